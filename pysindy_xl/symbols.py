@@ -1,0 +1,170 @@
+"""Generalized coordinates and helpers that build candidate-term catalogs."""
+
+from __future__ import annotations
+
+import itertools
+import keyword
+from collections.abc import Iterable, Sequence
+
+import sympy as sp
+
+__all__ = ["Coordinates", "monomials", "products"]
+
+
+class Coordinates:
+    """Generalized coordinates of a mechanical system and their sympy symbols.
+
+    For a coordinate named ``x`` the symbols are ``x`` (position), ``x_dot``
+    (velocity), ``x_ddot`` (acceleration) and ``tau_x`` (generalized force).
+
+    Parameters
+    ----------
+    names : sequence of str
+        Names of the coordinates, valid Python identifiers, unique.
+
+    Attributes
+    ----------
+    n : int
+        Number of coordinates.
+    names : tuple of str
+    q, qd, qdd, tau : tuple of sympy.Symbol
+        Positions, velocities, accelerations and generalized forces, one per coordinate.
+    t : sympy.Symbol
+        The time symbol.
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> coords = px.Coordinates(["x", "theta"])
+    >>> coords.n, coords.qd
+    (2, (x_dot, theta_dot))
+    """
+
+    def __init__(self, names: Sequence[str]):
+        if isinstance(names, str) or not isinstance(names, Iterable):
+            raise TypeError(f"names: expected a sequence of str, got {type(names).__name__}")
+        names = tuple(names)
+        if not names:
+            raise ValueError("names: expected at least one coordinate name")
+        for name in names:
+            if not isinstance(name, str) or not name.isidentifier() or keyword.iskeyword(name):
+                raise ValueError(f"names: {name!r} is not a valid identifier")
+            if name == "t" or name.startswith("tau_") or name.endswith(("_dot", "_ddot")):
+                raise ValueError(
+                    f"names: {name!r} is reserved (time 't', 'tau_*', '*_dot', '*_ddot')"
+                )
+        if len(set(names)) != len(names):
+            raise ValueError(f"names: duplicate coordinate names in {names}")
+        self.names = names
+        self.n = len(names)
+        self.q = tuple(sp.Symbol(n, real=True) for n in names)
+        self.qd = tuple(sp.Symbol(f"{n}_dot", real=True) for n in names)
+        self.qdd = tuple(sp.Symbol(f"{n}_ddot", real=True) for n in names)
+        self.tau = tuple(sp.Symbol(f"tau_{n}", real=True) for n in names)
+        self.t = sp.Symbol("t", real=True)
+
+    @property
+    def state(self) -> tuple[sp.Symbol, ...]:
+        """Symbols of the state ``(q_1..q_n, qd_1..qd_n)``."""
+        return self.q + self.qd
+
+    @property
+    def variables(self) -> tuple[sp.Symbol, ...]:
+        """All symbols a catalog column may use, in the order of the library input.
+
+        ``(q, qd, qdd, tau, t)``: the column layout of the data array that the
+        feature libraries transform (see :func:`pysindy_xl.feature_library.stack_variables`).
+        """
+        return self.q + self.qd + self.qdd + self.tau + (self.t,)
+
+    def symbol_table(self) -> dict[str, sp.Symbol]:
+        """Map from symbol name to symbol, used to parse saved expressions."""
+        return {str(s): s for s in self.variables}
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, Coordinates) and other.names == self.names
+
+    def __hash__(self) -> int:
+        return hash(self.names)
+
+    def __repr__(self) -> str:
+        return f"Coordinates({list(self.names)!r})"
+
+
+def _as_expr_list(exprs, name: str) -> list[sp.Expr]:
+    if isinstance(exprs, sp.Basic):
+        exprs = [exprs]
+    try:
+        exprs = [sp.sympify(e) if isinstance(e, (int, float)) else e for e in exprs]
+    except TypeError:
+        raise TypeError(f"{name}: expected a sequence of sympy expressions") from None
+    for e in exprs:
+        if not isinstance(e, sp.Basic):
+            raise TypeError(f"{name}: expected sympy expressions, got {type(e).__name__}")
+    return exprs
+
+
+def _unique(exprs: Iterable[sp.Expr]) -> list[sp.Expr]:
+    seen, out = set(), []
+    for e in exprs:
+        if e not in seen and e != 0:
+            seen.add(e)
+            out.append(e)
+    return out
+
+
+def monomials(exprs, degree: int) -> list[sp.Expr]:
+    """All products of ``exprs`` of total degree 1..``degree``, with repetition.
+
+    Parameters
+    ----------
+    exprs : sequence of sympy.Expr
+        Base functions, e.g. ``[sin(theta), cos(theta)]``.
+    degree : int
+        Maximal number of factors, at least 1.
+
+    Returns
+    -------
+    list of sympy.Expr
+        Distinct products, no constant, ordered by degree then by input order.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> a, b = sp.symbols("a b")
+    >>> monomials([a, b], 2)
+    [a, b, a**2, a*b, b**2]
+    """
+    exprs = _as_expr_list(exprs, "exprs")
+    if not isinstance(degree, int) or isinstance(degree, bool) or degree < 1:
+        raise ValueError(f"degree: expected an integer >= 1, got {degree!r}")
+    out = []
+    for d in range(1, degree + 1):
+        for combo in itertools.combinations_with_replacement(exprs, d):
+            out.append(sp.Mul(*combo))
+    return _unique(out)
+
+
+def products(terms_a, terms_b) -> list[sp.Expr]:
+    """Every pairwise product ``a * b``, de-duplicated, in order of first appearance.
+
+    Include ``1`` in either list to keep the terms of the other list alone.
+
+    Parameters
+    ----------
+    terms_a, terms_b : sequence of sympy.Expr
+
+    Returns
+    -------
+    list of sympy.Expr
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> a, b = sp.symbols("a b")
+    >>> products([1, a], [b, a])
+    [b, a, a*b, a**2]
+    """
+    terms_a = _as_expr_list(terms_a, "terms_a")
+    terms_b = _as_expr_list(terms_b, "terms_b")
+    return _unique(sp.Mul(x, y) for x in terms_a for y in terms_b)
