@@ -1,0 +1,22 @@
+"""Catalog categories as pysindy feature libraries.
+
+See :mod:`pysindy_xl.feature_library._base` for the layout of the stacked regression matrix.
+"""
+
+from ._base import SymbolicLibrary, compile_entries, stack_variables
+from .classical import ClassicalLibrary, pysindy_library_terms
+from .external_forces import ExternalForces
+from .lagrange import LagrangeLibrary, euler_lagrange
+from .repartition import CatalogRepartition
+
+__all__ = [
+    "SymbolicLibrary",
+    "LagrangeLibrary",
+    "ClassicalLibrary",
+    "ExternalForces",
+    "CatalogRepartition",
+    "stack_variables",
+    "compile_entries",
+    "euler_lagrange",
+    "pysindy_library_terms",
+]

@@ -1,0 +1,244 @@
+"""What every catalog category shares: symbolic columns compiled once to one numeric function.
+
+Regression-matrix layout
+------------------------
+Every library transforms the data array ``Z`` of shape ``(N, 4n + 1)`` whose columns are
+``coords.variables = (q_1..q_n, qd_1..qd_n, qdd_1..qdd_n, tau_1..tau_n, t)`` (see
+:func:`stack_variables`) into the stacked regression matrix ``Theta`` of shape ``(n * N, F)``:
+
+* rows are coordinate-major: rows ``c * N`` to ``(c + 1) * N - 1`` hold the equation of
+  coordinate ``c`` evaluated on all ``N`` samples;
+* columns are catalog features; entry ``(c * N + k, j)`` is the symbolic entry ``E[c, j]`` of
+  :meth:`SymbolicLibrary.symbolic_matrix` evaluated at sample ``k``.
+
+One coefficient vector ``xi`` of length ``F`` is shared by every coordinate, and the identified
+model is ``Theta @ xi = 0``, i.e. for each coordinate ``c``: ``sum_j xi_j E[c, j] = 0``. Sharing
+``xi`` is what lets one Lagrangian term explain several equations at once.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+from pysindy.feature_library.base import BaseFeatureLibrary
+from sklearn.utils.validation import check_is_fitted
+
+from ..symbols import Coordinates
+
+__all__ = ["SymbolicLibrary", "stack_variables", "compile_entries"]
+
+
+def stack_variables(q, qd, qdd=None, tau=None, t=None) -> np.ndarray:
+    """Stack the data into the library input ``Z`` of shape ``(N, 4n + 1)``.
+
+    Parameters
+    ----------
+    q, qd : array, shape (N, n)
+        Positions and velocities.
+    qdd, tau : array, shape (N, n), optional
+        Accelerations and generalized forces; zeros when absent.
+    t : array, shape (N,), optional
+        Sample times; zeros when absent.
+
+    Returns
+    -------
+    Z : ndarray, shape (N, 4n + 1)
+        Columns in the order of :attr:`Coordinates.variables`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> stack_variables(np.zeros((5, 2)), np.ones((5, 2))).shape
+    (5, 9)
+    """
+    q = np.asarray(q, dtype=float)
+    if q.ndim != 2:
+        raise ValueError(f"q: expected a 2-D array (n_samples, n), got shape {q.shape}")
+    n_samples, n = q.shape
+    parts = []
+    for name, a in (("q", q), ("qd", qd), ("qdd", qdd), ("tau", tau)):
+        a = np.zeros((n_samples, n)) if a is None else np.asarray(a, dtype=float)
+        if a.shape != (n_samples, n):
+            raise ValueError(f"{name}: expected shape {(n_samples, n)}, got {a.shape}")
+        parts.append(a)
+    t = np.zeros(n_samples) if t is None else np.asarray(t, dtype=float).reshape(-1)
+    if t.shape != (n_samples,):
+        raise ValueError(f"t: expected shape {(n_samples,)}, got {t.shape}")
+    return np.column_stack(parts + [t])
+
+
+def compile_entries(variables, exprs):
+    """Compile sympy expressions into one NumPy function of the data columns.
+
+    Common subexpressions are shared between all entries (one ``lambdify`` with ``cse=True``);
+    constant entries never reach the generated code.
+
+    Parameters
+    ----------
+    variables : sequence of sympy.Symbol
+        Symbols, in the order of the columns of the data array.
+    exprs : sequence of sympy.Expr
+        Entries to evaluate.
+
+    Returns
+    -------
+    callable
+        ``f(Z) -> list`` of ``len(exprs)`` arrays of shape ``(N,)`` or floats (constants, to be
+        broadcast), for a data array ``Z`` of shape ``(N, len(variables))``.
+
+    Examples
+    --------
+    >>> import numpy as np, sympy as sp
+    >>> a, b = sp.symbols("a b")
+    >>> f = compile_entries([a, b], [a * b, sp.Integer(2)])
+    >>> f(np.array([[1.0, 3.0]]))
+    [array([3.]), 2.0]
+    """
+    exprs = [sp.sympify(e) for e in exprs]
+    variables = tuple(variables)
+    dynamic = [k for k, e in enumerate(exprs) if e.free_symbols]
+    func = None
+    if dynamic:
+        func = sp.lambdify(variables, [exprs[k] for k in dynamic], modules="numpy", cse=True)
+
+    def evaluate(z: np.ndarray) -> list:
+        out = [0.0 if e.free_symbols else float(e) for e in exprs]
+        if func is not None:
+            for k, v in zip(dynamic, func(*z.T), strict=True):
+                out[k] = v
+        return out
+
+    return evaluate
+
+
+class SymbolicLibrary(BaseFeatureLibrary):
+    """Base class of the catalog categories: a matrix of symbolic columns, compiled once.
+
+    Subclasses implement :meth:`_build_symbolic` returning the feature names and the sympy
+    matrix ``E`` of shape ``(n, F)`` (entry ``E[c, j]``: contribution of feature ``j`` to the
+    equation of coordinate ``c``). ``fit`` derives ``E`` once and compiles all its non-zero
+    entries into a single vectorized NumPy function; ``transform`` evaluates it on all samples
+    and lays the result out as described in the module docstring.
+
+    Parameters
+    ----------
+    coords : Coordinates
+        Generalized coordinates of the system.
+    """
+
+    #: category label used in feature names and reports
+    category = "symbolic"
+
+    def __init__(self, coords: Coordinates):
+        self.coords = coords
+
+    # -- to implement --------------------------------------------------------------------
+    def _build_symbolic(self) -> tuple[list[str], sp.Matrix]:
+        raise NotImplementedError
+
+    def _check_coords(self):
+        if not isinstance(self.coords, Coordinates):
+            raise TypeError(
+                f"coords: expected a pysindy_xl.Coordinates, got {type(self.coords).__name__}"
+            )
+
+    # -- pysindy / scikit-learn interface ------------------------------------------------
+    def fit(self, x=None, y=None):
+        """Derive the symbolic columns and compile them.
+
+        Parameters
+        ----------
+        x : array, shape (N, 4n + 1), optional
+            Library input (see :func:`stack_variables`); only its width is checked.
+        y : ignored
+
+        Returns
+        -------
+        self
+        """
+        self._check_coords()
+        names, matrix = self._build_symbolic()
+        n = self.coords.n
+        if matrix.shape != (n, len(names)):
+            raise RuntimeError("internal error: symbolic matrix shape does not match names")
+        self.feature_names_ = list(names)
+        self.symbolic_matrix_ = matrix
+        self.n_features_in_ = len(self.coords.variables)
+        self.n_output_features_ = len(names)
+        self._compile()
+        if x is not None:
+            self._check_input(x)
+        return self
+
+    def _compile(self):
+        entries = [(c, j) for c in range(self.coords.n) for j in range(self.n_output_features_)]
+        entries = [(c, j) for c, j in entries if self.symbolic_matrix_[c, j] != 0]
+        self._entry_index = np.array(entries, dtype=int).reshape(-1, 2)
+        self._evaluate = compile_entries(
+            self.coords.variables, [self.symbolic_matrix_[c, j] for c, j in entries]
+        )
+
+    def _check_input(self, x) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        width = len(self.coords.variables)
+        if x.ndim != 2 or x.shape[1] != width:
+            raise ValueError(
+                f"x: expected the stacked variables array of shape (n_samples, {width}) "
+                f"(see pysindy_xl.feature_library.stack_variables), got shape {x.shape}"
+            )
+        if not np.all(np.isfinite(x)):
+            raise ValueError("x: contains NaN or inf")
+        return x
+
+    def transform(self, x) -> np.ndarray:
+        """Evaluate the stacked regression matrix.
+
+        Parameters
+        ----------
+        x : array, shape (N, 4n + 1)
+            Library input built by :func:`stack_variables`.
+
+        Returns
+        -------
+        theta : ndarray, shape (n * N, F)
+            Rows coordinate-major, one column per feature.
+        """
+        check_is_fitted(self, "symbolic_matrix_")
+        x = self._check_input(x)
+        n_samples = x.shape[0]
+        theta = np.zeros((self.coords.n * n_samples, self.n_output_features_))
+        values = self._evaluate(x)
+        for (c, j), value in zip(self._entry_index, values, strict=True):
+            theta[c * n_samples : (c + 1) * n_samples, j] = value
+        return theta
+
+    def get_feature_names(self, input_features=None) -> list[str]:
+        """Names of the features, in column order.
+
+        Parameters
+        ----------
+        input_features : ignored
+            Present for pysindy compatibility; names come from the coordinates.
+
+        Returns
+        -------
+        list of str
+        """
+        check_is_fitted(self, "feature_names_")
+        return list(self.feature_names_)
+
+    def symbolic_matrix(self) -> sp.Matrix:
+        """The sympy matrix ``E`` (n, F): entry ``[c, j]`` is feature ``j`` in equation ``c``."""
+        if not hasattr(self, "symbolic_matrix_"):
+            self.fit()
+        return self.symbolic_matrix_
+
+    def __add__(self, other):
+        from .repartition import CatalogRepartition
+
+        return CatalogRepartition([self, other])
+
+    # -- persistence ----------------------------------------------------------------------
+    def to_spec(self) -> dict:
+        """JSON-serializable description of this library (see :mod:`pysindy_xl.io`)."""
+        raise NotImplementedError

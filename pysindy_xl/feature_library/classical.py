@@ -1,0 +1,159 @@
+"""Classical (Newtonian) category: state functions added to chosen coordinate equations."""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+from pysindy.feature_library.base import BaseFeatureLibrary
+from sklearn.base import clone
+
+from ..expressions import parse_expression
+from ..symbols import Coordinates, _as_expr_list
+from ._base import SymbolicLibrary, compile_entries
+
+__all__ = ["ClassicalLibrary", "pysindy_library_terms"]
+
+
+def pysindy_library_terms(library: BaseFeatureLibrary, coords: Coordinates) -> list[sp.Expr]:
+    """Symbolic form of a pysindy feature library evaluated on the state ``(q, qd)``.
+
+    The library's feature names (with the state symbols as input names) are parsed by the
+    restricted grammar of :mod:`pysindy_xl.expressions`, then the parsed terms are checked
+    numerically against ``library.transform`` on random states, so a library whose names do not
+    describe its features (e.g. a ``CustomLibrary`` with opaque function names) is refused
+    instead of silently mistranslated.
+
+    Parameters
+    ----------
+    library : pysindy.BaseFeatureLibrary
+        E.g. ``ps.PolynomialLibrary(degree=2)`` or ``ps.FourierLibrary()``.
+    coords : Coordinates
+
+    Returns
+    -------
+    list of sympy.Expr
+        One expression per output feature of the library.
+
+    Examples
+    --------
+    >>> import pysindy as ps, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> pysindy_library_terms(ps.PolynomialLibrary(degree=2, include_bias=False), c)
+    [x, x_dot, x**2, x*x_dot, x_dot**2]
+    """
+    state = coords.state
+    names = [str(s) for s in state]
+    rng = np.random.default_rng(0)
+    sample = rng.uniform(-1.5, 1.5, size=(64, len(state)))
+    fitted = clone(library).fit(sample)
+    feature_names = fitted.get_feature_names(input_features=names)
+    table = {str(s): s for s in state}
+    terms = []
+    for name in feature_names:
+        try:
+            terms.append(parse_expression(name, table) if name != "1" else sp.Integer(1))
+        except ValueError as err:
+            raise ValueError(
+                f"terms: cannot translate feature {name!r} of {type(library).__name__} "
+                f"into a symbolic term ({err}); pass sympy expressions instead"
+            ) from None
+    expected = np.asarray(fitted.transform(sample), dtype=float)
+    evaluate = compile_entries(state, terms)
+    got = np.column_stack([np.broadcast_to(v, (len(sample),)) for v in evaluate(sample)])
+    if expected.shape != got.shape or not np.allclose(expected, got, rtol=1e-9, atol=1e-12):
+        raise ValueError(
+            f"terms: the feature names of {type(library).__name__} do not describe its "
+            "features; pass sympy expressions instead"
+        )
+    return terms
+
+
+class ClassicalLibrary(SymbolicLibrary):
+    """Newtonian terms entering the equations of chosen coordinates.
+
+    Each (term ``k``, coordinate ``c``) pair with ``mask[k, c]`` true is one feature: the term
+    evaluated in the equation of ``c`` and zero elsewhere, with its own coefficient. Typical use
+    is viscous friction, ``qd_i`` in the equation of ``i``.
+
+    Parameters
+    ----------
+    coords : Coordinates
+        Generalized coordinates.
+    terms : sequence of sympy.Expr or pysindy.BaseFeatureLibrary
+        Terms in any of ``coords.variables``; a pysindy library is evaluated on the state
+        ``(q, qd)`` and translated to symbolic terms (see :func:`pysindy_library_terms`).
+    mask : array of bool, shape (n_terms, n), optional
+        Which equations each term enters. Default: every equation.
+
+    Attributes
+    ----------
+    terms_ : list of sympy.Expr
+    mask_ : ndarray of bool, shape (n_terms, n)
+    symbolic_matrix_ : sympy.Matrix, shape (n, F)
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x", "theta"])
+    >>> friction = px.ClassicalLibrary(c, c.qd, mask=np.eye(2, dtype=bool))
+    >>> friction.fit().get_feature_names()
+    ['C_x[x_dot]', 'C_theta[theta_dot]']
+    """
+
+    category = "classical"
+
+    def __init__(self, coords: Coordinates, terms, mask=None):
+        self.coords = coords
+        self.terms = terms
+        self.mask = mask
+
+    def _resolved_terms(self) -> list[sp.Expr]:
+        if isinstance(self.terms, BaseFeatureLibrary):
+            return pysindy_library_terms(self.terms, self.coords)
+        terms = _as_expr_list(self.terms, "terms")
+        allowed = set(self.coords.variables)
+        for term in terms:
+            extra = term.free_symbols - allowed
+            if extra:
+                raise ValueError(
+                    f"terms: classical term {term} uses unknown symbols {sorted(map(str, extra))}"
+                )
+        return terms
+
+    def _resolved_mask(self, n_terms: int) -> np.ndarray:
+        if self.mask is None:
+            return np.ones((n_terms, self.coords.n), dtype=bool)
+        mask = np.asarray(self.mask)
+        if mask.shape != (n_terms, self.coords.n):
+            raise ValueError(
+                f"mask: expected shape (n_terms, n) = {(n_terms, self.coords.n)}, got {mask.shape}"
+            )
+        if mask.dtype != bool and not np.isin(mask, (0, 1)).all():
+            raise ValueError("mask: expected booleans (or 0/1)")
+        return mask.astype(bool)
+
+    def _build_symbolic(self):
+        terms = self._resolved_terms()
+        if not terms:
+            raise ValueError("terms: expected at least one classical term")
+        mask = self._resolved_mask(len(terms))
+        self.terms_, self.mask_ = terms, mask
+        names, columns = [], []
+        for k, term in enumerate(terms):
+            for c in range(self.coords.n):
+                if mask[k, c]:
+                    names.append(f"C_{self.coords.names[c]}[{term}]")
+                    columns.append((c, term))
+        matrix = sp.zeros(self.coords.n, len(columns))
+        for j, (c, term) in enumerate(columns):
+            matrix[c, j] = term
+        return names, matrix
+
+    def to_spec(self) -> dict:
+        if not hasattr(self, "terms_"):
+            self.fit()
+        return {
+            "type": "ClassicalLibrary",
+            "terms": [str(t) for t in self.terms_],
+            "mask": self.mask_.astype(int).tolist(),
+        }

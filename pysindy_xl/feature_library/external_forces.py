@@ -1,0 +1,129 @@
+"""ExternalForces category: the known right-hand side of the equations of motion."""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from ..symbols import Coordinates
+from ._base import SymbolicLibrary
+
+__all__ = ["ExternalForces"]
+
+
+def _interlink_matrix(interlink, n: int) -> np.ndarray:
+    """Normalize ``interlink`` to a matrix ``B`` (n, n): generalized force = ``B @ u``."""
+    if interlink is None:
+        return np.eye(n)
+    try:
+        matrix = np.asarray(interlink, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(
+            "interlink: expected a numeric matrix of shape (n, n); for lists of signed input "
+            "indices use ExternalForces.from_signed_indices"
+        ) from None
+    if matrix.shape != (n, n):
+        raise ValueError(
+            f"interlink: expected a matrix of shape (n, n) = {(n, n)} (generalized force = "
+            f"interlink @ u), got shape {matrix.shape}"
+        )
+    if not np.all(np.isfinite(matrix)):
+        raise ValueError("interlink: contains NaN or inf")
+    return matrix
+
+
+def signed_indices_to_interlink(indices, n: int) -> np.ndarray:
+    """Interlink matrix from per-coordinate lists of signed 1-based input indices.
+
+    ``[[1], [-1, 2]]`` means coordinate 0 receives ``u_1`` and coordinate 1 receives
+    ``u_2 - u_1`` (the convention of the original xlsindy code).
+    """
+    if not isinstance(indices, (list, tuple)) or len(indices) != n:
+        raise ValueError(f"indices: expected one list of signed input indices per coordinate ({n})")
+    matrix = np.zeros((n, n))
+    for c, row in enumerate(indices):
+        for k in row:
+            if not isinstance(k, (int, np.integer)) or k == 0 or abs(k) > n:
+                raise ValueError(
+                    f"indices: entry {k!r} for coordinate {c} is not a signed 1-based input "
+                    f"index in [-{n}, -1] or [1, {n}]"
+                )
+            matrix[c, abs(k) - 1] += np.sign(k)
+    return matrix
+
+
+class ExternalForces(SymbolicLibrary):
+    """Known generalized forces: one column whose entry in equation ``c`` is the force on ``c``.
+
+    With the paper's convention the coefficient of this column is fixed to ``-1`` in explicit
+    regression, so the identified equations read ``EL(L) + classical terms = force``.
+
+    Parameters
+    ----------
+    coords : Coordinates
+        Generalized coordinates.
+    interlink : array, shape (n, n), optional
+        How the measured inputs ``u`` (one per coordinate, ``tau``) act on the coordinates:
+        generalized force ``= interlink @ u``, so several signed inputs can act on one
+        coordinate (e.g. a motor between two links). Default: input ``i`` acts on coordinate
+        ``i``. See :meth:`from_signed_indices` for the index-list form.
+
+    Attributes
+    ----------
+    interlink_ : ndarray, shape (n, n)
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> c = px.Coordinates(["theta1", "theta2"])
+    >>> px.ExternalForces(c, interlink=[[1, -1], [0, 1]]).symbolic_matrix()
+    Matrix([
+    [tau_theta1 - tau_theta2],
+    [             tau_theta2]])
+    """
+
+    category = "forces"
+
+    def __init__(self, coords: Coordinates, interlink=None):
+        self.coords = coords
+        self.interlink = interlink
+
+    @classmethod
+    def from_signed_indices(cls, coords: Coordinates, indices) -> ExternalForces:
+        """Build from per-coordinate lists of signed 1-based input indices.
+
+        Parameters
+        ----------
+        coords : Coordinates
+        indices : list of list of int
+            ``[[1, -2], [2]]``: coordinate 0 receives ``u_1 - u_2``, coordinate 1 ``u_2``.
+
+        Returns
+        -------
+        ExternalForces
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> c = px.Coordinates(["a", "b"])
+        >>> px.ExternalForces.from_signed_indices(c, [[1, -2], [2]]).interlink
+        array([[ 1., -1.],
+               [ 0.,  1.]])
+        """
+        return cls(coords, interlink=signed_indices_to_interlink(indices, coords.n))
+
+    def _build_symbolic(self):
+        matrix = _interlink_matrix(self.interlink, self.coords.n)
+        self.interlink_ = matrix
+        tau = sp.Matrix(self.coords.tau)
+        column = sp.Matrix(
+            [sum(sp.nsimplify(matrix[c, k]) * tau[k] for k in range(self.coords.n))
+             for c in range(self.coords.n)]
+        )
+        return ["F[tau]"], column
+
+    def to_spec(self) -> dict:
+        return {
+            "type": "ExternalForces",
+            "interlink": _interlink_matrix(self.interlink, self.coords.n).tolist(),
+        }

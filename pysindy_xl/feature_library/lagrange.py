@@ -1,0 +1,108 @@
+"""Lagrange category: candidate Lagrangian terms through the Euler-Lagrange operator."""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from ..symbols import Coordinates, _as_expr_list
+from ._base import SymbolicLibrary
+
+__all__ = ["LagrangeLibrary", "euler_lagrange"]
+
+
+def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:
+    """Euler-Lagrange expressions ``d/dt dL/dqd_i - dL/dq_i`` for every coordinate.
+
+    The total time derivative is expanded with the chain rule over the coordinate symbols,
+    ``d/dt = sum_k qd_k d/dq_k + qdd_k d/dqd_k + d/dt``, so no function of time is involved.
+
+    Parameters
+    ----------
+    lagrangian : sympy.Expr
+        Expression in ``coords.q``, ``coords.qd`` (and possibly ``coords.t``).
+    coords : Coordinates
+
+    Returns
+    -------
+    list of sympy.Expr, length n
+        Expanded expressions, linear in the accelerations.
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> euler_lagrange(c.qd[0] ** 2 / 2 - c.q[0] ** 2 / 2, c)
+    [x + x_ddot]
+    """
+    out = []
+    for qi, qdi in zip(coords.q, coords.qd, strict=True):
+        momentum = sp.diff(lagrangian, qdi)
+        d_dt = sp.diff(momentum, coords.t)
+        for qk, qdk, qddk in zip(coords.q, coords.qd, coords.qdd, strict=True):
+            d_dt += sp.diff(momentum, qk) * qdk + sp.diff(momentum, qdk) * qddk
+        out.append(sp.expand(d_dt - sp.diff(lagrangian, qi)))
+    return out
+
+
+class LagrangeLibrary(SymbolicLibrary):
+    """Candidate Lagrangian terms, each turned into its Euler-Lagrange column.
+
+    Term ``L_k`` contributes the column ``d/dt dL_k/dqd_i - dL_k/dq_i`` to the equation of
+    every coordinate ``i``, so one coefficient per term is shared by all equations.
+
+    Parameters
+    ----------
+    coords : Coordinates
+        Generalized coordinates.
+    terms : sequence of sympy.Expr
+        Candidate terms in ``coords.q`` and ``coords.qd`` (e.g. built with
+        :func:`pysindy_xl.products` of velocity and trigonometric monomials).
+
+    Attributes
+    ----------
+    terms_ : list of sympy.Expr
+        The candidate terms, in column order.
+    symbolic_matrix_ : sympy.Matrix, shape (n, F)
+        Euler-Lagrange column of each term in each equation.
+    zero_terms_ : list of int
+        Indices of terms whose Euler-Lagrange column is identically zero (constants, total
+        time derivatives such as ``qd * f(q)``); they can never be identified.
+
+    Examples
+    --------
+    >>> import sympy as sp, pysindy_xl as px
+    >>> c = px.Coordinates(["theta"])
+    >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, sp.cos(c.q[0])])
+    >>> lib.fit().get_feature_names()
+    ['L[theta_dot**2]', 'L[cos(theta)]']
+    >>> lib.symbolic_matrix()
+    Matrix([[2*theta_ddot, sin(theta)]])
+    """
+
+    category = "lagrange"
+
+    def __init__(self, coords: Coordinates, terms):
+        self.coords = coords
+        self.terms = terms
+
+    def _build_symbolic(self):
+        terms = _as_expr_list(self.terms, "terms")
+        if not terms:
+            raise ValueError("terms: expected at least one candidate Lagrangian term")
+        allowed = set(self.coords.q + self.coords.qd + (self.coords.t,))
+        for term in terms:
+            extra = term.free_symbols - allowed
+            if extra:
+                raise ValueError(
+                    f"terms: Lagrangian term {term} uses {sorted(map(str, extra))}; "
+                    "only positions, velocities and t are allowed"
+                )
+        self.terms_ = terms
+        columns = [euler_lagrange(term, self.coords) for term in terms]
+        matrix = sp.Matrix(self.coords.n, len(terms), lambda i, j: columns[j][i])
+        self.zero_terms_ = [j for j, col in enumerate(columns) if all(e == 0 for e in col)]
+        return [f"L[{term}]" for term in terms], matrix
+
+    def to_spec(self) -> dict:
+        terms = _as_expr_list(self.terms, "terms")
+        return {"type": "LagrangeLibrary", "terms": [str(t) for t in terms]}

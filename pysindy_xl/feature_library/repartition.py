@@ -1,0 +1,239 @@
+"""CatalogRepartition: the concatenation of catalog categories into one regression problem."""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+from sklearn.utils.validation import check_is_fitted
+
+from ._base import SymbolicLibrary
+from .classical import ClassicalLibrary
+from .external_forces import ExternalForces
+from .lagrange import LagrangeLibrary
+
+__all__ = ["CatalogRepartition"]
+
+_CATEGORY_RANK = {"forces": 0, "lagrange": 1, "classical": 2}
+
+
+def _monomial_coefficients(expr: sp.Expr) -> dict:
+    """``expr`` as {monomial: coefficient} after expanding products of trigonometric sums."""
+    expanded = sp.expand(sp.expand_trig(sp.expand(expr)))
+    return {m: float(c) for m, c in expanded.as_coefficients_dict().items() if m != 1}
+
+
+class CatalogRepartition(SymbolicLibrary):
+    """Concatenation of catalog categories into one stacked regression matrix.
+
+    The columns of every library are placed side by side (in the given order); an
+    :class:`ExternalForces` column is prepended when none is given, so the catalog always holds
+    the force column that explicit and mixed regression need. All libraries must share the same
+    :class:`Coordinates`. All symbolic entries are compiled into one NumPy function, so common
+    subexpressions are shared across categories. See :mod:`pysindy_xl.feature_library._base` for
+    the layout of the regression matrix.
+
+    Parameters
+    ----------
+    libraries : list of SymbolicLibrary
+        ``ExternalForces``, ``LagrangeLibrary``, ``ClassicalLibrary`` instances (or nested
+        ``CatalogRepartition``, which are flattened).
+
+    Attributes
+    ----------
+    libraries_ : list of SymbolicLibrary
+        The flattened libraries, force library included.
+    slices_ : list of slice
+        Columns of each library in the regression matrix.
+    categories_ : list of str
+        Category of each feature: ``"forces"``, ``"lagrange"`` or ``"classical"``.
+    force_columns_ : list of int
+        Indices of the force columns.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]) + px.ClassicalLibrary(c, [c.qd[0]])
+    >>> lib.fit().get_feature_names()
+    ['F[tau]', 'L[x_dot**2]', 'L[x**2]', 'C_x[x_dot]']
+    >>> lib.ideal_coefficients(lagrangian=c.qd[0] ** 2 / 2 - 2 * c.q[0] ** 2,
+    ...                        classical={(c.qd[0], 0): 0.1})
+    array([-1. ,  0.5, -2. ,  0.1])
+    """
+
+    category = "repartition"
+
+    def __init__(self, libraries):
+        self.libraries = libraries
+
+    @property
+    def coords(self):
+        return self._flat_libraries()[0].coords
+
+    def _flat_libraries(self) -> list[SymbolicLibrary]:
+        if isinstance(self.libraries, SymbolicLibrary) or not hasattr(self.libraries, "__iter__"):
+            raise TypeError("libraries: expected a list of pysindy_xl feature libraries")
+        flat = []
+        for lib in self.libraries:
+            if isinstance(lib, CatalogRepartition):
+                flat.extend(lib._flat_libraries())
+            elif isinstance(lib, SymbolicLibrary):
+                flat.append(lib)
+            else:
+                raise TypeError(
+                    "libraries: expected pysindy_xl feature libraries (LagrangeLibrary, "
+                    f"ClassicalLibrary, ExternalForces), got {type(lib).__name__}; wrap pysindy "
+                    "libraries in ClassicalLibrary(coords, library)"
+                )
+        if not flat:
+            raise ValueError("libraries: expected at least one library")
+        coords = flat[0].coords
+        for lib in flat[1:]:
+            if lib.coords != coords:
+                raise ValueError(
+                    f"libraries: all libraries must share the same coordinates, got {coords} "
+                    f"and {lib.coords}"
+                )
+        if not any(isinstance(lib, ExternalForces) for lib in flat):
+            flat.insert(0, ExternalForces(coords))
+        return flat
+
+    def _check_coords(self):
+        self._flat_libraries()[0]._check_coords()
+
+    def _build_symbolic(self):
+        libraries = self._flat_libraries()
+        names, blocks, slices, categories = [], [], [], []
+        for lib in libraries:
+            lib.fit()
+            start = len(names)
+            names.extend(lib.feature_names_)
+            blocks.append(lib.symbolic_matrix_)
+            slices.append(slice(start, len(names)))
+            categories.extend([lib.category] * lib.n_output_features_)
+        self.libraries_ = libraries
+        self.slices_ = slices
+        self.categories_ = categories
+        self.force_columns_ = [j for j, cat in enumerate(categories) if cat == "forces"]
+        return names, sp.Matrix.hstack(*blocks)
+
+    def __add__(self, other):
+        return CatalogRepartition([self, other])
+
+    def __radd__(self, other):
+        return CatalogRepartition([other, self])
+
+    # -- helpers on the coefficient vector ----------------------------------------------------
+    def column_priority(self) -> np.ndarray:
+        """Feature indices from most to least preferred when columns are linearly dependent.
+
+        Force columns first, then Lagrange terms, then classical ones; within a category the
+        symbolically simpler column first (``sympy.count_ops``), then catalog order.
+        """
+        check_is_fitted(self, "symbolic_matrix_")
+        complexity = [
+            sum(sp.count_ops(e) for e in self.symbolic_matrix_[:, j])
+            for j in range(self.n_output_features_)
+        ]
+        keys = [
+            (_CATEGORY_RANK.get(cat, 3), complexity[j], j)
+            for j, cat in enumerate(self.categories_)
+        ]
+        return np.array([k[-1] for k in sorted(keys)], dtype=int)
+
+    def ideal_coefficients(self, lagrangian=None, classical=None, forces: float = -1.0):
+        """Coefficient vector of a known model in this catalog.
+
+        Parameters
+        ----------
+        lagrangian : sympy.Expr, optional
+            True Lagrangian; it is expanded (trigonometric sums included) and matched against
+            the Lagrange terms of the catalog. Constant parts are ignored.
+        classical : dict, optional
+            ``{(term, coordinate): value}`` where ``term`` is a sympy expression and
+            ``coordinate`` an index or a name; or ``{feature_name: value}``.
+        forces : float, default -1.0
+            Coefficient of the force column (the paper's convention).
+
+        Returns
+        -------
+        ndarray, shape (F,)
+
+        Raises
+        ------
+        ValueError
+            If a part of the model is not representable in the catalog.
+        """
+        if not hasattr(self, "symbolic_matrix_"):
+            self.fit()
+        xi = np.zeros(self.n_output_features_)
+        xi[self.force_columns_] = forces
+        if lagrangian is not None:
+            self._match_lagrangian(sp.sympify(lagrangian), xi)
+        for key, value in (classical or {}).items():
+            xi[self._classical_index(key)] += float(value)
+        return xi
+
+    def _match_lagrangian(self, lagrangian: sp.Expr, xi: np.ndarray):
+        columns, expansions = [], []
+        for lib, sl in zip(self.libraries_, self.slices_, strict=True):
+            if isinstance(lib, LagrangeLibrary):
+                for k, term in enumerate(lib.terms_):
+                    columns.append(sl.start + k)
+                    expansions.append(_monomial_coefficients(term))
+        target = _monomial_coefficients(lagrangian)
+        monomials = sorted(set(target).union(*expansions), key=sp.default_sort_key)
+        row = {m: i for i, m in enumerate(monomials)}
+        basis = np.zeros((len(monomials), len(columns)))
+        for j, expansion in enumerate(expansions):
+            for m, c in expansion.items():
+                basis[row[m], j] = c
+        rhs = np.zeros(len(monomials))
+        for m, c in target.items():
+            rhs[row[m]] = c
+        solution = np.linalg.lstsq(basis, rhs, rcond=None)[0] if columns else np.zeros(0)
+        residual = basis @ solution - rhs if columns else -rhs
+        missing = [str(m) for m, r in zip(monomials, residual, strict=True) if abs(r) > 1e-9]
+        if missing:
+            raise ValueError(
+                f"lagrangian: terms {missing} are not representable by the Lagrange catalog"
+            )
+        solution[np.abs(solution) < 1e-12] = 0.0
+        xi[columns] += solution
+
+    def _classical_index(self, key) -> int:
+        names = self.feature_names_
+        if isinstance(key, str):
+            if key not in names:
+                raise ValueError(f"classical: unknown feature name {key!r}")
+            return names.index(key)
+        try:
+            term, coord = key
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"classical: expected keys (term, coordinate) or feature names, got {key!r}"
+            ) from None
+        if isinstance(coord, str):
+            if coord not in self.coords.names:
+                raise ValueError(f"classical: unknown coordinate {coord!r}")
+            coord = self.coords.names.index(coord)
+        term = sp.sympify(term)
+        for lib, sl in zip(self.libraries_, self.slices_, strict=True):
+            if isinstance(lib, ClassicalLibrary):
+                j = sl.start
+                for k, t in enumerate(lib.terms_):
+                    for c in range(self.coords.n):
+                        if lib.mask_[k, c]:
+                            if c == coord and sp.simplify(t - term) == 0:
+                                return j
+                            j += 1
+        raise ValueError(
+            f"classical: term {term} in the equation of {self.coords.names[coord]} is not in "
+            "the catalog"
+        )
+
+    def to_spec(self) -> dict:
+        return {
+            "type": "CatalogRepartition",
+            "libraries": [lib.to_spec() for lib in self._flat_libraries()],
+        }
