@@ -1,0 +1,267 @@
+"""Explicit regression: the forces are known, solve ``Theta_rest @ xi = force``."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from sklearn.exceptions import ConvergenceWarning
+from sklearn.linear_model import Lasso, LassoCV
+
+from ._base import CatalogOptimizer, check_catalog_problem
+
+__all__ = ["ExplicitOptimizer", "hard_threshold_regression", "proximal_gradient_lasso"]
+
+_METHODS = ("threshold", "lasso", "lassocv", "proximal")
+
+
+def hard_threshold_regression(x, y, threshold: float = 0.01, max_iter: int = 100):
+    """Least squares with iterative pruning by the paper's condition value.
+
+    At each iteration the active columns are fitted by least squares, and a column is pruned
+    when its condition value ``|coef_j| * rms(x_j)`` (its contribution to the fit) is below
+    ``threshold`` times the largest one; repeat until the support is stable.
+
+    Parameters
+    ----------
+    x : array, shape (n_rows, F)
+    y : array, shape (n_rows,)
+    threshold : float
+        Relative condition value below which a term is pruned, in [0, 1).
+    max_iter : int
+        Maximal number of prune-and-refit rounds.
+
+    Returns
+    -------
+    coef : ndarray, shape (F,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> x = rng.normal(size=(200, 5))
+    >>> coef = hard_threshold_regression(x, x @ [2.0, 0, 0, -1.0, 0] + 1e-6 * rng.normal(size=200))
+    >>> np.round(coef, 4)
+    array([ 2., -0., -0., -1.,  0.])
+    """
+    scale = np.sqrt(np.mean(x**2, axis=0))
+    active = np.flatnonzero(scale > 0)
+    coef = np.zeros(x.shape[1])
+    for _ in range(max_iter):
+        if len(active) == 0:
+            break
+        xs = x[:, active] / scale[active]
+        sol = np.linalg.lstsq(xs, y, rcond=None)[0]
+        condition = np.abs(sol)
+        keep = condition >= threshold * condition.max() if condition.max() > 0 else condition > 0
+        coef[:] = 0.0
+        coef[active] = sol / scale[active]
+        if keep.all():
+            break
+        active = active[keep]
+    return coef
+
+
+def proximal_gradient_lasso(x, y, alpha: float, max_iter: int = 10_000, tol: float = 1e-10):
+    """Lasso ``min 1/(2 n) ||x c - y||^2 + alpha ||c||_1`` by accelerated proximal gradient.
+
+    Parameters
+    ----------
+    x : array, shape (n_rows, F)
+        Columns should be normalized (the step size is set by the largest singular value).
+    y : array, shape (n_rows,)
+    alpha : float
+        Regularization weight, >= 0.
+    max_iter : int
+    tol : float
+        Stop when the relative change of the iterate falls below ``tol``.
+
+    Returns
+    -------
+    coef : ndarray, shape (F,)
+    converged : bool
+    """
+    n_rows = x.shape[0]
+    gram = x.T @ x / n_rows
+    xty = x.T @ y / n_rows
+    step = 1.0 / max(np.linalg.eigvalsh(gram)[-1], 1e-300)
+    coef = np.zeros(x.shape[1])
+    momentum, t_k = coef.copy(), 1.0
+    for _ in range(max_iter):
+        grad = gram @ momentum - xty
+        z = momentum - step * grad
+        new = np.sign(z) * np.maximum(np.abs(z) - step * alpha, 0.0)
+        t_next = (1 + np.sqrt(1 + 4 * t_k**2)) / 2
+        momentum = new + (t_k - 1) / t_next * (new - coef)
+        change = np.linalg.norm(new - coef) / max(np.linalg.norm(new), 1e-300)
+        coef, t_k = new, t_next
+        if change < tol:
+            return coef, True
+    return coef, False
+
+
+class ExplicitOptimizer(CatalogOptimizer):
+    """Sparse regression when the generalized forces are known on the coordinates.
+
+    With the force column's coefficient fixed to ``-1`` (the paper's convention), the problem
+    ``Theta @ xi = 0`` becomes the ordinary regression ``Theta_rest @ xi_rest = force``.
+    Columns are normalized to unit RMS inside the optimizer and coefficients mapped back.
+
+    Parameters
+    ----------
+    method : {"threshold", "lasso", "lassocv", "proximal"} or estimator, default "threshold"
+        ``"threshold"``: iterative hard thresholding by condition value
+        (:func:`hard_threshold_regression`); ``"lasso"``: scikit-learn ``Lasso(alpha)``;
+        ``"lassocv"``: ``LassoCV`` (alpha by cross-validation); ``"proximal"``: accelerated
+        proximal gradient Lasso (:func:`proximal_gradient_lasso`). Any estimator with
+        ``fit(X, y)`` and ``coef_`` also works, e.g. pysindy's ``STLSQ``, ``SR3`` or ``MIOSR``.
+    threshold : float, default 0.01
+        Relative condition value for pruning: used by ``"threshold"`` and by the refit step.
+    alpha : float, default 1e-4
+        Lasso weight for ``"lasso"`` and ``"proximal"`` (on unit-RMS columns and a unit-RMS
+        target, so it is scale free).
+    refit : bool, default True
+        After an L1 method or a custom estimator, refit by least squares on the selected
+        support (removes the L1 shrinkage bias), pruned again with ``threshold``.
+    max_iter : int, default 1000
+
+    Attributes
+    ----------
+    coef_ : ndarray, shape (F,)
+        Coefficients of ``fit``'s columns, or the full catalog vector after ``fit_catalog``.
+    support_ : ndarray of bool, shape (F,)
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> rng = np.random.default_rng(1)
+    >>> X = rng.normal(size=(100, 4))
+    >>> px.ExplicitOptimizer().fit(X, X @ [0.5, 0.0, -3.0, 0.0]).coef_.round(6)
+    array([ 0.5,  0. , -3. ,  0. ])
+    """
+
+    def __init__(self, method="threshold", threshold=0.01, alpha=1e-4, refit=True, max_iter=1000):
+        self.method = method
+        self.threshold = threshold
+        self.alpha = alpha
+        self.refit = refit
+        self.max_iter = max_iter
+
+    def _check_params(self):
+        if isinstance(self.method, str):
+            if self.method not in _METHODS:
+                raise ValueError(f"method: expected one of {_METHODS} or an estimator, got "
+                                 f"{self.method!r}")
+        elif not hasattr(self.method, "fit"):
+            raise TypeError("method: expected a method name or an estimator with fit(X, y)")
+        if not 0 <= self.threshold < 1:
+            raise ValueError(f"threshold: expected a value in [0, 1), got {self.threshold!r}")
+        if self.alpha < 0:
+            raise ValueError(f"alpha: expected a non-negative value, got {self.alpha!r}")
+        if int(self.max_iter) < 1:
+            raise ValueError(f"max_iter: expected a positive integer, got {self.max_iter!r}")
+
+    def fit(self, X, y):
+        """Solve ``X @ coef_ = y`` sparsely.
+
+        Parameters
+        ----------
+        X : array, shape (n_rows, F)
+        y : array, shape (n_rows,)
+
+        Returns
+        -------
+        self
+        """
+        self._check_params()
+        X = np.asarray(X, dtype=float)
+        y = np.asarray(y, dtype=float)
+        if X.ndim != 2 or X.shape[0] == 0:
+            raise ValueError(f"X: expected a non-empty 2-D array, got shape {X.shape}")
+        if y.ndim != 1 or y.shape[0] != X.shape[0]:
+            raise ValueError(f"y: expected shape ({X.shape[0]},), got {y.shape}")
+        if not (np.all(np.isfinite(X)) and np.all(np.isfinite(y))):
+            raise ValueError("X, y: contain NaN or inf")
+        if not np.any(y):
+            raise ValueError(
+                "y: the force vector is identically zero; explicit regression needs a known "
+                "force (use ImplicitOptimizer or MixedOptimizer for unforced data)"
+            )
+        self.coef_ = self._solve(X, y)
+        self.support_ = self.coef_ != 0
+        return self
+
+    def _solve(self, X, y):
+        if self.method == "threshold":
+            return hard_threshold_regression(X, y, self.threshold, int(self.max_iter))
+        scale = np.sqrt(np.mean(X**2, axis=0))
+        active = scale > 0
+        xs = X[:, active] / scale[active]
+        y_scale = np.sqrt(np.mean(y**2))
+        ys = y / y_scale
+        if self.method == "lasso":
+            sol = Lasso(alpha=self.alpha, fit_intercept=False, max_iter=int(self.max_iter) * 10)
+            sol = self._fit_quietly(sol, xs, ys).coef_
+        elif self.method == "lassocv":
+            sol = LassoCV(fit_intercept=False, max_iter=int(self.max_iter) * 10)
+            sol = self._fit_quietly(sol, xs, ys).coef_
+        elif self.method == "proximal":
+            sol, converged = proximal_gradient_lasso(xs, ys, self.alpha, int(self.max_iter) * 10)
+            if not converged:
+                warnings.warn("proximal gradient did not converge; raise max_iter",
+                              ConvergenceWarning, stacklevel=3)
+        else:
+            estimator = self._fit_quietly(self.method, xs, ys)
+            sol = np.asarray(estimator.coef_, dtype=float).reshape(-1)
+            if sol.shape != (xs.shape[1],):
+                raise ValueError(
+                    f"method: the estimator's coef_ has {sol.size} entries, expected {xs.shape[1]}"
+                )
+        coef = np.zeros(X.shape[1])
+        coef[active] = sol * y_scale / scale[active]
+        if self.refit and np.any(coef):
+            support = np.flatnonzero(coef)
+            coef[:] = 0.0
+            coef[support] = hard_threshold_regression(
+                X[:, support], y, self.threshold, int(self.max_iter)
+            )
+        return coef
+
+    @staticmethod
+    def _fit_quietly(estimator, x, y):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", ConvergenceWarning)
+            estimator.fit(x, y)
+        for w in caught:
+            if issubclass(w.category, ConvergenceWarning):
+                warnings.warn(f"inner regressor did not converge: {w.message}",
+                              ConvergenceWarning, stacklevel=4)
+        return estimator
+
+    def fit_catalog(self, theta, n_coordinates, force_columns):
+        """Solve the catalog problem with the force coefficient fixed to -1.
+
+        Parameters
+        ----------
+        theta : array, shape (n_coordinates * N, F)
+            Stacked regression matrix.
+        n_coordinates : int
+        force_columns : sequence of int
+            Columns of the known forces; at least one, not identically zero.
+
+        Returns
+        -------
+        self
+        """
+        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns)
+        if len(force_columns) == 0:
+            raise ValueError("force_columns: explicit regression needs a force column")
+        rest = np.setdiff1d(np.arange(theta.shape[1]), force_columns)
+        force = theta[:, force_columns].sum(axis=1)
+        self.fit(theta[:, rest], force)
+        coef = np.zeros(theta.shape[1])
+        coef[rest] = self.coef_
+        coef[force_columns] = -1.0
+        self.coef_ = coef
+        self.support_ = coef != 0
+        return self
