@@ -1,0 +1,332 @@
+"""Mass-matrix form of identified equations, ``M(q, qd) qdd = f(q, qd, tau, t)``, and simulation.
+
+The identified equations are linear in the accelerations. ``M`` is read off as their Jacobian
+with respect to ``qdd`` and ``f`` as minus their value at ``qdd = 0``; both are compiled once
+(one NumPy function with shared subexpressions) and the accelerations follow from a batched
+linear solve. No symbolic solve is ever performed.
+"""
+
+from __future__ import annotations
+
+import time as _time
+
+import numpy as np
+import scipy.integrate
+import scipy.interpolate
+import sympy as sp
+
+from .feature_library._base import compile_entries, stack_variables
+from .symbols import Coordinates
+
+__all__ = [
+    "MassMatrixDynamics",
+    "DynamicsError",
+    "SingularMassMatrixError",
+    "SimulationError",
+    "force_function",
+]
+
+
+class DynamicsError(RuntimeError):
+    """Base class of the errors raised by identified dynamics."""
+
+
+class SingularMassMatrixError(DynamicsError):
+    """The identified mass matrix is singular (or numerically so) at some states.
+
+    Attributes
+    ----------
+    indices : ndarray of int
+        Samples where it is singular.
+    """
+
+    def __init__(self, message: str, indices=()):
+        super().__init__(message)
+        self.indices = np.asarray(indices, dtype=int)
+
+
+class SimulationError(DynamicsError):
+    """A simulation stopped before its end.
+
+    Attributes
+    ----------
+    t_failed : float
+        Time at which the simulation stopped.
+    t : ndarray, shape (k,)
+        Requested times reached before the failure.
+    states : ndarray, shape (k, 2n)
+        States at those times (the valid part of the trajectory).
+    reason : str
+        ``"diverged"``, ``"singular mass matrix"``, ``"non-finite derivative"``,
+        ``"too many evaluations"``, ``"timeout"`` or ``"integrator failure (...)"``.
+    """
+
+    def __init__(self, message: str, t_failed: float, t, states, reason: str):
+        super().__init__(message)
+        self.t_failed = float(t_failed)
+        self.t = np.asarray(t, dtype=float)
+        self.states = np.asarray(states, dtype=float)
+        self.reason = reason
+
+
+def force_function(u, t: np.ndarray, n: int):
+    """Turn the ``u`` argument of ``simulate`` into a function of time.
+
+    Parameters
+    ----------
+    u : None, array (len(t), n), or callable ``u(t) -> (n,)``
+        Generalized forces; arrays are interpolated linearly between samples.
+    t : ndarray, shape (T,)
+        Simulation times.
+    n : int
+        Number of coordinates.
+
+    Returns
+    -------
+    callable
+        ``u(t) -> ndarray (n,)``.
+    """
+    if u is None:
+        zeros = np.zeros(n)
+        return lambda _t: zeros
+    if callable(u):
+        value = np.asarray(u(float(t[0])), dtype=float)
+        if value.shape != (n,):
+            raise ValueError(f"u: the callable must return an array of shape ({n},), got "
+                             f"{value.shape}")
+
+        def call(s):
+            out = np.asarray(u(s), dtype=float)
+            if out.shape != (n,) or not np.all(np.isfinite(out)):
+                raise ValueError(f"u: u({s}) returned {out!r}, expected {n} finite values")
+            return out
+
+        return call
+    u = np.asarray(u, dtype=float)
+    if u.shape != (len(t), n):
+        raise ValueError(f"u: expected an array of shape (len(t), n) = {(len(t), n)}, got "
+                         f"{u.shape}")
+    if not np.all(np.isfinite(u)):
+        raise ValueError("u: contains NaN or inf")
+    if len(t) == 1:
+        return lambda _t: u[0]
+    interpolant = scipy.interpolate.interp1d(t, u, axis=0, assume_sorted=True,
+                                             bounds_error=False, fill_value=(u[0], u[-1]))
+    return lambda s: interpolant(s)
+
+
+class MassMatrixDynamics:
+    """Equations ``E(q, qd, qdd, tau, t) = 0``, linear in ``qdd``, in mass-matrix form.
+
+    Parameters
+    ----------
+    coords : Coordinates
+    equations : sequence of sympy.Expr, length n
+        One equation per coordinate (equal to zero), linear in ``coords.qdd``.
+
+    Attributes
+    ----------
+    mass_matrix_expr : sympy.Matrix, shape (n, n)
+        ``M(q, qd)``.
+    forcing_expr : sympy.Matrix, shape (n, 1)
+        ``f(q, qd, tau, t)``, so that ``M qdd = f``.
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> dyn = px.MassMatrixDynamics(c, [2 * c.qdd[0] + 3 * c.q[0] - c.tau[0]])
+    >>> dyn.mass_matrix_expr, dyn.forcing_expr
+    (Matrix([[2]]), Matrix([[-3*x + tau_x]]))
+    """
+
+    def __init__(self, coords: Coordinates, equations):
+        if not isinstance(coords, Coordinates):
+            raise TypeError(f"coords: expected Coordinates, got {type(coords).__name__}")
+        equations = [sp.sympify(e) for e in equations]
+        if len(equations) != coords.n:
+            raise ValueError(f"equations: expected {coords.n} equations, got {len(equations)}")
+        qdd = sp.Matrix(coords.qdd)
+        eqs = sp.Matrix(equations)
+        mass = eqs.jacobian(qdd)
+        if any(sp.diff(m, a) != 0 for m in mass for a in coords.qdd):
+            raise ValueError("equations: not linear in the accelerations")
+        zero = {a: 0 for a in coords.qdd}
+        self.coords = coords
+        self.equations = equations
+        self.mass_matrix_expr = mass
+        self.forcing_expr = -eqs.subs(zero)
+        n = coords.n
+        self._evaluate = compile_entries(coords.variables, list(mass) + list(self.forcing_expr))
+        self._n = n
+
+    def mass_and_forcing(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Evaluate ``M`` (N, n, n) and ``f`` (N, n) on a stacked-variables array ``z``."""
+        n, n_samples = self._n, z.shape[0]
+        values = [np.broadcast_to(v, (n_samples,)) for v in self._evaluate(z)]
+        mass = np.stack(values[: n * n], axis=-1).reshape(n_samples, n, n)
+        force = np.stack(values[n * n :], axis=-1)
+        return mass, force
+
+    def accelerations(self, q, qd, tau=None, t=None, rcond: float = 1e-12) -> np.ndarray:
+        """Accelerations ``qdd = M^-1 f`` at many states at once.
+
+        Parameters
+        ----------
+        q, qd : array, shape (N, n)
+        tau : array, shape (N, n), optional
+            Generalized forces (inputs), zero when absent.
+        t : array, shape (N,), optional
+        rcond : float
+            Reciprocal condition number of ``M`` below which it counts as singular.
+
+        Returns
+        -------
+        ndarray, shape (N, n)
+
+        Raises
+        ------
+        SingularMassMatrixError
+            Where ``M`` is singular.
+        """
+        z = stack_variables(q, qd, None, tau, t)
+        mass, force = self.mass_and_forcing(z)
+        singular = self._singular(mass, rcond)
+        if np.any(singular):
+            idx = np.flatnonzero(singular)
+            raise SingularMassMatrixError(
+                f"the identified mass matrix is singular at {len(idx)} of {len(z)} states "
+                f"(first at sample {idx[0]}); the equations of some coordinates contain no "
+                "acceleration there",
+                idx,
+            )
+        return np.linalg.solve(mass, force[..., None])[..., 0]
+
+    @staticmethod
+    def _singular(mass: np.ndarray, rcond: float) -> np.ndarray:
+        if not np.all(np.isfinite(mass)):
+            return ~np.all(np.isfinite(mass), axis=(1, 2))
+        s = np.linalg.svd(mass, compute_uv=False)
+        return ~(s[:, -1] > rcond * s[:, 0])
+
+    def simulate(
+        self,
+        x0,
+        t,
+        u=None,
+        *,
+        method: str = "RK45",
+        rtol: float = 1e-8,
+        atol: float = 1e-10,
+        divergence_bound: float = 1e6,
+        max_evaluations: int = 1_000_000,
+        timeout: float | None = 300.0,
+    ) -> np.ndarray:
+        """Integrate the dynamics with one of scipy's adaptive ODE solvers.
+
+        Parameters
+        ----------
+        x0 : array, shape (2n,)
+            Initial state ``[q_1..q_n, qd_1..qd_n]``.
+        t : array, shape (T,)
+            Strictly increasing output times; integration runs from ``t[0]`` to ``t[-1]``.
+        u : None, array (T, n) or callable ``u(t) -> (n,)``
+            Generalized forces; arrays are interpolated linearly.
+        method : {"RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA"}
+        rtol, atol : float
+            Tolerances of the solver.
+        divergence_bound : float
+            The run stops when any state component exceeds it in magnitude.
+        max_evaluations : int
+            Bound on right-hand-side evaluations (a stiff or blowing-up model cannot hang).
+        timeout : float or None
+            Wall-clock bound in seconds.
+
+        Returns
+        -------
+        ndarray, shape (T, 2n)
+
+        Raises
+        ------
+        SimulationError
+            On divergence, singular mass matrix, non-finite derivative, exhausted evaluations
+            or timeout; carries the valid part of the trajectory.
+        """
+        n = self._n
+        x0 = np.asarray(x0, dtype=float).reshape(-1)
+        if x0.shape != (2 * n,) or not np.all(np.isfinite(x0)):
+            raise ValueError(f"x0: expected {2 * n} finite values [q, qd], got {x0.shape}")
+        t = _check_times(t, "t")
+        force = force_function(u, t, n)
+        counter = {"n": 0}
+        start = _time.perf_counter()
+        z = np.zeros((1, 4 * n + 1))
+
+        def rhs(s, state):
+            counter["n"] += 1
+            if counter["n"] > max_evaluations:
+                raise _Stop(s, "too many evaluations")
+            if timeout is not None and counter["n"] % 256 == 0:
+                if _time.perf_counter() - start > timeout:
+                    raise _Stop(s, "timeout")
+            z[0, : 2 * n] = state
+            z[0, 3 * n : 4 * n] = force(s)
+            z[0, -1] = s
+            mass, f = self.mass_and_forcing(z)
+            if self._singular(mass, 1e-12)[0]:
+                raise _Stop(s, "singular mass matrix")
+            acc = np.linalg.solve(mass[0], f[0])
+            if not np.all(np.isfinite(acc)):
+                raise _Stop(s, "non-finite derivative")
+            return np.concatenate([state[n:], acc])
+
+        solver_class = _SOLVERS.get(method)
+        if solver_class is None:
+            raise ValueError(f"method: expected one of {sorted(_SOLVERS)}, got {method!r}")
+        out = np.empty((len(t), 2 * n))
+        out[0] = x0
+        filled = 1
+        try:
+            solver = solver_class(rhs, t[0], x0, t[-1], rtol=rtol, atol=atol)
+            while filled < len(t):
+                message = solver.step()
+                if solver.status == "failed":
+                    raise _Stop(solver.t, f"integrator failure ({message})")
+                stop = filled + np.searchsorted(t[filled:], solver.t, side="right")
+                if stop > filled:
+                    out[filled:stop] = solver.dense_output()(t[filled:stop]).T
+                    bad = np.flatnonzero(np.max(np.abs(out[filled:stop]), axis=1)
+                                         > divergence_bound)
+                    if len(bad):
+                        filled += bad[0]
+                        raise _Stop(t[filled], "diverged")
+                    filled = stop
+                elif np.max(np.abs(solver.y)) > divergence_bound:
+                    raise _Stop(solver.t, "diverged")
+        except _Stop as stop:
+            raise SimulationError(
+                f"simulation stopped at t={stop.t:.6g}: {stop.reason}",
+                stop.t, t[:filled], out[:filled], stop.reason,
+            ) from None
+        return out
+
+
+_SOLVERS = {name: getattr(scipy.integrate, name)
+            for name in ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")}
+
+
+class _Stop(Exception):
+    def __init__(self, t, reason):
+        super().__init__(reason)
+        self.t, self.reason = float(t), reason
+
+
+def _check_times(t, name: str) -> np.ndarray:
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1 or len(t) < 2:
+        raise ValueError(f"{name}: expected a 1-D array of at least 2 times, got shape {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise ValueError(f"{name}: contains NaN or inf")
+    if np.any(np.diff(t) <= 0):
+        raise ValueError(f"{name}: times must be strictly increasing")
+    return t

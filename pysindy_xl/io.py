@@ -1,0 +1,194 @@
+"""JSON persistence of identified models.
+
+The file holds the coordinate names, the catalog specification (terms as strings of the
+restricted grammar of :mod:`pysindy_xl.expressions`, masks, interlink matrices) and the
+coefficients. Loading validates every field and parses terms with that grammar only: nothing
+in the file is executed (no pickle, no ``eval``, no ``sympify``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+
+import numpy as np
+
+from .expressions import parse_expression
+from .feature_library import CatalogRepartition, ClassicalLibrary, ExternalForces, LagrangeLibrary
+from .symbols import Coordinates
+
+__all__ = ["save_model", "load_model", "FORMAT", "VERSION"]
+
+FORMAT = "pysindy-xl-model"
+VERSION = 1
+_MAX_BYTES = 50_000_000
+
+
+def save_model(model, path) -> None:
+    """Write a fitted :class:`~pysindy_xl.XLSINDy` to ``path`` as JSON.
+
+    Parameters
+    ----------
+    model : XLSINDy
+        A fitted model.
+    path : str or os.PathLike
+    """
+    from sklearn.utils.validation import check_is_fitted
+
+    check_is_fitted(model, "coef_")
+    library = model.feature_library_
+    optimizer = model.optimizer_
+    document = {
+        "format": FORMAT,
+        "version": VERSION,
+        "coordinates": list(library.coords.names),
+        "feature_library": library.to_spec(),
+        "feature_names": library.get_feature_names(),
+        "coefficients": [float(c) for c in model.coef_],
+        "dropped_features": model.dropped_features_,
+        "forced_coordinates": [bool(f) for f in model.forced_coordinates_],
+        "optimizer": {"type": type(optimizer).__name__, "params": _jsonable_params(optimizer)},
+    }
+    text = json.dumps(document, indent=1, allow_nan=False)
+    with open(os.fspath(path), "w", encoding="utf-8") as fh:
+        fh.write(text)
+
+
+def _jsonable_params(estimator) -> dict:
+    out = {}
+    for key, value in estimator.get_params(deep=False).items():
+        if value is None or isinstance(value, (bool, int, float, str)):
+            if isinstance(value, float) and not math.isfinite(value):
+                continue
+            out[key] = value
+    return out
+
+
+def _fail(path, what: str):
+    return ValueError(f"path: {os.fspath(path)!r} is not a valid pysindy-xl model file: {what}")
+
+
+def _expect(condition: bool, path, what: str):
+    if not condition:
+        raise _fail(path, what)
+
+
+def _library_from_spec(spec, coords: Coordinates, path):
+    _expect(isinstance(spec, dict) and isinstance(spec.get("type"), str), path,
+            "library spec must be an object with a 'type'")
+    kind = spec["type"]
+    table = {str(s): s for s in coords.variables}
+
+    def terms():
+        raw = spec.get("terms")
+        _expect(isinstance(raw, list) and raw and all(isinstance(t, str) for t in raw), path,
+                f"{kind}.terms must be a non-empty list of strings")
+        try:
+            return [parse_expression(t, table) for t in raw]
+        except ValueError as err:
+            raise _fail(path, str(err)) from None
+
+    if kind == "CatalogRepartition":
+        libs = spec.get("libraries")
+        _expect(isinstance(libs, list) and libs, path, "libraries must be a non-empty list")
+        return CatalogRepartition([_library_from_spec(s, coords, path) for s in libs])
+    if kind == "LagrangeLibrary":
+        return LagrangeLibrary(coords, terms())
+    if kind == "ClassicalLibrary":
+        parsed = terms()
+        mask = np.asarray(spec.get("mask"))
+        _expect(mask.shape == (len(parsed), coords.n) and np.isin(mask, (0, 1)).all(), path,
+                "ClassicalLibrary.mask must be a 0/1 matrix (n_terms, n)")
+        return ClassicalLibrary(coords, parsed, mask=mask.astype(bool))
+    if kind == "ExternalForces":
+        try:
+            interlink = np.asarray(spec.get("interlink"), dtype=float)
+        except (TypeError, ValueError):
+            raise _fail(path, "ExternalForces.interlink must be a numeric matrix") from None
+        _expect(interlink.shape == (coords.n, coords.n) and np.all(np.isfinite(interlink)), path,
+                "ExternalForces.interlink must be a finite (n, n) matrix")
+        return ExternalForces(coords, interlink=interlink)
+    raise _fail(path, f"unknown library type {kind!r}")
+
+
+def load_model(path):
+    """Read a model written by :func:`save_model`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    XLSINDy
+        A fitted model that predicts and simulates like the saved one.
+
+    Raises
+    ------
+    ValueError
+        If the file is not a valid model file (the message says what is wrong).
+    """
+    from . import optimizers
+    from .model import XLSINDy
+
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise ValueError(f"path: no such file {path!r}")
+    if os.path.getsize(path) > _MAX_BYTES:
+        raise _fail(path, "file too large")
+    try:
+        with open(path, encoding="utf-8") as fh:
+            document = json.load(fh, parse_constant=lambda c: (_ for _ in ()).throw(
+                _fail(path, f"non-finite number {c}")))
+    except (json.JSONDecodeError, UnicodeDecodeError) as err:
+        raise _fail(path, f"not JSON ({err})") from None
+    _expect(isinstance(document, dict) and document.get("format") == FORMAT, path,
+            f"'format' must be {FORMAT!r}")
+    _expect(document.get("version") == VERSION, path, f"unsupported version "
+            f"{document.get('version')!r}")
+    names = document.get("coordinates")
+    _expect(isinstance(names, list) and all(isinstance(n, str) for n in names), path,
+            "'coordinates' must be a list of names")
+    try:
+        coords = Coordinates(names)
+    except (TypeError, ValueError) as err:
+        raise _fail(path, str(err)) from None
+    library = _library_from_spec(document.get("feature_library"), coords, path)
+    if not isinstance(library, CatalogRepartition):
+        library = CatalogRepartition([library])
+    try:
+        library.fit()
+    except (TypeError, ValueError) as err:
+        raise _fail(path, f"catalog: {err}") from None
+    feature_names = library.get_feature_names()
+    _expect(document.get("feature_names") == feature_names, path,
+            "feature_names do not match the catalog")
+    coef = document.get("coefficients")
+    _expect(isinstance(coef, list) and len(coef) == len(feature_names)
+            and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in coef), path,
+            "'coefficients' must be one number per feature")
+    forced = document.get("forced_coordinates", [True] * coords.n)
+    _expect(isinstance(forced, list) and len(forced) == coords.n, path,
+            "'forced_coordinates' must have one flag per coordinate")
+    dropped = document.get("dropped_features", {})
+    _expect(isinstance(dropped, dict), path, "'dropped_features' must be an object")
+
+    optimizer = None
+    spec = document.get("optimizer") or {}
+    if isinstance(spec, dict) and spec.get("type") in optimizers.__all__:
+        candidate = getattr(optimizers, spec["type"])
+        params = spec.get("params", {})
+        valid = candidate().get_params(deep=False)
+        if isinstance(params, dict) and set(params) <= set(valid):
+            optimizer = candidate(**params)
+    model = XLSINDy(feature_library=library, optimizer=optimizer)
+    model.feature_library_ = library
+    model.optimizer_ = optimizer
+    model.coef_ = np.asarray(coef, dtype=float)
+    model.dropped_features_ = {str(k): str(v) for k, v in dropped.items()}
+    model.n_coordinates_ = coords.n
+    model.n_samples_ = 0
+    model.forced_coordinates_ = np.asarray(forced, dtype=bool)
+    model._build_dynamics()
+    return model

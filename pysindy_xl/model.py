@@ -1,0 +1,487 @@
+"""XLSINDy: the estimator that identifies a mechanical system from trajectories."""
+
+from __future__ import annotations
+
+import numpy as np
+import pysindy as ps
+import sympy as sp
+from sklearn.base import BaseEstimator
+from sklearn.metrics import r2_score
+from sklearn.utils.validation import check_is_fitted
+
+from .dynamics import MassMatrixDynamics, _check_times
+from .feature_library import (
+    CatalogRepartition,
+    LagrangeLibrary,
+    SymbolicLibrary,
+    stack_variables,
+)
+from .optimizers import ExplicitOptimizer, independent_columns
+
+__all__ = ["XLSINDy"]
+
+
+def _as_list(value, name: str) -> tuple[list, bool]:
+    """``value`` as a list of trajectories and whether it was given as a list."""
+    if isinstance(value, (list, tuple)):
+        if not value:
+            raise ValueError(f"{name}: expected at least one trajectory")
+        return list(value), True
+    return [value], False
+
+
+def _check_array(a, name: str, shape=None) -> np.ndarray:
+    try:
+        a = np.asarray(a, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expected a numeric array") from None
+    if a.ndim == 1 and shape is not None and shape[1] == 1:
+        a = a[:, None]
+    if a.ndim != 2:
+        raise ValueError(f"{name}: expected a 2-D array (n_samples, n), got shape {a.shape}")
+    if shape is not None and a.shape != tuple(shape):
+        raise ValueError(f"{name}: expected shape {tuple(shape)}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: contains NaN or inf")
+    return a
+
+
+def _probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndarray:
+    """Random points in the bounding box of the data, each variable drawn independently.
+
+    Column dependencies found on these points are identities of the catalog (true for any
+    data, such as ``cos^2 + sin^2 = 1``), never the physical law that the trajectories obey and
+    the regression is looking for.
+    """
+    rng = np.random.default_rng(seed)
+    low, high = z.min(axis=0), z.max(axis=0)
+    return rng.uniform(low, high, size=(n_points, z.shape[1]))
+
+
+def _significant(expr: sp.Expr, digits: int) -> sp.Expr:
+    return expr.xreplace({f: sp.Float(float(f"{float(f):.{digits}g}")) for f in
+                          expr.atoms(sp.Float)})
+
+
+class XLSINDy(BaseEstimator):
+    """Sparse identification of a mechanical system from position trajectories.
+
+    Builds the stacked regression matrix of a catalog (Lagrangian, classical and force terms,
+    see :class:`~pysindy_xl.CatalogRepartition`), removes exactly dependent columns, solves it
+    with a catalog optimizer and exposes the identified equations of motion in mass-matrix form.
+
+    Parameters
+    ----------
+    feature_library : SymbolicLibrary or CatalogRepartition
+        The catalog. A single library is wrapped in a ``CatalogRepartition`` (which adds the
+        force column).
+    optimizer : catalog optimizer, optional
+        :class:`~pysindy_xl.ExplicitOptimizer`, :class:`~pysindy_xl.ImplicitOptimizer`,
+        :class:`~pysindy_xl.MixedOptimizer` or anything with ``fit_catalog``. Default: chosen
+        from the data: explicit when every coordinate is forced, implicit when none is,
+        mixed otherwise.
+    differentiation_method : pysindy differentiation method, optional
+        Used for velocities and accelerations that are not given. Default:
+        ``ps.SmoothedFiniteDifference()`` (second-order finite differences after a
+        Savitzky-Golay smoothing): exact enough on clean data and robust to moderate noise,
+        which plain finite differences amplify twice for accelerations.
+    drop_dependent : bool, default True
+        Remove catalog columns that are zero or exact linear combinations of preferred columns
+        (see :func:`~pysindy_xl.optimizers.independent_columns`): a sparse regression on an
+        exactly rank-deficient matrix is a lottery. The test runs on random points of the
+        data's bounding box, so it finds identities of the catalog, not the physical law.
+
+    Attributes
+    ----------
+    feature_library_ : CatalogRepartition
+    optimizer_ : fitted catalog optimizer
+    coef_ : ndarray, shape (F,)
+    dropped_features_ : dict of str to str
+        Features removed before regression, with the reason.
+    dynamics_ : MassMatrixDynamics
+        The identified equations in mass-matrix form (``None`` if they contain no acceleration).
+    n_coordinates_ : int
+    n_samples_ : int
+        Samples used in the fit, all trajectories together.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2, c.q[0] ** 4])
+    >>> t = np.linspace(0, 10, 2001)
+    >>> u = np.sin(1.3 * t)[:, None]
+    >>> x = np.column_stack([np.cos(2 * t) + 0.1 * t])
+    >>> xd, xdd = -2 * np.sin(2 * t)[:, None] + 0.1, -4 * np.cos(2 * t)[:, None]
+    >>> model = px.XLSINDy(lib).fit(x, t, x_dot=xd, x_ddot=xdd, u=xdd + 3 * x)
+    >>> model.print()
+    L = 0.5*x_dot**2 - 1.5*x**2
+    (x) 3.0*x + 1.0*x_ddot = tau_x
+    """
+
+    def __init__(self, feature_library=None, optimizer=None, differentiation_method=None,
+                 drop_dependent=True):
+        self.feature_library = feature_library
+        self.optimizer = optimizer
+        self.differentiation_method = differentiation_method
+        self.drop_dependent = drop_dependent
+
+    # -- data handling -----------------------------------------------------------------------
+    def _library(self) -> CatalogRepartition:
+        lib = self.feature_library
+        if lib is None:
+            raise ValueError("feature_library: a catalog is required (e.g. LagrangeLibrary)")
+        if isinstance(lib, CatalogRepartition):
+            return lib
+        if isinstance(lib, SymbolicLibrary):
+            return CatalogRepartition([lib])
+        raise TypeError(
+            "feature_library: expected a pysindy_xl library (LagrangeLibrary, ClassicalLibrary, "
+            f"ExternalForces, CatalogRepartition), got {type(lib).__name__}"
+        )
+
+    def _differentiate(self, values: np.ndarray, t: np.ndarray) -> np.ndarray:
+        method = self.differentiation_method
+        if method is None:
+            method = ps.SmoothedFiniteDifference()
+        if not callable(method):
+            raise TypeError("differentiation_method: expected a pysindy differentiation method")
+        result = np.asarray(method(values, t), dtype=float)
+        if result.shape != values.shape or not np.all(np.isfinite(result)):
+            raise ValueError("differentiation_method: returned an invalid derivative")
+        return result
+
+    def _trajectories(self, x, t, x_dot, x_ddot, u, n):
+        """Validate the fit/score inputs; returns per-trajectory dicts of arrays."""
+        xs, is_list = _as_list(x, "x")
+        if isinstance(t, (list, tuple)):
+            if not is_list or len(t) != len(xs):
+                raise ValueError(
+                    "t: a list of times needs x to be a list of the same length"
+                )
+            ts = list(t)
+        else:
+            ts = [t] * len(xs)
+        optional = {}
+        for name, value in (("x_dot", x_dot), ("x_ddot", x_ddot), ("u", u)):
+            if value is None:
+                optional[name] = [None] * len(xs)
+                continue
+            values, value_is_list = _as_list(value, name)
+            if value_is_list != is_list or len(values) != len(xs):
+                raise ValueError(f"{name}: expected the same layout as x ({len(xs)} "
+                                 f"{'trajectories' if is_list else 'array'})")
+            optional[name] = values
+        out = []
+        for k, (xk, tk) in enumerate(zip(xs, ts, strict=True)):
+            label = f"[{k}]" if is_list else ""
+            xk = _check_array(xk, f"x{label}")
+            if xk.shape[1] != n:
+                raise ValueError(f"x{label}: expected {n} columns (one per coordinate), got "
+                                 f"{xk.shape[1]}")
+            if xk.shape[0] < 5:
+                raise ValueError(f"x{label}: expected at least 5 samples, got {xk.shape[0]}")
+            tk = self._times(tk, xk.shape[0], f"t{label}")
+            arrays = {"x": xk, "t": tk}
+            for name in ("x_dot", "x_ddot", "u"):
+                v = optional[name][k]
+                arrays[name] = None if v is None else _check_array(v, f"{name}{label}", xk.shape)
+            if arrays["x_dot"] is None:
+                arrays["x_dot"] = self._differentiate(xk, tk)
+            if arrays["x_ddot"] is None:
+                arrays["x_ddot"] = self._differentiate(arrays["x_dot"], tk)
+            out.append(arrays)
+        return out
+
+    @staticmethod
+    def _times(t, n_samples: int, name: str) -> np.ndarray:
+        if np.ndim(t) == 0:
+            try:
+                dt = float(t)
+            except (TypeError, ValueError):
+                raise TypeError(f"{name}: expected a time step or an array of times") from None
+            if not np.isfinite(dt) or dt <= 0:
+                raise ValueError(f"{name}: the time step must be positive and finite, got {t!r}")
+            return np.arange(n_samples) * dt
+        t = _check_times(t, name)
+        if len(t) != n_samples:
+            raise ValueError(f"{name}: expected {n_samples} times (one per sample), got {len(t)}")
+        return t
+
+    # -- fit ---------------------------------------------------------------------------------
+    def fit(self, x, t, x_dot=None, x_ddot=None, u=None):
+        """Identify the equations of motion.
+
+        Parameters
+        ----------
+        x : array (N, n) or list of arrays
+            Positions, one trajectory or several.
+        t : float, array (N,) or list of arrays
+            Time step or sample times (strictly increasing), matching ``x``.
+        x_dot, x_ddot : same layout as ``x``, optional
+            Measured velocities and accelerations; computed with ``differentiation_method``
+            when absent.
+        u : same layout as ``x``, optional
+            Generalized forces (inputs); ``None`` means unforced (implicit identification).
+
+        Returns
+        -------
+        self
+        """
+        library = self._library()
+        library.fit()
+        coords = library.coords
+        n = coords.n
+        data = self._trajectories(x, t, x_dot, x_ddot, u, n)
+        z = np.vstack([
+            stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"]) for d in data
+        ])
+        if not any(library.symbolic_matrix_[:, j].free_symbols & set(coords.qdd)
+                   for j in range(library.n_output_features_)):
+            raise ValueError(
+                "feature_library: no term contains an acceleration; add Lagrangian terms with "
+                "velocities (e.g. q_dot**2) or classical terms in q_ddot"
+            )
+        theta = library.transform(z)
+        if self.drop_dependent:
+            keep, dropped = independent_columns(
+                library.transform(_probe_points(z)), library.column_priority()
+            )
+        else:
+            keep, dropped = np.arange(theta.shape[1]), {}
+        force_columns = [int(np.flatnonzero(keep == j)[0]) for j in library.force_columns_
+                         if j in keep]
+        forced = np.zeros(n, dtype=bool)
+        if u is not None:
+            force_block = theta[:, library.force_columns_].reshape(n, -1, 
+                                                                   len(library.force_columns_))
+            forced = np.any(force_block != 0, axis=(1, 2))
+        optimizer = self._optimizer(forced)
+        optimizer.fit_catalog(theta[:, keep], n, force_columns)
+        coef = np.zeros(theta.shape[1])
+        coef[keep] = optimizer.coef_
+        self.feature_library_ = library
+        self.optimizer_ = optimizer
+        self.coef_ = coef
+        names = library.get_feature_names()
+        self.dropped_features_ = {names[j]: reason for j, reason in dropped.items()}
+        self.n_coordinates_ = n
+        self.n_samples_ = z.shape[0]
+        self.forced_coordinates_ = forced
+        self._build_dynamics()
+        return self
+
+    def _optimizer(self, forced: np.ndarray):
+        if self.optimizer is not None:
+            if not hasattr(self.optimizer, "fit_catalog"):
+                raise TypeError(
+                    "optimizer: expected a catalog optimizer with fit_catalog (ExplicitOptimizer, "
+                    "ImplicitOptimizer, MixedOptimizer); wrap pysindy optimizers in "
+                    "ExplicitOptimizer(method=...)"
+                )
+            from sklearn.base import clone
+
+            return clone(self.optimizer)
+        if forced.all():
+            return ExplicitOptimizer()
+        from . import optimizers
+
+        name = "ImplicitOptimizer" if not forced.any() else "MixedOptimizer"
+        if not hasattr(optimizers, name):
+            raise ValueError(f"optimizer: the data needs {name}, which is not available")
+        return getattr(optimizers, name)()
+
+    def _build_dynamics(self):
+        equations = self._equation_exprs()
+        has_acc = any(e.free_symbols & set(self.feature_library_.coords.qdd) for e in equations)
+        self.dynamics_ = (MassMatrixDynamics(self.feature_library_.coords, equations)
+                          if has_acc else None)
+
+    def _equation_exprs(self) -> list[sp.Expr]:
+        matrix = self.feature_library_.symbolic_matrix_
+        active = np.flatnonzero(self.coef_)
+        return [
+            sp.expand(sum((sp.Float(self.coef_[j]) * matrix[i, j] for j in active), sp.Integer(0)))
+            for i in range(matrix.shape[0])
+        ]
+
+    # -- inspection ----------------------------------------------------------------------------
+    def coefficients(self) -> np.ndarray:
+        """Identified coefficient vector, one entry per feature (see ``get_feature_names``)."""
+        check_is_fitted(self, "coef_")
+        return self.coef_.copy()
+
+    def get_feature_names(self) -> list[str]:
+        """Names of the catalog features, in coefficient order."""
+        check_is_fitted(self, "coef_")
+        return self.feature_library_.get_feature_names()
+
+    def equations(self, precision: int = 4) -> list[str]:
+        """Identified equations of motion, one per coordinate, as ``lhs = forces``.
+
+        Parameters
+        ----------
+        precision : int
+            Significant digits of the printed coefficients.
+
+        Returns
+        -------
+        list of str
+        """
+        check_is_fitted(self, "coef_")
+        library = self.feature_library_
+        matrix = library.symbolic_matrix_
+        forces = set(library.force_columns_)
+        out = []
+        for i in range(matrix.shape[0]):
+            lhs = sum((sp.Float(self.coef_[j]) * matrix[i, j] for j in np.flatnonzero(self.coef_)
+                       if j not in forces), sp.Integer(0))
+            rhs = sum((-sp.Float(self.coef_[j]) * matrix[i, j] for j in forces), sp.Integer(0))
+            lhs, rhs = _significant(sp.expand(lhs), precision), _significant(sp.expand(rhs),
+                                                                              precision)
+            out.append(f"{lhs} = {rhs}")
+        return out
+
+    def lagrangian(self) -> sp.Expr:
+        """Identified Lagrangian: the Lagrange terms weighted by their coefficients."""
+        check_is_fitted(self, "coef_")
+        total = sp.Integer(0)
+        for lib, sl in zip(self.feature_library_.libraries_, self.feature_library_.slices_,
+                           strict=True):
+            if isinstance(lib, LagrangeLibrary):
+                for k, term in enumerate(lib.terms_):
+                    if self.coef_[sl.start + k] != 0:
+                        total += sp.Float(self.coef_[sl.start + k]) * term
+        return total
+
+    def print(self, precision: int = 4) -> None:
+        """Print the identified Lagrangian and the equations of motion.
+
+        Parameters
+        ----------
+        precision : int
+            Significant digits of the printed coefficients.
+        """
+        check_is_fitted(self, "coef_")
+        lagrangian = self.lagrangian()
+        if lagrangian != 0:
+            print(f"L = {_significant(lagrangian, precision)}")
+        for name, eq in zip(self.feature_library_.coords.names, self.equations(precision),
+                            strict=True):
+            print(f"({name}) {eq}")
+
+    # -- prediction ----------------------------------------------------------------------------
+    def _require_dynamics(self) -> MassMatrixDynamics:
+        check_is_fitted(self, "coef_")
+        if self.dynamics_ is None:
+            raise ValueError(
+                "the identified equations contain no acceleration, so they define no dynamics"
+            )
+        return self.dynamics_
+
+    def predict(self, x, x_dot, u=None):
+        """Accelerations predicted by the identified equations.
+
+        Parameters
+        ----------
+        x, x_dot : array (N, n) or list of arrays
+            Positions and velocities.
+        u : same layout, optional
+            Generalized forces; zero when absent.
+
+        Returns
+        -------
+        ndarray (N, n), or a list of them when ``x`` is a list.
+        """
+        dynamics = self._require_dynamics()
+        n = self.n_coordinates_
+        xs, is_list = _as_list(x, "x")
+        xds, xd_list = _as_list(x_dot, "x_dot")
+        us, u_list = _as_list(u, "u") if u is not None else ([None] * len(xs), is_list)
+        if xd_list != is_list or len(xds) != len(xs) or u_list != is_list or len(us) != len(xs):
+            raise ValueError("x_dot, u: expected the same layout as x")
+        out = []
+        for k, (xk, xdk, uk) in enumerate(zip(xs, xds, us, strict=True)):
+            label = f"[{k}]" if is_list else ""
+            xk = _check_array(xk, f"x{label}")
+            if xk.shape[1] != n:
+                raise ValueError(f"x{label}: expected {n} columns, got {xk.shape[1]}")
+            xdk = _check_array(xdk, f"x_dot{label}", xk.shape)
+            uk = None if uk is None else _check_array(uk, f"u{label}", xk.shape)
+            out.append(dynamics.accelerations(xk, xdk, uk))
+        return out if is_list else out[0]
+
+    def score(self, x, t, x_dot=None, x_ddot=None, u=None, metric=r2_score):
+        """Score predicted accelerations against measured (or differentiated) ones.
+
+        Parameters
+        ----------
+        x, t, x_dot, x_ddot, u
+            As in :meth:`fit`.
+        metric : callable, default ``sklearn.metrics.r2_score``
+            ``metric(true, predicted)``.
+
+        Returns
+        -------
+        float
+        """
+        self._require_dynamics()
+        data = self._trajectories(x, t, x_dot, x_ddot, u, self.n_coordinates_)
+        true = np.vstack([d["x_ddot"] for d in data])
+        predicted = np.vstack([
+            self.dynamics_.accelerations(d["x"], d["x_dot"], d["u"], d["t"]) for d in data
+        ])
+        return metric(true, predicted)
+
+    def simulate(self, x0, t, u=None, **integrator_options) -> np.ndarray:
+        """Simulate the identified dynamics.
+
+        Parameters
+        ----------
+        x0 : array, shape (2n,)
+            Initial state ``[q_1..q_n, qd_1..qd_n]``.
+        t : array, shape (T,)
+            Output times, strictly increasing.
+        u : None, array (T, n) or callable ``u(t) -> (n,)``
+            Generalized forces (arrays are interpolated linearly).
+        **integrator_options
+            Passed to :meth:`MassMatrixDynamics.simulate` (``method``, ``rtol``, ``atol``,
+            ``divergence_bound``, ``max_evaluations``, ``timeout``).
+
+        Returns
+        -------
+        ndarray, shape (T, 2n)
+
+        Raises
+        ------
+        SimulationError
+            When the model diverges or its mass matrix becomes singular; the exception holds
+            the valid part of the trajectory.
+        """
+        return self._require_dynamics().simulate(x0, t, u, **integrator_options)
+
+    def to_jax(self):
+        """Pure JAX function ``f(state, u) -> d(state)/dt`` of the identified dynamics.
+
+        Returns
+        -------
+        callable
+            jit-, vmap- and grad-compatible; see :mod:`pysindy_xl.jax_dynamics`.
+        """
+        from .jax_dynamics import dynamics_function
+
+        return dynamics_function(self._require_dynamics())
+
+    # -- persistence ---------------------------------------------------------------------------
+    def save(self, path) -> None:
+        """Save the catalog specification and coefficients as JSON (see :mod:`pysindy_xl.io`)."""
+        from .io import save_model
+
+        save_model(self, path)
+
+    @classmethod
+    def load(cls, path) -> XLSINDy:
+        """Load a model written by :meth:`save`; parses only the restricted term grammar."""
+        from .io import load_model
+
+        return load_model(path)

@@ -1,0 +1,358 @@
+"""Trajectories and datasets: NPZ arrays plus JSON metadata, never pickle.
+
+File layout (``Dataset.save``)
+------------------------------
+``DATA.npz`` holds the arrays, all samples of all trajectories concatenated:
+
+==============  ===========  =====================================================
+key             shape        content
+==============  ===========  =====================================================
+``t``           (N,)         sample times (increasing within each trajectory)
+``q``           (N, n)       generalized positions (required)
+``qd``          (N, n)       velocities (optional)
+``qdd``         (N, n)       accelerations (optional)
+``tau``         (N, n)       generalized forces on the coordinates (optional)
+``u``           (N, n)       joint forces, ``tau = u @ B.T`` (optional)
+``trajectory``  (N,)         integer trajectory id of each sample (optional)
+``metadata``    ()           JSON text (unicode array, optional)
+==============  ===========  =====================================================
+
+The metadata are also written next to it as ``DATA.json`` for people to read; loading uses the
+copy inside the NPZ and falls back to the JSON file. A user's own NPZ needs only ``t`` and ``q``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import zipfile
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Trajectory", "Dataset", "load_dataset", "DatasetError"]
+
+FORMAT = "pysindy-xl-dataset"
+VERSION = 1
+_SERIES = ("q", "qd", "qdd", "tau", "u")
+
+
+class DatasetError(ValueError):
+    """A dataset file or array that cannot be used (bad file, missing or malformed arrays)."""
+
+
+@dataclass
+class Trajectory:
+    """One sampled trajectory in generalized coordinates.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+    q, qd, qdd : ndarray, shape (N, n) (``qd`` / ``qdd`` may be None)
+    tau : ndarray, shape (N, n) or None
+        Generalized forces on the coordinates.
+    u : ndarray, shape (N, n) or None
+        Joint forces (one per MuJoCo degree of freedom); ``tau = u @ B.T``.
+    info : dict
+        JSON-serializable description (initial state, forcing signals...).
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray | None = None
+    qdd: np.ndarray | None = None
+    tau: np.ndarray | None = None
+    u: np.ndarray | None = None
+    info: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        self.t = _check_times(self.t, "t")
+        self.q = _check_series(self.q, "q", len(self.t), None)
+        n = self.q.shape[1]
+        for name in _SERIES[1:]:
+            value = getattr(self, name)
+            if value is not None:
+                setattr(self, name, _check_series(value, name, len(self.t), n))
+
+    @property
+    def n_samples(self) -> int:
+        return len(self.t)
+
+    @property
+    def state(self) -> np.ndarray:
+        """``[q, qd]``, shape (N, 2n)."""
+        if self.qd is None:
+            raise ValueError("qd: the trajectory has no velocities")
+        return np.hstack([self.q, self.qd])
+
+
+def _check_times(t, name: str) -> np.ndarray:
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1 or t.size < 2:
+        raise DatasetError(f"{name}: expected a 1-D array of at least 2 times, got shape {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise DatasetError(f"{name}: contains NaN or inf")
+    if np.any(np.diff(t) <= 0):
+        raise DatasetError(f"{name}: times must be strictly increasing within a trajectory")
+    return t
+
+
+def _check_series(a, name: str, n_samples: int, n: int | None) -> np.ndarray:
+    a = np.asarray(a, dtype=float)
+    if a.ndim == 1 and n in (None, 1):
+        a = a[:, None]
+    if a.ndim != 2 or a.shape[0] != n_samples or (n is not None and a.shape[1] != n):
+        want = f"({n_samples}, {n if n is not None else 'n'})"
+        raise DatasetError(f"{name}: expected shape {want}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise DatasetError(f"{name}: contains NaN or inf")
+    return a
+
+
+class Dataset:
+    """Several trajectories of one system plus JSON metadata.
+
+    Parameters
+    ----------
+    trajectories : list of Trajectory
+    coordinate_names : sequence of str
+    metadata : dict, optional
+        JSON-serializable (system name and parameters, forcing mode, noise, seed...).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 1, 11)
+    >>> data = Dataset([Trajectory(t, np.sin(t)[:, None])], ["theta"])
+    >>> data.n_trajectories, data.n
+    (1, 1)
+    """
+
+    def __init__(self, trajectories, coordinate_names, metadata=None):
+        if isinstance(trajectories, Trajectory):
+            trajectories = [trajectories]
+        trajectories = list(trajectories)
+        if not trajectories or not all(isinstance(tr, Trajectory) for tr in trajectories):
+            raise TypeError("trajectories: expected a non-empty list of Trajectory")
+        names = tuple(coordinate_names)
+        for k, tr in enumerate(trajectories):
+            if tr.q.shape[1] != len(names):
+                raise DatasetError(
+                    f"trajectories: trajectory {k} has {tr.q.shape[1]} coordinates, "
+                    f"coordinate_names has {len(names)}"
+                )
+            for key in _SERIES[1:]:
+                if (getattr(tr, key) is None) != (getattr(trajectories[0], key) is None):
+                    raise DatasetError(f"trajectories: {key!r} present in some trajectories only")
+        metadata = dict(metadata or {})
+        try:
+            json.dumps(metadata)
+        except TypeError as error:
+            raise TypeError(f"metadata: expected JSON-serializable values ({error})") from None
+        self.trajectories = trajectories
+        self.coordinate_names = names
+        self.metadata = metadata
+
+    @property
+    def n(self) -> int:
+        """Number of coordinates."""
+        return len(self.coordinate_names)
+
+    @property
+    def n_trajectories(self) -> int:
+        return len(self.trajectories)
+
+    def has(self, key: str) -> bool:
+        """Whether every trajectory holds the series ``key`` (``"qd"``, ``"tau"``...)."""
+        return getattr(self.trajectories[0], key) is not None
+
+    def fit_arguments(self, forces: str | None = "tau") -> dict:
+        """Keyword arguments for ``XLSINDy.fit``: lists of per-trajectory arrays.
+
+        Parameters
+        ----------
+        forces : {"tau", "u", None}, default "tau"
+            Which forces to pass as ``u``: generalized forces (with the default interlink),
+            joint forces (with ``interlink=B``), or none (implicit fit).
+
+        Returns
+        -------
+        dict with keys ``x``, ``t``, ``x_dot``, ``x_ddot``, ``u``
+        """
+        if forces not in ("tau", "u", None):
+            raise ValueError(f"forces: expected 'tau', 'u' or None, got {forces!r}")
+        if forces is not None and not self.has(forces):
+            raise DatasetError(f"forces: the dataset has no {forces!r} array")
+        trs = self.trajectories
+        return {
+            "x": [tr.q for tr in trs],
+            "t": [tr.t for tr in trs],
+            "x_dot": [tr.qd for tr in trs] if self.has("qd") else None,
+            "x_ddot": [tr.qdd for tr in trs] if self.has("qdd") else None,
+            "u": [getattr(tr, forces) for tr in trs] if forces else None,
+        }
+
+    # -- persistence ---------------------------------------------------------------------
+    def to_arrays(self) -> dict:
+        """The NPZ arrays (see the module docstring)."""
+        trs = self.trajectories
+        arrays = {
+            "t": np.concatenate([tr.t for tr in trs]),
+            "trajectory": np.concatenate(
+                [np.full(tr.n_samples, k, dtype=np.int64) for k, tr in enumerate(trs)]
+            ),
+        }
+        for key in _SERIES:
+            if self.has(key):
+                arrays[key] = np.concatenate([getattr(tr, key) for tr in trs])
+        meta = dict(self.metadata, format=FORMAT, version=VERSION,
+                    coordinate_names=list(self.coordinate_names),
+                    trajectory_info=[tr.info for tr in trs])
+        arrays["metadata"] = np.array(json.dumps(meta))
+        return arrays
+
+    def save(self, path, write_json: bool = True):
+        """Write ``path`` (``.npz`` appended when missing) and the JSON metadata beside it.
+
+        Returns
+        -------
+        pathlib.Path
+            The NPZ path written.
+        """
+        import pathlib
+
+        path = pathlib.Path(path)
+        if path.suffix != ".npz":
+            path = path.with_name(path.name + ".npz")
+        arrays = self.to_arrays()
+        np.savez_compressed(path, **arrays)
+        if write_json:
+            meta = json.loads(str(arrays["metadata"]))
+            path.with_suffix(".json").write_text(json.dumps(meta, indent=2) + "\n")
+        return path
+
+    @classmethod
+    def load(cls, path) -> Dataset:
+        """Read a dataset written by :meth:`save` or a user's NPZ (see module docstring).
+
+        Raises
+        ------
+        DatasetError
+            If the file is missing, not an NPZ, or its arrays are missing or malformed.
+        """
+        return load_dataset(path)
+
+    def __repr__(self) -> str:
+        n_samples = sum(tr.n_samples for tr in self.trajectories)
+        return (f"Dataset(coordinates={list(self.coordinate_names)}, "
+                f"trajectories={self.n_trajectories}, samples={n_samples})")
+
+
+def _read_npz(path: str) -> dict:
+    if not os.path.isfile(path):
+        raise DatasetError(f"path: dataset file {path!r} does not exist")
+    try:
+        with np.load(path, allow_pickle=False) as npz:
+            if not hasattr(npz, "files"):
+                raise DatasetError(f"path: {path!r} holds a single array, expected an NPZ archive")
+            arrays = {}
+            for key in npz.files:
+                try:
+                    arrays[key] = npz[key]
+                except ValueError as error:
+                    raise DatasetError(
+                        f"path: array {key!r} of {path!r} cannot be read without pickle "
+                        f"({error}); store plain numeric arrays"
+                    ) from None
+            return arrays
+    except DatasetError:
+        raise
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as error:
+        raise DatasetError(f"path: {path!r} is not a readable NPZ file ({error})") from None
+
+
+def load_dataset(path) -> Dataset:
+    """Read a dataset NPZ (with embedded or side-car JSON metadata, or none).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An ``.npz`` file holding at least ``t`` (N,) and ``q`` (N, n); see the module docstring.
+
+    Returns
+    -------
+    Dataset
+
+    Raises
+    ------
+    DatasetError
+        With a message naming the missing or malformed array.
+    """
+    path = os.fspath(path)
+    arrays = _read_npz(path)
+    missing = [k for k in ("t", "q") if k not in arrays]
+    if missing:
+        raise DatasetError(
+            f"path: {path!r} lacks the required array(s) {missing}; found {sorted(arrays)} "
+            "(expected t (N,), q (N, n), optionally qd, qdd, tau, u, trajectory)"
+        )
+    metadata = {}
+    if "metadata" in arrays:
+        raw = arrays.pop("metadata")
+        if raw.dtype.kind != "U" or raw.ndim != 0:
+            raise DatasetError("metadata: expected a 0-d string array holding JSON text")
+        metadata = _parse_json(str(raw), f"{path!r} (embedded metadata)")
+    else:
+        sidecar = os.path.splitext(path)[0] + ".json"
+        if os.path.isfile(sidecar):
+            with open(sidecar, encoding="utf-8") as handle:
+                metadata = _parse_json(handle.read(), repr(sidecar))
+    for key, a in arrays.items():
+        if a.dtype.kind not in "fiub":
+            raise DatasetError(f"{key}: expected a numeric array, got dtype {a.dtype}")
+    q = arrays["q"]
+    if q.ndim == 1:
+        q = q[:, None]
+    if q.ndim != 2:
+        raise DatasetError(f"q: expected shape (N, n), got {arrays['q'].shape}")
+    n_samples, n = q.shape
+    t = np.asarray(arrays["t"], dtype=float)
+    if t.shape != (n_samples,):
+        raise DatasetError(f"t: expected shape ({n_samples},) like q's rows, got {t.shape}")
+    ids = arrays.get("trajectory", np.zeros(n_samples, dtype=np.int64))
+    if ids.shape != (n_samples,) or ids.dtype.kind not in "iu":
+        raise DatasetError(f"trajectory: expected integer ids of shape ({n_samples},)")
+    names = metadata.get("coordinate_names") or [f"q{k}" for k in range(n)]
+    if len(names) != n:
+        raise DatasetError(
+            f"metadata: coordinate_names has {len(names)} names, q has {n} columns"
+        )
+    infos = metadata.pop("trajectory_info", None)
+    trajectories = []
+    starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
+    ends = np.r_[starts[1:], n_samples]
+    if len(set(ids[starts].tolist())) != len(starts):
+        raise DatasetError("trajectory: the samples of each trajectory must be contiguous")
+    for k, (a, b) in enumerate(zip(starts, ends, strict=True)):
+        series = {}
+        for key in _SERIES:
+            if key in arrays:
+                series[key] = arrays[key][a:b]
+        info = infos[k] if isinstance(infos, list) and len(infos) == len(starts) else {}
+        try:
+            trajectories.append(Trajectory(t=t[a:b], info=info, **series))
+        except DatasetError as error:
+            raise DatasetError(f"{error} (trajectory {ids[a]} of {path!r})") from None
+    for key in ("format", "version", "coordinate_names"):
+        metadata.pop(key, None)
+    return Dataset(trajectories, names, metadata)
+
+
+def _parse_json(text: str, where: str) -> dict:
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise DatasetError(f"metadata: invalid JSON in {where}: {error}") from None
+    if not isinstance(data, dict):
+        raise DatasetError(f"metadata: expected a JSON object in {where}")
+    return data

@@ -1,0 +1,115 @@
+"""Random time-varying forces: sums of sinusoids with random frequencies, phases, amplitudes."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["SumOfSinusoids", "FORCING_MODES"]
+
+#: implicit: no force (random initial condition only); explicit: every actuator driven;
+#: mixed: a chosen subset of the actuators driven.
+FORCING_MODES = ("implicit", "explicit", "mixed")
+
+
+class SumOfSinusoids:
+    """Force signals ``u_a(t) = offset_a + sum_k A_ak sin(2 pi f_ak t + phi_ak)``.
+
+    Parameters
+    ----------
+    amplitudes, frequencies, phases : array, shape (n_signals, n_components)
+        Amplitudes, frequencies (Hz) and phases (rad) of each component.
+    offsets : array, shape (n_signals,), optional
+        Constant part of each signal (default zero).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> force = SumOfSinusoids([[1.0]], [[0.25]], [[0.0]])
+    >>> force(np.array([0.0, 1.0])).round(6)
+    array([[0.],
+           [1.]])
+    """
+
+    def __init__(self, amplitudes, frequencies, phases, offsets=None):
+        arrays = []
+        for name, a in (("amplitudes", amplitudes), ("frequencies", frequencies),
+                        ("phases", phases)):
+            a = np.asarray(a, dtype=float)
+            if a.ndim != 2:
+                raise ValueError(f"{name}: expected shape (n_signals, n_components), got {a.shape}")
+            if not np.all(np.isfinite(a)):
+                raise ValueError(f"{name}: contains NaN or inf")
+            arrays.append(a)
+        if not arrays[0].shape == arrays[1].shape == arrays[2].shape:
+            raise ValueError(
+                "amplitudes, frequencies, phases: expected equal shapes, got "
+                f"{[a.shape for a in arrays]}"
+            )
+        self.amplitudes, self.frequencies, self.phases = arrays
+        n_signals = self.amplitudes.shape[0]
+        offsets = np.zeros(n_signals) if offsets is None else np.asarray(offsets, dtype=float)
+        if offsets.shape != (n_signals,) or not np.all(np.isfinite(offsets)):
+            raise ValueError(f"offsets: expected {n_signals} finite numbers, got {offsets!r}")
+        self.offsets = offsets
+
+    @property
+    def n_signals(self) -> int:
+        return self.amplitudes.shape[0]
+
+    @classmethod
+    def random(cls, scales, rng: np.random.Generator, n_components: int = 6,
+               min_frequency: float = 0.05, max_frequency: float = 1.5, offsets=None):
+        """Draw random signals whose amplitudes sum to ``scales``.
+
+        Parameters
+        ----------
+        scales : array, shape (n_signals,)
+            Peak amplitude bound of each signal (the sum of its component amplitudes); a zero
+            scale gives a zero signal.
+        rng : numpy.random.Generator
+        n_components : int, default 6
+        min_frequency, max_frequency : float
+            Frequencies are drawn log-uniformly in this band (Hz).
+        offsets : array, shape (n_signals,), optional
+
+        Returns
+        -------
+        SumOfSinusoids
+        """
+        scales = np.asarray(scales, dtype=float).reshape(-1)
+        if np.any(scales < 0) or not np.all(np.isfinite(scales)):
+            raise ValueError(f"scales: expected non-negative finite numbers, got {scales!r}")
+        if not isinstance(n_components, (int, np.integer)) or n_components < 1:
+            raise ValueError(f"n_components: expected an integer >= 1, got {n_components!r}")
+        if not 0 < min_frequency <= max_frequency:
+            raise ValueError(
+                "min_frequency, max_frequency: expected 0 < min_frequency <= max_frequency, got "
+                f"{min_frequency!r}, {max_frequency!r}"
+            )
+        shape = (scales.size, n_components)
+        weights = rng.uniform(0.2, 1.0, shape)
+        amplitudes = weights / weights.sum(axis=1, keepdims=True) * scales[:, None]
+        frequencies = np.exp(rng.uniform(np.log(min_frequency), np.log(max_frequency), shape))
+        phases = rng.uniform(0.0, 2 * np.pi, shape)
+        return cls(amplitudes, frequencies, phases, offsets)
+
+    def __call__(self, t):
+        """Evaluate at times ``t`` (scalar -> (n_signals,), array (N,) -> (N, n_signals))."""
+        t_arr = np.asarray(t, dtype=float)
+        angles = 2 * np.pi * self.frequencies[None] * t_arr.reshape(-1, 1, 1) + self.phases[None]
+        values = (self.amplitudes[None] * np.sin(angles)).sum(axis=2) + self.offsets
+        return values[0] if t_arr.ndim == 0 else values
+
+    def to_dict(self) -> dict:
+        """JSON-serializable description."""
+        return {"amplitudes": self.amplitudes.tolist(), "frequencies": self.frequencies.tolist(),
+                "phases": self.phases.tolist(), "offsets": self.offsets.tolist()}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> SumOfSinusoids:
+        """Inverse of :meth:`to_dict`."""
+        try:
+            return cls(data["amplitudes"], data["frequencies"], data["phases"],
+                       data.get("offsets"))
+        except (KeyError, TypeError) as error:
+            raise ValueError(f"data: not a SumOfSinusoids description ({error})") from None
