@@ -319,6 +319,11 @@ def load_dataset(path) -> Dataset:
     t = np.asarray(arrays["t"], dtype=float)
     if t.shape != (n_samples,):
         raise DatasetError(f"t: expected shape ({n_samples},) like q's rows, got {t.shape}")
+    for key in _SERIES[1:]:
+        if key in arrays:
+            shape = arrays[key].shape
+            if shape not in ((n_samples, n),) + (((n_samples,),) if n == 1 else ()):
+                raise DatasetError(f"{key}: expected shape ({n_samples}, {n}) like q, got {shape}")
     ids = arrays.get("trajectory", np.zeros(n_samples, dtype=np.int64))
     if ids.shape != (n_samples,) or ids.dtype.kind not in "iu":
         raise DatasetError(f"trajectory: expected integer ids of shape ({n_samples},)")

@@ -669,11 +669,11 @@ class MJCFSystem(MuJoCoSystem):
             self._xml, self.path = source, None
         else:
             raise TypeError(f"source: expected a path or MJCF text, got {type(source).__name__}")
-        allowed = (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE)
+        allowed = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
         if model.njnt == 0:
             raise ValueError("source: the model has no joint, nothing to identify")
         for j in range(model.njnt):
-            if model.jnt_type[j] not in allowed:
+            if int(model.jnt_type[j]) not in allowed:
                 jname = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"#{j}"
                 raise ValueError(
                     f"source: joint {jname!r} is not a hinge or slide joint; only those are "
@@ -685,8 +685,9 @@ class MJCFSystem(MuJoCoSystem):
                range(model.njnt)]
         self.joint_names = tuple(raw[j] or f"joint{j}" for j in range(model.njnt))
         self.coordinate_names = tuple(_identifier(raw[j], j, taken) for j in range(model.njnt))
+        hinge = int(mujoco.mjtJoint.mjJNT_HINGE)
         self.angle_coordinates = tuple(
-            j for j in range(model.njnt) if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE
+            j for j in range(model.njnt) if int(model.jnt_type[j]) == hinge
         )
         self.mixed_actuators = self.actuated_joints[:1]
         self._parameters = {"source": self.path or "<string>",
@@ -698,7 +699,7 @@ class MJCFSystem(MuJoCoSystem):
         model = self._model
         names = []
         for a in range(model.nu):
-            if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
+            if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT):
                 names.append(self.joint_names[model.actuator_trnid[a, 0]])
         return tuple(dict.fromkeys(names))
 

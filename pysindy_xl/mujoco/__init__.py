@@ -1,0 +1,44 @@
+"""MuJoCo systems, data generation, reference catalogs and validation of identified models.
+
+The pipeline of the paper as a library: MJCF models of the cart-pole, the double pendulum and
+the double pendulum on a cart (:mod:`.systems`), randomly forced trajectories with noise
+(:mod:`.generate`), datasets as NPZ + JSON (:mod:`.dataset`), the reference catalogs of the
+paper's comparison (:mod:`.catalogs`) and the validation of an identified model against a fresh
+MuJoCo trajectory (:mod:`.validation`, :mod:`.plots`).
+"""
+
+from .dataset import Dataset, DatasetError, Trajectory, load_dataset
+from .forcing import FORCING_MODES, SumOfSinusoids
+from .generate import add_noise, generate_dataset, simulate_trajectory
+from .systems import (
+    SYSTEMS,
+    CartDoublePendulum,
+    CartPole,
+    DoublePendulum,
+    MJCFSystem,
+    MuJoCoSystem,
+    default_xml_path,
+    equations_of_motion,
+    get_system,
+)
+
+__all__ = [
+    "SYSTEMS",
+    "CartDoublePendulum",
+    "CartPole",
+    "DoublePendulum",
+    "MJCFSystem",
+    "MuJoCoSystem",
+    "default_xml_path",
+    "equations_of_motion",
+    "get_system",
+    "FORCING_MODES",
+    "SumOfSinusoids",
+    "add_noise",
+    "generate_dataset",
+    "simulate_trajectory",
+    "Dataset",
+    "DatasetError",
+    "Trajectory",
+    "load_dataset",
+]

@@ -1,0 +1,126 @@
+"""Data generation: forcing modes, reproducibility, noise levels, consistency of the samples."""
+
+import numpy as np
+import pytest
+
+from pysindy_xl.mujoco import (
+    CartPole,
+    DoublePendulum,
+    SumOfSinusoids,
+    add_noise,
+    generate_dataset,
+    simulate_trajectory,
+)
+
+
+def test_same_seed_same_data_other_seed_other_data():
+    kwargs = dict(n_trajectories=2, duration=0.5, noise=0.01, progress=False)
+    a = generate_dataset("cart-pole", seed=7, **kwargs)
+    b = generate_dataset("cart-pole", seed=7, **kwargs)
+    c = generate_dataset("cart-pole", seed=8, **kwargs)
+    for ta, tb, tc in zip(a.trajectories, b.trajectories, c.trajectories, strict=True):
+        for key in ("q", "qd", "qdd", "tau", "u"):
+            np.testing.assert_array_equal(getattr(ta, key), getattr(tb, key))
+        assert not np.allclose(ta.q, tc.q)
+    assert not np.allclose(a.trajectories[0].q, a.trajectories[1].q)
+
+
+def test_forcing_modes():
+    explicit = generate_dataset("double-pendulum", n_trajectories=1, duration=1.0, seed=0,
+                                progress=False).trajectories[0]
+    assert np.all(np.abs(explicit.u).max(axis=0) > 0.1)
+    implicit = generate_dataset("double-pendulum", n_trajectories=1, duration=1.0, seed=0,
+                                forcing="implicit", progress=False).trajectories[0]
+    assert np.all(implicit.u == 0) and np.all(implicit.tau == 0)
+    assert np.abs(implicit.qd[0]).max() > 0  # random initial condition
+    # mixed on the second (relative) hinge only: generalized force -u on theta1, +u on theta2
+    mixed = generate_dataset("double-pendulum", n_trajectories=1, duration=1.0, seed=0,
+                             forcing="mixed", actuators=["hinge2"],
+                             progress=False).trajectories[0]
+    assert np.all(mixed.u[:, 0] == 0) and np.abs(mixed.u[:, 1]).max() > 0.1
+    np.testing.assert_allclose(mixed.tau[:, 0], -mixed.u[:, 1])
+    np.testing.assert_allclose(mixed.tau[:, 1], mixed.u[:, 1])
+    default = generate_dataset(CartPole(), n_trajectories=1, duration=0.5, seed=0,
+                               forcing="mixed", progress=False).trajectories[0]
+    assert np.abs(default.u[:, 0]).max() > 0 and np.all(default.u[:, 1] == 0)
+
+
+def test_samples_are_consistent_time_series():
+    tr = generate_dataset("cart-double-pendulum", n_trajectories=1, duration=2.0, seed=2,
+                          progress=False).trajectories[0]
+    dt = tr.t[1] - tr.t[0]
+    assert dt == pytest.approx(1e-3)
+    # velocities are the derivative of positions, accelerations that of velocities
+    np.testing.assert_allclose(np.gradient(tr.q, dt, axis=0)[1:-1], tr.qd[1:-1],
+                               atol=1e-4 * np.abs(tr.qd).max())
+    np.testing.assert_allclose(np.gradient(tr.qd, dt, axis=0)[1:-1], tr.qdd[1:-1],
+                               atol=1e-3 * np.abs(tr.qdd).max())
+
+
+def test_sample_every_and_duration():
+    tr = generate_dataset("cart-pole", n_trajectories=1, duration=1.0, seed=0, sample_every=10,
+                          progress=False).trajectories[0]
+    assert tr.q.shape == (101, 2)
+    np.testing.assert_allclose(np.diff(tr.t), 0.01)
+
+
+def test_noise_levels_are_relative_to_each_column():
+    rng = np.random.default_rng(0)
+    clean = simulate_trajectory("double-pendulum", 5.0, q0=[1.0, -0.5],
+                                signals=SumOfSinusoids.random([2.0, 1.0], rng))
+    noisy = add_noise(clean, {"q": 0.1, "qdd": 0.02}, np.random.default_rng(1),
+                      DoublePendulum().force_matrix())
+    ratio = (noisy.q - clean.q).std(axis=0) / clean.q.std(axis=0)
+    np.testing.assert_allclose(ratio, 0.1, rtol=0.05)
+    ratio = (noisy.qdd - clean.qdd).std(axis=0) / clean.qdd.std(axis=0)
+    np.testing.assert_allclose(ratio, 0.02, rtol=0.05)
+    np.testing.assert_array_equal(noisy.qd, clean.qd)
+    np.testing.assert_array_equal(noisy.tau, clean.tau)
+    forced = add_noise(clean, {"tau": 0.1}, np.random.default_rng(1),
+                       DoublePendulum().force_matrix())
+    np.testing.assert_allclose(forced.tau, forced.u @ DoublePendulum().force_matrix().T)
+
+
+def test_sum_of_sinusoids():
+    rng = np.random.default_rng(0)
+    signal = SumOfSinusoids.random([3.0, 0.0], rng, n_components=4, max_frequency=2.0)
+    values = signal(np.linspace(0, 20, 2001))
+    assert values.shape == (2001, 2)
+    assert np.abs(values[:, 0]).max() <= 3.0 and np.abs(values[:, 0]).max() > 1.0
+    assert np.all(values[:, 1] == 0)
+    assert signal(0.5).shape == (2,)
+    again = SumOfSinusoids.from_dict(signal.to_dict())
+    np.testing.assert_array_equal(again(1.3), signal(1.3))
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(forcing="sideways"), "forcing"),
+        (dict(forcing="mixed", actuators=["elbow"]), "actuators"),
+        (dict(forcing="explicit", actuators=["slider"]), "actuators"),
+        (dict(noise=-0.1), "noise"),
+        (dict(noise={"velocity": 0.1}), "noise"),
+        (dict(n_trajectories=0), "n_trajectories"),
+        (dict(duration=-1.0), "duration"),
+        (dict(sample_every=0), "sample_every"),
+    ],
+)
+def test_generation_errors(kwargs, match):
+    kwargs = {"duration": 0.1, "progress": False, **kwargs}
+    with pytest.raises(ValueError, match=match):
+        generate_dataset("cart-pole", **kwargs)
+
+
+def test_model_without_actuator_only_implicit():
+    xml = """<mujoco><option timestep="0.002"/><worldbody><body>
+      <joint name="a" type="hinge" axis="0 1 0"/>
+      <geom type="sphere" size="0.1" pos="0 0 -1" mass="1"/></body></worldbody></mujoco>"""
+    from pysindy_xl.mujoco import MJCFSystem
+
+    system = MJCFSystem(xml)
+    with pytest.raises(ValueError, match="no actuator"):
+        generate_dataset(system, duration=0.1, progress=False)
+    data = generate_dataset(system, n_trajectories=1, duration=0.1, forcing="implicit", seed=0,
+                            progress=False)
+    assert data.trajectories[0].q.shape == (51, 1)
