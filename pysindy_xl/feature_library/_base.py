@@ -101,8 +101,10 @@ def compile_entries(variables, exprs):
     if dynamic:
         func = sp.lambdify(variables, [exprs[k] for k in dynamic], modules="numpy", cse=True)
 
+    constants = [0.0 if k in dynamic else float(e) for k, e in enumerate(exprs)]
+
     def evaluate(z: np.ndarray) -> list:
-        out = [0.0 if e.free_symbols else float(e) for e in exprs]
+        out = list(constants)
         if func is not None:
             for k, v in zip(dynamic, func(*z.T), strict=True):
                 out[k] = v
@@ -156,6 +158,14 @@ class SymbolicLibrary(BaseFeatureLibrary):
         -------
         self
         """
+        self._fit_symbolic()
+        self._compile()
+        if x is not None:
+            self._check_input(x)
+        return self
+
+    def _fit_symbolic(self):
+        """Derive the symbolic columns and set the attributes that describe them."""
         self._check_coords()
         names, matrix = self._build_symbolic()
         n = self.coords.n
@@ -165,10 +175,6 @@ class SymbolicLibrary(BaseFeatureLibrary):
         self.symbolic_matrix_ = matrix
         self.n_features_in_ = len(self.coords.variables)
         self.n_output_features_ = len(names)
-        self._compile()
-        if x is not None:
-            self._check_input(x)
-        return self
 
     def _compile(self):
         entries = [(c, j) for c in range(self.coords.n) for j in range(self.n_output_features_)]
@@ -206,7 +212,8 @@ class SymbolicLibrary(BaseFeatureLibrary):
         check_is_fitted(self, "symbolic_matrix_")
         x = self._check_input(x)
         n_samples = x.shape[0]
-        theta = np.zeros((self.coords.n * n_samples, self.n_output_features_))
+        # column-major: each entry fills a contiguous column block (and LAPACK prefers it)
+        theta = np.zeros((self.coords.n * n_samples, self.n_output_features_), order="F")
         values = self._evaluate(x)
         for (c, j), value in zip(self._entry_index, values, strict=True):
             theta[c * n_samples : (c + 1) * n_samples, j] = value

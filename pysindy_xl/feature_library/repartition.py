@@ -105,7 +105,7 @@ class CatalogRepartition(SymbolicLibrary):
         libraries = self._flat_libraries()
         names, blocks, slices, categories = [], [], [], []
         for lib in libraries:
-            lib.fit()
+            lib._fit_symbolic()
             start = len(names)
             names.extend(lib.feature_names_)
             blocks.append(lib.symbolic_matrix_)

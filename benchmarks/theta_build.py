@@ -1,0 +1,106 @@
+"""Time the build of the regression matrix of a ~290-term mixed catalog.
+
+System: double pendulum on a cart, coordinates (x, theta1, theta2). Catalog:
+
+* Lagrange: velocity monomials (degree <= 2) x trigonometric monomials of the angles
+  (degree <= 2): 149 terms;
+* classical: velocity monomials (degree <= 2) x {1, sin, cos of each angle}, entering every
+  equation: 45 terms x 3 equations;
+* the force column.
+
+pysindy-xl derives all columns symbolically once and compiles every non-zero entry into ONE
+NumPy function with shared common subexpressions. The naive baseline does what a direct
+implementation would: one ``sympy.lambdify`` per non-zero entry, evaluated entry by entry.
+Both are vectorized over samples; the symbolic derivation is shared and reported apart.
+
+Usage: ``python benchmarks/theta_build.py [--samples 100000] [--repeat 3]``
+"""
+
+import argparse
+import platform
+import time
+
+import numpy as np
+import sympy as sp
+
+import pysindy_xl as px
+
+
+def mixed_catalog() -> px.CatalogRepartition:
+    coords = px.Coordinates(["x", "theta1", "theta2"])
+    trig = [f(coords.q[i]) for i in (1, 2) for f in (sp.sin, sp.cos)]
+    velocity = px.monomials(coords.qd, 2)
+    lagrange_terms = [t for t in px.products([1, *px.monomials(trig, 2)], [1, *velocity])
+                      if t.free_symbols]
+    classical_terms = px.products([1, *trig], velocity)
+    return px.CatalogRepartition([
+        px.ExternalForces(coords),
+        px.LagrangeLibrary(coords, lagrange_terms),
+        px.ClassicalLibrary(coords, classical_terms),
+    ])
+
+
+def naive_build(library: px.CatalogRepartition, z: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """Per-entry lambdify, then per-entry evaluation. Returns (theta, compile_s, eval_s)."""
+    matrix, variables = library.symbolic_matrix_, library.coords.variables
+    n, n_features = matrix.shape
+    start = time.perf_counter()
+    functions = [(c, j, sp.lambdify(variables, matrix[c, j], modules="numpy"))
+                 for c in range(n) for j in range(n_features) if matrix[c, j] != 0]
+    compiled = time.perf_counter()
+    n_samples = z.shape[0]
+    theta = np.zeros((n * n_samples, n_features))
+    columns = z.T
+    for c, j, f in functions:
+        theta[c * n_samples:(c + 1) * n_samples, j] = f(*columns)
+    return theta, compiled - start, time.perf_counter() - compiled
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--samples", type=int, default=100_000)
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+
+    rng = np.random.default_rng(0)
+    library = mixed_catalog()
+    start = time.perf_counter()
+    library._fit_symbolic()
+    derive = time.perf_counter() - start
+    start = time.perf_counter()
+    library._compile()
+    compile_s = time.perf_counter() - start
+    n_entries = len(library._entry_index)
+    z = rng.uniform(-2, 2, size=(args.samples, len(library.coords.variables)))
+
+    evaluate = min(_timed(lambda: library.transform(z)) for _ in range(args.repeat))
+    theta = library.transform(z)
+    naive = [naive_build(library, z) for _ in range(args.repeat)]
+    naive_compile = min(r[1] for r in naive)
+    naive_eval = min(r[2] for r in naive)
+    assert np.allclose(theta, naive[0][0], rtol=1e-10, atol=1e-10), "the two builds disagree"
+
+    ours = compile_s + evaluate
+    baseline = naive_compile + naive_eval
+    print(f"machine: {platform.processor() or platform.machine()}, numpy {np.__version__}, "
+          f"sympy {sp.__version__}")
+    print(f"catalog: {library.n_output_features_} columns, {n_entries} non-zero symbolic entries;"
+          f" {args.samples} samples -> Theta {theta.shape[0]} x {theta.shape[1]}")
+    print(f"symbolic derivation (shared by both)  : {derive:8.3f} s")
+    print(f"{'':38s}  {'pysindy-xl':>10s}  {'naive':>10s}")
+    print(f"{'compile (lambdify)':38s}  {compile_s:9.3f}s  {naive_compile:9.3f}s")
+    print(f"{'numeric evaluation':38s}  {evaluate:9.3f}s  {naive_eval:9.3f}s")
+    print(f"{'total without derivation':38s}  {ours:9.3f}s  {baseline:9.3f}s"
+          f"   speed-up x{baseline / ours:.1f}")
+    print(f"{'total with derivation':38s}  {ours + derive:9.3f}s  {baseline + derive:9.3f}s"
+          f"   speed-up x{(baseline + derive) / (ours + derive):.1f}")
+
+
+def _timed(fn) -> float:
+    start = time.perf_counter()
+    fn()
+    return time.perf_counter() - start
+
+
+if __name__ == "__main__":
+    main()
