@@ -137,7 +137,7 @@ class MassMatrixDynamics:
     >>> c = px.Coordinates(["x"])
     >>> dyn = px.MassMatrixDynamics(c, [2 * c.qdd[0] + 3 * c.q[0] - c.tau[0]])
     >>> dyn.mass_matrix_expr, dyn.forcing_expr
-    (Matrix([[2]]), Matrix([[-3*x + tau_x]]))
+    (Matrix([[2]]), Matrix([[tau_x - 3*x]]))
     """
 
     def __init__(self, coords: Coordinates, equations):

@@ -115,7 +115,7 @@ class XLSINDy(BaseEstimator):
     >>> xd, xdd = -2 * np.sin(2 * t)[:, None] + 0.1, -4 * np.cos(2 * t)[:, None]
     >>> model = px.XLSINDy(lib).fit(x, t, x_dot=xd, x_ddot=xdd, u=xdd + 3 * x)
     >>> model.print()
-    L = 0.5*x_dot**2 - 1.5*x**2
+    L = -1.5*x**2 + 0.5*x_dot**2
     (x) 3.0*x + 1.0*x_ddot = tau_x
     """
 
@@ -253,7 +253,7 @@ class XLSINDy(BaseEstimator):
                          if j in keep]
         forced = np.zeros(n, dtype=bool)
         if u is not None:
-            force_block = theta[:, library.force_columns_].reshape(n, -1, 
+            force_block = theta[:, library.force_columns_].reshape(n, -1,
                                                                    len(library.force_columns_))
             forced = np.any(force_block != 0, axis=(1, 2))
         optimizer = self._optimizer(forced)
@@ -336,7 +336,8 @@ class XLSINDy(BaseEstimator):
         for i in range(matrix.shape[0]):
             lhs = sum((sp.Float(self.coef_[j]) * matrix[i, j] for j in np.flatnonzero(self.coef_)
                        if j not in forces), sp.Integer(0))
-            rhs = sum((-sp.Float(self.coef_[j]) * matrix[i, j] for j in forces), sp.Integer(0))
+            rhs = sum((matrix[i, j] if self.coef_[j] == -1 else -sp.Float(self.coef_[j])
+                       * matrix[i, j] for j in forces), sp.Integer(0))
             lhs, rhs = _significant(sp.expand(lhs), precision), _significant(sp.expand(rhs),
                                                                               precision)
             out.append(f"{lhs} = {rhs}")

@@ -42,7 +42,7 @@ def hard_threshold_regression(x, y, threshold: float = 0.01, max_iter: int = 100
     >>> x = rng.normal(size=(200, 5))
     >>> coef = hard_threshold_regression(x, x @ [2.0, 0, 0, -1.0, 0] + 1e-6 * rng.normal(size=200))
     >>> np.round(coef, 4)
-    array([ 2., -0., -0., -1.,  0.])
+    array([ 2.,  0.,  0., -1.,  0.])
     """
     scale = np.sqrt(np.mean(x**2, axis=0))
     active = np.flatnonzero(scale > 0)
