@@ -7,6 +7,13 @@ paper's comparison (:mod:`.catalogs`) and the validation of an identified model 
 MuJoCo trajectory (:mod:`.validation`, :mod:`.plots`).
 """
 
+from .catalogs import (
+    CATALOG_KINDS,
+    classical_terms,
+    lagrange_terms,
+    reference_catalog,
+    true_coefficients,
+)
 from .dataset import Dataset, DatasetError, Trajectory, load_dataset
 from .forcing import FORCING_MODES, SumOfSinusoids
 from .generate import add_noise, generate_dataset, simulate_trajectory
@@ -20,6 +27,13 @@ from .systems import (
     default_xml_path,
     equations_of_motion,
     get_system,
+)
+from .validation import (
+    DEFAULT_DIVERGENCE_BOUND,
+    ValidationResult,
+    compare_trajectories,
+    validate_model,
+    validation_trajectory,
 )
 
 __all__ = [
@@ -41,4 +55,25 @@ __all__ = [
     "DatasetError",
     "Trajectory",
     "load_dataset",
+    "CATALOG_KINDS",
+    "classical_terms",
+    "lagrange_terms",
+    "reference_catalog",
+    "true_coefficients",
+    "DEFAULT_DIVERGENCE_BOUND",
+    "ValidationResult",
+    "compare_trajectories",
+    "validate_model",
+    "validation_trajectory",
+    "plot_validation",
+    "plot_coefficients",
 ]
+
+
+def __getattr__(name):
+    # plots import matplotlib: load them on first use only
+    if name in ("plot_validation", "plot_coefficients"):
+        from . import plots
+
+        return getattr(plots, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -104,8 +104,9 @@ def equations_of_motion(lagrangian: sp.Expr, coords: Coordinates, friction=None)
     --------
     >>> import pysindy_xl as px
     >>> c = px.Coordinates(["x"])
-    >>> equations_of_motion(c.qd[0] ** 2 / 2, c, {(c.qd[0], 0): 0.5})
-    [0.5*x_dot + x_ddot]
+    >>> lhs = equations_of_motion(c.qd[0] ** 2 / 2, c, {(c.qd[0], 0): 0.5})
+    >>> lhs[0] == c.qdd[0] + 0.5 * c.qd[0]
+    True
     """
     out = []
     for i, (qi, qdi) in enumerate(zip(coords.q, coords.qd, strict=True)):
@@ -392,8 +393,8 @@ class CartPole(MuJoCoSystem):
     angle_coordinates = (1,)
     mixed_actuators = ("slider",)
 
-    def __init__(self, cart_mass=1.0, pole_mass=0.5, length=0.8, cart_damping=0.3,
-                 pole_damping=0.05, gravity=9.81, point_inertia=1e-6, timestep=1e-3):
+    def __init__(self, cart_mass=1.0, pole_mass=0.5, length=0.8, cart_damping=0.5,
+                 pole_damping=0.1, gravity=9.81, point_inertia=1e-6, timestep=1e-3):
         self._parameters = {
             "cart_mass": _positive(cart_mass, "cart_mass"),
             "pole_mass": _positive(pole_mass, "pole_mass"),
@@ -465,8 +466,8 @@ class DoublePendulum(MuJoCoSystem):
     angle_coordinates = (0, 1)
     mixed_actuators = ("hinge1",)
 
-    def __init__(self, mass1=1.0, mass2=0.8, length1=1.0, length2=0.7, damping1=0.05,
-                 damping2=0.03, gravity=9.81, point_inertia=1e-6, timestep=1e-3):
+    def __init__(self, mass1=1.0, mass2=0.8, length1=1.0, length2=0.7, damping1=0.3,
+                 damping2=0.15, gravity=9.81, point_inertia=1e-6, timestep=1e-3):
         self._parameters = {
             "mass1": _positive(mass1, "mass1"),
             "mass2": _positive(mass2, "mass2"),
@@ -557,7 +558,7 @@ class CartDoublePendulum(MuJoCoSystem):
     mixed_actuators = ("slider",)
 
     def __init__(self, cart_mass=1.0, mass1=0.5, mass2=0.4, length1=0.7, length2=0.5,
-                 cart_damping=0.3, damping1=0.03, damping2=0.02, gravity=9.81,
+                 cart_damping=0.5, damping1=0.1, damping2=0.05, gravity=9.81,
                  point_inertia=1e-6, timestep=1e-3):
         self._parameters = {
             "cart_mass": _positive(cart_mass, "cart_mass"),

@@ -1,0 +1,444 @@
+"""The ``pysindy-xl`` command: MuJoCo demo, identification of a dataset, data generation.
+
+Examples
+--------
+::
+
+    pysindy-xl demo cart-pole                         # generate, identify, validate, plot
+    pysindy-xl demo double-pendulum --forcing mixed --noise 0.01 --out results/
+    pysindy-xl generate cart-pole data.npz --forcing explicit --trajectories 4
+    pysindy-xl identify data.npz --system cart-pole --catalog mixed
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+__all__ = ["main", "build_parser", "run_demo", "run_identify"]
+
+SOLVERS = ("auto", "explicit", "implicit", "mixed")
+CATALOGS = ("lagrange", "classical", "mixed")
+FORCINGS = ("explicit", "implicit", "mixed")
+_AUTO_SOLVER = {"explicit": "explicit", "implicit": "implicit", "mixed": "mixed"}
+
+
+class CLIError(Exception):
+    """An error reported to the user as ``pysindy-xl: error: ...`` with exit status 1."""
+
+
+def _non_negative_float(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not np.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative number, got {text!r}")
+    return value
+
+
+def _positive_float(text):
+    value = _non_negative_float(text)
+    if value == 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def _positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return value
+
+
+def _add_generation_options(parser, duration=10.0, trajectories=2):
+    parser.add_argument("--forcing", choices=FORCINGS, default="explicit",
+                        help="implicit: no force, random initial state; explicit: every "
+                             "actuator driven; mixed: a subset (--actuators) (default: explicit)")
+    parser.add_argument("--actuators", nargs="+", metavar="NAME",
+                        help="joints driven with --forcing mixed (default: the system's choice)")
+    parser.add_argument("--noise", type=_non_negative_float, default=0.0,
+                        help="relative Gaussian noise on positions, velocities, accelerations "
+                             "and forces (default: 0)")
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    parser.add_argument("--duration", type=_positive_float, default=duration,
+                        help=f"seconds per training trajectory (default: {duration:g})")
+    parser.add_argument("--trajectories", type=_positive_int, default=trajectories,
+                        help=f"number of training trajectories (default: {trajectories})")
+    parser.add_argument("--sample-every", type=_positive_int, default=2,
+                        help="keep every k-th MuJoCo step (1 ms) (default: 2)")
+
+
+def _add_fit_options(parser):
+    parser.add_argument("--catalog", choices=CATALOGS, default="mixed",
+                        help="lagrange, classical or mixed (Lagrange + friction) (default: mixed)")
+    parser.add_argument("--solver", choices=SOLVERS, default="auto",
+                        help="explicit, implicit or mixed regression; auto follows the forcing "
+                             "(default: auto)")
+    parser.add_argument("--threshold", type=_non_negative_float, default=None,
+                        help="relative pruning threshold of the explicit solver")
+    parser.add_argument("--friction", choices=("auto", "diagonal", "full"), default="auto",
+                        help="friction terms of the catalogs (default: auto)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``pysindy-xl`` command."""
+    parser = argparse.ArgumentParser(
+        prog="pysindy-xl",
+        description="Identify mechanical systems with XLSINDy: MuJoCo demos and your data.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    demo = sub.add_parser(
+        "demo", help="generate MuJoCo data, identify, validate, plot",
+        description="Generate randomly forced MuJoCo trajectories of a system, identify its "
+                    "equations of motion, validate the model against a fresh trajectory, print "
+                    "the equations and metrics, and write plots and a JSON report.",
+    )
+    demo.add_argument("system", metavar="SYSTEM",
+                      help="cart-pole, double-pendulum, cart-double-pendulum, or an MJCF .xml")
+    _add_generation_options(demo)
+    _add_fit_options(demo)
+    demo.add_argument("--validation-duration", type=_positive_float, default=10.0,
+                      help="seconds of the validation trajectory (default: 10)")
+    demo.add_argument("--out", default="pysindy-xl-demo", metavar="DIR",
+                      help="output directory for report.json and plots (default: "
+                           "./pysindy-xl-demo)")
+    demo.add_argument("--save-data", action="store_true", help="also write the training data")
+    demo.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    demo.add_argument("--quiet", action="store_true", help="print only the final summary")
+
+    identify = sub.add_parser(
+        "identify", help="fit a dataset (NPZ) and print the model",
+        description="Fit an NPZ dataset (arrays t, q and optionally qd, qdd, tau, trajectory; "
+                    "see pysindy_xl.mujoco.dataset) with a reference catalog and print the model.",
+    )
+    identify.add_argument("data", metavar="DATA.npz")
+    identify.add_argument("--system", default=None,
+                          help="system name or MJCF .xml giving coordinates and catalog "
+                               "(default: the dataset's metadata)")
+    _add_fit_options(identify)
+    identify.add_argument("--forces", choices=("tau", "none"), default="tau",
+                          help="use the dataset's generalized forces or fit unforced "
+                               "(default: tau when present)")
+    identify.add_argument("--out", default=None, metavar="FILE.json",
+                          help="write the fitted model (JSON) there")
+
+    generate = sub.add_parser("generate", help="write a MuJoCo dataset (NPZ + JSON)")
+    generate.add_argument("system", metavar="SYSTEM")
+    generate.add_argument("out", metavar="DATA.npz")
+    _add_generation_options(generate, trajectories=4)
+    return parser
+
+
+# -- pieces ------------------------------------------------------------------------------------
+def _optimizer(solver: str, threshold=None):
+    import pysindy_xl as px
+
+    name = {"explicit": "ExplicitOptimizer", "implicit": "ImplicitOptimizer",
+            "mixed": "MixedOptimizer"}[solver]
+    cls = getattr(px, name, None)
+    if cls is None:
+        try:
+            from pysindy_xl import optimizers
+
+            cls = getattr(optimizers, name)
+        except (ImportError, AttributeError):
+            raise CLIError(
+                f"--solver {solver}: px.{name} is not available in this installation; use "
+                "--solver explicit with --forcing explicit or mixed"
+            ) from None
+    if threshold is not None:
+        if "threshold" not in cls().get_params():
+            raise CLIError(f"--threshold: {name} has no threshold parameter")
+        return cls(threshold=threshold)
+    return cls()
+
+
+def _system(name):
+    from pysindy_xl.mujoco import get_system
+
+    try:
+        return get_system(name)
+    except (ValueError, TypeError) as error:
+        raise CLIError(str(error)) from None
+
+
+def _log(quiet, *args):
+    if not quiet:
+        print(*args, flush=True)
+
+
+def _fit(system, dataset, catalog_kind, solver, threshold, friction, forced):
+    import pysindy_xl as px
+    from pysindy_xl.mujoco.catalogs import reference_catalog
+
+    if solver == "explicit" and not forced:
+        raise CLIError("--solver explicit needs forces; use --forcing explicit or mixed, or "
+                       "--solver implicit")
+    catalog = reference_catalog(system, catalog_kind, friction=friction)
+    model = px.XLSINDy(catalog, _optimizer(solver, threshold))
+    arguments = dataset.fit_arguments(forces="tau" if forced else None)
+    model.fit(**arguments)
+    return model
+
+
+def _coefficient_summary(system, model):
+    """True coefficients and errors against them (None for systems without ground truth)."""
+    from pysindy_xl.mujoco.catalogs import true_coefficients
+
+    if not system.has_ground_truth:
+        return None, {}
+    truth, missing = true_coefficients(system, model.feature_library_)
+    coef = model.coefficients()
+    scale = np.abs(truth).max()
+    active = truth != 0
+    summary = {
+        "max_relative_error": float(np.abs(coef - truth).max() / scale),
+        "true_terms": int(active.sum()),
+        "identified_terms": int(np.count_nonzero(coef)),
+        "support_recovered": bool(np.array_equal(coef != 0, active)),
+        "true_model_missing_from_catalog": missing,
+    }
+    return truth, summary
+
+
+def _rounded(expr, digits=4):
+    import sympy as sp
+
+    return expr.xreplace({f: sp.Float(f, digits) for f in expr.atoms(sp.Float)})
+
+
+def _model_lines(model):
+    lines = []
+    lagrangian = model.lagrangian()
+    if lagrangian != 0:
+        lines.append(f"L = {_rounded(lagrangian)}")
+    names = model.feature_library_.coords.names
+    for name, eq in zip(names, model.equations(), strict=True):
+        lines.append(f"({name}) {eq}")
+    return lines
+
+
+# -- commands ----------------------------------------------------------------------------------
+def run_demo(args) -> dict:
+    """Run ``pysindy-xl demo`` with parsed arguments; returns the JSON report."""
+    from pysindy_xl.dynamics import DynamicsError
+    from pysindy_xl.mujoco import generate_dataset
+    from pysindy_xl.mujoco.validation import validate_model
+
+    system = _system(args.system)
+    solver = _AUTO_SOLVER[args.forcing] if args.solver == "auto" else args.solver
+    forced = args.forcing != "implicit"
+    os.makedirs(args.out, exist_ok=True)
+    timings = {}
+    quiet = args.quiet
+    _log(quiet, f"pysindy-xl demo: {system.name} {system.parameters}")
+    _log(quiet, f"  forcing {args.forcing}, noise {args.noise:g}, catalog {args.catalog}, "
+                f"solver {solver}, seed {args.seed}")
+
+    start = time.perf_counter()
+    _log(quiet, f"[1/3] MuJoCo: {args.trajectories} trajectories of {args.duration:g} s")
+    try:
+        dataset = generate_dataset(
+            system, n_trajectories=args.trajectories, duration=args.duration,
+            forcing=args.forcing, actuators=args.actuators, noise=args.noise, seed=args.seed,
+            sample_every=args.sample_every, progress=None if not quiet else False,
+        )
+    except (ValueError, RuntimeError) as error:
+        raise CLIError(str(error)) from None
+    timings["generate"] = time.perf_counter() - start
+    if args.save_data:
+        dataset.save(os.path.join(args.out, "training_data.npz"))
+
+    start = time.perf_counter()
+    n_samples = sum(tr.n_samples for tr in dataset.trajectories)
+    _log(quiet, f"[2/3] identification on {n_samples} samples")
+    model = _fit(system, dataset, args.catalog, solver, args.threshold, args.friction, forced)
+    timings["identify"] = time.perf_counter() - start
+    truth, coefficient_summary = _coefficient_summary(system, model)
+
+    start = time.perf_counter()
+    _log(quiet, f"[3/3] validation against a fresh {args.validation_duration:g} s MuJoCo "
+                "trajectory")
+    try:
+        result = validate_model(model, system, duration=args.validation_duration,
+                                forcing=args.forcing, actuators=args.actuators,
+                                seed=args.seed + 10_000, timeout=120.0)
+    except (DynamicsError, ValueError) as error:
+        # e.g. identified equations without accelerations: no dynamics to simulate
+        result = None
+        failure = str(error)
+    timings["validate"] = time.perf_counter() - start
+
+    files = {}
+    if not args.no_plots and result is not None:
+        from pysindy_xl.mujoco.plots import plot_validation
+
+        path = os.path.join(args.out, "validation.png")
+        plot_validation(result, path, model.get_feature_names(), model.coefficients(), truth,
+                        title=f"{system.name} ({args.catalog} catalog, {solver} solver)")
+        files["validation_plot"] = path
+
+    print()
+    for line in _model_lines(model):
+        print(line)
+    print()
+    metrics = result.to_dict() if result is not None else {"valid": False, "failure": failure}
+    if result is not None:
+        divergence = ("none" if result.divergence_time is None
+                      else f"{result.divergence_time:.3g} s")
+        print(f"validation: position RMSE {result.position_rmse:.3g} over "
+              f"{args.validation_duration:g} s, divergence {divergence}, "
+              f"{'VALID' if result.valid else 'INVALID'}"
+              + (f" ({result.failure})" if result.failure else ""))
+    else:
+        print(f"validation: INVALID ({failure})")
+    if coefficient_summary:
+        print(f"coefficients: {coefficient_summary['identified_terms']} terms identified, "
+              f"{coefficient_summary['true_terms']} true, max error "
+              f"{coefficient_summary['max_relative_error']:.2g} (relative to the largest)")
+    timings["total"] = sum(timings.values())
+    report = {
+        "system": system.name,
+        "parameters": system.parameters,
+        "options": {k: v for k, v in vars(args).items() if k != "func"},
+        "solver": solver,
+        "n_samples": n_samples,
+        "features": model.get_feature_names(),
+        "coefficients": model.coefficients().tolist(),
+        "true_coefficients": None if truth is None else truth.tolist(),
+        "dropped_features": model.dropped_features_,
+        "lagrangian": str(model.lagrangian()),
+        "equations": model.equations(),
+        "coefficient_summary": coefficient_summary,
+        "validation": metrics,
+        "timings_s": timings,
+        "files": files,
+    }
+    path = os.path.join(args.out, "report.json")
+    with open(path, "w", encoding="utf-8") as handle:
+        json.dump(report, handle, indent=2)
+    print(f"report: {path}" + (f", plot: {files['validation_plot']}" if files else "")
+          + f" ({timings['total']:.1f} s)")
+    return report
+
+
+def _dataset_for(system, dataset):
+    """Check the dataset's coordinates against the system's (adopting them when unnamed)."""
+    from pysindy_xl.mujoco import Dataset
+
+    names = dataset.coordinate_names
+    if names == system.coordinate_names:
+        return dataset
+    if dataset.n != system.n:
+        raise CLIError(
+            f"DATA: the dataset has {dataset.n} coordinates {list(names)}, the system "
+            f"{system.name} has {system.n} {list(system.coordinate_names)}"
+        )
+    if names == tuple(f"q{k}" for k in range(dataset.n)):  # unnamed: adopt the system's
+        return Dataset(dataset.trajectories, system.coordinate_names, dataset.metadata)
+    raise CLIError(
+        f"DATA: coordinate names {list(names)} do not match the system {system.name} "
+        f"{list(system.coordinate_names)}"
+    )
+
+
+def run_identify(args):
+    """Run ``pysindy-xl identify`` with parsed arguments; returns the fitted model."""
+    from pysindy_xl.mujoco import DatasetError, load_dataset
+
+    try:
+        dataset = load_dataset(args.data)
+    except DatasetError as error:
+        raise CLIError(str(error)) from None
+    name = args.system or dataset.metadata.get("system")
+    if not name:
+        raise CLIError("--system: the dataset names no system; pass --system NAME or an MJCF "
+                       ".xml giving the coordinates")
+    system = _system(name)
+    dataset = _dataset_for(system, dataset)
+    if not (dataset.has("qd") and dataset.has("qdd")):
+        print("note: velocities/accelerations missing, computed by differentiation",
+              file=sys.stderr)
+    forced = args.forces == "tau" and dataset.has("tau") and any(
+        np.any(tr.tau != 0) for tr in dataset.trajectories)
+    solver = args.solver
+    if solver == "auto":
+        if not forced:
+            solver = "implicit"
+        else:
+            active = np.any(np.vstack([tr.tau for tr in dataset.trajectories]) != 0, axis=0)
+            solver = "explicit" if active.all() else "mixed"
+    model = _fit(system, dataset, args.catalog, solver, args.threshold, args.friction, forced)
+    n_samples = sum(tr.n_samples for tr in dataset.trajectories)
+    print(f"{system.name}: {dataset.n_trajectories} trajectories, {n_samples} samples, "
+          f"{args.catalog} catalog, {solver} solver")
+    for line in _model_lines(model):
+        print(line)
+    if system.has_ground_truth:
+        _, summary = _coefficient_summary(system, model)
+        print(f"against the true model: max coefficient error "
+              f"{summary['max_relative_error']:.2g} (relative), support recovered: "
+              f"{summary['support_recovered']}")
+    if args.out:
+        model.save(args.out)
+        print(f"model: {args.out}")
+    return model
+
+
+def run_generate(args):
+    """Run ``pysindy-xl generate``; returns the NPZ path written."""
+    from pysindy_xl.mujoco import generate_dataset
+
+    system = _system(args.system)
+    try:
+        dataset = generate_dataset(
+            system, n_trajectories=args.trajectories, duration=args.duration,
+            forcing=args.forcing, actuators=args.actuators, noise=args.noise, seed=args.seed,
+            sample_every=args.sample_every,
+        )
+    except (ValueError, RuntimeError) as error:
+        raise CLIError(str(error)) from None
+    directory = os.path.dirname(os.path.abspath(args.out))
+    if not os.path.isdir(directory):
+        raise CLIError(f"DATA.npz: directory {directory!r} does not exist")
+    path = dataset.save(args.out)
+    print(f"wrote {path} and {path.with_suffix('.json')}: {dataset}")
+    return path
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``pysindy-xl`` command.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status: 0 on success, 1 on an error, 2 on a usage error.
+    """
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    commands = {"demo": run_demo, "identify": run_identify, "generate": run_generate}
+    try:
+        commands[args.command](args)
+    except CLIError as error:
+        print(f"pysindy-xl: error: {error}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

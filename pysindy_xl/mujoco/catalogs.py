@@ -1,0 +1,254 @@
+"""Reference catalogs of the paper's comparison, built for any system.
+
+Three kinds, all with the force column first (:class:`~pysindy_xl.ExternalForces`):
+
+``lagrange``
+    Candidate Lagrangian terms only, paper style: every product of a velocity monomial (degree
+    up to ``velocity_degree``, with 1) and a trigonometric monomial of the angles (``sin`` and
+    ``cos``, degree up to ``trig_degree``, with 1), the constant excluded.
+``classical``
+    The smallest classical (Newtonian) catalog containing every term of the Euler-Lagrange
+    expansion of the ``lagrange`` catalog: each distinct monomial of ``EL_i(term)`` enters the
+    equation of coordinate ``i`` (its own coefficient per equation), plus viscous friction.
+``mixed``
+    ``lagrange`` plus classical viscous friction.
+
+Friction terms are velocities ``qd_j`` in the equation of ``i``. ``friction="auto"`` uses the
+system's :meth:`~pysindy_xl.mujoco.MuJoCoSystem.friction_pattern`: ``qd_i`` in equation ``i``,
+and also the neighbouring velocities that the damping of a relative hinge couples in (so the
+true model of a damped MuJoCo chain is in the catalog); ``"diagonal"`` keeps ``qd_i`` per
+coordinate only, ``"full"`` every pair.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from ..symbols import monomials, products
+from .systems import MuJoCoSystem, equations_of_motion, get_system
+
+__all__ = ["CATALOG_KINDS", "lagrange_terms", "classical_terms", "reference_catalog",
+           "true_coefficients"]
+
+CATALOG_KINDS = ("lagrange", "classical", "mixed")
+
+
+def _check_degree(value, name):
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise ValueError(f"{name}: expected an integer >= 0, got {value!r}")
+    return int(value)
+
+
+def lagrange_terms(system, velocity_degree: int = 2, trig_degree: int = 2) -> list[sp.Expr]:
+    """Candidate Lagrangian terms: velocity monomials times trigonometric monomials.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem or str
+    velocity_degree, trig_degree : int, default 2
+        Maximal degrees of the velocity and trigonometric monomials.
+
+    Returns
+    -------
+    list of sympy.Expr
+
+    Examples
+    --------
+    >>> len(lagrange_terms("cart-pole"))
+    35
+    """
+    system = get_system(system)
+    velocity_degree = _check_degree(velocity_degree, "velocity_degree")
+    trig_degree = _check_degree(trig_degree, "trig_degree")
+    coords = system.coords
+    trig = [f(coords.q[i]) for i in system.angle_coordinates for f in (sp.sin, sp.cos)]
+    velocity_part = [sp.Integer(1)]
+    if velocity_degree:
+        velocity_part += monomials(coords.qd, velocity_degree)
+    trig_part = [sp.Integer(1)]
+    if trig and trig_degree:
+        trig_part += monomials(trig, trig_degree)
+    terms = [t for t in products(velocity_part, trig_part) if t.free_symbols]
+    if not terms:
+        raise ValueError("velocity_degree, trig_degree: the catalog would be empty")
+    return terms
+
+
+def _monomials_of(expr: sp.Expr) -> list[tuple[sp.Expr, float]]:
+    """``expr`` expanded, as (monomial without numeric factor, coefficient) pairs."""
+    out = []
+    for term in sp.Add.make_args(sp.expand(expr)):
+        if term == 0:
+            continue
+        coefficient, monomial = term.as_coeff_Mul()
+        out.append((monomial, float(coefficient)))
+    return out
+
+
+def classical_terms(system, terms) -> tuple[list[sp.Expr], np.ndarray]:
+    """Distinct monomials of the Euler-Lagrange expansion of ``terms``, per equation.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem or str
+    terms : list of sympy.Expr
+        Candidate Lagrangian terms.
+
+    Returns
+    -------
+    monomials : list of sympy.Expr
+    mask : ndarray of bool, shape (len(monomials), n)
+        ``mask[k, i]``: monomial ``k`` appears in the expansion of equation ``i``.
+    """
+    system = get_system(system)
+    coords = system.coords
+    order: dict = {}
+    for term in terms:
+        for i, lhs in enumerate(equations_of_motion(term, coords)):
+            for monomial, _ in _monomials_of(lhs):
+                order.setdefault(monomial, set()).add(i)
+    found = list(order)
+    mask = np.zeros((len(found), coords.n), dtype=bool)
+    for k, monomial in enumerate(found):
+        mask[k, sorted(order[monomial])] = True
+    return found, mask
+
+
+def _friction_mask(system: MuJoCoSystem, friction) -> np.ndarray:
+    n = system.n
+    if friction == "auto":
+        pattern = system.friction_pattern()
+    elif friction == "diagonal":
+        pattern = np.eye(n, dtype=bool)
+    elif friction == "full":
+        pattern = np.ones((n, n), dtype=bool)
+    else:
+        raise ValueError(f"friction: expected 'auto', 'diagonal' or 'full', got {friction!r}")
+    return pattern.T  # mask[k, i]: velocity k in the equation of i
+
+
+def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
+                      trig_degree: int = 2, friction: str = "auto", interlink=None):
+    """The paper's reference catalog of a system (see the module docstring).
+
+    Parameters
+    ----------
+    system : MuJoCoSystem or str
+        A system, a registry name or an MJCF path.
+    kind : {"lagrange", "classical", "mixed"}, default "mixed"
+    velocity_degree, trig_degree : int, default 2
+        Degrees of the candidate Lagrangian terms (see :func:`lagrange_terms`).
+    friction : {"auto", "diagonal", "full"}, default "auto"
+        Which velocities enter which equation as friction terms.
+    interlink : array (n, n), optional
+        Passed to :class:`~pysindy_xl.ExternalForces`: use ``system.force_matrix()`` to fit
+        with MuJoCo joint forces ``u`` instead of generalized forces ``tau``.
+
+    Returns
+    -------
+    CatalogRepartition
+        Libraries in the order forces, Lagrange, classical.
+
+    Examples
+    --------
+    >>> catalog = reference_catalog("cart-pole", "mixed").fit()
+    >>> catalog.n_output_features_
+    38
+    """
+    from ..feature_library import (
+        CatalogRepartition,
+        ClassicalLibrary,
+        ExternalForces,
+        LagrangeLibrary,
+    )
+
+    system = get_system(system)
+    if kind not in CATALOG_KINDS:
+        raise ValueError(f"kind: expected one of {CATALOG_KINDS}, got {kind!r}")
+    coords = system.coords
+    friction_mask = _friction_mask(system, friction)
+    terms = lagrange_terms(system, velocity_degree, trig_degree)
+    libraries = [ExternalForces(coords, interlink=interlink)]
+    if kind in ("lagrange", "mixed"):
+        libraries.append(LagrangeLibrary(coords, terms))
+    if kind == "mixed":
+        libraries.append(ClassicalLibrary(coords, list(coords.qd), mask=friction_mask))
+    if kind == "classical":
+        found, mask = classical_terms(system, terms)
+        for k, velocity in enumerate(coords.qd):
+            if velocity in found:
+                mask[found.index(velocity)] |= friction_mask[k]
+            else:
+                found.append(velocity)
+                mask = np.vstack([mask, friction_mask[k]])
+        libraries.append(ClassicalLibrary(coords, found, mask=mask))
+    return CatalogRepartition(libraries)
+
+
+def _classical_name(coords, term, i) -> str:
+    return f"C_{coords.names[i]}[{term}]"
+
+
+def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.0):
+    """Coefficient vector of the system's true model in a catalog.
+
+    The Lagrangian goes to the Lagrange terms when the catalog has any, otherwise its
+    Euler-Lagrange expansion goes to the classical terms; friction goes to classical terms.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem or str
+        A system with a known Lagrangian.
+    catalog : CatalogRepartition
+    strict : bool, default False
+        Raise when part of the true model is not in the catalog (e.g. friction in a
+        ``lagrange`` catalog); otherwise leave that part out.
+    forces : float, default -1.0
+        Coefficient of the force column.
+
+    Returns
+    -------
+    xi : ndarray, shape (F,)
+    missing : list of str
+        Parts of the true model not representable in the catalog (empty when exact).
+    """
+    from ..feature_library import LagrangeLibrary
+
+    system = get_system(system)
+    if not system.has_ground_truth:
+        raise ValueError(f"system: {system!r} has no known true model")
+    if not hasattr(catalog, "ideal_coefficients"):
+        raise TypeError("catalog: expected a CatalogRepartition")
+    if not hasattr(catalog, "symbolic_matrix_"):
+        catalog.fit()
+    coords = system.coords
+    names = catalog.get_feature_names()
+    has_lagrange = any(isinstance(lib, LagrangeLibrary) for lib in catalog.libraries_)
+    classical: dict = {}
+    for (term, i), value in system.friction().items():
+        classical[(term, i)] = classical.get((term, i), 0.0) + value
+    if not has_lagrange:
+        for i, lhs in enumerate(equations_of_motion(system.lagrangian(), coords)):
+            for monomial, value in _monomials_of(sp.expand_trig(lhs)):
+                classical[(monomial, i)] = classical.get((monomial, i), 0.0) + value
+    keyed, missing = {}, []
+    for (term, i), value in classical.items():
+        name = _classical_name(coords, term, i)
+        if name in names:
+            keyed[name] = keyed.get(name, 0.0) + value
+        elif abs(value) > 1e-14:
+            missing.append(f"{value:+.4g}*{term} in the equation of {coords.names[i]}")
+    if missing and strict:
+        raise ValueError(f"catalog: the true model needs terms it lacks: {missing}")
+    try:
+        xi = catalog.ideal_coefficients(
+            lagrangian=system.lagrangian() if has_lagrange else None, classical=keyed,
+            forces=forces,
+        )
+    except ValueError as error:
+        if strict:
+            raise
+        missing.append(str(error))
+        xi = catalog.ideal_coefficients(classical=keyed, forces=forces)
+    return xi, missing

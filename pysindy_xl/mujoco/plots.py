@@ -1,0 +1,121 @@
+"""Figures of a validation (the paper's Figure 1), drawn with matplotlib's Agg canvas.
+
+The figures are built on :class:`matplotlib.figure.Figure` with an Agg canvas directly, so
+nothing touches pyplot's global state or needs a display.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["plot_validation", "plot_coefficients"]
+
+_REFERENCE = {"color": "black", "linestyle": "--", "linewidth": 1.2, "label": "MuJoCo"}
+_MODEL = {"color": "tab:blue", "linewidth": 1.2, "label": "identified model"}
+
+
+def _figure(width, height):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(figure)
+    return figure
+
+
+def plot_coefficients(ax, feature_names, coefficients, true_coefficients=None, max_features=40):
+    """Bar chart of identified (and true) coefficients on a symmetric log scale.
+
+    Only features that are non-zero in either vector are drawn (at most ``max_features``,
+    the largest first when there are more).
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    feature_names : list of str
+    coefficients : array, shape (F,)
+    true_coefficients : array, shape (F,), optional
+    max_features : int, default 40
+    """
+    coefficients = np.asarray(coefficients, dtype=float)
+    if len(feature_names) != len(coefficients):
+        raise ValueError(
+            f"feature_names: {len(feature_names)} names for {len(coefficients)} coefficients"
+        )
+    truth = None if true_coefficients is None else np.asarray(true_coefficients, dtype=float)
+    if truth is not None and truth.shape != coefficients.shape:
+        raise ValueError(f"true_coefficients: expected shape {coefficients.shape}")
+    size = np.abs(coefficients) if truth is None else np.maximum(np.abs(coefficients),
+                                                                np.abs(truth))
+    shown = np.flatnonzero(size > 0)
+    if len(shown) > max_features:
+        shown = np.sort(shown[np.argsort(-size[shown])[:max_features]])
+    x = np.arange(len(shown))
+    width = 0.4 if truth is not None else 0.8
+    ax.bar(x - (width / 2 if truth is not None else 0), coefficients[shown], width,
+           color="tab:blue", label="identified")
+    if truth is not None:
+        ax.bar(x + width / 2, truth[shown], width, color="black", alpha=0.6, label="true")
+    ax.set_yscale("symlog", linthresh=1e-2)
+    ax.set_xticks(x, [feature_names[j] for j in shown], rotation=60, ha="right", fontsize=7)
+    ax.axhline(0, color="grey", linewidth=0.5)
+    ax.set_ylabel("coefficient")
+    ax.legend(fontsize=8)
+
+
+def plot_validation(result, path=None, feature_names=None, coefficients=None,
+                    true_coefficients=None, title=None):
+    """Trajectories, residuals and coefficients of a validation, as in the paper's Figure 1.
+
+    Parameters
+    ----------
+    result : ValidationResult
+    path : str or os.PathLike, optional
+        Where to save the PNG.
+    feature_names, coefficients, true_coefficients : optional
+        Draw panel (C), the identified (and true) coefficient vector.
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    n = result.n
+    with_coefficients = coefficients is not None
+    rows = n + (2 if with_coefficients else 0)
+    figure = _figure(11, 2.0 * n + (4.0 if with_coefficients else 0.0))
+    grid = figure.add_gridspec(rows, 2)
+    k = len(result.prediction)
+    names = result.coordinate_names or tuple(f"q{i}" for i in range(n))
+    for i in range(n):
+        ax = figure.add_subplot(grid[i, 0])
+        ax.plot(result.t, result.reference[:, i], **_REFERENCE)
+        ax.plot(result.t[:k], result.prediction[:, i], **_MODEL)
+        ax.set_ylabel(names[i])
+        if i == 0:
+            ax.set_title("(A) trajectories")
+            ax.legend(fontsize=8, loc="upper right")
+        if result.divergence_time is not None:
+            ax.axvline(result.divergence_time, color="tab:red", linewidth=0.8)
+        ax = figure.add_subplot(grid[i, 1])
+        ax.plot(result.t[:k], result.prediction[:, i] - result.reference[:k, i],
+                color="tab:red", linewidth=1.0)
+        ax.axhline(0, color="grey", linewidth=0.5)
+        ax.set_ylabel(f"error {names[i]}")
+        if i == 0:
+            ax.set_title("(B) residuals (model - MuJoCo)")
+        if i == n - 1:
+            figure.axes[-2].set_xlabel("t [s]")
+            ax.set_xlabel("t [s]")
+    if with_coefficients:
+        ax = figure.add_subplot(grid[n:, :])
+        plot_coefficients(ax, feature_names, coefficients, true_coefficients)
+        ax.set_title("(C) coefficients")
+    status = "valid" if result.valid else f"invalid ({result.failure or 'diverged'})"
+    figure.suptitle(
+        (f"{title}: " if title else "")
+        + f"position RMSE {result.position_rmse:.3g}, {status}", fontsize=11,
+    )
+    if path is not None:
+        figure.savefig(path, dpi=110)
+    return figure

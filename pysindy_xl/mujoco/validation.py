@@ -1,0 +1,278 @@
+"""Validation of an identified model against a fresh MuJoCo trajectory.
+
+The model is simulated from the initial state of a new, noise-free MuJoCo trajectory and under
+its recorded forces, and the two position histories are compared.
+
+Metrics
+-------
+``position_rmse``
+    Root mean square of the position error over all samples and coordinates (in the
+    coordinates' units, rad or m), over the part the model could simulate.
+``divergence_time``
+    First time at which the error of some coordinate ``i`` exceeds
+    ``divergence_bound * max(1, ptp_i)``, with ``ptp_i`` the peak-to-peak range of that
+    coordinate in the MuJoCo trajectory (so the bound is relative to the motion, and absolute,
+    in rad or m, for coordinates that barely move); or the time at which the simulation of the
+    model failed (blow-up, singular mass matrix). None when neither happens.
+``valid``
+    The model was simulated over the whole horizon and never diverged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from .dataset import Trajectory
+from .forcing import FORCING_MODES
+from .generate import actuator_signals, simulate_trajectory
+from .systems import get_system
+
+__all__ = ["ValidationResult", "validate_model", "compare_trajectories",
+           "validation_trajectory", "DEFAULT_DIVERGENCE_BOUND"]
+
+DEFAULT_DIVERGENCE_BOUND = 0.2
+
+
+@dataclass
+class ValidationResult:
+    """Comparison of a model's simulation with a MuJoCo trajectory.
+
+    Attributes
+    ----------
+    t : ndarray, shape (T,)
+    reference : ndarray, shape (T, 2n)
+        MuJoCo state ``[q, qd]``.
+    prediction : ndarray, shape (k, 2n)
+        Model state at ``t[:k]``; ``k < T`` when the simulation failed.
+    forces : ndarray, shape (T, n)
+        Forces given to the model.
+    position_rmse : float
+    position_rmse_per_coordinate : ndarray, shape (n,)
+    divergence_time : float or None
+    valid : bool
+    failure : str or None
+        Reason of a failed simulation (``SimulationError.reason``).
+    divergence_bound : float
+    coordinate_names : tuple of str
+    """
+
+    t: np.ndarray
+    reference: np.ndarray
+    prediction: np.ndarray
+    forces: np.ndarray
+    position_rmse: float
+    position_rmse_per_coordinate: np.ndarray
+    divergence_time: float | None
+    valid: bool
+    failure: str | None
+    divergence_bound: float
+    coordinate_names: tuple = field(default_factory=tuple)
+
+    @property
+    def n(self) -> int:
+        return self.reference.shape[1] // 2
+
+    @property
+    def simulated_fraction(self) -> float:
+        """Fraction of the horizon the model could simulate."""
+        return len(self.prediction) / len(self.t)
+
+    def to_dict(self) -> dict:
+        """JSON-serializable summary (metrics, no arrays)."""
+        return {
+            "position_rmse": float(self.position_rmse),
+            "position_rmse_per_coordinate": dict(zip(
+                self.coordinate_names, map(float, self.position_rmse_per_coordinate),
+                strict=True)),
+            "divergence_time": self.divergence_time,
+            "valid": bool(self.valid),
+            "failure": self.failure,
+            "divergence_bound": self.divergence_bound,
+            "horizon": float(self.t[-1] - self.t[0]),
+            "simulated_fraction": float(self.simulated_fraction),
+        }
+
+
+def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVERGENCE_BOUND,
+                         failure=None, coordinate_names=None, forces=None) -> ValidationResult:
+    """Metrics of a predicted trajectory against a reference (see the module docstring).
+
+    Parameters
+    ----------
+    t : array, shape (T,)
+    reference : array, shape (T, 2n)
+        Reference states ``[q, qd]``.
+    prediction : array, shape (k, 2n), k <= T
+        Predicted states at ``t[:k]`` (shorter when the prediction stopped early).
+    divergence_bound : float, default 0.2
+    failure : str, optional
+        Why the prediction stopped early.
+    coordinate_names : sequence of str, optional
+    forces : array, shape (T, n), optional
+
+    Returns
+    -------
+    ValidationResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 1, 11)
+    >>> ref = np.column_stack([t, np.ones_like(t)])
+    >>> r = compare_trajectories(t, ref, ref + [0.01, 0.0])
+    >>> round(r.position_rmse, 6), r.valid
+    (0.01, True)
+    """
+    t = np.asarray(t, dtype=float)
+    reference = np.asarray(reference, dtype=float)
+    prediction = np.asarray(prediction, dtype=float)
+    if reference.ndim != 2 or reference.shape[0] != len(t) or reference.shape[1] % 2:
+        raise ValueError(f"reference: expected shape (len(t), 2n), got {reference.shape}")
+    if prediction.ndim != 2 or prediction.shape[1] != reference.shape[1] or len(
+        prediction
+    ) > len(t):
+        raise ValueError(
+            f"prediction: expected shape (k <= {len(t)}, {reference.shape[1]}), got "
+            f"{prediction.shape}"
+        )
+    if not np.isfinite(divergence_bound) or divergence_bound <= 0:
+        raise ValueError(f"divergence_bound: expected a positive number, got {divergence_bound!r}")
+    n = reference.shape[1] // 2
+    k = len(prediction)
+    finite = np.all(np.isfinite(prediction), axis=1)
+    if not finite.all():  # keep only the finite prefix
+        k = int(np.argmin(finite))
+        prediction = prediction[:k]
+        failure = failure or "non-finite state"
+    if k < len(t) and failure is None:
+        failure = "incomplete prediction"
+    error = prediction[:, :n] - reference[:k, :n]
+    if k:
+        per_coordinate = np.sqrt(np.mean(error**2, axis=0))
+        rmse = float(np.sqrt(np.mean(error**2)))
+    else:
+        per_coordinate, rmse = np.full(n, np.inf), np.inf
+    scale = np.maximum(1.0, np.ptp(reference[:, :n], axis=0))
+    exceeded = np.flatnonzero(np.any(np.abs(error) > divergence_bound * scale, axis=1))
+    divergence_time = None
+    if len(exceeded):
+        divergence_time = float(t[exceeded[0]])
+    elif k < len(t):
+        divergence_time = float(t[k]) if k else float(t[0])
+    names = tuple(coordinate_names) if coordinate_names is not None else tuple(
+        f"q{i}" for i in range(n))
+    return ValidationResult(
+        t=t, reference=reference, prediction=prediction,
+        forces=np.zeros((len(t), n)) if forces is None else np.asarray(forces, dtype=float),
+        position_rmse=rmse, position_rmse_per_coordinate=per_coordinate,
+        divergence_time=divergence_time,
+        valid=divergence_time is None and failure is None,
+        failure=failure, divergence_bound=float(divergence_bound), coordinate_names=names,
+    )
+
+
+def validation_trajectory(system, duration: float = 10.0, forcing: str = "explicit",
+                          actuators=None, seed=None, sample_every: int = 10,
+                          initial_scale: float = 1.0, **signal_options) -> Trajectory:
+    """A fresh noise-free MuJoCo trajectory with random initial state and forcing.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem or str
+    duration : float, default 10.0
+    forcing : {"explicit", "implicit", "mixed"}
+    actuators : list of str, optional
+        Driven actuators in ``mixed`` mode.
+    seed : int, optional
+    sample_every : int, default 10
+        Record every ``sample_every``-th MuJoCo step.
+    initial_scale : float, default 1.0
+    **signal_options
+        ``n_components``, ``max_frequency``, ``amplitude_scale`` of the random forces.
+
+    Returns
+    -------
+    Trajectory
+    """
+    system = get_system(system)
+    if forcing not in FORCING_MODES:
+        raise ValueError(f"forcing: expected one of {FORCING_MODES}, got {forcing!r}")
+    rng = np.random.default_rng(seed)
+    q0, qd0 = system.random_initial_state(rng, scale=initial_scale)
+    signals = actuator_signals(system, system.mj_model(), forcing, rng, actuators,
+                               **signal_options)
+    return simulate_trajectory(system, duration, signals, q0, qd0, sample_every)
+
+
+def validate_model(model, system=None, trajectory: Trajectory | None = None,
+                   duration: float = 10.0, forcing: str = "explicit", actuators=None, seed=None,
+                   divergence_bound: float = DEFAULT_DIVERGENCE_BOUND, force_input: str = "tau",
+                   sample_every: int = 10, **integrator_options) -> ValidationResult:
+    """Simulate an identified model against a fresh MuJoCo trajectory and score it.
+
+    Parameters
+    ----------
+    model : fitted XLSINDy
+        Anything with ``simulate(x0, t, u)`` raising
+        :class:`pysindy_xl.dynamics.SimulationError` on failure.
+    system : MuJoCoSystem or str, optional
+        Simulated to produce the reference (ignored when ``trajectory`` is given).
+    trajectory : Trajectory, optional
+        Reference trajectory to use instead of simulating one.
+    duration, forcing, actuators, seed, sample_every
+        Of the fresh trajectory (see :func:`validation_trajectory`).
+    divergence_bound : float, default 0.2
+        See the module docstring.
+    force_input : {"tau", "u"}, default "tau"
+        Forces given to the model: generalized forces (default interlink) or joint forces
+        (for a model fitted with ``interlink=system.force_matrix()``).
+    **integrator_options
+        Passed to ``model.simulate`` (``rtol``, ``atol``, ``timeout``...).
+
+    Returns
+    -------
+    ValidationResult
+
+    Raises
+    ------
+    ValueError
+        If neither ``system`` nor ``trajectory`` is given, or on a shape mismatch.
+    """
+    from ..dynamics import SimulationError
+
+    if trajectory is None:
+        if system is None:
+            raise ValueError("system: give a system to simulate or a reference trajectory")
+        trajectory = validation_trajectory(system, duration, forcing, actuators, seed,
+                                           sample_every)
+        names = get_system(system).coordinate_names
+    else:
+        if not isinstance(trajectory, Trajectory):
+            raise TypeError(f"trajectory: expected a Trajectory, got {type(trajectory).__name__}")
+        names = get_system(system).coordinate_names if system is not None else None
+    if trajectory.qd is None:
+        raise ValueError("trajectory: the reference needs velocities (qd)")
+    if force_input not in ("tau", "u"):
+        raise ValueError(f"force_input: expected 'tau' or 'u', got {force_input!r}")
+    forces = getattr(trajectory, force_input)
+    n = trajectory.q.shape[1]
+    if forces is None:
+        forces = np.zeros((trajectory.n_samples, n))
+    reference = trajectory.state
+    use_forces = None
+    if np.any(forces != 0):
+        # A C2 cubic spline of the force samples: the adaptive integrator rejects many steps at
+        # the kinks of a piecewise-linear interpolant.
+        spline = CubicSpline(trajectory.t, forces, axis=0)
+        use_forces = spline
+    failure = None
+    try:
+        prediction = model.simulate(reference[0], trajectory.t, use_forces,
+                                    **integrator_options)
+    except SimulationError as error:
+        prediction, failure = error.states, error.reason
+    return compare_trajectories(trajectory.t, reference, prediction, divergence_bound,
+                                failure, names, forces)
