@@ -1,0 +1,155 @@
+"""The ``pysindy-xl`` command end to end: demo, generate, identify, errors."""
+
+import json
+
+import numpy as np
+import pytest
+
+import pysindy_xl as px
+from pysindy_xl.cli import main
+from pysindy_xl.mujoco import SYSTEMS
+
+SHORT = ["--duration", "2", "--trajectories", "1", "--validation-duration", "1", "--no-plots",
+         "--quiet"]
+
+
+def read_report(directory):
+    return json.loads((directory / "report.json").read_text())
+
+
+@pytest.mark.slow
+def test_readme_demo_cart_pole(tmp_path, capsys):
+    """``pysindy-xl demo cart-pole``: the README's main command, default options."""
+    assert main(["demo", "cart-pole", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "(x) " in out and "(theta) " in out and "VALID" in out
+    report = read_report(tmp_path)
+    assert report["validation"]["valid"] is True
+    assert report["validation"]["position_rmse"] < 0.01
+    assert report["validation"]["horizon"] == pytest.approx(10.0)
+    assert report["coefficient_summary"]["support_recovered"] is True
+    assert report["coefficient_summary"]["max_relative_error"] < 1e-6
+    assert (tmp_path / "validation.png").stat().st_size > 10_000
+    assert report["timings_s"]["total"] < 60
+
+
+def solver_available(forcing):
+    name = {"explicit": "ExplicitOptimizer", "implicit": "ImplicitOptimizer",
+            "mixed": "MixedOptimizer"}[forcing]
+    return hasattr(px, name)
+
+
+@pytest.mark.parametrize("system", sorted(SYSTEMS))
+@pytest.mark.parametrize("forcing", ["explicit", "implicit", "mixed"])
+def test_demo_each_system_and_forcing(system, forcing, tmp_path, capsys):
+    status = main(["demo", system, "--forcing", forcing, "--out", str(tmp_path), *SHORT])
+    if not solver_available(forcing):
+        # the implicit and mixed solvers are optional parts: a clear message, no traceback
+        assert status == 1
+        assert "is not available" in capsys.readouterr().err
+        return
+    assert status == 0
+    report = read_report(tmp_path)
+    assert report["system"] == system and report["options"]["forcing"] == forcing
+    assert len(report["coefficients"]) == len(report["features"])
+    assert set(report["validation"]) >= {"valid", "failure"}
+    if forcing == "explicit":
+        assert report["validation"]["valid"] is True
+        assert report["coefficient_summary"]["max_relative_error"] < 1e-3
+
+
+@pytest.mark.parametrize("system", sorted(SYSTEMS))
+def test_demo_mixed_forcing_with_explicit_solver(system, tmp_path):
+    assert main(["demo", system, "--forcing", "mixed", "--solver", "explicit", "--out",
+                 str(tmp_path), *SHORT]) == 0
+    report = read_report(tmp_path)
+    assert report["solver"] == "explicit"
+    assert report["validation"]["valid"] is True
+
+
+def test_demo_with_noise_and_other_catalog(tmp_path):
+    assert main(["demo", "cart-pole", "--noise", "0.01", "--catalog", "classical", "--seed",
+                 "3", "--out", str(tmp_path), "--save-data", *SHORT]) == 0
+    report = read_report(tmp_path)
+    assert report["options"]["noise"] == 0.01
+    assert all(not f.startswith("L[") for f in report["features"][1:])
+    assert (tmp_path / "training_data.npz").exists()
+
+
+def test_generate_then_identify(tmp_path, capsys):
+    path = tmp_path / "data.npz"
+    assert main(["generate", "cart-pole", str(path), "--duration", "3", "--trajectories", "2",
+                 "--seed", "1"]) == 0
+    assert path.exists() and (tmp_path / "data.json").exists()
+    capsys.readouterr()
+    model_path = tmp_path / "model.json"
+    assert main(["identify", str(path), "--catalog", "mixed", "--out", str(model_path)]) == 0
+    out = capsys.readouterr().out
+    assert "cart-pole: 2 trajectories" in out
+    assert "1.5*x_ddot" in out and "0.5*x_dot" in out and "support recovered: True" in out
+    assert model_path.exists()
+    # named coordinates must match the system's
+    assert main(["identify", str(path), "--system", "double-pendulum"]) == 1
+    assert "do not match" in capsys.readouterr().err
+
+
+def test_identify_user_npz_without_metadata(tmp_path, capsys):
+    """A user's NPZ with only t, q, qd, qdd, tau and a --system for the coordinates."""
+    from pysindy_xl.mujoco import generate_dataset
+
+    tr = generate_dataset("cart-pole", n_trajectories=1, duration=3.0, seed=2,
+                          progress=False).trajectories[0]
+    path = tmp_path / "mine.npz"
+    np.savez(path, t=tr.t, q=tr.q, qd=tr.qd, qdd=tr.qdd, tau=tr.tau)
+    assert main(["identify", str(path), "--system", "cart-pole"]) == 0
+    assert "(theta) 0.32*theta_ddot" in capsys.readouterr().out
+    assert main(["identify", str(path)]) == 1
+    assert "--system" in capsys.readouterr().err
+    assert main(["identify", str(path), "--system", "cart-double-pendulum"]) == 1
+    assert "the dataset has 2 coordinates" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["demo", "triple-pendulum"], "unknown system"),
+        (["demo", "cart-pole", "--forcing", "implicit", "--solver", "explicit"],
+         "--solver explicit needs forces"),
+        (["demo", "cart-pole", "--forcing", "mixed", "--actuators", "elbow", "--solver",
+          "explicit"], "actuators"),
+        (["demo", "missing_model.xml"], "does not exist"),
+    ],
+)
+def test_demo_errors(argv, message, tmp_path, capsys):
+    assert main([*argv, "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("pysindy-xl: error:") and message in err
+
+
+def test_identify_errors(tmp_path, capsys):
+    assert main(["identify", str(tmp_path / "none.npz"), "--system", "cart-pole"]) == 1
+    assert "does not exist" in capsys.readouterr().err
+    bad = tmp_path / "bad.npz"
+    bad.write_text("not an archive")
+    assert main(["identify", str(bad), "--system", "cart-pole"]) == 1
+    assert "not a readable NPZ" in capsys.readouterr().err
+    partial = tmp_path / "partial.npz"
+    np.savez(partial, q=np.zeros((10, 2)))
+    assert main(["identify", str(partial), "--system", "cart-pole"]) == 1
+    assert "required array(s) ['t']" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["demo", "cart-pole", "--noise", "-1"],
+        ["demo", "cart-pole", "--catalog", "newtonian"],
+        ["demo", "cart-pole", "--duration", "0"],
+        ["demo"],
+        [],
+    ],
+)
+def test_usage_errors_exit_2(argv):
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    assert info.value.code == 2
