@@ -1,0 +1,165 @@
+"""List public objects whose docstrings lack Parameters, Returns or Examples.
+
+Usage::
+
+    python docs/check_docstrings.py                 # classes and functions of the public API
+    python docs/check_docstrings.py --methods       # + public methods (Parameters / Returns)
+    python docs/check_docstrings.py --run-examples  # + run every Examples section (doctest)
+
+The public API is the ``__all__`` of the modules documented in the API reference
+(``API_MODULES`` in ``docs/conf.py``). Checks use :func:`numpydoc.validate.validate`:
+
+=====  =============================================================================
+code   meaning
+=====  =============================================================================
+GL08   no docstring
+PR01   parameters of the signature not documented under Parameters
+PR02   documented parameters that are not in the signature
+RT01   no Returns section although the code returns a value
+EX01   no Examples section (classes and functions; methods with ``--method-examples``)
+DT     the Examples section fails when run as a doctest (``--run-examples``)
+=====  =============================================================================
+
+Exit status 1 when something is missing, so the script can gate a CI job.
+"""
+
+from __future__ import annotations
+
+import argparse
+import doctest
+import functools
+import importlib
+import inspect
+import sys
+from pathlib import Path
+
+from numpydoc.validate import validate
+
+DOCS = Path(__file__).resolve().parent
+sys.path.insert(0, str(DOCS / "_ext"))
+
+from pxl_docs import object_kind, public_objects  # noqa: E402
+
+#: Modules of the public API, the top-level package first (as in docs/conf.py).
+API_MODULES = [
+    "pysindy_xl",
+    "pysindy_xl.feature_library",
+    "pysindy_xl.optimizers",
+    "pysindy_xl.dynamics",
+    "pysindy_xl.jax_dynamics",
+    "pysindy_xl.io",
+    "pysindy_xl.expressions",
+    "pysindy_xl.mujoco",
+]
+CHECKED = ("GL08", "PR01", "PR02", "RT01", "EX01")
+SECTION_NAMES = {
+    "GL08": "no docstring",
+    "PR01": "Parameters incomplete",
+    "PR02": "unknown parameters documented",
+    "RT01": "no Returns",
+    "EX01": "no Examples",
+    "DT": "Examples fail",
+}
+
+
+def api_objects(modules) -> list[tuple[str, object]]:
+    """``(import path, object)`` of every public class and function, each object once."""
+    seen, out = set(), []
+    for module_name in modules:
+        try:
+            objects = public_objects(module_name)
+        except ImportError:
+            print(f"note: {module_name} is not importable, skipped", file=sys.stderr)
+            continue
+        for name, obj in objects:
+            if id(obj) in seen or object_kind(obj) == "data":
+                continue
+            seen.add(id(obj))
+            out.append((f"{module_name}.{name}", obj))
+    return out
+
+
+def _is_ours(obj) -> bool:
+    return (getattr(obj, "__module__", None) or "").split(".")[0] == "pysindy_xl"
+
+
+def public_methods(path: str, cls) -> list[tuple[str, object]]:
+    """Public methods a class defines or inherits from pysindy_xl classes (not properties)."""
+    out = []
+    for name in sorted(dir(cls)):
+        if name.startswith("_") and name != "__call__":
+            continue
+        for owner in cls.__mro__:
+            if name in owner.__dict__:
+                raw = owner.__dict__[name]
+                break
+        else:
+            continue
+        if not _is_ours(owner) or isinstance(raw, (property, functools.cached_property)):
+            continue
+        function = raw.__func__ if isinstance(raw, (classmethod, staticmethod)) else raw
+        if inspect.isfunction(function):
+            out.append((f"{path}.{name}", function))
+    return out
+
+
+def missing_sections(path: str, codes) -> list[str]:
+    result = validate(path)
+    return [code for code, _ in result["errors"] if code in codes]
+
+
+def failing_examples(path: str, obj) -> str | None:
+    """Run the doctest examples of one docstring; a failure message or None."""
+    module = importlib.import_module(obj.__module__) if _is_ours(obj) else None
+    globs = dict(vars(module)) if module is not None else {}
+    finder = doctest.DocTestFinder(recurse=False)
+    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    failures = []
+    for test in finder.find(obj, path, globs=globs):
+        result = runner.run(test, out=failures.append, clear_globs=True)
+        if result.failed:
+            return "".join(failures).strip().splitlines()[-1][:200]
+    return None
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--methods", action="store_true",
+                        help="also check public methods (Parameters, Returns)")
+    parser.add_argument("--method-examples", action="store_true",
+                        help="with --methods, also require Examples in methods")
+    parser.add_argument("--run-examples", action="store_true",
+                        help="run the Examples sections as doctests")
+    args = parser.parse_args(argv)
+
+    targets = []
+    for path, obj in api_objects(API_MODULES):
+        targets.append((path, obj, CHECKED))
+        if args.methods and inspect.isclass(obj):
+            codes = CHECKED if args.method_examples else CHECKED[:-1]
+            targets += [(p, m, codes) for p, m in public_methods(path, obj)]
+
+    problems = {}
+    seen_functions = set()
+    for path, obj, codes in targets:
+        if id(obj) in seen_functions:
+            continue
+        seen_functions.add(id(obj))
+        found = missing_sections(path, codes)
+        if args.run_examples and (inspect.getdoc(obj) or "").find(">>>") >= 0:
+            message = failing_examples(path, obj)
+            if message:
+                found.append("DT")
+                print(f"{path}: example fails: {message}", file=sys.stderr)
+        if found:
+            problems[path] = found
+
+    checked = len(seen_functions)
+    for path, codes in problems.items():
+        print(f"{path}: " + ", ".join(SECTION_NAMES[c] for c in codes))
+    print(f"{len(problems)} of {checked} public objects need docstring work", file=sys.stderr)
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
