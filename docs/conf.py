@@ -118,7 +118,6 @@ warnings.filterwarnings("ignore", message="Matplotlib is currently using agg")
 # -- HTML --------------------------------------------------------------------------------------
 html_theme = "pydata_sphinx_theme"
 html_title = f"pysindy-xl {release}"
-html_static_path = ["_static"]
 html_theme_options = {
     "navbar_align": "left",
     "show_toc_level": 2,
