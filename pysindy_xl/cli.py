@@ -147,10 +147,12 @@ def _optimizer(solver: str, threshold=None):
             "mixed": "MixedOptimizer"}[solver]
     cls = getattr(px, name, None)
     if cls is None:
-        try:
-            from pysindy_xl import optimizers
+        # not exported (yet): look in its module, imported only now
+        import importlib
 
-            cls = getattr(optimizers, name)
+        try:
+            module = importlib.import_module(f"pysindy_xl.optimizers.{solver}")
+            cls = getattr(module, name)
         except (ImportError, AttributeError):
             raise CLIError(
                 f"--solver {solver}: px.{name} is not available in this installation; use "
@@ -199,6 +201,14 @@ def _coefficient_summary(system, model):
         return None, {}
     truth, missing = true_coefficients(system, model.feature_library_)
     coef = model.coefficients()
+    forces = model.feature_library_.force_columns_
+    if not np.allclose(coef[forces], -1.0):
+        # an implicit law is defined up to a factor: scale the truth to the identified vector
+        rest = np.setdiff1d(np.arange(len(coef)), forces)
+        norm = truth[rest] @ truth[rest]
+        factor = (coef[rest] @ truth[rest]) / norm if norm > 0 else 1.0
+        truth = truth * (factor if factor != 0 else 1.0)
+        truth[forces] = coef[forces]
     scale = np.abs(truth).max()
     active = truth != 0
     summary = {

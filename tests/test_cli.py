@@ -153,3 +153,19 @@ def test_usage_errors_exit_2(argv):
     with pytest.raises(SystemExit) as info:
         main(argv)
     assert info.value.code == 2
+
+
+def test_demo_on_a_user_mjcf(tmp_path, capsys):
+    xml = tmp_path / "pendulum.xml"
+    xml.write_text("""<mujoco><option timestep="0.001" integrator="RK4"/>
+      <worldbody><body><joint name="swing" type="hinge" axis="0 1 0" damping="0.2"/>
+      <inertial pos="0 0 -0.5" mass="1" diaginertia="1e-8 1e-8 1e-8"/></body></worldbody>
+      <actuator><motor joint="swing"/></actuator></mujoco>""")
+    out = tmp_path / "out"
+    assert main(["demo", str(xml), "--out", str(out), "--duration", "3", "--trajectories", "1",
+                 "--validation-duration", "2"]) == 0
+    printed = capsys.readouterr().out
+    assert "L = 0.125*swing_dot**2 + 4.905*cos(swing)" in printed
+    report = read_report(out)
+    assert report["true_coefficients"] is None and report["validation"]["valid"] is True
+    assert (out / "validation.png").exists()
