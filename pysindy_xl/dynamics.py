@@ -102,7 +102,10 @@ def force_function(u, t: np.ndarray, n: int):
             return out
 
         return call
-    u = np.asarray(u, dtype=float)
+    try:
+        u = np.asarray(u, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError("u: expected None, an array (len(t), n) or a callable u(t)") from None
     if u.shape != (len(t), n):
         raise ValueError(f"u: expected an array of shape (len(t), n) = {(len(t), n)}, got "
                          f"{u.shape}")
@@ -189,7 +192,17 @@ class MassMatrixDynamics:
         SingularMassMatrixError
             Where ``M`` is singular.
         """
-        z = stack_variables(q, qd, None, tau, t)
+        arrays = {"q": q, "qd": qd, "tau": tau, "t": t}
+        for name, value in arrays.items():
+            if value is None:
+                continue
+            try:
+                arrays[name] = np.asarray(value, dtype=float)
+            except (TypeError, ValueError):
+                raise TypeError(f"{name}: expected a numeric array") from None
+            if not np.all(np.isfinite(arrays[name])):
+                raise ValueError(f"{name}: contains NaN or inf")
+        z = stack_variables(arrays["q"], arrays["qd"], None, arrays["tau"], arrays["t"])
         mass, force = self.mass_and_forcing(z)
         singular = self._singular(mass, rcond)
         if np.any(singular):

@@ -8,11 +8,13 @@ Nothing in a file can make it execute code.
 
 from __future__ import annotations
 
+import math
 import re
 
 import sympy as sp
+from sympy.printing.str import StrPrinter
 
-__all__ = ["parse_expression", "FUNCTIONS"]
+__all__ = ["parse_expression", "format_expression", "FUNCTIONS"]
 
 FUNCTIONS = {
     "sin": sp.sin,
@@ -37,6 +39,9 @@ _TOKEN = re.compile(
     r"|(?P<name>[A-Za-z_][A-Za-z_0-9]*)|(?P<op>\*\*|[-+*/^(),]))"
 )
 _MAX_LENGTH = 20_000
+_MAX_DEPTH = 100
+_MAX_NUMBER_DIGITS = 40
+_MAX_POWER_DIGITS = 300  # a numeric power may not exceed 10**300 (no huge exact integers)
 
 
 def _tokenize(text: str) -> list[tuple[str, str]]:
@@ -52,11 +57,40 @@ def _tokenize(text: str) -> list[tuple[str, str]]:
     return tokens
 
 
+class _FullPrecisionPrinter(StrPrinter):
+    """sympy's str printer, but floats keep every bit (``repr`` of the double)."""
+
+    def _print_Float(self, expr):
+        return repr(float(expr))
+
+
+def format_expression(expr: sp.Expr) -> str:
+    """Text of ``expr`` that :func:`parse_expression` turns back into the same expression.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> x = sp.Symbol("x")
+    >>> format_expression(sp.Float(1 / 3) * sp.cos(x))
+    '0.3333333333333333*cos(x)'
+    """
+    return _FullPrecisionPrinter().doprint(expr)
+
+
 class _Parser:
     def __init__(self, text: str, symbols: dict[str, sp.Symbol]):
         self.text = text
         self.tokens = _tokenize(text)
         self.pos = 0
+        self.depth = 0
         self.symbols = symbols
 
     def error(self, what: str):
@@ -86,9 +120,20 @@ class _Parser:
             expr = expr + rhs if op == "+" else expr - rhs
         return expr
 
-    def starts_atom(self):
+    def starts_implicit_factor(self):
+        # pysindy writes "x y^2": juxtaposition multiplies names and parentheses, never a
+        # number on the right ("3 2" or "1.2.3" are malformed, not products)
         kind, token = self.peek()
-        return kind in ("num", "name") or token == "("
+        return kind == "name" or token == "("
+
+    def nested(self, parse):
+        self.depth += 1
+        if self.depth > _MAX_DEPTH:
+            raise self.error(f"nested deeper than {_MAX_DEPTH} levels")
+        try:
+            return parse()
+        finally:
+            self.depth -= 1
 
     def product(self):
         expr = self.unary()
@@ -98,7 +143,7 @@ class _Parser:
                 self.take()
                 rhs = self.unary()
                 expr = expr * rhs if token == "*" else expr / rhs
-            elif self.starts_atom():
+            elif self.starts_implicit_factor():
                 expr = expr * self.unary()
             else:
                 return expr
@@ -106,7 +151,7 @@ class _Parser:
     def unary(self):
         if self.peek()[1] in ("-", "+"):
             _, op = self.take()
-            operand = self.unary()
+            operand = self.nested(self.unary)
             return -operand if op == "-" else operand
         return self.power()
 
@@ -114,17 +159,31 @@ class _Parser:
         base = self.atom()
         if self.peek()[1] in ("**", "^"):
             self.take()
-            return base ** self.unary()
+            exponent = self.nested(self.unary)
+            if base.is_number and exponent.is_number:
+                self.check_numeric_power(base, exponent)
+            return base**exponent
         return base
+
+    def check_numeric_power(self, base, exponent):
+        # sympy evaluates numeric powers exactly: 9**9**9 would never finish
+        try:
+            size = abs(float(exponent)) * math.log10(max(abs(complex(base)), 1e-300))
+        except (TypeError, ValueError, OverflowError):
+            raise self.error("unsupported numeric power") from None
+        if abs(float(exponent)) > 1000 or size > _MAX_POWER_DIGITS:
+            raise self.error(f"numeric power {base}**{exponent} is too large")
 
     def atom(self):
         kind, token = self.take()
         if kind == "num":
+            if len(token) > _MAX_NUMBER_DIGITS:
+                raise self.error(f"number {token[:20]}... is too long")
             if re.fullmatch(r"\d+", token):
                 return sp.Integer(token)
-            return sp.Float(token)
+            return sp.Float(float(token))
         if token == "(":
-            expr = self.sum()
+            expr = self.nested(self.sum)
             self.take(")")
             return expr
         if kind == "name":
@@ -132,7 +191,7 @@ class _Parser:
                 if token not in FUNCTIONS:
                     raise self.error(f"unknown function {token!r}")
                 self.take("(")
-                arg = self.sum()
+                arg = self.nested(self.sum)
                 self.take(")")
                 return FUNCTIONS[token](arg)
             if token in self.symbols:

@@ -256,6 +256,11 @@ class XLSINDy(BaseEstimator):
             force_block = theta[:, library.force_columns_].reshape(n, -1,
                                                                    len(library.force_columns_))
             forced = np.any(force_block != 0, axis=(1, 2))
+        if u is None and isinstance(self.optimizer, ExplicitOptimizer):
+            raise ValueError(
+                "u: explicit regression needs the generalized forces; pass u, or use "
+                "ImplicitOptimizer / MixedOptimizer for unforced data"
+            )
         optimizer = self._optimizer(forced)
         optimizer.fit_catalog(theta[:, keep], n, force_columns)
         coef = np.zeros(theta.shape[1])

@@ -108,8 +108,6 @@ def test_bad_parameters_rejected_at_fit(params, error, match):
         opt.fit(x, y)
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: alpha=nan passes 'alpha < 0' and is accepted "
-                   "(the proximal method then iterates on NaN thresholds)")
 @pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
 def test_nan_alpha_rejected():
     x, y = _problem()
@@ -117,9 +115,6 @@ def test_nan_alpha_rejected():
         px.ExplicitOptimizer(method="proximal", alpha=np.nan).fit(x, y)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="BUG: max_iter='abc' raises int()'s ValueError, whose message does "
-                   "not name max_iter")
 def test_non_numeric_max_iter_names_the_argument():
     x, y = _problem()
     with pytest.raises((ValueError, TypeError)) as info:

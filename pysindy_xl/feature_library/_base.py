@@ -210,6 +210,8 @@ class SymbolicLibrary(BaseFeatureLibrary):
             Rows coordinate-major, one column per feature.
         """
         check_is_fitted(self, "symbolic_matrix_")
+        if not hasattr(self, "_evaluate"):  # symbolic part fitted by a CatalogRepartition
+            self._compile()
         x = self._check_input(x)
         n_samples = x.shape[0]
         # column-major: each entry fills a contiguous column block (and LAPACK prefers it)

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import sympy as sp
 from pysindy.feature_library.base import BaseFeatureLibrary
-from sklearn.base import clone
 
-from ..expressions import parse_expression
+from ..expressions import format_expression, parse_expression
 from ..symbols import Coordinates, _as_expr_list
 from ._base import SymbolicLibrary, compile_entries
 
@@ -45,7 +46,8 @@ def pysindy_library_terms(library: BaseFeatureLibrary, coords: Coordinates) -> l
     names = [str(s) for s in state]
     rng = np.random.default_rng(0)
     sample = rng.uniform(-1.5, 1.5, size=(64, len(state)))
-    fitted = clone(library).fit(sample)
+    # deepcopy, not sklearn.clone: some pysindy libraries (CustomLibrary) are not clonable
+    fitted = copy.deepcopy(library).fit(sample)
     feature_names = fitted.get_feature_names(input_features=names)
     table = {str(s): s for s in state}
     terms = []
@@ -154,6 +156,6 @@ class ClassicalLibrary(SymbolicLibrary):
             self.fit()
         return {
             "type": "ClassicalLibrary",
-            "terms": [str(t) for t in self.terms_],
+            "terms": [format_expression(t) for t in self.terms_],
             "mask": self.mask_.astype(int).tolist(),
         }

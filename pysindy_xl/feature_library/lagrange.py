@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from ..expressions import format_expression
 from ..symbols import Coordinates, _as_expr_list
 from ._base import SymbolicLibrary
 
@@ -141,4 +142,4 @@ class LagrangeLibrary(SymbolicLibrary):
 
     def to_spec(self) -> dict:
         terms = _as_expr_list(self.terms, "terms")
-        return {"type": "LagrangeLibrary", "terms": [str(t) for t in terms]}
+        return {"type": "LagrangeLibrary", "terms": [format_expression(t) for t in terms]}

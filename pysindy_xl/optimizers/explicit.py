@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numbers
 import warnings
 
 import numpy as np
@@ -100,6 +101,10 @@ def proximal_gradient_lasso(x, y, alpha: float, max_iter: int = 10_000, tol: flo
     return coef, False
 
 
+def _is_real(value) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and value == value
+
+
 class ExplicitOptimizer(CatalogOptimizer):
     """Sparse regression when the generalized forces are known on the coordinates.
 
@@ -154,11 +159,11 @@ class ExplicitOptimizer(CatalogOptimizer):
                                  f"{self.method!r}")
         elif not hasattr(self.method, "fit"):
             raise TypeError("method: expected a method name or an estimator with fit(X, y)")
-        if not 0 <= self.threshold < 1:
+        if not _is_real(self.threshold) or not 0 <= self.threshold < 1:
             raise ValueError(f"threshold: expected a value in [0, 1), got {self.threshold!r}")
-        if self.alpha < 0:
-            raise ValueError(f"alpha: expected a non-negative value, got {self.alpha!r}")
-        if int(self.max_iter) < 1:
+        if not _is_real(self.alpha) or not 0 <= self.alpha < np.inf:
+            raise ValueError(f"alpha: expected a finite non-negative value, got {self.alpha!r}")
+        if not isinstance(self.max_iter, numbers.Integral) or self.max_iter < 1:
             raise ValueError(f"max_iter: expected a positive integer, got {self.max_iter!r}")
 
     def fit(self, X, y):
