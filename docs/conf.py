@@ -19,7 +19,7 @@ ROOT = DOCS.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(DOCS / "_ext"))
 
-from pxl_docs import write_api_pages  # noqa: E402
+from pxl_docs import write_api_pages, write_cli_help  # noqa: E402
 
 import pysindy_xl  # noqa: E402
 
@@ -57,10 +57,16 @@ API_MODULES = [
     "pysindy_xl.io",
     "pysindy_xl.expressions",
     "pysindy_xl.mujoco",
+    "pysindy_xl.cli",
 ]
 API_SKIPPED = write_api_pages(API_MODULES, DOCS / "gen_modules" / "api")
+CLI_AVAILABLE = write_cli_help("pysindy_xl.cli", DOCS / "gen_modules" / "cli_help.rst.inc")
 
-autosummary_generate = True
+# The pages to scan for autosummary tables, listed explicitly: with ``True`` an incremental
+# build would only scan the pages known to its cached environment and miss new modules.
+autosummary_generate = [
+    f"gen_modules/api/{name}.rst" for name in API_MODULES if name not in API_SKIPPED
+]
 autosummary_generate_overwrite = True
 autodoc_typehints = "none"  # numpydoc sections already state the types
 autodoc_member_order = "bysource"

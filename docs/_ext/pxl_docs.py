@@ -153,3 +153,51 @@ def write_api_pages(module_names, folder) -> list[str]:
         if stale.stem not in written:
             stale.unlink()
     return skipped
+
+
+def write_cli_help(module_name: str, path) -> bool:
+    """Write the ``--help`` text of the command and of each subcommand as a reST fragment.
+
+    Parameters
+    ----------
+    module_name : str
+        Module with a ``build_parser()`` returning the ``argparse`` parser.
+    path : path
+        Output file (inside the Sphinx source tree, ignored by git).
+
+    Returns
+    -------
+    bool
+        False when the module is not importable (the fragment then says so).
+    """
+    import argparse
+    import os
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        parser = importlib.import_module(module_name).build_parser()
+    except (ImportError, AttributeError):
+        path.write_text("The command-line interface is not available in this version.\n",
+                        encoding="utf-8")
+        return False
+    parsers = [(parser.prog, parser)]
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            parsers += [(sub.prog, sub) for sub in action.choices.values()]
+    previous = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = "96"  # argparse wraps to the terminal width; fix it for the page
+    try:
+        lines = []
+        for prog, sub in parsers:
+            lines += _heading(f"``{prog}``", "-") + [".. code-block:: text", ""]
+            lines += [f"   {line}".rstrip() for line in sub.format_help().splitlines()] + [""]
+    finally:
+        if previous is None:
+            del os.environ["COLUMNS"]
+        else:
+            os.environ["COLUMNS"] = previous
+    text = "\n".join(lines)
+    if not path.exists() or path.read_text(encoding="utf-8") != text:
+        path.write_text(text, encoding="utf-8")
+    return True
