@@ -87,6 +87,10 @@ def _add_fit_options(parser):
                         help="relative pruning threshold of the explicit solver")
     parser.add_argument("--friction", choices=("auto", "diagonal", "full"), default="auto",
                         help="friction terms of the catalogs (default: auto)")
+    parser.add_argument("--velocity-degree", type=_positive_int, default=2,
+                        help="degree of the velocity monomials of the catalog (default: 2)")
+    parser.add_argument("--trig-degree", type=_positive_int, default=2,
+                        help="degree of the sin/cos monomials of the catalog (default: 2)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -179,17 +183,27 @@ def _log(quiet, *args):
         print(*args, flush=True)
 
 
-def _fit(system, dataset, catalog_kind, solver, threshold, friction, forced):
-    import pysindy_xl as px
-    from pysindy_xl.mujoco.catalogs import reference_catalog
-
+def _check_solver(solver, forced, threshold):
+    """The optimizer of ``solver``, checked before any long computation."""
     if solver == "explicit" and not forced:
         raise CLIError("--solver explicit needs forces; use --forcing explicit or mixed, or "
                        "--solver implicit")
-    catalog = reference_catalog(system, catalog_kind, friction=friction)
-    model = px.XLSINDy(catalog, _optimizer(solver, threshold))
+    return _optimizer(solver, threshold)
+
+
+def _fit(system, dataset, args, solver, forced):
+    import pysindy_xl as px
+    from pysindy_xl.mujoco.catalogs import reference_catalog
+
+    optimizer = _check_solver(solver, forced, args.threshold)
+    catalog = reference_catalog(system, args.catalog, velocity_degree=args.velocity_degree,
+                                trig_degree=args.trig_degree, friction=args.friction)
+    model = px.XLSINDy(catalog, optimizer)
     arguments = dataset.fit_arguments(forces="tau" if forced else None)
-    model.fit(**arguments)
+    try:
+        model.fit(**arguments)
+    except (RuntimeError, ValueError, np.linalg.LinAlgError) as error:
+        raise CLIError(f"identification failed ({type(error).__name__}): {error}") from None
     return model
 
 
@@ -248,6 +262,7 @@ def run_demo(args) -> dict:
     system = _system(args.system)
     solver = _AUTO_SOLVER[args.forcing] if args.solver == "auto" else args.solver
     forced = args.forcing != "implicit"
+    _check_solver(solver, forced, args.threshold)
     os.makedirs(args.out, exist_ok=True)
     timings = {}
     quiet = args.quiet
@@ -272,7 +287,7 @@ def run_demo(args) -> dict:
     start = time.perf_counter()
     n_samples = sum(tr.n_samples for tr in dataset.trajectories)
     _log(quiet, f"[2/3] identification on {n_samples} samples")
-    model = _fit(system, dataset, args.catalog, solver, args.threshold, args.friction, forced)
+    model = _fit(system, dataset, args, solver, forced)
     timings["identify"] = time.perf_counter() - start
     truth, coefficient_summary = _coefficient_summary(system, model)
 
@@ -388,7 +403,7 @@ def run_identify(args):
         else:
             active = np.any(np.vstack([tr.tau for tr in dataset.trajectories]) != 0, axis=0)
             solver = "explicit" if active.all() else "mixed"
-    model = _fit(system, dataset, args.catalog, solver, args.threshold, args.friction, forced)
+    model = _fit(system, dataset, args, solver, forced)
     n_samples = sum(tr.n_samples for tr in dataset.trajectories)
     print(f"{system.name}: {dataset.n_trajectories} trajectories, {n_samples} samples, "
           f"{args.catalog} catalog, {solver} solver")
