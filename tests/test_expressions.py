@@ -42,6 +42,8 @@ def _catalog_like_terms():
 @pytest.mark.parametrize("expr", list(_catalog_like_terms()), ids=str)
 def test_round_trip_of_printed_expressions(expr):
     assert parse_expression(str(expr), TABLE) == expr
+    # the printer used by saved models
+    assert parse_expression(format_expression(expr), TABLE) == expr
 
 
 @pytest.mark.parametrize(

@@ -194,10 +194,6 @@ def test_explicit_optimizer_on_unforced_data(u, data):
         px.XLSINDy(_library(), px.ExplicitOptimizer()).fit(**kwargs)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="BUG: the error says 'force_columns: explicit regression needs a force "
-                   "column' (the dropped zero force column, an internal argument) instead of "
-                   "naming u")
 def test_explicit_optimizer_on_unforced_data_names_u(data):
     with pytest.raises(ValueError) as info:
         px.XLSINDy(_library(), px.ExplicitOptimizer()).fit(**_with(data, u=None))

@@ -1,0 +1,293 @@
+"""JSON persistence: exact round trip of a fitted cart-pole model, tampered files refused."""
+
+import json
+import pickle
+
+import numpy as np
+import pytest
+import sympy as sp
+from ground_truth import random_force, random_initial_state
+from test_explicit_identification import paper_catalog
+
+import pysindy_xl as px
+from pysindy_xl.io import FORMAT, VERSION, load_model, save_model
+
+
+@pytest.fixture(scope="module")
+def cart_pole_model(cart_pole_system):
+    system = cart_pole_system
+    t = np.arange(0.0, 5.0, 0.01)
+    data = system.simulate(random_initial_state(system, 4), t, random_force(system, 4))
+    library = paper_catalog(system.coords, [1])
+    model = px.XLSINDy(library, px.ExplicitOptimizer())
+    model.fit(data["q"], data["t"], x_dot=data["qd"], x_ddot=data["qdd"], u=data["tau"])
+    return model, data
+
+
+@pytest.fixture(scope="module")
+def saved(cart_pole_model, tmp_path_factory):
+    model, _ = cart_pole_model
+    path = tmp_path_factory.mktemp("models") / "cart_pole.json"
+    model.save(path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def loaded(saved):
+    return px.XLSINDy.load(saved)
+
+
+def test_fitted_model_is_the_true_one(cart_pole_model, cart_pole_system):
+    # guards the round-trip tests: they compare a meaningful model
+    model, _ = cart_pole_model
+    system = cart_pole_system
+    friction = {(system.coords.qd[i], i): c for i, c in enumerate(system.friction)}
+    true = model.feature_library_.ideal_coefficients(lagrangian=system.lagrangian,
+                                                     classical=friction)
+    np.testing.assert_allclose(model.coefficients(), true, atol=1e-8)
+
+
+def test_round_trip_gives_identical_coefficients_and_structure(cart_pole_model, loaded):
+    model, _ = cart_pole_model
+    np.testing.assert_array_equal(loaded.coefficients(), model.coefficients())
+    assert loaded.get_feature_names() == model.get_feature_names()
+    assert loaded.equations() == model.equations()
+    assert loaded.lagrangian() == model.lagrangian()
+    assert loaded.dropped_features_ == model.dropped_features_
+    np.testing.assert_array_equal(loaded.forced_coordinates_, model.forced_coordinates_)
+    assert loaded.n_coordinates_ == 2
+    assert loaded.feature_library_.coords == model.feature_library_.coords
+    assert loaded.dynamics_.mass_matrix_expr == model.dynamics_.mass_matrix_expr
+    assert loaded.dynamics_.forcing_expr == model.dynamics_.forcing_expr
+    assert isinstance(loaded.optimizer_, px.ExplicitOptimizer)
+    assert loaded.optimizer_.get_params() == model.optimizer_.get_params()
+
+
+def test_round_trip_gives_identical_predictions(cart_pole_model, loaded):
+    model, data = cart_pole_model
+    before = model.predict(data["q"], data["qd"], data["tau"])
+    after = loaded.predict(data["q"], data["qd"], data["tau"])
+    np.testing.assert_array_equal(after, before)
+    np.testing.assert_allclose(after, data["qdd"], atol=1e-6)
+
+
+def test_round_trip_gives_identical_simulations(cart_pole_model, loaded, cart_pole_system):
+    model, _ = cart_pole_model
+    t = np.arange(0.0, 1.0, 0.01)
+    x0 = random_initial_state(cart_pole_system, 9)
+    force = random_force(cart_pole_system, 9)
+    np.testing.assert_array_equal(loaded.simulate(x0, t, u=force), model.simulate(x0, t, u=force))
+    u = force(t)
+    np.testing.assert_array_equal(loaded.simulate(x0, t, u=u), model.simulate(x0, t, u=u))
+
+
+def test_saving_a_loaded_model_gives_the_same_file(loaded, saved, tmp_path):
+    again = tmp_path / "again.json"
+    save_model(loaded, again)
+    first, second = json.loads(saved.read_text()), json.loads(again.read_text())
+    assert second == first
+
+
+def test_file_is_plain_json_without_pickle(saved, cart_pole_model, tmp_path, monkeypatch):
+    raw = saved.read_bytes()
+    assert not raw.startswith(b"\x80")  # pickle protocol marker
+    document = json.loads(raw.decode("utf-8"))
+    assert document["format"] == FORMAT and document["version"] == VERSION
+    assert document["coordinates"] == ["x", "theta"]
+    assert len(document["coefficients"]) == len(document["feature_names"])
+    assert all(isinstance(c, float) for c in document["coefficients"])
+    library_types = [lib["type"] for lib in document["feature_library"]["libraries"]]
+    assert library_types == ["ExternalForces", "LagrangeLibrary", "ClassicalLibrary"]
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("pickle must not be used")
+
+    for name in ("load", "loads", "dump", "dumps", "Unpickler", "Pickler"):
+        monkeypatch.setattr(pickle, name, forbidden)
+    model, _ = cart_pole_model
+    path = tmp_path / "no_pickle.json"
+    model.save(str(path))  # str paths work as well as pathlib ones
+    reloaded = load_model(str(path))
+    np.testing.assert_array_equal(reloaded.coefficients(), model.coefficients())
+
+
+# --------------------------------------------------------------------------------------------
+# tampered files
+# --------------------------------------------------------------------------------------------
+
+
+def _tamper(saved, tmp_path, change):
+    document = json.loads(saved.read_text())
+    change(document)
+    path = tmp_path / "tampered.json"
+    path.write_text(json.dumps(document))
+    return path
+
+
+def _lagrange_spec(document):
+    return next(lib for lib in document["feature_library"]["libraries"]
+                if lib["type"] == "LagrangeLibrary")
+
+
+def _classical_spec(document):
+    return next(lib for lib in document["feature_library"]["libraries"]
+                if lib["type"] == "ClassicalLibrary")
+
+
+def _set(key, value):
+    def change(document):
+        document[key] = value
+    return change
+
+
+TAMPERED = {
+    "format": (_set("format", "pickle"), r"'format' must be 'pysindy-xl-model'"),
+    "format_missing": (lambda d: d.pop("format"), r"'format' must be"),
+    "version": (_set("version", 99), r"unsupported version 99"),
+    "version_string": (_set("version", "1"), r"unsupported version '1'"),
+    "coefficients_short": (lambda d: d["coefficients"].pop(), r"'coefficients' must be one number"),
+    "coefficients_long": (lambda d: d["coefficients"].append(0.0), r"'coefficients' must be"),
+    "coefficient_string": (lambda d: d["coefficients"].__setitem__(1, "0.5"),
+                           r"'coefficients' must be one number per feature"),
+    "coefficient_bool": (lambda d: d["coefficients"].__setitem__(1, True), r"'coefficients'"),
+    "coefficient_null": (lambda d: d["coefficients"].__setitem__(1, None), r"'coefficients'"),
+    "coefficients_missing": (lambda d: d.pop("coefficients"), r"'coefficients'"),
+    "import_term": (lambda d: _lagrange_spec(d)["terms"].__setitem__(
+        0, "__import__('os').system('echo pwned')"), r"cannot parse expression"),
+    "dunder_term": (lambda d: _lagrange_spec(d)["terms"].__setitem__(0, "x.__class__"),
+                    r"cannot parse expression"),
+    "unknown_function_term": (lambda d: _lagrange_spec(d)["terms"].__setitem__(0, "open(x)"),
+                              r"unknown function 'open'"),
+    "unknown_symbol_term": (lambda d: _lagrange_spec(d)["terms"].__setitem__(0, "y_dot**2"),
+                            r"unknown symbol 'y_dot'"),
+    "acceleration_in_lagrangian": (lambda d: _lagrange_spec(d)["terms"].__setitem__(
+        0, "x_ddot"), r"catalog: terms"),
+    "terms_not_strings": (lambda d: _lagrange_spec(d)["terms"].__setitem__(0, 3),
+                          r"LagrangeLibrary.terms must be a non-empty list of strings"),
+    "terms_empty": (lambda d: _lagrange_spec(d).__setitem__("terms", []),
+                    r"LagrangeLibrary.terms must be a non-empty list"),
+    "unknown_library": (lambda d: _lagrange_spec(d).__setitem__("type", "os.system"),
+                        r"unknown library type 'os.system'"),
+    "library_not_object": (lambda d: d["feature_library"]["libraries"].__setitem__(0, "lib"),
+                           r"library spec must be an object"),
+    "libraries_empty": (lambda d: d["feature_library"].__setitem__("libraries", []),
+                        r"libraries must be a non-empty list"),
+    "mask_shape": (lambda d: _classical_spec(d).__setitem__("mask", [[1, 0]]),
+                   r"ClassicalLibrary.mask must be a 0/1 matrix \(n_terms, n\)"),
+    "mask_values": (lambda d: _classical_spec(d).__setitem__("mask", [[1, 0], [0, 7]]),
+                    r"ClassicalLibrary.mask must be a 0/1 matrix"),
+    "mask_missing": (lambda d: _classical_spec(d).pop("mask"), r"ClassicalLibrary.mask"),
+    "interlink_shape": (lambda d: d["feature_library"]["libraries"][0].__setitem__(
+        "interlink", [[1.0]]), r"ExternalForces.interlink must be a finite \(n, n\) matrix"),
+    "interlink_text": (lambda d: d["feature_library"]["libraries"][0].__setitem__(
+        "interlink", [["a", 0], [0, 1]]), r"ExternalForces.interlink must be a numeric"),
+    "feature_names": (lambda d: d["feature_names"].__setitem__(1, "L[evil]"),
+                      r"feature_names do not match the catalog"),
+    "coordinates_reserved": (_set("coordinates", ["x", "t"]), r"names: 't' is reserved"),
+    "coordinates_not_list": (_set("coordinates", "x"), r"'coordinates' must be a list"),
+    "forced_length": (_set("forced_coordinates", [True]), r"'forced_coordinates' must have"),
+    "dropped_not_object": (_set("dropped_features", ["a"]), r"'dropped_features' must be"),
+}
+
+
+@pytest.mark.parametrize("case", list(TAMPERED))
+def test_tampered_file_rejected(case, saved, tmp_path):
+    change, match = TAMPERED[case]
+    path = _tamper(saved, tmp_path, change)
+    with pytest.raises(ValueError, match="is not a valid pysindy-xl model file") as info:
+        px.XLSINDy.load(path)
+    assert info.match(match)
+
+
+@pytest.mark.parametrize("literal", ["NaN", "Infinity", "-Infinity"])
+def test_non_finite_coefficient_rejected(literal, saved, tmp_path):
+    document = json.loads(saved.read_text())
+    document["coefficients"][2] = "PLACEHOLDER"
+    text = json.dumps(document).replace('"PLACEHOLDER"', literal)
+    path = tmp_path / "nan.json"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=f"non-finite number {literal}"):
+        load_model(path)
+
+
+@pytest.mark.xfail(strict=True, reason="BUG: JSON numbers that overflow (1e999) are read as "
+                   "float('inf') and accepted as coefficients; check math.isfinite on every "
+                   "coefficient (and interlink entry)")
+def test_overflowing_coefficient_rejected(saved, tmp_path):
+    document = json.loads(saved.read_text())
+    document["coefficients"][2] = "PLACEHOLDER"
+    path = tmp_path / "overflow.json"
+    path.write_text(json.dumps(document).replace('"PLACEHOLDER"', "1e999"))
+    with pytest.raises(ValueError, match="coefficients"):
+        load_model(path)
+
+
+def test_deeply_nested_term_rejected(saved, tmp_path):
+    path = _tamper(saved, tmp_path, lambda d: _lagrange_spec(d)["terms"].__setitem__(
+        0, "(" * 400 + "x_dot" + ")" * 400))
+    with pytest.raises(ValueError, match="is not a valid pysindy-xl model file"):
+        load_model(path)
+
+
+@pytest.mark.parametrize(
+    "content",
+    [
+        "not json at all",
+        "{\"format\": ",
+        "",
+        "[1, 2, 3]",
+        "\"pysindy-xl-model\"",
+        "null",
+    ],
+)
+def test_non_json_or_non_object_file_rejected(content, tmp_path):
+    path = tmp_path / "bad.json"
+    path.write_text(content)
+    with pytest.raises(ValueError, match="is not a valid pysindy-xl model file"):
+        load_model(path)
+
+
+def test_pickle_file_rejected_without_unpickling(tmp_path, monkeypatch):
+    path = tmp_path / "model.pkl"
+    path.write_bytes(pickle.dumps({"format": FORMAT, "version": VERSION}))
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("pickle must not be used")
+
+    monkeypatch.setattr(pickle, "loads", forbidden)
+    monkeypatch.setattr(pickle, "load", forbidden)
+    with pytest.raises(ValueError, match="not JSON"):
+        load_model(path)
+
+
+def test_missing_file_and_directory_rejected(tmp_path):
+    with pytest.raises(ValueError, match="path: no such file"):
+        load_model(tmp_path / "missing.json")
+    with pytest.raises(ValueError, match="path: no such file"):
+        load_model(tmp_path)
+
+
+def test_full_precision_constants_and_interlink_survive_round_trip(tmp_path):
+    coords = px.Coordinates(["x"])
+    x, xd = coords.q[0], coords.qd[0]
+    third = sp.Float(1 / 3)  # 15 printed digits would not reproduce it
+    library = px.CatalogRepartition([
+        px.ExternalForces(coords, interlink=[[0.7]]),
+        px.LagrangeLibrary(coords, [xd**2, third * x**2, sp.cos(third * x)]),
+        px.ClassicalLibrary(coords, [np.pi * xd], mask=[[1]]),
+    ])
+    t = np.linspace(0, 8, 401)
+    q = (np.cos(2 * t) + 0.1 * t)[:, None]
+    qd, qdd = (-2 * np.sin(2 * t) + 0.1)[:, None], (-4 * np.cos(2 * t))[:, None]
+    u = (qdd + 3 * q + 0.2 * qd) / 0.7  # 0.7 u = x'' + 3 x + 0.2 x'
+    model = px.XLSINDy(library, px.ExplicitOptimizer()).fit(q, t, x_dot=qd, x_ddot=qdd, u=u)
+    np.testing.assert_allclose(model.predict(q, qd, u), qdd, atol=1e-8)
+    path = tmp_path / "precise.json"
+    model.save(path)
+    loaded = load_model(path)
+    assert loaded.get_feature_names() == model.get_feature_names()
+    np.testing.assert_array_equal(loaded.coefficients(), model.coefficients())
+    np.testing.assert_array_equal(loaded.predict(q, qd, u), model.predict(q, qd, u))
+    theta = model.feature_library_.transform(np.column_stack([q, qd, qdd, u, t]))
+    np.testing.assert_array_equal(
+        loaded.feature_library_.transform(np.column_stack([q, qd, qdd, u, t])), theta)
