@@ -305,6 +305,7 @@ def run_demo(args) -> dict:
     timings["validate"] = time.perf_counter() - start
 
     files = {}
+    start = time.perf_counter()
     if not args.no_plots and result is not None:
         from pysindy_xl.mujoco.plots import plot_validation
 
@@ -312,6 +313,7 @@ def run_demo(args) -> dict:
         plot_validation(result, path, model.get_feature_names(), model.coefficients(), truth,
                         title=f"{system.name} ({args.catalog} catalog, {solver} solver)")
         files["validation_plot"] = path
+        timings["plot"] = time.perf_counter() - start
 
     print()
     for line in _model_lines(model):
