@@ -127,6 +127,20 @@ def test_zero_columns_are_reported():
     assert np.all(np.linalg.norm(theta[:, 5:], axis=0) > 0)
 
 
+@pytest.mark.xfail(strict=True, reason="BUG: complex terms are accepted and transform silently "
+                   "drops their imaginary part (numpy ComplexWarning, a zero column here)")
+@pytest.mark.filterwarnings("ignore::numpy.exceptions.ComplexWarning")
+@pytest.mark.parametrize("kind", ["lagrange", "classical"])
+def test_complex_terms_refused(kind):
+    coords = px.Coordinates(["x"])
+    term = sp.I * coords.qd[0] ** 2
+    with pytest.raises(ValueError, match="terms"):
+        if kind == "lagrange":
+            px.LagrangeLibrary(coords, [term]).fit().transform(np.ones((2, 5)))
+        else:
+            px.ClassicalLibrary(coords, [term]).fit().transform(np.ones((2, 5)))
+
+
 def test_lagrange_terms_must_be_state_functions():
     coords = px.Coordinates(["x"])
     with pytest.raises(ValueError, match="terms.*x_ddot"):
