@@ -1,0 +1,293 @@
+"""The benchmark grid: trajectories x configurations, and the ``quick`` / ``full`` presets.
+
+A *trajectory* (the unit the paper ranks on) is one training dataset: a system with a friction
+level, a forcing mode, a noise level and a seed. A *configuration* is a catalog (``mixed``,
+``lagrange``, ``classical``) crossed with a solver (``mixed``, ``explicit``, ``implicit``), plus
+the plain :class:`pysindy.SINDy` baseline (``classical`` catalog, ``pysindy`` solver). A *task*
+is one configuration on one trajectory; it produces one result record.
+
+Which solvers apply to which data follows the paper: the explicit solver needs forces (forcing
+``explicit`` or ``mixed``), the implicit solver is for unforced data (forcing ``implicit``), the
+mixed solver and the SINDy baseline run on every forcing mode.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict, dataclass, fields, replace
+
+__all__ = [
+    "CATALOGS",
+    "SOLVERS",
+    "BASELINE",
+    "FORCINGS",
+    "SYSTEM_NAMES",
+    "TrajectorySpec",
+    "Task",
+    "GridSettings",
+    "PRESETS",
+    "config_label",
+    "all_configurations",
+    "solver_applies",
+]
+
+CATALOGS = ("mixed", "lagrange", "classical")
+SOLVERS = ("mixed", "explicit", "implicit")
+#: The extra row: plain pysindy.SINDy (second order) with the classical catalog.
+BASELINE = ("classical", "pysindy")
+FORCINGS = ("implicit", "explicit", "mixed")
+SYSTEM_NAMES = ("cart-pole", "double-pendulum", "cart-double-pendulum")
+
+
+def config_label(catalog: str, solver: str) -> str:
+    """Row name of a configuration in the table, e.g. ``"mixed x mixed"``.
+
+    Examples
+    --------
+    >>> config_label("lagrange", "explicit")
+    'lagrange x explicit'
+    >>> config_label("classical", "pysindy")
+    'pysindy.SINDy (classical)'
+    """
+    if (catalog, solver) == BASELINE:
+        return "pysindy.SINDy (classical)"
+    return f"{catalog} x {solver}"
+
+
+def all_configurations(include_baseline: bool = True) -> list[tuple[str, str]]:
+    """The 9 catalog x solver configurations of the paper, then the SINDy baseline."""
+    out = [(c, s) for c in CATALOGS for s in SOLVERS]
+    return out + [BASELINE] if include_baseline else out
+
+
+def solver_applies(solver: str, forcing: str) -> bool:
+    """Whether a solver runs on data of a forcing mode (see the module docstring).
+
+    Examples
+    --------
+    >>> solver_applies("explicit", "implicit"), solver_applies("mixed", "implicit")
+    (False, True)
+    """
+    if solver == "explicit":
+        return forcing in ("explicit", "mixed")
+    if solver == "implicit":
+        return forcing == "implicit"
+    return True
+
+
+def _stable_hash(payload) -> str:
+    text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha1(text.encode()).hexdigest()[:10]
+
+
+@dataclass(frozen=True)
+class TrajectorySpec:
+    """One training dataset of the grid.
+
+    Attributes
+    ----------
+    system : str
+        Registry name (``"cart-pole"``, ``"double-pendulum"``, ``"cart-double-pendulum"``).
+    friction : float
+        Multiplier of the system's default joint damping (0: frictionless).
+    forcing : {"implicit", "explicit", "mixed"}
+    noise : float
+        Relative Gaussian noise on positions, velocities, accelerations and forces.
+    seed : int
+    """
+
+    system: str
+    friction: float
+    forcing: str
+    noise: float
+    seed: int
+
+    @property
+    def key(self) -> str:
+        """Readable identifier, e.g. ``cart-pole/friction=1/explicit/noise=0.01/seed=0``."""
+        return (f"{self.system}/friction={self.friction:g}/{self.forcing}/"
+                f"noise={self.noise:g}/seed={self.seed}")
+
+
+@dataclass(frozen=True)
+class Task:
+    """One configuration on one trajectory.
+
+    Attributes
+    ----------
+    trajectory : TrajectorySpec
+    catalog : str
+    solver : str
+        ``"mixed"``, ``"explicit"``, ``"implicit"`` or ``"pysindy"`` (the baseline).
+    settings_hash : str
+        Hash of the data settings (durations, sampling...) so that records
+        from a grid with other settings are never mistaken for finished runs of this one.
+    """
+
+    trajectory: TrajectorySpec
+    catalog: str
+    solver: str
+    settings_hash: str = ""
+
+    @property
+    def config(self) -> str:
+        return config_label(self.catalog, self.solver)
+
+    @property
+    def run_id(self) -> str:
+        """Unique, stable identifier of the run (used to resume)."""
+        return f"{self.trajectory.key}/{self.catalog}x{self.solver}/{self.settings_hash}"
+
+    def to_dict(self) -> dict:
+        return {**asdict(self.trajectory), "catalog": self.catalog, "solver": self.solver,
+                "config": self.config, "trajectory_id": self.trajectory.key,
+                "run_id": self.run_id}
+
+
+@dataclass(frozen=True)
+class GridSettings:
+    """A benchmark grid: its axes and the data / run settings shared by every task.
+
+    Parameters
+    ----------
+    systems, friction_levels, forcings, noise_levels, seeds : tuples
+        Axes of the trajectory grid.
+    configurations : tuple of (catalog, solver)
+        Configurations to run (default: the 9 of the paper and the SINDy baseline).
+    n_trajectories : int
+        Training trajectories per dataset (fitted together).
+    duration : float
+        Seconds per training trajectory.
+    sample_every : int
+        Keep every k-th MuJoCo step (1 ms).
+    validation_duration : float
+        Seconds of the fresh noise-free validation trajectory.
+    timeout : float
+        Seconds allowed to one run (identification + validation simulation).
+    name : str
+        Preset name, recorded with the results.
+    """
+
+    systems: tuple = SYSTEM_NAMES
+    friction_levels: tuple = (1.0,)
+    forcings: tuple = FORCINGS
+    noise_levels: tuple = (0.0,)
+    seeds: tuple = (0,)
+    configurations: tuple = tuple(all_configurations())
+    n_trajectories: int = 2
+    duration: float = 10.0
+    sample_every: int = 2
+    validation_duration: float = 10.0
+    timeout: float = 3600.0
+    name: str = "custom"
+
+    def __post_init__(self):
+        _check_axis(self.systems, "systems", str)
+        _check_axis(self.forcings, "forcings", str)
+        for f in self.forcings:
+            if f not in FORCINGS:
+                raise ValueError(f"forcings: expected values among {FORCINGS}, got {f!r}")
+        _check_axis(self.friction_levels, "friction_levels", (int, float), non_negative=True)
+        _check_axis(self.noise_levels, "noise_levels", (int, float), non_negative=True)
+        _check_axis(self.seeds, "seeds", int)
+        if not self.configurations:
+            raise ValueError("configurations: expected at least one (catalog, solver) pair")
+        known = set(all_configurations())
+        for pair in self.configurations:
+            if tuple(pair) not in known:
+                raise ValueError(
+                    f"configurations: unknown (catalog, solver) {pair!r}; expected among "
+                    f"{sorted(known)}"
+                )
+        for name in ("n_trajectories", "sample_every"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ValueError(f"{name}: expected an integer >= 1, got {value!r}")
+        for name in ("duration", "validation_duration", "timeout"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
+                raise ValueError(f"{name}: expected a positive number of seconds, got {value!r}")
+
+    # -- derived ---------------------------------------------------------------------------
+    def data_settings(self) -> dict:
+        """The settings that change the data (hashed into every run id).
+
+        The timeout is left out on purpose: rerunning with a longer one and ``retry`` only
+        reruns the runs that timed out.
+        """
+        return {"n_trajectories": self.n_trajectories, "duration": float(self.duration),
+                "sample_every": self.sample_every,
+                "validation_duration": float(self.validation_duration)}
+
+    @property
+    def settings_hash(self) -> str:
+        return _stable_hash(self.data_settings())
+
+    def trajectories(self) -> list[TrajectorySpec]:
+        """Every trajectory of the grid, in a stable order."""
+        return [
+            TrajectorySpec(system, float(friction), forcing, float(noise), int(seed))
+            for system in self.systems
+            for friction in self.friction_levels
+            for forcing in self.forcings
+            for noise in self.noise_levels
+            for seed in self.seeds
+        ]
+
+    def tasks(self) -> list[Task]:
+        """Every run of the grid, grouped by trajectory (consecutive runs share their data)."""
+        digest = self.settings_hash
+        return [
+            Task(spec, catalog, solver, digest)
+            for spec in self.trajectories()
+            for catalog, solver in self.configurations
+            if solver_applies(solver, spec.forcing)
+        ]
+
+    def with_options(self, **changes) -> GridSettings:
+        """A copy with some fields replaced (None values are ignored)."""
+        changes = {k: v for k, v in changes.items() if v is not None}
+        unknown = set(changes) - {f.name for f in fields(self)}
+        if unknown:
+            raise ValueError(f"changes: unknown grid settings {sorted(unknown)}")
+        return replace(self, **changes)
+
+    def to_dict(self) -> dict:
+        out = asdict(self)
+        out["configurations"] = [list(c) for c in self.configurations]
+        for key in ("systems", "friction_levels", "forcings", "noise_levels", "seeds"):
+            out[key] = list(out[key])
+        out["n_runs"] = len(self.tasks())
+        out["n_trajectory_specs"] = len(self.trajectories())
+        return out
+
+
+def _check_axis(values, name, kind, non_negative=False):
+    if isinstance(values, (str, bytes)) or not isinstance(values, (tuple, list)) or not values:
+        raise ValueError(f"{name}: expected a non-empty tuple, got {values!r}")
+    for v in values:
+        if isinstance(v, bool) or not isinstance(v, kind):
+            raise TypeError(f"{name}: unexpected entry {v!r} ({type(v).__name__})")
+        if non_negative and not (v >= 0 and v == v and v != float("inf")):
+            raise ValueError(f"{name}: expected non-negative finite numbers, got {v!r}")
+    if len(set(values)) != len(values):
+        raise ValueError(f"{name}: duplicate entries in {values!r}")
+
+
+#: ``quick``: every system and forcing mode, default friction, two noise levels, one seed,
+#: short trajectories; about 125 runs, under 15 minutes on 2 cores.
+#: ``full``: the paper's scale (three friction levels, three noise levels, two seeds: 162
+#: trajectories, about 1100 runs) with the paper's 1 h timeout per run.
+PRESETS = {
+    "quick": GridSettings(
+        friction_levels=(1.0,), noise_levels=(0.0, 0.001), seeds=(0,),
+        n_trajectories=2, duration=5.0, sample_every=5, validation_duration=5.0,
+        timeout=90.0, name="quick",
+    ),
+    "full": GridSettings(
+        friction_levels=(0.0, 1.0, 2.0), noise_levels=(0.0, 0.001, 0.01), seeds=(0, 1),
+        n_trajectories=2, duration=10.0, sample_every=2, validation_duration=10.0,
+        timeout=3600.0, name="full",
+    ),
+}

@@ -1,0 +1,208 @@
+"""The paper's ranking of configurations (Table 1).
+
+For each trajectory, the configurations whose model is valid are ranked by validation error
+(position RMSE against the fresh MuJoCo trajectory), best first; equal errors share a place
+(competition ranking: 1, 1, 3). Per configuration the table counts
+
+``invalid``
+    runs whose model diverged or could not be simulated (status ``invalid``);
+``timeout``
+    runs stopped by the time limit;
+``uncompleted``
+    runs whose identification failed with an error (status ``error``);
+``1st``, ``2nd``, ``2nd>``
+    valid runs ranked first, second, worse than second;
+``Wins WC``
+    "wins without competition": the only valid model of its trajectory (also counted in
+    ``1st``);
+``success rate``
+    valid / (valid + invalid + uncompleted). Timeouts are left out of the denominator, as in
+    the paper (its Table 1 is reproduced exactly by this formula).
+
+Rows are sorted by number of 1st places, then success rate.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+
+import numpy as np
+
+from .records import check_record, latest_records
+
+__all__ = ["TABLE_COLUMNS", "rank_trajectory", "ranking_table", "format_table",
+           "table_to_markdown", "table_to_csv", "RANK_TOLERANCE"]
+
+TABLE_COLUMNS = ("combo type", "invalid", "timeout", "uncompleted", "1st", "2nd", "2nd>",
+                 "Wins WC", "success rate")
+#: Extra columns of the saved tables (not in the paper).
+EXTRA_COLUMNS = ("runs", "valid", "median RMSE", "median time (s)")
+#: Relative difference below which two validation errors are a tie.
+RANK_TOLERANCE = 1e-9
+
+
+def _same(a: float, b: float) -> bool:
+    return math.isclose(a, b, rel_tol=RANK_TOLERANCE, abs_tol=0.0)
+
+
+def rank_trajectory(records) -> dict[str, int]:
+    """Competition ranks of the valid records of one trajectory.
+
+    Parameters
+    ----------
+    records : list of dict
+        Records of one trajectory (any status).
+
+    Returns
+    -------
+    dict
+        ``{config: rank}`` for the records with status ``ok``; rank 1 is the best.
+
+    Examples
+    --------
+    >>> recs = [{"config": c, "status": "ok", "metrics": {"position_rmse": e}}
+    ...         for c, e in [("a", 0.3), ("b", 0.1), ("c", 0.1)]]
+    >>> rank_trajectory(recs)
+    {'b': 1, 'c': 1, 'a': 3}
+    """
+    valid = sorted(
+        ((float(r["metrics"]["position_rmse"]), r["config"]) for r in records
+         if r["status"] == "ok"),
+    )
+    configs = [c for _, c in valid]
+    if len(set(configs)) != len(configs):
+        raise ValueError(f"records: a configuration appears twice in one trajectory: {configs}")
+    ranks: dict[str, int] = {}
+    for position, (error, config) in enumerate(valid):
+        if position and _same(error, valid[position - 1][0]):
+            ranks[config] = ranks[valid[position - 1][1]]
+        else:
+            ranks[config] = position + 1
+    return ranks
+
+
+def ranking_table(records, configs=None) -> list[dict]:
+    """Table 1 from result records.
+
+    Parameters
+    ----------
+    records : iterable of dict
+        Run records (see :mod:`~pysindy_xl.benchmark.records`); for a run id written more than
+        once the last record counts.
+    configs : sequence of str, optional
+        Configurations to list even when they have no record (zero rows).
+
+    Returns
+    -------
+    list of dict
+        One row per configuration with the keys of :data:`TABLE_COLUMNS` and
+        :data:`EXTRA_COLUMNS`, sorted by 1st places then success rate (descending).
+        ``success rate`` is ``nan`` for a configuration with no counted run.
+    """
+    records = [check_record(r) for r in latest_records(list(records))]
+    by_trajectory = defaultdict(list)
+    for r in records:
+        by_trajectory[r["trajectory_id"]].append(r)
+    counts = defaultdict(lambda: dict.fromkeys(TABLE_COLUMNS[1:-1], 0))
+    errors, times, n_runs = defaultdict(list), defaultdict(list), defaultdict(int)
+    for config in configs or ():
+        counts[config]  # noqa: B018 - creates the zero row
+    status_column = {"invalid": "invalid", "timeout": "timeout", "error": "uncompleted"}
+    for group in by_trajectory.values():
+        ranks = rank_trajectory(group)
+        for r in group:
+            config = r["config"]
+            row = counts[config]
+            n_runs[config] += 1
+            run_time = (r.get("time_s") or {}).get("run")
+            if isinstance(run_time, (int, float)):
+                times[config].append(float(run_time))
+            if r["status"] != "ok":
+                row[status_column[r["status"]]] += 1
+                continue
+            errors[config].append(float(r["metrics"]["position_rmse"]))
+            rank = ranks[config]
+            row["1st" if rank == 1 else "2nd" if rank == 2 else "2nd>"] += 1
+            if len(ranks) == 1:
+                row["Wins WC"] += 1
+    table = []
+    for config, row in counts.items():
+        valid = row["1st"] + row["2nd"] + row["2nd>"]
+        counted = valid + row["invalid"] + row["uncompleted"]
+        table.append({
+            "combo type": config, **row,
+            "success rate": valid / counted if counted else float("nan"),
+            "runs": n_runs[config], "valid": valid,
+            "median RMSE": float(np.median(errors[config])) if errors[config] else float("nan"),
+            "median time (s)": float(np.median(times[config])) if times[config] else float("nan"),
+        })
+    table.sort(key=lambda row: (-row["1st"], -_nan_low(row["success rate"]), row["combo type"]))
+    return table
+
+
+def _nan_low(value: float) -> float:
+    return -1.0 if value != value else value
+
+
+def _cell(value, column) -> str:
+    if isinstance(value, float):
+        if value != value:
+            return "-"
+        if column == "success rate":
+            return f"{value:.6f}"
+        if column == "median time (s)":
+            return f"{value:.1f}"
+        return f"{value:.3g}"
+    return str(value)
+
+
+def format_table(table, extra: bool = False) -> str:
+    """The table as aligned text, in the paper's column order.
+
+    Parameters
+    ----------
+    table : list of dict
+        From :func:`ranking_table`.
+    extra : bool, default False
+        Also print the columns that are not in the paper.
+
+    Returns
+    -------
+    str
+    """
+    columns = TABLE_COLUMNS + (EXTRA_COLUMNS if extra else ())
+    rows = [[_cell(row[c], c) for c in columns] for row in table]
+    widths = [max(len(c), *(len(r[k]) for r in rows)) if rows else len(c)
+              for k, c in enumerate(columns)]
+    lines = ["  ".join(c.ljust(w) if k == 0 else c.rjust(w)
+                       for k, (c, w) in enumerate(zip(columns, widths, strict=True)))]
+    for r in rows:
+        lines.append("  ".join(v.ljust(w) if k == 0 else v.rjust(w)
+                               for k, (v, w) in enumerate(zip(r, widths, strict=True))))
+    return "\n".join(lines)
+
+
+def table_to_markdown(table) -> str:
+    """The table (paper columns, then the extra ones) as a Markdown table."""
+    columns = TABLE_COLUMNS + EXTRA_COLUMNS
+    lines = ["| " + " | ".join(columns) + " |",
+             "|" + "|".join([":---"] + ["---:"] * (len(columns) - 1)) + "|"]
+    for row in table:
+        lines.append("| " + " | ".join(_cell(row[c], c) for c in columns) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def table_to_csv(table) -> str:
+    """The table as CSV text (full precision, empty cells for undefined values)."""
+    import csv
+    import io
+
+    columns = TABLE_COLUMNS + EXTRA_COLUMNS
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(columns)
+    for row in table:
+        writer.writerow(["" if isinstance(row[c], float) and row[c] != row[c] else row[c]
+                         for c in columns])
+    return buffer.getvalue()

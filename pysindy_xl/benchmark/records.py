@@ -1,0 +1,176 @@
+"""Result records: one JSON object per run, appended to a JSONL file as each run finishes.
+
+Each record is written with a single ``write`` of one line followed by ``flush`` and
+``os.fsync``, so a run is either fully recorded or not at all. A process killed in the middle
+of a write can leave a torn last line: :class:`RecordStore` cuts it off when it opens the
+file (that run is simply run again), and :func:`read_records` skips it with a warning. When a
+run id appears more than once (a failed run retried), the last record wins.
+
+Record fields
+-------------
+``run_id``, ``trajectory_id``, ``config``, ``system``, ``friction``, ``forcing``, ``noise``,
+``seed``, ``catalog``, ``solver``
+    What ran (see :class:`~pysindy_xl.benchmark.grid.Task`).
+``status``
+    ``"ok"`` (valid model: simulated over the whole validation horizon without diverging),
+    ``"invalid"`` (a model was identified but its simulation diverged or failed, or it has no
+    acceleration term), ``"timeout"`` (the run exceeded its time limit) or ``"error"`` (the
+    identification raised; the paper's "uncompleted").
+``message``
+    Why, for every status but ``ok`` (``None`` otherwise).
+``metrics``
+    ``position_rmse`` (ranking metric), ``divergence_time``, ``simulated_fraction``...
+``time_s``
+    Seconds spent: ``generate`` (data, shared by the runs of a trajectory), ``fit``,
+    ``validate``, ``run`` (fit + validation, what the timeout bounds).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import warnings
+
+__all__ = ["STATUSES", "RecordStore", "read_records", "latest_records", "check_record"]
+
+STATUSES = ("ok", "invalid", "timeout", "error")
+_REQUIRED = ("run_id", "trajectory_id", "config", "status")
+
+
+def check_record(record) -> dict:
+    """Validate a record's required fields; returns it.
+
+    Raises
+    ------
+    ValueError
+        If a required field is missing or the status is unknown.
+    """
+    if not isinstance(record, dict):
+        raise TypeError(f"record: expected a dict, got {type(record).__name__}")
+    missing = [k for k in _REQUIRED if k not in record]
+    if missing:
+        raise ValueError(f"record: missing fields {missing}")
+    if record["status"] not in STATUSES:
+        raise ValueError(f"record: status must be one of {STATUSES}, got {record['status']!r}")
+    if record["status"] == "ok":
+        rmse = (record.get("metrics") or {}).get("position_rmse")
+        if not isinstance(rmse, (int, float)) or not rmse == rmse or rmse < 0:
+            raise ValueError(
+                f"record {record['run_id']!r}: status 'ok' needs a finite metrics.position_rmse, "
+                f"got {rmse!r}"
+            )
+    return record
+
+
+def read_records(path) -> list[dict]:
+    """All complete records of a JSONL file, in file order (duplicates kept).
+
+    A torn last line (a writer killed mid-line) is skipped with a warning; an unreadable line
+    anywhere else raises, since it means the file was damaged otherwise.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    list of dict
+    """
+    if not os.path.exists(path):
+        return []
+    with open(path, encoding="utf-8") as handle:
+        text = handle.read()
+    lines = text.split("\n")
+    out = []
+    for number, line in enumerate(lines, start=1):
+        if not line.strip():
+            continue
+        is_last = number == len(lines)  # no newline after it: possibly torn
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError as error:
+            if is_last:
+                warnings.warn(f"{path}: skipping a torn last line ({len(line)} characters)",
+                              RuntimeWarning, stacklevel=2)
+                continue
+            raise ValueError(f"{path}: line {number} is not valid JSON ({error})") from None
+        if is_last:  # complete JSON but no trailing newline: also an interrupted write
+            warnings.warn(f"{path}: skipping a last line without newline", RuntimeWarning,
+                          stacklevel=2)
+            continue
+        out.append(check_record(record))
+    return out
+
+
+def latest_records(records) -> list[dict]:
+    """One record per run id, the last one written, in order of first appearance."""
+    by_id: dict = {}
+    for record in records:
+        by_id[record["run_id"]] = record  # dict keeps the first insertion position
+    return list(by_id.values())
+
+
+class RecordStore:
+    """Append-only JSONL file of run records (see the module docstring).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.jsonl`` file; created with its directory when absent.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> path = os.path.join(tempfile.mkdtemp(), "records.jsonl")
+    >>> store = RecordStore(path)
+    >>> store.append({"run_id": "a", "trajectory_id": "t", "config": "c", "status": "error"})
+    >>> sorted(store.finished_ids())
+    ['a']
+    """
+
+    def __init__(self, path):
+        self.path = os.fspath(path)
+        directory = os.path.dirname(os.path.abspath(self.path))
+        os.makedirs(directory, exist_ok=True)
+        self._repair()
+
+    def _repair(self):
+        """Cut a torn last line left by a killed writer, so the next append starts clean."""
+        if not os.path.exists(self.path):
+            return
+        with open(self.path, "rb+") as handle:
+            data = handle.read()
+            if not data or data.endswith(b"\n"):
+                return
+            keep = data.rfind(b"\n") + 1
+            handle.truncate(keep)
+            handle.flush()
+            os.fsync(handle.fileno())
+        warnings.warn(f"{self.path}: removed a torn last line ({len(data) - keep} bytes); that "
+                      "run will be run again", RuntimeWarning, stacklevel=3)
+
+    def records(self) -> list[dict]:
+        """Latest record of every run id (see :func:`latest_records`)."""
+        return latest_records(read_records(self.path))
+
+    def finished_ids(self, retry=()) -> set[str]:
+        """Run ids with a record, except those whose latest status is in ``retry``."""
+        retry = set(retry)
+        unknown = retry - set(STATUSES)
+        if unknown:
+            raise ValueError(f"retry: expected statuses among {STATUSES}, got {sorted(unknown)}")
+        return {r["run_id"] for r in self.records() if r["status"] not in retry}
+
+    def append(self, record: dict) -> None:
+        """Append one record durably (one write, flush, fsync)."""
+        check_record(record)
+        line = json.dumps(record, sort_keys=True, allow_nan=False) + "\n"
+        data = line.encode("utf-8")
+        fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+        try:
+            written = os.write(fd, data)
+            while written < len(data):  # short writes are rare but legal
+                written += os.write(fd, data[written:])
+            os.fsync(fd)
+        finally:
+            os.close(fd)

@@ -1,0 +1,547 @@
+"""Running the grid: one task = data, identification, validation, one record.
+
+Execution
+---------
+:func:`run_grid` sends the pending tasks to :class:`joblib.Parallel` (processes, all cores by
+default; any joblib backend through :func:`joblib.parallel_config`, e.g. Dask or Ray, see
+:func:`backend_context`) and appends each record to the store as soon as its run finishes, so
+an interrupted grid loses at most the runs in flight and resumes where it stopped.
+
+Time limit
+----------
+Each run is executed in a forked child process (``isolation="process"``, the default where
+``fork`` exists): the worker waits for its result at most ``timeout`` seconds and kills it
+otherwise, so nothing can hang, not even a solver stuck in C code, and a crash (segfault,
+out-of-memory kill) becomes an ``error`` record instead of taking the worker down. Where fork
+is unavailable, ``isolation="signal"`` runs the task in the worker under ``signal.setitimer``
+(effective between Python bytecodes only). In both cases the validation simulation also gets
+the remaining time as its own ``timeout``.
+
+Data
+----
+A trajectory's training data and validation trajectory are simulated once per worker process
+and cached (the tasks of a grid are ordered by trajectory): MuJoCo with the system's joint
+damping scaled by the friction level, the clean trajectories drawn from a seed that does not
+depend on the noise level (so the noise levels of a grid perturb the same motions), then
+Gaussian noise from a separate seed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import hashlib
+import json
+import math
+import os
+import signal
+import threading
+import time
+import traceback
+
+import numpy as np
+
+from .grid import GridSettings, Task, TrajectorySpec
+from .records import RecordStore
+
+__all__ = ["run_task", "execute_task", "run_grid", "system_for", "trajectory_data",
+           "backend_context", "RunTimeout"]
+
+_ISOLATIONS = ("auto", "process", "signal", "none")
+
+
+class RunTimeout(Exception):
+    """Raised inside a run when its time limit is reached (signal isolation)."""
+
+
+# -- data ------------------------------------------------------------------------------------
+def system_for(spec: TrajectorySpec):
+    """The MuJoCo system of a trajectory, joint damping scaled by its friction level."""
+    from ..mujoco import get_system
+
+    base = get_system(spec.system)
+    damping = {k: v * spec.friction for k, v in base.parameters.items() if "damping" in k}
+    if not damping and spec.friction != 1.0:
+        raise ValueError(f"friction: system {spec.system!r} has no damping parameter to scale")
+    return get_system(spec.system, **damping)
+
+
+def _seed(*parts) -> int:
+    text = "/".join(map(str, parts))
+    return int.from_bytes(hashlib.sha256(text.encode()).digest()[:4], "little")
+
+
+@functools.lru_cache(maxsize=4)
+def trajectory_data(spec: TrajectorySpec, n_trajectories: int, duration: float,
+                    sample_every: int, validation_duration: float):
+    """Training dataset and validation trajectory of a grid trajectory (cached per process).
+
+    Returns
+    -------
+    dataset : Dataset
+        ``n_trajectories`` noisy training trajectories.
+    validation : Trajectory
+        A fresh noise-free trajectory with the same forcing mode.
+    seconds : float
+        Time spent simulating.
+    """
+    from ..mujoco import Dataset, add_noise, generate_dataset
+    from ..mujoco.validation import validation_trajectory
+
+    start = time.perf_counter()
+    system = system_for(spec)
+    motion_seed = _seed(spec.system, spec.friction, spec.forcing, spec.seed)
+    clean = generate_dataset(system, n_trajectories=n_trajectories, duration=duration,
+                             forcing=spec.forcing, noise=0.0, seed=motion_seed,
+                             sample_every=sample_every, progress=False)
+    if spec.noise > 0:
+        rng = np.random.default_rng(_seed(motion_seed, "noise", spec.noise))
+        matrix = system.force_matrix()
+        noisy = [add_noise(tr, spec.noise, rng, matrix) for tr in clean.trajectories]
+        metadata = dict(clean.metadata, noise=dict.fromkeys(("q", "qd", "qdd", "tau"),
+                                                             spec.noise))
+        clean = Dataset(noisy, clean.coordinate_names, metadata)
+    validation = validation_trajectory(system, validation_duration, spec.forcing,
+                                       seed=_seed(motion_seed, "validation"),
+                                       sample_every=sample_every)
+    return clean, validation, time.perf_counter() - start
+
+
+# -- one run ---------------------------------------------------------------------------------
+def _finite(value):
+    """JSON-safe copy: non-finite floats become None, numpy scalars plain numbers."""
+    if isinstance(value, dict):
+        return {str(k): _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    if isinstance(value, (np.floating, float)):
+        value = float(value)
+        return value if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value
+
+
+def _optimizer(solver: str):
+    import pysindy_xl as px
+    from pysindy_xl import optimizers
+
+    name = {"explicit": "ExplicitOptimizer", "implicit": "ImplicitOptimizer",
+            "mixed": "MixedOptimizer"}[solver]
+    cls = getattr(px, name, None) or getattr(optimizers, name, None)
+    if cls is None:
+        raise NotImplementedError(f"solver {solver!r}: pysindy_xl.{name} is not available")
+    return cls()
+
+
+def _identify(task: Task, system, dataset):
+    """Fit one configuration; returns the model (anything with ``simulate``)."""
+    from ..mujoco.catalogs import reference_catalog
+
+    forced = task.trajectory.forcing != "implicit"
+    arguments = dataset.fit_arguments(forces="tau" if forced else None)
+    catalog = reference_catalog(system, task.catalog)
+    if task.solver == "pysindy":
+        from .baseline import SINDyBaseline, baseline_terms
+
+        catalog.fit()
+        return SINDyBaseline(system.coords, baseline_terms(catalog)).fit(**arguments)
+    import pysindy_xl as px
+
+    model = px.XLSINDy(catalog, _optimizer(task.solver))
+    return model.fit(**arguments)
+
+
+def _model_summary(task: Task, system, model) -> dict:
+    """Size of the model and, for XL-SINDy models, its error against the true coefficients."""
+    if task.solver == "pysindy":
+        coef = model.coef_
+        names = model.get_feature_names()
+        nonzero = {f"{system.coordinate_names[i]}_ddot <- {names[k]}": float(coef[i, k])
+                   for i, k in zip(*np.nonzero(coef), strict=True)}
+        return {"n_features": len(names), "n_terms": len(nonzero), "coefficients": nonzero}
+    coef = model.coefficients()
+    names = model.get_feature_names()
+    summary = {"n_features": len(names), "n_terms": int(np.count_nonzero(coef)),
+               "coefficients": {names[k]: float(coef[k]) for k in np.flatnonzero(coef)},
+               "dropped_features": len(getattr(model, "dropped_features_", {}) or {})}
+    try:
+        from ..mujoco.catalogs import true_coefficients
+
+        truth, missing = true_coefficients(system, model.feature_library_)
+        scale = float(np.abs(truth).max())
+        summary["coefficient_error"] = float(np.abs(coef - truth).max() / scale)
+        summary["support_recovered"] = bool(np.array_equal(coef != 0, truth != 0))
+        summary["true_model_in_catalog"] = not missing
+    except Exception as error:  # a summary must never fail the run
+        summary["coefficient_error_failure"] = f"{type(error).__name__}: {error}"
+    return summary
+
+
+def execute_task(task: Task, settings: GridSettings, deadline: float | None = None,
+                 stage=None) -> dict:
+    """Run one task in this process and return its record (no time limit of its own).
+
+    Parameters
+    ----------
+    task : Task
+    settings : GridSettings
+        Data settings of the grid.
+    deadline : float, optional
+        ``time.perf_counter()`` value by which the run must end: the validation simulation
+        gets the remaining time as its own timeout.
+    stage : callable, optional
+        Called with ``"generate"``, ``"fit"``, ``"validate"`` as the run advances.
+
+    Returns
+    -------
+    dict
+        The record (see :mod:`~pysindy_xl.benchmark.records`).
+    """
+    from ..dynamics import DynamicsError
+    from ..mujoco.validation import validate_model
+
+    stage = stage or (lambda name: None)
+    record = _base_record(task, settings)
+    spec = task.trajectory
+    stage("generate")
+    dataset, validation, generate_seconds = trajectory_data(
+        spec, settings.n_trajectories, float(settings.duration), settings.sample_every,
+        float(settings.validation_duration))
+    record["time_s"]["generate"] = generate_seconds
+    system = system_for(spec)
+    start = time.perf_counter()
+    stage("fit")
+    try:
+        model = _identify(task, system, dataset)
+    except RunTimeout:
+        raise
+    except Exception as error:
+        record["time_s"]["fit"] = time.perf_counter() - start
+        record["time_s"]["run"] = record["time_s"]["fit"]
+        return _failed(record, "error", error, with_traceback=True)
+    fitted = time.perf_counter()
+    record["time_s"]["fit"] = fitted - start
+    stage("validate")
+    remaining = None if deadline is None else max(deadline - time.perf_counter(), 1e-3)
+    try:
+        result = validate_model(model, system, trajectory=validation, timeout=remaining)
+    except RunTimeout:
+        raise
+    except (DynamicsError, ValueError) as error:  # e.g. no acceleration in the equations
+        result = None
+        record["status"], record["message"] = "invalid", f"{type(error).__name__}: {error}"
+    end = time.perf_counter()
+    record["time_s"]["validate"] = end - fitted
+    record["time_s"]["run"] = end - start
+    if result is not None:
+        record["metrics"] = result.to_dict()
+        if result.valid:
+            record["status"] = "ok"
+        elif result.failure == "timeout":
+            record["status"] = "timeout"
+            record["message"] = (f"validation simulation stopped by the time limit "
+                                 f"({settings.timeout:g} s per run)")
+        else:
+            record["status"] = "invalid"
+            when = result.divergence_time
+            record["message"] = (f"{result.failure or 'diverged'}"
+                                 + ("" if when is None else f" at t={when:.3g} s"))
+    stage("summary")
+    record["model"] = _model_summary(task, system, model)
+    return _finite(record)
+
+
+def _base_record(task: Task, settings: GridSettings) -> dict:
+    import pysindy_xl
+
+    return {**task.to_dict(), "grid": settings.name, "status": "error", "message": None,
+            "metrics": {}, "time_s": {}, "pid": os.getpid(),
+            "version": getattr(pysindy_xl, "__version__", "unknown")}
+
+
+def _failed(record: dict, status: str, error: BaseException, with_traceback=False) -> dict:
+    record["status"] = status
+    message = f"{type(error).__name__}: {error}"
+    if with_traceback:
+        frames = traceback.extract_tb(error.__traceback__)[-3:]
+        message += " [" + " <- ".join(f"{os.path.basename(f.filename)}:{f.lineno} {f.name}"
+                                      for f in reversed(frames)) + "]"
+    record["message"] = message
+    return _finite(record)
+
+
+def _finish(record: dict) -> dict:
+    record["finished_at"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+    return record
+
+
+# -- isolation and time limit ------------------------------------------------------------------
+def _resolve_isolation(isolation: str) -> str:
+    if isolation not in _ISOLATIONS:
+        raise ValueError(f"isolation: expected one of {_ISOLATIONS}, got {isolation!r}")
+    if isolation != "auto":
+        return isolation
+    import multiprocessing
+
+    if "fork" in multiprocessing.get_all_start_methods():
+        return "process"
+    if hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread():
+        return "signal"
+    return "none"
+
+
+def _child(connection, function, task, settings, deadline):
+    """Body of the forked child: run, send JSON lines (stages, then the record), exit."""
+    def send(message):
+        connection.send_bytes(json.dumps(message, allow_nan=False).encode())
+
+    try:
+        record = function(task, settings, deadline, lambda name: send({"stage": name}))
+        send({"record": _finite(record)})
+    except BaseException as error:  # report everything: the parent must learn why
+        send({"record": _failed(_base_record(task, settings), "error", error, True)})
+    finally:
+        connection.close()
+
+
+def _run_in_process(function, task, settings, timeout):
+    import multiprocessing
+
+    context = multiprocessing.get_context("fork")
+    receiver, sender = context.Pipe(duplex=False)
+    start = time.perf_counter()
+    deadline = start + timeout
+    process = context.Process(target=_child, args=(sender, function, task, settings, deadline),
+                              daemon=True)
+    process.start()
+    sender.close()
+    last_stage, record = "start", None
+    try:
+        while record is None:
+            remaining = deadline - time.perf_counter()
+            if remaining <= 0 or not receiver.poll(remaining):
+                break
+            try:
+                message = json.loads(receiver.recv_bytes())
+            except EOFError:  # the child died without a record
+                break
+            if "stage" in message:
+                last_stage = message["stage"]
+            else:
+                record = message["record"]
+    finally:
+        if record is None and process.is_alive():
+            process.kill()
+        process.join(5)
+        receiver.close()
+    elapsed = time.perf_counter() - start
+    if record is not None:
+        return record
+    base = _base_record(task, settings)
+    base["time_s"] = {"run": elapsed}
+    if elapsed >= timeout:
+        base["status"] = "timeout"
+        base["message"] = f"stopped after {timeout:g} s (during {last_stage})"
+    else:
+        base["message"] = (f"the run's process died with exit code {process.exitcode} "
+                           f"(during {last_stage})")
+    return _finite(base)
+
+
+def _run_with_signal(function, task, settings, timeout):
+    def alarm(signum, frame):
+        raise RunTimeout()
+
+    start = time.perf_counter()
+    previous = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, timeout)
+    try:
+        return function(task, settings, start + timeout, None)
+    except RunTimeout:
+        base = _base_record(task, settings)
+        base.update(status="timeout", message=f"stopped after {timeout:g} s",
+                    time_s={"run": time.perf_counter() - start})
+        return _finite(base)
+    except Exception as error:
+        return _failed(_base_record(task, settings), "error", error, True)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def _prefetch(task: Task, settings: GridSettings) -> None:
+    """Simulate the trajectory's data in this process, so that forked runs inherit the cache."""
+    try:
+        trajectory_data(task.trajectory, settings.n_trajectories, float(settings.duration),
+                        settings.sample_every, float(settings.validation_duration))
+    except Exception:  # the run repeats the call and records the error
+        pass
+
+
+def run_task(task: Task, settings: GridSettings, timeout: float | None = None,
+             isolation: str = "auto", function=None) -> dict:
+    """Run one task under its time limit; never raises for a failing run.
+
+    Parameters
+    ----------
+    task : Task
+    settings : GridSettings
+    timeout : float, optional
+        Seconds (default ``settings.timeout``).
+    isolation : {"auto", "process", "signal", "none"}
+        See the module docstring; ``auto`` picks ``process`` where fork exists.
+    function : callable, optional
+        ``function(task, settings, deadline, stage) -> record`` (default
+        :func:`execute_task`); for tests and custom benchmarks.
+
+    Returns
+    -------
+    dict
+        The record, with ``finished_at``.
+    """
+    function = function or execute_task
+    timeout = float(settings.timeout if timeout is None else timeout)
+    if not timeout > 0:
+        raise ValueError(f"timeout: expected a positive number of seconds, got {timeout!r}")
+    mode = _resolve_isolation(isolation)
+    if mode == "process":
+        if function is execute_task:
+            _prefetch(task, settings)
+        return _finish(_run_in_process(function, task, settings, timeout))
+    if mode == "signal":
+        return _finish(_run_with_signal(function, task, settings, timeout))
+    start = time.perf_counter()
+    try:
+        record = function(task, settings, start + timeout, None)
+    except Exception as error:
+        record = _failed(_base_record(task, settings), "error", error, True)
+    return _finish(_finite(record))
+
+
+# -- the grid ----------------------------------------------------------------------------------
+@contextlib.contextmanager
+def backend_context(backend: str | None = None, address: str | None = None):
+    """A :func:`joblib.parallel_config` context for ``backend``.
+
+    Parameters
+    ----------
+    backend : {None, "loky", "multiprocessing", "dask", "ray"}
+        ``None`` / ``"loky"``: local processes. ``"dask"``: connects a
+        ``dask.distributed.Client`` to ``address`` (a scheduler such as
+        ``tcp://host:8786``; a local cluster when None). ``"ray"``: registers Ray's joblib
+        backend and calls ``ray.init(address=address)`` (``"auto"`` joins a running cluster).
+        Dask and Ray are imported only here, only when asked for.
+    address : str, optional
+    """
+    import joblib
+
+    if backend in (None, "loky", "multiprocessing"):
+        with joblib.parallel_config(backend=backend or "loky"):
+            yield
+        return
+    if backend == "dask":
+        try:
+            from dask.distributed import Client
+        except ImportError:
+            raise ImportError("backend 'dask' needs dask.distributed: pip install "
+                              "'dask[distributed]'") from None
+        with Client(address) if address else Client(processes=True) as client:
+            with joblib.parallel_config(backend="dask"):
+                yield client
+        return
+    if backend == "ray":
+        try:
+            import ray
+            from ray.util.joblib import register_ray
+        except ImportError:
+            raise ImportError("backend 'ray' needs ray: pip install 'ray[default]'") from None
+        register_ray()
+        if not ray.is_initialized():
+            ray.init(address=address)
+        with joblib.parallel_config(backend="ray"):
+            yield
+        return
+    raise ValueError(
+        f"backend: expected None, 'loky', 'multiprocessing', 'dask' or 'ray', got {backend!r}"
+    )
+
+
+def _results(tasks, call, n_jobs):
+    """Yield records as runs finish (unordered), or in chunks where the backend cannot."""
+    import joblib
+
+    try:
+        parallel = joblib.Parallel(n_jobs=n_jobs, return_as="generator_unordered")
+    except ValueError:  # backends without generator support (multiprocessing, Ray)
+        parallel = None
+    if parallel is not None:
+        yield from parallel(joblib.delayed(call)(task) for task in tasks)
+        return
+    chunk = max(2 * joblib.effective_n_jobs(n_jobs), 1)
+    for k in range(0, len(tasks), chunk):
+        yield from joblib.Parallel(n_jobs=n_jobs)(
+            joblib.delayed(call)(task) for task in tasks[k:k + chunk])
+
+
+def run_grid(settings: GridSettings, records_path, n_jobs: int = -1, backend: str | None = None,
+             address: str | None = None, retry=(), isolation: str = "auto", progress=None,
+             limit: int | None = None, function=None) -> dict:
+    """Run every pending task of a grid, appending one record per run.
+
+    Parameters
+    ----------
+    settings : GridSettings
+    records_path : str or os.PathLike
+        JSONL record file; runs already recorded there are skipped.
+    n_jobs : int, default -1
+        Parallel processes (joblib convention: -1 = all cores).
+    backend, address : str, optional
+        See :func:`backend_context`.
+    retry : iterable of str
+        Statuses to run again (e.g. ``("error", "timeout")``).
+    isolation : str
+        See :func:`run_task`.
+    progress : bool, optional
+        Show a tqdm progress bar (default: on a terminal).
+    limit : int, optional
+        Run at most this many pending tasks (then stop; rerun to continue).
+    function : callable, optional
+        Replaces :func:`execute_task` (see :func:`run_task`).
+
+    Returns
+    -------
+    dict
+        ``{"total", "skipped", "ran", "statuses", "seconds"}``.
+    """
+    from tqdm.auto import tqdm
+
+    if not isinstance(settings, GridSettings):
+        raise TypeError(f"settings: expected a GridSettings, got {type(settings).__name__}")
+    if limit is not None and (isinstance(limit, bool) or not isinstance(limit, int)
+                              or limit < 0):
+        raise ValueError(f"limit: expected an integer >= 0, got {limit!r}")
+    store = RecordStore(records_path)
+    tasks = settings.tasks()
+    done = store.finished_ids(retry=retry)
+    pending = [t for t in tasks if t.run_id not in done]
+    if limit is not None:
+        pending = pending[:limit]
+    call = functools.partial(run_task, settings=settings, isolation=isolation,
+                             function=function)
+    statuses = dict.fromkeys(("ok", "invalid", "timeout", "error"), 0)
+    start = time.perf_counter()
+    bar = tqdm(total=len(pending), desc=f"benchmark {settings.name}", unit="run",
+               disable=None if progress is None else not progress, smoothing=0.05)
+    with bar, backend_context(backend, address):
+        if pending:
+            for record in _results(pending, call, n_jobs):
+                store.append(record)
+                statuses[record["status"]] += 1
+                bar.set_postfix(statuses, refresh=False)
+                bar.update(1)
+    return {"total": len(tasks), "skipped": sum(t.run_id in done for t in tasks),
+            "ran": sum(statuses.values()), "statuses": statuses,
+            "seconds": time.perf_counter() - start}

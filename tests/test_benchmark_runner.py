@@ -1,0 +1,164 @@
+"""Benchmark grid definition, per-run time limit and isolation, and one real end-to-end run."""
+
+import json
+import os
+import signal
+import time
+
+import numpy as np
+import pytest
+
+from pysindy_xl.benchmark.grid import (
+    PRESETS,
+    GridSettings,
+    TrajectorySpec,
+    all_configurations,
+    config_label,
+)
+from pysindy_xl.benchmark.runner import run_task, system_for
+
+SETTINGS = GridSettings(systems=("cart-pole",), forcings=("explicit",), timeout=2.0,
+                        configurations=(("mixed", "explicit"),), name="test")
+TASK = SETTINGS.tasks()[0]
+
+
+# -- grid --------------------------------------------------------------------------------------
+def test_grid_follows_the_papers_protocol():
+    settings = GridSettings(systems=("cart-pole", "double-pendulum"), noise_levels=(0.0, 0.01))
+    tasks = settings.tasks()
+    per_forcing = {}
+    for t in tasks:
+        per_forcing.setdefault(t.trajectory.forcing, set()).add((t.catalog, t.solver))
+    # explicit solver only with forces, implicit solver only without; mixed and SINDy always
+    assert {s for _, s in per_forcing["implicit"]} == {"mixed", "implicit", "pysindy"}
+    assert {s for _, s in per_forcing["explicit"]} == {"mixed", "explicit", "pysindy"}
+    assert per_forcing["mixed"] == per_forcing["explicit"]
+    assert len(settings.trajectories()) == 2 * 3 * 2
+    assert len(tasks) == 12 * 7 and len({t.run_id for t in tasks}) == len(tasks)
+    assert len(all_configurations()) == 10 and len(all_configurations(False)) == 9
+    # tasks of one trajectory are consecutive, so a worker reuses its data
+    keys = [t.trajectory.key for t in tasks]
+    assert keys == sorted(keys, key=keys.index)
+
+
+def test_run_ids_depend_on_the_data_settings_but_not_the_timeout():
+    base = PRESETS["quick"]
+    ids = {t.run_id for t in base.tasks()}
+    assert {t.run_id for t in base.with_options(timeout=5.0).tasks()} == ids
+    assert not {t.run_id for t in base.with_options(duration=7.0).tasks()} & ids
+    assert config_label("mixed", "mixed") == "mixed x mixed"
+
+
+def test_presets_scale():
+    assert len(PRESETS["quick"].tasks()) == 126
+    full = PRESETS["full"]
+    assert len(full.trajectories()) == 162 and full.timeout == 3600.0
+
+
+@pytest.mark.parametrize("changes, match", [
+    ({"forcings": ("pushed",)}, "forcings"),
+    ({"noise_levels": (-0.1,)}, "noise_levels"),
+    ({"seeds": (0, 0)}, "duplicate"),
+    ({"configurations": (("mixed", "lasso"),)}, "configurations"),
+    ({"timeout": 0.0}, "timeout"),
+    ({"systems": "cart-pole"}, "systems"),
+    ({"sample_every": 0}, "sample_every"),
+])
+def test_bad_grid_settings_are_rejected(changes, match):
+    with pytest.raises(ValueError, match=match):
+        GridSettings(**changes)
+
+
+def test_friction_level_scales_the_joint_damping():
+    spec = TrajectorySpec("double-pendulum", 2.0, "explicit", 0.0, 0)
+    default = system_for(TrajectorySpec("double-pendulum", 1.0, "explicit", 0.0, 0))
+    doubled = system_for(spec)
+    np.testing.assert_allclose(doubled.joint_damping, 2 * default.joint_damping)
+    frictionless = system_for(TrajectorySpec("cart-pole", 0.0, "implicit", 0.0, 0))
+    assert not np.any(frictionless.joint_damping)
+
+
+# -- time limit and isolation --------------------------------------------------------------------
+def sleeps_forever(task, settings, deadline, stage):
+    if stage:
+        stage("fit")
+    time.sleep(60)
+
+
+def raises(task, settings, deadline, stage):
+    raise np.linalg.LinAlgError("SVD did not converge")
+
+
+def crashes(task, settings, deadline, stage):
+    os.kill(os.getpid(), signal.SIGKILL)  # like an out-of-memory kill
+
+
+def busy_python(task, settings, deadline, stage):
+    while True:
+        sum(range(1000))
+
+
+@pytest.mark.parametrize("isolation", ["process", "signal"])
+def test_timeout_is_enforced(isolation):
+    function = sleeps_forever if isolation == "process" else busy_python
+    start = time.perf_counter()
+    record = run_task(TASK, SETTINGS, timeout=0.5, isolation=isolation, function=function)
+    elapsed = time.perf_counter() - start
+    assert record["status"] == "timeout" and elapsed < 5
+    assert "0.5 s" in record["message"]
+    if isolation == "process":
+        assert "during fit" in record["message"]
+    json.dumps(record, allow_nan=False)
+    assert record["run_id"] == TASK.run_id and "finished_at" in record
+
+
+@pytest.mark.parametrize("isolation", ["process", "signal", "none"])
+def test_an_exception_becomes_an_error_record(isolation):
+    record = run_task(TASK, SETTINGS, isolation=isolation, function=raises)
+    assert record["status"] == "error"
+    assert record["message"].startswith("LinAlgError: SVD did not converge")
+
+
+def test_a_crashing_run_becomes_an_error_record():
+    record = run_task(TASK, SETTINGS, isolation="process", function=crashes)
+    assert record["status"] == "error"
+    assert "exit code -9" in record["message"]
+
+
+def test_bad_run_arguments():
+    with pytest.raises(ValueError, match="isolation"):
+        run_task(TASK, SETTINGS, isolation="thread", function=raises)
+    with pytest.raises(ValueError, match="timeout"):
+        run_task(TASK, SETTINGS, timeout=0, function=raises)
+
+
+# -- real runs -------------------------------------------------------------------------------
+@pytest.mark.slow
+def test_real_grid_and_report(tmp_path):
+    """Cart-pole, explicit forcing: XL-SINDy explicit run and the SINDy baseline, end to end."""
+    from pysindy_xl.benchmark.cli import main
+
+    out = tmp_path / "results"
+    argv = ["--quick", "--systems", "cart-pole", "--forcing", "explicit", "--noise", "0",
+            "--configs", "mixed:explicit", "sindy", "-j", "1", "--no-progress",
+            "--out", str(out)]
+    assert main(argv) == 0
+    lines = (out / "records.jsonl").read_text().splitlines()
+    records = {json.loads(line)["config"]: json.loads(line) for line in lines}
+    assert set(records) == {"mixed x explicit", "pysindy.SINDy (classical)"}
+    ours = records["mixed x explicit"]
+    # noise-free data and the true model in the catalog: exact identification, valid model
+    assert ours["status"] == "ok", ours["message"]
+    assert ours["metrics"]["position_rmse"] < 1e-2
+    assert ours["model"]["coefficient_error"] < 1e-3
+    assert ours["time_s"]["run"] < SETTINGS.timeout * 60
+    baseline = records["pysindy.SINDy (classical)"]
+    assert baseline["status"] in ("ok", "invalid") and baseline["model"]["n_terms"] > 0
+    for name in ("table.md", "table.csv", "table.png", "summary.json", "machine.json"):
+        assert (out / name).stat().st_size > 0
+    table = (out / "table.csv").read_text().splitlines()
+    assert table[1].startswith("mixed x explicit,0,0,0,1,")
+    # rerun: nothing left to do, the records are untouched; report-only rebuilds the table
+    assert main(argv) == 0
+    assert (out / "records.jsonl").read_text().splitlines() == lines
+    assert main(argv + ["--report-only"]) == 0
