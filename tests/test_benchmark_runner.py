@@ -162,3 +162,38 @@ def test_real_grid_and_report(tmp_path):
     assert main(argv) == 0
     assert (out / "records.jsonl").read_text().splitlines() == lines
     assert main(argv + ["--report-only"]) == 0
+
+
+# -- command line ------------------------------------------------------------------------------
+def test_command_line_options_build_the_grid():
+    import argparse
+
+    from pysindy_xl.benchmark.cli import add_parser, settings_from_args
+
+    parser = argparse.ArgumentParser(prog="pysindy-xl")
+    add_parser(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["benchmark", "--full", "--systems", "cart-pole", "--noise", "0",
+                              "0.05", "--configs", "mixed:mixed", "sindy", "--timeout", "10"])
+    settings = settings_from_args(args)
+    assert settings.name == "full" and settings.systems == ("cart-pole",)
+    assert settings.noise_levels == (0.0, 0.05) and settings.timeout == 10.0
+    assert settings.configurations == (("mixed", "mixed"), ("classical", "pysindy"))
+    assert callable(args.func)
+    args = parser.parse_args(["benchmark", "--no-baseline"])
+    assert ("classical", "pysindy") not in settings_from_args(args).configurations
+    assert settings_from_args(args).name == "quick"
+    with pytest.raises(SystemExit):
+        parser.parse_args(["benchmark", "--configs", "mixed:lasso"])
+
+
+def test_missing_cluster_backend_is_a_clear_error(tmp_path, capsys):
+    import importlib.util
+
+    from pysindy_xl.benchmark.cli import main
+
+    if importlib.util.find_spec("dask") is not None:
+        pytest.skip("dask is installed")
+    status = main(["--quick", "--backend", "dask", "--limit", "0", "--no-progress",
+                   "--out", str(tmp_path)])
+    assert status == 1
+    assert "dask[distributed]" in capsys.readouterr().err

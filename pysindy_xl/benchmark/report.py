@@ -152,12 +152,15 @@ def plot_table(table, records, path) -> None:
         base += values
     left.set_yticks(y, configs)
     left.set_xlabel("runs (trajectories)")
-    left.set_title("Outcome per configuration (ranked among valid models)")
-    left.legend(ncols=3, fontsize=8, loc="lower right")
+    left.set_title("Outcome per configuration (number at the right: success rate)")
+    left.legend(ncols=6, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14),
+                frameon=False)
+    right_edge = max(base.max(), 1.0)
+    left.set_xlim(0, right_edge * 1.13)
     for yk, row in zip(y, table, strict=True):
         rate = row["success rate"]
         label = "-" if rate != rate else f"{rate:.2f}"
-        left.text(base.max() * 1.01, yk, label, va="center", fontsize=8)
+        left.text(right_edge * 1.01, yk, label, va="center", fontsize=8)
     errors = {c: [] for c in configs}
     for r in latest_records(records):
         if r["status"] == "ok" and r["config"] in errors:
