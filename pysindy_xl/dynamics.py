@@ -69,23 +69,33 @@ class SimulationError(DynamicsError):
         self.reason = reason
 
 
-def force_function(u, t: np.ndarray, n: int):
+_INTERPOLATIONS = ("cubic", "linear", "previous")
+
+
+def force_function(u, t: np.ndarray, n: int, interpolation: str = "cubic"):
     """Turn the ``u`` argument of ``simulate`` into a function of time.
 
     Parameters
     ----------
     u : None, array (len(t), n), or callable ``u(t) -> (n,)``
-        Generalized forces; arrays are interpolated linearly between samples.
+        Generalized forces.
     t : ndarray, shape (T,)
         Simulation times.
     n : int
         Number of coordinates.
+    interpolation : {"cubic", "linear", "previous"}
+        How an array ``u`` is read between samples: a cubic spline (smooth forces: adaptive
+        integrators take far fewer steps than on the kinks of a linear interpolant), linear,
+        or zero-order hold (``"previous"``, for piecewise-constant actuator commands).
 
     Returns
     -------
     callable
         ``u(t) -> ndarray (n,)``.
     """
+    if interpolation not in _INTERPOLATIONS:
+        raise ValueError(f"interpolation: expected one of {_INTERPOLATIONS}, got "
+                         f"{interpolation!r}")
     if u is None:
         zeros = np.zeros(n)
         return lambda _t: zeros
@@ -113,9 +123,14 @@ def force_function(u, t: np.ndarray, n: int):
         raise ValueError("u: contains NaN or inf")
     if len(t) == 1:
         return lambda _t: u[0]
-    interpolant = scipy.interpolate.interp1d(t, u, axis=0, assume_sorted=True,
+    if interpolation == "cubic" and len(t) >= 4:
+        spline = scipy.interpolate.CubicSpline(t, u, axis=0, extrapolate=False)
+        t_first, t_last = t[0], t[-1]
+        return lambda s: u[0] if s <= t_first else u[-1] if s >= t_last else spline(s)
+    kind = "previous" if interpolation == "previous" else "linear"
+    interpolant = scipy.interpolate.interp1d(t, u, axis=0, kind=kind, assume_sorted=True,
                                              bounds_error=False, fill_value=(u[0], u[-1]))
-    return lambda s: interpolant(s)
+    return interpolant
 
 
 class MassMatrixDynamics:
@@ -160,7 +175,13 @@ class MassMatrixDynamics:
         self.mass_matrix_expr = mass
         self.forcing_expr = -eqs.subs(zero)
         n = coords.n
-        self._evaluate = compile_entries(coords.variables, list(mass) + list(self.forcing_expr))
+        entries = list(mass) + list(self.forcing_expr)
+        self._evaluate = compile_entries(coords.variables, entries)
+        # one state at a time (simulation): plain floats through the math module are an order
+        # of magnitude faster than NumPy calls on length-1 arrays
+        self._evaluate_scalar = sp.lambdify(
+            coords.variables, entries, modules=[{"sign": _sign}, "math"], cse=True
+        )
         self._n = n
 
     def mass_and_forcing(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -234,6 +255,7 @@ class MassMatrixDynamics:
         divergence_bound: float = 1e6,
         max_evaluations: int = 1_000_000,
         timeout: float | None = 300.0,
+        interpolation: str = "cubic",
     ) -> np.ndarray:
         """Integrate the dynamics with one of scipy's adaptive ODE solvers.
 
@@ -244,7 +266,7 @@ class MassMatrixDynamics:
         t : array, shape (T,)
             Strictly increasing output times; integration runs from ``t[0]`` to ``t[-1]``.
         u : None, array (T, n) or callable ``u(t) -> (n,)``
-            Generalized forces; arrays are interpolated linearly.
+            Generalized forces.
         method : {"RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA"}
         rtol, atol : float
             Tolerances of the solver.
@@ -254,6 +276,8 @@ class MassMatrixDynamics:
             Bound on right-hand-side evaluations (a stiff or blowing-up model cannot hang).
         timeout : float or None
             Wall-clock bound in seconds.
+        interpolation : {"cubic", "linear", "previous"}
+            How an array ``u`` is read between samples (see :func:`force_function`).
 
         Returns
         -------
@@ -270,10 +294,10 @@ class MassMatrixDynamics:
         if x0.shape != (2 * n,) or not np.all(np.isfinite(x0)):
             raise ValueError(f"x0: expected {2 * n} finite values [q, qd], got {x0.shape}")
         t = _check_times(t, "t")
-        force = force_function(u, t, n)
+        force = force_function(u, t, n, interpolation)
         counter = {"n": 0}
         start = _time.perf_counter()
-        z = np.zeros((1, 4 * n + 1))
+        zero_acc = [0.0] * n
 
         def rhs(s, state):
             counter["n"] += 1
@@ -282,13 +306,19 @@ class MassMatrixDynamics:
             if timeout is not None and counter["n"] % 256 == 0:
                 if _time.perf_counter() - start > timeout:
                     raise _Stop(s, "timeout")
-            z[0, : 2 * n] = state
-            z[0, 3 * n : 4 * n] = force(s)
-            z[0, -1] = s
-            mass, f = self.mass_and_forcing(z)
-            if self._singular(mass, 1e-12)[0]:
+            inputs = np.asarray(force(s)).tolist()
+            try:
+                values = self._evaluate_scalar(*state.tolist(), *zero_acc, *inputs, s)
+            except (OverflowError, ValueError, ZeroDivisionError):
+                raise _Stop(s, "non-finite derivative") from None
+            mass = np.array(values[: n * n], dtype=float).reshape(n, n)
+            f = np.array(values[n * n :], dtype=float)
+            if not (np.all(np.isfinite(mass)) and np.all(np.isfinite(f))):
+                raise _Stop(s, "non-finite derivative")
+            row_norms = np.prod(np.linalg.norm(mass, axis=1))
+            if not abs(np.linalg.det(mass)) > 1e-12 * row_norms:
                 raise _Stop(s, "singular mass matrix")
-            acc = np.linalg.solve(mass[0], f[0])
+            acc = np.linalg.solve(mass, f)
             if not np.all(np.isfinite(acc)):
                 raise _Stop(s, "non-finite derivative")
             return np.concatenate([state[n:], acc])
@@ -326,6 +356,10 @@ class MassMatrixDynamics:
 
 _SOLVERS = {name: getattr(scipy.integrate, name)
             for name in ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")}
+
+
+def _sign(value: float) -> float:
+    return float(np.sign(value))
 
 
 class _Stop(Exception):

@@ -14,7 +14,7 @@ import re
 import sympy as sp
 from sympy.printing.str import StrPrinter
 
-__all__ = ["parse_expression", "format_expression", "FUNCTIONS"]
+__all__ = ["parse_expression", "format_expression", "check_real_expression", "FUNCTIONS"]
 
 FUNCTIONS = {
     "sin": sp.sin,
@@ -229,4 +229,17 @@ def parse_expression(text: str, symbols: dict[str, sp.Symbol]) -> sp.Expr:
         raise ValueError(f"text: expression longer than {_MAX_LENGTH} characters")
     if not text.strip():
         raise ValueError("text: empty expression")
-    return _Parser(text, symbols).parse()
+    expr = _Parser(text, symbols).parse()
+    check_real_expression(expr, "text")
+    return expr
+
+
+def check_real_expression(expr: sp.Expr, name: str) -> None:
+    """Raise ``ValueError`` (naming ``name``) if ``expr`` holds a non-real or infinite number.
+
+    ``x/0`` (``zoo``), ``0/0`` (``nan``), ``sqrt(-1)`` or ``log(0)`` make no sense in a catalog
+    term, and NumPy would evaluate them to NaN or silently drop an imaginary part.
+    """
+    for sub in sp.preorder_traversal(expr):
+        if sub.is_number and (sub.is_real is not True or sub.is_finite is False):
+            raise ValueError(f"{name}: {expr} contains the non-real or infinite number {sub}")

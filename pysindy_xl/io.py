@@ -166,8 +166,9 @@ def load_model(path):
             "feature_names do not match the catalog")
     coef = document.get("coefficients")
     _expect(isinstance(coef, list) and len(coef) == len(feature_names)
-            and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in coef), path,
-            "'coefficients' must be one number per feature")
+            and all(isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
+                    for c in coef), path,
+            "'coefficients' must be one number per feature, all finite")
     forced = document.get("forced_coordinates", [True] * coords.n)
     _expect(isinstance(forced, list) and len(forced) == coords.n, path,
             "'forced_coordinates' must have one flag per coordinate")

@@ -449,10 +449,10 @@ class XLSINDy(BaseEstimator):
         t : array, shape (T,)
             Output times, strictly increasing.
         u : None, array (T, n) or callable ``u(t) -> (n,)``
-            Generalized forces (arrays are interpolated linearly).
+            Generalized forces (arrays are interpolated by a cubic spline by default).
         **integrator_options
             Passed to :meth:`MassMatrixDynamics.simulate` (``method``, ``rtol``, ``atol``,
-            ``divergence_bound``, ``max_evaluations``, ``timeout``).
+            ``divergence_bound``, ``max_evaluations``, ``timeout``, ``interpolation``).
 
         Returns
         -------

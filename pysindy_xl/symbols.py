@@ -10,6 +10,10 @@ import sympy as sp
 
 __all__ = ["Coordinates", "monomials", "products"]
 
+# names the expression grammar reads as constants or functions, and the time symbol
+_RESERVED = {"t", "E", "pi", "I", "oo", "nan", "zoo", "sin", "cos", "tan", "exp", "log", "sqrt",
+             "sinh", "cosh", "tanh", "asin", "acos", "atan", "Abs", "abs", "sign"}
+
 
 class Coordinates:
     """Generalized coordinates of a mechanical system and their sympy symbols.
@@ -49,9 +53,11 @@ class Coordinates:
         for name in names:
             if not isinstance(name, str) or not name.isidentifier() or keyword.iskeyword(name):
                 raise ValueError(f"names: {name!r} is not a valid identifier")
-            if name == "t" or name.startswith("tau_") or name.endswith(("_dot", "_ddot")):
+            if (name in _RESERVED or name.startswith("tau_")
+                    or name.endswith(("_dot", "_ddot"))):
                 raise ValueError(
-                    f"names: {name!r} is reserved (time 't', 'tau_*', '*_dot', '*_ddot')"
+                    f"names: {name!r} is reserved (time 't', constants 'E', 'pi', 'I', "
+                    "function names, 'tau_*', '*_dot', '*_ddot')"
                 )
         if len(set(names)) != len(names):
             raise ValueError(f"names: duplicate coordinate names in {names}")
@@ -98,9 +104,12 @@ def _as_expr_list(exprs, name: str) -> list[sp.Expr]:
         exprs = [sp.sympify(e) if isinstance(e, (int, float)) else e for e in exprs]
     except TypeError:
         raise TypeError(f"{name}: expected a sequence of sympy expressions") from None
+    from .expressions import check_real_expression
+
     for e in exprs:
         if not isinstance(e, sp.Basic):
             raise TypeError(f"{name}: expected sympy expressions, got {type(e).__name__}")
+        check_real_expression(e, name)
     return exprs
 
 

@@ -127,8 +127,6 @@ def test_zero_columns_are_reported():
     assert np.all(np.linalg.norm(theta[:, 5:], axis=0) > 0)
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: complex terms are accepted and transform silently "
-                   "drops their imaginary part (numpy ComplexWarning, a zero column here)")
 @pytest.mark.filterwarnings("ignore::numpy.exceptions.ComplexWarning")
 @pytest.mark.parametrize("kind", ["lagrange", "classical"])
 def test_complex_terms_refused(kind):
