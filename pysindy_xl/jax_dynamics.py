@@ -22,6 +22,7 @@ Conventions
 
 from __future__ import annotations
 
+import math
 from functools import partial
 from typing import NamedTuple
 
@@ -34,6 +35,8 @@ __all__ = [
     "BatchSimulation",
     "dynamics_function",
     "euler_step",
+    "fast_cos",
+    "fast_sin",
     "rk4_step",
     "semi_implicit_euler_step",
     "simulate",
@@ -42,6 +45,102 @@ __all__ = [
 
 #: Largest system solved by unrolled Gaussian elimination; larger ones call LAPACK.
 _UNROLLED_MAX_N = 4
+
+
+# --------------------------------------------------------------------------------------
+# Vectorizable sine and cosine
+# --------------------------------------------------------------------------------------
+# XLA on CPU evaluates sin/cos one element at a time (about 15 ns per float32 element,
+# 50 ns per float64 one, against about 1 ns for a vectorized polynomial): for a pendulum
+# that is most of the cost of a simulation step. The functions below use the textbook
+# scheme: reduce the argument by multiples of pi/2 with pi/2 split into pieces whose
+# products with the multiple are exact (Cody-Waite), then Taylor polynomials on
+# [-pi/4, pi/4]. They match libm to a few ulp while |x| < _FAST_TRIG_RANGE; beyond, the
+# reduction loses about one digit per decade of |x|.
+#
+# pi/2 = sum of the pieces (float64: two 33-bit pieces and a tail; float32: three 8-bit
+# pieces and a tail), computed with mpmath at 200 bits.
+_HALF_PI_PIECES = {
+    np.dtype(np.float64): (1.5707963267341256, 6.077100506303966e-11, 2.0222662487959506e-21),
+    np.dtype(np.float32): (
+        1.5703125,
+        4.84466552734375e-04,
+        -6.407499313354492e-07,
+        9.92093629470503e-10,
+    ),
+}
+#: |x| below which the reduction is exact to rounding (multiples of pi/2 below 2**20 / 2**16).
+_FAST_TRIG_RANGE = {np.dtype(np.float64): 1.6e6, np.dtype(np.float32): 1.0e5}
+# Taylor coefficients, highest degree first: (-1)^k / (2k+1)! and (-1)^k / (2k)!. Degrees
+# 15 / 16 (float64) and 9 / 10 (float32) leave a truncation error below half an ulp on
+# [-pi/4, pi/4].
+_SIN_COEFFICIENTS = {
+    dtype: tuple((-1) ** k / float(math.factorial(2 * k + 1)) for k in range(top, 0, -1))
+    for dtype, top in ((np.dtype(np.float64), 7), (np.dtype(np.float32), 4))
+}
+_COS_COEFFICIENTS = {
+    dtype: tuple((-1) ** k / float(math.factorial(2 * k)) for k in range(top, 0, -1))
+    for dtype, top in ((np.dtype(np.float64), 8), (np.dtype(np.float32), 5))
+}
+
+
+def _horner(coefficients, x):
+    acc = coefficients[0]
+    for c in coefficients[1:]:
+        acc = acc * x + c
+    return acc
+
+
+def _sincos(x):
+    """(sin x, cos x) of a floating array, vectorizable (see the note above)."""
+    dtype = np.dtype(x.dtype)
+    if dtype not in _HALF_PI_PIECES:  # float16, bfloat16: nothing to gain
+        return jnp.sin(x), jnp.cos(x)
+    k = jnp.round(x * (2.0 / np.pi))
+    r = x
+    for piece in _HALF_PI_PIECES[dtype]:
+        r = r - k * piece
+    r2 = r * r
+    sin_r = r + r * r2 * _horner(_SIN_COEFFICIENTS[dtype], r2)
+    cos_r = 1.0 + r2 * _horner(_COS_COEFFICIENTS[dtype], r2)
+    quadrant = k - 4.0 * jnp.floor(k * 0.25)  # k mod 4, exact in floating point
+    swap = (quadrant == 1.0) | (quadrant == 3.0)
+    sin_x = jnp.where(swap, cos_r, sin_r)
+    cos_x = jnp.where(swap, sin_r, cos_r)
+    sin_x = jnp.where(quadrant >= 2.0, -sin_x, sin_x)
+    cos_x = jnp.where((quadrant == 1.0) | (quadrant == 2.0), -cos_x, cos_x)
+    return sin_x, cos_x
+
+
+def _float_operand(x):
+    x = jnp.asarray(x)
+    return x if jnp.issubdtype(x.dtype, jnp.floating) else x.astype(jnp.result_type(float))
+
+
+@jax.custom_jvp
+def fast_sin(x):
+    """Sine through a vectorizable polynomial; see ``_FAST_TRIG_RANGE`` for its range."""
+    return _sincos(_float_operand(x))[0]
+
+
+@jax.custom_jvp
+def fast_cos(x):
+    """Cosine through a vectorizable polynomial; see ``_FAST_TRIG_RANGE`` for its range."""
+    return _sincos(_float_operand(x))[1]
+
+
+@fast_sin.defjvp
+def _fast_sin_jvp(primals, tangents):
+    (x,), (dx,) = primals, tangents
+    sin_x, cos_x = _sincos(_float_operand(x))
+    return sin_x, cos_x * dx
+
+
+@fast_cos.defjvp
+def _fast_cos_jvp(primals, tangents):
+    (x,), (dx,) = primals, tangents
+    sin_x, cos_x = _sincos(_float_operand(x))
+    return cos_x, -sin_x * dx
 
 
 # --------------------------------------------------------------------------------------
@@ -75,24 +174,27 @@ def _check_symbols(matrix: sp.Matrix, name: str, coords) -> None:
         )
 
 
-def _unrolled_solve(a: list[list], b: list) -> list:
-    """Solve ``a x = b`` for a small matrix given as nested lists of scalars.
+def _unrolled_solve(a: list[list], b: list, pivoting: bool) -> list:
+    """Solve ``a x = b`` for a small matrix given entry by entry (nested lists of arrays).
 
-    Gaussian elimination with partial pivoting, written out entry by entry so that
-    under ``vmap`` every operation is an elementwise vector operation over the batch
-    (LAPACK's batched LU is far slower for 2x2 systems). Pivot choice by
-    compare-and-swap keeps it branch free.
+    Gaussian elimination written out so that every operation is elementwise over the
+    batch: XLA turns it into vector code, where LAPACK's batched LU would run one tiny
+    factorization at a time. Partial pivoting, when asked for, is done by
+    compare-and-swap (``where``) to stay branch free; it costs about twice the time of
+    the whole simulation step, and symmetric positive-definite mass matrices (every
+    Lagrangian one) do not need it.
     """
     n = len(b)
     a = [list(row) for row in a]
     b = list(b)
     for k in range(n):
-        for i in range(k + 1, n):
-            swap = jnp.abs(a[i][k]) > jnp.abs(a[k][k])
-            row_k = [jnp.where(swap, a[i][j], a[k][j]) for j in range(k, n)]
-            row_i = [jnp.where(swap, a[k][j], a[i][j]) for j in range(k, n)]
-            a[k][k:], a[i][k:] = row_k, row_i
-            b[k], b[i] = jnp.where(swap, b[i], b[k]), jnp.where(swap, b[k], b[i])
+        if pivoting:
+            for i in range(k + 1, n):
+                swap = jnp.abs(a[i][k]) > jnp.abs(a[k][k])
+                row_k = [jnp.where(swap, a[i][j], a[k][j]) for j in range(k, n)]
+                row_i = [jnp.where(swap, a[k][j], a[i][j]) for j in range(k, n)]
+                a[k][k:], a[i][k:] = row_k, row_i
+                b[k], b[i] = jnp.where(swap, b[i], b[k]), jnp.where(swap, b[k], b[i])
         for i in range(k + 1, n):
             factor = a[i][k] / a[k][k]
             for j in range(k + 1, n):
@@ -107,7 +209,43 @@ def _unrolled_solve(a: list[list], b: list) -> list:
     return x
 
 
-def dynamics_function(dynamics, *, solver: str = "auto"):
+def _lu_solve(a: list[list], b: list) -> list:
+    matrix = jnp.stack([jnp.stack(jnp.broadcast_arrays(*row), axis=-1) for row in a], axis=-2)
+    rhs = jnp.stack(jnp.broadcast_arrays(*b), axis=-1)
+    matrix, rhs = jnp.broadcast_arrays(matrix, rhs[..., None])
+    solution = jnp.linalg.solve(matrix, rhs)[..., 0]
+    return [solution[..., i] for i in range(len(b))]
+
+
+_SOLVERS = {
+    "auto": None,
+    "gauss": partial(_unrolled_solve, pivoting=False),
+    "pivoted": partial(_unrolled_solve, pivoting=True),
+    "lu": _lu_solve,
+}
+
+
+def _componentwise_function(evaluate, n: int, solve):
+    """Build ``g(state, u, t) -> d(state)/dt`` on tuples of same-shaped arrays.
+
+    Working on one array per component (structure of arrays) instead of a stacked
+    ``(..., 2n)`` array matters on CPU: XLA vectorizes elementwise code, but not code
+    that assembles an output with ``concatenate``, which was 10x slower.
+    """
+
+    def componentwise(state, u, t):
+        shape = jnp.broadcast_shapes(*(jnp.shape(c) for c in (*state, *u)))
+        dtype = jnp.result_type(*state, *u)
+        values = evaluate(*state, *u, t)
+        mass = [values[i * n : (i + 1) * n] for i in range(n)]
+        qdd = solve(mass, values[n * n :])
+        qdd = [jnp.broadcast_to(jnp.asarray(a, dtype=dtype), shape) for a in qdd]
+        return tuple(state[n:]) + tuple(qdd)
+
+    return componentwise
+
+
+def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True):
     """Compile identified mass-matrix dynamics into a pure JAX function.
 
     Parameters
@@ -117,22 +255,31 @@ def dynamics_function(dynamics, *, solver: str = "auto"):
         ``mass_matrix_expr`` (sympy Matrix ``(n, n)`` in positions and velocities) and
         ``forcing_expr`` (sympy Matrix ``(n, 1)`` in positions, velocities, forces and
         time), such that ``M(q, qd) qdd = f(q, qd, tau, t)``.
-    solver : {"auto", "unrolled", "lu"}
-        How ``qdd`` is solved for. ``"unrolled"``: Gaussian elimination with partial
-        pivoting written out entry by entry (fast under ``vmap`` for small ``n``);
-        ``"lu"``: :func:`jax.numpy.linalg.solve`; ``"auto"``: unrolled for
-        ``n <= 4``, LU above.
+    solver : {"auto", "gauss", "pivoted", "lu"}
+        How ``qdd`` is solved for. ``"gauss"``: Gaussian elimination written out entry
+        by entry, without pivoting (vectorizes over a batch; exact to rounding for
+        symmetric positive-definite mass matrices, a zero leading minor gives
+        non-finite accelerations); ``"pivoted"``: the same with partial pivoting (about
+        twice slower); ``"lu"``: :func:`jax.numpy.linalg.solve`. ``"auto"``: for
+        ``n <= 4``, ``"gauss"`` when the mass matrix is symbolically symmetric (the
+        Hessian of a Lagrangian) and ``"pivoted"`` otherwise; ``"lu"`` above.
+    fast_trig : bool, default True
+        Evaluate ``sin`` and ``cos`` with vectorizable polynomials (:func:`fast_sin`,
+        :func:`fast_cos`: within a few ulp of libm for ``|x| < 1e5``, several times
+        faster than XLA's CPU versions); ``False`` uses ``jax.numpy``'s.
 
     Returns
     -------
     callable
         ``f(state, u, t=0.0) -> d(state)/dt`` with ``state = [q, qd]`` of shape
-        ``(..., 2n)``, ``u`` of shape ``(..., n)`` and ``t`` a scalar or an array
-        broadcastable to the batch shape; returns ``[qd, qdd]`` of shape ``(..., 2n)``
-        in the floating dtype of the inputs. Leading batch dimensions broadcast.
-        The function carries the attributes ``n_coordinates`` and ``depends_on_time``.
-        A singular mass matrix gives non-finite accelerations, which the simulators
-        report as divergence.
+        ``(..., 2n)``, ``u`` of shape ``(..., n)`` and ``t`` a scalar or an array of
+        the batch shape; returns ``[qd, qdd]`` of shape ``(..., 2n)`` in the floating
+        dtype of the inputs. Leading batch dimensions broadcast. Attributes:
+        ``n_coordinates``, ``depends_on_time``, ``solver`` (the one chosen) and
+        ``componentwise``, the same
+        function on tuples of per-component arrays (``g(state_tuple, u_tuple, t) ->
+        derivative_tuple``) that the simulators use. A singular mass matrix gives
+        non-finite accelerations, which the simulators report as divergence.
 
     Examples
     --------
@@ -153,8 +300,8 @@ def dynamics_function(dynamics, *, solver: str = "auto"):
                 f"dynamics: expected a MassMatrixDynamics-like object with attribute "
                 f"{attribute!r}, got {type(dynamics).__name__}"
             )
-    if solver not in ("auto", "unrolled", "lu"):
-        raise ValueError(f"solver: expected 'auto', 'unrolled' or 'lu', got {solver!r}")
+    if solver not in _SOLVERS:
+        raise ValueError(f"solver: expected one of {list(_SOLVERS)}, got {solver!r}")
     coords = dynamics.coords
     n = coords.n
     mass = _as_matrix(dynamics.mass_matrix_expr, "dynamics.mass_matrix_expr", (n, n))
@@ -162,28 +309,21 @@ def dynamics_function(dynamics, *, solver: str = "auto"):
     _check_symbols(mass, "dynamics.mass_matrix_expr", coords)
     _check_symbols(forcing, "dynamics.forcing_expr", coords)
     if solver == "auto":
-        solver = "unrolled" if n <= _UNROLLED_MAX_N else "lu"
+        if n > _UNROLLED_MAX_N:
+            solver = "lu"
+        else:
+            symmetric = all(
+                sp.simplify(mass[i, j] - mass[j, i]) == 0 for i in range(n) for j in range(i)
+            )
+            solver = "gauss" if symmetric else "pivoted"
 
     # One lambdify over every entry of M and f shares common subexpressions
     # (sin/cos of the same angles appear in both).
     entries = list(mass) + list(forcing)
     arguments = list(coords.q) + list(coords.qd) + list(coords.tau) + [coords.t]
-    evaluate = sp.lambdify(arguments, entries, modules="jax", cse=True)
-
-    def single(state, u, t):
-        dtype = state.dtype
-        values = evaluate(*(state[i] for i in range(2 * n)), *(u[i] for i in range(n)), t)
-        # Constant entries come back as Python numbers: give every entry the state dtype.
-        values = [jnp.asarray(v, dtype=dtype) for v in values]
-        m = [values[i * n : (i + 1) * n] for i in range(n)]
-        rhs = values[n * n :]
-        if solver == "unrolled":
-            qdd = jnp.stack(_unrolled_solve(m, rhs))
-        else:
-            qdd = jnp.linalg.solve(jnp.stack([jnp.stack(row) for row in m]), jnp.stack(rhs))
-        return jnp.concatenate([state[n:], qdd])
-
-    vectorized = jnp.vectorize(single, signature="(s),(n),()->(s)")
+    modules = [{"sin": fast_sin, "cos": fast_cos}, "jax"] if fast_trig else ["jax"]
+    evaluate = sp.lambdify(arguments, entries, modules=modules, cse=True)
+    componentwise = _componentwise_function(evaluate, n, _SOLVERS[solver])
 
     def dynamics_fn(state, u, t=0.0):
         state = jnp.asarray(state)
@@ -195,10 +335,19 @@ def dynamics_function(dynamics, *, solver: str = "auto"):
         dtype = jnp.result_type(state, u, 0.0)
         if not jnp.issubdtype(dtype, jnp.floating):
             raise TypeError(f"state, u: expected real arrays, got dtype {dtype}")
-        return vectorized(state.astype(dtype), u.astype(dtype), jnp.asarray(t, dtype=dtype))
+        t = jnp.asarray(t, dtype=dtype)
+        batch = jnp.broadcast_shapes(state.shape[:-1], u.shape[:-1], t.shape)
+        state = jnp.broadcast_to(state.astype(dtype), batch + (2 * n,))
+        u = jnp.broadcast_to(u.astype(dtype), batch + (n,))
+        derivative = componentwise(
+            tuple(state[..., i] for i in range(2 * n)), tuple(u[..., i] for i in range(n)), t
+        )
+        return jnp.stack(derivative, axis=-1)
 
     dynamics_fn.n_coordinates = n
     dynamics_fn.depends_on_time = coords.t in (mass.free_symbols | forcing.free_symbols)
+    dynamics_fn.componentwise = componentwise
+    dynamics_fn.solver = solver
     dynamics_fn.__doc__ = (
         f"d(state)/dt of the identified {n}-coordinate system {list(coords.names)}: "
         "f(state (..., 2n), u (..., n), t=0.0) -> [qd, qdd] (..., 2n)."
@@ -207,13 +356,19 @@ def dynamics_function(dynamics, *, solver: str = "auto"):
 
 
 # --------------------------------------------------------------------------------------
-# Fixed-step schemes: pure functions of one state
+# Fixed-step schemes: pure functions of one state (an array (..., 2n) or a tuple of 2n
+# per-component arrays, matching what f takes)
 # --------------------------------------------------------------------------------------
 def _force_at(u_start, u_end, fraction):
     """Force at ``t + fraction * dt``: held when ``u_end`` is None, else linear."""
     if u_end is None:
         return u_start
-    return u_start + fraction * (u_end - u_start)
+    return jax.tree.map(lambda a, b: a + fraction * (b - a), u_start, u_end)
+
+
+def _axpy(x, a, y):
+    """``x + a * y`` on arrays or tuples of arrays."""
+    return jax.tree.map(lambda xi, yi: xi + a * yi, x, y)
 
 
 def rk4_step(f, state, t, dt, u_start, u_end=None):
@@ -223,27 +378,53 @@ def rk4_step(f, state, t, dt, u_start, u_end=None):
     ----------
     f : callable
         ``f(state, u, t) -> d(state)/dt``, e.g. from :func:`dynamics_function`.
-    state : array (2n,)
+    state : array (..., 2n) or tuple of 2n arrays
+        State at ``t``, in the layout ``f`` takes.
     t, dt : float
         Time at the start of the step and step length.
-    u_start : array (n,)
+    u_start : array (..., n) or tuple of n arrays
         Force at ``t``.
-    u_end : array (n,), optional
+    u_end : same as u_start, optional
         Force at ``t + dt``; when given the force is interpolated linearly inside the
         step, otherwise ``u_start`` is held.
 
     Returns
     -------
-    array (2n,)
-        State at ``t + dt``.
+    State at ``t + dt``, same layout as ``state``.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from pysindy_xl.jax_dynamics import rk4_step
+    >>> decay = lambda x, u, t: -x + u
+    >>> x = rk4_step(decay, jnp.array([1.0, 2.0]), 0.0, 0.1, jnp.array([0.0, 0.0]))
+    >>> [round(float(v), 6) for v in x]  # exp(-0.1) = 0.904837...
+    [0.904837, 1.809675]
     """
     u_mid = _force_at(u_start, u_end, 0.5)
     u_last = _force_at(u_start, u_end, 1.0)
     k1 = f(state, u_start, t)
-    k2 = f(state + 0.5 * dt * k1, u_mid, t + 0.5 * dt)
-    k3 = f(state + 0.5 * dt * k2, u_mid, t + 0.5 * dt)
-    k4 = f(state + dt * k3, u_last, t + dt)
-    return state + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    k2 = f(_axpy(state, 0.5 * dt, k1), u_mid, t + 0.5 * dt)
+    k3 = f(_axpy(state, 0.5 * dt, k2), u_mid, t + 0.5 * dt)
+    k4 = f(_axpy(state, dt, k3), u_last, t + dt)
+    return jax.tree.map(
+        lambda x, a, b, c, d: x + (dt / 6.0) * (a + 2.0 * b + 2.0 * c + d),
+        state, k1, k2, k3, k4,
+    )  # fmt: skip
+
+
+def _split_state(state):
+    if isinstance(state, tuple):
+        n = len(state) // 2
+        return state[:n], state[n:]
+    n = state.shape[-1] // 2
+    return state[..., :n], state[..., n:]
+
+
+def _join_state(q, qd):
+    if isinstance(q, tuple):
+        return q + qd
+    return jnp.concatenate([q, qd], axis=-1)
 
 
 def semi_implicit_euler_step(f, state, t, dt, u_start, u_end=None):
@@ -254,17 +435,16 @@ def semi_implicit_euler_step(f, state, t, dt, u_start, u_end=None):
     first-order scheme only samples the force at the start of the step).
     """
     del u_end
-    n = state.shape[-1] // 2
-    qdd = f(state, u_start, t)[..., n:]
-    qd = state[..., n:] + dt * qdd
-    q = state[..., :n] + dt * qd
-    return jnp.concatenate([q, qd], axis=-1)
+    q, qd = _split_state(state)
+    _, qdd = _split_state(f(state, u_start, t))
+    qd = _axpy(qd, dt, qdd)
+    return _join_state(_axpy(q, dt, qd), qd)
 
 
 def euler_step(f, state, t, dt, u_start, u_end=None):
     """One explicit Euler step. Same parameters as :func:`rk4_step` (``u_end`` unused)."""
     del u_end
-    return state + dt * f(state, u_start, t)
+    return _axpy(state, dt, f(state, u_start, t))
 
 
 _STEPS = {
@@ -283,9 +463,8 @@ class BatchSimulation(NamedTuple):
     Attributes
     ----------
     states : array (B, T, 2n), or (B, 2n) with ``final_only``; no ``B`` axis for
-        :func:`simulate`.
-        A diverged trajectory is frozen at its last accepted state: every sample from
-        ``divergence_step`` on repeats it.
+        :func:`simulate`. A diverged trajectory is frozen at its last accepted state:
+        every sample from ``divergence_step`` on repeats it.
     diverged : bool array (B,)
         Whether the trajectory left the finite / bounded region.
     divergence_step : int array (B,)
@@ -298,44 +477,61 @@ class BatchSimulation(NamedTuple):
     divergence_step: jax.Array
 
 
-def _is_bad(state, bound):
-    return ~jnp.all(jnp.isfinite(state) & (jnp.abs(state) <= bound), axis=-1)
+def _is_bad(components, bound):
+    bad = False
+    for c in components:
+        bad = bad | ~(jnp.isfinite(c) & (jnp.abs(c) <= bound))
+    return bad
 
 
-def _rollout(f, step, x0, u, dt, t0, bound, linear, final_only):
-    """Scan one trajectory: x0 (2n,), u (T, n) -> BatchSimulation without batch axis."""
-    n_steps = u.shape[0] - 1
-    bad0 = _is_bad(x0, bound)
+def _generic_componentwise(f, batch_ndim: int):
+    """Adapt a user ``f(state (2n,), u (n,), t)`` to the per-component layout."""
+    for _ in range(batch_ndim):
+        f = jax.vmap(f, in_axes=(0, 0, None))
+
+    def componentwise(state, u, t):
+        derivative = f(jnp.stack(state, axis=-1), jnp.stack(u, axis=-1), t)
+        return tuple(derivative[..., i] for i in range(len(state)))
+
+    return componentwise
+
+
+@partial(jax.jit, static_argnames=("f", "method", "linear", "final_only"))
+def _simulate_compiled(f, x0, u, dt, t0, bound, method, linear, final_only):
+    """Scan ``T - 1`` steps: x0 (..., 2n), u (..., T, n) -> BatchSimulation."""
+    step = _STEPS[method]
+    batch_ndim = x0.ndim - 1
+    g = getattr(f, "componentwise", None) or _generic_componentwise(f, batch_ndim)
+    n_steps = u.shape[-2] - 1
+    # Time first, then component: each scan step reads n per-component arrays.
+    u_seq = jnp.moveaxis(u, (-2, -1), (0, 1))
+    state0 = tuple(x0[..., i] for i in range(x0.shape[-1]))
+    bad0 = _is_bad(state0, bound)
 
     def body(carry, inputs):
         state, diverged, divergence_step, k = carry
         u_start, u_end = inputs
         t = t0 + k.astype(dt.dtype) * dt
-        proposed = step(f, state, t, dt, u_start, u_end)
+        proposed = step(g, state, t, dt, tuple(u_start), None if u_end is None else tuple(u_end))
         bad = _is_bad(proposed, bound)
         divergence_step = jnp.where(bad & ~diverged, k + 1, divergence_step)
         diverged = diverged | bad
         # Freeze: a diverged trajectory keeps its last accepted state, so NaN never
         # propagates and the rest of the batch is untouched.
-        state = jnp.where(diverged, state, proposed)
-        return (state, diverged, divergence_step, k + 1), (None if final_only else state)
+        state = tuple(jnp.where(diverged, s, p) for s, p in zip(state, proposed, strict=True))
+        return (state, diverged, divergence_step, k + 1), (None if final_only else jnp.stack(state))
 
-    carry0 = (x0, bad0, jnp.where(bad0, 0, -1), jnp.asarray(0, dtype=jnp.int32))
+    carry0 = (state0, bad0, jnp.where(bad0, 0, -1), jnp.asarray(0, dtype=jnp.int32))
+    inputs = (u_seq[:-1], u_seq[1:] if linear else None)
     (final, diverged, divergence_step, _), history = jax.lax.scan(
-        body, carry0, (u[:-1], u[1:] if linear else None), length=n_steps
+        body, carry0, inputs, length=n_steps
     )
-    states = final if final_only else jnp.concatenate([x0[None], history], axis=0)
+    if final_only:
+        states = jnp.stack(final, axis=-1)
+    else:
+        history = jnp.concatenate([jnp.stack(state0)[None], history], axis=0)
+        states = jnp.moveaxis(history, (0, 1), (-2, -1))
     return BatchSimulation(states, diverged, divergence_step)
-
-
-@partial(jax.jit, static_argnames=("f", "method", "linear", "final_only", "batched"))
-def _simulate_compiled(f, x0, u, dt, t0, bound, method, linear, final_only, batched):
-    def run(x0, u):
-        return _rollout(f, _STEPS[method], x0, u, dt, t0, bound, linear, final_only)
-
-    if batched:
-        run = jax.vmap(run)
-    return run(x0, u)
 
 
 def _float_dtype():
@@ -369,7 +565,9 @@ def _prepare(f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched):
     if u is None:
         if n_steps is None:
             raise ValueError("n_steps: required when u is None (number of output samples)")
-        u = jnp.zeros(x0.shape[:lead] + (n_steps, n), dtype=dtype)
+        if not isinstance(n_steps, int | np.integer) or n_steps < 1:
+            raise ValueError(f"n_steps: expected a positive integer, got {n_steps!r}")
+        u = jnp.zeros(x0.shape[:lead] + (int(n_steps), n), dtype=dtype)
     else:
         u = jnp.asarray(u, dtype=dtype)
         if u.ndim != 2 + lead or u.shape[:lead] != x0.shape[:lead] or u.shape[-1] != n:
@@ -379,8 +577,8 @@ def _prepare(f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched):
             )
         if n_steps is not None and n_steps != u.shape[lead]:
             raise ValueError(f"n_steps: {n_steps} does not match u with {u.shape[lead]} samples")
-    if u.shape[lead] < 1:
-        raise ValueError("u: expected at least one time sample")
+        if u.shape[lead] < 1:
+            raise ValueError("u: expected at least one time sample")
     if _is_concrete(x0) and not bool(jnp.all(jnp.isfinite(x0))):
         raise ValueError("x0: contains NaN or inf")
     if _is_concrete(u) and not bool(jnp.all(jnp.isfinite(u))):
@@ -388,12 +586,14 @@ def _prepare(f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched):
     dt = jnp.asarray(dt, dtype=dtype)
     if dt.ndim != 0:
         raise ValueError(f"dt: expected a scalar time step, got shape {dt.shape}")
-    if _is_concrete(dt) and not bool(dt > 0):
+    if _is_concrete(dt) and not bool(jnp.isfinite(dt) & (dt > 0)):
         raise ValueError(f"dt: expected a positive finite time step, got {float(dt)}")
     t0 = jnp.asarray(t0, dtype=dtype)
+    if t0.ndim != 0:
+        raise ValueError(f"t0: expected a scalar start time, got shape {t0.shape}")
     if bound is None:
         bound = np.inf
-    elif not np.isscalar(bound) or not bound > 0:
+    elif not isinstance(bound, int | float | np.number) or not bound > 0:
         raise ValueError(f"bound: expected None or a positive number, got {bound!r}")
     bound = jnp.asarray(bound, dtype=dtype)
     return f, x0, u, dt, t0, bound
@@ -466,7 +666,7 @@ def simulate(
         f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched=False
     )
     return _simulate_compiled(
-        f, x0, u, dt, t0, bound, method, interpolation == "linear", bool(final_only), False
+        f, x0, u, dt, t0, bound, method, interpolation == "linear", bool(final_only)
     )
 
 
@@ -524,5 +724,5 @@ def simulate_batch(
         f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched=True
     )
     return _simulate_compiled(
-        f, x0, u, dt, t0, bound, method, interpolation == "linear", bool(final_only), True
+        f, x0, u, dt, t0, bound, method, interpolation == "linear", bool(final_only)
     )
