@@ -23,6 +23,7 @@ Conventions
 from __future__ import annotations
 
 import math
+import weakref
 from functools import partial
 from typing import NamedTuple
 
@@ -217,6 +218,33 @@ def _lu_solve(a: list[list], b: list) -> list:
     return [solution[..., i] for i in range(len(b))]
 
 
+def _looks_positive_definite(mass: sp.Matrix, coords, n_samples: int = 64) -> bool:
+    """Whether ``M`` is symmetric positive definite at random states (Lagrangian ones are).
+
+    Decides whether elimination may skip pivoting; a wrong "yes" costs accuracy only on
+    unphysical (indefinite) mass matrices, and a zero pivot still shows as divergence.
+    """
+    arguments = list(coords.q) + list(coords.qd) + list(coords.tau) + [coords.t]
+    rng = np.random.default_rng(0)
+    samples = np.concatenate(
+        [
+            rng.uniform(-np.pi, np.pi, (n_samples, coords.n)),
+            rng.uniform(-3.0, 3.0, (n_samples, 2 * coords.n)),
+            rng.uniform(0.0, 10.0, (n_samples, 1)),
+        ],
+        axis=1,
+    )
+    evaluate = sp.lambdify(arguments, mass, modules="numpy")
+    with np.errstate(all="ignore"):
+        matrices = np.stack([np.asarray(evaluate(*row), dtype=float) for row in samples])
+    if not np.all(np.isfinite(matrices)):
+        return False
+    scale = np.max(np.abs(matrices), axis=(1, 2), keepdims=True)
+    if np.any(np.abs(matrices - np.swapaxes(matrices, 1, 2)) > 1e-9 * scale):
+        return False
+    return bool(np.all(np.linalg.eigvalsh(matrices)[:, 0] > 1e-12 * scale[:, 0, 0]))
+
+
 _SOLVERS = {
     "auto": None,
     "gauss": partial(_unrolled_solve, pivoting=False),
@@ -236,13 +264,19 @@ def _componentwise_function(evaluate, n: int, solve):
     def componentwise(state, u, t):
         shape = jnp.broadcast_shapes(*(jnp.shape(c) for c in (*state, *u)))
         dtype = jnp.result_type(*state, *u)
-        values = evaluate(*state, *u, t)
+        # Constant entries come back as Python numbers: make every entry an array.
+        values = [jnp.asarray(v, dtype=dtype) for v in evaluate(*state, *u, t)]
         mass = [values[i * n : (i + 1) * n] for i in range(n)]
         qdd = solve(mass, values[n * n :])
-        qdd = [jnp.broadcast_to(jnp.asarray(a, dtype=dtype), shape) for a in qdd]
+        qdd = [jnp.broadcast_to(a, shape) for a in qdd]
         return tuple(state[n:]) + tuple(qdd)
 
     return componentwise
+
+
+# Compiled functions per dynamics object: the simulators' jit cache is keyed by the function,
+# so handing out the same function for the same model avoids recompiling on every call.
+_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True):
@@ -261,8 +295,9 @@ def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True)
         symmetric positive-definite mass matrices, a zero leading minor gives
         non-finite accelerations); ``"pivoted"``: the same with partial pivoting (about
         twice slower); ``"lu"``: :func:`jax.numpy.linalg.solve`. ``"auto"``: for
-        ``n <= 4``, ``"gauss"`` when the mass matrix is symbolically symmetric (the
-        Hessian of a Lagrangian) and ``"pivoted"`` otherwise; ``"lu"`` above.
+        ``n <= 4``, ``"gauss"`` when the mass matrix is symmetric positive definite at
+        random states (as every Lagrangian one is) and ``"pivoted"`` otherwise; ``"lu"``
+        above.
     fast_trig : bool, default True
         Evaluate ``sin`` and ``cos`` with vectorizable polynomials (:func:`fast_sin`,
         :func:`fast_cos`: within a few ulp of libm for ``|x| < 1e5``, several times
@@ -279,7 +314,9 @@ def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True)
         ``componentwise``, the same
         function on tuples of per-component arrays (``g(state_tuple, u_tuple, t) ->
         derivative_tuple``) that the simulators use. A singular mass matrix gives
-        non-finite accelerations, which the simulators report as divergence.
+        non-finite accelerations, which the simulators report as divergence. The same
+        object is returned again for the same ``dynamics`` and options (the expressions
+        are read once: do not modify them afterwards).
 
     Examples
     --------
@@ -302,6 +339,17 @@ def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True)
             )
     if solver not in _SOLVERS:
         raise ValueError(f"solver: expected one of {list(_SOLVERS)}, got {solver!r}")
+    key = (solver, bool(fast_trig))
+    try:
+        cached = _CACHE.setdefault(dynamics, {})
+    except TypeError:  # not hashable or not weak-referenceable: compile every time
+        cached = {}
+    if key not in cached:
+        cached[key] = _compile(dynamics, solver, bool(fast_trig))
+    return cached[key]
+
+
+def _compile(dynamics, solver: str, fast_trig: bool):
     coords = dynamics.coords
     n = coords.n
     mass = _as_matrix(dynamics.mass_matrix_expr, "dynamics.mass_matrix_expr", (n, n))
@@ -312,10 +360,7 @@ def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True)
         if n > _UNROLLED_MAX_N:
             solver = "lu"
         else:
-            symmetric = all(
-                sp.simplify(mass[i, j] - mass[j, i]) == 0 for i in range(n) for j in range(i)
-            )
-            solver = "gauss" if symmetric else "pivoted"
+            solver = "gauss" if _looks_positive_definite(mass, coords) else "pivoted"
 
     # One lambdify over every entry of M and f shares common subexpressions
     # (sin/cos of the same angles appear in both).
