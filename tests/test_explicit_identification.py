@@ -100,7 +100,7 @@ def test_lasso_and_pysindy_optimizers_recover_cart_pole(cart_pole_system):
     data = _dataset(system, seed=4, duration=10.0, dt=0.01)
     library = paper_catalog(system.coords, [1])
     for method in ("lasso", "proximal", ps.STLSQ(threshold=1e-3)):
-        model = px.XLSINDy(library, px.ExplicitOptimizer(method=method, alpha=1e-5))
+        model = px.XLSINDy(library, px.ExplicitOptimizer(method=method, alpha=1e-5, max_iter=20000))
         model.fit(data["q"], data["t"], x_dot=data["qd"], x_ddot=data["qdd"], u=data["tau"])
         _check_model(model, system, library, rel_tol=1e-2)
 
