@@ -114,6 +114,7 @@ sphinx_gallery_conf = {
     "remove_config_comments": True,
     "download_all_examples": False,
     "image_scrapers": ("matplotlib",),
+    "reset_modules": ("matplotlib", "pxl_docs.reset_jax"),
     "min_reported_time": 1,
     "write_computation_times": True,
 }

@@ -48,6 +48,32 @@ def gallery_order(filename: str) -> tuple:
     return rank, filename
 
 
+def reset_jax(gallery_conf, fname, when=None):
+    """Undo global JAX settings an example may change (``jax_enable_x64``) before the next one.
+
+    Sphinx-gallery runs every example in the same process; without this, an example that
+    switches JAX to double precision would silently change the ones after it.
+
+    Parameters
+    ----------
+    gallery_conf : dict
+        The sphinx-gallery configuration (unused).
+    fname : str
+        The example file (unused).
+    when : str, optional
+        ``"before"`` or ``"after"`` the example (unused).
+
+    Returns
+    -------
+    None
+    """
+    import sys
+
+    jax = sys.modules.get("jax")
+    if jax is not None:
+        jax.config.update("jax_enable_x64", False)
+
+
 def object_kind(obj) -> str:
     """``"exception"``, ``"class"``, ``"function"`` or ``"data"``."""
     if inspect.isclass(obj):
