@@ -135,7 +135,9 @@ def _polish_support(gram, targets, coef, alpha, mask, columns, slack):
             continue
         signs = np.sign(coef[support, k])
         try:
-            x = np.linalg.solve(gram[np.ix_(support, support)], targets[support, k] - alpha[k] * signs)
+            x = np.linalg.solve(
+                gram[np.ix_(support, support)], targets[support, k] - alpha[k] * signs
+            )
         except np.linalg.LinAlgError:
             continue
         if not np.all(np.sign(x) == signs):
@@ -153,14 +155,23 @@ def _polish_support(gram, targets, coef, alpha, mask, columns, slack):
     return finished
 
 
-def _fista(gram, targets, alpha, mask, coef, lipschitz, tol, max_iter, check_every):
-    """Accelerated proximal gradient with per-column adaptive restart; updates ``coef``."""
+def _fista(
+    gram, targets, alpha, mask, coef, lipschitz, tol, max_iter, check_every, callback=None,
+    callback_every=100,
+):
+    """Accelerated proximal gradient with per-column adaptive restart; updates ``coef``.
+
+    ``callback(coef, converged) -> bool`` is called every ``callback_every`` iterations; True
+    stops the iterations.
+    """
     n_cols = coef.shape[1]
     active = np.arange(n_cols)
     converged = np.zeros(n_cols, dtype=bool)
     momentum = coef.copy()
     t = np.ones(n_cols)
-    previous_support = coef != 0
+    previous_pattern = np.sign(coef)
+    # Signed support at the last exact-finish attempt of each column: never retry the same one.
+    attempted = [None] * n_cols
     n_iter = 0
     while active.size and n_iter < max_iter:
         n_iter += 1
@@ -182,17 +193,24 @@ def _fista(gram, targets, alpha, mask, coef, lipschitz, tol, max_iter, check_eve
         sub_mask = None if mask is None else mask[:, active]
         violation = kkt_violation(gram, targets[:, active], new, alpha[active], sub_mask)
         done = violation <= tol[active]
-        support = new != 0
-        stable = np.all(support == previous_support[:, active], axis=0) & ~done
-        previous_support[:, active] = support
-        if np.any(stable):
-            finished = _polish_support(
-                gram, targets, coef, alpha, mask, active[stable], tol
-            )
+        pattern = np.sign(new)
+        stable = np.all(pattern == previous_pattern[:, active], axis=0) & ~done
+        previous_pattern[:, active] = pattern
+        candidates = [
+            k for k, column, ok in zip(active, pattern.T, stable, strict=True)
+            if ok and (attempted[k] is None or not np.array_equal(attempted[k], column))
+        ]
+        for k in candidates:
+            attempted[k] = np.sign(coef[:, k])
+        if candidates:
+            finished = _polish_support(gram, targets, coef, alpha, mask, candidates, tol)
             done[np.isin(active, finished)] = True
         converged[active[done]] = True
         momentum[:, active[done]] = coef[:, active[done]]
         active = active[~done]
+        if callback is not None and n_iter % callback_every == 0 and active.size:
+            if callback(coef, converged.copy()):
+                break
     return n_iter, converged
 
 
@@ -207,6 +225,7 @@ def lasso_gram(
     continuation: bool = True,
     check_every: int = 10,
     warn: bool = True,
+    callback=None,
 ) -> LassoResult:
     """Solve K Lasso problems sharing one Gram matrix, all at once.
 
@@ -214,9 +233,10 @@ def lasso_gram(
     ``mask[i, k]`` is False. The solver is accelerated proximal gradient (FISTA) on all columns
     together (one matrix-matrix product per iteration), with per-column adaptive restart, a
     continuation path on ``alpha`` (from the smallest value that zeroes every column down to
-    ``alpha``, each stage warm-started from the previous one) and an exact finish: once a
-    column's support is stable, the optimum on that support is computed by one linear solve and
-    accepted when it satisfies the optimality conditions.
+    ``alpha``, each stage warm-started from the previous one; columns given a non-zero warm
+    start skip it) and an exact finish: once a column's signed support is stable, the optimum
+    on that support is computed by one linear solve and accepted when it satisfies the
+    optimality conditions.
 
     Parameters
     ----------
@@ -230,7 +250,7 @@ def lasso_gram(
     mask : array of bool, shape (F, K), optional
         Entries allowed to be non-zero (default: all).
     coef_init : array, shape (F, K), optional
-        Warm start (disables the continuation path).
+        Warm start; its non-zero columns start directly at ``alpha`` (no continuation).
     tol : float
         Convergence when the largest optimality violation (:func:`kkt_violation`) of a column is
         at most ``tol * alpha``.
@@ -242,6 +262,10 @@ def lasso_gram(
         Iterations between convergence checks.
     warn : bool
         Emit a :class:`~sklearn.exceptions.ConvergenceWarning` when some column did not converge.
+    callback : callable, optional
+        ``callback(coef, converged) -> bool``, called every 100 iterations of the last stage
+        (``converged``: boolean per column); returning True stops early (the caller decides
+        that what it needs has converged).
 
     Returns
     -------
@@ -292,12 +316,13 @@ def lasso_gram(
             raise ValueError(f"coef_init: expected shape {targets.shape}, got {coef.shape}")
         if mask is not None:
             coef *= mask
-        continuation = False
+    warm = np.any(coef != 0, axis=0)
 
     stages = [alpha]
     if continuation:
         # Above alpha_max = max|b_k| the solution is zero; walk down by decades to alpha.
         alpha_max = np.max(np.abs(masked_targets), axis=0, initial=0.0)
+        alpha_max[warm] = alpha[warm]
         current = np.maximum(alpha, alpha_max / 10.0)
         stages = []
         while np.any(current > alpha):
@@ -315,7 +340,7 @@ def lasso_gram(
             break
         used, converged = _fista(
             gram, masked_targets, stage_alpha, mask, coef, lipschitz, stage_tol, budget,
-            int(check_every),
+            int(check_every), callback if last else None,
         )
         n_iter += used
 

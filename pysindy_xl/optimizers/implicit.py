@@ -1,0 +1,584 @@
+"""Implicit regression: SINDy-PI's constrained problem and homothetic-column clustering.
+
+Without a known force there is no left-hand side: we look for sparse ``xi`` with
+``Theta @ xi = 0``. Following SINDy-PI, every column is regressed on all the others,
+
+    min_X  1/2 ||Theta~ X - Theta~||_F^2 + alpha ||X||_1   s.t.  diag(X) = 0,        (1)
+
+on the column-normalized matrix ``Theta~ = Theta D^-1`` (``D`` = column norms, so ``alpha`` is
+scale free). If ``xi`` is a law and column j belongs to it (``xi_j != 0``), column j of the
+solution is ``-xi / xi_j`` (diagonal entry removed): all the columns of a law's support give the
+same direction ``v_j = e_j - X[:, j]`` up to scale. Columns that belong to no law give unrelated,
+dense directions. The post-processing of the paper therefore groups the ``v_j`` that are
+homothetic (within an angular tolerance), keeps the groups that look like laws and takes each
+group's principal direction (SVD).
+
+Solvers
+-------
+The squared Frobenius loss of (1) separates into one Lasso per column, all sharing the Gram
+matrix ``G = Theta~^T Theta~``::
+
+    column j:  min_x 1/2 x^T G x - G[:, j]^T x + alpha ||x||_1,   x_j = 0.
+
+``solver="fista"`` (default) solves the F problems at once with accelerated proximal gradient
+on ``G`` (:func:`pysindy_xl.optimizers._sparse.lasso_gram`: one matrix-matrix product per
+iteration, the diagonal constraint as a mask, a continuation path on alpha, an exact finish on
+the detected support). ``solver="cvxpy"`` hands the same problem (1), written with the
+triangular factor ``R`` of ``Theta~ = Q R`` (``||Theta~ X - Theta~|| = ||R X - R||``, so the
+size does not grow with the number of samples), to a conic solver. Both minimize the same
+strictly defined objective, so up to solver tolerance they return the same matrix and the same
+laws. The paper writes the loss unsquared, ``||Theta X - Theta||_F``; its optimality conditions
+are those of (1) with ``alpha`` replaced by ``alpha * ||Theta X* - Theta||_F``, so it traces the
+same family of solutions with a rescaled weight.
+
+Normalization of the laws
+-------------------------
+A law is defined up to a factor. Each extracted law is scaled so that
+
+* the force column equals ``-1`` when a (non-zero) force column is in its support (the explicit
+  convention: ``EL(L) + friction = tau``);
+* otherwise its dominant term (largest contribution ``||theta_k xi_k||``, restricted to
+  ``reference_columns`` when given, e.g. the acceleration-containing columns) equals ``+1``.
+
+Several laws (one per decoupled subsystem) live on disjoint supports, so their sum is again a
+law that holds in every equation: ``coef_`` is the sum of the normalized laws chosen greedily
+(best first) among those whose supports do not overlap.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from sklearn.exceptions import ConvergenceWarning
+
+from ._base import CatalogOptimizer, check_catalog_problem
+from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
+
+__all__ = ["ImplicitOptimizer", "NoLawFoundError", "coordinates_touched", "homothetic_groups"]
+
+_SOLVERS = ("fista", "cvxpy")
+
+
+class NoLawFoundError(RuntimeError):
+    """Implicit regression found no sparse law in the regression matrix."""
+
+
+def coordinates_touched(theta, n_coordinates: int, rtol: float = 1e-10) -> np.ndarray:
+    """Which coordinate equations each column enters (is not identically zero in).
+
+    Parameters
+    ----------
+    theta : array, shape (n_coordinates * N, F)
+        Stacked regression matrix, rows coordinate-major.
+    n_coordinates : int
+    rtol : float
+        A block counts as zero when its norm is at most ``rtol`` times the column's largest
+        block norm.
+
+    Returns
+    -------
+    ndarray of bool, shape (n_coordinates, F)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> theta = np.array([[1.0, 0.0], [2.0, 0.0], [0.0, 1.0], [3.0, 1.0]])
+    >>> coordinates_touched(theta, 2)
+    array([[ True, False],
+           [ True,  True]])
+    """
+    theta = np.asarray(theta, dtype=float)
+    blocks = theta.reshape(n_coordinates, -1, theta.shape[1])
+    block_norms = np.linalg.norm(blocks, axis=1)
+    top = block_norms.max(axis=0, initial=0.0)
+    return (block_norms > 0) & (block_norms > rtol * top)
+
+
+def homothetic_groups(vectors, angle_tol: float, order=None) -> list[np.ndarray]:
+    """Group column vectors that point along the same line (up to sign), greedily.
+
+    Columns are visited in ``order``; each unassigned column seeds a group with every other
+    unassigned column whose angle to it (modulo sign) is at most ``angle_tol`` degrees.
+
+    Parameters
+    ----------
+    vectors : array, shape (F, K)
+        Columns to group (zero columns are never grouped).
+    angle_tol : float
+        Angular tolerance in degrees.
+    order : array of int, optional
+        Seeding order, best candidate first (default: column order).
+
+    Returns
+    -------
+    list of ndarray of int
+        Groups (sorted indices), in seeding order; singletons included.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> v = np.array([[1.0, -2.0, 0.0], [1.0, -2.0, 1.0]])
+    >>> homothetic_groups(v, angle_tol=1.0)
+    [array([0, 1]), array([2])]
+    """
+    vectors = np.asarray(vectors, dtype=float)
+    norms = np.linalg.norm(vectors, axis=0)
+    valid = norms > 0
+    unit = np.where(valid, vectors / np.where(valid, norms, 1.0), 0.0)
+    cosines = np.abs(unit.T @ unit)
+    threshold = np.cos(np.deg2rad(angle_tol))
+    order = np.arange(vectors.shape[1]) if order is None else np.asarray(order, dtype=int)
+    free = valid.copy()
+    groups = []
+    for seed in order:
+        if not free[seed]:
+            continue
+        members = np.flatnonzero(free & (cosines[seed] >= threshold))
+        members = np.union1d(members, [seed])
+        free[members] = False
+        groups.append(members)
+    return groups
+
+
+def _principal_direction(unit_vectors) -> np.ndarray:
+    """Leading left singular vector of sign-aligned unit columns, largest entry positive."""
+    u, _, _ = np.linalg.svd(unit_vectors, full_matrices=False)
+    direction = u[:, 0]
+    return direction * np.sign(direction[np.argmax(np.abs(direction))])
+
+
+class ImplicitOptimizer(CatalogOptimizer):
+    """SINDy-PI constrained regression with homothetic-column clustering (unforced systems).
+
+    Solves problem (1) of the module documentation, groups the homothetic columns of the
+    solution matrix, takes each group's principal direction, refits it on its support (the
+    smallest right singular vector of the normalized matrix restricted to the support, pruned
+    with ``threshold``: this removes the L1 shrinkage), keeps the laws that qualify (at least
+    ``min_group_size`` members, members making up at least ``min_membership`` of the law's
+    terms, a residual within ``max_residual_ratio`` of the best law's) and combines the laws
+    with disjoint supports into ``coef_``.
+
+    Parameters
+    ----------
+    alpha : float, default 1e-5
+        L1 weight (the paper's lambda) of problem (1) on unit-norm columns. The squared loss
+        weighs a residual r as r^2 / 2 against alpha ||x||_1, so alpha must stay below the
+        squared residual of the best approximate (false) representations of the catalog's
+        columns for the exact law to win: large, nearly dependent catalogs need smaller values
+        (1e-7 and below), noisy data larger ones.
+    solver : {"fista", "cvxpy"}, default "fista"
+        Fast batched proximal-gradient solver or the cvxpy reference formulation.
+    cvxpy_solver : str, optional
+        Solver name passed to ``cvxpy.Problem.solve`` (e.g. ``"CLARABEL"``, ``"SCS"``,
+        ``"OSQP"``); default: cvxpy's choice.
+    angle_tol : float, default 5.0
+        Angular tolerance (degrees) of the homothetic grouping.
+    min_group_size : int, default 2
+        Smallest group that can be a law (a law with k terms has up to k members).
+    min_membership : float, default 0.1
+        Smallest fraction of a law's terms that must be members of its group. Every column of a
+        true law can reach it; a dense near-dependency is reached by few of its columns.
+    max_residual_ratio : float, default 10.0
+        Laws whose relative residual ``||Theta~ d|| / ||d||`` (``d`` on unit-norm columns)
+        exceeds this many times the best law's (or 1e-12, whichever is larger) are rejected as
+        near-dependencies.
+    threshold : float, default 1e-3
+        Terms whose normalized contribution is below ``threshold`` times the law's largest are
+        pruned during the refit.
+    refit : bool, default True
+        Refit each law on its support (else keep the group's principal direction).
+    tol : float, default 1e-4
+        Relative optimality tolerance of the fast solver (see ``lasso_gram``); for cvxpy, the
+        solver's own defaults apply.
+    max_iter : int, default 20000
+        Iteration budget of the fast solver.
+    early_stopping : bool, default True
+        Fast solver only: stop as soon as the extracted laws are identical at two consecutive
+        checks (every 100 iterations) and every column of their groups has converged; the
+        other columns (which belong to no law) may then be left inexact, see
+        ``column_converged_``. False solves every column to ``tol``.
+
+    Attributes
+    ----------
+    coef_ : ndarray, shape (F,)
+        Combined law (see the module documentation for its normalization).
+    solution_matrix_ : ndarray, shape (F, F)
+        SINDy-PI solution ``X`` in the original column units (``Theta @ X ~ Theta`` on the law
+        columns, zero diagonal); rows/columns of zero features are zero.
+    normalized_solution_matrix_ : ndarray, shape (F, F)
+        The same on unit-norm columns, ``D X D^-1`` (the matrix to plot, paper's Figure 2A).
+    column_norms_ : ndarray, shape (F,)
+    column_residuals_ : ndarray, shape (F,)
+        Relative residual of each column's direction ``||Theta~ v_j|| / ||v_j||`` (inf for zero
+        columns).
+    groups_ : list of ndarray of int
+        Homothetic groups of at least ``min_group_size`` columns, best seeded first.
+    laws_ : ndarray, shape (n_laws, F)
+        Accepted laws, normalized, best (smallest residual) first.
+    law_groups_ : list of ndarray of int
+        The group each law was extracted from.
+    law_residuals_ : ndarray, shape (n_laws,)
+        Relative residual of each law.
+    combined_laws_ : list of int
+        Indices of the laws summed into ``coef_``.
+    n_iter_ : int
+        Iterations of the fast solver (0 for cvxpy).
+    converged_ : bool
+        Every column converged, or (early stopping) every column of the laws did and the
+        laws were stable.
+    column_converged_ : ndarray of bool, shape (F,)
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> rng = np.random.default_rng(0)
+    >>> a, b, c = rng.normal(size=(3, 200))
+    >>> theta = np.column_stack([a, b, 2 * a - 0.5 * b, c])   # law: col2 - 2 a + 0.5 b = 0
+    >>> opt = px.ImplicitOptimizer().fit(theta)
+    >>> opt.coef_.round(6), [g.tolist() for g in opt.law_groups_]
+    (array([-2. ,  0.5,  1. ,  0. ]), [[0, 1, 2]])
+    """
+
+    def __init__(
+        self,
+        alpha=1e-5,
+        solver="fista",
+        cvxpy_solver=None,
+        angle_tol=5.0,
+        min_group_size=2,
+        min_membership=0.1,
+        max_residual_ratio=10.0,
+        threshold=1e-3,
+        refit=True,
+        tol=1e-4,
+        max_iter=20_000,
+        early_stopping=True,
+    ):
+        self.alpha = alpha
+        self.solver = solver
+        self.cvxpy_solver = cvxpy_solver
+        self.angle_tol = angle_tol
+        self.min_group_size = min_group_size
+        self.min_membership = min_membership
+        self.max_residual_ratio = max_residual_ratio
+        self.threshold = threshold
+        self.refit = refit
+        self.tol = tol
+        self.max_iter = max_iter
+        self.early_stopping = early_stopping
+
+    # ------------------------------------------------------------------ validation
+    def _check_params(self):
+        if self.solver not in _SOLVERS:
+            raise ValueError(f"solver: expected one of {_SOLVERS}, got {self.solver!r}")
+        checks = {
+            "alpha": self.alpha > 0,
+            "angle_tol": 0 < self.angle_tol < 90,
+            "min_membership": 0 <= self.min_membership <= 1,
+            "max_residual_ratio": self.max_residual_ratio >= 1,
+            "threshold": 0 <= self.threshold < 1,
+            "tol": self.tol > 0,
+        }
+        expected = {
+            "alpha": "a positive value",
+            "angle_tol": "degrees in (0, 90)",
+            "min_membership": "a value in [0, 1]",
+            "max_residual_ratio": "a value >= 1",
+            "threshold": "a value in [0, 1)",
+            "tol": "a positive value",
+        }
+        for name, ok in checks.items():
+            if not ok:
+                raise ValueError(f"{name}: expected {expected[name]}, got {getattr(self, name)!r}")
+        for name in ("min_group_size", "max_iter"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, np.integer)) or value < 1:
+                raise ValueError(f"{name}: expected a positive integer, got {value!r}")
+
+    # ------------------------------------------------------------------ public API
+    def fit(self, X, y=None):
+        """Find the sparse laws ``X @ xi = 0`` of a regression matrix.
+
+        Parameters
+        ----------
+        X : array, shape (n_rows, F)
+            Regression matrix (one block: no coordinate structure, no force column).
+        y : None
+            Ignored; present for scikit-learn compatibility.
+
+        Returns
+        -------
+        self
+        """
+        theta, _ = check_catalog_problem(X, 1, None)
+        return self._fit(theta, 1, np.array([], dtype=int), None)
+
+    def fit_catalog(self, theta, n_coordinates, force_columns, reference_columns=None):
+        """Implicit regression on a stacked catalog matrix.
+
+        Parameters
+        ----------
+        theta : array, shape (n_coordinates * N, F)
+            Stacked regression matrix (rows coordinate-major).
+        n_coordinates : int
+        force_columns : sequence of int
+            ExternalForces columns. Identically zero ones (unforced data) are ignored; non-zero
+            ones are ordinary columns and fix the scale of a law containing them (coef -1).
+        reference_columns : sequence of int, optional
+            Columns allowed to carry the ``+1`` of an unforced law (e.g. those containing
+            accelerations); default: any column.
+
+        Returns
+        -------
+        self
+        """
+        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns)
+        if reference_columns is not None:
+            reference_columns = np.asarray(reference_columns, dtype=int).reshape(-1)
+            if np.any((reference_columns < 0) | (reference_columns >= theta.shape[1])):
+                raise ValueError(
+                    f"reference_columns: indices must lie in [0, {theta.shape[1]}), got "
+                    f"{reference_columns}"
+                )
+        self._fit(theta, int(n_coordinates), force_columns, reference_columns)
+        touched = coordinates_touched(theta[:, self.coef_ != 0], int(n_coordinates))
+        unexplained = np.flatnonzero(~touched.any(axis=1))
+        if unexplained.size:
+            warnings.warn(
+                f"ImplicitOptimizer: no identified term enters the equation of coordinate(s) "
+                f"{unexplained.tolist()}; the model cannot predict them",
+                stacklevel=2,
+            )
+        return self
+
+    # ------------------------------------------------------------------ core
+    def _fit(self, theta, n_coordinates, force_columns, reference_columns):
+        self._check_params()
+        n_features = theta.shape[1]
+        norms, nonzero = column_norms(theta)
+        active = np.flatnonzero(nonzero)
+        if active.size < 2:
+            raise NoLawFoundError(
+                f"theta: {active.size} non-zero column(s); implicit regression needs at least 2"
+            )
+        scaled = theta[:, active] / norms[active]
+        r_factor = triangular_factor(scaled)
+        x_scaled = self._solve(r_factor)
+
+        # The SINDy-PI matrix in both unit systems, embedded in the full catalog.
+        self.column_norms_ = norms
+        self.normalized_solution_matrix_ = np.zeros((n_features, n_features))
+        self.normalized_solution_matrix_[np.ix_(active, active)] = x_scaled
+        self.solution_matrix_ = np.zeros((n_features, n_features))
+        self.solution_matrix_[np.ix_(active, active)] = (
+            x_scaled * norms[active][None, :] / norms[active][:, None]
+        )
+        converged = np.zeros(n_features, dtype=bool)
+        converged[active] = self._column_converged
+        self.column_converged_ = converged
+
+        residuals, groups, laws, law_groups, law_residuals = self._post_process(
+            x_scaled, r_factor
+        )
+        self.column_residuals_ = np.full(n_features, np.inf)
+        self.column_residuals_[active] = residuals
+        self.groups_ = [active[g] for g in groups]
+        if not laws:
+            raise NoLawFoundError(
+                "ImplicitOptimizer: no group of homothetic columns qualifies as a law "
+                f"({len(groups)} group(s) of >= {self.min_group_size} columns). Try a smaller "
+                "alpha, a larger angle_tol, or check that the catalog can express the dynamics."
+            )
+        full_laws = np.zeros((len(laws), n_features))
+        full_laws[:, active] = np.array(laws) / norms[active]
+        self.law_groups_ = [active[g] for g in law_groups]
+        self.law_residuals_ = np.asarray(law_residuals)
+        self.laws_ = np.array([
+            self._normalize_law(law, norms, force_columns, reference_columns) for law in full_laws
+        ])
+        self.coef_, self.combined_laws_ = self._combine(self.laws_)
+        return self
+
+    def _post_process(self, x_scaled, r_factor):
+        """Column residuals, homothetic groups and the laws (best first), normalized space."""
+        directions = np.eye(x_scaled.shape[0]) - x_scaled
+        residuals = np.linalg.norm(r_factor @ directions, axis=0) / np.linalg.norm(
+            directions, axis=0
+        )
+        order = np.argsort(residuals, kind="stable")
+        groups = homothetic_groups(directions, self.angle_tol, order)
+        groups = [g for g in groups if g.size >= self.min_group_size]
+        laws, law_groups, law_residuals = self._extract_laws(directions, groups, r_factor)
+        return residuals, groups, laws, law_groups, law_residuals
+
+    def _solve(self, r_factor):
+        n = r_factor.shape[1]
+        if self.solver == "cvxpy":
+            self.n_iter_ = 0
+            solution, converged = _solve_cvxpy(r_factor, self.alpha, self.cvxpy_solver)
+            self.converged_ = converged
+            self._column_converged = np.full(n, converged)
+            return solution
+        gram = r_factor.T @ r_factor
+        mask = ~np.eye(n, dtype=bool)
+        state = {"signature": None, "stable": False}
+
+        def laws_settled(coef, converged):
+            # Stop once the extracted laws are the same at two consecutive checks and every
+            # column that supports them has converged: the other columns cannot change them.
+            _, _, laws, law_groups, _ = self._post_process(coef, r_factor)
+            if not laws:
+                state["signature"] = None
+                return False
+            members = np.concatenate(law_groups)
+            signature = tuple(tuple(np.flatnonzero(law)) for law in laws)
+            settled = signature == state["signature"] and bool(np.all(converged[members]))
+            state["signature"] = signature
+            state["stable"] = settled
+            return settled
+
+        result = lasso_gram(
+            gram, gram, self.alpha, mask=mask, coef_init=_null_space_start(r_factor),
+            tol=self.tol, max_iter=int(self.max_iter), warn=False,
+            callback=laws_settled if self.early_stopping else None,
+        )
+        self.n_iter_ = result.n_iter
+        self._column_converged = result.converged
+        self.converged_ = bool(np.all(result.converged) or state["stable"])
+        if not self.converged_:
+            warnings.warn(
+                f"ImplicitOptimizer: the fast solver did not converge on "
+                f"{int(np.sum(~result.converged))} of {n} columns in {self.max_iter} iterations "
+                f"(largest optimality violation {np.max(result.violation) / self.alpha:.2e} x "
+                "alpha); raise max_iter or alpha",
+                ConvergenceWarning,
+                stacklevel=4,
+            )
+        return result.coef
+
+    def _extract_laws(self, directions, groups, r_factor):
+        """Principal direction of each qualifying group, refit on its support."""
+        unit = directions / np.linalg.norm(directions, axis=0)
+        candidates = []
+        for group in groups:
+            members = unit[:, group]
+            # Align signs on the first member so that the SVD sees one cluster, not two.
+            members = members * np.sign(members.T @ members[:, 0])[None, :]
+            direction = _principal_direction(members)
+            if self.refit:
+                law = self._refit(direction, r_factor)
+            else:
+                law = np.where(
+                    np.abs(direction) >= self.threshold * np.max(np.abs(direction)), direction, 0.0
+                )
+            support = np.flatnonzero(law)
+            if np.intersect1d(group, support).size < self.min_membership * support.size:
+                continue
+            residual = float(np.linalg.norm(r_factor @ law) / np.linalg.norm(law))
+            candidates.append((law, group, residual))
+        if not candidates:
+            return [], [], []
+        best = min(c[2] for c in candidates)
+        limit = max(best, 1e-12) * self.max_residual_ratio
+        kept = [c for c in candidates if c[2] <= limit]
+        # Drop duplicates: the same law reached from two groups.
+        laws, law_groups, residuals = [], [], []
+        cos_tol = np.cos(np.deg2rad(self.angle_tol))
+        for law, group, residual in sorted(kept, key=lambda c: c[2]):
+            unit_law = law / np.linalg.norm(law)
+            if any(abs(unit_law @ other) / np.linalg.norm(other) >= cos_tol for other in laws):
+                continue
+            laws.append(law)
+            law_groups.append(group)
+            residuals.append(residual)
+        return laws, law_groups, residuals
+
+    def _refit(self, direction, r_factor):
+        """Null vector of the normalized matrix on the direction's support, pruned iteratively."""
+        support = np.flatnonzero(np.abs(direction) >= self.threshold * np.max(np.abs(direction)))
+        law = np.zeros_like(direction)
+        while support.size >= 2:
+            values, _ = null_vector(r_factor[:, support])
+            small = np.abs(values) < self.threshold * np.max(np.abs(values))
+            if not np.any(small):
+                law[support] = values
+                return law
+            support = support[~small]
+        return direction  # degenerate support: keep the clustered direction
+
+    @staticmethod
+    def _normalize_law(law, norms, force_columns, reference_columns):
+        support = np.flatnonzero(law)
+        contribution = np.abs(law) * norms
+        forces = np.intersect1d(support, force_columns)
+        if forces.size:
+            pivot = forces[np.argmax(contribution[forces])]
+            return law / -law[pivot] + 0.0
+        candidates = support
+        if reference_columns is not None and np.intersect1d(support, reference_columns).size:
+            candidates = np.intersect1d(support, reference_columns)
+        pivot = candidates[np.argmax(contribution[candidates])]
+        return law / law[pivot] + 0.0
+
+    @staticmethod
+    def _combine(laws):
+        """Sum of the laws with pairwise disjoint supports, chosen best first."""
+        coef = np.zeros(laws.shape[1])
+        used = np.zeros(laws.shape[1], dtype=bool)
+        chosen = []
+        for k, law in enumerate(laws):
+            support = law != 0
+            if np.any(support & used):
+                continue
+            coef += law
+            used |= support
+            chosen.append(k)
+        return coef, chosen
+
+
+def _null_space_start(r_factor) -> np.ndarray:
+    """Warm start of the fast solver from the (near-)null space of the normalized matrix.
+
+    With ``V`` the right singular vectors of the smallest singular values (within a factor 10 of
+    the smallest, or below 1e-8 of the largest), column j's least-norm representation by the
+    others along that space is ``-v / v_j`` with ``v = V V[j]^T``. For a column of an exact law
+    this is the exact (unshrunk) solution, so the solver only has to apply the L1 shrinkage;
+    columns with no weight on that space start from zero. The problem is convex: the start
+    changes the speed, not the solution.
+    """
+    _, singular, vt = np.linalg.svd(r_factor, full_matrices=True)
+    singular = np.concatenate([singular, np.zeros(vt.shape[0] - singular.size)])
+    small = singular <= max(10 * singular[-1], 1e-8 * singular[0])
+    basis = vt[small].T
+    projector = basis @ basis.T
+    weight = np.diag(projector).copy()
+    start = np.zeros_like(projector)
+    columns = np.flatnonzero(weight >= 1e-4)
+    start[:, columns] = -projector[:, columns] / weight[columns]
+    np.fill_diagonal(start, 0.0)
+    return start
+
+
+def _solve_cvxpy(r_factor, alpha, solver=None):
+    """Problem (1) with cvxpy on the triangular factor; returns (X, converged)."""
+    import cvxpy as cp
+
+    n = r_factor.shape[1]
+    x = cp.Variable((n, n))
+    objective = 0.5 * cp.sum_squares(r_factor @ x - r_factor) + alpha * cp.sum(cp.abs(x))
+    problem = cp.Problem(cp.Minimize(objective), [cp.diag(x) == 0])
+    try:
+        problem.solve(solver=solver)
+    except cp.error.SolverError as error:
+        raise RuntimeError(f"ImplicitOptimizer: cvxpy solver {solver!r} failed: {error}") from error
+    if x.value is None:
+        raise RuntimeError(f"ImplicitOptimizer: cvxpy returned no solution ({problem.status})")
+    converged = problem.status == cp.OPTIMAL
+    if not converged:
+        warnings.warn(
+            f"ImplicitOptimizer: cvxpy status {problem.status!r}", ConvergenceWarning, stacklevel=5
+        )
+    solution = np.array(x.value)
+    np.fill_diagonal(solution, 0.0)
+    return solution, converged

@@ -1,0 +1,241 @@
+"""Mixed regression: explicit where a force reaches, implicit on the rest.
+
+Robots often actuate only some joints. The coordinates that receive a force, and everything
+coupled to them, can be identified explicitly (force coefficient -1 fixes the scale); a
+subsystem no force reaches can only be identified implicitly (its law's scale is free).
+
+Activation graph
+----------------
+Column j *touches* coordinate c when it is not identically zero in the block of rows of c.
+Starting from the forced coordinates (those where a force column is non-zero), every column
+that touches an activated coordinate activates all the coordinates it touches, to a fixed point.
+The activated block (its coordinates' rows, the columns touching them, which by construction
+touch no other coordinate) is solved explicitly. The activation is then updated from that
+solution: only coordinates that an identified (non-zero) term enters stay explicit. The
+remaining coordinates are solved implicitly with the columns that touch none of the explicit
+coordinates. The two coefficient vectors live on disjoint columns and are summed.
+
+With every coordinate forced (or coupled to a forced one) this is exactly the explicit
+optimizer on the whole matrix; with no force at all, exactly the implicit optimizer.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from sklearn.base import clone
+
+from ._base import CatalogOptimizer, check_catalog_problem
+from .implicit import ImplicitOptimizer, NoLawFoundError, coordinates_touched
+
+__all__ = ["MixedOptimizer", "activation_closure"]
+
+
+def activation_closure(touches, seed) -> tuple[np.ndarray, np.ndarray]:
+    """Fixed point of the activation graph.
+
+    Parameters
+    ----------
+    touches : array of bool, shape (n_coordinates, F)
+        ``touches[c, j]``: column j enters the equation of coordinate c.
+    seed : array of bool, shape (n_coordinates,)
+        Initially activated coordinates.
+
+    Returns
+    -------
+    coordinates : ndarray of bool, shape (n_coordinates,)
+    columns : ndarray of bool, shape (F,)
+        Columns touching an activated coordinate.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> touches = np.array([[1, 1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1]], dtype=bool)
+    >>> activation_closure(touches, np.array([True, False, False]))
+    (array([ True,  True, False]), array([ True,  True, False, False]))
+    """
+    touches = np.asarray(touches, dtype=bool)
+    coordinates = np.asarray(seed, dtype=bool).copy()
+    while True:
+        columns = touches[coordinates].any(axis=0)
+        grown = coordinates | touches[:, columns].any(axis=1)
+        if np.array_equal(grown, coordinates):
+            return coordinates, columns
+        coordinates = grown
+
+
+def _rows(coordinates, n_samples):
+    """Row indices of the blocks of the given coordinates (boolean mask over coordinates)."""
+    return np.concatenate(
+        [np.arange(c * n_samples, (c + 1) * n_samples) for c in np.flatnonzero(coordinates)]
+    )
+
+
+class MixedOptimizer(CatalogOptimizer):
+    """Explicit regression on the force-activated subsystem, implicit regression on the rest.
+
+    See the module documentation for the activation graph. Standalone use needs the catalog
+    metadata: call :meth:`fit_catalog` with the number of coordinates (the row blocks of
+    ``theta``) and the indices of the force columns.
+
+    Parameters
+    ----------
+    explicit_optimizer : estimator, optional
+        Optimizer of the activated block, with ``fit_catalog``; default
+        ``ExplicitOptimizer()``. It is cloned before fitting.
+    implicit_optimizer : estimator, optional
+        Optimizer of the remaining block; default ``ImplicitOptimizer()``. Cloned before fitting.
+    rtol : float, default 1e-10
+        A column block whose norm is at most ``rtol`` times the column's largest block norm
+        does not touch that coordinate.
+
+    Attributes
+    ----------
+    coef_ : ndarray, shape (F,)
+    mode_ : {"explicit", "implicit", "mixed"}
+        What the fit reduced to.
+    forced_coordinates_ : ndarray of bool, shape (n_coordinates,)
+        Coordinates where a force column is non-zero.
+    activated_coordinates_ : ndarray of bool, shape (n_coordinates,)
+        Closure of the activation graph from the forced coordinates.
+    explicit_coordinates_, implicit_coordinates_ : ndarray of bool, shape (n_coordinates,)
+        After the update from the explicit solution.
+    explicit_columns_, implicit_columns_ : ndarray of int
+        Catalog columns handed to each solver.
+    explicit_optimizer_, implicit_optimizer_ : estimator or None
+        The fitted sub-optimizers (None when unused).
+
+    Examples
+    --------
+    Two decoupled oscillators, ``x1'' + 4 x1 = u`` forced and ``x2'' + 9 x2 = 0`` free (rows: 2
+    coordinates x 200 samples; columns: force, x1'', x1, x2'', x2):
+
+    >>> import numpy as np, pysindy_xl as px
+    >>> t = np.linspace(0, 20, 200)
+    >>> u, x1, x2, zero = np.sin(1.3 * t), np.sin(t), np.cos(3 * t), np.zeros(200)
+    >>> theta = np.block([[np.column_stack([u, u - 4 * x1, x1, zero, zero])],
+    ...                   [np.column_stack([zero, zero, zero, -9 * x2, x2])]])
+    >>> opt = px.MixedOptimizer().fit_catalog(theta, 2, [0])
+    >>> opt.mode_, np.round(opt.coef_, 6)
+    ('mixed', array([-1.,  1.,  4.,  1.,  9.]))
+    """
+
+    def __init__(self, explicit_optimizer=None, implicit_optimizer=None, rtol=1e-10):
+        self.explicit_optimizer = explicit_optimizer
+        self.implicit_optimizer = implicit_optimizer
+        self.rtol = rtol
+
+    def _sub_optimizers(self):
+        from .explicit import ExplicitOptimizer
+
+        explicit, implicit = self.explicit_optimizer, self.implicit_optimizer
+        explicit = ExplicitOptimizer() if explicit is None else explicit
+        implicit = ImplicitOptimizer() if implicit is None else implicit
+        for name, opt in (("explicit_optimizer", explicit), ("implicit_optimizer", implicit)):
+            if not hasattr(opt, "fit_catalog"):
+                raise TypeError(f"{name}: expected an optimizer with fit_catalog, got {opt!r}")
+        return clone(explicit), clone(implicit)
+
+    def fit(self, X, y=None):
+        """Not available: mixed regression needs the catalog structure.
+
+        Raises
+        ------
+        TypeError
+            Always; use :meth:`fit_catalog`.
+        """
+        raise TypeError(
+            "MixedOptimizer.fit: mixed regression needs the row blocks and the force columns; "
+            "call fit_catalog(theta, n_coordinates, force_columns)"
+        )
+
+    def fit_catalog(self, theta, n_coordinates, force_columns):
+        """Mixed explicit/implicit regression on a stacked catalog matrix.
+
+        Parameters
+        ----------
+        theta : array, shape (n_coordinates * N, F)
+            Stacked regression matrix (rows coordinate-major).
+        n_coordinates : int
+        force_columns : sequence of int
+            ExternalForces columns (identically zero ones mean unforced data).
+
+        Returns
+        -------
+        self
+        """
+        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns)
+        if not 0 <= self.rtol < 1:
+            raise ValueError(f"rtol: expected a value in [0, 1), got {self.rtol!r}")
+        explicit, implicit = self._sub_optimizers()
+        n = int(n_coordinates)
+        n_samples = theta.shape[0] // n
+        n_features = theta.shape[1]
+        touches = coordinates_touched(theta, n, self.rtol)
+        forced = touches[:, force_columns].any(axis=1)
+        activated, activated_columns = activation_closure(touches, forced)
+        self.forced_coordinates_ = forced
+        self.activated_coordinates_ = activated
+        self.explicit_optimizer_ = None
+        self.implicit_optimizer_ = None
+
+        if not forced.any():
+            self._set_mode("implicit", np.zeros(n, bool), np.array([], int), np.arange(n_features))
+            self.implicit_optimizer_ = implicit.fit_catalog(theta, n, force_columns)
+            self.coef_ = np.asarray(self.implicit_optimizer_.coef_, dtype=float).copy()
+            return self
+        if activated.all():
+            self._set_mode("explicit", activated, np.arange(n_features), np.array([], int))
+            self.explicit_optimizer_ = explicit.fit_catalog(theta, n, force_columns)
+            self.coef_ = np.asarray(self.explicit_optimizer_.coef_, dtype=float).copy()
+            return self
+
+        coef = np.zeros(n_features)
+        explicit_cols = np.flatnonzero(activated_columns)
+        local_forces = np.flatnonzero(np.isin(explicit_cols, force_columns))
+        self.explicit_optimizer_ = explicit.fit_catalog(
+            theta[np.ix_(_rows(activated, n_samples), explicit_cols)],
+            int(activated.sum()),
+            local_forces,
+        )
+        coef[explicit_cols] = self.explicit_optimizer_.coef_
+        # Only coordinates that an identified term enters are explained explicitly.
+        explained = touches[:, coef != 0].any(axis=1)
+        remaining = ~explained
+        implicit_mask = ~touches[explained].any(axis=0) & touches[remaining].any(axis=0)
+        implicit_mask[force_columns] = False
+        implicit_cols = np.flatnonzero(implicit_mask)
+        self._set_mode("mixed", explained, explicit_cols, implicit_cols)
+        released = np.flatnonzero(activated & remaining)
+        if released.size:
+            warnings.warn(
+                f"MixedOptimizer: no identified explicit term enters coordinate(s) "
+                f"{released.tolist()}; solving them implicitly",
+                stacklevel=2,
+            )
+        if implicit_cols.size == 0:
+            raise ValueError(
+                f"theta: coordinate(s) {np.flatnonzero(remaining).tolist()} receive no force and "
+                "no catalog column is left for them (every column touching them also touches an "
+                "explicitly identified coordinate); nothing left to solve implicitly"
+            )
+        try:
+            self.implicit_optimizer_ = implicit.fit_catalog(
+                theta[np.ix_(_rows(remaining, n_samples), implicit_cols)], int(remaining.sum()), []
+            )
+        except NoLawFoundError as error:
+            raise NoLawFoundError(
+                f"MixedOptimizer: implicit part on coordinate(s) "
+                f"{np.flatnonzero(remaining).tolist()}: {error}"
+            ) from error
+        coef[implicit_cols] += self.implicit_optimizer_.coef_
+        self.coef_ = coef
+        return self
+
+    def _set_mode(self, mode, explicit_coordinates, explicit_columns, implicit_columns):
+        self.mode_ = mode
+        self.explicit_coordinates_ = np.asarray(explicit_coordinates, dtype=bool)
+        self.implicit_coordinates_ = ~self.explicit_coordinates_
+        self.explicit_columns_ = np.asarray(explicit_columns, dtype=int)
+        self.implicit_columns_ = np.asarray(implicit_columns, dtype=int)
