@@ -120,13 +120,50 @@ def _float_operand(x):
 
 @jax.custom_jvp
 def fast_sin(x):
-    """Sine through a vectorizable polynomial; see ``_FAST_TRIG_RANGE`` for its range."""
+    """Sine through a vectorizable polynomial (XLA's CPU sine is scalar code).
+
+    Parameters
+    ----------
+    x : array_like
+        Angles in radians; integers are promoted to the default float type.
+
+    Returns
+    -------
+    jax.Array
+        ``sin(x)`` within a few ulp of libm for ``|x| < 1e5`` (float32) or ``1.6e6``
+        (float64); NaN for infinite or NaN input. Its derivative is :func:`fast_cos`.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from pysindy_xl.jax_dynamics import fast_sin
+    >>> fast_sin(jnp.array([0.0, jnp.pi / 6, jnp.pi / 2])).round(6)
+    Array([0. , 0.5, 1. ], dtype=float32)
+    """
     return _sincos(_float_operand(x))[0]
 
 
 @jax.custom_jvp
 def fast_cos(x):
-    """Cosine through a vectorizable polynomial; see ``_FAST_TRIG_RANGE`` for its range."""
+    """Cosine through a vectorizable polynomial (see :func:`fast_sin`).
+
+    Parameters
+    ----------
+    x : array_like
+        Angles in radians.
+
+    Returns
+    -------
+    jax.Array
+        ``cos(x)``, same accuracy as :func:`fast_sin`.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from pysindy_xl.jax_dynamics import fast_cos
+    >>> fast_cos(jnp.array([0.0, jnp.pi / 3, jnp.pi])).round(6)
+    Array([ 1. ,  0.5, -1. ], dtype=float32)
+    """
     return _sincos(_float_operand(x))[1]
 
 
@@ -475,9 +512,34 @@ def _join_state(q, qd):
 def semi_implicit_euler_step(f, state, t, dt, u_start, u_end=None):
     """One semi-implicit (symplectic) Euler step: velocities first, then positions.
 
-    ``qd' = qd + dt qdd(q, qd, u(t))``, ``q' = q + dt qd'``. Same parameters as
-    :func:`rk4_step`; ``u_end`` is accepted for a uniform signature and unused (a
-    first-order scheme only samples the force at the start of the step).
+    ``qd' = qd + dt qdd(q, qd, u(t))``, ``q' = q + dt qd'``: first order, but it keeps the
+    energy of conservative systems bounded where explicit Euler pumps it up.
+
+    Parameters
+    ----------
+    f : callable
+        ``f(state, u, t) -> d(state)/dt``, e.g. from :func:`dynamics_function`.
+    state : array (..., 2n) or tuple of 2n arrays
+        State ``[q, qd]`` at ``t``.
+    t, dt : float
+        Time at the start of the step and step length.
+    u_start : array (..., n) or tuple of n arrays
+        Force at ``t``, used over the whole step.
+    u_end : optional
+        Accepted for the signature of :func:`rk4_step`, unused (a first-order scheme
+        samples the force once).
+
+    Returns
+    -------
+    State at ``t + dt``, same layout as ``state``.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from pysindy_xl.jax_dynamics import semi_implicit_euler_step
+    >>> spring = lambda x, u, t: jnp.array([x[1], u[0] - x[0]])
+    >>> semi_implicit_euler_step(spring, jnp.array([1.0, 0.0]), 0.0, 0.1, jnp.array([0.0]))
+    Array([ 0.99, -0.1 ], dtype=float32)
     """
     del u_end
     q, qd = _split_state(state)
@@ -487,7 +549,33 @@ def semi_implicit_euler_step(f, state, t, dt, u_start, u_end=None):
 
 
 def euler_step(f, state, t, dt, u_start, u_end=None):
-    """One explicit Euler step. Same parameters as :func:`rk4_step` (``u_end`` unused)."""
+    """One explicit Euler step, ``state + dt f(state, u(t), t)``.
+
+    Parameters
+    ----------
+    f : callable
+        ``f(state, u, t) -> d(state)/dt``.
+    state : array (..., 2n) or tuple of 2n arrays
+        State at ``t``.
+    t, dt : float
+        Time at the start of the step and step length.
+    u_start : array (..., n) or tuple of n arrays
+        Force at ``t``.
+    u_end : optional
+        Unused (see :func:`semi_implicit_euler_step`).
+
+    Returns
+    -------
+    State at ``t + dt``, same layout as ``state``.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from pysindy_xl.jax_dynamics import euler_step
+    >>> spring = lambda x, u, t: jnp.array([x[1], u[0] - x[0]])
+    >>> euler_step(spring, jnp.array([1.0, 0.0]), 0.0, 0.1, jnp.array([0.0]))
+    Array([ 1. , -0.1], dtype=float32)
+    """
     del u_end
     return _axpy(state, dt, f(state, u_start, t))
 
@@ -505,16 +593,26 @@ _STEPS = {
 class BatchSimulation(NamedTuple):
     """Result of :func:`simulate` / :func:`simulate_batch` (a JAX pytree).
 
-    Attributes
+    Parameters
     ----------
-    states : array (B, T, 2n), or (B, 2n) with ``final_only``; no ``B`` axis for
+    states : jax.Array
+        ``(B, T, 2n)``, or ``(B, 2n)`` with ``final_only``; no ``B`` axis for
         :func:`simulate`. A diverged trajectory is frozen at its last accepted state:
         every sample from ``divergence_step`` on repeats it.
-    diverged : bool array (B,)
+    diverged : jax.Array of bool, shape (B,)
         Whether the trajectory left the finite / bounded region.
-    divergence_step : int array (B,)
+    divergence_step : jax.Array of int, shape (B,)
         Index of the first sample that would have been non-finite or out of bound,
         ``-1`` for trajectories that did not diverge.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from pysindy_xl.jax_dynamics import simulate
+    >>> decay = lambda x, u, t: -x
+    >>> states, diverged, step = simulate(decay, jnp.ones(2), None, 0.1, n_steps=3)
+    >>> states.shape, bool(diverged), int(step)
+    ((3, 2), False, -1)
     """
 
     states: jax.Array
