@@ -11,12 +11,16 @@ Starting from the forced coordinates (those where a force column is non-zero), e
 that touches an activated coordinate activates all the coordinates it touches, to a fixed point.
 The activated block (its coordinates' rows, the columns touching them, which by construction
 touch no other coordinate) is solved explicitly. The activation is then updated from that
-solution: only coordinates that an identified (non-zero) term enters stay explicit. The
-remaining coordinates are solved implicitly with the columns that touch none of the explicit
-coordinates. The two coefficient vectors live on disjoint columns and are summed.
+solution: only coordinates that an identified (non-zero) term enters stay explicit (a catalog
+may couple a free subsystem to the forced one through candidate terms that the explicit
+solution discards). The remaining coordinates are solved implicitly with the columns that touch
+none of the explicit coordinates. The two coefficient vectors live on disjoint columns and are
+summed.
 
-With every coordinate forced (or coupled to a forced one) this is exactly the explicit
-optimizer on the whole matrix; with no force at all, exactly the implicit optimizer.
+When the activation reaches every coordinate the explicit step is exactly the explicit
+optimizer on the whole matrix, and the result is that optimizer's when it explains every
+coordinate (always the case when every coordinate is forced); with no force at all it is
+exactly the implicit optimizer.
 """
 
 from __future__ import annotations
@@ -185,23 +189,27 @@ class MixedOptimizer(CatalogOptimizer):
             self.implicit_optimizer_ = implicit.fit_catalog(theta, n, force_columns)
             self.coef_ = np.asarray(self.implicit_optimizer_.coef_, dtype=float).copy()
             return self
-        if activated.all():
-            self._set_mode("explicit", activated, np.arange(n_features), np.array([], int))
-            self.explicit_optimizer_ = explicit.fit_catalog(theta, n, force_columns)
-            self.coef_ = np.asarray(self.explicit_optimizer_.coef_, dtype=float).copy()
-            return self
 
         coef = np.zeros(n_features)
-        explicit_cols = np.flatnonzero(activated_columns)
-        local_forces = np.flatnonzero(np.isin(explicit_cols, force_columns))
-        self.explicit_optimizer_ = explicit.fit_catalog(
-            theta[np.ix_(_rows(activated, n_samples), explicit_cols)],
-            int(activated.sum()),
-            local_forces,
-        )
+        if activated.all():
+            # The whole catalog is reachable: exactly the explicit optimizer's problem.
+            explicit_cols = np.arange(n_features)
+            self.explicit_optimizer_ = explicit.fit_catalog(theta, n, force_columns)
+        else:
+            explicit_cols = np.flatnonzero(activated_columns)
+            self.explicit_optimizer_ = explicit.fit_catalog(
+                theta[np.ix_(_rows(activated, n_samples), explicit_cols)],
+                int(activated.sum()),
+                np.flatnonzero(np.isin(explicit_cols, force_columns)),
+            )
         coef[explicit_cols] = self.explicit_optimizer_.coef_
         # Only coordinates that an identified term enters are explained explicitly.
         explained = touches[:, coef != 0].any(axis=1)
+        if explained.all():
+            self._set_mode("explicit", explained, explicit_cols, np.array([], int))
+            self.coef_ = coef
+            return self
+
         remaining = ~explained
         implicit_mask = ~touches[explained].any(axis=0) & touches[remaining].any(axis=0)
         implicit_mask[force_columns] = False
