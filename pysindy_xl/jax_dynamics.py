@@ -787,7 +787,10 @@ def simulate(
     -------
     BatchSimulation
         ``states`` (T, 2n) (or (2n,)), scalar ``diverged`` and ``divergence_step``.
-        Differentiable with respect to ``x0``, ``u``, ``dt`` and ``t0``.
+        Differentiable with respect to ``x0``, ``u``, ``dt`` and ``t0`` (gradients
+        through a trajectory that diverged are meaningless and may be NaN: exclude such
+        trajectories from a loss, e.g. with ``jnp.where(diverged, 0, loss)`` *and* a
+        ``bound`` low enough that no infinity is ever reached).
 
     Examples
     --------

@@ -185,6 +185,7 @@ def test_fast_trigonometry_accuracy_and_derivative():
 # --------------------------------------------------------------------------------------
 # Simulation
 # --------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_batched_rk4_matches_model_simulate(identified, double_pendulum_system, x64):
     """Same sampled forces, read linearly between samples by both integrators."""
     dt, n_samples = 0.002, 501
@@ -217,6 +218,7 @@ def test_held_forces_match_model_simulate_with_previous_interpolation(
     np.testing.assert_allclose(np.asarray(result.states), reference, rtol=0, atol=1e-6)
 
 
+@pytest.mark.slow
 def test_vmap_over_1000_trajectories_equals_python_loop(identified, x64):
     rng = np.random.default_rng(5)
     n_batch, n_samples, dt = 1000, 40, 0.01
@@ -237,6 +239,7 @@ def test_vmap_over_1000_trajectories_equals_python_loop(identified, x64):
     np.testing.assert_allclose(batch.states[k, -1], state, rtol=1e-12, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_gradient_of_rollout_matches_finite_differences(identified, double_pendulum_system, x64):
     f = identified.to_jax()
     rng = np.random.default_rng(6)
@@ -287,6 +290,27 @@ def test_divergence_is_reported_per_trajectory_and_frozen(x64):
     # a start outside the bound diverges at sample 0
     out = simulate_batch(f, x0, None, dt, n_steps=3, bound=0.75)
     assert out.divergence_step.tolist() == [-1, 0, -1]
+
+
+def test_gradient_with_a_diverged_trajectory_stays_finite_under_a_bound(x64):
+    c = px.Coordinates(["x"])
+    f = dynamics_function(Dynamics(c, [[1]], [c.q[0] ** 3 + c.tau[0]]))
+    x0 = jnp.array([[0.1, 0.0], [1.0, 0.7]])  # the second one blows up before t = 2
+
+    def loss(shared_force):
+        forces = jnp.broadcast_to(shared_force, (2, 300, 1))
+        result = simulate_batch(f, x0, forces, 0.01, bound=1e3)
+        final = jnp.sum(result.states[:, -1] ** 2, axis=-1)
+        return jnp.sum(jnp.where(result.diverged, 0.0, final)), result.diverged
+
+    (value, diverged), gradient = jax.value_and_grad(loss, has_aux=True)(jnp.zeros((300, 1)))
+    assert diverged.tolist() == [False, True]
+    assert np.all(np.isfinite(np.asarray(gradient))) and np.any(np.asarray(gradient) != 0)
+    # the gradient is the calm trajectory's alone
+    calm = jax.grad(lambda u: jnp.sum(simulate(f, x0[0], u, 0.01).states[-1] ** 2))(
+        jnp.zeros((300, 1))
+    )
+    np.testing.assert_allclose(gradient, calm, rtol=1e-12, atol=1e-15)
 
 
 def test_integrators_converge_at_their_order(x64):
