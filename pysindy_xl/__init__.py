@@ -15,7 +15,7 @@ from .feature_library import (
     stack_variables,
 )
 from .model import XLSINDy
-from .optimizers import ExplicitOptimizer
+from .optimizers import ExplicitOptimizer, ImplicitOptimizer, MixedOptimizer, NoLawFoundError
 from .symbols import Coordinates, monomials, products
 
 __all__ = [
@@ -28,6 +28,9 @@ __all__ = [
     "CatalogRepartition",
     "stack_variables",
     "ExplicitOptimizer",
+    "ImplicitOptimizer",
+    "MixedOptimizer",
+    "NoLawFoundError",
     "XLSINDy",
     "MassMatrixDynamics",
     "SimulationError",

@@ -1,12 +1,22 @@
-"""Catalog optimizers: explicit, implicit (SINDy-PI) and mixed regression."""
+"""Catalog optimizers: explicit, implicit (SINDy-PI) and mixed regression.
+
+See :mod:`pysindy_xl.optimizers._base` for the ``fit_catalog`` protocol they share.
+"""
 
 from ._base import CatalogOptimizer, independent_columns
 from .explicit import ExplicitOptimizer, hard_threshold_regression, proximal_gradient_lasso
+from .implicit import ImplicitOptimizer, NoLawFoundError, homothetic_groups
+from .mixed import MixedOptimizer, activation_closure
 
 __all__ = [
     "CatalogOptimizer",
     "ExplicitOptimizer",
+    "ImplicitOptimizer",
+    "MixedOptimizer",
+    "NoLawFoundError",
     "independent_columns",
     "hard_threshold_regression",
     "proximal_gradient_lasso",
+    "homothetic_groups",
+    "activation_closure",
 ]
