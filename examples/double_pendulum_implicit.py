@@ -114,12 +114,11 @@ in_law = optimizer.coef_ != 0
 
 fig, (ax_matrix, ax_cluster) = plt.subplots(1, 2, figsize=(11, 4.5))
 image = ax_matrix.imshow(np.log10(np.abs(solution) + 1e-6), cmap="viridis", vmin=-6, vmax=0)
-ax_matrix.set(title="SINDy-PI solution matrix, log10 |X|", xlabel="column j (catalog term)",
-              ylabel="row")
+ax_matrix.set(title="SINDy-PI solution matrix, log10 |X|",
+              xlabel="column j (red marks: terms of the law)", ylabel="row")
 fig.colorbar(image, ax=ax_matrix, shrink=0.8)
-ax_matrix.plot(np.flatnonzero(in_law), np.full(in_law.sum(), -1.0), "v", color="C3",
-               clip_on=False, label="terms of the law")
-ax_matrix.legend(loc="upper right", bbox_to_anchor=(1.0, 1.13), fontsize="small")
+ax_matrix.plot(np.flatnonzero(in_law), np.full(in_law.sum(), len(kept) + 0.5), "^",
+               color="C3", clip_on=False)
 residuals = optimizer.column_residuals_
 ax_cluster.semilogx(residuals[~in_law], cosine[~in_law], "o", color="0.6", label="other terms")
 ax_cluster.semilogx(residuals[in_law], cosine[in_law], "o", color="C3", label="terms of the law")
