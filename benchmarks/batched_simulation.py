@@ -66,14 +66,19 @@ def joint_torques(rng, n_batch, n_steps, dt, amplitudes):
 
 
 def timed(function, repeat):
-    """Run ``function`` once to warm up, then ``repeat`` times; returns the wall times."""
+    """Run ``function`` once to warm up, then ``repeat`` times.
+
+    Returns the wall times and the CPU times of this process (all threads together: on a
+    shared machine, the CPU time shows the work done whatever the other users take).
+    """
     function()
-    times = []
+    wall, cpu = [], []
     for _ in range(repeat):
-        start = time.perf_counter()
+        start, start_cpu = time.perf_counter(), time.process_time()
         function()
-        times.append(time.perf_counter() - start)
-    return times
+        wall.append(time.perf_counter() - start)
+        cpu.append(time.process_time() - start_cpu)
+    return wall, cpu
 
 
 def numpy_rk4(dynamics, x0, tau, dt):
@@ -123,15 +128,18 @@ def mj_step_loop(model, data, qpos, qvel, controls):
 
 def report(rows, n_cores):
     print()
-    print(f"{'implementation':<44} {'batch':>6} {'best us':>10} {'median us':>10}")
-    print("-" * 74)
-    for name, batch, times in rows:
-        best, median = min(times), statistics.median(times)
-        print(f"{name:<44} {batch:>6} {best:>10.4f} {median:>10.4f}")
-    print("-" * 74)
+    print(f"{'implementation':<44} {'batch':>6} {'best us':>9} {'median us':>9} {'cpu us':>8}")
+    print("-" * 80)
+    for name, batch, (wall, cpu) in rows:
+        print(
+            f"{name:<44} {batch:>6} {min(wall):>9.4f} {statistics.median(wall):>9.4f} "
+            f"{min(cpu):>8.4f}"
+        )
+    print("-" * 80)
     print(
-        f"microseconds per trajectory-step, wall time; {n_cores} CPU cores; paper (GPU "
-        f"batch, NumPy, JAX sequential): " + ", ".join(f"{k} {v:g}" for k, v in PAPER.items())
+        f"microseconds per trajectory-step: wall time (best, median) and process CPU time "
+        f"(best, all threads); {n_cores} CPU cores. Paper: "
+        + ", ".join(f"{k} {v:g}" for k, v in PAPER.items())
     )
 
 
@@ -189,7 +197,9 @@ def main():
     qpos0, qvel0 = q0 @ to_joints.T, qd0 @ to_joints.T
 
     rows = []
-    per = lambda times, n_traj, n_step: [1e6 * s / (n_traj * n_step) for s in times]  # noqa: E731
+
+    def per(times, n_traj, n_step):
+        return tuple([1e6 * s / (n_traj * n_step) for s in series] for series in times)
 
     # -- sequential, batch 1 ----------------------------------------------------------
     m = args.sequential_steps
@@ -261,7 +271,7 @@ def main():
             f"JAX ({label}) vs MuJoCo after {n_steps * dt:g} s: max |q| gap {gap.max():.2e} "
             f"rad, median {np.median(gap):.2e}; diverged: {int(np.sum(result.diverged))}"
         )
-    best = {name: min(t) for name, _, t in rows}
+    best = {name: min(wall) for name, _, (wall, _) in rows}
     jax_best = min(
         best["JAX RK4 vmap, float32, all states"], best["JAX RK4 vmap, float64, all states"]
     )
