@@ -20,6 +20,9 @@ EX01   no Examples section (classes and functions; methods with ``--method-examp
 DT     the Examples section fails when run as a doctest (``--run-examples``)
 =====  =============================================================================
 
+An object without an Examples section counts as illustrated when a gallery example calls it
+(``name(`` or ``.name`` in a script of ``examples/``); it is then listed for information only.
+
 Exit status 1 when something is missing, so the script can gate a CI job.
 """
 
@@ -30,15 +33,17 @@ import doctest
 import functools
 import importlib
 import inspect
+import re
 import sys
 from pathlib import Path
 
 from numpydoc.validate import validate
 
 DOCS = Path(__file__).resolve().parent
+EXAMPLES = DOCS.parent / "examples"
 sys.path.insert(0, str(DOCS / "_ext"))
 
-from pxl_docs import object_kind, public_objects  # noqa: E402
+from pxl_docs import GALLERY_EXCLUDED, object_kind, public_objects  # noqa: E402
 
 #: Modules of the public API, the top-level package first (as in docs/conf.py).
 API_MODULES = [
@@ -105,6 +110,15 @@ def public_methods(path: str, cls) -> list[tuple[str, object]]:
     return out
 
 
+def gallery_users(name: str) -> list[str]:
+    """Gallery scripts that call ``name`` (``name(`` or ``.name``)."""
+    pattern = re.compile(rf"(\b{re.escape(name)}\s*\(|\.{re.escape(name)}\b)")
+    return sorted(
+        p.name for p in EXAMPLES.glob("*.py")
+        if p.name not in GALLERY_EXCLUDED and pattern.search(p.read_text(encoding="utf-8"))
+    )
+
+
 def missing_sections(path: str, codes) -> list[str]:
     result = validate(path)
     return [code for code, _ in result["errors"] if code in codes]
@@ -141,7 +155,7 @@ def main(argv=None) -> int:
             codes = CHECKED if args.method_examples else CHECKED[:-1]
             targets += [(p, m, codes) for p, m in public_methods(path, obj)]
 
-    problems = {}
+    problems, illustrated = {}, {}
     seen_functions = set()
     for path, obj, codes in targets:
         if id(obj) in seen_functions:
@@ -153,12 +167,20 @@ def main(argv=None) -> int:
             if message:
                 found.append("DT")
                 print(f"{path}: example fails: {message}", file=sys.stderr)
+        if "EX01" in found:
+            users = gallery_users(path.rsplit(".", 1)[-1])
+            if users:
+                found.remove("EX01")
+                illustrated[path] = users
         if found:
             problems[path] = found
 
     checked = len(seen_functions)
     for path, codes in problems.items():
         print(f"{path}: " + ", ".join(SECTION_NAMES[c] for c in codes))
+    for path, users in illustrated.items():
+        print(f"(info) {path}: no Examples section, called in " + ", ".join(users),
+              file=sys.stderr)
     print(f"{len(problems)} of {checked} public objects need docstring work", file=sys.stderr)
     return 1 if problems else 0
 

@@ -19,7 +19,7 @@ ROOT = DOCS.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(DOCS / "_ext"))
 
-from pxl_docs import write_api_pages, write_cli_help  # noqa: E402
+from pxl_docs import GALLERY_EXCLUDED, write_api_pages, write_cli_help  # noqa: E402
 
 import pysindy_xl  # noqa: E402
 
@@ -93,11 +93,6 @@ def _missing_requirement(module: str, attribute: str) -> bool:
         return True
 
 
-#: Examples left out of the gallery on purpose: file -> reason. Every example runs during the
-#: build, so each must stay short (under about 30 s).
-GALLERY_EXCLUDED = {
-    "jax_gradient.py": "too slow for the docs build (about 55 s; limit 30 s)",
-}
 GALLERY_SKIPPED = sorted(
     name for name, (module, attribute) in GALLERY_REQUIREMENTS.items()
     if (ROOT / "examples" / name).exists() and _missing_requirement(module, attribute)
