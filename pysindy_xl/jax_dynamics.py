@@ -32,6 +32,8 @@ import jax.numpy as jnp
 import numpy as np
 import sympy as sp
 
+from .symbols import Coordinates
+
 __all__ = [
     "BatchSimulation",
     "dynamics_function",
@@ -271,9 +273,12 @@ def _looks_positive_definite(mass: sp.Matrix, coords, n_samples: int = 64) -> bo
         ],
         axis=1,
     )
-    evaluate = sp.lambdify(arguments, mass, modules="numpy")
-    with np.errstate(all="ignore"):
-        matrices = np.stack([np.asarray(evaluate(*row), dtype=float) for row in samples])
+    try:
+        evaluate = sp.lambdify(arguments, mass, modules="numpy")
+        with np.errstate(all="ignore"):
+            matrices = np.stack([np.asarray(evaluate(*row), dtype=float) for row in samples])
+    except (TypeError, ValueError, ArithmeticError, NameError):
+        return False  # cannot tell: keep pivoting
     if not np.all(np.isfinite(matrices)):
         return False
     scale = np.max(np.abs(matrices), axis=(1, 2), keepdims=True)
@@ -388,6 +393,10 @@ def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True)
 
 def _compile(dynamics, solver: str, fast_trig: bool):
     coords = dynamics.coords
+    if not isinstance(coords, Coordinates):
+        raise TypeError(
+            f"dynamics.coords: expected pysindy_xl.Coordinates, got {type(coords).__name__}"
+        )
     n = coords.n
     mass = _as_matrix(dynamics.mass_matrix_expr, "dynamics.mass_matrix_expr", (n, n))
     forcing = _as_matrix(dynamics.forcing_expr, "dynamics.forcing_expr", (n, 1))
