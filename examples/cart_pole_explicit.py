@@ -7,6 +7,7 @@ Lagrangian and friction are identified from positions only with a paper-style ca
 velocity monomials times trigonometric monomials (Lagrange) plus viscous friction (classical).
 """
 
+import matplotlib.pyplot as plt
 import numpy as np
 import sympy as sp
 from scipy.integrate import solve_ivp
@@ -63,3 +64,14 @@ truth = solve_ivp(true_rhs, (0, 10), x0, t_eval=t_val, rtol=1e-10, atol=1e-10).y
 pred = model.simulate(x0, t_val, u=force)
 rmse = np.sqrt(np.mean((pred[:, :2] - truth[:, :2]) ** 2))
 print(f"validation position RMSE over 10 s: {rmse:.2e}")
+
+# %%
+# Identified model against the truth on the validation run.
+fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 4.5))
+for k, name in enumerate(coords.names):
+    axes[k].plot(t_val, truth[:, k], "k--", lw=1, label="truth")
+    axes[k].plot(t_val, pred[:, k], lw=1, label="identified")
+    axes[k].set_ylabel(name)
+axes[0].legend(loc="upper right")
+axes[-1].set_xlabel("t [s]")
+fig.tight_layout()
