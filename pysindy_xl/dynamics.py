@@ -28,16 +28,39 @@ __all__ = [
 
 
 class DynamicsError(RuntimeError):
-    """Base class of the errors raised by identified dynamics."""
+    """Base class of the errors raised by identified dynamics.
+
+    Examples
+    --------
+    >>> issubclass(SimulationError, DynamicsError), issubclass(SingularMassMatrixError,
+    ...                                                        DynamicsError)
+    (True, True)
+    """
 
 
 class SingularMassMatrixError(DynamicsError):
     """The identified mass matrix is singular (or numerically so) at some states.
 
+    Parameters
+    ----------
+    message : str
+    indices : sequence of int
+        Samples where the mass matrix is singular.
+
     Attributes
     ----------
     indices : ndarray of int
-        Samples where it is singular.
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> c = px.Coordinates(["x", "y"])
+    >>> dyn = px.MassMatrixDynamics(c, [c.qdd[0] - c.tau[0], c.qdd[0] + c.q[1]])
+    >>> try:
+    ...     dyn.accelerations([[0.0, 0.0]], [[0.0, 0.0]])
+    ... except px.SingularMassMatrixError as err:
+    ...     print(err.indices)
+    [0]
     """
 
     def __init__(self, message: str, indices=()):
@@ -47,6 +70,12 @@ class SingularMassMatrixError(DynamicsError):
 
 class SimulationError(DynamicsError):
     """A simulation stopped before its end.
+
+    Parameters
+    ----------
+    message : str
+    t_failed, t, states, reason
+        Stored as the attributes below.
 
     Attributes
     ----------
@@ -59,6 +88,17 @@ class SimulationError(DynamicsError):
     reason : str
         ``"diverged"``, ``"singular mass matrix"``, ``"non-finite derivative"``,
         ``"too many evaluations"``, ``"timeout"`` or ``"integrator failure (...)"``.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> unstable = px.MassMatrixDynamics(c, [c.qdd[0] - c.q[0] ** 3])
+    >>> try:
+    ...     unstable.simulate([1.0, 0.0], np.linspace(0, 5, 51))
+    ... except px.SimulationError as err:
+    ...     print(err.reason, err.t_failed < 2.0, err.states[0])
+    diverged True [1. 0.]
     """
 
     def __init__(self, message: str, t_failed: float, t, states, reason: str):
@@ -92,6 +132,14 @@ def force_function(u, t: np.ndarray, n: int, interpolation: str = "cubic"):
     -------
     callable
         ``u(t) -> ndarray (n,)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> u = force_function(np.array([[0.0], [2.0], [4.0]]), np.array([0.0, 1.0, 2.0]), 1,
+    ...                    interpolation="linear")
+    >>> u(0.5)
+    array([1.])
     """
     if interpolation not in _INTERPOLATIONS:
         raise ValueError(f"interpolation: expected one of {_INTERPOLATIONS}, got "
@@ -185,7 +233,18 @@ class MassMatrixDynamics:
         self._n = n
 
     def mass_and_forcing(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Evaluate ``M`` (N, n, n) and ``f`` (N, n) on a stacked-variables array ``z``."""
+        """Evaluate the mass matrix and the forcing on many samples.
+
+        Parameters
+        ----------
+        z : ndarray, shape (N, 4n + 1)
+            Stacked variables (see :func:`~pysindy_xl.stack_variables`).
+
+        Returns
+        -------
+        mass : ndarray, shape (N, n, n)
+        forcing : ndarray, shape (N, n)
+        """
         n, n_samples = self._n, z.shape[0]
         values = [np.broadcast_to(v, (n_samples,)) for v in self._evaluate(z)]
         mass = np.stack(values[: n * n], axis=-1).reshape(n_samples, n, n)

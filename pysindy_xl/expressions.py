@@ -239,6 +239,21 @@ def check_real_expression(expr: sp.Expr, name: str) -> None:
 
     ``x/0`` (``zoo``), ``0/0`` (``nan``), ``sqrt(-1)`` or ``log(0)`` make no sense in a catalog
     term, and NumPy would evaluate them to NaN or silently drop an imaginary part.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+    name : str
+        Argument name used in the error message.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> x = sp.Symbol("x")
+    >>> check_real_expression(sp.sqrt(-1) * x, "terms")
+    Traceback (most recent call last):
+    ...
+    ValueError: terms: I*x contains the non-real or infinite number I
     """
     for sub in sp.preorder_traversal(expr):
         if sub.is_number and (sub.is_real is not True or sub.is_finite is False):

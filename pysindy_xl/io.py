@@ -33,6 +33,20 @@ def save_model(model, path) -> None:
     model : XLSINDy
         A fitted model.
     path : str or os.PathLike
+
+    Examples
+    --------
+    >>> import json, os, tempfile
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> t = np.linspace(0, 5, 501)
+    >>> x, xd, xdd = (np.sin(t) + t)[:, None], (np.cos(t) + 1)[:, None], -np.sin(t)[:, None]
+    >>> model = px.XLSINDy(px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]))
+    >>> model = model.fit(x, t, xd, xdd, u=2 * xdd + x)
+    >>> path = os.path.join(tempfile.mkdtemp(), "model.json")
+    >>> save_model(model, path)
+    >>> [round(c, 6) for c in json.load(open(path))["coefficients"]]
+    [-1.0, 1.0, -0.5]
     """
     from sklearn.utils.validation import check_is_fitted
 
@@ -128,6 +142,16 @@ def load_model(path):
     ------
     ValueError
         If the file is not a valid model file (the message says what is wrong).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> path = os.path.join(tempfile.mkdtemp(), "bad.json")
+    >>> _ = open(path, "w").write('{"format": "something else"}')
+    >>> load_model(path)
+    Traceback (most recent call last):
+    ...
+    ValueError: path: '...bad.json' is not a valid pysindy-xl model file: 'format' must be ...
     """
     from . import optimizers
     from .model import XLSINDy

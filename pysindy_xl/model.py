@@ -312,12 +312,25 @@ class XLSINDy(BaseEstimator):
 
     # -- inspection ----------------------------------------------------------------------------
     def coefficients(self) -> np.ndarray:
-        """Identified coefficient vector, one entry per feature (see ``get_feature_names``)."""
+        """Identified coefficient vector.
+
+        Returns
+        -------
+        ndarray, shape (F,)
+            One entry per feature, in the order of :meth:`get_feature_names`.
+        """
         check_is_fitted(self, "coef_")
         return self.coef_.copy()
 
     def get_feature_names(self) -> list[str]:
-        """Names of the catalog features, in coefficient order."""
+        """Names of the catalog features.
+
+        Returns
+        -------
+        list of str
+            In coefficient order: ``F[...]`` forces, ``L[...]`` Lagrangian terms,
+            ``C_<coordinate>[...]`` classical terms.
+        """
         check_is_fitted(self, "coef_")
         return self.feature_library_.get_feature_names()
 
@@ -349,7 +362,13 @@ class XLSINDy(BaseEstimator):
         return out
 
     def lagrangian(self) -> sp.Expr:
-        """Identified Lagrangian: the Lagrange terms weighted by their coefficients."""
+        """Identified Lagrangian.
+
+        Returns
+        -------
+        sympy.Expr
+            The Lagrange terms weighted by their coefficients (0 without Lagrange terms).
+        """
         check_is_fitted(self, "coef_")
         total = sp.Integer(0)
         for lib, sl in zip(self.feature_library_.libraries_, self.feature_library_.slices_,
@@ -480,14 +499,29 @@ class XLSINDy(BaseEstimator):
 
     # -- persistence ---------------------------------------------------------------------------
     def save(self, path) -> None:
-        """Save the catalog specification and coefficients as JSON (see :mod:`pysindy_xl.io`)."""
+        """Save the catalog specification and coefficients as JSON (see :mod:`pysindy_xl.io`).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+        """
         from .io import save_model
 
         save_model(self, path)
 
     @classmethod
     def load(cls, path) -> XLSINDy:
-        """Load a model written by :meth:`save`; parses only the restricted term grammar."""
+        """Load a model written by :meth:`save`; parses only the restricted term grammar.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+
+        Returns
+        -------
+        XLSINDy
+            A fitted model that predicts and simulates like the saved one.
+        """
         from .io import load_model
 
         return load_model(path)

@@ -126,6 +126,17 @@ class SymbolicLibrary(BaseFeatureLibrary):
     ----------
     coords : Coordinates
         Generalized coordinates of the system.
+
+    Examples
+    --------
+    A new category only describes its columns:
+
+    >>> import sympy as sp, pysindy_xl as px
+    >>> class Gravity(SymbolicLibrary):
+    ...     def _build_symbolic(self):
+    ...         return ["sin"], sp.Matrix([[sp.sin(self.coords.q[0])]])
+    >>> Gravity(px.Coordinates(["theta"])).fit().transform([[0.5, 0, 0, 0, 0]]).round(3)
+    array([[0.479]])
     """
 
     #: category label used in feature names and reports
@@ -237,7 +248,13 @@ class SymbolicLibrary(BaseFeatureLibrary):
         return list(self.feature_names_)
 
     def symbolic_matrix(self) -> sp.Matrix:
-        """The sympy matrix ``E`` (n, F): entry ``[c, j]`` is feature ``j`` in equation ``c``."""
+        """The symbolic columns, derived on first use.
+
+        Returns
+        -------
+        sympy.Matrix, shape (n, F)
+            Entry ``[c, j]`` is feature ``j`` in the equation of coordinate ``c``.
+        """
         if not hasattr(self, "symbolic_matrix_"):
             self.fit()
         return self.symbolic_matrix_
@@ -249,5 +266,10 @@ class SymbolicLibrary(BaseFeatureLibrary):
 
     # -- persistence ----------------------------------------------------------------------
     def to_spec(self) -> dict:
-        """JSON-serializable description of this library (see :mod:`pysindy_xl.io`)."""
+        """JSON-serializable description of this library (see :mod:`pysindy_xl.io`).
+
+        Returns
+        -------
+        dict
+        """
         raise NotImplementedError

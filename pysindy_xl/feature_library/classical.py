@@ -152,6 +152,13 @@ class ClassicalLibrary(SymbolicLibrary):
         return names, matrix
 
     def to_spec(self) -> dict:
+        """JSON-serializable description of this library (terms in the restricted grammar).
+
+        Returns
+        -------
+        dict
+            Read back by :func:`pysindy_xl.io.load_model`.
+        """
         if not hasattr(self, "terms_"):
             self.fit()
         return {

@@ -123,6 +123,13 @@ class ExternalForces(SymbolicLibrary):
         return ["F[tau]"], column
 
     def to_spec(self) -> dict:
+        """JSON-serializable description of this library (terms in the restricted grammar).
+
+        Returns
+        -------
+        dict
+            Read back by :func:`pysindy_xl.io.load_model`.
+        """
         return {
             "type": "ExternalForces",
             "interlink": _interlink_matrix(self.interlink, self.coords.n).tolist(),

@@ -141,5 +141,12 @@ class LagrangeLibrary(SymbolicLibrary):
         return [f"L[{term}]" for term in terms], matrix
 
     def to_spec(self) -> dict:
+        """JSON-serializable description of this library (terms in the restricted grammar).
+
+        Returns
+        -------
+        dict
+            Read back by :func:`pysindy_xl.io.load_model`.
+        """
         terms = _as_expr_list(self.terms, "terms")
         return {"type": "LagrangeLibrary", "terms": [format_expression(t) for t in terms]}

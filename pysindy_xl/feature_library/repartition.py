@@ -129,6 +129,10 @@ class CatalogRepartition(SymbolicLibrary):
 
         Force columns first, then Lagrange terms, then classical ones; within a category the
         symbolically simpler column first (``sympy.count_ops``), then catalog order.
+
+        Returns
+        -------
+        ndarray of int, shape (F,)
         """
         check_is_fitted(self, "symbolic_matrix_")
         complexity = [
@@ -233,6 +237,13 @@ class CatalogRepartition(SymbolicLibrary):
         )
 
     def to_spec(self) -> dict:
+        """JSON-serializable description of this library (terms in the restricted grammar).
+
+        Returns
+        -------
+        dict
+            Read back by :func:`pysindy_xl.io.load_model`.
+        """
         return {
             "type": "CatalogRepartition",
             "libraries": [lib.to_spec() for lib in self._flat_libraries()],

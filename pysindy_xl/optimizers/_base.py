@@ -106,7 +106,38 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
 
 
 class CatalogOptimizer(BaseEstimator):
-    """Base class of the catalog optimizers (see the module docstring for the protocol)."""
+    """Base class of the catalog optimizers (see the module docstring for the protocol).
+
+    Examples
+    --------
+    A least-squares solver with the force coefficient fixed to -1:
+
+    >>> import numpy as np
+    >>> class LeastSquares(CatalogOptimizer):
+    ...     def fit_catalog(self, theta, n_coordinates, force_columns):
+    ...         rest = np.setdiff1d(np.arange(theta.shape[1]), force_columns)
+    ...         sol = np.linalg.lstsq(theta[:, rest], theta[:, force_columns].sum(1))[0]
+    ...         self.coef_ = np.full(theta.shape[1], -1.0)
+    ...         self.coef_[rest] = sol
+    ...         return self
+    >>> theta = np.column_stack([[1.0, 2.0, 3.0], [0.5, 1.0, 1.5]])
+    >>> LeastSquares().fit_catalog(theta, 1, [0]).coef_
+    array([-1.,  2.])
+    """
 
     def fit_catalog(self, theta, n_coordinates, force_columns):  # pragma: no cover - abstract
+        """Solve the catalog problem ``theta @ coef_ = 0``.
+
+        Parameters
+        ----------
+        theta : array, shape (n_coordinates * N, F)
+            Stacked regression matrix, rows coordinate-major.
+        n_coordinates : int
+        force_columns : sequence of int
+            Columns of the external forces.
+
+        Returns
+        -------
+        self
+        """
         raise NotImplementedError

@@ -81,6 +81,14 @@ def proximal_gradient_lasso(x, y, alpha: float, max_iter: int = 10_000, tol: flo
     -------
     coef : ndarray, shape (F,)
     converged : bool
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x = np.random.default_rng(0).normal(size=(200, 3))
+    >>> coef, converged = proximal_gradient_lasso(x, x @ [1.0, 0.0, -2.0], alpha=1e-3)
+    >>> coef.round(2), converged
+    (array([ 1.,  0., -2.]), True)
     """
     n_rows = x.shape[0]
     gram = x.T @ x / n_rows
