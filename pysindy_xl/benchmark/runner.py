@@ -38,6 +38,7 @@ import signal
 import threading
 import time
 import traceback
+import warnings
 
 import numpy as np
 
@@ -209,12 +210,23 @@ def execute_task(task: Task, settings: GridSettings, deadline: float | None = No
     Returns
     -------
     dict
-        The record (see :mod:`~pysindy_xl.benchmark.records`).
+        The record (see :mod:`~pysindy_xl.benchmark.records`); the warnings raised during the
+        run (convergence...) are collected in its ``warnings`` list instead of being printed.
     """
+    stage = stage or (lambda name: None)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        record = _execute(task, settings, deadline, stage)
+    messages = list(dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught))
+    record["warnings"] = [m[:300] for m in messages[:5]] + (
+        [f"... and {len(messages) - 5} more"] if len(messages) > 5 else [])
+    return record
+
+
+def _execute(task, settings, deadline, stage) -> dict:
     from ..dynamics import DynamicsError
     from ..mujoco.validation import validate_model
 
-    stage = stage or (lambda name: None)
     record = _base_record(task, settings)
     spec = task.trajectory
     stage("generate")
