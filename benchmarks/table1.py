@@ -4,6 +4,8 @@ Usage (from the repository root)::
 
     python benchmarks/table1.py --quick            # < 15 min on 2 cores; writes benchmarks/results/
     python benchmarks/table1.py --full -j 32 --out benchmarks/results/full
+    python benchmarks/table1.py --quick --fresh    # start over (the committed records are kept
+                                                   # aside as records.TIME.jsonl)
     python benchmarks/table1.py --help             # all options (backends, retries, subsets)
 
 Equivalent to ``pysindy-xl benchmark``, except that the output goes to

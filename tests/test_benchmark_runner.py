@@ -162,6 +162,12 @@ def test_real_grid_and_report(tmp_path):
     assert main(argv) == 0
     assert (out / "records.jsonl").read_text().splitlines() == lines
     assert main(argv + ["--report-only"]) == 0
+    # --fresh keeps the old records aside and starts over (here: nothing run, --limit 0)
+    assert main(argv + ["--fresh", "--limit", "0"]) == 0
+    kept = list(out.glob("records.*.jsonl"))
+    assert len(kept) == 1 and kept[0].read_text().splitlines() == lines
+    assert not (out / "records.jsonl").exists() or not (out / "records.jsonl").read_text()
+    assert "0 | 0 | 0 | 0 | 0 | 0 | 0 | - | 0 |" in (out / "table.md").read_text()
 
 
 # -- command line ------------------------------------------------------------------------------

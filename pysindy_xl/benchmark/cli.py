@@ -8,6 +8,7 @@ Examples
     pysindy-xl benchmark --full --jobs 32 --out results/full
     pysindy-xl benchmark --quick --retry error timeout  # rerun the failed runs only
     pysindy-xl benchmark --quick --report-only          # rebuild the table from the records
+    pysindy-xl benchmark --quick --fresh                # start over (old records kept aside)
 
     # a Dask cluster (pip install "dask[distributed]"):
     dask scheduler &  dask worker tcp://HOST:8786 --nworkers 16 --nthreads 1 &
@@ -24,6 +25,7 @@ import argparse
 import json
 import os
 import sys
+import time
 
 from .grid import (
     CATALOGS,
@@ -116,6 +118,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         default="auto",
                         help="how the time limit is enforced (default: a forked process per "
                              "run)")
+    parser.add_argument("--fresh", action="store_true",
+                        help="start over: existing records are renamed records.TIME.jsonl "
+                             "(kept), then every run is done again")
     parser.add_argument("--report-only", action="store_true",
                         help="do not run anything: rebuild the table from the records")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -190,10 +195,17 @@ def run_benchmark(args) -> int:
             with open(machine_path, encoding="utf-8") as handle:
                 machine = json.load(handle)
     else:
+        if args.fresh and os.path.exists(records_path):
+            kept = os.path.join(out, time.strftime("records.%Y%m%d-%H%M%S.jsonl"))
+            os.replace(records_path, kept)
+            print(f"previous records kept as {kept}")
         tasks = settings.tasks()
         print(f"benchmark {settings.name}: {len(tasks)} runs on "
               f"{len(settings.trajectories())} trajectories, {settings.timeout:g} s limit per "
               f"run, records in {records_path}", flush=True)
+        from .report import _load_average
+
+        load_at_start = _load_average()
         try:
             outcome = run_grid(settings, records_path, n_jobs=args.jobs, backend=args.backend,
                                address=args.address, retry=args.retry,
@@ -207,6 +219,7 @@ def run_benchmark(args) -> int:
         machine = machine_description(n_jobs=_effective_jobs(args.jobs), backend=args.backend)
         machine["wall_time_s"] = round(outcome["seconds"], 1)
         machine["runs_this_session"] = outcome["ran"]
+        machine["load_average_at_start"] = load_at_start
     records = RecordStore(records_path).records()
     wanted = {t.run_id for t in settings.tasks()}
     records = [r for r in records if r["run_id"] in wanted]  # other grids' records stay out

@@ -43,16 +43,22 @@ def _memory_gib() -> float | None:
     return None
 
 
-def _git_commit() -> str | None:
+def _git(*arguments) -> str | None:
     try:
-        out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                             text=True, timeout=10,
+        out = subprocess.run(["git", *arguments], capture_output=True, text=True, timeout=10,
                              cwd=os.path.dirname(os.path.abspath(__file__)))
     except (OSError, subprocess.SubprocessError):
         return None
-    if out.returncode != 0:
-        return None
-    return out.stdout.strip() or None
+    return out.stdout.strip() if out.returncode == 0 else None
+
+
+def _git_state() -> dict:
+    """Commit of the package's checkout and whether its own files had local changes."""
+    commit = _git("rev-parse", "--short", "HEAD")
+    if commit is None:
+        return {"git_commit": None}
+    changed = _git("status", "--porcelain", "--untracked-files=no", "--", "../")
+    return {"git_commit": commit, "package_modified": bool(changed)}
 
 
 def machine_description(n_jobs=None, backend=None) -> dict:
@@ -85,10 +91,19 @@ def machine_description(n_jobs=None, backend=None) -> dict:
         "memory_gib": _memory_gib(),
         "python": sys.version.split()[0],
         "packages": versions,
-        "git_commit": _git_commit(),
+        **_git_state(),
         "n_jobs": n_jobs,
         "backend": backend or "loky",
+        # other work on the machine slows the runs down: say how busy it was
+        "load_average_1_5_15min": _load_average(),
     }
+
+
+def _load_average():
+    try:
+        return [round(x, 2) for x in os.getloadavg()]
+    except (OSError, AttributeError):
+        return None
 
 
 def grid_summary(records, configs=None, reference: str = "mixed x mixed") -> dict:
@@ -239,7 +254,13 @@ def write_report(records, out_dir, settings=None, machine=None, configs=None) ->
     if machine:
         lines.append(f"- machine: {machine.get('cpu')}, {machine.get('logical_cores')} logical "
                      f"cores, {machine.get('memory_gib')} GiB, Python {machine.get('python')}, "
-                     f"{machine.get('n_jobs')} jobs ({machine.get('backend')})")
+                     f"{machine.get('n_jobs')} jobs ({machine.get('backend')})"
+                     + (f", wall time {machine['wall_time_s']:.0f} s"
+                        if machine.get("wall_time_s") is not None else "")
+                     + (f", load average at start / end {machine['load_average_at_start'][0]}"
+                        f" / {machine['load_average_1_5_15min'][0]}"
+                        if machine.get("load_average_at_start") and
+                        machine.get("load_average_1_5_15min") else ""))
     lines += ["", "Ranked by number of 1st places (paper's columns, then extra ones). "
               "success rate = valid / (valid + invalid + uncompleted), timeouts excluded as in "
               "the paper; Wins WC = only valid model of its trajectory.", "",
