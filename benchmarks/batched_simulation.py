@@ -4,7 +4,7 @@ The double pendulum of :mod:`pysindy_xl.mujoco` is identified from MuJoCo data (
 catalog, explicit optimizer); the identified model is then stepped with fixed-step RK4 at
 MuJoCo's own time step (1 ms) by
 
-* NumPy, sequential (batch 1): ``model.dynamics_.accelerations`` in a Python RK4 loop;
+* NumPy, sequential (batch 1): ``model.dynamics_.state_derivative`` in a Python RK4 loop;
 * JAX, sequential (batch 1): a jitted RK4 step called from Python, and the whole
   trajectory in one ``lax.scan`` (:func:`pysindy_xl.jax_dynamics.simulate`);
 * JAX, batched (default 10,000 trajectories): :func:`pysindy_xl.jax_dynamics.simulate_batch`
@@ -82,13 +82,8 @@ def timed(function, repeat):
 
 
 def numpy_rk4(dynamics, x0, tau, dt):
-    """One trajectory with the model's NumPy accelerations, RK4 in Python."""
-    n = len(x0) // 2
-
-    def derivative(state, force):
-        qdd = dynamics.accelerations(state[None, :n], state[None, n:], force[None])[0]
-        return np.concatenate([state[n:], qdd])
-
+    """One trajectory with the model's single-state NumPy derivative, RK4 in Python."""
+    derivative = dynamics.state_derivative
     state = np.array(x0, dtype=float)
     for k in range(len(tau)):
         k1 = derivative(state, tau[k])

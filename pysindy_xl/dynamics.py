@@ -295,6 +295,51 @@ class MassMatrixDynamics:
             )
         return np.linalg.solve(mass, force[..., None])[..., 0]
 
+    def state_derivative(self, state, u=None, t: float = 0.0) -> np.ndarray:
+        """``d(state)/dt = [qd, M^-1 f]`` at one state: the fast path used by simulators.
+
+        Evaluates ``M`` and ``f`` with Python floats (no NumPy call per entry), which is an
+        order of magnitude faster than :meth:`accelerations` on a single sample.
+
+        Parameters
+        ----------
+        state : array, shape (2n,)
+            ``[q, qd]``.
+        u : array, shape (n,), optional
+            Generalized forces; zero when absent.
+        t : float
+
+        Returns
+        -------
+        ndarray, shape (2n,)
+
+        Raises
+        ------
+        SingularMassMatrixError
+            If ``M`` is singular there, or ``M`` or ``f`` is not finite.
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> px.MassMatrixDynamics(c, [2 * c.qdd[0] + c.q[0]]).state_derivative([1.0, 3.0])
+        array([ 3. , -0.5])
+        """
+        n = self._n
+        state = np.asarray(state, dtype=float)
+        inputs = [0.0] * n if u is None else np.asarray(u, dtype=float).tolist()
+        try:
+            values = self._evaluate_scalar(*state.tolist(), *([0.0] * n), *inputs, t)
+        except (OverflowError, ValueError, ZeroDivisionError) as err:
+            raise SingularMassMatrixError(f"cannot evaluate the dynamics: {err}", [0]) from None
+        mass = np.array(values[: n * n], dtype=float).reshape(n, n)
+        force = np.array(values[n * n :], dtype=float)
+        if not (np.all(np.isfinite(mass)) and np.all(np.isfinite(force))):
+            raise SingularMassMatrixError("the dynamics are not finite at this state", [0])
+        if not abs(np.linalg.det(mass)) > 1e-12 * np.prod(np.linalg.norm(mass, axis=1)):
+            raise SingularMassMatrixError("the identified mass matrix is singular", [0])
+        return np.concatenate([state[n:], np.linalg.solve(mass, force)])
+
     @staticmethod
     def _singular(mass: np.ndarray, rcond: float) -> np.ndarray:
         if not np.all(np.isfinite(mass)):
@@ -356,7 +401,6 @@ class MassMatrixDynamics:
         force = force_function(u, t, n, interpolation)
         counter = {"n": 0}
         start = _time.perf_counter()
-        zero_acc = [0.0] * n
 
         def rhs(s, state):
             counter["n"] += 1
@@ -365,22 +409,16 @@ class MassMatrixDynamics:
             if timeout is not None and counter["n"] % 256 == 0:
                 if _time.perf_counter() - start > timeout:
                     raise _Stop(s, "timeout")
-            inputs = np.asarray(force(s)).tolist()
+            inputs = force(s)
             try:
-                values = self._evaluate_scalar(*state.tolist(), *zero_acc, *inputs, s)
-            except (OverflowError, ValueError, ZeroDivisionError):
-                raise _Stop(s, "non-finite derivative") from None
-            mass = np.array(values[: n * n], dtype=float).reshape(n, n)
-            f = np.array(values[n * n :], dtype=float)
-            if not (np.all(np.isfinite(mass)) and np.all(np.isfinite(f))):
+                derivative = self.state_derivative(state, inputs, s)
+            except SingularMassMatrixError as err:
+                reason = "singular mass matrix" if "singular" in str(err) else \
+                    "non-finite derivative"
+                raise _Stop(s, reason) from None
+            if not np.all(np.isfinite(derivative)):
                 raise _Stop(s, "non-finite derivative")
-            row_norms = np.prod(np.linalg.norm(mass, axis=1))
-            if not abs(np.linalg.det(mass)) > 1e-12 * row_norms:
-                raise _Stop(s, "singular mass matrix")
-            acc = np.linalg.solve(mass, f)
-            if not np.all(np.isfinite(acc)):
-                raise _Stop(s, "non-finite derivative")
-            return np.concatenate([state[n:], acc])
+            return derivative
 
         solver_class = _SOLVERS.get(method)
         if solver_class is None:

@@ -81,10 +81,16 @@ class XLSINDy(BaseEstimator):
         from the data: explicit when every coordinate is forced, implicit when none is,
         mixed otherwise.
     differentiation_method : pysindy differentiation method, optional
-        Used for velocities and accelerations that are not given. Default:
-        ``ps.SmoothedFiniteDifference()`` (second-order finite differences after a
-        Savitzky-Golay smoothing): exact enough on clean data and robust to moderate noise,
-        which plain finite differences amplify twice for accelerations.
+        Used for velocities and accelerations that are not given. Default, by solver:
+        explicit and mixed fits use ``ps.SmoothedFiniteDifference()`` (finite differences
+        after a Savitzky-Golay smoothing): accurate to about 0.1 % on clean data and robust to
+        moderate noise, which plain finite differences amplify twice for accelerations.
+        Implicit fits (unforced data) use ``ps.FiniteDifference(order=4)``: the SINDy-PI
+        null-space search needs unbiased derivatives (the smoothing bias alone hides the law)
+        and is sensitive to noise whatever the differentiation. Measured on a double pendulum
+        sampled at 100 Hz: implicit recovery is exact with the fourth-order scheme and fails
+        with the smoothed one; explicit recovery at 1e-4 rad noise is within 1.1 % with the
+        smoothed scheme and fails with the fourth-order one.
     drop_dependent : bool, default True
         Remove catalog columns that are zero or exact linear combinations of preferred columns
         (see :func:`~pysindy_xl.optimizers.independent_columns`): a sparse regression on an
@@ -140,10 +146,10 @@ class XLSINDy(BaseEstimator):
             f"ExternalForces, CatalogRepartition), got {type(lib).__name__}"
         )
 
-    def _differentiate(self, values: np.ndarray, t: np.ndarray) -> np.ndarray:
+    def _differentiate(self, values: np.ndarray, t: np.ndarray, implicit: bool) -> np.ndarray:
         method = self.differentiation_method
         if method is None:
-            method = ps.SmoothedFiniteDifference()
+            method = ps.FiniteDifference(order=4) if implicit else ps.SmoothedFiniteDifference()
         if not callable(method):
             raise TypeError("differentiation_method: expected a pysindy differentiation method")
         result = np.asarray(method(values, t), dtype=float)
@@ -172,6 +178,8 @@ class XLSINDy(BaseEstimator):
                 raise ValueError(f"{name}: expected the same layout as x ({len(xs)} "
                                  f"{'trajectories' if is_list else 'array'})")
             optional[name] = values
+        implicit = u is None and (self.optimizer is None
+                                  or type(self.optimizer).__name__ == "ImplicitOptimizer")
         out = []
         for k, (xk, tk) in enumerate(zip(xs, ts, strict=True)):
             label = f"[{k}]" if is_list else ""
@@ -187,9 +195,9 @@ class XLSINDy(BaseEstimator):
                 v = optional[name][k]
                 arrays[name] = None if v is None else _check_array(v, f"{name}{label}", xk.shape)
             if arrays["x_dot"] is None:
-                arrays["x_dot"] = self._differentiate(xk, tk)
+                arrays["x_dot"] = self._differentiate(xk, tk, implicit)
             if arrays["x_ddot"] is None:
-                arrays["x_ddot"] = self._differentiate(arrays["x_dot"], tk)
+                arrays["x_ddot"] = self._differentiate(arrays["x_dot"], tk, implicit)
             out.append(arrays)
         return out
 
