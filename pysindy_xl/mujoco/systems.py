@@ -93,6 +93,7 @@ def equations_of_motion(lagrangian: sp.Expr, coords: Coordinates, friction=None)
     lagrangian : sympy.Expr
         Lagrangian in ``coords.q`` and ``coords.qd``.
     coords : Coordinates
+        The generalized coordinates (positions, velocities, accelerations as symbols).
     friction : dict, optional
         ``{(term, i): c}``: adds ``c * term`` to equation ``i``.
 
@@ -135,12 +136,44 @@ class MuJoCoSystem:
     name : str
         Registry name (``"cart-pole"``...).
     coordinate_names : tuple of str
+        Names of the generalized coordinates (symbols of :attr:`coords`).
     joint_names : tuple of str
         MuJoCo joints, in the order of ``qpos`` / ``qvel``.
     angle_coordinates : tuple of int
         Indices of the coordinates that are angles (enter the catalogs through sin and cos).
     mixed_actuators : tuple of str
         Joints driven in the ``mixed`` forcing mode by default.
+    has_ground_truth : bool
+        Whether :meth:`lagrangian` and :meth:`friction` give the true model.
+
+    Examples
+    --------
+    The smallest system, a point mass on a damped rail (see :class:`CartPole` for a full one):
+
+    >>> import numpy as np
+    >>> class Rail(MuJoCoSystem):
+    ...     name, coordinate_names, joint_names = "rail", ("x",), ("slider",)
+    ...     def __init__(self, mass=2.0, damping=0.3):
+    ...         self._parameters = {"mass": mass, "damping": damping}
+    ...     @property
+    ...     def joint_damping(self):
+    ...         return np.array([self._parameters["damping"]])
+    ...     @property
+    ...     def force_amplitudes(self):
+    ...         return {"slider": 1.0}
+    ...     def lagrangian(self):
+    ...         return self._parameters["mass"] * self.coords.qd[0] ** 2 / 2
+    ...     def xml(self):
+    ...         p = self._parameters
+    ...         return (f'<mujoco><worldbody><body><joint name="slider" type="slide" '
+    ...                 f'axis="1 0 0" damping="{p["damping"]}"/><inertial pos="0 0 0" '
+    ...                 f'mass="{p["mass"]}" diaginertia="1 1 1"/></body></worldbody>'
+    ...                 '<actuator><motor joint="slider"/></actuator></mujoco>')
+    >>> rail = Rail()
+    >>> rail.equations_of_motion()
+    [2.0*x_ddot + 0.3*x_dot]
+    >>> rail.mj_model().nv, rail.friction()
+    (1, {(x_dot, 0): 0.3})
     """
 
     name = "system"
@@ -187,15 +220,61 @@ class MuJoCoSystem:
         raise NotImplementedError
 
     def lagrangian(self) -> sp.Expr:
-        """True Lagrangian ``T - V`` in the symbols of :attr:`coords`."""
+        """True Lagrangian ``T - V`` in the symbols of :attr:`coords`.
+
+        Returns
+        -------
+        sympy.Expr
+            Kinetic minus potential energy, in ``coords.q`` and ``coords.qd``.
+
+        Raises
+        ------
+        NotImplementedError
+            In this base class, which describes no particular system.
+
+        Examples
+        --------
+        The cart position is cyclic (absent from the Lagrangian of the cart-pole):
+
+        >>> sorted(map(str, CartPole().lagrangian().free_symbols))
+        ['theta', 'theta_dot', 'x_dot']
+        """
         raise NotImplementedError
 
     def xml(self) -> str:
-        """MJCF text of the model with the current parameters."""
+        """MJCF text of the model with the current parameters.
+
+        Returns
+        -------
+        str
+            A complete ``<mujoco>`` document.
+
+        Raises
+        ------
+        NotImplementedError
+            In this base class, which describes no particular system.
+
+        Examples
+        --------
+        >>> CartPole().xml().splitlines()[0]
+        '<mujoco model="cart_pole">'
+        """
         raise NotImplementedError
 
     def mj_model(self) -> mujoco.MjModel:
-        """Compiled MuJoCo model of :meth:`xml`."""
+        """Compiled MuJoCo model of :meth:`xml`.
+
+        Returns
+        -------
+        mujoco.MjModel
+            A new model at each call.
+
+        Examples
+        --------
+        >>> model = DoublePendulum().mj_model()
+        >>> model.nq, model.nu, model.opt.timestep
+        (2, 2, 0.001)
+        """
         return mujoco.MjModel.from_xml_string(self.xml())
 
     # -- transforms ----------------------------------------------------------------------
@@ -205,6 +284,19 @@ class MuJoCoSystem:
         ``u`` holds one force per MuJoCo degree of freedom (``qfrc_actuator``); ``B = T^-T``
         by virtual work. Pass it as ``ExternalForces(coords, interlink=B)`` to fit with the
         joint forces ``u`` instead of the generalized forces ``tau = u @ B.T``.
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+
+        Examples
+        --------
+        A motor on the second (relative) hinge of a double pendulum pushes the outer link
+        forward and the inner one back:
+
+        >>> import numpy as np
+        >>> DoublePendulum().force_matrix() @ np.array([0.0, 1.0])
+        array([-1.,  1.])
         """
         return np.linalg.inv(self.joint_to_coordinates).T
 
@@ -212,6 +304,17 @@ class MuJoCoSystem:
         """Matrix ``F`` (n, n): generalized friction force ``= -F @ qd``.
 
         ``F = B C T^-1`` with ``C`` the diagonal of joint damping coefficients.
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            Symmetric; diagonal when every joint measures one coordinate.
+
+        Examples
+        --------
+        >>> DoublePendulum(damping1=0.3, damping2=0.15).friction_matrix()
+        array([[ 0.45, -0.15],
+               [-0.15,  0.15]])
         """
         t_inv = np.linalg.inv(self.joint_to_coordinates)
         return t_inv.T @ np.diag(self.joint_damping) @ t_inv
@@ -221,6 +324,18 @@ class MuJoCoSystem:
 
         The structure of :meth:`friction_matrix` with every joint damped, independent of the
         damping values; the reference catalogs use it for their friction terms.
+
+        Returns
+        -------
+        ndarray of bool, shape (n, n)
+            ``pattern[i, j]``: the velocity of coordinate ``j`` may appear in equation ``i``.
+
+        Examples
+        --------
+        >>> CartDoublePendulum().friction_pattern()
+        array([[ True, False, False],
+               [False,  True,  True],
+               [False,  True,  True]])
         """
         t_inv = np.linalg.inv(self.joint_to_coordinates)
         return np.abs(t_inv.T @ t_inv) > 1e-12
@@ -230,6 +345,17 @@ class MuJoCoSystem:
 
         Convention of the feature libraries: the term ``qd_j`` with coefficient ``c`` in the
         equation of coordinate ``i`` stands for the friction force ``-c * qd_j``.
+
+        Returns
+        -------
+        dict
+            ``{(velocity symbol, equation index): coefficient}``, the non-zero entries of
+            :meth:`friction_matrix`; as ``classical=`` of ``ideal_coefficients``.
+
+        Examples
+        --------
+        >>> CartPole(cart_damping=0.5, pole_damping=0.1).friction()
+        {(x_dot, 0): 0.5, (theta_dot, 1): 0.1}
         """
         coords = self.coords
         matrix = self.friction_matrix()
@@ -241,7 +367,18 @@ class MuJoCoSystem:
         }
 
     def equations_of_motion(self) -> list[sp.Expr]:
-        """Left-hand sides ``EL_i(L) + friction_i``; the motion satisfies ``lhs = B @ u``."""
+        """Left-hand sides ``EL_i(L) + friction_i``; the motion satisfies ``lhs = B @ u``.
+
+        Returns
+        -------
+        list of sympy.Expr
+            One per coordinate (see the module function :func:`equations_of_motion`).
+
+        Examples
+        --------
+        >>> CartPole().equations_of_motion()[1]
+        0.320001*theta_ddot + 0.1*theta_dot + 0.4*x_ddot*cos(theta) + 3.924*sin(theta)
+        """
         return equations_of_motion(self.lagrangian(), self.coords, self.friction())
 
     def to_generalized(self, qpos, qvel, qacc=None):
@@ -250,12 +387,21 @@ class MuJoCoSystem:
         Parameters
         ----------
         qpos, qvel : array, shape (N, n) or (n,)
+            MuJoCo joint positions and velocities (``data.qpos``, ``data.qvel``).
         qacc : array, shape (N, n) or (n,), optional
+            MuJoCo joint accelerations (``data.qacc``).
 
         Returns
         -------
         q, qd, qdd : ndarray
             Same shapes; ``qdd`` is None when ``qacc`` is None.
+
+        Examples
+        --------
+        The second hinge of a double pendulum measures the relative angle:
+
+        >>> DoublePendulum().to_generalized([0.1, 0.2], [1.0, 1.0])
+        (array([0.1, 0.3]), array([1., 2.]), None)
         """
         matrix = self.joint_to_coordinates
         out = []
@@ -272,9 +418,23 @@ class MuJoCoSystem:
     def from_generalized(self, q, qd=None):
         """Inverse of :meth:`to_generalized` for positions and velocities.
 
+        Parameters
+        ----------
+        q : array, shape (N, n) or (n,)
+            Generalized positions.
+        qd : array, shape (N, n) or (n,), optional
+            Generalized velocities.
+
         Returns
         -------
-        qpos, qvel : ndarray (``qvel`` None when ``qd`` is None)
+        qpos, qvel : ndarray
+            MuJoCo joint positions and velocities, same shapes (``qvel`` None when ``qd`` is
+            None).
+
+        Examples
+        --------
+        >>> DoublePendulum().from_generalized([0.1, 0.3], [1.0, 2.0])
+        (array([0.1, 0.2]), array([1., 1.]))
         """
         inverse = np.linalg.inv(self.joint_to_coordinates)
         q = np.asarray(q, dtype=float)
@@ -294,9 +454,23 @@ class MuJoCoSystem:
         Angles uniform in ``[-2, 2] * scale`` rad, linear positions in ``[-0.5, 0.5] * scale``
         m, velocities uniform in ``[-1, 1] * scale``.
 
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            Source of the random draws.
+        scale : float, default 1.0
+            Multiplies every range.
+
         Returns
         -------
         q0, qd0 : ndarray, shape (n,)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> q0, qd0 = CartPole().random_initial_state(np.random.default_rng(0), scale=0.1)
+        >>> bool(abs(q0[0]) <= 0.05 and abs(q0[1]) <= 0.2 and np.all(abs(qd0) <= 0.1))
+        True
         """
         half_range = np.full(self.n, 0.5)
         half_range[list(self.angle_coordinates)] = 2.0
@@ -418,6 +592,17 @@ class CartPole(MuJoCoSystem):
                 "hinge": 0.5 * p["pole_mass"] * p["gravity"] * p["length"]}
 
     def lagrangian(self):
+        """True Lagrangian of the cart-pole (cart, point mass with its tiny inertia, gravity).
+
+        Returns
+        -------
+        sympy.Expr
+
+        Examples
+        --------
+        >>> CartPole(cart_mass=1.0, pole_mass=0.5, length=0.8).lagrangian()
+        0.1600005*theta_dot**2 + 0.4*theta_dot*x_dot*cos(theta) + 0.75*x_dot**2 + 3.924*cos(theta)
+        """
         p = self._parameters
         x, th = self.coords.q
         xd, thd = self.coords.qd
@@ -431,6 +616,17 @@ class CartPole(MuJoCoSystem):
         return kinetic - potential
 
     def xml(self):
+        """MJCF text of the cart-pole with the current parameters.
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> 'name="slider"' in CartPole().xml()
+        True
+        """
         p = self._parameters
         link = _link("pole", "hinge", p["pole_mass"], p["length"], p["pole_damping"],
                      p["point_inertia"], "0 0 0")
@@ -497,12 +693,35 @@ class DoublePendulum(MuJoCoSystem):
                 "hinge2": 0.3 * p["mass2"] * g * p["length2"]}
 
     def lagrangian(self):
+        """True Lagrangian of the double pendulum in absolute angles.
+
+        Returns
+        -------
+        sympy.Expr
+
+        Examples
+        --------
+        >>> L = DoublePendulum().lagrangian()
+        >>> sorted(map(str, L.free_symbols))
+        ['theta1', 'theta1_dot', 'theta2', 'theta2_dot']
+        """
         p = self._parameters
         th1, th2 = self.coords.q
         thd1, thd2 = self.coords.qd
         return _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=None)
 
     def xml(self):
+        """MJCF text of the double pendulum with the current parameters.
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> DoublePendulum().xml().splitlines()[0]
+        '<mujoco model="double_pendulum">'
+        """
         p = self._parameters
         inner = _link("link2", "hinge2", p["mass2"], p["length2"], p["damping2"],
                       p["point_inertia"], f"0 0 {_f(-p['length1'])}", indent=6)
@@ -592,6 +811,18 @@ class CartDoublePendulum(MuJoCoSystem):
                 "hinge2": 0.3 * p["mass2"] * g * p["length2"]}
 
     def lagrangian(self):
+        """True Lagrangian of the double pendulum on a cart.
+
+        Returns
+        -------
+        sympy.Expr
+
+        Examples
+        --------
+        >>> L = CartDoublePendulum().lagrangian()
+        >>> sorted(map(str, L.free_symbols))
+        ['theta1', 'theta1_dot', 'theta2', 'theta2_dot', 'x_dot']
+        """
         p = self._parameters
         _, th1, th2 = self.coords.q
         xd, thd1, thd2 = self.coords.qd
@@ -599,6 +830,17 @@ class CartDoublePendulum(MuJoCoSystem):
                                           cart_mass=p["cart_mass"])
 
     def xml(self):
+        """MJCF text of the double pendulum on a cart with the current parameters.
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> CartDoublePendulum().xml().splitlines()[0]
+        '<mujoco model="cart_double_pendulum">'
+        """
         p = self._parameters
         inner = _link("link2", "hinge2", p["mass2"], p["length2"], p["damping2"],
                       p["point_inertia"], f"0 0 {_f(-p['length1'])}", indent=8)
@@ -714,15 +956,62 @@ class MJCFSystem(MuJoCoSystem):
         return {j: self._parameters["force_amplitude"] for j in self.actuated_joints}
 
     def lagrangian(self):
+        """Not available: the true Lagrangian of a user's model is unknown.
+
+        Returns
+        -------
+        sympy.Expr
+            Never returns.
+
+        Raises
+        ------
+        NotImplementedError
+            Always; subclass :class:`MuJoCoSystem` to describe a model with a known Lagrangian.
+
+        Examples
+        --------
+        >>> xml = ('<mujoco><worldbody><body><joint type="slide"/><geom size="0.1"/>'
+        ...        '</body></worldbody></mujoco>')
+        >>> MJCFSystem(xml).lagrangian()
+        Traceback (most recent call last):
+        ...
+        NotImplementedError: MJCFSystem: the true Lagrangian of a user's model is unknown; ...
+        """
         raise NotImplementedError(
             "MJCFSystem: the true Lagrangian of a user's model is unknown; subclass "
             "MuJoCoSystem to provide one"
         )
 
     def xml(self):
+        """The MJCF text given (or read from the file given).
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> xml = ('<mujoco><worldbody><body><joint type="slide"/><geom size="0.1"/>'
+        ...        '</body></worldbody></mujoco>')
+        >>> MJCFSystem(xml).xml() == xml
+        True
+        """
         return self._xml
 
     def mj_model(self):
+        """Compiled MuJoCo model, from the file when one was given (relative assets resolve).
+
+        Returns
+        -------
+        mujoco.MjModel
+
+        Examples
+        --------
+        >>> xml = ('<mujoco><worldbody><body><joint type="slide"/><geom size="0.1"/>'
+        ...        '</body></worldbody></mujoco>')
+        >>> MJCFSystem(xml).mj_model().njnt
+        1
+        """
         if self.path is not None:
             return mujoco.MjModel.from_xml_path(self.path)
         return mujoco.MjModel.from_xml_string(self._xml)
@@ -777,6 +1066,22 @@ def get_system(name, **parameters) -> MuJoCoSystem:
 
 def default_xml_path(name: str):
     """Path of the packaged MJCF file of a system with default parameters.
+
+    Parameters
+    ----------
+    name : str
+        ``"cart-pole"``, ``"double-pendulum"`` or ``"cart-double-pendulum"`` (underscores
+        accepted).
+
+    Returns
+    -------
+    importlib.resources.abc.Traversable
+        The file inside the installed package (a :class:`pathlib.Path` for a regular install).
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is not a packaged system.
 
     Examples
     --------
