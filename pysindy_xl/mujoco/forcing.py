@@ -21,6 +21,17 @@ class SumOfSinusoids:
     offsets : array, shape (n_signals,), optional
         Constant part of each signal (default zero).
 
+    Attributes
+    ----------
+    amplitudes, frequencies, phases : ndarray, shape (n_signals, n_components)
+    offsets : ndarray, shape (n_signals,)
+
+    Raises
+    ------
+    ValueError
+        If the arrays are not 2-D of equal shapes, hold NaN or inf, or ``offsets`` does not
+        match the number of signals.
+
     Examples
     --------
     >>> import numpy as np
@@ -54,6 +65,7 @@ class SumOfSinusoids:
 
     @property
     def n_signals(self) -> int:
+        """Number of signals (rows of :attr:`amplitudes`)."""
         return self.amplitudes.shape[0]
 
     @classmethod
@@ -67,14 +79,25 @@ class SumOfSinusoids:
             Peak amplitude bound of each signal (the sum of its component amplitudes); a zero
             scale gives a zero signal.
         rng : numpy.random.Generator
+            Source of the random draws.
         n_components : int, default 6
+            Sinusoids per signal.
         min_frequency, max_frequency : float
             Frequencies are drawn log-uniformly in this band (Hz).
         offsets : array, shape (n_signals,), optional
+            Constant part of each signal (default zero).
 
         Returns
         -------
         SumOfSinusoids
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> force = SumOfSinusoids.random([2.0, 0.0], np.random.default_rng(0), n_components=3)
+        >>> values = force(np.linspace(0.0, 10.0, 1001))
+        >>> values.shape, bool(np.abs(values[:, 0]).max() <= 2.0), bool(np.all(values[:, 1] == 0))
+        ((1001, 2), True, True)
         """
         scales = np.asarray(scales, dtype=float).reshape(-1)
         if np.any(scales < 0) or not np.all(np.isfinite(scales)):
@@ -94,20 +117,70 @@ class SumOfSinusoids:
         return cls(amplitudes, frequencies, phases, offsets)
 
     def __call__(self, t):
-        """Evaluate at times ``t`` (scalar -> (n_signals,), array (N,) -> (N, n_signals))."""
+        """Evaluate the signals at times ``t``.
+
+        Parameters
+        ----------
+        t : float or array, shape (N,)
+            Times (s).
+
+        Returns
+        -------
+        ndarray
+            Shape (n_signals,) for a scalar ``t``, (N, n_signals) for an array.
+
+        Examples
+        --------
+        >>> force = SumOfSinusoids([[1.0]], [[0.25]], [[0.0]], offsets=[0.5])
+        >>> force(1.0)
+        array([1.5])
+        """
         t_arr = np.asarray(t, dtype=float)
         angles = 2 * np.pi * self.frequencies[None] * t_arr.reshape(-1, 1, 1) + self.phases[None]
         values = (self.amplitudes[None] * np.sin(angles)).sum(axis=2) + self.offsets
         return values[0] if t_arr.ndim == 0 else values
 
     def to_dict(self) -> dict:
-        """JSON-serializable description."""
+        """JSON-serializable description.
+
+        Returns
+        -------
+        dict
+            Keys ``amplitudes``, ``frequencies``, ``phases``, ``offsets`` (nested lists).
+
+        Examples
+        --------
+        >>> SumOfSinusoids([[1.0]], [[0.25]], [[0.0]]).to_dict()
+        {'amplitudes': [[1.0]], 'frequencies': [[0.25]], 'phases': [[0.0]], 'offsets': [0.0]}
+        """
         return {"amplitudes": self.amplitudes.tolist(), "frequencies": self.frequencies.tolist(),
                 "phases": self.phases.tolist(), "offsets": self.offsets.tolist()}
 
     @classmethod
     def from_dict(cls, data: dict) -> SumOfSinusoids:
-        """Inverse of :meth:`to_dict`."""
+        """Inverse of :meth:`to_dict`.
+
+        Parameters
+        ----------
+        data : dict
+            As written by :meth:`to_dict` (``offsets`` optional).
+
+        Returns
+        -------
+        SumOfSinusoids
+
+        Raises
+        ------
+        ValueError
+            If ``data`` lacks a key or holds malformed arrays.
+
+        Examples
+        --------
+        >>> force = SumOfSinusoids([[1.0, 0.5]], [[0.25, 1.0]], [[0.0, 1.0]])
+        >>> copy = SumOfSinusoids.from_dict(force.to_dict())
+        >>> bool((copy(0.3) == force(0.3)).all())
+        True
+        """
         try:
             return cls(data["amplitudes"], data["frequencies"], data["phases"],
                        data.get("offsets"))
