@@ -38,23 +38,61 @@ _SERIES = ("q", "qd", "qdd", "tau", "u")
 
 
 class DatasetError(ValueError):
-    """A dataset file or array that cannot be used (bad file, missing or malformed arrays)."""
+    """A dataset file or array that cannot be used (bad file, missing or malformed arrays).
+
+    A :class:`ValueError`, so ``except ValueError`` catches it too.
+
+    Examples
+    --------
+    >>> Trajectory(t=[0.0, 1.0, 0.5], q=[[0.0], [1.0], [2.0]])
+    Traceback (most recent call last):
+    ...
+    pysindy_xl.mujoco.dataset.DatasetError: t: times must be strictly increasing within a trajectory
+    """
 
 
 @dataclass
 class Trajectory:
     """One sampled trajectory in generalized coordinates.
 
+    The arrays are converted to float and checked on construction; a 1-D ``q`` is a single
+    coordinate.
+
+    Parameters
+    ----------
+    t : array, shape (N,)
+        Sample times, strictly increasing, at least 2.
+    q : array, shape (N, n) or (N,)
+        Generalized positions.
+    qd, qdd : array, shape (N, n), optional
+        Generalized velocities and accelerations.
+    tau : array, shape (N, n), optional
+        Generalized forces on the coordinates.
+    u : array, shape (N, n), optional
+        Joint forces (one per MuJoCo degree of freedom); ``tau = u @ B.T``.
+    info : dict, optional
+        JSON-serializable description (initial state, forcing signals...).
+
     Attributes
     ----------
     t : ndarray, shape (N,)
-    q, qd, qdd : ndarray, shape (N, n) (``qd`` / ``qdd`` may be None)
-    tau : ndarray, shape (N, n) or None
-        Generalized forces on the coordinates.
-    u : ndarray, shape (N, n) or None
-        Joint forces (one per MuJoCo degree of freedom); ``tau = u @ B.T``.
+    q : ndarray, shape (N, n)
+    qd, qdd, tau, u : ndarray, shape (N, n), or None
+        As given.
     info : dict
-        JSON-serializable description (initial state, forcing signals...).
+
+    Raises
+    ------
+    DatasetError
+        If an array has the wrong shape, holds NaN or inf, or the times do not increase.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0.0, 1.0, 5)
+    >>> trajectory = Trajectory(t, q=np.sin(t), qd=np.cos(t))
+    >>> trajectory.q.shape, trajectory.n_samples, trajectory.state.shape
+    ((5, 1), 5, (5, 2))
     """
 
     t: np.ndarray
@@ -76,6 +114,7 @@ class Trajectory:
 
     @property
     def n_samples(self) -> int:
+        """Number of samples ``N``."""
         return len(self.t)
 
     @property
@@ -119,6 +158,20 @@ class Dataset:
     metadata : dict, optional
         JSON-serializable (system name and parameters, forcing mode, noise, seed...).
 
+    Attributes
+    ----------
+    trajectories : list of Trajectory
+    coordinate_names : tuple of str
+    metadata : dict
+
+    Raises
+    ------
+    TypeError
+        If ``trajectories`` is not a non-empty list of :class:`Trajectory` or the metadata are
+        not JSON-serializable.
+    DatasetError
+        If the trajectories do not match ``coordinate_names`` or each other.
+
     Examples
     --------
     >>> import numpy as np
@@ -160,10 +213,29 @@ class Dataset:
 
     @property
     def n_trajectories(self) -> int:
+        """Number of trajectories."""
         return len(self.trajectories)
 
     def has(self, key: str) -> bool:
-        """Whether every trajectory holds the series ``key`` (``"qd"``, ``"tau"``...)."""
+        """Whether every trajectory holds the series ``key``.
+
+        Parameters
+        ----------
+        key : {"q", "qd", "qdd", "tau", "u"}
+            Name of a series of :class:`Trajectory`.
+
+        Returns
+        -------
+        bool
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> t = np.linspace(0, 1, 11)
+        >>> data = Dataset([Trajectory(t, np.sin(t), qd=np.cos(t))], ["theta"])
+        >>> data.has("qd"), data.has("tau")
+        (True, False)
+        """
         return getattr(self.trajectories[0], key) is not None
 
     def fit_arguments(self, forces: str | None = "tau") -> dict:
@@ -177,7 +249,17 @@ class Dataset:
 
         Returns
         -------
-        dict with keys ``x``, ``t``, ``x_dot``, ``x_ddot``, ``u``
+        dict
+            Keys ``x``, ``t``, ``x_dot``, ``x_ddot``, ``u``; a missing series gives None.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> t = np.linspace(0, 1, 11)
+        >>> data = Dataset([Trajectory(t, np.sin(t), tau=np.ones(11))], ["theta"])
+        >>> arguments = data.fit_arguments()
+        >>> arguments["x_dot"], arguments["u"][0].shape
+        (None, (11, 1))
         """
         if forces not in ("tau", "u", None):
             raise ValueError(f"forces: expected 'tau', 'u' or None, got {forces!r}")
@@ -194,7 +276,22 @@ class Dataset:
 
     # -- persistence ---------------------------------------------------------------------
     def to_arrays(self) -> dict:
-        """The NPZ arrays (see the module docstring)."""
+        """The NPZ arrays (see the module docstring).
+
+        Returns
+        -------
+        dict of str to ndarray
+            All trajectories concatenated, with ``trajectory`` ids and the JSON ``metadata``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> t = np.linspace(0, 1, 11)
+        >>> trajectory = Trajectory(t, np.sin(t))
+        >>> arrays = Dataset([trajectory, trajectory], ["theta"]).to_arrays()
+        >>> sorted(arrays), arrays["q"].shape, arrays["trajectory"][[0, -1]]
+        (['metadata', 'q', 't', 'trajectory'], (22, 1), array([0, 1]))
+        """
         trs = self.trajectories
         arrays = {
             "t": np.concatenate([tr.t for tr in trs]),
@@ -214,10 +311,27 @@ class Dataset:
     def save(self, path, write_json: bool = True):
         """Write ``path`` (``.npz`` appended when missing) and the JSON metadata beside it.
 
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The NPZ file; the JSON copy of the metadata goes to the same name with ``.json``.
+        write_json : bool, default True
+            Also write the JSON file (the metadata are inside the NPZ in any case).
+
         Returns
         -------
         pathlib.Path
             The NPZ path written.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib, numpy as np
+        >>> t = np.linspace(0, 1, 11)
+        >>> data = Dataset([Trajectory(t, np.sin(t))], ["theta"], {"system": "pendulum"})
+        >>> with tempfile.TemporaryDirectory() as tmp:
+        ...     path = data.save(pathlib.Path(tmp) / "pendulum")
+        ...     print(path.name, path.with_suffix(".json").exists())
+        pendulum.npz True
         """
         import pathlib
 
@@ -235,10 +349,31 @@ class Dataset:
     def load(cls, path) -> Dataset:
         """Read a dataset written by :meth:`save` or a user's NPZ (see module docstring).
 
+        Same as :func:`load_dataset`.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The NPZ file.
+
+        Returns
+        -------
+        Dataset
+
         Raises
         ------
         DatasetError
             If the file is missing, not an NPZ, or its arrays are missing or malformed.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib, numpy as np
+        >>> t = np.linspace(0, 1, 11)
+        >>> data = Dataset([Trajectory(t, np.sin(t))], ["theta"], {"system": "pendulum"})
+        >>> with tempfile.TemporaryDirectory() as tmp:
+        ...     copy = Dataset.load(data.save(pathlib.Path(tmp) / "pendulum.npz"))
+        >>> copy.metadata, bool(np.array_equal(copy.trajectories[0].q, data.trajectories[0].q))
+        ({'system': 'pendulum'}, True)
         """
         return load_dataset(path)
 
@@ -287,6 +422,31 @@ def load_dataset(path) -> Dataset:
     ------
     DatasetError
         With a message naming the missing or malformed array.
+
+    Examples
+    --------
+    A user's own NPZ needs only ``t`` and ``q``; ``trajectory`` ids split it:
+
+    >>> import tempfile, pathlib, numpy as np
+    >>> t = np.r_[np.linspace(0, 1, 11), np.linspace(0, 2, 21)]
+    >>> ids = np.r_[np.zeros(11, dtype=int), np.ones(21, dtype=int)]
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     path = pathlib.Path(tmp) / "mine.npz"
+    ...     np.savez(path, t=t, q=np.sin(t), trajectory=ids)
+    ...     data = load_dataset(path)
+    >>> data
+    Dataset(coordinates=['q0'], trajectories=2, samples=32)
+
+    A missing array is named in the error:
+
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     path = pathlib.Path(tmp) / "bad.npz"
+    ...     np.savez(path, t=t)
+    ...     load_dataset(path)
+    Traceback (most recent call last):
+    ...
+    pysindy_xl.mujoco.dataset.DatasetError: path: '...bad.npz' lacks the required array(s)
+    ['q']; ...
     """
     path = os.fspath(path)
     arrays = _read_npz(path)
