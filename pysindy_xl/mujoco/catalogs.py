@@ -46,6 +46,7 @@ def lagrange_terms(system, velocity_degree: int = 2, trig_degree: int = 2) -> li
     Parameters
     ----------
     system : MuJoCoSystem or str
+        A system, a registry name or an MJCF path (see :func:`get_system`).
     velocity_degree, trig_degree : int, default 2
         Maximal degrees of the velocity and trigonometric monomials.
 
@@ -92,14 +93,31 @@ def classical_terms(system, terms) -> tuple[list[sp.Expr], np.ndarray]:
     Parameters
     ----------
     system : MuJoCoSystem or str
+        A system, a registry name or an MJCF path (gives the coordinates).
     terms : list of sympy.Expr
         Candidate Lagrangian terms.
 
     Returns
     -------
     monomials : list of sympy.Expr
+        Without numeric factors, in order of first appearance.
     mask : ndarray of bool, shape (len(monomials), n)
         ``mask[k, i]``: monomial ``k`` appears in the expansion of equation ``i``.
+
+    Examples
+    --------
+    The coupling term of the cart-pole expands into three classical monomials:
+
+    >>> import sympy as sp
+    >>> coords = get_system("cart-pole").coords
+    >>> x_dot, theta_dot = coords.qd
+    >>> found, mask = classical_terms("cart-pole", [x_dot * theta_dot * sp.cos(coords.q[1])])
+    >>> found
+    [theta_ddot*cos(theta), theta_dot**2*sin(theta), x_ddot*cos(theta)]
+    >>> mask  # columns: equations of x and theta
+    array([[ True, False],
+           [ True, False],
+           [False,  True]])
     """
     system = get_system(system)
     coords = system.coords
@@ -201,6 +219,7 @@ def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.
     system : MuJoCoSystem or str
         A system with a known Lagrangian.
     catalog : CatalogRepartition
+        Fitted or not (fitted here when needed), e.g. from :func:`reference_catalog`.
     strict : bool, default False
         Raise when part of the true model is not in the catalog (e.g. friction in a
         ``lagrange`` catalog); otherwise leave that part out.
@@ -212,6 +231,29 @@ def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.
     xi : ndarray, shape (F,)
     missing : list of str
         Parts of the true model not representable in the catalog (empty when exact).
+
+    Raises
+    ------
+    ValueError
+        If the system has no known model, or with ``strict`` when the catalog lacks part of
+        it.
+    TypeError
+        If ``catalog`` is not a :class:`~pysindy_xl.CatalogRepartition`.
+
+    Examples
+    --------
+    >>> catalog = reference_catalog("cart-pole", "mixed", trig_degree=1)
+    >>> xi, missing = true_coefficients("cart-pole", catalog)
+    >>> {name: round(float(v), 4) for name, v in zip(catalog.get_feature_names(), xi) if v}
+    {'F[tau]': -1.0, 'L[cos(theta)]': 3.924, 'L[x_dot**2]': 0.75,
+     'L[theta_dot*x_dot*cos(theta)]': 0.4, 'L[theta_dot**2]': 0.16, 'C_x[x_dot]': 0.5,
+     'C_theta[theta_dot]': 0.1}
+
+    A catalog without friction terms cannot hold the whole model:
+
+    >>> _, missing = true_coefficients("cart-pole", reference_catalog("cart-pole", "lagrange"))
+    >>> missing
+    ['+0.5*x_dot in the equation of x', '+0.1*theta_dot in the equation of theta']
     """
     from ..feature_library import LagrangeLibrary
 
