@@ -40,9 +40,13 @@ DEFAULT_DIVERGENCE_BOUND = 0.2
 class ValidationResult:
     """Comparison of a model's simulation with a MuJoCo trajectory.
 
-    Attributes
+    Usually made by :func:`compare_trajectories` or :func:`validate_model`, which compute the
+    metrics (see the module docstring); the fields are stored as given.
+
+    Parameters
     ----------
     t : ndarray, shape (T,)
+        Sample times.
     reference : ndarray, shape (T, 2n)
         MuJoCo state ``[q, qd]``.
     prediction : ndarray, shape (k, 2n)
@@ -50,13 +54,37 @@ class ValidationResult:
     forces : ndarray, shape (T, n)
         Forces given to the model.
     position_rmse : float
+        Root mean square position error over the simulated part (inf when nothing was).
     position_rmse_per_coordinate : ndarray, shape (n,)
+        The same per coordinate.
     divergence_time : float or None
+        When the prediction left the bound or stopped; None when neither happened.
     valid : bool
+        Simulated over the whole horizon and never diverged.
     failure : str or None
         Reason of a failed simulation (``SimulationError.reason``).
     divergence_bound : float
-    coordinate_names : tuple of str
+        Relative bound of the divergence test.
+    coordinate_names : tuple of str, optional
+        Names used in plots and in :meth:`to_dict`.
+
+    Attributes
+    ----------
+    n : int
+        Number of coordinates.
+    simulated_fraction : float
+        Fraction of the horizon the model could simulate.
+
+    Examples
+    --------
+    A prediction that stops half-way:
+
+    >>> import numpy as np
+    >>> t = np.linspace(0.0, 0.9, 10)
+    >>> reference = np.column_stack([np.sin(t), np.cos(t)])
+    >>> result = compare_trajectories(t, reference, reference[:5], failure="diverged")
+    >>> result.n, result.simulated_fraction, result.valid, result.divergence_time
+    (1, 0.5, False, 0.5)
     """
 
     t: np.ndarray
@@ -73,6 +101,7 @@ class ValidationResult:
 
     @property
     def n(self) -> int:
+        """Number of coordinates."""
         return self.reference.shape[1] // 2
 
     @property
@@ -81,7 +110,26 @@ class ValidationResult:
         return len(self.prediction) / len(self.t)
 
     def to_dict(self) -> dict:
-        """JSON-serializable summary (metrics, no arrays)."""
+        """JSON-serializable summary (metrics, no arrays).
+
+        Returns
+        -------
+        dict
+            ``position_rmse``, ``position_rmse_per_coordinate`` (by name),
+            ``divergence_time``, ``valid``, ``failure``, ``divergence_bound``, ``horizon``
+            (s) and ``simulated_fraction``.
+
+        Examples
+        --------
+        >>> import json, numpy as np
+        >>> t = np.linspace(0.0, 1.0, 11)
+        >>> reference = np.column_stack([t, np.ones_like(t)])
+        >>> result = compare_trajectories(t, reference, reference, coordinate_names=["x"])
+        >>> print(json.dumps(result.to_dict()))
+        {"position_rmse": 0.0, "position_rmse_per_coordinate": {"x": 0.0},
+         "divergence_time": null, "valid": true, "failure": null, "divergence_bound": 0.2,
+         "horizon": 1.0, "simulated_fraction": 1.0}
+        """
         return {
             "position_rmse": float(self.position_rmse),
             "position_rmse_per_coordinate": dict(zip(
@@ -103,15 +151,19 @@ def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVE
     Parameters
     ----------
     t : array, shape (T,)
+        Sample times.
     reference : array, shape (T, 2n)
         Reference states ``[q, qd]``.
     prediction : array, shape (k, 2n), k <= T
         Predicted states at ``t[:k]`` (shorter when the prediction stopped early).
     divergence_bound : float, default 0.2
+        Relative bound of the divergence test (see the module docstring).
     failure : str, optional
         Why the prediction stopped early.
     coordinate_names : sequence of str, optional
+        Default ``q0, q1, ...``.
     forces : array, shape (T, n), optional
+        Forces given to the model, kept for the plots (default zero).
 
     Returns
     -------
@@ -182,20 +234,33 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
     Parameters
     ----------
     system : MuJoCoSystem or str
+        A system, a registry name or an MJCF path.
     duration : float, default 10.0
+        Simulated time (s).
     forcing : {"explicit", "implicit", "mixed"}
+        Which actuators are driven (see :func:`generate_dataset`).
     actuators : list of str, optional
         Driven actuators in ``mixed`` mode.
     seed : int, optional
+        Seed of the initial state and the signals.
     sample_every : int, default 10
         Record every ``sample_every``-th MuJoCo step.
     initial_scale : float, default 1.0
+        Scale of the random initial state.
     **signal_options
         ``n_components``, ``max_frequency``, ``amplitude_scale`` of the random forces.
 
     Returns
     -------
     Trajectory
+        With clean ``q, qd, qdd, tau, u``.
+
+    Examples
+    --------
+    >>> trajectory = validation_trajectory("double-pendulum", duration=0.5, forcing="implicit",
+    ...                                    seed=0)
+    >>> trajectory.t[:3], trajectory.q.shape, bool((trajectory.tau == 0).all())
+    (array([0.  , 0.01, 0.02]), (51, 2), True)
     """
     system = get_system(system)
     if forcing not in FORCING_MODES:
@@ -240,6 +305,20 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     ------
     ValueError
         If neither ``system`` nor ``trajectory`` is given, or on a shape mismatch.
+
+    Examples
+    --------
+    Identify a cart-pole from one second of data and validate it on another second:
+
+    >>> import pysindy_xl as px
+    >>> from pysindy_xl.mujoco import generate_dataset, reference_catalog
+    >>> data = generate_dataset("cart-pole", n_trajectories=1, duration=1.0, seed=0,
+    ...                         progress=False)
+    >>> catalog = reference_catalog("cart-pole", "mixed", trig_degree=1)
+    >>> model = px.XLSINDy(catalog, px.ExplicitOptimizer()).fit(**data.fit_arguments())
+    >>> result = validate_model(model, "cart-pole", duration=1.0, seed=1)
+    >>> result.valid, result.divergence_time, bool(result.position_rmse < 1e-3)
+    (True, None, True)
     """
     from ..dynamics import SimulationError
 
