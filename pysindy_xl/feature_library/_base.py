@@ -24,6 +24,7 @@ from pysindy.feature_library.base import BaseFeatureLibrary
 from sklearn.utils.validation import check_is_fitted
 
 from ..symbols import Coordinates
+from ._compile import compile_entries
 
 __all__ = ["SymbolicLibrary", "stack_variables", "compile_entries"]
 
@@ -67,60 +68,15 @@ def stack_variables(q, qd, qdd=None, tau=None, t=None) -> np.ndarray:
     return np.column_stack(parts + [t])
 
 
-def compile_entries(variables, exprs):
-    """Compile sympy expressions into one NumPy function of the data columns.
-
-    Common subexpressions are shared between all entries (one ``lambdify`` with ``cse=True``);
-    constant entries never reach the generated code.
-
-    Parameters
-    ----------
-    variables : sequence of sympy.Symbol
-        Symbols, in the order of the columns of the data array.
-    exprs : sequence of sympy.Expr
-        Entries to evaluate.
-
-    Returns
-    -------
-    callable
-        ``f(Z) -> list`` of ``len(exprs)`` arrays of shape ``(N,)`` or floats (constants, to be
-        broadcast), for a data array ``Z`` of shape ``(N, len(variables))``.
-
-    Examples
-    --------
-    >>> import numpy as np, sympy as sp
-    >>> a, b = sp.symbols("a b")
-    >>> f = compile_entries([a, b], [a * b, sp.Integer(2)])
-    >>> f(np.array([[1.0, 3.0]]))
-    [array([3.]), 2.0]
-    """
-    exprs = [sp.sympify(e) for e in exprs]
-    variables = tuple(variables)
-    dynamic = [k for k, e in enumerate(exprs) if e.free_symbols]
-    func = None
-    if dynamic:
-        func = sp.lambdify(variables, [exprs[k] for k in dynamic], modules="numpy", cse=True)
-
-    constants = [0.0 if k in dynamic else float(e) for k, e in enumerate(exprs)]
-
-    def evaluate(z: np.ndarray) -> list:
-        out = list(constants)
-        if func is not None:
-            for k, v in zip(dynamic, func(*z.T), strict=True):
-                out[k] = v
-        return out
-
-    return evaluate
-
-
 class SymbolicLibrary(BaseFeatureLibrary):
     """Base class of the catalog categories: a matrix of symbolic columns, compiled once.
 
     Subclasses implement :meth:`_build_symbolic` returning the feature names and the sympy
     matrix ``E`` of shape ``(n, F)`` (entry ``E[c, j]``: contribution of feature ``j`` to the
     equation of coordinate ``c``). ``fit`` derives ``E`` once and compiles all its non-zero
-    entries into a single vectorized NumPy function; ``transform`` evaluates it on all samples
-    and lays the result out as described in the module docstring.
+    entries into one vectorized evaluator that shares every common product
+    (:func:`compile_entries`); ``transform`` runs it on all samples and writes the entries in
+    place, laid out as described in the module docstring.
 
     Parameters
     ----------
@@ -225,11 +181,11 @@ class SymbolicLibrary(BaseFeatureLibrary):
             self._compile()
         x = self._check_input(x)
         n_samples = x.shape[0]
-        # column-major: each entry fills a contiguous column block (and LAPACK prefers it)
+        # column-major: each entry is written in place into a contiguous column block (and
+        # LAPACK prefers this layout)
         theta = np.zeros((self.coords.n * n_samples, self.n_output_features_), order="F")
-        values = self._evaluate(x)
-        for (c, j), value in zip(self._entry_index, values, strict=True):
-            theta[c * n_samples : (c + 1) * n_samples, j] = value
+        targets = [theta[c * n_samples : (c + 1) * n_samples, j] for c, j in self._entry_index]
+        self._evaluate(x, targets)
         return theta
 
     def get_feature_names(self, input_features=None) -> list[str]:

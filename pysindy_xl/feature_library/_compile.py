@@ -1,0 +1,139 @@
+"""Numeric evaluation of many symbolic entries at once, sharing every common product.
+
+Catalog entries are sums of ``coefficient * product of powers of atoms``, where the atoms are
+the data variables and a few functions of them (``sin(q)``, ``cos(q)``, ...). Instead of
+generating code (``lambdify`` with ``cse=True`` costs more to build than to run on large
+catalogs), the entries are decomposed once into that form; evaluation computes each distinct
+atom once, each distinct monomial once (as a smaller monomial times one atom power, so products
+are shared across all entries), and writes each entry straight into its output column. Samples
+are processed in blocks, so intermediate arrays stay small whatever the number of samples.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+__all__ = ["compile_entries"]
+
+_BLOCK = 16_384
+
+Monomial = tuple  # sorted tuple of (atom index, integer power)
+
+
+def _decompose(expr: sp.Expr, atoms: dict) -> list[tuple[float, Monomial]]:
+    """``expr`` as ``[(coefficient, monomial), ...]``, registering atoms in ``atoms``."""
+    terms = []
+    for term in sp.Add.make_args(sp.sympify(expr)):
+        coef, rest = term.as_coeff_Mul()
+        coef = float(coef)
+        powers: dict[int, int] = {}
+        for factor in sp.Mul.make_args(rest):
+            if factor.is_number:
+                coef *= float(factor)
+                continue
+            base, exp = factor.as_base_exp()
+            if not (exp.is_Integer and exp > 0):
+                base, exp = factor, sp.Integer(1)
+            index = atoms.setdefault(base, len(atoms))
+            powers[index] = powers.get(index, 0) + int(exp)
+        terms.append((coef, tuple(sorted(powers.items()))))
+    return terms
+
+
+def compile_entries(variables, exprs):
+    """Compile sympy expressions into one vectorized evaluator over the data columns.
+
+    Parameters
+    ----------
+    variables : sequence of sympy.Symbol
+        Symbols, in the order of the columns of the data array.
+    exprs : sequence of sympy.Expr
+        Entries to evaluate.
+
+    Returns
+    -------
+    callable
+        ``f(Z, targets=None)`` for a data array ``Z`` of shape ``(N, len(variables))``. Without
+        ``targets`` it returns a list of ``len(exprs)`` arrays of shape ``(N,)``; with
+        ``targets`` (one writable array of shape ``(N,)`` per entry, or ``None`` to skip an
+        entry) it writes the entries there and returns ``None``.
+
+    Examples
+    --------
+    >>> import numpy as np, sympy as sp
+    >>> a, b = sp.symbols("a b")
+    >>> f = compile_entries([a, b], [a * b + sp.sin(a) ** 2, sp.Integer(2)])
+    >>> [v.round(4) for v in f(np.array([[1.0, 3.0]]))]
+    [array([3.7081]), array([2.])]
+    """
+    variables = tuple(variables)
+    position = {v: k for k, v in enumerate(variables)}
+    atoms: dict[sp.Expr, int] = {}
+    entries = [_decompose(e, atoms) for e in exprs]
+    atom_list = sorted(atoms, key=atoms.get)
+    unknown = set().union(*(a.free_symbols for a in atom_list)) - set(variables)
+    if unknown:
+        raise ValueError(f"exprs: unknown symbols {sorted(map(str, unknown))}")
+    atom_functions = [
+        position[a] if a in position else sp.lambdify(variables, a, modules="numpy")
+        for a in atom_list
+    ]
+
+    def evaluate_block(columns, n_rows, write):
+        atom_values = [
+            columns[f] if isinstance(f, int) else np.broadcast_to(f(*columns), (n_rows,))
+            for f in atom_functions
+        ]
+        memo: dict[Monomial, np.ndarray] = {}
+
+        def monomial(key: Monomial) -> np.ndarray:
+            value = memo.get(key)
+            if value is None:
+                if len(key) == 1:
+                    index, power = key[0]
+                    base = atom_values[index]
+                    value = base if power == 1 else base * monomial(((index, power - 1),))
+                else:
+                    value = monomial(key[:-1]) * monomial(key[-1:])
+                memo[key] = value
+            return value
+
+        for k, terms in enumerate(entries):
+            write(k, terms, monomial)
+
+    def evaluate(z: np.ndarray, targets=None):
+        z = np.asarray(z, dtype=float)
+        n_samples = z.shape[0]
+        outputs = targets
+        if outputs is None:
+            outputs = [np.empty(n_samples) for _ in entries]
+
+        for start in range(0, max(n_samples, 1), _BLOCK):
+            stop = min(start + _BLOCK, n_samples)
+            columns = z[start:stop].T
+
+            def write(k, terms, monomial, start=start, stop=stop):
+                target = outputs[k]
+                if target is None:
+                    return
+                out = target[start:stop]
+                first = True
+                for coef, key in terms:
+                    if not key:
+                        if first:
+                            out[...] = coef
+                        else:
+                            out += coef
+                    elif first:
+                        np.multiply(monomial(key), coef, out=out)
+                    else:
+                        out += coef * monomial(key)
+                    first = False
+                if first:
+                    out[...] = 0.0
+
+            evaluate_block(columns, stop - start, write)
+        return None if targets is not None else outputs
+
+    return evaluate
