@@ -120,17 +120,27 @@ class LassoResult:
     violation: np.ndarray
 
 
-def _polish_support(gram, targets, coef, alpha, mask, columns, slack):
-    """Exact Lasso solution on the current support and signs, where it is optimal.
+_CUT = 1e-9
 
-    For column k with support S and signs s, the Lasso optimum (if S, s are right) solves
-    ``G_SS x_S = b_S - alpha s``. Accept it when the signs agree and the conditions off the
-    support hold; this finishes in one linear solve what proximal gradient approaches slowly.
-    Returns the indices of the columns that were finished.
+
+def _significant(coef, cut=_CUT):
+    """Entries above ``cut`` times their column's largest magnitude (the working support)."""
+    top = np.max(np.abs(coef), axis=0, initial=0.0)
+    return np.abs(coef) > cut * top
+
+
+def _polish_support(gram, targets, coef, alpha, mask, columns, slack):
+    """Exact Lasso solution on the current significant support and signs, where optimal.
+
+    For column k with support S (entries above ``_CUT`` times the largest) and signs s, the
+    Lasso optimum (if S, s are right) solves ``G_SS x_S = b_S - alpha s``. Accept it when the
+    signs agree and the conditions off the support hold; this finishes in one linear solve what
+    proximal gradient approaches slowly (with a tiny alpha its iterates keep tiny non-zero
+    entries long after the support is found). Returns the indices of the finished columns.
     """
     finished = []
     for k in columns:
-        support = np.flatnonzero(coef[:, k])
+        support = np.flatnonzero(_significant(coef[:, k]))
         if support.size == 0:
             continue
         signs = np.sign(coef[support, k])
@@ -169,7 +179,7 @@ def _fista(
     converged = np.zeros(n_cols, dtype=bool)
     momentum = coef.copy()
     t = np.ones(n_cols)
-    previous_pattern = np.sign(coef)
+    previous_pattern = np.sign(coef) * _significant(coef)
     # Signed support at the last exact-finish attempt of each column: never retry the same one.
     attempted = [None] * n_cols
     n_iter = 0
@@ -193,15 +203,14 @@ def _fista(
         sub_mask = None if mask is None else mask[:, active]
         violation = kkt_violation(gram, targets[:, active], new, alpha[active], sub_mask)
         done = violation <= tol[active]
-        pattern = np.sign(new)
+        pattern = np.sign(new) * _significant(new)
         stable = np.all(pattern == previous_pattern[:, active], axis=0) & ~done
         previous_pattern[:, active] = pattern
-        candidates = [
-            k for k, column, ok in zip(active, pattern.T, stable, strict=True)
-            if ok and (attempted[k] is None or not np.array_equal(attempted[k], column))
-        ]
-        for k in candidates:
-            attempted[k] = np.sign(coef[:, k])
+        candidates = []
+        for k, column, ok in zip(active, pattern.T, stable, strict=True):
+            if ok and (attempted[k] is None or not np.array_equal(attempted[k], column)):
+                attempted[k] = column.copy()
+                candidates.append(k)
         if candidates:
             finished = _polish_support(gram, targets, coef, alpha, mask, candidates, tol)
             done[np.isin(active, finished)] = True
@@ -226,6 +235,7 @@ def lasso_gram(
     check_every: int = 10,
     warn: bool = True,
     callback=None,
+    atol: float = 1e-8,
 ) -> LassoResult:
     """Solve K Lasso problems sharing one Gram matrix, all at once.
 
@@ -253,7 +263,7 @@ def lasso_gram(
         Warm start; its non-zero columns start directly at ``alpha`` (no continuation).
     tol : float
         Convergence when the largest optimality violation (:func:`kkt_violation`) of a column is
-        at most ``tol * alpha``.
+        at most ``max(tol * alpha, atol)``.
     max_iter : int
         Budget of proximal-gradient iterations over all stages.
     continuation : bool
@@ -263,9 +273,13 @@ def lasso_gram(
     warn : bool
         Emit a :class:`~sklearn.exceptions.ConvergenceWarning` when some column did not converge.
     callback : callable, optional
-        ``callback(coef, converged) -> bool``, called every 100 iterations of the last stage
-        (``converged``: boolean per column); returning True stops early (the caller decides
-        that what it needs has converged).
+        ``callback(coef, converged) -> bool``, called every 100 iterations (``converged``:
+        boolean per column, at the current stage's alpha); returning True stops early (the
+        caller decides that what it needs has converged; the other columns may be left at an
+        intermediate stage of the continuation path).
+    atol : float
+        Absolute floor of the convergence threshold: the rounding level of the gradient on
+        unit-norm columns, below which a tiny ``alpha`` could not be resolved.
 
     Returns
     -------
@@ -334,18 +348,21 @@ def lasso_gram(
     for k, stage_alpha in enumerate(stages):
         last = k == len(stages) - 1
         # Intermediate stages only need a warm start: loose tolerance, bounded effort.
-        stage_tol = tol * stage_alpha if last else 0.1 * stage_alpha
+        # (Warm-started columns already run at alpha and get the final tolerance throughout.)
+        stage_tol = np.maximum(np.where(warm | last, tol, 0.1) * stage_alpha, atol)
         budget = int(max_iter) - n_iter if last else max(1, min(500, int(max_iter) - n_iter))
         if budget <= 0:
             break
         used, converged = _fista(
             gram, masked_targets, stage_alpha, mask, coef, lipschitz, stage_tol, budget,
-            int(check_every), callback if last else None,
+            int(check_every), callback,
         )
         n_iter += used
+        if used < budget and not np.all(converged):
+            break  # stopped by the callback
 
     violation = kkt_violation(gram, masked_targets, coef, alpha, mask)
-    converged = violation <= tol * alpha * (1 + 1e-9)
+    converged = violation <= np.maximum(tol * alpha, atol) * (1 + 1e-9)
     if warn and not np.all(converged):
         warnings.warn(
             f"lasso_gram: {int(np.sum(~converged))} of {n_cols} problems did not converge in "

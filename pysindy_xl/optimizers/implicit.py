@@ -23,12 +23,21 @@ matrix ``G = Theta~^T Theta~``::
 ``solver="fista"`` (default) solves the F problems at once with accelerated proximal gradient
 on ``G`` (:func:`pysindy_xl.optimizers._sparse.lasso_gram`: one matrix-matrix product per
 iteration, the diagonal constraint as a mask, a continuation path on alpha, an exact finish on
-the detected support). ``solver="cvxpy"`` hands the same problem (1), written with the
+the detected support). Two things exploit the implicit structure: the columns of a law start
+from their exact representation read off the near-null space of ``Theta~`` (an SVD of the
+``F x F`` factor below), so they only have to absorb the L1 shrinkage; and with
+``early_stopping`` the iterations stop once the extracted laws are stable and every column of
+their groups has converged, leaving the columns that belong to no law (whose ill-conditioned
+Lasso problems are the slow ones, and which cannot be homothetic to a law: a column's own
+entry is 1 in its direction and 0 in any law without it) possibly inexact (see
+``column_converged_``). ``solver="cvxpy"`` hands the same problem (1), written with the
 triangular factor ``R`` of ``Theta~ = Q R`` (``||Theta~ X - Theta~|| = ||R X - R||``, so the
 size does not grow with the number of samples), to a conic solver. Both minimize the same
-strictly defined objective, so up to solver tolerance they return the same matrix and the same
-laws. The paper writes the loss unsquared, ``||Theta X - Theta||_F``; its optimality conditions
-are those of (1) with ``alpha`` replaced by ``alpha * ||Theta X* - Theta||_F``, so it traces the
+objective, so up to solver tolerance (and early stopping) they return the same law columns and
+the same laws; the tests check that they recover the same support.
+
+The paper writes the loss unsquared, ``||Theta X - Theta||_F``; its optimality conditions are
+those of (1) with ``alpha`` replaced by ``alpha * ||Theta X* - Theta||_F``, so it traces the
 same family of solutions with a rescaled weight.
 
 Normalization of the laws
@@ -161,12 +170,15 @@ class ImplicitOptimizer(CatalogOptimizer):
 
     Parameters
     ----------
-    alpha : float, default 1e-5
+    alpha : float or "auto", default "auto"
         L1 weight (the paper's lambda) of problem (1) on unit-norm columns. The squared loss
-        weighs a residual r as r^2 / 2 against alpha ||x||_1, so alpha must stay below the
-        squared residual of the best approximate (false) representations of the catalog's
-        columns for the exact law to win: large, nearly dependent catalogs need smaller values
-        (1e-7 and below), noisy data larger ones.
+        weighs a residual r as r^2 / 2 against alpha ||x||_1, so for the law to be every law
+        column's optimum, alpha must lie below the squared residual of the next-best (false)
+        representations, ``s_2^2`` (``s_1 <= s_2`` the two smallest singular values of the
+        normalized matrix; ``s_1`` is the law's own residual), and above the law's ``s_1^2``
+        (noise). ``"auto"`` takes their geometric mean ``s_1 s_2``, clipped to
+        ``[1e-12, 1e-3]``; the chosen value is ``alpha_``. The extracted laws are refit on their
+        support, so a small alpha costs no accuracy.
     solver : {"fista", "cvxpy"}, default "fista"
         Fast batched proximal-gradient solver or the cvxpy reference formulation.
     cvxpy_solver : str, optional
@@ -222,6 +234,8 @@ class ImplicitOptimizer(CatalogOptimizer):
         Relative residual of each law.
     combined_laws_ : list of int
         Indices of the laws summed into ``coef_``.
+    alpha_ : float
+        The L1 weight used.
     n_iter_ : int
         Iterations of the fast solver (0 for cvxpy).
     converged_ : bool
@@ -242,7 +256,7 @@ class ImplicitOptimizer(CatalogOptimizer):
 
     def __init__(
         self,
-        alpha=1e-5,
+        alpha="auto",
         solver="fista",
         cvxpy_solver=None,
         angle_tol=5.0,
@@ -273,7 +287,8 @@ class ImplicitOptimizer(CatalogOptimizer):
         if self.solver not in _SOLVERS:
             raise ValueError(f"solver: expected one of {_SOLVERS}, got {self.solver!r}")
         checks = {
-            "alpha": self.alpha > 0,
+            "alpha": isinstance(self.alpha, str) and self.alpha == "auto"
+            or not isinstance(self.alpha, str) and self.alpha > 0,
             "angle_tol": 0 < self.angle_tol < 90,
             "min_membership": 0 <= self.min_membership <= 1,
             "max_residual_ratio": self.max_residual_ratio >= 1,
@@ -281,7 +296,7 @@ class ImplicitOptimizer(CatalogOptimizer):
             "tol": self.tol > 0,
         }
         expected = {
-            "alpha": "a positive value",
+            "alpha": "a positive value or 'auto'",
             "angle_tol": "degrees in (0, 90)",
             "min_membership": "a value in [0, 1]",
             "max_residual_ratio": "a value >= 1",
@@ -414,9 +429,10 @@ class ImplicitOptimizer(CatalogOptimizer):
 
     def _solve(self, r_factor):
         n = r_factor.shape[1]
+        self.alpha_ = self._resolve_alpha(r_factor)
         if self.solver == "cvxpy":
             self.n_iter_ = 0
-            solution, converged = _solve_cvxpy(r_factor, self.alpha, self.cvxpy_solver)
+            solution, converged = _solve_cvxpy(r_factor, self.alpha_, self.cvxpy_solver)
             self.converged_ = converged
             self._column_converged = np.full(n, converged)
             return solution
@@ -439,7 +455,7 @@ class ImplicitOptimizer(CatalogOptimizer):
             return settled
 
         result = lasso_gram(
-            gram, gram, self.alpha, mask=mask, coef_init=_null_space_start(r_factor),
+            gram, gram, self.alpha_, mask=mask, coef_init=_null_space_start(r_factor),
             tol=self.tol, max_iter=int(self.max_iter), warn=False,
             callback=laws_settled if self.early_stopping else None,
         )
@@ -450,12 +466,20 @@ class ImplicitOptimizer(CatalogOptimizer):
             warnings.warn(
                 f"ImplicitOptimizer: the fast solver did not converge on "
                 f"{int(np.sum(~result.converged))} of {n} columns in {self.max_iter} iterations "
-                f"(largest optimality violation {np.max(result.violation) / self.alpha:.2e} x "
+                f"(largest optimality violation {np.max(result.violation) / self.alpha_:.2e} x "
                 "alpha); raise max_iter or alpha",
                 ConvergenceWarning,
                 stacklevel=4,
             )
         return result.coef
+
+    def _resolve_alpha(self, r_factor):
+        if not isinstance(self.alpha, str):
+            return float(self.alpha)
+        singular = np.linalg.svd(r_factor, compute_uv=False)
+        singular = np.concatenate([singular, np.zeros(r_factor.shape[1] - singular.size)])
+        smallest, second = singular[-1], singular[-2]
+        return float(np.clip(smallest * second / singular[0] ** 2, 1e-12, 1e-3))
 
     def _extract_laws(self, directions, groups, r_factor):
         """Principal direction of each qualifying group, refit on its support."""
