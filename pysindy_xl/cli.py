@@ -29,7 +29,21 @@ _AUTO_SOLVER = {"explicit": "explicit", "implicit": "implicit", "mixed": "mixed"
 
 
 class CLIError(Exception):
-    """An error reported to the user as ``pysindy-xl: error: ...`` with exit status 1."""
+    """An error reported to the user as ``pysindy-xl: error: ...`` with exit status 1.
+
+    Raised by the ``run_*`` functions for a bad input or a failed step; :func:`main` prints it
+    without a traceback.
+
+    Examples
+    --------
+    >>> args = build_parser().parse_args(["demo", "cart-pole", "--forcing", "implicit",
+    ...                                   "--solver", "explicit"])
+    >>> run_demo(args)
+    Traceback (most recent call last):
+    ...
+    pysindy_xl.cli.CLIError: --solver explicit needs forces; use --forcing explicit or mixed, or
+    --solver implicit
+    """
 
 
 def _non_negative_float(text):
@@ -94,7 +108,21 @@ def _add_fit_options(parser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``pysindy-xl`` command."""
+    """The argument parser of the ``pysindy-xl`` command.
+
+    Sub-commands ``demo``, ``identify`` and ``generate`` (see :doc:`/cli` for every option).
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        Its ``parse_args`` gives a namespace with ``command`` and the options of that command.
+
+    Examples
+    --------
+    >>> args = build_parser().parse_args(["demo", "double-pendulum", "--noise", "0.01"])
+    >>> args.command, args.system, args.noise, args.catalog, args.solver, args.forcing
+    ('demo', 'double-pendulum', 0.01, 'mixed', 'auto', 'explicit')
+    """
     parser = argparse.ArgumentParser(
         prog="pysindy-xl",
         description="Identify mechanical systems with XLSINDy: MuJoCo demos and your data.",
@@ -254,7 +282,51 @@ def _model_lines(model):
 
 # -- commands ----------------------------------------------------------------------------------
 def run_demo(args) -> dict:
-    """Run ``pysindy-xl demo`` with parsed arguments; returns the JSON report."""
+    """Run ``pysindy-xl demo`` with parsed arguments; returns the JSON report.
+
+    Generates the training data, identifies the model, validates it against a fresh MuJoCo
+    trajectory, prints the equations and metrics, and writes ``report.json`` (and
+    ``validation.png`` unless ``--no-plots``) to ``args.out``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed ``demo`` arguments (``build_parser().parse_args(["demo", ...])``).
+
+    Returns
+    -------
+    dict
+        The report also written to ``report.json``: options, features, coefficients (and
+        the true ones), equations, ``coefficient_summary``, ``validation`` metrics,
+        ``timings_s``, ``files``.
+
+    Raises
+    ------
+    CLIError
+        If the system, the solver or the data generation fails, or the identification does.
+
+    Examples
+    --------
+    Half a second of cart-pole data, a small catalog and a short validation:
+
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as out:
+    ...     args = build_parser().parse_args([
+    ...         "demo", "cart-pole", "--duration", "0.5", "--trajectories", "1",
+    ...         "--trig-degree", "1", "--validation-duration", "0.2", "--no-plots", "--quiet",
+    ...         "--out", out])
+    ...     report = run_demo(args)
+    <BLANKLINE>
+    L = 0.16*theta_dot**2 + 0.4*theta_dot*x_dot*cos(theta) + 0.75*x_dot**2 + 3.924*cos(theta)
+    (x) 0.4*theta_ddot*cos(theta) - 0.4*theta_dot**2*sin(theta) + 1.5*x_ddot + 0.5*x_dot = tau_x
+    (theta) 0.32*theta_ddot + 0.1*theta_dot + 0.4*x_ddot*cos(theta) + 3.924*sin(theta) = tau_theta
+    <BLANKLINE>
+    validation: position RMSE ... over 0.2 s, divergence none, VALID
+    coefficients: 7 terms identified, 7 true, max error ... (relative to the largest)
+    report: .../report.json (... s)
+    >>> report["validation"]["valid"], report["coefficient_summary"]["support_recovered"]
+    (True, True)
+    """
     from pysindy_xl.dynamics import DynamicsError
     from pysindy_xl.mujoco import generate_dataset
     from pysindy_xl.mujoco.validation import validate_model
@@ -380,7 +452,47 @@ def _dataset_for(system, dataset):
 
 
 def run_identify(args):
-    """Run ``pysindy-xl identify`` with parsed arguments; returns the fitted model."""
+    """Run ``pysindy-xl identify`` with parsed arguments; returns the fitted model.
+
+    Loads the dataset, picks the solver from its forces (``--solver auto``), fits the
+    reference catalog, prints the model (and its error against the true one for a known
+    system) and saves it as JSON with ``--out``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed ``identify`` arguments (``build_parser().parse_args(["identify", ...])``).
+
+    Returns
+    -------
+    XLSINDy
+        The fitted model.
+
+    Raises
+    ------
+    CLIError
+        If the dataset cannot be read, names no system, does not match the system, or the
+        identification fails.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from pysindy_xl.mujoco import generate_dataset
+    >>> data = generate_dataset("cart-pole", n_trajectories=1, duration=0.5, seed=0,
+    ...                         progress=False)
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     path = data.save(pathlib.Path(tmp) / "cart_pole.npz")
+    ...     args = build_parser().parse_args(["identify", str(path), "--trig-degree", "1"])
+    ...     model = run_identify(args)
+    cart-pole: 1 trajectories, 501 samples, mixed catalog, explicit solver
+    L = 0.16*theta_dot**2 + 0.4*theta_dot*x_dot*cos(theta) + 0.75*x_dot**2 + 3.924*cos(theta)
+    (x) 0.4*theta_ddot*cos(theta) - 0.4*theta_dot**2*sin(theta) + 1.5*x_ddot + 0.5*x_dot = tau_x
+    (theta) 0.32*theta_ddot + 0.1*theta_dot + 0.4*x_ddot*cos(theta) + 3.924*sin(theta) = tau_theta
+    against the true model: max coefficient error ... (relative), support recovered: True
+    >>> import numpy as np
+    >>> len(model.get_feature_names()), int(np.count_nonzero(model.coefficients()))
+    (20, 7)
+    """
     from pysindy_xl.mujoco import DatasetError, load_dataset
 
     try:
@@ -423,7 +535,33 @@ def run_identify(args):
 
 
 def run_generate(args):
-    """Run ``pysindy-xl generate``; returns the NPZ path written."""
+    """Run ``pysindy-xl generate``; returns the NPZ path written.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed ``generate`` arguments (``build_parser().parse_args(["generate", ...])``).
+
+    Returns
+    -------
+    pathlib.Path
+        The NPZ file (its JSON metadata lie beside it).
+
+    Raises
+    ------
+    CLIError
+        If the system is unknown, the generation fails or the output directory is missing.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     args = build_parser().parse_args(["generate", "cart-pole", f"{tmp}/data.npz",
+    ...                                       "--duration", "0.2", "--trajectories", "1"])
+    ...     path = run_generate(args)
+    wrote .../data.npz and .../data.json: Dataset(coordinates=['x', 'theta'], trajectories=1,
+    samples=101)
+    """
     from pysindy_xl.mujoco import generate_dataset
 
     system = _system(args.system)
@@ -455,6 +593,25 @@ def main(argv=None) -> int:
     -------
     int
         Exit status: 0 on success, 1 on an error, 2 on a usage error.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     status = main(["generate", "double-pendulum", f"{tmp}/data.npz", "--duration", "0.1",
+    ...                    "--trajectories", "1", "--forcing", "implicit"])
+    wrote ...
+    >>> status
+    0
+
+    Errors are printed on stderr, without a traceback:
+
+    >>> import contextlib, sys
+    >>> with contextlib.redirect_stderr(sys.stdout):
+    ...     status = main(["identify", "missing.npz", "--system", "cart-pole"])
+    pysindy-xl: error: path: dataset file 'missing.npz' does not exist
+    >>> status
+    1
     """
     parser = build_parser()
     args = parser.parse_args(argv)
