@@ -272,3 +272,15 @@ def test_implicit_identification_of_unforced_systems(name, request):
         warnings.simplefilter("ignore", UserWarning)
         reference = fit_unforced(system, library, ImplicitOptimizer(solver="cvxpy"))
     np.testing.assert_array_equal(reference.coefficients() != 0, fast != 0)
+
+
+def test_figure_2_plot(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    theta, _ = planted_matrix()
+    opt = ImplicitOptimizer().fit(theta)
+    axes = opt.plot(feature_names=[f"f{k}" for k in range(theta.shape[1])])
+    assert len(axes) == 3
+    axes[0].figure.savefig(tmp_path / "figure2.png")
+    assert (tmp_path / "figure2.png").stat().st_size > 0

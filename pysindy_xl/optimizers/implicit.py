@@ -415,6 +415,54 @@ class ImplicitOptimizer(CatalogOptimizer):
         self.coef_, self.combined_laws_ = self._combine(self.laws_)
         return self
 
+    def plot(self, feature_names=None, axes=None):
+        """The paper's Figure 2: solution matrix, homothetic groups, extracted law.
+
+        Panel A shows ``|normalized_solution_matrix_|`` (log scale), panel B the unit
+        directions ``e_j - X[:, j]`` of the columns of each law's group (one colour per law),
+        panel C the combined coefficients ``coef_``.
+
+        Parameters
+        ----------
+        feature_names : list of str, optional
+            Labels of the catalog columns (e.g. ``library.get_feature_names()``).
+        axes : sequence of 3 matplotlib Axes, optional
+            Where to draw; default: a new figure with three panels.
+
+        Returns
+        -------
+        list of matplotlib.axes.Axes
+        """
+        import matplotlib.pyplot as plt
+        from sklearn.utils.validation import check_is_fitted
+
+        check_is_fitted(self, "coef_")
+        if axes is None:
+            _, axes = plt.subplots(1, 3, figsize=(15, 4.5), constrained_layout=True)
+        x = np.abs(self.normalized_solution_matrix_)
+        floor = max(x.max(initial=0.0) * 1e-8, 1e-300)
+        image = axes[0].imshow(np.log10(np.maximum(x, floor)), cmap="viridis")
+        axes[0].set(title="A: |X| (SINDy-PI solution, log10)", xlabel="column j",
+                    ylabel="feature")
+        plt.colorbar(image, ax=axes[0], shrink=0.8)
+        directions = np.eye(x.shape[0]) - self.normalized_solution_matrix_
+        for k, group in enumerate(self.law_groups_):
+            for j in group:
+                d = directions[:, j] / np.linalg.norm(directions[:, j])
+                d = d * np.sign(d[np.argmax(np.abs(d))])
+                axes[1].plot(d, color=f"C{k}", alpha=0.6, label=f"law {k}" if j == group[0]
+                             else None)
+        axes[1].set(title="B: homothetic columns of each law", xlabel="feature",
+                    ylabel="unit direction")
+        axes[1].legend()
+        axes[2].bar(np.arange(self.coef_.size), self.coef_, color="C3")
+        axes[2].set(title="C: extracted law (coef_)", xlabel="feature", ylabel="coefficient")
+        if feature_names is not None:
+            for ax in axes[1:]:
+                ax.set_xticks(np.arange(len(feature_names)), feature_names, rotation=90,
+                              fontsize=6)
+        return list(axes)
+
     def _post_process(self, x_scaled, r_factor):
         """Column residuals, homothetic groups and the laws (best first), normalized space."""
         directions = np.eye(x_scaled.shape[0]) - x_scaled
