@@ -46,10 +46,14 @@ def test_ties_share_the_place():
                                          rec("t", "c", "ok", 0.7)]))
     assert rows["a"]["1st"] == rows["b"]["1st"] == 1
     assert rows["c"]["2nd"] == 0 and rows["c"]["2nd>"] == 1
-    # a tie for second place
+    # a tie for second place: errors equal within 0.1 % (the same model, integration noise)
     ranks = rank_trajectory([rec("t", "a", "ok", 0.1), rec("t", "b", "ok", 0.2),
-                             rec("t", "c", "ok", 0.2 * (1 + 1e-12))])
+                             rec("t", "c", "ok", 0.2 * (1 + 1e-6))])
     assert ranks == {"a": 1, "b": 2, "c": 2}
+    # no chaining: each within 0.1 % of its neighbour, but the last is 0.16 % above the best
+    ranks = rank_trajectory([rec("t", "a", "ok", 1.0), rec("t", "b", "ok", 1.0008),
+                             rec("t", "c", "ok", 1.0016), rec("t", "d", "ok", 1.01)])
+    assert ranks == {"a": 1, "b": 1, "c": 3, "d": 4}
 
 
 def test_all_invalid_trajectory_gives_no_place():
