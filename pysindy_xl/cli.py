@@ -128,6 +128,9 @@ def build_parser() -> argparse.ArgumentParser:
         description="Identify mechanical systems with XLSINDy: MuJoCo demos and your data.",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    from .benchmark import add_parser as add_benchmark_parser
+
+    add_benchmark_parser(sub)
 
     demo = sub.add_parser(
         "demo", help="generate MuJoCo data, identify, validate, plot",
@@ -615,6 +618,8 @@ def main(argv=None) -> int:
     """
     parser = build_parser()
     args = parser.parse_args(argv)
+    if args.command == "benchmark":
+        return args.func(args)
     commands = {"demo": run_demo, "identify": run_identify, "generate": run_generate}
     try:
         commands[args.command](args)
