@@ -635,6 +635,14 @@ class CartPole(MuJoCoSystem):
                 + _footer(self.joint_names))
 
 
+def _pendulum_chain_xml(p: dict, indent: int) -> str:
+    """MJCF bodies of the two-link chain (link1 carrying link2), shared by both pendulums."""
+    inner = _link("link2", "hinge2", p["mass2"], p["length2"], p["damping2"],
+                  p["point_inertia"], f"0 0 {_f(-p['length1'])}", indent=indent + 2)
+    return _link("link1", "hinge1", p["mass1"], p["length1"], p["damping1"],
+                 p["point_inertia"], "0 0 0", inner=inner, indent=indent)
+
+
 class DoublePendulum(MuJoCoSystem):
     """Double pendulum with point masses on massless rods, hanging from a fixed pivot.
 
@@ -723,12 +731,8 @@ class DoublePendulum(MuJoCoSystem):
         '<mujoco model="double_pendulum">'
         """
         p = self._parameters
-        inner = _link("link2", "hinge2", p["mass2"], p["length2"], p["damping2"],
-                      p["point_inertia"], f"0 0 {_f(-p['length1'])}", indent=6)
-        outer = _link("link1", "hinge1", p["mass1"], p["length1"], p["damping1"],
-                      p["point_inertia"], "0 0 0", inner=inner, indent=4)
-        return (_header("double_pendulum", p["timestep"], p["gravity"]) + outer
-                + _footer(self.joint_names))
+        return (_header("double_pendulum", p["timestep"], p["gravity"])
+                + _pendulum_chain_xml(p, indent=4) + _footer(self.joint_names))
 
 
 def _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=None, cart_mass=0.0):
@@ -842,10 +846,7 @@ class CartDoublePendulum(MuJoCoSystem):
         '<mujoco model="cart_double_pendulum">'
         """
         p = self._parameters
-        inner = _link("link2", "hinge2", p["mass2"], p["length2"], p["damping2"],
-                      p["point_inertia"], f"0 0 {_f(-p['length1'])}", indent=8)
-        link = _link("link1", "hinge1", p["mass1"], p["length1"], p["damping1"],
-                     p["point_inertia"], "0 0 0", inner=inner, indent=6)
+        link = _pendulum_chain_xml(p, indent=6)
         return (_header("cart_double_pendulum", p["timestep"], p["gravity"])
                 + _cart(p["cart_mass"], p["cart_damping"], link)
                 + _footer(self.joint_names))
