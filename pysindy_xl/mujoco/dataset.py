@@ -30,6 +30,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..dynamics import _check_times as check_times
+
 __all__ = ["Trajectory", "Dataset", "load_dataset", "DatasetError"]
 
 FORMAT = "pysindy-xl-dataset"
@@ -47,7 +49,7 @@ class DatasetError(ValueError):
     >>> Trajectory(t=[0.0, 1.0, 0.5], q=[[0.0], [1.0], [2.0]])
     Traceback (most recent call last):
     ...
-    pysindy_xl.mujoco.dataset.DatasetError: t: times must be strictly increasing within a trajectory
+    pysindy_xl.mujoco.dataset.DatasetError: t: times must be strictly increasing
     """
 
 
@@ -126,14 +128,10 @@ class Trajectory:
 
 
 def _check_times(t, name: str) -> np.ndarray:
-    t = np.asarray(t, dtype=float)
-    if t.ndim != 1 or t.size < 2:
-        raise DatasetError(f"{name}: expected a 1-D array of at least 2 times, got shape {t.shape}")
-    if not np.all(np.isfinite(t)):
-        raise DatasetError(f"{name}: contains NaN or inf")
-    if np.any(np.diff(t) <= 0):
-        raise DatasetError(f"{name}: times must be strictly increasing within a trajectory")
-    return t
+    try:
+        return check_times(t, name)
+    except ValueError as err:
+        raise DatasetError(str(err)) from None
 
 
 def _check_series(a, name: str, n_samples: int, n: int | None) -> np.ndarray:
