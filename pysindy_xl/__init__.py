@@ -17,6 +17,7 @@ from .feature_library import (
 from .model import XLSINDy
 from .optimizers import ExplicitOptimizer, ImplicitOptimizer, MixedOptimizer, NoLawFoundError
 from .symbols import Coordinates, monomials, products
+from .weak import BumpTestFunctions, WhittakerSmoother
 
 __all__ = [
     "Coordinates",
@@ -35,5 +36,7 @@ __all__ = [
     "MassMatrixDynamics",
     "SimulationError",
     "SingularMassMatrixError",
+    "BumpTestFunctions",
+    "WhittakerSmoother",
 ]
 __version__ = "0.1.0"

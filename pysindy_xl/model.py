@@ -17,8 +17,11 @@ from .feature_library import (
     stack_variables,
 )
 from .optimizers import ExplicitOptimizer, independent_columns
+from .weak import BumpTestFunctions, WhittakerSmoother
 
 __all__ = ["XLSINDy"]
+
+_FORMULATIONS = ("auto", "strong", "weak")
 
 
 def _as_list(value, name: str) -> tuple[list, bool]:
@@ -91,6 +94,21 @@ class XLSINDy(BaseEstimator):
         sampled at 100 Hz: implicit recovery is exact with the fourth-order scheme and fails
         with the smoothed one; explicit recovery at 1e-4 rad noise is within 1.1 % with the
         smoothed scheme and fails with the fourth-order one.
+    formulation : {"auto", "strong", "weak"}, default "auto"
+        ``"strong"``: the Euler-Lagrange columns evaluated pointwise, which needs
+        accelerations. ``"weak"``: each equation integrated against test functions, with the
+        accelerations removed by integration by parts (``int phi E dt = -int phi' P dt -
+        int phi Q dt``, see :meth:`SymbolicLibrary.weak_transform
+        <pysindy_xl.feature_library.SymbolicLibrary.weak_transform>`), fed by smoothed
+        positions and velocities: the robust choice for measured positions. ``"auto"``: weak
+        when only positions are given, strong when ``x_dot`` and ``x_ddot`` are given.
+    test_functions : BumpTestFunctions, optional
+        Test functions of the weak formulation (default ``BumpTestFunctions()``: bumps whose
+        width comes from the data's spectrum).
+    smoother : WhittakerSmoother, optional
+        Estimates positions and velocities for the weak formulation from noisy positions
+        (default ``WhittakerSmoother()``: smoothness chosen from the data). Measured
+        ``x_dot`` is used as given.
     drop_dependent : bool, default True
         Remove catalog columns that are zero or exact linear combinations of preferred columns
         (see :func:`~pysindy_xl.optimizers.independent_columns`): a sparse regression on an
@@ -109,6 +127,13 @@ class XLSINDy(BaseEstimator):
     n_coordinates_ : int
     n_samples_ : int
         Samples used in the fit, all trajectories together.
+    formulation_ : {"strong", "weak"}
+        The formulation used.
+    weak_info_ : dict or None
+        Weak formulation: test-function half-width (s), test functions per trajectory, and
+        the smoother's noise estimate per coordinate (first trajectory).
+    selection_ : SelectionResult or None
+        How the sparsity was chosen, when the optimizer reports it (``threshold="auto"``).
 
     Examples
     --------
@@ -126,11 +151,14 @@ class XLSINDy(BaseEstimator):
     """
 
     def __init__(self, feature_library=None, optimizer=None, differentiation_method=None,
-                 drop_dependent=True):
+                 drop_dependent=True, formulation="auto", test_functions=None, smoother=None):
         self.feature_library = feature_library
         self.optimizer = optimizer
         self.differentiation_method = differentiation_method
         self.drop_dependent = drop_dependent
+        self.formulation = formulation
+        self.test_functions = test_functions
+        self.smoother = smoother
 
     # -- data handling -----------------------------------------------------------------------
     def _library(self) -> CatalogRepartition:
@@ -157,8 +185,11 @@ class XLSINDy(BaseEstimator):
             raise ValueError("differentiation_method: returned an invalid derivative")
         return result
 
-    def _trajectories(self, x, t, x_dot, x_ddot, u, n):
-        """Validate the fit/score inputs; returns per-trajectory dicts of arrays."""
+    def _trajectories(self, x, t, x_dot, x_ddot, u, n, differentiate=True):
+        """Validate the fit/score inputs; returns per-trajectory dicts of arrays.
+
+        With ``differentiate=False`` missing velocities and accelerations stay ``None``.
+        """
         xs, is_list = _as_list(x, "x")
         if isinstance(t, (list, tuple)):
             if not is_list or len(t) != len(xs):
@@ -194,9 +225,11 @@ class XLSINDy(BaseEstimator):
             for name in ("x_dot", "x_ddot", "u"):
                 v = optional[name][k]
                 arrays[name] = None if v is None else _check_array(v, f"{name}{label}", xk.shape)
-            if arrays["x_dot"] is None:
+            if not differentiate:
+                pass
+            elif arrays["x_dot"] is None:
                 arrays["x_dot"] = self._differentiate(xk, tk, implicit)
-            if arrays["x_ddot"] is None:
+            if differentiate and arrays["x_ddot"] is None:
                 arrays["x_ddot"] = self._differentiate(arrays["x_dot"], tk, implicit)
             out.append(arrays)
         return out
@@ -240,17 +273,22 @@ class XLSINDy(BaseEstimator):
         library.fit()
         coords = library.coords
         n = coords.n
-        data = self._trajectories(x, t, x_dot, x_ddot, u, n)
-        z = np.vstack([
-            stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"]) for d in data
-        ])
+        formulation = self._resolve_formulation(x_dot, x_ddot)
+        data = self._trajectories(x, t, x_dot, x_ddot, u, n,
+                                  differentiate=formulation == "strong")
         if not any(library.symbolic_matrix_[:, j].free_symbols & set(coords.qdd)
                    for j in range(library.n_output_features_)):
             raise ValueError(
                 "feature_library: no term contains an acceleration; add Lagrangian terms with "
                 "velocities (e.g. q_dot**2) or classical terms in q_ddot"
             )
-        theta = library.transform(z)
+        if formulation == "weak":
+            theta, z, self.weak_info_ = self._weak_regression(library, data)
+        else:
+            z = np.vstack([
+                stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"]) for d in data
+            ])
+            theta, self.weak_info_ = library.transform(z), None
         if self.drop_dependent:
             keep, dropped = independent_columns(
                 library.transform(_probe_points(z)), library.column_priority()
@@ -281,8 +319,51 @@ class XLSINDy(BaseEstimator):
         self.n_coordinates_ = n
         self.n_samples_ = z.shape[0]
         self.forced_coordinates_ = forced
+        self.formulation_ = formulation
+        self.selection_ = getattr(optimizer, "selection_", None)
         self._build_dynamics()
         return self
+
+    def _resolve_formulation(self, x_dot, x_ddot) -> str:
+        if not isinstance(self.formulation, str) or self.formulation not in _FORMULATIONS:
+            raise ValueError(f"formulation: expected one of {_FORMULATIONS}, got "
+                             f"{self.formulation!r}")
+        if self.formulation != "auto":
+            return self.formulation
+        return "strong" if x_dot is not None and x_ddot is not None else "weak"
+
+    def _weak_regression(self, library, data):
+        """Weak regression matrix of all trajectories, rows coordinate-major.
+
+        Returns ``(theta, z, info)``: ``z`` stacks the smoothed states (with the smoother's
+        accelerations, used only to probe the catalog for dependent columns).
+        """
+        test_functions = self.test_functions or BumpTestFunctions()
+        smoother = self.smoother or WhittakerSmoother()
+        for name, value, kind in (("test_functions", test_functions, "matrices"),
+                                  ("smoother", smoother, "smooth")):
+            if not callable(getattr(value, kind, None)):
+                raise TypeError(f"{name}: expected an object with a {kind} method, got "
+                                f"{type(value).__name__}")
+        states, noise = [], None
+        for d in data:
+            q, qd, qdd = smoother.smooth(d["t"], d["x"])
+            noise = getattr(smoother, "noise_", None) if noise is None else noise
+            if d["x_dot"] is not None:  # measured velocities are better than estimated ones
+                q, qd = d["x"], d["x_dot"]
+            states.append(stack_variables(q, qd, qdd, d["u"], d["t"]))
+        # one width for all trajectories: the narrowest that any of them asks for
+        half_width = min(test_functions.half_width(d["t"], d["x"]) for d in data)
+        blocks, counts = [], []
+        for d, z in zip(data, states, strict=True):
+            phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
+            blocks.append(library.weak_transform(z, phi, dphi).reshape(
+                library.coords.n, phi.shape[0], -1))
+            counts.append(phi.shape[0])
+        theta = np.concatenate(blocks, axis=1).reshape(-1, blocks[0].shape[-1])
+        info = {"half_width": half_width, "test_functions": counts,
+                "noise": None if noise is None else np.asarray(noise).tolist()}
+        return theta, np.vstack(states), info
 
     def _optimizer(self, forced: np.ndarray):
         if self.optimizer is not None:

@@ -25,6 +25,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..symbols import Coordinates
 from ._compile import compile_entries
+from ._weak import integrate_by_parts
 
 __all__ = ["SymbolicLibrary", "stack_variables", "compile_entries"]
 
@@ -140,6 +141,8 @@ class SymbolicLibrary(BaseFeatureLibrary):
             raise RuntimeError("internal error: symbolic matrix shape does not match names")
         self.feature_names_ = list(names)
         self.symbolic_matrix_ = matrix
+        for stale in ("weak_P_", "weak_Q_", "_weak_evaluate", "_weak_entry_index"):
+            self.__dict__.pop(stale, None)
         self.n_features_in_ = len(self.coords.variables)
         self.n_output_features_ = len(names)
 
@@ -150,6 +153,13 @@ class SymbolicLibrary(BaseFeatureLibrary):
         self._evaluate = compile_entries(
             self.coords.variables, [self.symbolic_matrix_[c, j] for c, j in entries]
         )
+
+    def __getstate__(self):
+        # compiled evaluators are closures: rebuilt on first use after unpickling
+        state = self.__dict__.copy()
+        for key in ("_evaluate", "_weak_evaluate", "_weak_entry_index"):
+            state.pop(key, None)
+        return state
 
     def _check_input(self, x) -> np.ndarray:
         x = np.asarray(x, dtype=float)
@@ -187,6 +197,78 @@ class SymbolicLibrary(BaseFeatureLibrary):
         targets = [theta[c * n_samples : (c + 1) * n_samples, j] for c, j in self._entry_index]
         self._evaluate(x, targets)
         return theta
+
+    # -- weak formulation -------------------------------------------------------------------
+    def _build_weak_symbolic(self) -> tuple[sp.Matrix, sp.Matrix]:
+        """``(P, Q)`` of shape ``(n, F)`` with ``E = d/dt P - Q`` entrywise (see ``_weak``)."""
+        matrix = self.symbolic_matrix_
+        split = [[integrate_by_parts(matrix[c, j], self.coords) if matrix[c, j] != 0
+                  else (sp.Integer(0), sp.Integer(0)) for j in range(matrix.shape[1])]
+                 for c in range(matrix.shape[0])]
+        shape = matrix.shape
+        return (sp.Matrix(*shape, lambda c, j: split[c][j][0]),
+                sp.Matrix(*shape, lambda c, j: split[c][j][1]))
+
+    def weak_matrices(self) -> tuple[sp.Matrix, sp.Matrix]:
+        """Symbolic split ``E = d/dt P - Q`` of every entry, derived on first use.
+
+        Returns
+        -------
+        P, Q : sympy.Matrix, shape (n, F)
+            Free of accelerations. For a Lagrange term ``L_k``: ``P[i, k] = dL_k/dqd_i`` and
+            ``Q[i, k] = dL_k/dq_i``.
+        """
+        check_is_fitted(self, "symbolic_matrix_")
+        if not hasattr(self, "weak_P_"):
+            self.weak_P_, self.weak_Q_ = self._build_weak_symbolic()
+        return self.weak_P_, self.weak_Q_
+
+    def weak_transform(self, x, phi, dphi) -> np.ndarray:
+        """Weak regression matrix of one trajectory.
+
+        Row ``(c, k)`` of column ``j`` is ``int phi_k E[c, j] dt = -int phi_k' P[c, j] dt -
+        int phi_k Q[c, j] dt`` (:meth:`weak_matrices`), evaluated as two matrix products with
+        the quadrature-weighted test-function matrices.
+
+        Parameters
+        ----------
+        x : array, shape (N, 4n + 1)
+            Library input of one trajectory (:func:`stack_variables`); the acceleration
+            columns are not used.
+        phi, dphi : array or sparse matrix, shape (K, N)
+            Test functions and their time derivatives times quadrature weights (see
+            :class:`~pysindy_xl.weak.BumpTestFunctions`).
+
+        Returns
+        -------
+        theta : ndarray, shape (n * K, F)
+            Rows coordinate-major (all test functions of coordinate 0 first), one column per
+            feature, as :meth:`transform`.
+        """
+        x = self._check_input(x)
+        if phi.shape != dphi.shape or phi.shape[1] != x.shape[0]:
+            raise ValueError(
+                f"phi, dphi: expected two matrices of shape (K, {x.shape[0]}), got "
+                f"{phi.shape} and {dphi.shape}"
+            )
+        n, n_features, n_samples = self.coords.n, self.n_output_features_, x.shape[0]
+        if not hasattr(self, "_weak_evaluate"):
+            p_matrix, q_matrix = self.weak_matrices()
+            entries = [(part, c, j) for part, matrix in enumerate((p_matrix, q_matrix))
+                       for c in range(n) for j in range(n_features) if matrix[c, j] != 0]
+            self._weak_entry_index = np.array(entries, dtype=int).reshape(-1, 3)
+            self._weak_evaluate = compile_entries(
+                self.coords.variables,
+                [(p_matrix, q_matrix)[part][c, j] for part, c, j in entries],
+            )
+        values = np.zeros((2, n * n_features, n_samples))
+        self._weak_evaluate(x, [values[part, c * n_features + j]
+                                for part, c, j in self._weak_entry_index])
+        weak = -(dphi @ values[0].T) - (phi @ values[1].T)  # (K, n * F)
+        n_windows = phi.shape[0]
+        return np.ascontiguousarray(
+            np.asarray(weak).reshape(n_windows, n, n_features).transpose(1, 0, 2)
+        ).reshape(n * n_windows, n_features)
 
     def get_feature_names(self, input_features=None) -> list[str]:
         """Names of the features, in column order.

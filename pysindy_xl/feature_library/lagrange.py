@@ -140,6 +140,14 @@ class LagrangeLibrary(SymbolicLibrary):
         self.zero_terms_ = [j for j, col in enumerate(columns) if all(e == 0 for e in col)]
         return [f"L[{term}]" for term in terms], matrix
 
+    def _build_weak_symbolic(self):
+        # P = dL/dqd and Q = dL/dq: the Euler-Lagrange column before its time derivative
+        terms, coords = self.terms_, self.coords
+        return (
+            sp.Matrix(coords.n, len(terms), lambda i, k: sp.expand(_diff(terms[k], coords.qd[i]))),
+            sp.Matrix(coords.n, len(terms), lambda i, k: sp.expand(_diff(terms[k], coords.q[i]))),
+        )
+
     def to_spec(self) -> dict:
         """JSON-serializable description of this library (terms in the restricted grammar).
 

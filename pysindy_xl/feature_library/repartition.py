@@ -117,6 +117,11 @@ class CatalogRepartition(SymbolicLibrary):
         self.force_columns_ = [j for j, cat in enumerate(categories) if cat == "forces"]
         return names, sp.Matrix.hstack(*blocks)
 
+    def _build_weak_symbolic(self):
+        parts = [lib.weak_matrices() for lib in self.libraries_]
+        return (sp.Matrix.hstack(*(p for p, _ in parts)),
+                sp.Matrix.hstack(*(q for _, q in parts)))
+
     def __add__(self, other):
         return CatalogRepartition([self, other])
 

@@ -10,6 +10,7 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.linear_model import Lasso, LassoCV
 
 from ._base import CatalogOptimizer, check_catalog_problem
+from .selection import select_support
 
 __all__ = ["ExplicitOptimizer", "hard_threshold_regression", "proximal_gradient_lasso"]
 
@@ -128,8 +129,12 @@ class ExplicitOptimizer(CatalogOptimizer):
         ``"lassocv"``: ``LassoCV`` (alpha by cross-validation); ``"proximal"``: accelerated
         proximal gradient Lasso (:func:`proximal_gradient_lasso`). Any estimator with
         ``fit(X, y)`` and ``coef_`` also works, e.g. pysindy's ``STLSQ``, ``SR3`` or ``MIOSR``.
-    threshold : float, default 0.01
-        Relative condition value for pruning: used by ``"threshold"`` and by the refit step.
+    threshold : "auto" or float, default "auto"
+        How terms are pruned, by ``"threshold"`` and by the refit step. ``"auto"``: the
+        sparsest model of the backward-elimination path whose cross-validated error is within
+        one standard error of the best (:func:`~pysindy_xl.optimizers.selection.select_support`),
+        which keeps small true terms on clean data and cuts noise terms on noisy data. A
+        number in [0, 1): the paper's relative condition value (:func:`hard_threshold_regression`).
     alpha : float, default 1e-4
         Lasso weight for ``"lasso"`` and ``"proximal"`` (on unit-RMS columns and a unit-RMS
         target, so it is scale free).
@@ -143,6 +148,9 @@ class ExplicitOptimizer(CatalogOptimizer):
     coef_ : ndarray, shape (F,)
         Coefficients of ``fit``'s columns, or the full catalog vector after ``fit_catalog``.
     support_ : ndarray of bool, shape (F,)
+    selection_ : SelectionResult or None
+        With ``threshold="auto"``: the path, the held-out errors and the chosen size (indices
+        refer to the columns of ``fit``, or to the non-force columns after ``fit_catalog``).
 
     Examples
     --------
@@ -153,7 +161,8 @@ class ExplicitOptimizer(CatalogOptimizer):
     array([ 0.5,  0. , -3. ,  0. ])
     """
 
-    def __init__(self, method="threshold", threshold=0.01, alpha=1e-4, refit=True, max_iter=1000):
+    def __init__(self, method="threshold", threshold="auto", alpha=1e-4, refit=True,
+                 max_iter=1000):
         self.method = method
         self.threshold = threshold
         self.alpha = alpha
@@ -167,8 +176,10 @@ class ExplicitOptimizer(CatalogOptimizer):
                                  f"{self.method!r}")
         elif not hasattr(self.method, "fit"):
             raise TypeError("method: expected a method name or an estimator with fit(X, y)")
-        if not _is_real(self.threshold) or not 0 <= self.threshold < 1:
-            raise ValueError(f"threshold: expected a value in [0, 1), got {self.threshold!r}")
+        if not (isinstance(self.threshold, str) and self.threshold == "auto") and (
+                not _is_real(self.threshold) or not 0 <= self.threshold < 1):
+            raise ValueError(f"threshold: expected 'auto' or a value in [0, 1), got "
+                             f"{self.threshold!r}")
         if not _is_real(self.alpha) or not 0 <= self.alpha < np.inf:
             raise ValueError(f"alpha: expected a finite non-negative value, got {self.alpha!r}")
         if not isinstance(self.max_iter, numbers.Integral) or self.max_iter < 1:
@@ -186,6 +197,9 @@ class ExplicitOptimizer(CatalogOptimizer):
         -------
         self
         """
+        return self._fit(X, y, n_blocks=1)
+
+    def _fit(self, X, y, n_blocks):
         self._check_params()
         X = np.asarray(X, dtype=float)
         y = np.asarray(y, dtype=float)
@@ -200,13 +214,29 @@ class ExplicitOptimizer(CatalogOptimizer):
                 "y: the force vector is identically zero; explicit regression needs a known "
                 "force (use ImplicitOptimizer or MixedOptimizer for unforced data)"
             )
-        self.coef_ = self._solve(X, y)
+        self.selection_ = None
+        self.coef_ = self._solve(X, y, n_blocks)
         self.support_ = self.coef_ != 0
         return self
 
-    def _solve(self, X, y):
-        if self.method == "threshold":
+    def _prune(self, X, y, n_blocks):
+        """Sparse least squares on the columns of X with the configured pruning rule."""
+        if self.threshold != "auto":
             return hard_threshold_regression(X, y, self.threshold, int(self.max_iter))
+        n_rows = X.shape[0]
+        per_block = n_rows // n_blocks if n_rows % n_blocks == 0 else n_rows
+        blocks = n_blocks if n_rows % n_blocks == 0 else 1
+        if per_block < 10:  # too few rows to hold any out
+            return hard_threshold_regression(X, y, 0.01, int(self.max_iter))
+        self.selection_ = select_support(X, y, n_blocks=blocks)
+        support = self.selection_.support
+        coef = np.zeros(X.shape[1])
+        coef[support] = np.linalg.lstsq(X[:, support], y, rcond=None)[0]
+        return coef
+
+    def _solve(self, X, y, n_blocks=1):
+        if self.method == "threshold":
+            return self._prune(X, y, n_blocks)
         scale = np.sqrt(np.mean(X**2, axis=0))
         active = scale > 0
         xs = X[:, active] / scale[active]
@@ -235,9 +265,9 @@ class ExplicitOptimizer(CatalogOptimizer):
         if self.refit and np.any(coef):
             support = np.flatnonzero(coef)
             coef[:] = 0.0
-            coef[support] = hard_threshold_regression(
-                X[:, support], y, self.threshold, int(self.max_iter)
-            )
+            coef[support] = self._prune(X[:, support], y, n_blocks)
+            if self.selection_ is not None:  # report indices of X, not of the support
+                self.selection_.order = support[self.selection_.order]
         return coef
 
     @staticmethod
@@ -271,7 +301,8 @@ class ExplicitOptimizer(CatalogOptimizer):
             raise ValueError("force_columns: explicit regression needs a force column")
         rest = np.setdiff1d(np.arange(theta.shape[1]), force_columns)
         force = theta[:, force_columns].sum(axis=1)
-        self.fit(theta[:, rest], force)
+        # cross-validation folds stay inside each coordinate's block of rows
+        self._fit(theta[:, rest], force, n_blocks=int(n_coordinates))
         coef = np.zeros(theta.shape[1])
         coef[rest] = self.coef_
         coef[force_columns] = -1.0

@@ -1,0 +1,18 @@
+"""Weak formulation: test functions and the smoother that feeds the weak columns.
+
+The weak regression matrix itself is built by the catalog libraries
+(:meth:`~pysindy_xl.feature_library.SymbolicLibrary.weak_transform`), so the optimizers and
+the model use it exactly like the pointwise one.
+"""
+
+from .smoothing import WhittakerSmoother, differentiate, finite_difference_weights
+from .test_functions import BumpTestFunctions, corner_frequency, quadrature_weights
+
+__all__ = [
+    "BumpTestFunctions",
+    "WhittakerSmoother",
+    "corner_frequency",
+    "differentiate",
+    "finite_difference_weights",
+    "quadrature_weights",
+]
