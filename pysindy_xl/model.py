@@ -100,8 +100,9 @@ class XLSINDy(BaseEstimator):
         accelerations removed by integration by parts (``int phi E dt = -int phi' P dt -
         int phi Q dt``, see :meth:`SymbolicLibrary.weak_transform
         <pysindy_xl.feature_library.SymbolicLibrary.weak_transform>`), fed by smoothed
-        positions and velocities: the robust choice for measured positions. ``"auto"``: weak
-        when only positions are given, strong when ``x_dot`` and ``x_ddot`` are given.
+        positions and velocities: the robust choice for measured positions. ``"auto"``: strong
+        when ``x_dot`` and ``x_ddot`` are given or a ``differentiation_method`` is set, weak
+        otherwise (measured on noisy positions: ``benchmarks/noise_sweep.py``).
     test_functions : BumpTestFunctions, optional
         Test functions of the weak formulation (default ``BumpTestFunctions()``: bumps whose
         width comes from the data's spectrum).
@@ -330,7 +331,8 @@ class XLSINDy(BaseEstimator):
                              f"{self.formulation!r}")
         if self.formulation != "auto":
             return self.formulation
-        return "strong" if x_dot is not None and x_ddot is not None else "weak"
+        measured = x_dot is not None and x_ddot is not None
+        return "strong" if measured or self.differentiation_method is not None else "weak"
 
     def _weak_regression(self, library, data):
         """Weak regression matrix of all trajectories, rows coordinate-major.

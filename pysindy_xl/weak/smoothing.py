@@ -84,7 +84,7 @@ def finite_difference_weights(t, derivative: int, stencil: int = 5):
 
 
 def differentiate(t, values, derivative: int = 1) -> np.ndarray:
-    """Derivative of sampled smooth ``values`` (N, ...) along axis 0 by :func:`finite_difference_weights`.
+    """Derivative of smooth sampled ``values`` (N, ...) along axis 0 (five-point stencils).
 
     Parameters
     ----------
