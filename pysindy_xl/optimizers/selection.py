@@ -4,17 +4,19 @@ A fixed relative threshold cannot serve both clean and noisy data: on clean data
 small true terms (a 0.5 % joint damping), on noisy data it keeps terms that only fit the
 noise. Instead:
 
-1. **Path.** Backward elimination on all candidate columns: refit by least squares, drop the
-   column whose removal raises the residual least (``beta_j^2 / [(X^T X)^-1]_jj``, the
+1. **Paths.** Backward elimination on all candidate columns: refit by least squares, drop
+   the column whose removal raises the residual least (``beta_j^2 / [(X^T X)^-1]_jj``, the
    squared t-statistic, which unlike the raw coefficient size accounts for correlated
-   columns), repeat. This orders the columns from last-dropped (most needed) to first-dropped
-   and gives one nested model of every size.
+   columns), repeat; and forward stepwise selection, which adds the column that lowers the
+   residual most. Each orders the columns from most to least needed and gives one nested
+   model of every size; the two greedy directions fail on different correlated patterns, so
+   both are scored.
 2. **Score.** Each model size is scored by ``n_folds``-fold cross-validation over contiguous
    blocks of rows (blocks in time within each coordinate, so overlapping test functions or
    smoothing windows hardly leak across folds). Nested models along a fixed column order are
    all fitted from one QR factorization per fold.
-3. **Choice.** The smallest model whose cross-validated error is within one standard error
-   of the best (the one-standard-error rule): on clean data the error of a model missing a
+3. **Choice.** The smallest model (of either path) whose cross-validated error is within
+   one standard error of the best (the one-standard-error rule): on clean data the error of a model missing a
    true term is far above the best, however small the term; on noisy data the extra terms do
    not lower the held-out error beyond its own spread, so they are cut.
 """
@@ -26,7 +28,13 @@ import dataclasses
 import numpy as np
 import scipy.linalg
 
-__all__ = ["elimination_path", "cross_validated_size", "select_support", "SelectionResult"]
+__all__ = [
+    "elimination_path",
+    "forward_path",
+    "cross_validated_size",
+    "select_support",
+    "SelectionResult",
+]
 
 
 def _scaled(x):
@@ -83,6 +91,58 @@ def elimination_path(x, y) -> np.ndarray:
         for j in sorted(drop_local, reverse=True):
             removed.append(active.pop(j))
     return np.array(removed[::-1], dtype=int)
+
+
+def forward_path(x, y) -> np.ndarray:
+    """Column order from most to least needed, by forward stepwise selection.
+
+    At each step the column that lowers the least-squares residual most, given the columns
+    already chosen, is added (orthogonal least squares). Greedy in the other direction from
+    :func:`elimination_path`: it finds one true term that a pair of correlated candidates
+    imitates, where backward elimination may keep the pair.
+
+    Parameters
+    ----------
+    x : array, shape (n_rows, F)
+    y : array, shape (n_rows,)
+
+    Returns
+    -------
+    order : ndarray of int, shape (F,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> x = rng.normal(size=(300, 6))
+    >>> forward_path(x, x @ [0.0, 3.0, 0.0, 0.01, 0.0, -1.0])[:3].tolist()
+    [1, 5, 3]
+    """
+    x = np.asarray(x, dtype=float)
+    active_mask, scale = _scaled(x)
+    xs = x / scale
+    residual = np.asarray(y, dtype=float)
+    if xs.shape[0] > xs.shape[1]:
+        q_factor, xs = np.linalg.qr(xs)
+        residual = q_factor.T @ residual
+    orthogonal = xs.copy()
+    chosen = []
+    candidates = active_mask.copy()
+    while candidates.any():
+        norms2 = np.sum(orthogonal**2, axis=0)
+        usable = candidates & (norms2 > 1e-20 * np.sum(xs**2, axis=0))
+        if not usable.any():
+            break
+        gain = np.where(usable, (orthogonal.T @ residual) ** 2 / np.where(usable, norms2, 1),
+                        -np.inf)
+        j = int(np.argmax(gain))
+        direction = orthogonal[:, j] / np.sqrt(norms2[j])
+        residual = residual - direction * (direction @ residual)
+        orthogonal -= np.outer(direction, direction @ orthogonal)
+        chosen.append(j)
+        candidates[j] = False
+    rest = [j for j in range(x.shape[1]) if j not in set(chosen)]
+    return np.array(chosen + rest, dtype=int)
 
 
 def _fold_labels(n_rows: int, n_blocks: int, n_folds: int) -> np.ndarray:
@@ -208,17 +268,30 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     >>> select_support(x, y + 0.3 * rng.normal(size=400)).support.tolist()    # noisy: drops it
     [0, 6]
     """
-    order = elimination_path(x, y)
-    if max_size is not None:
-        order = order[: int(max_size)]
-    errors = cross_validated_size(x, y, order, n_blocks, n_folds)
-    finite = np.all(np.isfinite(errors), axis=0)
-    mean = np.full(errors.shape[1], np.inf)
-    spread = np.full(errors.shape[1], np.inf)
-    mean[finite] = errors[:, finite].mean(axis=0)
-    spread[finite] = errors[:, finite].std(axis=0, ddof=1) / np.sqrt(n_folds)
-    best = int(np.argmin(mean))
-    within = np.flatnonzero(mean <= mean[best] + max(spread[best], resolution))
-    size = int(within[0]) + 1
-    return SelectionResult(order=order, cv_error=mean, cv_spread=spread, size=size,
-                           best_size=best + 1, rule="one standard error")
+    best_mean, candidates = np.inf, []
+    for path in ("backward", "forward"):
+        order = (elimination_path if path == "backward" else forward_path)(x, y)
+        if max_size is not None:
+            order = order[: int(max_size)]
+        errors = cross_validated_size(x, y, order, n_blocks, n_folds)
+        finite = np.all(np.isfinite(errors), axis=0)
+        mean = np.full(errors.shape[1], np.inf)
+        spread = np.full(errors.shape[1], np.inf)
+        mean[finite] = errors[:, finite].mean(axis=0)
+        spread[finite] = errors[:, finite].std(axis=0, ddof=1) / np.sqrt(n_folds)
+        best = int(np.argmin(mean))
+        if mean[best] < best_mean:
+            best_mean, tolerance = mean[best], max(spread[best], resolution)
+        candidates.append((path, order, mean, spread, best))
+    chosen = None
+    for path, order, mean, spread, best in candidates:
+        within = np.flatnonzero(mean <= best_mean + tolerance)
+        if not len(within):
+            continue
+        size = int(within[0]) + 1
+        key = (size, mean[size - 1])
+        if chosen is None or key < chosen[0]:
+            chosen = (key, SelectionResult(
+                order=order, cv_error=mean, cv_spread=spread, size=size, best_size=best + 1,
+                rule=f"one standard error ({path} path)"))
+    return chosen[1]
