@@ -189,12 +189,12 @@ def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
         diag = np.abs(np.diag(r_factor))[:usable]
         ok = diag > 1e-12 * max(diag.max(initial=0.0), 1e-300)
         usable = int(np.argmin(ok)) if not ok.all() else usable
-        # coefficients of all nested models: column k holds the model of size k + 1
+        # coefficients of all nested models at once, column k holding the model of size
+        # k + 1: the leading block of an upper-triangular inverse is the inverse of the
+        # leading block, so beta_k = inv(R)[:, :k+1] @ rhs[:k+1] (a cumulative sum)
+        inverse = scipy.linalg.solve_triangular(r_factor[:usable, :usable], np.eye(usable))
         coefficients = np.zeros((size, usable))
-        for k in range(usable):
-            coefficients[: k + 1, k] = scipy.linalg.solve_triangular(
-                r_factor[: k + 1, : k + 1], rhs[: k + 1]
-            )
+        coefficients[:usable] = np.cumsum(inverse * rhs[:usable], axis=1)
         residual = x[test] @ coefficients - y[test][:, None]
         errors[fold, :usable] = np.mean(residual**2, axis=0) / y_scale
     return errors
