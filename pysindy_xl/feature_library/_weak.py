@@ -65,8 +65,8 @@ def integrate_by_parts(expr: sp.Expr, coords: Coordinates) -> tuple[sp.Expr, sp.
     Raises
     ------
     ValueError
-        When an acceleration has a coefficient that depends on velocities or forces, or
-        enters nonlinearly: no integration by parts removes it.
+        When an acceleration has a coefficient that depends on velocities, forces or
+        accelerations (a nonlinear acceleration term): no integration by parts removes it.
 
     Examples
     --------
@@ -93,9 +93,6 @@ def integrate_by_parts(expr: sp.Expr, coords: Coordinates) -> tuple[sp.Expr, sp.
             )
         momentum += coefficient * qd
         rest = sp.expand(rest - coefficient * qdd)
-    if any(a in rest.free_symbols for a in coords.qdd):
-        raise ValueError(f"terms: {expr} is not linear in the accelerations; use "
-                         "formulation='strong'")
     exact = sp.Integer(0)
     for term in sp.Add.make_args(rest):
         for q, qd in zip(coords.q, coords.qd, strict=True):

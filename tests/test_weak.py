@@ -1,0 +1,231 @@
+"""Weak formulation: the weak matrix against independent quadrature of the pointwise one,
+the smoother and test functions on their own, and identification from noisy positions
+(ground truth: sympy.physics.mechanics systems integrated by scipy at tight tolerance)."""
+
+import numpy as np
+import pytest
+import sympy as sp
+from ground_truth import random_force, random_initial_state
+from scipy.integrate import simpson
+from test_explicit_identification import _true_coefficients, paper_catalog
+
+import pysindy_xl as px
+from pysindy_xl.feature_library._weak import integrate_by_parts
+from pysindy_xl.optimizers.selection import select_support
+from pysindy_xl.weak import BumpTestFunctions, WhittakerSmoother, quadrature_weights
+
+# ---------------------------------------------------------------------------- weak matrix
+
+
+def _analytic_data(coords, t):
+    """Smooth closed-form trajectories with exact derivatives."""
+    n = coords.n
+    k = np.arange(1, n + 1)
+    q = np.sin(np.outer(t, k) * 0.7 + k) + 0.1 * t[:, None]
+    qd = 0.7 * k * np.cos(np.outer(t, k) * 0.7 + k) + 0.1
+    qdd = -(0.7 * k) ** 2 * np.sin(np.outer(t, k) * 0.7 + k)
+    tau = np.cos(np.outer(t, k) * 1.3)
+    return q, qd, qdd, tau
+
+
+@pytest.mark.parametrize("grid", ["uniform", "jittered"])
+def test_weak_matrix_is_the_integral_of_the_pointwise_one(grid):
+    coords = px.Coordinates(["x", "theta"])
+    x, th = coords.q
+    xd, thd = coords.qd
+    lagrange = px.LagrangeLibrary(coords, [xd**2, thd**2 * sp.cos(th), xd * thd * sp.cos(th),
+                                           sp.cos(th), xd * sp.sin(th), x**2 * thd])
+    classical = px.ClassicalLibrary(coords, [xd, thd * xd, sp.cos(th) * coords.qdd[1],
+                                             x**2 * xd])
+    library = px.CatalogRepartition([lagrange, classical]).fit()
+    rng = np.random.default_rng(0)
+    t = np.linspace(0, 6, 3001)
+    if grid == "jittered":
+        t[1:-1] += rng.uniform(-0.3, 0.3, len(t) - 2) * (t[1] - t[0])
+    q, qd, qdd, tau = _analytic_data(coords, t)
+    z = px.stack_variables(q, qd, qdd, tau, t)
+    phi, dphi, _ = BumpTestFunctions(width=1.0, n_functions=7).matrices(t)
+    weak = library.weak_transform(z, phi, dphi)
+    # independent reference: Simpson's rule on the pointwise columns times the bump
+    strong = library.transform(z).reshape(2, len(t), -1)
+    bumps = (phi.toarray() / quadrature_weights(t))  # the test functions themselves
+    reference = np.concatenate([
+        simpson(bumps[:, :, None] * strong[c][None], x=t, axis=1) for c in range(2)
+    ])
+    scale = np.abs(reference).max(axis=0) + 1e-12
+    tolerance = 1e-7 if grid == "uniform" else 2e-4
+    assert np.abs(weak - reference).max(axis=0).max() / scale.max() < tolerance
+    assert np.all(np.abs(weak - reference).max(axis=0) / scale < 50 * tolerance)
+
+
+def test_integration_by_parts_splits():
+    c = px.Coordinates(["x", "y"])
+    assert integrate_by_parts(c.qd[0], c) == (c.q[0], 0)  # viscous friction needs no velocity
+    p, q = integrate_by_parts(c.q[1] ** 2 * c.qdd[0] + c.tau[0], c)
+    assert p == c.q[1] ** 2 * c.qd[0]
+    assert sp.expand(q - (2 * c.q[1] * c.qd[1] * c.qd[0] - c.tau[0])) == 0
+    with pytest.raises(ValueError, match="acceleration x_ddot.*not a function of the positions"):
+        integrate_by_parts(c.qd[0] * c.qdd[0], c)
+    with pytest.raises(ValueError, match="formulation='strong'"):
+        integrate_by_parts(c.qdd[0] ** 2, c)
+
+
+def test_weak_refuses_unintegrable_classical_term(cart_pole_system):
+    system = cart_pole_system
+    c = system.coords
+    library = paper_catalog(c, [1]) + px.ClassicalLibrary(c, [c.qd[0] * c.qdd[0]])
+    t = np.arange(0, 5, 0.01)
+    data = system.simulate(random_initial_state(system, 0), t, random_force(system, 0))
+    with pytest.raises(ValueError, match="formulation='strong'"):
+        px.XLSINDy(library, formulation="weak").fit(data["q"], t, u=data["tau"])
+
+
+def test_quadrature_on_a_jittered_grid_integrates_by_parts():
+    rng = np.random.default_rng(1)
+    t = np.sort(rng.uniform(0, 10, 4000))
+    phi, dphi, _ = BumpTestFunctions(width=1.5, n_functions=20).matrices(t)
+    # int phi q' = -int phi' q for q = sin(1.7 t)
+    lhs = phi @ (1.7 * np.cos(1.7 * t))
+    rhs = -(dphi @ np.sin(1.7 * t))
+    assert np.abs(lhs - rhs).max() < 1e-4 * np.abs(lhs).max()
+
+
+# ---------------------------------------------------------------------- smoother, widths
+
+
+def test_smoother_estimates_noise_and_velocity():
+    t = np.linspace(0, 20, 2001)
+    truth = np.column_stack([np.sin(t) + 0.3 * np.sin(2.3 * t), 0.5 * np.cos(0.7 * t)])
+    velocity = np.column_stack([np.cos(t) + 0.69 * np.cos(2.3 * t), -0.35 * np.sin(0.7 * t)])
+    sigma = 0.01 * truth.std(axis=0)
+    noisy = truth + sigma * np.random.default_rng(2).normal(size=truth.shape)
+    smoother = WhittakerSmoother()
+    q, qd, _ = smoother.smooth(t, noisy)
+    np.testing.assert_allclose(smoother.noise_, sigma, rtol=0.15)
+    assert np.all(np.std(q - truth, axis=0) < 0.5 * sigma)
+    relative = np.std(qd - velocity, axis=0) / velocity.std(axis=0)
+    assert np.all(relative < 0.02), relative
+    # clean data pass through
+    q, qd, _ = smoother.smooth(t, truth)
+    assert np.abs(qd - velocity).max() < 1e-4
+
+
+def test_bad_options_are_named():
+    with pytest.raises(ValueError, match="lam"):
+        WhittakerSmoother(lam="loose").smooth(np.arange(10.0), np.zeros((10, 1)))
+    with pytest.raises(ValueError, match="width"):
+        BumpTestFunctions(width=-1.0).matrices(np.arange(100.0))
+    with pytest.raises(ValueError, match="shorter than one test function"):
+        BumpTestFunctions(width=50.0).matrices(np.arange(100.0))
+    with pytest.raises(ValueError, match="formulation"):
+        px.XLSINDy(px.LagrangeLibrary(px.Coordinates(["x"]), [px.Coordinates(["x"]).qd[0] ** 2]),
+                   formulation="weakest").fit(np.zeros((50, 1)), 0.1, u=np.ones((50, 1)))
+
+
+# ------------------------------------------------------------------------ model selection
+
+
+def test_selection_keeps_small_true_terms_and_cuts_noise_terms():
+    rng = np.random.default_rng(3)
+    x = rng.normal(size=(2000, 30))
+    coef = np.zeros(30)
+    coef[[2, 7, 19]] = [1.0, -0.5, 0.004]  # 0.4 % of the largest contribution
+    y = x @ coef
+    assert select_support(x, y + 1e-10 * rng.normal(size=2000)).support.tolist() == [2, 7, 19]
+    noisy = select_support(x, y + 0.2 * rng.normal(size=2000))
+    assert set(noisy.support) <= {2, 7, 19} and {2, 7} <= set(noisy.support)
+
+
+def test_small_damping_survives_on_clean_data(cart_pole_system):
+    # joint damping of 0.5 % of the largest term: pruned by a 1 % threshold, kept by the path
+    system = cart_pole_system.with_friction([0.3, 0.005])
+    t = np.arange(0, 15, 0.005)
+    data = system.simulate(random_initial_state(system, 7), t, random_force(system, 7))
+    library = paper_catalog(system.coords, [1])
+    for formulation, derivatives in (("strong", {"x_dot": data["qd"], "x_ddot": data["qdd"]}),
+                                     ("weak", {})):
+        model = px.XLSINDy(library, formulation=formulation).fit(
+            data["q"], t, u=data["tau"], **derivatives)
+        true = _true_coefficients(system, library)
+        coef = model.coefficients()
+        assert np.array_equal(coef != 0, true != 0), formulation
+        damping = model.get_feature_names().index("C_theta[theta_dot]")
+        assert abs(coef[damping] - 0.005) < 1e-4, (formulation, coef[damping])
+        assert model.selection_ is not None
+
+
+# ------------------------------------------------------- identification from noisy positions
+
+
+def _noisy_run(system, seed, level, duration=30.0, dt=0.01, active=None):
+    t = np.arange(0.0, duration, dt)
+    force = random_force(system, seed, active=active)
+    data = system.simulate(random_initial_state(system, seed), t, force)
+    rng = np.random.default_rng(10_000 + seed)
+    noisy = data["q"] + level * data["q"].std(axis=0) * rng.normal(size=data["q"].shape)
+    return t, noisy, data, force
+
+
+def _validates(model, system, seed):
+    t = np.arange(0.0, 5.0, 0.01)
+    force = random_force(system, seed)
+    x0 = random_initial_state(system, seed)
+    truth = system.simulate(x0, t, force)
+    try:
+        sim = model.simulate(x0, t, u=lambda s: force(s))
+    except px.SimulationError:
+        return False
+    rmse = np.sqrt(np.mean((sim[:, : system.n] - truth["q"]) ** 2, axis=0))
+    return bool(np.all(rmse < 0.1 * np.ptp(truth["q"], axis=0)))
+
+
+def _success_rate(system, angles, level, seeds):
+    library = paper_catalog(system.coords, angles)
+    true = _true_coefficients(system, library.fit())
+    exact, errors, valid = 0, [], 0
+    for seed in seeds:
+        t, noisy, data, _ = _noisy_run(system, seed, level)
+        model = px.XLSINDy(library).fit(noisy, t, u=data["tau"])
+        assert model.formulation_ == "weak"
+        coef = model.coefficients()
+        support = true != 0
+        exact += np.array_equal(coef != 0, support)
+        errors.append(np.median(np.abs(coef[support] - true[support]) / np.abs(true[support])))
+        valid += _validates(model, system, 500 + seed)
+    return exact, float(np.median(errors)), valid
+
+
+def test_cart_pole_from_one_percent_noisy_positions(cart_pole_system):
+    """CI cell of the noise sweep (measured: 5 of 8 seeds exact at 1 %, see the note)."""
+    exact, error, valid = _success_rate(cart_pole_system, [1], 0.01, range(4))
+    assert exact >= 2, exact
+    assert error < 0.01, error
+    assert valid >= 3, valid
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("level", [0.01, 0.03, 0.05])
+@pytest.mark.parametrize("name", ["cart_pole", "double_pendulum"])
+def test_noise_sweep_cells(name, level, request):
+    system = request.getfixturevalue(f"{name}_system")
+    angles = [1] if name == "cart_pole" else [0, 1]
+    exact, error, valid = _success_rate(system, angles, level, range(6))
+    # honest floors of what the method reaches today (targets in issue 10 are higher)
+    assert exact >= 2, exact
+    assert error < 0.05, error
+    assert valid >= 4, valid
+
+
+@pytest.mark.parametrize("name", ["cart_pole", "double_pendulum"])
+def test_noise_free_positions_are_recovered_exactly_by_the_weak_form(name, request):
+    system = request.getfixturevalue(f"{name}_system")
+    angles = [1] if name == "cart_pole" else [0, 1]
+    library = paper_catalog(system.coords, angles)
+    t, _, data, _ = _noisy_run(system, 3, 0.0, duration=20.0)
+    model = px.XLSINDy(library).fit(data["q"], t, u=data["tau"])
+    true = _true_coefficients(system, library)
+    coef = model.coefficients()
+    assert np.array_equal(coef != 0, true != 0)
+    support = true != 0
+    assert np.max(np.abs(coef[support] - true[support]) / np.abs(true[support])) < 1e-4
+    assert _validates(model, system, 77)
