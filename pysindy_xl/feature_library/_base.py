@@ -19,6 +19,7 @@ model is ``Theta @ xi = 0``, i.e. for each coordinate ``c``: ``sum_j xi_j E[c, j
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse
 import sympy as sp
 from pysindy.feature_library.base import BaseFeatureLibrary
 from sklearn.utils.validation import check_is_fitted
@@ -28,6 +29,8 @@ from ._compile import compile_entries
 from ._weak import integrate_by_parts
 
 __all__ = ["SymbolicLibrary", "stack_variables", "compile_entries"]
+
+_WEAK_BLOCK = 8192  # samples per block of the weak evaluation
 
 
 def stack_variables(q, qd, qdd=None, tau=None, t=None) -> np.ndarray:
@@ -261,14 +264,22 @@ class SymbolicLibrary(BaseFeatureLibrary):
                 self.coords.variables,
                 [(p_matrix, q_matrix)[part][c, j] for part, c, j in entries],
             )
-        values = np.zeros((2, n * n_features, n_samples))
-        self._weak_evaluate(x, [values[part, c * n_features + j]
-                                for part, c, j in self._weak_entry_index])
-        weak = -(dphi @ values[0].T) - (phi @ values[1].T)  # (K, n * F)
+        index = self._weak_entry_index
+        # int phi E = -int phi' P - int phi Q: each non-zero entry meets its own test matrix
+        tests = [scipy.sparse.csc_matrix(-dphi), scipy.sparse.csc_matrix(-phi)]
         n_windows = phi.shape[0]
-        return np.ascontiguousarray(
-            np.asarray(weak).reshape(n_windows, n, n_features).transpose(1, 0, 2)
-        ).reshape(n * n_windows, n_features)
+        contributions = np.zeros((n_windows, len(index)))
+        values = np.empty((len(index), min(n_samples, _WEAK_BLOCK)))
+        for start in range(0, n_samples, _WEAK_BLOCK):  # blocks of samples bound the memory
+            stop = min(start + _WEAK_BLOCK, n_samples)
+            block = values[:, : stop - start]
+            self._weak_evaluate(x[start:stop], list(block))
+            for part in (0, 1):
+                rows = index[:, 0] == part
+                contributions[:, rows] += tests[part][:, start:stop] @ block[rows].T
+        weak = np.zeros((n, n_windows, n_features))
+        np.add.at(weak, (index[:, 1], slice(None), index[:, 2]), contributions.T)
+        return weak.reshape(n * n_windows, n_features)
 
     def get_feature_names(self, input_features=None) -> list[str]:
         """Names of the features, in column order.
