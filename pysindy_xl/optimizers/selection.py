@@ -16,9 +16,9 @@ noise. Instead:
    smoothing windows hardly leak across folds). Nested models along a fixed column order are
    all fitted from one QR factorization per fold.
 3. **Choice.** The smallest model (of either path) whose cross-validated error is within
-   one standard error of the best (the one-standard-error rule): on clean data the error of a model missing a
-   true term is far above the best, however small the term; on noisy data the extra terms do
-   not lower the held-out error beyond its own spread, so they are cut.
+   one standard error of the best (the one-standard-error rule): on clean data the error of
+   a model missing a true term is far above the best, however small the term; on noisy data
+   the extra terms do not lower the held-out error beyond its own spread, so they are cut.
 """
 
 from __future__ import annotations
