@@ -98,40 +98,35 @@ def main(argv=None) -> dict:
     import logging
 
     logging.getLogger("distributed").setLevel(logging.ERROR)
+    fit_once(args.duration)  # warm-up: data, compiled catalog, BLAS loaded
     blas = [(p["internal_api"], p["num_threads"]) for p in threadpool_info()
             if p["user_api"] == "blas"]
     default_threads = max(n for _, n in blas) if blas else None
-    print(f"BLAS: {blas}, {os.cpu_count()} cores; best of {args.repeat}")
-    fit_once(args.duration)  # warm-up: data, compiled catalog
+    print(f"BLAS: {blas}, {os.cpu_count()} cores; best of {args.repeat}, the two settings "
+          "alternated")
     results = {"blas": blas, "cpu_count": os.cpu_count(), "repeat": args.repeat,
                "duration": args.duration}
-    for label, run in (
-        ("one fit", lambda threads: fit_once(args.duration)),
-        ("two fits in 2 processes", lambda threads: parallel_fits(threads, args.duration)),
-    ):
-        row = {}
-        for threads in (None, 1):
-            times = []
-            for _ in range(args.repeat):
-                if label == "one fit":
-                    with threadpool_limits(limits=threads, user_api="blas"):
-                        times.append(run(threads))
-                else:
-                    times.append(run(threads))
-            row["default" if threads is None else "1 thread"] = min(times)
+
+    def one_fit(threads):
+        with threadpool_limits(limits=threads, user_api="blas"):
+            return fit_once(args.duration)
+
+    cases = [("one fit", one_fit),
+             ("two fits in 2 processes", lambda threads: parallel_fits(threads, args.duration))]
+    if not args.no_grid and grid_on_dask(1) is not None:  # warm-up: simulated data cached
+        cases.append(("grid, 4 runs, Dask 2 threads",
+                      lambda threads: grid_on_dask(None if threads is None else "auto")))
+    for label, run in cases:
+        times = {None: [], 1: []}
+        for _ in range(args.repeat):
+            for threads in (None, 1):
+                times[threads].append(run(threads))
+        row = {"default": min(times[None]), "1 thread": min(times[1]),
+               "runs_default": times[None], "runs_1_thread": times[1]}
         row["speedup"] = row["default"] / row["1 thread"]
         results[label] = row
-        print(f"  {label:<26} default ({default_threads} threads) {row['default']:.3f} s, "
+        print(f"  {label:<30} default ({default_threads} BLAS threads) {row['default']:.3f} s, "
               f"1 thread {row['1 thread']:.3f} s: x{row['speedup']:.2f}")
-    if not args.no_grid:
-        none = [grid_on_dask(None) for _ in range(max(args.repeat - 1, 1))]
-        one = [grid_on_dask("auto") for _ in range(max(args.repeat - 1, 1))]
-        if none[0] is not None:
-            row = {"default": min(none), "1 thread": min(one),
-                   "speedup": min(none) / min(one)}
-            results["grid of 4 runs on Dask (2 threads)"] = row
-            print(f"  {'grid, 4 runs, Dask 2 thr.':<26} blas_threads=None {row['default']:.3f}"
-                  f" s, auto (1) {row['1 thread']:.3f} s: x{row['speedup']:.2f}")
     if args.out:
         with open(args.out, "w", encoding="utf-8") as handle:
             json.dump(results, handle, indent=2)
