@@ -126,3 +126,19 @@ def test_ray_backend_matches_loky(tmp_path):
     assert ours.keys() == reference.keys() and len(ours) == 2
     for run_id, record in ours.items():
         assert same(record, reference[run_id]), run_id
+
+
+def test_blas_threads_command_line_option():
+    import argparse
+
+    from pysindy_xl.benchmark.cli import add_parser
+
+    parser = argparse.ArgumentParser(prog="pysindy-xl")
+    add_parser(parser.add_subparsers(dest="command"))
+    values = [parser.parse_args(["benchmark", "--blas-threads", v]).blas_threads
+              for v in ("auto", "none", "2")]
+    assert values == ["auto", None, 2]
+    assert parser.parse_args(["benchmark"]).blas_threads == "auto"
+    for bad in ("0", "many"):
+        with pytest.raises(SystemExit):
+            parser.parse_args(["benchmark", "--blas-threads", bad])
