@@ -148,10 +148,10 @@ def _resolve(header, coordinates, columns, source):
     trajectory = column_of("trajectory")
     if coordinates is None:
         roles = {time, trajectory} | mapped
-        names = [c for c in header if c not in roles and not c.endswith("_dot")
-                 and not c.endswith("_ddot") and not c.startswith("tau_")]
+        names = [c for c in header if c not in roles and not c.endswith(("_dot", "_ddot"))
+                 and not c.startswith("tau_")]
         names += [k for k in columns if k not in ("t", "trajectory") and k not in names
-                  and not k.endswith("_dot") and not k.startswith("tau_")]
+                  and not k.endswith(("_dot", "_ddot")) and not k.startswith("tau_")]
         if not names:
             raise _error(f"{source}: no coordinate column in the header {header}")
     else:

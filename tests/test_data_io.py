@@ -176,6 +176,15 @@ def test_dataframe_matches_csv(tmp_path):
         from_dataframe(np.zeros((3, 2)))
 
 
+def test_mapped_columns_without_coordinates():
+    t = np.linspace(0, 1, 5)
+    data = from_columns({"time": t, "pos": t**2, "acc": np.full(5, 2.0), "F": 3 * t},
+                        columns={"x": "pos", "x_ddot": "acc", "tau_x": "F"})
+    assert data.coordinate_names == ("x",) and data.has("qdd") and not data.has("qd")
+    np.testing.assert_array_equal(data.trajectories[0].tau[:, 0], 3 * t)
+    np.testing.assert_array_equal(data.trajectories[0].t, t)  # "time" found by name
+
+
 def test_from_columns_checks():
     with pytest.raises(DatasetError, match="columns of different lengths"):
         from_columns({"t": [0, 1, 2], "x": [0, 1]})
