@@ -4,20 +4,40 @@ Catalogs of Lagrangian, classical (Newtonian) and external-force terms become on
 regression problem (:class:`CatalogRepartition`), solved by explicit, implicit or mixed sparse
 regression (:class:`ExplicitOptimizer`, :class:`ImplicitOptimizer`, :class:`MixedOptimizer`)
 inside the :class:`XLSINDy` estimator.
+
+The public names are loaded on first use (PEP 562): ``import pysindy_xl`` is fast and
+imports neither SymPy nor PySINDy until a name that needs them is touched, and the heavy
+optional back ends (cvxpy, JAX, MuJoCo, matplotlib) only where they are used.
 """
 
-from .dynamics import MassMatrixDynamics, SimulationError, SingularMassMatrixError
-from .feature_library import (
-    CatalogRepartition,
-    ClassicalLibrary,
-    ExternalForces,
-    LagrangeLibrary,
-    stack_variables,
-)
-from .model import XLSINDy
-from .optimizers import ExplicitOptimizer, ImplicitOptimizer, MixedOptimizer, NoLawFoundError
-from .symbols import Coordinates, monomials, products
-from .weak import BumpTestFunctions, WhittakerSmoother
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
+__version__ = "0.1.0"
+
+# public name -> submodule that defines it (imported on first attribute access)
+_LAZY = {
+    "Coordinates": "symbols",
+    "monomials": "symbols",
+    "products": "symbols",
+    "LagrangeLibrary": "feature_library",
+    "ClassicalLibrary": "feature_library",
+    "ExternalForces": "feature_library",
+    "CatalogRepartition": "feature_library",
+    "stack_variables": "feature_library",
+    "ExplicitOptimizer": "optimizers",
+    "ImplicitOptimizer": "optimizers",
+    "MixedOptimizer": "optimizers",
+    "NoLawFoundError": "optimizers",
+    "XLSINDy": "model",
+    "MassMatrixDynamics": "dynamics",
+    "SimulationError": "dynamics",
+    "SingularMassMatrixError": "dynamics",
+    "BumpTestFunctions": "weak",
+    "WhittakerSmoother": "weak",
+}
 
 __all__ = [
     "Coordinates",
@@ -39,4 +59,30 @@ __all__ = [
     "BumpTestFunctions",
     "WhittakerSmoother",
 ]
-__version__ = "0.1.0"
+
+if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
+    from .dynamics import MassMatrixDynamics, SimulationError, SingularMassMatrixError
+    from .feature_library import (
+        CatalogRepartition,
+        ClassicalLibrary,
+        ExternalForces,
+        LagrangeLibrary,
+        stack_variables,
+    )
+    from .model import XLSINDy
+    from .optimizers import ExplicitOptimizer, ImplicitOptimizer, MixedOptimizer, NoLawFoundError
+    from .symbols import Coordinates, monomials, products
+    from .weak import BumpTestFunctions, WhittakerSmoother
+
+
+def __getattr__(name):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value  # later accesses skip __getattr__
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

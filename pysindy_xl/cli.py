@@ -127,6 +127,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="pysindy-xl",
         description="Identify mechanical systems with XLSINDy: MuJoCo demos and your data.",
     )
+    from . import __version__
+
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     from .benchmark import add_parser as add_benchmark_parser
 
@@ -152,11 +155,29 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--quiet", action="store_true", help="print only the final summary")
 
     identify = sub.add_parser(
-        "identify", help="fit a dataset (NPZ) and print the model",
-        description="Fit an NPZ dataset (arrays t, q and optionally qd, qdd, tau, trajectory; "
-                    "see pysindy_xl.mujoco.dataset) with a reference catalog and print the model.",
+        "identify", help="fit your data (CSV or NPZ) and print the model",
+        description="Fit a dataset with a reference catalog and print the model. CSV (.csv, "
+                    ".txt; .tsv tab-separated): a header naming the columns t, the coordinates "
+                    "(NAME), optionally NAME_dot, NAME_ddot, tau_NAME and trajectory (ids, "
+                    "several trajectories in one file); --column maps other headers. NPZ: "
+                    "arrays t, q and optionally qd, qdd, tau, trajectory (see "
+                    "pysindy_xl.mujoco.dataset). Coordinates come from --system (a known "
+                    "system or an MJCF .xml), or from --coordinates/--angles, or the CSV header.",
     )
-    identify.add_argument("data", metavar="DATA.npz")
+    identify.add_argument("data", metavar="DATA", help="a .csv, .tsv, .txt or .npz file")
+    identify.add_argument("--coordinates", default=None, metavar="NAMES",
+                          help="comma-separated coordinate names, e.g. x,theta (CSV: the "
+                               "position columns; NPZ: names of the columns of q); no MJCF "
+                               "needed")
+    identify.add_argument("--angles", default=None, metavar="NAMES",
+                          help="comma-separated coordinates that are angles (enter the catalog "
+                               "through sin and cos), e.g. theta")
+    identify.add_argument("--column", action="append", default=[], metavar="KEY=HEADER",
+                          help="CSV column of a role when its header differs: KEY is t, "
+                               "trajectory, a coordinate NAME, NAME_dot, NAME_ddot or tau_NAME "
+                               "(repeat the option), e.g. --column t=time_s --column x=cart")
+    identify.add_argument("--delimiter", default=None,
+                          help="CSV field separator (default: tab for .tsv, comma otherwise)")
     identify.add_argument("--system", default=None,
                           help="system name or MJCF .xml giving coordinates and catalog "
                                "(default: the dataset's metadata)")
@@ -496,18 +517,7 @@ def run_identify(args):
     >>> len(model.get_feature_names()), int(np.count_nonzero(model.coefficients()))
     (20, 7)
     """
-    from pysindy_xl.mujoco import DatasetError, load_dataset
-
-    try:
-        dataset = load_dataset(args.data)
-    except DatasetError as error:
-        raise CLIError(str(error)) from None
-    name = args.system or dataset.metadata.get("system")
-    if not name:
-        raise CLIError("--system: the dataset names no system; pass --system NAME or an MJCF "
-                       ".xml giving the coordinates")
-    system = _system(name)
-    dataset = _dataset_for(system, dataset)
+    dataset, system = _identify_inputs(args)
     if not (dataset.has("qd") and dataset.has("qdd")):
         print("note: velocities/accelerations missing, computed by differentiation",
               file=sys.stderr)
@@ -532,9 +542,71 @@ def run_identify(args):
               f"{summary['max_relative_error']:.2g} (relative), support recovered: "
               f"{summary['support_recovered']}")
     if args.out:
-        model.save(args.out)
+        _save_atomically(model, args.out)
         print(f"model: {args.out}")
     return model
+
+
+def _column_map(items):
+    """``--column KEY=HEADER`` options as a dict."""
+    columns = {}
+    for item in items or []:
+        key, sep, header = item.partition("=")
+        if not sep or not key.strip() or not header.strip():
+            raise CLIError(f"--column: expected KEY=HEADER (e.g. t=time_s), got {item!r}")
+        columns[key.strip()] = header.strip()
+    return columns
+
+
+def _names(text):
+    return [c.strip() for c in text.split(",") if c.strip()] if text else None
+
+
+def _identify_inputs(args):
+    """The dataset of ``identify`` (CSV or NPZ) and the system naming its coordinates."""
+    from pysindy_xl.data_io import coordinate_system, load_data
+    from pysindy_xl.mujoco import DatasetError
+
+    coordinates, angles = _names(args.coordinates), _names(args.angles) or []
+    columns = _column_map(getattr(args, "column", None))
+    if args.data.lower().endswith(".npz") and (columns or args.delimiter):
+        raise CLIError(f"--column/--delimiter: apply to CSV files, not to the NPZ {args.data!r}")
+    try:
+        dataset = load_data(args.data, coordinates=coordinates, columns=columns or None,
+                            delimiter=args.delimiter)
+    except (DatasetError, ValueError) as error:
+        raise CLIError(str(error)) from None
+    name = args.system or (None if coordinates else dataset.metadata.get("system"))
+    if name:
+        if args.angles:
+            raise CLIError("--angles: the system gives the angles; use --angles with "
+                           "--coordinates (no --system)")
+        return _dataset_for(_system(name), dataset), _system(name)
+    if not args.data.lower().endswith(".npz") or coordinates:
+        if not angles:
+            print("note: no --angles: the catalog has no sin/cos terms of the positions",
+                  file=sys.stderr)
+        try:
+            return dataset, coordinate_system(dataset.coordinate_names, angles)
+        except ValueError as error:
+            raise CLIError(f"--angles: {error}") from None
+    raise CLIError("--system: the dataset names no system; pass --system NAME (or an MJCF "
+                   ".xml), or --coordinates x,theta [--angles theta]")
+
+
+def _save_atomically(model, path):
+    """Write the model to ``path`` through a temporary file: never a half-written file."""
+    directory = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(directory):
+        raise CLIError(f"--out: directory {directory!r} does not exist")
+    base, ext = os.path.splitext(os.path.basename(path))
+    tmp = os.path.join(directory, f".{base}.{os.getpid()}.tmp{ext}")
+    try:
+        model.save(tmp)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
 
 
 def run_generate(args):

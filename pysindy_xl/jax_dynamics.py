@@ -27,12 +27,14 @@ import weakref
 from functools import partial
 from typing import NamedTuple
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 import sympy as sp
 
+from ._optional import import_optional
 from .symbols import Coordinates
+
+jax = import_optional("jax", purpose="pysindy_xl.jax_dynamics (XLSINDy.to_jax)")
+jnp = import_optional("jax.numpy", purpose="pysindy_xl.jax_dynamics (XLSINDy.to_jax)")
 
 __all__ = [
     "BatchSimulation",

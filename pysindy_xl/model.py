@@ -616,3 +616,25 @@ class XLSINDy(BaseEstimator):
         from .io import load_model
 
         return load_model(path)
+
+    # -- reinforcement learning ----------------------------------------------------------------
+    def to_gymnasium(self, dt, **options):
+        """A Gymnasium environment whose dynamics are the identified model.
+
+        Parameters
+        ----------
+        dt : float
+            Seconds per step.
+        **options
+            ``reward``, ``terminated``, ``initial_state``, ``actuated``, ``action_bounds``,
+            ``max_episode_steps``, ``substeps``, ``observation_bounds``: see
+            :class:`pysindy_xl.gym_env.IdentifiedDynamicsEnv`.
+
+        Returns
+        -------
+        pysindy_xl.gym_env.IdentifiedDynamicsEnv
+            Observation ``[q, qd]``, action the forces of the actuated coordinates.
+        """
+        from .gym_env import make_env
+
+        return make_env(self, dt, **options)

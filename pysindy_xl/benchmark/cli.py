@@ -95,6 +95,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--address", default=None,
                         help="scheduler address for --backend dask (tcp://HOST:8786) or ray "
                              "('auto' or HOST:6379)")
+    parser.add_argument("--blas-threads", type=_blas_threads, default="auto", metavar="N",
+                        help="BLAS threads inside each run: auto (1 when runs go in parallel, "
+                             "default), none (no limit) or a number")
     parser.add_argument("--timeout", type=_positive_float, default=None,
                         help="seconds per run (default: the preset's: 90 quick, 3600 full)")
     parser.add_argument("--systems", nargs="+", choices=SYSTEM_NAMES, default=None)
@@ -125,6 +128,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         help="do not run anything: rebuild the table from the records")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     return parser
+
+
+def _blas_threads(text):
+    if text in ("auto", "none"):
+        return None if text == "none" else "auto"
+    try:
+        value = int(text)
+    except ValueError:
+        message = f"expected auto, none or an integer, got {text!r}"
+        raise argparse.ArgumentTypeError(message) from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return value
 
 
 def add_parser(subparsers):
@@ -210,7 +226,8 @@ def run_benchmark(args) -> int:
             outcome = run_grid(settings, records_path, n_jobs=args.jobs, backend=args.backend,
                                address=args.address, retry=args.retry,
                                isolation=args.isolation,
-                               progress=False if args.no_progress else None, limit=args.limit)
+                               progress=False if args.no_progress else None, limit=args.limit,
+                               blas_threads=args.blas_threads)
         except (ImportError, ValueError) as error:
             print(f"benchmark: error: {error}", file=sys.stderr)
             return 1

@@ -17,6 +17,14 @@ is unavailable, ``isolation="signal"`` runs the task in the worker under ``signa
 (effective between Python bytecodes only). In both cases the validation simulation also gets
 the remaining time as its own ``timeout``.
 
+Threads
+-------
+Each run solves small least-squares problems; with several runs in parallel, BLAS's own
+threads (one per core by default) oversubscribe the cores. :func:`run_grid` therefore limits
+BLAS to one thread inside each run when it runs in parallel (``blas_threads="auto"``) through
+:mod:`threadpoolctl`, whatever the backend (local processes, Dask, Ray); see
+``benchmarks/blas_threads.py`` for the effect.
+
 Data
 ----
 A trajectory's training data and validation trajectory are simulated once per worker process
@@ -46,7 +54,7 @@ from .grid import GridSettings, Task, TrajectorySpec
 from .records import RecordStore
 
 __all__ = ["run_task", "execute_task", "run_grid", "system_for", "trajectory_data",
-           "backend_context", "RunTimeout"]
+           "backend_context", "blas_thread_limit", "RunTimeout"]
 
 _ISOLATIONS = ("auto", "process", "signal", "none")
 
@@ -408,8 +416,52 @@ def _prefetch(task: Task, settings: GridSettings) -> None:
         pass
 
 
+def blas_thread_limit(blas_threads: int | None):
+    """A context limiting BLAS thread pools to ``blas_threads`` (no limit for None).
+
+    Parameters
+    ----------
+    blas_threads : int or None
+        Threads of every BLAS library loaded (OpenBLAS, MKL, BLIS...), via
+        :func:`threadpoolctl.threadpool_limits`; None leaves them as they are.
+
+    Returns
+    -------
+    context manager
+
+    Raises
+    ------
+    ValueError
+        If ``blas_threads`` is not None or an integer >= 1.
+
+    Examples
+    --------
+    >>> from threadpoolctl import threadpool_info
+    >>> with blas_thread_limit(1):
+    ...     print({pool["num_threads"] for pool in threadpool_info()
+    ...            if pool["user_api"] == "blas"} <= {1})
+    True
+    """
+    if blas_threads is None:
+        return contextlib.nullcontext()
+    if isinstance(blas_threads, bool) or not isinstance(blas_threads, int) or blas_threads < 1:
+        raise ValueError(f"blas_threads: expected None or an integer >= 1, got {blas_threads!r}")
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=blas_threads, user_api="blas")
+
+
+def _resolve_blas_threads(blas_threads, n_jobs, backend):
+    if blas_threads != "auto":
+        return blas_threads
+    import joblib
+
+    parallel = backend in ("dask", "ray") or joblib.effective_n_jobs(n_jobs) > 1
+    return 1 if parallel else None
+
+
 def run_task(task: Task, settings: GridSettings, timeout: float | None = None,
-             isolation: str = "auto", function=None) -> dict:
+             isolation: str = "auto", function=None, blas_threads: int | None = None) -> dict:
     """Run one task under its time limit; never raises for a failing run.
 
     Parameters
@@ -423,12 +475,20 @@ def run_task(task: Task, settings: GridSettings, timeout: float | None = None,
     function : callable, optional
         ``function(task, settings, deadline, stage) -> record`` (default
         :func:`execute_task`); for tests and custom benchmarks.
+    blas_threads : int, optional
+        Limit BLAS to this many threads during the run (see :func:`blas_thread_limit`);
+        default: no limit.
 
     Returns
     -------
     dict
         The record, with ``finished_at``.
     """
+    with blas_thread_limit(blas_threads):
+        return _run_task(task, settings, timeout, isolation, function)
+
+
+def _run_task(task, settings, timeout, isolation, function):
     function = function or execute_task
     timeout = float(settings.timeout if timeout is None else timeout)
     if not timeout > 0:
@@ -515,7 +575,7 @@ def _results(tasks, call, n_jobs):
 
 def run_grid(settings: GridSettings, records_path, n_jobs: int = -1, backend: str | None = None,
              address: str | None = None, retry=(), isolation: str = "auto", progress=None,
-             limit: int | None = None, function=None) -> dict:
+             limit: int | None = None, function=None, blas_threads="auto") -> dict:
     """Run every pending task of a grid, appending one record per run.
 
     Parameters
@@ -537,6 +597,9 @@ def run_grid(settings: GridSettings, records_path, n_jobs: int = -1, backend: st
         Run at most this many pending tasks (then stop; rerun to continue).
     function : callable, optional
         Replaces :func:`execute_task` (see :func:`run_task`).
+    blas_threads : "auto", int or None, default "auto"
+        BLAS threads inside each run: ``"auto"`` is 1 when runs go in parallel (``n_jobs``
+        > 1, Dask, Ray) and no limit otherwise; an integer sets it; None leaves BLAS alone.
 
     Returns
     -------
@@ -557,7 +620,8 @@ def run_grid(settings: GridSettings, records_path, n_jobs: int = -1, backend: st
     if limit is not None:
         pending = pending[:limit]
     call = functools.partial(run_task, settings=settings, isolation=isolation,
-                             function=function)
+                             function=function,
+                             blas_threads=_resolve_blas_threads(blas_threads, n_jobs, backend))
     statuses = dict.fromkeys(("ok", "invalid", "timeout", "error"), 0)
     start = time.perf_counter()
     bar = tqdm(total=len(pending), desc=f"benchmark {settings.name}", unit="run",

@@ -13,7 +13,7 @@ key             shape        content
 ``qdd``         (N, n)       accelerations (optional)
 ``tau``         (N, n)       generalized forces on the coordinates (optional)
 ``u``           (N, n)       joint forces, ``tau = u @ B.T`` (optional)
-``trajectory``  (N,)         integer trajectory id of each sample (optional)
+``trajectory``  (N,)         trajectory id of each sample (optional; int or float)
 ``metadata``    ()           JSON text (unicode array, optional)
 ==============  ===========  =====================================================
 
@@ -483,8 +483,10 @@ def load_dataset(path) -> Dataset:
             if shape not in ((n_samples, n),) + (((n_samples,),) if n == 1 else ()):
                 raise DatasetError(f"{key}: expected shape ({n_samples}, {n}) like q, got {shape}")
     ids = arrays.get("trajectory", np.zeros(n_samples, dtype=np.int64))
-    if ids.shape != (n_samples,) or ids.dtype.kind not in "iu":
-        raise DatasetError(f"trajectory: expected integer ids of shape ({n_samples},)")
+    if ids.shape != (n_samples,) or ids.dtype.kind not in "iuf" or (
+            ids.dtype.kind == "f" and not np.all(np.isfinite(ids))):
+        raise DatasetError(f"trajectory: expected numeric (integer or float) finite ids of "
+                           f"shape ({n_samples},), got dtype {ids.dtype}, shape {ids.shape}")
     names = metadata.get("coordinate_names") or [f"q{k}" for k in range(n)]
     if len(names) != n:
         raise DatasetError(

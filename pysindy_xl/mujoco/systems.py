@@ -38,11 +38,16 @@ import os
 import re
 from importlib import resources
 
-import mujoco
 import numpy as np
 import sympy as sp
 
+from .._optional import import_optional
 from ..symbols import Coordinates
+
+
+def _mujoco():
+    """The ``mujoco`` module, imported on first use (clear error naming the extra)."""
+    return import_optional("mujoco", purpose="MuJoCo simulation (pysindy_xl.mujoco)")
 
 __all__ = [
     "MuJoCoSystem",
@@ -261,7 +266,7 @@ class MuJoCoSystem:
         """
         raise NotImplementedError
 
-    def mj_model(self) -> mujoco.MjModel:
+    def mj_model(self):
         """Compiled MuJoCo model of :meth:`xml`.
 
         Returns
@@ -275,7 +280,7 @@ class MuJoCoSystem:
         >>> model.nq, model.nu, model.opt.timestep
         (2, 2, 0.001)
         """
-        return mujoco.MjModel.from_xml_string(self.xml())
+        return _mujoco().MjModel.from_xml_string(self.xml())
 
     # -- transforms ----------------------------------------------------------------------
     def force_matrix(self) -> np.ndarray:
@@ -892,6 +897,7 @@ class MJCFSystem(MuJoCoSystem):
     has_ground_truth = False
 
     def __init__(self, source, force_amplitude=1.0):
+        mujoco = _mujoco()
         if isinstance(source, os.PathLike) or (
             isinstance(source, str) and not source.lstrip().startswith("<")
         ):
@@ -943,7 +949,7 @@ class MJCFSystem(MuJoCoSystem):
         model = self._model
         names = []
         for a in range(model.nu):
-            if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT):
+            if int(model.actuator_trntype[a]) == int(_mujoco().mjtTrn.mjTRN_JOINT):
                 names.append(self.joint_names[model.actuator_trnid[a, 0]])
         return tuple(dict.fromkeys(names))
 
@@ -1013,6 +1019,7 @@ class MJCFSystem(MuJoCoSystem):
         >>> MJCFSystem(xml).mj_model().njnt
         1
         """
+        mujoco = _mujoco()
         if self.path is not None:
             return mujoco.MjModel.from_xml_path(self.path)
         return mujoco.MjModel.from_xml_string(self._xml)

@@ -1,0 +1,290 @@
+"""Gymnasium environments driven by identified dynamics (model-based reinforcement learning).
+
+:func:`make_env` (also :meth:`XLSINDy.to_gymnasium <pysindy_xl.XLSINDy.to_gymnasium>`) wraps a
+fitted model in a :class:`gymnasium.Env`:
+
+* **observation**: the state ``[q_1..q_n, qd_1..qd_n]`` (float64);
+* **action**: the generalized forces of the actuated coordinates (the model's ``u``, which the
+  catalog's :class:`~pysindy_xl.ExternalForces` interlink maps onto the equations), held
+  constant over a step of ``dt`` seconds (float32, bounded by ``action_bounds``);
+* **dynamics**: the identified ``M(q, qd) qdd = f(q, qd, u)``, integrated with fixed-step
+  Runge-Kutta 4 (``substeps`` per step);
+* **reward and termination**: functions you supply (default: reward 0, never terminated); an
+  episode is truncated after ``max_episode_steps`` steps, and terminated with
+  ``info["failure"]`` if the identified dynamics cannot be evaluated (singular mass matrix,
+  non-finite state).
+
+Needs the ``gym`` extra (``pip install "pysindy-xl[gym]"``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._optional import import_optional
+from .dynamics import DynamicsError
+
+gymnasium = import_optional("gymnasium", purpose="XLSINDy.to_gymnasium (pysindy_xl.gym_env)")
+spaces = gymnasium.spaces
+
+__all__ = ["IdentifiedDynamicsEnv", "make_env"]
+
+
+def _bounds(value, size: int, name: str) -> np.ndarray:
+    a = np.broadcast_to(np.asarray(value, dtype=float), (size,)).copy() if np.ndim(value) == 0 \
+        else np.asarray(value, dtype=float)
+    if a.shape != (size,):
+        raise ValueError(f"{name}: expected a number or {size} values, got shape {a.shape}")
+    if np.any(np.isnan(a)) or np.any(a <= 0):
+        raise ValueError(f"{name}: expected positive bounds, got {a.tolist()}")
+    return a
+
+
+class IdentifiedDynamicsEnv(gymnasium.Env):
+    """A Gymnasium environment whose dynamics are an identified model (see the module docs).
+
+    Build it with :func:`make_env` or :meth:`XLSINDy.to_gymnasium`; the parameters are the
+    same.
+
+    Parameters
+    ----------
+    model : XLSINDy
+        A fitted model whose equations contain accelerations.
+    dt : float
+        Seconds per step.
+    reward : callable, optional
+        ``reward(state, action, next_state) -> float`` (default 0).
+    terminated : callable, optional
+        ``terminated(next_state) -> bool`` (default: never).
+    initial_state : array (2n,) or callable, optional
+        Start of each episode, or ``initial_state(rng) -> array (2n,)`` with the environment's
+        ``np_random`` generator; default: uniform in ``[-0.05, 0.05]`` on every entry.
+    actuated : list of str or int, optional
+        Coordinates (names or indices) whose forces are the action; default: all.
+    action_bounds : float or array, default 1.0
+        The action space is ``[-bound, bound]`` per actuated coordinate; actions outside are
+        clipped.
+    max_episode_steps : int or None, default 1000
+        Truncation after this many steps (None: never).
+    substeps : int, default 1
+        Runge-Kutta 4 steps per ``dt``.
+    observation_bounds : float or array (2n,), default 1e6
+        The observation space is ``[-bound, bound]`` per state entry; a state leaving it
+        terminates the episode (``info["failure"]``), as a diverging model would.
+
+    Attributes
+    ----------
+    observation_space : gymnasium.spaces.Box, shape (2n,)
+    action_space : gymnasium.spaces.Box, shape (len(actuated),)
+    state : ndarray, shape (2n,)
+        The current state.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> from pysindy_xl.gym_env import make_env
+    >>> coords = px.Coordinates(["x"])
+    >>> t = np.linspace(0, 10, 1001)
+    >>> x = (np.sin(t) + 0.5 * np.sin(2.3 * t))[:, None]
+    >>> xdd = -(np.sin(t) + 0.5 * 2.3**2 * np.sin(2.3 * t))[:, None]
+    >>> lib = px.CatalogRepartition([px.ExternalForces(coords),
+    ...                              px.LagrangeLibrary(coords, [coords.qd[0] ** 2])])
+    >>> model = px.XLSINDy(lib, px.ExplicitOptimizer()).fit(x, t, u=2.0 * xdd)
+    >>> env = make_env(model, dt=0.1, reward=lambda s, a, s1: -float(s1[0] ** 2))
+    >>> observation, info = env.reset(seed=0)
+    >>> observation, reward, terminated, truncated, info = env.step(np.array([1.0]))
+    >>> round(float(observation[1] - env.observation_history[0][1]), 3)  # qd += u / 2 * dt
+    0.05
+    """
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, model, dt, reward=None, terminated=None, initial_state=None,
+                 actuated=None, action_bounds=1.0, max_episode_steps=1000, substeps=1,
+                 observation_bounds=1e6):
+        dynamics = model._require_dynamics()
+        self.model = model
+        self._dynamics = dynamics
+        coords = model.feature_library_.coords
+        n = coords.n
+        self.n = n
+        try:
+            dt = float(dt)
+        except (TypeError, ValueError):
+            raise TypeError(f"dt: expected a positive number of seconds, got {dt!r}") from None
+        if not np.isfinite(dt) or dt <= 0:
+            raise ValueError(f"dt: expected a positive number of seconds, got {dt!r}")
+        self.dt = dt
+        if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) \
+                or substeps < 1:
+            raise ValueError(f"substeps: expected an integer >= 1, got {substeps!r}")
+        self.substeps = int(substeps)
+        if max_episode_steps is not None and (
+                isinstance(max_episode_steps, bool)
+                or not isinstance(max_episode_steps, (int, np.integer)) or max_episode_steps < 1):
+            raise ValueError(f"max_episode_steps: expected None or an integer >= 1, got "
+                             f"{max_episode_steps!r}")
+        self.max_episode_steps = max_episode_steps
+        for name, f in (("reward", reward), ("terminated", terminated)):
+            if f is not None and not callable(f):
+                raise TypeError(f"{name}: expected a callable, got {type(f).__name__}")
+        self._reward, self._terminated = reward, terminated
+        if actuated is None:
+            actuated = list(range(n))
+        indices = []
+        for a in actuated:
+            if isinstance(a, str) and a in coords.names:
+                indices.append(coords.names.index(a))
+            elif isinstance(a, (int, np.integer)) and not isinstance(a, bool) and 0 <= a < n:
+                indices.append(int(a))
+            else:
+                raise ValueError(f"actuated: {a!r} is not a coordinate of {list(coords.names)}")
+        if not indices or len(set(indices)) != len(indices):
+            raise ValueError(f"actuated: expected distinct coordinates, got {list(actuated)}")
+        self.actuated = tuple(indices)
+        bound = _bounds(action_bounds, len(indices), "action_bounds")
+        self.action_space = spaces.Box(-bound.astype(np.float32), bound.astype(np.float32),
+                                       dtype=np.float32)
+        high = _bounds(observation_bounds, 2 * n, "observation_bounds")
+        self.observation_space = spaces.Box(-high, high, dtype=np.float64)
+        if initial_state is not None and not callable(initial_state):
+            initial_state = np.asarray(initial_state, dtype=float)
+            if initial_state.shape != (2 * n,) or not np.all(np.isfinite(initial_state)):
+                raise ValueError(f"initial_state: expected {2 * n} finite values "
+                                 f"[q, qd], got shape {initial_state.shape}")
+        self._initial_state = initial_state
+        self.state = np.zeros(2 * n)
+        self.observation_history = []
+        self._steps = 0
+
+    # -- gymnasium API --------------------------------------------------------------------
+    def reset(self, *, seed=None, options=None):
+        """Start an episode.
+
+        Parameters
+        ----------
+        seed : int, optional
+            Seeds ``np_random`` (the initial state).
+        options : dict, optional
+            ``{"state": array (2n,)}`` starts from that state.
+
+        Returns
+        -------
+        observation : ndarray, shape (2n,)
+        info : dict
+        """
+        super().reset(seed=seed)
+        if options and "state" in options:
+            state = np.asarray(options["state"], dtype=float)
+        elif callable(self._initial_state):
+            state = np.asarray(self._initial_state(self.np_random), dtype=float)
+        elif self._initial_state is not None:
+            state = self._initial_state.copy()
+        else:
+            state = self.np_random.uniform(-0.05, 0.05, size=2 * self.n)
+        if state.shape != (2 * self.n,) or not np.all(np.isfinite(state)):
+            raise ValueError(f"initial state: expected {2 * self.n} finite values, got "
+                             f"shape {state.shape}")
+        self.state = state
+        self._steps = 0
+        self.observation_history = [state.copy()]
+        return state.copy(), {}
+
+    def step(self, action):
+        """Advance ``dt`` seconds with the action held constant.
+
+        Parameters
+        ----------
+        action : array, shape (len(actuated),)
+            Forces of the actuated coordinates (clipped to the action space).
+
+        Returns
+        -------
+        observation : ndarray, shape (2n,)
+        reward : float
+        terminated : bool
+        truncated : bool
+        info : dict
+            ``{"time": t}``, plus ``"failure"`` when the dynamics failed.
+        """
+        action = np.asarray(action, dtype=float).reshape(-1)
+        if action.shape != self.action_space.shape:
+            raise ValueError(f"action: expected shape {self.action_space.shape}, got "
+                             f"{action.shape}")
+        action = np.clip(action, self.action_space.low, self.action_space.high)
+        u = np.zeros(self.n)
+        u[list(self.actuated)] = action
+        state = self.state
+        info = {}
+        try:
+            next_state = self._integrate(state, u)
+        except (DynamicsError, FloatingPointError, np.linalg.LinAlgError) as error:
+            next_state, info["failure"] = state.copy(), str(error)
+        if not np.all(np.isfinite(next_state)):
+            next_state, info["failure"] = state.copy(), "the state is not finite"
+        elif not self.observation_space.contains(next_state):
+            next_state = np.clip(next_state, self.observation_space.low,
+                                 self.observation_space.high)
+            info["failure"] = "the state left the observation space (observation_bounds)"
+        self._steps += 1
+        self.state = next_state
+        self.observation_history.append(next_state.copy())
+        info["time"] = self._steps * self.dt
+        reward = 0.0 if self._reward is None else float(self._reward(state, action, next_state))
+        terminated = "failure" in info or (
+            self._terminated is not None and bool(self._terminated(next_state)))
+        truncated = (self.max_episode_steps is not None
+                     and self._steps >= self.max_episode_steps and not terminated)
+        return next_state.copy(), reward, terminated, truncated, info
+
+    def _integrate(self, state, u):
+        f = self._dynamics.state_derivative
+        h = self.dt / self.substeps
+        with np.errstate(over="raise", invalid="raise"):
+            for _ in range(self.substeps):
+                k1 = f(state, u)
+                k2 = f(state + 0.5 * h * k1, u)
+                k3 = f(state + 0.5 * h * k2, u)
+                k4 = f(state + h * k3, u)
+                state = state + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        return state
+
+
+def make_env(model, dt, **options) -> IdentifiedDynamicsEnv:
+    """A Gymnasium environment driven by a fitted model (``dt`` alone is enough).
+
+    Parameters
+    ----------
+    model : XLSINDy
+        Fitted; its equations must contain accelerations.
+    dt : float
+        Seconds per step.
+    **options
+        ``reward``, ``terminated``, ``initial_state``, ``actuated``, ``action_bounds``,
+        ``max_episode_steps``, ``substeps``, ``observation_bounds``: see
+        :class:`IdentifiedDynamicsEnv`.
+
+    Returns
+    -------
+    IdentifiedDynamicsEnv
+
+    Raises
+    ------
+    ValueError
+        If the model defines no dynamics, or an option is out of range (named in the message).
+
+    Examples
+    --------
+    See :class:`IdentifiedDynamicsEnv`; with ``gymnasium.utils.env_checker.check_env``:
+
+    >>> import numpy as np, pysindy_xl as px
+    >>> from gymnasium.utils.env_checker import check_env
+    >>> coords = px.Coordinates(["x"])
+    >>> t = np.linspace(0, 10, 1001)
+    >>> x = np.sin(t)[:, None]
+    >>> lib = px.CatalogRepartition([px.ExternalForces(coords),
+    ...                              px.LagrangeLibrary(coords, [coords.qd[0] ** 2])])
+    >>> model = px.XLSINDy(lib, px.ExplicitOptimizer()).fit(x, t, u=-x)
+    >>> check_env(make_env(model, 0.05), skip_render_check=True)  # no rendering
+    """
+    return IdentifiedDynamicsEnv(model, dt, **options)
