@@ -1,13 +1,22 @@
 """Validation of an identified model against a fresh MuJoCo trajectory.
 
 The model is simulated from the initial state of a new, noise-free MuJoCo trajectory and under
-its recorded forces, and the two position histories are compared.
+the same forces, and the two position histories are compared.
+
+Faithfulness: the MuJoCo reference is integrated with RK4 at a fine internal step (the
+model's ``timestep / substeps``, ``substeps=4`` by default) with the control updated at every
+internal step, and the identified model receives the same continuous force signal (exact for
+joint motors, see :func:`~pysindy_xl.mujoco.generate.actuator_force_function`; otherwise a
+cubic spline of the recorded forces). Sample times do not depend on ``substeps``.
 
 Metrics
 -------
 ``position_rmse``
     Root mean square of the position error over all samples and coordinates (in the
-    coordinates' units, rad or m), over the part the model could simulate.
+    coordinates' units, rad or m), over the **whole horizon**: infinite when the model could
+    not be simulated to the end (its ``divergence_time`` says when it stopped).
+``simulated_rmse``
+    The same over the part the model could simulate (for diagnosis only).
 ``divergence_time``
     First time at which the error of some coordinate ``i`` exceeds
     ``divergence_bound * max(1, ptp_i)``, with ``ptp_i`` the peak-to-peak range of that
@@ -26,8 +35,8 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .dataset import Trajectory
-from .forcing import FORCING_MODES
-from .generate import actuator_signals, simulate_trajectory
+from .forcing import FORCING_MODES, SumOfSinusoids
+from .generate import actuator_force_function, actuator_signals, simulate_trajectory
 from .systems import get_system
 
 __all__ = ["ValidationResult", "validate_model", "compare_trajectories",
@@ -54,7 +63,8 @@ class ValidationResult:
     forces : ndarray, shape (T, n)
         Forces given to the model.
     position_rmse : float
-        Root mean square position error over the simulated part (inf when nothing was).
+        Root mean square position error over the whole horizon (inf when the simulation
+        stopped early).
     position_rmse_per_coordinate : ndarray, shape (n,)
         The same per coordinate.
     divergence_time : float or None
@@ -67,6 +77,8 @@ class ValidationResult:
         Relative bound of the divergence test.
     coordinate_names : tuple of str, optional
         Names used in plots and in :meth:`to_dict`.
+    simulated_rmse : float, optional
+        Root mean square position error over the simulated part (inf when nothing was).
 
     Attributes
     ----------
@@ -98,6 +110,7 @@ class ValidationResult:
     failure: str | None
     divergence_bound: float
     coordinate_names: tuple = field(default_factory=tuple)
+    simulated_rmse: float = float("nan")
 
     @property
     def n(self) -> int:
@@ -115,9 +128,10 @@ class ValidationResult:
         Returns
         -------
         dict
-            ``position_rmse``, ``position_rmse_per_coordinate`` (by name),
-            ``divergence_time``, ``valid``, ``failure``, ``divergence_bound``, ``horizon``
-            (s) and ``simulated_fraction``.
+            ``position_rmse`` (``Infinity`` in the JSON text when the simulation stopped),
+            ``position_rmse_per_coordinate`` (by name), ``divergence_time``, ``valid``,
+            ``failure``, ``divergence_bound``, ``horizon`` (s), ``simulated_fraction`` and
+            ``simulated_rmse``.
 
         Examples
         --------
@@ -128,7 +142,7 @@ class ValidationResult:
         >>> print(json.dumps(result.to_dict()))
         {"position_rmse": 0.0, "position_rmse_per_coordinate": {"x": 0.0},
          "divergence_time": null, "valid": true, "failure": null, "divergence_bound": 0.2,
-         "horizon": 1.0, "simulated_fraction": 1.0}
+         "horizon": 1.0, "simulated_fraction": 1.0, "simulated_rmse": 0.0}
         """
         return {
             "position_rmse": float(self.position_rmse),
@@ -141,6 +155,7 @@ class ValidationResult:
             "divergence_bound": self.divergence_bound,
             "horizon": float(self.t[-1] - self.t[0]),
             "simulated_fraction": float(self.simulated_fraction),
+            "simulated_rmse": float(self.simulated_rmse),
         }
 
 
@@ -202,10 +217,11 @@ def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVE
     if k < len(t) and failure is None:
         failure = "incomplete prediction"
     error = prediction[:, :n] - reference[:k, :n]
-    if k:
+    simulated = float(np.sqrt(np.mean(error**2))) if k else np.inf
+    if k == len(t):
         per_coordinate = np.sqrt(np.mean(error**2, axis=0))
-        rmse = float(np.sqrt(np.mean(error**2)))
-    else:
+        rmse = simulated
+    else:  # the model could not follow the whole horizon: no finite error over it
         per_coordinate, rmse = np.full(n, np.inf), np.inf
     scale = np.maximum(1.0, np.ptp(reference[:, :n], axis=0))
     exceeded = np.flatnonzero(np.any(np.abs(error) > divergence_bound * scale, axis=1))
@@ -223,12 +239,14 @@ def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVE
         divergence_time=divergence_time,
         valid=divergence_time is None and failure is None,
         failure=failure, divergence_bound=float(divergence_bound), coordinate_names=names,
+        simulated_rmse=simulated,
     )
 
 
 def validation_trajectory(system, duration: float = 10.0, forcing: str = "explicit",
                           actuators=None, seed=None, sample_every: int = 10,
-                          initial_scale: float = 1.0, **signal_options) -> Trajectory:
+                          initial_scale: float = 1.0, substeps: int = 4,
+                          **signal_options) -> Trajectory:
     """A fresh noise-free MuJoCo trajectory with random initial state and forcing.
 
     Parameters
@@ -247,8 +265,12 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
         Record every ``sample_every``-th MuJoCo step.
     initial_scale : float, default 1.0
         Scale of the random initial state.
+    substeps : int, default 4
+        MuJoCo internal steps per model time step (a finer reference, see the module
+        docstring).
     **signal_options
-        ``n_components``, ``max_frequency``, ``amplitude_scale`` of the random forces.
+        ``n_components``, ``max_frequency``, ``amplitude_scale``, ``amplitude`` of the random
+        forces.
 
     Returns
     -------
@@ -269,13 +291,15 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
     q0, qd0 = system.random_initial_state(rng, scale=initial_scale)
     signals = actuator_signals(system, system.mj_model(), forcing, rng, actuators,
                                **signal_options)
-    return simulate_trajectory(system, duration, signals, q0, qd0, sample_every)
+    return simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
+                               substeps=substeps)
 
 
 def validate_model(model, system=None, trajectory: Trajectory | None = None,
                    duration: float = 10.0, forcing: str = "explicit", actuators=None, seed=None,
                    divergence_bound: float = DEFAULT_DIVERGENCE_BOUND, force_input: str = "tau",
-                   sample_every: int = 10, **integrator_options) -> ValidationResult:
+                   sample_every: int = 10, substeps: int = 4, initial_scale: float = 1.0,
+                   amplitude=None, **integrator_options) -> ValidationResult:
     """Simulate an identified model against a fresh MuJoCo trajectory and score it.
 
     Parameters
@@ -294,6 +318,8 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     force_input : {"tau", "u"}, default "tau"
         Forces given to the model: generalized forces (default interlink) or joint forces
         (for a model fitted with ``interlink=system.force_matrix()``).
+    substeps, initial_scale, amplitude
+        Of the fresh trajectory (see :func:`validation_trajectory`).
     **integrator_options
         Passed to ``model.simulate`` (``rtol``, ``atol``, ``timeout``...).
 
@@ -325,8 +351,9 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     if trajectory is None:
         if system is None:
             raise ValueError("system: give a system to simulate or a reference trajectory")
+        options = {} if amplitude is None else {"amplitude": amplitude}
         trajectory = validation_trajectory(system, duration, forcing, actuators, seed,
-                                           sample_every)
+                                           sample_every, initial_scale, substeps, **options)
         names = get_system(system).coordinate_names
     else:
         if not isinstance(trajectory, Trajectory):
@@ -342,7 +369,13 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
         forces = np.zeros((trajectory.n_samples, n))
     reference = trajectory.state
     use_forces = None
-    if np.any(forces != 0):
+    exact = None
+    if system is not None and "signals" in trajectory.info:
+        exact = actuator_force_function(
+            system, SumOfSinusoids.from_dict(trajectory.info["signals"]), force_input)
+    if exact is not None:
+        use_forces = exact  # the continuous signal MuJoCo applied at each internal step
+    elif np.any(forces != 0):
         # A C2 cubic spline of the force samples: the adaptive integrator rejects many steps at
         # the kinks of a piecewise-linear interpolant.
         spline = CubicSpline(trajectory.t, forces, axis=0)
