@@ -280,7 +280,7 @@ class Dataset:
             With ``exclude``: samples also dropped on each side of an active one. Default 0
             when velocities and accelerations are given, 10 when the fit differentiates.
         min_length : int, optional
-            With ``exclude``: shortest unconstrained run kept. Default 2 with derivatives,
+            With ``exclude``: shortest unconstrained run kept. Default 5 with derivatives,
             25 when the fit differentiates.
 
         Returns
@@ -340,7 +340,7 @@ class Dataset:
         ):
             return arguments
         margin = (0 if derivatives else 10) if margin is None else margin
-        min_length = (2 if derivatives else 25) if min_length is None else min_length
+        min_length = (5 if derivatives else 25) if min_length is None else min_length
         out = {key: ([] if value is not None else None) for key, value in arguments.items()}
         for k, tr in enumerate(trs):
             keep = unconstrained_samples(tr.constraint_active, margin)

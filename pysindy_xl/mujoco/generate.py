@@ -8,6 +8,8 @@ the actuator type) and mapped to the textbook coordinates with the system's forc
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
 from .dataset import Dataset, Trajectory
@@ -621,8 +623,8 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     trajectories = []
     with bar:
         for _ in range(n_trajectories):
-            factor = 1.0
-            for attempt in range(4 if backoff else 1):
+            factor, attempts = 1.0, 4 if backoff else 1
+            for attempt in range(attempts):
                 q0, qd0 = system.random_initial_state(rng, scale=initial_scale * factor)
                 base = 0.5 if amplitude is None else amplitude
                 signals = actuator_signals(system, model, forcing, rng, actuators,
@@ -630,7 +632,9 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                                            amplitude_scale * factor, base * factor)
                 clean = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
                                             bar if attempt == 0 else None)
-                if clean.constraint_active.mean() <= max_constrained:
+                if clean.constraint_active.mean() <= max_constrained or (
+                    attempt == attempts - 1
+                ):
                     break
                 factor /= 2
             if factor < 1:
@@ -661,10 +665,11 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     summary = dataset.constraint_summary()
     dataset.metadata["constraints"] = summary
     if 1 - summary["active_fraction"] < min_unconstrained:
+        label = os.path.basename(getattr(system, "path", None) or "") or system.name
         joints = ", ".join(f"{j} ({c} samples)" for j, c in summary["limit_hits"].items())
         warnings.warn(
             f"constraints act on {summary['active_fraction']:.0%} of the samples of "
-            f"{system.name}: only {summary['unconstrained_samples']} unconstrained samples "
+            f"{label}: only {summary['unconstrained_samples']} unconstrained samples "
             f"left for the regression; joint limits hit: {joints or 'none'}; contact samples: "
             f"{summary['contact_samples']}. Lower amplitude / initial_scale, or pass the "
             "constraint forces as known forces (fit_arguments(constraints='known'))",
