@@ -228,7 +228,8 @@ def actuator_force_function(system, signals, force_input: str = "tau"):
 
 
 def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None,
-                        sample_every: int = 1, progress=None, substeps: int = 1) -> Trajectory:
+                        sample_every: int = 1, progress=None, substeps: int = 1,
+                        control_at: str = "start") -> Trajectory:
     """Simulate one MuJoCo trajectory and return it in generalized coordinates.
 
     Parameters
@@ -251,6 +252,11 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
         Internal steps per model time step: MuJoCo integrates with ``timestep / substeps``
         and the control is updated at every internal step (a finer, more faithful
         reference; the sample times do not change).
+    control_at : {"start", "midpoint"}, default "start"
+        Time at which ``signals`` is read for each internal step: its start (the recorded
+        forces are then exactly ``signals(t)``), or its midpoint (second-order accurate
+        against the continuous signal, for validation references; the forces recorded at
+        ``t`` are then ``signals(t + h/2)``).
 
     Returns
     -------
@@ -312,9 +318,12 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     model.opt.timestep = dt / substeps
     n_fine = n_steps * substeps
     fine_times = np.arange(n_fine + 1) * (dt / substeps)
+    if control_at not in ("start", "midpoint"):
+        raise ValueError(f"control_at: expected 'start' or 'midpoint', got {control_at!r}")
     ctrl = np.zeros((n_fine + 1, model.nu))
     if signals is not None:
-        ctrl = np.asarray(signals(fine_times), dtype=float)
+        shift = dt / substeps / 2 if control_at == "midpoint" else 0.0
+        ctrl = np.asarray(signals(fine_times + shift), dtype=float)
         if ctrl.shape != (n_fine + 1, model.nu):
             raise ValueError(
                 f"signals: expected values of shape (n_times, nu={model.nu}), got {ctrl.shape}"

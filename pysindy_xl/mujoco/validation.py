@@ -5,7 +5,8 @@ the same forces, and the two position histories are compared.
 
 Faithfulness: the MuJoCo reference is integrated with RK4 at a fine internal step (the
 model's ``timestep / substeps``, ``substeps=4`` by default) with the control updated at every
-internal step, and the identified model receives the same continuous force signal (exact for
+internal step (read at the step's midpoint, a second-order hold), and the identified model
+receives the same continuous force signal (exact for
 joint motors, see :func:`~pysindy_xl.mujoco.generate.actuator_force_function`; otherwise a
 cubic spline of the recorded forces). Sample times do not depend on ``substeps``.
 
@@ -292,7 +293,7 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
     signals = actuator_signals(system, system.mj_model(), forcing, rng, actuators,
                                **signal_options)
     return simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
-                               substeps=substeps)
+                               substeps=substeps, control_at="midpoint")
 
 
 def validate_model(model, system=None, trajectory: Trajectory | None = None,
