@@ -1080,7 +1080,7 @@ class MJCFSystem(MuJoCoSystem):
         ['joints', 'model_path', 'model_xml']
         """
         text = self._xml
-        if "<include" in text and self.path is not None:
+        if "<include " in text and self.path is not None:
             text = mujoco.MjSpec.from_file(self.path).to_xml()
         return {"model_path": self.path, "model_xml": text,
                 "joints": self._parameters.get("joints")}
