@@ -434,6 +434,8 @@ def run_demo(args) -> dict:
     (theta) 0.32*theta_ddot + 0.1*theta_dot + 0.4*x_ddot*cos(theta) + 3.924*sin(theta) = tau_theta
     <BLANKLINE>
     validation: position RMSE ... over 0.2 s, divergence none, VALID
+    data:
+      sampling every 2 step(s) of 1 ms = 2 ms
     coefficients: 7 terms identified, 7 true, max error ... (relative to the largest)
     report: .../report.json (... s)
     >>> report["validation"]["valid"], report["coefficient_summary"]["support_recovered"]
@@ -456,8 +458,6 @@ def run_demo(args) -> dict:
     start = time.perf_counter()
     _log(quiet, f"[1/3] MuJoCo: {args.trajectories} trajectories of {args.duration:g} s")
     dataset = _generate(system, args, progress=None if not quiet else False)
-    for line in _data_lines(system, dataset):
-        _log(quiet, line)
     timings["generate"] = time.perf_counter() - start
     if args.save_data:
         dataset.save(os.path.join(args.out, "training_data.npz"))
@@ -510,6 +510,9 @@ def run_demo(args) -> dict:
               + (f" ({result.failure})" if result.failure else ""))
     else:
         print(f"validation: INVALID ({failure})")
+    print("data:")
+    for line in _data_lines(system, dataset):
+        print(line)
     if coefficient_summary:
         print(f"coefficients: {coefficient_summary['identified_terms']} terms identified, "
               f"{coefficient_summary['true_terms']} true, max error "
