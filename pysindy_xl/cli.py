@@ -375,6 +375,24 @@ def _coefficient_summary(system, model):
     return truth, summary
 
 
+def _joint_parameters(system, model):
+    """Identified joint damping and dry friction next to the MJCF's (user models only)."""
+    if system.has_ground_truth or not hasattr(system, "frictionloss"):
+        return {}
+    coefficients = dict(zip(model.get_feature_names(), model.coefficients(), strict=True))
+    out = {}
+    for i, (joint, name) in enumerate(zip(system.joint_names, system.coordinate_names,
+                                          strict=True)):
+        entry = {"damping": [float(coefficients.get(f"C_{name}[{name}_dot]", 0.0)),
+                             float(system.joint_damping[i])]}
+        prefix = f"C_{name}[tanh("
+        dry = [v for k, v in coefficients.items() if k.startswith(prefix)]
+        if dry or system.frictionloss[i]:
+            entry["frictionloss"] = [float(sum(dry)), float(system.frictionloss[i])]
+        out[joint] = entry
+    return out
+
+
 def _rounded(expr, digits=4):
     import sympy as sp
 
@@ -504,8 +522,11 @@ def run_demo(args) -> dict:
                       else f"at {result.divergence_time:.3g} s")
         rmse = (f"{result.position_rmse:.3g}" if np.isfinite(result.position_rmse) else
                 f"inf (simulated {result.simulated_fraction:.0%} of the horizon)")
-        print(f"validation: position RMSE {rmse} over "
-              f"{args.validation_duration:g} s, divergence {divergence}, "
+        horizon = f"{args.validation_duration:g} s"
+        if result.constrained_at is not None:
+            horizon = (f"{result.constrained_at:.3g} s (a joint limit or contact acts in the "
+                       "MuJoCo reference from then on)")
+        print(f"validation: position RMSE {rmse} over {horizon}, divergence {divergence}, "
               f"{'VALID' if result.valid else 'INVALID'}"
               + (f" ({result.failure})" if result.failure else ""))
     else:
@@ -513,6 +534,23 @@ def run_demo(args) -> dict:
     print("data:")
     for line in _data_lines(system, dataset):
         print(line)
+    joints = _joint_parameters(system, model)
+    for joint, entry in joints.items():
+        print(f"  {joint}: " + ", ".join(f"{key} {found:.4g} (MJCF {given:.4g})"
+                                         for key, (found, given) in entry.items()))
+    physics = None
+    if result is not None:
+        from pysindy_xl.mujoco.validation import compare_physics
+
+        try:
+            physics = compare_physics(model, system, seed=args.seed)
+        except (DynamicsError, ValueError, TypeError, np.linalg.LinAlgError):
+            physics = None
+    if physics is not None:
+        definite = "" if physics["positive_definite"] else ", mass matrix NOT positive definite"
+        print(f"physics against MuJoCo (mj_fullM, qfrc_bias) at 5 states: mass matrix error "
+              f"{physics['mass_error']:.2g}, unforced dynamics error "
+              f"{physics['force_error']:.2g} (relative){definite}")
     if coefficient_summary:
         print(f"coefficients: {coefficient_summary['identified_terms']} terms identified, "
               f"{coefficient_summary['true_terms']} true, max error "
@@ -527,6 +565,8 @@ def run_demo(args) -> dict:
         "data": {key: dataset.metadata.get(key) for key in (
             "noise", "noise_model", "derivatives", "timestep", "sample_every", "constraints")},
         "excluded_joints": list(getattr(system, "excluded_joints", ())),
+        "joint_parameters": joints,
+        "physics": physics,
         "features": model.get_feature_names(),
         "coefficients": model.coefficients().tolist(),
         "true_coefficients": None if truth is None else truth.tolist(),

@@ -306,3 +306,40 @@ def test_unconstrained_samples_and_windows():
         unconstrained_samples(active, margin=-1)
     with pytest.raises(ValueError, match="constraint_active"):
         unconstrained_samples(np.zeros((2, 2), dtype=bool))
+
+
+def test_two_link_arm_physics_against_mujoco():
+    """Armature, gear ratios, ctrlrange and small damping: the identified mass matrix and
+    unforced dynamics match mj_fullM and qfrc_bias (threshold of the issue: 1e-3)."""
+    from pysindy_xl.mujoco import compare_physics
+
+    system = MJCFSystem(MODELS / "two_link_arm.xml")
+    data = generate_dataset(system, n_trajectories=2, duration=5.0, seed=0, sample_every=2,
+                            progress=False)
+    catalog = reference_catalog(system, "mixed")
+    model = px.XLSINDy(catalog, px.ExplicitOptimizer(threshold=1e-3)).fit(
+        **data.fit_arguments())
+    coefficients = dict(zip(model.get_feature_names(), model.coefficients(), strict=True))
+    assert coefficients["C_shoulder[shoulder_dot]"] == pytest.approx(0.05, rel=0.02)
+    assert coefficients["C_elbow[elbow_dot]"] == pytest.approx(0.02, rel=0.02)
+    physics = compare_physics(model, system)
+    assert physics["mass_error"] < 1e-8 and physics["force_error"] < 1e-8
+    assert physics["positive_definite"] and physics["scale"] == 1.0
+    # compared with a heavier upper link (1.3 kg instead of 1.2), the model is caught
+    heavier = MJCFSystem((MODELS / "two_link_arm.xml").read_text().replace(
+        'mass="1.2"', 'mass="1.3"'))
+    wrong = compare_physics(model, heavier)
+    assert wrong["mass_error"] > 0.01 and wrong["force_error"] > 0.01
+
+
+def test_validation_stops_where_the_reference_hits_a_limit(rail_cart):
+    system, data, _ = rail_cart
+    model, _ = fit(system, data)
+    reference = validation_trajectory(system, duration=4.0, seed=3, amplitude=1.0)
+    assert reference.constraint_active.any()
+    first = reference.t[np.argmax(reference.constraint_active)]
+    result = validate_model(model, system, trajectory=reference)
+    assert result.constrained_at == pytest.approx(first)
+    assert result.t[-1] < first and result.valid and result.position_rmse < 1e-5
+    ignored = validate_model(model, system, trajectory=reference, constraints="ignore")
+    assert ignored.t[-1] == pytest.approx(4.0) and ignored.position_rmse > 1e-3

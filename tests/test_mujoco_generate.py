@@ -13,13 +13,17 @@ from pysindy_xl.mujoco import (
 )
 
 
-def test_same_seed_same_data_other_seed_other_data():
-    kwargs = dict(n_trajectories=2, duration=0.5, noise=0.01, progress=False)
+@pytest.mark.parametrize("noise_model", ["positions", "all"])
+def test_same_seed_same_data_other_seed_other_data(noise_model):
+    kwargs = dict(n_trajectories=2, duration=0.5, noise=0.01, noise_model=noise_model,
+                  progress=False)
     a = generate_dataset("cart-pole", seed=7, **kwargs)
     b = generate_dataset("cart-pole", seed=7, **kwargs)
     c = generate_dataset("cart-pole", seed=8, **kwargs)
+    keys = ("q", "tau", "u") if noise_model == "positions" else ("q", "qd", "qdd", "tau", "u")
+    assert a.has("qdd") == (noise_model == "all")
     for ta, tb, tc in zip(a.trajectories, b.trajectories, c.trajectories, strict=True):
-        for key in ("q", "qd", "qdd", "tau", "u"):
+        for key in keys:
             np.testing.assert_array_equal(getattr(ta, key), getattr(tb, key))
         assert not np.allclose(ta.q, tc.q)
     assert not np.allclose(a.trajectories[0].q, a.trajectories[1].q)

@@ -40,6 +40,7 @@ from .systems import (
 from .validation import (
     DEFAULT_DIVERGENCE_BOUND,
     ValidationResult,
+    compare_physics,
     compare_trajectories,
     validate_model,
     validation_trajectory,
@@ -79,6 +80,7 @@ __all__ = [
     "DEFAULT_DIVERGENCE_BOUND",
     "ValidationResult",
     "compare_trajectories",
+    "compare_physics",
     "validate_model",
     "validation_trajectory",
     "plot_validation",

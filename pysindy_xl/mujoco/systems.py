@@ -984,6 +984,9 @@ class MJCFSystem(MuJoCoSystem):
             raise ValueError(
                 f"joints: expected a non-empty list of joint names among {names}, got {joints!r}"
             )
+        if not hasattr(mujoco, "MjSpec"):
+            raise ValueError(f"joints: selecting joints needs MuJoCo >= 3.3 (MjSpec), found "
+                             f"{mujoco.__version__}")
         spec = (mujoco.MjSpec.from_file(self.path) if self.path is not None
                 else mujoco.MjSpec.from_string(self._xml))
         excluded = [name for name in names if name not in joints]

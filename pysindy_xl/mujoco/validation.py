@@ -41,7 +41,7 @@ from .generate import actuator_force_function, actuator_signals, simulate_trajec
 from .systems import get_system
 
 __all__ = ["ValidationResult", "validate_model", "compare_trajectories",
-           "validation_trajectory", "DEFAULT_DIVERGENCE_BOUND"]
+           "validation_trajectory", "DEFAULT_DIVERGENCE_BOUND", "compare_physics"]
 
 DEFAULT_DIVERGENCE_BOUND = 0.2
 
@@ -80,6 +80,9 @@ class ValidationResult:
         Names used in plots and in :meth:`to_dict`.
     simulated_rmse : float, optional
         Root mean square position error over the simulated part (inf when nothing was).
+    constrained_at : float or None, optional
+        When a constraint (joint limit, contact) started to act in the reference, where the
+        comparison stopped (see :func:`validate_model`); None when none acted.
 
     Attributes
     ----------
@@ -112,6 +115,7 @@ class ValidationResult:
     divergence_bound: float
     coordinate_names: tuple = field(default_factory=tuple)
     simulated_rmse: float = float("nan")
+    constrained_at: float | None = None
 
     @property
     def n(self) -> int:
@@ -131,8 +135,8 @@ class ValidationResult:
         dict
             ``position_rmse`` (``Infinity`` in the JSON text when the simulation stopped),
             ``position_rmse_per_coordinate`` (by name), ``divergence_time``, ``valid``,
-            ``failure``, ``divergence_bound``, ``horizon`` (s), ``simulated_fraction`` and
-            ``simulated_rmse``.
+            ``failure``, ``divergence_bound``, ``horizon`` (s), ``simulated_fraction``,
+            ``simulated_rmse`` and ``constrained_at``.
 
         Examples
         --------
@@ -143,7 +147,8 @@ class ValidationResult:
         >>> print(json.dumps(result.to_dict()))
         {"position_rmse": 0.0, "position_rmse_per_coordinate": {"x": 0.0},
          "divergence_time": null, "valid": true, "failure": null, "divergence_bound": 0.2,
-         "horizon": 1.0, "simulated_fraction": 1.0, "simulated_rmse": 0.0}
+         "horizon": 1.0, "simulated_fraction": 1.0, "simulated_rmse": 0.0,
+         "constrained_at": null}
         """
         return {
             "position_rmse": float(self.position_rmse),
@@ -157,6 +162,7 @@ class ValidationResult:
             "horizon": float(self.t[-1] - self.t[0]),
             "simulated_fraction": float(self.simulated_fraction),
             "simulated_rmse": float(self.simulated_rmse),
+            "constrained_at": self.constrained_at,
         }
 
 
@@ -300,7 +306,8 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
                    duration: float = 10.0, forcing: str = "explicit", actuators=None, seed=None,
                    divergence_bound: float = DEFAULT_DIVERGENCE_BOUND, force_input: str = "tau",
                    sample_every: int = 10, substeps: int = 4, initial_scale: float = 1.0,
-                   amplitude=None, **integrator_options) -> ValidationResult:
+                   amplitude=None, constraints: str = "truncate",
+                   **integrator_options) -> ValidationResult:
     """Simulate an identified model against a fresh MuJoCo trajectory and score it.
 
     Parameters
@@ -321,6 +328,11 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
         (for a model fitted with ``interlink=system.force_matrix()``).
     substeps, initial_scale, amplitude
         Of the fresh trajectory (see :func:`validation_trajectory`).
+    constraints : {"truncate", "ignore"}, default "truncate"
+        When a joint limit, contact or equality constraint acts in the reference (its
+        ``constraint_active`` mask), which the identified model cannot reproduce:
+        ``truncate`` compares up to the first such sample (``constrained_at`` of the result
+        says when), ``ignore`` compares over the whole horizon anyway.
     **integrator_options
         Passed to ``model.simulate`` (``rtol``, ``atol``, ``timeout``...).
 
@@ -362,6 +374,16 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
         names = get_system(system).coordinate_names if system is not None else None
     if trajectory.qd is None:
         raise ValueError("trajectory: the reference needs velocities (qd)")
+    if constraints not in ("truncate", "ignore"):
+        raise ValueError(f"constraints: expected 'truncate' or 'ignore', got {constraints!r}")
+    constrained_at = None
+    active = trajectory.constraint_active
+    if constraints == "truncate" and active is not None and active.any():
+        k = max(int(np.argmax(active)), 2)
+        constrained_at = float(trajectory.t[k])
+        trajectory = Trajectory(**{
+            key: (value[:k] if isinstance(value, np.ndarray) else value)
+            for key, value in vars(trajectory).items()})
     if force_input not in ("tau", "u"):
         raise ValueError(f"force_input: expected 'tau' or 'u', got {force_input!r}")
     forces = getattr(trajectory, force_input)
@@ -387,5 +409,100 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
                                     **integrator_options)
     except SimulationError as error:
         prediction, failure = error.states, error.reason
-    return compare_trajectories(trajectory.t, reference, prediction, divergence_bound,
-                                failure, names, forces)
+    result = compare_trajectories(trajectory.t, reference, prediction, divergence_bound,
+                                  failure, names, forces)
+    result.constrained_at = constrained_at
+    return result
+
+
+def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8) -> dict:
+    """Compare the identified mass matrix and unforced dynamics with MuJoCo's at a few states.
+
+    At random states (``system.random_initial_state``, inside the joint ranges) the identified
+    equations ``M(q, qd) qdd = f(q, qd, u)`` are evaluated with ``u = 0`` and compared with
+    MuJoCo's ``mj_fullM`` and ``qfrc_passive - qfrc_bias + qfrc_constraint`` (gravity,
+    Coriolis, damping, springs, dry friction), both mapped to the system's coordinates
+    (``B M B^T``, ``B f``). An implicit (unforced) law is defined up to a factor: both are
+    first scaled by the least-squares factor that best matches the mass matrices.
+
+    Parameters
+    ----------
+    model : fitted XLSINDy
+        With dynamics (its equations contain accelerations).
+    system : MuJoCoSystem or str
+        The system the data came from.
+    n_states : int, default 5
+        Number of random states.
+    seed : int, optional
+        Seed of the states.
+    scale : float, default 0.8
+        Spread of the states (see ``random_initial_state``).
+
+    Returns
+    -------
+    dict
+        ``mass_error`` and ``force_error``: largest error relative to the largest entry of
+        MuJoCo's matrix / vector over the states; ``scale``: the factor applied to the
+        identified model (1 for a force-normalized fit); ``positive_definite``: the
+        identified mass matrix is positive definite at every state; ``condition``: its
+        largest condition number.
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> from pysindy_xl.mujoco import generate_dataset, reference_catalog
+    >>> data = generate_dataset("cart-pole", n_trajectories=1, duration=1.0, seed=0,
+    ...                         progress=False)
+    >>> catalog = reference_catalog("cart-pole", "mixed", trig_degree=1)
+    >>> model = px.XLSINDy(catalog, px.ExplicitOptimizer()).fit(**data.fit_arguments())
+    >>> physics = compare_physics(model, "cart-pole")
+    >>> bool(physics["mass_error"] < 1e-6 and physics["force_error"] < 1e-6)
+    True
+    >>> physics["positive_definite"], physics["scale"]
+    (True, 1.0)
+    """
+    import mujoco
+
+    from .. import stack_variables
+
+    system = get_system(system)
+    dynamics = model._require_dynamics() if hasattr(model, "_require_dynamics") else None
+    if dynamics is None:
+        raise TypeError("model: expected a fitted XLSINDy with dynamics")
+    rng = np.random.default_rng(seed)
+    states = [system.random_initial_state(rng, scale=scale) for _ in range(n_states)]
+    q = np.array([s[0] for s in states])
+    qd = np.array([s[1] for s in states])
+    mj_model = system.mj_model()
+    data = mujoco.MjData(mj_model)
+    matrix = system.force_matrix()
+    mass_ref = np.empty((n_states, system.n, system.n))
+    force_ref = np.empty((n_states, system.n))
+    full = np.empty((mj_model.nv, mj_model.nv))
+    for k in range(n_states):
+        data.qpos[:], data.qvel[:] = system.from_generalized(q[k], qd[k])
+        data.ctrl[:] = 0.0
+        mujoco.mj_forward(mj_model, data)
+        try:
+            mujoco.mj_fullM(mj_model, data, full)  # MuJoCo >= 3.4
+        except TypeError:
+            mujoco.mj_fullM(mj_model, full, data.qM)
+        mass_ref[k] = matrix @ full @ matrix.T
+        force_ref[k] = matrix @ (data.qfrc_passive - data.qfrc_bias + data.qfrc_constraint)
+    z = stack_variables(q, qd, None, np.zeros_like(q), np.zeros(n_states))
+    mass, force = dynamics.mass_and_forcing(z)
+    factor = float(np.sum(mass * mass_ref) / np.sum(mass * mass)) if np.any(mass) else 1.0
+    forces = model.feature_library_.force_columns_
+    if np.allclose(model.coefficients()[forces], -1.0):
+        factor = 1.0  # force-normalized: compare in absolute terms
+    mass, force = mass * factor, force * factor
+    eigenvalues = np.linalg.eigvalsh((mass + np.swapaxes(mass, 1, 2)) / 2)
+    return {
+        "mass_error": float(np.abs(mass - mass_ref).max() / np.abs(mass_ref).max()),
+        "force_error": float(np.abs(force - force_ref).max()
+                             / max(np.abs(force_ref).max(), 1e-300)),
+        "scale": factor,
+        "positive_definite": bool(np.all(eigenvalues > 0)),
+        "condition": float(np.max(np.abs(eigenvalues).max(axis=1)
+                                  / np.maximum(np.abs(eigenvalues).min(axis=1), 1e-300))),
+    }
