@@ -454,6 +454,7 @@ def run_demo(args) -> dict:
     validation: position RMSE ... over 0.2 s, divergence none, VALID
     data:
       sampling every 2 step(s) of 1 ms = 2 ms
+    physics against MuJoCo (mj_fullM, qfrc_bias) at 5 states: mass matrix error ...
     coefficients: 7 terms identified, 7 true, max error ... (relative to the largest)
     report: .../report.json (... s)
     >>> report["validation"]["valid"], report["coefficient_summary"]["support_recovered"]
