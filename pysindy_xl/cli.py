@@ -552,6 +552,15 @@ def run_demo(args) -> dict:
         print(f"physics against MuJoCo (mj_fullM, qfrc_bias) at 5 states: mass matrix error "
               f"{physics['mass_error']:.2g}, unforced dynamics error "
               f"{physics['force_error']:.2g} (relative){definite}")
+        if physics["unidentified"]:
+            names = set(physics["unidentified"])
+            keep = [j for j, c in zip(system.joint_names, system.coordinate_names, strict=True)
+                    if c not in names]
+            hint = f" (--joints {' '.join(keep)})" if keep and hasattr(system, "frictionloss") \
+                else ""
+            print(f"no inertia identified for {', '.join(physics['unidentified'])}: no force "
+                  f"excites these coordinates (a passive, decoupled body?); leave their joints "
+                  f"out{hint}")
     if coefficient_summary:
         print(f"coefficients: {coefficient_summary['identified_terms']} terms identified, "
               f"{coefficient_summary['true_terms']} true, max error "

@@ -267,3 +267,15 @@ def test_amplitude_option_checked():
     with pytest.raises(SystemExit) as info:
         main(["demo", "cart-pole", "--amplitude", "2"])
     assert info.value.code == 2
+
+
+def test_demo_names_a_passive_body_and_how_to_leave_it_out(tmp_path, capsys):
+    assert main(["demo", str(MODELS / "pendulum_and_target.xml"), "--trig-degree", "1",
+                 "--out", str(tmp_path), *SHORT]) == 0
+    printed = capsys.readouterr().out
+    assert "no inertia identified for target_x, target_y" in printed
+    assert "--joints swing" in printed
+    report = read_report(tmp_path)
+    assert report["physics"]["unidentified"] == ["target_x", "target_y"]
+    assert report["validation"]["valid"] is False
+    assert report["validation"]["position_rmse"] == float("inf")  # never "RMSE 0 ... INVALID"

@@ -445,7 +445,9 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
         MuJoCo's matrix / vector over the states; ``scale``: the factor applied to the
         identified model (1 for a force-normalized fit); ``positive_definite``: the
         identified mass matrix is positive definite at every state; ``condition``: its
-        largest condition number.
+        largest condition number; ``unidentified``: names of the coordinates whose row of
+        the identified mass matrix is zero at every state (no inertia identified, e.g. a
+        passive body that no force excites: leave its joints out with ``joints=``).
 
     Examples
     --------
@@ -497,7 +499,9 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
         factor = 1.0  # force-normalized: compare in absolute terms
     mass, force = mass * factor, force * factor
     eigenvalues = np.linalg.eigvalsh((mass + np.swapaxes(mass, 1, 2)) / 2)
+    empty = np.all(np.abs(mass) <= 1e-12 * max(np.abs(mass).max(), 1e-300), axis=(0, 2))
     return {
+        "unidentified": [system.coordinate_names[i] for i in np.flatnonzero(empty)],
         "mass_error": float(np.abs(mass - mass_ref).max() / np.abs(mass_ref).max()),
         "force_error": float(np.abs(force - force_ref).max()
                              / max(np.abs(force_ref).max(), 1e-300)),
