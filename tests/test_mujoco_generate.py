@@ -128,3 +128,19 @@ def test_model_without_actuator_only_implicit():
     data = generate_dataset(system, n_trajectories=1, duration=0.1, forcing="implicit", seed=0,
                             progress=False)
     assert data.trajectories[0].q.shape == (51, 1)
+
+
+def test_shipped_systems_keep_their_force_amplitudes():
+    """Without ctrlrange the forcing peaks at the system's force amplitudes (no back-off)."""
+    system = CartPole()
+    data = generate_dataset(system, n_trajectories=2, duration=0.2, seed=0, progress=False)
+    expected = [system.force_amplitudes[j] for j in system.joint_names]
+    for tr in data.trajectories:
+        signals = SumOfSinusoids.from_dict(tr.info["signals"])
+        np.testing.assert_allclose(signals.amplitudes.sum(axis=1), expected)
+        assert "backoff" not in tr.info
+    half = generate_dataset(system, n_trajectories=1, duration=0.2, seed=0, amplitude=0.5,
+                            progress=False).trajectories[0]
+    np.testing.assert_allclose(
+        SumOfSinusoids.from_dict(half.info["signals"]).amplitudes.sum(axis=1),
+        0.5 * np.array(expected))

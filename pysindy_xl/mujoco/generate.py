@@ -96,7 +96,8 @@ def _constraint_kinds():
 
 def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.Generator,
                      actuators=None, n_components: int = 6, max_frequency: float = 1.5,
-                     amplitude_scale: float = 1.0, amplitude=None) -> SumOfSinusoids | None:
+                     amplitude_scale: float = 1.0, amplitude=None,
+                     backoff: float = 1.0) -> SumOfSinusoids | None:
     """Random control signals (one per actuator of ``model``) for a forcing mode.
 
     Undriven actuators get a zero signal. An actuator with a ``ctrlrange`` oscillates around
@@ -127,6 +128,8 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
         multiplies the amplitudes of actuators without ``ctrlrange``. Default: 0.5 of the
         control range (the full range tends to drive a model into its joint stops), 1 for
         actuators without range.
+    backoff : float, default 1.0
+        Multiplies every amplitude (the automatic back-off of :func:`generate_dataset`).
 
     Returns
     -------
@@ -158,7 +161,7 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
         else:
             scales[a] = amplitudes.get(joint, 1.0) * amplitude_scale * (
                 1.0 if amplitude is None else amplitude)
-    scales = np.where(driven, scales, 0.0)
+    scales = np.where(driven, scales * float(backoff), 0.0)
     offsets = np.where(driven, offsets, 0.0)
     return SumOfSinusoids.random(scales, rng, n_components=n_components,
                                  max_frequency=max_frequency, offsets=offsets)
@@ -635,10 +638,9 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
             factor, attempts = 1.0, 4 if backoff else 1
             for attempt in range(attempts):
                 q0, qd0 = system.random_initial_state(rng, scale=initial_scale * factor)
-                base = 0.5 if amplitude is None else amplitude
                 signals = actuator_signals(system, model, forcing, rng, actuators,
-                                           n_components, max_frequency,
-                                           amplitude_scale * factor, base * factor)
+                                           n_components, max_frequency, amplitude_scale,
+                                           amplitude, backoff=factor)
                 clean = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
                                             bar if attempt == 0 else None)
                 if clean.constraint_active.mean() <= max_constrained or (
