@@ -776,6 +776,8 @@ def main(argv=None) -> int:
         return args.func(args)
     commands = {"demo": run_demo, "identify": run_identify, "generate": run_generate}
     try:
+        if args.command == "identify" and args.out:
+            _output_file(args.out, "--out")  # before fitting, not after
         commands[args.command](args)
     except CLIError as error:
         print(f"pysindy-xl: error: {error}", file=sys.stderr)

@@ -279,3 +279,15 @@ def test_demo_names_a_passive_body_and_how_to_leave_it_out(tmp_path, capsys):
     assert report["physics"]["unidentified"] == ["target_x", "target_y"]
     assert report["validation"]["valid"] is False
     assert report["validation"]["position_rmse"] == float("inf")  # never "RMSE 0 ... INVALID"
+
+
+def test_identify_out_checked_before_fitting(tmp_path, capsys):
+    data = tmp_path / "data.npz"
+    assert main(["generate", "cart-pole", str(data), "--duration", "0.5",
+                 "--trajectories", "1"]) == 0
+    capsys.readouterr()
+    assert main(["identify", str(data), "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("pysindy-xl: error: --out:") and "is a directory" in err
+    assert main(["identify", str(data), "--out", str(tmp_path / "no" / "m.json")]) == 1
+    assert "does not exist" in capsys.readouterr().err
