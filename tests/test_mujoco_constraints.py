@@ -335,7 +335,8 @@ def test_two_link_arm_physics_against_mujoco():
 def test_validation_stops_where_the_reference_hits_a_limit(rail_cart):
     system, data, _ = rail_cart
     model, _ = fit(system, data)
-    reference = validation_trajectory(system, duration=4.0, seed=3, amplitude=1.0)
+    reference = validation_trajectory(system, duration=4.0, seed=3, amplitude=1.0,
+                                      backoff=False)
     assert reference.constraint_active.any()
     first = reference.t[np.argmax(reference.constraint_active)]
     result = validate_model(model, system, trajectory=reference)

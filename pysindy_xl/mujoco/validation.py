@@ -253,7 +253,7 @@ def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVE
 def validation_trajectory(system, duration: float = 10.0, forcing: str = "explicit",
                           actuators=None, seed=None, sample_every: int = 10,
                           initial_scale: float = 1.0, substeps: int = 4,
-                          **signal_options) -> Trajectory:
+                          backoff: bool = True, **signal_options) -> Trajectory:
     """A fresh noise-free MuJoCo trajectory with random initial state and forcing.
 
     Parameters
@@ -275,6 +275,10 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
     substeps : int, default 4
         MuJoCo internal steps per model time step (a finer reference, see the module
         docstring).
+    backoff : bool, default True
+        When a joint limit, contact or equality constraint acts, draw again with half the
+        forcing amplitude and initial spread (at most three times) and keep the draw whose
+        first constraint comes latest (``info["backoff"]`` records the factor).
     **signal_options
         ``n_components``, ``max_frequency``, ``amplitude_scale``, ``amplitude`` of the random
         forces.
@@ -282,7 +286,7 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
     Returns
     -------
     Trajectory
-        With clean ``q, qd, qdd, tau, u``.
+        With clean ``q, qd, qdd, tau, u`` and the constraint data.
 
     Examples
     --------
@@ -295,11 +299,24 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
     if forcing not in FORCING_MODES:
         raise ValueError(f"forcing: expected one of {FORCING_MODES}, got {forcing!r}")
     rng = np.random.default_rng(seed)
-    q0, qd0 = system.random_initial_state(rng, scale=initial_scale)
-    signals = actuator_signals(system, system.mj_model(), forcing, rng, actuators,
-                               **signal_options)
-    return simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
-                               substeps=substeps, control_at="midpoint")
+    model = system.mj_model()
+    best, best_start, factor = None, -1, 1.0
+    for _ in range(4 if backoff else 1):
+        q0, qd0 = system.random_initial_state(rng, scale=initial_scale * factor)
+        signals = actuator_signals(system, model, forcing, rng, actuators, backoff=factor,
+                                   **signal_options)
+        trajectory = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
+                                         substeps=substeps, control_at="midpoint")
+        active = trajectory.constraint_active
+        start = int(np.argmax(active)) if active.any() else len(active)
+        if factor < 1:
+            trajectory.info["backoff"] = factor
+        if start > best_start:
+            best, best_start = trajectory, start
+        if start == len(active):
+            break
+        factor /= 2
+    return best
 
 
 def validate_model(model, system=None, trajectory: Trajectory | None = None,
