@@ -393,6 +393,17 @@ def _joint_parameters(system, model):
     return out
 
 
+def _strict_json(value):
+    """JSON-safe copy: non-finite floats (an infinite RMSE) become null."""
+    if isinstance(value, dict):
+        return {k: _strict_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_strict_json(v) for v in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
+
+
 def _rounded(expr, digits=4):
     import sympy as sp
 
@@ -590,7 +601,7 @@ def run_demo(args) -> dict:
     }
     path = os.path.join(args.out, "report.json")
     with open(path, "w", encoding="utf-8") as handle:
-        json.dump(report, handle, indent=2)
+        json.dump(_strict_json(report), handle, indent=2, allow_nan=False)
     print(f"report: {path}" + (f", plot: {files['validation_plot']}" if files else "")
           + f" ({timings['total']:.1f} s)")
     return report

@@ -133,7 +133,8 @@ class ValidationResult:
         Returns
         -------
         dict
-            ``position_rmse`` (``Infinity`` in the JSON text when the simulation stopped),
+            ``position_rmse`` (``inf`` when the simulation stopped early; the demo report and
+            the benchmark records write it as null),
             ``position_rmse_per_coordinate`` (by name), ``divergence_time``, ``valid``,
             ``failure``, ``divergence_bound``, ``horizon`` (s), ``simulated_fraction``,
             ``simulated_rmse`` and ``constrained_at``.
