@@ -25,6 +25,8 @@ __all__ = ["main", "build_parser", "run_demo", "run_identify"]
 SOLVERS = ("auto", "explicit", "implicit", "mixed")
 CATALOGS = ("lagrange", "classical", "mixed")
 FORCINGS = ("explicit", "implicit", "mixed")
+NOISE_MODELS = ("positions", "all")
+CONSTRAINTS = ("exclude", "known", "include")
 _AUTO_SOLVER = {"explicit": "explicit", "implicit": "implicit", "mixed": "mixed"}
 
 
@@ -63,6 +65,13 @@ def _positive_float(text):
     return value
 
 
+def _fraction(text):
+    value = _positive_float(text)
+    if value > 1:
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}")
+    return value
+
+
 def _positive_int(text):
     try:
         value = int(text)
@@ -80,15 +89,31 @@ def _add_generation_options(parser, duration=10.0, trajectories=2):
     parser.add_argument("--actuators", nargs="+", metavar="NAME",
                         help="joints driven with --forcing mixed (default: the system's choice)")
     parser.add_argument("--noise", type=_non_negative_float, default=0.0,
-                        help="relative Gaussian noise on positions, velocities, accelerations "
-                             "and forces (default: 0)")
+                        help="relative Gaussian noise: std = NOISE x each coordinate's standard "
+                             "deviation over the trajectory (default: 0)")
+    parser.add_argument("--noise-model", choices=NOISE_MODELS, default="positions",
+                        help="positions: noisy recorded positions only, velocities and "
+                             "accelerations are not recorded and the package differentiates; "
+                             "all: the paper's model, noise on positions, velocities, "
+                             "accelerations and forces (default: positions)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     parser.add_argument("--duration", type=_positive_float, default=duration,
                         help=f"seconds per training trajectory (default: {duration:g})")
     parser.add_argument("--trajectories", type=_positive_int, default=trajectories,
                         help=f"number of training trajectories (default: {trajectories})")
     parser.add_argument("--sample-every", type=_positive_int, default=2,
-                        help="keep every k-th MuJoCo step (1 ms) (default: 2)")
+                        help="keep every k-th step of the model's timestep (1 ms for the "
+                             "shipped systems; the sampling period is printed) (default: 2)")
+    parser.add_argument("--amplitude", type=_fraction, default=None,
+                        help="forcing peak as a fraction of each actuator's ctrlrange "
+                             "half-width, in (0, 1] (default: 0.5 of the range; the system's "
+                             "force amplitudes for actuators without ctrlrange)")
+    parser.add_argument("--initial-scale", type=_non_negative_float, default=1.0,
+                        help="spread of the random initial states, as a fraction of the joint "
+                             "ranges (default: 1)")
+    parser.add_argument("--joints", nargs="+", metavar="NAME", default=None,
+                        help="MJCF models: identify these joints only; the others are locked "
+                             "at their reference pose (removed with their actuators)")
 
 
 def _add_fit_options(parser):
@@ -145,6 +170,11 @@ def build_parser() -> argparse.ArgumentParser:
                       help="cart-pole, double-pendulum, cart-double-pendulum, or an MJCF .xml")
     _add_generation_options(demo)
     _add_fit_options(demo)
+    demo.add_argument("--constraints", choices=CONSTRAINTS, default="exclude",
+                      help="samples where a joint limit, contact or equality constraint acts: "
+                           "exclude them from the regression, pass the recorded constraint "
+                           "forces as known forces, or include them unchanged (default: "
+                           "exclude)")
     demo.add_argument("--validation-duration", type=_positive_float, default=10.0,
                       help="seconds of the validation trajectory (default: 10)")
     demo.add_argument("--out", default="pysindy-xl-demo", metavar="DIR",
@@ -221,11 +251,89 @@ def _optimizer(solver: str, threshold=None):
     return cls()
 
 
-def _system(name):
-    from pysindy_xl.mujoco import get_system
+def _system(name, joints=None):
+    from pysindy_xl.mujoco import MuJoCoSystem, get_system
 
     try:
-        return get_system(name)
+        if joints is None:
+            return get_system(name)
+        system = get_system(name) if isinstance(name, MuJoCoSystem) else None
+        if system is None and not (isinstance(name, str) and name.endswith(".xml")):
+            raise CLIError(f"--joints: only for MJCF .xml models; {name!r} is a shipped system "
+                           "whose joints are all identified")
+        return get_system(name, joints=joints)
+    except (ValueError, TypeError) as error:
+        raise CLIError(str(error).replace("joints: ", "--joints: ", 1)) from None
+
+
+def _output_file(path, option):
+    """Check an output file's directory before any long computation."""
+    directory = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(directory):
+        raise CLIError(f"{option}: directory {directory!r} does not exist")
+    if os.path.isdir(path):
+        raise CLIError(f"{option}: {path!r} is a directory, expected a file name")
+
+
+def _output_directory(path):
+    if os.path.exists(path) and not os.path.isdir(path):
+        raise CLIError(f"--out: {path!r} exists and is not a directory; give a directory")
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as error:
+        raise CLIError(f"--out: cannot create directory {path!r} ({error.strerror})") from None
+
+
+def _generate(system, args, progress=None):
+    """generate_dataset with the shared options; warnings of the generation are printed."""
+    import warnings
+
+    from pysindy_xl.mujoco import generate_dataset
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            dataset = generate_dataset(
+                system, n_trajectories=args.trajectories, duration=args.duration,
+                forcing=args.forcing, actuators=args.actuators, noise=args.noise,
+                noise_model=args.noise_model, seed=args.seed, sample_every=args.sample_every,
+                amplitude=args.amplitude, initial_scale=args.initial_scale, progress=progress,
+            )
+        except (ValueError, RuntimeError, TypeError) as error:
+            raise CLIError(str(error)) from None
+    for warning in caught:
+        print(f"warning: {warning.message}", file=sys.stderr)
+    return dataset
+
+
+def _data_lines(system, dataset):
+    """What the data hold: sampling, what the fit receives, constraints."""
+    meta = dataset.metadata
+    period = meta["timestep"] * meta["sample_every"]
+    lines = [f"  sampling every {meta['sample_every']} step(s) of {meta['timestep'] * 1e3:g} ms "
+             f"= {period * 1e3:g} ms"]
+    if meta.get("derivatives") == "none":
+        lines.append(f"  noise model {meta['noise_model']}: noisy positions only, velocities "
+                     "and accelerations computed by differentiation")
+    excluded = getattr(system, "excluded_joints", ())
+    if excluded:
+        lines.append(f"  joints locked at their reference pose (not identified): "
+                     f"{', '.join(excluded)}")
+    summary = meta.get("constraints", {})
+    if summary.get("active_fraction"):
+        hits = ", ".join(f"{j} {c}" for j, c in summary["limit_hits"].items()) or "none"
+        lines.append(f"  constraints act on {summary['active_fraction']:.1%} of the samples "
+                     f"(joint limit samples: {hits}; contact samples: "
+                     f"{summary['contact_samples']})")
+    return lines
+
+
+def _system_from_metadata(metadata):
+    """The system a dataset was generated with (a user's MJCF from its path or embedded XML)."""
+    from pysindy_xl.mujoco import system_from_metadata
+
+    try:
+        return system_from_metadata(metadata)
     except (ValueError, TypeError) as error:
         raise CLIError(str(error)) from None
 
@@ -251,8 +359,9 @@ def _fit(system, dataset, args, solver, forced):
     catalog = reference_catalog(system, args.catalog, velocity_degree=args.velocity_degree,
                                 trig_degree=args.trig_degree, friction=args.friction)
     model = px.XLSINDy(catalog, optimizer)
-    arguments = dataset.fit_arguments(forces="tau" if forced else None)
     try:
+        arguments = dataset.fit_arguments(forces="tau" if forced else None,
+                                          constraints=getattr(args, "constraints", "exclude"))
         model.fit(**arguments)
     except (RuntimeError, ValueError, np.linalg.LinAlgError) as error:
         raise CLIError(f"identification failed ({type(error).__name__}): {error}") from None
@@ -285,6 +394,35 @@ def _coefficient_summary(system, model):
         "true_model_missing_from_catalog": missing,
     }
     return truth, summary
+
+
+def _joint_parameters(system, model):
+    """Identified joint damping and dry friction next to the MJCF's (user models only)."""
+    if system.has_ground_truth or not hasattr(system, "frictionloss"):
+        return {}
+    coefficients = dict(zip(model.get_feature_names(), model.coefficients(), strict=True))
+    out = {}
+    for i, (joint, name) in enumerate(zip(system.joint_names, system.coordinate_names,
+                                          strict=True)):
+        entry = {"damping": [float(coefficients.get(f"C_{name}[{name}_dot]", 0.0)),
+                             float(system.joint_damping[i])]}
+        prefix = f"C_{name}[tanh("
+        dry = [v for k, v in coefficients.items() if k.startswith(prefix)]
+        if dry or system.frictionloss[i]:
+            entry["frictionloss"] = [float(sum(dry)), float(system.frictionloss[i])]
+        out[joint] = entry
+    return out
+
+
+def _strict_json(value):
+    """JSON-safe copy: non-finite floats (an infinite RMSE) become null."""
+    if isinstance(value, dict):
+        return {k: _strict_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_strict_json(v) for v in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
 
 
 def _rounded(expr, digits=4):
@@ -346,36 +484,31 @@ def run_demo(args) -> dict:
     (theta) 0.32*theta_ddot + 0.1*theta_dot + 0.4*x_ddot*cos(theta) + 3.924*sin(theta) = tau_theta
     <BLANKLINE>
     validation: position RMSE ... over 0.2 s, divergence none, VALID
+    data:
+      sampling every 2 step(s) of 1 ms = 2 ms
+    physics against MuJoCo (mj_fullM, qfrc_bias) at 5 states: mass matrix error ...
     coefficients: 7 terms identified, 7 true, max error ... (relative to the largest)
     report: .../report.json (... s)
     >>> report["validation"]["valid"], report["coefficient_summary"]["support_recovered"]
     (True, True)
     """
     from pysindy_xl.dynamics import DynamicsError
-    from pysindy_xl.mujoco import generate_dataset
     from pysindy_xl.mujoco.validation import validate_model
 
-    system = _system(args.system)
+    system = _system(args.system, args.joints)
     solver = _AUTO_SOLVER[args.forcing] if args.solver == "auto" else args.solver
     forced = args.forcing != "implicit"
     _check_solver(solver, forced, args.threshold)
-    os.makedirs(args.out, exist_ok=True)
+    _output_directory(args.out)
     timings = {}
     quiet = args.quiet
     _log(quiet, f"pysindy-xl demo: {system.name} {system.parameters}")
-    _log(quiet, f"  forcing {args.forcing}, noise {args.noise:g}, catalog {args.catalog}, "
-                f"solver {solver}, seed {args.seed}")
+    _log(quiet, f"  forcing {args.forcing}, noise {args.noise:g} ({args.noise_model}), catalog "
+                f"{args.catalog}, solver {solver}, seed {args.seed}")
 
     start = time.perf_counter()
     _log(quiet, f"[1/3] MuJoCo: {args.trajectories} trajectories of {args.duration:g} s")
-    try:
-        dataset = generate_dataset(
-            system, n_trajectories=args.trajectories, duration=args.duration,
-            forcing=args.forcing, actuators=args.actuators, noise=args.noise, seed=args.seed,
-            sample_every=args.sample_every, progress=None if not quiet else False,
-        )
-    except (ValueError, RuntimeError) as error:
-        raise CLIError(str(error)) from None
+    dataset = _generate(system, args, progress=None if not quiet else False)
     timings["generate"] = time.perf_counter() - start
     if args.save_data:
         dataset.save(os.path.join(args.out, "training_data.npz"))
@@ -393,7 +526,8 @@ def run_demo(args) -> dict:
     try:
         result = validate_model(model, system, duration=args.validation_duration,
                                 forcing=args.forcing, actuators=args.actuators,
-                                seed=args.seed + 10_000, timeout=120.0)
+                                seed=args.seed + 10_000, initial_scale=args.initial_scale,
+                                amplitude=args.amplitude, timeout=120.0)
     except (DynamicsError, ValueError) as error:
         # e.g. identified equations without accelerations: no dynamics to simulate
         result = None
@@ -418,13 +552,47 @@ def run_demo(args) -> dict:
     metrics = result.to_dict() if result is not None else {"valid": False, "failure": failure}
     if result is not None:
         divergence = ("none" if result.divergence_time is None
-                      else f"{result.divergence_time:.3g} s")
-        print(f"validation: position RMSE {result.position_rmse:.3g} over "
-              f"{args.validation_duration:g} s, divergence {divergence}, "
+                      else f"at {result.divergence_time:.3g} s")
+        rmse = (f"{result.position_rmse:.3g}" if np.isfinite(result.position_rmse) else
+                f"inf (simulated {result.simulated_fraction:.0%} of the horizon)")
+        horizon = f"{args.validation_duration:g} s"
+        if result.constrained_at is not None:
+            horizon = (f"{result.constrained_at:.3g} s (a joint limit or contact acts in the "
+                       "MuJoCo reference from then on)")
+        print(f"validation: position RMSE {rmse} over {horizon}, divergence {divergence}, "
               f"{'VALID' if result.valid else 'INVALID'}"
               + (f" ({result.failure})" if result.failure else ""))
     else:
         print(f"validation: INVALID ({failure})")
+    print("data:")
+    for line in _data_lines(system, dataset):
+        print(line)
+    joints = _joint_parameters(system, model)
+    for joint, entry in joints.items():
+        print(f"  {joint}: " + ", ".join(f"{key} {found:.4g} (MJCF {given:.4g})"
+                                         for key, (found, given) in entry.items()))
+    physics = None
+    if result is not None:
+        from pysindy_xl.mujoco.validation import compare_physics
+
+        try:
+            physics = compare_physics(model, system, seed=args.seed)
+        except (DynamicsError, ValueError, TypeError, np.linalg.LinAlgError):
+            physics = None
+    if physics is not None:
+        definite = "" if physics["positive_definite"] else ", mass matrix NOT positive definite"
+        print(f"physics against MuJoCo (mj_fullM, qfrc_bias) at 5 states: mass matrix error "
+              f"{physics['mass_error']:.2g}, unforced dynamics error "
+              f"{physics['force_error']:.2g} (relative){definite}")
+        if physics["unidentified"]:
+            names = set(physics["unidentified"])
+            keep = [j for j, c in zip(system.joint_names, system.coordinate_names, strict=True)
+                    if c not in names]
+            hint = f" (--joints {' '.join(keep)})" if keep and hasattr(system, "frictionloss") \
+                else ""
+            print(f"no inertia identified for {', '.join(physics['unidentified'])}: no force "
+                  f"excites these coordinates (a passive, decoupled body?); leave their joints "
+                  f"out{hint}")
     if coefficient_summary:
         print(f"coefficients: {coefficient_summary['identified_terms']} terms identified, "
               f"{coefficient_summary['true_terms']} true, max error "
@@ -436,6 +604,11 @@ def run_demo(args) -> dict:
         "options": {k: v for k, v in vars(args).items() if k != "func"},
         "solver": solver,
         "n_samples": n_samples,
+        "data": {key: dataset.metadata.get(key) for key in (
+            "noise", "noise_model", "derivatives", "timestep", "sample_every", "constraints")},
+        "excluded_joints": list(getattr(system, "excluded_joints", ())),
+        "joint_parameters": joints,
+        "physics": physics,
         "features": model.get_feature_names(),
         "coefficients": model.coefficients().tolist(),
         "true_coefficients": None if truth is None else truth.tolist(),
@@ -449,7 +622,7 @@ def run_demo(args) -> dict:
     }
     path = os.path.join(args.out, "report.json")
     with open(path, "w", encoding="utf-8") as handle:
-        json.dump(report, handle, indent=2)
+        json.dump(_strict_json(report), handle, indent=2, allow_nan=False)
     print(f"report: {path}" + (f", plot: {files['validation_plot']}" if files else "")
           + f" ({timings['total']:.1f} s)")
     return report
@@ -581,7 +754,9 @@ def _identify_inputs(args):
         if args.angles:
             raise CLIError("--angles: the system gives the angles; use --angles with "
                            "--coordinates (no --system)")
-        return _dataset_for(_system(name), dataset), _system(name)
+        # a dataset of a user's MJCF carries the model (path or XML) in its metadata
+        system = _system(name) if args.system else _system_from_metadata(dataset.metadata)
+        return _dataset_for(system, dataset), system
     if not args.data.lower().endswith(".npz") or coordinates:
         if not angles:
             print("note: no --angles: the catalog has no sin/cos terms of the positions",
@@ -636,23 +811,15 @@ def run_generate(args):
     ...     path = run_generate(args)
     wrote .../data.npz and .../data.json: Dataset(coordinates=['x', 'theta'], trajectories=1,
     samples=101)
+      sampling every 2 step(s) of 1 ms = 2 ms
     """
-    from pysindy_xl.mujoco import generate_dataset
-
-    system = _system(args.system)
-    try:
-        dataset = generate_dataset(
-            system, n_trajectories=args.trajectories, duration=args.duration,
-            forcing=args.forcing, actuators=args.actuators, noise=args.noise, seed=args.seed,
-            sample_every=args.sample_every,
-        )
-    except (ValueError, RuntimeError) as error:
-        raise CLIError(str(error)) from None
-    directory = os.path.dirname(os.path.abspath(args.out))
-    if not os.path.isdir(directory):
-        raise CLIError(f"DATA.npz: directory {directory!r} does not exist")
+    system = _system(args.system, args.joints)
+    _output_file(args.out, "DATA.npz")
+    dataset = _generate(system, args)
     path = dataset.save(args.out)
     print(f"wrote {path} and {path.with_suffix('.json')}: {dataset}")
+    for line in _data_lines(system, dataset):
+        print(line)
     return path
 
 
@@ -694,6 +861,8 @@ def main(argv=None) -> int:
         return args.func(args)
     commands = {"demo": run_demo, "identify": run_identify, "generate": run_generate}
     try:
+        if args.command == "identify" and args.out:
+            _output_file(args.out, "--out")  # before fitting, not after
         commands[args.command](args)
     except CLIError as error:
         print(f"pysindy-xl: error: {error}", file=sys.stderr)

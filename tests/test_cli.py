@@ -179,3 +179,118 @@ def test_demo_on_a_user_mjcf(tmp_path, capsys):
     report = read_report(out)
     assert report["true_coefficients"] is None and report["validation"]["valid"] is True
     assert (out / "validation.png").exists()
+
+
+MODELS = __import__("pathlib").Path(__file__).parent / "models"
+
+
+def test_generate_then_identify_a_user_mjcf_with_include(tmp_path, capsys):
+    """The dataset of a user's MJCF identifies alone, even once the model files are gone."""
+    import shutil
+
+    for name in ("included_arm.xml", "included_arm_body.xml"):
+        shutil.copy(MODELS / name, tmp_path / name)
+    data = tmp_path / "arm.npz"
+    assert main(["generate", str(tmp_path / "included_arm.xml"), str(data), "--duration", "3",
+                 "--trajectories", "1"]) == 0
+    assert "sampling every 2 step(s) of 1 ms = 2 ms" in capsys.readouterr().out
+    (tmp_path / "included_arm.xml").unlink()  # the embedded XML is enough
+    (tmp_path / "included_arm_body.xml").unlink()
+    assert main(["identify", str(data), "--trig-degree", "1"]) == 0
+    out = capsys.readouterr().out
+    # 1.5 kg at 0.4 m: m l^2 / 2 = 0.12, m g l = 5.886; damping 0.3
+    assert "mjcf: 1 trajectories" in out
+    assert "0.12*shoulder_dot**2" in out and "5.886*cos(shoulder)" in out
+    assert "0.3*shoulder_dot" in out
+
+
+def test_generate_checks_the_output_before_simulating(tmp_path, capsys):
+    import time
+
+    start = time.perf_counter()
+    assert main(["generate", "cart-pole", str(tmp_path / "missing" / "data.npz"),
+                 "--duration", "1000"]) == 1  # 10^6 steps if it simulated first
+    assert time.perf_counter() - start < 5
+    assert "does not exist" in capsys.readouterr().err
+    assert main(["generate", "cart-pole", str(tmp_path), "--duration", "1000"]) == 1
+    assert "is a directory" in capsys.readouterr().err
+
+
+def test_demo_out_on_an_existing_file(tmp_path, capsys):
+    existing = tmp_path / "report.txt"
+    existing.write_text("keep me")
+    assert main(["demo", "cart-pole", "--out", str(existing), *SHORT]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("pysindy-xl: error: --out:") and "not a directory" in err
+    assert "Traceback" not in err and existing.read_text() == "keep me"
+
+
+def test_demo_noise_model_decides_what_the_fit_receives(tmp_path, capsys):
+    assert main(["demo", "cart-pole", "--noise", "0.001", "--trig-degree", "1", "--out",
+                 str(tmp_path), *SHORT]) == 0
+    report = read_report(tmp_path)
+    assert report["data"]["noise_model"] == "positions"
+    assert report["data"]["derivatives"] == "none"
+    assert report["data"]["noise"] == {"q": 0.001, "qd": 0.0, "qdd": 0.0, "tau": 0.0}
+    assert "velocities and accelerations computed by differentiation" in capsys.readouterr().out
+    assert main(["demo", "cart-pole", "--noise", "0.001", "--noise-model", "all",
+                 "--trig-degree", "1", "--out", str(tmp_path), *SHORT]) == 0
+    report = read_report(tmp_path)
+    assert report["data"]["derivatives"] == "mujoco" and report["data"]["noise"]["qdd"] == 0.001
+
+
+def test_demo_joint_selection_and_limits(tmp_path, capsys):
+    out = tmp_path / "target"
+    assert main(["demo", str(MODELS / "pendulum_and_target.xml"), "--joints", "swing",
+                 "--trig-degree", "1", "--out", str(out), *SHORT]) == 0
+    report = read_report(out)
+    assert report["excluded_joints"] == ["target_x", "target_y"]
+    assert report["validation"]["valid"] is True
+    assert main(["demo", "cart-pole", "--joints", "slider", "--out", str(out), *SHORT]) == 1
+    assert "--joints: only for MJCF" in capsys.readouterr().err
+    assert main(["demo", str(MODELS / "pendulum_and_target.xml"), "--joints", "elbow",
+                 "--out", str(out), *SHORT]) == 1
+    assert "--joints: expected a non-empty list of joint names" in capsys.readouterr().err
+    rail = tmp_path / "rail"
+    assert main(["demo", str(MODELS / "rail_cart.xml"), "--amplitude", "1", "--trig-degree",
+                 "1", "--out", str(rail), "--duration", "5", "--trajectories", "2",
+                 "--validation-duration", "2", "--no-plots"]) == 0
+    printed = capsys.readouterr().out
+    report = read_report(rail)
+    constraints = report["data"]["constraints"]
+    assert constraints["limit_hits"].keys() == {"slider"}
+    assert "constraints act on" in printed and "slider" in printed
+    assert report["validation"]["valid"] is True
+
+
+def test_amplitude_option_checked():
+    with pytest.raises(SystemExit) as info:
+        main(["demo", "cart-pole", "--amplitude", "2"])
+    assert info.value.code == 2
+
+
+def test_demo_names_a_passive_body_and_how_to_leave_it_out(tmp_path, capsys):
+    assert main(["demo", str(MODELS / "pendulum_and_target.xml"), "--trig-degree", "1",
+                 "--out", str(tmp_path), *SHORT]) == 0
+    printed = capsys.readouterr().out
+    assert "no inertia identified for target_x, target_y" in printed
+    assert "--joints swing" in printed
+    report = read_report(tmp_path)
+    assert report["physics"]["unidentified"] == ["target_x", "target_y"]
+    assert report["validation"]["valid"] is False
+    # never "RMSE 0 ... INVALID": no finite error (null in the strict JSON report)
+    assert report["validation"]["position_rmse"] is None
+    assert report["validation"]["divergence_time"] is not None
+    assert "position RMSE inf" in printed
+
+
+def test_identify_out_checked_before_fitting(tmp_path, capsys):
+    data = tmp_path / "data.npz"
+    assert main(["generate", "cart-pole", str(data), "--duration", "0.5",
+                 "--trajectories", "1"]) == 0
+    capsys.readouterr()
+    assert main(["identify", str(data), "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("pysindy-xl: error: --out:") and "is a directory" in err
+    assert main(["identify", str(data), "--out", str(tmp_path / "no" / "m.json")]) == 1
+    assert "does not exist" in capsys.readouterr().err

@@ -11,7 +11,7 @@ from pysindy_xl.mujoco import Dataset, DatasetError, Trajectory, generate_datase
 @pytest.fixture(scope="module")
 def dataset():
     return generate_dataset("double-pendulum", n_trajectories=2, duration=0.3, forcing="mixed",
-                            noise=0.01, seed=4, progress=False)
+                            noise=0.01, noise_model="all", seed=4, progress=False)
 
 
 def test_round_trip(dataset, tmp_path):
@@ -26,12 +26,14 @@ def test_round_trip(dataset, tmp_path):
     assert loaded.metadata["seed"] == 4
     assert loaded.metadata["noise"] == dataset.metadata["noise"]
     for a, b in zip(loaded.trajectories, dataset.trajectories, strict=True):
-        for key in ("t", "q", "qd", "qdd", "tau", "u"):
+        for key in ("t", "q", "qd", "qdd", "tau", "u", "tau_constraint", "constraint_active"):
             np.testing.assert_array_equal(getattr(a, key), getattr(b, key))
         assert a.info == b.info
     # only plain arrays in the file: readable without pickle
     with np.load(path, allow_pickle=False) as npz:
-        assert set(npz.files) == {"t", "trajectory", "q", "qd", "qdd", "tau", "u", "metadata"}
+        assert set(npz.files) == {"t", "trajectory", "q", "qd", "qdd", "tau", "u", "metadata",
+                                  "tau_constraint", "u_constraint", "constraint_active"}
+        assert npz["constraint_active"].dtype == bool
 
 
 def test_fit_arguments(dataset):

@@ -13,13 +13,17 @@ from pysindy_xl.mujoco import (
 )
 
 
-def test_same_seed_same_data_other_seed_other_data():
-    kwargs = dict(n_trajectories=2, duration=0.5, noise=0.01, progress=False)
+@pytest.mark.parametrize("noise_model", ["positions", "all"])
+def test_same_seed_same_data_other_seed_other_data(noise_model):
+    kwargs = dict(n_trajectories=2, duration=0.5, noise=0.01, noise_model=noise_model,
+                  progress=False)
     a = generate_dataset("cart-pole", seed=7, **kwargs)
     b = generate_dataset("cart-pole", seed=7, **kwargs)
     c = generate_dataset("cart-pole", seed=8, **kwargs)
+    keys = ("q", "tau", "u") if noise_model == "positions" else ("q", "qd", "qdd", "tau", "u")
+    assert a.has("qdd") == (noise_model == "all")
     for ta, tb, tc in zip(a.trajectories, b.trajectories, c.trajectories, strict=True):
-        for key in ("q", "qd", "qdd", "tau", "u"):
+        for key in keys:
             np.testing.assert_array_equal(getattr(ta, key), getattr(tb, key))
         assert not np.allclose(ta.q, tc.q)
     assert not np.allclose(a.trajectories[0].q, a.trajectories[1].q)
@@ -124,3 +128,19 @@ def test_model_without_actuator_only_implicit():
     data = generate_dataset(system, n_trajectories=1, duration=0.1, forcing="implicit", seed=0,
                             progress=False)
     assert data.trajectories[0].q.shape == (51, 1)
+
+
+def test_shipped_systems_keep_their_force_amplitudes():
+    """Without ctrlrange the forcing peaks at the system's force amplitudes (no back-off)."""
+    system = CartPole()
+    data = generate_dataset(system, n_trajectories=2, duration=0.2, seed=0, progress=False)
+    expected = [system.force_amplitudes[j] for j in system.joint_names]
+    for tr in data.trajectories:
+        signals = SumOfSinusoids.from_dict(tr.info["signals"])
+        np.testing.assert_allclose(signals.amplitudes.sum(axis=1), expected)
+        assert "backoff" not in tr.info
+    half = generate_dataset(system, n_trajectories=1, duration=0.2, seed=0, amplitude=0.5,
+                            progress=False).trajectories[0]
+    np.testing.assert_allclose(
+        SumOfSinusoids.from_dict(half.info["signals"]).amplitudes.sum(axis=1),
+        0.5 * np.array(expected))

@@ -108,7 +108,7 @@ def trajectory_data(spec: TrajectorySpec, n_trajectories: int, duration: float,
         matrix = system.force_matrix()
         noisy = [add_noise(tr, spec.noise, rng, matrix) for tr in clean.trajectories]
         metadata = dict(clean.metadata, noise=dict.fromkeys(("q", "qd", "qdd", "tau"),
-                                                             spec.noise))
+                                                             spec.noise), noise_model="all")
         clean = Dataset(noisy, clean.coordinate_names, metadata)
     validation = validation_trajectory(system, validation_duration, spec.forcing,
                                        seed=_seed(motion_seed, "validation"),

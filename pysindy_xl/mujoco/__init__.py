@@ -14,9 +14,17 @@ from .catalogs import (
     reference_catalog,
     true_coefficients,
 )
+from .constraints import contiguous_segments, unconstrained_samples, unconstrained_windows
 from .dataset import Dataset, DatasetError, Trajectory, load_dataset
 from .forcing import FORCING_MODES, SumOfSinusoids
-from .generate import add_noise, generate_dataset, simulate_trajectory
+from .generate import (
+    NOISE_MODELS,
+    ConstraintWarning,
+    add_noise,
+    generate_dataset,
+    noise_levels,
+    simulate_trajectory,
+)
 from .systems import (
     SYSTEMS,
     CartDoublePendulum,
@@ -27,10 +35,12 @@ from .systems import (
     default_xml_path,
     equations_of_motion,
     get_system,
+    system_from_metadata,
 )
 from .validation import (
     DEFAULT_DIVERGENCE_BOUND,
     ValidationResult,
+    compare_physics,
     compare_trajectories,
     validate_model,
     validation_trajectory,
@@ -46,6 +56,13 @@ __all__ = [
     "default_xml_path",
     "equations_of_motion",
     "get_system",
+    "system_from_metadata",
+    "unconstrained_samples",
+    "unconstrained_windows",
+    "contiguous_segments",
+    "NOISE_MODELS",
+    "ConstraintWarning",
+    "noise_levels",
     "FORCING_MODES",
     "SumOfSinusoids",
     "add_noise",
@@ -63,6 +80,7 @@ __all__ = [
     "DEFAULT_DIVERGENCE_BOUND",
     "ValidationResult",
     "compare_trajectories",
+    "compare_physics",
     "validate_model",
     "validation_trajectory",
     "plot_validation",

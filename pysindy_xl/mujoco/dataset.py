@@ -13,6 +13,10 @@ key             shape        content
 ``qdd``         (N, n)       accelerations (optional)
 ``tau``         (N, n)       generalized forces on the coordinates (optional)
 ``u``           (N, n)       joint forces, ``tau = u @ B.T`` (optional)
+``tau_constraint``  (N, n)   generalized constraint forces (limits, contacts, equality,
+                             frictionloss), MuJoCo's ``qfrc_constraint`` mapped like ``u``
+``u_constraint``    (N, n)   the same in joint coordinates (``qfrc_constraint``)
+``constraint_active`` (N,)   bool: a limit, contact or equality constraint pushes (optional)
 ``trajectory``  (N,)         trajectory id of each sample (optional; int or float)
 ``metadata``    ()           JSON text (unicode array, optional)
 ==============  ===========  =====================================================
@@ -36,7 +40,9 @@ __all__ = ["Trajectory", "Dataset", "load_dataset", "DatasetError"]
 
 FORMAT = "pysindy-xl-dataset"
 VERSION = 1
-_SERIES = ("q", "qd", "qdd", "tau", "u")
+_SERIES = ("q", "qd", "qdd", "tau", "u", "tau_constraint", "u_constraint")
+_MASKS = ("constraint_active",)
+CONSTRAINT_HANDLING = ("exclude", "known", "include")
 
 
 class DatasetError(ValueError):
@@ -74,14 +80,21 @@ class Trajectory:
         Joint forces (one per MuJoCo degree of freedom); ``tau = u @ B.T``.
     info : dict, optional
         JSON-serializable description (initial state, forcing signals...).
+    tau_constraint, u_constraint : array, shape (N, n), optional
+        Constraint forces (MuJoCo's ``qfrc_constraint``: joint limits, contacts, equality
+        constraints, frictionloss) on the coordinates and on the joints.
+    constraint_active : array of bool, shape (N,), optional
+        Samples where a limit, contact or equality constraint acts (frictionloss excluded:
+        it is part of the dynamics that the catalogs can model).
 
     Attributes
     ----------
     t : ndarray, shape (N,)
     q : ndarray, shape (N, n)
-    qd, qdd, tau, u : ndarray, shape (N, n), or None
+    qd, qdd, tau, u, tau_constraint, u_constraint : ndarray, shape (N, n), or None
         As given.
     info : dict
+    constraint_active : ndarray of bool, shape (N,), or None
 
     Raises
     ------
@@ -104,6 +117,9 @@ class Trajectory:
     tau: np.ndarray | None = None
     u: np.ndarray | None = None
     info: dict = field(default_factory=dict)
+    tau_constraint: np.ndarray | None = None
+    u_constraint: np.ndarray | None = None
+    constraint_active: np.ndarray | None = None
 
     def __post_init__(self):
         self.t = _check_times(self.t, "t")
@@ -113,6 +129,14 @@ class Trajectory:
             value = getattr(self, name)
             if value is not None:
                 setattr(self, name, _check_series(value, name, len(self.t), n))
+        if self.constraint_active is not None:
+            mask = np.asarray(self.constraint_active)
+            if mask.shape != (len(self.t),) or mask.dtype.kind not in "biu":
+                raise DatasetError(
+                    f"constraint_active: expected a boolean array of shape ({len(self.t)},), "
+                    f"got {mask.dtype} {mask.shape}"
+                )
+            self.constraint_active = mask.astype(bool)
 
     @property
     def n_samples(self) -> int:
@@ -192,7 +216,7 @@ class Dataset:
                     f"trajectories: trajectory {k} has {tr.q.shape[1]} coordinates, "
                     f"coordinate_names has {len(names)}"
                 )
-            for key in _SERIES[1:]:
+            for key in _SERIES[1:] + _MASKS:
                 if (getattr(tr, key) is None) != (getattr(trajectories[0], key) is None):
                     raise DatasetError(f"trajectories: {key!r} present in some trajectories only")
         metadata = dict(metadata or {})
@@ -236,7 +260,8 @@ class Dataset:
         """
         return getattr(self.trajectories[0], key) is not None
 
-    def fit_arguments(self, forces: str | None = "tau") -> dict:
+    def fit_arguments(self, forces: str | None = "tau", constraints: str = "exclude",
+                      margin: int | None = None, min_length: int | None = None) -> dict:
         """Keyword arguments for ``XLSINDy.fit``: lists of per-trajectory arrays.
 
         Parameters
@@ -244,11 +269,29 @@ class Dataset:
         forces : {"tau", "u", None}, default "tau"
             Which forces to pass as ``u``: generalized forces (with the default interlink),
             joint forces (with ``interlink=B``), or none (implicit fit).
+        constraints : {"exclude", "known", "include"}, default "exclude"
+            Samples where a limit, contact or equality constraint acts (``constraint_active``):
+            ``exclude`` leaves them out (each trajectory is split into its unconstrained runs,
+            the strong-form rule of :func:`~pysindy_xl.mujoco.constraints.unconstrained_samples`);
+            ``known`` adds the recorded constraint forces to ``u`` (frictionloss included);
+            ``include`` passes the data unchanged. Without constraint data, all three pass
+            the data unchanged.
+        margin : int, optional
+            With ``exclude``: samples also dropped on each side of an active one. Default 0
+            when velocities and accelerations are given, 10 when the fit differentiates.
+        min_length : int, optional
+            With ``exclude``: shortest unconstrained run kept. Default 5 with derivatives,
+            25 when the fit differentiates.
 
         Returns
         -------
         dict
             Keys ``x``, ``t``, ``x_dot``, ``x_ddot``, ``u``; a missing series gives None.
+
+        Raises
+        ------
+        ValueError
+            If an argument is not one of the accepted values, or every sample is excluded.
 
         Examples
         --------
@@ -258,19 +301,94 @@ class Dataset:
         >>> arguments = data.fit_arguments()
         >>> arguments["x_dot"], arguments["u"][0].shape
         (None, (11, 1))
+
+        Samples where a constraint acts are left out, the trajectory split around them:
+
+        >>> active = np.zeros(11, dtype=bool); active[5] = True
+        >>> data = Dataset([Trajectory(t, np.sin(t), qd=np.cos(t), qdd=-np.sin(t),
+        ...                            constraint_active=active)], ["theta"])
+        >>> [x.shape[0] for x in data.fit_arguments(forces=None)["x"]]
+        [5, 5]
         """
+        from .constraints import contiguous_segments, unconstrained_samples
+
         if forces not in ("tau", "u", None):
             raise ValueError(f"forces: expected 'tau', 'u' or None, got {forces!r}")
+        if constraints not in CONSTRAINT_HANDLING:
+            raise ValueError(
+                f"constraints: expected one of {CONSTRAINT_HANDLING}, got {constraints!r}"
+            )
         if forces is not None and not self.has(forces):
             raise DatasetError(f"forces: the dataset has no {forces!r} array")
         trs = self.trajectories
-        return {
+        derivatives = self.has("qd") and self.has("qdd")
+        force_lists = [getattr(tr, forces) for tr in trs] if forces else None
+        if constraints == "known" and self.has("tau_constraint"):
+            key = "u_constraint" if forces == "u" else "tau_constraint"
+            extra = [getattr(tr, key) for tr in trs]
+            force_lists = extra if force_lists is None else [
+                f + c for f, c in zip(force_lists, extra, strict=True)]
+        arguments = {
             "x": [tr.q for tr in trs],
             "t": [tr.t for tr in trs],
             "x_dot": [tr.qd for tr in trs] if self.has("qd") else None,
             "x_ddot": [tr.qdd for tr in trs] if self.has("qdd") else None,
-            "u": [getattr(tr, forces) for tr in trs] if forces else None,
+            "u": force_lists,
         }
+        if constraints != "exclude" or not self.has("constraint_active") or not any(
+            tr.constraint_active.any() for tr in trs
+        ):
+            return arguments
+        margin = (0 if derivatives else 10) if margin is None else margin
+        min_length = (5 if derivatives else 25) if min_length is None else min_length
+        out = {key: ([] if value is not None else None) for key, value in arguments.items()}
+        for k, tr in enumerate(trs):
+            keep = unconstrained_samples(tr.constraint_active, margin)
+            for part in contiguous_segments(keep, min_length):
+                for key, value in arguments.items():
+                    if value is not None:
+                        out[key].append(value[k][part])
+        if not out["x"]:
+            raise ValueError(
+                "constraints: every sample is constrained (limits, contacts or equality "
+                "constraints act throughout); lower the forcing amplitude or the initial "
+                "spread, or use constraints='known'"
+            )
+        return out
+
+    def constraint_summary(self) -> dict:
+        """How much of the data a constraint touches, and which joint limits are hit.
+
+        Returns
+        -------
+        dict
+            ``active_fraction`` (of all samples; 0 without constraint data),
+            ``unconstrained_samples``, ``limit_hits`` (``{joint: samples}``, from the
+            trajectories' ``info``), ``contact_samples``, ``equality_samples``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> t = np.linspace(0, 1, 4)
+        >>> tr = Trajectory(t, np.sin(t), constraint_active=[0, 1, 1, 0],
+        ...                 info={"limit_hits": {"slider": 2}})
+        >>> Dataset([tr], ["x"]).constraint_summary()["active_fraction"]
+        0.5
+        """
+        n_samples = sum(tr.n_samples for tr in self.trajectories)
+        active = 0
+        if self.has("constraint_active"):
+            active = int(sum(int(tr.constraint_active.sum()) for tr in self.trajectories))
+        hits: dict = {}
+        contacts = equality = 0
+        for tr in self.trajectories:
+            for joint, count in tr.info.get("limit_hits", {}).items():
+                hits[joint] = hits.get(joint, 0) + int(count)
+            contacts += int(tr.info.get("contact_samples", 0))
+            equality += int(tr.info.get("equality_samples", 0))
+        return {"active_fraction": active / n_samples,
+                "unconstrained_samples": n_samples - active,
+                "limit_hits": hits, "contact_samples": contacts, "equality_samples": equality}
 
     # -- persistence ---------------------------------------------------------------------
     def to_arrays(self) -> dict:
@@ -297,7 +415,7 @@ class Dataset:
                 [np.full(tr.n_samples, k, dtype=np.int64) for k, tr in enumerate(trs)]
             ),
         }
-        for key in _SERIES:
+        for key in _SERIES + _MASKS:
             if self.has(key):
                 arrays[key] = np.concatenate([getattr(tr, key) for tr in trs])
         meta = dict(self.metadata, format=FORMAT, version=VERSION,
@@ -477,6 +595,11 @@ def load_dataset(path) -> Dataset:
     t = np.asarray(arrays["t"], dtype=float)
     if t.shape != (n_samples,):
         raise DatasetError(f"t: expected shape ({n_samples},) like q's rows, got {t.shape}")
+    if "constraint_active" in arrays and arrays["constraint_active"].shape != (n_samples,):
+        raise DatasetError(
+            f"constraint_active: expected shape ({n_samples},) like q's rows, got "
+            f"{arrays['constraint_active'].shape}"
+        )
     for key in _SERIES[1:]:
         if key in arrays:
             shape = arrays[key].shape
@@ -500,7 +623,7 @@ def load_dataset(path) -> Dataset:
         raise DatasetError("trajectory: the samples of each trajectory must be contiguous")
     for k, (a, b) in enumerate(zip(starts, ends, strict=True)):
         series = {}
-        for key in _SERIES:
+        for key in _SERIES + _MASKS:
             if key in arrays:
                 series[key] = arrays[key][a:b]
         info = infos[k] if isinstance(infos, list) and len(infos) == len(starts) else {}

@@ -8,6 +8,8 @@ the actuator type) and mapped to the textbook coordinates with the system's forc
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
 from .dataset import Dataset, Trajectory
@@ -15,9 +17,15 @@ from .forcing import FORCING_MODES, SumOfSinusoids
 from .systems import MuJoCoSystem, get_system
 
 __all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "actuator_signals",
-           "NOISE_KEYS"]
+           "noise_levels", "NOISE_KEYS", "NOISE_MODELS",
+           "ConstraintWarning", "actuator_force_function"]
 
 NOISE_KEYS = ("q", "qd", "qdd", "tau")
+
+#: ``positions``: noisy recorded positions only, velocities and accelerations are not given to
+#: the identification (the package differentiates); ``all``: the paper's model, the same
+#: relative noise on positions, velocities, accelerations and forces.
+NOISE_MODELS = ("positions", "all")
 
 
 def _import_mujoco():
@@ -68,13 +76,34 @@ def _driven_mask(system: MuJoCoSystem, model, forcing: str, actuators) -> np.nda
     return np.array([name in chosen or joint in chosen for name, joint in pairs])
 
 
+def _fraction(value, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name}: expected a number in (0, 1], got {value!r}")
+    value = float(value)
+    if not (np.isfinite(value) and 0 < value <= 1):
+        raise ValueError(f"{name}: expected a number in (0, 1], got {value!r}")
+    return value
+
+
+def _constraint_kinds():
+    mujoco = _import_mujoco()
+    c = mujoco.mjtConstraint
+    friction = np.array([int(c.mjCNSTR_FRICTION_DOF), int(c.mjCNSTR_FRICTION_TENDON)])
+    limits = np.array([int(c.mjCNSTR_LIMIT_JOINT), int(c.mjCNSTR_LIMIT_TENDON)])
+    equality = np.array([int(c.mjCNSTR_EQUALITY)])
+    return friction, limits, equality, int(c.mjCNSTR_LIMIT_JOINT)
+
+
 def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.Generator,
                      actuators=None, n_components: int = 6, max_frequency: float = 1.5,
-                     amplitude_scale: float = 1.0) -> SumOfSinusoids | None:
+                     amplitude_scale: float = 1.0, amplitude=None,
+                     backoff: float = 1.0) -> SumOfSinusoids | None:
     """Random control signals (one per actuator of ``model``) for a forcing mode.
 
-    Undriven actuators get a zero signal. Amplitudes come from ``system.force_amplitudes``
-    (by joint); an actuator with a ``ctrlrange`` oscillates around the middle of the range.
+    Undriven actuators get a zero signal. An actuator with a ``ctrlrange`` oscillates around
+    the middle of the range with a peak of ``amplitude`` times the half-range; the others
+    with ``system.force_amplitudes`` (by joint) times ``amplitude_scale`` (and times
+    ``amplitude`` when given).
 
     Parameters
     ----------
@@ -94,6 +123,13 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
         Highest frequency (Hz).
     amplitude_scale : float, default 1.0
         Multiplies the amplitudes of actuators without ``ctrlrange``.
+    amplitude : float, optional
+        Peak of the signal as a fraction of the ``ctrlrange`` half-width (in (0, 1]); also
+        multiplies the amplitudes of actuators without ``ctrlrange``. Default: 0.5 of the
+        control range (the full range tends to drive a model into its joint stops), 1 for
+        actuators without range.
+    backoff : float, default 1.0
+        Multiplies every amplitude (the automatic back-off of :func:`generate_dataset`).
 
     Returns
     -------
@@ -113,22 +149,90 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
     driven = _driven_mask(system, model, forcing, actuators)
     if not driven.any():
         return None
+    if amplitude is not None:
+        amplitude = _fraction(amplitude, "amplitude")
     amplitudes = system.force_amplitudes
     scales, offsets = np.zeros(model.nu), np.zeros(model.nu)
     for a, (_, joint) in enumerate(_actuators(model)):
         if model.actuator_ctrllimited[a]:
             low, high = model.actuator_ctrlrange[a]
-            scales[a], offsets[a] = (high - low) / 2, (high + low) / 2
+            fraction = 0.5 if amplitude is None else amplitude
+            scales[a], offsets[a] = fraction * (high - low) / 2, (high + low) / 2
         else:
-            scales[a] = amplitudes.get(joint, 1.0)
-    scales = np.where(driven, scales * amplitude_scale, 0.0)
+            scales[a] = amplitudes.get(joint, 1.0) * amplitude_scale * (
+                1.0 if amplitude is None else amplitude)
+    scales = np.where(driven, scales * float(backoff), 0.0)
     offsets = np.where(driven, offsets, 0.0)
     return SumOfSinusoids.random(scales, rng, n_components=n_components,
                                  max_frequency=max_frequency, offsets=offsets)
 
 
+def actuator_force_function(system, signals, force_input: str = "tau"):
+    """The forces MuJoCo's actuators apply under ``signals``, as a function of time.
+
+    Exact when every actuator is a plain motor on a joint (fixed gain, no bias, no
+    activation dynamics): ``qfrc_actuator = gear * clip(gain * clip(ctrl))``, linear in the
+    (clipped) controls, evaluated at any time; validation gives the identified model this
+    continuous signal, the one MuJoCo applies at each of its steps.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem or str
+        The system whose actuators are driven.
+    signals : callable
+        ``signals(times) -> (len(times), nu)`` (e.g. a :class:`SumOfSinusoids`).
+    force_input : {"tau", "u"}, default "tau"
+        Generalized forces on the coordinates (``B @ qfrc_actuator``) or joint forces.
+
+    Returns
+    -------
+    callable or None
+        ``f(t) -> (n,)`` for a scalar ``t``, ``(len(t), n)`` for an array; None when an
+        actuator is not a plain joint motor (the forces then depend on the state).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> force = SumOfSinusoids([[1.0], [0.0]], [[1.0], [1.0]], [[0.0], [0.0]])
+    >>> f = actuator_force_function("cart-pole", force)
+    >>> f(0.25)
+    array([1., 0.])
+    """
+    mujoco = _import_mujoco()
+    system = get_system(system)
+    if force_input not in ("tau", "u"):
+        raise ValueError(f"force_input: expected 'tau' or 'u', got {force_input!r}")
+    model = system.mj_model()
+    moment = np.zeros((model.nv, model.nu))
+    for a in range(model.nu):
+        if (int(model.actuator_trntype[a]) != int(mujoco.mjtTrn.mjTRN_JOINT)
+                or int(model.actuator_dyntype[a]) != int(mujoco.mjtDyn.mjDYN_NONE)
+                or int(model.actuator_gaintype[a]) != int(mujoco.mjtGain.mjGAIN_FIXED)
+                or int(model.actuator_biastype[a]) != int(mujoco.mjtBias.mjBIAS_NONE)):
+            return None
+        moment[model.jnt_dofadr[model.actuator_trnid[a, 0]], a] = model.actuator_gear[a, 0]
+    gain = model.actuator_gainprm[:, 0].copy()
+    clamp = not (model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_CLAMPCTRL))
+    ctrl_low = np.where(model.actuator_ctrllimited & clamp, model.actuator_ctrlrange[:, 0],
+                        -np.inf)
+    ctrl_high = np.where(model.actuator_ctrllimited & clamp, model.actuator_ctrlrange[:, 1],
+                         np.inf)
+    force_low = np.where(model.actuator_forcelimited, model.actuator_forcerange[:, 0], -np.inf)
+    force_high = np.where(model.actuator_forcelimited, model.actuator_forcerange[:, 1], np.inf)
+    matrix = moment if force_input == "u" else system.force_matrix() @ moment
+
+    def force(t):
+        ctrl = np.clip(np.asarray(signals(np.atleast_1d(np.asarray(t, dtype=float))),
+                                  dtype=float), ctrl_low, ctrl_high)
+        values = np.clip(ctrl * gain, force_low, force_high) @ matrix.T
+        return values[0] if np.ndim(t) == 0 else values
+
+    return force
+
+
 def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None,
-                        sample_every: int = 1, progress=None) -> Trajectory:
+                        sample_every: int = 1, progress=None, substeps: int = 1,
+                        control_at: str = "start") -> Trajectory:
     """Simulate one MuJoCo trajectory and return it in generalized coordinates.
 
     Parameters
@@ -139,18 +243,32 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
         Simulated time (s); rounded to a whole number of MuJoCo time steps.
     signals : callable, optional
         ``signals(times) -> (len(times), nu)`` control of every actuator, held constant over
-        each time step (e.g. a :class:`SumOfSinusoids`). None: no control.
+        each (internal) time step (e.g. a :class:`SumOfSinusoids`). None: no control.
     q0, qd0 : array, shape (n,), optional
-        Initial generalized positions and velocities (default: the model's rest state).
+        Initial generalized positions and velocities (default: the model's reference pose
+        ``qpos0``, the joints' ``ref``, at rest).
     sample_every : int, default 1
-        Record every ``sample_every``-th time step.
+        Record every ``sample_every``-th time step of the model.
     progress : tqdm.tqdm, optional
         A progress bar advanced by the number of simulated steps.
+    substeps : int, default 1
+        Internal steps per model time step: MuJoCo integrates with ``timestep / substeps``
+        and the control is updated at every internal step (a finer, more faithful
+        reference; the sample times do not change).
+    control_at : {"start", "midpoint"}, default "start"
+        Time at which ``signals`` is read for each internal step: its start (the recorded
+        forces are then exactly ``signals(t)``), or its midpoint (second-order accurate
+        against the continuous signal, for validation references; the forces recorded at
+        ``t`` are then ``signals(t + h/2)``).
 
     Returns
     -------
     Trajectory
-        ``t, q, qd, qdd, tau, u`` (``u``: MuJoCo joint forces; ``tau = u @ B.T``).
+        ``t, q, qd, qdd, tau, u`` (``u``: MuJoCo joint forces; ``tau = u @ B.T``), the
+        constraint forces ``u_constraint`` (``qfrc_constraint``) and ``tau_constraint``, and
+        the mask ``constraint_active`` (a limit, contact or equality constraint acts);
+        ``info`` counts the samples where each joint's limit acts (``limit_hits``), contacts
+        and equality constraints act.
 
     Raises
     ------
@@ -173,6 +291,8 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     >>> values = np.array(lhs(*trajectory.q.T, *trajectory.qd.T, *trajectory.qdd.T)).T
     >>> bool(np.abs(values - trajectory.tau).max() < 1e-9)
     True
+    >>> bool(trajectory.constraint_active.any())  # no limit, no contact
+    False
     """
     mujoco = _import_mujoco()
     system = get_system(system)
@@ -181,13 +301,16 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
         raise ValueError(f"duration: expected a positive number of seconds, got {duration!r}")
     if not isinstance(sample_every, (int, np.integer)) or sample_every < 1:
         raise ValueError(f"sample_every: expected an integer >= 1, got {sample_every!r}")
+    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
+        raise ValueError(f"substeps: expected an integer >= 1, got {substeps!r}")
     model = system.mj_model()
     data = mujoco.MjData(model)
     n = system.n
     if model.nq != n or model.nv != n:
         raise ValueError(f"system: MJCF has nq={model.nq}, nv={model.nv}, expected {n} each")
-    q0 = np.zeros(n) if q0 is None else np.asarray(q0, dtype=float)
-    qd0 = np.zeros(n) if qd0 is None else np.asarray(qd0, dtype=float)
+    rest_q, rest_qd, _ = system.to_generalized(model.qpos0, np.zeros(n))
+    q0 = rest_q if q0 is None else np.asarray(q0, dtype=float)
+    qd0 = rest_qd if qd0 is None else np.asarray(qd0, dtype=float)
     for name, a in (("q0", q0), ("qd0", qd0)):
         if a.shape != (n,) or not np.all(np.isfinite(a)):
             raise ValueError(f"{name}: expected {n} finite numbers, got {a!r}")
@@ -195,28 +318,50 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
 
     dt = model.opt.timestep
     n_steps = int(round(duration / dt))
-    times = np.arange(n_steps + 1) * dt
-    ctrl = np.zeros((n_steps + 1, model.nu))
+    model.opt.timestep = dt / substeps
+    n_fine = n_steps * substeps
+    fine_times = np.arange(n_fine + 1) * (dt / substeps)
+    if control_at not in ("start", "midpoint"):
+        raise ValueError(f"control_at: expected 'start' or 'midpoint', got {control_at!r}")
+    ctrl = np.zeros((n_fine + 1, model.nu))
     if signals is not None:
-        ctrl = np.asarray(signals(times), dtype=float)
-        if ctrl.shape != (n_steps + 1, model.nu):
+        shift = dt / substeps / 2 if control_at == "midpoint" else 0.0
+        ctrl = np.asarray(signals(fine_times + shift), dtype=float)
+        if ctrl.shape != (n_fine + 1, model.nu):
             raise ValueError(
                 f"signals: expected values of shape (n_times, nu={model.nu}), got {ctrl.shape}"
             )
-    recorded = np.arange(0, n_steps + 1, sample_every)
-    qpos, qvel, qacc, force = (np.empty((len(recorded), n)) for _ in range(4))
+    record_every = sample_every * substeps
+    recorded = np.arange(0, n_fine + 1, record_every)
+    qpos, qvel, qacc, force, constraint = (np.empty((len(recorded), n)) for _ in range(5))
+    active = np.zeros(len(recorded), dtype=bool)
+    friction_types, limit_types, equality_types, joint_limit = _constraint_kinds()
+    limit_hits = np.zeros(model.njnt, dtype=np.int64)
+    contact_samples = equality_samples = 0
     r = 0
-    for k in range(n_steps + 1):
+    for k in range(n_fine + 1):
         data.ctrl[:] = ctrl[k]
-        if k % sample_every == 0:
+        if k % record_every == 0:
             # mj_step leaves an intermediate RK4 stage in qacc: recompute at this state.
             mujoco.mj_forward(model, data)
             qpos[r], qvel[r], qacc[r] = data.qpos, data.qvel, data.qacc
             force[r] = data.qfrc_actuator
+            constraint[r] = data.qfrc_constraint
+            if data.nefc:
+                kinds = data.efc_type[:data.nefc]
+                pushing = (np.abs(data.efc_force[:data.nefc]) > 0) & ~np.isin(kinds,
+                                                                              friction_types)
+                if pushing.any():
+                    active[r] = True
+                    hit = pushing & (kinds == joint_limit)
+                    limit_hits[np.unique(data.efc_id[:data.nefc][hit])] += 1
+                    contact_samples += bool(np.any(pushing & ~np.isin(
+                        kinds, np.r_[limit_types, equality_types])))
+                    equality_samples += bool(np.any(pushing & np.isin(kinds, equality_types)))
             r += 1
-        if k < n_steps:
+        if k < n_fine:
             mujoco.mj_step(model, data)
-        if progress is not None and (k + 1) % 1000 == 0:
+        if progress is not None and (k + 1) % (1000 * substeps) == 0:
             progress.update(1000)
     if progress is not None:
         progress.update((n_steps + 1) % 1000)
@@ -227,11 +372,19 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
             "reduce the forces, the initial velocities or the time step"
         )
     q, qd, qdd = system.to_generalized(qpos, qvel, qacc)
-    tau = force @ system.force_matrix().T
-    info = {"q0": q0.tolist(), "qd0": qd0.tolist()}
+    matrix = system.force_matrix()
+    joint_names = list(system.joint_names)
+    info = {"q0": q0.tolist(), "qd0": qd0.tolist(),
+            "limit_hits": {joint_names[j]: int(limit_hits[j]) for j in np.flatnonzero(
+                limit_hits)},
+            "contact_samples": int(contact_samples), "equality_samples": int(equality_samples)}
+    if substeps > 1:
+        info["substeps"] = int(substeps)
     if isinstance(signals, SumOfSinusoids):
         info["signals"] = signals.to_dict()
-    return Trajectory(t=times[recorded], q=q, qd=qd, qdd=qdd, tau=tau, u=force, info=info)
+    return Trajectory(t=fine_times[recorded], q=q, qd=qd, qdd=qdd, tau=force @ matrix.T,
+                      u=force, info=info, tau_constraint=constraint @ matrix.T,
+                      u_constraint=constraint, constraint_active=active)
 
 
 def _noise_levels(noise) -> dict:
@@ -249,6 +402,51 @@ def _noise_levels(noise) -> dict:
             raise ValueError(f"noise: level for {k!r} must be a non-negative number, got {v!r}")
         levels[k] = float(v)
     return levels
+
+
+def noise_levels(noise, noise_model: str = "positions") -> dict:
+    """Per-channel relative noise levels of a noise specification under a noise model.
+
+    Parameters
+    ----------
+    noise : float or dict
+        One relative level (std = level x each coordinate's standard deviation over the
+        trajectory), or a dict with some of the keys ``"q", "qd", "qdd", "tau"``.
+    noise_model : {"positions", "all"}, default "positions"
+        ``positions``: a number perturbs the recorded positions only (a dict may also name
+        ``"tau"``, measured forces); ``all``: a number perturbs positions, velocities,
+        accelerations and forces alike (the paper's model).
+
+    Returns
+    -------
+    dict
+        ``{"q": ..., "qd": ..., "qdd": ..., "tau": ...}``, floats.
+
+    Raises
+    ------
+    ValueError
+        If ``noise_model`` is unknown, a level is negative or not a number, or a dict names
+        velocity or acceleration noise under the ``positions`` model.
+
+    Examples
+    --------
+    >>> noise_levels(0.01)
+    {'q': 0.01, 'qd': 0.0, 'qdd': 0.0, 'tau': 0.0}
+    >>> noise_levels(0.01, "all")
+    {'q': 0.01, 'qd': 0.01, 'qdd': 0.01, 'tau': 0.01}
+    """
+    if noise_model not in NOISE_MODELS:
+        raise ValueError(f"noise_model: expected one of {NOISE_MODELS}, got {noise_model!r}")
+    if noise_model == "all" or isinstance(noise, dict):
+        levels = _noise_levels(noise)
+        if noise_model == "positions" and (levels["qd"] or levels["qdd"]):
+            raise ValueError(
+                "noise: velocity or acceleration noise is not part of noise_model='positions' "
+                "(they are not recorded); use noise_model='all'"
+            )
+        return levels
+    levels = _noise_levels(noise)
+    return {"q": levels["q"], "qd": 0.0, "qdd": 0.0, "tau": 0.0}
 
 
 def add_noise(trajectory: Trajectory, noise, rng: np.random.Generator,
@@ -302,18 +500,36 @@ def add_noise(trajectory: Trajectory, noise, rng: np.random.Generator,
         tau = u @ matrix.T
     else:
         tau = noisy(trajectory.tau, levels["tau"])
+    def copy(a):
+        return None if a is None else a.copy()
+
     return Trajectory(
         t=trajectory.t.copy(), q=noisy(trajectory.q, levels["q"]),
         qd=noisy(trajectory.qd, levels["qd"]), qdd=noisy(trajectory.qdd, levels["qdd"]),
         tau=tau, u=u, info=dict(trajectory.info),
+        tau_constraint=copy(trajectory.tau_constraint),
+        u_constraint=copy(trajectory.u_constraint),
+        constraint_active=copy(trajectory.constraint_active),
     )
+
+
+class ConstraintWarning(UserWarning):
+    """Joint limits, contacts or equality constraints act on much of the generated data.
+
+    Examples
+    --------
+    >>> issubclass(ConstraintWarning, UserWarning)
+    True
+    """
 
 
 def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                      forcing: str = "explicit", actuators=None, noise=0.0, seed=None,
                      sample_every: int = 1, n_components: int = 6, max_frequency: float = 1.5,
                      amplitude_scale: float = 1.0, initial_scale: float = 1.0,
-                     progress=None) -> Dataset:
+                     progress=None, noise_model: str = "positions", derivatives=None,
+                     amplitude=None, backoff: bool = True, max_constrained: float = 0.1,
+                     min_unconstrained: float = 0.5) -> Dataset:
     """Simulate several randomly forced MuJoCo trajectories of a system.
 
     Parameters
@@ -330,30 +546,64 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     actuators : list of str, optional
         Actuator or joint names driven in ``mixed`` mode (default ``system.mixed_actuators``).
     noise : float or dict, default 0.0
-        Relative Gaussian noise levels (see :func:`add_noise`).
+        Relative Gaussian noise levels: std = level x each coordinate's standard deviation
+        over the trajectory (see :func:`noise_levels` and :func:`add_noise`).
     seed : int, optional
         Seed of every random draw (initial states, signals, noise): same seed, same data.
     sample_every : int, default 1
-        Record every ``sample_every``-th MuJoCo step.
+        Record every ``sample_every``-th MuJoCo step (of the model's ``timestep``).
     n_components, max_frequency, amplitude_scale : optional
         Shape of the random signals (see :meth:`SumOfSinusoids.random`); ``amplitude_scale``
         multiplies the system's force amplitudes.
     initial_scale : float, default 1.0
-        Scale of the random initial state (see ``MuJoCoSystem.random_initial_state``).
+        Scale of the random initial state (see ``MuJoCoSystem.random_initial_state``: a
+        fraction of each limited joint's range).
     progress : bool, optional
         Show a tqdm progress bar (default: only on a terminal).
+    noise_model : {"positions", "all"}, default "positions"
+        ``positions``: noisy recorded positions only; velocities and accelerations are not
+        recorded, the identification differentiates the positions. ``all``: the paper's
+        model, noise on positions, velocities, accelerations and forces.
+    derivatives : bool, optional
+        Keep MuJoCo's exact velocities and accelerations in the dataset. Default: kept
+        unless ``noise_model="positions"`` with position noise > 0 (noise-free data keep
+        them, so that noise-free identification is exact; pass ``False`` to exercise the
+        differentiation on clean positions).
+    amplitude : float, optional
+        Forcing peak as a fraction of each actuator's ``ctrlrange`` half-width (see
+        :func:`actuator_signals`; default 0.5 of the range).
+    backoff : bool, default True
+        When more than ``max_constrained`` of a trajectory's samples are constrained (joint
+        limits, contacts), simulate it again with half the forcing amplitude and initial
+        spread, at most three times.
+    max_constrained : float, default 0.1
+        Constrained fraction of a trajectory above which ``backoff`` acts.
+    min_unconstrained : float, default 0.5
+        Warn (:class:`ConstraintWarning`, naming the joints whose limits are hit) when less
+        than this fraction of all samples is unconstrained.
 
     Returns
     -------
     Dataset
+        Its metadata hold ``constraints`` (:meth:`Dataset.constraint_summary`) and, for a
+        user's MJCF, the model's path and its XML (so the dataset can be identified alone).
 
     Examples
     --------
     >>> data = generate_dataset("cart-pole", n_trajectories=1, duration=0.1, seed=0,
     ...                         progress=False)
-    >>> data.trajectories[0].q.shape
-    (101, 2)
+    >>> data.trajectories[0].q.shape, data.metadata["constraints"]["active_fraction"]
+    ((101, 2), 0.0)
+
+    Noisy positions only (the default noise model): no velocities nor accelerations recorded
+
+    >>> noisy = generate_dataset("cart-pole", n_trajectories=1, duration=0.1, seed=0,
+    ...                          noise=0.01, progress=False)
+    >>> noisy.has("qd"), noisy.has("qdd"), noisy.metadata["noise"]["q"]
+    (False, False, 0.01)
     """
+    import warnings
+
     from tqdm.auto import tqdm
 
     system = get_system(system)
@@ -363,7 +613,20 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         raise ValueError(f"n_trajectories: expected an integer >= 1, got {n_trajectories!r}")
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))):
         raise TypeError(f"seed: expected an integer or None, got {type(seed).__name__}")
-    levels = _noise_levels(noise)
+    levels = noise_levels(noise, noise_model)
+    if derivatives is None:
+        derivatives = not (noise_model == "positions" and levels["q"] > 0)
+    elif not isinstance(derivatives, (bool, np.bool_)):
+        raise TypeError(f"derivatives: expected True, False or None, got {derivatives!r}")
+    if amplitude is not None:
+        amplitude = _fraction(amplitude, "amplitude")
+    initial_scale = float(initial_scale)
+    if not (np.isfinite(initial_scale) and initial_scale >= 0):
+        raise ValueError(f"initial_scale: expected a non-negative number, got {initial_scale!r}")
+    for name, value in (("max_constrained", max_constrained),
+                        ("min_unconstrained", min_unconstrained)):
+        if not (isinstance(value, (int, float)) and 0 <= value <= 1):
+            raise ValueError(f"{name}: expected a number in [0, 1], got {value!r}")
     model = system.mj_model()
     rng = np.random.default_rng(seed)
     n_steps = int(round(float(duration) / model.opt.timestep)) + 1
@@ -372,22 +635,55 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     trajectories = []
     with bar:
         for _ in range(n_trajectories):
-            q0, qd0 = system.random_initial_state(rng, scale=initial_scale)
-            signals = actuator_signals(system, model, forcing, rng, actuators, n_components,
-                                       max_frequency, amplitude_scale)
-            clean = simulate_trajectory(system, duration, signals, q0, qd0, sample_every, bar)
-            trajectories.append(add_noise(clean, levels, rng, system.force_matrix()))
+            factor, attempts = 1.0, 4 if backoff else 1
+            for attempt in range(attempts):
+                q0, qd0 = system.random_initial_state(rng, scale=initial_scale * factor)
+                signals = actuator_signals(system, model, forcing, rng, actuators,
+                                           n_components, max_frequency, amplitude_scale,
+                                           amplitude, backoff=factor)
+                clean = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
+                                            bar if attempt == 0 else None)
+                if clean.constraint_active.mean() <= max_constrained or (
+                    attempt == attempts - 1
+                ):
+                    break
+                factor /= 2
+            if factor < 1:
+                clean.info["backoff"] = factor
+            noisy = add_noise(clean, levels, rng, system.force_matrix())
+            if not derivatives:
+                noisy.qd = noisy.qdd = None
+            trajectories.append(noisy)
     metadata = {
         "system": system.name,
         "parameters": system.parameters,
         "forcing": forcing,
         "actuators": None if actuators is None else list(np.atleast_1d(actuators).tolist()),
         "noise": levels,
+        "noise_model": noise_model,
+        "derivatives": "mujoco" if derivatives else "none",
         "seed": None if seed is None else int(seed),
         "duration": float(duration),
         "sample_every": int(sample_every),
         "timestep": float(model.opt.timestep),
+        "amplitude": amplitude,
+        "initial_scale": initial_scale,
         "force_matrix": system.force_matrix().tolist(),
         "joint_names": list(system.joint_names),
     }
-    return Dataset(trajectories, system.coordinate_names, metadata)
+    metadata.update(getattr(system, "metadata", lambda: {})())
+    dataset = Dataset(trajectories, system.coordinate_names, metadata)
+    summary = dataset.constraint_summary()
+    dataset.metadata["constraints"] = summary
+    if 1 - summary["active_fraction"] < min_unconstrained:
+        label = os.path.basename(getattr(system, "path", None) or "") or system.name
+        joints = ", ".join(f"{j} ({c} samples)" for j, c in summary["limit_hits"].items())
+        warnings.warn(
+            f"constraints act on {summary['active_fraction']:.0%} of the samples of "
+            f"{label}: only {summary['unconstrained_samples']} unconstrained samples "
+            f"left for the regression; joint limits hit: {joints or 'none'}; contact samples: "
+            f"{summary['contact_samples']}. Lower amplitude / initial_scale, or pass the "
+            "constraint forces as known forces (fit_arguments(constraints='known'))",
+            ConstraintWarning, stacklevel=2,
+        )
+    return dataset

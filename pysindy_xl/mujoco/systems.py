@@ -59,6 +59,7 @@ __all__ = [
     "get_system",
     "default_xml_path",
     "equations_of_motion",
+    "system_from_metadata",
 ]
 
 
@@ -884,6 +885,20 @@ class MJCFSystem(MuJoCoSystem):
         Path to an MJCF file, or the MJCF text itself (a string starting with ``<``).
     force_amplitude : float, default 1.0
         Amplitude of the random force of an actuator without ``ctrlrange``.
+    joints : list of str, optional
+        Identify these joints only. The other joints are **locked** at their reference pose
+        (the pose written in the MJCF, ``qpos = ref``): they are removed from the model with
+        the actuators that drive them, and their bodies move rigidly with their parents. A
+        passive body decoupled from the rest (e.g. a target on two slide joints) thus simply
+        leaves the problem; the mass of a locked body still loads its parent, as in the real
+        mechanism with that joint blocked. Default: every joint.
+
+    Attributes
+    ----------
+    path : str or None
+        Absolute path of the MJCF file (None for MJCF text).
+    excluded_joints : tuple of str
+        Joints locked by ``joints``.
 
     Examples
     --------
@@ -891,12 +906,23 @@ class MJCFSystem(MuJoCoSystem):
     ... <geom type="sphere" size="0.1" pos="0 0 -1"/></body></worldbody></mujoco>'''
     >>> MJCFSystem(xml).coords
     Coordinates(['a'])
+
+    Leave a passive target on two slide joints out:
+
+    >>> xml = '''<mujoco><worldbody>
+    ... <body><joint name="swing" axis="0 1 0"/><geom size="0.1" pos="0 0 -1"/></body>
+    ... <body pos="2 0 0"><joint name="tx" type="slide" axis="1 0 0"/>
+    ... <joint name="ty" type="slide" axis="0 1 0"/><geom size="0.1"/></body>
+    ... </worldbody></mujoco>'''
+    >>> system = MJCFSystem(xml, joints=["swing"])
+    >>> system.coords, system.excluded_joints, system.mj_model().nq
+    (Coordinates(['swing']), ('tx', 'ty'), 1)
     """
 
     name = "mjcf"
     has_ground_truth = False
 
-    def __init__(self, source, force_amplitude=1.0):
+    def __init__(self, source, force_amplitude=1.0, joints=None):
         mujoco = _mujoco()
         if isinstance(source, os.PathLike) or (
             isinstance(source, str) and not source.lstrip().startswith("<")
@@ -929,6 +955,10 @@ class MJCFSystem(MuJoCoSystem):
                     f"source: joint {jname!r} is not a hinge or slide joint; only those are "
                     "supported (one coordinate per joint)"
                 )
+        self._spec = None
+        self.excluded_joints = ()
+        if joints is not None:
+            model = self._select_joints(model, joints)
         self._model = model
         taken: set = set()
         raw = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or "" for j in
@@ -943,6 +973,127 @@ class MJCFSystem(MuJoCoSystem):
         self._parameters = {"source": self.path or "<string>",
                             "force_amplitude": _positive(force_amplitude, "force_amplitude"),
                             "timestep": float(model.opt.timestep)}
+        if joints is not None:
+            self._parameters["joints"] = list(self.joint_names)
+
+    def _select_joints(self, model, joints):
+        if isinstance(joints, str):
+            joints = [joints]
+        try:
+            joints = list(joints)
+        except TypeError:
+            raise TypeError(f"joints: expected a list of joint names, got {joints!r}") from None
+        mujoco = _mujoco()
+        names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
+                 for j in range(model.njnt)]
+        unknown = [j for j in joints if j not in names]
+        if unknown or not joints or not all(isinstance(j, str) for j in joints):
+            raise ValueError(
+                f"joints: expected a non-empty list of joint names among {names}, got {joints!r}"
+            )
+        if not hasattr(mujoco, "MjSpec"):
+            raise ValueError(f"joints: selecting joints needs MuJoCo >= 3.3 (MjSpec), found "
+                             f"{mujoco.__version__}")
+        spec = (mujoco.MjSpec.from_file(self.path) if self.path is not None
+                else mujoco.MjSpec.from_string(self._xml))
+        excluded = [name for name in names if name not in joints]
+        for name in excluded:
+            joint = spec.joint(name)
+            if joint is None:
+                raise ValueError(f"joints: cannot lock the unnamed joint {name!r}; name it")
+            for actuator in list(spec.actuators):
+                if actuator.target == name:
+                    spec.delete(actuator)
+            spec.delete(joint)
+        self._spec, self.excluded_joints = spec, tuple(excluded)
+        try:
+            return spec.compile()
+        except ValueError as error:
+            raise ValueError(f"joints: the model with {excluded} locked does not compile: "
+                             f"{error}") from None
+
+    @property
+    def frictionloss(self) -> np.ndarray:
+        """Dry friction (``frictionloss``) of each joint, shape (n,).
+
+        Examples
+        --------
+        >>> xml = ('<mujoco><worldbody><body><joint type="slide" frictionloss="0.3"/>'
+        ...        '<geom size="0.1"/></body></worldbody></mujoco>')
+        >>> MJCFSystem(xml).frictionloss
+        array([0.3])
+        """
+        model = self._model
+        return np.array([model.dof_frictionloss[model.jnt_dofadr[j]] for j in range(model.njnt)],
+                        dtype=float)
+
+    def random_initial_state(self, rng: np.random.Generator, scale: float = 1.0):
+        """Random initial state inside the joint ranges, around the reference pose.
+
+        A joint with a range starts uniformly between its reference position (``ref``,
+        clipped to the range) and ``scale`` x 90 % of the way to each end of the range, with
+        a velocity of at most ``scale`` x min(1, half the range width) per second; a joint
+        without range as in :meth:`MuJoCoSystem.random_initial_state`, around ``ref``.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            Source of the random draws.
+        scale : float, default 1.0
+            Fraction of the ranges used.
+
+        Returns
+        -------
+        q0, qd0 : ndarray, shape (n,)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> xml = ('<mujoco><compiler angle="radian"/><worldbody><body>'
+        ...        '<joint type="slide" range="0 0.2" ref="0.05"/><geom size="0.1"/>'
+        ...        '</body></worldbody></mujoco>')
+        >>> q0 = np.array([MJCFSystem(xml).random_initial_state(np.random.default_rng(k))[0]
+        ...                for k in range(200)])
+        >>> bool(q0.min() >= 0.0 and q0.max() <= 0.2)
+        True
+        """
+        model = self._model
+        ref = np.array([model.qpos0[model.jnt_qposadr[j]] for j in range(model.njnt)])
+        limited = np.asarray(model.jnt_limited, dtype=bool)
+        low, high = np.asarray(model.jnt_range, dtype=float).T
+        half = np.full(self.n, 0.5)
+        half[list(self.angle_coordinates)] = 2.0
+        draw = rng.uniform(-1.0, 1.0, self.n)
+        center = np.where(limited, np.clip(ref, low, high), ref)
+        reach = np.where(draw > 0, high - center, center - low)
+        q0 = np.where(limited, center + 0.9 * scale * draw * reach, ref + draw * half * scale)
+        margin = 0.05 * (high - low)
+        q0 = np.where(limited, np.clip(q0, low + margin, high - margin), q0)
+        speed = np.where(limited, np.minimum(1.0, (high - low) / 2), 1.0)
+        qd0 = rng.uniform(-1.0, 1.0, self.n) * speed * scale
+        return q0, qd0
+
+    def metadata(self) -> dict:
+        """What a dataset records to rebuild this system (:func:`system_from_metadata`).
+
+        Returns
+        -------
+        dict
+            ``model_path`` (absolute, or None), ``model_xml`` (the MJCF text, flattened when
+            it uses ``<include>``) and ``joints`` (None for every joint).
+
+        Examples
+        --------
+        >>> xml = ('<mujoco><worldbody><body><joint name="a" type="slide"/>'
+        ...        '<geom size="0.1"/></body></worldbody></mujoco>')
+        >>> sorted(MJCFSystem(xml).metadata())
+        ['joints', 'model_path', 'model_xml']
+        """
+        text = self._xml
+        if "<include " in text and self.path is not None:
+            text = _mujoco().MjSpec.from_file(self.path).to_xml()
+        return {"model_path": self.path, "model_xml": text,
+                "joints": self._parameters.get("joints")}
 
     @property
     def actuated_joints(self):
@@ -990,7 +1141,7 @@ class MJCFSystem(MuJoCoSystem):
         )
 
     def xml(self):
-        """The MJCF text given (or read from the file given).
+        """The MJCF text given (or read from the file given); with ``joints``, the reduced model.
 
         Returns
         -------
@@ -1003,6 +1154,8 @@ class MJCFSystem(MuJoCoSystem):
         >>> MJCFSystem(xml).xml() == xml
         True
         """
+        if self._spec is not None:
+            return self._spec.to_xml()
         return self._xml
 
     def mj_model(self):
@@ -1020,6 +1173,8 @@ class MJCFSystem(MuJoCoSystem):
         1
         """
         mujoco = _mujoco()
+        if self._spec is not None:
+            return self._spec.compile()
         if self.path is not None:
             return mujoco.MjModel.from_xml_path(self.path)
         return mujoco.MjModel.from_xml_string(self._xml)
@@ -1070,6 +1225,70 @@ def get_system(name, **parameters) -> MuJoCoSystem:
             "MJCF .xml file"
         )
     return SYSTEMS[key](**parameters)
+
+
+def system_from_metadata(metadata: dict, **parameters) -> MuJoCoSystem:
+    """The system a dataset was generated with, from its metadata.
+
+    Registry systems are rebuilt with their recorded parameters; a user's MJCF from its
+    recorded path when the file still exists, otherwise from the embedded XML, with the same
+    joint selection.
+
+    Parameters
+    ----------
+    metadata : dict
+        ``Dataset.metadata`` (keys ``system``, ``parameters``, and for MJCF models
+        ``model_path``, ``model_xml``, ``joints``).
+    **parameters
+        Override recorded constructor parameters.
+
+    Returns
+    -------
+    MuJoCoSystem
+
+    Raises
+    ------
+    ValueError
+        If the metadata name no system, or an MJCF dataset records neither path nor XML.
+
+    Examples
+    --------
+    >>> system_from_metadata({"system": "cart-pole", "parameters": {"pole_mass": 0.3}})
+    CartPole(cart_mass=1.0, pole_mass=0.3, length=0.8, cart_damping=0.5, pole_damping=0.1, \
+gravity=9.81, point_inertia=1e-06, timestep=0.001)
+    >>> xml = ('<mujoco><worldbody><body><joint name="a" type="slide"/>'
+    ...        '<geom size="0.1"/></body></worldbody></mujoco>')
+    >>> system_from_metadata({"system": "mjcf", "model_xml": xml}).coords
+    Coordinates(['a'])
+    """
+    if not isinstance(metadata, dict):
+        raise TypeError(f"metadata: expected a dict, got {type(metadata).__name__}")
+    name = metadata.get("system")
+    if not name:
+        raise ValueError("metadata: the dataset names no system")
+    if name == MJCFSystem.name:
+        path, xml = metadata.get("model_path"), metadata.get("model_xml")
+        options = {"joints": metadata.get("joints")}
+        recorded = metadata.get("parameters") or {}
+        if "force_amplitude" in recorded:
+            options["force_amplitude"] = recorded["force_amplitude"]
+        options.update(parameters)
+        if path and os.path.isfile(path):
+            return MJCFSystem(path, **options)
+        if xml:
+            return MJCFSystem(xml, **options)
+        raise ValueError(
+            "metadata: the dataset comes from a user's MJCF but records neither an existing "
+            f"model path ({path!r}) nor the model's XML; pass --system PATH.xml"
+        )
+    recorded = dict(metadata.get("parameters") or {})
+    if isinstance(name, str) and name.strip().lower().replace("_", "-") in SYSTEMS:
+        recorded.update(parameters)
+        try:
+            return get_system(name, **recorded)
+        except TypeError:
+            return get_system(name, **parameters)
+    return get_system(name, **parameters)
 
 
 def default_xml_path(name: str):
