@@ -74,6 +74,11 @@ def elimination_path(x, y) -> np.ndarray:
         xs, y = r_factor, q_factor.T @ y
     active = list(np.flatnonzero(active_mask))
     removed = list(np.flatnonzero(~active_mask))
+    while len(active) > xs.shape[0]:
+        # more columns than rows: keep the best-conditioned set that the rows can determine
+        pivots = scipy.linalg.qr(xs[:, active], mode="r", pivoting=True)[1]
+        for j in sorted(pivots[xs.shape[0]:], reverse=True):
+            removed.append(active.pop(j))
     while active:
         sub = xs[:, active]
         q_sub, r_sub = np.linalg.qr(sub)
