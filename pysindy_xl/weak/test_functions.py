@@ -20,6 +20,7 @@ import numbers
 
 import numpy as np
 import scipy.fft
+import scipy.signal
 import scipy.sparse
 
 __all__ = ["BumpTestFunctions", "corner_frequency", "quadrature_weights"]
@@ -56,8 +57,8 @@ def quadrature_weights(t) -> np.ndarray:
 def corner_frequency(t, x, energy: float = 0.99) -> float:
     """Frequency (Hz) below which the signal part of the positions' spectrum lies.
 
-    The spectrum of each coordinate (cosine transform after removing a linear trend, on the
-    samples treated as uniform with the mean step) is split into a noise floor (the median
+    The spectrum of each coordinate (cosine transform after removing a linear trend and
+    tapering the ends, on the samples treated as uniform with the mean step) is split into a noise floor (the median
     power of the upper half of the frequencies, where position data have little signal) and
     the signal above it; the corner is the frequency that holds ``energy`` of the signal
     power, the largest over coordinates.
@@ -85,11 +86,12 @@ def corner_frequency(t, x, energy: float = 0.99) -> float:
     n_samples = len(t)
     step = (t[-1] - t[0]) / (n_samples - 1)
     s = np.linspace(-1, 1, n_samples)
+    taper = scipy.signal.windows.tukey(n_samples, 0.2)  # leakage would pass for signal
     corners = []
     for column in x.T:
         trend = np.polynomial.polynomial.polyfit(s, column, 1)
-        power = scipy.fft.dct(column - np.polynomial.polynomial.polyval(s, trend),
-                              norm="ortho") ** 2
+        detrended = column - np.polynomial.polynomial.polyval(s, trend)
+        power = scipy.fft.dct(detrended * taper, norm="ortho") ** 2
         floor = np.median(power[n_samples // 2:])
         signal = np.maximum(power - floor, 0.0)
         if signal.sum() <= 0:
