@@ -52,6 +52,7 @@ API_MODULES = [
     "pysindy_xl",
     "pysindy_xl.feature_library",
     "pysindy_xl.optimizers",
+    "pysindy_xl.weak",
     "pysindy_xl.dynamics",
     "pysindy_xl.jax_dynamics",
     "pysindy_xl.io",

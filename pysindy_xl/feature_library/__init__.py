@@ -7,6 +7,7 @@ from ._base import SymbolicLibrary, compile_entries, stack_variables
 from .classical import ClassicalLibrary, pysindy_library_terms
 from .external_forces import ExternalForces
 from .lagrange import LagrangeLibrary, euler_lagrange
+from ._weak import integrate_by_parts
 from .repartition import CatalogRepartition
 
 __all__ = [
@@ -19,4 +20,5 @@ __all__ = [
     "compile_entries",
     "euler_lagrange",
     "pysindy_library_terms",
+    "integrate_by_parts",
 ]

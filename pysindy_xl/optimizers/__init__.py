@@ -7,6 +7,7 @@ from ._base import CatalogOptimizer, independent_columns
 from .explicit import ExplicitOptimizer, hard_threshold_regression, proximal_gradient_lasso
 from .implicit import ImplicitOptimizer, NoLawFoundError, homothetic_groups
 from .mixed import MixedOptimizer, activation_closure
+from .selection import SelectionResult, select_support
 
 __all__ = [
     "CatalogOptimizer",
@@ -19,4 +20,6 @@ __all__ = [
     "proximal_gradient_lasso",
     "homothetic_groups",
     "activation_closure",
+    "select_support",
+    "SelectionResult",
 ]

@@ -207,9 +207,9 @@ def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
 
 @dataclasses.dataclass
 class SelectionResult:
-    """What the sparsity selection chose and why.
+    """What the sparsity selection chose and why (returned by :func:`select_support`).
 
-    Attributes
+    Parameters
     ----------
     order : ndarray of int
         Columns from most to least needed (elimination path).
@@ -223,6 +223,14 @@ class SelectionResult:
         Size with the lowest held-out error.
     rule : str
         How ``size`` was chosen.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x = np.random.default_rng(0).normal(size=(200, 4))
+    >>> result = select_support(x, x @ [1.0, 0.0, 0.5, 0.0])
+    >>> result.support.tolist(), result.size, result.rule
+    ([0, 2], 2, 'one standard error (backward path)')
     """
 
     order: np.ndarray
