@@ -4,10 +4,10 @@ See :mod:`pysindy_xl.feature_library._base` for the layout of the stacked regres
 """
 
 from ._base import SymbolicLibrary, compile_entries, stack_variables
+from ._weak import integrate_by_parts
 from .classical import ClassicalLibrary, pysindy_library_terms
 from .external_forces import ExternalForces
 from .lagrange import LagrangeLibrary, euler_lagrange
-from ._weak import integrate_by_parts
 from .repartition import CatalogRepartition
 
 __all__ = [
