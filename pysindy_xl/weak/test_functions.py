@@ -60,8 +60,8 @@ def corner_frequency(t, x, energy: float = 0.99) -> float:
     The spectrum of each coordinate (cosine transform after removing a linear trend and
     tapering the ends, on the samples treated as uniform with the mean step) is split into a
     noise floor (the median power of the upper half of the frequencies, where position data
-    have little signal) and the signal above it; the corner is the frequency that holds ``energy`` of the signal
-    power, the largest over coordinates.
+    have little signal) and the signal above it; the corner is the frequency that holds
+    ``energy`` of the signal power, the largest over coordinates.
 
     Parameters
     ----------
