@@ -32,6 +32,7 @@ _LAZY = {
     "MixedOptimizer": "optimizers",
     "NoLawFoundError": "optimizers",
     "XLSINDy": "model",
+    "IdentificationWarning": "model",
     "MassMatrixDynamics": "dynamics",
     "SimulationError": "dynamics",
     "SingularMassMatrixError": "dynamics",
@@ -53,6 +54,7 @@ __all__ = [
     "MixedOptimizer",
     "NoLawFoundError",
     "XLSINDy",
+    "IdentificationWarning",
     "MassMatrixDynamics",
     "SimulationError",
     "SingularMassMatrixError",
@@ -69,7 +71,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         LagrangeLibrary,
         stack_variables,
     )
-    from .model import XLSINDy
+    from .model import IdentificationWarning, XLSINDy
     from .optimizers import ExplicitOptimizer, ImplicitOptimizer, MixedOptimizer, NoLawFoundError
     from .symbols import Coordinates, monomials, products
     from .weak import BumpTestFunctions, WhittakerSmoother

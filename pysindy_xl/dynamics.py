@@ -222,15 +222,28 @@ class MassMatrixDynamics:
         self.equations = equations
         self.mass_matrix_expr = mass
         self.forcing_expr = -eqs.subs(zero)
-        n = coords.n
-        entries = list(mass) + list(self.forcing_expr)
-        self._evaluate = compile_entries(coords.variables, entries)
+        self._n = coords.n
+        self._compile()
+
+    def _compile(self):
+        entries = list(self.mass_matrix_expr) + list(self.forcing_expr)
+        self._evaluate = compile_entries(self.coords.variables, entries)
         # one state at a time (simulation): plain floats through the math module are an order
         # of magnitude faster than NumPy calls on length-1 arrays
         self._evaluate_scalar = sp.lambdify(
-            coords.variables, entries, modules=[{"sign": _sign}, "math"], cse=True
+            self.coords.variables, entries, modules=[{"sign": _sign}, "math"], cse=True
         )
-        self._n = n
+
+    def __getstate__(self):
+        # compiled functions are generated code: rebuilt from the expressions on unpickling
+        state = self.__dict__.copy()
+        state.pop("_evaluate", None)
+        state.pop("_evaluate_scalar", None)
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._compile()
 
     def mass_and_forcing(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Evaluate the mass matrix and the forcing on many samples.

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pysindy as ps
 import sympy as sp
-from sklearn.base import BaseEstimator
+from sklearn.base import BaseEstimator, clone
 from sklearn.metrics import r2_score
 from sklearn.utils.validation import check_is_fitted
 
@@ -19,7 +21,12 @@ from .feature_library import (
 from .optimizers import ExplicitOptimizer, independent_columns
 from .weak import BumpTestFunctions, WhittakerSmoother
 
-__all__ = ["XLSINDy"]
+__all__ = ["XLSINDy", "IdentificationWarning"]
+
+
+class IdentificationWarning(UserWarning):
+    """The identified model looks wrong on its own training data (e.g. an indefinite mass
+    matrix): it will not simulate faithfully there."""
 
 _FORMULATIONS = ("auto", "strong", "weak")
 
@@ -135,6 +142,11 @@ class XLSINDy(BaseEstimator):
         the smoother's noise estimate per coordinate (first trajectory).
     selection_ : SelectionResult or None
         How the sparsity was chosen, when the optimizer reports it (``threshold="auto"``).
+    mass_matrix_check_ : dict or None
+        The identified mass matrix on (up to 2,000 of) the training states: fraction where it
+        is positive definite and median condition number. Below 1, ``fit`` warns with an
+        :class:`IdentificationWarning` naming coordinates without positive inertia. An
+        unforced law (sign free) is flipped when its mass matrix is negative definite.
 
     Examples
     --------
@@ -270,7 +282,8 @@ class XLSINDy(BaseEstimator):
         -------
         self
         """
-        library = self._library()
+        # a clone: fit never mutates its parameters (the user's catalog stays as given)
+        library = clone(self._library())
         library.fit()
         coords = library.coords
         n = coords.n
@@ -323,7 +336,49 @@ class XLSINDy(BaseEstimator):
         self.formulation_ = formulation
         self.selection_ = getattr(optimizer, "selection_", None)
         self._build_dynamics()
+        self._check_mass_matrix(z)
         return self
+
+    def _check_mass_matrix(self, z):
+        """Normalize the sign of an unforced law and warn when ``M(q)`` is not positive
+        definite on the training states (``mass_matrix_check_``)."""
+        self.mass_matrix_check_ = None
+        if self.dynamics_ is None:
+            return
+        rows = z[np.unique(np.linspace(0, len(z) - 1, min(len(z), 2000)).astype(int))]
+
+        def eigenvalues():
+            mass, _ = self.dynamics_.mass_and_forcing(rows)
+            mass = (mass + np.swapaxes(mass, 1, 2)) / 2
+            return mass, np.linalg.eigvalsh(mass)
+
+        mass, eig = eigenvalues()
+        forces = self.feature_library_.force_columns_
+        if np.all(eig < 0) and not np.any(self.coef_[forces]):
+            # an implicit law is defined up to its sign: make the kinetic energy positive
+            self.coef_ = -self.coef_ + 0.0
+            self._build_dynamics()
+            mass, eig = eigenvalues()
+        scale = max(float(np.abs(eig).max()), 1e-300)
+        definite = eig.min(axis=1) > 1e-9 * scale
+        with np.errstate(divide="ignore"):
+            condition = np.where(definite, eig.max(axis=1) / np.abs(eig.min(axis=1)), np.inf)
+        self.mass_matrix_check_ = {
+            "positive_definite_fraction": float(np.mean(definite)),
+            "median_condition": float(np.median(condition)),
+        }
+        if not definite.all():
+            diagonal = np.diagonal(mass, axis1=1, axis2=2)
+            names = [name for i, name in enumerate(self.feature_library_.coords.names)
+                     if np.any(diagonal[:, i] <= 1e-9 * scale)]
+            warnings.warn(
+                f"the identified mass matrix is not positive definite on "
+                f"{np.mean(~definite):.0%} of the training states"
+                + (f"; no positive inertia on {names}" if names else "")
+                + ": the model is wrong there (noise terms, an unidentifiable coordinate, or a "
+                "catalog that cannot express the dynamics) and will not simulate faithfully",
+                IdentificationWarning, stacklevel=3,
+            )
 
     def _resolve_formulation(self, x_dot, x_ddot) -> str:
         if not isinstance(self.formulation, str) or self.formulation not in _FORMULATIONS:
@@ -375,8 +430,6 @@ class XLSINDy(BaseEstimator):
                     "ImplicitOptimizer, MixedOptimizer); wrap pysindy optimizers in "
                     "ExplicitOptimizer(method=...)"
                 )
-            from sklearn.base import clone
-
             return clone(self.optimizer)
         if forced.all():
             return ExplicitOptimizer()

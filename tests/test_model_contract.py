@@ -1,0 +1,60 @@
+"""scikit-learn contract of XLSINDy on the weak path: fit leaves its parameters unchanged,
+fitted models pickle and predict identically, fit-time mass-matrix diagnostics."""
+
+import pickle
+
+import numpy as np
+import pytest
+from ground_truth import random_force, random_initial_state
+from test_explicit_identification import paper_catalog
+
+import pysindy_xl as px
+
+
+@pytest.fixture(scope="module")
+def cart_pole_data(cart_pole_system):
+    system = cart_pole_system
+    t = np.arange(0, 15, 0.01)
+    data = system.simulate(random_initial_state(system, 4), t, random_force(system, 4))
+    noisy = data["q"] + 0.01 * data["q"].std(0) * np.random.default_rng(0).normal(size=(len(t), 2))
+    return system, t, noisy, data
+
+
+def test_fit_leaves_the_catalog_untouched_and_models_pickle(cart_pole_data):
+    system, t, noisy, data = cart_pole_data
+    library = paper_catalog(system.coords, [1])
+    before = pickle.dumps(library)
+    model = px.XLSINDy(library)
+    params = model.get_params(deep=False)
+    model.fit(noisy, t, u=data["tau"])
+    assert pickle.dumps(library) == before  # the user's catalog object is not fitted in place
+    assert model.get_params(deep=False) == params
+    assert not hasattr(library, "symbolic_matrix_")
+    restored = pickle.loads(pickle.dumps(model))
+    np.testing.assert_array_equal(restored.coefficients(), model.coefficients())
+    np.testing.assert_array_equal(restored.predict(data["q"][:50], data["qd"][:50], data["tau"][:50]),
+                                  model.predict(data["q"][:50], data["qd"][:50], data["tau"][:50]))
+    # the restored library rebuilds its compiled evaluators (strong and weak) on first use
+    z = px.stack_variables(data["q"][:200], data["qd"][:200], data["qdd"][:200],
+                           data["tau"][:200], t[:200])
+    phi, dphi, _ = px.BumpTestFunctions(width=0.3, n_functions=3).matrices(t[:200])
+    np.testing.assert_allclose(restored.feature_library_.weak_transform(z, phi, dphi),
+                               model.feature_library_.weak_transform(z, phi, dphi))
+
+
+def test_an_indefinite_mass_matrix_warns_at_fit_time(cart_pole_data):
+    system, t, noisy, data = cart_pole_data
+    c = system.coords
+    # a catalog without the pole's kinetic energy cannot give theta a positive inertia
+    library = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.qd[0] * c.qd[1] * np.cos(0) , c.q[1] ** 2])
+    with pytest.warns(px.IdentificationWarning, match="not positive definite"):
+        model = px.XLSINDy(library, formulation="strong").fit(
+            data["q"], t, x_dot=data["qd"], x_ddot=data["qdd"], u=data["tau"])
+    assert model.mass_matrix_check_["positive_definite_fraction"] < 1
+
+
+def test_a_good_model_passes_the_mass_matrix_check(cart_pole_data):
+    system, t, noisy, data = cart_pole_data
+    model = px.XLSINDy(paper_catalog(system.coords, [1])).fit(noisy, t, u=data["tau"])
+    assert model.mass_matrix_check_["positive_definite_fraction"] == 1.0
+    assert np.isfinite(model.mass_matrix_check_["median_condition"])
