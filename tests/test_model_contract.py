@@ -32,8 +32,8 @@ def test_fit_leaves_the_catalog_untouched_and_models_pickle(cart_pole_data):
     assert not hasattr(library, "symbolic_matrix_")
     restored = pickle.loads(pickle.dumps(model))
     np.testing.assert_array_equal(restored.coefficients(), model.coefficients())
-    np.testing.assert_array_equal(restored.predict(data["q"][:50], data["qd"][:50], data["tau"][:50]),
-                                  model.predict(data["q"][:50], data["qd"][:50], data["tau"][:50]))
+    states = (data["q"][:50], data["qd"][:50], data["tau"][:50])
+    np.testing.assert_array_equal(restored.predict(*states), model.predict(*states))
     # the restored library rebuilds its compiled evaluators (strong and weak) on first use
     z = px.stack_variables(data["q"][:200], data["qd"][:200], data["qdd"][:200],
                            data["tau"][:200], t[:200])
