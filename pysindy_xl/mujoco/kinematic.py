@@ -36,9 +36,11 @@ from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
+import scipy.linalg
 import sympy as sp
 
 from ..symbols import Coordinates
+from ._trigpoly import TrigPolynomial, evaluate_many, state_values
 from .systems import MJCFSystem, MuJoCoSystem, get_system
 
 __all__ = ["KinematicCatalog", "kinematic_catalog", "INERTIAL_PARAMETERS"]
@@ -46,88 +48,54 @@ __all__ = ["KinematicCatalog", "kinematic_catalog", "INERTIAL_PARAMETERS"]
 #: Names of the ten inertial parameters of a body, in the order of the catalog's preference.
 INERTIAL_PARAMETERS = ("m", "mcx", "mcy", "mcz", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 
-# Coefficients below this magnitude in the kinematic expressions are round-off of quaternion
-# and axis arithmetic (lengths and rotation entries are O(1e-6) or larger in any real model).
+# Rotation entries and offsets below this magnitude are round-off of quaternion arithmetic.
 _CHOP = 1e-13
 # A column whose part orthogonal to the kept columns is below this fraction of its norm is
 # dependent; exact dependencies leave ~1e-14, independent columns O(1e-3) or more.
-_INDEPENDENCE_TOL = 1e-8
+_INDEPENDENCE_TOL = 1e-9
+# Columns taken in preference order only when at least this fraction of them is new.
+_WELL_CONDITIONED = 0.05
 _CACHE: dict = {}
 _CACHE_SIZE = 16
 
 
-# -- small symbolic helpers ----------------------------------------------------------------
-def _chop(expr: sp.Expr) -> sp.Expr:
-    """Expand ``expr`` and drop the round-off terms of float arithmetic."""
-    expr = sp.expand(expr)
-    if not isinstance(expr, sp.Add):
-        coefficient, _ = expr.as_coeff_Mul()
-        return sp.Integer(0) if coefficient.is_Number and abs(coefficient) < _CHOP else expr
-    kept = []
-    for term in expr.args:
-        coefficient, _ = term.as_coeff_Mul()
-        if not (coefficient.is_Number and abs(coefficient) < _CHOP):
-            kept.append(term)
-    return sp.Add(*kept)
-
-
-def _reduce_trigonometry(expr: sp.Expr, angles) -> sp.Expr:
-    """Rewrite ``cos(a)**2`` as ``1 - sin(a)**2`` for every angle: one canonical form per term.
-
-    The kinematics produce the same function in many spellings (``sin(b) cos(a)**2 +
-    sin(b) sin(a)**2`` is ``sin(b)``); the remainder modulo ``cos^2 + sin^2 - 1`` makes the
-    catalog terms short and readable.
-    """
-    for angle in angles:
-        sine, cosine = sp.sin(angle), sp.cos(angle)
-        if expr.has(cosine):
-            s, c = sp.Dummy("s"), sp.Dummy("c")
-            polynomial = expr.xreplace({sine: s, cosine: c})
-            reduced = sp.rem(polynomial, c**2 + s**2 - 1, c)
-            expr = sp.expand(reduced.xreplace({s: sine, c: cosine}))
-    return _chop(expr)
-
-
-def _numeric(values) -> list[sp.Expr]:
-    """Floats as sympy numbers, with round-off zeros made exact zeros."""
-    return [sp.Integer(0) if abs(v) < _CHOP else sp.Float(float(v)) for v in values]
-
-
+# -- vector helpers on polynomials ---------------------------------------------------------
 def _matvec(matrix, vector):
-    return [_chop(sum(matrix[i][k] * vector[k] for k in range(3))) for i in range(3)]
+    return [sum((matrix[i][k] * vector[k] for k in range(3)), 0.0 * vector[0])
+            for i in range(3)]
 
 
 def _matTvec(matrix, vector):
-    return [_chop(sum(matrix[k][i] * vector[k] for k in range(3))) for i in range(3)]
+    return [sum((matrix[k][i] * vector[k] for k in range(3)), 0.0 * vector[0])
+            for i in range(3)]
 
 
 def _cross(a, b):
-    return [
-        _chop(a[1] * b[2] - a[2] * b[1]),
-        _chop(a[2] * b[0] - a[0] * b[2]),
-        _chop(a[0] * b[1] - a[1] * b[0]),
-    ]
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 
 
-def _dot(a, b) -> sp.Expr:
-    return _chop(sum(x * y for x, y in zip(a, b, strict=True)))
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-def _quat_matrix(quat) -> list[list[sp.Expr]]:
+def _numeric(values) -> list[float]:
+    """Floats with round-off zeros (``6e-17`` from quaternion arithmetic) made exact zeros."""
+    return [0.0 if abs(v) < _CHOP else float(v) for v in values]
+
+
+def _quat_matrix(quat) -> list[list[float]]:
     matrix = np.zeros(9)
     mujoco.mju_quat2Mat(matrix, np.asarray(quat, dtype=float))
     rows = _numeric(matrix)
     return [rows[0:3], rows[3:6], rows[6:9]]
 
 
-def _axis_rotation(axis, s, c) -> list[list[sp.Expr]]:
+def _axis_rotation(axis, s, c):
     """Rotation by the angle of sine ``s`` and cosine ``c`` about the unit ``axis`` (Rodrigues)."""
     a = _numeric(axis)
-    skew = [[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]]
-    return [
-        [_chop(c * int(i == j) + s * skew[i][j] + (1 - c) * a[i] * a[j]) for j in range(3)]
-        for i in range(3)
-    ]
+    skew = [[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]]
+    return [[c * float(i == j) + s * skew[i][j] + (1 - c) * (a[i] * a[j]) for j in range(3)]
+            for i in range(3)]
 
 
 @dataclass
@@ -141,7 +109,7 @@ class _Frame:
     v: list
     w: list
     g: list
-    h: sp.Expr
+    h: TrigPolynomial
 
 
 # -- the catalog ---------------------------------------------------------------------------
@@ -203,6 +171,7 @@ class KinematicCatalog:
     classical_values: np.ndarray
     n_candidates: int
     build_seconds: float = 0.0
+    _polynomials: list = field(default_factory=list, repr=False, compare=False)
     _compiled: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
@@ -313,27 +282,19 @@ class KinematicCatalog:
         return out
 
     # -- physical quantities -------------------------------------------------------------
-    def _evaluator(self, key):
+    def _quantity(self, key) -> list:
+        """Per term, the polynomials of ``key``: mass-matrix entries or bias forces."""
         if key not in self._compiled:
-            c = self.coords
-            if key == "mass":
-                exprs = [[sp.diff(term, c.qd[i], c.qd[k]) for term in self.lagrange_terms]
-                         for i in range(c.n) for k in range(c.n)]
-            else:  # gravity: -dL/dq at rest; bias: Euler-Lagrange with qdd = 0
-                from ..feature_library.lagrange import euler_lagrange
-
-                rest = {qd: 0 for qd in c.qd} if key == "gravity" else {}
-                exprs = []
-                for i in range(c.n):
-                    exprs.append([])
-                for term in self.lagrange_terms:
-                    column = euler_lagrange(term, c)
-                    for i in range(c.n):
-                        value = column[i].subs({qdd: 0 for qdd in c.qdd})
-                        exprs[i].append(value.subs(rest))
-            flat = [e for row in exprs for e in row]
-            function = sp.lambdify([c.q, c.qd], flat, modules="numpy", cse=True)
-            self._compiled[key] = (function, len(exprs))
+            n = self.coords.n
+            rows = []
+            for term in self._polynomials:
+                if key == "mass":
+                    momenta = [term.diff_velocity(i) for i in range(n)]
+                    rows.append([p.diff_velocity(k) for p in momenta for k in range(n)])
+                else:  # the equations with qdd = 0 (and qd = 0 for gravity)
+                    rest = key == "gravity"
+                    rows.append([e.at_rest(velocities=rest) for e in term.euler_lagrange()])
+            self._compiled[key] = rows
         return self._compiled[key]
 
     def _evaluate(self, key, q, qd, coefficients):
@@ -346,13 +307,11 @@ class KinematicCatalog:
         if beta.shape != (len(self.lagrange_terms),):
             raise ValueError(f"coefficients: expected shape ({len(self.lagrange_terms)},), "
                              f"got {beta.shape}")
-        function, n_rows = self._evaluator(key)
-        values = function(tuple(q.T), tuple(qd.T))
-        n_samples, n_terms = q.shape[0], len(self.lagrange_terms)
-        table = np.empty((len(values), n_samples))
-        for k, v in enumerate(values):  # constant entries come back as scalars
-            table[k] = np.broadcast_to(v, (n_samples,))
-        return np.einsum("rfs,f->sr", table.reshape(n_rows, n_terms, n_samples), beta)
+        rows = self._quantity(key)
+        angles = [j in self.system.angle_coordinates for j in range(c.n)]
+        values = evaluate_many([p for row in rows for p in row], state_values(q, qd, None, angles))
+        values = values.reshape(q.shape[0], len(rows), -1)
+        return np.einsum("sfr,f->sr", values, beta)
 
     def mass_matrix(self, q, coefficients=None) -> np.ndarray:
         """Mass matrix ``M(q)`` in the system's coordinates.
@@ -482,87 +441,102 @@ def _resolve_system(system) -> MuJoCoSystem:
     )
 
 
-def _joint_substitutions(system: MuJoCoSystem, model, joint_symbols):
-    """Express each joint's sine, cosine, displacement and velocity in the coordinates."""
-    coords = system.coords
+def _joint_variables(system: MuJoCoSystem, model):
+    """Each joint's sine and cosine (hinge) or displacement (slide), and velocity, as polynomials.
+
+    MuJoCo measures ``qpos - qpos0`` (the joint's ``ref``); the coordinates are ``q = T qpos``,
+    so a joint's angle is the row of ``T^-1`` applied to ``q``, expanded with the angle-sum
+    formulas (which needs integer rows: relative hinges of a chain).
+    """
+    n = system.n
+    is_angle = tuple(j in system.angle_coordinates for j in range(n))
     inverse = np.linalg.inv(system.joint_to_coordinates)
-    integer_map = np.allclose(inverse, np.round(inverse))
-    subs = {}
+
+    def slot(index):
+        return TrigPolynomial.slot(n, index, is_angle)
+
+    hinge = int(mujoco.mjtJoint.mjJNT_HINGE)
+    joints = []
     for k in range(model.njnt):
-        row = np.round(inverse[k]) if integer_map else inverse[k]
-        position = sum((sp.Integer(int(a)) if integer_map else sp.Float(a)) * qj
-                       for a, qj in zip(row, coords.q, strict=True) if a != 0)
-        velocity = sum((sp.Integer(int(a)) if integer_map else sp.Float(a)) * qdj
-                       for a, qdj in zip(row, coords.qd, strict=True) if a != 0)
+        row = inverse[k]
+        used = np.flatnonzero(np.abs(row) > 1e-12)
+        velocity = sum((float(row[j]) * slot(2 * n + j) for j in used), 0.0 * slot(0))
         reference = float(model.qpos0[model.jnt_qposadr[k]])
-        kind = joint_symbols[k]
-        subs[kind["velocity"]] = velocity
-        if "sin" in kind:
-            s, c = sp.expand_trig(sp.sin(position)), sp.expand_trig(sp.cos(position))
-            if reference != 0.0:  # MuJoCo measures the angle from the joint's ref
-                cr, sr = np.cos(reference), np.sin(reference)
-                s, c = s * cr - c * sr, c * cr + s * sr
-            subs[kind["sin"]], subs[kind["cos"]] = sp.expand(s), sp.expand(c)
+        name = system.joint_names[k]
+        if int(model.jnt_type[k]) == hinge:
+            if not all(is_angle[j] and float(row[j]).is_integer() for j in used):
+                raise ValueError(
+                    f"system: the angle of hinge {name!r} must be an integer combination of "
+                    "angle coordinates (joint_to_coordinates)"
+                )
+            sine, cosine = TrigPolynomial.constant(0.0, is_angle), TrigPolynomial.constant(
+                1.0, is_angle)
+            for j in used:  # angle-sum formulas, one unit of q_j at a time
+                sign = np.sign(row[j])
+                for _ in range(int(abs(row[j]))):
+                    sine, cosine = (sine * slot(n + j) + sign * cosine * slot(j),
+                                    cosine * slot(n + j) - sign * sine * slot(j))
+            cr, sr = np.cos(reference), np.sin(reference)
+            joints.append({"sin": sine * cr - cosine * sr, "cos": cosine * cr + sine * sr,
+                           "velocity": velocity})
         else:
-            subs[kind["displacement"]] = position - reference
-    return subs
+            if any(is_angle[j] for j in used):
+                raise ValueError(f"system: slide joint {name!r} must map to linear coordinates")
+            displacement = sum((float(row[j]) * slot(j) for j in used), 0.0 * slot(0))
+            joints.append({"displacement": displacement - reference, "velocity": velocity})
+    return joints, is_angle
 
 
-def _body_functions(model):
-    """Lagrangian functions of every moving body, in joint symbols.
+def _body_functions(system, model):
+    """Lagrangian functions of every moving body (order of INERTIAL_PARAMETERS).
 
     Returns
     -------
-    functions : dict body id -> list of 10 sympy.Expr (order of INERTIAL_PARAMETERS)
-    joint_symbols : list of dict, one per joint
+    functions : dict body id -> list of 10 TrigPolynomial
+    joints : list of dict
+        Per joint: ``sin``, ``cos`` or ``displacement``, ``velocity`` polynomials.
     """
-    hinge, slide = int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)
-    joint_symbols = []
-    for k in range(model.njnt):
-        symbols = {"velocity": sp.Symbol(f"_w{k}")}
-        if int(model.jnt_type[k]) == hinge:
-            symbols["sin"], symbols["cos"] = sp.Symbol(f"_s{k}"), sp.Symbol(f"_c{k}")
-        elif int(model.jnt_type[k]) == slide:
-            symbols["displacement"] = sp.Symbol(f"_x{k}")
-        else:
-            raise ValueError(f"system: joint #{k} is not a hinge or slide joint")
-        joint_symbols.append(symbols)
-    zero = [sp.Integer(0)] * 3
-    frames = {0: _Frame(v=zero, w=zero, g=_numeric(model.opt.gravity), h=sp.Integer(0))}
+    joints, is_angle = _joint_variables(system, model)
+    zero = [TrigPolynomial.constant(0.0, is_angle)] * 3
+    frames = {0: _Frame(v=zero, w=zero,
+                        g=[TrigPolynomial.constant(x, is_angle) for x in model.opt.gravity],
+                        h=zero[0])}
     moving = {0: False}
     functions = {}
     for b in range(1, model.nbody):
-        parent = frames[int(model.body_parentid[b])]
+        parent_id = int(model.body_parentid[b])
+        parent = frames[parent_id]
         rot = _quat_matrix(model.body_quat[b])
         offset = _numeric(model.body_pos[b])
         frame = _Frame(
-            v=_matTvec(rot, [_chop(x + y) for x, y in
-                             zip(parent.v, _cross(parent.w, offset), strict=True)]),
+            v=_matTvec(rot, [x + y for x, y in zip(parent.v, _cross(parent.w, offset),
+                                                   strict=True)]),
             w=_matTvec(rot, parent.w),
             g=_matTvec(rot, parent.g),
-            h=_chop(parent.h + _dot(parent.g, offset)),
+            h=parent.h + _dot(parent.g, offset),
         )
-        moving[b] = moving[int(model.body_parentid[b])] or model.body_jntnum[b] > 0
+        moving[b] = moving[parent_id] or model.body_jntnum[b] > 0
         for k in range(model.body_jntadr[b], model.body_jntadr[b] + model.body_jntnum[b]):
             axis = _numeric(model.jnt_axis[k])
-            symbols = joint_symbols[k]
-            rate = symbols["velocity"]
-            if "sin" in symbols:
+            joint = joints[k]
+            rate = joint["velocity"]
+            if "sin" in joint:
+                # MuJoCo turns the frame about the axis through the anchor jnt_pos
                 anchor = _numeric(model.jnt_pos[k])
-                turn = _axis_rotation(model.jnt_axis[k], symbols["sin"], symbols["cos"])
+                turn = _axis_rotation(axis, joint["sin"], joint["cos"])
                 turned_anchor = _matvec(turn, anchor)
-                shift = [_chop(a - b) for a, b in zip(anchor, turned_anchor, strict=True)]
-                relative = [a * rate for a in axis]
+                shift = [a - t for a, t in zip(anchor, turned_anchor, strict=True)]
+                relative = [rate * a for a in axis]
                 shift_rate = [-x for x in _cross(relative, turned_anchor)]
             else:
                 turn = None
-                shift = [a * symbols["displacement"] for a in axis]
+                shift = [joint["displacement"] * a for a in axis]
                 relative = zero
-                shift_rate = [a * rate for a in axis]
-            velocity = [_chop(v + x + d) for v, x, d in
+                shift_rate = [rate * a for a in axis]
+            velocity = [v + x + d for v, x, d in
                         zip(frame.v, _cross(frame.w, shift), shift_rate, strict=True)]
-            spin = [_chop(w + r) for w, r in zip(frame.w, relative, strict=True)]
-            height = _chop(frame.h + _dot(frame.g, shift))
+            spin = [w + r for w, r in zip(frame.w, relative, strict=True)]
+            height = frame.h + _dot(frame.g, shift)
             if turn is None:
                 frame = _Frame(v=velocity, w=spin, g=frame.g, h=height)
             else:
@@ -572,14 +546,13 @@ def _body_functions(model):
         if not moving[b]:
             continue  # welded to the world: constant energy, no dynamics
         v, w = frame.v, frame.w
-        first_moment = [_chop(a + b) for a, b in zip(_cross(v, w), frame.g, strict=True)]
-        half = sp.Rational(1, 2)
+        first_moment = [a + g for a, g in zip(_cross(v, w), frame.g, strict=True)]
         functions[b] = [
-            _chop(half * _dot(v, v) + frame.h), *first_moment,
-            _chop(half * w[0] ** 2), _chop(half * w[1] ** 2), _chop(half * w[2] ** 2),
-            _chop(w[0] * w[1]), _chop(w[0] * w[2]), _chop(w[1] * w[2]),
+            0.5 * _dot(v, v) + frame.h, *first_moment,
+            0.5 * (w[0] * w[0]), 0.5 * (w[1] * w[1]), 0.5 * (w[2] * w[2]),
+            w[0] * w[1], w[0] * w[2], w[1] * w[2],
         ]
-    return functions, joint_symbols
+    return functions, joints
 
 
 def _physical_values(model, body: int) -> np.ndarray:
@@ -597,31 +570,53 @@ def _physical_values(model, body: int) -> np.ndarray:
 
 
 def _independent_columns(matrix: np.ndarray) -> list[int]:
-    """Columns kept in order when not in the span of those kept before (Gram-Schmidt)."""
+    """A well-conditioned set of independent columns, earlier columns preferred.
+
+    The rank comes from a column-pivoted QR (exact dependencies leave ``|R_ii| ~ 1e-15``,
+    independent columns ``1e-3`` or more). Columns are then taken in order when their part
+    orthogonal to those already taken is a sizeable fraction of their norm, and the remaining
+    rank is filled by the column with the largest orthogonal part, so that the dependent
+    columns are combinations of the kept ones with moderate weights (a nearly dependent basis
+    would amplify round-off in the base parameters).
+    """
     norms = np.linalg.norm(matrix, axis=0)
+    candidates = np.flatnonzero(norms > 0)
+    if candidates.size == 0:
+        return []
+    unit = matrix[:, candidates] / norms[candidates]
+    diagonal = np.abs(np.diag(scipy.linalg.qr(unit, mode="r", pivoting=True)[0]))
+    rank = int(np.sum(diagonal > _INDEPENDENCE_TOL * diagonal[0]))
     basis = np.zeros((matrix.shape[0], 0))
-    kept = []
-    for j in range(matrix.shape[1]):
-        if norms[j] == 0:
-            continue
-        residual = matrix[:, j] / norms[j]
+    kept: list[int] = []
+
+    def orthogonal_part(column):
         for _ in range(2):  # re-orthogonalize: one pass loses digits on near-parallel columns
-            residual = residual - basis @ (basis.T @ residual)
-        size = np.linalg.norm(residual)
-        if size > _INDEPENDENCE_TOL:
-            basis = np.column_stack([basis, residual / size])
+            column = column - basis @ (basis.T @ column)
+        return column
+
+    for j in range(unit.shape[1]):
+        if len(kept) == rank:
+            break
+        residual = orthogonal_part(unit[:, j])
+        if np.linalg.norm(residual) > _WELL_CONDITIONED:
+            basis = np.column_stack([basis, residual / np.linalg.norm(residual)])
             kept.append(j)
-    return kept
+    while len(kept) < rank:
+        rest = [j for j in range(unit.shape[1]) if j not in kept]
+        residuals = np.column_stack([orthogonal_part(unit[:, j]) for j in rest])
+        best = int(np.argmax(np.linalg.norm(residuals, axis=0)))
+        basis = np.column_stack([basis, residuals[:, best] / np.linalg.norm(residuals[:, best])])
+        kept.append(rest[best])
+    return sorted(int(candidates[j]) for j in kept)
 
 
-def _random_states(system: MuJoCoSystem, n_samples: int, rng) -> np.ndarray:
-    from ..feature_library import stack_variables
-
+def _random_values(system: MuJoCoSystem, n_samples: int, rng) -> np.ndarray:
     n = system.n
     q = rng.uniform(-1.0, 1.0, (n_samples, n))
     q[:, list(system.angle_coordinates)] *= np.pi
     qd, qdd = rng.normal(size=(2, n_samples, n))
-    return stack_variables(q, qd, qdd)
+    angles = [j in system.angle_coordinates for j in range(n)]
+    return state_values(q, qd, qdd, angles)
 
 
 def _classical_candidates(system, model, coulomb, coulomb_scale):
@@ -735,11 +730,9 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
 
 
 def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
-    from ..feature_library import LagrangeLibrary
-
     coords = system.coords
-    functions, joint_symbols = _body_functions(model)
-    subs = _joint_substitutions(system, model, joint_symbols)
+    n = coords.n
+    functions, joints = _body_functions(system, model)
     candidates, names, values = [], [], []
     for b, body_functions in functions.items():
         body = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}"
@@ -747,18 +740,17 @@ def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
         names.extend(f"{body}.{p}" for p in INERTIAL_PARAMETERS)
         values.extend(_physical_values(model, b))
     for k in range(model.njnt):
-        candidates.append(joint_symbols[k]["velocity"] ** 2 / 2)
+        candidates.append(0.5 * (joints[k]["velocity"] * joints[k]["velocity"]))
         names.append(f"{system.joint_names[k]}.armature")
         values.append(float(model.dof_armature[model.jnt_dofadr[k]]))
-    angles = [coords.q[i] for i in system.angle_coordinates]
-    terms = [_reduce_trigonometry(_chop(f.xreplace(subs)), angles) if f != 0 else sp.Integer(0)
-             for f in candidates]
-    nonzero = [j for j, term in enumerate(terms) if term.free_symbols]
-    regressor_library = LagrangeLibrary(coords, [terms[j] for j in nonzero]).fit()
+    columns = [candidate.euler_lagrange() for candidate in candidates]
     rng = np.random.default_rng(seed)
-    n_samples = 2 * len(nonzero) // coords.n + 20
-    regressor = np.zeros((coords.n * n_samples, len(terms)))
-    regressor[:, nonzero] = regressor_library.transform(_random_states(system, n_samples, rng))
+    n_samples = 2 * len(candidates) // n + 20
+    evaluated = evaluate_many([e for column in columns for e in column],
+                              _random_values(system, n_samples, rng))
+    # rows coordinate-major like the feature libraries: (equation, sample)
+    regressor = evaluated.reshape(n_samples, len(candidates), n).transpose(2, 0, 1)
+    regressor = regressor.reshape(n * n_samples, len(candidates))
     kept = _independent_columns(regressor)
     # every column is a combination of the kept ones: base = combination @ physical
     combination, *_ = np.linalg.lstsq(regressor[:, kept], regressor, rcond=None)
@@ -772,9 +764,10 @@ def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
     classical_terms, mask, kinds, classical_values = _classical_candidates(
         system, model, coulomb, coulomb_scale)
     return KinematicCatalog(
-        system=system, coords=coords, lagrange_terms=[terms[j] for j in kept],
+        system=system, coords=coords,
+        lagrange_terms=[candidates[j].to_sympy(coords) for j in kept],
         parameters=parameters, physical_names=names, combination=combination,
         physical_values=np.array(values), classical_terms=classical_terms,
         classical_mask=mask, classical_kinds=kinds, classical_values=classical_values,
-        n_candidates=len(candidates),
+        n_candidates=len(candidates), _polynomials=[candidates[j] for j in kept],
     )
