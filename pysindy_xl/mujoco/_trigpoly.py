@@ -157,8 +157,53 @@ class TrigPolynomial:
                               normalize=False)
 
     # -- conversion ------------------------------------------------------------------------
-    def to_sympy(self, coords) -> sp.Expr:
-        """The polynomial as a sympy expression in ``coords``' symbols."""
+    @classmethod
+    def from_sympy(cls, expr, coords, angles) -> TrigPolynomial:
+        """Parse a sum of products of ``sin q``, ``cos q`` (angles), ``q`` (others), ``qd``.
+
+        Raises
+        ------
+        ValueError
+            If ``expr`` is not such a polynomial (after expansion).
+        """
+        n = coords.n
+        slots = {}
+        for j in range(n):
+            if angles[j]:
+                slots[sp.sin(coords.q[j])], slots[sp.cos(coords.q[j])] = j, n + j
+            else:
+                slots[coords.q[j]] = j
+            slots[coords.qd[j]] = 2 * n + j
+        try:
+            return cls._parse(sp.Add.make_args(expr), slots, angles)
+        except _NotPolynomial:
+            return cls._parse(sp.Add.make_args(sp.expand(expr)), slots, angles)
+
+    @classmethod
+    def _parse(cls, terms, slots, angles):
+        exponents = np.zeros((len(terms), 4 * len(angles)), dtype=np.int16)
+        coefficients = np.zeros(len(terms))
+        for row, term in enumerate(terms):
+            coefficient, rest = term.as_coeff_Mul()
+            value = float(coefficient)
+            for factor in sp.Mul.make_args(rest):
+                if factor.is_number:
+                    value *= float(factor)
+                    continue
+                base, power = factor.as_base_exp()
+                if base not in slots or not (power.is_Integer and power > 0):
+                    raise _NotPolynomial(str(factor))
+                exponents[row, slots[base]] += int(power)
+            coefficients[row] = value
+        return cls(exponents, coefficients, angles)
+
+    def to_sympy(self, coords, evaluate: bool = True) -> sp.Expr:
+        """The polynomial as a sympy expression in ``coords``' symbols.
+
+        ``evaluate=False`` skips sympy's canonicalization of every product and sum (most of
+        the cost on large polynomials); the result is a flat sum of flat products, which the
+        feature libraries' compiler reads as is.
+        """
         n = len(self.angles)
         atoms = []
         for j in range(n):
@@ -167,9 +212,18 @@ class TrigPolynomial:
         terms = []
         for row, value in zip(self.exponents, self.coefficients, strict=True):
             number = sp.Integer(int(value)) if value == int(value) else sp.Float(float(value))
-            factors = [atoms[k] ** int(e) for k, e in enumerate(row) if e]
-            terms.append(sp.Mul(number, *factors))
-        return sp.Add(*terms)
+            factors = [atoms[k] if e == 1 else atoms[k] ** int(e)
+                       for k, e in enumerate(row) if e]
+            if not evaluate and factors and number == 1:
+                terms.append(sp.Mul(*factors, evaluate=False) if len(factors) > 1
+                             else factors[0])
+            else:
+                terms.append(sp.Mul(number, *factors, evaluate=evaluate))
+        return sp.Add(*terms, evaluate=evaluate)
+
+
+class _NotPolynomial(ValueError):
+    """A factor that is not a power of ``sin q``, ``cos q``, ``q`` or ``qd``."""
 
 
 def _normalize(exponents, coefficients, angles):
