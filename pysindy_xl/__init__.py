@@ -35,5 +35,16 @@ __all__ = [
     "MassMatrixDynamics",
     "SimulationError",
     "SingularMassMatrixError",
+    "kinematic_catalog",
 ]
 __version__ = "0.1.0"
+
+
+def __getattr__(name):
+    # the kinematic catalog reads MJCF through mujoco: import it on first use only, so that
+    # ``import pysindy_xl`` stays light
+    if name == "kinematic_catalog":
+        from .mujoco.kinematic import kinematic_catalog
+
+        return kinematic_catalog
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -23,7 +23,7 @@ import numpy as np
 __all__ = ["main", "build_parser", "run_demo", "run_identify"]
 
 SOLVERS = ("auto", "explicit", "implicit", "mixed")
-CATALOGS = ("lagrange", "classical", "mixed")
+CATALOGS = ("lagrange", "classical", "mixed", "kinematic")
 FORCINGS = ("explicit", "implicit", "mixed")
 _AUTO_SOLVER = {"explicit": "explicit", "implicit": "implicit", "mixed": "mixed"}
 
@@ -93,7 +93,8 @@ def _add_generation_options(parser, duration=10.0, trajectories=2):
 
 def _add_fit_options(parser):
     parser.add_argument("--catalog", choices=CATALOGS, default="mixed",
-                        help="lagrange, classical or mixed (Lagrange + friction) (default: mixed)")
+                        help="lagrange, classical, mixed (Lagrange + friction) or kinematic "
+                             "(derived from the MJCF kinematic tree) (default: mixed)")
     parser.add_argument("--solver", choices=SOLVERS, default="auto",
                         help="explicit, implicit or mixed regression; auto follows the forcing "
                              "(default: auto)")

@@ -17,6 +17,7 @@ from .catalogs import (
 from .dataset import Dataset, DatasetError, Trajectory, load_dataset
 from .forcing import FORCING_MODES, SumOfSinusoids
 from .generate import add_noise, generate_dataset, simulate_trajectory
+from .kinematic import KinematicCatalog, PolynomialLagrangeLibrary, kinematic_catalog
 from .systems import (
     SYSTEMS,
     CartDoublePendulum,
@@ -60,6 +61,9 @@ __all__ = [
     "lagrange_terms",
     "reference_catalog",
     "true_coefficients",
+    "KinematicCatalog",
+    "PolynomialLagrangeLibrary",
+    "kinematic_catalog",
     "DEFAULT_DIVERGENCE_BOUND",
     "ValidationResult",
     "compare_trajectories",

@@ -155,9 +155,10 @@ class KinematicCatalog:
     --------
     >>> catalog = kinematic_catalog("cart-pole")
     >>> catalog.lagrange_terms
-    [x_dot**2, theta_dot*x_dot*cos(theta), cos(theta), theta_dot**2]
-    >>> catalog.parameters[3]
-    {'pole.mcy': 0.0, 'pole.Iyy': 0.5, 'hinge.armature': 0.5}
+    [0.5*x_dot**2, -theta_dot*x_dot*sin(theta) - 9.81*sin(theta),
+     -theta_dot*x_dot*cos(theta) - 9.81*cos(theta), 0.5*theta_dot**2]
+    >>> catalog.parameters[0]
+    {'cart.m': 1.0, 'pole.m': 1.0, 'slider.armature': 1.0}
     """
 
     system: MuJoCoSystem
@@ -187,7 +188,7 @@ class KinematicCatalog:
         Examples
         --------
         >>> kinematic_catalog("cart-pole").base_parameters.round(4)
-        array([0.75  , 0.4   , 3.924 , 0.1600005])
+        array([ 1.5 ,  0.  , -0.4 ,  0.32])
         """
         return self.combination @ self.physical_values
 
@@ -209,8 +210,10 @@ class KinematicCatalog:
         Examples
         --------
         >>> lib = kinematic_catalog("cart-pole").library().fit()
-        >>> lib.get_feature_names()[:3]
-        ['F[tau]', 'L[x_dot**2]', 'L[theta_dot*x_dot*cos(theta)]']
+        >>> lib.get_feature_names()[:2]
+        ['F[tau]', 'L[0.5*x_dot**2]']
+        >>> lib.get_feature_names()[-2:]
+        ['C_theta[theta_dot]', 'C_theta[tanh(100.0*theta_dot)]']
         """
         from ..feature_library import CatalogRepartition, ClassicalLibrary, ExternalForces
 
@@ -240,7 +243,7 @@ class KinematicCatalog:
         Examples
         --------
         >>> kinematic_catalog("cart-pole").true_coefficients().round(4)
-        array([-1.    ,  0.75  ,  0.4   ,  3.924 ,  0.16  ,  0.5   ,  0.    ,  0.1   ,  0.    ])
+        array([-1.  ,  1.5 ,  0.  , -0.4 ,  0.32,  0.5 ,  0.  ,  0.1 ,  0.  ])
         """
         return np.concatenate([[forces], self.base_parameters, self.classical_values])
 
@@ -331,8 +334,8 @@ class KinematicCatalog:
         Examples
         --------
         >>> kinematic_catalog("cart-pole").mass_matrix([0.0, 0.0]).round(4)
-        array([[1.5, 0.4],
-               [0.4, 0.32 ]])
+        array([[1.5 , 0.4 ],
+               [0.4 , 0.32]])
         """
         single = np.ndim(q) == 1
         n = self.coords.n
@@ -400,7 +403,7 @@ class KinematicCatalog:
         Examples
         --------
         >>> print(kinematic_catalog("cart-pole").report().splitlines()[1])
-        x_dot**2  |  0.5*cart.m + 0.5*pole.m  |  0.75
+        0.5*x_dot**2  |  1*cart.m + 1*pole.m + 1*slider.armature  |  1.5
         """
         truth = self.base_parameters
         lines = ["term  |  stands for  |  MJCF" + ("  |  identified" if coefficients is not None
@@ -744,11 +747,15 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
 
     >>> xml = '''<mujoco><option gravity="0 0 -9.81"/><worldbody><body>
     ...   <joint name="a" type="hinge" axis="0 1 0"/>
-    ...   <inertial pos="0.1 0.02 -0.5" mass="2" fullinertia="0.1 0.2 0.3 0.01 0.02 0.03"/>
+    ...   <inertial pos="0.1 0.02 -0.5" mass="2" fullinertia="0.3 0.2 0.15 0.01 0.02 0.03"/>
     ... </body></worldbody></mujoco>'''
     >>> catalog = kinematic_catalog(xml)
     >>> catalog.lagrange_terms
-    [cos(a), sin(a), a_dot**2]
+    [9.81*sin(a), -9.81*cos(a), 0.5*a_dot**2]
+    >>> catalog.parameters
+    [{'body1.mcx': 1.0}, {'body1.mcz': 1.0}, {'body1.Iyy': 1.0, 'a.armature': 1.0}]
+    >>> catalog.base_parameters.round(4)  # m c_x, m c_z, Iyy about the hinge axis
+    array([ 0.2  , -1.   ,  0.72])
     >>> len(catalog.library().fit().get_feature_names())  # force, 3 Lagrange, 2 friction
     6
     """
