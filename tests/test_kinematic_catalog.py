@@ -259,3 +259,64 @@ def test_public_export_is_lazy():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip() == "kinematic_catalog"
+
+
+# -- independent check with the robotics regressor (Pinocchio, optional) ---------------------
+def _pinocchio_model(xml, tmp_path):
+    pinocchio = pytest.importorskip(
+        "pinocchio", reason="Pinocchio (pip package 'pin') is not installed; optional check")
+    path = tmp_path / "model.xml"
+    path.write_text(xml, encoding="utf-8")
+    model = pinocchio.buildModelFromMJCF(str(path))
+    return pinocchio, model, model.createData()
+
+
+def _pinocchio_regressor(pinocchio, model, data, q, qd, qdd):
+    """Joint-torque regressor of Pinocchio, with armature columns (Pinocchio leaves them out)."""
+    blocks = [np.hstack([pinocchio.computeJointTorqueRegressor(model, data, a, b, c),
+                         np.diag(c)]) for a, b, c in zip(q, qd, qdd, strict=True)]
+    return np.vstack(blocks)
+
+
+@pytest.mark.parametrize("name", ["planar-arm", "spatial-arm"])
+def test_base_parameter_count_matches_pinocchio(name, tmp_path):
+    pinocchio, model, data = _pinocchio_model(WRITTEN[name], tmp_path)
+    rng = np.random.default_rng(0)
+    q, qd, qdd = rng.uniform(-3, 3, (60, model.nq)), *rng.normal(size=(2, 60, model.nv))
+    regressor = _pinocchio_regressor(pinocchio, model, data, q, qd, qdd)
+    norms = np.linalg.norm(regressor, axis=0)
+    moving = norms > 1e-9 * norms.max()
+    singular = np.linalg.svd(regressor[:, moving] / norms[moving], compute_uv=False)
+    rank = int(np.sum(singular > 1e-9 * singular[0]))
+    assert len(kinematic_catalog(MJCFSystem(WRITTEN[name])).lagrange_terms) == rank
+
+
+def test_identified_dynamics_match_pinocchio_identification(tmp_path):
+    # the same noise-free data identified two ways: XLSINDy on the kinematic catalog, least
+    # squares on Pinocchio's regressor (plus damping columns). Base parameters are unique, so
+    # the identified mass matrices and gravity torques must agree.
+    xml = PLANAR_ARM.replace('damping="0.1"', 'damping="0.1" armature="0.02"')
+    pinocchio, model, data = _pinocchio_model(xml, tmp_path)
+    system = MJCFSystem(xml, force_amplitude=4.0)
+    catalog = kinematic_catalog(system, coulomb=False)
+    dataset = generate_dataset(system, n_trajectories=2, duration=2.0, seed=0, sample_every=5,
+                               progress=False)
+    fitted = px.XLSINDy(catalog.library(), optimizer=px.ExplicitOptimizer(threshold=1e-8))
+    fitted.fit(**dataset.fit_arguments(forces="tau"))
+    identified = catalog.lagrange_coefficients(fitted)
+    q, qd, qdd, tau = (np.vstack([getattr(tr, key) for tr in dataset.trajectories])
+                       for key in ("q", "qd", "qdd", "tau"))
+    regressor = np.hstack([_pinocchio_regressor(pinocchio, model, data, q, qd, qdd),
+                           np.vstack([np.diag(v) for v in qd])])
+    parameters = np.linalg.lstsq(regressor, tau.reshape(-1), rcond=None)[0]
+    states = _random_joint_states(system, 10, seed=7)[0]
+    n = system.n
+    zeros = np.zeros((len(states), n))
+    gravity_pinocchio = (_pinocchio_regressor(pinocchio, model, data, states, zeros, zeros)
+                         @ parameters[:-n]).reshape(-1, n)
+    columns = [(_pinocchio_regressor(pinocchio, model, data, states, zeros,
+                                     np.tile(np.eye(n)[k], (len(states), 1)))
+                @ parameters[:-n]).reshape(-1, n) - gravity_pinocchio for k in range(n)]
+    mass_pinocchio = np.stack(columns, axis=2)
+    assert _relative_error(catalog.mass_matrix(states, identified), mass_pinocchio) < 1e-6
+    assert _relative_error(catalog.gravity_torque(states, identified), gravity_pinocchio) < 1e-6
