@@ -386,8 +386,8 @@ class KinematicCatalog:
         out = self._evaluate("bias", q, qd, coefficients)
         return out[0] if single else out
 
-    def report(self, coefficients=None, digits: int = 4) -> str:
-        """Table of the base parameters: combination, MJCF value, identified value.
+    def report(self, coefficients=None, digits: int = 4, terms: bool = True) -> str:
+        """Table of the base parameters: term, combination, MJCF value, identified value.
 
         Parameters
         ----------
@@ -395,26 +395,35 @@ class KinematicCatalog:
             Identified Lagrange coefficients (see :meth:`lagrange_coefficients`).
         digits : int, default 4
             Significant digits.
+        terms : bool, default True
+            Include the column of catalog terms (long for spatial arms).
 
         Returns
         -------
         str
+            One line per base parameter, columns separated by ``|``.
 
         Examples
         --------
-        >>> print(kinematic_catalog("cart-pole").report().splitlines()[1])
-        0.5*x_dot**2  |  1*cart.m + 1*pole.m + 1*slider.armature  |  1.5
+        >>> print(kinematic_catalog("cart-pole").report(terms=False))
+        stands for  |  MJCF
+        1*cart.m + 1*pole.m + 1*slider.armature  |  1.5
+        1*pole.mcx  |  0
+        1*pole.mcz  |  -0.4
+        1*pole.Iyy + 1*hinge.armature  |  0.32
         """
         truth = self.base_parameters
-        lines = ["term  |  stands for  |  MJCF" + ("  |  identified" if coefficients is not None
-                                                 else "")]
+        header = ["term"] if terms else []
+        header += ["stands for", "MJCF"] + (["identified"] if coefficients is not None else [])
+        lines = ["  |  ".join(header)]
         for j, term in enumerate(self.lagrange_terms):
-            combo = " + ".join(f"{w:.{digits}g}*{name}" for name, w in self.parameters[j].items()
-                               if abs(w) > 1e-12)
-            line = f"{term}  |  {combo}  |  {truth[j]:.{digits}g}"
+            combination = " + ".join(f"{w:.{digits}g}*{name}"
+                                     for name, w in self.parameters[j].items())
+            cells = [str(term)] if terms else []
+            cells += [combination, f"{truth[j]:.{digits}g}"]
             if coefficients is not None:
-                line += f"  |  {float(coefficients[j]):.{digits}g}"
-            lines.append(line)
+                cells.append(f"{float(coefficients[j]):.{digits}g}")
+            lines.append("  |  ".join(cells))
         return "\n".join(lines)
 
 
