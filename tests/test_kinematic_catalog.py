@@ -320,3 +320,31 @@ def test_identified_dynamics_match_pinocchio_identification(tmp_path):
     mass_pinocchio = np.stack(columns, axis=2)
     assert _relative_error(catalog.mass_matrix(states, identified), mass_pinocchio) < 1e-6
     assert _relative_error(catalog.gravity_torque(states, identified), gravity_pinocchio) < 1e-6
+
+
+# -- command line ----------------------------------------------------------------------------
+CLI_SHORT = ["--duration", "2", "--trajectories", "1", "--validation-duration", "1",
+             "--no-plots", "--quiet"]
+
+
+def test_cli_demo_with_kinematic_catalog_recovers_the_true_model(tmp_path):
+    import json
+
+    from pysindy_xl.cli import main
+
+    assert main(["demo", "double-pendulum", "--catalog", "kinematic", "--out", str(tmp_path),
+                 *CLI_SHORT]) == 0
+    report = json.loads((tmp_path / "report.json").read_text())
+    # the relative hinge's damping is one joint-velocity term (theta2_dot - theta1_dot)
+    assert report["coefficient_summary"]["true_model_missing_from_catalog"] == []
+    assert report["coefficient_summary"]["max_relative_error"] < 1e-9
+    assert report["validation"]["valid"] is True
+
+
+def test_cli_demo_of_user_mjcf_file_with_kinematic_catalog(tmp_path, capsys):
+    from pysindy_xl.cli import main
+
+    path = tmp_path / "planar_arm.xml"
+    path.write_text(PLANAR_ARM, encoding="utf-8")
+    assert main(["demo", str(path), "--catalog", "kinematic", "--out", str(tmp_path / "out"),
+                 *CLI_SHORT]) == 0
