@@ -348,3 +348,21 @@ def test_cli_demo_of_user_mjcf_file_with_kinematic_catalog(tmp_path, capsys):
     path.write_text(PLANAR_ARM, encoding="utf-8")
     assert main(["demo", str(path), "--catalog", "kinematic", "--out", str(tmp_path / "out"),
                  *CLI_SHORT]) == 0
+
+
+def test_identified_model_saves_and_loads(tmp_path):
+    # the JSON file stores the terms; the loaded plain LagrangeLibrary has the same features
+    system = MJCFSystem(CART_DOUBLE_PENDULUM, force_amplitude=3.0)
+    catalog = kinematic_catalog(system)
+    data = generate_dataset(system, n_trajectories=1, duration=1.0, seed=0, progress=False)
+    model = px.XLSINDy(catalog.library(), optimizer=px.ExplicitOptimizer(threshold=1e-8))
+    model.fit(**data.fit_arguments())
+    path = tmp_path / "model.json"
+    model.save(path)
+    loaded = px.XLSINDy.load(path)
+    assert loaded.get_feature_names() == model.get_feature_names()
+    assert catalog.lagrange_coefficients(loaded) == pytest.approx(catalog.base_parameters,
+                                                                  rel=1e-6, abs=1e-9)
+    trajectory = data.trajectories[0]
+    predicted = loaded.predict(trajectory.q, trajectory.qd, u=trajectory.tau)
+    assert np.abs(predicted - trajectory.qdd).max() < 1e-8 * np.abs(trajectory.qdd).max()

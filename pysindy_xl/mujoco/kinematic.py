@@ -275,13 +275,10 @@ class KinematicCatalog:
         out = np.zeros(len(self.lagrange_terms))
         index = {name: k for k, name in enumerate(names)}
         for j, term in enumerate(self.lagrange_terms):
-            # LagrangeLibrary prints sorted sums, PolynomialLagrangeLibrary unsorted ones
-            for name in (_feature_name(term), f"L[{term}]"):
-                if name in index:
-                    out[j] = coefficients[index[name]] * scale
-                    break
-            else:
-                raise ValueError(f"model: its catalog has no feature {_feature_name(term)!r}")
+            name = _feature_name(term)
+            if name not in index:
+                raise ValueError(f"model: its catalog has no feature {name!r}")
+            out[j] = coefficients[index[name]] * scale
         return out
 
     # -- physical quantities -------------------------------------------------------------
@@ -472,9 +469,8 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
 
 
 def _feature_name(term: sp.Expr) -> str:
-    # sympy's default printer sorts the terms of a sum, which costs seconds on the thousands
-    # of monomials of a spatial arm's terms; the order they were built in is deterministic
-    return f"L[{sp.sstr(term, order='none')}]"
+    # the names of LagrangeLibrary: saved models are checked against them when loaded
+    return f"L[{term}]"
 
 
 def _states(a, name: str, n: int) -> np.ndarray:
