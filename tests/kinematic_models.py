@@ -106,3 +106,24 @@ def serial_arm(n_joints: int) -> str:
     motors = "".join(f'<motor joint="q{k}"/>' for k in range(n_joints))
     return (f'<mujoco model="arm{n_joints}"><option gravity="0 0 -9.81"><flag contact="disable"/>'
             f"</option><worldbody>{body}</worldbody><actuator>{motors}</actuator></mujoco>")
+
+
+def robot_arm(n_joints: int) -> str:
+    """A robot-like serial arm: axes along the link frames (yaw, pitch, pitch, roll, pitch,
+    roll, ...), link offsets, off-axis centres of mass, full inertias, armature, damping."""
+    axes = ["0 0 1", "0 1 0", "0 1 0", "1 0 0", "0 1 0", "1 0 0", "0 0 1"]
+    offsets = ["0 0 0.2", "0 0.05 0.1", "0.35 -0.03 0", "0.3 0 0", "0.1 0 0", "0.08 0 0",
+               "0.05 0 0"]
+    body = ""
+    for k in reversed(range(n_joints)):
+        body = f"""
+<body name="r{k}" pos="{offsets[k]}">
+  <joint name="a{k}" type="hinge" axis="{axes[k]}" armature="0.01" damping="0.1"/>
+  <inertial pos="{0.05 + 0.01 * k} 0.01 -0.02" mass="{1.5 - 0.15 * k}"
+            fullinertia="0.01 0.012 0.008 0.001 -0.0005 0.0007"/>
+  {body}
+</body>"""
+    motors = "".join(f'<motor joint="a{k}"/>' for k in range(n_joints))
+    return (f'<mujoco model="robot{n_joints}"><option gravity="0 0 -9.81" timestep="0.0005" '
+            f'integrator="RK4"><flag contact="disable"/></option><worldbody>{body}</worldbody>'
+            f"<actuator>{motors}</actuator></mujoco>")

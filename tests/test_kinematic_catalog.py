@@ -72,7 +72,7 @@ def _mujoco_base_parameter_count(system, seed=0):
     Inverse dynamics ``M(q) qdd + bias`` is linear in these parameters, so the difference
     quotient of a perturbed compiled model is an exact regressor column.
     """
-    from pysindy_xl.mujoco.kinematic import _physical_values
+    from pysindy_xl.mujoco._kinematic_tree import physical_values
 
     model = system.mj_model()
     data = mujoco.MjData(model)
@@ -94,7 +94,7 @@ def _mujoco_base_parameter_count(system, seed=0):
     columns = []
     step = 1e-3
     for body in range(1, model.nbody):
-        base = _physical_values(model, body)
+        base = physical_values(model, body)
         for p in range(10):
             # inverse dynamics is linear in these parameters: a difference is exact
             perturbed = base.copy()
