@@ -17,7 +17,7 @@ the paper's velocity x trigonometric monomials of degree 2 plus viscous friction
 * for the kinematic catalog, ``mass_error`` and ``gravity_error``: relative error of ``M(q)``
   and the gravity torque identified by ``XLSINDy`` (explicit, noise-free) at 20 random states.
 
-Usage: ``python benchmarks/kinematic_catalog.py [--arms 5 6] [--skip-paper-for spatial-arm]``;
+Usage: ``python benchmarks/kinematic_catalog.py [--robots 6 7] [--arms 5 6]``;
 writes ``benchmarks/results/kinematic_catalog.{json,md}``.
 """
 
@@ -41,13 +41,15 @@ import kinematic_models  # noqa: E402
 RESULTS = os.path.join(os.path.dirname(__file__), "results")
 
 
-def systems(arms):
+def systems(arms, robots):
     out = {name: get_system(name) for name in
            ("cart-pole", "double-pendulum", "cart-double-pendulum")}
     out["planar-arm"] = MJCFSystem(kinematic_models.PLANAR_ARM, force_amplitude=4.0)
     out["spatial-arm"] = MJCFSystem(kinematic_models.SPATIAL_ARM, force_amplitude=3.0)
     out["cart-two-link"] = MJCFSystem(kinematic_models.CART_DOUBLE_PENDULUM,
                                       force_amplitude=3.0)
+    for n in robots:
+        out[f"robot-arm-{n}"] = MJCFSystem(kinematic_models.robot_arm(n), force_amplitude=1.0)
     for n in arms:
         out[f"serial-arm-{n}"] = MJCFSystem(kinematic_models.serial_arm(n), force_amplitude=3.0)
     return out
@@ -68,7 +70,7 @@ def span_residual(library, data):
                  / np.linalg.norm(test_force))
 
 
-def benchmark(name, system, paper):
+def benchmark(name, system, paper, fit):
     data = generate_dataset(system, n_trajectories=2, duration=2.0, seed=0, sample_every=5,
                             progress=False)
     records = []
@@ -86,6 +88,9 @@ def benchmark(name, system, paper):
         "derive_s": round(derive, 3), "library_s": round(library_seconds, 3),
         "span_residual": span_residual(library, data),
     }
+    if not fit:
+        records.append(record)
+        return records
     model = px.XLSINDy(catalog.library(), optimizer=px.ExplicitOptimizer(threshold=1e-8))
     start = time.perf_counter()
     try:
@@ -137,16 +142,24 @@ def markdown(records, machine):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--arms", type=int, nargs="*", default=[],
-                        help="also benchmark generic serial arms with these joint counts")
+                        help="also benchmark generic serial arms (every axis tilted) with these "
+                             "joint counts")
+    parser.add_argument("--robots", type=int, nargs="*", default=[],
+                        help="also benchmark robot-like arms (axes along the link frames) with "
+                             "these joint counts (at most 7)")
+    parser.add_argument("--fit-max-joints", type=int, default=4,
+                        help="run XLSINDy only up to this many joints (its symbolic mass-matrix "
+                             "form is slow on the large terms of longer arms) (default: 4)")
     parser.add_argument("--skip-paper-for", nargs="*", default=[],
                         help="systems whose paper-style catalog is not built (too large)")
     args = parser.parse_args()
     machine = {"python": platform.python_version(), "machine": platform.machine(),
                "processor": platform.processor(), "cpus": os.cpu_count()}
     records = []
-    for name, system in systems(args.arms).items():
-        paper = name not in args.skip_paper_for and not name.startswith("serial-arm")
-        for record in benchmark(name, system, paper):
+    for name, system in systems(args.arms, args.robots).items():
+        paper = name not in args.skip_paper_for and not name.startswith(("serial", "robot"))
+        fit = system.n <= args.fit_max_joints
+        for record in benchmark(name, system, paper, fit):
             print(json.dumps(record), flush=True)
             records.append(record)
     os.makedirs(RESULTS, exist_ok=True)

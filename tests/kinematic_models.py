@@ -127,3 +127,33 @@ def robot_arm(n_joints: int) -> str:
     return (f'<mujoco model="robot{n_joints}"><option gravity="0 0 -9.81" timestep="0.0005" '
             f'integrator="RK4"><flag contact="disable"/></option><worldbody>{body}</worldbody>'
             f"<actuator>{motors}</actuator></mujoco>")
+
+
+# Two hinges and a slide on one body (applied in order, about anchors), a body welded to the
+# world, and a jointless body welded inside the chain.
+MULTI_JOINT_BODY = """
+<mujoco model="gimbal">
+  <option gravity="0 0 -9.81"><flag contact="disable"/></option>
+  <worldbody>
+    <body name="mount" pos="0 0 1" euler="0.1 0.2 0">
+      <inertial pos="0 0 0.1" mass="3" diaginertia="0.1 0.1 0.1"/>
+      <body name="gimbal" pos="0.1 0 0" euler="0 0.3 0.2">
+        <joint name="pan" type="hinge" axis="0 0 1" pos="0.02 0.01 0" armature="0.01"/>
+        <joint name="tilt" type="hinge" axis="0 1 0.3" pos="0 0.03 -0.02"/>
+        <joint name="extend" type="slide" axis="1 0 0.2"/>
+        <inertial pos="0.1 0.02 -0.05" mass="1.2"
+                  fullinertia="0.02 0.03 0.025 0.002 -0.001 0.003"/>
+        <body name="bracket" pos="0.2 0 -0.1" euler="0.3 0 0">
+          <inertial pos="0.03 0.01 0" mass="0.3"
+                    fullinertia="0.002 0.003 0.0025 0.0002 0.0001 -0.0003"/>
+          <body name="tip" pos="0.1 0 0">
+            <joint name="spin" type="hinge" axis="1 0 0" ref="0.4"/>
+            <inertial pos="0.02 0.01 0.01" mass="0.2"
+                      fullinertia="0.001 0.002 0.0015 0.0001 0.0002 -0.0001"/>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""

@@ -9,7 +9,14 @@ model (``mj_inverse`` is linear in them). None of it goes through the catalog's 
 import mujoco
 import numpy as np
 import pytest
-from kinematic_models import CART_DOUBLE_PENDULUM, PLANAR_ARM, SPATIAL_ARM, serial_arm
+from kinematic_models import (
+    CART_DOUBLE_PENDULUM,
+    MULTI_JOINT_BODY,
+    PLANAR_ARM,
+    SPATIAL_ARM,
+    robot_arm,
+    serial_arm,
+)
 
 import pysindy_xl as px
 from pysindy_xl.mujoco import MJCFSystem, generate_dataset, get_system, reference_catalog
@@ -17,7 +24,7 @@ from pysindy_xl.mujoco.kinematic import KinematicCatalog, kinematic_catalog
 
 SHIPPED = ["cart-pole", "double-pendulum", "cart-double-pendulum"]
 WRITTEN = {"planar-arm": PLANAR_ARM, "spatial-arm": SPATIAL_ARM,
-           "cart-two-link": CART_DOUBLE_PENDULUM}
+           "cart-two-link": CART_DOUBLE_PENDULUM, "multi-joint-body": MULTI_JOINT_BODY}
 
 
 def _system(name):
@@ -141,7 +148,7 @@ def test_base_parameter_count_matches_theory(name, expected):
     assert len(catalog.lagrange_terms) == expected
 
 
-@pytest.mark.parametrize("name", ["spatial-arm", "cart-two-link"])
+@pytest.mark.parametrize("name", ["spatial-arm", "cart-two-link", "multi-joint-body"])
 def test_base_parameter_count_matches_mujoco_regressor_rank(name):
     system = _system(name)
     catalog = kinematic_catalog(system)
@@ -222,9 +229,9 @@ def test_identification_of_spatial_arm():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("n_joints", [5])
-def test_longer_serial_arm_reproduces_mujoco(n_joints):
-    system = MJCFSystem(serial_arm(n_joints))
+@pytest.mark.parametrize("arm", [serial_arm(5), robot_arm(7)], ids=["tilted-5", "robot-7"])
+def test_longer_arms_reproduce_mujoco(arm):
+    system = MJCFSystem(arm)
     catalog = kinematic_catalog(system)
     qpos, qvel = _random_joint_states(system, 6, seed=2)
     masses, biases = _mujoco_dynamics(system, qpos, qvel)
@@ -232,7 +239,7 @@ def test_longer_serial_arm_reproduces_mujoco(n_joints):
     assert _relative_error(catalog.bias_forces(qpos, qvel), biases) < 1e-9
 
 
-def test_inputs_are_checked_and_results_cached():
+def test_inputs_are_checked_and_results_cached(tmp_path):
     with pytest.raises(TypeError, match="system"):
         kinematic_catalog(3.5)
     with pytest.raises(ValueError, match="coulomb_scale"):
@@ -243,6 +250,11 @@ def test_inputs_are_checked_and_results_cached():
         kinematic_catalog(free)
     catalog = kinematic_catalog("cart-pole")
     assert isinstance(catalog, KinematicCatalog)
+    path = tmp_path / "planar_arm"  # an MJCF file need not end in .xml
+    path.write_text(PLANAR_ARM, encoding="utf-8")
+    from_file = kinematic_catalog(path)
+    assert from_file.system.path == str(path)
+    assert from_file.lagrange_terms == kinematic_catalog(PLANAR_ARM).lagrange_terms
     assert kinematic_catalog("cart-pole") is catalog
     with pytest.raises(ValueError, match="q: expected shape"):
         catalog.mass_matrix(np.zeros(3))
