@@ -15,11 +15,18 @@ whose span holds the true Lagrangian of *every* mass distribution of the mechani
 Many of those functions are redundant: their Euler-Lagrange columns are zero (a body fixed to
 the world, a total time derivative) or linear combinations of others (robotics calls the
 independent combinations *base parameters*). :func:`kinematic_catalog` keeps a minimal set:
-it evaluates every Euler-Lagrange column at random states and keeps, in a fixed order of
-preference (bodies from the root, mass before first moments before inertia, armature last), each
-column that is not in the span of the columns already kept. The dependent parameters fold into
-the kept ones: the coefficient of a kept term is the *combination* of physical parameters that
-:attr:`KinematicCatalog.parameters` records, so an identified model reports physical parameters.
+it evaluates every Euler-Lagrange column at random states, takes the rank from a pivoted QR,
+and keeps that many columns, in a fixed order of preference (bodies from the root, mass before
+first moments before inertia, armature last) as long as each adds a well-conditioned new
+direction. The dependent parameters fold into the kept ones: the coefficient of a kept term is
+the *combination* of physical parameters that :attr:`KinematicCatalog.parameters` records, so an
+identified model reports physical parameters.
+
+The derivation runs on sparse trigonometric polynomials (:mod:`._trigpoly`, with
+``cos^2 = 1 - sin^2`` as canonical form), not on generic sympy expressions, and
+:class:`PolynomialLagrangeLibrary` derives the Euler-Lagrange columns the same way: a 4-joint
+spatial arm with tilted axes takes about 1 s to derive and 2 s to turn into a library, a 7-joint
+robot-like arm about 6 s and 7 s (see ``benchmarks/kinematic_catalog.py``).
 
 Friction and springs are not Lagrangian: each joint adds classical candidates (viscous
 ``qvel_k``, smooth Coulomb ``tanh(qvel_k / eps)``, and ``qpos_k - springref_k`` for joints with
@@ -89,6 +96,9 @@ class KinematicCatalog:
     classical_kinds : list of tuple
         ``(kind, joint name)`` of each classical term, ``kind`` in ``"viscous"``,
         ``"coulomb"``, ``"spring"``.
+    classical_values : ndarray
+        MJCF values of the classical features (damping, frictionloss, stiffness mapped to the
+        coordinates), in the feature order of :meth:`library`.
     n_candidates : int
         Lagrangian functions before the reduction (ten per moving body plus one per joint).
     build_seconds : float
