@@ -378,3 +378,25 @@ def test_identified_model_saves_and_loads(tmp_path):
     trajectory = data.trajectories[0]
     predicted = loaded.predict(trajectory.q, trajectory.qd, u=trajectory.tau)
     assert np.abs(predicted - trajectory.qdd).max() < 1e-8 * np.abs(trajectory.qdd).max()
+
+
+def test_polynomial_library_matches_lagrange_library_and_falls_back():
+    import sympy as sp
+
+    from pysindy_xl.mujoco.kinematic import PolynomialLagrangeLibrary
+
+    c = px.Coordinates(["a", "x"])
+    polynomial = [c.qd[0] ** 2 * sp.cos(c.q[0]) ** 3, c.qd[0] * c.qd[1] * sp.sin(c.q[0]),
+                  c.q[1] ** 2 * sp.cos(c.q[0]), c.qd[0] * sp.sin(c.q[0])]  # the last: d/dt
+    other = [c.t * c.qd[0] ** 2, sp.exp(c.q[1])]  # outside the polynomial class
+    data = np.random.default_rng(0).normal(size=(40, 9))
+    for terms in (polynomial, polynomial + other):
+        fast = PolynomialLagrangeLibrary(c, terms).fit()
+        reference = px.LagrangeLibrary(c, terms).fit()
+        assert fast.get_feature_names() == reference.get_feature_names()
+        assert fast.zero_terms_ == reference.zero_terms_
+        assert np.allclose(fast.transform(data), reference.transform(data), rtol=1e-12,
+                           atol=1e-12)
+    assert PolynomialLagrangeLibrary(c, polynomial).fit().zero_terms_ == [3]
+    with pytest.raises(ValueError, match="terms"):
+        PolynomialLagrangeLibrary(c, []).fit()

@@ -405,6 +405,8 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
 
     def _build_symbolic(self):
         terms = _as_expr_list(self.terms, "terms")
+        if not terms:
+            return super()._build_symbolic()  # raises the ValueError of LagrangeLibrary
         coords = self.coords
         angles = tuple(any(t.has(sp.sin(q)) or t.has(sp.cos(q)) for t in terms)
                        for q in coords.q)
