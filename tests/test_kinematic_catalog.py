@@ -250,12 +250,15 @@ def test_inputs_are_checked_and_results_cached(tmp_path):
         kinematic_catalog(free)
     catalog = kinematic_catalog("cart-pole")
     assert isinstance(catalog, KinematicCatalog)
+    again = kinematic_catalog("cart-pole")
+    assert again.lagrange_terms is catalog.lagrange_terms  # cached derivation
+    system = get_system("cart-pole")
+    assert kinematic_catalog(system).system is system  # bound to the system given
     path = tmp_path / "planar_arm"  # an MJCF file need not end in .xml
     path.write_text(PLANAR_ARM, encoding="utf-8")
     from_file = kinematic_catalog(path)
     assert from_file.system.path == str(path)
     assert from_file.lagrange_terms == kinematic_catalog(PLANAR_ARM).lagrange_terms
-    assert kinematic_catalog("cart-pole") is catalog
     with pytest.raises(ValueError, match="q: expected shape"):
         catalog.mass_matrix(np.zeros(3))
     with pytest.raises(ValueError, match="coefficients"):

@@ -36,10 +36,10 @@ stiffness), entered in the equations that the joint force reaches (``B = T^-T``,
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import os
 import time
-from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
@@ -65,7 +65,7 @@ _CACHE_SIZE = 16
 
 
 # -- the catalog ---------------------------------------------------------------------------
-@dataclass
+@dataclasses.dataclass
 class KinematicCatalog:
     """Candidate terms of a rigid-body mechanism, derived from its kinematic tree.
 
@@ -127,8 +127,8 @@ class KinematicCatalog:
     classical_values: np.ndarray
     n_candidates: int
     build_seconds: float = 0.0
-    _polynomials: list = field(default_factory=list, repr=False, compare=False)
-    _compiled: dict = field(default_factory=dict, repr=False, compare=False)
+    _polynomials: list = dataclasses.field(default_factory=list, repr=False, compare=False)
+    _compiled: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
 
     @property
     def base_parameters(self) -> np.ndarray:
@@ -608,7 +608,9 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
     key = (hashlib.sha256(system.xml().encode()).hexdigest(), system.coordinate_names,
            system.joint_to_coordinates.tobytes(), bool(coulomb), float(coulomb_scale), seed)
     if key in _CACHE:
-        return _CACHE[key]
+        # same model text and coordinates: same catalog, but bound to the system given (its
+        # other settings, e.g. force amplitudes, matter to whoever uses catalog.system)
+        return dataclasses.replace(_CACHE[key], system=system)
     start = time.perf_counter()
     catalog = _build(system, model, bool(coulomb), float(coulomb_scale), seed)
     catalog.build_seconds = time.perf_counter() - start
