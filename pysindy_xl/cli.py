@@ -92,9 +92,10 @@ def _add_generation_options(parser, duration=10.0, trajectories=2):
 
 
 def _add_fit_options(parser):
-    parser.add_argument("--catalog", choices=CATALOGS, default="mixed",
+    parser.add_argument("--catalog", choices=(*CATALOGS, "auto"), default="auto",
                         help="lagrange, classical, mixed (Lagrange + friction) or kinematic "
-                             "(derived from the MJCF kinematic tree) (default: mixed)")
+                             "(derived from the MJCF kinematic tree); auto: kinematic for a "
+                             "user's MJCF file, mixed for the shipped systems (default: auto)")
     parser.add_argument("--solver", choices=SOLVERS, default="auto",
                         help="explicit, implicit or mixed regression; auto follows the forcing "
                              "(default: auto)")
@@ -122,7 +123,7 @@ def build_parser() -> argparse.ArgumentParser:
     --------
     >>> args = build_parser().parse_args(["demo", "double-pendulum", "--noise", "0.01"])
     >>> args.command, args.system, args.noise, args.catalog, args.solver, args.forcing
-    ('demo', 'double-pendulum', 0.01, 'mixed', 'auto', 'explicit')
+    ('demo', 'double-pendulum', 0.01, 'auto', 'auto', 'explicit')
     """
     parser = argparse.ArgumentParser(
         prog="pysindy-xl",
@@ -208,6 +209,18 @@ def _system(name):
         return get_system(name)
     except (ValueError, TypeError) as error:
         raise CLIError(str(error)) from None
+
+
+def _resolve_catalog(args, system):
+    """Replace ``--catalog auto`` by the catalog kind used for ``system``.
+
+    A user's MJCF file has no textbook catalog: the kinematic one contains its true model
+    whatever its mass distribution. The shipped systems keep the paper's mixed catalog.
+    """
+    from pysindy_xl.mujoco import MJCFSystem
+
+    if args.catalog == "auto":
+        args.catalog = "kinematic" if isinstance(system, MJCFSystem) else "mixed"
 
 
 def _log(quiet, *args):
@@ -336,6 +349,7 @@ def run_demo(args) -> dict:
     from pysindy_xl.mujoco.validation import validate_model
 
     system = _system(args.system)
+    _resolve_catalog(args, system)
     solver = _AUTO_SOLVER[args.forcing] if args.solver == "auto" else args.solver
     forced = args.forcing != "implicit"
     _check_solver(solver, forced, args.threshold)
@@ -508,6 +522,7 @@ def run_identify(args):
         raise CLIError("--system: the dataset names no system; pass --system NAME or an MJCF "
                        ".xml giving the coordinates")
     system = _system(name)
+    _resolve_catalog(args, system)
     dataset = _dataset_for(system, dataset)
     if not (dataset.has("qd") and dataset.has("qdd")):
         print("note: velocities/accelerations missing, computed by differentiation",
