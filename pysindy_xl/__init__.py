@@ -38,6 +38,7 @@ _LAZY = {
     "SingularMassMatrixError": "dynamics",
     "BumpTestFunctions": "weak",
     "WhittakerSmoother": "weak",
+    "kinematic_catalog": "mujoco.kinematic",  # reads MJCF through mujoco: loaded on first use
 }
 
 __all__ = [
@@ -60,6 +61,7 @@ __all__ = [
     "SingularMassMatrixError",
     "BumpTestFunctions",
     "WhittakerSmoother",
+    "kinematic_catalog",
 ]
 
 if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
@@ -72,6 +74,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         stack_variables,
     )
     from .model import IdentificationWarning, XLSINDy
+    from .mujoco.kinematic import kinematic_catalog
     from .optimizers import ExplicitOptimizer, ImplicitOptimizer, MixedOptimizer, NoLawFoundError
     from .symbols import Coordinates, monomials, products
     from .weak import BumpTestFunctions, WhittakerSmoother

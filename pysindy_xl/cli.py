@@ -23,7 +23,7 @@ import numpy as np
 __all__ = ["main", "build_parser", "run_demo", "run_identify"]
 
 SOLVERS = ("auto", "explicit", "implicit", "mixed")
-CATALOGS = ("lagrange", "classical", "mixed")
+CATALOGS = ("lagrange", "classical", "mixed", "kinematic")
 FORCINGS = ("explicit", "implicit", "mixed")
 NOISE_MODELS = ("positions", "all")
 CONSTRAINTS = ("exclude", "known", "include")
@@ -117,8 +117,10 @@ def _add_generation_options(parser, duration=10.0, trajectories=2):
 
 
 def _add_fit_options(parser):
-    parser.add_argument("--catalog", choices=CATALOGS, default="mixed",
-                        help="lagrange, classical or mixed (Lagrange + friction) (default: mixed)")
+    parser.add_argument("--catalog", choices=(*CATALOGS, "auto"), default="auto",
+                        help="lagrange, classical, mixed (Lagrange + friction) or kinematic "
+                             "(derived from the MJCF kinematic tree); auto: kinematic for a "
+                             "user's MJCF file, mixed for the shipped systems (default: auto)")
     parser.add_argument("--solver", choices=SOLVERS, default="auto",
                         help="explicit, implicit or mixed regression; auto follows the forcing "
                              "(default: auto)")
@@ -146,7 +148,7 @@ def build_parser() -> argparse.ArgumentParser:
     --------
     >>> args = build_parser().parse_args(["demo", "double-pendulum", "--noise", "0.01"])
     >>> args.command, args.system, args.noise, args.catalog, args.solver, args.forcing
-    ('demo', 'double-pendulum', 0.01, 'mixed', 'auto', 'explicit')
+    ('demo', 'double-pendulum', 0.01, 'auto', 'auto', 'explicit')
     """
     parser = argparse.ArgumentParser(
         prog="pysindy-xl",
@@ -313,8 +315,8 @@ def _data_lines(system, dataset):
     lines = [f"  sampling every {meta['sample_every']} step(s) of {meta['timestep'] * 1e3:g} ms "
              f"= {period * 1e3:g} ms"]
     if meta.get("derivatives") == "none":
-        lines.append(f"  noise model {meta['noise_model']}: noisy positions only, velocities "
-                     "and accelerations computed by differentiation")
+        lines.append(f"  noise model {meta['noise_model']}: noisy positions only, no velocity "
+                     "or acceleration given (weak formulation on smoothed states)")
     excluded = getattr(system, "excluded_joints", ())
     if excluded:
         lines.append(f"  joints locked at their reference pose (not identified): "
@@ -336,6 +338,18 @@ def _system_from_metadata(metadata):
         return system_from_metadata(metadata)
     except (ValueError, TypeError) as error:
         raise CLIError(str(error)) from None
+
+
+def _resolve_catalog(args, system):
+    """Replace ``--catalog auto`` by the catalog kind used for ``system``.
+
+    A user's MJCF file has no textbook catalog: the kinematic one contains its true model
+    whatever its mass distribution. The shipped systems keep the paper's mixed catalog.
+    """
+    from pysindy_xl.mujoco import MJCFSystem
+
+    if args.catalog == "auto":
+        args.catalog = "kinematic" if isinstance(system, MJCFSystem) else "mixed"
 
 
 def _log(quiet, *args):
@@ -496,6 +510,7 @@ def run_demo(args) -> dict:
     from pysindy_xl.mujoco.validation import validate_model
 
     system = _system(args.system, args.joints)
+    _resolve_catalog(args, system)
     solver = _AUTO_SOLVER[args.forcing] if args.solver == "auto" else args.solver
     forced = args.forcing != "implicit"
     _check_solver(solver, forced, args.threshold)
@@ -691,8 +706,9 @@ def run_identify(args):
     (20, 7)
     """
     dataset, system = _identify_inputs(args)
+    _resolve_catalog(args, system)
     if not (dataset.has("qd") and dataset.has("qdd")):
-        print("note: velocities/accelerations missing, computed by differentiation",
+        print("note: velocities/accelerations missing: weak formulation on smoothed positions",
               file=sys.stderr)
     forced = args.forces == "tau" and dataset.has("tau") and any(
         np.any(tr.tau != 0) for tr in dataset.trajectories)

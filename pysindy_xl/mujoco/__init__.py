@@ -3,8 +3,9 @@
 The pipeline of the paper as a library: MJCF models of the cart-pole, the double pendulum and
 the double pendulum on a cart (:mod:`.systems`), randomly forced trajectories with noise
 (:mod:`.generate`), datasets as NPZ + JSON (:mod:`.dataset`), the reference catalogs of the
-paper's comparison (:mod:`.catalogs`) and the validation of an identified model against a fresh
-MuJoCo trajectory (:mod:`.validation`, :mod:`.plots`).
+paper's comparison (:mod:`.catalogs`), catalogs derived from the kinematic tree of any MJCF
+model (:mod:`.kinematic`) and the validation of an identified model against a fresh MuJoCo
+trajectory (:mod:`.validation`, :mod:`.plots`).
 """
 
 from .catalogs import (
@@ -25,6 +26,7 @@ from .generate import (
     noise_levels,
     simulate_trajectory,
 )
+from .kinematic import KinematicCatalog, PolynomialLagrangeLibrary, kinematic_catalog
 from .systems import (
     SYSTEMS,
     CartDoublePendulum,
@@ -77,6 +79,9 @@ __all__ = [
     "lagrange_terms",
     "reference_catalog",
     "true_coefficients",
+    "KinematicCatalog",
+    "PolynomialLagrangeLibrary",
+    "kinematic_catalog",
     "DEFAULT_DIVERGENCE_BOUND",
     "ValidationResult",
     "compare_trajectories",

@@ -12,6 +12,11 @@ Three kinds, all with the force column first (:class:`~pysindy_xl.ExternalForces
     equation of coordinate ``i`` (its own coefficient per equation), plus viscous friction.
 ``mixed``
     ``lagrange`` plus classical viscous friction.
+``kinematic``
+    The catalog derived from the kinematic tree (:func:`~pysindy_xl.mujoco.kinematic_catalog`):
+    one Lagrangian term per base parameter, plus viscous, smooth Coulomb and spring candidates
+    per joint. It contains the true model of any rigid-body mass distribution; the degree and
+    friction options do not apply to it.
 
 Dry friction: when the model has ``frictionloss`` (MuJoCo's dry joint friction, a constraint
 force of magnitude ``frictionloss`` opposing the motion), every catalog gains the smooth
@@ -36,7 +41,7 @@ from .systems import MuJoCoSystem, equations_of_motion, get_system
 __all__ = ["CATALOG_KINDS", "lagrange_terms", "classical_terms", "reference_catalog",
            "true_coefficients", "dry_friction_terms"]
 
-CATALOG_KINDS = ("lagrange", "classical", "mixed")
+CATALOG_KINDS = ("lagrange", "classical", "mixed", "kinematic")
 
 
 def _check_degree(value, name):
@@ -202,11 +207,13 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
     ----------
     system : MuJoCoSystem or str
         A system, a registry name or an MJCF path.
-    kind : {"lagrange", "classical", "mixed"}, default "mixed"
+    kind : {"lagrange", "classical", "mixed", "kinematic"}, default "mixed"
     velocity_degree, trig_degree : int, default 2
-        Degrees of the candidate Lagrangian terms (see :func:`lagrange_terms`).
+        Degrees of the candidate Lagrangian terms (see :func:`lagrange_terms`); not used by
+        ``"kinematic"``.
     friction : {"auto", "diagonal", "full"}, default "auto"
-        Which velocities enter which equation as friction terms.
+        Which velocities enter which equation as friction terms; not used by
+        ``"kinematic"`` (which enters each joint's friction where the joint force acts).
     interlink : array (n, n), optional
         Passed to :class:`~pysindy_xl.ExternalForces`: use ``system.force_matrix()`` to fit
         with MuJoCo joint forces ``u`` instead of generalized forces ``tau``.
@@ -226,6 +233,8 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
     >>> catalog = reference_catalog("cart-pole", "mixed").fit()
     >>> catalog.n_output_features_
     38
+    >>> reference_catalog("cart-pole", "kinematic").fit().n_output_features_
+    9
     """
     from ..feature_library import (
         CatalogRepartition,
@@ -237,6 +246,10 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
     system = get_system(system)
     if kind not in CATALOG_KINDS:
         raise ValueError(f"kind: expected one of {CATALOG_KINDS}, got {kind!r}")
+    if kind == "kinematic":
+        from .kinematic import kinematic_catalog
+
+        return kinematic_catalog(system).library(interlink=interlink)
     coords = system.coords
     friction_mask = _friction_mask(system, friction)
     terms = lagrange_terms(system, velocity_degree, trig_degree)
@@ -263,6 +276,26 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
             dry_mask = np.eye(coords.n, dtype=bool)
         libraries.append(ClassicalLibrary(coords, dry_terms, mask=dry_mask))
     return CatalogRepartition(libraries)
+
+
+def _kinematic_truth(system, catalog, names, forces):
+    """The MJCF model's exact vector when ``catalog`` is the system's kinematic catalog.
+
+    Its friction terms are joint velocities (``theta2_dot - theta1_dot`` for a relative
+    hinge), not the per-coordinate velocities of :meth:`MuJoCoSystem.friction`, so the generic
+    matching below would miss them.
+    """
+    from ..feature_library import ExternalForces
+    from .kinematic import PolynomialLagrangeLibrary, kinematic_catalog
+
+    if not any(isinstance(lib, PolynomialLagrangeLibrary) for lib in catalog.libraries_):
+        return None
+    forces_library = next(lib for lib in catalog.libraries_ if isinstance(lib, ExternalForces))
+    kinematic = kinematic_catalog(system)
+    reference = kinematic.library(interlink=forces_library.interlink)
+    if reference.fit().get_feature_names() != names:
+        return None
+    return kinematic.true_coefficients(forces=forces)
 
 
 def _classical_name(coords, term, i) -> str:
@@ -327,6 +360,9 @@ def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.
         catalog.fit()
     coords = system.coords
     names = catalog.get_feature_names()
+    kinematic = _kinematic_truth(system, catalog, names, forces)
+    if kinematic is not None:
+        return kinematic, []
     has_lagrange = any(isinstance(lib, LagrangeLibrary) for lib in catalog.libraries_)
     classical: dict = {}
     for (term, i), value in system.friction().items():

@@ -1,0 +1,301 @@
+"""Sparse polynomials in ``sin q``, ``cos q``, ``q``, ``qd``, ``qdd`` with float coefficients.
+
+The kinematic catalog multiplies rotation matrices and velocity vectors of whole chains;
+sympy's generic expressions spend most of that time in assumptions and automatic
+simplification. Here a polynomial is two arrays (exponents, coefficients), products are outer
+sums of exponents, ``cos(q)**2`` is always rewritten as ``1 - sin(q)**2`` (a canonical form, so
+identities cancel), and equal monomials are merged with one ``numpy.unique``.
+
+Slots of the exponent rows, for ``n`` coordinates: ``[0, n)`` ``sin q_j`` (or ``q_j`` itself
+for a linear coordinate), ``[n, 2n)`` ``cos q_j`` (unused for a linear coordinate), ``[2n, 3n)``
+``qd_j``, ``[3n, 4n)`` ``qdd_j``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse
+import sympy as sp
+
+__all__ = ["TrigPolynomial", "evaluate_many", "state_values"]
+
+# Coefficients below this fraction of the largest one are round-off of float arithmetic.
+_ROUND_OFF = 1e-13
+
+
+class TrigPolynomial:
+    """A polynomial of the slots described in the module docstring.
+
+    Parameters
+    ----------
+    exponents : ndarray of int, shape (T, 4n)
+    coefficients : ndarray of float, shape (T,)
+    angles : tuple of bool, length n
+        Which coordinates are angles (their ``cos`` slot is reduced modulo ``s^2 + c^2 = 1``).
+    normalize : bool, default True
+        Reduce, merge equal monomials and drop round-off.
+
+    Examples
+    --------
+    >>> c = TrigPolynomial.slot(1, 1, (True,))  # cos(q)
+    >>> s = TrigPolynomial.slot(1, 0, (True,))
+    >>> (c * c + s * s).coefficients
+    array([1.])
+    """
+
+    __slots__ = ("exponents", "coefficients", "angles")
+
+    def __init__(self, exponents, coefficients, angles, normalize=True):
+        self.angles = tuple(angles)
+        exponents = np.asarray(exponents, dtype=np.int16).reshape(-1, 4 * len(self.angles))
+        coefficients = np.asarray(coefficients, dtype=float).reshape(-1)
+        if normalize:
+            exponents, coefficients = _normalize(exponents, coefficients, self.angles)
+        self.exponents, self.coefficients = exponents, coefficients
+
+    # -- construction ----------------------------------------------------------------------
+    @classmethod
+    def constant(cls, value: float, angles) -> TrigPolynomial:
+        """The constant polynomial ``value``."""
+        return cls(np.zeros((1, 4 * len(angles))), [float(value)], angles)
+
+    @classmethod
+    def slot(cls, n: int, index: int, angles) -> TrigPolynomial:
+        """The monomial of one slot (see the module docstring); ``n`` coordinates."""
+        exponents = np.zeros((1, 4 * n))
+        exponents[0, index] = 1
+        return cls(exponents, [1.0], angles)
+
+    # -- arithmetic ------------------------------------------------------------------------
+    def _lift(self, other) -> TrigPolynomial:
+        if isinstance(other, TrigPolynomial):
+            return other
+        return TrigPolynomial.constant(float(other), self.angles)
+
+    def __add__(self, other):
+        other = self._lift(other)
+        return TrigPolynomial(np.vstack([self.exponents, other.exponents]),
+                              np.concatenate([self.coefficients, other.coefficients]), self.angles)
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return TrigPolynomial(self.exponents, -self.coefficients, self.angles, normalize=False)
+
+    def __sub__(self, other):
+        return self + (-self._lift(other))
+
+    def __rsub__(self, other):
+        return self._lift(other) - self
+
+    def __mul__(self, other):
+        if not isinstance(other, TrigPolynomial):
+            value = float(other)
+            if value == 0.0:
+                return TrigPolynomial.constant(0.0, self.angles)
+            return TrigPolynomial(self.exponents, self.coefficients * value, self.angles,
+                                  normalize=False)
+        if self.is_zero or other.is_zero:
+            return TrigPolynomial.constant(0.0, self.angles)
+        exponents = (self.exponents[:, None, :] + other.exponents[None, :, :])
+        coefficients = np.outer(self.coefficients, other.coefficients)
+        return TrigPolynomial(exponents.reshape(-1, self.exponents.shape[1]),
+                              coefficients.reshape(-1), self.angles)
+
+    __rmul__ = __mul__
+
+    @property
+    def is_zero(self) -> bool:
+        """Whether the polynomial has no term."""
+        return self.coefficients.size == 0
+
+    # -- calculus --------------------------------------------------------------------------
+    def diff_slot(self, index: int) -> TrigPolynomial:
+        """Partial derivative with respect to one slot (a monomial variable)."""
+        powers = self.exponents[:, index]
+        rows = powers > 0
+        exponents = self.exponents[rows].copy()
+        exponents[:, index] -= 1
+        return TrigPolynomial(exponents, self.coefficients[rows] * powers[rows], self.angles)
+
+    def diff_position(self, j: int) -> TrigPolynomial:
+        """Partial derivative with respect to the coordinate ``q_j``."""
+        n = len(self.angles)
+        if not self.angles[j]:
+            return self.diff_slot(j)
+        sine, cosine = (TrigPolynomial.slot(n, j, self.angles),
+                        TrigPolynomial.slot(n, n + j, self.angles))
+        return cosine * self.diff_slot(j) - sine * self.diff_slot(n + j)
+
+    def diff_velocity(self, j: int) -> TrigPolynomial:
+        """Partial derivative with respect to ``qd_j``."""
+        return self.diff_slot(2 * len(self.angles) + j)
+
+    def time_derivative(self) -> TrigPolynomial:
+        """Total time derivative ``sum_j qd_j d/dq_j + qdd_j d/dqd_j``."""
+        n = len(self.angles)
+        out = TrigPolynomial.constant(0.0, self.angles)
+        for j in range(n):
+            out = out + TrigPolynomial.slot(n, 2 * n + j, self.angles) * self.diff_position(j)
+            out = out + TrigPolynomial.slot(n, 3 * n + j, self.angles) * self.diff_velocity(j)
+        return out
+
+    def euler_lagrange(self) -> list[TrigPolynomial]:
+        """``d/dt dL/dqd_i - dL/dq_i`` for every coordinate, this polynomial being ``L``."""
+        return [self.diff_velocity(i).time_derivative() - self.diff_position(i)
+                for i in range(len(self.angles))]
+
+    def at_rest(self, velocities=True, accelerations=True) -> TrigPolynomial:
+        """The polynomial with the velocities and / or accelerations set to zero."""
+        n = len(self.angles)
+        keep = np.ones(len(self.coefficients), dtype=bool)
+        if velocities:
+            keep &= ~self.exponents[:, 2 * n:3 * n].any(axis=1)
+        if accelerations:
+            keep &= ~self.exponents[:, 3 * n:].any(axis=1)
+        return TrigPolynomial(self.exponents[keep], self.coefficients[keep], self.angles,
+                              normalize=False)
+
+    # -- conversion ------------------------------------------------------------------------
+    @classmethod
+    def from_sympy(cls, expr, coords, angles) -> TrigPolynomial:
+        """Parse a sum of products of ``sin q``, ``cos q`` (angles), ``q`` (others), ``qd``.
+
+        Raises
+        ------
+        ValueError
+            If ``expr`` is not such a polynomial (after expansion).
+        """
+        n = coords.n
+        slots = {}
+        for j in range(n):
+            if angles[j]:
+                slots[sp.sin(coords.q[j])], slots[sp.cos(coords.q[j])] = j, n + j
+            else:
+                slots[coords.q[j]] = j
+            slots[coords.qd[j]] = 2 * n + j
+        try:
+            return cls._parse(sp.Add.make_args(expr), slots, angles)
+        except _NotPolynomial:
+            return cls._parse(sp.Add.make_args(sp.expand(expr)), slots, angles)
+
+    @classmethod
+    def _parse(cls, terms, slots, angles):
+        exponents = np.zeros((len(terms), 4 * len(angles)), dtype=np.int16)
+        coefficients = np.zeros(len(terms))
+        for row, term in enumerate(terms):
+            coefficient, rest = term.as_coeff_Mul()
+            value = float(coefficient)
+            for factor in sp.Mul.make_args(rest):
+                if factor.is_number:
+                    value *= float(factor)
+                    continue
+                base, power = factor.as_base_exp()
+                if base not in slots or not (power.is_Integer and power > 0):
+                    raise _NotPolynomial(str(factor))
+                exponents[row, slots[base]] += int(power)
+            coefficients[row] = value
+        return cls(exponents, coefficients, angles)
+
+    def to_sympy(self, coords, evaluate: bool = True) -> sp.Expr:
+        """The polynomial as a sympy expression in ``coords``' symbols.
+
+        ``evaluate=False`` skips sympy's canonicalization of every product and sum (most of
+        the cost on large polynomials); the result is a flat sum of flat products, which the
+        feature libraries' compiler reads as is.
+        """
+        n = len(self.angles)
+        atoms = []
+        for j in range(n):
+            atoms.append(sp.sin(coords.q[j]) if self.angles[j] else coords.q[j])
+        atoms += [sp.cos(q) for q in coords.q] + list(coords.qd) + list(coords.qdd)
+        terms = []
+        for row, value in zip(self.exponents, self.coefficients, strict=True):
+            number = sp.Integer(int(value)) if value == int(value) else sp.Float(float(value))
+            factors = [atoms[k] if e == 1 else atoms[k] ** int(e)
+                       for k, e in enumerate(row) if e]
+            if not evaluate and factors and number == 1:
+                terms.append(sp.Mul(*factors, evaluate=False) if len(factors) > 1
+                             else factors[0])
+            else:
+                terms.append(sp.Mul(number, *factors, evaluate=evaluate))
+        return sp.Add(*terms, evaluate=evaluate)
+
+
+class _NotPolynomial(ValueError):
+    """A factor that is not a power of ``sin q``, ``cos q``, ``q`` or ``qd``."""
+
+
+def _normalize(exponents, coefficients, angles):
+    """Rewrite cos^2 = 1 - sin^2, merge equal monomials, drop zero and round-off terms."""
+    n = len(angles)
+    angle_slots = [n + j for j in range(n) if angles[j]]
+    while angle_slots:
+        high = exponents[:, angle_slots] >= 2
+        if not high.any():
+            break
+        row, which = np.nonzero(high)
+        first = np.zeros(len(exponents), dtype=bool)
+        # one reduction per row and pass: the first angle whose cosine power is >= 2
+        picked_rows, index = np.unique(row, return_index=True)
+        first[picked_rows] = True
+        slot = np.array(angle_slots)[which[index]]
+        base = exponents[picked_rows].copy()
+        base[np.arange(len(base)), slot] -= 2
+        with_sine = base.copy()
+        with_sine[np.arange(len(base)), slot - n] += 2
+        exponents = np.vstack([exponents[~first], base, with_sine])
+        coefficients = np.concatenate([coefficients[~first], coefficients[picked_rows],
+                                       -coefficients[picked_rows]])
+    if len(coefficients) == 0:
+        return exponents, coefficients
+    exponents = np.ascontiguousarray(exponents)
+    keys = exponents.view(np.dtype((np.void, exponents.dtype.itemsize * exponents.shape[1])))
+    _, first, inverse = np.unique(keys.ravel(), return_index=True, return_inverse=True)
+    merged = np.bincount(inverse.ravel(), weights=coefficients, minlength=len(first))
+    scale = np.abs(coefficients).max()
+    keep = np.abs(merged) > _ROUND_OFF * max(scale, 1.0)
+    return exponents[first[keep]], merged[keep]
+
+
+def state_values(q, qd=None, qdd=None, angles=()) -> np.ndarray:
+    """Slot values of the states: array (N, 4n) (see the module docstring)."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    angles = np.asarray(angles, dtype=bool)
+    zeros = np.zeros_like(q)
+    position = np.where(angles, np.sin(q), q)
+    cosine = np.where(angles, np.cos(q), 1.0)
+    return np.hstack([position, cosine, zeros if qd is None else np.atleast_2d(qd),
+                      zeros if qdd is None else np.atleast_2d(qdd)])
+
+
+def evaluate_many(polynomials, values: np.ndarray) -> np.ndarray:
+    """Evaluate polynomials on all states at once.
+
+    Parameters
+    ----------
+    polynomials : list of TrigPolynomial
+    values : ndarray, shape (N, 4n)
+        From :func:`state_values`.
+
+    Returns
+    -------
+    ndarray, shape (N, len(polynomials))
+    """
+    width = values.shape[1]
+    exponents = np.vstack([p.exponents for p in polynomials] + [np.zeros((0, width))])
+    owner = np.concatenate([np.full(len(p.coefficients), k) for k, p in enumerate(polynomials)]
+                           + [np.zeros(0, dtype=int)]).astype(int)
+    coefficients = np.concatenate([p.coefficients for p in polynomials] + [np.zeros(0)])
+    exponents = np.ascontiguousarray(exponents.astype(np.int16))
+    keys = exponents.view(np.dtype((np.void, exponents.dtype.itemsize * width))).ravel()
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    distinct = exponents[first]
+    monomials = np.ones((values.shape[0], len(distinct)))
+    for slot in np.flatnonzero(distinct.any(axis=0)):
+        powers = distinct[:, slot]
+        used = powers > 0
+        monomials[:, used] *= values[:, slot, None] ** powers[used]
+    mapping = scipy.sparse.csr_matrix((coefficients, (inverse.ravel(), owner)),
+                                      shape=(len(distinct), len(polynomials)))
+    return np.asarray((mapping.T @ monomials.T).T)

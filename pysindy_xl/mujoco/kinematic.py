@@ -1,0 +1,664 @@
+"""Catalogs from the kinematic tree: candidate Lagrangians of any rigid-body MJCF model.
+
+The Lagrangian of a rigid body is linear in its ten inertial parameters: mass ``m``, first
+moments ``m c`` and rotational inertia ``I_o`` about the body frame origin (all in the body
+frame). With ``v`` and ``w`` the linear velocity of the body origin and the angular velocity,
+both in body coordinates, ``g_b = R^T g`` the gravity vector in body coordinates and ``h = g.p_o``,
+
+    ``L_b = m (v.v / 2 + h) + m c . (v x w + g_b) + w . I_o w / 2``,
+
+so the functions of ``(q, qd)`` that multiply the parameters come from the kinematics alone
+(joint types, axes, anchors, body offsets and orientations), which an MJCF file gives before any
+mass. Together with the armature of each joint (``armature_k qvel_k^2 / 2``) they form a catalog
+whose span holds the true Lagrangian of *every* mass distribution of the mechanism.
+
+Many of those functions are redundant: their Euler-Lagrange columns are zero (a body fixed to
+the world, a total time derivative) or linear combinations of others (robotics calls the
+independent combinations *base parameters*). :func:`kinematic_catalog` keeps a minimal set:
+it evaluates every Euler-Lagrange column at random states, takes the rank from a pivoted QR,
+and keeps that many columns, in a fixed order of preference (bodies from the root, mass before
+first moments before inertia, armature last) as long as each adds a well-conditioned new
+direction. The dependent parameters fold into the kept ones: the coefficient of a kept term is
+the *combination* of physical parameters that :attr:`KinematicCatalog.parameters` records, so an
+identified model reports physical parameters.
+
+The derivation runs on sparse trigonometric polynomials (:mod:`._trigpoly`, with
+``cos^2 = 1 - sin^2`` as canonical form), not on generic sympy expressions, and
+:class:`PolynomialLagrangeLibrary` derives the Euler-Lagrange columns the same way: a 4-joint
+spatial arm with tilted axes takes about 1 s to derive and 2 s to turn into a library, a 7-joint
+robot-like arm about 6 s and 7 s (see ``benchmarks/kinematic_catalog.py``).
+
+Friction and springs are not Lagrangian: each joint adds classical candidates (viscous
+``qvel_k``, smooth Coulomb ``tanh(qvel_k / eps)``, and ``qpos_k - springref_k`` for joints with
+stiffness), entered in the equations that the joint force reaches (``B = T^-T``, see
+:mod:`pysindy_xl.mujoco.systems`). Coordinates are those of the system: ``q = T @ qpos``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import os
+import time
+
+import mujoco
+import numpy as np
+import scipy.linalg
+import sympy as sp
+
+from ..feature_library import LagrangeLibrary
+from ..symbols import Coordinates, _as_expr_list
+from ._kinematic_tree import INERTIAL_PARAMETERS, body_functions, physical_values
+from ._trigpoly import TrigPolynomial, evaluate_many, state_values
+from .systems import MJCFSystem, MuJoCoSystem, get_system
+
+__all__ = ["KinematicCatalog", "PolynomialLagrangeLibrary", "kinematic_catalog",
+           "INERTIAL_PARAMETERS"]
+
+# A column whose part orthogonal to the kept columns is below this fraction of its norm is
+# dependent; exact dependencies leave ~1e-14, independent columns O(1e-3) or more.
+_INDEPENDENCE_TOL = 1e-9
+# Columns taken in preference order only when at least this fraction of them is new.
+_WELL_CONDITIONED = 0.05
+_CACHE: dict = {}
+_CACHE_SIZE = 16
+
+
+# -- the catalog ---------------------------------------------------------------------------
+@dataclasses.dataclass
+class KinematicCatalog:
+    """Candidate terms of a rigid-body mechanism, derived from its kinematic tree.
+
+    Built by :func:`kinematic_catalog`; use :meth:`library` for the feature library.
+
+    Attributes
+    ----------
+    system : MuJoCoSystem
+        The system whose coordinates the terms use.
+    coords : Coordinates
+        ``system.coords``.
+    lagrange_terms : list of sympy.Expr
+        Minimal independent set of candidate Lagrangian terms (one per base parameter).
+    parameters : list of dict
+        For each Lagrange term, the physical-parameter combination its coefficient stands for,
+        ``{physical parameter name: weight}``.
+    physical_names : list of str
+        All physical parameters: ``"<body>.<p>"`` for ``p`` in :data:`INERTIAL_PARAMETERS`
+        (inertia about the body frame origin, in the body frame) and ``"<joint>.armature"``.
+    combination : ndarray, shape (len(lagrange_terms), len(physical_names))
+        ``base = combination @ physical``: base parameters from physical parameters.
+    physical_values : ndarray, shape (len(physical_names),)
+        The physical parameters of the MJCF model.
+    classical_terms : list of sympy.Expr
+        Newtonian candidates (viscous, smooth Coulomb, spring), one per joint and kind.
+    classical_mask : ndarray of bool, shape (len(classical_terms), n)
+        Equations each classical term enters.
+    classical_kinds : list of tuple
+        ``(kind, joint name)`` of each classical term, ``kind`` in ``"viscous"``,
+        ``"coulomb"``, ``"spring"``.
+    classical_values : ndarray
+        MJCF values of the classical features (damping, frictionloss, stiffness mapped to the
+        coordinates), in the feature order of :meth:`library`.
+    n_candidates : int
+        Lagrangian functions before the reduction (ten per moving body plus one per joint).
+    build_seconds : float
+        Time of the symbolic derivation and reduction.
+
+    Examples
+    --------
+    >>> catalog = kinematic_catalog("cart-pole")
+    >>> catalog.lagrange_terms
+    [0.5*x_dot**2, -theta_dot*x_dot*sin(theta) - 9.81*sin(theta),
+     -theta_dot*x_dot*cos(theta) - 9.81*cos(theta), 0.5*theta_dot**2]
+    >>> catalog.parameters[0]
+    {'cart.m': 1.0, 'pole.m': 1.0, 'slider.armature': 1.0}
+    """
+
+    system: MuJoCoSystem
+    coords: Coordinates
+    lagrange_terms: list
+    parameters: list
+    physical_names: list
+    combination: np.ndarray
+    physical_values: np.ndarray
+    classical_terms: list
+    classical_mask: np.ndarray
+    classical_kinds: list
+    classical_values: np.ndarray
+    n_candidates: int
+    build_seconds: float = 0.0
+    _polynomials: list = dataclasses.field(default_factory=list, repr=False, compare=False)
+    _compiled: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def base_parameters(self) -> np.ndarray:
+        """Base parameters of the MJCF model: the true coefficients of :attr:`lagrange_terms`.
+
+        Returns
+        -------
+        ndarray, shape (len(lagrange_terms),)
+
+        Examples
+        --------
+        >>> kinematic_catalog("cart-pole").base_parameters.round(4)
+        array([ 1.5 ,  0.  , -0.4 ,  0.32])
+        """
+        return self.combination @ self.physical_values
+
+    def library(self, interlink=None, classical: bool = True):
+        """The catalog as a feature library: forces, Lagrange terms, classical terms.
+
+        Parameters
+        ----------
+        interlink : array (n, n), optional
+            Passed to :class:`~pysindy_xl.ExternalForces` (``system.force_matrix()`` to fit
+            with MuJoCo joint forces ``u``).
+        classical : bool, default True
+            Include the Newtonian candidates (friction, springs).
+
+        Returns
+        -------
+        CatalogRepartition
+
+        Examples
+        --------
+        >>> lib = kinematic_catalog("cart-pole").library().fit()
+        >>> lib.get_feature_names()[:2]
+        ['F[tau]', 'L[0.5*x_dot**2]']
+        >>> lib.get_feature_names()[-2:]
+        ['C_theta[theta_dot]', 'C_theta[tanh(100.0*theta_dot)]']
+        """
+        from ..feature_library import CatalogRepartition, ClassicalLibrary, ExternalForces
+
+        libraries = [ExternalForces(self.coords, interlink=interlink),
+                     PolynomialLagrangeLibrary(self.coords, list(self.lagrange_terms))]
+        if classical and self.classical_terms:
+            libraries.append(ClassicalLibrary(self.coords, list(self.classical_terms),
+                                              mask=self.classical_mask.copy()))
+        return CatalogRepartition(libraries)
+
+    def true_coefficients(self, forces: float = -1.0) -> np.ndarray:
+        """Coefficient vector of the MJCF model in :meth:`library` (with classical terms).
+
+        Viscous and spring terms get the MJCF damping and stiffness (mapped to the
+        coordinates with ``B``); smooth Coulomb terms get MuJoCo's ``frictionloss`` (an
+        approximation: MuJoCo's dry friction is a constraint, not a smooth law).
+
+        Parameters
+        ----------
+        forces : float, default -1.0
+            Coefficient of the force column.
+
+        Returns
+        -------
+        ndarray, shape (1 + len(lagrange_terms) + n_classical_features,)
+
+        Examples
+        --------
+        >>> kinematic_catalog("cart-pole").true_coefficients().round(4)
+        array([-1.  ,  1.5 ,  0.  , -0.4 ,  0.32,  0.5 ,  0.  ,  0.1 ,  0.  ])
+        """
+        return np.concatenate([[forces], self.base_parameters, self.classical_values])
+
+    def lagrange_coefficients(self, model) -> np.ndarray:
+        """Coefficients of :attr:`lagrange_terms` in a fitted model, force coefficient -1.
+
+        Parameters
+        ----------
+        model : XLSINDy
+            Fitted with :meth:`library` (features matched by name; an implicit model is
+            rescaled so that its force coefficient is -1).
+
+        Returns
+        -------
+        ndarray, shape (len(lagrange_terms),)
+
+        Raises
+        ------
+        ValueError
+            If the model's catalog lacks a Lagrange term of this catalog, or has no force
+            coefficient to scale by.
+        """
+        names = list(model.get_feature_names())
+        coefficients = np.asarray(model.coefficients(), dtype=float)
+        force = [coefficients[k] for k, name in enumerate(names) if name.startswith("F[")]
+        if not force or force[0] == 0:
+            raise ValueError("model: no non-zero force coefficient to scale the model by")
+        scale = -1.0 / force[0]
+        out = np.zeros(len(self.lagrange_terms))
+        index = {name: k for k, name in enumerate(names)}
+        for j, term in enumerate(self.lagrange_terms):
+            name = _feature_name(term)
+            if name not in index:
+                raise ValueError(f"model: its catalog has no feature {name!r}")
+            out[j] = coefficients[index[name]] * scale
+        return out
+
+    # -- physical quantities -------------------------------------------------------------
+    def _quantity(self, key) -> list:
+        """Per term, the polynomials of ``key``: mass-matrix entries or bias forces."""
+        if key not in self._compiled:
+            n = self.coords.n
+            rows = []
+            for term in self._polynomials:
+                if key == "mass":
+                    momenta = [term.diff_velocity(i) for i in range(n)]
+                    rows.append([p.diff_velocity(k) for p in momenta for k in range(n)])
+                else:  # the equations with qdd = 0 (and qd = 0 for gravity)
+                    rest = key == "gravity"
+                    rows.append([e.at_rest(velocities=rest) for e in term.euler_lagrange()])
+            self._compiled[key] = rows
+        return self._compiled[key]
+
+    def _evaluate(self, key, q, qd, coefficients):
+        c = self.coords
+        q = _states(q, "q", c.n)
+        qd = np.zeros_like(q) if qd is None else _states(qd, "qd", c.n)
+        if qd.shape != q.shape:
+            raise ValueError(f"qd: expected shape {q.shape}, got {qd.shape}")
+        beta = self.base_parameters if coefficients is None else np.asarray(coefficients, float)
+        if beta.shape != (len(self.lagrange_terms),):
+            raise ValueError(f"coefficients: expected shape ({len(self.lagrange_terms)},), "
+                             f"got {beta.shape}")
+        rows = self._quantity(key)
+        angles = [j in self.system.angle_coordinates for j in range(c.n)]
+        values = evaluate_many([p for row in rows for p in row], state_values(q, qd, None, angles))
+        values = values.reshape(q.shape[0], len(rows), -1)
+        return np.einsum("sfr,f->sr", values, beta)
+
+    def mass_matrix(self, q, coefficients=None) -> np.ndarray:
+        """Mass matrix ``M(q)`` in the system's coordinates.
+
+        Parameters
+        ----------
+        q : array, shape (N, n) or (n,)
+            Positions.
+        coefficients : array, shape (len(lagrange_terms),), optional
+            Lagrange coefficients (e.g. from :meth:`lagrange_coefficients`); default the
+            MJCF model's base parameters.
+
+        Returns
+        -------
+        ndarray, shape (N, n, n) or (n, n)
+
+        Examples
+        --------
+        >>> kinematic_catalog("cart-pole").mass_matrix([0.0, 0.0]).round(4)
+        array([[1.5 , 0.4 ],
+               [0.4 , 0.32]])
+        """
+        single = np.ndim(q) == 1
+        n = self.coords.n
+        out = self._evaluate("mass", q, None, coefficients).reshape(-1, n, n)
+        return out[0] if single else out
+
+    def gravity_torque(self, q, coefficients=None) -> np.ndarray:
+        """Generalized gravity force ``dV/dq`` (the equations read ``M qdd + c + dV/dq = tau``).
+
+        Parameters
+        ----------
+        q : array, shape (N, n) or (n,)
+        coefficients : array, optional
+            See :meth:`mass_matrix`.
+
+        Returns
+        -------
+        ndarray, shape (N, n) or (n,)
+
+        Examples
+        --------
+        >>> kinematic_catalog("cart-pole").gravity_torque([0.0, np.pi / 2]).round(4)
+        array([0.   , 3.924])
+        """
+        single = np.ndim(q) == 1
+        out = self._evaluate("gravity", q, None, coefficients)
+        return out[0] if single else out
+
+    def bias_forces(self, q, qd, coefficients=None) -> np.ndarray:
+        """Coriolis, centrifugal and gravity forces: the equations with ``qdd = 0``.
+
+        Parameters
+        ----------
+        q, qd : array, shape (N, n) or (n,)
+        coefficients : array, optional
+            See :meth:`mass_matrix`.
+
+        Returns
+        -------
+        ndarray, shape (N, n) or (n,)
+
+        Examples
+        --------
+        >>> kinematic_catalog("cart-pole").bias_forces([0.0, 0.0], [0.0, 2.0]).round(4)
+        array([0., 0.])
+        """
+        single = np.ndim(q) == 1
+        out = self._evaluate("bias", q, qd, coefficients)
+        return out[0] if single else out
+
+    def report(self, coefficients=None, digits: int = 4, terms: bool = True) -> str:
+        """Table of the base parameters: term, combination, MJCF value, identified value.
+
+        Parameters
+        ----------
+        coefficients : array, optional
+            Identified Lagrange coefficients (see :meth:`lagrange_coefficients`).
+        digits : int, default 4
+            Significant digits.
+        terms : bool, default True
+            Include the column of catalog terms (long for spatial arms).
+
+        Returns
+        -------
+        str
+            One line per base parameter, columns separated by ``|``.
+
+        Examples
+        --------
+        >>> print(kinematic_catalog("cart-pole").report(terms=False))
+        stands for  |  MJCF
+        1*cart.m + 1*pole.m + 1*slider.armature  |  1.5
+        1*pole.mcx  |  0
+        1*pole.mcz  |  -0.4
+        1*pole.Iyy + 1*hinge.armature  |  0.32
+        """
+        truth = self.base_parameters
+        header = ["term"] if terms else []
+        header += ["stands for", "MJCF"] + (["identified"] if coefficients is not None else [])
+        lines = ["  |  ".join(header)]
+        for j, term in enumerate(self.lagrange_terms):
+            combination = " + ".join(f"{w:.{digits}g}*{name}"
+                                     for name, w in self.parameters[j].items())
+            cells = [str(term)] if terms else []
+            cells += [combination, f"{truth[j]:.{digits}g}"]
+            if coefficients is not None:
+                cells.append(f"{float(coefficients[j]):.{digits}g}")
+            lines.append("  |  ".join(cells))
+        return "\n".join(lines)
+
+
+class PolynomialLagrangeLibrary(LagrangeLibrary):
+    """:class:`~pysindy_xl.LagrangeLibrary` with a fast derivation for trigonometric polynomials.
+
+    Same parameters, columns, names and persistence as ``LagrangeLibrary``. When every term is
+    a polynomial in ``sin q_j``, ``cos q_j`` (angles), ``q_j`` (other coordinates) and
+    ``qd_j``, the Euler-Lagrange columns are derived on sparse arrays (:mod:`._trigpoly`),
+    which is one to two orders of magnitude faster than sympy on the large terms of spatial
+    arms; any other term falls back to the symbolic derivation of ``LagrangeLibrary``.
+
+    Parameters
+    ----------
+    coords : Coordinates
+    terms : sequence of sympy.Expr
+
+    Examples
+    --------
+    >>> import numpy as np, sympy as sp, pysindy_xl as px
+    >>> c = px.Coordinates(["theta", "x"])
+    >>> terms = [c.qd[0] ** 2 * sp.cos(c.q[0]) ** 2, c.qd[0] * c.qd[1] * sp.sin(c.q[0]),
+    ...          c.q[1] ** 2 * sp.cos(c.q[0])]
+    >>> data = np.random.default_rng(0).normal(size=(50, 9))
+    >>> fast = PolynomialLagrangeLibrary(c, terms).fit().transform(data)
+    >>> bool(np.allclose(fast, px.LagrangeLibrary(c, terms).fit().transform(data)))
+    True
+    """
+
+    def _build_symbolic(self):
+        terms = _as_expr_list(self.terms, "terms")
+        if not terms:
+            return super()._build_symbolic()  # raises the ValueError of LagrangeLibrary
+        coords = self.coords
+        angles = tuple(any(t.has(sp.sin(q)) or t.has(sp.cos(q)) for t in terms)
+                       for q in coords.q)
+        try:
+            polynomials = [TrigPolynomial.from_sympy(t, coords, angles) for t in terms]
+        except ValueError:
+            return super()._build_symbolic()
+        self.terms_ = terms
+        derived = [p.euler_lagrange() for p in polynomials]
+        columns = [[e.to_sympy(coords, evaluate=False) for e in column] for column in derived]
+        matrix = sp.Matrix(coords.n, len(terms), lambda i, j: columns[j][i])
+        self.zero_terms_ = [j for j, column in enumerate(derived)
+                            if all(e.is_zero for e in column)]
+        return [_feature_name(term) for term in terms], matrix
+
+
+def _feature_name(term: sp.Expr) -> str:
+    # the names of LagrangeLibrary: saved models are checked against them when loaded
+    return f"L[{term}]"
+
+
+def _states(a, name: str, n: int) -> np.ndarray:
+    a = np.asarray(a, dtype=float)
+    if a.ndim == 1:
+        a = a[None, :]
+    if a.ndim != 2 or a.shape[1] != n:
+        raise ValueError(f"{name}: expected shape (N, {n}) or ({n},), got {np.shape(a)}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: contains NaN or inf")
+    return a
+
+
+# -- derivation ----------------------------------------------------------------------------
+def _resolve_system(system) -> MuJoCoSystem:
+    if isinstance(system, MuJoCoSystem):
+        return system
+    if isinstance(system, str) and system.lstrip().startswith("<"):
+        return MJCFSystem(system)
+    if isinstance(system, (str, os.PathLike)):
+        if isinstance(system, str) and not system.endswith(".xml") and os.path.isfile(system):
+            return MJCFSystem(system)
+        return get_system(system)
+    raise TypeError(
+        f"system: expected a MuJoCoSystem, an MJCF path or MJCF text, got {type(system).__name__}"
+    )
+
+
+def _independent_columns(matrix: np.ndarray) -> list[int]:
+    """A well-conditioned set of independent columns, earlier columns preferred.
+
+    The rank comes from a column-pivoted QR (exact dependencies leave ``|R_ii| ~ 1e-15``,
+    independent columns ``1e-3`` or more). Columns are then taken in order when their part
+    orthogonal to those already taken is a sizeable fraction of their norm, and the remaining
+    rank is filled by the column with the largest orthogonal part, so that the dependent
+    columns are combinations of the kept ones with moderate weights (a nearly dependent basis
+    would amplify round-off in the base parameters).
+    """
+    norms = np.linalg.norm(matrix, axis=0)
+    candidates = np.flatnonzero(norms > 0)
+    if candidates.size == 0:
+        return []
+    unit = matrix[:, candidates] / norms[candidates]
+    diagonal = np.abs(np.diag(scipy.linalg.qr(unit, mode="r", pivoting=True)[0]))
+    rank = int(np.sum(diagonal > _INDEPENDENCE_TOL * diagonal[0]))
+    basis = np.zeros((matrix.shape[0], 0))
+    kept: list[int] = []
+
+    def orthogonal_part(column):
+        for _ in range(2):  # re-orthogonalize: one pass loses digits on near-parallel columns
+            column = column - basis @ (basis.T @ column)
+        return column
+
+    for j in range(unit.shape[1]):
+        if len(kept) == rank:
+            break
+        residual = orthogonal_part(unit[:, j])
+        if np.linalg.norm(residual) > _WELL_CONDITIONED:
+            basis = np.column_stack([basis, residual / np.linalg.norm(residual)])
+            kept.append(j)
+    while len(kept) < rank:
+        rest = [j for j in range(unit.shape[1]) if j not in kept]
+        residuals = np.column_stack([orthogonal_part(unit[:, j]) for j in rest])
+        best = int(np.argmax(np.linalg.norm(residuals, axis=0)))
+        basis = np.column_stack([basis, residuals[:, best] / np.linalg.norm(residuals[:, best])])
+        kept.append(rest[best])
+    return sorted(int(candidates[j]) for j in kept)
+
+
+def _random_values(system: MuJoCoSystem, n_samples: int, rng) -> np.ndarray:
+    n = system.n
+    q = rng.uniform(-1.0, 1.0, (n_samples, n))
+    q[:, list(system.angle_coordinates)] *= np.pi
+    qd, qdd = rng.normal(size=(2, n_samples, n))
+    angles = [j in system.angle_coordinates for j in range(n)]
+    return state_values(q, qd, qdd, angles)
+
+
+def _classical_candidates(system, model, coulomb, coulomb_scale):
+    """Friction and spring candidates per joint, in the coordinates, with their MJCF values."""
+    coords = system.coords
+    inverse = np.linalg.inv(system.joint_to_coordinates)
+    force_map = system.force_matrix()
+    qpos = [sp.expand(sum(sp.Float(a) * qj for a, qj in zip(inverse[k], coords.q, strict=True)
+                          if a != 0)) for k in range(model.njnt)]
+    qvel = [sp.expand(sum(sp.Float(a) * qdj for a, qdj in zip(inverse[k], coords.qd, strict=True)
+                          if a != 0)) for k in range(model.njnt)]
+    if np.allclose(inverse, np.round(inverse)):  # keep integer maps readable: theta2 - theta1
+        qpos = [sp.nsimplify(e, rational=True) for e in qpos]
+        qvel = [sp.nsimplify(e, rational=True) for e in qvel]
+    terms, mask, kinds, values = [], [], [], []
+    for k in range(model.njnt):
+        name = system.joint_names[k]
+        dof = model.jnt_dofadr[k]
+        reaches = np.abs(force_map[:, k]) > 1e-12
+        candidates = [("viscous", qvel[k], model.dof_damping[dof])]
+        if coulomb:
+            candidates.append(("coulomb", sp.tanh(qvel[k] / coulomb_scale),
+                               model.dof_frictionloss[dof]))
+        if model.jnt_stiffness[k] > 0:
+            rest = float(model.qpos_spring[model.jnt_qposadr[k]])
+            candidates.append(("spring", qpos[k] - rest, model.jnt_stiffness[k]))
+        for kind, term, value in candidates:
+            terms.append(term)
+            mask.append(reaches)
+            kinds.append((kind, name))
+            # the joint force -value * term reaches equation i as B[i, k] times it
+            values.extend(float(value) * force_map[reaches, k])
+    mask = np.array(mask, dtype=bool).reshape(-1, coords.n)
+    return terms, mask, kinds, np.array(values)
+
+
+def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
+                      seed: int = 0) -> KinematicCatalog:
+    """Candidate Lagrangian and Newtonian terms derived from the kinematic tree of a model.
+
+    Every moving body contributes the ten functions of ``(q, qd)`` that multiply its inertial
+    parameters, every joint its armature ``qvel^2 / 2``; the set is reduced to independent
+    Euler-Lagrange columns (base parameters, see the module docstring). Results are cached by
+    model text, coordinates and options.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem, str or os.PathLike
+        A system (its coordinates ``q = T @ qpos`` are used), a registry name, a path to an
+        MJCF file or the MJCF text (coordinates: MuJoCo's joint coordinates). Hinge and slide
+        joints only.
+    coulomb : bool, default True
+        Add a smooth Coulomb candidate ``tanh(qvel / coulomb_scale)`` per joint.
+    coulomb_scale : float, default 0.01
+        Velocity scale of the smooth Coulomb law.
+    seed : int, default 0
+        Seed of the random states of the numerical reduction.
+
+    Returns
+    -------
+    KinematicCatalog
+        Use ``.library()`` as the feature library of :class:`~pysindy_xl.XLSINDy`.
+
+    Raises
+    ------
+    TypeError
+        If ``system`` is not a system, path or MJCF text.
+    ValueError
+        If the model has a joint other than hinge or slide, or ``coulomb_scale`` is not
+        positive.
+
+    Examples
+    --------
+    A pendulum whose centre of mass is off its link axis and whose inertia is full:
+
+    >>> xml = '''<mujoco><option gravity="0 0 -9.81"/><worldbody><body>
+    ...   <joint name="a" type="hinge" axis="0 1 0"/>
+    ...   <inertial pos="0.1 0.02 -0.5" mass="2" fullinertia="0.3 0.2 0.15 0.01 0.02 0.03"/>
+    ... </body></worldbody></mujoco>'''
+    >>> catalog = kinematic_catalog(xml)
+    >>> catalog.lagrange_terms
+    [9.81*sin(a), -9.81*cos(a), 0.5*a_dot**2]
+    >>> catalog.parameters
+    [{'body1.mcx': 1.0}, {'body1.mcz': 1.0}, {'body1.Iyy': 1.0, 'a.armature': 1.0}]
+    >>> catalog.base_parameters.round(4)  # m c_x, m c_z, Iyy about the hinge axis
+    array([ 0.2  , -1.   ,  0.72])
+    >>> len(catalog.library().fit().get_feature_names())  # force, 3 Lagrange, 2 friction
+    6
+    """
+    system = _resolve_system(system)
+    if isinstance(coulomb_scale, bool) or not isinstance(coulomb_scale, (int, float)) or not (
+        np.isfinite(coulomb_scale) and coulomb_scale > 0
+    ):
+        raise ValueError(f"coulomb_scale: expected a positive number, got {coulomb_scale!r}")
+    model = system.mj_model()
+    if model.nq != system.n or model.nv != system.n:
+        raise ValueError(f"system: MJCF has nq={model.nq}, nv={model.nv}; expected one hinge or "
+                         f"slide joint per coordinate ({system.n})")
+    for k in range(model.njnt):
+        if int(model.jnt_type[k]) not in (int(mujoco.mjtJoint.mjJNT_HINGE),
+                                          int(mujoco.mjtJoint.mjJNT_SLIDE)):
+            raise ValueError(f"system: joint {system.joint_names[k]!r} is not a hinge or slide "
+                             "joint; only those are supported")
+    key = (hashlib.sha256(system.xml().encode()).hexdigest(), system.coordinate_names,
+           system.joint_to_coordinates.tobytes(), bool(coulomb), float(coulomb_scale), seed)
+    if key in _CACHE:
+        # same model text and coordinates: same catalog, but bound to the system given (its
+        # other settings, e.g. force amplitudes, matter to whoever uses catalog.system)
+        return dataclasses.replace(_CACHE[key], system=system)
+    start = time.perf_counter()
+    catalog = _build(system, model, bool(coulomb), float(coulomb_scale), seed)
+    catalog.build_seconds = time.perf_counter() - start
+    if len(_CACHE) >= _CACHE_SIZE:
+        _CACHE.pop(next(iter(_CACHE)))
+    _CACHE[key] = catalog
+    return catalog
+
+
+def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
+    coords = system.coords
+    n = coords.n
+    functions, joints = body_functions(system, model)
+    candidates, names, values = [], [], []
+    for b, functions_of_body in functions.items():
+        body = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}"
+        candidates.extend(functions_of_body)
+        names.extend(f"{body}.{p}" for p in INERTIAL_PARAMETERS)
+        values.extend(physical_values(model, b))
+    for k in range(model.njnt):
+        candidates.append(0.5 * (joints[k]["velocity"] * joints[k]["velocity"]))
+        names.append(f"{system.joint_names[k]}.armature")
+        values.append(float(model.dof_armature[model.jnt_dofadr[k]]))
+    columns = [candidate.euler_lagrange() for candidate in candidates]
+    rng = np.random.default_rng(seed)
+    n_samples = 2 * len(candidates) // n + 20
+    evaluated = evaluate_many([e for column in columns for e in column],
+                              _random_values(system, n_samples, rng))
+    # rows coordinate-major like the feature libraries: (equation, sample)
+    regressor = evaluated.reshape(n_samples, len(candidates), n).transpose(2, 0, 1)
+    regressor = regressor.reshape(n * n_samples, len(candidates))
+    kept = _independent_columns(regressor)
+    # every column is a combination of the kept ones: base = combination @ physical
+    combination, *_ = np.linalg.lstsq(regressor[:, kept], regressor, rcond=None)
+    # exact combinations come out within ~1e-14: round the noise away (0.9999999999999999)
+    combination = np.round(combination, 12)
+    combination[np.abs(combination) < 1e-10] = 0.0
+    parameters = [
+        {names[p]: float(combination[j, p]) for p in np.flatnonzero(combination[j])}
+        for j in range(len(kept))
+    ]
+    classical_terms, mask, kinds, classical_values = _classical_candidates(
+        system, model, coulomb, coulomb_scale)
+    return KinematicCatalog(
+        system=system, coords=coords,
+        lagrange_terms=[candidates[j].to_sympy(coords) for j in kept],
+        parameters=parameters, physical_names=names, combination=combination,
+        physical_values=np.array(values), classical_terms=classical_terms,
+        classical_mask=mask, classical_kinds=kinds, classical_values=classical_values,
+        n_candidates=len(candidates), _polynomials=[candidates[j] for j in kept],
+    )
