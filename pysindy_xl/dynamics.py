@@ -228,17 +228,27 @@ class MassMatrixDynamics:
     def _compile(self):
         entries = list(self.mass_matrix_expr) + list(self.forcing_expr)
         self._evaluate = compile_entries(self.coords.variables, entries)
-        # one state at a time (simulation): plain floats through the math module are an order
-        # of magnitude faster than NumPy calls on length-1 arrays
-        self._evaluate_scalar = sp.lambdify(
-            self.coords.variables, entries, modules=[{"sign": _sign}, "math"], cse=True
-        )
+
+    def _evaluate_scalar(self, *values):
+        """Entries at one state (simulation): plain floats through the math module are an
+        order of magnitude faster than NumPy calls on length-1 arrays. Generated on first use
+        (large models pay the code generation only when they simulate)."""
+        function = self.__dict__.get("_scalar_function")
+        if function is None:
+            entries = list(self.mass_matrix_expr) + list(self.forcing_expr)
+            modules = [{"sign": _sign}, "math"]
+            try:
+                function = sp.lambdify(self.coords.variables, entries, modules=modules, cse=True)
+            except RecursionError:  # very deep expressions: no common-subexpression pass
+                function = sp.lambdify(self.coords.variables, entries, modules=modules)
+            self._scalar_function = function
+        return function(*values)
 
     def __getstate__(self):
         # compiled functions are generated code: rebuilt from the expressions on unpickling
         state = self.__dict__.copy()
         state.pop("_evaluate", None)
-        state.pop("_evaluate_scalar", None)
+        state.pop("_scalar_function", None)
         return state
 
     def __setstate__(self, state):

@@ -450,7 +450,7 @@ class XLSINDy(BaseEstimator):
         matrix = self.feature_library_.symbolic_matrix_
         active = np.flatnonzero(self.coef_)
         return [
-            sp.expand(sum((sp.Float(self.coef_[j]) * matrix[i, j] for j in active), sp.Integer(0)))
+            sp.expand(sp.Add(*(sp.Float(self.coef_[j]) * matrix[i, j] for j in active)))
             for i in range(matrix.shape[0])
         ]
 
@@ -496,10 +496,10 @@ class XLSINDy(BaseEstimator):
         forces = set(library.force_columns_)
         out = []
         for i in range(matrix.shape[0]):
-            lhs = sum((sp.Float(self.coef_[j]) * matrix[i, j] for j in np.flatnonzero(self.coef_)
-                       if j not in forces), sp.Integer(0))
-            rhs = sum((matrix[i, j] if self.coef_[j] == -1 else -sp.Float(self.coef_[j])
-                       * matrix[i, j] for j in forces), sp.Integer(0))
+            lhs = sp.Add(*(sp.Float(self.coef_[j]) * matrix[i, j]
+                           for j in np.flatnonzero(self.coef_) if j not in forces))
+            rhs = sp.Add(*(matrix[i, j] if self.coef_[j] == -1 else -sp.Float(self.coef_[j])
+                           * matrix[i, j] for j in forces))
             lhs, rhs = _significant(sp.expand(lhs), precision), _significant(sp.expand(rhs),
                                                                               precision)
             out.append(f"{lhs} = {rhs}")

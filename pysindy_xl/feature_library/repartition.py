@@ -133,7 +133,7 @@ class CatalogRepartition(SymbolicLibrary):
         """Feature indices from most to least preferred when columns are linearly dependent.
 
         Force columns first, then Lagrange terms, then classical ones; within a category the
-        symbolically simpler column first (``sympy.count_ops``), then catalog order.
+        symbolically simpler column first (fewer terms in its entries), then catalog order.
 
         Returns
         -------
@@ -141,7 +141,7 @@ class CatalogRepartition(SymbolicLibrary):
         """
         check_is_fitted(self, "symbolic_matrix_")
         complexity = [
-            sum(sp.count_ops(e) for e in self.symbolic_matrix_[:, j])
+            sum(len(sp.Add.make_args(e)) for e in self.symbolic_matrix_[:, j] if e != 0)
             for j in range(self.n_output_features_)
         ]
         keys = [
