@@ -50,9 +50,10 @@ def test_run_ids_depend_on_the_data_settings_but_not_the_timeout():
 
 
 def test_presets_scale():
-    assert len(PRESETS["quick"].tasks()) == 126
+    assert len(PRESETS["quick"].tasks()) == 252  # 126 with the paper's noise, 126 positions-only
     full = PRESETS["full"]
-    assert len(full.trajectories()) == 162 and full.timeout == 3600.0
+    # the paper's 162 trajectories, plus 108 with positions-only noise (1 % and 5 %)
+    assert len(full.trajectories()) == 162 + 108 and full.timeout == 3600.0
 
 
 @pytest.mark.parametrize("changes, match", [
@@ -203,3 +204,23 @@ def test_missing_cluster_backend_is_a_clear_error(tmp_path, capsys):
                    "--out", str(tmp_path)])
     assert status == 1
     assert "dask[distributed]" in capsys.readouterr().err
+
+
+def test_positions_only_noise_gives_noisy_positions_and_no_derivatives():
+    from pysindy_xl.benchmark.runner import trajectory_data
+
+    spec = TrajectorySpec("cart-pole", 1.0, "explicit", 0.02, 0, noise_model="positions")
+    assert spec.key.endswith("noise=0.02(positions)/seed=0")
+    clean, _, _ = trajectory_data(TrajectorySpec("cart-pole", 1.0, "explicit", 0.0, 0), 1, 2.0,
+                                  5, 1.0)
+    noisy, _, _ = trajectory_data(spec, 1, 2.0, 5, 1.0)
+    assert noisy.metadata["noise_model"] == "positions"
+    arguments = noisy.fit_arguments()
+    assert arguments["x_dot"] is None and arguments["x_ddot"] is None
+    q_clean, q_noisy = clean.trajectories[0].q, noisy.trajectories[0].q
+    relative = np.std(q_noisy - q_clean, axis=0) / np.std(q_clean, axis=0)
+    np.testing.assert_allclose(relative, 0.02, rtol=0.25)
+    np.testing.assert_array_equal(noisy.trajectories[0].tau, clean.trajectories[0].tau)
+    settings = GridSettings(systems=("cart-pole",), forcings=("explicit",),
+                            position_noise_levels=(0.01,))
+    assert [s.noise_model for s in settings.trajectories()] == ["all", "positions"]

@@ -105,7 +105,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--friction", nargs="+", type=_non_negative_float, default=None,
                         help="friction levels (multipliers of the default joint damping)")
     parser.add_argument("--noise", nargs="+", type=_non_negative_float, default=None,
-                        help="relative noise levels")
+                        help="relative noise levels on every channel (the paper's model)")
+    parser.add_argument("--position-noise", nargs="*", type=_non_negative_float, default=None,
+                        help="relative noise levels on the positions only, no derivative given "
+                        "(default: the preset's; none to leave them out)")
     parser.add_argument("--seeds", nargs="+", type=int, default=None)
     parser.add_argument("--configs", nargs="+", type=_configuration, default=None,
                         metavar="CATALOG:SOLVER",
@@ -182,6 +185,8 @@ def settings_from_args(args):
         forcings=tuple(args.forcing) if args.forcing else None,
         friction_levels=tuple(args.friction) if args.friction else None,
         noise_levels=tuple(args.noise) if args.noise else None,
+        position_noise_levels=(None if args.position_noise is None
+                               else tuple(args.position_noise)),
         seeds=tuple(args.seeds) if args.seeds else None,
         configurations=tuple(dict.fromkeys(configurations)),
         timeout=args.timeout,

@@ -93,8 +93,12 @@ class TrajectorySpec:
         Multiplier of the system's default joint damping (0: frictionless).
     forcing : {"implicit", "explicit", "mixed"}
     noise : float
-        Relative Gaussian noise on positions, velocities, accelerations and forces.
+        Relative Gaussian noise level.
     seed : int
+    noise_model : {"all", "positions"}, default "all"
+        ``"all"``: the paper's noise on positions, velocities, accelerations and forces, all
+        given to the fit. ``"positions"``: noisy positions only, no velocity or acceleration
+        given (the package estimates what it needs, as with a real sensor).
     """
 
     system: str
@@ -102,12 +106,15 @@ class TrajectorySpec:
     forcing: str
     noise: float
     seed: int
+    noise_model: str = "all"
 
     @property
     def key(self) -> str:
-        """Readable identifier, e.g. ``cart-pole/friction=1/explicit/noise=0.01/seed=0``."""
+        """Readable identifier, e.g. ``cart-pole/friction=1/explicit/noise=0.01/seed=0``
+        (``noise=0.01(positions)`` for positions-only noise)."""
+        model = "(positions)" if self.noise_model == "positions" else ""
         return (f"{self.system}/friction={self.friction:g}/{self.forcing}/"
-                f"noise={self.noise:g}/seed={self.seed}")
+                f"noise={self.noise:g}{model}/seed={self.seed}")
 
 
 @dataclass(frozen=True)
@@ -152,7 +159,9 @@ class GridSettings:
     Parameters
     ----------
     systems, friction_levels, forcings, noise_levels, seeds : tuples
-        Axes of the trajectory grid.
+        Axes of the trajectory grid (``noise_levels``: the paper's noise on every channel).
+    position_noise_levels : tuple
+        Further noise levels on the positions only (no velocity or acceleration given).
     configurations : tuple of (catalog, solver)
         Configurations to run (default: the 9 of the paper and the SINDy baseline).
     n_trajectories : int
@@ -174,6 +183,7 @@ class GridSettings:
     forcings: tuple = FORCINGS
     noise_levels: tuple = (0.0,)
     seeds: tuple = (0,)
+    position_noise_levels: tuple = ()
     configurations: tuple = tuple(all_configurations())
     n_trajectories: int = 2
     duration: float = 10.0
@@ -190,6 +200,9 @@ class GridSettings:
                 raise ValueError(f"forcings: expected values among {FORCINGS}, got {f!r}")
         _check_axis(self.friction_levels, "friction_levels", (int, float), non_negative=True)
         _check_axis(self.noise_levels, "noise_levels", (int, float), non_negative=True)
+        if self.position_noise_levels:
+            _check_axis(self.position_noise_levels, "position_noise_levels", (int, float),
+                        non_negative=True)
         _check_axis(self.seeds, "seeds", int)
         if not self.configurations:
             raise ValueError("configurations: expected at least one (catalog, solver) pair")
@@ -226,12 +239,14 @@ class GridSettings:
 
     def trajectories(self) -> list[TrajectorySpec]:
         """Every trajectory of the grid, in a stable order."""
+        noises = [(float(v), "all") for v in self.noise_levels] + [
+            (float(v), "positions") for v in self.position_noise_levels]
         return [
-            TrajectorySpec(system, float(friction), forcing, float(noise), int(seed))
+            TrajectorySpec(system, float(friction), forcing, noise, int(seed), model)
             for system in self.systems
             for friction in self.friction_levels
             for forcing in self.forcings
-            for noise in self.noise_levels
+            for noise, model in noises
             for seed in self.seeds
         ]
 
@@ -256,7 +271,8 @@ class GridSettings:
     def to_dict(self) -> dict:
         out = asdict(self)
         out["configurations"] = [list(c) for c in self.configurations]
-        for key in ("systems", "friction_levels", "forcings", "noise_levels", "seeds"):
+        for key in ("systems", "friction_levels", "forcings", "noise_levels", "seeds",
+                    "position_noise_levels"):
             out[key] = list(out[key])
         out["n_runs"] = len(self.tasks())
         out["n_trajectory_specs"] = len(self.trajectories())
@@ -275,18 +291,21 @@ def _check_axis(values, name, kind, non_negative=False):
         raise ValueError(f"{name}: duplicate entries in {values!r}")
 
 
-#: ``quick``: every system and forcing mode, default friction, two noise levels, one seed,
-#: short trajectories; about 125 runs, under 15 minutes on 2 cores.
+#: ``quick``: every system and forcing mode, default friction, two levels of the paper's noise
+#: and two of positions-only noise, one seed, short trajectories.
 #: ``full``: the paper's scale (three friction levels, three noise levels, two seeds: 162
-#: trajectories, about 1100 runs) with the paper's 1 h timeout per run.
+#: trajectories, about 1100 runs, plus 108 trajectories with positions-only noise) with the
+#: paper's 1 h timeout per run.
 PRESETS = {
     "quick": GridSettings(
         friction_levels=(1.0,), noise_levels=(0.0, 0.001), seeds=(0,),
+        position_noise_levels=(0.01, 0.05),
         n_trajectories=2, duration=5.0, sample_every=5, validation_duration=5.0,
         timeout=90.0, name="quick",
     ),
     "full": GridSettings(
         friction_levels=(0.0, 1.0, 2.0), noise_levels=(0.0, 0.001, 0.01), seeds=(0, 1),
+        position_noise_levels=(0.01, 0.05),
         n_trajectories=2, duration=10.0, sample_every=2, validation_duration=10.0,
         timeout=3600.0, name="full",
     ),

@@ -202,7 +202,8 @@ def _settings_lines(settings) -> list[str]:
     return [
         f"- grid `{d.get('name')}`: systems {', '.join(d['systems'])}; friction levels "
         f"{d['friction_levels']} (x default damping); forcing {', '.join(d['forcings'])}; "
-        f"noise {d['noise_levels']}; seeds {d['seeds']}",
+        f"noise {d['noise_levels']} (all channels), {d.get('position_noise_levels', [])} "
+        f"(positions only); seeds {d['seeds']}",
         f"- data: {d['n_trajectories']} training trajectories of {d['duration']:g} s per "
         f"dataset, every {d['sample_every']} ms; validation on a fresh {d['validation_duration']:g}"
         f" s MuJoCo trajectory; time limit {d['timeout']:g} s per run",

@@ -106,9 +106,15 @@ def trajectory_data(spec: TrajectorySpec, n_trajectories: int, duration: float,
     if spec.noise > 0:
         rng = np.random.default_rng(_seed(motion_seed, "noise", spec.noise))
         matrix = system.force_matrix()
-        noisy = [add_noise(tr, spec.noise, rng, matrix) for tr in clean.trajectories]
-        metadata = dict(clean.metadata, noise=dict.fromkeys(("q", "qd", "qdd", "tau"),
-                                                             spec.noise), noise_model="all")
+        positions_only = spec.noise_model == "positions"
+        levels = ({"q": spec.noise} if positions_only
+                  else dict.fromkeys(("q", "qd", "qdd", "tau"), spec.noise))
+        noisy = [add_noise(tr, levels, rng, matrix) for tr in clean.trajectories]
+        if positions_only:  # a sensor records positions: the package estimates the rest
+            for trajectory in noisy:
+                trajectory.qd = trajectory.qdd = None
+        metadata = dict(clean.metadata, noise=levels, noise_model=spec.noise_model,
+                        derivatives="none" if positions_only else "mujoco")
         clean = Dataset(noisy, clean.coordinate_names, metadata)
     validation = validation_trajectory(system, validation_duration, spec.forcing,
                                        seed=_seed(motion_seed, "validation"),
@@ -154,6 +160,8 @@ def _optimizer(solver: str):
 
 def _identify(task: Task, system, dataset):
     """Fit one configuration; returns the model (anything with ``simulate``)."""
+    import pysindy_xl as px
+
     from ..mujoco.catalogs import reference_catalog
 
     forced = task.trajectory.forcing != "implicit"
@@ -163,9 +171,12 @@ def _identify(task: Task, system, dataset):
         from .baseline import SINDyBaseline, baseline_terms
 
         catalog.fit()
+        if arguments["x_dot"] is None:  # positions only: derivatives of the smoothed data
+            smoothed = [px.WhittakerSmoother().smooth(t, x)
+                        for x, t in zip(arguments["x"], arguments["t"], strict=True)]
+            arguments = dict(arguments, x=[s[0] for s in smoothed],
+                             x_dot=[s[1] for s in smoothed], x_ddot=[s[2] for s in smoothed])
         return SINDyBaseline(system.coords, baseline_terms(catalog)).fit(**arguments)
-    import pysindy_xl as px
-
     model = px.XLSINDy(catalog, _optimizer(task.solver))
     return model.fit(**arguments)
 
