@@ -267,16 +267,21 @@ class SymbolicLibrary(BaseFeatureLibrary):
         index = self._weak_entry_index
         # int phi E = -int phi' P - int phi Q: each non-zero entry meets its own test matrix
         tests = [scipy.sparse.csc_matrix(-dphi), scipy.sparse.csc_matrix(-phi)]
+        parts = [np.flatnonzero(index[:, 0] == part) for part in (0, 1)]
         n_windows = phi.shape[0]
         contributions = np.zeros((n_windows, len(index)))
-        values = np.empty((len(index), min(n_samples, _WEAK_BLOCK)))
         for start in range(0, n_samples, _WEAK_BLOCK):  # blocks of samples bound the memory
             stop = min(start + _WEAK_BLOCK, n_samples)
-            block = values[:, : stop - start]
-            self._weak_evaluate(x[start:stop], list(block))
-            for part in (0, 1):
-                rows = index[:, 0] == part
-                contributions[:, rows] += tests[part][:, start:stop] @ block[rows].T
+            # samples x entries in C order: the sparse products read them without a copy
+            values = [np.empty((stop - start, len(entries))) for entries in parts]
+            targets = [None] * len(index)
+            for part, entries in enumerate(parts):
+                for k, e in enumerate(entries):
+                    targets[e] = values[part][:, k]
+            self._weak_evaluate(x[start:stop], targets)
+            for part, entries in enumerate(parts):
+                if len(entries):
+                    contributions[:, entries] += tests[part][:, start:stop] @ values[part]
         weak = np.zeros((n, n_windows, n_features))
         np.add.at(weak, (index[:, 1], slice(None), index[:, 2]), contributions.T)
         return weak.reshape(n * n_windows, n_features)

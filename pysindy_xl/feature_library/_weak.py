@@ -94,13 +94,16 @@ def integrate_by_parts(expr: sp.Expr, coords: Coordinates) -> tuple[sp.Expr, sp.
         momentum += coefficient * qd
         rest = sp.expand(rest - coefficient * qdd)
     exact = sp.Integer(0)
+    velocities = dict(zip(coords.qd, coords.q, strict=True))
     for term in sp.Add.make_args(rest):
-        for q, qd in zip(coords.q, coords.qd, strict=True):
-            factor = sp.cancel(term / qd)
-            if factor.free_symbols <= {q} and factor.is_polynomial(q) and term.has(qd):
-                exact += sp.integrate(factor, q)
-                rest -= term
-                break
+        present = [v for v in term.free_symbols if v in velocities]
+        if len(present) != 1 or term.as_powers_dict().get(present[0]) != 1:
+            continue  # not linear in exactly one velocity
+        q = velocities[present[0]]
+        factor = term / present[0]
+        if factor.free_symbols <= {q} and factor.is_polynomial(q):
+            exact += sp.integrate(factor, q)
+            rest -= term
     momentum = sp.expand(momentum + exact)
     # E = d/dt P - Q: the time derivative of the acceleration part's P has no acceleration
     # left after subtracting E's own acceleration terms, and the exact part is E's term.
