@@ -145,8 +145,8 @@ class XLSINDy(BaseEstimator):
     mass_matrix_check_ : dict or None
         The identified mass matrix on (up to 2,000 of) the training states: fraction where it
         is positive definite and median condition number. Below 1, ``fit`` warns with an
-        :class:`IdentificationWarning` naming coordinates without positive inertia. An
-        unforced law (sign free) is flipped when its mass matrix is negative definite.
+        :class:`IdentificationWarning` naming coordinates without positive inertia. A law that
+        no force scales (sign free) is flipped when its mass matrix is negative definite.
 
     Examples
     --------
@@ -339,6 +339,36 @@ class XLSINDy(BaseEstimator):
         self._check_mass_matrix(z)
         return self
 
+    def _normalize_law_signs(self, mass) -> bool:
+        """Flip implicit laws whose kinetic energy is negative; returns whether any was.
+
+        A law that no force column scales (implicit, or the implicit part of a mixed fit) is
+        defined up to its sign. Coordinates coupled by identified terms form one law; when
+        the mass matrix of such a group is negative definite on every training state, the
+        coefficients of its columns change sign.
+        """
+        matrix = self.feature_library_.symbolic_matrix_
+        active = np.flatnonzero(self.coef_)
+        touches = np.array([[matrix[c, j] != 0 for j in active] for c in range(matrix.shape[0])],
+                           dtype=bool).reshape(matrix.shape[0], len(active))
+        group = np.arange(matrix.shape[0])  # union of coordinates sharing an active column
+        for column in touches.T:
+            members = np.flatnonzero(column)
+            if len(members) > 1:
+                group[np.isin(group, group[members])] = group[members].min()
+        forces = set(self.feature_library_.force_columns_)
+        flipped = False
+        for label in np.unique(group):
+            coordinates = np.flatnonzero(group == label)
+            columns = active[touches[coordinates].any(axis=0)]
+            if forces & set(columns.tolist()):
+                continue  # scaled by a known force: the sign is physical
+            block = mass[:, coordinates][:, :, coordinates]
+            if np.all(np.linalg.eigvalsh(block) < 0):
+                self.coef_[columns] = -self.coef_[columns] + 0.0
+                flipped = True
+        return flipped
+
     def _check_mass_matrix(self, z):
         """Normalize the sign of an unforced law and warn when ``M(q)`` is not positive
         definite on the training states (``mass_matrix_check_``)."""
@@ -353,10 +383,7 @@ class XLSINDy(BaseEstimator):
             return mass, np.linalg.eigvalsh(mass)
 
         mass, eig = eigenvalues()
-        forces = self.feature_library_.force_columns_
-        if np.all(eig < 0) and not np.any(self.coef_[forces]):
-            # an implicit law is defined up to its sign: make the kinetic energy positive
-            self.coef_ = -self.coef_ + 0.0
+        if self._normalize_law_signs(mass):
             self._build_dynamics()
             mass, eig = eigenvalues()
         scale = max(float(np.abs(eig).max()), 1e-300)

@@ -78,7 +78,7 @@ def corner_frequency(t, x, energy: float = 0.99) -> float:
     >>> import numpy as np
     >>> t = np.linspace(0, 20, 2001)
     >>> x = np.sin(2 * np.pi * 0.5 * t)[:, None]
-    >>> 0.4 < corner_frequency(t, x) < 0.7
+    >>> bool(0.4 < corner_frequency(t, x) < 0.7)
     True
     """
     t = np.asarray(t, dtype=float)
