@@ -436,10 +436,19 @@ class XLSINDy(BaseEstimator):
             if d["x_dot"] is not None:  # measured velocities are better than estimated ones
                 q, qd = d["x"], d["x_dot"]
             states.append(stack_variables(q, qd, qdd, d["u"], d["t"]))
-        # one width for all trajectories: the narrowest that any of them asks for
-        half_width = min(test_functions.half_width(d["t"], d["x"]) for d in data)
+        half_width = self._shared_half_width(test_functions, data)
+        durations = np.array([d["t"][-1] - d["t"][0] for d in data])
+        usable = np.flatnonzero(durations >= 2 * half_width)
+        if len(usable) < len(data):
+            short = np.flatnonzero(durations < 2 * half_width).tolist()
+            warnings.warn(
+                f"x: trajectories {short} are shorter than one test function (support "
+                f"{2 * half_width:.3g} s) and are left out of the weak regression",
+                UserWarning, stacklevel=3,
+            )
         blocks, counts = [], []
-        for d, z in zip(data, states, strict=True):
+        for k in usable:
+            d, z = data[k], states[k]
             phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
             blocks.append(library.weak_transform(z, phi, dphi).reshape(
                 library.coords.n, phi.shape[0], -1))
@@ -448,6 +457,26 @@ class XLSINDy(BaseEstimator):
         info = {"half_width": half_width, "test_functions": counts,
                 "noise": None if noise is None else np.asarray(noise).tolist()}
         return theta, np.vstack(states), info
+
+    @staticmethod
+    def _shared_half_width(test_functions, data) -> float:
+        """One test-function width for all trajectories: the narrowest asked for by those at
+        least half as long as the longest (short pieces have unreliable spectra)."""
+        durations = np.array([d["t"][-1] - d["t"][0] for d in data])
+        widths = []
+        for d, duration in zip(data, durations, strict=True):
+            if duration >= durations.max() / 2:
+                try:
+                    widths.append(test_functions.half_width(d["t"], d["x"]))
+                except ValueError:
+                    continue  # shorter than the width it asks for
+        if not widths:
+            raise ValueError(
+                f"x: the trajectories ({durations.max():.3g} s at most) are shorter than one "
+                "test function; record longer trajectories, set a smaller "
+                "BumpTestFunctions(width=...), or use formulation='strong'"
+            )
+        return min(widths)
 
     def _optimizer(self, forced: np.ndarray):
         if self.optimizer is not None:

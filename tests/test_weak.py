@@ -229,3 +229,17 @@ def test_noise_free_positions_are_recovered_exactly_by_the_weak_form(name, reque
     support = true != 0
     assert np.max(np.abs(coef[support] - true[support]) / np.abs(true[support])) < 1e-4
     assert _validates(model, system, 77)
+
+
+def test_short_pieces_are_left_out_with_a_warning(cart_pole_system):
+    system = cart_pole_system
+    t, noisy, data, _ = _noisy_run(system, 5, 0.01, duration=20.0)
+    library = paper_catalog(system.coords, [1])
+    pieces = [slice(0, 1900), slice(1900, 1930)]  # e.g. what constraint exclusion leaves
+    with pytest.warns(UserWarning, match=r"trajectories \[1\] are shorter than one test"):
+        model = px.XLSINDy(library).fit([noisy[p] for p in pieces], [t[p] for p in pieces],
+                                        u=[data["tau"][p] for p in pieces])
+    assert len(model.weak_info_["test_functions"]) == 1
+    with pytest.raises(ValueError, match="shorter than one test function"):
+        px.XLSINDy(library, test_functions=BumpTestFunctions(width=1.0)).fit(
+            noisy[:150], t[:150], u=data["tau"][:150])
