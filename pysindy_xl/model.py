@@ -40,12 +40,16 @@ def _as_list(value, name: str) -> tuple[list, bool]:
     return [value], False
 
 
-def _check_array(a, name: str, shape=None) -> np.ndarray:
+def _check_array(a, name: str, shape=None, n_columns=None) -> np.ndarray:
+    """Float 2-D array (one column per coordinate); a 1-D array is one coordinate, as in
+    PySINDy, when one column is expected."""
     try:
         a = np.asarray(a, dtype=float)
     except (TypeError, ValueError):
         raise TypeError(f"{name}: expected a numeric array") from None
-    if a.ndim == 1 and shape is not None and shape[1] == 1:
+    if shape is not None:
+        n_columns = shape[1]
+    if a.ndim == 1 and n_columns == 1:
         a = a[:, None]
     if a.ndim != 2:
         raise ValueError(f"{name}: expected a 2-D array (n_samples, n), got shape {a.shape}")
@@ -87,9 +91,10 @@ class XLSINDy(BaseEstimator):
         force column).
     optimizer : catalog optimizer, optional
         :class:`~pysindy_xl.ExplicitOptimizer`, :class:`~pysindy_xl.ImplicitOptimizer`,
-        :class:`~pysindy_xl.MixedOptimizer` or anything with ``fit_catalog``. Default: chosen
-        from the data: explicit when every coordinate is forced, implicit when none is,
-        mixed otherwise.
+        :class:`~pysindy_xl.MixedOptimizer` or anything with ``fit_catalog``; a pysindy
+        optimizer (``ps.STLSQ()``, ``ps.SR3()``, ...) or any regressor with ``fit(X, y)`` and
+        ``coef_`` runs as ``ExplicitOptimizer(method=...)``. Default: chosen from the data:
+        explicit when every coordinate is forced, implicit when none is, mixed otherwise.
     differentiation_method : pysindy differentiation method, optional
         Used for velocities and accelerations that are not given. Default, by solver:
         explicit and mixed fits use ``ps.SmoothedFiniteDifference()`` (finite differences
@@ -117,6 +122,8 @@ class XLSINDy(BaseEstimator):
         Estimates positions and velocities for the weak formulation from noisy positions
         (default ``WhittakerSmoother()``: smoothness chosen from the data). Measured
         ``x_dot`` is used as given.
+    t_default : float, default 1.0
+        Time step used when ``fit`` or ``score`` get no ``t`` (as in PySINDy).
     drop_dependent : bool, default True
         Remove catalog columns that are zero or exact linear combinations of preferred columns
         (see :func:`~pysindy_xl.optimizers.independent_columns`): a sparse regression on an
@@ -164,7 +171,8 @@ class XLSINDy(BaseEstimator):
     """
 
     def __init__(self, feature_library=None, optimizer=None, differentiation_method=None,
-                 drop_dependent=True, formulation="auto", test_functions=None, smoother=None):
+                 drop_dependent=True, formulation="auto", test_functions=None, smoother=None,
+                 t_default=1.0):
         self.feature_library = feature_library
         self.optimizer = optimizer
         self.differentiation_method = differentiation_method
@@ -172,6 +180,7 @@ class XLSINDy(BaseEstimator):
         self.formulation = formulation
         self.test_functions = test_functions
         self.smoother = smoother
+        self.t_default = t_default
 
     # -- data handling -----------------------------------------------------------------------
     def _library(self) -> CatalogRepartition:
@@ -204,6 +213,8 @@ class XLSINDy(BaseEstimator):
         With ``differentiate=False`` missing velocities and accelerations stay ``None``.
         """
         xs, is_list = _as_list(x, "x")
+        if t is None:
+            t = self.t_default
         if isinstance(t, (list, tuple)):
             if not is_list or len(t) != len(xs):
                 raise ValueError(
@@ -227,7 +238,7 @@ class XLSINDy(BaseEstimator):
         out = []
         for k, (xk, tk) in enumerate(zip(xs, ts, strict=True)):
             label = f"[{k}]" if is_list else ""
-            xk = _check_array(xk, f"x{label}")
+            xk = _check_array(xk, f"x{label}", n_columns=n)
             if xk.shape[1] != n:
                 raise ValueError(f"x{label}: expected {n} columns (one per coordinate), got "
                                  f"{xk.shape[1]}")
@@ -263,15 +274,16 @@ class XLSINDy(BaseEstimator):
         return t
 
     # -- fit ---------------------------------------------------------------------------------
-    def fit(self, x, t, x_dot=None, x_ddot=None, u=None):
+    def fit(self, x, t=None, x_dot=None, x_ddot=None, u=None):
         """Identify the equations of motion.
 
         Parameters
         ----------
         x : array (N, n) or list of arrays
             Positions, one trajectory or several.
-        t : float, array (N,) or list of arrays
-            Time step or sample times (strictly increasing), matching ``x``.
+        t : float, array (N,) or list of arrays, optional
+            Time step or sample times (strictly increasing), matching ``x``; default
+            ``t_default``.
         x_dot, x_ddot : same layout as ``x``, optional
             Measured velocities and accelerations; computed with ``differentiation_method``
             when absent.
@@ -480,11 +492,17 @@ class XLSINDy(BaseEstimator):
 
     def _optimizer(self, forced: np.ndarray):
         if self.optimizer is not None:
+            if isinstance(self.optimizer, type):
+                raise TypeError(f"optimizer: expected an instance, got the class "
+                                f"{self.optimizer.__name__}; write {self.optimizer.__name__}()")
             if not hasattr(self.optimizer, "fit_catalog"):
+                if callable(getattr(self.optimizer, "fit", None)):
+                    # a pysindy (or scikit-learn) regressor: explicit regression through it
+                    return ExplicitOptimizer(method=clone(self.optimizer))
                 raise TypeError(
                     "optimizer: expected a catalog optimizer with fit_catalog (ExplicitOptimizer, "
-                    "ImplicitOptimizer, MixedOptimizer); wrap pysindy optimizers in "
-                    "ExplicitOptimizer(method=...)"
+                    "ImplicitOptimizer, MixedOptimizer) or a regressor with fit(X, y) such as "
+                    f"pysindy's STLSQ, got {type(self.optimizer).__name__}"
                 )
             return clone(self.optimizer)
         if forced.all():
@@ -521,6 +539,48 @@ class XLSINDy(BaseEstimator):
         """
         check_is_fitted(self, "coef_")
         return self.coef_.copy()
+
+    @property
+    def complexity(self) -> int:
+        """Number of non-zero coefficients (as ``pysindy.SINDy.complexity``).
+
+        Returns
+        -------
+        int
+        """
+        check_is_fitted(self, "coef_")
+        return int(np.count_nonzero(self.coef_))
+
+    def differentiate(self, x, t=None):
+        """Velocities of positions ``x`` as the model estimates them (as ``SINDy.differentiate``).
+
+        With a ``differentiation_method``, that method; otherwise the smoother of the weak
+        formulation (default :class:`~pysindy_xl.WhittakerSmoother`).
+
+        Parameters
+        ----------
+        x : array (N, n) or (N,) for one coordinate
+        t : float or array (N,), optional
+            Time step or sample times; default ``t_default``.
+
+        Returns
+        -------
+        ndarray, shape (N, n)
+
+        Examples
+        --------
+        >>> import numpy as np, pysindy_xl as px
+        >>> t = np.linspace(0, 6, 601)
+        >>> xd = px.XLSINDy().differentiate(np.sin(t), t)
+        >>> bool(np.abs(xd[:, 0] - np.cos(t)).max() < 1e-4)
+        True
+        """
+        x = _check_array(x, "x", n_columns=1 if np.ndim(x) == 1 else None)
+        t = self._times(self.t_default if t is None else t, x.shape[0], "t")
+        if self.differentiation_method is not None:
+            return self._differentiate(x, t, implicit=False)
+        smoother = self.smoother or WhittakerSmoother()
+        return smoother.smooth(t, x)[1]
 
     def get_feature_names(self) -> list[str]:
         """Names of the catalog features.
@@ -628,7 +688,7 @@ class XLSINDy(BaseEstimator):
         out = []
         for k, (xk, xdk, uk) in enumerate(zip(xs, xds, us, strict=True)):
             label = f"[{k}]" if is_list else ""
-            xk = _check_array(xk, f"x{label}")
+            xk = _check_array(xk, f"x{label}", n_columns=n)
             if xk.shape[1] != n:
                 raise ValueError(f"x{label}: expected {n} columns, got {xk.shape[1]}")
             xdk = _check_array(xdk, f"x_dot{label}", xk.shape)
@@ -636,7 +696,7 @@ class XLSINDy(BaseEstimator):
             out.append(dynamics.accelerations(xk, xdk, uk))
         return out if is_list else out[0]
 
-    def score(self, x, t, x_dot=None, x_ddot=None, u=None, metric=r2_score):
+    def score(self, x, t=None, x_dot=None, x_ddot=None, u=None, metric=r2_score):
         """Score predicted accelerations against measured (or differentiated) ones.
 
         Parameters
@@ -683,7 +743,10 @@ class XLSINDy(BaseEstimator):
             When the model diverges or its mass matrix becomes singular; the exception holds
             the valid part of the trajectory.
         """
-        return self._require_dynamics().simulate(x0, t, u, **integrator_options)
+        dynamics = self._require_dynamics()
+        if u is not None and not callable(u) and np.ndim(u) == 1 and self.n_coordinates_ == 1:
+            u = np.asarray(u)[:, None]  # one coordinate: a 1-D force as fit accepts it
+        return dynamics.simulate(x0, t, u, **integrator_options)
 
     def to_jax(self):
         """Pure JAX function ``f(state, u) -> d(state)/dt`` of the identified dynamics.
