@@ -30,6 +30,7 @@ _LAZY = {
     "ExplicitOptimizer": "optimizers",
     "ImplicitOptimizer": "optimizers",
     "MixedOptimizer": "optimizers",
+    "EnsembleOptimizer": "optimizers",
     "NoLawFoundError": "optimizers",
     "XLSINDy": "model",
     "IdentificationWarning": "model",
@@ -53,6 +54,7 @@ __all__ = [
     "ExplicitOptimizer",
     "ImplicitOptimizer",
     "MixedOptimizer",
+    "EnsembleOptimizer",
     "NoLawFoundError",
     "XLSINDy",
     "IdentificationWarning",
@@ -75,7 +77,13 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
     )
     from .model import IdentificationWarning, XLSINDy
     from .mujoco.kinematic import kinematic_catalog
-    from .optimizers import ExplicitOptimizer, ImplicitOptimizer, MixedOptimizer, NoLawFoundError
+    from .optimizers import (
+        EnsembleOptimizer,
+        ExplicitOptimizer,
+        ImplicitOptimizer,
+        MixedOptimizer,
+        NoLawFoundError,
+    )
     from .symbols import Coordinates, monomials, products
     from .weak import BumpTestFunctions, WhittakerSmoother
 

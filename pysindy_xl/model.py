@@ -149,6 +149,10 @@ class XLSINDy(BaseEstimator):
         the smoother's noise estimate per coordinate (first trajectory).
     selection_ : SelectionResult or None
         How the sparsity was chosen, when the optimizer reports it (``threshold="auto"``).
+    inclusion_probability_, coef_interval_ : ndarray or None
+        With an :class:`~pysindy_xl.EnsembleOptimizer`: per catalog feature, the fraction of
+        the ensemble's fits that include it and the percentile interval of its coefficient,
+        shapes (F,) and (2, F); ``print(uncertainty=True)`` shows them.
     mass_matrix_check_ : dict or None
         The identified mass matrix on (up to 2,000 of) the training states: fraction where it
         is positive definite and median condition number. Below 1, ``fit`` warns with an
@@ -340,6 +344,12 @@ class XLSINDy(BaseEstimator):
         self.feature_library_ = library
         self.optimizer_ = optimizer
         self.coef_ = coef
+        self.inclusion_probability_ = self.coef_interval_ = None
+        if hasattr(optimizer, "inclusion_probability_"):  # an ensemble: map to the catalog
+            self.inclusion_probability_ = np.zeros(theta.shape[1])
+            self.inclusion_probability_[keep] = optimizer.inclusion_probability_
+            self.coef_interval_ = np.zeros((2, theta.shape[1]))
+            self.coef_interval_[:, keep] = optimizer.coef_interval_
         names = library.get_feature_names()
         self.dropped_features_ = {names[j]: reason for j, reason in dropped.items()}
         self.n_coordinates_ = n
@@ -639,15 +649,31 @@ class XLSINDy(BaseEstimator):
                         total += sp.Float(self.coef_[sl.start + k]) * term
         return total
 
-    def print(self, precision: int = 4) -> None:
+    def print(self, precision: int = 4, uncertainty: bool = False) -> None:
         """Print the identified Lagrangian and the equations of motion.
 
         Parameters
         ----------
         precision : int
             Significant digits of the printed coefficients.
+        uncertainty : bool, default False
+            After an ensemble fit (:class:`~pysindy_xl.EnsembleOptimizer`), also print each
+            term that any fit included with its coefficient, interval and inclusion
+            probability.
         """
         check_is_fitted(self, "coef_")
+        if uncertainty:
+            if self.inclusion_probability_ is None:
+                raise ValueError("uncertainty: needs a fit with an EnsembleOptimizer")
+            names = self.get_feature_names()
+            width = max(len(names[j]) for j in np.flatnonzero(self.inclusion_probability_))
+            for j in np.argsort(-self.inclusion_probability_, kind="stable"):
+                if self.inclusion_probability_[j] == 0:
+                    break
+                low, high = self.coef_interval_[:, j]
+                print(f"{names[j]:<{width}}  {self.coef_[j]: .{precision}g}  "
+                      f"[{low: .{precision}g}, {high: .{precision}g}]  "
+                      f"P={self.inclusion_probability_[j]:.2f}")
         lagrangian = self.lagrangian()
         if lagrangian != 0:
             print(f"L = {_significant(lagrangian, precision)}")

@@ -4,6 +4,7 @@ See :mod:`pysindy_xl.optimizers._base` for the ``fit_catalog`` protocol they sha
 """
 
 from ._base import CatalogOptimizer, independent_columns
+from .ensemble import EnsembleOptimizer
 from .explicit import ExplicitOptimizer, hard_threshold_regression, proximal_gradient_lasso
 from .implicit import ImplicitOptimizer, NoLawFoundError, homothetic_groups
 from .mixed import MixedOptimizer, activation_closure
@@ -14,6 +15,7 @@ __all__ = [
     "ExplicitOptimizer",
     "ImplicitOptimizer",
     "MixedOptimizer",
+    "EnsembleOptimizer",
     "NoLawFoundError",
     "independent_columns",
     "hard_threshold_regression",
