@@ -11,6 +11,8 @@ Methods:
 
 * ``weak``: ``XLSINDy(catalog)`` with its defaults (weak form, smoother and test functions
   chosen from the data, cross-validated sparsity);
+* ``ensemble``: the weak form with ``EnsembleOptimizer()`` (20 fits on 70 % subsamples,
+  terms included in at least half of them, median coefficients);
 * ``strong``: ``XLSINDy(catalog, formulation="strong")``: pointwise Euler-Lagrange columns,
   derivatives by the package's default differentiation (Savitzky-Golay smoothed finite
   differences), same sparsity selection;
@@ -23,7 +25,7 @@ error, valid (5 s validation from a fresh state and forcing: position RMSE below
 range of every coordinate). Writes ``benchmarks/results/noise_sweep.{jsonl,md,png}``.
 
 Usage: ``python benchmarks/noise_sweep.py [--seeds 10] [--levels 0,0.001,0.01,0.03,0.05,0.1]
-[--jobs -1]``
+[--methods weak,strong,sindy] [--jobs -1] [--append]``
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 SYSTEMS = {"cart_pole": [1], "double_pendulum": [0, 1]}
+METHODS = ["weak", "ensemble", "strong", "sindy"]
 
 
 def _setup(name):
@@ -104,8 +107,10 @@ def run(name, level, seed, method):
             model = _sindy(system, library, t, noisy, data["tau"])
             record.update(exact=None, error=None)
         else:
-            formulation = "weak" if method == "weak" else "strong"
-            model = px.XLSINDy(library, formulation=formulation).fit(noisy, t, u=data["tau"])
+            formulation = "strong" if method == "strong" else "weak"
+            optimizer = px.EnsembleOptimizer() if method == "ensemble" else None
+            model = px.XLSINDy(library, optimizer, formulation=formulation).fit(
+                noisy, t, u=data["tau"])
             coef, support = model.coefficients(), true != 0
             record["exact"] = bool(np.array_equal(coef != 0, support))
             record["error"] = float(np.median(np.abs(coef[support] - true[support])
@@ -125,7 +130,7 @@ def summarize(records) -> str:
     rows = ["| system | noise | method | exact support | median coef. error | valid | "
             "median fit (s) |", "|---|---|---|---|---|---|---|"]
     keys = sorted({(r["system"], r["level"], r["method"]) for r in records},
-                  key=lambda k: (k[0], k[1], ["weak", "strong", "sindy"].index(k[2])))
+                  key=lambda k: (k[0], k[1], METHODS.index(k[2])))
     for system, level, method in keys:
         cell = [r for r in records if (r["system"], r["level"], r["method"]) == (system, level,
                                                                                   method)]
@@ -146,11 +151,14 @@ def plot(records, path):
 
     fig, axes = plt.subplots(1, len(SYSTEMS), figsize=(5 * len(SYSTEMS), 3.5), sharey=True)
     for ax, system in zip(np.atleast_1d(axes), SYSTEMS, strict=True):
-        for method, style in (("weak", "o-"), ("strong", "s--"), ("sindy", "^:")):
+        for method, style in (("weak", "o-"), ("ensemble", "D-"), ("strong", "s--"),
+                              ("sindy", "^:")):
             levels = sorted({r["level"] for r in records if r["system"] == system})
             rate = [np.mean([bool(r["valid"]) and (method == "sindy" or bool(r["exact"]))
                              for r in records if (r["system"], r["level"], r["method"]) ==
                              (system, lv, method)] or [np.nan]) for lv in levels]
+            if np.all(np.isnan(rate)):
+                continue
             ax.plot([100 * lv for lv in levels], rate, style, label=method)
         ax.set_xscale("symlog", linthresh=0.1)
         ax.set_title(system)
@@ -165,9 +173,12 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument("--levels", default="0,0.001,0.01,0.03,0.05,0.1")
-    parser.add_argument("--methods", default="weak,strong,sindy")
+    parser.add_argument("--methods", default="weak,strong,sindy",
+                        help=f"comma-separated, among {METHODS}")
     parser.add_argument("--jobs", type=int, default=-1)
     parser.add_argument("--out", default=str(HERE / "results"))
+    parser.add_argument("--append", action="store_true",
+                        help="add these runs to the existing records (other methods/levels)")
     args = parser.parse_args()
     from joblib import Parallel, delayed
 
@@ -178,12 +189,19 @@ def main():
     records = Parallel(n_jobs=args.jobs, verbose=5)(delayed(run)(*task) for task in tasks)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    with open(out / "noise_sweep.jsonl", "w") as f:
+    path = out / "noise_sweep.jsonl"
+    if args.append and path.exists():
+        done = {(r["system"], r["level"], r["seed"], r["method"]) for r in records}
+        previous = [json.loads(line) for line in path.read_text().splitlines() if line]
+        records = [r for r in previous
+                   if (r["system"], r["level"], r["seed"], r["method"]) not in done] + records
+    with open(path, "w") as f:
         for record in records:
             f.write(json.dumps(record) + "\n")
     table = summarize(records)
     (out / "noise_sweep.md").write_text(
-        f"{len(records)} runs, {time.perf_counter() - start:.0f} s wall\n\n{table}\n")
+        f"{len(records)} runs (last invocation: {time.perf_counter() - start:.0f} s wall on "
+        f"{args.jobs} jobs)\n\n{table}\n")
     plot(records, out / "noise_sweep.png")
     print(table)
 
