@@ -518,10 +518,12 @@ def _quality_lines(quality):
     target = ("the generalized forces" if quality["target"] == "forces"
               else f"the largest term {quality['target']} (unforced data)")
     per = ", ".join(f"{k} {v:.4f}" for k, v in quality["r2_per_coordinate"].items())
-    lines = [f"fit quality: R^2 = {quality['r2']:.4f} ({per}) = 1 - |residual|^2 / "
-             f"|{'forces' if quality['target'] == 'forces' else 'largest term'}|^2 over "
-             f"{quality['rows']} rows of the {kind}; 1 is exact, the residual is what the "
-             f"identified equations leave unexplained of {target}"]
+    denominator = "forces" if quality["target"] == "forces" else "largest term"
+    lines = [f"fit quality: R^2 = {quality['r2']:.4f} ({per})",
+             f"  R^2 = 1 - |residual|^2 / |{denominator}|^2 over {quality['rows']} rows of the "
+             f"{kind};",
+             f"  1 is exact; the residual is what the identified equations leave unexplained "
+             f"of {target}"]
     if quality["cv_error"] is not None:
         lines.append(f"  held-out relative squared error of the chosen sparsity (5-fold "
                      f"cross-validation): {quality['cv_error']:.3g}")
@@ -932,7 +934,9 @@ def run_identify(args):
     L = 0.16*theta_dot**2 + 0.4*theta_dot*x_dot*cos(theta) + 0.75*x_dot**2 + 3.924*cos(theta)
     (x) 0.4*theta_ddot*cos(theta) - 0.4*theta_dot**2*sin(theta) + 1.5*x_ddot + 0.5*x_dot = tau_x
     (theta) 0.32*theta_ddot + 0.1*theta_dot + 0.4*x_ddot*cos(theta) + 3.924*sin(theta) = tau_theta
-    fit quality: R^2 = 1.0000 (x 1.0000, theta 1.0000) = 1 - |residual|^2 / |forces|^2 over ...
+    fit quality: R^2 = 1.0000 (x 1.0000, theta 1.0000)
+      R^2 = 1 - |residual|^2 / |forces|^2 over 1002 rows of the strong form: equations at ...
+      1 is exact; the residual is what the identified equations leave unexplained of the ...
     against the true model: max coefficient error ... (relative), support recovered: True
     >>> import numpy as np
     >>> len(model.get_feature_names()), int(np.count_nonzero(model.coefficients()))
@@ -1002,8 +1006,8 @@ def run_identify(args):
                            "nothing to simulate")
         result = plot_identification(
             model, dataset.trajectories[0], args.plot, forced=forced,
-            title=f"{system.name}: identified model ({args.catalog} catalog, {solver} "
-                  f"solver, {model.formulation_} form) against trajectory 0")
+            title=f"{system.name}: identified model against trajectory 0\n({args.catalog} "
+                  f"catalog, {solver} solver, {model.formulation_} form)")
         rmse = ", ".join(f"{name} {value:.3g}" for name, value in
                          zip(model.feature_library_.coords.names, result["rmse"], strict=True))
         span = dataset.trajectories[0].t
