@@ -74,8 +74,9 @@ def test_planar_arm_from_one_percent_position_noise():
     assert outcome["valid"]
     coefficients = dict(zip(outcome["model"].get_feature_names(),
                             outcome["model"].coefficients(), strict=True))
-    # the damping of the shoulder (0.2, the largest) is identified, within 20 %
-    assert coefficients["C_shoulder[shoulder_dot]"] == pytest.approx(0.2, rel=0.2)
+    # joint damping from noisy positions (measured: 0.198, 0.101, 0.050 for this seed)
+    assert coefficients["C_shoulder[shoulder_dot]"] == pytest.approx(0.2, rel=0.05)
+    assert coefficients["C_elbow[elbow_dot]"] == pytest.approx(0.1, rel=0.05)
 
 
 @pytest.mark.slow
