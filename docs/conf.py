@@ -86,6 +86,7 @@ GALLERY_REQUIREMENTS = {
     "cart_double_pendulum_mixed.py": ("pysindy_xl", "MixedOptimizer"),
     "jax_batched.py": ("pysindy_xl.jax_dynamics", "simulate_batch"),
     "jax_gradient.py": ("pysindy_xl.jax_dynamics", "simulate"),
+    "identified_cartpole_controller.py": ("pysindy_xl.gym_env", "make_env"),
 }
 
 

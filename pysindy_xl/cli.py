@@ -20,13 +20,15 @@ import time
 
 import numpy as np
 
-__all__ = ["main", "build_parser", "run_demo", "run_identify"]
+__all__ = ["main", "build_parser", "run_demo", "run_identify", "fit_quality",
+           "plot_identification"]
 
 SOLVERS = ("auto", "explicit", "implicit", "mixed")
 CATALOGS = ("lagrange", "classical", "mixed", "kinematic")
 FORCINGS = ("explicit", "implicit", "mixed")
 NOISE_MODELS = ("positions", "all")
 CONSTRAINTS = ("exclude", "known", "include")
+FORMULATIONS = ("auto", "strong", "weak")
 _AUTO_SOLVER = {"explicit": "explicit", "implicit": "implicit", "mixed": "mixed"}
 
 
@@ -132,6 +134,12 @@ def _add_fit_options(parser):
                         help="degree of the velocity monomials of the catalog (default: 2)")
     parser.add_argument("--trig-degree", type=_positive_int, default=2,
                         help="degree of the sin/cos monomials of the catalog (default: 2)")
+    parser.add_argument("--formulation", choices=FORMULATIONS, default="auto",
+                        help="strong: Euler-Lagrange equations at each sample (needs or "
+                             "differentiates velocities and accelerations); weak: equations "
+                             "integrated against test functions on smoothed positions, the "
+                             "robust choice for noisy positions; auto: strong when velocities "
+                             "and accelerations are in the data, weak otherwise (default: auto)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -219,6 +227,12 @@ def build_parser() -> argparse.ArgumentParser:
                                "(default: tau when present)")
     identify.add_argument("--out", default=None, metavar="FILE.json",
                           help="write the fitted model (JSON) there")
+    identify.add_argument("--plot", default=None, metavar="FILE.png",
+                          help="write a validation plot: the identified model simulated from "
+                               "the first trajectory's initial state under its recorded "
+                               "forces, against the recorded positions")
+    identify.add_argument("--quiet", action="store_true",
+                          help="no progress lines (on stderr) during the identification")
 
     generate = sub.add_parser("generate", help="write a MuJoCo dataset (NPZ + JSON)")
     generate.add_argument("system", metavar="SYSTEM")
@@ -365,21 +379,241 @@ def _check_solver(solver, forced, threshold):
     return _optimizer(solver, threshold)
 
 
-def _fit(system, dataset, args, solver, forced):
+def _fit(system, dataset, args, solver, forced, return_arguments=False):
     import pysindy_xl as px
     from pysindy_xl.mujoco.catalogs import reference_catalog
 
     optimizer = _check_solver(solver, forced, args.threshold)
     catalog = reference_catalog(system, args.catalog, velocity_degree=args.velocity_degree,
                                 trig_degree=args.trig_degree, friction=args.friction)
-    model = px.XLSINDy(catalog, optimizer)
+    model = px.XLSINDy(catalog, optimizer, formulation=getattr(args, "formulation", "auto"))
     try:
         arguments = dataset.fit_arguments(forces="tau" if forced else None,
                                           constraints=getattr(args, "constraints", "exclude"))
         model.fit(**arguments)
     except (RuntimeError, ValueError, np.linalg.LinAlgError) as error:
         raise CLIError(f"identification failed ({type(error).__name__}): {error}") from None
+    if return_arguments:
+        return model, arguments
     return model
+
+
+def _regression_matrix(model, arguments):
+    """The fitted model's regression matrix rebuilt on its training data, rows coordinate-major.
+
+    Strong form: the catalog at every sample (derivatives as in ``fit``). Weak form: the
+    smoothed states contracted with the test functions of the fit's width, one block per
+    trajectory long enough for a test function (as in ``fit``).
+    """
+    from pysindy_xl.feature_library import stack_variables
+
+    library, n = model.feature_library_, model.n_coordinates_
+    weak = model.formulation_ == "weak"
+    data = model._trajectories(arguments["x"], arguments.get("t"), arguments.get("x_dot"),
+                               arguments.get("x_ddot"), arguments.get("u"), n,
+                               differentiate=not weak)
+    blocks = []
+    if not weak:
+        for d in data:
+            z = stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"])
+            blocks.append(library.transform(z).reshape(n, len(d["t"]), -1))
+        return np.concatenate(blocks, axis=1).reshape(-1, blocks[0].shape[-1])
+    from pysindy_xl.weak import BumpTestFunctions, WhittakerSmoother
+
+    smoother = model.smoother or WhittakerSmoother()
+    test_functions = model.test_functions or BumpTestFunctions()
+    half_width = model.weak_info_["half_width"]
+    for d in data:
+        if d["t"][-1] - d["t"][0] < 2 * half_width:
+            continue  # left out of the fit too
+        q, qd, qdd = smoother.smooth(d["t"], d["x"])
+        if d["x_dot"] is not None:
+            q, qd = d["x"], d["x_dot"]
+        z = stack_variables(q, qd, qdd, d["u"], d["t"])
+        phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
+        blocks.append(library.weak_transform(z, phi, dphi).reshape(n, phi.shape[0], -1))
+    return np.concatenate(blocks, axis=1).reshape(-1, blocks[0].shape[-1])
+
+
+def fit_quality(model, arguments) -> dict:
+    """R^2 of the identified equations' residual on the training data.
+
+    With ``Theta`` the regression matrix of the fit (weak: equations integrated against the
+    test functions; strong: the equations at every sample) and ``xi`` the identified
+    coefficients, the residual is ``r = Theta xi`` (zero for an exact model) and
+    ``R^2 = 1 - ||r||^2 / ||b||^2``, where ``b`` is the part that the rest of the equations
+    must explain: the generalized-force part ``Theta_F xi_F`` of forced data, or for
+    unforced (implicit) data the largest single term ``Theta_j xi_j``. R^2 = 1 is an exact
+    fit; 0 is no better than predicting zero force.
+
+    Parameters
+    ----------
+    model : XLSINDy
+        A fitted model.
+    arguments : dict
+        The keyword arguments its ``fit`` received (``Dataset.fit_arguments``).
+
+    Returns
+    -------
+    dict
+        ``r2`` (float), ``r2_per_coordinate`` (dict name -> float), ``formulation``,
+        ``target`` (``"forces"`` or the name of the dominant term), ``rows`` (regression
+        rows), and ``cv_error`` (held-out relative squared error of the chosen model size
+        when the optimizer selected the sparsity by cross-validation, else ``None``).
+
+    Raises
+    ------
+    TypeError
+        If ``arguments`` is not a dict with ``x``.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+    >>> t = np.linspace(0, 10, 1001)
+    >>> x = np.cos(2 * t)[:, None]
+    >>> arguments = {"x": x, "t": t, "x_dot": -2 * np.sin(2 * t)[:, None],
+    ...              "x_ddot": -4 * x, "u": -1.0 * x}
+    >>> model = px.XLSINDy(lib).fit(**arguments)
+    >>> quality = fit_quality(model, arguments)
+    >>> round(quality["r2"], 6), quality["formulation"], quality["target"]
+    (1.0, 'strong', 'forces')
+    """
+    if not isinstance(arguments, dict) or "x" not in arguments:
+        raise TypeError("arguments: expected the dict of fit arguments (with 'x'), got "
+                        f"{type(arguments).__name__}")
+    theta = _regression_matrix(model, arguments)
+    coef = model.coef_
+    n = model.n_coordinates_
+    forces = list(model.feature_library_.force_columns_)
+    residual = theta @ coef
+    forced = bool(forces) and np.any(coef[forces] != 0) and np.any(theta[:, forces] != 0)
+    if forced:
+        target, target_name = theta[:, forces] @ coef[forces], "forces"
+    else:
+        norms = np.linalg.norm(theta * coef, axis=0)
+        j = int(np.argmax(norms))
+        target, target_name = theta[:, j] * coef[j], model.get_feature_names()[j]
+
+    def r2(r, b):
+        denominator = float(b @ b)
+        return float(1 - (r @ r) / denominator) if denominator > 0 else float("nan")
+
+    names = model.feature_library_.coords.names
+    per = {name: r2(r, b) for name, r, b in zip(names, residual.reshape(n, -1),
+                                                target.reshape(n, -1), strict=True)}
+    selection = getattr(model, "selection_", None)
+    cv_error = None
+    if selection is not None:
+        cv_error = float(selection.cv_error[selection.size - 1])
+    return {"r2": r2(residual, target), "r2_per_coordinate": per,
+            "formulation": model.formulation_, "target": target_name,
+            "rows": int(theta.shape[0]), "cv_error": cv_error}
+
+
+def _quality_lines(quality):
+    kind = ("weak form: equations integrated against test functions on smoothed positions"
+            if quality["formulation"] == "weak" else "strong form: equations at each sample")
+    target = ("the generalized forces" if quality["target"] == "forces"
+              else f"the largest term {quality['target']} (unforced data)")
+    per = ", ".join(f"{k} {v:.4f}" for k, v in quality["r2_per_coordinate"].items())
+    denominator = "forces" if quality["target"] == "forces" else "largest term"
+    lines = [f"fit quality: R^2 = {quality['r2']:.4f} ({per})",
+             f"  R^2 = 1 - |residual|^2 / |{denominator}|^2 over {quality['rows']} rows of the "
+             f"{kind};",
+             f"  1 is exact; the residual is what the identified equations leave unexplained "
+             f"of {target}"]
+    if quality["cv_error"] is not None:
+        lines.append(f"  held-out relative squared error of the chosen sparsity (5-fold "
+                     f"cross-validation): {quality['cv_error']:.3g}")
+    return lines
+
+
+def plot_identification(model, trajectory, path, title=None, forced=True) -> dict:
+    """Simulate the model from a recorded trajectory's initial state and plot both.
+
+    The model runs under the trajectory's recorded generalized forces (when ``forced``) from
+    its first sample (velocity: the recorded one, or the model's smoother estimate); the
+    figure has one panel per coordinate, recorded positions against simulated ones. Drawn on
+    matplotlib's Agg canvas (no display needed).
+
+    Parameters
+    ----------
+    model : XLSINDy
+        A fitted model with dynamics.
+    trajectory : Trajectory
+        Recorded data (``t``, ``q``, optional ``qd`` and ``tau``).
+    path : str or os.PathLike
+        PNG file to write.
+    title : str, optional
+        Figure title.
+    forced : bool, default True
+        Apply the recorded ``tau`` (ignored when the trajectory has none).
+
+    Returns
+    -------
+    dict
+        ``rmse`` (position RMSE per coordinate over the simulated span), ``simulated_until``
+        (s; the end of the data unless the model diverged) and ``diverged`` (bool).
+
+    Raises
+    ------
+    ValueError
+        If the model has no dynamics (no acceleration term identified).
+
+    Examples
+    --------
+    >>> import numpy as np, pathlib, tempfile, pysindy_xl as px
+    >>> from pysindy_xl.mujoco import Trajectory
+    >>> c = px.Coordinates(["x"])
+    >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+    >>> t = np.linspace(0, 5, 501)
+    >>> x = np.cos(2 * t)[:, None]
+    >>> model = px.XLSINDy(lib).fit(x, t, x_dot=-2 * np.sin(2 * t)[:, None],
+    ...                             x_ddot=-4 * x, u=-1.0 * x)
+    >>> data = Trajectory(t=t, q=x, qd=-2 * np.sin(2 * t)[:, None], tau=-1.0 * x)
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     result = plot_identification(model, data, pathlib.Path(tmp) / "fit.png")
+    ...     written = (pathlib.Path(tmp) / "fit.png").stat().st_size > 0
+    >>> written, result["diverged"], bool(result["rmse"][0] < 1e-3)
+    (True, False, True)
+    """
+    from pysindy_xl.dynamics import DynamicsError
+    from pysindy_xl.mujoco.plots import _figure
+
+    if model.dynamics_ is None:
+        raise ValueError("model: the identified equations contain no acceleration; nothing "
+                         "to simulate")
+    t, q = trajectory.t, trajectory.q
+    qd0 = trajectory.qd[0] if trajectory.qd is not None else model.differentiate(q, t)[0]
+    tau = trajectory.tau if forced and trajectory.tau is not None else None
+    diverged = False
+    try:
+        states = model.simulate(np.r_[q[0], qd0], t, tau, timeout=60.0)
+    except DynamicsError as error:
+        partial = getattr(error, "states", None)
+        states = np.asarray(partial) if partial is not None else np.empty((0, 2 * q.shape[1]))
+        diverged = True
+    k = len(states)
+    rmse = (np.sqrt(np.mean((states[:, :q.shape[1]] - q[:k]) ** 2, axis=0)) if k
+            else np.full(q.shape[1], np.inf))
+    names = model.feature_library_.coords.names
+    figure = _figure(7, 1.8 * len(names) + 0.6)
+    axes = figure.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
+    for i, (ax, name) in enumerate(zip(axes, names, strict=True)):
+        ax.plot(t, q[:, i], color="black", linestyle="--", linewidth=1.2, label="recorded")
+        if k:
+            ax.plot(t[:k], states[:, i], color="tab:blue", linewidth=1.2,
+                    label="identified model")
+        ax.set_ylabel(name)
+    axes[0].legend(loc="upper right", fontsize="small")
+    axes[-1].set_xlabel("t (s)")
+    figure.suptitle(title or "identified model against the data"
+                    + (" (diverged)" if diverged else ""))
+    figure.savefig(path, dpi=110)
+    return {"rmse": rmse, "simulated_until": float(t[k - 1]) if k else float(t[0]),
+            "diverged": diverged}
 
 
 def _coefficient_summary(system, model):
@@ -696,20 +930,39 @@ def run_identify(args):
     ...     path = data.save(pathlib.Path(tmp) / "cart_pole.npz")
     ...     args = build_parser().parse_args(["identify", str(path), "--trig-degree", "1"])
     ...     model = run_identify(args)
-    cart-pole: 1 trajectories, 501 samples, mixed catalog, explicit solver
+    cart-pole: 1 trajectories, 501 samples, mixed catalog, explicit solver, strong formulation
     L = 0.16*theta_dot**2 + 0.4*theta_dot*x_dot*cos(theta) + 0.75*x_dot**2 + 3.924*cos(theta)
     (x) 0.4*theta_ddot*cos(theta) - 0.4*theta_dot**2*sin(theta) + 1.5*x_ddot + 0.5*x_dot = tau_x
     (theta) 0.32*theta_ddot + 0.1*theta_dot + 0.4*x_ddot*cos(theta) + 3.924*sin(theta) = tau_theta
+    fit quality: R^2 = 1.0000 (x 1.0000, theta 1.0000)
+      R^2 = 1 - |residual|^2 / |forces|^2 over 1002 rows of the strong form: equations at ...
+      1 is exact; the residual is what the identified equations leave unexplained of the ...
     against the true model: max coefficient error ... (relative), support recovered: True
     >>> import numpy as np
     >>> len(model.get_feature_names()), int(np.count_nonzero(model.coefficients()))
     (20, 7)
     """
+    quiet = getattr(args, "quiet", True)
+    started = time.perf_counter()
+
+    def progress(message):
+        if not quiet:
+            print(f"[{time.perf_counter() - started:6.1f} s] {message}", file=sys.stderr,
+                  flush=True)
+
     dataset, system = _identify_inputs(args)
     _resolve_catalog(args, system)
-    if not (dataset.has("qd") and dataset.has("qdd")):
-        print("note: velocities/accelerations missing: weak formulation on smoothed positions",
-              file=sys.stderr)
+    if args.plot:
+        _output_file(args.plot, "--plot")
+    measured = dataset.has("qd") and dataset.has("qdd")
+    formulation = args.formulation
+    if formulation == "auto":
+        formulation = "strong" if measured else "weak"
+    if not measured:
+        print("note: velocities/accelerations missing: "
+              + ("weak formulation on smoothed positions" if formulation == "weak" else
+                 "strong formulation on differentiated positions (--formulation weak is the "
+                 "robust choice for noisy positions)"), file=sys.stderr)
     forced = args.forces == "tau" and dataset.has("tau") and any(
         np.any(tr.tau != 0) for tr in dataset.trajectories)
     solver = args.solver
@@ -719,20 +972,52 @@ def run_identify(args):
         else:
             active = np.any(np.vstack([tr.tau for tr in dataset.trajectories]) != 0, axis=0)
             solver = "explicit" if active.all() else "mixed"
-    model = _fit(system, dataset, args, solver, forced)
     n_samples = sum(tr.n_samples for tr in dataset.trajectories)
+    progress(f"building the {args.catalog} catalog of {system.name} and fitting "
+             f"({formulation} form: "
+             + ("smoothing positions, integrating against test functions" if formulation ==
+                "weak" else "catalog at every sample")
+             + f", {solver} regression with sparsity selection) on {n_samples} samples")
+    model, arguments = _fit(system, dataset, args, solver, forced, return_arguments=True)
+    progress(f"fitted: {int(np.count_nonzero(model.coefficients()))} terms of "
+             f"{len(model.get_feature_names())}; computing the fit quality")
     print(f"{system.name}: {dataset.n_trajectories} trajectories, {n_samples} samples, "
-          f"{args.catalog} catalog, {solver} solver")
+          f"{args.catalog} catalog, {solver} solver, {model.formulation_} formulation")
     for line in _model_lines(model):
         print(line)
+    try:
+        quality = fit_quality(model, arguments)
+    except (ValueError, np.linalg.LinAlgError) as error:  # pragma: no cover - reported
+        quality = None
+        print(f"fit quality: not available ({error})")
+    if quality is not None:
+        for line in _quality_lines(quality):
+            print(line)
     if system.has_ground_truth:
         _, summary = _coefficient_summary(system, model)
         print(f"against the true model: max coefficient error "
               f"{summary['max_relative_error']:.2g} (relative), support recovered: "
               f"{summary['support_recovered']}")
+    if args.plot:
+        progress(f"simulating the model from the first trajectory's initial state for "
+                 f"{args.plot}")
+        if model.dynamics_ is None:
+            raise CLIError("--plot: the identified equations contain no acceleration; "
+                           "nothing to simulate")
+        result = plot_identification(
+            model, dataset.trajectories[0], args.plot, forced=forced,
+            title=f"{system.name}: identified model against trajectory 0\n({args.catalog} "
+                  f"catalog, {solver} solver, {model.formulation_} form)")
+        rmse = ", ".join(f"{name} {value:.3g}" for name, value in
+                         zip(model.feature_library_.coords.names, result["rmse"], strict=True))
+        span = dataset.trajectories[0].t
+        status = (f"diverged at {result['simulated_until']:.3g} s" if result["diverged"]
+                  else f"over {span[-1] - span[0]:.3g} s")
+        print(f"validation plot: {args.plot} (position RMSE {rmse}, {status})")
     if args.out:
         _save_atomically(model, args.out)
         print(f"model: {args.out}")
+    progress("done")
     return model
 
 

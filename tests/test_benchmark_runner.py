@@ -34,8 +34,14 @@ def test_grid_follows_the_papers_protocol():
     assert {s for _, s in per_forcing["explicit"]} == {"mixed", "explicit", "pysindy"}
     assert per_forcing["mixed"] == per_forcing["explicit"]
     assert len(settings.trajectories()) == 2 * 3 * 2
-    assert len(tasks) == 12 * 7 and len({t.run_id for t in tasks}) == len(tasks)
-    assert len(all_configurations()) == 10 and len(all_configurations(False)) == 9
+    # per trajectory: 4 catalogs (the paper's 3 + kinematic) x the 2 solvers that apply to
+    # its forcing (mixed + explicit or implicit), + the SINDy baseline = 9 runs
+    assert len(tasks) == 12 * 9 and len({t.run_id for t in tasks}) == len(tasks)
+    assert len(all_configurations()) == 13 and len(all_configurations(False)) == 12
+    assert {(c, s) for c, s in all_configurations() if c == "kinematic"} == {
+        ("kinematic", "mixed"), ("kinematic", "explicit"), ("kinematic", "implicit")}
+    assert {c for t in tasks for c in [t.catalog]} == {"mixed", "lagrange", "classical",
+                                                       "kinematic"}
     # tasks of one trajectory are consecutive, so a worker reuses its data
     keys = [t.trajectory.key for t in tasks]
     assert keys == sorted(keys, key=keys.index)
@@ -50,10 +56,14 @@ def test_run_ids_depend_on_the_data_settings_but_not_the_timeout():
 
 
 def test_presets_scale():
-    assert len(PRESETS["quick"].tasks()) == 252  # 126 with the paper's noise, 126 positions-only
+    # quick: 3 systems x 3 forcings x (2 levels of the paper's noise + 2 positions-only) = 36
+    # trajectories x 9 runs (4 catalogs x 2 applicable solvers + SINDy) = 324
+    assert len(PRESETS["quick"].trajectories()) == 36
+    assert len(PRESETS["quick"].tasks()) == 36 * 9 == 324
     full = PRESETS["full"]
     # the paper's 162 trajectories, plus 108 with positions-only noise (1 % and 5 %)
     assert len(full.trajectories()) == 162 + 108 and full.timeout == 3600.0
+    assert len(full.tasks()) == 270 * 9
 
 
 @pytest.mark.parametrize("changes, match", [
@@ -140,8 +150,9 @@ def test_real_grid_and_report(tmp_path):
     from pysindy_xl.benchmark.cli import main
 
     out = tmp_path / "results"
+    # --position-noise with no level: the quick preset's positions-only trajectories left out
     argv = ["--quick", "--systems", "cart-pole", "--forcing", "explicit", "--noise", "0",
-            "--configs", "mixed:explicit", "sindy", "-j", "1", "--no-progress",
+            "--position-noise", "--configs", "mixed:explicit", "sindy", "-j", "1", "--no-progress",
             "--out", str(out)]
     assert main(argv) == 0
     lines = (out / "records.jsonl").read_text().splitlines()
@@ -224,3 +235,17 @@ def test_positions_only_noise_gives_noisy_positions_and_no_derivatives():
     settings = GridSettings(systems=("cart-pole",), forcings=("explicit",),
                             position_noise_levels=(0.01,))
     assert [s.noise_model for s in settings.trajectories()] == ["all", "positions"]
+
+
+def test_kinematic_catalog_row_runs_end_to_end():
+    """The kinematic-catalog row on clean cart-pole data: exact model, valid, few columns."""
+    settings = GridSettings(systems=("cart-pole",), forcings=("explicit",), duration=3.0,
+                            validation_duration=3.0, sample_every=5, timeout=120.0,
+                            configurations=(("kinematic", "explicit"),), name="test")
+    (task,) = settings.tasks()
+    assert task.config == "kinematic x explicit"
+    record = run_task(task, settings, isolation="none")
+    assert record["status"] == "ok", record["message"]
+    assert record["metrics"]["position_rmse"] < 1e-2
+    # the kinematic catalog of the cart-pole: 9 columns (the paper's mixed one has 38)
+    assert record["model"]["n_features"] == 9

@@ -19,6 +19,7 @@ GALLERY_ORDER = [
     "pysindy_components.py",
     "jax_batched.py",
     "jax_gradient.py",
+    "identified_cartpole_controller.py",
 ]
 
 #: Examples left out of the gallery on purpose: file -> reason. Every example runs during the

@@ -2,8 +2,10 @@
 
 A *trajectory* (the unit the paper ranks on) is one training dataset: a system with a friction
 level, a forcing mode, a noise level and a seed. A *configuration* is a catalog (``mixed``,
-``lagrange``, ``classical``) crossed with a solver (``mixed``, ``explicit``, ``implicit``), plus
-the plain :class:`pysindy.SINDy` baseline (``classical`` catalog, ``pysindy`` solver). A *task*
+``lagrange``, ``classical`` of the paper, and ``kinematic``: the catalog derived from the MJCF
+kinematic tree, :func:`~pysindy_xl.kinematic_catalog`) crossed with a solver (``mixed``,
+``explicit``, ``implicit``), plus the plain :class:`pysindy.SINDy` baseline (``classical``
+catalog, ``pysindy`` solver). A *task*
 is one configuration on one trajectory; it produces one result record.
 
 Which solvers apply to which data follows the paper: the explicit solver needs forces (forcing
@@ -32,7 +34,8 @@ __all__ = [
     "solver_applies",
 ]
 
-CATALOGS = ("mixed", "lagrange", "classical")
+#: The paper's three catalogs, then the kinematic-tree catalog (the row added by issue 12).
+CATALOGS = ("mixed", "lagrange", "classical", "kinematic")
 SOLVERS = ("mixed", "explicit", "implicit")
 #: The extra row: plain pysindy.SINDy (second order) with the classical catalog.
 BASELINE = ("classical", "pysindy")
@@ -56,7 +59,28 @@ def config_label(catalog: str, solver: str) -> str:
 
 
 def all_configurations(include_baseline: bool = True) -> list[tuple[str, str]]:
-    """The 9 catalog x solver configurations of the paper, then the SINDy baseline."""
+    """Catalog x solver configurations, then the SINDy baseline.
+
+    The 9 of the paper (3 catalogs x 3 solvers), the 3 of the kinematic catalog, then the
+    pysindy.SINDy baseline.
+
+    Parameters
+    ----------
+    include_baseline : bool, default True
+        Append the pysindy.SINDy baseline ``("classical", "pysindy")``.
+
+    Returns
+    -------
+    list of (str, str)
+        ``(catalog, solver)`` pairs in table order.
+
+    Examples
+    --------
+    >>> configurations = all_configurations()
+    >>> len(configurations), configurations[-4:]
+    (13, [('kinematic', 'mixed'), ('kinematic', 'explicit'), ('kinematic', 'implicit'), \
+('classical', 'pysindy')])
+    """
     out = [(c, s) for c in CATALOGS for s in SOLVERS]
     return out + [BASELINE] if include_baseline else out
 
@@ -163,7 +187,8 @@ class GridSettings:
     position_noise_levels : tuple
         Further noise levels on the positions only (no velocity or acceleration given).
     configurations : tuple of (catalog, solver)
-        Configurations to run (default: the 9 of the paper and the SINDy baseline).
+        Configurations to run (default: the 9 of the paper, the 3 of the kinematic catalog
+        and the SINDy baseline).
     n_trajectories : int
         Training trajectories per dataset (fitted together).
     duration : float
@@ -294,8 +319,8 @@ def _check_axis(values, name, kind, non_negative=False):
 #: ``quick``: every system and forcing mode, default friction, two levels of the paper's noise
 #: and two of positions-only noise, one seed, short trajectories.
 #: ``full``: the paper's scale (three friction levels, three noise levels, two seeds: 162
-#: trajectories, about 1100 runs, plus 108 trajectories with positions-only noise) with the
-#: paper's 1 h timeout per run.
+#: trajectories, plus 108 trajectories with positions-only noise; 9 runs per trajectory, 2430
+#: in all) with the paper's 1 h timeout per run.
 PRESETS = {
     "quick": GridSettings(
         friction_levels=(1.0,), noise_levels=(0.0, 0.001), seeds=(0,),
