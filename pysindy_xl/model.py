@@ -60,6 +60,21 @@ def _check_array(a, name: str, shape=None, n_columns=None) -> np.ndarray:
     return a
 
 
+def _check_mask(mask, name: str, n_samples: int) -> np.ndarray:
+    """Boolean sample mask (all True when absent)."""
+    if mask is None:
+        return np.ones(n_samples, dtype=bool)
+    mask = np.asarray(mask)
+    if mask.shape != (n_samples,):
+        raise ValueError(f"{name}: expected shape ({n_samples},) (one flag per sample), got "
+                         f"{mask.shape}")
+    if mask.dtype != bool:
+        if not np.issubdtype(mask.dtype, np.number) or not np.isin(mask, (0, 1)).all():
+            raise TypeError(f"{name}: expected booleans (or 0/1), got dtype {mask.dtype}")
+        mask = mask.astype(bool)
+    return mask
+
+
 def _probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndarray:
     """Random points in the bounding box of the data, each variable drawn independently.
 
@@ -211,7 +226,7 @@ class XLSINDy(BaseEstimator):
             raise ValueError("differentiation_method: returned an invalid derivative")
         return result
 
-    def _trajectories(self, x, t, x_dot, x_ddot, u, n, differentiate=True):
+    def _trajectories(self, x, t, x_dot, x_ddot, u, n, differentiate=True, sample_mask=None):
         """Validate the fit/score inputs; returns per-trajectory dicts of arrays.
 
         With ``differentiate=False`` missing velocities and accelerations stay ``None``.
@@ -228,7 +243,8 @@ class XLSINDy(BaseEstimator):
         else:
             ts = [t] * len(xs)
         optional = {}
-        for name, value in (("x_dot", x_dot), ("x_ddot", x_ddot), ("u", u)):
+        for name, value in (("x_dot", x_dot), ("x_ddot", x_ddot), ("u", u),
+                            ("sample_mask", sample_mask)):
             if value is None:
                 optional[name] = [None] * len(xs)
                 continue
@@ -249,7 +265,9 @@ class XLSINDy(BaseEstimator):
             if xk.shape[0] < 5:
                 raise ValueError(f"x{label}: expected at least 5 samples, got {xk.shape[0]}")
             tk = self._times(tk, xk.shape[0], f"t{label}")
-            arrays = {"x": xk, "t": tk}
+            arrays = {"x": xk, "t": tk,
+                      "mask": _check_mask(optional["sample_mask"][k], f"sample_mask{label}",
+                                          xk.shape[0])}
             for name in ("x_dot", "x_ddot", "u"):
                 v = optional[name][k]
                 arrays[name] = None if v is None else _check_array(v, f"{name}{label}", xk.shape)
@@ -278,7 +296,7 @@ class XLSINDy(BaseEstimator):
         return t
 
     # -- fit ---------------------------------------------------------------------------------
-    def fit(self, x, t=None, x_dot=None, x_ddot=None, u=None):
+    def fit(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None):
         """Identify the equations of motion.
 
         Parameters
@@ -293,6 +311,11 @@ class XLSINDy(BaseEstimator):
             when absent.
         u : same layout as ``x``, optional
             Generalized forces (inputs); ``None`` means unforced (implicit identification).
+        sample_mask : bool array (N,) or list of them, optional
+            Samples the equations must explain (``True``); ``False`` marks samples where
+            unmodelled forces act (contacts, joint limits, outliers). The strong form drops
+            their rows; the weak form drops every test function whose support touches one.
+            Differentiation and smoothing still use the whole trajectory.
 
         Returns
         -------
@@ -305,7 +328,7 @@ class XLSINDy(BaseEstimator):
         n = coords.n
         formulation = self._resolve_formulation(x_dot, x_ddot)
         data = self._trajectories(x, t, x_dot, x_ddot, u, n,
-                                  differentiate=formulation == "strong")
+                                  differentiate=formulation == "strong", sample_mask=sample_mask)
         if not any(library.symbolic_matrix_[:, j].free_symbols & set(coords.qdd)
                    for j in range(library.n_output_features_)):
             raise ValueError(
@@ -316,8 +339,11 @@ class XLSINDy(BaseEstimator):
             theta, z, self.weak_info_ = self._weak_regression(library, data)
         else:
             z = np.vstack([
-                stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"]) for d in data
+                stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"])[d["mask"]]
+                for d in data
             ])
+            if len(z) == 0:
+                raise ValueError("sample_mask: no sample left to fit")
             theta, self.weak_info_ = library.transform(z), None
         if self.drop_dependent:
             keep, dropped = independent_columns(
@@ -472,9 +498,17 @@ class XLSINDy(BaseEstimator):
         for k in usable:
             d, z = data[k], states[k]
             phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
+            if not d["mask"].all():  # drop the test functions that see a masked sample
+                clean = (abs(phi) @ (~d["mask"]).astype(float)) == 0
+                phi, dphi = phi[clean], dphi[clean]
+                if phi.shape[0] == 0:
+                    continue
             blocks.append(library.weak_transform(z, phi, dphi).reshape(
                 library.coords.n, phi.shape[0], -1))
             counts.append(phi.shape[0])
+        if not blocks:
+            raise ValueError("sample_mask: every test function touches a masked sample; "
+                             "unmask longer stretches or set a smaller test-function width")
         theta = np.concatenate(blocks, axis=1).reshape(-1, blocks[0].shape[-1])
         info = {"half_width": half_width, "test_functions": counts,
                 "noise": None if noise is None else np.asarray(noise).tolist()}

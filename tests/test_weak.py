@@ -243,3 +243,36 @@ def test_short_pieces_are_left_out_with_a_warning(cart_pole_system):
     with pytest.raises(ValueError, match="shorter than one test function"):
         px.XLSINDy(library, test_functions=BumpTestFunctions(width=1.0)).fit(
             noisy[:150], t[:150], u=data["tau"][:150])
+
+
+@pytest.mark.parametrize("formulation", ["strong", "weak"])
+def test_sample_mask_excludes_unmodelled_forces(cart_pole_system, formulation):
+    """A hidden push (a contact, say) in 8 s < t < 9 s: unmasked it spoils the fit, masked
+    out the law is exact again."""
+    system = cart_pole_system
+    t = np.arange(0.0, 20.0, 0.005)
+    recorded = random_force(system, 11)
+
+    def actual(s):
+        inside = np.asarray((8.0 < s) & (s < 9.0), dtype=float)
+        push = np.array([25.0, 0.0]) * inside[..., None]
+        return recorded(s) + push
+
+    data = system.simulate(random_initial_state(system, 11), t, actual)
+    tau = recorded(t)
+    library = paper_catalog(system.coords, [1])
+    true = _true_coefficients(system, library)
+    kwargs = {"x_dot": data["qd"], "x_ddot": data["qdd"]} if formulation == "strong" else {}
+    spoiled = px.XLSINDy(library, formulation=formulation).fit(data["q"], t, u=tau, **kwargs)
+    mask = ~((7.9 < t) & (t < 9.1))
+    masked = px.XLSINDy(library, formulation=formulation).fit(data["q"], t, u=tau,
+                                                            sample_mask=mask, **kwargs)
+    support = true != 0
+    error = np.abs(masked.coefficients()[support] - true[support]) / np.abs(true[support])
+    assert np.array_equal(masked.coefficients() != 0, support)
+    assert error.max() < 1e-3
+    spoiled_error = np.abs(spoiled.coefficients() - true)[support] / np.abs(true[support])
+    assert not np.array_equal(spoiled.coefficients() != 0, support) or spoiled_error.max() > 0.01
+    with pytest.raises(ValueError, match="sample_mask"):
+        px.XLSINDy(library, formulation=formulation).fit(data["q"], t, u=tau,
+                                                         sample_mask=mask[:-1], **kwargs)
