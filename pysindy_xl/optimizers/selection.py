@@ -43,6 +43,20 @@ def _scaled(x):
     return active, np.where(active, scale, 1.0)
 
 
+def _reduced(x, y):
+    """Unit-RMS columns and their rows reduced once to ``(R, Q^T y)``: every least-squares
+    fit on a subset of the columns is the same on the reduced system. Returns
+    ``(non_zero_columns, reduced_x, reduced_y)``."""
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    active, scale = _scaled(x)
+    xs = x / scale
+    if xs.shape[0] > xs.shape[1]:
+        q_factor, xs = np.linalg.qr(xs)
+        y = q_factor.T @ y
+    return active, xs, y
+
+
 def elimination_path(x, y) -> np.ndarray:
     """Column order from most to least needed, by backward elimination.
 
@@ -65,13 +79,7 @@ def elimination_path(x, y) -> np.ndarray:
     >>> elimination_path(x, y)[:3].tolist()
     [1, 5, 3]
     """
-    x = np.asarray(x, dtype=float)
-    active_mask, scale = _scaled(x)
-    xs = x / scale
-    # reduce the rows once: every least-squares fit on a column subset is the same on (R, Q^T y)
-    if xs.shape[0] > xs.shape[1]:
-        q_factor, r_factor = np.linalg.qr(xs)
-        xs, y = r_factor, q_factor.T @ y
+    active_mask, xs, y = _reduced(x, y)
     active = list(np.flatnonzero(active_mask))
     removed = list(np.flatnonzero(~active_mask))
     while len(active) > xs.shape[0]:
@@ -123,13 +131,7 @@ def forward_path(x, y) -> np.ndarray:
     >>> forward_path(x, x @ [0.0, 3.0, 0.0, 0.01, 0.0, -1.0])[:3].tolist()
     [1, 5, 3]
     """
-    x = np.asarray(x, dtype=float)
-    active_mask, scale = _scaled(x)
-    xs = x / scale
-    residual = np.asarray(y, dtype=float)
-    if xs.shape[0] > xs.shape[1]:
-        q_factor, xs = np.linalg.qr(xs)
-        residual = q_factor.T @ residual
+    active_mask, xs, residual = _reduced(x, y)
     orthogonal = xs.copy()
     chosen = []
     candidates = active_mask.copy()
@@ -146,7 +148,7 @@ def forward_path(x, y) -> np.ndarray:
         orthogonal -= np.outer(direction, direction @ orthogonal)
         chosen.append(j)
         candidates[j] = False
-    rest = [j for j in range(x.shape[1]) if j not in set(chosen)]
+    rest = [j for j in range(xs.shape[1]) if j not in set(chosen)]
     return np.array(chosen + rest, dtype=int)
 
 
