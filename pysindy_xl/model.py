@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import numbers
 import warnings
 
 import numpy as np
 import pysindy as ps
 import sympy as sp
+import threadpoolctl
 from sklearn.base import BaseEstimator, clone
 from sklearn.metrics import r2_score
 from sklearn.utils.validation import check_is_fitted
@@ -137,6 +139,11 @@ class XLSINDy(BaseEstimator):
         Estimates positions and velocities for the weak formulation from noisy positions
         (default ``WhittakerSmoother()``: smoothness chosen from the data). Measured
         ``x_dot`` is used as given.
+    blas_threads : int or None, default 1
+        BLAS threads during ``fit`` (threadpoolctl). The fit's linear algebra is many QR
+        factorizations of tall, narrow matrices, where threads mostly compete: measured on 2
+        loaded cores, a 12,000 x 285 QR takes 0.17 s on one thread and 4.4 s on the default
+        two. ``None`` keeps the library default.
     t_default : float, default 1.0
         Time step used when ``fit`` or ``score`` get no ``t`` (as in PySINDy).
     drop_dependent : bool, default True
@@ -191,7 +198,7 @@ class XLSINDy(BaseEstimator):
 
     def __init__(self, feature_library=None, optimizer=None, differentiation_method=None,
                  drop_dependent=True, formulation="auto", test_functions=None, smoother=None,
-                 t_default=1.0):
+                 t_default=1.0, blas_threads=1):
         self.feature_library = feature_library
         self.optimizer = optimizer
         self.differentiation_method = differentiation_method
@@ -200,6 +207,7 @@ class XLSINDy(BaseEstimator):
         self.test_functions = test_functions
         self.smoother = smoother
         self.t_default = t_default
+        self.blas_threads = blas_threads
 
     # -- data handling -----------------------------------------------------------------------
     def _library(self) -> CatalogRepartition:
@@ -321,6 +329,17 @@ class XLSINDy(BaseEstimator):
         -------
         self
         """
+        threads = self.blas_threads
+        if threads is not None and (not isinstance(threads, numbers.Integral)
+                                    or isinstance(threads, bool) or threads < 1):
+            raise ValueError(f"blas_threads: expected a positive integer or None, got "
+                             f"{threads!r}")
+        if threads is None:
+            return self._fit(x, t, x_dot, x_ddot, u, sample_mask)
+        with threadpoolctl.threadpool_limits(limits=int(threads), user_api="blas"):
+            return self._fit(x, t, x_dot, x_ddot, u, sample_mask)
+
+    def _fit(self, x, t, x_dot, x_ddot, u, sample_mask):
         # a clone: fit never mutates its parameters (the user's catalog stays as given)
         library = clone(self._library())
         library.fit()

@@ -51,10 +51,16 @@ def _reduced(x, y):
     y = np.asarray(y, dtype=float)
     active, scale = _scaled(x)
     xs = x / scale
-    if xs.shape[0] > xs.shape[1]:
-        q_factor, xs = np.linalg.qr(xs)
-        y = q_factor.T @ y
+    if xs.shape[0] > xs.shape[1] + 1:
+        xs, y = _triangular_system(xs, y)
     return active, xs, y
+
+
+def _triangular_system(x, y):
+    """``(R, Q^T y)`` of ``x = Q R`` from one QR of ``[x | y]`` (Q is never formed); the
+    last row carries the residual norm, so least-squares residuals are preserved."""
+    r_factor = scipy.linalg.qr(np.column_stack([x, y]), mode="r", check_finite=False)[0]
+    return r_factor[:, :-1], r_factor[:, -1]
 
 
 def elimination_path(x, y) -> np.ndarray:
@@ -88,14 +94,14 @@ def elimination_path(x, y) -> np.ndarray:
         for j in sorted(pivots[xs.shape[0]:], reverse=True):
             removed.append(active.pop(j))
     while active:
-        sub = xs[:, active]
-        q_sub, r_sub = np.linalg.qr(sub)
+        r_sub, qty = _triangular_system(xs[:, active], y)
+        r_sub, qty = r_sub[: len(active)], qty[: len(active)]
         diag = np.abs(np.diag(r_sub))
         if diag.min(initial=np.inf) <= 1e-12 * diag.max(initial=0.0):
             # an (almost) dependent column: drop the one that the others explain best
             drop_local = [int(np.argmin(diag))]
         else:
-            beta = scipy.linalg.solve_triangular(r_sub, q_sub.T @ y)
+            beta = scipy.linalg.solve_triangular(r_sub, qty)
             inverse = scipy.linalg.solve_triangular(r_sub, np.eye(len(active)))
             increase = beta**2 / np.sum(inverse**2, axis=1)
             # far from the interesting sizes, drop several columns per refit
@@ -190,8 +196,7 @@ def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
         train, test = labels != fold, labels == fold
         if not test.any() or train.sum() < 1:
             continue
-        q_factor, r_factor = np.linalg.qr(x[train])
-        rhs = q_factor.T @ y[train]
+        r_factor, rhs = _triangular_system(x[train], y[train])
         usable = min(size, r_factor.shape[0])
         diag = np.abs(np.diag(r_factor))[:usable]
         ok = diag > 1e-12 * max(diag.max(initial=0.0), 1e-300)
