@@ -51,6 +51,7 @@ API_MODULES = [
     "pysindy_xl.feature_library",
     "pysindy_xl.optimizers",
     "pysindy_xl.weak",
+    "pysindy_xl.diagnostics",
     "pysindy_xl.dynamics",
     "pysindy_xl.jax_dynamics",
     "pysindy_xl.io",

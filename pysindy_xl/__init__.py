@@ -33,7 +33,7 @@ _LAZY = {
     "EnsembleOptimizer": "optimizers",
     "NoLawFoundError": "optimizers",
     "XLSINDy": "model",
-    "IdentificationWarning": "model",
+    "IdentificationWarning": "diagnostics",
     "MassMatrixDynamics": "dynamics",
     "SimulationError": "dynamics",
     "SingularMassMatrixError": "dynamics",
@@ -67,6 +67,7 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
+    from .diagnostics import IdentificationWarning
     from .dynamics import MassMatrixDynamics, SimulationError, SingularMassMatrixError
     from .feature_library import (
         CatalogRepartition,
@@ -75,7 +76,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         LagrangeLibrary,
         stack_variables,
     )
-    from .model import IdentificationWarning, XLSINDy
+    from .model import XLSINDy
     from .mujoco.kinematic import kinematic_catalog
     from .optimizers import (
         EnsembleOptimizer,

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numbers
-import warnings
 
 import numpy as np
 import pysindy as ps
@@ -13,6 +12,12 @@ from sklearn.base import BaseEstimator, clone
 from sklearn.metrics import r2_score
 from sklearn.utils.validation import check_is_fitted
 
+from .diagnostics import (
+    IdentificationWarning,
+    mass_matrices,
+    mass_matrix_report,
+    orient_free_laws,
+)
 from .dynamics import MassMatrixDynamics, _check_times
 from .feature_library import (
     CatalogRepartition,
@@ -22,13 +27,9 @@ from .feature_library import (
 )
 from .optimizers import ExplicitOptimizer, independent_columns
 from .weak import BumpTestFunctions, WhittakerSmoother
+from .weak.regression import weak_regression
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
-
-
-class IdentificationWarning(UserWarning):
-    """The identified model looks wrong on its own training data (e.g. an indefinite mass
-    matrix): it will not simulate faithfully there."""
 
 _FORMULATIONS = ("auto", "strong", "weak")
 
@@ -355,7 +356,9 @@ class XLSINDy(BaseEstimator):
                 "velocities (e.g. q_dot**2) or classical terms in q_ddot"
             )
         if formulation == "weak":
-            theta, z, self.weak_info_ = self._weak_regression(library, data)
+            theta, z, self.weak_info_ = weak_regression(
+                library, data, self.test_functions or BumpTestFunctions(),
+                self.smoother or WhittakerSmoother())
         else:
             z = np.vstack([
                 stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"])[d["mask"]]
@@ -406,73 +409,20 @@ class XLSINDy(BaseEstimator):
         self._check_mass_matrix(z)
         return self
 
-    def _normalize_law_signs(self, mass) -> bool:
-        """Flip implicit laws whose kinetic energy is negative; returns whether any was.
-
-        A law that no force column scales (implicit, or the implicit part of a mixed fit) is
-        defined up to its sign. Coordinates coupled by identified terms form one law; when
-        the mass matrix of such a group is negative definite on every training state, the
-        coefficients of its columns change sign.
-        """
-        matrix = self.feature_library_.symbolic_matrix_
-        active = np.flatnonzero(self.coef_)
-        touches = np.array([[matrix[c, j] != 0 for j in active] for c in range(matrix.shape[0])],
-                           dtype=bool).reshape(matrix.shape[0], len(active))
-        group = np.arange(matrix.shape[0])  # union of coordinates sharing an active column
-        for column in touches.T:
-            members = np.flatnonzero(column)
-            if len(members) > 1:
-                group[np.isin(group, group[members])] = group[members].min()
-        forces = set(self.feature_library_.force_columns_)
-        flipped = False
-        for label in np.unique(group):
-            coordinates = np.flatnonzero(group == label)
-            columns = active[touches[coordinates].any(axis=0)]
-            if forces & set(columns.tolist()):
-                continue  # scaled by a known force: the sign is physical
-            block = mass[:, coordinates][:, :, coordinates]
-            if np.all(np.linalg.eigvalsh(block) < 0):
-                self.coef_[columns] = -self.coef_[columns] + 0.0
-                flipped = True
-        return flipped
-
     def _check_mass_matrix(self, z):
-        """Normalize the sign of an unforced law and warn when ``M(q)`` is not positive
-        definite on the training states (``mass_matrix_check_``)."""
+        """Orient the laws no force scales, then measure ``M(q)`` on the training states
+        (``mass_matrix_check_``; warns when it is not positive definite)."""
         self.mass_matrix_check_ = None
         if self.dynamics_ is None:
             return
-        rows = z[np.unique(np.linspace(0, len(z) - 1, min(len(z), 2000)).astype(int))]
-
-        def eigenvalues():
-            mass, _ = self.dynamics_.mass_and_forcing(rows)
-            mass = (mass + np.swapaxes(mass, 1, 2)) / 2
-            return mass, np.linalg.eigvalsh(mass)
-
-        mass, eig = eigenvalues()
-        if self._normalize_law_signs(mass):
+        mass, eig = mass_matrices(self.dynamics_, z)
+        library = self.feature_library_
+        self.coef_, flipped = orient_free_laws(self.coef_, library.symbolic_matrix_,
+                                               library.force_columns_, mass)
+        if flipped:
             self._build_dynamics()
-            mass, eig = eigenvalues()
-        scale = max(float(np.abs(eig).max()), 1e-300)
-        definite = eig.min(axis=1) > 1e-9 * scale
-        with np.errstate(divide="ignore"):
-            condition = np.where(definite, eig.max(axis=1) / np.abs(eig.min(axis=1)), np.inf)
-        self.mass_matrix_check_ = {
-            "positive_definite_fraction": float(np.mean(definite)),
-            "median_condition": float(np.median(condition)),
-        }
-        if not definite.all():
-            diagonal = np.diagonal(mass, axis1=1, axis2=2)
-            names = [name for i, name in enumerate(self.feature_library_.coords.names)
-                     if np.any(diagonal[:, i] <= 1e-9 * scale)]
-            warnings.warn(
-                f"the identified mass matrix is not positive definite on "
-                f"{np.mean(~definite):.0%} of the training states"
-                + (f"; no positive inertia on {names}" if names else "")
-                + ": the model is wrong there (noise terms, an unidentifiable coordinate, or a "
-                "catalog that cannot express the dynamics) and will not simulate faithfully",
-                IdentificationWarning, stacklevel=3,
-            )
+            mass, eig = mass_matrices(self.dynamics_, z)
+        self.mass_matrix_check_ = mass_matrix_report(mass, eig, library.coords.names)
 
     def _resolve_formulation(self, x_dot, x_ddot) -> str:
         if not isinstance(self.formulation, str) or self.formulation not in _FORMULATIONS:
@@ -482,76 +432,6 @@ class XLSINDy(BaseEstimator):
             return self.formulation
         measured = x_dot is not None and x_ddot is not None
         return "strong" if measured or self.differentiation_method is not None else "weak"
-
-    def _weak_regression(self, library, data):
-        """Weak regression matrix of all trajectories, rows coordinate-major.
-
-        Returns ``(theta, z, info)``: ``z`` stacks the smoothed states (with the smoother's
-        accelerations, used only to probe the catalog for dependent columns).
-        """
-        test_functions = self.test_functions or BumpTestFunctions()
-        smoother = self.smoother or WhittakerSmoother()
-        for name, value, kind in (("test_functions", test_functions, "matrices"),
-                                  ("smoother", smoother, "smooth")):
-            if not callable(getattr(value, kind, None)):
-                raise TypeError(f"{name}: expected an object with a {kind} method, got "
-                                f"{type(value).__name__}")
-        states, noise = [], None
-        for d in data:
-            q, qd, qdd = smoother.smooth(d["t"], d["x"])
-            noise = getattr(smoother, "noise_", None) if noise is None else noise
-            if d["x_dot"] is not None:  # measured velocities are better than estimated ones
-                q, qd = d["x"], d["x_dot"]
-            states.append(stack_variables(q, qd, qdd, d["u"], d["t"]))
-        half_width = self._shared_half_width(test_functions, data)
-        durations = np.array([d["t"][-1] - d["t"][0] for d in data])
-        usable = np.flatnonzero(durations >= 2 * half_width)
-        if len(usable) < len(data):
-            short = np.flatnonzero(durations < 2 * half_width).tolist()
-            warnings.warn(
-                f"x: trajectories {short} are shorter than one test function (support "
-                f"{2 * half_width:.3g} s) and are left out of the weak regression",
-                UserWarning, stacklevel=3,
-            )
-        blocks, counts = [], []
-        for k in usable:
-            d, z = data[k], states[k]
-            phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
-            if not d["mask"].all():  # drop the test functions that see a masked sample
-                clean = (abs(phi) @ (~d["mask"]).astype(float)) == 0
-                phi, dphi = phi[clean], dphi[clean]
-                if phi.shape[0] == 0:
-                    continue
-            blocks.append(library.weak_transform(z, phi, dphi).reshape(
-                library.coords.n, phi.shape[0], -1))
-            counts.append(phi.shape[0])
-        if not blocks:
-            raise ValueError("sample_mask: every test function touches a masked sample; "
-                             "unmask longer stretches or set a smaller test-function width")
-        theta = np.concatenate(blocks, axis=1).reshape(-1, blocks[0].shape[-1])
-        info = {"half_width": half_width, "test_functions": counts,
-                "noise": None if noise is None else np.asarray(noise).tolist()}
-        return theta, np.vstack(states), info
-
-    @staticmethod
-    def _shared_half_width(test_functions, data) -> float:
-        """One test-function width for all trajectories: the narrowest asked for by those at
-        least half as long as the longest (short pieces have unreliable spectra)."""
-        durations = np.array([d["t"][-1] - d["t"][0] for d in data])
-        widths = []
-        for d, duration in zip(data, durations, strict=True):
-            if duration >= durations.max() / 2:
-                try:
-                    widths.append(test_functions.half_width(d["t"], d["x"]))
-                except ValueError:
-                    continue  # shorter than the width it asks for
-        if not widths:
-            raise ValueError(
-                f"x: the trajectories ({durations.max():.3g} s at most) are shorter than one "
-                "test function; record longer trajectories, set a smaller "
-                "BumpTestFunctions(width=...), or use formulation='strong'"
-            )
-        return min(widths)
 
     def _optimizer(self, forced: np.ndarray):
         if self.optimizer is not None:

@@ -1,0 +1,146 @@
+"""Fit-time diagnostics of an identified model on its own training states.
+
+A model can be wrong in ways the regression residual does not show: a mass matrix that is
+indefinite (noise terms, a coordinate without identifiable inertia, a catalog that cannot
+express the dynamics) or a law that no force scales and came out with a negative kinetic
+energy (its sign is arbitrary). :func:`orient_free_laws` fixes the second,
+:func:`mass_matrix_report` measures the first and warns.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+__all__ = ["IdentificationWarning", "mass_matrices", "orient_free_laws", "mass_matrix_report"]
+
+
+class IdentificationWarning(UserWarning):
+    """The identified model looks wrong on its own training data (e.g. an indefinite mass
+    matrix): it will not simulate faithfully there."""
+
+
+def mass_matrices(dynamics, states, max_states: int = 2000):
+    """Symmetrized mass matrices and their eigenvalues on (up to ``max_states``) states.
+
+    Parameters
+    ----------
+    dynamics : MassMatrixDynamics
+    states : array, shape (N, 4n + 1)
+        Stacked variables (:func:`~pysindy_xl.stack_variables`).
+    max_states : int
+
+    Returns
+    -------
+    mass : ndarray, shape (S, n, n)
+    eigenvalues : ndarray, shape (S, n)
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> dyn = px.MassMatrixDynamics(c, [2 * c.qdd[0] + c.q[0]])
+    >>> mass_matrices(dyn, np.zeros((10, 5)))[1][:2]
+    array([[2.],
+           [2.]])
+    """
+    rows = states[np.unique(np.linspace(0, len(states) - 1,
+                                        min(len(states), max_states)).astype(int))]
+    mass, _ = dynamics.mass_and_forcing(rows)
+    mass = (mass + np.swapaxes(mass, 1, 2)) / 2
+    return mass, np.linalg.eigvalsh(mass)
+
+
+def orient_free_laws(coef, symbolic_matrix, force_columns, mass):
+    """Flip the laws that no force scales and whose mass matrix is negative definite.
+
+    Coordinates coupled by identified terms form one law; a law without a non-zero force
+    coefficient (implicit, or the implicit part of a mixed fit) is defined up to its sign.
+
+    Parameters
+    ----------
+    coef : ndarray, shape (F,)
+    symbolic_matrix : sympy.Matrix, shape (n, F)
+    force_columns : sequence of int
+    mass : ndarray, shape (S, n, n)
+        Mass matrices at the training states.
+
+    Returns
+    -------
+    coef : ndarray, shape (F,)
+        A new vector (the input is not modified).
+    flipped : bool
+
+    Examples
+    --------
+    >>> import numpy as np, sympy as sp
+    >>> coef, flipped = orient_free_laws(np.array([0.0, -0.5]), sp.Matrix([[0, 1]]), [0],
+    ...                                  -np.ones((3, 1, 1)))
+    >>> coef, flipped
+    (array([0. , 0.5]), True)
+    """
+    coef = np.array(coef, dtype=float)
+    n = symbolic_matrix.shape[0]
+    active = np.flatnonzero(coef)
+    touches = np.array([[symbolic_matrix[c, j] != 0 for j in active] for c in range(n)],
+                       dtype=bool).reshape(n, len(active))
+    group = np.arange(n)  # union of the coordinates that share an active column
+    for column in touches.T:
+        members = np.flatnonzero(column)
+        if len(members) > 1:
+            group[np.isin(group, group[members])] = group[members].min()
+    forces = {int(j) for j in force_columns if coef[j] != 0}
+    flipped = False
+    for label in np.unique(group):
+        coordinates = np.flatnonzero(group == label)
+        columns = active[touches[coordinates].any(axis=0)]
+        if forces & set(columns.tolist()):
+            continue  # scaled by a known force: the sign is physical
+        if np.all(np.linalg.eigvalsh(mass[:, coordinates][:, :, coordinates]) < 0):
+            coef[columns] = -coef[columns] + 0.0
+            flipped = True
+    return coef, flipped
+
+
+def mass_matrix_report(mass, eigenvalues, names) -> dict:
+    """Fraction of states with a positive definite mass matrix, its median condition number;
+    warns (:class:`IdentificationWarning`) naming coordinates without positive inertia.
+
+    Parameters
+    ----------
+    mass : ndarray, shape (S, n, n)
+    eigenvalues : ndarray, shape (S, n)
+    names : list of str
+        Coordinate names.
+
+    Returns
+    -------
+    dict
+        ``positive_definite_fraction`` and ``median_condition``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> mass = np.array([[[2.0, 0.0], [0.0, 1.0]]] * 3)
+    >>> mass_matrix_report(mass, np.linalg.eigvalsh(mass), ["a", "b"])
+    {'positive_definite_fraction': 1.0, 'median_condition': 2.0}
+    """
+    scale = max(float(np.abs(eigenvalues).max()), 1e-300)
+    definite = eigenvalues.min(axis=1) > 1e-9 * scale
+    with np.errstate(divide="ignore"):
+        condition = np.where(definite,
+                             eigenvalues.max(axis=1) / np.abs(eigenvalues.min(axis=1)), np.inf)
+    if not definite.all():
+        diagonal = np.diagonal(mass, axis1=1, axis2=2)
+        missing = [name for i, name in enumerate(names) if np.any(diagonal[:, i] <= 1e-9 * scale)]
+        warnings.warn(
+            f"the identified mass matrix is not positive definite on {np.mean(~definite):.0%} "
+            "of the training states"
+            + (f"; no positive inertia on {missing}" if missing else "")
+            + ": the model is wrong there (noise terms, an unidentifiable coordinate, or a "
+            "catalog that cannot express the dynamics) and will not simulate faithfully",
+            IdentificationWarning, stacklevel=4,
+        )
+    return {"positive_definite_fraction": float(np.mean(definite)),
+            "median_condition": float(np.median(condition))}

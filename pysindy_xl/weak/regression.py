@@ -1,0 +1,125 @@
+"""The weak regression matrix of several trajectories, as :class:`~pysindy_xl.XLSINDy` fits it.
+
+Each trajectory is smoothed (positions and velocities for the columns' ``P`` and ``Q``), gets
+test functions of one shared width, loses the test functions that touch a masked sample, and
+contributes its ``(n, K, F)`` block; blocks are concatenated along the test functions, so the
+rows stay coordinate-major over all trajectories.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from ..feature_library import stack_variables
+
+__all__ = ["weak_regression", "shared_half_width"]
+
+
+def shared_half_width(test_functions, trajectories) -> float:
+    """One test-function half-width for all trajectories.
+
+    The narrowest width asked for by the trajectories at least half as long as the longest
+    (short pieces have unreliable spectra).
+
+    Parameters
+    ----------
+    test_functions : BumpTestFunctions
+    trajectories : list of dict
+        With keys ``"t"`` (N,) and ``"x"`` (N, n).
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pysindy_xl.weak import BumpTestFunctions
+    >>> t = np.linspace(0, 10, 1001)
+    >>> shared_half_width(BumpTestFunctions(width=0.5), [{"t": t, "x": np.sin(t)[:, None]}])
+    0.5
+    """
+    durations = np.array([d["t"][-1] - d["t"][0] for d in trajectories])
+    widths = []
+    for d, duration in zip(trajectories, durations, strict=True):
+        if duration >= durations.max() / 2:
+            try:
+                widths.append(test_functions.half_width(d["t"], d["x"]))
+            except ValueError:
+                continue  # shorter than the width it asks for
+    if not widths:
+        raise ValueError(
+            f"x: the trajectories ({durations.max():.3g} s at most) are shorter than one "
+            "test function; record longer trajectories, set a smaller "
+            "BumpTestFunctions(width=...), or use formulation='strong'"
+        )
+    return min(widths)
+
+
+def weak_regression(library, trajectories, test_functions, smoother):
+    """Weak regression matrix of all trajectories, rows coordinate-major.
+
+    Parameters
+    ----------
+    library : fitted SymbolicLibrary
+        The catalog (:meth:`~pysindy_xl.feature_library.SymbolicLibrary.weak_transform`).
+    trajectories : list of dict
+        Keys ``"t"``, ``"x"`` (positions), ``"x_dot"`` (measured velocities or None, used as
+        given), ``"u"`` (forces or None) and ``"mask"`` (bool (N,), samples to explain).
+    test_functions : BumpTestFunctions
+    smoother : WhittakerSmoother
+        Anything with ``smooth(t, x) -> (q, qd, qdd)``.
+
+    Returns
+    -------
+    theta : ndarray, shape (n * K, F)
+    states : ndarray, shape (N_total, 4n + 1)
+        The smoothed states of all samples (with the smoother's accelerations, for probing
+        the catalog's dependent columns only).
+    info : dict
+        ``half_width`` (s), ``test_functions`` (count per trajectory used), ``noise`` (the
+        smoother's noise estimate per coordinate on the first trajectory).
+    """
+    for name, value, kind in (("test_functions", test_functions, "matrices"),
+                              ("smoother", smoother, "smooth")):
+        if not callable(getattr(value, kind, None)):
+            raise TypeError(f"{name}: expected an object with a {kind} method, got "
+                            f"{type(value).__name__}")
+    states, noise = [], None
+    for d in trajectories:
+        q, qd, qdd = smoother.smooth(d["t"], d["x"])
+        noise = getattr(smoother, "noise_", None) if noise is None else noise
+        if d["x_dot"] is not None:  # measured velocities are better than estimated ones
+            q, qd = d["x"], d["x_dot"]
+        states.append(stack_variables(q, qd, qdd, d["u"], d["t"]))
+    half_width = shared_half_width(test_functions, trajectories)
+    durations = np.array([d["t"][-1] - d["t"][0] for d in trajectories])
+    usable = np.flatnonzero(durations >= 2 * half_width)
+    if len(usable) < len(trajectories):
+        short = np.flatnonzero(durations < 2 * half_width).tolist()
+        warnings.warn(
+            f"x: trajectories {short} are shorter than one test function (support "
+            f"{2 * half_width:.3g} s) and are left out of the weak regression",
+            UserWarning, stacklevel=4,
+        )
+    blocks, counts = [], []
+    for k in usable:
+        d, z = trajectories[k], states[k]
+        phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
+        if not d["mask"].all():  # drop the test functions that see a masked sample
+            clean = (abs(phi) @ (~d["mask"]).astype(float)) == 0
+            phi, dphi = phi[clean], dphi[clean]
+            if phi.shape[0] == 0:
+                continue
+        blocks.append(library.weak_transform(z, phi, dphi).reshape(
+            library.coords.n, phi.shape[0], -1))
+        counts.append(phi.shape[0])
+    if not blocks:
+        raise ValueError("sample_mask: every test function touches a masked sample; "
+                         "unmask longer stretches or set a smaller test-function width")
+    theta = np.concatenate(blocks, axis=1).reshape(-1, blocks[0].shape[-1])
+    info = {"half_width": half_width, "test_functions": counts,
+            "noise": None if noise is None else np.asarray(noise).tolist()}
+    return theta, np.vstack(states), info
