@@ -192,6 +192,7 @@ class XLSINDy(BaseEstimator):
         if lib is None:
             raise ValueError("feature_library: a catalog is required (e.g. LagrangeLibrary)")
         if isinstance(lib, CatalogRepartition):
+            lib._flat_libraries()  # a catalog nested in itself: a clear error, not recursion
             return lib
         if isinstance(lib, SymbolicLibrary):
             return CatalogRepartition([lib])
@@ -324,6 +325,7 @@ class XLSINDy(BaseEstimator):
                 stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"]) for d in data
             ])
             theta, self.weak_info_ = library.transform(z), None
+        library.check_domain(z)
         if self.drop_dependent:
             keep, dropped = independent_columns(
                 library.transform(_probe_points(z)), library.column_priority()
