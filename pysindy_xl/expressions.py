@@ -44,7 +44,7 @@ _MAX_DEPTH = 100
 _MAX_NUMBER_DIGITS = 40
 _MAX_POWER_DIGITS = 300  # a numeric power may not exceed 10**300 (no huge exact integers)
 # bounds on the work a parsed term may cause (derivatives and expansion of the catalog)
-_MAX_EXPANDED_TERMS = 5_000
+_MAX_EXPANDED_TERMS = 1_000
 _MAX_FUNCTION_DEPTH = 8
 _MAX_OPERATIONS = 2_000
 

@@ -131,6 +131,9 @@ class MixedOptimizer(CatalogOptimizer):
         self.implicit_optimizer = implicit_optimizer
         self.rtol = rtol
 
+    def _check_params(self):
+        check_option("rtol", self.rtol, "real", low=0, high=1, high_open=True)
+
     def _sub_optimizers(self):
         from .explicit import ExplicitOptimizer
 
@@ -172,7 +175,7 @@ class MixedOptimizer(CatalogOptimizer):
         self
         """
         theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns)
-        check_option("rtol", self.rtol, "real", low=0, high=1, high_open=True)
+        self._check_params()
         explicit, implicit = self._sub_optimizers()
         n = int(n_coordinates)
         n_samples = theta.shape[0] // n
