@@ -150,7 +150,7 @@ def check_instance(name: str, value, what: str, method: str | None = None):
 
 
 def check_numeric_array(a, name: str, *, ndim=None, min_samples: int = 1,
-                        finite: bool = True) -> np.ndarray:
+                        finite: bool = True, max_abs: float | None = None) -> np.ndarray:
     """A float array of real numbers, refusing everything that only looks like one.
 
     Complex numbers, strings, booleans, datetimes/timedeltas and objects are refused (NumPy
@@ -168,6 +168,9 @@ def check_numeric_array(a, name: str, *, ndim=None, min_samples: int = 1,
         Minimal length of the first axis (0 accepts empty arrays).
     finite : bool
         Refuse NaN and inf.
+    max_abs : float, optional
+        Refuse values larger in magnitude (products and squares of the data must not
+        overflow).
 
     Returns
     -------
@@ -230,6 +233,12 @@ def check_numeric_array(a, name: str, *, ndim=None, min_samples: int = 1,
                          f"{'s' if min_samples > 1 else ''}, got shape {out.shape}")
     if finite and not np.all(np.isfinite(out)):
         raise ValueError(f"{name}: contains NaN or inf")
+    if max_abs is not None and out.size:
+        with np.errstate(invalid="ignore"):
+            largest = np.nanmax(np.abs(np.where(np.isfinite(out), out, 0.0)))
+        if largest > max_abs:
+            raise ValueError(f"{name}: values up to {largest:.3g} in magnitude are too large "
+                             f"(at most {max_abs:.0e}); rescale the data (other units)")
     return out
 
 

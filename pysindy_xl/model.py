@@ -30,6 +30,7 @@ class IdentificationWarning(UserWarning):
     matrix): it will not simulate faithfully there."""
 
 _FORMULATIONS = ("auto", "strong", "weak")
+_MAX_ABS = 1e100  # larger data overflow in the products and squares of the regression
 
 
 def _as_list(value, name: str) -> tuple[list, bool]:
@@ -61,7 +62,7 @@ def _check_array(a, name: str, shape=None, n_columns=None) -> np.ndarray:
         raise ValueError(f"{name}: expected a non-empty array, got shape {a.shape}")
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name}: contains NaN or inf")
-    return a
+    return check_numeric_array(a, name, max_abs=_MAX_ABS)
 
 
 def _probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndarray:
