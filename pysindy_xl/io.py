@@ -88,8 +88,8 @@ def _check_writable(path) -> None:
             from None
     if isinstance(path, bytes):
         path = os.fsdecode(path)
-    if not path:
-        raise ValueError("path: expected a file name, got an empty string")
+    if not path or "\x00" in path:
+        raise ValueError(f"path: expected a file name, got {path!r}")
     if os.path.isdir(path):
         raise ValueError(f"path: {path!r} is a directory; give a file name such as "
                          f"{os.path.join(path, 'model.json')!r}")
