@@ -90,16 +90,20 @@ def test_predict_array_classes(fitted, data):
 
 
 def test_predict_overflow_is_an_error():
-    # a cubic force law overflows at 1e200: a clear error, not inf
-    lib = _library([XD**2, X**2, X**4])
+    # values beyond 1e100 are refused; an equation that overflows below that is an error too
+    lib = _library([XD**2, X**2, sp.exp(X)])
     t = np.linspace(0, 8, N)
     x = (np.cos(2 * t) + 0.1 * t)[:, None]
     xd, xdd = (-2 * np.sin(2 * t) + 0.1)[:, None], (-4 * np.cos(2 * t))[:, None]
-    model = px.XLSINDy(lib, px.ExplicitOptimizer()).fit(x, t, xd, xdd, u=xdd + 3 * x + x**3)
-    assert model.coefficients()[3] != 0
-    np.testing.assert_allclose(model.predict(x, xd, xdd + 3 * x + x**3), xdd, atol=1e-6)
-    with pytest.raises(ValueError, match=r"x: the identified equations are not finite"):
+    u = xdd + 3 * x + np.exp(x)  # L = xd^2/2 - 3/2 x^2 - exp(x)
+    model = px.XLSINDy(lib, px.ExplicitOptimizer()).fit(x, t, xd, xdd, u=u)
+    np.testing.assert_allclose(model.coefficients(), [-1.0, 0.5, -1.5, -1.0], atol=1e-6)
+    np.testing.assert_allclose(model.predict(x, xd, u), xdd, atol=1e-6)
+    with pytest.raises(ValueError, match=r"x: values up to 1e\+200 in magnitude are too large"):
         model.predict(np.full((3, 1), 1e200), np.zeros((3, 1)))
+    with pytest.raises(ValueError, match=r"x: the identified equations are not finite .* at 2 "
+                                         r"of 3 samples, first at sample 1"):
+        model.predict(np.array([[0.5], [1e3], [800.0]]), np.zeros((3, 1)))
 
 
 def test_fractional_force_column_index():
