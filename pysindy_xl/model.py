@@ -333,6 +333,7 @@ class XLSINDy(BaseEstimator):
             )
         else:
             keep, dropped = np.arange(theta.shape[1]), {}
+        self._check_force_scale(theta, library, dropped)
         force_columns = [int(np.flatnonzero(keep == j)[0]) for j in library.force_columns_
                          if j in keep]
         forced = np.zeros(n, dtype=bool)
@@ -388,6 +389,18 @@ class XLSINDy(BaseEstimator):
             if all(np.ptp(d["x"][:, i]) == 0 for d in data):
                 raise ValueError(f"x: coordinate {name!r} is constant on every sample; a "
                                  "coordinate that never moves carries no dynamics to identify")
+
+    @staticmethod
+    def _check_force_scale(theta, library, dropped):
+        """Forces given but negligible next to the catalog columns: a units problem, said so."""
+        for j in library.force_columns_:
+            if dropped.get(j) == "zero column" and np.any(theta[:, j] != 0):
+                ratio = np.abs(theta[:, j]).max() / np.abs(theta).max()
+                raise ValueError(
+                    f"u: the forces are {ratio:.1e} times the largest catalog column and vanish "
+                    "next to it at double precision; express positions and forces in units of "
+                    "comparable magnitude (e.g. metres and newtons rather than micrometres)"
+                )
 
     def _normalize_law_signs(self, mass) -> bool:
         """Flip implicit laws whose kinetic energy is negative; returns whether any was.
