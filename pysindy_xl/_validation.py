@@ -196,6 +196,9 @@ def check_numeric_array(a, name: str, *, ndim=None, min_samples: int = 1,
     if isinstance(a, type):
         raise TypeError(f"{name}: expected an array of real numbers, got the class "
                         f"{a.__name__}")
+    if hasattr(a, "tocsr") and hasattr(a, "nnz"):  # scipy.sparse, without importing it
+        raise TypeError(f"{name}: sparse input is not supported; pass a dense array "
+                        "(e.g. X.toarray())")
     try:
         raw = np.asarray(a)
     except (TypeError, ValueError) as err:

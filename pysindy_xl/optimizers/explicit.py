@@ -214,6 +214,7 @@ class ExplicitOptimizer(CatalogOptimizer):
                 "force (use ImplicitOptimizer or MixedOptimizer for unforced data)"
             )
         self.selection_ = None
+        self.n_features_in_ = X.shape[1]
         self.coef_ = self._solve(X, y, n_blocks)
         self.support_ = self.coef_ != 0
         return self
@@ -306,5 +307,6 @@ class ExplicitOptimizer(CatalogOptimizer):
         coef[rest] = self.coef_
         coef[force_columns] = -1.0
         self.coef_ = coef
+        self.n_features_in_ = theta.shape[1]
         self.support_ = coef != 0
         return self
