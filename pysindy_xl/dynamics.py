@@ -210,7 +210,13 @@ class MassMatrixDynamics:
     def __init__(self, coords: Coordinates, equations):
         if not isinstance(coords, Coordinates):
             raise TypeError(f"coords: expected Coordinates, got {type(coords).__name__}")
-        equations = [sp.sympify(e) for e in equations]
+        from .expressions import as_expression
+
+        if isinstance(equations, (str, sp.Basic)) or not hasattr(equations, "__iter__"):
+            raise TypeError("equations: expected a list of expressions, one per coordinate")
+        table = coords.symbol_table()
+        equations = [as_expression(e, table, f"equations[{k}]")
+                     for k, e in enumerate(equations)]
         if len(equations) != coords.n:
             raise ValueError(f"equations: expected {coords.n} equations, got {len(equations)}")
         qdd = sp.Matrix(coords.qdd)

@@ -9,13 +9,15 @@ Nothing in a file can make it execute code.
 from __future__ import annotations
 
 import math
+import numbers
 import re
 
+import numpy as np
 import sympy as sp
 from sympy.printing.str import StrPrinter
 
 __all__ = ["parse_expression", "format_expression", "check_real_expression", "check_term",
-           "expression_size", "FUNCTIONS"]
+           "expression_size", "as_expression", "FUNCTIONS"]
 
 FUNCTIONS = {
     "sin": sp.sin,
@@ -321,7 +323,9 @@ def expression_size(expr: sp.Expr) -> dict:
         memo[e] = out
         return out
 
-    terms, depth, ops = visit(sp.sympify(expr))
+    if not isinstance(expr, sp.Basic):
+        raise TypeError(f"expr: expected a sympy expression, got {type(expr).__name__}")
+    terms, depth, ops = visit(expr)
     return {"terms": int(terms), "depth": int(depth), "operations": int(ops)}
 
 
@@ -401,3 +405,50 @@ def check_real_expression(expr: sp.Expr, name: str) -> None:
     except (OverflowError, RecursionError):
         raise ValueError(f"{name}: a number in the expression is too large to evaluate") \
             from None
+
+
+def as_expression(value, symbols: dict[str, sp.Symbol], name: str) -> sp.Expr:
+    """A sympy expression from a user's value: strings go through the restricted grammar.
+
+    ``sympify`` evaluates Python; public helpers that accept strings use this instead.
+
+    Parameters
+    ----------
+    value : sympy.Expr, str or real number
+    symbols : dict of str to sympy.Symbol
+        The names a string may use (e.g. ``Coordinates.symbol_table()``).
+    name : str
+        Argument name used in the error messages.
+
+    Returns
+    -------
+    sympy.Expr
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> x = sp.Symbol("x", real=True)
+    >>> as_expression("2*x**2", {"x": x}, "lagrangian") == 2 * x**2
+    True
+    >>> as_expression("__import__('os')", {"x": x}, "lagrangian")
+    Traceback (most recent call last):
+    ...
+    ValueError: lagrangian: cannot parse expression "__import__('os')": unexpected "'os')"
+    """
+    if isinstance(value, str):
+        try:
+            return parse_expression(value, symbols)
+        except ValueError as err:
+            message = str(err)
+            for prefix in ("text: ", ):
+                message = message.removeprefix(prefix)
+            raise ValueError(f"{name}: {message}") from None
+    if isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name}: expected a sympy expression or a string, got a bool")
+    if isinstance(value, numbers.Real):
+        return sp.Float(float(value)) if not isinstance(value, numbers.Integral) else \
+            sp.Integer(int(value))
+    if isinstance(value, sp.Expr):
+        return value
+    raise TypeError(f"{name}: expected a sympy expression or a string, got "
+                    f"{type(value).__name__}")

@@ -24,7 +24,7 @@ class Coordinates:
     Parameters
     ----------
     names : sequence of str
-        Names of the coordinates, valid Python identifiers, unique.
+        Names of the coordinates, ASCII Python identifiers, unique.
 
     Attributes
     ----------
@@ -53,6 +53,11 @@ class Coordinates:
         for name in names:
             if not isinstance(name, str) or not name.isidentifier() or keyword.iskeyword(name):
                 raise ValueError(f"names: {name!r} is not a valid identifier")
+            if not name.isascii():
+                raise ValueError(
+                    f"names: {name!r} is not ASCII; coordinate names must be ASCII identifiers "
+                    "(saved models spell them in the restricted term grammar), e.g. 'theta'"
+                )
             if (name in _RESERVED or name.startswith("tau_")
                     or name.endswith(("_dot", "_ddot"))):
                 raise ValueError(

@@ -288,3 +288,30 @@ def test_check_numeric_array_and_indices():
     assert check_indices(np.array([2, 0]), "i", 3).tolist() == [2, 0]
     with pytest.raises(ValueError, match=r"i: indices must lie in \[0, 3\)"):
         check_indices([3], "i", 3)
+
+
+# -- strings in public helpers: the restricted grammar, never sympify ---------------------------
+def test_mass_matrix_dynamics_parses_strings_with_the_grammar():
+    dynamics = px.MassMatrixDynamics(COORDS, ["2*x_ddot + 3*x - tau_x"])
+    assert dynamics.mass_matrix_expr == sp.Matrix([[2]])
+    with pytest.raises(ValueError, match=r"equations\[0\]: cannot parse expression"):
+        px.MassMatrixDynamics(COORDS, ['__import__("os").system("true")'])
+    with pytest.raises(TypeError, match=r"equations: expected a list of expressions"):
+        px.MassMatrixDynamics(COORDS, "x_ddot + x")
+
+
+def test_ideal_coefficients_parses_strings_with_the_grammar():
+    lib = px.LagrangeLibrary(COORDS, [XD**2, X**2]) + px.ClassicalLibrary(COORDS, [XD])
+    np.testing.assert_allclose(
+        lib.ideal_coefficients(lagrangian="x_dot**2/2 - 2*x**2", classical={("x_dot", 0): 0.1}),
+        [-1.0, 0.5, -2.0, 0.1])
+    with pytest.raises(ValueError, match=r"lagrangian: cannot parse expression 'eval\(1\)': "
+                                         r"unknown function 'eval'"):
+        lib.ideal_coefficients(lagrangian="eval(1)")
+
+
+@pytest.mark.parametrize("names", [["θ"], ["x", "ｘ"], ["café"]])
+def test_non_ascii_coordinate_names(names):
+    # accepted before, saved, and then the file did not load (or collided after normalization)
+    with pytest.raises(ValueError, match=r"names: .* is not ASCII"):
+        px.Coordinates(names)

@@ -194,7 +194,10 @@ class CatalogRepartition(SymbolicLibrary):
         xi = np.zeros(self.n_output_features_)
         xi[self.force_columns_] = forces
         if lagrangian is not None:
-            self._match_lagrangian(sp.sympify(lagrangian), xi)
+            from ..expressions import as_expression
+
+            self._match_lagrangian(
+                as_expression(lagrangian, self.coords.symbol_table(), "lagrangian"), xi)
         for key, value in (classical or {}).items():
             xi[self._classical_index(key)] += float(value)
         return xi
@@ -242,7 +245,9 @@ class CatalogRepartition(SymbolicLibrary):
             if coord not in self.coords.names:
                 raise ValueError(f"classical: unknown coordinate {coord!r}")
             coord = self.coords.names.index(coord)
-        term = sp.sympify(term)
+        from ..expressions import as_expression
+
+        term = as_expression(term, self.coords.symbol_table(), "classical")
         for lib, sl in zip(self.libraries_, self.slices_, strict=True):
             if isinstance(lib, ClassicalLibrary):
                 j = sl.start
