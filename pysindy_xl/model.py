@@ -771,6 +771,7 @@ class XLSINDy(BaseEstimator):
         float
         """
         self._require_dynamics()
+        check_instance("metric", metric, "a function metric(true, predicted)", "__call__")
         data = self._trajectories(x, t, x_dot, x_ddot, u, self.n_coordinates_)
         true = np.vstack([d["x_ddot"] for d in data])
         predicted = np.vstack([

@@ -315,3 +315,10 @@ def test_non_ascii_coordinate_names(names):
     # accepted before, saved, and then the file did not load (or collided after normalization)
     with pytest.raises(ValueError, match=r"names: .* is not ASCII"):
         px.Coordinates(names)
+
+
+def test_score_metric_must_be_a_function(fitted, data):
+    assert fitted.score(**data) == pytest.approx(1.0, abs=1e-9)
+    with pytest.raises(TypeError, match=r"metric: expected a function metric\(true, predicted\) "
+                                        r"with a __call__ method, got str"):
+        fitted.score(**data, metric="r2")
