@@ -15,6 +15,7 @@ import scipy.integrate
 import scipy.interpolate
 import sympy as sp
 
+from ._validation import check_numeric_array, check_option
 from .feature_library._base import compile_entries, stack_variables
 from .symbols import Coordinates
 
@@ -209,7 +210,13 @@ class MassMatrixDynamics:
     def __init__(self, coords: Coordinates, equations):
         if not isinstance(coords, Coordinates):
             raise TypeError(f"coords: expected Coordinates, got {type(coords).__name__}")
-        equations = [sp.sympify(e) for e in equations]
+        from .expressions import as_expression
+
+        if isinstance(equations, (str, sp.Basic)) or not hasattr(equations, "__iter__"):
+            raise TypeError("equations: expected a list of expressions, one per coordinate")
+        table = coords.symbol_table()
+        equations = [as_expression(e, table, f"equations[{k}]")
+                     for k, e in enumerate(equations)]
         if len(equations) != coords.n:
             raise ValueError(f"equations: expected {coords.n} equations, got {len(equations)}")
         qdd = sp.Matrix(coords.qdd)
@@ -299,12 +306,7 @@ class MassMatrixDynamics:
         for name, value in arrays.items():
             if value is None:
                 continue
-            try:
-                arrays[name] = np.asarray(value, dtype=float)
-            except (TypeError, ValueError):
-                raise TypeError(f"{name}: expected a numeric array") from None
-            if not np.all(np.isfinite(arrays[name])):
-                raise ValueError(f"{name}: contains NaN or inf")
+            arrays[name] = check_numeric_array(value, name, min_samples=0)
         z = stack_variables(arrays["q"], arrays["qd"], None, arrays["tau"], arrays["t"])
         mass, force = self.mass_and_forcing(z)
         singular = self._singular(mass, rcond)
@@ -417,7 +419,16 @@ class MassMatrixDynamics:
             or timeout; carries the valid part of the trajectory.
         """
         n = self._n
-        x0 = np.asarray(x0, dtype=float).reshape(-1)
+        rtol = check_option("rtol", rtol, "real", low=0, low_open=True)
+        atol = check_option("atol", atol, "real", low=0)
+        divergence_bound = check_option("divergence_bound", divergence_bound, "real", low=0,
+                                        low_open=True, allow_inf=True)
+        max_evaluations = check_option("max_evaluations", max_evaluations, "int", low=1)
+        timeout = check_option("timeout", timeout, "real", low=0,
+                               allow_none=True, allow_inf=True)
+        if not isinstance(method, str) and not isinstance(method, type):
+            raise TypeError(f"method: expected a solver name, got {type(method).__name__}")
+        x0 = check_numeric_array(x0, "x0", finite=False, min_samples=0).reshape(-1)
         if x0.shape != (2 * n,) or not np.all(np.isfinite(x0)):
             raise ValueError(f"x0: expected {2 * n} finite values [q, qd], got {x0.shape}")
         t = _check_times(t, "t")
@@ -489,7 +500,7 @@ class _Stop(Exception):
 
 
 def _check_times(t, name: str) -> np.ndarray:
-    t = np.asarray(t, dtype=float)
+    t = check_numeric_array(t, name, finite=False, min_samples=0)
     if t.ndim != 1 or len(t) < 2:
         raise ValueError(f"{name}: expected a 1-D array of at least 2 times, got shape {t.shape}")
     if not np.all(np.isfinite(t)):

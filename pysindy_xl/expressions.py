@@ -9,12 +9,15 @@ Nothing in a file can make it execute code.
 from __future__ import annotations
 
 import math
+import numbers
 import re
 
+import numpy as np
 import sympy as sp
 from sympy.printing.str import StrPrinter
 
-__all__ = ["parse_expression", "format_expression", "check_real_expression", "FUNCTIONS"]
+__all__ = ["parse_expression", "format_expression", "check_real_expression", "check_term",
+           "expression_size", "as_expression", "FUNCTIONS"]
 
 FUNCTIONS = {
     "sin": sp.sin,
@@ -42,6 +45,10 @@ _MAX_LENGTH = 20_000
 _MAX_DEPTH = 100
 _MAX_NUMBER_DIGITS = 40
 _MAX_POWER_DIGITS = 300  # a numeric power may not exceed 10**300 (no huge exact integers)
+# bounds on the work a parsed term may cause (derivatives and expansion of the catalog)
+_MAX_EXPANDED_TERMS = 1_000
+_MAX_FUNCTION_DEPTH = 8
+_MAX_OPERATIONS = 2_000
 
 
 def _tokenize(text: str) -> list[tuple[str, str]]:
@@ -160,8 +167,15 @@ class _Parser:
         if self.peek()[1] in ("**", "^"):
             self.take()
             exponent = self.nested(self.unary)
-            if base.is_number and exponent.is_number:
+            if not exponent.is_number:
+                raise self.error(f"the exponent {exponent} is not a number (symbolic powers "
+                                 "such as power towers are not catalog terms)")
+            if base.is_number:
                 self.check_numeric_power(base, exponent)
+            elif exponent.is_real is not True or exponent.is_finite is not True:
+                raise self.error(f"the exponent {exponent} is not a finite real number")
+            elif abs(float(exponent)) > 1000:
+                raise self.error(f"the exponent {exponent} is too large")
             return base**exponent
         return base
 
@@ -173,6 +187,15 @@ class _Parser:
             raise self.error("unsupported numeric power") from None
         if abs(float(exponent)) > 1000 or size > _MAX_POWER_DIGITS:
             raise self.error(f"numeric power {base}**{exponent} is too large")
+
+    def check_numeric_value(self, value):
+        # a number such as exp(exp(100)) would overflow (or hang) wherever it is evaluated
+        try:
+            number = complex(sp.N(value, 17))
+        except (TypeError, ValueError, OverflowError, RecursionError):
+            raise self.error(f"cannot evaluate the number {str(value)[:40]}") from None
+        if not (math.isfinite(number.real) and math.isfinite(number.imag)) or abs(number) > 1e300:
+            raise self.error(f"the number {str(value)[:40]} is too large")
 
     def atom(self):
         kind, token = self.take()
@@ -193,7 +216,10 @@ class _Parser:
                 self.take("(")
                 arg = self.nested(self.sum)
                 self.take(")")
-                return FUNCTIONS[token](arg)
+                value = FUNCTIONS[token](arg)
+                if value.is_number:
+                    self.check_numeric_value(value)
+                return value
             if token in self.symbols:
                 return self.symbols[token]
             if token in _CONSTANTS:
@@ -229,9 +255,125 @@ def parse_expression(text: str, symbols: dict[str, sp.Symbol]) -> sp.Expr:
         raise ValueError(f"text: expression longer than {_MAX_LENGTH} characters")
     if not text.strip():
         raise ValueError("text: empty expression")
-    expr = _Parser(text, symbols).parse()
+    try:
+        expr = _Parser(text, symbols).parse()
+    except (RecursionError, OverflowError, MemoryError):
+        raise ValueError(f"text: expression {text[:60]!r} is too complex to parse") from None
+    size = expression_size(expr)
+    if size["depth"] > _MAX_FUNCTION_DEPTH:
+        raise ValueError(f"text: {text[:60]!r} nests functions {size['depth']} deep (at most "
+                         f"{_MAX_FUNCTION_DEPTH})")
+    if size["terms"] > _MAX_EXPANDED_TERMS or size["operations"] > _MAX_OPERATIONS:
+        raise ValueError(
+            f"text: {text[:60]!r} is too large for a catalog term (about {size['terms']:.3g} "
+            f"terms once expanded, {size['operations']} operations; at most "
+            f"{_MAX_EXPANDED_TERMS} and {_MAX_OPERATIONS})")
     check_real_expression(expr, "text")
+    check_term(expr, "text")
     return expr
+
+
+def expression_size(expr: sp.Expr) -> dict:
+    """Cheap upper bounds on the work an expression causes, computed without expanding it.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+
+    Returns
+    -------
+    dict
+        ``terms``: an upper bound on the number of terms of ``sympy.expand(expr)`` (a power
+        ``(a + b + ...)**n`` of ``k`` terms counts ``C(n + k - 1, k - 1)``; a function call
+        counts the size of its argument); ``depth``: the nesting depth of function calls;
+        ``operations``: the number of nodes of the expression tree.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> a, b = sp.symbols("a b")
+    >>> expression_size((a + b) ** 3 * sp.sin(sp.cos(a)))
+    {'terms': 4, 'depth': 2, 'operations': 9}
+    """
+    memo: dict = {}
+
+    def visit(e):
+        if e in memo:
+            return memo[e]
+        if e.is_Atom:
+            out = (1, 0, 1)
+        else:
+            parts = [visit(a) for a in e.args]
+            ops = 1 + sum(p[2] for p in parts)
+            depth = max(p[1] for p in parts)
+            if isinstance(e, sp.Add):
+                terms = sum(p[0] for p in parts)
+            elif isinstance(e, sp.Mul):
+                terms = math.prod(p[0] for p in parts)
+            elif isinstance(e, sp.Pow):
+                k, exponent = parts[0][0], e.exp
+                if exponent.is_Integer and exponent > 0:
+                    n = int(exponent)
+                    terms = math.comb(n + k - 1, k - 1) if k > 1 else 1
+                else:
+                    terms = k
+            else:  # a function call: one atom, whose derivatives repeat its argument
+                terms, depth = parts[0][0] if parts else 1, depth + 1
+            out = (min(terms, 10**18), depth, ops)
+        memo[e] = out
+        return out
+
+    if not isinstance(expr, sp.Basic):
+        raise TypeError(f"expr: expected a sympy expression, got {type(expr).__name__}")
+    terms, depth, ops = visit(expr)
+    return {"terms": int(terms), "depth": int(depth), "operations": int(ops)}
+
+
+def check_term(expr, name: str) -> None:
+    """Raise if ``expr`` is not an evaluable catalog term (one layer for symbolic terms).
+
+    A catalog term is built from numbers, symbols, ``+ - * / **`` and the functions of
+    :data:`FUNCTIONS` only: derivatives, integrals, undefined functions, relations and other
+    sympy objects cannot be evaluated on data (nor saved and loaded).
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+    name : str
+        Argument name used in the error message.
+
+    Raises
+    ------
+    TypeError
+        When ``expr`` is not a sympy expression.
+    ValueError
+        When it contains something other than the grammar's operations and functions.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> x = sp.Symbol("x")
+    >>> check_term(sp.cos(x) * x**2, "terms")
+    >>> check_term(sp.Derivative(sp.Function("f")(x), x), "terms")
+    Traceback (most recent call last):
+    ...
+    ValueError: terms: Derivative(f(x), x) contains Derivative, ...
+    """
+    if not isinstance(expr, sp.Expr):
+        raise TypeError(f"{name}: expected a sympy expression, got {type(expr).__name__}")
+    allowed = tuple({f for f in FUNCTIONS.values() if isinstance(f, type)})
+    for sub in sp.preorder_traversal(expr):
+        if sub.is_Atom or isinstance(sub, (sp.Add, sp.Mul, sp.Pow)):
+            if isinstance(sub, sp.Atom) and not (sub.is_Symbol or sub.is_number):
+                raise ValueError(f"{name}: {expr} contains {sub}, which is not a number nor a "
+                                 "symbol")
+            continue
+        if isinstance(sub, allowed):
+            continue
+        raise ValueError(
+            f"{name}: {expr} contains {type(sub).__name__}, which a catalog term cannot hold "
+            f"(only numbers, symbols, + - * / ** and the functions {sorted(FUNCTIONS)}); "
+            "a term must be differentiable twice and evaluable on data")
 
 
 def check_real_expression(expr: sp.Expr, name: str) -> None:
@@ -255,6 +397,58 @@ def check_real_expression(expr: sp.Expr, name: str) -> None:
     ...
     ValueError: terms: I*x contains the non-real or infinite number I
     """
-    for sub in sp.preorder_traversal(expr):
-        if sub.is_number and (sub.is_real is not True or sub.is_finite is False):
-            raise ValueError(f"{name}: {expr} contains the non-real or infinite number {sub}")
+    try:
+        for sub in sp.preorder_traversal(expr):
+            if sub.is_number and (sub.is_real is not True or sub.is_finite is False):
+                raise ValueError(f"{name}: {expr} contains the non-real or infinite number "
+                                 f"{sub}")
+    except (OverflowError, RecursionError):
+        raise ValueError(f"{name}: a number in the expression is too large to evaluate") \
+            from None
+
+
+def as_expression(value, symbols: dict[str, sp.Symbol], name: str) -> sp.Expr:
+    """A sympy expression from a user's value: strings go through the restricted grammar.
+
+    ``sympify`` evaluates Python; public helpers that accept strings use this instead.
+
+    Parameters
+    ----------
+    value : sympy.Expr, str or real number
+    symbols : dict of str to sympy.Symbol
+        The names a string may use (e.g. ``Coordinates.symbol_table()``).
+    name : str
+        Argument name used in the error messages.
+
+    Returns
+    -------
+    sympy.Expr
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> x = sp.Symbol("x", real=True)
+    >>> as_expression("2*x**2", {"x": x}, "lagrangian") == 2 * x**2
+    True
+    >>> as_expression("__import__('os')", {"x": x}, "lagrangian")
+    Traceback (most recent call last):
+    ...
+    ValueError: lagrangian: cannot parse expression "__import__('os')": unexpected "'os')"
+    """
+    if isinstance(value, str):
+        try:
+            return parse_expression(value, symbols)
+        except ValueError as err:
+            message = str(err)
+            for prefix in ("text: ", ):
+                message = message.removeprefix(prefix)
+            raise ValueError(f"{name}: {message}") from None
+    if isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name}: expected a sympy expression or a string, got a bool")
+    if isinstance(value, numbers.Real):
+        return sp.Float(float(value)) if not isinstance(value, numbers.Integral) else \
+            sp.Integer(int(value))
+    if isinstance(value, sp.Expr):
+        return value
+    raise TypeError(f"{name}: expected a sympy expression or a string, got "
+                    f"{type(value).__name__}")

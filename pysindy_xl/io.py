@@ -14,15 +14,19 @@ import os
 
 import numpy as np
 
-from .expressions import parse_expression
+from .expressions import expression_size, parse_expression
 from .feature_library import CatalogRepartition, ClassicalLibrary, ExternalForces, LagrangeLibrary
 from .symbols import Coordinates
 
-__all__ = ["save_model", "load_model", "FORMAT", "VERSION"]
+__all__ = ["save_model", "load_model", "FORMAT", "VERSION", "OPTIMIZER_TYPES"]
 
 FORMAT = "pysindy-xl-model"
 VERSION = 1
 _MAX_BYTES = 50_000_000
+_MAX_TERMS = 5_000  # catalog terms in one file (about a minute of derivation)
+_MAX_TOTAL_SIZE = 20_000  # sum over the terms of their expanded size (expression_size)
+#: optimizer types a model file may name (the documented catalog optimizers, nothing else)
+OPTIMIZER_TYPES = ("ExplicitOptimizer", "ImplicitOptimizer", "MixedOptimizer")
 
 
 def save_model(model, path) -> None:
@@ -62,11 +66,36 @@ def save_model(model, path) -> None:
         "coefficients": [float(c) for c in model.coef_],
         "dropped_features": model.dropped_features_,
         "forced_coordinates": [bool(f) for f in model.forced_coordinates_],
-        "optimizer": {"type": type(optimizer).__name__, "params": _jsonable_params(optimizer)},
+        "optimizer": ({"type": type(optimizer).__name__, "params": _jsonable_params(optimizer)}
+                      if type(optimizer).__name__ in OPTIMIZER_TYPES else None),
     }
     text = json.dumps(document, indent=1, allow_nan=False)
-    with open(os.fspath(path), "w", encoding="utf-8") as fh:
-        fh.write(text)
+    _check_writable(path)
+    try:
+        with open(os.fspath(path), "w", encoding="utf-8") as fh:
+            fh.write(text)
+    except OSError as err:
+        raise ValueError(f"path: cannot write {os.fspath(path)!r} ({err.strerror or err})") \
+            from None
+
+
+def _check_writable(path) -> None:
+    """A clear ValueError for a path that cannot hold the file (a directory, no folder)."""
+    try:
+        path = os.fspath(path)
+    except TypeError:
+        raise TypeError(f"path: expected a str or os.PathLike, got {type(path).__name__}") \
+            from None
+    if isinstance(path, bytes):
+        path = os.fsdecode(path)
+    if not path or "\x00" in path:
+        raise ValueError(f"path: expected a file name, got {path!r}")
+    if os.path.isdir(path):
+        raise ValueError(f"path: {path!r} is a directory; give a file name such as "
+                         f"{os.path.join(path, 'model.json')!r}")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise ValueError(f"path: the folder {folder!r} does not exist; create it first")
 
 
 def _jsonable_params(estimator) -> dict:
@@ -88,7 +117,9 @@ def _expect(condition: bool, path, what: str):
         raise _fail(path, what)
 
 
-def _library_from_spec(spec, coords: Coordinates, path):
+def _library_from_spec(spec, coords: Coordinates, path, budget=None, depth=0):
+    budget = {"terms": 0, "size": 0} if budget is None else budget
+    _expect(depth <= 4, path, "libraries nested deeper than 4 levels")
     _expect(isinstance(spec, dict) and isinstance(spec.get("type"), str), path,
             "library spec must be an object with a 'type'")
     kind = spec["type"]
@@ -98,15 +129,26 @@ def _library_from_spec(spec, coords: Coordinates, path):
         raw = spec.get("terms")
         _expect(isinstance(raw, list) and raw and all(isinstance(t, str) for t in raw), path,
                 f"{kind}.terms must be a non-empty list of strings")
-        try:
-            return [parse_expression(t, table) for t in raw]
-        except ValueError as err:
-            raise _fail(path, str(err)) from None
+        _expect(len(raw) <= _MAX_TERMS - budget["terms"], path,
+                f"more than {_MAX_TERMS} catalog terms")
+        budget["terms"] += len(raw)
+        parsed = []
+        for text in raw:
+            try:
+                expr = parse_expression(text, table)
+            except (TypeError, ValueError) as err:
+                raise _fail(path, str(err)) from None
+            budget["size"] += expression_size(expr)["terms"]
+            _expect(budget["size"] <= _MAX_TOTAL_SIZE, path,
+                    f"the catalog is too large (more than {_MAX_TOTAL_SIZE} expanded terms)")
+            parsed.append(expr)
+        return parsed
 
     if kind == "CatalogRepartition":
         libs = spec.get("libraries")
         _expect(isinstance(libs, list) and libs, path, "libraries must be a non-empty list")
-        return CatalogRepartition([_library_from_spec(s, coords, path) for s in libs])
+        return CatalogRepartition([_library_from_spec(s, coords, path, budget, depth + 1)
+                                   for s in libs])
     if kind == "LagrangeLibrary":
         return LagrangeLibrary(coords, terms())
     if kind == "ClassicalLibrary":
@@ -183,6 +225,8 @@ def load_model(path):
         library = CatalogRepartition([library])
     try:
         library.fit()
+    except (RecursionError, OverflowError):
+        raise _fail(path, "catalog: the terms are too complex to differentiate") from None
     except (TypeError, ValueError) as err:
         raise _fail(path, f"catalog: {err}") from None
     feature_names = library.get_feature_names()
@@ -200,13 +244,22 @@ def load_model(path):
     _expect(isinstance(dropped, dict), path, "'dropped_features' must be an object")
 
     optimizer = None
-    spec = document.get("optimizer") or {}
-    if isinstance(spec, dict) and spec.get("type") in optimizers.__all__:
+    spec = document.get("optimizer")
+    if spec is not None:
+        _expect(isinstance(spec, dict) and spec.get("type") in OPTIMIZER_TYPES, path,
+                f"'optimizer' must be null or an object whose 'type' is one of {OPTIMIZER_TYPES}")
         candidate = getattr(optimizers, spec["type"])
         params = spec.get("params", {})
         valid = candidate().get_params(deep=False)
-        if isinstance(params, dict) and set(params) <= set(valid):
-            optimizer = candidate(**params)
+        _expect(isinstance(params, dict) and set(params) <= set(valid), path,
+                f"optimizer.params must be an object with keys among {sorted(valid)}")
+        _expect(all(v is None or isinstance(v, (bool, int, float, str))
+                    for v in params.values()), path, "optimizer.params must be plain values")
+        optimizer = candidate(**params)
+        try:
+            optimizer._check_params()
+        except (TypeError, ValueError) as err:
+            raise _fail(path, f"optimizer: {err}") from None
     model = XLSINDy(feature_library=library, optimizer=optimizer)
     model.feature_library_ = library
     model.optimizer_ = optimizer

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 import pysindy as ps
 import sympy as sp
@@ -12,6 +10,7 @@ from sklearn.base import BaseEstimator, clone
 from sklearn.metrics import r2_score
 from sklearn.utils.validation import check_is_fitted
 
+from ._validation import check_instance, check_numeric_array, check_option
 from .diagnostics import (
     IdentificationWarning,
     mass_matrices,
@@ -32,6 +31,7 @@ from .weak.regression import weak_regression
 __all__ = ["XLSINDy", "IdentificationWarning"]
 
 _FORMULATIONS = ("auto", "strong", "weak")
+_MAX_ABS = 1e100  # larger data overflow in the products and squares of the regression
 
 
 def _as_list(value, name: str) -> tuple[list, bool]:
@@ -39,6 +39,10 @@ def _as_list(value, name: str) -> tuple[list, bool]:
     if isinstance(value, (list, tuple)):
         if not value:
             raise ValueError(f"{name}: expected at least one trajectory")
+        for k, item in enumerate(value):
+            if item is None:
+                raise ValueError(f"{name}[{k}]: is None; give an array for every trajectory "
+                                 f"(or {name}=None for all of them)")
         return list(value), True
     return [value], False
 
@@ -46,10 +50,7 @@ def _as_list(value, name: str) -> tuple[list, bool]:
 def _check_array(a, name: str, shape=None, n_columns=None) -> np.ndarray:
     """Float 2-D array (one column per coordinate); a 1-D array is one coordinate, as in
     PySINDy, when one column is expected."""
-    try:
-        a = np.asarray(a, dtype=float)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name}: expected a numeric array") from None
+    a = check_numeric_array(a, name, finite=False, min_samples=0)
     if shape is not None:
         n_columns = shape[1]
     if a.ndim == 1 and n_columns == 1:
@@ -58,9 +59,11 @@ def _check_array(a, name: str, shape=None, n_columns=None) -> np.ndarray:
         raise ValueError(f"{name}: expected a 2-D array (n_samples, n), got shape {a.shape}")
     if shape is not None and a.shape != tuple(shape):
         raise ValueError(f"{name}: expected shape {tuple(shape)}, got {a.shape}")
+    if a.shape[0] == 0 or a.shape[1] == 0:
+        raise ValueError(f"{name}: expected a non-empty array, got shape {a.shape}")
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name}: contains NaN or inf")
-    return a
+    return check_numeric_array(a, name, max_abs=_MAX_ABS)
 
 
 def _check_mask(mask, name: str, n_samples: int) -> np.ndarray:
@@ -216,6 +219,7 @@ class XLSINDy(BaseEstimator):
         if lib is None:
             raise ValueError("feature_library: a catalog is required (e.g. LagrangeLibrary)")
         if isinstance(lib, CatalogRepartition):
+            lib._flat_libraries()  # a catalog nested in itself: a clear error, not recursion
             return lib
         if isinstance(lib, SymbolicLibrary):
             return CatalogRepartition([lib])
@@ -292,6 +296,9 @@ class XLSINDy(BaseEstimator):
     @staticmethod
     def _times(t, n_samples: int, name: str) -> np.ndarray:
         if np.ndim(t) == 0:
+            if isinstance(t, (str, bytes, bool, np.bool_, np.datetime64, np.timedelta64)):
+                raise TypeError(f"{name}: expected a time step in seconds (a real number) or an "
+                                f"array of times, got the {type(t).__name__} {t!r}")
             try:
                 dt = float(t)
             except (TypeError, ValueError):
@@ -299,7 +306,7 @@ class XLSINDy(BaseEstimator):
             if not np.isfinite(dt) or dt <= 0:
                 raise ValueError(f"{name}: the time step must be positive and finite, got {t!r}")
             return np.arange(n_samples) * dt
-        t = _check_times(t, name)
+        t = _check_times(check_numeric_array(t, name, finite=False, min_samples=0), name)
         if len(t) != n_samples:
             raise ValueError(f"{name}: expected {n_samples} times (one per sample), got {len(t)}")
         return t
@@ -330,11 +337,8 @@ class XLSINDy(BaseEstimator):
         -------
         self
         """
+        self._check_options()
         threads = self.blas_threads
-        if threads is not None and (not isinstance(threads, numbers.Integral)
-                                    or isinstance(threads, bool) or threads < 1):
-            raise ValueError(f"blas_threads: expected a positive integer or None, got "
-                             f"{threads!r}")
         if threads is None:
             return self._fit(x, t, x_dot, x_ddot, u, sample_mask)
         with threadpoolctl.threadpool_limits(limits=int(threads), user_api="blas"):
@@ -349,6 +353,7 @@ class XLSINDy(BaseEstimator):
         formulation = self._resolve_formulation(x_dot, x_ddot)
         data = self._trajectories(x, t, x_dot, x_ddot, u, n,
                                   differentiate=formulation == "strong", sample_mask=sample_mask)
+        self._check_moving(data, coords.names)
         if not any(library.symbolic_matrix_[:, j].free_symbols & set(coords.qdd)
                    for j in range(library.n_output_features_)):
             raise ValueError(
@@ -367,12 +372,14 @@ class XLSINDy(BaseEstimator):
             if len(z) == 0:
                 raise ValueError("sample_mask: no sample left to fit")
             theta, self.weak_info_ = library.transform(z), None
+        library.check_domain(z)
         if self.drop_dependent:
             keep, dropped = independent_columns(
                 library.transform(_probe_points(z)), library.column_priority()
             )
         else:
             keep, dropped = np.arange(theta.shape[1]), {}
+        self._check_force_scale(theta, library, dropped)
         force_columns = [int(np.flatnonzero(keep == j)[0]) for j in library.force_columns_
                          if j in keep]
         forced = np.zeros(n, dtype=bool)
@@ -408,6 +415,46 @@ class XLSINDy(BaseEstimator):
         self._build_dynamics()
         self._check_mass_matrix(z)
         return self
+
+    def _check_options(self):
+        """Options of the estimator, checked at the start of fit (one layer: _validation)."""
+        check_option("drop_dependent", self.drop_dependent, "bool")
+        if self.blas_threads is not None:
+            check_option("blas_threads", self.blas_threads, "int", low=1)
+        check_option("formulation", self.formulation, "choice", choices=_FORMULATIONS)
+        if np.ndim(self.t_default) == 0:
+            check_option("t_default", self.t_default, "real", low=0, low_open=True)
+        for name, what, method in (("differentiation_method", "a pysindy differentiation "
+                                    "method", "__call__"),
+                                   ("smoother", "a smoother", "smooth"),
+                                   ("test_functions", "test functions", "matrices")):
+            value = getattr(self, name)
+            if value is not None:
+                check_instance(name, value, what, method)
+        for name in ("feature_library", "optimizer"):
+            value = getattr(self, name)
+            if isinstance(value, type):
+                check_instance(name, value, name.replace("_", " "))
+
+    @staticmethod
+    def _check_moving(data, names):
+        """Refuse coordinates that never move: they carry no dynamics to identify."""
+        for i, name in enumerate(names):
+            if all(np.ptp(d["x"][:, i]) == 0 for d in data):
+                raise ValueError(f"x: coordinate {name!r} is constant on every sample; a "
+                                 "coordinate that never moves carries no dynamics to identify")
+
+    @staticmethod
+    def _check_force_scale(theta, library, dropped):
+        """Forces given but negligible next to the catalog columns: a units problem, said so."""
+        for j in library.force_columns_:
+            if dropped.get(j) == "zero column" and np.any(theta[:, j] != 0):
+                ratio = np.abs(theta[:, j]).max() / np.abs(theta).max()
+                raise ValueError(
+                    f"u: the forces are {ratio:.1e} times the largest catalog column and vanish "
+                    "next to it at double precision; express positions and forces in units of "
+                    "comparable magnitude (e.g. metres and newtons rather than micrometres)"
+                )
 
     def _check_mass_matrix(self, z):
         """Orient the laws no force scales, then measure ``M(q)`` on the training states
@@ -652,7 +699,16 @@ class XLSINDy(BaseEstimator):
                 raise ValueError(f"x{label}: expected {n} columns, got {xk.shape[1]}")
             xdk = _check_array(xdk, f"x_dot{label}", xk.shape)
             uk = None if uk is None else _check_array(uk, f"u{label}", xk.shape)
-            out.append(dynamics.accelerations(xk, xdk, uk))
+            with np.errstate(all="ignore"):
+                acc = dynamics.accelerations(xk, xdk, uk)
+            if not np.all(np.isfinite(acc)):
+                bad = np.flatnonzero(~np.all(np.isfinite(acc), axis=1))
+                raise ValueError(
+                    f"x{label}: the identified equations are not finite (overflow or outside "
+                    f"their domain) at {len(bad)} of {len(acc)} samples, first at sample "
+                    f"{bad[0]}; the values are too large for the model or outside its range"
+                )
+            out.append(acc)
         return out if is_list else out[0]
 
     def score(self, x, t=None, x_dot=None, x_ddot=None, u=None, metric=r2_score):
@@ -670,6 +726,7 @@ class XLSINDy(BaseEstimator):
         float
         """
         self._require_dynamics()
+        check_instance("metric", metric, "a function metric(true, predicted)", "__call__")
         data = self._trajectories(x, t, x_dot, x_ddot, u, self.n_coordinates_)
         true = np.vstack([d["x_ddot"] for d in data])
         predicted = np.vstack([

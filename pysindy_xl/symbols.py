@@ -24,7 +24,7 @@ class Coordinates:
     Parameters
     ----------
     names : sequence of str
-        Names of the coordinates, valid Python identifiers, unique.
+        Names of the coordinates, ASCII Python identifiers, unique.
 
     Attributes
     ----------
@@ -53,6 +53,11 @@ class Coordinates:
         for name in names:
             if not isinstance(name, str) or not name.isidentifier() or keyword.iskeyword(name):
                 raise ValueError(f"names: {name!r} is not a valid identifier")
+            if not name.isascii():
+                raise ValueError(
+                    f"names: {name!r} is not ASCII; coordinate names must be ASCII identifiers "
+                    "(saved models spell them in the restricted term grammar), e.g. 'theta'"
+                )
             if (name in _RESERVED or name.startswith("tau_")
                     or name.endswith(("_dot", "_ddot"))):
                 raise ValueError(
@@ -109,12 +114,13 @@ def _as_expr_list(exprs, name: str) -> list[sp.Expr]:
         exprs = [sp.sympify(e) if isinstance(e, (int, float)) else e for e in exprs]
     except TypeError:
         raise TypeError(f"{name}: expected a sequence of sympy expressions") from None
-    from .expressions import check_real_expression
+    from .expressions import check_real_expression, check_term
 
     for e in exprs:
         if not isinstance(e, sp.Basic):
             raise TypeError(f"{name}: expected sympy expressions, got {type(e).__name__}")
         check_real_expression(e, name)
+        check_term(e, name)
     return exprs
 
 
@@ -150,8 +156,9 @@ def monomials(exprs, degree: int) -> list[sp.Expr]:
     [a, b, a**2, a*b, b**2]
     """
     exprs = _as_expr_list(exprs, "exprs")
-    if not isinstance(degree, int) or isinstance(degree, bool) or degree < 1:
-        raise ValueError(f"degree: expected an integer >= 1, got {degree!r}")
+    from ._validation import check_option
+
+    degree = check_option("degree", degree, "int", low=1)
     out = []
     for d in range(1, degree + 1):
         for combo in itertools.combinations_with_replacement(exprs, d):

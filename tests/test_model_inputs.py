@@ -60,7 +60,7 @@ FIT_ERRORS = {
                   r"x: expected 1 columns"),
     "x_nan": (lambda d: _with(d, x=_nan_at(d["x"])), ValueError, r"x: contains NaN or inf"),
     "x_inf": (lambda d: _with(d, x=_nan_at(d["x"], np.inf)), ValueError, r"x: contains NaN"),
-    "x_text": (lambda d: _with(d, x=np.full((N, 1), "a")), TypeError, r"x: expected a numeric"),
+    "x_text": (lambda d: _with(d, x=np.full((N, 1), "a")), TypeError, r"x: expected real numbers"),
     "x_few": (lambda d: {k: (v[:3] if k != "u" else v[:3]) for k, v in d.items()}, ValueError,
               r"x: expected at least 5 samples"),
     "x_dot_nan": (lambda d: _with(d, x_dot=_nan_at(d["x_dot"])), ValueError,

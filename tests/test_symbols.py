@@ -127,11 +127,19 @@ def test_monomials_drop_duplicates_and_zero():
     assert out == [a, a**2]
 
 
-@pytest.mark.parametrize("degree", [0, -1, 1.5, 2.0, True, "2", None])
-def test_monomials_bad_degree(degree):
+@pytest.mark.parametrize("degree, error", [(0, ValueError), (-1, ValueError), (1.5, ValueError),
+                                           (2.0, ValueError), (True, TypeError),
+                                           ("2", TypeError), (None, TypeError)])
+def test_monomials_bad_degree(degree, error):
     a = sp.Symbol("a")
-    with pytest.raises(ValueError, match="degree"):
+    with pytest.raises(error, match="degree: expected an integer >= 1"):
         px.monomials([a], degree)
+
+
+@pytest.mark.parametrize("degree", [np.int64(2), np.int32(2)])
+def test_monomials_numpy_integer_degree(degree):
+    a, b = sp.symbols("a b")
+    assert px.monomials([a, b], degree) == [a, b, a**2, a * b, b**2]
 
 
 def test_monomials_bad_exprs():

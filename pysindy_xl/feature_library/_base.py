@@ -24,6 +24,7 @@ import sympy as sp
 from pysindy.feature_library.base import BaseFeatureLibrary
 from sklearn.utils.validation import check_is_fitted
 
+from .._validation import check_numeric_array
 from ..symbols import Coordinates
 from ._compile import compile_entries
 from ._weak import integrate_by_parts
@@ -142,6 +143,18 @@ class SymbolicLibrary(BaseFeatureLibrary):
         n = self.coords.n
         if matrix.shape != (n, len(names)):
             raise RuntimeError("internal error: symbolic matrix shape does not match names")
+        from ..expressions import check_term
+
+        for j, feature in enumerate(names):  # derived columns must be evaluable (e.g. no
+            for c in range(n):               # DiracDelta from differentiating Abs twice)
+                try:
+                    check_term(matrix[c, j], "feature_library")
+                except ValueError as err:
+                    raise ValueError(
+                        f"feature_library: the term {feature} cannot be used: its column "
+                        f"{str(matrix[c, j])[:80]} is not evaluable ({str(err).split(', which')[0]}"
+                        "); catalog terms must be differentiable twice"
+                    ) from None
         self.feature_names_ = list(names)
         self.symbolic_matrix_ = matrix
         for stale in ("weak_P_", "weak_Q_", "_weak_evaluate", "_weak_entry_index"):
@@ -165,16 +178,44 @@ class SymbolicLibrary(BaseFeatureLibrary):
         return state
 
     def _check_input(self, x) -> np.ndarray:
-        x = np.asarray(x, dtype=float)
+        x = check_numeric_array(x, "x", finite=False, min_samples=0)
         width = len(self.coords.variables)
         if x.ndim != 2 or x.shape[1] != width:
             raise ValueError(
                 f"x: expected the stacked variables array of shape (n_samples, {width}) "
                 f"(see pysindy_xl.feature_library.stack_variables), got shape {x.shape}"
             )
+        if x.shape[0] == 0:
+            raise ValueError("x: expected at least one sample, got shape (0, "
+                             f"{width})")
         if not np.all(np.isfinite(x)):
             raise ValueError("x: contains NaN or inf")
         return x
+
+    def _check_finite_output(self, theta, n_rows):
+        """Name the features that are NaN or inf on the data (log(x) at x <= 0, overflow)."""
+        bad = ~np.isfinite(theta)
+        if not bad.any():
+            return
+        columns = np.flatnonzero(bad.any(axis=0))
+        names = [self.feature_names_[j] for j in columns[:5]]
+        samples = np.unique(np.flatnonzero(bad.any(axis=1)) % n_rows)
+        raise ValueError(
+            f"feature_library: the term{'s' if len(columns) > 1 else ''} "
+            f"{', '.join(names)}{' ...' if len(columns) > 5 else ''} "
+            f"{'are' if len(columns) > 1 else 'is'} NaN or inf on {len(samples)} of {n_rows} "
+            f"samples (first at sample {samples[0]}): the data leave the term's domain "
+            "(log, sqrt, 1/x of values <= 0) or the values are too large (overflow)"
+        )
+
+    def check_domain(self, x) -> None:
+        """Raise ``ValueError`` when a candidate term is undefined on the data (no-op here).
+
+        Parameters
+        ----------
+        x : array, shape (N, 4n + 1)
+            Library input (:func:`stack_variables`).
+        """
 
     def transform(self, x) -> np.ndarray:
         """Evaluate the stacked regression matrix.
@@ -198,7 +239,9 @@ class SymbolicLibrary(BaseFeatureLibrary):
         # LAPACK prefers this layout)
         theta = np.zeros((self.coords.n * n_samples, self.n_output_features_), order="F")
         targets = [theta[c * n_samples : (c + 1) * n_samples, j] for c, j in self._entry_index]
-        self._evaluate(x, targets)
+        with np.errstate(all="ignore"):
+            self._evaluate(x, targets)
+        self._check_finite_output(theta, n_samples)
         return theta
 
     # -- weak formulation -------------------------------------------------------------------
@@ -278,13 +321,16 @@ class SymbolicLibrary(BaseFeatureLibrary):
             for part, entries in enumerate(parts):
                 for k, e in enumerate(entries):
                     targets[e] = values[part][:, k]
-            self._weak_evaluate(x[start:stop], targets)
+            with np.errstate(all="ignore"):
+                self._weak_evaluate(x[start:stop], targets)
             for part, entries in enumerate(parts):
                 if len(entries):
                     contributions[:, entries] += tests[part][:, start:stop] @ values[part]
         weak = np.zeros((n, n_windows, n_features))
         np.add.at(weak, (index[:, 1], slice(None), index[:, 2]), contributions.T)
-        return weak.reshape(n * n_windows, n_features)
+        weak = weak.reshape(n * n_windows, n_features)
+        self._check_finite_output(weak, n_windows)
+        return weak
 
     def get_feature_names(self, input_features=None) -> list[str]:
         """Names of the features, in column order.

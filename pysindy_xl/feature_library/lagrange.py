@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import numpy as np
 import sympy as sp
+from sklearn.utils.validation import check_is_fitted
 
 from ..expressions import format_expression
 from ..symbols import Coordinates, _as_expr_list
@@ -139,6 +141,43 @@ class LagrangeLibrary(SymbolicLibrary):
         matrix = sp.Matrix(self.coords.n, len(terms), lambda i, j: columns[j][i])
         self.zero_terms_ = [j for j, col in enumerate(columns) if all(e == 0 for e in col)]
         return [f"L[{term}]" for term in terms], matrix
+
+    def check_domain(self, x) -> None:
+        """Raise ``ValueError`` naming the candidate terms that are NaN or inf on the data.
+
+        A Lagrangian term outside its domain (``log(x)`` at ``x <= 0``, ``sqrt(x)`` at
+        ``x < 0``) has no meaning there, even where its Euler-Lagrange column is finite.
+
+        Parameters
+        ----------
+        x : array, shape (N, 4n + 1)
+            Library input (:func:`~pysindy_xl.feature_library.stack_variables`).
+
+        Examples
+        --------
+        >>> import numpy as np, sympy as sp, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, sp.log(c.q[0])]).fit()
+        >>> lib.check_domain(np.array([[-1.0, 0, 0, 0, 0]]))
+        Traceback (most recent call last):
+        ...
+        ValueError: feature_library: the Lagrangian term log(x) is NaN or inf on 1 of 1 samples...
+        """
+        from ._compile import compile_entries
+
+        check_is_fitted(self, "terms_")
+        x = self._check_input(x)
+        with np.errstate(all="ignore"):
+            values = compile_entries(self.coords.variables, self.terms_)(x)
+        for term, value in zip(self.terms_, values, strict=True):
+            bad = ~np.isfinite(value)
+            if bad.any():
+                raise ValueError(
+                    f"feature_library: the Lagrangian term {term} is NaN or inf on "
+                    f"{int(bad.sum())} of {len(value)} samples (first at sample "
+                    f"{int(np.flatnonzero(bad)[0])}): the data leave its domain (log, sqrt, 1/x "
+                    "of values <= 0) or overflow it"
+                )
 
     def _build_weak_symbolic(self):
         # P = dL/dqd and Q = dL/dq: the Euler-Lagrange column before its time derivative

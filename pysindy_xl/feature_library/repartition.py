@@ -70,13 +70,17 @@ class CatalogRepartition(SymbolicLibrary):
     def coords(self):
         return self._flat_libraries()[0].coords
 
-    def _flat_libraries(self) -> list[SymbolicLibrary]:
+    def _flat_libraries(self, _parents=()) -> list[SymbolicLibrary]:
         if isinstance(self.libraries, SymbolicLibrary) or not hasattr(self.libraries, "__iter__"):
             raise TypeError("libraries: expected a list of pysindy_xl feature libraries")
+        parents = (*_parents, id(self))
         flat = []
         for lib in self.libraries:
             if isinstance(lib, CatalogRepartition):
-                flat.extend(lib._flat_libraries())
+                if id(lib) in parents:
+                    raise ValueError("libraries: the catalog contains itself (a "
+                                     "CatalogRepartition nested in its own libraries)")
+                flat.extend(lib._flat_libraries(parents))
             elif isinstance(lib, SymbolicLibrary):
                 flat.append(lib)
             else:
@@ -121,6 +125,18 @@ class CatalogRepartition(SymbolicLibrary):
         parts = [lib.weak_matrices() for lib in self.libraries_]
         return (sp.Matrix.hstack(*(p for p, _ in parts)),
                 sp.Matrix.hstack(*(q for _, q in parts)))
+
+    def check_domain(self, x) -> None:
+        """Raise ``ValueError`` naming a candidate term undefined on the data.
+
+        Parameters
+        ----------
+        x : array, shape (N, 4n + 1)
+            Library input (see :func:`~pysindy_xl.feature_library.stack_variables`).
+        """
+        check_is_fitted(self, "libraries_")
+        for lib in self.libraries_:
+            lib.check_domain(x)
 
     def __add__(self, other):
         return CatalogRepartition([self, other])
@@ -178,7 +194,10 @@ class CatalogRepartition(SymbolicLibrary):
         xi = np.zeros(self.n_output_features_)
         xi[self.force_columns_] = forces
         if lagrangian is not None:
-            self._match_lagrangian(sp.sympify(lagrangian), xi)
+            from ..expressions import as_expression
+
+            self._match_lagrangian(
+                as_expression(lagrangian, self.coords.symbol_table(), "lagrangian"), xi)
         for key, value in (classical or {}).items():
             xi[self._classical_index(key)] += float(value)
         return xi
@@ -226,7 +245,9 @@ class CatalogRepartition(SymbolicLibrary):
             if coord not in self.coords.names:
                 raise ValueError(f"classical: unknown coordinate {coord!r}")
             coord = self.coords.names.index(coord)
-        term = sp.sympify(term)
+        from ..expressions import as_expression
+
+        term = as_expression(term, self.coords.symbol_table(), "classical")
         for lib, sl in zip(self.libraries_, self.slices_, strict=True):
             if isinstance(lib, ClassicalLibrary):
                 j = sl.start

@@ -606,6 +606,10 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
 
     from tqdm.auto import tqdm
 
+    from .._validation import check_option
+
+    duration = check_option("duration", duration, "real", low=0, low_open=True)
+    sample_every = check_option("sample_every", sample_every, "int", low=1)
     system = get_system(system)
     if forcing not in FORCING_MODES:
         raise ValueError(f"forcing: expected one of {FORCING_MODES}, got {forcing!r}")
@@ -630,6 +634,9 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     model = system.mj_model()
     rng = np.random.default_rng(seed)
     n_steps = int(round(float(duration) / model.opt.timestep)) + 1
+    if n_steps > 100_000_000:
+        raise ValueError(f"duration: {duration} s is {n_steps:.3g} MuJoCo steps per trajectory "
+                         "(at most 1e8); record shorter trajectories")
     bar = tqdm(total=n_steps * n_trajectories, desc=f"MuJoCo {system.name}", unit="step",
                disable=None if progress is None else not progress, leave=False)
     trajectories = []

@@ -17,29 +17,24 @@ import numpy as np
 import scipy.linalg
 from sklearn.base import BaseEstimator
 
+from .._validation import check_indices, check_numeric_array, check_option
+
 __all__ = ["CatalogOptimizer", "independent_columns", "check_catalog_problem"]
 
 
 def check_catalog_problem(theta, n_coordinates, force_columns):
     """Validate the arguments of ``fit_catalog``; returns ``(theta, force_columns)`` as arrays."""
-    theta = np.asarray(theta, dtype=float)
+    theta = check_numeric_array(theta, "theta", finite=False, min_samples=0)
     if theta.ndim != 2 or theta.shape[0] == 0 or theta.shape[1] == 0:
         raise ValueError(f"theta: expected a non-empty 2-D array, got shape {theta.shape}")
     if not np.all(np.isfinite(theta)):
         raise ValueError("theta: contains NaN or inf")
-    if not isinstance(n_coordinates, (int, np.integer)) or n_coordinates < 1:
-        raise ValueError(f"n_coordinates: expected a positive integer, got {n_coordinates!r}")
+    n_coordinates = check_option("n_coordinates", n_coordinates, "int", low=1)
     if theta.shape[0] % n_coordinates:
         raise ValueError(
             f"theta: {theta.shape[0]} rows is not a multiple of n_coordinates={n_coordinates}"
         )
-    force_columns = np.asarray(
-        [] if force_columns is None else force_columns, dtype=int
-    ).reshape(-1)
-    if np.any((force_columns < 0) | (force_columns >= theta.shape[1])):
-        raise ValueError(
-            f"force_columns: indices must lie in [0, {theta.shape[1]}), got {force_columns}"
-        )
+    force_columns = check_indices(force_columns, "force_columns", theta.shape[1])
     return theta, force_columns
 
 

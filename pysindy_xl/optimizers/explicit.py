@@ -9,6 +9,7 @@ import numpy as np
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.linear_model import Lasso, LassoCV
 
+from .._validation import check_instance, check_numeric_array, check_option
 from ._base import CatalogOptimizer, check_catalog_problem
 from .selection import select_support
 
@@ -171,19 +172,17 @@ class ExplicitOptimizer(CatalogOptimizer):
 
     def _check_params(self):
         if isinstance(self.method, str):
-            if self.method not in _METHODS:
-                raise ValueError(f"method: expected one of {_METHODS} or an estimator, got "
-                                 f"{self.method!r}")
-        elif not hasattr(self.method, "fit"):
-            raise TypeError("method: expected a method name or an estimator with fit(X, y)")
-        if not (isinstance(self.threshold, str) and self.threshold == "auto") and (
-                not _is_real(self.threshold) or not 0 <= self.threshold < 1):
-            raise ValueError(f"threshold: expected 'auto' or a value in [0, 1), got "
-                             f"{self.threshold!r}")
-        if not _is_real(self.alpha) or not 0 <= self.alpha < np.inf:
-            raise ValueError(f"alpha: expected a finite non-negative value, got {self.alpha!r}")
-        if not isinstance(self.max_iter, numbers.Integral) or self.max_iter < 1:
-            raise ValueError(f"max_iter: expected a positive integer, got {self.max_iter!r}")
+            check_option("method", self.method, "choice", choices=_METHODS)
+        else:
+            check_instance("method", self.method, "a method name or an estimator", "fit")
+        if not (isinstance(self.threshold, str) and self.threshold == "auto"):
+            if isinstance(self.threshold, str):
+                raise ValueError(f"threshold: expected 'auto' or a number in [0, 1), got "
+                                 f"{self.threshold!r}")
+            check_option("threshold", self.threshold, "real", low=0, high=1, high_open=True)
+        check_option("alpha", self.alpha, "real", low=0)
+        check_option("refit", self.refit, "bool")
+        check_option("max_iter", self.max_iter, "int", low=1)
 
     def fit(self, X, y):
         """Solve ``X @ coef_ = y`` sparsely.
@@ -201,9 +200,9 @@ class ExplicitOptimizer(CatalogOptimizer):
 
     def _fit(self, X, y, n_blocks):
         self._check_params()
-        X = np.asarray(X, dtype=float)
-        y = np.asarray(y, dtype=float)
-        if X.ndim != 2 or X.shape[0] == 0:
+        X = check_numeric_array(X, "X", finite=False, min_samples=0)
+        y = check_numeric_array(y, "y", finite=False, min_samples=0)
+        if X.ndim != 2 or X.shape[0] == 0 or X.shape[1] == 0:
             raise ValueError(f"X: expected a non-empty 2-D array, got shape {X.shape}")
         if y.ndim != 1 or y.shape[0] != X.shape[0]:
             raise ValueError(f"y: expected shape ({X.shape[0]},), got {y.shape}")
@@ -215,6 +214,7 @@ class ExplicitOptimizer(CatalogOptimizer):
                 "force (use ImplicitOptimizer or MixedOptimizer for unforced data)"
             )
         self.selection_ = None
+        self.n_features_in_ = X.shape[1]
         self.coef_ = self._solve(X, y, n_blocks)
         self.support_ = self.coef_ != 0
         return self
@@ -307,5 +307,6 @@ class ExplicitOptimizer(CatalogOptimizer):
         coef[rest] = self.coef_
         coef[force_columns] = -1.0
         self.coef_ = coef
+        self.n_features_in_ = theta.shape[1]
         self.support_ = coef != 0
         return self

@@ -61,6 +61,7 @@ import warnings
 import numpy as np
 from sklearn.exceptions import ConvergenceWarning
 
+from .._validation import check_option
 from ._base import CatalogOptimizer, check_catalog_problem
 from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
 
@@ -284,32 +285,23 @@ class ImplicitOptimizer(CatalogOptimizer):
 
     # ------------------------------------------------------------------ validation
     def _check_params(self):
-        if self.solver not in _SOLVERS:
-            raise ValueError(f"solver: expected one of {_SOLVERS}, got {self.solver!r}")
-        checks = {
-            "alpha": isinstance(self.alpha, str) and self.alpha == "auto"
-            or not isinstance(self.alpha, str) and self.alpha > 0,
-            "angle_tol": 0 < self.angle_tol < 90,
-            "min_membership": 0 <= self.min_membership <= 1,
-            "max_residual_ratio": self.max_residual_ratio >= 1,
-            "threshold": 0 <= self.threshold < 1,
-            "tol": self.tol > 0,
-        }
-        expected = {
-            "alpha": "a positive value or 'auto'",
-            "angle_tol": "degrees in (0, 90)",
-            "min_membership": "a value in [0, 1]",
-            "max_residual_ratio": "a value >= 1",
-            "threshold": "a value in [0, 1)",
-            "tol": "a positive value",
-        }
-        for name, ok in checks.items():
-            if not ok:
-                raise ValueError(f"{name}: expected {expected[name]}, got {getattr(self, name)!r}")
-        for name in ("min_group_size", "max_iter"):
-            value = getattr(self, name)
-            if not isinstance(value, (int, np.integer)) or value < 1:
-                raise ValueError(f"{name}: expected a positive integer, got {value!r}")
+        check_option("solver", self.solver, "choice", choices=_SOLVERS)
+        if not (isinstance(self.alpha, str) and self.alpha == "auto"):
+            if isinstance(self.alpha, str):
+                raise ValueError(f"alpha: expected a positive number or 'auto', got "
+                                 f"{self.alpha!r}")
+            check_option("alpha", self.alpha, "real", low=0, low_open=True)
+        check_option("angle_tol", self.angle_tol, "real", low=0, high=90, low_open=True,
+                     high_open=True)
+        check_option("min_membership", self.min_membership, "real", low=0, high=1)
+        check_option("max_residual_ratio", self.max_residual_ratio, "real", low=1,
+                     allow_inf=True)
+        check_option("threshold", self.threshold, "real", low=0, high=1, high_open=True)
+        check_option("tol", self.tol, "real", low=0, low_open=True)
+        check_option("min_group_size", self.min_group_size, "int", low=1)
+        check_option("max_iter", self.max_iter, "int", low=1)
+        check_option("refit", self.refit, "bool")
+        check_option("early_stopping", self.early_stopping, "bool")
 
     # ------------------------------------------------------------------ public API
     def fit(self, X, y=None):

@@ -30,6 +30,7 @@ import warnings
 import numpy as np
 from sklearn.base import clone
 
+from .._validation import check_instance, check_option
 from ._base import CatalogOptimizer, check_catalog_problem
 from .implicit import ImplicitOptimizer, NoLawFoundError, coordinates_touched
 
@@ -130,6 +131,9 @@ class MixedOptimizer(CatalogOptimizer):
         self.implicit_optimizer = implicit_optimizer
         self.rtol = rtol
 
+    def _check_params(self):
+        check_option("rtol", self.rtol, "real", low=0, high=1, high_open=True)
+
     def _sub_optimizers(self):
         from .explicit import ExplicitOptimizer
 
@@ -137,6 +141,7 @@ class MixedOptimizer(CatalogOptimizer):
         explicit = ExplicitOptimizer() if explicit is None else explicit
         implicit = ImplicitOptimizer() if implicit is None else implicit
         for name, opt in (("explicit_optimizer", explicit), ("implicit_optimizer", implicit)):
+            check_instance(name, opt, "an optimizer")
             if not hasattr(opt, "fit_catalog"):
                 raise TypeError(f"{name}: expected an optimizer with fit_catalog, got {opt!r}")
         return clone(explicit), clone(implicit)
@@ -170,8 +175,7 @@ class MixedOptimizer(CatalogOptimizer):
         self
         """
         theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns)
-        if not 0 <= self.rtol < 1:
-            raise ValueError(f"rtol: expected a value in [0, 1), got {self.rtol!r}")
+        self._check_params()
         explicit, implicit = self._sub_optimizers()
         n = int(n_coordinates)
         n_samples = theta.shape[0] // n

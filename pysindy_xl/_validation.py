@@ -1,0 +1,278 @@
+"""One validation layer per kind of input: options and numeric arrays.
+
+Every public entry point checks its options with :func:`check_option` and its arrays with
+:func:`check_numeric_array`, so that a mistake is answered by a ``ValueError`` or ``TypeError``
+that names the argument and says what was expected, whatever the entry point. (Symbolic
+catalog terms have their own layer, :func:`pysindy_xl.expressions.check_term`.)
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+import numpy as np
+
+__all__ = ["check_option", "check_numeric_array", "check_instance", "check_indices"]
+
+_KINDS = ("bool", "int", "real", "choice")
+
+
+def _describe_range(low, high, low_open, high_open) -> str:
+    if low is not None and high is not None:
+        return f" in {'(' if low_open else '['}{low}, {high}{')' if high_open else ']'}"
+    if low is not None:
+        return f" {'>' if low_open else '>='} {low}"
+    if high is not None:
+        return f" {'<' if high_open else '<='} {high}"
+    return ""
+
+
+def check_option(name: str, value, kind: str, *, choices=(), low=None, high=None,
+                 low_open=False, high_open=False, allow_none=False, allow_inf=False):
+    """Validate one scalar option; return it as the Python type of ``kind``.
+
+    Parameters
+    ----------
+    name : str
+        Name of the option, used in the error message.
+    value : object
+        The value given by the user.
+    kind : {"bool", "int", "real", "choice"}
+        ``"bool"``: ``True``/``False`` (NumPy booleans too; never strings or numbers);
+        ``"int"``: an integer (not a bool, not a string, not a float); ``"real"``: a real
+        number (not a bool, not a string), NaN refused, infinity only with ``allow_inf``;
+        ``"choice"``: one of ``choices``.
+    choices : sequence, optional
+        Accepted values for ``kind="choice"``.
+    low, high : float, optional
+        Bounds of ``"int"`` and ``"real"`` options.
+    low_open, high_open : bool
+        Whether the bounds are excluded.
+    allow_none : bool
+        Accept ``None`` (returned as is).
+    allow_inf : bool
+        Accept ``inf`` for ``"real"`` options (within the bounds).
+
+    Returns
+    -------
+    bool, int, float or the chosen value
+
+    Raises
+    ------
+    TypeError
+        When the value has the wrong type (a string for a number, a class for an instance...).
+    ValueError
+        When it has the right type but lies outside the accepted range or choices.
+
+    Examples
+    --------
+    >>> check_option("rtol", 1e-6, "real", low=0, low_open=True)
+    1e-06
+    >>> check_option("refit", "False", "bool")
+    Traceback (most recent call last):
+    ...
+    TypeError: refit: expected True or False, got the str 'False'
+    >>> check_option("timeout", -1.0, "real", low=0, low_open=True, allow_none=True)
+    Traceback (most recent call last):
+    ...
+    ValueError: timeout: expected a real number > 0 or None, got -1.0
+    """
+    if kind not in _KINDS:
+        raise ValueError(f"kind: expected one of {_KINDS}, got {kind!r}")
+    if value is None and allow_none:
+        return None
+    or_none = " or None" if allow_none else ""
+    if kind == "choice":
+        if isinstance(value, (str, numbers.Number, type(None))) and value in choices:
+            return value
+        raise (ValueError if isinstance(value, str) else TypeError)(
+            f"{name}: expected one of {tuple(choices)}{or_none}, got {value!r}")
+    if kind == "bool":
+        if isinstance(value, (bool, np.bool_)):
+            return bool(value)
+        raise TypeError(f"{name}: expected True or False{or_none}, got the "
+                        f"{type(value).__name__} {value!r}")
+    expected = ("an integer" if kind == "int" else "a real number") + _describe_range(
+        low, high, low_open, high_open) + or_none
+    if isinstance(value, type):
+        raise TypeError(f"{name}: expected {expected}, got the class {value.__name__}")
+    integral = isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))
+    real = isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+    if kind == "int" and real and not integral:  # a number, but not a whole one
+        raise ValueError(f"{name}: expected {expected}, got {value!r}")
+    if (kind == "int" and not integral) or (kind == "real" and not real):
+        raise TypeError(f"{name}: expected {expected}, got the {type(value).__name__} "
+                        f"{value!r}")
+    value = int(value) if kind == "int" else float(value)
+    if kind == "real" and (math.isnan(value) or (math.isinf(value) and not allow_inf)):
+        raise ValueError(f"{name}: expected {expected}, got {value!r}")
+    if low is not None and (value < low or (low_open and value == low)):
+        raise ValueError(f"{name}: expected {expected}, got {value!r}")
+    if high is not None and (value > high or (high_open and value == high)):
+        raise ValueError(f"{name}: expected {expected}, got {value!r}")
+    return value
+
+
+def check_instance(name: str, value, what: str, method: str | None = None):
+    """Refuse a class where an instance is due, and objects without the needed ``method``.
+
+    Parameters
+    ----------
+    name : str
+        Name of the argument.
+    value : object
+    what : str
+        Description of what is expected, e.g. ``"a smoother"``.
+    method : str, optional
+        A method the object must have.
+
+    Returns
+    -------
+    object
+        ``value``.
+
+    Examples
+    --------
+    >>> from pysindy_xl.weak import WhittakerSmoother
+    >>> check_instance("smoother", WhittakerSmoother, "a smoother", "smooth")
+    Traceback (most recent call last):
+    ...
+    TypeError: smoother: expected an instance (a smoother), got the class WhittakerSmoother; ...
+    """
+    if isinstance(value, type):
+        raise TypeError(f"{name}: expected an instance ({what}), got the class "
+                        f"{value.__name__}; write {value.__name__}()")
+    if method is not None and not callable(getattr(value, method, None)):
+        raise TypeError(f"{name}: expected {what} with a {method} method, got "
+                        f"{type(value).__name__}")
+    return value
+
+
+def check_numeric_array(a, name: str, *, ndim=None, min_samples: int = 1,
+                        finite: bool = True, max_abs: float | None = None) -> np.ndarray:
+    """A float array of real numbers, refusing everything that only looks like one.
+
+    Complex numbers, strings, booleans, datetimes/timedeltas and objects are refused (NumPy
+    would cast them to float silently or with a warning at most), as are arrays with fewer
+    than ``min_samples`` rows and, with ``finite``, NaN or inf.
+
+    Parameters
+    ----------
+    a : array_like
+    name : str
+        Name of the argument, used in the messages.
+    ndim : int or tuple of int, optional
+        Accepted numbers of dimensions.
+    min_samples : int
+        Minimal length of the first axis (0 accepts empty arrays).
+    finite : bool
+        Refuse NaN and inf.
+    max_abs : float, optional
+        Refuse values larger in magnitude (products and squares of the data must not
+        overflow).
+
+    Returns
+    -------
+    ndarray of float
+
+    Examples
+    --------
+    >>> check_numeric_array([[1, 2], [3, 4]], "x").dtype
+    dtype('float64')
+    >>> check_numeric_array(["0.1", "0.2"], "t")
+    Traceback (most recent call last):
+    ...
+    TypeError: t: expected real numbers, got an array of str (<U3)
+    >>> check_numeric_array([1 + 2j], "x")
+    Traceback (most recent call last):
+    ...
+    TypeError: x: expected real numbers, got complex values
+    """
+    if a is None:
+        raise ValueError(f"{name}: expected an array of real numbers, got None")
+    if isinstance(a, (str, bytes)):
+        raise TypeError(f"{name}: expected an array of real numbers, got a {type(a).__name__}")
+    if isinstance(a, type):
+        raise TypeError(f"{name}: expected an array of real numbers, got the class "
+                        f"{a.__name__}")
+    if hasattr(a, "tocsr") and hasattr(a, "nnz"):  # scipy.sparse, without importing it
+        raise TypeError(f"{name}: sparse input is not supported; pass a dense array "
+                        "(e.g. X.toarray())")
+    try:
+        raw = np.asarray(a)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"{name}: expected a rectangular array of real numbers ({err})") from None
+    kind = raw.dtype.kind
+    if kind == "c":
+        raise TypeError(f"{name}: expected real numbers, got complex values")
+    if kind == "b":
+        raise TypeError(f"{name}: expected real numbers, got booleans")
+    if kind in "US":
+        raise TypeError(f"{name}: expected real numbers, got an array of str ({raw.dtype})")
+    if kind in "mM":
+        raise TypeError(f"{name}: expected real numbers (seconds), got {raw.dtype} values; "
+                        "convert them to seconds first")
+    if kind == "O":
+        for item in raw.reshape(-1)[:1000]:
+            if not (isinstance(item, numbers.Real) and not isinstance(item, (bool, np.bool_))):
+                raise TypeError(f"{name}: expected real numbers, got an element of type "
+                                f"{type(item).__name__}")
+    if kind not in "iufO":
+        raise TypeError(f"{name}: expected real numbers, got {raw.dtype} values")
+    try:
+        out = raw.astype(float)
+    except (TypeError, ValueError, OverflowError) as err:
+        raise ValueError(f"{name}: expected real numbers ({err})") from None
+    if ndim is not None:
+        accepted = (ndim,) if isinstance(ndim, int) else tuple(ndim)
+        if out.ndim not in accepted:
+            raise ValueError(f"{name}: expected a {' or '.join(f'{d}-D' for d in accepted)} "
+                             f"array, got shape {out.shape}")
+    if out.ndim == 0 and min_samples > 0:
+        raise ValueError(f"{name}: expected an array, got a scalar")
+    if out.ndim > 0 and out.shape[0] < min_samples:
+        raise ValueError(f"{name}: expected at least {min_samples} sample"
+                         f"{'s' if min_samples > 1 else ''}, got shape {out.shape}")
+    if finite and not np.all(np.isfinite(out)):
+        raise ValueError(f"{name}: contains NaN or inf")
+    if max_abs is not None and out.size:
+        with np.errstate(invalid="ignore"):
+            largest = np.nanmax(np.abs(np.where(np.isfinite(out), out, 0.0)))
+        if largest > max_abs:
+            raise ValueError(f"{name}: values up to {largest:.3g} in magnitude are too large "
+                             f"(at most {max_abs:.0e}); rescale the data (other units)")
+    return out
+
+
+def check_indices(value, name: str, size: int) -> np.ndarray:
+    """Integer indices in ``[0, size)``; fractional numbers, booleans and strings refused.
+
+    Parameters
+    ----------
+    value : sequence of int or None
+    name : str
+    size : int
+        Exclusive upper bound.
+
+    Returns
+    -------
+    ndarray of int, 1-D
+
+    Examples
+    --------
+    >>> check_indices([0, 2], "force_columns", 3)
+    array([0, 2])
+    >>> check_indices([0.5], "force_columns", 3)
+    Traceback (most recent call last):
+    ...
+    TypeError: force_columns: expected integer indices, got 0.5
+    """
+    raw = np.asarray([] if value is None else value, dtype=object).reshape(-1)
+    for item in raw:
+        if not isinstance(item, numbers.Integral) or isinstance(item, (bool, np.bool_)):
+            raise TypeError(f"{name}: expected integer indices, got {item!r}")
+    out = raw.astype(int)
+    if np.any((out < 0) | (out >= size)):
+        raise ValueError(f"{name}: indices must lie in [0, {size}), got {out.tolist()}")
+    return out
