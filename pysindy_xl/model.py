@@ -10,14 +10,15 @@ from sklearn.base import BaseEstimator, clone
 from sklearn.metrics import r2_score
 from sklearn.utils.validation import check_is_fitted
 
-from ._validation import check_instance, check_numeric_array, check_option
+from ._inputs import as_list, check_array, sample_times, trajectory_arrays
+from ._validation import check_instance, check_option
 from .diagnostics import (
     IdentificationWarning,
     mass_matrices,
     mass_matrix_report,
     orient_free_laws,
 )
-from .dynamics import MassMatrixDynamics, _check_times
+from .dynamics import MassMatrixDynamics
 from .feature_library import (
     CatalogRepartition,
     LagrangeLibrary,
@@ -31,54 +32,6 @@ from .weak.regression import weak_regression
 __all__ = ["XLSINDy", "IdentificationWarning"]
 
 _FORMULATIONS = ("auto", "strong", "weak")
-_MAX_ABS = 1e100  # larger data overflow in the products and squares of the regression
-
-
-def _as_list(value, name: str) -> tuple[list, bool]:
-    """``value`` as a list of trajectories and whether it was given as a list."""
-    if isinstance(value, (list, tuple)):
-        if not value:
-            raise ValueError(f"{name}: expected at least one trajectory")
-        for k, item in enumerate(value):
-            if item is None:
-                raise ValueError(f"{name}[{k}]: is None; give an array for every trajectory "
-                                 f"(or {name}=None for all of them)")
-        return list(value), True
-    return [value], False
-
-
-def _check_array(a, name: str, shape=None, n_columns=None) -> np.ndarray:
-    """Float 2-D array (one column per coordinate); a 1-D array is one coordinate, as in
-    PySINDy, when one column is expected."""
-    a = check_numeric_array(a, name, finite=False, min_samples=0)
-    if shape is not None:
-        n_columns = shape[1]
-    if a.ndim == 1 and n_columns == 1:
-        a = a[:, None]
-    if a.ndim != 2:
-        raise ValueError(f"{name}: expected a 2-D array (n_samples, n), got shape {a.shape}")
-    if shape is not None and a.shape != tuple(shape):
-        raise ValueError(f"{name}: expected shape {tuple(shape)}, got {a.shape}")
-    if a.shape[0] == 0 or a.shape[1] == 0:
-        raise ValueError(f"{name}: expected a non-empty array, got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name}: contains NaN or inf")
-    return check_numeric_array(a, name, max_abs=_MAX_ABS)
-
-
-def _check_mask(mask, name: str, n_samples: int) -> np.ndarray:
-    """Boolean sample mask (all True when absent)."""
-    if mask is None:
-        return np.ones(n_samples, dtype=bool)
-    mask = np.asarray(mask)
-    if mask.shape != (n_samples,):
-        raise ValueError(f"{name}: expected shape ({n_samples},) (one flag per sample), got "
-                         f"{mask.shape}")
-    if mask.dtype != bool:
-        if not np.issubdtype(mask.dtype, np.number) or not np.isin(mask, (0, 1)).all():
-            raise TypeError(f"{name}: expected booleans (or 0/1), got dtype {mask.dtype}")
-        mask = mask.astype(bool)
-    return mask
 
 
 def _probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndarray:
@@ -244,72 +197,18 @@ class XLSINDy(BaseEstimator):
 
         With ``differentiate=False`` missing velocities and accelerations stay ``None``.
         """
-        xs, is_list = _as_list(x, "x")
-        if t is None:
-            t = self.t_default
-        if isinstance(t, (list, tuple)):
-            if not is_list or len(t) != len(xs):
-                raise ValueError(
-                    "t: a list of times needs x to be a list of the same length"
-                )
-            ts = list(t)
-        else:
-            ts = [t] * len(xs)
-        optional = {}
-        for name, value in (("x_dot", x_dot), ("x_ddot", x_ddot), ("u", u),
-                            ("sample_mask", sample_mask)):
-            if value is None:
-                optional[name] = [None] * len(xs)
-                continue
-            values, value_is_list = _as_list(value, name)
-            if value_is_list != is_list or len(values) != len(xs):
-                raise ValueError(f"{name}: expected the same layout as x ({len(xs)} "
-                                 f"{'trajectories' if is_list else 'array'})")
-            optional[name] = values
-        implicit = u is None and (self.optimizer is None
-                                  or type(self.optimizer).__name__ == "ImplicitOptimizer")
-        out = []
-        for k, (xk, tk) in enumerate(zip(xs, ts, strict=True)):
-            label = f"[{k}]" if is_list else ""
-            xk = _check_array(xk, f"x{label}", n_columns=n)
-            if xk.shape[1] != n:
-                raise ValueError(f"x{label}: expected {n} columns (one per coordinate), got "
-                                 f"{xk.shape[1]}")
-            if xk.shape[0] < 5:
-                raise ValueError(f"x{label}: expected at least 5 samples, got {xk.shape[0]}")
-            tk = self._times(tk, xk.shape[0], f"t{label}")
-            arrays = {"x": xk, "t": tk,
-                      "mask": _check_mask(optional["sample_mask"][k], f"sample_mask{label}",
-                                          xk.shape[0])}
-            for name in ("x_dot", "x_ddot", "u"):
-                v = optional[name][k]
-                arrays[name] = None if v is None else _check_array(v, f"{name}{label}", xk.shape)
-            if not differentiate:
-                pass
-            elif arrays["x_dot"] is None:
-                arrays["x_dot"] = self._differentiate(xk, tk, implicit)
-            if differentiate and arrays["x_ddot"] is None:
-                arrays["x_ddot"] = self._differentiate(arrays["x_dot"], tk, implicit)
-            out.append(arrays)
+        out = trajectory_arrays(x, self.t_default if t is None else t, x_dot, x_ddot, u,
+                                sample_mask, n)
+        if differentiate:
+            implicit = u is None and (self.optimizer is None
+                                      or type(self.optimizer).__name__ == "ImplicitOptimizer")
+            for arrays in out:
+                if arrays["x_dot"] is None:
+                    arrays["x_dot"] = self._differentiate(arrays["x"], arrays["t"], implicit)
+                if arrays["x_ddot"] is None:
+                    arrays["x_ddot"] = self._differentiate(arrays["x_dot"], arrays["t"],
+                                                           implicit)
         return out
-
-    @staticmethod
-    def _times(t, n_samples: int, name: str) -> np.ndarray:
-        if np.ndim(t) == 0:
-            if isinstance(t, (str, bytes, bool, np.bool_, np.datetime64, np.timedelta64)):
-                raise TypeError(f"{name}: expected a time step in seconds (a real number) or an "
-                                f"array of times, got the {type(t).__name__} {t!r}")
-            try:
-                dt = float(t)
-            except (TypeError, ValueError):
-                raise TypeError(f"{name}: expected a time step or an array of times") from None
-            if not np.isfinite(dt) or dt <= 0:
-                raise ValueError(f"{name}: the time step must be positive and finite, got {t!r}")
-            return np.arange(n_samples) * dt
-        t = _check_times(check_numeric_array(t, name, finite=False, min_samples=0), name)
-        if len(t) != n_samples:
-            raise ValueError(f"{name}: expected {n_samples} times (one per sample), got {len(t)}")
-        return t
 
     # -- fit ---------------------------------------------------------------------------------
     def fit(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None):
@@ -565,8 +464,8 @@ class XLSINDy(BaseEstimator):
         >>> bool(np.abs(xd[:, 0] - np.cos(t)).max() < 1e-4)
         True
         """
-        x = _check_array(x, "x", n_columns=1 if np.ndim(x) == 1 else None)
-        t = self._times(self.t_default if t is None else t, x.shape[0], "t")
+        x = check_array(x, "x", n_columns=1 if np.ndim(x) == 1 else None)
+        t = sample_times(self.t_default if t is None else t, x.shape[0], "t")
         if self.differentiation_method is not None:
             return self._differentiate(x, t, implicit=False)
         smoother = self.smoother or WhittakerSmoother()
@@ -686,19 +585,19 @@ class XLSINDy(BaseEstimator):
         """
         dynamics = self._require_dynamics()
         n = self.n_coordinates_
-        xs, is_list = _as_list(x, "x")
-        xds, xd_list = _as_list(x_dot, "x_dot")
-        us, u_list = _as_list(u, "u") if u is not None else ([None] * len(xs), is_list)
+        xs, is_list = as_list(x, "x")
+        xds, xd_list = as_list(x_dot, "x_dot")
+        us, u_list = as_list(u, "u") if u is not None else ([None] * len(xs), is_list)
         if xd_list != is_list or len(xds) != len(xs) or u_list != is_list or len(us) != len(xs):
             raise ValueError("x_dot, u: expected the same layout as x")
         out = []
         for k, (xk, xdk, uk) in enumerate(zip(xs, xds, us, strict=True)):
             label = f"[{k}]" if is_list else ""
-            xk = _check_array(xk, f"x{label}", n_columns=n)
+            xk = check_array(xk, f"x{label}", n_columns=n)
             if xk.shape[1] != n:
                 raise ValueError(f"x{label}: expected {n} columns, got {xk.shape[1]}")
-            xdk = _check_array(xdk, f"x_dot{label}", xk.shape)
-            uk = None if uk is None else _check_array(uk, f"u{label}", xk.shape)
+            xdk = check_array(xdk, f"x_dot{label}", xk.shape)
+            uk = None if uk is None else check_array(uk, f"u{label}", xk.shape)
             with np.errstate(all="ignore"):
                 acc = dynamics.accelerations(xk, xdk, uk)
             if not np.all(np.isfinite(acc)):
