@@ -195,7 +195,7 @@ def settings_from_args(args):
 
 def run_benchmark(args) -> int:
     """Run (or, with ``--report-only``, only report) the benchmark of parsed arguments."""
-    from .records import RecordStore
+    from .records import GridBusyError, RecordStore
     from .report import machine_description, write_report
     from .runner import run_grid
 
@@ -233,7 +233,7 @@ def run_benchmark(args) -> int:
                                isolation=args.isolation,
                                progress=False if args.no_progress else None, limit=args.limit,
                                blas_threads=args.blas_threads)
-        except (ImportError, ValueError) as error:
+        except (ImportError, ValueError, GridBusyError) as error:
             print(f"benchmark: error: {error}", file=sys.stderr)
             return 1
         print(f"ran {outcome['ran']} runs in {outcome['seconds']:.0f} s "

@@ -27,11 +27,14 @@ Record fields
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import json
 import os
 import warnings
 
-__all__ = ["STATUSES", "RecordStore", "read_records", "latest_records", "check_record"]
+__all__ = ["STATUSES", "RecordStore", "GridBusyError", "read_records", "latest_records",
+           "check_record"]
 
 STATUSES = ("ok", "invalid", "timeout", "error")
 _REQUIRED = ("run_id", "trajectory_id", "config", "status")
@@ -62,11 +65,16 @@ def check_record(record) -> dict:
     return record
 
 
+class GridBusyError(RuntimeError):
+    """Another grid holds the records file (see :meth:`RecordStore.lock`)."""
+
+
 def read_records(path) -> list[dict]:
     """All complete records of a JSONL file, in file order (duplicates kept).
 
-    A torn last line (a writer killed mid-line) is skipped with a warning; an unreadable line
-    anywhere else raises, since it means the file was damaged otherwise.
+    A torn last line (a writer killed mid-line) and any other unreadable line (a damaged
+    file) are skipped with a warning naming the line: their runs count as not done and are
+    run again.
 
     Parameters
     ----------
@@ -93,7 +101,9 @@ def read_records(path) -> list[dict]:
                 warnings.warn(f"{path}: skipping a torn last line ({len(line)} characters)",
                               RuntimeWarning, stacklevel=2)
                 continue
-            raise ValueError(f"{path}: line {number} is not valid JSON ({error})") from None
+            warnings.warn(f"{path}: skipping line {number}, which is not valid JSON ({error}); "
+                          "its run will be run again", RuntimeWarning, stacklevel=2)
+            continue
         if is_last:  # complete JSON but no trailing newline: also an interrupted write
             warnings.warn(f"{path}: skipping a last line without newline", RuntimeWarning,
                           stacklevel=2)
@@ -148,6 +158,39 @@ class RecordStore:
             os.fsync(handle.fileno())
         warnings.warn(f"{self.path}: removed a torn last line ({len(data) - keep} bytes); that "
                       "run will be run again", RuntimeWarning, stacklevel=3)
+
+    @contextlib.contextmanager
+    def lock(self):
+        """Exclusive use of the records file for the duration of a grid.
+
+        A second grid on the same output refuses at once (:class:`GridBusyError` naming the
+        holder)
+        instead of interleaving runs; the lock (``flock`` on ``PATH.lock``) dies with its
+        process, so a killed grid never leaves a stale lock behind.
+
+        Yields
+        ------
+        None
+        """
+        lock_path = self.path + ".lock"
+        handle = open(lock_path, "a+")  # noqa: SIM115 - held for the whole context
+        try:
+            try:
+                fcntl.flock(handle.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                handle.seek(0)
+                holder = handle.read().strip() or "another process"
+                raise GridBusyError(
+                    f"records: another grid ({holder}) is writing to {self.path}; wait for it "
+                    "to finish or use another output directory"
+                ) from None
+            handle.seek(0)
+            handle.truncate()
+            handle.write(f"pid {os.getpid()}")
+            handle.flush()
+            yield
+        finally:
+            handle.close()
 
     def records(self) -> list[dict]:
         """Latest record of every run id (see :func:`latest_records`)."""

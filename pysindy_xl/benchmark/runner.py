@@ -637,7 +637,7 @@ def run_grid(settings: GridSettings, records_path, n_jobs: int = -1, backend: st
     start = time.perf_counter()
     bar = tqdm(total=len(pending), desc=f"benchmark {settings.name}", unit="run",
                disable=None if progress is None else not progress, smoothing=0.05)
-    with bar, backend_context(backend, address):
+    with store.lock(), bar, backend_context(backend, address):
         if pending:
             for record in _results(pending, call, n_jobs):
                 store.append(record)
