@@ -211,6 +211,9 @@ class BumpTestFunctions:
         """
         t = np.asarray(t, dtype=float)
         h = self.half_width(t, x) if half_width is None else float(half_width)
+        if not 0 < 2 * h <= t[-1] - t[0]:
+            raise ValueError(f"half_width: the support {2 * h:.4g} s must be positive and fit "
+                             f"inside the trajectory ({t[-1] - t[0]:.4g} s)")
         if n_functions is None:
             n_functions = self.n_functions
         duration = t[-1] - t[0]
