@@ -134,8 +134,10 @@ class ExplicitOptimizer(CatalogOptimizer):
         How terms are pruned, by ``"threshold"`` and by the refit step. ``"auto"``: the
         sparsest model of the backward-elimination path whose cross-validated error is within
         one standard error of the best (:func:`~pysindy_xl.optimizers.selection.select_support`),
-        which keeps small true terms on clean data and cuts noise terms on noisy data. A
-        number in [0, 1): the paper's relative condition value (:func:`hard_threshold_regression`).
+        which keeps small true terms on clean data and cuts noise terms on noisy data (with
+        fewer than 10 rows per coordinate nothing can be held out: the 1 % rule below is used
+        and ``selection_`` stays None). A number in [0, 1): the paper's relative condition
+        value (:func:`hard_threshold_regression`).
     alpha : float, default 1e-4
         Lasso weight for ``"lasso"`` and ``"proximal"`` (on unit-RMS columns and a unit-RMS
         target, so it is scale free).
