@@ -16,11 +16,10 @@ coefficients' own (physical) units, and its model keeps the terms included in at
 
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 from sklearn.base import clone
 
+from .._validation import check_instance, check_option
 from ._base import CatalogOptimizer, check_catalog_problem
 from .explicit import ExplicitOptimizer
 
@@ -88,17 +87,11 @@ class EnsembleOptimizer(CatalogOptimizer):
 
     def _check_params(self):
         for name in ("n_models", "n_chunks"):
-            value = getattr(self, name)
-            if not isinstance(value, numbers.Integral) or isinstance(value, bool) or value < 2:
-                raise ValueError(f"{name}: expected an integer >= 2, got {value!r}")
-        for name, low, high in (("fraction", 0, 1), ("inclusion", 0, 1), ("confidence", 0, 1)):
-            value = getattr(self, name)
-            if not isinstance(value, numbers.Real) or isinstance(value, bool) or not (
-                    low < value <= high):
-                raise ValueError(f"{name}: expected a number in ({low}, {high}], got {value!r}")
-        if self.optimizer is not None and not hasattr(self.optimizer, "fit_catalog"):
-            raise TypeError("optimizer: expected a catalog optimizer with fit_catalog, got "
-                            f"{type(self.optimizer).__name__}")
+            check_option(name, getattr(self, name), "int", low=2)
+        for name in ("fraction", "inclusion", "confidence"):
+            check_option(name, getattr(self, name), "real", low=0, low_open=True, high=1)
+        if self.optimizer is not None:
+            check_instance("optimizer", self.optimizer, "a catalog optimizer", "fit_catalog")
 
     def fit_catalog(self, theta, n_coordinates, force_columns):
         """Fit the ensemble on a stacked catalog matrix.

@@ -23,13 +23,13 @@ both from noisy positions with no hand-set window:
 
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 import scipy.fft
 import scipy.signal
 import scipy.sparse
 import scipy.sparse.linalg
+
+from .._validation import check_option
 
 __all__ = ["WhittakerSmoother", "finite_difference_weights", "differentiate"]
 
@@ -201,19 +201,11 @@ class WhittakerSmoother:
         self.lam = lam
 
     def _check_params(self):
-        if (not isinstance(self.order, numbers.Integral) or isinstance(self.order, bool)
-                or not 1 <= self.order <= 4):
-            raise ValueError(f"order: expected an integer in [1, 4], got {self.order!r}")
+        check_option("order", self.order, "int", low=1, high=4)
         if isinstance(self.lam, str):
-            if self.lam not in ("velocity", "gcv"):
-                raise ValueError(
-                    f"lam: expected a number, 'velocity' or 'gcv', got {self.lam!r}"
-                )
-        elif (not isinstance(self.lam, numbers.Real) or isinstance(self.lam, bool)
-              or not 0 <= self.lam < np.inf):
-            raise ValueError(
-                f"lam: expected a non-negative number, 'velocity' or 'gcv', got {self.lam!r}"
-            )
+            check_option("lam", self.lam, "choice", choices=("velocity", "gcv"))
+        else:
+            check_option("lam", self.lam, "real", low=0)
 
     def smooth(self, t, x):
         """Smoothed positions, velocities and accelerations.

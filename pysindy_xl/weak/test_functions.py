@@ -16,12 +16,12 @@ functions must low-pass.
 
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 import scipy.fft
 import scipy.signal
 import scipy.sparse
+
+from .._validation import check_option
 
 __all__ = ["BumpTestFunctions", "corner_frequency", "quadrature_weights"]
 
@@ -142,20 +142,15 @@ class BumpTestFunctions:
         self.min_samples = min_samples
 
     def _check_params(self):
-        def positive(name, value, integral=False):
-            kind = numbers.Integral if integral else numbers.Real
-            if not isinstance(value, kind) or isinstance(value, bool) or not 0 < value < np.inf:
-                what = "positive integer" if integral else "positive number"
-                raise ValueError(f"{name}: expected a {what}, got {value!r}")
-
+        positive = {"low": 0, "low_open": True}
         if self.width != "auto":
-            positive("width", self.width)
+            check_option("width", self.width, "real", **positive)
         if self.n_functions != "auto":
-            positive("n_functions", self.n_functions, integral=True)
-        positive("power", self.power, integral=True)
-        positive("width_factor", self.width_factor)
-        positive("overlap", self.overlap)
-        positive("min_samples", self.min_samples, integral=True)
+            check_option("n_functions", self.n_functions, "int", low=1)
+        check_option("power", self.power, "int", low=1)
+        check_option("width_factor", self.width_factor, "real", **positive)
+        check_option("overlap", self.overlap, "real", **positive)
+        check_option("min_samples", self.min_samples, "int", low=1)
 
     def half_width(self, t, x=None) -> float:
         """Half-width ``h`` (time units) for a trajectory.
