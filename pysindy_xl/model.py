@@ -371,19 +371,13 @@ class XLSINDy(BaseEstimator):
         self.mass_matrix_check_ = mass_matrix_report(mass, eig, library.coords.names)
 
     def _resolve_formulation(self, x_dot, x_ddot) -> str:
-        if not isinstance(self.formulation, str) or self.formulation not in _FORMULATIONS:
-            raise ValueError(f"formulation: expected one of {_FORMULATIONS}, got "
-                             f"{self.formulation!r}")
-        if self.formulation != "auto":
+        if self.formulation != "auto":  # checked by _check_options
             return self.formulation
         measured = x_dot is not None and x_ddot is not None
         return "strong" if measured or self.differentiation_method is not None else "weak"
 
     def _optimizer(self, forced: np.ndarray):
         if self.optimizer is not None:
-            if isinstance(self.optimizer, type):
-                raise TypeError(f"optimizer: expected an instance, got the class "
-                                f"{self.optimizer.__name__}; write {self.optimizer.__name__}()")
             if not hasattr(self.optimizer, "fit_catalog"):
                 if callable(getattr(self.optimizer, "fit", None)):
                     # a pysindy (or scikit-learn) regressor: explicit regression through it
