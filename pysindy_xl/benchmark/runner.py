@@ -17,6 +17,16 @@ is unavailable, ``isolation="signal"`` runs the task in the worker under ``signa
 (effective between Python bytecodes only). In both cases the validation simulation also gets
 the remaining time as its own ``timeout``.
 
+Killing the grid
+----------------
+No process of a local grid outlives it. Ctrl-C (SIGINT) and SIGTERM stop the grid: the
+records already appended stay (each is flushed and fsynced), joblib kills its workers and
+their runs, and the process then ends as the signal asks (SIGTERM: killed by SIGTERM). If the
+grid process is killed outright (SIGKILL, out-of-memory killer), each worker notices within
+half a second that its parent is gone (a watchdog thread) and exits, and each forked run is
+killed by the kernel when its worker dies (Linux ``PR_SET_PDEATHSIG``; elsewhere the run's own
+alarm stops it 10 s after its time limit). Rerunning the grid resumes it.
+
 Threads
 -------
 Each run solves small least-squares problems; with several runs in parallel, BLAS's own
@@ -43,6 +53,7 @@ import json
 import math
 import os
 import signal
+import sys
 import threading
 import time
 import traceback
@@ -335,8 +346,94 @@ def _resolve_isolation(isolation: str) -> str:
     return "none"
 
 
-def _child(connection, function, task, settings, deadline):
+# -- lifetime: no process outlives the grid ----------------------------------------------------
+_WATCH_INTERVAL = 0.5  # seconds between two checks of a worker's parent
+_watched = None  # (this process, grid process) once the watchdog of this worker runs
+_runs = set()  # forked runs in flight in this process
+
+
+def _die_with_parent() -> None:
+    """Ask the kernel to SIGKILL this process when its parent dies (Linux; no-op elsewhere).
+
+    The parent "dies" when the thread that forked this process ends; callers fork from a
+    thread that waits for the child, so the two coincide.
+    """
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
+    except (OSError, AttributeError):
+        pass
+
+
+def _watch_grid(grid_pid: int) -> None:
+    """In a local worker of the grid process ``grid_pid``: exit as soon as it is gone.
+
+    Started once per worker (a daemon thread polling ``os.getppid()``). Nothing happens in
+    the grid process itself (``n_jobs=1``) or in a worker that is not its child (Dask, Ray).
+    A dying worker kills its forked runs (which also die with it through
+    :func:`_die_with_parent`).
+    """
+    global _watched
+    pid = os.getpid()
+    if pid == grid_pid or os.getppid() != grid_pid or _watched == (pid, grid_pid):
+        return
+    _watched = (pid, grid_pid)
+
+    def watch():
+        while os.getppid() == grid_pid:
+            time.sleep(_WATCH_INTERVAL)
+        for process in list(_runs):
+            with contextlib.suppress(Exception):
+                os.kill(process.pid, signal.SIGKILL)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="pysindy-xl-grid-watchdog", daemon=True).start()
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt():
+    """Turn SIGTERM into KeyboardInterrupt during the grid, so that it stops like on Ctrl-C
+    (joblib kills the workers); afterwards the process still ends by SIGTERM.
+
+    Only in the main thread and where SIGTERM has its default action (a handler of the
+    application is left alone).
+    """
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL):
+        yield
+        return
+    received = []
+
+    def handler(signum, frame):
+        received.append(signum)
+        raise KeyboardInterrupt(f"signal {signum}")
+
+    signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        if received:  # the default action, now that the workers are gone
+            os.kill(os.getpid(), signal.SIGTERM)
+
+
+def _grid_call(task, grid_pid, **options):
+    """One run of a grid in a worker: :func:`run_task` under the worker's watchdog."""
+    _watch_grid(grid_pid)
+    return run_task(task, **options)
+
+
+def _child(connection, function, task, settings, deadline, parent_pid):
     """Body of the forked child: run, send JSON lines (stages, then the record), exit."""
+    _die_with_parent()
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the grid's handler (n_jobs=1)
+    if os.getppid() != parent_pid:  # the parent died before the request took effect
+        os._exit(1)
+
     def send(message):
         connection.send_bytes(json.dumps(message, allow_nan=False).encode())
 
@@ -360,9 +457,10 @@ def _run_in_process(function, task, settings, timeout):
     receiver, sender = context.Pipe(duplex=False)
     start = time.perf_counter()
     deadline = start + timeout
-    process = context.Process(target=_child, args=(sender, function, task, settings, deadline),
-                              daemon=True)
+    process = context.Process(target=_child, daemon=True,
+                              args=(sender, function, task, settings, deadline, os.getpid()))
     process.start()
+    _runs.add(process)
     sender.close()
     last_stage, record = "start", None
     try:
@@ -382,6 +480,7 @@ def _run_in_process(function, task, settings, timeout):
         if record is None and process.is_alive():
             process.kill()
         process.join(5)
+        _runs.discard(process)
         receiver.close()
     elapsed = time.perf_counter() - start
     if record is not None:
@@ -630,20 +729,22 @@ def run_grid(settings: GridSettings, records_path, n_jobs: int = -1, backend: st
     pending = [t for t in tasks if t.run_id not in done]
     if limit is not None:
         pending = pending[:limit]
-    call = functools.partial(run_task, settings=settings, isolation=isolation,
-                             function=function,
+    call = functools.partial(_grid_call, grid_pid=os.getpid(), settings=settings,
+                             isolation=isolation, function=function,
                              blas_threads=_resolve_blas_threads(blas_threads, n_jobs, backend))
     statuses = dict.fromkeys(("ok", "invalid", "timeout", "error"), 0)
     start = time.perf_counter()
     bar = tqdm(total=len(pending), desc=f"benchmark {settings.name}", unit="run",
                disable=None if progress is None else not progress, smoothing=0.05)
-    with store.lock(), bar, backend_context(backend, address):
+    with _sigterm_as_interrupt(), store.lock(), bar, backend_context(backend, address):
         if pending:
-            for record in _results(pending, call, n_jobs):
-                store.append(record)
-                statuses[record["status"]] += 1
-                bar.set_postfix(statuses, refresh=False)
-                bar.update(1)
+            # closing the generator (on an interrupt too) makes joblib kill its workers
+            with contextlib.closing(_results(pending, call, n_jobs)) as results:
+                for record in results:
+                    store.append(record)
+                    statuses[record["status"]] += 1
+                    bar.set_postfix(statuses, refresh=False)
+                    bar.update(1)
     return {"total": len(tasks), "skipped": sum(t.run_id in done for t in tasks),
             "ran": sum(statuses.values()), "statuses": statuses,
             "seconds": time.perf_counter() - start}
