@@ -19,13 +19,14 @@ the remaining time as its own ``timeout``.
 
 Killing the grid
 ----------------
-No process of a local grid outlives it. Ctrl-C (SIGINT) and SIGTERM stop the grid: the
-records already appended stay (each is flushed and fsynced), joblib kills its workers and
-their runs, and the process then ends as the signal asks (SIGTERM: killed by SIGTERM). If the
-grid process is killed outright (SIGKILL, out-of-memory killer), each worker notices within
-half a second that its parent is gone (a watchdog thread) and exits, and each forked run is
-killed by the kernel when its worker dies (Linux ``PR_SET_PDEATHSIG``; elsewhere the run's own
-alarm stops it 10 s after its time limit). Rerunning the grid resumes it.
+No process of a local grid (loky workers) outlives it. Ctrl-C (SIGINT) and SIGTERM stop the
+grid: the records already appended stay (each is flushed and fsynced), joblib kills its
+workers and their runs, and the process then ends as the signal asks (SIGTERM: killed by
+SIGTERM). If the grid process is killed outright (SIGKILL, out-of-memory killer), each worker
+notices within half a second that its parent is gone (a watchdog thread) and exits, and each
+forked run is killed by the kernel when its worker dies (Linux ``PR_SET_PDEATHSIG``;
+elsewhere the run's own alarm stops it 10 s after its time limit). Rerunning the grid resumes
+it.
 
 Threads
 -------
@@ -715,6 +716,17 @@ def run_grid(settings: GridSettings, records_path, n_jobs: int = -1, backend: st
     -------
     dict
         ``{"total", "skipped", "ran", "statuses", "seconds"}``.
+
+    Notes
+    -----
+    Killing the grid leaves no process behind and keeps every finished run (see
+    "Killing the grid" in the module docstring). Ctrl-C (SIGINT) raises
+    :class:`KeyboardInterrupt` after joblib has killed the workers and their runs; SIGTERM
+    (where the application has no handler of its own and the grid runs in the main thread)
+    stops the grid in the same way and then ends the process by SIGTERM; after SIGKILL of the
+    grid process its local workers exit within about a second and their forked runs with them
+    (Linux). This covers the local workers (``backend="loky"``, the default); the workers of
+    a Dask or Ray cluster are the cluster's to manage.
     """
     from tqdm.auto import tqdm
 
