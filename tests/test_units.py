@@ -93,18 +93,6 @@ ONE_TRUE = np.array([-1.0, 0.5, -1.5, -0.125, 0.0])
 ONE_UNITS = np.array([1.0, UM**-2, UM**-2, UM**-4, UM**-3])
 
 
-def test_cubic_oscillator_in_micrometres_is_a_clear_error():
-    # the x^4 column is ~1e24 times the forces in um: a units error naming u, not the
-    # unrelated "needs a force column" of before
-    with pytest.raises(ValueError, match=r"u: the forces are .* times the largest catalog "
-                                         r"column .* units of comparable magnitude"):
-        _fit(px.LagrangeLibrary(ONE, ONE_TERMS), "strong", *_oscillator(UM))
-
-
-@pytest.mark.xfail(strict=True, raises=ValueError, reason=(
-    "issue 13, open: columns below 1e-14 of the largest are dropped as zero by "
-    "independent_columns; a catalog with x^4 in um spans 1e30 in column scale. Needs a "
-    "scale-free dependent-column test (a numerical change, not input validation)."))
 @pytest.mark.parametrize("formulation", ["strong", "weak"])
 def test_cubic_oscillator_in_micrometres(formulation):
     metres = _fit(px.LagrangeLibrary(ONE, ONE_TERMS), formulation, *_oscillator(1.0))
@@ -127,12 +115,6 @@ def test_cart_pole_in_metres(formulation):
     np.testing.assert_allclose(metres, TWO_TRUE, atol=1e-3)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "issue 13, open: with one coordinate in um and the other in rad the equation blocks differ "
-    "by 1e6 in scale; the dependent-column test (independent_columns) drops the coupling "
-    "term as a linear combination and the relative pruning removes the cart's inertia. Needs "
-    "per-coordinate row-block weighting in the regression (a numerical change, not input "
-    "validation)."))
 @pytest.mark.parametrize("formulation", ["strong", "weak"])
 def test_cart_pole_with_the_cart_in_micrometres(formulation):
     micro = _fit(px.LagrangeLibrary(TWO, TWO_TERMS), formulation, *_cart_pole(UM))
