@@ -107,6 +107,10 @@ def mass_matrix_report(mass, eigenvalues, names) -> dict:
     """Fraction of states with a positive definite mass matrix, its median condition number;
     warns (:class:`IdentificationWarning`) naming coordinates without positive inertia.
 
+    Definiteness is judged unit free, on ``D M D`` with ``D = diag(max |M_ii|)^(-1/2)``
+    (coordinates in micrometres next to radians are fine); the condition number is that of
+    ``M`` itself.
+
     Parameters
     ----------
     mass : ndarray, shape (S, n, n)
@@ -125,14 +129,24 @@ def mass_matrix_report(mass, eigenvalues, names) -> dict:
     >>> mass = np.array([[[2.0, 0.0], [0.0, 1.0]]] * 3)
     >>> mass_matrix_report(mass, np.linalg.eigvalsh(mass), ["a", "b"])
     {'positive_definite_fraction': 1.0, 'median_condition': 2.0}
+    >>> micro = mass * [[1e-12, 0.0], [0.0, 1.0]]  # "a" in micrometres
+    >>> mass_matrix_report(micro, np.linalg.eigvalsh(micro), ["a", "b"])
+    {'positive_definite_fraction': 1.0, 'median_condition': 500000000000.0}
     """
-    scale = max(float(np.abs(eigenvalues).max()), 1e-300)
-    definite = eigenvalues.min(axis=1) > 1e-9 * scale
+    # Definiteness is judged on D M D, D = diag(max_states |M_ii|)^(-1/2): a congruence (same
+    # signs of eigenvalues) that removes the units of the coordinates, so a cart in micrometres
+    # next to a pendulum in radians (M_xx 1e-12 times M_thth) is not called singular.
+    diagonal = np.diagonal(mass, axis1=1, axis2=2)
+    unit = np.max(np.abs(diagonal), axis=0, initial=0.0)
+    unit = 1.0 / np.sqrt(np.where((unit > 0) & np.isfinite(unit), unit, 1.0))
+    scaled = np.linalg.eigvalsh(mass * unit[None, :, None] * unit[None, None, :])
+    scale = max(float(np.abs(scaled).max()), 1e-300)
+    definite = scaled.min(axis=1) > 1e-9 * scale
     with np.errstate(divide="ignore"):
         condition = np.where(definite,
                              eigenvalues.max(axis=1) / np.abs(eigenvalues.min(axis=1)), np.inf)
     if not definite.all():
-        diagonal = np.diagonal(mass, axis1=1, axis2=2)
+        diagonal = diagonal * unit**2
         missing = [name for i, name in enumerate(names) if np.any(diagonal[:, i] <= 1e-9 * scale)]
         warnings.warn(
             f"the identified mass matrix is not positive definite on {np.mean(~definite):.0%} "

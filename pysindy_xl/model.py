@@ -274,11 +274,11 @@ class XLSINDy(BaseEstimator):
         library.check_domain(z)
         if self.drop_dependent:
             keep, dropped = independent_columns(
-                library.transform(_probe_points(z)), library.column_priority()
+                library.transform(_probe_points(z)), library.column_priority(),
+                n_blocks=n, force_columns=library.force_columns_,
             )
         else:
             keep, dropped = np.arange(theta.shape[1]), {}
-        self._check_force_scale(theta, library, dropped)
         force_columns = [int(np.flatnonzero(keep == j)[0]) for j in library.force_columns_
                          if j in keep]
         forced = np.zeros(n, dtype=bool)
@@ -342,18 +342,6 @@ class XLSINDy(BaseEstimator):
             if all(np.ptp(d["x"][:, i]) == 0 for d in data):
                 raise ValueError(f"x: coordinate {name!r} is constant on every sample; a "
                                  "coordinate that never moves carries no dynamics to identify")
-
-    @staticmethod
-    def _check_force_scale(theta, library, dropped):
-        """Forces given but negligible next to the catalog columns: a units problem, said so."""
-        for j in library.force_columns_:
-            if dropped.get(j) == "zero column" and np.any(theta[:, j] != 0):
-                ratio = np.abs(theta[:, j]).max() / np.abs(theta).max()
-                raise ValueError(
-                    f"u: the forces are {ratio:.1e} times the largest catalog column and vanish "
-                    "next to it at double precision; express positions and forces in units of "
-                    "comparable magnitude (e.g. metres and newtons rather than micrometres)"
-                )
 
     def _check_mass_matrix(self, z):
         """Orient the laws no force scales, then measure ``M(q)`` on the training states

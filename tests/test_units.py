@@ -13,8 +13,10 @@ import numpy as np
 import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
+from sklearn.base import clone
 
 import pysindy_xl as px
+from pysindy_xl.optimizers import balance_coordinates, coordinate_weights, independent_columns
 
 UM = 1e6  # micrometres per metre
 
@@ -93,18 +95,6 @@ ONE_TRUE = np.array([-1.0, 0.5, -1.5, -0.125, 0.0])
 ONE_UNITS = np.array([1.0, UM**-2, UM**-2, UM**-4, UM**-3])
 
 
-def test_cubic_oscillator_in_micrometres_is_a_clear_error():
-    # the x^4 column is ~1e24 times the forces in um: a units error naming u, not the
-    # unrelated "needs a force column" of before
-    with pytest.raises(ValueError, match=r"u: the forces are .* times the largest catalog "
-                                         r"column .* units of comparable magnitude"):
-        _fit(px.LagrangeLibrary(ONE, ONE_TERMS), "strong", *_oscillator(UM))
-
-
-@pytest.mark.xfail(strict=True, raises=ValueError, reason=(
-    "issue 13, open: columns below 1e-14 of the largest are dropped as zero by "
-    "independent_columns; a catalog with x^4 in um spans 1e30 in column scale. Needs a "
-    "scale-free dependent-column test (a numerical change, not input validation)."))
 @pytest.mark.parametrize("formulation", ["strong", "weak"])
 def test_cubic_oscillator_in_micrometres(formulation):
     metres = _fit(px.LagrangeLibrary(ONE, ONE_TERMS), formulation, *_oscillator(1.0))
@@ -127,13 +117,87 @@ def test_cart_pole_in_metres(formulation):
     np.testing.assert_allclose(metres, TWO_TRUE, atol=1e-3)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "issue 13, open: with one coordinate in um and the other in rad the equation blocks differ "
-    "by 1e6 in scale; the dependent-column test (independent_columns) drops the coupling "
-    "term as a linear combination and the relative pruning removes the cart's inertia. Needs "
-    "per-coordinate row-block weighting in the regression (a numerical change, not input "
-    "validation)."))
 @pytest.mark.parametrize("formulation", ["strong", "weak"])
 def test_cart_pole_with_the_cart_in_micrometres(formulation):
     micro = _fit(px.LagrangeLibrary(TWO, TWO_TERMS), formulation, *_cart_pole(UM))
     np.testing.assert_allclose(micro / TWO_UNITS, TWO_TRUE, rtol=1e-3, atol=1e-3)
+
+
+def test_cubic_oscillator_in_micrometres_keeps_the_forces():
+    # the x^4 column is ~1e24 times the forces in um: once a "zero column" (then a units error),
+    # now the same catalog reduction as in metres
+    fits = [px.XLSINDy(px.LagrangeLibrary(ONE, ONE_TERMS), px.ExplicitOptimizer(),
+                       formulation="strong")
+            for _ in range(2)]
+    for model, scale in zip(fits, (1.0, UM), strict=True):
+        t, x, xd, xdd, u = _oscillator(scale)
+        model.fit(x, t, x_dot=xd, x_ddot=xdd, u=u)
+    assert fits[1].dropped_features_ == fits[0].dropped_features_
+    assert fits[1].coefficients()[0] == -1.0  # the force column (first) is kept
+
+
+# ----------------------------------------------------------------- the optimizers alone
+def _two_block_problem(seed=0, n=400, noise=1e-3):
+    """theta = [a (block 0), b (block 1), coupling (both), spurious (both), force (both)]."""
+    rng = np.random.default_rng(seed)
+    zeros = np.zeros(n)
+    a, b, c0, c1, s0, s1 = rng.normal(size=(6, n))
+    columns = np.column_stack([np.concatenate(pair) for pair in
+                               ((a, zeros), (zeros, b), (c0, c1), (s0, s1))])
+    true = np.array([1.0, 2.0, 0.5, 0.0])
+    force = columns @ true + noise * rng.normal(size=2 * n)
+    return np.column_stack([columns, force]), np.append(true, -1.0)
+
+
+@pytest.mark.parametrize("optimizer", [
+    px.ExplicitOptimizer(),
+    px.ExplicitOptimizer(method="lasso", alpha=1e-5),
+    px.MixedOptimizer(),
+    px.EnsembleOptimizer(n_models=5, random_state=0),
+])
+def test_optimizer_is_equivariant_under_units(optimizer):
+    # block 0 in other units (x 1e6, its force included) and the coupling column x 1e-12: the
+    # same coefficients up to the unit factor of that column
+    theta, true = _two_block_problem()
+    reference = clone(optimizer).fit_catalog(theta, 2, [4]).coef_
+    np.testing.assert_allclose(reference, true, atol=1e-2)
+    scaled = theta.copy()
+    scaled[:400] *= 1e6
+    scaled[:, 2] *= 1e-12
+    coef = clone(optimizer).fit_catalog(scaled, 2, [4]).coef_
+    factor = np.array([1.0, 1.0, 1e12, 1.0, 1.0])
+    np.testing.assert_array_equal(coef != 0, reference != 0)
+    np.testing.assert_allclose(coef / factor, reference, rtol=1e-6, atol=1e-12)
+
+
+def test_coordinate_weights_are_unit_free():
+    theta, _ = _two_block_problem()
+    scaled = theta.copy()
+    scaled[:400] *= 1e6
+    scaled[:, 2] *= 1e-12
+    w, w_scaled = (coordinate_weights(m, 2, [4]) for m in (theta, scaled))
+    np.testing.assert_allclose(w_scaled[0] / w_scaled[1] * 1e6, w[0] / w[1], rtol=1e-12)
+    # balanced twice: the second balancing is a no-op
+    np.testing.assert_allclose(
+        coordinate_weights(balance_coordinates(scaled, 2, [4]), 2, [4]), 1.0, rtol=1e-12)
+
+
+def test_independent_columns_keeps_a_coupling_column_across_units():
+    # coordinate 0 in um: the coupling column is 1e-12 in block 0 and O(1) in block 1, where it
+    # equals column b; it is still independent (its block-0 part is not in the span of a)
+    rng = np.random.default_rng(1)
+    n = 300
+    zeros = np.zeros(n)
+    a, b, g, f0, f1 = rng.normal(size=(5, n))
+    theta = np.column_stack([
+        np.concatenate([a, zeros]),          # 0: block 0 only
+        np.concatenate([zeros, b]),          # 1: block 1 only
+        np.concatenate([1e-12 * g, b]),      # 2: coupling, blocks 1e12 apart
+        np.concatenate([a, b]),              # 3: = col 0 + col 1
+        np.concatenate([1e-6 * f0, f1]),     # 4: forces
+    ])
+    keep, dropped = independent_columns(theta, n_blocks=2, force_columns=[4])
+    assert keep.tolist() == [0, 1, 2, 4]
+    assert dropped == {3: "linear combination"}
+    # without the block structure the coupling column is indistinguishable from column 1
+    assert 2 in independent_columns(theta)[1]

@@ -3,7 +3,12 @@
 See :mod:`pysindy_xl.optimizers._base` for the ``fit_catalog`` protocol they share.
 """
 
-from ._base import CatalogOptimizer, independent_columns
+from ._base import (
+    CatalogOptimizer,
+    balance_coordinates,
+    coordinate_weights,
+    independent_columns,
+)
 from .ensemble import EnsembleOptimizer
 from .explicit import ExplicitOptimizer, hard_threshold_regression, proximal_gradient_lasso
 from .implicit import ImplicitOptimizer, NoLawFoundError, homothetic_groups
@@ -18,6 +23,8 @@ __all__ = [
     "EnsembleOptimizer",
     "NoLawFoundError",
     "independent_columns",
+    "coordinate_weights",
+    "balance_coordinates",
     "hard_threshold_regression",
     "proximal_gradient_lasso",
     "homothetic_groups",

@@ -9,6 +9,15 @@ Every optimizer of this package is a scikit-learn estimator with, besides its ow
     ``(F,)``: the full coefficient vector, force columns included, with ``theta @ coef_ ~ 0``.
 
 This is the metadata :class:`~pysindy_xl.XLSINDy` hands over; standalone users pass the same.
+
+Units. Every row of ``theta @ coef = 0`` holds exactly, so multiplying the rows of one
+coordinate block by a constant changes only how the regression weighs that block against the
+others, never the true coefficients. :func:`check_catalog_problem`, through which every
+``fit_catalog`` of this package goes, balances the blocks with :func:`coordinate_weights`
+before solving: a coordinate in micrometres next to one in radians (blocks 1e6 apart, a
+coupling column 1e12 apart between its two blocks) is then solved like the same system in
+metres, and ``coef_`` keeps its meaning (physical units of the catalog columns).
+:func:`independent_columns` uses the same balancing for its dependent-column test.
 """
 
 from __future__ import annotations
@@ -19,11 +28,23 @@ from sklearn.base import BaseEstimator
 
 from .._validation import check_indices, check_numeric_array, check_option
 
-__all__ = ["CatalogOptimizer", "independent_columns", "check_catalog_problem"]
+__all__ = [
+    "CatalogOptimizer",
+    "balance_coordinates",
+    "check_catalog_problem",
+    "coordinate_weights",
+    "independent_columns",
+]
 
 
-def check_catalog_problem(theta, n_coordinates, force_columns):
-    """Validate the arguments of ``fit_catalog``; returns ``(theta, force_columns)`` as arrays."""
+def check_catalog_problem(theta, n_coordinates, force_columns, balance: bool = True):
+    """Validate the arguments of ``fit_catalog``; returns ``(theta, force_columns)`` as arrays.
+
+    With ``balance`` (the default, used by every catalog optimizer of this package) the returned
+    ``theta`` has the rows of each coordinate block multiplied by its
+    :func:`coordinate_weights`: the same exact solutions, a unit-free regression. A single block
+    is returned unchanged.
+    """
     theta = check_numeric_array(theta, "theta", finite=False, min_samples=0)
     if theta.ndim != 2 or theta.shape[0] == 0 or theta.shape[1] == 0:
         raise ValueError(f"theta: expected a non-empty 2-D array, got shape {theta.shape}")
@@ -35,16 +56,135 @@ def check_catalog_problem(theta, n_coordinates, force_columns):
             f"theta: {theta.shape[0]} rows is not a multiple of n_coordinates={n_coordinates}"
         )
     force_columns = check_indices(force_columns, "force_columns", theta.shape[1])
+    if balance:
+        theta = balance_coordinates(theta, int(n_coordinates), force_columns)
     return theta, force_columns
 
 
-def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int = 20_000):
+def _block_rms(theta, n_blocks: int) -> np.ndarray:
+    """RMS of every column within every row block, shape (n_blocks, F), without overflow."""
+    blocks = np.asarray(theta, dtype=float).reshape(n_blocks, -1, theta.shape[1])
+    top = np.max(np.abs(blocks), axis=1)
+    safe = np.where((top > 0) & np.isfinite(top), top, 1.0)
+    return top * np.sqrt(np.mean((blocks / safe[:, None, :]) ** 2, axis=1))
+
+
+def coordinate_weights(theta, n_coordinates: int, force_columns=None) -> np.ndarray:
+    r"""Row weights of the coordinate blocks of ``theta`` that balance their scales.
+
+    With :math:`M_{ij}` the RMS of column :math:`j` within block :math:`i` (rows
+    coordinate-major) and :math:`P = \{(i, j) : M_{ij} > 0\}` the entries that are not
+    exactly zero, solve the small least-squares problem
+
+    .. math::
+
+        \min_{u, v} \sum_{(i, j) \in P} \left(\log M_{ij} + u_i + v_j\right)^2
+        \quad\text{s.t.}\quad v_j = 0 \text{ for the force columns } j
+
+    (minimum-norm solution where it is not unique) and return
+    :math:`w_i = \exp(u_i - \bar u)`, :math:`\bar u` the mean of :math:`u` over the blocks
+    with an entry in :math:`P` (geometric mean 1; a block that is exactly zero gets 1).
+    :math:`\exp(u_i)` and :math:`\exp(v_j)` are row and column scalings that bring every
+    block of every column as close as possible to 1 in the log sense.
+
+    Force columns carry the coefficient -1 (the units of their equation), so they are not
+    rescaled (:math:`v_j = 0`): a change of units that multiplies block :math:`i` by
+    :math:`a_i` and column :math:`j` by :math:`b_j` (coefficient :math:`c_j \to c_j / b_j`,
+    forces kept at -1) changes :math:`u_i` by exactly :math:`-\log a_i` (up to a common
+    constant that the normalization removes), so the weighted matrix is the same up to column
+    scales: the regression is unit free. The pinned columns also fix the otherwise free common
+    shift of :math:`u` against :math:`v`. Balancing a balanced matrix returns ones.
+
+    Parameters
+    ----------
+    theta : array, shape (n_coordinates * N, F)
+        Stacked regression matrix, rows coordinate-major.
+    n_coordinates : int
+    force_columns : sequence of int, optional
+        Columns whose scale is not free (their coefficient is fixed).
+
+    Returns
+    -------
+    ndarray, shape (n_coordinates,)
+
+    Examples
+    --------
+    The first coordinate in micrometres: its block, force included, is 1e6 times too small.
+
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> block = rng.normal(size=(50, 3))
+    >>> theta = np.vstack([block * 1e-6, block])
+    >>> w = coordinate_weights(theta, 2, force_columns=[2])
+    >>> np.round(w[0] / w[1])
+    np.float64(1000000.0)
+    >>> balanced = balance_coordinates(theta, 2, [2])
+    >>> np.allclose(coordinate_weights(balanced, 2, [2]), 1.0)
+    True
+    """
+    theta = np.asarray(theta, dtype=float)
+    n = int(n_coordinates)
+    n_features = theta.shape[1]
+    if n == 1:
+        return np.ones(1)
+    rms = _block_rms(theta, n)
+    present = (rms > 0) & np.isfinite(rms)
+    blocks, columns = np.nonzero(present)
+    if blocks.size == 0:
+        return np.ones(n)
+    pinned = np.zeros(n_features, dtype=bool)
+    if force_columns is not None:
+        pinned[np.asarray(force_columns, dtype=int).reshape(-1)] = True
+    free = np.flatnonzero(~pinned)
+    slot = np.full(n_features, -1)
+    slot[free] = n + np.arange(free.size)
+    design = np.zeros((blocks.size, n + free.size))
+    rows = np.arange(blocks.size)
+    design[rows, blocks] = 1.0
+    unpinned = slot[columns] >= 0
+    design[rows[unpinned], slot[columns[unpinned]]] = 1.0
+    solution = np.linalg.lstsq(design, -np.log(rms[blocks, columns]), rcond=None)[0]
+    u = solution[:n]
+    active = present.any(axis=1)
+    log_w = np.where(active, u - u[active].mean(), 0.0)
+    return np.exp(log_w)
+
+
+def balance_coordinates(theta, n_coordinates: int, force_columns=None) -> np.ndarray:
+    """``theta`` with the rows of each coordinate block multiplied by its
+    :func:`coordinate_weights` (a new array; ``theta`` itself for a single block).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> theta = np.array([[1e-6, 2e-6], [3e-6, 1e-6], [1.0, 2.0], [3.0, 1.0]])
+    >>> balance_coordinates(theta, 2).round(6)
+    array([[0.001, 0.002],
+           [0.003, 0.001],
+           [0.001, 0.002],
+           [0.003, 0.001]])
+    """
+    theta = np.asarray(theta, dtype=float)
+    if int(n_coordinates) == 1:
+        return theta
+    weights = coordinate_weights(theta, n_coordinates, force_columns)
+    return theta * np.repeat(weights, theta.shape[0] // int(n_coordinates))[:, None]
+
+
+def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int = 20_000,
+                        n_blocks: int = 1, force_columns=None):
     """Split the columns of ``theta`` into a linearly independent set and the rest.
 
     Columns are visited in ``priority`` order; a column is kept when its component orthogonal
     to the span of the columns visited before it exceeds ``rtol`` times its norm (a QR
     factorization of the column-normalized, priority-ordered matrix, on at most ``max_rows``
     evenly spaced rows: exact identities such as ``cos^2 + sin^2 = 1`` hold on any subset).
+    With ``n_blocks > 1`` the coordinate blocks of rows are first balanced by
+    :func:`coordinate_weights` (a coupling column whose blocks differ by 1e12 because one
+    coordinate is in micrometres stays independent of the columns of either block alone).
+
+    The test is scale free: only a column that is exactly zero on the rows used (or not
+    finite) is dropped without the QR test, whatever the scales of the other columns.
 
     Parameters
     ----------
@@ -55,13 +195,18 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
         Relative residual below which a column counts as dependent.
     max_rows : int
         Rows used for the test.
+    n_blocks : int
+        Coordinate blocks of rows (``theta`` stacked coordinate-major); 1: no balancing.
+    force_columns : sequence of int, optional
+        Force columns, passed to :func:`coordinate_weights`.
 
     Returns
     -------
     keep : ndarray of int
         Independent columns, sorted.
     dropped : dict of int to str
-        Dropped columns with the reason (``"zero column"`` or ``"linear combination"``).
+        Dropped columns with the reason (``"zero column"``, ``"non-finite column"`` or
+        ``"linear combination"``).
 
     Examples
     --------
@@ -71,24 +216,42 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
     >>> keep, dropped = independent_columns(theta)
     >>> keep, dropped
     (array([0, 1]), {2: 'linear combination', 3: 'zero column'})
+
+    Scales do not matter, only exact zeros do:
+
+    >>> keep, dropped = independent_columns(theta * [1e-30, 1.0, 1e30, 1.0])
+    >>> keep, dropped
+    (array([0, 1]), {2: 'linear combination', 3: 'zero column'})
     """
     theta = np.asarray(theta, dtype=float)
     n_rows, n_cols = theta.shape
     order = np.arange(n_cols) if priority is None else np.asarray(priority, dtype=int)
     if sorted(order.tolist()) != list(range(n_cols)):
         raise ValueError("priority: expected a permutation of the column indices")
+    n_blocks = int(n_blocks)
+    if n_blocks < 1 or n_rows % n_blocks:
+        raise ValueError(f"n_blocks: {n_rows} rows is not a multiple of n_blocks={n_blocks}")
+    finite_columns = np.all(np.isfinite(theta), axis=0)
+    if n_blocks > 1:
+        # balance on the finite columns; the others are dropped below anyway
+        finite = np.where(finite_columns, theta, 0.0)
+        weights = coordinate_weights(finite, n_blocks, force_columns)
+        theta = theta * np.repeat(weights, n_rows // n_blocks)[:, None]
     rows = np.unique(np.linspace(0, n_rows - 1, min(n_rows, max_rows)).astype(int))
     sub = theta[rows][:, order]
-    norms = np.linalg.norm(sub, axis=0)
-    scale = np.max(np.abs(theta), axis=0)[order]
+    top = np.max(np.abs(sub), axis=0, initial=0.0)
+    finite = np.isfinite(top) & finite_columns[order]
+    nonzero = finite & (top > 0)
     dropped = {}
-    nonzero = (norms > 0) & (norms > 1e-14 * np.max(norms, initial=0.0))
-    for j in order[~nonzero]:
+    for j in order[~finite]:
+        dropped[int(j)] = "non-finite column"
+    for j in order[finite & ~nonzero]:
         dropped[int(j)] = "zero column"
-    if not np.any(scale > 0):
-        return np.array([], dtype=int), dropped
+    if not np.any(nonzero):
+        return np.array([], dtype=int), dict(sorted(dropped.items()))
     candidates = order[nonzero]
-    sub = sub[:, nonzero] / norms[nonzero]
+    sub = sub[:, nonzero] / top[nonzero]  # max-scaled first: no overflow in the norms
+    sub /= np.linalg.norm(sub, axis=0)
     r = scipy.linalg.qr(sub, mode="r", check_finite=False)[0]
     diag = np.abs(np.diag(r))
     if len(diag) < len(candidates):  # fewer rows than columns: the tail is dependent

@@ -233,7 +233,11 @@ class ExplicitOptimizer(CatalogOptimizer):
         self.selection_ = select_support(X, y, n_blocks=blocks)
         support = self.selection_.support
         coef = np.zeros(X.shape[1])
-        coef[support] = np.linalg.lstsq(X[:, support], y, rcond=None)[0]
+        # on normalized columns: the accuracy of every coefficient is then independent of
+        # the units of the others (a column 1e-12 times the rest costs no digits elsewhere)
+        scale = np.sqrt(np.mean(X[:, support] ** 2, axis=0))
+        scale[scale == 0] = 1.0
+        coef[support] = np.linalg.lstsq(X[:, support] / scale, y, rcond=None)[0] / scale
         return coef
 
     def _solve(self, X, y, n_blocks=1):

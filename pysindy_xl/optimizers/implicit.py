@@ -222,6 +222,8 @@ class ImplicitOptimizer(CatalogOptimizer):
     normalized_solution_matrix_ : ndarray, shape (F, F)
         The same on unit-norm columns, ``D X D^-1`` (the matrix to plot, paper's Figure 2A).
     column_norms_ : ndarray, shape (F,)
+        Norms of the columns of ``theta`` after the coordinate blocks are balanced
+        (:func:`~pysindy_xl.optimizers.coordinate_weights`; unchanged for one coordinate).
     column_residuals_ : ndarray, shape (F,)
         Relative residual of each column's direction ``||Theta~ v_j|| / ||v_j||`` (inf for zero
         columns).

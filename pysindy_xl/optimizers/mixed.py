@@ -31,7 +31,7 @@ import numpy as np
 from sklearn.base import clone
 
 from .._validation import check_instance, check_option
-from ._base import CatalogOptimizer, check_catalog_problem
+from ._base import CatalogOptimizer, balance_coordinates, check_catalog_problem
 from .implicit import ImplicitOptimizer, NoLawFoundError, coordinates_touched
 
 __all__ = ["MixedOptimizer", "activation_closure"]
@@ -174,13 +174,18 @@ class MixedOptimizer(CatalogOptimizer):
         -------
         self
         """
-        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns)
+        # The sub-optimizers balance the coordinate blocks of their own (sub)problems
+        # (check_catalog_problem); here the balanced matrix only decides which coordinates a
+        # column touches (a coupling column 1e12 apart between a um and a rad block touches both).
+        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
+                                                     balance=False)
         self._check_params()
         explicit, implicit = self._sub_optimizers()
         n = int(n_coordinates)
         n_samples = theta.shape[0] // n
         n_features = theta.shape[1]
-        touches = coordinates_touched(theta, n, self.rtol)
+        touches = coordinates_touched(balance_coordinates(theta, n, force_columns), n,
+                                      self.rtol)
         forced = touches[:, force_columns].any(axis=1)
         activated, activated_columns = activation_closure(touches, forced)
         self.forced_coordinates_ = forced
