@@ -1,18 +1,21 @@
 """Identification from noisy positions: weak form vs strong form vs plain pysindy SINDy.
 
 Systems (ground truth from ``sympy.physics.mechanics``, trajectories by scipy DOP853 at
-1e-10 tolerance; see ``tests/ground_truth.py``): the forced cart-pole and double pendulum
-with viscous friction, paper-style catalogs (velocity monomials x trigonometric monomials,
-plus friction). Each run: a random initial state and sum-of-sines forces on every coordinate,
-30 s at 100 Hz; Gaussian noise of ``level`` times each coordinate's standard deviation added
-to the positions only; nothing else is given to the methods.
+1e-10 tolerance; see ``tests/ground_truth.py``): the forced cart-pole, double pendulum and
+double pendulum on a cart, with viscous friction, paper-style catalogs (velocity monomials x
+trigonometric monomials, plus friction). Each run: a random initial state and sum-of-sines
+forces on every coordinate, 30 s at 100 Hz; Gaussian noise of ``level`` times each
+coordinate's standard deviation added to the positions only; nothing else is given to the
+methods.
 
 Methods:
 
 * ``weak``: ``XLSINDy(catalog)`` with its defaults (weak form, smoother and test functions
   chosen from the data, cross-validated sparsity);
 * ``ensemble``: the weak form with ``EnsembleOptimizer()`` (20 fits on 70 % subsamples,
-  terms included in at least half of them, median coefficients);
+  terms included in at least half of them, median coefficients); also records the smallest
+  inclusion probability of a true term, the largest of a false term, and whether every
+  true coefficient lies in its 95 % interval (issue 13's acceptance cell);
 * ``strong``: ``XLSINDy(catalog, formulation="strong")``: pointwise Euler-Lagrange columns,
   derivatives by the package's default differentiation (Savitzky-Golay smoothed finite
   differences), same sparsity selection;
@@ -25,7 +28,7 @@ error, valid (5 s validation from a fresh state and forcing: position RMSE below
 range of every coordinate). Writes ``benchmarks/results/noise_sweep.{jsonl,md,png}``.
 
 Usage: ``python benchmarks/noise_sweep.py [--seeds 10] [--levels 0,0.001,0.01,0.03,0.05,0.1]
-[--methods weak,strong,sindy] [--jobs -1] [--append]``
+[--methods weak,strong,sindy] [--systems cart_pole,...] [--jobs -1] [--append]``
 """
 
 from __future__ import annotations
@@ -41,7 +44,7 @@ import numpy as np
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
-SYSTEMS = {"cart_pole": [1], "double_pendulum": [0, 1]}
+SYSTEMS = {"cart_pole": [1], "double_pendulum": [0, 1], "cart_double_pendulum": [1, 2]}
 METHODS = ["weak", "ensemble", "strong", "sindy"]
 
 
@@ -116,6 +119,14 @@ def run(name, level, seed, method):
             record["error"] = float(np.median(np.abs(coef[support] - true[support])
                                               / np.abs(true[support])))
             record["terms"] = int(np.count_nonzero(coef))
+            if method == "ensemble":
+                low, high = model.coef_interval_
+                probability = model.inclusion_probability_
+                record.update(
+                    true_inclusion=float(probability[support].min()),
+                    false_inclusion=float(probability[~support].max(initial=0.0)),
+                    covered=bool(np.all((low[support] <= true[support])
+                                        & (true[support] <= high[support]))))
         record["fit_s"] = time.perf_counter() - start
         record["valid"] = _validates(lambda x0, tt, u: model.simulate(x0, tt, u=u), system,
                                      500 + seed)
@@ -140,6 +151,19 @@ def summarize(records) -> str:
         rows.append(f"| {system} | {level:.1%} | {method} | {exact} | {error} | "
                     f"{sum(bool(r['valid']) for r in cell)}/{len(cell)} | "
                     f"{np.median([r['fit_s'] for r in cell]):.1f} |")
+    ensemble = [r for r in records if r["method"] == "ensemble" and "covered" in r]
+    if ensemble:
+        rows += ["", "Ensemble uncertainty (per seed: every true term with inclusion >= 0.9, "
+                 "every false term <= 0.2, every true coefficient inside its 95 % interval)",
+                 "", "| system | noise | true >= 0.9 | false <= 0.2 | covered |",
+                 "|---|---|---|---|---|"]
+        for system, level in sorted({(r["system"], r["level"]) for r in ensemble}):
+            cell = [r for r in ensemble if (r["system"], r["level"]) == (system, level)]
+            counts = [sum(r["true_inclusion"] >= 0.9 for r in cell),
+                      sum(r["false_inclusion"] <= 0.2 for r in cell),
+                      sum(r["covered"] for r in cell)]
+            rows.append(f"| {system} | {level:.1%} | "
+                        + " | ".join(f"{c}/{len(cell)}" for c in counts) + " |")
     return "\n".join(rows)
 
 
@@ -161,6 +185,7 @@ def plot(records, path):
                 continue
             ax.plot([100 * lv for lv in levels], rate, style, label=method)
         ax.set_xscale("symlog", linthresh=0.1)
+        ax.set_ylim(-0.05, 1.05)
         ax.set_title(system)
         ax.set_xlabel("position noise (% of std)")
     np.atleast_1d(axes)[0].set_ylabel("success (exact support and valid)")
@@ -175,6 +200,8 @@ def main():
     parser.add_argument("--levels", default="0,0.001,0.01,0.03,0.05,0.1")
     parser.add_argument("--methods", default="weak,strong,sindy",
                         help=f"comma-separated, among {METHODS}")
+    parser.add_argument("--systems", default=",".join(SYSTEMS),
+                        help=f"comma-separated, among {list(SYSTEMS)}")
     parser.add_argument("--jobs", type=int, default=-1)
     parser.add_argument("--out", default=str(HERE / "results"))
     parser.add_argument("--append", action="store_true",
@@ -183,7 +210,7 @@ def main():
     from joblib import Parallel, delayed
 
     levels = [float(v) for v in args.levels.split(",")]
-    tasks = [(name, level, seed, method) for name in SYSTEMS for level in levels
+    tasks = [(name, level, seed, method) for name in args.systems.split(",") for level in levels
              for seed in range(args.seeds) for method in args.methods.split(",")]
     start = time.perf_counter()
     records = Parallel(n_jobs=args.jobs, verbose=5)(delayed(run)(*task) for task in tasks)
