@@ -7,10 +7,11 @@ import pysindy as ps
 import sympy as sp
 import threadpoolctl
 from sklearn.base import BaseEstimator, clone
-from sklearn.metrics import r2_score
 from sklearn.utils.validation import check_is_fitted
 
-from ._inputs import as_list, check_array, sample_times, trajectory_arrays
+from ._equations import equation_strings, identified_lagrangian, significant, uncertainty_lines
+from ._fitted import DynamicsMixin
+from ._inputs import check_array, sample_times, trajectory_arrays
 from ._validation import check_instance, check_option
 from .diagnostics import (
     IdentificationWarning,
@@ -21,7 +22,6 @@ from .diagnostics import (
 from .dynamics import MassMatrixDynamics
 from .feature_library import (
     CatalogRepartition,
-    LagrangeLibrary,
     SymbolicLibrary,
     stack_variables,
 )
@@ -46,12 +46,7 @@ def _probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndar
     return rng.uniform(low, high, size=(n_points, z.shape[1]))
 
 
-def _significant(expr: sp.Expr, digits: int) -> sp.Expr:
-    return expr.xreplace({f: sp.Float(float(f"{float(f):.{digits}g}")) for f in
-                          expr.atoms(sp.Float)})
-
-
-class XLSINDy(BaseEstimator):
+class XLSINDy(DynamicsMixin, BaseEstimator):
     """Sparse identification of a mechanical system from position trajectories.
 
     Builds the stacked regression matrix of a catalog (Lagrangian, classical and force terms,
@@ -478,19 +473,7 @@ class XLSINDy(BaseEstimator):
         list of str
         """
         check_is_fitted(self, "coef_")
-        library = self.feature_library_
-        matrix = library.symbolic_matrix_
-        forces = set(library.force_columns_)
-        out = []
-        for i in range(matrix.shape[0]):
-            lhs = sp.Add(*(sp.Float(self.coef_[j]) * matrix[i, j]
-                           for j in np.flatnonzero(self.coef_) if j not in forces))
-            rhs = sp.Add(*(matrix[i, j] if self.coef_[j] == -1 else -sp.Float(self.coef_[j])
-                           * matrix[i, j] for j in forces))
-            lhs, rhs = _significant(sp.expand(lhs), precision), _significant(sp.expand(rhs),
-                                                                              precision)
-            out.append(f"{lhs} = {rhs}")
-        return out
+        return equation_strings(self.coef_, self.feature_library_, precision)
 
     def lagrangian(self) -> sp.Expr:
         """Identified Lagrangian.
@@ -501,14 +484,7 @@ class XLSINDy(BaseEstimator):
             The Lagrange terms weighted by their coefficients (0 without Lagrange terms).
         """
         check_is_fitted(self, "coef_")
-        total = sp.Integer(0)
-        for lib, sl in zip(self.feature_library_.libraries_, self.feature_library_.slices_,
-                           strict=True):
-            if isinstance(lib, LagrangeLibrary):
-                for k, term in enumerate(lib.terms_):
-                    if self.coef_[sl.start + k] != 0:
-                        total += sp.Float(self.coef_[sl.start + k]) * term
-        return total
+        return identified_lagrangian(self.coef_, self.feature_library_)
 
     def print(self, precision: int = 4, uncertainty: bool = False) -> None:
         """Print the identified Lagrangian and the equations of motion.
@@ -526,184 +502,13 @@ class XLSINDy(BaseEstimator):
         if uncertainty:
             if self.inclusion_probability_ is None:
                 raise ValueError("uncertainty: needs a fit with an EnsembleOptimizer")
-            names = self.get_feature_names()
-            width = max(len(names[j]) for j in np.flatnonzero(self.inclusion_probability_))
-            for j in np.argsort(-self.inclusion_probability_, kind="stable"):
-                if self.inclusion_probability_[j] == 0:
-                    break
-                low, high = self.coef_interval_[:, j]
-                print(f"{names[j]:<{width}}  {self.coef_[j]: .{precision}g}  "
-                      f"[{low: .{precision}g}, {high: .{precision}g}]  "
-                      f"P={self.inclusion_probability_[j]:.2f}")
+            for line in uncertainty_lines(self.get_feature_names(), self.coef_,
+                                          self.coef_interval_, self.inclusion_probability_,
+                                          precision):
+                print(line)
         lagrangian = self.lagrangian()
         if lagrangian != 0:
-            print(f"L = {_significant(lagrangian, precision)}")
+            print(f"L = {significant(lagrangian, precision)}")
         for name, eq in zip(self.feature_library_.coords.names, self.equations(precision),
                             strict=True):
             print(f"({name}) {eq}")
-
-    # -- prediction ----------------------------------------------------------------------------
-    def _require_dynamics(self) -> MassMatrixDynamics:
-        check_is_fitted(self, "coef_")
-        if self.dynamics_ is None:
-            raise ValueError(
-                "the identified equations contain no acceleration, so they define no dynamics"
-            )
-        return self.dynamics_
-
-    def predict(self, x, x_dot, u=None):
-        """Accelerations predicted by the identified equations.
-
-        Parameters
-        ----------
-        x, x_dot : array (N, n) or list of arrays
-            Positions and velocities.
-        u : same layout, optional
-            Generalized forces; zero when absent.
-
-        Returns
-        -------
-        ndarray (N, n), or a list of them when ``x`` is a list.
-        """
-        dynamics = self._require_dynamics()
-        n = self.n_coordinates_
-        xs, is_list = as_list(x, "x")
-        xds, xd_list = as_list(x_dot, "x_dot")
-        us, u_list = as_list(u, "u") if u is not None else ([None] * len(xs), is_list)
-        if xd_list != is_list or len(xds) != len(xs) or u_list != is_list or len(us) != len(xs):
-            raise ValueError("x_dot, u: expected the same layout as x")
-        out = []
-        for k, (xk, xdk, uk) in enumerate(zip(xs, xds, us, strict=True)):
-            label = f"[{k}]" if is_list else ""
-            xk = check_array(xk, f"x{label}", n_columns=n)
-            if xk.shape[1] != n:
-                raise ValueError(f"x{label}: expected {n} columns, got {xk.shape[1]}")
-            xdk = check_array(xdk, f"x_dot{label}", xk.shape)
-            uk = None if uk is None else check_array(uk, f"u{label}", xk.shape)
-            with np.errstate(all="ignore"):
-                acc = dynamics.accelerations(xk, xdk, uk)
-            if not np.all(np.isfinite(acc)):
-                bad = np.flatnonzero(~np.all(np.isfinite(acc), axis=1))
-                raise ValueError(
-                    f"x{label}: the identified equations are not finite (overflow or outside "
-                    f"their domain) at {len(bad)} of {len(acc)} samples, first at sample "
-                    f"{bad[0]}; the values are too large for the model or outside its range"
-                )
-            out.append(acc)
-        return out if is_list else out[0]
-
-    def score(self, x, t=None, x_dot=None, x_ddot=None, u=None, metric=r2_score):
-        """Score predicted accelerations against measured (or differentiated) ones.
-
-        Parameters
-        ----------
-        x, t, x_dot, x_ddot, u
-            As in :meth:`fit`.
-        metric : callable, default ``sklearn.metrics.r2_score``
-            ``metric(true, predicted)``.
-
-        Returns
-        -------
-        float
-        """
-        self._require_dynamics()
-        check_instance("metric", metric, "a function metric(true, predicted)", "__call__")
-        data = self._trajectories(x, t, x_dot, x_ddot, u, self.n_coordinates_)
-        true = np.vstack([d["x_ddot"] for d in data])
-        predicted = np.vstack([
-            self.dynamics_.accelerations(d["x"], d["x_dot"], d["u"], d["t"]) for d in data
-        ])
-        return metric(true, predicted)
-
-    def simulate(self, x0, t, u=None, **integrator_options) -> np.ndarray:
-        """Simulate the identified dynamics.
-
-        Parameters
-        ----------
-        x0 : array, shape (2n,)
-            Initial state ``[q_1..q_n, qd_1..qd_n]``.
-        t : array, shape (T,)
-            Output times, strictly increasing.
-        u : None, array (T, n) or callable ``u(t) -> (n,)``
-            Generalized forces (arrays are interpolated by a cubic spline by default).
-        **integrator_options
-            Passed to :meth:`MassMatrixDynamics.simulate` (``method``, ``rtol``, ``atol``,
-            ``divergence_bound``, ``max_evaluations``, ``timeout``, ``interpolation``).
-
-        Returns
-        -------
-        ndarray, shape (T, 2n)
-
-        Raises
-        ------
-        SimulationError
-            When the model diverges or its mass matrix becomes singular; the exception holds
-            the valid part of the trajectory.
-        """
-        dynamics = self._require_dynamics()
-        if u is not None and not callable(u) and np.ndim(u) == 1 and self.n_coordinates_ == 1:
-            u = np.asarray(u)[:, None]  # one coordinate: a 1-D force as fit accepts it
-        return dynamics.simulate(x0, t, u, **integrator_options)
-
-    def to_jax(self):
-        """Pure JAX function ``f(state, u) -> d(state)/dt`` of the identified dynamics.
-
-        Returns
-        -------
-        callable
-            jit-, vmap- and grad-compatible; see :mod:`pysindy_xl.jax_dynamics`.
-        """
-        from .jax_dynamics import dynamics_function
-
-        return dynamics_function(self._require_dynamics())
-
-    # -- persistence ---------------------------------------------------------------------------
-    def save(self, path) -> None:
-        """Save the catalog specification and coefficients as JSON (see :mod:`pysindy_xl.io`).
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-        """
-        from .io import save_model
-
-        save_model(self, path)
-
-    @classmethod
-    def load(cls, path) -> XLSINDy:
-        """Load a model written by :meth:`save`; parses only the restricted term grammar.
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-
-        Returns
-        -------
-        XLSINDy
-            A fitted model that predicts and simulates like the saved one.
-        """
-        from .io import load_model
-
-        return load_model(path)
-
-    # -- reinforcement learning ----------------------------------------------------------------
-    def to_gymnasium(self, dt, **options):
-        """A Gymnasium environment whose dynamics are the identified model.
-
-        Parameters
-        ----------
-        dt : float
-            Seconds per step.
-        **options
-            ``reward``, ``terminated``, ``initial_state``, ``actuated``, ``action_bounds``,
-            ``max_episode_steps``, ``substeps``, ``observation_bounds``: see
-            :class:`pysindy_xl.gym_env.IdentifiedDynamicsEnv`.
-
-        Returns
-        -------
-        pysindy_xl.gym_env.IdentifiedDynamicsEnv
-            Observation ``[q, qd]``, action the forces of the actuated coordinates.
-        """
-        from .gym_env import make_env
-
-        return make_env(self, dt, **options)

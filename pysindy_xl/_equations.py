@@ -1,0 +1,105 @@
+"""Readable forms of an identified coefficient vector: equations, Lagrangian, uncertainty.
+
+Pure functions of a fitted catalog (:class:`~pysindy_xl.CatalogRepartition`) and its
+coefficients; :class:`~pysindy_xl.XLSINDy` prints and returns them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from .feature_library import LagrangeLibrary
+
+__all__ = ["significant", "equation_strings", "identified_lagrangian", "uncertainty_lines"]
+
+
+def significant(expr: sp.Expr, digits: int) -> sp.Expr:
+    """``expr`` with every float rounded to ``digits`` significant digits.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> significant(sp.Float(3.14159) * sp.Symbol("x"), 3)
+    3.14*x
+    """
+    return expr.xreplace({f: sp.Float(float(f"{float(f):.{digits}g}")) for f in
+                          expr.atoms(sp.Float)})
+
+
+def equation_strings(coef: np.ndarray, library, precision: int) -> list[str]:
+    """One ``lhs = forces`` string per coordinate.
+
+    Parameters
+    ----------
+    coef : ndarray, shape (F,)
+    library : fitted CatalogRepartition
+    precision : int
+        Significant digits of the coefficients.
+
+    Returns
+    -------
+    list of str
+    """
+    matrix = library.symbolic_matrix_
+    forces = set(library.force_columns_)
+    active = np.flatnonzero(coef)
+    out = []
+    for i in range(matrix.shape[0]):
+        lhs = sp.Add(*(sp.Float(coef[j]) * matrix[i, j] for j in active if j not in forces))
+        rhs = sp.Add(*(matrix[i, j] if coef[j] == -1 else -sp.Float(coef[j]) * matrix[i, j]
+                       for j in forces))
+        out.append(f"{significant(sp.expand(lhs), precision)} = "
+                   f"{significant(sp.expand(rhs), precision)}")
+    return out
+
+
+def identified_lagrangian(coef: np.ndarray, library) -> sp.Expr:
+    """The Lagrange terms of ``library`` weighted by ``coef`` (0 without Lagrange terms).
+
+    Parameters
+    ----------
+    coef : ndarray, shape (F,)
+    library : fitted CatalogRepartition
+
+    Returns
+    -------
+    sympy.Expr
+    """
+    total = sp.Integer(0)
+    for lib, columns in zip(library.libraries_, library.slices_, strict=True):
+        if isinstance(lib, LagrangeLibrary):
+            for k, term in enumerate(lib.terms_):
+                if coef[columns.start + k] != 0:
+                    total += sp.Float(coef[columns.start + k]) * term
+    return total
+
+
+def uncertainty_lines(names, coef, interval, probability, precision: int) -> list[str]:
+    """``name  coefficient  [low, high]  P=p`` for every term any ensemble fit included,
+    most probable first.
+
+    Parameters
+    ----------
+    names : list of str
+    coef : ndarray, shape (F,)
+    interval : ndarray, shape (2, F)
+    probability : ndarray, shape (F,)
+    precision : int
+
+    Returns
+    -------
+    list of str
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> uncertainty_lines(["a", "bb"], np.array([1.0, 0.0]), np.array([[0.9, 0], [1.1, 0.2]]),
+    ...                   np.array([1.0, 0.3]), 2)
+    ['a    1  [ 0.9,  1.1]  P=1.00', 'bb   0  [ 0,  0.2]  P=0.30']
+    """
+    shown = [j for j in np.argsort(-probability, kind="stable") if probability[j] > 0]
+    width = max((len(names[j]) for j in shown), default=0)
+    return [f"{names[j]:<{width}}  {coef[j]: .{precision}g}  "
+            f"[{interval[0, j]: .{precision}g}, {interval[1, j]: .{precision}g}]  "
+            f"P={probability[j]:.2f}" for j in shown]

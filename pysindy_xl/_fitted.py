@@ -1,0 +1,195 @@
+"""What a fitted model does with its equations: accelerations, scores, simulations, exports.
+
+:class:`DynamicsMixin` is the second half of :class:`~pysindy_xl.XLSINDy` (the first,
+:mod:`pysindy_xl.model`, fits): everything here needs only the fitted state ``coef_``,
+``dynamics_`` (the :class:`~pysindy_xl.MassMatrixDynamics` of the identified equations),
+``n_coordinates_`` and the host's ``_trajectories`` input handling.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+from sklearn.metrics import r2_score
+from sklearn.utils.validation import check_is_fitted
+
+from ._inputs import as_list, check_array
+from ._validation import check_instance
+from .dynamics import MassMatrixDynamics
+
+if TYPE_CHECKING:  # annotations only: model.py imports this module
+    from .model import XLSINDy
+
+__all__ = ["DynamicsMixin"]
+
+
+class DynamicsMixin:
+    """Prediction, scoring, simulation, JAX/Gymnasium export and persistence of a fitted
+    model (mixed into :class:`~pysindy_xl.XLSINDy`)."""
+
+    # -- prediction ----------------------------------------------------------------------------
+    def _require_dynamics(self) -> MassMatrixDynamics:
+        check_is_fitted(self, "coef_")
+        if self.dynamics_ is None:
+            raise ValueError(
+                "the identified equations contain no acceleration, so they define no dynamics"
+            )
+        return self.dynamics_
+
+    def predict(self, x, x_dot, u=None):
+        """Accelerations predicted by the identified equations.
+
+        Parameters
+        ----------
+        x, x_dot : array (N, n) or list of arrays
+            Positions and velocities.
+        u : same layout, optional
+            Generalized forces; zero when absent.
+
+        Returns
+        -------
+        ndarray (N, n), or a list of them when ``x`` is a list.
+        """
+        dynamics = self._require_dynamics()
+        n = self.n_coordinates_
+        xs, is_list = as_list(x, "x")
+        xds, xd_list = as_list(x_dot, "x_dot")
+        us, u_list = as_list(u, "u") if u is not None else ([None] * len(xs), is_list)
+        if xd_list != is_list or len(xds) != len(xs) or u_list != is_list or len(us) != len(xs):
+            raise ValueError("x_dot, u: expected the same layout as x")
+        out = []
+        for k, (xk, xdk, uk) in enumerate(zip(xs, xds, us, strict=True)):
+            label = f"[{k}]" if is_list else ""
+            xk = check_array(xk, f"x{label}", n_columns=n)
+            if xk.shape[1] != n:
+                raise ValueError(f"x{label}: expected {n} columns, got {xk.shape[1]}")
+            xdk = check_array(xdk, f"x_dot{label}", xk.shape)
+            uk = None if uk is None else check_array(uk, f"u{label}", xk.shape)
+            with np.errstate(all="ignore"):
+                acc = dynamics.accelerations(xk, xdk, uk)
+            if not np.all(np.isfinite(acc)):
+                bad = np.flatnonzero(~np.all(np.isfinite(acc), axis=1))
+                raise ValueError(
+                    f"x{label}: the identified equations are not finite (overflow or outside "
+                    f"their domain) at {len(bad)} of {len(acc)} samples, first at sample "
+                    f"{bad[0]}; the values are too large for the model or outside its range"
+                )
+            out.append(acc)
+        return out if is_list else out[0]
+
+    def score(self, x, t=None, x_dot=None, x_ddot=None, u=None, metric=r2_score):
+        """Score predicted accelerations against measured (or differentiated) ones.
+
+        Parameters
+        ----------
+        x, t, x_dot, x_ddot, u
+            As in :meth:`fit`.
+        metric : callable, default ``sklearn.metrics.r2_score``
+            ``metric(true, predicted)``.
+
+        Returns
+        -------
+        float
+        """
+        self._require_dynamics()
+        check_instance("metric", metric, "a function metric(true, predicted)", "__call__")
+        data = self._trajectories(x, t, x_dot, x_ddot, u, self.n_coordinates_)
+        true = np.vstack([d["x_ddot"] for d in data])
+        predicted = np.vstack([
+            self.dynamics_.accelerations(d["x"], d["x_dot"], d["u"], d["t"]) for d in data
+        ])
+        return metric(true, predicted)
+
+    def simulate(self, x0, t, u=None, **integrator_options) -> np.ndarray:
+        """Simulate the identified dynamics.
+
+        Parameters
+        ----------
+        x0 : array, shape (2n,)
+            Initial state ``[q_1..q_n, qd_1..qd_n]``.
+        t : array, shape (T,)
+            Output times, strictly increasing.
+        u : None, array (T, n) or callable ``u(t) -> (n,)``
+            Generalized forces (arrays are interpolated by a cubic spline by default).
+        **integrator_options
+            Passed to :meth:`MassMatrixDynamics.simulate` (``method``, ``rtol``, ``atol``,
+            ``divergence_bound``, ``max_evaluations``, ``timeout``, ``interpolation``).
+
+        Returns
+        -------
+        ndarray, shape (T, 2n)
+
+        Raises
+        ------
+        SimulationError
+            When the model diverges or its mass matrix becomes singular; the exception holds
+            the valid part of the trajectory.
+        """
+        dynamics = self._require_dynamics()
+        if u is not None and not callable(u) and np.ndim(u) == 1 and self.n_coordinates_ == 1:
+            u = np.asarray(u)[:, None]  # one coordinate: a 1-D force as fit accepts it
+        return dynamics.simulate(x0, t, u, **integrator_options)
+
+    def to_jax(self):
+        """Pure JAX function ``f(state, u) -> d(state)/dt`` of the identified dynamics.
+
+        Returns
+        -------
+        callable
+            jit-, vmap- and grad-compatible; see :mod:`pysindy_xl.jax_dynamics`.
+        """
+        from .jax_dynamics import dynamics_function
+
+        return dynamics_function(self._require_dynamics())
+
+    # -- persistence ---------------------------------------------------------------------------
+    def save(self, path) -> None:
+        """Save the catalog specification and coefficients as JSON (see :mod:`pysindy_xl.io`).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+        """
+        from .io import save_model
+
+        save_model(self, path)
+
+    @classmethod
+    def load(cls, path) -> XLSINDy:
+        """Load a model written by :meth:`save`; parses only the restricted term grammar.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+
+        Returns
+        -------
+        XLSINDy
+            A fitted model that predicts and simulates like the saved one.
+        """
+        from .io import load_model
+
+        return load_model(path)
+
+    # -- reinforcement learning ----------------------------------------------------------------
+    def to_gymnasium(self, dt, **options):
+        """A Gymnasium environment whose dynamics are the identified model.
+
+        Parameters
+        ----------
+        dt : float
+            Seconds per step.
+        **options
+            ``reward``, ``terminated``, ``initial_state``, ``actuated``, ``action_bounds``,
+            ``max_episode_steps``, ``substeps``, ``observation_bounds``: see
+            :class:`pysindy_xl.gym_env.IdentifiedDynamicsEnv`.
+
+        Returns
+        -------
+        pysindy_xl.gym_env.IdentifiedDynamicsEnv
+            Observation ``[q, qd]``, action the forces of the actuated coordinates.
+        """
+        from .gym_env import make_env
+
+        return make_env(self, dt, **options)
