@@ -13,7 +13,7 @@ from .ensemble import EnsembleOptimizer
 from .explicit import ExplicitOptimizer, hard_threshold_regression, proximal_gradient_lasso
 from .implicit import ImplicitOptimizer, NoLawFoundError, homothetic_groups
 from .mixed import MixedOptimizer, activation_closure
-from .selection import SelectionResult, select_support
+from .selection import SelectionResult, refine_by_swaps, select_support
 
 __all__ = [
     "CatalogOptimizer",
@@ -30,5 +30,6 @@ __all__ = [
     "homothetic_groups",
     "activation_closure",
     "select_support",
+    "refine_by_swaps",
     "SelectionResult",
 ]
