@@ -23,10 +23,12 @@ noise. Instead:
    unselected one while the least-squares residual drops, the 1-swap search of L0Learn),
    and the refined models are scored like the path models.
 4. **Choice.** The smallest model (of either path or its refinement) whose cross-validated
-   error is within one standard error of the best (the one-standard-error rule): on clean
-   data the error of a model missing a true term is far above the best, however small the
-   term; on noisy data the extra terms do not lower the held-out error beyond its own
-   spread, so they are cut.
+   error is within one standard error of the best path model (the one-standard-error rule):
+   on clean data the error of a model missing a true term is far above the best, however
+   small the term; on noisy data the extra terms do not lower the held-out error beyond its
+   own spread, so they are cut. The best is taken over the path models only: the minimum
+   over their many refinements as well would be optimistically low (the winner's curse of a
+   larger search) and let noise-fitting terms back in.
 """
 
 from __future__ import annotations
@@ -365,7 +367,7 @@ class SelectionResult:
     size : int
         Chosen number of terms.
     best_size : int
-        Size with the lowest held-out error.
+        Size of the path model with the lowest held-out error (the reference of the rule).
     rule : str
         How ``size`` was chosen.
 
@@ -396,7 +398,8 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     """Sparsest model within one standard error of the best held-out error.
 
     Candidates are the nested models of the backward and forward paths and, with ``swaps``,
-    their swap refinements (:func:`refine_by_swaps`) up to the best path size.
+    their swap refinements (:func:`refine_by_swaps`) up to the best path size; the reference
+    error and its standard error are those of the best path model.
 
     Parameters
     ----------
@@ -444,11 +447,14 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
             if key not in seen:
                 seen.add(key)
                 candidates.append((int(k) + 1, mean[k], spread[k], f"{path} path", order))
-    if swaps:
-        candidates += _swap_candidates(x, y, paths, seen, n_blocks, n_folds)
     if not candidates:
         raise ValueError("x: no model size can be cross-validated on these rows")
+    # The reference accuracy comes from the path models only: the minimum held-out error
+    # over many more (refined) candidates is optimistically low (the winner's curse) and
+    # would let noise-fitting terms in; refinements can only reach it with fewer terms.
     best = min(candidates, key=lambda c: c[1])
+    if swaps:
+        candidates += _swap_candidates(x, y, paths, seen, n_blocks, n_folds)
     tolerance = max(best[2], resolution)
     size, mean, _, how, order = min((c for c in candidates if c[1] <= best[1] + tolerance),
                                     key=lambda c: (c[0], c[1]))
