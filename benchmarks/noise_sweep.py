@@ -16,6 +16,10 @@ Methods:
   terms included in at least half of them, median coefficients); also records the smallest
   inclusion probability of a true term, the largest of a false term, and whether every
   true coefficient lies in its 95 % interval (issue 13's acceptance cell);
+* ``mixed``: the weak form on data forced on the first coordinate only (the cart, or the
+  first link), the others free: :class:`~pysindy_xl.MixedOptimizer`, chosen by default;
+* ``implicit``: the weak form on unforced data (no ``u``): :class:`~pysindy_xl.ImplicitOptimizer`
+  (SINDy-PI), chosen by default; support and error up to the law's scale;
 * ``strong``: ``XLSINDy(catalog, formulation="strong")``: pointwise Euler-Lagrange columns,
   derivatives by the package's default differentiation (Savitzky-Golay smoothed finite
   differences), same sparsity selection;
@@ -45,7 +49,9 @@ HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 SYSTEMS = {"cart_pole": [1], "double_pendulum": [0, 1], "cart_double_pendulum": [1, 2]}
-METHODS = ["weak", "ensemble", "strong", "sindy"]
+METHODS = ["weak", "ensemble", "mixed", "implicit", "strong", "sindy"]
+#: Forced coordinates of the methods that do not force every coordinate.
+FORCED = {"mixed": [0], "implicit": []}
 
 
 def _setup(name):
@@ -57,15 +63,23 @@ def _setup(name):
     return system, library, _true_coefficients(system, library.fit())
 
 
-def _validates(simulate, system, seed):
-    from ground_truth import random_force, random_initial_state
+def _force(system, seed, method):
+    """The forcing of a run: every coordinate, some, or none (None)."""
+    from ground_truth import random_force
+
+    active = FORCED.get(method)
+    return None if active == [] else random_force(system, seed, active=active)
+
+
+def _validates(simulate, system, seed, method):
+    from ground_truth import random_initial_state
 
     t = np.arange(0.0, 5.0, 0.01)
-    force = random_force(system, seed)
+    force = _force(system, seed, method)
     x0 = random_initial_state(system, seed)
     truth = system.simulate(x0, t, force)
     try:
-        sim = simulate(x0, t, lambda s: force(s))
+        sim = simulate(x0, t, force)
     except Exception:  # diverged, singular mass matrix: not valid
         return False
     rmse = np.sqrt(np.mean((sim[:, : system.n] - truth["q"]) ** 2, axis=0))
@@ -94,13 +108,16 @@ def _sindy(system, library, t, noisy, tau):
 
 
 def run(name, level, seed, method):
-    from ground_truth import random_force, random_initial_state
+    from ground_truth import random_initial_state
 
     import pysindy_xl as px
 
     system, library, true = _setup(name)
     t = np.arange(0.0, 30.0, 0.01)
-    data = system.simulate(random_initial_state(system, seed), t, random_force(system, seed))
+    data = system.simulate(random_initial_state(system, seed), t, _force(system, seed, method))
+    if method == "implicit":  # no force: the law holds up to a factor, force column unused
+        true = true.copy()
+        true[library.force_columns_] = 0.0
     rng = np.random.default_rng(10_000 + seed)
     noisy = data["q"] + level * data["q"].std(axis=0) * rng.normal(size=data["q"].shape)
     record = {"system": name, "level": level, "seed": seed, "method": method}
@@ -113,8 +130,10 @@ def run(name, level, seed, method):
             formulation = "strong" if method == "strong" else "weak"
             optimizer = px.EnsembleOptimizer() if method == "ensemble" else None
             model = px.XLSINDy(library, optimizer, formulation=formulation).fit(
-                noisy, t, u=data["tau"])
+                noisy, t, u=None if method == "implicit" else data["tau"])
             coef, support = model.coefficients(), true != 0
+            if method == "implicit" and np.any(coef[support]):  # compare up to the scale
+                coef = coef * (coef[support] @ true[support]) / (coef[support] @ coef[support])
             record["exact"] = bool(np.array_equal(coef != 0, support))
             record["error"] = float(np.median(np.abs(coef[support] - true[support])
                                               / np.abs(true[support])))
@@ -129,7 +148,7 @@ def run(name, level, seed, method):
                                         & (true[support] <= high[support]))))
         record["fit_s"] = time.perf_counter() - start
         record["valid"] = _validates(lambda x0, tt, u: model.simulate(x0, tt, u=u), system,
-                                     500 + seed)
+                                     500 + seed, method)
         record["status"] = "ok"
     except Exception as err:  # a failed fit counts as a failure, with its reason
         record.update(status="error", message=f"{type(err).__name__}: {err}"[:300],
@@ -175,8 +194,8 @@ def plot(records, path):
 
     fig, axes = plt.subplots(1, len(SYSTEMS), figsize=(5 * len(SYSTEMS), 3.5), sharey=True)
     for ax, system in zip(np.atleast_1d(axes), SYSTEMS, strict=True):
-        for method, style in (("weak", "o-"), ("ensemble", "D-"), ("strong", "s--"),
-                              ("sindy", "^:")):
+        for method, style in (("weak", "o-"), ("ensemble", "D-"), ("mixed", "v-"),
+                              ("implicit", "x-"), ("strong", "s--"), ("sindy", "^:")):
             levels = sorted({r["level"] for r in records if r["system"] == system})
             rate = [np.mean([bool(r["valid"]) and (method == "sindy" or bool(r["exact"]))
                              for r in records if (r["system"], r["level"], r["method"]) ==
@@ -223,8 +242,7 @@ def main():
         records = [r for r in previous
                    if (r["system"], r["level"], r["seed"], r["method"]) not in done] + records
     with open(path, "w") as f:
-        for record in records:
-            f.write(json.dumps(record) + "\n")
+        f.writelines(json.dumps(record) + "\n" for record in records)
     table = summarize(records)
     (out / "noise_sweep.md").write_text(
         f"{len(records)} runs (last invocation: {time.perf_counter() - start:.0f} s wall on "

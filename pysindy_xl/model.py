@@ -26,6 +26,7 @@ from .feature_library import (
     stack_variables,
 )
 from .optimizers import ExplicitOptimizer, independent_columns
+from .optimizers._base import accepts_noise_moments
 from .weak import BumpTestFunctions, WhittakerSmoother
 from .weak.regression import weak_regression
 
@@ -255,7 +256,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
                 "velocities (e.g. q_dot**2) or classical terms in q_ddot"
             )
         if formulation == "weak":
-            theta, z, self.weak_info_ = weak_regression(
+            theta, z, noise_moments, self.weak_info_ = weak_regression(
                 library, data, self.test_functions or BumpTestFunctions(),
                 self.smoother or WhittakerSmoother())
         else:
@@ -265,7 +266,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             ])
             if len(z) == 0:
                 raise ValueError("sample_mask: no sample left to fit")
-            theta, self.weak_info_ = library.transform(z), None
+            theta, noise_moments, self.weak_info_ = library.transform(z), None, None
         library.check_domain(z)
         if self.drop_dependent:
             keep, dropped = independent_columns(
@@ -287,7 +288,10 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
                 "ImplicitOptimizer / MixedOptimizer for unforced data"
             )
         optimizer = self._optimizer(forced)
-        optimizer.fit_catalog(theta[:, keep], n, force_columns)
+        extra = {}
+        if noise_moments is not None and accepts_noise_moments(optimizer):
+            extra["noise_moments"] = noise_moments[:, keep][:, :, keep]
+        optimizer.fit_catalog(theta[:, keep], n, force_columns, **extra)
         coef = np.zeros(theta.shape[1])
         coef[keep] = optimizer.coef_
         self.feature_library_ = library

@@ -9,6 +9,10 @@ Every optimizer of this package is a scikit-learn estimator with, besides its ow
     ``(F,)``: the full coefficient vector, force columns included, with ``theta @ coef_ ~ 0``.
 
 This is the metadata :class:`~pysindy_xl.XLSINDy` hands over; standalone users pass the same.
+Optimizers that can correct for errors in the columns also take
+``noise_moments`` of shape ``(n_coordinates, F, F)``, ``E[E_c^T E_c]`` for the errors ``E_c``
+of each coordinate's rows (the weak form's propagated position noise); XLSINDy passes it to
+those whose ``fit_catalog`` has the parameter (:func:`accepts_noise_moments`).
 
 Units. Every row of ``theta @ coef = 0`` holds exactly, so multiplying the rows of one
 coordinate block by a constant changes only how the regression weighs that block against the
@@ -22,6 +26,8 @@ metres, and ``coef_`` keeps its meaning (physical units of the catalog columns).
 
 from __future__ import annotations
 
+import inspect
+
 import numpy as np
 import scipy.linalg
 from sklearn.base import BaseEstimator
@@ -29,6 +35,8 @@ from sklearn.base import BaseEstimator
 from .._validation import check_indices, check_numeric_array, check_option
 
 __all__ = [
+    "accepts_noise_moments",
+    "check_noise_moments",
     "CatalogOptimizer",
     "balance_coordinates",
     "check_catalog_problem",
@@ -59,6 +67,25 @@ def check_catalog_problem(theta, n_coordinates, force_columns, balance: bool = T
     if balance:
         theta = balance_coordinates(theta, int(n_coordinates), force_columns)
     return theta, force_columns
+
+
+def check_noise_moments(noise_moments, n_coordinates: int, n_features: int) -> np.ndarray:
+    """Validate the ``noise_moments`` of ``fit_catalog``: finite, shape (n, F, F), symmetric
+    positive semidefinite blocks (sums of outer products of column errors)."""
+    moments = check_numeric_array(noise_moments, "noise_moments", min_samples=0)
+    if moments.shape != (n_coordinates, n_features, n_features):
+        raise ValueError(f"noise_moments: expected shape {(n_coordinates, n_features, n_features)}"
+                         f", got {moments.shape}")
+    if not np.allclose(moments, np.swapaxes(moments, 1, 2), rtol=1e-8,
+                       atol=1e-12 * np.abs(moments).max(initial=0.0)):
+        raise ValueError("noise_moments: expected symmetric blocks")
+    return moments
+
+
+def accepts_noise_moments(optimizer) -> bool:
+    """Whether ``optimizer.fit_catalog`` takes ``noise_moments`` (as scikit-learn's
+    ``has_fit_parameter`` does for ``sample_weight``)."""
+    return "noise_moments" in inspect.signature(optimizer.fit_catalog).parameters
 
 
 def _block_rms(theta, n_blocks: int) -> np.ndarray:

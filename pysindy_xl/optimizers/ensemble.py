@@ -20,7 +20,12 @@ import numpy as np
 from sklearn.base import clone
 
 from .._validation import check_instance, check_option
-from ._base import CatalogOptimizer, check_catalog_problem
+from ._base import (
+    CatalogOptimizer,
+    accepts_noise_moments,
+    check_catalog_problem,
+    check_noise_moments,
+)
 from .explicit import ExplicitOptimizer
 
 __all__ = ["EnsembleOptimizer"]
@@ -93,7 +98,7 @@ class EnsembleOptimizer(CatalogOptimizer):
         if self.optimizer is not None:
             check_instance("optimizer", self.optimizer, "a catalog optimizer", "fit_catalog")
 
-    def fit_catalog(self, theta, n_coordinates, force_columns):
+    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None):
         """Fit the ensemble on a stacked catalog matrix.
 
         Parameters
@@ -101,26 +106,38 @@ class EnsembleOptimizer(CatalogOptimizer):
         theta : array, shape (n_coordinates * N, F)
         n_coordinates : int
         force_columns : sequence of int
+        noise_moments : array, shape (n_coordinates, F, F), optional
+            Errors-in-variables moments of all rows; each fit gets its subsample's share
+            (the errors are stationary along the rows) when its optimizer takes them.
 
         Returns
         -------
         self
         """
         self._check_params()
-        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns)
+        # the inner optimizers balance the coordinates of their own subsamples
+        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
+                                                     balance=False)
+        if noise_moments is not None:
+            noise_moments = check_noise_moments(noise_moments, int(n_coordinates),
+                                                theta.shape[1])
         n_rows = theta.shape[0] // n_coordinates
         n_chunks = min(int(self.n_chunks), n_rows)
         edges = np.linspace(0, n_rows, n_chunks + 1).astype(int)
         n_keep = max(2, int(round(self.fraction * n_chunks)))
         rng = np.random.default_rng(self.random_state)
         base = ExplicitOptimizer() if self.optimizer is None else self.optimizer
+        extra = {}
+        if noise_moments is not None and accepts_noise_moments(base):
+            extra["noise_moments"] = noise_moments * (n_keep / n_chunks)
         samples, failed = [], 0
         for _ in range(int(self.n_models)):
             chunks = np.sort(rng.choice(n_chunks, size=n_keep, replace=False))
             rows = np.concatenate([np.arange(edges[k], edges[k + 1]) for k in chunks])
             stacked = (np.arange(n_coordinates)[:, None] * n_rows + rows[None, :]).ravel()
             try:
-                fitted = clone(base).fit_catalog(theta[stacked], n_coordinates, force_columns)
+                fitted = clone(base).fit_catalog(theta[stacked], n_coordinates, force_columns,
+                                                 **extra)
             except (ValueError, RuntimeError, np.linalg.LinAlgError):
                 failed += 1
                 continue

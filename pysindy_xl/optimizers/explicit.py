@@ -6,14 +6,25 @@ import numbers
 import warnings
 
 import numpy as np
+import scipy.linalg
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.linear_model import Lasso, LassoCV
 
 from .._validation import check_instance, check_numeric_array, check_option
-from ._base import CatalogOptimizer, check_catalog_problem
+from ._base import (
+    CatalogOptimizer,
+    check_catalog_problem,
+    check_noise_moments,
+    coordinate_weights,
+)
 from .selection import select_support
 
-__all__ = ["ExplicitOptimizer", "hard_threshold_regression", "proximal_gradient_lasso"]
+__all__ = [
+    "ExplicitOptimizer",
+    "hard_threshold_regression",
+    "proximal_gradient_lasso",
+    "corrected_least_squares",
+]
 
 _METHODS = ("threshold", "lasso", "lassocv", "proximal")
 
@@ -111,6 +122,72 @@ def proximal_gradient_lasso(x, y, alpha: float, max_iter: int = 10_000, tol: flo
     return coef, False
 
 
+def corrected_least_squares(x, y, noise_moments=None, max_noise_share: float = 0.5):
+    r"""Least squares corrected for errors in the columns (errors in variables).
+
+    With ``x = x_0 + E``, errors ``E`` independent of ``y`` and ``E[E^T E] = S``, the normal
+    equations are biased, ``E[x^T x] = x_0^T x_0 + S``, which shrinks the coefficients towards
+    zero (attenuation). The corrected estimate (Fuller, *Measurement Error Models*, 1987)
+    solves
+
+    .. math:: (x^T x - S)\,\beta = x^T y, \quad\text{i.e.}\quad
+              \beta = (I - (x^T x)^{-1} S)^{-1} \beta_{LS},
+
+    computed from the QR factor of ``x`` (``(x^T x)^{-1} S = R^{-1} R^{-T} S``), so that it
+    costs no accuracy on clean data. Where the errors are not small against the signal (an
+    eigenvalue of ``(x^T x)^{-1} S`` above ``max_noise_share``) the correction would amplify
+    noise, and plain least squares is returned.
+
+    Parameters
+    ----------
+    x : array, shape (n_rows, k)
+    y : array, shape (n_rows,)
+    noise_moments : array, shape (k, k), optional
+        ``S``; None gives plain least squares.
+    max_noise_share : float, default 0.5
+
+    Returns
+    -------
+    coef : ndarray, shape (k,)
+    noise_share : float
+        Largest eigenvalue of ``(x^T x)^{-1} S`` (0 without ``S``).
+
+    Examples
+    --------
+    A regressor measured with noise of 30 % of its spread: least squares shrinks the slope
+    by ``1 / (1 + 0.3^2)``, the corrected estimate does not.
+
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> truth = rng.normal(size=20000)
+    >>> x = (truth + 0.3 * rng.normal(size=20000))[:, None]
+    >>> y = 2.0 * truth
+    >>> plain, _ = corrected_least_squares(x, y)
+    >>> corrected, share = corrected_least_squares(x, y, np.array([[0.09 * 20000]]))
+    >>> plain.round(2), corrected.round(2), round(share, 2)
+    (array([1.83]), array([2.]), 0.08)
+    """
+    x = np.asarray(x, dtype=float)
+    scale = np.sqrt(np.mean(x**2, axis=0))
+    scale[scale == 0] = 1.0
+    # on normalized columns: the accuracy of every coefficient is then independent of the
+    # units of the others (a column 1e-12 times the rest costs no digits elsewhere)
+    coef = np.linalg.lstsq(x / scale, y, rcond=None)[0]
+    if noise_moments is None or x.shape[1] == 0:
+        return coef / scale, 0.0
+    r_factor = scipy.linalg.qr(x / scale, mode="r", check_finite=False)[0][: x.shape[1]]
+    moments = np.asarray(noise_moments, dtype=float) / np.outer(scale, scale)
+    try:
+        ratio = scipy.linalg.solve_triangular(
+            r_factor, scipy.linalg.solve_triangular(r_factor, moments, trans="T"))
+    except (np.linalg.LinAlgError, ValueError):
+        return coef / scale, np.inf
+    share = float(np.max(np.abs(np.linalg.eigvals(ratio)), initial=0.0))
+    if not share < max_noise_share:
+        return coef / scale, share
+    return np.linalg.solve(np.eye(len(coef)) - ratio, coef) / scale, share
+
+
 def _is_real(value) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, bool) and value == value
 
@@ -151,6 +228,10 @@ class ExplicitOptimizer(CatalogOptimizer):
     coef_ : ndarray, shape (F,)
         Coefficients of ``fit``'s columns, or the full catalog vector after ``fit_catalog``.
     support_ : ndarray of bool, shape (F,)
+    noise_share_ : float or None
+        With ``noise_moments`` (:meth:`fit_catalog`): the largest eigenvalue of
+        ``(X^T X)^-1 S`` on the selected support, the share of the column errors in the
+        normal equations; the correction is applied below 0.5. None without moments.
     selection_ : SelectionResult or None
         With ``threshold="auto"``: the path, the held-out errors and the chosen size (indices
         refer to the columns of ``fit``, or to the non-force columns after ``fit_catalog``).
@@ -200,7 +281,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         """
         return self._fit(X, y, n_blocks=1)
 
-    def _fit(self, X, y, n_blocks):
+    def _fit(self, X, y, n_blocks, noise_moments=None):
         self._check_params()
         X = check_numeric_array(X, "X", finite=False, min_samples=0)
         y = check_numeric_array(y, "y", finite=False, min_samples=0)
@@ -216,12 +297,13 @@ class ExplicitOptimizer(CatalogOptimizer):
                 "force (use ImplicitOptimizer or MixedOptimizer for unforced data)"
             )
         self.selection_ = None
+        self.noise_share_ = None if noise_moments is None else 0.0
         self.n_features_in_ = X.shape[1]
-        self.coef_ = self._solve(X, y, n_blocks)
+        self.coef_ = self._solve(X, y, n_blocks, noise_moments)
         self.support_ = self.coef_ != 0
         return self
 
-    def _prune(self, X, y, n_blocks):
+    def _prune(self, X, y, n_blocks, noise_moments=None):
         """Sparse least squares on the columns of X with the configured pruning rule."""
         if self.threshold != "auto":
             return hard_threshold_regression(X, y, self.threshold, int(self.max_iter))
@@ -233,16 +315,15 @@ class ExplicitOptimizer(CatalogOptimizer):
         self.selection_ = select_support(X, y, n_blocks=blocks)
         support = self.selection_.support
         coef = np.zeros(X.shape[1])
-        # on normalized columns: the accuracy of every coefficient is then independent of
-        # the units of the others (a column 1e-12 times the rest costs no digits elsewhere)
-        scale = np.sqrt(np.mean(X[:, support] ** 2, axis=0))
-        scale[scale == 0] = 1.0
-        coef[support] = np.linalg.lstsq(X[:, support] / scale, y, rcond=None)[0] / scale
+        moments = None if noise_moments is None else noise_moments[np.ix_(support, support)]
+        coef[support], share = corrected_least_squares(X[:, support], y, moments)
+        if noise_moments is not None:
+            self.noise_share_ = share
         return coef
 
-    def _solve(self, X, y, n_blocks=1):
+    def _solve(self, X, y, n_blocks=1, noise_moments=None):
         if self.method == "threshold":
-            return self._prune(X, y, n_blocks)
+            return self._prune(X, y, n_blocks, noise_moments)
         scale = np.sqrt(np.mean(X**2, axis=0))
         active = scale > 0
         xs = X[:, active] / scale[active]
@@ -271,7 +352,9 @@ class ExplicitOptimizer(CatalogOptimizer):
         if self.refit and np.any(coef):
             support = np.flatnonzero(coef)
             coef[:] = 0.0
-            coef[support] = self._prune(X[:, support], y, n_blocks)
+            moments = (None if noise_moments is None
+                       else noise_moments[np.ix_(support, support)])
+            coef[support] = self._prune(X[:, support], y, n_blocks, moments)
             if self.selection_ is not None:  # report indices of X, not of the support
                 self.selection_.order = support[self.selection_.order]
         return coef
@@ -287,7 +370,7 @@ class ExplicitOptimizer(CatalogOptimizer):
                               ConvergenceWarning, stacklevel=4)
         return estimator
 
-    def fit_catalog(self, theta, n_coordinates, force_columns):
+    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None):
         """Solve the catalog problem with the force coefficient fixed to -1.
 
         Parameters
@@ -297,18 +380,33 @@ class ExplicitOptimizer(CatalogOptimizer):
         n_coordinates : int
         force_columns : sequence of int
             Columns of the known forces; at least one, not identically zero.
+        noise_moments : array, shape (n_coordinates, F, F), optional
+            ``E[E_c^T E_c]`` of the errors ``E_c`` in each coordinate's rows of ``theta``
+            (errors in the variables: the weak form of :class:`~pysindy_xl.XLSINDy` passes
+            the propagated position noise). The final fit on the selected support is then
+            corrected for the attenuation they cause (:func:`corrected_least_squares`;
+            ``noise_share_`` says how large they were).
 
         Returns
         -------
         self
         """
-        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns)
+        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
+                                                     balance=False)
+        n_coordinates = int(n_coordinates)
+        weights = coordinate_weights(theta, n_coordinates, force_columns)
+        theta = theta * np.repeat(weights, theta.shape[0] // n_coordinates)[:, None]
         if len(force_columns) == 0:
             raise ValueError("force_columns: explicit regression needs a force column")
         rest = np.setdiff1d(np.arange(theta.shape[1]), force_columns)
         force = theta[:, force_columns].sum(axis=1)
+        moments = None
+        if noise_moments is not None:
+            moments = check_noise_moments(noise_moments, n_coordinates, theta.shape[1])
+            # the moments of the balanced rows, restricted to the regressors
+            moments = np.einsum("b,bfg->fg", weights**2, moments)[np.ix_(rest, rest)]
         # cross-validation folds stay inside each coordinate's block of rows
-        self._fit(theta[:, rest], force, n_blocks=int(n_coordinates))
+        self._fit(theta[:, rest], force, n_blocks=n_coordinates, noise_moments=moments)
         coef = np.zeros(theta.shape[1])
         coef[rest] = self.coef_
         coef[force_columns] = -1.0

@@ -13,8 +13,13 @@ import warnings
 import numpy as np
 
 from ..feature_library import stack_variables
+from .smoothing import WhittakerSmoother, whittaker_smooth
 
-__all__ = ["weak_regression", "shared_half_width"]
+__all__ = ["weak_regression", "shared_half_width", "propagated_noise"]
+
+#: Samples times draws of the noise propagation: 8 draws of a 3,000-sample record, fewer of
+#: longer records (at least 2), whose many rows average the estimate as well.
+_PROPAGATION_SAMPLES = 24_000
 
 
 def shared_half_width(test_functions, trajectories) -> float:
@@ -58,6 +63,43 @@ def shared_half_width(test_functions, trajectories) -> float:
     return min(widths)
 
 
+def propagated_noise(library, d, smoothing, phi, dphi, block, n_draws, rng):
+    """Second moments of the weak columns' errors caused by the noise of the positions.
+
+    Fresh noise of the estimated level is added to the recorded positions, which are smoothed
+    again with the same weights and turned into weak columns; the change ``Delta`` of the
+    columns is distributed (to first order) as their error ``E`` due to the original noise,
+    so that ``E[E^T E] ~ mean over draws of Delta^T Delta``, per coordinate block.
+
+    Parameters
+    ----------
+    library : fitted SymbolicLibrary
+    d : dict
+        One trajectory (``"t"``, ``"x"``, ``"u"``).
+    smoothing : tuple
+        ``(lam, noise, order)`` of the smoother on this trajectory.
+    phi, dphi : sparse matrices, shape (K, N)
+    block : ndarray, shape (n * K, F)
+        The trajectory's weak columns.
+    n_draws : int
+    rng : numpy Generator
+
+    Returns
+    -------
+    ndarray, shape (n, F, F)
+    """
+    lam, noise, order = smoothing
+    n = library.coords.n
+    moments = np.zeros((n, block.shape[1], block.shape[1]))
+    for _ in range(n_draws):
+        noisy = d["x"] + noise * rng.normal(size=d["x"].shape)
+        q, qd, qdd = whittaker_smooth(d["t"], noisy, lam, order)
+        delta = (library.weak_transform(stack_variables(q, qd, qdd, d["u"], d["t"]), phi, dphi)
+                 - block).reshape(n, phi.shape[0], -1)
+        moments += np.einsum("bkf,bkg->bfg", delta, delta) / n_draws
+    return moments
+
+
 def weak_regression(library, trajectories, test_functions, smoother):
     """Weak regression matrix of all trajectories, rows coordinate-major.
 
@@ -78,6 +120,11 @@ def weak_regression(library, trajectories, test_functions, smoother):
     states : ndarray, shape (N_total, 4n + 1)
         The smoothed states of all samples (with the smoother's accelerations, for probing
         the catalog's dependent columns only).
+    noise_moments : ndarray, shape (n, F, F), or None
+        ``E[E_c^T E_c]`` for the errors ``E_c`` of each coordinate's rows due to the position
+        noise (:func:`propagated_noise`), for the errors-in-variables correction of the
+        optimizers; None unless a :class:`WhittakerSmoother` estimated the noise of every
+        trajectory and no velocities were measured.
     info : dict
         ``half_width`` (s), ``test_functions`` (count per trajectory used), ``noise`` (the
         smoother's noise estimate per coordinate on the first trajectory).
@@ -87,12 +134,15 @@ def weak_regression(library, trajectories, test_functions, smoother):
         if not callable(getattr(value, kind, None)):
             raise TypeError(f"{name}: expected an object with a {kind} method, got "
                             f"{type(value).__name__}")
-    states, noise = [], None
+    states, smoothing, noise = [], [], None
     for d in trajectories:
         q, qd, qdd = smoother.smooth(d["t"], d["x"])
         noise = getattr(smoother, "noise_", None) if noise is None else noise
+        smoothing.append((smoother.lam_, smoother.noise_, smoother.order)
+                         if isinstance(smoother, WhittakerSmoother) else None)
         if d["x_dot"] is not None:  # measured velocities are better than estimated ones
             q, qd = d["x"], d["x_dot"]
+            smoothing[-1] = None
         states.append(stack_variables(q, qd, qdd, d["u"], d["t"]))
     half_width = shared_half_width(test_functions, trajectories)
     durations = np.array([d["t"][-1] - d["t"][0] for d in trajectories])
@@ -104,7 +154,12 @@ def weak_regression(library, trajectories, test_functions, smoother):
             f"{2 * half_width:.3g} s) and are left out of the weak regression",
             UserWarning, stacklevel=4,
         )
-    blocks, counts = [], []
+    propagate = all(smoothing[k] is not None and np.all(np.isfinite(smoothing[k][1]))
+                    for k in usable)
+    n_samples = sum(len(trajectories[k]["t"]) for k in usable)
+    n_draws = int(np.clip(np.ceil(_PROPAGATION_SAMPLES / max(n_samples, 1)), 2, 16))
+    rng = np.random.default_rng(0)  # reproducible fits
+    blocks, counts, moments = [], [], None
     for k in usable:
         d, z = trajectories[k], states[k]
         phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
@@ -113,13 +168,16 @@ def weak_regression(library, trajectories, test_functions, smoother):
             phi, dphi = phi[clean], dphi[clean]
             if phi.shape[0] == 0:
                 continue
-        blocks.append(library.weak_transform(z, phi, dphi).reshape(
-            library.coords.n, phi.shape[0], -1))
+        block = library.weak_transform(z, phi, dphi)
+        blocks.append(block.reshape(library.coords.n, phi.shape[0], -1))
         counts.append(phi.shape[0])
+        if propagate:
+            part = propagated_noise(library, d, smoothing[k], phi, dphi, block, n_draws, rng)
+            moments = part if moments is None else moments + part
     if not blocks:
         raise ValueError("sample_mask: every test function touches a masked sample; "
                          "unmask longer stretches or set a smaller test-function width")
     theta = np.concatenate(blocks, axis=1).reshape(-1, blocks[0].shape[-1])
     info = {"half_width": half_width, "test_functions": counts,
             "noise": None if noise is None else np.asarray(noise).tolist()}
-    return theta, np.vstack(states), info
+    return theta, np.vstack(states), moments, info
