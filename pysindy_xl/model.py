@@ -27,8 +27,7 @@ from .feature_library import (
 )
 from .optimizers import ExplicitOptimizer, independent_columns
 from .optimizers._base import accepts_noise_moments
-from .weak import BumpTestFunctions, WhittakerSmoother
-from .weak.regression import weak_regression
+from .weak import BumpTestFunctions, WhittakerSmoother, weak_regression
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
 

@@ -11,9 +11,12 @@ from test_weak import _noisy_run
 import pysindy_xl as px
 from pysindy_xl.feature_library import stack_variables
 from pysindy_xl.optimizers import ExplicitOptimizer
-from pysindy_xl.weak import BumpTestFunctions, WhittakerSmoother
-from pysindy_xl.weak.regression import weak_regression
-from pysindy_xl.weak.smoothing import whittaker_smooth
+from pysindy_xl.weak import (
+    BumpTestFunctions,
+    WhittakerSmoother,
+    weak_regression,
+    whittaker_smooth,
+)
 
 
 def _trajectory(t, x, u):

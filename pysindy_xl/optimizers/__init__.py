@@ -10,7 +10,12 @@ from ._base import (
     independent_columns,
 )
 from .ensemble import EnsembleOptimizer
-from .explicit import ExplicitOptimizer, hard_threshold_regression, proximal_gradient_lasso
+from .explicit import (
+    ExplicitOptimizer,
+    corrected_least_squares,
+    hard_threshold_regression,
+    proximal_gradient_lasso,
+)
 from .implicit import ImplicitOptimizer, NoLawFoundError, homothetic_groups
 from .mixed import MixedOptimizer, activation_closure
 from .selection import SelectionResult, refine_by_swaps, select_support
@@ -27,6 +32,7 @@ __all__ = [
     "balance_coordinates",
     "hard_threshold_regression",
     "proximal_gradient_lasso",
+    "corrected_least_squares",
     "homothetic_groups",
     "activation_closure",
     "select_support",

@@ -5,7 +5,13 @@ The weak regression matrix itself is built by the catalog libraries
 the model use it exactly like the pointwise one.
 """
 
-from .smoothing import WhittakerSmoother, differentiate, finite_difference_weights
+from .regression import propagated_noise, weak_regression
+from .smoothing import (
+    WhittakerSmoother,
+    differentiate,
+    finite_difference_weights,
+    whittaker_smooth,
+)
 from .test_functions import BumpTestFunctions, corner_frequency, quadrature_weights
 
 __all__ = [
@@ -15,4 +21,7 @@ __all__ = [
     "differentiate",
     "finite_difference_weights",
     "quadrature_weights",
+    "whittaker_smooth",
+    "weak_regression",
+    "propagated_noise",
 ]
