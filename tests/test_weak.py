@@ -203,16 +203,23 @@ def test_cart_pole_from_one_percent_noisy_positions(cart_pole_system):
     assert valid >= 3, valid
 
 
+_ANGLES = {"cart_pole": [1], "double_pendulum": [0, 1], "cart_double_pendulum": [1, 2]}
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("level", [0.01, 0.03, 0.05])
-@pytest.mark.parametrize("name", ["cart_pole", "double_pendulum"])
+@pytest.mark.parametrize(("name", "level"), [
+    ("cart_pole", 0.01), ("cart_pole", 0.03), ("cart_pole", 0.05),
+    ("double_pendulum", 0.01), ("double_pendulum", 0.03), ("double_pendulum", 0.05),
+    ("cart_double_pendulum", 0.01), ("cart_double_pendulum", 0.03),
+])
 def test_noise_sweep_cells(name, level, request):
     system = request.getfixturevalue(f"{name}_system")
-    angles = [1] if name == "cart_pole" else [0, 1]
-    exact, error, valid = _success_rate(system, angles, level, range(6))
-    # honest floors of what the method reaches today (targets in issue 10 are higher)
+    exact, error, valid = _success_rate(system, _ANGLES[name], level, range(6))
+    # honest floors of what the method reaches today (measured on 10 seeds in
+    # benchmarks/results/noise_sweep.md: exact support 6-10 of 10, median errors 0.1-0.8 %;
+    # the targets of issue 10 are higher)
     assert exact >= 2, exact
-    assert error < 0.05, error
+    assert error < 0.02, error
     assert valid >= 4, valid
 
 
