@@ -71,7 +71,9 @@ def _reduced(x, y):
 def _triangular_system(x, y):
     """``(R, Q^T y)`` of ``x = Q R`` from one QR of ``[x | y]`` (Q is never formed); the
     last row carries the residual norm, so least-squares residuals are preserved."""
-    r_factor = scipy.linalg.qr(np.column_stack([x, y]), mode="r", check_finite=False)[0]
+    stacked = np.column_stack([x, y])
+    # mode="r" returns R with all the rows of x; below the first F + 1 they are zero
+    r_factor = scipy.linalg.qr(stacked, mode="r", check_finite=False)[0][: stacked.shape[1]]
     return r_factor[:, :-1], r_factor[:, -1]
 
 
@@ -482,13 +484,15 @@ def _swap_candidates(x, y, paths, seen, n_blocks, n_folds):
     """Swap refinements of the path models up to the best path size, scored by CV."""
     active, xs, y_reduced = _reduced(x, y)
     limit = max(int(np.argmin(mean)) + 1 for _, _, mean in paths if np.isfinite(mean).any())
-    refined = []
+    refined, visited = [], set()  # starts already refined and local optima reached
     for path, order, mean in paths:
         for k in range(1, min(limit, len(order)) + 1):
-            if not np.isfinite(mean[k - 1]):
+            start = frozenset(order[:k].tolist())
+            if not np.isfinite(mean[k - 1]) or start in visited:
                 continue
             support = _swap_search(xs, y_reduced, active, order[:k], max_swaps=50)
             key = frozenset(support.tolist())
+            visited.update((start, key))
             if key not in seen:
                 seen.add(key)
                 rest = order[~np.isin(order, support)]
