@@ -54,7 +54,6 @@ import json
 import math
 import os
 import signal
-import sys
 import threading
 import time
 import traceback
@@ -63,6 +62,7 @@ import warnings
 import numpy as np
 
 from .grid import GridSettings, Task, TrajectorySpec
+from .lifetime import die_with_parent, runs_in_flight, sigterm_as_interrupt, watch_grid
 from .records import RecordStore
 
 __all__ = ["run_task", "execute_task", "run_grid", "system_for", "trajectory_data",
@@ -347,90 +347,15 @@ def _resolve_isolation(isolation: str) -> str:
     return "none"
 
 
-# -- lifetime: no process outlives the grid ----------------------------------------------------
-_WATCH_INTERVAL = 0.5  # seconds between two checks of a worker's parent
-_watched = None  # (this process, grid process) once the watchdog of this worker runs
-_runs = set()  # forked runs in flight in this process
-
-
-def _die_with_parent() -> None:
-    """Ask the kernel to SIGKILL this process when its parent dies (Linux; no-op elsewhere).
-
-    The parent "dies" when the thread that forked this process ends; callers fork from a
-    thread that waits for the child, so the two coincide.
-    """
-    if not sys.platform.startswith("linux"):
-        return
-    try:
-        import ctypes
-
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
-    except (OSError, AttributeError):
-        pass
-
-
-def _watch_grid(grid_pid: int) -> None:
-    """In a local worker of the grid process ``grid_pid``: exit as soon as it is gone.
-
-    Started once per worker (a daemon thread polling ``os.getppid()``). Nothing happens in
-    the grid process itself (``n_jobs=1``) or in a worker that is not its child (Dask, Ray).
-    A dying worker kills its forked runs (which also die with it through
-    :func:`_die_with_parent`).
-    """
-    global _watched
-    pid = os.getpid()
-    if pid == grid_pid or os.getppid() != grid_pid or _watched == (pid, grid_pid):
-        return
-    _watched = (pid, grid_pid)
-
-    def watch():
-        while os.getppid() == grid_pid:
-            time.sleep(_WATCH_INTERVAL)
-        for process in list(_runs):
-            with contextlib.suppress(Exception):
-                os.kill(process.pid, signal.SIGKILL)
-        os._exit(1)
-
-    threading.Thread(target=watch, name="pysindy-xl-grid-watchdog", daemon=True).start()
-
-
-@contextlib.contextmanager
-def _sigterm_as_interrupt():
-    """Turn SIGTERM into KeyboardInterrupt during the grid, so that it stops like on Ctrl-C
-    (joblib kills the workers); afterwards the process still ends by SIGTERM.
-
-    Only in the main thread and where SIGTERM has its default action (a handler of the
-    application is left alone).
-    """
-    if (threading.current_thread() is not threading.main_thread()
-            or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL):
-        yield
-        return
-    received = []
-
-    def handler(signum, frame):
-        received.append(signum)
-        raise KeyboardInterrupt(f"signal {signum}")
-
-    signal.signal(signal.SIGTERM, handler)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, signal.SIG_DFL)
-        if received:  # the default action, now that the workers are gone
-            os.kill(os.getpid(), signal.SIGTERM)
-
-
 def _grid_call(task, grid_pid, **options):
     """One run of a grid in a worker: :func:`run_task` under the worker's watchdog."""
-    _watch_grid(grid_pid)
+    watch_grid(grid_pid)
     return run_task(task, **options)
 
 
 def _child(connection, function, task, settings, deadline, parent_pid):
     """Body of the forked child: run, send JSON lines (stages, then the record), exit."""
-    _die_with_parent()
+    die_with_parent()
     signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the grid's handler (n_jobs=1)
     if os.getppid() != parent_pid:  # the parent died before the request took effect
         os._exit(1)
@@ -461,7 +386,7 @@ def _run_in_process(function, task, settings, timeout):
     process = context.Process(target=_child, daemon=True,
                               args=(sender, function, task, settings, deadline, os.getpid()))
     process.start()
-    _runs.add(process)
+    runs_in_flight.add(process)
     sender.close()
     last_stage, record = "start", None
     try:
@@ -481,7 +406,7 @@ def _run_in_process(function, task, settings, timeout):
         if record is None and process.is_alive():
             process.kill()
         process.join(5)
-        _runs.discard(process)
+        runs_in_flight.discard(process)
         receiver.close()
     elapsed = time.perf_counter() - start
     if record is not None:
@@ -748,7 +673,7 @@ def run_grid(settings: GridSettings, records_path, n_jobs: int = -1, backend: st
     start = time.perf_counter()
     bar = tqdm(total=len(pending), desc=f"benchmark {settings.name}", unit="run",
                disable=None if progress is None else not progress, smoothing=0.05)
-    with _sigterm_as_interrupt(), store.lock(), bar, backend_context(backend, address):
+    with sigterm_as_interrupt(), store.lock(), bar, backend_context(backend, address):
         if pending:
             # closing the generator (on an interrupt too) makes joblib kill its workers
             with contextlib.closing(_results(pending, call, n_jobs)) as results:
