@@ -181,6 +181,18 @@ def balance_coordinates(theta, n_coordinates: int, force_columns=None) -> np.nda
     """``theta`` with the rows of each coordinate block multiplied by its
     :func:`coordinate_weights` (a new array; ``theta`` itself for a single block).
 
+    Parameters
+    ----------
+    theta : array, shape (n_coordinates * N, F)
+        Stacked regression matrix, rows coordinate-major.
+    n_coordinates : int
+    force_columns : sequence of int, optional
+        Columns whose scale is not free (see :func:`coordinate_weights`).
+
+    Returns
+    -------
+    ndarray, shape (n_coordinates * N, F)
+
     Examples
     --------
     >>> import numpy as np

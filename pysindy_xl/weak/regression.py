@@ -87,6 +87,25 @@ def propagated_noise(library, d, smoothing, phi, dphi, block, n_draws, rng):
     Returns
     -------
     ndarray, shape (n, F, F)
+
+    Examples
+    --------
+    A noisy oscillator: the moments of its two columns (``x_dot^2`` and ``x^2``).
+
+    >>> import numpy as np, pysindy_xl as px
+    >>> coords = px.Coordinates(["x"])
+    >>> library = px.LagrangeLibrary(coords, [coords.qd[0] ** 2, coords.q[0] ** 2]).fit()
+    >>> t = np.linspace(0, 20, 2001)
+    >>> x = np.sin(t)[:, None] + 0.01 * np.random.default_rng(0).normal(size=(2001, 1))
+    >>> smoother = px.WhittakerSmoother()
+    >>> q, qd, qdd = smoother.smooth(t, x)
+    >>> phi, dphi, _ = px.BumpTestFunctions(width=2.0).matrices(t)
+    >>> block = library.weak_transform(px.stack_variables(q, qd, qdd, t=t), phi, dphi)
+    >>> d = {"t": t, "x": x, "u": None}
+    >>> moments = propagated_noise(library, d, (smoother.lam_, smoother.noise_, 3), phi, dphi,
+    ...                            block, 4, np.random.default_rng(1))
+    >>> moments.shape, bool(np.all(np.diag(moments[0]) > 0))
+    ((1, 2, 2), True)
     """
     lam, noise, order = smoothing
     n = library.coords.n
@@ -128,6 +147,22 @@ def weak_regression(library, trajectories, test_functions, smoother):
     info : dict
         ``half_width`` (s), ``test_functions`` (count per trajectory used), ``noise`` (the
         smoother's noise estimate per coordinate on the first trajectory).
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> coords = px.Coordinates(["x"])
+    >>> library = px.CatalogRepartition([
+    ...     px.ExternalForces(coords),
+    ...     px.LagrangeLibrary(coords, [coords.qd[0] ** 2, coords.q[0] ** 2])]).fit()
+    >>> t = np.linspace(0, 20, 2001)
+    >>> x = np.sin(t)[:, None] + 0.01 * np.random.default_rng(0).normal(size=(2001, 1))
+    >>> d = {"t": t, "x": x, "x_dot": None, "u": np.zeros((2001, 1)),
+    ...      "mask": np.ones(2001, bool)}
+    >>> theta, states, moments, info = weak_regression(
+    ...     library, [d], px.BumpTestFunctions(width=2.0), px.WhittakerSmoother())
+    >>> theta.shape[1], states.shape, moments.shape, info["half_width"]
+    (3, (2001, 5), (1, 3, 3), 2.0)
     """
     for name, value, kind in (("test_functions", test_functions, "matrices"),
                               ("smoother", smoother, "smooth")):
