@@ -206,8 +206,21 @@ def balance_coordinates(theta, n_coordinates: int, force_columns=None) -> np.nda
     theta = np.asarray(theta, dtype=float)
     if int(n_coordinates) == 1:
         return theta
-    weights = coordinate_weights(theta, n_coordinates, force_columns)
-    return theta * np.repeat(weights, theta.shape[0] // int(n_coordinates))[:, None]
+    return scale_blocks(theta, coordinate_weights(theta, n_coordinates, force_columns))
+
+
+def scale_blocks(theta, weights) -> np.ndarray:
+    """``theta`` with the rows of block ``i`` (rows coordinate-major) multiplied by
+    ``weights[i]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> scale_blocks(np.ones((4, 1)), [1.0, 3.0]).ravel().tolist()
+    [1.0, 1.0, 3.0, 3.0]
+    """
+    weights = np.asarray(weights, dtype=float)
+    return theta * np.repeat(weights, theta.shape[0] // len(weights))[:, None]
 
 
 def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int = 20_000,
@@ -274,8 +287,7 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
     if n_blocks > 1:
         # balance on the finite columns; the others are dropped below anyway
         finite = np.where(finite_columns, theta, 0.0)
-        weights = coordinate_weights(finite, n_blocks, force_columns)
-        theta = theta * np.repeat(weights, n_rows // n_blocks)[:, None]
+        theta = scale_blocks(theta, coordinate_weights(finite, n_blocks, force_columns))
     rows = np.unique(np.linspace(0, n_rows - 1, min(n_rows, max_rows)).astype(int))
     sub = theta[rows][:, order]
     top = np.max(np.abs(sub), axis=0, initial=0.0)

@@ -16,6 +16,7 @@ from ._base import (
     check_catalog_problem,
     check_noise_moments,
     coordinate_weights,
+    scale_blocks,
 )
 from .selection import select_support
 
@@ -395,7 +396,7 @@ class ExplicitOptimizer(CatalogOptimizer):
                                                      balance=False)
         n_coordinates = int(n_coordinates)
         weights = coordinate_weights(theta, n_coordinates, force_columns)
-        theta = theta * np.repeat(weights, theta.shape[0] // n_coordinates)[:, None]
+        theta = scale_blocks(theta, weights)
         if len(force_columns) == 0:
             raise ValueError("force_columns: explicit regression needs a force column")
         rest = np.setdiff1d(np.arange(theta.shape[1]), force_columns)

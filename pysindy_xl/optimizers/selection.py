@@ -268,6 +268,22 @@ def _fold_labels(n_rows: int, n_blocks: int, n_folds: int) -> np.ndarray:
     return np.minimum(position * n_folds // per_block, n_folds - 1)
 
 
+def _fold_systems(x, y, n_blocks: int, n_folds: int):
+    """Per fold: ``(fold, x_test, y_test, R, Q^T y)`` of unit-RMS columns, the training rows
+    reduced to their triangular system and ``y`` divided by its RMS (so squared held-out
+    errors come out relative to the mean square of ``y``). Folds without test or training
+    rows are skipped."""
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    x = x / _scaled(x)[1]
+    y = y / np.sqrt(max(float(np.mean(y**2)), 1e-300))
+    labels = _fold_labels(len(y), n_blocks, n_folds)
+    for fold in range(n_folds):
+        train, test = labels != fold, labels == fold
+        if test.any() and train.any():
+            yield (fold, x[test], y[test], *_triangular_system(x[train], y[train]))
+
+
 def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
     """Held-out error of every nested model ``order[:k]``, ``k = 1..max_size``.
 
@@ -287,19 +303,10 @@ def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
         Mean squared held-out error of each fold and model size (size ``k`` at index
         ``k - 1``), relative to the mean square of ``y``.
     """
-    x = np.asarray(x, dtype=float)[:, order]
-    y = np.asarray(y, dtype=float)
-    _, scale = _scaled(x)
-    x = x / scale
-    labels = _fold_labels(len(y), n_blocks, n_folds)
     size = len(order)
     errors = np.full((n_folds, size), np.inf)
-    y_scale = max(float(np.mean(y**2)), 1e-300)
-    for fold in range(n_folds):
-        train, test = labels != fold, labels == fold
-        if not test.any() or train.sum() < 1:
-            continue
-        r_factor, rhs = _triangular_system(x[train], y[train])
+    for fold, x_test, y_test, r_factor, rhs in _fold_systems(
+            np.asarray(x, dtype=float)[:, order], y, n_blocks, n_folds):
         usable = min(size, r_factor.shape[0])
         diag = np.abs(np.diag(r_factor))[:usable]
         ok = diag > 1e-12 * max(diag.max(initial=0.0), 1e-300)
@@ -310,8 +317,8 @@ def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
         inverse = scipy.linalg.solve_triangular(r_factor[:usable, :usable], np.eye(usable))
         coefficients = np.zeros((size, usable))
         coefficients[:usable] = np.cumsum(inverse * rhs[:usable], axis=1)
-        residual = x[test] @ coefficients - y[test][:, None]
-        errors[fold, :usable] = np.mean(residual**2, axis=0) / y_scale
+        residual = x_test @ coefficients - y_test[:, None]
+        errors[fold, :usable] = np.mean(residual**2, axis=0)
     return errors
 
 
@@ -332,25 +339,14 @@ def cross_validated_supports(x, y, supports, n_blocks: int = 1, n_folds: int = 5
         Mean squared held-out error relative to the mean square of ``y`` (inf where a fold's
         training rows cannot determine the model).
     """
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
-    _, scale = _scaled(x)
-    x = x / scale
-    labels = _fold_labels(len(y), n_blocks, n_folds)
-    y_scale = max(float(np.mean(y**2)), 1e-300)
     errors = np.full((n_folds, len(supports)), np.inf)
-    for fold in range(n_folds):
-        train, test = labels != fold, labels == fold
-        if not test.any() or train.sum() < 1:
-            continue
-        r_factor, rhs = _triangular_system(x[train], y[train])
+    for fold, x_test, y_test, r_factor, rhs in _fold_systems(x, y, n_blocks, n_folds):
         for m, support in enumerate(supports):
             support = np.asarray(support, dtype=int)
             coef, _, rank, _ = np.linalg.lstsq(r_factor[:, support], rhs, rcond=None)
             if rank < len(support):
                 continue
-            residual = x[test][:, support] @ coef - y[test]
-            errors[fold, m] = np.mean(residual**2) / y_scale
+            errors[fold, m] = np.mean((x_test[:, support] @ coef - y_test) ** 2)
     return errors
 
 
