@@ -62,8 +62,15 @@ import numpy as np
 from sklearn.exceptions import ConvergenceWarning
 
 from .._validation import check_option
-from ._base import CatalogOptimizer, check_catalog_problem
+from ._base import (
+    CatalogOptimizer,
+    check_catalog_problem,
+    check_noise_moments,
+    coordinate_weights,
+    scale_blocks,
+)
 from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
+from .homogeneous import select_law
 
 __all__ = ["ImplicitOptimizer", "NoLawFoundError", "coordinates_touched", "homothetic_groups"]
 
@@ -323,7 +330,8 @@ class ImplicitOptimizer(CatalogOptimizer):
         theta, _ = check_catalog_problem(X, 1, None)
         return self._fit(theta, 1, np.array([], dtype=int), None)
 
-    def fit_catalog(self, theta, n_coordinates, force_columns, reference_columns=None):
+    def fit_catalog(self, theta, n_coordinates, force_columns, reference_columns=None,
+                    noise_moments=None):
         """Implicit regression on a stacked catalog matrix.
 
         Parameters
@@ -337,12 +345,22 @@ class ImplicitOptimizer(CatalogOptimizer):
         reference_columns : sequence of int, optional
             Columns allowed to carry the ``+1`` of an unforced law (e.g. those containing
             accelerations); default: any column.
+        noise_moments : array, shape (n_coordinates, F, F), optional
+            ``E[E_c^T E_c]`` of the errors ``E_c`` in each coordinate's rows of ``theta`` (the
+            weak form of :class:`~pysindy_xl.XLSINDy` passes the propagated position noise).
+            With them, the laws are selected by their held-out noise ratio
+            (:func:`~pysindy_xl.optimizers.homogeneous.select_law`) instead of problem (1):
+            the least-squares residual that problem (1) minimizes prefers laws whose columns
+            are quiet over laws that hold. ``selection_method_`` says which was used.
 
         Returns
         -------
         self
         """
-        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns)
+        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
+                                                     balance=False)
+        weights = coordinate_weights(theta, int(n_coordinates), force_columns)
+        theta = scale_blocks(theta, weights)
         if reference_columns is not None:
             reference_columns = np.asarray(reference_columns, dtype=int).reshape(-1)
             if np.any((reference_columns < 0) | (reference_columns >= theta.shape[1])):
@@ -350,7 +368,12 @@ class ImplicitOptimizer(CatalogOptimizer):
                     f"reference_columns: indices must lie in [0, {theta.shape[1]}), got "
                     f"{reference_columns}"
                 )
-        self._fit(theta, int(n_coordinates), force_columns, reference_columns)
+        if noise_moments is None:
+            self._fit(theta, int(n_coordinates), force_columns, reference_columns)
+        else:
+            moments = check_noise_moments(noise_moments, int(n_coordinates), theta.shape[1])
+            self._fit_noisy(theta, int(n_coordinates), force_columns, reference_columns,
+                            moments * (weights**2)[:, None, None])
         touched = coordinates_touched(theta[:, self.coef_ != 0], int(n_coordinates))
         unexplained = np.flatnonzero(~touched.any(axis=1))
         if unexplained.size:
@@ -362,8 +385,60 @@ class ImplicitOptimizer(CatalogOptimizer):
         return self
 
     # ------------------------------------------------------------------ core
+    def _fit_noisy(self, theta, n_coordinates, force_columns, reference_columns, moments):
+        """Laws selected by held-out noise ratio, one per group of coordinates they explain."""
+        self._check_params()
+        self.selection_method_ = "noise ratio"
+        n_features = theta.shape[1]
+        norms, nonzero = column_norms(theta)
+        self.column_norms_ = norms
+        n_samples = theta.shape[0] // n_coordinates
+        touches = coordinates_touched(theta, n_coordinates)
+        laws, ratios, selections = [], [], []
+        explained = np.zeros(n_coordinates, dtype=bool)
+        while not explained.all():
+            # a further law may only use columns that leave the explained coordinates alone
+            # (an uncoupled subsystem); its rows are those of the coordinates left
+            columns = np.flatnonzero(nonzero & ~touches[explained].any(axis=0)
+                                     & touches[~explained].any(axis=0))
+            if columns.size < 2:
+                break
+            rows = np.repeat(~explained, n_samples)
+            try:
+                law, ratio, selection = select_law(
+                    theta[np.ix_(rows, columns)],
+                    moments[~explained][:, columns][:, :, columns],
+                    n_blocks=int(np.sum(~explained)))
+            except ValueError:
+                break
+            if laws and ratio > self.max_residual_ratio * max(ratios[0], 1e-12):
+                break
+            full = np.zeros(n_features)
+            full[columns] = law
+            laws.append(full)
+            ratios.append(ratio)
+            selections.append(selection)
+            explained |= touches[:, full != 0].any(axis=1)
+        if not laws:
+            raise NoLawFoundError(
+                "ImplicitOptimizer: no law could be selected from the noisy columns (too few "
+                "non-zero columns or rows for cross-validation)"
+            )
+        self.selection_ = selections[0]
+        self.law_selections_ = selections
+        self.law_noise_ratios_ = np.asarray(ratios)
+        self.law_residuals_ = np.array([  # as for problem (1): on unit-norm columns
+            np.linalg.norm(theta @ law) / np.linalg.norm(law * norms) for law in laws])
+        self.law_groups_ = [np.flatnonzero(law) for law in laws]
+        self.laws_ = np.array([
+            self._normalize_law(law, norms, force_columns, reference_columns) for law in laws
+        ])
+        self.coef_, self.combined_laws_ = self._combine(self.laws_)
+        return self
+
     def _fit(self, theta, n_coordinates, force_columns, reference_columns):
         self._check_params()
+        self.selection_method_ = "sindy-pi"
         n_features = theta.shape[1]
         norms, nonzero = column_norms(theta)
         active = np.flatnonzero(nonzero)

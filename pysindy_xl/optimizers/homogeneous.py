@@ -1,0 +1,455 @@
+r"""Errors-in-variables selection of a homogeneous law ``Theta xi = 0`` (unforced, noisy data).
+
+Without a force, a law is a direction ``xi`` with ``Theta xi = 0``. When the columns carry
+errors, ``Theta = Theta_0 + E`` with known second moments ``S = E[E^T E]`` (the weak form
+propagates the position noise into them), the true law leaves the residual ``E xi``, whose
+expected square is ``xi^T S xi``. The *noise ratio*
+
+.. math:: \rho(\xi) = \frac{\lVert \Theta \xi \rVert^2}{\xi^T S \xi}
+
+is therefore close to 1 for the true law, whatever its scale, and larger for any law the data
+contradict. Its minimum over the laws on a support ``s`` is the smallest generalized eigenvalue
+of the pencil ``(Theta_s^T Theta_s, S_ss)``; the minimizer is the consistent
+(errors-in-variables) estimate of the law on that support (Fuller, *Measurement Error Models*,
+1987, section 4.1).
+
+The plain least-squares residual ``||Theta xi|| / ||xi||``, which SINDy-PI minimizes, is small
+for laws whose *own noise* ``xi^T S xi`` is small, not only for laws that hold: on a noisy
+unforced cart-pole a kinetic-only law, whose columns are smoothed and quiet, fits with half the
+residual of the true law. The ratio removes that preference.
+
+Selection
+---------
+1. **Path.** Backward elimination from all the columns: drop the column whose removal raises
+   the smallest generalized eigenvalue least. The constrained eigenvalue of every candidate
+   removal comes from one decomposition per step: with ``G V = S V diag(lambda)`` and
+   ``V^T S V = I``, forcing ``xi_j = 0`` gives the root in ``[lambda_1, lambda_2]`` of the
+   secular equation ``sum_i w_i^2 / (lambda_i - mu) = 0``, ``w = V[j]``.
+2. **Swaps.** At high noise the greedy path can lose a true column early, imitated by a
+   correlated pair. A second path starts from the best support of the first and refines
+   every support by single swaps (:func:`refine_law_by_swaps`) before the next elimination.
+3. **Score.** Every support of both paths is scored by ``n_folds``-fold cross-validation over
+   contiguous blocks of rows: the law is estimated on the training rows and its noise ratio
+   measured on the held-out rows (their share of the moments).
+4. **Choice.** The smallest support within one standard error of the best (as
+   :func:`~pysindy_xl.optimizers.selection.select_support` does for the explicit problem): a
+   support missing a true term has a held-out ratio far above 1, the extra terms of a larger one
+   do not lower it beyond its spread.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import scipy.linalg
+
+from ._sparse import triangular_factor
+from .selection import _fold_labels, _fold_summary
+
+__all__ = [
+    "LawSelection",
+    "law_elimination_path",
+    "noise_ratio_law",
+    "refine_law_by_swaps",
+    "select_law",
+]
+
+
+def _whitened_factor(r_factor, moments):
+    """``(R L^-T, L)`` with ``L L^T`` the (regularized) moments: the noise ratio of ``xi`` is
+    ``||R L^-T (L^T xi)||^2 / ||L^T xi||^2``. The moments are regularized relative to their own
+    scale, so that a column without noise cannot make them singular."""
+    k = moments.shape[0]
+    floor = 1e-10 * max(float(np.trace(moments)) / max(k, 1), 1e-300)
+    lower = np.linalg.cholesky(moments + floor * np.eye(k))
+    whitened = scipy.linalg.solve_triangular(lower, r_factor.T, lower=True,
+                                             check_finite=False).T
+    return whitened, lower
+
+
+def _pencil(r_factor, moments):
+    """Ascending eigenpairs of the pencil ``(R^T R, S)``, ``V^T S V = I``.
+
+    From the singular values of ``R L^-T`` (never from ``R^T R``, which would square the
+    condition number: on clean data the true law's residual is at the rounding level of the
+    Gram matrix)."""
+    whitened, lower = _whitened_factor(r_factor, moments)
+    _, singular, wt = np.linalg.svd(whitened, full_matrices=True)
+    singular = np.concatenate([singular, np.zeros(wt.shape[0] - singular.size)])
+    vectors = scipy.linalg.solve_triangular(lower.T, wt[::-1].T, lower=False,
+                                            check_finite=False)
+    return singular[::-1] ** 2, vectors
+
+
+def noise_ratio_law(r_factor, moments) -> tuple[float, np.ndarray]:
+    """Smallest noise ratio on all the columns and its law (unit norm, largest entry positive).
+
+    Parameters
+    ----------
+    r_factor : array, shape (m, k)
+        ``Theta`` or any factor with the same ``R^T R = Theta^T Theta`` (the triangular factor).
+    moments : array, shape (k, k)
+        ``E[E^T E]`` of the errors of the same rows.
+
+    Returns
+    -------
+    ratio : float
+    law : ndarray, shape (k,)
+
+    Examples
+    --------
+    Two noisy copies of one signal: the law ``a - b = 0`` holds to the noise (ratio ~ 1).
+
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> signal = rng.normal(size=5000)
+    >>> theta = signal[:, None] + 0.1 * rng.normal(size=(5000, 2))
+    >>> ratio, law = noise_ratio_law(theta, 0.01 * 5000 * np.eye(2))
+    >>> round(ratio, 1), (law / law[0]).round(2)
+    (1.0, array([ 1., -1.]))
+    """
+    values, vectors = _pencil(np.asarray(r_factor, float), np.asarray(moments, float))
+    law = vectors[:, 0] / np.linalg.norm(vectors[:, 0])
+    return float(values[0]), law * np.sign(law[np.argmax(np.abs(law))])
+
+
+def _constrained_minima(values, vectors, n_bisections: int = 80) -> np.ndarray:
+    """Smallest eigenvalue of the pencil with ``xi_j = 0``, for every ``j`` at once.
+
+    Parameters
+    ----------
+    values : array, shape (k,)
+        Ascending generalized eigenvalues.
+    vectors : array, shape (k, k)
+        Their ``S``-orthonormal eigenvectors (columns).
+
+    Returns
+    -------
+    ndarray, shape (k,)
+        The root in ``[values[0], values[1]]`` of ``sum_i w_i^2 / (values[i] - mu)`` with
+        ``w = vectors[j]`` (Cauchy interlacing puts it there; the function increases on it).
+    """
+    weights = vectors**2  # row j: w_i^2 of the constraint xi_j = 0
+    low = np.full(values.size, values[0])
+    high = np.full(values.size, values[1])
+    for _ in range(n_bisections):
+        middle = 0.5 * (low + high)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            secular = np.sum(weights / (values[None, :] - middle[:, None]), axis=1)
+        below = secular < 0  # the root lies above the middle
+        low = np.where(below, middle, low)
+        high = np.where(below, high, middle)
+    return 0.5 * (low + high)
+
+
+def law_elimination_path(r_factor, moments) -> np.ndarray:
+    """Columns ordered from most to least needed by backward elimination of the noise ratio.
+
+    Parameters
+    ----------
+    r_factor : array, shape (m, F)
+        ``Theta`` or its triangular factor, unit-scale columns.
+    moments : array, shape (F, F)
+        ``E[E^T E]`` on the same columns.
+
+    Returns
+    -------
+    ndarray of int, shape (F,)
+        ``order[:k]`` is the support of size ``k`` (``k >= 2``) of the path.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> a, b, c, d = rng.normal(size=(4, 2000))
+    >>> clean = np.column_stack([a, b, a - 2 * b, c, d])
+    >>> theta = clean + 0.05 * rng.normal(size=clean.shape)
+    >>> order = law_elimination_path(theta, 0.0025 * 2000 * np.eye(5))
+    >>> sorted(order[:3].tolist())
+    [0, 1, 2]
+    """
+    support = np.arange(r_factor.shape[1])
+    removed = []
+    while len(support) > 2:
+        kept = _eliminate_one(r_factor, moments, support)
+        removed.append(int(np.setdiff1d(support, kept)[0]))
+        support = kept
+    return np.concatenate([support, removed[::-1]]).astype(int)
+
+
+def _eliminate_one(r_factor, moments, support) -> np.ndarray:
+    """The support without the column whose removal raises the smallest ratio least."""
+    support = np.asarray(support, dtype=int)
+    values, vectors = _pencil(r_factor[:, support], moments[np.ix_(support, support)])
+    return np.delete(support, int(np.argmin(_constrained_minima(values, vectors))))
+
+
+def _bordered_minima(values, cross_gram, cross_moments, gram_diag, moments_diag,
+                     n_bisections: int = 80) -> np.ndarray:
+    """Smallest eigenvalue of the pencil with one more column, for every candidate at once.
+
+    With the pencil's eigenpairs ``(lambda, V)`` on the current columns, adding column ``i``
+    (Gram column ``c``, moment column ``d``) gives the root in ``[0, lambda_1]`` of
+    ``f(mu) = g_ii - mu s_ii - sum_m (a_m - mu b_m)^2 / (lambda_m - mu)``, ``a = V^T c``,
+    ``b = V^T d`` (the Schur complement of the bordered pencil; interlacing puts exactly one
+    root there).
+
+    Parameters
+    ----------
+    values : array, shape (k,)
+    cross_gram, cross_moments : array, shape (k, m)
+        ``V^T c`` and ``V^T d`` of the ``m`` candidates.
+    gram_diag, moments_diag : array, shape (m,)
+
+    Returns
+    -------
+    ndarray, shape (m,)
+    """
+    low = np.zeros(cross_gram.shape[1])
+    high = np.full(cross_gram.shape[1], values[0])
+    for _ in range(n_bisections):
+        middle = 0.5 * (low + high)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            coupling = np.sum((cross_gram - middle * cross_moments) ** 2
+                              / (values[:, None] - middle), axis=0)
+        positive = gram_diag - middle * moments_diag - coupling > 0  # the root lies above
+        low = np.where(positive, middle, low)
+        high = np.where(positive, high, middle)
+    return 0.5 * (low + high)
+
+
+def _smallest_ratio(r_factor, moments, support) -> float:
+    return noise_ratio_law(r_factor[:, support], moments[np.ix_(support, support)])[0]
+
+
+def refine_law_by_swaps(r_factor, moments, support, max_swaps: int = 50) -> np.ndarray:
+    """Best-improvement single swaps of a law's support, lowering its smallest noise ratio.
+
+    The greedy path can lose a true column that a pair of correlated candidates imitates at
+    high noise; exchanging one selected column for an unselected one while the ratio drops
+    (the 1-swap local search of L0Learn) recovers it. For every removal ``j`` the ratios of
+    all the additions come from one decomposition (:func:`_bordered_minima`); the best swap
+    is confirmed by an exact computation before it is taken.
+
+    Parameters
+    ----------
+    r_factor : array, shape (m, F)
+        ``Theta`` or its triangular factor, unit-scale columns.
+    moments : array, shape (F, F)
+    support : array of int
+    max_swaps : int, default 50
+
+    Returns
+    -------
+    ndarray of int
+        The refined support, sorted.
+    """
+    gram = r_factor.T @ r_factor
+    support = [int(j) for j in support]
+    current = _smallest_ratio(r_factor, moments, support)
+    for _ in range(int(max_swaps)):
+        outside = np.setdiff1d(np.arange(r_factor.shape[1]), support)
+        if outside.size == 0 or len(support) < 3:
+            break
+        best = (current, None, None)
+        for position, removed in enumerate(support):
+            rest = support[:position] + support[position + 1:]
+            values, vectors = _pencil(r_factor[:, rest], moments[np.ix_(rest, rest)])
+            minima = _bordered_minima(values, vectors.T @ gram[np.ix_(rest, outside)],
+                                      vectors.T @ moments[np.ix_(rest, outside)],
+                                      np.diag(gram)[outside], np.diag(moments)[outside])
+            pick = int(np.argmin(minima))
+            if minima[pick] < best[0]:
+                best = (minima[pick], removed, int(outside[pick]))
+        if best[1] is None:
+            break
+        candidate = sorted(set(support) - {best[1]} | {best[2]})
+        ratio = _smallest_ratio(r_factor, moments, candidate)
+        if not ratio < current * (1 - 1e-9):
+            break
+        support, current = candidate, ratio
+    return np.array(sorted(support), dtype=int)
+
+
+@dataclasses.dataclass
+class LawSelection:
+    """What the errors-in-variables selection chose and why (returned by :func:`select_law`).
+
+    Parameters
+    ----------
+    order : ndarray of int
+        Columns from most to least needed (:func:`law_elimination_path`).
+    cv_ratio : ndarray
+        Mean held-out noise ratio of the support of each size (index ``k - 1``; inf for
+        ``k = 1``, which holds no law).
+    cv_spread : ndarray
+        Its standard error over the folds.
+    size : int
+        Chosen number of terms.
+    best_size : int
+        Size with the lowest held-out ratio.
+    rule : str
+        How ``size`` was chosen.
+    """
+
+    order: np.ndarray
+    cv_ratio: np.ndarray
+    cv_spread: np.ndarray
+    size: int
+    best_size: int
+    rule: str
+
+    @property
+    def support(self) -> np.ndarray:
+        """Selected columns, sorted."""
+        return np.sort(self.order[: self.size])
+
+
+def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
+    """Held-out noise ratio and relative squared residual of the law of every support.
+
+    Returns two arrays of shape (n_folds, len(supports)); the relative residual is
+    ``||Theta xi||^2 / sum_j ||Theta_j xi_j||^2`` on the held-out rows (inf where a support
+    cannot be fitted)."""
+    ratios = np.full((n_folds, len(supports)), np.inf)
+    relative = np.full((n_folds, len(supports)), np.inf)
+    labels = _fold_labels(theta.shape[0], n_blocks, n_folds)
+    blocks = np.arange(theta.shape[0]) // (theta.shape[0] // n_blocks)
+    for fold in range(n_folds):
+        test = labels == fold
+        if not test.any() or test.all():
+            continue
+        # each block's moments spread evenly over its rows: the fold's share of each block
+        share = np.bincount(blocks[test], minlength=n_blocks) / np.bincount(blocks)
+        test_moments = np.einsum("b,bfg->fg", share, moments)
+        train_moments = moments.sum(axis=0) - test_moments
+        r_train = triangular_factor(theta[~test])
+        r_test = triangular_factor(theta[test])
+        for m, support in enumerate(supports):
+            if len(support) < 2 or len(support) > r_train.shape[0]:
+                continue
+            _, law = noise_ratio_law(r_train[:, support],
+                                     train_moments[np.ix_(support, support)])
+            noise = law @ test_moments[np.ix_(support, support)] @ law
+            residual = np.sum((r_test[:, support] @ law) ** 2)
+            signal = np.sum((r_test[:, support] * law) ** 2)
+            if noise > 0 and signal > 0:
+                ratios[fold, m] = residual / noise
+                relative[fold, m] = residual / signal
+    return ratios, relative
+
+
+def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
+               resolution: float = 1e-8, swaps: bool = True
+               ) -> tuple[np.ndarray, float, LawSelection]:
+    """Sparsest homogeneous law of noisy columns, by held-out noise ratio.
+
+    Candidates are the supports of two paths: the backward path
+    (:func:`law_elimination_path`) and, with ``swaps``, a path refined by single swaps
+    (:func:`refine_law_by_swaps`) at every size, from the best support of the first down. The
+    choice is the smallest support within one standard error of the best of both.
+
+    Parameters
+    ----------
+    theta : array, shape (n_rows, F)
+        Regression matrix, rows ``n_blocks`` equal blocks (coordinates).
+    noise_moments : array, shape (n_blocks, F, F)
+        ``E[E_b^T E_b]`` of each block's errors.
+    n_blocks : int, default 1
+    n_folds : int, default 5
+    resolution : float, default 1e-8
+        Held-out relative squared residuals closer than this to the best count as equal: on
+        clean data the moments are tiny and extra terms fit quadrature errors (as for
+        :func:`~pysindy_xl.optimizers.selection.select_support`).
+    swaps : bool, default True
+
+    Returns
+    -------
+    law : ndarray, shape (F,)
+        Unit-norm law on the selected support (largest entry positive).
+    ratio : float
+        Its noise ratio on all the rows (~1 for a law that holds to the noise).
+    selection : LawSelection
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> a, b, c, d = rng.normal(size=(4, 2000))
+    >>> clean = np.column_stack([a, b, a - 2 * b, c, d])
+    >>> theta = clean + 0.05 * rng.normal(size=clean.shape)
+    >>> law, ratio, selection = select_law(theta, 0.0025 * 2000 * np.eye(5)[None])
+    >>> (law / law[0]).round(1) + 0.0, selection.size
+    (array([ 1., -2., -1.,  0.,  0.]), 3)
+    """
+    theta = np.asarray(theta, dtype=float)
+    moments = np.asarray(noise_moments, dtype=float)
+    scale = np.sqrt(np.mean(theta**2, axis=0))
+    scale[scale == 0] = 1.0
+    theta = theta / scale
+    moments = moments / np.outer(scale, scale)[None]
+    total = moments.sum(axis=0)
+    r_factor = triangular_factor(theta)
+    order = law_elimination_path(r_factor, total)
+    path = [order[:k] for k in range(2, len(order) + 1)]
+    candidates = _scored(theta, moments, path, "backward path", n_blocks, n_folds)
+    if not candidates:
+        raise ValueError("theta: no law can be cross-validated on these rows")
+    if swaps:
+        best_path = min(candidates, key=lambda c: c.ratio)
+        candidates += _scored(theta, moments, _refined_path(r_factor, total, best_path.support),
+                              "swap-refined path", n_blocks, n_folds)
+    best = min(candidates, key=lambda c: c.ratio)
+    # one standard error, or the resolution on the relative residual (clean data: the
+    # moments are tiny, the ratios large, and extra terms that fit quadrature errors must not
+    # win on that alone) in ratio units, by the best support's ratio-to-relative factor
+    resolution_in_ratio = resolution * best.ratio / max(best.relative, 1e-300)
+    limit = best.ratio + max(best.spread, resolution_in_ratio)
+    chosen = min((c for c in candidates if c.ratio <= limit),
+                 key=lambda c: (len(c.support), c.ratio))
+    support = chosen.support
+    ratio, values = noise_ratio_law(theta[:, support], total[np.ix_(support, support)])
+    law = np.zeros(theta.shape[1])
+    law[support] = values / scale[support]
+    law /= np.linalg.norm(law)
+    cv_ratio, cv_spread = np.full(len(order), np.inf), np.full(len(order), np.inf)
+    for c in candidates:  # the best of each size
+        if c.ratio < cv_ratio[len(c.support) - 1]:
+            cv_ratio[len(c.support) - 1], cv_spread[len(c.support) - 1] = c.ratio, c.spread
+    selection = LawSelection(
+        order=np.concatenate([np.sort(support), order[~np.isin(order, support)]]),
+        cv_ratio=cv_ratio, cv_spread=cv_spread, size=len(support),
+        best_size=len(best.support), rule=f"one standard error of the noise ratio ({chosen.how})")
+    return law * np.sign(law[np.argmax(np.abs(law))]), ratio, selection
+
+
+@dataclasses.dataclass
+class _Candidate:
+    support: np.ndarray
+    ratio: float  # mean held-out noise ratio
+    spread: float  # its standard error over the folds
+    relative: float  # mean held-out relative squared residual
+    how: str
+
+
+def _scored(theta, moments, supports, how, n_blocks, n_folds) -> list:
+    """Candidates of the supports that can be cross-validated."""
+    ratios, relative = _held_out_ratios(theta, moments, supports, n_blocks, n_folds)
+    (mean, spread), (relative_mean, _) = _fold_summary(ratios), _fold_summary(relative)
+    return [_Candidate(np.asarray(s), mean[m], spread[m], relative_mean[m], how)
+            for m, s in enumerate(supports) if np.isfinite(mean[m])]
+
+
+def _refined_path(r_factor, moments, start) -> list:
+    """A second path, refined by swaps at every size: from ``start`` down to two columns,
+    each support is swap-refined before the next elimination, so that a true column the
+    plain path lost early (imitated by a correlated pair) can come back."""
+    supports, support = [], np.asarray(start)
+    while len(support) >= 2:
+        support = refine_law_by_swaps(r_factor, moments, support)
+        supports.append(support)
+        if len(support) == 2:
+            break
+        support = _eliminate_one(r_factor, moments, support)
+    return supports

@@ -1,0 +1,149 @@
+"""Unforced (implicit) identification from noisy positions: the noise-ratio law selection.
+
+Ground truth: the closed-form eigenproblems (scipy at tight tolerance) for the secular
+shortcuts, and ``sympy.physics.mechanics`` systems (tests/ground_truth.py) for the fits.
+"""
+
+import warnings
+
+import numpy as np
+import pytest
+import scipy.linalg
+from ground_truth import random_initial_state
+from test_implicit import paper_catalog
+
+import pysindy_xl as px
+from pysindy_xl.optimizers.homogeneous import (
+    _bordered_minima,
+    _constrained_minima,
+    _pencil,
+    law_elimination_path,
+    refine_law_by_swaps,
+    select_law,
+)
+
+
+def _random_pencil(k, seed):
+    rng = np.random.default_rng(seed)
+    theta = rng.normal(size=(50, k))
+    noise = rng.normal(size=(3 * k, k))
+    return theta, noise.T @ noise
+
+
+def test_pencil_matches_the_generalized_eigenproblem():
+    theta, moments = _random_pencil(6, 0)
+    values, vectors = _pencil(theta, moments)
+    expected = scipy.linalg.eigh(theta.T @ theta, moments, eigvals_only=True)
+    np.testing.assert_allclose(values, expected, rtol=1e-8)
+    np.testing.assert_allclose(vectors.T @ moments @ vectors, np.eye(6), atol=1e-8)
+
+
+def test_constrained_minima_equal_the_eigenvalue_without_the_column():
+    theta, moments = _random_pencil(7, 1)
+    values, vectors = _pencil(theta, moments)
+    minima = _constrained_minima(values, vectors)
+    for j in range(7):
+        rest = np.delete(np.arange(7), j)
+        direct = scipy.linalg.eigh(theta[:, rest].T @ theta[:, rest],
+                                   moments[np.ix_(rest, rest)], eigvals_only=True)[0]
+        assert minima[j] == pytest.approx(direct, rel=1e-9)
+
+
+def test_bordered_minima_equal_the_eigenvalue_with_one_more_column():
+    theta, moments = _random_pencil(8, 2)
+    current, candidates = np.arange(5), np.arange(5, 8)
+    values, vectors = _pencil(theta[:, current], moments[np.ix_(current, current)])
+    gram = theta.T @ theta
+    minima = _bordered_minima(values, vectors.T @ gram[np.ix_(current, candidates)],
+                              vectors.T @ moments[np.ix_(current, candidates)],
+                              np.diag(gram)[candidates], np.diag(moments)[candidates])
+    for m, i in enumerate(candidates):
+        support = np.append(current, i)
+        direct = scipy.linalg.eigh(theta[:, support].T @ theta[:, support],
+                                   moments[np.ix_(support, support)], eigvals_only=True)[0]
+        assert minima[m] == pytest.approx(direct, rel=1e-9)
+
+
+def _quiet_imitation(seed, n_rows=4000):
+    """A law ``a + b - c = 0`` whose columns are noisy, and a quiet column ``d`` that imitates
+    ``a`` closely: the plain least-squares residual prefers the law that uses ``d``."""
+    rng = np.random.default_rng(seed)
+    a, b = rng.normal(size=(2, n_rows))
+    d_clean = a + 0.08 * rng.normal(size=n_rows)   # not a law: 8 % of systematic misfit
+    noise = np.array([0.15, 0.15, 0.15, 0.0])
+    clean = np.column_stack([a, b, a + b, d_clean])
+    theta = clean + noise * rng.normal(size=clean.shape)
+    return theta, n_rows * np.diag(noise**2)[None]
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_noise_ratio_prefers_the_law_that_holds_over_the_quiet_imitation(seed):
+    theta, moments = _quiet_imitation(seed)
+    law, ratio, selection = select_law(theta, moments)
+    assert selection.support.tolist() == [0, 1, 2]
+    np.testing.assert_allclose(law[:3] / law[0], [1.0, 1.0, -1.0], atol=0.02)
+    assert 0.8 < ratio < 1.2  # the residual is the noise and nothing else
+    # plain least squares (no noise model) takes the quiet column instead of a
+    quiet = np.linalg.lstsq(theta[:, [1, 3]], theta[:, 2], rcond=None)[1][0]
+    noisy = np.linalg.lstsq(theta[:, [0, 1]], theta[:, 2], rcond=None)[1][0]
+    assert quiet < noisy
+
+
+def test_swaps_bring_back_a_column_lost_by_the_path():
+    theta, moments = _quiet_imitation(0)
+    total = moments[0] / np.mean(theta**2, axis=0)[None, :] / np.mean(theta**2, axis=0)[:, None]
+    theta = theta / np.sqrt(np.mean(theta**2, axis=0))
+    assert refine_law_by_swaps(theta, total, [1, 2, 3]).tolist() == [0, 1, 2]
+    assert sorted(law_elimination_path(theta, total)[:3].tolist()) == [0, 1, 2]
+
+
+def _true_law(system, library):
+    friction = {(system.coords.qd[i], i): c for i, c in enumerate(system.friction)}
+    return library.ideal_coefficients(lagrangian=system.lagrangian, classical=friction,
+                                      forces=0.0)
+
+
+def _unforced_noisy_fit(system, angles, level, seed):
+    library = paper_catalog(system.coords, angles)
+    t = np.arange(0.0, 15.0, 0.01)
+    runs = [system.simulate(random_initial_state(system, 1000 * seed + k), t) for k in range(3)]
+    rng = np.random.default_rng(seed)
+    noisy = [r["q"] + level * r["q"].std(0) * rng.normal(size=r["q"].shape) for r in runs]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = px.XLSINDy(library).fit(noisy, [t] * 3)
+    return model, _true_law(system, model.feature_library_)
+
+
+def _check_unforced(model, true, system, seed, rel_tol):
+    coef = model.coefficients()
+    assert model.formulation_ == "weak"
+    assert model.optimizer_.selection_method_ == "noise ratio"
+    np.testing.assert_array_equal(coef != 0, true != 0)
+    support = true != 0
+    scale = coef[support] @ true[support] / (true[support] @ true[support])
+    np.testing.assert_allclose(coef[support] / scale, true[support], rtol=rel_tol)
+    # valid: a fresh unforced 5 s trajectory, position RMSE below 10 % of the spread
+    t = np.arange(0.0, 5.0, 0.01)
+    x0 = random_initial_state(system, 777 + seed)
+    truth = system.simulate(x0, t)
+    simulated = model.simulate(x0, t)
+    rmse = np.sqrt(np.mean((simulated[:, : system.n] - truth["q"]) ** 2, axis=0))
+    assert np.all(rmse < 0.1 * np.ptp(truth["q"], axis=0))
+
+
+def test_unforced_cart_pole_from_one_percent_noisy_positions(cart_pole_system):
+    model, true = _unforced_noisy_fit(cart_pole_system, [1], 0.01, seed=0)
+    _check_unforced(model, true, cart_pole_system, 0, rel_tol=0.03)
+    assert model.selection_.rule.startswith("one standard error of the noise ratio")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("name", "level", "seed"), [
+    ("cart_pole", 0.03, 0), ("double_pendulum", 0.01, 0), ("double_pendulum", 0.03, 1),
+])
+def test_unforced_noise_cells(name, level, seed, request):
+    system = request.getfixturevalue(f"{name}_system")
+    angles = {"cart_pole": [1], "double_pendulum": [0, 1]}[name]
+    model, true = _unforced_noisy_fit(system, angles, level, seed)
+    _check_unforced(model, true, system, seed, rel_tol=0.1)
