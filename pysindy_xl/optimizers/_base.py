@@ -41,6 +41,7 @@ __all__ = [
     "balance_coordinates",
     "check_catalog_problem",
     "coordinate_weights",
+    "coordinates_touched",
     "independent_columns",
 ]
 
@@ -94,6 +95,37 @@ def _block_rms(theta, n_blocks: int) -> np.ndarray:
     top = np.max(np.abs(blocks), axis=1)
     safe = np.where((top > 0) & np.isfinite(top), top, 1.0)
     return top * np.sqrt(np.mean((blocks / safe[:, None, :]) ** 2, axis=1))
+
+
+def coordinates_touched(theta, n_coordinates: int, rtol: float = 1e-10) -> np.ndarray:
+    """Which coordinate equations each column enters (is not identically zero in).
+
+    Parameters
+    ----------
+    theta : array, shape (n_coordinates * N, F)
+        Stacked regression matrix, rows coordinate-major.
+    n_coordinates : int
+    rtol : float
+        A block counts as zero when its norm is at most ``rtol`` times the column's largest
+        block norm.
+
+    Returns
+    -------
+    ndarray of bool, shape (n_coordinates, F)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> theta = np.array([[1.0, 0.0], [2.0, 0.0], [0.0, 1.0], [3.0, 1.0]])
+    >>> coordinates_touched(theta, 2)
+    array([[ True, False],
+           [ True,  True]])
+    """
+    theta = np.asarray(theta, dtype=float)
+    blocks = theta.reshape(n_coordinates, -1, theta.shape[1])
+    block_norms = np.linalg.norm(blocks, axis=1)
+    top = block_norms.max(axis=0, initial=0.0)
+    return (block_norms > 0) & (block_norms > rtol * top)
 
 
 def coordinate_weights(theta, n_coordinates: int, force_columns=None) -> np.ndarray:

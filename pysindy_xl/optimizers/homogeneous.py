@@ -44,12 +44,14 @@ import dataclasses
 import numpy as np
 import scipy.linalg
 
+from ._base import coordinates_touched
 from ._sparse import triangular_factor
 from .selection import _fold_labels, _fold_summary
 
 __all__ = [
     "LawSelection",
     "law_elimination_path",
+    "law_forward_path",
     "noise_ratio_law",
     "refine_law_by_swaps",
     "select_law",
@@ -183,6 +185,49 @@ def _eliminate_one(r_factor, moments, support) -> np.ndarray:
     support = np.asarray(support, dtype=int)
     values, vectors = _pencil(r_factor[:, support], moments[np.ix_(support, support)])
     return np.delete(support, int(np.argmin(_constrained_minima(values, vectors))))
+
+
+def law_forward_path(r_factor, moments, max_size=None) -> np.ndarray:
+    """Columns in the order forward selection adds them: the pair with the smallest noise
+    ratio first, then the column whose addition lowers the ratio most.
+
+    Parameters
+    ----------
+    r_factor : array, shape (m, F)
+        ``Theta`` or its triangular factor, unit-scale columns.
+    moments : array, shape (F, F)
+    max_size : int, optional
+        Stop after this many columns (default: all).
+
+    Returns
+    -------
+    ndarray of int
+        ``order[:k]`` is the support of size ``k`` (``k >= 2``) of the path.
+    """
+    n_features = r_factor.shape[1]
+    max_size = n_features if max_size is None else min(int(max_size), n_features)
+    gram = r_factor.T @ r_factor
+    diag_gram, diag_moments = np.diag(gram), np.diag(moments)
+    # the best pair: for each first column, the best second one from its 1 x 1 pencil
+    pairs = np.full(n_features, np.inf)
+    partner = np.zeros(n_features, dtype=int)
+    for j in range(n_features):
+        values, vectors = _pencil(r_factor[:, [j]], moments[np.ix_([j], [j])])
+        minima = _bordered_minima(values, vectors.T @ gram[[j]], vectors.T @ moments[[j]],
+                                  diag_gram, diag_moments)
+        minima[j] = np.inf
+        partner[j] = int(np.argmin(minima))
+        pairs[j] = minima[partner[j]]
+    first = int(np.argmin(pairs))
+    support = [first, int(partner[first])]
+    while len(support) < max_size:
+        outside = np.setdiff1d(np.arange(n_features), support)
+        values, vectors = _pencil(r_factor[:, support], moments[np.ix_(support, support)])
+        minima = _bordered_minima(values, vectors.T @ gram[np.ix_(support, outside)],
+                                  vectors.T @ moments[np.ix_(support, outside)],
+                                  diag_gram[outside], diag_moments[outside])
+        support.append(int(outside[np.argmin(minima)]))
+    return np.array(support, dtype=int)
 
 
 def _bordered_minima(values, cross_gram, cross_moments, gram_diag, moments_diag,
@@ -392,14 +437,34 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     total = moments.sum(axis=0)
     r_factor = triangular_factor(theta)
     order = law_elimination_path(r_factor, total)
-    path = [order[:k] for k in range(2, len(order) + 1)]
-    candidates = _scored(theta, moments, path, "backward path", n_blocks, n_folds)
+    forward = law_forward_path(r_factor, total)
+    candidates = (
+        _scored(theta, moments, [order[:k] for k in range(2, len(order) + 1)], "backward path",
+                n_blocks, n_folds)
+        + _scored(theta, moments, [forward[:k] for k in range(2, len(forward) + 1)],
+                  "forward path", n_blocks, n_folds))
     if not candidates:
         raise ValueError("theta: no law can be cross-validated on these rows")
     if swaps:
         best_path = min(candidates, key=lambda c: c.ratio)
-        candidates += _scored(theta, moments, _refined_path(r_factor, total, best_path.support),
-                              "swap-refined path", n_blocks, n_folds)
+        refined = _refined_path(r_factor, total, best_path.support)
+        # and every path support up to the best size, refined at its own size
+        seen = {frozenset(c.support.tolist()) for c in candidates + [
+            _Candidate(r, 0, 0, 0, "") for r in refined]}
+        for c in list(candidates):
+            if len(c.support) <= len(best_path.support):
+                support = refine_law_by_swaps(r_factor, total, c.support)
+                if frozenset(support.tolist()) not in seen:
+                    seen.add(frozenset(support.tolist()))
+                    refined.append(support)
+        candidates += _scored(theta, moments, refined, "swap-refined", n_blocks, n_folds)
+    # A law that leaves a coordinate out says nothing about it, and its ratio is measured on
+    # the other rows only: it is not comparable. Such laws can hold exactly (the unforced
+    # cart-pole's pendulum row alone, the Routhian of the cyclic cart coordinate), so they are
+    # candidates only when no law covers every coordinate (uncoupled subsystems).
+    touches = coordinates_touched(theta, n_blocks)
+    covering = [c for c in candidates if touches[:, c.support].any(axis=1).all()]
+    candidates = covering or candidates
     best = min(candidates, key=lambda c: c.ratio)
     # one standard error, or the resolution on the relative residual (clean data: the
     # moments are tiny, the ratios large, and extra terms that fit quadrature errors must not

@@ -67,6 +67,7 @@ from ._base import (
     check_catalog_problem,
     check_noise_moments,
     coordinate_weights,
+    coordinates_touched,
     scale_blocks,
 )
 from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
@@ -79,37 +80,6 @@ _SOLVERS = ("fista", "cvxpy")
 
 class NoLawFoundError(RuntimeError):
     """Implicit regression found no sparse law in the regression matrix."""
-
-
-def coordinates_touched(theta, n_coordinates: int, rtol: float = 1e-10) -> np.ndarray:
-    """Which coordinate equations each column enters (is not identically zero in).
-
-    Parameters
-    ----------
-    theta : array, shape (n_coordinates * N, F)
-        Stacked regression matrix, rows coordinate-major.
-    n_coordinates : int
-    rtol : float
-        A block counts as zero when its norm is at most ``rtol`` times the column's largest
-        block norm.
-
-    Returns
-    -------
-    ndarray of bool, shape (n_coordinates, F)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> theta = np.array([[1.0, 0.0], [2.0, 0.0], [0.0, 1.0], [3.0, 1.0]])
-    >>> coordinates_touched(theta, 2)
-    array([[ True, False],
-           [ True,  True]])
-    """
-    theta = np.asarray(theta, dtype=float)
-    blocks = theta.reshape(n_coordinates, -1, theta.shape[1])
-    block_norms = np.linalg.norm(blocks, axis=1)
-    top = block_norms.max(axis=0, initial=0.0)
-    return (block_norms > 0) & (block_norms > rtol * top)
 
 
 def homothetic_groups(vectors, angle_tol: float, order=None) -> list[np.ndarray]:

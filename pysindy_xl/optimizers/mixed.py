@@ -31,7 +31,13 @@ import numpy as np
 from sklearn.base import clone
 
 from .._validation import check_instance, check_option
-from ._base import CatalogOptimizer, balance_coordinates, check_catalog_problem
+from ._base import (
+    CatalogOptimizer,
+    accepts_noise_moments,
+    balance_coordinates,
+    check_catalog_problem,
+    check_noise_moments,
+)
 from .implicit import ImplicitOptimizer, NoLawFoundError, coordinates_touched
 
 __all__ = ["MixedOptimizer", "activation_closure"]
@@ -159,7 +165,7 @@ class MixedOptimizer(CatalogOptimizer):
             "call fit_catalog(theta, n_coordinates, force_columns)"
         )
 
-    def fit_catalog(self, theta, n_coordinates, force_columns):
+    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None):
         """Mixed explicit/implicit regression on a stacked catalog matrix.
 
         Parameters
@@ -169,6 +175,10 @@ class MixedOptimizer(CatalogOptimizer):
         n_coordinates : int
         force_columns : sequence of int
             ExternalForces columns (identically zero ones mean unforced data).
+        noise_moments : array, shape (n_coordinates, F, F), optional
+            Second moments of the errors of each coordinate's rows (see
+            :meth:`ExplicitOptimizer.fit_catalog`); each sub-optimizer that takes them gets
+            those of its own rows and columns.
 
         Returns
         -------
@@ -182,6 +192,19 @@ class MixedOptimizer(CatalogOptimizer):
         self._check_params()
         explicit, implicit = self._sub_optimizers()
         n = int(n_coordinates)
+        if noise_moments is not None:
+            noise_moments = check_noise_moments(noise_moments, n, theta.shape[1])
+
+        def fit_part(optimizer, coordinates, columns, part_force_columns):
+            # one sub-problem: the rows of `coordinates`, the `columns`, their noise moments
+            extra = {}
+            if noise_moments is not None and accepts_noise_moments(optimizer):
+                extra["noise_moments"] = noise_moments[coordinates][:, columns][:, :, columns]
+            whole = coordinates.all() and len(columns) == n_features
+            part = theta if whole else theta[np.ix_(_rows(coordinates, n_samples), columns)]
+            return optimizer.fit_catalog(part, int(coordinates.sum()), part_force_columns,
+                                         **extra)
+
         n_samples = theta.shape[0] // n
         n_features = theta.shape[1]
         touches = coordinates_touched(balance_coordinates(theta, n, force_columns), n,
@@ -195,22 +218,17 @@ class MixedOptimizer(CatalogOptimizer):
 
         if not forced.any():
             self._set_mode("implicit", np.zeros(n, bool), np.array([], int), np.arange(n_features))
-            self.implicit_optimizer_ = implicit.fit_catalog(theta, n, force_columns)
+            self.implicit_optimizer_ = fit_part(implicit, np.ones(n, bool),
+                                                np.arange(n_features), force_columns)
             self.coef_ = np.asarray(self.implicit_optimizer_.coef_, dtype=float).copy()
             return self
 
         coef = np.zeros(n_features)
-        if activated.all():
-            # The whole catalog is reachable: exactly the explicit optimizer's problem.
-            explicit_cols = np.arange(n_features)
-            self.explicit_optimizer_ = explicit.fit_catalog(theta, n, force_columns)
-        else:
-            explicit_cols = np.flatnonzero(activated_columns)
-            self.explicit_optimizer_ = explicit.fit_catalog(
-                theta[np.ix_(_rows(activated, n_samples), explicit_cols)],
-                int(activated.sum()),
-                np.flatnonzero(np.isin(explicit_cols, force_columns)),
-            )
+        # When the whole catalog is reachable this is exactly the explicit optimizer's problem.
+        explicit_cols = (np.arange(n_features) if activated.all()
+                         else np.flatnonzero(activated_columns))
+        self.explicit_optimizer_ = fit_part(explicit, activated, explicit_cols,
+                                            np.flatnonzero(np.isin(explicit_cols, force_columns)))
         coef[explicit_cols] = self.explicit_optimizer_.coef_
         # Only coordinates that an identified term enters are explained explicitly.
         explained = touches[:, coef != 0].any(axis=1)
@@ -238,9 +256,7 @@ class MixedOptimizer(CatalogOptimizer):
                 "explicitly identified coordinate); nothing left to solve implicitly"
             )
         try:
-            self.implicit_optimizer_ = implicit.fit_catalog(
-                theta[np.ix_(_rows(remaining, n_samples), implicit_cols)], int(remaining.sum()), []
-            )
+            self.implicit_optimizer_ = fit_part(implicit, remaining, implicit_cols, [])
         except NoLawFoundError as error:
             raise NoLawFoundError(
                 f"MixedOptimizer: implicit part on coordinate(s) "
