@@ -465,8 +465,10 @@ def fit_quality(model, arguments) -> dict:
     dict
         ``r2`` (float), ``r2_per_coordinate`` (dict name -> float), ``formulation``,
         ``target`` (``"forces"`` or the name of the dominant term), ``rows`` (regression
-        rows), and ``cv_error`` (held-out relative squared error of the chosen model size
-        when the optimizer selected the sparsity by cross-validation, else ``None``).
+        rows), ``cv_error`` (held-out relative squared error of the chosen model size
+        when the optimizer selected the sparsity by cross-validation, else ``None``) and
+        ``cv_noise_ratio`` (held-out noise ratio of the chosen unforced law when it was
+        selected from noisy data, else ``None``: about 1 when the law leaves only noise).
 
     Raises
     ------
@@ -511,12 +513,13 @@ def fit_quality(model, arguments) -> dict:
     per = {name: r2(r, b) for name, r, b in zip(names, residual.reshape(n, -1),
                                                 target.reshape(n, -1), strict=True)}
     selection = getattr(model, "selection_", None)
-    cv_error = None
-    if selection is not None:
-        cv_error = float(selection.cv_error[selection.size - 1])
+    held_out = {"cv_error": None, "cv_noise_ratio": None}
+    for key, attribute in (("cv_error", "cv_error"), ("cv_noise_ratio", "cv_ratio")):
+        if hasattr(selection, attribute):
+            held_out[key] = float(getattr(selection, attribute)[selection.size - 1])
     return {"r2": r2(residual, target), "r2_per_coordinate": per,
             "formulation": model.formulation_, "target": target_name,
-            "rows": int(theta.shape[0]), "cv_error": cv_error}
+            "rows": int(theta.shape[0]), **held_out}
 
 
 def _quality_lines(quality):
@@ -534,6 +537,10 @@ def _quality_lines(quality):
     if quality["cv_error"] is not None:
         lines.append(f"  held-out relative squared error of the chosen sparsity (5-fold "
                      f"cross-validation): {quality['cv_error']:.3g}")
+    if quality.get("cv_noise_ratio") is not None:
+        lines.append(f"  held-out noise ratio of the chosen law (5-fold cross-validation; about "
+                     f"1 when it leaves only the propagated noise): "
+                     f"{quality['cv_noise_ratio']:.3g}")
     return lines
 
 

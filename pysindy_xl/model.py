@@ -121,8 +121,9 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
     weak_info_ : dict or None
         Weak formulation: test-function half-width (s), test functions per trajectory, and
         the smoother's noise estimate per coordinate (first trajectory).
-    selection_ : SelectionResult or None
-        How the sparsity was chosen, when the optimizer reports it (``threshold="auto"``).
+    selection_ : SelectionResult, LawSelection or None
+        How the sparsity was chosen, when the optimizer reports it (``threshold="auto"``;
+        an unforced law selected from noisy data by its noise ratio).
     inclusion_probability_, coef_interval_ : ndarray or None
         With an :class:`~pysindy_xl.EnsembleOptimizer`: per catalog feature, the fraction of
         the ensemble's fits that include it and the percentile interval of its coefficient,

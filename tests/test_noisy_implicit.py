@@ -135,7 +135,31 @@ def _check_unforced(model, true, system, seed, rel_tol):
 def test_unforced_cart_pole_from_one_percent_noisy_positions(cart_pole_system):
     model, true = _unforced_noisy_fit(cart_pole_system, [1], 0.01, seed=0)
     _check_unforced(model, true, cart_pole_system, 0, rel_tol=0.03)
-    assert model.selection_.rule.startswith("one standard error of the noise ratio")
+    selection = model.selection_
+    assert selection.rule.startswith("one standard error of the noise ratio")
+    # the chosen law leaves the noise and nothing else; one term less leaves much more
+    chosen = selection.cv_ratio[selection.size - 1]
+    assert 0.5 < chosen < 2.0
+    assert selection.cv_ratio[selection.size - 2] > 3 * chosen
+    with pytest.raises(ValueError, match="noise ratio"):
+        model.optimizer_.plot()
+
+
+def test_fit_quality_reports_the_noise_ratio_of_an_unforced_law(cart_pole_system):
+    from pysindy_xl.cli import _quality_lines, fit_quality
+
+    library = paper_catalog(cart_pole_system.coords, [1])
+    t = np.arange(0.0, 15.0, 0.01)
+    run = cart_pole_system.simulate(random_initial_state(cart_pole_system, 3), t)
+    noisy = run["q"] + 0.01 * run["q"].std(0) * np.random.default_rng(3).normal(
+        size=run["q"].shape)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = px.XLSINDy(library).fit(noisy, t)
+    quality = fit_quality(model, {"x": noisy, "t": t})
+    assert quality["cv_error"] is None
+    assert quality["cv_noise_ratio"] == model.selection_.cv_ratio[model.selection_.size - 1]
+    assert any("noise ratio" in line for line in _quality_lines(quality))
 
 
 @pytest.mark.slow

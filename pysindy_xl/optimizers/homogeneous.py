@@ -63,7 +63,9 @@ def _whitened_factor(r_factor, moments):
     ``||R L^-T (L^T xi)||^2 / ||L^T xi||^2``. The moments are regularized relative to their own
     scale, so that a column without noise cannot make them singular."""
     k = moments.shape[0]
-    floor = 1e-10 * max(float(np.trace(moments)) / max(k, 1), 1e-300)
+    floor = 1e-10 * float(np.trace(moments)) / max(k, 1)
+    if not floor > 0:  # no noise at all on these columns: a floor far below the signal's
+        floor = max(1e-30 * float(np.sum(r_factor**2)) / max(k, 1), 1e-300)
     lower = np.linalg.cholesky(moments + floor * np.eye(k))
     whitened = scipy.linalg.solve_triangular(lower, r_factor.T, lower=True,
                                              check_finite=False).T
@@ -434,6 +436,10 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     scale[scale == 0] = 1.0
     theta = theta / scale
     moments = moments / np.outer(scale, scale)[None]
+    # a column without noise of its own (a known force) still gets a floor far below the
+    # others' noise, so that the ratios stay finite and comparable
+    floor = 1e-10 * np.mean(np.diagonal(moments, axis1=1, axis2=2)) / len(moments)
+    moments = moments + floor * np.eye(theta.shape[1])[None]
     total = moments.sum(axis=0)
     r_factor = triangular_factor(theta)
     order = law_elimination_path(r_factor, total)

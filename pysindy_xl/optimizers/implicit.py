@@ -146,6 +146,15 @@ class ImplicitOptimizer(CatalogOptimizer):
     terms, a residual within ``max_residual_ratio`` of the best law's) and combines the laws
     with disjoint supports into ``coef_``.
 
+    Given the noise moments of the columns (:meth:`fit_catalog`; the weak form on positions
+    passes them), the laws are instead selected by their held-out *noise ratio*
+    (:mod:`~pysindy_xl.optimizers.homogeneous`): problem (1) minimizes the plain residual,
+    which on noisy columns prefers laws whose columns are quiet to laws that hold. A law
+    must then cover every coordinate it can; a further law is sought on the coordinates left
+    unexplained (uncoupled subsystems) and kept when its ratio is within
+    ``max_residual_ratio`` of the first's. The SINDy-PI attributes (``solution_matrix_``,
+    ``groups_``, ``alpha_``, ...) are not set in that mode.
+
     Parameters
     ----------
     alpha : float or "auto", default "auto"
@@ -222,6 +231,15 @@ class ImplicitOptimizer(CatalogOptimizer):
         Every column converged, or (early stopping) every column of the laws did and the
         laws were stable.
     column_converged_ : ndarray of bool, shape (F,)
+    selection_method_ : {"sindy-pi", "noise ratio"}
+        How the laws were found.
+    selection_ : LawSelection
+        Noise-ratio mode: how the first law's support was chosen (held-out ratio per size).
+    law_selections_ : list of LawSelection
+        Noise-ratio mode: the same for every law.
+    law_noise_ratios_ : ndarray, shape (n_laws,)
+        Noise-ratio mode: each law's noise ratio on all the rows (about 1 when it holds to
+        the noise).
 
     Examples
     --------
@@ -476,6 +494,11 @@ class ImplicitOptimizer(CatalogOptimizer):
         from sklearn.utils.validation import check_is_fitted
 
         check_is_fitted(self, "coef_")
+        if self.selection_method_ != "sindy-pi":
+            raise ValueError(
+                "plot: the laws were selected by noise ratio (noise moments were given), "
+                "there is no SINDy-PI solution matrix to draw; see selection_ instead"
+            )
         if axes is None:
             _, axes = plt.subplots(1, 3, figsize=(15, 4.5), constrained_layout=True)
         x = np.abs(self.normalized_solution_matrix_)
