@@ -171,3 +171,18 @@ def test_unforced_noise_cells(name, level, seed, request):
     angles = {"cart_pole": [1], "double_pendulum": [0, 1]}[name]
     model, true = _unforced_noisy_fit(system, angles, level, seed)
     _check_unforced(model, true, system, seed, rel_tol=0.1)
+
+
+def test_mixed_optimizer_hands_the_noise_moments_to_its_implicit_part(cart_pole_system):
+    library = paper_catalog(cart_pole_system.coords, [1])
+    t = np.arange(0.0, 15.0, 0.01)
+    run = cart_pole_system.simulate(random_initial_state(cart_pole_system, 4), t)
+    noisy = run["q"] + 0.01 * run["q"].std(0) * np.random.default_rng(4).normal(
+        size=run["q"].shape)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        implicit = px.XLSINDy(library).fit(noisy, t)
+        mixed = px.XLSINDy(library, px.MixedOptimizer()).fit(noisy, t)
+    assert mixed.optimizer_.mode_ == "implicit"
+    assert mixed.optimizer_.implicit_optimizer_.selection_method_ == "noise ratio"
+    np.testing.assert_allclose(mixed.coefficients(), implicit.coefficients(), rtol=1e-10)

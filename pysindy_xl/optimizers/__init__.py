@@ -16,6 +16,7 @@ from .explicit import (
     hard_threshold_regression,
     proximal_gradient_lasso,
 )
+from .homogeneous import LawSelection, select_law
 from .implicit import ImplicitOptimizer, NoLawFoundError, homothetic_groups
 from .mixed import MixedOptimizer, activation_closure
 from .selection import SelectionResult, refine_by_swaps, select_support
@@ -38,4 +39,6 @@ __all__ = [
     "select_support",
     "refine_by_swaps",
     "SelectionResult",
+    "select_law",
+    "LawSelection",
 ]

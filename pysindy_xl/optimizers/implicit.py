@@ -148,7 +148,7 @@ class ImplicitOptimizer(CatalogOptimizer):
 
     Given the noise moments of the columns (:meth:`fit_catalog`; the weak form on positions
     passes them), the laws are instead selected by their held-out *noise ratio*
-    (:mod:`~pysindy_xl.optimizers.homogeneous`): problem (1) minimizes the plain residual,
+    (:func:`~pysindy_xl.optimizers.select_law`): problem (1) minimizes the plain residual,
     which on noisy columns prefers laws whose columns are quiet to laws that hold. A law
     must then cover every coordinate it can; a further law is sought on the coordinates left
     unexplained (uncoupled subsystems) and kept when its ratio is within
@@ -337,7 +337,7 @@ class ImplicitOptimizer(CatalogOptimizer):
             ``E[E_c^T E_c]`` of the errors ``E_c`` in each coordinate's rows of ``theta`` (the
             weak form of :class:`~pysindy_xl.XLSINDy` passes the propagated position noise).
             With them, the laws are selected by their held-out noise ratio
-            (:func:`~pysindy_xl.optimizers.homogeneous.select_law`) instead of problem (1):
+            (:func:`~pysindy_xl.optimizers.select_law`) instead of problem (1):
             the least-squares residual that problem (1) minimizes prefers laws whose columns
             are quiet over laws that hold. ``selection_method_`` says which was used.
 
