@@ -13,7 +13,13 @@ import warnings
 
 import numpy as np
 
-__all__ = ["IdentificationWarning", "mass_matrices", "orient_free_laws", "mass_matrix_report"]
+__all__ = [
+    "IdentificationWarning",
+    "column_mass_matrices",
+    "mass_matrices",
+    "orient_free_laws",
+    "mass_matrix_report",
+]
 
 
 class IdentificationWarning(UserWarning):
@@ -50,6 +56,48 @@ def mass_matrices(dynamics, states, max_states: int = 2000):
     mass, _ = dynamics.mass_and_forcing(rows)
     mass = (mass + np.swapaxes(mass, 1, 2)) / 2
     return mass, np.linalg.eigvalsh(mass)
+
+
+def column_mass_matrices(library, states, max_states: int = 200) -> np.ndarray:
+    """Each catalog column's contribution to the mass matrix, on (up to ``max_states``) states.
+
+    Every column's Euler-Lagrange expression is affine in the accelerations,
+    ``E_j = M_j(q, qd) qdd + rest``, so ``M_j[:, k]`` is the column evaluated with
+    ``qdd = e_k`` minus the column with ``qdd = 0``: ``n + 1`` evaluations of the library, no
+    symbolic work. A coefficient vector ``xi`` has the mass matrix ``sum_j xi_j M_j``.
+
+    Parameters
+    ----------
+    library : fitted SymbolicLibrary
+    states : array, shape (N, 4n + 1)
+        Stacked variables (:func:`~pysindy_xl.stack_variables`); accelerations and forces
+        are ignored.
+    max_states : int, default 200
+
+    Returns
+    -------
+    ndarray, shape (S, F, n, n)
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> library = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit()
+    >>> column_mass_matrices(library, np.zeros((3, 5)))[0, :, 0, 0]   # d2/dqd2 of qd^2: 2
+    array([2., 0.])
+    """
+    n = library.coords.n
+    rows = np.asarray(states, dtype=float)[np.unique(np.linspace(
+        0, len(states) - 1, min(len(states), max_states)).astype(int))].copy()
+    rows[:, 2 * n:4 * n] = 0.0  # no acceleration, no force
+    base = library.transform(rows).reshape(n, len(rows), -1)
+    mass = np.empty((len(rows), base.shape[-1], n, n))
+    for k in range(n):
+        unit = rows.copy()
+        unit[:, 2 * n + k] = 1.0
+        mass[:, :, :, k] = np.moveaxis(
+            library.transform(unit).reshape(n, len(rows), -1) - base, 0, -1)
+    return mass
 
 
 def orient_free_laws(coef, symbolic_matrix, force_columns, mass):

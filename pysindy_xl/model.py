@@ -15,6 +15,7 @@ from ._inputs import check_array, sample_times, trajectory_arrays
 from ._validation import check_instance, check_option
 from .diagnostics import (
     IdentificationWarning,
+    column_mass_matrices,
     mass_matrices,
     mass_matrix_report,
     orient_free_laws,
@@ -26,7 +27,7 @@ from .feature_library import (
     stack_variables,
 )
 from .optimizers import ExplicitOptimizer, independent_columns
-from .optimizers._base import accepts_noise_moments
+from .optimizers._base import accepts_fit_parameter, accepts_noise_moments
 from .weak import BumpTestFunctions, WhittakerSmoother, weak_regression
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
@@ -291,6 +292,8 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         extra = {}
         if noise_moments is not None and accepts_noise_moments(optimizer):
             extra["noise_moments"] = noise_moments[:, keep][:, :, keep]
+            if accepts_fit_parameter(optimizer, "mass_matrices"):
+                extra["mass_matrices"] = column_mass_matrices(library, z)[:, keep]
         optimizer.fit_catalog(theta[:, keep], n, force_columns, **extra)
         coef = np.zeros(theta.shape[1])
         coef[keep] = optimizer.coef_

@@ -35,7 +35,9 @@ from sklearn.base import BaseEstimator
 from .._validation import check_indices, check_numeric_array, check_option
 
 __all__ = [
+    "accepts_fit_parameter",
     "accepts_noise_moments",
+    "check_mass_matrices",
     "check_noise_moments",
     "CatalogOptimizer",
     "balance_coordinates",
@@ -86,7 +88,22 @@ def check_noise_moments(noise_moments, n_coordinates: int, n_features: int) -> n
 def accepts_noise_moments(optimizer) -> bool:
     """Whether ``optimizer.fit_catalog`` takes ``noise_moments`` (as scikit-learn's
     ``has_fit_parameter`` does for ``sample_weight``)."""
-    return "noise_moments" in inspect.signature(optimizer.fit_catalog).parameters
+    return accepts_fit_parameter(optimizer, "noise_moments")
+
+
+def accepts_fit_parameter(optimizer, name: str) -> bool:
+    """Whether ``optimizer.fit_catalog`` takes the keyword ``name``."""
+    return name in inspect.signature(optimizer.fit_catalog).parameters
+
+
+def check_mass_matrices(mass_matrices, n_coordinates: int, n_features: int) -> np.ndarray:
+    """Validate the ``mass_matrices`` of ``fit_catalog``: finite, shape (S, F, n, n)."""
+    mass = check_numeric_array(mass_matrices, "mass_matrices", min_samples=0)
+    if mass.ndim != 4 or mass.shape[1:] != (n_features, n_coordinates, n_coordinates) \
+            or mass.shape[0] == 0:
+        raise ValueError(f"mass_matrices: expected shape (S, {n_features}, {n_coordinates}, "
+                         f"{n_coordinates}) with S >= 1, got {mass.shape}")
+    return mass
 
 
 def _block_rms(theta, n_blocks: int) -> np.ndarray:

@@ -44,12 +44,13 @@ import dataclasses
 import numpy as np
 import scipy.linalg
 
-from ._base import coordinates_touched
 from ._sparse import triangular_factor
 from .selection import _fold_labels, _fold_summary
 
 __all__ = [
     "LawSelection",
+    "definite_mass",
+    "explained_coordinates",
     "law_elimination_path",
     "law_forward_path",
     "noise_ratio_law",
@@ -116,6 +117,67 @@ def noise_ratio_law(r_factor, moments) -> tuple[float, np.ndarray]:
     values, vectors = _pencil(np.asarray(r_factor, float), np.asarray(moments, float))
     law = vectors[:, 0] / np.linalg.norm(vectors[:, 0])
     return float(values[0]), law * np.sign(law[np.argmax(np.abs(law))])
+
+
+def explained_coordinates(theta, law, n_blocks: int, min_share: float = 1e-3) -> np.ndarray:
+    """Coordinates whose equation a law explains: the squared contributions of its terms in
+    that coordinate's rows carry at least ``min_share`` of the largest coordinate's.
+
+    A term that merely touches a coordinate with a negligible coefficient does not explain
+    it. ``theta`` must have balanced coordinate blocks
+    (:func:`~pysindy_xl.optimizers.coordinate_weights`), so that the shares compare
+    equations, not units.
+
+    Parameters
+    ----------
+    theta : array, shape (n_blocks * N, k)
+        Columns of the law's support.
+    law : array, shape (k,)
+    n_blocks : int
+    min_share : float, default 1e-3
+
+    Returns
+    -------
+    ndarray of bool, shape (n_blocks,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> theta = np.array([[1.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.0, 1.0]])
+    >>> explained_coordinates(theta, np.array([1.0, 1e-4]), 2).tolist()
+    [True, False]
+    """
+    contributions = (np.asarray(theta, dtype=float) * law).reshape(n_blocks, -1, len(law))
+    shares = np.sum(contributions**2, axis=(1, 2))
+    return shares >= min_share * max(float(shares.max(initial=0.0)), 1e-300)
+
+
+def definite_mass(mass_matrices, law) -> bool:
+    """Whether the law's mass matrix ``sum_j law_j M_j`` is definite (of either sign: a law
+    has no sign) on every state, judged unit free as
+    :func:`~pysindy_xl.diagnostics.mass_matrix_report` does.
+
+    Parameters
+    ----------
+    mass_matrices : array, shape (S, k, n, n)
+    law : array, shape (k,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> columns = np.array([[[[1.0, 0.0], [0.0, 0.0]], [[0.0, 0.0], [0.0, 1.0]]]])
+    >>> definite_mass(columns, np.array([-2.0, -1.0])), definite_mass(columns, [1.0, 0.0])
+    (True, False)
+    """
+    mass = np.einsum("sfij,f->sij", np.asarray(mass_matrices, dtype=float), law)
+    mass = (mass + np.swapaxes(mass, 1, 2)) / 2
+    diagonal = np.max(np.abs(np.diagonal(mass, axis1=1, axis2=2)), axis=0, initial=0.0)
+    unit = 1.0 / np.sqrt(np.where(diagonal > 0, diagonal, 1.0))
+    eigenvalues = np.linalg.eigvalsh(mass * unit[None, :, None] * unit[None, None, :])
+    if np.median(np.trace(mass, axis1=1, axis2=2)) < 0:
+        eigenvalues = -eigenvalues
+    scale = max(float(np.abs(eigenvalues).max(initial=0.0)), 1e-300)
+    return bool(np.all(eigenvalues.min(axis=1) > 1e-9 * scale))
 
 
 def _constrained_minima(values, vectors, n_bisections: int = 80) -> np.ndarray:
@@ -388,7 +450,7 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
 
 
 def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
-               resolution: float = 1e-8, swaps: bool = True
+               resolution: float = 1e-8, swaps: bool = True, mass_matrices=None
                ) -> tuple[np.ndarray, float, LawSelection]:
     """Sparsest homogeneous law of noisy columns, by held-out noise ratio.
 
@@ -410,6 +472,10 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         clean data the moments are tiny and extra terms fit quadrature errors (as for
         :func:`~pysindy_xl.optimizers.selection.select_support`).
     swaps : bool, default True
+    mass_matrices : array, shape (S, F, n_blocks, n_blocks), optional
+        Each column's contribution to the mass matrix on sample states
+        (:func:`~pysindy_xl.diagnostics.column_mass_matrices`): laws whose mass matrix is not
+        definite there are not candidates (unless no law is definite).
 
     Returns
     -------
@@ -464,13 +530,24 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
                     seen.add(frozenset(support.tolist()))
                     refined.append(support)
         candidates += _scored(theta, moments, refined, "swap-refined", n_blocks, n_folds)
-    # A law that leaves a coordinate out says nothing about it, and its ratio is measured on
-    # the other rows only: it is not comparable. Such laws can hold exactly (the unforced
-    # cart-pole's pendulum row alone, the Routhian of the cyclic cart coordinate), so they are
-    # candidates only when no law covers every coordinate (uncoupled subsystems).
-    touches = coordinates_touched(theta, n_blocks)
-    covering = [c for c in candidates if touches[:, c.support].any(axis=1).all()]
-    candidates = covering or candidates
+    # Admissible laws only, when there are any:
+    # - a law that leaves a coordinate out (or enters it with negligible terms) says nothing
+    #   about it, and its ratio is measured on the other rows only. Such laws can hold
+    #   exactly (the unforced cart-pole's pendulum row alone: the Routhian of the cyclic
+    #   cart coordinate); without any law explaining every coordinate (uncoupled subsystems)
+    #   the coordinates are left to further laws;
+    # - with the columns' mass matrices, a law whose mass matrix is not definite on the
+    #   states does not define motion (the unforced cart-pole's momentum balance written as
+    #   a Lagrangian is sparse, holds to the friction, and has det M = 0).
+    def admissible(candidate):
+        support = candidate.support
+        law = noise_ratio_law(theta[:, support], total[np.ix_(support, support)])[1]
+        if not explained_coordinates(theta[:, support], law, n_blocks).all():
+            return False
+        return mass_matrices is None or definite_mass(mass_matrices[:, support],
+                                                      law / scale[support])
+
+    candidates = [c for c in candidates if admissible(c)] or candidates
     best = min(candidates, key=lambda c: c.ratio)
     # one standard error, or the resolution on the relative residual (clean data: the
     # moments are tiny, the ratios large, and extra terms that fit quadrature errors must not

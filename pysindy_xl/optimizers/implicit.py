@@ -65,13 +65,14 @@ from .._validation import check_option
 from ._base import (
     CatalogOptimizer,
     check_catalog_problem,
+    check_mass_matrices,
     check_noise_moments,
     coordinate_weights,
     coordinates_touched,
     scale_blocks,
 )
 from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
-from .homogeneous import select_law
+from .homogeneous import explained_coordinates, select_law
 
 __all__ = ["ImplicitOptimizer", "NoLawFoundError", "coordinates_touched", "homothetic_groups"]
 
@@ -319,7 +320,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         return self._fit(theta, 1, np.array([], dtype=int), None)
 
     def fit_catalog(self, theta, n_coordinates, force_columns, reference_columns=None,
-                    noise_moments=None):
+                    noise_moments=None, mass_matrices=None):
         """Implicit regression on a stacked catalog matrix.
 
         Parameters
@@ -340,6 +341,11 @@ class ImplicitOptimizer(CatalogOptimizer):
             (:func:`~pysindy_xl.optimizers.select_law`) instead of problem (1):
             the least-squares residual that problem (1) minimizes prefers laws whose columns
             are quiet over laws that hold. ``selection_method_`` says which was used.
+        mass_matrices : array, shape (S, F, n_coordinates, n_coordinates), optional
+            Each column's contribution to the mass matrix on sample states
+            (:func:`~pysindy_xl.diagnostics.column_mass_matrices`; :class:`~pysindy_xl.XLSINDy`
+            passes them). With ``noise_moments``, laws whose mass matrix is not definite
+            there are not selected, unless no candidate law is definite.
 
         Returns
         -------
@@ -360,8 +366,11 @@ class ImplicitOptimizer(CatalogOptimizer):
             self._fit(theta, int(n_coordinates), force_columns, reference_columns)
         else:
             moments = check_noise_moments(noise_moments, int(n_coordinates), theta.shape[1])
+            if mass_matrices is not None:
+                mass_matrices = check_mass_matrices(mass_matrices, int(n_coordinates),
+                                                    theta.shape[1])
             self._fit_noisy(theta, int(n_coordinates), force_columns, reference_columns,
-                            moments * (weights**2)[:, None, None])
+                            moments * (weights**2)[:, None, None], mass_matrices)
         touched = coordinates_touched(theta[:, self.coef_ != 0], int(n_coordinates))
         unexplained = np.flatnonzero(~touched.any(axis=1))
         if unexplained.size:
@@ -373,7 +382,8 @@ class ImplicitOptimizer(CatalogOptimizer):
         return self
 
     # ------------------------------------------------------------------ core
-    def _fit_noisy(self, theta, n_coordinates, force_columns, reference_columns, moments):
+    def _fit_noisy(self, theta, n_coordinates, force_columns, reference_columns, moments,
+                   mass_matrices):
         """Laws selected by held-out noise ratio, one per group of coordinates they explain."""
         self._check_params()
         self.selection_method_ = "noise ratio"
@@ -392,11 +402,14 @@ class ImplicitOptimizer(CatalogOptimizer):
             if columns.size < 2:
                 break
             rows = np.repeat(~explained, n_samples)
+            mass = None
+            if mass_matrices is not None:
+                mass = mass_matrices[:, columns][:, :, ~explained][:, :, :, ~explained]
             try:
                 law, ratio, selection = select_law(
                     theta[np.ix_(rows, columns)],
                     moments[~explained][:, columns][:, :, columns],
-                    n_blocks=int(np.sum(~explained)))
+                    n_blocks=int(np.sum(~explained)), mass_matrices=mass)
             except ValueError:
                 break
             if laws and ratio > self.max_residual_ratio * max(ratios[0], 1e-12):
@@ -406,7 +419,7 @@ class ImplicitOptimizer(CatalogOptimizer):
             laws.append(full)
             ratios.append(ratio)
             selections.append(selection)
-            explained |= touches[:, full != 0].any(axis=1)
+            explained |= explained_coordinates(theta, full, n_coordinates)
         if not laws:
             raise NoLawFoundError(
                 "ImplicitOptimizer: no law could be selected from the noisy columns (too few "

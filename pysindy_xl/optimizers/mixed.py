@@ -33,9 +33,11 @@ from sklearn.base import clone
 from .._validation import check_instance, check_option
 from ._base import (
     CatalogOptimizer,
+    accepts_fit_parameter,
     accepts_noise_moments,
     balance_coordinates,
     check_catalog_problem,
+    check_mass_matrices,
     check_noise_moments,
 )
 from .implicit import ImplicitOptimizer, NoLawFoundError, coordinates_touched
@@ -165,7 +167,8 @@ class MixedOptimizer(CatalogOptimizer):
             "call fit_catalog(theta, n_coordinates, force_columns)"
         )
 
-    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None):
+    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None,
+                    mass_matrices=None):
         """Mixed explicit/implicit regression on a stacked catalog matrix.
 
         Parameters
@@ -179,6 +182,9 @@ class MixedOptimizer(CatalogOptimizer):
             Second moments of the errors of each coordinate's rows (see
             :meth:`ExplicitOptimizer.fit_catalog`); each sub-optimizer that takes them gets
             those of its own rows and columns.
+        mass_matrices : array, shape (S, F, n_coordinates, n_coordinates), optional
+            Each column's contribution to the mass matrix (see
+            :meth:`ImplicitOptimizer.fit_catalog`), handed on the same way.
 
         Returns
         -------
@@ -194,12 +200,17 @@ class MixedOptimizer(CatalogOptimizer):
         n = int(n_coordinates)
         if noise_moments is not None:
             noise_moments = check_noise_moments(noise_moments, n, theta.shape[1])
+        if mass_matrices is not None:
+            mass_matrices = check_mass_matrices(mass_matrices, n, theta.shape[1])
 
         def fit_part(optimizer, coordinates, columns, part_force_columns):
             # one sub-problem: the rows of `coordinates`, the `columns`, their noise moments
             extra = {}
             if noise_moments is not None and accepts_noise_moments(optimizer):
                 extra["noise_moments"] = noise_moments[coordinates][:, columns][:, :, columns]
+            if mass_matrices is not None and accepts_fit_parameter(optimizer, "mass_matrices"):
+                extra["mass_matrices"] = (
+                    mass_matrices[:, columns][:, :, coordinates][:, :, :, coordinates])
             whole = coordinates.all() and len(columns) == n_features
             part = theta if whole else theta[np.ix_(_rows(coordinates, n_samples), columns)]
             return optimizer.fit_catalog(part, int(coordinates.sum()), part_force_columns,
