@@ -156,7 +156,9 @@ def run(name, level, seed, method):
                     true_inclusion=float(probability[support].min()),
                     false_inclusion=float(probability[~support].max(initial=0.0)),
                     covered=bool(np.all((low[support] <= true[support])
-                                        & (true[support] <= high[support]))))
+                                        & (true[support] <= high[support]))),
+                    interval_width=float(np.median((high[support] - low[support])
+                                                   / np.abs(true[support]))))
         record["fit_s"] = time.perf_counter() - start
         record["valid"] = _validates(lambda x0, tt, u: model.simulate(x0, tt, u=u), system,
                                      500 + seed, method)
@@ -185,15 +187,17 @@ def summarize(records) -> str:
     if ensemble:
         rows += ["", "Ensemble uncertainty (per seed: every true term with inclusion >= 0.9, "
                  "every false term <= 0.2, every true coefficient inside its 95 % interval)",
-                 "", "| system | noise | true >= 0.9 | false <= 0.2 | covered |",
-                 "|---|---|---|---|---|"]
+                 "", "| system | noise | true >= 0.9 | false <= 0.2 | covered | "
+                 "median interval width (relative) |", "|---|---|---|---|---|---|"]
         for system, level in sorted({(r["system"], r["level"]) for r in ensemble}):
             cell = [r for r in ensemble if (r["system"], r["level"]) == (system, level)]
             counts = [sum(r["true_inclusion"] >= 0.9 for r in cell),
                       sum(r["false_inclusion"] <= 0.2 for r in cell),
                       sum(r["covered"] for r in cell)]
+            widths = [r["interval_width"] for r in cell if "interval_width" in r]
+            width = f"{np.median(widths):.2%}" if widths else "-"
             rows.append(f"| {system} | {level:.1%} | "
-                        + " | ".join(f"{c}/{len(cell)}" for c in counts) + " |")
+                        + " | ".join(f"{c}/{len(cell)}" for c in counts) + f" | {width} |")
     return "\n".join(rows)
 
 

@@ -127,7 +127,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         an unforced law selected from noisy data by its noise ratio).
     inclusion_probability_, coef_interval_ : ndarray or None
         With an :class:`~pysindy_xl.EnsembleOptimizer`: per catalog feature, the fraction of
-        the ensemble's fits that include it and the percentile interval of its coefficient,
+        the ensemble's fits that include it and the interval of its coefficient,
         shapes (F,) and (2, F); ``print(uncertainty=True)`` shows them.
     mass_matrix_check_ : dict or None
         The identified mass matrix on (up to 2,000 of) the training states: fraction where it

@@ -9,7 +9,7 @@ cross-validated selection inside each fit never sees a row twice:
 .. math:: \\xi^{(b)} = \\text{optimizer}(\\Theta_{R_b}), \\quad b = 1..B,
 
 with ``R_b`` a random ``fraction`` of the chunks. The ensemble reports, per catalog term, the
-inclusion probability ``P(xi_j != 0)`` and percentile intervals of ``xi_j``, in the
+inclusion probability ``P(xi_j != 0)`` and intervals of ``xi_j`` (from the fits' spread), in the
 coefficients' own (physical) units, and its model keeps the terms included in at least
 ``inclusion`` of the fits with their median coefficient.
 """
@@ -17,6 +17,7 @@ coefficients' own (physical) units, and its model keeps the terms included in at
 from __future__ import annotations
 
 import numpy as np
+import scipy.stats
 from sklearn.base import clone
 
 from .._validation import check_instance, check_option
@@ -47,7 +48,7 @@ class EnsembleOptimizer(CatalogOptimizer):
     inclusion : float, default 0.5
         Inclusion probability from which a term enters the ensemble's model.
     confidence : float, default 0.95
-        Coverage of the percentile intervals.
+        Coverage of the coefficient intervals.
     random_state : int or None, default 0
 
     Attributes
@@ -58,11 +59,11 @@ class EnsembleOptimizer(CatalogOptimizer):
         Coefficients of every fit (failed fits are left out).
     inclusion_probability_ : ndarray, shape (F,)
     coef_interval_ : ndarray, shape (2, F)
-        ``confidence`` interval of each coefficient: the percentiles over the fits (zeros
-        included) around their median, widened by ``sqrt(f / (1 - f))`` for the subsample
-        fraction ``f`` (delete-d jackknife), since a subsample estimate spreads less around
-        the full-data one than the full-data estimate spreads around the truth. Smoothing
-        bias is not covered.
+        ``confidence`` interval of each coefficient: the median over the fits (zeros included)
+        plus or minus Student's quantile times their standard deviation, widened by
+        ``sqrt(f / (1 - f))`` for the subsample fraction ``f`` (delete-d jackknife), since a
+        subsample estimate spreads less around the full-data one than the full-data estimate
+        spreads around the truth. Smoothing bias is not covered.
     n_failed_ : int
         Fits that raised (e.g. no law found on a subsample).
 
@@ -154,13 +155,19 @@ class EnsembleOptimizer(CatalogOptimizer):
             coef[j] = np.median(samples[samples[:, j] != 0, j])
         self.coef_ = coef
         # A subsample of a fraction f of the data spreads around the full-data estimate by
-        # sqrt((1 - f) / f) times that estimate's own sampling spread (delete-d jackknife):
-        # the percentile deviations are scaled back up by sqrt(f / (1 - f)).
-        tail = 50 * (1 - self.confidence)
-        percentiles = np.percentile(samples, [tail, 100 - tail], axis=0)
+        # sqrt((1 - f) / f) times that estimate's own sampling spread (delete-d jackknife),
+        # so the fits' standard deviation is scaled back up by sqrt(f / (1 - f)). Student's
+        # quantile of that spread (it is estimated from the fits), not the fits' own
+        # percentiles: the 2.5 and 97.5 percentiles of 20 fits are those of the two most
+        # extreme ones, far noisier than a spread measured with all of them (and too narrow
+        # on average).
         center = np.median(samples, axis=0)
-        scale = np.sqrt(n_keep / max(n_chunks - n_keep, 1))
-        self.coef_interval_ = center + scale * (percentiles - center)
+        half_width = np.zeros_like(center)
+        if len(samples) > 1:
+            quantile = scipy.stats.t.ppf(0.5 + self.confidence / 2, df=len(samples) - 1)
+            half_width = (quantile * np.sqrt(n_keep / max(n_chunks - n_keep, 1))
+                          * samples.std(axis=0, ddof=1))
+        self.coef_interval_ = np.array([center - half_width, center + half_width])
         return self
 
     def plot(self, feature_names=None, axes=None):
