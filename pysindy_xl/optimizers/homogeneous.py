@@ -180,7 +180,7 @@ def definite_mass(mass_matrices, law) -> bool:
     return bool(np.all(eigenvalues.min(axis=1) > 1e-9 * scale))
 
 
-def _constrained_minima(values, vectors, n_bisections: int = 80) -> np.ndarray:
+def _constrained_minima(values, vectors, n_bisections: int = 48) -> np.ndarray:
     """Smallest eigenvalue of the pencil with ``xi_j = 0``, for every ``j`` at once.
 
     Parameters
@@ -295,7 +295,7 @@ def law_forward_path(r_factor, moments, max_size=None) -> np.ndarray:
 
 
 def _bordered_minima(values, cross_gram, cross_moments, gram_diag, moments_diag,
-                     n_bisections: int = 80) -> np.ndarray:
+                     n_bisections: int = 48) -> np.ndarray:
     """Smallest eigenvalue of the pencil with one more column, for every candidate at once.
 
     With the pencil's eigenpairs ``(lambda, V)`` on the current columns, adding column ``i``
@@ -420,9 +420,19 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
 
     Returns two arrays of shape (n_folds, len(supports)); the relative residual is
     ``||Theta xi||^2 / sum_j ||Theta_j xi_j||^2`` on the held-out rows (inf where a support
-    cannot be fitted)."""
+    cannot be fitted).
+
+    The supports of a path are prefixes of one column order: with the columns in that order,
+    each is a leading block of the triangular factors, so a fold costs one QR and small
+    decompositions (not one decomposition of all the rows' factor per support)."""
     ratios = np.full((n_folds, len(supports)), np.inf)
     relative = np.full((n_folds, len(supports)), np.inf)
+    longest = np.asarray(max(supports, key=len))
+    nested = all(np.array_equal(s, longest[:len(s)]) for s in supports)
+    if nested:
+        theta = theta[:, longest]
+        moments = moments[:, longest][:, :, longest]
+        supports = [np.arange(len(s)) for s in supports]
     labels = _fold_labels(theta.shape[0], n_blocks, n_folds)
     blocks = np.arange(theta.shape[0]) // (theta.shape[0] // n_blocks)
     for fold in range(n_folds):
@@ -438,11 +448,14 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
         for m, support in enumerate(supports):
             if len(support) < 2 or len(support) > r_train.shape[0]:
                 continue
-            _, law = noise_ratio_law(r_train[:, support],
+            # leading columns of a triangular factor: its leading rows are all that is needed
+            rows = slice(0, len(support)) if nested else slice(None)
+            _, law = noise_ratio_law(r_train[rows, support],
                                      train_moments[np.ix_(support, support)])
             noise = law @ test_moments[np.ix_(support, support)] @ law
-            residual = np.sum((r_test[:, support] @ law) ** 2)
-            signal = np.sum((r_test[:, support] * law) ** 2)
+            test_factor = r_test[:, support]
+            residual = np.sum((test_factor @ law) ** 2)
+            signal = np.sum((test_factor * law) ** 2)
             if noise > 0 and signal > 0:
                 ratios[fold, m] = residual / noise
                 relative[fold, m] = residual / signal
