@@ -145,14 +145,19 @@ def test_unforced_cart_pole_from_one_percent_noisy_positions(cart_pole_system):
         model.optimizer_.plot()
 
 
+def _one_noisy_unforced_run(system, seed, level=0.01):
+    """The cart-pole catalog and one unforced 15 s run with noisy positions."""
+    t = np.arange(0.0, 15.0, 0.01)
+    run = system.simulate(random_initial_state(system, seed), t)
+    noisy = run["q"] + level * run["q"].std(0) * np.random.default_rng(seed).normal(
+        size=run["q"].shape)
+    return paper_catalog(system.coords, [1]), t, noisy
+
+
 def test_fit_quality_reports_the_noise_ratio_of_an_unforced_law(cart_pole_system):
     from pysindy_xl.cli import _quality_lines, fit_quality
 
-    library = paper_catalog(cart_pole_system.coords, [1])
-    t = np.arange(0.0, 15.0, 0.01)
-    run = cart_pole_system.simulate(random_initial_state(cart_pole_system, 3), t)
-    noisy = run["q"] + 0.01 * run["q"].std(0) * np.random.default_rng(3).normal(
-        size=run["q"].shape)
+    library, t, noisy = _one_noisy_unforced_run(cart_pole_system, seed=3)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         model = px.XLSINDy(library).fit(noisy, t)
@@ -174,11 +179,7 @@ def test_unforced_noise_cells(name, level, seed, request):
 
 
 def test_mixed_optimizer_hands_the_noise_moments_to_its_implicit_part(cart_pole_system):
-    library = paper_catalog(cart_pole_system.coords, [1])
-    t = np.arange(0.0, 15.0, 0.01)
-    run = cart_pole_system.simulate(random_initial_state(cart_pole_system, 4), t)
-    noisy = run["q"] + 0.01 * run["q"].std(0) * np.random.default_rng(4).normal(
-        size=run["q"].shape)
+    library, t, noisy = _one_noisy_unforced_run(cart_pole_system, seed=4)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         implicit = px.XLSINDy(library).fit(noisy, t)
