@@ -13,13 +13,13 @@ from ground_truth import random_initial_state
 from test_implicit import paper_catalog
 
 import pysindy_xl as px
-from pysindy_xl.optimizers.homogeneous import (
+from pysindy_xl.optimizers.homogeneous import select_law
+from pysindy_xl.optimizers.noise_ratio import (
     _bordered_minima,
     _constrained_minima,
     _pencil,
     law_elimination_path,
     refine_law_by_swaps,
-    select_law,
 )
 
 

@@ -72,7 +72,7 @@ from ._base import (
     scale_blocks,
 )
 from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
-from .homogeneous import explained_coordinates, select_law
+from .homogeneous import select_laws
 
 __all__ = ["ImplicitOptimizer", "NoLawFoundError", "coordinates_touched", "homothetic_groups"]
 
@@ -387,39 +387,10 @@ class ImplicitOptimizer(CatalogOptimizer):
         """Laws selected by held-out noise ratio, one per group of coordinates they explain."""
         self._check_params()
         self.selection_method_ = "noise ratio"
-        n_features = theta.shape[1]
-        norms, nonzero = column_norms(theta)
+        norms = column_norms(theta)[0]
         self.column_norms_ = norms
-        n_samples = theta.shape[0] // n_coordinates
-        touches = coordinates_touched(theta, n_coordinates)
-        laws, ratios, selections = [], [], []
-        explained = np.zeros(n_coordinates, dtype=bool)
-        while not explained.all():
-            # a further law may only use columns that leave the explained coordinates alone
-            # (an uncoupled subsystem); its rows are those of the coordinates left
-            columns = np.flatnonzero(nonzero & ~touches[explained].any(axis=0)
-                                     & touches[~explained].any(axis=0))
-            if columns.size < 2:
-                break
-            rows = np.repeat(~explained, n_samples)
-            mass = None
-            if mass_matrices is not None:
-                mass = mass_matrices[:, columns][:, :, ~explained][:, :, :, ~explained]
-            try:
-                law, ratio, selection = select_law(
-                    theta[np.ix_(rows, columns)],
-                    moments[~explained][:, columns][:, :, columns],
-                    n_blocks=int(np.sum(~explained)), mass_matrices=mass)
-            except ValueError:
-                break
-            if laws and ratio > self.max_residual_ratio * max(ratios[0], 1e-12):
-                break
-            full = np.zeros(n_features)
-            full[columns] = law
-            laws.append(full)
-            ratios.append(ratio)
-            selections.append(selection)
-            explained |= explained_coordinates(theta, full, n_coordinates)
+        laws, ratios, selections = select_laws(theta, moments, n_coordinates, mass_matrices,
+                                               self.max_residual_ratio)
         if not laws:
             raise NoLawFoundError(
                 "ImplicitOptimizer: no law could be selected from the noisy columns (too few "
