@@ -96,3 +96,15 @@ def test_bad_ensemble_options():
         px.XLSINDy(px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])).fit(
             x, t, x_dot=np.cos(t), x_ddot=-x, u=-0.5 * x).print(
             uncertainty=True)
+
+
+def test_parallel_fits_give_the_same_ensemble():
+    rng = np.random.default_rng(0)
+    a, b, c = rng.normal(size=(3, 600))
+    theta = np.column_stack([2 * a - 0.5 * c + 0.05 * rng.normal(size=600), a, b, c])
+    serial = px.EnsembleOptimizer(n_models=6).fit_catalog(theta, 1, [0])
+    parallel = px.EnsembleOptimizer(n_models=6, n_jobs=2).fit_catalog(theta, 1, [0])
+    np.testing.assert_array_equal(serial.coef_samples_, parallel.coef_samples_)
+    np.testing.assert_array_equal(serial.coef_interval_, parallel.coef_interval_)
+    with pytest.raises(TypeError, match="n_jobs"):
+        px.EnsembleOptimizer(n_jobs="all").fit_catalog(theta, 1, [0])

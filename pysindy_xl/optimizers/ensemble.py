@@ -16,6 +16,7 @@ coefficients' own (physical) units, and its model keeps the terms included in at
 
 from __future__ import annotations
 
+import joblib
 import numpy as np
 import scipy.stats
 from sklearn.base import clone
@@ -50,6 +51,10 @@ class EnsembleOptimizer(CatalogOptimizer):
     confidence : float, default 0.95
         Coverage of the coefficient intervals.
     random_state : int or None, default 0
+    n_jobs : int or None, default None
+        Fits run in parallel by joblib (``None``: one at a time, or as a surrounding
+        ``joblib.parallel_config`` says, e.g. a Dask or Ray backend; ``-1``: every core). The
+        subsamples are drawn first, so the result does not depend on it.
 
     Attributes
     ----------
@@ -82,7 +87,7 @@ class EnsembleOptimizer(CatalogOptimizer):
     """
 
     def __init__(self, optimizer=None, n_models=20, fraction=0.7, n_chunks=20, inclusion=0.5,
-                 confidence=0.95, random_state=0):
+                 confidence=0.95, random_state=0, n_jobs=None):
         self.optimizer = optimizer
         self.n_models = n_models
         self.fraction = fraction
@@ -90,6 +95,7 @@ class EnsembleOptimizer(CatalogOptimizer):
         self.inclusion = inclusion
         self.confidence = confidence
         self.random_state = random_state
+        self.n_jobs = n_jobs
 
     def _check_params(self):
         for name in ("n_models", "n_chunks"):
@@ -98,6 +104,8 @@ class EnsembleOptimizer(CatalogOptimizer):
             check_option(name, getattr(self, name), "real", low=0, low_open=True, high=1)
         if self.optimizer is not None:
             check_instance("optimizer", self.optimizer, "a catalog optimizer", "fit_catalog")
+        if self.n_jobs is not None:
+            check_option("n_jobs", self.n_jobs, "int")
 
     def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None):
         """Fit the ensemble on a stacked catalog matrix.
@@ -131,18 +139,17 @@ class EnsembleOptimizer(CatalogOptimizer):
         extra = {}
         if noise_moments is not None and accepts_noise_moments(base):
             extra["noise_moments"] = noise_moments * (n_keep / n_chunks)
-        samples, failed = [], 0
+        subsamples = []
         for _ in range(int(self.n_models)):
             chunks = np.sort(rng.choice(n_chunks, size=n_keep, replace=False))
             rows = np.concatenate([np.arange(edges[k], edges[k + 1]) for k in chunks])
-            stacked = (np.arange(n_coordinates)[:, None] * n_rows + rows[None, :]).ravel()
-            try:
-                fitted = clone(base).fit_catalog(theta[stacked], n_coordinates, force_columns,
-                                                 **extra)
-            except (ValueError, RuntimeError, np.linalg.LinAlgError):
-                failed += 1
-                continue
-            samples.append(np.asarray(fitted.coef_, dtype=float))
+            subsamples.append((np.arange(n_coordinates)[:, None] * n_rows
+                               + rows[None, :]).ravel())
+        fits = joblib.Parallel(n_jobs=self.n_jobs)(
+            joblib.delayed(_fit_subsample)(base, theta[rows], n_coordinates, force_columns,
+                                           extra) for rows in subsamples)
+        samples = [coef for coef in fits if coef is not None]
+        failed = len(fits) - len(samples)
         if not samples:
             raise RuntimeError("EnsembleOptimizer: every fit of the ensemble failed")
         samples = np.array(samples)
@@ -198,3 +205,12 @@ class EnsembleOptimizer(CatalogOptimizer):
         axes[1].set_xscale("symlog", linthresh=1e-3)
         axes[1].set_xlabel("coefficient over the ensemble")
         return axes
+
+
+def _fit_subsample(base, theta, n_coordinates, force_columns, extra):
+    """Coefficients of one subsample fit, or None when it fails (no law, too few rows)."""
+    try:
+        fitted = clone(base).fit_catalog(theta, n_coordinates, force_columns, **extra)
+    except (ValueError, RuntimeError, np.linalg.LinAlgError):
+        return None
+    return np.asarray(fitted.coef_, dtype=float)
