@@ -286,7 +286,7 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     #   a Lagrangian is sparse, holds to the friction, and has det M = 0).
     def admissible(candidate):
         support = candidate.support
-        law = noise_ratio_law(theta[:, support], total[np.ix_(support, support)])[1]
+        law = noise_ratio_law(r_factor[:, support], total[np.ix_(support, support)])[1]
         if not explained_coordinates(theta[:, support], law, n_blocks).all():
             return False
         return mass_matrices is None or definite_mass(mass_matrices[:, support],
@@ -302,7 +302,7 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     chosen = min((c for c in candidates if c.ratio <= limit),
                  key=lambda c: (len(c.support), c.ratio))
     support = chosen.support
-    ratio, values = noise_ratio_law(theta[:, support], total[np.ix_(support, support)])
+    ratio, values = noise_ratio_law(r_factor[:, support], total[np.ix_(support, support)])
     law = np.zeros(theta.shape[1])
     law[support] = values / scale[support]
     law /= np.linalg.norm(law)

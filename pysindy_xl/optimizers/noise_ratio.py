@@ -60,7 +60,8 @@ def _pencil(r_factor, moments):
     condition number: on clean data the true law's residual is at the rounding level of the
     Gram matrix)."""
     whitened, lower = _whitened_factor(r_factor, moments)
-    _, singular, wt = np.linalg.svd(whitened, full_matrices=True)
+    # all k right singular vectors; the left ones only as many as needed (a tall factor)
+    _, singular, wt = np.linalg.svd(whitened, full_matrices=whitened.shape[0] < whitened.shape[1])
     singular = np.concatenate([singular, np.zeros(wt.shape[0] - singular.size)])
     vectors = scipy.linalg.solve_triangular(lower.T, wt[::-1].T, lower=False,
                                             check_finite=False)
