@@ -187,3 +187,9 @@ def test_mixed_optimizer_hands_the_noise_moments_to_its_implicit_part(cart_pole_
     assert mixed.optimizer_.mode_ == "implicit"
     assert mixed.optimizer_.implicit_optimizer_.selection_method_ == "noise ratio"
     np.testing.assert_allclose(mixed.coefficients(), implicit.coefficients(), rtol=1e-10)
+
+
+def test_mass_matrices_of_the_wrong_shape_are_refused_even_without_noise_moments():
+    theta = np.random.default_rng(0).normal(size=(100, 3))
+    with pytest.raises(ValueError, match="mass_matrices"):
+        px.ImplicitOptimizer().fit_catalog(theta, 1, [], mass_matrices=np.ones((2, 2)))

@@ -41,7 +41,7 @@ from .noise_ratio import (
     noise_ratio_law,
     refine_law_by_swaps,
 )
-from .selection import _fold_labels, _fold_summary
+from .selection import ChosenSupport, _fold_labels, _fold_summary
 
 __all__ = [
     "LawSelection",
@@ -114,7 +114,7 @@ def definite_mass(mass_matrices, law) -> bool:
 
 
 @dataclasses.dataclass
-class LawSelection:
+class LawSelection(ChosenSupport):
     """What the errors-in-variables selection chose and why (returned by :func:`select_law`).
 
     Parameters
@@ -140,11 +140,6 @@ class LawSelection:
     size: int
     best_size: int
     rule: str
-
-    @property
-    def support(self) -> np.ndarray:
-        """Selected columns, sorted."""
-        return np.sort(self.order[: self.size])
 
 
 def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):

@@ -315,13 +315,13 @@ class ImplicitOptimizer(CatalogOptimizer):
                     f"reference_columns: indices must lie in [0, {theta.shape[1]}), got "
                     f"{reference_columns}"
                 )
+        if mass_matrices is not None:  # checked even where unused: nothing silently dropped
+            mass_matrices = check_mass_matrices(mass_matrices, int(n_coordinates),
+                                                theta.shape[1])
         if noise_moments is None:
             self._fit(theta, int(n_coordinates), force_columns, reference_columns)
         else:
             moments = check_noise_moments(noise_moments, int(n_coordinates), theta.shape[1])
-            if mass_matrices is not None:
-                mass_matrices = check_mass_matrices(mass_matrices, int(n_coordinates),
-                                                    theta.shape[1])
             self._fit_noisy(theta, int(n_coordinates), force_columns, reference_columns,
                             moments * (weights**2)[:, None, None], mass_matrices)
         touched = coordinates_touched(theta[:, self.coef_ != 0], int(n_coordinates))

@@ -350,8 +350,20 @@ def cross_validated_supports(x, y, supports, n_blocks: int = 1, n_folds: int = 5
     return errors
 
 
+class ChosenSupport:
+    """What a selection result shares: the columns ``order[:size]`` it chose."""
+
+    order: np.ndarray
+    size: int
+
+    @property
+    def support(self) -> np.ndarray:
+        """Selected columns, sorted."""
+        return np.sort(self.order[: self.size])
+
+
 @dataclasses.dataclass
-class SelectionResult:
+class SelectionResult(ChosenSupport):
     """What the sparsity selection chose and why (returned by :func:`select_support`).
 
     Parameters
@@ -384,11 +396,6 @@ class SelectionResult:
     size: int
     best_size: int
     rule: str
-
-    @property
-    def support(self) -> np.ndarray:
-        """Selected columns, sorted."""
-        return np.sort(self.order[: self.size])
 
 
 def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
