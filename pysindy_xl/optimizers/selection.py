@@ -18,10 +18,12 @@ noise. Instead:
 3. **Swaps.** Greedy paths miss supports where one true term is imitated by a pair of
    correlated candidates (``qd1 qd2 cos q`` by ``qd1 qd2`` and ``qd1 qd2 sin^2 q`` on
    small-angle stretches): at their sizes the path models are far worse than the true
-   support. Each path model up to the best size is therefore refined by a local best-subset
-   search of the same size (:func:`refine_by_swaps`: exchange one selected column for an
+   support. Path models are therefore refined by a local best-subset search of the same
+   size (:func:`refine_by_swaps`: exchange one selected column for an
    unselected one while the least-squares residual drops, the 1-swap search of L0Learn),
-   and the refined models are scored like the path models.
+   and the refined models are scored like the path models. Only path models no larger than
+   the one the paths alone would choose (step 4) are refined: a larger refinement can never
+   be chosen.
 4. **Choice.** The smallest model (of either path or its refinement) whose cross-validated
    error is within one standard error of the best path model (the one-standard-error rule):
    on clean data the error of a model missing a true term is far above the best, however
@@ -403,7 +405,8 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     """Sparsest model within one standard error of the best held-out error.
 
     Candidates are the nested models of the backward and forward paths and, with ``swaps``,
-    their swap refinements (:func:`refine_by_swaps`) up to the best path size; the reference
+    their swap refinements (:func:`refine_by_swaps`) up to the size the paths alone would
+    choose; the reference
     error and its standard error are those of the best path model.
 
     Parameters
@@ -458,9 +461,12 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     # over many more (refined) candidates is optimistically low (the winner's curse) and
     # would let noise-fitting terms in; refinements can only reach it with fewer terms.
     best = min(candidates, key=lambda c: c[1])
-    if swaps:
-        candidates += _swap_candidates(x, y, paths, seen, n_blocks, n_folds)
     tolerance = max(best[2], resolution)
+    if swaps:
+        # the choice is the smallest candidate within the tolerance, so only refinements no
+        # larger than the path models' own choice can change it
+        path_choice = min(c[0] for c in candidates if c[1] <= best[1] + tolerance)
+        candidates += _swap_candidates(x, y, paths, seen, path_choice, n_blocks, n_folds)
     size, mean, _, how, order = min((c for c in candidates if c[1] <= best[1] + tolerance),
                                     key=lambda c: (c[0], c[1]))
     n_sizes = max(c[0] for c in candidates)
@@ -483,10 +489,9 @@ def _fold_summary(errors):
     return mean, spread
 
 
-def _swap_candidates(x, y, paths, seen, n_blocks, n_folds):
-    """Swap refinements of the path models up to the best path size, scored by CV."""
+def _swap_candidates(x, y, paths, seen, limit, n_blocks, n_folds):
+    """Swap refinements of the path models of at most ``limit`` terms, scored by CV."""
     active, xs, y_reduced = _reduced(x, y)
-    limit = max(int(np.argmin(mean)) + 1 for _, _, mean in paths if np.isfinite(mean).any())
     refined, visited = [], set()  # starts already refined and local optima reached
     for path, order, mean in paths:
         for k in range(1, min(limit, len(order)) + 1):
