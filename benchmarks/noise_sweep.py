@@ -10,12 +10,14 @@ methods.
 
 Methods:
 
-* ``weak``: ``XLSINDy(catalog)`` with its defaults (weak form, smoother and test functions
-  chosen from the data, cross-validated sparsity);
-* ``ensemble``: the weak form with ``EnsembleOptimizer()`` (20 fits on 70 % subsamples,
+* ``weak``: ``XLSINDy(catalog)`` with its defaults: weak form, smoother and test functions
+  chosen from the data, and, every coordinate being forced, the bagged explicit fit
+  ``EnsembleOptimizer(ExplicitOptimizer())`` (20 cross-validated fits on 70 % subsamples,
   terms included in at least half of them, median coefficients); also records the smallest
   inclusion probability of a true term, the largest of a false term, and whether every
   true coefficient lies in its 95 % interval (issue 13's acceptance cell);
+* ``single``: the weak form with one cross-validated fit, ``ExplicitOptimizer()`` (the
+  default before bagging);
 * ``mixed``: the weak form on data forced on the first coordinate only (the cart, or the
   first link), the others free: :class:`~pysindy_xl.MixedOptimizer`, chosen by default;
 * ``implicit``: the weak form on unforced data (no ``u``): :class:`~pysindy_xl.ImplicitOptimizer`,
@@ -36,7 +38,7 @@ error, valid (5 s validation from a fresh state and forcing: position RMSE below
 range of every coordinate). Writes ``benchmarks/results/noise_sweep.{jsonl,md,png}``.
 
 Usage: ``python benchmarks/noise_sweep.py [--seeds 10] [--levels 0,0.001,0.01,0.03,0.05,0.1]
-[--methods weak,strong,sindy] [--systems cart_pole,...] [--jobs -1] [--append]``
+[--methods weak,single,strong,sindy] [--systems cart_pole,...] [--jobs -1] [--append]``
 """
 
 from __future__ import annotations
@@ -53,7 +55,7 @@ HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 SYSTEMS = {"cart_pole": [1], "double_pendulum": [0, 1], "cart_double_pendulum": [1, 2]}
-METHODS = ["weak", "ensemble", "mixed", "implicit", "strong", "sindy"]
+METHODS = ["weak", "single", "mixed", "implicit", "strong", "sindy"]
 #: Forced coordinates of the methods that do not force every coordinate.
 FORCED = {"mixed": [0], "implicit": []}
 
@@ -139,7 +141,7 @@ def run(name, level, seed, method):
             record.update(exact=None, error=None)
         else:
             formulation = "strong" if method == "strong" else "weak"
-            optimizer = px.EnsembleOptimizer() if method == "ensemble" else None
+            optimizer = px.ExplicitOptimizer() if method == "single" else None
             model = px.XLSINDy(library, optimizer, formulation=formulation).fit(
                 noisy, t, u=None if method == "implicit" else data["tau"])
             coef, support = model.coefficients(), true != 0
@@ -149,7 +151,7 @@ def run(name, level, seed, method):
             record["error"] = float(np.median(np.abs(coef[support] - true[support])
                                               / np.abs(true[support])))
             record["terms"] = int(np.count_nonzero(coef))
-            if method == "ensemble":
+            if model.coef_interval_ is not None:  # a bagged fit
                 low, high = model.coef_interval_
                 probability = model.inclusion_probability_
                 record.update(
@@ -169,6 +171,10 @@ def run(name, level, seed, method):
     return record
 
 
+def _key(record) -> tuple:
+    return (record["system"], record["level"], record["seed"], record["method"])
+
+
 def summarize(records) -> str:
     rows = ["| system | noise | method | exact support | median coef. error | valid | "
             "median fit (s) |", "|---|---|---|---|---|---|---|"]
@@ -183,10 +189,11 @@ def summarize(records) -> str:
         rows.append(f"| {system} | {level:.1%} | {method} | {exact} | {error} | "
                     f"{sum(bool(r['valid']) for r in cell)}/{len(cell)} | "
                     f"{np.median([r['fit_s'] for r in cell]):.1f} |")
-    ensemble = [r for r in records if r["method"] == "ensemble" and "covered" in r]
+    ensemble = [r for r in records if r["method"] == "weak" and "covered" in r]
     if ensemble:
-        rows += ["", "Ensemble uncertainty (per seed: every true term with inclusion >= 0.9, "
-                 "every false term <= 0.2, every true coefficient inside its 95 % interval)",
+        rows += ["", "Uncertainty of the bagged default fit (per seed: every true term with "
+                 "inclusion >= 0.9, every false term <= 0.2, every true coefficient inside its "
+                 "95 % interval)",
                  "", "| system | noise | true >= 0.9 | false <= 0.2 | covered | "
                  "median interval width (relative) |", "|---|---|---|---|---|---|"]
         for system, level in sorted({(r["system"], r["level"]) for r in ensemble}):
@@ -209,7 +216,7 @@ def plot(records, path):
 
     fig, axes = plt.subplots(1, len(SYSTEMS), figsize=(5 * len(SYSTEMS), 3.5), sharey=True)
     for ax, system in zip(np.atleast_1d(axes), SYSTEMS, strict=True):
-        for method, style in (("weak", "o-"), ("ensemble", "D-"), ("mixed", "v-"),
+        for method, style in (("weak", "o-"), ("single", "D-"), ("mixed", "v-"),
                               ("implicit", "x-"), ("strong", "s--"), ("sindy", "^:")):
             levels = sorted({r["level"] for r in records if r["system"] == system})
             rate = [np.mean([bool(r["valid"]) and (method == "sindy" or bool(r["exact"]))
@@ -232,7 +239,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument("--levels", default="0,0.001,0.01,0.03,0.05,0.1")
-    parser.add_argument("--methods", default="weak,strong,sindy",
+    parser.add_argument("--methods", default="weak,single,strong,sindy",
                         help=f"comma-separated, among {METHODS}")
     parser.add_argument("--systems", default=",".join(SYSTEMS),
                         help=f"comma-separated, among {list(SYSTEMS)}")
@@ -246,18 +253,38 @@ def main():
     levels = [float(v) for v in args.levels.split(",")]
     tasks = [(name, level, seed, method) for name in args.systems.split(",") for level in levels
              for seed in range(args.seeds) for method in args.methods.split(",")]
-    start = time.perf_counter()
-    records = Parallel(n_jobs=args.jobs, verbose=5)(delayed(run)(*task) for task in tasks)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     path = out / "noise_sweep.jsonl"
+    # every finished run is appended here at once: an interrupted sweep resumes from it
+    partial = out / "noise_sweep.partial.jsonl"
+    finished = {}
+    if partial.exists():
+        for line in partial.read_text().splitlines():
+            try:
+                record = json.loads(line)
+                finished[_key(record)] = record
+            except (json.JSONDecodeError, KeyError):  # a line cut by the interruption
+                continue
+    records = [finished[task] for task in tasks if task in finished]
+    todo = [task for task in tasks if task not in finished]
+    if records:
+        print(f"resuming: {len(records)} of {len(tasks)} runs already done ({partial})")
+    start = time.perf_counter()
+    with open(partial, "a") as log:
+        for record in Parallel(n_jobs=args.jobs, verbose=5, return_as="generator_unordered")(
+                delayed(run)(*task) for task in todo):
+            log.write(json.dumps(record) + "\n")
+            log.flush()
+            records.append(record)
+    records.sort(key=lambda r: tasks.index(_key(r)))
     if args.append and path.exists():
-        done = {(r["system"], r["level"], r["seed"], r["method"]) for r in records}
+        done = {_key(r) for r in records}
         previous = [json.loads(line) for line in path.read_text().splitlines() if line]
-        records = [r for r in previous
-                   if (r["system"], r["level"], r["seed"], r["method"]) not in done] + records
+        records = [r for r in previous if _key(r) not in done] + records
     with open(path, "w") as f:
         f.writelines(json.dumps(record) + "\n" for record in records)
+    partial.unlink()
     table = summarize(records)
     (out / "noise_sweep.md").write_text(
         f"{len(records)} runs (last invocation: {time.perf_counter() - start:.0f} s wall on "

@@ -26,7 +26,7 @@ from .feature_library import (
     SymbolicLibrary,
     stack_variables,
 )
-from .optimizers import ExplicitOptimizer, independent_columns
+from .optimizers import EnsembleOptimizer, ExplicitOptimizer, independent_columns
 from .optimizers._base import accepts_fit_parameter, accepts_noise_moments
 from .weak import BumpTestFunctions, WhittakerSmoother, weak_regression
 
@@ -65,6 +65,12 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         optimizer (``ps.STLSQ()``, ``ps.SR3()``, ...) or any regressor with ``fit(X, y)`` and
         ``coef_`` runs as ``ExplicitOptimizer(method=...)``. Default: chosen from the data:
         explicit when every coordinate is forced, implicit when none is, mixed otherwise.
+        Explicit fits from positions only (weak form, velocities estimated) are bagged,
+        ``EnsembleOptimizer(ExplicitOptimizer())``: the model keeps the terms that most of 20
+        subsample fits select, and reports inclusion probabilities and coefficient
+        intervals. Measured (``benchmarks/noise_sweep.py``, forced double pendulum, 1-5 %
+        position noise, 10 seeds): exact support 10/10 at every level, against 6-8/10 for
+        one fit, at about four times the fit time.
     differentiation_method : pysindy differentiation method, optional
         Used for velocities and accelerations that are not given. Default, by solver:
         explicit and mixed fits use ``ps.SmoothedFiniteDifference()`` (finite differences
@@ -288,7 +294,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
                 "u: explicit regression needs the generalized forces; pass u, or use "
                 "ImplicitOptimizer / MixedOptimizer for unforced data"
             )
-        optimizer = self._optimizer(forced)
+        optimizer = self._optimizer(forced, estimated=noise_moments is not None)
         extra = {}
         if noise_moments is not None and accepts_noise_moments(optimizer):
             extra["noise_moments"] = noise_moments[:, keep][:, :, keep]
@@ -366,7 +372,11 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         measured = x_dot is not None and x_ddot is not None
         return "strong" if measured or self.differentiation_method is not None else "weak"
 
-    def _optimizer(self, forced: np.ndarray):
+    def _optimizer(self, forced: np.ndarray, estimated: bool = False):
+        """The optimizer to fit: a clone of the user's, or the default for the data.
+
+        ``estimated``: the columns come from noisy positions only (the weak form propagated
+        the smoother's noise estimate into them)."""
         if self.optimizer is not None:
             if not hasattr(self.optimizer, "fit_catalog"):
                 if callable(getattr(self.optimizer, "fit", None)):
@@ -379,7 +389,10 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
                 )
             return clone(self.optimizer)
         if forced.all():
-            return ExplicitOptimizer()
+            # On estimated columns one cross-validated selection keeps a term that only fits
+            # the noise in about a third of the fits (a multiple-comparison effect of ~100
+            # candidates); the terms kept by most subsample fits are the true ones.
+            return EnsembleOptimizer(ExplicitOptimizer()) if estimated else ExplicitOptimizer()
         from . import optimizers
 
         name = "ImplicitOptimizer" if not forced.any() else "MixedOptimizer"
