@@ -1,9 +1,10 @@
 """JSON persistence of identified models.
 
 The file holds the coordinate names, the catalog specification (terms as strings of the
-restricted grammar of :mod:`pysindy_xl.expressions`, masks, interlink matrices) and the
-coefficients. Loading validates every field and parses terms with that grammar only: nothing
-in the file is executed (no pickle, no ``eval``, no ``sympify``).
+restricted grammar of :mod:`pysindy_xl.expressions`, masks, interlink matrices), the
+coefficients, the optimizer's plain parameters and, after an ensemble fit, the inclusion
+probabilities and coefficient intervals. Loading validates every field and parses terms with
+that grammar only: nothing in the file is executed (no pickle, no ``eval``, no ``sympify``).
 """
 
 from __future__ import annotations
@@ -25,8 +26,10 @@ VERSION = 1
 _MAX_BYTES = 50_000_000
 _MAX_TERMS = 5_000  # catalog terms in one file (about a minute of derivation)
 _MAX_TOTAL_SIZE = 20_000  # sum over the terms of their expanded size (expression_size)
-#: optimizer types a model file may name (the documented catalog optimizers, nothing else)
-OPTIMIZER_TYPES = ("ExplicitOptimizer", "ImplicitOptimizer", "MixedOptimizer")
+#: optimizer types a model file may name (the documented catalog optimizers, nothing else);
+#: an EnsembleOptimizer's own ``optimizer`` is one of the others, never an ensemble
+OPTIMIZER_TYPES = ("ExplicitOptimizer", "ImplicitOptimizer", "MixedOptimizer",
+                   "EnsembleOptimizer")
 
 
 def save_model(model, path) -> None:
@@ -66,9 +69,12 @@ def save_model(model, path) -> None:
         "coefficients": [float(c) for c in model.coef_],
         "dropped_features": model.dropped_features_,
         "forced_coordinates": [bool(f) for f in model.forced_coordinates_],
-        "optimizer": ({"type": type(optimizer).__name__, "params": _jsonable_params(optimizer)}
-                      if type(optimizer).__name__ in OPTIMIZER_TYPES else None),
+        "optimizer": _optimizer_spec(optimizer),
     }
+    if getattr(model, "inclusion_probability_", None) is not None:
+        document["uncertainty"] = {
+            "inclusion_probability": [float(p) for p in model.inclusion_probability_],
+            "coef_interval": [[float(c) for c in bound] for bound in model.coef_interval_]}
     text = json.dumps(document, indent=1, allow_nan=False)
     _check_writable(path)
     try:
@@ -98,14 +104,71 @@ def _check_writable(path) -> None:
         raise ValueError(f"path: the folder {folder!r} does not exist; create it first")
 
 
-def _jsonable_params(estimator) -> dict:
-    out = {}
-    for key, value in estimator.get_params(deep=False).items():
+def _optimizer_spec(optimizer, nested: bool = False):
+    """``{"type", "params"}`` of a documented optimizer (plain parameters only; an ensemble's
+    own optimizer as a nested spec), or None."""
+    name = type(optimizer).__name__
+    if name not in OPTIMIZER_TYPES or (nested and name == "EnsembleOptimizer"):
+        return None
+    params = {}
+    for key, value in optimizer.get_params(deep=False).items():
         if value is None or isinstance(value, (bool, int, float, str)):
             if isinstance(value, float) and not math.isfinite(value):
                 continue
-            out[key] = value
-    return out
+            params[key] = value
+        elif name == "EnsembleOptimizer" and key == "optimizer":
+            params[key] = _optimizer_spec(value, nested=True)
+    return {"type": name, "params": params}
+
+
+def _optimizer_from_spec(spec, path, nested: bool = False):
+    """The optimizer a file's spec names: documented types and plain values only."""
+    from . import optimizers
+
+    types = tuple(t for t in OPTIMIZER_TYPES if not (nested and t == "EnsembleOptimizer"))
+    where = "optimizer.params.optimizer" if nested else "optimizer"
+    _expect(isinstance(spec, dict) and spec.get("type") in types, path,
+            f"'{where}' must be null or an object whose 'type' is one of {types}")
+    candidate = getattr(optimizers, spec["type"])
+    params = dict(spec.get("params", {})) if isinstance(spec.get("params", {}), dict) else None
+    valid = candidate().get_params(deep=False)
+    _expect(params is not None and set(params) <= set(valid), path,
+            f"{where}.params must be an object with keys among {sorted(valid)}")
+    inner = params.pop("optimizer", None) if spec["type"] == "EnsembleOptimizer" else None
+    _expect(all(v is None or isinstance(v, (bool, int, float, str)) for v in params.values()),
+            path, f"{where}.params must be plain values")
+    if inner is not None:
+        params["optimizer"] = _optimizer_from_spec(inner, path, nested=True)
+    optimizer = candidate(**params)
+    try:
+        optimizer._check_params()
+    except (TypeError, ValueError) as err:
+        raise _fail(path, f"{where}: {err}") from None
+    return optimizer
+
+
+def _uncertainty_from_document(document, n_features, path):
+    """``(inclusion_probability, coef_interval)`` of an ensemble fit, or ``(None, None)``."""
+    spec = document.get("uncertainty")
+    if spec is None:
+        return None, None
+    _expect(isinstance(spec, dict) and set(spec) == {"inclusion_probability", "coef_interval"},
+            path, "'uncertainty' must be an object with inclusion_probability and coef_interval")
+
+    def numbers(values):
+        return (isinstance(values, list) and len(values) == n_features
+                and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                        and math.isfinite(v) for v in values))
+
+    probability, interval = spec["inclusion_probability"], spec["coef_interval"]
+    _expect(numbers(probability) and all(0 <= p <= 1 for p in probability), path,
+            "uncertainty.inclusion_probability must be one number in [0, 1] per feature")
+    _expect(isinstance(interval, list) and len(interval) == 2
+            and all(numbers(bound) for bound in interval)
+            and all(lo <= hi for lo, hi in zip(*interval, strict=True)), path,
+            "uncertainty.coef_interval must be [low, high], one finite number per feature "
+            "each, low <= high")
+    return np.asarray(probability, dtype=float), np.asarray(interval, dtype=float)
 
 
 def _fail(path, what: str):
@@ -195,7 +258,6 @@ def load_model(path):
     ...
     ValueError: path: '...bad.json' is not a valid pysindy-xl model file: 'format' must be ...
     """
-    from . import optimizers
     from .model import XLSINDy
 
     path = os.fspath(path)
@@ -243,23 +305,9 @@ def load_model(path):
     dropped = document.get("dropped_features", {})
     _expect(isinstance(dropped, dict), path, "'dropped_features' must be an object")
 
-    optimizer = None
     spec = document.get("optimizer")
-    if spec is not None:
-        _expect(isinstance(spec, dict) and spec.get("type") in OPTIMIZER_TYPES, path,
-                f"'optimizer' must be null or an object whose 'type' is one of {OPTIMIZER_TYPES}")
-        candidate = getattr(optimizers, spec["type"])
-        params = spec.get("params", {})
-        valid = candidate().get_params(deep=False)
-        _expect(isinstance(params, dict) and set(params) <= set(valid), path,
-                f"optimizer.params must be an object with keys among {sorted(valid)}")
-        _expect(all(v is None or isinstance(v, (bool, int, float, str))
-                    for v in params.values()), path, "optimizer.params must be plain values")
-        optimizer = candidate(**params)
-        try:
-            optimizer._check_params()
-        except (TypeError, ValueError) as err:
-            raise _fail(path, f"optimizer: {err}") from None
+    optimizer = None if spec is None else _optimizer_from_spec(spec, path)
+    probability, interval = _uncertainty_from_document(document, len(feature_names), path)
     model = XLSINDy(feature_library=library, optimizer=optimizer)
     model.feature_library_ = library
     model.optimizer_ = optimizer
@@ -268,5 +316,6 @@ def load_model(path):
     model.n_coordinates_ = coords.n
     model.n_samples_ = 0
     model.forced_coordinates_ = np.asarray(forced, dtype=bool)
+    model.inclusion_probability_, model.coef_interval_ = probability, interval
     model._build_dynamics()
     return model

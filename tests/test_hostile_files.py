@@ -105,7 +105,8 @@ def test_only_documented_optimizer_types_load(optimizer, saved, tmp_path):
         px.XLSINDy.load(_write(tmp_path, doc))
 
 
-@pytest.mark.parametrize("name", ["ExplicitOptimizer", "ImplicitOptimizer", "MixedOptimizer"])
+@pytest.mark.parametrize("name", ["ExplicitOptimizer", "ImplicitOptimizer", "MixedOptimizer",
+                                  "EnsembleOptimizer"])
 def test_documented_optimizer_types_load(name, saved, tmp_path):
     doc = dict(saved[2], optimizer={"type": name, "params": {}})
     assert type(px.XLSINDy.load(_write(tmp_path, doc)).optimizer_).__name__ == name

@@ -307,3 +307,73 @@ def test_non_finite_or_complex_term_rejected(bad, saved, tmp_path):
     path = _tamper(saved, tmp_path, change)
     with pytest.raises(ValueError, match="is not a valid pysindy-xl model file"):
         load_model(path)
+
+
+# ------------------------------------------------- a bagged fit keeps its uncertainty on disk
+
+
+@pytest.fixture(scope="module")
+def noisy_model(cart_pole_system, tmp_path_factory):
+    """The default fit of noisy positions (bagged), saved and loaded back."""
+    system = cart_pole_system
+    t = np.arange(0.0, 20.0, 0.01)
+    data = system.simulate(random_initial_state(system, 2), t, random_force(system, 2))
+    noisy = data["q"] + 0.01 * data["q"].std(axis=0) * np.random.default_rng(2).normal(
+        size=data["q"].shape)
+    model = px.XLSINDy(paper_catalog(system.coords, [1])).fit(noisy, t, u=data["tau"])
+    path = tmp_path_factory.mktemp("models") / "noisy.json"
+    model.save(path)
+    return model, path, data
+
+
+def test_bagged_fit_round_trip_keeps_inclusion_and_intervals(noisy_model):
+    model, path, data = noisy_model
+    assert isinstance(model.optimizer_, px.EnsembleOptimizer)  # the default for noisy positions
+    loaded = px.XLSINDy.load(path)
+    np.testing.assert_array_equal(loaded.inclusion_probability_, model.inclusion_probability_)
+    np.testing.assert_array_equal(loaded.coef_interval_, model.coef_interval_)
+    assert isinstance(loaded.optimizer_, px.EnsembleOptimizer)
+    assert isinstance(loaded.optimizer_.optimizer, px.ExplicitOptimizer)
+    assert loaded.optimizer_.get_params(deep=False)["n_models"] == 20
+    np.testing.assert_array_equal(loaded.predict(data["q"], data["qd"], data["tau"]),
+                                  model.predict(data["q"], data["qd"], data["tau"]))
+
+
+@pytest.mark.parametrize("uncertainty, message", [
+    ({"inclusion_probability": [0.5], "coef_interval": [[0], [1]]}, "one number in"),
+    ("everything is certain", "must be an object"),
+    ({"coef_interval": None}, "must be an object"),
+])
+def test_tampered_uncertainty_is_refused(noisy_model, tmp_path, uncertainty, message):
+    _, path, _ = noisy_model
+    document = json.loads(path.read_text())
+    document["uncertainty"] = uncertainty
+    target = tmp_path / "tampered.json"
+    target.write_text(json.dumps(document))
+    with pytest.raises(ValueError, match=f"not a valid pysindy-xl model file: .*{message}"):
+        px.XLSINDy.load(target)
+
+
+def test_tampered_interval_bounds_and_probabilities_are_refused(noisy_model, tmp_path):
+    _, path, _ = noisy_model
+    for change in ("probability above one", "low above high"):
+        document = json.loads(path.read_text())
+        uncertainty = document["uncertainty"]
+        if change == "probability above one":
+            uncertainty["inclusion_probability"][0] = 1.5
+        else:
+            uncertainty["coef_interval"][0][1] = uncertainty["coef_interval"][1][1] + 1.0
+        target = tmp_path / "tampered.json"
+        target.write_text(json.dumps(document))
+        with pytest.raises(ValueError, match="uncertainty"):
+            px.XLSINDy.load(target)
+
+
+def test_an_ensemble_inside_an_ensemble_is_refused(noisy_model, tmp_path):
+    _, path, _ = noisy_model
+    document = json.loads(path.read_text())
+    document["optimizer"]["params"]["optimizer"] = {"type": "EnsembleOptimizer", "params": {}}
+    target = tmp_path / "nested.json"
+    target.write_text(json.dumps(document))
+    with pytest.raises(ValueError, match="optimizer.params.optimizer"):
+        px.XLSINDy.load(target)
