@@ -126,7 +126,7 @@ def _add_fit_options(parser):
                              "auto)")
     parser.add_argument("--solver", choices=SOLVERS, default="auto",
                         help="explicit, implicit or mixed regression; auto follows the forcing "
-                             "(default: auto)")
+                             "and bags explicit fits of positions-only data (default: auto)")
     parser.add_argument("--threshold", type=_non_negative_float, default=None,
                         help="relative pruning threshold of the explicit solver")
     parser.add_argument("--friction", choices=("auto", "diagonal", "full"), default="auto",
@@ -397,6 +397,13 @@ def _fit(system, dataset, args, solver, forced, return_arguments=False):
     try:
         arguments = dataset.fit_arguments(forces="tau" if forced else None,
                                           constraints=getattr(args, "constraints", "exclude"))
+        formulation = model._resolve_formulation(arguments.get("x_dot"),
+                                                 arguments.get("x_ddot"))
+        if (solver == "explicit" and getattr(args, "solver", "auto") == "auto"
+                and args.threshold is None and formulation == "weak"
+                and arguments.get("x_dot") is None):
+            # as XLSINDy's own default: explicit fits of positions only are bagged
+            model.set_params(optimizer=px.EnsembleOptimizer(optimizer))
         model.fit(**arguments)
     except (RuntimeError, ValueError, np.linalg.LinAlgError) as error:
         raise CLIError(f"identification failed ({type(error).__name__}): {error}") from None
@@ -468,7 +475,10 @@ def fit_quality(model, arguments) -> dict:
         rows), ``cv_error`` (held-out relative squared error of the chosen model size
         when the optimizer selected the sparsity by cross-validation, else ``None``) and
         ``cv_noise_ratio`` (held-out noise ratio of the chosen unforced law when it was
-        selected from noisy data, else ``None``: about 1 when the law leaves only noise).
+        selected from noisy data, else ``None``: about 1 when the law leaves only noise) and
+        ``stability`` (after an ensemble fit, the default for noisy positions: the kept term
+        selected least often and the dropped term selected most often by the subsample fits,
+        each as ``[name, fraction]``, else ``None``).
 
     Raises
     ------
@@ -519,7 +529,26 @@ def fit_quality(model, arguments) -> dict:
             held_out[key] = float(getattr(selection, attribute)[selection.size - 1])
     return {"r2": r2(residual, target), "r2_per_coordinate": per,
             "formulation": model.formulation_, "target": target_name,
-            "rows": int(theta.shape[0]), **held_out}
+            "rows": int(theta.shape[0]), **held_out, "stability": _stability(model)}
+
+
+def _stability(model):
+    """The kept term that the ensemble's fits selected least often and the dropped term they
+    selected most often (``[name, fraction]`` or None each), or None without an ensemble."""
+    probability = getattr(model, "inclusion_probability_", None)
+    if probability is None:
+        return None
+    names, kept = model.get_feature_names(), model.coef_ != 0
+    forces = np.isin(np.arange(len(names)), model.feature_library_.force_columns_)
+
+    def extreme(mask, pick):
+        if not mask.any():
+            return None
+        j = np.flatnonzero(mask)[pick(probability[mask])]
+        return [names[j], float(probability[j])]
+
+    return {"kept_least": extreme(kept & ~forces, np.argmin),
+            "dropped_most": extreme(~kept & ~forces, np.argmax)}
 
 
 def _quality_lines(quality):
@@ -537,6 +566,16 @@ def _quality_lines(quality):
     if quality["cv_error"] is not None:
         lines.append(f"  held-out relative squared error of the chosen sparsity (5-fold "
                      f"cross-validation): {quality['cv_error']:.3g}")
+    stability = quality.get("stability")
+    if stability is not None:
+        kept, dropped = stability["kept_least"], stability["dropped_most"]
+        line = "  stability over the subsample fits:"
+        if kept is not None:
+            line += f" every kept term in {kept[1]:.0%} of them or more (least: {kept[0]})"
+        if dropped is not None:
+            line += (";" if kept is not None else "") + (
+                f" the most frequent dropped term in {dropped[1]:.0%} ({dropped[0]})")
+        lines.append(line)
     if quality.get("cv_noise_ratio") is not None:
         lines.append(f"  held-out noise ratio of the chosen law (5-fold cross-validation; about "
                      f"1 when it leaves only the propagated noise): "

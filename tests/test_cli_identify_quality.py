@@ -64,6 +64,24 @@ def test_positions_only_defaults_to_weak_and_strong_is_selectable(positions_csv,
         assert found["L[cos(theta)]"] == pytest.approx(4.9, rel=2e-2)
 
 
+def test_positions_only_fit_reports_the_stability_of_its_terms(positions_csv, capsys):
+    from pysindy_xl.data_io import load_data
+
+    model = run_identify(build_parser().parse_args([
+        "identify", str(positions_csv), "--coordinates", "theta", "--angles", "theta",
+        "--trig-degree", "1", "--quiet"]))
+    text = capsys.readouterr().out
+    assert model.inclusion_probability_ is not None  # positions only: bagged by default
+    quality = fit_quality(model, load_data(str(positions_csv), coordinates=["theta"])
+                          .fit_arguments())
+    kept, dropped = quality["stability"]["kept_least"], quality["stability"]["dropped_most"]
+    names = model.get_feature_names()
+    assert kept[1] == model.inclusion_probability_[model.coef_ != 0][1:].min()
+    assert model.coef_[names.index(kept[0])] != 0 and model.coef_[names.index(dropped[0])] == 0
+    assert kept[1] >= 0.5 > dropped[1]
+    assert f"every kept term in {kept[1]:.0%} of them or more (least: {kept[0]})" in text
+
+
 def test_bad_formulation_is_a_usage_error(csv_file, capsys):
     with pytest.raises(SystemExit) as info:
         main(["identify", str(csv_file), "--formulation", "medium"])
