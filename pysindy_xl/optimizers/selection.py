@@ -19,11 +19,10 @@ noise. Instead:
    correlated candidates (``qd1 qd2 cos q`` by ``qd1 qd2`` and ``qd1 qd2 sin^2 q`` on
    small-angle stretches): at their sizes the path models are far worse than the true
    support. Path models are therefore refined by a local best-subset search of the same
-   size (:func:`refine_by_swaps`: exchange one selected column for an
-   unselected one while the least-squares residual drops, the 1-swap search of L0Learn),
-   and the refined models are scored like the path models. Only path models no larger than
-   the one the paths alone would choose (step 4) are refined: a larger refinement can never
-   be chosen.
+   size (:func:`refine_by_swaps`: exchange one selected column for an unselected one while
+   the least-squares residual drops, the 1-swap search of L0Learn), and the refined models
+   are scored like the path models. Only path models no larger than the one the paths alone
+   would choose (step 4) are refined: a larger refinement can never be chosen.
 4. **Choice.** The smallest model (of either path or its refinement) whose cross-validated
    error is within one standard error of the best path model (the one-standard-error rule):
    on clean data the error of a model missing a true term is far above the best, however
@@ -406,8 +405,7 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
 
     Candidates are the nested models of the backward and forward paths and, with ``swaps``,
     their swap refinements (:func:`refine_by_swaps`) up to the size the paths alone would
-    choose; the reference
-    error and its standard error are those of the best path model.
+    choose; the reference error and its standard error are those of the best path model.
 
     Parameters
     ----------
