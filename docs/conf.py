@@ -62,6 +62,7 @@ API_MODULES = [
     "pysindy_xl.expressions",
     "pysindy_xl.mujoco",
     "pysindy_xl.benchmark",
+    "pysindy_xl.quality",
     "pysindy_xl.cli",
 ]
 API_SKIPPED = write_api_pages(API_MODULES, DOCS / "gen_modules" / "api")

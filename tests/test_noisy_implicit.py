@@ -155,7 +155,7 @@ def _one_noisy_unforced_run(system, seed, level=0.01):
 
 
 def test_fit_quality_reports_the_noise_ratio_of_an_unforced_law(cart_pole_system):
-    from pysindy_xl.cli import _quality_lines, fit_quality
+    from pysindy_xl.quality import fit_quality, quality_lines
 
     library, t, noisy = _one_noisy_unforced_run(cart_pole_system, seed=3)
     with warnings.catch_warnings():
@@ -164,7 +164,7 @@ def test_fit_quality_reports_the_noise_ratio_of_an_unforced_law(cart_pole_system
     quality = fit_quality(model, {"x": noisy, "t": t})
     assert quality["cv_error"] is None
     assert quality["cv_noise_ratio"] == model.selection_.cv_ratio[model.selection_.size - 1]
-    assert any("noise ratio" in line for line in _quality_lines(quality))
+    assert any("noise ratio" in line for line in quality_lines(quality))
 
 
 @pytest.mark.slow

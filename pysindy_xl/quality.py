@@ -1,0 +1,293 @@
+"""How well an identified model explains its own data, and how it simulates it.
+
+:func:`fit_quality` rebuilds the regression the model solved (strong or weak form) and reports
+``R^2`` per coordinate, the held-out score of its sparsity selection and, after a bagged fit,
+the stability of its terms; :func:`plot_identification` simulates the model from a recorded
+trajectory. The ``pysindy-xl identify`` command prints and plots both.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["fit_quality", "quality_lines", "plot_identification"]
+
+
+def _regression_matrix(model, arguments):
+    """The fitted model's regression matrix rebuilt on its training data, rows coordinate-major.
+
+    Strong form: the catalog at every sample (derivatives as in ``fit``). Weak form: the
+    smoothed states contracted with the test functions of the fit's width, one block per
+    trajectory long enough for a test function (as in ``fit``).
+    """
+    from pysindy_xl.feature_library import stack_variables
+
+    library, n = model.feature_library_, model.n_coordinates_
+    weak = model.formulation_ == "weak"
+    data = model._trajectories(arguments["x"], arguments.get("t"), arguments.get("x_dot"),
+                               arguments.get("x_ddot"), arguments.get("u"), n,
+                               differentiate=not weak)
+    blocks = []
+    if not weak:
+        for d in data:
+            z = stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"])
+            blocks.append(library.transform(z).reshape(n, len(d["t"]), -1))
+        return np.concatenate(blocks, axis=1).reshape(-1, blocks[0].shape[-1])
+    from pysindy_xl.weak import BumpTestFunctions, WhittakerSmoother
+
+    smoother = model.smoother or WhittakerSmoother()
+    test_functions = model.test_functions or BumpTestFunctions()
+    half_width = model.weak_info_["half_width"]
+    for d in data:
+        if d["t"][-1] - d["t"][0] < 2 * half_width:
+            continue  # left out of the fit too
+        q, qd, qdd = smoother.smooth(d["t"], d["x"])
+        if d["x_dot"] is not None:
+            q, qd = d["x"], d["x_dot"]
+        z = stack_variables(q, qd, qdd, d["u"], d["t"])
+        phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
+        blocks.append(library.weak_transform(z, phi, dphi).reshape(n, phi.shape[0], -1))
+    return np.concatenate(blocks, axis=1).reshape(-1, blocks[0].shape[-1])
+
+
+def fit_quality(model, arguments) -> dict:
+    """R^2 of the identified equations' residual on the training data.
+
+    With ``Theta`` the regression matrix of the fit (weak: equations integrated against the
+    test functions; strong: the equations at every sample) and ``xi`` the identified
+    coefficients, the residual is ``r = Theta xi`` (zero for an exact model) and
+    ``R^2 = 1 - ||r||^2 / ||b||^2``, where ``b`` is the part that the rest of the equations
+    must explain: the generalized-force part ``Theta_F xi_F`` of forced data, or for
+    unforced (implicit) data the largest single term ``Theta_j xi_j``. R^2 = 1 is an exact
+    fit; 0 is no better than predicting zero force.
+
+    Parameters
+    ----------
+    model : XLSINDy
+        A fitted model.
+    arguments : dict
+        The keyword arguments its ``fit`` received (``Dataset.fit_arguments``).
+
+    Returns
+    -------
+    dict
+        ``r2`` (float), ``r2_per_coordinate`` (dict name -> float), ``formulation``,
+        ``target`` (``"forces"`` or the name of the dominant term), ``rows`` (regression
+        rows), ``cv_error`` (held-out relative squared error of the chosen model size
+        when the optimizer selected the sparsity by cross-validation, else ``None``) and
+        ``cv_noise_ratio`` (held-out noise ratio of the chosen unforced law when it was
+        selected from noisy data, else ``None``: about 1 when the law leaves only noise) and
+        ``stability`` (after an ensemble fit, the default for noisy positions: the kept term
+        selected least often and the dropped term selected most often by the subsample fits,
+        each as ``[name, fraction]``, else ``None``).
+
+    Raises
+    ------
+    TypeError
+        If ``arguments`` is not a dict with ``x``.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+    >>> t = np.linspace(0, 10, 1001)
+    >>> x = np.cos(2 * t)[:, None]
+    >>> arguments = {"x": x, "t": t, "x_dot": -2 * np.sin(2 * t)[:, None],
+    ...              "x_ddot": -4 * x, "u": -1.0 * x}
+    >>> model = px.XLSINDy(lib).fit(**arguments)
+    >>> quality = fit_quality(model, arguments)
+    >>> round(quality["r2"], 6), quality["formulation"], quality["target"]
+    (1.0, 'strong', 'forces')
+    """
+    if not isinstance(arguments, dict) or "x" not in arguments:
+        raise TypeError("arguments: expected the dict of fit arguments (with 'x'), got "
+                        f"{type(arguments).__name__}")
+    theta = _regression_matrix(model, arguments)
+    coef = model.coef_
+    n = model.n_coordinates_
+    forces = list(model.feature_library_.force_columns_)
+    residual = theta @ coef
+    forced = bool(forces) and np.any(coef[forces] != 0) and np.any(theta[:, forces] != 0)
+    if forced:
+        target, target_name = theta[:, forces] @ coef[forces], "forces"
+    else:
+        norms = np.linalg.norm(theta * coef, axis=0)
+        j = int(np.argmax(norms))
+        target, target_name = theta[:, j] * coef[j], model.get_feature_names()[j]
+
+    def r2(r, b):
+        denominator = float(b @ b)
+        return float(1 - (r @ r) / denominator) if denominator > 0 else float("nan")
+
+    names = model.feature_library_.coords.names
+    per = {name: r2(r, b) for name, r, b in zip(names, residual.reshape(n, -1),
+                                                target.reshape(n, -1), strict=True)}
+    selection = getattr(model, "selection_", None)
+    held_out = {"cv_error": None, "cv_noise_ratio": None}
+    for key, attribute in (("cv_error", "cv_error"), ("cv_noise_ratio", "cv_ratio")):
+        if hasattr(selection, attribute):
+            held_out[key] = float(getattr(selection, attribute)[selection.size - 1])
+    return {"r2": r2(residual, target), "r2_per_coordinate": per,
+            "formulation": model.formulation_, "target": target_name,
+            "rows": int(theta.shape[0]), **held_out, "stability": _stability(model)}
+
+
+def _stability(model):
+    """The kept term that the ensemble's fits selected least often and the dropped term they
+    selected most often (``[name, fraction]`` or None each), or None without an ensemble."""
+    probability = getattr(model, "inclusion_probability_", None)
+    if probability is None:
+        return None
+    names, kept = model.get_feature_names(), model.coef_ != 0
+    forces = np.isin(np.arange(len(names)), model.feature_library_.force_columns_)
+
+    def extreme(mask, pick):
+        if not mask.any():
+            return None
+        j = np.flatnonzero(mask)[pick(probability[mask])]
+        return [names[j], float(probability[j])]
+
+    return {"kept_least": extreme(kept & ~forces, np.argmin),
+            "dropped_most": extreme(~kept & ~forces, np.argmax)}
+
+
+def quality_lines(quality) -> list:
+    """The lines ``pysindy-xl identify`` prints for a :func:`fit_quality` result.
+
+    Parameters
+    ----------
+    quality : dict
+        As returned by :func:`fit_quality`.
+
+    Returns
+    -------
+    list of str
+
+    Examples
+    --------
+    >>> quality = {"r2": 0.999, "r2_per_coordinate": {"theta": 0.999}, "formulation": "weak",
+    ...            "target": "forces", "rows": 120, "cv_error": 1e-3, "cv_noise_ratio": None,
+    ...            "stability": {"kept_least": ["L[cos(theta)]", 0.95],
+    ...                          "dropped_most": ["L[theta_dot**2*cos(theta)]", 0.1]}}
+    >>> lines = quality_lines(quality)
+    >>> lines[0]
+    'fit quality: R^2 = 0.9990 (theta 0.9990)'
+    >>> lines[-1][:68]
+    '  stability over the subsample fits: every kept term in 95% of them '
+    """
+    kind = ("weak form: equations integrated against test functions on smoothed positions"
+            if quality["formulation"] == "weak" else "strong form: equations at each sample")
+    target = ("the generalized forces" if quality["target"] == "forces"
+              else f"the largest term {quality['target']} (unforced data)")
+    per = ", ".join(f"{k} {v:.4f}" for k, v in quality["r2_per_coordinate"].items())
+    denominator = "forces" if quality["target"] == "forces" else "largest term"
+    lines = [f"fit quality: R^2 = {quality['r2']:.4f} ({per})",
+             f"  R^2 = 1 - |residual|^2 / |{denominator}|^2 over {quality['rows']} rows of the "
+             f"{kind};",
+             f"  1 is exact; the residual is what the identified equations leave unexplained "
+             f"of {target}"]
+    if quality["cv_error"] is not None:
+        lines.append(f"  held-out relative squared error of the chosen sparsity (5-fold "
+                     f"cross-validation): {quality['cv_error']:.3g}")
+    stability = quality.get("stability")
+    if stability is not None:
+        kept, dropped = stability["kept_least"], stability["dropped_most"]
+        line = "  stability over the subsample fits:"
+        if kept is not None:
+            line += f" every kept term in {kept[1]:.0%} of them or more (least: {kept[0]})"
+        if dropped is not None:
+            line += (";" if kept is not None else "") + (
+                f" the most frequent dropped term in {dropped[1]:.0%} ({dropped[0]})")
+        lines.append(line)
+    if quality.get("cv_noise_ratio") is not None:
+        lines.append(f"  held-out noise ratio of the chosen law (5-fold cross-validation; about "
+                     f"1 when it leaves only the propagated noise): "
+                     f"{quality['cv_noise_ratio']:.3g}")
+    return lines
+
+
+def plot_identification(model, trajectory, path, title=None, forced=True) -> dict:
+    """Simulate the model from a recorded trajectory's initial state and plot both.
+
+    The model runs under the trajectory's recorded generalized forces (when ``forced``) from
+    its first sample (velocity: the recorded one, or the model's smoother estimate); the
+    figure has one panel per coordinate, recorded positions against simulated ones. Drawn on
+    matplotlib's Agg canvas (no display needed).
+
+    Parameters
+    ----------
+    model : XLSINDy
+        A fitted model with dynamics.
+    trajectory : Trajectory
+        Recorded data (``t``, ``q``, optional ``qd`` and ``tau``).
+    path : str or os.PathLike
+        PNG file to write.
+    title : str, optional
+        Figure title.
+    forced : bool, default True
+        Apply the recorded ``tau`` (ignored when the trajectory has none).
+
+    Returns
+    -------
+    dict
+        ``rmse`` (position RMSE per coordinate over the simulated span), ``simulated_until``
+        (s; the end of the data unless the model diverged) and ``diverged`` (bool).
+
+    Raises
+    ------
+    ValueError
+        If the model has no dynamics (no acceleration term identified).
+
+    Examples
+    --------
+    >>> import numpy as np, pathlib, tempfile, pysindy_xl as px
+    >>> from pysindy_xl.mujoco import Trajectory
+    >>> c = px.Coordinates(["x"])
+    >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+    >>> t = np.linspace(0, 5, 501)
+    >>> x = np.cos(2 * t)[:, None]
+    >>> model = px.XLSINDy(lib).fit(x, t, x_dot=-2 * np.sin(2 * t)[:, None],
+    ...                             x_ddot=-4 * x, u=-1.0 * x)
+    >>> data = Trajectory(t=t, q=x, qd=-2 * np.sin(2 * t)[:, None], tau=-1.0 * x)
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     result = plot_identification(model, data, pathlib.Path(tmp) / "fit.png")
+    ...     written = (pathlib.Path(tmp) / "fit.png").stat().st_size > 0
+    >>> written, result["diverged"], bool(result["rmse"][0] < 1e-3)
+    (True, False, True)
+    """
+    from pysindy_xl.dynamics import DynamicsError
+    from pysindy_xl.mujoco.plots import _figure
+
+    if model.dynamics_ is None:
+        raise ValueError("model: the identified equations contain no acceleration; nothing "
+                         "to simulate")
+    t, q = trajectory.t, trajectory.q
+    qd0 = trajectory.qd[0] if trajectory.qd is not None else model.differentiate(q, t)[0]
+    tau = trajectory.tau if forced and trajectory.tau is not None else None
+    diverged = False
+    try:
+        states = model.simulate(np.r_[q[0], qd0], t, tau, timeout=60.0)
+    except DynamicsError as error:
+        partial = getattr(error, "states", None)
+        states = np.asarray(partial) if partial is not None else np.empty((0, 2 * q.shape[1]))
+        diverged = True
+    k = len(states)
+    rmse = (np.sqrt(np.mean((states[:, :q.shape[1]] - q[:k]) ** 2, axis=0)) if k
+            else np.full(q.shape[1], np.inf))
+    names = model.feature_library_.coords.names
+    figure = _figure(7, 1.8 * len(names) + 0.6)
+    axes = figure.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
+    for i, (ax, name) in enumerate(zip(axes, names, strict=True)):
+        ax.plot(t, q[:, i], color="black", linestyle="--", linewidth=1.2, label="recorded")
+        if k:
+            ax.plot(t[:k], states[:, i], color="tab:blue", linewidth=1.2,
+                    label="identified model")
+        ax.set_ylabel(name)
+    axes[0].legend(loc="upper right", fontsize="small")
+    axes[-1].set_xlabel("t (s)")
+    figure.suptitle(title or "identified model against the data"
+                    + (" (diverged)" if diverged else ""))
+    figure.savefig(path, dpi=110)
+    return {"rmse": rmse, "simulated_until": float(t[k - 1]) if k else float(t[0]),
+            "diverged": diverged}
