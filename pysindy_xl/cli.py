@@ -12,7 +12,6 @@ Examples
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
@@ -20,20 +19,14 @@ import time
 
 import numpy as np
 
+from ._cli_parser import build_parser
 from .quality import fit_quality, plot_identification, quality_lines
 
 # fit_quality and plot_identification live in pysindy_xl.quality; imported here for the
 # commands and for code that imported them from here
 __all__ = ["main", "build_parser", "run_demo", "run_identify"]
 
-SOLVERS = ("auto", "explicit", "implicit", "mixed")
-CATALOGS = ("lagrange", "classical", "mixed", "kinematic")
-FORCINGS = ("explicit", "implicit", "mixed")
-NOISE_MODELS = ("positions", "all")
-CONSTRAINTS = ("exclude", "known", "include")
-FORMULATIONS = ("auto", "strong", "weak")
 _AUTO_SOLVER = {"explicit": "explicit", "implicit": "implicit", "mixed": "mixed"}
-
 
 class CLIError(Exception):
     """An error reported to the user as ``pysindy-xl: error: ...`` with exit status 1.
@@ -51,198 +44,6 @@ class CLIError(Exception):
     pysindy_xl.cli.CLIError: --solver explicit needs forces; use --forcing explicit or mixed, or
     --solver implicit
     """
-
-
-def _non_negative_float(text):
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not np.isfinite(value) or value < 0:
-        raise argparse.ArgumentTypeError(f"expected a non-negative number, got {text!r}")
-    return value
-
-
-def _positive_float(text):
-    value = _non_negative_float(text)
-    if value == 0:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return value
-
-
-def _fraction(text):
-    value = _positive_float(text)
-    if value > 1:
-        raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}")
-    return value
-
-
-def _positive_int(text):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
-    return value
-
-
-def _add_generation_options(parser, duration=10.0, trajectories=2):
-    parser.add_argument("--forcing", choices=FORCINGS, default="explicit",
-                        help="implicit: no force, random initial state; explicit: every "
-                             "actuator driven; mixed: a subset (--actuators) (default: explicit)")
-    parser.add_argument("--actuators", nargs="+", metavar="NAME",
-                        help="joints driven with --forcing mixed (default: the system's choice)")
-    parser.add_argument("--noise", type=_non_negative_float, default=0.0,
-                        help="relative Gaussian noise: std = NOISE x each coordinate's standard "
-                             "deviation over the trajectory (default: 0)")
-    parser.add_argument("--noise-model", choices=NOISE_MODELS, default="positions",
-                        help="positions: noisy recorded positions only, velocities and "
-                             "accelerations are not recorded and the package differentiates; "
-                             "all: the paper's model, noise on positions, velocities, "
-                             "accelerations and forces (default: positions)")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
-    parser.add_argument("--duration", type=_positive_float, default=duration,
-                        help=f"seconds per training trajectory (default: {duration:g})")
-    parser.add_argument("--trajectories", type=_positive_int, default=trajectories,
-                        help=f"number of training trajectories (default: {trajectories})")
-    parser.add_argument("--sample-every", type=_positive_int, default=2,
-                        help="keep every k-th step of the model's timestep (1 ms for the "
-                             "shipped systems; the sampling period is printed) (default: 2)")
-    parser.add_argument("--amplitude", type=_fraction, default=None,
-                        help="forcing peak as a fraction of each actuator's ctrlrange "
-                             "half-width, in (0, 1] (default: 0.5 of the range; the system's "
-                             "force amplitudes for actuators without ctrlrange)")
-    parser.add_argument("--initial-scale", type=_non_negative_float, default=1.0,
-                        help="spread of the random initial states, as a fraction of the joint "
-                             "ranges (default: 1)")
-    parser.add_argument("--joints", nargs="+", metavar="NAME", default=None,
-                        help="MJCF models: identify these joints only; the others are locked "
-                             "at their reference pose (removed with their actuators)")
-
-
-def _add_fit_options(parser):
-    parser.add_argument("--catalog", choices=(*CATALOGS, "auto"), default="auto",
-                        help="lagrange, classical, mixed (Lagrange + friction) or kinematic "
-                             "(derived from the MJCF kinematic tree); auto: kinematic for any "
-                             "MuJoCo model, mixed for coordinates named without one (default: "
-                             "auto)")
-    parser.add_argument("--solver", choices=SOLVERS, default="auto",
-                        help="explicit, implicit or mixed regression; auto follows the forcing "
-                             "and bags explicit fits of positions-only data (default: auto)")
-    parser.add_argument("--threshold", type=_non_negative_float, default=None,
-                        help="relative pruning threshold of the explicit solver")
-    parser.add_argument("--friction", choices=("auto", "diagonal", "full"), default="auto",
-                        help="friction terms of the catalogs (default: auto)")
-    parser.add_argument("--velocity-degree", type=_positive_int, default=2,
-                        help="degree of the velocity monomials of the catalog (default: 2)")
-    parser.add_argument("--trig-degree", type=_positive_int, default=2,
-                        help="degree of the sin/cos monomials of the catalog (default: 2)")
-    parser.add_argument("--formulation", choices=FORMULATIONS, default="auto",
-                        help="strong: Euler-Lagrange equations at each sample (needs or "
-                             "differentiates velocities and accelerations); weak: equations "
-                             "integrated against test functions on smoothed positions, the "
-                             "robust choice for noisy positions; auto: strong when velocities "
-                             "and accelerations are in the data, weak otherwise (default: auto)")
-
-
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``pysindy-xl`` command.
-
-    Sub-commands ``demo``, ``identify`` and ``generate`` (see :doc:`/cli` for every option).
-
-    Returns
-    -------
-    argparse.ArgumentParser
-        Its ``parse_args`` gives a namespace with ``command`` and the options of that command.
-
-    Examples
-    --------
-    >>> args = build_parser().parse_args(["demo", "double-pendulum", "--noise", "0.01"])
-    >>> args.command, args.system, args.noise, args.catalog, args.solver, args.forcing
-    ('demo', 'double-pendulum', 0.01, 'auto', 'auto', 'explicit')
-    """
-    parser = argparse.ArgumentParser(
-        prog="pysindy-xl",
-        description="Identify mechanical systems with XLSINDy: MuJoCo demos and your data.",
-    )
-    from . import __version__
-
-    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    from .benchmark import add_parser as add_benchmark_parser
-
-    add_benchmark_parser(sub)
-
-    demo = sub.add_parser(
-        "demo", help="generate MuJoCo data, identify, validate, plot",
-        description="Generate randomly forced MuJoCo trajectories of a system, identify its "
-                    "equations of motion, validate the model against a fresh trajectory, print "
-                    "the equations and metrics, and write plots and a JSON report.",
-    )
-    demo.add_argument("system", metavar="SYSTEM",
-                      help="cart-pole, double-pendulum, cart-double-pendulum, or an MJCF .xml")
-    _add_generation_options(demo)
-    _add_fit_options(demo)
-    demo.add_argument("--constraints", choices=CONSTRAINTS, default="exclude",
-                      help="samples where a joint limit, contact or equality constraint acts: "
-                           "exclude them from the regression, pass the recorded constraint "
-                           "forces as known forces, or include them unchanged (default: "
-                           "exclude)")
-    demo.add_argument("--validation-duration", type=_positive_float, default=10.0,
-                      help="seconds of the validation trajectory (default: 10)")
-    demo.add_argument("--out", default="pysindy-xl-demo", metavar="DIR",
-                      help="output directory for report.json and plots (default: "
-                           "./pysindy-xl-demo)")
-    demo.add_argument("--save-data", action="store_true", help="also write the training data")
-    demo.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
-    demo.add_argument("--quiet", action="store_true", help="print only the final summary")
-
-    identify = sub.add_parser(
-        "identify", help="fit your data (CSV or NPZ) and print the model",
-        description="Fit a dataset with a reference catalog and print the model. CSV (.csv, "
-                    ".txt; .tsv tab-separated): a header naming the columns t, the coordinates "
-                    "(NAME), optionally NAME_dot, NAME_ddot, tau_NAME and trajectory (ids, "
-                    "several trajectories in one file); --column maps other headers. NPZ: "
-                    "arrays t, q and optionally qd, qdd, tau, trajectory (see "
-                    "pysindy_xl.mujoco.dataset). Coordinates come from --system (a known "
-                    "system or an MJCF .xml), or from --coordinates/--angles, or the CSV header.",
-    )
-    identify.add_argument("data", metavar="DATA", help="a .csv, .tsv, .txt or .npz file")
-    identify.add_argument("--coordinates", default=None, metavar="NAMES",
-                          help="comma-separated coordinate names, e.g. x,theta (CSV: the "
-                               "position columns; NPZ: names of the columns of q); no MJCF "
-                               "needed")
-    identify.add_argument("--angles", default=None, metavar="NAMES",
-                          help="comma-separated coordinates that are angles (enter the catalog "
-                               "through sin and cos), e.g. theta")
-    identify.add_argument("--column", action="append", default=[], metavar="KEY=HEADER",
-                          help="CSV column of a role when its header differs: KEY is t, "
-                               "trajectory, a coordinate NAME, NAME_dot, NAME_ddot or tau_NAME "
-                               "(repeat the option), e.g. --column t=time_s --column x=cart")
-    identify.add_argument("--delimiter", default=None,
-                          help="CSV field separator (default: tab for .tsv, comma otherwise)")
-    identify.add_argument("--system", default=None,
-                          help="system name or MJCF .xml giving coordinates and catalog "
-                               "(default: the dataset's metadata)")
-    _add_fit_options(identify)
-    identify.add_argument("--forces", choices=("tau", "none"), default="tau",
-                          help="use the dataset's generalized forces or fit unforced "
-                               "(default: tau when present)")
-    identify.add_argument("--out", default=None, metavar="FILE.json",
-                          help="write the fitted model (JSON) there")
-    identify.add_argument("--plot", default=None, metavar="FILE.png",
-                          help="write a validation plot: the identified model simulated from "
-                               "the first trajectory's initial state under its recorded "
-                               "forces, against the recorded positions")
-    identify.add_argument("--quiet", action="store_true",
-                          help="no progress lines (on stderr) during the identification")
-
-    generate = sub.add_parser("generate", help="write a MuJoCo dataset (NPZ + JSON)")
-    generate.add_argument("system", metavar="SYSTEM")
-    generate.add_argument("out", metavar="DATA.npz")
-    _add_generation_options(generate, trajectories=4)
-    return parser
 
 
 # -- pieces ------------------------------------------------------------------------------------
