@@ -20,6 +20,23 @@ import time
 import numpy as np
 
 from ._cli_parser import build_parser
+from ._cli_steps import (
+    CLIError,
+    _check_solver,
+    _coefficient_summary,
+    _data_lines,
+    _fit,
+    _generate,
+    _joint_parameters,
+    _log,
+    _model_lines,
+    _output_directory,
+    _output_file,
+    _resolve_catalog,
+    _strict_json,
+    _system,
+    _system_from_metadata,
+)
 from .quality import fit_quality, plot_identification, quality_lines
 
 # fit_quality and plot_identification live in pysindy_xl.quality; imported here for the
@@ -27,268 +44,6 @@ from .quality import fit_quality, plot_identification, quality_lines
 __all__ = ["main", "build_parser", "run_demo", "run_identify"]
 
 _AUTO_SOLVER = {"explicit": "explicit", "implicit": "implicit", "mixed": "mixed"}
-
-class CLIError(Exception):
-    """An error reported to the user as ``pysindy-xl: error: ...`` with exit status 1.
-
-    Raised by the ``run_*`` functions for a bad input or a failed step; :func:`main` prints it
-    without a traceback.
-
-    Examples
-    --------
-    >>> args = build_parser().parse_args(["demo", "cart-pole", "--forcing", "implicit",
-    ...                                   "--solver", "explicit"])
-    >>> run_demo(args)
-    Traceback (most recent call last):
-    ...
-    pysindy_xl.cli.CLIError: --solver explicit needs forces; use --forcing explicit or mixed, or
-    --solver implicit
-    """
-
-
-# -- pieces ------------------------------------------------------------------------------------
-def _optimizer(solver: str, threshold=None):
-    import pysindy_xl as px
-
-    name = {"explicit": "ExplicitOptimizer", "implicit": "ImplicitOptimizer",
-            "mixed": "MixedOptimizer"}[solver]
-    cls = getattr(px, name, None)
-    if cls is None:
-        # not exported (yet): look in its module, imported only now
-        import importlib
-
-        try:
-            module = importlib.import_module(f"pysindy_xl.optimizers.{solver}")
-            cls = getattr(module, name)
-        except (ImportError, AttributeError):
-            raise CLIError(
-                f"--solver {solver}: px.{name} is not available in this installation; use "
-                "--solver explicit with --forcing explicit or mixed"
-            ) from None
-    if threshold is not None:
-        if "threshold" not in cls().get_params():
-            raise CLIError(f"--threshold: {name} has no threshold parameter")
-        return cls(threshold=threshold)
-    return cls()
-
-
-def _system(name, joints=None):
-    from pysindy_xl.mujoco import MuJoCoSystem, get_system
-
-    try:
-        if joints is None:
-            return get_system(name)
-        system = get_system(name) if isinstance(name, MuJoCoSystem) else None
-        if system is None and not (isinstance(name, str) and name.endswith(".xml")):
-            raise CLIError(f"--joints: only for MJCF .xml models; {name!r} is a shipped system "
-                           "whose joints are all identified")
-        return get_system(name, joints=joints)
-    except (ValueError, TypeError) as error:
-        raise CLIError(str(error).replace("joints: ", "--joints: ", 1)) from None
-
-
-def _output_file(path, option):
-    """Check an output file's directory before any long computation."""
-    directory = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(directory):
-        raise CLIError(f"{option}: directory {directory!r} does not exist")
-    if os.path.isdir(path):
-        raise CLIError(f"{option}: {path!r} is a directory, expected a file name")
-
-
-def _output_directory(path):
-    if os.path.exists(path) and not os.path.isdir(path):
-        raise CLIError(f"--out: {path!r} exists and is not a directory; give a directory")
-    try:
-        os.makedirs(path, exist_ok=True)
-    except OSError as error:
-        raise CLIError(f"--out: cannot create directory {path!r} ({error.strerror})") from None
-
-
-def _generate(system, args, progress=None):
-    """generate_dataset with the shared options; warnings of the generation are printed."""
-    import warnings
-
-    from pysindy_xl.mujoco import generate_dataset
-
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
-            dataset = generate_dataset(
-                system, n_trajectories=args.trajectories, duration=args.duration,
-                forcing=args.forcing, actuators=args.actuators, noise=args.noise,
-                noise_model=args.noise_model, seed=args.seed, sample_every=args.sample_every,
-                amplitude=args.amplitude, initial_scale=args.initial_scale, progress=progress,
-            )
-        except (ValueError, RuntimeError, TypeError) as error:
-            raise CLIError(str(error)) from None
-    for warning in caught:
-        print(f"warning: {warning.message}", file=sys.stderr)
-    return dataset
-
-
-def _data_lines(system, dataset):
-    """What the data hold: sampling, what the fit receives, constraints."""
-    meta = dataset.metadata
-    period = meta["timestep"] * meta["sample_every"]
-    lines = [f"  sampling every {meta['sample_every']} step(s) of {meta['timestep'] * 1e3:g} ms "
-             f"= {period * 1e3:g} ms"]
-    if meta.get("derivatives") == "none":
-        lines.append(f"  noise model {meta['noise_model']}: noisy positions only, no velocity "
-                     "or acceleration given (weak formulation on smoothed states)")
-    excluded = getattr(system, "excluded_joints", ())
-    if excluded:
-        lines.append(f"  joints locked at their reference pose (not identified): "
-                     f"{', '.join(excluded)}")
-    summary = meta.get("constraints", {})
-    if summary.get("active_fraction"):
-        hits = ", ".join(f"{j} {c}" for j, c in summary["limit_hits"].items()) or "none"
-        lines.append(f"  constraints act on {summary['active_fraction']:.1%} of the samples "
-                     f"(joint limit samples: {hits}; contact samples: "
-                     f"{summary['contact_samples']})")
-    return lines
-
-
-def _system_from_metadata(metadata):
-    """The system a dataset was generated with (a user's MJCF from its path or embedded XML)."""
-    from pysindy_xl.mujoco import system_from_metadata
-
-    try:
-        return system_from_metadata(metadata)
-    except (ValueError, TypeError) as error:
-        raise CLIError(str(error)) from None
-
-
-def _resolve_catalog(args, system):
-    """Replace ``--catalog auto`` by the catalog kind used for ``system``.
-
-    Any MuJoCo model (the shipped ones and users' MJCF files) gets the kinematic catalog: it
-    contains the true model whatever the mass distribution and, being compact, identifies
-    noisy positions where the paper's product catalogs swap near-collinear terms (measured on
-    the shipped cart double pendulum at 1 % position noise: 10 exact terms, 0.1 % error,
-    against 29 terms for 15 true with the mixed catalog). Systems without a model (named
-    coordinates of a CSV file) get the paper's mixed catalog; ``--catalog mixed`` etc.
-    reproduce the paper's tables.
-    """
-    from pysindy_xl.mujoco import MuJoCoSystem
-
-    if args.catalog == "auto":
-        has_model = type(system).xml is not MuJoCoSystem.xml  # an MJCF to read the tree from
-        args.catalog = "kinematic" if has_model else "mixed"
-
-
-def _log(quiet, *args):
-    if not quiet:
-        print(*args, flush=True)
-
-
-def _check_solver(solver, forced, threshold):
-    """The optimizer of ``solver``, checked before any long computation."""
-    if solver == "explicit" and not forced:
-        raise CLIError("--solver explicit needs forces; use --forcing explicit or mixed, or "
-                       "--solver implicit")
-    return _optimizer(solver, threshold)
-
-
-def _fit(system, dataset, args, solver, forced, return_arguments=False):
-    import pysindy_xl as px
-    from pysindy_xl.mujoco.catalogs import reference_catalog
-
-    optimizer = _check_solver(solver, forced, args.threshold)
-    catalog = reference_catalog(system, args.catalog, velocity_degree=args.velocity_degree,
-                                trig_degree=args.trig_degree, friction=args.friction)
-    model = px.XLSINDy(catalog, optimizer, formulation=getattr(args, "formulation", "auto"))
-    try:
-        arguments = dataset.fit_arguments(forces="tau" if forced else None,
-                                          constraints=getattr(args, "constraints", "exclude"))
-        formulation = model._resolve_formulation(arguments.get("x_dot"),
-                                                 arguments.get("x_ddot"))
-        if (solver == "explicit" and getattr(args, "solver", "auto") == "auto"
-                and args.threshold is None and formulation == "weak"
-                and arguments.get("x_dot") is None):
-            # as XLSINDy's own default: explicit fits of positions only are bagged
-            model.set_params(optimizer=px.EnsembleOptimizer(optimizer))
-        model.fit(**arguments)
-    except (RuntimeError, ValueError, np.linalg.LinAlgError) as error:
-        raise CLIError(f"identification failed ({type(error).__name__}): {error}") from None
-    if return_arguments:
-        return model, arguments
-    return model
-
-
-def _coefficient_summary(system, model):
-    """True coefficients and errors against them (None for systems without ground truth)."""
-    from pysindy_xl.mujoco.catalogs import true_coefficients
-
-    if not system.has_ground_truth:
-        return None, {}
-    truth, missing = true_coefficients(system, model.feature_library_)
-    coef = model.coefficients()
-    forces = model.feature_library_.force_columns_
-    if not np.allclose(coef[forces], -1.0):
-        # an implicit law is defined up to a factor: scale the truth to the identified vector
-        rest = np.setdiff1d(np.arange(len(coef)), forces)
-        norm = truth[rest] @ truth[rest]
-        factor = (coef[rest] @ truth[rest]) / norm if norm > 0 else 1.0
-        truth = truth * (factor if factor != 0 else 1.0)
-        truth[forces] = coef[forces]
-    scale = np.abs(truth).max()
-    active = truth != 0
-    summary = {
-        "max_relative_error": float(np.abs(coef - truth).max() / scale),
-        "true_terms": int(active.sum()),
-        "identified_terms": int(np.count_nonzero(coef)),
-        "support_recovered": bool(np.array_equal(coef != 0, active)),
-        "true_model_missing_from_catalog": missing,
-    }
-    return truth, summary
-
-
-def _joint_parameters(system, model):
-    """Identified joint damping and dry friction next to the MJCF's (user models only)."""
-    if system.has_ground_truth or not hasattr(system, "frictionloss"):
-        return {}
-    coefficients = dict(zip(model.get_feature_names(), model.coefficients(), strict=True))
-    out = {}
-    for i, (joint, name) in enumerate(zip(system.joint_names, system.coordinate_names,
-                                          strict=True)):
-        entry = {"damping": [float(coefficients.get(f"C_{name}[{name}_dot]", 0.0)),
-                             float(system.joint_damping[i])]}
-        prefix = f"C_{name}[tanh("
-        dry = [v for k, v in coefficients.items() if k.startswith(prefix)]
-        if dry or system.frictionloss[i]:
-            entry["frictionloss"] = [float(sum(dry)), float(system.frictionloss[i])]
-        out[joint] = entry
-    return out
-
-
-def _strict_json(value):
-    """JSON-safe copy: non-finite floats (an infinite RMSE) become null."""
-    if isinstance(value, dict):
-        return {k: _strict_json(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_strict_json(v) for v in value]
-    if isinstance(value, float) and not np.isfinite(value):
-        return None
-    return value
-
-
-def _rounded(expr, digits=4):
-    import sympy as sp
-
-    return expr.xreplace({f: sp.Float(f, digits) for f in expr.atoms(sp.Float)})
-
-
-def _model_lines(model):
-    lines = []
-    lagrangian = model.lagrangian()
-    if lagrangian != 0:
-        lines.append(f"L = {_rounded(lagrangian)}")
-    names = model.feature_library_.coords.names
-    for name, eq in zip(names, model.equations(), strict=True):
-        lines.append(f"({name}) {eq}")
-    return lines
-
 
 # -- commands ----------------------------------------------------------------------------------
 def run_demo(args) -> dict:
