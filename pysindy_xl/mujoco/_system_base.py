@@ -1,0 +1,459 @@
+"""The base class of every MuJoCo system: an MJCF model with the textbook description of the
+same mechanism (coordinate, force and friction conventions: :mod:`pysindy_xl.mujoco.systems`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from .._optional import import_optional
+from ..symbols import Coordinates
+
+
+def _mujoco():
+    """The ``mujoco`` module, imported on first use (clear error naming the extra)."""
+    return import_optional("mujoco", purpose="MuJoCo simulation (pysindy_xl.mujoco)")
+
+
+__all__ = ["MuJoCoSystem", "equations_of_motion"]
+
+
+def _positive(value, name: str) -> float:
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expected a positive number, got {value!r}") from None
+    if not np.isfinite(value) or value <= 0:
+        raise ValueError(f"{name}: expected a positive finite number, got {value!r}")
+    return value
+
+
+def _non_negative(value, name: str) -> float:
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expected a non-negative number, got {value!r}") from None
+    if not np.isfinite(value) or value < 0:
+        raise ValueError(f"{name}: expected a non-negative finite number, got {value!r}")
+    return value
+
+
+def _f(value: float) -> str:
+    """Format a float for MJCF without losing precision."""
+    return repr(float(value))
+
+
+def equations_of_motion(lagrangian: sp.Expr, coords: Coordinates, friction=None) -> list[sp.Expr]:
+    """Left-hand sides ``d/dt dL/dqd_i - dL/dq_i + friction_i`` of the equations of motion.
+
+    The equations of motion read ``lhs_i = Q_i`` with ``Q`` the generalized external forces.
+    The time derivative is taken with the chain rule over the coordinate symbols.
+
+    Parameters
+    ----------
+    lagrangian : sympy.Expr
+        Lagrangian in ``coords.q`` and ``coords.qd``.
+    coords : Coordinates
+        The generalized coordinates (positions, velocities, accelerations as symbols).
+    friction : dict, optional
+        ``{(term, i): c}``: adds ``c * term`` to equation ``i``.
+
+    Returns
+    -------
+    list of sympy.Expr, one per coordinate
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> lhs = equations_of_motion(c.qd[0] ** 2 / 2, c, {(c.qd[0], 0): 0.5})
+    >>> lhs[0] == c.qdd[0] + 0.5 * c.qd[0]
+    True
+    """
+    out = []
+    for i, (qi, qdi) in enumerate(zip(coords.q, coords.qd, strict=True)):
+        momentum = sp.diff(lagrangian, qdi)
+        d_dt = sum(
+            sp.diff(momentum, qk) * qdk + sp.diff(momentum, qdk) * qddk
+            for qk, qdk, qddk in zip(coords.q, coords.qd, coords.qdd, strict=True)
+        )
+        lhs = d_dt - sp.diff(lagrangian, qi)
+        for (term, c), value in (friction or {}).items():
+            if c == i:
+                lhs += value * term
+        out.append(sp.expand(lhs))
+    return out
+
+
+class MuJoCoSystem:
+    """A mechanical system simulated by MuJoCo and described in textbook coordinates.
+
+    Subclasses define the coordinate names, the MuJoCo joints (in degree-of-freedom order), the
+    linear map ``q = T @ qpos`` (:attr:`joint_to_coordinates`), the MJCF text (:meth:`xml`)
+    and the Lagrangian (:meth:`lagrangian`).
+
+    Attributes
+    ----------
+    name : str
+        Registry name (``"cart-pole"``...).
+    coordinate_names : tuple of str
+        Names of the generalized coordinates (symbols of :attr:`coords`).
+    joint_names : tuple of str
+        MuJoCo joints, in the order of ``qpos`` / ``qvel``.
+    angle_coordinates : tuple of int
+        Indices of the coordinates that are angles (enter the catalogs through sin and cos).
+    mixed_actuators : tuple of str
+        Joints driven in the ``mixed`` forcing mode by default.
+    has_ground_truth : bool
+        Whether :meth:`lagrangian` and :meth:`friction` give the true model.
+
+    Examples
+    --------
+    The smallest system, a point mass on a damped rail (see :class:`CartPole` for a full one):
+
+    >>> import numpy as np
+    >>> class Rail(MuJoCoSystem):
+    ...     name, coordinate_names, joint_names = "rail", ("x",), ("slider",)
+    ...     def __init__(self, mass=2.0, damping=0.3):
+    ...         self._parameters = {"mass": mass, "damping": damping}
+    ...     @property
+    ...     def joint_damping(self):
+    ...         return np.array([self._parameters["damping"]])
+    ...     @property
+    ...     def force_amplitudes(self):
+    ...         return {"slider": 1.0}
+    ...     def lagrangian(self):
+    ...         return self._parameters["mass"] * self.coords.qd[0] ** 2 / 2
+    ...     def xml(self):
+    ...         p = self._parameters
+    ...         return (f'<mujoco><worldbody><body><joint name="slider" type="slide" '
+    ...                 f'axis="1 0 0" damping="{p["damping"]}"/><inertial pos="0 0 0" '
+    ...                 f'mass="{p["mass"]}" diaginertia="1 1 1"/></body></worldbody>'
+    ...                 '<actuator><motor joint="slider"/></actuator></mujoco>')
+    >>> rail = Rail()
+    >>> rail.equations_of_motion()
+    [2.0*x_ddot + 0.3*x_dot]
+    >>> rail.mj_model().nv, rail.friction()
+    (1, {(x_dot, 0): 0.3})
+    """
+
+    name = "system"
+    coordinate_names: tuple[str, ...] = ()
+    joint_names: tuple[str, ...] = ()
+    angle_coordinates: tuple[int, ...] = ()
+    mixed_actuators: tuple[str, ...] = ()
+    has_ground_truth = True
+
+    # -- description ---------------------------------------------------------------------
+    @property
+    def coords(self) -> Coordinates:
+        """The generalized coordinates (:class:`pysindy_xl.Coordinates`)."""
+        return Coordinates(self.coordinate_names)
+
+    @property
+    def n(self) -> int:
+        """Number of generalized coordinates."""
+        return len(self.coordinate_names)
+
+    @property
+    def parameters(self) -> dict:
+        """Physical and numerical parameters (JSON-serializable)."""
+        return dict(self._parameters)
+
+    @property
+    def joint_to_coordinates(self) -> np.ndarray:
+        """Matrix ``T`` (n, n) of the map ``q = T @ qpos`` (also velocities, accelerations)."""
+        return np.eye(self.n)
+
+    @property
+    def actuated_joints(self) -> tuple[str, ...]:
+        """Joints that carry a motor in :meth:`xml` (every joint for our systems)."""
+        return self.joint_names
+
+    @property
+    def joint_damping(self) -> np.ndarray:
+        """Viscous damping coefficient of each MuJoCo joint, shape (n,)."""
+        raise NotImplementedError
+
+    @property
+    def force_amplitudes(self) -> dict[str, float]:
+        """Typical amplitude of the random force of each actuated joint (N or N m)."""
+        raise NotImplementedError
+
+    def lagrangian(self) -> sp.Expr:
+        """True Lagrangian ``T - V`` in the symbols of :attr:`coords`.
+
+        Returns
+        -------
+        sympy.Expr
+            Kinetic minus potential energy, in ``coords.q`` and ``coords.qd``.
+
+        Raises
+        ------
+        NotImplementedError
+            In this base class, which describes no particular system.
+
+        Examples
+        --------
+        >>> from pysindy_xl.mujoco import CartPole
+
+        The cart position is cyclic (absent from the Lagrangian of the cart-pole):
+
+        >>> sorted(map(str, CartPole().lagrangian().free_symbols))
+        ['theta', 'theta_dot', 'x_dot']
+        """
+        raise NotImplementedError
+
+    def xml(self) -> str:
+        """MJCF text of the model with the current parameters.
+
+        Returns
+        -------
+        str
+            A complete ``<mujoco>`` document.
+
+        Raises
+        ------
+        NotImplementedError
+            In this base class, which describes no particular system.
+
+        Examples
+        --------
+        >>> from pysindy_xl.mujoco import CartPole
+        >>> CartPole().xml().splitlines()[0]
+        '<mujoco model="cart_pole">'
+        """
+        raise NotImplementedError
+
+    def mj_model(self):
+        """Compiled MuJoCo model of :meth:`xml`.
+
+        Returns
+        -------
+        mujoco.MjModel
+            A new model at each call.
+
+        Examples
+        --------
+        >>> from pysindy_xl.mujoco import DoublePendulum
+        >>> model = DoublePendulum().mj_model()
+        >>> model.nq, model.nu, model.opt.timestep
+        (2, 2, 0.001)
+        """
+        return _mujoco().MjModel.from_xml_string(self.xml())
+
+    # -- transforms ----------------------------------------------------------------------
+    def force_matrix(self) -> np.ndarray:
+        """Matrix ``B`` (n, n): generalized force on the coordinates ``= B @ u``.
+
+        ``u`` holds one force per MuJoCo degree of freedom (``qfrc_actuator``); ``B = T^-T``
+        by virtual work. Pass it as ``ExternalForces(coords, interlink=B)`` to fit with the
+        joint forces ``u`` instead of the generalized forces ``tau = u @ B.T``.
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+
+        Examples
+        --------
+        >>> from pysindy_xl.mujoco import DoublePendulum
+
+        A motor on the second (relative) hinge of a double pendulum pushes the outer link
+        forward and the inner one back:
+
+        >>> import numpy as np
+        >>> DoublePendulum().force_matrix() @ np.array([0.0, 1.0])
+        array([-1.,  1.])
+        """
+        return np.linalg.inv(self.joint_to_coordinates).T
+
+    def friction_matrix(self) -> np.ndarray:
+        """Matrix ``F`` (n, n): generalized friction force ``= -F @ qd``.
+
+        ``F = B C T^-1`` with ``C`` the diagonal of joint damping coefficients.
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            Symmetric; diagonal when every joint measures one coordinate.
+
+        Examples
+        --------
+        >>> from pysindy_xl.mujoco import DoublePendulum
+        >>> DoublePendulum(damping1=0.3, damping2=0.15).friction_matrix()
+        array([[ 0.45, -0.15],
+               [-0.15,  0.15]])
+        """
+        t_inv = np.linalg.inv(self.joint_to_coordinates)
+        return t_inv.T @ np.diag(self.joint_damping) @ t_inv
+
+    def friction_pattern(self) -> np.ndarray:
+        """Boolean (n, n): which velocity ``j`` joint damping can put in equation ``i``.
+
+        The structure of :meth:`friction_matrix` with every joint damped, independent of the
+        damping values; the reference catalogs use it for their friction terms.
+
+        Returns
+        -------
+        ndarray of bool, shape (n, n)
+            ``pattern[i, j]``: the velocity of coordinate ``j`` may appear in equation ``i``.
+
+        Examples
+        --------
+        >>> from pysindy_xl.mujoco import CartDoublePendulum
+        >>> CartDoublePendulum().friction_pattern()
+        array([[ True, False, False],
+               [False,  True,  True],
+               [False,  True,  True]])
+        """
+        t_inv = np.linalg.inv(self.joint_to_coordinates)
+        return np.abs(t_inv.T @ t_inv) > 1e-12
+
+    def friction(self) -> dict:
+        """Classical friction terms ``{(qd_j, i): c}`` of the true model.
+
+        Convention of the feature libraries: the term ``qd_j`` with coefficient ``c`` in the
+        equation of coordinate ``i`` stands for the friction force ``-c * qd_j``.
+
+        Returns
+        -------
+        dict
+            ``{(velocity symbol, equation index): coefficient}``, the non-zero entries of
+            :meth:`friction_matrix`; as ``classical=`` of ``ideal_coefficients``.
+
+        Examples
+        --------
+        >>> from pysindy_xl.mujoco import CartPole
+        >>> CartPole(cart_damping=0.5, pole_damping=0.1).friction()
+        {(x_dot, 0): 0.5, (theta_dot, 1): 0.1}
+        """
+        coords = self.coords
+        matrix = self.friction_matrix()
+        return {
+            (coords.qd[j], i): float(matrix[i, j])
+            for i in range(self.n)
+            for j in range(self.n)
+            if abs(matrix[i, j]) > 1e-15
+        }
+
+    def equations_of_motion(self) -> list[sp.Expr]:
+        """Left-hand sides ``EL_i(L) + friction_i``; the motion satisfies ``lhs = B @ u``.
+
+        Returns
+        -------
+        list of sympy.Expr
+            One per coordinate (see the module function :func:`equations_of_motion`).
+
+        Examples
+        --------
+        >>> from pysindy_xl.mujoco import CartPole
+        >>> CartPole().equations_of_motion()[1]
+        0.320001*theta_ddot + 0.1*theta_dot + 0.4*x_ddot*cos(theta) + 3.924*sin(theta)
+        """
+        return equations_of_motion(self.lagrangian(), self.coords, self.friction())
+
+    def to_generalized(self, qpos, qvel, qacc=None):
+        """Map MuJoCo joint coordinates to the textbook generalized coordinates.
+
+        Parameters
+        ----------
+        qpos, qvel : array, shape (N, n) or (n,)
+            MuJoCo joint positions and velocities (``data.qpos``, ``data.qvel``).
+        qacc : array, shape (N, n) or (n,), optional
+            MuJoCo joint accelerations (``data.qacc``).
+
+        Returns
+        -------
+        q, qd, qdd : ndarray
+            Same shapes; ``qdd`` is None when ``qacc`` is None.
+
+        Examples
+        --------
+        >>> from pysindy_xl.mujoco import DoublePendulum
+
+        The second hinge of a double pendulum measures the relative angle:
+
+        >>> DoublePendulum().to_generalized([0.1, 0.2], [1.0, 1.0])
+        (array([0.1, 0.3]), array([1., 2.]), None)
+        """
+        matrix = self.joint_to_coordinates
+        out = []
+        for name, a in (("qpos", qpos), ("qvel", qvel), ("qacc", qacc)):
+            if a is None:
+                out.append(None)
+                continue
+            a = np.asarray(a, dtype=float)
+            if a.shape[-1] != self.n:
+                raise ValueError(f"{name}: expected last dimension {self.n}, got shape {a.shape}")
+            out.append(a @ matrix.T)
+        return tuple(out)
+
+    def from_generalized(self, q, qd=None):
+        """Inverse of :meth:`to_generalized` for positions and velocities.
+
+        Parameters
+        ----------
+        q : array, shape (N, n) or (n,)
+            Generalized positions.
+        qd : array, shape (N, n) or (n,), optional
+            Generalized velocities.
+
+        Returns
+        -------
+        qpos, qvel : ndarray
+            MuJoCo joint positions and velocities, same shapes (``qvel`` None when ``qd`` is
+            None).
+
+        Examples
+        --------
+        >>> from pysindy_xl.mujoco import DoublePendulum
+        >>> DoublePendulum().from_generalized([0.1, 0.3], [1.0, 2.0])
+        (array([0.1, 0.2]), array([1., 1.]))
+        """
+        inverse = np.linalg.inv(self.joint_to_coordinates)
+        q = np.asarray(q, dtype=float)
+        if q.shape[-1] != self.n:
+            raise ValueError(f"q: expected last dimension {self.n}, got shape {q.shape}")
+        qpos = q @ inverse.T
+        if qd is None:
+            return qpos, None
+        qd = np.asarray(qd, dtype=float)
+        if qd.shape[-1] != self.n:
+            raise ValueError(f"qd: expected last dimension {self.n}, got shape {qd.shape}")
+        return qpos, qd @ inverse.T
+
+    def random_initial_state(self, rng: np.random.Generator, scale: float = 1.0):
+        """Random initial positions and velocities in the generalized coordinates.
+
+        Angles uniform in ``[-2, 2] * scale`` rad, linear positions in ``[-0.5, 0.5] * scale``
+        m, velocities uniform in ``[-1, 1] * scale``.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            Source of the random draws.
+        scale : float, default 1.0
+            Multiplies every range.
+
+        Returns
+        -------
+        q0, qd0 : ndarray, shape (n,)
+
+        Examples
+        --------
+        >>> from pysindy_xl.mujoco import CartPole
+        >>> import numpy as np
+        >>> q0, qd0 = CartPole().random_initial_state(np.random.default_rng(0), scale=0.1)
+        >>> bool(abs(q0[0]) <= 0.05 and abs(q0[1]) <= 0.2 and np.all(abs(qd0) <= 0.1))
+        True
+        """
+        half_range = np.full(self.n, 0.5)
+        half_range[list(self.angle_coordinates)] = 2.0
+        q0 = rng.uniform(-1.0, 1.0, self.n) * half_range * scale
+        qd0 = rng.uniform(-1.0, 1.0, self.n) * scale
+        return q0, qd0
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v!r}" for k, v in self._parameters.items())
+        return f"{type(self).__name__}({args})"

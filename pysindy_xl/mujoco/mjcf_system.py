@@ -1,0 +1,338 @@
+"""A user's MJCF model as a system: coordinates are MuJoCo's joint coordinates."""
+
+from __future__ import annotations
+
+import keyword
+import os
+import re
+
+import numpy as np
+
+from ._system_base import MuJoCoSystem, _mujoco, _positive
+
+__all__ = ["MJCFSystem"]
+
+
+# -- user-supplied models ------------------------------------------------------------------
+def _identifier(name: str, index: int, taken: set) -> str:
+    ident = re.sub(r"\W", "_", name or "") or f"q{index}"
+    if ident[0].isdigit() or keyword.iskeyword(ident) or ident == "t":
+        ident = f"q_{ident}"
+    if ident.startswith("tau_") or ident.endswith(("_dot", "_ddot")):
+        ident = f"{ident}_q"
+    base, k = ident, 1
+    while ident in taken:
+        ident, k = f"{base}_{k}", k + 1
+    taken.add(ident)
+    return ident
+
+
+class MJCFSystem(MuJoCoSystem):
+    """A user's MJCF model: coordinates are MuJoCo's joint coordinates.
+
+    Only hinge and slide joints are supported (each joint one coordinate, ``q = qpos``);
+    hinge angles count as angles for the catalogs. The true Lagrangian is unknown, so
+    :meth:`lagrangian` raises; joint damping is read from the model as diagonal friction.
+
+    Parameters
+    ----------
+    source : str or os.PathLike
+        Path to an MJCF file, or the MJCF text itself (a string starting with ``<``).
+    force_amplitude : float, default 1.0
+        Amplitude of the random force of an actuator without ``ctrlrange``.
+    joints : list of str, optional
+        Identify these joints only. The other joints are **locked** at their reference pose
+        (the pose written in the MJCF, ``qpos = ref``): they are removed from the model with
+        the actuators that drive them, and their bodies move rigidly with their parents. A
+        passive body decoupled from the rest (e.g. a target on two slide joints) thus simply
+        leaves the problem; the mass of a locked body still loads its parent, as in the real
+        mechanism with that joint blocked. Default: every joint.
+
+    Attributes
+    ----------
+    path : str or None
+        Absolute path of the MJCF file (None for MJCF text).
+    excluded_joints : tuple of str
+        Joints locked by ``joints``.
+
+    Examples
+    --------
+    >>> xml = '''<mujoco><worldbody><body><joint name="a" type="hinge" axis="0 1 0"/>
+    ... <geom type="sphere" size="0.1" pos="0 0 -1"/></body></worldbody></mujoco>'''
+    >>> MJCFSystem(xml).coords
+    Coordinates(['a'])
+
+    Leave a passive target on two slide joints out:
+
+    >>> xml = '''<mujoco><worldbody>
+    ... <body><joint name="swing" axis="0 1 0"/><geom size="0.1" pos="0 0 -1"/></body>
+    ... <body pos="2 0 0"><joint name="tx" type="slide" axis="1 0 0"/>
+    ... <joint name="ty" type="slide" axis="0 1 0"/><geom size="0.1"/></body>
+    ... </worldbody></mujoco>'''
+    >>> system = MJCFSystem(xml, joints=["swing"])
+    >>> system.coords, system.excluded_joints, system.mj_model().nq
+    (Coordinates(['swing']), ('tx', 'ty'), 1)
+    """
+
+    name = "mjcf"
+    has_ground_truth = False
+
+    def __init__(self, source, force_amplitude=1.0, joints=None):
+        mujoco = _mujoco()
+        if isinstance(source, os.PathLike) or (
+            isinstance(source, str) and not source.lstrip().startswith("<")
+        ):
+            path = os.fspath(source)
+            if not os.path.isfile(path):
+                raise ValueError(f"source: MJCF file {path!r} does not exist")
+            try:
+                model = mujoco.MjModel.from_xml_path(path)
+            except ValueError as error:
+                raise ValueError(f"source: cannot load MJCF file {path!r}: {error}") from None
+            with open(path, encoding="utf-8") as handle:
+                self._xml = handle.read()
+            self.path = os.path.abspath(path)
+        elif isinstance(source, str):
+            try:
+                model = mujoco.MjModel.from_xml_string(source)
+            except ValueError as error:
+                raise ValueError(f"source: cannot compile MJCF text: {error}") from None
+            self._xml, self.path = source, None
+        else:
+            raise TypeError(f"source: expected a path or MJCF text, got {type(source).__name__}")
+        allowed = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+        if model.njnt == 0:
+            raise ValueError("source: the model has no joint, nothing to identify")
+        for j in range(model.njnt):
+            if int(model.jnt_type[j]) not in allowed:
+                jname = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"#{j}"
+                raise ValueError(
+                    f"source: joint {jname!r} is not a hinge or slide joint; only those are "
+                    "supported (one coordinate per joint)"
+                )
+        self._spec = None
+        self.excluded_joints = ()
+        if joints is not None:
+            model = self._select_joints(model, joints)
+        self._model = model
+        taken: set = set()
+        raw = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or "" for j in
+               range(model.njnt)]
+        self.joint_names = tuple(raw[j] or f"joint{j}" for j in range(model.njnt))
+        self.coordinate_names = tuple(_identifier(raw[j], j, taken) for j in range(model.njnt))
+        hinge = int(mujoco.mjtJoint.mjJNT_HINGE)
+        self.angle_coordinates = tuple(
+            j for j in range(model.njnt) if int(model.jnt_type[j]) == hinge
+        )
+        self.mixed_actuators = self.actuated_joints[:1]
+        self._parameters = {"source": self.path or "<string>",
+                            "force_amplitude": _positive(force_amplitude, "force_amplitude"),
+                            "timestep": float(model.opt.timestep)}
+        if joints is not None:
+            self._parameters["joints"] = list(self.joint_names)
+
+    def _select_joints(self, model, joints):
+        if isinstance(joints, str):
+            joints = [joints]
+        try:
+            joints = list(joints)
+        except TypeError:
+            raise TypeError(f"joints: expected a list of joint names, got {joints!r}") from None
+        mujoco = _mujoco()
+        names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
+                 for j in range(model.njnt)]
+        unknown = [j for j in joints if j not in names]
+        if unknown or not joints or not all(isinstance(j, str) for j in joints):
+            raise ValueError(
+                f"joints: expected a non-empty list of joint names among {names}, got {joints!r}"
+            )
+        if not hasattr(mujoco, "MjSpec"):
+            raise ValueError(f"joints: selecting joints needs MuJoCo >= 3.3 (MjSpec), found "
+                             f"{mujoco.__version__}")
+        spec = (mujoco.MjSpec.from_file(self.path) if self.path is not None
+                else mujoco.MjSpec.from_string(self._xml))
+        excluded = [name for name in names if name not in joints]
+        for name in excluded:
+            joint = spec.joint(name)
+            if joint is None:
+                raise ValueError(f"joints: cannot lock the unnamed joint {name!r}; name it")
+            for actuator in list(spec.actuators):
+                if actuator.target == name:
+                    spec.delete(actuator)
+            spec.delete(joint)
+        self._spec, self.excluded_joints = spec, tuple(excluded)
+        try:
+            return spec.compile()
+        except ValueError as error:
+            raise ValueError(f"joints: the model with {excluded} locked does not compile: "
+                             f"{error}") from None
+
+    @property
+    def frictionloss(self) -> np.ndarray:
+        """Dry friction (``frictionloss``) of each joint, shape (n,).
+
+        Examples
+        --------
+        >>> xml = ('<mujoco><worldbody><body><joint type="slide" frictionloss="0.3"/>'
+        ...        '<geom size="0.1"/></body></worldbody></mujoco>')
+        >>> MJCFSystem(xml).frictionloss
+        array([0.3])
+        """
+        model = self._model
+        return np.array([model.dof_frictionloss[model.jnt_dofadr[j]] for j in range(model.njnt)],
+                        dtype=float)
+
+    def random_initial_state(self, rng: np.random.Generator, scale: float = 1.0):
+        """Random initial state inside the joint ranges, around the reference pose.
+
+        A joint with a range starts uniformly between its reference position (``ref``,
+        clipped to the range) and ``scale`` x 90 % of the way to each end of the range, with
+        a velocity of at most ``scale`` x min(1, half the range width) per second; a joint
+        without range as in :meth:`MuJoCoSystem.random_initial_state`, around ``ref``.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            Source of the random draws.
+        scale : float, default 1.0
+            Fraction of the ranges used.
+
+        Returns
+        -------
+        q0, qd0 : ndarray, shape (n,)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> xml = ('<mujoco><compiler angle="radian"/><worldbody><body>'
+        ...        '<joint type="slide" range="0 0.2" ref="0.05"/><geom size="0.1"/>'
+        ...        '</body></worldbody></mujoco>')
+        >>> q0 = np.array([MJCFSystem(xml).random_initial_state(np.random.default_rng(k))[0]
+        ...                for k in range(200)])
+        >>> bool(q0.min() >= 0.0 and q0.max() <= 0.2)
+        True
+        """
+        model = self._model
+        ref = np.array([model.qpos0[model.jnt_qposadr[j]] for j in range(model.njnt)])
+        limited = np.asarray(model.jnt_limited, dtype=bool)
+        low, high = np.asarray(model.jnt_range, dtype=float).T
+        half = np.full(self.n, 0.5)
+        half[list(self.angle_coordinates)] = 2.0
+        draw = rng.uniform(-1.0, 1.0, self.n)
+        center = np.where(limited, np.clip(ref, low, high), ref)
+        reach = np.where(draw > 0, high - center, center - low)
+        q0 = np.where(limited, center + 0.9 * scale * draw * reach, ref + draw * half * scale)
+        margin = 0.05 * (high - low)
+        q0 = np.where(limited, np.clip(q0, low + margin, high - margin), q0)
+        speed = np.where(limited, np.minimum(1.0, (high - low) / 2), 1.0)
+        qd0 = rng.uniform(-1.0, 1.0, self.n) * speed * scale
+        return q0, qd0
+
+    def metadata(self) -> dict:
+        """What a dataset records to rebuild this system (:func:`system_from_metadata`).
+
+        Returns
+        -------
+        dict
+            ``model_path`` (absolute, or None), ``model_xml`` (the MJCF text, flattened when
+            it uses ``<include>``) and ``joints`` (None for every joint).
+
+        Examples
+        --------
+        >>> xml = ('<mujoco><worldbody><body><joint name="a" type="slide"/>'
+        ...        '<geom size="0.1"/></body></worldbody></mujoco>')
+        >>> sorted(MJCFSystem(xml).metadata())
+        ['joints', 'model_path', 'model_xml']
+        """
+        text = self._xml
+        if "<include " in text and self.path is not None:
+            text = _mujoco().MjSpec.from_file(self.path).to_xml()
+        return {"model_path": self.path, "model_xml": text,
+                "joints": self._parameters.get("joints")}
+
+    @property
+    def actuated_joints(self):
+        model = self._model
+        names = []
+        for a in range(model.nu):
+            if int(model.actuator_trntype[a]) == int(_mujoco().mjtTrn.mjTRN_JOINT):
+                names.append(self.joint_names[model.actuator_trnid[a, 0]])
+        return tuple(dict.fromkeys(names))
+
+    @property
+    def joint_damping(self):
+        return np.array([self._model.dof_damping[self._model.jnt_dofadr[j]]
+                         for j in range(self._model.njnt)], dtype=float)
+
+    @property
+    def force_amplitudes(self):
+        return {j: self._parameters["force_amplitude"] for j in self.actuated_joints}
+
+    def lagrangian(self):
+        """Not available: the true Lagrangian of a user's model is unknown.
+
+        Returns
+        -------
+        sympy.Expr
+            Never returns.
+
+        Raises
+        ------
+        NotImplementedError
+            Always; subclass :class:`MuJoCoSystem` to describe a model with a known Lagrangian.
+
+        Examples
+        --------
+        >>> xml = ('<mujoco><worldbody><body><joint type="slide"/><geom size="0.1"/>'
+        ...        '</body></worldbody></mujoco>')
+        >>> MJCFSystem(xml).lagrangian()
+        Traceback (most recent call last):
+        ...
+        NotImplementedError: MJCFSystem: the true Lagrangian of a user's model is unknown; ...
+        """
+        raise NotImplementedError(
+            "MJCFSystem: the true Lagrangian of a user's model is unknown; subclass "
+            "MuJoCoSystem to provide one"
+        )
+
+    def xml(self):
+        """The MJCF text given (or read from the file given); with ``joints``, the reduced model.
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> xml = ('<mujoco><worldbody><body><joint type="slide"/><geom size="0.1"/>'
+        ...        '</body></worldbody></mujoco>')
+        >>> MJCFSystem(xml).xml() == xml
+        True
+        """
+        if self._spec is not None:
+            return self._spec.to_xml()
+        return self._xml
+
+    def mj_model(self):
+        """Compiled MuJoCo model, from the file when one was given (relative assets resolve).
+
+        Returns
+        -------
+        mujoco.MjModel
+
+        Examples
+        --------
+        >>> xml = ('<mujoco><worldbody><body><joint type="slide"/><geom size="0.1"/>'
+        ...        '</body></worldbody></mujoco>')
+        >>> MJCFSystem(xml).mj_model().njnt
+        1
+        """
+        mujoco = _mujoco()
+        if self._spec is not None:
+            return self._spec.compile()
+        if self.path is not None:
+            return mujoco.MjModel.from_xml_path(self.path)
+        return mujoco.MjModel.from_xml_string(self._xml)
+
+    def __repr__(self):
+        return f"MJCFSystem({self._parameters['source']!r})"

@@ -1,0 +1,383 @@
+"""The paper's systems as MuJoCo models: cart-pole, double pendulum, double pendulum on a cart.
+
+Each class writes its MJCF text from its parameters and knows the same mechanism's textbook
+Lagrangian (coordinate conventions: :mod:`pysindy_xl.mujoco.systems`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from ._system_base import MuJoCoSystem, _f, _non_negative, _positive
+
+__all__ = ["CartPole", "DoublePendulum", "CartDoublePendulum"]
+
+
+# -- MJCF building blocks ------------------------------------------------------------------
+def _header(model: str, timestep: float, gravity: float) -> str:
+    return f"""<mujoco model="{model}">
+  <!-- Written by pysindy_xl.mujoco.systems; point masses via explicit inertials. -->
+  <compiler angle="radian" inertiafromgeom="auto"/>
+  <option timestep="{_f(timestep)}" integrator="RK4" gravity="0 0 {_f(-gravity)}">
+    <flag contact="disable"/>
+  </option>
+  <default>
+    <geom contype="0" conaffinity="0"/>
+    <joint armature="0" frictionloss="0"/>
+  </default>
+  <worldbody>
+    <light pos="0 -3 3" dir="0 1 -1"/>
+"""
+
+
+def _cart(mass: float, damping: float, inner: str) -> str:
+    return f"""    <body name="cart" pos="0 0 0">
+      <joint name="slider" type="slide" axis="1 0 0" damping="{_f(damping)}"/>
+      <inertial pos="0 0 0" mass="{_f(mass)}" diaginertia="0.01 0.01 0.01"/>
+      <geom type="box" size="0.2 0.1 0.05" rgba="0.3 0.3 0.8 1"/>
+{inner}    </body>
+"""
+
+
+def _link(body: str, joint: str, mass, length, damping, inertia, pos, inner="", indent=6):
+    # axis 0 -1 0: a positive angle moves the bob towards +x (textbook convention).
+    pad = " " * indent
+    return (
+        f'{pad}<body name="{body}" pos="{pos}">\n'
+        f'{pad}  <joint name="{joint}" type="hinge" axis="0 -1 0" damping="{_f(damping)}"/>\n'
+        f'{pad}  <inertial pos="0 0 {_f(-length)}" mass="{_f(mass)}" '
+        f'diaginertia="{_f(inertia)} {_f(inertia)} {_f(inertia)}"/>\n'
+        f'{pad}  <geom type="capsule" fromto="0 0 0 0 0 {_f(-length)}" size="0.01" '
+        f'rgba="0.6 0.6 0.6 1"/>\n'
+        f'{pad}  <geom type="sphere" pos="0 0 {_f(-length)}" size="0.04" rgba="0.8 0.3 0.3 1"/>\n'
+        f"{inner}"
+        f"{pad}</body>\n"
+    )
+
+
+def _footer(joints) -> str:
+    motors = "".join(
+        f'    <motor name="{j}_motor" joint="{j}" gear="1" ctrllimited="false"/>\n' for j in joints
+    )
+    return f"""  </worldbody>
+  <actuator>
+{motors}  </actuator>
+</mujoco>
+"""
+
+
+class CartPole(MuJoCoSystem):
+    """Cart on a horizontal rail with a pendulum (point mass on a massless rod).
+
+    Coordinates ``x`` (cart position) and ``theta`` (pole angle, 0 hanging down); MuJoCo joints
+    ``slider`` and ``hinge`` coincide with them.
+
+    Parameters
+    ----------
+    cart_mass, pole_mass, length : float
+        Cart mass (kg), bob mass (kg), rod length (m).
+    cart_damping, pole_damping : float
+        Viscous friction of the slider (N s/m) and of the hinge (N m s/rad).
+    gravity : float
+    point_inertia : float
+        Rotational inertia of the bob about its center (kept tiny; exact in the Lagrangian).
+    timestep : float
+        MuJoCo time step (RK4).
+
+    Examples
+    --------
+    >>> system = CartPole(pole_mass=0.2)
+    >>> system.coords
+    Coordinates(['x', 'theta'])
+    """
+
+    name = "cart-pole"
+    coordinate_names = ("x", "theta")
+    joint_names = ("slider", "hinge")
+    angle_coordinates = (1,)
+    mixed_actuators = ("slider",)
+
+    def __init__(self, cart_mass=1.0, pole_mass=0.5, length=0.8, cart_damping=0.5,
+                 pole_damping=0.1, gravity=9.81, point_inertia=1e-6, timestep=1e-3):
+        self._parameters = {
+            "cart_mass": _positive(cart_mass, "cart_mass"),
+            "pole_mass": _positive(pole_mass, "pole_mass"),
+            "length": _positive(length, "length"),
+            "cart_damping": _non_negative(cart_damping, "cart_damping"),
+            "pole_damping": _non_negative(pole_damping, "pole_damping"),
+            "gravity": _non_negative(gravity, "gravity"),
+            "point_inertia": _positive(point_inertia, "point_inertia"),
+            "timestep": _positive(timestep, "timestep"),
+        }
+
+    @property
+    def joint_damping(self):
+        p = self._parameters
+        return np.array([p["cart_damping"], p["pole_damping"]])
+
+    @property
+    def force_amplitudes(self):
+        p = self._parameters
+        return {"slider": 2.0 * (p["cart_mass"] + p["pole_mass"]),
+                "hinge": 0.5 * p["pole_mass"] * p["gravity"] * p["length"]}
+
+    def lagrangian(self):
+        """True Lagrangian of the cart-pole (cart, point mass with its tiny inertia, gravity).
+
+        Returns
+        -------
+        sympy.Expr
+
+        Examples
+        --------
+        >>> CartPole(cart_mass=1.0, pole_mass=0.5, length=0.8).lagrangian()
+        0.1600005*theta_dot**2 + 0.4*theta_dot*x_dot*cos(theta) + 0.75*x_dot**2 + 3.924*cos(theta)
+        """
+        p = self._parameters
+        x, th = self.coords.q
+        xd, thd = self.coords.qd
+        big_m, m, l, g = p["cart_mass"], p["pole_mass"], p["length"], p["gravity"]
+        kinetic = (
+            (big_m + m) * xd**2 / 2
+            + m * l * xd * thd * sp.cos(th)
+            + (m * l**2 + p["point_inertia"]) * thd**2 / 2
+        )
+        potential = -m * g * l * sp.cos(th)
+        return kinetic - potential
+
+    def xml(self):
+        """MJCF text of the cart-pole with the current parameters.
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> 'name="slider"' in CartPole().xml()
+        True
+        """
+        p = self._parameters
+        link = _link("pole", "hinge", p["pole_mass"], p["length"], p["pole_damping"],
+                     p["point_inertia"], "0 0 0")
+        return (_header("cart_pole", p["timestep"], p["gravity"])
+                + _cart(p["cart_mass"], p["cart_damping"], link)
+                + _footer(self.joint_names))
+
+
+def _pendulum_chain_xml(p: dict, indent: int) -> str:
+    """MJCF bodies of the two-link chain (link1 carrying link2), shared by both pendulums."""
+    inner = _link("link2", "hinge2", p["mass2"], p["length2"], p["damping2"],
+                  p["point_inertia"], f"0 0 {_f(-p['length1'])}", indent=indent + 2)
+    return _link("link1", "hinge1", p["mass1"], p["length1"], p["damping1"],
+                 p["point_inertia"], "0 0 0", inner=inner, indent=indent)
+
+
+class DoublePendulum(MuJoCoSystem):
+    """Double pendulum with point masses on massless rods, hanging from a fixed pivot.
+
+    Coordinates ``theta1``, ``theta2``: absolute angles from the downward vertical. MuJoCo's
+    hinges ``hinge1`` and ``hinge2`` measure ``theta1`` and ``theta2 - theta1``.
+
+    Parameters
+    ----------
+    mass1, mass2, length1, length2 : float
+    damping1, damping2 : float
+        Viscous damping of the two hinges (the second one acts on the relative angle).
+    gravity, point_inertia, timestep : float
+        See :class:`CartPole`.
+
+    Examples
+    --------
+    >>> DoublePendulum().force_matrix()
+    array([[ 1., -1.],
+           [ 0.,  1.]])
+    """
+
+    name = "double-pendulum"
+    coordinate_names = ("theta1", "theta2")
+    joint_names = ("hinge1", "hinge2")
+    angle_coordinates = (0, 1)
+    mixed_actuators = ("hinge1",)
+
+    def __init__(self, mass1=1.0, mass2=0.8, length1=1.0, length2=0.7, damping1=0.3,
+                 damping2=0.15, gravity=9.81, point_inertia=1e-6, timestep=1e-3):
+        self._parameters = {
+            "mass1": _positive(mass1, "mass1"),
+            "mass2": _positive(mass2, "mass2"),
+            "length1": _positive(length1, "length1"),
+            "length2": _positive(length2, "length2"),
+            "damping1": _non_negative(damping1, "damping1"),
+            "damping2": _non_negative(damping2, "damping2"),
+            "gravity": _non_negative(gravity, "gravity"),
+            "point_inertia": _positive(point_inertia, "point_inertia"),
+            "timestep": _positive(timestep, "timestep"),
+        }
+
+    @property
+    def joint_to_coordinates(self):
+        return np.array([[1.0, 0.0], [1.0, 1.0]])
+
+    @property
+    def joint_damping(self):
+        p = self._parameters
+        return np.array([p["damping1"], p["damping2"]])
+
+    @property
+    def force_amplitudes(self):
+        p = self._parameters
+        g = p["gravity"]
+        return {"hinge1": 0.3 * (p["mass1"] + p["mass2"]) * g * p["length1"],
+                "hinge2": 0.3 * p["mass2"] * g * p["length2"]}
+
+    def lagrangian(self):
+        """True Lagrangian of the double pendulum in absolute angles.
+
+        Returns
+        -------
+        sympy.Expr
+
+        Examples
+        --------
+        >>> L = DoublePendulum().lagrangian()
+        >>> sorted(map(str, L.free_symbols))
+        ['theta1', 'theta1_dot', 'theta2', 'theta2_dot']
+        """
+        p = self._parameters
+        th1, th2 = self.coords.q
+        thd1, thd2 = self.coords.qd
+        return _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=None)
+
+    def xml(self):
+        """MJCF text of the double pendulum with the current parameters.
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> DoublePendulum().xml().splitlines()[0]
+        '<mujoco model="double_pendulum">'
+        """
+        p = self._parameters
+        return (_header("double_pendulum", p["timestep"], p["gravity"])
+                + _pendulum_chain_xml(p, indent=4) + _footer(self.joint_names))
+
+
+def _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=None, cart_mass=0.0):
+    m1, m2, l1, l2, g = p["mass1"], p["mass2"], p["length1"], p["length2"], p["gravity"]
+    inertia = p["point_inertia"]
+    kinetic = (
+        (m1 + m2) * l1**2 * thd1**2 / 2
+        + m2 * l2**2 * thd2**2 / 2
+        + m2 * l1 * l2 * thd1 * thd2 * sp.cos(th1 - th2)
+        # each bob's body rotates with its absolute angle
+        + inertia * (thd1**2 + thd2**2) / 2
+    )
+    if xd is not None:
+        kinetic += (
+            (cart_mass + m1 + m2) * xd**2 / 2
+            + (m1 + m2) * l1 * xd * thd1 * sp.cos(th1)
+            + m2 * l2 * xd * thd2 * sp.cos(th2)
+        )
+    potential = -(m1 + m2) * g * l1 * sp.cos(th1) - m2 * g * l2 * sp.cos(th2)
+    return kinetic - potential
+
+
+class CartDoublePendulum(MuJoCoSystem):
+    """Double pendulum (point masses) hanging from a cart on a horizontal rail.
+
+    Coordinates ``x``, ``theta1``, ``theta2`` (absolute angles); MuJoCo joints ``slider``,
+    ``hinge1``, ``hinge2`` (the last relative to the first link).
+
+    Parameters
+    ----------
+    cart_mass, mass1, mass2, length1, length2 : float
+    cart_damping, damping1, damping2 : float
+    gravity, point_inertia, timestep : float
+        See :class:`CartPole`.
+
+    Examples
+    --------
+    >>> CartDoublePendulum().coords.names
+    ('x', 'theta1', 'theta2')
+    """
+
+    name = "cart-double-pendulum"
+    coordinate_names = ("x", "theta1", "theta2")
+    joint_names = ("slider", "hinge1", "hinge2")
+    angle_coordinates = (1, 2)
+    mixed_actuators = ("slider",)
+
+    def __init__(self, cart_mass=1.0, mass1=0.5, mass2=0.4, length1=0.7, length2=0.5,
+                 cart_damping=0.5, damping1=0.1, damping2=0.05, gravity=9.81,
+                 point_inertia=1e-6, timestep=1e-3):
+        self._parameters = {
+            "cart_mass": _positive(cart_mass, "cart_mass"),
+            "mass1": _positive(mass1, "mass1"),
+            "mass2": _positive(mass2, "mass2"),
+            "length1": _positive(length1, "length1"),
+            "length2": _positive(length2, "length2"),
+            "cart_damping": _non_negative(cart_damping, "cart_damping"),
+            "damping1": _non_negative(damping1, "damping1"),
+            "damping2": _non_negative(damping2, "damping2"),
+            "gravity": _non_negative(gravity, "gravity"),
+            "point_inertia": _positive(point_inertia, "point_inertia"),
+            "timestep": _positive(timestep, "timestep"),
+        }
+
+    @property
+    def joint_to_coordinates(self):
+        return np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 1.0, 1.0]])
+
+    @property
+    def joint_damping(self):
+        p = self._parameters
+        return np.array([p["cart_damping"], p["damping1"], p["damping2"]])
+
+    @property
+    def force_amplitudes(self):
+        p = self._parameters
+        g = p["gravity"]
+        return {"slider": 2.0 * (p["cart_mass"] + p["mass1"] + p["mass2"]),
+                "hinge1": 0.3 * (p["mass1"] + p["mass2"]) * g * p["length1"],
+                "hinge2": 0.3 * p["mass2"] * g * p["length2"]}
+
+    def lagrangian(self):
+        """True Lagrangian of the double pendulum on a cart.
+
+        Returns
+        -------
+        sympy.Expr
+
+        Examples
+        --------
+        >>> L = CartDoublePendulum().lagrangian()
+        >>> sorted(map(str, L.free_symbols))
+        ['theta1', 'theta1_dot', 'theta2', 'theta2_dot', 'x_dot']
+        """
+        p = self._parameters
+        _, th1, th2 = self.coords.q
+        xd, thd1, thd2 = self.coords.qd
+        return _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=xd,
+                                          cart_mass=p["cart_mass"])
+
+    def xml(self):
+        """MJCF text of the double pendulum on a cart with the current parameters.
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> CartDoublePendulum().xml().splitlines()[0]
+        '<mujoco model="cart_double_pendulum">'
+        """
+        p = self._parameters
+        link = _pendulum_chain_xml(p, indent=6)
+        return (_header("cart_double_pendulum", p["timestep"], p["gravity"])
+                + _cart(p["cart_mass"], p["cart_damping"], link)
+                + _footer(self.joint_names))
