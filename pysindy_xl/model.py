@@ -130,7 +130,9 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         the smoother's noise estimate per coordinate (first trajectory).
     selection_ : SelectionResult, LawSelection or None
         How the sparsity was chosen, when the optimizer reports it (``threshold="auto"``;
-        an unforced law selected from noisy data by its noise ratio).
+        an unforced law selected from noisy data by its noise ratio). None after a bagged
+        fit (the default for forced positions-only data), where no single selection made the
+        model: see ``inclusion_probability_``.
     inclusion_probability_, coef_interval_ : ndarray or None
         With an :class:`~pysindy_xl.EnsembleOptimizer`: per catalog feature, the fraction of
         the ensemble's fits that include it and the interval of its coefficient,
