@@ -286,3 +286,21 @@ def test_sample_mask_excludes_unmodelled_forces(cart_pole_system, formulation):
     with pytest.raises(ValueError, match="sample_mask"):
         px.XLSINDy(library, formulation=formulation).fit(data["q"], t, u=tau,
                                                          sample_mask=mask[:-1], **kwargs)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_test_function_width_does_not_move_with_the_noise(seed):
+    # a drifting cart: after the linear trend the signal is small against noise of a few
+    # percent of the spread; half the noise power counted as signal used to push the corner
+    # from 0.77 Hz to over 40 Hz (test functions ~50x too narrow)
+    from pysindy_xl.weak.test_functions import corner_frequency
+
+    t = np.arange(0, 30, 0.01)
+    x = (0.2 * t + 0.2 * np.sin(2 * np.pi * 0.7 * t)
+         + 0.1 * np.sin(2 * np.pi * 0.3 * t + 1))[:, None]
+    clean = corner_frequency(t, x)
+    assert 0.7 < clean < 0.85  # the 0.7 Hz component, to the DCT's resolution
+    rng = np.random.default_rng(seed)
+    for level in (0.01, 0.03, 0.05):
+        noisy = x + level * x.std() * rng.normal(size=x.shape)
+        assert corner_frequency(t, noisy) == pytest.approx(clean, rel=0.1), level

@@ -54,14 +54,25 @@ def quadrature_weights(t) -> np.ndarray:
     return weights
 
 
+#: Median of a chi-square variable with one degree of freedom (its mean is 1).
+_CHI2_1_MEDIAN = 0.454936423119572
+
+
 def corner_frequency(t, x, energy: float = 0.99) -> float:
     """Frequency (Hz) below which the signal part of the positions' spectrum lies.
 
     The spectrum of each coordinate (cosine transform after removing a linear trend and
     tapering the ends, on the samples treated as uniform with the mean step) is split into a
-    noise floor (the median power of the upper half of the frequencies, where position data
-    have little signal) and the signal above it; the corner is the frequency that holds
-    ``energy`` of the signal power, the largest over coordinates.
+    noise floor and the signal above it; the corner is the frequency that holds ``energy`` of
+    the signal power, the largest over coordinates. The floor is the mean noise power per
+    mode, estimated from the upper half of the frequencies (where position data have little
+    signal) as their median power divided by 0.4549, the median of a chi-square variable
+    with one degree of freedom over its mean (white noise gives each mode such a power).
+    The signal power is accumulated without clipping, so that the noise's fluctuations
+    about the floor cancel: the corner then does not move with the noise level (clipping
+    them at zero, or taking the median itself as the floor, leaves about half the noise
+    power in the "signal", which pushes the corner up when the detrended signal is small
+    against the noise, e.g. a drifting cart).
 
     Parameters
     ----------
@@ -92,11 +103,11 @@ def corner_frequency(t, x, energy: float = 0.99) -> float:
         trend = np.polynomial.polynomial.polyfit(s, column, 1)
         detrended = column - np.polynomial.polynomial.polyval(s, trend)
         power = scipy.fft.dct(detrended * taper, norm="ortho") ** 2
-        floor = np.median(power[n_samples // 2:])
-        signal = np.maximum(power - floor, 0.0)
-        if signal.sum() <= 0:
+        floor = np.median(power[n_samples // 2:]) / _CHI2_1_MEDIAN
+        signal = np.cumsum(power - floor)
+        if not signal[-1] > 0:
             continue
-        k = int(np.searchsorted(np.cumsum(signal), energy * signal.sum()))
+        k = int(np.argmax(signal >= energy * signal[-1]))
         corners.append((k + 1) / (2 * n_samples * step))  # DCT index k <-> k / (2 N dt) Hz
     return max(corners) if corners else 1.0 / (2 * step)
 
