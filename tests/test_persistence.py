@@ -377,3 +377,21 @@ def test_an_ensemble_inside_an_ensemble_is_refused(noisy_model, tmp_path):
     target.write_text(json.dumps(document))
     with pytest.raises(ValueError, match="optimizer.params.optimizer"):
         px.XLSINDy.load(target)
+
+
+def test_ensemble_sampling_survives_the_file_and_bad_values_are_refused(noisy_model, tmp_path):
+    _, path, _ = noisy_model
+    document = json.loads(path.read_text())
+    document["optimizer"]["params"]["sampling"] = "complementary_pairs"
+    target = tmp_path / "pairs.json"
+    target.write_text(json.dumps(document))
+    assert px.XLSINDy.load(target).optimizer_.sampling == "complementary_pairs"
+    for bad, message in (("bootstrap", "sampling"), (True, "sampling")):
+        document["optimizer"]["params"]["sampling"] = bad
+        target.write_text(json.dumps(document))
+        with pytest.raises(ValueError, match=message):
+            px.XLSINDy.load(target)
+    document["optimizer"]["params"].update(sampling="complementary_pairs", n_models=5)
+    target.write_text(json.dumps(document))
+    with pytest.raises(ValueError, match="even"):
+        px.XLSINDy.load(target)
