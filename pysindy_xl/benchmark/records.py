@@ -30,8 +30,15 @@ from __future__ import annotations
 import contextlib
 import fcntl
 import json
+import math
 import os
+import time
+import traceback
 import warnings
+
+import numpy as np
+
+from .grid import GridSettings, Task
 
 __all__ = ["STATUSES", "RecordStore", "GridBusyError", "read_records", "latest_records",
            "check_record"]
@@ -217,3 +224,45 @@ class RecordStore:
             os.fsync(fd)
         finally:
             os.close(fd)
+
+
+# -- building a run's record (the runner and its isolation) ----------------------------------------
+def _finite(value):
+    """JSON-safe copy: non-finite floats become None, numpy scalars plain numbers."""
+    if isinstance(value, dict):
+        return {str(k): _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    if isinstance(value, (np.floating, float)):
+        value = float(value)
+        return value if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value
+
+
+
+def _base_record(task: Task, settings: GridSettings) -> dict:
+    import pysindy_xl
+
+    return {**task.to_dict(), "grid": settings.name, "status": "error", "message": None,
+            "metrics": {}, "time_s": {}, "pid": os.getpid(),
+            "version": getattr(pysindy_xl, "__version__", "unknown")}
+
+
+def _failed(record: dict, status: str, error: BaseException, with_traceback=False) -> dict:
+    record["status"] = status
+    message = f"{type(error).__name__}: {error}"
+    if with_traceback:
+        frames = traceback.extract_tb(error.__traceback__)[-3:]
+        message += " [" + " <- ".join(f"{os.path.basename(f.filename)}:{f.lineno} {f.name}"
+                                      for f in reversed(frames)) + "]"
+    record["message"] = message
+    return _finite(record)
+
+
+def _finish(record: dict) -> dict:
+    record["finished_at"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+    return record

@@ -14,18 +14,12 @@ import numpy as np
 
 from .dataset import Dataset, Trajectory
 from .forcing import FORCING_MODES, SumOfSinusoids
+from .noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
 from .systems import MuJoCoSystem, get_system
 
 __all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "actuator_signals",
            "noise_levels", "NOISE_KEYS", "NOISE_MODELS",
            "ConstraintWarning", "actuator_force_function"]
-
-NOISE_KEYS = ("q", "qd", "qdd", "tau")
-
-#: ``positions``: noisy recorded positions only, velocities and accelerations are not given to
-#: the identification (the package differentiates); ``all``: the paper's model, the same
-#: relative noise on positions, velocities, accelerations and forces.
-NOISE_MODELS = ("positions", "all")
 
 
 def _import_mujoco():
@@ -385,132 +379,6 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     return Trajectory(t=fine_times[recorded], q=q, qd=qd, qdd=qdd, tau=force @ matrix.T,
                       u=force, info=info, tau_constraint=constraint @ matrix.T,
                       u_constraint=constraint, constraint_active=active)
-
-
-def _noise_levels(noise) -> dict:
-    if isinstance(noise, dict):
-        unknown = set(noise) - set(NOISE_KEYS)
-        if unknown:
-            raise ValueError(f"noise: unknown keys {sorted(unknown)}; expected {NOISE_KEYS}")
-        levels = {k: noise.get(k, 0.0) for k in NOISE_KEYS}
-    else:
-        levels = dict.fromkeys(NOISE_KEYS, noise)
-    for k, v in levels.items():
-        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) or not (
-            np.isfinite(v) and v >= 0
-        ):
-            raise ValueError(f"noise: level for {k!r} must be a non-negative number, got {v!r}")
-        levels[k] = float(v)
-    return levels
-
-
-def noise_levels(noise, noise_model: str = "positions") -> dict:
-    """Per-channel relative noise levels of a noise specification under a noise model.
-
-    Parameters
-    ----------
-    noise : float or dict
-        One relative level (std = level x each coordinate's standard deviation over the
-        trajectory), or a dict with some of the keys ``"q", "qd", "qdd", "tau"``.
-    noise_model : {"positions", "all"}, default "positions"
-        ``positions``: a number perturbs the recorded positions only (a dict may also name
-        ``"tau"``, measured forces); ``all``: a number perturbs positions, velocities,
-        accelerations and forces alike (the paper's model).
-
-    Returns
-    -------
-    dict
-        ``{"q": ..., "qd": ..., "qdd": ..., "tau": ...}``, floats.
-
-    Raises
-    ------
-    ValueError
-        If ``noise_model`` is unknown, a level is negative or not a number, or a dict names
-        velocity or acceleration noise under the ``positions`` model.
-
-    Examples
-    --------
-    >>> noise_levels(0.01)
-    {'q': 0.01, 'qd': 0.0, 'qdd': 0.0, 'tau': 0.0}
-    >>> noise_levels(0.01, "all")
-    {'q': 0.01, 'qd': 0.01, 'qdd': 0.01, 'tau': 0.01}
-    """
-    if noise_model not in NOISE_MODELS:
-        raise ValueError(f"noise_model: expected one of {NOISE_MODELS}, got {noise_model!r}")
-    if noise_model == "all" or isinstance(noise, dict):
-        levels = _noise_levels(noise)
-        if noise_model == "positions" and (levels["qd"] or levels["qdd"]):
-            raise ValueError(
-                "noise: velocity or acceleration noise is not part of noise_model='positions' "
-                "(they are not recorded); use noise_model='all'"
-            )
-        return levels
-    levels = _noise_levels(noise)
-    return {"q": levels["q"], "qd": 0.0, "qdd": 0.0, "tau": 0.0}
-
-
-def add_noise(trajectory: Trajectory, noise, rng: np.random.Generator,
-              force_matrix=None) -> Trajectory:
-    """Gaussian noise at relative levels: sigma = level * std of each column.
-
-    Parameters
-    ----------
-    trajectory : Trajectory
-        Clean data; not modified.
-    noise : float or dict
-        One level for ``q``, ``qd``, ``qdd`` and the forces, or a dict with some of the keys
-        ``"q", "qd", "qdd", "tau"``. The force noise is added to the joint forces ``u`` (the
-        measured actuator signal) and ``tau`` recomputed as ``u @ force_matrix.T``.
-    rng : numpy.random.Generator
-        Source of the noise.
-    force_matrix : array (n, n), optional
-        ``B``; identity when absent.
-
-    Returns
-    -------
-    Trajectory
-        A new trajectory (the input is not modified).
-
-    Raises
-    ------
-    ValueError
-        If a level is negative or not a number, or ``noise`` has an unknown key.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> t = np.linspace(0.0, 10.0, 10001)
-    >>> clean = Trajectory(t, q=np.sin(t), qd=np.cos(t))
-    >>> noisy = add_noise(clean, {"q": 0.01}, np.random.default_rng(0))
-    >>> error = noisy.q - clean.q
-    >>> round(float(error.std() / clean.q.std()), 3), bool(np.all(noisy.qd == clean.qd))
-    (0.01, True)
-    """
-    levels = _noise_levels(noise)
-
-    def noisy(a, level):
-        if a is None or level == 0:
-            return None if a is None else a.copy()
-        return a + level * a.std(axis=0) * rng.standard_normal(a.shape)
-
-    n = trajectory.q.shape[1]
-    matrix = np.eye(n) if force_matrix is None else np.asarray(force_matrix, dtype=float)
-    u = noisy(trajectory.u, levels["tau"])
-    if u is not None:
-        tau = u @ matrix.T
-    else:
-        tau = noisy(trajectory.tau, levels["tau"])
-    def copy(a):
-        return None if a is None else a.copy()
-
-    return Trajectory(
-        t=trajectory.t.copy(), q=noisy(trajectory.q, levels["q"]),
-        qd=noisy(trajectory.qd, levels["qd"]), qdd=noisy(trajectory.qdd, levels["qdd"]),
-        tau=tau, u=u, info=dict(trajectory.info),
-        tau_constraint=copy(trajectory.tau_constraint),
-        u_constraint=copy(trajectory.u_constraint),
-        constraint_active=copy(trajectory.constraint_active),
-    )
 
 
 class ConstraintWarning(UserWarning):

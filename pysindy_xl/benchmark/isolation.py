@@ -1,0 +1,171 @@
+"""Process isolation, time limit and BLAS threads of one run (see :mod:`.runner`, "Time limit"
+and "Threads"): a forked child, or an interval-timer signal, and a threadpoolctl limit.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import signal
+import threading
+import time
+
+from .lifetime import die_with_parent, runs_in_flight
+from .records import _base_record, _failed, _finite
+
+__all__ = ["RunTimeout", "blas_thread_limit"]
+
+_ISOLATIONS = ("auto", "process", "signal", "none")
+
+
+class RunTimeout(Exception):
+    """Raised inside a run when its time limit is reached (signal isolation)."""
+
+
+def _resolve_isolation(isolation: str) -> str:
+    if isolation not in _ISOLATIONS:
+        raise ValueError(f"isolation: expected one of {_ISOLATIONS}, got {isolation!r}")
+    if isolation != "auto":
+        return isolation
+    import multiprocessing
+
+    if "fork" in multiprocessing.get_all_start_methods():
+        return "process"
+    if hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread():
+        return "signal"
+    return "none"
+
+
+def _child(connection, function, task, settings, deadline, parent_pid):
+    """Body of the forked child: run, send JSON lines (stages, then the record), exit."""
+    die_with_parent()
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the grid's handler (n_jobs=1)
+    if os.getppid() != parent_pid:  # the parent died before the request took effect
+        os._exit(1)
+
+    def send(message):
+        connection.send_bytes(json.dumps(message, allow_nan=False).encode())
+
+    # Self-destruct a little after the deadline even if the parent died without killing us
+    # (default SIGALRM action: terminate), so no orphan run can outlive its time limit.
+    signal.signal(signal.SIGALRM, signal.SIG_DFL)
+    signal.alarm(max(int(deadline - time.perf_counter()) + 10, 1))
+    try:
+        record = function(task, settings, deadline, lambda name: send({"stage": name}))
+        send({"record": _finite(record)})
+    except BaseException as error:  # report everything: the parent must learn why
+        send({"record": _failed(_base_record(task, settings), "error", error, True)})
+    finally:
+        connection.close()
+
+
+def _run_in_process(function, task, settings, timeout):
+    import multiprocessing
+
+    context = multiprocessing.get_context("fork")
+    receiver, sender = context.Pipe(duplex=False)
+    start = time.perf_counter()
+    deadline = start + timeout
+    process = context.Process(target=_child, daemon=True,
+                              args=(sender, function, task, settings, deadline, os.getpid()))
+    process.start()
+    runs_in_flight.add(process)
+    sender.close()
+    last_stage, record = "start", None
+    try:
+        while record is None:
+            remaining = deadline - time.perf_counter()
+            if remaining <= 0 or not receiver.poll(remaining):
+                break
+            try:
+                message = json.loads(receiver.recv_bytes())
+            except EOFError:  # the child died without a record
+                break
+            if "stage" in message:
+                last_stage = message["stage"]
+            else:
+                record = message["record"]
+    finally:
+        if record is None and process.is_alive():
+            process.kill()
+        process.join(5)
+        runs_in_flight.discard(process)
+        receiver.close()
+    elapsed = time.perf_counter() - start
+    if record is not None:
+        return record
+    base = _base_record(task, settings)
+    base["time_s"] = {"run": elapsed}
+    if elapsed >= timeout:
+        base["status"] = "timeout"
+        base["message"] = f"stopped after {timeout:g} s (during {last_stage})"
+    else:
+        base["message"] = (f"the run's process died with exit code {process.exitcode} "
+                           f"(during {last_stage})")
+    return _finite(base)
+
+
+def _run_with_signal(function, task, settings, timeout):
+    def alarm(signum, frame):
+        raise RunTimeout()
+
+    start = time.perf_counter()
+    previous = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, timeout)
+    try:
+        return function(task, settings, start + timeout, None)
+    except RunTimeout:
+        base = _base_record(task, settings)
+        base.update(status="timeout", message=f"stopped after {timeout:g} s",
+                    time_s={"run": time.perf_counter() - start})
+        return _finite(base)
+    except Exception as error:
+        return _failed(_base_record(task, settings), "error", error, True)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def blas_thread_limit(blas_threads: int | None):
+    """A context limiting BLAS thread pools to ``blas_threads`` (no limit for None).
+
+    Parameters
+    ----------
+    blas_threads : int or None
+        Threads of every BLAS library loaded (OpenBLAS, MKL, BLIS...), via
+        :func:`threadpoolctl.threadpool_limits`; None leaves them as they are.
+
+    Returns
+    -------
+    context manager
+
+    Raises
+    ------
+    ValueError
+        If ``blas_threads`` is not None or an integer >= 1.
+
+    Examples
+    --------
+    >>> from threadpoolctl import threadpool_info
+    >>> with blas_thread_limit(1):
+    ...     print({pool["num_threads"] for pool in threadpool_info()
+    ...            if pool["user_api"] == "blas"} <= {1})
+    True
+    """
+    if blas_threads is None:
+        return contextlib.nullcontext()
+    if isinstance(blas_threads, bool) or not isinstance(blas_threads, int) or blas_threads < 1:
+        raise ValueError(f"blas_threads: expected None or an integer >= 1, got {blas_threads!r}")
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=blas_threads, user_api="blas")
+
+
+def _resolve_blas_threads(blas_threads, n_jobs, backend):
+    if blas_threads != "auto":
+        return blas_threads
+    import joblib
+
+    parallel = backend in ("dask", "ray") or joblib.effective_n_jobs(n_jobs) > 1
+    return 1 if parallel else None

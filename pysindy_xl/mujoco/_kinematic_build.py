@@ -1,0 +1,118 @@
+"""Steps of building a kinematic catalog (:mod:`.kinematic`): resolving the system, random
+states, the reduction to independent columns, and the classical (friction, spring) candidates.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import scipy.linalg
+import sympy as sp
+
+from ._trigpoly import state_values
+from .systems import MJCFSystem, MuJoCoSystem, get_system
+
+# A column whose part orthogonal to the kept columns is below this fraction of its norm is
+# dependent; exact dependencies leave ~1e-14, independent columns O(1e-3) or more.
+_INDEPENDENCE_TOL = 1e-9
+# Columns taken in preference order only when at least this fraction of them is new.
+_WELL_CONDITIONED = 0.05
+
+
+def _resolve_system(system) -> MuJoCoSystem:
+    if isinstance(system, MuJoCoSystem):
+        return system
+    if isinstance(system, str) and system.lstrip().startswith("<"):
+        return MJCFSystem(system)
+    if isinstance(system, (str, os.PathLike)):
+        if isinstance(system, str) and not system.endswith(".xml") and os.path.isfile(system):
+            return MJCFSystem(system)
+        return get_system(system)
+    raise TypeError(
+        f"system: expected a MuJoCoSystem, an MJCF path or MJCF text, got {type(system).__name__}"
+    )
+
+
+def _independent_columns(matrix: np.ndarray) -> list[int]:
+    """A well-conditioned set of independent columns, earlier columns preferred.
+
+    The rank comes from a column-pivoted QR (exact dependencies leave ``|R_ii| ~ 1e-15``,
+    independent columns ``1e-3`` or more). Columns are then taken in order when their part
+    orthogonal to those already taken is a sizeable fraction of their norm, and the remaining
+    rank is filled by the column with the largest orthogonal part, so that the dependent
+    columns are combinations of the kept ones with moderate weights (a nearly dependent basis
+    would amplify round-off in the base parameters).
+    """
+    norms = np.linalg.norm(matrix, axis=0)
+    candidates = np.flatnonzero(norms > 0)
+    if candidates.size == 0:
+        return []
+    unit = matrix[:, candidates] / norms[candidates]
+    diagonal = np.abs(np.diag(scipy.linalg.qr(unit, mode="r", pivoting=True)[0]))
+    rank = int(np.sum(diagonal > _INDEPENDENCE_TOL * diagonal[0]))
+    basis = np.zeros((matrix.shape[0], 0))
+    kept: list[int] = []
+
+    def orthogonal_part(column):
+        for _ in range(2):  # re-orthogonalize: one pass loses digits on near-parallel columns
+            column = column - basis @ (basis.T @ column)
+        return column
+
+    for j in range(unit.shape[1]):
+        if len(kept) == rank:
+            break
+        residual = orthogonal_part(unit[:, j])
+        if np.linalg.norm(residual) > _WELL_CONDITIONED:
+            basis = np.column_stack([basis, residual / np.linalg.norm(residual)])
+            kept.append(j)
+    while len(kept) < rank:
+        rest = [j for j in range(unit.shape[1]) if j not in kept]
+        residuals = np.column_stack([orthogonal_part(unit[:, j]) for j in rest])
+        best = int(np.argmax(np.linalg.norm(residuals, axis=0)))
+        basis = np.column_stack([basis, residuals[:, best] / np.linalg.norm(residuals[:, best])])
+        kept.append(rest[best])
+    return sorted(int(candidates[j]) for j in kept)
+
+
+def _random_values(system: MuJoCoSystem, n_samples: int, rng) -> np.ndarray:
+    n = system.n
+    q = rng.uniform(-1.0, 1.0, (n_samples, n))
+    q[:, list(system.angle_coordinates)] *= np.pi
+    qd, qdd = rng.normal(size=(2, n_samples, n))
+    angles = [j in system.angle_coordinates for j in range(n)]
+    return state_values(q, qd, qdd, angles)
+
+
+def _classical_candidates(system, model, coulomb, coulomb_scale):
+    """Friction and spring candidates per joint, in the coordinates, with their MJCF values."""
+    coords = system.coords
+    inverse = np.linalg.inv(system.joint_to_coordinates)
+    force_map = system.force_matrix()
+    qpos = [sp.expand(sum(sp.Float(a) * qj for a, qj in zip(inverse[k], coords.q, strict=True)
+                          if a != 0)) for k in range(model.njnt)]
+    qvel = [sp.expand(sum(sp.Float(a) * qdj for a, qdj in zip(inverse[k], coords.qd, strict=True)
+                          if a != 0)) for k in range(model.njnt)]
+    if np.allclose(inverse, np.round(inverse)):  # keep integer maps readable: theta2 - theta1
+        qpos = [sp.nsimplify(e, rational=True) for e in qpos]
+        qvel = [sp.nsimplify(e, rational=True) for e in qvel]
+    terms, mask, kinds, values = [], [], [], []
+    for k in range(model.njnt):
+        name = system.joint_names[k]
+        dof = model.jnt_dofadr[k]
+        reaches = np.abs(force_map[:, k]) > 1e-12
+        candidates = [("viscous", qvel[k], model.dof_damping[dof])]
+        if coulomb:
+            candidates.append(("coulomb", sp.tanh(qvel[k] / coulomb_scale),
+                               model.dof_frictionloss[dof]))
+        if model.jnt_stiffness[k] > 0:
+            rest = float(model.qpos_spring[model.jnt_qposadr[k]])
+            candidates.append(("spring", qpos[k] - rest, model.jnt_stiffness[k]))
+        for kind, term, value in candidates:
+            terms.append(term)
+            mask.append(reaches)
+            kinds.append((kind, name))
+            # the joint force -value * term reaches equation i as B[i, k] times it
+            values.extend(float(value) * force_map[reaches, k])
+    mask = np.array(mask, dtype=bool).reshape(-1, coords.n)
+    return terms, mask, kinds, np.array(values)
