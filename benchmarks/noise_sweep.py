@@ -18,6 +18,9 @@ Methods:
   true coefficient lies in its 95 % interval (issue 13's acceptance cell);
 * ``single``: the weak form with one cross-validated fit, ``ExplicitOptimizer()`` (the
   default before bagging);
+* ``pairs``: the weak form bagged over complementary pairs of halves,
+  ``EnsembleOptimizer(sampling="complementary_pairs")`` (10 pairs; a term is included by a
+  pair when both halves keep it), with the same uncertainty metrics as ``weak``;
 * ``mixed``: the weak form on data forced on the first coordinate only (the cart, or the
   first link), the others free: :class:`~pysindy_xl.MixedOptimizer`, chosen by default;
 * ``implicit``: the weak form on unforced data (no ``u``): :class:`~pysindy_xl.ImplicitOptimizer`,
@@ -55,7 +58,7 @@ HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 SYSTEMS = {"cart_pole": [1], "double_pendulum": [0, 1], "cart_double_pendulum": [1, 2]}
-METHODS = ["weak", "single", "mixed", "implicit", "strong", "sindy"]
+METHODS = ["weak", "single", "pairs", "mixed", "implicit", "strong", "sindy"]
 #: Forced coordinates of the methods that do not force every coordinate.
 FORCED = {"mixed": [0], "implicit": []}
 
@@ -141,7 +144,8 @@ def run(name, level, seed, method):
             record.update(exact=None, error=None)
         else:
             formulation = "strong" if method == "strong" else "weak"
-            optimizer = px.ExplicitOptimizer() if method == "single" else None
+            optimizer = {"single": px.ExplicitOptimizer(),
+                         "pairs": px.EnsembleOptimizer(sampling="complementary_pairs")}.get(method)
             model = px.XLSINDy(library, optimizer, formulation=formulation).fit(
                 noisy, t, u=None if method == "implicit" else data["tau"])
             coef, support = model.coefficients(), true != 0
@@ -189,21 +193,23 @@ def summarize(records) -> str:
         rows.append(f"| {system} | {level:.1%} | {method} | {exact} | {error} | "
                     f"{sum(bool(r['valid']) for r in cell)}/{len(cell)} | "
                     f"{np.median([r['fit_s'] for r in cell]):.1f} |")
-    ensemble = [r for r in records if r["method"] == "weak" and "covered" in r]
+    ensemble = [r for r in records if r["method"] in ("weak", "pairs") and "covered" in r]
     if ensemble:
-        rows += ["", "Uncertainty of the bagged default fit (per seed: every true term with "
-                 "inclusion >= 0.9, every false term <= 0.2, every true coefficient inside its "
-                 "95 % interval)",
-                 "", "| system | noise | true >= 0.9 | false <= 0.2 | covered | "
-                 "median interval width (relative) |", "|---|---|---|---|---|---|"]
-        for system, level in sorted({(r["system"], r["level"]) for r in ensemble}):
-            cell = [r for r in ensemble if (r["system"], r["level"]) == (system, level)]
+        rows += ["", "Uncertainty of the bagged fits, the default (weak: 70 % subsamples) and "
+                 "complementary pairs (per seed: every true term with inclusion >= 0.9, every "
+                 "false term <= 0.2, every true coefficient inside its 95 % interval)",
+                 "", "| system | noise | method | true >= 0.9 | false <= 0.2 | covered | "
+                 "median interval width (relative) |", "|---|---|---|---|---|---|---|"]
+        for system, level, method in sorted({(r["system"], r["level"], r["method"])
+                                             for r in ensemble}):
+            cell = [r for r in ensemble
+                    if (r["system"], r["level"], r["method"]) == (system, level, method)]
             counts = [sum(r["true_inclusion"] >= 0.9 for r in cell),
                       sum(r["false_inclusion"] <= 0.2 for r in cell),
                       sum(r["covered"] for r in cell)]
             widths = [r["interval_width"] for r in cell if "interval_width" in r]
             width = f"{np.median(widths):.2%}" if widths else "-"
-            rows.append(f"| {system} | {level:.1%} | "
+            rows.append(f"| {system} | {level:.1%} | {method} | "
                         + " | ".join(f"{c}/{len(cell)}" for c in counts) + f" | {width} |")
     return "\n".join(rows)
 
@@ -216,7 +222,7 @@ def plot(records, path):
 
     fig, axes = plt.subplots(1, len(SYSTEMS), figsize=(5 * len(SYSTEMS), 3.5), sharey=True)
     for ax, system in zip(np.atleast_1d(axes), SYSTEMS, strict=True):
-        for method, style in (("weak", "o-"), ("single", "D-"), ("mixed", "v-"),
+        for method, style in (("weak", "o-"), ("single", "D-"), ("pairs", "P-"), ("mixed", "v-"),
                               ("implicit", "x-"), ("strong", "s--"), ("sindy", "^:")):
             levels = sorted({r["level"] for r in records if r["system"] == system})
             rate = [np.mean([bool(r["valid"]) and (method == "sindy" or bool(r["exact"]))
