@@ -42,6 +42,26 @@ def test_fit_leaves_the_catalog_untouched_and_models_pickle(cart_pole_data):
                                model.feature_library_.weak_transform(z, phi, dphi))
 
 
+def test_fitted_models_go_through_joblib_worker_processes(cart_pole_data):
+    """Fitted models travel to other processes (loky pickles them) and predict there exactly
+    as here; so do unfitted ones, which fit there."""
+    import joblib
+
+    system, t, noisy, data = cart_pole_data
+    library = paper_catalog(system.coords, [1])
+    model = px.XLSINDy(library, px.ExplicitOptimizer()).fit(noisy, t, u=data["tau"])
+    states = (data["q"][:50], data["qd"][:50], data["tau"][:50])
+    remote = joblib.Parallel(n_jobs=2, backend="loky")(
+        joblib.delayed(lambda m, s: m.predict(*s))(m, states) for m in (model, model))
+    for predicted in remote:
+        np.testing.assert_array_equal(predicted, model.predict(*states))
+    refit = joblib.Parallel(n_jobs=2, backend="loky")(
+        joblib.delayed(lambda m: m.fit(noisy, t, u=data["tau"]).coefficients())(
+            px.XLSINDy(library, px.ExplicitOptimizer())) for _ in range(2))
+    for coefficients in refit:
+        np.testing.assert_allclose(coefficients, model.coefficients(), rtol=1e-9, atol=1e-12)
+
+
 def test_an_indefinite_mass_matrix_warns_at_fit_time(cart_pole_data):
     system, t, noisy, data = cart_pole_data
     c = system.coords
