@@ -3,8 +3,14 @@
 The file holds the coordinate names, the catalog specification (terms as strings of the
 restricted grammar of :mod:`pysindy_xl.expressions`, masks, interlink matrices), the
 coefficients, the optimizer's plain parameters and, after an ensemble fit, the inclusion
-probabilities and coefficient intervals. Loading validates every field and parses terms with
-that grammar only: nothing in the file is executed (no pickle, no ``eval``, no ``sympify``).
+probabilities and coefficient intervals. It also holds the model's settings (plain
+parameters; test functions, smoother and pysindy differentiation method as a type and plain
+parameters) and the fit's diagnostics (``formulation_``, ``n_samples_``, ``weak_info_``,
+``selection_``, ``mass_matrix_check_``), so that a loaded model reports how it was chosen and
+:func:`~pysindy_xl.quality.fit_quality` can rebuild its regression. Loading validates every
+field and parses terms with that grammar only: nothing in the file is executed (no pickle, no
+``eval``, no ``sympify``); non-finite diagnostics are written as the strings ``"inf"``,
+``"-inf"`` and ``"nan"`` (JSON has no such numbers).
 """
 
 from __future__ import annotations
@@ -75,6 +81,8 @@ def save_model(model, path) -> None:
         document["uncertainty"] = {
             "inclusion_probability": [float(p) for p in model.inclusion_probability_],
             "coef_interval": [[float(c) for c in bound] for bound in model.coef_interval_]}
+    document["settings"] = _settings_spec(model)
+    document["training"] = _training_spec(model)
     text = json.dumps(document, indent=1, allow_nan=False)
     _check_writable(path)
     try:
@@ -314,8 +322,227 @@ def load_model(path):
     model.coef_ = np.asarray(coef, dtype=float)
     model.dropped_features_ = {str(k): str(v) for k, v in dropped.items()}
     model.n_coordinates_ = coords.n
-    model.n_samples_ = 0
     model.forced_coordinates_ = np.asarray(forced, dtype=bool)
     model.inclusion_probability_, model.coef_interval_ = probability, interval
+    model.set_params(**_settings_from_document(document, path))
+    _restore_training(model, document.get("training"), len(feature_names), path)
     model._build_dynamics()
     return model
+
+
+# --------------------------------------------------------------------------------------------
+# settings and diagnostics of the fit
+# --------------------------------------------------------------------------------------------
+
+#: XLSINDy parameters that are plain values, and the objects saved as a type and plain params
+_PLAIN_SETTINGS = ("drop_dependent", "formulation", "t_default", "blas_threads")
+_OBJECT_SETTINGS = ("test_functions", "smoother", "differentiation_method")
+_NON_FINITE = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}
+
+
+def _setting_types(name):
+    """The classes a file may name for an object setting (documented ones only)."""
+    if name == "differentiation_method":
+        import pysindy.differentiation as differentiation
+
+        base = differentiation.BaseDifferentiation
+        return {k: v for k, v in vars(differentiation).items()
+                if isinstance(v, type) and issubclass(v, base) and v is not base}
+    from .weak import BumpTestFunctions, WhittakerSmoother
+
+    return {"test_functions": {"BumpTestFunctions": BumpTestFunctions},
+            "smoother": {"WhittakerSmoother": WhittakerSmoother}}[name]
+
+
+def _plain(value) -> bool:
+    return value is None or (isinstance(value, (bool, int, float, str))
+                             and not (isinstance(value, float) and not math.isfinite(value)))
+
+
+def _init_params(value) -> dict:
+    """The constructor parameters of an object, as they are set on it (not its fitted state)."""
+    import inspect
+
+    if hasattr(value, "get_params"):
+        return value.get_params(deep=False)
+    names = [name for name, p in inspect.signature(type(value).__init__).parameters.items()
+             if name != "self" and p.kind is p.POSITIONAL_OR_KEYWORD]
+    return {name: getattr(value, name, None) for name in names}
+
+
+def _settings_spec(model) -> dict:
+    """The model's parameters: plain ones as they are, objects as ``{"type", "params"}``.
+
+    An object that cannot be written so (a type the loader does not know, a parameter that
+    is a function) is left out with a warning: the loaded model uses the default instead."""
+    import warnings
+
+    settings = {key: getattr(model, key) for key in _PLAIN_SETTINGS}
+    for key in _OBJECT_SETTINGS:
+        value = getattr(model, key)
+        if value is None:
+            settings[key] = None
+            continue
+        name = type(value).__name__
+        params = _init_params(value)
+        if _setting_types(key).get(name) is type(value) and all(map(_plain, params.values())):
+            settings[key] = {"type": name, "params": params}
+        else:
+            settings[key] = None
+            warnings.warn(f"{key}: {name} cannot be saved as plain JSON; the loaded model "
+                          "will use the default", UserWarning, stacklevel=4)
+    return settings
+
+
+def _settings_from_document(document, path) -> dict:
+    """The XLSINDy parameters a file names (empty for files written before they were saved)."""
+    spec = document.get("settings", {})
+    _expect(isinstance(spec, dict) and set(spec) <= set(_PLAIN_SETTINGS + _OBJECT_SETTINGS),
+            path, f"'settings' must be an object with keys among "
+                  f"{sorted(_PLAIN_SETTINGS + _OBJECT_SETTINGS)}")
+    settings = {}
+    for key, value in spec.items():
+        if key in _PLAIN_SETTINGS:
+            _expect(_plain(value), path, f"settings.{key} must be a plain value")
+            settings[key] = value
+        elif value is not None:
+            types = _setting_types(key)
+            _expect(isinstance(value, dict) and value.get("type") in types
+                    and isinstance(value.get("params"), dict)
+                    and all(map(_plain, value["params"].values())), path,
+                    f"settings.{key} must be null or {{'type': one of {sorted(types)}, "
+                    "'params': plain values}")
+            try:
+                settings[key] = types[value["type"]](**value["params"])
+                getattr(settings[key], "_check_params", lambda: None)()
+            except (TypeError, ValueError) as err:
+                raise _fail(path, f"settings.{key}: {err}") from None
+    from .model import XLSINDy
+
+    try:
+        XLSINDy(**settings)._check_options()
+    except (TypeError, ValueError) as err:
+        raise _fail(path, f"settings: {err}") from None
+    return settings
+
+
+def _floats(values) -> list:
+    """Numbers for JSON: non-finite ones as the strings "inf", "-inf", "nan"."""
+    return [float(v) if math.isfinite(v) else ("nan" if math.isnan(v) else
+                                               "inf" if v > 0 else "-inf")
+            for v in np.asarray(values, dtype=float).ravel()]
+
+
+def _floats_from(values, path, where) -> np.ndarray:
+    _expect(isinstance(values, list) and all(
+        (isinstance(v, (int, float)) and not isinstance(v, bool)) or v in _NON_FINITE
+        for v in values), path, f"{where} must be a list of numbers")
+    return np.array([_NON_FINITE[v] if isinstance(v, str) else v for v in values], dtype=float)
+
+
+def _selection_types():
+    from .optimizers.homogeneous import LawSelection
+    from .optimizers.selection import SelectionResult
+
+    return {"SelectionResult": SelectionResult, "LawSelection": LawSelection}
+
+
+def _training_spec(model) -> dict:
+    """The diagnostics of the fit: formulation, samples, weak-form info, the sparsity
+    selection and the mass-matrix check."""
+    import dataclasses
+
+    info = getattr(model, "weak_info_", None)
+    selection = getattr(model, "selection_", None)
+    check = getattr(model, "mass_matrix_check_", None)
+    if selection is not None and type(selection).__name__ in _selection_types():
+        fields = {}
+        for field in dataclasses.fields(selection):
+            value = getattr(selection, field.name)
+            fields[field.name] = (value if isinstance(value, str) else int(value)
+                                  if np.ndim(value) == 0 else
+                                  [int(v) for v in value] if field.name == "order"
+                                  else _floats(value))
+        selection = {"type": type(selection).__name__, "fields": fields}
+    else:
+        selection = None
+    return {
+        "formulation": getattr(model, "formulation_", None),
+        "n_samples": int(getattr(model, "n_samples_", 0)),
+        "weak_info": None if info is None else {
+            "half_width": float(info["half_width"]),
+            "test_functions": [int(k) for k in info["test_functions"]],
+            "noise": None if info["noise"] is None else _floats(info["noise"])},
+        "selection": selection,
+        "mass_matrix_check": None if check is None else {
+            key: _floats([value])[0] for key, value in check.items()},
+    }
+
+
+def _restore_training(model, spec, n_features, path) -> None:
+    """Set the fit's diagnostics from a file (absent in files written before they were
+    saved: ``formulation_`` unknown, the others None)."""
+    import dataclasses
+
+    spec = {} if spec is None else spec
+    _expect(isinstance(spec, dict), path, "'training' must be an object")
+    formulation = spec.get("formulation")
+    _expect(formulation in (None, "strong", "weak"), path,
+            "training.formulation must be 'strong', 'weak' or null")
+    n_samples = spec.get("n_samples", 0)
+    _expect(isinstance(n_samples, int) and not isinstance(n_samples, bool) and n_samples >= 0,
+            path, "training.n_samples must be a non-negative integer")
+    info = spec.get("weak_info")
+    if info is not None:
+        _expect(isinstance(info, dict) and set(info) == {"half_width", "test_functions",
+                                                          "noise"}, path,
+                "training.weak_info must hold half_width, test_functions and noise")
+        half_width = _floats_from([info["half_width"]], path, "training.weak_info.half_width")
+        _expect(half_width[0] > 0, path, "training.weak_info.half_width must be positive")
+        counts = info["test_functions"]
+        _expect(isinstance(counts, list) and all(isinstance(k, int) and k > 0 for k in counts),
+                path, "training.weak_info.test_functions must be positive integers")
+        noise = info["noise"]
+        info = {"half_width": float(half_width[0]), "test_functions": counts,
+                "noise": None if noise is None else
+                _floats_from(noise, path, "training.weak_info.noise").tolist()}
+    check = spec.get("mass_matrix_check")
+    if check is not None:
+        keys = ("positive_definite_fraction", "median_condition")
+        _expect(isinstance(check, dict) and set(check) == set(keys), path,
+                f"training.mass_matrix_check must hold {keys}")
+        check = dict(zip(keys, _floats_from([check[k] for k in keys], path,
+                                            "training.mass_matrix_check").tolist(), strict=True))
+    selection = spec.get("selection")
+    if selection is not None:
+        types = _selection_types()
+        _expect(isinstance(selection, dict) and selection.get("type") in types
+                and isinstance(selection.get("fields"), dict), path,
+                f"training.selection must be null or {{'type': one of {sorted(types)}, "
+                "'fields': ...}")
+        kind = types[selection["type"]]
+        fields, values = selection["fields"], {}
+        names = [f.name for f in dataclasses.fields(kind)]
+        _expect(set(fields) == set(names), path, f"training.selection.fields must be {names}")
+        for name in names:
+            value, where = fields[name], f"training.selection.{name}"
+            if name == "rule":
+                _expect(isinstance(value, str), path, f"{where} must be a string")
+            elif name in ("size", "best_size"):
+                _expect(isinstance(value, int) and not isinstance(value, bool)
+                        and 0 <= value <= n_features, path,
+                        f"{where} must be an integer in [0, {n_features}]")
+            elif name == "order":
+                _expect(isinstance(value, list) and all(
+                    isinstance(j, int) and not isinstance(j, bool) and 0 <= j < n_features
+                    for j in value), path, f"{where} must be feature indices")
+                value = np.asarray(value, dtype=int)
+            else:
+                value = _floats_from(value, path, where)
+            values[name] = value
+        selection = kind(**values)
+    model.formulation_ = formulation
+    model.n_samples_ = n_samples
+    model.weak_info_ = info
+    model.selection_ = selection
+    model.mass_matrix_check_ = check

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import pysindy as ps
 import sympy as sp
@@ -267,7 +269,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         if formulation == "weak":
             theta, z, noise_moments, self.weak_info_ = weak_regression(
                 library, data, self.test_functions or BumpTestFunctions(),
-                self.smoother or WhittakerSmoother())
+                copy.deepcopy(self.smoother) or WhittakerSmoother())  # smoothing fits it
         else:
             z = np.vstack([
                 stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"])[d["mask"]]
@@ -467,7 +469,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         t = sample_times(self.t_default if t is None else t, x.shape[0], "t")
         if self.differentiation_method is not None:
             return self._differentiate(x, t, implicit=False)
-        smoother = self.smoother or WhittakerSmoother()
+        smoother = copy.deepcopy(self.smoother) or WhittakerSmoother()
         return smoother.smooth(t, x)[1]
 
     def get_feature_names(self) -> list[str]:

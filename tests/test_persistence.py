@@ -4,13 +4,16 @@ import json
 import pickle
 
 import numpy as np
+import pysindy as ps
 import pytest
+import scipy.integrate
 import sympy as sp
 from ground_truth import random_force, random_initial_state
 from test_explicit_identification import paper_catalog
 
 import pysindy_xl as px
 from pysindy_xl.io import FORMAT, VERSION, load_model, save_model
+from pysindy_xl.quality import fit_quality
 
 
 @pytest.fixture(scope="module")
@@ -395,3 +398,152 @@ def test_ensemble_sampling_survives_the_file_and_bad_values_are_refused(noisy_mo
     target.write_text(json.dumps(document))
     with pytest.raises(ValueError, match="even"):
         px.XLSINDy.load(target)
+
+
+# ------------------------------------- settings and diagnostics of the fit survive the file
+
+
+@pytest.fixture(scope="module")
+def weak_model(tmp_path_factory):
+    """A single cross-validated weak fit of a noisy forced oscillator with non-default
+    settings: ``x'' + 0.1 x' + 3 x = u``."""
+    coords = px.Coordinates(["x"])
+    library = px.CatalogRepartition([
+        px.ExternalForces(coords),
+        px.LagrangeLibrary(coords, [coords.qd[0] ** 2, coords.q[0] ** 2, coords.q[0] ** 4]),
+        px.ClassicalLibrary(coords, [coords.qd[0]])])
+    t = np.linspace(0, 20, 2001)
+
+    def force(time):
+        return np.sin(1.3 * time) + 0.5 * np.sin(3.1 * time)
+
+    solution = scipy.integrate.solve_ivp(
+        lambda time, y: [y[1], force(time) - 3 * y[0] - 0.1 * y[1]], (0, 20), [1.0, 0.0],
+        t_eval=t, rtol=1e-10, atol=1e-10)
+    x = solution.y[0][:, None] + 0.01 * np.random.default_rng(0).normal(size=(2001, 1))
+    arguments = {"x": x, "t": t, "u": force(t)[:, None]}
+    smoother = px.WhittakerSmoother(order=2)
+    model = px.XLSINDy(library, px.ExplicitOptimizer(), smoother=smoother, t_default=0.5,
+                       test_functions=px.BumpTestFunctions(width_factor=1.2, power=5))
+    model.fit(**arguments)
+    path = tmp_path_factory.mktemp("models") / "weak.json"
+    model.save(path)
+    return model, path, arguments
+
+
+def test_weak_fit_keeps_its_settings_and_diagnostics(weak_model):
+    model, path, arguments = weak_model
+    np.testing.assert_allclose(model.coefficients()[[0, 1, 2, 4]], [-1.0, 0.5, -1.5, 0.1],
+                               rtol=0.05)  # guards the comparison: a meaningful fit
+    assert not hasattr(model.smoother, "lam_")  # fit smooths with a copy of the parameter
+    loaded = px.XLSINDy.load(path)
+    assert loaded.formulation_ == "weak" and loaded.n_samples_ == model.n_samples_ == 2001
+    assert loaded.weak_info_ == {**model.weak_info_,
+                                 "half_width": float(model.weak_info_["half_width"])}
+    assert loaded.mass_matrix_check_ == model.mass_matrix_check_
+    assert type(loaded.selection_) is type(model.selection_)
+    np.testing.assert_array_equal(loaded.selection_.order, model.selection_.order)
+    np.testing.assert_array_equal(loaded.selection_.cv_error, model.selection_.cv_error)
+    assert (loaded.selection_.size, loaded.selection_.rule) == (model.selection_.size,
+                                                                model.selection_.rule)
+    assert loaded.t_default == 0.5
+    assert vars(loaded.test_functions) == vars(model.test_functions)
+    assert loaded.smoother.order == 2
+    # the loaded model rebuilds the regression it was fitted on
+    assert fit_quality(loaded, arguments) == fit_quality(model, arguments)
+
+
+def test_files_without_settings_or_diagnostics_still_load(weak_model, tmp_path):
+    model, path, _ = weak_model
+    document = json.loads(path.read_text())
+    del document["settings"], document["training"]
+    target = tmp_path / "older.json"
+    target.write_text(json.dumps(document))
+    loaded = load_model(target)
+    assert loaded.formulation_ is None and loaded.selection_ is None
+    assert loaded.test_functions is None and loaded.t_default == 1.0
+    np.testing.assert_array_equal(loaded.coefficients(), model.coefficients())
+
+
+def test_non_finite_diagnostics_round_trip_as_strings(weak_model, tmp_path):
+    _, path, _ = weak_model
+    document = json.loads(path.read_text())
+    document["training"]["selection"]["fields"]["cv_error"][0] = "inf"
+    document["training"]["mass_matrix_check"]["median_condition"] = "nan"
+    target = tmp_path / "inf.json"
+    target.write_text(json.dumps(document))
+    loaded = load_model(target)
+    assert loaded.selection_.cv_error[0] == np.inf
+    assert np.isnan(loaded.mass_matrix_check_["median_condition"])
+    save_model(loaded, tmp_path / "again.json")
+    assert json.loads((tmp_path / "again.json").read_text())["training"] == document["training"]
+
+
+def test_unsaveable_setting_warns_and_is_left_out(weak_model, tmp_path):
+    model, _, arguments = weak_model
+    custom = px.XLSINDy(model.feature_library, px.ExplicitOptimizer(),
+                        differentiation_method=ps.SmoothedFiniteDifference())
+    custom.fit(arguments["x"], arguments["t"], u=arguments["u"])
+    with pytest.warns(UserWarning, match="differentiation_method: SmoothedFiniteDifference"):
+        custom.save(tmp_path / "custom.json")
+    assert load_model(tmp_path / "custom.json").differentiation_method is None
+    plain = px.XLSINDy(model.feature_library, px.ExplicitOptimizer(),
+                       differentiation_method=ps.FiniteDifference(order=2))
+    plain.fit(arguments["x"], arguments["t"], u=arguments["u"])
+    plain.save(tmp_path / "plain.json")
+    method = load_model(tmp_path / "plain.json").differentiation_method
+    assert isinstance(method, ps.FiniteDifference) and method.order == 2
+
+
+def _training(key, value):
+    def change(document):
+        document["training"][key] = value
+    return change
+
+
+def _setting(key, value):
+    def change(document):
+        document["settings"][key] = value
+    return change
+
+
+def _selection_field(key, value):
+    def change(document):
+        document["training"]["selection"]["fields"][key] = value
+    return change
+
+
+TAMPERED_TRAINING = {
+    "formulation": (_training("formulation", "pointwise"), "training.formulation"),
+    "samples": (_training("n_samples", -3), "training.n_samples"),
+    "weak_info": (_training("weak_info", {"half_width": 1.0}), "training.weak_info"),
+    "half_width": (lambda d: d["training"]["weak_info"].__setitem__("half_width", -1.0),
+                   "training.weak_info.half_width must be positive"),
+    "check": (_training("mass_matrix_check", {"positive_definite_fraction": "all"}),
+              "training.mass_matrix_check"),
+    "selection_type": (lambda d: d["training"]["selection"].__setitem__("type", "os.system"),
+                       "training.selection must be null or"),
+    "selection_order": (_selection_field("order", [0, 99]), "training.selection.order"),
+    "selection_size": (_selection_field("size", True), "training.selection.size"),
+    "selection_error": (_selection_field("cv_error", ["zero"]),
+                        "training.selection.cv_error"),
+    "selection_missing": (lambda d: d["training"]["selection"]["fields"].pop("rule"),
+                          "training.selection.fields must be"),
+    "setting_unknown": (_setting("verbose", True), "'settings' must be an object"),
+    "setting_value": (_setting("t_default", -1.0), "settings: t_default"),
+    "setting_type": (_setting("smoother", {"type": "eval", "params": {}}), "settings.smoother"),
+    "setting_param": (_setting("test_functions", {"type": "BumpTestFunctions",
+                                                  "params": {"power": 0}}),
+                      "settings.test_functions: power"),
+    "setting_unknown_param": (_setting("smoother", {"type": "WhittakerSmoother",
+                                                    "params": {"window": 3}}),
+                              "settings.smoother: .*window"),
+}
+
+
+@pytest.mark.parametrize("case", list(TAMPERED_TRAINING))
+def test_tampered_settings_or_diagnostics_are_refused(case, weak_model, tmp_path):
+    change, match = TAMPERED_TRAINING[case]
+    _, path, _ = weak_model
+    with pytest.raises(ValueError, match=f"not a valid pysindy-xl model file: {match}"):
+        load_model(_tamper(path, tmp_path, change))
