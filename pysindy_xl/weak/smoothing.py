@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.fft
+import scipy.linalg
 import scipy.signal
 import scipy.sparse
 import scipy.sparse.linalg
@@ -208,8 +209,13 @@ def _choose_lambda_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
     """
     n_samples = len(t)
     penalty = _divided_difference_matrix(t, order)
-    penalty = (penalty.T @ penalty).tocsc()
-    identity = scipy.sparse.identity(n_samples, format="csc")
+    penalty = (penalty.T @ penalty).todia()
+    # D^T D in LAPACK band storage (row order - k: the k-th diagonal, aligned by column, as
+    # the DIA format stores it). An LU with pivoting, not Cholesky: at the largest weights
+    # the identity is lost to rounding next to lambda D^T D, which is only semi-definite.
+    banded = np.zeros((2 * order + 1, n_samples))
+    for offset, diagonal in zip(penalty.offsets, penalty.data, strict=True):
+        banded[order - offset] = diagonal
     first = _divided_difference_matrix(t, 1)
     rng = np.random.default_rng(0)
     probes = rng.choice([-1.0, 1.0], size=(n_samples, n_probes))
@@ -220,7 +226,10 @@ def _choose_lambda_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
 
     def score(k):
         if k not in scores:
-            solved = scipy.sparse.linalg.splu(identity + _LAMBDA_GRID[k] * penalty).solve(rhs)
+            system = _LAMBDA_GRID[k] * banded
+            system[order] += 1.0
+            solved = scipy.linalg.solve_banded((order, order), system, rhs,
+                                               check_finite=False)
             residual = y - solved[:, 0]
             rss = float(residual @ residual)
             trace = float(np.mean(np.sum(probes * solved[:, 1:1 + n_probes], axis=0)))
