@@ -339,3 +339,23 @@ def test_test_function_width_does_not_move_with_the_noise(seed):
     for level in (0.01, 0.03, 0.05):
         noisy = x + level * x.std() * rng.normal(size=x.shape)
         assert corner_frequency(t, noisy) == pytest.approx(clean, rel=0.1), level
+
+
+@pytest.mark.parametrize("grid", ["dropped", "two rates"])
+def test_positions_on_irregular_grids_are_recovered(grid, double_pendulum_system):
+    # Lost samples or a changing logging rate: clean positions identify the true law as on a
+    # uniform grid (a 1.5 % median error with 30 % of the samples lost, before the smoother
+    # chose its weight on the actual times), and 1 % noise costs about what it costs there.
+    system = double_pendulum_system
+    library = paper_catalog(system.coords, [0, 1])
+    true = _true_coefficients(system, library)
+    support = true != 0
+    t = _grid(grid, np.random.default_rng(7))
+    data = system.simulate(random_initial_state(system, 3), t, random_force(system, 3))
+    for level, tolerance in ((0.0, 5e-4), (0.01, 1e-2)):
+        noise = np.random.default_rng(8).normal(size=data["q"].shape)
+        positions = data["q"] + level * data["q"].std(axis=0) * noise
+        coef = px.XLSINDy(library).fit(positions, t, u=data["tau"]).coefficients()
+        assert np.array_equal(coef != 0, support), level
+        error = np.median(np.abs(coef[support] - true[support]) / np.abs(true[support]))
+        assert error < tolerance, (level, error)
