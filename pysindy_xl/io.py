@@ -224,7 +224,10 @@ def _library_from_spec(spec, coords: Coordinates, path, budget=None, depth=0):
         return LagrangeLibrary(coords, terms())
     if kind == "ClassicalLibrary":
         parsed = terms()
-        mask = np.asarray(spec.get("mask"))
+        try:
+            mask = np.asarray(spec.get("mask"))
+        except ValueError:  # ragged nested lists
+            mask = np.empty(0)
         _expect(mask.shape == (len(parsed), coords.n) and np.isin(mask, (0, 1)).all(), path,
                 "ClassicalLibrary.mask must be a 0/1 matrix (n_terms, n)")
         return ClassicalLibrary(coords, parsed, mask=mask.astype(bool))
@@ -308,8 +311,9 @@ def load_model(path):
                     for c in coef), path,
             "'coefficients' must be one number per feature, all finite")
     forced = document.get("forced_coordinates", [True] * coords.n)
-    _expect(isinstance(forced, list) and len(forced) == coords.n, path,
-            "'forced_coordinates' must have one flag per coordinate")
+    _expect(isinstance(forced, list) and len(forced) == coords.n
+            and all(isinstance(f, bool) for f in forced), path,
+            "'forced_coordinates' must have one flag (true or false) per coordinate")
     dropped = document.get("dropped_features", {})
     _expect(isinstance(dropped, dict), path, "'dropped_features' must be an object")
 
@@ -407,7 +411,8 @@ def _settings_from_document(document, path) -> dict:
             settings[key] = value
         elif value is not None:
             types = _setting_types(key)
-            _expect(isinstance(value, dict) and value.get("type") in types
+            _expect(isinstance(value, dict) and isinstance(value.get("type"), str)
+                    and value["type"] in types
                     and isinstance(value.get("params"), dict)
                     and all(map(_plain, value["params"].values())), path,
                     f"settings.{key} must be null or {{'type': one of {sorted(types)}, "
@@ -415,7 +420,7 @@ def _settings_from_document(document, path) -> dict:
             try:
                 settings[key] = types[value["type"]](**value["params"])
                 getattr(settings[key], "_check_params", lambda: None)()
-            except (TypeError, ValueError) as err:
+            except (TypeError, ValueError, AttributeError) as err:
                 raise _fail(path, f"settings.{key}: {err}") from None
     from .model import XLSINDy
 
@@ -435,7 +440,8 @@ def _floats(values) -> list:
 
 def _floats_from(values, path, where) -> np.ndarray:
     _expect(isinstance(values, list) and all(
-        (isinstance(v, (int, float)) and not isinstance(v, bool)) or v in _NON_FINITE
+        (isinstance(v, (int, float)) and not isinstance(v, bool))
+        or (isinstance(v, str) and v in _NON_FINITE)
         for v in values), path, f"{where} must be a list of numbers")
     return np.array([_NON_FINITE[v] if isinstance(v, str) else v for v in values], dtype=float)
 
@@ -498,9 +504,11 @@ def _restore_training(model, spec, n_features, path) -> None:
                                                           "noise"}, path,
                 "training.weak_info must hold half_width, test_functions and noise")
         half_width = _floats_from([info["half_width"]], path, "training.weak_info.half_width")
-        _expect(half_width[0] > 0, path, "training.weak_info.half_width must be positive")
+        _expect(0 < half_width[0] < math.inf, path,
+                "training.weak_info.half_width must be positive")
         counts = info["test_functions"]
-        _expect(isinstance(counts, list) and all(isinstance(k, int) and k > 0 for k in counts),
+        _expect(isinstance(counts, list) and all(
+            isinstance(k, int) and not isinstance(k, bool) and k > 0 for k in counts),
                 path, "training.weak_info.test_functions must be positive integers")
         noise = info["noise"]
         info = {"half_width": float(half_width[0]), "test_functions": counts,
@@ -516,7 +524,8 @@ def _restore_training(model, spec, n_features, path) -> None:
     selection = spec.get("selection")
     if selection is not None:
         types = _selection_types()
-        _expect(isinstance(selection, dict) and selection.get("type") in types
+        _expect(isinstance(selection, dict) and isinstance(selection.get("type"), str)
+                and selection["type"] in types
                 and isinstance(selection.get("fields"), dict), path,
                 f"training.selection must be null or {{'type': one of {sorted(types)}, "
                 "'fields': ...}")
@@ -540,6 +549,9 @@ def _restore_training(model, spec, n_features, path) -> None:
             else:
                 value = _floats_from(value, path, where)
             values[name] = value
+        _expect(all(len(v) >= values["size"] for v in values.values()
+                    if isinstance(v, np.ndarray)), path,
+                "training.selection: the arrays must cover the chosen size")
         selection = kind(**values)
     model.formulation_ = formulation
     model.n_samples_ = n_samples

@@ -189,6 +189,10 @@ TAMPERED = {
     "coordinates_reserved": (_set("coordinates", ["x", "t"]), r"names: 't' is reserved"),
     "coordinates_not_list": (_set("coordinates", "x"), r"'coordinates' must be a list"),
     "forced_length": (_set("forced_coordinates", [True]), r"'forced_coordinates' must have"),
+    "forced_not_flags": (_set("forced_coordinates", [[None, []], True]),
+                         r"'forced_coordinates' must have one flag"),
+    "mask_ragged": (lambda d: _classical_spec(d).__setitem__("mask", [[1, [0]], [0, 1]]),
+                    r"ClassicalLibrary.mask must be a 0/1 matrix"),
     "dropped_not_object": (_set("dropped_features", ["a"]), r"'dropped_features' must be"),
 }
 
