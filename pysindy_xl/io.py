@@ -15,9 +15,12 @@ field and parses terms with that grammar only: nothing in the file is executed (
 
 from __future__ import annotations
 
+import dataclasses
+import inspect
 import json
 import math
 import os
+import warnings
 
 import numpy as np
 
@@ -365,8 +368,6 @@ def _plain(value) -> bool:
 
 def _init_params(value) -> dict:
     """The constructor parameters of an object, as they are set on it (not its fitted state)."""
-    import inspect
-
     if hasattr(value, "get_params"):
         return value.get_params(deep=False)
     names = [name for name, p in inspect.signature(type(value).__init__).parameters.items()
@@ -379,8 +380,6 @@ def _settings_spec(model) -> dict:
 
     An object that cannot be written so (a type the loader does not know, a parameter that
     is a function) is left out with a warning: the loaded model uses the default instead."""
-    import warnings
-
     settings = {key: getattr(model, key) for key in _PLAIN_SETTINGS}
     for key in _OBJECT_SETTINGS:
         value = getattr(model, key)
@@ -453,23 +452,27 @@ def _selection_types():
     return {"SelectionResult": SelectionResult, "LawSelection": LawSelection}
 
 
+def _field_json(name, value):
+    """A selection field for JSON: the rule as text, sizes and column indices as integers,
+    the held-out scores as numbers (:func:`_floats`)."""
+    if isinstance(value, str):
+        return value
+    if np.ndim(value) == 0:
+        return int(value)
+    return [int(v) for v in value] if name == "order" else _floats(value)
+
+
 def _training_spec(model) -> dict:
     """The diagnostics of the fit: formulation, samples, weak-form info, the sparsity
     selection and the mass-matrix check."""
-    import dataclasses
-
     info = getattr(model, "weak_info_", None)
     selection = getattr(model, "selection_", None)
     check = getattr(model, "mass_matrix_check_", None)
     if selection is not None and type(selection).__name__ in _selection_types():
-        fields = {}
-        for field in dataclasses.fields(selection):
-            value = getattr(selection, field.name)
-            fields[field.name] = (value if isinstance(value, str) else int(value)
-                                  if np.ndim(value) == 0 else
-                                  [int(v) for v in value] if field.name == "order"
-                                  else _floats(value))
-        selection = {"type": type(selection).__name__, "fields": fields}
+        selection = {"type": type(selection).__name__,
+                     "fields": {field.name: _field_json(field.name,
+                                                        getattr(selection, field.name))
+                                for field in dataclasses.fields(selection)}}
     else:
         selection = None
     return {
@@ -488,8 +491,6 @@ def _training_spec(model) -> dict:
 def _restore_training(model, spec, n_features, path) -> None:
     """Set the fit's diagnostics from a file (absent in files written before they were
     saved: ``formulation_`` unknown, the others None)."""
-    import dataclasses
-
     spec = {} if spec is None else spec
     _expect(isinstance(spec, dict), path, "'training' must be an object")
     formulation = spec.get("formulation")
@@ -521,40 +522,45 @@ def _restore_training(model, spec, n_features, path) -> None:
                 f"training.mass_matrix_check must hold {keys}")
         check = dict(zip(keys, _floats_from([check[k] for k in keys], path,
                                             "training.mass_matrix_check").tolist(), strict=True))
-    selection = spec.get("selection")
-    if selection is not None:
-        types = _selection_types()
-        _expect(isinstance(selection, dict) and isinstance(selection.get("type"), str)
-                and selection["type"] in types
-                and isinstance(selection.get("fields"), dict), path,
-                f"training.selection must be null or {{'type': one of {sorted(types)}, "
-                "'fields': ...}")
-        kind = types[selection["type"]]
-        fields, values = selection["fields"], {}
-        names = [f.name for f in dataclasses.fields(kind)]
-        _expect(set(fields) == set(names), path, f"training.selection.fields must be {names}")
-        for name in names:
-            value, where = fields[name], f"training.selection.{name}"
-            if name == "rule":
-                _expect(isinstance(value, str), path, f"{where} must be a string")
-            elif name in ("size", "best_size"):
-                _expect(isinstance(value, int) and not isinstance(value, bool)
-                        and 0 <= value <= n_features, path,
-                        f"{where} must be an integer in [0, {n_features}]")
-            elif name == "order":
-                _expect(isinstance(value, list) and all(
-                    isinstance(j, int) and not isinstance(j, bool) and 0 <= j < n_features
-                    for j in value), path, f"{where} must be feature indices")
-                value = np.asarray(value, dtype=int)
-            else:
-                value = _floats_from(value, path, where)
-            values[name] = value
-        _expect(all(len(v) >= values["size"] for v in values.values()
-                    if isinstance(v, np.ndarray)), path,
-                "training.selection: the arrays must cover the chosen size")
-        selection = kind(**values)
+    selection = _selection_from_spec(spec.get("selection"), n_features, path)
     model.formulation_ = formulation
     model.n_samples_ = n_samples
     model.weak_info_ = info
     model.selection_ = selection
     model.mass_matrix_check_ = check
+
+
+def _selection_from_spec(selection, n_features, path):
+    """The ``SelectionResult`` or ``LawSelection`` a file holds, every field checked, or None."""
+    if selection is None:
+        return None
+    types = _selection_types()
+    _expect(isinstance(selection, dict) and isinstance(selection.get("type"), str)
+            and selection["type"] in types
+            and isinstance(selection.get("fields"), dict), path,
+            f"training.selection must be null or {{'type': one of {sorted(types)}, "
+            "'fields': ...}")
+    kind = types[selection["type"]]
+    fields, values = selection["fields"], {}
+    names = [f.name for f in dataclasses.fields(kind)]
+    _expect(set(fields) == set(names), path, f"training.selection.fields must be {names}")
+    for name in names:
+        value, where = fields[name], f"training.selection.{name}"
+        if name == "rule":
+            _expect(isinstance(value, str), path, f"{where} must be a string")
+        elif name in ("size", "best_size"):
+            _expect(isinstance(value, int) and not isinstance(value, bool)
+                    and 0 <= value <= n_features, path,
+                    f"{where} must be an integer in [0, {n_features}]")
+        elif name == "order":
+            _expect(isinstance(value, list) and all(
+                isinstance(j, int) and not isinstance(j, bool) and 0 <= j < n_features
+                for j in value), path, f"{where} must be feature indices")
+            value = np.asarray(value, dtype=int)
+        else:
+            value = _floats_from(value, path, where)
+        values[name] = value
+    _expect(all(len(v) >= values["size"] for v in values.values()
+                if isinstance(v, np.ndarray)), path,
+            "training.selection: the arrays must cover the chosen size")
+    return kind(**values)
