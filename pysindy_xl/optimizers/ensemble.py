@@ -11,7 +11,15 @@ cross-validated selection inside each fit never sees a row twice:
 with ``R_b`` a random ``fraction`` of the chunks. The ensemble reports, per catalog term, the
 inclusion probability ``P(xi_j != 0)`` and intervals of ``xi_j`` (from the fits' spread), in the
 coefficients' own (physical) units, and its model keeps the terms included in at least
-``inclusion`` of the fits with their median coefficient.
+``inclusion`` of the fits.
+
+The kept terms are then fitted once more on all the rows (``aggregate="refit"``, the default
+where the optimizer can fit a given support): the ensemble decides *which* terms, the whole data
+*how large*. The median of the fits (``aggregate="median"``) is less accurate: each fit sees
+only part of the rows, and the fits disagree on the support, so the median of one coefficient
+mixes estimates made with different companions. On a chaotic double pendulum on a cart at 3 %
+noise that mixing split a pair of coupling terms unevenly (-2.5 % and 0 % where the truth has
+them equal), and the model's simulation left the truth within 5 s.
 
 Complementary pairs
 -------------------
@@ -51,6 +59,8 @@ __all__ = ["EnsembleOptimizer"]
 
 #: Ways of drawing the fits' rows (see the module docs).
 SAMPLINGS = ("subsamples", "complementary_pairs")
+#: Ways of computing the coefficients of the included terms (see ``aggregate``).
+AGGREGATES = ("auto", "refit", "median")
 
 
 class EnsembleOptimizer(CatalogOptimizer):
@@ -68,6 +78,12 @@ class EnsembleOptimizer(CatalogOptimizer):
         Contiguous chunks of each coordinate's rows.
     inclusion : float, default 0.5
         Inclusion probability from which a term enters the ensemble's model.
+    aggregate : {"auto", "refit", "median"}, default "auto"
+        Coefficients of the included terms. ``"refit"``: the optimizer's least squares on all
+        the rows with the included terms (its ``fit_support``, e.g.
+        :meth:`ExplicitOptimizer.fit_support`, with the same noise correction);
+        ``"median"``: the median over the fits that keep the term; ``"auto"``: ``"refit"``
+        when the optimizer has ``fit_support``, ``"median"`` otherwise.
     sampling : {"subsamples", "complementary_pairs"}, default "subsamples"
         ``"subsamples"``: each fit on a random ``fraction`` of the chunks, inclusion = fraction
         of the fits keeping the term. ``"complementary_pairs"``: ``n_models / 2`` pairs of
@@ -84,18 +100,22 @@ class EnsembleOptimizer(CatalogOptimizer):
     Attributes
     ----------
     coef_ : ndarray, shape (F,)
-        Median coefficient of each term included in at least ``inclusion`` of the fits.
+        Coefficients of the terms included in at least ``inclusion`` of the fits (see
+        ``aggregate``), zero elsewhere.
+    aggregate_ : str
+        ``"refit"`` or ``"median"``: how ``coef_`` was computed.
     coef_samples_ : ndarray, shape (n_models, F)
         Coefficients of every fit (failed fits are left out).
     inclusion_probability_ : ndarray, shape (F,)
         Fraction of the fits (pairs, with complementary pairs) that keep each term; failed
         fits (pairs) are not counted.
     coef_interval_ : ndarray, shape (2, F)
-        ``confidence`` interval of each coefficient: the median over the fits (zeros included)
-        plus or minus Student's quantile times their standard deviation, widened by
-        ``sqrt(f / (1 - f))`` for the subsample fraction ``f`` (delete-d jackknife), since a
-        subsample estimate spreads less around the full-data one than the full-data estimate
-        spreads around the truth. Smoothing bias is not covered.
+        ``confidence`` interval of each coefficient: ``coef_`` for the included terms, the
+        median over the fits (zeros included) for the others, plus or minus Student's quantile
+        times the fits' standard deviation, widened by ``sqrt(f / (1 - f))`` for the subsample
+        fraction ``f`` (delete-d jackknife), since a subsample estimate spreads less around
+        the full-data one than the full-data estimate spreads around the truth.
+        Smoothing bias is not covered.
     n_failed_ : int
         Fits that raised (e.g. no law found on a subsample).
 
@@ -114,12 +134,14 @@ class EnsembleOptimizer(CatalogOptimizer):
     """
 
     def __init__(self, optimizer=None, n_models=20, fraction=0.7, n_chunks=20, inclusion=0.5,
-                 confidence=0.95, random_state=0, n_jobs=None, sampling="subsamples"):
+                 confidence=0.95, random_state=0, n_jobs=None, sampling="subsamples",
+                 aggregate="auto"):
         self.optimizer = optimizer
         self.n_models = n_models
         self.fraction = fraction
         self.n_chunks = n_chunks
         self.inclusion = inclusion
+        self.aggregate = aggregate
         self.sampling = sampling
         self.confidence = confidence
         self.random_state = random_state
@@ -135,6 +157,10 @@ class EnsembleOptimizer(CatalogOptimizer):
         if self.n_jobs is not None:
             check_option("n_jobs", self.n_jobs, "int")
         check_option("sampling", self.sampling, "choice", choices=SAMPLINGS)
+        check_option("aggregate", self.aggregate, "choice", choices=AGGREGATES)
+        if self.aggregate == "refit" and not hasattr(self._base(), "fit_support"):
+            raise ValueError(f"aggregate: 'refit' needs an optimizer with fit_support, "
+                             f"{type(self._base()).__name__} has none (use 'median' or 'auto')")
         if self.sampling == "complementary_pairs" and self.n_models % 2:
             raise ValueError(f"n_models: complementary pairs need an even number of fits, got "
                              f"{self.n_models}")
@@ -172,7 +198,7 @@ class EnsembleOptimizer(CatalogOptimizer):
             n_keep = max(2, int(round(self.fraction * n_chunks)))
             subsamples = [np.sort(rng.choice(n_chunks, size=n_keep, replace=False))
                           for _ in range(int(self.n_models))]
-        base = ExplicitOptimizer() if self.optimizer is None else self.optimizer
+        base = self._base()
         takes_moments = noise_moments is not None and accepts_noise_moments(base)
         problems = []
         for chunks in subsamples:
@@ -202,10 +228,17 @@ class EnsembleOptimizer(CatalogOptimizer):
         else:
             self.inclusion_probability_ = np.mean(samples != 0, axis=0)
         included = self.inclusion_probability_ >= self.inclusion
-        coef = np.zeros(theta.shape[1])
-        for j in np.flatnonzero(included):
-            coef[j] = np.median(samples[samples[:, j] != 0, j])
-        self.coef_ = coef
+        self.aggregate_ = ("refit" if self.aggregate == "refit" or (
+            self.aggregate == "auto" and hasattr(base, "fit_support")) else "median")
+        if self.aggregate_ == "refit":
+            extra = {"noise_moments": noise_moments} if takes_moments else {}
+            coef = clone(base).fit_support(theta, n_coordinates, force_columns, included,
+                                           **extra).coef_
+        else:
+            coef = np.zeros(theta.shape[1])
+            for j in np.flatnonzero(included):
+                coef[j] = np.median(samples[samples[:, j] != 0, j])
+        self.coef_ = np.asarray(coef, dtype=float)
         share = np.mean([len(chunks) for chunks in subsamples]) / n_chunks
         # A subsample of a fraction f of the data spreads around the full-data estimate by
         # sqrt((1 - f) / f) times that estimate's own sampling spread (delete-d jackknife),
@@ -214,7 +247,7 @@ class EnsembleOptimizer(CatalogOptimizer):
         # percentiles: the 2.5 and 97.5 percentiles of 20 fits are those of the two most
         # extreme ones, far noisier than a spread measured with all of them (and too narrow
         # on average).
-        center = np.median(samples, axis=0)
+        center = np.where(included, self.coef_, np.median(samples, axis=0))
         half_width = np.zeros_like(center)
         if len(samples) > 1:
             quantile = scipy.stats.t.ppf(0.5 + self.confidence / 2, df=len(samples) - 1)
@@ -222,6 +255,9 @@ class EnsembleOptimizer(CatalogOptimizer):
                           * samples.std(axis=0, ddof=1))
         self.coef_interval_ = np.array([center - half_width, center + half_width])
         return self
+
+    def _base(self):
+        return ExplicitOptimizer() if self.optimizer is None else self.optimizer
 
     def plot(self, feature_names=None, axes=None):
         """Inclusion probabilities and coefficient distributions of the ensemble.

@@ -392,26 +392,76 @@ class ExplicitOptimizer(CatalogOptimizer):
         -------
         self
         """
-        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
-                                                     balance=False)
-        n_coordinates = int(n_coordinates)
-        weights = coordinate_weights(theta, n_coordinates, force_columns)
-        theta = scale_blocks(theta, weights)
-        if len(force_columns) == 0:
-            raise ValueError("force_columns: explicit regression needs a force column")
-        rest = np.setdiff1d(np.arange(theta.shape[1]), force_columns)
-        force = theta[:, force_columns].sum(axis=1)
-        moments = None
-        if noise_moments is not None:
-            moments = check_noise_moments(noise_moments, n_coordinates, theta.shape[1])
-            # the moments of the balanced rows, restricted to the regressors
-            moments = np.einsum("b,bfg->fg", weights**2, moments)[np.ix_(rest, rest)]
+        theta, force_columns, rest, force, moments = _explicit_problem(
+            theta, n_coordinates, force_columns, noise_moments)
         # cross-validation folds stay inside each coordinate's block of rows
-        self._fit(theta[:, rest], force, n_blocks=n_coordinates, noise_moments=moments)
-        coef = np.zeros(theta.shape[1])
-        coef[rest] = self.coef_
+        self._fit(theta[:, rest], force, n_blocks=int(n_coordinates), noise_moments=moments)
+        return self._as_catalog_vector(self.coef_, rest, force_columns, theta.shape[1])
+
+    def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None):
+        """Least squares of the catalog problem on a given support, nothing selected.
+
+        The final step of :meth:`fit_catalog` with the support given: the terms in ``support``
+        (besides the force columns, fixed to -1) are fitted on every row, corrected for
+        ``noise_moments`` as there. :class:`EnsembleOptimizer` uses it to refit the terms its
+        fits agree on with all the data.
+
+        Parameters
+        ----------
+        theta, n_coordinates, force_columns, noise_moments
+            As in :meth:`fit_catalog`.
+        support : array of bool, shape (F,)
+            Terms to fit; the others get 0.
+
+        Returns
+        -------
+        self
+        """
+        self._check_params()
+        theta, force_columns, rest, force, moments = _explicit_problem(
+            theta, n_coordinates, force_columns, noise_moments)
+        support = np.asarray(support)
+        if support.dtype != bool or support.shape != (theta.shape[1],):
+            raise ValueError(f"support: expected a boolean array of shape ({theta.shape[1]},), "
+                             f"got {support.dtype} of shape {support.shape}")
+        keep = support[rest]
+        coef = np.zeros(len(rest))
+        if moments is not None:
+            moments = moments[np.ix_(keep, keep)]
+        coef[keep], share = corrected_least_squares(theta[:, rest[keep]], force, moments)
+        self.selection_ = None
+        self.noise_share_ = None if moments is None else share
+        return self._as_catalog_vector(coef, rest, force_columns, theta.shape[1])
+
+    def _as_catalog_vector(self, coef_rest, rest, force_columns, n_features):
+        coef = np.zeros(n_features)
+        coef[rest] = coef_rest
         coef[force_columns] = -1.0
         self.coef_ = coef
-        self.n_features_in_ = theta.shape[1]
+        self.n_features_in_ = n_features
         self.support_ = coef != 0
         return self
+
+
+def _explicit_problem(theta, n_coordinates, force_columns, noise_moments):
+    """The balanced regression of a catalog problem with known forces.
+
+    Returns the balanced ``theta``, the force columns, the other columns ``rest``, the force
+    (the right-hand side) and the noise moments of the balanced rows restricted to ``rest``
+    (None without ``noise_moments``).
+    """
+    theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
+                                                 balance=False)
+    n_coordinates = int(n_coordinates)
+    weights = coordinate_weights(theta, n_coordinates, force_columns)
+    theta = scale_blocks(theta, weights)
+    if len(force_columns) == 0:
+        raise ValueError("force_columns: explicit regression needs a force column")
+    rest = np.setdiff1d(np.arange(theta.shape[1]), force_columns)
+    force = theta[:, force_columns].sum(axis=1)
+    moments = None
+    if noise_moments is not None:
+        moments = check_noise_moments(noise_moments, n_coordinates, theta.shape[1])
+        # the moments of the balanced rows, restricted to the regressors
+        moments = np.einsum("b,bfg->fg", weights**2, moments)[np.ix_(rest, rest)]
+    return theta, force_columns, rest, force, moments
