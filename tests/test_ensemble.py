@@ -195,3 +195,36 @@ def test_parallel_fits_give_the_same_ensemble():
     np.testing.assert_array_equal(serial.coef_interval_, parallel.coef_interval_)
     with pytest.raises(TypeError, match="n_jobs"):
         px.EnsembleOptimizer(n_jobs="all").fit_catalog(theta, 1, [0])
+
+
+class _RecordingImplicit(px.ImplicitOptimizer):
+    """An ImplicitOptimizer that records the mass matrices each of its fits receives."""
+
+    received = []
+
+    def fit_catalog(self, theta, n_coordinates, force_columns, reference_columns=None,
+                    noise_moments=None, mass_matrices=None):
+        _RecordingImplicit.received.append(mass_matrices)
+        return super().fit_catalog(theta, n_coordinates, force_columns, reference_columns,
+                                   noise_moments, mass_matrices)
+
+
+def test_every_fit_gets_the_mass_matrices_its_optimizer_takes():
+    rng = np.random.default_rng(0)
+    a, b, c = rng.normal(size=(3, 400))
+    theta = np.column_stack([a - 2 * b + 0.01 * rng.normal(size=400), a, b, c])
+    moments = 0.01**2 * 400 * np.eye(4)[None]
+    masses = rng.normal(size=(5, 4, 1, 1))
+    _RecordingImplicit.received.clear()
+    implicit = px.EnsembleOptimizer(_RecordingImplicit(), n_models=4).fit_catalog(
+        theta, 1, [], noise_moments=moments, mass_matrices=masses)
+    assert len(_RecordingImplicit.received) == 4
+    for received in _RecordingImplicit.received:
+        np.testing.assert_array_equal(received, masses)
+    assert implicit.aggregate_ == "median"
+    np.testing.assert_array_equal(implicit.coef_ != 0, [True, True, True, False])
+    # an explicit optimizer takes none: accepted and unused
+    px.EnsembleOptimizer(n_models=4).fit_catalog(theta, 1, [0], mass_matrices=masses)
+    with pytest.raises(ValueError, match="mass_matrices"):
+        px.EnsembleOptimizer(n_models=4).fit_catalog(theta, 1, [0],
+                                                     mass_matrices=masses[:, :2])

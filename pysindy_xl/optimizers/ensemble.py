@@ -49,8 +49,10 @@ from sklearn.base import clone
 from .._validation import check_instance, check_option
 from ._base import (
     CatalogOptimizer,
+    accepts_fit_parameter,
     accepts_noise_moments,
     check_catalog_problem,
+    check_mass_matrices,
     check_noise_moments,
 )
 from .explicit import ExplicitOptimizer
@@ -165,7 +167,8 @@ class EnsembleOptimizer(CatalogOptimizer):
             raise ValueError(f"n_models: complementary pairs need an even number of fits, got "
                              f"{self.n_models}")
 
-    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None):
+    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None,
+                    mass_matrices=None):
         """Fit the ensemble on a stacked catalog matrix.
 
         Parameters
@@ -176,6 +179,10 @@ class EnsembleOptimizer(CatalogOptimizer):
         noise_moments : array, shape (n_coordinates, F, F), optional
             Errors-in-variables moments of all rows; each fit gets its subsample's share
             (the errors are stationary along the rows) when its optimizer takes them.
+        mass_matrices : array, shape (S, F, n_coordinates, n_coordinates), optional
+            Each column's contribution to the mass matrix on sample states, passed unchanged
+            to every fit whose optimizer takes them (:class:`ImplicitOptimizer` then selects
+            only laws with a definite mass matrix); ignored by the others.
 
         Returns
         -------
@@ -200,12 +207,20 @@ class EnsembleOptimizer(CatalogOptimizer):
                           for _ in range(int(self.n_models))]
         base = self._base()
         takes_moments = noise_moments is not None and accepts_noise_moments(base)
+        shared = {}
+        if mass_matrices is not None:
+            mass_matrices = check_mass_matrices(mass_matrices, int(n_coordinates),
+                                                theta.shape[1])
+            if accepts_fit_parameter(base, "mass_matrices"):
+                # properties of the columns at sample states, not of rows: every fit gets all
+                shared["mass_matrices"] = mass_matrices
         problems = []
         for chunks in subsamples:
             rows = np.concatenate([np.arange(edges[k], edges[k + 1]) for k in chunks])
             # the noise moments are sums over rows: each fit gets its rows' share
-            extra = {"noise_moments": noise_moments * (len(rows) / n_rows)} if takes_moments \
-                else {}
+            extra = dict(shared)
+            if takes_moments:
+                extra["noise_moments"] = noise_moments * (len(rows) / n_rows)
             problems.append(((np.arange(n_coordinates)[:, None] * n_rows
                               + rows[None, :]).ravel(), extra))
         fits = joblib.Parallel(n_jobs=self.n_jobs)(
