@@ -160,9 +160,10 @@ class EnsembleOptimizer(CatalogOptimizer):
             check_option("n_jobs", self.n_jobs, "int")
         check_option("sampling", self.sampling, "choice", choices=SAMPLINGS)
         check_option("aggregate", self.aggregate, "choice", choices=AGGREGATES)
-        if self.aggregate == "refit" and not hasattr(self._base(), "fit_support"):
+        base = self._base()
+        if self.aggregate == "refit" and not hasattr(base, "fit_support"):
             raise ValueError(f"aggregate: 'refit' needs an optimizer with fit_support, "
-                             f"{type(self._base()).__name__} has none (use 'median' or 'auto')")
+                             f"{type(base).__name__} has none (use 'median' or 'auto')")
         if self.sampling == "complementary_pairs" and self.n_models % 2:
             raise ValueError(f"n_models: complementary pairs need an even number of fits, got "
                              f"{self.n_models}")
@@ -253,7 +254,7 @@ class EnsembleOptimizer(CatalogOptimizer):
             coef = np.zeros(theta.shape[1])
             for j in np.flatnonzero(included):
                 coef[j] = np.median(samples[samples[:, j] != 0, j])
-        self.coef_ = np.asarray(coef, dtype=float)
+        self.coef_ = coef
         share = np.mean([len(chunks) for chunks in subsamples]) / n_chunks
         # A subsample of a fraction f of the data spreads around the full-data estimate by
         # sqrt((1 - f) / f) times that estimate's own sampling spread (delete-d jackknife),
