@@ -18,6 +18,7 @@ from pysindy_xl.optimizers.noise_ratio import (
     _bordered_minima,
     _constrained_minima,
     _pencil,
+    _smallest_bordered_root,
     law_elimination_path,
     refine_law_by_swaps,
 )
@@ -62,6 +63,80 @@ def test_bordered_minima_equal_the_eigenvalue_with_one_more_column():
         direct = scipy.linalg.eigh(theta[:, support].T @ theta[:, support],
                                    moments[np.ix_(support, support)], eigvals_only=True)[0]
         assert minima[m] == pytest.approx(direct, rel=1e-9)
+
+
+def test_stacked_pencils_match_each_generalized_eigenproblem():
+    problems = [_random_pencil(5, seed) for seed in range(4)]
+    values, vectors = _pencil(np.stack([p[0] for p in problems]),
+                              np.stack([p[1] for p in problems]))
+    for m, (theta, moments) in enumerate(problems):
+        expected = scipy.linalg.eigh(theta.T @ theta, moments, eigvals_only=True)
+        np.testing.assert_allclose(values[m], expected, rtol=1e-8)
+        np.testing.assert_allclose(vectors[m].T @ moments @ vectors[m], np.eye(5), atol=1e-8)
+
+
+def _smallest_eigenvalue(theta, moments, support):
+    return scipy.linalg.eigh(theta[:, support].T @ theta[:, support],
+                             moments[np.ix_(support, support)], eigvals_only=True)[0]
+
+
+def test_smallest_bordered_root_is_the_best_swap_of_all_removals():
+    """Candidates of different removals (each with its own pencil) compete in one call; the
+    winner and its root are those of the direct eigenproblems."""
+    theta, moments = _random_pencil(9, 3)
+    gram = theta.T @ theta
+    support, outside = [0, 1, 2, 3], np.array([4, 5, 6, 7, 8])
+    current = _smallest_eigenvalue(theta, moments, support)
+    values, cross_gram, cross_moments, swaps = [], [], [], []
+    for removed in support:
+        rest = [j for j in support if j != removed]
+        pencil_values, vectors = _pencil(theta[:, rest], moments[np.ix_(rest, rest)])
+        values.append(np.repeat(pencil_values[:, None], outside.size, axis=1))
+        cross_gram.append(vectors.T @ gram[np.ix_(rest, outside)])
+        cross_moments.append(vectors.T @ moments[np.ix_(rest, outside)])
+        swaps += [rest + [int(i)] for i in outside]
+    direct = np.array([_smallest_eigenvalue(theta, moments, s) for s in swaps])
+    arrays = (np.hstack(values), np.hstack(cross_gram), np.hstack(cross_moments),
+              np.tile(np.diag(gram)[outside], 4), np.tile(np.diag(moments)[outside], 4))
+    # the ceiling is the support's own ratio, below each removal's (interlacing)
+    assert direct.min() < current
+    index, root = _smallest_bordered_root(current, *arrays)
+    assert index == int(np.argmin(direct))
+    assert root == pytest.approx(direct.min(), rel=1e-9)
+    # below every candidate's root: nothing to report
+    assert _smallest_bordered_root(0.99 * direct.min(), *arrays) is None
+
+
+def _swap_search_by_eigh(theta, moments, support):
+    """Best-improvement single swaps, every swap's ratio from scipy's generalized eigh."""
+    support = sorted(support)
+    current = _smallest_eigenvalue(theta, moments, support)
+    while True:
+        swaps = [sorted(set(support) - {j} | {i}) for j in support
+                 for i in range(theta.shape[1]) if i not in support]
+        ratios = [_smallest_eigenvalue(theta, moments, s) for s in swaps]
+        if not min(ratios) < current * (1 - 1e-9):
+            return support
+        support, current = swaps[int(np.argmin(ratios))], min(ratios)
+
+
+def test_swap_refinement_matches_the_direct_search_and_its_memo():
+    rng = np.random.default_rng(5)
+    a, b, c = rng.normal(size=(3, 400))
+    # a law a + b - c = 0 among correlated decoys, so that some starts need several swaps
+    clean = np.column_stack([a, b, a + b - c, c, a + 0.3 * rng.normal(size=400),
+                             b + 0.3 * rng.normal(size=400), rng.normal(size=(400, 4))])
+    theta = clean + 0.1 * rng.normal(size=clean.shape)
+    moments = 0.01 * 400 * np.eye(10)
+    memo = {}
+    for start in ([4, 5, 6, 7], [1, 4, 8, 9], [0, 5, 6, 7], [5, 6, 7, 8]):
+        expected = _swap_search_by_eigh(theta, moments, start)
+        assert refine_law_by_swaps(theta, moments, start).tolist() == expected
+        assert refine_law_by_swaps(theta, moments, start, memo=memo).tolist() == expected
+        assert memo[frozenset(start)] == tuple(expected)
+    # a start the memo knows ends where the memo says, without a search
+    memo[frozenset([4, 5, 6, 7])] = (0, 1, 2, 9)
+    assert refine_law_by_swaps(theta, moments, [4, 5, 6, 7], memo=memo).tolist() == [0, 1, 2, 9]
 
 
 def _quiet_imitation(seed, n_rows=4000):

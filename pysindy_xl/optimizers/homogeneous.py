@@ -263,9 +263,9 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         # own size; each support scored once
         starts = [c.support for c in candidates if len(c.support) <= len(best_path.support)]
         seen = {frozenset(c.support.tolist()) for c in candidates}
-        refined = []
-        for support in _refined_path(r_factor, total, best_path.support) + [
-                refine_law_by_swaps(r_factor, total, start) for start in starts]:
+        refined, memo = [], {}  # many starts meet on their way: each search is done once
+        for support in _refined_path(r_factor, total, best_path.support, memo) + [
+                refine_law_by_swaps(r_factor, total, start, memo=memo) for start in starts]:
             if frozenset(support.tolist()) not in seen:
                 seen.add(frozenset(support.tolist()))
                 refined.append(support)
@@ -331,13 +331,13 @@ def _scored(theta, moments, supports, how, n_blocks, n_folds) -> list:
             for m, s in enumerate(supports) if np.isfinite(mean[m])]
 
 
-def _refined_path(r_factor, moments, start) -> list:
+def _refined_path(r_factor, moments, start, memo=None) -> list:
     """A second path, refined by swaps at every size: from ``start`` down to two columns,
     each support is swap-refined before the next elimination, so that a true column the
     plain path lost early (imitated by a correlated pair) can come back."""
     supports, support = [], np.asarray(start)
     while len(support) >= 2:
-        support = refine_law_by_swaps(r_factor, moments, support)
+        support = refine_law_by_swaps(r_factor, moments, support, memo=memo)
         supports.append(support)
         if len(support) == 2:
             break

@@ -42,14 +42,19 @@ __all__ = ["law_elimination_path", "law_forward_path", "noise_ratio_law", "refin
 def _whitened_factor(r_factor, moments):
     """``(R L^-T, L)`` with ``L L^T`` the (regularized) moments: the noise ratio of ``xi`` is
     ``||R L^-T (L^T xi)||^2 / ||L^T xi||^2``. The moments are regularized relative to their own
-    scale, so that a column without noise cannot make them singular."""
-    k = moments.shape[0]
-    floor = 1e-10 * float(np.trace(moments)) / max(k, 1)
-    if not floor > 0:  # no noise at all on these columns: a floor far below the signal's
-        floor = max(1e-30 * float(np.sum(r_factor**2)) / max(k, 1), 1e-300)
-    lower = np.linalg.cholesky(moments + floor * np.eye(k))
-    whitened = scipy.linalg.solve_triangular(lower, r_factor.T, lower=True,
-                                             check_finite=False).T
+    scale, so that a column without noise cannot make them singular. Stacks of problems
+    (leading axes) are whitened at once."""
+    k = moments.shape[-1]
+    floor = 1e-10 * np.trace(moments, axis1=-2, axis2=-1) / max(k, 1)
+    # no noise at all on these columns: a floor far below the signal's
+    signal_floor = np.maximum(1e-30 * np.sum(r_factor**2, axis=(-2, -1)) / max(k, 1), 1e-300)
+    floor = np.where(floor > 0, floor, signal_floor)
+    lower = np.linalg.cholesky(moments + floor[..., None, None] * np.eye(k))
+    if lower.ndim == 2:
+        whitened = scipy.linalg.solve_triangular(lower, r_factor.T, lower=True,
+                                                 check_finite=False).T
+    else:  # a stack: LAPACK's triangular solve has no batched form in numpy
+        whitened = np.swapaxes(np.linalg.solve(lower, np.swapaxes(r_factor, -1, -2)), -1, -2)
     return whitened, lower
 
 
@@ -58,14 +63,21 @@ def _pencil(r_factor, moments):
 
     From the singular values of ``R L^-T`` (never from ``R^T R``, which would square the
     condition number: on clean data the true law's residual is at the rounding level of the
-    Gram matrix)."""
+    Gram matrix). ``r_factor`` (..., m, k) and ``moments`` (..., k, k) may be stacks of
+    problems; the values are then (..., k) and the vectors (..., k, k)."""
     whitened, lower = _whitened_factor(r_factor, moments)
     # all k right singular vectors; the left ones only as many as needed (a tall factor)
-    _, singular, wt = np.linalg.svd(whitened, full_matrices=whitened.shape[0] < whitened.shape[1])
-    singular = np.concatenate([singular, np.zeros(wt.shape[0] - singular.size)])
-    vectors = scipy.linalg.solve_triangular(lower.T, wt[::-1].T, lower=False,
-                                            check_finite=False)
-    return singular[::-1] ** 2, vectors
+    m, k = whitened.shape[-2:]
+    _, singular, wt = np.linalg.svd(whitened, full_matrices=m < k)
+    singular = np.concatenate([singular, np.zeros(singular.shape[:-1] + (k - singular.shape[-1],))],
+                              axis=-1)
+    eigenvectors = np.swapaxes(wt[..., ::-1, :], -1, -2)
+    if lower.ndim == 2:
+        vectors = scipy.linalg.solve_triangular(lower.T, eigenvectors, lower=False,
+                                                check_finite=False)
+    else:
+        vectors = np.linalg.solve(np.swapaxes(lower, -1, -2), eigenvectors)
+    return singular[..., ::-1] ** 2, vectors
 
 
 def noise_ratio_law(r_factor, moments) -> tuple[float, np.ndarray]:
@@ -214,6 +226,15 @@ def law_forward_path(r_factor, moments, max_size=None) -> np.ndarray:
     return np.array(support, dtype=int)
 
 
+def _bordered_secular(mu, values, cross_gram, cross_moments, gram_diag, moments_diag):
+    """The bordered pencil's secular function ``f(mu)`` of every candidate (see
+    :func:`_bordered_minima`); ``mu`` and the arrays broadcast over the candidates (last axis).
+    Positive where the candidate's root lies above ``mu``."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        coupling = np.sum((cross_gram - mu * cross_moments) ** 2 / (values - mu), axis=-2)
+    return gram_diag - mu * moments_diag - coupling
+
+
 def _bordered_minima(values, cross_gram, cross_moments, gram_diag, moments_diag,
                      n_bisections: int = 48) -> np.ndarray:
     """Smallest eigenvalue of the pencil with one more column, for every candidate at once.
@@ -222,7 +243,7 @@ def _bordered_minima(values, cross_gram, cross_moments, gram_diag, moments_diag,
     (Gram column ``c``, moment column ``d``) gives the root in ``[0, lambda_1]`` of
     ``f(mu) = g_ii - mu s_ii - sum_m (a_m - mu b_m)^2 / (lambda_m - mu)``, ``a = V^T c``,
     ``b = V^T d`` (the Schur complement of the bordered pencil; interlacing puts exactly one
-    root there).
+    root there, and ``f`` is positive below it).
 
     Parameters
     ----------
@@ -239,27 +260,70 @@ def _bordered_minima(values, cross_gram, cross_moments, gram_diag, moments_diag,
     high = np.full(cross_gram.shape[1], values[0])
     for _ in range(n_bisections):
         middle = 0.5 * (low + high)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            coupling = np.sum((cross_gram - middle * cross_moments) ** 2
-                              / (values[:, None] - middle), axis=0)
-        positive = gram_diag - middle * moments_diag - coupling > 0  # the root lies above
+        positive = _bordered_secular(middle, values[:, None], cross_gram, cross_moments,
+                                     gram_diag, moments_diag) > 0  # the root lies above
         low = np.where(positive, middle, low)
         high = np.where(positive, high, middle)
     return 0.5 * (low + high)
+
+
+def _smallest_bordered_root(ceiling, values, cross_gram, cross_moments, gram_diag,
+                            moments_diag, n_bisections: int = 48):
+    """The candidate whose bordered root is smallest, if any lies below ``ceiling``.
+
+    Equivalent to the argmin of :func:`_bordered_minima` over the candidates (to the same
+    bisection resolution), without resolving every root: the candidates whose root lies above
+    ``ceiling`` are dropped by one evaluation of ``f``, and one bisection of a threshold shared
+    by the rest drops every candidate whose root lies above a root already bracketed below.
+    At a local optimum of the swaps no candidate passes the first test, and that costs one
+    evaluation instead of ``n_bisections``.
+
+    Parameters
+    ----------
+    ceiling : float
+        At most the smallest pencil eigenvalue of every candidate's current columns.
+    values : array, shape (k, m)
+        Each candidate's current pencil eigenvalues (columns may repeat).
+    cross_gram, cross_moments : array, shape (k, m)
+    gram_diag, moments_diag : array, shape (m,)
+
+    Returns
+    -------
+    (int, float) or None
+        The candidate's index and its root.
+    """
+    def secular(mu, alive):
+        return _bordered_secular(mu, values[:, alive], cross_gram[:, alive],
+                                 cross_moments[:, alive], gram_diag[alive], moments_diag[alive])
+
+    alive = np.flatnonzero(~(secular(ceiling, slice(None)) > 0))
+    if alive.size == 0:
+        return None
+    low, high = 0.0, float(ceiling)
+    for _ in range(n_bisections):
+        middle = 0.5 * (low + high)
+        below = ~(secular(middle, alive) > 0)
+        if below.any():  # some root lies at or below the middle: the others cannot win
+            alive, high = alive[below], middle
+        else:
+            low = middle
+    return int(alive[0]), 0.5 * (low + high)
 
 
 def _smallest_ratio(r_factor, moments, support) -> float:
     return noise_ratio_law(r_factor[:, support], moments[np.ix_(support, support)])[0]
 
 
-def refine_law_by_swaps(r_factor, moments, support, max_swaps: int = 50) -> np.ndarray:
+def refine_law_by_swaps(r_factor, moments, support, max_swaps: int = 50,
+                        memo: dict | None = None) -> np.ndarray:
     """Best-improvement single swaps of a law's support, lowering its smallest noise ratio.
 
     The greedy path can lose a true column that a pair of correlated candidates imitates at
     high noise; exchanging one selected column for an unselected one while the ratio drops
-    (the 1-swap local search of L0Learn) recovers it. For every removal ``j`` the ratios of
-    all the additions come from one decomposition (:func:`_bordered_minima`); the best swap
-    is confirmed by an exact computation before it is taken.
+    (the 1-swap local search of L0Learn) recovers it. For every removal ``j`` the pencil of
+    the remaining columns is decomposed once (on the support's own triangular factor); the
+    best swap over all removals and additions is then found by
+    :func:`_smallest_bordered_root`, and confirmed by an exact computation before it is taken.
 
     Parameters
     ----------
@@ -268,34 +332,62 @@ def refine_law_by_swaps(r_factor, moments, support, max_swaps: int = 50) -> np.n
     moments : array, shape (F, F)
     support : array of int
     max_swaps : int, default 50
+    memo : dict, optional
+        Refined supports by the supports they passed through (frozensets), shared between
+        calls on the same ``r_factor`` and ``moments``: the search is deterministic, so a
+        support already visited ends where it ended before.
 
     Returns
     -------
     ndarray of int
         The refined support, sorted.
     """
+    memo = {} if memo is None else memo
     gram = r_factor.T @ r_factor
-    support = [int(j) for j in support]
+    support = sorted(int(j) for j in support)
+    visited = []
     current = _smallest_ratio(r_factor, moments, support)
     for _ in range(int(max_swaps)):
+        key = frozenset(support)
+        if key in memo:
+            support = sorted(memo[key])
+            break
+        visited.append(key)
         outside = np.setdiff1d(np.arange(r_factor.shape[1]), support)
-        if outside.size == 0 or len(support) < 3:
+        if outside.size == 0 or len(support) < 3 or not current > 0:
             break
-        best = (current, None, None)
-        for position, removed in enumerate(support):
-            rest = support[:position] + support[position + 1:]
-            values, vectors = _pencil(r_factor[:, rest], moments[np.ix_(rest, rest)])
-            minima = _bordered_minima(values, vectors.T @ gram[np.ix_(rest, outside)],
-                                      vectors.T @ moments[np.ix_(rest, outside)],
-                                      np.diag(gram)[outside], np.diag(moments)[outside])
-            pick = int(np.argmin(minima))
-            if minima[pick] < best[0]:
-                best = (minima[pick], removed, int(outside[pick]))
-        if best[1] is None:
+        best = _best_swap(r_factor, moments, gram, support, outside, current)
+        if best is None:
             break
-        candidate = sorted(set(support) - {best[1]} | {best[2]})
+        candidate = sorted(set(support) - {best[0]} | {best[1]})
         ratio = _smallest_ratio(r_factor, moments, candidate)
         if not ratio < current * (1 - 1e-9):
             break
         support, current = candidate, ratio
+    memo.update(dict.fromkeys(visited, tuple(support)))
     return np.array(sorted(support), dtype=int)
+
+
+def _best_swap(r_factor, moments, gram, support, outside, current):
+    """``(removed, added)`` of the swap with the smallest ratio below ``current``, or None."""
+    k = len(support)
+    # the support's own factor: the pencils of its subsets are k x k problems, whatever the
+    # number of rows of r_factor
+    factor = scipy.linalg.qr(r_factor[:, support], mode="r", check_finite=False)[0][:k]
+    keep = np.array([np.delete(np.arange(k), position) for position in range(k)])  # (k, k-1)
+    rest = np.asarray(support)[keep]
+    values, vectors = _pencil(factor[:, keep].transpose(1, 0, 2),
+                              moments[rest[:, :, None], rest[:, None, :]])
+    # (k-1, k * n_outside): removal-major, so candidate j * n_outside + i swaps j for i
+    n_out = outside.size
+    values = np.repeat(values.T, n_out, axis=1)
+    cross_gram = np.einsum("rab,rao->bro", vectors, gram[rest][:, :, outside]).reshape(k - 1, -1)
+    cross_moments = np.einsum("rab,rao->bro", vectors,
+                              moments[rest][:, :, outside]).reshape(k - 1, -1)
+    found = _smallest_bordered_root(
+        current, values, cross_gram, cross_moments,
+        np.tile(np.diag(gram)[outside], k), np.tile(np.diag(moments)[outside], k))
+    if found is None:
+        return None
+    position, addition = divmod(found[0], outside.size)
+    return support[position], int(outside[addition])
