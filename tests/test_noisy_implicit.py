@@ -20,6 +20,7 @@ from pysindy_xl.optimizers.noise_ratio import (
     _pencil,
     _smallest_bordered_root,
     law_elimination_path,
+    law_forward_path,
     refine_law_by_swaps,
 )
 
@@ -105,6 +106,17 @@ def test_smallest_bordered_root_is_the_best_swap_of_all_removals():
     assert root == pytest.approx(direct.min(), rel=1e-9)
     # below every candidate's root: nothing to report
     assert _smallest_bordered_root(0.99 * direct.min(), *arrays) is None
+
+
+def test_forward_path_starts_from_the_best_pair_and_adds_the_best_column():
+    theta, moments = _random_pencil(7, 4)
+    pairs = [[i, j] for i in range(7) for j in range(i + 1, 7)]
+    best_pair = pairs[int(np.argmin([_smallest_eigenvalue(theta, moments, p) for p in pairs]))]
+    order = law_forward_path(theta, moments)
+    assert sorted(order[:2].tolist()) == best_pair
+    third = [_smallest_eigenvalue(theta, moments, best_pair + [i]) if i not in best_pair
+             else np.inf for i in range(7)]
+    assert order[2] == int(np.argmin(third))
 
 
 def _swap_search_by_eigh(theta, moments, support):

@@ -204,18 +204,16 @@ def law_forward_path(r_factor, moments, max_size=None) -> np.ndarray:
     max_size = n_features if max_size is None else min(int(max_size), n_features)
     gram = r_factor.T @ r_factor
     diag_gram, diag_moments = np.diag(gram), np.diag(moments)
-    # the best pair: for each first column, the best second one from its 1 x 1 pencil
-    pairs = np.full(n_features, np.inf)
-    partner = np.zeros(n_features, dtype=int)
-    for j in range(n_features):
-        values, vectors = _pencil(r_factor[:, [j]], moments[np.ix_([j], [j])])
-        minima = _bordered_minima(values, vectors.T @ gram[[j]], vectors.T @ moments[[j]],
-                                  diag_gram, diag_moments)
-        minima[j] = np.inf
-        partner[j] = int(np.argmin(minima))
-        pairs[j] = minima[partner[j]]
-    first = int(np.argmin(pairs))
-    support = [first, int(partner[first])]
+    # the best pair, from every column's 1 x 1 pencil bordered by every other column
+    values, vectors = _pencil(r_factor.T[:, :, None], diag_moments[:, None, None])
+    scale = vectors[:, 0, 0][:, None]  # (F, 1): the pencils' single eigenvectors
+    minima = _bordered_minima(
+        np.repeat(values[:, 0], n_features)[None], (scale * gram).reshape(1, -1),
+        (scale * moments).reshape(1, -1), np.tile(diag_gram, n_features),
+        np.tile(diag_moments, n_features)).reshape(n_features, n_features)
+    np.fill_diagonal(minima, np.inf)
+    first, second = np.unravel_index(int(np.argmin(minima)), minima.shape)
+    support = [int(first), int(second)]
     while len(support) < max_size:
         outside = np.setdiff1d(np.arange(n_features), support)
         values, vectors = _pencil(r_factor[:, support], moments[np.ix_(support, support)])
@@ -247,7 +245,8 @@ def _bordered_minima(values, cross_gram, cross_moments, gram_diag, moments_diag,
 
     Parameters
     ----------
-    values : array, shape (k,)
+    values : array, shape (k,) or (k, m)
+        The current pencil's eigenvalues, or each candidate's own.
     cross_gram, cross_moments : array, shape (k, m)
         ``V^T c`` and ``V^T d`` of the ``m`` candidates.
     gram_diag, moments_diag : array, shape (m,)
@@ -256,11 +255,12 @@ def _bordered_minima(values, cross_gram, cross_moments, gram_diag, moments_diag,
     -------
     ndarray, shape (m,)
     """
+    values = values[:, None] if values.ndim == 1 else values
     low = np.zeros(cross_gram.shape[1])
-    high = np.full(cross_gram.shape[1], values[0])
+    high = np.broadcast_to(values[0], low.shape)
     for _ in range(n_bisections):
         middle = 0.5 * (low + high)
-        positive = _bordered_secular(middle, values[:, None], cross_gram, cross_moments,
+        positive = _bordered_secular(middle, values, cross_gram, cross_moments,
                                      gram_diag, moments_diag) > 0  # the root lies above
         low = np.where(positive, middle, low)
         high = np.where(positive, high, middle)
