@@ -16,9 +16,11 @@ import pysindy_xl as px
 from pysindy_xl.optimizers.homogeneous import select_law
 from pysindy_xl.optimizers.noise_ratio import (
     _bordered_minima,
+    _bordered_secular,
     _constrained_minima,
     _pencil,
     _smallest_bordered_root,
+    _swap_secular_at_the_law,
     law_elimination_path,
     law_forward_path,
     refine_law_by_swaps,
@@ -117,6 +119,32 @@ def test_forward_path_starts_from_the_best_pair_and_adds_the_best_column():
     third = [_smallest_eigenvalue(theta, moments, best_pair + [i]) if i not in best_pair
              else np.inf for i in range(7)]
     assert order[2] == int(np.argmin(third))
+
+
+def test_swap_screen_from_the_support_equals_each_removals_secular_function():
+    """The screen of every swap, from the support's pencil alone, is the Schur complement of
+    the removal's own bordered pencil at the support's ratio; its sign says which swaps lower
+    the ratio (direct eigenproblems)."""
+    theta, moments = _random_pencil(10, 6)
+    gram = theta.T @ theta
+    support, outside = np.array([0, 1, 2, 3, 4]), np.arange(5, 10)
+    values, vectors = _pencil(theta[:, support], moments[np.ix_(support, support)])
+    screen = _swap_secular_at_the_law(
+        values, vectors, vectors.T @ gram[np.ix_(support, outside)],
+        vectors.T @ moments[np.ix_(support, outside)], np.diag(gram)[outside],
+        np.diag(moments)[outside])
+    for j in range(5):
+        rest = np.delete(support, j)
+        rest_values, rest_vectors = _pencil(theta[:, rest], moments[np.ix_(rest, rest)])
+        exact = _bordered_secular(values[0], rest_values[:, None],
+                                  rest_vectors.T @ gram[np.ix_(rest, outside)],
+                                  rest_vectors.T @ moments[np.ix_(rest, outside)],
+                                  np.diag(gram)[outside], np.diag(moments)[outside])
+        np.testing.assert_allclose(screen[j], exact, rtol=1e-7, atol=1e-9 * np.abs(exact).max())
+        lowers = [_smallest_eigenvalue(theta, moments, np.append(rest, i)) < values[0]
+                  for i in outside]
+        np.testing.assert_array_equal(screen[j] < 0, lowers)
+    assert (screen < 0).any() and (screen > 0).any()
 
 
 def _swap_search_by_eigh(theta, moments, support):

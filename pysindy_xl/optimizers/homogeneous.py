@@ -36,6 +36,7 @@ from ._base import coordinates_touched
 from ._sparse import column_norms, triangular_factor
 from .noise_ratio import (
     _eliminate_one,
+    _pencil,
     law_elimination_path,
     law_forward_path,
     noise_ratio_law,
@@ -172,20 +173,25 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
         train_moments = moments.sum(axis=0) - test_moments
         r_train = triangular_factor(theta[~test])
         r_test = triangular_factor(theta[test])
-        for m, support in enumerate(supports):
-            if len(support) < 2 or len(support) > r_train.shape[0]:
+        for size in {len(support) for support in supports}:
+            if size < 2 or size > r_train.shape[0]:
                 continue
+            members = [m for m, support in enumerate(supports) if len(support) == size]
+            columns = np.array([supports[m] for m in members])  # (g, size)
             # leading columns of a triangular factor: its leading rows are all that is needed
-            rows = slice(0, len(support)) if nested else slice(None)
-            _, law = noise_ratio_law(r_train[rows, support],
-                                     train_moments[np.ix_(support, support)])
-            noise = law @ test_moments[np.ix_(support, support)] @ law
-            test_factor = r_test[:, support]
-            residual = np.sum((test_factor @ law) ** 2)
-            signal = np.sum((test_factor * law) ** 2)
-            if noise > 0 and signal > 0:
-                ratios[fold, m] = residual / noise
-                relative[fold, m] = residual / signal
+            train = r_train[:size] if nested else r_train
+            _, vectors = _pencil(np.swapaxes(train[:, columns], 0, 1),
+                                 train_moments[columns[:, :, None], columns[:, None, :]])
+            laws = vectors[:, :, 0]  # (g, size): each support's smallest-ratio law
+            noise = np.einsum("gi,gij,gj->g", laws,
+                              test_moments[columns[:, :, None], columns[:, None, :]], laws)
+            test_factor = r_test[:, columns]  # (rows, g, size)
+            residual = np.sum(np.einsum("rgi,gi->rg", test_factor, laws) ** 2, axis=0)
+            signal = np.sum((test_factor * laws) ** 2, axis=(0, 2))
+            fitted = (noise > 0) & (signal > 0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ratios[fold, members] = np.where(fitted, residual / noise, np.inf)
+                relative[fold, members] = np.where(fitted, residual / signal, np.inf)
     return ratios, relative
 
 

@@ -368,26 +368,86 @@ def refine_law_by_swaps(r_factor, moments, support, max_swaps: int = 50,
     return np.array(sorted(support), dtype=int)
 
 
+def _swap_secular_at_the_law(values, vectors, cross_gram, cross_moments, gram_diag,
+                             moments_diag) -> np.ndarray:
+    """Secular function at the support's own ratio of every swap, from the support's pencil.
+
+    Swapping column ``j`` of the support for ``i`` gives the pencil on ``T = S - j + i``. At
+    ``c = lambda_1`` (the support's smallest ratio) ``A = G - c S`` is positive definite on
+    ``R = S - j`` (interlacing), so ``A_TT`` has a negative eigenvalue, i.e. the swap lowers
+    the ratio, iff the Schur complement ``a_ii - u^T A_RR^-1 u`` (``u = A_Ri``) is negative.
+    The block inverse ``A_RR^-1 = H_RR - h h^T / H_jj`` (``H = A_SS^-1``) turns it into
+    ``a_ii - u^T H u + (H u)_j^2 / H_jj``, and in the eigenbasis of the pencil its limit at
+    ``c = lambda_1`` (where ``H`` is singular) is finite:
+
+    .. math:: f_{ji} = a_{ii} - P_i + 2 x_i Q_{ji} / y_j - x_i^2 R_j / y_j^2
+
+    with ``w = V^T u`` (``x = w_1``), ``y = V_{j1}`` and ``P, Q, R`` the sums over ``m >= 2``
+    of ``w_m^2``, ``V_{jm} w_m`` and ``V_{jm}^2`` over ``lambda_m - lambda_1``. One
+    decomposition serves all ``k x n`` swaps, where each removal's own pencil costs
+    ``O(k^3)``.
+
+    Parameters
+    ----------
+    values : array, shape (k,)
+        The support's pencil eigenvalues, ascending.
+    vectors : array, shape (k, k)
+        Its ``S``-orthonormal eigenvectors (columns).
+    cross_gram, cross_moments : array, shape (k, n)
+        ``V^T G_Si`` and ``V^T S_Si`` of the ``n`` columns outside.
+    gram_diag, moments_diag : array, shape (n,)
+
+    Returns
+    -------
+    ndarray, shape (k, n)
+        Positive where swapping ``j`` for ``i`` cannot lower the ratio below ``lambda_1``;
+        not finite where the removed column carries no weight in the law (``y_j = 0``).
+    """
+    law_ratio = values[0]
+    gaps = values[1:] - law_ratio
+    w = cross_gram - law_ratio * cross_moments  # (k, n)
+    x, y = w[0], vectors[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scaled = w[1:] / gaps[:, None]
+        p_term = np.sum(w[1:] * scaled, axis=0)  # (n,)
+        q_term = vectors[:, 1:] @ scaled  # (k, n)
+        r_term = (vectors[:, 1:] ** 2) @ (1.0 / gaps)  # (k,)
+        schur = (gram_diag - law_ratio * moments_diag - p_term)[None, :] \
+            + 2 * x[None, :] * q_term / y[:, None] - x[None, :] ** 2 * (r_term / y**2)[:, None]
+    return schur
+
+
 def _best_swap(r_factor, moments, gram, support, outside, current):
-    """``(removed, added)`` of the swap with the smallest ratio below ``current``, or None."""
+    """``(removed, added)`` of the swap with the smallest ratio below ``current``, or None.
+
+    The swaps that can lower the ratio are found from the support's own pencil
+    (:func:`_swap_secular_at_the_law`); only the removals among them get their own pencils,
+    for the exact comparison (:func:`_smallest_bordered_root`)."""
     k = len(support)
     # the support's own factor: the pencils of its subsets are k x k problems, whatever the
     # number of rows of r_factor
     factor = scipy.linalg.qr(r_factor[:, support], mode="r", check_finite=False)[0][:k]
-    keep = np.array([np.delete(np.arange(k), position) for position in range(k)])  # (k, k-1)
+    gram_out, moments_out = gram[np.ix_(support, outside)], moments[np.ix_(support, outside)]
+    gram_diag, moments_diag = np.diag(gram)[outside], np.diag(moments)[outside]
+    values, vectors = _pencil(factor, moments[np.ix_(support, support)])
+    screen = _swap_secular_at_the_law(values, vectors, vectors.T @ gram_out,
+                                      vectors.T @ moments_out, gram_diag, moments_diag)
+    removals = np.flatnonzero(np.any(~(screen > 0), axis=1))
+    if removals.size == 0:
+        return None
+    keep = np.array([np.delete(np.arange(k), j) for j in removals])  # (r, k-1)
     rest = np.asarray(support)[keep]
-    values, vectors = _pencil(factor[:, keep].transpose(1, 0, 2),
+    values, vectors = _pencil(np.swapaxes(factor[:, keep], 0, 1),
                               moments[rest[:, :, None], rest[:, None, :]])
-    # (k-1, k * n_outside): removal-major, so candidate j * n_outside + i swaps j for i
+    # (k-1, r * n): removal-major, so candidate j * n + i swaps removals[j] for outside[i]
     n_out = outside.size
     values = np.repeat(values.T, n_out, axis=1)
-    cross_gram = np.einsum("rab,rao->bro", vectors, gram[rest][:, :, outside]).reshape(k - 1, -1)
-    cross_moments = np.einsum("rab,rao->bro", vectors,
-                              moments[rest][:, :, outside]).reshape(k - 1, -1)
-    found = _smallest_bordered_root(
-        current, values, cross_gram, cross_moments,
-        np.tile(np.diag(gram)[outside], k), np.tile(np.diag(moments)[outside], k))
+    cross_gram = np.einsum("rab,rao->bro", vectors, gram_out[keep]).reshape(k - 1, -1)
+    cross_moments = np.einsum("rab,rao->bro", vectors, moments_out[keep]).reshape(k - 1, -1)
+    found = _smallest_bordered_root(current, values, cross_gram, cross_moments,
+                                    np.tile(gram_diag, removals.size),
+                                    np.tile(moments_diag, removals.size))
     if found is None:
         return None
-    position, addition = divmod(found[0], outside.size)
-    return support[position], int(outside[addition])
+    position, addition = divmod(found[0], n_out)
+    return support[removals[position]], int(outside[addition])
