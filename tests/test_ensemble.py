@@ -199,6 +199,21 @@ def test_parallel_fits_give_the_same_ensemble():
         px.EnsembleOptimizer(n_jobs="all").fit_catalog(theta, 1, [0])
 
 
+def test_progress_shows_every_fit_and_changes_nothing(capsys):
+    rng = np.random.default_rng(1)
+    a, b, c = rng.normal(size=(3, 600))
+    theta = np.column_stack([2 * a - 0.5 * c + 0.05 * rng.normal(size=600), a, b, c])
+    quiet = px.EnsembleOptimizer(n_models=6).fit_catalog(theta, 1, [0])
+    assert capsys.readouterr().err == ""
+    shown = px.EnsembleOptimizer(n_models=6, progress=True).fit_catalog(theta, 1, [0])
+    bar = capsys.readouterr().err
+    assert "ExplicitOptimizer fits" in bar and "6/6" in bar
+    np.testing.assert_array_equal(quiet.coef_samples_, shown.coef_samples_)
+    np.testing.assert_array_equal(quiet.coef_, shown.coef_)
+    with pytest.raises(TypeError, match="progress"):
+        px.EnsembleOptimizer(progress="yes").fit_catalog(theta, 1, [0])
+
+
 class _RecordingImplicit(px.ImplicitOptimizer):
     """An ImplicitOptimizer that records the mass matrices each of its fits receives."""
 

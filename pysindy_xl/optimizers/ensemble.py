@@ -98,6 +98,9 @@ class EnsembleOptimizer(CatalogOptimizer):
         Fits run in parallel by joblib (``None``: one at a time, or as a surrounding
         ``joblib.parallel_config`` says, e.g. a Dask or Ray backend; ``-1``: every core). The
         subsamples are drawn first, so the result does not depend on it.
+    progress : bool, default False
+        Show a tqdm bar over the fits as they finish (a bagged implicit fit of a large
+        catalog takes minutes).
 
     Attributes
     ----------
@@ -137,7 +140,7 @@ class EnsembleOptimizer(CatalogOptimizer):
 
     def __init__(self, optimizer=None, n_models=20, fraction=0.7, n_chunks=20, inclusion=0.5,
                  confidence=0.95, random_state=0, n_jobs=None, sampling="subsamples",
-                 aggregate="auto"):
+                 aggregate="auto", progress=False):
         self.optimizer = optimizer
         self.n_models = n_models
         self.fraction = fraction
@@ -148,6 +151,7 @@ class EnsembleOptimizer(CatalogOptimizer):
         self.confidence = confidence
         self.random_state = random_state
         self.n_jobs = n_jobs
+        self.progress = progress
 
     def _check_params(self):
         for name in ("n_models", "n_chunks"):
@@ -158,6 +162,7 @@ class EnsembleOptimizer(CatalogOptimizer):
             check_instance("optimizer", self.optimizer, "a catalog optimizer", "fit_catalog")
         if self.n_jobs is not None:
             check_option("n_jobs", self.n_jobs, "int")
+        check_option("progress", self.progress, "bool")
         check_option("sampling", self.sampling, "choice", choices=SAMPLINGS)
         check_option("aggregate", self.aggregate, "choice", choices=AGGREGATES)
         base = self._base()
@@ -224,9 +229,15 @@ class EnsembleOptimizer(CatalogOptimizer):
                 extra["noise_moments"] = noise_moments * (len(rows) / n_rows)
             problems.append(((np.arange(n_coordinates)[:, None] * n_rows
                               + rows[None, :]).ravel(), extra))
-        fits = joblib.Parallel(n_jobs=self.n_jobs)(
+        fits = joblib.Parallel(n_jobs=self.n_jobs, return_as="generator")(
             joblib.delayed(_fit_subsample)(base, theta[rows], n_coordinates, force_columns,
                                            extra) for rows, extra in problems)
+        if self.progress:
+            from tqdm.auto import tqdm
+
+            fits = tqdm(fits, total=len(problems), desc=f"{type(base).__name__} fits",
+                        unit="fit")
+        fits = list(fits)
         failed = np.array([coef is None for coef in fits])
         if failed.all():
             raise RuntimeError("EnsembleOptimizer: every fit of the ensemble failed")
