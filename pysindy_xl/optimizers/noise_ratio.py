@@ -320,10 +320,11 @@ def refine_law_by_swaps(r_factor, moments, support, max_swaps: int = 50,
 
     The greedy path can lose a true column that a pair of correlated candidates imitates at
     high noise; exchanging one selected column for an unselected one while the ratio drops
-    (the 1-swap local search of L0Learn) recovers it. For every removal ``j`` the pencil of
-    the remaining columns is decomposed once (on the support's own triangular factor); the
-    best swap over all removals and additions is then found by
-    :func:`_smallest_bordered_root`, and confirmed by an exact computation before it is taken.
+    (the 1-swap local search of L0Learn) recovers it. Every swap is first screened from the
+    support's own pencil (:func:`_swap_secular_at_the_law`); only the removals with a swap
+    that can lower the ratio get their own pencils, the best swap among them is found by
+    :func:`_smallest_bordered_root`, and it is confirmed by an exact computation before it is
+    taken.
 
     Parameters
     ----------
@@ -372,11 +373,12 @@ def _swap_secular_at_the_law(values, vectors, cross_gram, cross_moments, gram_di
                              moments_diag) -> np.ndarray:
     """Secular function at the support's own ratio of every swap, from the support's pencil.
 
-    Swapping column ``j`` of the support for ``i`` gives the pencil on ``T = S - j + i``. At
-    ``c = lambda_1`` (the support's smallest ratio) ``A = G - c S`` is positive definite on
-    ``R = S - j`` (interlacing), so ``A_TT`` has a negative eigenvalue, i.e. the swap lowers
-    the ratio, iff the Schur complement ``a_ii - u^T A_RR^-1 u`` (``u = A_Ri``) is negative.
-    The block inverse ``A_RR^-1 = H_RR - h h^T / H_jj`` (``H = A_SS^-1``) turns it into
+    Swapping column ``j`` of the support ``s`` for ``i`` gives the pencil on
+    ``t = s - j + i``. At ``c = lambda_1`` (the support's smallest ratio) ``A = G - c S``
+    (Gram and moment matrices) is positive definite on ``r = s - j`` (interlacing), so
+    ``A_tt`` has a negative eigenvalue, i.e. the swap lowers the ratio, iff the Schur
+    complement ``a_ii - u^T A_rr^-1 u`` (``u = A_ri``) is negative. The block inverse
+    ``A_rr^-1 = H_rr - h h^T / H_jj`` (``H = A_ss^-1``, ``h = H_rj``) turns it into
     ``a_ii - u^T H u + (H u)_j^2 / H_jj``, and in the eigenbasis of the pencil its limit at
     ``c = lambda_1`` (where ``H`` is singular) is finite:
 
