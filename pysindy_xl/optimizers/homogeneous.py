@@ -152,7 +152,8 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
 
     The supports of a path are prefixes of one column order: with the columns in that order,
     each is a leading block of the triangular factors, so a fold costs one QR and small
-    decompositions (not one decomposition of all the rows' factor per support)."""
+    decompositions (not one decomposition of all the rows' factor per support). The supports
+    of one size are decomposed as one stack."""
     ratios = np.full((n_folds, len(supports)), np.inf)
     relative = np.full((n_folds, len(supports)), np.inf)
     longest = np.asarray(max(supports, key=len))

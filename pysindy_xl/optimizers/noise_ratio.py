@@ -437,7 +437,8 @@ def _best_swap(r_factor, moments, gram, support, outside, current):
     removals = np.flatnonzero(np.any(~(screen > 0), axis=1))
     if removals.size == 0:
         return None
-    keep = np.array([np.delete(np.arange(k), j) for j in removals])  # (r, k-1)
+    # (r, k-1): the support's positions without each removal
+    keep = np.arange(k - 1)[None, :] + (np.arange(k - 1)[None, :] >= removals[:, None])
     rest = np.asarray(support)[keep]
     values, vectors = _pencil(np.swapaxes(factor[:, keep], 0, 1),
                               moments[rest[:, :, None], rest[:, None, :]])
