@@ -28,7 +28,13 @@ from .feature_library import (
     SymbolicLibrary,
     stack_variables,
 )
-from .optimizers import EnsembleOptimizer, ExplicitOptimizer, independent_columns
+from .optimizers import (
+    EnsembleOptimizer,
+    ExplicitOptimizer,
+    ImplicitOptimizer,
+    MixedOptimizer,
+    independent_columns,
+)
 from .optimizers._base import accepts_fit_parameter, accepts_noise_moments
 from .weak import BumpTestFunctions, WhittakerSmoother, weak_regression
 
@@ -397,12 +403,10 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             # the noise in about a third of the fits (a multiple-comparison effect of ~100
             # candidates); the terms kept by most subsample fits are the true ones.
             return EnsembleOptimizer(ExplicitOptimizer()) if estimated else ExplicitOptimizer()
-        from . import optimizers
-
-        name = "ImplicitOptimizer" if not forced.any() else "MixedOptimizer"
-        if not hasattr(optimizers, name):
-            raise ValueError(f"optimizer: the data needs {name}, which is not available")
-        return getattr(optimizers, name)()
+        if not forced.any():
+            return ImplicitOptimizer()
+        # the forced subsystem is an explicit problem like the one above: bagged on estimates
+        return MixedOptimizer(EnsembleOptimizer(ExplicitOptimizer()) if estimated else None)
 
     def _build_dynamics(self):
         equations = self._equation_exprs()

@@ -308,3 +308,62 @@ def test_mass_matrices_of_the_wrong_shape_are_refused_even_without_noise_moments
     theta = np.random.default_rng(0).normal(size=(100, 3))
     with pytest.raises(ValueError, match="mass_matrices"):
         px.ImplicitOptimizer().fit_catalog(theta, 1, [], mass_matrices=np.ones((2, 2)))
+
+
+def _two_uncoupled_laws(seed, n_samples=3000, sigma=0.05):
+    """Coordinate 0 holds ``2 a - 0.5 b - (2 a - 0.5 b) = 0`` on columns 0-2, coordinate 1
+    holds ``c - 3 d - (c - 3 d) = 0`` on columns 3-5; column 6 (noise-free) touches both. Every
+    non-zero entry gets noise of standard deviation ``sigma``."""
+    rng = np.random.default_rng(seed)
+    a, b, c, d, e = rng.normal(size=(5, n_samples))
+    zero = np.zeros(n_samples)
+    clean = np.vstack([np.column_stack([a, b, 2 * a - 0.5 * b, zero, zero, zero, e]),
+                       np.column_stack([zero, zero, zero, c, d, c - 3 * d, -e])])
+    noisy = clean + sigma * rng.normal(size=clean.shape) * (clean != 0)
+    noisy[:, 6] = clean[:, 6]
+    noisy_columns = clean.reshape(2, n_samples, 7).any(axis=1) & (np.arange(7) < 6)
+    moments = np.stack([np.diag(sigma**2 * n_samples * block) for block in noisy_columns])
+    return noisy, moments
+
+
+def test_implicit_fit_support_gives_each_uncoupled_group_its_noise_ratio_law():
+    theta, moments = _two_uncoupled_laws(0)
+    support = np.array([True] * 6 + [False])
+    opt = px.ImplicitOptimizer().fit_support(theta, 2, [], support, noise_moments=moments)
+    assert opt.selection_method_ == "given support"
+    assert [g.tolist() for g in opt.law_groups_] == [[0, 1, 2], [3, 4, 5]]
+    for group, law in zip(([0, 1, 2], [3, 4, 5]), ([-2.0, 0.5, 1.0], [-1.0, 3.0, 1.0]),
+                          strict=True):
+        block, noise = theta[:, group], moments.sum(axis=0)[np.ix_(group, group)]
+        values, vectors = scipy.linalg.eigh(block.T @ block, noise)
+        # scaled as the catalog's convention: +1 on the term of largest contribution
+        vector = vectors[:, 0]
+        vector = vector / vector[np.argmax(np.abs(vector) * np.linalg.norm(block, axis=0))]
+        np.testing.assert_allclose(opt.coef_[group], vector, rtol=1e-9)
+        np.testing.assert_allclose(opt.coef_[group], law, atol=0.02)
+        assert values[0] == pytest.approx(opt.law_noise_ratios_[group[0] // 3], rel=1e-9)
+        assert 0.9 < values[0] < 1.1  # the law holds to the noise
+    assert opt.coef_[6] == 0
+    # without noise moments: the smallest right singular vector of the unit-norm columns
+    plain = px.ImplicitOptimizer().fit_support(theta, 2, [], support)
+    unit = theta[:, :3] / np.linalg.norm(theta[:, :3], axis=0)
+    vector = np.linalg.svd(unit)[2][-1] / np.linalg.norm(theta[:, :3], axis=0)
+    np.testing.assert_allclose(plain.coef_[:3], vector / vector[2], rtol=1e-9)
+    assert plain.law_noise_ratios_ is None
+    with pytest.raises(ValueError, match=r"support: expected a boolean array of shape \(7,\)"):
+        px.ImplicitOptimizer().fit_support(theta, 2, [], support.astype(int))
+    with pytest.raises(px.NoLawFoundError, match="a law needs at least two terms"):
+        px.ImplicitOptimizer().fit_support(theta, 2, [], np.eye(7, dtype=bool)[0])
+
+
+def test_implicit_ensemble_refits_the_agreed_terms_instead_of_median_laws():
+    theta, moments = _two_uncoupled_laws(1)
+    ensemble = px.EnsembleOptimizer(px.ImplicitOptimizer(), n_models=6).fit_catalog(
+        theta, 2, [], noise_moments=moments)
+    assert ensemble.aggregate_ == "refit"
+    np.testing.assert_array_equal(ensemble.coef_ != 0, [True] * 6 + [False])
+    refit = px.ImplicitOptimizer().fit_support(theta, 2, [], ensemble.coef_ != 0,
+                                               noise_moments=moments)
+    np.testing.assert_allclose(ensemble.coef_, refit.coef_, rtol=1e-12)
+    median = np.median(ensemble.coef_samples_, axis=0)
+    assert not np.allclose(ensemble.coef_, median, rtol=1e-9, atol=0)

@@ -85,6 +85,15 @@ def check_noise_moments(noise_moments, n_coordinates: int, n_features: int) -> n
     return moments
 
 
+def check_support(support, n_features: int) -> np.ndarray:
+    """Validate the ``support`` of ``fit_support``: a boolean array of shape (F,)."""
+    support = np.asarray(support)
+    if support.dtype != bool or support.shape != (n_features,):
+        raise ValueError(f"support: expected a boolean array of shape ({n_features},), got "
+                         f"{support.dtype} of shape {support.shape}")
+    return support
+
+
 def accepts_noise_moments(optimizer) -> bool:
     """Whether ``optimizer.fit_catalog`` takes ``noise_moments`` (as scikit-learn's
     ``has_fit_parameter`` does for ``sample_weight``)."""

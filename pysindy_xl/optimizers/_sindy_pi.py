@@ -1,6 +1,6 @@
-"""SINDy-PI's building blocks: homothetic grouping of solution columns, the null-space warm
-start of the batched Lasso and the cvxpy reference solver (see
-:class:`~pysindy_xl.optimizers.ImplicitOptimizer` for problem (1) they serve)."""
+"""SINDy-PI's building blocks: homothetic grouping of solution columns, the extraction of laws
+from the groups, the null-space warm start of the batched Lasso and the cvxpy reference solver
+(see :class:`~pysindy_xl.optimizers.ImplicitOptimizer` for problem (1) they serve)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,9 @@ import warnings
 import numpy as np
 from sklearn.exceptions import ConvergenceWarning
 
-__all__ = ["homothetic_groups"]
+from ._sparse import null_vector
+
+__all__ = ["extract_laws", "homothetic_groups"]
 
 
 def homothetic_groups(vectors, angle_tol: float, order=None) -> list[np.ndarray]:
@@ -63,6 +65,78 @@ def _principal_direction(unit_vectors) -> np.ndarray:
     u, _, _ = np.linalg.svd(unit_vectors, full_matrices=False)
     direction = u[:, 0]
     return direction * np.sign(direction[np.argmax(np.abs(direction))])
+
+
+def extract_laws(directions, groups, r_factor, *, refit: bool, threshold: float,
+                 min_membership: float, max_residual_ratio: float, angle_tol: float):
+    """The laws of the homothetic groups: each group's principal direction, refit on its
+    support, kept when it qualifies.
+
+    Parameters
+    ----------
+    directions : array, shape (F, F)
+        Column directions ``e_j - X[:, j]`` of the solution matrix (unit-norm columns).
+    groups : list of array of int
+        Homothetic groups of at least ``min_group_size`` columns.
+    r_factor : array, shape (m, F)
+        Factor of the normalized matrix (``R^T R = Theta~^T Theta~``).
+    refit, threshold, min_membership, max_residual_ratio, angle_tol
+        As in :class:`~pysindy_xl.ImplicitOptimizer`.
+
+    Returns
+    -------
+    laws : list of ndarray, shape (F,)
+        Best (smallest relative residual) first, duplicates (within ``angle_tol``) dropped.
+    law_groups : list of ndarray of int
+    residuals : list of float
+    """
+    unit = directions / np.linalg.norm(directions, axis=0)
+    candidates = []
+    for group in groups:
+        members = unit[:, group]
+        # Align signs on the first member so that the SVD sees one cluster, not two.
+        members = members * np.sign(members.T @ members[:, 0])[None, :]
+        direction = _principal_direction(members)
+        if refit:
+            law = _refit_on_support(direction, r_factor, threshold)
+        else:
+            law = np.where(np.abs(direction) >= threshold * np.max(np.abs(direction)),
+                           direction, 0.0)
+        support = np.flatnonzero(law)
+        if np.intersect1d(group, support).size < min_membership * support.size:
+            continue
+        residual = float(np.linalg.norm(r_factor @ law) / np.linalg.norm(law))
+        candidates.append((law, group, residual))
+    if not candidates:
+        return [], [], []
+    best = min(c[2] for c in candidates)
+    limit = max(best, 1e-12) * max_residual_ratio
+    kept = [c for c in candidates if c[2] <= limit]
+    # Drop duplicates: the same law reached from two groups.
+    laws, law_groups, residuals = [], [], []
+    cos_tol = np.cos(np.deg2rad(angle_tol))
+    for law, group, residual in sorted(kept, key=lambda c: c[2]):
+        unit_law = law / np.linalg.norm(law)
+        if any(abs(unit_law @ other) / np.linalg.norm(other) >= cos_tol for other in laws):
+            continue
+        laws.append(law)
+        law_groups.append(group)
+        residuals.append(residual)
+    return laws, law_groups, residuals
+
+
+def _refit_on_support(direction, r_factor, threshold: float) -> np.ndarray:
+    """Null vector of the normalized matrix on the direction's support, pruned iteratively."""
+    support = np.flatnonzero(np.abs(direction) >= threshold * np.max(np.abs(direction)))
+    law = np.zeros_like(direction)
+    while support.size >= 2:
+        values, _ = null_vector(r_factor[:, support])
+        small = np.abs(values) < threshold * np.max(np.abs(values))
+        if not np.any(small):
+            law[support] = values
+            return law
+        support = support[~small]
+    return direction  # degenerate support: keep the clustered direction
 
 
 def _null_space_start(r_factor) -> np.ndarray:

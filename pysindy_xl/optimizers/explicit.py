@@ -15,6 +15,7 @@ from ._base import (
     CatalogOptimizer,
     check_catalog_problem,
     check_noise_moments,
+    check_support,
     coordinate_weights,
     scale_blocks,
 )
@@ -420,11 +421,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         self._check_params()
         theta, force_columns, rest, force, moments = _explicit_problem(
             theta, n_coordinates, force_columns, noise_moments)
-        support = np.asarray(support)
-        if support.dtype != bool or support.shape != (theta.shape[1],):
-            raise ValueError(f"support: expected a boolean array of shape ({theta.shape[1]},), "
-                             f"got {support.dtype} of shape {support.shape}")
-        keep = support[rest]
+        keep = check_support(support, theta.shape[1])[rest]
         coef = np.zeros(len(rest))
         if moments is not None:
             moments = moments[np.ix_(keep, keep)]

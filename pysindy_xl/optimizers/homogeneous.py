@@ -46,8 +46,10 @@ from .selection import ChosenSupport, _fold_labels, _fold_summary
 
 __all__ = [
     "LawSelection",
+    "combine_laws",
     "definite_mass",
     "explained_coordinates",
+    "normalize_law",
     "select_law",
     "select_laws",
 ]
@@ -84,6 +86,69 @@ def explained_coordinates(theta, law, n_blocks: int, min_share: float = 1e-3) ->
     contributions = (np.asarray(theta, dtype=float) * law).reshape(n_blocks, -1, len(law))
     shares = np.sum(contributions**2, axis=(1, 2))
     return shares >= min_share * max(float(shares.max(initial=0.0)), 1e-300)
+
+
+def normalize_law(law, norms, force_columns, reference_columns=None) -> np.ndarray:
+    """A law scaled to the catalog's convention: a force column in its support gets ``-1``
+    (the one with the largest contribution ``|law_j| norms_j``), otherwise its dominant term
+    (among ``reference_columns`` when it has any) gets ``+1``.
+
+    Parameters
+    ----------
+    law : array, shape (F,)
+    norms : array, shape (F,)
+        Column norms of the regression matrix.
+    force_columns : array of int
+    reference_columns : array of int, optional
+
+    Returns
+    -------
+    ndarray, shape (F,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> normalize_law(np.array([0.5, -1.0, 0.0]), np.ones(3), np.array([0])).tolist()
+    [-1.0, 2.0, 0.0]
+    """
+    support = np.flatnonzero(law)
+    contribution = np.abs(law) * norms
+    forces = np.intersect1d(support, force_columns)
+    if forces.size:
+        pivot = forces[np.argmax(contribution[forces])]
+        return law / -law[pivot] + 0.0
+    candidates = support
+    if reference_columns is not None and np.intersect1d(support, reference_columns).size:
+        candidates = np.intersect1d(support, reference_columns)
+    pivot = candidates[np.argmax(contribution[candidates])]
+    return law / law[pivot] + 0.0
+
+
+def combine_laws(laws) -> tuple[np.ndarray, list]:
+    """Sum of the laws with pairwise disjoint supports, chosen in order (best first): laws of
+    uncoupled subsystems hold in every equation together.
+
+    Parameters
+    ----------
+    laws : array, shape (n_laws, F)
+
+    Returns
+    -------
+    coef : ndarray, shape (F,)
+    chosen : list of int
+        Indices of the summed laws.
+    """
+    coef = np.zeros(laws.shape[1])
+    used = np.zeros(laws.shape[1], dtype=bool)
+    chosen = []
+    for k, law in enumerate(laws):
+        support = law != 0
+        if np.any(support & used):
+            continue
+        coef += law
+        used |= support
+        chosen.append(k)
+    return coef, chosen
 
 
 def definite_mass(mass_matrices, law) -> bool:

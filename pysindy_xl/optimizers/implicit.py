@@ -59,6 +59,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+import scipy.sparse.csgraph
 from sklearn.exceptions import ConvergenceWarning
 
 from .._validation import check_option
@@ -67,18 +68,15 @@ from ._base import (
     check_catalog_problem,
     check_mass_matrices,
     check_noise_moments,
+    check_support,
     coordinate_weights,
     coordinates_touched,
     scale_blocks,
 )
-from ._sindy_pi import (
-    _null_space_start,
-    _principal_direction,
-    _solve_cvxpy,
-    homothetic_groups,
-)
+from ._sindy_pi import _null_space_start, _solve_cvxpy, extract_laws, homothetic_groups
 from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
-from .homogeneous import select_laws
+from .homogeneous import combine_laws, normalize_law, select_laws
+from .noise_ratio import noise_ratio_law
 
 __all__ = ["ImplicitOptimizer", "NoLawFoundError", "coordinates_touched", "homothetic_groups"]
 
@@ -185,8 +183,8 @@ class ImplicitOptimizer(CatalogOptimizer):
         Every column converged, or (early stopping) every column of the laws did and the
         laws were stable.
     column_converged_ : ndarray of bool, shape (F,)
-    selection_method_ : {"sindy-pi", "noise ratio"}
-        How the laws were found.
+    selection_method_ : {"sindy-pi", "noise ratio", "given support"}
+        How the laws were found (the last by :meth:`fit_support`).
     selection_ : LawSelection
         Noise-ratio mode: how the first law's support was chosen (held-out ratio per size).
     law_selections_ : list of LawSelection
@@ -324,15 +322,91 @@ class ImplicitOptimizer(CatalogOptimizer):
             moments = check_noise_moments(noise_moments, int(n_coordinates), theta.shape[1])
             self._fit_noisy(theta, int(n_coordinates), force_columns, reference_columns,
                             moments * (weights**2)[:, None, None], mass_matrices)
-        touched = coordinates_touched(theta[:, self.coef_ != 0], int(n_coordinates))
+        self._warn_unexplained(theta, int(n_coordinates))
+        return self
+
+    def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None):
+        """The laws on a given support, nothing selected.
+
+        The columns of ``support`` fall into groups that share no coordinate (uncoupled
+        subsystems: a chain of columns touching common coordinates links the members of a
+        group). Each group of at least two columns gets the law its columns fit best on every
+        row: with ``noise_moments``, the smallest noise ratio
+        (:func:`~pysindy_xl.optimizers.noise_ratio.noise_ratio_law`), otherwise the smallest
+        right singular vector of the unit-norm columns, as the refit of :meth:`fit_catalog`.
+        The laws are normalized as there and summed. :class:`EnsembleOptimizer` uses it to
+        refit the terms its fits agree on with all the data: a median of laws fitted on
+        different supports is no law.
+
+        Parameters
+        ----------
+        theta, n_coordinates, force_columns, noise_moments
+            As in :meth:`fit_catalog`.
+        support : array of bool, shape (F,)
+            Terms of the laws; the others get 0.
+
+        Returns
+        -------
+        self
+        """
+        self._check_params()
+        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
+                                                     balance=False)
+        n_coordinates = int(n_coordinates)
+        weights = coordinate_weights(theta, n_coordinates, force_columns)
+        theta = scale_blocks(theta, weights)
+        norms, nonzero = column_norms(theta)
+        columns = np.flatnonzero(check_support(support, theta.shape[1]) & nonzero)
+        moments = None
+        if noise_moments is not None:
+            moments = np.einsum("b,bfg->fg", weights**2, check_noise_moments(
+                noise_moments, n_coordinates, theta.shape[1]))
+        touches = coordinates_touched(theta[:, columns], n_coordinates).astype(int)
+        _, labels = scipy.sparse.csgraph.connected_components(touches.T @ touches,
+                                                              directed=False)
+        laws, ratios = [], []
+        for label in np.unique(labels):
+            group = columns[labels == label]
+            if group.size < 2:  # one column alone is a law only where it vanishes
+                continue
+            law = np.zeros(theta.shape[1])
+            if moments is None:
+                law[group] = null_vector(theta[:, group] / norms[group])[0] / norms[group]
+                ratios.append(np.nan)
+            else:
+                ratio, law[group] = noise_ratio_law(triangular_factor(theta[:, group]),
+                                                    moments[np.ix_(group, group)])
+                ratios.append(ratio)
+            laws.append(law)
+        if not laws:
+            raise NoLawFoundError(f"support: no two non-zero columns of {columns.tolist()} "
+                                  "share a coordinate; a law needs at least two terms")
+        self.selection_method_ = "given support"
+        self.selection_ = None
+        self.column_norms_ = norms
+        self.law_residuals_ = np.array([  # as for problem (1): on unit-norm columns
+            np.linalg.norm(theta @ law) / np.linalg.norm(law * norms) for law in laws])
+        self.law_noise_ratios_ = None if moments is None else np.asarray(ratios)
+        self.law_groups_ = [np.flatnonzero(law) for law in laws]
+        self._set_laws(laws, norms, force_columns, None)
+        self._warn_unexplained(theta, n_coordinates)
+        return self
+
+    def _set_laws(self, laws, norms, force_columns, reference_columns):
+        """``laws_`` normalized (module documentation) and their disjoint sum ``coef_``."""
+        self.laws_ = np.array([normalize_law(law, norms, force_columns, reference_columns)
+                               for law in laws])
+        self.coef_, self.combined_laws_ = combine_laws(self.laws_)
+
+    def _warn_unexplained(self, theta, n_coordinates):
+        touched = coordinates_touched(theta[:, self.coef_ != 0], n_coordinates)
         unexplained = np.flatnonzero(~touched.any(axis=1))
         if unexplained.size:
             warnings.warn(
                 f"ImplicitOptimizer: no identified term enters the equation of coordinate(s) "
                 f"{unexplained.tolist()}; the model cannot predict them",
-                stacklevel=2,
+                stacklevel=3,
             )
-        return self
 
     # ------------------------------------------------------------------ core
     def _fit_noisy(self, theta, n_coordinates, force_columns, reference_columns, moments,
@@ -355,10 +429,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         self.law_residuals_ = np.array([  # as for problem (1): on unit-norm columns
             np.linalg.norm(theta @ law) / np.linalg.norm(law * norms) for law in laws])
         self.law_groups_ = [np.flatnonzero(law) for law in laws]
-        self.laws_ = np.array([
-            self._normalize_law(law, norms, force_columns, reference_columns) for law in laws
-        ])
-        self.coef_, self.combined_laws_ = self._combine(self.laws_)
+        self._set_laws(laws, norms, force_columns, reference_columns)
         return self
 
     def _fit(self, theta, n_coordinates, force_columns, reference_columns):
@@ -403,10 +474,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         full_laws[:, active] = np.array(laws) / norms[active]
         self.law_groups_ = [active[g] for g in law_groups]
         self.law_residuals_ = np.asarray(law_residuals)
-        self.laws_ = np.array([
-            self._normalize_law(law, norms, force_columns, reference_columns) for law in full_laws
-        ])
-        self.coef_, self.combined_laws_ = self._combine(self.laws_)
+        self._set_laws(full_laws, norms, force_columns, reference_columns)
         return self
 
     def plot(self, feature_names=None, axes=None):
@@ -471,7 +539,10 @@ class ImplicitOptimizer(CatalogOptimizer):
         order = np.argsort(residuals, kind="stable")
         groups = homothetic_groups(directions, self.angle_tol, order)
         groups = [g for g in groups if g.size >= self.min_group_size]
-        laws, law_groups, law_residuals = self._extract_laws(directions, groups, r_factor)
+        laws, law_groups, law_residuals = extract_laws(
+            directions, groups, r_factor, refit=self.refit, threshold=self.threshold,
+            min_membership=self.min_membership, max_residual_ratio=self.max_residual_ratio,
+            angle_tol=self.angle_tol)
         return residuals, groups, laws, law_groups, law_residuals
 
     def _solve(self, r_factor):
@@ -527,82 +598,3 @@ class ImplicitOptimizer(CatalogOptimizer):
         singular = np.concatenate([singular, np.zeros(r_factor.shape[1] - singular.size)])
         smallest, second = singular[-1], singular[-2]
         return float(np.clip(smallest * second / singular[0] ** 2, 1e-12, 1e-3))
-
-    def _extract_laws(self, directions, groups, r_factor):
-        """Principal direction of each qualifying group, refit on its support."""
-        unit = directions / np.linalg.norm(directions, axis=0)
-        candidates = []
-        for group in groups:
-            members = unit[:, group]
-            # Align signs on the first member so that the SVD sees one cluster, not two.
-            members = members * np.sign(members.T @ members[:, 0])[None, :]
-            direction = _principal_direction(members)
-            if self.refit:
-                law = self._refit(direction, r_factor)
-            else:
-                law = np.where(
-                    np.abs(direction) >= self.threshold * np.max(np.abs(direction)), direction, 0.0
-                )
-            support = np.flatnonzero(law)
-            if np.intersect1d(group, support).size < self.min_membership * support.size:
-                continue
-            residual = float(np.linalg.norm(r_factor @ law) / np.linalg.norm(law))
-            candidates.append((law, group, residual))
-        if not candidates:
-            return [], [], []
-        best = min(c[2] for c in candidates)
-        limit = max(best, 1e-12) * self.max_residual_ratio
-        kept = [c for c in candidates if c[2] <= limit]
-        # Drop duplicates: the same law reached from two groups.
-        laws, law_groups, residuals = [], [], []
-        cos_tol = np.cos(np.deg2rad(self.angle_tol))
-        for law, group, residual in sorted(kept, key=lambda c: c[2]):
-            unit_law = law / np.linalg.norm(law)
-            if any(abs(unit_law @ other) / np.linalg.norm(other) >= cos_tol for other in laws):
-                continue
-            laws.append(law)
-            law_groups.append(group)
-            residuals.append(residual)
-        return laws, law_groups, residuals
-
-    def _refit(self, direction, r_factor):
-        """Null vector of the normalized matrix on the direction's support, pruned iteratively."""
-        support = np.flatnonzero(np.abs(direction) >= self.threshold * np.max(np.abs(direction)))
-        law = np.zeros_like(direction)
-        while support.size >= 2:
-            values, _ = null_vector(r_factor[:, support])
-            small = np.abs(values) < self.threshold * np.max(np.abs(values))
-            if not np.any(small):
-                law[support] = values
-                return law
-            support = support[~small]
-        return direction  # degenerate support: keep the clustered direction
-
-    @staticmethod
-    def _normalize_law(law, norms, force_columns, reference_columns):
-        support = np.flatnonzero(law)
-        contribution = np.abs(law) * norms
-        forces = np.intersect1d(support, force_columns)
-        if forces.size:
-            pivot = forces[np.argmax(contribution[forces])]
-            return law / -law[pivot] + 0.0
-        candidates = support
-        if reference_columns is not None and np.intersect1d(support, reference_columns).size:
-            candidates = np.intersect1d(support, reference_columns)
-        pivot = candidates[np.argmax(contribution[candidates])]
-        return law / law[pivot] + 0.0
-
-    @staticmethod
-    def _combine(laws):
-        """Sum of the laws with pairwise disjoint supports, chosen best first."""
-        coef = np.zeros(laws.shape[1])
-        used = np.zeros(laws.shape[1], dtype=bool)
-        chosen = []
-        for k, law in enumerate(laws):
-            support = law != 0
-            if np.any(support & used):
-                continue
-            coef += law
-            used |= support
-            chosen.append(k)
-        return coef, chosen
