@@ -22,13 +22,16 @@ Methods:
   ``EnsembleOptimizer(sampling="complementary_pairs")`` (10 pairs; a term is included by a
   pair when both halves keep it), with the same uncertainty metrics as ``weak``;
 * ``mixed``: the weak form on data forced on the first coordinate only (the cart, or the
-  first link), the others free: :class:`~pysindy_xl.MixedOptimizer`, chosen by default;
+  first link), the others free: :class:`~pysindy_xl.MixedOptimizer`, chosen by default (its
+  explicit part bagged as the fully forced fit is);
 * ``implicit``: the weak form on unforced data (no ``u``): :class:`~pysindy_xl.ImplicitOptimizer`,
   chosen by default (laws selected by their noise ratio); support and error up to the law's
   scale. Three trajectories of 10 s from different initial states instead of one of 30 s: a
   single unforced trajectory stays on one (slowly decaying) energy level, where other
   Lagrangians give the same motion (Jacobi-Maupertuis: ``(E - V) T`` is a purely kinetic
   one), so no method can single out the true law from it;
+* ``bagged_implicit``: the same unforced runs, ``EnsembleOptimizer(ImplicitOptimizer())``
+  (20 fits on 70 % subsamples; the law refit on the terms most fits keep, with all the data);
 * ``strong``: ``XLSINDy(catalog, formulation="strong")``: pointwise Euler-Lagrange columns,
   derivatives by the package's default differentiation (Savitzky-Golay smoothed finite
   differences), same sparsity selection;
@@ -58,9 +61,9 @@ HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 SYSTEMS = {"cart_pole": [1], "double_pendulum": [0, 1], "cart_double_pendulum": [1, 2]}
-METHODS = ["weak", "single", "pairs", "mixed", "implicit", "strong", "sindy"]
+METHODS = ["weak", "single", "pairs", "mixed", "implicit", "bagged_implicit", "strong", "sindy"]
 #: Forced coordinates of the methods that do not force every coordinate.
-FORCED = {"mixed": [0], "implicit": []}
+FORCED = {"mixed": [0], "implicit": [], "bagged_implicit": []}
 
 
 def _setup(name):
@@ -122,11 +125,12 @@ def run(name, level, seed, method):
     import pysindy_xl as px
 
     system, library, true = _setup(name)
-    pieces = 3 if method == "implicit" else 1  # unforced: several energy levels (see above)
+    unforced = FORCED.get(method) == []
+    pieces = 3 if unforced else 1  # unforced: several energy levels (see above)
     t = np.arange(0.0, 30.0 / pieces, 0.01)
     runs = [system.simulate(random_initial_state(system, seed + 1000 * k), t,
                             _force(system, seed, method)) for k in range(pieces)]
-    if method == "implicit":  # no force: the law holds up to a factor, force column unused
+    if unforced:  # no force: the law holds up to a factor, force column unused
         true = true.copy()
         true[library.force_columns_] = 0.0
     rng = np.random.default_rng(10_000 + seed)
@@ -145,11 +149,13 @@ def run(name, level, seed, method):
         else:
             formulation = "strong" if method == "strong" else "weak"
             optimizer = {"single": px.ExplicitOptimizer(),
-                         "pairs": px.EnsembleOptimizer(sampling="complementary_pairs")}.get(method)
+                         "pairs": px.EnsembleOptimizer(sampling="complementary_pairs"),
+                         "bagged_implicit": px.EnsembleOptimizer(px.ImplicitOptimizer()),
+                         }.get(method)
             model = px.XLSINDy(library, optimizer, formulation=formulation).fit(
-                noisy, t, u=None if method == "implicit" else data["tau"])
+                noisy, t, u=None if unforced else data["tau"])
             coef, support = model.coefficients(), true != 0
-            if method == "implicit" and np.any(coef[support]):  # compare up to the scale
+            if unforced and np.any(coef[support]):  # compare up to the scale
                 coef = coef * (coef[support] @ true[support]) / (coef[support] @ coef[support])
             record["exact"] = bool(np.array_equal(coef != 0, support))
             record["error"] = float(np.median(np.abs(coef[support] - true[support])
@@ -223,7 +229,8 @@ def plot(records, path):
     fig, axes = plt.subplots(1, len(SYSTEMS), figsize=(5 * len(SYSTEMS), 3.5), sharey=True)
     for ax, system in zip(np.atleast_1d(axes), SYSTEMS, strict=True):
         for method, style in (("weak", "o-"), ("single", "D-"), ("pairs", "P-"), ("mixed", "v-"),
-                              ("implicit", "x-"), ("strong", "s--"), ("sindy", "^:")):
+                              ("implicit", "x-"), ("bagged_implicit", "X--"), ("strong", "s--"),
+                              ("sindy", "^:")):
             levels = sorted({r["level"] for r in records if r["system"] == system})
             rate = [np.mean([bool(r["valid"]) and (method == "sindy" or bool(r["exact"]))
                              for r in records if (r["system"], r["level"], r["method"]) ==

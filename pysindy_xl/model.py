@@ -78,7 +78,9 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         subsample fits select, and reports inclusion probabilities and coefficient
         intervals. Measured (``benchmarks/noise_sweep.py``, forced double pendulum, 1-5 %
         position noise, 10 seeds): exact support 10/10 at every level, against 6-8/10 for
-        one fit, at two to five times the fit time.
+        one fit, at two to five times the fit time. The explicit part of a mixed fit is
+        bagged the same way (double pendulum driven on its first link, 5 % noise: 10/10
+        against 7/10).
     differentiation_method : pysindy differentiation method, optional
         Used for velocities and accelerations that are not given. Default, by solver:
         explicit and mixed fits use ``ps.SmoothedFiniteDifference()`` (finite differences
