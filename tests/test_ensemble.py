@@ -261,7 +261,7 @@ def test_every_fit_gets_the_mass_matrices_its_optimizer_takes():
                                                      mass_matrices=masses[:, :2])
 
 
-def test_partly_forced_noisy_positions_bag_the_explicit_part(double_pendulum_system):
+def test_partly_forced_noisy_positions_bag_the_explicit_part(double_pendulum_system, capsys):
     # only the first link is driven; the free link couples to it, so the whole problem is
     # explicit. On this seed one cross-validated fit keeps a noise term (the benchmark's
     # single-fit mixed cell: 10 terms for 9); the bagged explicit part, as for fully forced
@@ -277,3 +277,10 @@ def test_partly_forced_noisy_positions_bag_the_explicit_part(double_pendulum_sys
     support = true != 0
     np.testing.assert_array_equal(model.coefficients() != 0, support)
     np.testing.assert_allclose(model.coefficients()[support], true[support], rtol=0.05)
+    # the ensemble is the whole model: its uncertainty is the model's
+    assert np.all(model.inclusion_probability_[support] >= 0.5)
+    assert np.all(model.inclusion_probability_[~support] < 0.5)
+    low, high = model.coef_interval_
+    assert np.all((low <= model.coefficients()) & (model.coefficients() <= high))
+    model.print(uncertainty=True)
+    assert "P=1.00" in capsys.readouterr().out

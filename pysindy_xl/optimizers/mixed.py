@@ -118,6 +118,10 @@ class MixedOptimizer(CatalogOptimizer):
         Catalog columns handed to each solver.
     explicit_optimizer_, implicit_optimizer_ : estimator or None
         The fitted sub-optimizers (None when unused).
+    inclusion_probability_, coef_interval_ : ndarray, shape (F,) and (2, F)
+        Only when the explicit part is an :class:`EnsembleOptimizer` and explains every
+        coordinate (``mode_ == "explicit"``): its inclusion probabilities and intervals,
+        which are then the whole model's.
 
     Examples
     --------
@@ -226,6 +230,8 @@ class MixedOptimizer(CatalogOptimizer):
         self.activated_coordinates_ = activated
         self.explicit_optimizer_ = None
         self.implicit_optimizer_ = None
+        for name in ("inclusion_probability_", "coef_interval_"):  # of an earlier fit
+            self.__dict__.pop(name, None)
 
         if not forced.any():
             self._set_mode("implicit", np.zeros(n, bool), np.array([], int), np.arange(n_features))
@@ -246,6 +252,12 @@ class MixedOptimizer(CatalogOptimizer):
         if explained.all():
             self._set_mode("explicit", explained, explicit_cols, np.array([], int))
             self.coef_ = coef
+            part = self.explicit_optimizer_
+            if hasattr(part, "inclusion_probability_"):  # the model is one ensemble's
+                self.inclusion_probability_ = np.zeros(n_features)
+                self.inclusion_probability_[explicit_cols] = part.inclusion_probability_
+                self.coef_interval_ = np.zeros((2, n_features))
+                self.coef_interval_[:, explicit_cols] = part.coef_interval_
             return self
 
         remaining = ~explained
