@@ -83,6 +83,14 @@ __all__ = ["ImplicitOptimizer", "NoLawFoundError", "coordinates_touched", "homot
 _SOLVERS = ("fista", "cvxpy")
 
 
+def _balanced_problem(theta, n_coordinates, force_columns):
+    """The checked catalog problem with balanced coordinate blocks, and the blocks' weights."""
+    theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
+                                                 balance=False)
+    weights = coordinate_weights(theta, int(n_coordinates), force_columns)
+    return scale_blocks(theta, weights), force_columns, weights
+
+
 class NoLawFoundError(RuntimeError):
     """Implicit regression found no sparse law in the regression matrix."""
 
@@ -302,10 +310,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         -------
         self
         """
-        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
-                                                     balance=False)
-        weights = coordinate_weights(theta, int(n_coordinates), force_columns)
-        theta = scale_blocks(theta, weights)
+        theta, force_columns, weights = _balanced_problem(theta, n_coordinates, force_columns)
         if reference_columns is not None:
             reference_columns = np.asarray(reference_columns, dtype=int).reshape(-1)
             if np.any((reference_columns < 0) | (reference_columns >= theta.shape[1])):
@@ -350,11 +355,8 @@ class ImplicitOptimizer(CatalogOptimizer):
         self
         """
         self._check_params()
-        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
-                                                     balance=False)
+        theta, force_columns, weights = _balanced_problem(theta, n_coordinates, force_columns)
         n_coordinates = int(n_coordinates)
-        weights = coordinate_weights(theta, n_coordinates, force_columns)
-        theta = scale_blocks(theta, weights)
         norms, nonzero = column_norms(theta)
         columns = np.flatnonzero(check_support(support, theta.shape[1]) & nonzero)
         moments = None
