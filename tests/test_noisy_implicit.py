@@ -354,6 +354,10 @@ def test_implicit_fit_support_gives_each_uncoupled_group_its_noise_ratio_law():
         px.ImplicitOptimizer().fit_support(theta, 2, [], support.astype(int))
     with pytest.raises(px.NoLawFoundError, match="a law needs at least two terms"):
         px.ImplicitOptimizer().fit_support(theta, 2, [], np.eye(7, dtype=bool)[0])
+    with pytest.raises(px.NoLawFoundError, match="0 non-zero column"):
+        px.ImplicitOptimizer().fit_support(theta, 2, [], np.zeros(7, dtype=bool))
+    with pytest.raises(px.NoLawFoundError, match="share a coordinate"):  # 0 and 3: uncoupled
+        px.ImplicitOptimizer().fit_support(theta, 2, [], np.isin(np.arange(7), [0, 3]))
 
 
 def test_implicit_ensemble_refits_the_agreed_terms_instead_of_median_laws():

@@ -363,6 +363,9 @@ class ImplicitOptimizer(CatalogOptimizer):
         if noise_moments is not None:
             moments = np.einsum("b,bfg->fg", weights**2, check_noise_moments(
                 noise_moments, n_coordinates, theta.shape[1]))
+        if columns.size < 2:
+            raise NoLawFoundError(f"support: {columns.size} non-zero column(s) given; a law "
+                                  "needs at least two terms")
         touches = coordinates_touched(theta[:, columns], n_coordinates).astype(int)
         _, labels = scipy.sparse.csgraph.connected_components(touches.T @ touches,
                                                               directed=False)
