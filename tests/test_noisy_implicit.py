@@ -312,8 +312,8 @@ def test_mass_matrices_of_the_wrong_shape_are_refused_even_without_noise_moments
 
 def _two_uncoupled_laws(seed, n_samples=3000, sigma=0.05):
     """Coordinate 0 holds ``2 a - 0.5 b - (2 a - 0.5 b) = 0`` on columns 0-2, coordinate 1
-    holds ``c - 3 d - (c - 3 d) = 0`` on columns 3-5; column 6 (noise-free) touches both. Every
-    non-zero entry gets noise of standard deviation ``sigma``."""
+    holds ``c - 3 d - (c - 3 d) = 0`` on columns 3-5; column 6 (noise-free) touches both. The
+    non-zero entries of columns 0-5 get noise of standard deviation ``sigma``."""
     rng = np.random.default_rng(seed)
     a, b, c, d, e = rng.normal(size=(5, n_samples))
     zero = np.zeros(n_samples)
