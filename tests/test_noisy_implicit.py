@@ -371,3 +371,20 @@ def test_implicit_ensemble_refits_the_agreed_terms_instead_of_median_laws():
     np.testing.assert_allclose(ensemble.coef_, refit.coef_, rtol=1e-12)
     median = np.median(ensemble.coef_samples_, axis=0)
     assert not np.allclose(ensemble.coef_, median, rtol=1e-9, atol=0)
+
+
+class _OneColumnImplicit(px.ImplicitOptimizer):
+    """Every subsample fit keeps column 0 alone: the agreed terms form no law."""
+
+    def fit_catalog(self, theta, n_coordinates, force_columns, reference_columns=None,
+                    noise_moments=None, mass_matrices=None):
+        self.coef_ = np.eye(theta.shape[1])[0]
+        return self
+
+
+def test_implicit_ensemble_says_when_the_agreed_terms_form_no_law():
+    theta, moments = _two_uncoupled_laws(2)
+    with pytest.raises(px.NoLawFoundError, match=r"the refit on the 1 term\(s\) kept by at "
+                       r"least 0.5 of the fits failed \(support: 1 non-zero column"):
+        px.EnsembleOptimizer(_OneColumnImplicit(), n_models=4).fit_catalog(
+            theta, 2, [], noise_moments=moments)

@@ -259,8 +259,14 @@ class EnsembleOptimizer(CatalogOptimizer):
             self.aggregate == "auto" and hasattr(base, "fit_support")) else "median")
         if self.aggregate_ == "refit":
             extra = {"noise_moments": noise_moments} if takes_moments else {}
-            coef = clone(base).fit_support(theta, n_coordinates, force_columns, included,
-                                           **extra).coef_
+            try:
+                coef = clone(base).fit_support(theta, n_coordinates, force_columns, included,
+                                               **extra).coef_
+            except (ValueError, RuntimeError) as error:  # e.g. no law on the agreed terms
+                raise type(error)(
+                    f"EnsembleOptimizer: the refit on the {int(included.sum())} term(s) kept by "
+                    f"at least {self.inclusion} of the fits failed ({error}); the fits disagree, "
+                    "try aggregate='median', a lower inclusion or more data") from error
         else:
             coef = np.zeros(theta.shape[1])
             for j in np.flatnonzero(included):
