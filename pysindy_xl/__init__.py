@@ -34,6 +34,7 @@ _LAZY = {
     "NoLawFoundError": "optimizers",
     "XLSINDy": "model",
     "IdentificationWarning": "diagnostics",
+    "UnexplainedCoordinateWarning": "diagnostics",
     "MassMatrixDynamics": "dynamics",
     "SimulationError": "dynamics",
     "SingularMassMatrixError": "dynamics",
@@ -58,6 +59,7 @@ __all__ = [
     "NoLawFoundError",
     "XLSINDy",
     "IdentificationWarning",
+    "UnexplainedCoordinateWarning",
     "MassMatrixDynamics",
     "SimulationError",
     "SingularMassMatrixError",
@@ -67,7 +69,7 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
-    from .diagnostics import IdentificationWarning
+    from .diagnostics import IdentificationWarning, UnexplainedCoordinateWarning
     from .dynamics import MassMatrixDynamics, SimulationError, SingularMassMatrixError
     from .feature_library import (
         CatalogRepartition,

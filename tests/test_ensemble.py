@@ -2,6 +2,8 @@
 against the true coefficients (sympy.physics.mechanics ground truth), and next to PySINDy's
 own EnsembleOptimizer."""
 
+import warnings
+
 import numpy as np
 import pysindy as ps
 import pytest
@@ -284,3 +286,57 @@ def test_partly_forced_noisy_positions_bag_the_explicit_part(double_pendulum_sys
     assert np.all((low <= model.coefficients()) & (model.coefficients() <= high))
     model.print(uncertainty=True)
     assert "P=1.00" in capsys.readouterr().out
+
+
+class _NoisyExplicit(px.ExplicitOptimizer):
+    """An ExplicitOptimizer whose fits warn once each, and fail on rows whose first force
+    value is the marker 99 (the subsamples holding the first chunk)."""
+
+    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None):
+        warnings.warn("a note from one fit", RuntimeWarning, stacklevel=2)
+        if theta[0, 0] == 99.0:
+            raise ValueError("marked rows")
+        return super().fit_catalog(theta, n_coordinates, force_columns, noise_moments)
+
+
+@pytest.mark.parametrize("n_jobs", [None, 2])
+def test_subsample_warnings_and_failures_are_reported_once_with_counts(n_jobs):
+    rng = np.random.default_rng(2)
+    a, b, c = rng.normal(size=(3, 600))
+    theta = np.column_stack([2 * a - 0.5 * c + 0.05 * rng.normal(size=600), a, b, c])
+    theta[0] = [99.0, 49.5, 0.0, 0.0]  # the marker row still satisfies force = 2 a - c / 2
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        opt = px.EnsembleOptimizer(_NoisyExplicit(), n_models=10, n_jobs=n_jobs).fit_catalog(
+            theta, 1, [0])
+    messages = [str(w.message) for w in caught]
+    notes = [m for m in messages if "a note from one fit" in m]
+    n_fitted = 10 - opt.n_failed_
+    assert 0 < opt.n_failed_ < 10
+    # every fit warned, the successful and the failed ones: one line says so (processes too)
+    assert notes == ["EnsembleOptimizer: 10 of 10 subsample fits warned: a note from one fit"]
+    assert [w.category for w in caught if "a note" in str(w.message)] == [RuntimeWarning]
+    failed = [m for m in messages if "failed" in m]
+    assert failed == [f"EnsembleOptimizer: {opt.n_failed_} of 10 subsample fits failed and are "
+                      "left out (first: ValueError: marked rows)"]
+    assert len(opt.coef_samples_) == n_fitted
+    np.testing.assert_array_equal(opt.coef_ != 0, [True, True, False, True])
+
+
+def test_a_coordinate_the_agreed_terms_leave_unexplained_is_named():
+    """Coordinate 1 is unforced and only b enters it: the refit gives b a coefficient of
+    round-off size, and the ensemble says the model cannot predict coordinate 1."""
+    rng = np.random.default_rng(4)
+    a, b = rng.normal(size=(2, 300))
+    zero = np.zeros(300)
+    theta = np.column_stack([np.r_[2 * a + 0.01 * rng.normal(size=300), zero],
+                             np.r_[a, zero], np.r_[zero, b]])
+    for aggregate in ("refit", "median"):
+        with pytest.warns(px.IdentificationWarning, match=r"coordinate\(s\) \[1\]; the model "
+                          "cannot predict them") as caught:
+            px.EnsembleOptimizer(n_models=6, aggregate=aggregate).fit_catalog(theta, 2, [0])
+        final = [str(w.message) for w in caught if "subsample" not in str(w.message)]
+        assert len(final) == 1
+        assert final[0].startswith("EnsembleOptimizer: " + (
+            "the refit on the 2 term(s) kept by at least 0.5 of the fits: ExplicitOptimizer: "
+            if aggregate == "refit" else "no identified term"))

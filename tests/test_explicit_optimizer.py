@@ -263,3 +263,34 @@ def test_clone_keeps_parameters_and_wrapped_estimator():
     x, y = _problem()
     np.testing.assert_array_equal(copy.fit(x, y).coef_, opt.fit(x, y).coef_)
     assert not hasattr(clone(opt), "coef_")
+
+
+def _two_coordinate_catalog(seed=0, n_rows=200):
+    """Columns [force (coordinate 0 only), a (coordinate 0), b (coordinate 1)]: the force is
+    2 a, and coordinate 1 (unforced) has b alone, so b's least-squares coefficient is 0."""
+    a, b = np.random.default_rng(seed).normal(size=(2, n_rows))
+    zero = np.zeros(n_rows)
+    return np.column_stack([np.r_[2 * a, zero], np.r_[a, zero], np.r_[zero, b]])
+
+
+def test_a_coordinate_no_identified_term_enters_is_named():
+    theta = _two_coordinate_catalog()
+    with pytest.warns(px.UnexplainedCoordinateWarning, match=r"besides the forces enters the "
+                      r"equation of coordinate\(s\) \[1\]; the model cannot predict them"):
+        opt = px.ExplicitOptimizer().fit_catalog(theta, 2, [0])
+    np.testing.assert_allclose(opt.coef_, [-1.0, 2.0, 0.0], atol=1e-12)
+    # b kept by hand gets a coefficient of round-off size: still no explanation of coordinate 1
+    with pytest.warns(px.IdentificationWarning, match=r"coordinate\(s\) \[1\]"):
+        kept = px.ExplicitOptimizer().fit_support(theta, 2, [0], np.array([True, True, True]))
+    assert abs(kept.coef_[2]) < 1e-12
+    with pytest.warns(px.IdentificationWarning, match=r"coordinate\(s\) \[0, 1\]"):
+        px.ExplicitOptimizer().fit_support(theta, 2, [0], np.array([True, False, False]))
+
+
+def test_explained_coordinates_do_not_warn():
+    theta = _two_coordinate_catalog()
+    theta[200:, 0] = 0.5 * theta[200:, 2]  # coordinate 1 forced too, by b / 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        opt = px.ExplicitOptimizer().fit_catalog(theta, 2, [0])
+    np.testing.assert_allclose(opt.coef_, [-1.0, 2.0, 0.5], rtol=1e-9)

@@ -6,6 +6,8 @@ forced cart-pole next to a free double pendulum (a robot with an unactuated, dec
 subsystem), on which explicit regression alone fails.
 """
 
+import warnings
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -74,8 +76,13 @@ def test_mixed_solves_the_forced_and_the_free_oscillator():
 
 def test_explicit_alone_misses_the_free_oscillator():
     theta, truth = two_oscillators()
-    explicit = px.ExplicitOptimizer().fit_catalog(theta, 2, [0])
+    with pytest.warns(px.UnexplainedCoordinateWarning, match=r"coordinate\(s\) \[1\]"):
+        explicit = px.ExplicitOptimizer().fit_catalog(theta, 2, [0])
     assert not np.any(explicit.coef_[[4, 5]]), "explicit regression cannot fix a free law's scale"
+    # the mixed fit solves that coordinate implicitly and does not pass the warning on
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", px.UnexplainedCoordinateWarning)
+        assert px.MixedOptimizer().fit_catalog(theta, 2, [0]).mode_ == "mixed"
 
 
 def test_reduces_to_explicit_when_every_coordinate_is_forced():

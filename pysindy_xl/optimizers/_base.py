@@ -27,12 +27,14 @@ metres, and ``coef_`` keeps its meaning (physical units of the catalog columns).
 from __future__ import annotations
 
 import inspect
+import warnings
 
 import numpy as np
 import scipy.linalg
 from sklearn.base import BaseEstimator
 
 from .._validation import check_indices, check_numeric_array, check_option
+from ..diagnostics import UnexplainedCoordinateWarning
 
 __all__ = [
     "accepts_fit_parameter",
@@ -45,6 +47,7 @@ __all__ = [
     "coordinate_weights",
     "coordinates_touched",
     "independent_columns",
+    "warn_unexplained",
 ]
 
 
@@ -152,6 +155,54 @@ def coordinates_touched(theta, n_coordinates: int, rtol: float = 1e-10) -> np.nd
     block_norms = np.linalg.norm(blocks, axis=1)
     top = block_norms.max(axis=0, initial=0.0)
     return (block_norms > 0) & (block_norms > rtol * top)
+
+
+def warn_unexplained(owner: str, theta, n_coordinates: int, coef, force_columns=(),
+                     stacklevel: int = 2, rtol: float = 1e-8) -> np.ndarray:
+    """Warn when no identified term other than the forces enters some coordinate's equation.
+
+    Such a coordinate's equation says only ``forces = 0`` (or nothing): the model cannot
+    predict it, however small its residual. Fits on noisy data end there when the candidate
+    terms of a weakly excited coordinate are all pruned.
+
+    Parameters
+    ----------
+    owner : str
+        Who warns (the optimizer's name).
+    theta : array, shape (n_coordinates * N, F)
+    n_coordinates : int
+    coef : array, shape (F,)
+    force_columns : sequence of int
+    stacklevel : int, default 2
+        As for :func:`warnings.warn`, counted from the caller (2: the caller's caller).
+    rtol : float, default 1e-8
+        A term explains a coordinate when its contribution there (the norm of its column
+        block times its coefficient) exceeds ``rtol`` times the largest contribution of any
+        identified term or force to any coordinate.
+
+    Returns
+    -------
+    ndarray of int
+        The unexplained coordinates (empty when every coordinate is explained).
+    """
+    coef = np.asarray(coef, dtype=float)
+    used = np.flatnonzero(coef)
+    # each term's contribution to each coordinate's equation: a term whose coefficient came
+    # out at round-off level (a refit on terms that cannot reach the forced equations) is
+    # no explanation
+    contribution = np.linalg.norm(
+        (np.asarray(theta)[:, used] * coef[used]).reshape(n_coordinates, -1, len(used)), axis=1)
+    terms = ~np.isin(used, np.asarray(force_columns, dtype=int))
+    scale = contribution.max(initial=0.0)
+    explained = (contribution[:, terms] > rtol * scale).any(axis=1)
+    unexplained = np.flatnonzero(~explained)
+    if unexplained.size:
+        besides = " besides the forces" if len(force_columns) else ""
+        warnings.warn(
+            f"{owner}: no identified term{besides} enters the equation of coordinate(s) "
+            f"{unexplained.tolist()}; the model cannot predict them",
+            UnexplainedCoordinateWarning, stacklevel=stacklevel + 1)
+    return unexplained
 
 
 def coordinate_weights(theta, n_coordinates: int, force_columns=None) -> np.ndarray:

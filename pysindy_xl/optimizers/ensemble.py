@@ -41,6 +41,9 @@ subsamples.
 
 from __future__ import annotations
 
+import collections
+import warnings
+
 import joblib
 import numpy as np
 import scipy.stats
@@ -54,6 +57,7 @@ from ._base import (
     check_catalog_problem,
     check_mass_matrices,
     check_noise_moments,
+    warn_unexplained,
 )
 from .explicit import ExplicitOptimizer
 
@@ -237,10 +241,13 @@ class EnsembleOptimizer(CatalogOptimizer):
 
             fits = tqdm(fits, total=len(problems), desc=f"{type(base).__name__} fits",
                         unit="fit")
-        fits = list(fits)
+        outcomes = list(fits)
+        fits = [coef for coef, _, _ in outcomes]
         failed = np.array([coef is None for coef in fits])
         if failed.all():
-            raise RuntimeError("EnsembleOptimizer: every fit of the ensemble failed")
+            raise RuntimeError(f"EnsembleOptimizer: every fit of the ensemble failed (first: "
+                               f"{outcomes[0][2]})")
+        _report_subsample_fits(outcomes)
         samples = np.array([coef for coef in fits if coef is not None])
         self.coef_samples_ = samples
         self.n_failed_ = int(failed.sum())
@@ -259,18 +266,25 @@ class EnsembleOptimizer(CatalogOptimizer):
             self.aggregate == "auto" and hasattr(base, "fit_support")) else "median")
         if self.aggregate_ == "refit":
             extra = {"noise_moments": noise_moments} if takes_moments else {}
+            refit = (f"EnsembleOptimizer: the refit on the {int(included.sum())} term(s) kept "
+                     f"by at least {self.inclusion} of the fits")
             try:
-                coef = clone(base).fit_support(theta, n_coordinates, force_columns, included,
-                                               **extra).coef_
+                with warnings.catch_warnings(record=True) as caught:
+                    warnings.simplefilter("always")
+                    coef = clone(base).fit_support(theta, n_coordinates, force_columns,
+                                                   included, **extra).coef_
             except (ValueError, RuntimeError) as error:  # e.g. no law on the agreed terms
                 raise type(error)(
-                    f"EnsembleOptimizer: the refit on the {int(included.sum())} term(s) kept by "
-                    f"at least {self.inclusion} of the fits failed ({error}); the fits disagree, "
-                    "try aggregate='median', a lower inclusion or more data") from error
+                    f"{refit} failed ({error}); the fits disagree, try aggregate='median', a "
+                    "lower inclusion or more data") from error
+            for w in caught:  # the final model's own warnings, said of the ensemble
+                warnings.warn(f"{refit}: {w.message}", w.category, stacklevel=2)
         else:
             coef = np.zeros(theta.shape[1])
             for j in np.flatnonzero(included):
                 coef[j] = np.median(samples[samples[:, j] != 0, j])
+            warn_unexplained("EnsembleOptimizer", theta, int(n_coordinates), coef,
+                             force_columns)
         self.coef_ = coef
         share = np.mean([len(chunks) for chunks in subsamples]) / n_chunks
         # A subsample of a fraction f of the data spreads around the full-data estimate by
@@ -332,9 +346,32 @@ def _complementary_halves(rng, n_chunks, n_pairs):
 
 
 def _fit_subsample(base, theta, n_coordinates, force_columns, extra):
-    """Coefficients of one subsample fit, or None when it fails (no law, too few rows)."""
-    try:
-        fitted = clone(base).fit_catalog(theta, n_coordinates, force_columns, **extra)
-    except (ValueError, RuntimeError, np.linalg.LinAlgError):
-        return None
-    return np.asarray(fitted.coef_, dtype=float)
+    """One subsample fit: ``(coef or None when it fails, its warnings as (category,
+    message) pairs, the error that made it fail or None)``.
+
+    The warnings are recorded, not shown: they describe a fit on part of the data (and a
+    process-based joblib backend would lose them), so the ensemble reports them together.
+    """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            fitted = clone(base).fit_catalog(theta, n_coordinates, force_columns, **extra)
+            coef, error = np.asarray(fitted.coef_, dtype=float), None
+        except (ValueError, RuntimeError, np.linalg.LinAlgError) as failure:
+            coef, error = None, f"{type(failure).__name__}: {failure}"
+    return coef, [(w.category, str(w.message)) for w in caught], error
+
+
+def _report_subsample_fits(outcomes):
+    """One warning per distinct message of the subsample fits, with how many fits gave it,
+    and one for the fits that failed (with the first error)."""
+    n_fits = len(outcomes)
+    counts = collections.Counter(message for _, caught, _ in outcomes for message in
+                                 dict.fromkeys(caught))  # each fit counts a message once
+    for (category, message), count in counts.items():
+        warnings.warn(f"EnsembleOptimizer: {count} of {n_fits} subsample fits warned: "
+                      f"{message}", category, stacklevel=3)
+    errors = [error for _, _, error in outcomes if error is not None]
+    if errors:
+        warnings.warn(f"EnsembleOptimizer: {len(errors)} of {n_fits} subsample fits failed "
+                      f"and are left out (first: {errors[0]})", UserWarning, stacklevel=3)

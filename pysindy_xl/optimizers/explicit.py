@@ -18,6 +18,7 @@ from ._base import (
     check_support,
     coordinate_weights,
     scale_blocks,
+    warn_unexplained,
 )
 from .selection import select_support
 
@@ -397,7 +398,8 @@ class ExplicitOptimizer(CatalogOptimizer):
             theta, n_coordinates, force_columns, noise_moments)
         # cross-validation folds stay inside each coordinate's block of rows
         self._fit(theta[:, rest], force, n_blocks=int(n_coordinates), noise_moments=moments)
-        return self._as_catalog_vector(self.coef_, rest, force_columns, theta.shape[1])
+        return self._as_catalog_vector(self.coef_, rest, force_columns, theta,
+                                       int(n_coordinates))
 
     def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None):
         """Least squares of the catalog problem on a given support, nothing selected.
@@ -428,15 +430,18 @@ class ExplicitOptimizer(CatalogOptimizer):
         coef[keep], share = corrected_least_squares(theta[:, rest[keep]], force, moments)
         self.selection_ = None
         self.noise_share_ = None if moments is None else share
-        return self._as_catalog_vector(coef, rest, force_columns, theta.shape[1])
+        return self._as_catalog_vector(coef, rest, force_columns, theta, int(n_coordinates))
 
-    def _as_catalog_vector(self, coef_rest, rest, force_columns, n_features):
-        coef = np.zeros(n_features)
+    def _as_catalog_vector(self, coef_rest, rest, force_columns, theta, n_coordinates):
+        """Set ``coef_`` over the whole catalog (forces at -1) and warn when it leaves a
+        coordinate unexplained."""
+        coef = np.zeros(theta.shape[1])
         coef[rest] = coef_rest
         coef[force_columns] = -1.0
         self.coef_ = coef
-        self.n_features_in_ = n_features
+        self.n_features_in_ = theta.shape[1]
         self.support_ = coef != 0
+        warn_unexplained("ExplicitOptimizer", theta, n_coordinates, coef, force_columns, 3)
         return self
 
 

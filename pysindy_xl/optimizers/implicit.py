@@ -72,6 +72,7 @@ from ._base import (
     coordinate_weights,
     coordinates_touched,
     scale_blocks,
+    warn_unexplained,
 )
 from ._sindy_pi import _null_space_start, _solve_cvxpy, extract_laws, homothetic_groups
 from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
@@ -327,7 +328,8 @@ class ImplicitOptimizer(CatalogOptimizer):
             moments = check_noise_moments(noise_moments, int(n_coordinates), theta.shape[1])
             self._fit_noisy(theta, int(n_coordinates), force_columns, reference_columns,
                             moments * (weights**2)[:, None, None], mass_matrices)
-        self._warn_unexplained(theta, int(n_coordinates))
+        warn_unexplained("ImplicitOptimizer", theta, int(n_coordinates), self.coef_,
+                         force_columns)
         return self
 
     def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None):
@@ -394,7 +396,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         self.law_noise_ratios_ = None if moments is None else np.asarray(ratios)
         self.law_groups_ = [np.flatnonzero(law) for law in laws]
         self._set_laws(laws, norms, force_columns, None)
-        self._warn_unexplained(theta, n_coordinates)
+        warn_unexplained("ImplicitOptimizer", theta, n_coordinates, self.coef_, force_columns)
         return self
 
     def _set_laws(self, laws, norms, force_columns, reference_columns):
@@ -402,16 +404,6 @@ class ImplicitOptimizer(CatalogOptimizer):
         self.laws_ = np.array([normalize_law(law, norms, force_columns, reference_columns)
                                for law in laws])
         self.coef_, self.combined_laws_ = combine_laws(self.laws_)
-
-    def _warn_unexplained(self, theta, n_coordinates):
-        touched = coordinates_touched(theta[:, self.coef_ != 0], n_coordinates)
-        unexplained = np.flatnonzero(~touched.any(axis=1))
-        if unexplained.size:
-            warnings.warn(
-                f"ImplicitOptimizer: no identified term enters the equation of coordinate(s) "
-                f"{unexplained.tolist()}; the model cannot predict them",
-                stacklevel=3,
-            )
 
     # ------------------------------------------------------------------ core
     def _fit_noisy(self, theta, n_coordinates, force_columns, reference_columns, moments,

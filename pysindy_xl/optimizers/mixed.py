@@ -31,6 +31,7 @@ import numpy as np
 from sklearn.base import clone
 
 from .._validation import check_instance, check_option
+from ..diagnostics import UnexplainedCoordinateWarning
 from ._base import (
     CatalogOptimizer,
     accepts_fit_parameter,
@@ -244,8 +245,12 @@ class MixedOptimizer(CatalogOptimizer):
         # When the whole catalog is reachable this is exactly the explicit optimizer's problem.
         explicit_cols = (np.arange(n_features) if activated.all()
                          else np.flatnonzero(activated_columns))
-        self.explicit_optimizer_ = fit_part(explicit, activated, explicit_cols,
-                                            np.flatnonzero(np.isin(explicit_cols, force_columns)))
+        with warnings.catch_warnings():
+            # coordinates the explicit part leaves unexplained are solved implicitly below
+            warnings.simplefilter("ignore", UnexplainedCoordinateWarning)
+            self.explicit_optimizer_ = fit_part(
+                explicit, activated, explicit_cols,
+                np.flatnonzero(np.isin(explicit_cols, force_columns)))
         coef[explicit_cols] = self.explicit_optimizer_.coef_
         # Only coordinates that an identified term enters are explained explicitly.
         explained = touches[:, coef != 0].any(axis=1)
