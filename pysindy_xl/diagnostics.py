@@ -209,7 +209,7 @@ def mass_matrix_report(mass, eigenvalues, names) -> dict:
             + (f"; no positive inertia on {missing}" if missing else "")
             + ": the model is wrong there (noise terms, an unidentifiable coordinate, or a "
             "catalog that cannot express the dynamics) and will not simulate faithfully",
-            IdentificationWarning, stacklevel=5,  # the caller of XLSINDy.fit
+            IdentificationWarning, stacklevel=2,
         )
     return {"positive_definite_fraction": float(np.mean(definite)),
             "median_condition": float(np.median(condition))}

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import warnings
 
 import numpy as np
 import pysindy as ps
@@ -252,11 +253,18 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         self
         """
         self._check_options()
-        threads = self.blas_threads
-        if threads is None:
-            return self._fit(x, t, x_dot, x_ddot, u, sample_mask)
-        with threadpoolctl.threadpool_limits(limits=int(threads), user_api="blas"):
-            return self._fit(x, t, x_dot, x_ddot, u, sample_mask)
+        # The warnings of the fit come from several depths (libraries, smoother, optimizers,
+        # ensembles); recorded here and re-emitted, they all point at the caller's line. The
+        # caller's filters still apply inside ("error" raises where the warning arises).
+        caught = []
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                with threadpoolctl.threadpool_limits(limits=self.blas_threads, user_api="blas"):
+                    self._fit(x, t, x_dot, x_ddot, u, sample_mask)
+        finally:  # also when the fit fails: its warnings may say why
+            for record in caught:
+                warnings.warn(record.message, record.category, stacklevel=2)
+        return self
 
     def _fit(self, x, t, x_dot, x_ddot, u, sample_mask):
         # a clone: fit never mutates its parameters (the user's catalog stays as given)

@@ -2,6 +2,7 @@
 fitted models pickle and predict identically, fit-time mass-matrix diagnostics."""
 
 import pickle
+import warnings
 
 import numpy as np
 import pytest
@@ -78,3 +79,24 @@ def test_a_good_model_passes_the_mass_matrix_check(cart_pole_data):
     model = px.XLSINDy(paper_catalog(system.coords, [1])).fit(noisy, t, u=data["tau"])
     assert model.mass_matrix_check_["positive_definite_fraction"] == 1.0
     assert np.isfinite(model.mass_matrix_check_["median_condition"])
+
+
+def test_the_warnings_of_a_fit_point_at_the_callers_line(cart_pole_data):
+    """Warnings arise at several depths (optimizer, ensemble, diagnostics); every one names
+    the line that called fit, where the user can act on it."""
+    system, t, noisy, data = cart_pole_data
+    c = system.coords
+    library = px.LagrangeLibrary(c, [c.qd[0] ** 2])  # nothing can explain theta
+    model = px.XLSINDy(library, px.EnsembleOptimizer(px.ExplicitOptimizer(), n_models=4),
+                       formulation="strong")
+    with pytest.warns(px.IdentificationWarning) as records:
+        model.fit(data["q"], t, x_dot=data["qd"], x_ddot=data["qdd"], u=data["tau"])
+    categories = {record.category for record in records}
+    assert px.UnexplainedCoordinateWarning in categories  # raised inside the ensemble's fits
+    assert any("not positive definite" in str(record.message) for record in records)
+    assert {record.filename for record in records} == {__file__}
+    # the caller's filters still apply inside the fit
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", px.UnexplainedCoordinateWarning)
+        with pytest.raises(px.UnexplainedCoordinateWarning, match=r"\[1\]"):
+            model.fit(data["q"], t, x_dot=data["qd"], x_ddot=data["qdd"], u=data["tau"])
