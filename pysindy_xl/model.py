@@ -258,8 +258,9 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         # caller's filters still apply inside ("error" raises where the warning arises).
         caught = []
         try:
+            threads = None if self.blas_threads is None else int(self.blas_threads)
             with warnings.catch_warnings(record=True) as caught:
-                with threadpoolctl.threadpool_limits(limits=self.blas_threads, user_api="blas"):
+                with threadpoolctl.threadpool_limits(limits=threads, user_api="blas"):
                     self._fit(x, t, x_dot, x_ddot, u, sample_mask)
         finally:  # also when the fit fails: its warnings may say why
             for record in caught:

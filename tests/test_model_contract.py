@@ -100,3 +100,18 @@ def test_the_warnings_of_a_fit_point_at_the_callers_line(cart_pole_data):
         warnings.simplefilter("error", px.UnexplainedCoordinateWarning)
         with pytest.raises(px.UnexplainedCoordinateWarning, match=r"\[1\]"):
             model.fit(data["q"], t, x_dot=data["qd"], x_ddot=data["qdd"], u=data["tau"])
+
+
+class _WarnsThenFails(px.ExplicitOptimizer):
+    def fit_catalog(self, theta, n_coordinates, force_columns, **kwargs):
+        warnings.warn("the columns look odd", px.IdentificationWarning, stacklevel=2)
+        raise np.linalg.LinAlgError("singular")
+
+
+def test_a_failed_fit_still_reports_its_warnings_at_the_callers_line(cart_pole_data):
+    system, t, noisy, data = cart_pole_data
+    model = px.XLSINDy(paper_catalog(system.coords, [1]), _WarnsThenFails())
+    with pytest.warns(px.IdentificationWarning, match="look odd") as records:
+        with pytest.raises(np.linalg.LinAlgError, match="singular"):
+            model.fit(noisy, t, u=data["tau"])
+    assert [record.filename for record in records] == [__file__]
