@@ -342,7 +342,8 @@ def load_model(path):
 # --------------------------------------------------------------------------------------------
 
 #: XLSINDy parameters that are plain values, and the objects saved as a type and plain params
-_PLAIN_SETTINGS = ("drop_dependent", "formulation", "t_default", "blas_threads")
+_PLAIN_SETTINGS = ("drop_dependent", "formulation", "t_default", "blas_threads",
+                   "residual_covariance")
 _OBJECT_SETTINGS = ("test_functions", "smoother", "differentiation_method")
 _NON_FINITE = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}
 

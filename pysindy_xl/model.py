@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import functools
 import warnings
 
 import numpy as np
@@ -109,6 +110,14 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         Estimates positions and velocities for the weak formulation from noisy positions
         (default ``WhittakerSmoother()``: smoothness chosen from the data). Measured
         ``x_dot`` is used as given.
+    residual_covariance : bool, default True
+        Weak formulation on positions only (the smoother estimated the noise, no ``x_dot``):
+        weigh the rows by the covariance of the residual, generalized least squares. A pilot
+        fit gives the law; the noise propagated into the rows gives the covariance of its
+        residual (rows of overlapping test functions are correlated); the optimizer then
+        fits the whitened rows (:meth:`~pysindy_xl.weak.WeakNoise.whitener`, the reweighting
+        of WENDy). About twice the time of one fit; measured in
+        ``benchmarks/noise_sweep.py``. ``False``: one fit of the rows as they are.
     blas_threads : int or None, default 1
         BLAS threads during ``fit`` (threadpoolctl). The fit's linear algebra is many QR
         factorizations of tall, narrow matrices, where threads mostly compete: measured on 2
@@ -171,7 +180,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
 
     def __init__(self, feature_library=None, optimizer=None, differentiation_method=None,
                  drop_dependent=True, formulation="auto", test_functions=None, smoother=None,
-                 t_default=1.0, blas_threads=1):
+                 t_default=1.0, blas_threads=1, residual_covariance=True):
         self.feature_library = feature_library
         self.optimizer = optimizer
         self.differentiation_method = differentiation_method
@@ -181,6 +190,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         self.smoother = smoother
         self.t_default = t_default
         self.blas_threads = blas_threads
+        self.residual_covariance = residual_covariance
 
     # -- data handling -----------------------------------------------------------------------
     def _library(self) -> CatalogRepartition:
@@ -284,9 +294,10 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
                 "velocities (e.g. q_dot**2) or classical terms in q_ddot"
             )
         if formulation == "weak":
-            theta, z, noise_moments, self.weak_info_ = weak_regression(
+            theta, z, noise, self.weak_info_ = weak_regression(
                 library, data, self.test_functions or BumpTestFunctions(),
-                copy.deepcopy(self.smoother) or WhittakerSmoother())  # smoothing fits it
+                copy.deepcopy(self.smoother) or WhittakerSmoother(),  # smoothing fits it
+                noise="draws")
         else:
             z = np.vstack([
                 stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"])[d["mask"]]
@@ -294,7 +305,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             ])
             if len(z) == 0:
                 raise ValueError("sample_mask: no sample left to fit")
-            theta, noise_moments, self.weak_info_ = library.transform(z), None, None
+            theta, noise, self.weak_info_ = library.transform(z), None, None
         library.check_domain(z)
         if self.drop_dependent:
             keep, dropped = independent_columns(
@@ -315,13 +326,10 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
                 "u: explicit regression needs the generalized forces; pass u, or use "
                 "ImplicitOptimizer / MixedOptimizer for unforced data"
             )
-        optimizer = self._optimizer(forced, estimated=noise_moments is not None)
-        extra = {}
-        if noise_moments is not None and accepts_noise_moments(optimizer):
-            extra["noise_moments"] = noise_moments[:, keep][:, :, keep]
-            if accepts_fit_parameter(optimizer, "mass_matrices"):
-                extra["mass_matrices"] = column_mass_matrices(library, z)[:, keep]
-        optimizer.fit_catalog(theta[:, keep], n, force_columns, **extra)
+        optimizer = self._fit_optimizer(theta[:, keep], n, force_columns, forced,
+                                        None if noise is None else noise.columns(keep),
+                                        functools.cache(
+                                            lambda: column_mass_matrices(library, z)[:, keep]))
         coef = np.zeros(theta.shape[1])
         coef[keep] = optimizer.coef_
         self.feature_library_ = library
@@ -347,6 +355,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
     def _check_options(self):
         """Options of the estimator, checked at the start of fit (one layer: _validation)."""
         check_option("drop_dependent", self.drop_dependent, "bool")
+        check_option("residual_covariance", self.residual_covariance, "bool")
         if self.blas_threads is not None:
             check_option("blas_threads", self.blas_threads, "int", low=1)
         check_option("formulation", self.formulation, "choice", choices=_FORMULATIONS)
@@ -392,6 +401,35 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             return self.formulation
         measured = x_dot is not None and x_ddot is not None
         return "strong" if measured or self.differentiation_method is not None else "weak"
+
+    def _fit_optimizer(self, theta, n, force_columns, forced, noise, mass_matrices):
+        """Fit the optimizer on ``theta``; on weak rows with propagated ``noise``
+        (:class:`~pysindy_xl.weak.WeakNoise`), refit it on the rows whitened by the covariance
+        of the pilot law's residual (``residual_covariance``). ``mass_matrices``: a function
+        returning the mass matrices of the columns, called only when the optimizer takes them.
+        Returns the fitted optimizer."""
+        def fit(rows, propagated):
+            optimizer = self._optimizer(forced, estimated=noise is not None)
+            extra = {}
+            if propagated is not None and accepts_noise_moments(optimizer):
+                extra["noise_moments"] = propagated.moments()
+                if accepts_fit_parameter(optimizer, "mass_matrices"):
+                    extra["mass_matrices"] = mass_matrices()
+            optimizer.fit_catalog(rows, n, force_columns, **extra)
+            return optimizer
+
+        if noise is None or not self.residual_covariance:
+            return fit(theta, noise)
+        # the pilot's warnings are about the pilot: kept only if it stays the answer
+        with warnings.catch_warnings(record=True) as pilot_warnings:
+            warnings.simplefilter("always")
+            pilot = fit(theta, noise)
+        whiten = noise.whitener(pilot.coef_)
+        if whiten is None:  # a coordinate without noise in its residual: nothing to weigh
+            for record in pilot_warnings:
+                warnings.warn(record.message, record.category, stacklevel=2)
+            return pilot
+        return fit(whiten(theta), noise.whitened(whiten))
 
     def _optimizer(self, forced: np.ndarray, estimated: bool = False):
         """The optimizer to fit: a clone of the user's, or the default for the data.

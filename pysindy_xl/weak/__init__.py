@@ -5,7 +5,8 @@ The weak regression matrix itself is built by the catalog libraries
 the model use it exactly like the pointwise one.
 """
 
-from .regression import propagated_noise, weak_regression
+from .noise import RowWhitener, WeakNoise
+from .regression import propagated_draws, propagated_noise, weak_regression
 from .smoothing import (
     WhittakerSmoother,
     differentiate,
@@ -24,4 +25,7 @@ __all__ = [
     "whittaker_smooth",
     "weak_regression",
     "propagated_noise",
+    "propagated_draws",
+    "WeakNoise",
+    "RowWhitener",
 ]

@@ -13,9 +13,10 @@ import warnings
 import numpy as np
 
 from ..feature_library import stack_variables
+from .noise import WeakNoise
 from .smoothing import WhittakerSmoother, whittaker_smooth
 
-__all__ = ["weak_regression", "shared_half_width", "propagated_noise"]
+__all__ = ["weak_regression", "shared_half_width", "propagated_noise", "propagated_draws"]
 
 #: Samples times draws of the noise propagation: 8 draws of a 3,000-sample record, fewer of
 #: longer records, whose many rows average the estimate as well (one from 24,000 samples).
@@ -107,19 +108,34 @@ def propagated_noise(library, d, smoothing, phi, dphi, block, n_draws, rng):
     >>> moments.shape, bool(np.all(np.diag(moments[0]) > 0))
     ((1, 2, 2), True)
     """
+    draws = propagated_draws(library, d, smoothing, phi, dphi, block, n_draws, rng)
+    return WeakNoise(draws, library.coords.n, np.zeros((0, 4), int)).moments()
+
+
+def propagated_draws(library, d, smoothing, phi, dphi, block, n_draws, rng):
+    """Draws of the change of the weak columns under fresh noise of the estimated level.
+
+    Parameters
+    ----------
+    library, d, smoothing, phi, dphi, block, n_draws, rng
+        As in :func:`propagated_noise`.
+
+    Returns
+    -------
+    ndarray, shape (n_draws, n * K, F)
+        Rows as in ``block`` (coordinate-major).
+    """
     lam, noise, order = smoothing
-    n = library.coords.n
-    moments = np.zeros((n, block.shape[1], block.shape[1]))
-    for _ in range(n_draws):
+    draws = np.empty((n_draws,) + block.shape)
+    for k in range(n_draws):
         noisy = d["x"] + noise * rng.normal(size=d["x"].shape)
         q, qd, qdd = whittaker_smooth(d["t"], noisy, lam, order)
-        delta = (library.weak_transform(stack_variables(q, qd, qdd, d["u"], d["t"]), phi, dphi)
-                 - block).reshape(n, phi.shape[0], -1)
-        moments += np.einsum("bkf,bkg->bfg", delta, delta) / n_draws
-    return moments
+        draws[k] = library.weak_transform(stack_variables(q, qd, qdd, d["u"], d["t"]), phi,
+                                          dphi) - block
+    return draws
 
 
-def weak_regression(library, trajectories, test_functions, smoother):
+def weak_regression(library, trajectories, test_functions, smoother, noise="moments"):
     """Weak regression matrix of all trajectories, rows coordinate-major.
 
     Parameters
@@ -132,6 +148,10 @@ def weak_regression(library, trajectories, test_functions, smoother):
     test_functions : BumpTestFunctions
     smoother : WhittakerSmoother
         Anything with ``smooth(t, x) -> (q, qd, qdd)``.
+    noise : {"moments", "draws"}, default "moments"
+        What to return of the propagated noise: its moments, or its draws with the
+        structure of the rows (:class:`~pysindy_xl.weak.noise.WeakNoise`, which gives the
+        moments and the covariance of a law's residual).
 
     Returns
     -------
@@ -142,8 +162,9 @@ def weak_regression(library, trajectories, test_functions, smoother):
     noise_moments : ndarray, shape (n, F, F), or None
         ``E[E_c^T E_c]`` for the errors ``E_c`` of each coordinate's rows due to the position
         noise (:func:`propagated_noise`), for the errors-in-variables correction of the
-        optimizers; None unless a :class:`WhittakerSmoother` estimated the noise of every
-        trajectory and no velocities were measured.
+        optimizers (a :class:`~pysindy_xl.weak.noise.WeakNoise` with ``noise="draws"``);
+        None unless a :class:`WhittakerSmoother` estimated the noise of every trajectory and
+        no velocities were measured.
     info : dict
         ``half_width`` (s), ``test_functions`` (count per trajectory used), ``noise`` (the
         smoother's noise estimate per coordinate on the first trajectory).
@@ -164,15 +185,18 @@ def weak_regression(library, trajectories, test_functions, smoother):
     >>> theta.shape[1], states.shape, moments.shape, info["half_width"]
     (3, (2001, 5), (1, 3, 3), 2.0)
     """
+    if noise not in ("moments", "draws"):
+        raise ValueError(f"noise: expected 'moments' or 'draws', got {noise!r}")
     for name, value, kind in (("test_functions", test_functions, "matrices"),
                               ("smoother", smoother, "smooth")):
         if not callable(getattr(value, kind, None)):
             raise TypeError(f"{name}: expected an object with a {kind} method, got "
                             f"{type(value).__name__}")
-    states, smoothing, noise = [], [], None
+    states, smoothing, noise_level = [], [], None
     for d in trajectories:
         q, qd, qdd = smoother.smooth(d["t"], d["x"])
-        noise = getattr(smoother, "noise_", None) if noise is None else noise
+        if noise_level is None:
+            noise_level = getattr(smoother, "noise_", None)
         smoothing.append((smoother.lam_, smoother.noise_, smoother.order)
                          if isinstance(smoother, WhittakerSmoother) else None)
         if d["x_dot"] is not None:  # measured velocities are better than estimated ones
@@ -194,25 +218,54 @@ def weak_regression(library, trajectories, test_functions, smoother):
     n_samples = sum(len(trajectories[k]["t"]) for k in usable)
     n_draws = int(np.clip(np.ceil(_PROPAGATION_SAMPLES / max(n_samples, 1)), 1, 16))
     rng = np.random.default_rng(0)  # reproducible fits
-    blocks, counts, moments = [], [], None
+    n = library.coords.n
+    blocks, draws, runs = [], [], []
     for k in usable:
         d, z = trajectories[k], states[k]
         phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
+        overlap, kept = _overlap_rows(phi), np.arange(phi.shape[0])
         if not d["mask"].all():  # drop the test functions that see a masked sample
-            clean = (abs(phi) @ (~d["mask"]).astype(float)) == 0
-            phi, dphi = phi[clean], dphi[clean]
+            kept = np.flatnonzero((abs(phi) @ (~d["mask"]).astype(float)) == 0)
+            phi, dphi = phi[kept], dphi[kept]
             if phi.shape[0] == 0:
                 continue
         block = library.weak_transform(z, phi, dphi)
-        blocks.append(block.reshape(library.coords.n, phi.shape[0], -1))
-        counts.append(phi.shape[0])
+        blocks.append(block.reshape(n, phi.shape[0], -1))
+        runs.append((np.split(np.arange(len(kept)), np.flatnonzero(np.diff(kept) > 1) + 1),
+                     overlap))
         if propagate:
-            part = propagated_noise(library, d, smoothing[k], phi, dphi, block, n_draws, rng)
-            moments = part if moments is None else moments + part
+            draws.append(propagated_draws(library, d, smoothing[k], phi, dphi, block, n_draws,
+                                          rng).reshape(n_draws, n, phi.shape[0], -1))
     if not blocks:
         raise ValueError("sample_mask: every test function touches a masked sample; "
                          "unmask longer stretches or set a smaller test-function width")
     theta = np.concatenate(blocks, axis=1).reshape(-1, blocks[0].shape[-1])
-    info = {"half_width": half_width, "test_functions": counts,
-            "noise": None if noise is None else np.asarray(noise).tolist()}
-    return theta, np.vstack(states), moments, info
+    propagated = None
+    if draws:
+        propagated = WeakNoise(np.concatenate(draws, axis=2).reshape(n_draws, theta.shape[0], -1),
+                               n, _row_runs(runs, n))
+    info = {"half_width": half_width, "test_functions": [b.shape[1] for b in blocks],
+            "noise": None if noise_level is None else np.asarray(noise_level).tolist()}
+    if noise == "moments" and propagated is not None:
+        propagated = propagated.moments()
+    return theta, np.vstack(states), propagated, info
+
+
+def _overlap_rows(phi) -> int:
+    """The largest row lag at which two test functions (rows of ``phi``) overlap."""
+    gram = (abs(phi) @ abs(phi).T).tocoo()
+    return int(np.max(np.abs(gram.row - gram.col))) if gram.nnz else 0
+
+
+def _row_runs(runs, n_coordinates):
+    """``(start, stop, group, overlap)`` of the runs of consecutive test functions in the
+    coordinate-major rows, from each trajectory's runs (local indices) and overlap."""
+    counts = [sum(len(run) for run in local) for local, _ in runs]
+    offsets = np.concatenate([[0], np.cumsum(counts)])
+    rows = []
+    for coordinate in range(n_coordinates):
+        for k, (local, overlap) in enumerate(runs):
+            start = coordinate * offsets[-1] + offsets[k]
+            rows += [(start + run[0], start + run[-1] + 1, coordinate * len(runs) + k, overlap)
+                     for run in local]
+    return np.array(rows, dtype=int)
