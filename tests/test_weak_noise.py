@@ -1,0 +1,104 @@
+"""The propagated noise of the weak rows and the generalized least squares it enables.
+
+Ground truth: a moving-average process of known covariance, and the residual of the true law
+(coefficients from sympy.physics.mechanics) on positions with noise of known level."""
+
+import numpy as np
+import pytest
+from test_explicit_identification import _true_coefficients, paper_catalog
+from test_weak import _noisy_run
+
+import pysindy_xl as px
+from pysindy_xl.weak import WeakNoise, weak_regression
+
+
+def _autocorrelation(rows, lags):
+    """Autocorrelation at ``lags`` of the rows (R,) or of each column of (R, D), pooled."""
+    rows = rows.reshape(rows.shape[0], -1)
+    variance = np.mean(rows**2)
+    return np.array([np.mean(rows[: len(rows) - lag] * rows[lag:]) / variance
+                     for lag in lags])
+
+
+def test_whitener_decorrelates_a_moving_average():
+    """Rows ``e_k = a_k - 0.5 a_{k-1}`` (lag-one correlation -0.4, as the weak rows' half a
+    support apart): whitened fresh draws are uncorrelated with unit variance (up to the
+    taper's bias, -0.05 at lag one); the two runs are whitened independently."""
+    rng = np.random.default_rng(0)
+
+    def moving_average(n_draws, n_rows):
+        innovations = rng.normal(size=(n_draws, n_rows + 1))
+        return 3.0 * (innovations[:, 1:] - 0.5 * innovations[:, :-1])
+
+    runs = np.array([[0, 300, 0, 8], [300, 600, 0, 8]])  # one masked gap between them
+    draws = np.concatenate([moving_average(40, 300), moving_average(40, 300)], axis=1)
+    noise = WeakNoise(draws[:, :, None], 1, runs)
+    whiten = noise.whitener(np.array([1.0]))
+    fresh = np.concatenate([moving_average(200, 300), moving_average(200, 300)], axis=1).T
+    assert _autocorrelation(fresh, [1])[0] == pytest.approx(-0.5 / 1.25, abs=0.02)
+    white = whiten(fresh)
+    assert np.mean(white**2) == pytest.approx(1.0, abs=0.05)
+    assert np.all(np.abs(_autocorrelation(white, range(1, 6))) < 0.07)
+    # block diagonal: a change in the second run leaves the first run's rows as they were
+    changed = fresh.copy()
+    changed[300:] += 1.0
+    np.testing.assert_array_equal(whiten(changed)[:300], white[:300])
+    assert noise.whitener(np.array([0.0])) is None  # a law without noise: nothing to weigh
+
+
+def test_the_draws_describe_the_noise_of_the_recorded_rows(cart_pole_system):
+    """The residual of the true law on noisy positions (5 %) is correlated across rows half
+    a test-function support apart, and whitened by the covariance the propagated draws give,
+    it has the variance of the whitened draws: the draws describe the noise of the recorded
+    rows. (The tapered stationary covariance whitens only partly: both variances are about
+    0.6, and lag correlations of 0.3-0.5 remain; see the module's notes.)"""
+    system = cart_pole_system
+    library = paper_catalog(system.coords, [1]).fit()
+    true = _true_coefficients(system, library)
+    raw, ratios = [], []
+    for seed in range(3):
+        t, noisy, data, _ = _noisy_run(system, seed, 0.05)
+        trajectory = {"t": t, "x": noisy, "x_dot": None, "u": data["tau"],
+                      "mask": np.ones(len(t), bool)}
+        theta, _, noise, _ = weak_regression(library, [trajectory], px.BumpTestFunctions(),
+                                             px.WhittakerSmoother(), noise="draws")
+        overlap = int(noise.runs[0, 3])
+        whiten = noise.whitener(true)
+        residual = (theta @ true).reshape(system.n, -1)
+        whitened = whiten(theta @ true).reshape(system.n, -1)
+        draws = np.stack([whiten(draw @ true) for draw in noise.draws], axis=1)
+        draws = draws.reshape(system.n, -1, len(noise.draws))
+        raw += [_autocorrelation(r, [overlap // 2])[0] for r in residual]
+        ratios += [np.mean(w**2) / np.mean(d**2) for w, d in zip(whitened, draws, strict=True)]
+    assert np.max(np.abs(raw)) > 0.3, raw
+    assert np.all((np.array(ratios) > 0.5) & (np.array(ratios) < 2.0)), ratios
+
+
+def test_moments_are_those_of_the_draws(cart_pole_system):
+    """``noise="moments"`` (the default) returns what the draws give, unchanged."""
+    system = cart_pole_system
+    library = paper_catalog(system.coords, [1]).fit()
+    t, noisy, data, _ = _noisy_run(system, 0, 0.02, duration=12.0)
+    trajectory = {"t": t, "x": noisy, "x_dot": None, "u": data["tau"],
+                  "mask": np.ones(len(t), bool)}
+    parts = [weak_regression(library, [trajectory], px.BumpTestFunctions(),
+                             px.WhittakerSmoother(), noise=kind) for kind in ("moments", "draws")]
+    np.testing.assert_allclose(parts[0][2], parts[1][2].moments(), rtol=1e-12)
+    with pytest.raises(ValueError, match="noise: expected 'moments' or 'draws'"):
+        weak_regression(library, [trajectory], px.BumpTestFunctions(), px.WhittakerSmoother(),
+                        noise="both")
+
+
+@pytest.mark.parametrize("seed", [0, 4])
+def test_double_pendulum_on_a_cart_at_five_percent(cart_double_pendulum_system, seed):
+    """Seeds of the noise sweep where the rows fitted as they are lose a true term (seed 0:
+    the cart's friction) or split one between substitutes (seed 4): with the residual's
+    covariance, the defaults find the exact law."""
+    system = cart_double_pendulum_system
+    library = paper_catalog(system.coords, [1, 2])
+    t, noisy, data, _ = _noisy_run(system, seed, 0.05)
+    model = px.XLSINDy(library).fit(noisy, t, u=data["tau"])
+    true = _true_coefficients(system, library.fit())
+    coef, support = model.coefficients(), true != 0
+    assert np.array_equal(coef != 0, support), model.equations()
+    assert np.median(np.abs(coef[support] - true[support]) / np.abs(true[support])) < 0.03
