@@ -420,14 +420,18 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
 
         if noise is None or not self.residual_covariance:
             return fit(theta, noise)
-        # the pilot's warnings are about the pilot: kept only if it stays the answer
-        with warnings.catch_warnings(record=True) as pilot_warnings:
-            warnings.simplefilter("always")
-            pilot = fit(theta, noise)
-        whiten = noise.whitener(pilot.coef_)
-        if whiten is None:  # a coordinate without noise in its residual: nothing to weigh
-            for record in pilot_warnings:
-                warnings.warn(record.message, record.category, stacklevel=2)
+        # the pilot's warnings are about the pilot: kept if it fails or stays the answer
+        pilot_warnings, whiten = [], None
+        try:
+            with warnings.catch_warnings(record=True) as pilot_warnings:
+                warnings.simplefilter("always")
+                pilot = fit(theta, noise)
+            whiten = noise.whitener(pilot.coef_)
+        finally:
+            if whiten is None:  # failed, or a coordinate without noise in its residual
+                for record in pilot_warnings:
+                    warnings.warn(record.message, record.category, stacklevel=2)
+        if whiten is None:
             return pilot
         return fit(whiten(theta), noise.whitened(whiten))
 

@@ -138,6 +138,8 @@ OPTION_CASES = {
     "drop_dependent_str": (dict(drop_dependent="no"), None, TypeError,
                            r"drop_dependent: expected True or False, got the str 'no'"),
     "formulation_unknown": (dict(formulation="strongest"), None, ValueError, r"formulation: "),
+    "residual_covariance_str": (dict(residual_covariance="yes"), None, TypeError,
+                                r"residual_covariance: expected True or False, got the str"),
     "t_default_str": (dict(t_default="0.02"), None, TypeError, r"t_default: expected a real"),
     "t_default_negative": (dict(t_default=-1.0), None, ValueError, r"t_default: expected a real"),
     "smoother_class": (dict(smoother=px.WhittakerSmoother), None, TypeError,
