@@ -110,14 +110,17 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         Estimates positions and velocities for the weak formulation from noisy positions
         (default ``WhittakerSmoother()``: smoothness chosen from the data). Measured
         ``x_dot`` is used as given.
-    residual_covariance : bool, default True
+    residual_covariance : bool or "auto", default "auto"
         Weak formulation on positions only (the smoother estimated the noise, no ``x_dot``):
         weigh the rows by the covariance of the residual, generalized least squares. A pilot
         fit gives the law; the noise propagated into the rows gives the covariance of its
         residual (rows of overlapping test functions are correlated); the optimizer then
         fits the whitened rows (:meth:`~pysindy_xl.weak.WeakNoise.whitener`, the reweighting
-        of WENDy). About twice the time of one fit; measured in
-        ``benchmarks/noise_sweep.py``. ``False``: one fit of the rows as they are.
+        of WENDy). About 1.5-2x the time of one fit. ``"auto"``: when some coordinate is
+        forced; measured in ``benchmarks/noise_sweep.py``, it finds more exact laws on forced
+        and partly forced data (the double pendulum on a cart at 5 %: 9 instead of 7 of 10)
+        but fewer on unforced data (the double pendulum at 1 %: 7 instead of 8 of 10).
+        ``False``: one fit of the rows as they are.
     blas_threads : int or None, default 1
         BLAS threads during ``fit`` (threadpoolctl). The fit's linear algebra is many QR
         factorizations of tall, narrow matrices, where threads mostly compete: measured on 2
@@ -180,7 +183,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
 
     def __init__(self, feature_library=None, optimizer=None, differentiation_method=None,
                  drop_dependent=True, formulation="auto", test_functions=None, smoother=None,
-                 t_default=1.0, blas_threads=1, residual_covariance=True):
+                 t_default=1.0, blas_threads=1, residual_covariance="auto"):
         self.feature_library = feature_library
         self.optimizer = optimizer
         self.differentiation_method = differentiation_method
@@ -355,7 +358,11 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
     def _check_options(self):
         """Options of the estimator, checked at the start of fit (one layer: _validation)."""
         check_option("drop_dependent", self.drop_dependent, "bool")
-        check_option("residual_covariance", self.residual_covariance, "bool")
+        value = self.residual_covariance
+        if not (isinstance(value, (bool, np.bool_)) or (isinstance(value, str)
+                                                          and value == "auto")):
+            raise TypeError("residual_covariance: expected True, False or 'auto', got the "
+                            f"{type(value).__name__} {value!r}")
         if self.blas_threads is not None:
             check_option("blas_threads", self.blas_threads, "int", low=1)
         check_option("formulation", self.formulation, "choice", choices=_FORMULATIONS)
@@ -418,7 +425,8 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             optimizer.fit_catalog(rows, n, force_columns, **extra)
             return optimizer
 
-        if noise is None or not self.residual_covariance:
+        weigh = forced.any() if self.residual_covariance == "auto" else self.residual_covariance
+        if noise is None or not weigh:
             return fit(theta, noise)
         # the pilot's warnings are about the pilot: kept if it fails or stays the answer
         pilot_warnings, whiten = [], None

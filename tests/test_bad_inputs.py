@@ -139,7 +139,11 @@ OPTION_CASES = {
                            r"drop_dependent: expected True or False, got the str 'no'"),
     "formulation_unknown": (dict(formulation="strongest"), None, ValueError, r"formulation: "),
     "residual_covariance_str": (dict(residual_covariance="yes"), None, TypeError,
-                                r"residual_covariance: expected True or False, got the str"),
+                                r"residual_covariance: expected True, False or 'auto', got "
+                                r"the str 'yes'"),
+    "residual_covariance_int": (dict(residual_covariance=1), None, TypeError,
+                                r"residual_covariance: expected True, False or 'auto', got "
+                                r"the int 1"),
     "t_default_str": (dict(t_default="0.02"), None, TypeError, r"t_default: expected a real"),
     "t_default_negative": (dict(t_default=-1.0), None, ValueError, r"t_default: expected a real"),
     "smoother_class": (dict(smoother=px.WhittakerSmoother), None, TypeError,
