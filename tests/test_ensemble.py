@@ -143,7 +143,9 @@ def test_refit_is_the_least_squares_of_the_included_terms_on_all_rows():
 
 def test_refit_coefficients_are_closer_to_the_truth_than_the_median(cart_pole_system):
     """The ensemble picks the terms, all the rows size them: at 3 % position noise the
-    full-data refit of the included terms is more accurate than the median of the fits."""
+    full-data refit of the included terms is more accurate than the median of the fits.
+    (On the rows as they are: whitened by the residual's covariance, the default, both are
+    closer, 0.24 % against 0.28 %.)"""
     library = paper_catalog(cart_pole_system.coords, [1])
     true = _true_coefficients(cart_pole_system, library.fit())
     support = true != 0
@@ -151,8 +153,8 @@ def test_refit_coefficients_are_closer_to_the_truth_than_the_median(cart_pole_sy
     for seed in range(5):
         t, noisy, data = _noisy(cart_pole_system, seed, level=0.03)
         for aggregate in errors:
-            model = px.XLSINDy(library, optimizer=px.EnsembleOptimizer(
-                aggregate=aggregate)).fit(noisy, t, u=data["tau"])
+            model = px.XLSINDy(library, optimizer=px.EnsembleOptimizer(aggregate=aggregate),
+                               residual_covariance=False).fit(noisy, t, u=data["tau"])
             assert np.array_equal(model.coefficients() != 0, support)
             errors[aggregate].append(np.abs(model.coefficients()[support] / true[support] - 1))
     # measured: 0.24 % against 0.39 %
@@ -164,11 +166,14 @@ def test_same_support_as_pysindys_ensemble_in_physical_units(cart_pole_system):
     library = paper_catalog(system.coords, [1])
     true = _true_coefficients(system, library.fit())
     t, noisy, data = _noisy(system, 1, level=0.001, duration=20.0)
-    ours = px.XLSINDy(library, optimizer=px.EnsembleOptimizer(n_models=10)).fit(
-        noisy, t, u=data["tau"])
+    # the rows as they are: at 0.1 % noise the residual-covariance weighting (the default)
+    # moves the coefficients by up to 7e-5 relative, a bias of the smoother and quadrature
+    # that it weighs more, outside intervals that describe the sampling spread only
+    ours = px.XLSINDy(library, optimizer=px.EnsembleOptimizer(n_models=10),
+                      residual_covariance=False).fit(noisy, t, u=data["tau"])
     theirs = px.XLSINDy(library, optimizer=px.ExplicitOptimizer(
-        method=ps.EnsembleOptimizer(ps.STLSQ(threshold=0.02), bagging=True, n_models=10))).fit(
-        noisy, t, u=data["tau"])
+        method=ps.EnsembleOptimizer(ps.STLSQ(threshold=0.02), bagging=True, n_models=10)),
+        residual_covariance=False).fit(noisy, t, u=data["tau"])
     support = true != 0
     np.testing.assert_array_equal(ours.coefficients() != 0, support)
     np.testing.assert_array_equal(theirs.coefficients() != 0, support)
