@@ -118,8 +118,9 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         fits the whitened rows (:meth:`~pysindy_xl.weak.WeakNoise.whitener`, the reweighting
         of WENDy). About 1.5-2x the time of one fit. ``"auto"``: when some coordinate is
         forced; measured in ``benchmarks/noise_sweep.py``, it finds more exact laws on forced
-        and partly forced data (the double pendulum on a cart at 5 %: 9 instead of 7 of 10)
-        but fewer on unforced data (the double pendulum at 1 %: 7 instead of 8 of 10).
+        and partly forced data (the double pendulum on a cart at 5 %: 8 instead of 7 of 10;
+        at 10 %: 5 instead of 1) but fewer on unforced data (the double pendulum at 3 %: 6
+        instead of 9 of 10).
         ``False``: one fit of the rows as they are.
     blas_threads : int or None, default 1
         BLAS threads during ``fit`` (threadpoolctl). The fit's linear algebra is many QR
