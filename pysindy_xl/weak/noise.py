@@ -46,7 +46,7 @@ import dataclasses
 import numpy as np
 import scipy.linalg
 
-__all__ = ["WeakNoise", "RowWhitener"]
+__all__ = ["WeakNoise", "RowWhitener", "draw_moments"]
 
 #: Taper length of the residual's autocovariance, in test-function overlaps.
 _TAPER_OVERLAPS = 2
@@ -122,9 +122,7 @@ class WeakNoise:
 
     def moments(self) -> np.ndarray:
         """``E[E_c^T E_c]`` of each coordinate's rows, shape (n_coordinates, F, F)."""
-        n_draws, n_rows, n_columns = self.draws.shape
-        blocks = self.draws.reshape(n_draws, self.n_coordinates, -1, n_columns)
-        return np.einsum("dbkf,dbkg->bfg", blocks, blocks) / n_draws
+        return draw_moments(self.draws, self.n_coordinates)
 
     def columns(self, keep) -> WeakNoise:
         """The draws of the columns ``keep`` only."""
@@ -161,29 +159,65 @@ class WeakNoise:
         1.0
         """
         residual = self.draws @ np.asarray(coef, dtype=float)  # (D, R)
-        groups = np.unique(self.runs[:, 2])
-        spans = {g: int(_TAPER_OVERLAPS * max(self.runs[self.runs[:, 2] == g, 3].max(), 1))
-                 for g in groups}
-        sums = {g: np.zeros(spans[g]) for g in groups}
-        counts = dict.fromkeys(groups, 0)
-        for start, stop, group, _ in self.runs:
-            part = residual[:, start:stop]
-            lags = np.arange(min(spans[group], stop - start))
-            sums[group][lags] += [np.sum(part[:, : part.shape[1] - lag] * part[:, lag:])
-                                  for lag in lags]
-            counts[group] += part.size
-        variance_scale = max(sums[g][0] / counts[g] for g in groups)
+        autocovariances = _pooled_autocovariances(residual, self.runs)
+        variance_scale = max(a[0] for a in autocovariances.values())
         factors = []
         for start, stop, group, _ in self.runs:
-            span = spans[group]
-            autocovariance = sums[group] / counts[group] * (1 - np.arange(span) / span)
+            autocovariance = autocovariances[group]
             if not autocovariance[0] > 1e-12 * variance_scale:
                 return None
-            bandwidth = min(span, stop - start)
-            banded = np.zeros((bandwidth, stop - start))
-            for lag in range(bandwidth):
-                banded[lag, : stop - start - lag] = autocovariance[lag]
-            banded[0] *= 1 + 1e-8  # round-off margin on the diagonal
-            factors.append(scipy.linalg.cholesky_banded(banded, lower=True,
-                                                        check_finite=False))
+            factors.append(_banded_cholesky(autocovariance, stop - start))
         return RowWhitener(self.runs[:, :2].copy(), tuple(factors))
+
+
+def draw_moments(draws, n_coordinates: int) -> np.ndarray:
+    """``E[E_c^T E_c]`` of each coordinate's block of rows from draws of the errors.
+
+    Parameters
+    ----------
+    draws : array, shape (D, n_coordinates * K, F)
+        Rows coordinate-major.
+    n_coordinates : int
+
+    Returns
+    -------
+    ndarray, shape (n_coordinates, F, F)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> draw_moments(np.ones((2, 4, 1)), 2)
+    array([[[2.]],
+    <BLANKLINE>
+           [[2.]]])
+    """
+    n_draws, _, n_columns = draws.shape
+    blocks = draws.reshape(n_draws, n_coordinates, -1, n_columns)
+    return np.einsum("dbkf,dbkg->bfg", blocks, blocks) / n_draws
+
+
+def _pooled_autocovariances(residual, runs) -> dict:
+    """Per group of runs, the autocovariance of ``residual`` (D, R) pooled over its runs and
+    draws (biased, so positive definite) and tapered (Bartlett) to zero at
+    ``_TAPER_OVERLAPS`` times the group's overlap."""
+    sums, counts = {}, {}
+    for start, stop, group, overlap in runs:
+        span = int(_TAPER_OVERLAPS * max(overlap, 1))
+        part = residual[:, start:stop]
+        lags = np.arange(min(span, stop - start))
+        sums.setdefault(group, np.zeros(span))[lags] += [
+            np.sum(part[:, : part.shape[1] - lag] * part[:, lag:]) for lag in lags]
+        counts[group] = counts.get(group, 0) + part.size
+    return {group: total / counts[group] * (1 - np.arange(len(total)) / len(total))
+            for group, total in sums.items()}
+
+
+def _banded_cholesky(autocovariance, length: int) -> np.ndarray:
+    """Lower banded Cholesky factor of the ``length`` x ``length`` Toeplitz matrix of
+    ``autocovariance`` (zero beyond its last lag)."""
+    bandwidth = min(len(autocovariance), length)
+    banded = np.zeros((bandwidth, length))
+    for lag in range(bandwidth):
+        banded[lag, : length - lag] = autocovariance[lag]
+    banded[0] *= 1 + 1e-8  # round-off margin on the diagonal
+    return scipy.linalg.cholesky_banded(banded, lower=True, check_finite=False)

@@ -13,7 +13,7 @@ import warnings
 import numpy as np
 
 from ..feature_library import stack_variables
-from .noise import WeakNoise
+from .noise import WeakNoise, draw_moments
 from .smoothing import WhittakerSmoother, whittaker_smooth
 
 __all__ = ["weak_regression", "shared_half_width", "propagated_noise", "propagated_draws"]
@@ -108,8 +108,8 @@ def propagated_noise(library, d, smoothing, phi, dphi, block, n_draws, rng):
     >>> moments.shape, bool(np.all(np.diag(moments[0]) > 0))
     ((1, 2, 2), True)
     """
-    draws = propagated_draws(library, d, smoothing, phi, dphi, block, n_draws, rng)
-    return WeakNoise(draws, library.coords.n, np.zeros((0, 4), int)).moments()
+    return draw_moments(propagated_draws(library, d, smoothing, phi, dphi, block, n_draws, rng),
+                        library.coords.n)
 
 
 def propagated_draws(library, d, smoothing, phi, dphi, block, n_draws, rng):
