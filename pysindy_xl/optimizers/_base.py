@@ -12,7 +12,9 @@ This is the metadata :class:`~pysindy_xl.XLSINDy` hands over; standalone users p
 Optimizers that can correct for errors in the columns also take
 ``noise_moments`` of shape ``(n_coordinates, F, F)``, ``E[E_c^T E_c]`` for the errors ``E_c``
 of each coordinate's rows (the weak form's propagated position noise); XLSINDy passes it to
-those whose ``fit_catalog`` has the parameter (:func:`accepts_noise_moments`).
+those whose ``fit_catalog`` has the parameter (:func:`accepts_noise_moments`). An optimizer
+may also offer ``pilot()``, an unfitted cheaper optimizer of the same law for a first estimate
+(:func:`pilot_optimizer`).
 
 Units. Every row of ``theta @ coef = 0`` holds exactly, so multiplying the rows of one
 coordinate block by a constant changes only how the regression weighs that block against the
@@ -31,7 +33,7 @@ import warnings
 
 import numpy as np
 import scipy.linalg
-from sklearn.base import BaseEstimator
+from sklearn.base import BaseEstimator, clone
 
 from .._validation import check_indices, check_numeric_array, check_option
 from ..diagnostics import UnexplainedCoordinateWarning
@@ -106,6 +108,18 @@ def accepts_noise_moments(optimizer) -> bool:
 def accepts_fit_parameter(optimizer, name: str) -> bool:
     """Whether ``optimizer.fit_catalog`` takes the keyword ``name``."""
     return name in inspect.signature(optimizer.fit_catalog).parameters
+
+
+def pilot_optimizer(optimizer):
+    """An unfitted optimizer for a first estimate of the law that ``optimizer`` would find.
+
+    Where the law only prepares the real fit (the residual covariance of
+    :class:`~pysindy_xl.XLSINDy`), an optimizer may offer a cheaper stand-in through a
+    ``pilot()`` method (an ensemble: one fit of its base optimizer instead of
+    ``n_models``); otherwise the pilot is a clone of ``optimizer``.
+    """
+    pilot = getattr(optimizer, "pilot", None)
+    return pilot() if callable(pilot) else clone(optimizer)
 
 
 def check_mass_matrices(mass_matrices, n_coordinates: int, n_features: int) -> np.ndarray:

@@ -57,6 +57,7 @@ from ._base import (
     check_catalog_problem,
     check_mass_matrices,
     check_noise_moments,
+    pilot_optimizer,
     warn_unexplained,
 )
 from .explicit import ExplicitOptimizer
@@ -305,6 +306,12 @@ class EnsembleOptimizer(CatalogOptimizer):
 
     def _base(self):
         return ExplicitOptimizer() if self.optimizer is None else self.optimizer
+
+    def pilot(self):
+        """Unfitted stand-in for a first estimate of the law: the base optimizer's pilot
+        on all the rows, ``n_models`` times cheaper than the ensemble (see
+        :func:`~pysindy_xl.optimizers._base.pilot_optimizer`)."""
+        return pilot_optimizer(self._base())
 
     def plot(self, feature_names=None, axes=None):
         """Inclusion probabilities and coefficient distributions of the ensemble.

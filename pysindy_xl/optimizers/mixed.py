@@ -40,6 +40,7 @@ from ._base import (
     check_catalog_problem,
     check_mass_matrices,
     check_noise_moments,
+    pilot_optimizer,
 )
 from .implicit import ImplicitOptimizer, NoLawFoundError, coordinates_touched
 
@@ -158,6 +159,14 @@ class MixedOptimizer(CatalogOptimizer):
             if not hasattr(opt, "fit_catalog"):
                 raise TypeError(f"{name}: expected an optimizer with fit_catalog, got {opt!r}")
         return clone(explicit), clone(implicit)
+
+    def pilot(self):
+        """Unfitted stand-in for a first estimate of the law: the same mixed regression
+        with the pilots of both parts (see
+        :func:`~pysindy_xl.optimizers._base.pilot_optimizer`)."""
+        explicit, implicit = self._sub_optimizers()
+        return clone(self).set_params(explicit_optimizer=pilot_optimizer(explicit),
+                                      implicit_optimizer=pilot_optimizer(implicit))
 
     def fit(self, X, y=None):
         """Not available: mixed regression needs the catalog structure.

@@ -100,7 +100,11 @@ def elimination_path(x, y) -> np.ndarray:
     >>> elimination_path(x, y)[:3].tolist()
     [1, 5, 3]
     """
-    active_mask, xs, y = _reduced(x, y)
+    return _elimination_order(*_reduced(x, y))
+
+
+def _elimination_order(active_mask, xs, y) -> np.ndarray:
+    """:func:`elimination_path` on a reduced system (:func:`_reduced`)."""
     active = list(np.flatnonzero(active_mask))
     removed = list(np.flatnonzero(~active_mask))
     while len(active) > xs.shape[0]:
@@ -152,7 +156,11 @@ def forward_path(x, y) -> np.ndarray:
     >>> forward_path(x, x @ [0.0, 3.0, 0.0, 0.01, 0.0, -1.0])[:3].tolist()
     [1, 5, 3]
     """
-    active_mask, xs, residual = _reduced(x, y)
+    return _forward_order(*_reduced(x, y))
+
+
+def _forward_order(active_mask, xs, residual) -> np.ndarray:
+    """:func:`forward_path` on a reduced system (:func:`_reduced`)."""
     orthogonal = xs.copy()
     chosen = []
     candidates = active_mask.copy()
@@ -269,7 +277,7 @@ def _fold_labels(n_rows: int, n_blocks: int, n_folds: int) -> np.ndarray:
     return np.minimum(position * n_folds // per_block, n_folds - 1)
 
 
-def _fold_systems(x, y, n_blocks: int, n_folds: int):
+def _fold_systems(x, y, n_blocks: int, n_folds: int) -> list:
     """Per fold: ``(fold, x_test, y_test, R, Q^T y)`` of unit-RMS columns, the training rows
     reduced to their triangular system and ``y`` divided by its RMS (so squared held-out
     errors come out relative to the mean square of ``y``). Folds without test or training
@@ -279,10 +287,9 @@ def _fold_systems(x, y, n_blocks: int, n_folds: int):
     x = x / _scaled(x)[1]
     y = y / np.sqrt(max(float(np.mean(y**2)), 1e-300))
     labels = _fold_labels(len(y), n_blocks, n_folds)
-    for fold in range(n_folds):
-        train, test = labels != fold, labels == fold
-        if test.any() and train.any():
-            yield (fold, x[test], y[test], *_triangular_system(x[train], y[train]))
+    return [(fold, x[labels == fold], y[labels == fold],
+             *_triangular_system(x[labels != fold], y[labels != fold]))
+            for fold in range(n_folds) if np.any(labels == fold) and np.any(labels != fold)]
 
 
 def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
@@ -304,10 +311,18 @@ def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
         Mean squared held-out error of each fold and model size (size ``k`` at index
         ``k - 1``), relative to the mean square of ``y``.
     """
+    return _nested_errors(_fold_systems(x, y, n_blocks, n_folds), order, n_folds)
+
+
+def _nested_errors(folds, order, n_folds: int) -> np.ndarray:
+    """:func:`cross_validated_size` on the fold systems of :func:`_fold_systems`."""
+    order = np.asarray(order, dtype=int)
     size = len(order)
     errors = np.full((n_folds, size), np.inf)
-    for fold, x_test, y_test, r_factor, rhs in _fold_systems(
-            np.asarray(x, dtype=float)[:, order], y, n_blocks, n_folds):
+    for fold, x_test, y_test, r_natural, rhs_natural in folds:
+        # the training rows in the path's column order: re-triangularizing their reduced
+        # system gives the R of x_train[:, order] at the cost of a square QR
+        r_factor, rhs = _triangular_system(r_natural[:, order], rhs_natural)
         usable = min(size, r_factor.shape[0])
         diag = np.abs(np.diag(r_factor))[:usable]
         ok = diag > 1e-12 * max(diag.max(initial=0.0), 1e-300)
@@ -318,7 +333,7 @@ def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
         inverse = scipy.linalg.solve_triangular(r_factor[:usable, :usable], np.eye(usable))
         coefficients = np.zeros((size, usable))
         coefficients[:usable] = np.cumsum(inverse * rhs[:usable], axis=1)
-        residual = x_test @ coefficients - y_test[:, None]
+        residual = x_test[:, order] @ coefficients - y_test[:, None]
         errors[fold, :usable] = np.mean(residual**2, axis=0)
     return errors
 
@@ -340,8 +355,13 @@ def cross_validated_supports(x, y, supports, n_blocks: int = 1, n_folds: int = 5
         Mean squared held-out error relative to the mean square of ``y`` (inf where a fold's
         training rows cannot determine the model).
     """
+    return _support_errors(_fold_systems(x, y, n_blocks, n_folds), supports, n_folds)
+
+
+def _support_errors(folds, supports, n_folds: int) -> np.ndarray:
+    """:func:`cross_validated_supports` on the fold systems of :func:`_fold_systems`."""
     errors = np.full((n_folds, len(supports)), np.inf)
-    for fold, x_test, y_test, r_factor, rhs in _fold_systems(x, y, n_blocks, n_folds):
+    for fold, x_test, y_test, r_factor, rhs in folds:
         for m, support in enumerate(supports):
             support = np.asarray(support, dtype=int)
             coef, _, rank, _ = np.linalg.lstsq(r_factor[:, support], rhs, rcond=None)
@@ -442,11 +462,14 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     """
     # candidate models: (size, held-out mean, its standard error, how found, column order)
     candidates, seen, paths = [], set(), []
+    # shared by both paths, their scoring and the swaps: one reduction of all the rows and
+    # one of each fold's training rows
+    reduced, folds = _reduced(x, y), _fold_systems(x, y, n_blocks, n_folds)
     for path in ("backward", "forward"):
-        order = (elimination_path if path == "backward" else forward_path)(x, y)
+        order = (_elimination_order if path == "backward" else _forward_order)(*reduced)
         if max_size is not None:
             order = order[: int(max_size)]
-        mean, spread = _fold_summary(cross_validated_size(x, y, order, n_blocks, n_folds))
+        mean, spread = _fold_summary(_nested_errors(folds, order, n_folds))
         paths.append((path, order, mean))
         for k in np.flatnonzero(np.isfinite(mean)):
             key = frozenset(order[: k + 1].tolist())
@@ -464,7 +487,7 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
         # the choice is the smallest candidate within the tolerance, so only refinements no
         # larger than the path models' own choice can change it
         path_choice = min(c[0] for c in candidates if c[1] <= best[1] + tolerance)
-        candidates += _swap_candidates(x, y, paths, seen, path_choice, n_blocks, n_folds)
+        candidates += _swap_candidates(reduced, folds, paths, seen, path_choice, n_folds)
     size, mean, _, how, order = min((c for c in candidates if c[1] <= best[1] + tolerance),
                                     key=lambda c: (c[0], c[1]))
     n_sizes = max(c[0] for c in candidates)
@@ -487,9 +510,10 @@ def _fold_summary(errors):
     return mean, spread
 
 
-def _swap_candidates(x, y, paths, seen, limit, n_blocks, n_folds):
-    """Swap refinements of the path models of at most ``limit`` terms, scored by CV."""
-    active, xs, y_reduced = _reduced(x, y)
+def _swap_candidates(reduced, folds, paths, seen, limit, n_folds):
+    """Swap refinements of the path models of at most ``limit`` terms, scored by CV on the
+    ``folds`` (:func:`_fold_systems`); ``reduced``: the system of :func:`_reduced`."""
+    active, xs, y_reduced = reduced
     refined, visited = [], set()  # starts already refined and local optima reached
     for path, order, mean in paths:
         for k in range(1, min(limit, len(order)) + 1):
@@ -505,7 +529,7 @@ def _swap_candidates(x, y, paths, seen, limit, n_blocks, n_folds):
                 refined.append((path, support, np.concatenate([support, rest])))
     if not refined:
         return []
-    mean, spread = _fold_summary(cross_validated_supports(
-        x, y, [support for _, support, _ in refined], n_blocks, n_folds))
+    mean, spread = _fold_summary(_support_errors(
+        folds, [support for _, support, _ in refined], n_folds))
     return [(len(support), mean[m], spread[m], f"{path} path, swap-refined", order)
             for m, (path, support, order) in enumerate(refined) if np.isfinite(mean[m])]
