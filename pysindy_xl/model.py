@@ -432,7 +432,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
 
         def unweighted(reason):
             warnings.warn(f"residual_covariance: {reason}; the rows are fitted unweighted",
-                          UserWarning, stacklevel=4)
+                          UserWarning, stacklevel=2)
             return fit(optimizer, theta, noise)
 
         optimizer = self._optimizer(forced, estimated=noise is not None)
@@ -459,7 +459,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             if settled:
                 break
         for record in caught:
-            warnings.warn(record.message, record.category, stacklevel=3)
+            warnings.warn(record.message, record.category, stacklevel=2)
         return fitted
 
     def _optimizer(self, forced: np.ndarray, estimated: bool = False):

@@ -9,6 +9,7 @@ from test_explicit_identification import _true_coefficients, paper_catalog
 from test_weak import _noisy_run
 
 import pysindy_xl as px
+from pysindy_xl.optimizers import CatalogOptimizer
 from pysindy_xl.weak import WeakNoise, weak_regression
 
 
@@ -93,7 +94,8 @@ def test_moments_are_those_of_the_draws(cart_pole_system):
 def test_double_pendulum_on_a_cart_at_five_percent(cart_double_pendulum_system, seed):
     """Seeds of the noise sweep where the rows fitted as they are lose a true term (seed 0:
     the cart's friction) or split one between substitutes (seed 4): with the residual's
-    covariance, the defaults find the exact law."""
+    covariance, the defaults find the exact law. (On seed 4 the single-fit pilot splits the
+    term too; the fit weighted by its law does not, and reweighting by that law settles.)"""
     system = cart_double_pendulum_system
     library = paper_catalog(system.coords, [1, 2])
     t, noisy, data, _ = _noisy_run(system, seed, 0.05)
@@ -102,3 +104,46 @@ def test_double_pendulum_on_a_cart_at_five_percent(cart_double_pendulum_system, 
     coef, support = model.coefficients(), true != 0
     assert np.array_equal(coef != 0, support), model.equations()
     assert np.median(np.abs(coef[support] - true[support]) / np.abs(true[support])) < 0.03
+
+
+class _NoLaw(CatalogOptimizer):
+    def fit_catalog(self, theta, n_coordinates, force_columns):
+        raise ValueError("no law on these rows")
+
+
+class _FailingPilot(px.ExplicitOptimizer):
+    """An explicit fit whose pilot cannot find a law."""
+
+    def pilot(self):
+        return _NoLaw()
+
+
+def test_pilots_of_the_optimizers():
+    """An ensemble's pilot is one unfitted fit of its base optimizer (its parameters kept);
+    a mixed fit's pilot has the pilots of its parts; others are their own clone."""
+    base = px.ExplicitOptimizer(threshold=0.05)
+    pilot = px.EnsembleOptimizer(base, n_models=7).pilot()
+    assert type(pilot) is px.ExplicitOptimizer and pilot.get_params() == base.get_params()
+    assert not hasattr(pilot, "coef_") and pilot is not base
+    mixed = px.MixedOptimizer(px.EnsembleOptimizer(base), px.ImplicitOptimizer(alpha=0.1))
+    pilot = mixed.pilot()
+    assert type(pilot.explicit_optimizer) is px.ExplicitOptimizer
+    assert pilot.implicit_optimizer.get_params() == mixed.implicit_optimizer.get_params()
+    assert type(mixed.explicit_optimizer) is px.EnsembleOptimizer  # the original unchanged
+
+
+def test_a_failing_pilot_leaves_the_rows_unweighted(cart_pole_system):
+    """The weighting needs a first law: when the pilot finds none, the model says so and
+    fits the rows as they are (the same law as ``residual_covariance=False``)."""
+    system = cart_pole_system
+    library = paper_catalog(system.coords, [1])
+    t, noisy, data, _ = _noisy_run(system, 1, 0.01)
+    with pytest.warns(UserWarning, match=r"residual_covariance: the pilot fit failed "
+                      r"\(no law on these rows\); the rows are fitted unweighted"):
+        model = px.XLSINDy(library, _FailingPilot(), residual_covariance=True).fit(
+            noisy, t, u=data["tau"])
+    plain = px.XLSINDy(library, _FailingPilot(), residual_covariance=False).fit(
+        noisy, t, u=data["tau"])
+    np.testing.assert_array_equal(model.coefficients(), plain.coefficients())
+    true = _true_coefficients(system, library.fit())
+    assert np.array_equal(model.coefficients() != 0, true != 0)
