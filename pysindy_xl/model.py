@@ -430,10 +430,11 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
                     extra["mass_matrices"] = mass_matrices()
             return optimizer.fit_catalog(rows, n, force_columns, **extra)
 
-        def unweighted(reason):
+        def unweighted(reason):  # said only of a fit that succeeds
+            fitted = fit(optimizer, theta, noise)
             warnings.warn(f"residual_covariance: {reason}; the rows are fitted unweighted",
                           UserWarning, stacklevel=2)
-            return fit(optimizer, theta, noise)
+            return fitted
 
         optimizer = self._optimizer(forced, estimated=noise is not None)
         weigh = forced.any() if self.residual_covariance == "auto" else self.residual_covariance

@@ -13,8 +13,9 @@ noise. Instead:
    both are scored.
 2. **Score.** Each model size is scored by ``n_folds``-fold cross-validation over contiguous
    blocks of rows (blocks in time within each coordinate, so overlapping test functions or
-   smoothing windows hardly leak across folds). Nested models along a fixed column order are
-   all fitted from one QR factorization per fold.
+   smoothing windows hardly leak across folds). Each fold's training rows are reduced once
+   to their triangular system ``(R, Q^T y)``; a path's column order re-triangularizes that
+   square system, and all the nested models along the order follow from it.
 3. **Swaps.** Greedy paths miss supports where one true term is imitated by a pair of
    correlated candidates (``qd1 qd2 cos q`` by ``qd1 qd2`` and ``qd1 qd2 sin^2 q`` on
    small-angle stretches): at their sizes the path models are far worse than the true
