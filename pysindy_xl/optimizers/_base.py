@@ -49,6 +49,7 @@ __all__ = [
     "coordinate_weights",
     "coordinates_touched",
     "independent_columns",
+    "pilot_optimizer",
     "warn_unexplained",
 ]
 

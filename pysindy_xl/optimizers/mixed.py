@@ -164,7 +164,7 @@ class MixedOptimizer(CatalogOptimizer):
         """Unfitted stand-in for a first estimate of the law: the same mixed regression
         with the pilots of both parts (see
         :func:`~pysindy_xl.optimizers._base.pilot_optimizer`)."""
-        explicit, implicit = self._sub_optimizers()
+        explicit, implicit = self._sub_optimizers()  # validated clones
         return clone(self).set_params(explicit_optimizer=pilot_optimizer(explicit),
                                       implicit_optimizer=pilot_optimizer(implicit))
 
