@@ -8,9 +8,9 @@ noise, larger for a law the data contradict):
    (:func:`~pysindy_xl.optimizers.noise_ratio.law_elimination_path`,
    :func:`~pysindy_xl.optimizers.noise_ratio.law_forward_path`).
 2. **Swaps.** At high noise a greedy path can lose a true column early, imitated by a
-   correlated pair. A third path starts from the best support of the first two and refines
-   every support by single swaps before the next elimination, and every path support up to
-   the best size is refined at its own size.
+   correlated pair. A third path starts from the best admissible support of the first two
+   (step 4) and refines every support by single swaps before the next elimination, and every
+   path support up to that size is refined at its own size.
 3. **Score.** Every support is scored by ``n_folds``-fold cross-validation over contiguous
    blocks of rows: the law is estimated on the training rows and its noise ratio measured on
    the held-out rows (their share of the moments).
@@ -266,10 +266,11 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
                ) -> tuple[np.ndarray, float, LawSelection]:
     """Sparsest homogeneous law of noisy columns, by held-out noise ratio.
 
-    Candidates are the supports of two paths: the backward path
-    (:func:`law_elimination_path`) and, with ``swaps``, a path refined by single swaps
-    (:func:`refine_law_by_swaps`) at every size, from the best support of the first down. The
-    choice is the smallest support within one standard error of the best of both.
+    Candidates are the supports of the backward and forward paths
+    (:func:`law_elimination_path`, :func:`law_forward_path`) and, with ``swaps``, of a path
+    refined by single swaps (:func:`refine_law_by_swaps`) at every size, from the best
+    admissible path support down, with every path support up to that size refined at its own
+    size. The choice is the smallest admissible support within one standard error of the best.
 
     Parameters
     ----------
@@ -329,19 +330,6 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
                   "forward path", n_blocks, n_folds))
     if not candidates:
         raise ValueError("theta: no law can be cross-validated on these rows")
-    if swaps:
-        best_path = min(candidates, key=lambda c: c.ratio)
-        # the swap-refined path, and every path support up to the best size refined at its
-        # own size; each support scored once
-        starts = [c.support for c in candidates if len(c.support) <= len(best_path.support)]
-        seen = {frozenset(c.support.tolist()) for c in candidates}
-        refined, memo = [], {}  # many starts meet on their way: each search is done once
-        for support in _refined_path(r_factor, total, best_path.support, memo) + [
-                refine_law_by_swaps(r_factor, total, start, memo=memo) for start in starts]:
-            if frozenset(support.tolist()) not in seen:
-                seen.add(frozenset(support.tolist()))
-                refined.append(support)
-        candidates += _scored(theta, moments, refined, "swap-refined", n_blocks, n_folds)
     # Admissible laws only, when there are any:
     # - a law that leaves a coordinate out (or enters it with negligible terms) says nothing
     #   about it, and its ratio is measured on the other rows only. Such laws can hold
@@ -359,7 +347,25 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         return mass_matrices is None or definite_mass(mass_matrices[:, support],
                                                       law / scale[support])
 
-    candidates = [c for c in candidates if admissible(c)] or candidates
+    def admissible_only(candidates):
+        return [c for c in candidates if admissible(c)] or candidates
+
+    if swaps:
+        # the search starts from the best admissible path law (only admissible laws can be
+        # chosen: an inadmissible best, e.g. a law of one coordinate's rows, may be far
+        # smaller or larger than any admissible one); the swap-refined path from it, and
+        # every path support up to its size refined at its own size; each support scored once
+        best_path = min(admissible_only(candidates), key=lambda c: c.ratio)
+        starts = [c.support for c in candidates if len(c.support) <= len(best_path.support)]
+        seen = {frozenset(c.support.tolist()) for c in candidates}
+        refined, memo = [], {}  # many starts meet on their way: each search is done once
+        for support in _refined_path(r_factor, total, best_path.support, memo) + [
+                refine_law_by_swaps(r_factor, total, start, memo=memo) for start in starts]:
+            if frozenset(support.tolist()) not in seen:
+                seen.add(frozenset(support.tolist()))
+                refined.append(support)
+        candidates += _scored(theta, moments, refined, "swap-refined", n_blocks, n_folds)
+    candidates = admissible_only(candidates)
     best = min(candidates, key=lambda c: c.ratio)
     # one standard error, or the resolution on the relative residual (clean data: the
     # moments are tiny, the ratios large, and extra terms that fit quadrature errors must not
