@@ -422,12 +422,17 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         residual of the law (``residual_covariance``). ``mass_matrices``: a function returning
         the mass matrices of the columns, called only when the optimizer takes them.
         Returns the fitted optimizer."""
-        def fit(optimizer, rows, propagated):
+        def fit(optimizer, rows, propagated, whitened=False):
             extra = {}
             if propagated is not None and accepts_noise_moments(optimizer):
                 extra["noise_moments"] = propagated.moments()
                 if accepts_fit_parameter(optimizer, "mass_matrices"):
                     extra["mass_matrices"] = mass_matrices()
+            if whitened and accepts_fit_parameter(optimizer, "balance"):
+                # each block is in units of its own noise: rebalancing them by their
+                # scales would undo the weighting (an undriven coordinate's rows, where the
+                # law is tested hardest, weighed 30 times less than a driven one's)
+                extra["balance"] = False
             return optimizer.fit_catalog(rows, n, force_columns, **extra)
 
         def unweighted(reason):  # said only of a fit that succeeds
@@ -454,7 +459,8 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
                 return unweighted("the residual of the law carries no noise")
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
-                fitted = fit(clone(optimizer), whiten(theta), noise.whitened(whiten))
+                fitted = fit(clone(optimizer), whiten(theta), noise.whitened(whiten),
+                             whitened=True)
             settled = np.array_equal(fitted.coef_ != 0, law != 0)
             law = fitted.coef_
             if settled:

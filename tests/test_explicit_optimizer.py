@@ -294,3 +294,44 @@ def test_explained_coordinates_do_not_warn():
         warnings.simplefilter("error")
         opt = px.ExplicitOptimizer().fit_catalog(theta, 2, [0])
     np.testing.assert_allclose(opt.coef_, [-1.0, 2.0, 0.5], rtol=1e-9)
+
+
+def _disagreeing_blocks(seed=0, n_rows=200):
+    """Two forced coordinates whose noisy rows disagree on the shared coefficient of column
+    1 (2.0 in block 0, 3.0 in block 1), block 1 a thousand times smaller: which answer comes
+    out depends only on how the blocks are weighed against each other."""
+    rng = np.random.default_rng(seed)
+    a, b, u0, u1 = rng.normal(size=(4, n_rows))
+    block0 = np.column_stack([2 * a + 0.1 * u0, a, np.zeros(n_rows)])
+    block1 = 1e-3 * np.column_stack([3 * a + b + 0.1 * u1, a, b])
+    return np.vstack([block0, block1])
+
+
+def test_balance_false_fits_the_blocks_as_weighed_by_the_caller():
+    """``balance=False`` (rows already weighed, e.g. whitened by the residual's covariance):
+    the least squares of the stacked rows as given; the default first rebalances the blocks
+    by ``coordinate_weights``. Reference: ``numpy.linalg.lstsq`` of either system."""
+    theta = _disagreeing_blocks()
+    support = np.array([True, True, True])
+    as_given = np.linalg.lstsq(theta[:, 1:], theta[:, 0], rcond=None)[0]
+    weights = px.optimizers.coordinate_weights(theta, 2, [0])
+    balanced = px.optimizers.balance_coordinates(theta, 2, [0])
+    rebalanced = np.linalg.lstsq(balanced[:, 1:], balanced[:, 0], rcond=None)[0]
+    assert weights[1] / weights[0] > 100  # the small block is weighed up
+    assert abs(as_given[0] - rebalanced[0]) > 0.3  # so the two answers differ
+    unbalanced = px.ExplicitOptimizer().fit_support(theta, 2, [0], support, balance=False)
+    np.testing.assert_allclose(unbalanced.coef_[1:], as_given, rtol=1e-10)
+    default = px.ExplicitOptimizer().fit_support(theta, 2, [0], support)
+    np.testing.assert_allclose(default.coef_[1:], rebalanced, rtol=1e-10)
+    # the selection weighs the rows the same way: column 2, which only the small block
+    # needs, is not worth a term as given, and is one when the blocks are rebalanced
+    assert px.ExplicitOptimizer().fit_catalog(theta, 2, [0], balance=False).coef_[2] == 0
+    assert np.all(px.ExplicitOptimizer().fit_catalog(theta, 2, [0]).coef_ != 0)
+
+
+@pytest.mark.parametrize("optimizer", [px.ExplicitOptimizer(), px.ImplicitOptimizer(),
+                                       px.MixedOptimizer(), px.EnsembleOptimizer(n_models=2)],
+                         ids=lambda o: type(o).__name__)
+def test_balance_must_be_a_bool(optimizer):
+    with pytest.raises(TypeError, match="balance: expected True or False, got the str 'no'"):
+        optimizer.fit_catalog(_disagreeing_blocks(), 2, [0], balance="no")

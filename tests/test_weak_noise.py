@@ -6,7 +6,7 @@ Ground truth: a moving-average process of known covariance, and the residual of 
 import numpy as np
 import pytest
 from test_explicit_identification import _true_coefficients, paper_catalog
-from test_weak import _noisy_run
+from test_weak import _noisy_run, _validates
 
 import pysindy_xl as px
 from pysindy_xl.optimizers import CatalogOptimizer
@@ -147,3 +147,22 @@ def test_a_failing_pilot_leaves_the_rows_unweighted(cart_pole_system):
     np.testing.assert_array_equal(model.coefficients(), plain.coefficients())
     true = _true_coefficients(system, library.fit())
     assert np.array_equal(model.coefficients() != 0, true != 0)
+
+
+def test_partly_forced_cart_pole_weighs_the_free_pendulums_rows(cart_pole_system):
+    """Cart-pole driven on the cart only, 3 %, the noise sweep's seed 9. The law is one
+    explicit problem (every term reaches the cart's force), and only the undriven pendulum's
+    rows tell ``4.9 cos(theta)`` and ``0.25 theta_dot**2`` from their small-angle substitutes
+    ``-2.5 sin(theta)**2`` and ``0.25 theta_dot**2 cos(theta)``. Whitened, those rows are in
+    units of their own noise, as the cart's are; rebalanced by their scales afterwards they
+    weighed (0.68 / 1.48)^2 of the cart's, and the fit took the substitutes."""
+    system = cart_pole_system
+    library = paper_catalog(system.coords, [1])
+    t, noisy, data, _ = _noisy_run(system, 9, 0.03, active=[0])
+    model = px.XLSINDy(library).fit(noisy, t, u=data["tau"])
+    assert model.optimizer_.mode_ == "explicit"
+    true = _true_coefficients(system, library.fit())
+    coef, support = model.coefficients(), true != 0
+    assert np.array_equal(coef != 0, support), model.equations()
+    assert np.max(np.abs(coef[support] - true[support]) / np.abs(true[support])) < 0.03
+    assert _validates(model, system, 509)

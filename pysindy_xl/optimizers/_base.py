@@ -106,9 +106,10 @@ def accepts_noise_moments(optimizer) -> bool:
     return accepts_fit_parameter(optimizer, "noise_moments")
 
 
-def accepts_fit_parameter(optimizer, name: str) -> bool:
-    """Whether ``optimizer.fit_catalog`` takes the keyword ``name``."""
-    return name in inspect.signature(optimizer.fit_catalog).parameters
+def accepts_fit_parameter(optimizer, name: str, method: str = "fit_catalog") -> bool:
+    """Whether ``optimizer.<method>`` (by default ``fit_catalog``) takes the keyword
+    ``name``."""
+    return name in inspect.signature(getattr(optimizer, method)).parameters
 
 
 def pilot_optimizer(optimizer):

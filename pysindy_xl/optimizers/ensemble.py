@@ -179,7 +179,7 @@ class EnsembleOptimizer(CatalogOptimizer):
                              f"{self.n_models}")
 
     def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None,
-                    mass_matrices=None):
+                    mass_matrices=None, balance=True):
         """Fit the ensemble on a stacked catalog matrix.
 
         Parameters
@@ -194,12 +194,17 @@ class EnsembleOptimizer(CatalogOptimizer):
             Each column's contribution to the mass matrix on sample states, passed unchanged
             to every fit whose optimizer takes them (:class:`ImplicitOptimizer` then selects
             only laws with a definite mass matrix); ignored by the others.
+        balance : bool, default True
+            Passed to every fit (and the refit) whose optimizer takes it (see
+            :meth:`ExplicitOptimizer.fit_catalog`): False where the caller has weighed the
+            coordinate blocks already, as on rows whitened by the residual covariance.
 
         Returns
         -------
         self
         """
         self._check_params()
+        check_option("balance", balance, "bool")
         # the inner optimizers balance the coordinates of their own subsamples
         theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
                                                      balance=False)
@@ -218,7 +223,7 @@ class EnsembleOptimizer(CatalogOptimizer):
                           for _ in range(int(self.n_models))]
         base = self._base()
         takes_moments = noise_moments is not None and accepts_noise_moments(base)
-        shared = {}
+        shared = {"balance": balance} if accepts_fit_parameter(base, "balance") else {}
         if mass_matrices is not None:
             mass_matrices = check_mass_matrices(mass_matrices, int(n_coordinates),
                                                 theta.shape[1])
@@ -267,6 +272,8 @@ class EnsembleOptimizer(CatalogOptimizer):
             self.aggregate == "auto" and hasattr(base, "fit_support")) else "median")
         if self.aggregate_ == "refit":
             extra = {"noise_moments": noise_moments} if takes_moments else {}
+            if accepts_fit_parameter(base, "balance", "fit_support"):
+                extra["balance"] = balance
             refit = (f"EnsembleOptimizer: the refit on the {int(included.sum())} term(s) kept "
                      f"by at least {self.inclusion} of the fits")
             try:

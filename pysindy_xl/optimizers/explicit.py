@@ -373,7 +373,8 @@ class ExplicitOptimizer(CatalogOptimizer):
                               ConvergenceWarning, stacklevel=4)
         return estimator
 
-    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None):
+    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None,
+                    balance=True):
         """Solve the catalog problem with the force coefficient fixed to -1.
 
         Parameters
@@ -389,19 +390,26 @@ class ExplicitOptimizer(CatalogOptimizer):
             the propagated position noise). The final fit on the selected support is then
             corrected for the attenuation they cause (:func:`corrected_least_squares`;
             ``noise_share_`` says how large they were).
+        balance : bool, default True
+            Rescale the coordinate blocks of rows by
+            :func:`~pysindy_xl.optimizers.coordinate_weights` before solving (a unit-free
+            regression). False where the caller has weighed the blocks already: rows
+            whitened by the covariance of the residual are each in units of their own noise,
+            and a rebalancing would undo that weighting.
 
         Returns
         -------
         self
         """
         theta, force_columns, rest, force, moments = _explicit_problem(
-            theta, n_coordinates, force_columns, noise_moments)
+            theta, n_coordinates, force_columns, noise_moments, balance)
         # cross-validation folds stay inside each coordinate's block of rows
         self._fit(theta[:, rest], force, n_blocks=int(n_coordinates), noise_moments=moments)
         return self._as_catalog_vector(self.coef_, rest, force_columns, theta,
                                        int(n_coordinates))
 
-    def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None):
+    def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None,
+                    balance=True):
         """Least squares of the catalog problem on a given support, nothing selected.
 
         The final step of :meth:`fit_catalog` with the support given: the terms in ``support``
@@ -411,7 +419,7 @@ class ExplicitOptimizer(CatalogOptimizer):
 
         Parameters
         ----------
-        theta, n_coordinates, force_columns, noise_moments
+        theta, n_coordinates, force_columns, noise_moments, balance
             As in :meth:`fit_catalog`.
         support : array of bool, shape (F,)
             Terms to fit; the others get 0.
@@ -422,7 +430,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         """
         self._check_params()
         theta, force_columns, rest, force, moments = _explicit_problem(
-            theta, n_coordinates, force_columns, noise_moments)
+            theta, n_coordinates, force_columns, noise_moments, balance)
         keep = check_support(support, theta.shape[1])[rest]
         coef = np.zeros(len(rest))
         if moments is not None:
@@ -445,17 +453,20 @@ class ExplicitOptimizer(CatalogOptimizer):
         return self
 
 
-def _explicit_problem(theta, n_coordinates, force_columns, noise_moments):
-    """The balanced regression of a catalog problem with known forces.
+def _explicit_problem(theta, n_coordinates, force_columns, noise_moments, balance=True):
+    """The regression of a catalog problem with known forces, its blocks balanced when
+    ``balance``.
 
-    Returns the balanced ``theta``, the force columns, the other columns ``rest``, the force
-    (the right-hand side) and the noise moments of the balanced rows restricted to ``rest``
+    Returns the (balanced) ``theta``, the force columns, the other columns ``rest``, the
+    force (the right-hand side) and the noise moments of those rows restricted to ``rest``
     (None without ``noise_moments``).
     """
     theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
                                                  balance=False)
+    check_option("balance", balance, "bool")
     n_coordinates = int(n_coordinates)
-    weights = coordinate_weights(theta, n_coordinates, force_columns)
+    weights = (coordinate_weights(theta, n_coordinates, force_columns) if balance
+               else np.ones(n_coordinates))
     theta = scale_blocks(theta, weights)
     if len(force_columns) == 0:
         raise ValueError("force_columns: explicit regression needs a force column")

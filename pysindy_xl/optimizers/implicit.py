@@ -84,11 +84,14 @@ __all__ = ["ImplicitOptimizer", "NoLawFoundError", "coordinates_touched", "homot
 _SOLVERS = ("fista", "cvxpy")
 
 
-def _balanced_problem(theta, n_coordinates, force_columns):
-    """The checked catalog problem with balanced coordinate blocks, and the blocks' weights."""
+def _balanced_problem(theta, n_coordinates, force_columns, balance=True):
+    """The checked catalog problem, its coordinate blocks balanced when ``balance``, and the
+    blocks' weights."""
     theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
                                                  balance=False)
-    weights = coordinate_weights(theta, int(n_coordinates), force_columns)
+    check_option("balance", balance, "bool")
+    weights = (coordinate_weights(theta, int(n_coordinates), force_columns) if balance
+               else np.ones(int(n_coordinates)))
     return scale_blocks(theta, weights), force_columns, weights
 
 
@@ -280,7 +283,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         return self._fit(theta, 1, np.array([], dtype=int), None)
 
     def fit_catalog(self, theta, n_coordinates, force_columns, reference_columns=None,
-                    noise_moments=None, mass_matrices=None):
+                    noise_moments=None, mass_matrices=None, balance=True):
         """Implicit regression on a stacked catalog matrix.
 
         Parameters
@@ -306,12 +309,18 @@ class ImplicitOptimizer(CatalogOptimizer):
             (:func:`~pysindy_xl.diagnostics.column_mass_matrices`; :class:`~pysindy_xl.XLSINDy`
             passes them). With ``noise_moments``, laws whose mass matrix is not definite
             there are not selected, unless no candidate law is definite.
+        balance : bool, default True
+            Rescale the coordinate blocks of rows by
+            :func:`~pysindy_xl.optimizers.coordinate_weights` before solving. False where the
+            caller has weighed the blocks already (rows whitened by the covariance of the
+            residual, each block in units of its own noise).
 
         Returns
         -------
         self
         """
-        theta, force_columns, weights = _balanced_problem(theta, n_coordinates, force_columns)
+        theta, force_columns, weights = _balanced_problem(theta, n_coordinates, force_columns,
+                                                          balance)
         if reference_columns is not None:
             reference_columns = np.asarray(reference_columns, dtype=int).reshape(-1)
             if np.any((reference_columns < 0) | (reference_columns >= theta.shape[1])):
@@ -332,7 +341,8 @@ class ImplicitOptimizer(CatalogOptimizer):
                          force_columns)
         return self
 
-    def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None):
+    def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None,
+                    balance=True):
         """The laws on a given support, nothing selected.
 
         The columns of ``support`` fall into groups that share no coordinate (uncoupled
@@ -347,7 +357,7 @@ class ImplicitOptimizer(CatalogOptimizer):
 
         Parameters
         ----------
-        theta, n_coordinates, force_columns, noise_moments
+        theta, n_coordinates, force_columns, noise_moments, balance
             As in :meth:`fit_catalog`.
         support : array of bool, shape (F,)
             Terms of the laws; the others get 0.
@@ -357,7 +367,8 @@ class ImplicitOptimizer(CatalogOptimizer):
         self
         """
         self._check_params()
-        theta, force_columns, weights = _balanced_problem(theta, n_coordinates, force_columns)
+        theta, force_columns, weights = _balanced_problem(theta, n_coordinates, force_columns,
+                                                          balance)
         n_coordinates = int(n_coordinates)
         norms, nonzero = column_norms(theta)
         columns = np.flatnonzero(check_support(support, theta.shape[1]) & nonzero)

@@ -182,7 +182,7 @@ class MixedOptimizer(CatalogOptimizer):
         )
 
     def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None,
-                    mass_matrices=None):
+                    mass_matrices=None, balance=True):
         """Mixed explicit/implicit regression on a stacked catalog matrix.
 
         Parameters
@@ -199,6 +199,10 @@ class MixedOptimizer(CatalogOptimizer):
         mass_matrices : array, shape (S, F, n_coordinates, n_coordinates), optional
             Each column's contribution to the mass matrix (see
             :meth:`ImplicitOptimizer.fit_catalog`), handed on the same way.
+        balance : bool, default True
+            Handed to each sub-optimizer that takes it (see
+            :meth:`ExplicitOptimizer.fit_catalog`): False where the caller has weighed the
+            coordinate blocks already, as on rows whitened by the residual covariance.
 
         Returns
         -------
@@ -210,6 +214,7 @@ class MixedOptimizer(CatalogOptimizer):
         theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
                                                      balance=False)
         self._check_params()
+        check_option("balance", balance, "bool")
         explicit, implicit = self._sub_optimizers()
         n = int(n_coordinates)
         if noise_moments is not None:
@@ -225,6 +230,8 @@ class MixedOptimizer(CatalogOptimizer):
             if mass_matrices is not None and accepts_fit_parameter(optimizer, "mass_matrices"):
                 extra["mass_matrices"] = (
                     mass_matrices[:, columns][:, :, coordinates][:, :, :, coordinates])
+            if accepts_fit_parameter(optimizer, "balance"):
+                extra["balance"] = balance
             whole = coordinates.all() and len(columns) == n_features
             part = theta if whole else theta[np.ix_(_rows(coordinates, n_samples), columns)]
             return optimizer.fit_catalog(part, int(coordinates.sum()), part_force_columns,
