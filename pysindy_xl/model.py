@@ -122,7 +122,10 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         overlapping test functions are correlated); the optimizer then fits the whitened rows
         (:meth:`~pysindy_xl.weak.WeakNoise.whitener`, the iterative reweighting of WENDy),
         again with the weights of its own law while the support it finds differs from the
-        one that set them (at most three weighted fits). ``"auto"``: when some coordinate is
+        one that set them (at most three weighted fits). Each coordinate's whitened rows are
+        in units of their own noise, so the optimizer fits them as they are
+        (``fit_catalog(..., balance=False)`` where it takes the keyword) rather than
+        rebalancing the coordinates by their scales. ``"auto"``: when some coordinate is
         forced; measured in ``benchmarks/noise_sweep.py``, it finds more exact laws on forced
         and partly forced data (the double pendulum on a cart at 5 %: 8 instead of 7 of 10;
         at 10 %: 4 instead of 1) but fewer on unforced data (the double pendulum at 3 %: 6

@@ -23,7 +23,10 @@ others, never the true coefficients. :func:`check_catalog_problem`, through whic
 before solving: a coordinate in micrometres next to one in radians (blocks 1e6 apart, a
 coupling column 1e12 apart between its two blocks) is then solved like the same system in
 metres, and ``coef_`` keeps its meaning (physical units of the catalog columns).
-:func:`independent_columns` uses the same balancing for its dependent-column test.
+:func:`independent_columns` uses the same balancing for its dependent-column test. Rows that
+the caller has weighed already are fitted as given with ``fit_catalog(..., balance=False)``:
+XLSINDy's rows whitened by the covariance of the residual are each in units of their own
+noise (unit free too), and rebalancing them by their scales would undo the weighting.
 """
 
 from __future__ import annotations
