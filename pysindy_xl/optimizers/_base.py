@@ -48,6 +48,7 @@ __all__ = [
     "check_noise_moments",
     "CatalogOptimizer",
     "balance_coordinates",
+    "block_weights",
     "check_catalog_problem",
     "coordinate_weights",
     "coordinates_touched",
@@ -303,6 +304,16 @@ def coordinate_weights(theta, n_coordinates: int, force_columns=None) -> np.ndar
     active = present.any(axis=1)
     log_w = np.where(active, u - u[active].mean(), 0.0)
     return np.exp(log_w)
+
+
+def block_weights(theta, n_coordinates: int, force_columns=None, balance=True) -> np.ndarray:
+    """Weights of the coordinate blocks of a ``fit_catalog`` problem: those of
+    :func:`coordinate_weights` with ``balance`` (checked: a bool), ones without (the caller
+    has weighed the blocks, e.g. whitened them by the covariance of the residual)."""
+    check_option("balance", balance, "bool")
+    if balance:
+        return coordinate_weights(theta, n_coordinates, force_columns)
+    return np.ones(int(n_coordinates))
 
 
 def balance_coordinates(theta, n_coordinates: int, force_columns=None) -> np.ndarray:

@@ -13,10 +13,10 @@ from sklearn.linear_model import Lasso, LassoCV
 from .._validation import check_instance, check_numeric_array, check_option
 from ._base import (
     CatalogOptimizer,
+    block_weights,
     check_catalog_problem,
     check_noise_moments,
     check_support,
-    coordinate_weights,
     scale_blocks,
     warn_unexplained,
 )
@@ -463,10 +463,8 @@ def _explicit_problem(theta, n_coordinates, force_columns, noise_moments, balanc
     """
     theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
                                                  balance=False)
-    check_option("balance", balance, "bool")
     n_coordinates = int(n_coordinates)
-    weights = (coordinate_weights(theta, n_coordinates, force_columns) if balance
-               else np.ones(n_coordinates))
+    weights = block_weights(theta, n_coordinates, force_columns, balance)
     theta = scale_blocks(theta, weights)
     if len(force_columns) == 0:
         raise ValueError("force_columns: explicit regression needs a force column")

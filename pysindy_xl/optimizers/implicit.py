@@ -65,11 +65,11 @@ from sklearn.exceptions import ConvergenceWarning
 from .._validation import check_option
 from ._base import (
     CatalogOptimizer,
+    block_weights,
     check_catalog_problem,
     check_mass_matrices,
     check_noise_moments,
     check_support,
-    coordinate_weights,
     coordinates_touched,
     scale_blocks,
     warn_unexplained,
@@ -89,9 +89,7 @@ def _balanced_problem(theta, n_coordinates, force_columns, balance=True):
     blocks' weights."""
     theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
                                                  balance=False)
-    check_option("balance", balance, "bool")
-    weights = (coordinate_weights(theta, int(n_coordinates), force_columns) if balance
-               else np.ones(int(n_coordinates)))
+    weights = block_weights(theta, int(n_coordinates), force_columns, balance)
     return scale_blocks(theta, weights), force_columns, weights
 
 
