@@ -55,7 +55,7 @@ API_MODULES = [
     "pysindy_xl.dynamics",
     "pysindy_xl.jax_dynamics",
     "pysindy_xl.io",
-    "pysindy_xl.data_io",
+    "pysindy_xl.data",
     "pysindy_xl.gym_env",
     "pysindy_xl.expressions",
     "pysindy_xl.mujoco",

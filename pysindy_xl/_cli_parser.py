@@ -165,7 +165,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "(NAME), optionally NAME_dot, NAME_ddot, tau_NAME and trajectory (ids, "
                     "several trajectories in one file); --column maps other headers. NPZ: "
                     "arrays t, q and optionally qd, qdd, tau, trajectory (see "
-                    "pysindy_xl.mujoco.dataset). Coordinates come from --system (a known "
+                    "pysindy_xl.data.dataset). Coordinates come from --system (a known "
                     "system or an MJCF .xml), or from --coordinates/--angles, or the CSV header.",
     )
     identify.add_argument("data", metavar="DATA", help="a .csv, .tsv, .txt or .npz file")

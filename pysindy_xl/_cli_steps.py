@@ -53,7 +53,7 @@ def _optimizer(solver: str, threshold=None):
     return cls()
 
 
-def _system(name, joints=None):
+def system_by_name(name, joints=None):
     from pysindy_xl.mujoco import MuJoCoSystem, get_system
 
     try:
@@ -68,7 +68,7 @@ def _system(name, joints=None):
         raise CLIError(str(error).replace("joints: ", "--joints: ", 1)) from None
 
 
-def _output_file(path, option):
+def output_file(path, option):
     """Check an output file's directory before any long computation."""
     directory = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(directory):
@@ -77,7 +77,7 @@ def _output_file(path, option):
         raise CLIError(f"{option}: {path!r} is a directory, expected a file name")
 
 
-def _output_directory(path):
+def output_directory(path):
     if os.path.exists(path) and not os.path.isdir(path):
         raise CLIError(f"--out: {path!r} exists and is not a directory; give a directory")
     try:
@@ -86,7 +86,7 @@ def _output_directory(path):
         raise CLIError(f"--out: cannot create directory {path!r} ({error.strerror})") from None
 
 
-def _generate(system, args, progress=None):
+def generate_data(system, args, progress=None):
     """generate_dataset with the shared options; warnings of the generation are printed."""
     import warnings
 
@@ -108,7 +108,7 @@ def _generate(system, args, progress=None):
     return dataset
 
 
-def _data_lines(system, dataset):
+def data_lines(system, dataset):
     """What the data hold: sampling, what the fit receives, constraints."""
     meta = dataset.metadata
     period = meta["timestep"] * meta["sample_every"]
@@ -130,7 +130,7 @@ def _data_lines(system, dataset):
     return lines
 
 
-def _system_from_metadata(metadata):
+def dataset_system(metadata):
     """The system a dataset was generated with (a user's MJCF from its path or embedded XML)."""
     from pysindy_xl.mujoco import system_from_metadata
 
@@ -140,7 +140,7 @@ def _system_from_metadata(metadata):
         raise CLIError(str(error)) from None
 
 
-def _resolve_catalog(args, system):
+def resolve_catalog(args, system):
     """Replace ``--catalog auto`` by the catalog kind used for ``system``.
 
     Any MuJoCo model (the shipped ones and users' MJCF files) gets the kinematic catalog: it
@@ -158,12 +158,12 @@ def _resolve_catalog(args, system):
         args.catalog = "kinematic" if has_model else "mixed"
 
 
-def _log(quiet, *args):
+def log(quiet, *args):
     if not quiet:
         print(*args, flush=True)
 
 
-def _check_solver(solver, forced, threshold):
+def check_solver(solver, forced, threshold):
     """The optimizer of ``solver``, checked before any long computation."""
     if solver == "explicit" and not forced:
         raise CLIError("--solver explicit needs forces; use --forcing explicit or mixed, or "
@@ -171,11 +171,11 @@ def _check_solver(solver, forced, threshold):
     return _optimizer(solver, threshold)
 
 
-def _fit(system, dataset, args, solver, forced, return_arguments=False):
+def fit_model(system, dataset, args, solver, forced, return_arguments=False):
     import pysindy_xl as px
     from pysindy_xl.mujoco.catalogs import reference_catalog
 
-    optimizer = _check_solver(solver, forced, args.threshold)
+    optimizer = check_solver(solver, forced, args.threshold)
     catalog = reference_catalog(system, args.catalog, velocity_degree=args.velocity_degree,
                                 trig_degree=args.trig_degree, friction=args.friction)
     model = px.XLSINDy(catalog, optimizer, formulation=getattr(args, "formulation", "auto"))
@@ -197,7 +197,7 @@ def _fit(system, dataset, args, solver, forced, return_arguments=False):
     return model
 
 
-def _coefficient_summary(system, model):
+def summarize_coefficients(system, model):
     """True coefficients and errors against them (None for systems without ground truth)."""
     from pysindy_xl.mujoco.catalogs import true_coefficients
 
@@ -225,7 +225,7 @@ def _coefficient_summary(system, model):
     return truth, summary
 
 
-def _joint_parameters(system, model):
+def joint_parameters(system, model):
     """Identified joint damping and dry friction next to the MJCF's (user models only)."""
     if system.has_ground_truth or not hasattr(system, "frictionloss"):
         return {}
@@ -243,12 +243,12 @@ def _joint_parameters(system, model):
     return out
 
 
-def _strict_json(value):
+def strict_json(value):
     """JSON-safe copy: non-finite floats (an infinite RMSE) become null."""
     if isinstance(value, dict):
-        return {k: _strict_json(v) for k, v in value.items()}
+        return {k: strict_json(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_strict_json(v) for v in value]
+        return [strict_json(v) for v in value]
     if isinstance(value, float) and not np.isfinite(value):
         return None
     return value
@@ -260,7 +260,7 @@ def _rounded(expr, digits=4):
     return expr.xreplace({f: sp.Float(f, digits) for f in expr.atoms(sp.Float)})
 
 
-def _model_lines(model):
+def model_lines(model):
     lines = []
     lagrangian = model.lagrangian()
     if lagrangian != 0:

@@ -9,8 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validation import check_numeric_array
-from .dynamics import _check_times
+from ._validation import check_numeric_array, check_times
 
 __all__ = ["as_list", "check_array", "check_mask", "sample_times", "trajectory_arrays"]
 
@@ -77,7 +76,7 @@ def sample_times(t, n_samples: int, name: str) -> np.ndarray:
         if not np.isfinite(dt) or dt <= 0:
             raise ValueError(f"{name}: the time step must be positive and finite, got {t!r}")
         return np.arange(n_samples) * dt
-    t = _check_times(check_numeric_array(t, name, finite=False, min_samples=0), name)
+    t = check_times(check_numeric_array(t, name, finite=False, min_samples=0), name)
     if len(t) != n_samples:
         raise ValueError(f"{name}: expected {n_samples} times (one per sample), got {len(t)}")
     return t

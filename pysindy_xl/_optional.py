@@ -9,7 +9,7 @@ scikit-learn and PySINDy only. Heavier back ends are optional and imported only 
 - ``mujoco``: simulation in :mod:`pysindy_xl.mujoco`; ``pip install "pysindy-xl[mujoco]"``
 - ``gymnasium``: :meth:`XLSINDy.to_gymnasium`; ``pip install "pysindy-xl[gym]"``
 - ``dask``: the grid's Dask backend; ``pip install "pysindy-xl[dask]"``
-- ``pandas``: DataFrames in :mod:`pysindy_xl.data_io`; ``pip install pandas``
+- ``pandas``: DataFrames in :mod:`pysindy_xl.data.tables`; ``pip install pandas``
 """
 
 from __future__ import annotations

@@ -13,7 +13,7 @@ import numbers
 
 import numpy as np
 
-__all__ = ["check_option", "check_numeric_array", "check_instance", "check_indices"]
+__all__ = ["check_option", "check_numeric_array", "check_instance", "check_indices", "check_times"]
 
 _KINDS = ("bool", "int", "real", "choice")
 
@@ -276,3 +276,15 @@ def check_indices(value, name: str, size: int) -> np.ndarray:
     if np.any((out < 0) | (out >= size)):
         raise ValueError(f"{name}: indices must lie in [0, {size}), got {out.tolist()}")
     return out
+
+
+def check_times(t, name: str) -> np.ndarray:
+    """``t`` as a 1-D float array of at least two finite, strictly increasing times."""
+    t = check_numeric_array(t, name, finite=False, min_samples=0)
+    if t.ndim != 1 or len(t) < 2:
+        raise ValueError(f"{name}: expected a 1-D array of at least 2 times, got shape {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise ValueError(f"{name}: contains NaN or inf")
+    if np.any(np.diff(t) <= 0):
+        raise ValueError(f"{name}: times must be strictly increasing")
+    return t

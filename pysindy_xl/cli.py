@@ -22,20 +22,20 @@ import numpy as np
 from ._cli_parser import build_parser
 from ._cli_steps import (
     CLIError,
-    _check_solver,
-    _coefficient_summary,
-    _data_lines,
-    _fit,
-    _generate,
-    _joint_parameters,
-    _log,
-    _model_lines,
-    _output_directory,
-    _output_file,
-    _resolve_catalog,
-    _strict_json,
-    _system,
-    _system_from_metadata,
+    check_solver,
+    data_lines,
+    dataset_system,
+    fit_model,
+    generate_data,
+    joint_parameters,
+    log,
+    model_lines,
+    output_directory,
+    output_file,
+    resolve_catalog,
+    strict_json,
+    summarize_coefficients,
+    system_by_name,
 )
 from .quality import fit_quality, plot_identification, quality_lines
 
@@ -97,34 +97,34 @@ def run_demo(args) -> dict:
     from pysindy_xl.dynamics import DynamicsError
     from pysindy_xl.mujoco.validation import validate_model
 
-    system = _system(args.system, args.joints)
-    _resolve_catalog(args, system)
+    system = system_by_name(args.system, args.joints)
+    resolve_catalog(args, system)
     solver = _AUTO_SOLVER[args.forcing] if args.solver == "auto" else args.solver
     forced = args.forcing != "implicit"
-    _check_solver(solver, forced, args.threshold)
-    _output_directory(args.out)
+    check_solver(solver, forced, args.threshold)
+    output_directory(args.out)
     timings = {}
     quiet = args.quiet
-    _log(quiet, f"pysindy-xl demo: {system.name} {system.parameters}")
-    _log(quiet, f"  forcing {args.forcing}, noise {args.noise:g} ({args.noise_model}), catalog "
+    log(quiet, f"pysindy-xl demo: {system.name} {system.parameters}")
+    log(quiet, f"  forcing {args.forcing}, noise {args.noise:g} ({args.noise_model}), catalog "
                 f"{args.catalog}, solver {solver}, seed {args.seed}")
 
     start = time.perf_counter()
-    _log(quiet, f"[1/3] MuJoCo: {args.trajectories} trajectories of {args.duration:g} s")
-    dataset = _generate(system, args, progress=None if not quiet else False)
+    log(quiet, f"[1/3] MuJoCo: {args.trajectories} trajectories of {args.duration:g} s")
+    dataset = generate_data(system, args, progress=None if not quiet else False)
     timings["generate"] = time.perf_counter() - start
     if args.save_data:
         dataset.save(os.path.join(args.out, "training_data.npz"))
 
     start = time.perf_counter()
     n_samples = sum(tr.n_samples for tr in dataset.trajectories)
-    _log(quiet, f"[2/3] identification on {n_samples} samples")
-    model = _fit(system, dataset, args, solver, forced)
+    log(quiet, f"[2/3] identification on {n_samples} samples")
+    model = fit_model(system, dataset, args, solver, forced)
     timings["identify"] = time.perf_counter() - start
-    truth, coefficient_summary = _coefficient_summary(system, model)
+    truth, coefficient_summary = summarize_coefficients(system, model)
 
     start = time.perf_counter()
-    _log(quiet, f"[3/3] validation against a fresh {args.validation_duration:g} s MuJoCo "
+    log(quiet, f"[3/3] validation against a fresh {args.validation_duration:g} s MuJoCo "
                 "trajectory")
     try:
         result = validate_model(model, system, duration=args.validation_duration,
@@ -149,7 +149,7 @@ def run_demo(args) -> dict:
         timings["plot"] = time.perf_counter() - start
 
     print()
-    for line in _model_lines(model):
+    for line in model_lines(model):
         print(line)
     print()
     metrics = result.to_dict() if result is not None else {"valid": False, "failure": failure}
@@ -168,9 +168,9 @@ def run_demo(args) -> dict:
     else:
         print(f"validation: INVALID ({failure})")
     print("data:")
-    for line in _data_lines(system, dataset):
+    for line in data_lines(system, dataset):
         print(line)
-    joints = _joint_parameters(system, model)
+    joints = joint_parameters(system, model)
     for joint, entry in joints.items():
         print(f"  {joint}: " + ", ".join(f"{key} {found:.4g} (MJCF {given:.4g})"
                                          for key, (found, given) in entry.items()))
@@ -225,7 +225,7 @@ def run_demo(args) -> dict:
     }
     path = os.path.join(args.out, "report.json")
     with open(path, "w", encoding="utf-8") as handle:
-        json.dump(_strict_json(report), handle, indent=2, allow_nan=False)
+        json.dump(strict_json(report), handle, indent=2, allow_nan=False)
     print(f"report: {path}" + (f", plot: {files['validation_plot']}" if files else "")
           + f" ({timings['total']:.1f} s)")
     return report
@@ -305,9 +305,9 @@ def run_identify(args):
                   flush=True)
 
     dataset, system = _identify_inputs(args)
-    _resolve_catalog(args, system)
+    resolve_catalog(args, system)
     if args.plot:
-        _output_file(args.plot, "--plot")
+        output_file(args.plot, "--plot")
     measured = dataset.has("qd") and dataset.has("qdd")
     formulation = args.formulation
     if formulation == "auto":
@@ -332,12 +332,12 @@ def run_identify(args):
              + ("smoothing positions, integrating against test functions" if formulation ==
                 "weak" else "catalog at every sample")
              + f", {solver} regression with sparsity selection) on {n_samples} samples")
-    model, arguments = _fit(system, dataset, args, solver, forced, return_arguments=True)
+    model, arguments = fit_model(system, dataset, args, solver, forced, return_arguments=True)
     progress(f"fitted: {int(np.count_nonzero(model.coefficients()))} terms of "
              f"{len(model.get_feature_names())}; computing the fit quality")
     print(f"{system.name}: {dataset.n_trajectories} trajectories, {n_samples} samples, "
           f"{args.catalog} catalog, {solver} solver, {model.formulation_} formulation")
-    for line in _model_lines(model):
+    for line in model_lines(model):
         print(line)
     try:
         quality = fit_quality(model, arguments)
@@ -348,7 +348,7 @@ def run_identify(args):
         for line in quality_lines(quality):
             print(line)
     if system.has_ground_truth:
-        _, summary = _coefficient_summary(system, model)
+        _, summary = summarize_coefficients(system, model)
         print(f"against the true model: max coefficient error "
               f"{summary['max_relative_error']:.2g} (relative), support recovered: "
               f"{summary['support_recovered']}")
@@ -392,8 +392,8 @@ def _names(text):
 
 def _identify_inputs(args):
     """The dataset of ``identify`` (CSV or NPZ) and the system naming its coordinates."""
-    from pysindy_xl.data_io import coordinate_system, load_data
-    from pysindy_xl.mujoco import DatasetError
+    from pysindy_xl.data import load_data
+    from pysindy_xl.mujoco import DatasetError, coordinate_system
 
     coordinates, angles = _names(args.coordinates), _names(args.angles) or []
     columns = _column_map(getattr(args, "column", None))
@@ -410,7 +410,7 @@ def _identify_inputs(args):
             raise CLIError("--angles: the system gives the angles; use --angles with "
                            "--coordinates (no --system)")
         # a dataset of a user's MJCF carries the model (path or XML) in its metadata
-        system = _system(name) if args.system else _system_from_metadata(dataset.metadata)
+        system = system_by_name(name) if args.system else dataset_system(dataset.metadata)
         return _dataset_for(system, dataset), system
     if not args.data.lower().endswith(".npz") or coordinates:
         if not angles:
@@ -468,12 +468,12 @@ def run_generate(args):
     samples=101)
       sampling every 2 step(s) of 1 ms = 2 ms
     """
-    system = _system(args.system, args.joints)
-    _output_file(args.out, "DATA.npz")
-    dataset = _generate(system, args)
+    system = system_by_name(args.system, args.joints)
+    output_file(args.out, "DATA.npz")
+    dataset = generate_data(system, args)
     path = dataset.save(args.out)
     print(f"wrote {path} and {path.with_suffix('.json')}: {dataset}")
-    for line in _data_lines(system, dataset):
+    for line in data_lines(system, dataset):
         print(line)
     return path
 
@@ -517,7 +517,7 @@ def main(argv=None) -> int:
     commands = {"demo": run_demo, "identify": run_identify, "generate": run_generate}
     try:
         if args.command == "identify" and args.out:
-            _output_file(args.out, "--out")  # before fitting, not after
+            output_file(args.out, "--out")  # before fitting, not after
         commands[args.command](args)
     except CLIError as error:
         print(f"pysindy-xl: error: {error}", file=sys.stderr)

@@ -15,7 +15,7 @@ import scipy.integrate
 import scipy.interpolate
 import sympy as sp
 
-from ._validation import check_numeric_array, check_option
+from ._validation import check_numeric_array, check_option, check_times
 from .feature_library._base import compile_entries, stack_variables
 from .symbols import Coordinates
 
@@ -431,7 +431,7 @@ class MassMatrixDynamics:
         x0 = check_numeric_array(x0, "x0", finite=False, min_samples=0).reshape(-1)
         if x0.shape != (2 * n,) or not np.all(np.isfinite(x0)):
             raise ValueError(f"x0: expected {2 * n} finite values [q, qd], got {x0.shape}")
-        t = _check_times(t, "t")
+        t = check_times(t, "t")
         force = force_function(u, t, n, interpolation)
         counter = {"n": 0}
         start = _time.perf_counter()
@@ -497,14 +497,3 @@ class _Stop(Exception):
     def __init__(self, t, reason):
         super().__init__(reason)
         self.t, self.reason = float(t), reason
-
-
-def _check_times(t, name: str) -> np.ndarray:
-    t = check_numeric_array(t, name, finite=False, min_samples=0)
-    if t.ndim != 1 or len(t) < 2:
-        raise ValueError(f"{name}: expected a 1-D array of at least 2 times, got shape {t.shape}")
-    if not np.all(np.isfinite(t)):
-        raise ValueError(f"{name}: contains NaN or inf")
-    if np.any(np.diff(t) <= 0):
-        raise ValueError(f"{name}: times must be strictly increasing")
-    return t

@@ -29,7 +29,7 @@ from typing import NamedTuple
 import numpy as np
 import sympy as sp
 
-from ._jax_steps import _STEPS, euler_step, rk4_step, semi_implicit_euler_step
+from ._jax_steps import STEPS, euler_step, rk4_step, semi_implicit_euler_step
 from ._jax_trig import fast_cos, fast_sin
 from ._optional import import_optional
 from .symbols import Coordinates
@@ -371,7 +371,7 @@ def _generic_componentwise(f, batch_ndim: int):
 @partial(jax.jit, static_argnames=("f", "method", "linear", "final_only"))
 def _simulate_compiled(f, x0, u, dt, t0, bound, method, linear, final_only):
     """Scan ``T - 1`` steps: x0 (..., 2n), u (..., T, n) -> BatchSimulation."""
-    step = _STEPS[method]
+    step = STEPS[method]
     batch_ndim = x0.ndim - 1
     g = getattr(f, "componentwise", None) or _generic_componentwise(f, batch_ndim)
     n_steps = u.shape[-2] - 1
@@ -421,8 +421,8 @@ def _prepare(f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched):
         f = f.to_jax()
     if not callable(f):
         raise TypeError(f"f: expected a callable f(state, u, t), got {type(f).__name__}")
-    if method not in _STEPS:
-        raise ValueError(f"method: expected one of {sorted(_STEPS)}, got {method!r}")
+    if method not in STEPS:
+        raise ValueError(f"method: expected one of {sorted(STEPS)}, got {method!r}")
     if interpolation not in ("zoh", "linear"):
         raise ValueError(f"interpolation: expected 'zoh' or 'linear', got {interpolation!r}")
     dtype = _float_dtype()

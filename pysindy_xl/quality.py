@@ -257,7 +257,7 @@ def plot_identification(model, trajectory, path, title=None, forced=True) -> dic
     (True, False, True)
     """
     from pysindy_xl.dynamics import DynamicsError
-    from pysindy_xl.mujoco.plots import _figure
+    from pysindy_xl.mujoco.plots import new_figure
 
     if model.dynamics_ is None:
         raise ValueError("model: the identified equations contain no acceleration; nothing "
@@ -276,7 +276,7 @@ def plot_identification(model, trajectory, path, title=None, forced=True) -> dic
     rmse = (np.sqrt(np.mean((states[:, :q.shape[1]] - q[:k]) ** 2, axis=0)) if k
             else np.full(q.shape[1], np.inf))
     names = model.feature_library_.coords.names
-    figure = _figure(7, 1.8 * len(names) + 0.6)
+    figure = new_figure(7, 1.8 * len(names) + 0.6)
     axes = figure.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
     for i, (ax, name) in enumerate(zip(axes, names, strict=True)):
         ax.plot(t, q[:, i], color="black", linestyle="--", linewidth=1.2, label="recorded")

@@ -107,7 +107,7 @@ class Coordinates:
         return f"Coordinates({list(self.names)!r})"
 
 
-def _as_expr_list(exprs, name: str) -> list[sp.Expr]:
+def as_expr_list(exprs, name: str) -> list[sp.Expr]:
     if isinstance(exprs, sp.Basic):
         exprs = [exprs]
     try:
@@ -155,7 +155,7 @@ def monomials(exprs, degree: int) -> list[sp.Expr]:
     >>> monomials([a, b], 2)
     [a, b, a**2, a*b, b**2]
     """
-    exprs = _as_expr_list(exprs, "exprs")
+    exprs = as_expr_list(exprs, "exprs")
     from ._validation import check_option
 
     degree = check_option("degree", degree, "int", low=1)
@@ -186,6 +186,6 @@ def products(terms_a, terms_b) -> list[sp.Expr]:
     >>> products([1, a], [b, a])
     [b, a, a*b, a**2]
     """
-    terms_a = _as_expr_list(terms_a, "terms_a")
-    terms_b = _as_expr_list(terms_b, "terms_b")
+    terms_a = as_expr_list(terms_a, "terms_a")
+    terms_b = as_expr_list(terms_b, "terms_b")
     return _unique(sp.Mul(x, y) for x in terms_a for y in terms_b)

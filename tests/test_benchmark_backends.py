@@ -8,8 +8,8 @@ import pytest
 
 from pysindy_xl.benchmark.grid import GridSettings
 from pysindy_xl.benchmark.runner import (
-    _resolve_blas_threads,
     blas_thread_limit,
+    resolve_blas_threads,
     run_grid,
     run_task,
 )
@@ -53,10 +53,10 @@ def blas_probe(task, settings, deadline, stage):
 
 # -- threads -----------------------------------------------------------------------------------
 def test_blas_threads_resolution():
-    assert _resolve_blas_threads("auto", 2, None) == 1
-    assert _resolve_blas_threads("auto", 1, None) is None
-    assert _resolve_blas_threads("auto", 1, "dask") == 1
-    assert _resolve_blas_threads(3, 2, None) == 3
+    assert resolve_blas_threads("auto", 2, None) == 1
+    assert resolve_blas_threads("auto", 1, None) is None
+    assert resolve_blas_threads("auto", 1, "dask") == 1
+    assert resolve_blas_threads(3, 2, None) == 3
     with pytest.raises(ValueError, match="blas_threads"):
         blas_thread_limit(0)
 

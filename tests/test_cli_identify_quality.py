@@ -65,7 +65,7 @@ def test_positions_only_defaults_to_weak_and_strong_is_selectable(positions_csv,
 
 
 def test_positions_only_fit_reports_the_stability_of_its_terms(positions_csv, capsys):
-    from pysindy_xl.data_io import load_data
+    from pysindy_xl.data import load_data
 
     model = run_identify(build_parser().parse_args([
         "identify", str(positions_csv), "--coordinates", "theta", "--angles", "theta",
@@ -92,7 +92,7 @@ def test_bad_formulation_is_a_usage_error(csv_file, capsys):
 @pytest.mark.parametrize("formulation", ["strong", "weak"])
 def test_fit_quality_drops_for_a_wrong_model(csv_file, formulation):
     """R^2 is ~1 for the identified model and clearly lower when a true term is removed."""
-    from pysindy_xl.data_io import load_data
+    from pysindy_xl.data import load_data
 
     model = run_identify(build_parser().parse_args([
         "identify", str(csv_file), "--angles", "theta", "--trig-degree", "1",
@@ -122,7 +122,7 @@ def test_fit_quality_of_an_unforced_fit_uses_the_largest_term(tmp_path):
                          t_eval=np.linspace(0, 4, 801), rtol=1e-11, atol=1e-12)
     q = solution.y[0]
     np.savez(path, t=solution.t, q=q, qd=solution.y[1], qdd=-9.8 * np.sin(q))
-    from pysindy_xl.data_io import load_data
+    from pysindy_xl.data import load_data
 
     model = run_identify(build_parser().parse_args([
         "identify", str(path), "--coordinates", "theta", "--angles", "theta",

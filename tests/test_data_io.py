@@ -3,14 +3,8 @@
 import numpy as np
 import pytest
 
-from pysindy_xl.data_io import (
-    coordinate_system,
-    from_columns,
-    from_dataframe,
-    load_data,
-    read_csv,
-)
-from pysindy_xl.mujoco import DatasetError
+from pysindy_xl.data import DatasetError, from_columns, from_dataframe, load_data, read_csv
+from pysindy_xl.mujoco import coordinate_system
 
 
 def pendulum(n=101, phase=0.0):

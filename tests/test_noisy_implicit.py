@@ -18,11 +18,11 @@ from pysindy_xl.optimizers.noise_ratio import (
     _bordered_minima,
     _bordered_secular,
     _constrained_minima,
-    _pencil,
     _smallest_bordered_root,
     _swap_secular_at_the_law,
     law_elimination_path,
     law_forward_path,
+    noise_pencil,
     refine_law_by_swaps,
 )
 
@@ -36,7 +36,7 @@ def _random_pencil(k, seed):
 
 def test_pencil_matches_the_generalized_eigenproblem():
     theta, moments = _random_pencil(6, 0)
-    values, vectors = _pencil(theta, moments)
+    values, vectors = noise_pencil(theta, moments)
     expected = scipy.linalg.eigh(theta.T @ theta, moments, eigvals_only=True)
     np.testing.assert_allclose(values, expected, rtol=1e-8)
     np.testing.assert_allclose(vectors.T @ moments @ vectors, np.eye(6), atol=1e-8)
@@ -44,7 +44,7 @@ def test_pencil_matches_the_generalized_eigenproblem():
 
 def test_constrained_minima_equal_the_eigenvalue_without_the_column():
     theta, moments = _random_pencil(7, 1)
-    values, vectors = _pencil(theta, moments)
+    values, vectors = noise_pencil(theta, moments)
     minima = _constrained_minima(values, vectors)
     for j in range(7):
         rest = np.delete(np.arange(7), j)
@@ -56,7 +56,7 @@ def test_constrained_minima_equal_the_eigenvalue_without_the_column():
 def test_bordered_minima_equal_the_eigenvalue_with_one_more_column():
     theta, moments = _random_pencil(8, 2)
     current, candidates = np.arange(5), np.arange(5, 8)
-    values, vectors = _pencil(theta[:, current], moments[np.ix_(current, current)])
+    values, vectors = noise_pencil(theta[:, current], moments[np.ix_(current, current)])
     gram = theta.T @ theta
     minima = _bordered_minima(values, vectors.T @ gram[np.ix_(current, candidates)],
                               vectors.T @ moments[np.ix_(current, candidates)],
@@ -70,7 +70,7 @@ def test_bordered_minima_equal_the_eigenvalue_with_one_more_column():
 
 def test_stacked_pencils_match_each_generalized_eigenproblem():
     problems = [_random_pencil(5, seed) for seed in range(4)]
-    values, vectors = _pencil(np.stack([p[0] for p in problems]),
+    values, vectors = noise_pencil(np.stack([p[0] for p in problems]),
                               np.stack([p[1] for p in problems]))
     for m, (theta, moments) in enumerate(problems):
         expected = scipy.linalg.eigh(theta.T @ theta, moments, eigvals_only=True)
@@ -93,7 +93,7 @@ def test_smallest_bordered_root_is_the_best_swap_of_all_removals():
     values, cross_gram, cross_moments, swaps = [], [], [], []
     for removed in support:
         rest = [j for j in support if j != removed]
-        pencil_values, vectors = _pencil(theta[:, rest], moments[np.ix_(rest, rest)])
+        pencil_values, vectors = noise_pencil(theta[:, rest], moments[np.ix_(rest, rest)])
         values.append(np.repeat(pencil_values[:, None], outside.size, axis=1))
         cross_gram.append(vectors.T @ gram[np.ix_(rest, outside)])
         cross_moments.append(vectors.T @ moments[np.ix_(rest, outside)])
@@ -128,14 +128,14 @@ def test_swap_screen_from_the_support_equals_each_removals_secular_function():
     theta, moments = _random_pencil(10, 6)
     gram = theta.T @ theta
     support, outside = np.array([0, 1, 2, 3, 4]), np.arange(5, 10)
-    values, vectors = _pencil(theta[:, support], moments[np.ix_(support, support)])
+    values, vectors = noise_pencil(theta[:, support], moments[np.ix_(support, support)])
     screen = _swap_secular_at_the_law(
         values, vectors, vectors.T @ gram[np.ix_(support, outside)],
         vectors.T @ moments[np.ix_(support, outside)], np.diag(gram)[outside],
         np.diag(moments)[outside])
     for j in range(5):
         rest = np.delete(support, j)
-        rest_values, rest_vectors = _pencil(theta[:, rest], moments[np.ix_(rest, rest)])
+        rest_values, rest_vectors = noise_pencil(theta[:, rest], moments[np.ix_(rest, rest)])
         exact = _bordered_secular(values[0], rest_values[:, None],
                                   rest_vectors.T @ gram[np.ix_(rest, outside)],
                                   rest_vectors.T @ moments[np.ix_(rest, outside)],

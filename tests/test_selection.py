@@ -6,9 +6,9 @@ import pytest
 
 from pysindy_xl.optimizers import select_support
 from pysindy_xl.optimizers.selection import (
-    _fold_labels,
     cross_validated_size,
     cross_validated_supports,
+    fold_labels,
 )
 
 
@@ -26,7 +26,7 @@ def _problem(n_rows=240, n_columns=12, seed=0):
 
 def _brute_force(x, y, supports, n_blocks, n_folds):
     """Held-out relative mean squared error of each support, fold by fold, by lstsq."""
-    labels = _fold_labels(len(y), n_blocks, n_folds)
+    labels = fold_labels(len(y), n_blocks, n_folds)
     y_scale = np.mean(y**2)
     errors = np.zeros((n_folds, len(supports)))
     for fold in range(n_folds):

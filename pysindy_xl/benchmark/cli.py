@@ -224,9 +224,9 @@ def run_benchmark(args) -> int:
         print(f"benchmark {settings.name}: {len(tasks)} runs on "
               f"{len(settings.trajectories())} trajectories, {settings.timeout:g} s limit per "
               f"run, records in {records_path}", flush=True)
-        from .report import _load_average
+        from .report import load_average
 
-        load_at_start = _load_average()
+        load_at_start = load_average()
         try:
             outcome = run_grid(settings, records_path, n_jobs=args.jobs, backend=args.backend,
                                address=args.address, retry=args.retry,

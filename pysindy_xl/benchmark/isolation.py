@@ -12,7 +12,7 @@ import threading
 import time
 
 from .lifetime import die_with_parent, runs_in_flight
-from .records import _base_record, _failed, _finite
+from .records import base_record, failed_record, json_finite
 
 __all__ = ["RunTimeout", "blas_thread_limit"]
 
@@ -23,7 +23,7 @@ class RunTimeout(Exception):
     """Raised inside a run when its time limit is reached (signal isolation)."""
 
 
-def _resolve_isolation(isolation: str) -> str:
+def resolve_isolation(isolation: str) -> str:
     if isolation not in _ISOLATIONS:
         raise ValueError(f"isolation: expected one of {_ISOLATIONS}, got {isolation!r}")
     if isolation != "auto":
@@ -53,14 +53,14 @@ def _child(connection, function, task, settings, deadline, parent_pid):
     signal.alarm(max(int(deadline - time.perf_counter()) + 10, 1))
     try:
         record = function(task, settings, deadline, lambda name: send({"stage": name}))
-        send({"record": _finite(record)})
+        send({"record": json_finite(record)})
     except BaseException as error:  # report everything: the parent must learn why
-        send({"record": _failed(_base_record(task, settings), "error", error, True)})
+        send({"record": failed_record(base_record(task, settings), "error", error, True)})
     finally:
         connection.close()
 
 
-def _run_in_process(function, task, settings, timeout):
+def run_in_process(function, task, settings, timeout):
     import multiprocessing
 
     context = multiprocessing.get_context("fork")
@@ -95,7 +95,7 @@ def _run_in_process(function, task, settings, timeout):
     elapsed = time.perf_counter() - start
     if record is not None:
         return record
-    base = _base_record(task, settings)
+    base = base_record(task, settings)
     base["time_s"] = {"run": elapsed}
     if elapsed >= timeout:
         base["status"] = "timeout"
@@ -103,10 +103,10 @@ def _run_in_process(function, task, settings, timeout):
     else:
         base["message"] = (f"the run's process died with exit code {process.exitcode} "
                            f"(during {last_stage})")
-    return _finite(base)
+    return json_finite(base)
 
 
-def _run_with_signal(function, task, settings, timeout):
+def run_with_signal(function, task, settings, timeout):
     def alarm(signum, frame):
         raise RunTimeout()
 
@@ -116,12 +116,12 @@ def _run_with_signal(function, task, settings, timeout):
     try:
         return function(task, settings, start + timeout, None)
     except RunTimeout:
-        base = _base_record(task, settings)
+        base = base_record(task, settings)
         base.update(status="timeout", message=f"stopped after {timeout:g} s",
                     time_s={"run": time.perf_counter() - start})
-        return _finite(base)
+        return json_finite(base)
     except Exception as error:
-        return _failed(_base_record(task, settings), "error", error, True)
+        return failed_record(base_record(task, settings), "error", error, True)
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
@@ -162,7 +162,7 @@ def blas_thread_limit(blas_threads: int | None):
     return threadpool_limits(limits=blas_threads, user_api="blas")
 
 
-def _resolve_blas_threads(blas_threads, n_jobs, backend):
+def resolve_blas_threads(blas_threads, n_jobs, backend):
     if blas_threads != "auto":
         return blas_threads
     import joblib

@@ -227,12 +227,12 @@ class RecordStore:
 
 
 # -- building a run's record (the runner and its isolation) ----------------------------------------
-def _finite(value):
+def json_finite(value):
     """JSON-safe copy: non-finite floats become None, numpy scalars plain numbers."""
     if isinstance(value, dict):
-        return {str(k): _finite(v) for k, v in value.items()}
+        return {str(k): json_finite(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_finite(v) for v in value]
+        return [json_finite(v) for v in value]
     if isinstance(value, (np.floating, float)):
         value = float(value)
         return value if math.isfinite(value) else None
@@ -244,7 +244,7 @@ def _finite(value):
 
 
 
-def _base_record(task: Task, settings: GridSettings) -> dict:
+def base_record(task: Task, settings: GridSettings) -> dict:
     import pysindy_xl
 
     return {**task.to_dict(), "grid": settings.name, "status": "error", "message": None,
@@ -252,7 +252,7 @@ def _base_record(task: Task, settings: GridSettings) -> dict:
             "version": getattr(pysindy_xl, "__version__", "unknown")}
 
 
-def _failed(record: dict, status: str, error: BaseException, with_traceback=False) -> dict:
+def failed_record(record: dict, status: str, error: BaseException, with_traceback=False) -> dict:
     record["status"] = status
     message = f"{type(error).__name__}: {error}"
     if with_traceback:
@@ -260,9 +260,9 @@ def _failed(record: dict, status: str, error: BaseException, with_traceback=Fals
         message += " [" + " <- ".join(f"{os.path.basename(f.filename)}:{f.lineno} {f.name}"
                                       for f in reversed(frames)) + "]"
     record["message"] = message
-    return _finite(record)
+    return json_finite(record)
 
 
-def _finish(record: dict) -> dict:
+def finish_record(record: dict) -> dict:
     record["finished_at"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
     return record

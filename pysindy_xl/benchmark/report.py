@@ -95,11 +95,11 @@ def machine_description(n_jobs=None, backend=None) -> dict:
         "n_jobs": n_jobs,
         "backend": backend or "loky",
         # other work on the machine slows the runs down: say how busy it was
-        "load_average_1_5_15min": _load_average(),
+        "load_average_1_5_15min": load_average(),
     }
 
 
-def _load_average():
+def load_average():
     try:
         return [round(x, 2) for x in os.getloadavg()]
     except (OSError, AttributeError):

@@ -59,14 +59,14 @@ import numpy as np
 from .grid import GridSettings, Task, TrajectorySpec
 from .isolation import (
     RunTimeout,
-    _resolve_blas_threads,
-    _resolve_isolation,
-    _run_in_process,
-    _run_with_signal,
     blas_thread_limit,
+    resolve_blas_threads,
+    resolve_isolation,
+    run_in_process,
+    run_with_signal,
 )
 from .lifetime import sigterm_as_interrupt, watch_grid
-from .records import RecordStore, _base_record, _failed, _finish, _finite
+from .records import RecordStore, base_record, failed_record, finish_record, json_finite
 
 __all__ = ["run_task", "execute_task", "run_grid", "system_for", "trajectory_data",
            "backend_context", "blas_thread_limit", "RunTimeout"]
@@ -239,7 +239,7 @@ def _execute(task, settings, deadline, stage) -> dict:
     from ..dynamics import DynamicsError
     from ..mujoco.validation import validate_model
 
-    record = _base_record(task, settings)
+    record = base_record(task, settings)
     spec = task.trajectory
     stage("generate")
     dataset, validation, generate_seconds = trajectory_data(
@@ -256,7 +256,7 @@ def _execute(task, settings, deadline, stage) -> dict:
     except Exception as error:
         record["time_s"]["fit"] = time.perf_counter() - start
         record["time_s"]["run"] = record["time_s"]["fit"]
-        return _failed(record, "error", error, with_traceback=True)
+        return failed_record(record, "error", error, with_traceback=True)
     fitted = time.perf_counter()
     record["time_s"]["fit"] = fitted - start
     stage("validate")
@@ -286,7 +286,7 @@ def _execute(task, settings, deadline, stage) -> dict:
                                  + ("" if when is None else f" at t={when:.3g} s"))
     stage("summary")
     record["model"] = _model_summary(task, system, model)
-    return _finite(record)
+    return json_finite(record)
 
 
 # -- isolation and time limit ------------------------------------------------------------------
@@ -338,19 +338,19 @@ def _run_task(task, settings, timeout, isolation, function):
     timeout = float(settings.timeout if timeout is None else timeout)
     if not timeout > 0:
         raise ValueError(f"timeout: expected a positive number of seconds, got {timeout!r}")
-    mode = _resolve_isolation(isolation)
+    mode = resolve_isolation(isolation)
     if mode == "process":
         if function is execute_task:
             _prefetch(task, settings)
-        return _finish(_run_in_process(function, task, settings, timeout))
+        return finish_record(run_in_process(function, task, settings, timeout))
     if mode == "signal":
-        return _finish(_run_with_signal(function, task, settings, timeout))
+        return finish_record(run_with_signal(function, task, settings, timeout))
     start = time.perf_counter()
     try:
         record = function(task, settings, start + timeout, None)
     except Exception as error:
-        record = _failed(_base_record(task, settings), "error", error, True)
-    return _finish(_finite(record))
+        record = failed_record(base_record(task, settings), "error", error, True)
+    return finish_record(json_finite(record))
 
 
 # -- the grid ----------------------------------------------------------------------------------
@@ -477,7 +477,7 @@ def run_grid(settings: GridSettings, records_path, n_jobs: int = -1, backend: st
         pending = pending[:limit]
     call = functools.partial(_grid_call, grid_pid=os.getpid(), settings=settings,
                              isolation=isolation, function=function,
-                             blas_threads=_resolve_blas_threads(blas_threads, n_jobs, backend))
+                             blas_threads=resolve_blas_threads(blas_threads, n_jobs, backend))
     statuses = dict.fromkeys(("ok", "invalid", "timeout", "error"), 0)
     start = time.perf_counter()
     bar = tqdm(total=len(pending), desc=f"benchmark {settings.name}", unit="run",

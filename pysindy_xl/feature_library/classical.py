@@ -9,7 +9,7 @@ import sympy as sp
 from pysindy.feature_library.base import BaseFeatureLibrary
 
 from ..expressions import format_expression, parse_expression
-from ..symbols import Coordinates, _as_expr_list
+from ..symbols import Coordinates, as_expr_list
 from ._base import SymbolicLibrary, compile_entries
 
 __all__ = ["ClassicalLibrary", "pysindy_library_terms"]
@@ -112,7 +112,7 @@ class ClassicalLibrary(SymbolicLibrary):
     def _resolved_terms(self) -> list[sp.Expr]:
         if isinstance(self.terms, BaseFeatureLibrary):
             return pysindy_library_terms(self.terms, self.coords)
-        terms = _as_expr_list(self.terms, "terms")
+        terms = as_expr_list(self.terms, "terms")
         allowed = set(self.coords.variables)
         for term in terms:
             extra = term.free_symbols - allowed

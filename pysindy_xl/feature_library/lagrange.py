@@ -7,7 +7,7 @@ import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
 from ..expressions import format_expression
-from ..symbols import Coordinates, _as_expr_list
+from ..symbols import Coordinates, as_expr_list
 from ._base import SymbolicLibrary
 
 __all__ = ["LagrangeLibrary", "euler_lagrange"]
@@ -125,7 +125,7 @@ class LagrangeLibrary(SymbolicLibrary):
         self.terms = terms
 
     def _build_symbolic(self):
-        terms = _as_expr_list(self.terms, "terms")
+        terms = as_expr_list(self.terms, "terms")
         if not terms:
             raise ValueError("terms: expected at least one candidate Lagrangian term")
         allowed = set(self.coords.q + self.coords.qd + (self.coords.t,))
@@ -195,5 +195,5 @@ class LagrangeLibrary(SymbolicLibrary):
         dict
             Read back by :func:`pysindy_xl.io.load_model`.
         """
-        terms = _as_expr_list(self.terms, "terms")
+        terms = as_expr_list(self.terms, "terms")
         return {"type": "LagrangeLibrary", "terms": [format_expression(t) for t in terms]}

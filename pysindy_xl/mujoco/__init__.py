@@ -8,6 +8,8 @@ model (:mod:`.kinematic`) and the validation of an identified model against a fr
 trajectory (:mod:`.validation`, :mod:`.plots`).
 """
 
+from ..data.constraints import contiguous_segments, unconstrained_samples, unconstrained_windows
+from ..data.dataset import Dataset, DatasetError, Trajectory, load_dataset
 from .catalogs import (
     CATALOG_KINDS,
     classical_terms,
@@ -15,8 +17,6 @@ from .catalogs import (
     reference_catalog,
     true_coefficients,
 )
-from .constraints import contiguous_segments, unconstrained_samples, unconstrained_windows
-from .dataset import Dataset, DatasetError, Trajectory, load_dataset
 from .forcing import FORCING_MODES, SumOfSinusoids
 from .generate import (
     NOISE_MODELS,
@@ -34,6 +34,7 @@ from .systems import (
     DoublePendulum,
     MJCFSystem,
     MuJoCoSystem,
+    coordinate_system,
     default_xml_path,
     equations_of_motion,
     get_system,
@@ -59,6 +60,7 @@ __all__ = [
     "equations_of_motion",
     "get_system",
     "system_from_metadata",
+    "coordinate_system",
     "unconstrained_samples",
     "unconstrained_windows",
     "contiguous_segments",

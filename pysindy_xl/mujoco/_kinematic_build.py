@@ -20,7 +20,7 @@ _INDEPENDENCE_TOL = 1e-9
 _WELL_CONDITIONED = 0.05
 
 
-def _resolve_system(system) -> MuJoCoSystem:
+def resolve_system(system) -> MuJoCoSystem:
     if isinstance(system, MuJoCoSystem):
         return system
     if isinstance(system, str) and system.lstrip().startswith("<"):
@@ -34,7 +34,7 @@ def _resolve_system(system) -> MuJoCoSystem:
     )
 
 
-def _independent_columns(matrix: np.ndarray) -> list[int]:
+def independent_regressor_columns(matrix: np.ndarray) -> list[int]:
     """A well-conditioned set of independent columns, earlier columns preferred.
 
     The rank comes from a column-pivoted QR (exact dependencies leave ``|R_ii| ~ 1e-15``,
@@ -75,7 +75,7 @@ def _independent_columns(matrix: np.ndarray) -> list[int]:
     return sorted(int(candidates[j]) for j in kept)
 
 
-def _random_values(system: MuJoCoSystem, n_samples: int, rng) -> np.ndarray:
+def random_joint_values(system: MuJoCoSystem, n_samples: int, rng) -> np.ndarray:
     n = system.n
     q = rng.uniform(-1.0, 1.0, (n_samples, n))
     q[:, list(system.angle_coordinates)] *= np.pi
@@ -84,7 +84,7 @@ def _random_values(system: MuJoCoSystem, n_samples: int, rng) -> np.ndarray:
     return state_values(q, qd, qdd, angles)
 
 
-def _classical_candidates(system, model, coulomb, coulomb_scale):
+def classical_candidates(system, model, coulomb, coulomb_scale):
     """Friction and spring candidates per joint, in the coordinates, with their MJCF values."""
     coords = system.coords
     inverse = np.linalg.inv(system.joint_to_coordinates)

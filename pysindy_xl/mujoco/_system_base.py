@@ -11,7 +11,7 @@ from .._optional import import_optional
 from ..symbols import Coordinates
 
 
-def _mujoco():
+def import_mujoco():
     """The ``mujoco`` module, imported on first use (clear error naming the extra)."""
     return import_optional("mujoco", purpose="MuJoCo simulation (pysindy_xl.mujoco)")
 
@@ -19,7 +19,7 @@ def _mujoco():
 __all__ = ["MuJoCoSystem", "equations_of_motion"]
 
 
-def _positive(value, name: str) -> float:
+def check_positive(value, name: str) -> float:
     try:
         value = float(value)
     except (TypeError, ValueError):
@@ -29,7 +29,7 @@ def _positive(value, name: str) -> float:
     return value
 
 
-def _non_negative(value, name: str) -> float:
+def check_non_negative(value, name: str) -> float:
     try:
         value = float(value)
     except (TypeError, ValueError):
@@ -39,7 +39,7 @@ def _non_negative(value, name: str) -> float:
     return value
 
 
-def _f(value: float) -> str:
+def mjcf_float(value: float) -> str:
     """Format a float for MJCF without losing precision."""
     return repr(float(value))
 
@@ -241,7 +241,7 @@ class MuJoCoSystem:
         >>> model.nq, model.nu, model.opt.timestep
         (2, 2, 0.001)
         """
-        return _mujoco().MjModel.from_xml_string(self.xml())
+        return import_mujoco().MjModel.from_xml_string(self.xml())
 
     # -- transforms ----------------------------------------------------------------------
     def force_matrix(self) -> np.ndarray:

@@ -12,9 +12,9 @@ import os
 
 import numpy as np
 
-from .dataset import Dataset, Trajectory
+from ..data.dataset import Dataset, Trajectory
+from ..data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
 from .forcing import FORCING_MODES, SumOfSinusoids
-from .noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
 from .systems import MuJoCoSystem, get_system
 
 __all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "actuator_signals",

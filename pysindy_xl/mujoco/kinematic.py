@@ -45,12 +45,12 @@ import numpy as np
 import sympy as sp
 
 from ..feature_library import LagrangeLibrary
-from ..symbols import Coordinates, _as_expr_list
+from ..symbols import Coordinates, as_expr_list
 from ._kinematic_build import (
-    _classical_candidates,
-    _independent_columns,
-    _random_values,
-    _resolve_system,
+    classical_candidates,
+    independent_regressor_columns,
+    random_joint_values,
+    resolve_system,
 )
 from ._kinematic_tree import INERTIAL_PARAMETERS, body_functions, physical_values
 from ._trigpoly import TrigPolynomial, evaluate_many, state_values
@@ -403,7 +403,7 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
     """
 
     def _build_symbolic(self):
-        terms = _as_expr_list(self.terms, "terms")
+        terms = as_expr_list(self.terms, "terms")
         if not terms:
             return super()._build_symbolic()  # raises the ValueError of LagrangeLibrary
         coords = self.coords
@@ -492,7 +492,7 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
     >>> len(catalog.library().fit().get_feature_names())  # force, 3 Lagrange, 2 friction
     6
     """
-    system = _resolve_system(system)
+    system = resolve_system(system)
     if isinstance(coulomb_scale, bool) or not isinstance(coulomb_scale, (int, float)) or not (
         np.isfinite(coulomb_scale) and coulomb_scale > 0
     ):
@@ -539,11 +539,11 @@ def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
     rng = np.random.default_rng(seed)
     n_samples = 2 * len(candidates) // n + 20
     evaluated = evaluate_many([e for column in columns for e in column],
-                              _random_values(system, n_samples, rng))
+                              random_joint_values(system, n_samples, rng))
     # rows coordinate-major like the feature libraries: (equation, sample)
     regressor = evaluated.reshape(n_samples, len(candidates), n).transpose(2, 0, 1)
     regressor = regressor.reshape(n * n_samples, len(candidates))
-    kept = _independent_columns(regressor)
+    kept = independent_regressor_columns(regressor)
     # every column is a combination of the kept ones: base = combination @ physical
     combination, *_ = np.linalg.lstsq(regressor[:, kept], regressor, rcond=None)
     # exact combinations come out within ~1e-14: round the noise away (0.9999999999999999)
@@ -553,7 +553,7 @@ def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
         {names[p]: float(combination[j, p]) for p in np.flatnonzero(combination[j])}
         for j in range(len(kept))
     ]
-    classical_terms, mask, kinds, classical_values = _classical_candidates(
+    classical_terms, mask, kinds, classical_values = classical_candidates(
         system, model, coulomb, coulomb_scale)
     return KinematicCatalog(
         system=system, coords=coords,

@@ -8,7 +8,7 @@ import re
 
 import numpy as np
 
-from ._system_base import MuJoCoSystem, _mujoco, _positive
+from ._system_base import MuJoCoSystem, check_positive, import_mujoco
 
 __all__ = ["MJCFSystem"]
 
@@ -78,7 +78,7 @@ class MJCFSystem(MuJoCoSystem):
     has_ground_truth = False
 
     def __init__(self, source, force_amplitude=1.0, joints=None):
-        mujoco = _mujoco()
+        mujoco = import_mujoco()
         if isinstance(source, os.PathLike) or (
             isinstance(source, str) and not source.lstrip().startswith("<")
         ):
@@ -126,7 +126,7 @@ class MJCFSystem(MuJoCoSystem):
         )
         self.mixed_actuators = self.actuated_joints[:1]
         self._parameters = {"source": self.path or "<string>",
-                            "force_amplitude": _positive(force_amplitude, "force_amplitude"),
+                            "force_amplitude": check_positive(force_amplitude, "force_amplitude"),
                             "timestep": float(model.opt.timestep)}
         if joints is not None:
             self._parameters["joints"] = list(self.joint_names)
@@ -138,7 +138,7 @@ class MJCFSystem(MuJoCoSystem):
             joints = list(joints)
         except TypeError:
             raise TypeError(f"joints: expected a list of joint names, got {joints!r}") from None
-        mujoco = _mujoco()
+        mujoco = import_mujoco()
         names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
                  for j in range(model.njnt)]
         unknown = [j for j in joints if j not in names]
@@ -246,7 +246,7 @@ class MJCFSystem(MuJoCoSystem):
         """
         text = self._xml
         if "<include " in text and self.path is not None:
-            text = _mujoco().MjSpec.from_file(self.path).to_xml()
+            text = import_mujoco().MjSpec.from_file(self.path).to_xml()
         return {"model_path": self.path, "model_xml": text,
                 "joints": self._parameters.get("joints")}
 
@@ -255,7 +255,7 @@ class MJCFSystem(MuJoCoSystem):
         model = self._model
         names = []
         for a in range(model.nu):
-            if int(model.actuator_trntype[a]) == int(_mujoco().mjtTrn.mjTRN_JOINT):
+            if int(model.actuator_trntype[a]) == int(import_mujoco().mjtTrn.mjTRN_JOINT):
                 names.append(self.joint_names[model.actuator_trnid[a, 0]])
         return tuple(dict.fromkeys(names))
 
@@ -327,7 +327,7 @@ class MJCFSystem(MuJoCoSystem):
         >>> MJCFSystem(xml).mj_model().njnt
         1
         """
-        mujoco = _mujoco()
+        mujoco = import_mujoco()
         if self._spec is not None:
             return self._spec.compile()
         if self.path is not None:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from ._system_base import MuJoCoSystem, _f, _non_negative, _positive
+from ._system_base import MuJoCoSystem, check_non_negative, check_positive, mjcf_float
 
 __all__ = ["CartPole", "DoublePendulum", "CartDoublePendulum"]
 
@@ -19,7 +19,7 @@ def _header(model: str, timestep: float, gravity: float) -> str:
     return f"""<mujoco model="{model}">
   <!-- Written by pysindy_xl.mujoco.systems; point masses via explicit inertials. -->
   <compiler angle="radian" inertiafromgeom="auto"/>
-  <option timestep="{_f(timestep)}" integrator="RK4" gravity="0 0 {_f(-gravity)}">
+  <option timestep="{mjcf_float(timestep)}" integrator="RK4" gravity="0 0 {mjcf_float(-gravity)}">
     <flag contact="disable"/>
   </option>
   <default>
@@ -33,8 +33,8 @@ def _header(model: str, timestep: float, gravity: float) -> str:
 
 def _cart(mass: float, damping: float, inner: str) -> str:
     return f"""    <body name="cart" pos="0 0 0">
-      <joint name="slider" type="slide" axis="1 0 0" damping="{_f(damping)}"/>
-      <inertial pos="0 0 0" mass="{_f(mass)}" diaginertia="0.01 0.01 0.01"/>
+      <joint name="slider" type="slide" axis="1 0 0" damping="{mjcf_float(damping)}"/>
+      <inertial pos="0 0 0" mass="{mjcf_float(mass)}" diaginertia="0.01 0.01 0.01"/>
       <geom type="box" size="0.2 0.1 0.05" rgba="0.3 0.3 0.8 1"/>
 {inner}    </body>
 """
@@ -45,12 +45,14 @@ def _link(body: str, joint: str, mass, length, damping, inertia, pos, inner="", 
     pad = " " * indent
     return (
         f'{pad}<body name="{body}" pos="{pos}">\n'
-        f'{pad}  <joint name="{joint}" type="hinge" axis="0 -1 0" damping="{_f(damping)}"/>\n'
-        f'{pad}  <inertial pos="0 0 {_f(-length)}" mass="{_f(mass)}" '
-        f'diaginertia="{_f(inertia)} {_f(inertia)} {_f(inertia)}"/>\n'
-        f'{pad}  <geom type="capsule" fromto="0 0 0 0 0 {_f(-length)}" size="0.01" '
+        f'{pad}  <joint name="{joint}" type="hinge" axis="0 -1 0" '
+        f'damping="{mjcf_float(damping)}"/>\n'
+        f'{pad}  <inertial pos="0 0 {mjcf_float(-length)}" mass="{mjcf_float(mass)}" '
+        f'diaginertia="{mjcf_float(inertia)} {mjcf_float(inertia)} {mjcf_float(inertia)}"/>\n'
+        f'{pad}  <geom type="capsule" fromto="0 0 0 0 0 {mjcf_float(-length)}" size="0.01" '
         f'rgba="0.6 0.6 0.6 1"/>\n'
-        f'{pad}  <geom type="sphere" pos="0 0 {_f(-length)}" size="0.04" rgba="0.8 0.3 0.3 1"/>\n'
+        f'{pad}  <geom type="sphere" pos="0 0 {mjcf_float(-length)}" size="0.04" '
+        f'rgba="0.8 0.3 0.3 1"/>\n'
         f"{inner}"
         f"{pad}</body>\n"
     )
@@ -101,14 +103,14 @@ class CartPole(MuJoCoSystem):
     def __init__(self, cart_mass=1.0, pole_mass=0.5, length=0.8, cart_damping=0.5,
                  pole_damping=0.1, gravity=9.81, point_inertia=1e-6, timestep=1e-3):
         self._parameters = {
-            "cart_mass": _positive(cart_mass, "cart_mass"),
-            "pole_mass": _positive(pole_mass, "pole_mass"),
-            "length": _positive(length, "length"),
-            "cart_damping": _non_negative(cart_damping, "cart_damping"),
-            "pole_damping": _non_negative(pole_damping, "pole_damping"),
-            "gravity": _non_negative(gravity, "gravity"),
-            "point_inertia": _positive(point_inertia, "point_inertia"),
-            "timestep": _positive(timestep, "timestep"),
+            "cart_mass": check_positive(cart_mass, "cart_mass"),
+            "pole_mass": check_positive(pole_mass, "pole_mass"),
+            "length": check_positive(length, "length"),
+            "cart_damping": check_non_negative(cart_damping, "cart_damping"),
+            "pole_damping": check_non_negative(pole_damping, "pole_damping"),
+            "gravity": check_non_negative(gravity, "gravity"),
+            "point_inertia": check_positive(point_inertia, "point_inertia"),
+            "timestep": check_positive(timestep, "timestep"),
         }
 
     @property
@@ -169,7 +171,7 @@ class CartPole(MuJoCoSystem):
 def _pendulum_chain_xml(p: dict, indent: int) -> str:
     """MJCF bodies of the two-link chain (link1 carrying link2), shared by both pendulums."""
     inner = _link("link2", "hinge2", p["mass2"], p["length2"], p["damping2"],
-                  p["point_inertia"], f"0 0 {_f(-p['length1'])}", indent=indent + 2)
+                  p["point_inertia"], f"0 0 {mjcf_float(-p['length1'])}", indent=indent + 2)
     return _link("link1", "hinge1", p["mass1"], p["length1"], p["damping1"],
                  p["point_inertia"], "0 0 0", inner=inner, indent=indent)
 
@@ -204,15 +206,15 @@ class DoublePendulum(MuJoCoSystem):
     def __init__(self, mass1=1.0, mass2=0.8, length1=1.0, length2=0.7, damping1=0.3,
                  damping2=0.15, gravity=9.81, point_inertia=1e-6, timestep=1e-3):
         self._parameters = {
-            "mass1": _positive(mass1, "mass1"),
-            "mass2": _positive(mass2, "mass2"),
-            "length1": _positive(length1, "length1"),
-            "length2": _positive(length2, "length2"),
-            "damping1": _non_negative(damping1, "damping1"),
-            "damping2": _non_negative(damping2, "damping2"),
-            "gravity": _non_negative(gravity, "gravity"),
-            "point_inertia": _positive(point_inertia, "point_inertia"),
-            "timestep": _positive(timestep, "timestep"),
+            "mass1": check_positive(mass1, "mass1"),
+            "mass2": check_positive(mass2, "mass2"),
+            "length1": check_positive(length1, "length1"),
+            "length2": check_positive(length2, "length2"),
+            "damping1": check_non_negative(damping1, "damping1"),
+            "damping2": check_non_negative(damping2, "damping2"),
+            "gravity": check_non_negative(gravity, "gravity"),
+            "point_inertia": check_positive(point_inertia, "point_inertia"),
+            "timestep": check_positive(timestep, "timestep"),
         }
 
     @property
@@ -315,17 +317,17 @@ class CartDoublePendulum(MuJoCoSystem):
                  cart_damping=0.5, damping1=0.1, damping2=0.05, gravity=9.81,
                  point_inertia=1e-6, timestep=1e-3):
         self._parameters = {
-            "cart_mass": _positive(cart_mass, "cart_mass"),
-            "mass1": _positive(mass1, "mass1"),
-            "mass2": _positive(mass2, "mass2"),
-            "length1": _positive(length1, "length1"),
-            "length2": _positive(length2, "length2"),
-            "cart_damping": _non_negative(cart_damping, "cart_damping"),
-            "damping1": _non_negative(damping1, "damping1"),
-            "damping2": _non_negative(damping2, "damping2"),
-            "gravity": _non_negative(gravity, "gravity"),
-            "point_inertia": _positive(point_inertia, "point_inertia"),
-            "timestep": _positive(timestep, "timestep"),
+            "cart_mass": check_positive(cart_mass, "cart_mass"),
+            "mass1": check_positive(mass1, "mass1"),
+            "mass2": check_positive(mass2, "mass2"),
+            "length1": check_positive(length1, "length1"),
+            "length2": check_positive(length2, "length2"),
+            "cart_damping": check_non_negative(cart_damping, "cart_damping"),
+            "damping1": check_non_negative(damping1, "damping1"),
+            "damping2": check_non_negative(damping2, "damping2"),
+            "gravity": check_non_negative(gravity, "gravity"),
+            "point_inertia": check_positive(point_inertia, "point_inertia"),
+            "timestep": check_positive(timestep, "timestep"),
         }
 
     @property

@@ -14,7 +14,7 @@ _REFERENCE = {"color": "black", "linestyle": "--", "linewidth": 1.2, "label": "M
 _MODEL = {"color": "tab:blue", "linewidth": 1.2, "label": "identified model"}
 
 
-def _figure(width, height):
+def new_figure(width, height):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -119,7 +119,7 @@ def plot_validation(result, path=None, feature_names=None, coefficients=None,
     n = result.n
     with_coefficients = coefficients is not None
     rows = n + (2 if with_coefficients else 0)
-    figure = _figure(11, 2.0 * n + (4.0 if with_coefficients else 0.0))
+    figure = new_figure(11, 2.0 * n + (4.0 if with_coefficients else 0.0))
     grid = figure.add_gridspec(rows, 2)
     k = len(result.prediction)
     names = result.coordinate_names or tuple(f"q{i}" for i in range(n))

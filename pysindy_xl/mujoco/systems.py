@@ -40,12 +40,16 @@ from __future__ import annotations
 import os
 from importlib import resources
 
+import numpy as np
+
+from ..symbols import Coordinates
 from ._system_base import MuJoCoSystem, equations_of_motion
 from .mjcf_system import MJCFSystem
 from .paper_systems import CartDoublePendulum, CartPole, DoublePendulum
 
 __all__ = [
     "MuJoCoSystem",
+    "coordinate_system",
     "CartPole",
     "DoublePendulum",
     "CartDoublePendulum",
@@ -194,3 +198,66 @@ def default_xml_path(name: str):
     if key not in SYSTEMS:
         raise ValueError(f"name: unknown system {name!r}; expected one of {sorted(SYSTEMS)}")
     return resources.files("pysindy_xl.mujoco") / "models" / f"{key.replace('-', '_')}.xml"
+
+
+# -- coordinates without an MJCF file ----------------------------------------------------------
+def coordinate_system(names, angles=()):
+    """A system description from coordinate names alone, for the reference catalogs.
+
+    What :func:`pysindy_xl.mujoco.reference_catalog` and ``pysindy-xl identify`` need from a
+    system when there is no MJCF file: the coordinates, which of them are angles (they enter
+    the catalog through ``sin`` and ``cos``) and friction ``qd_i`` in the equation of ``i``.
+    No true model, no simulation.
+
+    Parameters
+    ----------
+    names : list of str or str
+        Coordinate names (``["x", "theta"]`` or ``"x,theta"``).
+    angles : list of str or str, default ()
+        The names among ``names`` that are angles.
+
+    Returns
+    -------
+    MuJoCoSystem
+        With ``name`` "coordinates", ``has_ground_truth`` False.
+
+    Raises
+    ------
+    ValueError
+        If an angle is not among the coordinates, or a name is not a valid symbol name.
+
+    Examples
+    --------
+    >>> from pysindy_xl.mujoco import reference_catalog
+    >>> system = coordinate_system("x,theta", angles="theta")
+    >>> system.coordinate_names, system.angle_coordinates
+    (('x', 'theta'), (1,))
+    >>> reference_catalog(system, "mixed", trig_degree=1).fit().n_output_features_
+    20
+    """
+    if isinstance(names, str):
+        names = [c.strip() for c in names.split(",") if c.strip()]
+    if isinstance(angles, str):
+        angles = [c.strip() for c in angles.split(",") if c.strip()]
+    names, angles = tuple(names), tuple(angles)
+    Coordinates(list(names))
+    unknown = [a for a in angles if a not in names]
+    if unknown:
+        raise ValueError(f"angles: {unknown} not among the coordinates {list(names)}")
+
+    class CoordinateSystem(MuJoCoSystem):
+        name = "coordinates"
+        has_ground_truth = False
+        coordinate_names = names
+        angle_coordinates = tuple(names.index(a) for a in angles)
+
+        def __init__(self):
+            self._parameters = {"coordinates": list(names), "angles": list(angles)}
+
+        def friction_pattern(self):
+            return np.eye(len(names), dtype=bool)
+
+        def __repr__(self):
+            return f"coordinate_system({list(names)}, angles={list(angles)})"
+
+    return CoordinateSystem()

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from .dataset import Trajectory
+from ..data.dataset import Trajectory
 from .forcing import FORCING_MODES, SumOfSinusoids
 from .generate import actuator_force_function, actuator_signals, simulate_trajectory
 from .systems import get_system

@@ -139,7 +139,7 @@ def _refit_on_support(direction, r_factor, threshold: float) -> np.ndarray:
     return direction  # degenerate support: keep the clustered direction
 
 
-def _null_space_start(r_factor) -> np.ndarray:
+def null_space_start(r_factor) -> np.ndarray:
     """Warm start of the fast solver from the (near-)null space of the normalized matrix.
 
     With ``V`` the right singular vectors of the smallest singular values (within a factor 10 of
@@ -162,7 +162,7 @@ def _null_space_start(r_factor) -> np.ndarray:
     return start
 
 
-def _solve_cvxpy(r_factor, alpha, solver=None):
+def solve_cvxpy(r_factor, alpha, solver=None):
     """Problem (1) with cvxpy on the triangular factor; returns (X, converged)."""
     import cvxpy as cp
 

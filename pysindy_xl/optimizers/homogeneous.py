@@ -35,14 +35,14 @@ import numpy as np
 from ._base import coordinates_touched
 from ._sparse import column_norms, triangular_factor
 from .noise_ratio import (
-    _eliminate_one,
-    _pencil,
+    eliminate_one,
     law_elimination_path,
     law_forward_path,
+    noise_pencil,
     noise_ratio_law,
     refine_law_by_swaps,
 )
-from .selection import ChosenSupport, _fold_labels, _fold_summary
+from .selection import ChosenSupport, fold_labels, fold_summary
 
 __all__ = [
     "LawSelection",
@@ -227,7 +227,7 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
         theta = theta[:, longest]
         moments = moments[:, longest][:, :, longest]
         supports = [np.arange(len(s)) for s in supports]
-    labels = _fold_labels(theta.shape[0], n_blocks, n_folds)
+    labels = fold_labels(theta.shape[0], n_blocks, n_folds)
     blocks = np.arange(theta.shape[0]) // (theta.shape[0] // n_blocks)
     for fold in range(n_folds):
         test = labels == fold
@@ -246,7 +246,7 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
             columns = np.array([supports[m] for m in members])  # (g, size)
             # leading columns of a triangular factor: its leading rows are all that is needed
             train = r_train[:size] if nested else r_train
-            _, vectors = _pencil(np.swapaxes(train[:, columns], 0, 1),
+            _, vectors = noise_pencil(np.swapaxes(train[:, columns], 0, 1),
                                  train_moments[columns[:, :, None], columns[:, None, :]])
             laws = vectors[:, :, 0]  # (g, size): each support's smallest-ratio law
             noise = np.einsum("gi,gij,gj->g", laws,
@@ -404,7 +404,7 @@ def _scored(theta, moments, supports, how, n_blocks, n_folds) -> list:
     if not supports:
         return []
     ratios, relative = _held_out_ratios(theta, moments, supports, n_blocks, n_folds)
-    (mean, spread), (relative_mean, _) = _fold_summary(ratios), _fold_summary(relative)
+    (mean, spread), (relative_mean, _) = fold_summary(ratios), fold_summary(relative)
     return [_Candidate(np.asarray(s), mean[m], spread[m], relative_mean[m], how)
             for m, s in enumerate(supports) if np.isfinite(mean[m])]
 
@@ -419,7 +419,7 @@ def _refined_path(r_factor, moments, start, memo=None) -> list:
         supports.append(support)
         if len(support) == 2:
             break
-        support = _eliminate_one(r_factor, moments, support)
+        support = eliminate_one(r_factor, moments, support)
     return supports
 
 

@@ -74,7 +74,7 @@ from ._base import (
     scale_blocks,
     warn_unexplained,
 )
-from ._sindy_pi import _null_space_start, _solve_cvxpy, extract_laws, homothetic_groups
+from ._sindy_pi import extract_laws, homothetic_groups, null_space_start, solve_cvxpy
 from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
 from .homogeneous import combine_laws, normalize_law, select_laws
 from .noise_ratio import noise_ratio_law
@@ -556,7 +556,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         self.alpha_ = self._resolve_alpha(r_factor)
         if self.solver == "cvxpy":
             self.n_iter_ = 0
-            solution, converged = _solve_cvxpy(r_factor, self.alpha_, self.cvxpy_solver)
+            solution, converged = solve_cvxpy(r_factor, self.alpha_, self.cvxpy_solver)
             self.converged_ = converged
             self._column_converged = np.full(n, converged)
             return solution
@@ -579,7 +579,7 @@ class ImplicitOptimizer(CatalogOptimizer):
             return settled
 
         result = lasso_gram(
-            gram, gram, self.alpha_, mask=mask, coef_init=_null_space_start(r_factor),
+            gram, gram, self.alpha_, mask=mask, coef_init=null_space_start(r_factor),
             tol=self.tol, max_iter=int(self.max_iter), warn=False,
             callback=laws_settled if self.early_stopping else None,
         )

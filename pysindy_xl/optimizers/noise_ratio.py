@@ -58,7 +58,7 @@ def _whitened_factor(r_factor, moments):
     return whitened, lower
 
 
-def _pencil(r_factor, moments):
+def noise_pencil(r_factor, moments):
     """Ascending eigenpairs of the pencil ``(R^T R, S)``, ``V^T S V = I``.
 
     From the singular values of ``R L^-T`` (never from ``R^T R``, which would square the
@@ -107,7 +107,7 @@ def noise_ratio_law(r_factor, moments) -> tuple[float, np.ndarray]:
     >>> round(ratio, 1), (law / law[0]).round(2)
     (1.0, array([ 1., -1.]))
     """
-    values, vectors = _pencil(np.asarray(r_factor, float), np.asarray(moments, float))
+    values, vectors = noise_pencil(np.asarray(r_factor, float), np.asarray(moments, float))
     law = vectors[:, 0] / np.linalg.norm(vectors[:, 0])
     return float(values[0]), law * np.sign(law[np.argmax(np.abs(law))])
 
@@ -170,16 +170,16 @@ def law_elimination_path(r_factor, moments) -> np.ndarray:
     support = np.arange(r_factor.shape[1])
     removed = []
     while len(support) > 2:
-        kept = _eliminate_one(r_factor, moments, support)
+        kept = eliminate_one(r_factor, moments, support)
         removed.append(int(np.setdiff1d(support, kept)[0]))
         support = kept
     return np.concatenate([support, removed[::-1]]).astype(int)
 
 
-def _eliminate_one(r_factor, moments, support) -> np.ndarray:
+def eliminate_one(r_factor, moments, support) -> np.ndarray:
     """The support without the column whose removal raises the smallest ratio least."""
     support = np.asarray(support, dtype=int)
-    values, vectors = _pencil(r_factor[:, support], moments[np.ix_(support, support)])
+    values, vectors = noise_pencil(r_factor[:, support], moments[np.ix_(support, support)])
     return np.delete(support, int(np.argmin(_constrained_minima(values, vectors))))
 
 
@@ -205,7 +205,7 @@ def law_forward_path(r_factor, moments, max_size=None) -> np.ndarray:
     gram = r_factor.T @ r_factor
     diag_gram, diag_moments = np.diag(gram), np.diag(moments)
     # the best pair, from every column's 1 x 1 pencil bordered by every other column
-    values, vectors = _pencil(r_factor.T[:, :, None], diag_moments[:, None, None])
+    values, vectors = noise_pencil(r_factor.T[:, :, None], diag_moments[:, None, None])
     scale = vectors[:, 0, 0][:, None]  # (F, 1): the pencils' single eigenvectors
     minima = _bordered_minima(
         np.repeat(values[:, 0], n_features)[None], (scale * gram).reshape(1, -1),
@@ -216,7 +216,7 @@ def law_forward_path(r_factor, moments, max_size=None) -> np.ndarray:
     support = [int(first), int(second)]
     while len(support) < max_size:
         outside = np.setdiff1d(np.arange(n_features), support)
-        values, vectors = _pencil(r_factor[:, support], moments[np.ix_(support, support)])
+        values, vectors = noise_pencil(r_factor[:, support], moments[np.ix_(support, support)])
         minima = _bordered_minima(values, vectors.T @ gram[np.ix_(support, outside)],
                                   vectors.T @ moments[np.ix_(support, outside)],
                                   diag_gram[outside], diag_moments[outside])
@@ -431,7 +431,7 @@ def _best_swap(r_factor, moments, gram, support, outside, current):
     factor = scipy.linalg.qr(r_factor[:, support], mode="r", check_finite=False)[0][:k]
     gram_out, moments_out = gram[np.ix_(support, outside)], moments[np.ix_(support, outside)]
     gram_diag, moments_diag = np.diag(gram)[outside], np.diag(moments)[outside]
-    values, vectors = _pencil(factor, moments[np.ix_(support, support)])
+    values, vectors = noise_pencil(factor, moments[np.ix_(support, support)])
     screen = _swap_secular_at_the_law(values, vectors, vectors.T @ gram_out,
                                       vectors.T @ moments_out, gram_diag, moments_diag)
     removals = np.flatnonzero(np.any(~(screen > 0), axis=1))
@@ -440,7 +440,7 @@ def _best_swap(r_factor, moments, gram, support, outside, current):
     # (r, k-1): the support's positions without each removal
     keep = np.arange(k - 1)[None, :] + (np.arange(k - 1)[None, :] >= removals[:, None])
     rest = np.asarray(support)[keep]
-    values, vectors = _pencil(np.swapaxes(factor[:, keep], 0, 1),
+    values, vectors = noise_pencil(np.swapaxes(factor[:, keep], 0, 1),
                               moments[rest[:, :, None], rest[:, None, :]])
     # (k-1, r * n): removal-major, so candidate j * n + i swaps removals[j] for outside[i]
     n_out = outside.size

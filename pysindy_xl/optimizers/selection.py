@@ -271,7 +271,7 @@ def refine_by_swaps(x, y, support, max_swaps: int = 50) -> np.ndarray:
     return _swap_search(xs, y, active, support, int(max_swaps))
 
 
-def _fold_labels(n_rows: int, n_blocks: int, n_folds: int) -> np.ndarray:
+def fold_labels(n_rows: int, n_blocks: int, n_folds: int) -> np.ndarray:
     """Fold of each row: contiguous stretches within each of ``n_blocks`` equal row blocks."""
     per_block = n_rows // n_blocks
     position = np.arange(n_rows) % per_block
@@ -287,7 +287,7 @@ def _fold_systems(x, y, n_blocks: int, n_folds: int) -> list:
     y = np.asarray(y, dtype=float)
     x = x / _scaled(x)[1]
     y = y / np.sqrt(max(float(np.mean(y**2)), 1e-300))
-    labels = _fold_labels(len(y), n_blocks, n_folds)
+    labels = fold_labels(len(y), n_blocks, n_folds)
     return [(fold, x[labels == fold], y[labels == fold],
              *_triangular_system(x[labels != fold], y[labels != fold]))
             for fold in range(n_folds) if np.any(labels == fold) and np.any(labels != fold)]
@@ -470,7 +470,7 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
         order = (_elimination_order if path == "backward" else _forward_order)(*reduced)
         if max_size is not None:
             order = order[: int(max_size)]
-        mean, spread = _fold_summary(_nested_errors(folds, order, n_folds))
+        mean, spread = fold_summary(_nested_errors(folds, order, n_folds))
         paths.append((path, order, mean))
         for k in np.flatnonzero(np.isfinite(mean)):
             key = frozenset(order[: k + 1].tolist())
@@ -500,7 +500,7 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
                            best_size=best[0], rule=f"one standard error ({how})")
 
 
-def _fold_summary(errors):
+def fold_summary(errors):
     """Mean and standard error over the folds of each model (inf where a fold failed)."""
     n_folds = errors.shape[0]
     finite = np.all(np.isfinite(errors), axis=0)
@@ -530,7 +530,7 @@ def _swap_candidates(reduced, folds, paths, seen, limit, n_folds):
                 refined.append((path, support, np.concatenate([support, rest])))
     if not refined:
         return []
-    mean, spread = _fold_summary(_support_errors(
+    mean, spread = fold_summary(_support_errors(
         folds, [support for _, support, _ in refined], n_folds))
     return [(len(support), mean[m], spread[m], f"{path} path, swap-refined", order)
             for m, (path, support, order) in enumerate(refined) if np.isfinite(mean[m])]

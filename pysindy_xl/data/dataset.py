@@ -28,34 +28,17 @@ copy inside the NPZ and falls back to the JSON file. A user's own NPZ needs only
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..dynamics import _check_times as check_times
-from ._dataset_files import load_dataset
+from .._validation import check_times
+from .files import FORMAT, MASKS, SERIES, VERSION, DatasetError, read_dataset_arrays
 
 __all__ = ["Trajectory", "Dataset", "load_dataset", "DatasetError"]
 
-FORMAT = "pysindy-xl-dataset"
-VERSION = 1
-_SERIES = ("q", "qd", "qdd", "tau", "u", "tau_constraint", "u_constraint")
-_MASKS = ("constraint_active",)
 CONSTRAINT_HANDLING = ("exclude", "known", "include")
-
-
-class DatasetError(ValueError):
-    """A dataset file or array that cannot be used (bad file, missing or malformed arrays).
-
-    A :class:`ValueError`, so ``except ValueError`` catches it too.
-
-    Examples
-    --------
-    >>> Trajectory(t=[0.0, 1.0, 0.5], q=[[0.0], [1.0], [2.0]])
-    Traceback (most recent call last):
-    ...
-    pysindy_xl.mujoco.dataset.DatasetError: t: times must be strictly increasing
-    """
 
 
 @dataclass
@@ -124,7 +107,7 @@ class Trajectory:
         self.t = _check_times(self.t, "t")
         self.q = _check_series(self.q, "q", len(self.t), None)
         n = self.q.shape[1]
-        for name in _SERIES[1:]:
+        for name in SERIES[1:]:
             value = getattr(self, name)
             if value is not None:
                 setattr(self, name, _check_series(value, name, len(self.t), n))
@@ -215,7 +198,7 @@ class Dataset:
                     f"trajectories: trajectory {k} has {tr.q.shape[1]} coordinates, "
                     f"coordinate_names has {len(names)}"
                 )
-            for key in _SERIES[1:] + _MASKS:
+            for key in SERIES[1:] + MASKS:
                 if (getattr(tr, key) is None) != (getattr(trajectories[0], key) is None):
                     raise DatasetError(f"trajectories: {key!r} present in some trajectories only")
         metadata = dict(metadata or {})
@@ -271,7 +254,7 @@ class Dataset:
         constraints : {"exclude", "known", "include"}, default "exclude"
             Samples where a limit, contact or equality constraint acts (``constraint_active``):
             ``exclude`` leaves them out (each trajectory is split into its unconstrained runs,
-            the strong-form rule of :func:`~pysindy_xl.mujoco.constraints.unconstrained_samples`);
+            the strong-form rule of :func:`~pysindy_xl.data.constraints.unconstrained_samples`);
             ``known`` adds the recorded constraint forces to ``u`` (frictionloss included);
             ``include`` passes the data unchanged. Without constraint data, all three pass
             the data unchanged.
@@ -414,7 +397,7 @@ class Dataset:
                 [np.full(tr.n_samples, k, dtype=np.int64) for k, tr in enumerate(trs)]
             ),
         }
-        for key in _SERIES + _MASKS:
+        for key in SERIES + MASKS:
             if self.has(key):
                 arrays[key] = np.concatenate([getattr(tr, key) for tr in trs])
         meta = dict(self.metadata, format=FORMAT, version=VERSION,
@@ -496,3 +479,68 @@ class Dataset:
         n_samples = sum(tr.n_samples for tr in self.trajectories)
         return (f"Dataset(coordinates={list(self.coordinate_names)}, "
                 f"trajectories={self.n_trajectories}, samples={n_samples})")
+
+
+def load_dataset(path) -> Dataset:
+    """Read a dataset NPZ (with embedded or side-car JSON metadata, or none).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An ``.npz`` file holding at least ``t`` (N,) and ``q`` (N, n); see the module docstring.
+
+    Returns
+    -------
+    Dataset
+
+    Raises
+    ------
+    DatasetError
+        With a message naming the missing or malformed array.
+
+    Examples
+    --------
+    A user's own NPZ needs only ``t`` and ``q``; ``trajectory`` ids split it:
+
+    >>> import tempfile, pathlib, numpy as np
+    >>> t = np.r_[np.linspace(0, 1, 11), np.linspace(0, 2, 21)]
+    >>> ids = np.r_[np.zeros(11, dtype=int), np.ones(21, dtype=int)]
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     path = pathlib.Path(tmp) / "mine.npz"
+    ...     np.savez(path, t=t, q=np.sin(t), trajectory=ids)
+    ...     data = load_dataset(path)
+    >>> data
+    Dataset(coordinates=['q0'], trajectories=2, samples=32)
+
+    A missing array is named in the error:
+
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     path = pathlib.Path(tmp) / "bad.npz"
+    ...     np.savez(path, t=t)
+    ...     load_dataset(path)
+    Traceback (most recent call last):
+    ...
+    pysindy_xl.data.files.DatasetError: path: '...bad.npz' lacks the required array(s)
+    ['q']; ...
+    """
+    path = os.fspath(path)
+    arrays, metadata, names, bounds = read_dataset_arrays(path)
+    t = np.asarray(arrays["t"], dtype=float)
+    infos = metadata.pop("trajectory_info", None)
+    trajectories = []
+    ids = arrays["trajectory"]
+    for k, (a, b) in enumerate(bounds):
+        series = {}
+        for key in SERIES + MASKS:
+            if key in arrays:
+                series[key] = arrays[key][a:b]
+        info = infos[k] if isinstance(infos, list) and len(infos) == len(bounds) else {}
+        try:
+            trajectories.append(Trajectory(t=t[a:b], info=info, **series))
+        except DatasetError as error:
+            raise DatasetError(f"{error} (trajectory {ids[a]} of {path!r})") from None
+    for key in ("format", "version", "coordinate_names"):
+        metadata.pop(key, None)
+    return Dataset(trajectories, names, metadata)
+
+

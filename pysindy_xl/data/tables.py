@@ -31,15 +31,14 @@ import os
 
 import numpy as np
 
-__all__ = ["read_csv", "from_dataframe", "from_columns", "load_data", "coordinate_system",
-           "CSV_SUFFIXES"]
+__all__ = ["read_csv", "from_dataframe", "from_columns", "load_data", "CSV_SUFFIXES"]
 
 CSV_SUFFIXES = (".csv", ".tsv", ".txt")
 _TIME_NAMES = ("t", "time")
 
 
 def _error(message):
-    from .mujoco.dataset import DatasetError
+    from .files import DatasetError
 
     return DatasetError(message)
 
@@ -160,7 +159,7 @@ def _resolve(header, coordinates, columns, source):
         names = list(coordinates)
         if not names or not all(isinstance(n, str) and n for n in names):
             raise ValueError(f"coordinates: expected a non-empty list of names, got {names!r}")
-    from .symbols import Coordinates
+    from ..symbols import Coordinates
 
     Coordinates(names)  # same name rules as the symbols (raises ValueError naming them)
     q = []
@@ -187,7 +186,7 @@ def _resolve(header, coordinates, columns, source):
 
 
 def _build(raw, header, coordinates, columns, source, where, metadata=None):
-    from .mujoco.dataset import Dataset, Trajectory
+    from .dataset import Dataset, Trajectory
 
     time, id_column, names, q_cols, series = _resolve(header, coordinates, columns, source)
     cache = {}
@@ -275,7 +274,7 @@ def read_csv(path, coordinates=None, columns=None, delimiter=","):
     ...     read_csv(path)
     Traceback (most recent call last):
     ...
-    pysindy_xl.mujoco.dataset.DatasetError: '.../bad.csv', column 'theta', line 3: 'oops' is
+    pysindy_xl.data.files.DatasetError: '.../bad.csv', column 'theta', line 3: 'oops' is
     not a number
     """
     path = os.fspath(path)
@@ -386,7 +385,7 @@ def load_data(source, coordinates=None, columns=None, delimiter=None):
     ----------
     source : str, os.PathLike, pandas.DataFrame or dict
         ``.csv`` / ``.txt`` (comma-separated) or ``.tsv`` (tab-separated) file, ``.npz``
-        dataset (see :mod:`pysindy_xl.mujoco.dataset`), DataFrame, or mapping of columns.
+        dataset (see :mod:`pysindy_xl.data.dataset`), DataFrame, or mapping of columns.
     coordinates : list of str or str, optional
         Coordinate names; for an NPZ file they rename the columns of ``q``.
     columns : dict, optional
@@ -435,7 +434,7 @@ def load_data(source, coordinates=None, columns=None, delimiter=None):
 
 
 def _load_npz(path, coordinates, columns):
-    from .mujoco.dataset import Dataset, load_dataset
+    from .dataset import Dataset, load_dataset
 
     if columns:
         raise ValueError("columns: a column mapping applies to tables (CSV, DataFrame), not "
@@ -449,73 +448,7 @@ def _load_npz(path, coordinates, columns):
     if len(names) != dataset.n:
         raise _error(f"coordinates: {len(names)} names {names} for the {dataset.n} columns of "
                      f"q in {path!r}")
-    from .symbols import Coordinates
+    from ..symbols import Coordinates
 
     Coordinates(names)
     return Dataset(dataset.trajectories, names, dataset.metadata)
-
-
-# -- coordinates without an MJCF file ----------------------------------------------------------
-def coordinate_system(names, angles=()):
-    """A system description from coordinate names alone, for the reference catalogs.
-
-    What :func:`pysindy_xl.mujoco.reference_catalog` and ``pysindy-xl identify`` need from a
-    system when there is no MJCF file: the coordinates, which of them are angles (they enter
-    the catalog through ``sin`` and ``cos``) and friction ``qd_i`` in the equation of ``i``.
-    No true model, no simulation.
-
-    Parameters
-    ----------
-    names : list of str or str
-        Coordinate names (``["x", "theta"]`` or ``"x,theta"``).
-    angles : list of str or str, default ()
-        The names among ``names`` that are angles.
-
-    Returns
-    -------
-    MuJoCoSystem
-        With ``name`` "coordinates", ``has_ground_truth`` False.
-
-    Raises
-    ------
-    ValueError
-        If an angle is not among the coordinates, or a name is not a valid symbol name.
-
-    Examples
-    --------
-    >>> from pysindy_xl.mujoco import reference_catalog
-    >>> system = coordinate_system("x,theta", angles="theta")
-    >>> system.coordinate_names, system.angle_coordinates
-    (('x', 'theta'), (1,))
-    >>> reference_catalog(system, "mixed", trig_degree=1).fit().n_output_features_
-    20
-    """
-    from .mujoco.systems import MuJoCoSystem
-    from .symbols import Coordinates
-
-    if isinstance(names, str):
-        names = [c.strip() for c in names.split(",") if c.strip()]
-    if isinstance(angles, str):
-        angles = [c.strip() for c in angles.split(",") if c.strip()]
-    names, angles = tuple(names), tuple(angles)
-    Coordinates(list(names))
-    unknown = [a for a in angles if a not in names]
-    if unknown:
-        raise ValueError(f"angles: {unknown} not among the coordinates {list(names)}")
-
-    class CoordinateSystem(MuJoCoSystem):
-        name = "coordinates"
-        has_ground_truth = False
-        coordinate_names = names
-        angle_coordinates = tuple(names.index(a) for a in angles)
-
-        def __init__(self):
-            self._parameters = {"coordinates": list(names), "angles": list(angles)}
-
-        def friction_pattern(self):
-            return np.eye(len(names), dtype=bool)
-
-        def __repr__(self):
-            return f"coordinate_system({list(names)}, angles={list(angles)})"
-
-    return CoordinateSystem()

@@ -1,6 +1,7 @@
-"""Reading and checking dataset files (NPZ arrays, JSON metadata) into a :class:`Dataset`.
+"""Reading and checking dataset files: NPZ arrays and JSON metadata, never pickle.
 
-File layout: see :mod:`pysindy_xl.mujoco.dataset`, which re-exports :func:`load_dataset`.
+File layout: see :mod:`pysindy_xl.data.dataset`, whose :func:`~pysindy_xl.data.dataset.load_dataset`
+builds the trajectories from what :func:`read_dataset_arrays` returns.
 """
 
 from __future__ import annotations
@@ -8,19 +9,35 @@ from __future__ import annotations
 import json
 import os
 import zipfile
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from .dataset import Dataset
+__all__ = ["DatasetError", "read_dataset_arrays", "FORMAT", "VERSION", "SERIES", "MASKS"]
 
-__all__ = ["load_dataset"]
+FORMAT = "pysindy-xl-dataset"
+VERSION = 1
+#: per-sample series of a trajectory (float arrays) and its boolean masks
+SERIES = ("q", "qd", "qdd", "tau", "u", "tau_constraint", "u_constraint")
+MASKS = ("constraint_active",)
+
+
+class DatasetError(ValueError):
+    """A dataset file or array that cannot be used (bad file, missing or malformed arrays).
+
+    A :class:`ValueError`, so ``except ValueError`` catches it too.
+
+    Examples
+    --------
+    >>> from pysindy_xl.data import Trajectory
+    >>> Trajectory(t=[0.0, 1.0, 0.5], q=[[0.0], [1.0], [2.0]])
+    Traceback (most recent call last):
+    ...
+    pysindy_xl.data.files.DatasetError: t: times must be strictly increasing
+    """
+
 
 
 def _read_npz(path: str) -> dict:
-    from .dataset import DatasetError
-
     if not os.path.isfile(path):
         raise DatasetError(f"path: dataset file {path!r} does not exist")
     try:
@@ -43,50 +60,27 @@ def _read_npz(path: str) -> dict:
         raise DatasetError(f"path: {path!r} is not a readable NPZ file ({error})") from None
 
 
-def load_dataset(path) -> Dataset:
-    """Read a dataset NPZ (with embedded or side-car JSON metadata, or none).
+def read_dataset_arrays(path) -> tuple[dict, dict, list, list]:
+    """The checked arrays of a dataset NPZ and its metadata (embedded, side-car JSON or none).
 
     Parameters
     ----------
     path : str or os.PathLike
-        An ``.npz`` file holding at least ``t`` (N,) and ``q`` (N, n); see the module docstring.
 
     Returns
     -------
-    Dataset
+    arrays : dict of str to ndarray
+        Every numeric array of the file, ``q`` as (N, n).
+    metadata : dict
+    coordinate_names : list of str
+    bounds : list of (int, int)
+        Sample range of each trajectory (the samples of one trajectory are contiguous).
 
     Raises
     ------
     DatasetError
-        With a message naming the missing or malformed array.
-
-    Examples
-    --------
-    A user's own NPZ needs only ``t`` and ``q``; ``trajectory`` ids split it:
-
-    >>> import tempfile, pathlib, numpy as np
-    >>> t = np.r_[np.linspace(0, 1, 11), np.linspace(0, 2, 21)]
-    >>> ids = np.r_[np.zeros(11, dtype=int), np.ones(21, dtype=int)]
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     path = pathlib.Path(tmp) / "mine.npz"
-    ...     np.savez(path, t=t, q=np.sin(t), trajectory=ids)
-    ...     data = load_dataset(path)
-    >>> data
-    Dataset(coordinates=['q0'], trajectories=2, samples=32)
-
-    A missing array is named in the error:
-
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     path = pathlib.Path(tmp) / "bad.npz"
-    ...     np.savez(path, t=t)
-    ...     load_dataset(path)
-    Traceback (most recent call last):
-    ...
-    pysindy_xl.mujoco.dataset.DatasetError: path: '...bad.npz' lacks the required array(s)
-    ['q']; ...
+        If the file is missing, not an NPZ, or its arrays are missing or malformed.
     """
-    from .dataset import _MASKS, _SERIES, Dataset, DatasetError, Trajectory
-
     path = os.fspath(path)
     arrays = _read_npz(path)
     missing = [k for k in ("t", "q") if k not in arrays]
@@ -111,7 +105,7 @@ def load_dataset(path) -> Dataset:
             raise DatasetError(f"{key}: expected a numeric array, got dtype {a.dtype}")
     q = arrays["q"]
     if q.ndim == 1:
-        q = q[:, None]
+        q = arrays["q"] = q[:, None]
     if q.ndim != 2:
         raise DatasetError(f"q: expected shape (N, n), got {arrays['q'].shape}")
     n_samples, n = q.shape
@@ -123,7 +117,7 @@ def load_dataset(path) -> Dataset:
             f"constraint_active: expected shape ({n_samples},) like q's rows, got "
             f"{arrays['constraint_active'].shape}"
         )
-    for key in _SERIES[1:]:
+    for key in SERIES[1:]:
         if key in arrays:
             shape = arrays[key].shape
             if shape not in ((n_samples, n),) + (((n_samples,),) if n == 1 else ()):
@@ -138,30 +132,16 @@ def load_dataset(path) -> Dataset:
         raise DatasetError(
             f"metadata: coordinate_names has {len(names)} names, q has {n} columns"
         )
-    infos = metadata.pop("trajectory_info", None)
-    trajectories = []
     starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
     ends = np.r_[starts[1:], n_samples]
     if len(set(ids[starts].tolist())) != len(starts):
         raise DatasetError("trajectory: the samples of each trajectory must be contiguous")
-    for k, (a, b) in enumerate(zip(starts, ends, strict=True)):
-        series = {}
-        for key in _SERIES + _MASKS:
-            if key in arrays:
-                series[key] = arrays[key][a:b]
-        info = infos[k] if isinstance(infos, list) and len(infos) == len(starts) else {}
-        try:
-            trajectories.append(Trajectory(t=t[a:b], info=info, **series))
-        except DatasetError as error:
-            raise DatasetError(f"{error} (trajectory {ids[a]} of {path!r})") from None
-    for key in ("format", "version", "coordinate_names"):
-        metadata.pop(key, None)
-    return Dataset(trajectories, names, metadata)
+    arrays["trajectory"] = ids
+    return arrays, metadata, list(names), [(int(a), int(b)) for a, b in zip(starts, ends,
+                                                                          strict=True)]
 
 
 def _parse_json(text: str, where: str) -> dict:
-    from .dataset import DatasetError
-
     try:
         data = json.loads(text)
     except json.JSONDecodeError as error:
