@@ -31,24 +31,11 @@ class CLIError(Exception):
 def _optimizer(solver: str, threshold=None):
     import pysindy_xl as px
 
-    name = {"explicit": "ExplicitOptimizer", "implicit": "ImplicitOptimizer",
-            "mixed": "MixedOptimizer"}[solver]
-    cls = getattr(px, name, None)
-    if cls is None:
-        # not exported (yet): look in its module, imported only now
-        import importlib
-
-        try:
-            module = importlib.import_module(f"pysindy_xl.optimizers.{solver}")
-            cls = getattr(module, name)
-        except (ImportError, AttributeError):
-            raise CLIError(
-                f"--solver {solver}: px.{name} is not available in this installation; use "
-                "--solver explicit with --forcing explicit or mixed"
-            ) from None
+    cls = {"explicit": px.ExplicitOptimizer, "implicit": px.ImplicitOptimizer,
+           "mixed": px.MixedOptimizer}[solver]
     if threshold is not None:
         if "threshold" not in cls().get_params():
-            raise CLIError(f"--threshold: {name} has no threshold parameter")
+            raise CLIError(f"--threshold: {cls.__name__} has no threshold parameter")
         return cls(threshold=threshold)
     return cls()
 
@@ -163,11 +150,15 @@ def log(quiet, *args):
         print(*args, flush=True)
 
 
-def check_solver(solver, forced, threshold):
-    """The optimizer of ``solver``, checked before any long computation."""
+def check_solver(solver, forced, threshold, auto=False):
+    """The optimizer of ``solver``, checked before any long computation; None for ``auto``
+    without a threshold (XLSINDy's default for the data,
+    :func:`~pysindy_xl.optimizers.default_optimizer`)."""
     if solver == "explicit" and not forced:
         raise CLIError("--solver explicit needs forces; use --forcing explicit or mixed, or "
                        "--solver implicit")
+    if auto and threshold is None:
+        return None
     return _optimizer(solver, threshold)
 
 
@@ -175,20 +166,14 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
     import pysindy_xl as px
     from pysindy_xl.mujoco.catalogs import reference_catalog
 
-    optimizer = check_solver(solver, forced, args.threshold)
+    optimizer = check_solver(solver, forced, args.threshold,
+                             auto=getattr(args, "solver", "auto") == "auto")
     catalog = reference_catalog(system, args.catalog, velocity_degree=args.velocity_degree,
                                 trig_degree=args.trig_degree, friction=args.friction)
     model = px.XLSINDy(catalog, optimizer, formulation=getattr(args, "formulation", "auto"))
     try:
         arguments = dataset.fit_arguments(forces="tau" if forced else None,
                                           constraints=getattr(args, "constraints", "exclude"))
-        formulation = model._resolve_formulation(arguments.get("x_dot"),
-                                                 arguments.get("x_ddot"))
-        if (solver == "explicit" and getattr(args, "solver", "auto") == "auto"
-                and args.threshold is None and formulation == "weak"
-                and arguments.get("x_dot") is None):
-            # as XLSINDy's own default: explicit fits of positions only are bagged
-            model.set_params(optimizer=px.EnsembleOptimizer(optimizer))
         model.fit(**arguments)
     except (RuntimeError, ValueError, np.linalg.LinAlgError) as error:
         raise CLIError(f"identification failed ({type(error).__name__}): {error}") from None

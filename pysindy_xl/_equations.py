@@ -9,8 +9,6 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from .feature_library import LagrangeLibrary
-
 __all__ = ["significant", "equation_strings", "identified_lagrangian", "uncertainty_lines"]
 
 
@@ -66,13 +64,9 @@ def identified_lagrangian(coef: np.ndarray, library) -> sp.Expr:
     -------
     sympy.Expr
     """
-    total = sp.Integer(0)
-    for lib, columns in zip(library.libraries_, library.slices_, strict=True):
-        if isinstance(lib, LagrangeLibrary):
-            for k, term in enumerate(lib.terms_):
-                if coef[columns.start + k] != 0:
-                    total += sp.Float(coef[columns.start + k]) * term
-    return total
+    return sp.Add(*(sp.Float(coef[j]) * library.feature_terms_[j]
+                    for j, category in enumerate(library.categories_)
+                    if category == "lagrange" and coef[j] != 0))
 
 
 def uncertainty_lines(names, coef, interval, probability, precision: int) -> list[str]:

@@ -8,8 +8,6 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from sklearn.metrics import r2_score
 from sklearn.utils.validation import check_is_fitted
@@ -18,15 +16,12 @@ from ._inputs import as_list, check_array
 from ._validation import check_instance
 from .dynamics import MassMatrixDynamics
 
-if TYPE_CHECKING:  # annotations only: model.py imports this module
-    from .model import XLSINDy
-
 __all__ = ["DynamicsMixin"]
 
 
 class DynamicsMixin:
-    """Prediction, scoring, simulation, JAX/Gymnasium export and persistence of a fitted
-    model (mixed into :class:`~pysindy_xl.XLSINDy`)."""
+    """Prediction, scoring, simulation, JAX/Gymnasium export and saving of a fitted model
+    (mixed into :class:`~pysindy_xl.XLSINDy`, which loads)."""
 
     # -- prediction ----------------------------------------------------------------------------
     def _require_dynamics(self) -> MassMatrixDynamics:
@@ -154,23 +149,6 @@ class DynamicsMixin:
         from .io import save_model
 
         save_model(self, path)
-
-    @classmethod
-    def load(cls, path) -> XLSINDy:
-        """Load a model written by :meth:`save`; parses only the restricted term grammar.
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-
-        Returns
-        -------
-        XLSINDy
-            A fitted model that predicts and simulates like the saved one.
-        """
-        from .io import load_model
-
-        return load_model(path)
 
     # -- reinforcement learning ----------------------------------------------------------------
     def to_gymnasium(self, dt, **options):

@@ -43,7 +43,6 @@ from .quality import fit_quality, plot_identification, quality_lines
 # commands and for code that imported them from here
 __all__ = ["main", "build_parser", "run_demo", "run_identify"]
 
-_AUTO_SOLVER = {"explicit": "explicit", "implicit": "implicit", "mixed": "mixed"}
 
 # -- commands ----------------------------------------------------------------------------------
 def run_demo(args) -> dict:
@@ -99,9 +98,9 @@ def run_demo(args) -> dict:
 
     system = system_by_name(args.system, args.joints)
     resolve_catalog(args, system)
-    solver = _AUTO_SOLVER[args.forcing] if args.solver == "auto" else args.solver
+    solver = args.forcing if args.solver == "auto" else args.solver
     forced = args.forcing != "implicit"
-    check_solver(solver, forced, args.threshold)
+    check_solver(solver, forced, args.threshold, auto=args.solver == "auto")
     output_directory(args.out)
     timings = {}
     quiet = args.quiet

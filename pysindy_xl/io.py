@@ -9,8 +9,14 @@ parameters) and the fit's diagnostics (``formulation_``, ``n_samples_``, ``weak_
 ``selection_``, ``mass_matrix_check_``), so that a loaded model reports how it was chosen and
 :func:`~pysindy_xl.quality.fit_quality` can rebuild its regression. Loading validates every
 field and parses terms with that grammar only: nothing in the file is executed (no pickle, no
-``eval``, no ``sympify``); non-finite diagnostics are written as the strings ``"inf"``,
-``"-inf"`` and ``"nan"`` (JSON has no such numbers).
+``eval``, no ``sympify``); the library and optimizer types it names are looked up among the
+registered ones (:data:`~pysindy_xl.feature_library.LIBRARY_TYPES`,
+:data:`~pysindy_xl.optimizers.OPTIMIZER_TYPES`), each of which reads its own part
+(``from_spec``). Non-finite diagnostics are written as the strings ``"inf"``, ``"-inf"`` and
+``"nan"`` (JSON has no such numbers).
+
+:func:`save_model` writes a fitted model; :func:`read_model_file` returns the checked parts of
+a file, from which :meth:`XLSINDy.load <pysindy_xl.XLSINDy.load>` rebuilds the model.
 """
 
 from __future__ import annotations
@@ -24,21 +30,38 @@ import warnings
 
 import numpy as np
 
-from .expressions import expression_size, parse_expression
-from .feature_library import CatalogRepartition, ClassicalLibrary, ExternalForces, LagrangeLibrary
+from .feature_library import CatalogRepartition, SpecError, SpecReader
+from .optimizers import OPTIMIZER_TYPES, optimizer_from_spec
+from .registry import is_plain
 from .symbols import Coordinates
 
-__all__ = ["save_model", "load_model", "FORMAT", "VERSION", "OPTIMIZER_TYPES"]
+__all__ = ["save_model", "read_model_file", "ModelFile", "invalid_model_file", "FORMAT",
+           "VERSION", "OPTIMIZER_TYPES"]
 
 FORMAT = "pysindy-xl-model"
 VERSION = 1
 _MAX_BYTES = 50_000_000
-_MAX_TERMS = 5_000  # catalog terms in one file (about a minute of derivation)
-_MAX_TOTAL_SIZE = 20_000  # sum over the terms of their expanded size (expression_size)
-#: optimizer types a model file may name (the documented catalog optimizers, nothing else);
-#: an EnsembleOptimizer's own ``optimizer`` is one of the others, never an ensemble
-OPTIMIZER_TYPES = ("ExplicitOptimizer", "ImplicitOptimizer", "MixedOptimizer",
-                   "EnsembleOptimizer")
+
+
+@dataclasses.dataclass
+class ModelFile:
+    """The checked contents of a model file.
+
+    Attributes
+    ----------
+    settings : dict
+        The estimator's parameters besides the catalog and the optimizer.
+    feature_library : CatalogRepartition
+        Fitted (the columns derived).
+    optimizer : CatalogOptimizer or None
+    fitted : dict
+        The fitted attributes (``coef_``, ``dropped_features_``, ``n_coordinates_``, ...).
+    """
+
+    settings: dict
+    feature_library: CatalogRepartition
+    optimizer: object
+    fitted: dict
 
 
 def save_model(model, path) -> None:
@@ -78,7 +101,7 @@ def save_model(model, path) -> None:
         "coefficients": [float(c) for c in model.coef_],
         "dropped_features": model.dropped_features_,
         "forced_coordinates": [bool(f) for f in model.forced_coordinates_],
-        "optimizer": _optimizer_spec(optimizer),
+        "optimizer": optimizer.to_spec() if hasattr(optimizer, "to_spec") else None,
     }
     if getattr(model, "inclusion_probability_", None) is not None:
         document["uncertainty"] = {
@@ -115,49 +138,6 @@ def _check_writable(path) -> None:
         raise ValueError(f"path: the folder {folder!r} does not exist; create it first")
 
 
-def _optimizer_spec(optimizer, nested: bool = False):
-    """``{"type", "params"}`` of a documented optimizer (plain parameters only; an ensemble's
-    own optimizer as a nested spec), or None."""
-    name = type(optimizer).__name__
-    if name not in OPTIMIZER_TYPES or (nested and name == "EnsembleOptimizer"):
-        return None
-    params = {}
-    for key, value in optimizer.get_params(deep=False).items():
-        if value is None or isinstance(value, (bool, int, float, str)):
-            if isinstance(value, float) and not math.isfinite(value):
-                continue
-            params[key] = value
-        elif name == "EnsembleOptimizer" and key == "optimizer":
-            params[key] = _optimizer_spec(value, nested=True)
-    return {"type": name, "params": params}
-
-
-def _optimizer_from_spec(spec, path, nested: bool = False):
-    """The optimizer a file's spec names: documented types and plain values only."""
-    from . import optimizers
-
-    types = tuple(t for t in OPTIMIZER_TYPES if not (nested and t == "EnsembleOptimizer"))
-    where = "optimizer.params.optimizer" if nested else "optimizer"
-    _expect(isinstance(spec, dict) and spec.get("type") in types, path,
-            f"'{where}' must be null or an object whose 'type' is one of {types}")
-    candidate = getattr(optimizers, spec["type"])
-    params = dict(spec.get("params", {})) if isinstance(spec.get("params", {}), dict) else None
-    valid = candidate().get_params(deep=False)
-    _expect(params is not None and set(params) <= set(valid), path,
-            f"{where}.params must be an object with keys among {sorted(valid)}")
-    inner = params.pop("optimizer", None) if spec["type"] == "EnsembleOptimizer" else None
-    _expect(all(v is None or isinstance(v, (bool, int, float, str)) for v in params.values()),
-            path, f"{where}.params must be plain values")
-    if inner is not None:
-        params["optimizer"] = _optimizer_from_spec(inner, path, nested=True)
-    optimizer = candidate(**params)
-    try:
-        optimizer._check_params()
-    except (TypeError, ValueError) as err:
-        raise _fail(path, f"{where}: {err}") from None
-    return optimizer
-
-
 def _uncertainty_from_document(document, n_features, path):
     """``(inclusion_probability, coef_interval)`` of an ensemble fit, or ``(None, None)``."""
     spec = document.get("uncertainty")
@@ -182,8 +162,12 @@ def _uncertainty_from_document(document, n_features, path):
     return np.asarray(probability, dtype=float), np.asarray(interval, dtype=float)
 
 
-def _fail(path, what: str):
+def invalid_model_file(path, what: str) -> ValueError:
+    """The error for a file that is not a valid model file, saying ``what`` is wrong."""
     return ValueError(f"path: {os.fspath(path)!r} is not a valid pysindy-xl model file: {what}")
+
+
+_fail = invalid_model_file
 
 
 def _expect(condition: bool, path, what: str):
@@ -191,62 +175,8 @@ def _expect(condition: bool, path, what: str):
         raise _fail(path, what)
 
 
-def _library_from_spec(spec, coords: Coordinates, path, budget=None, depth=0):
-    budget = {"terms": 0, "size": 0} if budget is None else budget
-    _expect(depth <= 4, path, "libraries nested deeper than 4 levels")
-    _expect(isinstance(spec, dict) and isinstance(spec.get("type"), str), path,
-            "library spec must be an object with a 'type'")
-    kind = spec["type"]
-    table = {str(s): s for s in coords.variables}
-
-    def terms():
-        raw = spec.get("terms")
-        _expect(isinstance(raw, list) and raw and all(isinstance(t, str) for t in raw), path,
-                f"{kind}.terms must be a non-empty list of strings")
-        _expect(len(raw) <= _MAX_TERMS - budget["terms"], path,
-                f"more than {_MAX_TERMS} catalog terms")
-        budget["terms"] += len(raw)
-        parsed = []
-        for text in raw:
-            try:
-                expr = parse_expression(text, table)
-            except (TypeError, ValueError) as err:
-                raise _fail(path, str(err)) from None
-            budget["size"] += expression_size(expr)["terms"]
-            _expect(budget["size"] <= _MAX_TOTAL_SIZE, path,
-                    f"the catalog is too large (more than {_MAX_TOTAL_SIZE} expanded terms)")
-            parsed.append(expr)
-        return parsed
-
-    if kind == "CatalogRepartition":
-        libs = spec.get("libraries")
-        _expect(isinstance(libs, list) and libs, path, "libraries must be a non-empty list")
-        return CatalogRepartition([_library_from_spec(s, coords, path, budget, depth + 1)
-                                   for s in libs])
-    if kind == "LagrangeLibrary":
-        return LagrangeLibrary(coords, terms())
-    if kind == "ClassicalLibrary":
-        parsed = terms()
-        try:
-            mask = np.asarray(spec.get("mask"))
-        except ValueError:  # ragged nested lists
-            mask = np.empty(0)
-        _expect(mask.shape == (len(parsed), coords.n) and np.isin(mask, (0, 1)).all(), path,
-                "ClassicalLibrary.mask must be a 0/1 matrix (n_terms, n)")
-        return ClassicalLibrary(coords, parsed, mask=mask.astype(bool))
-    if kind == "ExternalForces":
-        try:
-            interlink = np.asarray(spec.get("interlink"), dtype=float)
-        except (TypeError, ValueError):
-            raise _fail(path, "ExternalForces.interlink must be a numeric matrix") from None
-        _expect(interlink.shape == (coords.n, coords.n) and np.all(np.isfinite(interlink)), path,
-                "ExternalForces.interlink must be a finite (n, n) matrix")
-        return ExternalForces(coords, interlink=interlink)
-    raise _fail(path, f"unknown library type {kind!r}")
-
-
-def load_model(path):
-    """Read a model written by :func:`save_model`.
+def read_model_file(path) -> ModelFile:
+    """Read and check a model written by :func:`save_model`.
 
     Parameters
     ----------
@@ -254,8 +184,7 @@ def load_model(path):
 
     Returns
     -------
-    XLSINDy
-        A fitted model that predicts and simulates like the saved one.
+    ModelFile
 
     Raises
     ------
@@ -267,13 +196,56 @@ def load_model(path):
     >>> import os, tempfile
     >>> path = os.path.join(tempfile.mkdtemp(), "bad.json")
     >>> _ = open(path, "w").write('{"format": "something else"}')
-    >>> load_model(path)
+    >>> read_model_file(path)
     Traceback (most recent call last):
     ...
     ValueError: path: '...bad.json' is not a valid pysindy-xl model file: 'format' must be ...
     """
-    from .model import XLSINDy
+    document = _read_document(path)
+    names = document.get("coordinates")
+    _expect(isinstance(names, list) and all(isinstance(n, str) for n in names), path,
+            "'coordinates' must be a list of names")
+    try:
+        coords = Coordinates(names)
+    except (TypeError, ValueError) as err:
+        raise _fail(path, str(err)) from None
+    library = _library_from_document(document, coords, path)
+    feature_names = library.get_feature_names()
+    _expect(document.get("feature_names") == feature_names, path,
+            "feature_names do not match the catalog")
+    coef = document.get("coefficients")
+    _expect(isinstance(coef, list) and len(coef) == len(feature_names)
+            and all(isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
+                    for c in coef), path,
+            "'coefficients' must be one number per feature, all finite")
+    forced = document.get("forced_coordinates", [True] * coords.n)
+    _expect(isinstance(forced, list) and len(forced) == coords.n
+            and all(isinstance(f, bool) for f in forced), path,
+            "'forced_coordinates' must have one flag (true or false) per coordinate")
+    dropped = document.get("dropped_features", {})
+    _expect(isinstance(dropped, dict), path, "'dropped_features' must be an object")
+    spec = document.get("optimizer")
+    try:
+        optimizer = None if spec is None else optimizer_from_spec(spec)
+    except ValueError as err:
+        raise _fail(path, str(err)) from None
+    probability, interval = _uncertainty_from_document(document, len(feature_names), path)
+    fitted = {
+        "feature_library_": library,
+        "optimizer_": optimizer,
+        "coef_": np.asarray(coef, dtype=float),
+        "dropped_features_": {str(k): str(v) for k, v in dropped.items()},
+        "n_coordinates_": coords.n,
+        "forced_coordinates_": np.asarray(forced, dtype=bool),
+        "inclusion_probability_": probability,
+        "coef_interval_": interval,
+        **_training_from_document(document.get("training"), len(feature_names), path),
+    }
+    return ModelFile(_settings_from_document(document, path), library, optimizer, fitted)
 
+
+def _read_document(path) -> dict:
+    """The JSON object of a model file of this format and version."""
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise ValueError(f"path: no such file {path!r}")
@@ -289,14 +261,15 @@ def load_model(path):
             f"'format' must be {FORMAT!r}")
     _expect(document.get("version") == VERSION, path, f"unsupported version "
             f"{document.get('version')!r}")
-    names = document.get("coordinates")
-    _expect(isinstance(names, list) and all(isinstance(n, str) for n in names), path,
-            "'coordinates' must be a list of names")
+    return document
+
+
+def _library_from_document(document, coords, path) -> CatalogRepartition:
+    """The file's catalog, read by the registered library types and fitted."""
     try:
-        coords = Coordinates(names)
-    except (TypeError, ValueError) as err:
+        library = SpecReader(coords).library(document.get("feature_library"))
+    except SpecError as err:
         raise _fail(path, str(err)) from None
-    library = _library_from_spec(document.get("feature_library"), coords, path)
     if not isinstance(library, CatalogRepartition):
         library = CatalogRepartition([library])
     try:
@@ -305,36 +278,7 @@ def load_model(path):
         raise _fail(path, "catalog: the terms are too complex to differentiate") from None
     except (TypeError, ValueError) as err:
         raise _fail(path, f"catalog: {err}") from None
-    feature_names = library.get_feature_names()
-    _expect(document.get("feature_names") == feature_names, path,
-            "feature_names do not match the catalog")
-    coef = document.get("coefficients")
-    _expect(isinstance(coef, list) and len(coef) == len(feature_names)
-            and all(isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
-                    for c in coef), path,
-            "'coefficients' must be one number per feature, all finite")
-    forced = document.get("forced_coordinates", [True] * coords.n)
-    _expect(isinstance(forced, list) and len(forced) == coords.n
-            and all(isinstance(f, bool) for f in forced), path,
-            "'forced_coordinates' must have one flag (true or false) per coordinate")
-    dropped = document.get("dropped_features", {})
-    _expect(isinstance(dropped, dict), path, "'dropped_features' must be an object")
-
-    spec = document.get("optimizer")
-    optimizer = None if spec is None else _optimizer_from_spec(spec, path)
-    probability, interval = _uncertainty_from_document(document, len(feature_names), path)
-    model = XLSINDy(feature_library=library, optimizer=optimizer)
-    model.feature_library_ = library
-    model.optimizer_ = optimizer
-    model.coef_ = np.asarray(coef, dtype=float)
-    model.dropped_features_ = {str(k): str(v) for k, v in dropped.items()}
-    model.n_coordinates_ = coords.n
-    model.forced_coordinates_ = np.asarray(forced, dtype=bool)
-    model.inclusion_probability_, model.coef_interval_ = probability, interval
-    model.set_params(**_settings_from_document(document, path))
-    _restore_training(model, document.get("training"), len(feature_names), path)
-    model._build_dynamics()
-    return model
+    return library
 
 
 # --------------------------------------------------------------------------------------------
@@ -362,11 +306,6 @@ def _setting_types(name):
             "smoother": {"WhittakerSmoother": WhittakerSmoother}}[name]
 
 
-def _plain(value) -> bool:
-    return value is None or (isinstance(value, (bool, int, float, str))
-                             and not (isinstance(value, float) and not math.isfinite(value)))
-
-
 def _init_params(value) -> dict:
     """The constructor parameters of an object, as they are set on it (not its fitted state)."""
     if hasattr(value, "get_params"):
@@ -389,7 +328,7 @@ def _settings_spec(model) -> dict:
             continue
         name = type(value).__name__
         params = _init_params(value)
-        if _setting_types(key).get(name) is type(value) and all(map(_plain, params.values())):
+        if _setting_types(key).get(name) is type(value) and all(map(is_plain, params.values())):
             settings[key] = {"type": name, "params": params}
         else:
             settings[key] = None
@@ -407,14 +346,14 @@ def _settings_from_document(document, path) -> dict:
     settings = {}
     for key, value in spec.items():
         if key in _PLAIN_SETTINGS:
-            _expect(_plain(value), path, f"settings.{key} must be a plain value")
+            _expect(is_plain(value), path, f"settings.{key} must be a plain value")
             settings[key] = value
         elif value is not None:
             types = _setting_types(key)
             _expect(isinstance(value, dict) and isinstance(value.get("type"), str)
                     and value["type"] in types
                     and isinstance(value.get("params"), dict)
-                    and all(map(_plain, value["params"].values())), path,
+                    and all(map(is_plain, value["params"].values())), path,
                     f"settings.{key} must be null or {{'type': one of {sorted(types)}, "
                     "'params': plain values}")
             try:
@@ -422,12 +361,6 @@ def _settings_from_document(document, path) -> dict:
                 getattr(settings[key], "_check_params", lambda: None)()
             except (TypeError, ValueError, AttributeError) as err:
                 raise _fail(path, f"settings.{key}: {err}") from None
-    from .model import XLSINDy
-
-    try:
-        XLSINDy(**settings)._check_options()
-    except (TypeError, ValueError) as err:
-        raise _fail(path, f"settings: {err}") from None
     return settings
 
 
@@ -489,9 +422,9 @@ def _training_spec(model) -> dict:
     }
 
 
-def _restore_training(model, spec, n_features, path) -> None:
-    """Set the fit's diagnostics from a file (absent in files written before they were
-    saved: ``formulation_`` unknown, the others None)."""
+def _training_from_document(spec, n_features, path) -> dict:
+    """The fit's diagnostics in a file, as fitted attributes (absent in files written before
+    they were saved: ``formulation_`` unknown, the others None)."""
     spec = {} if spec is None else spec
     _expect(isinstance(spec, dict), path, "'training' must be an object")
     formulation = spec.get("formulation")
@@ -523,12 +456,9 @@ def _restore_training(model, spec, n_features, path) -> None:
                 f"training.mass_matrix_check must hold {keys}")
         check = dict(zip(keys, _floats_from([check[k] for k in keys], path,
                                             "training.mass_matrix_check").tolist(), strict=True))
-    selection = _selection_from_spec(spec.get("selection"), n_features, path)
-    model.formulation_ = formulation
-    model.n_samples_ = n_samples
-    model.weak_info_ = info
-    model.selection_ = selection
-    model.mass_matrix_check_ = check
+    return {"formulation_": formulation, "n_samples_": n_samples, "weak_info_": info,
+            "selection_": _selection_from_spec(spec.get("selection"), n_features, path),
+            "mass_matrix_check_": check}
 
 
 def _selection_from_spec(selection, n_features, path):

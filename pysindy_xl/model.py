@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import copy
-import functools
+import dataclasses
 import warnings
 
 import numpy as np
-import pysindy as ps
 import sympy as sp
 import threadpoolctl
 from sklearn.base import BaseEstimator, clone
@@ -15,7 +14,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ._equations import equation_strings, identified_lagrangian, significant, uncertainty_lines
 from ._fitted import DynamicsMixin
-from ._inputs import check_array, sample_times, trajectory_arrays
+from ._inputs import check_array, sample_times
 from ._validation import check_instance, check_option
 from .diagnostics import (
     IdentificationWarning,
@@ -25,24 +24,26 @@ from .diagnostics import (
     orient_free_laws,
 )
 from .dynamics import MassMatrixDynamics
-from .feature_library import (
-    CatalogRepartition,
-    SymbolicLibrary,
-    stack_variables,
-)
+from .feature_library import CatalogRepartition, SymbolicLibrary
+from .io import invalid_model_file, read_model_file
 from .optimizers import (
-    EnsembleOptimizer,
+    CatalogProblem,
     ExplicitOptimizer,
-    ImplicitOptimizer,
-    MixedOptimizer,
+    default_optimizer,
     independent_columns,
+    pilot_optimizer,
+    solve,
 )
-from .optimizers._base import accepts_fit_parameter, accepts_noise_moments, pilot_optimizer
-from .weak import BumpTestFunctions, WhittakerSmoother, weak_regression
+from .regression import (
+    FORMULATIONS,
+    Regression,
+    build_regression,
+    differentiation_function,
+    trajectory_data,
+)
+from .weak import WhittakerSmoother
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
-
-_FORMULATIONS = ("auto", "strong", "weak")
 
 #: Fits on whitened rows at most (``residual_covariance``): the last one is kept even when
 #: its support still differs from the law that weighed it.
@@ -212,7 +213,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         if lib is None:
             raise ValueError("feature_library: a catalog is required (e.g. LagrangeLibrary)")
         if isinstance(lib, CatalogRepartition):
-            lib._flat_libraries()  # a catalog nested in itself: a clear error, not recursion
+            lib.flat_libraries()  # a catalog nested in itself: a clear error, not recursion
             return lib
         if isinstance(lib, SymbolicLibrary):
             return CatalogRepartition([lib])
@@ -221,34 +222,51 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             f"ExternalForces, CatalogRepartition), got {type(lib).__name__}"
         )
 
-    def _differentiate(self, values: np.ndarray, t: np.ndarray, implicit: bool) -> np.ndarray:
-        method = self.differentiation_method
-        if method is None:
-            method = ps.FiniteDifference(order=4) if implicit else ps.SmoothedFiniteDifference()
-        if not callable(method):
-            raise TypeError("differentiation_method: expected a pysindy differentiation method")
-        result = np.asarray(method(values, t), dtype=float)
-        if result.shape != values.shape or not np.all(np.isfinite(result)):
-            raise ValueError("differentiation_method: returned an invalid derivative")
-        return result
-
     def _trajectories(self, x, t, x_dot, x_ddot, u, n, differentiate=True, sample_mask=None):
-        """Validate the fit/score inputs; returns per-trajectory dicts of arrays.
+        """Validate the fit/score inputs; returns per-trajectory dicts of arrays
+        (:func:`~pysindy_xl.regression.trajectory_data`).
 
-        With ``differentiate=False`` missing velocities and accelerations stay ``None``.
+        With ``differentiate=False`` missing velocities and accelerations stay ``None``;
+        otherwise they are estimated with ``differentiation_method`` or, by default, with the
+        estimate the optimizer prefers (its ``derivative_estimate``; unforced data: unbiased).
         """
-        out = trajectory_arrays(x, self.t_default if t is None else t, x_dot, x_ddot, u,
-                                sample_mask, n)
+        derivative = None
         if differentiate:
-            implicit = u is None and (self.optimizer is None
-                                      or type(self.optimizer).__name__ == "ImplicitOptimizer")
-            for arrays in out:
-                if arrays["x_dot"] is None:
-                    arrays["x_dot"] = self._differentiate(arrays["x"], arrays["t"], implicit)
-                if arrays["x_ddot"] is None:
-                    arrays["x_ddot"] = self._differentiate(arrays["x_dot"], arrays["t"],
-                                                           implicit)
-        return out
+            prefers = getattr(self.optimizer, "derivative_estimate", "unbiased")
+            derivative = differentiation_function(self.differentiation_method,
+                                                  unbiased=u is None and prefers == "unbiased")
+        return trajectory_data(x, self.t_default if t is None else t, x_dot, x_ddot, u, n,
+                               sample_mask, derivative)
+
+    def regression(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None,
+                   formulation=None) -> Regression:
+        """The rows of the fitted catalog on data, built as :meth:`fit` builds them.
+
+        The residual ``regression(...).theta @ coefficients()`` is zero for data that obey
+        the identified equations exactly (the fit-quality report of
+        :func:`pysindy_xl.quality.fit_quality` is made of it).
+
+        Parameters
+        ----------
+        x, t, x_dot, x_ddot, u, sample_mask
+            As in :meth:`fit`.
+        formulation : {"strong", "weak"}, optional
+            Default: the fit's; the weak form uses the fit's test-function width.
+
+        Returns
+        -------
+        Regression
+            See :class:`pysindy_xl.regression.Regression`.
+        """
+        check_is_fitted(self, "coef_")
+        formulation = formulation or self.formulation_ or "strong"
+        if formulation not in ("strong", "weak"):
+            raise ValueError(f"formulation: expected 'strong' or 'weak', got {formulation!r}")
+        data = self._trajectories(x, t, x_dot, x_ddot, u, self.n_coordinates_,
+                                  differentiate=formulation == "strong", sample_mask=sample_mask)
+        info = self.weak_info_ if formulation == self.formulation_ else None
+        return build_regression(self.feature_library_, data, formulation, self.test_functions,
+                                self.smoother, None if info is None else info["half_width"])
 
     # -- fit ---------------------------------------------------------------------------------
     def fit(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None):
@@ -307,19 +325,10 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
                 "feature_library: no term contains an acceleration; add Lagrangian terms with "
                 "velocities (e.g. q_dot**2) or classical terms in q_ddot"
             )
-        if formulation == "weak":
-            theta, z, noise, self.weak_info_ = weak_regression(
-                library, data, self.test_functions or BumpTestFunctions(),
-                copy.deepcopy(self.smoother) or WhittakerSmoother(),  # smoothing fits it
-                noise="draws")
-        else:
-            z = np.vstack([
-                stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"])[d["mask"]]
-                for d in data
-            ])
-            if len(z) == 0:
-                raise ValueError("sample_mask: no sample left to fit")
-            theta, noise, self.weak_info_ = library.transform(z), None, None
+        regression = build_regression(library, data, formulation, self.test_functions,
+                                      self.smoother)
+        theta, z, noise = regression.theta, regression.states, regression.noise
+        self.weak_info_ = regression.weak_info
         library.check_domain(z)
         if self.drop_dependent:
             keep, dropped = independent_columns(
@@ -335,15 +344,18 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             force_block = theta[:, library.force_columns_].reshape(n, -1,
                                                                    len(library.force_columns_))
             forced = np.any(force_block != 0, axis=(1, 2))
-        if u is None and isinstance(self.optimizer, ExplicitOptimizer):
+        if u is None and getattr(self.optimizer, "requires_forces", False):
             raise ValueError(
                 "u: explicit regression needs the generalized forces; pass u, or use "
                 "ImplicitOptimizer / MixedOptimizer for unforced data"
             )
-        optimizer = self._fit_optimizer(theta[:, keep], n, force_columns, forced,
-                                        None if noise is None else noise.columns(keep),
-                                        functools.cache(
-                                            lambda: column_mass_matrices(library, z)[:, keep]))
+        optimizer = self._optimizer(forced, estimated=noise is not None)
+        mass = None
+        if noise is not None and getattr(optimizer, "uses_mass_matrices", False):
+            mass = column_mass_matrices(library, z)[:, keep]
+        optimizer = self._fit_optimizer(optimizer, CatalogProblem.from_arrays(
+            theta[:, keep], n, force_columns, mass_matrices=mass),
+            None if noise is None else noise.columns(keep), forced)
         coef = np.zeros(theta.shape[1])
         coef[keep] = optimizer.coef_
         self.feature_library_ = library
@@ -376,7 +388,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
                             f"{type(value).__name__} {value!r}")
         if self.blas_threads is not None:
             check_option("blas_threads", self.blas_threads, "int", low=1)
-        check_option("formulation", self.formulation, "choice", choices=_FORMULATIONS)
+        check_option("formulation", self.formulation, "choice", choices=FORMULATIONS)
         if np.ndim(self.t_default) == 0:
             check_option("t_default", self.t_default, "real", low=0, low_open=True)
         for name, what, method in (("differentiation_method", "a pysindy differentiation "
@@ -420,39 +432,32 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         measured = x_dot is not None and x_ddot is not None
         return "strong" if measured or self.differentiation_method is not None else "weak"
 
-    def _fit_optimizer(self, theta, n, force_columns, forced, noise, mass_matrices):
-        """Fit the optimizer on ``theta``; on weak rows with propagated ``noise``
-        (:class:`~pysindy_xl.weak.WeakNoise`), on the rows whitened by the covariance of the
-        residual of the law (``residual_covariance``). ``mass_matrices``: a function returning
-        the mass matrices of the columns, called only when the optimizer takes them.
+    def _fit_optimizer(self, optimizer, problem, noise, forced):
+        """Fit ``optimizer`` on ``problem``; on weak rows with propagated ``noise``
+        (:class:`~pysindy_xl.weak.WeakNoise`), with its noise moments, and on the rows
+        whitened by the covariance of the residual of the law (``residual_covariance``).
         Returns the fitted optimizer."""
         def fit(optimizer, rows, propagated, whitened=False):
-            extra = {}
-            if propagated is not None and accepts_noise_moments(optimizer):
-                extra["noise_moments"] = propagated.moments()
-                if accepts_fit_parameter(optimizer, "mass_matrices"):
-                    extra["mass_matrices"] = mass_matrices()
-            if whitened and accepts_fit_parameter(optimizer, "balance"):
-                # each block is in units of its own noise: rebalancing them by their
-                # scales would undo the weighting (an undriven coordinate's rows, where the
-                # law is tested hardest, weighed 30 times less than a driven one's)
-                extra["balance"] = False
-            return optimizer.fit_catalog(rows, n, force_columns, **extra)
+            # whitened rows are each in units of their own noise: rebalancing the blocks by
+            # their scales would undo the weighting (an undriven coordinate's rows, where
+            # the law is tested hardest, weighed 30 times less than a driven one's)
+            moments = None if propagated is None else propagated.moments()
+            return solve(optimizer, dataclasses.replace(
+                problem, theta=rows, noise_moments=moments, balance=not whitened))
 
         def unweighted(reason):  # said only of a fit that succeeds
-            fitted = fit(optimizer, theta, noise)
+            fitted = fit(optimizer, problem.theta, noise)
             warnings.warn(f"residual_covariance: {reason}; the rows are fitted unweighted",
                           UserWarning, stacklevel=2)
             return fitted
 
-        optimizer = self._optimizer(forced, estimated=noise is not None)
         weigh = forced.any() if self.residual_covariance == "auto" else self.residual_covariance
         if noise is None or not weigh:
-            return fit(optimizer, theta, noise)
+            return fit(optimizer, problem.theta, noise)
         try:
             with warnings.catch_warnings():  # the pilot only sets the first weights
                 warnings.simplefilter("ignore")
-                law = fit(pilot_optimizer(optimizer), theta, noise).coef_
+                law = fit(pilot_optimizer(optimizer), problem.theta, noise).coef_
         except (ValueError, RuntimeError, np.linalg.LinAlgError) as error:
             return unweighted(f"the pilot fit failed ({error})")
         # iteratively reweighted: refit with the weights of the latest law until the support
@@ -463,7 +468,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
                 return unweighted("the residual of the law carries no noise")
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
-                fitted = fit(clone(optimizer), whiten(theta), noise.whitened(whiten),
+                fitted = fit(clone(optimizer), whiten(problem.theta), noise.whitened(whiten),
                              whitened=True)
             settled = np.array_equal(fitted.coef_ != 0, law != 0)
             law = fitted.coef_
@@ -474,30 +479,23 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         return fitted
 
     def _optimizer(self, forced: np.ndarray, estimated: bool = False):
-        """The optimizer to fit: a clone of the user's, or the default for the data.
+        """The optimizer to fit: a clone of the user's, or
+        :func:`~pysindy_xl.optimizers.default_optimizer` for the data.
 
         ``estimated``: the columns come from noisy positions only (the weak form propagated
         the smoother's noise estimate into them)."""
-        if self.optimizer is not None:
-            if not hasattr(self.optimizer, "fit_catalog"):
-                if callable(getattr(self.optimizer, "fit", None)):
-                    # a pysindy (or scikit-learn) regressor: explicit regression through it
-                    return ExplicitOptimizer(method=clone(self.optimizer))
-                raise TypeError(
-                    "optimizer: expected a catalog optimizer with fit_catalog (ExplicitOptimizer, "
-                    "ImplicitOptimizer, MixedOptimizer) or a regressor with fit(X, y) such as "
-                    f"pysindy's STLSQ, got {type(self.optimizer).__name__}"
-                )
-            return clone(self.optimizer)
-        if forced.all():
-            # On estimated columns one cross-validated selection keeps a term that only fits
-            # the noise in about a third of the fits (a multiple-comparison effect of ~100
-            # candidates); the terms kept by most subsample fits are the true ones.
-            return EnsembleOptimizer(ExplicitOptimizer()) if estimated else ExplicitOptimizer()
-        if not forced.any():
-            return ImplicitOptimizer()
-        # the forced subsystem is an explicit problem like the one above: bagged on estimates
-        return MixedOptimizer(EnsembleOptimizer(ExplicitOptimizer()) if estimated else None)
+        if self.optimizer is None:
+            return default_optimizer(forced, estimated)
+        if not hasattr(self.optimizer, "fit_catalog"):
+            if callable(getattr(self.optimizer, "fit", None)):
+                # a pysindy (or scikit-learn) regressor: explicit regression through it
+                return ExplicitOptimizer(method=clone(self.optimizer))
+            raise TypeError(
+                "optimizer: expected a catalog optimizer with fit_catalog (ExplicitOptimizer, "
+                "ImplicitOptimizer, MixedOptimizer) or a regressor with fit(X, y) such as "
+                f"pysindy's STLSQ, got {type(self.optimizer).__name__}"
+            )
+        return clone(self.optimizer)
 
     def _build_dynamics(self):
         equations = self._equation_exprs()
@@ -512,6 +510,38 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             sp.expand(sp.Add(*(sp.Float(self.coef_[j]) * matrix[i, j] for j in active)))
             for i in range(matrix.shape[0])
         ]
+
+    # -- persistence ---------------------------------------------------------------------------
+    @classmethod
+    def load(cls, path) -> XLSINDy:
+        """Load a model written by :meth:`save`; parses only the restricted term grammar and
+        the registered library and optimizer types (:mod:`pysindy_xl.io`).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+
+        Returns
+        -------
+        XLSINDy
+            A fitted model that predicts and simulates like the saved one.
+
+        Raises
+        ------
+        ValueError
+            If the file is not a valid model file (the message says what is wrong).
+        """
+        contents = read_model_file(path)
+        model = cls(feature_library=contents.feature_library, optimizer=contents.optimizer,
+                    **contents.settings)
+        try:
+            model._check_options()
+        except (TypeError, ValueError) as err:
+            raise invalid_model_file(path, f"settings: {err}") from None
+        for name, value in contents.fitted.items():
+            setattr(model, name, value)
+        model._build_dynamics()
+        return model
 
     # -- inspection ----------------------------------------------------------------------------
     def coefficients(self) -> np.ndarray:

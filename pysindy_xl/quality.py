@@ -1,6 +1,7 @@
 """How well an identified model explains its own data, and how it simulates it.
 
-:func:`fit_quality` rebuilds the regression the model solved (strong or weak form) and reports
+:func:`fit_quality` rebuilds the regression the model solved (strong or weak form, through
+:meth:`XLSINDy.regression <pysindy_xl.XLSINDy.regression>`) and reports
 ``R^2`` per coordinate, the held-out score of its sparsity selection and, after a bagged fit,
 the stability of its terms; :func:`plot_identification` simulates the model from a recorded
 trajectory. The ``pysindy-xl identify`` command prints and plots both.
@@ -11,43 +12,6 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["fit_quality", "quality_lines", "plot_identification"]
-
-
-def _regression_matrix(model, arguments):
-    """The fitted model's regression matrix rebuilt on its training data, rows coordinate-major.
-
-    Strong form: the catalog at every sample (derivatives as in ``fit``). Weak form: the
-    smoothed states contracted with the test functions of the fit's width, one block per
-    trajectory long enough for a test function (as in ``fit``).
-    """
-    from pysindy_xl.feature_library import stack_variables
-
-    library, n = model.feature_library_, model.n_coordinates_
-    weak = model.formulation_ == "weak"
-    data = model._trajectories(arguments["x"], arguments.get("t"), arguments.get("x_dot"),
-                               arguments.get("x_ddot"), arguments.get("u"), n,
-                               differentiate=not weak)
-    blocks = []
-    if not weak:
-        for d in data:
-            z = stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"])
-            blocks.append(library.transform(z).reshape(n, len(d["t"]), -1))
-        return np.concatenate(blocks, axis=1).reshape(-1, blocks[0].shape[-1])
-    from pysindy_xl.weak import BumpTestFunctions, WhittakerSmoother
-
-    smoother = model.smoother or WhittakerSmoother()
-    test_functions = model.test_functions or BumpTestFunctions()
-    half_width = model.weak_info_["half_width"]
-    for d in data:
-        if d["t"][-1] - d["t"][0] < 2 * half_width:
-            continue  # left out of the fit too
-        q, qd, qdd = smoother.smooth(d["t"], d["x"])
-        if d["x_dot"] is not None:
-            q, qd = d["x"], d["x_dot"]
-        z = stack_variables(q, qd, qdd, d["u"], d["t"])
-        phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
-        blocks.append(library.weak_transform(z, phi, dphi).reshape(n, phi.shape[0], -1))
-    return np.concatenate(blocks, axis=1).reshape(-1, blocks[0].shape[-1])
 
 
 def fit_quality(model, arguments) -> dict:
@@ -103,7 +67,8 @@ def fit_quality(model, arguments) -> dict:
     if not isinstance(arguments, dict) or "x" not in arguments:
         raise TypeError("arguments: expected the dict of fit arguments (with 'x'), got "
                         f"{type(arguments).__name__}")
-    theta = _regression_matrix(model, arguments)
+    fit_keys = ("x", "t", "x_dot", "x_ddot", "u", "sample_mask")
+    theta = model.regression(**{key: arguments.get(key) for key in fit_keys}).theta
     coef = model.coef_
     n = model.n_coordinates_
     forces = list(model.feature_library_.force_columns_)

@@ -110,7 +110,8 @@ def test_complementary_pairs_count_a_term_only_when_both_halves_keep_it():
 class _LeastSquares(CatalogOptimizer):
     """A catalog optimizer without fit_support: plain least squares on every column."""
 
-    def fit_catalog(self, theta, n_coordinates, force_columns):
+    def _solve(self, problem):
+        theta, force_columns = problem.theta, problem.force_columns
         rest = np.setdiff1d(np.arange(theta.shape[1]), force_columns)
         self.coef_ = np.full(theta.shape[1], -1.0)
         self.coef_[rest] = np.linalg.lstsq(theta[:, rest], theta[:, force_columns].sum(1),
@@ -240,11 +241,9 @@ class _RecordingImplicit(px.ImplicitOptimizer):
 
     received = []
 
-    def fit_catalog(self, theta, n_coordinates, force_columns, reference_columns=None,
-                    noise_moments=None, mass_matrices=None):
-        _RecordingImplicit.received.append(mass_matrices)
-        return super().fit_catalog(theta, n_coordinates, force_columns, reference_columns,
-                                   noise_moments, mass_matrices)
+    def fit_problem(self, problem):
+        _RecordingImplicit.received.append(problem.mass_matrices)
+        return super().fit_problem(problem)
 
 
 def test_every_fit_gets_the_mass_matrices_its_optimizer_takes():
@@ -297,11 +296,11 @@ class _NoisyExplicit(px.ExplicitOptimizer):
     """An ExplicitOptimizer whose fits warn once each, and fail on rows whose first force
     value is the marker 99 (the subsamples holding the first chunk)."""
 
-    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None):
+    def fit_problem(self, problem):
         warnings.warn("a note from one fit", RuntimeWarning, stacklevel=2)
-        if theta[0, 0] == 99.0:
+        if problem.theta[0, 0] == 99.0:
             raise ValueError("marked rows")
-        return super().fit_catalog(theta, n_coordinates, force_columns, noise_moments)
+        return super().fit_problem(problem)
 
 
 @pytest.mark.parametrize("n_jobs", [None, 2])

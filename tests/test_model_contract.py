@@ -103,7 +103,7 @@ def test_the_warnings_of_a_fit_point_at_the_callers_line(cart_pole_data):
 
 
 class _WarnsThenFails(px.ExplicitOptimizer):
-    def fit_catalog(self, theta, n_coordinates, force_columns, **kwargs):
+    def _solve(self, problem):
         warnings.warn("the columns look odd", px.IdentificationWarning, stacklevel=2)
         raise np.linalg.LinAlgError("singular")
 

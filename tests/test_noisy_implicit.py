@@ -395,9 +395,8 @@ def test_implicit_ensemble_refits_the_agreed_terms_instead_of_median_laws():
 class _OneColumnImplicit(px.ImplicitOptimizer):
     """Every subsample fit keeps column 0 alone: the agreed terms form no law."""
 
-    def fit_catalog(self, theta, n_coordinates, force_columns, reference_columns=None,
-                    noise_moments=None, mass_matrices=None):
-        self.coef_ = np.eye(theta.shape[1])[0]
+    def _solve(self, problem):
+        self.coef_ = np.eye(problem.n_features)[0]
         return self
 
 

@@ -12,7 +12,7 @@ from ground_truth import random_force, random_initial_state
 from test_explicit_identification import paper_catalog
 
 import pysindy_xl as px
-from pysindy_xl.io import FORMAT, VERSION, load_model, save_model
+from pysindy_xl.io import FORMAT, VERSION, save_model
 from pysindy_xl.quality import fit_quality
 
 
@@ -110,7 +110,7 @@ def test_file_is_plain_json_without_pickle(saved, cart_pole_model, tmp_path, mon
     model, _ = cart_pole_model
     path = tmp_path / "no_pickle.json"
     model.save(str(path))  # str paths work as well as pathlib ones
-    reloaded = load_model(str(path))
+    reloaded = px.XLSINDy.load(str(path))
     np.testing.assert_array_equal(reloaded.coefficients(), model.coefficients())
 
 
@@ -214,7 +214,7 @@ def test_non_finite_coefficient_rejected(literal, saved, tmp_path):
     path = tmp_path / "nan.json"
     path.write_text(text)
     with pytest.raises(ValueError, match=f"non-finite number {literal}"):
-        load_model(path)
+        px.XLSINDy.load(path)
 
 
 def test_overflowing_coefficient_rejected(saved, tmp_path):
@@ -223,14 +223,14 @@ def test_overflowing_coefficient_rejected(saved, tmp_path):
     path = tmp_path / "overflow.json"
     path.write_text(json.dumps(document).replace('"PLACEHOLDER"', "1e999"))
     with pytest.raises(ValueError, match="coefficients"):
-        load_model(path)
+        px.XLSINDy.load(path)
 
 
 def test_deeply_nested_term_rejected(saved, tmp_path):
     path = _tamper(saved, tmp_path, lambda d: _lagrange_spec(d)["terms"].__setitem__(
         0, "(" * 400 + "x_dot" + ")" * 400))
     with pytest.raises(ValueError, match="is not a valid pysindy-xl model file"):
-        load_model(path)
+        px.XLSINDy.load(path)
 
 
 @pytest.mark.parametrize(
@@ -248,7 +248,7 @@ def test_non_json_or_non_object_file_rejected(content, tmp_path):
     path = tmp_path / "bad.json"
     path.write_text(content)
     with pytest.raises(ValueError, match="is not a valid pysindy-xl model file"):
-        load_model(path)
+        px.XLSINDy.load(path)
 
 
 def test_pickle_file_rejected_without_unpickling(tmp_path, monkeypatch):
@@ -261,14 +261,14 @@ def test_pickle_file_rejected_without_unpickling(tmp_path, monkeypatch):
     monkeypatch.setattr(pickle, "loads", forbidden)
     monkeypatch.setattr(pickle, "load", forbidden)
     with pytest.raises(ValueError, match="not JSON"):
-        load_model(path)
+        px.XLSINDy.load(path)
 
 
 def test_missing_file_and_directory_rejected(tmp_path):
     with pytest.raises(ValueError, match="path: no such file"):
-        load_model(tmp_path / "missing.json")
+        px.XLSINDy.load(tmp_path / "missing.json")
     with pytest.raises(ValueError, match="path: no such file"):
-        load_model(tmp_path)
+        px.XLSINDy.load(tmp_path)
 
 
 def test_full_precision_constants_and_interlink_survive_round_trip(tmp_path):
@@ -288,7 +288,7 @@ def test_full_precision_constants_and_interlink_survive_round_trip(tmp_path):
     np.testing.assert_allclose(model.predict(q, qd, u), qdd, atol=1e-8)
     path = tmp_path / "precise.json"
     model.save(path)
-    loaded = load_model(path)
+    loaded = px.XLSINDy.load(path)
     assert loaded.get_feature_names() == model.get_feature_names()
     np.testing.assert_array_equal(loaded.coefficients(), model.coefficients())
     np.testing.assert_array_equal(loaded.predict(q, qd, u), model.predict(q, qd, u))
@@ -313,7 +313,7 @@ def test_non_finite_or_complex_term_rejected(bad, saved, tmp_path):
 
     path = _tamper(saved, tmp_path, change)
     with pytest.raises(ValueError, match="is not a valid pysindy-xl model file"):
-        load_model(path)
+        px.XLSINDy.load(path)
 
 
 # ------------------------------------------------- a bagged fit keeps its uncertainty on disk
@@ -382,7 +382,7 @@ def test_an_ensemble_inside_an_ensemble_is_refused(noisy_model, tmp_path):
     document["optimizer"]["params"]["optimizer"] = {"type": "EnsembleOptimizer", "params": {}}
     target = tmp_path / "nested.json"
     target.write_text(json.dumps(document))
-    with pytest.raises(ValueError, match="optimizer.params.optimizer"):
+    with pytest.raises(ValueError, match="cannot bag another EnsembleOptimizer"):
         px.XLSINDy.load(target)
 
 
@@ -463,7 +463,7 @@ def test_files_without_settings_or_diagnostics_still_load(weak_model, tmp_path):
     del document["settings"], document["training"]
     target = tmp_path / "older.json"
     target.write_text(json.dumps(document))
-    loaded = load_model(target)
+    loaded = px.XLSINDy.load(target)
     assert loaded.formulation_ is None and loaded.selection_ is None
     assert loaded.test_functions is None and loaded.t_default == 1.0
     np.testing.assert_array_equal(loaded.coefficients(), model.coefficients())
@@ -476,7 +476,7 @@ def test_non_finite_diagnostics_round_trip_as_strings(weak_model, tmp_path):
     document["training"]["mass_matrix_check"]["median_condition"] = "nan"
     target = tmp_path / "inf.json"
     target.write_text(json.dumps(document))
-    loaded = load_model(target)
+    loaded = px.XLSINDy.load(target)
     assert loaded.selection_.cv_error[0] == np.inf
     assert np.isnan(loaded.mass_matrix_check_["median_condition"])
     save_model(loaded, tmp_path / "again.json")
@@ -490,12 +490,12 @@ def test_unsaveable_setting_warns_and_is_left_out(weak_model, tmp_path):
     custom.fit(arguments["x"], arguments["t"], u=arguments["u"])
     with pytest.warns(UserWarning, match="differentiation_method: SmoothedFiniteDifference"):
         custom.save(tmp_path / "custom.json")
-    assert load_model(tmp_path / "custom.json").differentiation_method is None
+    assert px.XLSINDy.load(tmp_path / "custom.json").differentiation_method is None
     plain = px.XLSINDy(model.feature_library, px.ExplicitOptimizer(),
                        differentiation_method=ps.FiniteDifference(order=2))
     plain.fit(arguments["x"], arguments["t"], u=arguments["u"])
     plain.save(tmp_path / "plain.json")
-    method = load_model(tmp_path / "plain.json").differentiation_method
+    method = px.XLSINDy.load(tmp_path / "plain.json").differentiation_method
     assert isinstance(method, ps.FiniteDifference) and method.order == 2
 
 
@@ -550,4 +550,4 @@ def test_tampered_settings_or_diagnostics_are_refused(case, weak_model, tmp_path
     change, match = TAMPERED_TRAINING[case]
     _, path, _ = weak_model
     with pytest.raises(ValueError, match=f"not a valid pysindy-xl model file: {match}"):
-        load_model(_tamper(path, tmp_path, change))
+        px.XLSINDy.load(_tamper(path, tmp_path, change))

@@ -107,7 +107,7 @@ def test_double_pendulum_on_a_cart_at_five_percent(cart_double_pendulum_system, 
 
 
 class _NoLaw(CatalogOptimizer):
-    def fit_catalog(self, theta, n_coordinates, force_columns):
+    def _solve(self, problem):
         raise ValueError("no law on these rows")
 
 

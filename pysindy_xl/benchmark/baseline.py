@@ -38,16 +38,13 @@ def baseline_terms(catalog) -> list[sp.Expr]:
     list of sympy.Expr
         Distinct classical terms without any acceleration symbol, in catalog order.
     """
-    from ..feature_library import ClassicalLibrary
-
-    coords = catalog.coords
-    accelerations = set(coords.qdd)
+    catalog.symbolic_matrix()  # the columns, derived on first use
+    accelerations = set(catalog.coords.qdd)
     found = []
-    for library in catalog._flat_libraries():
-        if isinstance(library, ClassicalLibrary):
-            for term in library._resolved_terms():
-                if not (term.free_symbols & accelerations) and term not in found:
-                    found.append(term)
+    for category, term in zip(catalog.categories_, catalog.feature_terms_, strict=True):
+        if (category == "classical" and not (term.free_symbols & accelerations)
+                and term not in found):
+            found.append(term)
     if not found:
         raise ValueError("catalog: no classical term without acceleration")
     return found

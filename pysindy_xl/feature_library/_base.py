@@ -25,11 +25,17 @@ from pysindy.feature_library.base import BaseFeatureLibrary
 from sklearn.utils.validation import check_is_fitted
 
 from .._validation import check_numeric_array
+from ..registry import register_type
 from ..symbols import Coordinates
 from ._compile import compile_entries
 from ._weak import integrate_by_parts
 
-__all__ = ["SymbolicLibrary", "stack_variables", "compile_entries"]
+__all__ = ["SymbolicLibrary", "stack_variables", "compile_entries", "LIBRARY_TYPES"]
+
+#: Every catalog category by its ``spec_type``: what a model file may name. A subclass of
+#: :class:`SymbolicLibrary` registers itself when it is defined (in this package or in a
+#: user's code); loading looks classes up here and never imports anything.
+LIBRARY_TYPES: dict[str, type] = {}
 
 _WEAK_BLOCK = 8192  # samples per block of the weak evaluation
 
@@ -100,8 +106,19 @@ class SymbolicLibrary(BaseFeatureLibrary):
     array([[0.479]])
     """
 
-    #: category label used in feature names and reports
+    #: category label used in feature names and reports; ``"forces"`` marks the known
+    #: right-hand side, ``"lagrange"`` features whose term is a candidate Lagrangian term
     category = "symbolic"
+    #: preference among exactly dependent columns (lower is kept; see
+    #: :meth:`CatalogRepartition.column_priority
+    #: <pysindy_xl.CatalogRepartition.column_priority>`)
+    column_rank = 3
+    #: the name a model file gives this class (default: ``module.QualifiedName``)
+    spec_type: str
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        register_type(LIBRARY_TYPES, cls)
 
     def __init__(self, coords: Coordinates):
         self.coords = coords
@@ -109,6 +126,11 @@ class SymbolicLibrary(BaseFeatureLibrary):
     # -- to implement --------------------------------------------------------------------
     def _build_symbolic(self) -> tuple[list[str], sp.Matrix]:
         raise NotImplementedError
+
+    def _feature_terms(self) -> list:
+        """The term each feature stands for (a Lagrangian term for the ``"lagrange"``
+        category, the added function for a classical one), None where there is none."""
+        return [None] * self.n_output_features_
 
     def _check_coords(self):
         if not isinstance(self.coords, Coordinates):
@@ -157,10 +179,11 @@ class SymbolicLibrary(BaseFeatureLibrary):
                     ) from None
         self.feature_names_ = list(names)
         self.symbolic_matrix_ = matrix
+        self.n_output_features_ = len(names)
+        self.feature_terms_ = list(self._feature_terms())
         for stale in ("weak_P_", "weak_Q_", "_weak_evaluate", "_weak_entry_index"):
             self.__dict__.pop(stale, None)
         self.n_features_in_ = len(self.coords.variables)
-        self.n_output_features_ = len(names)
 
     def _compile(self):
         entries = [(c, j) for c in range(self.coords.n) for j in range(self.n_output_features_)]
@@ -360,9 +383,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
         return self.symbolic_matrix_
 
     def __add__(self, other):
-        from .repartition import CatalogRepartition
-
-        return CatalogRepartition([self, other])
+        return LIBRARY_TYPES["CatalogRepartition"]([self, other])
 
     # -- persistence ----------------------------------------------------------------------
     def to_spec(self) -> dict:
@@ -371,5 +392,26 @@ class SymbolicLibrary(BaseFeatureLibrary):
         Returns
         -------
         dict
+            ``{"type": spec_type, ...}``, read back by :meth:`from_spec`.
         """
-        raise NotImplementedError
+        raise NotImplementedError(f"{type(self).__name__}: to_spec is not implemented; a "
+                                  "library that can be saved describes itself in plain JSON")
+
+    @classmethod
+    def from_spec(cls, spec: dict, reader):
+        """The library a specification describes (the inverse of :meth:`to_spec`).
+
+        Parameters
+        ----------
+        spec : dict
+            As written by :meth:`to_spec`; untrusted (it comes from a file).
+        reader : pysindy_xl.feature_library.SpecReader
+            Parses the parts of ``spec`` within the loader's budget: ``reader.coords``,
+            ``reader.terms(spec)``, ``reader.matrix(spec, key, shape)``,
+            ``reader.library(spec)`` for nested libraries, ``reader.expect(condition, what)``.
+
+        Returns
+        -------
+        SymbolicLibrary
+        """
+        raise NotImplementedError(f"{cls.__name__}: from_spec is not implemented")

@@ -103,6 +103,8 @@ class ClassicalLibrary(SymbolicLibrary):
     """
 
     category = "classical"
+    column_rank = 2
+    spec_type = "ClassicalLibrary"
 
     def __init__(self, coords: Coordinates, terms, mask=None):
         self.coords = coords
@@ -151,18 +153,32 @@ class ClassicalLibrary(SymbolicLibrary):
             matrix[c, j] = term
         return names, matrix
 
+    def _feature_terms(self):
+        return [term for term, row in zip(self.terms_, self.mask_, strict=True)
+                for used in row if used]
+
     def to_spec(self) -> dict:
         """JSON-serializable description of this library (terms in the restricted grammar).
 
         Returns
         -------
         dict
-            Read back by :func:`pysindy_xl.io.load_model`.
+            Read back by :meth:`from_spec`.
         """
         if not hasattr(self, "terms_"):
             self.fit()
         return {
-            "type": "ClassicalLibrary",
+            "type": self.spec_type,
             "terms": [format_expression(t) for t in self.terms_],
             "mask": self.mask_.astype(int).tolist(),
         }
+
+    @classmethod
+    def from_spec(cls, spec, reader):
+        """The library :meth:`to_spec` describes (see
+        :meth:`SymbolicLibrary.from_spec <pysindy_xl.feature_library.SymbolicLibrary.from_spec>`).
+        """
+        terms = reader.terms(spec)
+        mask = reader.matrix(spec, "mask", (len(terms), reader.coords.n), binary=True,
+                             shape_name="(n_terms, n)")
+        return cls(reader.coords, terms, mask=mask)

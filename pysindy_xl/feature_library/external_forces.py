@@ -83,6 +83,8 @@ class ExternalForces(SymbolicLibrary):
     """
 
     category = "forces"
+    column_rank = 0
+    spec_type = "ExternalForces"
 
     def __init__(self, coords: Coordinates, interlink=None):
         self.coords = coords
@@ -128,9 +130,18 @@ class ExternalForces(SymbolicLibrary):
         Returns
         -------
         dict
-            Read back by :func:`pysindy_xl.io.load_model`.
+            Read back by :meth:`from_spec`.
         """
         return {
-            "type": "ExternalForces",
+            "type": self.spec_type,
             "interlink": _interlink_matrix(self.interlink, self.coords.n).tolist(),
         }
+
+    @classmethod
+    def from_spec(cls, spec, reader):
+        """The library :meth:`to_spec` describes (see
+        :meth:`SymbolicLibrary.from_spec <pysindy_xl.feature_library.SymbolicLibrary.from_spec>`).
+        """
+        n = reader.coords.n
+        return cls(reader.coords,
+                   interlink=reader.matrix(spec, "interlink", (n, n), shape_name="(n, n)"))

@@ -119,6 +119,8 @@ class LagrangeLibrary(SymbolicLibrary):
     """
 
     category = "lagrange"
+    column_rank = 1
+    spec_type = "LagrangeLibrary"
 
     def __init__(self, coords: Coordinates, terms):
         self.coords = coords
@@ -141,6 +143,9 @@ class LagrangeLibrary(SymbolicLibrary):
         matrix = sp.Matrix(self.coords.n, len(terms), lambda i, j: columns[j][i])
         self.zero_terms_ = [j for j, col in enumerate(columns) if all(e == 0 for e in col)]
         return [f"L[{term}]" for term in terms], matrix
+
+    def _feature_terms(self):
+        return self.terms_
 
     def check_domain(self, x) -> None:
         """Raise ``ValueError`` naming the candidate terms that are NaN or inf on the data.
@@ -193,7 +198,14 @@ class LagrangeLibrary(SymbolicLibrary):
         Returns
         -------
         dict
-            Read back by :func:`pysindy_xl.io.load_model`.
+            Read back by :meth:`from_spec`.
         """
         terms = as_expr_list(self.terms, "terms")
-        return {"type": "LagrangeLibrary", "terms": [format_expression(t) for t in terms]}
+        return {"type": self.spec_type, "terms": [format_expression(t) for t in terms]}
+
+    @classmethod
+    def from_spec(cls, spec, reader):
+        """The library :meth:`to_spec` describes (see
+        :meth:`SymbolicLibrary.from_spec <pysindy_xl.feature_library.SymbolicLibrary.from_spec>`).
+        """
+        return cls(reader.coords, reader.terms(spec))

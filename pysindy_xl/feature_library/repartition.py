@@ -7,13 +7,9 @@ import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
 from ._base import SymbolicLibrary
-from .classical import ClassicalLibrary
 from .external_forces import ExternalForces
-from .lagrange import LagrangeLibrary
 
 __all__ = ["CatalogRepartition"]
-
-_CATEGORY_RANK = {"forces": 0, "lagrange": 1, "classical": 2}
 
 
 def _monomial_coefficients(expr: sp.Expr) -> dict:
@@ -45,7 +41,10 @@ class CatalogRepartition(SymbolicLibrary):
     slices_ : list of slice
         Columns of each library in the regression matrix.
     categories_ : list of str
-        Category of each feature: ``"forces"``, ``"lagrange"`` or ``"classical"``.
+        Category of each feature (its library's ``category``): ``"forces"``,
+        ``"lagrange"``, ``"classical"`` or that of a user's library.
+    feature_terms_ : list
+        The term each feature stands for (its library's ``feature_terms_``).
     force_columns_ : list of int
         Indices of the force columns.
 
@@ -62,15 +61,21 @@ class CatalogRepartition(SymbolicLibrary):
     """
 
     category = "repartition"
+    spec_type = "CatalogRepartition"
 
     def __init__(self, libraries):
         self.libraries = libraries
 
     @property
     def coords(self):
-        return self._flat_libraries()[0].coords
+        return self.flat_libraries()[0].coords
 
-    def _flat_libraries(self, _parents=()) -> list[SymbolicLibrary]:
+    def flat_libraries(self, _parents=()) -> list[SymbolicLibrary]:
+        """The libraries, nested catalogs flattened, a force library first when none is given.
+
+        Raises ``TypeError`` for something that is not a library and ``ValueError`` for a
+        catalog nested in itself or libraries of different coordinates.
+        """
         if isinstance(self.libraries, SymbolicLibrary) or not hasattr(self.libraries, "__iter__"):
             raise TypeError("libraries: expected a list of pysindy_xl feature libraries")
         parents = (*_parents, id(self))
@@ -80,14 +85,15 @@ class CatalogRepartition(SymbolicLibrary):
                 if id(lib) in parents:
                     raise ValueError("libraries: the catalog contains itself (a "
                                      "CatalogRepartition nested in its own libraries)")
-                flat.extend(lib._flat_libraries(parents))
+                flat.extend(lib.flat_libraries(parents))
             elif isinstance(lib, SymbolicLibrary):
                 flat.append(lib)
             else:
                 raise TypeError(
-                    "libraries: expected pysindy_xl feature libraries (LagrangeLibrary, "
-                    f"ClassicalLibrary, ExternalForces), got {type(lib).__name__}; wrap pysindy "
-                    "libraries in ClassicalLibrary(coords, library)"
+                    "libraries: expected pysindy_xl feature libraries (SymbolicLibrary "
+                    "subclasses such as LagrangeLibrary, ClassicalLibrary, ExternalForces), got "
+                    f"{type(lib).__name__}; wrap pysindy libraries in "
+                    "ClassicalLibrary(coords, library)"
                 )
         if not flat:
             raise ValueError("libraries: expected at least one library")
@@ -98,28 +104,31 @@ class CatalogRepartition(SymbolicLibrary):
                     f"libraries: all libraries must share the same coordinates, got {coords} "
                     f"and {lib.coords}"
                 )
-        if not any(isinstance(lib, ExternalForces) for lib in flat):
+        if not any(lib.category == "forces" for lib in flat):
             flat.insert(0, ExternalForces(coords))
         return flat
 
     def _check_coords(self):
-        self._flat_libraries()[0]._check_coords()
+        self.flat_libraries()[0]._check_coords()
 
     def _build_symbolic(self):
-        libraries = self._flat_libraries()
-        names, blocks, slices, categories = [], [], [], []
+        libraries = self.flat_libraries()
+        names, blocks, slices = [], [], []
         for lib in libraries:
             lib._fit_symbolic()
             start = len(names)
             names.extend(lib.feature_names_)
             blocks.append(lib.symbolic_matrix_)
             slices.append(slice(start, len(names)))
-            categories.extend([lib.category] * lib.n_output_features_)
         self.libraries_ = libraries
         self.slices_ = slices
-        self.categories_ = categories
-        self.force_columns_ = [j for j, cat in enumerate(categories) if cat == "forces"]
+        self.categories_ = [lib.category for lib in libraries
+                            for _ in range(lib.n_output_features_)]
+        self.force_columns_ = [j for j, cat in enumerate(self.categories_) if cat == "forces"]
         return names, sp.Matrix.hstack(*blocks)
+
+    def _feature_terms(self):
+        return [term for lib in self.libraries_ for term in lib.feature_terms_]
 
     def _build_weak_symbolic(self):
         parts = [lib.weak_matrices() for lib in self.libraries_]
@@ -148,8 +157,9 @@ class CatalogRepartition(SymbolicLibrary):
     def column_priority(self) -> np.ndarray:
         """Feature indices from most to least preferred when columns are linearly dependent.
 
-        Force columns first, then Lagrange terms, then classical ones; within a category the
-        symbolically simpler column first (fewer terms in its entries), then catalog order.
+        By the ``column_rank`` of each column's library (force columns first, then Lagrange
+        terms, then classical ones, then other libraries); within a rank the symbolically
+        simpler column first (fewer terms in its entries), then catalog order.
 
         Returns
         -------
@@ -160,10 +170,8 @@ class CatalogRepartition(SymbolicLibrary):
             sum(len(sp.Add.make_args(e)) for e in self.symbolic_matrix_[:, j] if e != 0)
             for j in range(self.n_output_features_)
         ]
-        keys = [
-            (_CATEGORY_RANK.get(cat, 3), complexity[j], j)
-            for j, cat in enumerate(self.categories_)
-        ]
+        ranks = [lib.column_rank for lib in self.libraries_ for _ in range(lib.n_output_features_)]
+        keys = [(ranks[j], complexity[j], j) for j in range(self.n_output_features_)]
         return np.array([k[-1] for k in sorted(keys)], dtype=int)
 
     def ideal_coefficients(self, lagrangian=None, classical=None, forces: float = -1.0):
@@ -203,12 +211,8 @@ class CatalogRepartition(SymbolicLibrary):
         return xi
 
     def _match_lagrangian(self, lagrangian: sp.Expr, xi: np.ndarray):
-        columns, expansions = [], []
-        for lib, sl in zip(self.libraries_, self.slices_, strict=True):
-            if isinstance(lib, LagrangeLibrary):
-                for k, term in enumerate(lib.terms_):
-                    columns.append(sl.start + k)
-                    expansions.append(_monomial_coefficients(term))
+        columns = [j for j, cat in enumerate(self.categories_) if cat == "lagrange"]
+        expansions = [_monomial_coefficients(self.feature_terms_[j]) for j in columns]
         target = _monomial_coefficients(lagrangian)
         monomials = sorted(set(target).union(*expansions), key=sp.default_sort_key)
         row = {m: i for i, m in enumerate(monomials)}
@@ -248,15 +252,11 @@ class CatalogRepartition(SymbolicLibrary):
         from ..expressions import as_expression
 
         term = as_expression(term, self.coords.symbol_table(), "classical")
-        for lib, sl in zip(self.libraries_, self.slices_, strict=True):
-            if isinstance(lib, ClassicalLibrary):
-                j = sl.start
-                for k, t in enumerate(lib.terms_):
-                    for c in range(self.coords.n):
-                        if lib.mask_[k, c]:
-                            if c == coord and sp.simplify(t - term) == 0:
-                                return j
-                            j += 1
+        for j, category in enumerate(self.categories_):
+            # a classical feature enters one equation: the row where its column is not zero
+            if (category == "classical" and self.symbolic_matrix_[coord, j] != 0
+                    and sp.simplify(self.feature_terms_[j] - term) == 0):
+                return j
         raise ValueError(
             f"classical: term {term} in the equation of {self.coords.names[coord]} is not in "
             "the catalog"
@@ -268,9 +268,19 @@ class CatalogRepartition(SymbolicLibrary):
         Returns
         -------
         dict
-            Read back by :func:`pysindy_xl.io.load_model`.
+            Read back by :meth:`from_spec`.
         """
         return {
-            "type": "CatalogRepartition",
-            "libraries": [lib.to_spec() for lib in self._flat_libraries()],
+            "type": self.spec_type,
+            "libraries": [lib.to_spec() for lib in self.flat_libraries()],
         }
+
+    @classmethod
+    def from_spec(cls, spec, reader):
+        """The catalog :meth:`to_spec` describes, each library through ``reader`` (see
+        :meth:`SymbolicLibrary.from_spec <pysindy_xl.feature_library.SymbolicLibrary.from_spec>`).
+        """
+        libraries = spec.get("libraries")
+        reader.expect(isinstance(libraries, list) and libraries,
+                      "libraries must be a non-empty list")
+        return cls([reader.library(item) for item in libraries])

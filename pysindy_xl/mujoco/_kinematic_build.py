@@ -10,7 +10,7 @@ import numpy as np
 import scipy.linalg
 import sympy as sp
 
-from ._trigpoly import state_values
+from ..feature_library.trigpoly import state_values
 from .systems import MJCFSystem, MuJoCoSystem, get_system
 
 # A column whose part orthogonal to the kept columns is below this fraction of its norm is

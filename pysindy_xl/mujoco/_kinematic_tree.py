@@ -5,7 +5,7 @@ For every moving body, the velocity ``v`` of its frame origin and its angular ve
 ``g . p`` are propagated from the world through body offsets, orientations and joints exactly
 as MuJoCo's ``mj_kinematics`` places the frames (hinges turn about their axis through the anchor
 ``jnt_pos``, slides translate along their axis, angles are measured from ``qpos0``). Everything
-is a :class:`~pysindy_xl.mujoco._trigpoly.TrigPolynomial` in the system's coordinates.
+is a :class:`~pysindy_xl.feature_library.trigpoly.TrigPolynomial` in the system's coordinates.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from ._trigpoly import TrigPolynomial
+from ..feature_library.trigpoly import TrigPolynomial
 from .systems import MuJoCoSystem
 
 __all__ = ["INERTIAL_PARAMETERS", "body_functions", "physical_values"]

@@ -285,12 +285,11 @@ def _kinematic_truth(system, catalog, names, forces):
     hinge), not the per-coordinate velocities of :meth:`MuJoCoSystem.friction`, so the generic
     matching below would miss them.
     """
-    from ..feature_library import ExternalForces
     from .kinematic import PolynomialLagrangeLibrary, kinematic_catalog
 
     if not any(isinstance(lib, PolynomialLagrangeLibrary) for lib in catalog.libraries_):
         return None
-    forces_library = next(lib for lib in catalog.libraries_ if isinstance(lib, ExternalForces))
+    forces_library = next(lib for lib in catalog.libraries_ if lib.category == "forces")
     kinematic = kinematic_catalog(system)
     reference = kinematic.library(interlink=forces_library.interlink)
     if reference.fit().get_feature_names() != names:
@@ -349,7 +348,6 @@ def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.
     >>> missing
     ['+0.5*x_dot in the equation of x', '+0.1*theta_dot in the equation of theta']
     """
-    from ..feature_library import LagrangeLibrary
 
     system = get_system(system)
     if not system.has_ground_truth:
@@ -363,7 +361,7 @@ def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.
     kinematic = _kinematic_truth(system, catalog, names, forces)
     if kinematic is not None:
         return kinematic, []
-    has_lagrange = any(isinstance(lib, LagrangeLibrary) for lib in catalog.libraries_)
+    has_lagrange = any(lib.category == "lagrange" for lib in catalog.libraries_)
     classical: dict = {}
     for (term, i), value in system.friction().items():
         classical[(term, i)] = classical.get((term, i), 0.0) + value

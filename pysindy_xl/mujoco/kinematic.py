@@ -22,7 +22,8 @@ direction. The dependent parameters fold into the kept ones: the coefficient of 
 the *combination* of physical parameters that :attr:`KinematicCatalog.parameters` records, so an
 identified model reports physical parameters.
 
-The derivation runs on sparse trigonometric polynomials (:mod:`._trigpoly`, with
+The derivation runs on sparse trigonometric polynomials
+(:mod:`pysindy_xl.feature_library.trigpoly`, with
 ``cos^2 = 1 - sin^2`` as canonical form), not on generic sympy expressions, and
 :class:`PolynomialLagrangeLibrary` derives the Euler-Lagrange columns the same way: a 4-joint
 spatial arm with tilted axes takes about 1 s to derive and 2 s to turn into a library, a 7-joint
@@ -42,10 +43,10 @@ import time
 
 import mujoco
 import numpy as np
-import sympy as sp
 
-from ..feature_library import LagrangeLibrary
-from ..symbols import Coordinates, as_expr_list
+from ..feature_library import PolynomialLagrangeLibrary
+from ..feature_library.trigpoly import evaluate_many, state_values
+from ..symbols import Coordinates
 from ._kinematic_build import (
     classical_candidates,
     independent_regressor_columns,
@@ -53,7 +54,6 @@ from ._kinematic_build import (
     resolve_system,
 )
 from ._kinematic_tree import INERTIAL_PARAMETERS, body_functions, physical_values
-from ._trigpoly import TrigPolynomial, evaluate_many, state_values
 from .systems import MuJoCoSystem
 
 __all__ = ["KinematicCatalog", "PolynomialLagrangeLibrary", "kinematic_catalog",
@@ -227,7 +227,7 @@ class KinematicCatalog:
         out = np.zeros(len(self.lagrange_terms))
         index = {name: k for k, name in enumerate(names)}
         for j, term in enumerate(self.lagrange_terms):
-            name = _feature_name(term)
+            name = f"L[{term}]"
             if name not in index:
                 raise ValueError(f"model: its catalog has no feature {name!r}")
             out[j] = coefficients[index[name]] * scale
@@ -374,57 +374,6 @@ class KinematicCatalog:
                 cells.append(f"{float(coefficients[j]):.{digits}g}")
             lines.append("  |  ".join(cells))
         return "\n".join(lines)
-
-
-class PolynomialLagrangeLibrary(LagrangeLibrary):
-    """:class:`~pysindy_xl.LagrangeLibrary` with a fast derivation for trigonometric polynomials.
-
-    Same parameters, columns, names and persistence as ``LagrangeLibrary``. When every term is
-    a polynomial in ``sin q_j``, ``cos q_j`` (angles), ``q_j`` (other coordinates) and
-    ``qd_j``, the Euler-Lagrange columns are derived on sparse arrays (:mod:`._trigpoly`),
-    which is one to two orders of magnitude faster than sympy on the large terms of spatial
-    arms; any other term falls back to the symbolic derivation of ``LagrangeLibrary``.
-
-    Parameters
-    ----------
-    coords : Coordinates
-    terms : sequence of sympy.Expr
-
-    Examples
-    --------
-    >>> import numpy as np, sympy as sp, pysindy_xl as px
-    >>> c = px.Coordinates(["theta", "x"])
-    >>> terms = [c.qd[0] ** 2 * sp.cos(c.q[0]) ** 2, c.qd[0] * c.qd[1] * sp.sin(c.q[0]),
-    ...          c.q[1] ** 2 * sp.cos(c.q[0])]
-    >>> data = np.random.default_rng(0).normal(size=(50, 9))
-    >>> fast = PolynomialLagrangeLibrary(c, terms).fit().transform(data)
-    >>> bool(np.allclose(fast, px.LagrangeLibrary(c, terms).fit().transform(data)))
-    True
-    """
-
-    def _build_symbolic(self):
-        terms = as_expr_list(self.terms, "terms")
-        if not terms:
-            return super()._build_symbolic()  # raises the ValueError of LagrangeLibrary
-        coords = self.coords
-        angles = tuple(any(t.has(sp.sin(q)) or t.has(sp.cos(q)) for t in terms)
-                       for q in coords.q)
-        try:
-            polynomials = [TrigPolynomial.from_sympy(t, coords, angles) for t in terms]
-        except ValueError:
-            return super()._build_symbolic()
-        self.terms_ = terms
-        derived = [p.euler_lagrange() for p in polynomials]
-        columns = [[e.to_sympy(coords, evaluate=False) for e in column] for column in derived]
-        matrix = sp.Matrix(coords.n, len(terms), lambda i, j: columns[j][i])
-        self.zero_terms_ = [j for j, column in enumerate(derived)
-                            if all(e.is_zero for e in column)]
-        return [_feature_name(term) for term in terms], matrix
-
-
-def _feature_name(term: sp.Expr) -> str:
-    # the names of LagrangeLibrary: saved models are checked against them when loaded
-    return f"L[{term}]"
 
 
 def _states(a, name: str, n: int) -> np.ndarray:

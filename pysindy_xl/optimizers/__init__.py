@@ -1,14 +1,18 @@
-"""Catalog optimizers: explicit, implicit (SINDy-PI) and mixed regression.
+"""Catalog optimizers: explicit, implicit (SINDy-PI), mixed and ensemble regression.
 
-See :mod:`pysindy_xl.optimizers._base` for the ``fit_catalog`` protocol they share.
+Each solves a :class:`~pysindy_xl.optimizers.problem.CatalogProblem`; see
+:mod:`pysindy_xl.optimizers._base` for the template of a fit that they share.
 """
 
 from ._base import (
+    OPTIMIZER_TYPES,
     CatalogOptimizer,
-    balance_coordinates,
-    coordinate_weights,
     independent_columns,
+    optimizer_from_spec,
+    pilot_optimizer,
+    solve,
 )
+from .defaults import default_optimizer
 from .ensemble import EnsembleOptimizer
 from .explicit import (
     ExplicitOptimizer,
@@ -19,10 +23,17 @@ from .explicit import (
 from .homogeneous import LawSelection, select_law
 from .implicit import ImplicitOptimizer, NoLawFoundError, homothetic_groups
 from .mixed import MixedOptimizer, activation_closure
+from .problem import CatalogProblem, balance_coordinates, coordinate_weights
 from .selection import SelectionResult, refine_by_swaps, select_support
 
 __all__ = [
     "CatalogOptimizer",
+    "CatalogProblem",
+    "OPTIMIZER_TYPES",
+    "optimizer_from_spec",
+    "pilot_optimizer",
+    "solve",
+    "default_optimizer",
     "ExplicitOptimizer",
     "ImplicitOptimizer",
     "MixedOptimizer",

@@ -1,126 +1,80 @@
-"""What the catalog optimizers share: the ``fit_catalog`` protocol and column bookkeeping.
+"""What the catalog optimizers share: the template of a fit and column bookkeeping.
 
-Every optimizer of this package is a scikit-learn estimator with, besides its own ``fit``,
+Every optimizer of this package is a scikit-learn estimator derived from
+:class:`CatalogOptimizer`. A fit goes one way:
 
-``fit_catalog(theta, n_coordinates, force_columns) -> self``
-    ``theta`` is the stacked regression matrix ``(n_coordinates * N, F)`` (rows
-    coordinate-major, see :mod:`pysindy_xl.feature_library._base`), ``force_columns`` the
-    indices of the :class:`~pysindy_xl.ExternalForces` columns. It sets ``coef_`` of shape
-    ``(F,)``: the full coefficient vector, force columns included, with ``theta @ coef_ ~ 0``.
+``fit_catalog(theta, n_coordinates, force_columns, noise_moments=None, mass_matrices=None,
+balance=True, reference_columns=None) -> self``
+    checks the arguments once into a :class:`~pysindy_xl.optimizers.problem.CatalogProblem`
+    and calls :meth:`CatalogOptimizer.fit_problem`,
 
-This is the metadata :class:`~pysindy_xl.XLSINDy` hands over; standalone users pass the same.
-Optimizers that can correct for errors in the columns also take
-``noise_moments`` of shape ``(n_coordinates, F, F)``, ``E[E_c^T E_c]`` for the errors ``E_c``
-of each coordinate's rows (the weak form's propagated position noise); XLSINDy passes it to
-those whose ``fit_catalog`` has the parameter (:func:`accepts_noise_moments`). An optimizer
-may also offer ``pilot()``, an unfitted cheaper optimizer of the same law for a first estimate
-(:func:`pilot_optimizer`).
+``fit_problem(problem) -> self``
+    checks the optimizer's parameters, balances the coordinate blocks of the rows
+    (:meth:`CatalogProblem.balanced <pysindy_xl.optimizers.problem.CatalogProblem.balanced>`)
+    unless the optimizer hands the problem on to others (``balances_rows = False``), and calls
+    the one method a new optimizer implements, ``_solve(problem) -> self``, which sets
+    ``coef_`` of shape ``(F,)``: the full coefficient vector, force columns included, with
+    ``theta @ coef_ ~ 0``.
 
-Units. Every row of ``theta @ coef = 0`` holds exactly, so multiplying the rows of one
-coordinate block by a constant changes only how the regression weighs that block against the
-others, never the true coefficients. :func:`check_catalog_problem`, through which every
-``fit_catalog`` of this package goes, balances the blocks with :func:`coordinate_weights`
-before solving: a coordinate in micrometres next to one in radians (blocks 1e6 apart, a
-coupling column 1e12 apart between its two blocks) is then solved like the same system in
-metres, and ``coef_`` keeps its meaning (physical units of the catalog columns).
-:func:`independent_columns` uses the same balancing for its dependent-column test. Rows that
-the caller has weighed already are fitted as given with ``fit_catalog(..., balance=False)``:
-XLSINDy's rows whitened by the covariance of the residual are each in units of their own
-noise (unit free too), and rebalancing them by their scales would undo the weighting.
+An optimizer that can refit a given support (the last step of an ensemble) implements
+``_solve_support(problem, support)`` too, reached through ``fit_support``. What an optimizer
+needs or prefers is said by attributes, read by :class:`~pysindy_xl.XLSINDy` and the
+composite optimizers: ``requires_forces`` (explicit regression), ``uses_mass_matrices``
+(the mass matrices of the columns are worth computing), ``derivative_estimate``
+(``"smoothed"`` or ``"unbiased"`` derivatives for the strong form), ``can_refit``. An
+optimizer may also offer ``pilot()``, an unfitted cheaper optimizer of the same law for a
+first estimate (:func:`pilot_optimizer`).
+
+Optimizers describe themselves for persistence: ``to_spec()`` writes the type and plain
+parameters (nested catalog optimizers as specs of their own); :func:`optimizer_from_spec`
+reads them back through the registry :data:`OPTIMIZER_TYPES`, where every subclass enters
+when it is defined.
 """
 
 from __future__ import annotations
 
-import inspect
 import warnings
 
 import numpy as np
 import scipy.linalg
 from sklearn.base import BaseEstimator, clone
 
-from .._validation import check_indices, check_numeric_array, check_option
 from ..diagnostics import UnexplainedCoordinateWarning
+from ..registry import is_plain, register_type
+from .problem import CatalogProblem, check_support, coordinate_weights, scale_blocks
 
 __all__ = [
-    "accepts_fit_parameter",
-    "accepts_noise_moments",
-    "check_mass_matrices",
-    "check_noise_moments",
     "CatalogOptimizer",
-    "balance_coordinates",
-    "block_weights",
-    "check_catalog_problem",
-    "coordinate_weights",
+    "OPTIMIZER_TYPES",
     "coordinates_touched",
     "independent_columns",
+    "optimizer_from_spec",
     "pilot_optimizer",
+    "solve",
     "warn_unexplained",
 ]
 
+#: Every catalog optimizer by its ``spec_type``: what a model file may name.
+OPTIMIZER_TYPES: dict[str, type] = {}
 
-def check_catalog_problem(theta, n_coordinates, force_columns, balance: bool = True):
-    """Validate the arguments of ``fit_catalog``; returns ``(theta, force_columns)`` as arrays.
-
-    With ``balance`` (the default, used by every catalog optimizer of this package) the returned
-    ``theta`` has the rows of each coordinate block multiplied by its
-    :func:`coordinate_weights`: the same exact solutions, a unit-free regression. A single block
-    is returned unchanged.
-    """
-    theta = check_numeric_array(theta, "theta", finite=False, min_samples=0)
-    if theta.ndim != 2 or theta.shape[0] == 0 or theta.shape[1] == 0:
-        raise ValueError(f"theta: expected a non-empty 2-D array, got shape {theta.shape}")
-    if not np.all(np.isfinite(theta)):
-        raise ValueError("theta: contains NaN or inf")
-    n_coordinates = check_option("n_coordinates", n_coordinates, "int", low=1)
-    if theta.shape[0] % n_coordinates:
-        raise ValueError(
-            f"theta: {theta.shape[0]} rows is not a multiple of n_coordinates={n_coordinates}"
-        )
-    force_columns = check_indices(force_columns, "force_columns", theta.shape[1])
-    if balance:
-        theta = balance_coordinates(theta, int(n_coordinates), force_columns)
-    return theta, force_columns
+#: Optimizers nested in a file's optimizer (a mixed fit's parts, an ensemble's base) at most.
+_MAX_NESTING = 3
 
 
-def check_noise_moments(noise_moments, n_coordinates: int, n_features: int) -> np.ndarray:
-    """Validate the ``noise_moments`` of ``fit_catalog``: finite, shape (n, F, F), symmetric
-    positive semidefinite blocks (sums of outer products of column errors)."""
-    moments = check_numeric_array(noise_moments, "noise_moments", min_samples=0)
-    if moments.shape != (n_coordinates, n_features, n_features):
-        raise ValueError(f"noise_moments: expected shape {(n_coordinates, n_features, n_features)}"
-                         f", got {moments.shape}")
-    if not np.allclose(moments, np.swapaxes(moments, 1, 2), rtol=1e-8,
-                       atol=1e-12 * np.abs(moments).max(initial=0.0)):
-        raise ValueError("noise_moments: expected symmetric blocks")
-    return moments
-
-
-def check_support(support, n_features: int) -> np.ndarray:
-    """Validate the ``support`` of ``fit_support``: a boolean array of shape (F,)."""
-    support = np.asarray(support)
-    if support.dtype != bool or support.shape != (n_features,):
-        raise ValueError(f"support: expected a boolean array of shape ({n_features},), got "
-                         f"{support.dtype} of shape {support.shape}")
-    return support
-
-
-def accepts_noise_moments(optimizer) -> bool:
-    """Whether ``optimizer.fit_catalog`` takes ``noise_moments`` (as scikit-learn's
-    ``has_fit_parameter`` does for ``sample_weight``)."""
-    return accepts_fit_parameter(optimizer, "noise_moments")
-
-
-def accepts_fit_parameter(optimizer, name: str, method: str = "fit_catalog") -> bool:
-    """Whether ``optimizer.<method>`` (by default ``fit_catalog``) takes the keyword
-    ``name``."""
-    return name in inspect.signature(getattr(optimizer, method)).parameters
+def solve(optimizer, problem: CatalogProblem):
+    """Fit ``optimizer`` on ``problem``: :meth:`CatalogOptimizer.fit_problem` for the
+    package's optimizers, the bare ``fit_catalog(theta, n_coordinates, force_columns)``
+    protocol for any other object that has it. Returns the fitted optimizer."""
+    if isinstance(optimizer, CatalogOptimizer):
+        return optimizer.fit_problem(problem)
+    return optimizer.fit_catalog(problem.theta, problem.n_coordinates, problem.force_columns)
 
 
 def pilot_optimizer(optimizer):
     """An unfitted optimizer for a first estimate of the law that ``optimizer`` would find.
 
     Where the law only prepares the real fit (the residual covariance of
-    :class:`~pysindy_xl.XLSINDy`), an optimizer may offer a cheaper stand-in through a
+    :class:`~pysindy_xl.XLSINDy`), an optimizer may offer a cheaper stand-in through its
     ``pilot()`` method (an ensemble: one fit of its base optimizer instead of
     ``n_models``); otherwise the pilot is a clone of ``optimizer``.
     """
@@ -128,22 +82,6 @@ def pilot_optimizer(optimizer):
     return pilot() if callable(pilot) else clone(optimizer)
 
 
-def check_mass_matrices(mass_matrices, n_coordinates: int, n_features: int) -> np.ndarray:
-    """Validate the ``mass_matrices`` of ``fit_catalog``: finite, shape (S, F, n, n)."""
-    mass = check_numeric_array(mass_matrices, "mass_matrices", min_samples=0)
-    if mass.ndim != 4 or mass.shape[1:] != (n_features, n_coordinates, n_coordinates) \
-            or mass.shape[0] == 0:
-        raise ValueError(f"mass_matrices: expected shape (S, {n_features}, {n_coordinates}, "
-                         f"{n_coordinates}) with S >= 1, got {mass.shape}")
-    return mass
-
-
-def _block_rms(theta, n_blocks: int) -> np.ndarray:
-    """RMS of every column within every row block, shape (n_blocks, F), without overflow."""
-    blocks = np.asarray(theta, dtype=float).reshape(n_blocks, -1, theta.shape[1])
-    top = np.max(np.abs(blocks), axis=1)
-    safe = np.where((top > 0) & np.isfinite(top), top, 1.0)
-    return top * np.sqrt(np.mean((blocks / safe[:, None, :]) ** 2, axis=1))
 
 
 def coordinates_touched(theta, n_coordinates: int, rtol: float = 1e-10) -> np.ndarray:
@@ -225,141 +163,6 @@ def warn_unexplained(owner: str, theta, n_coordinates: int, coef, force_columns=
     return unexplained
 
 
-def coordinate_weights(theta, n_coordinates: int, force_columns=None) -> np.ndarray:
-    r"""Row weights of the coordinate blocks of ``theta`` that balance their scales.
-
-    With :math:`M_{ij}` the RMS of column :math:`j` within block :math:`i` (rows
-    coordinate-major) and :math:`P = \{(i, j) : M_{ij} > 0\}` the entries that are not
-    exactly zero, solve the small least-squares problem
-
-    .. math::
-
-        \min_{u, v} \sum_{(i, j) \in P} \left(\log M_{ij} + u_i + v_j\right)^2
-        \quad\text{s.t.}\quad v_j = 0 \text{ for the force columns } j
-
-    (minimum-norm solution where it is not unique) and return
-    :math:`w_i = \exp(u_i - \bar u)`, :math:`\bar u` the mean of :math:`u` over the blocks
-    with an entry in :math:`P` (geometric mean 1; a block that is exactly zero gets 1).
-    :math:`\exp(u_i)` and :math:`\exp(v_j)` are row and column scalings that bring every
-    block of every column as close as possible to 1 in the log sense.
-
-    Force columns carry the coefficient -1 (the units of their equation), so they are not
-    rescaled (:math:`v_j = 0`): a change of units that multiplies block :math:`i` by
-    :math:`a_i` and column :math:`j` by :math:`b_j` (coefficient :math:`c_j \to c_j / b_j`,
-    forces kept at -1) changes :math:`u_i` by exactly :math:`-\log a_i` (up to a common
-    constant that the normalization removes), so the weighted matrix is the same up to column
-    scales: the regression is unit free. The pinned columns also fix the otherwise free common
-    shift of :math:`u` against :math:`v`. Balancing a balanced matrix returns ones.
-
-    Parameters
-    ----------
-    theta : array, shape (n_coordinates * N, F)
-        Stacked regression matrix, rows coordinate-major.
-    n_coordinates : int
-    force_columns : sequence of int, optional
-        Columns whose scale is not free (their coefficient is fixed).
-
-    Returns
-    -------
-    ndarray, shape (n_coordinates,)
-
-    Examples
-    --------
-    The first coordinate in micrometres: its block, force included, is 1e6 times too small.
-
-    >>> import numpy as np
-    >>> rng = np.random.default_rng(0)
-    >>> block = rng.normal(size=(50, 3))
-    >>> theta = np.vstack([block * 1e-6, block])
-    >>> w = coordinate_weights(theta, 2, force_columns=[2])
-    >>> np.round(w[0] / w[1])
-    np.float64(1000000.0)
-    >>> balanced = balance_coordinates(theta, 2, [2])
-    >>> np.allclose(coordinate_weights(balanced, 2, [2]), 1.0)
-    True
-    """
-    theta = np.asarray(theta, dtype=float)
-    n = int(n_coordinates)
-    n_features = theta.shape[1]
-    if n == 1:
-        return np.ones(1)
-    rms = _block_rms(theta, n)
-    present = (rms > 0) & np.isfinite(rms)
-    blocks, columns = np.nonzero(present)
-    if blocks.size == 0:
-        return np.ones(n)
-    pinned = np.zeros(n_features, dtype=bool)
-    if force_columns is not None:
-        pinned[np.asarray(force_columns, dtype=int).reshape(-1)] = True
-    free = np.flatnonzero(~pinned)
-    slot = np.full(n_features, -1)
-    slot[free] = n + np.arange(free.size)
-    design = np.zeros((blocks.size, n + free.size))
-    rows = np.arange(blocks.size)
-    design[rows, blocks] = 1.0
-    unpinned = slot[columns] >= 0
-    design[rows[unpinned], slot[columns[unpinned]]] = 1.0
-    solution = np.linalg.lstsq(design, -np.log(rms[blocks, columns]), rcond=None)[0]
-    u = solution[:n]
-    active = present.any(axis=1)
-    log_w = np.where(active, u - u[active].mean(), 0.0)
-    return np.exp(log_w)
-
-
-def block_weights(theta, n_coordinates: int, force_columns=None, balance=True) -> np.ndarray:
-    """Weights of the coordinate blocks of a ``fit_catalog`` problem: those of
-    :func:`coordinate_weights` with ``balance`` (checked: a bool), ones without (the caller
-    has weighed the blocks, e.g. whitened them by the covariance of the residual)."""
-    check_option("balance", balance, "bool")
-    if balance:
-        return coordinate_weights(theta, n_coordinates, force_columns)
-    return np.ones(int(n_coordinates))
-
-
-def balance_coordinates(theta, n_coordinates: int, force_columns=None) -> np.ndarray:
-    """``theta`` with the rows of each coordinate block multiplied by its
-    :func:`coordinate_weights` (a new array; ``theta`` itself for a single block).
-
-    Parameters
-    ----------
-    theta : array, shape (n_coordinates * N, F)
-        Stacked regression matrix, rows coordinate-major.
-    n_coordinates : int
-    force_columns : sequence of int, optional
-        Columns whose scale is not free (see :func:`coordinate_weights`).
-
-    Returns
-    -------
-    ndarray, shape (n_coordinates * N, F)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> theta = np.array([[1e-6, 2e-6], [3e-6, 1e-6], [1.0, 2.0], [3.0, 1.0]])
-    >>> balance_coordinates(theta, 2).round(6)
-    array([[0.001, 0.002],
-           [0.003, 0.001],
-           [0.001, 0.002],
-           [0.003, 0.001]])
-    """
-    theta = np.asarray(theta, dtype=float)
-    if int(n_coordinates) == 1:
-        return theta
-    return scale_blocks(theta, coordinate_weights(theta, n_coordinates, force_columns))
-
-
-def scale_blocks(theta, weights) -> np.ndarray:
-    """``theta`` with the rows of block ``i`` (rows coordinate-major) multiplied by
-    ``weights[i]``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> scale_blocks(np.ones((4, 1)), [1.0, 3.0]).ravel().tolist()
-    [1.0, 1.0, 3.0, 3.0]
-    """
-    weights = np.asarray(weights, dtype=float)
-    return theta * np.repeat(weights, theta.shape[0] // len(weights))[:, None]
 
 
 def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int = 20_000,
@@ -458,23 +261,46 @@ class CatalogOptimizer(BaseEstimator):
 
     Examples
     --------
-    A least-squares solver with the force coefficient fixed to -1:
+    A least-squares solver with the force coefficient fixed to -1 implements one method:
 
     >>> import numpy as np
     >>> class LeastSquares(CatalogOptimizer):
-    ...     def fit_catalog(self, theta, n_coordinates, force_columns):
-    ...         rest = np.setdiff1d(np.arange(theta.shape[1]), force_columns)
-    ...         sol = np.linalg.lstsq(theta[:, rest], theta[:, force_columns].sum(1))[0]
-    ...         self.coef_ = np.full(theta.shape[1], -1.0)
+    ...     requires_forces = True
+    ...     def _solve(self, problem):
+    ...         theta, forces = problem.theta, problem.force_columns
+    ...         rest = np.setdiff1d(np.arange(problem.n_features), forces)
+    ...         sol = np.linalg.lstsq(theta[:, rest], theta[:, forces].sum(1))[0]
+    ...         self.coef_ = np.full(problem.n_features, -1.0)
     ...         self.coef_[rest] = sol
     ...         return self
     >>> theta = np.column_stack([[1.0, 2.0, 3.0], [0.5, 1.0, 1.5]])
     >>> LeastSquares().fit_catalog(theta, 1, [0]).coef_
     array([-1.,  2.])
+    >>> LeastSquares().to_spec()["type"]
+    'pysindy_xl.optimizers._base.LeastSquares'
     """
 
-    def fit_catalog(self, theta, n_coordinates, force_columns):  # pragma: no cover - abstract
-        """Solve the catalog problem ``theta @ coef_ = 0``.
+    #: explicit regression: the problem must have force columns (XLSINDy refuses u=None)
+    requires_forces = False
+    #: the column mass matrices improve the fit (XLSINDy computes them only then)
+    uses_mass_matrices = False
+    #: derivatives the strong form should use: "smoothed" (bias small next to noise) or
+    #: "unbiased" (a null-space search that the smoothing bias alone can hide the law from)
+    derivative_estimate = "smoothed"
+    #: balance the coordinate blocks before ``_solve``; False for optimizers that hand the
+    #: problem on to others, which balance their own parts
+    balances_rows = True
+    #: the name a model file gives this class (default: ``module.QualifiedName``)
+    spec_type: str
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        register_type(OPTIMIZER_TYPES, cls)
+
+    # -- the template of a fit ------------------------------------------------------------
+    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None,
+                    mass_matrices=None, balance=True, reference_columns=None):
+        """Solve the catalog problem ``theta @ coef_ ~ 0``.
 
         Parameters
         ----------
@@ -483,9 +309,162 @@ class CatalogOptimizer(BaseEstimator):
         n_coordinates : int
         force_columns : sequence of int
             Columns of the external forces.
+        noise_moments : array, shape (n_coordinates, F, F), optional
+            ``E[E_c^T E_c]`` of the errors ``E_c`` in each coordinate's rows (errors in
+            variables; the weak form of :class:`~pysindy_xl.XLSINDy` passes the propagated
+            position noise). Optimizers that do not use them ignore them.
+        mass_matrices : array, shape (S, F, n_coordinates, n_coordinates), optional
+            Each column's contribution to the mass matrix at sample states
+            (:func:`~pysindy_xl.diagnostics.column_mass_matrices`).
+        balance : bool, default True
+            Rescale the coordinate blocks by
+            :func:`~pysindy_xl.optimizers.coordinate_weights` before solving (a unit-free
+            regression). False where the caller has weighed the blocks already: rows
+            whitened by the covariance of the residual are each in units of their own noise,
+            and a rebalancing would undo that weighting.
+        reference_columns : sequence of int, optional
+            Columns allowed to carry the ``+1`` of an unforced law; default: any column.
 
         Returns
         -------
         self
         """
-        raise NotImplementedError
+        return self.fit_problem(CatalogProblem.from_arrays(
+            theta, n_coordinates, force_columns, noise_moments, mass_matrices, balance,
+            reference_columns))
+
+    def fit_problem(self, problem: CatalogProblem):
+        """Solve a checked :class:`~pysindy_xl.optimizers.problem.CatalogProblem`.
+
+        Returns
+        -------
+        self
+        """
+        self._check_params()
+        return self._solve(problem.balanced() if self.balances_rows else problem)
+
+    def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None,
+                    balance=True):
+        """Fit the terms of ``support`` on every row, nothing selected (see ``can_refit``).
+
+        Parameters
+        ----------
+        theta, n_coordinates, force_columns, noise_moments, balance
+            As in :meth:`fit_catalog`.
+        support : array of bool, shape (F,)
+            Terms to fit; the others get 0.
+
+        Returns
+        -------
+        self
+        """
+        problem = CatalogProblem.from_arrays(theta, n_coordinates, force_columns,
+                                             noise_moments, balance=balance)
+        return self.refit_problem(problem, support)
+
+    def refit_problem(self, problem: CatalogProblem, support):
+        """:meth:`fit_support` on a checked problem."""
+        self._check_params()
+        support = check_support(support, problem.n_features)
+        return self._solve_support(problem.balanced() if self.balances_rows else problem,
+                                   support)
+
+    @property
+    def can_refit(self) -> bool:
+        """Whether :meth:`fit_support` is available (the class implements
+        ``_solve_support``)."""
+        return type(self)._solve_support is not CatalogOptimizer._solve_support
+
+    # -- to implement ---------------------------------------------------------------------
+    def _solve(self, problem: CatalogProblem):  # pragma: no cover - abstract
+        raise NotImplementedError(f"{type(self).__name__}: _solve(problem) is not implemented")
+
+    def _solve_support(self, problem: CatalogProblem, support):
+        raise TypeError(f"{type(self).__name__}: cannot refit a given support (no "
+                        "_solve_support)")
+
+    def _check_params(self):
+        """Raise ``TypeError``/``ValueError`` naming a parameter with a bad value."""
+
+    def pilot(self):
+        """Unfitted optimizer for a first estimate of the law (see :func:`pilot_optimizer`);
+        a clone of this one unless a cheaper stand-in exists."""
+        return clone(self)
+
+    # -- persistence ----------------------------------------------------------------------
+    def to_spec(self) -> dict:
+        """JSON description: ``{"type": spec_type, "params": {...}}``.
+
+        Plain parameters are written as they are, nested catalog optimizers as their own
+        specs; other objects (a pysindy regressor, a function) have no JSON form and are left
+        out, so that the loaded optimizer uses their default.
+
+        Returns
+        -------
+        dict
+        """
+        params = {}
+        for key, value in self.get_params(deep=False).items():
+            if isinstance(value, CatalogOptimizer):
+                params[key] = value.to_spec()
+            elif is_plain(value):
+                params[key] = value
+        return {"type": self.spec_type, "params": params}
+
+
+def optimizer_from_spec(spec, where: str = "optimizer", depth: int = 0):
+    """The optimizer a (untrusted) spec describes: a registered type, plain parameters among
+    its own, nested optimizers as specs, its parameter checks passed.
+
+    Parameters
+    ----------
+    spec : dict
+        As written by :meth:`CatalogOptimizer.to_spec`.
+    where : str
+        Where the spec sits in its file, for the messages.
+
+    Returns
+    -------
+    CatalogOptimizer
+
+    Raises
+    ------
+    ValueError
+        Naming ``where`` and what is wrong.
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> spec = px.EnsembleOptimizer(px.ExplicitOptimizer(), n_models=5).to_spec()
+    >>> optimizer_from_spec(spec).get_params()["n_models"]
+    5
+    >>> optimizer_from_spec({"type": "os.system"})
+    Traceback (most recent call last):
+    ...
+    ValueError: optimizer: 'type' must name a catalog optimizer, got 'os.system'
+    """
+    if not (isinstance(spec, dict) and isinstance(spec.get("type"), str)):
+        raise ValueError(f"{where}: expected an object with a 'type' and 'params'")
+    cls = OPTIMIZER_TYPES.get(spec["type"])
+    if cls is None:
+        raise ValueError(f"{where}: 'type' must name a catalog optimizer, got {spec['type']!r}")
+    if depth > _MAX_NESTING:
+        raise ValueError(f"{where}: optimizers nested deeper than {_MAX_NESTING} levels")
+    params = spec.get("params", {})
+    known = cls().get_params(deep=False)
+    if not (isinstance(params, dict) and set(params) <= set(known)):
+        raise ValueError(f"{where}.params must be an object with keys among {sorted(known)}")
+    values = {}
+    for key, value in params.items():
+        if isinstance(value, dict):
+            values[key] = optimizer_from_spec(value, f"{where}.params.{key}", depth + 1)
+        elif is_plain(value):
+            values[key] = value
+        else:
+            raise ValueError(f"{where}.params.{key} must be a plain value or an optimizer")
+    optimizer = cls(**values)
+    try:
+        optimizer._check_params()
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{where}: {error}") from None
+    return optimizer

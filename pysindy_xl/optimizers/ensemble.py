@@ -50,16 +50,7 @@ import scipy.stats
 from sklearn.base import clone
 
 from .._validation import check_instance, check_option
-from ._base import (
-    CatalogOptimizer,
-    accepts_fit_parameter,
-    accepts_noise_moments,
-    check_catalog_problem,
-    check_mass_matrices,
-    check_noise_moments,
-    pilot_optimizer,
-    warn_unexplained,
-)
+from ._base import CatalogOptimizer, pilot_optimizer, solve, warn_unexplained
 from .explicit import ExplicitOptimizer
 
 __all__ = ["EnsembleOptimizer"]
@@ -143,6 +134,10 @@ class EnsembleOptimizer(CatalogOptimizer):
     True
     """
 
+    #: every fit balances its own subsample
+    balances_rows = False
+    spec_type = "EnsembleOptimizer"
+
     def __init__(self, optimizer=None, n_models=20, fraction=0.7, n_chunks=20, inclusion=0.5,
                  confidence=0.95, random_state=0, n_jobs=None, sampling="subsamples",
                  aggregate="auto", progress=False):
@@ -165,53 +160,44 @@ class EnsembleOptimizer(CatalogOptimizer):
             check_option(name, getattr(self, name), "real", low=0, low_open=True, high=1)
         if self.optimizer is not None:
             check_instance("optimizer", self.optimizer, "a catalog optimizer", "fit_catalog")
+            if isinstance(self.optimizer, EnsembleOptimizer):
+                raise ValueError("optimizer: an EnsembleOptimizer cannot bag another "
+                                 "EnsembleOptimizer (n_models squared fits); bag its base "
+                                 "optimizer")
         if self.n_jobs is not None:
             check_option("n_jobs", self.n_jobs, "int")
         check_option("progress", self.progress, "bool")
         check_option("sampling", self.sampling, "choice", choices=SAMPLINGS)
         check_option("aggregate", self.aggregate, "choice", choices=AGGREGATES)
         base = self._base()
-        if self.aggregate == "refit" and not hasattr(base, "fit_support"):
+        if self.aggregate == "refit" and not getattr(base, "can_refit", False):
             raise ValueError(f"aggregate: 'refit' needs an optimizer with fit_support, "
                              f"{type(base).__name__} has none (use 'median' or 'auto')")
         if self.sampling == "complementary_pairs" and self.n_models % 2:
             raise ValueError(f"n_models: complementary pairs need an even number of fits, got "
                              f"{self.n_models}")
 
-    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None,
-                    mass_matrices=None, balance=True):
-        """Fit the ensemble on a stacked catalog matrix.
+    @property
+    def requires_forces(self) -> bool:
+        """As the base optimizer."""
+        return getattr(self._base(), "requires_forces", False)
 
-        Parameters
-        ----------
-        theta : array, shape (n_coordinates * N, F)
-        n_coordinates : int
-        force_columns : sequence of int
-        noise_moments : array, shape (n_coordinates, F, F), optional
-            Errors-in-variables moments of all rows; each fit gets its subsample's share
-            (the errors are stationary along the rows) when its optimizer takes them.
-        mass_matrices : array, shape (S, F, n_coordinates, n_coordinates), optional
-            Each column's contribution to the mass matrix on sample states, passed unchanged
-            to every fit whose optimizer takes them (:class:`ImplicitOptimizer` then selects
-            only laws with a definite mass matrix); ignored by the others.
-        balance : bool, default True
-            Passed to every fit (and the refit) whose optimizer takes it (see
-            :meth:`ExplicitOptimizer.fit_catalog`): False where the caller has weighed the
-            coordinate blocks already, as on rows whitened by the residual covariance.
+    @property
+    def uses_mass_matrices(self) -> bool:
+        """As the base optimizer."""
+        return getattr(self._base(), "uses_mass_matrices", False)
 
-        Returns
-        -------
-        self
-        """
-        self._check_params()
-        check_option("balance", balance, "bool")
-        # the inner optimizers balance the coordinates of their own subsamples
-        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
-                                                     balance=False)
-        if noise_moments is not None:
-            noise_moments = check_noise_moments(noise_moments, int(n_coordinates),
-                                                theta.shape[1])
-        n_rows = theta.shape[0] // n_coordinates
+    @property
+    def derivative_estimate(self) -> str:
+        """As the base optimizer."""
+        return getattr(self._base(), "derivative_estimate", "smoothed")
+
+    def _solve(self, problem):
+        """Fit the base optimizer on subsamples of the problem's rows (the same chunks of
+        every coordinate block; each fit gets its rows' share of the noise moments and all
+        the mass matrices), then aggregate (see the class docstring)."""
+        theta = problem.theta
+        n_rows = problem.n_samples
         n_chunks = min(int(self.n_chunks), n_rows)
         edges = np.linspace(0, n_rows, n_chunks + 1).astype(int)
         rng = np.random.default_rng(self.random_state)
@@ -222,26 +208,11 @@ class EnsembleOptimizer(CatalogOptimizer):
             subsamples = [np.sort(rng.choice(n_chunks, size=n_keep, replace=False))
                           for _ in range(int(self.n_models))]
         base = self._base()
-        takes_moments = noise_moments is not None and accepts_noise_moments(base)
-        shared = {"balance": balance} if accepts_fit_parameter(base, "balance") else {}
-        if mass_matrices is not None:
-            mass_matrices = check_mass_matrices(mass_matrices, int(n_coordinates),
-                                                theta.shape[1])
-            if accepts_fit_parameter(base, "mass_matrices"):
-                # properties of the columns at sample states, not of rows: every fit gets all
-                shared["mass_matrices"] = mass_matrices
-        problems = []
-        for chunks in subsamples:
-            rows = np.concatenate([np.arange(edges[k], edges[k + 1]) for k in chunks])
-            # the noise moments are sums over rows: each fit gets its rows' share
-            extra = dict(shared)
-            if takes_moments:
-                extra["noise_moments"] = noise_moments * (len(rows) / n_rows)
-            problems.append(((np.arange(n_coordinates)[:, None] * n_rows
-                              + rows[None, :]).ravel(), extra))
+        problems = [problem.subsample(np.concatenate([np.arange(edges[k], edges[k + 1])
+                                                      for k in chunks]))
+                    for chunks in subsamples]
         fits = joblib.Parallel(n_jobs=self.n_jobs, return_as="generator")(
-            joblib.delayed(_fit_subsample)(base, theta[rows], n_coordinates, force_columns,
-                                           extra) for rows, extra in problems)
+            joblib.delayed(_fit_subsample)(base, part) for part in problems)
         if self.progress:
             from tqdm.auto import tqdm
 
@@ -269,18 +240,14 @@ class EnsembleOptimizer(CatalogOptimizer):
             self.inclusion_probability_ = np.mean(samples != 0, axis=0)
         included = self.inclusion_probability_ >= self.inclusion
         self.aggregate_ = ("refit" if self.aggregate == "refit" or (
-            self.aggregate == "auto" and hasattr(base, "fit_support")) else "median")
+            self.aggregate == "auto" and getattr(base, "can_refit", False)) else "median")
         if self.aggregate_ == "refit":
-            extra = {"noise_moments": noise_moments} if takes_moments else {}
-            if accepts_fit_parameter(base, "balance", "fit_support"):
-                extra["balance"] = balance
             refit = (f"EnsembleOptimizer: the refit on the {int(included.sum())} term(s) kept "
                      f"by at least {self.inclusion} of the fits")
             try:
                 with warnings.catch_warnings(record=True) as caught:
                     warnings.simplefilter("always")
-                    coef = clone(base).fit_support(theta, n_coordinates, force_columns,
-                                                   included, **extra).coef_
+                    coef = clone(base).refit_problem(problem, included).coef_
             except (ValueError, RuntimeError) as error:  # e.g. no law on the agreed terms
                 raise type(error)(
                     f"{refit} failed ({error}); the fits disagree, try aggregate='median', a "
@@ -291,8 +258,8 @@ class EnsembleOptimizer(CatalogOptimizer):
             coef = np.zeros(theta.shape[1])
             for j in np.flatnonzero(included):
                 coef[j] = np.median(samples[samples[:, j] != 0, j])
-            warn_unexplained("EnsembleOptimizer", theta, int(n_coordinates), coef,
-                             force_columns)
+            warn_unexplained("EnsembleOptimizer", theta, problem.n_coordinates, coef,
+                             problem.force_columns)
         self.coef_ = coef
         share = np.mean([len(chunks) for chunks in subsamples]) / n_chunks
         # A subsample of a fraction f of the data spreads around the full-data estimate by
@@ -359,7 +326,7 @@ def _complementary_halves(rng, n_chunks, n_pairs):
     return halves
 
 
-def _fit_subsample(base, theta, n_coordinates, force_columns, extra):
+def _fit_subsample(base, problem):
     """One subsample fit: ``(coef or None when it fails, its warnings as (category,
     message) pairs, the error that made it fail or None)``.
 
@@ -369,7 +336,7 @@ def _fit_subsample(base, theta, n_coordinates, force_columns, extra):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            fitted = clone(base).fit_catalog(theta, n_coordinates, force_columns, **extra)
+            fitted = solve(clone(base), problem)
             coef, error = np.asarray(fitted.coef_, dtype=float), None
         except (ValueError, RuntimeError, np.linalg.LinAlgError) as failure:
             coef, error = None, f"{type(failure).__name__}: {failure}"

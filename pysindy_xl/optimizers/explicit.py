@@ -11,15 +11,7 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.linear_model import Lasso, LassoCV
 
 from .._validation import check_instance, check_numeric_array, check_option
-from ._base import (
-    CatalogOptimizer,
-    block_weights,
-    check_catalog_problem,
-    check_noise_moments,
-    check_support,
-    scale_blocks,
-    warn_unexplained,
-)
+from ._base import CatalogOptimizer, warn_unexplained
 from .selection import select_support
 
 __all__ = [
@@ -248,6 +240,9 @@ class ExplicitOptimizer(CatalogOptimizer):
     array([ 0.5,  0. , -3. ,  0. ])
     """
 
+    requires_forces = True
+    spec_type = "ExplicitOptimizer"
+
     def __init__(self, method="threshold", threshold="auto", alpha=1e-4, refit=True,
                  max_iter=1000):
         self.method = method
@@ -302,7 +297,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         self.selection_ = None
         self.noise_share_ = None if noise_moments is None else 0.0
         self.n_features_in_ = X.shape[1]
-        self.coef_ = self._solve(X, y, n_blocks, noise_moments)
+        self.coef_ = self._sparse_coefficients(X, y, n_blocks, noise_moments)
         self.support_ = self.coef_ != 0
         return self
 
@@ -324,7 +319,7 @@ class ExplicitOptimizer(CatalogOptimizer):
             self.noise_share_ = share
         return coef
 
-    def _solve(self, X, y, n_blocks=1, noise_moments=None):
+    def _sparse_coefficients(self, X, y, n_blocks=1, noise_moments=None):
         if self.method == "threshold":
             return self._prune(X, y, n_blocks, noise_moments)
         scale = np.sqrt(np.mean(X**2, axis=0))
@@ -373,106 +368,58 @@ class ExplicitOptimizer(CatalogOptimizer):
                               ConvergenceWarning, stacklevel=4)
         return estimator
 
-    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None,
-                    balance=True):
-        """Solve the catalog problem with the force coefficient fixed to -1.
+    def _solve(self, problem):
+        """Solve the (balanced) catalog problem with the force coefficient fixed to -1.
 
-        Parameters
-        ----------
-        theta : array, shape (n_coordinates * N, F)
-            Stacked regression matrix.
-        n_coordinates : int
-        force_columns : sequence of int
-            Columns of the known forces; at least one, not identically zero.
-        noise_moments : array, shape (n_coordinates, F, F), optional
-            ``E[E_c^T E_c]`` of the errors ``E_c`` in each coordinate's rows of ``theta``
-            (errors in the variables: the weak form of :class:`~pysindy_xl.XLSINDy` passes
-            the propagated position noise). The final fit on the selected support is then
-            corrected for the attenuation they cause (:func:`corrected_least_squares`;
-            ``noise_share_`` says how large they were).
-        balance : bool, default True
-            Rescale the coordinate blocks of rows by
-            :func:`~pysindy_xl.optimizers.coordinate_weights` before solving (a unit-free
-            regression). False where the caller has weighed the blocks already: rows
-            whitened by the covariance of the residual are each in units of their own noise,
-            and a rebalancing would undo that weighting.
-
-        Returns
-        -------
-        self
+        With noise moments (errors in the variables: the weak form of
+        :class:`~pysindy_xl.XLSINDy` passes the propagated position noise), the final fit on
+        the selected support is corrected for the attenuation they cause
+        (:func:`corrected_least_squares`; ``noise_share_`` says how large they were).
         """
-        theta, force_columns, rest, force, moments = _explicit_problem(
-            theta, n_coordinates, force_columns, noise_moments, balance)
+        rest, force, moments = _explicit_regression(problem)
         # cross-validation folds stay inside each coordinate's block of rows
-        self._fit(theta[:, rest], force, n_blocks=int(n_coordinates), noise_moments=moments)
-        return self._as_catalog_vector(self.coef_, rest, force_columns, theta,
-                                       int(n_coordinates))
+        self._fit(problem.theta[:, rest], force, n_blocks=problem.n_coordinates,
+                  noise_moments=moments)
+        return self._as_catalog_vector(self.coef_, rest, problem)
 
-    def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None,
-                    balance=True):
-        """Least squares of the catalog problem on a given support, nothing selected.
-
-        The final step of :meth:`fit_catalog` with the support given: the terms in ``support``
-        (besides the force columns, fixed to -1) are fitted on every row, corrected for
-        ``noise_moments`` as there. :class:`EnsembleOptimizer` uses it to refit the terms its
-        fits agree on with all the data.
-
-        Parameters
-        ----------
-        theta, n_coordinates, force_columns, noise_moments, balance
-            As in :meth:`fit_catalog`.
-        support : array of bool, shape (F,)
-            Terms to fit; the others get 0.
-
-        Returns
-        -------
-        self
-        """
-        self._check_params()
-        theta, force_columns, rest, force, moments = _explicit_problem(
-            theta, n_coordinates, force_columns, noise_moments, balance)
-        keep = check_support(support, theta.shape[1])[rest]
+    def _solve_support(self, problem, support):
+        """Least squares on a given support, nothing selected: the final step of a fit with
+        the support given (the terms in ``support`` besides the force columns, fixed to -1,
+        fitted on every row, corrected for the noise moments as there).
+        :class:`EnsembleOptimizer` uses it to refit the terms its fits agree on with all the
+        data."""
+        rest, force, moments = _explicit_regression(problem)
+        keep = support[rest]
         coef = np.zeros(len(rest))
         if moments is not None:
             moments = moments[np.ix_(keep, keep)]
-        coef[keep], share = corrected_least_squares(theta[:, rest[keep]], force, moments)
+        coef[keep], share = corrected_least_squares(problem.theta[:, rest[keep]], force,
+                                                    moments)
         self.selection_ = None
         self.noise_share_ = None if moments is None else share
-        return self._as_catalog_vector(coef, rest, force_columns, theta, int(n_coordinates))
+        return self._as_catalog_vector(coef, rest, problem)
 
-    def _as_catalog_vector(self, coef_rest, rest, force_columns, theta, n_coordinates):
+    def _as_catalog_vector(self, coef_rest, rest, problem):
         """Set ``coef_`` over the whole catalog (forces at -1) and warn when it leaves a
         coordinate unexplained."""
-        coef = np.zeros(theta.shape[1])
+        coef = np.zeros(problem.n_features)
         coef[rest] = coef_rest
-        coef[force_columns] = -1.0
+        coef[problem.force_columns] = -1.0
         self.coef_ = coef
-        self.n_features_in_ = theta.shape[1]
+        self.n_features_in_ = problem.n_features
         self.support_ = coef != 0
-        warn_unexplained("ExplicitOptimizer", theta, n_coordinates, coef, force_columns, 3)
+        warn_unexplained("ExplicitOptimizer", problem.theta, problem.n_coordinates, coef,
+                         problem.force_columns, 5)
         return self
 
 
-def _explicit_problem(theta, n_coordinates, force_columns, noise_moments, balance=True):
-    """The regression of a catalog problem with known forces, its blocks balanced when
-    ``balance``.
-
-    Returns the (balanced) ``theta``, the force columns, the other columns ``rest``, the
-    force (the right-hand side) and the noise moments of those rows restricted to ``rest``
-    (None without ``noise_moments``).
-    """
-    theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
-                                                 balance=False)
-    n_coordinates = int(n_coordinates)
-    weights = block_weights(theta, n_coordinates, force_columns, balance)
-    theta = scale_blocks(theta, weights)
-    if len(force_columns) == 0:
+def _explicit_regression(problem):
+    """The regression of a catalog problem with known forces: the columns besides the
+    forces (``rest``), the force (the right-hand side) and the noise moments of all rows
+    restricted to ``rest`` (None without noise moments)."""
+    if len(problem.force_columns) == 0:
         raise ValueError("force_columns: explicit regression needs a force column")
-    rest = np.setdiff1d(np.arange(theta.shape[1]), force_columns)
-    force = theta[:, force_columns].sum(axis=1)
-    moments = None
-    if noise_moments is not None:
-        moments = check_noise_moments(noise_moments, n_coordinates, theta.shape[1])
-        # the moments of the balanced rows, restricted to the regressors
-        moments = np.einsum("b,bfg->fg", weights**2, moments)[np.ix_(rest, rest)]
-    return theta, force_columns, rest, force, moments
+    rest = np.setdiff1d(np.arange(problem.n_features), problem.force_columns)
+    force = problem.theta[:, problem.force_columns].sum(axis=1)
+    moments = problem.pooled_moments()
+    return rest, force, None if moments is None else moments[np.ix_(rest, rest)]

@@ -63,34 +63,16 @@ import scipy.sparse.csgraph
 from sklearn.exceptions import ConvergenceWarning
 
 from .._validation import check_option
-from ._base import (
-    CatalogOptimizer,
-    block_weights,
-    check_catalog_problem,
-    check_mass_matrices,
-    check_noise_moments,
-    check_support,
-    coordinates_touched,
-    scale_blocks,
-    warn_unexplained,
-)
+from ._base import CatalogOptimizer, coordinates_touched, warn_unexplained
 from ._sindy_pi import extract_laws, homothetic_groups, null_space_start, solve_cvxpy
 from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
 from .homogeneous import combine_laws, normalize_law, select_laws
 from .noise_ratio import noise_ratio_law
+from .problem import CatalogProblem
 
 __all__ = ["ImplicitOptimizer", "NoLawFoundError", "coordinates_touched", "homothetic_groups"]
 
 _SOLVERS = ("fista", "cvxpy")
-
-
-def _balanced_problem(theta, n_coordinates, force_columns, balance=True):
-    """The checked catalog problem, its coordinate blocks balanced when ``balance``, and the
-    blocks' weights."""
-    theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
-                                                 balance=False)
-    weights = block_weights(theta, int(n_coordinates), force_columns, balance)
-    return scale_blocks(theta, weights), force_columns, weights
 
 
 class NoLawFoundError(RuntimeError):
@@ -214,6 +196,10 @@ class ImplicitOptimizer(CatalogOptimizer):
     (array([-2. ,  0.5,  1. ,  0. ]), [[0, 1, 2]])
     """
 
+    uses_mass_matrices = True
+    derivative_estimate = "unbiased"
+    spec_type = "ImplicitOptimizer"
+
     def __init__(
         self,
         alpha="auto",
@@ -277,103 +263,48 @@ class ImplicitOptimizer(CatalogOptimizer):
         -------
         self
         """
-        theta, _ = check_catalog_problem(X, 1, None)
-        return self._fit(theta, 1, np.array([], dtype=int), None)
+        problem = CatalogProblem.from_arrays(X, 1, [])
+        return self._fit(problem.theta, 1, problem.force_columns, None)
 
-    def fit_catalog(self, theta, n_coordinates, force_columns, reference_columns=None,
-                    noise_moments=None, mass_matrices=None, balance=True):
-        """Implicit regression on a stacked catalog matrix.
+    def _solve(self, problem):
+        """Implicit regression on the (balanced) catalog problem.
 
-        Parameters
-        ----------
-        theta : array, shape (n_coordinates * N, F)
-            Stacked regression matrix (rows coordinate-major).
-        n_coordinates : int
-        force_columns : sequence of int
-            ExternalForces columns. Identically zero ones (unforced data) are ignored; non-zero
-            ones are ordinary columns and fix the scale of a law containing them (coef -1).
-        reference_columns : sequence of int, optional
-            Columns allowed to carry the ``+1`` of an unforced law (e.g. those containing
-            accelerations); default: any column.
-        noise_moments : array, shape (n_coordinates, F, F), optional
-            ``E[E_c^T E_c]`` of the errors ``E_c`` in each coordinate's rows of ``theta`` (the
-            weak form of :class:`~pysindy_xl.XLSINDy` passes the propagated position noise).
-            With them, the laws are selected by their held-out noise ratio
-            (:func:`~pysindy_xl.optimizers.select_law`) instead of problem (1):
-            the least-squares residual that problem (1) minimizes prefers laws whose columns
-            are quiet over laws that hold. ``selection_method_`` says which was used.
-        mass_matrices : array, shape (S, F, n_coordinates, n_coordinates), optional
-            Each column's contribution to the mass matrix on sample states
-            (:func:`~pysindy_xl.diagnostics.column_mass_matrices`; :class:`~pysindy_xl.XLSINDy`
-            passes them). With ``noise_moments``, laws whose mass matrix is not definite
-            there are not selected, unless no candidate law is definite.
-        balance : bool, default True
-            Rescale the coordinate blocks of rows by
-            :func:`~pysindy_xl.optimizers.coordinate_weights` before solving. False where the
-            caller has weighed the blocks already (rows whitened by the covariance of the
-            residual, each block in units of its own noise).
-
-        Returns
-        -------
-        self
+        Identically zero force columns (unforced data) are ignored; non-zero ones are
+        ordinary columns and fix the scale of a law containing them (coef -1). With noise
+        moments, the laws are selected by their held-out noise ratio
+        (:func:`~pysindy_xl.optimizers.select_law`) instead of problem (1): the least-squares
+        residual that problem (1) minimizes prefers laws whose columns are quiet over laws
+        that hold; ``selection_method_`` says which was used. With mass matrices too, laws
+        whose mass matrix is not definite at the sample states are not selected, unless no
+        candidate law is definite.
         """
-        theta, force_columns, weights = _balanced_problem(theta, n_coordinates, force_columns,
-                                                          balance)
-        if reference_columns is not None:
-            reference_columns = np.asarray(reference_columns, dtype=int).reshape(-1)
-            if np.any((reference_columns < 0) | (reference_columns >= theta.shape[1])):
-                raise ValueError(
-                    f"reference_columns: indices must lie in [0, {theta.shape[1]}), got "
-                    f"{reference_columns}"
-                )
-        if mass_matrices is not None:  # checked even where unused: nothing silently dropped
-            mass_matrices = check_mass_matrices(mass_matrices, int(n_coordinates),
-                                                theta.shape[1])
-        if noise_moments is None:
-            self._fit(theta, int(n_coordinates), force_columns, reference_columns)
+        theta, n = problem.theta, problem.n_coordinates
+        if problem.noise_moments is None:
+            self._fit(theta, n, problem.force_columns, problem.reference_columns)
         else:
-            moments = check_noise_moments(noise_moments, int(n_coordinates), theta.shape[1])
-            self._fit_noisy(theta, int(n_coordinates), force_columns, reference_columns,
-                            moments * (weights**2)[:, None, None], mass_matrices)
-        warn_unexplained("ImplicitOptimizer", theta, int(n_coordinates), self.coef_,
-                         force_columns)
+            self._fit_noisy(theta, n, problem.force_columns, problem.reference_columns,
+                            problem.noise_moments, problem.mass_matrices)
+        warn_unexplained("ImplicitOptimizer", theta, n, self.coef_, problem.force_columns)
         return self
 
-    def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None,
-                    balance=True):
+    def _solve_support(self, problem, support):
         """The laws on a given support, nothing selected.
 
         The columns of ``support`` fall into groups that share no coordinate (uncoupled
         subsystems: a chain of columns touching common coordinates links the members of a
         group). Each group of at least two columns gets the law its columns fit best on every
-        row: with ``noise_moments``, the smallest noise ratio
+        row: with noise moments, the smallest noise ratio
         (:func:`~pysindy_xl.optimizers.noise_ratio.noise_ratio_law`), otherwise the smallest
-        right singular vector of the unit-norm columns, as the refit of :meth:`fit_catalog`.
-        The laws are normalized as there and summed. :class:`EnsembleOptimizer` uses it to
-        refit the terms its fits agree on with all the data: a median of laws fitted on
-        different supports is no law.
-
-        Parameters
-        ----------
-        theta, n_coordinates, force_columns, noise_moments, balance
-            As in :meth:`fit_catalog`.
-        support : array of bool, shape (F,)
-            Terms of the laws; the others get 0.
-
-        Returns
-        -------
-        self
+        right singular vector of the unit-norm columns, as the refit of a full fit. The laws
+        are normalized as there and summed. :class:`EnsembleOptimizer` uses it to refit the
+        terms its fits agree on with all the data: a median of laws fitted on different
+        supports is no law.
         """
-        self._check_params()
-        theta, force_columns, weights = _balanced_problem(theta, n_coordinates, force_columns,
-                                                          balance)
-        n_coordinates = int(n_coordinates)
+        theta, n_coordinates = problem.theta, problem.n_coordinates
+        force_columns = problem.force_columns
         norms, nonzero = column_norms(theta)
-        columns = np.flatnonzero(check_support(support, theta.shape[1]) & nonzero)
-        moments = None
-        if noise_moments is not None:
-            moments = np.einsum("b,bfg->fg", weights**2, check_noise_moments(
-                noise_moments, n_coordinates, theta.shape[1]))
+        columns = np.flatnonzero(support & nonzero)
+        moments = problem.pooled_moments()
         if columns.size < 2:
             raise NoLawFoundError(f"support: {columns.size} non-zero column(s) given; a law "
                                   "needs at least two terms")
@@ -450,7 +381,7 @@ class ImplicitOptimizer(CatalogOptimizer):
             )
         scaled = theta[:, active] / norms[active]
         r_factor = triangular_factor(scaled)
-        x_scaled = self._solve(r_factor)
+        x_scaled = self._sindy_pi_matrix(r_factor)
 
         # The SINDy-PI matrix in both unit systems, embedded in the full catalog.
         self.column_norms_ = norms
@@ -551,7 +482,7 @@ class ImplicitOptimizer(CatalogOptimizer):
             angle_tol=self.angle_tol)
         return residuals, groups, laws, law_groups, law_residuals
 
-    def _solve(self, r_factor):
+    def _sindy_pi_matrix(self, r_factor):
         n = r_factor.shape[1]
         self.alpha_ = self._resolve_alpha(r_factor)
         if self.solver == "cvxpy":

@@ -32,17 +32,9 @@ from sklearn.base import clone
 
 from .._validation import check_instance, check_option
 from ..diagnostics import UnexplainedCoordinateWarning
-from ._base import (
-    CatalogOptimizer,
-    accepts_fit_parameter,
-    accepts_noise_moments,
-    balance_coordinates,
-    check_catalog_problem,
-    check_mass_matrices,
-    check_noise_moments,
-    pilot_optimizer,
-)
+from ._base import CatalogOptimizer, pilot_optimizer, solve
 from .implicit import ImplicitOptimizer, NoLawFoundError, coordinates_touched
+from .problem import balance_coordinates
 
 __all__ = ["MixedOptimizer", "activation_closure"]
 
@@ -78,13 +70,6 @@ def activation_closure(touches, seed) -> tuple[np.ndarray, np.ndarray]:
         if np.array_equal(grown, coordinates):
             return coordinates, columns
         coordinates = grown
-
-
-def _rows(coordinates, n_samples):
-    """Row indices of the blocks of the given coordinates (boolean mask over coordinates)."""
-    return np.concatenate(
-        [np.arange(c * n_samples, (c + 1) * n_samples) for c in np.flatnonzero(coordinates)]
-    )
 
 
 class MixedOptimizer(CatalogOptimizer):
@@ -140,6 +125,10 @@ class MixedOptimizer(CatalogOptimizer):
     ('mixed', array([-1.,  1.,  4.,  1.,  9.]))
     """
 
+    #: the parts balance their own sub-problems
+    balances_rows = False
+    spec_type = "MixedOptimizer"
+
     def __init__(self, explicit_optimizer=None, implicit_optimizer=None, rtol=1e-10):
         self.explicit_optimizer = explicit_optimizer
         self.implicit_optimizer = implicit_optimizer
@@ -168,77 +157,25 @@ class MixedOptimizer(CatalogOptimizer):
         return clone(self).set_params(explicit_optimizer=pilot_optimizer(explicit),
                                       implicit_optimizer=pilot_optimizer(implicit))
 
-    def fit(self, X, y=None):
-        """Not available: mixed regression needs the catalog structure.
+    @property
+    def uses_mass_matrices(self) -> bool:
+        """Whether a part uses the column mass matrices."""
+        return any(getattr(part, "uses_mass_matrices", False)
+                   for part in self._sub_optimizers())
 
-        Raises
-        ------
-        TypeError
-            Always; use :meth:`fit_catalog`.
-        """
-        raise TypeError(
-            "MixedOptimizer.fit: mixed regression needs the row blocks and the force columns; "
-            "call fit_catalog(theta, n_coordinates, force_columns)"
-        )
-
-    def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None,
-                    mass_matrices=None, balance=True):
-        """Mixed explicit/implicit regression on a stacked catalog matrix.
-
-        Parameters
-        ----------
-        theta : array, shape (n_coordinates * N, F)
-            Stacked regression matrix (rows coordinate-major).
-        n_coordinates : int
-        force_columns : sequence of int
-            ExternalForces columns (identically zero ones mean unforced data).
-        noise_moments : array, shape (n_coordinates, F, F), optional
-            Second moments of the errors of each coordinate's rows (see
-            :meth:`ExplicitOptimizer.fit_catalog`); each sub-optimizer that takes them gets
-            those of its own rows and columns.
-        mass_matrices : array, shape (S, F, n_coordinates, n_coordinates), optional
-            Each column's contribution to the mass matrix (see
-            :meth:`ImplicitOptimizer.fit_catalog`), handed on the same way.
-        balance : bool, default True
-            Handed to each sub-optimizer that takes it (see
-            :meth:`ExplicitOptimizer.fit_catalog`): False where the caller has weighed the
-            coordinate blocks already, as on rows whitened by the residual covariance.
-
-        Returns
-        -------
-        self
-        """
-        # The sub-optimizers balance the coordinate blocks of their own (sub)problems
-        # (check_catalog_problem); here the balanced matrix only decides which coordinates a
-        # column touches (a coupling column 1e12 apart between a um and a rad block touches both).
-        theta, force_columns = check_catalog_problem(theta, n_coordinates, force_columns,
-                                                     balance=False)
-        self._check_params()
-        check_option("balance", balance, "bool")
+    def _solve(self, problem):
+        """Mixed explicit/implicit regression (see the module docstring); each part gets its
+        sub-problem: its rows and columns with their noise moments and mass matrices."""
         explicit, implicit = self._sub_optimizers()
-        n = int(n_coordinates)
-        if noise_moments is not None:
-            noise_moments = check_noise_moments(noise_moments, n, theta.shape[1])
-        if mass_matrices is not None:
-            mass_matrices = check_mass_matrices(mass_matrices, n, theta.shape[1])
+        theta, n, force_columns = problem.theta, problem.n_coordinates, problem.force_columns
 
         def fit_part(optimizer, coordinates, columns, part_force_columns):
-            # one sub-problem: the rows of `coordinates`, the `columns`, their noise moments
-            extra = {}
-            if noise_moments is not None and accepts_noise_moments(optimizer):
-                extra["noise_moments"] = noise_moments[coordinates][:, columns][:, :, columns]
-            if mass_matrices is not None and accepts_fit_parameter(optimizer, "mass_matrices"):
-                extra["mass_matrices"] = (
-                    mass_matrices[:, columns][:, :, coordinates][:, :, :, coordinates])
-            if accepts_fit_parameter(optimizer, "balance"):
-                extra["balance"] = balance
-            whole = coordinates.all() and len(columns) == n_features
-            part = theta if whole else theta[np.ix_(_rows(coordinates, n_samples), columns)]
-            return optimizer.fit_catalog(part, int(coordinates.sum()), part_force_columns,
-                                         **extra)
+            return solve(optimizer, problem.subproblem(coordinates, columns, part_force_columns))
 
-        n_samples = theta.shape[0] // n
         n_features = theta.shape[1]
+        # the parts balance their own sub-problems; here the balanced matrix only decides
+        # which coordinates a column touches (a coupling column 1e12 apart between a um and a
+        # rad block touches both)
         touches = coordinates_touched(balance_coordinates(theta, n, force_columns), n,
                                       self.rtol)
         forced = touches[:, force_columns].any(axis=1)

@@ -135,7 +135,8 @@ def propagated_draws(library, d, smoothing, phi, dphi, block, n_draws, rng):
     return draws
 
 
-def weak_regression(library, trajectories, test_functions, smoother, noise="moments"):
+def weak_regression(library, trajectories, test_functions, smoother, noise="moments",
+                    half_width=None):
     """Weak regression matrix of all trajectories, rows coordinate-major.
 
     Parameters
@@ -152,6 +153,8 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         What to return of the propagated noise: its moments, or its draws with the
         structure of the rows (:class:`~pysindy_xl.weak.noise.WeakNoise`, which gives the
         moments and the covariance of a law's residual).
+    half_width : float, optional
+        Half-width of the test functions (s); default: :func:`shared_half_width`.
 
     Returns
     -------
@@ -203,7 +206,8 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
             q, qd = d["x"], d["x_dot"]
             smoothing[-1] = None
         states.append(stack_variables(q, qd, qdd, d["u"], d["t"]))
-    half_width = shared_half_width(test_functions, trajectories)
+    if half_width is None:
+        half_width = shared_half_width(test_functions, trajectories)
     durations = np.array([d["t"][-1] - d["t"][0] for d in trajectories])
     usable = np.flatnonzero(durations >= 2 * half_width)
     if len(usable) < len(trajectories):

@@ -1,0 +1,129 @@
+"""Reading library specifications from untrusted files, within a budget.
+
+A model file describes its catalog as nested ``{"type": ..., ...}`` objects written by each
+library's :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`. :class:`SpecReader` looks
+the type up in :data:`~pysindy_xl.feature_library.LIBRARY_TYPES` (classes already defined: a
+file never makes Python import anything) and hands the object to the class's ``from_spec``
+with itself, so that every library parses its terms and matrices the same bounded way: terms
+in the restricted grammar of :mod:`pysindy_xl.expressions`, at most ``max_terms`` of them and
+``max_size`` expanded terms in all, libraries nested at most ``max_depth`` deep.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..expressions import expression_size, parse_expression
+from ..symbols import Coordinates
+from ._base import LIBRARY_TYPES
+
+__all__ = ["SpecError", "SpecReader"]
+
+
+class SpecError(ValueError):
+    """A library specification that cannot be read (the message says which part)."""
+
+
+class SpecReader:
+    """Parses library specifications for the coordinates of one model file.
+
+    Parameters
+    ----------
+    coords : Coordinates
+    max_terms : int, default 5000
+        Catalog terms in all the specification (about a minute of derivation).
+    max_size : int, default 20000
+        Sum over the terms of their expanded size
+        (:func:`~pysindy_xl.expressions.expression_size`).
+    max_depth : int, default 4
+        Nesting of libraries.
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> spec = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).to_spec()
+    >>> SpecReader(c).library(spec).fit().get_feature_names()
+    ['L[x_dot**2]', 'L[x**2]']
+    >>> SpecReader(c).library({"type": "os.system"})
+    Traceback (most recent call last):
+    ...
+    pysindy_xl.feature_library.spec.SpecError: unknown library type 'os.system'
+    """
+
+    def __init__(self, coords: Coordinates, max_terms: int = 5_000, max_size: int = 20_000,
+                 max_depth: int = 4):
+        self.coords = coords
+        self.max_terms = max_terms
+        self.max_size = max_size
+        self.max_depth = max_depth
+        self._symbols = {str(s): s for s in coords.variables}
+        self._terms = self._size = self._depth = 0
+
+    @staticmethod
+    def expect(condition: bool, what: str) -> None:
+        """Raise :class:`SpecError` saying ``what`` unless ``condition``."""
+        if not condition:
+            raise SpecError(what)
+
+    def library(self, spec):
+        """The library ``spec`` describes (nested ones through this same reader)."""
+        self.expect(isinstance(spec, dict) and isinstance(spec.get("type"), str),
+                    "library spec must be an object with a 'type'")
+        cls = LIBRARY_TYPES.get(spec["type"])
+        self.expect(cls is not None, f"unknown library type {spec['type']!r}")
+        self.expect(self._depth < self.max_depth,
+                    f"libraries nested deeper than {self.max_depth} levels")
+        self._depth += 1
+        try:
+            return cls.from_spec(spec, self)
+        finally:
+            self._depth -= 1
+
+    def terms(self, spec, key: str = "terms") -> list:
+        """``spec[key]``: a non-empty list of terms in the restricted grammar, parsed."""
+        raw = spec.get(key)
+        where = f"{spec.get('type')}.{key}"
+        self.expect(isinstance(raw, list) and raw and all(isinstance(t, str) for t in raw),
+                    f"{where} must be a non-empty list of strings")
+        self.expect(len(raw) <= self.max_terms - self._terms,
+                    f"more than {self.max_terms} catalog terms")
+        self._terms += len(raw)
+        parsed = []
+        for text in raw:
+            try:
+                expr = parse_expression(text, self._symbols)
+            except (TypeError, ValueError) as err:
+                raise SpecError(str(err)) from None
+            self._size += expression_size(expr)["terms"]
+            self.expect(self._size <= self.max_size,
+                        f"the catalog is too large (more than {self.max_size} expanded terms)")
+            parsed.append(expr)
+        return parsed
+
+    def matrix(self, spec, key: str, shape: tuple, binary: bool = False,
+               shape_name: str | None = None) -> np.ndarray:
+        """``spec[key]``: a finite numeric matrix of ``shape`` (0/1 entries with ``binary``).
+
+        ``shape_name`` names the shape in the messages, e.g. ``"(n, n)"``.
+        """
+        where = f"{spec.get('type')}.{key}"
+        label = f"{shape_name} = {tuple(shape)}" if shape_name else str(tuple(shape))
+        raw = spec.get(key)
+        refused = (str,) if binary else (str, bool)
+        try:
+            numeric = isinstance(raw, list) and not any(
+                isinstance(v, refused) for v in np.ravel(np.asarray(raw, dtype=object)))
+            matrix = np.asarray(raw, dtype=float) if numeric else None
+        except (TypeError, ValueError):  # ragged nested lists, non-numbers
+            numeric, matrix = False, None
+        if binary:
+            self.expect(numeric and matrix.shape == tuple(shape)
+                        and bool(np.isin(matrix, (0, 1)).all()),
+                        f"{where} must be a 0/1 matrix {label}")
+            return matrix.astype(bool)
+        self.expect(numeric, f"{where} must be a numeric matrix {label}")
+        self.expect(matrix.shape == tuple(shape) and bool(np.all(np.isfinite(matrix))),
+                    f"{where} must be a finite {shape_name or ''} matrix of shape {tuple(shape)}"
+                    .replace("  ", " "))
+        return matrix

@@ -1,0 +1,55 @@
+"""The optimizer a fit uses when the user names none: chosen from which coordinates are forced
+and whether the columns come from estimated (noisy) positions.
+
+One policy, used by :class:`~pysindy_xl.XLSINDy` and, through it, by the command line.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .ensemble import EnsembleOptimizer
+from .explicit import ExplicitOptimizer
+from .implicit import ImplicitOptimizer
+from .mixed import MixedOptimizer
+
+__all__ = ["default_optimizer"]
+
+
+def default_optimizer(forced, estimated: bool = False):
+    """The default catalog optimizer for the data.
+
+    * every coordinate forced: explicit regression; on estimated columns bagged,
+      ``EnsembleOptimizer(ExplicitOptimizer())``. One cross-validated selection among about a
+      hundred candidates keeps a term that only fits the noise in a sizeable share of fits (a
+      multiple-comparison effect); the terms most subsample fits keep are the true ones;
+    * no coordinate forced: ``ImplicitOptimizer()``;
+    * some forced: ``MixedOptimizer``, its explicit part bagged on estimated columns as above.
+
+    Parameters
+    ----------
+    forced : array of bool, shape (n,)
+        Coordinates where a force acts.
+    estimated : bool, default False
+        The columns come from noisy positions only (the weak form propagated the smoother's
+        noise estimate into them).
+
+    Returns
+    -------
+    CatalogOptimizer
+        Unfitted.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> type(default_optimizer(np.array([True, False]))).__name__
+    'MixedOptimizer'
+    >>> default_optimizer(np.array([True, True]), estimated=True).optimizer
+    ExplicitOptimizer()
+    """
+    forced = np.asarray(forced, dtype=bool)
+    if forced.all():
+        return EnsembleOptimizer(ExplicitOptimizer()) if estimated else ExplicitOptimizer()
+    if not forced.any():
+        return ImplicitOptimizer()
+    return MixedOptimizer(EnsembleOptimizer(ExplicitOptimizer()) if estimated else None)

@@ -1,0 +1,391 @@
+"""The catalog regression problem that every catalog optimizer solves.
+
+A :class:`CatalogProblem` is the stacked regression matrix ``theta`` of shape
+``(n_coordinates * N, F)`` (rows coordinate-major: the ``N`` rows of coordinate 0, then those
+of coordinate 1, ...; see :mod:`pysindy_xl.feature_library._base`) and what is known about it:
+
+* ``force_columns``: the :class:`~pysindy_xl.ExternalForces` columns, whose coefficient is -1
+  in an explicit law;
+* ``noise_moments`` ``(n_coordinates, F, F)``: ``E[E_c^T E_c]`` for the errors ``E_c`` in each
+  coordinate's rows (the weak form's propagated position noise; errors in variables);
+* ``mass_matrices`` ``(S, F, n, n)``: each column's contribution to the mass matrix at ``S``
+  sample states (physical admissibility of a law);
+* ``balance``: whether the coordinate blocks may be rescaled by
+  :func:`~pysindy_xl.optimizers.coordinate_weights` (False where the caller has weighed them,
+  e.g. rows whitened by the covariance of the residual);
+* ``reference_columns``: the columns allowed to carry the ``+1`` of an unforced law.
+
+Every row of ``theta @ coef = 0`` holds exactly, so multiplying the rows of one coordinate block
+by a constant changes how the regression weighs the blocks, never the true coefficients:
+:meth:`CatalogProblem.balanced` makes the regression unit free (a coordinate in micrometres
+next to one in radians is solved like the same system in metres).
+
+The problem is validated once, where it is made (:meth:`CatalogProblem.from_arrays`); the
+sub-problems of mixed regression (:meth:`~CatalogProblem.subproblem`) and the subsamples of
+an ensemble (:meth:`~CatalogProblem.subsample`) are derived from it, with their share of the
+noise moments and mass matrices.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+
+import numpy as np
+
+from .._validation import check_indices, check_numeric_array, check_option
+
+__all__ = [
+    "CatalogProblem",
+    "check_mass_matrices",
+    "check_noise_moments",
+    "check_support",
+    "balance_coordinates",
+    "coordinate_weights",
+    "scale_blocks",
+]
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class CatalogProblem:
+    """A validated catalog regression ``theta @ coef ~ 0`` (see the module docstring).
+
+    Build it with :meth:`from_arrays`, which checks every argument; the constructor trusts
+    its arguments.
+
+    Attributes
+    ----------
+    theta : ndarray, shape (n_coordinates * N, F)
+    n_coordinates : int
+    force_columns : ndarray of int
+    noise_moments : ndarray, shape (n_coordinates, F, F), or None
+    mass_matrices : ndarray, shape (S, F, n_coordinates, n_coordinates), or None
+    balance : bool
+    reference_columns : ndarray of int or None
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> theta = np.array([[1e-6, 2e-6], [3e-6, 1e-6], [1.0, 2.0], [3.0, 1.0]])
+    >>> problem = CatalogProblem.from_arrays(theta, 2, [])
+    >>> problem.n_samples, problem.n_features
+    (2, 2)
+    >>> problem.balanced().theta.round(6)
+    array([[0.001, 0.002],
+           [0.003, 0.001],
+           [0.001, 0.002],
+           [0.003, 0.001]])
+    >>> problem.subproblem(np.array([False, True]), np.array([1])).theta
+    array([[2.],
+           [1.]])
+    """
+
+    theta: np.ndarray
+    n_coordinates: int
+    force_columns: np.ndarray
+    noise_moments: np.ndarray | None = None
+    mass_matrices: np.ndarray | None = None
+    balance: bool = True
+    reference_columns: np.ndarray | None = None
+
+    @classmethod
+    def from_arrays(cls, theta, n_coordinates, force_columns, noise_moments=None,
+                    mass_matrices=None, balance=True, reference_columns=None):
+        """Check the arguments of ``fit_catalog`` and hold them as a problem.
+
+        Parameters
+        ----------
+        theta : array, shape (n_coordinates * N, F)
+        n_coordinates : int
+        force_columns : sequence of int
+        noise_moments : array, shape (n_coordinates, F, F), optional
+        mass_matrices : array, shape (S, F, n_coordinates, n_coordinates), optional
+        balance : bool, default True
+        reference_columns : sequence of int, optional
+
+        Returns
+        -------
+        CatalogProblem
+
+        Raises
+        ------
+        ValueError, TypeError
+            Naming the argument that is wrong.
+        """
+        theta = check_numeric_array(theta, "theta", finite=False, min_samples=0)
+        if theta.ndim != 2 or theta.shape[0] == 0 or theta.shape[1] == 0:
+            raise ValueError(f"theta: expected a non-empty 2-D array, got shape {theta.shape}")
+        if not np.all(np.isfinite(theta)):
+            raise ValueError("theta: contains NaN or inf")
+        n = int(check_option("n_coordinates", n_coordinates, "int", low=1))
+        if theta.shape[0] % n:
+            raise ValueError(
+                f"theta: {theta.shape[0]} rows is not a multiple of n_coordinates={n}")
+        n_features = theta.shape[1]
+        force_columns = check_indices(force_columns, "force_columns", n_features)
+        check_option("balance", balance, "bool")
+        if noise_moments is not None:
+            noise_moments = check_noise_moments(noise_moments, n, n_features)
+        if mass_matrices is not None:
+            mass_matrices = check_mass_matrices(mass_matrices, n, n_features)
+        if reference_columns is not None:
+            reference_columns = np.asarray(reference_columns, dtype=int).reshape(-1)
+            if np.any((reference_columns < 0) | (reference_columns >= n_features)):
+                raise ValueError(f"reference_columns: indices must lie in [0, {n_features}), "
+                                 f"got {reference_columns}")
+        return cls(theta, n, force_columns, noise_moments, mass_matrices, bool(balance),
+                   reference_columns)
+
+    @property
+    def n_samples(self) -> int:
+        """Rows of each coordinate block."""
+        return self.theta.shape[0] // self.n_coordinates
+
+    @property
+    def n_features(self) -> int:
+        """Catalog columns."""
+        return self.theta.shape[1]
+
+    @functools.cached_property
+    def block_weights(self) -> np.ndarray:
+        """Weights of the coordinate blocks, shape (n_coordinates,): those of
+        :func:`coordinate_weights` with ``balance``, ones without."""
+        if not self.balance:
+            return np.ones(self.n_coordinates)
+        return coordinate_weights(self.theta, self.n_coordinates, self.force_columns)
+
+    def balanced(self) -> CatalogProblem:
+        """The same problem with each coordinate block's rows (and noise moments) scaled by
+        :attr:`block_weights`; ``balance`` is then False (the blocks are weighed)."""
+        if not self.balance:
+            return self
+        weights = self.block_weights
+        moments = self.noise_moments
+        if moments is not None:
+            moments = moments * (weights**2)[:, None, None]
+        return dataclasses.replace(self, theta=scale_blocks(self.theta, weights),
+                                   noise_moments=moments, balance=False)
+
+    def pooled_moments(self) -> np.ndarray | None:
+        """The noise moments of all rows together, shape (F, F), or None."""
+        return None if self.noise_moments is None else self.noise_moments.sum(axis=0)
+
+    def rows(self, coordinates) -> np.ndarray:
+        """Row indices of the blocks of ``coordinates`` (a boolean mask or indices)."""
+        blocks = np.arange(self.n_coordinates)[coordinates]
+        return (blocks[:, None] * self.n_samples + np.arange(self.n_samples)).ravel()
+
+    def subproblem(self, coordinates, columns, force_columns=None) -> CatalogProblem:
+        """The rows of ``coordinates`` and the ``columns``, with their moments and masses.
+
+        Parameters
+        ----------
+        coordinates : array of bool, shape (n_coordinates,)
+        columns : array of int
+            Catalog columns kept, in this order.
+        force_columns : array of int, optional
+            Force columns of the sub-problem, as indices into ``columns``; default: those of
+            this problem that are among ``columns``.
+
+        Returns
+        -------
+        CatalogProblem
+        """
+        coordinates = np.asarray(coordinates, dtype=bool)
+        columns = np.asarray(columns, dtype=int)
+        if force_columns is None:
+            force_columns = np.flatnonzero(np.isin(columns, self.force_columns))
+        whole = coordinates.all() and np.array_equal(columns, np.arange(self.n_features))
+        theta = self.theta if whole else self.theta[np.ix_(self.rows(coordinates), columns)]
+        moments, mass = self.noise_moments, self.mass_matrices
+        if moments is not None:
+            moments = moments[coordinates][:, columns][:, :, columns]
+        if mass is not None:
+            mass = mass[:, columns][:, :, coordinates][:, :, :, coordinates]
+        reference = self.reference_columns
+        if reference is not None:
+            reference = np.flatnonzero(np.isin(columns, reference))
+        return dataclasses.replace(self, theta=theta, n_coordinates=int(coordinates.sum()),
+                                   force_columns=np.asarray(force_columns, dtype=int),
+                                   noise_moments=moments, mass_matrices=mass,
+                                   reference_columns=reference)
+
+    def subsample(self, samples) -> CatalogProblem:
+        """The rows of ``samples`` (indices within a block) in every coordinate block.
+
+        The noise moments are sums over rows: the subsample gets its rows' share. The mass
+        matrices are properties of the columns at sample states, not of rows: kept whole.
+        """
+        samples = np.asarray(samples, dtype=int)
+        rows = (np.arange(self.n_coordinates)[:, None] * self.n_samples + samples).ravel()
+        moments = self.noise_moments
+        if moments is not None:
+            moments = moments * (len(samples) / self.n_samples)
+        return dataclasses.replace(self, theta=self.theta[rows], noise_moments=moments)
+
+
+def check_noise_moments(noise_moments, n_coordinates: int, n_features: int) -> np.ndarray:
+    """Validate noise moments: finite, shape (n, F, F), symmetric blocks (sums of outer
+    products of column errors)."""
+    moments = check_numeric_array(noise_moments, "noise_moments", min_samples=0)
+    if moments.shape != (n_coordinates, n_features, n_features):
+        raise ValueError(f"noise_moments: expected shape {(n_coordinates, n_features, n_features)}"
+                         f", got {moments.shape}")
+    if not np.allclose(moments, np.swapaxes(moments, 1, 2), rtol=1e-8,
+                       atol=1e-12 * np.abs(moments).max(initial=0.0)):
+        raise ValueError("noise_moments: expected symmetric blocks")
+    return moments
+
+
+def check_mass_matrices(mass_matrices, n_coordinates: int, n_features: int) -> np.ndarray:
+    """Validate column mass matrices: finite, shape (S, F, n, n) with S >= 1."""
+    mass = check_numeric_array(mass_matrices, "mass_matrices", min_samples=0)
+    if mass.ndim != 4 or mass.shape[1:] != (n_features, n_coordinates, n_coordinates) \
+            or mass.shape[0] == 0:
+        raise ValueError(f"mass_matrices: expected shape (S, {n_features}, {n_coordinates}, "
+                         f"{n_coordinates}) with S >= 1, got {mass.shape}")
+    return mass
+
+
+def check_support(support, n_features: int) -> np.ndarray:
+    """Validate the ``support`` of a refit: a boolean array of shape (F,)."""
+    support = np.asarray(support)
+    if support.dtype != bool or support.shape != (n_features,):
+        raise ValueError(f"support: expected a boolean array of shape ({n_features},), got "
+                         f"{support.dtype} of shape {support.shape}")
+    return support
+
+
+def _block_rms(theta, n_blocks: int) -> np.ndarray:
+    """RMS of every column within every row block, shape (n_blocks, F), without overflow."""
+    blocks = np.asarray(theta, dtype=float).reshape(n_blocks, -1, theta.shape[1])
+    top = np.max(np.abs(blocks), axis=1)
+    safe = np.where((top > 0) & np.isfinite(top), top, 1.0)
+    return top * np.sqrt(np.mean((blocks / safe[:, None, :]) ** 2, axis=1))
+
+
+def coordinate_weights(theta, n_coordinates: int, force_columns=None) -> np.ndarray:
+    r"""Row weights of the coordinate blocks of ``theta`` that balance their scales.
+
+    With :math:`M_{ij}` the RMS of column :math:`j` within block :math:`i` (rows
+    coordinate-major) and :math:`P = \{(i, j) : M_{ij} > 0\}` the entries that are not
+    exactly zero, solve the small least-squares problem
+
+    .. math::
+
+        \min_{u, v} \sum_{(i, j) \in P} \left(\log M_{ij} + u_i + v_j\right)^2
+        \quad\text{s.t.}\quad v_j = 0 \text{ for the force columns } j
+
+    (minimum-norm solution where it is not unique) and return
+    :math:`w_i = \exp(u_i - \bar u)`, :math:`\bar u` the mean of :math:`u` over the blocks
+    with an entry in :math:`P` (geometric mean 1; a block that is exactly zero gets 1).
+    :math:`\exp(u_i)` and :math:`\exp(v_j)` are row and column scalings that bring every
+    block of every column as close as possible to 1 in the log sense.
+
+    Force columns carry the coefficient -1 (the units of their equation), so they are not
+    rescaled (:math:`v_j = 0`): a change of units that multiplies block :math:`i` by
+    :math:`a_i` and column :math:`j` by :math:`b_j` (coefficient :math:`c_j \to c_j / b_j`,
+    forces kept at -1) changes :math:`u_i` by exactly :math:`-\log a_i` (up to a common
+    constant that the normalization removes), so the weighted matrix is the same up to column
+    scales: the regression is unit free. The pinned columns also fix the otherwise free common
+    shift of :math:`u` against :math:`v`. Balancing a balanced matrix returns ones.
+
+    Parameters
+    ----------
+    theta : array, shape (n_coordinates * N, F)
+        Stacked regression matrix, rows coordinate-major.
+    n_coordinates : int
+    force_columns : sequence of int, optional
+        Columns whose scale is not free (their coefficient is fixed).
+
+    Returns
+    -------
+    ndarray, shape (n_coordinates,)
+
+    Examples
+    --------
+    The first coordinate in micrometres: its block, force included, is 1e6 times too small.
+
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> block = rng.normal(size=(50, 3))
+    >>> theta = np.vstack([block * 1e-6, block])
+    >>> w = coordinate_weights(theta, 2, force_columns=[2])
+    >>> np.round(w[0] / w[1])
+    np.float64(1000000.0)
+    >>> balanced = balance_coordinates(theta, 2, [2])
+    >>> np.allclose(coordinate_weights(balanced, 2, [2]), 1.0)
+    True
+    """
+    theta = np.asarray(theta, dtype=float)
+    n = int(n_coordinates)
+    n_features = theta.shape[1]
+    if n == 1:
+        return np.ones(1)
+    rms = _block_rms(theta, n)
+    present = (rms > 0) & np.isfinite(rms)
+    blocks, columns = np.nonzero(present)
+    if blocks.size == 0:
+        return np.ones(n)
+    pinned = np.zeros(n_features, dtype=bool)
+    if force_columns is not None:
+        pinned[np.asarray(force_columns, dtype=int).reshape(-1)] = True
+    free = np.flatnonzero(~pinned)
+    slot = np.full(n_features, -1)
+    slot[free] = n + np.arange(free.size)
+    design = np.zeros((blocks.size, n + free.size))
+    rows = np.arange(blocks.size)
+    design[rows, blocks] = 1.0
+    unpinned = slot[columns] >= 0
+    design[rows[unpinned], slot[columns[unpinned]]] = 1.0
+    solution = np.linalg.lstsq(design, -np.log(rms[blocks, columns]), rcond=None)[0]
+    u = solution[:n]
+    active = present.any(axis=1)
+    log_w = np.where(active, u - u[active].mean(), 0.0)
+    return np.exp(log_w)
+
+
+def balance_coordinates(theta, n_coordinates: int, force_columns=None) -> np.ndarray:
+    """``theta`` with the rows of each coordinate block multiplied by its
+    :func:`coordinate_weights` (a new array; ``theta`` itself for a single block).
+
+    Parameters
+    ----------
+    theta : array, shape (n_coordinates * N, F)
+        Stacked regression matrix, rows coordinate-major.
+    n_coordinates : int
+    force_columns : sequence of int, optional
+        Columns whose scale is not free (see :func:`coordinate_weights`).
+
+    Returns
+    -------
+    ndarray, shape (n_coordinates * N, F)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> theta = np.array([[1e-6, 2e-6], [3e-6, 1e-6], [1.0, 2.0], [3.0, 1.0]])
+    >>> balance_coordinates(theta, 2).round(6)
+    array([[0.001, 0.002],
+           [0.003, 0.001],
+           [0.001, 0.002],
+           [0.003, 0.001]])
+    """
+    theta = np.asarray(theta, dtype=float)
+    if int(n_coordinates) == 1:
+        return theta
+    return scale_blocks(theta, coordinate_weights(theta, n_coordinates, force_columns))
+
+
+def scale_blocks(theta, weights) -> np.ndarray:
+    """``theta`` with the rows of block ``i`` (rows coordinate-major) multiplied by
+    ``weights[i]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> scale_blocks(np.ones((4, 1)), [1.0, 3.0]).ravel().tolist()
+    [1.0, 1.0, 3.0, 3.0]
+    """
+    weights = np.asarray(weights, dtype=float)
+    return theta * np.repeat(weights, theta.shape[0] // len(weights))[:, None]

@@ -1,0 +1,58 @@
+"""Named types for persistence: what a model file may name, and how a name is resolved.
+
+Catalog libraries (:data:`pysindy_xl.feature_library.LIBRARY_TYPES`) and catalog optimizers
+(:data:`pysindy_xl.optimizers.OPTIMIZER_TYPES`) register themselves when their class is
+defined, in this package or in a user's code; a model file names them by ``spec_type`` and
+loading looks the name up, so nothing in a file makes Python import or execute anything.
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["register_type", "is_plain"]
+
+
+def register_type(registry: dict, cls: type) -> None:
+    """Put ``cls`` in ``registry`` under its ``spec_type``.
+
+    A class sets ``spec_type`` in its own body to choose the name; otherwise it is
+    ``module.QualifiedName`` (never inherited: a subclass is a type of its own). A name taken
+    by another class raises ``TypeError``; the same class defined again (a re-run notebook
+    cell) replaces itself.
+
+    Examples
+    --------
+    >>> registry = {}
+    >>> class Solver:
+    ...     spec_type = "Solver"
+    >>> register_type(registry, Solver)
+    >>> registry["Solver"] is Solver
+    True
+    >>> class Other:
+    ...     spec_type = "Solver"
+    >>> register_type(registry, Other)
+    Traceback (most recent call last):
+    ...
+    TypeError: spec_type: 'Solver' is already the name of ...Solver; give Other another spec_type
+    """
+    name = cls.__dict__.get("spec_type") or f"{cls.__module__}.{cls.__qualname__}"
+    known = registry.get(name)
+    if known is not None and (known.__module__, known.__qualname__) != (cls.__module__,
+                                                                         cls.__qualname__):
+        raise TypeError(f"spec_type: {name!r} is already the name of {known.__module__}."
+                        f"{known.__qualname__}; give {cls.__qualname__} another spec_type")
+    cls.spec_type = name
+    registry[name] = cls
+
+
+def is_plain(value) -> bool:
+    """Whether JSON holds ``value`` as it is: None, a bool, an int, a str or a finite float.
+
+    Examples
+    --------
+    >>> [is_plain(v) for v in (None, True, 3, 0.5, "a", float("nan"), [1])]
+    [True, True, True, True, True, False, False]
+    """
+    return value is None or (isinstance(value, (bool, int, float, str))
+                             and not (isinstance(value, float) and not math.isfinite(value)))

@@ -1,0 +1,174 @@
+"""The regression stage: a catalog and trajectories in, the rows of the regression out.
+
+Every consumer of a catalog's regression goes through here: :meth:`XLSINDy.fit
+<pysindy_xl.XLSINDy.fit>`, the fit-quality report (:mod:`pysindy_xl.quality`) and the CLI.
+
+* :func:`trajectory_data` validates the arrays of ``fit`` (one trajectory or a list) and
+  estimates missing velocities and accelerations with a differentiation function;
+* :func:`build_regression` turns them into the stacked rows of the chosen formulation:
+  ``"strong"``, the catalog's columns at every unmasked sample
+  (:meth:`SymbolicLibrary.transform <pysindy_xl.feature_library.SymbolicLibrary.transform>`),
+  or ``"weak"``, the columns integrated against test functions of smoothed positions
+  (:func:`~pysindy_xl.weak.weak_regression`), with the propagated noise of the positions.
+
+Rows are coordinate-major over all trajectories: ``theta`` has shape ``(n * R, F)`` with
+``R`` rows (samples or test functions) per coordinate.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+
+import numpy as np
+import pysindy as ps
+
+from ._inputs import trajectory_arrays
+from .feature_library import stack_variables
+from .weak import BumpTestFunctions, WhittakerSmoother, weak_regression
+
+__all__ = ["Regression", "build_regression", "trajectory_data", "differentiation_function",
+           "FORMULATIONS"]
+
+FORMULATIONS = ("auto", "strong", "weak")
+
+
+@dataclasses.dataclass
+class Regression:
+    """The rows of a catalog's regression and what the fit needs to remember of them.
+
+    Attributes
+    ----------
+    theta : ndarray, shape (n * R, F)
+        Stacked regression matrix, rows coordinate-major.
+    states : ndarray, shape (S, 4n + 1)
+        The library inputs the rows come from (smoothed for the weak form), for the checks of
+        the catalog's domain, its dependent columns and the mass matrix.
+    formulation : {"strong", "weak"}
+    noise : WeakNoise or None
+        Weak form on estimated positions: the noise the rows carry
+        (:class:`~pysindy_xl.weak.WeakNoise`).
+    weak_info : dict or None
+        Weak form: the test-function half-width, test functions per trajectory and the
+        smoother's noise estimate.
+    """
+
+    theta: np.ndarray
+    states: np.ndarray
+    formulation: str
+    noise: object = None
+    weak_info: dict | None = None
+
+
+def differentiation_function(method=None, unbiased: bool = False):
+    """The function ``derivative(values, t)`` that estimates missing derivatives.
+
+    Parameters
+    ----------
+    method : pysindy differentiation method, optional
+        Used as it is when given.
+    unbiased : bool, default False
+        Without ``method``: fourth-order finite differences (no smoothing bias, which a
+        null-space search of unforced data cannot tell from the law) instead of
+        ``ps.SmoothedFiniteDifference()`` (robust to moderate noise).
+
+    Returns
+    -------
+    callable
+        Checks that the result has the shape of its input and is finite.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 1, 101)
+    >>> d = differentiation_function(unbiased=True)(t[:, None] ** 2, t)
+    >>> bool(np.allclose(d[:, 0], 2 * t))
+    True
+    """
+    if method is None:
+        method = ps.FiniteDifference(order=4) if unbiased else ps.SmoothedFiniteDifference()
+    if not callable(method):
+        raise TypeError("differentiation_method: expected a pysindy differentiation method")
+
+    def derivative(values, t):
+        result = np.asarray(method(values, t), dtype=float)
+        if result.shape != values.shape or not np.all(np.isfinite(result)):
+            raise ValueError("differentiation_method: returned an invalid derivative")
+        return result
+
+    return derivative
+
+
+def trajectory_data(x, t, x_dot, x_ddot, u, n: int, sample_mask=None,
+                    derivative=None) -> list[dict]:
+    """The validated trajectories of ``fit``: one dict of arrays per trajectory.
+
+    Parameters
+    ----------
+    x, t, x_dot, x_ddot, u, sample_mask
+        As :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes them (``t`` already defaulted).
+    n : int
+        Coordinates.
+    derivative : callable, optional
+        ``derivative(values, t)`` (:func:`differentiation_function`) for missing velocities
+        and accelerations; without it they stay None.
+
+    Returns
+    -------
+    list of dict
+        Keys ``"x"``, ``"t"``, ``"x_dot"``, ``"x_ddot"``, ``"u"``, ``"mask"``.
+    """
+    data = trajectory_arrays(x, t, x_dot, x_ddot, u, sample_mask, n)
+    if derivative is not None:
+        for arrays in data:
+            if arrays["x_dot"] is None:
+                arrays["x_dot"] = derivative(arrays["x"], arrays["t"])
+            if arrays["x_ddot"] is None:
+                arrays["x_ddot"] = derivative(arrays["x_dot"], arrays["t"])
+    return data
+
+
+def build_regression(library, data, formulation: str, test_functions=None, smoother=None,
+                     half_width=None) -> Regression:
+    """The rows of a fitted catalog on trajectories, in the strong or weak formulation.
+
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+    data : list of dict
+        From :func:`trajectory_data`; the strong form needs ``x_dot`` and ``x_ddot``.
+    formulation : {"strong", "weak"}
+    test_functions, smoother : optional
+        Weak form: default ``BumpTestFunctions()`` and ``WhittakerSmoother()``; the smoother
+        is copied (smoothing fits it).
+    half_width : float, optional
+        Weak form: the test functions' half-width (default: chosen from the data, as in a fit).
+
+    Returns
+    -------
+    Regression
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> library = px.CatalogRepartition([px.LagrangeLibrary(c, [c.qd[0] ** 2])]).fit()
+    >>> t = np.linspace(0, 1, 11)
+    >>> data = trajectory_data(np.sin(t), t, np.cos(t), -np.sin(t), None, 1)
+    >>> build_regression(library, data, "strong").theta.shape
+    (11, 2)
+    """
+    if formulation == "weak":
+        theta, states, noise, info = weak_regression(
+            library, data, test_functions or BumpTestFunctions(),
+            copy.deepcopy(smoother) or WhittakerSmoother(), noise="draws",
+            half_width=half_width)
+        return Regression(theta, states, "weak", noise, info)
+    if formulation != "strong":
+        raise ValueError(f"formulation: expected 'strong' or 'weak', got {formulation!r}")
+    states = np.vstack([
+        stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"])[d["mask"]]
+        for d in data])
+    if len(states) == 0:
+        raise ValueError("sample_mask: no sample left to fit")
+    return Regression(library.transform(states), states, "strong")
