@@ -328,3 +328,53 @@ def test_score_metric_must_be_a_function(fitted, data):
     with pytest.raises(TypeError, match=r"metric: expected a function metric\(true, predicted\) "
                                         r"with a __call__ method, got str"):
         fitted.score(**data, metric="r2")
+
+
+def test_a_high_power_is_evaluated_without_recursion(data):
+    # |x_dot| exceeds 1 here, so the column overflows: a clear error naming the term, never
+    # a RecursionError
+    with pytest.raises(ValueError, match=r"L\[x_dot\*\*1500\] is NaN or inf"):
+        px.XLSINDy(_library([XD**2, X**2, XD**1500]), px.ExplicitOptimizer()).fit(**data)
+    small = {**data, "x_dot": data["x_dot"] / 10}  # |x_dot| < 1: evaluated, no overflow
+    column = px.CatalogRepartition([_library([XD**2, XD**1501])]).fit().transform(
+        px.stack_variables(small["x"], small["x_dot"]))
+    np.testing.assert_array_equal(column[:, 2], 0.0)  # d/dt(1501 x_dot**1500) underflows
+
+
+def test_physical_parameters_refuse_strings():
+    from pysindy_xl.mujoco import get_system
+
+    for value in ("2", "heavy", True):
+        with pytest.raises(TypeError, match="cart_mass: expected a real number > 0"):
+            get_system("cart-pole", cart_mass=value)
+
+
+def test_trajectories_name_the_series_that_is_not_numeric():
+    from pysindy_xl.data import Dataset, Trajectory
+
+    with pytest.raises(TypeError, match=r"q: expected real numbers, got an array of str"):
+        Trajectory(t=[0.0, 1.0], q=[["a"], ["b"]])
+    with pytest.raises(TypeError, match="qd: expected real numbers, got complex"):
+        Trajectory(t=[0.0, 1.0], q=[[0.0], [1.0]], qd=[[1j], [0.0]])
+    trajectory = Trajectory(t=[0.0, 1.0], q=[[0.0], [1.0]])
+    for names in (3, "x", [1]):
+        with pytest.raises(TypeError, match="coordinate_names: expected a sequence of str"):
+            Dataset([trajectory], names)
+
+
+def test_coordinate_names_of_loaded_data(tmp_path):
+    from pysindy_xl.data import load_data
+
+    t = np.linspace(0, 1, 11)
+    np.savez(tmp_path / "run.npz", t=t, q=np.sin(t))
+    with pytest.raises(TypeError, match="coordinates: expected a list of names or a comma"):
+        load_data(tmp_path / "run.npz", coordinates=3)
+    assert load_data(tmp_path / "run.npz", coordinates="theta").coordinate_names == ("theta",)
+
+
+def test_sample_every_longer_than_the_run():
+    from pysindy_xl.mujoco import generate_dataset
+
+    with pytest.raises(ValueError, match="sample_every: recording every 1000 steps .* fewer "
+                                         "than two samples in a run of 0.1 s"):
+        generate_dataset("cart-pole", n_trajectories=1, duration=0.1, sample_every=1000)

@@ -17,8 +17,7 @@ gymnasium = pytest.importorskip("gymnasium")
 @pytest.fixture(scope="module")
 def model():
     """Damped pendulum 0.5 qdd + 0.2 qd + 4.9 sin q = tau, identified from exact data."""
-    from pysindy_xl.mujoco import coordinate_system
-    from pysindy_xl.mujoco import reference_catalog
+    from pysindy_xl.mujoco import coordinate_system, reference_catalog
 
     t, q, qd, qdd, tau = pendulum(401)
     catalog = reference_catalog(coordinate_system("theta", angles="theta"), "mixed",

@@ -328,7 +328,7 @@ def test_test_function_width_does_not_move_with_the_noise(seed):
     # a drifting cart: after the linear trend the signal is small against noise of a few
     # percent of the spread; half the noise power counted as signal used to push the corner
     # from 0.77 Hz to over 40 Hz (test functions ~50x too narrow)
-    from pysindy_xl.weak.test_functions import corner_frequency
+    from pysindy_xl.weak.bumps import corner_frequency
 
     t = np.arange(0, 30, 0.01)
     x = (0.2 * t + 0.2 * np.sin(2 * np.pi * 0.7 * t)

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validation import check_times
+from .._validation import check_numeric_array, check_times
 from .files import FORMAT, MASKS, SERIES, VERSION, DatasetError, read_dataset_arrays
 
 __all__ = ["Trajectory", "Dataset", "load_dataset", "DatasetError"]
@@ -141,7 +141,10 @@ def _check_times(t, name: str) -> np.ndarray:
 
 
 def _check_series(a, name: str, n_samples: int, n: int | None) -> np.ndarray:
-    a = np.asarray(a, dtype=float)
+    try:  # strings, complex numbers, booleans: refused with the argument's name
+        a = check_numeric_array(a, name, finite=False, min_samples=0)
+    except ValueError as err:
+        raise DatasetError(str(err)) from None
     if a.ndim == 1 and n in (None, 1):
         a = a[:, None]
     if a.ndim != 2 or a.shape[0] != n_samples or (n is not None and a.shape[1] != n):
@@ -191,7 +194,13 @@ class Dataset:
         trajectories = list(trajectories)
         if not trajectories or not all(isinstance(tr, Trajectory) for tr in trajectories):
             raise TypeError("trajectories: expected a non-empty list of Trajectory")
-        names = tuple(coordinate_names)
+        try:
+            names = None if isinstance(coordinate_names, str) else tuple(coordinate_names)
+        except TypeError:  # not iterable
+            names = None
+        if names is None or not all(isinstance(name, str) for name in names):
+            raise TypeError("coordinate_names: expected a sequence of str, got "
+                            f"{coordinate_names!r}")
         for k, tr in enumerate(trajectories):
             if tr.q.shape[1] != len(names):
                 raise DatasetError(

@@ -31,7 +31,8 @@ import os
 
 import numpy as np
 
-__all__ = ["read_csv", "from_dataframe", "from_columns", "load_data", "CSV_SUFFIXES"]
+__all__ = ["read_csv", "from_dataframe", "from_columns", "load_data", "coordinate_names",
+           "CSV_SUFFIXES"]
 
 CSV_SUFFIXES = (".csv", ".tsv", ".txt")
 _TIME_NAMES = ("t", "time")
@@ -124,6 +125,29 @@ def _trajectory_groups(ids, source: str, column: str):
     return [(key, np.asarray(rows)) for key, rows in groups.items()]
 
 
+def coordinate_names(coordinates) -> list[str]:
+    """Coordinate names given as a list of str or one comma-separated str.
+
+    Examples
+    --------
+    >>> coordinate_names("x, theta")
+    ['x', 'theta']
+    >>> coordinate_names(3)
+    Traceback (most recent call last):
+    ...
+    TypeError: coordinates: expected a list of names or a comma-separated str, got the int 3
+    """
+    if isinstance(coordinates, str):
+        coordinates = [c.strip() for c in coordinates.split(",")]
+    if not isinstance(coordinates, (list, tuple)):
+        raise TypeError("coordinates: expected a list of names or a comma-separated str, got "
+                        f"the {type(coordinates).__name__} {coordinates!r}")
+    names = list(coordinates)
+    if not names or not all(isinstance(n, str) and n for n in names):
+        raise ValueError(f"coordinates: expected a non-empty list of names, got {names!r}")
+    return names
+
+
 def _resolve(header, coordinates, columns, source):
     """Map the roles (time, id, q, qd, qdd, tau) to header names."""
     columns = dict(columns or {})
@@ -154,11 +178,7 @@ def _resolve(header, coordinates, columns, source):
         if not names:
             raise _error(f"{source}: no coordinate column in the header {header}")
     else:
-        if isinstance(coordinates, str):
-            coordinates = [c.strip() for c in coordinates.split(",")]
-        names = list(coordinates)
-        if not names or not all(isinstance(n, str) and n for n in names):
-            raise ValueError(f"coordinates: expected a non-empty list of names, got {names!r}")
+        names = coordinate_names(coordinates)
     from ..symbols import Coordinates
 
     Coordinates(names)  # same name rules as the symbols (raises ValueError naming them)
@@ -442,9 +462,7 @@ def _load_npz(path, coordinates, columns):
     dataset = load_dataset(path)
     if coordinates is None:
         return dataset
-    if isinstance(coordinates, str):
-        coordinates = [c.strip() for c in coordinates.split(",")]
-    names = list(coordinates)
+    names = coordinate_names(coordinates)
     if len(names) != dataset.n:
         raise _error(f"coordinates: {len(names)} names {names} for the {dataset.n} columns of "
                      f"q in {path!r}")

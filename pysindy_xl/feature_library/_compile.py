@@ -91,9 +91,15 @@ def compile_entries(variables, exprs):
             value = memo.get(key)
             if value is None:
                 if len(key) == 1:
+                    # by squaring: log2(power) products deep, whatever the power
                     index, power = key[0]
-                    base = atom_values[index]
-                    value = base if power == 1 else base * monomial(((index, power - 1),))
+                    if power == 1:
+                        value = atom_values[index]
+                    else:
+                        half = monomial(((index, power // 2),))
+                        value = half * half
+                        if power % 2:
+                            value = value * atom_values[index]
                 else:
                     value = monomial(key[:-1]) * monomial(key[-1:])
                 memo[key] = value

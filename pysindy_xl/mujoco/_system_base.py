@@ -8,6 +8,7 @@ import numpy as np
 import sympy as sp
 
 from .._optional import import_optional
+from .._validation import check_option
 from ..symbols import Coordinates
 
 
@@ -20,23 +21,13 @@ __all__ = ["MuJoCoSystem", "equations_of_motion"]
 
 
 def check_positive(value, name: str) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name}: expected a positive number, got {value!r}") from None
-    if not np.isfinite(value) or value <= 0:
-        raise ValueError(f"{name}: expected a positive finite number, got {value!r}")
-    return value
+    """A physical parameter that must be a positive number (never a string or a bool)."""
+    return check_option(name, value, "real", low=0, low_open=True)
 
 
 def check_non_negative(value, name: str) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name}: expected a non-negative number, got {value!r}") from None
-    if not np.isfinite(value) or value < 0:
-        raise ValueError(f"{name}: expected a non-negative finite number, got {value!r}")
-    return value
+    """A physical parameter that must be a non-negative number (never a string or a bool)."""
+    return check_option(name, value, "real", low=0)
 
 
 def mjcf_float(value: float) -> str:

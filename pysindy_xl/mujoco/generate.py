@@ -12,6 +12,7 @@ import os
 
 import numpy as np
 
+from .._validation import check_option
 from ..data.dataset import Dataset, Trajectory
 from ..data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
 from .forcing import FORCING_MODES, SumOfSinusoids
@@ -290,13 +291,9 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     """
     mujoco = _import_mujoco()
     system = get_system(system)
-    duration = float(duration)
-    if not np.isfinite(duration) or duration <= 0:
-        raise ValueError(f"duration: expected a positive number of seconds, got {duration!r}")
-    if not isinstance(sample_every, (int, np.integer)) or sample_every < 1:
-        raise ValueError(f"sample_every: expected an integer >= 1, got {sample_every!r}")
-    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
-        raise ValueError(f"substeps: expected an integer >= 1, got {substeps!r}")
+    duration = check_option("duration", duration, "real", low=0, low_open=True)
+    sample_every = check_option("sample_every", sample_every, "int", low=1)
+    substeps = check_option("substeps", substeps, "int", low=1)
     model = system.mj_model()
     data = mujoco.MjData(model)
     n = system.n
@@ -312,6 +309,11 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
 
     dt = model.opt.timestep
     n_steps = int(round(duration / dt))
+    if n_steps < sample_every:
+        raise ValueError(
+            f"sample_every: recording every {sample_every} steps of {dt:g} s leaves fewer than "
+            f"two samples in a run of {duration:g} s ({n_steps} steps); lower sample_every or "
+            "lengthen the run")
     model.opt.timestep = dt / substeps
     n_fine = n_steps * substeps
     fine_times = np.arange(n_fine + 1) * (dt / substeps)
@@ -473,8 +475,6 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     import warnings
 
     from tqdm.auto import tqdm
-
-    from .._validation import check_option
 
     duration = check_option("duration", duration, "real", low=0, low_open=True)
     sample_every = check_option("sample_every", sample_every, "int", low=1)

@@ -5,6 +5,7 @@ The weak regression matrix itself is built by the catalog libraries
 the model use it exactly like the pointwise one.
 """
 
+from .bumps import BumpTestFunctions, corner_frequency, quadrature_weights
 from .noise import RowWhitener, WeakNoise
 from .regression import propagated_draws, propagated_noise, weak_regression
 from .smoothing import (
@@ -13,7 +14,6 @@ from .smoothing import (
     finite_difference_weights,
     whittaker_smooth,
 )
-from .test_functions import BumpTestFunctions, corner_frequency, quadrature_weights
 
 __all__ = [
     "BumpTestFunctions",
