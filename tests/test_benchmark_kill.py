@@ -36,6 +36,10 @@ GRID_SCRIPT = textwrap.dedent("""
                 "time_s": {"run": 0.0}, "message": None}
 
     if __name__ == "__main__":
+        # Ctrl-C as in a terminal: a background job of a non-interactive shell (CI, nohup,
+        # "cmd &") starts with SIGINT ignored, and Python then installs no KeyboardInterrupt
+        import signal
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         run_grid(SETTINGS, sys.argv[1], n_jobs=2, function=task, progress=False)
 """)
 
