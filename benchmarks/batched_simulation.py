@@ -6,8 +6,8 @@ MuJoCo's own time step (1 ms) by
 
 * NumPy, sequential (batch 1): ``model.dynamics_.state_derivative`` in a Python RK4 loop;
 * JAX, sequential (batch 1): a jitted RK4 step called from Python, and the whole
-  trajectory in one ``lax.scan`` (:func:`pysindy_xl.jax_dynamics.simulate`);
-* JAX, batched (default 10,000 trajectories): :func:`pysindy_xl.jax_dynamics.simulate_batch`
+  trajectory in one ``lax.scan`` (:func:`pysindy_xl.export.jax_dynamics.simulate`);
+* JAX, batched (default 10,000 trajectories): :func:`pysindy_xl.export.jax_dynamics.simulate_batch`
   in float32 and float64, storing every state or only the final one;
 
 and, as the reference a user would otherwise pick, MuJoCo stepping the same MJCF system
@@ -37,7 +37,7 @@ import numpy as np
 
 import pysindy_xl as px
 from pysindy_xl import mujoco as pxm
-from pysindy_xl.jax_dynamics import rk4_step, simulate, simulate_batch
+from pysindy_xl.export.jax_dynamics import rk4_step, simulate, simulate_batch
 
 PAPER = {  # Table 2 of the paper, microseconds per step
     "NumPy (sequential)": 150.0,

@@ -52,13 +52,14 @@ API_MODULES = [
     "pysindy_xl",
     "pysindy_xl.feature_library",
     "pysindy_xl.optimizers",
+    "pysindy_xl.regression",
     "pysindy_xl.weak",
     "pysindy_xl.diagnostics",
     "pysindy_xl.dynamics",
-    "pysindy_xl.jax_dynamics",
+    "pysindy_xl.export.jax_dynamics",
     "pysindy_xl.io",
     "pysindy_xl.data",
-    "pysindy_xl.gym_env",
+    "pysindy_xl.export.gym_env",
     "pysindy_xl.expressions",
     "pysindy_xl.mujoco",
     "pysindy_xl.benchmark",
@@ -86,9 +87,9 @@ numpydoc_attributes_as_param_list = True
 GALLERY_REQUIREMENTS = {
     "double_pendulum_implicit.py": ("pysindy_xl", "ImplicitOptimizer"),
     "cart_double_pendulum_mixed.py": ("pysindy_xl", "MixedOptimizer"),
-    "jax_batched.py": ("pysindy_xl.jax_dynamics", "simulate_batch"),
-    "jax_gradient.py": ("pysindy_xl.jax_dynamics", "simulate"),
-    "identified_cartpole_controller.py": ("pysindy_xl.gym_env", "make_env"),
+    "jax_batched.py": ("pysindy_xl.export.jax_dynamics", "simulate_batch"),
+    "jax_gradient.py": ("pysindy_xl.export.jax_dynamics", "simulate"),
+    "identified_cartpole_controller.py": ("pysindy_xl.export.gym_env", "make_env"),
 }
 
 

@@ -3,7 +3,7 @@ Ten thousand simulations at once with JAX
 =========================================
 
 A double pendulum is identified from MuJoCo data and exported with ``to_jax``. One call to
-:func:`pysindy_xl.jax_dynamics.simulate_batch` then integrates 10,000 trajectories with
+:func:`pysindy_xl.export.jax_dynamics.simulate_batch` then integrates 10,000 trajectories with
 fixed-step RK4 (``lax.scan`` over time, vectorized over trajectories) on whatever device JAX
 uses. Two uses of such batches:
 
@@ -21,7 +21,7 @@ import numpy as np
 
 import pysindy_xl as px
 from pysindy_xl import mujoco as pxm
-from pysindy_xl.jax_dynamics import simulate_batch
+from pysindy_xl.export.jax_dynamics import simulate_batch
 
 # Single precision (the default of JAX): twice as fast as double on CPU.
 jax.config.update("jax_enable_x64", False)

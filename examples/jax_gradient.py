@@ -23,7 +23,7 @@ from scipy.optimize import minimize
 
 import pysindy_xl as px
 from pysindy_xl import mujoco as pxm
-from pysindy_xl.jax_dynamics import simulate
+from pysindy_xl.export.jax_dynamics import simulate
 
 # Double precision keeps BFGS's line search reliable.
 jax.config.update("jax_enable_x64", True)

@@ -132,9 +132,9 @@ class DynamicsMixin:
         Returns
         -------
         callable
-            jit-, vmap- and grad-compatible; see :mod:`pysindy_xl.jax_dynamics`.
+            jit-, vmap- and grad-compatible; see :mod:`pysindy_xl.export.jax_dynamics`.
         """
-        from .jax_dynamics import dynamics_function
+        from .export.jax_dynamics import dynamics_function
 
         return dynamics_function(self._require_dynamics())
 
@@ -161,13 +161,13 @@ class DynamicsMixin:
         **options
             ``reward``, ``terminated``, ``initial_state``, ``actuated``, ``action_bounds``,
             ``max_episode_steps``, ``substeps``, ``observation_bounds``: see
-            :class:`pysindy_xl.gym_env.IdentifiedDynamicsEnv`.
+            :class:`pysindy_xl.export.gym_env.IdentifiedDynamicsEnv`.
 
         Returns
         -------
-        pysindy_xl.gym_env.IdentifiedDynamicsEnv
+        pysindy_xl.export.gym_env.IdentifiedDynamicsEnv
             Observation ``[q, qd]``, action the forces of the actuated coordinates.
         """
-        from .gym_env import make_env
+        from .export.gym_env import make_env
 
         return make_env(self, dt, **options)

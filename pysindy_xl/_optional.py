@@ -4,7 +4,7 @@ The core (catalogs, optimizers, :class:`~pysindy_xl.XLSINDy`) needs NumPy, SciPy
 scikit-learn and PySINDy only. Heavier back ends are optional and imported only where used:
 
 - ``cvxpy``: ``ImplicitOptimizer(solver="cvxpy")``; ``pip install "pysindy-xl[cvxpy]"``
-- ``jax``: :meth:`XLSINDy.to_jax`, :mod:`pysindy_xl.jax_dynamics`;
+- ``jax``: :meth:`XLSINDy.to_jax`, :mod:`pysindy_xl.export.jax_dynamics`;
   ``pip install "pysindy-xl[jax]"``
 - ``mujoco``: simulation in :mod:`pysindy_xl.mujoco`; ``pip install "pysindy-xl[mujoco]"``
 - ``gymnasium``: :meth:`XLSINDy.to_gymnasium`; ``pip install "pysindy-xl[gym]"``

@@ -163,7 +163,23 @@ def _uncertainty_from_document(document, n_features, path):
 
 
 def invalid_model_file(path, what: str) -> ValueError:
-    """The error for a file that is not a valid model file, saying ``what`` is wrong."""
+    """The error for a file that is not a valid model file, saying ``what`` is wrong.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    what : str
+
+    Returns
+    -------
+    ValueError
+        To raise.
+
+    Examples
+    --------
+    >>> invalid_model_file("m.json", "'format' must be 'pysindy-xl-model'")
+    ValueError("path: 'm.json' is not a valid pysindy-xl model file: 'format' must be ...")
+    """
     return ValueError(f"path: {os.fspath(path)!r} is not a valid pysindy-xl model file: {what}")
 
 

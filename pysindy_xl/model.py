@@ -27,12 +27,13 @@ from .dynamics import MassMatrixDynamics
 from .feature_library import CatalogRepartition, SymbolicLibrary
 from .io import invalid_model_file, read_model_file
 from .optimizers import (
+    SOLVER_KINDS,
     CatalogProblem,
     ExplicitOptimizer,
     default_optimizer,
     independent_columns,
     pilot_optimizer,
-    solve,
+    solve_problem,
 )
 from .regression import (
     FORMULATIONS,
@@ -74,31 +75,24 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
     feature_library : SymbolicLibrary or CatalogRepartition
         The catalog. A single library is wrapped in a ``CatalogRepartition`` (which adds the
         force column).
-    optimizer : catalog optimizer, optional
+    optimizer : catalog optimizer or {"explicit", "implicit", "mixed"}, optional
         :class:`~pysindy_xl.ExplicitOptimizer`, :class:`~pysindy_xl.ImplicitOptimizer`,
         :class:`~pysindy_xl.MixedOptimizer` or anything with ``fit_catalog``; a pysindy
         optimizer (``ps.STLSQ()``, ``ps.SR3()``, ...) or any regressor with ``fit(X, y)`` and
-        ``coef_`` runs as ``ExplicitOptimizer(method=...)``. Default: chosen from the data:
-        explicit when every coordinate is forced, implicit when none is, mixed otherwise.
-        Explicit fits from positions only (weak form, velocities estimated) are bagged,
-        ``EnsembleOptimizer(ExplicitOptimizer())``: the model keeps the terms that most of 20
-        subsample fits select, and reports inclusion probabilities and coefficient
-        intervals. Measured (``benchmarks/noise_sweep.py``, forced double pendulum, 1-5 %
-        position noise, 10 seeds): exact support 10/10 at every level, against 6-8/10 for
-        one fit, at two to five times the fit time. The explicit part of a mixed fit is
-        bagged the same way (double pendulum driven on its first link, 5 % noise: 10/10
-        against 7/10).
+        ``coef_`` runs as ``ExplicitOptimizer(method=...)``; the name of a kind of regression
+        gets the default optimizer of that kind. Default: chosen from the data by
+        :func:`~pysindy_xl.optimizers.default_optimizer`: explicit when every coordinate is
+        forced, implicit when none is, mixed otherwise; explicit fits (and explicit parts)
+        from positions only are bagged, ``EnsembleOptimizer(ExplicitOptimizer())``: the
+        model keeps the terms that most of 20 subsample fits select, and reports inclusion
+        probabilities and coefficient intervals (measured in the "Noisy data" guide).
     differentiation_method : pysindy differentiation method, optional
-        Used for velocities and accelerations that are not given. Default, by solver:
-        explicit and mixed fits use ``ps.SmoothedFiniteDifference()`` (finite differences
-        after a Savitzky-Golay smoothing): accurate to about 0.1 % on clean data and robust to
-        moderate noise, which plain finite differences amplify twice for accelerations.
-        Implicit fits (unforced data) use ``ps.FiniteDifference(order=4)``: the SINDy-PI
-        null-space search needs unbiased derivatives (the smoothing bias alone hides the law)
-        and is sensitive to noise whatever the differentiation. Measured on a double pendulum
-        sampled at 100 Hz: implicit recovery is exact with the fourth-order scheme and fails
-        with the smoothed one; explicit recovery at 1e-4 rad noise is within 1.1 % with the
-        smoothed scheme and fails with the fourth-order one.
+        Used for velocities and accelerations that are not given (strong form). Default, by
+        the optimizer's ``derivative_estimate``: ``ps.SmoothedFiniteDifference()`` (finite
+        differences after a Savitzky-Golay smoothing, robust to moderate noise, which plain
+        finite differences amplify twice for accelerations) for explicit and mixed fits;
+        ``ps.FiniteDifference(order=4)`` for implicit fits of unforced data, whose null-space
+        search needs unbiased derivatives (the smoothing bias alone can hide the law).
     formulation : {"auto", "strong", "weak"}, default "auto"
         ``"strong"``: the Euler-Lagrange columns evaluated pointwise, which needs
         accelerations. ``"weak"``: each equation integrated against test functions, with the
@@ -107,7 +101,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         <pysindy_xl.feature_library.SymbolicLibrary.weak_transform>`), fed by smoothed
         positions and velocities: the robust choice for measured positions. ``"auto"``: strong
         when ``x_dot`` and ``x_ddot`` are given or a ``differentiation_method`` is set, weak
-        otherwise (measured on noisy positions: ``benchmarks/noise_sweep.py``).
+        otherwise.
     test_functions : BumpTestFunctions, optional
         Test functions of the weak formulation (default ``BumpTestFunctions()``: bumps whose
         width comes from the data's spectrum).
@@ -124,20 +118,15 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         (:meth:`~pysindy_xl.weak.WeakNoise.whitener`, the iterative reweighting of WENDy),
         again with the weights of its own law while the support it finds differs from the
         one that set them (at most three weighted fits). Each coordinate's whitened rows are
-        in units of their own noise, so the optimizer fits them as they are
-        (``fit_catalog(..., balance=False)`` where it takes the keyword) rather than
-        rebalancing the coordinates by their scales. ``"auto"``: when some coordinate is
-        forced; measured in ``benchmarks/noise_sweep.py``, it finds more exact laws on forced
-        and partly forced data (the double pendulum on a cart at 5 %: 8 instead of 7 of 10;
-        at 10 %: 6 instead of 1; the cart-pole driven on the cart only, at 3 %: 9 instead of
-        6) but fewer on unforced data (the double pendulum at 3 %: 6
-        instead of 9 of 10).
+        in units of their own noise, so the optimizer fits them as they are (a problem with
+        ``balance=False``) rather than rebalancing the coordinates by their scales.
+        ``"auto"``: when some coordinate is forced, where the weighting finds more exact laws;
+        on unforced data it finds fewer (the "Noisy data" guide has the figures).
         ``False``: one fit of the rows as they are.
     blas_threads : int or None, default 1
         BLAS threads during ``fit`` (threadpoolctl). The fit's linear algebra is many QR
-        factorizations of tall, narrow matrices, where threads mostly compete: measured on 2
-        loaded cores, a 12,000 x 285 QR takes 0.17 s on one thread and 4.4 s on the default
-        two. ``None`` keeps the library default.
+        factorizations of tall, narrow matrices, where threads mostly compete (measured in
+        ``benchmarks/blas_threads.py``). ``None`` keeps the library default.
     t_default : float, default 1.0
         Time step used when ``fit`` or ``score`` get no ``t`` (as in PySINDy).
     drop_dependent : bool, default True
@@ -232,7 +221,9 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         """
         derivative = None
         if differentiate:
-            prefers = getattr(self.optimizer, "derivative_estimate", "unbiased")
+            prefers = (getattr(self.optimizer, "derivative_estimate", "unbiased")
+                       if not isinstance(self.optimizer, str)
+                       else "unbiased" if self.optimizer == "implicit" else "smoothed")
             derivative = differentiation_function(self.differentiation_method,
                                                   unbiased=u is None and prefers == "unbiased")
         return trajectory_data(x, self.t_default if t is None else t, x_dot, x_ddot, u, n,
@@ -344,7 +335,8 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             force_block = theta[:, library.force_columns_].reshape(n, -1,
                                                                    len(library.force_columns_))
             forced = np.any(force_block != 0, axis=(1, 2))
-        if u is None and getattr(self.optimizer, "requires_forces", False):
+        if u is None and (self.optimizer == "explicit"
+                          or getattr(self.optimizer, "requires_forces", False)):
             raise ValueError(
                 "u: explicit regression needs the generalized forces; pass u, or use "
                 "ImplicitOptimizer / MixedOptimizer for unforced data"
@@ -398,6 +390,8 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             value = getattr(self, name)
             if value is not None:
                 check_instance(name, value, what, method)
+        if isinstance(self.optimizer, str):
+            check_option("optimizer", self.optimizer, "choice", choices=SOLVER_KINDS)
         for name in ("feature_library", "optimizer"):
             value = getattr(self, name)
             if isinstance(value, type):
@@ -442,7 +436,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             # their scales would undo the weighting (an undriven coordinate's rows, where
             # the law is tested hardest, weighed 30 times less than a driven one's)
             moments = None if propagated is None else propagated.moments()
-            return solve(optimizer, dataclasses.replace(
+            return solve_problem(optimizer, dataclasses.replace(
                 problem, theta=rows, noise_moments=moments, balance=not whitened))
 
         def unweighted(reason):  # said only of a fit that succeeds
@@ -484,8 +478,8 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
 
         ``estimated``: the columns come from noisy positions only (the weak form propagated
         the smoother's noise estimate into them)."""
-        if self.optimizer is None:
-            return default_optimizer(forced, estimated)
+        if self.optimizer is None or isinstance(self.optimizer, str):
+            return default_optimizer(forced, estimated, kind=self.optimizer)
         if not hasattr(self.optimizer, "fit_catalog"):
             if callable(getattr(self.optimizer, "fit", None)):
                 # a pysindy (or scikit-learn) regressor: explicit regression through it

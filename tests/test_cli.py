@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from pysindy_xl._cli_steps import _optimizer
 from pysindy_xl.cli import CLIError, main
+from pysindy_xl.cli.steps import _optimizer
 from pysindy_xl.mujoco import SYSTEMS
 
 SHORT = ["--duration", "2", "--trajectories", "1", "--validation-duration", "1", "--no-plots",

@@ -112,8 +112,8 @@ def test_unfitted_model_is_refused():
 
 def test_missing_gymnasium_names_the_extra(model, monkeypatch):
     monkeypatch.setitem(sys.modules, "gymnasium", None)
-    monkeypatch.delitem(sys.modules, "pysindy_xl.gym_env", raising=False)
+    monkeypatch.delitem(sys.modules, "pysindy_xl.export.gym_env", raising=False)
     with pytest.raises(MissingExtraError, match=r'pip install "pysindy-xl\[gym\]"'):
         model.to_gymnasium(0.05)
     with pytest.raises(MissingExtraError):
-        importlib.import_module("pysindy_xl.gym_env")
+        importlib.import_module("pysindy_xl.export.gym_env")

@@ -15,7 +15,7 @@ import sympy as sp
 from ground_truth import random_force, random_initial_state
 
 import pysindy_xl as px
-from pysindy_xl.jax_dynamics import (
+from pysindy_xl.export.jax_dynamics import (
     BatchSimulation,
     dynamics_function,
     euler_step,

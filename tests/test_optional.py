@@ -19,11 +19,11 @@ def test_public_names_load_on_first_use():
 
 def test_missing_jax_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "jax", None)  # makes `import jax` fail
-    monkeypatch.delitem(sys.modules, "pysindy_xl.jax_dynamics", raising=False)
+    monkeypatch.delitem(sys.modules, "pysindy_xl.export.jax_dynamics", raising=False)
     with pytest.raises(MissingExtraError, match=r'pip install "pysindy-xl\[jax\]"'):
-        importlib.import_module("pysindy_xl.jax_dynamics")
+        importlib.import_module("pysindy_xl.export.jax_dynamics")
     with pytest.raises(ImportError, match=r"XLSINDy.to_jax"):
-        importlib.import_module("pysindy_xl.jax_dynamics")
+        importlib.import_module("pysindy_xl.export.jax_dynamics")
 
 
 def test_missing_mujoco_names_the_extra(monkeypatch):

@@ -10,9 +10,9 @@ from ._base import (
     independent_columns,
     optimizer_from_spec,
     pilot_optimizer,
-    solve,
+    solve_problem,
 )
-from .defaults import default_optimizer
+from .defaults import SOLVER_KINDS, default_optimizer
 from .ensemble import EnsembleOptimizer
 from .explicit import (
     ExplicitOptimizer,
@@ -32,8 +32,9 @@ __all__ = [
     "OPTIMIZER_TYPES",
     "optimizer_from_spec",
     "pilot_optimizer",
-    "solve",
+    "solve_problem",
     "default_optimizer",
+    "SOLVER_KINDS",
     "ExplicitOptimizer",
     "ImplicitOptimizer",
     "MixedOptimizer",

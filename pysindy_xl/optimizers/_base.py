@@ -50,7 +50,7 @@ __all__ = [
     "independent_columns",
     "optimizer_from_spec",
     "pilot_optimizer",
-    "solve",
+    "solve_problem",
     "warn_unexplained",
 ]
 
@@ -61,10 +61,28 @@ OPTIMIZER_TYPES: dict[str, type] = {}
 _MAX_NESTING = 3
 
 
-def solve(optimizer, problem: CatalogProblem):
-    """Fit ``optimizer`` on ``problem``: :meth:`CatalogOptimizer.fit_problem` for the
-    package's optimizers, the bare ``fit_catalog(theta, n_coordinates, force_columns)``
-    protocol for any other object that has it. Returns the fitted optimizer."""
+def solve_problem(optimizer, problem: CatalogProblem):
+    """Fit ``optimizer`` on ``problem``.
+
+    Parameters
+    ----------
+    optimizer : CatalogOptimizer or object with ``fit_catalog``
+        The package's optimizers get the whole problem (:meth:`CatalogOptimizer.fit_problem`);
+        any other object the bare ``fit_catalog(theta, n_coordinates, force_columns)``.
+    problem : CatalogProblem
+
+    Returns
+    -------
+    The fitted optimizer.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> theta = np.column_stack([[1.0, 2.0, 3.0], [0.5, 1.0, 1.5]])
+    >>> problem = px.optimizers.CatalogProblem.from_arrays(theta, 1, [0])
+    >>> solve_problem(px.ExplicitOptimizer(), problem).coef_
+    array([-1.,  2.])
+    """
     if isinstance(optimizer, CatalogOptimizer):
         return optimizer.fit_problem(problem)
     return optimizer.fit_catalog(problem.theta, problem.n_coordinates, problem.force_columns)
@@ -77,6 +95,21 @@ def pilot_optimizer(optimizer):
     :class:`~pysindy_xl.XLSINDy`), an optimizer may offer a cheaper stand-in through its
     ``pilot()`` method (an ensemble: one fit of its base optimizer instead of
     ``n_models``); otherwise the pilot is a clone of ``optimizer``.
+
+    Parameters
+    ----------
+    optimizer : estimator
+
+    Returns
+    -------
+    estimator
+        Unfitted.
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> pilot_optimizer(px.EnsembleOptimizer(px.ExplicitOptimizer(threshold=0.05)))
+    ExplicitOptimizer(threshold=0.05)
     """
     pilot = getattr(optimizer, "pilot", None)
     return pilot() if callable(pilot) else clone(optimizer)
@@ -422,6 +455,8 @@ def optimizer_from_spec(spec, where: str = "optimizer", depth: int = 0):
         As written by :meth:`CatalogOptimizer.to_spec`.
     where : str
         Where the spec sits in its file, for the messages.
+    depth : int
+        Nesting of this spec in the file's optimizer (bounded).
 
     Returns
     -------

@@ -13,11 +13,14 @@ from .explicit import ExplicitOptimizer
 from .implicit import ImplicitOptimizer
 from .mixed import MixedOptimizer
 
-__all__ = ["default_optimizer"]
+__all__ = ["default_optimizer", "SOLVER_KINDS"]
+
+#: The kinds of regression, as named by users (``XLSINDy(optimizer="mixed")``, ``--solver``).
+SOLVER_KINDS = ("explicit", "implicit", "mixed")
 
 
-def default_optimizer(forced, estimated: bool = False):
-    """The default catalog optimizer for the data.
+def default_optimizer(forced, estimated: bool = False, kind: str | None = None):
+    """The default catalog optimizer for the data (or of a given kind).
 
     * every coordinate forced: explicit regression; on estimated columns bagged,
       ``EnsembleOptimizer(ExplicitOptimizer())``. One cross-validated selection among about a
@@ -33,6 +36,9 @@ def default_optimizer(forced, estimated: bool = False):
     estimated : bool, default False
         The columns come from noisy positions only (the weak form propagated the smoother's
         noise estimate into them).
+    kind : {"explicit", "implicit", "mixed"}, optional
+        The kind of regression; default: from ``forced`` as above. The bagging policy is the
+        same whatever the kind.
 
     Returns
     -------
@@ -48,8 +54,13 @@ def default_optimizer(forced, estimated: bool = False):
     ExplicitOptimizer()
     """
     forced = np.asarray(forced, dtype=bool)
-    if forced.all():
-        return EnsembleOptimizer(ExplicitOptimizer()) if estimated else ExplicitOptimizer()
-    if not forced.any():
+    if kind is None:
+        kind = "explicit" if forced.all() else "implicit" if not forced.any() else "mixed"
+    if kind not in SOLVER_KINDS:
+        raise ValueError(f"kind: expected one of {SOLVER_KINDS}, got {kind!r}")
+    explicit = EnsembleOptimizer(ExplicitOptimizer()) if estimated else ExplicitOptimizer()
+    if kind == "explicit":
+        return explicit
+    if kind == "implicit":
         return ImplicitOptimizer()
-    return MixedOptimizer(EnsembleOptimizer(ExplicitOptimizer()) if estimated else None)
+    return MixedOptimizer(explicit if estimated else None)

@@ -17,9 +17,8 @@ The kept terms are then fitted once more on all the rows (``aggregate="refit"``,
 where the optimizer can fit a given support): the ensemble decides *which* terms, the whole data
 *how large*. The median of the fits (``aggregate="median"``) is less accurate: each fit sees
 only part of the rows, and the fits disagree on the support, so the median of one coefficient
-mixes estimates made with different companions. On a chaotic double pendulum on a cart at 3 %
-noise that mixing split a pair of coupling terms unevenly (-2.5 % and 0 % where the truth has
-them equal), and the model's simulation left the truth within 5 s.
+mixes estimates made with different companions: a pair of terms that the truth has equal can
+come out split unevenly, and a model that simulates the system badly.
 
 Complementary pairs
 -------------------
@@ -50,7 +49,7 @@ import scipy.stats
 from sklearn.base import clone
 
 from .._validation import check_instance, check_option
-from ._base import CatalogOptimizer, pilot_optimizer, solve, warn_unexplained
+from ._base import CatalogOptimizer, pilot_optimizer, solve_problem, warn_unexplained
 from .explicit import ExplicitOptimizer
 
 __all__ = ["EnsembleOptimizer"]
@@ -336,7 +335,7 @@ def _fit_subsample(base, problem):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            fitted = solve(clone(base), problem)
+            fitted = solve_problem(clone(base), problem)
             coef, error = np.asarray(fitted.coef_, dtype=float), None
         except (ValueError, RuntimeError, np.linalg.LinAlgError) as failure:
             coef, error = None, f"{type(failure).__name__}: {failure}"

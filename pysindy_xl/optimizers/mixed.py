@@ -32,7 +32,7 @@ from sklearn.base import clone
 
 from .._validation import check_instance, check_option
 from ..diagnostics import UnexplainedCoordinateWarning
-from ._base import CatalogOptimizer, pilot_optimizer, solve
+from ._base import CatalogOptimizer, pilot_optimizer, solve_problem
 from .implicit import ImplicitOptimizer, NoLawFoundError, coordinates_touched
 from .problem import balance_coordinates
 
@@ -170,7 +170,8 @@ class MixedOptimizer(CatalogOptimizer):
         theta, n, force_columns = problem.theta, problem.n_coordinates, problem.force_columns
 
         def fit_part(optimizer, coordinates, columns, part_force_columns):
-            return solve(optimizer, problem.subproblem(coordinates, columns, part_force_columns))
+            part = problem.subproblem(coordinates, columns, part_force_columns)
+            return solve_problem(optimizer, part)
 
         n_features = theta.shape[1]
         # the parts balance their own sub-problems; here the balanced matrix only decides

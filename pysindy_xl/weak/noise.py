@@ -30,13 +30,9 @@ The whitening is partial. The residual's spectrum nearly vanishes at low frequen
 test functions' derivatives) and high ones (their smoothness), which a tapered estimate
 fills in: on the benchmark systems the whitened draws keep a variance of about 0.6 (1 if the
 whitening were exact) and lag correlations of 0.3-0.5, whatever the taper length (2 to 8
-overlaps). A regularized generalized least squares, then. Measured in
-``benchmarks/results/noise_sweep.md`` (``weak`` against ``weak_ols``, 10 seeds, forced
-systems): on the double pendulum on a cart it finds the exact law in 8 of 10 seeds instead
-of 7 at 5 % noise (median coefficient error 0.94 % instead of 1.47 %) and in 5 instead of 1
-at 10 %. On the cart-pole and the double pendulum it loses one seed in a few cells (9 instead
-of 10 of 10; the cart-pole at 10 %: 8) and raises the median coefficient error by about a
-third (the cart-pole at 3 %: 0.27 % instead of 0.18 %).
+overlaps). A regularized generalized least squares, then: what it gains on forced systems and
+costs on others is measured in ``benchmarks/results/noise_sweep.md`` (``weak`` against
+``weak_ols``).
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ class CLIError(Exception):
     >>> run_demo(args)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    pysindy_xl._cli_steps.CLIError: --solver explicit needs forces; use --forcing explicit ...
+    pysindy_xl.cli.steps.CLIError: --solver explicit needs forces; use --forcing explicit ...
     """
 
 
@@ -132,9 +132,8 @@ def resolve_catalog(args, system):
 
     Any MuJoCo model (the shipped ones and users' MJCF files) gets the kinematic catalog: it
     contains the true model whatever the mass distribution and, being compact, identifies
-    noisy positions where the paper's product catalogs swap near-collinear terms (measured on
-    the shipped cart double pendulum at 1 % position noise: 10 exact terms, 0.1 % error,
-    against 29 terms for 15 true with the mixed catalog). Systems without a model (named
+    noisy positions where the paper's product catalogs swap near-collinear terms (measured in
+    ``benchmarks/results/kinematic_catalog.md``). Systems without a model (named
     coordinates of a CSV file) get the paper's mixed catalog; ``--catalog mixed`` etc.
     reproduce the paper's tables.
     """
@@ -151,14 +150,14 @@ def log(quiet, *args):
 
 
 def check_solver(solver, forced, threshold, auto=False):
-    """The optimizer of ``solver``, checked before any long computation; None for ``auto``
-    without a threshold (XLSINDy's default for the data,
-    :func:`~pysindy_xl.optimizers.default_optimizer`)."""
+    """The optimizer of ``solver``, checked before any long computation; for ``auto`` without
+    a threshold, the name of the kind, which XLSINDy turns into its default optimizer of that
+    kind (:func:`~pysindy_xl.optimizers.default_optimizer`)."""
     if solver == "explicit" and not forced:
         raise CLIError("--solver explicit needs forces; use --forcing explicit or mixed, or "
                        "--solver implicit")
     if auto and threshold is None:
-        return None
+        return solver  # the default optimizer of that kind (XLSINDy's bagging policy)
     return _optimizer(solver, threshold)
 
 

@@ -1,14 +1,4 @@
-"""The ``pysindy-xl`` command: MuJoCo demo, identification of a dataset, data generation.
-
-Examples
---------
-::
-
-    pysindy-xl demo cart-pole                         # generate, identify, validate, plot
-    pysindy-xl demo double-pendulum --forcing mixed --noise 0.01 --out results/
-    pysindy-xl generate cart-pole data.npz --forcing explicit --trajectories 4
-    pysindy-xl identify data.npz --system cart-pole --catalog mixed
-"""
+"""The ``run_*`` functions behind the subcommands, and :func:`main`, which dispatches to them."""
 
 from __future__ import annotations
 
@@ -19,8 +9,9 @@ import time
 
 import numpy as np
 
-from ._cli_parser import build_parser
-from ._cli_steps import (
+from ..quality import fit_quality, plot_identification, quality_lines
+from .parser import build_parser
+from .steps import (
     CLIError,
     check_solver,
     data_lines,
@@ -37,7 +28,6 @@ from ._cli_steps import (
     summarize_coefficients,
     system_by_name,
 )
-from .quality import fit_quality, plot_identification, quality_lines
 
 # fit_quality and plot_identification live in pysindy_xl.quality; imported here for the
 # commands and for code that imported them from here
@@ -523,6 +513,3 @@ def main(argv=None) -> int:
         return 1
     return 0
 
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

@@ -21,10 +21,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._optional import import_optional
-from .dynamics import DynamicsError
+from .._optional import import_optional
+from ..dynamics import DynamicsError
 
-gymnasium = import_optional("gymnasium", purpose="XLSINDy.to_gymnasium (pysindy_xl.gym_env)")
+gymnasium = import_optional("gymnasium", purpose="XLSINDy.to_gymnasium (pysindy_xl.export.gym_env)")
 spaces = gymnasium.spaces
 
 __all__ = ["IdentifiedDynamicsEnv", "make_env"]
@@ -82,7 +82,7 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
     Examples
     --------
     >>> import numpy as np, pysindy_xl as px
-    >>> from pysindy_xl.gym_env import make_env
+    >>> from pysindy_xl.export.gym_env import make_env
     >>> coords = px.Coordinates(["x"])
     >>> t = np.linspace(0, 10, 1001)
     >>> x = (np.sin(t) + 0.5 * np.sin(2.3 * t))[:, None]

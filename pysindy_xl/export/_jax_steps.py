@@ -1,11 +1,11 @@
-"""Fixed-step integrators of ``x' = f(x, u, t)`` for JAX (see :mod:`pysindy_xl.jax_dynamics`)."""
+"""Fixed-step integrators of ``x' = f(x, u, t)`` for JAX (see :mod:`.jax_dynamics`)."""
 
 from __future__ import annotations
 
-from ._optional import import_optional
+from .._optional import import_optional
 
-jax = import_optional("jax", purpose="pysindy_xl.jax_dynamics (XLSINDy.to_jax)")
-jnp = import_optional("jax.numpy", purpose="pysindy_xl.jax_dynamics (XLSINDy.to_jax)")
+jax = import_optional("jax", purpose="pysindy_xl.export.jax_dynamics (XLSINDy.to_jax)")
+jnp = import_optional("jax.numpy", purpose="pysindy_xl.export.jax_dynamics (XLSINDy.to_jax)")
 
 __all__ = ["euler_step", "rk4_step", "semi_implicit_euler_step"]
 
@@ -50,7 +50,7 @@ def rk4_step(f, state, t, dt, u_start, u_end=None):
     Examples
     --------
     >>> import jax.numpy as jnp
-    >>> from pysindy_xl.jax_dynamics import rk4_step
+    >>> from pysindy_xl.export.jax_dynamics import rk4_step
     >>> decay = lambda x, u, t: -x + u
     >>> x = rk4_step(decay, jnp.array([1.0, 2.0]), 0.0, 0.1, jnp.array([0.0, 0.0]))
     >>> [round(float(v), 6) for v in x]  # exp(-0.1) = 0.904837...
@@ -109,7 +109,7 @@ def semi_implicit_euler_step(f, state, t, dt, u_start, u_end=None):
     Examples
     --------
     >>> import jax.numpy as jnp
-    >>> from pysindy_xl.jax_dynamics import semi_implicit_euler_step
+    >>> from pysindy_xl.export.jax_dynamics import semi_implicit_euler_step
     >>> spring = lambda x, u, t: jnp.array([x[1], u[0] - x[0]])
     >>> semi_implicit_euler_step(spring, jnp.array([1.0, 0.0]), 0.0, 0.1, jnp.array([0.0]))
     Array([ 0.99, -0.1 ], dtype=float32)
@@ -144,7 +144,7 @@ def euler_step(f, state, t, dt, u_start, u_end=None):
     Examples
     --------
     >>> import jax.numpy as jnp
-    >>> from pysindy_xl.jax_dynamics import euler_step
+    >>> from pysindy_xl.export.jax_dynamics import euler_step
     >>> spring = lambda x, u, t: jnp.array([x[1], u[0] - x[0]])
     >>> euler_step(spring, jnp.array([1.0, 0.0]), 0.0, 0.1, jnp.array([0.0]))
     Array([ 1. , -0.1], dtype=float32)

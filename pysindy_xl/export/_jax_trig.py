@@ -1,4 +1,4 @@
-"""Vectorizable sine and cosine for JAX (see :mod:`pysindy_xl.jax_dynamics`)."""
+"""Vectorizable sine and cosine for JAX (see :mod:`pysindy_xl.export.jax_dynamics`)."""
 
 from __future__ import annotations
 
@@ -6,10 +6,10 @@ import math
 
 import numpy as np
 
-from ._optional import import_optional
+from .._optional import import_optional
 
-jax = import_optional("jax", purpose="pysindy_xl.jax_dynamics (XLSINDy.to_jax)")
-jnp = import_optional("jax.numpy", purpose="pysindy_xl.jax_dynamics (XLSINDy.to_jax)")
+jax = import_optional("jax", purpose="pysindy_xl.export.jax_dynamics (XLSINDy.to_jax)")
+jnp = import_optional("jax.numpy", purpose="pysindy_xl.export.jax_dynamics (XLSINDy.to_jax)")
 
 __all__ = ["fast_sin", "fast_cos"]
 
@@ -102,7 +102,7 @@ def fast_sin(x):
     Examples
     --------
     >>> import jax.numpy as jnp
-    >>> from pysindy_xl.jax_dynamics import fast_sin
+    >>> from pysindy_xl.export.jax_dynamics import fast_sin
     >>> fast_sin(jnp.array([0.0, jnp.pi / 6, jnp.pi / 2])).round(6)
     Array([0. , 0.5, 1. ], dtype=float32)
     """
@@ -126,7 +126,7 @@ def fast_cos(x):
     Examples
     --------
     >>> import jax.numpy as jnp
-    >>> from pysindy_xl.jax_dynamics import fast_cos
+    >>> from pysindy_xl.export.jax_dynamics import fast_cos
     >>> fast_cos(jnp.array([0.0, jnp.pi / 3, jnp.pi])).round(6)
     Array([ 1. ,  0.5, -1. ], dtype=float32)
     """

@@ -29,13 +29,13 @@ from typing import NamedTuple
 import numpy as np
 import sympy as sp
 
+from .._optional import import_optional
+from ..symbols import Coordinates
 from ._jax_steps import STEPS, euler_step, rk4_step, semi_implicit_euler_step
 from ._jax_trig import fast_cos, fast_sin
-from ._optional import import_optional
-from .symbols import Coordinates
 
-jax = import_optional("jax", purpose="pysindy_xl.jax_dynamics (XLSINDy.to_jax)")
-jnp = import_optional("jax.numpy", purpose="pysindy_xl.jax_dynamics (XLSINDy.to_jax)")
+jax = import_optional("jax", purpose="pysindy_xl.export.jax_dynamics (XLSINDy.to_jax)")
+jnp = import_optional("jax.numpy", purpose="pysindy_xl.export.jax_dynamics (XLSINDy.to_jax)")
 
 __all__ = [
     "BatchSimulation",
@@ -235,7 +235,7 @@ def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True)
     >>> import sympy as sp, jax.numpy as jnp
     >>> from types import SimpleNamespace
     >>> import pysindy_xl as px
-    >>> from pysindy_xl.jax_dynamics import dynamics_function
+    >>> from pysindy_xl.export.jax_dynamics import dynamics_function
     >>> c = px.Coordinates(["x"])
     >>> spring = SimpleNamespace(coords=c, mass_matrix_expr=sp.Matrix([[2]]),
     ...                          forcing_expr=sp.Matrix([c.tau[0] - 4 * c.q[0]]))
@@ -337,7 +337,7 @@ class BatchSimulation(NamedTuple):
     Examples
     --------
     >>> import jax.numpy as jnp
-    >>> from pysindy_xl.jax_dynamics import simulate
+    >>> from pysindy_xl.export.jax_dynamics import simulate
     >>> decay = lambda x, u, t: -x
     >>> states, diverged, step = simulate(decay, jnp.ones(2), None, 0.1, n_steps=3)
     >>> states.shape, bool(diverged), int(step)
@@ -526,7 +526,7 @@ def simulate(
     >>> import sympy as sp, jax.numpy as jnp
     >>> from types import SimpleNamespace
     >>> import pysindy_xl as px
-    >>> from pysindy_xl.jax_dynamics import dynamics_function, simulate
+    >>> from pysindy_xl.export.jax_dynamics import dynamics_function, simulate
     >>> c = px.Coordinates(["x"])
     >>> oscillator = SimpleNamespace(coords=c, mass_matrix_expr=sp.Matrix([[1]]),
     ...                              forcing_expr=sp.Matrix([-c.q[0]]))
@@ -585,7 +585,7 @@ def simulate_batch(
     >>> import sympy as sp, jax.numpy as jnp
     >>> from types import SimpleNamespace
     >>> import pysindy_xl as px
-    >>> from pysindy_xl.jax_dynamics import dynamics_function, simulate_batch
+    >>> from pysindy_xl.export.jax_dynamics import dynamics_function, simulate_batch
     >>> c = px.Coordinates(["x"])
     >>> unstable = SimpleNamespace(coords=c, mass_matrix_expr=sp.Matrix([[1]]),
     ...                            forcing_expr=sp.Matrix([c.q[0] ** 3]))
