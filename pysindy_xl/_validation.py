@@ -13,7 +13,8 @@ import numbers
 
 import numpy as np
 
-__all__ = ["check_option", "check_numeric_array", "check_instance", "check_indices", "check_times"]
+__all__ = ["check_option", "check_numeric_array", "check_instance", "check_indices", "check_times",
+           "argument_type"]
 
 _KINDS = ("bool", "int", "real", "choice")
 
@@ -288,3 +289,37 @@ def check_times(t, name: str) -> np.ndarray:
     if np.any(np.diff(t) <= 0):
         raise ValueError(f"{name}: times must be strictly increasing")
     return t
+
+
+def argument_type(kind: str, **bounds):
+    """An ``argparse`` type: the text as an ``"int"`` or ``"real"`` number checked by
+    :func:`check_option` with ``bounds``, refused with ``argparse.ArgumentTypeError``.
+
+    Examples
+    --------
+    >>> fraction = argument_type("real", low=0, low_open=True, high=1)
+    >>> fraction("0.5")
+    0.5
+    >>> fraction("2")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: expected a real number in (0, 1], got 2.0
+    """
+    import argparse
+
+    parse = int if kind == "int" else float
+
+    def convert(text):
+        try:
+            value = parse(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"expected {'an integer' if kind == 'int' else 'a number'}, got {text!r}"
+            ) from None
+        try:
+            return check_option("value", value, kind, **bounds)
+        except (TypeError, ValueError) as error:
+            raise argparse.ArgumentTypeError(str(error).removeprefix("value: ")) from None
+
+    convert.__name__ = f"{kind}_argument"
+    return convert

@@ -1,9 +1,14 @@
 """Mass-matrix form of identified equations, ``M(q, qd) qdd = f(q, qd, tau, t)``, and simulation.
 
-The identified equations are linear in the accelerations. ``M`` is read off as their Jacobian
-with respect to ``qdd`` and ``f`` as minus their value at ``qdd = 0``; both are compiled once
-(one NumPy function with shared subexpressions) and the accelerations follow from a batched
-linear solve. No symbolic solve is ever performed.
+The identified equations are linear in the accelerations. ``M`` holds their coefficients of
+``qdd`` and ``f`` minus their value at ``qdd = 0``; both are kept as polynomials in a few atoms
+(:class:`~pysindy_xl.feature_library._compile.Terms`), evaluated by one vectorized kernel on
+many states and by flat generated code at one state, and the accelerations follow from a
+batched linear solve. No symbolic solve is ever performed, and nothing is lambdified whole.
+
+:class:`MassMatrixDynamics` starts from equations; :class:`CatalogDynamics` from a catalog and
+its coefficients, combining the catalog's column entries numerically (a robot arm's equations
+are never expanded symbolically).
 """
 
 from __future__ import annotations
@@ -16,11 +21,13 @@ import scipy.interpolate
 import sympy as sp
 
 from ._validation import check_numeric_array, check_option, check_times
-from .feature_library._base import compile_entries, stack_variables
+from .feature_library import stack_variables
+from .feature_library._compile import Terms, compile_terms, decompose, scalar_function
 from .symbols import Coordinates
 
 __all__ = [
     "MassMatrixDynamics",
+    "CatalogDynamics",
     "DynamicsError",
     "SingularMassMatrixError",
     "SimulationError",
@@ -230,11 +237,11 @@ class MassMatrixDynamics:
         self.mass_matrix_expr = mass
         self.forcing_expr = -eqs.subs(zero)
         self._n = coords.n
+        self._terms = decompose(list(self.mass_matrix_expr) + list(self.forcing_expr))
         self._compile()
 
     def _compile(self):
-        entries = list(self.mass_matrix_expr) + list(self.forcing_expr)
-        self._evaluate = compile_entries(self.coords.variables, entries)
+        self._evaluate = compile_terms(self.coords.variables, self._terms)
 
     def _evaluate_scalar(self, *values):
         """Entries at one state (simulation): plain floats through the math module are an
@@ -242,17 +249,13 @@ class MassMatrixDynamics:
         (large models pay the code generation only when they simulate)."""
         function = self.__dict__.get("_scalar_function")
         if function is None:
-            entries = list(self.mass_matrix_expr) + list(self.forcing_expr)
-            modules = [{"sign": _sign}, "math"]
-            try:
-                function = sp.lambdify(self.coords.variables, entries, modules=modules, cse=True)
-            except RecursionError:  # very deep expressions: no common-subexpression pass
-                function = sp.lambdify(self.coords.variables, entries, modules=modules)
+            function = scalar_function(self.coords.variables, self._terms,
+                                       modules=({"sign": _sign}, "math"))
             self._scalar_function = function
         return function(*values)
 
     def __getstate__(self):
-        # compiled functions are generated code: rebuilt from the expressions on unpickling
+        # compiled functions are generated code: rebuilt from the terms on unpickling
         state = self.__dict__.copy()
         state.pop("_evaluate", None)
         state.pop("_scalar_function", None)
@@ -483,6 +486,106 @@ class MassMatrixDynamics:
                 stop.t, t[:filled], out[:filled], stop.reason,
             ) from None
         return out
+
+
+class CatalogDynamics(MassMatrixDynamics):
+    r"""The equations ``sum_j xi_j E[c, j] = 0`` of a catalog in mass-matrix form.
+
+    Each column entry ``E[c, j]`` is decomposed once into monomials of a few atoms; the
+    coefficients ``xi`` combine them numerically into the monomials of ``M`` (the terms
+    with ``qdd_k``, without it) and ``f`` (minus the terms without acceleration):
+
+    .. math:: M_{ck} = \sum_j \xi_j \frac{\partial E_{cj}}{\partial \ddot q_k}, \qquad
+              f_c = -\sum_j \xi_j E_{cj}\big|_{\ddot q = 0}.
+
+    Nothing is expanded or lambdified as a whole, so the equations of a seven-joint arm cost
+    what their monomials cost. The symbolic forms (``equations``, ``mass_matrix_expr``,
+    ``forcing_expr``) are built on first use, from the same monomials.
+
+    Parameters
+    ----------
+    library : fitted SymbolicLibrary
+        The catalog (``coords`` and ``symbolic_matrix_``).
+    coef : array, shape (F,)
+        One coefficient per feature; only the non-zero ones are read.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> library = px.CatalogRepartition([px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])])
+    >>> dyn = CatalogDynamics(library.fit(), np.array([-1.0, 1.0, -1.5]))  # x'' + 3 x = u
+    >>> dyn.accelerations(np.array([[1.0]]), np.array([[0.0]]), np.array([[5.0]]))
+    array([[1.]])
+    >>> dyn.mass_matrix_expr, dyn.forcing_expr
+    (Matrix([[2.0]]), Matrix([[1.0*tau_x - 3.0*x]]))
+    """
+
+    def __init__(self, library, coef):
+        coords = library.coords
+        coef = np.asarray(coef, dtype=float)
+        active = np.flatnonzero(coef)
+        matrix = library.symbolic_matrix_
+        entries = [(c, j) for j in active for c in range(coords.n) if matrix[c, j] != 0]
+        self.coords = coords
+        self._n = coords.n
+        self._terms = _mass_and_forcing_terms(
+            coords, [matrix[c, j] for c, j in entries], [c for c, _ in entries],
+            coef[[j for _, j in entries]])
+        self._compile()
+
+    @property
+    def mass_matrix_expr(self) -> sp.Matrix:
+        """``M(q, qd)``, shape (n, n), from the monomials."""
+        n = self._n
+        return sp.Matrix(n, n, self._symbolic_entries()[: n * n])
+
+    @property
+    def forcing_expr(self) -> sp.Matrix:
+        """``f(q, qd, tau, t)``, shape (n, 1), from the monomials."""
+        return sp.Matrix(self._symbolic_entries()[self._n * self._n:])
+
+    @property
+    def equations(self) -> list:
+        """``M qdd - f``, one expression per coordinate."""
+        return list(self.mass_matrix_expr * sp.Matrix(self.coords.qdd) - self.forcing_expr)
+
+    def _symbolic_entries(self) -> list:
+        atoms = self._terms.atoms
+        return [sp.Add(*(sp.Float(coef) * sp.Mul(*(atoms[i] ** p for i, p in key))
+                         for coef, key in entry)) for entry in self._terms.entries]
+
+
+def _mass_and_forcing_terms(coords, exprs, rows, weights) -> Terms:
+    """The :class:`Terms` of ``M`` (n * n entries, row-major) and ``f`` (n entries) of the
+    equations ``sum_k weights[k] exprs[k] = 0`` in the rows ``rows[k]``."""
+    n = coords.n
+    terms = decompose(exprs)
+    accelerations = set(coords.qdd)
+    if any(atom.free_symbols & accelerations for atom in terms.atoms
+           if atom not in accelerations):  # an acceleration inside a factor: expand those
+        terms = decompose([sp.expand(e) if e.has(*coords.qdd) else e for e in exprs])
+        if any(atom.free_symbols & accelerations for atom in terms.atoms
+               if atom not in accelerations):
+            raise ValueError("equations: not linear in the accelerations")
+    which = {index: k for index, atom in enumerate(terms.atoms)
+             for k, symbol in enumerate(coords.qdd) if atom == symbol}
+    sums = [{} for _ in range(n * n + n)]
+    for entry, row, weight in zip(terms.entries, rows, weights, strict=True):
+        for coef, key in entry:
+            found = [(position, power) for position, (index, power) in enumerate(key)
+                     if index in which]
+            if not found:
+                target, monomial, value = n * n + row, key, -weight * coef
+            elif len(found) == 1 and found[0][1] == 1:
+                position = found[0][0]
+                target = row * n + which[key[position][0]]
+                monomial, value = key[:position] + key[position + 1:], weight * coef
+            else:
+                raise ValueError("equations: not linear in the accelerations")
+            sums[target][monomial] = sums[target].get(monomial, 0.0) + value
+    return Terms(terms.atoms, [[(float(coef), key) for key, coef in entry.items() if coef != 0]
+                               for entry in sums])
 
 
 _SOLVERS = {name: getattr(scipy.integrate, name)

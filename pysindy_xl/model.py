@@ -23,7 +23,7 @@ from .diagnostics import (
     mass_matrix_report,
     orient_free_laws,
 )
-from .dynamics import MassMatrixDynamics
+from .dynamics import CatalogDynamics
 from .feature_library import CatalogRepartition, SymbolicLibrary
 from .io import invalid_model_file, read_model_file
 from .optimizers import (
@@ -142,7 +142,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
     coef_ : ndarray, shape (F,)
     dropped_features_ : dict of str to str
         Features removed before regression, with the reason.
-    dynamics_ : MassMatrixDynamics
+    dynamics_ : CatalogDynamics
         The identified equations in mass-matrix form (``None`` if they contain no acceleration).
     n_coordinates_ : int
     n_samples_ : int
@@ -492,18 +492,14 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         return clone(self.optimizer)
 
     def _build_dynamics(self):
-        equations = self._equation_exprs()
-        has_acc = any(e.free_symbols & set(self.feature_library_.coords.qdd) for e in equations)
-        self.dynamics_ = (MassMatrixDynamics(self.feature_library_.coords, equations)
-                          if has_acc else None)
-
-    def _equation_exprs(self) -> list[sp.Expr]:
-        matrix = self.feature_library_.symbolic_matrix_
-        active = np.flatnonzero(self.coef_)
-        return [
-            sp.expand(sp.Add(*(sp.Float(self.coef_[j]) * matrix[i, j] for j in active)))
-            for i in range(matrix.shape[0])
-        ]
+        """``dynamics_``: the identified equations in mass-matrix form, combined numerically
+        from the catalog's columns (:class:`~pysindy_xl.dynamics.CatalogDynamics`); None when
+        no identified term contains an acceleration."""
+        library = self.feature_library_
+        accelerations = set(library.coords.qdd)
+        has_acc = any(library.symbolic_matrix_[:, j].free_symbols & accelerations
+                      for j in np.flatnonzero(self.coef_))
+        self.dynamics_ = CatalogDynamics(library, self.coef_) if has_acc else None
 
     # -- persistence ---------------------------------------------------------------------------
     @classmethod
@@ -587,7 +583,7 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         x = check_array(x, "x", n_columns=1 if np.ndim(x) == 1 else None)
         t = sample_times(self.t_default if t is None else t, x.shape[0], "t")
         if self.differentiation_method is not None:
-            return self._differentiate(x, t, implicit=False)
+            return differentiation_function(self.differentiation_method)(x, t)
         smoother = copy.deepcopy(self.smoother) or WhittakerSmoother()
         return smoother.smooth(t, x)[1]
 

@@ -148,8 +148,15 @@ def test_contract_and_validation():
     opt = MixedOptimizer(implicit_optimizer=ImplicitOptimizer(alpha=1e-6))
     assert clone(opt).get_params()["implicit_optimizer"].alpha == 1e-6
     theta, _ = two_oscillators()
+    # one block without structure: the explicit part with a right-hand side, else implicit
+    n = theta.shape[0] // 2
+    np.testing.assert_allclose(opt.fit(theta[:n, 1:4], theta[:n, 0]).coef_, [1.0, 4.0, 0.3],
+                               rtol=1e-8)
+    assert opt.mode_ == "explicit"
+    law = opt.fit(theta[n:, 4:6]).coef_
+    np.testing.assert_allclose(law / law[0], [1.0, 9.0], rtol=1e-8)
     with pytest.raises(TypeError, match="fit_catalog"):
-        opt.fit(theta)
+        MixedOptimizer(px.EnsembleOptimizer()).fit(theta[:n, 1:4], theta[:n, 0])
     with pytest.raises(TypeError, match="explicit_optimizer"):
         MixedOptimizer(explicit_optimizer=object()).fit_catalog(theta, 2, [0])
     with pytest.raises(ValueError, match="rtol"):

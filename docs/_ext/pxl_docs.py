@@ -116,8 +116,8 @@ def _module_page(module_name: str, top_level: dict[int, str]) -> str:
     ]
     documented, elsewhere = {}, []
     for name, obj in public_objects(module_name):
-        owner = top_level.get(id(obj))
-        if owner is not None and owner != module_name:
+        owner = top_level.setdefault(id(obj), module_name)  # the first page that lists it
+        if owner != module_name:
             elsewhere.append((name, obj, owner))
         else:
             documented.setdefault(object_kind(obj), []).append(name)
@@ -147,8 +147,9 @@ def _module_page(module_name: str, top_level: dict[int, str]) -> str:
 def write_api_pages(module_names, folder) -> list[str]:
     """Write one reference page per importable module and a toctree fragment listing them.
 
-    Objects re-exported by the top-level package (the first module) are documented there
-    once and linked from the submodules, so no object is described twice.
+    Every object is documented once, on the first page that lists it (the top-level package
+    first), and linked from the later ones (a name re-exported where users expect it, such as
+    ``pysindy_xl.mujoco.Dataset``), so no object is described twice.
 
     Parameters
     ----------

@@ -27,6 +27,7 @@ import os
 import sys
 import time
 
+from .._validation import argument_type
 from .grid import (
     CATALOGS,
     FORCINGS,
@@ -43,24 +44,8 @@ BACKENDS = ("loky", "multiprocessing", "dask", "ray")
 STATUSES = ("ok", "invalid", "timeout", "error")
 
 
-def _positive_float(text):
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value > 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return value
-
-
-def _non_negative_float(text):
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value >= 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a non-negative number, got {text!r}")
-    return value
+_positive_float = argument_type("real", low=0, low_open=True)
+_non_negative_float = argument_type("real", low=0)
 
 
 def _configuration(text):

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import math
+
+from .._validation import argument_type
 
 SOLVERS = ("auto", "explicit", "implicit", "mixed")
 CATALOGS = ("lagrange", "classical", "mixed", "kinematic")
@@ -13,38 +14,10 @@ CONSTRAINTS = ("exclude", "known", "include")
 FORMULATIONS = ("auto", "strong", "weak")
 
 
-def _non_negative_float(text):
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not math.isfinite(value) or value < 0:
-        raise argparse.ArgumentTypeError(f"expected a non-negative number, got {text!r}")
-    return value
-
-
-def _positive_float(text):
-    value = _non_negative_float(text)
-    if value == 0:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return value
-
-
-def _fraction(text):
-    value = _positive_float(text)
-    if value > 1:
-        raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}")
-    return value
-
-
-def _positive_int(text):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
-    return value
+_non_negative_float = argument_type("real", low=0)
+_positive_float = argument_type("real", low=0, low_open=True)
+_fraction = argument_type("real", low=0, low_open=True, high=1)
+_positive_int = argument_type("int", low=1)
 
 
 def _add_generation_options(parser, duration=10.0, trajectories=2):

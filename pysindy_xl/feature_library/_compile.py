@@ -2,23 +2,46 @@
 
 Catalog entries are sums of ``coefficient * product of powers of atoms``, where the atoms are
 the data variables and a few functions of them (``sin(q)``, ``cos(q)``, ...). Instead of
-generating code (``lambdify`` with ``cse=True`` costs more to build than to run on large
-catalogs), the entries are decomposed once into that form; evaluation computes each distinct
-atom once, each distinct monomial once (as a smaller monomial times one atom power, so products
-are shared across all entries), and writes each entry straight into its output column. Samples
-are processed in blocks, so intermediate arrays stay small whatever the number of samples.
+generating code for whole expressions (``lambdify`` costs more to build than to run on large
+catalogs, and the sum of a robot arm's thousands of terms overflows Python's compiler), the
+entries are decomposed once into :class:`Terms`: an atom list and, per entry, a list of
+``(coefficient, monomial)``. Evaluation computes each distinct atom once, each distinct
+monomial once (as a smaller monomial times one atom power, so products are shared across all
+entries), and writes each entry straight into its output column; samples are processed in
+blocks, so intermediate arrays stay small whatever the number of samples.
+:func:`scalar_function` evaluates the same terms at one state with Python floats, from flat
+generated code (one short statement per monomial and term), for simulators.
 """
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import sympy as sp
 
-__all__ = ["compile_entries"]
+__all__ = ["compile_entries", "Terms", "decompose", "compile_terms", "scalar_function"]
 
 _BLOCK = 16_384
 
 Monomial = tuple  # sorted tuple of (atom index, integer power)
+
+
+@dataclasses.dataclass
+class Terms:
+    """Entries as polynomials in atoms.
+
+    Attributes
+    ----------
+    atoms : list of sympy.Expr
+        Data variables and functions of them.
+    entries : list of list of (float, Monomial)
+        Per entry, its terms: a coefficient and a monomial, a sorted tuple of
+        ``(atom index, power)`` (the empty tuple for a constant).
+    """
+
+    atoms: list
+    entries: list
 
 
 def _decompose(expr: sp.Expr, atoms: dict) -> list[tuple[float, Monomial]]:
@@ -39,6 +62,14 @@ def _decompose(expr: sp.Expr, atoms: dict) -> list[tuple[float, Monomial]]:
             powers[index] = powers.get(index, 0) + int(exp)
         terms.append((coef, tuple(sorted(powers.items()))))
     return terms
+
+
+def decompose(exprs) -> Terms:
+    """The :class:`Terms` of sympy expressions (sums are not expanded: a factor that is a sum
+    is an atom of its own)."""
+    atoms: dict[sp.Expr, int] = {}
+    entries = [_decompose(e, atoms) for e in exprs]
+    return Terms(sorted(atoms, key=atoms.get), entries)
 
 
 def compile_entries(variables, exprs):
@@ -67,11 +98,14 @@ def compile_entries(variables, exprs):
     >>> [v.round(4) for v in f(np.array([[1.0, 3.0]]))]
     [array([3.7081]), array([2.])]
     """
+    return compile_terms(variables, decompose(exprs))
+
+
+def compile_terms(variables, terms: Terms):
+    """The vectorized evaluator of :class:`Terms` (see :func:`compile_entries`)."""
     variables = tuple(variables)
     position = {v: k for k, v in enumerate(variables)}
-    atoms: dict[sp.Expr, int] = {}
-    entries = [_decompose(e, atoms) for e in exprs]
-    atom_list = sorted(atoms, key=atoms.get)
+    atom_list, entries = terms.atoms, terms.entries
     unknown = set().union(*(a.free_symbols for a in atom_list)) - set(variables)
     if unknown:
         raise ValueError(f"exprs: unknown symbols {sorted(map(str, unknown))}")
@@ -143,3 +177,61 @@ def compile_entries(variables, exprs):
         return None if targets is not None else outputs
 
     return evaluate
+
+
+def scalar_function(variables, terms: Terms, modules=("math",)):
+    """The entries of ``terms`` at one state, as Python floats, from flat generated code.
+
+    Parameters
+    ----------
+    variables : sequence of sympy.Symbol
+        The function's arguments, in order.
+    terms : Terms
+    modules : sequence
+        Namespaces of the atoms' functions (as for ``sympy.lambdify``).
+
+    Returns
+    -------
+    callable
+        ``f(*values) -> list of float``, one value per entry.
+
+    Examples
+    --------
+    >>> a, b = sp.symbols("a b")
+    >>> f = scalar_function([a, b], decompose([a * b + 3 * sp.sin(a) ** 2, sp.Integer(2)]))
+    >>> [round(v, 4) for v in f(1.0, 3.0)]
+    [5.1242, 2.0]
+    """
+    variables = tuple(variables)
+    names = [f"v{k}" for k in range(len(variables))]
+    position = {v: k for k, v in enumerate(variables)}
+    namespace, lines = {}, []
+    atom_names = []
+    for index, atom in enumerate(terms.atoms):
+        if atom in position:
+            atom_names.append(names[position[atom]])
+            continue
+        namespace[f"_atom{index}"] = sp.lambdify(variables, atom, modules=list(modules))
+        lines.append(f"a{index} = _atom{index}({', '.join(names)})")
+        atom_names.append(f"a{index}")
+    monomials: dict[Monomial, str] = {}
+
+    def monomial(key: Monomial) -> str:
+        name = monomials.get(key)
+        if name is None:  # a smaller monomial times one atom power: products shared
+            index, power = key[-1]
+            factor = atom_names[index] if power == 1 else f"{atom_names[index]}**{power}"
+            value = f"{monomial(key[:-1])} * {factor}" if len(key) > 1 else factor
+            name = monomials[key] = f"m{len(monomials)}"
+            lines.append(f"{name} = {value}")
+        return name
+
+    for k, entry in enumerate(terms.entries):
+        lines.append(f"e{k} = 0.0")
+        for coef, key in entry:  # one statement a term: no deep expression to compile
+            value = repr(float(coef))
+            lines.append(f"e{k} += {value} * {monomial(key)}" if key else f"e{k} += {value}")
+    lines.append(f"return [{', '.join(f'e{k}' for k in range(len(terms.entries)))}]")
+    source = f"def _entries({', '.join(names)}):\n" + "\n".join("    " + line for line in lines)
+    exec(compile(source, "<pysindy_xl.scalar_function>", "exec"), namespace)  # noqa: S102
+    return namespace["_entries"]

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from ..expressions import format_expression
 from ..symbols import as_expr_list
 from .lagrange import LagrangeLibrary
 from .trigpoly import TrigPolynomial
@@ -49,8 +50,7 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         if not terms:
             return super()._build_symbolic()  # raises the ValueError of LagrangeLibrary
         coords = self.coords
-        angles = tuple(any(t.has(sp.sin(q)) or t.has(sp.cos(q)) for t in terms)
-                       for q in coords.q)
+        angles = _angles(terms, coords)
         try:
             polynomials = [TrigPolynomial.from_sympy(t, coords, angles) for t in terms]
         except ValueError:
@@ -63,10 +63,59 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
                             if all(e.is_zero for e in column)]
         return [_feature_name(term) for term in terms], matrix
 
+    def to_spec(self) -> dict:
+        """JSON description: each term that is a trigonometric polynomial in canonical form as
+        its exponent rows and coefficients (exact, and far more compact than the expanded
+        expression of an arm's term), any other term as a string of the restricted grammar.
 
-def _feature_name(term: sp.Expr) -> str:
-    # the names of LagrangeLibrary: saved models are checked against them when loaded
-    return f"L[{term}]"
+        Returns
+        -------
+        dict
+            Read back by :meth:`from_spec`.
+        """
+        terms = as_expr_list(self.terms, "terms")
+        coords = self.coords
+        angles = _angles(terms, coords)
+        items = []
+        for term in terms:
+            try:
+                polynomial = TrigPolynomial.from_sympy(term, coords, angles)
+            except ValueError:
+                polynomial = None
+            if polynomial is not None and polynomial.to_sympy(coords) == term:
+                items.append({"exponents": polynomial.exponents.tolist(),
+                              "coefficients": polynomial.coefficients.tolist()})
+            else:
+                items.append(format_expression(term))
+        return {"type": self.spec_type, "angles": list(angles), "terms": items}
+
+    @classmethod
+    def from_spec(cls, spec, reader):
+        """The library :meth:`to_spec` describes (see
+        :meth:`SymbolicLibrary.from_spec <pysindy_xl.feature_library.SymbolicLibrary.from_spec>`).
+        """
+        coords = reader.coords
+        angles, items = spec.get("angles"), spec.get("terms")
+        reader.expect(isinstance(angles, list) and len(angles) == coords.n
+                      and all(isinstance(a, bool) for a in angles),
+                      f"{cls.spec_type}.angles must be one true or false per coordinate")
+        reader.expect(isinstance(items, list) and items,
+                      f"{cls.spec_type}.terms must be a non-empty list")
+        reader.count_terms(len(items))
+        terms = []
+        for k, item in enumerate(items):
+            if isinstance(item, str):
+                terms.append(reader.term(item))
+                continue
+            exponents, coefficients = reader.polynomial(item, 4 * coords.n,
+                                                        f"{cls.spec_type}.terms[{k}]")
+            terms.append(TrigPolynomial(exponents, coefficients, angles).to_sympy(coords))
+        return cls(coords, terms)
+
+
+def _angles(terms, coords) -> tuple:
+    """Which coordinates the terms use as angles (through their sine or cosine)."""
+    return tuple(any(t.has(sp.sin(q)) or t.has(sp.cos(q)) for t in terms) for q in coords.q)
 
 
 def _feature_name(term: sp.Expr) -> str:

@@ -19,6 +19,9 @@ from ._base import LIBRARY_TYPES
 
 __all__ = ["SpecError", "SpecReader"]
 
+#: Largest exponent of a polynomial term read from a file.
+_MAX_POWER = 64
+
 
 class SpecError(ValueError):
     """A library specification that cannot be read (the message says which part)."""
@@ -37,6 +40,9 @@ class SpecReader:
         (:func:`~pysindy_xl.expressions.expression_size`).
     max_depth : int, default 4
         Nesting of libraries.
+    max_monomials : int, default 500000
+        Monomials of the polynomial terms in all (arrays of numbers: cheap to read, each
+        monomial a few floating-point operations of the derivation).
 
     Examples
     --------
@@ -52,13 +58,14 @@ class SpecReader:
     """
 
     def __init__(self, coords: Coordinates, max_terms: int = 5_000, max_size: int = 20_000,
-                 max_depth: int = 4):
+                 max_depth: int = 4, max_monomials: int = 500_000):
         self.coords = coords
         self.max_terms = max_terms
         self.max_size = max_size
         self.max_depth = max_depth
+        self.max_monomials = max_monomials
         self._symbols = {str(s): s for s in coords.variables}
-        self._terms = self._size = self._depth = 0
+        self._terms = self._size = self._depth = self._monomials = 0
 
     @staticmethod
     def expect(condition: bool, what: str) -> None:
@@ -86,20 +93,48 @@ class SpecReader:
         where = f"{spec.get('type')}.{key}"
         self.expect(isinstance(raw, list) and raw and all(isinstance(t, str) for t in raw),
                     f"{where} must be a non-empty list of strings")
-        self.expect(len(raw) <= self.max_terms - self._terms,
+        self.count_terms(len(raw))
+        return [self.term(text) for text in raw]
+
+    def count_terms(self, count: int) -> None:
+        """Take ``count`` catalog terms from the budget."""
+        self.expect(count <= self.max_terms - self._terms,
                     f"more than {self.max_terms} catalog terms")
-        self._terms += len(raw)
-        parsed = []
-        for text in raw:
-            try:
-                expr = parse_expression(text, self._symbols)
-            except (TypeError, ValueError) as err:
-                raise SpecError(str(err)) from None
-            self._size += expression_size(expr)["terms"]
-            self.expect(self._size <= self.max_size,
-                        f"the catalog is too large (more than {self.max_size} expanded terms)")
-            parsed.append(expr)
-        return parsed
+        self._terms += count
+
+    def term(self, text: str):
+        """One term in the restricted grammar, its expanded size taken from the budget."""
+        try:
+            expr = parse_expression(text, self._symbols)
+        except (TypeError, ValueError) as err:
+            raise SpecError(str(err)) from None
+        self._size += expression_size(expr)["terms"]
+        self.expect(self._size <= self.max_size,
+                    f"the catalog is too large (more than {self.max_size} expanded terms)")
+        return expr
+
+    def polynomial(self, item, width: int, where: str) -> tuple[np.ndarray, np.ndarray]:
+        """``{"exponents": (T, width) small non-negative integers, "coefficients": (T,)
+        finite numbers}``, checked, its ``T`` taken from the monomial budget."""
+        self.expect(isinstance(item, dict) and set(item) == {"exponents", "coefficients"},
+                    f"{where} must be an object with exponents and coefficients")
+        coefficients, exponents = item["coefficients"], item["exponents"]
+        self.expect(isinstance(coefficients, list) and isinstance(exponents, list)
+                    and len(coefficients) == len(exponents),
+                    f"{where}: one exponent row per coefficient")
+        self._monomials += len(coefficients)
+        self.expect(self._monomials <= self.max_monomials,
+                    f"the catalog is too large (more than {self.max_monomials} monomials)")
+        self.expect(all(isinstance(c, (int, float)) and not isinstance(c, bool)
+                        and np.isfinite(c) for c in coefficients)
+                    and all(isinstance(row, list) and len(row) == width
+                            and all(isinstance(e, int) and not isinstance(e, bool)
+                                    and 0 <= e <= _MAX_POWER for e in row)
+                            for row in exponents),
+                    f"{where}: exponents must be rows of {width} integers in [0, {_MAX_POWER}]"
+                    " and coefficients finite numbers")
+        return (np.asarray(exponents, dtype=int).reshape(-1, width),
+                np.asarray(coefficients, dtype=float))
 
     def matrix(self, spec, key: str, shape: tuple, binary: bool = False,
                shape_name: str | None = None) -> np.ndarray:

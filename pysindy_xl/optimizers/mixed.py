@@ -157,6 +157,33 @@ class MixedOptimizer(CatalogOptimizer):
         return clone(self).set_params(explicit_optimizer=pilot_optimizer(explicit),
                                       implicit_optimizer=pilot_optimizer(implicit))
 
+    def fit(self, X, y=None):
+        """Regression on one block of rows, without a catalog's structure.
+
+        With the known right-hand side ``y`` (a force), mixed regression reduces to its
+        explicit part, ``X @ coef_ = y``; without, to its implicit part, ``X @ coef_ = 0``.
+        Coordinate blocks and force columns need :meth:`fit_catalog`.
+
+        Parameters
+        ----------
+        X : array, shape (n_rows, F)
+        y : array, shape (n_rows,), optional
+
+        Returns
+        -------
+        self
+        """
+        self._check_params()
+        explicit, implicit = self._sub_optimizers()
+        part = implicit if y is None else explicit
+        if not callable(getattr(part, "fit", None)):
+            raise TypeError(f"{type(part).__name__} has no fit(X, y); call fit_catalog(theta, "
+                            "n_coordinates, force_columns)")
+        fitted = part.fit(X) if y is None else part.fit(X, y)
+        self.mode_ = "implicit" if y is None else "explicit"
+        self.coef_ = np.asarray(fitted.coef_, dtype=float).copy()
+        return self
+
     @property
     def uses_mass_matrices(self) -> bool:
         """Whether a part uses the column mass matrices."""
