@@ -522,16 +522,21 @@ class CatalogDynamics(MassMatrixDynamics):
     """
 
     def __init__(self, library, coef):
-        coords = library.coords
         coef = np.asarray(coef, dtype=float)
-        active = np.flatnonzero(coef)
-        matrix = library.symbolic_matrix_
-        entries = [(c, j) for j in active for c in range(coords.n) if matrix[c, j] != 0]
-        self.coords = coords
-        self._n = coords.n
-        self._terms = _mass_and_forcing_terms(
-            coords, [matrix[c, j] for c, j in entries], [c for c, _ in entries],
-            coef[[j for _, j in entries]])
+        index = library.entry_index_
+        active = np.flatnonzero(coef[index[:, 1]])
+        terms = library.column_terms()
+        self.coords = library.coords
+        self._n = self.coords.n
+        accelerations = set(self.coords.qdd)
+        if any(atom.free_symbols & accelerations for atom in terms.atoms
+               if atom not in accelerations):  # an acceleration inside a factor: expanded
+            terms = decompose([sp.expand(library.symbolic_matrix_[c, j])
+                               for c, j in index[active]])
+        else:
+            terms = Terms(terms.atoms, [terms.entries[k] for k in active])
+        self._terms = _mass_and_forcing_terms(self.coords, terms, index[active, 0],
+                                              coef[index[active, 1]])
         self._compile()
 
     @property
@@ -556,18 +561,14 @@ class CatalogDynamics(MassMatrixDynamics):
                          for coef, key in entry)) for entry in self._terms.entries]
 
 
-def _mass_and_forcing_terms(coords, exprs, rows, weights) -> Terms:
+def _mass_and_forcing_terms(coords, terms: Terms, rows, weights) -> Terms:
     """The :class:`Terms` of ``M`` (n * n entries, row-major) and ``f`` (n entries) of the
-    equations ``sum_k weights[k] exprs[k] = 0`` in the rows ``rows[k]``."""
+    equations ``sum_k weights[k] entry_k = 0``, ``entry_k`` in the equation of ``rows[k]``."""
     n = coords.n
-    terms = decompose(exprs)
     accelerations = set(coords.qdd)
     if any(atom.free_symbols & accelerations for atom in terms.atoms
-           if atom not in accelerations):  # an acceleration inside a factor: expand those
-        terms = decompose([sp.expand(e) if e.has(*coords.qdd) else e for e in exprs])
-        if any(atom.free_symbols & accelerations for atom in terms.atoms
-               if atom not in accelerations):
-            raise ValueError("equations: not linear in the accelerations")
+           if atom not in accelerations):
+        raise ValueError("equations: not linear in the accelerations")
     which = {index: k for index, atom in enumerate(terms.atoms)
              for k, symbol in enumerate(coords.qdd) if atom == symbol}
     sums = [{} for _ in range(n * n + n)]

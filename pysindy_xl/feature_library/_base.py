@@ -27,7 +27,7 @@ from sklearn.utils.validation import check_is_fitted
 from .._validation import check_numeric_array
 from ..registry import register_type
 from ..symbols import Coordinates
-from ._compile import compile_entries
+from ._compile import Terms, compile_entries, compile_terms, decompose
 from ._weak import integrate_by_parts
 
 __all__ = ["SymbolicLibrary", "stack_variables", "compile_entries", "LIBRARY_TYPES"]
@@ -165,10 +165,25 @@ class SymbolicLibrary(BaseFeatureLibrary):
         n = self.coords.n
         if matrix.shape != (n, len(names)):
             raise RuntimeError("internal error: symbolic matrix shape does not match names")
+        self._check_columns(names, matrix)
+        self.feature_names_ = list(names)
+        self.symbolic_matrix_ = matrix
+        self.n_output_features_ = len(names)
+        self.feature_terms_ = list(self._feature_terms())
+        self.entry_index_ = np.array([(c, j) for c in range(n) for j in range(len(names))
+                                      if matrix[c, j] != 0], dtype=int).reshape(-1, 2)
+        for stale in ("weak_P_", "weak_Q_", "_weak_evaluate", "_weak_entry_index",
+                      "_column_terms"):
+            self.__dict__.pop(stale, None)
+        self.n_features_in_ = len(self.coords.variables)
+
+    def _check_columns(self, names, matrix) -> None:
+        """Refuse derived columns that cannot be evaluated (e.g. a DiracDelta from
+        differentiating Abs twice), naming the feature."""
         from ..expressions import check_term
 
-        for j, feature in enumerate(names):  # derived columns must be evaluable (e.g. no
-            for c in range(n):               # DiracDelta from differentiating Abs twice)
+        for j, feature in enumerate(names):
+            for c in range(matrix.shape[0]):
                 try:
                     check_term(matrix[c, j], "feature_library")
                 except ValueError as err:
@@ -177,21 +192,30 @@ class SymbolicLibrary(BaseFeatureLibrary):
                         f"{str(matrix[c, j])[:80]} is not evaluable ({str(err).split(', which')[0]}"
                         "); catalog terms must be differentiable twice"
                     ) from None
-        self.feature_names_ = list(names)
-        self.symbolic_matrix_ = matrix
-        self.n_output_features_ = len(names)
-        self.feature_terms_ = list(self._feature_terms())
-        for stale in ("weak_P_", "weak_Q_", "_weak_evaluate", "_weak_entry_index"):
-            self.__dict__.pop(stale, None)
-        self.n_features_in_ = len(self.coords.variables)
 
     def _compile(self):
-        entries = [(c, j) for c in range(self.coords.n) for j in range(self.n_output_features_)]
-        entries = [(c, j) for c, j in entries if self.symbolic_matrix_[c, j] != 0]
-        self._entry_index = np.array(entries, dtype=int).reshape(-1, 2)
-        self._evaluate = compile_entries(
-            self.coords.variables, [self.symbolic_matrix_[c, j] for c, j in entries]
-        )
+        self._evaluate = compile_terms(self.coords.variables, self.column_terms())
+
+    def column_terms(self) -> Terms:
+        """The non-zero entries of the columns as polynomials in a few atoms, one entry per
+        row of ``entry_index_`` (coordinate, feature), decomposed on first use.
+
+        The kernel of :meth:`transform` and of the identified dynamics
+        (:class:`~pysindy_xl.dynamics.CatalogDynamics`).
+
+        Returns
+        -------
+        Terms
+            See :class:`pysindy_xl.feature_library._compile.Terms`.
+        """
+        check_is_fitted(self, "symbolic_matrix_")
+        terms = self.__dict__.get("_column_terms")
+        if terms is None:
+            terms = self._column_terms = self._derive_column_terms()
+        return terms
+
+    def _derive_column_terms(self) -> Terms:
+        return decompose([self.symbolic_matrix_[c, j] for c, j in self.entry_index_])
 
     def __getstate__(self):
         # compiled evaluators are closures: rebuilt on first use after unpickling
@@ -261,7 +285,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
         # column-major: each entry is written in place into a contiguous column block (and
         # LAPACK prefers this layout)
         theta = np.zeros((self.coords.n * n_samples, self.n_output_features_), order="F")
-        targets = [theta[c * n_samples : (c + 1) * n_samples, j] for c, j in self._entry_index]
+        targets = [theta[c * n_samples : (c + 1) * n_samples, j] for c, j in self.entry_index_]
         with np.errstate(all="ignore"):
             self._evaluate(x, targets)
         self._check_finite_output(theta, n_samples)

@@ -7,10 +7,12 @@ the exponent arrays of :mod:`.trigpoly` without sympy's general differentiation.
 
 from __future__ import annotations
 
+import numpy as np
 import sympy as sp
 
 from ..expressions import format_expression
 from ..symbols import as_expr_list
+from ._compile import Terms
 from .lagrange import LagrangeLibrary
 from .trigpoly import TrigPolynomial
 
@@ -47,6 +49,7 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
 
     def _build_symbolic(self):
         terms = as_expr_list(self.terms, "terms")
+        self.__dict__.pop("_polynomial_columns", None)
         if not terms:
             return super()._build_symbolic()  # raises the ValueError of LagrangeLibrary
         coords = self.coords
@@ -57,11 +60,36 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
             return super()._build_symbolic()
         self.terms_ = terms
         derived = [p.euler_lagrange() for p in polynomials]
+        self._polynomial_columns = (angles, derived)  # the exact columns, for column_terms
         columns = [[e.to_sympy(coords, evaluate=False) for e in column] for column in derived]
         matrix = sp.Matrix(coords.n, len(terms), lambda i, j: columns[j][i])
         self.zero_terms_ = [j for j, column in enumerate(derived)
                             if all(e.is_zero for e in column)]
         return [_feature_name(term) for term in terms], matrix
+
+    def _check_columns(self, names, matrix) -> None:
+        if "_polynomial_columns" not in self.__dict__:  # derived symbolically
+            super()._check_columns(names, matrix)
+        # polynomials in sin, cos, q, qd, qdd are evaluable everywhere
+
+    def _derive_column_terms(self) -> Terms:
+        """The column entries straight from the polynomials' exponent rows (no sympy)."""
+        if "_polynomial_columns" not in self.__dict__:
+            return super()._derive_column_terms()
+        angles, derived = self._polynomial_columns
+        coords = self.coords
+        atoms = ([sp.sin(q) if angle else q for q, angle in zip(coords.q, angles, strict=True)]
+                 + [sp.cos(q) for q in coords.q] + list(coords.qd) + list(coords.qdd))
+        entries = []
+        for c, j in self.entry_index_:
+            polynomial = derived[j][c]
+            rows, slots = np.nonzero(polynomial.exponents)
+            keys = [[] for _ in range(len(polynomial.coefficients))]
+            for row, slot in zip(rows.tolist(), slots.tolist(), strict=True):
+                keys[row].append((slot, int(polynomial.exponents[row, slot])))
+            entries.append([(float(coef), tuple(key)) for coef, key
+                            in zip(polynomial.coefficients.tolist(), keys, strict=True)])
+        return Terms(atoms, entries)
 
     def to_spec(self) -> dict:
         """JSON description: each term that is a trigonometric polynomial in canonical form as

@@ -7,6 +7,7 @@ import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
 from ._base import SymbolicLibrary
+from ._compile import Terms
 from .external_forces import ExternalForces
 
 __all__ = ["CatalogRepartition"]
@@ -129,6 +130,23 @@ class CatalogRepartition(SymbolicLibrary):
 
     def _feature_terms(self):
         return [term for lib in self.libraries_ for term in lib.feature_terms_]
+
+    def _check_columns(self, names, matrix) -> None:
+        """Each library checked its own columns when it derived them."""
+
+    def _derive_column_terms(self) -> Terms:
+        """The libraries' column terms, their atoms merged and their entries in this
+        catalog's ``entry_index_`` order."""
+        atoms: dict = {}
+        located = {}  # (coordinate, catalog feature) -> the entry's terms, atoms merged
+        for lib, columns in zip(self.libraries_, self.slices_, strict=True):
+            terms = lib.column_terms()
+            index = [atoms.setdefault(atom, len(atoms)) for atom in terms.atoms]
+            for (c, j), entry in zip(lib.entry_index_, terms.entries, strict=True):
+                located[(int(c), columns.start + int(j))] = [
+                    (coef, tuple(sorted((index[a], p) for a, p in key))) for coef, key in entry]
+        return Terms(sorted(atoms, key=atoms.get),
+                     [located[(int(c), int(j))] for c, j in self.entry_index_])
 
     def _build_weak_symbolic(self):
         parts = [lib.weak_matrices() for lib in self.libraries_]
