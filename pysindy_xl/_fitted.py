@@ -73,6 +73,44 @@ class DynamicsMixin:
             out.append(acc)
         return out if is_list else out[0]
 
+    def predict_forces(self, x, x_dot, x_ddot):
+        """Generalized forces that move the identified system as given: inverse dynamics.
+
+        ``M(q, qd) qdd - f(q, qd, 0)``, the forces (through the catalog's interlink) under
+        which the identified equations hold with the given accelerations; for a robot arm, the
+        joint torques. Compared with measured torques on a fresh trajectory this is the
+        standard validation of robot identification: no integration, insensitive to feedback.
+
+        Parameters
+        ----------
+        x, x_dot, x_ddot : array (N, n)
+            Positions, velocities and accelerations.
+
+        Returns
+        -------
+        ndarray, shape (N, n)
+
+        Examples
+        --------
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+        >>> t = np.linspace(0, 5, 501)
+        >>> x, xd, xdd = np.sin(t)[:, None], np.cos(t)[:, None], -np.sin(t)[:, None]
+        >>> model = px.XLSINDy(lib).fit(x, t, x_dot=xd, x_ddot=xdd, u=2 * xdd + 3 * x)
+        >>> bool(np.allclose(model.predict_forces(x, xd, xdd), 2 * xdd + 3 * x))
+        True
+        """
+        dynamics = self._require_dynamics()
+        n = self.n_coordinates_
+        x = check_array(x, "x", n_columns=n)
+        x_dot = check_array(x_dot, "x_dot", x.shape)
+        x_ddot = check_array(x_ddot, "x_ddot", x.shape)
+        from .feature_library import stack_variables
+
+        mass, free = dynamics.mass_and_forcing(stack_variables(x, x_dot))
+        return np.einsum("sij,sj->si", mass, x_ddot) - free
+
     def score(self, x, t=None, x_dot=None, x_ddot=None, u=None, metric=r2_score):
         """Score predicted accelerations against measured (or differentiated) ones.
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["fit_quality", "quality_lines", "plot_identification"]
+__all__ = ["fit_quality", "quality_lines", "plot_identification", "force_prediction"]
 
 
 def fit_quality(model, arguments) -> dict:
@@ -96,6 +96,61 @@ def fit_quality(model, arguments) -> dict:
     return {"r2": r2(residual, target), "r2_per_coordinate": per,
             "formulation": model.formulation_, "target": target_name,
             "rows": int(theta.shape[0]), **held_out, "stability": _stability(model)}
+
+
+def force_prediction(model, x, t, u, x_dot=None, x_ddot=None) -> dict:
+    """How well the model predicts measured forces on a trajectory (inverse dynamics).
+
+    The robotics validation of an identified model: on a fresh trajectory, the forces
+    :meth:`~pysindy_xl.XLSINDy.predict_forces` needs to move as recorded against the
+    measured ones, per coordinate. Derivatives that are not given are estimated from the
+    positions by the model's smoother (noisy positions are the main case).
+
+    Parameters
+    ----------
+    model : XLSINDy
+        A fitted model.
+    x : array (N, n)
+        Positions.
+    t : array (N,)
+        Sample times.
+    u : array (N, n)
+        Measured generalized forces.
+    x_dot, x_ddot : array (N, n), optional
+        Measured velocities and accelerations.
+
+    Returns
+    -------
+    dict
+        ``relative_rms`` (per coordinate name: RMS of the prediction error over RMS of the
+        measured force), ``worst`` (the largest of them) and ``predicted`` (N, n).
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+    >>> t = np.linspace(0, 5, 501)
+    >>> x, xd, xdd = np.sin(t)[:, None], np.cos(t)[:, None], -np.sin(t)[:, None]
+    >>> model = px.XLSINDy(lib).fit(x, t, x_dot=xd, x_ddot=xdd, u=2 * xdd + 3 * x)
+    >>> force_prediction(model, x, t, 2 * xdd + 3 * x, xd, xdd)["worst"] < 1e-9
+    True
+    """
+    from ._inputs import check_array
+    from .weak import WhittakerSmoother
+
+    n = model.n_coordinates_
+    x = check_array(x, "x", n_columns=n)
+    u = check_array(u, "u", x.shape)
+    if x_dot is None or x_ddot is None:  # noisy positions: smoothed with their derivatives
+        q, qd, qdd = (model.smoother or WhittakerSmoother()).smooth(np.asarray(t, dtype=float), x)
+        x, x_dot, x_ddot = q, qd if x_dot is None else x_dot, qdd if x_ddot is None else x_ddot
+    predicted = model.predict_forces(x, x_dot, x_ddot)
+    scale = np.sqrt(np.mean(u**2, axis=0))
+    error = np.sqrt(np.mean((predicted - u) ** 2, axis=0)) / np.where(scale > 0, scale, 1.0)
+    names = model.feature_library_.coords.names
+    return {"relative_rms": dict(zip(names, error.tolist(), strict=True)),
+            "worst": float(error.max()), "predicted": predicted}
 
 
 def _stability(model):

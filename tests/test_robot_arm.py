@@ -64,6 +64,30 @@ def test_the_saved_arm_loads_and_predicts_identically(arm, tmp_path):
                                   model.predict(trajectory.q, trajectory.qd, trajectory.tau))
 
 
+def test_torque_prediction_tells_the_exact_model_from_a_wrong_inertia(arm):
+    import copy
+
+    from pysindy_xl.quality import force_prediction
+
+    system, catalog, data, model = arm
+    fresh = generate_dataset(system, n_trajectories=1, duration=1.0, seed=7, sample_every=4,
+                             progress=False).trajectories[0]
+    exact = force_prediction(model, fresh.q, fresh.t, fresh.tau, fresh.qd, fresh.qdd)
+    assert exact["worst"] < 1e-7
+    # the same model with one link's inertia 20 % off: the torques say so
+    wrong = copy.deepcopy(model)
+    names = wrong.get_feature_names()
+    inertia = max((j for j, name in enumerate(names) if name.startswith("L[")),
+                  key=lambda j: abs(wrong.coef_[j]))
+    wrong.coef_[inertia] *= 1.2
+    wrong._build_dynamics()
+    assert force_prediction(wrong, fresh.q, fresh.t, fresh.tau, fresh.qd, fresh.qdd)[
+        "worst"] > 1e-2
+    # from positions only, derivatives estimated by the model's smoother
+    smoothed = force_prediction(model, fresh.q, fresh.t, fresh.tau)
+    assert smoothed["worst"] < 0.05
+
+
 def test_equations_with_thousands_of_terms_simulate():
     # one equation whose forcing is a sum of 3000 monomials: a single expression of that
     # depth cannot be compiled by Python
