@@ -212,3 +212,30 @@ def test_user_mjcf_errors(tmp_path):
     free = "<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body></worldbody></mujoco>"
     with pytest.raises(ValueError, match="hinge or slide"):
         MJCFSystem(free)
+
+
+def test_joints_of_a_model_with_a_full_length_keyframe(tmp_path, capsys):
+    from pysindy_xl.cli import main
+    from pysindy_xl.mujoco import MJCFSystem
+
+    xml = tmp_path / "keyed.xml"
+    xml.write_text("""<mujoco><option timestep="0.002"/><worldbody>
+      <body name="a"><joint name="j1" type="hinge" axis="0 1 0"/>
+        <geom type="capsule" fromto="0 0 0 0 0 -0.5" size="0.03" mass="1"/>
+        <body name="b" pos="0 0 -0.5"><joint name="j2" type="hinge" axis="0 1 0"/>
+          <geom type="capsule" fromto="0 0 0 0 0 -0.4" size="0.03" mass="0.5"/></body></body>
+      <body name="t" pos="2 0 0"><joint name="tx" type="slide" axis="1 0 0"/>
+        <joint name="ty" type="slide" axis="0 0 1"/><geom size="0.05" mass="0.2"/></body>
+    </worldbody>
+    <actuator><motor joint="j1"/><motor joint="j2"/><motor joint="tx"/></actuator>
+    <keyframe><key name="home" qpos="0.1 0.2 0.3 0.4" qvel="0 0 0 0" ctrl="0.5 0.6 0.7"/>
+    </keyframe></mujoco>""")
+    system = MJCFSystem(str(xml), joints=["j1", "j2"])
+    assert system.trimmed_keyframes == ("home",)
+    model = system.mj_model()
+    np.testing.assert_array_equal(model.key_qpos[0], [0.1, 0.2])
+    np.testing.assert_array_equal(model.key_ctrl[0], [0.5, 0.6])
+    assert main(["demo", str(xml), "--joints", "j1", "j2", "--duration", "1",
+                 "--trajectories", "1", "--validation-duration", "0.5", "--no-plots",
+                 "--out", str(tmp_path / "out")]) == 0
+    assert "keyframes cut to the identified joints: home" in capsys.readouterr().out

@@ -108,6 +108,9 @@ def data_lines(system, dataset):
     if excluded:
         lines.append(f"  joints locked at their reference pose (not identified): "
                      f"{', '.join(excluded)}")
+    trimmed = getattr(system, "trimmed_keyframes", ())
+    if trimmed:
+        lines.append(f"  keyframes cut to the identified joints: {', '.join(trimmed)}")
     summary = meta.get("constraints", {})
     if summary.get("active_fraction"):
         hits = ", ".join(f"{j} {c}" for j, c in summary["limit_hits"].items()) or "none"

@@ -54,6 +54,9 @@ class MJCFSystem(MuJoCoSystem):
         Absolute path of the MJCF file (None for MJCF text).
     excluded_joints : tuple of str
         Joints locked by ``joints``.
+    trimmed_keyframes : tuple of str
+        Keyframes whose ``qpos``, ``qvel``, ``ctrl`` were cut to the kept joints and
+        actuators by ``joints`` (their activations cleared).
 
     Examples
     --------
@@ -112,6 +115,7 @@ class MJCFSystem(MuJoCoSystem):
                 )
         self._spec = None
         self.excluded_joints = ()
+        self.trimmed_keyframes = ()
         if joints is not None:
             model = self._select_joints(model, joints)
         self._model = model
@@ -152,6 +156,8 @@ class MJCFSystem(MuJoCoSystem):
         spec = (mujoco.MjSpec.from_file(self.path) if self.path is not None
                 else mujoco.MjSpec.from_string(self._xml))
         excluded = [name for name in names if name not in joints]
+        kept_actuators = [spec_actuator.target not in excluded
+                          for spec_actuator in spec.actuators]
         for name in excluded:
             joint = spec.joint(name)
             if joint is None:
@@ -160,6 +166,8 @@ class MJCFSystem(MuJoCoSystem):
                 if actuator.target == name:
                     spec.delete(actuator)
             spec.delete(joint)
+        self.trimmed_keyframes = _trim_keyframes(spec, [name in joints for name in names],
+                                                 kept_actuators)
         self._spec, self.excluded_joints = spec, tuple(excluded)
         try:
             return spec.compile()
@@ -336,3 +344,27 @@ class MJCFSystem(MuJoCoSystem):
 
     def __repr__(self):
         return f"MJCFSystem({self._parameters['source']!r})"
+
+
+def _trim_keyframes(spec, kept_joints, kept_actuators) -> tuple:
+    """Keep, in every keyframe, the entries of the kept joints (one ``qpos`` and one ``qvel``
+    each: hinges and slides) and actuators; activations of removed actuators are cleared.
+    Returns the names of the keyframes changed (a keyframe sized for the whole model would
+    not compile)."""
+    kept_joints = np.asarray(kept_joints, dtype=bool)
+    kept_actuators = np.asarray(kept_actuators, dtype=bool)
+    trimmed = []
+    for key in spec.keys:
+        changed = False
+        for field, kept in (("qpos", kept_joints), ("qvel", kept_joints),
+                            ("ctrl", kept_actuators)):
+            values = np.asarray(getattr(key, field), dtype=float)
+            if values.size == kept.size and not kept.all():
+                setattr(key, field, values[kept].tolist())
+                changed = True
+        if len(key.act) and not kept_actuators.all():
+            key.act = []
+            changed = True
+        if changed:
+            trimmed.append(key.name or f"key {len(trimmed)}")
+    return tuple(trimmed)
