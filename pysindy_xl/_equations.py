@@ -97,3 +97,65 @@ def uncertainty_lines(names, coef, interval, probability, precision: int) -> lis
     return [f"{names[j]:<{width}}  {coef[j]: .{precision}g}  "
             f"[{interval[0, j]: .{precision}g}, {interval[1, j]: .{precision}g}]  "
             f"P={probability[j]:.2f}" for j in shown]
+
+
+def physical_parameters(coef: np.ndarray, library) -> dict:
+    """The identified model in physical terms (see :meth:`XLSINDy.physical_parameters
+    <pysindy_xl.XLSINDy.physical_parameters>`).
+
+    Parameters
+    ----------
+    coef : ndarray, shape (F,)
+    library : fitted CatalogRepartition
+
+    Returns
+    -------
+    dict
+    """
+    forces = [coef[j] for j in library.force_columns_ if coef[j] != 0]
+    scale = -1.0 / forces[0] if forces else None
+    factor = 1.0 if scale is None else scale
+    base = []
+    for lib, columns in zip(library.libraries_, library.slices_, strict=True):
+        if lib.category != "lagrange":
+            continue
+        maps = getattr(lib, "parameters", None)
+        for k in range(lib.n_output_features_):
+            base.append({"feature": library.feature_names_[columns.start + k],
+                         "stands_for": None if maps is None else dict(maps[k]),
+                         "value": float(coef[columns.start + k] * factor)})
+    friction = {name: {"viscous": 0.0, "dry": 0.0} for name in library.coords.names}
+    other = {}
+    for j, category in enumerate(library.categories_):
+        if category != "classical" or coef[j] == 0:
+            continue
+        c = next(i for i in range(library.coords.n) if library.symbolic_matrix_[i, j] != 0)
+        name, term, velocity = library.coords.names[c], library.feature_terms_[j], \
+            library.coords.qd[c]
+        if term == velocity:
+            friction[name]["viscous"] += float(coef[j] * factor)
+        elif term.func in (sp.tanh, sp.sign) and term.free_symbols == {velocity}:
+            friction[name]["dry"] += float(coef[j] * factor)
+        else:
+            other[library.feature_names_[j]] = float(coef[j] * factor)
+    return {"scale": scale, "base_parameters": base, "friction": friction, "other": other}
+
+
+def parameter_lines(parameters: dict, precision: int) -> list[str]:
+    """Printable lines of :func:`physical_parameters`: the base parameters (with the inertial
+    combinations they stand for) and each joint's viscous and dry friction."""
+    lines = ["base parameters (value  |  stands for):"]
+    for entry in parameters["base_parameters"]:
+        if entry["value"] == 0:
+            continue
+        meaning = entry["stands_for"]
+        meaning = (" + ".join(f"{w:.{precision}g}*{name}" for name, w in meaning.items())
+                   if meaning else entry["feature"])
+        lines.append(f"  {entry['value']:>12.{precision}g}  |  {meaning}")
+    lines.append("friction per coordinate (viscous, dry):")
+    for name, values in parameters["friction"].items():
+        lines.append(f"  {name}: {values['viscous']:.{precision}g}, {values['dry']:.{precision}g}")
+    lines += [f"  {name}: {value:.{precision}g}" for name, value in parameters["other"].items()]
+    if parameters["scale"] is None:
+        lines.append("(no force fixes the scale: values up to a common factor)")
+    return lines

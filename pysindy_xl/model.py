@@ -12,7 +12,14 @@ import threadpoolctl
 from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_is_fitted
 
-from ._equations import equation_strings, identified_lagrangian, significant, uncertainty_lines
+from ._equations import (
+    equation_strings,
+    identified_lagrangian,
+    parameter_lines,
+    physical_parameters,
+    significant,
+    uncertainty_lines,
+)
 from ._fitted import DynamicsMixin
 from ._inputs import check_array, sample_times
 from ._validation import check_instance, check_option
@@ -625,8 +632,43 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
         check_is_fitted(self, "coef_")
         return identified_lagrangian(self.coef_, self.feature_library_)
 
-    def print(self, precision: int = 4, uncertainty: bool = False) -> None:
-        """Print the identified Lagrangian and the equations of motion.
+    def physical_parameters(self) -> dict:
+        """The identified model in physical terms: base parameters, friction per coordinate.
+
+        For a kinematic catalog (:func:`~pysindy_xl.mujoco.kinematic_catalog`) each Lagrange
+        term stands for a combination of inertial parameters (masses, first and second
+        moments, armature) of the bodies and joints: its identified coefficient is that
+        combination's value. Classical terms ``qd_c`` and ``tanh(k qd_c)`` are the viscous
+        and dry friction of coordinate ``c``. Values are scaled so that the force coefficient
+        is -1 (the units of the forces); an unforced model has no scale.
+
+        Returns
+        -------
+        dict
+            ``base_parameters``: one ``{"feature", "stands_for" ({name: weight} or None),
+            "value"}`` per Lagrange term; ``friction``: ``{coordinate: {"viscous", "dry"}}``;
+            ``other``: the other classical terms by feature name; ``scale``: the factor
+            applied, None for an unforced model.
+
+        Examples
+        --------
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]) + px.ClassicalLibrary(
+        ...     c, [c.qd[0]])
+        >>> t = np.linspace(0, 5, 501)
+        >>> x, xd, xdd = np.sin(t)[:, None], np.cos(t)[:, None], -np.sin(t)[:, None]
+        >>> model = px.XLSINDy(lib).fit(x, t, x_dot=xd, x_ddot=xdd, u=2 * xdd + 0.5 * xd + x)
+        >>> friction = model.physical_parameters()["friction"]["x"]
+        >>> round(friction["viscous"], 6), friction["dry"]
+        (0.5, 0.0)
+        """
+        check_is_fitted(self, "coef_")
+        return physical_parameters(self.coef_, self.feature_library_)
+
+    def print(self, precision: int = 4, uncertainty: bool = False,
+              equations: bool | None = None) -> None:
+        """Print the identified model.
 
         Parameters
         ----------
@@ -636,6 +678,11 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             After an ensemble fit (:class:`~pysindy_xl.EnsembleOptimizer`), also print each
             term that any fit included with its coefficient, interval and inclusion
             probability.
+        equations : bool, optional
+            Print the Lagrangian and the equations of motion. Default: True, except for a
+            catalog whose terms stand for physical parameters (a robot's kinematic catalog),
+            whose equations run for pages: its :meth:`physical_parameters` are printed
+            instead.
         """
         check_is_fitted(self, "coef_")
         if uncertainty:
@@ -645,6 +692,13 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
                                           self.coef_interval_, self.inclusion_probability_,
                                           precision):
                 print(line)
+        physical = any(getattr(lib, "parameters", None) is not None
+                       for lib in self.feature_library_.libraries_)
+        if physical:
+            for line in parameter_lines(self.physical_parameters(), precision):
+                print(line)
+        if equations is False or (equations is None and physical):
+            return
         lagrangian = self.lagrangian()
         if lagrangian != 0:
             print(f"L = {significant(lagrangian, precision)}")

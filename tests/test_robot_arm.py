@@ -102,3 +102,22 @@ def test_equations_with_thousands_of_terms_simulate():
     derivative = dynamics.state_derivative(simulated[-1])
     np.testing.assert_allclose(derivative[1], dynamics.accelerations(
         simulated[-1:, :1], simulated[-1:, 1:])[0, 0], rtol=1e-12)
+
+
+def test_physical_parameters_are_the_face_of_the_arm(arm, tmp_path, capsys):
+    _, catalog, _, model = arm
+    parameters = model.physical_parameters()
+    values = np.array([entry["value"] for entry in parameters["base_parameters"]])
+    np.testing.assert_allclose(values, catalog.base_parameters, rtol=1e-6, atol=1e-9)
+    assert [entry["stands_for"] for entry in parameters["base_parameters"]] == [
+        dict(p) for p in catalog.parameters]
+    for joint in model.feature_library_.coords.names:  # damping 0.1 on every joint
+        assert parameters["friction"][joint]["viscous"] == pytest.approx(0.1, rel=1e-6)
+        assert abs(parameters["friction"][joint]["dry"]) < 1e-8
+    model.print()
+    printed = capsys.readouterr().out
+    assert "base parameters" in printed and "a0.armature" in printed
+    assert "(a0)" not in printed  # the pages of equations only on request
+    path = tmp_path / "arm.json"
+    model.save(path)
+    assert px.XLSINDy.load(path).physical_parameters() == parameters

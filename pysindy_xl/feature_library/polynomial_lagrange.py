@@ -32,6 +32,10 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
     ----------
     coords : Coordinates
     terms : sequence of sympy.Expr
+    parameters : sequence of dict, optional
+        One per term: the physical parameters it stands for, ``{name: weight}`` (a kinematic
+        catalog's base parameters, e.g. ``{"link1.m": 1.0, "joint1.armature": 1.0}``); read
+        by :meth:`XLSINDy.physical_parameters <pysindy_xl.XLSINDy.physical_parameters>`.
 
     Examples
     --------
@@ -46,6 +50,10 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
     """
 
     spec_type = "PolynomialLagrangeLibrary"
+
+    def __init__(self, coords, terms, parameters=None):
+        super().__init__(coords, terms)
+        self.parameters = parameters
 
     def _build_symbolic(self):
         terms = as_expr_list(self.terms, "terms")
@@ -115,7 +123,11 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
                               "coefficients": polynomial.coefficients.tolist()})
             else:
                 items.append(format_expression(term))
-        return {"type": self.spec_type, "angles": list(angles), "terms": items}
+        spec = {"type": self.spec_type, "angles": list(angles), "terms": items}
+        if self.parameters is not None:
+            spec["parameters"] = [{str(k): float(v) for k, v in p.items()}
+                                  for p in self.parameters]
+        return spec
 
     @classmethod
     def from_spec(cls, spec, reader):
@@ -138,7 +150,14 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
             exponents, coefficients = reader.polynomial(item, 4 * coords.n,
                                                         f"{cls.spec_type}.terms[{k}]")
             terms.append(TrigPolynomial(exponents, coefficients, angles).to_sympy(coords))
-        return cls(coords, terms)
+        parameters = spec.get("parameters")
+        reader.expect(parameters is None or (
+            isinstance(parameters, list) and len(parameters) == len(terms)
+            and all(isinstance(p, dict) and all(
+                isinstance(k, str) and isinstance(v, (int, float)) and not isinstance(v, bool)
+                and np.isfinite(v) for k, v in p.items()) for p in parameters)),
+            f"{cls.spec_type}.parameters must be one object of finite weights per term")
+        return cls(coords, terms, parameters)
 
 
 def _angles(terms, coords) -> tuple:

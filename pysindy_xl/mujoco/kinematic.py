@@ -170,7 +170,8 @@ class KinematicCatalog:
         from ..feature_library import CatalogRepartition, ClassicalLibrary, ExternalForces
 
         libraries = [ExternalForces(self.coords, interlink=interlink),
-                     PolynomialLagrangeLibrary(self.coords, list(self.lagrange_terms))]
+                     PolynomialLagrangeLibrary(self.coords, list(self.lagrange_terms),
+                                               parameters=[dict(p) for p in self.parameters])]
         if classical and self.classical_terms:
             libraries.append(ClassicalLibrary(self.coords, list(self.classical_terms),
                                               mask=self.classical_mask.copy()))
