@@ -144,3 +144,39 @@ def test_shipped_systems_keep_their_force_amplitudes():
     np.testing.assert_allclose(
         SumOfSinusoids.from_dict(half.info["signals"]).amplitudes.sum(axis=1),
         0.5 * np.array(expected))
+
+
+SERVO_ARM = """<mujoco model="servo_arm"><option timestep="0.002" integrator="implicitfast"
+  gravity="0 0 -9.81"><flag contact="disable"/></option><worldbody>
+  <body name="l1"><joint name="j1" type="hinge" axis="0 1 0" damping="0.5" armature="0.01"/>
+    <inertial pos="0.1 0 -0.05" mass="1.0" diaginertia="0.01 0.012 0.008"/>
+    <body name="l2" pos="0.3 0 0"><joint name="j2" type="hinge" axis="0 1 0" damping="0.3"
+      armature="0.01"/><inertial pos="0.1 0 0" mass="0.6" diaginertia="0.005 0.006 0.004"/>
+  </body></body></worldbody>
+  <actuator><position joint="j1" kp="40" kv="4" ctrlrange="-1 1"/>
+    <position joint="j2" kp="20" kv="2" ctrlrange="-1 1"/></actuator></mujoco>"""
+
+
+def _position_bias(trajectory):
+    """Largest gap between the accelerations of the recorded positions (second differences)
+    and the continuous accelerations MuJoCo reports, relative to their range."""
+    h = trajectory.t[1] - trajectory.t[0]
+    differenced = (trajectory.q[2:] - 2 * trajectory.q[1:-1] + trajectory.q[:-2]) / h**2
+    return np.abs(differenced - trajectory.qdd[1:-1]).max() / np.ptp(trajectory.qdd)
+
+
+def test_implicit_steps_are_replaced_where_they_bias_the_positions():
+    from pysindy_xl.mujoco import MJCFSystem
+    from pysindy_xl.mujoco.generate import faithful_integrator
+
+    system = MJCFSystem(SERVO_ARM)
+    assert faithful_integrator(system.mj_model()) == "RK4"
+    faithful = generate_dataset(system, n_trajectories=1, duration=2.0, seed=1, progress=False)
+    authored = generate_dataset(system, n_trajectories=1, duration=2.0, seed=1,
+                                integrator="model", progress=False)
+    assert faithful.metadata["integrator"] == "RK4"
+    assert authored.metadata["integrator"] == "implicitfast"
+    # the implicit step's positions disagree with the continuous accelerations by the
+    # velocity forces times the step; RK4's only by the differencing error
+    assert _position_bias(authored.trajectories[0]) > 10 * _position_bias(
+        faithful.trajectories[0])

@@ -101,6 +101,14 @@ def data_lines(system, dataset):
     period = meta["timestep"] * meta["sample_every"]
     lines = [f"  sampling every {meta['sample_every']} step(s) of {meta['timestep'] * 1e3:g} ms "
              f"= {period * 1e3:g} ms"]
+    if meta.get("integrator") and getattr(system, "mj_model", None) is not None:
+        authored = int(system.mj_model().opt.integrator)
+        from pysindy_xl.mujoco.generate import INTEGRATORS
+
+        if INTEGRATORS.get(meta["integrator"]) != authored:
+            lines.append(f"  integrated with {meta['integrator']} instead of the model's own "
+                         "implicit step, whose damping and servo gains would bias the "
+                         "recorded positions against the continuous equations")
     if meta.get("derivatives") == "none":
         lines.append(f"  noise model {meta['noise_model']}: noisy positions only, no velocity "
                      "or acceleration given (weak formulation on smoothed states)")

@@ -20,7 +20,7 @@ from .systems import MuJoCoSystem, get_system
 
 __all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "actuator_signals",
            "noise_levels", "NOISE_KEYS", "NOISE_MODELS",
-           "ConstraintWarning", "actuator_force_function"]
+           "ConstraintWarning", "actuator_force_function", "faithful_integrator", "INTEGRATORS"]
 
 
 def _import_mujoco():
@@ -227,7 +227,7 @@ def actuator_force_function(system, signals, force_input: str = "tau"):
 
 def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None,
                         sample_every: int = 1, progress=None, substeps: int = 1,
-                        control_at: str = "start") -> Trajectory:
+                        control_at: str = "start", integrator: str | None = None) -> Trajectory:
     """Simulate one MuJoCo trajectory and return it in generalized coordinates.
 
     Parameters
@@ -255,6 +255,9 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
         forces are then exactly ``signals(t)``), or its midpoint (second-order accurate
         against the continuous signal, for validation references; the forces recorded at
         ``t`` are then ``signals(t + h/2)``).
+    integrator : {"Euler", "RK4", "implicit", "implicitfast"}, optional
+        MuJoCo's integrator for this run; default: the model's (see
+        :func:`faithful_integrator`).
 
     Returns
     -------
@@ -315,6 +318,9 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
             f"two samples in a run of {duration:g} s ({n_steps} steps); lower sample_every or "
             "lengthen the run")
     model.opt.timestep = dt / substeps
+    if integrator is not None:
+        check_option("integrator", integrator, "choice", choices=tuple(INTEGRATORS))
+        model.opt.integrator = INTEGRATORS[integrator]
     n_fine = n_steps * substeps
     fine_times = np.arange(n_fine + 1) * (dt / substeps)
     if control_at not in ("start", "midpoint"):
@@ -376,11 +382,48 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
             "contact_samples": int(contact_samples), "equality_samples": int(equality_samples)}
     if substeps > 1:
         info["substeps"] = int(substeps)
+    if integrator is not None:
+        info["integrator"] = integrator
     if isinstance(signals, SumOfSinusoids):
         info["signals"] = signals.to_dict()
     return Trajectory(t=fine_times[recorded], q=q, qd=qd, qdd=qdd, tau=force @ matrix.T,
                       u=force, info=info, tau_constraint=constraint @ matrix.T,
                       u_constraint=constraint, constraint_active=active)
+
+
+#: MuJoCo's integrators by name.
+INTEGRATORS = {"Euler": 0, "RK4": 1, "implicit": 2, "implicitfast": 3}
+
+
+def faithful_integrator(model) -> str | None:
+    """RK4 where the model's own step would bias the data against the continuous equations.
+
+    MuJoCo's ``implicit`` and ``implicitfast`` integrators apply the velocity-dependent
+    forces (joint damping, an actuator's velocity gain ``kv``) at the end of the step, so the
+    recorded positions obey ``(M + h (kv + d)) qdd = ...`` rather than the continuous
+    equations: an identification from positions overstates every inertia by about
+    ``(kv + damping) x timestep``. RK4 integrates the continuous equations (error of order
+    ``h^4``). Models whose step has no such force keep their integrator.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+
+    Returns
+    -------
+    str or None
+        ``"RK4"``, or None to keep the model's integrator.
+
+    Examples
+    --------
+    >>> from pysindy_xl.mujoco import get_system
+    >>> print(faithful_integrator(get_system("cart-pole").mj_model()))  # already RK4
+    None
+    """
+    if int(model.opt.integrator) not in (INTEGRATORS["implicit"], INTEGRATORS["implicitfast"]):
+        return None
+    velocity_forces = np.any(model.dof_damping > 0) or np.any(model.actuator_biasprm[:, 2] != 0)
+    return "RK4" if velocity_forces else None
 
 
 class ConstraintWarning(UserWarning):
@@ -399,7 +442,7 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                      amplitude_scale: float = 1.0, initial_scale: float = 1.0,
                      progress=None, noise_model: str = "positions", derivatives=None,
                      amplitude=None, backoff: bool = True, max_constrained: float = 0.1,
-                     min_unconstrained: float = 0.5) -> Dataset:
+                     min_unconstrained: float = 0.5, integrator: str = "auto") -> Dataset:
     """Simulate several randomly forced MuJoCo trajectories of a system.
 
     Parameters
@@ -451,6 +494,11 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     min_unconstrained : float, default 0.5
         Warn (:class:`ConstraintWarning`, naming the joints whose limits are hit) when less
         than this fraction of all samples is unconstrained.
+    integrator : {"auto", "model", "Euler", "RK4", "implicit", "implicitfast"}, default "auto"
+        MuJoCo's integrator. ``"auto"``: RK4 where the model's implicit step would bias the
+        data against the continuous equations that the package identifies
+        (:func:`faithful_integrator`), the model's otherwise; ``"model"``: as authored.
+        The metadata's ``integrator`` says which was used.
 
     Returns
     -------
@@ -505,6 +553,10 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     if n_steps > 100_000_000:
         raise ValueError(f"duration: {duration} s is {n_steps:.3g} MuJoCo steps per trajectory "
                          "(at most 1e8); record shorter trajectories")
+    check_option("integrator", integrator, "choice",
+                 choices=("auto", "model", *INTEGRATORS))
+    run_integrator = {"auto": faithful_integrator(model), "model": None}.get(integrator,
+                                                                            integrator)
     bar = tqdm(total=n_steps * n_trajectories, desc=f"MuJoCo {system.name}", unit="step",
                disable=None if progress is None else not progress, leave=False)
     trajectories = []
@@ -517,7 +569,8 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                                            n_components, max_frequency, amplitude_scale,
                                            amplitude, backoff=factor)
                 clean = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
-                                            bar if attempt == 0 else None)
+                                            bar if attempt == 0 else None,
+                                            integrator=run_integrator)
                 if clean.constraint_active.mean() <= max_constrained or (
                     attempt == attempts - 1
                 ):
@@ -541,6 +594,8 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         "duration": float(duration),
         "sample_every": int(sample_every),
         "timestep": float(model.opt.timestep),
+        "integrator": run_integrator or next(name for name, value in INTEGRATORS.items()
+                                             if value == int(model.opt.integrator)),
         "amplitude": amplitude,
         "initial_scale": initial_scale,
         "force_matrix": system.force_matrix().tolist(),
