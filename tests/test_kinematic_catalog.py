@@ -403,3 +403,20 @@ def test_polynomial_library_matches_lagrange_library_and_falls_back():
     assert PolynomialLagrangeLibrary(c, polynomial).fit().zero_terms_ == [3]
     with pytest.raises(ValueError, match="terms"):
         PolynomialLagrangeLibrary(c, []).fit()
+
+
+def test_polynomial_library_weak_rows_match_the_symbolic_ones():
+    import sympy as sp
+
+    from pysindy_xl.feature_library import PolynomialLagrangeLibrary
+
+    c = px.Coordinates(["theta", "x"])
+    terms = [c.qd[0] ** 2 * sp.cos(c.q[0]) ** 2, c.qd[0] * c.qd[1] * sp.sin(c.q[0]),
+             c.q[1] ** 2 * sp.cos(c.q[0]), c.qd[1] ** 2]
+    t = np.linspace(0, 10, 1001)
+    states = px.stack_variables(np.column_stack([np.sin(t), np.cos(1.3 * t)]),
+                                np.column_stack([np.cos(t), -1.3 * np.sin(1.3 * t)]))
+    phi, dphi, _ = px.BumpTestFunctions(width=1.0).matrices(t)
+    fast = PolynomialLagrangeLibrary(c, terms).fit().weak_transform(states, phi, dphi)
+    reference = px.LagrangeLibrary(c, terms).fit().weak_transform(states, phi, dphi)
+    np.testing.assert_allclose(fast, reference, rtol=1e-12, atol=1e-12 * np.abs(reference).max())

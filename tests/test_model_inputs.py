@@ -166,10 +166,20 @@ def test_bad_feature_library(library, error, match, data):
 
 
 # (a 1-D x of one coordinate and a pysindy optimizer are accepted: tests/test_pysindy_parity.py)
-@pytest.mark.parametrize("optimizer", [object(), "explicit", 3])
+@pytest.mark.parametrize("optimizer", [object(), 3])
 def test_wrong_optimizer_type(optimizer, data):
     with pytest.raises(TypeError, match="optimizer: expected a catalog optimizer"):
         px.XLSINDy(_library(), optimizer).fit(**data)
+
+
+def test_optimizer_named_by_its_kind(data):
+    # a kind of regression names the default optimizer of that kind; others are refused
+    model = px.XLSINDy(_library(), "explicit").fit(**data)
+    assert type(model.optimizer_) is px.ExplicitOptimizer
+    with pytest.raises(ValueError, match=r"optimizer: expected one of \('explicit', "):
+        px.XLSINDy(_library(), "lasso").fit(**data)
+    with pytest.raises(ValueError, match="u: explicit regression needs the generalized forces"):
+        px.XLSINDy(_library(), "explicit").fit(data["x"], data["t"])
 
 
 def test_bad_differentiation_method(data):

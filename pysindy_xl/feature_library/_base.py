@@ -173,7 +173,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
         self.entry_index_ = np.array([(c, j) for c in range(n) for j in range(len(names))
                                       if matrix[c, j] != 0], dtype=int).reshape(-1, 2)
         for stale in ("weak_P_", "weak_Q_", "_weak_evaluate", "_weak_entry_index",
-                      "_column_terms"):
+                      "_column_terms", "_weak_terms"):
             self.__dict__.pop(stale, None)
         self.n_features_in_ = len(self.coords.variables)
 
@@ -316,6 +316,31 @@ class SymbolicLibrary(BaseFeatureLibrary):
             self.weak_P_, self.weak_Q_ = self._build_weak_symbolic()
         return self.weak_P_, self.weak_Q_
 
+    def weak_terms(self) -> tuple[np.ndarray, Terms]:
+        """The non-zero entries of ``P`` and ``Q`` (:meth:`weak_matrices`) as polynomial
+        terms, derived on first use.
+
+        Returns
+        -------
+        index : ndarray of int, shape (E, 3)
+            ``(part, coordinate, feature)`` of each entry, part 0 for ``P`` and 1 for ``Q``.
+        terms : Terms
+            One entry per row of ``index``.
+        """
+        check_is_fitted(self, "symbolic_matrix_")
+        found = self.__dict__.get("_weak_terms")
+        if found is None:
+            found = self._weak_terms = self._derive_weak_terms()
+        return found
+
+    def _derive_weak_terms(self) -> tuple[np.ndarray, Terms]:
+        matrices = self.weak_matrices()
+        n, n_features = self.coords.n, self.n_output_features_
+        entries = [(part, c, j) for part, matrix in enumerate(matrices)
+                   for c in range(n) for j in range(n_features) if matrix[c, j] != 0]
+        index = np.array(entries, dtype=int).reshape(-1, 3)
+        return index, decompose([matrices[part][c, j] for part, c, j in entries])
+
     def weak_transform(self, x, phi, dphi) -> np.ndarray:
         """Weak regression matrix of one trajectory.
 
@@ -346,14 +371,9 @@ class SymbolicLibrary(BaseFeatureLibrary):
             )
         n, n_features, n_samples = self.coords.n, self.n_output_features_, x.shape[0]
         if not hasattr(self, "_weak_evaluate"):
-            p_matrix, q_matrix = self.weak_matrices()
-            entries = [(part, c, j) for part, matrix in enumerate((p_matrix, q_matrix))
-                       for c in range(n) for j in range(n_features) if matrix[c, j] != 0]
-            self._weak_entry_index = np.array(entries, dtype=int).reshape(-1, 3)
-            self._weak_evaluate = compile_entries(
-                self.coords.variables,
-                [(p_matrix, q_matrix)[part][c, j] for part, c, j in entries],
-            )
+            index, terms = self.weak_terms()
+            self._weak_entry_index = index
+            self._weak_evaluate = compile_terms(self.coords.variables, terms)
         index = self._weak_entry_index
         # int phi E = -int phi' P - int phi Q: each non-zero entry meets its own test matrix
         tests = [scipy.sparse.csc_matrix(-dphi), scipy.sparse.csc_matrix(-phi)]

@@ -68,7 +68,8 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
             return super()._build_symbolic()
         self.terms_ = terms
         derived = [p.euler_lagrange() for p in polynomials]
-        self._polynomial_columns = (angles, derived)  # the exact columns, for column_terms
+        # the exact terms and columns, for column_terms and weak_terms
+        self._polynomial_columns = (angles, derived, polynomials)
         columns = [[e.to_sympy(coords, evaluate=False) for e in column] for column in derived]
         matrix = sp.Matrix(coords.n, len(terms), lambda i, j: columns[j][i])
         self.zero_terms_ = [j for j, column in enumerate(derived)
@@ -84,13 +85,33 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         """The column entries straight from the polynomials' exponent rows (no sympy)."""
         if "_polynomial_columns" not in self.__dict__:
             return super()._derive_column_terms()
-        angles, derived = self._polynomial_columns
+        _, derived, _ = self._polynomial_columns
+        return self._terms_of([derived[j][c] for c, j in self.entry_index_])
+
+    def _derive_weak_terms(self):
+        """``P = dL/dqd`` and ``Q = dL/dq`` of every term straight from its polynomial."""
+        if "_polynomial_columns" not in self.__dict__:
+            return super()._derive_weak_terms()
+        _, _, polynomials = self._polynomial_columns
+        index, entries = [], []
+        for part in (0, 1):
+            for c in range(self.coords.n):
+                for j, polynomial in enumerate(polynomials):
+                    derivative = (polynomial.diff_velocity(c) if part == 0
+                                  else polynomial.diff_position(c))
+                    if not derivative.is_zero:
+                        index.append((part, c, j))
+                        entries.append(derivative)
+        return np.array(index, dtype=int).reshape(-1, 3), self._terms_of(entries)
+
+    def _terms_of(self, polynomials) -> Terms:
+        """:class:`Terms` of polynomials over the slot atoms ``(sin q | q, cos q, qd, qdd)``."""
+        angles = self._polynomial_columns[0]
         coords = self.coords
         atoms = ([sp.sin(q) if angle else q for q, angle in zip(coords.q, angles, strict=True)]
                  + [sp.cos(q) for q in coords.q] + list(coords.qd) + list(coords.qdd))
         entries = []
-        for c, j in self.entry_index_:
-            polynomial = derived[j][c]
+        for polynomial in polynomials:
             rows, slots = np.nonzero(polynomial.exponents)
             keys = [[] for _ in range(len(polynomial.coefficients))]
             for row, slot in zip(rows.tolist(), slots.tolist(), strict=True):

@@ -13,6 +13,23 @@ from .external_forces import ExternalForces
 __all__ = ["CatalogRepartition"]
 
 
+def _merged(libraries, slices, parts) -> tuple[np.ndarray, Terms]:
+    """Concatenate the ``(index, terms)`` of several libraries: atoms merged, each index's
+    last column (the feature) shifted to the library's columns in the catalog."""
+    atoms: dict = {}
+    indices, entries = [], []
+    for columns, (index, terms) in zip(slices, parts, strict=True):
+        remap = [atoms.setdefault(atom, len(atoms)) for atom in terms.atoms]
+        shifted = np.array(index, dtype=int).reshape(len(terms.entries), -1)
+        shifted[:, -1] += columns.start
+        indices.append(shifted)
+        entries += [[(coef, tuple(sorted((remap[a], p) for a, p in key))) for coef, key in entry]
+                    for entry in terms.entries]
+    width = max((i.shape[1] for i in indices), default=2)
+    return (np.vstack(indices) if indices else np.zeros((0, width), dtype=int),
+            Terms(sorted(atoms, key=atoms.get), entries))
+
+
 def _monomial_coefficients(expr: sp.Expr) -> dict:
     """``expr`` as {monomial: coefficient} after expanding products of trigonometric sums."""
     expanded = sp.expand(sp.expand_trig(sp.expand(expr)))
@@ -137,16 +154,16 @@ class CatalogRepartition(SymbolicLibrary):
     def _derive_column_terms(self) -> Terms:
         """The libraries' column terms, their atoms merged and their entries in this
         catalog's ``entry_index_`` order."""
-        atoms: dict = {}
-        located = {}  # (coordinate, catalog feature) -> the entry's terms, atoms merged
-        for lib, columns in zip(self.libraries_, self.slices_, strict=True):
-            terms = lib.column_terms()
-            index = [atoms.setdefault(atom, len(atoms)) for atom in terms.atoms]
-            for (c, j), entry in zip(lib.entry_index_, terms.entries, strict=True):
-                located[(int(c), columns.start + int(j))] = [
-                    (coef, tuple(sorted((index[a], p) for a, p in key))) for coef, key in entry]
-        return Terms(sorted(atoms, key=atoms.get),
-                     [located[(int(c), int(j))] for c, j in self.entry_index_])
+        index, terms = _merged(self.libraries_, self.slices_,
+                               [(lib.entry_index_, lib.column_terms()) for lib in self.libraries_])
+        position = {(int(c), int(j)): k for k, (c, j) in enumerate(index)}
+        return Terms(terms.atoms, [terms.entries[position[(int(c), int(j))]]
+                                   for c, j in self.entry_index_])
+
+    def _derive_weak_terms(self):
+        """The libraries' weak terms, their atoms merged (entries in library order)."""
+        return _merged(self.libraries_, self.slices_,
+                       [lib.weak_terms() for lib in self.libraries_])
 
     def _build_weak_symbolic(self):
         parts = [lib.weak_matrices() for lib in self.libraries_]
