@@ -18,16 +18,17 @@ smooth-Coulomb friction per joint):
   backwards (4th-order Butterworth at 5x the excitation's top frequency), velocities and
   accelerations by central differences, ordinary least squares of the torques on the
   catalog's columns (the base-parameter regressor);
-* ``truth``: the MJCF's own parameters (no fit), the floor of the torque metric.
+* ``truth``: the MJCF's own parameters (no fit): smooth dry friction against MuJoCo's
+  constraint friction is the only model error left.
 
 MuJoCo's own ``mujoco.sysid`` (output-error Gauss-Newton over rollouts) takes minutes per
 fit and is not run here.
 
 Metrics: mass-matrix error (mean over 200 random joint states of ``|M_id - M|_F / |M|_F``),
 gravity-torque error (``|g_id - g| / |g|`` over the same states), torque prediction on a fresh
-noisy trajectory (worst joint's relative RMS error of the filtered torques, the states through
-the same filtered pipeline for every method, so that models are compared rather than
-differentiators), whether ``M`` is positive definite on the states, fit time.
+trajectory (worst joint's relative RMS error against the recorded torques, at MuJoCo's exact
+states: the model's own error, whatever differentiated its training data), whether ``M`` is
+positive definite on the states, fit time.
 
 Usage: ``python benchmarks/robot_arms.py [--seeds 3] [--levels 0,0.01,0.05]
 [--arms ur5,panda,iiwa] [--methods pysindy-xl,idim-ls]``. Results are appended to
@@ -132,7 +133,7 @@ def run(arm, level, seed, method):
     system = MJCFSystem(arm_mjcf(arm))
     catalog = kinematic_catalog(system)
     data = _data(system, level, seed)
-    fresh = _data(system, level, seed + 1000, duration=5.0, n_trajectories=1).trajectories[0]
+    fresh = _data(system, 0.0, seed + 1000, duration=5.0, n_trajectories=1).trajectories[0]
     record = {"arm": arm, "level": level, "seed": seed, "method": method,
               "integrator": data.metadata["integrator"]}
     start = time.perf_counter()
@@ -149,14 +150,14 @@ def run(arm, level, seed, method):
             coef = catalog.true_coefficients()
     record["fit_s"] = time.perf_counter() - start
     beta = coef[[j for j, c in enumerate(library.categories_) if c == "lagrange"]]
-    # torque prediction of every method through one pipeline (filtered states against the
-    # same filter on the measured torques): models are compared, not differentiators
-    states, tau = _idim_pipeline(library, fresh.t, fresh.q, fresh.tau, 1.5)
-    theta = library.transform(states).reshape(system.n, len(states), -1)
+    # torque prediction on the fresh trajectory's exact states (MuJoCo's): the model's own
+    # error in torque space, the same for every method whatever differentiates its data
+    theta = library.transform(px.stack_variables(fresh.q, fresh.qd, fresh.qdd)).reshape(
+        system.n, len(fresh.t), -1)
     rest = np.setdiff1d(np.arange(theta.shape[-1]), library.force_columns_)
     predicted = (theta[:, :, rest] @ coef[rest]).T
-    torque_error = float(np.max(np.sqrt(np.mean((predicted - tau) ** 2, axis=0))
-                                / np.sqrt(np.mean(tau**2, axis=0))))
+    torque_error = float(np.max(np.sqrt(np.mean((predicted - fresh.tau) ** 2, axis=0))
+                                / np.sqrt(np.mean(fresh.tau**2, axis=0))))
     rng = np.random.default_rng(0)
     limits = system.mj_model().jnt_range
     q = rng.uniform(limits[:, 0], limits[:, 1], size=(200, system.n))

@@ -99,6 +99,27 @@ def uncertainty_lines(names, coef, interval, probability, precision: int) -> lis
             f"P={probability[j]:.2f}" for j in shown]
 
 
+#: Monomials of the identified equations above which a model with physical parameters is
+#: printed by its parameters alone (its equations would run for pages).
+SHORT_EQUATIONS = 200
+
+
+def prints_equations(model, equations=None) -> bool:
+    """Whether the model is printed with its equations: ``equations`` when given, otherwise
+    unless the catalog's terms stand for physical parameters and the equations are long."""
+    if equations is not None:
+        return bool(equations)
+    dynamics = model.dynamics_
+    return not has_parameter_map(model.feature_library_) or (
+        dynamics is not None and dynamics.n_terms <= SHORT_EQUATIONS)
+
+
+def has_parameter_map(library) -> bool:
+    """Whether some library of the catalog says which physical parameters its terms stand
+    for (a kinematic catalog): the model is then read by its parameters, not its equations."""
+    return any(getattr(lib, "parameters", None) is not None for lib in library.libraries_)
+
+
 def physical_parameters(coef: np.ndarray, library) -> dict:
     """The identified model in physical terms (see :meth:`XLSINDy.physical_parameters
     <pysindy_xl.XLSINDy.physical_parameters>`).

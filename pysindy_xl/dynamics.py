@@ -243,6 +243,11 @@ class MassMatrixDynamics:
     def _compile(self):
         self._evaluate = compile_terms(self.coords.variables, self._terms)
 
+    @property
+    def n_terms(self) -> int:
+        """Monomials of ``M`` and ``f`` together: how long the written equations are."""
+        return sum(len(entry) for entry in self._terms.entries)
+
     def _evaluate_scalar(self, *values):
         """Entries at one state (simulation): plain floats through the math module are an
         order of magnitude faster than NumPy calls on length-1 arrays. Generated on first use

@@ -14,9 +14,11 @@ from sklearn.utils.validation import check_is_fitted
 
 from ._equations import (
     equation_strings,
+    has_parameter_map,
     identified_lagrangian,
     parameter_lines,
     physical_parameters,
+    prints_equations,
     significant,
     uncertainty_lines,
 )
@@ -680,9 +682,9 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             probability.
         equations : bool, optional
             Print the Lagrangian and the equations of motion. Default: True, except for a
-            catalog whose terms stand for physical parameters (a robot's kinematic catalog),
-            whose equations run for pages: its :meth:`physical_parameters` are printed
-            instead.
+            catalog whose terms stand for physical parameters (a robot's kinematic catalog)
+            and whose equations run for pages. Such a catalog's :meth:`physical_parameters`
+            are printed in any case.
         """
         check_is_fitted(self, "coef_")
         if uncertainty:
@@ -692,12 +694,10 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
                                           self.coef_interval_, self.inclusion_probability_,
                                           precision):
                 print(line)
-        physical = any(getattr(lib, "parameters", None) is not None
-                       for lib in self.feature_library_.libraries_)
-        if physical:
+        if has_parameter_map(self.feature_library_):
             for line in parameter_lines(self.physical_parameters(), precision):
                 print(line)
-        if equations is False or (equations is None and physical):
+        if not prints_equations(self, equations):
             return
         lagrangian = self.lagrangian()
         if lagrangian != 0:

@@ -70,6 +70,13 @@ def run_demo(args) -> dict:
     ...         "--validation-duration", "0.2", "--no-plots", "--quiet", "--out", out])
     ...     report = run_demo(args)
     <BLANKLINE>
+    base parameters (value  |  stands for):
+               1.5  |  1*cart.m + 1*pole.m + 1*slider.armature
+              -0.4  |  1*pole.mcz
+              0.32  |  1*pole.Iyy + 1*hinge.armature
+    friction per coordinate (viscous, dry):
+      x: 0.5, 0
+      theta: 0.1, 0
     L = 0.16*theta_dot**2 + 0.4*theta_dot*x_dot*cos(theta) + 0.75*x_dot**2 + 3.924*cos(theta)
     (x) 0.4*theta_ddot*cos(theta) - 0.4*theta_dot**2*sin(theta) + 1.5*x_ddot + 0.5*x_dot = tau_x
     (theta) 0.32*theta_ddot + 0.1*theta_dot + 0.4*x_ddot*cos(theta) + 3.924*sin(theta) = tau_theta
@@ -83,9 +90,6 @@ def run_demo(args) -> dict:
     >>> report["validation"]["valid"], report["coefficient_summary"]["support_recovered"]
     (True, True)
     """
-    from pysindy_xl.dynamics import DynamicsError
-    from pysindy_xl.mujoco.validation import validate_model
-
     system = system_by_name(args.system, args.joints)
     resolve_catalog(args, system)
     solver = args.forcing if args.solver == "auto" else args.solver
@@ -115,15 +119,7 @@ def run_demo(args) -> dict:
     start = time.perf_counter()
     log(quiet, f"[3/3] validation against a fresh {args.validation_duration:g} s MuJoCo "
                 "trajectory")
-    try:
-        result = validate_model(model, system, duration=args.validation_duration,
-                                forcing=args.forcing, actuators=args.actuators,
-                                seed=args.seed + 10_000, initial_scale=args.initial_scale,
-                                amplitude=args.amplitude, timeout=120.0)
-    except (DynamicsError, ValueError) as error:
-        # e.g. identified equations without accelerations: no dynamics to simulate
-        result = None
-        failure = str(error)
+    result, failure = _validate(model, system, args)
     timings["validate"] = time.perf_counter() - start
 
     files = {}
@@ -142,20 +138,7 @@ def run_demo(args) -> dict:
         print(line)
     print()
     metrics = result.to_dict() if result is not None else {"valid": False, "failure": failure}
-    if result is not None:
-        divergence = ("none" if result.divergence_time is None
-                      else f"at {result.divergence_time:.3g} s")
-        rmse = (f"{result.position_rmse:.3g}" if np.isfinite(result.position_rmse) else
-                f"inf (simulated {result.simulated_fraction:.0%} of the horizon)")
-        horizon = f"{args.validation_duration:g} s"
-        if result.constrained_at is not None:
-            horizon = (f"{result.constrained_at:.3g} s (a joint limit or contact acts in the "
-                       "MuJoCo reference from then on)")
-        print(f"validation: position RMSE {rmse} over {horizon}, divergence {divergence}, "
-              f"{'VALID' if result.valid else 'INVALID'}"
-              + (f" ({result.failure})" if result.failure else ""))
-    else:
-        print(f"validation: INVALID ({failure})")
+    print(_validation_line(result, failure, args))
     print("data:")
     for line in data_lines(system, dataset):
         print(line)
@@ -163,28 +146,9 @@ def run_demo(args) -> dict:
     for joint, entry in joints.items():
         print(f"  {joint}: " + ", ".join(f"{key} {found:.4g} (MJCF {given:.4g})"
                                          for key, (found, given) in entry.items()))
-    physics = None
-    if result is not None:
-        from pysindy_xl.mujoco.validation import compare_physics
-
-        try:
-            physics = compare_physics(model, system, seed=args.seed)
-        except (DynamicsError, ValueError, TypeError, np.linalg.LinAlgError):
-            physics = None
-    if physics is not None:
-        definite = "" if physics["positive_definite"] else ", mass matrix NOT positive definite"
-        print(f"physics against MuJoCo (mj_fullM, qfrc_bias) at 5 states: mass matrix error "
-              f"{physics['mass_error']:.2g}, unforced dynamics error "
-              f"{physics['force_error']:.2g} (relative){definite}")
-        if physics["unidentified"]:
-            names = set(physics["unidentified"])
-            keep = [j for j, c in zip(system.joint_names, system.coordinate_names, strict=True)
-                    if c not in names]
-            hint = f" (--joints {' '.join(keep)})" if keep and hasattr(system, "frictionloss") \
-                else ""
-            print(f"no inertia identified for {', '.join(physics['unidentified'])}: no force "
-                  f"excites these coordinates (a passive, decoupled body?); leave their joints "
-                  f"out{hint}")
+    physics = _physics(model, system, args) if result is not None else None
+    for line in _physics_lines(physics, system):
+        print(line)
     if coefficient_summary:
         print(f"coefficients: {coefficient_summary['identified_terms']} terms identified, "
               f"{coefficient_summary['true_terms']} true, max error "
@@ -205,6 +169,7 @@ def run_demo(args) -> dict:
         "coefficients": model.coefficients().tolist(),
         "true_coefficients": None if truth is None else truth.tolist(),
         "dropped_features": model.dropped_features_,
+        "physical_parameters": model.physical_parameters(),
         "lagrangian": str(model.lagrangian()),
         "equations": model.equations(),
         "coefficient_summary": coefficient_summary,
@@ -218,6 +183,69 @@ def run_demo(args) -> dict:
     print(f"report: {path}" + (f", plot: {files['validation_plot']}" if files else "")
           + f" ({timings['total']:.1f} s)")
     return report
+
+
+def _validate(model, system, args):
+    """``(ValidationResult, None)`` against a fresh MuJoCo run, or ``(None, reason)``."""
+    from pysindy_xl.dynamics import DynamicsError
+    from pysindy_xl.mujoco.validation import validate_model
+
+    try:
+        return validate_model(model, system, duration=args.validation_duration,
+                              forcing=args.forcing, actuators=args.actuators,
+                              seed=args.seed + 10_000, initial_scale=args.initial_scale,
+                              amplitude=args.amplitude, timeout=120.0), None
+    except (DynamicsError, ValueError) as error:
+        # e.g. identified equations without accelerations: no dynamics to simulate
+        return None, str(error)
+
+
+def _validation_line(result, failure, args) -> str:
+    """The verdict line of the demo."""
+    if result is None:
+        return f"validation: INVALID ({failure})"
+    divergence = ("none" if result.divergence_time is None
+                  else f"at {result.divergence_time:.3g} s")
+    rmse = (f"{result.position_rmse:.3g}" if np.isfinite(result.position_rmse) else
+            f"inf (simulated {result.simulated_fraction:.0%} of the horizon)")
+    horizon = f"{args.validation_duration:g} s"
+    if result.constrained_at is not None:
+        horizon = (f"{result.constrained_at:.3g} s (a joint limit or contact acts in the "
+                   "MuJoCo reference from then on)")
+    return (f"validation: position RMSE {rmse} over {horizon}, divergence {divergence}, "
+            f"{'VALID' if result.valid else 'INVALID'}"
+            + (f" ({result.failure})" if result.failure else ""))
+
+
+def _physics(model, system, args):
+    """The identified mass matrix and unforced dynamics against MuJoCo's, or None."""
+    from pysindy_xl.dynamics import DynamicsError
+    from pysindy_xl.mujoco.validation import compare_physics
+
+    try:
+        return compare_physics(model, system, seed=args.seed)
+    except (DynamicsError, ValueError, TypeError, np.linalg.LinAlgError):
+        return None
+
+
+def _physics_lines(physics, system) -> list:
+    """What :func:`_physics` found, with advice for coordinates without inertia."""
+    if physics is None:
+        return []
+    definite = "" if physics["positive_definite"] else ", mass matrix NOT positive definite"
+    lines = [f"physics against MuJoCo (mj_fullM, qfrc_bias) at 5 states: mass matrix error "
+             f"{physics['mass_error']:.2g}, unforced dynamics error "
+             f"{physics['force_error']:.2g} (relative){definite}"]
+    if physics["unidentified"]:
+        names = set(physics["unidentified"])
+        keep = [j for j, c in zip(system.joint_names, system.coordinate_names, strict=True)
+                if c not in names]
+        hint = f" (--joints {' '.join(keep)})" if keep and hasattr(system, "frictionloss") \
+            else ""
+        lines.append(f"no inertia identified for {', '.join(physics['unidentified'])}: no "
+                     "force excites these coordinates (a passive, decoupled body?); leave "
+                     f"their joints out{hint}")
+    return lines
 
 
 def _dataset_for(system, dataset):
@@ -274,6 +302,13 @@ def run_identify(args):
     ...     args = build_parser().parse_args(["identify", str(path), "--trig-degree", "1"])
     ...     model = run_identify(args)
     cart-pole: 1 trajectories, 501 samples, kinematic catalog, explicit solver, strong formulation
+    base parameters (value  |  stands for):
+               1.5  |  1*cart.m + 1*pole.m + 1*slider.armature
+              -0.4  |  1*pole.mcz
+              0.32  |  1*pole.Iyy + 1*hinge.armature
+    friction per coordinate (viscous, dry):
+      x: 0.5, 0
+      theta: 0.1, 0
     L = 0.16*theta_dot**2 + 0.4*theta_dot*x_dot*cos(theta) + 0.75*x_dot**2 + 3.924*cos(theta)
     (x) 0.4*theta_ddot*cos(theta) - 0.4*theta_dot**2*sin(theta) + 1.5*x_ddot + 0.5*x_dot = tau_x
     (theta) 0.32*theta_ddot + 0.1*theta_dot + 0.4*x_ddot*cos(theta) + 3.924*sin(theta) = tau_theta

@@ -224,16 +224,14 @@ def joint_parameters(system, model):
     """Identified joint damping and dry friction next to the MJCF's (user models only)."""
     if system.has_ground_truth or not hasattr(system, "frictionloss"):
         return {}
-    coefficients = dict(zip(model.get_feature_names(), model.coefficients(), strict=True))
+    friction = model.physical_parameters()["friction"]
     out = {}
     for i, (joint, name) in enumerate(zip(system.joint_names, system.coordinate_names,
                                           strict=True)):
-        entry = {"damping": [float(coefficients.get(f"C_{name}[{name}_dot]", 0.0)),
-                             float(system.joint_damping[i])]}
-        prefix = f"C_{name}[tanh("
-        dry = [v for k, v in coefficients.items() if k.startswith(prefix)]
-        if dry or system.frictionloss[i]:
-            entry["frictionloss"] = [float(sum(dry)), float(system.frictionloss[i])]
+        found = friction[name]
+        entry = {"damping": [found["viscous"], float(system.joint_damping[i])]}
+        if found["dry"] or system.frictionloss[i]:
+            entry["frictionloss"] = [found["dry"], float(system.frictionloss[i])]
         out[joint] = entry
     return out
 
@@ -256,7 +254,15 @@ def _rounded(expr, digits=4):
 
 
 def model_lines(model):
+    """The identified model as printed: the physical parameters of a kinematic catalog, the
+    Lagrangian and equations unless they run for pages."""
+    from pysindy_xl._equations import has_parameter_map, parameter_lines, prints_equations
+
     lines = []
+    if has_parameter_map(model.feature_library_):
+        lines += parameter_lines(model.physical_parameters(), 4)
+    if not prints_equations(model):
+        return lines
     lagrangian = model.lagrangian()
     if lagrangian != 0:
         lines.append(f"L = {_rounded(lagrangian)}")
