@@ -244,6 +244,12 @@ class MassMatrixDynamics:
         self._evaluate = compile_terms(self.coords.variables, self._terms)
 
     @property
+    def terms(self) -> Terms:
+        """``M`` (n * n entries, row-major) then ``f`` (n entries) as polynomials in atoms
+        (:class:`~pysindy_xl.feature_library._compile.Terms`): what every evaluator reads."""
+        return self._terms
+
+    @property
     def n_terms(self) -> int:
         """Monomials of ``M`` and ``f`` together: how long the written equations are."""
         return sum(len(entry) for entry in self._terms.entries)

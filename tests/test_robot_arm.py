@@ -121,3 +121,15 @@ def test_physical_parameters_are_the_face_of_the_arm(arm, tmp_path, capsys):
     path = tmp_path / "arm.json"
     model.save(path)
     assert px.XLSINDy.load(path).physical_parameters() == parameters
+
+
+def test_the_arm_exports_to_jax(arm):
+    jax = pytest.importorskip("jax")
+    _, _, data, model = arm
+    trajectory = data.trajectories[0]
+    with jax.enable_x64(True):
+        f = model.to_jax()
+        states = np.hstack([trajectory.q[:20], trajectory.qd[:20]])
+        derivative = np.asarray(jax.vmap(f)(states, trajectory.tau[:20]))
+    np.testing.assert_allclose(derivative[:, 7:], trajectory.qdd[:20], rtol=1e-7,
+                               atol=1e-7 * np.abs(trajectory.qdd).max())

@@ -268,22 +268,26 @@ def _compile(dynamics, solver: str, fast_trig: bool):
             f"dynamics.coords: expected pysindy_xl.Coordinates, got {type(coords).__name__}"
         )
     n = coords.n
-    mass = _as_matrix(dynamics.mass_matrix_expr, "dynamics.mass_matrix_expr", (n, n))
-    forcing = _as_matrix(dynamics.forcing_expr, "dynamics.forcing_expr", (n, 1))
-    _check_symbols(mass, "dynamics.mass_matrix_expr", coords)
-    _check_symbols(forcing, "dynamics.forcing_expr", coords)
-    if solver == "auto":
-        if n > _UNROLLED_MAX_N:
-            solver = "lu"
-        else:
-            solver = "gauss" if _looks_positive_definite(mass, coords) else "pivoted"
-
-    # One lambdify over every entry of M and f shares common subexpressions
-    # (sin/cos of the same angles appear in both).
-    entries = list(mass) + list(forcing)
     arguments = list(coords.q) + list(coords.qd) + list(coords.tau) + [coords.t]
     modules = [{"sin": fast_sin, "cos": fast_cos}, "jax"] if fast_trig else ["jax"]
-    evaluate = sp.lambdify(arguments, entries, modules=modules, cse=True)
+    terms = getattr(dynamics, "terms", None)
+    if terms is not None and (solver != "auto" or n > _UNROLLED_MAX_N):
+        # polynomial terms: any size, nothing symbolic built, nothing lambdified whole
+        evaluate = _terms_function(terms, arguments, modules)
+        solver = "lu" if solver == "auto" else solver
+        depends_on_time = any(coords.t in atom.free_symbols for atom in terms.atoms)
+    else:
+        mass = _as_matrix(dynamics.mass_matrix_expr, "dynamics.mass_matrix_expr", (n, n))
+        forcing = _as_matrix(dynamics.forcing_expr, "dynamics.forcing_expr", (n, 1))
+        _check_symbols(mass, "dynamics.mass_matrix_expr", coords)
+        _check_symbols(forcing, "dynamics.forcing_expr", coords)
+        if solver == "auto":
+            solver = "gauss" if _looks_positive_definite(mass, coords) else "pivoted"
+        depends_on_time = coords.t in (mass.free_symbols | forcing.free_symbols)
+        evaluate = (_terms_function(terms, arguments, modules) if terms is not None
+                    # one lambdify over every entry shares the common subexpressions
+                    else sp.lambdify(arguments, list(mass) + list(forcing), modules=modules,
+                                     cse=True))
     componentwise = _componentwise_function(evaluate, n, _SOLVERS[solver])
 
     def dynamics_fn(state, u, t=0.0):
@@ -306,7 +310,7 @@ def _compile(dynamics, solver: str, fast_trig: bool):
         return jnp.stack(derivative, axis=-1)
 
     dynamics_fn.n_coordinates = n
-    dynamics_fn.depends_on_time = coords.t in (mass.free_symbols | forcing.free_symbols)
+    dynamics_fn.depends_on_time = depends_on_time
     dynamics_fn.componentwise = componentwise
     dynamics_fn.solver = solver
     dynamics_fn.__doc__ = (
@@ -314,6 +318,64 @@ def _compile(dynamics, solver: str, fast_trig: bool):
         "f(state (..., 2n), u (..., n), t=0.0) -> [qd, qdd] (..., 2n)."
     )
     return dynamics_fn
+
+
+def _terms_function(terms, arguments, modules):
+    """``evaluate(*arguments) -> list of entries`` of polynomial :class:`Terms`, in JAX.
+
+    Each atom is computed once (a small lambdified function, or an argument itself), its
+    powers once, each monomial as a product of at most ``width`` gathered powers, and each
+    entry as a scatter-add of coefficient times monomial: a handful of array operations,
+    whatever the number of terms, so that seven-joint arms compile and differentiate.
+    """
+    position = {symbol: k for k, symbol in enumerate(arguments)}
+    used = sorted({a for entry in terms.entries for _, key in entry for a, _ in key})
+    local = {a: k for k, a in enumerate(used)}
+    atoms = [terms.atoms[a] for a in used]
+    unknown = set().union(*(atom.free_symbols for atom in atoms)) - set(arguments)
+    if unknown:
+        raise ValueError(f"dynamics: the equations contain {sorted(map(str, unknown))}, "
+                         "not positions, velocities, forces or time")
+    functions = [position[atom] if atom in position
+                 else sp.lambdify(arguments, atom, modules=modules) for atom in atoms]
+    keys = sorted({key for entry in terms.entries for _, key in entry})
+    monomial = {key: k for k, key in enumerate(keys)}
+    width = max((len(key) for key in keys), default=1) or 1
+    max_power = max((p for key in keys for _, p in key), default=1)
+    # int32 indices: JAX's own index type whether or not x64 is enabled
+    atom_index = np.zeros((len(keys), width), dtype=np.int32)
+    power_index = np.zeros((len(keys), width), dtype=np.int32)  # power 0: the factor 1
+    for k, key in enumerate(keys):
+        for w, (a, p) in enumerate(key):
+            atom_index[k, w], power_index[k, w] = local[a], p
+    coefficients = np.array([c for entry in terms.entries for c, _ in entry], dtype=float)
+    which_monomial = np.array([monomial[key] for entry in terms.entries for _, key in entry],
+                              dtype=np.int32)
+    which_entry = np.array([e for e, entry in enumerate(terms.entries) for _ in entry],
+                           dtype=np.int32)
+    n_entries = len(terms.entries)
+
+    def evaluate(*values):
+        batch = jnp.broadcast_shapes(*(jnp.shape(v) for v in values))
+        dtype = jnp.result_type(*values, 0.0)
+        atom_values = [jnp.broadcast_to(jnp.asarray(values[f] if isinstance(f, int)
+                                                    else f(*values), dtype=dtype), batch)
+                       for f in functions]
+        base = jnp.stack(atom_values, axis=-1) if atom_values else jnp.zeros(batch + (1,),
+                                                                              dtype)
+        powers = [jnp.ones_like(base)]
+        for _ in range(max_power):
+            powers.append(powers[-1] * base)
+        table = jnp.stack(powers, axis=-1)  # (..., atoms, max_power + 1)
+        monomials = jnp.ones(batch + (len(keys),), dtype)
+        for w in range(width):
+            monomials = monomials * table[..., atom_index[:, w], power_index[:, w]]
+        contributions = coefficients.astype(dtype) * monomials[..., which_monomial]
+        entries = jnp.zeros(batch + (n_entries,), dtype).at[..., which_entry].add(
+            contributions)
+        return [entries[..., k] for k in range(n_entries)]
+
+    return evaluate
 
 
 # --------------------------------------------------------------------------------------
