@@ -188,6 +188,35 @@ class DynamicsMixin:
 
         save_model(self, path)
 
+    def to_mjcf(self, path, template=None) -> dict:
+        """Write the identified robot as an MJCF model MuJoCo can simulate.
+
+        The identified base parameters become physically consistent body inertials (the
+        consistent set closest to the template's, :mod:`pysindy_xl.export.mjcf`), with each
+        joint's armature and the identified viscous and dry friction as ``damping`` and
+        ``frictionloss``; everything else (kinematics, actuators, options) is the
+        template's.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The MJCF file to write.
+        template : str, os.PathLike or MJCFSystem
+            The MJCF the model was identified on (a model fitted with
+            ``kinematic_catalog(template).library()``).
+
+        Returns
+        -------
+        dict
+            ``physical_parameters`` (name -> value written) and ``residual``
+            (``|C pi - beta| / |beta|``, zero when the identified parameters are realizable
+            by rigid bodies).
+        """
+        from .export.mjcf import to_mjcf
+
+        check_is_fitted(self, "coef_")
+        return to_mjcf(self, path, template)
+
     # -- reinforcement learning ----------------------------------------------------------------
     def to_gymnasium(self, dt, **options):
         """A Gymnasium environment whose dynamics are the identified model.

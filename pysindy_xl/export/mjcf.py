@@ -1,0 +1,149 @@
+r"""An identified robot model as a MuJoCo model: physically consistent inertials.
+
+A kinematic catalog's base parameters ``beta`` are linear images of the bodies' inertial
+parameters ``pi`` (per body: mass ``m``, first moment ``h = m c`` and inertia ``I`` about
+the body frame's origin; per joint: armature), ``beta = C pi``. Rigid bodies realize ``pi``
+exactly when each body's pseudo-inertia matrix is positive semidefinite (Wensing, Kim and
+Slotine, 2017),
+
+.. math:: J_b = \begin{pmatrix} \tfrac12 \operatorname{tr}(I_b) \mathbb 1 - I_b & h_b \\
+          h_b^T & m_b \end{pmatrix} \succeq 0,
+
+and armatures are non-negative. :func:`consistent_parameters` solves the semidefinite program
+
+.. math:: \min_\pi \; \|C \pi - \beta\|^2 / \|\beta\|^2 + \epsilon \|\pi - \pi_0\|^2 /
+          \|\pi_0\|^2 \quad \text{s.t.} \quad J_b(\pi) \succeq 0, \; a_j \ge 0
+
+(cvxpy): the consistent parameters that reproduce ``beta`` (exactly when it is realizable),
+among them the closest to the template's ``pi_0``. :func:`write_mjcf` writes them into the
+template's MJCF with the identified viscous and dry friction of each joint.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["consistent_parameters", "write_mjcf", "to_mjcf"]
+
+
+def consistent_parameters(catalog, beta, closeness: float = 1e-6):
+    """Physically consistent inertial parameters reproducing base parameters ``beta``.
+
+    Parameters
+    ----------
+    catalog : KinematicCatalog
+        Its ``combination`` ``C`` and ``physical_values`` (the template's ``pi_0``).
+    beta : array, shape (len(catalog.lagrange_terms),)
+    closeness : float, default 1e-6
+        Weight ``epsilon`` of the distance to the template's parameters.
+
+    Returns
+    -------
+    pi : ndarray, shape (len(catalog.physical_names),)
+    residual : float
+        ``|C pi - beta| / |beta|``: zero (to the solver's tolerance) when ``beta`` is
+        realizable by rigid bodies.
+    """
+    import cvxpy as cp
+
+    beta = np.asarray(beta, dtype=float)
+    combination, reference = catalog.combination, catalog.physical_values
+    names = catalog.physical_names
+    pi = cp.Variable(len(names))
+    constraints = []
+    for start in (k for k, name in enumerate(names) if name.endswith(".m")):
+        m, hx, hy, hz, ixx, iyy, izz, ixy, ixz, iyz = (pi[start + k] for k in range(10))
+        trace = (ixx + iyy + izz) / 2
+        pseudo = cp.bmat([[trace - ixx, -ixy, -ixz, hx], [-ixy, trace - iyy, -iyz, hy],
+                          [-ixz, -iyz, trace - izz, hz], [hx, hy, hz, m]])
+        constraints.append((pseudo + pseudo.T) / 2 >> 0)
+    armature = [k for k, name in enumerate(names) if name.endswith(".armature")]
+    if armature:
+        constraints.append(pi[armature] >= 0)
+    scale_beta = max(np.linalg.norm(beta), 1e-12)
+    scale_pi = max(np.linalg.norm(reference), 1e-12)
+    objective = (cp.sum_squares(combination @ pi - beta) / scale_beta**2
+                 + closeness * cp.sum_squares(pi - reference) / scale_pi**2)
+    cp.Problem(cp.Minimize(objective), constraints).solve()
+    if pi.value is None:
+        raise RuntimeError("consistent_parameters: the semidefinite program found no solution")
+    value = np.asarray(pi.value, dtype=float)
+    return value, float(np.linalg.norm(combination @ value - beta) / scale_beta)
+
+
+def write_mjcf(catalog, pi, friction, path) -> str:
+    """Write the catalog's system with inertial parameters ``pi`` and joint friction.
+
+    Parameters
+    ----------
+    catalog : KinematicCatalog
+        Its ``system`` (an :class:`~pysindy_xl.mujoco.MJCFSystem`) is the template.
+    pi : array
+        In the order of ``catalog.physical_names``.
+    friction : dict
+        ``{coordinate name: {"viscous": ..., "dry": ...}}`` (as
+        :meth:`XLSINDy.physical_parameters <pysindy_xl.XLSINDy.physical_parameters>` gives).
+    path : str or os.PathLike
+
+    Returns
+    -------
+    str
+        The MJCF text written.
+    """
+    import mujoco
+
+    system = catalog.system
+    spec = mujoco.MjSpec.from_string(system.xml())
+    values = dict(zip(catalog.physical_names, np.asarray(pi, dtype=float), strict=True))
+    for body in spec.bodies:
+        if f"{body.name}.m" not in values:
+            continue
+        mass = values[f"{body.name}.m"]
+        moment = np.array([values[f"{body.name}.mc{axis}"] for axis in "xyz"])
+        centre = moment / mass if mass > 0 else np.zeros(3)
+        about_origin = np.array([[values[f"{body.name}.Ixx"], values[f"{body.name}.Ixy"],
+                                  values[f"{body.name}.Ixz"]],
+                                 [values[f"{body.name}.Ixy"], values[f"{body.name}.Iyy"],
+                                  values[f"{body.name}.Iyz"]],
+                                 [values[f"{body.name}.Ixz"], values[f"{body.name}.Iyz"],
+                                  values[f"{body.name}.Izz"]]])
+        # parallel-axis theorem back to the centre of mass, where MJCF states the inertia
+        inertia = about_origin - mass * (centre @ centre * np.eye(3) - np.outer(centre, centre))
+        body.explicitinertial = True
+        body.mass = max(mass, 1e-9)
+        body.ipos = centre
+        body.iquat = [1.0, 0.0, 0.0, 0.0]
+        body.fullinertia = [inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1],
+                            inertia[0, 2], inertia[1, 2]]
+    for joint_name, coordinate in zip(system.joint_names, system.coordinate_names,
+                                      strict=True):
+        joint = spec.joint(joint_name)
+        joint.armature = max(values.get(f"{joint_name}.armature", joint.armature), 0.0)
+        damping = max(friction[coordinate]["viscous"], 0.0)
+        if np.ndim(joint.damping):  # MuJoCo >= 4: a vector (its first entry: linear)
+            joint.damping = [damping, *np.asarray(joint.damping)[1:]]
+        else:
+            joint.damping = damping
+        joint.frictionloss = max(friction[coordinate]["dry"], 0.0)
+    spec.compile()  # a model MuJoCo refuses is an error here, not when it is read
+    text = spec.to_xml()
+    with open(path, "w", encoding="utf-8") as handle:
+        handle.write(text)
+    return text
+
+
+def to_mjcf(model, path, template) -> dict:
+    """The body of :meth:`XLSINDy.to_mjcf <pysindy_xl.XLSINDy.to_mjcf>`."""
+    from ..mujoco import MJCFSystem, kinematic_catalog
+
+    if template is None:
+        raise ValueError("template: the MJCF file (or MuJoCo system) whose kinematic tree "
+                         "the model was identified on is needed to place the inertials")
+    system = template if hasattr(template, "mj_model") else MJCFSystem(template)
+    catalog = kinematic_catalog(system)
+    beta = catalog.lagrange_coefficients(model)
+    pi, residual = consistent_parameters(catalog, beta)
+    parameters = model.physical_parameters()
+    write_mjcf(catalog, pi, parameters["friction"], path)
+    return {"physical_parameters": dict(zip(catalog.physical_names, pi.tolist(), strict=True)),
+            "residual": residual}
