@@ -418,8 +418,9 @@ def _training_spec(model) -> dict:
     info = getattr(model, "weak_info_", None)
     selection = getattr(model, "selection_", None)
     check = getattr(model, "mass_matrix_check_", None)
-    if selection is not None and type(selection).__name__ in _selection_types():
-        selection = {"type": type(selection).__name__,
+    names = {kind: name for name, kind in _selection_types().items()}
+    if type(selection) in names:
+        selection = {"type": names[type(selection)],
                      "fields": {field.name: _field_json(field.name,
                                                         getattr(selection, field.name))
                                 for field in dataclasses.fields(selection)}}
