@@ -2,28 +2,16 @@
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import warnings
 
 import numpy as np
-import sympy as sp
 import threadpoolctl
 from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_is_fitted
 
-from ._equations import (
-    equation_strings,
-    has_parameter_map,
-    identified_lagrangian,
-    parameter_lines,
-    physical_parameters,
-    prints_equations,
-    significant,
-    uncertainty_lines,
-)
 from ._fitted import DynamicsMixin
-from ._inputs import check_array, sample_times
+from ._inspection import InspectionMixin
 from ._validation import check_instance, check_option
 from .diagnostics import (
     IdentificationWarning,
@@ -51,7 +39,6 @@ from .regression import (
     differentiation_function,
     trajectory_data,
 )
-from .weak import WhittakerSmoother
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
 
@@ -72,7 +59,7 @@ def _probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndar
     return rng.uniform(low, high, size=(n_points, z.shape[1]))
 
 
-class XLSINDy(DynamicsMixin, BaseEstimator):
+class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
     """Sparse identification of a mechanical system from position trajectories.
 
     Builds the stacked regression matrix of a catalog (Lagrangian, classical and force terms,
@@ -541,167 +528,3 @@ class XLSINDy(DynamicsMixin, BaseEstimator):
             setattr(model, name, value)
         model._build_dynamics()
         return model
-
-    # -- inspection ----------------------------------------------------------------------------
-    def coefficients(self) -> np.ndarray:
-        """Identified coefficient vector.
-
-        Returns
-        -------
-        ndarray, shape (F,)
-            One entry per feature, in the order of :meth:`get_feature_names`.
-        """
-        check_is_fitted(self, "coef_")
-        return self.coef_.copy()
-
-    @property
-    def complexity(self) -> int:
-        """Number of non-zero coefficients (as ``pysindy.SINDy.complexity``).
-
-        Returns
-        -------
-        int
-        """
-        check_is_fitted(self, "coef_")
-        return int(np.count_nonzero(self.coef_))
-
-    def differentiate(self, x, t=None):
-        """Velocities of positions ``x`` as the model estimates them (as ``SINDy.differentiate``).
-
-        With a ``differentiation_method``, that method; otherwise the smoother of the weak
-        formulation (default :class:`~pysindy_xl.WhittakerSmoother`).
-
-        Parameters
-        ----------
-        x : array (N, n) or (N,) for one coordinate
-        t : float or array (N,), optional
-            Time step or sample times; default ``t_default``.
-
-        Returns
-        -------
-        ndarray, shape (N, n)
-
-        Examples
-        --------
-        >>> import numpy as np, pysindy_xl as px
-        >>> t = np.linspace(0, 6, 601)
-        >>> xd = px.XLSINDy().differentiate(np.sin(t), t)
-        >>> bool(np.abs(xd[:, 0] - np.cos(t)).max() < 1e-4)
-        True
-        """
-        x = check_array(x, "x", n_columns=1 if np.ndim(x) == 1 else None)
-        t = sample_times(self.t_default if t is None else t, x.shape[0], "t")
-        if self.differentiation_method is not None:
-            return differentiation_function(self.differentiation_method)(x, t)
-        smoother = copy.deepcopy(self.smoother) or WhittakerSmoother()
-        return smoother.smooth(t, x)[1]
-
-    def get_feature_names(self) -> list[str]:
-        """Names of the catalog features.
-
-        Returns
-        -------
-        list of str
-            In coefficient order: ``F[...]`` forces, ``L[...]`` Lagrangian terms,
-            ``C_<coordinate>[...]`` classical terms.
-        """
-        check_is_fitted(self, "coef_")
-        return self.feature_library_.get_feature_names()
-
-    def equations(self, precision: int = 4) -> list[str]:
-        """Identified equations of motion, one per coordinate, as ``lhs = forces``.
-
-        Parameters
-        ----------
-        precision : int
-            Significant digits of the printed coefficients.
-
-        Returns
-        -------
-        list of str
-        """
-        check_is_fitted(self, "coef_")
-        return equation_strings(self.coef_, self.feature_library_, precision)
-
-    def lagrangian(self) -> sp.Expr:
-        """Identified Lagrangian.
-
-        Returns
-        -------
-        sympy.Expr
-            The Lagrange terms weighted by their coefficients (0 without Lagrange terms).
-        """
-        check_is_fitted(self, "coef_")
-        return identified_lagrangian(self.coef_, self.feature_library_)
-
-    def physical_parameters(self) -> dict:
-        """The identified model in physical terms: base parameters, friction per coordinate.
-
-        For a kinematic catalog (:func:`~pysindy_xl.mujoco.kinematic_catalog`) each Lagrange
-        term stands for a combination of inertial parameters (masses, first and second
-        moments, armature) of the bodies and joints: its identified coefficient is that
-        combination's value. Classical terms ``qd_c`` and ``tanh(k qd_c)`` are the viscous
-        and dry friction of coordinate ``c``. Values are scaled so that the force coefficient
-        is -1 (the units of the forces); an unforced model has no scale.
-
-        Returns
-        -------
-        dict
-            ``base_parameters``: one ``{"feature", "stands_for" ({name: weight} or None),
-            "value"}`` per Lagrange term; ``friction``: ``{coordinate: {"viscous", "dry"}}``;
-            ``other``: the other classical terms by feature name; ``scale``: the factor
-            applied, None for an unforced model.
-
-        Examples
-        --------
-        >>> import numpy as np, pysindy_xl as px
-        >>> c = px.Coordinates(["x"])
-        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]) + px.ClassicalLibrary(
-        ...     c, [c.qd[0]])
-        >>> t = np.linspace(0, 5, 501)
-        >>> x, xd, xdd = np.sin(t)[:, None], np.cos(t)[:, None], -np.sin(t)[:, None]
-        >>> model = px.XLSINDy(lib).fit(x, t, x_dot=xd, x_ddot=xdd, u=2 * xdd + 0.5 * xd + x)
-        >>> friction = model.physical_parameters()["friction"]["x"]
-        >>> round(friction["viscous"], 6), friction["dry"]
-        (0.5, 0.0)
-        """
-        check_is_fitted(self, "coef_")
-        return physical_parameters(self.coef_, self.feature_library_)
-
-    def print(self, precision: int = 4, uncertainty: bool = False,
-              equations: bool | None = None) -> None:
-        """Print the identified model.
-
-        Parameters
-        ----------
-        precision : int
-            Significant digits of the printed coefficients.
-        uncertainty : bool, default False
-            After an ensemble fit (:class:`~pysindy_xl.EnsembleOptimizer`), also print each
-            term that any fit included with its coefficient, interval and inclusion
-            probability.
-        equations : bool, optional
-            Print the Lagrangian and the equations of motion. Default: True, except for a
-            catalog whose terms stand for physical parameters (a robot's kinematic catalog)
-            and whose equations run for pages. Such a catalog's :meth:`physical_parameters`
-            are printed in any case.
-        """
-        check_is_fitted(self, "coef_")
-        if uncertainty:
-            if self.inclusion_probability_ is None:
-                raise ValueError("uncertainty: needs a fit with an EnsembleOptimizer")
-            for line in uncertainty_lines(self.get_feature_names(), self.coef_,
-                                          self.coef_interval_, self.inclusion_probability_,
-                                          precision):
-                print(line)
-        if has_parameter_map(self.feature_library_):
-            for line in parameter_lines(self.physical_parameters(), precision):
-                print(line)
-        if not prints_equations(self, equations):
-            return
-        lagrangian = self.lagrangian()
-        if lagrangian != 0:
-            print(f"L = {significant(lagrangian, precision)}")
-        for name, eq in zip(self.feature_library_.coords.names, self.equations(precision),
-                            strict=True):
-            print(f"({name}) {eq}")
