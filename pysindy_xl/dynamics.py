@@ -539,9 +539,7 @@ class CatalogDynamics(MassMatrixDynamics):
         terms = library.column_terms()
         self.coords = library.coords
         self._n = self.coords.n
-        accelerations = set(self.coords.qdd)
-        if any(atom.free_symbols & accelerations for atom in terms.atoms
-               if atom not in accelerations):  # an acceleration inside a factor: expanded
+        if _acceleration_in_a_factor(terms, self.coords):  # expanded, then split
             terms = decompose([sp.expand(library.symbolic_matrix_[c, j])
                                for c, j in index[active]])
         else:
@@ -572,13 +570,19 @@ class CatalogDynamics(MassMatrixDynamics):
                          for coef, key in entry)) for entry in self._terms.entries]
 
 
+def _acceleration_in_a_factor(terms: Terms, coords) -> bool:
+    """Whether an atom other than an acceleration itself contains one (a factor such as
+    ``(qdd + q)``, which the split into ``M`` and ``f`` cannot read)."""
+    accelerations = set(coords.qdd)
+    return any(atom.free_symbols & accelerations for atom in terms.atoms
+               if atom not in accelerations)
+
+
 def _mass_and_forcing_terms(coords, terms: Terms, rows, weights) -> Terms:
     """The :class:`Terms` of ``M`` (n * n entries, row-major) and ``f`` (n entries) of the
     equations ``sum_k weights[k] entry_k = 0``, ``entry_k`` in the equation of ``rows[k]``."""
     n = coords.n
-    accelerations = set(coords.qdd)
-    if any(atom.free_symbols & accelerations for atom in terms.atoms
-           if atom not in accelerations):
+    if _acceleration_in_a_factor(terms, coords):
         raise ValueError("equations: not linear in the accelerations")
     which = {index: k for index, atom in enumerate(terms.atoms)
              for k, symbol in enumerate(coords.qdd) if atom == symbol}
