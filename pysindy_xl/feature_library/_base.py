@@ -22,6 +22,7 @@ import numpy as np
 import scipy.sparse
 import sympy as sp
 from pysindy.feature_library.base import BaseFeatureLibrary
+from sklearn.base import clone
 from sklearn.utils.validation import check_is_fitted
 
 from .._validation import check_numeric_array
@@ -38,6 +39,16 @@ __all__ = ["SymbolicLibrary", "stack_variables", "compile_entries", "LIBRARY_TYP
 LIBRARY_TYPES: dict[str, type] = {}
 
 _WEAK_BLOCK = 8192  # samples per block of the weak evaluation
+
+
+def _clone_parameter(value):
+    """``value`` for a clone: sympy expressions (alone or in a list or tuple) shared, anything
+    else cloned as scikit-learn does."""
+    if isinstance(value, sp.Basic):
+        return value
+    if isinstance(value, (list, tuple)) and all(isinstance(v, sp.Basic) for v in value):
+        return type(value)(value)
+    return clone(value, safe=False)
 
 
 def stack_variables(q, qd, qdd=None, tau=None, t=None) -> np.ndarray:
@@ -122,6 +133,12 @@ class SymbolicLibrary(BaseFeatureLibrary):
 
     def __init__(self, coords: Coordinates):
         self.coords = coords
+
+    def __sklearn_clone__(self):
+        """An unfitted copy with the same parameters. Sympy expressions are immutable, so the
+        copy shares them instead of deep-copying them (seconds for an arm's catalog)."""
+        params = self.get_params(deep=False)
+        return type(self)(**{name: _clone_parameter(value) for name, value in params.items()})
 
     # -- to implement --------------------------------------------------------------------
     def _build_symbolic(self) -> tuple[list[str], sp.Matrix]:

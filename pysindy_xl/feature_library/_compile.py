@@ -5,10 +5,11 @@ the data variables and a few functions of them (``sin(q)``, ``cos(q)``, ...). In
 generating code for whole expressions (``lambdify`` costs more to build than to run on large
 catalogs, and the sum of a robot arm's thousands of terms overflows Python's compiler), the
 entries are decomposed once into :class:`Terms`: an atom list and, per entry, a list of
-``(coefficient, monomial)``. Evaluation computes each distinct atom once, each distinct
-monomial once (as a smaller monomial times one atom power, so products are shared across all
-entries), and writes each entry straight into its output column; samples are processed in
-blocks, so intermediate arrays stay small whatever the number of samples.
+``(coefficient, monomial)``. Evaluation computes each distinct atom once, then every distinct
+monomial degree by degree (a monomial is a monomial one degree lower times one atom: one gather
+and one product per degree, shared across all entries), and the entries as one sparse product
+of the coefficient matrix with the monomial values; samples are processed in blocks, so
+intermediate arrays stay small whatever the number of samples.
 :func:`scalar_function` evaluates the same terms at one state with Python floats, from flat
 generated code (one short statement per monomial and term), for simulators.
 """
@@ -18,11 +19,13 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import scipy.sparse
 import sympy as sp
 
 __all__ = ["compile_entries", "Terms", "decompose", "compile_terms", "scalar_function"]
 
 _BLOCK = 16_384
+_BLOCK_VALUES = 1 << 22  # monomial values held at once (32 MiB of floats)
 
 Monomial = tuple  # sorted tuple of (atom index, integer power)
 
@@ -42,6 +45,11 @@ class Terms:
 
     atoms: list
     entries: list
+    # evaluators compiled from these terms, by variables (closures: never pickled)
+    _compiled: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
+
+    def __getstate__(self):
+        return {"atoms": self.atoms, "entries": self.entries, "_compiled": {}}
 
 
 def _decompose(expr: sp.Expr, atoms: dict) -> list[tuple[float, Monomial]]:
@@ -101,9 +109,64 @@ def compile_entries(variables, exprs):
     return compile_terms(variables, decompose(exprs))
 
 
+def _monomial_schedule(entries) -> tuple[list, np.ndarray, np.ndarray, dict]:
+    """Every monomial of ``entries`` and the sub-monomials that build it, ordered by degree.
+
+    Each monomial of degree ``d > 1`` is its *parent* (one power less of its last atom, degree
+    ``d - 1``) times one atom, so a whole degree is one gather and one product.
+
+    Returns
+    -------
+    monomials : list of Monomial
+        Ordered by degree; the constant monomial (if any) first.
+    parents, atoms : ndarray of int, shape (len(monomials),)
+        Position of the parent in ``monomials`` (-1 for the constant and the atoms themselves)
+        and the atom multiplied in (-1 for the constant).
+    position : dict
+        Monomial -> its position in ``monomials``.
+    """
+    wanted = {key for terms in entries for _, key in terms}
+    closure = set()
+    for key in wanted:
+        while key and key not in closure:
+            closure.add(key)
+            index, power = key[-1]
+            key = key[:-1] + (((index, power - 1),) if power > 1 else ())
+    if () in wanted:
+        closure.add(())
+    by_degree: dict[int, list] = {}
+    for key in closure:
+        by_degree.setdefault(sum(p for _, p in key), []).append(key)
+    monomials = [key for degree in sorted(by_degree) for key in by_degree[degree]]
+    position = {key: k for k, key in enumerate(monomials)}
+    parents = np.full(len(monomials), -1)
+    atoms = np.full(len(monomials), -1)
+    for k, key in enumerate(monomials):
+        if not key:
+            continue
+        index, power = key[-1]
+        parent = key[:-1] + (((index, power - 1),) if power > 1 else ())
+        atoms[k] = index
+        parents[k] = position[parent] if parent else -1
+    return monomials, parents, atoms, position
+
+
 def compile_terms(variables, terms: Terms):
-    """The vectorized evaluator of :class:`Terms` (see :func:`compile_entries`)."""
+    """The vectorized evaluator of :class:`Terms` (see :func:`compile_entries`).
+
+    With ``V`` the values of every monomial (one row per monomial, built degree by degree as
+    parent times atom) and ``C`` the sparse matrix of term coefficients (entries x
+    monomials), the entries are ``C @ V``: a handful of array operations per block of samples,
+    whatever the number of terms.
+    """
     variables = tuple(variables)
+    evaluate = terms._compiled.get(variables)
+    if evaluate is None:  # shared by every library that holds the same terms
+        evaluate = terms._compiled[variables] = _compile_terms(variables, terms)
+    return evaluate
+
+
+def _compile_terms(variables: tuple, terms: Terms):
     position = {v: k for k, v in enumerate(variables)}
     atom_list, entries = terms.atoms, terms.entries
     unknown = set().union(*(a.free_symbols for a in atom_list)) - set(variables)
@@ -113,67 +176,50 @@ def compile_terms(variables, terms: Terms):
         position[a] if a in position else sp.lambdify(variables, a, modules="numpy")
         for a in atom_list
     ]
+    monomials, parents, atoms, where = _monomial_schedule(entries)
+    n_monomials, n_entries = len(monomials), len(entries)
+    degrees = np.array([sum(p for _, p in key) for key in monomials], dtype=int)
+    levels = [(int(np.searchsorted(degrees, d)), int(np.searchsorted(degrees, d, "right")))
+              for d in range(2, int(degrees.max(initial=1)) + 1)]
+    first = slice(int(np.searchsorted(degrees, 1)), int(np.searchsorted(degrees, 1, "right")))
+    rows = [k for k, e in enumerate(entries) for _ in e]
+    cols = [where[key] for e in entries for _, key in e]
+    coefs = [c for e in entries for c, _ in e]
+    # duplicate (entry, monomial) pairs are summed, as the terms are
+    matrix = scipy.sparse.csr_matrix((coefs, (rows, cols)), shape=(n_entries, n_monomials))
+    # blocks of samples keep the monomial values (monomials x block) near _BLOCK_VALUES
+    block = int(np.clip(_BLOCK_VALUES // max(n_monomials, 1), 64, _BLOCK))
 
-    def evaluate_block(columns, n_rows, write):
-        atom_values = [
-            columns[f] if isinstance(f, int) else np.broadcast_to(f(*columns), (n_rows,))
-            for f in atom_functions
-        ]
-        memo: dict[Monomial, np.ndarray] = {}
+    def atom_values(columns, n_rows):
+        values = np.empty((len(atom_functions), n_rows))
+        for k, f in enumerate(atom_functions):
+            values[k] = columns[f] if isinstance(f, int) else f(*columns)
+        return values
 
-        def monomial(key: Monomial) -> np.ndarray:
-            value = memo.get(key)
-            if value is None:
-                if len(key) == 1:
-                    # by squaring: log2(power) products deep, whatever the power
-                    index, power = key[0]
-                    if power == 1:
-                        value = atom_values[index]
-                    else:
-                        half = monomial(((index, power // 2),))
-                        value = half * half
-                        if power % 2:
-                            value = value * atom_values[index]
-                else:
-                    value = monomial(key[:-1]) * monomial(key[-1:])
-                memo[key] = value
-            return value
-
-        for k, terms in enumerate(entries):
-            write(k, terms, monomial)
+    def evaluate_block(z_block):
+        n_rows = z_block.shape[0]
+        atom_rows = atom_values(z_block.T, n_rows)
+        values = np.empty((n_monomials, n_rows))
+        if degrees.size and degrees[0] == 0:
+            values[0] = 1.0
+        values[first] = atom_rows[atoms[first]]
+        for start, stop in levels:
+            np.take(values, parents[start:stop], axis=0, out=values[start:stop])
+            values[start:stop] *= atom_rows[atoms[start:stop]]
+        return np.asarray(matrix @ values)
 
     def evaluate(z: np.ndarray, targets=None):
         z = np.asarray(z, dtype=float)
         n_samples = z.shape[0]
         outputs = targets
         if outputs is None:
-            outputs = [np.empty(n_samples) for _ in entries]
-
-        for start in range(0, max(n_samples, 1), _BLOCK):
-            stop = min(start + _BLOCK, n_samples)
-            columns = z[start:stop].T
-
-            def write(k, terms, monomial, start=start, stop=stop):
-                target = outputs[k]
-                if target is None:
-                    return
-                out = target[start:stop]
-                first = True
-                for coef, key in terms:
-                    if not key:
-                        if first:
-                            out[...] = coef
-                        else:
-                            out += coef
-                    elif first:
-                        np.multiply(monomial(key), coef, out=out)
-                    else:
-                        out += coef * monomial(key)
-                    first = False
-                if first:
-                    out[...] = 0.0
-
-            evaluate_block(columns, stop - start, write)
+            outputs = list(np.empty((n_entries, n_samples)))
+        for start in range(0, n_samples, block):
+            stop = min(start + block, n_samples)
+            block_values = evaluate_block(z[start:stop])
+            for k, target in enumerate(outputs):
+                if target is not None:
+                    target[start:stop] = block_values[k]
         return None if targets is not None else outputs
 
     return evaluate

@@ -7,6 +7,8 @@ the exponent arrays of :mod:`.trigpoly` without sympy's general differentiation.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import sympy as sp
 
@@ -61,20 +63,20 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         if not terms:
             return super()._build_symbolic()  # raises the ValueError of LagrangeLibrary
         coords = self.coords
-        angles = _angles(terms, coords)
-        try:
-            polynomials = [TrigPolynomial.from_sympy(t, coords, angles) for t in terms]
-        except ValueError:
+        key = (tuple(coords.variables), tuple(terms))
+        derivation = _DERIVATIONS.pop(key, None)
+        if derivation is None:
+            derivation = _derive(coords, terms)
+        _DERIVATIONS[key] = derivation  # most recent last
+        while len(_DERIVATIONS) > _CACHED_DERIVATIONS:
+            del _DERIVATIONS[next(iter(_DERIVATIONS))]
+        if derivation is _NOT_POLYNOMIAL:
             return super()._build_symbolic()
         self.terms_ = terms
-        derived = [p.euler_lagrange() for p in polynomials]
         # the exact terms and columns, for column_terms and weak_terms
-        self._polynomial_columns = (angles, derived, polynomials)
-        columns = [[e.to_sympy(coords, evaluate=False) for e in column] for column in derived]
-        matrix = sp.Matrix(coords.n, len(terms), lambda i, j: columns[j][i])
-        self.zero_terms_ = [j for j, column in enumerate(derived)
-                            if all(e.is_zero for e in column)]
-        return [_feature_name(term) for term in terms], matrix
+        self._polynomial_columns = derivation
+        self.zero_terms_ = list(derivation.zero_terms)
+        return list(derivation.names), derivation.matrix
 
     def _check_columns(self, names, matrix) -> None:
         if "_polynomial_columns" not in self.__dict__:  # derived symbolically
@@ -85,28 +87,35 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         """The column entries straight from the polynomials' exponent rows (no sympy)."""
         if "_polynomial_columns" not in self.__dict__:
             return super()._derive_column_terms()
-        _, derived, _ = self._polynomial_columns
-        return self._terms_of([derived[j][c] for c, j in self.entry_index_])
+        derivation = self._polynomial_columns
+        if derivation.column_terms is None:  # shared by clones of this library
+            derived = derivation.derived
+            derivation.column_terms = self._terms_of(
+                [derived[j][c] for c, j in self.entry_index_])
+        return derivation.column_terms
 
     def _derive_weak_terms(self):
         """``P = dL/dqd`` and ``Q = dL/dq`` of every term straight from its polynomial."""
         if "_polynomial_columns" not in self.__dict__:
             return super()._derive_weak_terms()
-        _, _, polynomials = self._polynomial_columns
-        index, entries = [], []
-        for part in (0, 1):
-            for c in range(self.coords.n):
-                for j, polynomial in enumerate(polynomials):
-                    derivative = (polynomial.diff_velocity(c) if part == 0
-                                  else polynomial.diff_position(c))
-                    if not derivative.is_zero:
-                        index.append((part, c, j))
-                        entries.append(derivative)
-        return np.array(index, dtype=int).reshape(-1, 3), self._terms_of(entries)
+        derivation = self._polynomial_columns
+        if derivation.weak_terms is None:
+            index, entries = [], []
+            for part in (0, 1):
+                for c in range(self.coords.n):
+                    for j, polynomial in enumerate(derivation.polynomials):
+                        derivative = (polynomial.diff_velocity(c) if part == 0
+                                      else polynomial.diff_position(c))
+                        if not derivative.is_zero:
+                            index.append((part, c, j))
+                            entries.append(derivative)
+            derivation.weak_terms = (np.array(index, dtype=int).reshape(-1, 3),
+                                     self._terms_of(entries))
+        return derivation.weak_terms
 
     def _terms_of(self, polynomials) -> Terms:
         """:class:`Terms` of polynomials over the slot atoms ``(sin q | q, cos q, qd, qdd)``."""
-        angles = self._polynomial_columns[0]
+        angles = self._polynomial_columns.angles
         coords = self.coords
         atoms = ([sp.sin(q) if angle else q for q, angle in zip(coords.q, angles, strict=True)]
                  + [sp.cos(q) for q in coords.q] + list(coords.qd) + list(coords.qdd))
@@ -179,6 +188,43 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
                 and np.isfinite(v) for k, v in p.items()) for p in parameters)),
             f"{cls.spec_type}.parameters must be one object of finite weights per term")
         return cls(coords, terms, parameters)
+
+
+@dataclasses.dataclass
+class _Derivation:
+    """The Euler-Lagrange columns of a list of polynomial terms, and what derives from them.
+
+    Shared by every library with the same coordinates and terms (a fitted model's clone of
+    the user's catalog, a loaded model): deriving a spatial arm's columns costs seconds.
+    """
+
+    angles: tuple
+    polynomials: list
+    derived: list  # per term, its Euler-Lagrange column (one polynomial per coordinate)
+    names: list
+    matrix: sp.Matrix
+    zero_terms: list
+    column_terms: Terms | None = None
+    weak_terms: tuple | None = None
+
+
+_NOT_POLYNOMIAL = object()  # cached verdict: some term is not a trigonometric polynomial
+_CACHED_DERIVATIONS = 4
+_DERIVATIONS: dict = {}  # (variables, terms) -> _Derivation, least recently used first
+
+
+def _derive(coords, terms):
+    angles = _angles(terms, coords)
+    try:
+        polynomials = [TrigPolynomial.from_sympy(t, coords, angles) for t in terms]
+    except ValueError:
+        return _NOT_POLYNOMIAL
+    derived = [p.euler_lagrange() for p in polynomials]
+    columns = [[e.to_sympy(coords, evaluate=False) for e in column] for column in derived]
+    matrix = sp.Matrix(coords.n, len(terms), lambda i, j: columns[j][i])
+    zero_terms = [j for j, column in enumerate(derived) if all(e.is_zero for e in column)]
+    return _Derivation(angles, polynomials, derived, [_feature_name(t) for t in terms], matrix,
+                       zero_terms)
 
 
 def _angles(terms, coords) -> tuple:

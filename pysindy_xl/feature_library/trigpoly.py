@@ -109,6 +109,23 @@ class TrigPolynomial:
         """Whether the polynomial has no term."""
         return self.coefficients.size == 0
 
+    def _times_slot(self, index: int) -> TrigPolynomial:
+        """This polynomial times one slot monomial: a shift of one exponent column, which keeps
+        the rows distinct; only a cosine can create a power to rewrite."""
+        exponents = self.exponents.copy()
+        exponents[:, index] += 1
+        n = len(self.angles)
+        cosine = n <= index < 2 * n and self.angles[index - n]
+        return TrigPolynomial(exponents, self.coefficients, self.angles, normalize=cosine)
+
+    @classmethod
+    def _sum(cls, polynomials, angles) -> TrigPolynomial:
+        """The sum of many polynomials, normalized once."""
+        n_slots = 4 * len(angles)
+        return cls(np.vstack([p.exponents for p in polynomials] + [np.zeros((0, n_slots))]),
+                   np.concatenate([p.coefficients for p in polynomials] + [np.zeros(0)]),
+                   angles)
+
     # -- calculus --------------------------------------------------------------------------
     def diff_slot(self, index: int) -> TrigPolynomial:
         """Partial derivative with respect to one slot (a monomial variable)."""
@@ -116,16 +133,17 @@ class TrigPolynomial:
         rows = powers > 0
         exponents = self.exponents[rows].copy()
         exponents[:, index] -= 1
-        return TrigPolynomial(exponents, self.coefficients[rows] * powers[rows], self.angles)
+        # lowering one column keeps normalized rows distinct and normalized
+        return TrigPolynomial(exponents, self.coefficients[rows] * powers[rows], self.angles,
+                              normalize=False)
 
     def diff_position(self, j: int) -> TrigPolynomial:
         """Partial derivative with respect to the coordinate ``q_j``."""
         n = len(self.angles)
         if not self.angles[j]:
             return self.diff_slot(j)
-        sine, cosine = (TrigPolynomial.slot(n, j, self.angles),
-                        TrigPolynomial.slot(n, n + j, self.angles))
-        return cosine * self.diff_slot(j) - sine * self.diff_slot(n + j)
+        return TrigPolynomial._sum([self.diff_slot(j)._times_slot(n + j),
+                                    -self.diff_slot(n + j)._times_slot(j)], self.angles)
 
     def diff_velocity(self, j: int) -> TrigPolynomial:
         """Partial derivative with respect to ``qd_j``."""
@@ -134,11 +152,11 @@ class TrigPolynomial:
     def time_derivative(self) -> TrigPolynomial:
         """Total time derivative ``sum_j qd_j d/dq_j + qdd_j d/dqd_j``."""
         n = len(self.angles)
-        out = TrigPolynomial.constant(0.0, self.angles)
+        pieces = []
         for j in range(n):
-            out = out + TrigPolynomial.slot(n, 2 * n + j, self.angles) * self.diff_position(j)
-            out = out + TrigPolynomial.slot(n, 3 * n + j, self.angles) * self.diff_velocity(j)
-        return out
+            pieces.append(self.diff_position(j)._times_slot(2 * n + j))
+            pieces.append(self.diff_velocity(j)._times_slot(3 * n + j))
+        return TrigPolynomial._sum(pieces, self.angles)
 
     def euler_lagrange(self) -> list[TrigPolynomial]:
         """``d/dt dL/dqd_i - dL/dq_i`` for every coordinate, this polynomial being ``L``."""
@@ -209,17 +227,30 @@ class TrigPolynomial:
         for j in range(n):
             atoms.append(sp.sin(coords.q[j]) if self.angles[j] else coords.q[j])
         atoms += [sp.cos(q) for q in coords.q] + list(coords.qd) + list(coords.qdd)
+        if evaluate:
+            terms = [sp.Mul(_number(value), *[atoms[k] ** int(e) for k, e in enumerate(row) if e])
+                     for row, value in zip(self.exponents, self.coefficients, strict=True)]
+            return sp.Add(*terms)
+        powers: dict = {}  # each power built once
+
+        def factor(k, e):
+            found = powers.get((k, e))
+            if found is None:
+                found = powers[(k, e)] = atoms[k] if e == 1 else sp.Pow(atoms[k], e)
+            return found
+
         terms = []
-        for row, value in zip(self.exponents, self.coefficients, strict=True):
-            number = sp.Integer(int(value)) if value == int(value) else sp.Float(float(value))
-            factors = [atoms[k] if e == 1 else atoms[k] ** int(e)
-                       for k, e in enumerate(row) if e]
-            if not evaluate and factors and number == 1:
-                terms.append(sp.Mul(*factors, evaluate=False) if len(factors) > 1
-                             else factors[0])
-            else:
-                terms.append(sp.Mul(number, *factors, evaluate=evaluate))
-        return sp.Add(*terms, evaluate=evaluate)
+        for row, value in zip(self.exponents.tolist(), self.coefficients.tolist(), strict=True):
+            factors = [factor(k, e) for k, e in enumerate(row) if e]
+            if value != 1 or not factors:
+                factors.insert(0, _number(value))
+            # flat products and sum, built without canonicalization (sympy's own constructor)
+            terms.append(sp.Mul._from_args(factors) if len(factors) > 1 else factors[0])
+        return sp.Add._from_args(terms) if len(terms) > 1 else terms[0] if terms else sp.S.Zero
+
+
+def _number(value: float) -> sp.Number:
+    return sp.Integer(int(value)) if value == int(value) else sp.Float(float(value))
 
 
 class _NotPolynomial(ValueError):
