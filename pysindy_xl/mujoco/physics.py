@@ -13,7 +13,9 @@ __all__ = ["compare_physics"]
 def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8) -> dict:
     """Compare the identified mass matrix and unforced dynamics with MuJoCo's at a few states.
 
-    At random states (``system.random_initial_state``, inside the joint ranges) the identified
+    At random states (``system.random_initial_state``, inside the joint ranges; states where a
+    contact is active after ``mj_forward`` are drawn again, since contact forces are not part
+    of the identified dynamics) the identified
     equations ``M(q, qd) qdd = f(q, qd, u)`` are evaluated with ``u = 0`` and compared with
     MuJoCo's ``mj_fullM`` and ``qfrc_passive - qfrc_bias + qfrc_constraint`` (gravity,
     Coriolis, damping, springs, dry friction), both mapped to the system's coordinates
@@ -42,7 +44,13 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
         identified mass matrix is positive definite at every state; ``condition``: its
         largest condition number; ``unidentified``: names of the coordinates whose row of
         the identified mass matrix is zero at every state (no inertia identified, e.g. a
-        passive body that no force excites: leave its joints out with ``joints=``).
+        passive body that no force excites: leave its joints out with ``joints=``);
+        ``contact_states_skipped``: random states drawn again because a contact was active.
+
+    Raises
+    ------
+    ValueError
+        If contacts are active at every one of ``20 * n_states`` random states.
 
     Examples
     --------
@@ -67,19 +75,26 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     if dynamics is None:
         raise TypeError("model: expected a fitted XLSINDy with dynamics")
     rng = np.random.default_rng(seed)
-    states = [system.random_initial_state(rng, scale=scale) for _ in range(n_states)]
-    q = np.array([s[0] for s in states])
-    qd = np.array([s[1] for s in states])
     mj_model = system.mj_model()
     data = mujoco.MjData(mj_model)
     matrix = system.force_matrix()
+    q, qd = np.empty((n_states, system.n)), np.empty((n_states, system.n))
     mass_ref = np.empty((n_states, system.n, system.n))
     force_ref = np.empty((n_states, system.n))
     full = np.empty((mj_model.nv, mj_model.nv))
+    skipped = 0
     for k in range(n_states):
-        data.qpos[:], data.qvel[:] = system.from_generalized(q[k], qd[k])
-        data.ctrl[:] = 0.0
-        mujoco.mj_forward(mj_model, data)
+        while True:  # MuJoCo evaluates one state per call
+            q[k], qd[k] = system.random_initial_state(rng, scale=scale)
+            data.qpos[:], data.qvel[:] = system.from_generalized(q[k], qd[k])
+            data.ctrl[:] = 0.0
+            mujoco.mj_forward(mj_model, data)
+            if data.ncon == 0:
+                break
+            skipped += 1
+            if skipped >= 20 * n_states:
+                raise ValueError(f"system: contacts act at {skipped} random states of "
+                                 f"{system!r}; lower scale or disable the contacts")
         try:
             mujoco.mj_fullM(mj_model, data, full)  # MuJoCo >= 3.4
         except TypeError:
@@ -97,6 +112,7 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     empty = np.all(np.abs(mass) <= 1e-12 * max(np.abs(mass).max(), 1e-300), axis=(0, 2))
     return {
         "unidentified": [system.coordinate_names[i] for i in np.flatnonzero(empty)],
+        "contact_states_skipped": skipped,
         "mass_error": float(np.abs(mass - mass_ref).max() / np.abs(mass_ref).max()),
         "force_error": float(np.abs(force - force_ref).max()
                              / max(np.abs(force_ref).max(), 1e-300)),
