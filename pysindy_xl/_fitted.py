@@ -134,8 +134,8 @@ class DynamicsMixin:
         ])
         return metric(true, predicted)
 
-    def simulate(self, x0, t, u=None, **integrator_options) -> np.ndarray:
-        """Simulate the identified dynamics.
+    def simulate(self, x0, t, u=None, feedback=None, **integrator_options) -> np.ndarray:
+        """Simulate the identified dynamics, open loop (``u``) or closed loop (``feedback``).
 
         Parameters
         ----------
@@ -144,7 +144,15 @@ class DynamicsMixin:
         t : array, shape (T,)
             Output times, strictly increasing.
         u : None, array (T, n) or callable ``u(t) -> (n,)``
-            Generalized forces (arrays are interpolated by a cubic spline by default).
+            Generalized forces as a function of time (arrays are interpolated by a cubic
+            spline by default).
+        feedback : callable, optional
+            A feedback law ``feedback(t, q, qd) -> (n,)``: generalized forces from the time
+            and the model's own simulated state (``q``, ``qd`` arrays of shape (n,)),
+            evaluated at every step of the integrator and added to ``u``. This is how a
+            servo-driven system is simulated the way it ran: the servos react to the
+            model's motion (:func:`pysindy_xl.mujoco.actuator_law` gives an MJCF's actuator
+            law in this form).
         **integrator_options
             Passed to :meth:`MassMatrixDynamics.simulate` (``method``, ``rtol``, ``atol``,
             ``divergence_bound``, ``max_evaluations``, ``timeout``, ``interpolation``).
@@ -158,10 +166,32 @@ class DynamicsMixin:
         SimulationError
             When the model diverges or its mass matrix becomes singular; the exception holds
             the valid part of the trajectory.
+        TypeError, ValueError
+            If ``feedback`` is not callable or does not return ``n`` finite values at ``x0``.
+
+        Examples
+        --------
+        A unit mass on a spring (``x'' + 2 x = u``), identified, then brought to ``x = 0.5``
+        by a PD controller with the spring's force at 0.5 as feed-forward:
+
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+        >>> t = np.linspace(0, 5, 501)
+        >>> x = (np.sin(t) + np.sin(3 * t))[:, None]
+        >>> xd = (np.cos(t) + 3 * np.cos(3 * t))[:, None]
+        >>> xdd = (-np.sin(t) - 9 * np.sin(3 * t))[:, None]
+        >>> model = px.XLSINDy(lib).fit(x, t, x_dot=xd, x_ddot=xdd, u=xdd + 2 * x)
+        >>> pd = lambda t, q, qd: 20.0 * (0.5 - q) - 6.0 * qd + 1.0
+        >>> states = model.simulate([0.0, 0.0], np.linspace(0.0, 10.0, 11), feedback=pd)
+        >>> round(float(states[-1, 0]), 4)
+        0.5
         """
         dynamics = self._require_dynamics()
         if u is not None and not callable(u) and np.ndim(u) == 1 and self.n_coordinates_ == 1:
             u = np.asarray(u)[:, None]  # one coordinate: a 1-D force as fit accepts it
+        if feedback is not None:
+            integrator_options["feedback"] = feedback
         return dynamics.simulate(x0, t, u, **integrator_options)
 
     def to_jax(self):

@@ -20,6 +20,7 @@ import scipy.integrate
 import scipy.interpolate
 import sympy as sp
 
+from ._simulation_inputs import feedback_function, force_function
 from ._validation import check_numeric_array, check_option, check_times
 from .feature_library import stack_variables
 from .feature_library._compile import Terms, compile_terms, decompose, scalar_function
@@ -115,78 +116,6 @@ class SimulationError(DynamicsError):
         self.t = np.asarray(t, dtype=float)
         self.states = np.asarray(states, dtype=float)
         self.reason = reason
-
-
-_INTERPOLATIONS = ("cubic", "linear", "previous")
-
-
-def force_function(u, t: np.ndarray, n: int, interpolation: str = "cubic"):
-    """Turn the ``u`` argument of ``simulate`` into a function of time.
-
-    Parameters
-    ----------
-    u : None, array (len(t), n), or callable ``u(t) -> (n,)``
-        Generalized forces.
-    t : ndarray, shape (T,)
-        Simulation times.
-    n : int
-        Number of coordinates.
-    interpolation : {"cubic", "linear", "previous"}
-        How an array ``u`` is read between samples: a cubic spline (smooth forces: adaptive
-        integrators take far fewer steps than on the kinks of a linear interpolant), linear,
-        or zero-order hold (``"previous"``, for piecewise-constant actuator commands).
-
-    Returns
-    -------
-    callable
-        ``u(t) -> ndarray (n,)``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> u = force_function(np.array([[0.0], [2.0], [4.0]]), np.array([0.0, 1.0, 2.0]), 1,
-    ...                    interpolation="linear")
-    >>> u(0.5)
-    array([1.])
-    """
-    if interpolation not in _INTERPOLATIONS:
-        raise ValueError(f"interpolation: expected one of {_INTERPOLATIONS}, got "
-                         f"{interpolation!r}")
-    if u is None:
-        zeros = np.zeros(n)
-        return lambda _t: zeros
-    if callable(u):
-        value = np.asarray(u(float(t[0])), dtype=float)
-        if value.shape != (n,):
-            raise ValueError(f"u: the callable must return an array of shape ({n},), got "
-                             f"{value.shape}")
-
-        def call(s):
-            out = np.asarray(u(s), dtype=float)
-            if out.shape != (n,) or not np.all(np.isfinite(out)):
-                raise ValueError(f"u: u({s}) returned {out!r}, expected {n} finite values")
-            return out
-
-        return call
-    try:
-        u = np.asarray(u, dtype=float)
-    except (TypeError, ValueError):
-        raise TypeError("u: expected None, an array (len(t), n) or a callable u(t)") from None
-    if u.shape != (len(t), n):
-        raise ValueError(f"u: expected an array of shape (len(t), n) = {(len(t), n)}, got "
-                         f"{u.shape}")
-    if not np.all(np.isfinite(u)):
-        raise ValueError("u: contains NaN or inf")
-    if len(t) == 1:
-        return lambda _t: u[0]
-    if interpolation == "cubic" and len(t) >= 4:
-        spline = scipy.interpolate.CubicSpline(t, u, axis=0, extrapolate=False)
-        t_first, t_last = t[0], t[-1]
-        return lambda s: u[0] if s <= t_first else u[-1] if s >= t_last else spline(s)
-    kind = "previous" if interpolation == "previous" else "linear"
-    interpolant = scipy.interpolate.interp1d(t, u, axis=0, kind=kind, assume_sorted=True,
-                                             bounds_error=False, fill_value=(u[0], u[-1]))
-    return interpolant
 
 
 class MassMatrixDynamics:
@@ -399,6 +328,7 @@ class MassMatrixDynamics:
         max_evaluations: int = 1_000_000,
         timeout: float | None = 300.0,
         interpolation: str = "cubic",
+        feedback=None,
     ) -> np.ndarray:
         """Integrate the dynamics with one of scipy's adaptive ODE solvers.
 
@@ -409,7 +339,7 @@ class MassMatrixDynamics:
         t : array, shape (T,)
             Strictly increasing output times; integration runs from ``t[0]`` to ``t[-1]``.
         u : None, array (T, n) or callable ``u(t) -> (n,)``
-            Generalized forces.
+            Generalized forces, a function of time (open loop).
         method : {"RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA"}
         rtol, atol : float
             Tolerances of the solver.
@@ -421,6 +351,11 @@ class MassMatrixDynamics:
             Wall-clock bound in seconds.
         interpolation : {"cubic", "linear", "previous"}
             How an array ``u`` is read between samples (see :func:`force_function`).
+        feedback : callable, optional
+            A feedback law ``feedback(t, q, qd) -> (n,)``: generalized forces from the time
+            and the simulated state (``q``, ``qd`` arrays of shape (n,)), evaluated at every
+            step of the integrator and added to ``u``: a closed-loop simulation (a servo, a
+            controller; see :func:`pysindy_xl.mujoco.actuator_law` for an MJCF's actuators).
 
         Returns
         -------
@@ -431,6 +366,20 @@ class MassMatrixDynamics:
         SimulationError
             On divergence, singular mass matrix, non-finite derivative, exhausted evaluations
             or timeout; carries the valid part of the trajectory.
+        TypeError, ValueError
+            If ``feedback`` is not callable or does not return ``n`` finite values at ``x0``.
+
+        Examples
+        --------
+        A unit mass driven to ``q = 1`` by a PD controller:
+
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> mass = px.MassMatrixDynamics(c, [c.qdd[0] - c.tau[0]])
+        >>> pd = lambda t, q, qd: 4.0 * (1.0 - q) - 4.0 * qd
+        >>> states = mass.simulate([0.0, 0.0], np.linspace(0.0, 10.0, 11), feedback=pd)
+        >>> round(float(states[-1, 0]), 3)
+        1.0
         """
         n = self._n
         rtol = check_option("rtol", rtol, "real", low=0, low_open=True)
@@ -447,6 +396,7 @@ class MassMatrixDynamics:
             raise ValueError(f"x0: expected {2 * n} finite values [q, qd], got {x0.shape}")
         t = check_times(t, "t")
         force = force_function(u, t, n, interpolation)
+        law = feedback_function(feedback, x0, t[0], n)
         counter = {"n": 0}
         start = _time.perf_counter()
 
@@ -457,7 +407,7 @@ class MassMatrixDynamics:
             if timeout is not None and counter["n"] % 256 == 0:
                 if _time.perf_counter() - start > timeout:
                     raise _Stop(s, "timeout")
-            inputs = force(s)
+            inputs = force(s) if law is None else force(s) + law(s, state)
             try:
                 derivative = self.state_derivative(state, inputs, s)
             except SingularMassMatrixError as err:

@@ -137,3 +137,35 @@ def test_plot_written_as_png(cart_pole_model, tmp_path):
     assert len(bars.patches) == 2 * 7  # identified and true bars of the 7 active features
     with pytest.raises(ValueError, match="feature_names"):
         plot_validation(result, None, ["a"], cart_pole_model.coefficients())
+
+
+CONTACT_PENDULUM = """
+<mujoco><compiler angle="radian"/><option timestep="0.001" integrator="RK4"/>
+  <worldbody>
+    <geom name="wall" type="box" pos="0.6 0 0.5" size="0.05 0.5 0.6"/>
+    <body pos="0 0 1">
+      <joint name="swing" axis="0 1 0" damping="0.2" range="-1.5 1.5"/>
+      <inertial pos="0 0 -0.6" mass="0.7" diaginertia="1e-4 1e-4 1e-4"/>
+      <geom type="sphere" pos="0 0 -0.6" size="0.05" mass="0"/>
+    </body>
+  </worldbody>
+  <actuator><motor joint="swing"/></actuator>
+</mujoco>
+"""
+
+
+def test_compare_physics_skips_states_in_contact():
+    from pysindy_xl.mujoco import compare_physics
+
+    free = MJCFSystem(CONTACT_PENDULUM.replace('<option timestep="0.001" integrator="RK4"/>',
+                                               '<option timestep="0.001" integrator="RK4">'
+                                               '<flag contact="disable"/></option>'))
+    data = generate_dataset(free, n_trajectories=1, duration=2.0, seed=0, sample_every=2,
+                            progress=False)
+    model = px.XLSINDy(reference_catalog(free, "mixed"), px.ExplicitOptimizer()).fit(
+        **data.fit_arguments())
+    walled = MJCFSystem(CONTACT_PENDULUM)  # the bob touches the wall beyond about 0.9 rad
+    physics = compare_physics(model, walled, n_states=10, scale=1.0)
+    assert physics["contact_states_skipped"] > 0
+    assert physics["force_error"] < 1e-6 and physics["mass_error"] < 1e-6
+    assert compare_physics(model, free, n_states=10, scale=1.0)["contact_states_skipped"] == 0

@@ -212,8 +212,12 @@ def _validation_line(result, failure, args) -> str:
     if result.constrained_at is not None:
         horizon = (f"{result.constrained_at:.3g} s (a joint limit or contact acts in the "
                    "MuJoCo reference from then on)")
-    return (f"validation: position RMSE {rmse} over {horizon}, divergence {divergence}, "
-            f"{'VALID' if result.valid else 'INVALID'}"
+    drive = ""
+    if result.drive == "closed-loop":  # servos: the MJCF's actuator law acts on the model
+        drive = (" (closed loop: the MJCF's servos track the reference controls; actuator "
+                 f"force error {result.force_error:.2g})")
+    return (f"validation{drive}: position RMSE {rmse} over {horizon}, divergence "
+            f"{divergence}, {'VALID' if result.valid else 'INVALID'}"
             + (f" ({result.failure})" if result.failure else ""))
 
 

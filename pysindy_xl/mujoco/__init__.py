@@ -5,11 +5,13 @@ the double pendulum on a cart (:mod:`.systems`), randomly forced trajectories wi
 (:mod:`.generate`), datasets as NPZ + JSON (:mod:`.dataset`), the reference catalogs of the
 paper's comparison (:mod:`.catalogs`), catalogs derived from the kinematic tree of any MJCF
 model (:mod:`.kinematic`) and the validation of an identified model against a fresh MuJoCo
-trajectory (:mod:`.validation`, :mod:`.plots`).
+trajectory (:mod:`.validation`, :mod:`.plots`), open loop or closed loop through the MJCF's
+actuator law (:mod:`.actuation`).
 """
 
 from ..data.constraints import contiguous_segments, unconstrained_samples, unconstrained_windows
 from ..data.dataset import Dataset, DatasetError, Trajectory, load_dataset
+from .actuation import ActuatorLaw, actuator_law
 from .catalogs import (
     CATALOG_KINDS,
     classical_terms,
@@ -89,6 +91,8 @@ __all__ = [
     "compare_trajectories",
     "compare_physics",
     "validate_model",
+    "ActuatorLaw",
+    "actuator_law",
     "validation_trajectory",
     "plot_validation",
     "plot_coefficients",

@@ -15,6 +15,7 @@ import numpy as np
 from .._validation import check_option
 from ..data.dataset import Dataset, Trajectory
 from ..data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
+from .actuation import actuator_force_function
 from .forcing import FORCING_MODES, SumOfSinusoids
 from .systems import MuJoCoSystem, get_system
 
@@ -160,69 +161,6 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
     offsets = np.where(driven, offsets, 0.0)
     return SumOfSinusoids.random(scales, rng, n_components=n_components,
                                  max_frequency=max_frequency, offsets=offsets)
-
-
-def actuator_force_function(system, signals, force_input: str = "tau"):
-    """The forces MuJoCo's actuators apply under ``signals``, as a function of time.
-
-    Exact when every actuator is a plain motor on a joint (fixed gain, no bias, no
-    activation dynamics): ``qfrc_actuator = gear * clip(gain * clip(ctrl))``, linear in the
-    (clipped) controls, evaluated at any time; validation gives the identified model this
-    continuous signal, the one MuJoCo applies at each of its steps.
-
-    Parameters
-    ----------
-    system : MuJoCoSystem or str
-        The system whose actuators are driven.
-    signals : callable
-        ``signals(times) -> (len(times), nu)`` (e.g. a :class:`SumOfSinusoids`).
-    force_input : {"tau", "u"}, default "tau"
-        Generalized forces on the coordinates (``B @ qfrc_actuator``) or joint forces.
-
-    Returns
-    -------
-    callable or None
-        ``f(t) -> (n,)`` for a scalar ``t``, ``(len(t), n)`` for an array; None when an
-        actuator is not a plain joint motor (the forces then depend on the state).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> force = SumOfSinusoids([[1.0], [0.0]], [[1.0], [1.0]], [[0.0], [0.0]])
-    >>> f = actuator_force_function("cart-pole", force)
-    >>> f(0.25)
-    array([1., 0.])
-    """
-    mujoco = _import_mujoco()
-    system = get_system(system)
-    if force_input not in ("tau", "u"):
-        raise ValueError(f"force_input: expected 'tau' or 'u', got {force_input!r}")
-    model = system.mj_model()
-    moment = np.zeros((model.nv, model.nu))
-    for a in range(model.nu):
-        if (int(model.actuator_trntype[a]) != int(mujoco.mjtTrn.mjTRN_JOINT)
-                or int(model.actuator_dyntype[a]) != int(mujoco.mjtDyn.mjDYN_NONE)
-                or int(model.actuator_gaintype[a]) != int(mujoco.mjtGain.mjGAIN_FIXED)
-                or int(model.actuator_biastype[a]) != int(mujoco.mjtBias.mjBIAS_NONE)):
-            return None
-        moment[model.jnt_dofadr[model.actuator_trnid[a, 0]], a] = model.actuator_gear[a, 0]
-    gain = model.actuator_gainprm[:, 0].copy()
-    clamp = not (model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_CLAMPCTRL))
-    ctrl_low = np.where(model.actuator_ctrllimited & clamp, model.actuator_ctrlrange[:, 0],
-                        -np.inf)
-    ctrl_high = np.where(model.actuator_ctrllimited & clamp, model.actuator_ctrlrange[:, 1],
-                         np.inf)
-    force_low = np.where(model.actuator_forcelimited, model.actuator_forcerange[:, 0], -np.inf)
-    force_high = np.where(model.actuator_forcelimited, model.actuator_forcerange[:, 1], np.inf)
-    matrix = moment if force_input == "u" else system.force_matrix() @ moment
-
-    def force(t):
-        ctrl = np.clip(np.asarray(signals(np.atleast_1d(np.asarray(t, dtype=float))),
-                                  dtype=float), ctrl_low, ctrl_high)
-        values = np.clip(ctrl * gain, force_low, force_high) @ matrix.T
-        return values[0] if np.ndim(t) == 0 else values
-
-    return force
 
 
 def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None,

@@ -1,14 +1,31 @@
 """Validation of an identified model against a fresh MuJoCo trajectory.
 
-The model is simulated from the initial state of a new, noise-free MuJoCo trajectory and under
-the same forces, and the two position histories are compared.
+The model is simulated from the initial state of a new, noise-free MuJoCo trajectory, driven
+the way MuJoCo was, and the two position histories are compared.
 
-Faithfulness: the MuJoCo reference is integrated with RK4 at a fine internal step (the
-model's ``timestep / substeps``, ``substeps=4`` by default) with the control updated at every
-internal step (read at the step's midpoint, a second-order hold), and the identified model
-receives the same continuous force signal (exact for
-joint motors, see :func:`~pysindy_xl.mujoco.generate.actuator_force_function`; otherwise a
-cubic spline of the recorded forces). Sample times do not depend on ``substeps``.
+Drive: how the identified model is forced (``ValidationResult.drive``).
+
+``open-loop``
+    The model receives the forces MuJoCo applied, as a function of time: exactly the
+    continuous signal for actuators whose force does not depend on the state (joint motors,
+    see :func:`~pysindy_xl.mujoco.actuation.actuator_force_function`), otherwise a cubic
+    spline of the recorded forces.
+``closed-loop``
+    For servos (``position`` / ``velocity`` actuators, ``general`` ones with an affine bias
+    or gain), whose force depends on the joint state: the MJCF's actuator law
+    (:func:`~pysindy_xl.mujoco.actuation.actuator_law`), driven by the reference controls
+    of the run (the trajectory's ``info["signals"]``), acts on the model's own simulated
+    state, as MuJoCo's servos acted on MuJoCo's. Replaying a servo run's forces open loop
+    compares two different experiments: an exact model drifts away as soon as rounding
+    moves it (nothing corrects it), and a wrong one can look right while the servos sit on
+    their force limits.
+
+Faithfulness: the MuJoCo reference is integrated at a fine internal step (the model's
+``timestep / substeps``, ``substeps=4`` by default; RK4 where the model's implicit integrator
+would apply damping or servo gains at the end of the step, see
+:func:`~pysindy_xl.mujoco.generate.faithful_integrator`) with the control updated at every
+internal step (read at the step's midpoint, a second-order hold); the identified model sees
+the same continuous controls. Sample times do not depend on ``substeps``.
 
 Metrics
 -------
@@ -24,8 +41,16 @@ Metrics
     coordinate in the MuJoCo trajectory (so the bound is relative to the motion, and absolute,
     in rad or m, for coordinates that barely move); or the time at which the simulation of the
     model failed (blow-up, singular mass matrix). None when neither happens.
+``force_error`` (closed loop only)
+    Root mean square, over the simulated samples and coordinates, of the difference between
+    the actuator forces along the model's run and along MuJoCo's (the same law, at each
+    run's own states), relative to the root mean square of MuJoCo's. Feedback hides model
+    error in the positions (stiff servos track their reference whatever the inertia) and
+    shows it in the forces the servos need: the closed-loop counterpart of torque
+    prediction.
 ``valid``
-    The model was simulated over the whole horizon and never diverged.
+    The model was simulated over the whole horizon and never diverged; in closed loop, also
+    ``force_error <= force_bound`` (see :func:`validate_model`).
 """
 
 from __future__ import annotations
@@ -36,14 +61,22 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from ..data.dataset import Trajectory
+from .actuation import actuator_law
 from .forcing import FORCING_MODES, SumOfSinusoids
-from .generate import actuator_force_function, actuator_signals, simulate_trajectory
+from .generate import INTEGRATORS, actuator_signals, faithful_integrator, simulate_trajectory
+from .physics import compare_physics
 from .systems import get_system
 
 __all__ = ["ValidationResult", "validate_model", "compare_trajectories",
-           "validation_trajectory", "DEFAULT_DIVERGENCE_BOUND", "compare_physics"]
+           "validation_trajectory", "DEFAULT_DIVERGENCE_BOUND", "DEFAULT_FORCE_BOUND", "DRIVES",
+           "compare_physics"]
 
 DEFAULT_DIVERGENCE_BOUND = 0.2
+
+#: How :func:`validate_model` drives the identified model (see the module docstring).
+DRIVES = ("auto", "closed-loop", "open-loop")
+
+DEFAULT_FORCE_BOUND = 0.05
 
 
 @dataclass
@@ -62,7 +95,8 @@ class ValidationResult:
     prediction : ndarray, shape (k, 2n)
         Model state at ``t[:k]``; ``k < T`` when the simulation failed.
     forces : ndarray, shape (T, n)
-        Forces given to the model.
+        Forces given to the model in open loop; in closed loop, the forces MuJoCo's
+        actuators applied in the reference (the model's follow from its own state).
     position_rmse : float
         Root mean square position error over the whole horizon (inf when the simulation
         stopped early).
@@ -83,6 +117,11 @@ class ValidationResult:
     constrained_at : float or None, optional
         When a constraint (joint limit, contact) started to act in the reference, where the
         comparison stopped (see :func:`validate_model`); None when none acted.
+    drive : {"open-loop", "closed-loop"}, default "open-loop"
+        How the model was driven (see the module docstring).
+    force_error : float or None, optional
+        Relative actuator-force error of a closed-loop run (see the module docstring); None
+        in open loop.
 
     Attributes
     ----------
@@ -116,6 +155,8 @@ class ValidationResult:
     coordinate_names: tuple = field(default_factory=tuple)
     simulated_rmse: float = float("nan")
     constrained_at: float | None = None
+    drive: str = "open-loop"
+    force_error: float | None = None
 
     @property
     def n(self) -> int:
@@ -137,7 +178,7 @@ class ValidationResult:
             the benchmark records write it as null),
             ``position_rmse_per_coordinate`` (by name), ``divergence_time``, ``valid``,
             ``failure``, ``divergence_bound``, ``horizon`` (s), ``simulated_fraction``,
-            ``simulated_rmse`` and ``constrained_at``.
+            ``simulated_rmse``, ``constrained_at``, ``drive`` and ``force_error``.
 
         Examples
         --------
@@ -149,7 +190,7 @@ class ValidationResult:
         {"position_rmse": 0.0, "position_rmse_per_coordinate": {"x": 0.0},
          "divergence_time": null, "valid": true, "failure": null, "divergence_bound": 0.2,
          "horizon": 1.0, "simulated_fraction": 1.0, "simulated_rmse": 0.0,
-         "constrained_at": null}
+         "constrained_at": null, "drive": "open-loop", "force_error": null}
         """
         return {
             "position_rmse": float(self.position_rmse),
@@ -164,6 +205,8 @@ class ValidationResult:
             "simulated_fraction": float(self.simulated_fraction),
             "simulated_rmse": float(self.simulated_rmse),
             "constrained_at": self.constrained_at,
+            "drive": self.drive,
+            "force_error": self.force_error,
         }
 
 
@@ -254,7 +297,8 @@ def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVE
 def validation_trajectory(system, duration: float = 10.0, forcing: str = "explicit",
                           actuators=None, seed=None, sample_every: int = 10,
                           initial_scale: float = 1.0, substeps: int = 4,
-                          backoff: bool = True, **signal_options) -> Trajectory:
+                          backoff: bool = True, integrator: str = "auto",
+                          **signal_options) -> Trajectory:
     """A fresh noise-free MuJoCo trajectory with random initial state and forcing.
 
     Parameters
@@ -280,6 +324,11 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
         When a joint limit, contact or equality constraint acts, draw again with half the
         forcing amplitude and initial spread (at most three times) and keep the draw whose
         first constraint comes latest (``info["backoff"]`` records the factor).
+    integrator : {"auto", "model", "Euler", "RK4", "implicit", "implicitfast"}, default "auto"
+        MuJoCo's integrator: ``"auto"`` is RK4 where the model's implicit step would bias the
+        reference against the continuous equations (see
+        :func:`~pysindy_xl.mujoco.generate.faithful_integrator`), the model's otherwise;
+        ``"model"`` keeps the authored one.
     **signal_options
         ``n_components``, ``max_frequency``, ``amplitude_scale``, ``amplitude`` of the random
         forces.
@@ -287,7 +336,9 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
     Returns
     -------
     Trajectory
-        With clean ``q, qd, qdd, tau, u`` and the constraint data.
+        With clean ``q, qd, qdd, tau, u`` and the constraint data; ``info["signals"]`` holds
+        the controls (None when no actuator is driven: zero controls, under which servos hold
+        their zero reference).
 
     Examples
     --------
@@ -301,13 +352,20 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
         raise ValueError(f"forcing: expected one of {FORCING_MODES}, got {forcing!r}")
     rng = np.random.default_rng(seed)
     model = system.mj_model()
+    if integrator not in ("auto", "model", *INTEGRATORS):
+        raise ValueError(f"integrator: expected one of {('auto', 'model', *INTEGRATORS)}, got "
+                         f"{integrator!r}")
+    integrator = {"auto": faithful_integrator(model), "model": None}.get(integrator,
+                                                                        integrator)
     best, best_start, factor = None, -1, 1.0
     for _ in range(4 if backoff else 1):
         q0, qd0 = system.random_initial_state(rng, scale=initial_scale * factor)
         signals = actuator_signals(system, model, forcing, rng, actuators, backoff=factor,
                                    **signal_options)
         trajectory = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
-                                         substeps=substeps, control_at="midpoint")
+                                         substeps=substeps, control_at="midpoint",
+                                         integrator=integrator)
+        trajectory.info.setdefault("signals", None)  # the controls are known: zero
         active = trajectory.constraint_active
         start = int(np.argmax(active)) if active.any() else len(active)
         if factor < 1:
@@ -324,14 +382,15 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
                    duration: float = 10.0, forcing: str = "explicit", actuators=None, seed=None,
                    divergence_bound: float = DEFAULT_DIVERGENCE_BOUND, force_input: str = "tau",
                    sample_every: int = 10, substeps: int = 4, initial_scale: float = 1.0,
-                   amplitude=None, constraints: str = "truncate",
+                   amplitude=None, constraints: str = "truncate", drive: str = "auto",
+                   force_bound: float = DEFAULT_FORCE_BOUND,
                    **integrator_options) -> ValidationResult:
     """Simulate an identified model against a fresh MuJoCo trajectory and score it.
 
     Parameters
     ----------
     model : fitted XLSINDy
-        Anything with ``simulate(x0, t, u)`` raising
+        Anything with ``simulate(x0, t, u)`` (and ``feedback=`` for closed loop) raising
         :class:`pysindy_xl.dynamics.SimulationError` on failure.
     system : MuJoCoSystem or str, optional
         Simulated to produce the reference (ignored when ``trajectory`` is given).
@@ -351,17 +410,28 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
         ``constraint_active`` mask), which the identified model cannot reproduce:
         ``truncate`` compares up to the first such sample (``constrained_at`` of the result
         says when), ``ignore`` compares over the whole horizon anyway.
+    drive : {"auto", "closed-loop", "open-loop"}, default "auto"
+        How the model is driven (see the module docstring). ``auto``: closed loop when the
+        system's actuators have a state-dependent law (servos) and the reference's controls
+        are known (``trajectory.info["signals"]``, which :func:`validation_trajectory`
+        records), open loop otherwise. ``closed-loop`` requires both the law and the
+        controls; ``open-loop`` replays the recorded forces whatever the actuators.
+    force_bound : float, default 0.05
+        In closed loop, the largest relative actuator-force error (``force_error``, see the
+        module docstring) of a valid model.
     **integrator_options
         Passed to ``model.simulate`` (``rtol``, ``atol``, ``timeout``...).
 
     Returns
     -------
     ValidationResult
+        Its ``drive`` says which drive was used.
 
     Raises
     ------
     ValueError
-        If neither ``system`` nor ``trajectory`` is given, or on a shape mismatch.
+        If neither ``system`` nor ``trajectory`` is given, on a shape mismatch, or with
+        ``drive="closed-loop"`` when there is no actuator law or no known controls.
 
     Examples
     --------
@@ -376,6 +446,8 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     >>> result = validate_model(model, "cart-pole", duration=1.0, seed=1)
     >>> result.valid, result.divergence_time, bool(result.position_rmse < 1e-3)
     (True, None, True)
+    >>> result.drive  # a motor on the cart: its force is a function of time
+    'open-loop'
     """
     from ..dynamics import SimulationError
 
@@ -408,14 +480,31 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     n = trajectory.q.shape[1]
     if forces is None:
         forces = np.zeros((trajectory.n_samples, n))
+    if drive not in DRIVES:
+        raise ValueError(f"drive: expected one of {DRIVES}, got {drive!r}")
+    if not (isinstance(force_bound, (int, float)) and force_bound > 0):
+        raise ValueError(f"force_bound: expected a positive number, got {force_bound!r}")
     reference = trajectory.state
-    use_forces = None
-    exact = None
-    if system is not None and "signals" in trajectory.info:
-        exact = actuator_force_function(
-            system, SumOfSinusoids.from_dict(trajectory.info["signals"]), force_input)
-    if exact is not None:
-        use_forces = exact  # the continuous signal MuJoCo applied at each internal step
+    law = None
+    known = "signals" in trajectory.info  # None: recorded without controls (all zero)
+    if system is not None and known:
+        signals = trajectory.info["signals"]
+        law = actuator_law(system, None if signals is None else SumOfSinusoids.from_dict(
+            signals), force_input)
+    if drive == "closed-loop" and law is None:
+        raise ValueError(
+            "drive: closed loop needs the system's actuator law (a system given, every "
+            "actuator on a joint without activation dynamics) and the reference's controls "
+            "(trajectory.info['signals']); " + (
+                "no system given" if system is None else "the trajectory has no controls"
+                if not known else "an actuator is outside the supported law"))
+    closed = law is not None and drive != "open-loop" and (
+        law.state_dependent or drive == "closed-loop")
+    use_forces, options = None, dict(integrator_options)
+    if closed:
+        options["feedback"] = law  # the servos act on the model's own state
+    elif law is not None and not law.state_dependent:
+        use_forces = law  # the continuous signal MuJoCo applied at each internal step
     elif np.any(forces != 0):
         # A C2 cubic spline of the force samples: the adaptive integrator rejects many steps at
         # the kinks of a piecewise-linear interpolant.
@@ -423,108 +512,40 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
         use_forces = spline
     failure = None
     try:
-        prediction = model.simulate(reference[0], trajectory.t, use_forces,
-                                    **integrator_options)
+        prediction = model.simulate(reference[0], trajectory.t, use_forces, **options)
     except SimulationError as error:
         prediction, failure = error.states, error.reason
     result = compare_trajectories(trajectory.t, reference, prediction, divergence_bound,
                                   failure, names, forces)
     result.constrained_at = constrained_at
+    if closed:
+        result.drive = "closed-loop"
+        result.force_error = _closed_loop_force_error(law, result)
+        result.valid = result.valid and result.force_error <= force_bound
     return result
 
 
-def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8) -> dict:
-    """Compare the identified mass matrix and unforced dynamics with MuJoCo's at a few states.
+def _closed_loop_force_error(law, result: ValidationResult) -> float:
+    """Relative RMS difference of the actuator forces along the model's and MuJoCo's runs."""
+    n, k = result.n, len(result.prediction)
+    if k == 0:
+        return float("inf")
+    t, model, reference = result.t[:k], result.prediction, result.reference[:k]
+    model_forces = law(t, model[:, :n], model[:, n:])
+    mujoco_forces = law(t, reference[:, :n], reference[:, n:])
+    error = np.sqrt(np.mean((model_forces - mujoco_forces) ** 2))
+    scale = np.sqrt(np.mean(mujoco_forces ** 2))
+    return float(error / scale) if scale > 0 else (0.0 if error == 0 else float("inf"))
 
-    At random states (``system.random_initial_state``, inside the joint ranges) the identified
-    equations ``M(q, qd) qdd = f(q, qd, u)`` are evaluated with ``u = 0`` and compared with
-    MuJoCo's ``mj_fullM`` and ``qfrc_passive - qfrc_bias + qfrc_constraint`` (gravity,
-    Coriolis, damping, springs, dry friction), both mapped to the system's coordinates
-    (``B M B^T``, ``B f``). An implicit (unforced) law is defined up to a factor: both are
-    first scaled by the least-squares factor that best matches the mass matrices.
 
-    Parameters
-    ----------
-    model : fitted XLSINDy
-        With dynamics (its equations contain accelerations).
-    system : MuJoCoSystem or str
-        The system the data came from.
-    n_states : int, default 5
-        Number of random states.
-    seed : int, optional
-        Seed of the states.
-    scale : float, default 0.8
-        Spread of the states (see ``random_initial_state``).
-
-    Returns
-    -------
-    dict
-        ``mass_error`` and ``force_error``: largest error relative to the largest entry of
-        MuJoCo's matrix / vector over the states; ``scale``: the factor applied to the
-        identified model (1 for a force-normalized fit); ``positive_definite``: the
-        identified mass matrix is positive definite at every state; ``condition``: its
-        largest condition number; ``unidentified``: names of the coordinates whose row of
-        the identified mass matrix is zero at every state (no inertia identified, e.g. a
-        passive body that no force excites: leave its joints out with ``joints=``).
-
-    Examples
-    --------
-    >>> import pysindy_xl as px
-    >>> from pysindy_xl.mujoco import generate_dataset, reference_catalog
-    >>> data = generate_dataset("cart-pole", n_trajectories=1, duration=1.0, seed=0,
-    ...                         progress=False)
-    >>> catalog = reference_catalog("cart-pole", "mixed", trig_degree=1)
-    >>> model = px.XLSINDy(catalog, px.ExplicitOptimizer()).fit(**data.fit_arguments())
-    >>> physics = compare_physics(model, "cart-pole")
-    >>> bool(physics["mass_error"] < 1e-6 and physics["force_error"] < 1e-6)
-    True
-    >>> physics["positive_definite"], physics["scale"]
-    (True, 1.0)
-    """
-    import mujoco
-
-    from .. import stack_variables
-
-    system = get_system(system)
-    dynamics = model._require_dynamics() if hasattr(model, "_require_dynamics") else None
-    if dynamics is None:
-        raise TypeError("model: expected a fitted XLSINDy with dynamics")
-    rng = np.random.default_rng(seed)
-    states = [system.random_initial_state(rng, scale=scale) for _ in range(n_states)]
-    q = np.array([s[0] for s in states])
-    qd = np.array([s[1] for s in states])
-    mj_model = system.mj_model()
-    data = mujoco.MjData(mj_model)
-    matrix = system.force_matrix()
-    mass_ref = np.empty((n_states, system.n, system.n))
-    force_ref = np.empty((n_states, system.n))
-    full = np.empty((mj_model.nv, mj_model.nv))
-    for k in range(n_states):
-        data.qpos[:], data.qvel[:] = system.from_generalized(q[k], qd[k])
-        data.ctrl[:] = 0.0
-        mujoco.mj_forward(mj_model, data)
-        try:
-            mujoco.mj_fullM(mj_model, data, full)  # MuJoCo >= 3.4
-        except TypeError:
-            mujoco.mj_fullM(mj_model, full, data.qM)
-        mass_ref[k] = matrix @ full @ matrix.T
-        force_ref[k] = matrix @ (data.qfrc_passive - data.qfrc_bias + data.qfrc_constraint)
-    z = stack_variables(q, qd, None, np.zeros_like(q), np.zeros(n_states))
-    mass, force = dynamics.mass_and_forcing(z)
-    factor = float(np.sum(mass * mass_ref) / np.sum(mass * mass)) if np.any(mass) else 1.0
-    forces = model.feature_library_.force_columns_
-    if np.allclose(model.coefficients()[forces], -1.0):
-        factor = 1.0  # force-normalized: compare in absolute terms
-    mass, force = mass * factor, force * factor
-    eigenvalues = np.linalg.eigvalsh((mass + np.swapaxes(mass, 1, 2)) / 2)
-    empty = np.all(np.abs(mass) <= 1e-12 * max(np.abs(mass).max(), 1e-300), axis=(0, 2))
-    return {
-        "unidentified": [system.coordinate_names[i] for i in np.flatnonzero(empty)],
-        "mass_error": float(np.abs(mass - mass_ref).max() / np.abs(mass_ref).max()),
-        "force_error": float(np.abs(force - force_ref).max()
-                             / max(np.abs(force_ref).max(), 1e-300)),
-        "scale": factor,
-        "positive_definite": bool(np.all(eigenvalues > 0)),
-        "condition": float(np.max(np.abs(eigenvalues).max(axis=1)
-                                  / np.maximum(np.abs(eigenvalues).min(axis=1), 1e-300))),
-    }
+def _closed_loop_force_error(law, result: ValidationResult) -> float:
+    """Relative RMS difference of the actuator forces along the model's and MuJoCo's runs."""
+    n, k = result.n, len(result.prediction)
+    if k == 0:
+        return float("inf")
+    t, model, reference = result.t[:k], result.prediction, result.reference[:k]
+    model_forces = law(t, model[:, :n], model[:, n:])
+    mujoco_forces = law(t, reference[:, :n], reference[:, n:])
+    error = np.sqrt(np.mean((model_forces - mujoco_forces) ** 2))
+    scale = np.sqrt(np.mean(mujoco_forces ** 2))
+    return float(error / scale) if scale > 0 else (0.0 if error == 0 else float("inf"))

@@ -1,0 +1,281 @@
+"""The MJCF's actuator law: the forces MuJoCo's actuators apply, as a function of time and state.
+
+MuJoCo computes each actuator's force from its control and, for servos, from the state of the
+joint it drives (``mj_fwdActuation``). For an actuator with a joint transmission (gear ``g``
+on a hinge or slide with position ``qpos_j`` and velocity ``qvel_j``), no activation dynamics,
+a fixed or affine gain and no or an affine bias:
+
+.. math::
+
+    \\ell = g\\,q_j, \\quad v = g\\,\\dot q_j, \\quad
+    c = \\mathrm{clip}(\\mathrm{ctrl}, \\mathrm{ctrlrange}), \\\\
+    F = \\mathrm{clip}\\big((p_0 + p_1 \\ell + p_2 v)\\,c + b_0 + b_1 \\ell + b_2 v,
+        \\mathrm{forcerange}\\big), \\quad
+    \\mathrm{qfrc\\_actuator}_j = \\mathrm{clip}\\big(\\textstyle\\sum_a g_a F_a,
+        \\mathrm{actuatorfrcrange}_j\\big)
+
+(``p``: ``gainprm``, ``b``: ``biasprm``; a ``motor`` has ``p = (1, 0, 0)``, ``b = 0``; a
+``position`` servo ``p = (kp, 0, 0)``, ``b = (0, -kp, -kv)``; a ``velocity`` servo
+``p = (kv, 0, 0)``, ``b = (0, 0, -kv)``). Joint damping, armature, springs and dry friction
+are not part of it: they are the physics the identified model contains.
+
+:class:`ActuatorLaw` evaluates this law on generalized coordinates, for one state or many at
+once; a simulation of an identified model driven by it is a closed-loop simulation, the
+experiment MuJoCo ran (see :func:`~pysindy_xl.mujoco.validate_model`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .systems import get_system
+
+__all__ = ["ActuatorLaw", "actuator_law", "actuator_force_function"]
+
+
+def _supported(model, a: int) -> bool:
+    """Whether actuator ``a`` follows the law of the module docstring."""
+    import mujoco
+
+    return (int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)
+            and int(model.actuator_dyntype[a]) == int(mujoco.mjtDyn.mjDYN_NONE)
+            and int(model.actuator_gaintype[a]) in (int(mujoco.mjtGain.mjGAIN_FIXED),
+                                                    int(mujoco.mjtGain.mjGAIN_AFFINE))
+            and int(model.actuator_biastype[a]) in (int(mujoco.mjtBias.mjBIAS_NONE),
+                                                    int(mujoco.mjtBias.mjBIAS_AFFINE)))
+
+
+class ActuatorLaw:
+    """The forces of an MJCF's actuators under given controls, as a function of time and state.
+
+    Made by :func:`actuator_law`, which checks that every actuator follows the law of the
+    module docstring. Calling it evaluates the law on generalized coordinates (the system's
+    ``q``, ``qd``): one state or many at once, without a loop over samples.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        Whose actuators apply the forces.
+    signals : callable or None
+        ``signals(times) -> (len(times), nu)`` controls (e.g. a :class:`SumOfSinusoids`);
+        None: every control is zero (servos hold their zero reference).
+    force_input : {"tau", "u"}
+        Forces on the system's coordinates (``B @ qfrc_actuator``, ``B`` the system's
+        ``force_matrix()``) or on MuJoCo's joints (``qfrc_actuator``).
+
+    Attributes
+    ----------
+    n : int
+        Number of coordinates.
+    state_dependent : bool
+        Some force depends on the state (a servo, an affine gain or bias with a position or
+        velocity term): the law must run in closed loop. False for motors, whose forces
+        depend on time only.
+    signals, force_input
+        As given.
+
+    Examples
+    --------
+    A position servo (``kp = 10``, ``kv = 1``) on a hinge, its reference fixed at 0.5 rad:
+
+    >>> import numpy as np
+    >>> from pysindy_xl.mujoco import MJCFSystem, SumOfSinusoids
+    >>> servo = MJCFSystem('''<mujoco><worldbody><body><joint name="hinge"/>
+    ...   <geom size="0.1" mass="1"/></body></worldbody>
+    ...   <actuator><position joint="hinge" kp="10" kv="1"/></actuator></mujoco>''')
+    >>> law = actuator_law(servo, SumOfSinusoids([[0.0]], [[1.0]], [[0.0]], offsets=[0.5]))
+    >>> law.state_dependent
+    True
+    >>> law(0.0, [0.2], [1.0])  # 10 * (0.5 - 0.2) - 1 * 1.0
+    array([2.])
+    >>> law(np.zeros(3), np.zeros((3, 1)), np.zeros((3, 1))).shape  # many states at once
+    (3, 1)
+    """
+
+    def __init__(self, system, signals, force_input: str):
+        import mujoco
+
+        model = system.mj_model()
+        self.n = int(system.n)
+        self.signals = signals
+        self.force_input = force_input
+        self._nu = int(model.nu)
+        dof = model.jnt_dofadr[model.actuator_trnid[:, 0]]
+        gear = model.actuator_gear[:, 0].copy()
+        inverse = np.linalg.inv(system.joint_to_coordinates)  # qpos = T^-1 q
+        # lengths and velocities of the actuators from generalized states: ell = q @ A.T
+        self._length = gear[:, None] * inverse[dof]
+        fixed = model.actuator_gaintype == int(mujoco.mjtGain.mjGAIN_FIXED)
+        self._gain = np.where(fixed[:, None], [1.0, 0.0, 0.0], 1.0) * model.actuator_gainprm[:, :3]
+        affine = model.actuator_biastype == int(mujoco.mjtBias.mjBIAS_AFFINE)
+        self._bias = np.where(affine[:, None], model.actuator_biasprm[:, :3], 0.0)
+        clamp = not (model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_CLAMPCTRL))
+        limited = model.actuator_ctrllimited.astype(bool) & clamp
+        self._ctrl_low = np.where(limited, model.actuator_ctrlrange[:, 0], -np.inf)
+        self._ctrl_high = np.where(limited, model.actuator_ctrlrange[:, 1], np.inf)
+        forced = model.actuator_forcelimited.astype(bool)
+        self._force_low = np.where(forced, model.actuator_forcerange[:, 0], -np.inf)
+        self._force_high = np.where(forced, model.actuator_forcerange[:, 1], np.inf)
+        moment = np.zeros((model.nv, model.nu))  # qfrc_actuator = moment @ force
+        moment[dof, np.arange(model.nu)] = gear
+        self._moment = moment
+        joint_limited = model.jnt_actfrclimited.astype(bool)
+        dof_joint = model.dof_jntid
+        self._joint_low = np.where(joint_limited, model.jnt_actfrcrange[:, 0], -np.inf)[dof_joint]
+        self._joint_high = np.where(joint_limited, model.jnt_actfrcrange[:, 1], np.inf)[dof_joint]
+        self._output = np.eye(model.nv) if force_input == "u" else system.force_matrix()
+        if model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_ACTUATION):
+            self._gain, self._bias = np.zeros_like(self._gain), np.zeros_like(self._bias)
+        self.state_dependent = bool(np.any(self._gain[:, 1:] != 0)
+                                    or np.any(self._bias[:, 1:] != 0))
+
+    def controls(self, t) -> np.ndarray:
+        """Clamped controls at times ``t``: shape (nu,) for a scalar, (len(t), nu) else.
+
+        Parameters
+        ----------
+        t : float or array, shape (N,)
+
+        Returns
+        -------
+        ndarray
+        """
+        times = np.atleast_1d(np.asarray(t, dtype=float))
+        if self.signals is None:
+            ctrl = np.zeros((len(times), self._nu))
+        else:
+            ctrl = np.asarray(self.signals(times), dtype=float).reshape(len(times), self._nu)
+        ctrl = np.clip(ctrl, self._ctrl_low, self._ctrl_high)
+        return ctrl[0] if np.ndim(t) == 0 else ctrl
+
+    def __call__(self, t, q=None, qd=None) -> np.ndarray:
+        """The forces at time(s) ``t`` and state(s) ``(q, qd)``.
+
+        Parameters
+        ----------
+        t : float or array, shape (N,)
+            Time(s).
+        q, qd : array, shape (n,) or (N, n), optional
+            Generalized positions and velocities; may be left out when the law is not
+            ``state_dependent``.
+
+        Returns
+        -------
+        ndarray
+            Shape (n,) for a scalar ``t`` and one state, (N, n) otherwise.
+
+        Raises
+        ------
+        ValueError
+            If the law depends on the state and ``q`` or ``qd`` is missing or of the wrong
+            shape.
+        """
+        ctrl = self.controls(t)
+        gain = self._gain[:, 0]
+        bias = self._bias[:, 0]
+        single = np.ndim(t) == 0
+        if self.state_dependent or q is not None or qd is not None:
+            if q is None or qd is None:
+                raise ValueError("q, qd: the actuator law depends on the state (a servo); give "
+                                 "positions and velocities")
+            q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+            for name, value in (("q", q), ("qd", qd)):
+                if value.shape[-1:] != (self.n,) or value.ndim > 2:
+                    raise ValueError(f"{name}: expected shape ({self.n},) or (N, {self.n}), "
+                                     f"got {value.shape}")
+            single = single and q.ndim == 1 and qd.ndim == 1
+            length, velocity = q @ self._length.T, qd @ self._length.T
+            gain = gain + self._gain[:, 1] * length + self._gain[:, 2] * velocity
+            bias = bias + self._bias[:, 1] * length + self._bias[:, 2] * velocity
+        force = np.clip(gain * ctrl + bias, self._force_low, self._force_high)
+        joint = np.clip(force @ self._moment.T, self._joint_low, self._joint_high)
+        values = joint @ self._output.T
+        return values.reshape(self.n) if single else values
+
+    def __repr__(self) -> str:
+        kind = "state-dependent" if self.state_dependent else "time-only"
+        return f"ActuatorLaw({kind}, n={self.n}, nu={self._nu}, force_input={self.force_input!r})"
+
+
+def actuator_law(system, signals=None, force_input: str = "tau") -> ActuatorLaw | None:
+    """The MJCF's actuator law driven by ``signals``, or None when MuJoCo's is another.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem or str
+        The system whose actuators are driven.
+    signals : callable, optional
+        ``signals(times) -> (len(times), nu)`` controls (e.g. a :class:`SumOfSinusoids`, the
+        ``info["signals"]`` of a trajectory); None: zero controls.
+    force_input : {"tau", "u"}, default "tau"
+        Generalized forces on the coordinates (``B @ qfrc_actuator``) or joint forces.
+
+    Returns
+    -------
+    ActuatorLaw or None
+        None when some actuator is outside the law of the module docstring (a tendon or site
+        transmission, activation dynamics, a muscle, actuator gravity compensation): its
+        forces cannot be written from the joint states alone.
+
+    Raises
+    ------
+    ValueError
+        If ``force_input`` is not "tau" or "u".
+
+    Examples
+    --------
+    >>> from pysindy_xl.mujoco import SumOfSinusoids
+    >>> law = actuator_law("cart-pole", SumOfSinusoids([[1.0], [0.0]], [[1.0], [1.0]],
+    ...                                                [[0.0], [0.0]]))
+    >>> law.state_dependent, law(0.25)  # a motor on the cart: a function of time
+    (False, array([1., 0.]))
+    """
+    system = get_system(system)
+    if force_input not in ("tau", "u"):
+        raise ValueError(f"force_input: expected 'tau' or 'u', got {force_input!r}")
+    if signals is not None and not callable(signals):
+        raise TypeError(f"signals: expected a function of time or None, got "
+                        f"{type(signals).__name__}")
+    model = system.mj_model()
+    if not all(_supported(model, a) for a in range(model.nu)):
+        return None
+    if np.any(getattr(model, "jnt_actgravcomp", 0)):
+        return None  # gravity compensation routed through the actuators
+    return ActuatorLaw(system, signals, force_input)
+
+
+def actuator_force_function(system, signals, force_input: str = "tau"):
+    """The forces MuJoCo's actuators apply under ``signals``, as a function of time.
+
+    Exact when the actuators' forces do not depend on the state (plain motors on joints:
+    ``qfrc_actuator = gear * clip(gain * clip(ctrl))``, linear in the clipped controls),
+    evaluated at any time; validation gives the identified model this continuous signal, the
+    one MuJoCo applies at each of its steps. For servos see :func:`actuator_law`.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem or str
+        The system whose actuators are driven.
+    signals : callable
+        ``signals(times) -> (len(times), nu)`` (e.g. a :class:`SumOfSinusoids`).
+    force_input : {"tau", "u"}, default "tau"
+        Generalized forces on the coordinates (``B @ qfrc_actuator``) or joint forces.
+
+    Returns
+    -------
+    callable or None
+        ``f(t) -> (n,)`` for a scalar ``t``, ``(len(t), n)`` for an array; None when the
+        forces depend on the state (servos) or an actuator is outside :func:`actuator_law`.
+
+    Examples
+    --------
+    >>> from pysindy_xl.mujoco import SumOfSinusoids
+    >>> force = SumOfSinusoids([[1.0], [0.0]], [[1.0], [1.0]], [[0.0], [0.0]])
+    >>> f = actuator_force_function("cart-pole", force)
+    >>> f(0.25)
+    array([1., 0.])
+    """
+    law = actuator_law(system, signals, force_input)
+    if law is None or law.state_dependent:
+        return None
+    return law

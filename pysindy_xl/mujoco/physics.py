@@ -1,0 +1,123 @@
+"""The identified mass matrix and unforced dynamics against MuJoCo's, at random states."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .systems import get_system
+
+__all__ = ["compare_physics"]
+
+
+
+def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8) -> dict:
+    """Compare the identified mass matrix and unforced dynamics with MuJoCo's at a few states.
+
+    At random states (``system.random_initial_state``, inside the joint ranges; states where a
+    contact is active after ``mj_forward`` are drawn again, since contact forces are not part
+    of the identified dynamics) the identified
+    equations ``M(q, qd) qdd = f(q, qd, u)`` are evaluated with ``u = 0`` and compared with
+    MuJoCo's ``mj_fullM`` and ``qfrc_passive - qfrc_bias + qfrc_constraint`` (gravity,
+    Coriolis, damping, springs, dry friction), both mapped to the system's coordinates
+    (``B M B^T``, ``B f``). An implicit (unforced) law is defined up to a factor: both are
+    first scaled by the least-squares factor that best matches the mass matrices.
+
+    Parameters
+    ----------
+    model : fitted XLSINDy
+        With dynamics (its equations contain accelerations).
+    system : MuJoCoSystem or str
+        The system the data came from.
+    n_states : int, default 5
+        Number of random states.
+    seed : int, optional
+        Seed of the states.
+    scale : float, default 0.8
+        Spread of the states (see ``random_initial_state``).
+
+    Returns
+    -------
+    dict
+        ``mass_error`` and ``force_error``: largest error relative to the largest entry of
+        MuJoCo's matrix / vector over the states; ``scale``: the factor applied to the
+        identified model (1 for a force-normalized fit); ``positive_definite``: the
+        identified mass matrix is positive definite at every state; ``condition``: its
+        largest condition number; ``unidentified``: names of the coordinates whose row of
+        the identified mass matrix is zero at every state (no inertia identified, e.g. a
+        passive body that no force excites: leave its joints out with ``joints=``);
+        ``contact_states_skipped``: random states drawn again because a contact was active.
+
+    Raises
+    ------
+    ValueError
+        If contacts are active at every one of ``20 * n_states`` random states.
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> from pysindy_xl.mujoco import generate_dataset, reference_catalog
+    >>> data = generate_dataset("cart-pole", n_trajectories=1, duration=1.0, seed=0,
+    ...                         progress=False)
+    >>> catalog = reference_catalog("cart-pole", "mixed", trig_degree=1)
+    >>> model = px.XLSINDy(catalog, px.ExplicitOptimizer()).fit(**data.fit_arguments())
+    >>> physics = compare_physics(model, "cart-pole")
+    >>> bool(physics["mass_error"] < 1e-6 and physics["force_error"] < 1e-6)
+    True
+    >>> physics["positive_definite"], physics["scale"]
+    (True, 1.0)
+    """
+    import mujoco
+
+    from .. import stack_variables
+
+    system = get_system(system)
+    dynamics = model._require_dynamics() if hasattr(model, "_require_dynamics") else None
+    if dynamics is None:
+        raise TypeError("model: expected a fitted XLSINDy with dynamics")
+    rng = np.random.default_rng(seed)
+    mj_model = system.mj_model()
+    data = mujoco.MjData(mj_model)
+    matrix = system.force_matrix()
+    q, qd = np.empty((n_states, system.n)), np.empty((n_states, system.n))
+    mass_ref = np.empty((n_states, system.n, system.n))
+    force_ref = np.empty((n_states, system.n))
+    full = np.empty((mj_model.nv, mj_model.nv))
+    skipped = 0
+    for k in range(n_states):
+        while True:  # MuJoCo evaluates one state per call
+            q[k], qd[k] = system.random_initial_state(rng, scale=scale)
+            data.qpos[:], data.qvel[:] = system.from_generalized(q[k], qd[k])
+            data.ctrl[:] = 0.0
+            mujoco.mj_forward(mj_model, data)
+            if data.ncon == 0:
+                break
+            skipped += 1
+            if skipped >= 20 * n_states:
+                raise ValueError(f"system: contacts act at {skipped} random states of "
+                                 f"{system!r}; lower scale or disable the contacts")
+        try:
+            mujoco.mj_fullM(mj_model, data, full)  # MuJoCo >= 3.4
+        except TypeError:
+            mujoco.mj_fullM(mj_model, full, data.qM)
+        mass_ref[k] = matrix @ full @ matrix.T
+        force_ref[k] = matrix @ (data.qfrc_passive - data.qfrc_bias + data.qfrc_constraint)
+    z = stack_variables(q, qd, None, np.zeros_like(q), np.zeros(n_states))
+    mass, force = dynamics.mass_and_forcing(z)
+    factor = float(np.sum(mass * mass_ref) / np.sum(mass * mass)) if np.any(mass) else 1.0
+    forces = model.feature_library_.force_columns_
+    if np.allclose(model.coefficients()[forces], -1.0):
+        factor = 1.0  # force-normalized: compare in absolute terms
+    mass, force = mass * factor, force * factor
+    eigenvalues = np.linalg.eigvalsh((mass + np.swapaxes(mass, 1, 2)) / 2)
+    empty = np.all(np.abs(mass) <= 1e-12 * max(np.abs(mass).max(), 1e-300), axis=(0, 2))
+    return {
+        "unidentified": [system.coordinate_names[i] for i in np.flatnonzero(empty)],
+        "contact_states_skipped": skipped,
+        "mass_error": float(np.abs(mass - mass_ref).max() / np.abs(mass_ref).max()),
+        "force_error": float(np.abs(force - force_ref).max()
+                             / max(np.abs(force_ref).max(), 1e-300)),
+        "scale": factor,
+        "positive_definite": bool(np.all(eigenvalues > 0)),
+        "condition": float(np.max(np.abs(eigenvalues).max(axis=1)
+                                  / np.maximum(np.abs(eigenvalues).min(axis=1), 1e-300))),
+    }
