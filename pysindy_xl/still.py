@@ -1,0 +1,198 @@
+r"""Coordinates that hold still in the data: found at fit time and left out of the regression.
+
+A body that never moves (a passive target beside an arm, a part resting on its support)
+carries no information about its own dynamics: its equation of motion reads ``0 = 0`` on the
+data, up to noise, and its inertia cannot be identified. Left in the regression it makes the
+fit fail (no law explains the noise of its rows; a mass matrix without inertia for it). Such
+a coordinate is *still*, and :class:`~pysindy_xl.XLSINDy` leaves it out of the regression:
+
+* **Criterion** (:func:`still_coordinates`). Coordinate :math:`i` is still when it is
+  undriven (no recorded generalized force acts on it: its rows of the force columns are
+  zero) and, on every trajectory :math:`k`, its recorded motion is not above the noise:
+
+  .. math::
+
+      \operatorname{std}_t q_i^{(k)}(t) \le \kappa \, \hat\sigma_i^{(k)}
+      \quad\text{or}\quad
+      \max_t q_i^{(k)} - \min_t q_i^{(k)} \le \epsilon \,(1 + \max_t |q_i^{(k)}|),
+
+  with :math:`\hat\sigma_i^{(k)}` the noise level of the positions, estimated robustly from
+  their third differences (which remove any smooth motion sampled finely enough):
+  :math:`\hat\sigma = 1.4826 \, \operatorname{MAD}(\Delta^3 q) / \sqrt{20}` (white noise of
+  standard deviation :math:`\sigma` has third differences of variance :math:`20 \sigma^2`),
+  :math:`\kappa` the ``hold_still`` threshold of the estimator and :math:`\epsilon = 10^{-12}`
+  (numerically constant). A sinusoid of amplitude :math:`A` has standard deviation
+  :math:`A / \sqrt 2`, so with :math:`\kappa = 3` a motion of more than about four noise
+  levels is kept.
+* **Leaving out** (:func:`still_columns`). The rows of still coordinates (their equations)
+  are removed, and so is every catalog column that, in the equations of the other
+  coordinates, is zero, involves a velocity, acceleration or force of a still coordinate, or
+  depends on the positions of still coordinates only (a constant on the data). The remaining
+  coordinates are identified as if the still body were absent; columns coupling a still
+  position with moving coordinates stay (the still position is a constant of their law).
+* **In the model** the still coordinates are held: their acceleration is zero
+  (:class:`~pysindy_xl.dynamics.CatalogDynamics` with ``held``), so they keep their initial
+  velocity in a simulation (zero for a body at rest), and the model says so in ``print()``,
+  the quality report and the CLI.
+
+A driven coordinate that does not move (a joint held by its motor) is never still: its
+equation, gravity against the recorded torque, carries information.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["noise_level", "still_coordinates", "still_columns", "block_rows", "held_note"]
+
+#: Relative range below which a recorded coordinate is numerically constant.
+_CONSTANT = 1e-12
+
+
+def noise_level(x) -> np.ndarray:
+    r"""Robust noise level of each column of ``x`` from its third differences.
+
+    ``1.4826 * MAD(diff(x, 3)) / sqrt(20)``: the standard deviation of white noise added to a
+    signal that is smooth at the sampling rate (its third differences are negligible), and
+    insensitive to a few outliers.
+
+    Parameters
+    ----------
+    x : array, shape (N, n)
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Zeros when ``N < 4``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> t = np.linspace(0, 10, 4001)[:, None]
+    >>> sigma = noise_level(np.sin(t) + 0.01 * rng.normal(size=t.shape))
+    >>> bool(abs(sigma[0] - 0.01) < 0.001)
+    True
+    """
+    x = np.asarray(x, dtype=float)
+    if x.shape[0] < 4:
+        return np.zeros(x.shape[1])
+    third = np.diff(x, n=3, axis=0)
+    mad = np.median(np.abs(third - np.median(third, axis=0)), axis=0)
+    return 1.4826 * mad / np.sqrt(20.0)
+
+
+def still_coordinates(positions, forced, threshold: float) -> np.ndarray:
+    """The coordinates that hold still in the data (see the module docstring).
+
+    Parameters
+    ----------
+    positions : list of array, shape (N_k, n)
+        Recorded positions, one array per trajectory.
+    forced : array of bool, shape (n,)
+        Coordinates on which a recorded force acts (never still).
+    threshold : float
+        ``kappa``: motion up to this many noise levels counts as noise.
+
+    Returns
+    -------
+    ndarray of bool, shape (n,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 10, 1001)
+    >>> x = np.column_stack([np.sin(t), np.full_like(t, 0.3), np.full_like(t, 0.3)])
+    >>> still_coordinates([x], np.array([False, False, True]), 3.0).tolist()
+    [False, True, False]
+    """
+    forced = np.asarray(forced, dtype=bool)
+    still = ~forced
+    for x in positions:
+        x = np.asarray(x, dtype=float)
+        spread = x.std(axis=0)
+        constant = np.ptp(x, axis=0) <= _CONSTANT * (1.0 + np.abs(x).max(axis=0))
+        still &= constant | (spread <= threshold * noise_level(x))
+    return still
+
+
+def still_columns(library, still) -> dict:
+    """Catalog columns left out with the still coordinates, with the reason.
+
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+    still : array of bool, shape (n,)
+
+    Returns
+    -------
+    dict of int to str
+        Column index -> reason, for the columns that are zero in the equations of the moving
+        coordinates, involve a velocity, acceleration or force of a still coordinate there,
+        or depend only on positions of still coordinates there.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x", "y"])
+    >>> lib = px.CatalogRepartition([px.LagrangeLibrary(
+    ...     c, [c.qd[0] ** 2, c.qd[1] ** 2, c.q[0] * c.q[1], c.q[1] ** 2])]).fit()
+    >>> lib.get_feature_names()
+    ['F[tau]', 'L[x_dot**2]', 'L[y_dot**2]', 'L[x*y]', 'L[y**2]']
+    >>> for j, reason in still_columns(lib, np.array([False, True])).items():
+    ...     print(j, reason)
+    2 only in the equations of still coordinates
+    3 a function of still coordinates' positions only
+    4 only in the equations of still coordinates
+    """
+    still = np.asarray(still, dtype=bool)
+    if not still.any():
+        return {}
+    coords = library.coords
+    matrix = library.symbolic_matrix_
+    moving = np.flatnonzero(~still)
+    held = np.flatnonzero(still)
+    motion = {symbol: coords.names[i] for i in held
+              for symbol in (coords.qd[i], coords.qdd[i], coords.tau[i])}
+    positions = {coords.q[i] for i in held}
+    reasons = {}
+    for j in range(matrix.shape[1]):
+        entries = [matrix[c, j] for c in moving if matrix[c, j] != 0]
+        if not entries:
+            reasons[j] = "only in the equations of still coordinates"
+            continue
+        symbols = set().union(*(e.free_symbols for e in entries))
+        involved = sorted({motion[s] for s in symbols if s in motion})
+        if involved:
+            reasons[j] = f"involves the motion of still coordinate(s) {', '.join(involved)}"
+        elif symbols & positions and not symbols - positions - {coords.t}:
+            reasons[j] = "a function of still coordinates' positions only"
+    return reasons
+
+
+def block_rows(n_blocks: int, n_rows: int, blocks) -> np.ndarray:
+    """Row indices of ``blocks`` (a boolean mask) in a matrix stacked coordinate-major.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> block_rows(3, 6, np.array([True, False, True])).tolist()
+    [0, 1, 4, 5]
+    """
+    per = n_rows // n_blocks
+    chosen = np.flatnonzero(np.asarray(blocks, dtype=bool))
+    return (chosen[:, None] * per + np.arange(per)).ravel()
+
+
+def held_note(names) -> str:
+    """The note that a model prints about its still coordinates (empty when none).
+
+    Examples
+    --------
+    >>> held_note(["target_x"])[:37]
+    'held still (no motion beyond the nois'
+    """
+    if not len(names):
+        return ""
+    return ("held still (no motion beyond the noise in the data and no force; left out of the "
+            f"regression, zero acceleration in the model): {', '.join(names)}")
