@@ -134,13 +134,13 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         data's bounding box, so it finds identities of the catalog, not the physical law.
     hold_still : float or False, default 3.0
         Leave out of the regression the coordinates that hold still in the data: undriven,
-        and on every trajectory with a position standard deviation of at most ``hold_still``
-        times the noise level estimated from the positions (or numerically constant); see
-        :mod:`pysindy_xl.still` for the criterion. Their equations and the catalog columns
-        that involve their motion (or only their positions) are removed, the other
-        coordinates are identified as if they were absent, and the model holds them (zero
-        acceleration), saying so in :meth:`print`. ``False``: every coordinate is fitted (a
-        numerically constant coordinate is then an error).
+        and on every trajectory at rest or in uniform motion up to ``hold_still`` times the
+        noise level estimated from the positions (the standard deviation of their departure
+        from a straight line in time); see :mod:`pysindy_xl.still` for the criterion.
+        Their equations and the catalog columns that involve their motion (or only their
+        positions) are removed, the other coordinates are identified as if they were
+        absent, and the model holds them (zero acceleration), saying so in :meth:`print`.
+        ``False``: every coordinate is fitted (a constant coordinate is then an error).
 
     Attributes
     ----------
@@ -338,7 +338,8 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             forced = np.any(force_block != 0, axis=(1, 2))
         still = np.zeros(n, dtype=bool)
         if self.hold_still is not False:
-            still = still_coordinates([d["x"] for d in data], forced, float(self.hold_still))
+            still = still_coordinates([d["x"] for d in data], [d["t"] for d in data],
+                                      forced, float(self.hold_still))
         self._check_moving(data, coords.names, still)
         moving = ~still
         # the equations of still coordinates and the columns of their motion leave the problem

@@ -8,22 +8,28 @@ a coordinate is *still*, and :class:`~pysindy_xl.XLSINDy` leaves it out of the r
 
 * **Criterion** (:func:`still_coordinates`). Coordinate :math:`i` is still when it is
   undriven (no recorded generalized force acts on it: its rows of the force columns are
-  zero) and, on every trajectory :math:`k`, its recorded motion is not above the noise:
+  zero) and, on every trajectory :math:`k`, its recorded motion departs from a uniform one
+  by no more than the noise. With :math:`r_i^{(k)}(t) = q_i^{(k)}(t) - a - b t` the residual
+  of the least-squares line through the positions,
 
   .. math::
 
-      \operatorname{std}_t q_i^{(k)}(t) \le \kappa \, \hat\sigma_i^{(k)}
+      \operatorname{std}_t r_i^{(k)} \le \kappa \, \hat\sigma_i^{(k)}
       \quad\text{or}\quad
-      \max_t q_i^{(k)} - \min_t q_i^{(k)} \le \epsilon \,(1 + \max_t |q_i^{(k)}|),
+      \max_t r_i^{(k)} - \min_t r_i^{(k)} \le \epsilon \,(1 + \max_t |q_i^{(k)}|),
 
   with :math:`\hat\sigma_i^{(k)}` the noise level of the positions, estimated robustly from
   their third differences (which remove any smooth motion sampled finely enough):
   :math:`\hat\sigma = 1.4826 \, \operatorname{MAD}(\Delta^3 q) / \sqrt{20}` (white noise of
   standard deviation :math:`\sigma` has third differences of variance :math:`20 \sigma^2`),
-  :math:`\kappa` the ``hold_still`` threshold of the estimator and :math:`\epsilon = 10^{-12}`
-  (numerically constant). A sinusoid of amplitude :math:`A` has standard deviation
+  :math:`\kappa` the ``hold_still`` threshold of the estimator and :math:`\epsilon = 10^{-9}`
+  (numerically uniform). A sinusoid of amplitude :math:`A` has standard deviation
   :math:`A / \sqrt 2`, so with :math:`\kappa = 3` a motion of more than about four noise
-  levels is kept.
+  levels is kept. A body at rest is the common case (:math:`b = 0`); a body drifting at
+  constant velocity is the same: its accelerations, all its equation could be identified
+  from, are zero. Such a body is decoupled from the coordinates that move: in a Lagrangian
+  system a coupling term acts on both sides, so it would accelerate the body as the others
+  move.
 * **Leaving out** (:func:`still_columns`). The rows of still coordinates (their equations)
   are removed, and so is every catalog column that, in the equations of the other
   coordinates, is zero, involves a velocity, acceleration or force of a still coordinate, or
@@ -45,8 +51,8 @@ import numpy as np
 
 __all__ = ["noise_level", "still_coordinates", "still_columns", "block_rows", "held_note"]
 
-#: Relative range below which a recorded coordinate is numerically constant.
-_CONSTANT = 1e-12
+#: Relative range of the departure from uniform motion below which it is numerical.
+_UNIFORM = 1e-9
 
 
 def noise_level(x) -> np.ndarray:
@@ -82,13 +88,15 @@ def noise_level(x) -> np.ndarray:
     return 1.4826 * mad / np.sqrt(20.0)
 
 
-def still_coordinates(positions, forced, threshold: float) -> np.ndarray:
+def still_coordinates(positions, times, forced, threshold: float) -> np.ndarray:
     """The coordinates that hold still in the data (see the module docstring).
 
     Parameters
     ----------
     positions : list of array, shape (N_k, n)
         Recorded positions, one array per trajectory.
+    times : list of array, shape (N_k,)
+        Their sample times.
     forced : array of bool, shape (n,)
         Coordinates on which a recorded force acts (never still).
     threshold : float
@@ -103,16 +111,21 @@ def still_coordinates(positions, forced, threshold: float) -> np.ndarray:
     >>> import numpy as np
     >>> t = np.linspace(0, 10, 1001)
     >>> x = np.column_stack([np.sin(t), np.full_like(t, 0.3), np.full_like(t, 0.3)])
-    >>> still_coordinates([x], np.array([False, False, True]), 3.0).tolist()
+    >>> still_coordinates([x], [t], np.array([False, False, True]), 3.0).tolist()
     [False, True, False]
+    >>> drift = np.column_stack([np.sin(t), 0.3 + 0.1 * t])  # uniform motion: still too
+    >>> still_coordinates([drift], [t], np.zeros(2, dtype=bool), 3.0).tolist()
+    [False, True]
     """
     forced = np.asarray(forced, dtype=bool)
     still = ~forced
-    for x in positions:
+    for x, t in zip(positions, times, strict=True):
         x = np.asarray(x, dtype=float)
-        spread = x.std(axis=0)
-        constant = np.ptp(x, axis=0) <= _CONSTANT * (1.0 + np.abs(x).max(axis=0))
-        still &= constant | (spread <= threshold * noise_level(x))
+        t = np.asarray(t, dtype=float)
+        line = np.column_stack([np.ones_like(t), t - t.mean()])
+        residual = x - line @ np.linalg.lstsq(line, x, rcond=None)[0]
+        uniform = np.ptp(residual, axis=0) <= _UNIFORM * (1.0 + np.abs(x).max(axis=0))
+        still &= uniform | (residual.std(axis=0) <= threshold * noise_level(x))
     return still
 
 
@@ -189,10 +202,10 @@ def held_note(names) -> str:
 
     Examples
     --------
-    >>> held_note(["target_x"])[:37]
-    'held still (no motion beyond the nois'
+    >>> held_note(["target_x"]).endswith("model): target_x"), held_note([])
+    (True, '')
     """
     if not len(names):
         return ""
-    return ("held still (no motion beyond the noise in the data and no force; left out of the "
-            f"regression, zero acceleration in the model): {', '.join(names)}")
+    return ("held still (no force and no acceleration beyond the noise in the data; left out "
+            f"of the regression, zero acceleration in the model): {', '.join(names)}")
