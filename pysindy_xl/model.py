@@ -40,7 +40,7 @@ from .regression import (
     differentiation_function,
     trajectory_data,
 )
-from .still import block_rows, still_columns, still_coordinates
+from .still import block_rows, driven_coordinates, still_columns, still_coordinates
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
 
@@ -268,7 +268,8 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
                                   differentiate=formulation == "strong", sample_mask=sample_mask)
         info = self.weak_info_ if formulation == self.formulation_ else None
         return build_regression(self.feature_library_, data, formulation, self.test_functions,
-                                self.smoother, None if info is None else info["half_width"])
+                                self.smoother, None if info is None else info["half_width"],
+                                moving=~self._held())
 
     # -- fit ---------------------------------------------------------------------------------
     def fit(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None):
@@ -326,8 +327,15 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
                 "feature_library: no term contains an acceleration; add Lagrangian terms with "
                 "velocities (e.g. q_dot**2) or classical terms in q_ddot"
             )
+        still = np.zeros(n, dtype=bool)
+        if self.hold_still is not False:
+            still = still_coordinates(
+                [d["x"] for d in data], [d["t"] for d in data],
+                driven_coordinates(library, None if u is None else [d["u"] for d in data]),
+                float(self.hold_still))
+        self._check_moving(data, coords.names, still)
         regression = build_regression(library, data, formulation, self.test_functions,
-                                      self.smoother)
+                                      self.smoother, moving=~still)
         theta, z, noise = regression.theta, regression.states, regression.noise
         self.weak_info_ = regression.weak_info
         library.check_domain(z)
@@ -336,11 +344,6 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             force_block = theta[:, library.force_columns_].reshape(n, -1,
                                                                    len(library.force_columns_))
             forced = np.any(force_block != 0, axis=(1, 2))
-        still = np.zeros(n, dtype=bool)
-        if self.hold_still is not False:
-            still = still_coordinates([d["x"] for d in data], [d["t"] for d in data],
-                                      forced, float(self.hold_still))
-        self._check_moving(data, coords.names, still)
         moving = ~still
         # the equations of still coordinates and the columns of their motion leave the problem
         left_out = still_columns(library, still)

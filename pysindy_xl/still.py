@@ -49,7 +49,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["noise_level", "still_coordinates", "still_columns", "block_rows", "held_note"]
+__all__ = ["noise_level", "driven_coordinates", "still_coordinates", "still_columns",
+           "block_rows", "held_note"]
 
 #: Relative range of the departure from uniform motion below which it is numerical.
 _UNIFORM = 1e-9
@@ -86,6 +87,42 @@ def noise_level(x) -> np.ndarray:
     third = np.diff(x, n=3, axis=0)
     mad = np.median(np.abs(third - np.median(third, axis=0)), axis=0)
     return 1.4826 * mad / np.sqrt(20.0)
+
+
+def driven_coordinates(library, forces) -> np.ndarray:
+    """The coordinates on which a recorded force acts through the catalog's force columns.
+
+    Coordinate ``c`` is driven when an entry of a force column in its equation contains the
+    force ``tau_k`` of a coordinate ``k`` whose recorded force is not zero everywhere.
+
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+    forces : list of array (N_k, n) or None
+        Recorded generalized forces per trajectory (None: unforced).
+
+    Returns
+    -------
+    ndarray of bool, shape (n,)
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x", "y"])
+    >>> lib = px.CatalogRepartition([px.LagrangeLibrary(c, [c.qd[0] ** 2])]).fit()
+    >>> driven_coordinates(lib, [np.array([[1.0, 0.0], [2.0, 0.0]])]).tolist()
+    [True, False]
+    """
+    coords = library.coords
+    n = coords.n
+    if forces is None or all(u is None for u in forces):
+        return np.zeros(n, dtype=bool)
+    acting = np.any([np.any(np.asarray(u) != 0, axis=0) for u in forces if u is not None],
+                    axis=0)
+    matrix = library.symbolic_matrix_
+    return np.array([any(acting[k] for j in library.force_columns_
+                         for k, tau in enumerate(coords.tau) if tau in matrix[c, j].free_symbols)
+                     for c in range(n)], dtype=bool)
 
 
 def still_coordinates(positions, times, forced, threshold: float) -> np.ndarray:
