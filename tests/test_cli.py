@@ -285,6 +285,21 @@ def test_demo_holds_a_passive_body_still(tmp_path, capsys):
     assert report["physics"]["mass_error"] < 1e-6
     assert report["validation"]["valid"] is True
 
+
+def test_demo_names_a_passive_body_and_how_to_leave_it_out(tmp_path, capsys):
+    assert main(["demo", str(MODELS / "pendulum_and_target.xml"), "--trig-degree", "1",
+                 "--no-hold-still", "--out", str(tmp_path), *SHORT]) == 0
+    printed = capsys.readouterr().out
+    assert "no inertia identified for target_x, target_y" in printed
+    assert "--joints swing" in printed
+    report = read_report(tmp_path)
+    assert report["physics"]["unidentified"] == ["target_x", "target_y"]
+    assert report["validation"]["valid"] is False
+    # never "RMSE 0 ... INVALID": no finite error (null in the strict JSON report)
+    assert report["validation"]["position_rmse"] is None
+    assert report["validation"]["divergence_time"] is not None
+    assert "position RMSE inf" in printed
+
 def test_identify_out_checked_before_fitting(tmp_path, capsys):
     data = tmp_path / "data.npz"
     assert main(["generate", "cart-pole", str(data), "--duration", "0.5",
