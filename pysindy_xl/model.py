@@ -132,7 +132,7 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         (see :func:`~pysindy_xl.optimizers.independent_columns`): a sparse regression on an
         exactly rank-deficient matrix is a lottery. The test runs on random points of the
         data's bounding box, so it finds identities of the catalog, not the physical law.
-    hold_still : float or False, default 3.0
+    hold_still : float or False, default 2.0
         Leave out of the regression the coordinates that hold still in the data: undriven,
         and on every trajectory at rest or in uniform motion up to ``hold_still`` times the
         noise level estimated from the positions (the standard deviation of their departure
@@ -194,7 +194,7 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
 
     def __init__(self, feature_library=None, optimizer=None, differentiation_method=None,
                  drop_dependent=True, formulation="auto", test_functions=None, smoother=None,
-                 t_default=1.0, blas_threads=1, residual_covariance="auto", hold_still=3.0):
+                 t_default=1.0, blas_threads=1, residual_covariance="auto", hold_still=2.0):
         self.feature_library = feature_library
         self.optimizer = optimizer
         self.differentiation_method = differentiation_method

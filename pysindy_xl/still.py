@@ -23,9 +23,14 @@ a coordinate is *still*, and :class:`~pysindy_xl.XLSINDy` leaves it out of the r
   :math:`\hat\sigma = 1.4826 \, \operatorname{MAD}(\Delta^3 q) / \sqrt{20}` (white noise of
   standard deviation :math:`\sigma` has third differences of variance :math:`20 \sigma^2`),
   :math:`\kappa` the ``hold_still`` threshold of the estimator and :math:`\epsilon = 10^{-9}`
-  (numerically uniform). A sinusoid of amplitude :math:`A` has standard deviation
-  :math:`A / \sqrt 2`, so with :math:`\kappa = 3` a motion of more than about four noise
-  levels is kept. A body at rest is the common case (:math:`b = 0`); a body drifting at
+  (numerically uniform). Pure noise gives a ratio
+  :math:`\operatorname{std} r / \hat\sigma` close to 1; a sinusoid of amplitude :math:`A`
+  under the noise gives :math:`\sqrt{1 + A^2 / (2 \sigma^2)}`, so with the default
+  :math:`\kappa = 2` a motion of amplitude above about 2.5 noise levels keeps its
+  coordinate in the regression. The margin to 1 leaves room for the estimators' scatter on
+  short trajectories; the margin to larger values keeps coupled coordinates that move little
+  (a heavy cart under a pendulum) whose motion, though small, is resolved over many samples.
+  A body at rest is the common case (:math:`b = 0`); a body drifting at
   constant velocity is the same: its accelerations, all its equation could be identified
   from, are zero. Such a body is decoupled from the coordinates that move: in a Lagrangian
   system a coupling term acts on both sides, so it would accelerate the body as the others

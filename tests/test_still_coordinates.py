@@ -117,7 +117,7 @@ def test_round_trip_keeps_the_still_set(systems, tmp_path):
     model.save(path)
     x0, t = np.r_[0.5, REST, 1.0, 0.1, 0.0], np.linspace(0, 1, 11)
     for loaded in (px.XLSINDy.load(path), pickle.loads(pickle.dumps(model))):
-        assert loaded.still_coordinates_ == TARGET and loaded.hold_still == 3.0
+        assert loaded.still_coordinates_ == TARGET and loaded.hold_still == 2.0
         assert loaded.equations() == model.equations()
         np.testing.assert_array_equal(loaded.simulate(x0, t), model.simulate(x0, t))
 

@@ -181,7 +181,7 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
     catalog = reference_catalog(system, args.catalog, velocity_degree=args.velocity_degree,
                                 trig_degree=args.trig_degree, friction=args.friction)
     model = px.XLSINDy(catalog, optimizer, formulation=getattr(args, "formulation", "auto"),
-                       hold_still=3.0 if getattr(args, "hold_still", True) else False)
+                       **({} if getattr(args, "hold_still", True) else {"hold_still": False}))
     try:
         arguments = dataset.fit_arguments(forces="tau" if forced else None,
                                           constraints=getattr(args, "constraints", "exclude"))
