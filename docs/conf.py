@@ -53,6 +53,7 @@ API_MODULES = [
     "pysindy_xl.feature_library",
     "pysindy_xl.optimizers",
     "pysindy_xl.regression",
+    "pysindy_xl.still",
     "pysindy_xl.weak",
     "pysindy_xl.diagnostics",
     "pysindy_xl.dynamics",

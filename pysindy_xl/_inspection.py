@@ -25,6 +25,7 @@ from ._equations import (
 )
 from ._inputs import check_array, sample_times
 from .regression import differentiation_function
+from .still import held_note
 from .weak import WhittakerSmoother
 
 __all__ = ["InspectionMixin"]
@@ -110,9 +111,16 @@ class InspectionMixin:
         Returns
         -------
         list of str
+            A coordinate held still (``still_coordinates_``) reads ``<name>_ddot = 0 (held
+            still)``.
         """
         check_is_fitted(self, "coef_")
-        return equation_strings(self.coef_, self.feature_library_, precision)
+        coords = self.feature_library_.coords
+        held = set(getattr(self, "still_coordinates_", ()))
+        return [f"{coords.qdd[i]} = 0 (held still)" if name in held else equation
+                for i, (name, equation) in enumerate(zip(
+                    coords.names, equation_strings(self.coef_, self.feature_library_,
+                                                   precision), strict=True))]
 
     def lagrangian(self) -> sp.Expr:
         """Identified Lagrangian.
@@ -175,9 +183,11 @@ class InspectionMixin:
             Print the Lagrangian and the equations of motion. Default: True, except for a
             catalog whose terms stand for physical parameters (a robot's kinematic catalog)
             and whose equations run for pages. Such a catalog's :meth:`physical_parameters`
-            are printed in any case.
+            are printed in any case, and so is the note on coordinates held still
+            (``still_coordinates_``).
         """
         check_is_fitted(self, "coef_")
+        note = held_note(getattr(self, "still_coordinates_", ()))
         if uncertainty:
             if self.inclusion_probability_ is None:
                 raise ValueError("uncertainty: needs a fit with an EnsembleOptimizer")
@@ -188,11 +198,12 @@ class InspectionMixin:
         if has_parameter_map(self.feature_library_):
             for line in parameter_lines(self.physical_parameters(), precision):
                 print(line)
-        if not prints_equations(self, equations):
-            return
-        lagrangian = self.lagrangian()
-        if lagrangian != 0:
-            print(f"L = {significant(lagrangian, precision)}")
-        for name, eq in zip(self.feature_library_.coords.names, self.equations(precision),
-                            strict=True):
-            print(f"({name}) {eq}")
+        if prints_equations(self, equations):
+            lagrangian = self.lagrangian()
+            if lagrangian != 0:
+                print(f"L = {significant(lagrangian, precision)}")
+            for name, eq in zip(self.feature_library_.coords.names, self.equations(precision),
+                                strict=True):
+                print(f"({name}) {eq}")
+        if note:
+            print(note)

@@ -469,6 +469,10 @@ class CatalogDynamics(MassMatrixDynamics):
         The catalog (``coords`` and ``symbolic_matrix_``).
     coef : array, shape (F,)
         One coefficient per feature; only the non-zero ones are read.
+    held : array of bool, shape (n,), optional
+        Coordinates held by the model (coordinates that stood still in the data, see
+        :mod:`pysindy_xl.still`): their equation is replaced by ``qdd_c = 0`` (a unit row of
+        ``M``, zero ``f``), whatever the catalog's entries in it.
 
     Examples
     --------
@@ -482,20 +486,23 @@ class CatalogDynamics(MassMatrixDynamics):
     (Matrix([[2.0]]), Matrix([[1.0*tau_x - 3.0*x]]))
     """
 
-    def __init__(self, library, coef):
+    def __init__(self, library, coef, held=None):
         coef = np.asarray(coef, dtype=float)
         index = library.entry_index_
-        active = np.flatnonzero(coef[index[:, 1]])
-        terms = library.column_terms()
         self.coords = library.coords
         self._n = self.coords.n
+        held = np.zeros(self._n, dtype=bool) if held is None else np.asarray(held, dtype=bool)
+        if held.shape != (self._n,):
+            raise ValueError(f"held: expected {self._n} flags, got shape {held.shape}")
+        active = np.flatnonzero((coef[index[:, 1]] != 0) & ~held[index[:, 0]])
+        terms = library.column_terms()
         if _acceleration_in_a_factor(terms, self.coords):  # expanded, then split
             terms = decompose([sp.expand(library.symbolic_matrix_[c, j])
                                for c, j in index[active]])
         else:
             terms = Terms(terms.atoms, [terms.entries[k] for k in active])
         self._terms = _mass_and_forcing_terms(self.coords, terms, index[active, 0],
-                                              coef[index[active, 1]])
+                                              coef[index[active, 1]], held)
         self._compile()
 
     @property
@@ -528,9 +535,10 @@ def _acceleration_in_a_factor(terms: Terms, coords) -> bool:
                if atom not in accelerations)
 
 
-def _mass_and_forcing_terms(coords, terms: Terms, rows, weights) -> Terms:
+def _mass_and_forcing_terms(coords, terms: Terms, rows, weights, held=None) -> Terms:
     """The :class:`Terms` of ``M`` (n * n entries, row-major) and ``f`` (n entries) of the
-    equations ``sum_k weights[k] entry_k = 0``, ``entry_k`` in the equation of ``rows[k]``."""
+    equations ``sum_k weights[k] entry_k = 0``, ``entry_k`` in the equation of ``rows[k]``;
+    the equations of ``held`` coordinates (a mask, none of the ``rows``) are ``qdd_c = 0``."""
     n = coords.n
     if _acceleration_in_a_factor(terms, coords):
         raise ValueError("equations: not linear in the accelerations")
@@ -550,6 +558,8 @@ def _mass_and_forcing_terms(coords, terms: Terms, rows, weights) -> Terms:
             else:
                 raise ValueError("equations: not linear in the accelerations")
             sums[target][monomial] = sums[target].get(monomial, 0.0) + value
+    for c in np.flatnonzero(held) if held is not None else ():
+        sums[c * n + c] = {(): 1.0}
     return Terms(terms.atoms, [[(float(coef), key) for key, coef in entry.items() if coef != 0]
                                for entry in sums])
 

@@ -101,6 +101,7 @@ def save_model(model, path) -> None:
         "coefficients": [float(c) for c in model.coef_],
         "dropped_features": model.dropped_features_,
         "forced_coordinates": [bool(f) for f in model.forced_coordinates_],
+        "still_coordinates": [str(name) for name in getattr(model, "still_coordinates_", ())],
         "optimizer": optimizer.to_spec() if hasattr(optimizer, "to_spec") else None,
     }
     if getattr(model, "inclusion_probability_", None) is not None:
@@ -238,6 +239,10 @@ def read_model_file(path) -> ModelFile:
     _expect(isinstance(forced, list) and len(forced) == coords.n
             and all(isinstance(f, bool) for f in forced), path,
             "'forced_coordinates' must have one flag (true or false) per coordinate")
+    still = document.get("still_coordinates", [])  # absent in files of older versions
+    _expect(isinstance(still, list) and len(set(still)) == len(still)
+            and all(isinstance(name, str) and name in coords.names for name in still), path,
+            "'still_coordinates' must be a list of distinct coordinate names")
     dropped = document.get("dropped_features", {})
     _expect(isinstance(dropped, dict), path, "'dropped_features' must be an object")
     spec = document.get("optimizer")
@@ -253,6 +258,7 @@ def read_model_file(path) -> ModelFile:
         "dropped_features_": {str(k): str(v) for k, v in dropped.items()},
         "n_coordinates_": coords.n,
         "forced_coordinates_": np.asarray(forced, dtype=bool),
+        "still_coordinates_": list(still),
         "inclusion_probability_": probability,
         "coef_interval_": interval,
         **_training_from_document(document.get("training"), len(feature_names), path),
@@ -303,7 +309,7 @@ def _library_from_document(document, coords, path) -> CatalogRepartition:
 
 #: XLSINDy parameters that are plain values, and the objects saved as a type and plain params
 _PLAIN_SETTINGS = ("drop_dependent", "formulation", "t_default", "blas_threads",
-                   "residual_covariance")
+                   "residual_covariance", "hold_still")
 _OBJECT_SETTINGS = ("test_functions", "smoother", "differentiation_method")
 _NON_FINITE = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}
 

@@ -6,6 +6,7 @@ import dataclasses
 import warnings
 
 import numpy as np
+import sympy as sp
 import threadpoolctl
 from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_is_fitted
@@ -39,6 +40,7 @@ from .regression import (
     differentiation_function,
     trajectory_data,
 )
+from .still import block_rows, driven_coordinates, still_columns, still_coordinates
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
 
@@ -130,6 +132,15 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         (see :func:`~pysindy_xl.optimizers.independent_columns`): a sparse regression on an
         exactly rank-deficient matrix is a lottery. The test runs on random points of the
         data's bounding box, so it finds identities of the catalog, not the physical law.
+    hold_still : float or False, default 2.0
+        Leave out of the regression the coordinates that hold still in the data: undriven,
+        and on every trajectory at rest or in uniform motion up to ``hold_still`` times the
+        noise level estimated from the positions (the standard deviation of their departure
+        from a straight line in time); see :mod:`pysindy_xl.still` for the criterion.
+        Their equations and the catalog columns that involve their motion (or only their
+        positions) are removed, the other coordinates are identified as if they were
+        absent, and the model holds them (zero acceleration), saying so in :meth:`print`.
+        ``False``: every coordinate is fitted (a constant coordinate is then an error).
 
     Attributes
     ----------
@@ -138,6 +149,9 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
     coef_ : ndarray, shape (F,)
     dropped_features_ : dict of str to str
         Features removed before regression, with the reason.
+    still_coordinates_ : list of str
+        Coordinates that held still in the data (``hold_still``): left out of the regression
+        and held by the model (zero acceleration).
     dynamics_ : CatalogDynamics
         The identified equations in mass-matrix form (``None`` if they contain no acceleration).
     n_coordinates_ : int
@@ -180,7 +194,7 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
 
     def __init__(self, feature_library=None, optimizer=None, differentiation_method=None,
                  drop_dependent=True, formulation="auto", test_functions=None, smoother=None,
-                 t_default=1.0, blas_threads=1, residual_covariance="auto"):
+                 t_default=1.0, blas_threads=1, residual_covariance="auto", hold_still=2.0):
         self.feature_library = feature_library
         self.optimizer = optimizer
         self.differentiation_method = differentiation_method
@@ -191,6 +205,7 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         self.t_default = t_default
         self.blas_threads = blas_threads
         self.residual_covariance = residual_covariance
+        self.hold_still = hold_still
 
     # -- data handling -----------------------------------------------------------------------
     def _library(self) -> CatalogRepartition:
@@ -253,7 +268,8 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
                                   differentiate=formulation == "strong", sample_mask=sample_mask)
         info = self.weak_info_ if formulation == self.formulation_ else None
         return build_regression(self.feature_library_, data, formulation, self.test_functions,
-                                self.smoother, None if info is None else info["half_width"])
+                                self.smoother, None if info is None else info["half_width"],
+                                moving=~self._held())
 
     # -- fit ---------------------------------------------------------------------------------
     def fit(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None):
@@ -305,45 +321,64 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         formulation = self._resolve_formulation(x_dot, x_ddot)
         data = self._trajectories(x, t, x_dot, x_ddot, u, n,
                                   differentiate=formulation == "strong", sample_mask=sample_mask)
-        self._check_moving(data, coords.names)
         if not any(library.symbolic_matrix_[:, j].free_symbols & set(coords.qdd)
                    for j in range(library.n_output_features_)):
             raise ValueError(
                 "feature_library: no term contains an acceleration; add Lagrangian terms with "
                 "velocities (e.g. q_dot**2) or classical terms in q_ddot"
             )
+        still = np.zeros(n, dtype=bool)
+        if self.hold_still is not False:
+            still = still_coordinates(
+                [d["x"] for d in data], [d["t"] for d in data],
+                driven_coordinates(library, None if u is None else [d["u"] for d in data]),
+                float(self.hold_still))
+        self._check_moving(data, coords.names, still)
         regression = build_regression(library, data, formulation, self.test_functions,
-                                      self.smoother)
+                                      self.smoother, moving=~still)
         theta, z, noise = regression.theta, regression.states, regression.noise
         self.weak_info_ = regression.weak_info
         library.check_domain(z)
-        if self.drop_dependent:
-            keep, dropped = independent_columns(
-                library.transform(_probe_points(z)), library.column_priority(),
-                n_blocks=n, force_columns=library.force_columns_,
-            )
-        else:
-            keep, dropped = np.arange(theta.shape[1]), {}
-        force_columns = [int(np.flatnonzero(keep == j)[0]) for j in library.force_columns_
-                         if j in keep]
         forced = np.zeros(n, dtype=bool)
         if u is not None:
             force_block = theta[:, library.force_columns_].reshape(n, -1,
                                                                    len(library.force_columns_))
             forced = np.any(force_block != 0, axis=(1, 2))
+        moving = ~still
+        # the equations of still coordinates and the columns of their motion leave the problem
+        left_out = still_columns(library, still)
+        candidates = np.setdiff1d(np.arange(theta.shape[1]), list(left_out))
+        if self.drop_dependent:
+            probe = library.transform(_probe_points(z))
+            order = library.column_priority()
+            order = order[np.isin(order, candidates)]
+            local, dropped = independent_columns(
+                probe[block_rows(n, probe.shape[0], moving)][:, candidates],
+                np.searchsorted(candidates, order), n_blocks=int(moving.sum()),
+                force_columns=np.flatnonzero(np.isin(candidates, library.force_columns_)))
+            keep = candidates[local]
+            dropped = {int(candidates[j]): reason for j, reason in dropped.items()}
+        else:
+            keep, dropped = candidates, {}
+        dropped.update(left_out)
+        force_columns = [int(np.flatnonzero(keep == j)[0]) for j in library.force_columns_
+                         if j in keep]
         if u is None and (self.optimizer == "explicit"
                           or getattr(self.optimizer, "requires_forces", False)):
             raise ValueError(
                 "u: explicit regression needs the generalized forces; pass u, or use "
                 "ImplicitOptimizer / MixedOptimizer for unforced data"
             )
-        optimizer = self._optimizer(forced, estimated=noise is not None)
+        optimizer = self._optimizer(forced[moving], estimated=noise is not None)
         mass = None
         if noise is not None and getattr(optimizer, "uses_mass_matrices", False):
-            mass = column_mass_matrices(library, z)[:, keep]
+            mass = column_mass_matrices(library, z)[:, keep][:, :, moving][:, :, :, moving]
+        if noise is not None:
+            noise = noise.columns(keep)
+            noise = noise.coordinates(moving) if still.any() else noise
         optimizer = self._fit_optimizer(optimizer, CatalogProblem.from_arrays(
-            theta[:, keep], n, force_columns, mass_matrices=mass),
-            None if noise is None else noise.columns(keep), forced)
+            theta[block_rows(n, theta.shape[0], moving)][:, keep], int(moving.sum()),
+            force_columns, mass_matrices=mass), noise, forced[moving])
         coef = np.zeros(theta.shape[1])
         coef[keep] = optimizer.coef_
         self.feature_library_ = library
@@ -360,6 +395,8 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         self.n_coordinates_ = n
         self.n_samples_ = z.shape[0]
         self.forced_coordinates_ = forced
+        self.still_coordinates_ = [name for name, held in zip(coords.names, still, strict=True)
+                                   if held]
         self.formulation_ = formulation
         self.selection_ = getattr(optimizer, "selection_", None)
         self._build_dynamics()
@@ -369,6 +406,8 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
     def _check_options(self):
         """Options of the estimator, checked at the start of fit (one layer: _validation)."""
         check_option("drop_dependent", self.drop_dependent, "bool")
+        if self.hold_still is not False:  # a threshold; True is refused (not a number)
+            check_option("hold_still", self.hold_still, "real", low=0)
         value = self.residual_covariance
         if not (isinstance(value, (bool, np.bool_)) or (isinstance(value, str)
                                                           and value == "auto")):
@@ -394,10 +433,14 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
                 check_instance(name, value, name.replace("_", " "))
 
     @staticmethod
-    def _check_moving(data, names):
-        """Refuse coordinates that never move: they carry no dynamics to identify."""
+    def _check_moving(data, names, still):
+        """Refuse coordinates that never move unless held (``still``): they carry no dynamics
+        to identify; and data where every coordinate holds still."""
+        if still.all():
+            raise ValueError("x: no coordinate moves beyond the noise of the positions; there "
+                             "are no dynamics to identify")
         for i, name in enumerate(names):
-            if all(np.ptp(d["x"][:, i]) == 0 for d in data):
+            if not still[i] and all(np.ptp(d["x"][:, i]) == 0 for d in data):
                 raise ValueError(f"x: coordinate {name!r} is constant on every sample; a "
                                  "coordinate that never moves carries no dynamics to identify")
 
@@ -409,8 +452,11 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             return
         mass, eig = mass_matrices(self.dynamics_, z)
         library = self.feature_library_
-        self.coef_, flipped = orient_free_laws(self.coef_, library.symbolic_matrix_,
-                                               library.force_columns_, mass)
+        matrix = library.symbolic_matrix_.copy()
+        for c in np.flatnonzero(self._held()):  # held equations are not the catalog's
+            matrix[c, :] = sp.zeros(1, matrix.shape[1])
+        self.coef_, flipped = orient_free_laws(self.coef_, matrix, library.force_columns_,
+                                               mass)
         if flipped:
             self._build_dynamics()
             mass, eig = mass_matrices(self.dynamics_, z)
@@ -495,7 +541,13 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         accelerations = set(library.coords.qdd)
         has_acc = any(library.symbolic_matrix_[:, j].free_symbols & accelerations
                       for j in np.flatnonzero(self.coef_))
-        self.dynamics_ = CatalogDynamics(library, self.coef_) if has_acc else None
+        self.dynamics_ = CatalogDynamics(library, self.coef_, self._held()) if has_acc \
+            else None
+
+    def _held(self) -> np.ndarray:
+        """Mask of the coordinates held by the model (``still_coordinates_``)."""
+        names = self.feature_library_.coords.names
+        return np.isin(names, list(getattr(self, "still_coordinates_", ())))
 
     # -- persistence ---------------------------------------------------------------------------
     @classmethod

@@ -43,7 +43,9 @@ def fit_quality(model, arguments) -> dict:
         selected from noisy data, else ``None``: about 1 when the law leaves only noise) and
         ``stability`` (after an ensemble fit, the default for noisy positions: the kept term
         selected least often and the dropped term selected most often by the subsample fits,
-        each as ``[name, fraction]``, else ``None``).
+        each as ``[name, fraction]``, else ``None``) and ``held_still`` (the coordinates the
+        model holds still, ``still_coordinates_``: their equations were not identified, and
+        their rows are left out of the R^2).
 
     Raises
     ------
@@ -70,7 +72,12 @@ def fit_quality(model, arguments) -> dict:
     fit_keys = ("x", "t", "x_dot", "x_ddot", "u", "sample_mask")
     theta = model.regression(**{key: arguments.get(key) for key in fit_keys}).theta
     coef = model.coef_
-    n = model.n_coordinates_
+    names = model.feature_library_.coords.names
+    held = list(getattr(model, "still_coordinates_", ()))
+    moving = ~np.isin(names, held)
+    theta = theta.reshape(len(names), -1, theta.shape[1])[moving].reshape(-1, theta.shape[1])
+    names = [name for name, m in zip(names, moving, strict=True) if m]
+    n = len(names)
     forces = list(model.feature_library_.force_columns_)
     residual = theta @ coef
     forced = bool(forces) and np.any(coef[forces] != 0) and np.any(theta[:, forces] != 0)
@@ -85,7 +92,6 @@ def fit_quality(model, arguments) -> dict:
         denominator = float(b @ b)
         return float(1 - (r @ r) / denominator) if denominator > 0 else float("nan")
 
-    names = model.feature_library_.coords.names
     per = {name: r2(r, b) for name, r, b in zip(names, residual.reshape(n, -1),
                                                 target.reshape(n, -1), strict=True)}
     selection = getattr(model, "selection_", None)
@@ -95,7 +101,8 @@ def fit_quality(model, arguments) -> dict:
             held_out[key] = float(getattr(selection, attribute)[selection.size - 1])
     return {"r2": r2(residual, target), "r2_per_coordinate": per,
             "formulation": model.formulation_, "target": target_name,
-            "rows": int(theta.shape[0]), **held_out, "stability": _stability(model)}
+            "rows": int(theta.shape[0]), **held_out, "stability": _stability(model),
+            "held_still": held}
 
 
 def force_prediction(model, x, t, u, x_dot=None, x_ddot=None) -> dict:
@@ -220,6 +227,9 @@ def quality_lines(quality) -> list:
             line += (";" if kept is not None else "") + (
                 f" the most frequent dropped term in {dropped[1]:.0%} ({dropped[0]})")
         lines.append(line)
+    if quality.get("held_still"):
+        lines.append(f"  not identified, held still: {', '.join(quality['held_still'])} (no "
+                     "force and no acceleration beyond the noise in the data)")
     if quality.get("cv_noise_ratio") is not None:
         lines.append(f"  held-out noise ratio of the chosen law (5-fold cross-validation; about "
                      f"1 when it leaves only the propagated noise): "

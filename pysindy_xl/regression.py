@@ -129,7 +129,7 @@ def trajectory_data(x, t, x_dot, x_ddot, u, n: int, sample_mask=None,
 
 
 def build_regression(library, data, formulation: str, test_functions=None, smoother=None,
-                     half_width=None) -> Regression:
+                     half_width=None, moving=None) -> Regression:
     """The rows of a fitted catalog on trajectories, in the strong or weak formulation.
 
     Parameters
@@ -143,6 +143,9 @@ def build_regression(library, data, formulation: str, test_functions=None, smoot
         is copied (smoothing fits it).
     half_width : float, optional
         Weak form: the test functions' half-width (default: chosen from the data, as in a fit).
+    moving : array of bool, shape (n,), optional
+        Weak form: the coordinates whose spectra choose the default half-width (default all;
+        a fit leaves out those that hold still, :mod:`pysindy_xl.still`).
 
     Returns
     -------
@@ -162,7 +165,7 @@ def build_regression(library, data, formulation: str, test_functions=None, smoot
         theta, states, noise, info = weak_regression(
             library, data, test_functions or BumpTestFunctions(),
             copy.deepcopy(smoother) or WhittakerSmoother(), noise="draws",
-            half_width=half_width)
+            half_width=half_width, width_columns=moving)
         return Regression(theta, states, "weak", noise, info)
     if formulation != "strong":
         raise ValueError(f"formulation: expected 'strong' or 'weak', got {formulation!r}")

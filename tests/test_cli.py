@@ -270,9 +270,25 @@ def test_amplitude_option_checked():
     assert info.value.code == 2
 
 
-def test_demo_names_a_passive_body_and_how_to_leave_it_out(tmp_path, capsys):
+def test_demo_holds_a_passive_body_still(tmp_path, capsys):
+    # the passive target drifts at its initial velocity, undriven and decoupled: its
+    # coordinates leave the regression and the model holds them (issue 34)
     assert main(["demo", str(MODELS / "pendulum_and_target.xml"), "--trig-degree", "1",
                  "--out", str(tmp_path), *SHORT]) == 0
+    printed = capsys.readouterr().out
+    assert "held still" in printed and "target_x, target_y" in printed
+    assert "no inertia identified" not in printed
+    report = read_report(tmp_path)
+    assert report["still_coordinates"] == ["target_x", "target_y"]
+    assert report["physics"]["held"] == ["target_x", "target_y"]
+    assert report["physics"]["unidentified"] == []
+    assert report["physics"]["mass_error"] < 1e-6
+    assert report["validation"]["valid"] is True
+
+
+def test_demo_names_a_passive_body_and_how_to_leave_it_out(tmp_path, capsys):
+    assert main(["demo", str(MODELS / "pendulum_and_target.xml"), "--trig-degree", "1",
+                 "--no-hold-still", "--out", str(tmp_path), *SHORT]) == 0
     printed = capsys.readouterr().out
     assert "no inertia identified for target_x, target_y" in printed
     assert "--joints swing" in printed
@@ -283,7 +299,6 @@ def test_demo_names_a_passive_body_and_how_to_leave_it_out(tmp_path, capsys):
     assert report["validation"]["position_rmse"] is None
     assert report["validation"]["divergence_time"] is not None
     assert "position RMSE inf" in printed
-
 
 def test_identify_out_checked_before_fitting(tmp_path, capsys):
     data = tmp_path / "data.npz"

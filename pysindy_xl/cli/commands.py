@@ -169,6 +169,7 @@ def run_demo(args) -> dict:
         "coefficients": model.coefficients().tolist(),
         "true_coefficients": None if truth is None else truth.tolist(),
         "dropped_features": model.dropped_features_,
+        "still_coordinates": list(model.still_coordinates_),
         "physical_parameters": model.physical_parameters(),
         "lagrangian": str(model.lagrangian()),
         "equations": model.equations(),

@@ -77,6 +77,10 @@ def _add_fit_options(parser):
                              "integrated against test functions on smoothed positions, the "
                              "robust choice for noisy positions; auto: strong when velocities "
                              "and accelerations are in the data, weak otherwise (default: auto)")
+    parser.add_argument("--no-hold-still", dest="hold_still", action="store_false",
+                        help="fit every coordinate, also those that hold still in the data "
+                             "(undriven, at rest or in uniform motion within the noise; by "
+                             "default they leave the regression and the model holds them)")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -180,7 +180,8 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
                              auto=getattr(args, "solver", "auto") == "auto")
     catalog = reference_catalog(system, args.catalog, velocity_degree=args.velocity_degree,
                                 trig_degree=args.trig_degree, friction=args.friction)
-    model = px.XLSINDy(catalog, optimizer, formulation=getattr(args, "formulation", "auto"))
+    model = px.XLSINDy(catalog, optimizer, formulation=getattr(args, "formulation", "auto"),
+                       **({} if getattr(args, "hold_still", True) else {"hold_still": False}))
     try:
         arguments = dataset.fit_arguments(forces="tau" if forced else None,
                                           constraints=getattr(args, "constraints", "exclude"))
@@ -255,18 +256,19 @@ def _rounded(expr, digits=4):
 
 def model_lines(model):
     """The identified model as printed: the physical parameters of a kinematic catalog, the
-    Lagrangian and equations unless they run for pages."""
+    Lagrangian and equations unless they run for pages, the coordinates held still."""
     from pysindy_xl._equations import has_parameter_map, parameter_lines, prints_equations
+    from pysindy_xl.still import held_note
 
     lines = []
     if has_parameter_map(model.feature_library_):
         lines += parameter_lines(model.physical_parameters(), 4)
-    if not prints_equations(model):
-        return lines
-    lagrangian = model.lagrangian()
-    if lagrangian != 0:
-        lines.append(f"L = {_rounded(lagrangian)}")
-    names = model.feature_library_.coords.names
-    for name, eq in zip(names, model.equations(), strict=True):
-        lines.append(f"({name}) {eq}")
-    return lines
+    if prints_equations(model):
+        lagrangian = model.lagrangian()
+        if lagrangian != 0:
+            lines.append(f"L = {_rounded(lagrangian)}")
+        names = model.feature_library_.coords.names
+        for name, eq in zip(names, model.equations(), strict=True):
+            lines.append(f"({name}) {eq}")
+    note = held_note(model.still_coordinates_)
+    return lines + ([note] if note else [])

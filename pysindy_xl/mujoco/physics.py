@@ -45,7 +45,9 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
         largest condition number; ``unidentified``: names of the coordinates whose row of
         the identified mass matrix is zero at every state (no inertia identified, e.g. a
         passive body that no force excites: leave its joints out with ``joints=``);
-        ``contact_states_skipped``: random states drawn again because a contact was active.
+        ``held``: the coordinates the model holds still (``still_coordinates_``), left out of
+        the comparison (the others are compared as MuJoCo's equations of their own, exact
+        for a held body that is decoupled from them); ``contact_states_skipped``: random states drawn again because a contact was active.
 
     Raises
     ------
@@ -103,6 +105,10 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
         force_ref[k] = matrix @ (data.qfrc_passive - data.qfrc_bias + data.qfrc_constraint)
     z = stack_variables(q, qd, None, np.zeros_like(q), np.zeros(n_states))
     mass, force = dynamics.mass_and_forcing(z)
+    held = np.isin(system.coordinate_names, list(getattr(model, "still_coordinates_", ())))
+    names = [name for name, h in zip(system.coordinate_names, held, strict=True) if not h]
+    mass, mass_ref = (m[:, ~held][:, :, ~held] for m in (mass, mass_ref))
+    force, force_ref = force[:, ~held], force_ref[:, ~held]
     factor = float(np.sum(mass * mass_ref) / np.sum(mass * mass)) if np.any(mass) else 1.0
     forces = model.feature_library_.force_columns_
     if np.allclose(model.coefficients()[forces], -1.0):
@@ -111,7 +117,8 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     eigenvalues = np.linalg.eigvalsh((mass + np.swapaxes(mass, 1, 2)) / 2)
     empty = np.all(np.abs(mass) <= 1e-12 * max(np.abs(mass).max(), 1e-300), axis=(0, 2))
     return {
-        "unidentified": [system.coordinate_names[i] for i in np.flatnonzero(empty)],
+        "unidentified": [names[i] for i in np.flatnonzero(empty)],
+        "held": [name for name, h in zip(system.coordinate_names, held, strict=True) if h],
         "contact_states_skipped": skipped,
         "mass_error": float(np.abs(mass - mass_ref).max() / np.abs(mass_ref).max()),
         "force_error": float(np.abs(force - force_ref).max()

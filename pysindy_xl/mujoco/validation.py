@@ -538,14 +538,3 @@ def _closed_loop_force_error(law, result: ValidationResult) -> float:
     return float(error / scale) if scale > 0 else (0.0 if error == 0 else float("inf"))
 
 
-def _closed_loop_force_error(law, result: ValidationResult) -> float:
-    """Relative RMS difference of the actuator forces along the model's and MuJoCo's runs."""
-    n, k = result.n, len(result.prediction)
-    if k == 0:
-        return float("inf")
-    t, model, reference = result.t[:k], result.prediction, result.reference[:k]
-    model_forces = law(t, model[:, :n], model[:, n:])
-    mujoco_forces = law(t, reference[:, :n], reference[:, n:])
-    error = np.sqrt(np.mean((model_forces - mujoco_forces) ** 2))
-    scale = np.sqrt(np.mean(mujoco_forces ** 2))
-    return float(error / scale) if scale > 0 else (0.0 if error == 0 else float("inf"))

@@ -124,6 +124,29 @@ class WeakNoise:
         """The draws of the columns ``keep`` only."""
         return dataclasses.replace(self, draws=self.draws[:, :, keep])
 
+    def coordinates(self, keep) -> WeakNoise:
+        """The draws of the rows of the coordinates ``keep`` (a boolean mask) only, with
+        their runs renumbered.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> runs = np.array([[0, 5, 0, 1], [5, 10, 1, 1], [10, 15, 2, 1]])
+        >>> part = WeakNoise(np.zeros((2, 15, 1)), 3, runs).coordinates([True, False, True])
+        >>> part.draws.shape, part.runs[:, :2].tolist()
+        ((2, 10, 1), [[0, 5], [5, 10]])
+        """
+        keep = np.asarray(keep, dtype=bool)
+        per = self.draws.shape[1] // self.n_coordinates
+        chosen = np.flatnonzero(keep)
+        rows = (chosen[:, None] * per + np.arange(per)).ravel()
+        block = self.runs[:, 0] // per
+        runs = self.runs[keep[block]].copy()
+        shift = (np.cumsum(keep)[block[keep[block]]] - 1 - block[keep[block]]) * per
+        runs[:, :2] += shift[:, None]
+        return dataclasses.replace(self, draws=self.draws[:, rows],
+                                   n_coordinates=int(chosen.size), runs=runs)
+
     def whitened(self, whiten: RowWhitener) -> WeakNoise:
         """The draws of the whitened rows."""
         moved = whiten(np.moveaxis(self.draws, 1, 0))

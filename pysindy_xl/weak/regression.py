@@ -23,7 +23,7 @@ __all__ = ["weak_regression", "shared_half_width", "propagated_noise", "propagat
 _PROPAGATION_SAMPLES = 24_000
 
 
-def shared_half_width(test_functions, trajectories) -> float:
+def shared_half_width(test_functions, trajectories, columns=None) -> float:
     """One test-function half-width for all trajectories.
 
     The narrowest width asked for by the trajectories at least half as long as the longest
@@ -34,6 +34,9 @@ def shared_half_width(test_functions, trajectories) -> float:
     test_functions : BumpTestFunctions
     trajectories : list of dict
         With keys ``"t"`` (N,) and ``"x"`` (N, n).
+    columns : array of bool, shape (n,), optional
+        The coordinates whose spectra set the width (default all); coordinates held still
+        (:mod:`pysindy_xl.still`) have only the noise's, which would ask for the narrowest.
 
     Returns
     -------
@@ -52,7 +55,8 @@ def shared_half_width(test_functions, trajectories) -> float:
     for d, duration in zip(trajectories, durations, strict=True):
         if duration >= durations.max() / 2:
             try:
-                widths.append(test_functions.half_width(d["t"], d["x"]))
+                x = d["x"] if columns is None else d["x"][:, np.asarray(columns, bool)]
+                widths.append(test_functions.half_width(d["t"], x))
             except ValueError:
                 continue  # shorter than the width it asks for
     if not widths:
@@ -136,7 +140,7 @@ def propagated_draws(library, d, smoothing, phi, dphi, block, n_draws, rng):
 
 
 def weak_regression(library, trajectories, test_functions, smoother, noise="moments",
-                    half_width=None):
+                    half_width=None, width_columns=None):
     """Weak regression matrix of all trajectories, rows coordinate-major.
 
     Parameters
@@ -155,6 +159,8 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         moments and the covariance of a law's residual).
     half_width : float, optional
         Half-width of the test functions (s); default: :func:`shared_half_width`.
+    width_columns : array of bool, shape (n,), optional
+        The coordinates whose spectra choose the default half-width (default all).
 
     Returns
     -------
@@ -207,7 +213,7 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
             smoothing[-1] = None
         states.append(stack_variables(q, qd, qdd, d["u"], d["t"]))
     if half_width is None:
-        half_width = shared_half_width(test_functions, trajectories)
+        half_width = shared_half_width(test_functions, trajectories, width_columns)
     durations = np.array([d["t"][-1] - d["t"][0] for d in trajectories])
     usable = np.flatnonzero(durations >= 2 * half_width)
     if len(usable) < len(trajectories):
