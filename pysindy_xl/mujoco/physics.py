@@ -47,7 +47,8 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
         passive body that no force excites: leave its joints out with ``joints=``);
         ``held``: the coordinates the model holds still (``still_coordinates_``), left out of
         the comparison (the others are compared as MuJoCo's equations of their own, exact
-        for a held body that is decoupled from them); ``contact_states_skipped``: random states drawn again because a contact was active.
+        for a held body that is decoupled from them); ``contact_states_skipped``: random
+        states drawn again because a contact was active.
 
     Raises
     ------
