@@ -189,10 +189,11 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
         and the control is updated at every internal step (a finer, more faithful
         reference; the sample times do not change).
     control_at : {"start", "midpoint"}, default "start"
-        Time at which ``signals`` is read for each internal step: its start (the recorded
-        forces are then exactly ``signals(t)``), or its midpoint (second-order accurate
-        against the continuous signal, for validation references; the forces recorded at
-        ``t`` are then ``signals(t + h/2)``).
+        Time at which ``signals`` is read for each internal step, held over the step: its
+        start, or its midpoint (second-order accurate against the continuous signal: a
+        start hold lags it by half a step, which a servo's ``kp`` turns into an apparent
+        viscous friction of ``kp * h / 2``). Either way, a sample at ``t`` records the
+        actuator forces of the continuous signal, ``signals(t)`` at the recorded state.
     integrator : {"Euler", "RK4", "implicit", "implicitfast"}, optional
         MuJoCo's integrator for this run; default: the model's (see
         :func:`faithful_integrator`).
@@ -264,6 +265,9 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     if control_at not in ("start", "midpoint"):
         raise ValueError(f"control_at: expected 'start' or 'midpoint', got {control_at!r}")
     ctrl = np.zeros((n_fine + 1, model.nu))
+    record_every = sample_every * substeps
+    recorded = np.arange(0, n_fine + 1, record_every)
+    recorded_ctrl = np.zeros((len(recorded), model.nu))
     if signals is not None:
         shift = dt / substeps / 2 if control_at == "midpoint" else 0.0
         ctrl = np.asarray(signals(fine_times + shift), dtype=float)
@@ -271,8 +275,8 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
             raise ValueError(
                 f"signals: expected values of shape (n_times, nu={model.nu}), got {ctrl.shape}"
             )
-    record_every = sample_every * substeps
-    recorded = np.arange(0, n_fine + 1, record_every)
+        recorded_ctrl = ctrl[recorded] if shift == 0.0 else np.asarray(
+            signals(fine_times[recorded]), dtype=float)
     qpos, qvel, qacc, force, constraint = (np.empty((len(recorded), n)) for _ in range(5))
     active = np.zeros(len(recorded), dtype=bool)
     friction_types, limit_types, equality_types, joint_limit = _constraint_kinds()
@@ -280,9 +284,10 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     contact_samples = equality_samples = 0
     r = 0
     for k in range(n_fine + 1):
-        data.ctrl[:] = ctrl[k]
         if k % record_every == 0:
-            # mj_step leaves an intermediate RK4 stage in qacc: recompute at this state.
+            # mj_step leaves an intermediate RK4 stage in qacc: recompute at this state, under
+            # the control of this instant (the continuous law the samples should obey)
+            data.ctrl[:] = recorded_ctrl[r]
             mujoco.mj_forward(model, data)
             qpos[r], qvel[r], qacc[r] = data.qpos, data.qvel, data.qacc
             force[r] = data.qfrc_actuator
@@ -300,6 +305,7 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
                     equality_samples += bool(np.any(pushing & np.isin(kinds, equality_types)))
             r += 1
         if k < n_fine:
+            data.ctrl[:] = ctrl[k]
             mujoco.mj_step(model, data)
         if progress is not None and (k + 1) % (1000 * substeps) == 0:
             progress.update(1000)
@@ -436,7 +442,9 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         MuJoCo's integrator. ``"auto"``: RK4 where the model's implicit step would bias the
         data against the continuous equations that the package identifies
         (:func:`faithful_integrator`), the model's otherwise; ``"model"``: as authored.
-        The metadata's ``integrator`` says which was used.
+        The metadata's ``integrator`` says which was used. Each step holds the controls of
+        its midpoint (see :func:`simulate_trajectory`), so the recorded samples obey the
+        continuous equations under the continuous control signal.
 
     Returns
     -------
@@ -508,7 +516,7 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                                            amplitude, backoff=factor)
                 clean = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
                                             bar if attempt == 0 else None,
-                                            integrator=run_integrator)
+                                            control_at="midpoint", integrator=run_integrator)
                 if clean.constraint_active.mean() <= max_constrained or (
                     attempt == attempts - 1
                 ):
