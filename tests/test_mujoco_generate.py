@@ -180,3 +180,46 @@ def test_implicit_steps_are_replaced_where_they_bias_the_positions():
     # velocity forces times the step; RK4's only by the differencing error
     assert _position_bias(authored.trajectories[0]) > 10 * _position_bias(
         faithful.trajectories[0])
+
+
+SERVO_ARM = """
+<mujoco model="servo_arm">
+  <option gravity="0 0 -9.81" timestep="0.002" integrator="RK4"><flag contact="disable"/></option>
+  <worldbody>
+    <body name="upper" pos="0 0 1">
+      <joint name="shoulder" type="hinge" axis="0 1 0" damping="0.3"/>
+      <inertial pos="0.2 0 0" mass="1.5" diaginertia="0.01 0.03 0.03"/>
+      <body name="fore" pos="0.4 0 0">
+        <joint name="elbow" type="hinge" axis="0 1 0" damping="0.15"/>
+        <inertial pos="0.15 0 0" mass="0.8" diaginertia="0.005 0.01 0.01"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <position joint="shoulder" kp="200" kv="4" ctrlrange="-1.5 1.5"/>
+    <position joint="elbow" kp="120" kv="2" ctrlrange="-1.5 1.5"/>
+  </actuator>
+</mujoco>
+"""
+
+
+def test_servo_samples_obey_the_continuous_law():
+    """Recorded forces are the servo law under the control of the sample's own instant, and
+    positions alone give the joint damping back: a control held from the start of each step
+    lags the signal by half a step, which the servos' kp turn into a spurious damping of
+    kp * h / 2 (0.2 and 0.12 here, against 0.3 and 0.15)."""
+    import pysindy_xl as px
+    from pysindy_xl.mujoco import MJCFSystem, actuator_law, kinematic_catalog
+
+    system = MJCFSystem(SERVO_ARM)
+    data = generate_dataset(system, n_trajectories=2, duration=6.0, seed=3, progress=False)
+    for trajectory in data.trajectories:
+        law = actuator_law(system, SumOfSinusoids.from_dict(trajectory.info["signals"]))
+        np.testing.assert_allclose(law(trajectory.t, trajectory.q, trajectory.qd),
+                                   trajectory.tau, atol=1e-9 * np.abs(trajectory.tau).max())
+    arguments = data.fit_arguments()
+    model = px.XLSINDy(kinematic_catalog(system).library()).fit(
+        arguments["x"], arguments["t"], u=arguments["u"])  # positions only: the weak form
+    friction = model.physical_parameters()["friction"]
+    np.testing.assert_allclose([friction[j]["viscous"] for j in ("shoulder", "elbow")],
+                               [0.3, 0.15], rtol=0.1)
