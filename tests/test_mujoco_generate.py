@@ -182,7 +182,7 @@ def test_implicit_steps_are_replaced_where_they_bias_the_positions():
         faithful.trajectories[0])
 
 
-SERVO_ARM = """
+RK4_SERVO_ARM = """
 <mujoco model="servo_arm">
   <option gravity="0 0 -9.81" timestep="0.002" integrator="RK4"><flag contact="disable"/></option>
   <worldbody>
@@ -211,7 +211,7 @@ def test_servo_samples_obey_the_continuous_law():
     import pysindy_xl as px
     from pysindy_xl.mujoco import MJCFSystem, actuator_law, kinematic_catalog
 
-    system = MJCFSystem(SERVO_ARM)
+    system = MJCFSystem(RK4_SERVO_ARM)
     data = generate_dataset(system, n_trajectories=2, duration=6.0, seed=3, progress=False)
     for trajectory in data.trajectories:
         law = actuator_law(system, SumOfSinusoids.from_dict(trajectory.info["signals"]))
@@ -223,3 +223,21 @@ def test_servo_samples_obey_the_continuous_law():
     friction = model.physical_parameters()["friction"]
     np.testing.assert_allclose([friction[j]["viscous"] for j in ("shoulder", "elbow")],
                                [0.3, 0.15], rtol=0.1)
+
+
+def test_driven_servo_runs_start_on_the_reference():
+    """A random initial error would make the servos jump at it (saturating, far faster than
+    the reference): driven runs start where every servo sits on its reference."""
+    from pysindy_xl.mujoco import MJCFSystem
+
+    system = MJCFSystem(RK4_SERVO_ARM)
+    data = generate_dataset(system, n_trajectories=2, duration=0.5, seed=1, progress=False)
+    for trajectory in data.trajectories:
+        signals = SumOfSinusoids.from_dict(trajectory.info["signals"])
+        reference = np.clip(signals(np.array([0.0, 1e-5]))[:, :2], -1.5, 1.5)
+        np.testing.assert_allclose(trajectory.q[0], reference[0], atol=1e-12)
+        np.testing.assert_allclose(trajectory.qd[0], (reference[1] - reference[0]) / 1e-5,
+                                   rtol=1e-3, atol=1e-6)
+    undriven = generate_dataset(system, n_trajectories=1, duration=0.1, seed=1,
+                                forcing="implicit", progress=False).trajectories[0]
+    assert np.abs(undriven.q[0]).max() > 0.05  # nothing to track: the random state stays

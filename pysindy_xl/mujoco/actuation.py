@@ -192,9 +192,73 @@ class ActuatorLaw:
         values = joint @ self._output.T
         return values.reshape(self.n) if single else values
 
+    def rest_state(self, t: float, q, qd, dt: float = 1e-4):
+        """The state nearest ``(q, qd)`` at which every position servo sits on its reference.
+
+        A servo with a position feedback (``bias[1] < 0``: ``position`` actuators, ``general``
+        ones with an affine bias and a constant gain) pulls its joint to the length
+        ``ell* = -(gain * ctrl + bias[0]) / bias[1]``. With ``A`` the servos' lengths per
+        generalized coordinate (``ell = A q``), the positions are moved to
+        ``q + pinv(A) (ell* - A q)`` (the smallest change that puts every servo on its
+        reference) and the velocities likewise onto ``d ell* / dt``. Other coordinates keep
+        their values. Starting a run there spares the servos the transient of a random
+        initial error, which saturates them and drives the joints far faster than the
+        reference.
+
+        Parameters
+        ----------
+        t : float
+            Time of the state.
+        q, qd : array, shape (n,)
+            Generalized positions and velocities to start from.
+        dt : float, default 1e-4
+            Step of the central difference that gives the reference's velocity.
+
+        Returns
+        -------
+        q, qd : ndarray, shape (n,)
+            Unchanged when no actuator is a position servo.
+        """
+        q, qd = np.array(q, dtype=float), np.array(qd, dtype=float)
+        servo = (self._bias[:, 1] < 0) & np.all(self._gain[:, 1:] == 0, axis=1)
+        if not servo.any():
+            return q, qd
+        lengths = self._length[servo]
+        gain, bias = self._gain[servo, 0], self._bias[servo]
+
+        def reference(times):
+            return -(gain * self.controls(times)[:, servo] + bias[:, 0]) / bias[:, 1]
+
+        target = reference(np.array([t]))[0]
+        rate = (reference(np.array([t + dt])) - reference(np.array([t - dt])))[0] / (2 * dt)
+        inverse = np.linalg.pinv(lengths)
+        return q + inverse @ (target - lengths @ q), qd + inverse @ (rate - lengths @ qd)
+
     def __repr__(self) -> str:
         kind = "state-dependent" if self.state_dependent else "time-only"
         return f"ActuatorLaw({kind}, n={self.n}, nu={self._nu}, force_input={self.force_input!r})"
+
+
+def start_on_reference(system, signals, q0, qd0):
+    """Move a random initial state onto the position servos' reference (driven runs only).
+
+    Parameters
+    ----------
+    system : MuJoCoSystem
+    signals : callable or None
+        The run's controls; None (an undriven run, whose only excitation is its initial
+        state) leaves the state as drawn.
+    q0, qd0 : array, shape (n,)
+
+    Returns
+    -------
+    q0, qd0 : ndarray, shape (n,)
+        See :meth:`ActuatorLaw.rest_state`; unchanged without position servos.
+    """
+    law = None if signals is None else actuator_law(system, signals)
+    if law is None or not law.state_dependent:
+        return np.asarray(q0, dtype=float), np.asarray(qd0, dtype=float)
+    return law.rest_state(0.0, q0, qd0)
 
 
 def actuator_law(system, signals=None, force_input: str = "tau") -> ActuatorLaw | None:

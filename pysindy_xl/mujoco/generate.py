@@ -15,7 +15,7 @@ import numpy as np
 from .._validation import check_option
 from ..data.dataset import Dataset, Trajectory
 from ..data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
-from .actuation import actuator_force_function
+from .actuation import actuator_force_function, start_on_reference
 from .forcing import FORCING_MODES, SumOfSinusoids
 from .systems import MuJoCoSystem, get_system
 
@@ -414,7 +414,9 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         multiplies the system's force amplitudes.
     initial_scale : float, default 1.0
         Scale of the random initial state (see ``MuJoCoSystem.random_initial_state``: a
-        fraction of each limited joint's range).
+        fraction of each limited joint's range). In a driven run, joints under position
+        servos start on the servos' reference instead
+        (:func:`~pysindy_xl.mujoco.actuation.start_on_reference`).
     progress : bool, optional
         Show a tqdm progress bar (default: only on a terminal).
     noise_model : {"positions", "all"}, default "positions"
@@ -514,6 +516,7 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                 signals = actuator_signals(system, model, forcing, rng, actuators,
                                            n_components, max_frequency, amplitude_scale,
                                            amplitude, backoff=factor)
+                q0, qd0 = start_on_reference(system, signals, q0, qd0)
                 clean = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
                                             bar if attempt == 0 else None,
                                             control_at="midpoint", integrator=run_integrator)

@@ -61,7 +61,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from ..data.dataset import Trajectory
-from .actuation import actuator_law
+from .actuation import actuator_law, start_on_reference
 from .forcing import FORCING_MODES, SumOfSinusoids
 from .generate import INTEGRATORS, actuator_signals, faithful_integrator, simulate_trajectory
 from .physics import compare_physics
@@ -362,6 +362,7 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
         q0, qd0 = system.random_initial_state(rng, scale=initial_scale * factor)
         signals = actuator_signals(system, model, forcing, rng, actuators, backoff=factor,
                                    **signal_options)
+        q0, qd0 = start_on_reference(system, signals, q0, qd0)
         trajectory = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
                                          substeps=substeps, control_at="midpoint",
                                          integrator=integrator)
