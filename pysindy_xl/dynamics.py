@@ -181,12 +181,19 @@ class MassMatrixDynamics:
     @property
     def n_terms(self) -> int:
         """Monomials of ``M`` and ``f`` together: how long the written equations are."""
-        return sum(len(entry) for entry in self._terms.entries)
+        count = self.__dict__.get("_n_terms")
+        if count is None:
+            count = self._n_terms = sum(len(entry) for entry in self._terms.entries)
+        return count
 
     def _evaluate_scalar(self, *values):
-        """Entries at one state (simulation): plain floats through the math module are an
-        order of magnitude faster than NumPy calls on length-1 arrays. Generated on first use
-        (large models pay the code generation only when they simulate)."""
+        """Entries at one state (simulation). Plain floats through the math module are an
+        order of magnitude faster than NumPy calls on length-1 arrays for a few hundred
+        terms; past :data:`_SCALAR_TERMS` (a robot arm's tens of thousands), the per-term
+        Python work dominates and the vectorized kernel on one row is faster. Generated on
+        first use (large models pay the code generation only when they simulate)."""
+        if self.n_terms > _SCALAR_TERMS:
+            return [float(v[0]) for v in self._evaluate(np.array([values], dtype=float))]
         function = self.__dict__.get("_scalar_function")
         if function is None:
             function = scalar_function(self.coords.variables, self._terms,
@@ -563,6 +570,9 @@ def _mass_and_forcing_terms(coords, terms: Terms, rows, weights, held=None) -> T
     return Terms(terms.atoms, [[(float(coef), key) for key, coef in entry.items() if coef != 0]
                                for entry in sums])
 
+
+#: Terms of ``M`` and ``f`` above which one state is evaluated by the vectorized kernel.
+_SCALAR_TERMS = 1000
 
 _SOLVERS = {name: getattr(scipy.integrate, name)
             for name in ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")}

@@ -9,6 +9,7 @@ import time
 
 import numpy as np
 
+from .._equations import prints_equations
 from ..quality import fit_quality, plot_identification, quality_lines
 from .parser import build_parser
 from .steps import (
@@ -51,8 +52,9 @@ def run_demo(args) -> dict:
     -------
     dict
         The report also written to ``report.json``: options, features, coefficients (and
-        the true ones), equations, ``coefficient_summary``, ``validation`` metrics,
-        ``timings_s``, ``files``.
+        the true ones), physical parameters, the Lagrangian and equations (None for a
+        catalog of physical parameters whose equations run for pages), ``coefficient_summary``,
+        ``validation`` metrics, ``timings_s``, ``files``.
 
     Raises
     ------
@@ -154,6 +156,7 @@ def run_demo(args) -> dict:
               f"{coefficient_summary['true_terms']} true, max error "
               f"{coefficient_summary['max_relative_error']:.2g} (relative to the largest)")
     timings["total"] = sum(timings.values())
+    short = prints_equations(model)
     report = {
         "system": system.name,
         "parameters": system.parameters,
@@ -171,8 +174,10 @@ def run_demo(args) -> dict:
         "dropped_features": model.dropped_features_,
         "still_coordinates": list(model.still_coordinates_),
         "physical_parameters": model.physical_parameters(),
-        "lagrangian": str(model.lagrangian()),
-        "equations": model.equations(),
+        # a robot's equations run for pages (and take minutes to print): its parameters stand
+        # for it; XLSINDy.equations() still gives them
+        "lagrangian": str(model.lagrangian()) if short else None,
+        "equations": model.equations() if short else None,
         "coefficient_summary": coefficient_summary,
         "validation": metrics,
         "timings_s": timings,
