@@ -11,7 +11,7 @@ actuator law (:mod:`.actuation`).
 
 from ..data.constraints import contiguous_segments, unconstrained_samples, unconstrained_windows
 from ..data.dataset import Dataset, DatasetError, Trajectory, load_dataset
-from .actuation import ActuatorLaw, actuator_law
+from .actuation import ActuatorLaw, actuator_law, start_on_reference
 from .catalogs import (
     CATALOG_KINDS,
     classical_terms,
@@ -89,6 +89,7 @@ __all__ = [
     "DEFAULT_DIVERGENCE_BOUND",
     "ValidationResult",
     "compare_trajectories",
+    "start_on_reference",
     "compare_physics",
     "validate_model",
     "ActuatorLaw",

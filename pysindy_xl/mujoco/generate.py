@@ -416,7 +416,7 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         Scale of the random initial state (see ``MuJoCoSystem.random_initial_state``: a
         fraction of each limited joint's range). In a driven run, joints under position
         servos start on the servos' reference instead
-        (:func:`~pysindy_xl.mujoco.actuation.start_on_reference`).
+        (:func:`~pysindy_xl.mujoco.start_on_reference`).
     progress : bool, optional
         Show a tqdm progress bar (default: only on a terminal).
     noise_model : {"positions", "all"}, default "positions"
