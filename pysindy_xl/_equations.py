@@ -162,20 +162,31 @@ def physical_parameters(coef: np.ndarray, library) -> dict:
     return {"scale": scale, "base_parameters": base, "friction": friction, "other": other}
 
 
-def parameter_lines(parameters: dict, precision: int) -> list[str]:
+def parameter_lines(parameters: dict, precision: int, reference: dict | None = None) -> list[str]:
     """Printable lines of :func:`physical_parameters`: the base parameters (with the inertial
-    combinations they stand for) and each joint's viscous and dry friction."""
-    lines = ["base parameters (value  |  stands for):"]
+    combinations they stand for) and each joint's viscous and dry friction; with a
+    ``reference`` (the same dictionary for known values, e.g. the MJCF's), those values
+    beside."""
+    known = ({entry["feature"]: entry["value"] for entry in reference["base_parameters"]}
+             if reference is not None else None)
+    lines = ["base parameters (value  |  stands for):" if known is None
+             else "base parameters (value  |  true value  |  stands for):"]
     for entry in parameters["base_parameters"]:
-        if entry["value"] == 0:
+        true = None if known is None else known.get(entry["feature"])
+        if entry["value"] == 0 and not true:
             continue
         meaning = entry["stands_for"]
         meaning = (" + ".join(f"{w:.{precision}g}*{name}" for name, w in meaning.items())
                    if meaning else entry["feature"])
-        lines.append(f"  {entry['value']:>12.{precision}g}  |  {meaning}")
+        beside = "" if known is None else f"  |  {true or 0:>12.{precision}g}"
+        lines.append(f"  {entry['value']:>12.{precision}g}{beside}  |  {meaning}")
     lines.append("friction per coordinate (viscous, dry):")
     for name, values in parameters["friction"].items():
-        lines.append(f"  {name}: {values['viscous']:.{precision}g}, {values['dry']:.{precision}g}")
+        line = f"  {name}: {values['viscous']:.{precision}g}, {values['dry']:.{precision}g}"
+        if reference is not None and name in reference["friction"]:
+            true = reference["friction"][name]
+            line += f" (true {true['viscous']:.{precision}g}, {true['dry']:.{precision}g})"
+        lines.append(line)
     lines += [f"  {name}: {value:.{precision}g}" for name, value in parameters["other"].items()]
     if parameters["scale"] is None:
         lines.append("(no force fixes the scale: values up to a common factor)")

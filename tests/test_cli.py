@@ -178,7 +178,12 @@ def test_demo_on_a_user_mjcf(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "L = 0.125*swing_dot**2 + 4.905*cos(swing)" in printed
     report = read_report(out)
-    assert report["true_coefficients"] is None and report["validation"]["valid"] is True
+    # the kinematic catalog is exact for any MJCF: the true vector is the MJCF's own values
+    np.testing.assert_allclose(report["coefficients"], report["true_coefficients"], atol=1e-6)
+    assert report["true_coefficients"][report["features"].index("L[0.5*swing_dot**2]")] == \
+        pytest.approx(0.25, rel=1e-6)  # m l^2 of the point mass
+    assert report["validation"]["valid"] is True
+    assert "true value" in printed and "swing: 0.2, 0 (true 0.2, 0)" in printed
     assert (out / "validation.png").exists()
 
 

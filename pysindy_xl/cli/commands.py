@@ -136,7 +136,7 @@ def run_demo(args) -> dict:
         timings["plot"] = time.perf_counter() - start
 
     print()
-    for line in model_lines(model):
+    for line in model_lines(model, truth):
         print(line)
     print()
     metrics = result.to_dict() if result is not None else {"valid": False, "failure": failure}

@@ -197,9 +197,10 @@ def summarize_coefficients(system, model):
     """True coefficients and errors against them (None for systems without ground truth)."""
     from pysindy_xl.mujoco.catalogs import true_coefficients
 
-    if not system.has_ground_truth:
+    try:  # known Lagrangians, and the MJCF's own values in its kinematic catalog
+        truth, missing = true_coefficients(system, model.feature_library_)
+    except ValueError:
         return None, {}
-    truth, missing = true_coefficients(system, model.feature_library_)
     coef = model.coefficients()
     forces = model.feature_library_.force_columns_
     if not np.allclose(coef[forces], -1.0):
@@ -254,15 +255,23 @@ def _rounded(expr, digits=4):
     return expr.xreplace({f: sp.Float(f, digits) for f in expr.atoms(sp.Float)})
 
 
-def model_lines(model):
-    """The identified model as printed: the physical parameters of a kinematic catalog, the
-    Lagrangian and equations unless they run for pages, the coordinates held still."""
-    from pysindy_xl._equations import has_parameter_map, parameter_lines, prints_equations
+def model_lines(model, truth=None):
+    """The identified model as printed: the physical parameters of a kinematic catalog (next
+    to the true ones when the coefficient vector ``truth`` is known), the Lagrangian and
+    equations unless they run for pages, the coordinates held still."""
+    from pysindy_xl._equations import (
+        has_parameter_map,
+        parameter_lines,
+        physical_parameters,
+        prints_equations,
+    )
     from pysindy_xl.still import held_note
 
     lines = []
     if has_parameter_map(model.feature_library_):
-        lines += parameter_lines(model.physical_parameters(), 4)
+        reference = (None if truth is None
+                     else physical_parameters(np.asarray(truth), model.feature_library_))
+        lines += parameter_lines(model.physical_parameters(), 4, reference)
     if prints_equations(model):
         lagrangian = model.lagrangian()
         if lagrangian != 0:

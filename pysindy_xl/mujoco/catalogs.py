@@ -310,7 +310,8 @@ def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.
     Parameters
     ----------
     system : MuJoCoSystem or str
-        A system with a known Lagrangian.
+        A system with a known Lagrangian, or any MJCF model with its kinematic catalog
+        (:func:`~pysindy_xl.mujoco.kinematic_catalog`, exact for every model).
     catalog : CatalogRepartition
         Fitted or not (fitted here when needed), e.g. from :func:`reference_catalog`.
     strict : bool, default False
@@ -328,8 +329,8 @@ def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.
     Raises
     ------
     ValueError
-        If the system has no known model, or with ``strict`` when the catalog lacks part of
-        it.
+        If the system has no known model (no Lagrangian, and the catalog is not its
+        kinematic one), or with ``strict`` when the catalog lacks part of it.
     TypeError
         If ``catalog`` is not a :class:`~pysindy_xl.CatalogRepartition`.
 
@@ -350,17 +351,18 @@ def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.
     """
 
     system = get_system(system)
-    if not system.has_ground_truth:
-        raise ValueError(f"system: {system!r} has no known true model")
     if not hasattr(catalog, "ideal_coefficients"):
         raise TypeError("catalog: expected a CatalogRepartition")
     if not hasattr(catalog, "symbolic_matrix_"):
         catalog.fit()
     coords = system.coords
     names = catalog.get_feature_names()
+    # the kinematic catalog is exact for any MJCF model: its values are the MJCF's
     kinematic = _kinematic_truth(system, catalog, names, forces)
     if kinematic is not None:
         return kinematic, []
+    if not system.has_ground_truth:
+        raise ValueError(f"system: {system!r} has no known true model")
     has_lagrange = any(lib.category == "lagrange" for lib in catalog.libraries_)
     classical: dict = {}
     for (term, i), value in system.friction().items():
