@@ -1,0 +1,102 @@
+"""Time a robot arm end to end: catalog, fit, validation, simulation step.
+
+The acceptance of the robot-arm work: 10,000 samples of a 7-joint servo arm (the Panda-like arm
+of ``robot_arms.py``: armature, damping, limits, position servos) with 1 % noise on the
+positions only, identified with ``XLSINDy``'s defaults (weak form, bagged selection). Steps:
+
+* ``catalog``: :func:`~pysindy_xl.mujoco.kinematic_catalog` and the library's derivation (the
+  Euler-Lagrange columns of the base parameters);
+* ``fit``: ``XLSINDy(library).fit`` on the noisy positions and recorded torques;
+* ``validation``: :func:`~pysindy_xl.mujoco.validate_model` over ``--validation`` seconds
+  (a fresh MuJoCo run, the MJCF's servos driving the identified model in closed loop);
+* ``step``: one evaluation of the identified dynamics at a state (``state_derivative``, the
+  cost a simulator pays per right-hand side) against one ``mujoco.mj_step`` of the MJCF.
+
+Each step is timed in a fresh process state except the catalog derivation, which later fits of
+the same arm reuse (it is cached); ``catalog (cached)`` reports that reuse.
+
+Usage: ``python benchmarks/arm_speed.py [--arm panda] [--samples 10000] [--validation 5]``;
+writes ``benchmarks/results/arm_speed.json`` and prints the figures.
+"""
+
+import argparse
+import json
+import pathlib
+import platform
+import sys
+import time
+import warnings
+
+import numpy as np
+
+HERE = pathlib.Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from robot_arms import arm_mjcf  # noqa: E402
+
+
+def timed(function):
+    start = time.perf_counter()
+    value = function()
+    return value, time.perf_counter() - start
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--arm", default="panda")
+    parser.add_argument("--samples", type=int, default=10_000)
+    parser.add_argument("--noise", type=float, default=0.01)
+    parser.add_argument("--validation", type=float, default=5.0)
+    parser.add_argument("--out", default=str(HERE / "results" / "arm_speed.json"))
+    args = parser.parse_args()
+
+    import mujoco
+
+    import pysindy_xl as px
+    from pysindy_xl.mujoco import (
+        MJCFSystem,
+        generate_dataset,
+        kinematic_catalog,
+        validate_model,
+    )
+
+    system = MJCFSystem(arm_mjcf(args.arm))
+    n_trajectories, sample_every, timestep = 2, 2, system.mj_model().opt.timestep
+    duration = args.samples / n_trajectories * sample_every * timestep
+    data = generate_dataset(system, n_trajectories=n_trajectories, duration=duration,
+                            noise=args.noise, seed=0, sample_every=sample_every,
+                            progress=False)
+    n_samples = sum(len(tr.t) for tr in data.trajectories)
+    library, catalog_s = timed(lambda: kinematic_catalog(system).library().fit())
+    _, cached_s = timed(lambda: kinematic_catalog(system).library().fit())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model, fit_s = timed(lambda: px.XLSINDy(library).fit(
+            **data.fit_arguments(forces="tau")))
+        result, validation_s = timed(lambda: validate_model(
+            model, system, duration=args.validation, seed=1))
+    state = result.reference[len(result.reference) // 2]  # a clean state of the arm
+    dynamics = model.dynamics_
+    dynamics.state_derivative(state)
+    repeats = 200
+    _, step_s = timed(lambda: [dynamics.state_derivative(state) for _ in range(repeats)])
+    mj_model = system.mj_model()
+    mj_data = mujoco.MjData(mj_model)
+    _, mujoco_s = timed(lambda: [mujoco.mj_step(mj_model, mj_data) for _ in range(10_000)])
+    figures = {
+        "arm": args.arm, "joints": system.n, "samples": n_samples, "noise": args.noise,
+        "catalog_s": catalog_s, "catalog_cached_s": cached_s, "fit_s": fit_s,
+        "validation_s": validation_s, "validation_horizon_s": args.validation,
+        "validation_drive": result.drive, "validation_valid": bool(result.valid),
+        "total_s": catalog_s + fit_s + validation_s,
+        "rhs_ms": step_s / repeats * 1e3, "mujoco_step_ms": mujoco_s / 10_000 * 1e3,
+        "machine": {"python": platform.python_version(), "processor": platform.processor(),
+                    "cpus": __import__("os").cpu_count()},
+    }
+    pathlib.Path(args.out).write_text(json.dumps(figures, indent=2) + "\n")
+    for key, value in figures.items():
+        print(f"{key}: {value:.3g}" if isinstance(value, float) else f"{key}: {value}")
+
+
+if __name__ == "__main__":
+    main()
