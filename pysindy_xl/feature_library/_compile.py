@@ -45,11 +45,12 @@ class Terms:
 
     atoms: list
     entries: list
-    # evaluators compiled from these terms, by variables (closures: never pickled)
-    _compiled: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
+    # what derives from these terms, computed once (evaluators compiled for some variables,
+    # reorderings): closures and caches, never pickled
+    _memo: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
 
     def __getstate__(self):
-        return {"atoms": self.atoms, "entries": self.entries, "_compiled": {}}
+        return {"atoms": self.atoms, "entries": self.entries, "_memo": {}}
 
 
 def _decompose(expr: sp.Expr, atoms: dict) -> list[tuple[float, Monomial]]:
@@ -160,9 +161,10 @@ def compile_terms(variables, terms: Terms):
     whatever the number of terms.
     """
     variables = tuple(variables)
-    evaluate = terms._compiled.get(variables)
+    key = ("compiled", variables)
+    evaluate = terms._memo.get(key)
     if evaluate is None:  # shared by every library that holds the same terms
-        evaluate = terms._compiled[variables] = _compile_terms(variables, terms)
+        evaluate = terms._memo[key] = _compile_terms(variables, terms)
     return evaluate
 
 

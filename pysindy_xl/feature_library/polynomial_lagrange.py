@@ -78,6 +78,13 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         self.zero_terms_ = list(derivation.zero_terms)
         return list(derivation.names), derivation.matrix
 
+    def check_domain(self, x) -> None:
+        """Trigonometric polynomials are defined everywhere: only the symbolically derived
+        terms (any term that is not such a polynomial) need the check of
+        :meth:`LagrangeLibrary.check_domain`."""
+        if "_polynomial_columns" not in self.__dict__:
+            super().check_domain(x)
+
     def _check_columns(self, names, matrix) -> None:
         if "_polynomial_columns" not in self.__dict__:  # derived symbolically
             super()._check_columns(names, matrix)

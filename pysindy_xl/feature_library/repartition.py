@@ -13,9 +13,28 @@ from .external_forces import ExternalForces
 __all__ = ["CatalogRepartition"]
 
 
-def _merged(libraries, slices, parts) -> tuple[np.ndarray, Terms]:
+_MERGED: dict = {}  # (identities of the parts' terms, column offsets) -> (parts, merged)
+_CACHED_MERGES = 8
+
+
+def _merged(slices, parts) -> tuple[np.ndarray, Terms]:
     """Concatenate the ``(index, terms)`` of several libraries: atoms merged, each index's
-    last column (the feature) shifted to the library's columns in the catalog."""
+    last column (the feature) shifted to the library's columns in the catalog.
+
+    Clones of a catalog share their libraries' terms (derivations are cached), so the merge
+    of the same parts is reused rather than redone at every fit."""
+    key = (tuple(id(terms) for _, terms in parts), tuple(c.start for c in slices),
+           tuple(np.asarray(index).tobytes() for index, _ in parts))
+    found = _MERGED.get(key)
+    if found is None:
+        found = _MERGED[key] = (parts, _merge(slices, parts))  # parts keep the ids valid
+        while len(_MERGED) > _CACHED_MERGES:
+            del _MERGED[next(iter(_MERGED))]
+    index, terms = found[1]
+    return index.copy(), terms
+
+
+def _merge(slices, parts) -> tuple[np.ndarray, Terms]:
     atoms: dict = {}
     indices, entries = [], []
     for columns, (index, terms) in zip(slices, parts, strict=True):
@@ -154,15 +173,19 @@ class CatalogRepartition(SymbolicLibrary):
     def _derive_column_terms(self) -> Terms:
         """The libraries' column terms, their atoms merged and their entries in this
         catalog's ``entry_index_`` order."""
-        index, terms = _merged(self.libraries_, self.slices_,
+        index, terms = _merged(self.slices_,
                                [(lib.entry_index_, lib.column_terms()) for lib in self.libraries_])
-        position = {(int(c), int(j)): k for k, (c, j) in enumerate(index)}
-        return Terms(terms.atoms, [terms.entries[position[(int(c), int(j))]]
-                                   for c, j in self.entry_index_])
+        key = ("in the order of", self.entry_index_.tobytes())
+        ordered = terms._memo.get(key)  # shared by clones, with its compiled evaluator
+        if ordered is None:
+            position = {(int(c), int(j)): k for k, (c, j) in enumerate(index)}
+            ordered = terms._memo[key] = Terms(terms.atoms, [
+                terms.entries[position[(int(c), int(j))]] for c, j in self.entry_index_])
+        return ordered
 
     def _derive_weak_terms(self):
         """The libraries' weak terms, their atoms merged (entries in library order)."""
-        return _merged(self.libraries_, self.slices_,
+        return _merged(self.slices_,
                        [lib.weak_terms() for lib in self.libraries_])
 
     def _build_weak_symbolic(self):
