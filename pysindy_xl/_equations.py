@@ -9,6 +9,8 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
+from .physical.structure import friction_kind
+
 __all__ = ["significant", "equation_strings", "identified_lagrangian", "uncertainty_lines"]
 
 
@@ -151,12 +153,10 @@ def physical_parameters(coef: np.ndarray, library) -> dict:
         if category != "classical" or coef[j] == 0:
             continue
         c = next(i for i in range(library.coords.n) if library.symbolic_matrix_[i, j] != 0)
-        name, term, velocity = library.coords.names[c], library.feature_terms_[j], \
-            library.coords.qd[c]
-        if term == velocity:
-            friction[name]["viscous"] += float(coef[j] * factor)
-        elif term.func in (sp.tanh, sp.sign) and term.free_symbols == {velocity}:
-            friction[name]["dry"] += float(coef[j] * factor)
+        name = library.coords.names[c]
+        kind = friction_kind(library.feature_terms_[j], library.coords.qd[c])
+        if kind is not None:
+            friction[name][kind] += float(coef[j] * factor)
         else:
             other[library.feature_names_[j]] = float(coef[j] * factor)
     return {"scale": scale, "base_parameters": base, "friction": friction, "other": other}

@@ -376,9 +376,12 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         if noise is not None:
             noise = noise.columns(keep)
             noise = noise.coordinates(moving) if still.any() else noise
+        structure = library.physical_structure()
         optimizer = self._fit_optimizer(optimizer, CatalogProblem.from_arrays(
             theta[block_rows(n, theta.shape[0], moving)][:, keep], int(moving.sum()),
-            force_columns, mass_matrices=mass), noise, forced[moving])
+            force_columns, mass_matrices=mass,
+            physical=None if structure is None else structure.select(keep)), noise,
+            forced[moving])
         coef = np.zeros(theta.shape[1])
         coef[keep] = optimizer.coef_
         self.feature_library_ = library
@@ -392,6 +395,9 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             self.coef_interval_[:, keep] = optimizer.coef_interval_
         names = library.get_feature_names()
         self.dropped_features_ = {names[j]: reason for j, reason in dropped.items()}
+        report = getattr(optimizer, "consistency_", None)  # a physically constrained fit
+        self.physical_consistency_ = None if report is None else {**report, "negative_friction": [
+            names[keep[j]] for j in report["negative_friction"]]}
         self.n_coordinates_ = n
         self.n_samples_ = z.shape[0]
         self.forced_coordinates_ = forced
