@@ -32,6 +32,9 @@ from .explicit import ExplicitOptimizer, corrected_least_squares, explicit_regre
 
 __all__ = ["PhysicalOptimizer"]
 
+#: Which base parameters the constrained refit fits (see ``base_parameters``).
+_BASE_PARAMETERS = ("auto", "all", "selected")
+
 #: Attributes of the selecting optimizer that the physical fit reports as its own.
 _PASSED_ON = ("inclusion_probability_", "coef_interval_", "coef_samples_", "n_failed_",
               "aggregate_")
@@ -53,6 +56,14 @@ class PhysicalOptimizer(CatalogOptimizer):
     optimizer : catalog optimizer, optional
         Selects the terms (cloned); explicit regression (force coefficient -1). Default
         ``ExplicitOptimizer()``.
+    base_parameters : {"auto", "all", "selected"}, default "auto"
+        Which base parameters the refit fits. ``"selected"``: those the optimizer selected;
+        the others are zero, and must be realizable as zero too, which can constrain the
+        others hard. ``"all"``: every one, whatever the selection (the constraints bound
+        those the data barely excite); the selection still decides the other terms
+        (friction). ``"auto"``: the selected ones when their unconstrained refit is
+        consistent (it is then the answer, as the optimizer found it), all of them under the
+        constraints otherwise.
     tolerance : float, default 1e-8
         The unconstrained refit counts as consistent, and is kept as it is, when its friction
         coefficients are non-negative and the constraints would cost at most this share of
@@ -106,8 +117,9 @@ class PhysicalOptimizer(CatalogOptimizer):
     balances_rows = False
     spec_type = "PhysicalOptimizer"
 
-    def __init__(self, optimizer=None, tolerance=1e-8, solver=None):
+    def __init__(self, optimizer=None, base_parameters="auto", tolerance=1e-8, solver=None):
         self.optimizer = optimizer
+        self.base_parameters = base_parameters
         self.tolerance = tolerance
         self.solver = solver
 
@@ -117,6 +129,8 @@ class PhysicalOptimizer(CatalogOptimizer):
             if not getattr(self.optimizer, "requires_forces", False):
                 raise ValueError(f"optimizer: the terms must be selected by explicit "
                                  f"regression, {type(self.optimizer).__name__} is not")
+        check_option("base_parameters", self.base_parameters, "choice",
+                     choices=_BASE_PARAMETERS)
         check_option("tolerance", self.tolerance, "real", low=0)
         if self.solver is not None and not isinstance(self.solver, str):
             raise TypeError(f"solver: expected a cvxpy solver name, got {self.solver!r}")
@@ -157,19 +171,45 @@ class PhysicalOptimizer(CatalogOptimizer):
         return self._refit(problem.balanced(), support)
 
     def _refit(self, problem, support):
+        structure = problem.physical
+        fit = self._refit_on(problem, support)
+        if structure is not None and len(structure.base_columns) \
+                and self.base_parameters != "selected":
+            every = support.copy()
+            every[structure.base_columns] = True
+            if self.base_parameters == "all" or not (
+                    fit["consistency"]["consistent"] or np.array_equal(every, support)):
+                wide = self._refit_on(problem, every)
+                if self.base_parameters == "auto":  # report the selection's own estimate
+                    wide["unconstrained"] = fit["unconstrained"]
+                    wide["consistency"] = {**fit["consistency"],
+                                           "min_pseudo_inertia_eigenvalue": wide["consistency"][
+                                               "min_pseudo_inertia_eigenvalue"]}
+                fit = wide
+        self.selection_ = None
+        self.coef_ = fit["coef"]
+        self.unconstrained_coef_ = fit["unconstrained"]
+        self.consistency_ = fit["consistency"]
+        self.inertial_parameters_ = fit["inertial"]
+        self.n_features_in_ = problem.n_features
+        self.support_ = self.coef_ != 0
+        warn_unexplained("PhysicalOptimizer", problem.theta, problem.n_coordinates,
+                         self.coef_, problem.force_columns, 4)
+        return self
+
+    def _refit_on(self, problem, support):
+        """The unconstrained and the constrained least squares on ``support``."""
         rest, force, moments = explicit_regression(problem)
+        structure = problem.physical
         keep = support[rest]
         x = problem.theta[:, rest]
         coef = np.zeros(len(rest))
         sub = None if moments is None else moments[np.ix_(keep, keep)]
         coef[keep], share = corrected_least_squares(x[:, keep], force, sub)
-        self.selection_ = None
-        self.unconstrained_coef_ = self._catalog_vector(coef, rest, problem)
-        self.consistency_ = self.inertial_parameters_ = None
-        structure = problem.physical
+        unconstrained = self._catalog_vector(coef, rest, problem)
         if structure is None or not structure.constrains:
-            self.coef_ = self.unconstrained_coef_
-            return self._finish(problem)
+            return {"coef": unconstrained, "unconstrained": unconstrained,
+                    "consistency": None, "inertial": None}
         structure = structure.select(rest)
         normal = x.T @ x
         if moments is not None and share < 0.5:  # as corrected_least_squares corrects
@@ -181,14 +221,14 @@ class PhysicalOptimizer(CatalogOptimizer):
         pseudo = np.linalg.eigvalsh(structure.pseudo_inertias(pi)) if len(structure.bodies) \
             else np.zeros((0, 4))
         top = float(np.abs(pseudo).max(initial=0.0)) or 1.0
-        self.consistency_ = {
-            "consistent": bool(consistent), "cost": float(cost),
-            "negative_friction": [int(rest[j]) for j in negative],
-            "min_pseudo_inertia_eigenvalue": float(pseudo.min(initial=0.0) / top)}
-        self.inertial_parameters_ = dict(zip(structure.names, pi.tolist(), strict=True))
-        self.coef_ = (self.unconstrained_coef_ if consistent
-                      else self._catalog_vector(constrained, rest, problem))
-        return self._finish(problem)
+        return {"coef": unconstrained if consistent
+                else self._catalog_vector(constrained, rest, problem),
+                "unconstrained": unconstrained,
+                "consistency": {"consistent": bool(consistent), "cost": float(cost),
+                                "negative_friction": [int(rest[j]) for j in negative],
+                                "min_pseudo_inertia_eigenvalue": float(pseudo.min(initial=0.0)
+                                                                       / top)},
+                "inertial": dict(zip(structure.names, pi.tolist(), strict=True))}
 
     @staticmethod
     def _catalog_vector(coef_rest, rest, problem):
@@ -196,10 +236,3 @@ class PhysicalOptimizer(CatalogOptimizer):
         coef[rest] = coef_rest
         coef[problem.force_columns] = -1.0
         return coef
-
-    def _finish(self, problem):
-        self.n_features_in_ = problem.n_features
-        self.support_ = self.coef_ != 0
-        warn_unexplained("PhysicalOptimizer", problem.theta, problem.n_coordinates,
-                         self.coef_, problem.force_columns, 5)
-        return self
