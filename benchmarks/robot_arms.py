@@ -14,6 +14,10 @@ smooth-Coulomb friction per joint):
 
 * ``pysindy-xl``: ``XLSINDy(catalog.library())`` with its defaults (weak form on smoothed
   positions, noise-aware bagged selection);
+* ``pysindy-xl-lmi``: the same with ``PhysicalOptimizer(EnsembleOptimizer(ExplicitOptimizer()))``:
+  the bagged selection, then the least squares under rigid bodies' constraints (pseudo-inertias
+  positive semidefinite, armature and friction non-negative) when the selection's estimate is
+  not physically consistent;
 * ``idim-ls``: the robotics baseline: positions and torques low-pass filtered forwards and
   backwards (4th-order Butterworth at 5x the excitation's top frequency), velocities and
   accelerations by central differences, ordinary least squares of the torques on the
@@ -28,7 +32,11 @@ Metrics: mass-matrix error (mean over 200 random joint states of ``|M_id - M|_F 
 gravity-torque error (``|g_id - g| / |g|`` over the same states), torque prediction on a fresh
 trajectory (worst joint's relative RMS error against the recorded torques, at MuJoCo's exact
 states: the model's own error, whatever differentiated its training data), whether ``M`` is
-positive definite on the states, fit time.
+positive definite on the states, fit time; ``realizable``: whether the identified base
+parameters are those of rigid bodies (the semidefinite program of
+:func:`pysindy_xl.physical.realize` reproduces them within 1e-5 relative) with non-negative
+friction; for ``pysindy-xl-lmi``, ``selection_consistent``: whether the selection's own
+(unconstrained) estimate was.
 
 Usage: ``python benchmarks/robot_arms.py [--seeds 3] [--levels 0,0.01,0.05]
 [--arms ur5,panda,iiwa] [--methods pysindy-xl,idim-ls]``. Results are appended to
@@ -126,6 +134,23 @@ def idim_ls(library, data, max_frequency):
     return coef
 
 
+def _realizable(catalog, library, beta, coef, tolerance=1e-5):
+    """Whether base parameters ``beta`` are those of rigid bodies and friction is
+    non-negative (None without cvxpy)."""
+    try:
+        from pysindy_xl.physical import PhysicalStructure, realize
+    except ImportError:
+        return None
+    structure = PhysicalStructure.from_combination(list(catalog.physical_names),
+                                                   catalog.combination)
+    try:
+        _, residual = realize(structure, beta, closeness=1e-9)
+    except (ImportError, RuntimeError):
+        return None
+    friction = library.physical_structure().friction_columns
+    return bool(residual <= tolerance and np.all(coef[friction] >= 0))
+
+
 def run(arm, level, seed, method):
     import pysindy_xl as px
     from pysindy_xl.mujoco import MJCFSystem, kinematic_catalog
@@ -140,16 +165,22 @@ def run(arm, level, seed, method):
     library = catalog.library().fit()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        if method == "pysindy-xl":
-            model = px.XLSINDy(library).fit(**data.fit_arguments(forces="tau"))
+        if method in ("pysindy-xl", "pysindy-xl-lmi"):
+            optimizer = (px.PhysicalOptimizer(px.EnsembleOptimizer(px.ExplicitOptimizer()))
+                         if method == "pysindy-xl-lmi" else None)
+            model = px.XLSINDy(library, optimizer).fit(**data.fit_arguments(forces="tau"))
             coef = model.coefficients()
             coef = -coef / coef[library.force_columns_[0]]  # force coefficient -1
+            if model.physical_consistency_ is not None:
+                record["selection_consistent"] = model.physical_consistency_["consistent"]
+                record["constraint_cost"] = model.physical_consistency_["cost"]
         elif method == "idim-ls":
             coef = idim_ls(library, data, 1.5)
         else:  # the MJCF's own parameters: the floor of the torque metric
             coef = catalog.true_coefficients()
     record["fit_s"] = time.perf_counter() - start
     beta = coef[[j for j, c in enumerate(library.categories_) if c == "lagrange"]]
+    record["realizable"] = _realizable(catalog, library, beta, coef)
     # torque prediction on the fresh trajectory's exact states (MuJoCo's): the model's own
     # error in torque space, the same for every method whatever differentiates its data
     theta = library.transform(px.stack_variables(fresh.q, fresh.qd, fresh.qdd)).reshape(
@@ -178,16 +209,23 @@ def summarize(records) -> str:
     for r in records:
         cells.setdefault((r["arm"], r["level"], r["method"]), []).append(r)
     lines = ["| arm | noise | method | mass-matrix error | gravity error | torque prediction "
-             "| M positive definite | fit (s) |", "|---|---|---|---|---|---|---|---|"]
+             "| M positive definite | realizable | fit (s) |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for (arm, level, method), rs in sorted(cells.items()):
         def median(key, rs=rs):
             return np.median([r[key] for r in rs])
         lines.append(f"| {arm} | {level:.0%} | {method} | {median('mass_error'):.2%} | "
                      f"{median('gravity_error'):.2%} | {median('torque_error'):.2%} | "
                      f"{sum(r['positive_definite'] for r in rs)}/{len(rs)} | "
-                     f"{median('fit_s'):.1f} |")
+                     f"{_count(rs, 'realizable')} | {median('fit_s'):.1f} |")
     return (f"{len(records)} runs; medians over seeds (see robot_arms.py for the setup)\n\n"
             + "\n".join(lines) + "\n")
+
+
+def _count(records, key) -> str:
+    """``k/n`` of the records that say ``key`` is true, ``-`` when none says."""
+    said = [r[key] for r in records if r.get(key) is not None]
+    return f"{sum(said)}/{len(said)}" if said else "-"
 
 
 def main():

@@ -162,6 +162,28 @@ def physical_parameters(coef: np.ndarray, library) -> dict:
     return {"scale": scale, "base_parameters": base, "friction": friction, "other": other}
 
 
+def consistency_line(report) -> str | None:
+    """The line that says whether a physically constrained fit had to constrain (its
+    ``physical_consistency_``), or None without such a report.
+
+    Examples
+    --------
+    >>> consistency_line({"consistent": False, "cost": 0.012, "negative_friction": ["C_a[a_dot]"],
+    ...                   "min_pseudo_inertia_eigenvalue": 0.0})[:71]
+    'physical consistency: the unconstrained estimate is not that of rigid b'
+    """
+    if report is None:
+        return None
+    if report["consistent"]:
+        return ("physical consistency: the unconstrained estimate is that of rigid bodies "
+                "(kept as it is)")
+    friction = report["negative_friction"]
+    friction = f"; negative friction: {', '.join(friction)}" if friction else ""
+    return (f"physical consistency: the unconstrained estimate is not that of rigid bodies "
+            f"(the constraints cost {report['cost']:.2g} of the explained signal{friction}); "
+            f"constrained to consistent parameters")
+
+
 def parameter_lines(parameters: dict, precision: int) -> list[str]:
     """Printable lines of :func:`physical_parameters`: the base parameters (with the inertial
     combinations they stand for) and each joint's viscous and dry friction."""

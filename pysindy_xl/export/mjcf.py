@@ -15,8 +15,9 @@ and armatures are non-negative. :func:`consistent_parameters` solves the semidef
           \|\pi_0\|^2 \quad \text{s.t.} \quad J_b(\pi) \succeq 0, \; a_j \ge 0
 
 (cvxpy, :func:`pysindy_xl.physical.realize`): the consistent parameters that reproduce
-``beta`` (exactly when it is realizable), among them the closest to the template's ``pi_0``. :func:`write_mjcf` writes them into the
-template's MJCF with the identified viscous and dry friction of each joint.
+``beta`` (exactly when it is realizable), among them the closest to the template's ``pi_0``.
+:func:`write_mjcf` writes them into the template's MJCF with the identified viscous and dry
+friction of each joint.
 """
 
 from __future__ import annotations
