@@ -34,7 +34,7 @@ trajectory (worst joint's relative RMS error against the recorded torques, at Mu
 states: the model's own error, whatever differentiated its training data), whether ``M`` is
 positive definite on the states, fit time; ``realizable``: whether the identified base
 parameters are those of rigid bodies (the semidefinite program of
-:func:`pysindy_xl.physical.realize` reproduces them within 1e-5 relative) with non-negative
+:func:`pysindy_xl.physical.realize` reproduces them within 1e-4 relative, about its accuracy on the boundary of the consistent set) with non-negative
 friction; for ``pysindy-xl-lmi``, ``selection_consistent``: whether the selection's own
 (unconstrained) estimate was.
 
@@ -134,7 +134,7 @@ def idim_ls(library, data, max_frequency):
     return coef
 
 
-def _realizable(catalog, library, beta, coef, tolerance=1e-5):
+def _realizable(catalog, library, beta, coef, tolerance=1e-4):
     """Whether base parameters ``beta`` are those of rigid bodies and friction is
     non-negative (None without cvxpy)."""
     try:

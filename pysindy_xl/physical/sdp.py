@@ -53,11 +53,12 @@ def realize(structure, beta, reference=None, closeness: float = 1e-6, solver=Non
 
     Solves
 
-    .. math:: \min_\pi \; \|C \pi - \beta\|^2 / \|\beta\|^2 + \epsilon \|\pi - \pi_0\|^2 /
+    .. math:: \min_\pi \; \|C \pi - \beta\| / \|\beta\| + \epsilon \|\pi - \pi_0\|^2 /
               \|\pi_0\|^2 \quad \text{s.t.} \quad J_b(\pi) \succeq 0, \; a_j \ge 0,
 
-    the consistent parameters that reproduce ``beta`` (exactly when it is realizable), among
-    them the closest to ``pi_0``.
+    the consistent parameters that reproduce ``beta`` (exactly when it is realizable: the
+    residual's norm, not its square, is an exact penalty, and the solver's tolerance bounds
+    the norm itself), among them the closest to ``pi_0``.
 
     Parameters
     ----------
@@ -86,7 +87,7 @@ def realize(structure, beta, reference=None, closeness: float = 1e-6, solver=Non
     pi = cp.Variable(len(structure.names))
     scale_beta = max(np.linalg.norm(beta), 1e-12)
     scale_pi = max(np.linalg.norm(reference), scale_beta, 1e-12)
-    objective = (cp.sum_squares(combination @ pi - beta) / scale_beta**2
+    objective = (cp.norm(combination @ pi - beta) / scale_beta
                  + closeness * cp.sum_squares(pi - reference) / scale_pi**2)
     problem = cp.Problem(cp.Minimize(objective), body_constraints(structure, pi))
     _solve(problem, solver, "realize")
@@ -110,9 +111,11 @@ def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=
               b_{\mathcal F} \ge 0
 
     (:math:`\mathcal B` the base-parameter columns, :math:`\mathcal F` the friction columns),
-    solved on unit-RMS columns and a normal matrix scaled to ``b_u^T A b_u = 1``, plus
-    ``regularization * |pi|^2 / |pi_scale|^2`` so that parameters the data leave free stay
-    bounded. When ``b_u`` is consistent it is the solution, at zero cost.
+    solved on unit-RMS columns and a normal matrix scaled to ``b_u^T A b_u = 1``, as the
+    minimum of the norm :math:`\|A^{1/2} (b - b_u)\|` (the same minimizer; the solver's
+    tolerance then bounds the norm, not its square), plus ``regularization * |pi|^2 /
+    |pi_scale|^2`` so that parameters the data leave free stay bounded. When ``b_u`` is
+    consistent it is the solution, at zero cost.
 
     Parameters
     ----------
@@ -167,7 +170,7 @@ def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=
         constraints.append(b[np.flatnonzero(zero)] == 0)
     # pi's own scale: that of the base parameters it makes
     pi_scale = max(float(np.linalg.norm(coef[base])), 1e-12) if len(base) else 1.0
-    objective = (cp.sum_squares(factor @ (b - scaled))
+    objective = (cp.norm(factor @ (b - scaled))
                  + regularization * cp.sum_squares(pi) / pi_scale**2)
     problem = cp.Problem(cp.Minimize(objective), constraints)
     _solve(problem, solver, "consistent_least_squares")
