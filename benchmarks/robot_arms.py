@@ -34,9 +34,9 @@ trajectory (worst joint's relative RMS error against the recorded torques, at Mu
 states: the model's own error, whatever differentiated its training data), whether ``M`` is
 positive definite on the states, fit time; ``realizable``: whether the identified base
 parameters are those of rigid bodies (the semidefinite program of
-:func:`pysindy_xl.physical.realize` reproduces them within 1e-4 relative, about its accuracy on the boundary of the consistent set) with non-negative
-friction; for ``pysindy-xl-lmi``, ``selection_consistent``: whether the selection's own
-(unconstrained) estimate was.
+:func:`pysindy_xl.physical.realize` reproduces them within 1e-4 relative, about its accuracy
+on the boundary of the consistent set) with non-negative friction; for ``pysindy-xl-lmi``,
+``selection_consistent``: whether the selection's own (unconstrained) estimate was.
 
 Usage: ``python benchmarks/robot_arms.py [--seeds 3] [--levels 0,0.01,0.05]
 [--arms ur5,panda,iiwa] [--methods pysindy-xl,idim-ls]``. Results are appended to
