@@ -17,7 +17,8 @@ smooth-Coulomb friction per joint):
 * ``pysindy-xl-lmi``: the same with ``PhysicalOptimizer(EnsembleOptimizer(ExplicitOptimizer()))``:
   the bagged selection, then the least squares under rigid bodies' constraints (pseudo-inertias
   positive semidefinite, armature and friction non-negative) when the selection's estimate is
-  not physically consistent;
+  not physically consistent; ``pysindy-xl-lmi-all``: the same refitting every base parameter
+  (``base_parameters="all"``);
 * ``idim-ls``: the robotics baseline: positions and torques low-pass filtered forwards and
   backwards (4th-order Butterworth at 5x the excitation's top frequency), velocities and
   accelerations by central differences, ordinary least squares of the torques on the
@@ -165,9 +166,10 @@ def run(arm, level, seed, method):
     library = catalog.library().fit()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        if method in ("pysindy-xl", "pysindy-xl-lmi"):
-            optimizer = (px.PhysicalOptimizer(px.EnsembleOptimizer(px.ExplicitOptimizer()))
-                         if method == "pysindy-xl-lmi" else None)
+        if method.startswith("pysindy-xl"):
+            optimizer = None if method == "pysindy-xl" else px.PhysicalOptimizer(
+                px.EnsembleOptimizer(px.ExplicitOptimizer()),
+                base_parameters="all" if method.endswith("-all") else "selected")
             model = px.XLSINDy(library, optimizer).fit(**data.fit_arguments(forces="tau"))
             coef = model.coefficients()
             coef = -coef / coef[library.force_columns_[0]]  # force coefficient -1

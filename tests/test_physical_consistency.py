@@ -29,9 +29,10 @@ def arm():
 
 @pytest.fixture(scope="module")
 def inconsistent(arm):
-    """One second of positions with 5 % noise: the unconstrained estimate is not physical."""
+    """Two seconds of positions with 5 % noise: the unconstrained estimate is not physical
+    (a negative viscous friction)."""
     system, catalog = arm
-    data = generate_dataset(system, n_trajectories=1, duration=1.0, seed=1, noise=0.05,
+    data = generate_dataset(system, n_trajectories=1, duration=2.0, seed=1, noise=0.05,
                             sample_every=4, progress=False)
     arguments = data.fit_arguments(forces="tau")
     with warnings.catch_warnings():
@@ -83,8 +84,8 @@ def test_an_inconsistent_estimate_is_recorded_and_constrained(arm, inconsistent)
     pi = np.array([optimizer.inertial_parameters_.get(name, 0.0)
                    for name in catalog.physical_names])
     eigenvalues = np.linalg.eigvalsh(structure.pseudo_inertias(pi))
-    assert eigenvalues.min() >= -1e-7 * np.abs(eigenvalues).max()
-    assert pi[structure.armature].min() >= -1e-9
+    assert eigenvalues.min() >= -1e-12 * np.abs(eigenvalues).max()
+    assert pi[structure.armature].min() >= 0
     # ... which reproduces the identified base parameters
     beta = catalog.lagrange_coefficients(model)
     np.testing.assert_allclose(catalog.combination @ pi, beta, atol=1e-9 * np.abs(beta).max())
@@ -117,7 +118,7 @@ def test_the_violation_is_printed_reported_and_saved(inconsistent, tmp_path, cap
     assert loaded.physical_consistency_ == model.physical_consistency_
     np.testing.assert_array_equal(loaded.coefficients(), model.coefficients())
     assert isinstance(loaded.optimizer, px.PhysicalOptimizer)
-    assert loaded.optimizer.get_params()["base_parameters"] == "auto"
+    assert loaded.optimizer.get_params()["base_parameters"] == "selected"
     trajectory = arguments["x"][0] if isinstance(arguments["x"], list) else arguments["x"]
     velocities = np.gradient(trajectory, axis=0)
     np.testing.assert_allclose(loaded.predict(trajectory[:20], velocities[:20]),

@@ -33,7 +33,7 @@ from .explicit import ExplicitOptimizer, corrected_least_squares, explicit_regre
 __all__ = ["PhysicalOptimizer"]
 
 #: Which base parameters the constrained refit fits (see ``base_parameters``).
-_BASE_PARAMETERS = ("auto", "all", "selected")
+_BASE_PARAMETERS = ("selected", "all")
 
 #: Attributes of the selecting optimizer that the physical fit reports as its own.
 _PASSED_ON = ("inclusion_probability_", "coef_interval_", "coef_samples_", "n_failed_",
@@ -56,14 +56,15 @@ class PhysicalOptimizer(CatalogOptimizer):
     optimizer : catalog optimizer, optional
         Selects the terms (cloned); explicit regression (force coefficient -1). Default
         ``ExplicitOptimizer()``.
-    base_parameters : {"auto", "all", "selected"}, default "auto"
-        Which base parameters the refit fits. ``"selected"``: those the optimizer selected;
-        the others are zero, and must be realizable as zero too, which can constrain the
-        others hard. ``"all"``: every one, whatever the selection (the constraints bound
-        those the data barely excite); the selection still decides the other terms
-        (friction). ``"auto"``: the selected ones when their unconstrained refit is
-        consistent (it is then the answer, as the optimizer found it), all of them under the
-        constraints otherwise.
+    base_parameters : {"selected", "all"}, default "selected"
+        Which base parameters the refit fits. ``"selected"``: those the optimizer selected,
+        the others being zero (and realizable as zero too): the constrained fit is the
+        projection of the selection's model onto the consistent set. ``"all"``: every one,
+        whatever the selection (the constraints bound those the data barely excite); the
+        selection still decides the other terms (friction). When zeros that no rigid bodies
+        realize together with the selected values make the constraints cost much of the
+        explained signal (``consistency_["cost"]``, typically on data too short or too noisy
+        to identify the arm), ``"all"`` is the remedy.
     tolerance : float, default 1e-8
         The unconstrained refit counts as consistent, and is kept as it is, when its friction
         coefficients are non-negative and the constraints would cost at most this share of
@@ -84,8 +85,8 @@ class PhysicalOptimizer(CatalogOptimizer):
         ``cost``: share of the explained signal the constraints cost;
         ``negative_friction``: columns whose unconstrained friction was negative;
         ``min_pseudo_inertia_eigenvalue``: smallest eigenvalue of the bodies' pseudo-inertias
-        in :attr:`inertial_parameters_`, relative to the largest (non-negative up to the
-        solver's tolerance). None without a physical structure.
+        in :attr:`inertial_parameters_`, relative to the largest (non-negative up to
+        round-off). None without a physical structure.
     inertial_parameters_ : dict or None
         A set of bodies' inertial parameters (and armatures) that realizes the fitted base
         parameters, by name: one of many (base parameters do not determine the bodies).
@@ -117,7 +118,7 @@ class PhysicalOptimizer(CatalogOptimizer):
     balances_rows = False
     spec_type = "PhysicalOptimizer"
 
-    def __init__(self, optimizer=None, base_parameters="auto", tolerance=1e-8, solver=None):
+    def __init__(self, optimizer=None, base_parameters="selected", tolerance=1e-8, solver=None):
         self.optimizer = optimizer
         self.base_parameters = base_parameters
         self.tolerance = tolerance
@@ -172,20 +173,10 @@ class PhysicalOptimizer(CatalogOptimizer):
 
     def _refit(self, problem, support):
         structure = problem.physical
+        if structure is not None and self.base_parameters == "all":
+            support = support.copy()
+            support[structure.base_columns] = True
         fit = self._refit_on(problem, support)
-        if structure is not None and len(structure.base_columns) \
-                and self.base_parameters != "selected":
-            every = support.copy()
-            every[structure.base_columns] = True
-            if self.base_parameters == "all" or not (
-                    fit["consistency"]["consistent"] or np.array_equal(every, support)):
-                wide = self._refit_on(problem, every)
-                if self.base_parameters == "auto":  # report the selection's own estimate
-                    wide["unconstrained"] = fit["unconstrained"]
-                    wide["consistency"] = {**fit["consistency"],
-                                           "min_pseudo_inertia_eigenvalue": wide["consistency"][
-                                               "min_pseudo_inertia_eigenvalue"]}
-                fit = wide
         self.selection_ = None
         self.coef_ = fit["coef"]
         self.unconstrained_coef_ = fit["unconstrained"]

@@ -140,7 +140,8 @@ def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=
     coef : ndarray, shape (F,)
         Consistent coefficients: the base parameters are exactly ``C pi``.
     pi : ndarray, shape (len(structure.names),)
-        Inertial parameters that realize them (one realization of many).
+        Inertial parameters that realize them (one realization of many), exactly consistent
+        (the solver's answer through :meth:`PhysicalStructure.nearest_consistent`).
     cost : float
         ``(b - b_u)^T A (b - b_u) / b_u^T A b_u``: the share of the explained signal the
         constraints cost (0 when ``b_u`` is consistent, to the solver's tolerance).
@@ -177,7 +178,7 @@ def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=
     if b.value is None or pi.value is None:
         raise RuntimeError("consistent_least_squares: the semidefinite program found no "
                            "solution")
-    pi_value = np.asarray(pi.value, dtype=float)
+    pi_value = structure.nearest_consistent(pi.value)
     out = np.asarray(b.value, dtype=float) / scale
     out[base] = structure.combination @ pi_value  # exactly the realized base parameters
     if zero is not None:

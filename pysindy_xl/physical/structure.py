@@ -148,6 +148,28 @@ class PhysicalStructure:
             friction_columns=np.array([position[int(c)] for c in self.friction_columns
                                        if int(c) in position], dtype=int))
 
+    def nearest_consistent(self, pi) -> np.ndarray:
+        """``pi`` with every body's pseudo-inertia projected onto the positive semidefinite
+        cone (negative eigenvalues set to zero) and negative armatures set to zero: a
+        solver's answer made exactly consistent, at a change of the order of its tolerance.
+
+        Examples
+        --------
+        >>> s = PhysicalStructure.from_maps([{"b.m": 1.0}], base_columns=[0])
+        >>> s.nearest_consistent([-1e-9, 0, 0, 0, 1, 1, 1, 0, 0, 0])[0]
+        np.float64(0.0)
+        """
+        pi = np.array(pi, dtype=float)
+        for indices in self.body_indices:
+            values, vectors = np.linalg.eigh(pseudo_inertia_matrix(pi[indices]))
+            pseudo = (vectors * np.clip(values, 0.0, None)) @ vectors.T
+            sigma = pseudo[:3, :3]
+            inertia = np.trace(sigma) * np.eye(3) - sigma
+            pi[indices] = [pseudo[3, 3], *pseudo[:3, 3], inertia[0, 0], inertia[1, 1],
+                           inertia[2, 2], inertia[0, 1], inertia[0, 2], inertia[1, 2]]
+        pi[self.armature] = np.clip(pi[self.armature], 0.0, None)
+        return pi
+
     def pseudo_inertias(self, pi) -> np.ndarray:
         """Every body's 4x4 pseudo-inertia at parameters ``pi``, shape (len(bodies), 4, 4)."""
         pi = np.asarray(pi, dtype=float)
