@@ -174,3 +174,23 @@ def test_the_optimizer_is_an_estimator_that_round_trips_its_spec():
     assert loaded.get_params()["optimizer"].get_params()["n_models"] == 4
     assert loaded.get_params()["solver"] == "CLARABEL"
     assert loaded.requires_forces and loaded.can_refit
+
+
+@pytest.mark.parametrize("report", [
+    {"consistent": "no"},
+    {"consistent": False, "cost": 0.1, "negative_friction": [3],
+     "min_pseudo_inertia_eigenvalue": 0.0},
+    {"consistent": False, "cost": [], "negative_friction": [],
+     "min_pseudo_inertia_eigenvalue": 0.0},
+])
+def test_a_file_with_a_bad_consistency_report_is_refused(inconsistent, tmp_path, report):
+    import json
+
+    model, _ = inconsistent
+    path = tmp_path / "arm.json"
+    model.save(path)
+    document = json.loads(path.read_text())
+    document["training"]["physical_consistency"] = report
+    path.write_text(json.dumps(document))
+    with pytest.raises(ValueError, match="physical_consistency"):
+        px.XLSINDy.load(path)
