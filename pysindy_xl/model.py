@@ -83,7 +83,9 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         forced, implicit when none is, mixed otherwise; explicit fits (and explicit parts)
         from positions only are bagged, ``EnsembleOptimizer(ExplicitOptimizer())``: the
         model keeps the terms that most of 20 subsample fits select, and reports inclusion
-        probabilities and coefficient intervals (measured in the "Noisy data" guide).
+        probabilities and coefficient intervals (measured in the "Noisy data" guide); a
+        kinematic catalog's explicit fit is kept physically consistent by
+        :class:`~pysindy_xl.PhysicalOptimizer` when cvxpy is installed.
     differentiation_method : pysindy differentiation method, optional
         Used for velocities and accelerations that are not given (strong form). Default, by
         the optimizer's ``derivative_estimate``: ``ps.SmoothedFiniteDifference()`` (finite
@@ -171,6 +173,10 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         With an :class:`~pysindy_xl.EnsembleOptimizer`: per catalog feature, the fraction of
         the ensemble's fits that include it and the interval of its coefficient,
         shapes (F,) and (2, F); ``print(uncertainty=True)`` shows them.
+    physical_consistency_ : dict or None
+        After a physically constrained fit (:class:`~pysindy_xl.PhysicalOptimizer`): whether
+        the unconstrained estimate was consistent, what the constraints cost, the features
+        whose friction came out negative (see ``PhysicalOptimizer.consistency_``).
     mass_matrix_check_ : dict or None
         The identified mass matrix on (up to 2,000 of) the training states: fraction where it
         is positive definite and median condition number. Below 1, ``fit`` warns with an
@@ -369,14 +375,15 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
                 "u: explicit regression needs the generalized forces; pass u, or use "
                 "ImplicitOptimizer / MixedOptimizer for unforced data"
             )
-        optimizer = self._optimizer(forced[moving], estimated=noise is not None)
+        structure = library.physical_structure()
+        optimizer = self._optimizer(forced[moving], estimated=noise is not None,
+                                    physical=structure is not None and structure.constrains)
         mass = None
         if noise is not None and getattr(optimizer, "uses_mass_matrices", False):
             mass = column_mass_matrices(library, z)[:, keep][:, :, moving][:, :, :, moving]
         if noise is not None:
             noise = noise.columns(keep)
             noise = noise.coordinates(moving) if still.any() else noise
-        structure = library.physical_structure()
         optimizer = self._fit_optimizer(optimizer, CatalogProblem.from_arrays(
             theta[block_rows(n, theta.shape[0], moving)][:, keep], int(moving.sum()),
             force_columns, mass_matrices=mass,
@@ -520,14 +527,15 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             warnings.warn(record.message, record.category, stacklevel=2)
         return fitted
 
-    def _optimizer(self, forced: np.ndarray, estimated: bool = False):
+    def _optimizer(self, forced: np.ndarray, estimated: bool = False, physical: bool = False):
         """The optimizer to fit: a clone of the user's, or
         :func:`~pysindy_xl.optimizers.default_optimizer` for the data.
 
         ``estimated``: the columns come from noisy positions only (the weak form propagated
-        the smoother's noise estimate into them)."""
+        the smoother's noise estimate into them); ``physical``: the catalog's coefficients stand
+        for rigid bodies' parameters."""
         if self.optimizer is None or isinstance(self.optimizer, str):
-            return default_optimizer(forced, estimated, kind=self.optimizer)
+            return default_optimizer(forced, estimated, kind=self.optimizer, physical=physical)
         if not hasattr(self.optimizer, "fit_catalog"):
             if callable(getattr(self.optimizer, "fit", None)):
                 # a pysindy (or scikit-learn) regressor: explicit regression through it
