@@ -20,8 +20,8 @@ smooth-Coulomb friction per joint):
 * ``pysindy-xl-lmi``: the same with ``PhysicalOptimizer(EnsembleOptimizer(ExplicitOptimizer()))``:
   the bagged selection, then the least squares under rigid bodies' constraints (pseudo-inertias
   positive semidefinite, armature and friction non-negative) when the selection's estimate is
-  not physically consistent; ``pysindy-xl-lmi-all``: the same refitting every base parameter
-  (``base_parameters="all"``);
+  not physically consistent; ``pysindy-xl-lmi-support`` and ``pysindy-xl-lmi-all``: the same
+  with ``base_parameters="support"`` (the selection's zeros stay zero) and ``"all"``;
 * ``idim-ls``: the robotics baseline: positions and torques low-pass filtered forwards and
   backwards (4th-order Butterworth at 5x the excitation's top frequency), velocities and
   accelerations by central differences, ordinary least squares of the torques on the
@@ -172,8 +172,8 @@ def run(arm, level, seed, method):
         if method.startswith("pysindy-xl"):
             bagged = px.EnsembleOptimizer(px.ExplicitOptimizer())
             optimizer = {"pysindy-xl": None, "pysindy-xl-unconstrained": bagged}.get(
-                method, px.PhysicalOptimizer(bagged, base_parameters="all" if method.endswith(
-                    "-all") else "selected"))
+                method, px.PhysicalOptimizer(bagged, base_parameters=(
+                    method.split("-lmi-")[1] if "-lmi-" in method else "selected")))
             model = px.XLSINDy(library, optimizer).fit(**data.fit_arguments(forces="tau"))
             coef = model.coefficients()
             coef = -coef / coef[library.force_columns_[0]]  # force coefficient -1

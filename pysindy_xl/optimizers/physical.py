@@ -17,7 +17,11 @@ variables where the unconstrained refit is),
 which is the least squares of the regression on the consistent set (``|X b - y|^2`` differs
 from it by a constant), a semidefinite program (cvxpy): :math:`J_k` the pseudo-inertia of body
 ``k``, :math:`a_j` the armatures, :math:`\mathcal F` the friction columns. A consistent ``b_u``
-is its own solution: the constraint then changes nothing.
+is its own solution: the constraint then changes nothing. The true parameters are consistent,
+and the projection onto a closed convex set that holds them is non-expansive: the constrained
+estimate is no farther from the truth than ``b_u`` in the norm of ``A`` (the error of the
+regression's rows), whatever the noise, as long as the set holds the truth, which is why the
+base parameters the selection left out may leave zero (``base_parameters="selected"``).
 """
 
 from __future__ import annotations
@@ -33,7 +37,7 @@ from .explicit import ExplicitOptimizer, corrected_least_squares, explicit_regre
 __all__ = ["PhysicalOptimizer"]
 
 #: Which base parameters the constrained refit fits (see ``base_parameters``).
-_BASE_PARAMETERS = ("selected", "all")
+_BASE_PARAMETERS = ("selected", "all", "support")
 
 #: Attributes of the selecting optimizer that the physical fit reports as its own.
 _PASSED_ON = ("inclusion_probability_", "coef_interval_", "coef_samples_", "n_failed_",
@@ -56,15 +60,16 @@ class PhysicalOptimizer(CatalogOptimizer):
     optimizer : catalog optimizer, optional
         Selects the terms (cloned); explicit regression (force coefficient -1). Default
         ``ExplicitOptimizer()``.
-    base_parameters : {"selected", "all"}, default "selected"
-        Which base parameters the refit fits. ``"selected"``: those the optimizer selected,
-        the others being zero (and realizable as zero too): the constrained fit is the
-        projection of the selection's model onto the consistent set. ``"all"``: every one,
-        whatever the selection (the constraints bound those the data barely excite); the
-        selection still decides the other terms (friction). When zeros that no rigid bodies
-        realize together with the selected values make the constraints cost much of the
-        explained signal (``consistency_["cost"]``, typically on data too short or too noisy
-        to identify the arm), ``"all"`` is the remedy.
+    base_parameters : {"selected", "support", "all"}, default "selected"
+        Which base parameters the estimates fit. ``"selected"``: the unconstrained estimate
+        is the selection's (the base parameters it left out are zero), and the constrained
+        fit may move every base parameter, those left out too: the consistent set then holds
+        the true parameters, and the projection onto it (see the module docstring) brings
+        the estimate no farther from them in the metric of the normal matrix, whatever the
+        noise. ``"support"``: the base parameters left out stay zero, and must be realizable
+        as zero too (the projection within the selection's model; the consistent set then
+        need not hold the truth). ``"all"``: both estimates fit every base parameter (the
+        unconstrained one noisier than the selection's).
     tolerance : float, default 1e-8
         The unconstrained refit counts as consistent, and is kept as it is, when its friction
         coefficients are non-negative and the constraints would cost at most this share of
@@ -205,8 +210,11 @@ class PhysicalOptimizer(CatalogOptimizer):
         normal = x.T @ x
         if moments is not None and share < 0.5:  # as corrected_least_squares corrects
             normal = normal - moments
+        free = keep.copy()
+        if self.base_parameters != "support":  # every base parameter may leave zero
+            free[structure.base_columns] = True
         constrained, pi, cost = consistent_least_squares(
-            x, structure, coef, normal=normal, zero=~keep, solver=self.solver)
+            x, structure, coef, normal=normal, zero=~free, solver=self.solver)
         negative = structure.friction_columns[coef[structure.friction_columns] < 0]
         consistent = cost <= self.tolerance and not len(negative)
         pseudo = np.linalg.eigvalsh(structure.pseudo_inertias(pi)) if len(structure.bodies) \
