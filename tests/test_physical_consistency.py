@@ -4,6 +4,7 @@ Ground truth is MuJoCo (``mj_fullM``); consistency is checked on the realization
 reports (pseudo-inertia eigenvalues, armatures) and on the friction coefficients.
 """
 
+import pickle
 import warnings
 
 import mujoco
@@ -123,6 +124,9 @@ def test_the_violation_is_printed_reported_and_saved(inconsistent, tmp_path, cap
     velocities = np.gradient(trajectory, axis=0)
     np.testing.assert_allclose(loaded.predict(trajectory[:20], velocities[:20]),
                                model.predict(trajectory[:20], velocities[:20]))
+    pickled = pickle.loads(pickle.dumps(model))
+    assert pickled.physical_consistency_ == model.physical_consistency_
+    np.testing.assert_array_equal(pickled.coefficients(), model.coefficients())
 
 
 def test_a_catalog_without_physical_meaning_is_fitted_as_by_the_selecting_optimizer():
