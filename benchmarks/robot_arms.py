@@ -13,10 +13,10 @@ Methods, on the same data and the same kinematic catalog (base parameters, visco
 smooth-Coulomb friction per joint):
 
 * ``pysindy-xl``: ``XLSINDy(catalog.library())`` with its defaults (weak form on smoothed
-  positions, noise-aware bagged selection; since the physically consistent fit became the
-  default for kinematic catalogs, the same as ``pysindy-xl-lmi``: the records written before
-  were unconstrained);
-* ``pysindy-xl-unconstrained``: the same with ``EnsembleOptimizer(ExplicitOptimizer())``;
+  positions, noise-aware bagged selection);
+* ``pysindy-xl-unconstrained``: the same with its default optimizer named,
+  ``EnsembleOptimizer(ExplicitOptimizer())`` (a rerun of ``pysindy-xl`` next to the
+  constrained methods, in the same session);
 * ``pysindy-xl-lmi``: the same with ``PhysicalOptimizer(EnsembleOptimizer(ExplicitOptimizer()))``:
   the bagged selection, then the least squares under rigid bodies' constraints (pseudo-inertias
   positive semidefinite, armature and friction non-negative) when the selection's estimate is

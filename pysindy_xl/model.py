@@ -83,9 +83,9 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         forced, implicit when none is, mixed otherwise; explicit fits (and explicit parts)
         from positions only are bagged, ``EnsembleOptimizer(ExplicitOptimizer())``: the
         model keeps the terms that most of 20 subsample fits select, and reports inclusion
-        probabilities and coefficient intervals (measured in the "Noisy data" guide); a
-        kinematic catalog's explicit fit is kept physically consistent by
-        :class:`~pysindy_xl.PhysicalOptimizer` when cvxpy is installed.
+        probabilities and coefficient intervals (measured in the "Noisy data" guide). For
+        parameters that rigid bodies can have (a kinematic catalog), pass
+        :class:`~pysindy_xl.PhysicalOptimizer`.
     differentiation_method : pysindy differentiation method, optional
         Used for velocities and accelerations that are not given (strong form). Default, by
         the optimizer's ``derivative_estimate``: ``ps.SmoothedFiniteDifference()`` (finite
@@ -375,15 +375,14 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
                 "u: explicit regression needs the generalized forces; pass u, or use "
                 "ImplicitOptimizer / MixedOptimizer for unforced data"
             )
-        structure = library.physical_structure()
-        optimizer = self._optimizer(forced[moving], estimated=noise is not None,
-                                    physical=structure is not None and structure.constrains)
+        optimizer = self._optimizer(forced[moving], estimated=noise is not None)
         mass = None
         if noise is not None and getattr(optimizer, "uses_mass_matrices", False):
             mass = column_mass_matrices(library, z)[:, keep][:, :, moving][:, :, :, moving]
         if noise is not None:
             noise = noise.columns(keep)
             noise = noise.coordinates(moving) if still.any() else noise
+        structure = library.physical_structure()  # for optimizers that constrain to it
         optimizer = self._fit_optimizer(optimizer, CatalogProblem.from_arrays(
             theta[block_rows(n, theta.shape[0], moving)][:, keep], int(moving.sum()),
             force_columns, mass_matrices=mass,
@@ -527,15 +526,14 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             warnings.warn(record.message, record.category, stacklevel=2)
         return fitted
 
-    def _optimizer(self, forced: np.ndarray, estimated: bool = False, physical: bool = False):
+    def _optimizer(self, forced: np.ndarray, estimated: bool = False):
         """The optimizer to fit: a clone of the user's, or
         :func:`~pysindy_xl.optimizers.default_optimizer` for the data.
 
         ``estimated``: the columns come from noisy positions only (the weak form propagated
-        the smoother's noise estimate into them); ``physical``: the catalog's coefficients stand
-        for rigid bodies' parameters."""
+        the smoother's noise estimate into them)."""
         if self.optimizer is None or isinstance(self.optimizer, str):
-            return default_optimizer(forced, estimated, kind=self.optimizer, physical=physical)
+            return default_optimizer(forced, estimated, kind=self.optimizer)
         if not hasattr(self.optimizer, "fit_catalog"):
             if callable(getattr(self.optimizer, "fit", None)):
                 # a pysindy (or scikit-learn) regressor: explicit regression through it

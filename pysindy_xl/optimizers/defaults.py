@@ -12,7 +12,6 @@ from .ensemble import EnsembleOptimizer
 from .explicit import ExplicitOptimizer
 from .implicit import ImplicitOptimizer
 from .mixed import MixedOptimizer
-from .physical import PhysicalOptimizer
 
 __all__ = ["default_optimizer", "SOLVER_KINDS"]
 
@@ -20,8 +19,7 @@ __all__ = ["default_optimizer", "SOLVER_KINDS"]
 SOLVER_KINDS = ("explicit", "implicit", "mixed")
 
 
-def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
-                      physical: bool = False):
+def default_optimizer(forced, estimated: bool = False, kind: str | None = None):
     """The default catalog optimizer for the data (or of a given kind).
 
     * every coordinate forced: explicit regression; on estimated columns bagged,
@@ -29,13 +27,7 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
       hundred candidates keeps a term that only fits the noise in a sizeable share of fits (a
       multiple-comparison effect); the terms most subsample fits keep are the true ones;
     * no coordinate forced: ``ImplicitOptimizer()``;
-    * some forced: ``MixedOptimizer``, its explicit part bagged on estimated columns as above;
-    * a catalog whose coefficients stand for rigid bodies' parameters (``physical``, a
-      kinematic catalog) fitted explicitly: the explicit regression wrapped in
-      :class:`~pysindy_xl.PhysicalOptimizer`, which keeps the selection's estimate when it is
-      physically consistent and projects it onto the consistent set otherwise (measured to
-      cost no accuracy on the robot-arm benchmark, ``benchmarks/robot_arms.py``), when cvxpy
-      is installed (without it, the unconstrained regression).
+    * some forced: ``MixedOptimizer``, its explicit part bagged on estimated columns as above.
 
     Parameters
     ----------
@@ -47,9 +39,6 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
     kind : {"explicit", "implicit", "mixed"}, optional
         The kind of regression; default: from ``forced`` as above. The bagging policy is the
         same whatever the kind.
-    physical : bool, default False
-        The catalog's columns stand for physical parameters (its
-        :meth:`~pysindy_xl.CatalogRepartition.physical_structure` constrains something).
 
     Returns
     -------
@@ -71,14 +60,7 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
         raise ValueError(f"kind: expected one of {SOLVER_KINDS}, got {kind!r}")
     explicit = EnsembleOptimizer(ExplicitOptimizer()) if estimated else ExplicitOptimizer()
     if kind == "explicit":
-        return PhysicalOptimizer(explicit) if physical and _has_cvxpy() else explicit
+        return explicit
     if kind == "implicit":
         return ImplicitOptimizer()
     return MixedOptimizer(explicit if estimated else None)
-
-
-def _has_cvxpy() -> bool:
-    """Whether cvxpy, which the physically consistent fit needs, is installed."""
-    import importlib.util
-
-    return importlib.util.find_spec("cvxpy") is not None
