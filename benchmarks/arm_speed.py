@@ -27,8 +27,6 @@ import sys
 import time
 import warnings
 
-import numpy as np
-
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 

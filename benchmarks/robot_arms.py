@@ -14,6 +14,14 @@ smooth-Coulomb friction per joint):
 
 * ``pysindy-xl``: ``XLSINDy(catalog.library())`` with its defaults (weak form on smoothed
   positions, noise-aware bagged selection);
+* ``pysindy-xl-unconstrained``: the same with its default optimizer named,
+  ``EnsembleOptimizer(ExplicitOptimizer())`` (a rerun of ``pysindy-xl`` next to the
+  constrained methods, in the same session);
+* ``pysindy-xl-lmi``: the same with ``PhysicalOptimizer(EnsembleOptimizer(ExplicitOptimizer()))``:
+  the bagged selection, then the least squares under rigid bodies' constraints (pseudo-inertias
+  positive semidefinite, armature and friction non-negative) when the selection's estimate is
+  not physically consistent; ``pysindy-xl-lmi-support`` and ``pysindy-xl-lmi-all``: the same
+  with ``base_parameters="support"`` (the selection's zeros stay zero) and ``"all"``;
 * ``idim-ls``: the robotics baseline: positions and torques low-pass filtered forwards and
   backwards (4th-order Butterworth at 5x the excitation's top frequency), velocities and
   accelerations by central differences, ordinary least squares of the torques on the
@@ -29,7 +37,12 @@ gravity-torque error (``|g_id - g| / |g|`` over the same states), torque predict
 trajectory (worst joint's relative RMS error against the recorded torques, at MuJoCo's exact
 states: the model's own error, whatever differentiated its training data), whether ``M`` is
 positive definite on the states, viscous friction against the MJCF's joint damping (worst
-joint's relative error), the largest dry friction identified (the arms have none), fit time.
+joint's relative error), the largest dry friction identified (the arms have none), fit time;
+``realizable``: whether the identified base parameters are those of rigid bodies (the
+semidefinite program of :func:`pysindy_xl.physical.realize` reproduces them within 1e-4
+relative, about its accuracy on the boundary of the consistent set) with non-negative
+friction; for ``pysindy-xl-lmi``, ``selection_consistent``: whether the selection's own
+(unconstrained) estimate was.
 
 Usage: ``python benchmarks/robot_arms.py [--seeds 3] [--levels 0,0.01,0.05]
 [--arms ur5,panda,iiwa] [--methods pysindy-xl,idim-ls] [--jobs 2]``. Results are appended to
@@ -133,6 +146,23 @@ def idim_ls(library, data, max_frequency):
     return coef
 
 
+def _realizable(catalog, library, beta, coef, tolerance=1e-4):
+    """Whether base parameters ``beta`` are those of rigid bodies and friction is
+    non-negative (None without cvxpy)."""
+    try:
+        from pysindy_xl.physical import PhysicalStructure, realize
+    except ImportError:
+        return None
+    structure = PhysicalStructure.from_combination(list(catalog.physical_names),
+                                                   catalog.combination)
+    try:
+        _, residual = realize(structure, beta, closeness=1e-9)
+    except (ImportError, RuntimeError):
+        return None
+    friction = library.physical_structure().friction_columns
+    return bool(residual <= tolerance and np.all(coef[friction] >= 0))
+
+
 def run(arm, level, seed, method):
     import pysindy_xl as px
     from pysindy_xl._equations import physical_parameters
@@ -148,10 +178,17 @@ def run(arm, level, seed, method):
     library = catalog.library().fit()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        if method == "pysindy-xl":
-            model = px.XLSINDy(library).fit(**data.fit_arguments(forces="tau"))
+        if method.startswith("pysindy-xl"):
+            bagged = px.EnsembleOptimizer(px.ExplicitOptimizer())
+            optimizer = {"pysindy-xl": None, "pysindy-xl-unconstrained": bagged}.get(
+                method, px.PhysicalOptimizer(bagged, base_parameters=(
+                    method.split("-lmi-")[1] if "-lmi-" in method else "selected")))
+            model = px.XLSINDy(library, optimizer).fit(**data.fit_arguments(forces="tau"))
             coef = model.coefficients()
             coef = -coef / coef[library.force_columns_[0]]  # force coefficient -1
+            if getattr(model, "physical_consistency_", None) is not None:
+                record["selection_consistent"] = model.physical_consistency_["consistent"]
+                record["constraint_cost"] = model.physical_consistency_["cost"]
         elif method == "idim-ls":
             coef = idim_ls(library, data, 1.5)
         else:  # the MJCF's own parameters: the floor of the torque metric
@@ -164,6 +201,7 @@ def run(arm, level, seed, method):
         abs(friction[name]["viscous"] - d) / d
         for name, d in zip(system.coordinate_names, damping, strict=True)))
     record["dry_friction"] = float(max(abs(f["dry"]) for f in friction.values()))
+    record["realizable"] = _realizable(catalog, library, beta, coef)
     # torque prediction on the fresh trajectory's exact states (MuJoCo's): the model's own
     # error in torque space, the same for every method whatever differentiates its data
     theta = library.transform(px.stack_variables(fresh.q, fresh.qd, fresh.qdd)).reshape(
@@ -193,8 +231,8 @@ def summarize(records) -> str:
         cells.setdefault((r["arm"], r["level"], r["method"]), []).append(r)
     lines = ["| arm | noise | method | seeds | mass-matrix error (median / worst) | gravity error "
              "(median / worst) | torque prediction | damping error (median / worst) "
-             "| largest dry friction | M positive definite | fit (s) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| largest dry friction | M positive definite | realizable | fit (s) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for (arm, level, method), rs in sorted(cells.items()):
         def median(key, rs=rs):
             return np.median([r[key] for r in rs])
@@ -208,9 +246,15 @@ def summarize(records) -> str:
                      f"{median('damping_error'):.1%} / {worst('damping_error'):.1%} | "
                      f"{worst('dry_friction'):.3g} | "
                      f"{sum(r['positive_definite'] for r in rs)}/{len(rs)} | "
-                     f"{median('fit_s'):.1f} |")
+                     f"{_count(rs, 'realizable')} | {median('fit_s'):.1f} |")
     return (f"{len(records)} runs; medians and worst cases over seeds (see robot_arms.py for "
             "the setup)\n\n" + "\n".join(lines) + "\n")
+
+
+def _count(records, key) -> str:
+    """``k/n`` of the records that say ``key`` is true, ``-`` when none says."""
+    said = [r[key] for r in records if r.get(key) is not None]
+    return f"{sum(said)}/{len(said)}" if said else "-"
 
 
 def main():

@@ -31,6 +31,7 @@ _LAZY = {
     "ImplicitOptimizer": "optimizers",
     "MixedOptimizer": "optimizers",
     "EnsembleOptimizer": "optimizers",
+    "PhysicalOptimizer": "optimizers",
     "NoLawFoundError": "optimizers",
     "XLSINDy": "model",
     "IdentificationWarning": "diagnostics",
@@ -56,6 +57,7 @@ __all__ = [
     "ImplicitOptimizer",
     "MixedOptimizer",
     "EnsembleOptimizer",
+    "PhysicalOptimizer",
     "NoLawFoundError",
     "XLSINDy",
     "IdentificationWarning",
@@ -86,6 +88,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         ImplicitOptimizer,
         MixedOptimizer,
         NoLawFoundError,
+        PhysicalOptimizer,
     )
     from .symbols import Coordinates, monomials, products
     from .weak import BumpTestFunctions, WhittakerSmoother

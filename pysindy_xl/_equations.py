@@ -9,6 +9,8 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
+from .physical.structure import friction_kind
+
 __all__ = ["significant", "equation_strings", "identified_lagrangian", "uncertainty_lines"]
 
 
@@ -151,15 +153,35 @@ def physical_parameters(coef: np.ndarray, library) -> dict:
         if category != "classical" or coef[j] == 0:
             continue
         c = next(i for i in range(library.coords.n) if library.symbolic_matrix_[i, j] != 0)
-        name, term, velocity = library.coords.names[c], library.feature_terms_[j], \
-            library.coords.qd[c]
-        if term == velocity:
-            friction[name]["viscous"] += float(coef[j] * factor)
-        elif term.func in (sp.tanh, sp.sign) and term.free_symbols == {velocity}:
-            friction[name]["dry"] += float(coef[j] * factor)
+        name = library.coords.names[c]
+        kind = friction_kind(library.feature_terms_[j], library.coords.qd[c])
+        if kind is not None:
+            friction[name][kind] += float(coef[j] * factor)
         else:
             other[library.feature_names_[j]] = float(coef[j] * factor)
     return {"scale": scale, "base_parameters": base, "friction": friction, "other": other}
+
+
+def consistency_line(report) -> str | None:
+    """The line that says whether a physically constrained fit had to constrain (its
+    ``physical_consistency_``), or None without such a report.
+
+    Examples
+    --------
+    >>> consistency_line({"consistent": False, "cost": 0.012, "negative_friction": ["C_a[a_dot]"],
+    ...                   "min_pseudo_inertia_eigenvalue": 0.0})[:71]
+    'physical consistency: the unconstrained estimate is not that of rigid b'
+    """
+    if report is None:
+        return None
+    if report["consistent"]:
+        return ("physical consistency: the unconstrained estimate is that of rigid bodies "
+                "(kept as it is)")
+    friction = report["negative_friction"]
+    friction = f"; negative friction: {', '.join(friction)}" if friction else ""
+    return (f"physical consistency: the unconstrained estimate is not that of rigid bodies "
+            f"(the constraints cost {report['cost']:.2g} of the explained signal{friction}); "
+            f"constrained to consistent parameters")
 
 
 def parameter_lines(parameters: dict, precision: int, reference: dict | None = None) -> list[str]:

@@ -14,6 +14,7 @@ import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
 from ._equations import (
+    consistency_line,
     equation_strings,
     has_parameter_map,
     identified_lagrangian,
@@ -183,8 +184,9 @@ class InspectionMixin:
             Print the Lagrangian and the equations of motion. Default: True, except for a
             catalog whose terms stand for physical parameters (a robot's kinematic catalog)
             and whose equations run for pages. Such a catalog's :meth:`physical_parameters`
-            are printed in any case, and so is the note on coordinates held still
-            (``still_coordinates_``).
+            are printed in any case, and so are the note on coordinates held still
+            (``still_coordinates_``) and, after a fit constrained to physically consistent
+            parameters, whether the constraints had to change the estimate.
         """
         check_is_fitted(self, "coef_")
         note = held_note(getattr(self, "still_coordinates_", ()))
@@ -198,6 +200,9 @@ class InspectionMixin:
         if has_parameter_map(self.feature_library_):
             for line in parameter_lines(self.physical_parameters(), precision):
                 print(line)
+        consistency = consistency_line(getattr(self, "physical_consistency_", None))
+        if consistency:
+            print(consistency)
         if prints_equations(self, equations):
             lagrangian = self.lagrangian()
             if lagrangian != 0:

@@ -442,7 +442,39 @@ def _training_spec(model) -> dict:
         "selection": selection,
         "mass_matrix_check": None if check is None else {
             key: _floats([value])[0] for key, value in check.items()},
+        "physical_consistency": _consistency_json(getattr(model, "physical_consistency_",
+                                                          None)),
     }
+
+
+_CONSISTENCY_KEYS = ("consistent", "cost", "negative_friction", "min_pseudo_inertia_eigenvalue")
+
+
+def _consistency_json(report):
+    """``physical_consistency_`` for JSON (None when the fit did not check it)."""
+    if report is None:
+        return None
+    return {"consistent": bool(report["consistent"]), "cost": _floats([report["cost"]])[0],
+            "negative_friction": [str(name) for name in report["negative_friction"]],
+            "min_pseudo_inertia_eigenvalue": _floats(
+                [report["min_pseudo_inertia_eigenvalue"]])[0]}
+
+
+def _consistency_from_document(report, path):
+    """The ``physical_consistency_`` a file holds, every field checked, or None."""
+    if report is None:
+        return None
+    where = "training.physical_consistency"
+    _expect(isinstance(report, dict) and set(report) == set(_CONSISTENCY_KEYS), path,
+            f"{where} must hold {_CONSISTENCY_KEYS}")
+    _expect(isinstance(report["consistent"], bool), path, f"{where}.consistent must be a bool")
+    names = report["negative_friction"]
+    _expect(isinstance(names, list) and all(isinstance(n, str) for n in names), path,
+            f"{where}.negative_friction must be a list of feature names")
+    cost, eigenvalue = _floats_from([report["cost"], report["min_pseudo_inertia_eigenvalue"]],
+                                    path, where)
+    return {"consistent": report["consistent"], "cost": float(cost),
+            "negative_friction": list(names), "min_pseudo_inertia_eigenvalue": float(eigenvalue)}
 
 
 def _training_from_document(spec, n_features, path) -> dict:
@@ -481,7 +513,9 @@ def _training_from_document(spec, n_features, path) -> dict:
                                             "training.mass_matrix_check").tolist(), strict=True))
     return {"formulation_": formulation, "n_samples_": n_samples, "weak_info_": info,
             "selection_": _selection_from_spec(spec.get("selection"), n_features, path),
-            "mass_matrix_check_": check}
+            "mass_matrix_check_": check,
+            "physical_consistency_": _consistency_from_document(
+                spec.get("physical_consistency"), path)}
 
 
 def _selection_from_spec(selection, n_features, path):

@@ -83,7 +83,9 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         forced, implicit when none is, mixed otherwise; explicit fits (and explicit parts)
         from positions only are bagged, ``EnsembleOptimizer(ExplicitOptimizer())``: the
         model keeps the terms that most of 20 subsample fits select, and reports inclusion
-        probabilities and coefficient intervals (measured in the "Noisy data" guide).
+        probabilities and coefficient intervals (measured in the "Noisy data" guide). For
+        parameters that rigid bodies can have (a kinematic catalog), pass
+        :class:`~pysindy_xl.PhysicalOptimizer`.
     differentiation_method : pysindy differentiation method, optional
         Used for velocities and accelerations that are not given (strong form). Default, by
         the optimizer's ``derivative_estimate``: ``ps.SmoothedFiniteDifference()`` (finite
@@ -171,6 +173,10 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         With an :class:`~pysindy_xl.EnsembleOptimizer`: per catalog feature, the fraction of
         the ensemble's fits that include it and the interval of its coefficient,
         shapes (F,) and (2, F); ``print(uncertainty=True)`` shows them.
+    physical_consistency_ : dict or None
+        After a physically constrained fit (:class:`~pysindy_xl.PhysicalOptimizer`): whether
+        the unconstrained estimate was consistent, what the constraints cost, the features
+        whose friction came out negative (see ``PhysicalOptimizer.consistency_``).
     mass_matrix_check_ : dict or None
         The identified mass matrix on (up to 2,000 of) the training states: fraction where it
         is positive definite and median condition number. Below 1, ``fit`` warns with an
@@ -376,9 +382,12 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         if noise is not None:
             noise = noise.columns(keep)
             noise = noise.coordinates(moving) if still.any() else noise
+        structure = library.physical_structure()  # for optimizers that constrain to it
         optimizer = self._fit_optimizer(optimizer, CatalogProblem.from_arrays(
             theta[block_rows(n, theta.shape[0], moving)][:, keep], int(moving.sum()),
-            force_columns, mass_matrices=mass), noise, forced[moving])
+            force_columns, mass_matrices=mass,
+            physical=None if structure is None else structure.select(keep)), noise,
+            forced[moving])
         coef = np.zeros(theta.shape[1])
         coef[keep] = optimizer.coef_
         self.feature_library_ = library
@@ -392,6 +401,9 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             self.coef_interval_[:, keep] = optimizer.coef_interval_
         names = library.get_feature_names()
         self.dropped_features_ = {names[j]: reason for j, reason in dropped.items()}
+        report = getattr(optimizer, "consistency_", None)  # a physically constrained fit
+        self.physical_consistency_ = None if report is None else {**report, "negative_friction": [
+            names[keep[j]] for j in report["negative_friction"]]}
         self.n_coordinates_ = n
         self.n_samples_ = z.shape[0]
         self.forced_coordinates_ = forced

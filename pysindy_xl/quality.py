@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._equations import consistency_line
+
 __all__ = ["fit_quality", "quality_lines", "plot_identification", "force_prediction"]
 
 
@@ -102,7 +104,8 @@ def fit_quality(model, arguments) -> dict:
     return {"r2": r2(residual, target), "r2_per_coordinate": per,
             "formulation": model.formulation_, "target": target_name,
             "rows": int(theta.shape[0]), **held_out, "stability": _stability(model),
-            "held_still": held}
+            "held_still": held,
+            "physical_consistency": getattr(model, "physical_consistency_", None)}
 
 
 def force_prediction(model, x, t, u, x_dot=None, x_ddot=None) -> dict:
@@ -234,6 +237,9 @@ def quality_lines(quality) -> list:
         lines.append(f"  held-out noise ratio of the chosen law (5-fold cross-validation; about "
                      f"1 when it leaves only the propagated noise): "
                      f"{quality['cv_noise_ratio']:.3g}")
+    consistency = consistency_line(quality.get("physical_consistency"))
+    if consistency:
+        lines.append(f"  {consistency}")
     return lines
 
 

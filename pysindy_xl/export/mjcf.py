@@ -14,9 +14,10 @@ and armatures are non-negative. :func:`consistent_parameters` solves the semidef
 .. math:: \min_\pi \; \|C \pi - \beta\|^2 / \|\beta\|^2 + \epsilon \|\pi - \pi_0\|^2 /
           \|\pi_0\|^2 \quad \text{s.t.} \quad J_b(\pi) \succeq 0, \; a_j \ge 0
 
-(cvxpy): the consistent parameters that reproduce ``beta`` (exactly when it is realizable),
-among them the closest to the template's ``pi_0``. :func:`write_mjcf` writes them into the
-template's MJCF with the identified viscous and dry friction of each joint.
+(cvxpy, :func:`pysindy_xl.physical.realize`): the consistent parameters that reproduce
+``beta`` (exactly when it is realizable), among them the closest to the template's ``pi_0``.
+:func:`write_mjcf` writes them into the template's MJCF with the identified viscous and dry
+friction of each joint.
 """
 
 from __future__ import annotations
@@ -44,31 +45,11 @@ def consistent_parameters(catalog, beta, closeness: float = 1e-6):
         ``|C pi - beta| / |beta|``: zero (to the solver's tolerance) when ``beta`` is
         realizable by rigid bodies.
     """
-    import cvxpy as cp
+    from ..physical import PhysicalStructure, realize
 
-    beta = np.asarray(beta, dtype=float)
-    combination, reference = catalog.combination, catalog.physical_values
-    names = catalog.physical_names
-    pi = cp.Variable(len(names))
-    constraints = []
-    for start in (k for k, name in enumerate(names) if name.endswith(".m")):
-        m, hx, hy, hz, ixx, iyy, izz, ixy, ixz, iyz = (pi[start + k] for k in range(10))
-        trace = (ixx + iyy + izz) / 2
-        pseudo = cp.bmat([[trace - ixx, -ixy, -ixz, hx], [-ixy, trace - iyy, -iyz, hy],
-                          [-ixz, -iyz, trace - izz, hz], [hx, hy, hz, m]])
-        constraints.append((pseudo + pseudo.T) / 2 >> 0)
-    armature = [k for k, name in enumerate(names) if name.endswith(".armature")]
-    if armature:
-        constraints.append(pi[armature] >= 0)
-    scale_beta = max(np.linalg.norm(beta), 1e-12)
-    scale_pi = max(np.linalg.norm(reference), 1e-12)
-    objective = (cp.sum_squares(combination @ pi - beta) / scale_beta**2
-                 + closeness * cp.sum_squares(pi - reference) / scale_pi**2)
-    cp.Problem(cp.Minimize(objective), constraints).solve()
-    if pi.value is None:
-        raise RuntimeError("consistent_parameters: the semidefinite program found no solution")
-    value = np.asarray(pi.value, dtype=float)
-    return value, float(np.linalg.norm(combination @ value - beta) / scale_beta)
+    structure = PhysicalStructure.from_combination(list(catalog.physical_names),
+                                                   catalog.combination)
+    return realize(structure, beta, reference=catalog.physical_values, closeness=closeness)
 
 
 def write_mjcf(catalog, pi, friction, path) -> str:

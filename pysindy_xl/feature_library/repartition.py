@@ -212,6 +212,21 @@ class CatalogRepartition(SymbolicLibrary):
         return CatalogRepartition([other, self])
 
     # -- helpers on the coefficient vector ----------------------------------------------------
+    def physical_structure(self):
+        """What the columns stand for physically: base parameters of rigid bodies (from the
+        ``parameters`` maps of Lagrange libraries, a kinematic catalog's) and friction.
+
+        Returns
+        -------
+        PhysicalStructure or None
+            In this catalog's column indices (see :mod:`pysindy_xl.physical`); None when no
+            library maps its terms to physical parameters.
+        """
+        from ..physical.structure import catalog_structure
+
+        check_is_fitted(self, "symbolic_matrix_")
+        return catalog_structure(self)
+
     def column_priority(self) -> np.ndarray:
         """Feature indices from most to least preferred when columns are linearly dependent.
 

@@ -16,12 +16,12 @@ import mujoco
 import numpy as np
 
 from ..feature_library.trigpoly import TrigPolynomial
+from ..physical.structure import INERTIAL_PARAMETERS
 from .systems import MuJoCoSystem
 
 __all__ = ["INERTIAL_PARAMETERS", "body_functions", "physical_values"]
 
 #: Names of the ten inertial parameters of a body, in the order of the catalog's preference.
-INERTIAL_PARAMETERS = ("m", "mcx", "mcy", "mcz", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 
 # Rotation entries and offsets below this magnitude are round-off of quaternion arithmetic.
 _CHOP = 1e-13

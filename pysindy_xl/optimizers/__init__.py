@@ -1,4 +1,5 @@
-"""Catalog optimizers: explicit, implicit (SINDy-PI), mixed and ensemble regression.
+"""Catalog optimizers: explicit, implicit (SINDy-PI), mixed, ensemble and physically consistent
+regression.
 
 Each solves a :class:`~pysindy_xl.optimizers.problem.CatalogProblem`; see
 :mod:`pysindy_xl.optimizers._base` for the template of a fit that they share.
@@ -23,6 +24,7 @@ from .explicit import (
 from .homogeneous import LawSelection, select_law
 from .implicit import ImplicitOptimizer, NoLawFoundError, homothetic_groups
 from .mixed import MixedOptimizer, activation_closure
+from .physical import PhysicalOptimizer
 from .problem import CatalogProblem, balance_coordinates, coordinate_weights
 from .selection import SelectionResult, refine_by_swaps, select_support
 
@@ -39,6 +41,7 @@ __all__ = [
     "ImplicitOptimizer",
     "MixedOptimizer",
     "EnsembleOptimizer",
+    "PhysicalOptimizer",
     "NoLawFoundError",
     "independent_columns",
     "coordinate_weights",

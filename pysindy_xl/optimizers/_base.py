@@ -332,7 +332,7 @@ class CatalogOptimizer(BaseEstimator):
 
     # -- the template of a fit ------------------------------------------------------------
     def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None,
-                    mass_matrices=None, balance=True, reference_columns=None):
+                    mass_matrices=None, balance=True, reference_columns=None, physical=None):
         """Solve the catalog problem ``theta @ coef_ ~ 0``.
 
         Parameters
@@ -357,6 +357,9 @@ class CatalogOptimizer(BaseEstimator):
             and a rebalancing would undo that weighting.
         reference_columns : sequence of int, optional
             Columns allowed to carry the ``+1`` of an unforced law; default: any column.
+        physical : PhysicalStructure, optional
+            What the columns stand for physically (:mod:`pysindy_xl.physical`); used by
+            optimizers that constrain the coefficients to physically consistent values.
 
         Returns
         -------
@@ -364,7 +367,7 @@ class CatalogOptimizer(BaseEstimator):
         """
         return self.fit_problem(CatalogProblem.from_arrays(
             theta, n_coordinates, force_columns, noise_moments, mass_matrices, balance,
-            reference_columns))
+            reference_columns, physical))
 
     def fit_problem(self, problem: CatalogProblem):
         """Solve a checked :class:`~pysindy_xl.optimizers.problem.CatalogProblem`.

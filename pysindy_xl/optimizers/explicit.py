@@ -19,6 +19,7 @@ __all__ = [
     "hard_threshold_regression",
     "proximal_gradient_lasso",
     "corrected_least_squares",
+    "explicit_regression",
 ]
 
 _METHODS = ("threshold", "lasso", "lassocv", "proximal")
@@ -376,7 +377,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         the selected support is corrected for the attenuation they cause
         (:func:`corrected_least_squares`; ``noise_share_`` says how large they were).
         """
-        rest, force, moments = _explicit_regression(problem)
+        rest, force, moments = explicit_regression(problem)
         # cross-validation folds stay inside each coordinate's block of rows
         self._fit(problem.theta[:, rest], force, n_blocks=problem.n_coordinates,
                   noise_moments=moments)
@@ -388,7 +389,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         fitted on every row, corrected for the noise moments as there).
         :class:`EnsembleOptimizer` uses it to refit the terms its fits agree on with all the
         data."""
-        rest, force, moments = _explicit_regression(problem)
+        rest, force, moments = explicit_regression(problem)
         keep = support[rest]
         coef = np.zeros(len(rest))
         if moments is not None:
@@ -413,7 +414,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         return self
 
 
-def _explicit_regression(problem):
+def explicit_regression(problem):
     """The regression of a catalog problem with known forces: the columns besides the
     forces (``rest``), the force (the right-hand side) and the noise moments of all rows
     restricted to ``rest`` (None without noise moments)."""

@@ -13,7 +13,10 @@ of coordinate 1, ...; see :mod:`pysindy_xl.feature_library._base`) and what is k
 * ``balance``: whether the coordinate blocks may be rescaled by
   :func:`~pysindy_xl.optimizers.coordinate_weights` (False where the caller has weighed them,
   e.g. rows whitened by the covariance of the residual);
-* ``reference_columns``: the columns allowed to carry the ``+1`` of an unforced law.
+* ``reference_columns``: the columns allowed to carry the ``+1`` of an unforced law;
+* ``physical``: what the columns stand for physically (base parameters of rigid bodies,
+  friction; a :class:`~pysindy_xl.physical.PhysicalStructure` in the problem's columns), for
+  optimizers that constrain the coefficients to physically consistent values.
 
 Every row of ``theta @ coef = 0`` holds exactly, so multiplying the rows of one coordinate block
 by a constant changes how the regression weighs the blocks, never the true coefficients:
@@ -34,6 +37,7 @@ import functools
 import numpy as np
 
 from .._validation import check_indices, check_numeric_array, check_option
+from ..physical.structure import PhysicalStructure
 
 __all__ = [
     "CatalogProblem",
@@ -62,6 +66,7 @@ class CatalogProblem:
     mass_matrices : ndarray, shape (S, F, n_coordinates, n_coordinates), or None
     balance : bool
     reference_columns : ndarray of int or None
+    physical : PhysicalStructure or None
 
     Examples
     --------
@@ -87,10 +92,11 @@ class CatalogProblem:
     mass_matrices: np.ndarray | None = None
     balance: bool = True
     reference_columns: np.ndarray | None = None
+    physical: PhysicalStructure | None = None
 
     @classmethod
     def from_arrays(cls, theta, n_coordinates, force_columns, noise_moments=None,
-                    mass_matrices=None, balance=True, reference_columns=None):
+                    mass_matrices=None, balance=True, reference_columns=None, physical=None):
         """Check the arguments of ``fit_catalog`` and hold them as a problem.
 
         Parameters
@@ -102,6 +108,8 @@ class CatalogProblem:
         mass_matrices : array, shape (S, F, n_coordinates, n_coordinates), optional
         balance : bool, default True
         reference_columns : sequence of int, optional
+        physical : PhysicalStructure, optional
+            In the columns of ``theta``.
 
         Returns
         -------
@@ -133,8 +141,15 @@ class CatalogProblem:
             if np.any((reference_columns < 0) | (reference_columns >= n_features)):
                 raise ValueError(f"reference_columns: indices must lie in [0, {n_features}), "
                                  f"got {reference_columns}")
+        if physical is not None:
+            if not isinstance(physical, PhysicalStructure):
+                raise TypeError(f"physical: expected a PhysicalStructure, got "
+                                f"{type(physical).__name__}")
+            used = np.concatenate([physical.base_columns, physical.friction_columns])
+            if np.any((used < 0) | (used >= n_features)):
+                raise ValueError(f"physical: column indices must lie in [0, {n_features})")
         return cls(theta, n, force_columns, noise_moments, mass_matrices, bool(balance),
-                   reference_columns)
+                   reference_columns, physical)
 
     @property
     def n_samples(self) -> int:
@@ -205,10 +220,11 @@ class CatalogProblem:
         reference = self.reference_columns
         if reference is not None:
             reference = np.flatnonzero(np.isin(columns, reference))
+        physical = None if self.physical is None else self.physical.select(columns)
         return dataclasses.replace(self, theta=theta, n_coordinates=int(coordinates.sum()),
                                    force_columns=np.asarray(force_columns, dtype=int),
                                    noise_moments=moments, mass_matrices=mass,
-                                   reference_columns=reference)
+                                   reference_columns=reference, physical=physical)
 
     def subsample(self, samples) -> CatalogProblem:
         """The rows of ``samples`` (indices within a block) in every coordinate block.

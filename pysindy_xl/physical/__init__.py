@@ -1,0 +1,30 @@
+"""Physical consistency of identified rigid-body parameters.
+
+:mod:`.structure` says what a catalog's coefficients stand for physically (base parameters as
+images of the bodies' inertial parameters, friction coefficients); :mod:`.sdp` states rigid
+bodies' constraints on them as linear matrix inequalities and solves the programs that realize
+base parameters or fit under the constraints (cvxpy). Used by
+:class:`~pysindy_xl.optimizers.PhysicalOptimizer` and the MJCF export.
+"""
+
+from .sdp import body_constraints, consistent_least_squares, realize
+from .structure import (
+    INERTIAL_PARAMETERS,
+    PhysicalStructure,
+    catalog_structure,
+    friction_columns,
+    friction_kind,
+    pseudo_inertia_matrix,
+)
+
+__all__ = [
+    "INERTIAL_PARAMETERS",
+    "PhysicalStructure",
+    "catalog_structure",
+    "friction_columns",
+    "friction_kind",
+    "pseudo_inertia_matrix",
+    "body_constraints",
+    "consistent_least_squares",
+    "realize",
+]

@@ -1,0 +1,189 @@
+r"""Semidefinite programs of physical consistency (cvxpy, imported on first use).
+
+With a :class:`~pysindy_xl.physical.PhysicalStructure` (``beta = C pi`` for the base
+parameters, the bodies' parameters, armatures and friction columns), the rigid-body
+constraints on inertial parameters ``pi`` are linear matrix inequalities (Wensing, Kim and
+Slotine, 2017): every body's pseudo-inertia :math:`J_b(\pi) \succeq 0`
+(:func:`~pysindy_xl.physical.pseudo_inertia_matrix`) and every armature :math:`a_j \ge 0`.
+
+* :func:`realize` finds parameters ``pi`` that reproduce given base parameters (the MJCF
+  export places them in a template's bodies);
+* :func:`consistent_least_squares` fits a regression's coefficients under the constraints.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._optional import import_optional
+
+__all__ = ["body_constraints", "realize", "consistent_least_squares"]
+
+
+def _cvxpy():
+    return import_optional("cvxpy", "physically consistent identification")
+
+
+def body_constraints(structure, pi) -> list:
+    r"""The constraints of rigid bodies on the cvxpy variable ``pi``: :math:`J_b(\pi) \succeq 0`
+    per body, armatures :math:`\ge 0`."""
+    from .structure import pseudo_inertia_matrix
+
+    constraints = []
+    for indices in structure.body_indices:
+        pseudo = pseudo_inertia_matrix([pi[int(k)] for k in indices])
+        constraints.append((pseudo + pseudo.T) / 2 >> 0)
+    if len(structure.armature):
+        constraints.append(pi[structure.armature] >= 0)
+    return constraints
+
+
+def _solve(problem, solver, who):
+    cp = _cvxpy()
+    try:
+        problem.solve(solver=solver)
+    except cp.error.SolverError as error:
+        raise RuntimeError(f"{who}: the semidefinite program failed ({error})") from error
+    if problem.status not in ("optimal", "optimal_inaccurate"):
+        raise RuntimeError(f"{who}: the semidefinite program ended {problem.status!r}")
+
+
+def realize(structure, beta, reference=None, closeness: float = 1e-6, solver=None):
+    r"""Physically consistent parameters ``pi`` reproducing base parameters ``beta``.
+
+    Solves
+
+    .. math:: \min_\pi \; \|C \pi - \beta\| / \|\beta\| + \epsilon \|\pi - \pi_0\|^2 /
+              \|\pi_0\|^2 \quad \text{s.t.} \quad J_b(\pi) \succeq 0, \; a_j \ge 0,
+
+    the consistent parameters that reproduce ``beta`` (exactly when it is realizable: the
+    residual's norm, not its square, is an exact penalty, and the solver's tolerance bounds
+    the norm itself), among them the closest to ``pi_0``.
+
+    Parameters
+    ----------
+    structure : PhysicalStructure
+        Base parameter ``j`` is ``structure.combination[j] @ pi``.
+    beta : array, shape (k,)
+    reference : array, shape (len(structure.names),), optional
+        ``pi_0``; default zeros (then ``epsilon`` weighs ``|pi|^2``).
+    closeness : float, default 1e-6
+        ``epsilon``.
+    solver : str, optional
+        cvxpy solver name; default cvxpy's choice.
+
+    Returns
+    -------
+    pi : ndarray, shape (len(structure.names),)
+    residual : float
+        ``|C pi - beta| / |beta|``: zero (to the solver's tolerance) when ``beta`` is
+        realizable by rigid bodies.
+    """
+    cp = _cvxpy()
+    beta = np.asarray(beta, dtype=float)
+    combination = structure.combination
+    reference = (np.zeros(len(structure.names)) if reference is None
+                 else np.asarray(reference, dtype=float))
+    pi = cp.Variable(len(structure.names))
+    scale_beta = max(np.linalg.norm(beta), 1e-12)
+    scale_pi = max(np.linalg.norm(reference), scale_beta, 1e-12)
+    objective = (cp.norm(combination @ pi - beta) / scale_beta
+                 + closeness * cp.sum_squares(pi - reference) / scale_pi**2)
+    problem = cp.Problem(cp.Minimize(objective), body_constraints(structure, pi))
+    _solve(problem, solver, "realize")
+    if pi.value is None:
+        raise RuntimeError("realize: the semidefinite program found no solution")
+    value = np.asarray(pi.value, dtype=float)
+    return value, float(np.linalg.norm(combination @ value - beta) / scale_beta)
+
+
+def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=None,
+                             regularization: float = 1e-9):
+    r"""Least squares under physical consistency, as the projection of an unconstrained fit.
+
+    With ``b_u`` the unconstrained least-squares coefficients of ``x b = y`` and ``A`` the
+    normal matrix (``x^T x``, or the errors-in-variables corrected ``x^T x - S``), the
+    residual of any ``b`` is ``|x b - y|^2 = |x b_u - y|^2 + (b - b_u)^T A (b - b_u)``, so the
+    constrained least squares is
+
+    .. math:: \min_{b, \pi} \; (b - b_u)^T A (b - b_u) \quad \text{s.t.} \quad
+              b_{\mathcal B} = C \pi, \; J_k(\pi) \succeq 0, \; a_j \ge 0, \;
+              b_{\mathcal F} \ge 0
+
+    (:math:`\mathcal B` the base-parameter columns, :math:`\mathcal F` the friction columns),
+    solved on unit-RMS columns and a normal matrix scaled to ``b_u^T A b_u = 1``, as the
+    minimum of the norm :math:`\|A^{1/2} (b - b_u)\|` (the same minimizer; the solver's
+    tolerance then bounds the norm, not its square), plus ``regularization * |pi|^2 /
+    |pi_scale|^2`` so that parameters the data leave free stay bounded. When ``b_u`` is
+    consistent it is the solution, at zero cost.
+
+    Parameters
+    ----------
+    x : array, shape (n_rows, F)
+        The regression's columns (``y`` enters only through ``b_u``).
+    structure : PhysicalStructure
+        In the column indices of ``x``; base parameters whose column is not in ``x`` are
+        absent from it (:meth:`PhysicalStructure.select`): the data do not decide them.
+    coef : array, shape (F,)
+        ``b_u``.
+    normal : array, shape (F, F), optional
+        ``A``; default ``x^T x``.
+    zero : array of bool, shape (F,), optional
+        Coefficients held at zero (the terms a sparse fit left out: their base parameters
+        are zero, and must be realizable as such too).
+    solver : str, optional
+        cvxpy solver name.
+    regularization : float, default 1e-9
+
+    Returns
+    -------
+    coef : ndarray, shape (F,)
+        Consistent coefficients: the base parameters are exactly ``C pi``.
+    pi : ndarray, shape (len(structure.names),)
+        Inertial parameters that realize them (one realization of many), exactly consistent
+        (the solver's answer through :meth:`PhysicalStructure.nearest_consistent`).
+    cost : float
+        ``(b - b_u)^T A (b - b_u) / b_u^T A b_u``: the share of the explained signal the
+        constraints cost (0 when ``b_u`` is consistent, to the solver's tolerance).
+    """
+    cp = _cvxpy()
+    x = np.asarray(x, dtype=float)
+    coef = np.asarray(coef, dtype=float)
+    scale = np.sqrt(np.mean(x**2, axis=0))
+    scale[scale == 0] = 1.0
+    normal = x.T @ x if normal is None else np.asarray(normal, dtype=float)
+    normal = normal / np.outer(scale, scale)
+    scaled = coef * scale
+    values, vectors = np.linalg.eigh((normal + normal.T) / 2)
+    factor = np.sqrt(np.clip(values, 0.0, None))[:, None] * vectors.T
+    size = max(float(np.linalg.norm(factor @ scaled)), 1e-300)
+    factor = factor / size
+    b = cp.Variable(len(coef))
+    pi = cp.Variable(len(structure.names))
+    constraints = body_constraints(structure, pi)
+    base = structure.base_columns
+    # base parameters: b_j / scale_j = C_j pi (in the unit-RMS columns)
+    if len(base):
+        constraints.append(b[base] == cp.multiply(scale[base], structure.combination @ pi))
+    if len(structure.friction_columns):
+        constraints.append(b[structure.friction_columns] >= 0)
+    if zero is not None and np.any(zero):
+        constraints.append(b[np.flatnonzero(zero)] == 0)
+    # pi's own scale: that of the base parameters it makes
+    pi_scale = max(float(np.linalg.norm(coef[base])), 1e-12) if len(base) else 1.0
+    objective = (cp.norm(factor @ (b - scaled))
+                 + regularization * cp.sum_squares(pi) / pi_scale**2)
+    problem = cp.Problem(cp.Minimize(objective), constraints)
+    _solve(problem, solver, "consistent_least_squares")
+    if b.value is None or pi.value is None:
+        raise RuntimeError("consistent_least_squares: the semidefinite program found no "
+                           "solution")
+    pi_value = structure.nearest_consistent(pi.value)
+    out = np.asarray(b.value, dtype=float) / scale
+    out[base] = structure.combination @ pi_value  # exactly the realized base parameters
+    if zero is not None:
+        out[np.asarray(zero, dtype=bool)] = 0.0
+    if len(structure.friction_columns):
+        out[structure.friction_columns] = np.maximum(out[structure.friction_columns], 0.0)
+    cost = float(np.sum((factor @ (out * scale - scaled)) ** 2))
+    return out, pi_value, cost
