@@ -9,7 +9,6 @@ import time
 
 import numpy as np
 
-from .._equations import prints_equations
 from ..quality import fit_quality, plot_identification, quality_lines
 from .parser import build_parser
 from .steps import (
@@ -156,6 +155,8 @@ def run_demo(args) -> dict:
               f"{coefficient_summary['true_terms']} true, max error "
               f"{coefficient_summary['max_relative_error']:.2g} (relative to the largest)")
     timings["total"] = sum(timings.values())
+    from .._equations import prints_equations  # sympy: not imported by --help
+
     short = prints_equations(model)
     report = {
         "system": system.name,
