@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._equations import consistency_line
-
 __all__ = ["fit_quality", "quality_lines", "plot_identification", "force_prediction"]
 
 
@@ -237,6 +235,8 @@ def quality_lines(quality) -> list:
         lines.append(f"  held-out noise ratio of the chosen law (5-fold cross-validation; about "
                      f"1 when it leaves only the propagated noise): "
                      f"{quality['cv_noise_ratio']:.3g}")
+    from ._equations import consistency_line  # sympy: not imported by the CLI's --help
+
     consistency = consistency_line(quality.get("physical_consistency"))
     if consistency:
         lines.append(f"  {consistency}")
