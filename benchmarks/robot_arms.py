@@ -139,135 +139,6 @@ def idim_ls(library, data, max_frequency):
     return coef
 
 
-def run(arm, level, seed, method):
-    import pysindy_xl as px
-    from pysindy_xl._equations import physical_parameters
-    from pysindy_xl.mujoco import MJCFSystem, kinematic_catalog
-
-    system = MJCFSystem(arm_mjcf(arm))
-    data = _data(system, level, seed)
-    fresh = _data(system, 0.0, seed + 1000, duration=5.0, n_trajectories=1).trajectories[0]
-    record = {"arm": arm, "level": level, "seed": seed, "method": method,
-              "integrator": data.metadata["integrator"], "data": DATA_VERSION}
-    if method == "mujoco-sysid":  # an MJCF identified: MuJoCo's own dynamics give the metrics
-        truth = system.mj_model()
-        start = time.perf_counter()
-        identified, summary, guess = mujoco_sysid(system, data, seed)
-        record["fit_s"] = time.perf_counter() - start
-        record.update(_mjcf_metrics(identified, truth, fresh, truth.jnt_range))
-        initial = _mjcf_metrics(guess, truth, fresh, truth.jnt_range)
-        record["sysid"] = summary | {"initial_" + key: initial[key] for key in (
-            "mass_error", "gravity_error", "torque_error", "damping_error")}
-        return record
-    catalog = kinematic_catalog(system)
-    start = time.perf_counter()
-    library = catalog.library().fit()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        if method == "pysindy-xl":
-            model = px.XLSINDy(library).fit(**data.fit_arguments(forces="tau"))
-            coef = model.coefficients()
-            coef = -coef / coef[library.force_columns_[0]]  # force coefficient -1
-        elif method == "idim-ls":
-            coef = idim_ls(library, data, 1.5)
-        else:  # the MJCF's own parameters: the floor of the torque metric
-            coef = catalog.true_coefficients()
-    record["fit_s"] = time.perf_counter() - start
-    beta = coef[[j for j, c in enumerate(library.categories_) if c == "lagrange"]]
-    friction = physical_parameters(coef, library)["friction"]
-    damping = system.mj_model().dof_damping
-    record["damping_error"] = float(max(
-        abs(friction[name]["viscous"] - d) / d
-        for name, d in zip(system.coordinate_names, damping, strict=True)))
-    record["dry_friction"] = float(max(abs(f["dry"]) for f in friction.values()))
-    # torque prediction on the fresh trajectory's exact states (MuJoCo's): the model's own
-    # error in torque space, the same for every method whatever differentiates its data
-    theta = library.transform(px.stack_variables(fresh.q, fresh.qd, fresh.qdd)).reshape(
-        system.n, len(fresh.t), -1)
-    rest = np.setdiff1d(np.arange(theta.shape[-1]), library.force_columns_)
-    predicted = (theta[:, :, rest] @ coef[rest]).T
-    torque_error = float(np.max(np.sqrt(np.mean((predicted - fresh.tau) ** 2, axis=0))
-                                / np.sqrt(np.mean(fresh.tau**2, axis=0))))
-    rng = np.random.default_rng(0)
-    limits = system.mj_model().jnt_range
-    q = rng.uniform(limits[:, 0], limits[:, 1], size=(200, system.n))
-    mass, mass_id = catalog.mass_matrix(q), catalog.mass_matrix(q, beta)
-    gravity, gravity_id = catalog.gravity_torque(q), catalog.gravity_torque(q, beta)
-    record.update(
-        mass_error=float(np.mean(np.linalg.norm(mass_id - mass, axis=(1, 2))
-                                 / np.linalg.norm(mass, axis=(1, 2)))),
-        gravity_error=float(np.linalg.norm(gravity_id - gravity) / np.linalg.norm(gravity)),
-        torque_error=float(torque_error),
-        positive_definite=bool(np.all(np.linalg.eigvalsh((mass_id + np.swapaxes(
-            mass_id, 1, 2)) / 2)[:, 0] > 0)))
-    return record
-
-
-def summarize(records) -> str:
-    cells = {}
-    for r in records:
-        cells.setdefault((r["arm"], r["level"], r["method"]), []).append(r)
-    lines = ["| arm | noise | method | seeds | mass-matrix error (median / worst) | gravity error "
-             "(median / worst) | torque prediction | damping error (median / worst) "
-             "| largest dry friction | M positive definite | fit (s) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
-    for (arm, level, method), rs in sorted(cells.items()):
-        def median(key, rs=rs):
-            return np.median([r[key] for r in rs])
-
-        def worst(key, rs=rs):
-            return np.max([r[key] for r in rs])
-        lines.append(f"| {arm} | {level:.0%} | {method} | {len(rs)} | "
-                     f"{median('mass_error'):.2%} / {worst('mass_error'):.2%} | "
-                     f"{median('gravity_error'):.2%} / {worst('gravity_error'):.2%} | "
-                     f"{median('torque_error'):.2%} | "
-                     f"{median('damping_error'):.1%} / {worst('damping_error'):.1%} | "
-                     f"{worst('dry_friction'):.3g} | "
-                     f"{sum(r['positive_definite'] for r in rs)}/{len(rs)} | "
-                     f"{median('fit_s'):.1f} |")
-    return (f"{len(records)} runs; medians and worst cases over seeds (see robot_arms.py for "
-            "the setup)\n\n" + "\n".join(lines) + "\n")
-
-
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seeds", type=int, default=3)
-    parser.add_argument("--levels", default="0,0.01,0.05")
-    parser.add_argument("--arms", default=",".join(ARMS))
-    parser.add_argument("--methods", default="pysindy-xl,idim-ls,truth")
-    parser.add_argument("--out", default=str(RESULTS))
-    parser.add_argument("--jobs", type=int, default=1,
-                        help="cells run at once (joblib processes)")
-    args = parser.parse_args()
-    methods = args.methods.split(",")
-    if "mujoco-sysid" in methods and (reason := sysid_missing()):
-        print(f"skipping mujoco-sysid: {reason}", flush=True)
-        methods.remove("mujoco-sysid")
-    out = pathlib.Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    path = out / "robot_arms.jsonl"
-    records = [json.loads(line) for line in path.read_text().splitlines()] \
-        if path.exists() else []
-    records = [r for r in records if r.get("data") == DATA_VERSION]
-    done = {(r["arm"], r["level"], r["seed"], r["method"]) for r in records}
-    cells = [(arm, level, seed, method) for arm in args.arms.split(",")
-             for level in map(float, args.levels.split(",")) for seed in range(args.seeds)
-             for method in methods if (arm, level, seed, method) not in done]
-    runs = joblib.Parallel(n_jobs=args.jobs, return_as="generator_unordered")(
-        joblib.delayed(run)(*cell) for cell in cells)
-    for record in runs:
-        print(json.dumps(record), flush=True)
-        with path.open("a") as handle:  # each finished run kept at once
-            handle.write(json.dumps(record) + "\n")
-        records.append(record)
-    (out / "robot_arms.md").write_text(summarize(records))
-    print(summarize(records))
-
-
-if __name__ == "__main__":
-    main()
-
-
 # ---------------------------------------------------------------------------------------------
 # MuJoCo's own system identification (mujoco.sysid): output error over rollouts of the MJCF
 # ---------------------------------------------------------------------------------------------
@@ -470,3 +341,133 @@ def _mjcf_metrics(model, truth, fresh, limits, rng_seed=0):
         damping_error=float(np.max(np.abs(model.dof_damping - truth.dof_damping)
                                    / truth.dof_damping)),
         dry_friction=float(np.max(np.abs(model.dof_frictionloss), initial=0.0)))
+
+
+def run(arm, level, seed, method):
+    import pysindy_xl as px
+    from pysindy_xl._equations import physical_parameters
+    from pysindy_xl.mujoco import MJCFSystem, kinematic_catalog
+
+    system = MJCFSystem(arm_mjcf(arm))
+    data = _data(system, level, seed)
+    fresh = _data(system, 0.0, seed + 1000, duration=5.0, n_trajectories=1).trajectories[0]
+    record = {"arm": arm, "level": level, "seed": seed, "method": method,
+              "integrator": data.metadata["integrator"], "data": DATA_VERSION}
+    if method == "mujoco-sysid":  # an MJCF identified: MuJoCo's own dynamics give the metrics
+        truth = system.mj_model()
+        start = time.perf_counter()
+        identified, summary, guess = mujoco_sysid(system, data, seed)
+        record["fit_s"] = time.perf_counter() - start
+        record.update(_mjcf_metrics(identified, truth, fresh, truth.jnt_range))
+        initial = _mjcf_metrics(guess, truth, fresh, truth.jnt_range)
+        record["sysid"] = summary | {"initial_" + key: initial[key] for key in (
+            "mass_error", "gravity_error", "torque_error", "damping_error")}
+        return record
+    catalog = kinematic_catalog(system)
+    start = time.perf_counter()
+    library = catalog.library().fit()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        if method == "pysindy-xl":
+            model = px.XLSINDy(library).fit(**data.fit_arguments(forces="tau"))
+            coef = model.coefficients()
+            coef = -coef / coef[library.force_columns_[0]]  # force coefficient -1
+        elif method == "idim-ls":
+            coef = idim_ls(library, data, 1.5)
+        else:  # the MJCF's own parameters: the floor of the torque metric
+            coef = catalog.true_coefficients()
+    record["fit_s"] = time.perf_counter() - start
+    beta = coef[[j for j, c in enumerate(library.categories_) if c == "lagrange"]]
+    friction = physical_parameters(coef, library)["friction"]
+    damping = system.mj_model().dof_damping
+    record["damping_error"] = float(max(
+        abs(friction[name]["viscous"] - d) / d
+        for name, d in zip(system.coordinate_names, damping, strict=True)))
+    record["dry_friction"] = float(max(abs(f["dry"]) for f in friction.values()))
+    # torque prediction on the fresh trajectory's exact states (MuJoCo's): the model's own
+    # error in torque space, the same for every method whatever differentiates its data
+    theta = library.transform(px.stack_variables(fresh.q, fresh.qd, fresh.qdd)).reshape(
+        system.n, len(fresh.t), -1)
+    rest = np.setdiff1d(np.arange(theta.shape[-1]), library.force_columns_)
+    predicted = (theta[:, :, rest] @ coef[rest]).T
+    torque_error = float(np.max(np.sqrt(np.mean((predicted - fresh.tau) ** 2, axis=0))
+                                / np.sqrt(np.mean(fresh.tau**2, axis=0))))
+    rng = np.random.default_rng(0)
+    limits = system.mj_model().jnt_range
+    q = rng.uniform(limits[:, 0], limits[:, 1], size=(200, system.n))
+    mass, mass_id = catalog.mass_matrix(q), catalog.mass_matrix(q, beta)
+    gravity, gravity_id = catalog.gravity_torque(q), catalog.gravity_torque(q, beta)
+    record.update(
+        mass_error=float(np.mean(np.linalg.norm(mass_id - mass, axis=(1, 2))
+                                 / np.linalg.norm(mass, axis=(1, 2)))),
+        gravity_error=float(np.linalg.norm(gravity_id - gravity) / np.linalg.norm(gravity)),
+        torque_error=float(torque_error),
+        positive_definite=bool(np.all(np.linalg.eigvalsh((mass_id + np.swapaxes(
+            mass_id, 1, 2)) / 2)[:, 0] > 0)))
+    return record
+
+
+def summarize(records) -> str:
+    cells = {}
+    for r in records:
+        cells.setdefault((r["arm"], r["level"], r["method"]), []).append(r)
+    lines = ["| arm | noise | method | seeds | mass-matrix error (median / worst) | gravity error "
+             "(median / worst) | torque prediction | damping error (median / worst) "
+             "| largest dry friction | M positive definite | fit (s) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for (arm, level, method), rs in sorted(cells.items()):
+        def median(key, rs=rs):
+            return np.median([r[key] for r in rs])
+
+        def worst(key, rs=rs):
+            return np.max([r[key] for r in rs])
+        lines.append(f"| {arm} | {level:.0%} | {method} | {len(rs)} | "
+                     f"{median('mass_error'):.2%} / {worst('mass_error'):.2%} | "
+                     f"{median('gravity_error'):.2%} / {worst('gravity_error'):.2%} | "
+                     f"{median('torque_error'):.2%} | "
+                     f"{median('damping_error'):.1%} / {worst('damping_error'):.1%} | "
+                     f"{worst('dry_friction'):.3g} | "
+                     f"{sum(r['positive_definite'] for r in rs)}/{len(rs)} | "
+                     f"{median('fit_s'):.1f} |")
+    return (f"{len(records)} runs; medians and worst cases over seeds (see robot_arms.py for "
+            "the setup)\n\n" + "\n".join(lines) + "\n")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--levels", default="0,0.01,0.05")
+    parser.add_argument("--arms", default=",".join(ARMS))
+    parser.add_argument("--methods", default="pysindy-xl,idim-ls,truth")
+    parser.add_argument("--out", default=str(RESULTS))
+    parser.add_argument("--jobs", type=int, default=1,
+                        help="cells run at once (joblib processes)")
+    args = parser.parse_args()
+    methods = args.methods.split(",")
+    if "mujoco-sysid" in methods and (reason := sysid_missing()):
+        print(f"skipping mujoco-sysid: {reason}", flush=True)
+        methods.remove("mujoco-sysid")
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "robot_arms.jsonl"
+    records = [json.loads(line) for line in path.read_text().splitlines()] \
+        if path.exists() else []
+    records = [r for r in records if r.get("data") == DATA_VERSION]
+    done = {(r["arm"], r["level"], r["seed"], r["method"]) for r in records}
+    cells = [(arm, level, seed, method) for arm in args.arms.split(",")
+             for level in map(float, args.levels.split(",")) for seed in range(args.seeds)
+             for method in methods if (arm, level, seed, method) not in done]
+    runs = joblib.Parallel(n_jobs=args.jobs, return_as="generator_unordered")(
+        joblib.delayed(run)(*cell) for cell in cells)
+    for record in runs:
+        print(json.dumps(record), flush=True)
+        with path.open("a") as handle:  # each finished run kept at once
+            handle.write(json.dumps(record) + "\n")
+        records.append(record)
+    (out / "robot_arms.md").write_text(summarize(records))
+    print(summarize(records))
+
+
+if __name__ == "__main__":
+    main()
+
