@@ -204,7 +204,8 @@ def mujoco_sysid(system, data, seed, max_iters=SYSID_MAX_ITERS, time_limit=SYSID
     reference at t = 0, as the data do (computed from the controls). The servo gains are
     fixed at their MJCF values: from positions and controls alone a common scale of the
     inertias, damping and gains is not identifiable (the others read it from the torques).
-    Parameters scaled by the Jacobian's columns (``x_scale="jac"``); at most ``max_iters``
+    No parameter scaling (``x_scale="jac"`` stalls: the columns of the unidentifiable
+    parameters, e.g. the base link's inertia across its axis, are zero). At most ``max_iters``
     iterations and ``time_limit`` seconds (then the best point reached is kept). The
     optimizer's iteration log goes to ``log`` (default stderr).
     """
@@ -288,7 +289,7 @@ def mujoco_sysid(system, data, seed, max_iters=SYSID_MAX_ITERS, time_limit=SYSID
         # the confidence intervals) is printed to ``log``
         identified, result = sysid.optimize(params, bounded, optimizer="mujoco",
                                             verbose=False, max_iters=max_iters,
-                                            x_scale="jac", iter_callback=progress, output=log)
+                                            iter_callback=progress, output=log)
         summary["stopped"] = "converged or max_iters"
         x = identified.as_vector()
         _, intervals = sysid.calculate_intervals(residual_fn(x, identified.copy())[0],
