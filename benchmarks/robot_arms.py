@@ -332,16 +332,19 @@ def _mjcf_metrics(model, truth, fresh, limits, rng_seed=0):
         d.qpos[:], d.qvel[:], d.qacc[:] = fresh.q[k], fresh.qd[k], fresh.qdd[k]
         mujoco.mj_inverse(model, d)
         predicted[k] = d.qfrc_inverse  # M qdd + bias + damping qd: the actuator torques
+    joint_errors = (np.sqrt(np.mean((predicted - fresh.tau) ** 2, axis=0))
+                    / np.sqrt(np.mean(fresh.tau**2, axis=0)))
     return dict(
         mass_error=float(np.mean(np.linalg.norm(mass_id - mass, axis=(1, 2))
                                  / np.linalg.norm(mass, axis=(1, 2)))),
         gravity_error=float(np.linalg.norm(gravity_id - gravity) / np.linalg.norm(gravity)),
-        torque_error=float(np.max(np.sqrt(np.mean((predicted - fresh.tau) ** 2, axis=0))
-                                  / np.sqrt(np.mean(fresh.tau**2, axis=0)))),
+        torque_error=float(np.max(joint_errors)),
+        torque_errors=joint_errors.tolist(),  # per joint
         positive_definite=bool(np.all(np.linalg.eigvalsh(mass_id)[:, 0] > 0)),
         damping_error=float(np.max(np.abs(model.dof_damping - truth.dof_damping)
                                    / truth.dof_damping)),
-        dry_friction=float(np.max(np.abs(model.dof_frictionloss), initial=0.0)))
+        dry_friction=float(np.max(np.abs(model.dof_frictionloss), initial=0.0)),
+        damping=model.dof_damping.tolist())
 
 
 def run(arm, level, seed, method):
@@ -359,7 +362,10 @@ def run(arm, level, seed, method):
         start = time.perf_counter()
         identified, summary, guess = mujoco_sysid(system, data, seed)
         record["fit_s"] = time.perf_counter() - start
-        record.update(_mjcf_metrics(identified, truth, fresh, truth.jnt_range))
+        metrics = _mjcf_metrics(identified, truth, fresh, truth.jnt_range)
+        summary.update(torque_errors=metrics.pop("torque_errors"),
+                       damping=metrics.pop("damping"), true_damping=truth.dof_damping.tolist())
+        record.update(metrics)
         initial = _mjcf_metrics(guess, truth, fresh, truth.jnt_range)
         record["sysid"] = summary | {"initial_" + key: initial[key] for key in (
             "mass_error", "gravity_error", "torque_error", "damping_error")}
