@@ -199,8 +199,8 @@ def mujoco_sysid(system, data, seed, max_iters=SYSID_MAX_ITERS, time_limit=SYSID
     sysid's pseudo-inertia parametrization, physical by construction), every joint's armature
     and viscous damping, starting from the MJCF's values perturbed by 30 % (seeded). Data:
     each training trajectory's reference controls (``info["signals"]`` held at each step's
-    midpoint, as the data were simulated) and its noisy joint positions as ``jointpos``
-    sensors; the rollouts use the data's own integrator (RK4) and start on the servos'
+    midpoint, as the data were simulated) and its noisy joint positions, observed as the
+    rollouts' ``qpos``; the rollouts use the data's own integrator (RK4) and start on the servos'
     reference at t = 0, as the data do (computed from the controls). The servo gains are
     fixed at their MJCF values: from positions and controls alone a common scale of the
     inertias, damping and gains is not identifiable (the others read it from the torques).
@@ -223,9 +223,9 @@ def mujoco_sysid(system, data, seed, max_iters=SYSID_MAX_ITERS, time_limit=SYSID
     spec.option.integrator = getattr(mujoco.mjtIntegrator,
                                      f"mjINT_{data.metadata['integrator'].upper()}")
     joints = [spec.joints[k].name for k in range(len(spec.joints))]
-    for name in joints:
-        spec.add_sensor(name=f"{name}_pos", type=mujoco.mjtSensor.mjSENS_JOINTPOS,
-                        objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=name)
+    # the positions are observed as the rollout's states (qpos at each state's own time):
+    # jointpos sensors would lag a step, a rollout's sensordata being computed before the step
+    observed = [(f"{name}_qpos", sysid.SignalType.MjStateQPos) for name in joints]
     guess = spec.compile()
     dt = guess.opt.timestep
 
@@ -237,9 +237,10 @@ def mujoco_sysid(system, data, seed, max_iters=SYSID_MAX_ITERS, time_limit=SYSID
         initial_states.append(sysid.create_initial_state(guess, q0, qd0))
         times = np.arange(int(round(trajectory.t[-1] / dt)) + 1) * dt
         controls.append(sysid.TimeSeries(times, np.asarray(signals(times + dt / 2))))
-        sensors.append(sysid.TimeSeries.from_names(trajectory.t, trajectory.q, guess))
+        sensors.append(sysid.TimeSeries.from_names(trajectory.t, trajectory.q, guess,
+                                                   names=observed))
     sequences = sysid.ModelSequences(system.name, spec, [f"run{k}" for k in range(
-        len(controls))], initial_states, controls, sensors)
+        len(controls))], initial_states, controls, sensors, allow_missing_sensors=True)
 
     params = sysid.ParameterDict()
     for body in spec.bodies[1:]:
