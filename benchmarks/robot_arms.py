@@ -173,10 +173,11 @@ def _perturbed_spec(xml, rng, scale=0.3):
     ``scale`` times its distance from the joint frame along each axis."""
     import mujoco
 
+    def factor(size=None):
+        return 1 + scale * rng.uniform(-1, 1, size)
+
     spec = mujoco.MjSpec.from_string(xml)
     for body in spec.bodies[1:]:
-        def factor(size=None):
-            return 1 + scale * rng.uniform(-1, 1, size)
         inertia = np.asarray(body.inertia, dtype=float)
         sigma = (inertia.sum() / 2 - inertia) * factor(3)
         com = np.asarray(body.ipos, dtype=float)
@@ -197,7 +198,8 @@ def mujoco_sysid(system, data, seed, max_iters=SYSID_MAX_ITERS, time_limit=SYSID
     Output-error fit (MuJoCo's Levenberg-Marquardt over finite-difference Jacobians of
     rollouts) of every link's 10 inertial parameters (mass, centre of mass, full inertia, in
     sysid's pseudo-inertia parametrization, physical by construction), every joint's armature
-    and viscous damping, starting from the MJCF's values perturbed by 30 % (seeded). Data:
+    and viscous damping, starting from the MJCF's values perturbed by 30 % (seeded; see
+    :func:`_perturbed_spec`). Data:
     each training trajectory's reference controls (``info["signals"]`` held at each step's
     midpoint, as the data were simulated) and its noisy joint positions, observed as the
     rollouts' ``qpos``; the rollouts use the data's own integrator (RK4) and start on the servos'
