@@ -29,8 +29,14 @@ smooth-Coulomb friction per joint):
 * ``truth``: the MJCF's own parameters (no fit): smooth dry friction against MuJoCo's
   constraint friction is the only model error left.
 
-MuJoCo's own ``mujoco.sysid`` (output-error Gauss-Newton over rollouts) takes minutes per
-fit and is not run here.
+* ``mujoco-sysid`` (not in the default ``--methods``: minutes per fit): MuJoCo's own system
+  identification (:func:`mujoco_sysid`): output error of rollouts of the MJCF under the
+  recorded controls against the noisy positions, Levenberg-Marquardt on every link's
+  inertial parameters, the joints' armature and damping, from the MJCF's values perturbed by
+  30 %. Needs ``absl-py``, ``colorama`` and ``tabulate`` (the ``benchmarks`` extra); its
+  metrics come from MuJoCo on the identified MJCF (``mj_fullM``, ``qfrc_bias``,
+  ``mj_inverse``), its record's ``sysid`` holds the fit's summary and the initial guess's
+  errors.
 
 Metrics: mass-matrix error (mean over 200 random joint states of ``|M_id - M|_F / |M|_F``),
 gravity-torque error (``|g_id - g| / |g|`` over the same states), torque prediction on a fresh
@@ -163,17 +169,241 @@ def _realizable(catalog, library, beta, coef, tolerance=1e-4):
     return bool(residual <= tolerance and np.all(coef[friction] >= 0))
 
 
+# ---------------------------------------------------------------------------------------------
+# MuJoCo's own system identification (mujoco.sysid): output error over rollouts of the MJCF
+# ---------------------------------------------------------------------------------------------
+
+#: Limits of one mujoco.sysid fit: Gauss-Newton iterations and seconds (the best point reached
+#: when the time runs out is kept).
+SYSID_MAX_ITERS = 20
+SYSID_TIME_LIMIT = 600.0
+
+
+def sysid_missing() -> str | None:
+    """Why ``mujoco.sysid`` cannot run here, or None."""
+    try:
+        import absl  # noqa: F401
+        import colorama  # noqa: F401
+        import tabulate  # noqa: F401
+        from mujoco import sysid
+    except ImportError as error:
+        return (f"mujoco.sysid unavailable ({error}); pip install 'mujoco>=4.0' absl-py "
+                "colorama tabulate (the 'benchmarks' extra)")
+    if not hasattr(sysid, "optimize"):
+        return "mujoco.sysid unavailable (its optional dependencies failed to import)"
+    return None
+
+
+def _perturbed_spec(xml, rng, scale=0.3):
+    """The MJCF with every inertial parameter, armature and damping off by up to ``scale``.
+
+    Mass, armature, damping and the second moments of each link's mass distribution
+    (``Sigma = tr(I)/2 - I`` on the principal axes: any positive values are a physical body)
+    are multiplied by ``1 + scale * u``, ``u ~ U(-1, 1)``; the centre of mass moves by up to
+    ``scale`` times its distance from the joint frame along each axis."""
+    import mujoco
+
+    def factor(size=None):
+        return 1 + scale * rng.uniform(-1, 1, size)
+
+    spec = mujoco.MjSpec.from_string(xml)
+    for body in spec.bodies[1:]:
+        inertia = np.asarray(body.inertia, dtype=float)
+        sigma = (inertia.sum() / 2 - inertia) * factor(3)
+        com = np.asarray(body.ipos, dtype=float)
+        body.ipos = com + scale * np.linalg.norm(com) * rng.uniform(-1, 1, 3)
+        body.mass = body.mass * factor()
+        body.inertia = sigma.sum() - sigma
+    for joint in spec.joints:
+        joint.armature = joint.armature * factor()
+        joint.damping = joint.damping * factor()
+    return spec
+
+
+def mujoco_sysid(system, data, seed, max_iters=SYSID_MAX_ITERS, time_limit=SYSID_TIME_LIMIT,
+                 log=None):
+    """Identify the arm with ``mujoco.sysid``: the identified MjModel, a summary dict (with
+    95 % confidence half-widths of the damping, relative) and the initial guess's MjModel.
+
+    Output-error fit (MuJoCo's Levenberg-Marquardt over finite-difference Jacobians of
+    rollouts) of every link's 10 inertial parameters (mass, centre of mass, full inertia, in
+    sysid's pseudo-inertia parametrization, physical by construction), every joint's armature
+    and viscous damping, starting from the MJCF's values perturbed by 30 % (seeded; see
+    :func:`_perturbed_spec`). Data:
+    each training trajectory's reference controls (``info["signals"]`` held at each step's
+    midpoint, as the data were simulated) and its noisy joint positions, observed as the
+    rollouts' ``qpos``; the rollouts use the data's own integrator (RK4) and start on the servos'
+    reference at t = 0, as the data do (computed from the controls). The servo gains are
+    fixed at their MJCF values: from positions and controls alone a common scale of the
+    inertias, damping and gains is not identifiable (the others read it from the torques).
+    No parameter scaling (``x_scale="jac"`` stalls: the columns of the unidentifiable
+    parameters, e.g. the base link's inertia across its axis, are zero). At most ``max_iters``
+    iterations and ``time_limit`` seconds (then the best point reached is kept). The
+    optimizer's iteration log goes to ``log`` (default stderr).
+    """
+    import sys
+
+    import mujoco
+    from mujoco import sysid
+    from mujoco.sysid._src import model_modifier
+
+    from pysindy_xl.mujoco import SumOfSinusoids, start_on_reference
+
+    xml = system.metadata()["model_xml"]
+    rng = np.random.default_rng([seed, 30])
+    spec = _perturbed_spec(xml, rng)
+    spec.option.integrator = getattr(mujoco.mjtIntegrator,
+                                     f"mjINT_{data.metadata['integrator'].upper()}")
+    joints = [spec.joints[k].name for k in range(len(spec.joints))]
+    # the positions are observed as the rollout's states (qpos at each state's own time):
+    # jointpos sensors would lag a step, a rollout's sensordata being computed before the step
+    observed = [(f"{name}_qpos", sysid.SignalType.MjStateQPos) for name in joints]
+    guess = spec.compile()
+    dt = guess.opt.timestep
+
+    initial_states, controls, sensors = [], [], []
+    for trajectory in data.trajectories:
+        signals = SumOfSinusoids.from_dict(trajectory.info["signals"])
+        q0, qd0 = start_on_reference(system, signals, trajectory.q[0],
+                                     np.zeros(system.n))
+        initial_states.append(sysid.create_initial_state(guess, q0, qd0))
+        times = np.arange(int(round(trajectory.t[-1] / dt)) + 1) * dt
+        controls.append(sysid.TimeSeries(times, np.asarray(signals(times + dt / 2))))
+        sensors.append(sysid.TimeSeries.from_names(trajectory.t, trajectory.q, guess,
+                                                   names=observed))
+    sequences = sysid.ModelSequences(system.name, spec, [f"run{k}" for k in range(
+        len(controls))], initial_states, controls, sensors, allow_missing_sensors=True)
+
+    params = sysid.ParameterDict()
+    for body in spec.bodies[1:]:
+        def modifier(s, p, name=body.name):
+            model_modifier.apply_body_theta_inertia(s, name, p.value)
+            s.body(name).iquat = [1, 0, 0, 0]  # mujoco 4.0.0: NaN iquat does not compile
+        params.add(sysid.body_inertia_param(
+            spec, guess, body.name, sysid.InertiaType.Pseudo, modifier=modifier,
+            mass_bound_mult=np.array([0.2, 5.0]), stretch_bound_mult=np.array([0.25, 4.0])))
+    for name in joints:
+        joint = spec.joint(name)
+        for attribute in ("armature", "damping"):
+            value = np.atleast_1d(getattr(joint, attribute))  # damping: [linear, ...]
+            params.add(sysid.Parameter(
+                f"{name}_{attribute}", value[0], 0.0, 5 * value[0],
+                modifier=lambda s, p, n=name, a=attribute, v=value: setattr(
+                    s.joint(n), a, np.r_[p.value[0], v[1:]] if v.size > 1 else p.value[0])))
+
+    residual_fn = sysid.build_residual_fn(models_sequences=[sequences])
+    start = time.perf_counter()
+    best = {"objective": np.inf, "x": params.as_vector(), "evaluations": 0}
+
+    class _OutOfTime(Exception):
+        pass
+
+    def bounded(x, p, **kwargs):
+        if time.perf_counter() - start > time_limit:
+            raise _OutOfTime
+        result = residual_fn(x, p, **kwargs)
+        best["evaluations"] += 1
+        if x.ndim == 1 or x.shape[1] == 1:  # a trial point, not a finite-difference batch
+            objective = 0.5 * float(np.sum(np.concatenate(result[0]) ** 2))
+            if objective < best["objective"]:
+                best.update(objective=objective, x=np.ravel(x).copy())
+        return result
+
+    log = sys.stderr if log is None else log
+
+    def progress(trace):
+        print(f"mujoco-sysid: iteration {len(trace)}, objective {trace[-1].objective:.4g}, "
+              f"{time.perf_counter() - start:.0f} s", file=log, flush=True)
+
+    summary = {"parameters": int(params.as_vector().size), "max_iters": max_iters,
+               "time_limit_s": time_limit}
+    try:
+        # the backend's own log (full: it ends on the Jacobian at the optimum, which gives
+        # the confidence intervals) is printed to ``log``
+        identified, result = sysid.optimize(params, bounded, optimizer="mujoco",
+                                            verbose=False, max_iters=max_iters,
+                                            iter_callback=progress, output=log)
+        summary["stopped"] = "converged or max_iters"
+        x = identified.as_vector()
+        _, intervals = sysid.calculate_intervals(residual_fn(x, identified.copy())[0],
+                                                 result.jac)
+        names = [n for n in identified.keys() for _ in range(identified[n].size)]
+        summary["damping_ci"] = [float(w / abs(v)) for n, v, w in zip(
+            names, x, intervals, strict=True) if n.endswith("_damping")]
+    except _OutOfTime:
+        identified = params.copy()
+        identified.update_from_vector(best["x"])
+        summary["stopped"] = "time limit"
+    summary.update(objective=best["objective"], evaluations=best["evaluations"])
+    model = model_modifier.apply_param_modifiers(identified, spec)
+    return model, summary, guess
+
+
+def _mjcf_metrics(model, truth, fresh, limits, rng_seed=0):
+    """The benchmark's metrics of an MJCF model against the true one (MuJoCo's own
+    dynamics: ``mj_fullM``, ``qfrc_bias`` at rest, ``mj_inverse``)."""
+    import mujoco
+
+    def mass_and_gravity(m, states):
+        d = mujoco.MjData(m)
+        mass = np.empty((len(states), m.nv, m.nv))
+        gravity = np.empty((len(states), m.nv))
+        for k, q in enumerate(states):
+            d.qpos[:], d.qvel[:] = q, 0
+            mujoco.mj_forward(m, d)
+            mujoco.mj_fullM(m, d, mass[k])
+            gravity[k] = d.qfrc_bias
+        return mass, gravity
+
+    rng = np.random.default_rng(rng_seed)
+    q = rng.uniform(limits[:, 0], limits[:, 1], size=(200, model.nv))
+    (mass, gravity), (mass_id, gravity_id) = mass_and_gravity(truth, q), mass_and_gravity(
+        model, q)
+    d = mujoco.MjData(model)
+    predicted = np.empty_like(fresh.tau)
+    for k in range(len(fresh.t)):  # inverse dynamics at MuJoCo's exact states
+        d.qpos[:], d.qvel[:], d.qacc[:] = fresh.q[k], fresh.qd[k], fresh.qdd[k]
+        mujoco.mj_inverse(model, d)
+        predicted[k] = d.qfrc_inverse  # M qdd + bias + damping qd: the actuator torques
+    joint_errors = (np.sqrt(np.mean((predicted - fresh.tau) ** 2, axis=0))
+                    / np.sqrt(np.mean(fresh.tau**2, axis=0)))
+    return dict(
+        mass_error=float(np.mean(np.linalg.norm(mass_id - mass, axis=(1, 2))
+                                 / np.linalg.norm(mass, axis=(1, 2)))),
+        gravity_error=float(np.linalg.norm(gravity_id - gravity) / np.linalg.norm(gravity)),
+        torque_error=float(np.max(joint_errors)),
+        torque_errors=joint_errors.tolist(),  # per joint
+        positive_definite=bool(np.all(np.linalg.eigvalsh(mass_id)[:, 0] > 0)),
+        damping_error=float(np.max(np.abs(model.dof_damping - truth.dof_damping)
+                                   / truth.dof_damping)),
+        dry_friction=float(np.max(np.abs(model.dof_frictionloss), initial=0.0)),
+        damping=model.dof_damping.tolist())
+
+
 def run(arm, level, seed, method):
     import pysindy_xl as px
     from pysindy_xl._equations import physical_parameters
     from pysindy_xl.mujoco import MJCFSystem, kinematic_catalog
 
     system = MJCFSystem(arm_mjcf(arm))
-    catalog = kinematic_catalog(system)
     data = _data(system, level, seed)
     fresh = _data(system, 0.0, seed + 1000, duration=5.0, n_trajectories=1).trajectories[0]
     record = {"arm": arm, "level": level, "seed": seed, "method": method,
               "integrator": data.metadata["integrator"], "data": DATA_VERSION}
+    if method == "mujoco-sysid":  # an MJCF identified: MuJoCo's own dynamics give the metrics
+        truth = system.mj_model()
+        start = time.perf_counter()
+        identified, summary, guess = mujoco_sysid(system, data, seed)
+        record["fit_s"] = time.perf_counter() - start
+        metrics = _mjcf_metrics(identified, truth, fresh, truth.jnt_range)
+        summary.update(torque_errors=metrics.pop("torque_errors"),
+                       damping=metrics.pop("damping"), true_damping=truth.dof_damping.tolist())
+        record.update(metrics)
+        initial = _mjcf_metrics(guess, truth, fresh, truth.jnt_range)
+        record["sysid"] = summary | {"initial_" + key: initial[key] for key in (
+            "mass_error", "gravity_error", "torque_error", "damping_error")}
+        return record
+    catalog = kinematic_catalog(system)
     start = time.perf_counter()
     library = catalog.library().fit()
     with warnings.catch_warnings():
@@ -267,6 +497,10 @@ def main():
     parser.add_argument("--jobs", type=int, default=1,
                         help="cells run at once (joblib processes)")
     args = parser.parse_args()
+    methods = args.methods.split(",")
+    if "mujoco-sysid" in methods and (reason := sysid_missing()):
+        print(f"skipping mujoco-sysid: {reason}", flush=True)
+        methods.remove("mujoco-sysid")
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     path = out / "robot_arms.jsonl"
@@ -276,7 +510,7 @@ def main():
     done = {(r["arm"], r["level"], r["seed"], r["method"]) for r in records}
     cells = [(arm, level, seed, method) for arm in args.arms.split(",")
              for level in map(float, args.levels.split(",")) for seed in range(args.seeds)
-             for method in args.methods.split(",") if (arm, level, seed, method) not in done]
+             for method in methods if (arm, level, seed, method) not in done]
     runs = joblib.Parallel(n_jobs=args.jobs, return_as="generator_unordered")(
         joblib.delayed(run)(*cell) for cell in cells)
     for record in runs:
@@ -290,3 +524,4 @@ def main():
 
 if __name__ == "__main__":
     main()
+
