@@ -71,13 +71,13 @@ def run_demo(args) -> dict:
     ...         "--validation-duration", "0.2", "--no-plots", "--quiet", "--out", out])
     ...     report = run_demo(args)
     <BLANKLINE>
-    base parameters (value  |  stands for):
-               1.5  |  1*cart.m + 1*pole.m + 1*slider.armature
-              -0.4  |  1*pole.mcz
-              0.32  |  1*pole.Iyy + 1*hinge.armature
+    base parameters (value  |  true value  |  stands for):
+               1.5  |           1.5  |  1*cart.m + 1*pole.m + 1*slider.armature
+              -0.4  |          -0.4  |  1*pole.mcz
+              0.32  |          0.32  |  1*pole.Iyy + 1*hinge.armature
     friction per coordinate (viscous, dry):
-      x: 0.5, 0
-      theta: 0.1, 0
+      x: 0.5, 0 (true 0.5, 0)
+      theta: 0.1, 0 (true 0.1, 0)
     L = 0.16*theta_dot**2 + 0.4*theta_dot*x_dot*cos(theta) + 0.75*x_dot**2 + 3.924*cos(theta)
     (x) 0.4*theta_ddot*cos(theta) - 0.4*theta_dot**2*sin(theta) + 1.5*x_ddot + 0.5*x_dot = tau_x
     (theta) 0.32*theta_ddot + 0.1*theta_dot + 0.4*x_ddot*cos(theta) + 3.924*sin(theta) = tau_theta
