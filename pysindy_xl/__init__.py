@@ -32,6 +32,7 @@ _LAZY = {
     "MixedOptimizer": "optimizers",
     "EnsembleOptimizer": "optimizers",
     "NoLawFoundError": "optimizers",
+    "TotalLeastSquaresOptimizer": "optimizers",
     "XLSINDy": "model",
     "IdentificationWarning": "diagnostics",
     "UnexplainedCoordinateWarning": "diagnostics",
@@ -57,6 +58,7 @@ __all__ = [
     "MixedOptimizer",
     "EnsembleOptimizer",
     "NoLawFoundError",
+    "TotalLeastSquaresOptimizer",
     "XLSINDy",
     "IdentificationWarning",
     "UnexplainedCoordinateWarning",
@@ -86,6 +88,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         ImplicitOptimizer,
         MixedOptimizer,
         NoLawFoundError,
+        TotalLeastSquaresOptimizer,
     )
     from .symbols import Coordinates, monomials, products
     from .weak import BumpTestFunctions, WhittakerSmoother

@@ -1,4 +1,5 @@
-"""Catalog optimizers: explicit, implicit (SINDy-PI), mixed and ensemble regression.
+"""Catalog optimizers: explicit, implicit (SINDy-PI; total least squares on complete catalogs),
+mixed and ensemble regression.
 
 Each solves a :class:`~pysindy_xl.optimizers.problem.CatalogProblem`; see
 :mod:`pysindy_xl.optimizers._base` for the template of a fit that they share.
@@ -25,6 +26,7 @@ from .implicit import ImplicitOptimizer, NoLawFoundError, homothetic_groups
 from .mixed import MixedOptimizer, activation_closure
 from .problem import CatalogProblem, balance_coordinates, coordinate_weights
 from .selection import SelectionResult, refine_by_swaps, select_support
+from .total_least_squares import TotalLeastSquaresOptimizer, UndeterminedLawWarning
 
 __all__ = [
     "CatalogOptimizer",
@@ -40,6 +42,8 @@ __all__ = [
     "MixedOptimizer",
     "EnsembleOptimizer",
     "NoLawFoundError",
+    "TotalLeastSquaresOptimizer",
+    "UndeterminedLawWarning",
     "independent_columns",
     "coordinate_weights",
     "balance_coordinates",
