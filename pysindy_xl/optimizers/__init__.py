@@ -21,12 +21,12 @@ from .explicit import (
     hard_threshold_regression,
     proximal_gradient_lasso,
 )
-from .homogeneous import LawSelection, select_law
+from .homogeneous import LawSelection, UndeterminedLawWarning, select_law
 from .implicit import ImplicitOptimizer, NoLawFoundError, homothetic_groups
 from .mixed import MixedOptimizer, activation_closure
 from .problem import CatalogProblem, balance_coordinates, coordinate_weights
 from .selection import SelectionResult, refine_by_swaps, select_support
-from .total_least_squares import TotalLeastSquaresOptimizer, UndeterminedLawWarning
+from .total_least_squares import TotalLeastSquaresOptimizer
 
 __all__ = [
     "CatalogOptimizer",

@@ -66,7 +66,7 @@ from .._validation import check_option
 from ._base import CatalogOptimizer, coordinates_touched, warn_unexplained
 from ._sindy_pi import extract_laws, homothetic_groups, null_space_start, solve_cvxpy
 from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
-from .homogeneous import combine_laws, normalize_law, select_laws
+from .homogeneous import UndeterminedLawWarning, combine_laws, normalize_law, select_laws
 from .noise_ratio import noise_ratio_law
 from .problem import CatalogProblem
 
@@ -184,6 +184,10 @@ class ImplicitOptimizer(CatalogOptimizer):
     law_noise_ratios_ : ndarray, shape (n_laws,)
         Noise-ratio mode: each law's noise ratio on all the rows (about 1 when it holds to
         the noise).
+    undetermined_ : ndarray, shape (k, F)
+        Noise-ratio mode: other laws (different terms, normalized as ``coef_``) that the
+        data hold as well as the first law (``selection_.rivals``); empty when the data
+        decide. A :class:`~pysindy_xl.optimizers.UndeterminedLawWarning` names their terms.
 
     Examples
     --------
@@ -367,7 +371,31 @@ class ImplicitOptimizer(CatalogOptimizer):
             np.linalg.norm(theta @ law) / np.linalg.norm(law * norms) for law in laws])
         self.law_groups_ = [np.flatnonzero(law) for law in laws]
         self._set_laws(laws, norms, force_columns, reference_columns)
+        self._report_rivals(theta, moments, selections[0].rivals, laws[0], norms,
+                            force_columns, reference_columns)
         return self
+
+    def _report_rivals(self, theta, moments, rivals, law, norms, force_columns,
+                       reference_columns):
+        """``undetermined_``: the rival laws of the first law's selection, normalized; and a
+        warning naming them when there are any."""
+        pooled = moments.sum(axis=0)
+        found = []
+        for support in rivals:
+            rival = np.zeros(theta.shape[1])
+            rival[support] = noise_ratio_law(triangular_factor(theta[:, support]),
+                                             pooled[np.ix_(support, support)])[1]
+            found.append(normalize_law(rival, norms, force_columns, reference_columns))
+        self.undetermined_ = np.array(found).reshape(len(found), theta.shape[1])
+        if found:
+            differ = sorted({int(j) for rival in found
+                             for j in np.flatnonzero((rival != 0) != (law != 0))})
+            warnings.warn(
+                f"ImplicitOptimizer: the data hold {len(found)} other law(s) with different "
+                "terms as well as the chosen one (held-out noise ratio within its standard "
+                f"error): the terms {differ} (columns of the problem) are undetermined, see "
+                "undetermined_. Record trajectories at more energy levels, reduce the noise "
+                "or force a coordinate.", UndeterminedLawWarning, stacklevel=4)
 
     def _fit(self, theta, n_coordinates, force_columns, reference_columns):
         self._check_params()

@@ -41,16 +41,12 @@ import numpy as np
 from .._validation import check_option
 from ._base import CatalogOptimizer, warn_unexplained
 from ._sparse import column_norms, null_vector, triangular_factor
-from .homogeneous import normalize_law
+from .homogeneous import UndeterminedLawWarning, normalize_law
 from .noise_ratio import noise_pencil
 
-__all__ = ["TotalLeastSquaresOptimizer", "UndeterminedLawWarning"]
+__all__ = ["TotalLeastSquaresOptimizer"]
 
 _NORMALIZATIONS = ("dominant", "inertia")
-
-
-class UndeterminedLawWarning(UserWarning):
-    """The data hold several independent laws to the noise: their combination is unknown."""
 
 
 class TotalLeastSquaresOptimizer(CatalogOptimizer):
