@@ -153,8 +153,8 @@ def test_product_catalog_flags_an_undetermined_unforced_law():
     """Cart double pendulum, paper catalog, three unforced 10 s runs at 3 % noise, seed 1:
     the noise-ratio selection returns a wrong law that holds to the noise, and says that the
     data hold others as well."""
-    import sys
     import pathlib
+    import sys
 
     sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "benchmarks"))
     import noise_sweep
