@@ -16,7 +16,7 @@ undetermined directions reported, fit time, and validation (``validate_model``: 
 unforced MuJoCo trajectory).
 
 Usage: ``python benchmarks/unforced_kinematic.py [--seeds 10] [--levels 0.01,0.03,0.05,0.1]
-[--systems cart-pole,double-pendulum,cart-double-pendulum]``
+[--systems cart-pole,double-pendulum,cart-double-pendulum,triple-pendulum]``
 """
 
 from __future__ import annotations
@@ -96,7 +96,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument("--levels", default="0.01,0.03,0.05,0.1")
-    parser.add_argument("--systems", default="cart-pole,double-pendulum,cart-double-pendulum")
+    parser.add_argument("--systems",
+                        default="cart-pole,double-pendulum,cart-double-pendulum,triple-pendulum")
     parser.add_argument("--methods", default="implicit,tls")
     parser.add_argument("--jobs", type=int, default=1)
     args = parser.parse_args()
