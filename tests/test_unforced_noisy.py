@@ -169,3 +169,19 @@ def test_product_catalog_flags_an_undetermined_unforced_law():
     with pytest.warns(UndeterminedLawWarning):
         model = px.XLSINDy(library).fit(noisy, [t] * 3)
     assert len(model.optimizer_.undetermined_) > 0
+
+
+def test_implicit_fit_says_when_no_law_holds():
+    rng = np.random.default_rng(2)
+    theta = rng.normal(size=(600, 5))  # independent columns: no law at all
+    moments = 0.01**2 * 600 * np.eye(5)[None]
+    with pytest.warns(UndeterminedLawWarning, match="no law that holds to the noise"):
+        opt = px.ImplicitOptimizer().fit_catalog(theta, 1, [], noise_moments=moments)
+    assert not opt.law_holds_
+    clean = np.column_stack([theta[:, :2], theta[:, 0] - 2 * theta[:, 1], theta[:, 3:]])
+    noisy = clean + 0.01 * rng.normal(size=clean.shape)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UndeterminedLawWarning)
+        opt = px.ImplicitOptimizer().fit_catalog(noisy, 1, [], noise_moments=moments)
+    assert opt.law_holds_ and len(opt.undetermined_) == 0
+    np.testing.assert_allclose(opt.coef_[:3] / opt.coef_[2], [-1.0, 2.0, 1.0], rtol=0.02)

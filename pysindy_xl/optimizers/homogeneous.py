@@ -208,6 +208,11 @@ class LawSelection(ChosenSupport):
         Supports of other admissible laws that hold as well (held-out ratio within the same
         standard error of the best) and are not the chosen support with terms added: the
         data do not decide between them and the chosen one. Smallest first.
+    admissible : bool
+        Whether the chosen law is admissible (explains every coordinate; definite mass
+        matrix, given the mass matrices); False when no candidate was.
+    cv_relative : float
+        The chosen law's mean held-out relative squared residual.
     """
 
     order: np.ndarray
@@ -217,6 +222,8 @@ class LawSelection(ChosenSupport):
     best_size: int
     rule: str
     rivals: list = dataclasses.field(default_factory=list)
+    admissible: bool = True
+    cv_relative: float = np.nan
 
 
 def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
@@ -399,7 +406,7 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         order=np.concatenate([np.sort(support), order[~np.isin(order, support)]]),
         cv_ratio=cv_ratio, cv_spread=cv_spread, size=len(support),
         best_size=len(best.support), rule=f"one standard error of the noise ratio ({chosen.how})",
-        rivals=rivals)
+        rivals=rivals, admissible=admissible(chosen), cv_relative=float(chosen.relative))
     return law * np.sign(law[np.argmax(np.abs(law))]), ratio, selection
 
 
