@@ -46,7 +46,9 @@ Methods:
 
 Metrics per cell: exact support (every true term and no other), median relative coefficient
 error, valid (5 s validation from a fresh state and forcing: position RMSE below 10 % of the
-range of every coordinate). Writes ``benchmarks/results/noise_sweep.{jsonl,md,png}``.
+range of every coordinate); for unforced fits also the number of rival laws the fit reports
+(``undetermined_``: the data hold them as well; a wrong law that reports none is a confident
+wrong law). Writes ``benchmarks/results/noise_sweep.{jsonl,md,png}`` (``--out`` elsewhere).
 
 Usage: ``python benchmarks/noise_sweep.py [--seeds 10] [--levels 0,0.001,0.01,0.03,0.05,0.1]
 [--methods weak,single,strong,sindy] [--systems cart_pole,...] [--jobs -1] [--append]``
