@@ -1,12 +1,12 @@
 """Identification from noisy positions: weak form vs strong form vs plain pysindy SINDy.
 
 Systems (ground truth from ``sympy.physics.mechanics``, trajectories by scipy DOP853 at
-1e-10 tolerance; see ``tests/ground_truth.py``): the forced cart-pole, double pendulum and
-double pendulum on a cart, with viscous friction, paper-style catalogs (velocity monomials x
-trigonometric monomials, plus friction). Each run: a random initial state and sum-of-sines
-forces on every coordinate, 30 s at 100 Hz; Gaussian noise of ``level`` times each
-coordinate's standard deviation added to the positions only; nothing else is given to the
-methods.
+1e-10 tolerance; see ``tests/ground_truth.py``): the forced cart-pole, double pendulum,
+double pendulum on a cart and three-link pendulum, with viscous friction, paper-style
+catalogs (velocity monomials x trigonometric monomials, plus friction). Each run: a random
+initial state and sum-of-sines forces on every coordinate, 30 s at 100 Hz; Gaussian noise of
+``level`` times each coordinate's standard deviation added to the positions only; nothing
+else is given to the methods.
 
 Methods:
 
@@ -46,7 +46,9 @@ Methods:
 
 Metrics per cell: exact support (every true term and no other), median relative coefficient
 error, valid (5 s validation from a fresh state and forcing: position RMSE below 10 % of the
-range of every coordinate). Writes ``benchmarks/results/noise_sweep.{jsonl,md,png}``.
+range of every coordinate); for unforced fits also the number of rival laws the fit reports
+(``undetermined_``: the data hold them as well; a wrong law that reports none is a confident
+wrong law). Writes ``benchmarks/results/noise_sweep.{jsonl,md,png}`` (``--out`` elsewhere).
 
 Usage: ``python benchmarks/noise_sweep.py [--seeds 10] [--levels 0,0.001,0.01,0.03,0.05,0.1]
 [--methods weak,single,strong,sindy] [--systems cart_pole,...] [--jobs -1] [--append]``
@@ -65,7 +67,8 @@ import numpy as np
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
-SYSTEMS = {"cart_pole": [1], "double_pendulum": [0, 1], "cart_double_pendulum": [1, 2]}
+SYSTEMS = {"cart_pole": [1], "double_pendulum": [0, 1], "cart_double_pendulum": [1, 2],
+           "triple_pendulum": [0, 1, 2]}
 METHODS = ["weak", "weak_ols", "single", "pairs", "mixed", "implicit", "implicit_gls",
            "bagged_implicit", "strong", "sindy"]
 #: Forced coordinates of the methods that do not force every coordinate.
@@ -169,6 +172,9 @@ def run(name, level, seed, method):
             record["error"] = float(np.median(np.abs(coef[support] - true[support])
                                               / np.abs(true[support])))
             record["terms"] = int(np.count_nonzero(coef))
+            # rival laws the fit reports (unforced noise-ratio selection): an honest fit flags
+            # the data that do not determine the law
+            record["undetermined"] = len(getattr(model.optimizer_, "undetermined_", ()))
             if model.coef_interval_ is not None:  # a bagged fit
                 low, high = model.coef_interval_
                 probability = model.inclusion_probability_
@@ -207,6 +213,22 @@ def summarize(records) -> str:
         rows.append(f"| {system} | {level:.1%} | {method} | {exact} | {error} | "
                     f"{sum(bool(r['valid']) for r in cell)}/{len(cell)} | "
                     f"{np.median([r['fit_s'] for r in cell]):.1f} |")
+    flagged = [r for r in records if "undetermined" in r and FORCED.get(r["method"]) == []]
+    if flagged:
+        rows += ["", "Unforced fits that report rival laws (``undetermined_``, with an "
+                 "``UndeterminedLawWarning``): wrong laws flagged / not flagged, exact laws "
+                 "flagged", "", "| system | noise | method | wrong, flagged | wrong, not flagged "
+                 "| exact, flagged |", "|---|---|---|---|---|---|"]
+        for system, level, method in sorted({(r["system"], r["level"], r["method"])
+                                             for r in flagged}):
+            cell = [r for r in flagged
+                    if (r["system"], r["level"], r["method"]) == (system, level, method)]
+            wrong = [r for r in cell if not r["exact"]]
+            rows.append(f"| {system} | {level:.1%} | {method} | "
+                        f"{sum(r['undetermined'] > 0 for r in wrong)}/{len(wrong)} | "
+                        f"{sum(r['undetermined'] == 0 for r in wrong)}/{len(wrong)} | "
+                        f"{sum(r['undetermined'] > 0 for r in cell if r['exact'])}/"
+                        f"{len(cell) - len(wrong)} |")
     ensemble = [r for r in records if r["method"] in ("weak", "pairs") and "covered" in r]
     if ensemble:
         rows += ["", "Uncertainty of the bagged fits, the default (weak: 70 % subsamples) and "

@@ -33,6 +33,7 @@ _LAZY = {
     "EnsembleOptimizer": "optimizers",
     "PhysicalOptimizer": "optimizers",
     "NoLawFoundError": "optimizers",
+    "TotalLeastSquaresOptimizer": "optimizers",
     "XLSINDy": "model",
     "IdentificationWarning": "diagnostics",
     "UnexplainedCoordinateWarning": "diagnostics",
@@ -59,6 +60,7 @@ __all__ = [
     "EnsembleOptimizer",
     "PhysicalOptimizer",
     "NoLawFoundError",
+    "TotalLeastSquaresOptimizer",
     "XLSINDy",
     "IdentificationWarning",
     "UnexplainedCoordinateWarning",
@@ -89,6 +91,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         MixedOptimizer,
         NoLawFoundError,
         PhysicalOptimizer,
+        TotalLeastSquaresOptimizer,
     )
     from .symbols import Coordinates, monomials, products
     from .weak import BumpTestFunctions, WhittakerSmoother

@@ -9,7 +9,8 @@ Conventions (all systems): point masses, gravity ``G = 9.81`` along ``-y``, angl
 the downward vertical (absolute angles for the double pendulums). On coordinate ``i`` act the
 viscous friction ``-c_i * qd_i`` and the external generalized force ``tau_i``.
 
-Systems: :func:`cart_pole`, :func:`double_pendulum`, :func:`cart_double_pendulum`. Each returns a
+Systems: :func:`cart_pole`, :func:`double_pendulum`, :func:`cart_double_pendulum`,
+:func:`triple_pendulum`. Each returns a
 :class:`TrueSystem` with vectorized accelerations and a tight-tolerance :meth:`TrueSystem.simulate`.
 Forcing signals: :func:`sum_of_sines`, :func:`random_force`; initial states:
 :func:`random_initial_state`.
@@ -35,6 +36,7 @@ __all__ = [
     "cart_pole",
     "double_pendulum",
     "cart_double_pendulum",
+    "triple_pendulum",
     "sum_of_sines",
     "random_force",
     "random_initial_state",
@@ -419,6 +421,50 @@ def double_pendulum(
 
     return _derive(
         "double_pendulum", Coordinates(["theta1", "theta2"]), build, friction, [10.0, 5.0]
+    )
+
+
+def triple_pendulum(
+    m1: float = 1.0,
+    m2: float = 1.0,
+    m3: float = 1.0,
+    l1: float = 1.0,
+    l2: float = 1.0,
+    l3: float = 1.0,
+    friction=(0.2, 0.15, 0.1),
+) -> TrueSystem:
+    """Planar three-link pendulum of point masses (chaotic), absolute angles theta1..theta3.
+
+    Parameters
+    ----------
+    m1, m2, m3, l1, l2, l3 : float
+    friction : sequence of 3 float
+
+    Returns
+    -------
+    TrueSystem
+    """
+    _check_positive(m1=m1, m2=m2, m3=m3, l1=l1, l2=l2, l3=l3)
+    friction = _check_friction(friction, 3)
+
+    def build(q, qd, frame, origin):
+        links = [_link(frame, q[k], label) for k, label in enumerate("ABC")]
+        p1 = _attach("P1", origin, links[0], l1, frame)
+        p2 = _attach("P2", p1, links[1], l2, frame)
+        p3 = _attach("P3", p2, links[2], l3, frame)
+        particles = [
+            _particle("bob1", p1, m1, frame, origin),
+            _particle("bob2", p2, m2, frame, origin),
+            _particle("bob3", p3, m3, frame, origin),
+        ]
+        return particles, [(link, frame.z) for link in links]
+
+    return _derive(
+        "triple_pendulum",
+        Coordinates(["theta1", "theta2", "theta3"]),
+        build,
+        friction,
+        [15.0, 8.0, 3.0],
     )
 
 

@@ -12,7 +12,7 @@ import mujoco
 import numpy as np
 import pytest
 import sympy as sp
-from ground_truth import cart_double_pendulum, cart_pole, double_pendulum
+from ground_truth import cart_double_pendulum, cart_pole, double_pendulum, triple_pendulum
 
 from pysindy_xl.mujoco import (
     SYSTEMS,
@@ -20,6 +20,7 @@ from pysindy_xl.mujoco import (
     CartPole,
     DoublePendulum,
     MJCFSystem,
+    TriplePendulum,
     default_xml_path,
     generate_dataset,
     get_system,
@@ -101,8 +102,13 @@ def test_relative_hinge_friction_couples_absolute_coordinates():
                             cart_damping=0.3, damping1=0.05, damping2=0.0, point_inertia=1e-10),
          cart_double_pendulum(m_cart=1.0, m1=0.5, m2=0.4, l1=0.7, l2=0.5,
                               friction=(0.3, 0.05, 0.0))),
+        (TriplePendulum(mass1=1.0, mass2=0.8, mass3=0.6, length1=0.8, length2=0.6,
+                        length3=0.5, damping1=0.0, damping2=0.0, damping3=0.0,
+                        point_inertia=1e-10),
+         triple_pendulum(m1=1.0, m2=0.8, m3=0.6, l1=0.8, l2=0.6, l3=0.5,
+                         friction=(0.0, 0.0, 0.0))),
     ],
-    ids=["cart-pole", "double-pendulum", "cart-double-pendulum"],
+    ids=["cart-pole", "double-pendulum", "cart-double-pendulum", "triple-pendulum"],
 )
 def test_accelerations_match_independent_mechanics(system, truth):
     data = generate_dataset(system, n_trajectories=1, duration=2.0, seed=5, sample_every=10,
@@ -126,9 +132,11 @@ def test_bob_positions_follow_textbook_convention(name):
     has_cart = system.coordinate_names[0] == "x"
     x = q[0] if has_cart else 0.0
     angles = q[1:] if has_cart else q
-    lengths = [p["length"]] if name == "cart-pole" else [p["length1"], p["length2"]]
+    links = [f"link{k}" for k in range(1, len(angles) + 1)]
+    lengths = [p["length"]] if name == "cart-pole" else [p[f"length{k}"]
+                                                         for k in range(1, len(angles) + 1)]
     point = np.array([x, 0.0])
-    bodies = ["pole"] if name == "cart-pole" else ["link1", "link2"]
+    bodies = ["pole"] if name == "cart-pole" else links
     for body, angle, length in zip(bodies, angles, lengths, strict=True):
         point = point + length * np.array([np.sin(angle), -np.cos(angle)])
         b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, body)
@@ -164,7 +172,7 @@ def test_parameters_are_used_and_checked():
     with pytest.raises(TypeError, match="length"):
         CartPole(length="long")
     with pytest.raises(ValueError, match="unknown system"):
-        get_system("triple-pendulum")
+        get_system("quadruple-pendulum")
     assert isinstance(get_system("cart_double_pendulum"), CartDoublePendulum)
 
 

@@ -57,6 +57,13 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         super().__init__(coords, terms)
         self.parameters = parameters
 
+    @property
+    def complete_catalog(self) -> bool:
+        """Whether every term stands for a physical parameter of the law (``parameters``
+        given: a kinematic catalog's base parameters), so that none is spurious and an
+        unforced law needs no selection of terms."""
+        return self.parameters is not None
+
     def _build_symbolic(self):
         terms = as_expr_list(self.terms, "terms")
         self.__dict__.pop("_polynomial_columns", None)

@@ -107,6 +107,14 @@ class CatalogRepartition(SymbolicLibrary):
     def coords(self):
         return self.flat_libraries()[0].coords
 
+    @property
+    def complete_catalog(self) -> bool:
+        """Whether every Lagrangian library of the catalog is complete (its terms are the
+        law's physical parameters, see ``PolynomialLagrangeLibrary.complete_catalog``)."""
+        lagrange = [lib for lib in self.flat_libraries() if lib.category == "lagrange"]
+        return bool(lagrange) and all(getattr(lib, "complete_catalog", False)
+                                      for lib in lagrange)
+
     def flat_libraries(self, _parents=()) -> list[SymbolicLibrary]:
         """The libraries, nested catalogs flattened, a force library first when none is given.
 

@@ -1,4 +1,5 @@
-"""The paper's systems as MuJoCo models: cart-pole, double pendulum, double pendulum on a cart.
+"""The paper's systems as MuJoCo models: cart-pole, double pendulum, double pendulum on a cart,
+and a (chaotic) three-link pendulum.
 
 Each class writes its MJCF text from its parameters and knows the same mechanism's textbook
 Lagrangian (coordinate conventions: :mod:`pysindy_xl.mujoco.systems`).
@@ -11,7 +12,7 @@ import sympy as sp
 
 from ._system_base import MuJoCoSystem, check_non_negative, check_positive, mjcf_float
 
-__all__ = ["CartPole", "DoublePendulum", "CartDoublePendulum"]
+__all__ = ["CartPole", "DoublePendulum", "CartDoublePendulum", "TriplePendulum"]
 
 
 # -- MJCF building blocks ------------------------------------------------------------------
@@ -382,4 +383,115 @@ class CartDoublePendulum(MuJoCoSystem):
         link = _pendulum_chain_xml(p, indent=6)
         return (_header("cart_double_pendulum", p["timestep"], p["gravity"])
                 + _cart(p["cart_mass"], p["cart_damping"], link)
+                + _footer(self.joint_names))
+
+
+class TriplePendulum(MuJoCoSystem):
+    """Three-link pendulum with point masses on massless rods, hanging from a fixed pivot.
+
+    Coordinates ``theta1``, ``theta2``, ``theta3``: absolute angles from the downward
+    vertical; MuJoCo's hinges ``hinge1``, ``hinge2``, ``hinge3`` measure each link's angle
+    relative to the previous one. Chaotic at moderate energies.
+
+    Parameters
+    ----------
+    mass1, mass2, mass3, length1, length2, length3 : float
+    damping1, damping2, damping3 : float
+        Viscous damping of the hinges (relative angles).
+    gravity, point_inertia, timestep : float
+        See :class:`CartPole`.
+
+    Examples
+    --------
+    >>> TriplePendulum().coords.names
+    ('theta1', 'theta2', 'theta3')
+    """
+
+    name = "triple-pendulum"
+    coordinate_names = ("theta1", "theta2", "theta3")
+    joint_names = ("hinge1", "hinge2", "hinge3")
+    angle_coordinates = (0, 1, 2)
+    mixed_actuators = ("hinge1",)
+
+    def __init__(self, mass1=1.0, mass2=0.8, mass3=0.6, length1=0.8, length2=0.6, length3=0.5,
+                 damping1=0.2, damping2=0.1, damping3=0.05, gravity=9.81, point_inertia=1e-6,
+                 timestep=1e-3):
+        self._parameters = {
+            **{f"mass{k}": check_positive(v, f"mass{k}")
+               for k, v in enumerate((mass1, mass2, mass3), 1)},
+            **{f"length{k}": check_positive(v, f"length{k}")
+               for k, v in enumerate((length1, length2, length3), 1)},
+            **{f"damping{k}": check_non_negative(v, f"damping{k}")
+               for k, v in enumerate((damping1, damping2, damping3), 1)},
+            "gravity": check_non_negative(gravity, "gravity"),
+            "point_inertia": check_positive(point_inertia, "point_inertia"),
+            "timestep": check_positive(timestep, "timestep"),
+        }
+
+    @property
+    def joint_to_coordinates(self):
+        return np.tril(np.ones((3, 3)))
+
+    @property
+    def joint_damping(self):
+        p = self._parameters
+        return np.array([p["damping1"], p["damping2"], p["damping3"]])
+
+    @property
+    def force_amplitudes(self):
+        p = self._parameters
+        g, masses = p["gravity"], [p["mass1"], p["mass2"], p["mass3"]]
+        return {f"hinge{k}": 0.3 * sum(masses[k - 1:]) * g * p[f"length{k}"]
+                for k in (1, 2, 3)}
+
+    def lagrangian(self):
+        """True Lagrangian of the three-link pendulum in absolute angles,
+        ``T = 1/2 sum_ij mu_ij l_i l_j thd_i thd_j cos(th_i - th_j)`` with ``mu_ij`` the mass
+        at or beyond link ``max(i, j)``, ``V = -g sum_i mu_ii l_i cos th_i``, plus each bob's
+        tiny rotational inertia.
+
+        Returns
+        -------
+        sympy.Expr
+
+        Examples
+        --------
+        >>> L = TriplePendulum().lagrangian()
+        >>> sorted(map(str, L.free_symbols))[:3]
+        ['theta1', 'theta1_dot', 'theta2']
+        """
+        p = self._parameters
+        th, thd = self.coords.q, self.coords.qd
+        masses = [p["mass1"], p["mass2"], p["mass3"]]
+        lengths = [p["length1"], p["length2"], p["length3"]]
+        kinetic = p["point_inertia"] * sum(w**2 for w in thd) / 2
+        potential = 0
+        for i in range(3):
+            potential -= sum(masses[i:]) * p["gravity"] * lengths[i] * sp.cos(th[i])
+            for j in range(3):
+                kinetic += (sum(masses[max(i, j):]) * lengths[i] * lengths[j] * thd[i] * thd[j]
+                            * sp.cos(th[i] - th[j]) / 2)
+        return kinetic - potential
+
+    def xml(self):
+        """MJCF text of the three-link pendulum with the current parameters.
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> TriplePendulum().xml().splitlines()[0]
+        '<mujoco model="triple_pendulum">'
+        """
+        p = self._parameters
+        link3 = _link("link3", "hinge3", p["mass3"], p["length3"], p["damping3"],
+                      p["point_inertia"], f"0 0 {mjcf_float(-p['length2'])}", indent=8)
+        link2 = _link("link2", "hinge2", p["mass2"], p["length2"], p["damping2"],
+                      p["point_inertia"], f"0 0 {mjcf_float(-p['length1'])}", inner=link3,
+                      indent=6)
+        link1 = _link("link1", "hinge1", p["mass1"], p["length1"], p["damping1"],
+                      p["point_inertia"], "0 0 0", inner=link2, indent=4)
+        return (_header("triple_pendulum", p["timestep"], p["gravity"]) + link1
                 + _footer(self.joint_names))

@@ -45,7 +45,7 @@ import numpy as np
 from ..symbols import Coordinates
 from ._system_base import MuJoCoSystem, equations_of_motion
 from .mjcf_system import MJCFSystem
-from .paper_systems import CartDoublePendulum, CartPole, DoublePendulum
+from .paper_systems import CartDoublePendulum, CartPole, DoublePendulum, TriplePendulum
 
 __all__ = [
     "MuJoCoSystem",
@@ -53,6 +53,7 @@ __all__ = [
     "CartPole",
     "DoublePendulum",
     "CartDoublePendulum",
+    "TriplePendulum",
     "MJCFSystem",
     "SYSTEMS",
     "get_system",
@@ -66,6 +67,7 @@ SYSTEMS = {
     CartPole.name: CartPole,
     DoublePendulum.name: DoublePendulum,
     CartDoublePendulum.name: CartDoublePendulum,
+    TriplePendulum.name: TriplePendulum,
 }
 
 
@@ -75,7 +77,8 @@ def get_system(name, **parameters) -> MuJoCoSystem:
     Parameters
     ----------
     name : str, os.PathLike or MuJoCoSystem
-        ``"cart-pole"``, ``"double-pendulum"``, ``"cart-double-pendulum"`` (underscores
+        ``"cart-pole"``, ``"double-pendulum"``, ``"cart-double-pendulum"``,
+        ``"triple-pendulum"`` (underscores
         accepted), a path to an ``.xml`` file, or a system (returned as is).
     **parameters
         Passed to the system's constructor.
@@ -176,7 +179,8 @@ def default_xml_path(name: str):
     Parameters
     ----------
     name : str
-        ``"cart-pole"``, ``"double-pendulum"`` or ``"cart-double-pendulum"`` (underscores
+        ``"cart-pole"``, ``"double-pendulum"``, ``"cart-double-pendulum"`` or
+        ``"triple-pendulum"`` (underscores
         accepted).
 
     Returns

@@ -1,5 +1,5 @@
-"""Catalog optimizers: explicit, implicit (SINDy-PI), mixed, ensemble and physically consistent
-regression.
+"""Catalog optimizers: explicit, implicit (SINDy-PI; total least squares on complete catalogs),
+mixed, ensemble and physically consistent regression.
 
 Each solves a :class:`~pysindy_xl.optimizers.problem.CatalogProblem`; see
 :mod:`pysindy_xl.optimizers._base` for the template of a fit that they share.
@@ -21,12 +21,13 @@ from .explicit import (
     hard_threshold_regression,
     proximal_gradient_lasso,
 )
-from .homogeneous import LawSelection, select_law
+from .homogeneous import LawSelection, UndeterminedLawWarning, select_law
 from .implicit import ImplicitOptimizer, NoLawFoundError, homothetic_groups
 from .mixed import MixedOptimizer, activation_closure
 from .physical import PhysicalOptimizer
 from .problem import CatalogProblem, balance_coordinates, coordinate_weights
 from .selection import SelectionResult, refine_by_swaps, select_support
+from .total_least_squares import TotalLeastSquaresOptimizer
 
 __all__ = [
     "CatalogOptimizer",
@@ -43,6 +44,8 @@ __all__ = [
     "EnsembleOptimizer",
     "PhysicalOptimizer",
     "NoLawFoundError",
+    "TotalLeastSquaresOptimizer",
+    "UndeterminedLawWarning",
     "independent_columns",
     "coordinate_weights",
     "balance_coordinates",

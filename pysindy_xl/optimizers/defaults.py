@@ -12,6 +12,7 @@ from .ensemble import EnsembleOptimizer
 from .explicit import ExplicitOptimizer
 from .implicit import ImplicitOptimizer
 from .mixed import MixedOptimizer
+from .total_least_squares import TotalLeastSquaresOptimizer
 
 __all__ = ["default_optimizer", "SOLVER_KINDS"]
 
@@ -19,14 +20,19 @@ __all__ = ["default_optimizer", "SOLVER_KINDS"]
 SOLVER_KINDS = ("explicit", "implicit", "mixed")
 
 
-def default_optimizer(forced, estimated: bool = False, kind: str | None = None):
+def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
+                      complete: bool = False):
     """The default catalog optimizer for the data (or of a given kind).
 
     * every coordinate forced: explicit regression; on estimated columns bagged,
       ``EnsembleOptimizer(ExplicitOptimizer())``. One cross-validated selection among about a
       hundred candidates keeps a term that only fits the noise in a sizeable share of fits (a
       multiple-comparison effect); the terms most subsample fits keep are the true ones;
-    * no coordinate forced: ``ImplicitOptimizer()``;
+    * no coordinate forced: ``ImplicitOptimizer()``; on estimated columns of a complete
+      catalog (every Lagrangian term a physical parameter: a kinematic catalog), the
+      errors-in-variables law on all the columns, ``TotalLeastSquaresOptimizer()``: there is
+      no spurious term to select away, and a selection drops small true terms (joint
+      damping);
     * some forced: ``MixedOptimizer``, its explicit part bagged on estimated columns as above.
 
     Parameters
@@ -39,6 +45,8 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None):
     kind : {"explicit", "implicit", "mixed"}, optional
         The kind of regression; default: from ``forced`` as above. The bagging policy is the
         same whatever the kind.
+    complete : bool, default False
+        The catalog is complete (``library.complete_catalog``).
 
     Returns
     -------
@@ -62,5 +70,5 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None):
     if kind == "explicit":
         return explicit
     if kind == "implicit":
-        return ImplicitOptimizer()
+        return TotalLeastSquaresOptimizer() if estimated and complete else ImplicitOptimizer()
     return MixedOptimizer(explicit if estimated else None)

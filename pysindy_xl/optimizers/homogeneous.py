@@ -46,6 +46,7 @@ from .selection import ChosenSupport, fold_labels, fold_summary
 
 __all__ = [
     "LawSelection",
+    "UndeterminedLawWarning",
     "combine_laws",
     "definite_mass",
     "explained_coordinates",
@@ -53,6 +54,11 @@ __all__ = [
     "select_law",
     "select_laws",
 ]
+
+
+class UndeterminedLawWarning(UserWarning):
+    """The data hold several different laws to the noise: which one is the system's is not
+    determined by them."""
 
 
 def explained_coordinates(theta, law, n_blocks: int, min_share: float = 1e-3) -> np.ndarray:
@@ -198,6 +204,15 @@ class LawSelection(ChosenSupport):
         Size with the lowest held-out ratio.
     rule : str
         How ``size`` was chosen.
+    rivals : list of ndarray of int
+        Supports of other admissible laws that hold as well (held-out ratio within the same
+        standard error of the best) and are not the chosen support with terms added: the
+        data do not decide between them and the chosen one. Smallest first.
+    admissible : bool
+        Whether the chosen law is admissible (explains every coordinate; definite mass
+        matrix, given the mass matrices); False when no candidate was.
+    cv_relative : float
+        The chosen law's mean held-out relative squared residual.
     """
 
     order: np.ndarray
@@ -206,6 +221,9 @@ class LawSelection(ChosenSupport):
     size: int
     best_size: int
     rule: str
+    rivals: list = dataclasses.field(default_factory=list)
+    admissible: bool = True
+    cv_relative: float = np.nan
 
 
 def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
@@ -375,6 +393,7 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     chosen = min((c for c in candidates if c.ratio <= limit),
                  key=lambda c: (len(c.support), c.ratio))
     support = chosen.support
+    rivals = _rivals(candidates, limit, support)
     ratio, values = noise_ratio_law(r_factor[:, support], total[np.ix_(support, support)])
     law = np.zeros(theta.shape[1])
     law[support] = values / scale[support]
@@ -386,7 +405,8 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     selection = LawSelection(
         order=np.concatenate([np.sort(support), order[~np.isin(order, support)]]),
         cv_ratio=cv_ratio, cv_spread=cv_spread, size=len(support),
-        best_size=len(best.support), rule=f"one standard error of the noise ratio ({chosen.how})")
+        best_size=len(best.support), rule=f"one standard error of the noise ratio ({chosen.how})",
+        rivals=rivals, admissible=admissible(chosen), cv_relative=float(chosen.relative))
     return law * np.sign(law[np.argmax(np.abs(law))]), ratio, selection
 
 
@@ -397,6 +417,21 @@ class _Candidate:
     spread: float  # its standard error over the folds
     relative: float  # mean held-out relative squared residual
     how: str
+
+
+def _rivals(candidates, limit, support, max_rivals: int = 5) -> list:
+    """Supports within ``limit`` that neither contain ``support`` nor another rival (a law
+    with terms added is no rival), smallest first."""
+    chosen, rivals = set(support.tolist()), []
+    for candidate in sorted((c for c in candidates if c.ratio <= limit),
+                            key=lambda c: (len(c.support), c.ratio)):
+        terms = set(candidate.support.tolist())
+        if terms >= chosen or any(terms >= set(r.tolist()) for r in rivals):
+            continue
+        rivals.append(np.sort(candidate.support))
+        if len(rivals) == max_rivals:
+            break
+    return rivals
 
 
 def _scored(theta, moments, supports, how, n_blocks, n_folds) -> list:
@@ -484,6 +519,7 @@ def select_laws(theta, noise_moments, n_blocks: int, mass_matrices=None,
             break
         if laws and ratio > max_ratio_factor * max(ratios[0], 1e-12):
             break
+        selection.rivals = [columns[r] for r in selection.rivals]  # the problem's columns
         full = np.zeros(n_features)
         full[columns] = law
         laws.append(full)

@@ -66,7 +66,7 @@ from .._validation import check_option
 from ._base import CatalogOptimizer, coordinates_touched, warn_unexplained
 from ._sindy_pi import extract_laws, homothetic_groups, null_space_start, solve_cvxpy
 from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
-from .homogeneous import combine_laws, normalize_law, select_laws
+from .homogeneous import UndeterminedLawWarning, combine_laws, normalize_law, select_laws
 from .noise_ratio import noise_ratio_law
 from .problem import CatalogProblem
 
@@ -184,6 +184,14 @@ class ImplicitOptimizer(CatalogOptimizer):
     law_noise_ratios_ : ndarray, shape (n_laws,)
         Noise-ratio mode: each law's noise ratio on all the rows (about 1 when it holds to
         the noise).
+    undetermined_ : ndarray, shape (k, F)
+        Noise-ratio mode: other laws (different terms, normalized as ``coef_``) that the
+        data hold as well as the first law (``selection_.rivals``); empty when the data
+        decide. A :class:`~pysindy_xl.optimizers.UndeterminedLawWarning` names their terms.
+    law_holds_ : bool
+        Noise-ratio mode: whether the first law is admissible (explains every coordinate,
+        definite mass matrix) and holds to the noise; a
+        :class:`~pysindy_xl.optimizers.UndeterminedLawWarning` says so when it does not.
 
     Examples
     --------
@@ -367,7 +375,47 @@ class ImplicitOptimizer(CatalogOptimizer):
             np.linalg.norm(theta @ law) / np.linalg.norm(law * norms) for law in laws])
         self.law_groups_ = [np.flatnonzero(law) for law in laws]
         self._set_laws(laws, norms, force_columns, reference_columns)
+        self._report_rivals(theta, moments, selections[0], laws[0], norms,
+                            force_columns, reference_columns)
         return self
+
+    def _report_rivals(self, theta, moments, selection, law, norms, force_columns,
+                       reference_columns):
+        """``undetermined_``: the rival laws of the first law's selection, normalized;
+        ``law_holds_``: whether the first law is admissible and holds to the noise (held-out
+        noise ratio not above 1 by more than two standard errors, or a relative residual at
+        the quadrature level). A warning says what is undetermined or not found."""
+        size = selection.size
+        ratio, spread = selection.cv_ratio[size - 1], selection.cv_spread[size - 1]
+        holds = ratio - 2 * spread <= 1 or ratio <= 2 or selection.cv_relative < 1e-8
+        self.law_holds_ = bool(selection.admissible and holds)
+        if not self.law_holds_:
+            reason = ("its mass matrix is not definite on the states or it leaves a coordinate "
+                      "unexplained" if not selection.admissible else
+                      f"its held-out noise ratio is {ratio:.3g} +- {spread:.2g} (about 1 for a "
+                      "law that holds)")
+            warnings.warn(
+                f"ImplicitOptimizer: no law that holds to the noise was found in the catalog "
+                f"({reason}); the returned law is the best found, not a determined one. Record "
+                "more trajectories, reduce the noise or force a coordinate.",
+                UndeterminedLawWarning, stacklevel=4)
+        pooled = moments.sum(axis=0)
+        found = []
+        for support in selection.rivals:
+            rival = np.zeros(theta.shape[1])
+            rival[support] = noise_ratio_law(triangular_factor(theta[:, support]),
+                                             pooled[np.ix_(support, support)])[1]
+            found.append(normalize_law(rival, norms, force_columns, reference_columns))
+        self.undetermined_ = np.array(found).reshape(len(found), theta.shape[1])
+        if found:
+            differ = sorted({int(j) for rival in found
+                             for j in np.flatnonzero((rival != 0) != (law != 0))})
+            warnings.warn(
+                f"ImplicitOptimizer: the data hold {len(found)} other law(s) with different "
+                "terms as well as the chosen one (held-out noise ratio within its standard "
+                f"error): the terms {differ} (columns of the problem) are undetermined, see "
+                "undetermined_. Record trajectories at more energy levels, reduce the noise "
+                "or force a coordinate.", UndeterminedLawWarning, stacklevel=4)
 
     def _fit(self, theta, n_coordinates, force_columns, reference_columns):
         self._check_params()

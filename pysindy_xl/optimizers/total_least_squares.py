@@ -1,0 +1,164 @@
+r"""Errors-in-variables total least squares on every column of a complete catalog.
+
+Where the catalog has no spurious columns (a kinematic catalog: each Lagrangian column
+multiplies one base parameter, every one of them present in the true law), an unforced law
+needs no selection of terms: it is the direction ``xi`` that the noisy columns
+``Theta = Theta_0 + E`` (noise moments ``S = E[E^T E]``) contradict least,
+
+.. math:: \hat\xi = \arg\min_{\xi \ne 0} \rho(\xi), \qquad
+          \rho(\xi) = \frac{\lVert \Theta \xi \rVert^2}{\xi^T S \xi},
+
+the smallest generalized eigenvector of the pencil ``(Theta^T Theta, S)``
+(:func:`~pysindy_xl.optimizers.noise_ratio.noise_pencil`): the consistent errors-in-variables
+estimate (Fuller, *Measurement Error Models*, 1987, section 4.1), where least squares on a
+pivot column or the smallest singular vector of the raw columns are biased by the noise.
+
+**What the data determine.** The ascending pencil values ``rho_1 <= rho_2 <= ...`` are the
+noise ratios of the principal directions: about 1 for a law that holds to the noise. When
+``rho_k <= undetermined_ratio * max(rho_1, 1)`` for some ``k >= 2``, a second independent
+law holds as well (one energy level, too little excitation): every combination of those
+directions fits, so the combination is undetermined. They are reported in ``undetermined_``
+and a warning says so, rather than one of them being returned as if it were the law.
+
+**Normalization.** A law is defined up to a factor. ``normalization="dominant"`` follows the
+catalog's convention (:func:`~pysindy_xl.optimizers.homogeneous.normalize_law`: a non-zero
+force column ``-1``, otherwise the dominant term ``+1``); ``"inertia"`` scales the law to a
+unit reference inertia, the mean over the sample states of the trace of its mass matrix
+``M(q) = sum_j xi_j M_j(q)`` equal to the number of coordinates,
+
+.. math:: \frac{1}{S} \sum_s \operatorname{tr} M(q_s) = n .
+
+In both, given the columns' mass matrices, the sign is the one of a positive kinetic energy
+(positive mean trace).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from .._validation import check_option
+from ._base import CatalogOptimizer, warn_unexplained
+from ._sparse import column_norms, null_vector, triangular_factor
+from .homogeneous import UndeterminedLawWarning, normalize_law
+from .noise_ratio import noise_pencil
+
+__all__ = ["TotalLeastSquaresOptimizer"]
+
+_NORMALIZATIONS = ("dominant", "inertia")
+
+
+class TotalLeastSquaresOptimizer(CatalogOptimizer):
+    r"""Unforced law of a complete catalog by errors-in-variables total least squares.
+
+    Every non-zero column is kept (no selection): the law minimizes the noise ratio
+    ``||Theta xi||^2 / xi^T S xi`` over all directions (module documentation). Without noise
+    moments, the smallest right singular vector of the unit-norm columns.
+
+    Parameters
+    ----------
+    undetermined_ratio : float, default 3.0
+        Further principal directions whose noise ratio is within this factor of
+        ``max(rho_1, 1)`` hold to the noise as well and are reported as undetermined.
+    normalization : {"dominant", "inertia"}, default "dominant"
+        Scale of the law (module documentation).
+
+    Attributes
+    ----------
+    coef_ : ndarray, shape (F,)
+    noise_ratio_ : float
+        The law's noise ratio on all rows (about 1 when it holds to the noise); nan without
+        noise moments.
+    pencil_ratios_ : ndarray
+        Noise ratios of the principal directions, ascending (relative squared residuals of
+        the unit-norm columns without noise moments).
+    undetermined_ : ndarray, shape (k, F)
+        Further laws the data hold as well (normalized as ``coef_``); empty when the law is
+        determined.
+    column_norms_ : ndarray, shape (F,)
+    selection_method_ : str
+        ``"total least squares"``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> a, b = rng.normal(size=(2, 2000))
+    >>> clean = np.column_stack([a, b, a - 2 * b])
+    >>> theta = clean + 0.05 * rng.normal(size=clean.shape)
+    >>> opt = TotalLeastSquaresOptimizer().fit_catalog(theta, 1, [],
+    ...                                                noise_moments=5.0 * np.eye(3)[None])
+    >>> (opt.coef_ / opt.coef_[0]).round(1) + 0.0, len(opt.undetermined_)
+    (array([ 1., -2., -1.]), 0)
+    """
+
+    uses_mass_matrices = True
+    derivative_estimate = "unbiased"
+    spec_type = "TotalLeastSquaresOptimizer"
+
+    def __init__(self, undetermined_ratio=3.0, normalization="dominant"):
+        self.undetermined_ratio = undetermined_ratio
+        self.normalization = normalization
+
+    def _check_params(self):
+        check_option("undetermined_ratio", self.undetermined_ratio, "real", low=1)
+        check_option("normalization", self.normalization, "choice", choices=_NORMALIZATIONS)
+
+    def _solve(self, problem):
+        return self._solve_support(problem, np.ones(problem.n_features, dtype=bool))
+
+    def _solve_support(self, problem, support):
+        """The law on the columns of ``support`` (all of them by :meth:`_solve`)."""
+        theta, n = problem.theta, problem.n_coordinates
+        norms, nonzero = column_norms(theta)
+        columns = np.flatnonzero(np.asarray(support, dtype=bool) & nonzero)
+        if columns.size < 2:
+            raise ValueError(f"theta: {columns.size} non-zero column(s) in the support; a law "
+                             "needs at least two")
+        scaled = theta[:, columns] / norms[columns]
+        factor = triangular_factor(scaled)
+        moments = problem.pooled_moments()
+        if moments is None:
+            singular = np.linalg.svd(factor, compute_uv=False)
+            singular = np.concatenate([singular, np.zeros(columns.size - singular.size)])
+            ratios = (singular[::-1] / max(singular[0], 1e-300)) ** 2
+            directions = null_vector(scaled)[0][:, None]
+            self.noise_ratio_ = np.nan
+            undetermined = np.zeros(0, dtype=int)
+        else:
+            local = moments[np.ix_(columns, columns)] / np.outer(norms[columns], norms[columns])
+            ratios, directions = noise_pencil(factor, local)
+            self.noise_ratio_ = float(ratios[0])
+            limit = self.undetermined_ratio * max(float(ratios[0]), 1.0)
+            undetermined = np.flatnonzero(ratios[1:] <= limit) + 1
+        laws = np.zeros((1 + undetermined.size, theta.shape[1]))
+        laws[:, columns] = directions[:, np.concatenate([[0], undetermined])].T / norms[columns]
+        laws = np.array([self._normalize(law, norms, problem) for law in laws])
+        self.column_norms_ = norms
+        self.pencil_ratios_ = np.asarray(ratios)
+        self.coef_ = laws[0]
+        self.undetermined_ = laws[1:]
+        self.selection_method_ = "total least squares"
+        if len(self.undetermined_):
+            warnings.warn(
+                f"TotalLeastSquaresOptimizer: the data hold {len(self.undetermined_)} further "
+                "independent law(s) to the noise (noise ratios "
+                f"{np.round(ratios[undetermined], 2).tolist()} against {ratios[0]:.3g}): the "
+                "combination is undetermined, see undetermined_. Record trajectories at "
+                "several energy levels, or force a coordinate.",
+                UndeterminedLawWarning, stacklevel=4)
+        warn_unexplained("TotalLeastSquaresOptimizer", theta, n, self.coef_,
+                         problem.force_columns)
+        return self
+
+    def _normalize(self, law, norms, problem):
+        """Scale of the module documentation; sign of a positive kinetic energy."""
+        law = normalize_law(law, norms, problem.force_columns, problem.reference_columns)
+        if problem.mass_matrices is None:
+            return law
+        trace = float(np.mean(np.einsum("sfii,f->s", problem.mass_matrices, law)))
+        forced = np.any(law[problem.force_columns] != 0) if len(problem.force_columns) else False
+        if self.normalization == "inertia" and trace != 0 and not forced:
+            return law * (problem.n_coordinates / trace)
+        return -law if trace < 0 and not forced else law
