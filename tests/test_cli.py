@@ -123,7 +123,7 @@ def test_identify_user_npz_without_metadata(tmp_path, capsys):
 @pytest.mark.parametrize(
     "argv, message",
     [
-        (["demo", "triple-pendulum"], "unknown system"),
+        (["demo", "quadruple-pendulum"], "unknown system"),
         (["demo", "cart-pole", "--forcing", "implicit", "--solver", "explicit"],
          "--solver explicit needs forces"),
         (["demo", "cart-pole", "--forcing", "mixed", "--actuators", "elbow", "--solver",

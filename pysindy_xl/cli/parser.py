@@ -118,7 +118,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "the equations and metrics, and write plots and a JSON report.",
     )
     demo.add_argument("system", metavar="SYSTEM",
-                      help="cart-pole, double-pendulum, cart-double-pendulum, or an MJCF .xml")
+                      help="cart-pole, double-pendulum, cart-double-pendulum, triple-pendulum, "
+                           "or an MJCF .xml")
     _add_generation_options(demo)
     _add_fit_options(demo)
     demo.add_argument("--constraints", choices=CONSTRAINTS, default="exclude",
