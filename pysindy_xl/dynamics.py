@@ -24,6 +24,7 @@ from ._simulation_inputs import feedback_function, force_function
 from ._validation import check_numeric_array, check_option, check_times
 from .feature_library import stack_variables
 from .feature_library._compile import Terms, compile_terms, decompose, scalar_function
+from .physical.rigid_body import rigid_body_dynamics
 from .symbols import Coordinates
 
 __all__ = [
@@ -171,19 +172,32 @@ class MassMatrixDynamics:
 
     def _compile(self):
         self._evaluate = compile_terms(self.coords.variables, self._terms)
+        self._vectorized_at_one_state = sum(
+            len(entry) for entry in self._terms.entries) > _SCALAR_TERMS
+
+    #: Parts of ``M`` and ``f`` evaluated by the rigid-body kernel, ``(tree, pi)`` pairs (see
+    #: :class:`CatalogDynamics`); none here.
+    rigid_parts: tuple = ()
 
     @property
     def terms(self) -> Terms:
         """``M`` (n * n entries, row-major) then ``f`` (n entries) as polynomials in atoms
-        (:class:`~pysindy_xl.feature_library._compile.Terms`): what every evaluator reads."""
+        (:class:`~pysindy_xl.feature_library._compile.Terms`)."""
+        return self._terms
+
+    @property
+    def numeric_terms(self) -> Terms:
+        """The part of :attr:`terms` that numeric evaluators read as polynomials; they add
+        :attr:`rigid_parts` with :func:`~pysindy_xl.physical.rigid_body.rigid_body_dynamics`."""
         return self._terms
 
     @property
     def n_terms(self) -> int:
-        """Monomials of ``M`` and ``f`` together: how long the written equations are."""
+        """Monomials of ``M`` and ``f`` together (of :attr:`terms`): how long the written
+        equations are."""
         count = self.__dict__.get("_n_terms")
         if count is None:
-            count = self._n_terms = sum(len(entry) for entry in self._terms.entries)
+            count = self._n_terms = sum(len(entry) for entry in self.terms.entries)
         return count
 
     def _evaluate_scalar(self, *values):
@@ -192,7 +206,7 @@ class MassMatrixDynamics:
         terms; past :data:`_SCALAR_TERMS` (a robot arm's tens of thousands), the per-term
         Python work dominates and the vectorized kernel on one row is faster. Generated on
         first use (large models pay the code generation only when they simulate)."""
-        if self.n_terms > _SCALAR_TERMS:
+        if self._vectorized_at_one_state:
             return [float(v[0]) for v in self._evaluate(np.array([values], dtype=float))]
         function = self.__dict__.get("_scalar_function")
         if function is None:
@@ -466,9 +480,14 @@ class CatalogDynamics(MassMatrixDynamics):
     .. math:: M_{ck} = \sum_j \xi_j \frac{\partial E_{cj}}{\partial \ddot q_k}, \qquad
               f_c = -\sum_j \xi_j E_{cj}\big|_{\ddot q = 0}.
 
-    Nothing is expanded or lambdified as a whole, so the equations of a seven-joint arm cost
-    what their monomials cost. The symbolic forms (``equations``, ``mass_matrix_expr``,
-    ``forcing_expr``) are built on first use, from the same monomials.
+    Nothing is expanded or lambdified as a whole. Lagrange libraries that carry a kinematic
+    tree (kinematic catalogs, :class:`~pysindy_xl.PolynomialLagrangeLibrary` with ``tree``)
+    are evaluated by the rigid-body kernel instead (:mod:`pysindy_xl.physical.rigid_body`):
+    their coefficients become physical parameters ``pi`` with the same Euler-Lagrange
+    equations, and a seven-joint arm costs what its bodies cost, not what the tens of
+    thousands of monomials of its columns would. The symbolic forms (``equations``,
+    ``mass_matrix_expr``, ``forcing_expr``, ``terms``) are built on first use from the
+    monomials of every column.
 
     Parameters
     ----------
@@ -480,6 +499,12 @@ class CatalogDynamics(MassMatrixDynamics):
         Coordinates held by the model (coordinates that stood still in the data, see
         :mod:`pysindy_xl.still`): their equation is replaced by ``qdd_c = 0`` (a unit row of
         ``M``, zero ``f``), whatever the catalog's entries in it.
+
+    Attributes
+    ----------
+    rigid_parts : list of (KinematicTree, ndarray)
+        The kinematic trees evaluated by the rigid-body kernel, with their physical
+        parameters ``pi``.
 
     Examples
     --------
@@ -495,22 +520,59 @@ class CatalogDynamics(MassMatrixDynamics):
 
     def __init__(self, library, coef, held=None):
         coef = np.asarray(coef, dtype=float)
-        index = library.entry_index_
         self.coords = library.coords
         self._n = self.coords.n
         held = np.zeros(self._n, dtype=bool) if held is None else np.asarray(held, dtype=bool)
         if held.shape != (self._n,):
             raise ValueError(f"held: expected {self._n} flags, got shape {held.shape}")
-        active = np.flatnonzero((coef[index[:, 1]] != 0) & ~held[index[:, 0]])
-        terms = library.column_terms()
-        if _acceleration_in_a_factor(terms, self.coords):  # expanded, then split
-            terms = decompose([sp.expand(library.symbolic_matrix_[c, j])
-                               for c, j in index[active]])
-        else:
-            terms = Terms(terms.atoms, [terms.entries[k] for k in active])
-        self._terms = _mass_and_forcing_terms(self.coords, terms, index[active, 0],
-                                              coef[index[active, 1]], held)
+        self._held = held
+        self.rigid_parts, rigid_features = _rigid_body_parts(library, coef)
+        self._terms = _catalog_terms(library, coef, held, ~rigid_features)
+        if self.rigid_parts:  # their monomials are written out only for the symbolic forms
+            self._symbolic_source = (library, coef)
         self._compile()
+
+    def _rigid_body(self, z):
+        """``M`` and ``f`` contributions of :attr:`rigid_parts` at the rows of ``z``, zero in
+        the equations of held coordinates."""
+        n = self._n
+        q, qd = z[:, :n], z[:, n:2 * n]
+        mass, bias = 0.0, 0.0
+        for tree, pi in self.rigid_parts:
+            part_mass, part_bias = rigid_body_dynamics(tree, pi, q, qd)
+            mass, bias = mass + part_mass, bias + part_bias
+        moving = ~self._held
+        return mass * moving[:, None], -bias * moving
+
+    def mass_and_forcing(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        mass, force = super().mass_and_forcing(z)
+        if self.rigid_parts:
+            rigid_mass, rigid_force = self._rigid_body(np.asarray(z, dtype=float))
+            mass, force = mass + rigid_mass, force + rigid_force
+        return mass, force
+
+    mass_and_forcing.__doc__ = MassMatrixDynamics.mass_and_forcing.__doc__
+
+    def _evaluate_scalar(self, *values):
+        entries = super()._evaluate_scalar(*values)
+        if not self.rigid_parts:
+            return entries
+        mass, force = self._rigid_body(np.array([values], dtype=float))
+        return (np.asarray(entries, dtype=float)
+                + np.concatenate([mass.reshape(-1), force.reshape(-1)])).tolist()
+
+    @property
+    def terms(self) -> Terms:
+        """``M`` and ``f`` as polynomials in atoms, the rigid-body parts written out (built on
+        first use: an arm's tens of thousands of monomials); the numeric evaluators read the
+        rigid parts through their kernel instead."""
+        if not self.rigid_parts:
+            return self._terms
+        full = self.__dict__.get("_full_terms")
+        if full is None:
+            library, coef = self._symbolic_source
+            full = self._full_terms = _catalog_terms(library, coef, self._held)
+        return full
 
     @property
     def mass_matrix_expr(self) -> sp.Matrix:
@@ -529,9 +591,45 @@ class CatalogDynamics(MassMatrixDynamics):
         return list(self.mass_matrix_expr * sp.Matrix(self.coords.qdd) - self.forcing_expr)
 
     def _symbolic_entries(self) -> list:
-        atoms = self._terms.atoms
+        terms = self.terms
+        atoms = terms.atoms
         return [sp.Add(*(sp.Float(coef) * sp.Mul(*(atoms[i] ** p for i, p in key))
-                         for coef, key in entry)) for entry in self._terms.entries]
+                         for coef, key in entry)) for entry in terms.entries]
+
+
+def _rigid_body_parts(library, coef) -> tuple[list, np.ndarray]:
+    """The Lagrange libraries of ``library`` that carry a kinematic tree, as ``(tree, pi)``
+    pairs (physical parameters reproducing their coefficients), and a mask of their
+    features, which the rigid-body kernel evaluates instead of their monomials."""
+    parts = getattr(library, "libraries_", [library])
+    slices = getattr(library, "slices_", [slice(0, len(coef))])
+    mask = np.zeros(len(coef), dtype=bool)
+    rigid = []
+    for part, columns in zip(parts, slices, strict=True):
+        pi = part.rigid_body_parameters(coef[columns]) if hasattr(
+            part, "rigid_body_parameters") else None
+        if pi is not None:
+            rigid.append((part.tree, pi))
+            mask[columns] = True
+    return rigid, mask
+
+
+def _catalog_terms(library, coef, held, features=None) -> Terms:
+    """:class:`Terms` of ``M`` and ``f`` from the catalog's column entries with a non-zero
+    coefficient (of the ``features`` mask only, when given), held coordinates' rows excepted."""
+    index = library.entry_index_
+    keep = (coef[index[:, 1]] != 0) & ~held[index[:, 0]]
+    if features is not None:
+        keep &= features[index[:, 1]]
+    active = np.flatnonzero(keep)
+    terms = library.column_terms()
+    if _acceleration_in_a_factor(terms, library.coords):  # expanded, then split
+        terms = decompose([sp.expand(library.symbolic_matrix_[c, j])
+                           for c, j in index[active]])
+    else:
+        terms = Terms(terms.atoms, [terms.entries[k] for k in active])
+    return _mass_and_forcing_terms(library.coords, terms, index[active, 0],
+                                   coef[index[active, 1]], held)
 
 
 def _acceleration_in_a_factor(terms: Terms, coords) -> bool:

@@ -22,6 +22,7 @@ Conventions
 
 from __future__ import annotations
 
+import inspect
 import weakref
 from functools import partial
 from typing import NamedTuple
@@ -30,6 +31,7 @@ import numpy as np
 import sympy as sp
 
 from .._optional import import_optional
+from ..physical.rigid_body import rigid_body_dynamics
 from ..symbols import Coordinates
 from ._jax_steps import STEPS, euler_step, rk4_step, semi_implicit_euler_step
 from ._jax_trig import fast_cos, fast_sin
@@ -186,6 +188,8 @@ def _componentwise_function(evaluate, n: int, solve):
     return componentwise
 
 
+_MISSING = object()
+
 # Compiled functions per dynamics object: the simulators' jit cache is keyed by the function,
 # so handing out the same function for the same model avoids recompiling on every call.
 _CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -244,7 +248,8 @@ def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True)
     Array([ 0.5, -2. ], dtype=float32)
     """
     for attribute in ("coords", "mass_matrix_expr", "forcing_expr"):
-        if not hasattr(dynamics, attribute):
+        # statically: reading the expressions builds them (minutes for a robot arm's)
+        if inspect.getattr_static(dynamics, attribute, _MISSING) is _MISSING:
             raise TypeError(
                 f"dynamics: expected a MassMatrixDynamics-like object with attribute "
                 f"{attribute!r}, got {type(dynamics).__name__}"
@@ -270,8 +275,9 @@ def _compile(dynamics, solver: str, fast_trig: bool):
     n = coords.n
     arguments = list(coords.q) + list(coords.qd) + list(coords.tau) + [coords.t]
     modules = [{"sin": fast_sin, "cos": fast_cos}, "jax"] if fast_trig else ["jax"]
-    terms = getattr(dynamics, "terms", None)
-    if terms is not None and (solver != "auto" or n > _UNROLLED_MAX_N):
+    terms = getattr(dynamics, "numeric_terms", None) or getattr(dynamics, "terms", None)
+    rigid_parts = tuple(getattr(dynamics, "rigid_parts", ()))
+    if terms is not None and (solver != "auto" or n > _UNROLLED_MAX_N or rigid_parts):
         # polynomial terms: any size, nothing symbolic built, nothing lambdified whole
         evaluate = _terms_function(terms, arguments, modules)
         solver = "lu" if solver == "auto" else solver
@@ -288,6 +294,8 @@ def _compile(dynamics, solver: str, fast_trig: bool):
                     # one lambdify over every entry shares the common subexpressions
                     else sp.lambdify(arguments, list(mass) + list(forcing), modules=modules,
                                      cse=True))
+    if rigid_parts:
+        evaluate = _with_rigid_bodies(evaluate, rigid_parts, dynamics, n)
     componentwise = _componentwise_function(evaluate, n, _SOLVERS[solver])
 
     def dynamics_fn(state, u, t=0.0):
@@ -376,6 +384,32 @@ def _terms_function(terms, arguments, modules):
         return [entries[..., k] for k in range(n_entries)]
 
     return evaluate
+
+
+def _with_rigid_bodies(evaluate, rigid_parts, dynamics, n: int):
+    """``evaluate`` plus the rigid-body kernel's ``M`` and ``-bias`` (see
+    :class:`~pysindy_xl.dynamics.CatalogDynamics`), zero in the rows of held coordinates."""
+    moving = ~np.asarray(getattr(dynamics, "_held", np.zeros(n, dtype=bool)))
+    parts = [(tree, np.asarray(pi, dtype=float)) for tree, pi in rigid_parts]
+
+    def evaluate_all(*values):
+        entries = evaluate(*values)
+        batch = jnp.broadcast_shapes(*(jnp.shape(v) for v in values))
+        dtype = jnp.result_type(*values, 0.0)
+        q = jnp.reshape(jnp.stack([jnp.broadcast_to(v, batch) for v in values[:n]], -1),
+                        (-1, n)).astype(dtype)
+        qd = jnp.reshape(jnp.stack([jnp.broadcast_to(v, batch) for v in values[n:2 * n]],
+                                   -1), (-1, n)).astype(dtype)
+        mass, bias = 0.0, 0.0
+        for tree, pi in parts:
+            part_mass, part_bias = rigid_body_dynamics(tree, pi.astype(dtype), q, qd, xp=jnp)
+            mass, bias = mass + part_mass, bias + part_bias
+        mass = jnp.reshape(mass * moving[:, None], batch + (n * n,))
+        force = jnp.reshape(-bias * moving, batch + (n,))
+        rigid = [mass[..., k] for k in range(n * n)] + [force[..., k] for k in range(n)]
+        return [e + r for e, r in zip(entries, rigid, strict=True)]
+
+    return evaluate_all
 
 
 # --------------------------------------------------------------------------------------

@@ -13,6 +13,7 @@ import numpy as np
 import sympy as sp
 
 from ..expressions import format_expression
+from ..physical.rigid_body import KinematicTree, physical_parameters_from_base
 from ..symbols import as_expr_list
 from ._compile import Terms
 from .lagrange import LagrangeLibrary
@@ -38,6 +39,11 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         One per term: the physical parameters it stands for, ``{name: weight}`` (a kinematic
         catalog's base parameters, e.g. ``{"link1.m": 1.0, "joint1.armature": 1.0}``); read
         by :meth:`XLSINDy.physical_parameters <pysindy_xl.XLSINDy.physical_parameters>`.
+    tree : KinematicTree, optional
+        The mechanism the terms come from (with ``parameters``, whose names it knows). Models
+        then evaluate the Lagrangian part of their equations with the rigid-body kernel of
+        :mod:`pysindy_xl.physical.rigid_body`, whose cost grows with the number of bodies
+        rather than with the monomials of the expanded columns; the columns stay the same.
 
     Examples
     --------
@@ -53,9 +59,38 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
 
     spec_type = "PolynomialLagrangeLibrary"
 
-    def __init__(self, coords, terms, parameters=None):
+    def __init__(self, coords, terms, parameters=None, tree=None):
         super().__init__(coords, terms)
         self.parameters = parameters
+        self.tree = tree
+
+    def rigid_body_parameters(self, coefficients):
+        """Physical parameters ``pi`` of :attr:`tree` whose Lagrangian is
+        ``sum_j coefficients[j] * terms[j]`` (the least-norm solution, see
+        :func:`~pysindy_xl.physical.rigid_body.physical_parameters_from_base`), or ``None``
+        without a tree.
+
+        Parameters
+        ----------
+        coefficients : array, shape (len(terms),)
+
+        Returns
+        -------
+        ndarray or None
+        """
+        if self.tree is None:
+            return None
+        self._check_tree()
+        return physical_parameters_from_base(self.tree, self.parameters, coefficients)
+
+    def _check_tree(self):
+        if not isinstance(self.tree, KinematicTree):
+            raise TypeError(f"tree: expected a KinematicTree, got {type(self.tree).__name__}")
+        if self.parameters is None:
+            raise ValueError("tree: needs parameters (the physical combination of each term)")
+        if len(self.tree.joint_names) != self.coords.n:
+            raise ValueError(f"tree: has {len(self.tree.joint_names)} joints for "
+                             f"{self.coords.n} coordinates")
 
     @property
     def complete_catalog(self) -> bool:
@@ -66,6 +101,8 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
 
     def _build_symbolic(self):
         terms = as_expr_list(self.terms, "terms")
+        if self.tree is not None:
+            self._check_tree()
         self.__dict__.pop("_polynomial_columns", None)
         if not terms:
             return super()._build_symbolic()  # raises the ValueError of LagrangeLibrary
@@ -171,6 +208,8 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         if self.parameters is not None:
             spec["parameters"] = [{str(k): float(v) for k, v in p.items()}
                                   for p in self.parameters]
+        if self.tree is not None:
+            spec["tree"] = self.tree.to_dict()
         return spec
 
     @classmethod
@@ -201,7 +240,21 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
                 isinstance(k, str) and isinstance(v, (int, float)) and not isinstance(v, bool)
                 and np.isfinite(v) for k, v in p.items()) for p in parameters)),
             f"{cls.spec_type}.parameters must be one object of finite weights per term")
-        return cls(coords, terms, parameters)
+        tree = spec.get("tree")
+        if tree is not None:
+            reader.expect(parameters is not None, f"{cls.spec_type}.tree needs parameters")
+            reader.expect(isinstance(tree, dict) and len(tree.get("body_names", ())) <= 1000,
+                          f"{cls.spec_type}.tree must be an object of at most 1000 bodies")
+            try:
+                tree = KinematicTree.from_dict(tree)
+            except (TypeError, ValueError) as err:
+                reader.expect(False, f"{cls.spec_type}.tree: {err}")
+            reader.expect(len(tree.joint_names) == coords.n,
+                          f"{cls.spec_type}.tree must have one joint per coordinate")
+            known = set(tree.physical_names)
+            reader.expect(all(name in known for p in parameters for name in p),
+                          f"{cls.spec_type}.parameters must name parameters of the tree")
+        return cls(coords, terms, parameters, tree)
 
 
 @dataclasses.dataclass

@@ -16,10 +16,11 @@ import mujoco
 import numpy as np
 
 from ..feature_library.trigpoly import TrigPolynomial
+from ..physical.rigid_body import KinematicTree
 from ..physical.structure import INERTIAL_PARAMETERS
 from .systems import MuJoCoSystem
 
-__all__ = ["INERTIAL_PARAMETERS", "body_functions", "physical_values"]
+__all__ = ["INERTIAL_PARAMETERS", "body_functions", "kinematic_tree", "physical_values"]
 
 #: Names of the ten inertial parameters of a body, in the order of the catalog's preference.
 
@@ -206,3 +207,27 @@ def physical_values(model, body: int) -> np.ndarray:
     inertia += mass * (centre @ centre * np.eye(3) - np.outer(centre, centre))
     return np.array([mass, *(mass * centre), inertia[0, 0], inertia[1, 1], inertia[2, 2],
                      inertia[0, 1], inertia[0, 2], inertia[1, 2]])
+
+
+def kinematic_tree(system: MuJoCoSystem, model) -> KinematicTree:
+    """The numeric :class:`~pysindy_xl.physical.rigid_body.KinematicTree` of an MJCF model:
+    the same frames as :func:`body_functions`, for the rigid-body kernel."""
+    bodies = range(1, model.nbody)
+    rotations = np.zeros((model.nbody - 1, 9))
+    for b in bodies:
+        mujoco.mju_quat2Mat(rotations[b - 1], np.asarray(model.body_quat[b], dtype=float))
+    return KinematicTree(
+        body_names=tuple(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}"
+                         for b in bodies),
+        parents=np.asarray(model.body_parentid[1:], dtype=int) - 1,
+        offsets=np.asarray(model.body_pos[1:], dtype=float),
+        rotations=rotations.reshape(-1, 3, 3),
+        joint_names=tuple(system.joint_names),
+        joint_bodies=np.asarray(model.jnt_bodyid, dtype=int) - 1,
+        joint_hinge=np.asarray(model.jnt_type) == int(mujoco.mjtJoint.mjJNT_HINGE),
+        joint_axes=np.asarray(model.jnt_axis, dtype=float),
+        joint_anchors=np.asarray(model.jnt_pos, dtype=float),
+        joint_references=np.asarray(model.qpos0[model.jnt_qposadr], dtype=float),
+        joint_to_coordinates=np.asarray(system.joint_to_coordinates, dtype=float),
+        gravity=np.asarray(model.opt.gravity, dtype=float),
+    )

@@ -46,6 +46,7 @@ import numpy as np
 
 from ..feature_library import PolynomialLagrangeLibrary
 from ..feature_library.trigpoly import evaluate_many, state_values
+from ..physical.rigid_body import KinematicTree
 from ..symbols import Coordinates
 from ._kinematic_build import (
     classical_candidates,
@@ -53,7 +54,12 @@ from ._kinematic_build import (
     random_joint_values,
     resolve_system,
 )
-from ._kinematic_tree import INERTIAL_PARAMETERS, body_functions, physical_values
+from ._kinematic_tree import (
+    INERTIAL_PARAMETERS,
+    body_functions,
+    kinematic_tree,
+    physical_values,
+)
 from .systems import MuJoCoSystem
 
 __all__ = ["KinematicCatalog", "PolynomialLagrangeLibrary", "kinematic_catalog",
@@ -102,6 +108,9 @@ class KinematicCatalog:
         Lagrangian functions before the reduction (ten per moving body plus one per joint).
     build_seconds : float
         Time of the symbolic derivation and reduction.
+    tree : KinematicTree
+        The numeric kinematic tree (the rigid-body kernel that models of the catalog
+        simulate with, see :mod:`pysindy_xl.physical.rigid_body`).
 
     Examples
     --------
@@ -126,6 +135,7 @@ class KinematicCatalog:
     classical_values: np.ndarray
     n_candidates: int
     build_seconds: float = 0.0
+    tree: KinematicTree | None = None
     _polynomials: list = dataclasses.field(default_factory=list, repr=False, compare=False)
     _compiled: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
 
@@ -171,7 +181,8 @@ class KinematicCatalog:
 
         libraries = [ExternalForces(self.coords, interlink=interlink),
                      PolynomialLagrangeLibrary(self.coords, list(self.lagrange_terms),
-                                               parameters=[dict(p) for p in self.parameters])]
+                                               parameters=[dict(p) for p in self.parameters],
+                                               tree=self.tree)]
         if classical and self.classical_terms:
             libraries.append(ClassicalLibrary(self.coords, list(self.classical_terms),
                                               mask=self.classical_mask.copy()))
@@ -511,5 +522,6 @@ def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
         parameters=parameters, physical_names=names, combination=combination,
         physical_values=np.array(values), classical_terms=classical_terms,
         classical_mask=mask, classical_kinds=kinds, classical_values=classical_values,
-        n_candidates=len(candidates), _polynomials=[candidates[j] for j in kept],
+        n_candidates=len(candidates), tree=kinematic_tree(system, model),
+        _polynomials=[candidates[j] for j in kept],
     )

@@ -3,10 +3,12 @@
 :mod:`.structure` says what a catalog's coefficients stand for physically (base parameters as
 images of the bodies' inertial parameters, friction coefficients); :mod:`.sdp` states rigid
 bodies' constraints on them as linear matrix inequalities and solves the programs that realize
-base parameters or fit under the constraints (cvxpy). Used by
+base parameters or fit under the constraints (cvxpy); :mod:`.rigid_body` evaluates the
+equations of motion of any parameters on the kinematic tree (mass matrix, bias forces). Used by
 :class:`~pysindy_xl.optimizers.PhysicalOptimizer` and the MJCF export.
 """
 
+from .rigid_body import KinematicTree, physical_parameters_from_base, rigid_body_dynamics
 from .sdp import body_constraints, consistent_least_squares, realize
 from .structure import (
     INERTIAL_PARAMETERS,
@@ -27,4 +29,7 @@ __all__ = [
     "body_constraints",
     "consistent_least_squares",
     "realize",
+    "KinematicTree",
+    "physical_parameters_from_base",
+    "rigid_body_dynamics",
 ]
