@@ -10,7 +10,11 @@ positions only, identified with ``XLSINDy``'s defaults (weak form, bagged select
 * ``validation``: :func:`~pysindy_xl.mujoco.validate_model` over ``--validation`` seconds
   (a fresh MuJoCo run, the MJCF's servos driving the identified model in closed loop);
 * ``step``: one evaluation of the identified dynamics at a state (``state_derivative``, the
-  cost a simulator pays per right-hand side) against one ``mujoco.mj_step`` of the MJCF.
+  cost a simulator pays per right-hand side) against one ``mujoco.mj_step`` of the MJCF;
+* ``jax``: one fixed step (RK4, the MJCF's timestep, float64) of ``XLSINDy.to_jax`` rolled
+  out with :func:`~pysindy_xl.export.jax_dynamics.simulate` (one trajectory) and
+  :func:`~pysindy_xl.export.jax_dynamics.simulate_batch` (per trajectory of 256), compiled
+  beforehand; skipped without JAX.
 
 Each step is timed in a fresh process state except the catalog derivation, which later fits of
 the same arm reuse (it is cached); ``catalog (cached)`` reports that reuse.
@@ -81,6 +85,7 @@ def main():
     mj_model = system.mj_model()
     mj_data = mujoco.MjData(mj_model)
     _, mujoco_s = timed(lambda: [mujoco.mj_step(mj_model, mj_data) for _ in range(10_000)])
+    jax_figures = jax_steps(model, state, timestep)
     figures = {
         "arm": args.arm, "joints": system.n, "samples": n_samples, "noise": args.noise,
         "catalog_s": catalog_s, "catalog_cached_s": cached_s, "fit_s": fit_s,
@@ -88,12 +93,44 @@ def main():
         "validation_drive": result.drive, "validation_valid": bool(result.valid),
         "total_s": catalog_s + fit_s + validation_s,
         "rhs_ms": step_s / repeats * 1e3, "mujoco_step_ms": mujoco_s / 10_000 * 1e3,
+        **jax_figures,
         "machine": {"python": platform.python_version(), "processor": platform.processor(),
                     "cpus": __import__("os").cpu_count()},
     }
     pathlib.Path(args.out).write_text(json.dumps(figures, indent=2) + "\n")
     for key, value in figures.items():
         print(f"{key}: {value:.3g}" if isinstance(value, float) else f"{key}: {value}")
+
+
+def jax_steps(model, state, timestep, n_steps=2000, batch=256) -> dict:
+    """Milliseconds per RK4 step of the identified arm rolled out in JAX (float64)."""
+    try:
+        import jax
+    except ImportError:
+        return {}
+    import numpy as np
+
+    from pysindy_xl.export.jax_dynamics import simulate, simulate_batch
+
+    with jax.enable_x64(True):
+        function = model.to_jax()
+        n = len(state) // 2
+        forces = np.zeros((n_steps + 1, n))
+        states = np.tile(state, (batch, 1))
+        batch_forces = np.zeros((batch, n_steps + 1, n))
+
+        def one():
+            return simulate(function, state, forces, timestep).states.block_until_ready()
+
+        def many():
+            return simulate_batch(function, states, batch_forces,
+                                  timestep).states.block_until_ready()
+
+        one(), many()  # compile
+        _, one_s = timed(one)
+        _, many_s = timed(many)
+    return {"jax_rk4_step_ms": one_s / n_steps * 1e3,
+            "jax_batch_rk4_step_ms": many_s / n_steps / batch * 1e3}
 
 
 if __name__ == "__main__":
