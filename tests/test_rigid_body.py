@@ -165,3 +165,52 @@ def test_jax_kernel_matches_numpy():
     expected = np.array([dynamics.state_derivative(s, u) for s, u in zip(states, forces,
                                                                              strict=True)])
     np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-9)
+
+
+@pytest.fixture(scope="module")
+def saved_arm(tmp_path_factory):
+    """A model of a three-joint arm fitted on noise-free MuJoCo data, and its file."""
+    import pysindy_xl as px
+    from pysindy_xl.mujoco import generate_dataset
+
+    system = MJCFSystem(PLANAR_ARM, force_amplitude=4.0)
+    catalog = kinematic_catalog(system, coulomb=False)
+    data = generate_dataset(system, n_trajectories=1, duration=1.0, seed=0, sample_every=5,
+                            progress=False)
+    model = px.XLSINDy(catalog.library(), optimizer=px.ExplicitOptimizer(threshold=1e-8))
+    model.fit(**data.fit_arguments(forces="tau"))
+    path = tmp_path_factory.mktemp("arm") / "arm.json"
+    model.save(path)
+    return model, path, json.loads(path.read_text())
+
+
+def test_saved_arm_simulates_with_its_tree(saved_arm):
+    import pysindy_xl as px
+
+    model, path, _ = saved_arm
+    loaded = px.XLSINDy.load(path)
+    assert len(loaded.dynamics_.rigid_parts) == 1
+    t = np.linspace(0.0, 0.5, 51)
+    x0 = np.array([0.3, -0.2, 0.1, 0.0, 0.5, 0.0])
+    np.testing.assert_allclose(loaded.simulate(x0, t), model.simulate(x0, t), rtol=0,
+                               atol=1e-10)
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda tree: tree.pop("gravity"), "fields"),
+    (lambda tree: tree.update(joint_axes=[[0.0, 0.0, 2.0]] * 3), "unit"),
+    (lambda tree: tree.update(joint_names=["a", "b"]), "joint"),
+    (lambda tree: tree.update(body_names=["b"] * 2000), "1000 bodies"),
+])
+def test_hostile_trees_are_refused_on_load(saved_arm, tmp_path, change, message):
+    import pysindy_xl as px
+
+    _, _, document = saved_arm
+    document = json.loads(json.dumps(document))
+    lagrange = next(spec for spec in document["feature_library"]["libraries"]
+                    if "tree" in spec)
+    change(lagrange["tree"])
+    path = tmp_path / "hostile.json"
+    path.write_text(json.dumps(document))
+    with pytest.raises(ValueError, match=message):
+        px.XLSINDy.load(path)
