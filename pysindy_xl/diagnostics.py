@@ -158,7 +158,7 @@ def orient_free_laws(coef, symbolic_matrix, force_columns, mass):
     return coef, flipped
 
 
-def mass_matrix_report(mass, eigenvalues, names) -> dict:
+def mass_matrix_report(mass, eigenvalues, names, remedy: str = "") -> dict:
     """Fraction of states with a positive definite mass matrix, its median condition number;
     warns (:class:`IdentificationWarning`) naming coordinates without positive inertia.
 
@@ -172,6 +172,8 @@ def mass_matrix_report(mass, eigenvalues, names) -> dict:
     eigenvalues : ndarray, shape (S, n)
     names : list of str
         Coordinate names.
+    remedy : str, optional
+        What the warning suggests (appended to it).
 
     Returns
     -------
@@ -208,7 +210,8 @@ def mass_matrix_report(mass, eigenvalues, names) -> dict:
             "of the training states"
             + (f"; no positive inertia on {missing}" if missing else "")
             + ": the model is wrong there (noise terms, an unidentifiable coordinate, or a "
-            "catalog that cannot express the dynamics) and will not simulate faithfully",
+            "catalog that cannot express the dynamics) and will not simulate faithfully"
+            + remedy,
             IdentificationWarning, stacklevel=2,
         )
     return {"positive_definite_fraction": float(np.mean(definite)),

@@ -11,6 +11,7 @@ import threadpoolctl
 from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_is_fitted
 
+from ._equations import has_parameter_map
 from ._fitted import DynamicsMixin
 from ._inspection import InspectionMixin
 from ._validation import check_instance, check_option
@@ -473,7 +474,10 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         if flipped:
             self._build_dynamics()
             mass, eig = mass_matrices(self.dynamics_, z)
-        self.mass_matrix_check_ = mass_matrix_report(mass, eig, library.coords.names)
+        remedy = ("; fit with optimizer=px.PhysicalOptimizer(...) for parameters of rigid "
+                  "bodies, whose mass matrix is positive definite"
+                  if has_parameter_map(library) else "")
+        self.mass_matrix_check_ = mass_matrix_report(mass, eig, library.coords.names, remedy)
 
     def _resolve_formulation(self, x_dot, x_ddot) -> str:
         if self.formulation != "auto":  # checked by _check_options
