@@ -151,8 +151,8 @@ def test_noise_ratio_selection_reports_rival_laws():
 @pytest.mark.slow
 def test_product_catalog_flags_an_undetermined_unforced_law():
     """Cart double pendulum, paper catalog, three unforced 10 s runs at 3 % noise, seed 1:
-    the noise-ratio selection returns a wrong law that holds to the noise, and says that the
-    data hold others as well."""
+    the data hold other laws to the noise as well as the chosen one (since the admissible
+    starts the chosen one is the true law; before, a wrong one), and the fit says so."""
     import pathlib
     import sys
 

@@ -6,7 +6,13 @@ noise, larger for a law the data contradict):
 
 1. **Paths.** The backward and forward paths of supports
    (:func:`~pysindy_xl.optimizers.noise_ratio.law_elimination_path`,
-   :func:`~pysindy_xl.optimizers.noise_ratio.law_forward_path`).
+   :func:`~pysindy_xl.optimizers.noise_ratio.law_forward_path`) and, given the columns' mass
+   matrices, the backward path inside each support of the admissible lasso
+   (:func:`~pysindy_xl.optimizers.admissible.admissible_supports`: sparse laws whose mean mass
+   matrix is positive definite). On a product catalog of three or more coordinates the greedy
+   paths over all the columns end in laws of rank-deficient inertia (a momentum balance) or
+   of some coordinates only, none of them admissible; the admissible lasso starts next to the
+   law that defines the motion.
 2. **Swaps.** At high noise a greedy path can lose a true column early, imitated by a
    correlated pair. A third path starts from the best admissible support of the first two
    (step 4) and refines every support by single swaps before the next elimination, and every
@@ -34,6 +40,7 @@ import numpy as np
 
 from ._base import coordinates_touched
 from ._sparse import column_norms, triangular_factor
+from .admissible import admissible_supports
 from .noise_ratio import (
     eliminate_one,
     law_elimination_path,
@@ -285,7 +292,9 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     """Sparsest homogeneous law of noisy columns, by held-out noise ratio.
 
     Candidates are the supports of the backward and forward paths
-    (:func:`law_elimination_path`, :func:`law_forward_path`) and, with ``swaps``, of a path
+    (:func:`law_elimination_path`, :func:`law_forward_path`), given ``mass_matrices`` the
+    backward paths inside the supports of the admissible lasso
+    (:func:`~pysindy_xl.optimizers.admissible.admissible_supports`) and, with ``swaps``, of a path
     refined by single swaps (:func:`refine_law_by_swaps`) at every size, from the best
     admissible path support down, with every path support up to that size refined at its own
     size. The choice is the smallest admissible support within one standard error of the best.
@@ -306,7 +315,8 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     mass_matrices : array, shape (S, F, n_blocks, n_blocks), optional
         Each column's contribution to the mass matrix on sample states
         (:func:`~pysindy_xl.diagnostics.column_mass_matrices`): laws whose mass matrix is not
-        definite there are not candidates (unless no law is definite).
+        definite there are not candidates (unless no law is definite), and the admissible
+        lasso gives further starts (with cvxpy installed).
 
     Returns
     -------
@@ -341,13 +351,13 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     r_factor = triangular_factor(theta)
     order = law_elimination_path(r_factor, total)
     forward = law_forward_path(r_factor, total)
-    candidates = (
-        _scored(theta, moments, [order[:k] for k in range(2, len(order) + 1)], "backward path",
-                n_blocks, n_folds)
-        + _scored(theta, moments, [forward[:k] for k in range(2, len(forward) + 1)],
-                  "forward path", n_blocks, n_folds))
-    if not candidates:
-        raise ValueError("theta: no law can be cross-validated on these rows")
+    # (how, nested supports): each list is cross-validated at once (see _held_out_ratios)
+    paths = [("backward path", [order[:k] for k in range(2, len(order) + 1)]),
+             ("forward path", [forward[:k] for k in range(2, len(forward) + 1)])]
+    if mass_matrices is not None:
+        paths += [("admissible start", supports) for supports in _admissible_starts(
+            r_factor, total, mass_matrices / scale[None, :, None, None],
+            {frozenset(s.tolist()) for _, supports in paths for s in supports})]
     # Admissible laws only, when there are any:
     # - a law that leaves a coordinate out (or enters it with negligible terms) says nothing
     #   about it, and its ratio is measured on the other rows only. Such laws can hold
@@ -357,25 +367,47 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     # - with the columns' mass matrices, a law whose mass matrix is not definite on the
     #   states does not define motion (the unforced cart-pole's momentum balance written as
     #   a Lagrangian is sparse, holds to the friction, and has det M = 0).
-    def admissible(candidate):
-        support = candidate.support
-        law = noise_ratio_law(r_factor[:, support], total[np.ix_(support, support)])[1]
-        if not explained_coordinates(theta[:, support], law, n_blocks).all():
-            return False
-        return mass_matrices is None or definite_mass(mass_matrices[:, support],
-                                                      law / scale[support])
+    verdicts = {}  # admissibility of each support, decided once and only where needed
 
-    def admissible_only(candidates):
-        return [c for c in candidates if admissible(c)] or candidates
+    def admissible_support(support):
+        key = frozenset(support.tolist())
+        if key not in verdicts:
+            law = noise_ratio_law(r_factor[:, support], total[np.ix_(support, support)])[1]
+            verdicts[key] = bool(explained_coordinates(theta[:, support], law, n_blocks).all()
+                                 and (mass_matrices is None or definite_mass(
+                                     mass_matrices[:, support], law / scale[support])))
+        return verdicts[key]
+
+    def admissible(candidate):
+        return admissible_support(candidate.support)
+
+    # the admissibility of a support does not depend on the folds: when some path support is
+    # admissible, only those are cross-validated (the others cannot be chosen)
+    kept = [(how, [s for s in supports if admissible_support(s)]) for how, supports in paths]
+    if not any(supports for _, supports in kept):
+        kept = paths
+    candidates = [c for how, supports in kept
+                  for c in _scored(theta, moments, supports, how, n_blocks, n_folds)]
+    if not candidates and kept is not paths:  # no admissible one can be cross-validated
+        candidates = [c for how, supports in paths
+                      for c in _scored(theta, moments, supports, how, n_blocks, n_folds)]
+    if not candidates:
+        raise ValueError("theta: no law can be cross-validated on these rows")
+
+    def best_admissible(candidates):
+        """The admissible candidate of smallest ratio (the smallest overall if none is)."""
+        ordered = sorted(candidates, key=lambda c: c.ratio)
+        return next((c for c in ordered if admissible(c)), ordered[0])
 
     if swaps:
         # the search starts from the best admissible path law (only admissible laws can be
         # chosen: an inadmissible best, e.g. a law of one coordinate's rows, may be far
         # smaller or larger than any admissible one); the swap-refined path from it, and
         # every path support up to its size refined at its own size; each support scored once
-        best_path = min(admissible_only(candidates), key=lambda c: c.ratio)
-        starts = [c.support for c in candidates if len(c.support) <= len(best_path.support)]
-        seen = {frozenset(c.support.tolist()) for c in candidates}
+        best_path = best_admissible(candidates)
+        starts = [s for _, supports in paths for s in supports
+                  if len(s) <= len(best_path.support)]
+        seen = {frozenset(s.tolist()) for _, supports in paths for s in supports}
         refined, memo = [], {}  # many starts meet on their way: each search is done once
         for support in _refined_path(r_factor, total, best_path.support, memo) + [
                 refine_law_by_swaps(r_factor, total, start, memo=memo) for start in starts]:
@@ -383,24 +415,25 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
                 seen.add(frozenset(support.tolist()))
                 refined.append(support)
         candidates += _scored(theta, moments, refined, "swap-refined", n_blocks, n_folds)
-    candidates = admissible_only(candidates)
-    best = min(candidates, key=lambda c: c.ratio)
+    best = best_admissible(candidates)
+    # only admissible laws compete, unless there is none
+    competes = admissible if admissible(best) else (lambda c: True)
     # one standard error, or the resolution on the relative residual (clean data: the
     # moments are tiny, the ratios large, and extra terms that fit quadrature errors must not
     # win on that alone) in ratio units, by the best support's ratio-to-relative factor
     resolution_in_ratio = resolution * best.ratio / max(best.relative, 1e-300)
     limit = best.ratio + max(best.spread, resolution_in_ratio)
-    chosen = min((c for c in candidates if c.ratio <= limit),
-                 key=lambda c: (len(c.support), c.ratio))
+    within = [c for c in candidates if c.ratio <= limit and competes(c)]
+    chosen = min(within, key=lambda c: (len(c.support), c.ratio))
     support = chosen.support
-    rivals = _rivals(candidates, limit, support)
+    rivals = _rivals(within, limit, support)
     ratio, values = noise_ratio_law(r_factor[:, support], total[np.ix_(support, support)])
     law = np.zeros(theta.shape[1])
     law[support] = values / scale[support]
     law /= np.linalg.norm(law)
     cv_ratio, cv_spread = np.full(len(order), np.inf), np.full(len(order), np.inf)
-    for c in candidates:  # the best of each size
-        if c.ratio < cv_ratio[len(c.support) - 1]:
+    for c in sorted(candidates, key=lambda c: c.ratio):  # the best competing one of each size
+        if not np.isfinite(cv_ratio[len(c.support) - 1]) and competes(c):
             cv_ratio[len(c.support) - 1], cv_spread[len(c.support) - 1] = c.ratio, c.spread
     selection = LawSelection(
         order=np.concatenate([np.sort(support), order[~np.isin(order, support)]]),
@@ -442,6 +475,21 @@ def _scored(theta, moments, supports, how, n_blocks, n_folds) -> list:
     (mean, spread), (relative_mean, _) = fold_summary(ratios), fold_summary(relative)
     return [_Candidate(np.asarray(s), mean[m], spread[m], relative_mean[m], how)
             for m, s in enumerate(supports) if np.isfinite(mean[m])]
+
+
+def _admissible_starts(r_factor, moments, mass_matrices, seen) -> list:
+    """The supports of the admissible lasso (:func:`~pysindy_xl.optimizers.admissible.
+    admissible_supports`: sparse laws with a definite mass matrix), each with the backward
+    path of the noise ratio inside it (one nested list per start), less the supports in
+    ``seen``."""
+    paths = []
+    for start in admissible_supports(r_factor, mass_matrices):
+        inside = start[law_elimination_path(r_factor[:, start], moments[np.ix_(start, start)])]
+        path = [inside[:k] for k in range(2, len(start) + 1)
+                if frozenset(inside[:k].tolist()) not in seen]
+        seen.update(frozenset(support.tolist()) for support in path)
+        paths.append(path)
+    return paths
 
 
 def _refined_path(r_factor, moments, start, memo=None) -> list:
