@@ -207,12 +207,17 @@ def _factored(entries, inner) -> tuple[list, list]:
 
     Returns the distinct ``(outer monomial, entry)`` pairs, ordered by outer monomial, and
     per pair its terms ``(coefficient, inner monomial)``."""
+    inner = inner.tolist()
     grouped: dict = {}
+    splits: dict = {}  # monomial -> (outer part, inner part), shared by its terms
     for k, entry in enumerate(entries):
         for coef, key in entry:
-            outer = tuple(p for p in key if not inner[p[0]])
-            grouped.setdefault((outer, k), []).append(
-                (coef, tuple(p for p in key if inner[p[0]]) if outer else key))
+            split = splits.get(key)
+            if split is None:
+                outer = tuple(p for p in key if not inner[p[0]])
+                split = splits[key] = (outer, tuple(p for p in key if inner[p[0]])
+                                       if outer else key)
+            grouped.setdefault((split[0], k), []).append((coef, split[1]))
     pairs = sorted(grouped, key=lambda pair: (len(pair[0]), pair))
     return pairs, [grouped[pair] for pair in pairs]
 

@@ -110,7 +110,7 @@ def _elimination_order(active_mask, xs, y) -> np.ndarray:
     removed = list(np.flatnonzero(~active_mask))
     while len(active) > xs.shape[0]:
         # more columns than rows: keep the best-conditioned set that the rows can determine
-        pivots = scipy.linalg.qr(xs[:, active], mode="r", pivoting=True)[1]
+        pivots = scipy.linalg.qr(xs[:, active], mode="r", pivoting=True, check_finite=False)[1]
         for j in sorted(pivots[xs.shape[0]:], reverse=True):
             removed.append(active.pop(j))
     while active:
@@ -121,8 +121,9 @@ def _elimination_order(active_mask, xs, y) -> np.ndarray:
             # an (almost) dependent column: drop the one that the others explain best
             drop_local = [int(np.argmin(diag))]
         else:
-            beta = scipy.linalg.solve_triangular(r_sub, qty)
-            inverse = scipy.linalg.solve_triangular(r_sub, np.eye(len(active)))
+            beta = scipy.linalg.solve_triangular(r_sub, qty, check_finite=False)
+            inverse = scipy.linalg.solve_triangular(r_sub, np.eye(len(active)),
+                                                 check_finite=False)
             increase = beta**2 / np.sum(inverse**2, axis=1)
             # far from the interesting sizes, drop several columns per refit
             n_drop = max(1, len(active) // 10) if len(active) > 40 else 1
@@ -203,8 +204,8 @@ def _swap_search(xs, y, usable, support, max_swaps):
             return np.sort(previous)
         rss, previous = new_rss, support.copy()
         try:
-            directions = basis @ scipy.linalg.solve_triangular(r_factor, np.eye(len(support)),
-                                                               trans="T")
+            directions = basis @ scipy.linalg.solve_triangular(
+                r_factor, np.eye(len(support)), trans="T", check_finite=False)
         except (np.linalg.LinAlgError, ValueError):
             break
         directions /= np.linalg.norm(directions, axis=0)
@@ -331,7 +332,8 @@ def _nested_errors(folds, order, n_folds: int) -> np.ndarray:
         # coefficients of all nested models at once, column k holding the model of size
         # k + 1: the leading block of an upper-triangular inverse is the inverse of the
         # leading block, so beta_k = inv(R)[:, :k+1] @ rhs[:k+1] (a cumulative sum)
-        inverse = scipy.linalg.solve_triangular(r_factor[:usable, :usable], np.eye(usable))
+        inverse = scipy.linalg.solve_triangular(r_factor[:usable, :usable], np.eye(usable),
+                                             check_finite=False)
         coefficients = np.zeros((size, usable))
         coefficients[:usable] = np.cumsum(inverse * rhs[:usable], axis=1)
         residual = x_test[:, order] @ coefficients - y_test[:, None]
