@@ -183,7 +183,7 @@ def _forward_order(active_mask, xs, residual) -> np.ndarray:
     return np.array(chosen + rest, dtype=int)
 
 
-def _swap_search(xs, y, usable, support, max_swaps):
+def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
     """Best-improvement 1-swap search on a reduced system (see :func:`refine_by_swaps`).
 
     With ``x_S = Q R``, the direction of column ``j`` orthogonal to the other selected
@@ -191,11 +191,13 @@ def _swap_search(xs, y, usable, support, max_swaps):
     of squares and gives every candidate column ``c`` the remaining component
     ``C_c + u_j (u_j . x_c)`` (``C`` the columns projected off ``span(S)``), so the gains of
     all ``k x F`` exchanges come from two matrix products per swap, not a refit per pair.
+
+    ``rss`` and ``previous``: the residual sum of squares of ``previous``, the support a
+    first exchange (:func:`_first_swaps`) left for ``support``, to go on from.
     """
     support = np.asarray(support, dtype=int)
     norms2 = np.sum(xs**2, axis=0)
     y_norm2 = float(y @ y)
-    rss, previous = None, support
     for _ in range(max_swaps + 1):
         basis, r_factor = np.linalg.qr(xs[:, support])
         residual = y - basis @ (basis.T @ y)
@@ -227,6 +229,68 @@ def _swap_search(xs, y, usable, support, max_swaps):
         support = support.copy()
         support[j] = c
     return np.sort(support)
+
+
+def _first_swaps(xs, y, usable, order, sizes):
+    """The first step of :func:`_swap_search` from every nested support ``order[:k]``, ``k``
+    in ``sizes``, at once: ``{k: (rss, swapped support or None when no exchange improves)}``.
+
+    The supports share the leading columns of one QR factorization ``x[:, order] = Q R``:
+    with ``B = Q^T x`` and ``b = Q^T y`` (``Q`` complete, so that projections off the span
+    are sums over the trailing rows, free of cancellation), the residual of ``order[:k]``
+    is ``b[k:]``, the projected columns are ``B[k:]``, and the directions ``u_j`` of
+    :func:`_swap_search` are the rows of ``inv(R)[:k, :k]`` (the leading block of a
+    triangular inverse is the inverse of the leading block), so the exchange gains of all
+    sizes follow from cumulative sums. Sizes past a zero pivot are left out (the search
+    from them stops at once).
+    """
+    largest = max(sizes, default=0)
+    q_factor, r_factor = np.linalg.qr(xs[:, order[:largest]], mode="complete")
+    diag = np.abs(np.diag(r_factor))
+    if np.any(diag == 0):
+        largest = int(np.argmax(diag == 0))
+        r_factor = r_factor[:largest]
+    if largest == 0:
+        return {}
+    head = r_factor[:largest, :largest]
+    inverse = scipy.linalg.solve_triangular(head, np.eye(largest), check_finite=False)
+    big_b, small_b = q_factor.T @ xs, q_factor.T @ y
+    norms2 = np.sum(xs**2, axis=0)
+    y_norm2 = float(y @ y)
+    # tail sums: what lies off the span of the first k columns
+    remaining_base = np.cumsum((big_b**2)[::-1], axis=0)[::-1]          # (m, F) from row k
+    correlation_base = np.cumsum((big_b * small_b[:, None])[::-1], axis=0)[::-1]
+    rss_tail = np.cumsum((small_b**2)[::-1])[::-1]
+    # along[k - 1][j, c] = inv(R)[j, :k] @ B[:k, c] (rows j < k), as cumulative sums over i
+    along_all = np.cumsum(inverse[:, :, None] * big_b[None, :largest, :], axis=1)
+    removed_all = np.cumsum(inverse * small_b[None, :largest], axis=1)  # (j, k - 1)
+    row_norms = np.sqrt(np.cumsum(inverse**2, axis=1))                  # (j, k - 1)
+    out = {}
+    for k in sizes:
+        if k > largest:
+            continue
+        norm = row_norms[:k, k - 1]
+        along = (along_all[:k, k - 1, :] / norm[:, None]).T               # (F, k)
+        removed = removed_all[:k, k - 1] / norm
+        if k < xs.shape[0]:
+            remaining2 = remaining_base[k][:, None] + along**2
+            correlation = correlation_base[k][:, None] + along * removed
+            rss = float(rss_tail[k])
+        else:
+            remaining2, correlation, rss = along**2, along * removed, 0.0
+        support = np.asarray(order[:k], dtype=int)
+        allowed = usable.copy()
+        allowed[support] = False
+        allowed = allowed[:, None] & (remaining2 > 1e-10 * norms2[:, None])
+        gain = np.where(allowed, correlation**2 / np.where(allowed, remaining2, 1.0), -np.inf)
+        change = removed**2 - gain
+        c, j = np.unravel_index(np.argmin(change), change.shape)
+        swapped = None
+        if change[c, j] < -(1e-9 * rss + 1e-14 * y_norm2):
+            swapped = support.copy()
+            swapped[j] = c
+        out[k] = (rss, swapped)
+    return out
 
 
 def refine_by_swaps(x, y, support, max_swaps: int = 50) -> np.ndarray:
@@ -284,14 +348,36 @@ def _fold_systems(x, y, n_blocks: int, n_folds: int) -> list:
     reduced to their triangular system and ``y`` divided by its RMS (so squared held-out
     errors come out relative to the mean square of ``y``). Folds without test or training
     rows are skipped."""
+    return _systems(x, y, n_blocks, n_folds)[1]
+
+
+def _systems(x, y, n_blocks: int, n_folds: int) -> tuple[tuple, list]:
+    """:func:`_reduced` and :func:`_fold_systems` of the same rows, from one triangular
+    system per fold: the training system of a fold is the triangular system of the other
+    folds' stacked triangular systems (a QR of a few square blocks instead of one of all
+    their rows), and the system of all the rows that of every fold's."""
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
-    x = x / _scaled(x)[1]
-    y = y / np.sqrt(max(float(np.mean(y**2)), 1e-300))
+    active, scale = _scaled(x)
+    xs = x / scale
+    y_rms = np.sqrt(max(float(np.mean(y**2)), 1e-300))
     labels = fold_labels(len(y), n_blocks, n_folds)
-    return [(fold, x[labels == fold], y[labels == fold],
-             *_triangular_system(x[labels != fold], y[labels != fold]))
-            for fold in range(n_folds) if np.any(labels == fold) and np.any(labels != fold)]
+    rows = [labels == fold for fold in range(n_folds)]
+    parts = [np.column_stack(_triangular_system(xs[r], y[r])) if r.any() else None
+             for r in rows]
+
+    def stacked(folds):
+        system = np.vstack([parts[f] for f in folds if parts[f] is not None])
+        return _triangular_system(system[:, :-1], system[:, -1])
+
+    reduced = ((active, *stacked(range(n_folds))) if xs.shape[0] > xs.shape[1] + 1
+               else (active, xs, y))
+    folds = []
+    for fold in range(n_folds):
+        if rows[fold].any() and not rows[fold].all():
+            r_factor, rhs = stacked([f for f in range(n_folds) if f != fold])
+            folds.append((fold, xs[rows[fold]], y[rows[fold]] / y_rms, r_factor, rhs / y_rms))
+    return reduced, folds
 
 
 def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
@@ -467,7 +553,7 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     candidates, seen, paths = [], set(), []
     # shared by both paths, their scoring and the swaps: one reduction of all the rows and
     # one of each fold's training rows
-    reduced, folds = _reduced(x, y), _fold_systems(x, y, n_blocks, n_folds)
+    reduced, folds = _systems(x, y, n_blocks, n_folds)
     for path in ("backward", "forward"):
         order = (_elimination_order if path == "backward" else _forward_order)(*reduced)
         if max_size is not None:
@@ -519,11 +605,20 @@ def _swap_candidates(reduced, folds, paths, seen, limit, n_folds):
     active, xs, y_reduced = reduced
     refined, visited = [], set()  # starts already refined and local optima reached
     for path, order, mean in paths:
-        for k in range(1, min(limit, len(order)) + 1):
+        sizes = [k for k in range(1, min(limit, len(order)) + 1) if np.isfinite(mean[k - 1])]
+        first = _first_swaps(xs, y_reduced, active, order, sizes)
+        for k in sizes:
             start = frozenset(order[:k].tolist())
-            if not np.isfinite(mean[k - 1]) or start in visited:
+            if start in visited:
                 continue
-            support = _swap_search(xs, y_reduced, active, order[:k], max_swaps=50)
+            if k not in first:
+                support = _swap_search(xs, y_reduced, active, order[:k], max_swaps=50)
+            elif first[k][1] is None:  # no exchange improves the start
+                support = np.sort(order[:k])
+            else:
+                rss, swapped = first[k]
+                support = _swap_search(xs, y_reduced, active, swapped, max_swaps=49, rss=rss,
+                                       previous=order[:k])
             key = frozenset(support.tolist())
             visited.update((start, key))
             if key not in seen:
