@@ -426,17 +426,13 @@ class SymbolicLibrary(BaseFeatureLibrary):
         contributions = np.zeros((n_windows, len(index)))
         for start in range(0, n_samples, _WEAK_BLOCK):  # blocks of samples bound the memory
             stop = min(start + _WEAK_BLOCK, n_samples)
-            # samples x entries in C order: the sparse products read them without a copy
-            values = [np.empty((stop - start, len(entries))) for entries in parts]
-            targets = [None] * len(index)
-            for part, entries in enumerate(parts):
-                for k, e in enumerate(entries):
-                    targets[e] = values[part][:, k]
             with np.errstate(all="ignore"):
-                self._weak_evaluate(x[start:stop], targets)
+                values = self._weak_evaluate(x[start:stop], stacked=True)  # entries x samples
             for part, entries in enumerate(parts):
                 if len(entries):
-                    contributions[:, entries] += tests[part][:, start:stop] @ values[part]
+                    # samples x entries in C order, as the sparse product reads them
+                    contributions[:, entries] += tests[part][:, start:stop] @ np.ascontiguousarray(
+                        values[entries].T)
         weak = np.zeros((n, n_windows, n_features))
         np.add.at(weak, (index[:, 1], slice(None), index[:, 2]), contributions.T)
         weak = weak.reshape(n * n_windows, n_features)

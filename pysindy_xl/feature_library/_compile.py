@@ -94,10 +94,11 @@ def compile_entries(variables, exprs):
     Returns
     -------
     callable
-        ``f(Z, targets=None)`` for a data array ``Z`` of shape ``(N, len(variables))``. Without
-        ``targets`` it returns a list of ``len(exprs)`` arrays of shape ``(N,)``; with
-        ``targets`` (one writable array of shape ``(N,)`` per entry, or ``None`` to skip an
-        entry) it writes the entries there and returns ``None``.
+        ``f(Z, targets=None, stacked=False)`` for a data array ``Z`` of shape
+        ``(N, len(variables))``. Without ``targets`` it returns a list of ``len(exprs)``
+        arrays of shape ``(N,)`` (with ``stacked``, one array of shape ``(len(exprs), N)``);
+        with ``targets`` (one writable array of shape ``(N,)`` per entry, or ``None`` to skip
+        an entry) it writes the entries there and returns ``None``.
 
     Examples
     --------
@@ -344,22 +345,23 @@ def _compile_terms(variables: tuple, terms: Terms):
             rows[k] = columns[f] if isinstance(f, int) else f(*columns)
         return rows
 
-    def evaluate_block(z_block):
-        return plan(atom_values(z_block.T, z_block.shape[0]))
-
-    def evaluate(z: np.ndarray, targets=None):
+    def evaluate(z: np.ndarray, targets=None, stacked=False):
         z = np.asarray(z, dtype=float)
         n_samples = z.shape[0]
-        outputs = targets
-        if outputs is None:
-            outputs = list(np.empty((n_entries, n_samples)))
+        atom_rows = atom_values(z.T, n_samples)
+        outputs = np.empty((n_entries, n_samples)) if targets is None else None
         for start in range(0, n_samples, block):
             stop = min(start + block, n_samples)
-            block_values = evaluate_block(z[start:stop])
-            for k, target in enumerate(outputs):
+            values = plan(atom_rows[:, start:stop])
+            if outputs is not None:
+                outputs[:, start:stop] = values
+                continue
+            for k, target in enumerate(targets):
                 if target is not None:
-                    target[start:stop] = block_values[k]
-        return None if targets is not None else outputs
+                    target[start:stop] = values[k]
+        if targets is not None:
+            return None
+        return outputs if stacked else list(outputs)
 
     return evaluate
 
