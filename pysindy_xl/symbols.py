@@ -119,9 +119,20 @@ def as_expr_list(exprs, name: str) -> list[sp.Expr]:
     for e in exprs:
         if not isinstance(e, sp.Basic):
             raise TypeError(f"{name}: expected sympy expressions, got {type(e).__name__}")
+        if e in _CHECKED:  # a clone's terms, checked when the original was fitted
+            continue
         check_real_expression(e, name)
         check_term(e, name)
+        _CHECKED[e] = None
+        while len(_CHECKED) > _CACHED_CHECKS:
+            del _CHECKED[next(iter(_CHECKED))]
     return exprs
+
+
+#: Terms that passed the checks of :func:`as_expr_list` (a check walks the whole expression
+#: tree: seconds for the terms of a spatial arm, whose catalog every fit clones), oldest first.
+_CHECKED: dict = {}
+_CACHED_CHECKS = 4096
 
 
 def _unique(exprs: Iterable[sp.Expr]) -> list[sp.Expr]:

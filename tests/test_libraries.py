@@ -630,3 +630,26 @@ def test_clone_of_fitted_library_is_unfitted_and_refits_identically(name):
     z = np.random.default_rng(0).normal(size=(5, 9))
     assert copy.fit().get_feature_names() == library.get_feature_names()
     np.testing.assert_array_equal(copy.transform(z), library.transform(z))
+
+
+def test_compiled_entries_factored_by_angles_match_lambdify():
+    """Velocity monomials times trigonometric coefficient functions (evaluated factored),
+    entries equal up to a factor (evaluated once), constants and plain polynomials."""
+    from pysindy_xl.feature_library._compile import _angle_atoms, _Plan, decompose
+
+    a, b, v, w, u = sp.symbols("a b v w u")
+    coefficient = 1 + sp.cos(a) ** 2 * sp.sin(b) - 3 * sp.sin(a) * sp.cos(b) ** 3
+    exprs = [sp.expand(v * w * coefficient), sp.expand(2 * v * w * coefficient),
+             sp.expand(v**2 * sp.cos(a) + u * sp.sin(b) ** 4 + sp.tanh(10 * v)),
+             sp.Integer(3), sp.expand(v * w + w**2 * a), sp.Integer(0) * v]
+    terms = decompose(exprs)
+    inner = _angle_atoms(terms.atoms)
+    assert inner.any() and not inner.all()
+    plan = _Plan(terms.entries, inner)
+    assert not plan.direct and plan.coefficients.shape[0] < len(plan.index)  # shared
+    variables = [a, b, v, w, u]
+    z = np.random.default_rng(0).uniform(-2, 2, size=(300, 5))
+    values = px.feature_library.compile_entries(variables, exprs)(z)
+    for expr, value in zip(exprs, values, strict=True):
+        expected = np.broadcast_to(sp.lambdify(variables, expr, "numpy")(*z.T), (300,))
+        np.testing.assert_allclose(value, expected, rtol=1e-12, atol=1e-12)

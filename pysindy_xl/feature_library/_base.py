@@ -40,6 +40,24 @@ LIBRARY_TYPES: dict[str, type] = {}
 
 _WEAK_BLOCK = 8192  # samples per block of the weak evaluation
 
+#: Derived terms by content, most recently used last: a fitted model's clone of a catalog
+#: (every fit clones the user's) derives the same entries again, and with the same
+#: :class:`Terms` object its merged terms and compiled evaluators are found, not rebuilt.
+_DERIVED: dict = {}
+_CACHED_DERIVED = 16
+
+
+def _derived(key, derive):
+    """``derive()``, shared by every call with the same ``key`` (bounded, least recently used
+    dropped first)."""
+    found = _DERIVED.pop(key, None)
+    if found is None:
+        found = derive()
+    _DERIVED[key] = found
+    while len(_DERIVED) > _CACHED_DERIVED:
+        del _DERIVED[next(iter(_DERIVED))]
+    return found
+
 
 def _clone_parameter(value):
     """``value`` for a clone: sympy expressions (alone or in a list or tuple) shared, anything
@@ -232,7 +250,8 @@ class SymbolicLibrary(BaseFeatureLibrary):
         return terms
 
     def _derive_column_terms(self) -> Terms:
-        return decompose([self.symbolic_matrix_[c, j] for c, j in self.entry_index_])
+        entries = tuple(self.symbolic_matrix_[c, j] for c, j in self.entry_index_)
+        return _derived(("column terms", entries), lambda: decompose(entries))
 
     def __getstate__(self):
         # compiled evaluators are closures: rebuilt on first use after unpickling
@@ -351,6 +370,14 @@ class SymbolicLibrary(BaseFeatureLibrary):
         return found
 
     def _derive_weak_terms(self) -> tuple[np.ndarray, Terms]:
+        if type(self)._build_weak_symbolic is not SymbolicLibrary._build_weak_symbolic:
+            return self._split_weak_terms()  # a split of its own, from what it knows
+        # integration by parts of the entries: a function of the entries and coordinates
+        key = ("weak terms", self.coords.variables, self.symbolic_matrix_.shape,
+               tuple(self.symbolic_matrix_))
+        return _derived(key, self._split_weak_terms)
+
+    def _split_weak_terms(self) -> tuple[np.ndarray, Terms]:
         matrices = self.weak_matrices()
         n, n_features = self.coords.n, self.n_output_features_
         entries = [(part, c, j) for part, matrix in enumerate(matrices)
@@ -399,17 +426,13 @@ class SymbolicLibrary(BaseFeatureLibrary):
         contributions = np.zeros((n_windows, len(index)))
         for start in range(0, n_samples, _WEAK_BLOCK):  # blocks of samples bound the memory
             stop = min(start + _WEAK_BLOCK, n_samples)
-            # samples x entries in C order: the sparse products read them without a copy
-            values = [np.empty((stop - start, len(entries))) for entries in parts]
-            targets = [None] * len(index)
-            for part, entries in enumerate(parts):
-                for k, e in enumerate(entries):
-                    targets[e] = values[part][:, k]
             with np.errstate(all="ignore"):
-                self._weak_evaluate(x[start:stop], targets)
+                values = self._weak_evaluate(x[start:stop], stacked=True)  # entries x samples
             for part, entries in enumerate(parts):
                 if len(entries):
-                    contributions[:, entries] += tests[part][:, start:stop] @ values[part]
+                    # samples x entries in C order, as the sparse product reads them
+                    contributions[:, entries] += tests[part][:, start:stop] @ np.ascontiguousarray(
+                        values[entries].T)
         weak = np.zeros((n, n_windows, n_features))
         np.add.at(weak, (index[:, 1], slice(None), index[:, 2]), contributions.T)
         weak = weak.reshape(n * n_windows, n_features)

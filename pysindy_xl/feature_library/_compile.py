@@ -25,7 +25,7 @@ import sympy as sp
 __all__ = ["compile_entries", "Terms", "decompose", "compile_terms", "scalar_function"]
 
 _BLOCK = 16_384
-_BLOCK_VALUES = 1 << 22  # monomial values held at once (32 MiB of floats)
+_BLOCK_VALUES = 1 << 21  # values built at once (16 MiB of floats: blocks stay in the cache)
 
 Monomial = tuple  # sorted tuple of (atom index, integer power)
 
@@ -94,10 +94,11 @@ def compile_entries(variables, exprs):
     Returns
     -------
     callable
-        ``f(Z, targets=None)`` for a data array ``Z`` of shape ``(N, len(variables))``. Without
-        ``targets`` it returns a list of ``len(exprs)`` arrays of shape ``(N,)``; with
-        ``targets`` (one writable array of shape ``(N,)`` per entry, or ``None`` to skip an
-        entry) it writes the entries there and returns ``None``.
+        ``f(Z, targets=None, stacked=False)`` for a data array ``Z`` of shape
+        ``(N, len(variables))``. Without ``targets`` it returns a list of ``len(exprs)``
+        arrays of shape ``(N,)`` (with ``stacked``, one array of shape ``(len(exprs), N)``);
+        with ``targets`` (one writable array of shape ``(N,)`` per entry, or ``None`` to skip
+        an entry) it writes the entries there and returns ``None``.
 
     Examples
     --------
@@ -110,23 +111,27 @@ def compile_entries(variables, exprs):
     return compile_terms(variables, decompose(exprs))
 
 
-def _monomial_schedule(entries) -> tuple[list, np.ndarray, np.ndarray, dict]:
-    """Every monomial of ``entries`` and the sub-monomials that build it, ordered by degree.
+def _monomial_schedule(wanted) -> tuple[list, np.ndarray, np.ndarray, dict]:
+    """The monomials ``wanted`` and the sub-monomials that build them, ordered by degree.
 
     Each monomial of degree ``d > 1`` is its *parent* (one power less of its last atom, degree
     ``d - 1``) times one atom, so a whole degree is one gather and one product.
 
+    Parameters
+    ----------
+    wanted : set of Monomial
+
     Returns
     -------
     monomials : list of Monomial
-        Ordered by degree; the constant monomial (if any) first.
+        Ordered by degree, and by atom within a degree (a run of one atom is one product);
+        the constant monomial (if any) first.
     parents, atoms : ndarray of int, shape (len(monomials),)
         Position of the parent in ``monomials`` (-1 for the constant and the atoms themselves)
         and the atom multiplied in (-1 for the constant).
     position : dict
         Monomial -> its position in ``monomials``.
     """
-    wanted = {key for terms in entries for _, key in terms}
     closure = set()
     for key in wanted:
         while key and key not in closure:
@@ -135,10 +140,8 @@ def _monomial_schedule(entries) -> tuple[list, np.ndarray, np.ndarray, dict]:
             key = key[:-1] + (((index, power - 1),) if power > 1 else ())
     if () in wanted:
         closure.add(())
-    by_degree: dict[int, list] = {}
-    for key in closure:
-        by_degree.setdefault(sum(p for _, p in key), []).append(key)
-    monomials = [key for degree in sorted(by_degree) for key in by_degree[degree]]
+    monomials = sorted(closure, key=lambda key: (sum(p for _, p in key),
+                                                 key[-1][0] if key else -1))
     position = {key: k for k, key in enumerate(monomials)}
     parents = np.full(len(monomials), -1)
     atoms = np.full(len(monomials), -1)
@@ -152,6 +155,147 @@ def _monomial_schedule(entries) -> tuple[list, np.ndarray, np.ndarray, dict]:
     return monomials, parents, atoms, position
 
 
+class _MonomialValues:
+    """Evaluates a set of monomials degree by degree, each as its parent times one atom."""
+
+    def __init__(self, wanted):
+        monomials, parents, atoms, self.position = _monomial_schedule(wanted)
+        self.size = len(monomials)
+        degrees = np.array([sum(p for _, p in key) for key in monomials], dtype=int)
+        self.constant = bool(degrees.size and degrees[0] == 0)
+        first = slice(int(np.searchsorted(degrees, 1)), int(np.searchsorted(degrees, 1, "right")))
+        self.first = (first, atoms[first])
+        # per degree: the gather of the parents, then one in-place product per run of
+        # monomials that share their last atom (no gathered copy of the atom rows)
+        self.levels = []
+        for d in range(2, int(degrees.max(initial=1)) + 1):
+            start, stop = (int(np.searchsorted(degrees, d)),
+                           int(np.searchsorted(degrees, d, "right")))
+            cuts = np.flatnonzero(np.diff(atoms[start:stop])) + 1
+            bounds = np.concatenate([[0], cuts, [stop - start]]) + start
+            runs = [(int(a), int(b), int(atoms[a])) for a, b in zip(bounds[:-1], bounds[1:],
+                                                                     strict=True)]
+            self.levels.append((start, stop, parents[start:stop], runs))
+
+    def __call__(self, atom_rows: np.ndarray) -> np.ndarray:
+        values = np.empty((self.size, atom_rows.shape[1]))
+        if self.constant:
+            values[0] = 1.0
+        first, atoms = self.first
+        values[first] = atom_rows[atoms]
+        for start, stop, parents, runs in self.levels:
+            np.take(values, parents, axis=0, out=values[start:stop])
+            for a, b, atom in runs:
+                values[a:b] *= atom_rows[atom]
+        return values
+
+
+def _angle_atoms(atom_list) -> np.ndarray:
+    """Atoms that are functions of the angles only (the variables found inside a sine or a
+    cosine): the atoms of a mechanical catalog's coefficient functions."""
+    angles = set()
+    for atom in atom_list:
+        for trig in atom.atoms(sp.sin, sp.cos):
+            angles |= trig.free_symbols
+    if not angles:
+        return np.zeros(len(atom_list), dtype=bool)
+    return np.array([bool(a.free_symbols) and a.free_symbols <= angles for a in atom_list],
+                    dtype=bool)
+
+
+def _factored(entries, inner) -> tuple[list, list]:
+    """Every term's monomial split into its ``inner`` atoms and the rest (outer).
+
+    Returns the distinct ``(outer monomial, entry)`` pairs, ordered by outer monomial, and
+    per pair its terms ``(coefficient, inner monomial)``."""
+    inner = inner.tolist()
+    grouped: dict = {}
+    splits: dict = {}  # monomial -> (outer part, inner part), shared by its terms
+    for k, entry in enumerate(entries):
+        for coef, key in entry:
+            split = splits.get(key)
+            if split is None:
+                outer = tuple(p for p in key if not inner[p[0]])
+                split = splits[key] = (outer, tuple(p for p in key if inner[p[0]])
+                                       if outer else key)
+            grouped.setdefault((split[0], k), []).append((coef, split[1]))
+    pairs = sorted(grouped, key=lambda pair: (len(pair[0]), pair))
+    return pairs, [grouped[pair] for pair in pairs]
+
+
+def _distinct_polynomials(polynomials) -> tuple[list, np.ndarray, np.ndarray]:
+    """The distinct polynomials up to a factor (a symmetric mass matrix gives the same
+    coefficient function to ``dL/dqd_i`` through ``qd_j`` and to ``dL/dqd_j`` through
+    ``qd_i``): ``(distinct, index, scale)`` with ``polynomials[m] = scale[m] *
+    distinct[index[m]]``."""
+    found: dict = {}
+    distinct, index, scale = [], [], []
+    for terms in polynomials:
+        terms = sorted(terms, key=lambda term: term[1])
+        first = terms[0][0] if terms and terms[0][0] != 0 else 1.0
+        normal = tuple((coef / first, key) for coef, key in terms)
+        position = found.get(normal)
+        if position is None:
+            position = found[normal] = len(distinct)
+            distinct.append(normal)
+        index.append(position)
+        scale.append(first)
+    return distinct, np.array(index, dtype=int), np.array(scale, dtype=float)
+
+
+class _Plan:
+    """How to evaluate entries: ``entry = sum over outer monomials u of u times a
+    polynomial in the inner atoms``, each distinct polynomial (up to a factor) once.
+
+    Without outer atoms (``inner`` all true or all false) every entry is one polynomial of
+    all the atoms, evaluated as such."""
+
+    def __init__(self, entries, inner):
+        self.n_entries = len(entries)
+        factor = inner.any() and not inner.all()
+        pairs, polynomials = (_factored(entries, inner) if factor
+                              else ([((), k) for k in range(len(entries))], entries))
+        distinct, self.index, scale = _distinct_polynomials(polynomials)
+        self.values = _MonomialValues({key for terms in distinct for _, key in terms})
+        self.coefficients = _coefficients(distinct, self.values.position)
+        outer_keys = [key for key, _ in pairs]
+        self.outer = _MonomialValues(set(outer_keys) - {()})
+        bounds = [0] + [m for m in range(1, len(pairs)) if outer_keys[m] != outer_keys[m - 1]]
+        bounds.append(len(pairs))
+        self.runs = [(a, b, self.outer.position[outer_keys[a]])
+                     for a, b in zip(bounds[:-1], bounds[1:], strict=True) if outer_keys[a]]
+        self.sum = scipy.sparse.csr_matrix(
+            (scale, ([k for _, k in pairs], np.arange(len(pairs)))),
+            shape=(len(entries), len(pairs)))
+        # the polynomials are the entries themselves: no gather, scaling nor sum
+        self.direct = (not self.runs and len(distinct) == len(pairs)
+                       and np.array_equal(self.index, np.arange(len(pairs)))
+                       and np.all(scale == 1.0) and [k for _, k in pairs] == list(
+                           range(len(entries))))
+        self.size = (self.values.size + self.coefficients.shape[0]
+                     + (0 if self.direct else self.outer.size + 2 * len(pairs)))
+
+    def __call__(self, atom_rows: np.ndarray) -> np.ndarray:
+        polynomials = np.asarray(self.coefficients @ self.values(atom_rows))
+        if self.direct:
+            return polynomials
+        pairs = polynomials[self.index]
+        if self.runs:
+            outer = self.outer(atom_rows)
+            for a, b, u in self.runs:
+                pairs[a:b] *= outer[u]
+        return np.asarray(self.sum @ pairs)
+
+
+def _coefficients(entries, position) -> scipy.sparse.csr_matrix:
+    """Sparse matrix of the entries' coefficients over the monomials at ``position``;
+    duplicate (entry, monomial) pairs are summed, as the terms are."""
+    rows = [k for k, e in enumerate(entries) for _ in e]
+    cols = [position[key] for e in entries for _, key in e]
+    coefs = [c for e in entries for c, _ in e]
+    return scipy.sparse.csr_matrix((coefs, (rows, cols)), shape=(len(entries), len(position)))
+
+
 def compile_terms(variables, terms: Terms):
     """The vectorized evaluator of :class:`Terms` (see :func:`compile_entries`).
 
@@ -159,6 +303,12 @@ def compile_terms(variables, terms: Terms):
     parent times atom) and ``C`` the sparse matrix of term coefficients (entries x
     monomials), the entries are ``C @ V``: a handful of array operations per block of samples,
     whatever the number of terms.
+
+    Entries of mechanical catalogs are polynomials in a few velocities (or forces) whose
+    coefficients are long trigonometric polynomials of the angles. When it saves work, the
+    monomials are factored as ``u * v`` with ``v`` a product of atoms of the angles only:
+    ``entry = sum_u u * (C_u @ V)``, so that only the monomials ``v`` of the angles (and the
+    few ``u``) are built, not each of their products.
     """
     variables = tuple(variables)
     key = ("compiled", variables)
@@ -178,51 +328,40 @@ def _compile_terms(variables: tuple, terms: Terms):
         position[a] if a in position else sp.lambdify(variables, a, modules="numpy")
         for a in atom_list
     ]
-    monomials, parents, atoms, where = _monomial_schedule(entries)
-    n_monomials, n_entries = len(monomials), len(entries)
-    degrees = np.array([sum(p for _, p in key) for key in monomials], dtype=int)
-    levels = [(int(np.searchsorted(degrees, d)), int(np.searchsorted(degrees, d, "right")))
-              for d in range(2, int(degrees.max(initial=1)) + 1)]
-    first = slice(int(np.searchsorted(degrees, 1)), int(np.searchsorted(degrees, 1, "right")))
-    rows = [k for k, e in enumerate(entries) for _ in e]
-    cols = [where[key] for e in entries for _, key in e]
-    coefs = [c for e in entries for c, _ in e]
-    # duplicate (entry, monomial) pairs are summed, as the terms are
-    matrix = scipy.sparse.csr_matrix((coefs, (rows, cols)), shape=(n_entries, n_monomials))
-    # blocks of samples keep the monomial values (monomials x block) near _BLOCK_VALUES
-    block = int(np.clip(_BLOCK_VALUES // max(n_monomials, 1), 64, _BLOCK))
+    plan = _Plan(entries, _angle_atoms(atom_list))
+    if not plan.direct:  # factored: kept when it builds fewer values than the flat plan
+        # (at least one value per distinct monomial; built only when that does not decide)
+        flat_size = len({key for entry in entries for _, key in entry}) + len(entries)
+        if plan.size >= flat_size:
+            flat = _Plan(entries, np.zeros(len(atom_list), dtype=bool))
+            plan = plan if plan.size < flat.size else flat
+    n_entries = len(entries)
+    # blocks of samples keep the values built at once (values x block) near _BLOCK_VALUES
+    block = int(np.clip(_BLOCK_VALUES // max(plan.size, 1), 64, _BLOCK))
 
     def atom_values(columns, n_rows):
-        values = np.empty((len(atom_functions), n_rows))
+        rows = np.empty((len(atom_functions), n_rows))
         for k, f in enumerate(atom_functions):
-            values[k] = columns[f] if isinstance(f, int) else f(*columns)
-        return values
+            rows[k] = columns[f] if isinstance(f, int) else f(*columns)
+        return rows
 
-    def evaluate_block(z_block):
-        n_rows = z_block.shape[0]
-        atom_rows = atom_values(z_block.T, n_rows)
-        values = np.empty((n_monomials, n_rows))
-        if degrees.size and degrees[0] == 0:
-            values[0] = 1.0
-        values[first] = atom_rows[atoms[first]]
-        for start, stop in levels:
-            np.take(values, parents[start:stop], axis=0, out=values[start:stop])
-            values[start:stop] *= atom_rows[atoms[start:stop]]
-        return np.asarray(matrix @ values)
-
-    def evaluate(z: np.ndarray, targets=None):
+    def evaluate(z: np.ndarray, targets=None, stacked=False):
         z = np.asarray(z, dtype=float)
         n_samples = z.shape[0]
-        outputs = targets
-        if outputs is None:
-            outputs = list(np.empty((n_entries, n_samples)))
+        atom_rows = atom_values(z.T, n_samples)
+        outputs = np.empty((n_entries, n_samples)) if targets is None else None
         for start in range(0, n_samples, block):
             stop = min(start + block, n_samples)
-            block_values = evaluate_block(z[start:stop])
-            for k, target in enumerate(outputs):
+            values = plan(atom_rows[:, start:stop])
+            if outputs is not None:
+                outputs[:, start:stop] = values
+                continue
+            for k, target in enumerate(targets):
                 if target is not None:
-                    target[start:stop] = block_values[k]
-        return None if targets is not None else outputs
+                    target[start:stop] = values[k]
+        if targets is not None:
+            return None
+        return outputs if stacked else list(outputs)
 
     return evaluate
 

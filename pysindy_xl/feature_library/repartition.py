@@ -42,8 +42,14 @@ def _merge(slices, parts) -> tuple[np.ndarray, Terms]:
         shifted = np.array(index, dtype=int).reshape(len(terms.entries), -1)
         shifted[:, -1] += columns.start
         indices.append(shifted)
-        entries += [[(coef, tuple(sorted((remap[a], p) for a, p in key))) for coef, key in entry]
-                    for entry in terms.entries]
+        if remap == list(range(len(remap))):  # the first library's atoms: entries as they are
+            entries += terms.entries
+        elif all(np.diff(remap) > 0):  # order kept: no sorting
+            entries += [[(coef, tuple((remap[a], p) for a, p in key)) for coef, key in entry]
+                        for entry in terms.entries]
+        else:
+            entries += [[(coef, tuple(sorted((remap[a], p) for a, p in key)))
+                         for coef, key in entry] for entry in terms.entries]
     width = max((i.shape[1] for i in indices), default=2)
     return (np.vstack(indices) if indices else np.zeros((0, width), dtype=int),
             Terms(sorted(atoms, key=atoms.get), entries))

@@ -40,6 +40,8 @@ import dataclasses
 import numpy as np
 import scipy.linalg
 
+from ._swaps import _first_swaps, _swap_search
+
 __all__ = [
     "elimination_path",
     "forward_path",
@@ -110,7 +112,7 @@ def _elimination_order(active_mask, xs, y) -> np.ndarray:
     removed = list(np.flatnonzero(~active_mask))
     while len(active) > xs.shape[0]:
         # more columns than rows: keep the best-conditioned set that the rows can determine
-        pivots = scipy.linalg.qr(xs[:, active], mode="r", pivoting=True)[1]
+        pivots = scipy.linalg.qr(xs[:, active], mode="r", pivoting=True, check_finite=False)[1]
         for j in sorted(pivots[xs.shape[0]:], reverse=True):
             removed.append(active.pop(j))
     while active:
@@ -121,8 +123,9 @@ def _elimination_order(active_mask, xs, y) -> np.ndarray:
             # an (almost) dependent column: drop the one that the others explain best
             drop_local = [int(np.argmin(diag))]
         else:
-            beta = scipy.linalg.solve_triangular(r_sub, qty)
-            inverse = scipy.linalg.solve_triangular(r_sub, np.eye(len(active)))
+            beta = scipy.linalg.solve_triangular(r_sub, qty, check_finite=False)
+            inverse = scipy.linalg.solve_triangular(r_sub, np.eye(len(active)),
+                                                 check_finite=False)
             increase = beta**2 / np.sum(inverse**2, axis=1)
             # far from the interesting sizes, drop several columns per refit
             n_drop = max(1, len(active) // 10) if len(active) > 40 else 1
@@ -182,52 +185,6 @@ def _forward_order(active_mask, xs, residual) -> np.ndarray:
     return np.array(chosen + rest, dtype=int)
 
 
-def _swap_search(xs, y, usable, support, max_swaps):
-    """Best-improvement 1-swap search on a reduced system (see :func:`refine_by_swaps`).
-
-    With ``x_S = Q R``, the direction of column ``j`` orthogonal to the other selected
-    columns is ``u_j ~ Q R^-T e_j``. Dropping ``j`` adds ``(u_j . y)^2`` to the residual sum
-    of squares and gives every candidate column ``c`` the remaining component
-    ``C_c + u_j (u_j . x_c)`` (``C`` the columns projected off ``span(S)``), so the gains of
-    all ``k x F`` exchanges come from two matrix products per swap, not a refit per pair.
-    """
-    support = np.asarray(support, dtype=int)
-    norms2 = np.sum(xs**2, axis=0)
-    y_norm2 = float(y @ y)
-    rss, previous = None, support
-    for _ in range(max_swaps + 1):
-        basis, r_factor = np.linalg.qr(xs[:, support])
-        residual = y - basis @ (basis.T @ y)
-        new_rss = float(residual @ residual)
-        if rss is not None and not new_rss < rss:  # the predicted gain did not materialize
-            return np.sort(previous)
-        rss, previous = new_rss, support.copy()
-        try:
-            directions = basis @ scipy.linalg.solve_triangular(r_factor, np.eye(len(support)),
-                                                               trans="T")
-        except (np.linalg.LinAlgError, ValueError):
-            break
-        directions /= np.linalg.norm(directions, axis=0)
-        along = xs.T @ directions                        # (F, k): u_j . x_c
-        removed = directions.T @ y                       # (k,): u_j . y
-        projected = xs - basis @ (basis.T @ xs)
-        remaining2 = np.sum(projected**2, axis=0)[:, None] + along**2
-        correlation = (projected.T @ residual)[:, None] + along * removed
-        allowed = usable.copy()
-        allowed[support] = False
-        allowed = allowed[:, None] & (remaining2 > 1e-10 * norms2[:, None])
-        gain = np.where(allowed, correlation**2 / np.where(allowed, remaining2, 1.0), -np.inf)
-        # swapping out j for c changes the residual by removed_j^2 - gain[c, j]
-        change = removed**2 - gain
-        c, j = np.unravel_index(np.argmin(change), change.shape)
-        # a strict, scale-aware improvement: rounding must not swap equivalent columns
-        if not change[c, j] < -(1e-9 * rss + 1e-14 * y_norm2):
-            break
-        support = support.copy()
-        support[j] = c
-    return np.sort(support)
-
-
 def refine_by_swaps(x, y, support, max_swaps: int = 50) -> np.ndarray:
     """Local best subset of a fixed size, by single swaps.
 
@@ -283,14 +240,36 @@ def _fold_systems(x, y, n_blocks: int, n_folds: int) -> list:
     reduced to their triangular system and ``y`` divided by its RMS (so squared held-out
     errors come out relative to the mean square of ``y``). Folds without test or training
     rows are skipped."""
+    return _systems(x, y, n_blocks, n_folds)[1]
+
+
+def _systems(x, y, n_blocks: int, n_folds: int) -> tuple[tuple, list]:
+    """:func:`_reduced` and :func:`_fold_systems` of the same rows, from one triangular
+    system per fold: the training system of a fold is the triangular system of the other
+    folds' stacked triangular systems (a QR of a few square blocks instead of one of all
+    their rows), and the system of all the rows that of every fold's."""
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
-    x = x / _scaled(x)[1]
-    y = y / np.sqrt(max(float(np.mean(y**2)), 1e-300))
+    active, scale = _scaled(x)
+    xs = x / scale
+    y_rms = np.sqrt(max(float(np.mean(y**2)), 1e-300))
     labels = fold_labels(len(y), n_blocks, n_folds)
-    return [(fold, x[labels == fold], y[labels == fold],
-             *_triangular_system(x[labels != fold], y[labels != fold]))
-            for fold in range(n_folds) if np.any(labels == fold) and np.any(labels != fold)]
+    rows = [labels == fold for fold in range(n_folds)]
+    parts = [np.column_stack(_triangular_system(xs[r], y[r])) if r.any() else None
+             for r in rows]
+
+    def stacked(folds):
+        system = np.vstack([parts[f] for f in folds if parts[f] is not None])
+        return _triangular_system(system[:, :-1], system[:, -1])
+
+    reduced = ((active, *stacked(range(n_folds))) if xs.shape[0] > xs.shape[1] + 1
+               else (active, xs, y))
+    folds = []
+    for fold in range(n_folds):
+        if rows[fold].any() and not rows[fold].all():
+            r_factor, rhs = stacked([f for f in range(n_folds) if f != fold])
+            folds.append((fold, xs[rows[fold]], y[rows[fold]] / y_rms, r_factor, rhs / y_rms))
+    return reduced, folds
 
 
 def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
@@ -331,7 +310,8 @@ def _nested_errors(folds, order, n_folds: int) -> np.ndarray:
         # coefficients of all nested models at once, column k holding the model of size
         # k + 1: the leading block of an upper-triangular inverse is the inverse of the
         # leading block, so beta_k = inv(R)[:, :k+1] @ rhs[:k+1] (a cumulative sum)
-        inverse = scipy.linalg.solve_triangular(r_factor[:usable, :usable], np.eye(usable))
+        inverse = scipy.linalg.solve_triangular(r_factor[:usable, :usable], np.eye(usable),
+                                             check_finite=False)
         coefficients = np.zeros((size, usable))
         coefficients[:usable] = np.cumsum(inverse * rhs[:usable], axis=1)
         residual = x_test[:, order] @ coefficients - y_test[:, None]
@@ -465,7 +445,7 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     candidates, seen, paths = [], set(), []
     # shared by both paths, their scoring and the swaps: one reduction of all the rows and
     # one of each fold's training rows
-    reduced, folds = _reduced(x, y), _fold_systems(x, y, n_blocks, n_folds)
+    reduced, folds = _systems(x, y, n_blocks, n_folds)
     for path in ("backward", "forward"):
         order = (_elimination_order if path == "backward" else _forward_order)(*reduced)
         if max_size is not None:
@@ -517,11 +497,20 @@ def _swap_candidates(reduced, folds, paths, seen, limit, n_folds):
     active, xs, y_reduced = reduced
     refined, visited = [], set()  # starts already refined and local optima reached
     for path, order, mean in paths:
-        for k in range(1, min(limit, len(order)) + 1):
+        sizes = [k for k in range(1, min(limit, len(order)) + 1) if np.isfinite(mean[k - 1])]
+        first = _first_swaps(xs, y_reduced, active, order, sizes)
+        for k in sizes:
             start = frozenset(order[:k].tolist())
-            if not np.isfinite(mean[k - 1]) or start in visited:
+            if start in visited:
                 continue
-            support = _swap_search(xs, y_reduced, active, order[:k], max_swaps=50)
+            if k not in first:
+                support = _swap_search(xs, y_reduced, active, order[:k], max_swaps=50)
+            elif first[k][1] is None:  # no exchange improves the start
+                support = np.sort(order[:k])
+            else:
+                rss, swapped = first[k]
+                support = _swap_search(xs, y_reduced, active, swapped, max_swaps=49, rss=rss,
+                                       previous=order[:k])
             key = frozenset(support.tolist())
             visited.update((start, key))
             if key not in seen:

@@ -130,10 +130,13 @@ def propagated_draws(library, d, smoothing, phi, dphi, block, n_draws, rng):
         Rows as in ``block`` (coordinate-major).
     """
     lam, noise, order = smoothing
+    n = d["x"].shape[1]
+    noisy = [d["x"] + noise * rng.normal(size=d["x"].shape) for _ in range(n_draws)]
+    # all the draws smoothed side by side: each weight's system is factored once
+    smoothed = whittaker_smooth(d["t"], np.hstack(noisy), np.tile(lam, n_draws), order)
     draws = np.empty((n_draws,) + block.shape)
     for k in range(n_draws):
-        noisy = d["x"] + noise * rng.normal(size=d["x"].shape)
-        q, qd, qdd = whittaker_smooth(d["t"], noisy, lam, order)
+        q, qd, qdd = (values[:, k * n : (k + 1) * n] for values in smoothed)
         draws[k] = library.weak_transform(stack_variables(q, qd, qdd, d["u"], d["t"]), phi,
                                           dphi) - block
     return draws

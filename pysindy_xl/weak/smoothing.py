@@ -265,7 +265,8 @@ def whittaker_smooth(t, x, lams, order: int = 3):
         Strictly increasing sample times.
     x : array, shape (N, n)
     lams : array, shape (n,)
-        Weight of each column in sample units (0: the column is used as is).
+        Weight of each column in sample units (0: the column is used as is); the columns of
+        one weight share one factorization of the smoothing system.
     order : int, default 3
         Order of the penalized divided difference.
 
@@ -288,9 +289,11 @@ def whittaker_smooth(t, x, lams, order: int = 3):
     penalty = (penalty.T @ penalty).tocsc()
     identity = scipy.sparse.identity(len(t), format="csc")
     smoothed = x.copy()
-    for c, lam in enumerate(np.asarray(lams, dtype=float)):  # a few coordinates
-        if lam > 0:
-            smoothed[:, c] = scipy.sparse.linalg.spsolve(identity + lam * penalty, x[:, c])
+    lams = np.asarray(lams, dtype=float)
+    for lam in np.unique(lams[lams > 0]):  # one factorization per weight, for its columns
+        columns = np.flatnonzero(lams == lam)
+        smoothed[:, columns] = scipy.sparse.linalg.splu(identity + lam * penalty).solve(
+            np.ascontiguousarray(x[:, columns]))
     return smoothed, differentiate(t, smoothed, 1), differentiate(t, smoothed, 2)
 
 

@@ -1,0 +1,122 @@
+"""Single-swap refinement of a support on a reduced least-squares system.
+
+The local best-subset search of :func:`~pysindy_xl.optimizers.selection.refine_by_swaps`
+(the 1-swap search of L0Learn): :func:`_swap_search` exchanges one selected column for an
+unselected one while the residual drops; :func:`_first_swaps` takes the first step of it
+from every nested support of a column order at once.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+
+
+def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
+    """Best-improvement 1-swap search on a reduced system (see :func:`refine_by_swaps`).
+
+    With ``x_S = Q R``, the direction of column ``j`` orthogonal to the other selected
+    columns is ``u_j ~ Q R^-T e_j``. Dropping ``j`` adds ``(u_j . y)^2`` to the residual sum
+    of squares and gives every candidate column ``c`` the remaining component
+    ``C_c + u_j (u_j . x_c)`` (``C`` the columns projected off ``span(S)``), so the gains of
+    all ``k x F`` exchanges come from two matrix products per swap, not a refit per pair.
+
+    ``rss`` and ``previous``: the residual sum of squares of ``previous``, the support a
+    first exchange (:func:`_first_swaps`) left for ``support``, to go on from.
+    """
+    support = np.asarray(support, dtype=int)
+    norms2 = np.sum(xs**2, axis=0)
+    y_norm2 = float(y @ y)
+    for _ in range(max_swaps + 1):
+        basis, r_factor = np.linalg.qr(xs[:, support])
+        residual = y - basis @ (basis.T @ y)
+        new_rss = float(residual @ residual)
+        if rss is not None and not new_rss < rss:  # the predicted gain did not materialize
+            return np.sort(previous)
+        rss, previous = new_rss, support.copy()
+        try:
+            directions = basis @ scipy.linalg.solve_triangular(
+                r_factor, np.eye(len(support)), trans="T", check_finite=False)
+        except (np.linalg.LinAlgError, ValueError):
+            break
+        directions /= np.linalg.norm(directions, axis=0)
+        along = xs.T @ directions                        # (F, k): u_j . x_c
+        removed = directions.T @ y                       # (k,): u_j . y
+        projected = xs - basis @ (basis.T @ xs)
+        remaining2 = np.sum(projected**2, axis=0)[:, None] + along**2
+        correlation = (projected.T @ residual)[:, None] + along * removed
+        allowed = usable.copy()
+        allowed[support] = False
+        allowed = allowed[:, None] & (remaining2 > 1e-10 * norms2[:, None])
+        gain = np.where(allowed, correlation**2 / np.where(allowed, remaining2, 1.0), -np.inf)
+        # swapping out j for c changes the residual by removed_j^2 - gain[c, j]
+        change = removed**2 - gain
+        c, j = np.unravel_index(np.argmin(change), change.shape)
+        # a strict, scale-aware improvement: rounding must not swap equivalent columns
+        if not change[c, j] < -(1e-9 * rss + 1e-14 * y_norm2):
+            break
+        support = support.copy()
+        support[j] = c
+    return np.sort(support)
+
+
+def _first_swaps(xs, y, usable, order, sizes):
+    """The first step of :func:`_swap_search` from every nested support ``order[:k]``, ``k``
+    in ``sizes``, at once: ``{k: (rss, swapped support or None when no exchange improves)}``.
+
+    The supports share the leading columns of one QR factorization ``x[:, order] = Q R``:
+    with ``B = Q^T x`` and ``b = Q^T y`` (``Q`` complete, so that projections off the span
+    are sums over the trailing rows, free of cancellation), the residual of ``order[:k]``
+    is ``b[k:]``, the projected columns are ``B[k:]``, and the directions ``u_j`` of
+    :func:`_swap_search` are the rows of ``inv(R)[:k, :k]`` (the leading block of a
+    triangular inverse is the inverse of the leading block), so the exchange gains of all
+    sizes follow from cumulative sums. Sizes past a zero pivot are left out (the search
+    from them stops at once).
+    """
+    largest = max(sizes, default=0)
+    q_factor, r_factor = np.linalg.qr(xs[:, order[:largest]], mode="complete")
+    diag = np.abs(np.diag(r_factor))
+    if np.any(diag == 0):
+        largest = int(np.argmax(diag == 0))
+        r_factor = r_factor[:largest]
+    if largest == 0:
+        return {}
+    head = r_factor[:largest, :largest]
+    inverse = scipy.linalg.solve_triangular(head, np.eye(largest), check_finite=False)
+    big_b, small_b = q_factor.T @ xs, q_factor.T @ y
+    norms2 = np.sum(xs**2, axis=0)
+    y_norm2 = float(y @ y)
+    # tail sums: what lies off the span of the first k columns
+    remaining_base = np.cumsum((big_b**2)[::-1], axis=0)[::-1]          # (m, F) from row k
+    correlation_base = np.cumsum((big_b * small_b[:, None])[::-1], axis=0)[::-1]
+    rss_tail = np.cumsum((small_b**2)[::-1])[::-1]
+    # along[k - 1][j, c] = inv(R)[j, :k] @ B[:k, c] (rows j < k), as cumulative sums over i
+    along_all = np.cumsum(inverse[:, :, None] * big_b[None, :largest, :], axis=1)
+    removed_all = np.cumsum(inverse * small_b[None, :largest], axis=1)  # (j, k - 1)
+    row_norms = np.sqrt(np.cumsum(inverse**2, axis=1))                  # (j, k - 1)
+    out = {}
+    for k in sizes:
+        if k > largest:
+            continue
+        norm = row_norms[:k, k - 1]
+        along = (along_all[:k, k - 1, :] / norm[:, None]).T               # (F, k)
+        removed = removed_all[:k, k - 1] / norm
+        if k < xs.shape[0]:
+            remaining2 = remaining_base[k][:, None] + along**2
+            correlation = correlation_base[k][:, None] + along * removed
+            rss = float(rss_tail[k])
+        else:
+            remaining2, correlation, rss = along**2, along * removed, 0.0
+        support = np.asarray(order[:k], dtype=int)
+        allowed = usable.copy()
+        allowed[support] = False
+        allowed = allowed[:, None] & (remaining2 > 1e-10 * norms2[:, None])
+        gain = np.where(allowed, correlation**2 / np.where(allowed, remaining2, 1.0), -np.inf)
+        change = removed**2 - gain
+        c, j = np.unravel_index(np.argmin(change), change.shape)
+        swapped = None
+        if change[c, j] < -(1e-9 * rss + 1e-14 * y_norm2):
+            swapped = support.copy()
+            swapped[j] = c
+        out[k] = (rss, swapped)
+    return out
