@@ -35,7 +35,7 @@ A point mass ``m = 2`` at distance 0.5 on a hinge about ``y``, gravity along ``-
 ...                      joint_hinge=np.array([True]), joint_axes=np.array([[0.0, 1, 0]]),
 ...                      joint_anchors=np.zeros((1, 3)), joint_references=np.zeros(1),
 ...                      joint_to_coordinates=np.eye(1), gravity=np.array([0.0, 0, -9.81]))
->>> pi = np.zeros(11); pi[0], pi[3], pi[4], pi[6] = 2.0, -1.0, 0.5, 0.5  # m, m cz, Ixx, Izz
+>>> pi = np.zeros(11); pi[0], pi[3], pi[4], pi[5] = 2.0, -1.0, 0.5, 0.5  # m, m cz, Ixx, Iyy
 >>> mass, bias = rigid_body_dynamics(tree, pi, np.array([[0.0]]), np.array([[0.0]]))
 >>> mass.round(4), bias.round(4)  # m l^2, and no torque hanging straight down
 (array([[[0.5]]]), array([[0.]]))
@@ -183,15 +183,12 @@ class KinematicTree:
                 frames.append((J + len(fixed_rotation) - 1, frame))
                 frame = len(frames) - 1
             body_frames.append(frame)
-        axis_skew = np.zeros((J, 3, 3))
-        for k, axis in enumerate(self.joint_axes):
-            axis_skew[k] = [[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]],
-                            [-axis[1], axis[0], 0]]
         return {"prefix_rotation": prefix_rotation, "prefix_offset": prefix_offset,
                 "fixed_rotation": np.array(fixed_rotation).reshape(-1, 3, 3),
                 "fixed_offset": np.array(fixed_offset).reshape(-1, 3),
                 "frames": frames, "joint_frames": np.array(joint_frames),
-                "body_frames": np.array(body_frames), "axis_skew": axis_skew}
+                "body_frames": np.array(body_frames),
+                "axis_skew": _skew(np.asarray(self.joint_axes), np)}
 
     @functools.cached_property
     def _moving_support(self) -> np.ndarray:
