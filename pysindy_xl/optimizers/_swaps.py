@@ -12,6 +12,27 @@ import numpy as np
 import scipy.linalg
 
 
+def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2):
+    """The exchange ``(c, j)`` (column ``c`` in for the ``j``-th selected one) that lowers
+    the residual most, or ``(None, None)`` when none lowers it strictly.
+
+    ``remaining2[c, j]`` and ``correlation[c, j]``: squared norm of candidate ``c`` off the
+    span of the support without its ``j``-th column, and its product with that residual;
+    ``removed[j]``: what dropping the ``j``-th column adds back to the residual.
+    """
+    allowed = usable.copy()
+    allowed[support] = False
+    allowed = allowed[:, None] & (remaining2 > 1e-10 * norms2[:, None])
+    gain = np.where(allowed, correlation**2 / np.where(allowed, remaining2, 1.0), -np.inf)
+    # swapping out j for c changes the residual by removed_j^2 - gain[c, j]
+    change = removed**2 - gain
+    c, j = np.unravel_index(np.argmin(change), change.shape)
+    # a strict, scale-aware improvement: rounding must not swap equivalent columns
+    if not change[c, j] < -(1e-9 * rss + 1e-14 * y_norm2):
+        return None, None
+    return c, j
+
+
 def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
     """Best-improvement 1-swap search on a reduced system (see :func:`refine_by_swaps`).
 
@@ -45,15 +66,9 @@ def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
         projected = xs - basis @ (basis.T @ xs)
         remaining2 = np.sum(projected**2, axis=0)[:, None] + along**2
         correlation = (projected.T @ residual)[:, None] + along * removed
-        allowed = usable.copy()
-        allowed[support] = False
-        allowed = allowed[:, None] & (remaining2 > 1e-10 * norms2[:, None])
-        gain = np.where(allowed, correlation**2 / np.where(allowed, remaining2, 1.0), -np.inf)
-        # swapping out j for c changes the residual by removed_j^2 - gain[c, j]
-        change = removed**2 - gain
-        c, j = np.unravel_index(np.argmin(change), change.shape)
-        # a strict, scale-aware improvement: rounding must not swap equivalent columns
-        if not change[c, j] < -(1e-9 * rss + 1e-14 * y_norm2):
+        c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss,
+                          y_norm2)
+        if c is None:
             break
         support = support.copy()
         support[j] = c
@@ -108,14 +123,10 @@ def _first_swaps(xs, y, usable, order, sizes):
         else:
             remaining2, correlation, rss = along**2, along * removed, 0.0
         support = np.asarray(order[:k], dtype=int)
-        allowed = usable.copy()
-        allowed[support] = False
-        allowed = allowed[:, None] & (remaining2 > 1e-10 * norms2[:, None])
-        gain = np.where(allowed, correlation**2 / np.where(allowed, remaining2, 1.0), -np.inf)
-        change = removed**2 - gain
-        c, j = np.unravel_index(np.argmin(change), change.shape)
+        c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss,
+                          y_norm2)
         swapped = None
-        if change[c, j] < -(1e-9 * rss + 1e-14 * y_norm2):
+        if c is not None:
             swapped = support.copy()
             swapped[j] = c
         out[k] = (rss, swapped)
