@@ -13,15 +13,14 @@ Methods, on the same data and the same kinematic catalog (base parameters, visco
 smooth-Coulomb friction per joint):
 
 * ``pysindy-xl``: ``XLSINDy(catalog.library())`` with its defaults (weak form on smoothed
-  positions, noise-aware bagged selection);
-* ``pysindy-xl-unconstrained``: the same with its default optimizer named,
-  ``EnsembleOptimizer(ExplicitOptimizer())`` (a rerun of ``pysindy-xl`` next to the
-  constrained methods, in the same session);
-* ``pysindy-xl-lmi``: the same with ``PhysicalOptimizer(EnsembleOptimizer(ExplicitOptimizer()))``:
-  the bagged selection, then the least squares under rigid bodies' constraints (pseudo-inertias
-  positive semidefinite, armature and friction non-negative) when the selection's estimate is
-  not physically consistent; ``pysindy-xl-lmi-support`` and ``pysindy-xl-lmi-all``: the same
-  with ``base_parameters="support"`` (the selection's zeros stay zero) and ``"all"``;
+  positions; for a kinematic catalog ``PhysicalOptimizer(EnsembleOptimizer(
+  ExplicitOptimizer()))``: the noise-aware bagged selection, then the least squares under
+  rigid bodies' constraints, pseudo-inertias positive semidefinite, armature and friction
+  non-negative, when the selection's estimate is not physically consistent);
+* ``pysindy-xl-unconstrained``: the selection's estimate as it is,
+  ``EnsembleOptimizer(ExplicitOptimizer())`` (the default before the constrained fit was);
+* ``pysindy-xl-lmi-support`` and ``pysindy-xl-lmi-all``: the constrained fit with
+  ``base_parameters="support"`` (the selection's zeros stay zero) and ``"all"``;
 * ``idim-ls``: the robotics baseline: positions and torques low-pass filtered forwards and
   backwards (4th-order Butterworth at 5x the excitation's top frequency), velocities and
   accelerations by central differences, ordinary least squares of the torques on the
@@ -47,7 +46,7 @@ joint's relative error), the largest dry friction identified (the arms have none
 ``realizable``: whether the identified base parameters are those of rigid bodies (the
 semidefinite program of :func:`pysindy_xl.physical.realize` reproduces them within 1e-4
 relative, about its accuracy on the boundary of the consistent set) with non-negative
-friction; for ``pysindy-xl-lmi``, ``selection_consistent``: whether the selection's own
+friction; for the constrained fits, ``selection_consistent``: whether the selection's own
 (unconstrained) estimate was.
 
 Usage: ``python benchmarks/robot_arms.py [--seeds 3] [--levels 0,0.01,0.05]
@@ -411,8 +410,7 @@ def run(arm, level, seed, method):
         if method.startswith("pysindy-xl"):
             bagged = px.EnsembleOptimizer(px.ExplicitOptimizer())
             optimizer = {"pysindy-xl": None, "pysindy-xl-unconstrained": bagged}.get(
-                method, px.PhysicalOptimizer(bagged, base_parameters=(
-                    method.split("-lmi-")[1] if "-lmi-" in method else "selected")))
+                method, px.PhysicalOptimizer(bagged, base_parameters=method.split("-lmi-")[-1]))
             model = px.XLSINDy(library, optimizer).fit(**data.fit_arguments(forces="tau"))
             coef = model.coefficients()
             coef = -coef / coef[library.force_columns_[0]]  # force coefficient -1

@@ -1,9 +1,10 @@
 """Optional back ends: import on first use, with an error that names the extra to install.
 
 The core (catalogs, optimizers, :class:`~pysindy_xl.XLSINDy`) needs NumPy, SciPy, SymPy,
-scikit-learn and PySINDy only. Heavier back ends are optional and imported only where used:
+scikit-learn, PySINDy and cvxpy (imported on first use: the physically consistent fit of
+kinematic catalogs, the admissible starts of unforced fits, ``ImplicitOptimizer(
+solver="cvxpy")``). Heavier back ends are optional and imported only where used:
 
-- ``cvxpy``: ``ImplicitOptimizer(solver="cvxpy")``; ``pip install "pysindy-xl[cvxpy]"``
 - ``jax``: :meth:`XLSINDy.to_jax`, :mod:`pysindy_xl.export.jax_dynamics`;
   ``pip install "pysindy-xl[jax]"``
 - ``mujoco``: simulation in :mod:`pysindy_xl.mujoco`; ``pip install "pysindy-xl[mujoco]"``

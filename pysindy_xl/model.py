@@ -376,8 +376,7 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
                 "u: explicit regression needs the generalized forces; pass u, or use "
                 "ImplicitOptimizer / MixedOptimizer for unforced data"
             )
-        optimizer = self._optimizer(forced[moving], estimated=noise is not None,
-                                    complete=getattr(library, "complete_catalog", False))
+        optimizer = self._optimizer(forced[moving], noise is not None, library)
         mass = None
         if noise is not None and getattr(optimizer, "uses_mass_matrices", False):
             mass = column_mass_matrices(library, z)[:, keep][:, :, moving][:, :, :, moving]
@@ -531,14 +530,15 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             warnings.warn(record.message, record.category, stacklevel=2)
         return fitted
 
-    def _optimizer(self, forced: np.ndarray, estimated: bool = False, complete: bool = False):
+    def _optimizer(self, forced: np.ndarray, estimated: bool, library):
         """The optimizer to fit: a clone of the user's, or
-        :func:`~pysindy_xl.optimizers.default_optimizer` for the data.
-
-        ``estimated``: the columns come from noisy positions only (the weak form propagated
-        the smoother's noise estimate into them)."""
+        :func:`~pysindy_xl.optimizers.default_optimizer` for the data (``estimated``: the
+        columns come from noisy positions only) and the catalog ``library``."""
         if self.optimizer is None or isinstance(self.optimizer, str):
-            return default_optimizer(forced, estimated, kind=self.optimizer, complete=complete)
+            return default_optimizer(
+                forced, estimated, kind=self.optimizer,
+                complete=getattr(library, "complete_catalog", False),
+                physical=library.physical_structure() is not None)
         if not hasattr(self.optimizer, "fit_catalog"):
             if callable(getattr(self.optimizer, "fit", None)):
                 # a pysindy (or scikit-learn) regressor: explicit regression through it

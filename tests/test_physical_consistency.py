@@ -19,8 +19,6 @@ from pysindy_xl.optimizers import CatalogProblem, optimizer_from_spec
 from pysindy_xl.physical import PhysicalStructure, realize
 from pysindy_xl.quality import fit_quality, quality_lines
 
-pytest.importorskip("cvxpy")
-
 
 @pytest.fixture(scope="module")
 def arm():

@@ -136,7 +136,6 @@ def test_the_arm_exports_to_jax(arm):
 
 
 def test_the_identified_arm_exported_to_mjcf_simulates_like_the_model(arm, tmp_path):
-    pytest.importorskip("cvxpy")
     system, catalog, data, model = arm
     path = tmp_path / "identified.xml"
     written = model.to_mjcf(path, template=system)

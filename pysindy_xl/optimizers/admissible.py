@@ -25,13 +25,14 @@ supports are starts, not answers: the least-squares residual prefers quiet colum
 :mod:`~pysindy_xl.optimizers.noise_ratio`), so the caller refines each by the noise ratio's
 backward elimination and scores it as every other candidate.
 
-The problems are handed to cvxpy (the ``cvxpy`` extra); without it there are no such
-starts and the search uses the greedy paths alone.
+The problems are handed to cvxpy.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from .._optional import import_optional
 
 __all__ = ["admissible_supports", "reference_mass_matrices"]
 
@@ -106,10 +107,7 @@ def admissible_supports(r_factor, mass_matrices, penalties=PENALTIES,
     >>> {tuple(s.tolist()) for s in admissible_supports(theta, mass)}
     {(0, 1, 2)}
     """
-    try:
-        import cvxpy as cp
-    except ImportError:  # the cvxpy extra is not installed: no admissible starts
-        return []
+    cp = import_optional("cvxpy", "admissible starts")
     r_factor = np.asarray(r_factor, dtype=float)
     reference = reference_mass_matrices(mass_matrices)
     n_features, n = r_factor.shape[1], reference.shape[-1]

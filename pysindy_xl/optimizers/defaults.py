@@ -12,6 +12,7 @@ from .ensemble import EnsembleOptimizer
 from .explicit import ExplicitOptimizer
 from .implicit import ImplicitOptimizer
 from .mixed import MixedOptimizer
+from .physical import PhysicalOptimizer
 from .total_least_squares import TotalLeastSquaresOptimizer
 
 __all__ = ["default_optimizer", "SOLVER_KINDS"]
@@ -21,7 +22,7 @@ SOLVER_KINDS = ("explicit", "implicit", "mixed")
 
 
 def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
-                      complete: bool = False):
+                      complete: bool = False, physical: bool = False):
     """The default catalog optimizer for the data (or of a given kind).
 
     * every coordinate forced: explicit regression; on estimated columns bagged,
@@ -33,7 +34,13 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
       errors-in-variables law on all the columns, ``TotalLeastSquaresOptimizer()``: there is
       no spurious term to select away, and a selection drops small true terms (joint
       damping);
-    * some forced: ``MixedOptimizer``, its explicit part bagged on estimated columns as above.
+    * some forced: ``MixedOptimizer``, its explicit part bagged on estimated columns as above;
+    * explicit regression on a catalog whose terms stand for rigid-body parameters (a
+      kinematic catalog): the same, refitted under rigid bodies' constraints,
+      ``PhysicalOptimizer(explicit)``. A consistent estimate is kept as it is; an
+      inconsistent one (an indefinite mass matrix, a negative mass or friction, most often
+      on noisy data and barely excited parameters) is projected onto the consistent set,
+      which holds the truth, so the estimate comes no farther from it.
 
     Parameters
     ----------
@@ -47,6 +54,9 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
         same whatever the kind.
     complete : bool, default False
         The catalog is complete (``library.complete_catalog``).
+    physical : bool, default False
+        The catalog's terms stand for rigid-body parameters (``library.physical_structure()``
+        is not None).
 
     Returns
     -------
@@ -60,6 +70,8 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
     'MixedOptimizer'
     >>> default_optimizer(np.array([True, True]), estimated=True).optimizer
     ExplicitOptimizer()
+    >>> default_optimizer(np.array([True, True]), physical=True)
+    PhysicalOptimizer(optimizer=ExplicitOptimizer())
     """
     forced = np.asarray(forced, dtype=bool)
     if kind is None:
@@ -68,7 +80,7 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
         raise ValueError(f"kind: expected one of {SOLVER_KINDS}, got {kind!r}")
     explicit = EnsembleOptimizer(ExplicitOptimizer()) if estimated else ExplicitOptimizer()
     if kind == "explicit":
-        return explicit
+        return PhysicalOptimizer(explicit) if physical else explicit
     if kind == "implicit":
         return TotalLeastSquaresOptimizer() if estimated and complete else ImplicitOptimizer()
     return MixedOptimizer(explicit if estimated else None)

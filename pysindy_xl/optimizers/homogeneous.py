@@ -316,7 +316,7 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         Each column's contribution to the mass matrix on sample states
         (:func:`~pysindy_xl.diagnostics.column_mass_matrices`): laws whose mass matrix is not
         definite there are not candidates (unless no law is definite), and the admissible
-        lasso gives further starts (with cvxpy installed).
+        lasso gives further starts.
 
     Returns
     -------

@@ -151,6 +151,10 @@ def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=
     coef = np.asarray(coef, dtype=float)
     scale = np.sqrt(np.mean(x**2, axis=0))
     scale[scale == 0] = 1.0
+    # relative column scales only: the scaled coefficients keep the magnitude of the
+    # coefficients, and the constraints tying them to pi stay of order one (whitened rows
+    # can be 1e9 in size, which the conic solvers cannot balance on their own)
+    scale = scale / np.exp(np.mean(np.log(scale)))
     normal = x.T @ x if normal is None else np.asarray(normal, dtype=float)
     normal = normal / np.outer(scale, scale)
     scaled = coef * scale
