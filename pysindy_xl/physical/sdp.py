@@ -29,9 +29,13 @@ def body_constraints(structure, pi) -> list:
     per body, armatures :math:`\ge 0`."""
     from .structure import pseudo_inertia_matrix
 
+    cp = _cvxpy()
+    # J is linear in the ten parameters: one affine map per body, not sixteen scalar
+    # expressions (which cvxpy canonicalizes one by one, most of the cost of a solve)
+    basis = np.array([pseudo_inertia_matrix(unit) for unit in np.eye(10)]).reshape(10, 16)
     constraints = []
     for indices in structure.body_indices:
-        pseudo = pseudo_inertia_matrix([pi[int(k)] for k in indices])
+        pseudo = cp.reshape(basis.T @ pi[np.asarray(indices, dtype=int)], (4, 4), order="C")
         constraints.append((pseudo + pseudo.T) / 2 >> 0)
     if len(structure.armature):
         constraints.append(pi[structure.armature] >= 0)
