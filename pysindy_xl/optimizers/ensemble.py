@@ -49,8 +49,8 @@ import scipy.stats
 from sklearn.base import clone
 
 from .._validation import check_instance, check_option
-from ._base import CatalogOptimizer, pilot_optimizer, solve_problem, warn_unexplained
-from .explicit import ExplicitOptimizer
+from ._base import CatalogOptimizer, solve_problem, warn_unexplained
+from ._wrapping import WrappingOptimizer
 
 __all__ = ["EnsembleOptimizer"]
 
@@ -60,7 +60,7 @@ SAMPLINGS = ("subsamples", "complementary_pairs")
 AGGREGATES = ("auto", "refit", "median")
 
 
-class EnsembleOptimizer(CatalogOptimizer):
+class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
     """Subsample-and-refit ensemble around any catalog optimizer (see the module docs).
 
     Parameters
@@ -181,16 +181,6 @@ class EnsembleOptimizer(CatalogOptimizer):
         """As the base optimizer."""
         return getattr(self._base(), "requires_forces", False)
 
-    @property
-    def uses_mass_matrices(self) -> bool:
-        """As the base optimizer."""
-        return getattr(self._base(), "uses_mass_matrices", False)
-
-    @property
-    def derivative_estimate(self) -> str:
-        """As the base optimizer."""
-        return getattr(self._base(), "derivative_estimate", "smoothed")
-
     def _solve(self, problem):
         """Fit the base optimizer on subsamples of the problem's rows (the same chunks of
         every coordinate block; each fit gets its rows' share of the noise moments and all
@@ -276,15 +266,6 @@ class EnsembleOptimizer(CatalogOptimizer):
                           * samples.std(axis=0, ddof=1))
         self.coef_interval_ = np.array([center - half_width, center + half_width])
         return self
-
-    def _base(self):
-        return ExplicitOptimizer() if self.optimizer is None else self.optimizer
-
-    def pilot(self):
-        """Unfitted stand-in for a first estimate of the law: the base optimizer's pilot
-        on all the rows, ``n_models`` times cheaper than the ensemble (see
-        :func:`~pysindy_xl.optimizers._base.pilot_optimizer`)."""
-        return pilot_optimizer(self._base())
 
     def plot(self, feature_names=None, axes=None):
         """Inclusion probabilities and coefficient distributions of the ensemble.

@@ -32,7 +32,8 @@ from sklearn.base import clone
 from .._validation import check_instance, check_option
 from ..physical.sdp import consistent_least_squares
 from ._base import CatalogOptimizer, solve_problem, warn_unexplained
-from .explicit import ExplicitOptimizer, corrected_least_squares, explicit_regression
+from ._wrapping import WrappingOptimizer
+from .explicit import corrected_least_squares, explicit_regression
 
 __all__ = ["PhysicalOptimizer"]
 
@@ -44,7 +45,7 @@ _PASSED_ON = ("inclusion_probability_", "coef_interval_", "coef_samples_", "n_fa
               "aggregate_")
 
 
-class PhysicalOptimizer(CatalogOptimizer):
+class PhysicalOptimizer(WrappingOptimizer, CatalogOptimizer):
     """Explicit regression constrained to physically consistent parameters.
 
     The terms are selected by ``optimizer`` (any explicit catalog optimizer, bagged or not);
@@ -140,25 +141,6 @@ class PhysicalOptimizer(CatalogOptimizer):
         check_option("tolerance", self.tolerance, "real", low=0)
         if self.solver is not None and not isinstance(self.solver, str):
             raise TypeError(f"solver: expected a cvxpy solver name, got {self.solver!r}")
-
-    def _base(self):
-        return ExplicitOptimizer() if self.optimizer is None else self.optimizer
-
-    @property
-    def uses_mass_matrices(self) -> bool:
-        """As the selecting optimizer."""
-        return getattr(self._base(), "uses_mass_matrices", False)
-
-    @property
-    def derivative_estimate(self) -> str:
-        """As the selecting optimizer."""
-        return getattr(self._base(), "derivative_estimate", "smoothed")
-
-    def pilot(self):
-        """The selecting optimizer's pilot: a first law only sets weights."""
-        from ._base import pilot_optimizer
-
-        return pilot_optimizer(self._base())
 
     def _solve(self, problem):
         """Select with the base optimizer, then refit its terms under the constraints."""
