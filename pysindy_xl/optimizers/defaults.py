@@ -28,12 +28,17 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
     * every coordinate forced: explicit regression; on estimated columns bagged,
       ``EnsembleOptimizer(ExplicitOptimizer())``. One cross-validated selection among about a
       hundred candidates keeps a term that only fits the noise in a sizeable share of fits (a
-      multiple-comparison effect); the terms most subsample fits keep are the true ones;
+      multiple-comparison effect); the terms most subsample fits keep are the true ones. On
+      estimated columns of a complete catalog (every Lagrangian term a physical parameter:
+      a kinematic catalog) nothing is selected, ``ExplicitOptimizer(threshold=0.0)``
+      (bagged as above for its intervals): no term is spurious there, and on noisy columns
+      a selection drops the small true ones (a wrist's armature and damping, whose torques
+      are a hundredth of the shoulder's), leaving joints whose torque the model does not
+      predict at all. On exact columns the automatic threshold keeps every true term and
+      cuts the exact zeros;
     * no coordinate forced: ``ImplicitOptimizer()``; on estimated columns of a complete
-      catalog (every Lagrangian term a physical parameter: a kinematic catalog), the
-      errors-in-variables law on all the columns, ``TotalLeastSquaresOptimizer()``: there is
-      no spurious term to select away, and a selection drops small true terms (joint
-      damping);
+      catalog, the errors-in-variables law on all the columns,
+      ``TotalLeastSquaresOptimizer()``, for the same reason;
     * some forced: ``MixedOptimizer``, its explicit part bagged on estimated columns as above;
     * explicit regression on a catalog whose terms stand for rigid-body parameters (a
       kinematic catalog): the same, refitted under rigid bodies' constraints,
@@ -70,7 +75,7 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
     'MixedOptimizer'
     >>> default_optimizer(np.array([True, True]), estimated=True).optimizer
     ExplicitOptimizer()
-    >>> default_optimizer(np.array([True, True]), physical=True)
+    >>> default_optimizer(np.array([True, True]), complete=True, physical=True)
     PhysicalOptimizer(optimizer=ExplicitOptimizer())
     """
     forced = np.asarray(forced, dtype=bool)
@@ -80,6 +85,8 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
         raise ValueError(f"kind: expected one of {SOLVER_KINDS}, got {kind!r}")
     explicit = EnsembleOptimizer(ExplicitOptimizer()) if estimated else ExplicitOptimizer()
     if kind == "explicit":
+        if complete and estimated:  # every parameter estimated
+            explicit = EnsembleOptimizer(ExplicitOptimizer(threshold=0.0))
         return PhysicalOptimizer(explicit) if physical else explicit
     if kind == "implicit":
         return TotalLeastSquaresOptimizer() if estimated and complete else ImplicitOptimizer()
