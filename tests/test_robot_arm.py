@@ -158,3 +158,44 @@ def test_the_identified_arm_exported_to_mjcf_simulates_like_the_model(arm, tmp_p
         assert np.abs(forcing[k] - unforced).max() < 1e-5 * np.abs(unforced).max()
     # bodies the exporter wrote are rigid bodies: positive masses and inertias
     assert np.all(mj_model.body_mass[1:] > 0) and np.all(mj_model.body_inertia[1:] >= 0)
+
+
+DIAGONAL_INERTIA_ARM = """
+<mujoco model="diagonal_arm">
+  <option gravity="0 0 -9.81" timestep="0.002" integrator="RK4"><flag contact="disable"/></option>
+  <worldbody>
+    <body name="upper" pos="0 0 1">
+      <joint name="shoulder" type="hinge" axis="0 1 0" damping="0.3" armature="0.02"/>
+      <inertial pos="0.2 0 0" mass="1.5" diaginertia="0.01 0.03 0.03"/>
+      <body name="fore" pos="0.4 0 0" euler="0 0 20">
+        <joint name="elbow" type="hinge" axis="0 0.3 1" damping="0.15" armature="0.01"/>
+        <inertial pos="0.15 0.02 0" mass="0.8" diaginertia="0.005 0.01 0.012"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator><motor joint="shoulder"/><motor joint="elbow"/></actuator>
+</mujoco>
+"""
+
+
+def test_a_template_with_diagonal_inertias_exports(tmp_path):
+    """MJCF states an inertia diagonal (``diaginertia``) or full; MuJoCo refuses both at
+    once: the exporter writes principal axes, whichever the template used."""
+    system = MJCFSystem(DIAGONAL_INERTIA_ARM)
+    catalog = kinematic_catalog(system)
+    data = generate_dataset(system, n_trajectories=1, duration=2.0, seed=0, sample_every=4,
+                            progress=False)
+    model = px.XLSINDy(catalog.library(), px.ExplicitOptimizer(threshold=1e-8)).fit(
+        **data.fit_arguments(forces="tau"))
+    path = tmp_path / "identified.xml"
+    assert model.to_mjcf(path, template=system)["residual"] < 1e-4
+    exported = MJCFSystem(str(path)).mj_model()
+    mj_data = mujoco.MjData(exported)
+    qpos = np.array([0.4, -0.7])
+    mj_data.qpos[:] = qpos
+    mujoco.mj_forward(exported, mj_data)
+    mass = np.zeros((2, 2))
+    mujoco.mj_fullM(exported, mj_data, mass)
+    identified, _ = model.dynamics_.mass_and_forcing(px.stack_variables(qpos[None],
+                                                                        np.zeros((1, 2))))
+    np.testing.assert_allclose(mass, identified[0], rtol=1e-4, atol=1e-6)

@@ -93,9 +93,8 @@ def write_mjcf(catalog, pi, friction, path) -> str:
         body.explicitinertial = True
         body.mass = max(mass, 1e-9)
         body.ipos = centre
-        body.iquat = [1.0, 0.0, 0.0, 0.0]
-        body.fullinertia = [inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1],
-                            inertia[0, 2], inertia[1, 2]]
+        body.iquat, body.inertia = _principal_axes(inertia)
+        body.fullinertia = [np.nan] * 6  # unset: the principal axes state it
     for joint_name, coordinate in zip(system.joint_names, system.coordinate_names,
                                       strict=True):
         joint = spec.joint(joint_name)
@@ -111,6 +110,23 @@ def write_mjcf(catalog, pi, friction, path) -> str:
     with open(path, "w", encoding="utf-8") as handle:
         handle.write(text)
     return text
+
+
+def _principal_axes(inertia):
+    """``(quaternion, diagonal)`` of a symmetric inertia ``R diag(d) R^T`` (``R`` a proper
+    rotation): the form every MJCF template can take, whichever way it stated its inertia
+    (``diaginertia`` or ``fullinertia``, which MuJoCo refuses together). Moments below a
+    billionth of the largest, a point mass's or a rod's, are raised to it: MuJoCo refuses
+    zero moments on a moving body."""
+    import mujoco
+
+    moments, axes = np.linalg.eigh((inertia + inertia.T) / 2)
+    if np.linalg.det(axes) < 0:
+        axes[:, 0] = -axes[:, 0]
+    floor = 1e-9 * max(float(moments.max()), 1e-12)
+    quaternion = np.zeros(4)
+    mujoco.mju_mat2Quat(quaternion, np.ascontiguousarray(axes).reshape(-1))
+    return quaternion, np.maximum(moments, floor)
 
 
 def to_mjcf(model, path, template) -> dict:
