@@ -49,7 +49,9 @@ joint's relative error), the largest dry friction identified (the arms have none
 ``realizable``: whether the identified base parameters are those of rigid bodies (the
 semidefinite program of :func:`pysindy_xl.physical.realize` reproduces them within 1e-4
 relative, about its accuracy on the boundary of the consistent set) with non-negative
-friction; for the constrained fits, ``selection_consistent``: whether the selection's own
+friction; ``dry_friction_significant``: how many joints' dry friction has a bagged 95 %
+interval that excludes zero (friction the data tell from none); for the constrained fits,
+``selection_consistent``: whether the selection's own
 (unconstrained) estimate was.
 
 Usage: ``python benchmarks/robot_arms.py [--seeds 3] [--levels 0,0.01,0.05]
@@ -418,6 +420,10 @@ def run(arm, level, seed, method):
             model = px.XLSINDy(library, optimizer).fit(**data.fit_arguments(forces="tau"))
             coef = model.coefficients()
             coef = -coef / coef[library.force_columns_[0]]  # force coefficient -1
+            if model.coef_interval_ is not None:  # dry friction the data tell from zero
+                scale = -model.coef_[library.force_columns_[0]]
+                low, high = model.coef_interval_[:, _dry_columns(library)] / scale
+                record["dry_friction_significant"] = int(np.sum((low > 0) | (high < 0)))
             if getattr(model, "physical_consistency_", None) is not None:
                 record["selection_consistent"] = model.physical_consistency_["consistent"]
                 record["constraint_cost"] = model.physical_consistency_["cost"]
@@ -455,6 +461,12 @@ def run(arm, level, seed, method):
         positive_definite=bool(np.all(np.linalg.eigvalsh((mass_id + np.swapaxes(
             mass_id, 1, 2)) / 2)[:, 0] > 0)))
     return record
+
+
+def _dry_columns(library) -> list:
+    """The catalog's dry-friction columns (``tanh`` of a velocity)."""
+    return [j for j, name in enumerate(library.get_feature_names())
+            if name.startswith("C_") and "tanh(" in name]
 
 
 def summarize(records) -> str:
