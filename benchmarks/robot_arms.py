@@ -49,8 +49,10 @@ joint's relative error), the largest dry friction identified (the arms have none
 ``realizable``: whether the identified base parameters are those of rigid bodies (the
 semidefinite program of :func:`pysindy_xl.physical.realize` reproduces them within 1e-4
 relative, about its accuracy on the boundary of the consistent set) with non-negative
-friction; ``dry_friction_significant``: how many joints' dry friction has a bagged 95 %
-interval that excludes zero (friction the data tell from none); for the constrained fits,
+friction; ``dry_friction_relative``: the largest dry friction as a share of its joint's RMS
+torque on the fresh trajectory; ``dry_friction_significant``: how many joints' dry friction has
+a bagged 95 % interval that excludes zero (friction the data tell from none); for the
+constrained fits,
 ``selection_consistent``: whether the selection's own
 (unconstrained) estimate was.
 
@@ -446,8 +448,12 @@ def run(arm, level, seed, method):
         system.n, len(fresh.t), -1)
     rest = np.setdiff1d(np.arange(theta.shape[-1]), library.force_columns_)
     predicted = (theta[:, :, rest] @ coef[rest]).T
+    torque_scale = np.sqrt(np.mean(fresh.tau**2, axis=0))  # each joint's RMS torque
     torque_error = float(np.max(np.sqrt(np.mean((predicted - fresh.tau) ** 2, axis=0))
-                                / np.sqrt(np.mean(fresh.tau**2, axis=0))))
+                                / torque_scale))
+    record["dry_friction_relative"] = float(max(
+        abs(friction[name]["dry"]) / scale
+        for name, scale in zip(system.coordinate_names, torque_scale, strict=True)))
     rng = np.random.default_rng(0)
     limits = system.mj_model().jnt_range
     q = rng.uniform(limits[:, 0], limits[:, 1], size=(200, system.n))
