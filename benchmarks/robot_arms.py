@@ -481,7 +481,8 @@ def summarize(records) -> str:
         cells.setdefault((r["arm"], r["level"], r["method"]), []).append(r)
     lines = ["| arm | noise | method | seeds | mass-matrix error (median / worst) | gravity error "
              "(median / worst) | torque prediction (median / worst) | damping error "
-             "(median / worst) | largest dry friction | M positive definite | realizable "
+             "(median / worst) | largest dry friction (share of its joint's RMS torque) "
+             "| M positive definite | realizable "
              "| fit (s) |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for (arm, level, method), rs in sorted(cells.items()):
@@ -495,12 +496,18 @@ def summarize(records) -> str:
                      f"{median('gravity_error'):.2%} / {worst('gravity_error'):.2%} | "
                      f"{median('torque_error'):.2%} / {worst('torque_error'):.2%} | "
                      f"{median('damping_error'):.1%} / {worst('damping_error'):.1%} | "
-                     f"{worst('dry_friction'):.3g} | "
+                     f"{worst('dry_friction'):.3g}{_share(rs, 'dry_friction_relative')} | "
                      f"{sum(r['positive_definite'] for r in rs)}/{len(rs)} | "
                      f"{_count(rs, 'realizable')} | {median('fit_s'):.1f} |")
     return (f"{len(records)} runs; medians and worst cases over seeds (see robot_arms.py for "
             "the setup; fit times are wall clock on a shared 2-core machine, measured in "
             "different sessions for different methods)\n\n" + "\n".join(lines) + "\n")
+
+
+def _share(records, key) -> str:
+    """`` (x %)``, the largest ``key`` of the records that have it; empty when none has."""
+    said = [r[key] for r in records if r.get(key) is not None]
+    return f" ({max(said):.2%})" if said else ""
 
 
 def _count(records, key) -> str:
