@@ -175,7 +175,7 @@ def build_regression(library, data, formulation: str, test_functions=None, smoot
         if test_functions is None:
             unforced = all(d["u"] is None for d in data)
             test_functions = BumpTestFunctions(
-                width_multiples=UNFORCED_WIDTH_MULTIPLES if unforced else (1.0,))
+                width_multiples=UNFORCED_WIDTH_MULTIPLES if unforced else None)
         theta, states, noise, info = weak_regression(
             library, data, test_functions,
             copy.deepcopy(smoother) or WhittakerSmoother(), noise="draws",

@@ -163,10 +163,10 @@ class BumpTestFunctions:
         Average number of test functions covering each sample when ``n_functions="auto"``.
     min_samples : int, default 12
         Smallest half-width in samples (quadrature needs a resolved bump).
-    width_multiples : sequence of float, default (1.0,)
+    width_multiples : sequence of float, optional
         Rows of the test functions of half-width ``m h`` for each multiple ``m`` (module
-        documentation); a width whose support does not fit inside the trajectory is left out,
-        and ``h`` (the first multiple's, at least) must fit.
+        documentation); a width whose support does not fit inside the trajectory is left out.
+        Default: ``h`` alone.
 
     Examples
     --------
@@ -187,7 +187,7 @@ class BumpTestFunctions:
     """
 
     def __init__(self, width="auto", n_functions="auto", power=6, width_factor=1.0,
-                 overlap=8.0, min_samples=12, width_multiples=(1.0,)):
+                 overlap=8.0, min_samples=12, width_multiples=None):
         self.width = width
         self.n_functions = n_functions
         self.power = power
@@ -206,7 +206,7 @@ class BumpTestFunctions:
         check_option("width_factor", self.width_factor, "real", **positive)
         check_option("overlap", self.overlap, "real", **positive)
         check_option("min_samples", self.min_samples, "int", low=1)
-        multiples = np.atleast_1d(np.asarray(self.width_multiples, dtype=float))
+        multiples = self._multiples()
         if multiples.size == 0 or not np.all(np.isfinite(multiples) & (multiples > 0)):
             raise ValueError("width_multiples: expected positive numbers, got "
                              f"{self.width_multiples!r}")
@@ -273,7 +273,7 @@ class BumpTestFunctions:
                              f"inside the trajectory ({t[-1] - t[0]:.4g} s)")
         if n_functions is None:
             n_functions = self.n_functions
-        multiples = np.atleast_1d(np.asarray(self.width_multiples, dtype=float))
+        multiples = self._multiples()
         widths = [m * h for m in multiples if 2 * m * h <= t[-1] - t[0]] or [h]
         if len(widths) == 1:
             phi, dphi, _ = self._bumps(t, widths[0], n_functions)
@@ -283,6 +283,11 @@ class BumpTestFunctions:
         order = np.argsort(np.concatenate([centers for *_, centers in parts]), kind="stable")
         return (scipy.sparse.vstack([phi for phi, *_ in parts]).tocsr()[order],
                 scipy.sparse.vstack([dphi for _, dphi, _ in parts]).tocsr()[order], h)
+
+    def _multiples(self) -> np.ndarray:
+        if self.width_multiples is None:
+            return np.ones(1)
+        return np.atleast_1d(np.asarray(self.width_multiples, dtype=float))
 
     def _bumps(self, t, h, n_functions):
         """``(phi, dphi, centers)`` of the bumps of half-width ``h`` (see :meth:`matrices`)."""
