@@ -10,6 +10,11 @@ Every consumer of a catalog's regression goes through here: :meth:`XLSINDy.fit
   (:meth:`SymbolicLibrary.transform <pysindy_xl.feature_library.SymbolicLibrary.transform>`),
   or ``"weak"``, the columns integrated against test functions of smoothed positions
   (:func:`~pysindy_xl.weak.weak_regression`), with the propagated noise of the positions.
+  Without forces (no ``u``) the default test functions come in several widths
+  (:data:`UNFORCED_WIDTH_MULTIPLES`): an unforced law is known only up to a factor and is
+  told from the other laws the catalog holds by the noise ratio alone, which one width's rows
+  determine poorly from noisy positions; a force column fixes the scale of a forced law, whose
+  rows keep the single width.
 
 Rows are coordinate-major over all trajectories: ``theta`` has shape ``(n * R, F)`` with
 ``R`` rows (samples or test functions) per coordinate.
@@ -31,6 +36,10 @@ __all__ = ["Regression", "build_regression", "trajectory_data", "differentiation
            "FORMULATIONS"]
 
 FORMULATIONS = ("auto", "strong", "weak")
+
+#: Test-function widths of the unforced weak form, in multiples of the spectrum's width
+#: (:class:`~pysindy_xl.weak.BumpTestFunctions`, ``width_multiples``).
+UNFORCED_WIDTH_MULTIPLES = (1.0, 1.5, 2.0)
 
 
 @dataclasses.dataclass
@@ -139,8 +148,9 @@ def build_regression(library, data, formulation: str, test_functions=None, smoot
         From :func:`trajectory_data`; the strong form needs ``x_dot`` and ``x_ddot``.
     formulation : {"strong", "weak"}
     test_functions, smoother : optional
-        Weak form: default ``BumpTestFunctions()`` and ``WhittakerSmoother()``; the smoother
-        is copied (smoothing fits it).
+        Weak form: default ``BumpTestFunctions()`` (of the widths
+        :data:`UNFORCED_WIDTH_MULTIPLES` when no trajectory has forces) and
+        ``WhittakerSmoother()``; the smoother is copied (smoothing fits it).
     half_width : float, optional
         Weak form: the test functions' half-width (default: chosen from the data, as in a fit).
     moving : array of bool, shape (n,), optional
@@ -162,8 +172,12 @@ def build_regression(library, data, formulation: str, test_functions=None, smoot
     (11, 2)
     """
     if formulation == "weak":
+        if test_functions is None:
+            unforced = all(d["u"] is None for d in data)
+            test_functions = BumpTestFunctions(
+                width_multiples=UNFORCED_WIDTH_MULTIPLES if unforced else None)
         theta, states, noise, info = weak_regression(
-            library, data, test_functions or BumpTestFunctions(),
+            library, data, test_functions,
             copy.deepcopy(smoother) or WhittakerSmoother(), noise="draws",
             half_width=half_width, width_columns=moving)
         return Regression(theta, states, "weak", noise, info)

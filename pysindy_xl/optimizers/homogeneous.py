@@ -19,7 +19,10 @@ noise, larger for a law the data contradict):
    path support up to that size is refined at its own size.
 3. **Score.** Every support is scored by ``n_folds``-fold cross-validation over contiguous
    blocks of rows: the law is estimated on the training rows and its noise ratio measured on
-   the held-out rows (their share of the moments).
+   the held-out rows (their share of the moments). The training rows stop short of the
+   held-out ones by a gap (h-block cross-validation, :data:`FOLD_GAP`): neighbouring weak rows
+   share noise, and without the gap a large support fitting it holds on the held-out rows
+   seemingly better than the noise allows (held-out ratio below 1).
 4. **Admissible laws.** A law must explain every coordinate (its terms carry a real share of
    each coordinate's equation) and, given the columns' mass matrices, have a definite mass
    matrix on the states; the others compete only when no law is admissible.
@@ -61,6 +64,11 @@ __all__ = [
     "select_law",
     "select_laws",
 ]
+
+
+#: Rows left out of the training rows on each side of a held-out fold, as a fraction of a
+#: fold (:func:`_held_out_ratios`).
+FOLD_GAP = 0.3
 
 
 class UndeterminedLawWarning(UserWarning):
@@ -243,7 +251,8 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
     The supports of a path are prefixes of one column order: with the columns in that order,
     each is a leading block of the triangular factors, so a fold costs one QR and small
     decompositions (not one decomposition of all the rows' factor per support). The supports
-    of one size are decomposed as one stack."""
+    of one size are decomposed as one stack. The training rows of a fold leave out
+    :data:`FOLD_GAP` of a fold on each side of its held-out rows."""
     ratios = np.full((n_folds, len(supports)), np.inf)
     relative = np.full((n_folds, len(supports)), np.inf)
     longest = np.asarray(max(supports, key=len))
@@ -253,16 +262,26 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
         moments = moments[:, longest][:, :, longest]
         supports = [np.arange(len(s)) for s in supports]
     labels = fold_labels(theta.shape[0], n_blocks, n_folds)
-    blocks = np.arange(theta.shape[0]) // (theta.shape[0] // n_blocks)
+    per_block = theta.shape[0] // n_blocks
+    blocks = np.arange(theta.shape[0]) // per_block
+    position = np.arange(theta.shape[0]) % per_block
+    gap = int(FOLD_GAP * per_block / n_folds)
     for fold in range(n_folds):
         test = labels == fold
         if not test.any() or test.all():
             continue
-        # each block's moments spread evenly over its rows: the fold's share of each block
-        share = np.bincount(blocks[test], minlength=n_blocks) / np.bincount(blocks)
-        test_moments = np.einsum("b,bfg->fg", share, moments)
-        train_moments = moments.sum(axis=0) - test_moments
-        r_train = triangular_factor(theta[~test])
+        # h-block cross-validation: the rows next to the held-out stretch share its noise
+        # (overlapping test functions, the smoother's window) and leave the training rows,
+        # or a law fitting that noise would look as if it held on the held-out rows
+        first, last = position[test].min(), position[test].max()
+        training = ~test & ((position < first - gap) | (position > last + gap))
+        # each block's moments spread evenly over its rows: the rows' share of each block
+        count = np.bincount(blocks)
+        test_moments = np.einsum("b,bfg->fg", np.bincount(blocks[test], minlength=n_blocks)
+                                 / count, moments)
+        train_moments = np.einsum("b,bfg->fg", np.bincount(blocks[training],
+                                                           minlength=n_blocks) / count, moments)
+        r_train = triangular_factor(theta[training])
         r_test = triangular_factor(theta[test])
         for size in {len(support) for support in supports}:
             if size < 2 or size > r_train.shape[0]:

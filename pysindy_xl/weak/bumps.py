@@ -12,6 +12,13 @@ every integral of the weak regression is one sparse matrix product: ``int phi_k 
 (Phi @ f)[k]``. The half-width ``h`` is chosen from the data's spectrum (as WSINDy does): the
 corner frequency where the positions' spectrum meets the noise floor sets how much the test
 functions must low-pass.
+
+That width is the narrowest the noise allows, not the only useful one: wider bumps average more
+noise out of each row and see the slow motion, narrower ones resolve the fast motion. With
+``width_multiples`` the rows of several widths ``m h`` are stacked, ordered by their centres so
+that a contiguous stretch of rows (a cross-validation fold) is a stretch of time at every width.
+The rows of different widths share noise, which the errors-in-variables moments account for
+(their expectation needs no independence).
 """
 
 from __future__ import annotations
@@ -156,6 +163,10 @@ class BumpTestFunctions:
         Average number of test functions covering each sample when ``n_functions="auto"``.
     min_samples : int, default 12
         Smallest half-width in samples (quadrature needs a resolved bump).
+    width_multiples : sequence of float, optional
+        Rows of the test functions of half-width ``m h`` for each multiple ``m`` (module
+        documentation); a width whose support does not fit inside the trajectory is left out.
+        Default: ``h`` alone.
 
     Examples
     --------
@@ -166,16 +177,24 @@ class BumpTestFunctions:
     ((5, 1001), 1.0)
     >>> float(abs(phi @ np.cos(t) + dphi @ np.sin(t)).max()) < 1e-10   # int phi q' = -int phi' q
     True
+
+    Two widths, 5 bumps of each, ordered by their centres:
+
+    >>> phi, _, _ = BumpTestFunctions(width=1.0, n_functions=5,
+    ...                               width_multiples=(1.0, 2.0)).matrices(t)
+    >>> phi.shape, np.count_nonzero(phi[:2].toarray(), axis=1).tolist()
+    ((10, 1001), [199, 399])
     """
 
     def __init__(self, width="auto", n_functions="auto", power=6, width_factor=1.0,
-                 overlap=8.0, min_samples=12):
+                 overlap=8.0, min_samples=12, width_multiples=None):
         self.width = width
         self.n_functions = n_functions
         self.power = power
         self.width_factor = width_factor
         self.overlap = overlap
         self.min_samples = min_samples
+        self.width_multiples = width_multiples
 
     def _check_params(self):
         positive = {"low": 0, "low_open": True}
@@ -187,6 +206,10 @@ class BumpTestFunctions:
         check_option("width_factor", self.width_factor, "real", **positive)
         check_option("overlap", self.overlap, "real", **positive)
         check_option("min_samples", self.min_samples, "int", low=1)
+        multiples = self._multiples()
+        if multiples.size == 0 or not np.all(np.isfinite(multiples) & (multiples > 0)):
+            raise ValueError("width_multiples: expected positive numbers, got "
+                             f"{self.width_multiples!r}")
 
     def half_width(self, t, x=None) -> float:
         """Half-width ``h`` (time units) for a trajectory.
@@ -237,16 +260,37 @@ class BumpTestFunctions:
         -------
         phi, dphi : scipy.sparse.csr_matrix, shape (K, N)
             ``phi[k, i] = phi_k(t_i) w_i`` and ``dphi[k, i] = phi_k'(t_i) w_i`` with the
-            trapezoidal weights ``w`` (:func:`quadrature_weights`).
+            trapezoidal weights ``w`` (:func:`quadrature_weights`); with several
+            ``width_multiples``, the rows of every width, ordered by their centres.
         half_width : float
+            ``h``, before the multiples.
         """
         t = np.asarray(t, dtype=float)
+        self._check_params()
         h = self.half_width(t, x) if half_width is None else float(half_width)
         if not 0 < 2 * h <= t[-1] - t[0]:
             raise ValueError(f"half_width: the support {2 * h:.4g} s must be positive and fit "
                              f"inside the trajectory ({t[-1] - t[0]:.4g} s)")
         if n_functions is None:
             n_functions = self.n_functions
+        multiples = self._multiples()
+        widths = [m * h for m in multiples if 2 * m * h <= t[-1] - t[0]] or [h]
+        if len(widths) == 1:
+            phi, dphi, _ = self._bumps(t, widths[0], n_functions)
+            return phi, dphi, h
+        parts = [self._bumps(t, width, n_functions) for width in widths]
+        # by centre (stable: equal centres keep the order of the widths)
+        order = np.argsort(np.concatenate([centers for *_, centers in parts]), kind="stable")
+        return (scipy.sparse.vstack([phi for phi, *_ in parts]).tocsr()[order],
+                scipy.sparse.vstack([dphi for _, dphi, _ in parts]).tocsr()[order], h)
+
+    def _multiples(self) -> np.ndarray:
+        if self.width_multiples is None:
+            return np.ones(1)
+        return np.atleast_1d(np.asarray(self.width_multiples, dtype=float))
+
+    def _bumps(self, t, h, n_functions):
+        """``(phi, dphi, centers)`` of the bumps of half-width ``h`` (see :meth:`matrices`)."""
         duration = t[-1] - t[0]
         if n_functions == "auto":
             n_functions = int(np.ceil(self.overlap * duration / (2 * h)))
@@ -267,4 +311,4 @@ class BumpTestFunctions:
         shape = (n_functions, len(t))
         phi = scipy.sparse.csr_matrix((values, (rows, cols)), shape=shape)
         dphi = scipy.sparse.csr_matrix((slopes, (rows, cols)), shape=shape)
-        return phi, dphi, h
+        return phi, dphi, centers
