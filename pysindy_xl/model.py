@@ -104,8 +104,9 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         when ``x_dot`` and ``x_ddot`` are given or a ``differentiation_method`` is set, weak
         otherwise.
     test_functions : BumpTestFunctions, optional
-        Test functions of the weak formulation (default ``BumpTestFunctions()``: bumps whose
-        width comes from the data's spectrum).
+        Test functions of the weak formulation (default: bumps whose width comes from the
+        data's spectrum; on unforced data bumps of three widths,
+        :data:`~pysindy_xl.regression.UNFORCED_WIDTH_MULTIPLES`).
     smoother : WhittakerSmoother, optional
         Estimates positions and velocities for the weak formulation from noisy positions
         (default ``WhittakerSmoother()``: smoothness chosen from the data). Measured

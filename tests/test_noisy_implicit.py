@@ -284,13 +284,28 @@ def test_fit_quality_reports_the_noise_ratio_of_an_unforced_law(cart_pole_system
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("name", "level", "seed"), [
-    ("cart_pole", 0.03, 0), ("double_pendulum", 0.01, 0), ("double_pendulum", 0.03, 1),
+    ("double_pendulum", 0.01, 0), ("double_pendulum", 0.03, 1),
 ])
 def test_unforced_noise_cells(name, level, seed, request):
     system = request.getfixturevalue(f"{name}_system")
     angles = {"cart_pole": [1], "double_pendulum": [0, 1]}[name]
     model, true = _unforced_noisy_fit(system, angles, level, seed)
     _check_unforced(model, true, system, seed, rel_tol=0.1)
+
+
+@pytest.mark.slow
+def test_unforced_cart_pole_at_3_percent_over_ten_seeds(cart_pole_system):
+    """The bar of the unforced acceptance: the exact support and a valid model from 3 %
+    noisy positions in at least 8 of 10 seeds (a rate: any one seed may go either way)."""
+    exact = 0
+    for seed in range(10):
+        model, true = _unforced_noisy_fit(cart_pole_system, [1], 0.03, seed)
+        try:
+            _check_unforced(model, true, cart_pole_system, seed, rel_tol=0.1)
+        except AssertionError:
+            continue
+        exact += 1
+    assert exact >= 8
 
 
 def test_swaps_start_from_the_best_admissible_path_law(cart_pole_system):
