@@ -40,6 +40,20 @@ def inconsistent(arm):
     return model, arguments
 
 
+def _mass_matrices(model, system, trajectory, every):
+    """The model's and MuJoCo's (``mj_fullM``) mass matrices at every ``every``-th state."""
+    q, qd = trajectory.q[::every], trajectory.qd[::every]
+    mass, _ = model.dynamics_.mass_and_forcing(px.stack_variables(q, qd))
+    mj_model = system.mj_model()
+    mj_data = mujoco.MjData(mj_model)
+    reference = np.zeros((len(q), mj_model.nv, mj_model.nv))
+    for k, qpos in enumerate(q):
+        mj_data.qpos[:] = qpos
+        mujoco.mj_forward(mj_model, mj_data)
+        mujoco.mj_fullM(mj_model, mj_data, reference[k])
+    return mass, reference
+
+
 def _structure(catalog):
     return PhysicalStructure.from_combination(list(catalog.physical_names),
                                               catalog.combination)
@@ -55,17 +69,9 @@ def test_clean_data_recovers_the_base_parameters_and_mujocos_mass_matrix(arm):
     beta = catalog.lagrange_coefficients(model)
     truth = catalog.base_parameters
     assert np.abs(beta - truth).max() < 1e-8 * np.abs(truth).max()
-    mj_model = system.mj_model()
-    mj_data = mujoco.MjData(mj_model)
-    trajectory = data.trajectories[0]
-    mass, _ = model.dynamics_.mass_and_forcing(px.stack_variables(trajectory.q[::100],
-                                                                  trajectory.qd[::100]))
-    for k, qpos in enumerate(trajectory.q[::100]):
-        mj_data.qpos[:] = qpos
-        mujoco.mj_forward(mj_model, mj_data)
-        reference = np.zeros((mj_model.nv, mj_model.nv))
-        mujoco.mj_fullM(mj_model, mj_data, reference)
-        assert np.abs(mass[k] - reference).max() < 1e-7 * np.abs(reference).max()
+    mass, reference = _mass_matrices(model, system, data.trajectories[0], every=100)
+    for identified, exact in zip(mass, reference, strict=True):
+        assert np.abs(identified - exact).max() < 1e-7 * np.abs(exact).max()
     # a consistent estimate is kept as the optimizer found it
     np.testing.assert_array_equal(model.optimizer_.coef_, model.optimizer_.unconstrained_coef_)
 
@@ -217,19 +223,11 @@ def test_the_default_fit_estimates_every_parameter_consistently(arm):
     predicted = model.predict_forces(fresh.q, fresh.qd, fresh.qdd)
     error = (np.sqrt(np.mean((predicted - fresh.tau) ** 2, axis=0))
              / np.sqrt(np.mean(fresh.tau**2, axis=0)))
-    print("torque prediction error per joint", error)
     assert error.max() < 0.05
-    mj_model = system.mj_model()
-    mj_data = mujoco.MjData(mj_model)
-    mass, _ = model.dynamics_.mass_and_forcing(px.stack_variables(fresh.q[::50],
-                                                                  fresh.qd[::50]))
-    for k, qpos in enumerate(fresh.q[::50]):
-        mj_data.qpos[:] = qpos
-        mujoco.mj_forward(mj_model, mj_data)
-        reference = np.zeros((mj_model.nv, mj_model.nv))
-        mujoco.mj_fullM(mj_model, mj_data, reference)
-        assert np.linalg.norm(mass[k] - reference) < 0.03 * np.linalg.norm(reference)
-        assert np.linalg.eigvalsh(mass[k])[0] > 0
+    mass, reference = _mass_matrices(model, system, fresh, every=50)
+    for identified, exact in zip(mass, reference, strict=True):
+        assert np.linalg.norm(identified - exact) < 0.03 * np.linalg.norm(exact)
+        assert np.linalg.eigvalsh(identified)[0] > 0
 
 
 @pytest.mark.parametrize("row_scale", [1e-6, 1.0, 1e9])
