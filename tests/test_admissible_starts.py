@@ -7,12 +7,10 @@ the paper catalog end in a momentum balance of rank-one inertia and no admissibl
 """
 
 import sys
-import warnings
 
 import numpy as np
 import pytest
 
-import pysindy_xl as px
 from pysindy_xl.optimizers.admissible import admissible_supports, reference_mass_matrices
 
 
@@ -67,23 +65,9 @@ def test_cart_double_pendulum_unforced_at_3_percent_paper_catalog():
     """The noise sweep's cell (three 10 s unforced runs, 3 % position noise, seed 2): before
     the admissible starts, a 6-term law of constant inertia (rank one on the data) with a
     held-out ratio of 4.4; now the true 12-term law (held-out ratio about 1.3)."""
-    import pathlib
+    from unforced_cells import fit_unforced_cell
 
-    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "benchmarks"))
-    import noise_sweep
-    from ground_truth import random_initial_state
-
-    system, library, true = noise_sweep._setup("cart_double_pendulum")
-    true = true.copy()
-    true[library.force_columns_] = 0.0
-    t = np.arange(0.0, 10.0, 0.01)
-    runs = [system.simulate(random_initial_state(system, 2 + 1000 * k), t, None)
-            for k in range(3)]
-    rng = np.random.default_rng(10_002)
-    noisy = [r["q"] + 0.03 * r["q"].std(axis=0) * rng.normal(size=r["q"].shape) for r in runs]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model = px.XLSINDy(library).fit(noisy, [t] * 3)
+    model, true = fit_unforced_cell("cart_double_pendulum", 0.03, seed=2)
     coef = model.coefficients()
     np.testing.assert_array_equal(coef != 0, true != 0)
     scale = (coef @ true) / (coef @ coef)

@@ -1,9 +1,6 @@
 """Unforced weak form: test functions of several widths, and h-block cross-validation of the
 noise ratio (issue 34)."""
 
-import pathlib
-import sys
-import warnings
 
 import numpy as np
 import pytest
@@ -100,20 +97,9 @@ def test_cart_double_pendulum_unforced_at_5_percent():
     """Paper catalog, three unforced 10 s runs, 5 % position noise, seed 0: the exact law
     (with one test-function width and no gap the selection returned an 11-term law missing
     the pendulums' friction and an inertia term)."""
-    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "benchmarks"))
-    import noise_sweep
-    from ground_truth import random_initial_state
+    from unforced_cells import fit_unforced_cell
 
-    system, library, true = noise_sweep._setup("cart_double_pendulum")
-    true = true.copy()
-    true[library.force_columns_] = 0.0
-    t = np.arange(0.0, 10.0, 0.01)
-    runs = [system.simulate(random_initial_state(system, 1000 * k), t, None) for k in range(3)]
-    rng = np.random.default_rng(10_000)
-    noisy = [r["q"] + 0.05 * r["q"].std(axis=0) * rng.normal(size=r["q"].shape) for r in runs]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model = px.XLSINDy(library).fit(noisy, [t] * 3)
+    model, true = fit_unforced_cell("cart_double_pendulum", 0.05, seed=0)
     coef = model.coefficients()
     np.testing.assert_array_equal(coef != 0, true != 0)
     scaled = coef * (coef @ true) / (coef @ coef)
