@@ -495,8 +495,11 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             # their scales would undo the weighting (an undriven coordinate's rows, where
             # the law is tested hardest, weighed 30 times less than a driven one's)
             moments = None if propagated is None else propagated.moments()
+            draws = (propagated.draws if propagated is not None
+                     and getattr(optimizer, "uses_noise_draws", False) else None)
             return solve_problem(optimizer, dataclasses.replace(
-                problem, theta=rows, noise_moments=moments, balance=not whitened))
+                problem, theta=rows, noise_moments=moments, noise_draws=draws,
+                balance=not whitened))
 
         def unweighted(reason):  # said only of a fit that succeeds
             fitted = fit(optimizer, problem.theta, noise)

@@ -20,7 +20,8 @@ An optimizer that can refit a given support (the last step of an ensemble) imple
 ``_solve_support(problem, support)`` too, reached through ``fit_support``. What an optimizer
 needs or prefers is said by attributes, read by :class:`~pysindy_xl.XLSINDy` and the
 composite optimizers: ``requires_forces`` (explicit regression), ``uses_mass_matrices``
-(the mass matrices of the columns are worth computing), ``derivative_estimate``
+(the mass matrices of the columns are worth computing), ``uses_noise_draws`` (the
+row-resolved noise, ``CatalogProblem.noise_draws``, is worth passing), ``derivative_estimate``
 (``"smoothed"`` or ``"unbiased"`` derivatives for the strong form), ``can_refit``. An
 optimizer may also offer ``pilot()``, an unfitted cheaper optimizer of the same law for a
 first estimate (:func:`pilot_optimizer`).
@@ -317,6 +318,8 @@ class CatalogOptimizer(BaseEstimator):
     requires_forces = False
     #: the column mass matrices improve the fit (XLSINDy computes them only then)
     uses_mass_matrices = False
+    #: the draws of the rows' errors improve the fit (XLSINDy passes them only then)
+    uses_noise_draws = False
     #: derivatives the strong form should use: "smoothed" (bias small next to noise) or
     #: "unbiased" (a null-space search that the smoothing bias alone can hide the law from)
     derivative_estimate = "smoothed"

@@ -28,6 +28,11 @@ class WrappingOptimizer:
         return getattr(self._base(), "uses_mass_matrices", False)
 
     @property
+    def uses_noise_draws(self) -> bool:
+        """As the wrapped optimizer."""
+        return getattr(self._base(), "uses_noise_draws", False)
+
+    @property
     def derivative_estimate(self) -> str:
         """As the wrapped optimizer."""
         return getattr(self._base(), "derivative_estimate", "smoothed")

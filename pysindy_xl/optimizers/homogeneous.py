@@ -15,21 +15,23 @@ noise, larger for a law the data contradict):
    law that defines the motion.
 2. **Swaps.** At high noise a greedy path can lose a true column early, imitated by a
    correlated pair. A third path starts from the best admissible support of the first two
-   (step 4) and refines every support by single swaps before the next elimination, and every
-   path support up to that size is refined at its own size.
+   (step 4) and refines every support by single swaps before the next elimination, and the
+   best path support of every size up to that size is refined at its own size.
 3. **Score.** Every support is scored by ``n_folds``-fold cross-validation over contiguous
    blocks of rows: the law is estimated on the training rows and its noise ratio measured on
-   the held-out rows (their share of the moments). The training rows stop short of the
-   held-out ones by a gap (h-block cross-validation, :data:`FOLD_GAP`): neighbouring weak rows
-   share noise, and without the gap a large support fitting it holds on the held-out rows
-   seemingly better than the noise allows (held-out ratio below 1).
+   the held-out rows (their own moments, given the draws of the rows' errors: the propagated
+   noise varies along a trajectory; else their share of the block's). The training rows stop
+   short of the held-out ones by a gap (h-block cross-validation, :data:`FOLD_GAP`):
+   neighbouring weak rows share noise, and without the gap a large support fitting it holds
+   on the held-out rows seemingly better than the noise allows (held-out ratio below 1).
 4. **Admissible laws.** A law must explain every coordinate (its terms carry a real share of
    each coordinate's equation) and, given the columns' mass matrices, have a definite mass
    matrix on the states; the others compete only when no law is admissible.
 5. **Choice.** The smallest support within one standard error of the best (as
-   :func:`~pysindy_xl.optimizers.selection.select_support` does for the explicit problem): a
-   support missing a true term has a held-out ratio far above 1, the extra terms of a larger one
-   do not lower it beyond its spread.
+   :func:`~pysindy_xl.optimizers.selection.select_support` does for the explicit problem),
+   the larger of the two laws' errors: a support missing a true term has a held-out ratio
+   far above 1, the extra terms of a larger one do not lower it beyond its spread. The best
+   of many candidates is partly the luckiest, its spread biased low with its ratio.
 
 :func:`select_laws` repeats the selection on the coordinates a law leaves unexplained
 (uncoupled subsystems).
@@ -56,6 +58,7 @@ from .selection import ChosenSupport, fold_labels, fold_summary
 
 __all__ = [
     "LawSelection",
+    "RowMoments",
     "UndeterminedLawWarning",
     "combine_laws",
     "definite_mass",
@@ -69,6 +72,47 @@ __all__ = [
 #: Rows left out of the training rows on each side of a held-out fold, as a fraction of a
 #: fold (:func:`_held_out_ratios`).
 FOLD_GAP = 0.3
+
+
+@dataclasses.dataclass(frozen=True)
+class RowMoments:
+    """Noise moments of any set of rows, from Monte Carlo draws of the rows' errors.
+
+    The propagated noise of the weak rows is far from uniform along a trajectory (a term
+    that multiplies the noise by a velocity is noisy where the motion is fast): the share of
+    a block's moments that falls on a stretch of its rows can be several times its share of
+    the rows. A held-out noise ratio divides by the held-out rows' own moments.
+
+    Parameters
+    ----------
+    draws : ndarray, shape (D, n_rows, F)
+        Draws of the rows' errors.
+    floor : float, default 0.0
+        Added to the diagonal per row (the regularization of the block moments, spread
+        over the rows).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> draws = np.ones((2, 4, 1))
+    >>> moments = RowMoments(draws)
+    >>> float(moments(np.array([True, True, False, False]))[0, 0])
+    2.0
+    """
+
+    draws: np.ndarray
+    floor: float = 0.0
+
+    def __call__(self, rows) -> np.ndarray:
+        """``E[E_rows^T E_rows]``, shape (F, F), of the rows selected by a mask or indices."""
+        chosen = self.draws[:, rows]
+        flat = chosen.reshape(-1, chosen.shape[-1])
+        return flat.T @ flat / self.draws.shape[0] + (
+            self.floor * chosen.shape[1] * np.eye(flat.shape[1]))
+
+    def columns(self, keep) -> RowMoments:
+        """The moments of the columns ``keep`` only."""
+        return dataclasses.replace(self, draws=self.draws[:, :, keep])
 
 
 class UndeterminedLawWarning(UserWarning):
@@ -241,7 +285,7 @@ class LawSelection(ChosenSupport):
     cv_relative: float = np.nan
 
 
-def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
+def _held_out_ratios(theta, moments, supports, n_blocks, n_folds, row_moments=None):
     """Held-out noise ratio and relative squared residual of the law of every support.
 
     Returns two arrays of shape (n_folds, len(supports)); the relative residual is
@@ -252,7 +296,11 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
     each is a leading block of the triangular factors, so a fold costs one QR and small
     decompositions (not one decomposition of all the rows' factor per support). The supports
     of one size are decomposed as one stack. The training rows of a fold leave out
-    :data:`FOLD_GAP` of a fold on each side of its held-out rows."""
+    :data:`FOLD_GAP` of a fold on each side of its held-out rows.
+
+    ``row_moments(rows) -> (F, F)`` gives the noise moments of any set of rows (from the
+    draws of the rows' errors, :class:`FoldMoments`); without it each block's moments are
+    spread evenly over its rows."""
     ratios = np.full((n_folds, len(supports)), np.inf)
     relative = np.full((n_folds, len(supports)), np.inf)
     longest = np.asarray(max(supports, key=len))
@@ -260,6 +308,8 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
     if nested:
         theta = theta[:, longest]
         moments = moments[:, longest][:, :, longest]
+        if row_moments is not None:
+            row_moments = row_moments.columns(longest)
         supports = [np.arange(len(s)) for s in supports]
     labels = fold_labels(theta.shape[0], n_blocks, n_folds)
     per_block = theta.shape[0] // n_blocks
@@ -275,12 +325,14 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
         # or a law fitting that noise would look as if it held on the held-out rows
         first, last = position[test].min(), position[test].max()
         training = ~test & ((position < first - gap) | (position > last + gap))
-        # each block's moments spread evenly over its rows: the rows' share of each block
-        count = np.bincount(blocks)
-        test_moments = np.einsum("b,bfg->fg", np.bincount(blocks[test], minlength=n_blocks)
-                                 / count, moments)
-        train_moments = np.einsum("b,bfg->fg", np.bincount(blocks[training],
-                                                           minlength=n_blocks) / count, moments)
+        if row_moments is not None:  # the rows' own noise
+            test_moments, train_moments = row_moments(test), row_moments(training)
+        else:  # each block's moments spread evenly over its rows: the rows' share
+            count = np.bincount(blocks)
+            test_moments = np.einsum("b,bfg->fg", np.bincount(
+                blocks[test], minlength=n_blocks) / count, moments)
+            train_moments = np.einsum("b,bfg->fg", np.bincount(
+                blocks[training], minlength=n_blocks) / count, moments)
         r_train = triangular_factor(theta[training])
         r_test = triangular_factor(theta[test])
         for size in {len(support) for support in supports}:
@@ -306,8 +358,8 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds):
 
 
 def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
-               resolution: float = 1e-8, swaps: bool = True, mass_matrices=None
-               ) -> tuple[np.ndarray, float, LawSelection]:
+               resolution: float = 1e-8, swaps: bool = True, mass_matrices=None,
+               noise_draws=None) -> tuple[np.ndarray, float, LawSelection]:
     """Sparsest homogeneous law of noisy columns, by held-out noise ratio.
 
     Candidates are the supports of the backward and forward paths
@@ -315,8 +367,9 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     backward paths inside the supports of the admissible lasso
     (:func:`~pysindy_xl.optimizers.admissible.admissible_supports`) and, with ``swaps``, of a path
     refined by single swaps (:func:`refine_law_by_swaps`) at every size, from the best
-    admissible path support down, with every path support up to that size refined at its own
-    size. The choice is the smallest admissible support within one standard error of the best.
+    admissible path support down, with the best path support of every size up to that size
+    refined at its own size. The choice is the smallest admissible support within one
+    standard error (its own or the best's, the larger) of the best.
 
     Parameters
     ----------
@@ -336,6 +389,12 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         (:func:`~pysindy_xl.diagnostics.column_mass_matrices`): laws whose mass matrix is not
         definite there are not candidates (unless no law is definite), and the admissible
         lasso gives further starts.
+    noise_draws : array, shape (D, n_rows, F), optional
+        Draws of the rows' errors whose second moments are ``noise_moments``: each fold's
+        held-out and training rows then get their own moments (:class:`RowMoments`), not
+        their share of the block's. The propagated noise varies along a trajectory, and
+        with even shares the held-out ratio of the true law spreads over the folds several
+        times more than the noise explains.
 
     Returns
     -------
@@ -367,6 +426,17 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     floor = 1e-10 * np.mean(np.diagonal(moments, axis1=1, axis2=2)) / len(moments)
     moments = moments + floor * np.eye(theta.shape[1])[None]
     total = moments.sum(axis=0)
+    row_moments = None
+    if noise_draws is not None:
+        noise_draws = np.asarray(noise_draws, dtype=float)
+        if noise_draws.ndim != 3 or noise_draws.shape[1:] != theta.shape:
+            raise ValueError(f"noise_draws: expected shape (D, {theta.shape[0]}, "
+                             f"{theta.shape[1]}), got {noise_draws.shape}")
+        row_moments = RowMoments(noise_draws / scale, floor * n_blocks / theta.shape[0])
+
+    def scored(supports, how):
+        return _scored(theta, moments, supports, how, n_blocks, n_folds, row_moments)
+
     r_factor = triangular_factor(theta)
     order = law_elimination_path(r_factor, total)
     forward = law_forward_path(r_factor, total)
@@ -405,11 +475,9 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     kept = [(how, [s for s in supports if admissible_support(s)]) for how, supports in paths]
     if not any(supports for _, supports in kept):
         kept = paths
-    candidates = [c for how, supports in kept
-                  for c in _scored(theta, moments, supports, how, n_blocks, n_folds)]
+    candidates = [c for how, supports in kept for c in scored(supports, how)]
     if not candidates and kept is not paths:  # no admissible one can be cross-validated
-        candidates = [c for how, supports in paths
-                      for c in _scored(theta, moments, supports, how, n_blocks, n_folds)]
+        candidates = [c for how, supports in paths for c in scored(supports, how)]
     if not candidates:
         raise ValueError("theta: no law can be cross-validated on these rows")
 
@@ -422,10 +490,17 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         # the search starts from the best admissible path law (only admissible laws can be
         # chosen: an inadmissible best, e.g. a law of one coordinate's rows, may be far
         # smaller or larger than any admissible one); the swap-refined path from it, and
-        # every path support up to its size refined at its own size; each support scored once
+        # the best path support of every size up to its size refined at that size (the
+        # other path supports of a size lead mostly to the same local optima, at a cost that
+        # grows with the number of admissible starts); each support scored once
         best_path = best_admissible(candidates)
-        starts = [s for _, supports in paths for s in supports
-                  if len(s) <= len(best_path.support)]
+        starts = {}
+        for candidate in sorted(candidates, key=lambda c: c.ratio):
+            size = len(candidate.support)
+            if size <= len(best_path.support) and size not in starts \
+                    and (admissible(candidate) or not admissible(best_path)):
+                starts[size] = candidate.support
+        starts = [starts[size] for size in sorted(starts)]
         seen = {frozenset(s.tolist()) for _, supports in paths for s in supports}
         refined, memo = [], {}  # many starts meet on their way: each search is done once
         for support in _refined_path(r_factor, total, best_path.support, memo) + [
@@ -433,19 +508,22 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
             if frozenset(support.tolist()) not in seen:
                 seen.add(frozenset(support.tolist()))
                 refined.append(support)
-        candidates += _scored(theta, moments, refined, "swap-refined", n_blocks, n_folds)
+        candidates += scored(refined, "swap-refined")
     best = best_admissible(candidates)
     # only admissible laws compete, unless there is none
     competes = admissible if admissible(best) else (lambda c: True)
-    # one standard error, or the resolution on the relative residual (clean data: the
-    # moments are tiny, the ratios large, and extra terms that fit quadrature errors must not
-    # win on that alone) in ratio units, by the best support's ratio-to-relative factor
+    # one standard error, the larger of the two laws' (the best of many candidates is
+    # partly the luckiest: its ratio and spread are both biased low, and the supersets of
+    # the true law that swaps find dip below it by chance), or the resolution on the
+    # relative residual (clean data: the moments are tiny, the ratios large, and extra
+    # terms that fit quadrature errors must not win on that alone) in ratio units, by the
+    # best support's ratio-to-relative factor
     resolution_in_ratio = resolution * best.ratio / max(best.relative, 1e-300)
-    limit = best.ratio + max(best.spread, resolution_in_ratio)
-    within = [c for c in candidates if c.ratio <= limit and competes(c)]
+    within = [c for c in candidates if competes(c) and c.ratio <= best.ratio + max(
+        best.spread, c.spread, resolution_in_ratio)]
     chosen = min(within, key=lambda c: (len(c.support), c.ratio))
     support = chosen.support
-    rivals = _rivals(within, limit, support)
+    rivals = _rivals(within, support)
     ratio, values = noise_ratio_law(r_factor[:, support], total[np.ix_(support, support)])
     law = np.zeros(theta.shape[1])
     law[support] = values / scale[support]
@@ -471,12 +549,11 @@ class _Candidate:
     how: str
 
 
-def _rivals(candidates, limit, support, max_rivals: int = 5) -> list:
-    """Supports within ``limit`` that neither contain ``support`` nor another rival (a law
+def _rivals(candidates, support, max_rivals: int = 5) -> list:
+    """Supports of ``candidates`` that neither contain ``support`` nor another rival (a law
     with terms added is no rival), smallest first."""
     chosen, rivals = set(support.tolist()), []
-    for candidate in sorted((c for c in candidates if c.ratio <= limit),
-                            key=lambda c: (len(c.support), c.ratio)):
+    for candidate in sorted(candidates, key=lambda c: (len(c.support), c.ratio)):
         terms = set(candidate.support.tolist())
         if terms >= chosen or any(terms >= set(r.tolist()) for r in rivals):
             continue
@@ -486,11 +563,12 @@ def _rivals(candidates, limit, support, max_rivals: int = 5) -> list:
     return rivals
 
 
-def _scored(theta, moments, supports, how, n_blocks, n_folds) -> list:
+def _scored(theta, moments, supports, how, n_blocks, n_folds, row_moments=None) -> list:
     """Candidates of the supports that can be cross-validated."""
     if not supports:
         return []
-    ratios, relative = _held_out_ratios(theta, moments, supports, n_blocks, n_folds)
+    ratios, relative = _held_out_ratios(theta, moments, supports, n_blocks, n_folds,
+                                        row_moments)
     (mean, spread), (relative_mean, _) = fold_summary(ratios), fold_summary(relative)
     return [_Candidate(np.asarray(s), mean[m], spread[m], relative_mean[m], how)
             for m, s in enumerate(supports) if np.isfinite(mean[m])]
@@ -526,7 +604,7 @@ def _refined_path(r_factor, moments, start, memo=None) -> list:
 
 
 def select_laws(theta, noise_moments, n_blocks: int, mass_matrices=None,
-                max_ratio_factor: float = 10.0) -> tuple[list, list, list]:
+                max_ratio_factor: float = 10.0, noise_draws=None) -> tuple[list, list, list]:
     """Laws for all the coordinates: :func:`select_law`, then again on the coordinates left
     unexplained, with the columns that leave the explained ones alone (uncoupled subsystems).
 
@@ -539,6 +617,8 @@ def select_laws(theta, noise_moments, n_blocks: int, mass_matrices=None,
     mass_matrices : array, shape (S, F, n_blocks, n_blocks), optional
     max_ratio_factor : float, default 10.0
         A further law is kept when its noise ratio is within this factor of the first's.
+    noise_draws : array, shape (D, n_blocks * N, F), optional
+        Draws of the rows' errors (see :func:`select_law`).
 
     Returns
     -------
@@ -577,11 +657,12 @@ def select_laws(theta, noise_moments, n_blocks: int, mass_matrices=None,
             break
         mass = (None if mass_matrices is None
                 else mass_matrices[:, columns][:, :, left][:, :, :, left])
+        rows = np.repeat(left, n_samples)
         try:
             law, ratio, selection = select_law(
-                theta[np.ix_(np.repeat(left, n_samples), columns)],
-                noise_moments[left][:, columns][:, :, columns], n_blocks=int(left.sum()),
-                mass_matrices=mass)
+                theta[np.ix_(rows, columns)], noise_moments[left][:, columns][:, :, columns],
+                n_blocks=int(left.sum()), mass_matrices=mass,
+                noise_draws=None if noise_draws is None else noise_draws[:, rows][:, :, columns])
         except ValueError:  # too few rows or columns left to cross-validate
             break
         if laws and ratio > max_ratio_factor * max(ratios[0], 1e-12):

@@ -205,6 +205,7 @@ class ImplicitOptimizer(CatalogOptimizer):
     """
 
     uses_mass_matrices = True
+    uses_noise_draws = True
     derivative_estimate = "unbiased"
     spec_type = "ImplicitOptimizer"
 
@@ -291,7 +292,7 @@ class ImplicitOptimizer(CatalogOptimizer):
             self._fit(theta, n, problem.force_columns, problem.reference_columns)
         else:
             self._fit_noisy(theta, n, problem.force_columns, problem.reference_columns,
-                            problem.noise_moments, problem.mass_matrices)
+                            problem.noise_moments, problem.mass_matrices, problem.noise_draws)
         warn_unexplained("ImplicitOptimizer", theta, n, self.coef_, problem.force_columns)
         return self
 
@@ -355,14 +356,15 @@ class ImplicitOptimizer(CatalogOptimizer):
 
     # ------------------------------------------------------------------ core
     def _fit_noisy(self, theta, n_coordinates, force_columns, reference_columns, moments,
-                   mass_matrices):
-        """Laws selected by held-out noise ratio, one per group of coordinates they explain."""
+                   mass_matrices, draws=None):
+        """Laws selected by held-out noise ratio, one per group of coordinates they explain
+        (each fold with its rows' own noise moments, given the draws of the rows' errors)."""
         self._check_params()
         self.selection_method_ = "noise ratio"
         norms = column_norms(theta)[0]
         self.column_norms_ = norms
         laws, ratios, selections = select_laws(theta, moments, n_coordinates, mass_matrices,
-                                               self.max_residual_ratio)
+                                               self.max_residual_ratio, draws)
         if not laws:
             raise NoLawFoundError(
                 "ImplicitOptimizer: no law could be selected from the noisy columns (too few "

@@ -190,6 +190,11 @@ class MixedOptimizer(CatalogOptimizer):
         return any(getattr(part, "uses_mass_matrices", False)
                    for part in self._sub_optimizers())
 
+    @property
+    def uses_noise_draws(self) -> bool:
+        """Whether a part uses the draws of the rows' errors."""
+        return any(getattr(part, "uses_noise_draws", False) for part in self._sub_optimizers())
+
     def _solve(self, problem):
         """Mixed explicit/implicit regression (see the module docstring); each part gets its
         sub-problem: its rows and columns with their noise moments and mass matrices."""

@@ -16,7 +16,11 @@ of coordinate 1, ...; see :mod:`pysindy_xl.feature_library._base`) and what is k
 * ``reference_columns``: the columns allowed to carry the ``+1`` of an unforced law;
 * ``physical``: what the columns stand for physically (base parameters of rigid bodies,
   friction; a :class:`~pysindy_xl.physical.PhysicalStructure` in the problem's columns), for
-  optimizers that constrain the coefficients to physically consistent values.
+  optimizers that constrain the coefficients to physically consistent values;
+* ``noise_draws`` ``(D, n_coordinates * N, F)``: Monte Carlo draws of the rows' errors, whose
+  second moments are ``noise_moments``. They resolve the noise row by row: the propagated
+  noise varies along a trajectory, and a part of the rows (a cross-validation fold, an
+  ensemble's subsample) gets its own moments instead of its share of the block's.
 
 Every row of ``theta @ coef = 0`` holds exactly, so multiplying the rows of one coordinate block
 by a constant changes how the regression weighs the blocks, never the true coefficients:
@@ -25,8 +29,8 @@ next to one in radians is solved like the same system in metres).
 
 The problem is validated once, where it is made (:meth:`CatalogProblem.from_arrays`); the
 sub-problems of mixed regression (:meth:`~CatalogProblem.subproblem`) and the subsamples of
-an ensemble (:meth:`~CatalogProblem.subsample`) are derived from it, with their share of the
-noise moments and mass matrices.
+an ensemble (:meth:`~CatalogProblem.subsample`) are derived from it, with their noise moments
+(their own, given the draws; else their share) and mass matrices.
 """
 
 from __future__ import annotations
@@ -38,6 +42,7 @@ import numpy as np
 
 from .._validation import check_indices, check_numeric_array, check_option
 from ..physical.structure import PhysicalStructure
+from ..weak.noise import draw_moments as _draw_moments
 
 __all__ = [
     "CatalogProblem",
@@ -67,6 +72,7 @@ class CatalogProblem:
     balance : bool
     reference_columns : ndarray of int or None
     physical : PhysicalStructure or None
+    noise_draws : ndarray, shape (D, n_coordinates * N, F), or None
 
     Examples
     --------
@@ -93,10 +99,12 @@ class CatalogProblem:
     balance: bool = True
     reference_columns: np.ndarray | None = None
     physical: PhysicalStructure | None = None
+    noise_draws: np.ndarray | None = None
 
     @classmethod
     def from_arrays(cls, theta, n_coordinates, force_columns, noise_moments=None,
-                    mass_matrices=None, balance=True, reference_columns=None, physical=None):
+                    mass_matrices=None, balance=True, reference_columns=None, physical=None,
+                    noise_draws=None):
         """Check the arguments of ``fit_catalog`` and hold them as a problem.
 
         Parameters
@@ -110,6 +118,9 @@ class CatalogProblem:
         reference_columns : sequence of int, optional
         physical : PhysicalStructure, optional
             In the columns of ``theta``.
+        noise_draws : array, shape (D, n_coordinates * N, F), optional
+            Draws of the rows' errors; ``noise_moments`` default to their second moments
+            (:func:`~pysindy_xl.weak.draw_moments`).
 
         Returns
         -------
@@ -132,6 +143,14 @@ class CatalogProblem:
         n_features = theta.shape[1]
         force_columns = check_indices(force_columns, "force_columns", n_features)
         check_option("balance", balance, "bool")
+        if noise_draws is not None:
+            noise_draws = check_numeric_array(noise_draws, "noise_draws", min_samples=0)
+            if noise_draws.ndim != 3 or noise_draws.shape[1:] != theta.shape \
+                    or noise_draws.shape[0] == 0:
+                raise ValueError(f"noise_draws: expected shape (D, {theta.shape[0]}, "
+                                 f"{n_features}) with D >= 1, got {noise_draws.shape}")
+            if noise_moments is None:
+                noise_moments = _draw_moments(noise_draws, n)
         if noise_moments is not None:
             noise_moments = check_noise_moments(noise_moments, n, n_features)
         if mass_matrices is not None:
@@ -149,7 +168,7 @@ class CatalogProblem:
             if np.any((used < 0) | (used >= n_features)):
                 raise ValueError(f"physical: column indices must lie in [0, {n_features})")
         return cls(theta, n, force_columns, noise_moments, mass_matrices, bool(balance),
-                   reference_columns, physical)
+                   reference_columns, physical, noise_draws)
 
     @property
     def n_samples(self) -> int:
@@ -170,16 +189,18 @@ class CatalogProblem:
         return coordinate_weights(self.theta, self.n_coordinates, self.force_columns)
 
     def balanced(self) -> CatalogProblem:
-        """The same problem with each coordinate block's rows (and noise moments) scaled by
-        :attr:`block_weights`; ``balance`` is then False (the blocks are weighed)."""
+        """The same problem with each coordinate block's rows (and noise moments and draws)
+        scaled by :attr:`block_weights`; ``balance`` is then False (the blocks are weighed)."""
         if not self.balance:
             return self
         weights = self.block_weights
-        moments = self.noise_moments
+        moments, draws = self.noise_moments, self.noise_draws
         if moments is not None:
             moments = moments * (weights**2)[:, None, None]
+        if draws is not None:
+            draws = draws * np.repeat(weights, self.n_samples)[None, :, None]
         return dataclasses.replace(self, theta=scale_blocks(self.theta, weights),
-                                   noise_moments=moments, balance=False)
+                                   noise_moments=moments, noise_draws=draws, balance=False)
 
     def pooled_moments(self) -> np.ndarray | None:
         """The noise moments of all rows together, shape (F, F), or None."""
@@ -212,9 +233,11 @@ class CatalogProblem:
             force_columns = np.flatnonzero(np.isin(columns, self.force_columns))
         whole = coordinates.all() and np.array_equal(columns, np.arange(self.n_features))
         theta = self.theta if whole else self.theta[np.ix_(self.rows(coordinates), columns)]
-        moments, mass = self.noise_moments, self.mass_matrices
+        moments, mass, draws = self.noise_moments, self.mass_matrices, self.noise_draws
         if moments is not None:
             moments = moments[coordinates][:, columns][:, :, columns]
+        if draws is not None and not whole:
+            draws = draws[:, self.rows(coordinates)][:, :, columns]
         if mass is not None:
             mass = mass[:, columns][:, :, coordinates][:, :, :, coordinates]
         reference = self.reference_columns
@@ -224,20 +247,26 @@ class CatalogProblem:
         return dataclasses.replace(self, theta=theta, n_coordinates=int(coordinates.sum()),
                                    force_columns=np.asarray(force_columns, dtype=int),
                                    noise_moments=moments, mass_matrices=mass,
-                                   reference_columns=reference, physical=physical)
+                                   reference_columns=reference, physical=physical,
+                                   noise_draws=draws)
 
     def subsample(self, samples) -> CatalogProblem:
         """The rows of ``samples`` (indices within a block) in every coordinate block.
 
-        The noise moments are sums over rows: the subsample gets its rows' share. The mass
-        matrices are properties of the columns at sample states, not of rows: kept whole.
+        The noise moments are sums over rows: the subsample gets its rows' own (given the
+        draws) or their share. The mass matrices are properties of the columns at sample
+        states, not of rows: kept whole.
         """
         samples = np.asarray(samples, dtype=int)
         rows = (np.arange(self.n_coordinates)[:, None] * self.n_samples + samples).ravel()
-        moments = self.noise_moments
-        if moments is not None:
+        moments, draws = self.noise_moments, self.noise_draws
+        if draws is not None:
+            draws = draws[:, rows]
+            moments = _draw_moments(draws, self.n_coordinates)
+        elif moments is not None:
             moments = moments * (len(samples) / self.n_samples)
-        return dataclasses.replace(self, theta=self.theta[rows], noise_moments=moments)
+        return dataclasses.replace(self, theta=self.theta[rows], noise_moments=moments,
+                                   noise_draws=draws)
 
 
 def check_noise_moments(noise_moments, n_coordinates: int, n_features: int) -> np.ndarray:
