@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import warnings
 
 import numpy as np
@@ -31,23 +30,18 @@ from .optimizers import (
     ExplicitOptimizer,
     default_optimizer,
     independent_columns,
-    pilot_optimizer,
-    solve_problem,
 )
 from .regression import (
     FORMULATIONS,
     Regression,
     build_regression,
     differentiation_function,
+    solve_weak_problem,
     trajectory_data,
 )
 from .still import block_rows, driven_coordinates, still_columns, still_coordinates
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
-
-#: Fits on whitened rows at most (``residual_covariance``): the last one is kept even when
-#: its support still differs from the law that weighed it.
-_MAX_REWEIGHTS = 3
 
 
 def _probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndarray:
@@ -385,11 +379,12 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             noise = noise.columns(keep)
             noise = noise.coordinates(moving) if still.any() else noise
         structure = library.physical_structure()  # for optimizers that constrain to it
-        optimizer = self._fit_optimizer(optimizer, CatalogProblem.from_arrays(
+        optimizer = solve_weak_problem(optimizer, CatalogProblem.from_arrays(
             theta[block_rows(n, theta.shape[0], moving)][:, keep], int(moving.sum()),
             force_columns, mass_matrices=mass,
             physical=None if structure is None else structure.select(keep)), noise,
-            forced[moving])
+            forced[moving].any() if self.residual_covariance == "auto"
+            else self.residual_covariance)
         coef = np.zeros(theta.shape[1])
         coef[keep] = optimizer.coef_
         self.feature_library_ = library
@@ -484,55 +479,6 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             return self.formulation
         measured = x_dot is not None and x_ddot is not None
         return "strong" if measured or self.differentiation_method is not None else "weak"
-
-    def _fit_optimizer(self, optimizer, problem, noise, forced):
-        """Fit ``optimizer`` on ``problem``; on weak rows with propagated ``noise``
-        (:class:`~pysindy_xl.weak.WeakNoise`), with its noise moments, and on the rows
-        whitened by the covariance of the residual of the law (``residual_covariance``).
-        Returns the fitted optimizer."""
-        def fit(optimizer, rows, propagated, whitened=False):
-            # whitened rows are each in units of their own noise: rebalancing the blocks by
-            # their scales would undo the weighting (an undriven coordinate's rows, where
-            # the law is tested hardest, weighed 30 times less than a driven one's)
-            moments = None if propagated is None else propagated.moments()
-            draws = (propagated.draws if propagated is not None
-                     and getattr(optimizer, "uses_noise_draws", False) else None)
-            return solve_problem(optimizer, dataclasses.replace(
-                problem, theta=rows, noise_moments=moments, noise_draws=draws,
-                balance=not whitened))
-
-        def unweighted(reason):  # said only of a fit that succeeds
-            fitted = fit(optimizer, problem.theta, noise)
-            warnings.warn(f"residual_covariance: {reason}; the rows are fitted unweighted",
-                          UserWarning, stacklevel=2)
-            return fitted
-
-        weigh = forced.any() if self.residual_covariance == "auto" else self.residual_covariance
-        if noise is None or not weigh:
-            return fit(optimizer, problem.theta, noise)
-        try:
-            with warnings.catch_warnings():  # the pilot only sets the first weights
-                warnings.simplefilter("ignore")
-                law = fit(pilot_optimizer(optimizer), problem.theta, noise).coef_
-        except (ValueError, RuntimeError, np.linalg.LinAlgError) as error:
-            return unweighted(f"the pilot fit failed ({error})")
-        # iteratively reweighted: refit with the weights of the latest law until the support
-        # found is the one that set the weights; only the answer's warnings are shown
-        for _ in range(_MAX_REWEIGHTS):
-            whiten = noise.whitener(law)
-            if whiten is None:
-                return unweighted("the residual of the law carries no noise")
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                fitted = fit(clone(optimizer), whiten(problem.theta), noise.whitened(whiten),
-                             whitened=True)
-            settled = np.array_equal(fitted.coef_ != 0, law != 0)
-            law = fitted.coef_
-            if settled:
-                break
-        for record in caught:
-            warnings.warn(record.message, record.category, stacklevel=2)
-        return fitted
 
     def _optimizer(self, forced: np.ndarray, estimated: bool, library):
         """The optimizer to fit: a clone of the user's, or

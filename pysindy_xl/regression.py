@@ -24,16 +24,19 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import warnings
 
 import numpy as np
 import pysindy as ps
+from sklearn.base import clone
 
 from ._inputs import trajectory_arrays
 from .feature_library import stack_variables
+from .optimizers import pilot_optimizer, solve_problem
 from .weak import BumpTestFunctions, WhittakerSmoother, weak_regression
 
 __all__ = ["Regression", "build_regression", "trajectory_data", "differentiation_function",
-           "FORMULATIONS"]
+           "solve_weak_problem", "FORMULATIONS"]
 
 FORMULATIONS = ("auto", "strong", "weak")
 
@@ -189,3 +192,73 @@ def build_regression(library, data, formulation: str, test_functions=None, smoot
     if len(states) == 0:
         raise ValueError("sample_mask: no sample left to fit")
     return Regression(library.transform(states), states, "strong")
+
+
+#: Fits on whitened rows at most (:func:`solve_weak_problem`): the last one is kept even when
+#: its support still differs from the law that weighed it.
+MAX_REWEIGHTS = 3
+
+
+def solve_weak_problem(optimizer, problem, noise=None, weigh=False):
+    """Fit ``optimizer`` on ``problem``, given the propagated noise of its rows.
+
+    With ``noise`` (:class:`~pysindy_xl.weak.WeakNoise`, the rows' errors drawn again) the
+    problem gets its noise moments and, for optimizers that use them (``uses_noise_draws``),
+    the draws themselves. With ``weigh`` the fit is iteratively reweighted: the rows are
+    whitened by the covariance of the residual of the latest law
+    (:meth:`~pysindy_xl.weak.WeakNoise.whitener`, starting from the optimizer's pilot law)
+    and refitted, until the support found is the one that set the weights (at most
+    :data:`MAX_REWEIGHTS` fits); only the answer's warnings are shown.
+
+    Parameters
+    ----------
+    optimizer : catalog optimizer
+        Fitted in place (the reweighted fits on clones).
+    problem : CatalogProblem
+    noise : WeakNoise, optional
+    weigh : bool, default False
+
+    Returns
+    -------
+    The fitted optimizer.
+    """
+    def fit(optimizer, rows, propagated, whitened=False):
+        # whitened rows are each in units of their own noise: rebalancing the blocks by
+        # their scales would undo the weighting (an undriven coordinate's rows, where
+        # the law is tested hardest, weighed 30 times less than a driven one's)
+        moments = None if propagated is None else propagated.moments()
+        draws = (propagated.draws if propagated is not None
+                 and getattr(optimizer, "uses_noise_draws", False) else None)
+        return solve_problem(optimizer, dataclasses.replace(
+            problem, theta=rows, noise_moments=moments, noise_draws=draws,
+            balance=not whitened))
+
+    def unweighted(reason):  # said only of a fit that succeeds
+        fitted = fit(optimizer, problem.theta, noise)
+        warnings.warn(f"residual_covariance: {reason}; the rows are fitted unweighted",
+                      UserWarning, stacklevel=3)
+        return fitted
+
+    if noise is None or not weigh:
+        return fit(optimizer, problem.theta, noise)
+    try:
+        with warnings.catch_warnings():  # the pilot only sets the first weights
+            warnings.simplefilter("ignore")
+            law = fit(pilot_optimizer(optimizer), problem.theta, noise).coef_
+    except (ValueError, RuntimeError, np.linalg.LinAlgError) as error:
+        return unweighted(f"the pilot fit failed ({error})")
+    for _ in range(MAX_REWEIGHTS):
+        whiten = noise.whitener(law)
+        if whiten is None:
+            return unweighted("the residual of the law carries no noise")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fitted = fit(clone(optimizer), whiten(problem.theta), noise.whitened(whiten),
+                         whitened=True)
+        settled = np.array_equal(fitted.coef_ != 0, law != 0)
+        law = fitted.coef_
+        if settled:
+            break
+    for record in caught:
+        warnings.warn(record.message, record.category, stacklevel=3)
+    return fitted
