@@ -16,7 +16,8 @@ noise, larger for a law the data contradict):
 2. **Swaps.** At high noise a greedy path can lose a true column early, imitated by a
    correlated pair. A third path starts from the best admissible support of the first two
    (step 4) and refines every support by single swaps before the next elimination, and the
-   best path support of every size up to that size is refined at its own size.
+   best path supports of every size up to that size (:data:`STARTS_PER_SIZE`) are refined at
+   their own size.
 3. **Score.** Every support is scored by ``n_folds``-fold cross-validation over contiguous
    blocks of rows: the law is estimated on the training rows and its noise ratio measured on
    the held-out rows (their own moments, given the draws of the rows' errors: the propagated
@@ -72,6 +73,9 @@ __all__ = [
 #: Rows left out of the training rows on each side of a held-out fold, as a fraction of a
 #: fold (:func:`_held_out_ratios`).
 FOLD_GAP = 0.3
+
+#: Path supports of each size refined by swaps (those of lowest held-out ratio).
+STARTS_PER_SIZE = 3
 
 
 @dataclasses.dataclass(frozen=True)
@@ -367,8 +371,8 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     backward paths inside the supports of the admissible lasso
     (:func:`~pysindy_xl.optimizers.admissible.admissible_supports`) and, with ``swaps``, of a path
     refined by single swaps (:func:`refine_law_by_swaps`) at every size, from the best
-    admissible path support down, with the best path support of every size up to that size
-    refined at its own size. The choice is the smallest admissible support within one
+    admissible path support down, with the best path supports of every size up to that size
+    refined at their own size. The choice is the smallest admissible support within one
     standard error (its own or the best's, the larger) of the best.
 
     Parameters
@@ -490,17 +494,18 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         # the search starts from the best admissible path law (only admissible laws can be
         # chosen: an inadmissible best, e.g. a law of one coordinate's rows, may be far
         # smaller or larger than any admissible one); the swap-refined path from it, and
-        # the best path support of every size up to its size refined at that size (the
-        # other path supports of a size lead mostly to the same local optima, at a cost that
-        # grows with the number of admissible starts); each support scored once
+        # the best few path supports of every size up to its size refined at that size (the
+        # others lead mostly to the same local optima, at a cost that grows with the number
+        # of admissible starts); each support scored once
         best_path = best_admissible(candidates)
         starts = {}
         for candidate in sorted(candidates, key=lambda c: c.ratio):
             size = len(candidate.support)
-            if size <= len(best_path.support) and size not in starts \
+            if size <= len(best_path.support) \
+                    and len(starts.setdefault(size, [])) < STARTS_PER_SIZE \
                     and (admissible(candidate) or not admissible(best_path)):
-                starts[size] = candidate.support
-        starts = [starts[size] for size in sorted(starts)]
+                starts[size].append(candidate.support)
+        starts = [support for size in sorted(starts) for support in starts[size]]
         seen = {frozenset(s.tolist()) for _, supports in paths for s in supports}
         refined, memo = [], {}  # many starts meet on their way: each search is done once
         for support in _refined_path(r_factor, total, best_path.support, memo) + [
