@@ -203,11 +203,11 @@ def solve_weak_problem(optimizer, problem, noise=None, weigh=False):
     """Fit ``optimizer`` on ``problem``, given the propagated noise of its rows.
 
     With ``noise`` (:class:`~pysindy_xl.weak.WeakNoise`, the rows' errors drawn again) the
-    problem gets its noise moments and, for optimizers that use them (``uses_noise_draws``),
-    the draws themselves. With ``weigh`` the fit is iteratively reweighted: the rows are
-    whitened by the covariance of the residual of the latest law
-    (:meth:`~pysindy_xl.weak.WeakNoise.whitener`, starting from the optimizer's pilot law)
-    and refitted, until the support found is the one that set the weights (at most
+    problem gets its noise moments and the draws themselves (for the optimizers that use
+    them, :func:`~pysindy_xl.optimizers.solve_problem`). With ``weigh`` the fit is
+    iteratively reweighted: the rows are whitened by the covariance of the residual of the
+    latest law (:meth:`~pysindy_xl.weak.WeakNoise.whitener`, starting from the optimizer's
+    pilot law) and refitted, until the support found is the one that set the weights (at most
     :data:`MAX_REWEIGHTS` fits); only the answer's warnings are shown.
 
     Parameters
@@ -226,9 +226,8 @@ def solve_weak_problem(optimizer, problem, noise=None, weigh=False):
         # whitened rows are each in units of their own noise: rebalancing the blocks by
         # their scales would undo the weighting (an undriven coordinate's rows, where
         # the law is tested hardest, weighed 30 times less than a driven one's)
-        moments = None if propagated is None else propagated.moments()
-        draws = (propagated.draws if propagated is not None
-                 and getattr(optimizer, "uses_noise_draws", False) else None)
+        moments, draws = ((None, None) if propagated is None
+                          else (propagated.moments(), propagated.draws))
         return solve_problem(optimizer, dataclasses.replace(
             problem, theta=rows, noise_moments=moments, noise_draws=draws,
             balance=not whitened))

@@ -71,3 +71,24 @@ def test_problem_keeps_draws_and_moments_consistent():
 def test_draws_of_the_wrong_shape_or_not_finite_are_refused(draws, message):
     with pytest.raises(ValueError, match=message):
         CatalogProblem.from_arrays(np.ones((40, 3)), 2, [], noise_draws=draws)
+
+
+def test_only_optimizers_that_use_the_draws_get_them():
+    from pysindy_xl.optimizers import ExplicitOptimizer, ImplicitOptimizer, solve_problem
+
+    seen = {}
+
+    class Spy(ImplicitOptimizer):
+        def _solve(self, problem):
+            seen[type(self).uses_noise_draws] = problem.noise_draws is not None
+            return super()._solve(problem)
+
+    class QuietSpy(Spy):
+        uses_noise_draws = False
+
+    theta, draws = _heteroscedastic_law(0, n_rows=400)
+    problem = CatalogProblem.from_arrays(theta, 1, [], noise_draws=draws)
+    for optimizer in (Spy(), QuietSpy()):
+        solve_problem(optimizer, problem)
+    assert seen == {True: True, False: False}
+    assert not ExplicitOptimizer().uses_noise_draws and ImplicitOptimizer().uses_noise_draws

@@ -34,6 +34,7 @@ when it is defined.
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
@@ -68,8 +69,10 @@ def solve_problem(optimizer, problem: CatalogProblem):
     Parameters
     ----------
     optimizer : CatalogOptimizer or object with ``fit_catalog``
-        The package's optimizers get the whole problem (:meth:`CatalogOptimizer.fit_problem`);
-        any other object the bare ``fit_catalog(theta, n_coordinates, force_columns)``.
+        The package's optimizers get the whole problem (:meth:`CatalogOptimizer.fit_problem`),
+        less the draws of the rows' errors unless they use them (``uses_noise_draws``: the
+        others fit on the same moments whether or not the draws come along); any other
+        object the bare ``fit_catalog(theta, n_coordinates, force_columns)``.
     problem : CatalogProblem
 
     Returns
@@ -85,6 +88,9 @@ def solve_problem(optimizer, problem: CatalogProblem):
     array([-1.,  2.])
     """
     if isinstance(optimizer, CatalogOptimizer):
+        if problem.noise_draws is not None and not getattr(optimizer, "uses_noise_draws",
+                                                               False):
+            problem = dataclasses.replace(problem, noise_draws=None)
         return optimizer.fit_problem(problem)
     return optimizer.fit_catalog(problem.theta, problem.n_coordinates, problem.force_columns)
 
