@@ -303,18 +303,20 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds, row_moments=No
     :data:`FOLD_GAP` of a fold on each side of its held-out rows.
 
     ``row_moments(rows) -> (F, F)`` gives the noise moments of any set of rows (from the
-    draws of the rows' errors, :class:`FoldMoments`); without it each block's moments are
+    draws of the rows' errors, :class:`RowMoments`); without it each block's moments are
     spread evenly over its rows."""
     ratios = np.full((n_folds, len(supports)), np.inf)
     relative = np.full((n_folds, len(supports)), np.inf)
     longest = np.asarray(max(supports, key=len))
     nested = all(np.array_equal(s, longest[:len(s)]) for s in supports)
-    if nested:
-        theta = theta[:, longest]
-        moments = moments[:, longest][:, :, longest]
-        if row_moments is not None:
-            row_moments = row_moments.columns(longest)
-        supports = [np.arange(len(s)) for s in supports]
+    # only the columns of the supports: nested ones in path order (see above)
+    used = longest if nested else np.unique(np.concatenate(supports))
+    theta = theta[:, used]
+    moments = moments[:, used][:, :, used]
+    if row_moments is not None:
+        row_moments = row_moments.columns(used)
+    supports = ([np.arange(len(s)) for s in supports] if nested
+                else [np.searchsorted(used, s) for s in supports])
     labels = fold_labels(theta.shape[0], n_blocks, n_folds)
     per_block = theta.shape[0] // n_blocks
     blocks = np.arange(theta.shape[0]) // per_block
