@@ -15,9 +15,9 @@ noise, larger for a law the data contradict):
    law that defines the motion.
 2. **Swaps.** At high noise a greedy path can lose a true column early, imitated by a
    correlated pair. A third path starts from the best admissible support of the first two
-   (step 4) and refines every support by single swaps before the next elimination, and the
-   best path supports of every size up to that size (:data:`STARTS_PER_SIZE`) are refined at
-   their own size.
+   (step 4) and refines every support by single swaps before the next elimination; then the
+   best path supports of every size up to the law chosen so far (step 5;
+   :data:`STARTS_PER_SIZE` of each size) are refined at their own size.
 3. **Score.** Every support is scored by ``n_folds``-fold cross-validation over contiguous
    blocks of rows: the law is estimated on the training rows and its noise ratio measured on
    the held-out rows (their own moments, given the draws of the rows' errors: the propagated
@@ -373,8 +373,8 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     backward paths inside the supports of the admissible lasso
     (:func:`~pysindy_xl.optimizers.admissible.admissible_supports`) and, with ``swaps``, of a path
     refined by single swaps (:func:`refine_law_by_swaps`) at every size, from the best
-    admissible path support down, with the best path supports of every size up to that size
-    refined at their own size. The choice is the smallest admissible support within one
+    admissible path support down, then the best path supports of every size up to the law
+    chosen so far refined at their own size. The choice is the smallest admissible support within one
     standard error (its own or the best's, the larger) of the best.
 
     Parameters
@@ -492,43 +492,52 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         ordered = sorted(candidates, key=lambda c: c.ratio)
         return next((c for c in ordered if admissible(c)), ordered[0])
 
+    def choice(candidates):
+        """``(chosen, within, best, competes)``: the smallest competing candidate within
+        one standard error of the best (the larger of the two laws' errors: the best of many
+        candidates is partly the luckiest, its ratio and spread both biased low, and the
+        supersets of the true law that swaps find dip below it by chance), or within the
+        resolution on the relative residual (clean data: the moments are tiny, the ratios
+        large, and extra terms that fit quadrature errors must not win on that alone) in
+        ratio units, by the best support's ratio-to-relative factor."""
+        best = best_admissible(candidates)
+        # only admissible laws compete, unless there is none
+        competes = admissible if admissible(best) else (lambda c: True)
+        resolution_in_ratio = resolution * best.ratio / max(best.relative, 1e-300)
+        within = [c for c in candidates if competes(c) and c.ratio <= best.ratio + max(
+            best.spread, c.spread, resolution_in_ratio)]
+        return min(within, key=lambda c: (len(c.support), c.ratio)), within, best, competes
+
     if swaps:
         # the search starts from the best admissible path law (only admissible laws can be
         # chosen: an inadmissible best, e.g. a law of one coordinate's rows, may be far
-        # smaller or larger than any admissible one); the swap-refined path from it, and
-        # the best few path supports of every size up to its size refined at that size (the
-        # others lead mostly to the same local optima, at a cost that grows with the number
-        # of admissible starts); each support scored once
+        # smaller or larger than any admissible one): the swap-refined path from it; then
+        # the best few path supports of every size up to the law chosen so far, each refined
+        # at its size (the others lead mostly to the same local optima; larger sizes would
+        # not be chosen, and their searches cost the most); each support scored once
         best_path = best_admissible(candidates)
+        seen = {frozenset(s.tolist()) for _, supports in paths for s in supports}
+        memo = {}  # many starts meet on their way: each search is done once
+
+        def unseen(supports):
+            fresh = [s for s in supports if frozenset(s.tolist()) not in seen]
+            seen.update(frozenset(s.tolist()) for s in fresh)
+            return fresh
+
+        candidates += scored(unseen(_refined_path(r_factor, total, best_path.support, memo)),
+                             "swap-refined")
+        largest = min(len(best_path.support), len(choice(candidates)[0].support))
         starts = {}
         for candidate in sorted(candidates, key=lambda c: c.ratio):
             size = len(candidate.support)
-            if size <= len(best_path.support) \
+            if candidate.how != "swap-refined" and size <= largest \
                     and len(starts.setdefault(size, [])) < STARTS_PER_SIZE \
                     and (admissible(candidate) or not admissible(best_path)):
                 starts[size].append(candidate.support)
-        starts = [support for size in sorted(starts) for support in starts[size]]
-        seen = {frozenset(s.tolist()) for _, supports in paths for s in supports}
-        refined, memo = [], {}  # many starts meet on their way: each search is done once
-        for support in _refined_path(r_factor, total, best_path.support, memo) + [
-                refine_law_by_swaps(r_factor, total, start, memo=memo) for start in starts]:
-            if frozenset(support.tolist()) not in seen:
-                seen.add(frozenset(support.tolist()))
-                refined.append(support)
-        candidates += scored(refined, "swap-refined")
-    best = best_admissible(candidates)
-    # only admissible laws compete, unless there is none
-    competes = admissible if admissible(best) else (lambda c: True)
-    # one standard error, the larger of the two laws' (the best of many candidates is
-    # partly the luckiest: its ratio and spread are both biased low, and the supersets of
-    # the true law that swaps find dip below it by chance), or the resolution on the
-    # relative residual (clean data: the moments are tiny, the ratios large, and extra
-    # terms that fit quadrature errors must not win on that alone) in ratio units, by the
-    # best support's ratio-to-relative factor
-    resolution_in_ratio = resolution * best.ratio / max(best.relative, 1e-300)
-    within = [c for c in candidates if competes(c) and c.ratio <= best.ratio + max(
-        best.spread, c.spread, resolution_in_ratio)]
-    chosen = min(within, key=lambda c: (len(c.support), c.ratio))
+        candidates += scored(unseen([refine_law_by_swaps(r_factor, total, start, memo=memo)
+                                     for size in sorted(starts) for start in starts[size]]),
+                             "swap-refined")
+    chosen, within, best, competes = choice(candidates)
     support = chosen.support
     rivals = _rivals(within, support)
     ratio, values = noise_ratio_law(r_factor[:, support], total[np.ix_(support, support)])
