@@ -374,8 +374,8 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     (:func:`~pysindy_xl.optimizers.admissible.admissible_supports`) and, with ``swaps``, of a path
     refined by single swaps (:func:`refine_law_by_swaps`) at every size, from the best
     admissible path support down, then the best path supports of every size up to the law
-    chosen so far refined at their own size. The choice is the smallest admissible support within one
-    standard error (its own or the best's, the larger) of the best.
+    chosen so far refined at their own size. The choice is the smallest admissible support
+    within one standard error (its own or the best's, the larger) of the best.
 
     Parameters
     ----------
