@@ -120,7 +120,7 @@ class CatalogProblem:
             In the columns of ``theta``.
         noise_draws : array, shape (D, n_coordinates * N, F), optional
             Draws of the rows' errors; ``noise_moments`` default to their second moments
-            (:func:`~pysindy_xl.weak.draw_moments`).
+            (:func:`~pysindy_xl.weak.noise.draw_moments`).
 
         Returns
         -------
