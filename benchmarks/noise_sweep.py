@@ -50,8 +50,9 @@ range of every coordinate); for unforced fits also the number of rival laws the 
 (``undetermined_``: the data hold them as well; a wrong law that reports none is a confident
 wrong law). Writes ``benchmarks/results/noise_sweep.{jsonl,md,png}`` (``--out`` elsewhere).
 
-Usage: ``python benchmarks/noise_sweep.py [--seeds 10] [--levels 0,0.001,0.01,0.03,0.05,0.1]
-[--methods weak,single,strong,sindy] [--systems cart_pole,...] [--jobs -1] [--append]``
+Usage: ``python benchmarks/noise_sweep.py [--seeds 10] [--first-seed 0]
+[--levels 0,0.001,0.01,0.03,0.05,0.1] [--methods weak,single,strong,sindy]
+[--systems cart_pole,...] [--jobs -1] [--append]``
 """
 
 from __future__ import annotations
@@ -281,6 +282,9 @@ def plot(records, path):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=10)
+    parser.add_argument("--first-seed", type=int, default=0,
+                        help="seeds first-seed .. first-seed + seeds - 1 (fresh seeds check a "
+                             "choice made on the usual ones)")
     parser.add_argument("--levels", default="0,0.001,0.01,0.03,0.05,0.1")
     parser.add_argument("--methods", default="weak,single,strong,sindy",
                         help=f"comma-separated, among {METHODS}")
@@ -295,7 +299,8 @@ def main():
 
     levels = [float(v) for v in args.levels.split(",")]
     tasks = [(name, level, seed, method) for name in args.systems.split(",") for level in levels
-             for seed in range(args.seeds) for method in args.methods.split(",")]
+             for seed in range(args.first_seed, args.first_seed + args.seeds)
+             for method in args.methods.split(",")]
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     path = out / "noise_sweep.jsonl"
