@@ -44,6 +44,7 @@ import dataclasses
 
 import numpy as np
 
+from ..weak.noise import draw_moments
 from ._base import coordinates_touched
 from ._sparse import column_norms, triangular_factor
 from .admissible import admissible_supports
@@ -110,9 +111,8 @@ class RowMoments:
     def __call__(self, rows) -> np.ndarray:
         """``E[E_rows^T E_rows]``, shape (F, F), of the rows selected by a mask or indices."""
         chosen = self.draws[:, rows]
-        flat = chosen.reshape(-1, chosen.shape[-1])
-        return flat.T @ flat / self.draws.shape[0] + (
-            self.floor * chosen.shape[1] * np.eye(flat.shape[1]))
+        return draw_moments(chosen, 1)[0] + self.floor * chosen.shape[1] * np.eye(
+            chosen.shape[-1])
 
     def columns(self, keep) -> RowMoments:
         """The moments of the columns ``keep`` only."""
