@@ -128,6 +128,8 @@ def read_dataset_arrays(path) -> tuple[dict, dict, list, list]:
         raise DatasetError(f"trajectory: expected numeric (integer or float) finite ids of "
                            f"shape ({n_samples},), got dtype {ids.dtype}, shape {ids.shape}")
     names = metadata.get("coordinate_names") or [f"q{k}" for k in range(n)]
+    if not isinstance(names, list) or not all(isinstance(name, str) for name in names):
+        raise DatasetError(f"metadata: coordinate_names: expected a list of str, got {names!r}")
     if len(names) != n:
         raise DatasetError(
             f"metadata: coordinate_names has {len(names)} names, q has {n} columns"
