@@ -119,7 +119,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     demo.add_argument("system", metavar="SYSTEM",
                       help="cart-pole, double-pendulum, cart-double-pendulum, triple-pendulum, "
-                           "or an MJCF .xml")
+                           "an MJCF .xml or a URDF .urdf")
     _add_generation_options(demo)
     _add_fit_options(demo)
     demo.add_argument("--constraints", choices=CONSTRAINTS, default="exclude",
@@ -144,7 +144,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "several trajectories in one file); --column maps other headers. NPZ: "
                     "arrays t, q and optionally qd, qdd, tau, trajectory (see "
                     "pysindy_xl.data.dataset). Coordinates come from --system (a known "
-                    "system or an MJCF .xml), or from --coordinates/--angles, or the CSV header.",
+                    "system, an MJCF .xml or a URDF .urdf), or from --coordinates/--angles, or the CSV header.",
     )
     identify.add_argument("data", metavar="DATA", help="a .csv, .tsv, .txt or .npz file")
     identify.add_argument("--coordinates", default=None, metavar="NAMES",
@@ -161,7 +161,7 @@ def build_parser() -> argparse.ArgumentParser:
     identify.add_argument("--delimiter", default=None,
                           help="CSV field separator (default: tab for .tsv, comma otherwise)")
     identify.add_argument("--system", default=None,
-                          help="system name or MJCF .xml giving coordinates and catalog "
+                          help="system name, MJCF .xml or URDF .urdf giving coordinates and catalog "
                                "(default: the dataset's metadata)")
     _add_fit_options(identify)
     identify.add_argument("--forces", choices=("tau", "none"), default="tau",

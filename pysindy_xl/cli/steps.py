@@ -47,8 +47,10 @@ def system_by_name(name, joints=None):
         if joints is None:
             return get_system(name)
         system = get_system(name) if isinstance(name, MuJoCoSystem) else None
-        if system is None and not (isinstance(name, str) and name.endswith(".xml")):
-            raise CLIError(f"--joints: only for MJCF .xml models; {name!r} is a shipped system "
+        if system is None and not (isinstance(name, str)
+                                   and name.lower().endswith((".xml", ".urdf"))):
+            raise CLIError(f"--joints: only for MJCF .xml and URDF models; {name!r} is a "
+                           "shipped system "
                            "whose joints are all identified")
         return get_system(name, joints=joints)
     except (ValueError, TypeError) as error:
