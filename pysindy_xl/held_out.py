@@ -116,8 +116,13 @@ class ForceScore:
                 "total": self.total, "n_samples": self.n_samples,
                 "derivatives": self.derivatives, "folds": self.folds}
 
-    def lines(self, unit: str = "N m") -> list:
-        """Per-coordinate lines (RMS in ``unit`` and %) and the total.
+    def lines(self, units="N m") -> list:
+        """Per-coordinate lines (RMS in force units and %) and the total.
+
+        Parameters
+        ----------
+        units : str or sequence of str, default "N m"
+            Unit of the forces, one for all coordinates or one each.
 
         Examples
         --------
@@ -127,10 +132,11 @@ class ForceScore:
         >>> score.lines()
         ['  joint_1: RMS 0.1 N m (5.00 % of 2 N m)', '  all coordinates: 5.00 % (relative RMS)']
         """
+        units = [units] * len(self.names) if isinstance(units, str) else list(units)
         width = max(len(name) for name in self.names)
         out = [f"  {name + ':':<{width + 1}} RMS {rms:.3g} {unit} ({100 * rel:.2f} % of "
-               f"{scale:.3g} {unit})" for name, rms, rel, scale in
-               zip(self.names, self.rms, self.relative, self.measured_rms, strict=True)]
+               f"{scale:.3g} {unit})" for name, rms, rel, scale, unit in
+               zip(self.names, self.rms, self.relative, self.measured_rms, units, strict=True)]
         out.append(f"  all coordinates: {100 * self.total:.2f} % (relative RMS)")
         if self.folds:
             out.append("  per fold: " + ", ".join(f"{100 * f:.2f} %" for f in self.folds))

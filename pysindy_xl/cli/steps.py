@@ -140,6 +140,26 @@ def dataset_system(metadata):
         raise CLIError(str(error)) from None
 
 
+def dataset_for(system, dataset):
+    """Check the dataset's coordinates against the system's (adopting them when unnamed)."""
+    from pysindy_xl.mujoco import Dataset
+
+    names = dataset.coordinate_names
+    if names == system.coordinate_names:
+        return dataset
+    if dataset.n != system.n:
+        raise CLIError(
+            f"DATA: the dataset has {dataset.n} coordinates {list(names)}, the system "
+            f"{system.name} has {system.n} {list(system.coordinate_names)}"
+        )
+    if names == tuple(f"q{k}" for k in range(dataset.n)):  # unnamed: adopt the system's
+        return Dataset(dataset.trajectories, system.coordinate_names, dataset.metadata)
+    raise CLIError(
+        f"DATA: coordinate names {list(names)} do not match the system {system.name} "
+        f"{list(system.coordinate_names)}"
+    )
+
+
 def resolve_catalog(args, system):
     """Replace ``--catalog auto`` by the catalog kind used for ``system``.
 
