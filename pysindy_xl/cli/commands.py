@@ -375,7 +375,7 @@ def run_identify(args):
     score = None
     if verdict and model.dynamics_ is not None:
         score = held_out_verdict(args, model, system, arguments,
-                                 lambda path: _load(args, path), progress)
+                                 lambda path: _load(args, path, system), progress)
         if args.plot:
             score.plot(args.plot, title=f"{system.name}: held-out torques, measured and "
                                         f"predicted ({100 * score.total:.2f} % relative RMS)")
@@ -419,17 +419,27 @@ def _names(text):
     return [c.strip() for c in text.split(",") if c.strip()] if text else None
 
 
-def _load(args, path):
-    """A data file of ``identify`` (DATA or a --validate file) with the column options."""
+def _load(args, path, system=None):
+    """A data file of ``identify`` (DATA or a --validate file) with the column options; the
+    joints of a ROS bag are the system's (its joint names, in its order) unless named."""
     from pysindy_xl.data import load_data
+    from pysindy_xl.data.rosbag import is_rosbag
     from pysindy_xl.mujoco import DatasetError
 
     columns = _column_map(getattr(args, "column", None))
+    coordinates = _names(args.coordinates)
     if path.lower().endswith(".npz") and (columns or args.delimiter):
         raise CLIError(f"--column/--delimiter: apply to CSV files, not to the NPZ {path!r}")
+    bag = is_rosbag(path)
+    if getattr(args, "topic", None) and not bag:
+        raise CLIError(f"--topic: applies to ROS bags, not to {path!r}")
+    if bag and coordinates is None and hasattr(system, "joint_names"):
+        coordinates = list(system.coordinate_names)
+        columns = {**dict(zip(system.coordinate_names, system.joint_names, strict=True)),
+                   **columns}
     try:
-        return load_data(path, coordinates=_names(args.coordinates), columns=columns or None,
-                         delimiter=args.delimiter)
+        return load_data(path, coordinates=coordinates, columns=columns or None,
+                         delimiter=args.delimiter, **({"topic": args.topic} if bag else {}))
     except (DatasetError, ValueError) as error:
         raise CLIError(str(error)) from None
 
@@ -439,14 +449,18 @@ def _identify_inputs(args):
     from pysindy_xl.mujoco import coordinate_system
 
     coordinates, angles = _names(args.coordinates), _names(args.angles) or []
-    dataset = _load(args, args.data)
+    if args.system and args.angles:
+        raise CLIError("--angles: the system gives the angles; use --angles with "
+                       "--coordinates (no --system)")
+    given = system_by_name(args.system) if args.system else None
+    dataset = _load(args, args.data, given)
     name = args.system or (None if coordinates else dataset.metadata.get("system"))
     if name:
         if args.angles:
             raise CLIError("--angles: the system gives the angles; use --angles with "
                            "--coordinates (no --system)")
         # a dataset of a user's MJCF carries the model (path or XML) in its metadata
-        system = system_by_name(name) if args.system else dataset_system(dataset.metadata)
+        system = given or dataset_system(dataset.metadata)
         return dataset_for(system, dataset), system
     if not args.data.lower().endswith(".npz") or coordinates:
         if not angles:

@@ -147,7 +147,11 @@ def build_parser() -> argparse.ArgumentParser:
                     "system, an MJCF .xml or a URDF .urdf), or from --coordinates/--angles, "
                     "or the CSV header.",
     )
-    identify.add_argument("data", metavar="DATA", help="a .csv, .tsv, .txt or .npz file")
+    identify.add_argument("data", metavar="DATA",
+                          help="a .csv, .tsv, .txt or .npz file, or a ROS bag of "
+                               "sensor_msgs/JointState (.bag, or a ROS 2 bag directory)")
+    identify.add_argument("--topic", default=None, metavar="NAME",
+                          help="ROS bags: the JointState topic (default: the only one)")
     identify.add_argument("--coordinates", default=None, metavar="NAMES",
                           help="comma-separated coordinate names, e.g. x,theta (CSV: the "
                                "position columns; NPZ: names of the columns of q); no MJCF "

@@ -141,7 +141,8 @@ def dataset_system(metadata):
 
 
 def dataset_for(system, dataset):
-    """Check the dataset's coordinates against the system's (adopting them when unnamed)."""
+    """Check the dataset's coordinates against the system's (adopting them when unnamed, and
+    putting the columns in the system's order when they name its coordinates in another)."""
     from pysindy_xl.mujoco import Dataset
 
     names = dataset.coordinate_names
@@ -154,6 +155,18 @@ def dataset_for(system, dataset):
         )
     if names == tuple(f"q{k}" for k in range(dataset.n)):  # unnamed: adopt the system's
         return Dataset(dataset.trajectories, system.coordinate_names, dataset.metadata)
+    joint_forces = any(getattr(tr, key) is not None for tr in dataset.trajectories
+                       for key in ("u", "u_constraint"))  # per joint: not reordered by name
+    if set(names) == set(system.coordinate_names) and not joint_forces:  # another order
+        import dataclasses
+
+        from pysindy_xl.data.files import SERIES
+
+        order = [list(names).index(name) for name in system.coordinate_names]
+        trajectories = [dataclasses.replace(tr, **{key: getattr(tr, key)[:, order] for key in
+                                                   SERIES if getattr(tr, key) is not None})
+                        for tr in dataset.trajectories]
+        return Dataset(trajectories, system.coordinate_names, dataset.metadata)
     raise CLIError(
         f"DATA: coordinate names {list(names)} do not match the system {system.name} "
         f"{list(system.coordinate_names)}"
