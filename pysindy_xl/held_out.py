@@ -45,6 +45,9 @@ __all__ = ["ForceScore", "score_forces", "blocked_cross_validation", "scoring_de
 #: How :func:`scoring_derivatives` estimates what the data lack (printed with the scores).
 SCORING_DERIVATIVES = ("quintic smoothing spline of the positions (WhittakerSmoother, "
                        "smoothness by GCV), per run")
+_ESTIMATED = {(False, False): "measured", (True, True): SCORING_DERIVATIVES,
+              (False, True): f"measured velocities, accelerations from a {SCORING_DERIVATIVES}",
+              (True, False): f"measured accelerations, velocities from a {SCORING_DERIVATIVES}"}
 
 
 @dataclasses.dataclass
@@ -250,12 +253,16 @@ def _runs(n, x, t, u, x_dot, x_ddot):
 
 def _with_derivatives(run, smoother):
     """The run's (q, qd, qdd) for scoring and how they were obtained."""
-    if run["x_dot"] is not None and run["x_ddot"] is not None:
+    estimated = (run["x_dot"] is None, run["x_ddot"] is None)
+    if not any(estimated):
         return run["x"], run["x_dot"], run["x_ddot"], "measured"
     q, qd, qdd = scoring_derivatives(run["t"], run["x"], smoother)
     qd = qd if run["x_dot"] is None else run["x_dot"]
     qdd = qdd if run["x_ddot"] is None else run["x_ddot"]
-    return q, qd, qdd, SCORING_DERIVATIVES if smoother is None else repr(smoother)
+    source = _ESTIMATED[estimated]
+    if smoother is not None:
+        source = source.replace(SCORING_DERIVATIVES, repr(smoother))
+    return q, qd, qdd, source
 
 
 def _predict(model, q, t, u, qd, qdd):

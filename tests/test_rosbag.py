@@ -158,7 +158,8 @@ def test_identify_reads_a_bag_with_the_urdf_joints(tmp_path, capsys):
                  str(bags[1]), "--quiet"]) == 0
     text = capsys.readouterr().out
     assert "held-out torque prediction on run1.bag (1 run" in text
-    assert "derivatives: quintic smoothing spline" in text  # bags carry no accelerations
+    assert "derivatives: measured velocities, accelerations from a quintic smoothing " \
+           "spline" in text  # bags carry no accelerations
     total = float(text.split("all coordinates: ")[1].split(" %")[0])
     assert total < 10.0  # joints swapped or misread would be off by 100 % or more
 
