@@ -12,7 +12,8 @@ import zipfile
 
 import numpy as np
 
-__all__ = ["DatasetError", "read_dataset_arrays", "FORMAT", "VERSION", "SERIES", "MASKS"]
+__all__ = ["DatasetError", "read_dataset_arrays", "coordinate_names", "FORMAT", "VERSION",
+           "SERIES", "MASKS"]
 
 FORMAT = "pysindy-xl-dataset"
 VERSION = 1
@@ -151,3 +152,26 @@ def _parse_json(text: str, where: str) -> dict:
     if not isinstance(data, dict):
         raise DatasetError(f"metadata: expected a JSON object in {where}")
     return data
+
+
+def coordinate_names(coordinates) -> list[str]:
+    """Coordinate names given as a list of str or one comma-separated str.
+
+    Examples
+    --------
+    >>> coordinate_names("x, theta")
+    ['x', 'theta']
+    >>> coordinate_names(3)
+    Traceback (most recent call last):
+    ...
+    TypeError: coordinates: expected a list of names or a comma-separated str, got the int 3
+    """
+    if isinstance(coordinates, str):
+        coordinates = [c.strip() for c in coordinates.split(",")]
+    if not isinstance(coordinates, (list, tuple)):
+        raise TypeError("coordinates: expected a list of names or a comma-separated str, got "
+                        f"the {type(coordinates).__name__} {coordinates!r}")
+    names = list(coordinates)
+    if not names or not all(isinstance(n, str) and n for n in names):
+        raise ValueError(f"coordinates: expected a non-empty list of names, got {names!r}")
+    return names
