@@ -7,6 +7,7 @@ from ._base import LIBRARY_TYPES, SymbolicLibrary, compile_entries, stack_variab
 from ._weak import integrate_by_parts
 from .classical import ClassicalLibrary, pysindy_library_terms
 from .external_forces import ExternalForces
+from .joint_friction import JointFrictionLibrary
 from .lagrange import LagrangeLibrary, euler_lagrange
 from .polynomial_lagrange import PolynomialLagrangeLibrary
 from .repartition import CatalogRepartition
@@ -18,6 +19,7 @@ __all__ = [
     "PolynomialLagrangeLibrary",
     "ClassicalLibrary",
     "ExternalForces",
+    "JointFrictionLibrary",
     "CatalogRepartition",
     "stack_variables",
     "compile_entries",
