@@ -115,6 +115,8 @@ class JointFrictionLibrary(SymbolicLibrary):
     ----------
     kinds_ : list of (str, str)
         ``(model, joint)`` of each feature.
+    joints_ : list of str
+    weights_ : ndarray, shape (n, len(joints_))
 
     Examples
     --------
@@ -180,7 +182,8 @@ class JointFrictionLibrary(SymbolicLibrary):
                                 for w in weights[:, k]])
                 kinds.append((model, joint))
                 terms.append(term)
-        self.kinds_, self._terms = kinds, terms
+        self.kinds_, self._terms, self.weights_ = kinds, terms, weights
+        self.joints_ = joints
         matrix = sp.zeros(self.coords.n, len(names))
         for j, column in enumerate(columns):
             for i, entry in enumerate(column):
@@ -206,6 +209,15 @@ class JointFrictionLibrary(SymbolicLibrary):
                                          strict=True):
             out.setdefault(joint, {})[model] = float(value)
         return out
+
+    def coordinate_of(self, joint: str) -> str | None:
+        """The coordinate that ``joint`` is (its torque that coordinate's force, weight 1),
+        None when its torque reaches several coordinates or with another weight."""
+        column = self.weights_[:, self.joints_.index(joint)]
+        reached = np.flatnonzero(column)
+        if len(reached) == 1 and column[reached[0]] == 1:
+            return self.coords.names[reached[0]]
+        return None
 
     def to_spec(self) -> dict:
         """JSON-serializable description (velocities in the restricted grammar).
