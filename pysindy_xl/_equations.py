@@ -160,7 +160,7 @@ def physical_parameters(coef: np.ndarray, library) -> dict:
             friction[name][kind] += float(coef[j] * factor)
         else:
             other[library.feature_names_[j]] = float(coef[j] * factor)
-    for joint, values in joints.items():
+    for values in joints.values():
         # a joint that is one coordinate: its viscous and Coulomb friction are that one's
         if values["coordinate"] is not None:
             friction[values["coordinate"]]["viscous"] += values.get("viscous", 0.0)

@@ -18,6 +18,7 @@ import pysindy_xl as px
 from pysindy_xl.feature_library import JointFrictionLibrary
 from pysindy_xl.mujoco import MJCFSystem, kinematic_catalog
 from pysindy_xl.optimizers import default_optimizer
+from pysindy_xl.physical import PhysicalStructure
 
 EPS, VS = 0.01, 0.1
 MODELS = ("viscous", "coulomb", "asymmetric", "stribeck", "offset")
@@ -141,11 +142,10 @@ def test_the_model_saves_loads_and_exports_with_its_friction(arm, tmp_path):
 
 def test_the_identified_arm_simulates_under_the_measured_torques(arm):
     _, _, model, (q, qd, qdd, tau, _), _ = arm
-    window = slice(0, 101)  # 0.2 s
-    t = np.arange(101) * 0.002
-    states = model.simulate(np.concatenate([q[0], qd[0]]), t, u=tau[window], rtol=1e-8,
-                            atol=1e-10)
-    assert np.abs(states[:, :3] - q[window]).max() < 0.02 * np.abs(q[window]).max()
+    window = slice(0, 51)  # 0.1 s: the smooth signs make the equations stiff near rest
+    t = np.arange(51) * 0.002
+    states = model.simulate(np.concatenate([q[0], qd[0]]), t, u=tau[window])
+    assert np.abs(states[:, :3] - q[window]).max() < 1e-3
 
 
 def test_the_default_catalog_and_fit_are_unchanged():
@@ -165,10 +165,6 @@ def test_selection_keeps_every_other_column():
     x = rng.normal(size=(600, 6))
     # columns 0-2 stand for base parameters (one of them a tiny 1e-4), 3-5 for friction
     y = x @ [1.0, 1e-4, -0.5, 0.3, 0.0, 0.0] + 0.05 * rng.normal(size=600)
-    structure = px.PhysicalOptimizer  # the seam: the problem's physical structure
-    del structure
-    from pysindy_xl.physical import PhysicalStructure
-
     physical = PhysicalStructure.from_maps([{"b.m": 1.0}, {"b.mcx": 1.0}, {"b.Iyy": 1.0}],
                                            base_columns=[1, 2, 3], friction_columns=[4],
                                            selectable_columns=[4, 5, 6])
