@@ -279,9 +279,11 @@ class DynamicsMixin:
         Returns
         -------
         dict
-            ``physical_parameters`` (name -> value written) and ``residual``
+            ``physical_parameters`` (name -> value written), ``residual``
             (``|C pi - beta| / |beta|``, zero when the identified parameters are realizable
-            by rigid bodies).
+            by rigid bodies) and ``dropped``: ``{joint: {model: value}}``, the identified
+            joint models MJCF cannot state (asymmetric Coulomb, Stribeck, torque offset: a
+            catalog built with ``friction=``), left out of the file.
         """
         from .export.mjcf import to_mjcf
 

@@ -14,6 +14,7 @@ from ._compile import scalar_function as scalar_function
 from ._weak import integrate_by_parts
 from .classical import ClassicalLibrary, pysindy_library_terms
 from .external_forces import ExternalForces
+from .joint_friction import JointFrictionLibrary
 from .lagrange import LagrangeLibrary, euler_lagrange
 from .polynomial_lagrange import PolynomialLagrangeLibrary
 from .repartition import CatalogRepartition
@@ -25,6 +26,7 @@ __all__ = [
     "PolynomialLagrangeLibrary",
     "ClassicalLibrary",
     "ExternalForces",
+    "JointFrictionLibrary",
     "CatalogRepartition",
     "stack_variables",
     "compile_entries",
