@@ -121,20 +121,21 @@ class _Design:
         return float(np.log(s[0] / s[-1])), gradient, torques, jacobian.reshape(N * n, -1)
 
     def linear_constraints(self, bases):
-        """``A x + c >= 0`` for the position, velocity and acceleration limits."""
-        n, N, m = self.n, bases.shape[1], 2 * self.L
-        rows, offsets = [], []
+        """``A x + c >= 0`` for the position, velocity and acceleration limits: ``A`` of shape
+        (N, C, len(x)), ``c`` of shape (C,), one column per limited (kind, side, joint)."""
+        n, m = self.n, 2 * self.L
+        blocks, offsets = [], []
         for kind, (low, high) in enumerate([self.position.T, (-self.velocity, self.velocity),
                                             (-self.acceleration, self.acceleration)]):
-            A = np.zeros((N, n, n + n * m))
+            A = np.zeros((bases.shape[1], n, n + n * m))
             for j in range(n):
                 A[:, j, n + j * m:n + (j + 1) * m] = bases[kind]
                 A[:, j, j] = 1.0 if kind == 0 else 0.0
             for sign, bound in ((1, -low), (-1, high)):
                 keep = np.isfinite(bound)
-                rows.append((sign * A)[:, keep].reshape(-1, n + n * m))
-                offsets.append(np.tile(bound[keep], N))
-        return np.vstack(rows), np.concatenate(offsets)
+                blocks.append(sign * A[:, keep])
+                offsets.append(bound[keep])
+        return np.concatenate(blocks, axis=1), np.concatenate(offsets)
 
     def rest_equalities(self):
         """``E x = 0``: zero velocity and acceleration at ``t = 0``."""
@@ -190,24 +191,36 @@ class _Design:
         return self.fit_to_limits(x, bases, grow=True)
 
     def optimize(self, x, bases, rest_at_start, max_iter):
+        """SLSQP from ``x``. Each limit enters through its margin at the lowest local minima
+        along the period (at most ``L`` for a series of ``L`` harmonics; ``3 L`` kept for the
+        torques): a fixed, small number of rows instead of one per sample and limit."""
         from scipy.optimize import minimize
 
         A, c = self.linear_constraints(bases)
-        constraints = [{"type": "ineq", "fun": lambda x: A @ x + c, "jac": lambda x: A}]
+        columns = np.arange(A.shape[1])
+
+        def linear(x):
+            index = _dips(A @ x + c, self.L + 1)
+            return (A @ x + c)[index, columns].ravel(), A[index, columns].reshape(-1, len(x))
+
+        constraints = [{"type": "ineq", "fun": lambda x: linear(x)[0],
+                        "jac": lambda x: linear(x)[1]}]
         limited = np.flatnonzero(np.isfinite(self.torque))
         if limited.size:
-            bound = self.torque[limited]
+            bound = np.tile(self.torque[limited], 2)
+            sides = np.r_[-np.ones(limited.size), np.ones(limited.size)]
+            N, pair = bases.shape[1], np.arange(2 * limited.size)
 
-            def torque_margin(x):
-                tau = self.evaluate(x, bases)[2][:, limited]
-                return np.concatenate([(bound - tau).ravel(), (bound + tau).ravel()])
+            def torque(x):
+                _, _, tau, jac = self.evaluate(x, bases)
+                jac = jac.reshape(N, self.n, len(x))[:, limited]
+                margin = bound + sides * np.tile(tau[:, limited], 2)
+                index = _dips(margin, 3 * self.L)
+                jac = sides[None, :, None] * np.concatenate([jac, jac], axis=1)
+                return margin[index, pair].ravel(), jac[index, pair].reshape(-1, len(x))
 
-            def torque_jacobian(x):
-                jac = self.evaluate(x, bases)[3].reshape(-1, self.n, len(x))[:, limited]
-                jac = jac.reshape(-1, len(x))
-                return np.vstack([-jac, jac])
-
-            constraints.append({"type": "ineq", "fun": torque_margin, "jac": torque_jacobian})
+            constraints.append({"type": "ineq", "fun": lambda x: torque(x)[0],
+                                "jac": lambda x: torque(x)[1]})
         if rest_at_start:
             E = self.rest_equalities()
             constraints.append({"type": "eq", "fun": lambda x: E @ x, "jac": lambda x: E})
@@ -215,6 +228,15 @@ class _Design:
                           jac=lambda x: self.evaluate(x, bases)[1], method="SLSQP",
                           constraints=constraints, options={"maxiter": max_iter})
         return result.x, result
+
+
+def _dips(margins, k):
+    """Rows (k, C) of the ``k`` lowest local minima of each column of ``margins`` (N, C),
+    periodic along N; padded with the column's largest margins (inactive rows)."""
+    before, after = np.roll(margins, 1, axis=0), np.roll(margins, -1, axis=0)
+    dip = (margins <= before) & (margins < after)
+    order = np.lexsort((np.where(dip, margins, -margins), ~dip), axis=0)
+    return order[:min(k, len(margins))]
 
 
 def _per_joint(value, name, n, default):
