@@ -404,7 +404,8 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                      amplitude_scale: float = 1.0, initial_scale: float = 1.0,
                      progress=None, noise_model: str = "positions", derivatives=None,
                      amplitude=None, backoff: bool = True, max_constrained: float = 0.1,
-                     min_unconstrained: float = 0.5, integrator: str = "auto") -> Dataset:
+                     min_unconstrained: float = 0.5, integrator: str = "auto",
+                     reference=None) -> Dataset:
     """Simulate several randomly forced MuJoCo trajectories of a system.
 
     Parameters
@@ -469,6 +470,10 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         :func:`simulate_trajectory`), so the recorded samples obey the continuous equations
         under the continuous control signal. Every run is checked (finite, velocities
         under a sane bound); an unstable one raises :class:`UnstableSimulationError`.
+    reference : FourierTrajectory, optional
+        A planned trajectory (e.g. :func:`~pysindy_xl.mujoco.excitation_trajectory`) that
+        every run plays through the system's position servos (its ``controls(system)``)
+        instead of random signals; no back-off. The metadata keep it (``reference``).
 
     Returns
     -------
@@ -524,6 +529,8 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                         ("min_unconstrained", min_unconstrained)):
         if not (isinstance(value, (int, float)) and 0 <= value <= 1):
             raise ValueError(f"{name}: expected a number in [0, 1], got {value!r}")
+    if reference is not None and not callable(getattr(reference, "controls", None)):
+        raise TypeError(f"reference: expected a FourierTrajectory, got {type(reference).__name__}")
     model = system.mj_model()
     rng = np.random.default_rng(seed)
     n_steps = int(round(float(duration) / model.opt.timestep)) + 1
@@ -536,12 +543,12 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     trajectories = []
     with bar:
         for _ in range(n_trajectories):
-            factor, attempts = 1.0, 4 if backoff else 1
+            factor, attempts = 1.0, 4 if backoff and reference is None else 1
             for attempt in range(attempts):
                 q0, qd0 = system.random_initial_state(rng, scale=initial_scale * factor)
-                signals = actuator_signals(system, model, forcing, rng, actuators,
-                                           n_components, max_frequency, amplitude_scale,
-                                           amplitude, backoff=factor)
+                signals = reference.controls(system) if reference is not None else \
+                    actuator_signals(system, model, forcing, rng, actuators, n_components,
+                                     max_frequency, amplitude_scale, amplitude, backoff=factor)
                 q0, qd0 = start_on_reference(system, signals, q0, qd0)
                 clean = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
                                             bar if attempt == 0 else None,
@@ -578,6 +585,7 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         "initial_scale": initial_scale,
         "force_matrix": system.force_matrix().tolist(),
         "joint_names": list(system.joint_names),
+        "reference": None if reference is None else reference.to_dict(),
     }
     metadata.update(getattr(system, "metadata", lambda: {})())
     dataset = Dataset(trajectories, system.coordinate_names, metadata)
