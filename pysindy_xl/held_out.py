@@ -233,7 +233,7 @@ def scoring_derivatives(t, x, smoother=None, max_frequency: float = MAX_FREQUENC
     t = np.asarray(t, dtype=float)
     if smoother is not None:
         return smoother.smooth(t, x)
-    if not max_frequency == np.inf:
+    if max_frequency != np.inf:
         check_option("max_frequency", max_frequency, "real", low=0, low_open=True)
     smoother = WhittakerSmoother()
     q, qd, qdd = smoother.smooth(t, x)
@@ -277,17 +277,20 @@ def _runs(n, x, t, u, x_dot, x_ddot):
     return runs
 
 
-def _with_derivatives(run, smoother):
+def _with_derivatives(run, smoother, max_frequency=MAX_FREQUENCY):
     """The run's (q, qd, qdd) for scoring and how they were obtained."""
     estimated = (run["x_dot"] is None, run["x_ddot"] is None)
     if not any(estimated):
         return run["x"], run["x_dot"], run["x_ddot"], "measured"
-    q, qd, qdd = scoring_derivatives(run["t"], run["x"], smoother)
+    q, qd, qdd = scoring_derivatives(run["t"], run["x"], smoother, max_frequency)
     qd = qd if run["x_dot"] is None else run["x_dot"]
     qdd = qdd if run["x_ddot"] is None else run["x_ddot"]
     source = _ESTIMATED[estimated]
     if smoother is not None:
         source = source.replace(SCORING_DERIVATIVES, repr(smoother))
+    elif max_frequency != MAX_FREQUENCY:
+        source = source.replace(f"at most {MAX_FREQUENCY:g} Hz",
+                                f"at most {max_frequency:g} Hz")
     return q, qd, qdd, source
 
 
@@ -297,7 +300,8 @@ def _predict(model, q, t, u, qd, qdd):
     return force_prediction(model, q, t, u, qd, qdd)["predicted"]
 
 
-def score_forces(model, x, t, u, x_dot=None, x_ddot=None, smoother=None) -> ForceScore:
+def score_forces(model, x, t, u, x_dot=None, x_ddot=None, smoother=None,
+                 max_frequency: float = MAX_FREQUENCY) -> ForceScore:
     """Held-out force prediction of a fitted model (see the module documentation).
 
     Parameters
@@ -314,6 +318,8 @@ def score_forces(model, x, t, u, x_dot=None, x_ddot=None, smoother=None) -> Forc
         Velocities and accelerations; those not given come from :func:`scoring_derivatives`.
     smoother : object with ``smooth(t, x)``, optional
         Replaces the default smoother of :func:`scoring_derivatives`.
+    max_frequency : float, default 10.0
+        Bandwidth bound of the default smoother, in Hz (see :func:`scoring_derivatives`).
 
     Returns
     -------
@@ -336,7 +342,7 @@ def score_forces(model, x, t, u, x_dot=None, x_ddot=None, smoother=None) -> Forc
     runs = _runs(model.n_coordinates_, x, t, u, x_dot, x_ddot)
     times, measured, predicted, sources = [], [], [], set()
     for run in runs:
-        q, qd, qdd, source = _with_derivatives(run, smoother)
+        q, qd, qdd, source = _with_derivatives(run, smoother, max_frequency)
         predicted.append(_predict(model, q, run["t"], run["u"], qd, qdd))
         times.append(run["t"])
         measured.append(run["u"])
@@ -354,7 +360,7 @@ def _folds(lengths, n_blocks):
 
 
 def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: int = 5,
-                             smoother=None) -> ForceScore:
+                             smoother=None, max_frequency: float = MAX_FREQUENCY) -> ForceScore:
     """Time-blocked cross-validation of the force prediction of a model class.
 
     One run is cut into ``n_blocks`` contiguous time blocks; each block is predicted by a
@@ -369,7 +375,7 @@ def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: 
     ----------
     model : XLSINDy
         The model to cross-validate (fitted or not; its parameters are used).
-    x, t, u, x_dot, x_ddot, smoother
+    x, t, u, x_dot, x_ddot, smoother, max_frequency
         As in :func:`score_forces`; the training data.
     n_blocks : int, default 5
         Contiguous blocks of a single run (at least 2).
@@ -401,7 +407,7 @@ def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: 
     if len(runs) == 1 and len(runs[0]["t"]) < 20 * n_blocks:
         raise ValueError(f"n_blocks: {n_blocks} blocks of {len(runs[0]['t'])} samples are too "
                          "short to fit on; use fewer blocks or more data")
-    scoring = [_with_derivatives(run, smoother) for run in runs]
+    scoring = [_with_derivatives(run, smoother, max_frequency) for run in runs]
     predicted = [np.empty_like(run["u"]) for run in runs]
     totals, names = [], None
     for fold in folds:

@@ -68,7 +68,7 @@ def held_out_verdict(args, model, system, arguments, load, progress):
         held = data.fit_arguments(forces="tau", constraints="include")
         progress(f"predicting the torques of {', '.join(args.validate)}")
         score = model.score_forces(held["x"], held["t"], held["u"], held["x_dot"],
-                                   held["x_ddot"])
+                                   held["x_ddot"], max_frequency=args.bandwidth)
         n_runs = len(held["x"])
         where = (f"on {', '.join(os.path.basename(p) for p in args.validate)} ({n_runs} "
                  f"run{'s' if n_runs > 1 else ''}, {score.n_samples} samples)")
@@ -80,7 +80,7 @@ def held_out_verdict(args, model, system, arguments, load, progress):
         try:
             score = blocked_cross_validation(
                 model, arguments["x"], arguments["t"], arguments["u"], arguments["x_dot"],
-                arguments["x_ddot"], n_blocks=args.cv_blocks)
+                arguments["x_ddot"], n_blocks=args.cv_blocks, max_frequency=args.bandwidth)
         except (ValueError, RuntimeError) as error:
             raise CLIError(f"--cv-blocks: cross-validation failed ({error})") from None
         where = ("by leave-one-run-out cross-validation of the training runs" if runs > 1 else
