@@ -27,7 +27,8 @@ as good as its middle). Pass ``x_dot`` and ``x_ddot`` to score other methods (e.
 on exactly the same numbers.
 
 :func:`blocked_cross_validation` scores a model class on one run: ``k`` contiguous time blocks,
-each predicted by the model refitted on the others (with several runs, each run is a fold).
+each predicted by the model refitted on the others (several runs are kept whole, one run or a
+group of runs per fold).
 """
 
 from __future__ import annotations
@@ -352,9 +353,10 @@ def score_forces(model, x, t, u, x_dot=None, x_ddot=None, smoother=None,
 
 
 def _folds(lengths, n_blocks):
-    """``(run, start, stop)`` of each fold: the runs themselves, or blocks of the one run."""
+    """``(run, start, stop)`` of each fold: groups of whole runs, or blocks of the one run."""
     if len(lengths) > 1:
-        return [[(k, 0, n)] for k, n in enumerate(lengths)]
+        groups = np.array_split(np.arange(len(lengths)), min(n_blocks, len(lengths)))
+        return [[(int(k), 0, lengths[k]) for k in group] for group in groups]
     edges = np.linspace(0, lengths[0], n_blocks + 1).round().astype(int)
     return [[(0, int(a), int(b))] for a, b in zip(edges[:-1], edges[1:], strict=True)]
 
@@ -366,7 +368,8 @@ def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: 
     One run is cut into ``n_blocks`` contiguous time blocks; each block is predicted by a
     copy of ``model`` (``sklearn.base.clone``: same settings, not fitted) fitted on the
     other blocks, which enter the fit as separate runs (the samples before the block and
-    those after it). With several runs, each run is a fold. The scores pool the errors of
+    those after it). Several runs are kept whole: each fold is one run, or with more runs
+    than ``n_blocks``, one of ``n_blocks`` groups of consecutive runs. The scores pool the errors of
     all folds; ``folds`` gives each fold's total. The scoring derivatives are computed once on
     each whole run (see the module documentation); the fits get the data as ``fit`` would
     (measured derivatives when given, else the model differentiates).
@@ -378,7 +381,7 @@ def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: 
     x, t, u, x_dot, x_ddot, smoother, max_frequency
         As in :func:`score_forces`; the training data.
     n_blocks : int, default 5
-        Contiguous blocks of a single run (at least 2).
+        Contiguous blocks of a single run, or most groups of runs (at least 2).
 
     Returns
     -------

@@ -108,6 +108,10 @@ def test_several_runs_are_the_folds(model):
     score = blocked_cross_validation(model, [d[0] for d in data], runs, [d[3] for d in data],
                                      [d[1] for d in data], [d[2] for d in data])
     assert len(score.folds) == 3 and max(score.folds) < 1e-6
+    grouped = blocked_cross_validation(model, [d[0] for d in data], runs,
+                                       [d[3] for d in data], [d[1] for d in data],
+                                       [d[2] for d in data], n_blocks=2)
+    assert len(grouped.folds) == 2 and max(grouped.folds) < 1e-6  # runs kept whole
 
 
 def test_lines_and_plot(tmp_path):

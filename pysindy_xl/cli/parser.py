@@ -186,7 +186,7 @@ def build_parser() -> argparse.ArgumentParser:
     identify.add_argument("--cv-blocks", type=int, default=5, metavar="K",
                           help="without --validate, a log with forces and --system is scored "
                                "by time-blocked cross-validation: K contiguous blocks of its "
-                               "one run (several runs: each run in turn), each predicted by "
+                               "one run (several runs: K groups of whole runs), each predicted by "
                                "the model refitted on the rest; 0 skips it (default: 5)")
     identify.add_argument("--bandwidth", type=_bandwidth, default=10.0, metavar="HZ",
                           help="held-out scoring of data without accelerations: the highest "
