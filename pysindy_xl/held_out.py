@@ -57,6 +57,16 @@ _ESTIMATED = {(False, False): "measured", (True, True): SCORING_DERIVATIVES,
 class ForceScore:
     """Held-out force prediction of a model, per coordinate and in total.
 
+    Built by :func:`score_forces`, :func:`blocked_cross_validation` or
+    :meth:`from_predictions`; the parameters are the attributes below.
+
+    Parameters
+    ----------
+    names, rms, relative, total, measured_rms, n_samples, derivatives, t, measured, predicted
+        See Attributes.
+    folds : list of float, optional
+        See Attributes.
+
     Attributes
     ----------
     names : tuple of str
@@ -77,6 +87,15 @@ class ForceScore:
         Per run: times, measured and predicted forces (for :meth:`plot`).
     folds : list of float or None
         Cross-validation: ``total`` of each fold (in fold order), else None.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0.0, 1.0, 4)
+    >>> score = ForceScore.from_predictions(["a", "b"], [t], [np.ones((4, 2))],
+    ...                                     [np.ones((4, 2)) * [1.02, 0.9]], "measured")
+    >>> score.rms.round(3), round(score.total, 4)
+    (array([0.02, 0.1 ]), 0.0721)
     """
 
     names: tuple
@@ -93,7 +112,23 @@ class ForceScore:
 
     @classmethod
     def from_predictions(cls, names, t, measured, predicted, derivatives, folds=None):
-        """The scores of predicted against measured forces (lists of runs)."""
+        """The scores of predicted against measured forces.
+
+        Parameters
+        ----------
+        names : sequence of str
+            Coordinate names.
+        t, measured, predicted : list of ndarray
+            Per run: times (N,), measured and predicted forces (N, n).
+        derivatives : str
+            Where the velocities and accelerations came from.
+        folds : list of float, optional
+            Total relative error of each cross-validation fold.
+
+        Returns
+        -------
+        ForceScore
+        """
         error = np.vstack([p - m for p, m in zip(predicted, measured, strict=True)])
         stacked = np.vstack(measured)
         rms = np.sqrt(np.mean(error**2, axis=0))
@@ -106,6 +141,12 @@ class ForceScore:
 
     def to_dict(self) -> dict:
         """JSON-ready figures (no series).
+
+        Returns
+        -------
+        dict
+            ``rms``, ``relative``, ``measured_rms`` (per coordinate name), ``total``,
+            ``n_samples``, ``derivatives``, ``folds``.
 
         Examples
         --------
@@ -129,6 +170,10 @@ class ForceScore:
         ----------
         units : str or sequence of str, default "N m"
             Unit of the forces, one for all coordinates or one each.
+
+        Returns
+        -------
+        list of str
 
         Examples
         --------
