@@ -17,12 +17,16 @@ from .steps import CLIError, dataset_for
 def wants_verdict(args, forced: bool) -> bool:
     """Whether ``identify`` scores held-out torques: with ``--validate``, or on a log with
     forces identified against a ``--system`` (unless ``--cv-blocks 0``)."""
+    blocks = getattr(args, "cv_blocks", 0)
+    if blocks == 1 or blocks < 0:
+        raise CLIError(f"--cv-blocks: expected 0 (no cross-validation) or at least 2, got "
+                       f"{blocks}")
     if getattr(args, "validate", None):
         if not forced:
             raise CLIError("--validate: the training data have no forces; held-out torque "
                            "prediction needs them (tau_NAME columns)")
         return True
-    return forced and bool(args.system) and getattr(args, "cv_blocks", 0) >= 2
+    return forced and bool(args.system) and blocks >= 2
 
 
 def _units(system, names) -> list:
