@@ -117,6 +117,21 @@ def markdown(rows) -> str:
             lines.append(f"| {row['arm']} | {row['noise']:.0%} | {joint} | {floor:.3g} | "
                          f"{plain:.3g} | {models:.3g} | {plain / floor:.2f} / "
                          f"{models / floor:.2f} |")
+    lines += ["", "Identified joint models against the truth (terms the joints have, terms they "
+              "do not):", "", "| arm | noise | missed | spurious | largest error of a present "
+              "term (relative) | of which model | largest, asymmetric excepted |",
+              "|---|---|---|---|---|---|---|"]
+    for row in rows:
+        truth, found = np.array(row["truth"]), np.array(row["friction"]["identified"])
+        present = truth != 0
+        relative = np.where(present, np.abs(found - truth) / np.where(present, np.abs(truth),
+                                                                         1.0), 0.0)
+        worst = np.unravel_index(np.argmax(relative), relative.shape)
+        lines.append(f"| {row['arm']} | {row['noise']:.0%} | "
+                     f"{int(np.sum(present & (found == 0)))} of {int(present.sum())} | "
+                     f"{int(np.sum(~present & (found != 0)))} of {int((~present).sum())} | "
+                     f"{relative[worst]:.1%} | {row['joints'][worst[0]]} "
+                     f"{MODELS[worst[1]]} | {np.delete(relative, 2, axis=1).max():.1%} |")
     lines += ["", "| arm | noise | total relative error, plain | with models | floor | "
               "fit s plain / models |", "|---|---|---|---|---|---|"]
     for row in rows:
@@ -135,8 +150,12 @@ def main():
     parser.add_argument("--noise", type=float, nargs="+", default=[0.01, 0.02])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--arms", nargs="+", default=list(arms()))
+    parser.add_argument("--markdown-only", action="store_true",
+                        help="rewrite the table from the stored results")
     args = parser.parse_args()
     rows = []
+    if args.markdown_only:
+        args.arms = []
     for name in args.arms:
         for noise in args.noise:
             for seed in args.seeds:
@@ -145,7 +164,14 @@ def main():
                       [round(v, 4) for v in rows[-1]["plain"]["rms"]],
                       [round(v, 4) for v in rows[-1]["friction"]["rms"]], flush=True)
     os.makedirs(RESULTS, exist_ok=True)
-    with open(os.path.join(RESULTS, "friction_models.json"), "w", encoding="utf-8") as f:
+    path = os.path.join(RESULTS, "friction_models.json")
+    if os.path.exists(path):  # keep the rows of other runs (arms, noise levels, seeds)
+        with open(path, encoding="utf-8") as f:
+            done = {(r["arm"], r["noise"], r["seed"]): r for r in json.load(f)}
+        done.update({(r["arm"], r["noise"], r["seed"]): r for r in rows})
+        rows = sorted(done.values(), key=lambda r: (list(arms()).index(r["arm"]), r["noise"],
+                                                   r["seed"]))
+    with open(path, "w", encoding="utf-8") as f:
         json.dump(rows, f, indent=1)
     with open(os.path.join(RESULTS, "friction_models.md"), "w", encoding="utf-8") as f:
         f.write(markdown(rows))
