@@ -76,7 +76,12 @@ def run_data(system, rng, duration=30.0, dt=0.002):
     return t, q, qd, qdd, rigid + friction, truth
 
 
-def evaluate(name, xml, noise_level, seed):
+#: The fits compared: catalog options and optimizer (None: the default).
+VARIANTS = {"plain": ({}, None), "friction": ({"friction": "all"}, None),
+            "unbagged": ({"friction": "all"}, "unbagged")}
+
+
+def evaluate(name, xml, noise_level, seed, variants=("plain", "friction")):
     system = MJCFSystem(xml)
     rng = np.random.default_rng(seed)
     t, q, qd, qdd, tau, truth = run_data(system, rng)
@@ -87,11 +92,14 @@ def evaluate(name, xml, noise_level, seed):
            "floor": np.sqrt(np.mean(noise[split:] ** 2, axis=0)).tolist(),
            "torque_rms": np.sqrt(np.mean(tau[split:] ** 2, axis=0)).tolist(),
            "truth": truth.tolist()}
-    for label, options in (("plain", {}), ("friction", {"friction": "all"})):
+    for label in variants:
+        options, optimizer = VARIANTS[label]
+        if optimizer == "unbagged":  # the default's selection without bagging
+            optimizer = px.PhysicalOptimizer(px.ExplicitOptimizer(select="friction"))
         start = time.perf_counter()
         catalog = kinematic_catalog(system, **options)
-        model = px.XLSINDy(catalog.library()).fit(measured_q[:split], t[:split],
-                                                  u=measured_tau[:split])
+        model = px.XLSINDy(catalog.library(), optimizer).fit(measured_q[:split], t[:split],
+                                                             u=measured_tau[:split])
         seconds = time.perf_counter() - start
         error = model.predict_forces(q[split:], qd[split:], qdd[split:]) - measured_tau[split:]
         row[label] = {"rms": np.sqrt(np.mean(error**2, axis=0)).tolist(),
@@ -121,39 +129,44 @@ def markdown(rows) -> str:
              "quantized positions, 2/3 to fit, 1/3 held out; floor: the RMS of the torque "
              "noise; wall times on a shared 2-core machine)", "",
              "| arm | noise | joint | floor | viscous + Coulomb | friction models | "
-             "ratio to floor (plain / models) |", "|---|---|---|---|---|---|---|"]
+             "ratio to floor (plain / models) | models unbagged (ratio) |",
+             "|---|---|---|---|---|---|---|---|"]
     for row in rows:
         for k, joint in enumerate(row["joints"]):
             floor, plain, models = (row["floor"][k], row["plain"]["rms"][k],
                                     row["friction"]["rms"][k])
+            unbagged = (f"{row['unbagged']['rms'][k] / floor:.2f}" if "unbagged" in row
+                        else "-")
             lines.append(f"| {row['arm']} | {row['noise']:.0%} | {joint} | {floor:.3g} | "
                          f"{plain:.3g} | {models:.3g} | {plain / floor:.2f} / "
-                         f"{models / floor:.2f} |")
+                         f"{models / floor:.2f} | {unbagged} |")
     lines += ["", "Identified joint models against the truth (terms the joints have, terms they "
-              "do not):", "", "| arm | noise | missed | spurious | largest error of a present "
-              "term (relative) | of which model | largest, asymmetry and offset as their sum |",
-              "|---|---|---|---|---|---|---|"]
-    for row in rows:
-        truth, found = np.array(row["truth"]), np.array(row["friction"]["identified"])
+              "do not):", "", "| arm | noise | fit | missed | spurious | largest error of a "
+              "present term (relative) | of which model | largest, asymmetry and offset as their sum |",
+              "|---|---|---|---|---|---|---|---|"]
+    for row, key in ((row, key) for row in rows for key in ("friction", "unbagged")
+                     if key in row):
+        truth, found = np.array(row["truth"]), np.array(row[key]["identified"])
         present = truth != 0
         relative = np.where(present, np.abs(found - truth) / np.where(present, np.abs(truth),
                                                                          1.0), 0.0)
         worst = np.unravel_index(np.argmax(relative), relative.shape)
-        lines.append(f"| {row['arm']} | {row['noise']:.0%} | "
+        lines.append(f"| {row['arm']} | {row['noise']:.0%} | {key} | "
                      f"{int(np.sum(present & (found == 0)))} of {int(present.sum())} | "
                      f"{int(np.sum(~present & (found != 0)))} of {int((~present).sum())} | "
                      f"{relative[worst]:.1%} | {row['joints'][worst[0]]} "
                      f"{MODELS[worst[1]]} | {_moving_error(truth, found):.1%} |")
-    lines += ["", "| arm | noise | total relative error, plain | with models | floor | "
-              "fit s plain / models |", "|---|---|---|---|---|---|"]
+    lines += ["", "| arm | noise | total relative error, plain | with models | unbagged | "
+              "floor | fit s plain / models / unbagged |", "|---|---|---|---|---|---|---|"]
     for row in rows:
         scale = np.sqrt(np.sum(np.square(row["torque_rms"])))
-        total = {key: np.sqrt(np.sum(np.square(row[key]["rms"]))) / scale
-                 for key in ("plain", "friction")}
+        keys = [key for key in VARIANTS if key in row]
+        total = {key: f"{np.sqrt(np.sum(np.square(row[key]['rms']))) / scale:.2%}"
+                 for key in keys}
         floor = np.sqrt(np.sum(np.square(row["floor"]))) / scale
-        lines.append(f"| {row['arm']} | {row['noise']:.0%} | {total['plain']:.2%} | "
-                     f"{total['friction']:.2%} | {floor:.2%} | "
-                     f"{row['plain']['seconds']:.1f} / {row['friction']['seconds']:.1f} |")
+        lines.append(f"| {row['arm']} | {row['noise']:.0%} | {total['plain']} | "
+                     f"{total['friction']} | {total.get('unbagged', '-')} | {floor:.2%} | "
+                     + " / ".join(f"{row[key]['seconds']:.1f}" for key in keys) + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -162,6 +175,8 @@ def main():
     parser.add_argument("--noise", type=float, nargs="+", default=[0.01, 0.02])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--arms", nargs="+", default=list(arms()))
+    parser.add_argument("--variants", nargs="+", default=["plain", "friction"],
+                        choices=list(VARIANTS))
     parser.add_argument("--markdown-only", action="store_true",
                         help="rewrite the table from the stored results")
     args = parser.parse_args()
@@ -171,16 +186,18 @@ def main():
     for name in args.arms:
         for noise in args.noise:
             for seed in args.seeds:
-                rows.append(evaluate(name, arms()[name], noise, seed))
+                rows.append(evaluate(name, arms()[name], noise, seed, args.variants))
                 print(json.dumps({k: rows[-1][k] for k in ("arm", "noise", "floor")}),
-                      [round(v, 4) for v in rows[-1]["plain"]["rms"]],
-                      [round(v, 4) for v in rows[-1]["friction"]["rms"]], flush=True)
+                      [[round(v, 4) for v in rows[-1][k]["rms"]] for k in args.variants],
+                      flush=True)
     os.makedirs(RESULTS, exist_ok=True)
     path = os.path.join(RESULTS, "friction_models.json")
     if os.path.exists(path):  # keep the rows of other runs (arms, noise levels, seeds)
         with open(path, encoding="utf-8") as f:
             done = {(r["arm"], r["noise"], r["seed"]): r for r in json.load(f)}
-        done.update({(r["arm"], r["noise"], r["seed"]): r for r in rows})
+        for r in rows:  # new variants join the stored row of the same run
+            done[(r["arm"], r["noise"], r["seed"])] = {**done.get(
+                (r["arm"], r["noise"], r["seed"]), {}), **r}
         rows = sorted(done.values(), key=lambda r: (list(arms()).index(r["arm"]), r["noise"],
                                                    r["seed"]))
     with open(path, "w", encoding="utf-8") as f:
