@@ -142,7 +142,8 @@ def markdown(rows) -> str:
                          f"{models / floor:.2f} | {unbagged} |")
     lines += ["", "Identified joint models against the truth (terms the joints have, terms they "
               "do not):", "", "| arm | noise | fit | missed | spurious | largest error of a "
-              "present term (relative) | of which model | largest, asymmetry and offset as their sum |",
+              "present term (relative) | of which model | largest, asymmetry and offset as "
+              "their sum |",
               "|---|---|---|---|---|---|---|---|"]
     for row, key in ((row, key) for row in rows for key in ("friction", "unbagged")
                      if key in row):
