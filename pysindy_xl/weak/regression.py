@@ -8,13 +8,14 @@ rows stay coordinate-major over all trajectories.
 
 from __future__ import annotations
 
+import copy
 import warnings
 
 import numpy as np
 
 from ..feature_library import stack_variables
 from .noise import WeakNoise, draw_moments
-from .smoothing import WhittakerSmoother, whittaker_smooth
+from .smoothing import WhittakerSmoother
 
 __all__ = ["weak_regression", "shared_half_width", "propagated_noise", "propagated_draws"]
 
@@ -81,8 +82,11 @@ def propagated_noise(library, d, smoothing, phi, dphi, block, n_draws, rng):
     library : fitted SymbolicLibrary
     d : dict
         One trajectory (``"t"``, ``"x"``, ``"u"``).
-    smoothing : tuple
-        ``(lam, noise, order)`` of the smoother on this trajectory.
+    smoothing : smoother or tuple
+        The smoother as it was after smoothing this trajectory, with ``noise_`` (the noise
+        level per coordinate) and ``resmooth(t, x)`` (the same smoothing of other data, see
+        :meth:`WhittakerSmoother.resmooth <pysindy_xl.WhittakerSmoother.resmooth>`); or
+        ``(lam, noise, order)`` of a :class:`WhittakerSmoother`.
     phi, dphi : sparse matrices, shape (K, N)
     block : ndarray, shape (n * K, F)
         The trajectory's weak columns.
@@ -129,11 +133,14 @@ def propagated_draws(library, d, smoothing, phi, dphi, block, n_draws, rng):
     ndarray, shape (n_draws, n * K, F)
         Rows as in ``block`` (coordinate-major).
     """
-    lam, noise, order = smoothing
+    if isinstance(smoothing, tuple):  # (lam, noise, order) of a WhittakerSmoother
+        lam, noise, order = smoothing
+        smoothing = WhittakerSmoother(order=order)
+        smoothing.lam_, smoothing.noise_ = np.asarray(lam, float), np.asarray(noise, float)
     n = d["x"].shape[1]
-    noisy = [d["x"] + noise * rng.normal(size=d["x"].shape) for _ in range(n_draws)]
-    # all the draws smoothed side by side: each weight's system is factored once
-    smoothed = whittaker_smooth(d["t"], np.hstack(noisy), np.tile(lam, n_draws), order)
+    noisy = [d["x"] + smoothing.noise_ * rng.normal(size=d["x"].shape) for _ in range(n_draws)]
+    # all the draws smoothed side by side (Whittaker: each weight's system factored once)
+    smoothed = smoothing.resmooth(d["t"], np.hstack(noisy))
     draws = np.empty((n_draws,) + block.shape)
     for k in range(n_draws):
         q, qd, qdd = (values[:, k * n : (k + 1) * n] for values in smoothed)
@@ -155,7 +162,8 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         given), ``"u"`` (forces or None) and ``"mask"`` (bool (N,), samples to explain).
     test_functions : BumpTestFunctions
     smoother : WhittakerSmoother
-        Anything with ``smooth(t, x) -> (q, qd, qdd)``.
+        Anything with ``smooth(t, x) -> (q, qd, qdd)``; it propagates the noise of the
+        positions when it also has ``noise_`` and ``resmooth`` (see :func:`propagated_draws`).
     noise : {"moments", "draws"}, default "moments"
         What to return of the propagated noise: its moments, or its draws with the
         structure of the rows (:class:`~pysindy_xl.weak.noise.WeakNoise`, which gives the
@@ -175,8 +183,9 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         ``E[E_c^T E_c]`` for the errors ``E_c`` of each coordinate's rows due to the position
         noise (:func:`propagated_noise`), for the errors-in-variables correction of the
         optimizers (a :class:`~pysindy_xl.weak.noise.WeakNoise` with ``noise="draws"``);
-        None unless a :class:`WhittakerSmoother` estimated the noise of every trajectory and
-        no velocities were measured.
+        None unless the smoother estimated the noise of every trajectory and can smooth
+        again with the same weights (``noise_`` and ``resmooth``, as
+        :class:`WhittakerSmoother`), and no velocities were measured.
     info : dict
         ``half_width`` (s), ``test_functions`` (count per trajectory used), ``noise`` (the
         smoother's noise estimate per coordinate on the first trajectory).
@@ -205,15 +214,23 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
             raise TypeError(f"{name}: expected an object with a {kind} method, got "
                             f"{type(value).__name__}")
     states, smoothing, noise_level = [], [], None
+    propagates, warned = callable(getattr(smoother, "resmooth", None)), False
     for d in trajectories:
         q, qd, qdd = smoother.smooth(d["t"], d["x"])
         if noise_level is None:
             noise_level = getattr(smoother, "noise_", None)
-        smoothing.append((smoother.lam_, smoother.noise_, smoother.order)
-                         if isinstance(smoother, WhittakerSmoother) else None)
+        # the smoother as it smoothed this trajectory (its weights), for the noise propagation
+        smoothing.append(copy.copy(smoother) if propagates else None)
         if d["x_dot"] is not None:  # measured velocities are better than estimated ones
             q, qd = d["x"], d["x_dot"]
             smoothing[-1] = None
+        elif not propagates and not warned:
+            warned = True
+            warnings.warn(
+                f"smoother: {type(smoother).__name__} has no resmooth method (and noise_ "
+                "attribute), so the noise of the positions is not propagated into the weak "
+                "columns and the fit is not corrected for it; see WhittakerSmoother.resmooth",
+                UserWarning, stacklevel=4)
         states.append(stack_variables(q, qd, qdd, d["u"], d["t"]))
     if half_width is None:
         half_width = shared_half_width(test_functions, trajectories, width_columns)
@@ -226,7 +243,8 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
             f"{2 * half_width:.3g} s) and are left out of the weak regression",
             UserWarning, stacklevel=4,
         )
-    propagate = all(smoothing[k] is not None and np.all(np.isfinite(smoothing[k][1]))
+    propagate = all(smoothing[k] is not None
+                    and np.all(np.isfinite(getattr(smoothing[k], "noise_", np.nan)))
                     for k in usable)
     n_samples = sum(len(trajectories[k]["t"]) for k in usable)
     n_draws = int(np.clip(np.ceil(_PROPAGATION_SAMPLES / max(n_samples, 1)), 1, 16))

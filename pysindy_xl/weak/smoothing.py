@@ -375,3 +375,42 @@ class WhittakerSmoother:
                 lams[c], noise[c] = float(self.lam), np.nan
         self.lam_, self.noise_ = lams, noise
         return whittaker_smooth(t, x, lams, self.order)
+
+    def resmooth(self, t, x):
+        """Smooth with the weights the last :meth:`smooth` chose, without choosing again.
+
+        The protocol of a smoother that propagates the noise of the positions into the weak
+        columns (:func:`~pysindy_xl.weak.propagated_draws`): with the weights fixed the
+        smoother is one linear map, so fresh noise of the estimated level ``noise_`` smoothed
+        by it has the spread of the original noise's error. A smoother without ``resmooth``
+        and ``noise_`` is used without that propagation (and a warning).
+
+        Parameters
+        ----------
+        t : array, shape (N,)
+            The sample times of the last :meth:`smooth`.
+        x : array, shape (N, k * n)
+            ``k`` copies of the ``n`` coordinates side by side (e.g. noisy draws).
+
+        Returns
+        -------
+        q, qd, qdd : ndarray, shape (N, k * n)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> t = np.linspace(0, 10, 1001)
+        >>> y = np.sin(t)[:, None] + 0.01 * np.random.default_rng(0).normal(size=(1001, 1))
+        >>> smoother = WhittakerSmoother()
+        >>> q = smoother.smooth(t, y)[0]
+        >>> twice = smoother.resmooth(t, np.hstack([y, y]))[0]
+        >>> bool(np.allclose(twice, np.hstack([q, q])))
+        True
+        """
+        if not hasattr(self, "lam_"):
+            raise ValueError("resmooth: call smooth first (it chooses the weights)")
+        x = np.asarray(x, dtype=float)
+        if x.ndim != 2 or x.shape[1] % len(self.lam_):
+            raise ValueError(f"x: expected copies of the {len(self.lam_)} smoothed coordinates "
+                             f"side by side, got shape {x.shape}")
+        return whittaker_smooth(t, x, np.resize(self.lam_, x.shape[1]), self.order)
