@@ -91,9 +91,13 @@ def identify(system, catalog, trajectory, seed, fresh):
         constrained=float(clean.constraint_active.mean()))
 
 
-def run_arm(arm, n_random, n_seeds, out):
-    from pysindy_xl.mujoco import MJCFSystem, excitation_trajectory, generate_dataset
-    from pysindy_xl.mujoco import kinematic_catalog
+def run_arm(arm, n_random, n_seeds, out, restarts=3, max_iter=100):
+    from pysindy_xl.mujoco import (
+        MJCFSystem,
+        excitation_trajectory,
+        generate_dataset,
+        kinematic_catalog,
+    )
 
     system = MJCFSystem(arm_mjcf(arm))
     catalog = kinematic_catalog(system)
@@ -102,7 +106,7 @@ def run_arm(arm, n_random, n_seeds, out):
     limits = LIMITS | {"torque_limits": TORQUE_LIMITS[arm]}
     designs = []
     start = time.perf_counter()
-    best = excitation_trajectory(system, restarts=3, seed=0, **limits)
+    best = excitation_trajectory(system, restarts=restarts, seed=0, max_iter=max_iter, **limits)
     designs.append(("optimized", 0, best, time.perf_counter() - start))
     for seed in range(1, n_random + 1):
         start = time.perf_counter()
@@ -160,13 +164,15 @@ def main():
     parser.add_argument("--arms", default="ur5,panda,iiwa")
     parser.add_argument("--randoms", type=int, default=5)
     parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--restarts", type=int, default=3)
+    parser.add_argument("--max-iter", type=int, default=100)
     parser.add_argument("--out", default=str(RESULTS))
     args = parser.parse_args()
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     path = out / "excitation.jsonl"
     for arm in args.arms.split(","):
-        run_arm(arm, args.randoms, args.seeds, path)
+        run_arm(arm, args.randoms, args.seeds, path, args.restarts, args.max_iter)
     records = [json.loads(line) for line in path.read_text().splitlines()]
     (out / "excitation.md").write_text(summarize(records))
     print(summarize(records))
