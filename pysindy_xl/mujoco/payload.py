@@ -47,7 +47,8 @@ class Payload:
     identifiable : int
         Number of independent combinations of the ten that the run determines.
     residual : float
-        Relative RMS of the torques the arm alone leaves unexplained after the payload.
+        Relative RMS of the torques (or their weak-form projections) left unexplained by the
+        arm and the payload.
     """
 
     body: str
@@ -84,7 +85,7 @@ def _arm_coefficients(catalog, library, arm):
     return coef
 
 
-def identify_payload(catalog, q, qd, qdd, tau, arm=None, body=None) -> Payload:
+def identify_payload(catalog, q, t, tau, qd=None, qdd=None, arm=None, body=None) -> Payload:
     """The inertial parameters of a payload from a run of the loaded arm.
 
     Parameters
@@ -92,9 +93,17 @@ def identify_payload(catalog, q, qd, qdd, tau, arm=None, body=None) -> Payload:
     catalog : KinematicCatalog
         The arm's catalog (:func:`~pysindy_xl.mujoco.kinematic_catalog` of the arm without
         the payload).
-    q, qd, qdd, tau : array, shape (N, n)
-        The loaded run: positions, velocities, accelerations (exact, or the package's smoothed
-        estimates) and joint torques.
+    q : array, shape (N, n)
+        Positions of the loaded run.
+    t : array, shape (N,)
+        Its sample times.
+    tau : array, shape (N, n)
+        Its joint torques.
+    qd, qdd : array, shape (N, n), optional
+        Velocities and accelerations. Without both, the regression is the weak form of the
+        package's fits (:func:`~pysindy_xl.weak.weak_regression`: test functions against
+        smoothed positions, no accelerations needed), with the test functions and smoother
+        of ``arm`` when it is a fitted model.
     arm : XLSINDy, array or None, optional
         The arm without payload: a model fitted with ``catalog.library()``, its coefficient
         vector (force coefficient -1), or None for the MJCF's nominal values.
@@ -130,37 +139,45 @@ def identify_payload(catalog, q, qd, qdd, tau, arm=None, body=None) -> Payload:
     >>> truth = kinematic_catalog(loaded)  # the loaded arm's torques, from its catalog
     >>> theta = truth.library().fit().transform(px.stack_variables(q, qd, qdd))
     >>> tau = (theta[:, 1:] @ truth.true_coefficients()[1:]).reshape(2, -1).T
-    >>> payload = identify_payload(kinematic_catalog(arm), q, qd, qdd, tau)
+    >>> t = np.arange(200) * 0.01  # (unused: the derivatives are given)
+    >>> payload = identify_payload(kinematic_catalog(arm), q, t, tau, qd, qdd)
     >>> payload.body, round(payload.mass, 4), payload.com.round(4)[[0, 2]]
     ('hand', 0.3, array([0.1, 0. ]))
     """
+    from .._inputs import check_array
     from ..feature_library import stack_variables
     from ..physical.sdp import consistent_least_squares
+    from ..weak import BumpTestFunctions, WhittakerSmoother, weak_regression
 
     library = catalog.library().fit()
     n = catalog.coords.n
-    arrays = []
-    for name, value in (("q", q), ("qd", qd), ("qdd", qdd), ("tau", tau)):
-        value = np.asarray(value, dtype=float)
-        if value.ndim != 2 or value.shape[1] != n or not np.all(np.isfinite(value)):
-            raise ValueError(f"{name}: expected finite values of shape (N, {n}), got "
-                             f"{np.shape(value)}")
-        arrays.append(value)
-    if len({a.shape for a in arrays}) != 1:
-        raise ValueError(f"q, qd, qdd, tau: expected equal shapes, got {[a.shape for a in arrays]}")
+    q = check_array(q, "q", n_columns=n)
+    tau = check_array(tau, "tau", q.shape)
+    t = np.asarray(t, dtype=float)
+    if t.shape != (len(q),) or not np.all(np.isfinite(t)):
+        raise ValueError(f"t: expected {len(q)} finite sample times, got shape {t.shape}")
     bodies = list(dict.fromkeys(name.rsplit(".", 1)[0] for name in catalog.physical_names
                                 if name.rsplit(".", 1)[1] in INERTIAL_PARAMETERS))
     body = bodies[-1] if body is None else body
     if body not in bodies:
         raise ValueError(f"body: expected one of {bodies}, got {body!r}")
     coef = _arm_coefficients(catalog, library, arm)
-    theta = library.transform(stack_variables(*arrays))  # (n N, p), coordinate-major rows
+    if qd is None or qdd is None:  # positions only: weak form, as the package's fits
+        rows = weak_regression(library, [{"t": t, "x": q, "x_dot": qd, "u": tau,
+                                         "mask": np.ones(len(t), dtype=bool)}],
+                               getattr(arm, "test_functions", None) or BumpTestFunctions(),
+                               getattr(arm, "smoother", None) or WhittakerSmoother())[0]
+    else:
+        rows = library.transform(stack_variables(
+            q, check_array(qd, "qd", q.shape), check_array(qdd, "qdd", q.shape), tau))
+    # rows (coordinate-major, strong or weak) of the catalog: F[tau] = rest @ coef[rest]
     forces = library.force_columns_
-    rest = np.setdiff1d(np.arange(theta.shape[1]), forces)
-    residual = arrays[3].T.ravel() - theta[:, rest] @ coef[rest]
+    rest = np.setdiff1d(np.arange(rows.shape[1]), forces)
+    measured = rows[:, forces].sum(axis=1)
+    residual = measured - rows[:, rest] @ coef[rest]
     lagrange = [j for j, c in enumerate(library.categories_) if c == "lagrange"]
     index = [list(catalog.physical_names).index(f"{body}.{p}") for p in INERTIAL_PARAMETERS]
-    regressor = theta[:, lagrange] @ catalog.combination[:, index]  # (n N, 10)
+    regressor = rows[:, lagrange] @ catalog.combination[:, index]  # (rows, 10)
     unconstrained = np.linalg.lstsq(regressor, residual, rcond=None)[0]
     structure = PhysicalStructure.from_maps([{f"payload.{p}": 1.0} for p in INERTIAL_PARAMETERS],
                                             base_columns=np.arange(10))
@@ -174,4 +191,4 @@ def identify_payload(catalog, q, qd, qdd, tau, arm=None, body=None) -> Payload:
     left = residual - regressor @ parameters
     return Payload(body=body, parameters=parameters, mass=mass, com=com, inertia=inertia,
                    identifiable=int(np.sum(singular > 1e-9 * singular[0])),
-                   residual=float(np.linalg.norm(left) / np.linalg.norm(arrays[3])))
+                   residual=float(np.linalg.norm(left) / np.linalg.norm(measured)))
