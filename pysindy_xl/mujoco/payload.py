@@ -60,7 +60,13 @@ class Payload:
     residual: float
 
     def to_dict(self) -> dict:
-        """JSON-serializable description."""
+        """JSON-serializable description.
+
+        Returns
+        -------
+        dict
+            The attributes, arrays as nested lists.
+        """
         return {"body": self.body, "parameters": self.parameters.tolist(), "mass": self.mass,
                 "com": self.com.tolist(), "inertia": self.inertia.tolist(),
                 "identifiable": self.identifiable, "residual": self.residual}
