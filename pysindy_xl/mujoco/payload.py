@@ -32,7 +32,7 @@ __all__ = ["Payload", "identify_payload"]
 class Payload:
     """Inertial parameters of a payload identified by :func:`identify_payload`.
 
-    Attributes
+    Parameters
     ----------
     body : str
         The body carrying it (its frame is the reference of the parameters).
@@ -49,6 +49,14 @@ class Payload:
     residual : float
         Relative RMS of the torques (or their weak-form projections) left unexplained by the
         arm and the payload.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> payload = Payload("hand", np.r_[2.0, 0.2, 0, 0, np.zeros(6)], 2.0,
+    ...                   np.array([0.1, 0, 0]), np.zeros((3, 3)), 10, 0.0)
+    >>> payload.to_dict()["com"]
+    [0.1, 0.0, 0.0]
     """
 
     body: str
