@@ -15,6 +15,7 @@ import numpy as np
 from ..feature_library import stack_variables
 from .noise import WeakNoise, draw_moments
 from .smoothing import WhittakerSmoother, whittaker_smooth
+from .timegrid import grid_summary, split_at_gaps
 
 __all__ = ["weak_regression", "shared_half_width", "propagated_noise", "propagated_draws"]
 
@@ -178,8 +179,18 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         None unless a :class:`WhittakerSmoother` estimated the noise of every trajectory and
         no velocities were measured.
     info : dict
-        ``half_width`` (s), ``test_functions`` (count per trajectory used), ``noise`` (the
-        smoother's noise estimate per coordinate on the first trajectory).
+        ``half_width`` (s), ``test_functions`` (count per piece used), ``noise`` (the
+        smoother's noise estimate per coordinate on the first piece), ``time_grid``
+        (:func:`~pysindy_xl.weak.timegrid.grid_summary` of the stamps), ``gaps`` (the cuts
+        of :func:`~pysindy_xl.weak.timegrid.split_at_gaps`) and ``segments`` (for each piece
+        used, its trajectory).
+
+    Notes
+    -----
+    Trajectories are cut at steps longer than ``test_functions.max_gap(half_width)`` (when
+    the test functions have that method): no test function and no smoother spans such a gap
+    (:mod:`~pysindy_xl.weak.timegrid`). Pieces shorter than one test function are left out
+    with a warning; the states returned are those of the pieces used.
 
     Examples
     --------
@@ -204,8 +215,31 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         if not callable(getattr(value, kind, None)):
             raise TypeError(f"{name}: expected an object with a {kind} method, got "
                             f"{type(value).__name__}")
+    if half_width is None:
+        half_width = shared_half_width(test_functions, trajectories, width_columns)
+    max_gap = getattr(test_functions, "max_gap", None)
+    segments, source, gaps = split_at_gaps(
+        trajectories, np.inf if max_gap is None else max_gap(half_width))
+    durations = np.array([d["t"][-1] - d["t"][0] for d in segments])
+    usable = np.flatnonzero(durations >= 2 * half_width)
+    summary = grid_summary([d["t"] for d in trajectories])
+    if len(usable) < len(segments):
+        short = sorted(set(source[durations < 2 * half_width].tolist()))
+        what = (f"pieces (between {len(gaps)} gaps longer than {max_gap(half_width):.3g} s) "
+                "of " if gaps else "")
+        warnings.warn(
+            f"x: {what}trajectories {short} are shorter than one test function (support "
+            f"{2 * half_width:.3g} s) and are left out of the weak regression",
+            UserWarning, stacklevel=4,
+        )
+    if usable.size == 0:
+        raise ValueError(
+            f"t: every piece of the trajectories between gaps longer than "
+            f"{max_gap(half_width):.3g} s is shorter than one test function (support "
+            f"{2 * half_width:.3g} s); resample across the gaps or set a smaller width")
+    pieces = [segments[k] for k in usable]
     states, smoothing, noise_level = [], [], None
-    for d in trajectories:
+    for d in pieces:
         q, qd, qdd = smoother.smooth(d["t"], d["x"])
         if noise_level is None:
             noise_level = getattr(smoother, "noise_", None)
@@ -215,26 +249,13 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
             q, qd = d["x"], d["x_dot"]
             smoothing[-1] = None
         states.append(stack_variables(q, qd, qdd, d["u"], d["t"]))
-    if half_width is None:
-        half_width = shared_half_width(test_functions, trajectories, width_columns)
-    durations = np.array([d["t"][-1] - d["t"][0] for d in trajectories])
-    usable = np.flatnonzero(durations >= 2 * half_width)
-    if len(usable) < len(trajectories):
-        short = np.flatnonzero(durations < 2 * half_width).tolist()
-        warnings.warn(
-            f"x: trajectories {short} are shorter than one test function (support "
-            f"{2 * half_width:.3g} s) and are left out of the weak regression",
-            UserWarning, stacklevel=4,
-        )
-    propagate = all(smoothing[k] is not None and np.all(np.isfinite(smoothing[k][1]))
-                    for k in usable)
-    n_samples = sum(len(trajectories[k]["t"]) for k in usable)
+    propagate = all(piece is not None and np.all(np.isfinite(piece[1])) for piece in smoothing)
+    n_samples = sum(len(d["t"]) for d in pieces)
     n_draws = int(np.clip(np.ceil(_PROPAGATION_SAMPLES / max(n_samples, 1)), 1, 16))
     rng = np.random.default_rng(0)  # reproducible fits
     n = library.coords.n
     blocks, draws, runs = [], [], []
-    for k in usable:
-        d, z = trajectories[k], states[k]
+    for k, (d, z) in enumerate(zip(pieces, states, strict=True)):
         phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
         overlap, kept = _overlap_rows(phi), np.arange(phi.shape[0])
         if not d["mask"].all():  # drop the test functions that see a masked sample
@@ -258,7 +279,8 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         propagated = WeakNoise(np.concatenate(draws, axis=2).reshape(n_draws, theta.shape[0], -1),
                                n, _row_runs(runs, n))
     info = {"half_width": half_width, "test_functions": [b.shape[1] for b in blocks],
-            "noise": None if noise_level is None else np.asarray(noise_level).tolist()}
+            "noise": None if noise_level is None else np.asarray(noise_level).tolist(),
+            "time_grid": summary, "gaps": gaps, "segments": source[usable].tolist()}
     if noise == "moments" and propagated is not None:
         propagated = propagated.moments()
     return theta, np.vstack(states), propagated, info

@@ -119,10 +119,15 @@ def differentiate(t, values, derivative: int = 1) -> np.ndarray:
     return np.einsum("ij,ij...->i...", weights, gathered)
 
 
-def _divided_difference_matrix(t: np.ndarray, order: int) -> scipy.sparse.csr_matrix:
+def _divided_difference_matrix(t: np.ndarray, order: int,
+                               weighted: bool = False) -> scipy.sparse.csr_matrix:
     """``D`` (N - order, N): ``order``-th divided differences times ``order! * mean_step^order``.
 
-    On a uniform grid this is the plain ``order``-th difference matrix.
+    On a uniform grid this is the plain ``order``-th difference matrix. With ``weighted``
+    each row is also multiplied by ``sqrt(span / (order * mean_step))``, ``span`` the time
+    its samples cover, so that ``||D z||^2`` is the quadrature of the integral of the squared
+    ``order``-th derivative on the actual grid (a row across a gap stands for the whole gap,
+    a row of bunched samples for its short span); on a uniform grid every factor is 1.
     """
     n_samples = len(t)
     index = np.arange(n_samples - order)[:, None] + np.arange(order + 1)
@@ -130,7 +135,10 @@ def _divided_difference_matrix(t: np.ndarray, order: int) -> scipy.sparse.csr_ma
     gaps = window[:, :, None] - window[:, None, :]
     gaps[:, np.arange(order + 1), np.arange(order + 1)] = 1.0
     weights = 1.0 / np.prod(gaps, axis=2)
-    weights *= np.prod(np.arange(1, order + 1)) * np.mean(np.diff(t)) ** order
+    mean_step = np.mean(np.diff(t))
+    weights *= np.prod(np.arange(1, order + 1)) * mean_step ** order
+    if weighted:
+        weights *= np.sqrt((window[:, -1] - window[:, 0]) / (order * mean_step))[:, None]
     rows = np.repeat(np.arange(n_samples - order), order + 1)
     return scipy.sparse.csr_matrix(
         (weights.ravel(), (rows, index.ravel())), shape=(n_samples - order, n_samples)
@@ -162,18 +170,15 @@ def is_uniform(t) -> bool:
 
 def _choose_lambda(t: np.ndarray, y: np.ndarray, order: int,
                    target: str) -> tuple[float, float]:
-    """Smoothing weight for one series: in the cosine-transform domain on a uniform grid, on
-    the actual grid otherwise (:func:`_choose_lambda_on_grid`).
+    """Smoothing weight for one series on a uniform grid, in the cosine-transform domain.
 
     Returns ``(lambda, sigma)``. ``sigma`` is the noise level of the GCV fit (residual RMS
     corrected for the smoother's degrees of freedom). ``target="gcv"`` returns the GCV weight;
     ``target="velocity"`` the weight that minimizes the unbiased risk estimate (SURE) of the
     smoothed *velocity*, ``sum_k w_k^2 [(1 - H_k)^2 (P_k - sigma^2) + H_k^2 sigma^2]`` with
     ``w_k`` the frequency and ``P_k`` the power of mode ``k``: GCV targets the positions and
-    leaves their derivatives too rough.
+    leaves their derivatives too rough. Non-uniform grids: :func:`_choose_lambdas_on_grid`.
     """
-    if not is_uniform(t):
-        return _choose_lambda_on_grid(t, y, order, target)
     n_samples = len(y)
     s = np.linspace(-1.0, 1.0, n_samples)
     trend = np.polynomial.polynomial.polyfit(s, y, order - 1)  # unpenalized by D_order
@@ -196,33 +201,45 @@ def _choose_lambda(t: np.ndarray, y: np.ndarray, order: int,
     return float(_LAMBDA_GRID[int(np.argmin(risk))]), float(np.sqrt(sigma2))
 
 
-def _choose_lambda_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
-    """GCV and the velocity risk of the smoother solved on the actual (non-uniform) grid.
-
-    For each ``lambda`` of the grid, ``z = H y`` with ``H = (I + lambda D^T D)^-1``;
-    ``tr H ~ mean_p r_p^T H r_p`` over random sign vectors ``r_p``, and the Stein risk of
-    the velocity (first divided differences ``D_1``, in sample units) is
-    ``||D_1 (z - y)||^2 + sigma^2 (2 tr(D_1 H D_1^T) - ||D_1||_F^2)``, whose trace is
-    estimated with the probes ``D_1^T r_p``. The weights are searched a decade apart, then
-    on the grid's full resolution around the best of each criterion. The probes are drawn
-    from a fixed seed: the same data give the same weight.
-    """
-    n_samples = len(t)
-    penalty = _divided_difference_matrix(t, order)
+def _banded_penalty(t: np.ndarray, order: int) -> np.ndarray:
+    """``D^T D`` of the weighted divided differences in LAPACK band storage (row
+    ``order - k``: the ``k``-th diagonal, aligned by column, as the DIA format stores it)."""
+    penalty = _divided_difference_matrix(t, order, weighted=True)
     penalty = (penalty.T @ penalty).todia()
-    # D^T D in LAPACK band storage (row order - k: the k-th diagonal, aligned by column, as
-    # the DIA format stores it). An LU with pivoting, not Cholesky: at the largest weights
-    # the identity is lost to rounding next to lambda D^T D, which is only semi-definite.
-    banded = np.zeros((2 * order + 1, n_samples))
+    banded = np.zeros((2 * order + 1, len(t)))
     for offset, diagonal in zip(penalty.offsets, penalty.data, strict=True):
         banded[order - offset] = diagonal
+    return banded
+
+
+def _choose_lambdas_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
+    """GCV and the velocity risk of the smoother solved on the actual (non-uniform) grid, for
+    every column of ``y`` (N, n) at once.
+
+    For each ``lambda`` of the grid, ``Z = H Y`` with ``H = (I + lambda D^T D)^-1``, one
+    banded LU for all columns (``H`` depends on the grid, not on the data);
+    ``tr H ~ mean_p r_p^T H r_p`` over random sign vectors ``r_p`` (the same probes for all
+    columns), and the Stein risk of the velocity (first divided differences ``D_1``, in
+    sample units) is ``||D_1 (z - y)||^2 + sigma^2 (2 tr(D_1 H D_1^T) - ||D_1||_F^2)``, whose
+    trace is estimated with the probes ``D_1^T r_p``. The weights are searched a decade
+    apart, then on the grid's full resolution around each column's best of each criterion.
+    The probes are drawn from a fixed seed: the same data give the same weights.
+
+    Returns
+    -------
+    lams, sigmas : ndarray, shape (n,)
+    """
+    n_samples, n_columns = y.shape
+    # An LU with pivoting, not Cholesky: at the largest weights the identity is lost to
+    # rounding next to lambda D^T D, which is only semi-definite.
+    banded = _banded_penalty(t, order)
     first = _divided_difference_matrix(t, 1)
     rng = np.random.default_rng(0)
     probes = rng.choice([-1.0, 1.0], size=(n_samples, n_probes))
     velocity_probes = first.T @ rng.choice([-1.0, 1.0], size=(n_samples - 1, n_probes))
     rhs = np.column_stack([y, probes, velocity_probes])
     first_norm = float(first.multiply(first).sum())
-    scores = {}  # grid index -> (gcv, rss, tr H, ||D_1 (z - y)||^2, tr D_1 H D_1^T)
+    scores = {}  # grid index -> (gcv (n,), rss (n,), tr H, ||D_1 (Z - Y)||^2 (n,), tr D_1 H D_1^T)
 
     def score(k):
         if k not in scores:
@@ -230,30 +247,35 @@ def _choose_lambda_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
             system[order] += 1.0
             solved = scipy.linalg.solve_banded((order, order), system, rhs,
                                                check_finite=False)
-            residual = y - solved[:, 0]
-            rss = float(residual @ residual)
-            trace = float(np.mean(np.sum(probes * solved[:, 1:1 + n_probes], axis=0)))
-            trace_velocity = float(np.mean(np.sum(velocity_probes * solved[:, 1 + n_probes:],
-                                                  axis=0)))
+            residual = y - solved[:, :n_columns]
+            rss = np.sum(residual**2, axis=0)
+            trace = float(np.mean(np.sum(probes * solved[:, n_columns:n_columns + n_probes],
+                                         axis=0)))
+            trace_velocity = float(np.mean(np.sum(
+                velocity_probes * solved[:, n_columns + n_probes:], axis=0)))
             gcv = (n_samples * rss / (n_samples - trace) ** 2 if trace < n_samples - 1
-                   else np.inf)
-            scores[k] = (gcv, rss, trace, float(np.sum((first @ residual) ** 2)),
+                   else np.full(n_columns, np.inf))
+            scores[k] = (gcv, rss, trace, np.sum((first @ residual) ** 2, axis=0),
                          trace_velocity)
         return scores[k]
 
     def minimize(criterion):
-        coarse = range(0, len(_LAMBDA_GRID), 4)  # a decade apart
-        best = min(coarse, key=lambda k: criterion(score(k)))
-        fine = range(max(best - 3, 0), min(best + 4, len(_LAMBDA_GRID)))
-        return min(fine, key=lambda k: criterion(score(k)))
+        """Per column, the grid index of the smallest ``criterion(score) -> (n,)``."""
+        coarse = np.arange(0, len(_LAMBDA_GRID), 4)  # a decade apart
+        best = coarse[np.argmin([criterion(score(k)) for k in coarse], axis=0)]
+        fine = best[:, None] + np.arange(-3, 4)
+        fine = np.clip(fine, 0, len(_LAMBDA_GRID) - 1)
+        values = np.array([[criterion(score(k))[c] for k in row] for c, row in enumerate(fine)])
+        return fine[np.arange(n_columns), np.argmin(values, axis=1)]
 
     best = minimize(lambda s: s[0])
-    _, rss, trace, _, _ = scores[best]
+    rss = np.array([scores[k][1][c] for c, k in enumerate(best)])
+    trace = np.array([scores[k][2] for k in best])
     sigma2 = rss / (n_samples - trace)
     if target == "gcv":
-        return float(_LAMBDA_GRID[best]), float(np.sqrt(sigma2))
+        return _LAMBDA_GRID[best], np.sqrt(sigma2)
     chosen = minimize(lambda s: s[3] + sigma2 * (2 * s[4] - first_norm))
-    return float(_LAMBDA_GRID[chosen]), float(np.sqrt(sigma2))
+    return _LAMBDA_GRID[chosen], np.sqrt(sigma2)
 
 
 def whittaker_smooth(t, x, lams, order: int = 3):
@@ -285,7 +307,7 @@ def whittaker_smooth(t, x, lams, order: int = 3):
     """
     t = np.asarray(t, dtype=float)
     x = np.asarray(x, dtype=float)
-    penalty = _divided_difference_matrix(t, order)
+    penalty = _divided_difference_matrix(t, order, weighted=True)
     penalty = (penalty.T @ penalty).tocsc()
     identity = scipy.sparse.identity(len(t), format="csc")
     smoothed = x.copy()
@@ -367,11 +389,13 @@ class WhittakerSmoother:
         n_samples = len(t)
         if n_samples < max(5, self.order + 2):
             raise ValueError(f"x: expected at least {max(5, self.order + 2)} samples")
-        lams, noise = np.empty(x.shape[1]), np.empty(x.shape[1])
-        for c in range(x.shape[1]):  # a few coordinates, each with its own lambda
-            if isinstance(self.lam, str):
+        lams, noise = np.full(x.shape[1], np.nan), np.full(x.shape[1], np.nan)
+        if not isinstance(self.lam, str):
+            lams[:] = float(self.lam)
+        elif is_uniform(t):
+            for c in range(x.shape[1]):  # a few coordinates, each with its own lambda
                 lams[c], noise[c] = _choose_lambda(t, x[:, c], self.order, self.lam)
-            else:
-                lams[c], noise[c] = float(self.lam), np.nan
+        else:  # one banded solve per weight for all coordinates
+            lams, noise = _choose_lambdas_on_grid(t, x, self.order, self.lam)
         self.lam_, self.noise_ = lams, noise
         return whittaker_smooth(t, x, lams, self.order)
