@@ -260,11 +260,11 @@ class BumpTestFunctions:
 
         Examples
         --------
-        >>> BumpTestFunctions().max_gap(1.2)
-        0.1
+        >>> BumpTestFunctions(min_samples=10).max_gap(0.5)
+        0.05
         """
         self._check_params()
-        return float(half_width) / self.min_samples
+        return float(half_width / self.min_samples)
 
     def matrices(self, t, x=None, half_width=None, n_functions=None):
         """Quadrature-weighted test-function matrices of one trajectory.
