@@ -9,7 +9,9 @@ both from noisy positions with no hand-set window:
   .. math:: \\hat z = \\arg\\min_z \\|y - z\\|^2 + \\lambda \\|D_d z\\|^2,
 
   where ``D_d`` is the ``d``-th divided difference on the (possibly non-uniform) time grid,
-  scaled by the mean step to the power ``d`` so that ``lambda`` is in sample units. The system
+  scaled by the mean step to the power ``d`` so that ``lambda`` is in sample units, each row
+  weighted by the square root of the time it spans (the penalty is then the quadrature of
+  the integral of the squared ``d``-th derivative, across gaps and bunched samples alike). The system
   ``(I + lambda D_d^T D_d) z = y`` is banded: one sparse LU solve, linear in the samples.
 * **lambda from the data**: generalized cross-validation (Craven and Wahba),
   ``GCV(lambda) = N RSS(lambda) / (N - tr H(lambda))^2`` with ``H`` the smoother's hat
@@ -149,9 +151,9 @@ def _divided_difference_matrix(t: np.ndarray, order: int,
 #: rounded to microseconds at 100 Hz spread by 1e-4; the error of reading them as uniform
 #: is then far below any noise).
 _UNIFORM_TOLERANCE = 1e-3
-#: Random sign probes of the trace estimates on non-uniform grids: the relative error of
-#: ``tr H`` is about ``sqrt(2 / (probes tr H))``, 2-4 % for the 50-200 degrees of freedom of
-#: a smoothed record.
+#: Probes of the trace estimates on non-uniform grids (random signs in colours,
+#: :func:`_colored_probes`); the error comes from entries of the smoother this many samples
+#: apart.
 _TRACE_PROBES = 16
 
 
@@ -212,6 +214,22 @@ def _banded_penalty(t: np.ndarray, order: int) -> np.ndarray:
     return banded
 
 
+def _colored_probes(n_samples: int, n_probes: int, rng) -> np.ndarray:
+    """Probe vectors of a trace estimate: probe ``j`` holds random signs on the samples
+    ``i = j mod n_probes`` and zeros elsewhere.
+
+    ``sum_j r_j^T A r_j`` is then ``tr A`` plus only the entries of ``A`` between samples a
+    multiple of ``n_probes`` apart, each with a random sign (probing with colours, Tang and
+    Saad 2012): for the smoother, whose entries decay within about ``lambda^(1/(2d))``
+    samples, far less variance than the same number of dense random-sign probes, whose
+    estimate sums every off-diagonal entry.
+    """
+    probes = np.zeros((n_samples, n_probes))
+    probes[np.arange(n_samples), np.arange(n_samples) % n_probes] = rng.choice(
+        [-1.0, 1.0], size=n_samples)
+    return probes
+
+
 def _choose_lambdas_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
     """GCV and the velocity risk of the smoother solved on the actual (non-uniform) grid, for
     every column of ``y`` (N, n) at once.
@@ -219,9 +237,12 @@ def _choose_lambdas_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
     For each ``lambda`` of the grid, ``Z = H Y`` with ``H = (I + lambda D^T D)^-1``, one
     banded LU for all columns (``H`` depends on the grid, not on the data);
     ``tr H ~ mean_p r_p^T H r_p`` over random sign vectors ``r_p`` (the same probes for all
-    columns), and the Stein risk of the velocity (first divided differences ``D_1``, in
-    sample units) is ``||D_1 (z - y)||^2 + sigma^2 (2 tr(D_1 H D_1^T) - ||D_1||_F^2)``, whose
-    trace is estimated with the probes ``D_1^T r_p``. The weights are searched a decade
+    columns, coloured: :func:`_colored_probes`), and the Stein risk of the velocity (first
+    divided differences ``D_1``, in sample units, weighted by the square root of the Tukey
+    taper of the uniform path, ``W``: the error at the ends, which grows with the weight
+    where the test functions vanish, would otherwise choose a weight 100 times too small) is
+    ``||W D_1 (z - y)||^2 + sigma^2 (2 tr(W D_1 H D_1^T W) - ||W D_1||_F^2)``, whose trace is
+    estimated with the probes ``D_1^T W r_p``. The weights are searched a decade
     apart, then on the grid's full resolution around each column's best of each criterion.
     The probes are drawn from a fixed seed: the same data give the same weights.
 
@@ -233,10 +254,13 @@ def _choose_lambdas_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
     # An LU with pivoting, not Cholesky: at the largest weights the identity is lost to
     # rounding next to lambda D^T D, which is only semi-definite.
     banded = _banded_penalty(t, order)
-    first = _divided_difference_matrix(t, 1)
+    # the velocity's error is weighed with the taper of the uniform path: the smoother's
+    # ends, where its error grows with the weight, are where the test functions vanish
+    taper = np.sqrt(scipy.signal.windows.tukey(n_samples - 1, 0.2))
+    first = scipy.sparse.diags(taper) @ _divided_difference_matrix(t, 1)
     rng = np.random.default_rng(0)
-    probes = rng.choice([-1.0, 1.0], size=(n_samples, n_probes))
-    velocity_probes = first.T @ rng.choice([-1.0, 1.0], size=(n_samples - 1, n_probes))
+    probes = _colored_probes(n_samples, n_probes, rng)
+    velocity_probes = first.T @ _colored_probes(n_samples - 1, n_probes, rng)
     rhs = np.column_stack([y, probes, velocity_probes])
     first_norm = float(first.multiply(first).sum())
     scores = {}  # grid index -> (gcv (n,), rss (n,), tr H, ||D_1 (Z - Y)||^2 (n,), tr D_1 H D_1^T)
@@ -249,10 +273,8 @@ def _choose_lambdas_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
                                                check_finite=False)
             residual = y - solved[:, :n_columns]
             rss = np.sum(residual**2, axis=0)
-            trace = float(np.mean(np.sum(probes * solved[:, n_columns:n_columns + n_probes],
-                                         axis=0)))
-            trace_velocity = float(np.mean(np.sum(
-                velocity_probes * solved[:, n_columns + n_probes:], axis=0)))
+            trace = float(np.sum(probes * solved[:, n_columns:n_columns + n_probes]))
+            trace_velocity = float(np.sum(velocity_probes * solved[:, n_columns + n_probes:]))
             gcv = (n_samples * rss / (n_samples - trace) ** 2 if trace < n_samples - 1
                    else np.full(n_columns, np.inf))
             scores[k] = (gcv, rss, trace, np.sum((first @ residual) ** 2, axis=0),
