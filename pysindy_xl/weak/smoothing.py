@@ -11,8 +11,8 @@ both from noisy positions with no hand-set window:
   where ``D_d`` is the ``d``-th divided difference on the (possibly non-uniform) time grid,
   scaled by the mean step to the power ``d`` so that ``lambda`` is in sample units, each row
   weighted by the square root of the time it spans (the penalty is then the quadrature of
-  the integral of the squared ``d``-th derivative, across gaps and bunched samples alike). The system
-  ``(I + lambda D_d^T D_d) z = y`` is banded: one sparse LU solve, linear in the samples.
+  the integral of the squared ``d``-th derivative, across gaps and bunched samples alike).
+  The system ``(I + lambda D_d^T D_d) z = y`` is banded: one sparse LU solve, linear in the samples.
 * **lambda from the data**: generalized cross-validation (Craven and Wahba),
   ``GCV(lambda) = N RSS(lambda) / (N - tr H(lambda))^2`` with ``H`` the smoother's hat
   matrix, estimates the noise level; the weight used by default then minimizes the unbiased
@@ -48,12 +48,14 @@ __all__ = ["WhittakerSmoother", "whittaker_smooth", "finite_difference_weights",
 _LAMBDA_GRID = 10.0 ** np.arange(-4.0, 16.01, 0.25)
 
 
-def finite_difference_weights(t, derivative: int, stencil: int = 5):
+def finite_difference_weights(t, derivative: int, stencil: int = 5, degree=None):
     """Per-sample finite-difference stencils of the ``derivative``-th derivative.
 
     Each sample uses the ``stencil`` nearest samples (centred inside the grid, shifted at its
     ends); the weights solve the Taylor conditions on the actual offsets, so any strictly
-    increasing grid works.
+    increasing grid works. With ``degree < stencil - 1`` they are those of the least-squares
+    polynomial of that degree through the stencil (Savitzky-Golay on the actual times;
+    ``derivative=0`` smooths).
 
     Parameters
     ----------
@@ -63,6 +65,9 @@ def finite_difference_weights(t, derivative: int, stencil: int = 5):
         Order of the derivative, smaller than ``stencil``.
     stencil : int, default 5
         Points per stencil.
+    degree : int, optional
+        Degree of the local polynomial, at least ``derivative`` (default ``stencil - 1``:
+        interpolation).
 
     Returns
     -------
@@ -87,15 +92,20 @@ def finite_difference_weights(t, derivative: int, stencil: int = 5):
     index = start[:, None] + np.arange(stencil)
     scale = np.mean(np.diff(t))
     offsets = (t[index] - t[:, None]) / scale  # (N, stencil), O(1) for conditioning
-    powers = np.arange(stencil)
+    powers = np.arange(stencil if degree is None else int(degree) + 1)
     taylor = offsets[:, None, :] ** powers[None, :, None]  # (N, power, point)
-    rhs = np.zeros((n_samples, stencil, 1))
+    rhs = np.zeros((n_samples, len(powers), 1))
     rhs[:, derivative, 0] = float(np.prod(np.arange(1, derivative + 1)))
-    weights = np.linalg.solve(taylor, rhs)[..., 0] / scale**derivative
-    return index, weights
+    if len(powers) < stencil:  # least squares: the minimum-norm weights of the conditions
+        gram = taylor @ np.swapaxes(taylor, 1, 2)
+        weights = (np.swapaxes(taylor, 1, 2) @ np.linalg.solve(gram, rhs))[..., 0]
+    else:
+        weights = np.linalg.solve(taylor, rhs)[..., 0]
+    return index, weights / scale**derivative
 
 
-def differentiate(t, values, derivative: int = 1) -> np.ndarray:
+def differentiate(t, values, derivative: int = 1, stencil: int = 5,
+                  degree=None) -> np.ndarray:
     """Derivative of smooth sampled ``values`` (N, ...) along axis 0 (five-point stencils).
 
     Parameters
@@ -103,6 +113,9 @@ def differentiate(t, values, derivative: int = 1) -> np.ndarray:
     t : array, shape (N,)
     values : array, shape (N, ...)
     derivative : int, default 1
+    stencil, degree : optional
+        As in :func:`finite_difference_weights` (a smoothing local polynomial when
+        ``degree < stencil - 1``).
 
     Returns
     -------
@@ -115,7 +128,7 @@ def differentiate(t, values, derivative: int = 1) -> np.ndarray:
     >>> float(np.abs(differentiate(t, np.sin(t)) - np.cos(t)).max()) < 1e-6
     True
     """
-    index, weights = finite_difference_weights(t, derivative)
+    index, weights = finite_difference_weights(t, derivative, stencil, degree)
     values = np.asarray(values, dtype=float)
     gathered = values[index]  # (N, stencil, ...)
     return np.einsum("ij,ij...->i...", weights, gathered)
