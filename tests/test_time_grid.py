@@ -150,6 +150,7 @@ def test_jittered_and_gapped_stamps_identify_as_well_as_uniform(double_pendulum_
     assert len(gaps) == 1 and gaps[0]["length"] == pytest.approx(0.5, abs=0.02)
     assert infos["log"]["segments"] == [0, 0]
     assert not infos["log"]["time_grid"]["uniform"]
+    assert infos["log"]["time_grid"]["stamp_noise_ratio"] < 1.0  # the stamps are sampling times
 
 
 def test_gaps_cut_trajectories_and_short_pieces_are_named(cart_pole_system):
@@ -196,3 +197,18 @@ def test_strong_form_derivatives_on_jittered_stamps_are_as_accurate_as_on_unifor
         estimate = derivative(derivative(encoder, t), t)[:, 0]
         errors[name] = np.sqrt(np.mean((estimate - acceleration)[100:-100] ** 2))
     assert errors["log"] < 1.2 * errors["uniform"], errors
+
+
+def test_arrival_stamps_are_reported(cart_pole_system):
+    # Samples taken every 10 ms and stamped when they arrive (late by up to 2 ms, and queued
+    # behind a late one): the positions look far noisier at their stamps than in sample order.
+    system = cart_pole_system
+    library = paper_catalog(system.coords, [1])
+    taken = np.arange(0.0, 20.0, 0.01)
+    data = system.simulate(random_initial_state(system, 2), taken, random_force(system, 2))
+    rng = np.random.default_rng(0)
+    stamps = np.maximum.accumulate(taken + 0.002 * rng.random(len(taken)))
+    stamps += 1e-6 * np.arange(len(taken))
+    with pytest.warns(UserWarning, match="may be arrival times"):
+        model = px.XLSINDy(library).fit(data["q"], stamps, u=data["tau"])
+    assert model.weak_info_["time_grid"]["stamp_noise_ratio"] > 10

@@ -14,8 +14,8 @@ import numpy as np
 
 from ..feature_library import stack_variables
 from .noise import WeakNoise, draw_moments
-from .smoothing import WhittakerSmoother, whittaker_smooth
-from .timegrid import grid_summary, split_at_gaps
+from .smoothing import WhittakerSmoother, is_uniform, whittaker_smooth
+from .timegrid import STAMP_NOISE_RATIO, grid_summary, split_at_gaps, stamp_noise_ratio
 
 __all__ = ["weak_regression", "shared_half_width", "propagated_noise", "propagated_draws"]
 
@@ -249,6 +249,19 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
             q, qd = d["x"], d["x_dot"]
             smoothing[-1] = None
         states.append(stack_variables(q, qd, qdd, d["u"], d["t"]))
+    first = next((k for k, (d, piece) in enumerate(zip(pieces, smoothing, strict=True))
+                  if piece is not None and np.all(np.isfinite(piece[1]))
+                  and not is_uniform(d["t"])), None)
+    if first is not None:  # are the stamps sampling times?
+        ratio = stamp_noise_ratio(pieces[first]["t"], pieces[first]["x"], smoothing[first][1],
+                                  smoothing[first][2])
+        summary["stamp_noise_ratio"] = ratio
+        if ratio > STAMP_NOISE_RATIO:
+            warnings.warn(
+                f"t: the positions look {ratio:.3g} times noisier at their stamps than read at "
+                "uniform steps; the stamps may be arrival times of samples taken at a fixed "
+                "rate, whose delays pass for motion: if so, pass uniform times",
+                UserWarning, stacklevel=4)
     propagate = all(piece is not None and np.all(np.isfinite(piece[1])) for piece in smoothing)
     n_samples = sum(len(d["t"]) for d in pieces)
     n_draws = int(np.clip(np.ceil(_PROPAGATION_SAMPLES / max(n_samples, 1)), 1, 16))

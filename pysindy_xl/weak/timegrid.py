@@ -16,6 +16,15 @@ trajectory is cut there into segments, each smoothed and integrated on its own
 (:func:`split_at_gaps`). The fit records each cut (``weak_info_["gaps"]``) and warns about
 segments too short for a test function, which are left out.
 
+**Stamps that are not sampling times.** A logger that stamps each sample when it arrives
+(over a bus, in a loop) records the arrival times of samples taken at a fixed rate: the
+delays then pass for motion, and positions that are smooth in sample order look noisy at
+their stamps. Where samples were taken at their stamps it is the other way round (a smooth
+signal read in sample order on jittered stamps looks noisy). :func:`stamp_noise_ratio`
+compares the two noise levels; the fit warns when the positions are more than
+:data:`STAMP_NOISE_RATIO` times noisier at their stamps and records the ratio
+(``weak_info_["time_grid"]["stamp_noise_ratio"]``); the stamps are still used as given.
+
 **Repeated stamps** (a step of zero or a negative one) are refused at the input with a
 ``ValueError`` naming the first of them: two positions at one time are two measurements of
 one sample, and which to keep (or their mean) is the user's decision.
@@ -25,9 +34,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from .smoothing import is_uniform
+from .smoothing import _choose_lambda, is_uniform
 
-__all__ = ["split_at_gaps", "grid_summary"]
+__all__ = ["split_at_gaps", "grid_summary", "stamp_noise_ratio", "STAMP_NOISE_RATIO"]
+
+#: Median over coordinates of the noise at the stamps over the noise in sample order above
+#: which the stamps are suspected not to be sampling times (true stamps give less than 1:
+#: a smooth signal read in sample order on jittered stamps looks noisy; arrival stamps
+#: jittering by a tenth of the step give 10 or more).
+STAMP_NOISE_RATIO = 2.0
 
 
 def split_at_gaps(trajectories, max_gap: float):
@@ -103,3 +118,43 @@ def grid_summary(times) -> dict:
     return {"uniform": all(is_uniform(t) for t in times),
             "median_step": float(np.median(steps)), "max_step": float(steps.max()),
             "min_step": float(steps.min())}
+
+
+def stamp_noise_ratio(t, x, noise, order: int = 3) -> float:
+    """Median over coordinates of the positions' noise at their stamps over their noise read
+    at uniform steps.
+
+    Parameters
+    ----------
+    t : array, shape (N,)
+    x : array, shape (N, n)
+    noise : array, shape (n,)
+        The noise level at the stamps (e.g. a :class:`~pysindy_xl.WhittakerSmoother`'s
+        ``noise_`` on ``t``).
+    order : int, default 3
+        Order of the smoother's penalty.
+
+    Returns
+    -------
+    float
+        Below 1 for stamps that are the sampling times of a smooth motion; above
+        :data:`STAMP_NOISE_RATIO`, the stamps look like arrival times.
+
+    Examples
+    --------
+    Samples taken every 10 ms, stamped late by up to 3 ms:
+
+    >>> import numpy as np
+    >>> from pysindy_xl.weak import WhittakerSmoother
+    >>> taken = np.arange(1000) * 0.01
+    >>> stamps = taken + 0.003 * np.random.default_rng(0).random(1000)
+    >>> x = np.column_stack([np.sin(taken), np.cos(0.5 * taken)])
+    >>> smoother = WhittakerSmoother()
+    >>> _ = smoother.smooth(stamps, x)
+    >>> bool(stamp_noise_ratio(stamps, x, smoother.noise_) > STAMP_NOISE_RATIO)
+    True
+    """
+    steps = np.arange(len(t), dtype=float)
+    in_order = np.array([_choose_lambda(steps, column, order, "gcv")[1]
+                         for column in np.asarray(x, dtype=float).T])
+    return float(np.median(np.asarray(noise, dtype=float) / np.maximum(in_order, 1e-300)))
