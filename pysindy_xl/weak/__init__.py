@@ -14,7 +14,7 @@ from .smoothing import (
     finite_difference_weights,
     whittaker_smooth,
 )
-from .timegrid import grid_summary, split_at_gaps
+from .timegrid import grid_summary, split_at_gaps, stamp_noise_ratio
 
 __all__ = [
     "BumpTestFunctions",
@@ -31,4 +31,5 @@ __all__ = [
     "RowWhitener",
     "split_at_gaps",
     "grid_summary",
+    "stamp_noise_ratio",
 ]
