@@ -152,7 +152,7 @@ def _divided_difference_matrix(t: np.ndarray, order: int,
     weights = 1.0 / np.prod(gaps, axis=2)
     mean_step = np.mean(np.diff(t))
     weights *= np.prod(np.arange(1, order + 1)) * mean_step ** order
-    if weighted:
+    if weighted and not is_uniform(t):  # (factors 1 up to rounding on a uniform grid)
         weights *= np.sqrt((window[:, -1] - window[:, 0]) / (order * mean_step))[:, None]
     rows = np.repeat(np.arange(n_samples - order), order + 1)
     return scipy.sparse.csr_matrix(
