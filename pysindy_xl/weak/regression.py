@@ -15,7 +15,8 @@ import numpy as np
 
 from ..feature_library import stack_variables
 from .noise import WeakNoise, draw_moments
-from .smoothing import WhittakerSmoother
+from .smoothing import WhittakerSmoother, is_uniform
+from .timegrid import STAMP_NOISE_RATIO, grid_summary, split_at_gaps, stamp_noise_ratio
 
 __all__ = ["weak_regression", "shared_half_width", "propagated_noise", "propagated_draws"]
 
@@ -187,8 +188,18 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         again with the same weights (``noise_`` and ``resmooth``, as
         :class:`WhittakerSmoother`), and no velocities were measured.
     info : dict
-        ``half_width`` (s), ``test_functions`` (count per trajectory used), ``noise`` (the
-        smoother's noise estimate per coordinate on the first trajectory).
+        ``half_width`` (s), ``test_functions`` (count per piece used), ``noise`` (the
+        smoother's noise estimate per coordinate on the first piece), ``time_grid``
+        (:func:`~pysindy_xl.weak.timegrid.grid_summary` of the stamps), ``gaps`` (the cuts
+        of :func:`~pysindy_xl.weak.timegrid.split_at_gaps`) and ``segments`` (for each piece
+        used, its trajectory).
+
+    Notes
+    -----
+    Trajectories are cut at steps longer than ``test_functions.max_gap(half_width)`` (when
+    the test functions have that method): no test function and no smoother spans such a gap
+    (:mod:`~pysindy_xl.weak.timegrid`). Pieces shorter than one test function are left out
+    with a warning; the states returned are those of the pieces used.
 
     Examples
     --------
@@ -213,9 +224,32 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         if not callable(getattr(value, kind, None)):
             raise TypeError(f"{name}: expected an object with a {kind} method, got "
                             f"{type(value).__name__}")
+    if half_width is None:
+        half_width = shared_half_width(test_functions, trajectories, width_columns)
+    max_gap = getattr(test_functions, "max_gap", None)
+    segments, source, gaps = split_at_gaps(
+        trajectories, np.inf if max_gap is None else max_gap(half_width))
+    durations = np.array([d["t"][-1] - d["t"][0] for d in segments])
+    usable = np.flatnonzero(durations >= 2 * half_width)
+    summary = grid_summary([d["t"] for d in trajectories])
+    if len(usable) < len(segments):
+        short = sorted(set(source[durations < 2 * half_width].tolist()))
+        what = (f"pieces (between {len(gaps)} gaps longer than {max_gap(half_width):.3g} s) "
+                "of " if gaps else "")
+        warnings.warn(
+            f"x: {what}trajectories {short} are shorter than one test function (support "
+            f"{2 * half_width:.3g} s) and are left out of the weak regression",
+            UserWarning, stacklevel=4,
+        )
+    if usable.size == 0:
+        raise ValueError(
+            f"t: every piece of the trajectories between gaps longer than "
+            f"{max_gap(half_width):.3g} s is shorter than one test function (support "
+            f"{2 * half_width:.3g} s); resample across the gaps or set a smaller width")
+    pieces = [segments[k] for k in usable]
     states, smoothing, noise_level = [], [], None
     propagates, warned = callable(getattr(smoother, "resmooth", None)), False
-    for d in trajectories:
+    for d in pieces:
         q, qd, qdd = smoother.smooth(d["t"], d["x"])
         if noise_level is None:
             noise_level = getattr(smoother, "noise_", None)
@@ -232,27 +266,30 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
                 "columns and the fit is not corrected for it; see WhittakerSmoother.resmooth",
                 UserWarning, stacklevel=4)
         states.append(stack_variables(q, qd, qdd, d["u"], d["t"]))
-    if half_width is None:
-        half_width = shared_half_width(test_functions, trajectories, width_columns)
-    durations = np.array([d["t"][-1] - d["t"][0] for d in trajectories])
-    usable = np.flatnonzero(durations >= 2 * half_width)
-    if len(usable) < len(trajectories):
-        short = np.flatnonzero(durations < 2 * half_width).tolist()
-        warnings.warn(
-            f"x: trajectories {short} are shorter than one test function (support "
-            f"{2 * half_width:.3g} s) and are left out of the weak regression",
-            UserWarning, stacklevel=4,
-        )
-    propagate = all(smoothing[k] is not None
-                    and np.all(np.isfinite(getattr(smoothing[k], "noise_", np.nan)))
-                    for k in usable)
-    n_samples = sum(len(trajectories[k]["t"]) for k in usable)
+
+    def estimated(piece):  # a smoother copy that estimated its noise
+        return piece is not None and np.all(np.isfinite(getattr(piece, "noise_", np.nan)))
+
+    first = next((k for k, (d, piece) in enumerate(zip(pieces, smoothing, strict=True))
+                  if estimated(piece) and not is_uniform(d["t"])), None)
+    if first is not None:  # are the stamps sampling times?
+        ratio = stamp_noise_ratio(pieces[first]["t"], pieces[first]["x"],
+                                  smoothing[first].noise_,
+                                  getattr(smoothing[first], "order", 3))
+        summary["stamp_noise_ratio"] = ratio
+        if ratio > STAMP_NOISE_RATIO:
+            warnings.warn(
+                f"t: the positions look {ratio:.3g} times noisier at their stamps than read at "
+                "uniform steps; the stamps may be arrival times of samples taken at a fixed "
+                "rate, whose delays pass for motion: if so, pass uniform times",
+                UserWarning, stacklevel=4)
+    propagate = all(estimated(piece) for piece in smoothing)
+    n_samples = sum(len(d["t"]) for d in pieces)
     n_draws = int(np.clip(np.ceil(_PROPAGATION_SAMPLES / max(n_samples, 1)), 1, 16))
     rng = np.random.default_rng(0)  # reproducible fits
     n = library.coords.n
     blocks, draws, runs = [], [], []
-    for k in usable:
-        d, z = trajectories[k], states[k]
+    for k, (d, z) in enumerate(zip(pieces, states, strict=True)):
         phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
         overlap, kept = _overlap_rows(phi), np.arange(phi.shape[0])
         if not d["mask"].all():  # drop the test functions that see a masked sample
@@ -276,7 +313,8 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         propagated = WeakNoise(np.concatenate(draws, axis=2).reshape(n_draws, theta.shape[0], -1),
                                n, _row_runs(runs, n))
     info = {"half_width": half_width, "test_functions": [b.shape[1] for b in blocks],
-            "noise": None if noise_level is None else np.asarray(noise_level).tolist()}
+            "noise": None if noise_level is None else np.asarray(noise_level).tolist(),
+            "time_grid": summary, "gaps": gaps, "segments": source[usable].tolist()}
     if noise == "moments" and propagated is not None:
         propagated = propagated.moments()
     return theta, np.vstack(states), propagated, info
