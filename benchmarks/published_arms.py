@@ -28,7 +28,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 MODELS = os.path.join(HERE, "models", "menagerie")
 RESULTS = os.path.join(HERE, "results")
-ARMS = ("fr3", "xarm7", "ur10e", "sawyer", "z1", "lite6", "m1013", "piper")
+ARMS = ("fr3", "xarm7", "ur10e", "sawyer", "z1", "lite6", "m1013", "piper", "arx_l5")
 
 
 def run_arm(arm: str, timeout: float, extra: list[str]) -> dict:
