@@ -15,8 +15,8 @@ import numpy as np
 from .._validation import check_option
 from ..data.dataset import Dataset, Trajectory
 from ..data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
-from .actuation import actuator_force_function, servo_bandwidths, start_on_reference
-from .forcing import FORCING_MODES, SumOfSinusoids
+from .actuation import actuator_force_function, start_on_reference
+from .forcing import FORCING_MODES, SumOfSinusoids, within_servo_reach
 from .integration import (
     INTEGRATORS,
     Integration,
@@ -173,41 +173,7 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
     offsets = np.where(driven, offsets, 0.0)
     signals = SumOfSinusoids.random(scales, rng, n_components=n_components,
                                     max_frequency=max_frequency, offsets=offsets)
-    return _within_servo_reach(signals, model)
-
-
-#: A servo's reference stays below this fraction of its bandwidth (:func:`servo_bandwidths`).
-SERVO_BANDWIDTH_FRACTION = 0.5
-#: Peak speed of a servo's reference: hinge joints (rad/s), slide joints (m/s), typical of
-#: the velocity limits of real arms (MJCF has none).
-REFERENCE_SPEED = {"hinge": np.pi, "slide": 1.0}
-
-
-def _within_servo_reach(signals: SumOfSinusoids, model) -> SumOfSinusoids:
-    """The position servos' references slowed to their reach: the band of each reference
-    scaled below ``SERVO_BANDWIDTH_FRACTION`` of its servo's bandwidth, its amplitudes so that
-    its speed bound ``sum_k 2 pi f_k A_k`` (in joint units) stays below ``REFERENCE_SPEED``.
-    Faster references are not tracked: the servo saturates, chatters, and drives its joint
-    far faster than any real arm moves."""
-    import mujoco
-
-    bandwidth = servo_bandwidths(model)
-    servo = np.isfinite(bandwidth) & np.any(signals.amplitudes != 0, axis=1)
-    if not servo.any():
-        return signals
-    top = SERVO_BANDWIDTH_FRACTION * np.where(servo, bandwidth, 0.0) / (2 * np.pi)
-    highest = signals.frequencies.max(axis=1)
-    band = np.where(servo & (highest > top), top / highest, 1.0)
-    frequencies = signals.frequencies * band[:, None]
-    # joint reference = ctrl * gain / (kp * gear)
-    kp = np.where(servo, -model.actuator_biasprm[:, 1], 1.0)
-    per_joint = np.abs(model.actuator_gainprm[:, 0] / (kp * model.actuator_gear[:, 0]))
-    speed = (2 * np.pi * frequencies * np.abs(signals.amplitudes)).sum(axis=1) * per_joint
-    slide = model.jnt_type[model.actuator_trnid[:, 0]] == int(mujoco.mjtJoint.mjJNT_SLIDE)
-    limit = np.where(slide, REFERENCE_SPEED["slide"], REFERENCE_SPEED["hinge"])
-    factor = np.where(servo & (speed > limit), limit / np.maximum(speed, 1e-300), 1.0)
-    return SumOfSinusoids(signals.amplitudes * factor[:, None], frequencies, signals.phases,
-                          signals.offsets)
+    return within_servo_reach(signals, model)
 
 
 def _controls(signals, times, nu: int) -> np.ndarray:
