@@ -21,7 +21,8 @@ continuous flow. Two things go wrong with a published arm model's own settings:
 
 :func:`choose_integration` evaluates ``A`` at the reference pose and at random poses inside
 the joint ranges (``M`` changes with the pose) and prices both remedies in substeps of the
-model's time step: RK4 with ``h |lambda| <= RK4_BOUND`` everywhere (well inside the region),
+model's time step: RK4 with ``h |lambda| <= RK4_BOUND`` everywhere (well inside the region,
+and fine enough that the control held over a step does not ring the stiff modes),
 or the model's implicit step (``implicitfast`` for models authored with ``Euler`` or ``RK4``)
 with its inertia bias ``h max_i D_ii`` at most ``BIAS_TOLERANCE`` of the largest entry of
 ``M`` (the normalization of the mass-matrix error of
@@ -50,14 +51,18 @@ __all__ = ["Integration", "choose_integration", "linear_modes", "check_run",
 #: MuJoCo's integrators by name.
 INTEGRATORS = {"Euler": 0, "RK4": 1, "implicit": 2, "implicitfast": 3}
 
-#: Largest ``h |lambda|`` of an RK4 step (its region reaches 2.785 on the negative real axis).
-RK4_BOUND = 2.0
+#: Largest ``h |lambda|`` of an RK4 step: far inside its stability region (2.785 on the
+#: negative real axis), and small enough that the control, held over each step, does not ring
+#: the stiff servo modes (with ``h |lambda| >= 1`` they settle on the held control within
+#: every step, and the recorded velocities and forces carry a sawtooth of ``kv`` times the
+#: reference's change over a step).
+RK4_BOUND = 0.25
 #: Largest inertia bias ``h max_i D_ii`` of an implicit step, relative to ``max |M_ij|``.
 BIAS_TOLERANCE = 5e-3
 #: Cost of an RK4 step in implicit steps (four evaluations against one and a factorization).
 RK4_COST = 4.0
 #: RK4 (no inertia bias at all) is kept up to this many substeps even where it costs more.
-RK4_MAX_SUBSTEPS = 32
+RK4_MAX_SUBSTEPS = 64
 #: Velocity bound of a sane run: hinge joints (rad/s) and slide joints (m/s).
 MAX_HINGE_VELOCITY = 100.0
 MAX_SLIDE_VELOCITY = 20.0
@@ -251,7 +256,7 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
     ...   <actuator><position joint="j" kp="3000" kv="300"/></actuator></mujoco>''')
     >>> choice = choose_integration(model)
     >>> choice.integrator, choice.substeps, choice.stability <= RK4_BOUND
-    ('RK4', 300, True)
+    ('RK4', 2400, True)
     """
     from .._validation import check_option
 
