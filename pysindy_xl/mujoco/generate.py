@@ -15,7 +15,7 @@ import numpy as np
 from .._validation import check_option
 from ..data.dataset import Dataset, Trajectory
 from ..data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
-from .actuation import actuator_force_function, servo_bandwidths, start_on_reference
+from .actuation import actuator_force_function, start_on_reference
 from .forcing import FORCING_MODES, SumOfSinusoids, within_servo_reach
 from .integration import (
     INTEGRATORS,
@@ -23,6 +23,8 @@ from .integration import (
     UnstableSimulationError,
     check_run,
     choose_integration,
+    settled,
+    settling_time,
 )
 from .systems import MuJoCoSystem, get_system
 
@@ -174,29 +176,6 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
     signals = SumOfSinusoids.random(scales, rng, n_components=n_components,
                                     max_frequency=max_frequency, offsets=offsets)
     return within_servo_reach(signals, model)
-
-
-def _settling_time(model, signals: bool) -> float:
-    """Time after which the stiff servo modes excited by a start on the reference are gone:
-    20 time constants of the fastest servo's bandwidth, at most 0.1 s (the stiff modes are
-    far faster), in whole model steps; zero without position servos or without forcing."""
-    bandwidth = servo_bandwidths(model)
-    if not signals or not np.any(np.isfinite(bandwidth)):
-        return 0.0
-    steps = np.ceil(min(0.1, 20.0 / np.nanmax(bandwidth)) / model.opt.timestep)
-    return float(steps * model.opt.timestep)
-
-
-def _settled(trajectory: Trajectory, settle: float) -> Trajectory:
-    """The trajectory from time ``settle`` on (times kept: the controls are functions of time)."""
-    if settle <= 0:
-        return trajectory
-    keep = trajectory.t >= trajectory.t[0] + settle - 1e-12
-    fields = {key: (value[keep] if isinstance(value, np.ndarray) and value.ndim
-                    and len(value) == len(keep) else value)
-              for key, value in vars(trajectory).items()}
-    fields["info"] = dict(trajectory.info, settle=settle)
-    return Trajectory(**fields)
 
 
 def _controls(signals, times, nu: int) -> np.ndarray:
@@ -562,7 +541,7 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     # a servo started on its reference is not at rest there (gravity, the reference's
     # acceleration): its stiff modes ring for a few time constants, faster than the samples
     # resolve; the recorded part starts once they have died out
-    settle = _settling_time(model, signals=forcing != "implicit")
+    settle = settling_time(model, forced=forcing != "implicit")
     bar = tqdm(total=n_steps * n_trajectories, desc=f"MuJoCo {system.name}", unit="step",
                disable=None if progress is None else not progress, leave=False)
     trajectories = []
@@ -578,7 +557,7 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                 clean = simulate_trajectory(system, duration + settle, signals, q0, qd0,
                                             sample_every, bar if attempt == 0 else None,
                                             control_at="midpoint", integrator=integration)
-                clean = _settled(clean, settle)
+                clean = settled(clean, settle)
                 if clean.constraint_active.mean() <= max_constrained or (
                     attempt == attempts - 1
                 ):

@@ -46,7 +46,8 @@ import numpy as np
 
 __all__ = ["Integration", "choose_integration", "linear_modes", "check_run",
            "UnstableSimulationError", "INTEGRATORS", "RK4_BOUND", "BIAS_TOLERANCE",
-           "RK4_COST", "RK4_MAX_SUBSTEPS", "MAX_HINGE_VELOCITY", "MAX_SLIDE_VELOCITY"]
+           "RK4_COST", "RK4_MAX_SUBSTEPS", "settling_time", "settled", "MAX_HINGE_VELOCITY",
+           "MAX_SLIDE_VELOCITY"]
 
 #: MuJoCo's integrators by name.
 INTEGRATORS = {"Euler": 0, "RK4": 1, "implicit": 2, "implicitfast": 3}
@@ -393,3 +394,53 @@ def check_run(model, qpos, qvel, qacc, energy=None, bad_accelerations: int = 0,
                 f"{label}: the energy of an unforced run grew by {growth:.3g} J{how}{advice}")
     return {"peak_velocity": {name: float(p) for name, p in zip(names, peak, strict=True)},
             "velocity_bound": {name: float(b) for name, b in zip(names, bound, strict=True)}}
+
+
+def settling_time(model, forced: bool = True) -> float:
+    """Time after which the stiff servo modes excited by a start on the reference are gone:
+    20 time constants of the fastest servo's bandwidth, at most 0.1 s (the stiff modes are
+    far faster), in whole model steps; zero without position servos or without forcing.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+    forced : bool, default True
+        Whether the run is driven (an undriven run starts where it is drawn).
+
+    Returns
+    -------
+    float
+        Seconds.
+    """
+    from .actuation import servo_bandwidths
+
+    bandwidth = servo_bandwidths(model)
+    if not forced or not np.any(np.isfinite(bandwidth)):
+        return 0.0
+    steps = np.ceil(min(0.1, 20.0 / np.nanmax(bandwidth)) / model.opt.timestep)
+    return float(steps * model.opt.timestep)
+
+
+def settled(trajectory, settle: float):
+    """The trajectory from time ``settle`` on (times kept: the controls are functions of time).
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+    settle : float
+        Seconds to drop from the start; ``info["settle"]`` records them.
+
+    Returns
+    -------
+    Trajectory
+    """
+    from ..data.dataset import Trajectory
+
+    if settle <= 0:
+        return trajectory
+    keep = trajectory.t >= trajectory.t[0] + settle - 1e-12
+    fields = {key: (value[keep] if isinstance(value, np.ndarray) and value.ndim
+                    and len(value) == len(keep) else value)
+              for key, value in vars(trajectory).items()}
+    fields["info"] = dict(trajectory.info, settle=settle)
+    return Trajectory(**fields)
