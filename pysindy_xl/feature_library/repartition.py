@@ -6,7 +6,7 @@ import numpy as np
 import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
-from ._base import SymbolicLibrary
+from ._base import SymbolicLibrary, TermChain
 from ._compile import Terms
 from .external_forces import ExternalForces
 
@@ -179,7 +179,7 @@ class CatalogRepartition(SymbolicLibrary):
         return names, sp.Matrix.hstack(*blocks)
 
     def _feature_terms(self):
-        return [term for lib in self.libraries_ for term in lib.feature_terms_]
+        return TermChain([lib.feature_terms_ for lib in self.libraries_])
 
     def _check_columns(self, names, matrix) -> None:
         """Each library checked its own columns when it derived them."""

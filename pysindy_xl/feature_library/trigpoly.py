@@ -19,6 +19,7 @@ from collections.abc import Sequence
 import numpy as np
 import scipy.sparse
 import sympy as sp
+from mpmath import libmp as mlib
 from sympy.printing.str import StrPrinter
 
 __all__ = ["TrigPolynomial", "TrigTerms", "evaluate_many", "state_values"]
@@ -235,22 +236,39 @@ class TrigPolynomial:
             terms = [sp.Mul(_number(value), *[atoms[k] ** int(e) for k, e in enumerate(row) if e])
                      for row, value in zip(self.exponents, self.coefficients, strict=True)]
             return sp.Add(*terms)
-        powers: dict = {}  # each power built once
-
-        def factor(k, e):
-            found = powers.get((k, e))
-            if found is None:
-                found = powers[(k, e)] = atoms[k] if e == 1 else sp.Pow(atoms[k], e)
-            return found
-
+        # flat products and sum, built without canonicalization (sympy's own constructors;
+        # the products of powers and numbers are commutative)
+        rows, slots = np.nonzero(self.exponents)  # row by row, slots increasing
+        powers = self.exponents[rows, slots].astype(int)
+        codes = slots * (int(powers.max(initial=1)) + 1) + powers
+        table = np.empty(int(codes.max(initial=0)) + 1, dtype=object)
+        for code in np.unique(codes).tolist():  # each power built once
+            k, e = divmod(code, int(powers.max(initial=1)) + 1)
+            table[code] = atoms[k] if e == 1 else sp.Pow(atoms[k], e)
+        factors = table[codes].tolist()
+        bounds = np.searchsorted(rows, np.arange(len(self.coefficients) + 1)).tolist()
         terms = []
-        for row, value in zip(self.exponents.tolist(), self.coefficients.tolist(), strict=True):
-            factors = [factor(k, e) for k, e in enumerate(row) if e]
-            if value != 1 or not factors:
-                factors.insert(0, _number(value))
-            # flat products and sum, built without canonicalization (sympy's own constructor)
-            terms.append(sp.Mul._from_args(factors) if len(factors) > 1 else factors[0])
-        return sp.Add._from_args(terms) if len(terms) > 1 else terms[0] if terms else sp.S.Zero
+        for r, value in enumerate(self.coefficients.tolist()):
+            row = factors[bounds[r]:bounds[r + 1]]
+            if value != 1 or not row:
+                row.insert(0, _fast_number(value))
+            terms.append(sp.Mul._from_args(row, True) if len(row) > 1 else row[0])
+        return sp.Add._from_args(terms, True) if len(terms) > 1 else terms[0] if terms else sp.S.Zero
+
+
+_NUMBERS: dict = {}  # float -> sympy number, bounded
+
+
+def _fast_number(value: float) -> sp.Number:
+    """:func:`_number` without the parsing of ``sympy.Float`` (an equal object), cached."""
+    found = _NUMBERS.get(value)
+    if found is None:
+        if len(_NUMBERS) > 100_000:
+            _NUMBERS.clear()
+        found = _NUMBERS[value] = (
+            sp.Integer(int(value)) if value == int(value)
+            else sp.Float._new(mlib.from_float(value, 53, mlib.round_nearest), 53))
+    return found
 
 
 def _number(value: float) -> sp.Number:

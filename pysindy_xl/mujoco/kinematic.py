@@ -50,7 +50,7 @@ import numpy as np
 
 from ..feature_library import PolynomialLagrangeLibrary
 from ..feature_library.joint_friction import FRICTION_MODELS
-from ..feature_library.trigpoly import evaluate_many, state_values
+from ..feature_library.trigpoly import TrigTerms, evaluate_many, state_values
 from ..physical.rigid_body import KinematicTree
 from ..symbols import Coordinates
 from ._kinematic_build import (
@@ -200,7 +200,7 @@ class KinematicCatalog:
         )
 
         libraries = [ExternalForces(self.coords, interlink=interlink),
-                     PolynomialLagrangeLibrary(self.coords, list(self.lagrange_terms),
+                     PolynomialLagrangeLibrary(self.coords, _shared(self.lagrange_terms),
                                                parameters=[dict(p) for p in self.parameters],
                                                tree=self.tree)]
         if classical and self.classical_terms:
@@ -268,8 +268,10 @@ class KinematicCatalog:
         scale = -1.0 / force[0]
         out = np.zeros(len(self.lagrange_terms))
         index = {name: k for k, name in enumerate(names)}
-        for j, term in enumerate(self.lagrange_terms):
-            name = f"L[{term}]"
+        terms = self.lagrange_terms
+        texts = terms.names() if isinstance(terms, TrigTerms) else [str(t) for t in terms]
+        for j, text in enumerate(texts):
+            name = f"L[{text}]"
             if name not in index:
                 raise ValueError(f"model: its catalog has no feature {name!r}")
             out[j] = coefficients[index[name]] * scale
@@ -416,6 +418,12 @@ class KinematicCatalog:
                 cells.append(f"{float(coefficients[j]):.{digits}g}")
             lines.append("  |  ".join(cells))
         return "\n".join(lines)
+
+
+def _shared(terms):
+    """The catalog's terms for a library: a :class:`TrigTerms` as is (immutable), a copy of
+    a list."""
+    return terms if isinstance(terms, TrigTerms) else list(terms)
 
 
 def _states(a, name: str, n: int) -> np.ndarray:
@@ -591,7 +599,9 @@ def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
         system, model, coulomb, coulomb_scale)
     return KinematicCatalog(
         system=system, coords=coords,
-        lagrange_terms=[candidates[j].to_sympy(coords) for j in kept],
+        # sympy expressions built only when read: the library derives from the polynomials
+        lagrange_terms=TrigTerms([candidates[j] for j in kept], coords,
+                                 columns=[columns[j] for j in kept]),
         parameters=parameters, physical_names=names, combination=combination,
         physical_values=np.array(values), classical_terms=classical_terms,
         classical_mask=mask, classical_kinds=kinds, classical_values=classical_values,
