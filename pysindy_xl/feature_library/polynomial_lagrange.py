@@ -172,13 +172,15 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         atoms = ([sp.sin(q) if angle else q for q, angle in zip(coords.q, angles, strict=True)]
                  + [sp.cos(q) for q in coords.q] + list(coords.qd) + list(coords.qdd))
         entries = []
+        pairs: dict = {}  # (slot, power) tuples shared
         for polynomial in polynomials:
-            rows, slots = np.nonzero(polynomial.exponents)
-            keys = [[] for _ in range(len(polynomial.coefficients))]
-            for row, slot in zip(rows.tolist(), slots.tolist(), strict=True):
-                keys[row].append((slot, int(polynomial.exponents[row, slot])))
-            entries.append([(float(coef), tuple(key)) for coef, key
-                            in zip(polynomial.coefficients.tolist(), keys, strict=True)])
+            rows, slots = np.nonzero(polynomial.exponents)  # row by row, slots increasing
+            powers = polynomial.exponents[rows, slots].tolist()
+            factors = [pairs.setdefault(pair, pair)
+                       for pair in zip(slots.tolist(), powers, strict=True)]
+            bounds = np.searchsorted(rows, np.arange(len(polynomial.coefficients) + 1)).tolist()
+            entries.append([(coef, tuple(factors[bounds[r]:bounds[r + 1]])) for r, coef
+                            in enumerate(polynomial.coefficients.tolist())])
         return Terms(atoms, entries)
 
     def to_spec(self) -> dict:

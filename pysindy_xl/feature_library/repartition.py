@@ -45,8 +45,15 @@ def _merge(slices, parts) -> tuple[np.ndarray, Terms]:
         if remap == list(range(len(remap))):  # the first library's atoms: entries as they are
             entries += terms.entries
         elif all(np.diff(remap) > 0):  # order kept: no sorting
-            entries += [[(coef, tuple((remap[a], p) for a, p in key)) for coef, key in entry]
-                        for entry in terms.entries]
+            moved: dict = {}  # each distinct monomial remapped once
+
+            def move(key, moved=moved, remap=remap):
+                found = moved.get(key)
+                if found is None:
+                    found = moved[key] = tuple((remap[a], p) for a, p in key)
+                return found
+
+            entries += [[(coef, move(key)) for coef, key in entry] for entry in terms.entries]
         else:
             entries += [[(coef, tuple(sorted((remap[a], p) for a, p in key)))
                          for coef, key in entry] for entry in terms.entries]

@@ -480,11 +480,11 @@ class _Printer:
         self.factors: dict = {}
         self.numbers: dict = {}
 
-    def factor(self, slot: int, power: int):
+    def _factor(self, slot: int, power: int) -> str:
         found = self.factors.get((slot, power))
         if found is None:
             expr = self.atoms[slot] if power == 1 else sp.Pow(self.atoms[slot], power)
-            found = self.factors[(slot, power)] = (expr.sort_key(), str(expr))
+            found = self.factors[(slot, power)] = str(expr)
         return found
 
     def number(self, value: float) -> str:
@@ -494,25 +494,29 @@ class _Printer:
             found = self.numbers[value] = _NESTED.doprint(_number(value))
         return found
 
-    def monomial(self, row, value) -> tuple[str, str]:
-        """``(sign, text)`` of one product."""
-        factors = sorted(self.factor(k, e) for k, e in enumerate(row) if e)
-        sign = "-" if value < 0 else ""
-        magnitude = abs(value)
-        parts = [text for _, text in factors]
-        if not parts or _number(magnitude) != 1:
-            parts.insert(0, self.number(magnitude))
-        return sign, "*".join(parts)
-
     def __call__(self, polynomial) -> str:
         exponents, coefficients = polynomial.exponents, polynomial.coefficients
         if len(coefficients) == 0:
             return "0"
         if len(coefficients) == 1 and not exponents.any():
             return str(_number(float(coefficients[0])))
+        # a product's factors sort by their bases (distinct in a monomial): columns in the
+        # generators' order give each row's factors in printing order
         ordered = exponents[:, self.order]
         rows = np.lexsort((-ordered).T[::-1])  # decreasing lexicographic order
-        pieces = [self.monomial(exponents[r].tolist(), float(coefficients[r])) for r in rows]
+        ordered = ordered[rows]
+        nonzero_rows, columns = np.nonzero(ordered)
+        powers = ordered[nonzero_rows, columns].tolist()
+        slots = self.order[columns].tolist()
+        texts = [self._factor(k, e) for k, e in zip(slots, powers, strict=True)]
+        bounds = np.searchsorted(nonzero_rows, np.arange(len(rows) + 1)).tolist()
+        pieces = []
+        for r, value in enumerate(coefficients[rows].tolist()):
+            parts = texts[bounds[r]:bounds[r + 1]]
+            magnitude = abs(value)
+            if not parts or _number(magnitude) != 1:
+                parts.insert(0, self.number(magnitude))
+            pieces.append(("-" if value < 0 else "", "*".join(parts)))
         if (len(pieces) == 2 and not exponents[rows[1]].any() and coefficients[rows[1]] > 0
                 and coefficients[rows[0]] < 0 and np.count_nonzero(exponents[rows[0]]) == 1):
             # sympy's special case: a positive constant before a negative number times one
