@@ -47,6 +47,7 @@ import time
 
 import mujoco
 import numpy as np
+import threadpoolctl
 
 from ..feature_library import PolynomialLagrangeLibrary
 from ..feature_library.joint_friction import FRICTION_MODELS
@@ -585,9 +586,11 @@ def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
     # rows coordinate-major like the feature libraries: (equation, sample)
     regressor = evaluated.reshape(n_samples, len(candidates), n).transpose(2, 0, 1)
     regressor = regressor.reshape(n * n_samples, len(candidates))
-    kept = independent_regressor_columns(regressor)
-    # every column is a combination of the kept ones: base = combination @ physical
-    combination, *_ = np.linalg.lstsq(regressor[:, kept], regressor, rcond=None)
+    # small dense problems: one BLAS thread (threads only contend, as in XLSINDy.fit)
+    with threadpoolctl.threadpool_limits(limits=1, user_api="blas"):
+        kept = independent_regressor_columns(regressor)
+        # every column is a combination of the kept ones: base = combination @ physical
+        combination, *_ = np.linalg.lstsq(regressor[:, kept], regressor, rcond=None)
     # exact combinations come out within ~1e-14: round the noise away (0.9999999999999999)
     combination = np.round(combination, 12)
     combination[np.abs(combination) < 1e-10] = 0.0
