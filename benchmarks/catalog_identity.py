@@ -53,8 +53,9 @@ def record(name, source, amplitude, samples):
     n = system.n
     q, qd, qdd, tau = rng.normal(size=(4, 50, n))
     columns = library.transform(stack_variables(q, qd, qdd, tau))
-    data = generate_dataset(system, n_trajectories=2, duration=samples * system.mj_model().opt.timestep,
-                            seed=0, progress=False)
+    step = system.mj_model().opt.timestep
+    data = generate_dataset(system, n_trajectories=2, duration=samples * step, seed=0,
+                            progress=False)
     model = px.XLSINDy(catalog.library()).fit(**data.fit_arguments(forces="tau"))
     return {
         f"{name}/terms": np.array(json.dumps([str(t) for t in catalog.lagrange_terms])),

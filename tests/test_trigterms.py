@@ -11,7 +11,8 @@ from sklearn.base import clone
 
 import pysindy_xl as px
 from pysindy_xl.feature_library import PolynomialLagrangeLibrary, stack_variables
-from pysindy_xl.feature_library.trigpoly import TrigPolynomial, TrigTerms
+from pysindy_xl.feature_library.trigpoly import TrigPolynomial
+from pysindy_xl.feature_library.trigterms import TrigTerms
 from pysindy_xl.mujoco import MJCFSystem
 
 

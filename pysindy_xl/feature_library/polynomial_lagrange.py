@@ -17,7 +17,8 @@ from ..physical.rigid_body import KinematicTree, physical_parameters_from_base
 from ..symbols import as_expr_list
 from ._compile import Terms
 from .lagrange import LagrangeLibrary
-from .trigpoly import TrigPolynomial, TrigTerms
+from .trigpoly import TrigPolynomial, euler_lagrange_many
+from .trigterms import TrigTerms
 
 __all__ = ["PolynomialLagrangeLibrary"]
 
@@ -307,7 +308,7 @@ def _derive(coords, terms):
         polynomials = [TrigPolynomial.from_sympy(t, coords, angles) for t in terms]
     except ValueError:
         return _NOT_POLYNOMIAL
-    return _derivation(coords, polynomials, [p.euler_lagrange() for p in polynomials],
+    return _derivation(coords, polynomials, euler_lagrange_many(polynomials),
                        [_feature_name(t) for t in terms])
 
 
@@ -321,7 +322,7 @@ def _derive_trig(terms: TrigTerms):
                              "accelerations; only positions, velocities and t are allowed")
     derived = terms.columns
     if derived is None:
-        derived = [p.euler_lagrange() for p in terms.polynomials]
+        derived = euler_lagrange_many(terms.polynomials)
     return _derivation(terms.coords, list(terms.polynomials), [list(c) for c in derived],
                        [f"L[{name}]" for name in terms.names()])
 

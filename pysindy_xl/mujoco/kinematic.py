@@ -23,11 +23,11 @@ the *combination* of physical parameters that :attr:`KinematicCatalog.parameters
 identified model reports physical parameters.
 
 The derivation runs on sparse trigonometric polynomials
-(:mod:`pysindy_xl.feature_library.trigpoly`, with
-``cos^2 = 1 - sin^2`` as canonical form), not on generic sympy expressions, and
-:class:`PolynomialLagrangeLibrary` derives the Euler-Lagrange columns the same way: a 4-joint
-spatial arm with tilted axes takes about 1 s to derive and 2 s to turn into a library, a 7-joint
-robot-like arm about 6 s and 7 s (see ``benchmarks/kinematic_catalog.py``).
+(:mod:`pysindy_xl.feature_library.trigpoly`, with ``cos^2 = 1 - sin^2`` as canonical form), not
+on generic sympy expressions, and stays there: the catalog's terms are a
+:class:`~pysindy_xl.feature_library.trigterms.TrigTerms` whose library derives its columns,
+names and evaluators from the polynomials (and the columns derived here); a term's sympy
+expression is built only when read. Timings: ``benchmarks/kinematic_catalog.py``.
 
 Friction and springs are not Lagrangian: each joint adds classical candidates (viscous
 ``qvel_k``, smooth Coulomb ``tanh(qvel_k / eps)``, and ``qpos_k - springref_k`` for joints with
@@ -51,7 +51,8 @@ import threadpoolctl
 
 from ..feature_library import PolynomialLagrangeLibrary
 from ..feature_library.joint_friction import FRICTION_MODELS
-from ..feature_library.trigpoly import TrigTerms, evaluate_many, state_values
+from ..feature_library.trigpoly import euler_lagrange_many, evaluate_many, state_values
+from ..feature_library.trigterms import TrigTerms
 from ..physical.rigid_body import KinematicTree
 from ..symbols import Coordinates
 from ._kinematic_build import (
@@ -578,7 +579,7 @@ def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
         candidates.append(0.5 * (joints[k]["velocity"] * joints[k]["velocity"]))
         names.append(f"{system.joint_names[k]}.armature")
         values.append(float(model.dof_armature[model.jnt_dofadr[k]]))
-    columns = [candidate.euler_lagrange() for candidate in candidates]
+    columns = euler_lagrange_many(candidates)
     rng = np.random.default_rng(seed)
     n_samples = 2 * len(candidates) // n + 20
     evaluated = evaluate_many([e for column in columns for e in column],
