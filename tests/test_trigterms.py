@@ -6,12 +6,12 @@ import pickle
 import numpy as np
 import pytest
 import sympy as sp
-from kinematic_models import CART_DOUBLE_PENDULUM, SPATIAL_ARM, robot_arm
+from kinematic_models import CART_DOUBLE_PENDULUM, PLANAR_ARM, robot_arm
 from sklearn.base import clone
 
 import pysindy_xl as px
 from pysindy_xl.feature_library import PolynomialLagrangeLibrary, stack_variables
-from pysindy_xl.feature_library.trigpoly import TrigPolynomial
+from pysindy_xl.feature_library.trigpoly import TrigPolynomial, euler_lagrange_many
 from pysindy_xl.feature_library.trigterms import TrigTerms
 from pysindy_xl.mujoco import MJCFSystem
 
@@ -43,7 +43,8 @@ def test_names_are_sympys_str(angles):
     assert terms.names() == [str(p.to_sympy(coords)) for p in polynomials]
 
 
-@pytest.mark.parametrize("xml", [SPATIAL_ARM, CART_DOUBLE_PENDULUM, robot_arm(5)])
+@pytest.mark.parametrize("xml", [PLANAR_ARM, CART_DOUBLE_PENDULUM, robot_arm(5)],
+                         ids=["planar", "cart-two-link", "robot-5"])
 def test_catalog_library_matches_the_sympy_terms(xml):
     """The catalog's library (polynomial terms) and the same library given the sympy
     expressions of its terms have the same names, columns and file description; fitting the
@@ -68,7 +69,7 @@ def test_catalog_library_matches_the_sympy_terms(xml):
 
 
 def test_trig_terms_are_shared_and_pickle():
-    catalog = px.kinematic_catalog(MJCFSystem(SPATIAL_ARM))
+    catalog = px.kinematic_catalog(MJCFSystem(robot_arm(4)))
     library = catalog.library()
     lagrange = library.libraries[1]
     assert clone(lagrange).terms is lagrange.terms
@@ -94,3 +95,20 @@ def test_bad_polynomials_are_refused():
         TrigTerms([TrigPolynomial.constant(1.0, (True, True)),
                    TrigPolynomial.constant(1.0, (True, False))], coords)
     assert sp.sympify(TrigTerms([TrigPolynomial.constant(1.0, (True, True))], coords)[0]) == 1
+
+
+@pytest.mark.parametrize("angles", [(True, True, True), (False, True, False)])
+def test_euler_lagrange_many_is_each_polynomials_bit_for_bit(angles):
+    """The stacked derivation gives exactly (same rows, same bits) each polynomial's own
+    Euler-Lagrange column, including merged and dropped round-off terms."""
+    n = len(angles)
+    rng = np.random.default_rng(7)
+    polynomials = _random_polynomials(n, angles, rng, count=60)
+    polynomials += px.kinematic_catalog(MJCFSystem(robot_arm(3))).lagrange_terms.polynomials \
+        if angles == (True, True, True) else []
+    stacked = euler_lagrange_many(polynomials)
+    for polynomial, column in zip(polynomials, stacked, strict=True):
+        for alone, together in zip(polynomial.euler_lagrange(), column, strict=True):
+            np.testing.assert_array_equal(alone.exponents, together.exponents)
+            np.testing.assert_array_equal(alone.coefficients, together.coefficients)
+    assert euler_lagrange_many([]) == []
