@@ -470,11 +470,11 @@ def evaluate_many(polynomials, values: np.ndarray) -> np.ndarray:
     keys = exponents.view(np.dtype((np.void, exponents.dtype.itemsize * width))).ravel()
     _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
     distinct = exponents[first]
-    monomials = np.ones((values.shape[0], len(distinct)))
+    monomials = np.ones((len(distinct), values.shape[0]))  # a row per monomial
     for slot in np.flatnonzero(distinct.any(axis=0)):
         powers = distinct[:, slot]
-        used = powers > 0
-        monomials[:, used] *= values[:, slot, None] ** powers[used]
+        used = np.flatnonzero(powers > 0)
+        monomials[used] *= values[None, :, slot] ** powers[used, None]
     mapping = scipy.sparse.csr_matrix((coefficients, (inverse.ravel(), owner)),
                                       shape=(len(distinct), len(polynomials)))
-    return np.asarray((mapping.T @ monomials.T).T)
+    return np.asarray((mapping.T @ monomials).T)
