@@ -66,6 +66,8 @@ def test_catalog_library_matches_the_sympy_terms(xml):
     assert fast.symbolic_matrix_ == slow.symbolic_matrix_
     assert fast.to_spec() == slow.to_spec()
     assert list(fresh) == expressions  # items built on demand are the expressions
+    assert fresh + [sp.Integer(1)] == expressions + [1] and [] + fresh == expressions
+    assert fresh[-1] == expressions[-1] and fresh[:2] == expressions[:2]
 
 
 def test_trig_terms_are_shared_and_pickle():

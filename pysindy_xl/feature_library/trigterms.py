@@ -85,6 +85,13 @@ class TrigTerms(Sequence):
 
     __hash__ = None
 
+    # concatenation gives a list, as it did when the terms were one
+    def __add__(self, other):
+        return list(self) + list(other)
+
+    def __radd__(self, other):
+        return list(other) + list(self)
+
     def __repr__(self):
         return repr(list(self))
 
