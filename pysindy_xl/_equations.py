@@ -148,9 +148,10 @@ def physical_parameters(coef: np.ndarray, library) -> dict:
                          "stands_for": None if maps is None else dict(maps[k]),
                          "value": float(coef[columns.start + k] * factor)})
     friction = {name: {"viscous": 0.0, "dry": 0.0} for name in library.coords.names}
+    joints, modelled = joint_friction(coef * factor, library)
     other = {}
     for j, category in enumerate(library.categories_):
-        if category != "classical" or coef[j] == 0:
+        if category != "classical" or coef[j] == 0 or j in modelled:
             continue
         c = next(i for i in range(library.coords.n) if library.symbolic_matrix_[i, j] != 0)
         name = library.coords.names[c]
@@ -159,7 +160,35 @@ def physical_parameters(coef: np.ndarray, library) -> dict:
             friction[name][kind] += float(coef[j] * factor)
         else:
             other[library.feature_names_[j]] = float(coef[j] * factor)
-    return {"scale": scale, "base_parameters": base, "friction": friction, "other": other}
+    for values in joints.values():
+        # a joint that is one coordinate: its viscous and Coulomb friction are that one's
+        if values["coordinate"] is not None:
+            friction[values["coordinate"]]["viscous"] += values.get("viscous", 0.0)
+            friction[values["coordinate"]]["dry"] += values.get("coulomb", 0.0)
+    out = {"scale": scale, "base_parameters": base, "friction": friction, "other": other}
+    if joints:
+        out["joint_friction"] = joints
+    return out
+
+
+def joint_friction(coef, library) -> tuple[dict, set]:
+    """The joint models of a catalog's :class:`~pysindy_xl.feature_library.JointFrictionLibrary`
+    parts, ``{joint: {model: value}}`` (with ``coulomb_positive`` and ``coulomb_negative``,
+    the magnitudes ``f_c +- f_a`` of each direction, where the asymmetry is modelled, and
+    ``coordinate``: the coordinate the joint is, None when its torque reaches several), and
+    the set of their columns."""
+    joints, columns = {}, set()
+    for lib, block in zip(library.libraries_, library.slices_, strict=True):
+        if getattr(lib, "kinds_", None) is None:
+            continue
+        for joint, values in lib.coefficients_by_joint(coef[block]).items():
+            values["coordinate"] = lib.coordinate_of(joint)
+            if "coulomb" in values and "asymmetric" in values:
+                values["coulomb_positive"] = values["coulomb"] + values["asymmetric"]
+                values["coulomb_negative"] = values["coulomb"] - values["asymmetric"]
+            joints[joint] = values
+        columns.update(range(block.start, block.stop))
+    return joints, columns
 
 
 def consistency_line(report) -> str | None:
@@ -210,6 +239,12 @@ def parameter_lines(parameters: dict, precision: int, reference: dict | None = N
             line += f" (true {true['viscous']:.{precision}g}, {true['dry']:.{precision}g})"
         lines.append(line)
     lines += [f"  {name}: {value:.{precision}g}" for name, value in parameters["other"].items()]
+    if parameters.get("joint_friction"):
+        lines.append("joint friction and sensor models (0: not needed):")
+        lines += [f"  {joint}: " + ", ".join(f"{model} {value:.{precision}g}"
+                                             for model, value in values.items()
+                                             if model != "coordinate")
+                  for joint, values in parameters["joint_friction"].items()]
     if parameters["scale"] is None:
         lines.append("(no force fixes the scale: values up to a common factor)")
     return lines

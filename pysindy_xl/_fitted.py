@@ -111,6 +111,47 @@ class DynamicsMixin:
         mass, free = dynamics.mass_and_forcing(stack_variables(x, x_dot))
         return np.einsum("sij,sj->si", mass, x_ddot) - free
 
+    def score_forces(self, x, t, u, x_dot=None, x_ddot=None, smoother=None):
+        """Held-out force prediction: RMS per coordinate (in force units and relative), total.
+
+        The robotics validation of an identified arm on a run it never saw: the torques
+        :meth:`predict_forces` needs to move as recorded against the measured ones. The
+        derivatives not given are estimated the same way whatever the model (a quintic
+        smoothing spline of the positions; :mod:`pysindy_xl.held_out`), so that models
+        identified by different methods score on the same numbers.
+
+        Parameters
+        ----------
+        x, t, u : array or list of arrays
+            Positions, times and measured generalized forces of the held-out run(s).
+        x_dot, x_ddot : same layout, optional
+            Measured velocities and accelerations.
+        smoother : object with ``smooth(t, x)``, optional
+            Replaces the default estimate of the derivatives.
+
+        Returns
+        -------
+        ForceScore
+            ``rms``, ``relative`` (per coordinate), ``total``, ``lines()``, ``plot(path)``.
+
+        Examples
+        --------
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+        >>> t = np.linspace(0, 5, 501)[:, None]
+        >>> x = np.sin(t) + np.sin(2.3 * t) / 2
+        >>> xd, xdd = np.cos(t) + 1.15 * np.cos(2.3 * t), -np.sin(t) - 2.645 * np.sin(2.3 * t)
+        >>> model = px.XLSINDy(lib).fit(x, t[:, 0], x_dot=xd, x_ddot=xdd, u=2 * xdd + 3 * x)
+        >>> score = model.score_forces(x, t[:, 0], 2 * xdd + 3 * x + 0.02, xd, xdd)
+        >>> round(float(score.rms[0]), 6), score.derivatives
+        (0.02, 'measured')
+        """
+        from .held_out import score_forces
+
+        self._require_dynamics()
+        return score_forces(self, x, t, u, x_dot, x_ddot, smoother)
+
     def score(self, x, t=None, x_dot=None, x_ddot=None, u=None, metric=r2_score):
         """Score predicted accelerations against measured (or differentiated) ones.
 
@@ -238,9 +279,11 @@ class DynamicsMixin:
         Returns
         -------
         dict
-            ``physical_parameters`` (name -> value written) and ``residual``
+            ``physical_parameters`` (name -> value written), ``residual``
             (``|C pi - beta| / |beta|``, zero when the identified parameters are realizable
-            by rigid bodies).
+            by rigid bodies) and ``dropped``: ``{joint: {model: value}}``, the identified
+            joint models MJCF cannot state (asymmetric Coulomb, Stribeck, torque offset: a
+            catalog built with ``friction=``), left out of the file.
         """
         from .export.mjcf import to_mjcf
 

@@ -150,7 +150,13 @@ class InspectionMixin:
             ``base_parameters``: one ``{"feature", "stands_for" ({name: weight} or None),
             "value"}`` per Lagrange term; ``friction``: ``{coordinate: {"viscous", "dry"}}``;
             ``other``: the other classical terms by feature name; ``scale``: the factor
-            applied, None for an unforced model.
+            applied, None for an unforced model. A catalog with joint friction models
+            (``kinematic_catalog(..., friction=...)``) adds ``joint_friction``:
+            ``{joint: {model: value}}`` for its models (``viscous``, ``coulomb``,
+            ``asymmetric``, ``stribeck``, ``offset``; 0 where the fit found a joint does not
+            need one), with ``coulomb_positive`` / ``coulomb_negative`` (the Coulomb
+            magnitude in each direction) and ``coordinate`` (the coordinate the joint is, or
+            None); such a joint's viscous and Coulomb friction also count in ``friction``.
 
         Examples
         --------

@@ -28,6 +28,7 @@ EXTRAS = {
     "gymnasium": "gym",
     "dask": "dask",
     "distributed": "dask",
+    "rosbags": "ros",
 }
 
 

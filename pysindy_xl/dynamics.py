@@ -22,8 +22,7 @@ import sympy as sp
 
 from ._simulation_inputs import feedback_function, force_function
 from ._validation import check_numeric_array, check_option, check_times
-from .feature_library import stack_variables
-from .feature_library._compile import Terms, compile_terms, decompose, scalar_function
+from .feature_library import Terms, compile_terms, decompose, scalar_function, stack_variables
 from .physical.rigid_body import rigid_body_dynamics
 from .symbols import Coordinates
 

@@ -485,10 +485,12 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         :func:`~pysindy_xl.optimizers.default_optimizer` for the data (``estimated``: the
         columns come from noisy positions only) and the catalog ``library``."""
         if self.optimizer is None or isinstance(self.optimizer, str):
+            structure = library.physical_structure()
             return default_optimizer(
                 forced, estimated, kind=self.optimizer,
                 complete=getattr(library, "complete_catalog", False),
-                physical=library.physical_structure() is not None)
+                physical=structure is not None,
+                selective=structure is not None and len(structure.selectable_columns) > 0)
         if not hasattr(self.optimizer, "fit_catalog"):
             if callable(getattr(self.optimizer, "fit", None)):
                 # a pysindy (or scikit-learn) regressor: explicit regression through it

@@ -378,3 +378,51 @@ def test_sample_every_longer_than_the_run():
     with pytest.raises(ValueError, match="sample_every: recording every 1000 steps .* fewer "
                                          "than two samples in a run of 0.1 s"):
         generate_dataset("cart-pole", n_trajectories=1, duration=0.1, sample_every=1000)
+
+
+# -- issue 43: arguments that ended deep inside with an unrelated message -----------------------
+def _library_with(extra):
+    return px.CatalogRepartition([px.ExternalForces(COORDS), _library(), extra])
+
+
+BOUNDARY_CASES = {
+    # "cannot reshape array of size 0" from the catalog merge
+    "classical_mask_all_false": (
+        lambda data: _fit(data, library=_library_with(px.ClassicalLibrary(COORDS, [XD],
+                                                                          mask=[[False]]))),
+        ValueError, r"mask: selects no equation for any term; expected at least one True"),
+    "interlink_all_zero": (
+        lambda data: _fit(data, library=px.CatalogRepartition(
+            [px.ExternalForces(COORDS, interlink=[[0.0]]), _library()])),
+        ValueError, r"interlink: is all zero, so no input acts on any coordinate"),
+}
+
+
+@pytest.mark.parametrize("case", list(BOUNDARY_CASES))
+def test_boundary_classes(case, data):
+    call, error, match = BOUNDARY_CASES[case]
+    with pytest.raises(error, match=match):
+        call(data)
+
+
+def test_validate_a_model_on_a_system_of_other_coordinates(fitted):
+    # was "x0: expected 2 finite values" from inside simulate
+    from pysindy_xl.mujoco import validate_model
+
+    with pytest.raises(ValueError, match=r"model: identified on 1 coordinates, but the reference "
+                                         r"has 2 \['x', 'theta'\]"):
+        validate_model(fitted, "cart-pole", duration=0.2, seed=0)
+
+
+@pytest.mark.parametrize("names", [3, "x", [1]])
+def test_coordinate_names_of_a_dataset_file(tmp_path, names):
+    # was "object of type 'int' has no len()"
+    import json
+
+    from pysindy_xl.data import load_dataset
+
+    t = np.linspace(0, 1, 11)
+    np.savez(tmp_path / "run.npz", t=t, q=np.sin(t),
+             metadata=json.dumps({"coordinate_names": names}))
+    with pytest.raises(ValueError, match=r"metadata: coordinate_names: expected a list of str"):
+        load_dataset(tmp_path / "run.npz")

@@ -173,10 +173,18 @@ def servo_arm():
     return system, model.fit(**data.fit_arguments(forces="tau"))
 
 
-def test_exact_servo_arm_is_valid_in_closed_loop(servo_arm):
+@pytest.fixture(scope="module")
+def exact_closed_loop(servo_arm):
+    """A fresh reference of the servo arm and the exact model's closed-loop validation on it
+    (one simulation, shared by the tests that compare against it)."""
     system, model = servo_arm
     reference = validation_trajectory(system, duration=2.0, seed=1)
-    closed = validate_model(model, system, trajectory=reference)
+    return reference, validate_model(model, system, trajectory=reference)
+
+
+def test_exact_servo_arm_is_valid_in_closed_loop(servo_arm, exact_closed_loop):
+    system, model = servo_arm
+    reference, closed = exact_closed_loop
     assert closed.drive == "closed-loop" and closed.valid
     assert closed.position_rmse < 1e-5 and closed.force_error < 1e-4
     summary = closed.to_dict()
@@ -190,17 +198,16 @@ def test_exact_servo_arm_is_valid_in_closed_loop(servo_arm):
     assert still.drive == "closed-loop" and still.valid and still.position_rmse < 1e-5
 
 
-def test_wrong_inertia_fails_closed_loop_validation(servo_arm):
+def test_wrong_inertia_fails_closed_loop_validation(servo_arm, exact_closed_loop):
     system, model = servo_arm
     wrong = copy.deepcopy(model)
     inertia = wrong.get_feature_names().index("L[0.5*shoulder_dot**2]")
     wrong.coef_[inertia] *= 1.3
     wrong._build_dynamics()
-    reference = validation_trajectory(system, duration=2.0, seed=1)
+    reference, exact = exact_closed_loop
     result = validate_model(wrong, system, trajectory=reference)
     assert result.drive == "closed-loop" and not result.valid and result.failure is None
     assert result.force_error > 0.05  # the servos push differently to track the reference
-    exact = validate_model(model, system, trajectory=reference)
     assert result.position_rmse > 1000 * exact.position_rmse
     # the positions alone stay within the divergence bound: the servos hide the error there
     assert result.divergence_time is None

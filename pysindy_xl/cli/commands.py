@@ -15,6 +15,7 @@ from .steps import (
     CLIError,
     check_solver,
     data_lines,
+    dataset_for,
     dataset_system,
     fit_model,
     generate_data,
@@ -28,6 +29,7 @@ from .steps import (
     summarize_coefficients,
     system_by_name,
 )
+from .verdict import held_out_verdict, wants_verdict
 
 # fit_quality and plot_identification live in pysindy_xl.quality; imported here for the
 # commands and for code that imported them from here
@@ -259,26 +261,6 @@ def _physics_lines(physics, system) -> list:
     return lines
 
 
-def _dataset_for(system, dataset):
-    """Check the dataset's coordinates against the system's (adopting them when unnamed)."""
-    from pysindy_xl.mujoco import Dataset
-
-    names = dataset.coordinate_names
-    if names == system.coordinate_names:
-        return dataset
-    if dataset.n != system.n:
-        raise CLIError(
-            f"DATA: the dataset has {dataset.n} coordinates {list(names)}, the system "
-            f"{system.name} has {system.n} {list(system.coordinate_names)}"
-        )
-    if names == tuple(f"q{k}" for k in range(dataset.n)):  # unnamed: adopt the system's
-        return Dataset(dataset.trajectories, system.coordinate_names, dataset.metadata)
-    raise CLIError(
-        f"DATA: coordinate names {list(names)} do not match the system {system.name} "
-        f"{list(system.coordinate_names)}"
-    )
-
-
 def run_identify(args):
     """Run ``pysindy-xl identify`` with parsed arguments; returns the fitted model.
 
@@ -341,8 +323,10 @@ def run_identify(args):
 
     dataset, system = _identify_inputs(args)
     resolve_catalog(args, system)
-    if args.plot:
-        output_file(args.plot, "--plot")
+    for path, option in ((args.plot, "--plot"), (getattr(args, "open_loop", None),
+                                                  "--open-loop")):
+        if path:
+            output_file(path, option)
     measured = dataset.has("qd") and dataset.has("qdd")
     formulation = args.formulation
     if formulation == "auto":
@@ -354,6 +338,7 @@ def run_identify(args):
                  "robust choice for noisy positions)"), file=sys.stderr)
     forced = args.forces == "tau" and dataset.has("tau") and any(
         np.any(tr.tau != 0) for tr in dataset.trajectories)
+    verdict = wants_verdict(args, forced)  # held-out torques: the verdict on a robot log
     solver = args.solver
     if solver == "auto":
         if not forced:
@@ -387,14 +372,23 @@ def run_identify(args):
         print(f"against the true model: max coefficient error "
               f"{summary['max_relative_error']:.2g} (relative), support recovered: "
               f"{summary['support_recovered']}")
-    if args.plot:
+    score = None
+    if verdict and model.dynamics_ is not None:
+        score = held_out_verdict(args, model, system, arguments,
+                                 lambda path: _load(args, path, system), progress)
+        if args.plot:
+            score.plot(args.plot, title=f"{system.name}: held-out torques, measured and "
+                                        f"predicted ({100 * score.total:.2f} % relative RMS)")
+            print(f"torque plot: {args.plot} (measured against predicted torques)")
+    replay = getattr(args, "open_loop", None) or (args.plot if score is None else None)
+    if replay:  # open loop: a fair check of a free system, not of an arm under feedback
         progress(f"simulating the model from the first trajectory's initial state for "
-                 f"{args.plot}")
+                 f"{replay}")
         if model.dynamics_ is None:
             raise CLIError("--plot: the identified equations contain no acceleration; "
                            "nothing to simulate")
         result = plot_identification(
-            model, dataset.trajectories[0], args.plot, forced=forced,
+            model, dataset.trajectories[0], replay, forced=forced,
             title=f"{system.name}: identified model against trajectory 0\n({args.catalog} "
                   f"catalog, {solver} solver, {model.formulation_} form)")
         rmse = ", ".join(f"{name} {value:.3g}" for name, value in
@@ -402,7 +396,7 @@ def run_identify(args):
         span = dataset.trajectories[0].t
         status = (f"diverged at {result['simulated_until']:.3g} s" if result["diverged"]
                   else f"over {span[-1] - span[0]:.3g} s")
-        print(f"validation plot: {args.plot} (position RMSE {rmse}, {status})")
+        print(f"validation plot: {replay} (position RMSE {rmse}, {status})")
     if args.out:
         _save_atomically(model, args.out)
         print(f"model: {args.out}")
@@ -425,28 +419,49 @@ def _names(text):
     return [c.strip() for c in text.split(",") if c.strip()] if text else None
 
 
-def _identify_inputs(args):
-    """The dataset of ``identify`` (CSV or NPZ) and the system naming its coordinates."""
+def _load(args, path, system=None):
+    """A data file of ``identify`` (DATA or a --validate file) with the column options; the
+    joints of a ROS bag are the system's (its joint names, in its order) unless named."""
     from pysindy_xl.data import load_data
-    from pysindy_xl.mujoco import DatasetError, coordinate_system
+    from pysindy_xl.data.rosbag import is_rosbag
+    from pysindy_xl.mujoco import DatasetError
 
-    coordinates, angles = _names(args.coordinates), _names(args.angles) or []
     columns = _column_map(getattr(args, "column", None))
-    if args.data.lower().endswith(".npz") and (columns or args.delimiter):
-        raise CLIError(f"--column/--delimiter: apply to CSV files, not to the NPZ {args.data!r}")
+    coordinates = _names(args.coordinates)
+    if path.lower().endswith(".npz") and (columns or args.delimiter):
+        raise CLIError(f"--column/--delimiter: apply to CSV files, not to the NPZ {path!r}")
+    bag = is_rosbag(path)
+    if getattr(args, "topic", None) and not bag:
+        raise CLIError(f"--topic: applies to ROS bags, not to {path!r}")
+    if bag and coordinates is None and hasattr(system, "joint_names"):
+        coordinates = list(system.coordinate_names)
+        columns = {**dict(zip(system.coordinate_names, system.joint_names, strict=True)),
+                   **columns}
     try:
-        dataset = load_data(args.data, coordinates=coordinates, columns=columns or None,
-                            delimiter=args.delimiter)
+        return load_data(path, coordinates=coordinates, columns=columns or None,
+                         delimiter=args.delimiter, **({"topic": args.topic} if bag else {}))
     except (DatasetError, ValueError) as error:
         raise CLIError(str(error)) from None
+
+
+def _identify_inputs(args):
+    """The dataset of ``identify`` (CSV or NPZ) and the system naming its coordinates."""
+    from pysindy_xl.mujoco import coordinate_system
+
+    coordinates, angles = _names(args.coordinates), _names(args.angles) or []
+    if args.system and args.angles:
+        raise CLIError("--angles: the system gives the angles; use --angles with "
+                       "--coordinates (no --system)")
+    given = system_by_name(args.system) if args.system else None
+    dataset = _load(args, args.data, given)
     name = args.system or (None if coordinates else dataset.metadata.get("system"))
     if name:
         if args.angles:
             raise CLIError("--angles: the system gives the angles; use --angles with "
                            "--coordinates (no --system)")
         # a dataset of a user's MJCF carries the model (path or XML) in its metadata
-        system = system_by_name(name) if args.system else dataset_system(dataset.metadata)
-        return _dataset_for(system, dataset), system
+        system = given or dataset_system(dataset.metadata)
+        return dataset_for(system, dataset), system
     if not args.data.lower().endswith(".npz") or coordinates:
         if not angles:
             print("note: no --angles: the catalog has no sin/cos terms of the positions",

@@ -119,7 +119,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     demo.add_argument("system", metavar="SYSTEM",
                       help="cart-pole, double-pendulum, cart-double-pendulum, triple-pendulum, "
-                           "or an MJCF .xml")
+                           "an MJCF .xml or a URDF .urdf")
     _add_generation_options(demo)
     _add_fit_options(demo)
     demo.add_argument("--constraints", choices=CONSTRAINTS, default="exclude",
@@ -144,9 +144,14 @@ def build_parser() -> argparse.ArgumentParser:
                     "several trajectories in one file); --column maps other headers. NPZ: "
                     "arrays t, q and optionally qd, qdd, tau, trajectory (see "
                     "pysindy_xl.data.dataset). Coordinates come from --system (a known "
-                    "system or an MJCF .xml), or from --coordinates/--angles, or the CSV header.",
+                    "system, an MJCF .xml or a URDF .urdf), or from --coordinates/--angles, "
+                    "or the CSV header.",
     )
-    identify.add_argument("data", metavar="DATA", help="a .csv, .tsv, .txt or .npz file")
+    identify.add_argument("data", metavar="DATA",
+                          help="a .csv, .tsv, .txt or .npz file, or a ROS bag of "
+                               "sensor_msgs/JointState (.bag, or a ROS 2 bag directory)")
+    identify.add_argument("--topic", default=None, metavar="NAME",
+                          help="ROS bags: the JointState topic (default: the only one)")
     identify.add_argument("--coordinates", default=None, metavar="NAMES",
                           help="comma-separated coordinate names, e.g. x,theta (CSV: the "
                                "position columns; NPZ: names of the columns of q); no MJCF "
@@ -161,18 +166,32 @@ def build_parser() -> argparse.ArgumentParser:
     identify.add_argument("--delimiter", default=None,
                           help="CSV field separator (default: tab for .tsv, comma otherwise)")
     identify.add_argument("--system", default=None,
-                          help="system name or MJCF .xml giving coordinates and catalog "
-                               "(default: the dataset's metadata)")
+                          help="system name, MJCF .xml or URDF .urdf giving coordinates and "
+                               "catalog (default: the dataset's metadata)")
     _add_fit_options(identify)
     identify.add_argument("--forces", choices=("tau", "none"), default="tau",
                           help="use the dataset's generalized forces or fit unforced "
                                "(default: tau when present)")
     identify.add_argument("--out", default=None, metavar="FILE.json",
                           help="write the fitted model (JSON) there")
+    identify.add_argument("--validate", action="append", default=None, metavar="TEST",
+                          help="held-out data (same format as DATA, with forces; repeat for "
+                               "several files): print the torques the model predicts there "
+                               "against the measured ones, per coordinate (RMS in N m and %%)")
+    identify.add_argument("--cv-blocks", type=int, default=5, metavar="K",
+                          help="without --validate, a log with forces and --system is scored "
+                               "by time-blocked cross-validation: K contiguous blocks of its "
+                               "one run (several runs: each run in turn), each predicted by "
+                               "the model refitted on the rest; 0 skips it (default: 5)")
     identify.add_argument("--plot", default=None, metavar="FILE.png",
-                          help="write a validation plot: the identified model simulated from "
-                               "the first trajectory's initial state under its recorded "
-                               "forces, against the recorded positions")
+                          help="write the plot of the verdict: measured against predicted "
+                               "held-out torques per coordinate (with --validate or the "
+                               "cross-validation), else the open-loop replay (--open-loop)")
+    identify.add_argument("--open-loop", default=None, metavar="FILE.png",
+                          help="write an open-loop replay: the identified model simulated "
+                               "from the first trajectory's initial state under its recorded "
+                               "forces, against the recorded positions (an arm under feedback "
+                               "control diverges from its log whatever the model)")
     identify.add_argument("--quiet", action="store_true",
                           help="no progress lines (on stderr) during the identification")
 

@@ -47,8 +47,10 @@ def system_by_name(name, joints=None):
         if joints is None:
             return get_system(name)
         system = get_system(name) if isinstance(name, MuJoCoSystem) else None
-        if system is None and not (isinstance(name, str) and name.endswith(".xml")):
-            raise CLIError(f"--joints: only for MJCF .xml models; {name!r} is a shipped system "
+        if system is None and not (isinstance(name, str)
+                                   and name.lower().endswith((".xml", ".urdf"))):
+            raise CLIError(f"--joints: only for MJCF .xml and URDF models; {name!r} is a "
+                           "shipped system "
                            "whose joints are all identified")
         return get_system(name, joints=joints)
     except (ValueError, TypeError) as error:
@@ -136,6 +138,39 @@ def dataset_system(metadata):
         return system_from_metadata(metadata)
     except (ValueError, TypeError) as error:
         raise CLIError(str(error)) from None
+
+
+def dataset_for(system, dataset):
+    """Check the dataset's coordinates against the system's (adopting them when unnamed, and
+    putting the columns in the system's order when they name its coordinates in another)."""
+    from pysindy_xl.mujoco import Dataset
+
+    names = dataset.coordinate_names
+    if names == system.coordinate_names:
+        return dataset
+    if dataset.n != system.n:
+        raise CLIError(
+            f"DATA: the dataset has {dataset.n} coordinates {list(names)}, the system "
+            f"{system.name} has {system.n} {list(system.coordinate_names)}"
+        )
+    if names == tuple(f"q{k}" for k in range(dataset.n)):  # unnamed: adopt the system's
+        return Dataset(dataset.trajectories, system.coordinate_names, dataset.metadata)
+    joint_forces = any(getattr(tr, key) is not None for tr in dataset.trajectories
+                       for key in ("u", "u_constraint"))  # per joint: not reordered by name
+    if set(names) == set(system.coordinate_names) and not joint_forces:  # another order
+        import dataclasses
+
+        from pysindy_xl.data.files import SERIES
+
+        order = [list(names).index(name) for name in system.coordinate_names]
+        trajectories = [dataclasses.replace(tr, **{key: getattr(tr, key)[:, order] for key in
+                                                   SERIES if getattr(tr, key) is not None})
+                        for tr in dataset.trajectories]
+        return Dataset(trajectories, system.coordinate_names, dataset.metadata)
+    raise CLIError(
+        f"DATA: coordinate names {list(names)} do not match the system {system.name} "
+        f"{list(system.coordinate_names)}"
+    )
 
 
 def resolve_catalog(args, system):

@@ -12,7 +12,8 @@ import zipfile
 
 import numpy as np
 
-__all__ = ["DatasetError", "read_dataset_arrays", "FORMAT", "VERSION", "SERIES", "MASKS"]
+__all__ = ["DatasetError", "read_dataset_arrays", "coordinate_names", "FORMAT", "VERSION",
+           "SERIES", "MASKS"]
 
 FORMAT = "pysindy-xl-dataset"
 VERSION = 1
@@ -128,6 +129,8 @@ def read_dataset_arrays(path) -> tuple[dict, dict, list, list]:
         raise DatasetError(f"trajectory: expected numeric (integer or float) finite ids of "
                            f"shape ({n_samples},), got dtype {ids.dtype}, shape {ids.shape}")
     names = metadata.get("coordinate_names") or [f"q{k}" for k in range(n)]
+    if not isinstance(names, list) or not all(isinstance(name, str) for name in names):
+        raise DatasetError(f"metadata: coordinate_names: expected a list of str, got {names!r}")
     if len(names) != n:
         raise DatasetError(
             f"metadata: coordinate_names has {len(names)} names, q has {n} columns"
@@ -149,3 +152,26 @@ def _parse_json(text: str, where: str) -> dict:
     if not isinstance(data, dict):
         raise DatasetError(f"metadata: expected a JSON object in {where}")
     return data
+
+
+def coordinate_names(coordinates) -> list[str]:
+    """Coordinate names given as a list of str or one comma-separated str.
+
+    Examples
+    --------
+    >>> coordinate_names("x, theta")
+    ['x', 'theta']
+    >>> coordinate_names(3)
+    Traceback (most recent call last):
+    ...
+    TypeError: coordinates: expected a list of names or a comma-separated str, got the int 3
+    """
+    if isinstance(coordinates, str):
+        coordinates = [c.strip() for c in coordinates.split(",")]
+    if not isinstance(coordinates, (list, tuple)):
+        raise TypeError("coordinates: expected a list of names or a comma-separated str, got "
+                        f"the {type(coordinates).__name__} {coordinates!r}")
+    names = list(coordinates)
+    if not names or not all(isinstance(n, str) and n for n in names):
+        raise ValueError(f"coordinates: expected a non-empty list of names, got {names!r}")
+    return names

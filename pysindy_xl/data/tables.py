@@ -31,6 +31,8 @@ import os
 
 import numpy as np
 
+from .files import coordinate_names
+
 __all__ = ["read_csv", "from_dataframe", "from_columns", "load_data", "coordinate_names",
            "CSV_SUFFIXES"]
 
@@ -123,29 +125,6 @@ def _trajectory_groups(ids, source: str, column: str):
     for row, key in enumerate(keys):
         groups.setdefault(key, []).append(row)
     return [(key, np.asarray(rows)) for key, rows in groups.items()]
-
-
-def coordinate_names(coordinates) -> list[str]:
-    """Coordinate names given as a list of str or one comma-separated str.
-
-    Examples
-    --------
-    >>> coordinate_names("x, theta")
-    ['x', 'theta']
-    >>> coordinate_names(3)
-    Traceback (most recent call last):
-    ...
-    TypeError: coordinates: expected a list of names or a comma-separated str, got the int 3
-    """
-    if isinstance(coordinates, str):
-        coordinates = [c.strip() for c in coordinates.split(",")]
-    if not isinstance(coordinates, (list, tuple)):
-        raise TypeError("coordinates: expected a list of names or a comma-separated str, got "
-                        f"the {type(coordinates).__name__} {coordinates!r}")
-    names = list(coordinates)
-    if not names or not all(isinstance(n, str) and n for n in names):
-        raise ValueError(f"coordinates: expected a non-empty list of names, got {names!r}")
-    return names
 
 
 def _resolve(header, coordinates, columns, source):
@@ -398,20 +377,25 @@ def from_dataframe(frame, coordinates=None, columns=None):
                   lambda k: f"row {labels[k]!r}")
 
 
-def load_data(source, coordinates=None, columns=None, delimiter=None):
+def load_data(source, coordinates=None, columns=None, delimiter=None, topic=None):
     """Read a CSV or NPZ file, a DataFrame or a column mapping into a :class:`Dataset`.
 
     Parameters
     ----------
     source : str, os.PathLike, pandas.DataFrame or dict
         ``.csv`` / ``.txt`` (comma-separated) or ``.tsv`` (tab-separated) file, ``.npz``
-        dataset (see :mod:`pysindy_xl.data.dataset`), DataFrame, or mapping of columns.
+        dataset (see :mod:`pysindy_xl.data.dataset`), ROS bag of ``sensor_msgs/JointState``
+        (``.bag`` file or ROS 2 bag directory; :func:`~pysindy_xl.data.rosbag.read_rosbag`),
+        DataFrame, or mapping of columns.
     coordinates : list of str or str, optional
         Coordinate names; for an NPZ file they rename the columns of ``q``.
     columns : dict, optional
-        Column mapping of a table (see :func:`read_csv`); not used for NPZ.
+        Column mapping of a table (see :func:`read_csv`), or ``{coordinate: joint name}`` of
+        a ROS bag; not used for NPZ.
     delimiter : str, optional
         Field separator of a text file (default: tab for ``.tsv``, comma otherwise).
+    topic : str, optional
+        The ``sensor_msgs/JointState`` topic of a ROS bag (default: its only one).
 
     Returns
     -------
@@ -437,6 +421,15 @@ def load_data(source, coordinates=None, columns=None, delimiter=None):
     if isinstance(source, (str, os.PathLike)):
         path = os.fspath(source)
         suffix = os.path.splitext(path)[1].lower()
+        from .rosbag import is_rosbag, read_rosbag
+
+        if is_rosbag(path):
+            if delimiter is not None:
+                raise ValueError(f"delimiter: applies to text tables, not to the ROS bag "
+                                 f"{path!r}")
+            return read_rosbag(path, coordinates, columns, topic)
+        if topic is not None:
+            raise ValueError(f"topic: applies to ROS bags, not to {path!r}")
         if suffix == ".npz":
             return _load_npz(path, coordinates, columns)
         if suffix not in CSV_SUFFIXES:

@@ -17,7 +17,8 @@ and armatures are non-negative. :func:`consistent_parameters` solves the semidef
 (cvxpy, :func:`pysindy_xl.physical.realize`): the consistent parameters that reproduce
 ``beta`` (exactly when it is realizable), among them the closest to the template's ``pi_0``.
 :func:`write_mjcf` writes them into the template's MJCF with the identified viscous and dry
-friction of each joint.
+friction of each joint (``damping`` and ``frictionloss``; the asymmetric, Stribeck and
+torque-offset models of real joints have no MJCF attribute and are left out).
 """
 
 from __future__ import annotations
@@ -25,6 +26,9 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["consistent_parameters", "write_mjcf", "to_mjcf"]
+
+#: Joint models MJCF cannot state (left out of the file, listed in ``dropped``).
+_NOT_IN_MJCF = ("asymmetric", "stribeck", "offset")
 
 
 def consistent_parameters(catalog, beta, closeness: float = 1e-6):
@@ -52,7 +56,7 @@ def consistent_parameters(catalog, beta, closeness: float = 1e-6):
     return realize(structure, beta, reference=catalog.physical_values, closeness=closeness)
 
 
-def write_mjcf(catalog, pi, friction, path) -> str:
+def write_mjcf(catalog, pi, friction, path, joint_friction=None) -> str:
     """Write the catalog's system with inertial parameters ``pi`` and joint friction.
 
     Parameters
@@ -65,6 +69,10 @@ def write_mjcf(catalog, pi, friction, path) -> str:
         ``{coordinate name: {"viscous": ..., "dry": ...}}`` (as
         :meth:`XLSINDy.physical_parameters <pysindy_xl.XLSINDy.physical_parameters>` gives).
     path : str or os.PathLike
+    joint_friction : dict, optional
+        ``{joint name: {"viscous": ..., "coulomb": ...}}``, the joint models of a catalog
+        built with ``friction=``: where a joint has them they give its ``damping`` and
+        ``frictionloss`` instead of ``friction``.
 
     Returns
     -------
@@ -99,12 +107,15 @@ def write_mjcf(catalog, pi, friction, path) -> str:
                                       strict=True):
         joint = spec.joint(joint_name)
         joint.armature = max(values.get(f"{joint_name}.armature", joint.armature), 0.0)
-        damping = max(friction[coordinate]["viscous"], 0.0)
+        own = (joint_friction or {}).get(joint_name)
+        viscous, dry = ((own.get("viscous", 0.0), own.get("coulomb", 0.0)) if own is not None
+                        else (friction[coordinate]["viscous"], friction[coordinate]["dry"]))
+        damping = max(viscous, 0.0)
         if np.ndim(joint.damping):  # MuJoCo >= 4: a vector (its first entry: linear)
             joint.damping = [damping, *np.asarray(joint.damping)[1:]]
         else:
             joint.damping = damping
-        joint.frictionloss = max(friction[coordinate]["dry"], 0.0)
+        joint.frictionloss = max(dry, 0.0)
     spec.compile()  # a model MuJoCo refuses is an error here, not when it is read
     text = spec.to_xml()
     with open(path, "w", encoding="utf-8") as handle:
@@ -141,6 +152,11 @@ def to_mjcf(model, path, template) -> dict:
     beta = catalog.lagrange_coefficients(model)
     pi, residual = consistent_parameters(catalog, beta)
     parameters = model.physical_parameters()
-    write_mjcf(catalog, pi, parameters["friction"], path)
+    joints = parameters.get("joint_friction", {})
+    write_mjcf(catalog, pi, parameters["friction"], path, joints)
+    # MJCF joints have damping and a symmetric frictionloss, nothing else
+    dropped = {joint: {m: v for m, v in values.items() if m in _NOT_IN_MJCF and v != 0}
+               for joint, values in joints.items()}
     return {"physical_parameters": dict(zip(catalog.physical_names, pi.tolist(), strict=True)),
-            "residual": residual}
+            "residual": residual,
+            "dropped": {joint: values for joint, values in dropped.items() if values}}

@@ -4,9 +4,17 @@ See :mod:`pysindy_xl.feature_library._base` for the layout of the stacked regres
 """
 
 from ._base import LIBRARY_TYPES, SymbolicLibrary, compile_entries, stack_variables
+
+# the compiled evaluation of symbolic terms is re-exported for the simulators of the package
+# (``dynamics``), so that no module outside this folder imports the private ``_compile``
+from ._compile import Terms as Terms
+from ._compile import compile_terms as compile_terms
+from ._compile import decompose as decompose
+from ._compile import scalar_function as scalar_function
 from ._weak import integrate_by_parts
 from .classical import ClassicalLibrary, pysindy_library_terms
 from .external_forces import ExternalForces
+from .joint_friction import JointFrictionLibrary
 from .lagrange import LagrangeLibrary, euler_lagrange
 from .polynomial_lagrange import PolynomialLagrangeLibrary
 from .repartition import CatalogRepartition
@@ -18,6 +26,7 @@ __all__ = [
     "PolynomialLagrangeLibrary",
     "ClassicalLibrary",
     "ExternalForces",
+    "JointFrictionLibrary",
     "CatalogRepartition",
     "stack_variables",
     "compile_entries",

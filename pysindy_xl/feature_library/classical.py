@@ -134,6 +134,9 @@ class ClassicalLibrary(SymbolicLibrary):
             )
         if mask.dtype != bool and not np.isin(mask, (0, 1)).all():
             raise ValueError("mask: expected booleans (or 0/1)")
+        if not mask.any():
+            raise ValueError("mask: selects no equation for any term; expected at least one "
+                             "True entry (leave the library out to have no classical terms)")
         return mask.astype(bool)
 
     def _build_symbolic(self):

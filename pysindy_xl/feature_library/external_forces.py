@@ -29,6 +29,10 @@ def _interlink_matrix(interlink, n: int) -> np.ndarray:
         )
     if not np.all(np.isfinite(matrix)):
         raise ValueError("interlink: contains NaN or inf")
+    if not matrix.any():
+        raise ValueError("interlink: is all zero, so no input acts on any coordinate; expected "
+                         "a matrix with at least one nonzero entry (generalized force = "
+                         "interlink @ u)")
     return matrix
 
 

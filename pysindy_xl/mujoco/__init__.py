@@ -19,7 +19,9 @@ from .catalogs import (
     reference_catalog,
     true_coefficients,
 )
+from .excitation import excitation_trajectory
 from .forcing import FORCING_MODES, SumOfSinusoids
+from .fourier import FourierTrajectory
 from .generate import (
     NOISE_MODELS,
     ConstraintWarning,
@@ -73,6 +75,8 @@ __all__ = [
     "noise_levels",
     "FORCING_MODES",
     "SumOfSinusoids",
+    "FourierTrajectory",
+    "excitation_trajectory",
     "add_noise",
     "generate_dataset",
     "simulate_trajectory",

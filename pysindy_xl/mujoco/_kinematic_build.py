@@ -84,11 +84,10 @@ def random_joint_values(system: MuJoCoSystem, n_samples: int, rng) -> np.ndarray
     return state_values(q, qd, qdd, angles)
 
 
-def classical_candidates(system, model, coulomb, coulomb_scale):
-    """Friction and spring candidates per joint, in the coordinates, with their MJCF values."""
+def joint_coordinates(system, model):
+    """Each joint's position and velocity in the system's coordinates (``qpos = T^-1 q``)."""
     coords = system.coords
     inverse = np.linalg.inv(system.joint_to_coordinates)
-    force_map = system.force_matrix()
     qpos = [sp.expand(sum(sp.Float(a) * qj for a, qj in zip(inverse[k], coords.q, strict=True)
                           if a != 0)) for k in range(model.njnt)]
     qvel = [sp.expand(sum(sp.Float(a) * qdj for a, qdj in zip(inverse[k], coords.qd, strict=True)
@@ -96,13 +95,22 @@ def classical_candidates(system, model, coulomb, coulomb_scale):
     if np.allclose(inverse, np.round(inverse)):  # keep integer maps readable: theta2 - theta1
         qpos = [sp.nsimplify(e, rational=True) for e in qpos]
         qvel = [sp.nsimplify(e, rational=True) for e in qvel]
+    return qpos, qvel
+
+
+def classical_candidates(system, model, coulomb, coulomb_scale, friction=True):
+    """Friction (unless not ``friction``) and spring candidates per joint, in the
+    coordinates, with their MJCF values."""
+    coords = system.coords
+    force_map = system.force_matrix()
+    qpos, qvel = joint_coordinates(system, model)
     terms, mask, kinds, values = [], [], [], []
     for k in range(model.njnt):
         name = system.joint_names[k]
         dof = model.jnt_dofadr[k]
         reaches = np.abs(force_map[:, k]) > 1e-12
-        candidates = [("viscous", qvel[k], model.dof_damping[dof])]
-        if coulomb:
+        candidates = [("viscous", qvel[k], model.dof_damping[dof])] if friction else []
+        if coulomb and friction:
             candidates.append(("coulomb", sp.tanh(qvel[k] / coulomb_scale),
                                model.dof_frictionloss[dof]))
         if model.jnt_stiffness[k] > 0:

@@ -17,11 +17,19 @@ from ..data.dataset import Dataset, Trajectory
 from ..data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
 from .actuation import actuator_force_function, start_on_reference
 from .forcing import FORCING_MODES, SumOfSinusoids
+from .integration import (
+    INTEGRATORS,
+    Integration,
+    UnstableSimulationError,
+    check_run,
+    choose_integration,
+)
 from .systems import MuJoCoSystem, get_system
 
 __all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "actuator_signals",
            "noise_levels", "NOISE_KEYS", "NOISE_MODELS",
-           "ConstraintWarning", "actuator_force_function", "faithful_integrator", "INTEGRATORS"]
+           "ConstraintWarning", "actuator_force_function", "faithful_integrator", "INTEGRATORS",
+           "UnstableSimulationError", "choose_integration"]
 
 
 def _import_mujoco():
@@ -163,6 +171,15 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
                                  max_frequency=max_frequency, offsets=offsets)
 
 
+def _controls(signals, times, nu: int) -> np.ndarray:
+    """``signals(times)`` checked to shape (len(times), nu)."""
+    values = np.asarray(signals(times), dtype=float)
+    if values.shape != (len(times), nu):
+        raise ValueError(f"signals: expected values of shape (n_times, nu={nu}), got "
+                         f"{values.shape}")
+    return values
+
+
 def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None,
                         sample_every: int = 1, progress=None, substeps: int = 1,
                         control_at: str = "start", integrator: str | None = None) -> Trajectory:
@@ -194,9 +211,11 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
         start hold lags it by half a step, which a servo's ``kp`` turns into an apparent
         viscous friction of ``kp * h / 2``). Either way, a sample at ``t`` records the
         actuator forces of the continuous signal, ``signals(t)`` at the recorded state.
-    integrator : {"Euler", "RK4", "implicit", "implicitfast"}, optional
-        MuJoCo's integrator for this run; default: the model's (see
-        :func:`faithful_integrator`).
+    integrator : {"auto", "Euler", "RK4", "implicit", "implicitfast"} or Integration, optional
+        MuJoCo's integrator for this run; default: the model's. ``"auto"``: a stable and
+        faithful integration chosen from the model (:func:`choose_integration`, with at least
+        ``substeps`` substeps); an :class:`~pysindy_xl.mujoco.integration.Integration`: its
+        integrator and substeps.
 
     Returns
     -------
@@ -209,8 +228,10 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
 
     Raises
     ------
-    RuntimeError
-        If MuJoCo reports an unstable simulation (NaN or huge accelerations).
+    UnstableSimulationError
+        A ``RuntimeError``: the run left the physics (NaN or huge accelerations, velocities
+        over a sane bound, energy growth without forcing; see
+        :func:`~pysindy_xl.mujoco.integration.check_run`). Its data are not returned.
 
     Examples
     --------
@@ -256,28 +277,30 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
             f"sample_every: recording every {sample_every} steps of {dt:g} s leaves fewer than "
             f"two samples in a run of {duration:g} s ({n_steps} steps); lower sample_every or "
             "lengthen the run")
+    if isinstance(integrator, Integration):
+        integration = integrator
+    elif integrator is not None:
+        integration = choose_integration(model, integrator, substeps)
+    else:
+        integration = choose_integration(model, "model", substeps)
+    substeps = integration.substeps
     model.opt.timestep = dt / substeps
-    if integrator is not None:
-        check_option("integrator", integrator, "choice", choices=tuple(INTEGRATORS))
-        model.opt.integrator = INTEGRATORS[integrator]
+    model.opt.integrator = INTEGRATORS[integration.integrator]
+    if signals is None:  # unforced: the total energy must not grow
+        model.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
     n_fine = n_steps * substeps
     fine_times = np.arange(n_fine + 1) * (dt / substeps)
     if control_at not in ("start", "midpoint"):
         raise ValueError(f"control_at: expected 'start' or 'midpoint', got {control_at!r}")
-    ctrl = np.zeros((n_fine + 1, model.nu))
     record_every = sample_every * substeps
     recorded = np.arange(0, n_fine + 1, record_every)
     recorded_ctrl = np.zeros((len(recorded), model.nu))
+    shift = dt / substeps / 2 if control_at == "midpoint" else 0.0
     if signals is not None:
-        shift = dt / substeps / 2 if control_at == "midpoint" else 0.0
-        ctrl = np.asarray(signals(fine_times + shift), dtype=float)
-        if ctrl.shape != (n_fine + 1, model.nu):
-            raise ValueError(
-                f"signals: expected values of shape (n_times, nu={model.nu}), got {ctrl.shape}"
-            )
-        recorded_ctrl = ctrl[recorded] if shift == 0.0 else np.asarray(
-            signals(fine_times[recorded]), dtype=float)
+        recorded_ctrl = _controls(signals, fine_times[recorded], model.nu)
+    chunk = max(record_every, (200_000 // record_every) * record_every)
     qpos, qvel, qacc, force, constraint = (np.empty((len(recorded), n)) for _ in range(5))
+    energy = np.empty((len(recorded), 2))
     active = np.zeros(len(recorded), dtype=bool)
     friction_types, limit_types, equality_types, joint_limit = _constraint_kinds()
     limit_hits = np.zeros(model.njnt, dtype=np.int64)
@@ -289,7 +312,7 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
             # the control of this instant (the continuous law the samples should obey)
             data.ctrl[:] = recorded_ctrl[r]
             mujoco.mj_forward(model, data)
-            qpos[r], qvel[r], qacc[r] = data.qpos, data.qvel, data.qacc
+            qpos[r], qvel[r], qacc[r], energy[r] = data.qpos, data.qvel, data.qacc, data.energy
             force[r] = data.qfrc_actuator
             constraint[r] = data.qfrc_constraint
             if data.nefc:
@@ -305,18 +328,19 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
                     equality_samples += bool(np.any(pushing & np.isin(kinds, equality_types)))
             r += 1
         if k < n_fine:
-            data.ctrl[:] = ctrl[k]
+            if k % chunk == 0:  # the controls of the next chunk of internal steps
+                ctrl = np.zeros((min(chunk, n_fine - k), model.nu)) if signals is None else \
+                    _controls(signals, fine_times[k:k + chunk] + shift, model.nu)
+            data.ctrl[:] = ctrl[k % chunk]
             mujoco.mj_step(model, data)
         if progress is not None and (k + 1) % (1000 * substeps) == 0:
             progress.update(1000)
     if progress is not None:
         progress.update((n_steps + 1) % 1000)
     bad = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
-    if bad or not np.all(np.isfinite(qacc)):
-        raise RuntimeError(
-            f"MuJoCo simulation of {system!r} became unstable (NaN or huge accelerations); "
-            "reduce the forces, the initial velocities or the time step"
-        )
+    passive = signals is None and not np.any(force)  # no actuator force: energy only decays
+    checked = check_run(model, qpos, qvel, qacc, energy if passive else None, bad,
+                        integration, f"MuJoCo simulation of {system!r}")
     q, qd, qdd = system.to_generalized(qpos, qvel, qacc)
     matrix = system.force_matrix()
     joint_names = list(system.joint_names)
@@ -327,7 +351,8 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     if substeps > 1:
         info["substeps"] = int(substeps)
     if integrator is not None:
-        info["integrator"] = integrator
+        info["integrator"] = integration.integrator
+    info["peak_velocity"] = checked["peak_velocity"]
     if isinstance(signals, SumOfSinusoids):
         info["signals"] = signals.to_dict()
     return Trajectory(t=fine_times[recorded], q=q, qd=qd, qdd=qdd, tau=force @ matrix.T,
@@ -335,19 +360,14 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
                       u_constraint=constraint, constraint_active=active)
 
 
-#: MuJoCo's integrators by name.
-INTEGRATORS = {"Euler": 0, "RK4": 1, "implicit": 2, "implicitfast": 3}
-
-
 def faithful_integrator(model) -> str | None:
-    """RK4 where the model's own step would bias the data against the continuous equations.
+    """The integrator :func:`choose_integration` picks where it differs from the model's.
 
-    MuJoCo's ``implicit`` and ``implicitfast`` integrators apply the velocity-dependent
-    forces (joint damping, an actuator's velocity gain ``kv``) at the end of the step, so the
-    recorded positions obey ``(M + h (kv + d)) qdd = ...`` rather than the continuous
-    equations: an identification from positions overstates every inertia by about
-    ``(kv + damping) x timestep``. RK4 integrates the continuous equations (error of order
-    ``h^4``). Models whose step has no such force keep their integrator.
+    MuJoCo's ``implicit`` and ``implicitfast`` integrators (and ``Euler`` for joint damping)
+    apply the velocity-dependent forces at the end of the step, so the recorded positions
+    obey ``(M + h (kv + d)) qdd = ...`` rather than the continuous equations; RK4 is exact to
+    ``h^4`` but only stable for ``h |lambda|`` inside its region. The choice, with its
+    substeps, is :func:`choose_integration`'s (module :mod:`~pysindy_xl.mujoco.integration`).
 
     Parameters
     ----------
@@ -356,7 +376,7 @@ def faithful_integrator(model) -> str | None:
     Returns
     -------
     str or None
-        ``"RK4"``, or None to keep the model's integrator.
+        The integrator name, or None to keep the model's.
 
     Examples
     --------
@@ -364,10 +384,8 @@ def faithful_integrator(model) -> str | None:
     >>> print(faithful_integrator(get_system("cart-pole").mj_model()))  # already RK4
     None
     """
-    if int(model.opt.integrator) not in (INTEGRATORS["implicit"], INTEGRATORS["implicitfast"]):
-        return None
-    velocity_forces = np.any(model.dof_damping > 0) or np.any(model.actuator_biasprm[:, 2] != 0)
-    return "RK4" if velocity_forces else None
+    chosen = choose_integration(model).integrator
+    return None if INTEGRATORS[chosen] == int(model.opt.integrator) else chosen
 
 
 class ConstraintWarning(UserWarning):
@@ -386,7 +404,8 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                      amplitude_scale: float = 1.0, initial_scale: float = 1.0,
                      progress=None, noise_model: str = "positions", derivatives=None,
                      amplitude=None, backoff: bool = True, max_constrained: float = 0.1,
-                     min_unconstrained: float = 0.5, integrator: str = "auto") -> Dataset:
+                     min_unconstrained: float = 0.5, integrator: str = "auto",
+                     reference=None) -> Dataset:
     """Simulate several randomly forced MuJoCo trajectories of a system.
 
     Parameters
@@ -441,18 +460,33 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         Warn (:class:`ConstraintWarning`, naming the joints whose limits are hit) when less
         than this fraction of all samples is unconstrained.
     integrator : {"auto", "model", "Euler", "RK4", "implicit", "implicitfast"}, default "auto"
-        MuJoCo's integrator. ``"auto"``: RK4 where the model's implicit step would bias the
-        data against the continuous equations that the package identifies
-        (:func:`faithful_integrator`), the model's otherwise; ``"model"``: as authored.
-        The metadata's ``integrator`` says which was used. Each step holds the controls of
-        its midpoint (see :func:`simulate_trajectory`), so the recorded samples obey the
-        continuous equations under the continuous control signal.
+        MuJoCo's integrator. ``"auto"``: a stable integration faithful to the continuous
+        equations that the package identifies, chosen from the model's servo gains, damping
+        and inertia (:func:`choose_integration`: RK4 with substeps inside its stability
+        region, or the model's implicit step with substeps that make its inertia bias
+        negligible); ``"model"``: as authored; a name: that integrator at the model's step.
+        The metadata's ``integrator``, ``substeps`` and ``integration`` (with the reason)
+        say which was used. Each step holds the controls of its midpoint (see
+        :func:`simulate_trajectory`), so the recorded samples obey the continuous equations
+        under the continuous control signal. Every run is checked (finite, velocities
+        under a sane bound); an unstable one raises :class:`UnstableSimulationError`.
+    reference : FourierTrajectory, optional
+        A planned trajectory (e.g. :func:`~pysindy_xl.mujoco.excitation_trajectory`) that
+        every run plays through the system's position servos (its ``controls(system)``)
+        instead of random signals; no back-off. The metadata keep it (``reference``).
 
     Returns
     -------
     Dataset
-        Its metadata hold ``constraints`` (:meth:`Dataset.constraint_summary`) and, for a
-        user's MJCF, the model's path and its XML (so the dataset can be identified alone).
+        Its metadata hold ``constraints`` (:meth:`Dataset.constraint_summary`), the
+        integration (``integrator``, ``substeps``, ``integration``), the largest
+        ``peak_velocity`` of each joint and, for a user's MJCF, the model's path and its XML
+        (so the dataset can be identified alone).
+
+    Raises
+    ------
+    UnstableSimulationError
+        If a run left the physics (see :func:`simulate_trajectory`).
 
     Examples
     --------
@@ -495,31 +529,30 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                         ("min_unconstrained", min_unconstrained)):
         if not (isinstance(value, (int, float)) and 0 <= value <= 1):
             raise ValueError(f"{name}: expected a number in [0, 1], got {value!r}")
+    if reference is not None and not callable(getattr(reference, "controls", None)):
+        raise TypeError(f"reference: expected a FourierTrajectory, got {type(reference).__name__}")
     model = system.mj_model()
     rng = np.random.default_rng(seed)
     n_steps = int(round(float(duration) / model.opt.timestep)) + 1
     if n_steps > 100_000_000:
         raise ValueError(f"duration: {duration} s is {n_steps:.3g} MuJoCo steps per trajectory "
                          "(at most 1e8); record shorter trajectories")
-    check_option("integrator", integrator, "choice",
-                 choices=("auto", "model", *INTEGRATORS))
-    run_integrator = {"auto": faithful_integrator(model), "model": None}.get(integrator,
-                                                                            integrator)
+    integration = choose_integration(model, integrator)
     bar = tqdm(total=n_steps * n_trajectories, desc=f"MuJoCo {system.name}", unit="step",
                disable=None if progress is None else not progress, leave=False)
     trajectories = []
     with bar:
         for _ in range(n_trajectories):
-            factor, attempts = 1.0, 4 if backoff else 1
+            factor, attempts = 1.0, 4 if backoff and reference is None else 1
             for attempt in range(attempts):
                 q0, qd0 = system.random_initial_state(rng, scale=initial_scale * factor)
-                signals = actuator_signals(system, model, forcing, rng, actuators,
-                                           n_components, max_frequency, amplitude_scale,
-                                           amplitude, backoff=factor)
+                signals = reference.controls(system) if reference is not None else \
+                    actuator_signals(system, model, forcing, rng, actuators, n_components,
+                                     max_frequency, amplitude_scale, amplitude, backoff=factor)
                 q0, qd0 = start_on_reference(system, signals, q0, qd0)
                 clean = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
                                             bar if attempt == 0 else None,
-                                            control_at="midpoint", integrator=run_integrator)
+                                            control_at="midpoint", integrator=integration)
                 if clean.constraint_active.mean() <= max_constrained or (
                     attempt == attempts - 1
                 ):
@@ -543,12 +576,16 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         "duration": float(duration),
         "sample_every": int(sample_every),
         "timestep": float(model.opt.timestep),
-        "integrator": run_integrator or next(name for name, value in INTEGRATORS.items()
-                                             if value == int(model.opt.integrator)),
+        "integrator": integration.integrator,
+        "substeps": integration.substeps,
+        "integration": integration.to_dict(),
+        "peak_velocity": {joint: max(tr.info["peak_velocity"][joint] for tr in trajectories)
+                          for joint in trajectories[0].info["peak_velocity"]},
         "amplitude": amplitude,
         "initial_scale": initial_scale,
         "force_matrix": system.force_matrix().tolist(),
         "joint_names": list(system.joint_names),
+        "reference": None if reference is None else reference.to_dict(),
     }
     metadata.update(getattr(system, "metadata", lambda: {})())
     dataset = Dataset(trajectories, system.coordinate_names, metadata)

@@ -33,6 +33,10 @@ Friction and springs are not Lagrangian: each joint adds classical candidates (v
 ``qvel_k``, smooth Coulomb ``tanh(qvel_k / eps)``, and ``qpos_k - springref_k`` for joints with
 stiffness), entered in the equations that the joint force reaches (``B = T^-T``, see
 :mod:`pysindy_xl.mujoco.systems`). Coordinates are those of the system: ``q = T @ qpos``.
+With ``friction=`` the joints' friction comes instead from the models of real joints
+(viscous, Coulomb, asymmetric Coulomb, Stribeck, torque-sensor offset;
+:class:`~pysindy_xl.feature_library.JointFrictionLibrary`), one column per joint and model,
+among which the default fit selects what each joint needs.
 """
 
 from __future__ import annotations
@@ -45,12 +49,14 @@ import mujoco
 import numpy as np
 
 from ..feature_library import PolynomialLagrangeLibrary
+from ..feature_library.joint_friction import FRICTION_MODELS
 from ..feature_library.trigpoly import evaluate_many, state_values
 from ..physical.rigid_body import KinematicTree
 from ..symbols import Coordinates
 from ._kinematic_build import (
     classical_candidates,
     independent_regressor_columns,
+    joint_coordinates,
     random_joint_values,
     resolve_system,
 )
@@ -111,6 +117,12 @@ class KinematicCatalog:
     tree : KinematicTree
         The numeric kinematic tree (the rigid-body kernel that models of the catalog
         simulate with, see :mod:`pysindy_xl.physical.rigid_body`).
+    friction_models : tuple of str
+        The joint models of ``friction=`` (empty: friction as ``classical_terms``).
+    friction_scales : tuple of float
+        ``(coulomb_scale, stribeck_scale)`` of the joint models.
+    joint_velocities : list of sympy.Expr
+        Each joint's velocity in the coordinates.
 
     Examples
     --------
@@ -136,6 +148,9 @@ class KinematicCatalog:
     n_candidates: int
     build_seconds: float = 0.0
     tree: KinematicTree | None = None
+    friction_models: tuple = ()
+    friction_scales: tuple = (0.01, 0.1)
+    joint_velocities: list = dataclasses.field(default_factory=list)
     _polynomials: list = dataclasses.field(default_factory=list, repr=False, compare=False)
     _compiled: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
 
@@ -177,7 +192,12 @@ class KinematicCatalog:
         >>> lib.get_feature_names()[-2:]
         ['C_theta[theta_dot]', 'C_theta[tanh(100.0*theta_dot)]']
         """
-        from ..feature_library import CatalogRepartition, ClassicalLibrary, ExternalForces
+        from ..feature_library import (
+            CatalogRepartition,
+            ClassicalLibrary,
+            ExternalForces,
+            JointFrictionLibrary,
+        )
 
         libraries = [ExternalForces(self.coords, interlink=interlink),
                      PolynomialLagrangeLibrary(self.coords, list(self.lagrange_terms),
@@ -186,6 +206,10 @@ class KinematicCatalog:
         if classical and self.classical_terms:
             libraries.append(ClassicalLibrary(self.coords, list(self.classical_terms),
                                               mask=self.classical_mask.copy()))
+        if classical and self.friction_models:
+            libraries.append(JointFrictionLibrary(
+                self.coords, list(self.system.joint_names), list(self.joint_velocities),
+                self.system.force_matrix(), self.friction_models, *self.friction_scales))
         return CatalogRepartition(libraries)
 
     def true_coefficients(self, forces: float = -1.0) -> np.ndarray:
@@ -193,7 +217,8 @@ class KinematicCatalog:
 
         Viscous and spring terms get the MJCF damping and stiffness (mapped to the
         coordinates with ``B``); smooth Coulomb terms get MuJoCo's ``frictionloss`` (an
-        approximation: MuJoCo's dry friction is a constraint, not a smooth law).
+        approximation: MuJoCo's dry friction is a constraint, not a smooth law); the other
+        joint models (asymmetric, Stribeck, offset), which MJCF does not have, zero.
 
         Parameters
         ----------
@@ -209,7 +234,12 @@ class KinematicCatalog:
         >>> kinematic_catalog("cart-pole").true_coefficients().round(4)
         array([-1.  ,  1.5 ,  0.  , -0.4 ,  0.32,  0.5 ,  0.  ,  0.1 ,  0.  ])
         """
-        return np.concatenate([[forces], self.base_parameters, self.classical_values])
+        model = self.system.mj_model()
+        mjcf = {"viscous": model.dof_damping, "coulomb": model.dof_frictionloss}
+        joint_models = [float(mjcf[kind][model.jnt_dofadr[k]]) if kind in mjcf else 0.0
+                        for k in range(model.njnt) for kind in self.friction_models]
+        return np.concatenate([[forces], self.base_parameters, self.classical_values,
+                               joint_models])
 
     def lagrange_coefficients(self, model) -> np.ndarray:
         """Coefficients of :attr:`lagrange_terms` in a fitted model, force coefficient -1.
@@ -401,7 +431,8 @@ def _states(a, name: str, n: int) -> np.ndarray:
 
 # -- derivation ----------------------------------------------------------------------------
 def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
-                      seed: int = 0) -> KinematicCatalog:
+                      seed: int = 0, friction=None,
+                      stribeck_scale: float = 0.1) -> KinematicCatalog:
     """Candidate Lagrangian and Newtonian terms derived from the kinematic tree of a model.
 
     Every moving body contributes the ten functions of ``(q, qd)`` that multiply its inertial
@@ -418,9 +449,18 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
     coulomb : bool, default True
         Add a smooth Coulomb candidate ``tanh(qvel / coulomb_scale)`` per joint.
     coulomb_scale : float, default 0.01
-        Velocity scale of the smooth Coulomb law.
+        Velocity scale of the smooth Coulomb law (and of the joint models' smooth sign).
     seed : int, default 0
         Seed of the random states of the numerical reduction.
+    friction : sequence of str or "all", optional
+        Friction and sensor models of real joints offered for every joint, among
+        ``"viscous"``, ``"coulomb"``, ``"asymmetric"``, ``"stribeck"``, ``"offset"``
+        (:class:`~pysindy_xl.feature_library.JointFrictionLibrary`; ``"all"``: every one).
+        They replace the viscous and Coulomb candidates (``coulomb`` then does not apply),
+        and the default fit selects among them what each joint needs, the base parameters
+        unselected. Default: the viscous and Coulomb candidates above.
+    stribeck_scale : float, default 0.1
+        Velocity scale ``v_s`` of the Stribeck model ``tanh(v / eps) exp(-(v / v_s)^2)``.
 
     Returns
     -------
@@ -432,8 +472,8 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
     TypeError
         If ``system`` is not a system, path or MJCF text.
     ValueError
-        If the model has a joint other than hinge or slide, or ``coulomb_scale`` is not
-        positive.
+        If the model has a joint other than hinge or slide, a scale is not positive or
+        ``friction`` names an unknown model.
 
     Examples
     --------
@@ -454,10 +494,11 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
     6
     """
     system = resolve_system(system)
-    if isinstance(coulomb_scale, bool) or not isinstance(coulomb_scale, (int, float)) or not (
-        np.isfinite(coulomb_scale) and coulomb_scale > 0
-    ):
-        raise ValueError(f"coulomb_scale: expected a positive number, got {coulomb_scale!r}")
+    for name, value in (("coulomb_scale", coulomb_scale), ("stribeck_scale", stribeck_scale)):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
+                np.isfinite(value) and value > 0):
+            raise ValueError(f"{name}: expected a positive number, got {value!r}")
+    friction = _friction_models(friction)
     model = system.mj_model()
     if model.nq != system.n or model.nv != system.n:
         raise ValueError(f"system: MJCF has nq={model.nq}, nv={model.nv}; expected one hinge or "
@@ -468,18 +509,50 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
             raise ValueError(f"system: joint {system.joint_names[k]!r} is not a hinge or slide "
                              "joint; only those are supported")
     key = (hashlib.sha256(system.xml().encode()).hexdigest(), system.coordinate_names,
-           system.joint_to_coordinates.tobytes(), bool(coulomb), float(coulomb_scale), seed)
+           system.joint_to_coordinates.tobytes(), bool(coulomb), float(coulomb_scale), seed,
+           friction, float(stribeck_scale))
     if key in _CACHE:
         # same model text and coordinates: same catalog, but bound to the system given (its
         # other settings, e.g. force amplitudes, matter to whoever uses catalog.system)
         return dataclasses.replace(_CACHE[key], system=system)
     start = time.perf_counter()
     catalog = _build(system, model, bool(coulomb), float(coulomb_scale), seed)
+    if friction:
+        catalog = _with_joint_models(catalog, system, model, friction,
+                                     (float(coulomb_scale), float(stribeck_scale)))
     catalog.build_seconds = time.perf_counter() - start
     if len(_CACHE) >= _CACHE_SIZE:
         _CACHE.pop(next(iter(_CACHE)))
     _CACHE[key] = catalog
     return catalog
+
+
+def _friction_models(friction) -> tuple:
+    """``friction=`` as a tuple of model names in :data:`FRICTION_MODELS` order."""
+    if friction is None:
+        return ()
+    if isinstance(friction, str):
+        friction = FRICTION_MODELS if friction == "all" else (friction,)
+    try:
+        names = list(friction)
+    except TypeError:
+        names = [friction]
+    unknown = [f for f in names if f not in FRICTION_MODELS]
+    if unknown or not names:
+        raise ValueError(f"friction: expected 'all' or names among {FRICTION_MODELS}, got "
+                         f"{friction!r}")
+    return tuple(m for m in FRICTION_MODELS if m in names)
+
+
+def _with_joint_models(catalog, system, model, friction, scales) -> KinematicCatalog:
+    """The catalog with the joint models ``friction`` instead of its viscous and Coulomb
+    candidates (springs stay classical)."""
+    terms, mask, kinds, values = classical_candidates(system, model, False, scales[0],
+                                                      friction=False)
+    return dataclasses.replace(
+        catalog, classical_terms=terms, classical_mask=mask, classical_kinds=kinds,
+        classical_values=values, friction_models=friction, friction_scales=scales,
+        joint_velocities=joint_coordinates(system, model)[1])
 
 
 def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:

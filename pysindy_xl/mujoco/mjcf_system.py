@@ -9,6 +9,7 @@ import re
 import numpy as np
 
 from ._system_base import MuJoCoSystem, check_positive, import_mujoco
+from .urdf import is_urdf, urdf_spec
 
 __all__ = ["MJCFSystem"]
 
@@ -37,7 +38,9 @@ class MJCFSystem(MuJoCoSystem):
     Parameters
     ----------
     source : str or os.PathLike
-        Path to an MJCF file, or the MJCF text itself (a string starting with ``<``).
+        Path to an MJCF file or a URDF file (``.urdf``), or the MJCF or URDF text itself (a
+        string starting with ``<``). A URDF is read with its inertials and without its
+        meshes, with a motor on every joint (see :mod:`pysindy_xl.mujoco.urdf`).
     force_amplitude : float, default 1.0
         Amplitude of the random force of an actuator without ``ctrlrange``.
     joints : list of str, optional
@@ -51,7 +54,7 @@ class MJCFSystem(MuJoCoSystem):
     Attributes
     ----------
     path : str or None
-        Absolute path of the MJCF file (None for MJCF text).
+        Absolute path of the MJCF or URDF file (None for text).
     excluded_joints : tuple of str
         Joints locked by ``joints``.
     trimmed_keyframes : tuple of str
@@ -82,19 +85,30 @@ class MJCFSystem(MuJoCoSystem):
 
     def __init__(self, source, force_amplitude=1.0, joints=None):
         mujoco = import_mujoco()
+        self._urdf = is_urdf(source)
         if isinstance(source, os.PathLike) or (
             isinstance(source, str) and not source.lstrip().startswith("<")
         ):
             path = os.fspath(source)
             if not os.path.isfile(path):
-                raise ValueError(f"source: MJCF file {path!r} does not exist")
-            try:
-                model = mujoco.MjModel.from_xml_path(path)
-            except ValueError as error:
-                raise ValueError(f"source: cannot load MJCF file {path!r}: {error}") from None
+                raise ValueError(f"source: {'URDF' if self._urdf else 'MJCF'} file {path!r} "
+                                 "does not exist")
             with open(path, encoding="utf-8") as handle:
                 self._xml = handle.read()
+            if self._urdf:
+                self._urdf_text = self._xml
+                spec = urdf_spec(self._xml, f"source {path!r}")
+                model, self._xml = spec.compile(), spec.to_xml()
+            else:
+                try:
+                    model = mujoco.MjModel.from_xml_path(path)
+                except ValueError as error:
+                    raise ValueError(f"source: cannot load MJCF file {path!r}: {error}") \
+                        from None
             self.path = os.path.abspath(path)
+        elif isinstance(source, str) and self._urdf:
+            spec, self._urdf_text, self.path = urdf_spec(source), source, None
+            model, self._xml = spec.compile(), spec.to_xml()
         elif isinstance(source, str):
             try:
                 model = mujoco.MjModel.from_xml_string(source)
@@ -153,8 +167,8 @@ class MJCFSystem(MuJoCoSystem):
         if not hasattr(mujoco, "MjSpec"):
             raise ValueError(f"joints: selecting joints needs MuJoCo >= 3.3 (MjSpec), found "
                              f"{mujoco.__version__}")
-        spec = (mujoco.MjSpec.from_file(self.path) if self.path is not None
-                else mujoco.MjSpec.from_string(self._xml))
+        spec = (self._urdf_spec() if self._urdf else mujoco.MjSpec.from_file(self.path)
+                if self.path is not None else mujoco.MjSpec.from_string(self._xml))
         excluded = [name for name in names if name not in joints]
         kept_actuators = [spec_actuator.target not in excluded
                           for spec_actuator in spec.actuators]
@@ -253,7 +267,7 @@ class MJCFSystem(MuJoCoSystem):
         ['joints', 'model_path', 'model_xml']
         """
         text = self._xml
-        if "<include " in text and self.path is not None:
+        if "<include " in text and self.path is not None and not self._urdf:
             text = import_mujoco().MjSpec.from_file(self.path).to_xml()
         return {"model_path": self.path, "model_xml": text,
                 "joints": self._parameters.get("joints")}
@@ -338,9 +352,14 @@ class MJCFSystem(MuJoCoSystem):
         mujoco = import_mujoco()
         if self._spec is not None:
             return self._spec.compile()
+        if self._urdf:  # from the URDF's own numbers (the MJCF text rounds them)
+            return self._urdf_spec().compile()
         if self.path is not None:
             return mujoco.MjModel.from_xml_path(self.path)
         return mujoco.MjModel.from_xml_string(self._xml)
+
+    def _urdf_spec(self):
+        return urdf_spec(self._urdf_text, warn=False)
 
     def __repr__(self):
         return f"MJCFSystem({self._parameters['source']!r})"

@@ -79,7 +79,8 @@ def get_system(name, **parameters) -> MuJoCoSystem:
     name : str, os.PathLike or MuJoCoSystem
         ``"cart-pole"``, ``"double-pendulum"``, ``"cart-double-pendulum"``,
         ``"triple-pendulum"`` (underscores
-        accepted), a path to an ``.xml`` file, or a system (returned as is).
+        accepted), a path to an MJCF ``.xml`` or a URDF ``.urdf`` file, or a system (returned
+        as is).
     **parameters
         Passed to the system's constructor.
 
@@ -96,7 +97,8 @@ def get_system(name, **parameters) -> MuJoCoSystem:
         if parameters:
             raise ValueError("parameters: cannot be given together with a system instance")
         return name
-    if isinstance(name, os.PathLike) or (isinstance(name, str) and name.endswith(".xml")):
+    if isinstance(name, os.PathLike) or (
+            isinstance(name, str) and name.lower().endswith((".xml", ".urdf"))):
         return MJCFSystem(name, **parameters)
     if not isinstance(name, str):
         raise TypeError(f"name: expected a system name or an MJCF path, got {type(name).__name__}")
@@ -104,7 +106,7 @@ def get_system(name, **parameters) -> MuJoCoSystem:
     if key not in SYSTEMS:
         raise ValueError(
             f"name: unknown system {name!r}; expected one of {sorted(SYSTEMS)} or a path to an "
-            "MJCF .xml file"
+            "MJCF .xml or URDF .urdf file"
         )
     return SYSTEMS[key](**parameters)
 

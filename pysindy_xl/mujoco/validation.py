@@ -21,9 +21,9 @@ Drive: how the identified model is forced (``ValidationResult.drive``).
     their force limits.
 
 Faithfulness: the MuJoCo reference is integrated at a fine internal step (the model's
-``timestep / substeps``, ``substeps=4`` by default; RK4 where the model's implicit integrator
-would apply damping or servo gains at the end of the step, see
-:func:`~pysindy_xl.mujoco.generate.faithful_integrator`) with the control updated at every
+``timestep / substeps``, ``substeps=4`` by default or more where the integration that
+:func:`~pysindy_xl.mujoco.integration.choose_integration` picks, stable and faithful to the
+continuous equations, needs more) with the control updated at every
 internal step (read at the step's midpoint, a second-order hold); the identified model sees
 the same continuous controls. Sample times do not depend on ``substeps``.
 
@@ -63,7 +63,8 @@ from scipy.interpolate import CubicSpline
 from ..data.dataset import Trajectory
 from .actuation import actuator_law, start_on_reference
 from .forcing import FORCING_MODES, SumOfSinusoids
-from .generate import INTEGRATORS, actuator_signals, faithful_integrator, simulate_trajectory
+from .generate import actuator_signals, simulate_trajectory
+from .integration import choose_integration
 from .physics import compare_physics
 from .systems import get_system
 
@@ -319,15 +320,14 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
         Scale of the random initial state.
     substeps : int, default 4
         MuJoCo internal steps per model time step (a finer reference, see the module
-        docstring).
+        docstring); with ``integrator="auto"`` at least this many.
     backoff : bool, default True
         When a joint limit, contact or equality constraint acts, draw again with half the
         forcing amplitude and initial spread (at most three times) and keep the draw whose
         first constraint comes latest (``info["backoff"]`` records the factor).
     integrator : {"auto", "model", "Euler", "RK4", "implicit", "implicitfast"}, default "auto"
-        MuJoCo's integrator: ``"auto"`` is RK4 where the model's implicit step would bias the
-        reference against the continuous equations (see
-        :func:`~pysindy_xl.mujoco.generate.faithful_integrator`), the model's otherwise;
+        MuJoCo's integrator: ``"auto"`` is a stable integration faithful to the continuous
+        equations (see :func:`~pysindy_xl.mujoco.integration.choose_integration`);
         ``"model"`` keeps the authored one.
     **signal_options
         ``n_components``, ``max_frequency``, ``amplitude_scale``, ``amplitude`` of the random
@@ -352,11 +352,7 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
         raise ValueError(f"forcing: expected one of {FORCING_MODES}, got {forcing!r}")
     rng = np.random.default_rng(seed)
     model = system.mj_model()
-    if integrator not in ("auto", "model", *INTEGRATORS):
-        raise ValueError(f"integrator: expected one of {('auto', 'model', *INTEGRATORS)}, got "
-                         f"{integrator!r}")
-    integrator = {"auto": faithful_integrator(model), "model": None}.get(integrator,
-                                                                        integrator)
+    integration = choose_integration(model, integrator, substeps)
     best, best_start, factor = None, -1, 1.0
     for _ in range(4 if backoff else 1):
         q0, qd0 = system.random_initial_state(rng, scale=initial_scale * factor)
@@ -364,8 +360,7 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
                                    **signal_options)
         q0, qd0 = start_on_reference(system, signals, q0, qd0)
         trajectory = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
-                                         substeps=substeps, control_at="midpoint",
-                                         integrator=integrator)
+                                         control_at="midpoint", integrator=integration)
         trajectory.info.setdefault("signals", None)  # the controls are known: zero
         active = trajectory.constraint_active
         start = int(np.argmax(active)) if active.any() else len(active)
@@ -479,6 +474,12 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
         raise ValueError(f"force_input: expected 'tau' or 'u', got {force_input!r}")
     forces = getattr(trajectory, force_input)
     n = trajectory.q.shape[1]
+    n_model = getattr(model, "n_coordinates_", n)  # any model with simulate: trusted
+    if n_model != n:
+        raise ValueError(
+            f"model: identified on {n_model} coordinates, but the reference has {n}"
+            f"{'' if names is None else ' ' + str(list(names))}; validate a model on the "
+            "system it was identified on")
     if forces is None:
         forces = np.zeros((trajectory.n_samples, n))
     if drive not in DRIVES:

@@ -22,7 +22,8 @@ SOLVER_KINDS = ("explicit", "implicit", "mixed")
 
 
 def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
-                      complete: bool = False, physical: bool = False):
+                      complete: bool = False, physical: bool = False,
+                      selective: bool = False):
     """The default catalog optimizer for the data (or of a given kind).
 
     * every coordinate forced: explicit regression; on estimated columns bagged,
@@ -45,7 +46,12 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
       ``PhysicalOptimizer(explicit)``. A consistent estimate is kept as it is; an
       inconsistent one (an indefinite mass matrix, a negative mass or friction, most often
       on noisy data and barely excited parameters) is projected onto the consistent set,
-      which holds the truth, so the estimate comes no farther from it.
+      which holds the truth, so the estimate comes no farther from it;
+    * explicit regression on a catalog with candidate friction and sensor models per joint
+      (``selective``: a kinematic catalog built with ``friction=``): the selection is
+      restricted to those columns, ``ExplicitOptimizer(select="friction")`` (bagged on
+      estimated columns), refitted physically as above. The base parameters keep the
+      no-selection default; the fit decides which friction models each joint needs.
 
     Parameters
     ----------
@@ -62,6 +68,9 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
     physical : bool, default False
         The catalog's terms stand for rigid-body parameters (``library.physical_structure()``
         is not None).
+    selective : bool, default False
+        The catalog has joint models to select among (its physical structure's
+        ``selectable_columns``).
 
     Returns
     -------
@@ -85,7 +94,10 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
         raise ValueError(f"kind: expected one of {SOLVER_KINDS}, got {kind!r}")
     explicit = EnsembleOptimizer(ExplicitOptimizer()) if estimated else ExplicitOptimizer()
     if kind == "explicit":
-        if complete and estimated:  # every parameter estimated
+        if selective:  # only the joint models are selected
+            explicit = ExplicitOptimizer(select="friction")
+            explicit = EnsembleOptimizer(explicit) if estimated else explicit
+        elif complete and estimated:  # every parameter estimated
             explicit = EnsembleOptimizer(ExplicitOptimizer(threshold=0.0))
         return PhysicalOptimizer(explicit) if physical else explicit
     if kind == "implicit":

@@ -25,7 +25,7 @@ __all__ = [
 _METHODS = ("threshold", "lasso", "lassocv", "proximal")
 
 
-def hard_threshold_regression(x, y, threshold: float = 0.01, max_iter: int = 100):
+def hard_threshold_regression(x, y, threshold: float = 0.01, max_iter: int = 100, keep=None):
     """Least squares with iterative pruning by the paper's condition value.
 
     At each iteration the active columns are fitted by least squares, and a column is pruned
@@ -40,6 +40,8 @@ def hard_threshold_regression(x, y, threshold: float = 0.01, max_iter: int = 100
         Relative condition value below which a term is pruned, in [0, 1).
     max_iter : int
         Maximal number of prune-and-refit rounds.
+    keep : array of bool, shape (F,), optional
+        Columns never pruned.
 
     Returns
     -------
@@ -56,6 +58,7 @@ def hard_threshold_regression(x, y, threshold: float = 0.01, max_iter: int = 100
     """
     scale = np.sqrt(np.mean(x**2, axis=0))
     active = np.flatnonzero(scale > 0)
+    fixed = np.zeros(x.shape[1], dtype=bool) if keep is None else np.asarray(keep, dtype=bool)
     coef = np.zeros(x.shape[1])
     for _ in range(max_iter):
         if len(active) == 0:
@@ -64,6 +67,7 @@ def hard_threshold_regression(x, y, threshold: float = 0.01, max_iter: int = 100
         sol = np.linalg.lstsq(xs, y, rcond=None)[0]
         condition = np.abs(sol)
         keep = condition >= threshold * condition.max() if condition.max() > 0 else condition > 0
+        keep |= fixed[active]
         coef[:] = 0.0
         coef[active] = sol / scale[active]
         if keep.all():
@@ -218,6 +222,13 @@ class ExplicitOptimizer(CatalogOptimizer):
         After an L1 method or a custom estimator, refit by least squares on the selected
         support (removes the L1 shrinkage bias), pruned again with ``threshold``.
     max_iter : int, default 1000
+    select : {"all", "friction"}, default "all"
+        Which columns the pruning may drop. ``"all"``: any. ``"friction"``: only the joint
+        friction and sensor-offset columns of the problem's physical structure
+        (``selectable_columns``, a kinematic catalog built with ``friction=``); every other
+        column (the base parameters of rigid bodies, which every arm has) stays in the
+        model, so the fit decides which friction models each joint needs and nothing else.
+        Without such columns nothing is selected. Needs ``method="threshold"``.
 
     Attributes
     ----------
@@ -245,12 +256,13 @@ class ExplicitOptimizer(CatalogOptimizer):
     spec_type = "ExplicitOptimizer"
 
     def __init__(self, method="threshold", threshold="auto", alpha=1e-4, refit=True,
-                 max_iter=1000):
+                 max_iter=1000, select="all"):
         self.method = method
         self.threshold = threshold
         self.alpha = alpha
         self.refit = refit
         self.max_iter = max_iter
+        self.select = select
 
     def _check_params(self):
         if isinstance(self.method, str):
@@ -265,6 +277,11 @@ class ExplicitOptimizer(CatalogOptimizer):
         check_option("alpha", self.alpha, "real", low=0)
         check_option("refit", self.refit, "bool")
         check_option("max_iter", self.max_iter, "int", low=1)
+        check_option("select", self.select, "choice", choices=("all", "friction"))
+        if self.select == "friction" and not (isinstance(self.method, str)
+                                              and self.method == "threshold"):
+            raise ValueError(f"select: 'friction' needs method='threshold', got method="
+                             f"{self.method!r}")
 
     def fit(self, X, y):
         """Solve ``X @ coef_ = y`` sparsely.
@@ -280,7 +297,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         """
         return self._fit(X, y, n_blocks=1)
 
-    def _fit(self, X, y, n_blocks, noise_moments=None):
+    def _fit(self, X, y, n_blocks, noise_moments=None, keep=None):
         self._check_params()
         X = check_numeric_array(X, "X", finite=False, min_samples=0)
         y = check_numeric_array(y, "y", finite=False, min_samples=0)
@@ -298,20 +315,22 @@ class ExplicitOptimizer(CatalogOptimizer):
         self.selection_ = None
         self.noise_share_ = None if noise_moments is None else 0.0
         self.n_features_in_ = X.shape[1]
-        self.coef_ = self._sparse_coefficients(X, y, n_blocks, noise_moments)
+        self.coef_ = self._sparse_coefficients(X, y, n_blocks, noise_moments, keep)
         self.support_ = self.coef_ != 0
         return self
 
-    def _prune(self, X, y, n_blocks, noise_moments=None):
-        """Sparse least squares on the columns of X with the configured pruning rule."""
+    def _prune(self, X, y, n_blocks, noise_moments=None, keep=None):
+        """Sparse least squares on the columns of X with the configured pruning rule
+        (``keep``: a mask of columns never pruned)."""
         if self.threshold != "auto":
-            return hard_threshold_regression(X, y, self.threshold, int(self.max_iter))
+            return hard_threshold_regression(X, y, self.threshold, int(self.max_iter), keep)
         n_rows = X.shape[0]
         per_block = n_rows // n_blocks if n_rows % n_blocks == 0 else n_rows
         blocks = n_blocks if n_rows % n_blocks == 0 else 1
         if per_block < 10:  # too few rows to hold any out
-            return hard_threshold_regression(X, y, 0.01, int(self.max_iter))
-        self.selection_ = select_support(X, y, n_blocks=blocks)
+            return hard_threshold_regression(X, y, 0.01, int(self.max_iter), keep)
+        self.selection_ = select_support(
+            X, y, n_blocks=blocks, keep=None if keep is None else np.flatnonzero(keep))
         support = self.selection_.support
         coef = np.zeros(X.shape[1])
         moments = None if noise_moments is None else noise_moments[np.ix_(support, support)]
@@ -320,9 +339,9 @@ class ExplicitOptimizer(CatalogOptimizer):
             self.noise_share_ = share
         return coef
 
-    def _sparse_coefficients(self, X, y, n_blocks=1, noise_moments=None):
+    def _sparse_coefficients(self, X, y, n_blocks=1, noise_moments=None, keep=None):
         if self.method == "threshold":
-            return self._prune(X, y, n_blocks, noise_moments)
+            return self._prune(X, y, n_blocks, noise_moments, keep)
         scale = np.sqrt(np.mean(X**2, axis=0))
         active = scale > 0
         xs = X[:, active] / scale[active]
@@ -378,9 +397,14 @@ class ExplicitOptimizer(CatalogOptimizer):
         (:func:`corrected_least_squares`; ``noise_share_`` says how large they were).
         """
         rest, force, moments = explicit_regression(problem)
+        keep = None
+        if self.select == "friction":  # only the joint models may leave
+            selectable = (problem.physical.selectable_columns if problem.physical is not None
+                          else np.zeros(0, dtype=int))
+            keep = ~np.isin(rest, selectable)
         # cross-validation folds stay inside each coordinate's block of rows
         self._fit(problem.theta[:, rest], force, n_blocks=problem.n_coordinates,
-                  noise_moments=moments)
+                  noise_moments=moments, keep=keep)
         return self._as_catalog_vector(self.coef_, rest, problem)
 
     def _solve_support(self, problem, support):

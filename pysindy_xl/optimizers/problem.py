@@ -164,7 +164,8 @@ class CatalogProblem:
             if not isinstance(physical, PhysicalStructure):
                 raise TypeError(f"physical: expected a PhysicalStructure, got "
                                 f"{type(physical).__name__}")
-            used = np.concatenate([physical.base_columns, physical.friction_columns])
+            used = np.concatenate([physical.base_columns, physical.friction_columns,
+                                   physical.selectable_columns])
             if np.any((used < 0) | (used >= n_features)):
                 raise ValueError(f"physical: column indices must lie in [0, {n_features})")
         return cls(theta, n, force_columns, noise_moments, mass_matrices, bool(balance),

@@ -401,7 +401,7 @@ class SelectionResult(ChosenSupport):
 
 
 def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
-                   resolution: float = 1e-8, swaps: bool = True) -> SelectionResult:
+                   resolution: float = 1e-8, swaps: bool = True, keep=None) -> SelectionResult:
     """Sparsest model within one standard error of the best held-out error.
 
     Candidates are the nested models of the backward and forward paths and, with ``swaps``,
@@ -425,6 +425,10 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
         changes the error by 1e-6, far above it.
     swaps : bool, default True
         Refine the path models by single swaps.
+    keep : array of int, optional
+        Columns in every model: the paths order the other columns given these (least
+        squares with ``keep`` profiled out), and only models holding all of them are
+        candidates.
 
     Returns
     -------
@@ -440,17 +444,23 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     [0, 3, 6]
     >>> select_support(x, y + 0.3 * rng.normal(size=400)).support.tolist()    # noisy: drops it
     [0, 6]
+    >>> select_support(x, y + 0.3 * rng.normal(size=400), keep=[3]).support.tolist()
+    [0, 3, 6]
     """
     # candidate models: (size, held-out mean, its standard error, how found, column order)
     candidates, seen, paths = [], set(), []
     # shared by both paths, their scoring and the swaps: one reduction of all the rows and
     # one of each fold's training rows
     reduced, folds = _systems(x, y, n_blocks, n_folds)
+    keep = np.unique(np.asarray([] if keep is None else keep, dtype=int))
+    free, local = _profiled(reduced, keep)
     for path in ("backward", "forward"):
-        order = (_elimination_order if path == "backward" else _forward_order)(*reduced)
+        order = np.concatenate([keep, free[(_elimination_order if path == "backward"
+                                            else _forward_order)(*local)]]).astype(int)
         if max_size is not None:
-            order = order[: int(max_size)]
+            order = order[: max(int(max_size), len(keep))]
         mean, spread = fold_summary(_nested_errors(folds, order, n_folds))
+        mean[: max(len(keep) - 1, 0)] = np.inf  # models without every kept column
         paths.append((path, order, mean))
         for k in np.flatnonzero(np.isfinite(mean)):
             key = frozenset(order[: k + 1].tolist())
@@ -468,7 +478,8 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
         # the choice is the smallest candidate within the tolerance, so only refinements no
         # larger than the path models' own choice can change it
         path_choice = min(c[0] for c in candidates if c[1] <= best[1] + tolerance)
-        candidates += _swap_candidates(reduced, folds, paths, seen, path_choice, n_folds)
+        candidates += _swap_candidates(local, folds, paths, seen, path_choice, n_folds,
+                                       keep, free)
     size, mean, _, how, order = min((c for c in candidates if c[1] <= best[1] + tolerance),
                                     key=lambda c: (c[0], c[1]))
     n_sizes = max(c[0] for c in candidates)
@@ -491,10 +502,33 @@ def fold_summary(errors):
     return mean, spread
 
 
-def _swap_candidates(reduced, folds, paths, seen, limit, n_folds):
+def _profiled(reduced, keep):
+    """The columns besides ``keep`` and the reduced system (:func:`_reduced`) of their
+    least squares with the ``keep`` columns profiled out (both sides projected off their
+    span): the paths and swaps of the other columns given ``keep``."""
+    active, xs, y = reduced
+    free = np.setdiff1d(np.arange(xs.shape[1]), keep)
+    if not len(keep):
+        return free, reduced
+    basis = np.linalg.qr(xs[:, keep])[0]
+    rest = xs[:, free] - basis @ (basis.T @ xs[:, free])
+    left = np.sum(rest**2, axis=0) > 1e-20 * np.maximum(np.sum(xs[:, free] ** 2, axis=0),
+                                                        1e-300)
+    return free, (active[free] & left, rest, y - basis @ (basis.T @ y))
+
+
+def _swap_candidates(reduced, folds, paths, seen, limit, n_folds, keep=(), free=None):
     """Swap refinements of the path models of at most ``limit`` terms, scored by CV on the
-    ``folds`` (:func:`_fold_systems`); ``reduced``: the system of :func:`_reduced`."""
+    ``folds`` (:func:`_fold_systems`); ``reduced``: the system of :func:`_reduced` (of the
+    ``free`` columns with ``keep`` profiled out, :func:`_profiled`: only free columns are
+    exchanged, the kept ones stay in every model)."""
     active, xs, y_reduced = reduced
+    n_keep = len(keep)
+    if n_keep:
+        position = {int(c): k for k, c in enumerate(free)}
+        paths = [(path, np.array([position[int(c)] for c in order[n_keep:]], dtype=int),
+                  mean[n_keep:]) for path, order, mean in paths]
+        limit -= n_keep
     refined, visited = [], set()  # starts already refined and local optima reached
     for path, order, mean in paths:
         sizes = [k for k in range(1, min(limit, len(order)) + 1) if np.isfinite(mean[k - 1])]
@@ -511,11 +545,13 @@ def _swap_candidates(reduced, folds, paths, seen, limit, n_folds):
                 rss, swapped = first[k]
                 support = _swap_search(xs, y_reduced, active, swapped, max_swaps=49, rss=rss,
                                        previous=order[:k])
+            visited.update((start, frozenset(support.tolist())))
+            rest = order[~np.isin(order, support)]
+            if n_keep:  # back to the columns of the folds
+                support, rest = np.concatenate([keep, free[support]]), free[rest]
             key = frozenset(support.tolist())
-            visited.update((start, key))
             if key not in seen:
                 seen.add(key)
-                rest = order[~np.isin(order, support)]
                 refined.append((path, support, np.concatenate([support, rest])))
     if not refined:
         return []

@@ -29,6 +29,8 @@ __all__ = ["INERTIAL_PARAMETERS", "PhysicalStructure", "catalog_structure", "fri
 #: The inertial parameters of one body, in this order: mass, first moments ``m c``, inertia
 #: about the body frame's origin (diagonal, then products).
 INERTIAL_PARAMETERS = ("m", "mcx", "mcy", "mcz", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
+#: Joint models whose coefficient is a dissipation (non-negative in a consistent model).
+DISSIPATIVE = ("viscous", "coulomb")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -53,6 +55,11 @@ class PhysicalStructure:
         Indices into ``names`` of the armatures (non-negative).
     friction_columns : ndarray of int
         Columns whose coefficients are viscous or dry friction (non-negative).
+    selectable_columns : ndarray of int
+        Columns of joint friction and sensor models (a
+        :class:`~pysindy_xl.feature_library.JointFrictionLibrary`'s) that a fit may leave out
+        (``ExplicitOptimizer(select="friction")``); the other columns stand for parameters
+        every rigid-body model has.
 
     Examples
     --------
@@ -71,9 +78,12 @@ class PhysicalStructure:
     body_indices: np.ndarray
     armature: np.ndarray
     friction_columns: np.ndarray
+    selectable_columns: np.ndarray = dataclasses.field(
+        default_factory=lambda: np.zeros(0, dtype=int))
 
     @classmethod
-    def from_maps(cls, maps, base_columns, friction_columns=()) -> PhysicalStructure:
+    def from_maps(cls, maps, base_columns, friction_columns=(),
+                  selectable_columns=()) -> PhysicalStructure:
         """The structure of base parameters given as ``{physical name: weight}`` maps.
 
         Parameters
@@ -83,6 +93,7 @@ class PhysicalStructure:
         base_columns : sequence of int
             The column of each map.
         friction_columns : sequence of int
+        selectable_columns : sequence of int
 
         Returns
         -------
@@ -103,7 +114,8 @@ class PhysicalStructure:
                    np.arange(10 * len(bodies), dtype=int).reshape(len(bodies), 10),
                    np.array([k for k, name in enumerate(names)
                              if name.endswith(".armature")], dtype=int),
-                   np.asarray(friction_columns, dtype=int).reshape(-1))
+                   np.asarray(friction_columns, dtype=int).reshape(-1),
+                   np.asarray(selectable_columns, dtype=int).reshape(-1))
 
     @classmethod
     def from_combination(cls, names, combination) -> PhysicalStructure:
@@ -146,7 +158,9 @@ class PhysicalStructure:
                                         dtype=int),
             combination=self.combination[rows],
             friction_columns=np.array([position[int(c)] for c in self.friction_columns
-                                       if int(c) in position], dtype=int))
+                                       if int(c) in position], dtype=int),
+            selectable_columns=np.array([position[int(c)] for c in self.selectable_columns
+                                         if int(c) in position], dtype=int))
 
     def nearest_consistent(self, pi) -> np.ndarray:
         """``pi`` with every body's pseudo-inertia projected onto the positive semidefinite
@@ -246,18 +260,33 @@ def catalog_structure(library) -> PhysicalStructure | None:
         columns += list(range(block.start, block.start + lib.n_output_features_))
     if not maps:
         return None
-    return PhysicalStructure.from_maps(maps, columns, friction_columns(library))
+    return PhysicalStructure.from_maps(maps, columns, friction_columns(library),
+                                       joint_model_columns(library))
+
+
+def joint_model_columns(library, models=None) -> list:
+    """Columns of a fitted catalog's joint friction and sensor models
+    (:class:`~pysindy_xl.feature_library.JointFrictionLibrary`), of the given ``models``
+    only when given."""
+    out = []
+    for lib, block in zip(library.libraries_, library.slices_, strict=True):
+        for k, (model, _) in enumerate(getattr(lib, "kinds_", None) or ()):
+            if models is None or model in models:
+                out.append(block.start + k)
+    return out
 
 
 def friction_columns(library) -> list:
-    """Columns of a fitted catalog that are viscous or dry friction of one coordinate."""
-    out = []
+    """Columns of a fitted catalog that are viscous or dry friction: of one coordinate
+    (``qd_c``, ``tanh(k qd_c)``) or of a joint (a joint model's viscous or Coulomb column)."""
+    joint_models = joint_model_columns(library)
+    out = joint_model_columns(library, DISSIPATIVE)
     coords = library.coords
     for j, category in enumerate(library.categories_):
-        if category != "classical":
+        if category != "classical" or j in joint_models:
             continue
         entering = [i for i in range(coords.n) if library.symbolic_matrix_[i, j] != 0]
         if len(entering) == 1 and friction_kind(library.feature_terms_[j],
                                                 coords.qd[entering[0]]):
             out.append(j)
-    return out
+    return sorted(out)

@@ -1,0 +1,92 @@
+"""The verdict of ``pysindy-xl identify`` on a robot log: held-out torque prediction.
+
+A real arm runs under feedback control, so an open-loop replay of the identified model under
+the logged torques diverges whatever the model; the verdict on a log is how well the model
+predicts the torques of data it never saw (:mod:`pysindy_xl.held_out`): a validation file
+(``--validate TEST``), else time-blocked cross-validation of the training log (one run: ``k``
+contiguous blocks; several runs: each run in turn).
+"""
+
+from __future__ import annotations
+
+import os
+
+from .steps import CLIError, dataset_for
+
+
+def wants_verdict(args, forced: bool) -> bool:
+    """Whether ``identify`` scores held-out torques: with ``--validate``, or on a log with
+    forces identified against a ``--system`` (unless ``--cv-blocks 0``)."""
+    if getattr(args, "validate", None):
+        if not forced:
+            raise CLIError("--validate: the training data have no forces; held-out torque "
+                           "prediction needs them (tau_NAME columns)")
+        return True
+    return forced and bool(args.system) and getattr(args, "cv_blocks", 0) >= 2
+
+
+def _units(system, names) -> list:
+    angles = set(getattr(system, "angle_coordinates", ()))
+    return ["N m" if k in angles else "N" for k in range(len(names))]
+
+
+def validation_dataset(args, system, load):
+    """The ``--validate`` files read like DATA and mapped to the system's coordinates, as one
+    dataset (their runs side by side)."""
+    from pysindy_xl.data import Dataset
+
+    trajectories, names = [], None
+    for path in args.validate:
+        dataset = load(path)
+        if getattr(system, "coordinate_names", None) and dataset.n == system.n:
+            dataset = dataset_for(system, dataset)
+        if names is not None and dataset.coordinate_names != names:
+            raise CLIError(f"--validate: {path!r} has coordinates {list(dataset.coordinate_names)}"
+                           f", the other files {list(names)}")
+        if not dataset.has("tau"):
+            raise CLIError(f"--validate: {path!r} has no forces (tau_NAME columns); held-out "
+                           "torque prediction needs them")
+        names = dataset.coordinate_names
+        trajectories += dataset.trajectories
+    return Dataset(trajectories, names)
+
+
+def held_out_verdict(args, model, system, arguments, load, progress):
+    """Score the model on ``--validate`` data or by blocked cross-validation; print the lines.
+
+    Returns
+    -------
+    ForceScore
+    """
+    from pysindy_xl.held_out import blocked_cross_validation
+
+    if args.validate:
+        data = validation_dataset(args, system, load)
+        if tuple(data.coordinate_names) != tuple(model.feature_library_.coords.names):
+            raise CLIError(f"--validate: coordinates {list(data.coordinate_names)} do not match "
+                           f"the model's {list(model.feature_library_.coords.names)}")
+        held = data.fit_arguments(forces="tau", constraints="include")
+        progress(f"predicting the torques of {', '.join(args.validate)}")
+        score = model.score_forces(held["x"], held["t"], held["u"], held["x_dot"],
+                                   held["x_ddot"])
+        n_runs = len(held["x"])
+        where = (f"on {', '.join(os.path.basename(p) for p in args.validate)} ({n_runs} "
+                 f"run{'s' if n_runs > 1 else ''}, {score.n_samples} samples)")
+    else:
+        runs = len(arguments["x"])
+        folds = runs if runs > 1 else args.cv_blocks
+        progress(f"time-blocked cross-validation: {folds} fits of the model, each on the data "
+                 "without one " + ("run" if runs > 1 else "block"))
+        try:
+            score = blocked_cross_validation(
+                model, arguments["x"], arguments["t"], arguments["u"], arguments["x_dot"],
+                arguments["x_ddot"], n_blocks=args.cv_blocks)
+        except (ValueError, RuntimeError) as error:
+            raise CLIError(f"--cv-blocks: cross-validation failed ({error})") from None
+        where = ("by leave-one-run-out cross-validation of the training runs" if runs > 1 else
+                 f"by time-blocked cross-validation ({args.cv_blocks} contiguous blocks of the "
+                 "run, each predicted by the model refitted on the others)")
+    print(f"held-out torque prediction {where}; derivatives: {score.derivatives}:")
+    for line in score.lines(_units(system, score.names)):
+        print(line)
+    return score

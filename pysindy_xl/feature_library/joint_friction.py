@@ -1,0 +1,255 @@
+r"""Friction and sensor models of real joints, linear in their parameters.
+
+Real joints do not follow symmetric viscous + Coulomb friction, and joint-torque sensors read
+with an offset. Each joint ``k`` of velocity ``v = qvel_k`` (in the coordinates) may carry any
+of these terms, every one a fixed function of ``v`` times an unknown coefficient, so that the
+regression stays linear (``eps`` and ``v_s`` are fixed velocity scales):
+
+==============  ================================================  =============================
+model           function of the joint velocity ``v``              coefficient
+==============  ================================================  =============================
+``viscous``     ``v``                                             viscous friction ``f_v``
+``coulomb``     ``tanh(v / eps)``                                 Coulomb friction ``f_c``
+``asymmetric``  ``tanh(v / eps)^2``                               direction dependence ``f_a``
+``stribeck``    ``tanh(v / eps) exp(-(v / v_s)^2)``               Stribeck excess ``f_s``
+``offset``      ``1``                                             torque-sensor offset ``o``
+==============  ================================================  =============================
+
+The joint's torque ``f_v v + f_c tanh + f_a tanh^2 + f_s tanh exp(..) + o`` acts on the
+coordinates as ``weights[:, k]`` times it (``B = T^-T`` for coordinates ``q = T qpos``), so
+each (joint, model) pair is one column and one coefficient, in the joint's own units.
+
+*Asymmetric Coulomb friction*: moving in the positive direction the friction is
+``f_c + f_a``, in the negative direction ``-(f_c - f_a)``, and zero at rest: separate
+positive- and negative-direction magnitudes ``f_c +- f_a``, still linear. A constant
+(``offset``) differs from the asymmetry only at rest (``|v| < eps``): away from zero
+velocity an asymmetric Coulomb friction and a torque offset are the same torque, and the data
+tell them apart only through their samples near zero velocity.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from ..expressions import format_expression
+from ..symbols import Coordinates
+from ._base import SymbolicLibrary
+
+__all__ = ["FRICTION_MODELS", "JointFrictionLibrary", "friction_function"]
+
+#: The joint models, in the order of a joint's columns.
+FRICTION_MODELS = ("viscous", "coulomb", "asymmetric", "stribeck", "offset")
+
+
+def friction_function(model: str, velocity, coulomb_scale: float, stribeck_scale: float):
+    """The function of a joint velocity that ``model``'s coefficient multiplies.
+
+    Parameters
+    ----------
+    model : str
+        One of :data:`FRICTION_MODELS`.
+    velocity : sympy.Expr
+        The joint's velocity in the coordinates.
+    coulomb_scale, stribeck_scale : float
+        ``eps`` and ``v_s`` of the module docstring.
+
+    Returns
+    -------
+    sympy.Expr
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> v = sp.Symbol("v")
+    >>> friction_function("stribeck", v, 0.01, 0.1)
+    exp(-100.0*v**2)*tanh(100.0*v)
+    """
+    sign = sp.tanh(velocity / sp.Float(coulomb_scale))
+    if model == "viscous":
+        return velocity
+    if model == "coulomb":
+        return sign
+    if model == "asymmetric":
+        return sign**2
+    if model == "stribeck":
+        return sign * sp.exp(-(velocity / sp.Float(stribeck_scale)) ** 2)
+    if model == "offset":
+        return sp.Integer(1)
+    raise ValueError(f"models: expected names among {FRICTION_MODELS}, got {model!r}")
+
+
+def _positive(value, name) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) or not (
+            np.isfinite(value) and value > 0):
+        raise ValueError(f"{name}: expected a positive number, got {value!r}")
+    return float(value)
+
+
+class JointFrictionLibrary(SymbolicLibrary):
+    """Friction and sensor-offset candidates of each joint (see the module docstring).
+
+    One column per (joint, model): the model's function of the joint velocity, entering
+    the equations as ``weights[:, k]`` times it. A fit that restricts its selection to
+    these columns (``ExplicitOptimizer(select="friction")``, the default for a kinematic
+    catalog built with ``friction=``) decides which model each joint needs.
+
+    Parameters
+    ----------
+    coords : Coordinates
+    joints : sequence of str
+        Joint names.
+    velocities : sequence of sympy.Expr, optional
+        Each joint's velocity in the coordinates; default ``coords.qd`` (one joint per
+        coordinate).
+    weights : array (n, len(joints)), optional
+        The generalized force of a unit joint torque; default the identity.
+    models : sequence of str, default ("viscous", "coulomb", "asymmetric", "stribeck", "offset")
+        The candidate models of every joint (names of :data:`FRICTION_MODELS`).
+    coulomb_scale : float, default 0.01
+        ``eps``: velocity scale of the smooth sign.
+    stribeck_scale : float, default 0.1
+        ``v_s``: velocity scale of the Stribeck decay.
+
+    Attributes
+    ----------
+    kinds_ : list of (str, str)
+        ``(model, joint)`` of each feature.
+    joints_ : list of str
+    weights_ : ndarray, shape (n, len(joints_))
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> c = px.Coordinates(["a"])
+    >>> lib = JointFrictionLibrary(c, ["hinge"], models=("viscous", "coulomb", "offset")).fit()
+    >>> lib.get_feature_names()
+    ['J_hinge.viscous[a_dot]', 'J_hinge.coulomb[tanh(100.0*a_dot)]', 'J_hinge.offset[1]']
+    """
+
+    category = "classical"
+    column_rank = 2
+    spec_type = "JointFrictionLibrary"
+
+    def __init__(self, coords: Coordinates, joints, velocities=None, weights=None,
+                 models=FRICTION_MODELS, coulomb_scale=0.01, stribeck_scale=0.1):
+        self.coords = coords
+        self.joints = joints
+        self.velocities = velocities
+        self.weights = weights
+        self.models = models
+        self.coulomb_scale = coulomb_scale
+        self.stribeck_scale = stribeck_scale
+
+    def _resolved(self):
+        joints = list(self.joints) if not isinstance(self.joints, str) else None
+        if not joints or not all(isinstance(j, str) and j for j in joints) or len(
+                set(joints)) != len(joints):
+            raise ValueError(f"joints: expected distinct non-empty names, got {self.joints!r}")
+        n = self.coords.n
+        velocities = list(self.coords.qd) if self.velocities is None else [
+            sp.sympify(v) for v in self.velocities]
+        if len(velocities) != len(joints):
+            raise ValueError(f"velocities: expected one per joint ({len(joints)}), got "
+                             f"{len(velocities)}")
+        allowed = set(self.coords.qd)
+        for v in velocities:
+            if not v.free_symbols or not v.free_symbols <= allowed:
+                raise ValueError(f"velocities: {v} is not a function of the velocities "
+                                 f"{[str(s) for s in self.coords.qd]}")
+        weights = np.eye(n) if self.weights is None else np.asarray(self.weights, dtype=float)
+        if weights.shape != (n, len(joints)) or not np.all(np.isfinite(weights)):
+            raise ValueError(f"weights: expected finite numbers of shape {(n, len(joints))}, "
+                             f"got shape {np.shape(self.weights)}")
+        models = [self.models] if isinstance(self.models, str) else list(self.models)
+        unknown = [m for m in models if m not in FRICTION_MODELS]
+        if not models or unknown or len(set(models)) != len(models):
+            raise ValueError(f"models: expected distinct names among {FRICTION_MODELS}, got "
+                             f"{self.models!r}")
+        models = [m for m in FRICTION_MODELS if m in models]  # a fixed order
+        scales = (_positive(self.coulomb_scale, "coulomb_scale"),
+                  _positive(self.stribeck_scale, "stribeck_scale"))
+        return joints, velocities, weights, models, scales
+
+    def _build_symbolic(self):
+        joints, velocities, weights, models, scales = self._resolved()
+        names, columns, kinds, terms = [], [], [], []
+        for k, (joint, velocity) in enumerate(zip(joints, velocities, strict=True)):
+            for model in models:
+                term = friction_function(model, velocity, *scales)
+                names.append(f"J_{joint}.{model}[{term}]")
+                columns.append([sp.Float(w) * term if w != 1 else term
+                                for w in weights[:, k]])
+                kinds.append((model, joint))
+                terms.append(term)
+        self.kinds_, self._terms, self.weights_ = kinds, terms, weights
+        self.joints_ = joints
+        matrix = sp.zeros(self.coords.n, len(names))
+        for j, column in enumerate(columns):
+            for i, entry in enumerate(column):
+                matrix[i, j] = entry
+        return names, matrix
+
+    def _feature_terms(self):
+        return list(self._terms)
+
+    def coefficients_by_joint(self, coef) -> dict:
+        """``{joint: {model: coefficient}}`` of this library's coefficients (its columns).
+
+        Parameters
+        ----------
+        coef : array, shape (n_output_features_,)
+
+        Returns
+        -------
+        dict
+        """
+        out = {}
+        for (model, joint), value in zip(self.kinds_, np.asarray(coef, dtype=float),
+                                         strict=True):
+            out.setdefault(joint, {})[model] = float(value)
+        return out
+
+    def coordinate_of(self, joint: str) -> str | None:
+        """The coordinate that ``joint`` is (its torque that coordinate's force, weight 1),
+        None when its torque reaches several coordinates or with another weight."""
+        column = self.weights_[:, self.joints_.index(joint)]
+        reached = np.flatnonzero(column)
+        if len(reached) == 1 and column[reached[0]] == 1:
+            return self.coords.names[reached[0]]
+        return None
+
+    def to_spec(self) -> dict:
+        """JSON-serializable description (velocities in the restricted grammar).
+
+        Returns
+        -------
+        dict
+            Read back by :meth:`from_spec`.
+        """
+        joints, velocities, weights, models, scales = self._resolved()
+        return {"type": self.spec_type, "joints": joints,
+                "velocities": [format_expression(v) for v in velocities],
+                "weights": weights.tolist(), "models": models,
+                "coulomb_scale": scales[0], "stribeck_scale": scales[1]}
+
+    @classmethod
+    def from_spec(cls, spec, reader):
+        """The library :meth:`to_spec` describes (bounded reading, see
+        :class:`~pysindy_xl.feature_library.spec.SpecReader`)."""
+        joints = spec.get("joints")
+        reader.expect(isinstance(joints, list) and all(isinstance(j, str) for j in joints),
+                      "JointFrictionLibrary: 'joints' must be a list of names")
+        velocities = reader.terms(spec, "velocities")
+        reader.expect(len(velocities) == len(joints),
+                      "JointFrictionLibrary: one velocity per joint expected")
+        weights = reader.matrix(spec, "weights", (reader.coords.n, len(joints)),
+                                shape_name="(n, n_joints)")
+        models = spec.get("models")
+        reader.expect(isinstance(models, list) and all(m in FRICTION_MODELS for m in models),
+                      f"JointFrictionLibrary: 'models' must name models of {FRICTION_MODELS}")
+        scales = [spec.get(key) for key in ("coulomb_scale", "stribeck_scale")]
+        reader.expect(all(isinstance(s, (int, float)) and not isinstance(s, bool)
+                          and np.isfinite(s) and s > 0 for s in scales),
+                      "JointFrictionLibrary: the scales must be positive numbers")
+        return cls(reader.coords, joints, velocities, weights, tuple(models), *scales)

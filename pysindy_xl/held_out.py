@@ -1,0 +1,409 @@
+"""Held-out validation of an identified model: the torques it predicts on data it never saw.
+
+A robot arm runs under feedback control, so simulating an identified model open loop from a
+logged state under the logged torques diverges within a second even for a good model (the
+controller that kept the real arm on its path is not in the loop). Robotics validates an
+identification by **inverse dynamics** instead: on a run (or a time block) the fit never saw,
+the torques ``tau_hat = M(q) qdd + c(q, qd) + friction`` that the model needs to move as
+recorded, against the measured ones (:meth:`XLSINDy.predict_forces
+<pysindy_xl.XLSINDy.predict_forces>`). No integration, no controller needed.
+
+The figures, per coordinate ``j`` over every held-out sample ``s``:
+
+- ``rms_j = sqrt(mean_s (tau_hat_sj - tau_sj)^2)``, in the units of the forces (N m for a
+  hinge, N for a slide);
+- ``relative_j = rms_j / sqrt(mean_s tau_sj^2)``;
+- ``total = ||tau_hat - tau||_F / ||tau||_F`` over all coordinates and samples (the relative
+  RMS that robot identification papers report).
+
+**Derivatives.** The velocities and accelerations that enter ``tau_hat`` must be the same for
+every method compared, or the comparison measures the differentiation rather than the model.
+Measured ones are used when given; otherwise they come from :func:`scoring_derivatives`,
+whatever the model's own smoother: a quintic smoothing spline
+(:class:`~pysindy_xl.weak.WhittakerSmoother` with its defaults: the smoothness chosen per
+coordinate from the data by generalized cross-validation, for the velocity), on the actual time
+stamps, over each run as a whole (a time block is cut after differentiating, so its ends are
+as good as its middle). Pass ``x_dot`` and ``x_ddot`` to score other methods (e.g. IDIM-LS)
+on exactly the same numbers.
+
+:func:`blocked_cross_validation` scores a model class on one run: ``k`` contiguous time blocks,
+each predicted by the model refitted on the others (with several runs, each run is a fold).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ._inputs import as_list, check_array
+from ._validation import check_option
+
+__all__ = ["ForceScore", "score_forces", "blocked_cross_validation", "scoring_derivatives",
+           "SCORING_DERIVATIVES"]
+
+#: How :func:`scoring_derivatives` estimates what the data lack (printed with the scores).
+SCORING_DERIVATIVES = ("quintic smoothing spline of the positions (WhittakerSmoother, "
+                       "smoothness by GCV), per run")
+_ESTIMATED = {(False, False): "measured", (True, True): SCORING_DERIVATIVES,
+              (False, True): f"measured velocities, accelerations from a {SCORING_DERIVATIVES}",
+              (True, False): f"measured accelerations, velocities from a {SCORING_DERIVATIVES}"}
+
+
+@dataclasses.dataclass
+class ForceScore:
+    """Held-out force prediction of a model, per coordinate and in total.
+
+    Attributes
+    ----------
+    names : tuple of str
+        Coordinate names.
+    rms : ndarray, shape (n,)
+        RMS of the prediction error per coordinate, in the units of the forces.
+    relative : ndarray, shape (n,)
+        ``rms`` over the RMS of the measured force (a fraction; 0.03 is 3 %).
+    total : float
+        Relative RMS over all coordinates: ``||predicted - measured|| / ||measured||``.
+    measured_rms : ndarray, shape (n,)
+        RMS of the measured force per coordinate.
+    n_samples : int
+        Held-out samples scored.
+    derivatives : str
+        Where the velocities and accelerations came from.
+    t, measured, predicted : list of ndarray
+        Per run: times, measured and predicted forces (for :meth:`plot`).
+    folds : list of float or None
+        Cross-validation: ``total`` of each fold (in fold order), else None.
+    """
+
+    names: tuple
+    rms: np.ndarray
+    relative: np.ndarray
+    total: float
+    measured_rms: np.ndarray
+    n_samples: int
+    derivatives: str
+    t: list = dataclasses.field(repr=False)
+    measured: list = dataclasses.field(repr=False)
+    predicted: list = dataclasses.field(repr=False)
+    folds: list | None = None
+
+    @classmethod
+    def from_predictions(cls, names, t, measured, predicted, derivatives, folds=None):
+        """The scores of predicted against measured forces (lists of runs)."""
+        error = np.vstack([p - m for p, m in zip(predicted, measured, strict=True)])
+        stacked = np.vstack(measured)
+        rms = np.sqrt(np.mean(error**2, axis=0))
+        scale = np.sqrt(np.mean(stacked**2, axis=0))
+        relative = np.where(scale > 0, rms / np.where(scale > 0, scale, 1.0), np.inf)
+        norm = np.linalg.norm(stacked)
+        total = float(np.linalg.norm(error) / norm) if norm > 0 else float("inf")
+        return cls(tuple(names), rms, relative, total, scale, len(stacked), derivatives,
+                   list(t), list(measured), list(predicted), folds)
+
+    def to_dict(self) -> dict:
+        """JSON-ready figures (no series).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> t = [np.linspace(0, 1, 3)]
+        >>> score = ForceScore.from_predictions(["a"], t, [np.ones((3, 1))],
+        ...                                     [np.full((3, 1), 1.1)], "measured")
+        >>> {k: round(v, 6) for k, v in score.to_dict()["relative"].items()}
+        {'a': 0.1}
+        """
+        return {"rms": dict(zip(self.names, self.rms.tolist(), strict=True)),
+                "relative": dict(zip(self.names, self.relative.tolist(), strict=True)),
+                "measured_rms": dict(zip(self.names, self.measured_rms.tolist(), strict=True)),
+                "total": self.total, "n_samples": self.n_samples,
+                "derivatives": self.derivatives, "folds": self.folds}
+
+    def lines(self, units="N m") -> list:
+        """Per-coordinate lines (RMS in force units and %) and the total.
+
+        Parameters
+        ----------
+        units : str or sequence of str, default "N m"
+            Unit of the forces, one for all coordinates or one each.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> score = ForceScore.from_predictions(["joint_1"], [np.arange(4.0)],
+        ...     [np.full((4, 1), 2.0)], [np.full((4, 1), 2.1)], "measured")
+        >>> score.lines()
+        ['  joint_1: RMS 0.1 N m (5.00 % of 2 N m)', '  all coordinates: 5.00 % (relative RMS)']
+        """
+        units = [units] * len(self.names) if isinstance(units, str) else list(units)
+        width = max(len(name) for name in self.names)
+        out = [f"  {name + ':':<{width + 1}} RMS {rms:.3g} {unit} ({100 * rel:.2f} % of "
+               f"{scale:.3g} {unit})" for name, rms, rel, scale, unit in
+               zip(self.names, self.rms, self.relative, self.measured_rms, units, strict=True)]
+        out.append(f"  all coordinates: {100 * self.total:.2f} % (relative RMS)")
+        if self.folds:
+            out.append("  per fold: " + ", ".join(f"{100 * f:.2f} %" for f in self.folds))
+        return out
+
+    def plot(self, path, title=None):
+        """Measured against predicted forces, one panel per coordinate (Agg canvas).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            PNG file to write.
+        title : str, optional
+
+        Examples
+        --------
+        >>> import numpy as np, pathlib, tempfile
+        >>> t = np.linspace(0, 1, 50)
+        >>> score = ForceScore.from_predictions(["a"], [t], [np.sin(t)[:, None]],
+        ...                                     [np.sin(t)[:, None] + 0.01], "measured")
+        >>> with tempfile.TemporaryDirectory() as tmp:
+        ...     score.plot(pathlib.Path(tmp) / "torques.png")
+        ...     (pathlib.Path(tmp) / "torques.png").stat().st_size > 0
+        True
+        """
+        from pysindy_xl.mujoco.plots import new_figure
+
+        n = len(self.names)
+        figure = new_figure(8, 1.6 * n + 0.8)
+        axes = figure.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
+        offset = 0.0
+        for run, (t, measured, predicted) in enumerate(
+                zip(self.t, self.measured, self.predicted, strict=True)):
+            time = t - t[0] + offset
+            for i, ax in enumerate(axes):
+                ax.plot(time, measured[:, i], color="black", linewidth=0.8,
+                        label="measured" if run == 0 else None)
+                ax.plot(time, predicted[:, i], color="tab:orange", linewidth=0.8,
+                        label="predicted" if run == 0 else None)
+            offset = time[-1] + (time[-1] - time[0]) * 0.02
+        for ax, name, rel in zip(axes, self.names, self.relative, strict=True):
+            ax.set_ylabel(name)
+            ax.set_title(f"{name}: {100 * rel:.1f} %", fontsize="small", loc="right")
+        axes[0].legend(loc="upper left", fontsize="small")
+        axes[-1].set_xlabel("t (s)" + (", runs one after the other" if len(self.t) > 1 else ""))
+        figure.suptitle(title or f"held-out forces: {100 * self.total:.2f} % relative RMS")
+        figure.savefig(path, dpi=110)
+
+
+def scoring_derivatives(t, x, smoother=None):
+    """Positions, velocities and accelerations for scoring, the same for every method.
+
+    See the module documentation: a quintic smoothing spline of the positions with its
+    smoothness chosen from the data, on the actual time stamps.
+
+    Parameters
+    ----------
+    t : array, shape (N,)
+        Strictly increasing times.
+    x : array, shape (N, n)
+        Positions.
+    smoother : object with ``smooth(t, x)``, optional
+        Default ``WhittakerSmoother()``.
+
+    Returns
+    -------
+    q, qd, qdd : ndarray, shape (N, n)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 4, 401)
+    >>> q, qd, qdd = scoring_derivatives(t, np.sin(t)[:, None])
+    >>> bool(np.abs(qdd[20:-20, 0] + np.sin(t[20:-20])).max() < 1e-3)
+    True
+    """
+    from .weak import WhittakerSmoother
+
+    return (smoother or WhittakerSmoother()).smooth(np.asarray(t, dtype=float), x)
+
+
+def _runs(n, x, t, u, x_dot, x_ddot):
+    """Checked per-run arrays: lists of x, t, u, x_dot, x_ddot (None entries allowed); ``n``
+    coordinates, or None to take them from ``x``."""
+    xs, is_list = as_list(x, "x")
+    layout = {}
+    for name, value in (("t", t), ("u", u), ("x_dot", x_dot), ("x_ddot", x_ddot)):
+        if value is None:
+            if name in ("t", "u"):
+                raise ValueError(f"{name}: required to score forces")
+            layout[name] = [None] * len(xs)
+            continue
+        values, listed = as_list(value, name)
+        if listed != is_list or len(values) != len(xs):
+            raise ValueError(f"{name}: expected the same layout as x ({len(xs)} "
+                             f"{'runs' if is_list else 'array'})")
+        layout[name] = values
+    runs = []
+    for k, xk in enumerate(xs):
+        label = f"[{k}]" if is_list else ""
+        xk = check_array(xk, f"x{label}", n_columns=n or (1 if np.ndim(xk) == 1 else None))
+        tk = np.asarray(layout["t"][k], dtype=float)
+        if tk.shape != (len(xk),) or np.any(np.diff(tk) <= 0):
+            raise ValueError(f"t{label}: expected {len(xk)} strictly increasing times")
+        runs.append({"x": xk, "t": tk, "u": check_array(layout["u"][k], f"u{label}", xk.shape),
+                     **{key: None if layout[key][k] is None else
+                        check_array(layout[key][k], f"{key}{label}", xk.shape)
+                        for key in ("x_dot", "x_ddot")}})
+    return runs
+
+
+def _with_derivatives(run, smoother):
+    """The run's (q, qd, qdd) for scoring and how they were obtained."""
+    estimated = (run["x_dot"] is None, run["x_ddot"] is None)
+    if not any(estimated):
+        return run["x"], run["x_dot"], run["x_ddot"], "measured"
+    q, qd, qdd = scoring_derivatives(run["t"], run["x"], smoother)
+    qd = qd if run["x_dot"] is None else run["x_dot"]
+    qdd = qdd if run["x_ddot"] is None else run["x_ddot"]
+    source = _ESTIMATED[estimated]
+    if smoother is not None:
+        source = source.replace(SCORING_DERIVATIVES, repr(smoother))
+    return q, qd, qdd, source
+
+
+def _predict(model, q, t, u, qd, qdd):
+    from .quality import force_prediction
+
+    return force_prediction(model, q, t, u, qd, qdd)["predicted"]
+
+
+def score_forces(model, x, t, u, x_dot=None, x_ddot=None, smoother=None) -> ForceScore:
+    """Held-out force prediction of a fitted model (see the module documentation).
+
+    Parameters
+    ----------
+    model : XLSINDy
+        A fitted model with dynamics.
+    x : array (N, n) or list of arrays
+        Positions of the held-out run(s).
+    t : array (N,) or list
+        Their times (non-uniform stamps are used as recorded).
+    u : array (N, n) or list
+        Measured generalized forces (joint torques of an arm).
+    x_dot, x_ddot : same layout, optional
+        Velocities and accelerations; those not given come from :func:`scoring_derivatives`.
+    smoother : object with ``smooth(t, x)``, optional
+        Replaces the default smoother of :func:`scoring_derivatives`.
+
+    Returns
+    -------
+    ForceScore
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+    >>> t = np.linspace(0, 5, 501)[:, None]
+    >>> x = np.sin(t) + np.sin(2.3 * t) / 2
+    >>> xd, xdd = np.cos(t) + 1.15 * np.cos(2.3 * t), -np.sin(t) - 2.645 * np.sin(2.3 * t)
+    >>> t = t[:, 0]
+    >>> model = px.XLSINDy(lib).fit(x, t, x_dot=xd, x_ddot=xdd, u=2 * xdd + 3 * x)
+    >>> score = score_forces(model, x, t, 2 * xdd + 3 * x + 0.01, xd, xdd)
+    >>> round(float(score.rms[0]), 6)
+    0.01
+    """
+    runs = _runs(model.n_coordinates_, x, t, u, x_dot, x_ddot)
+    times, measured, predicted, sources = [], [], [], set()
+    for run in runs:
+        q, qd, qdd, source = _with_derivatives(run, smoother)
+        predicted.append(_predict(model, q, run["t"], run["u"], qd, qdd))
+        times.append(run["t"])
+        measured.append(run["u"])
+        sources.add(source)
+    return ForceScore.from_predictions(model.feature_library_.coords.names, times, measured,
+                                       predicted, "; ".join(sorted(sources)))
+
+
+def _folds(lengths, n_blocks):
+    """``(run, start, stop)`` of each fold: the runs themselves, or blocks of the one run."""
+    if len(lengths) > 1:
+        return [[(k, 0, n)] for k, n in enumerate(lengths)]
+    edges = np.linspace(0, lengths[0], n_blocks + 1).round().astype(int)
+    return [[(0, int(a), int(b))] for a, b in zip(edges[:-1], edges[1:], strict=True)]
+
+
+def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: int = 5,
+                             smoother=None) -> ForceScore:
+    """Time-blocked cross-validation of the force prediction of a model class.
+
+    One run is cut into ``n_blocks`` contiguous time blocks; each block is predicted by a
+    copy of ``model`` (``sklearn.base.clone``: same settings, not fitted) fitted on the
+    other blocks, which enter the fit as separate runs (the samples before the block and
+    those after it). With several runs, each run is a fold. The scores pool the errors of
+    all folds; ``folds`` gives each fold's total. The scoring derivatives are computed once on
+    each whole run (see the module documentation); the fits get the data as ``fit`` would
+    (measured derivatives when given, else the model differentiates).
+
+    Parameters
+    ----------
+    model : XLSINDy
+        The model to cross-validate (fitted or not; its parameters are used).
+    x, t, u, x_dot, x_ddot, smoother
+        As in :func:`score_forces`; the training data.
+    n_blocks : int, default 5
+        Contiguous blocks of a single run (at least 2).
+
+    Returns
+    -------
+    ForceScore
+        Out-of-fold predictions of every sample.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+    >>> t = np.linspace(0, 10, 1001)[:, None]
+    >>> x = np.sin(t) + np.sin(2.3 * t) / 2
+    >>> xd, xdd = np.cos(t) + 1.15 * np.cos(2.3 * t), -np.sin(t) - 2.645 * np.sin(2.3 * t)
+    >>> t = t[:, 0]
+    >>> score = blocked_cross_validation(px.XLSINDy(lib), x, t, 2 * xdd + 3 * x, xd, xdd,
+    ...                                  n_blocks=4)
+    >>> len(score.folds), score.total < 1e-6
+    (4, True)
+    """
+    from sklearn.base import clone
+
+    check_option("n_blocks", n_blocks, "int", low=2)
+    runs = _runs(None, x, t, u, x_dot, x_ddot)
+    folds = _folds([len(run["t"]) for run in runs], n_blocks)
+    if len(runs) == 1 and len(runs[0]["t"]) < 20 * n_blocks:
+        raise ValueError(f"n_blocks: {n_blocks} blocks of {len(runs[0]['t'])} samples are too "
+                         "short to fit on; use fewer blocks or more data")
+    scoring = [_with_derivatives(run, smoother) for run in runs]
+    predicted = [np.empty_like(run["u"]) for run in runs]
+    totals, names = [], None
+    for fold in folds:
+        held = {(k, a, b) for k, a, b in fold}
+        pieces = []
+        for k, run in enumerate(runs):
+            cuts = [(a, b) for kk, a, b in held if kk == k]
+            keep = np.ones(len(run["t"]), dtype=bool)
+            for a, b in cuts:
+                keep[a:b] = False
+            edges = np.flatnonzero(np.diff(np.r_[0, keep.astype(int), 0]))
+            pieces += [(k, a, b) for a, b in zip(edges[::2], edges[1::2], strict=True)]
+        train = {key: [runs[k][key][a:b] if runs[k][key] is not None else None
+                       for k, a, b in pieces] for key in ("x", "t", "u", "x_dot", "x_ddot")}
+        for key in ("x_dot", "x_ddot"):
+            if any(value is None for value in train[key]):
+                train[key] = None
+        fitted = clone(model).fit(**train)
+        names = fitted.feature_library_.coords.names
+        error, norm = 0.0, 0.0
+        for k, a, b in fold:
+            q, qd, qdd, _ = scoring[k]
+            run = runs[k]
+            predicted[k][a:b] = _predict(fitted, q[a:b], run["t"][a:b], run["u"][a:b],
+                                         qd[a:b], qdd[a:b])
+            error += float(np.sum((predicted[k][a:b] - run["u"][a:b]) ** 2))
+            norm += float(np.sum(run["u"][a:b] ** 2))
+        totals.append(float(np.sqrt(error / norm)) if norm > 0 else float("inf"))
+    source = "; ".join(sorted({entry[3] for entry in scoring}))
+    return ForceScore.from_predictions(names, [run["t"] for run in runs],
+                                       [run["u"] for run in runs], predicted, source, totals)

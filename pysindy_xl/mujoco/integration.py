@@ -1,0 +1,390 @@
+r"""A MuJoCo integration that is stable and faithful, chosen from the model; checks of every run.
+
+The package identifies continuous-time equations, so generated positions must follow the
+continuous flow. Two things go wrong with a published arm model's own settings:
+
+* **Implicit steps bias the inertia.** MuJoCo's ``implicit`` and ``implicitfast`` integrators
+  (and ``Euler`` for joint damping) apply the velocity-dependent forces (joint damping ``d``,
+  a servo's ``kv``) at the end of the step: the recorded positions obey
+  ``(M + h D) qdd = f`` with ``D`` the damping matrix, not ``M qdd = f``.
+* **Explicit steps have a stability region.** RK4 is stable only while every mode of the
+  linearized step stays inside its region (``|h lambda| < 2.785`` on the real axis, ``2.83``
+  on the imaginary one). The modes are the eigenvalues of
+
+  .. math:: A = \begin{pmatrix} 0 & \mathbb 1 \\ -M^{-1} K & -M^{-1} D \end{pmatrix},
+
+  ``K`` the servos' position gains (``kp``, an affine bias's ``-biasprm[1]``) and joint
+  stiffness, ``D`` their velocity gains and joint damping, both mapped through the actuator
+  moments, ``M`` the joint-space inertia (``mj_fullM``, armature included). A servo with
+  ``kv = 200`` on a wrist link of ``1e-3 kg m^2`` has ``|lambda| ~ 2e5 1/s``: RK4 needs
+  ``h < 1e-5 s`` where the model says ``2e-3``.
+
+:func:`choose_integration` evaluates ``A`` at the reference pose and at random poses inside
+the joint ranges (``M`` changes with the pose) and prices both remedies in substeps of the
+model's time step: RK4 with ``h |lambda| <= RK4_BOUND`` everywhere (well inside the region),
+or the model's implicit step (``implicitfast`` for models authored with ``Euler`` or ``RK4``)
+with its inertia bias ``h max_i D_ii`` at most ``BIAS_TOLERANCE`` of the largest entry of
+``M`` (the normalization of the mass-matrix error of
+:func:`~pysindy_xl.mujoco.compare_physics`) and a stable linearized step. An RK4 step costs
+about ``RK4_COST`` implicit steps; the cheaper remedy wins. Models without velocity-dependent
+forces keep their integrator.
+
+:func:`check_run` inspects a finished run: finite states, MuJoCo's bad-acceleration warning,
+velocities under a physically sane bound (``MAX_HINGE_VELOCITY``, ``MAX_SLIDE_VELOCITY``) and,
+for unforced runs, no growth of the total energy. An unstable run raises
+:class:`UnstableSimulationError`, which names the option to change; its data never reach a
+dataset.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+__all__ = ["Integration", "choose_integration", "linear_modes", "check_run",
+           "UnstableSimulationError", "INTEGRATORS", "RK4_BOUND", "BIAS_TOLERANCE",
+           "RK4_COST", "RK4_MAX_SUBSTEPS", "MAX_HINGE_VELOCITY", "MAX_SLIDE_VELOCITY"]
+
+#: MuJoCo's integrators by name.
+INTEGRATORS = {"Euler": 0, "RK4": 1, "implicit": 2, "implicitfast": 3}
+
+#: Largest ``h |lambda|`` of an RK4 step (its region reaches 2.785 on the negative real axis).
+RK4_BOUND = 2.0
+#: Largest inertia bias ``h max_i D_ii`` of an implicit step, relative to ``max |M_ij|``.
+BIAS_TOLERANCE = 5e-3
+#: Cost of an RK4 step in implicit steps (four evaluations against one and a factorization).
+RK4_COST = 4.0
+#: RK4 (no inertia bias at all) is kept up to this many substeps even where it costs more.
+RK4_MAX_SUBSTEPS = 32
+#: Velocity bound of a sane run: hinge joints (rad/s) and slide joints (m/s).
+MAX_HINGE_VELOCITY = 100.0
+MAX_SLIDE_VELOCITY = 20.0
+
+
+class UnstableSimulationError(RuntimeError):
+    """A MuJoCo run that left the physics (NaN, huge accelerations or velocities, energy growth).
+
+    Examples
+    --------
+    >>> issubclass(UnstableSimulationError, RuntimeError)
+    True
+    """
+
+
+@dataclass
+class Integration:
+    """How a MuJoCo model is integrated: integrator, substeps per model step, and why.
+
+    Parameters
+    ----------
+    integrator : str
+        A key of :data:`INTEGRATORS`.
+    substeps : int
+        Internal steps per model time step.
+    reason : str
+        Why this integration (printed by the demo, kept in the dataset metadata).
+    rate : float
+        Largest ``|lambda|`` (1/s) of the linearized joint dynamics over the poses examined.
+    damping_rate : float
+        ``max_i D_ii / max |M_ij|`` (1/s): the implicit step's inertia bias per second of step.
+    timestep : float
+        The model's time step (s).
+
+    Examples
+    --------
+    >>> Integration("RK4", 3, "example", 2.7e3, 150.0, 0.002).step
+    0.0006666666666666666
+    """
+
+    integrator: str
+    substeps: int
+    reason: str
+    rate: float
+    damping_rate: float
+    timestep: float
+
+    @property
+    def step(self) -> float:
+        """The internal step ``timestep / substeps`` (s)."""
+        return self.timestep / self.substeps
+
+    @property
+    def stability(self) -> float:
+        """``h |lambda|`` of the internal step (RK4 is stable below about 2.8)."""
+        return self.step * self.rate
+
+    @property
+    def bias(self) -> float:
+        """Inertia bias ``h max D_ii / max |M_ij|`` an implicit step would add at this step."""
+        return self.step * self.damping_rate
+
+    def to_dict(self) -> dict:
+        """JSON-serializable description (the fields plus ``step``, ``stability``, ``bias``).
+
+        Returns
+        -------
+        dict
+        """
+        out = asdict(self)
+        out.update(step=self.step, stability=self.stability, bias=self.bias)
+        return out
+
+
+def _stiffness(model, data) -> tuple[np.ndarray, np.ndarray]:
+    """``K``, ``D`` (nv x nv) of the servos, joint springs and damping at ``data``'s pose."""
+    import mujoco
+
+    mujoco.mj_forward(model, data)
+    moments = np.zeros((model.nu, model.nv))
+    if model.nu:
+        mujoco.mju_sparse2dense(moments, data.actuator_moment, data.moment_rownnz,
+                                data.moment_rowadr, data.moment_colind)
+    affine = model.actuator_biastype == int(mujoco.mjtBias.mjBIAS_AFFINE)
+    kp = np.where(affine, -model.actuator_biasprm[:, 1], 0.0)
+    kv = np.where(affine, -model.actuator_biasprm[:, 2], 0.0)
+    stiffness = np.diag(model.jnt_stiffness[model.dof_jntid])
+    damping = np.diag(model.dof_damping.copy())
+    return (stiffness + moments.T @ (kp[:, None] * moments),
+            damping + moments.T @ (kv[:, None] * moments))
+
+
+def _poses(model, n_poses: int, seed) -> np.ndarray:
+    """The reference pose and ``n_poses - 1`` random poses inside the joint ranges."""
+    import mujoco
+
+    rng = np.random.default_rng(seed)
+    poses = np.tile(model.qpos0, (n_poses, 1))
+    for j in range(model.njnt):
+        kind = int(model.jnt_type[j])
+        if kind not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
+            continue
+        low, high = model.jnt_range[j] if model.jnt_limited[j] else (-np.pi, np.pi)
+        poses[1:, model.jnt_qposadr[j]] = rng.uniform(low, high, n_poses - 1)
+    return poses
+
+
+def linear_modes(model, n_poses: int = 8, seed=0) -> tuple[float, float]:
+    """Stiffness of a model's linearized joint dynamics over a few poses.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+    n_poses : int, default 8
+        The reference pose ``qpos0`` and ``n_poses - 1`` random poses inside the joint ranges.
+    seed : int, optional
+        Seed of the random poses.
+
+    Returns
+    -------
+    rate : float
+        Largest ``|lambda|`` (1/s) of ``A`` (module docstring) over the poses.
+    damping_rate : float
+        Largest ``max_i D_ii / max |M_ij|`` (1/s) over the poses.
+
+    Examples
+    --------
+    A 1e-3 kg m^2 link under a servo with kp = 100, kv = 10 (lambda = -1e4 and -10 1/s):
+
+    >>> import mujoco
+    >>> model = mujoco.MjModel.from_xml_string('''<mujoco><worldbody><body>
+    ...   <joint name="j" axis="0 0 1"/>
+    ...   <inertial pos="0 0 0" mass="1" diaginertia="1e-3 1e-3 1e-3"/></body></worldbody>
+    ...   <actuator><position joint="j" kp="100" kv="10"/></actuator></mujoco>''')
+    >>> rate, damping_rate = linear_modes(model)
+    >>> round(rate), round(damping_rate)
+    (9990, 10000)
+    """
+    import mujoco
+
+    data = mujoco.MjData(model)
+    nv = model.nv
+    rate = damping_rate = 0.0
+    mass = np.zeros((nv, nv))
+    for pose in _poses(model, max(int(n_poses), 1), seed):
+        data.qpos[:] = pose
+        stiffness, damping = _stiffness(model, data)
+        mujoco.mj_fullM(model, data, mass)
+        state = np.block([[np.zeros((nv, nv)), np.eye(nv)],
+                          [-np.linalg.solve(mass, stiffness), -np.linalg.solve(mass, damping)]])
+        rate = max(rate, float(np.abs(np.linalg.eigvals(state)).max()))
+        damping_rate = max(damping_rate, float(damping.diagonal().max() / np.abs(mass).max()))
+    return rate, damping_rate
+
+
+def choose_integration(model, integrator: str = "auto", substeps: int | None = None,
+                       n_poses: int = 8) -> Integration:
+    """The integration of a MuJoCo model: stable and faithful to the continuous equations.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model (its ``opt.integrator`` and ``opt.timestep`` as authored).
+    integrator : {"auto", "model", "Euler", "RK4", "implicit", "implicitfast"}
+        ``"auto"``: the cheaper of RK4 and the model's implicit step that is stable and
+        faithful (module docstring); ``"model"``: as authored; a name: that integrator.
+    substeps : int, optional
+        Internal steps per model step. With ``"auto"``, a lower bound on the chosen number;
+        otherwise the number used (default 1).
+    n_poses : int, default 8
+        Poses at which the linearized dynamics are examined (see :func:`linear_modes`).
+
+    Returns
+    -------
+    Integration
+
+    Raises
+    ------
+    ValueError
+        If ``integrator`` or ``substeps`` is not one of the accepted values.
+
+    Examples
+    --------
+    A stiff servo (kv = 300) on a light link (1e-3 kg m^2) at MuJoCo's 2 ms step: RK4 at the
+    model's step would be far outside its stability region (h |lambda| = 600).
+
+    >>> import mujoco
+    >>> model = mujoco.MjModel.from_xml_string('''<mujoco><option integrator="implicitfast"/>
+    ...   <worldbody><body><joint name="j" axis="0 0 1"/>
+    ...   <inertial pos="0 0 0" mass="1" diaginertia="1e-3 1e-3 1e-3"/></body></worldbody>
+    ...   <actuator><position joint="j" kp="3000" kv="300"/></actuator></mujoco>''')
+    >>> choice = choose_integration(model)
+    >>> choice.integrator, choice.substeps, choice.stability <= RK4_BOUND
+    ('RK4', 300, True)
+    """
+    from .._validation import check_option
+
+    check_option("integrator", integrator, "choice", choices=("auto", "model", *INTEGRATORS))
+    if substeps is not None:
+        substeps = check_option("substeps", substeps, "int", low=1)
+    timestep = float(model.opt.timestep)
+    authored = next(name for name, value in INTEGRATORS.items()
+                    if value == int(model.opt.integrator))
+    rate, damping_rate = linear_modes(model, n_poses)
+    if integrator != "auto":
+        name = authored if integrator == "model" else integrator
+        return Integration(name, substeps or 1, f"{name} as requested", rate, damping_rate,
+                           timestep)
+    floor = substeps or 1
+    rk4 = max(floor, math.ceil(timestep * rate / RK4_BOUND))
+    if damping_rate == 0 and authored in ("RK4", "Euler"):
+        if authored == "RK4" or timestep * rate / floor < 1.0:
+            return Integration(authored, floor, f"the model's {authored}: no velocity-"
+                               "dependent force to bias, stable at the model's step", rate,
+                               damping_rate, timestep)
+    implicit = authored if authored in ("implicit", "implicitfast") else "implicitfast"
+    implicit_steps = max(floor, math.ceil(timestep * damping_rate / BIAS_TOLERANCE))
+    while not _implicit_stable(model, timestep / implicit_steps, n_poses):
+        implicit_steps *= 2
+    step = timestep * 1e3
+    if rk4 <= RK4_MAX_SUBSTEPS or RK4_COST * rk4 <= implicit_steps:
+        reason = (f"RK4 at {step:g} ms / {rk4}: the stiffest mode (|lambda| = {rate:.3g} 1/s, "
+                  f"servo gains and damping over the inertia) keeps h |lambda| <= {RK4_BOUND:g}"
+                  f"; the {implicit} step would need {implicit_steps} substeps to keep its "
+                  f"inertia bias h (kv + damping) below {BIAS_TOLERANCE:.1%} of the mass "
+                  "matrix")
+        return Integration("RK4", rk4, reason, rate, damping_rate, timestep)
+    reason = (f"{implicit} at {step:g} ms / {implicit_steps}: its inertia bias h (kv + damping)"
+              f" stays below {BIAS_TOLERANCE:.1%} of the mass matrix; RK4 would need {rk4} "
+              f"substeps (|lambda| = {rate:.3g} 1/s)")
+    return Integration(implicit, implicit_steps, reason, rate, damping_rate, timestep)
+
+
+def _implicit_stable(model, step: float, n_poses: int) -> bool:
+    """Whether MuJoCo's implicit step (damping implicit, springs explicit) is stable at ``step``.
+
+    The linearized step is ``v' = v + h (M + h D)^-1 (-K x - D v)``, ``x' = x + h v'``.
+    """
+    import mujoco
+
+    data = mujoco.MjData(model)
+    nv = model.nv
+    mass = np.zeros((nv, nv))
+    for pose in _poses(model, max(int(n_poses), 1), 0):
+        data.qpos[:] = pose
+        stiffness, damping = _stiffness(model, data)
+        mujoco.mj_fullM(model, data, mass)
+        solve = np.linalg.solve(mass + step * damping, np.hstack([stiffness, damping]))
+        velocity = np.hstack([-step * solve[:, :nv], np.eye(nv) - step * solve[:, nv:]])
+        position = np.hstack([np.eye(nv), np.zeros((nv, nv))]) + step * velocity
+        radius = np.abs(np.linalg.eigvals(np.vstack([position, velocity]))).max()
+        if radius > 1 + 1e-9:
+            return False
+    return True
+
+
+def check_run(model, qpos, qvel, qacc, energy=None, bad_accelerations: int = 0,
+              integration: Integration | None = None, label: str = "MuJoCo run") -> dict:
+    """Check a finished MuJoCo run; raise on any sign of a numerical instability.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+    qpos, qvel, qacc : array, shape (T, nq), (T, nv), (T, nv)
+        Recorded states and accelerations.
+    energy : array, shape (T, 2), optional
+        Potential and kinetic energy (MuJoCo's ``data.energy``) of an unforced run: a
+        growth of their sum beyond 5 % of the largest kinetic energy plus the potential
+        energy's range is an instability (a passive model only loses energy).
+    bad_accelerations : int, default 0
+        MuJoCo's ``mjWARN_BADQACC`` count of the run.
+    integration : Integration, optional
+        How the run was integrated (named in the error).
+    label : str
+        Names the run in the error.
+
+    Returns
+    -------
+    dict
+        ``peak_velocity`` (by joint, the largest ``|qvel|``) and ``velocity_bound``.
+
+    Raises
+    ------
+    UnstableSimulationError
+        With the reason and the option to change (``integrator="auto"``, ``substeps``).
+
+    Examples
+    --------
+    >>> import mujoco, numpy as np
+    >>> model = mujoco.MjModel.from_xml_string(
+    ...     '<mujoco><worldbody><body><joint name="j"/><geom size="0.1"/></body></worldbody>'
+    ...     '</mujoco>')
+    >>> check_run(model, np.zeros((3, 1)), np.array([[0.0], [1.0], [2.0]]), np.zeros((3, 1)))
+    {'peak_velocity': {'j': 2.0}, 'velocity_bound': {'j': 100.0}}
+    """
+    import mujoco
+
+    qvel = np.asarray(qvel, dtype=float)
+    names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
+             for j in model.dof_jntid]
+    slide = model.jnt_type[model.dof_jntid] == int(mujoco.mjtJoint.mjJNT_SLIDE)
+    bound = np.where(slide, MAX_SLIDE_VELOCITY, MAX_HINGE_VELOCITY)
+    finite = all(np.all(np.isfinite(a)) for a in (qpos, qvel, qacc))
+    peak = np.max(np.abs(qvel), axis=0) if finite and len(qvel) else np.full(model.nv, np.inf)
+    how = ("" if integration is None else
+           f" (integrated with {integration.integrator} at {integration.step * 1e3:.3g} ms, "
+           f"h |lambda| = {integration.stability:.3g})")
+    advice = ("; pass integrator='auto' (a stable step chosen from the servo gains, damping "
+              "and inertia) or more substeps")
+    if not finite or bad_accelerations:
+        raise UnstableSimulationError(
+            f"{label} became unstable (NaN or huge accelerations){how}{advice}, or reduce the "
+            "forces and initial velocities")
+    over = np.flatnonzero(peak > bound)
+    if len(over):
+        joints = ", ".join(f"{names[i]} {peak[i]:.3g}" for i in over)
+        raise UnstableSimulationError(
+            f"{label} is not physical: velocities up to {joints} (bound {bound[over[0]]:g}, "
+            f"rad/s or m/s){how}{advice}, or lower the forcing amplitude")
+    if energy is not None and len(energy) > 1:
+        energy = np.asarray(energy, dtype=float).reshape(len(energy), -1)
+        total = energy.sum(axis=1)
+        growth = float(np.max(total) - total[0])
+        scale = float(np.max(energy[:, -1]) + np.ptp(energy[:, 0])) if energy.shape[1] > 1 \
+            else float(np.ptp(total))
+        if growth > 0.05 * scale + 1e-12:
+            raise UnstableSimulationError(
+                f"{label}: the energy of an unforced run grew by {growth:.3g} J{how}{advice}")
+    return {"peak_velocity": {name: float(p) for name, p in zip(names, peak, strict=True)},
+            "velocity_bound": {name: float(b) for name, b in zip(names, bound, strict=True)}}
