@@ -61,6 +61,7 @@ API_MODULES = [
     "pysindy_xl.expressions",
     "pysindy_xl.mujoco",
     "pysindy_xl.benchmark",
+    "pysindy_xl.held_out",
     "pysindy_xl.cli",
 ]
 CHECKED = ("GL08", "PR01", "PR02", "RT01", "EX01")

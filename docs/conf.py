@@ -65,6 +65,7 @@ API_MODULES = [
     "pysindy_xl.mujoco",
     "pysindy_xl.benchmark",
     "pysindy_xl.quality",
+    "pysindy_xl.held_out",
     "pysindy_xl.cli",
 ]
 API_SKIPPED = write_api_pages(API_MODULES, DOCS / "gen_modules" / "api")

@@ -8,6 +8,7 @@ noise floor; the default catalog (viscous + Coulomb) cannot.
 """
 
 import json
+import pickle
 
 import mujoco
 import numpy as np
@@ -121,6 +122,8 @@ def test_the_model_saves_loads_and_exports_with_its_friction(arm, tmp_path):
                        rtol=1e-10, atol=1e-12)
     assert loaded.physical_parameters()["joint_friction"] == \
         model.physical_parameters()["joint_friction"]
+    copy = pickle.loads(pickle.dumps(model))
+    assert np.array_equal(copy.predict_forces(q[states], qd[states], qdd[states]), expected)
     # the JAX export evaluates the same friction (asymmetric, Stribeck, offset included)
     jax = pytest.importorskip("jax")
     with jax.enable_x64(True):

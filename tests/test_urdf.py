@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import importlib.metadata
 import pathlib
+import pickle
 import re
 import warnings
 
@@ -180,7 +181,12 @@ def test_small_urdf_catalog_matches_pinocchio_and_mujoco(tmp_path):
     mj_mass, mj_bias = _mujoco_dynamics(system, q)
     assert _relative(mass, mj_mass) < 1e-8 and _relative(gravity, mj_bias) < 1e-8
     pin_mass, pin_gravity = _pinocchio_dynamics(SMALL, q, system.joint_names)
-    assert _relative(mass, pin_mass) < 1e-6 and _relative(gravity, pin_gravity) < 1e-6
+    assert _relative(mass, pin_mass) < 1e-9 and _relative(gravity, pin_gravity) < 1e-9
+    # the path itself, and a pickled system, give the same catalog
+    same = kinematic_catalog(str(path))
+    assert same.lagrange_terms == catalog.lagrange_terms
+    np.testing.assert_allclose(same.mass_matrix(q), mass, rtol=1e-12)
+    assert pickle.loads(pickle.dumps(system)).xml() == system.xml()
 
 
 def test_fusestatic_false_keeps_the_fixed_link_with_the_same_dynamics(tmp_path):

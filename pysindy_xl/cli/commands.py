@@ -373,7 +373,10 @@ def run_identify(args):
               f"{summary['max_relative_error']:.2g} (relative), support recovered: "
               f"{summary['support_recovered']}")
     score = None
-    if verdict and model.dynamics_ is not None:
+    if verdict and model.dynamics_ is None:
+        print("held-out torque prediction: not available (the identified equations contain "
+              "no acceleration)")
+    elif verdict:
         score = held_out_verdict(args, model, system, arguments,
                                  lambda path: _load(args, path, system), progress)
         if args.plot:

@@ -20,6 +20,11 @@ _fraction = argument_type("real", low=0, low_open=True, high=1)
 _positive_int = argument_type("int", low=1)
 
 
+def _bandwidth(text):
+    """A positive frequency, or ``inf``."""
+    return float("inf") if text.strip().lower() == "inf" else _positive_float(text)
+
+
 def _add_generation_options(parser, duration=10.0, trajectories=2):
     parser.add_argument("--forcing", choices=FORCINGS, default="explicit",
                         help="implicit: no force, random initial state; explicit: every "
@@ -181,8 +186,12 @@ def build_parser() -> argparse.ArgumentParser:
     identify.add_argument("--cv-blocks", type=int, default=5, metavar="K",
                           help="without --validate, a log with forces and --system is scored "
                                "by time-blocked cross-validation: K contiguous blocks of its "
-                               "one run (several runs: each run in turn), each predicted by "
+                               "one run (several runs: K groups of whole runs), each predicted by "
                                "the model refitted on the rest; 0 skips it (default: 5)")
+    identify.add_argument("--bandwidth", type=_bandwidth, default=10.0, metavar="HZ",
+                          help="held-out scoring of data without accelerations: the highest "
+                               "frequency kept by the smoothing spline that differentiates the "
+                               "positions (inf: chosen from the data alone) (default: 10)")
     identify.add_argument("--plot", default=None, metavar="FILE.png",
                           help="write the plot of the verdict: measured against predicted "
                                "held-out torques per coordinate (with --validate or the "

@@ -4,7 +4,7 @@ A real arm runs under feedback control, so an open-loop replay of the identified
 the logged torques diverges whatever the model; the verdict on a log is how well the model
 predicts the torques of data it never saw (:mod:`pysindy_xl.held_out`): a validation file
 (``--validate TEST``), else time-blocked cross-validation of the training log (one run: ``k``
-contiguous blocks; several runs: each run in turn).
+contiguous blocks; several runs: at most ``k`` groups of whole runs).
 """
 
 from __future__ import annotations
@@ -17,12 +17,16 @@ from .steps import CLIError, dataset_for
 def wants_verdict(args, forced: bool) -> bool:
     """Whether ``identify`` scores held-out torques: with ``--validate``, or on a log with
     forces identified against a ``--system`` (unless ``--cv-blocks 0``)."""
+    blocks = getattr(args, "cv_blocks", 0)
+    if blocks == 1 or blocks < 0:
+        raise CLIError(f"--cv-blocks: expected 0 (no cross-validation) or at least 2, got "
+                       f"{blocks}")
     if getattr(args, "validate", None):
         if not forced:
             raise CLIError("--validate: the training data have no forces; held-out torque "
                            "prediction needs them (tau_NAME columns)")
         return True
-    return forced and bool(args.system) and getattr(args, "cv_blocks", 0) >= 2
+    return forced and bool(args.system) and blocks >= 2
 
 
 def _units(system, names) -> list:
@@ -68,22 +72,23 @@ def held_out_verdict(args, model, system, arguments, load, progress):
         held = data.fit_arguments(forces="tau", constraints="include")
         progress(f"predicting the torques of {', '.join(args.validate)}")
         score = model.score_forces(held["x"], held["t"], held["u"], held["x_dot"],
-                                   held["x_ddot"])
+                                   held["x_ddot"], max_frequency=args.bandwidth)
         n_runs = len(held["x"])
         where = (f"on {', '.join(os.path.basename(p) for p in args.validate)} ({n_runs} "
                  f"run{'s' if n_runs > 1 else ''}, {score.n_samples} samples)")
     else:
         runs = len(arguments["x"])
-        folds = runs if runs > 1 else args.cv_blocks
+        folds = min(runs, args.cv_blocks) if runs > 1 else args.cv_blocks
         progress(f"time-blocked cross-validation: {folds} fits of the model, each on the data "
-                 "without one " + ("run" if runs > 1 else "block"))
+                 "without one " + ("group of runs" if runs > 1 else "block"))
         try:
             score = blocked_cross_validation(
                 model, arguments["x"], arguments["t"], arguments["u"], arguments["x_dot"],
-                arguments["x_ddot"], n_blocks=args.cv_blocks)
+                arguments["x_ddot"], n_blocks=args.cv_blocks, max_frequency=args.bandwidth)
         except (ValueError, RuntimeError) as error:
             raise CLIError(f"--cv-blocks: cross-validation failed ({error})") from None
-        where = ("by leave-one-run-out cross-validation of the training runs" if runs > 1 else
+        where = (f"by cross-validation over the {runs} training runs ({folds} folds of whole "
+                 "runs)" if runs > 1 else
                  f"by time-blocked cross-validation ({args.cv_blocks} contiguous blocks of the "
                  "run, each predicted by the model refitted on the others)")
     print(f"held-out torque prediction {where}; derivatives: {score.derivatives}:")

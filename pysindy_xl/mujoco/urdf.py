@@ -158,7 +158,7 @@ def urdf_spec(text: str, where: str = "source", warn: bool = True):
                 "body's (principal moments with A + B < C); MuJoCo balanced them (each set to "
                 "the mean of its principal moments). The kinematic catalog does not depend on "
                 "them; the model's reference inertias do",
-                UserWarning, stacklevel=4)
+                UserWarning, stacklevel=3)
     return spec
 
 
