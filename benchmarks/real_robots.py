@@ -14,12 +14,13 @@ Arms and logs (``benchmarks/data/real/``; sources, licences and columns in its R
 
 Methods, each on the same training samples:
 
-* ``default``: ``XLSINDy(kinematic_catalog(system, friction="all").library()).fit(q, t,
-  u=tau)`` on the log as recorded (its own smoother, weak form, physically consistent fit;
-  every joint offered viscous, Coulomb, asymmetric, Stribeck and offset terms, the fit
-  selecting among them);
-* ``strong``: the same catalog and optimizer in the strong form, on the IDIM filter's
-  derivatives;
+* ``default``: ``XLSINDy(kinematic_catalog(system).library()).fit(q, t, u=tau)`` on the log
+  as recorded (its own smoother, weak form, physically consistent fit);
+* ``default-friction``: the same with ``kinematic_catalog(system, friction="all")``: every
+  joint offered viscous, Coulomb, asymmetric, Stribeck and offset terms, the fit selecting
+  among them;
+* ``strong`` and ``strong-friction``: the same catalogs and optimizer in the strong form, on
+  the IDIM filter's derivatives and filtered torques;
 * ``idim-ls``: :mod:`idim` (Pinocchio's regressor of the URDF, rotor inertia, viscous,
   Coulomb and offset per joint, uniform grid, zero-phase Butterworth at the cutoff its own
   time-blocked cross-validation picks, decimation, OLS then WLS);
@@ -107,18 +108,30 @@ def mjcf_system(urdf):
         return MJCFSystem(str(urdf))
 
 
-def fit_package(system, t, q, tau, formulation="auto", derivatives=None, friction="all"):
+def fit_package(catalog, t, q, tau, formulation="auto", derivatives=None):
+    """``XLSINDy(catalog.library())`` fitted on one run, and its fit time."""
     import pysindy_xl as px
-    from pysindy_xl.mujoco import kinematic_catalog
 
     start = time.perf_counter()
-    library = kinematic_catalog(system, friction=friction).library()
-    catalog_s = time.perf_counter() - start
     kwargs = {} if derivatives is None else dict(x_dot=derivatives[0], x_ddot=derivatives[1])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        model = px.XLSINDy(library, formulation=formulation).fit(q, t, u=tau, **kwargs)
-    return model, catalog_s, time.perf_counter() - start - catalog_s
+        model = px.XLSINDy(catalog.library(), formulation=formulation).fit(q, t, u=tau,
+                                                                            **kwargs)
+    return model, time.perf_counter() - start
+
+
+def catalogs(system):
+    """The default kinematic catalog and the one offering every joint friction model, and
+    the seconds each took to derive."""
+    from pysindy_xl.mujoco import kinematic_catalog
+
+    built, seconds = {}, {}
+    for name, friction in (("default", None), ("friction", "all")):
+        start = time.perf_counter()
+        built[name] = kinematic_catalog(system, friction=friction)
+        seconds[name] = time.perf_counter() - start
+    return built, seconds
 
 
 def scores(predicted, measured):
@@ -142,18 +155,20 @@ def run(arm):
     cutoff = baseline.cutoff
 
     system = mjcf_system(urdf)
-    models = {}
-    models["default"], record["catalog_s"], record["default_fit_s"] = fit_package(
-        system, t, q, tau)
+    built, record["catalog_s"] = catalogs(system)
+    models, record["fit_s"] = {}, {}
+    models["default"], record["fit_s"]["default"] = fit_package(built["default"], t, q, tau)
+    models["default-friction"], record["fit_s"]["default-friction"] = fit_package(
+        built["friction"], t, q, tau)
     _, qf, qd, qdd, _ = idim.filtered_states(t, q, cutoff)
     grid, _, _, _, tauf = idim.filtered_states(t, q, cutoff, tau)
-    models["strong"], _, record["strong_fit_s"] = fit_package(
-        system, grid, qf, tauf, formulation="strong", derivatives=(qd, qdd))
+    for name, catalog in (("strong", built["default"]), ("strong-friction", built["friction"])):
+        models[name], record["fit_s"][name] = fit_package(
+            catalog, grid, qf, tauf, formulation="strong", derivatives=(qd, qdd))
     published = idim.pinocchio_inverse_dynamics(urdf)
 
-    predictors = {"default": models["default"].predict_forces,
-                  "strong": models["strong"].predict_forces,
-                  "idim-ls": baseline.predict_forces, "published": published}
+    predictors = {name: model.predict_forces for name, model in models.items()}
+    predictors.update({"idim-ls": baseline.predict_forces, "published": published})
     held = {}
     t_test, q_test, tau_test = test
     grid, qf, qd, qdd, _ = idim.filtered_states(t_test, q_test, cutoff)
@@ -164,6 +179,9 @@ def run(arm):
 
     smoothed = (models["default"].smoother or WhittakerSmoother()).smooth(t_test, q_test)
     held["smoother"] = (*smoothed, tau_test)
+    from pysindy_xl.held_out import scoring_derivatives
+
+    held["spline"] = (*scoring_derivatives(t_test, q_test), tau_test)
     record["scores"] = {
         derivatives: {name: scores(predict(*states[:3]), states[3])
                       for name, predict in predictors.items()}
@@ -182,8 +200,9 @@ def table(records) -> str:
                   f"{r['train_samples']} training samples (steps min/median/max "
                   f"{r['train_step_ms'][0]:.2f}/{r['train_step_ms'][1]:.2f}/"
                   f"{r['train_step_ms'][2]:.2f} ms), {r['test_samples']} held out. "
-                  f"Catalog {r['catalog_s']:.1f} s, default fit {r['default_fit_s']:.1f} s, "
-                  f"strong fit {r['strong_fit_s']:.1f} s, IDIM-LS with its cutoff search "
+                  "Catalogs " + ", ".join(f"{k} {v:.1f} s" for k, v in r["catalog_s"].items())
+                  + "; fits " + ", ".join(f"{k} {v:.1f} s" for k, v in r["fit_s"].items())
+                  + f"; IDIM-LS with its cutoff search "
                   f"{r['idim_s']:.1f} s (cutoff {r['idim_cutoff_hz']:g} Hz).", ""]
         for derivatives, by_method in r["scores"].items():
             lines += [f"Held-out derivatives: **{derivatives}**", "",
