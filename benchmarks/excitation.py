@@ -91,9 +91,13 @@ def identify(system, catalog, trajectory, seed, fresh):
         constrained=float(clean.constraint_active.mean()))
 
 
-def run_arm(arm, n_random, n_seeds, out):
-    from pysindy_xl.mujoco import MJCFSystem, excitation_trajectory, generate_dataset
-    from pysindy_xl.mujoco import kinematic_catalog
+def run_arm(arm, n_random, n_seeds, out, restarts=3, max_iter=100):
+    from pysindy_xl.mujoco import (
+        MJCFSystem,
+        excitation_trajectory,
+        generate_dataset,
+        kinematic_catalog,
+    )
 
     system = MJCFSystem(arm_mjcf(arm))
     catalog = kinematic_catalog(system)
@@ -102,7 +106,7 @@ def run_arm(arm, n_random, n_seeds, out):
     limits = LIMITS | {"torque_limits": TORQUE_LIMITS[arm]}
     designs = []
     start = time.perf_counter()
-    best = excitation_trajectory(system, restarts=3, seed=0, **limits)
+    best = excitation_trajectory(system, restarts=restarts, seed=0, max_iter=max_iter, **limits)
     designs.append(("optimized", 0, best, time.perf_counter() - start))
     for seed in range(1, n_random + 1):
         start = time.perf_counter()
@@ -126,7 +130,8 @@ def run_arm(arm, n_random, n_seeds, out):
 def summarize(records) -> str:
     lines = ["| arm | trajectory | condition number (planned) | condition number (as the servos "
              "ran it) | mass-matrix error at 1 % noise (median / worst) | torque error "
-             "(median) | design (s) |", "|---|---|---|---|---|---|---|"]
+             "(median) | servo tracking error (rad, median) | design (s) |",
+             "|---|---|---|---|---|---|---|---|"]
     verdicts = []
     for arm in dict.fromkeys(r["arm"] for r in records):
         rows = {kind: [r for r in records if r["arm"] == arm and r["kind"] == kind]
@@ -142,6 +147,7 @@ def summarize(records) -> str:
                 f"{'' if len(conditions) == 1 else f' ({conditions[0]:.0f}-{conditions[-1]:.0f})'}"
                 f" | {np.median(realized):.1f} | {np.median(mass):.3%} / {np.max(mass):.3%} | "
                 f"{np.median([r['torque_error'] for r in rs]):.2%} | "
+                f"{np.median([r['tracking_error'] for r in rs]):.2f} | "
                 f"{np.median([r['design_s'] for r in rs]):.0f} |")
         ratio = rows["optimized"][0]["condition"] / np.median(
             list({r["design_seed"]: r["condition"] for r in rows["random"]}.values()))
@@ -152,7 +158,15 @@ def summarize(records) -> str:
                         f"{'at most' if better else 'above'} the random trajectories' median")
     return ("Optimized excitation against random Fourier series under the same limits (see "
             "excitation.py for the setup; times are wall clock on a shared 2-core machine)\n\n"
-            + "\n".join(lines) + "\n\n" + "\n".join(verdicts) + "\n")
+            + "\n".join(lines) + "\n\n" + "\n".join(verdicts) + "\n\n" + NOTE)
+
+
+#: What the table does not say by itself.
+NOTE = ("The arms' position servos are soft (``kp = 200 / (k + 1)``): they follow a reference "
+        "with errors of tenths of a radian, so the run is not the planned trajectory. Where they "
+        "distort it most (iiwa: condition number 45 planned, 150 as run, against 85 for the "
+        "random series as run) the optimized design's gain in accuracy is small; a controller "
+        "that tracks its reference keeps the planned conditioning.\n")
 
 
 def main():
@@ -160,13 +174,15 @@ def main():
     parser.add_argument("--arms", default="ur5,panda,iiwa")
     parser.add_argument("--randoms", type=int, default=5)
     parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--restarts", type=int, default=3)
+    parser.add_argument("--max-iter", type=int, default=100)
     parser.add_argument("--out", default=str(RESULTS))
     args = parser.parse_args()
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     path = out / "excitation.jsonl"
     for arm in args.arms.split(","):
-        run_arm(arm, args.randoms, args.seeds, path)
+        run_arm(arm, args.randoms, args.seeds, path, args.restarts, args.max_iter)
     records = [json.loads(line) for line in path.read_text().splitlines()]
     (out / "excitation.md").write_text(summarize(records))
     print(summarize(records))

@@ -286,8 +286,14 @@ def check_times(t, name: str) -> np.ndarray:
         raise ValueError(f"{name}: expected a 1-D array of at least 2 times, got shape {t.shape}")
     if not np.all(np.isfinite(t)):
         raise ValueError(f"{name}: contains NaN or inf")
-    if np.any(np.diff(t) <= 0):
-        raise ValueError(f"{name}: times must be strictly increasing")
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        bad = np.flatnonzero(steps <= 0)
+        what = "repeated" if steps[bad[0]] == 0 else "decreasing"
+        raise ValueError(
+            f"{name}: times must be strictly increasing; {bad.size} step(s) are not, the first "
+            f"{what} at samples {bad[0]} and {bad[0] + 1} ({t[bad[0]]:.9g}, {t[bad[0] + 1]:.9g}): "
+            "merge the samples of a repeated stamp (keep one, or their mean) and sort the rest")
     return t
 
 

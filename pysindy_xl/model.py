@@ -158,8 +158,11 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
     formulation_ : {"strong", "weak"}
         The formulation used.
     weak_info_ : dict or None
-        Weak formulation: test-function half-width (s), test functions per trajectory, and
-        the smoother's noise estimate per coordinate (first trajectory).
+        Weak formulation: test-function half-width (s), test functions per piece, the
+        smoother's noise estimate per coordinate (first piece), the time grid (``time_grid``:
+        uniform or not, median, smallest and largest step), the gaps the trajectories were
+        cut at (``gaps``: trajectory, time, length) and each piece's trajectory
+        (``segments``); see :func:`~pysindy_xl.weak.weak_regression`.
     selection_ : SelectionResult, LawSelection or None
         How the sparsity was chosen, when the optimizer reports it (``threshold="auto"``;
         an unforced law selected from noisy data by its noise ratio). None after a bagged
@@ -283,7 +286,11 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             Positions, one trajectory or several.
         t : float, array (N,) or list of arrays, optional
             Time step or sample times (strictly increasing), matching ``x``; default
-            ``t_default``.
+            ``t_default``. Stamps as a logger wrote them (jittered, with gaps) are used as
+            they are: the weak form smooths, integrates and propagates the noise on the
+            actual times and cuts a trajectory at a gap its test functions cannot span
+            (:mod:`~pysindy_xl.weak.timegrid`; recorded in ``weak_info_``); a repeated stamp
+            raises a ``ValueError`` naming it.
         x_dot, x_ddot : same layout as ``x``, optional
             Measured velocities and accelerations; computed with ``differentiation_method``
             when absent.

@@ -94,23 +94,25 @@ def test_relative_hinge_friction_couples_absolute_coordinates():
     [
         (CartPole(cart_mass=1.2, pole_mass=0.4, length=0.9, cart_damping=0.2, pole_damping=0.1,
                   point_inertia=1e-10),
-         cart_pole(m_cart=1.2, m_pole=0.4, length=0.9, friction=(0.2, 0.1))),
+         lambda: cart_pole(m_cart=1.2, m_pole=0.4, length=0.9, friction=(0.2, 0.1))),
         (DoublePendulum(mass1=1.0, mass2=0.6, length1=0.8, length2=0.5, damping1=0.1,
                         damping2=0.0, point_inertia=1e-10),
-         double_pendulum(m1=1.0, m2=0.6, l1=0.8, l2=0.5, friction=(0.1, 0.0))),
+         lambda: double_pendulum(m1=1.0, m2=0.6, l1=0.8, l2=0.5, friction=(0.1, 0.0))),
         (CartDoublePendulum(cart_mass=1.0, mass1=0.5, mass2=0.4, length1=0.7, length2=0.5,
                             cart_damping=0.3, damping1=0.05, damping2=0.0, point_inertia=1e-10),
-         cart_double_pendulum(m_cart=1.0, m1=0.5, m2=0.4, l1=0.7, l2=0.5,
-                              friction=(0.3, 0.05, 0.0))),
+         lambda: cart_double_pendulum(m_cart=1.0, m1=0.5, m2=0.4, l1=0.7, l2=0.5,
+                                      friction=(0.3, 0.05, 0.0))),
         (TriplePendulum(mass1=1.0, mass2=0.8, mass3=0.6, length1=0.8, length2=0.6,
                         length3=0.5, damping1=0.0, damping2=0.0, damping3=0.0,
                         point_inertia=1e-10),
-         triple_pendulum(m1=1.0, m2=0.8, m3=0.6, l1=0.8, l2=0.6, l3=0.5,
-                         friction=(0.0, 0.0, 0.0))),
+         lambda: triple_pendulum(m1=1.0, m2=0.8, m3=0.6, l1=0.8, l2=0.6, l3=0.5,
+                                 friction=(0.0, 0.0, 0.0))),
     ],
     ids=["cart-pole", "double-pendulum", "cart-double-pendulum", "triple-pendulum"],
 )
 def test_accelerations_match_independent_mechanics(system, truth):
+    # the sympy.physics.mechanics derivation runs with the test, not at collection
+    truth = truth()
     data = generate_dataset(system, n_trajectories=1, duration=2.0, seed=5, sample_every=10,
                             progress=False)
     tr = data.trajectories[0]

@@ -166,3 +166,44 @@ def test_partly_forced_cart_pole_weighs_the_free_pendulums_rows(cart_pole_system
     assert np.array_equal(coef != 0, support), model.equations()
     assert np.max(np.abs(coef[support] - true[support]) / np.abs(true[support])) < 0.03
     assert _validates(model, system, 509)
+
+
+class _DelegatingSmoother:
+    """A user's smoother (not a WhittakerSmoother) that smooths like one."""
+
+    def __init__(self, resmooth):
+        self.inner = px.WhittakerSmoother()
+        if resmooth:  # the protocol of noise propagation: noise_ and resmooth
+            self.resmooth = lambda t, x: self.inner.resmooth(t, x)
+
+    def smooth(self, t, x):
+        out = self.inner.smooth(t, x)
+        self.noise_ = self.inner.noise_
+        return out
+
+
+def test_a_custom_smoother_propagates_noise_through_the_protocol():
+    """A smoother of its own class with ``noise_`` and ``resmooth`` gets the noise propagated
+    exactly as the WhittakerSmoother it wraps; one without ``resmooth`` is told so (it used to
+    be dropped silently)."""
+    coords = px.Coordinates(["x"])
+    library = px.CatalogRepartition([
+        px.ExternalForces(coords),
+        px.LagrangeLibrary(coords, [coords.qd[0] ** 2, coords.q[0] ** 2])]).fit()
+    t = np.linspace(0, 20, 2001)
+    x = np.sin(t)[:, None] + 0.01 * np.random.default_rng(0).normal(size=(2001, 1))
+    runs = [{"t": t, "x": x, "x_dot": None, "u": np.zeros((2001, 1)),
+             "mask": np.ones(2001, bool)}] * 2
+    bumps = px.BumpTestFunctions(width=2.0)
+    theta, _, moments, _ = weak_regression(library, runs, bumps, px.WhittakerSmoother())
+    assert moments is not None and np.all(np.diag(moments[0])[1:] > 0)  # forces: exact
+    theta_c, _, moments_c, _ = weak_regression(library, runs, bumps, _DelegatingSmoother(True))
+    np.testing.assert_array_equal(theta_c, theta)
+    np.testing.assert_allclose(moments_c, moments, rtol=1e-12)
+    with pytest.warns(UserWarning, match=r"smoother: _DelegatingSmoother has no resmooth "
+                                         r"method .* not propagated") as record:
+        theta_w, _, moments_w, _ = weak_regression(library, runs, bumps,
+                                                   _DelegatingSmoother(False))
+    assert len([w for w in record if "resmooth" in str(w.message)]) == 1  # once, not per run
+    np.testing.assert_array_equal(theta_w, theta)
+    assert moments_w is None

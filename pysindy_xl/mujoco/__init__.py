@@ -31,6 +31,7 @@ from .generate import (
     simulate_trajectory,
 )
 from .kinematic import KinematicCatalog, PolynomialLagrangeLibrary, kinematic_catalog
+from .payload import Payload, identify_payload
 from .systems import (
     SYSTEMS,
     CartDoublePendulum,
@@ -77,6 +78,8 @@ __all__ = [
     "SumOfSinusoids",
     "FourierTrajectory",
     "excitation_trajectory",
+    "Payload",
+    "identify_payload",
     "add_noise",
     "generate_dataset",
     "simulate_trajectory",

@@ -98,15 +98,45 @@ class FourierTrajectory:
         return values[0] if t.ndim == 0 else values
 
     def q(self, t) -> np.ndarray:
-        """Positions at times ``t``: shape (n,) for a scalar, (len(t), n) for an array."""
+        """Positions at times ``t``.
+
+        Parameters
+        ----------
+        t : float or array, shape (N,)
+
+        Returns
+        -------
+        ndarray
+            Shape (n,) for a scalar ``t``, (N, n) for an array.
+        """
         return self._evaluate(t, 0)
 
     def qd(self, t) -> np.ndarray:
-        """Velocities at times ``t`` (exact derivative of :meth:`q`)."""
+        """Velocities at times ``t``, the exact derivative of :meth:`q`.
+
+        Parameters
+        ----------
+        t : float or array, shape (N,)
+
+        Returns
+        -------
+        ndarray
+            Shape (n,) for a scalar ``t``, (N, n) for an array.
+        """
         return self._evaluate(t, 1)
 
     def qdd(self, t) -> np.ndarray:
-        """Accelerations at times ``t`` (exact second derivative of :meth:`q`)."""
+        """Accelerations at times ``t``, the exact second derivative of :meth:`q`.
+
+        Parameters
+        ----------
+        t : float or array, shape (N,)
+
+        Returns
+        -------
+        ndarray
+            Shape (n,) for a scalar ``t``, (N, n) for an array.
+        """
         return self._evaluate(t, 2)
 
     def controls(self, system) -> SumOfSinusoids:
@@ -191,7 +221,13 @@ class FourierTrajectory:
             writer.writerows([[repr(float(v)) for v in row] for row in columns])
 
     def to_dict(self) -> dict:
-        """JSON-serializable description (:meth:`from_dict` reads it back)."""
+        """JSON-serializable description (:meth:`from_dict` reads it back).
+
+        Returns
+        -------
+        dict
+            Keys ``q0``, ``a``, ``b``, ``period``, ``names``, ``condition_number``.
+        """
         return {"q0": self.q0.tolist(), "a": self.a.tolist(), "b": self.b.tolist(),
                 "period": self.period, "names": list(self.names),
                 "condition_number": self.condition_number}
@@ -199,6 +235,15 @@ class FourierTrajectory:
     @classmethod
     def from_dict(cls, data: dict) -> FourierTrajectory:
         """Inverse of :meth:`to_dict`.
+
+        Parameters
+        ----------
+        data : dict
+            As written by :meth:`to_dict` (``names`` and ``condition_number`` optional).
+
+        Returns
+        -------
+        FourierTrajectory
 
         Raises
         ------

@@ -14,6 +14,7 @@ from .smoothing import (
     finite_difference_weights,
     whittaker_smooth,
 )
+from .timegrid import grid_summary, split_at_gaps, stamp_noise_ratio
 
 __all__ = [
     "BumpTestFunctions",
@@ -28,4 +29,7 @@ __all__ = [
     "propagated_draws",
     "WeakNoise",
     "RowWhitener",
+    "split_at_gaps",
+    "grid_summary",
+    "stamp_noise_ratio",
 ]

@@ -8,13 +8,15 @@ rows stay coordinate-major over all trajectories.
 
 from __future__ import annotations
 
+import copy
 import warnings
 
 import numpy as np
 
 from ..feature_library import stack_variables
 from .noise import WeakNoise, draw_moments
-from .smoothing import WhittakerSmoother, whittaker_smooth
+from .smoothing import WhittakerSmoother, is_uniform
+from .timegrid import STAMP_NOISE_RATIO, grid_summary, split_at_gaps, stamp_noise_ratio
 
 __all__ = ["weak_regression", "shared_half_width", "propagated_noise", "propagated_draws"]
 
@@ -81,8 +83,11 @@ def propagated_noise(library, d, smoothing, phi, dphi, block, n_draws, rng):
     library : fitted SymbolicLibrary
     d : dict
         One trajectory (``"t"``, ``"x"``, ``"u"``).
-    smoothing : tuple
-        ``(lam, noise, order)`` of the smoother on this trajectory.
+    smoothing : smoother or tuple
+        The smoother as it was after smoothing this trajectory, with ``noise_`` (the noise
+        level per coordinate) and ``resmooth(t, x)`` (the same smoothing of other data, see
+        :meth:`WhittakerSmoother.resmooth <pysindy_xl.WhittakerSmoother.resmooth>`); or
+        ``(lam, noise, order)`` of a :class:`WhittakerSmoother`.
     phi, dphi : sparse matrices, shape (K, N)
     block : ndarray, shape (n * K, F)
         The trajectory's weak columns.
@@ -129,11 +134,14 @@ def propagated_draws(library, d, smoothing, phi, dphi, block, n_draws, rng):
     ndarray, shape (n_draws, n * K, F)
         Rows as in ``block`` (coordinate-major).
     """
-    lam, noise, order = smoothing
+    if isinstance(smoothing, tuple):  # (lam, noise, order) of a WhittakerSmoother
+        lam, noise, order = smoothing
+        smoothing = WhittakerSmoother(order=order)
+        smoothing.lam_, smoothing.noise_ = np.asarray(lam, float), np.asarray(noise, float)
     n = d["x"].shape[1]
-    noisy = [d["x"] + noise * rng.normal(size=d["x"].shape) for _ in range(n_draws)]
-    # all the draws smoothed side by side: each weight's system is factored once
-    smoothed = whittaker_smooth(d["t"], np.hstack(noisy), np.tile(lam, n_draws), order)
+    noisy = [d["x"] + smoothing.noise_ * rng.normal(size=d["x"].shape) for _ in range(n_draws)]
+    # all the draws smoothed side by side (Whittaker: each weight's system factored once)
+    smoothed = smoothing.resmooth(d["t"], np.hstack(noisy))
     draws = np.empty((n_draws,) + block.shape)
     for k in range(n_draws):
         q, qd, qdd = (values[:, k * n : (k + 1) * n] for values in smoothed)
@@ -155,7 +163,8 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         given), ``"u"`` (forces or None) and ``"mask"`` (bool (N,), samples to explain).
     test_functions : BumpTestFunctions
     smoother : WhittakerSmoother
-        Anything with ``smooth(t, x) -> (q, qd, qdd)``.
+        Anything with ``smooth(t, x) -> (q, qd, qdd)``; it propagates the noise of the
+        positions when it also has ``noise_`` and ``resmooth`` (see :func:`propagated_draws`).
     noise : {"moments", "draws"}, default "moments"
         What to return of the propagated noise: its moments, or its draws with the
         structure of the rows (:class:`~pysindy_xl.weak.noise.WeakNoise`, which gives the
@@ -175,11 +184,22 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         ``E[E_c^T E_c]`` for the errors ``E_c`` of each coordinate's rows due to the position
         noise (:func:`propagated_noise`), for the errors-in-variables correction of the
         optimizers (a :class:`~pysindy_xl.weak.noise.WeakNoise` with ``noise="draws"``);
-        None unless a :class:`WhittakerSmoother` estimated the noise of every trajectory and
-        no velocities were measured.
+        None unless the smoother estimated the noise of every trajectory and can smooth
+        again with the same weights (``noise_`` and ``resmooth``, as
+        :class:`WhittakerSmoother`), and no velocities were measured.
     info : dict
-        ``half_width`` (s), ``test_functions`` (count per trajectory used), ``noise`` (the
-        smoother's noise estimate per coordinate on the first trajectory).
+        ``half_width`` (s), ``test_functions`` (count per piece used), ``noise`` (the
+        smoother's noise estimate per coordinate on the first piece), ``time_grid``
+        (:func:`~pysindy_xl.weak.timegrid.grid_summary` of the stamps), ``gaps`` (the cuts
+        of :func:`~pysindy_xl.weak.timegrid.split_at_gaps`) and ``segments`` (for each piece
+        used, its trajectory).
+
+    Notes
+    -----
+    Trajectories are cut at steps longer than ``test_functions.max_gap(half_width)`` (when
+    the test functions have that method): no test function and no smoother spans such a gap
+    (:mod:`~pysindy_xl.weak.timegrid`). Pieces shorter than one test function are left out
+    with a warning; the states returned are those of the pieces used.
 
     Examples
     --------
@@ -204,37 +224,72 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         if not callable(getattr(value, kind, None)):
             raise TypeError(f"{name}: expected an object with a {kind} method, got "
                             f"{type(value).__name__}")
-    states, smoothing, noise_level = [], [], None
-    for d in trajectories:
-        q, qd, qdd = smoother.smooth(d["t"], d["x"])
-        if noise_level is None:
-            noise_level = getattr(smoother, "noise_", None)
-        smoothing.append((smoother.lam_, smoother.noise_, smoother.order)
-                         if isinstance(smoother, WhittakerSmoother) else None)
-        if d["x_dot"] is not None:  # measured velocities are better than estimated ones
-            q, qd = d["x"], d["x_dot"]
-            smoothing[-1] = None
-        states.append(stack_variables(q, qd, qdd, d["u"], d["t"]))
     if half_width is None:
         half_width = shared_half_width(test_functions, trajectories, width_columns)
-    durations = np.array([d["t"][-1] - d["t"][0] for d in trajectories])
+    max_gap = getattr(test_functions, "max_gap", None)
+    segments, source, gaps = split_at_gaps(
+        trajectories, np.inf if max_gap is None else max_gap(half_width))
+    durations = np.array([d["t"][-1] - d["t"][0] for d in segments])
     usable = np.flatnonzero(durations >= 2 * half_width)
-    if len(usable) < len(trajectories):
-        short = np.flatnonzero(durations < 2 * half_width).tolist()
+    summary = grid_summary([d["t"] for d in trajectories])
+    if len(usable) < len(segments):
+        short = sorted(set(source[durations < 2 * half_width].tolist()))
+        what = (f"pieces (between {len(gaps)} gaps longer than {max_gap(half_width):.3g} s) "
+                "of " if gaps else "")
         warnings.warn(
-            f"x: trajectories {short} are shorter than one test function (support "
+            f"x: {what}trajectories {short} are shorter than one test function (support "
             f"{2 * half_width:.3g} s) and are left out of the weak regression",
             UserWarning, stacklevel=4,
         )
-    propagate = all(smoothing[k] is not None and np.all(np.isfinite(smoothing[k][1]))
-                    for k in usable)
-    n_samples = sum(len(trajectories[k]["t"]) for k in usable)
+    if usable.size == 0:
+        raise ValueError(
+            f"t: every piece of the trajectories between gaps longer than "
+            f"{max_gap(half_width):.3g} s is shorter than one test function (support "
+            f"{2 * half_width:.3g} s); resample across the gaps or set a smaller width")
+    pieces = [segments[k] for k in usable]
+    states, smoothing, noise_level = [], [], None
+    propagates, warned = callable(getattr(smoother, "resmooth", None)), False
+    for d in pieces:
+        q, qd, qdd = smoother.smooth(d["t"], d["x"])
+        if noise_level is None:
+            noise_level = getattr(smoother, "noise_", None)
+        # the smoother as it smoothed this trajectory (its weights), for the noise propagation
+        smoothing.append(copy.copy(smoother) if propagates else None)
+        if d["x_dot"] is not None:  # measured velocities are better than estimated ones
+            q, qd = d["x"], d["x_dot"]
+            smoothing[-1] = None
+        elif not propagates and not warned:
+            warned = True
+            warnings.warn(
+                f"smoother: {type(smoother).__name__} has no resmooth method (and noise_ "
+                "attribute), so the noise of the positions is not propagated into the weak "
+                "columns and the fit is not corrected for it; see WhittakerSmoother.resmooth",
+                UserWarning, stacklevel=4)
+        states.append(stack_variables(q, qd, qdd, d["u"], d["t"]))
+
+    def estimated(piece):  # a smoother copy that estimated its noise
+        return piece is not None and np.all(np.isfinite(getattr(piece, "noise_", np.nan)))
+
+    first = next((k for k, (d, piece) in enumerate(zip(pieces, smoothing, strict=True))
+                  if estimated(piece) and not is_uniform(d["t"])), None)
+    if first is not None:  # are the stamps sampling times?
+        ratio = stamp_noise_ratio(pieces[first]["t"], pieces[first]["x"],
+                                  smoothing[first].noise_,
+                                  getattr(smoothing[first], "order", 3))
+        summary["stamp_noise_ratio"] = ratio
+        if ratio > STAMP_NOISE_RATIO:
+            warnings.warn(
+                f"t: the positions look {ratio:.3g} times noisier at their stamps than read at "
+                "uniform steps; the stamps may be arrival times of samples taken at a fixed "
+                "rate, whose delays pass for motion: if so, pass uniform times",
+                UserWarning, stacklevel=4)
+    propagate = all(estimated(piece) for piece in smoothing)
+    n_samples = sum(len(d["t"]) for d in pieces)
     n_draws = int(np.clip(np.ceil(_PROPAGATION_SAMPLES / max(n_samples, 1)), 1, 16))
     rng = np.random.default_rng(0)  # reproducible fits
     n = library.coords.n
     blocks, draws, runs = [], [], []
-    for k in usable:
-        d, z = trajectories[k], states[k]
+    for k, (d, z) in enumerate(zip(pieces, states, strict=True)):
         phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
         overlap, kept = _overlap_rows(phi), np.arange(phi.shape[0])
         if not d["mask"].all():  # drop the test functions that see a masked sample
@@ -258,7 +313,8 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         propagated = WeakNoise(np.concatenate(draws, axis=2).reshape(n_draws, theta.shape[0], -1),
                                n, _row_runs(runs, n))
     info = {"half_width": half_width, "test_functions": [b.shape[1] for b in blocks],
-            "noise": None if noise_level is None else np.asarray(noise_level).tolist()}
+            "noise": None if noise_level is None else np.asarray(noise_level).tolist(),
+            "time_grid": summary, "gaps": gaps, "segments": source[usable].tolist()}
     if noise == "moments" and propagated is not None:
         propagated = propagated.moments()
     return theta, np.vstack(states), propagated, info
