@@ -167,7 +167,8 @@ def run_demo(args) -> dict:
         "solver": solver,
         "n_samples": n_samples,
         "data": {key: dataset.metadata.get(key) for key in (
-            "noise", "noise_model", "derivatives", "timestep", "sample_every", "constraints")},
+            "noise", "noise_model", "derivatives", "timestep", "sample_every", "constraints",
+            "integrator", "substeps", "integration", "peak_velocity")},
         "excluded_joints": list(getattr(system, "excluded_joints", ())),
         "joint_parameters": joints,
         "physics": physics,

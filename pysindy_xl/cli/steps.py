@@ -103,14 +103,15 @@ def data_lines(system, dataset):
     period = meta["timestep"] * meta["sample_every"]
     lines = [f"  sampling every {meta['sample_every']} step(s) of {meta['timestep'] * 1e3:g} ms "
              f"= {period * 1e3:g} ms"]
-    if meta.get("integrator") and getattr(system, "mj_model", None) is not None:
-        authored = int(system.mj_model().opt.integrator)
+    integration = meta.get("integration")
+    if integration and getattr(system, "mj_model", None) is not None:
         from pysindy_xl.mujoco.generate import INTEGRATORS
 
-        if INTEGRATORS.get(meta["integrator"]) != authored:
-            lines.append(f"  integrated with {meta['integrator']} instead of the model's own "
-                         "implicit step, whose damping and servo gains would bias the "
-                         "recorded positions against the continuous equations")
+        authored = int(system.mj_model().opt.integrator)
+        if INTEGRATORS.get(integration["integrator"]) != authored or integration["substeps"] > 1:
+            lines.append(f"  integrated with {integration['reason']}")
+            joint, peak = max(meta["peak_velocity"].items(), key=lambda item: item[1])
+            lines.append(f"  peak joint velocity {peak:.3g} ({joint})")
     if meta.get("derivatives") == "none":
         lines.append(f"  noise model {meta['noise_model']}: noisy positions only, no velocity "
                      "or acceleration given (weak formulation on smoothed states)")

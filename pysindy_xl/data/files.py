@@ -33,7 +33,7 @@ class DatasetError(ValueError):
     >>> Trajectory(t=[0.0, 1.0, 0.5], q=[[0.0], [1.0], [2.0]])
     Traceback (most recent call last):
     ...
-    pysindy_xl.data.files.DatasetError: t: times must be strictly increasing
+    pysindy_xl.data.files.DatasetError: t: times must be strictly increasing; ...
     """
 
 

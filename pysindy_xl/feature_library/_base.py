@@ -18,6 +18,8 @@ model is ``Theta @ xi = 0``, i.e. for each coordinate ``c``: ``sum_j xi_j E[c, j
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 import scipy.sparse
 import sympy as sp
@@ -57,6 +59,35 @@ def _derived(key, derive):
     while len(_DERIVED) > _CACHED_DERIVED:
         del _DERIVED[next(iter(_DERIVED))]
     return found
+
+
+class TermChain(Sequence):
+    """The terms of several libraries one after another, each read from its library's own
+    sequence when asked for (a kinematic catalog's sympy terms are built on demand)."""
+
+    def __init__(self, parts):
+        self.parts = [p if isinstance(p, Sequence) else list(p) for p in parts]
+        self._offsets = np.cumsum([0] + [len(p) for p in self.parts])
+
+    def __len__(self):
+        return int(self._offsets[-1])
+
+    def __getitem__(self, index):
+        if isinstance(index, slice):
+            return [self[k] for k in range(*index.indices(len(self)))]
+        index = range(len(self))[index]  # negative indices, IndexError
+        part = int(np.searchsorted(self._offsets, index, side="right")) - 1
+        return self.parts[part][index - int(self._offsets[part])]
+
+    def __eq__(self, other):
+        if isinstance(other, (list, tuple, Sequence)) and not isinstance(other, str):
+            return len(self) == len(other) and list(self) == list(other)
+        return NotImplemented
+
+    __hash__ = None
+
+    def __repr__(self):
+        return repr(list(self))
 
 
 def _clone_parameter(value):
@@ -204,7 +235,10 @@ class SymbolicLibrary(BaseFeatureLibrary):
         self.feature_names_ = list(names)
         self.symbolic_matrix_ = matrix
         self.n_output_features_ = len(names)
-        self.feature_terms_ = list(self._feature_terms())
+        terms = self._feature_terms()
+        # a lazy sequence (terms built on demand, e.g. TrigTerms) stays one
+        self.feature_terms_ = (terms if isinstance(terms, Sequence)
+                               and not isinstance(terms, (list, str)) else list(terms))
         self.entry_index_ = np.array([(c, j) for c in range(n) for j in range(len(names))
                                       if matrix[c, j] != 0], dtype=int).reshape(-1, 2)
         for stale in ("weak_P_", "weak_Q_", "_weak_evaluate", "_weak_entry_index",

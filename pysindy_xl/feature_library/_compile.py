@@ -324,10 +324,7 @@ def _compile_terms(variables: tuple, terms: Terms):
     unknown = set().union(*(a.free_symbols for a in atom_list)) - set(variables)
     if unknown:
         raise ValueError(f"exprs: unknown symbols {sorted(map(str, unknown))}")
-    atom_functions = [
-        position[a] if a in position else sp.lambdify(variables, a, modules="numpy")
-        for a in atom_list
-    ]
+    atom_functions = [_atom_function(a, position, variables) for a in atom_list]
     plan = _Plan(entries, _angle_atoms(atom_list))
     if not plan.direct:  # factored: kept when it builds fewer values than the flat plan
         # (at least one value per distinct monomial; built only when that does not decide)
@@ -364,6 +361,20 @@ def _compile_terms(variables: tuple, terms: Terms):
         return outputs if stacked else list(outputs)
 
     return evaluate
+
+
+_UNARY = {sp.sin: np.sin, sp.cos: np.cos}  # what lambdify makes of them, without lambdify
+
+
+def _atom_function(atom, position, variables):
+    """A data column's index, or the function of the columns that evaluates ``atom``."""
+    if atom in position:
+        return position[atom]
+    function = _UNARY.get(type(atom))
+    if function is not None and atom.args[0] in position:  # sin(q), cos(q): most atoms
+        index = position[atom.args[0]]
+        return lambda *columns: function(columns[index])
+    return sp.lambdify(variables, atom, modules="numpy")
 
 
 def scalar_function(variables, terms: Terms, modules=("math",)):

@@ -17,7 +17,8 @@ from ..physical.rigid_body import KinematicTree, physical_parameters_from_base
 from ..symbols import as_expr_list
 from ._compile import Terms
 from .lagrange import LagrangeLibrary
-from .trigpoly import TrigPolynomial
+from .trigpoly import TrigPolynomial, euler_lagrange_many
+from .trigterms import TrigTerms
 
 __all__ = ["PolynomialLagrangeLibrary"]
 
@@ -100,17 +101,18 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         return self.parameters is not None
 
     def _build_symbolic(self):
-        terms = as_expr_list(self.terms, "terms")
+        trig = isinstance(self.terms, TrigTerms) and self.terms.coords == self.coords
+        terms = self.terms if trig else as_expr_list(self.terms, "terms")
         if self.tree is not None:
             self._check_tree()
         self.__dict__.pop("_polynomial_columns", None)
-        if not terms:
+        if not len(terms):
             return super()._build_symbolic()  # raises the ValueError of LagrangeLibrary
         coords = self.coords
-        key = (tuple(coords.variables), tuple(terms))
+        key = ("polynomials", terms.key) if trig else (tuple(coords.variables), tuple(terms))
         derivation = _DERIVATIONS.pop(key, None)
         if derivation is None:
-            derivation = _derive(coords, terms)
+            derivation = _derive_trig(terms) if trig else _derive(coords, terms)
         _DERIVATIONS[key] = derivation  # most recent last
         while len(_DERIVATIONS) > _CACHED_DERIVATIONS:
             del _DERIVATIONS[next(iter(_DERIVATIONS))]
@@ -171,13 +173,15 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         atoms = ([sp.sin(q) if angle else q for q, angle in zip(coords.q, angles, strict=True)]
                  + [sp.cos(q) for q in coords.q] + list(coords.qd) + list(coords.qdd))
         entries = []
+        pairs: dict = {}  # (slot, power) tuples shared
         for polynomial in polynomials:
-            rows, slots = np.nonzero(polynomial.exponents)
-            keys = [[] for _ in range(len(polynomial.coefficients))]
-            for row, slot in zip(rows.tolist(), slots.tolist(), strict=True):
-                keys[row].append((slot, int(polynomial.exponents[row, slot])))
-            entries.append([(float(coef), tuple(key)) for coef, key
-                            in zip(polynomial.coefficients.tolist(), keys, strict=True)])
+            rows, slots = np.nonzero(polynomial.exponents)  # row by row, slots increasing
+            powers = polynomial.exponents[rows, slots].tolist()
+            factors = [pairs.setdefault(pair, pair)
+                       for pair in zip(slots.tolist(), powers, strict=True)]
+            bounds = np.searchsorted(rows, np.arange(len(polynomial.coefficients) + 1)).tolist()
+            entries.append([(coef, tuple(factors[bounds[r]:bounds[r + 1]])) for r, coef
+                            in enumerate(polynomial.coefficients.tolist())])
         return Terms(atoms, entries)
 
     def to_spec(self) -> dict:
@@ -190,8 +194,19 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         dict
             Read back by :meth:`from_spec`.
         """
-        terms = as_expr_list(self.terms, "terms")
         coords = self.coords
+        if isinstance(self.terms, TrigTerms) and self.terms.coords == coords and len(self.terms):
+            polynomials = self.terms.polynomials
+            n = coords.n
+            # the angles the terms use, as the sympy path finds them
+            used = np.zeros(n, dtype=bool)
+            for p in polynomials:
+                used |= (p.exponents[:, :2 * n] != 0).reshape(-1, 2, n).any(axis=(0, 1))
+            angles = tuple(bool(a and u) for a, u in zip(self.terms.angles, used, strict=True))
+            items = [{"exponents": p.exponents.tolist(), "coefficients": p.coefficients.tolist()}
+                     for p in polynomials]
+            return self._spec(angles, items)
+        terms = as_expr_list(self.terms, "terms")
         angles = _angles(terms, coords)
         items = []
         for term in terms:
@@ -204,6 +219,9 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
                               "coefficients": polynomial.coefficients.tolist()})
             else:
                 items.append(format_expression(term))
+        return self._spec(angles, items)
+
+    def _spec(self, angles, items) -> dict:
         spec = {"type": self.spec_type, "angles": list(angles), "terms": items}
         if self.parameters is not None:
             spec["parameters"] = [{str(k): float(v) for k, v in p.items()}
@@ -232,7 +250,11 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
                 continue
             exponents, coefficients = reader.polynomial(item, 4 * coords.n,
                                                         f"{cls.spec_type}.terms[{k}]")
-            terms.append(TrigPolynomial(exponents, coefficients, angles).to_sympy(coords))
+            terms.append(TrigPolynomial(exponents, coefficients, angles))
+        if all(isinstance(t, TrigPolynomial) for t in terms):
+            terms = TrigTerms(terms, coords)  # sympy expressions built only when read
+        else:
+            terms = [t.to_sympy(coords) if isinstance(t, TrigPolynomial) else t for t in terms]
         parameters = spec.get("parameters")
         reader.expect(parameters is None or (
             isinstance(parameters, list) and len(parameters) == len(terms)
@@ -286,12 +308,31 @@ def _derive(coords, terms):
         polynomials = [TrigPolynomial.from_sympy(t, coords, angles) for t in terms]
     except ValueError:
         return _NOT_POLYNOMIAL
-    derived = [p.euler_lagrange() for p in polynomials]
+    return _derivation(coords, polynomials, euler_lagrange_many(polynomials),
+                       [_feature_name(t) for t in terms])
+
+
+def _derive_trig(terms: TrigTerms):
+    """The derivation of terms given as polynomials: names formatted from the exponent rows,
+    the Euler-Lagrange columns those the terms carry (a kinematic catalog derived them)."""
+    n = terms.coords.n
+    for p in terms.polynomials:
+        if p.exponents[:, 3 * n:].any():
+            raise ValueError(f"terms: Lagrangian term {TrigTerms([p], terms.coords)[0]} uses "
+                             "accelerations; only positions, velocities and t are allowed")
+    derived = terms.columns
+    if derived is None:
+        derived = euler_lagrange_many(terms.polynomials)
+    return _derivation(terms.coords, list(terms.polynomials), [list(c) for c in derived],
+                       [f"L[{name}]" for name in terms.names()])
+
+
+def _derivation(coords, polynomials, derived, names):
+    angles = polynomials[0].angles
     columns = [[e.to_sympy(coords, evaluate=False) for e in column] for column in derived]
-    matrix = sp.Matrix(coords.n, len(terms), lambda i, j: columns[j][i])
+    matrix = sp.Matrix(coords.n, len(polynomials), lambda i, j: columns[j][i])
     zero_terms = [j for j, column in enumerate(derived) if all(e.is_zero for e in column)]
-    return _Derivation(angles, polynomials, derived, [_feature_name(t) for t in terms], matrix,
-                       zero_terms)
+    return _Derivation(angles, polynomials, derived, names, matrix, zero_terms)
 
 
 def _angles(terms, coords) -> tuple:

@@ -6,7 +6,7 @@ import numpy as np
 import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
-from ._base import SymbolicLibrary
+from ._base import SymbolicLibrary, TermChain
 from ._compile import Terms
 from .external_forces import ExternalForces
 
@@ -45,8 +45,15 @@ def _merge(slices, parts) -> tuple[np.ndarray, Terms]:
         if remap == list(range(len(remap))):  # the first library's atoms: entries as they are
             entries += terms.entries
         elif all(np.diff(remap) > 0):  # order kept: no sorting
-            entries += [[(coef, tuple((remap[a], p) for a, p in key)) for coef, key in entry]
-                        for entry in terms.entries]
+            moved: dict = {}  # each distinct monomial remapped once
+
+            def move(key, moved=moved, remap=remap):
+                found = moved.get(key)
+                if found is None:
+                    found = moved[key] = tuple((remap[a], p) for a, p in key)
+                return found
+
+            entries += [[(coef, move(key)) for coef, key in entry] for entry in terms.entries]
         else:
             entries += [[(coef, tuple(sorted((remap[a], p) for a, p in key)))
                          for coef, key in entry] for entry in terms.entries]
@@ -179,7 +186,7 @@ class CatalogRepartition(SymbolicLibrary):
         return names, sp.Matrix.hstack(*blocks)
 
     def _feature_terms(self):
-        return [term for lib in self.libraries_ for term in lib.feature_terms_]
+        return TermChain([lib.feature_terms_ for lib in self.libraries_])
 
     def _check_columns(self, names, matrix) -> None:
         """Each library checked its own columns when it derived them."""

@@ -6,7 +6,8 @@ the double pendulum on a cart (:mod:`.systems`), randomly forced trajectories wi
 paper's comparison (:mod:`.catalogs`), catalogs derived from the kinematic tree of any MJCF
 model (:mod:`.kinematic`) and the validation of an identified model against a fresh MuJoCo
 trajectory (:mod:`.validation`, :mod:`.plots`), open loop or closed loop through the MJCF's
-actuator law (:mod:`.actuation`).
+actuator law (:mod:`.actuation`). Every generated run is integrated stably and faithfully to
+the continuous equations, and checked (:mod:`.integration`).
 """
 
 from ..data.constraints import contiguous_segments, unconstrained_samples, unconstrained_windows
@@ -30,6 +31,7 @@ from .generate import (
     noise_levels,
     simulate_trajectory,
 )
+from .integration import Integration, UnstableSimulationError, choose_integration
 from .kinematic import KinematicCatalog, PolynomialLagrangeLibrary, kinematic_catalog
 from .payload import Payload, identify_payload
 from .systems import (
@@ -56,6 +58,9 @@ from .validation import (
 )
 
 __all__ = [
+    "Integration",
+    "UnstableSimulationError",
+    "choose_integration",
     "SYSTEMS",
     "CartDoublePendulum",
     "CartPole",

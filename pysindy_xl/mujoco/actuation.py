@@ -30,7 +30,7 @@ import numpy as np
 
 from .systems import get_system
 
-__all__ = ["ActuatorLaw", "actuator_law", "actuator_force_function"]
+__all__ = ["ActuatorLaw", "actuator_law", "actuator_force_function", "servo_bandwidths"]
 
 
 def _supported(model, a: int) -> bool:
@@ -343,3 +343,53 @@ def actuator_force_function(system, signals, force_input: str = "tau"):
     if law is None or law.state_dependent:
         return None
     return law
+
+
+def servo_bandwidths(model) -> np.ndarray:
+    """The bandwidth (rad/s) of each position servo of a MuJoCo model; NaN for other actuators.
+
+    A position servo (affine bias with ``biasprm[1] < 0``) of gains ``kp``, ``kv`` on a joint
+    of effective inertia ``m`` (``mj_fullM``'s diagonal at the reference pose, armature
+    included; joint damping ``d`` added to ``kv``) closes the loop
+    ``m s^2 + (kv + d) s + kp``: its slower pole, ``kp / (kv + d)`` when overdamped and
+    ``sqrt(kp / m)`` otherwise, is how fast it can follow its reference. A reference much
+    faster than that is not tracked: the servo saturates or chatters.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+
+    Returns
+    -------
+    ndarray, shape (nu,)
+
+    Examples
+    --------
+    >>> import mujoco
+    >>> model = mujoco.MjModel.from_xml_string('''<mujoco><worldbody><body>
+    ...   <joint name="j" axis="0 0 1"/>
+    ...   <inertial pos="0 0 0" mass="1" diaginertia="1e-2 1e-2 1e-2"/></body></worldbody>
+    ...   <actuator><position joint="j" kp="100" kv="20"/><motor joint="j"/></actuator>
+    ...   </mujoco>''')
+    >>> servo_bandwidths(model).round(3)  # overdamped: nearly kp / kv
+    array([5.013,   nan])
+    """
+    import mujoco
+
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    mass = np.zeros((model.nv, model.nv))
+    mujoco.mj_fullM(model, data, mass)
+    out = np.full(model.nu, np.nan)
+    for a in range(model.nu):
+        kp, kv = -model.actuator_biasprm[a, 1], -model.actuator_biasprm[a, 2]
+        if not (_supported(model, a) and kp > 0):
+            continue
+        dof = model.jnt_dofadr[model.actuator_trnid[a, 0]]
+        gear = model.actuator_gear[a, 0]
+        m = mass[dof, dof]
+        damping = gear**2 * kv + model.dof_damping[dof]
+        stiffness = gear**2 * kp
+        roots = np.roots([m, damping, stiffness])
+        out[a] = float(np.min(np.abs(roots)))
+    return out

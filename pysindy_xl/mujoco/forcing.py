@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["SumOfSinusoids", "FORCING_MODES"]
+__all__ = ["SumOfSinusoids", "FORCING_MODES", "within_servo_reach", "REFERENCE_SPEED",
+           "SERVO_BANDWIDTH_FRACTION"]
 
 #: implicit: no force (random initial condition only); explicit: every actuator driven;
 #: mixed: a chosen subset of the actuators driven.
@@ -186,3 +187,53 @@ class SumOfSinusoids:
                        data.get("offsets"))
         except (KeyError, TypeError) as error:
             raise ValueError(f"data: not a SumOfSinusoids description ({error})") from None
+
+
+#: A servo's reference stays below this fraction of its bandwidth (:func:`servo_bandwidths`).
+SERVO_BANDWIDTH_FRACTION = 0.5
+#: Peak speed of a servo's reference: hinge joints (rad/s), slide joints (m/s), typical of
+#: the velocity limits of real arms (MJCF has none).
+REFERENCE_SPEED = {"hinge": np.pi, "slide": 1.0}
+
+
+def within_servo_reach(signals: SumOfSinusoids, model) -> SumOfSinusoids:
+    """The position servos' references of ``signals`` slowed to their reach.
+
+    The band of each servo's reference is scaled below ``SERVO_BANDWIDTH_FRACTION`` of the
+    servo's bandwidth (:func:`~pysindy_xl.mujoco.actuation.servo_bandwidths`), its amplitudes
+    so that its speed bound ``sum_k 2 pi f_k A_k`` (in joint units) stays below
+    ``REFERENCE_SPEED``. Faster references are not tracked: the servo saturates, chatters,
+    and drives its joint far faster than any real arm moves.
+
+    Parameters
+    ----------
+    signals : SumOfSinusoids
+        One signal per actuator of ``model``.
+    model : mujoco.MjModel
+
+    Returns
+    -------
+    SumOfSinusoids
+        ``signals`` itself when no driven actuator is a position servo.
+    """
+    import mujoco
+
+    from .actuation import servo_bandwidths
+
+    bandwidth = servo_bandwidths(model)
+    servo = np.isfinite(bandwidth) & np.any(signals.amplitudes != 0, axis=1)
+    if not servo.any():
+        return signals
+    top = SERVO_BANDWIDTH_FRACTION * np.where(servo, bandwidth, 0.0) / (2 * np.pi)
+    highest = signals.frequencies.max(axis=1)
+    band = np.where(servo & (highest > top), top / highest, 1.0)
+    frequencies = signals.frequencies * band[:, None]
+    # joint reference = ctrl * gain / (kp * gear)
+    kp = np.where(servo, -model.actuator_biasprm[:, 1], 1.0)
+    per_joint = np.abs(model.actuator_gainprm[:, 0] / (kp * model.actuator_gear[:, 0]))
+    speed = (2 * np.pi * frequencies * np.abs(signals.amplitudes)).sum(axis=1) * per_joint
+    slide = model.jnt_type[model.actuator_trnid[:, 0]] == int(mujoco.mjtJoint.mjJNT_SLIDE)
+    limit = np.where(slide, REFERENCE_SPEED["slide"], REFERENCE_SPEED["hinge"])
+    factor = np.where(servo & (speed > limit), limit / np.maximum(speed, 1e-300), 1.0)
+    return SumOfSinusoids(signals.amplitudes * factor[:, None], frequencies, signals.phases,
+                          signals.offsets)

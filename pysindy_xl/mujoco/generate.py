@@ -16,13 +16,15 @@ from .._validation import check_option
 from ..data.dataset import Dataset, Trajectory
 from ..data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
 from .actuation import actuator_force_function, start_on_reference
-from .forcing import FORCING_MODES, SumOfSinusoids
+from .forcing import FORCING_MODES, SumOfSinusoids, within_servo_reach
 from .integration import (
     INTEGRATORS,
     Integration,
     UnstableSimulationError,
     check_run,
     choose_integration,
+    settled,
+    settling_time,
 )
 from .systems import MuJoCoSystem, get_system
 
@@ -107,7 +109,11 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
     Undriven actuators get a zero signal. An actuator with a ``ctrlrange`` oscillates around
     the middle of the range with a peak of ``amplitude`` times the half-range; the others
     with ``system.force_amplitudes`` (by joint) times ``amplitude_scale`` (and times
-    ``amplitude`` when given).
+    ``amplitude`` when given). A position servo's reference stays within its reach: its
+    frequencies below ``SERVO_BANDWIDTH_FRACTION`` of the servo's bandwidth
+    (:func:`~pysindy_xl.mujoco.actuation.servo_bandwidths`) and its peak speed below
+    ``REFERENCE_SPEED`` (pi rad/s, 1 m/s), so that the servo tracks it without saturating
+    or chattering.
 
     Parameters
     ----------
@@ -167,8 +173,9 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
                 1.0 if amplitude is None else amplitude)
     scales = np.where(driven, scales * float(backoff), 0.0)
     offsets = np.where(driven, offsets, 0.0)
-    return SumOfSinusoids.random(scales, rng, n_components=n_components,
-                                 max_frequency=max_frequency, offsets=offsets)
+    signals = SumOfSinusoids.random(scales, rng, n_components=n_components,
+                                    max_frequency=max_frequency, offsets=offsets)
+    return within_servo_reach(signals, model)
 
 
 def _controls(signals, times, nu: int) -> np.ndarray:
@@ -538,6 +545,10 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         raise ValueError(f"duration: {duration} s is {n_steps:.3g} MuJoCo steps per trajectory "
                          "(at most 1e8); record shorter trajectories")
     integration = choose_integration(model, integrator)
+    # a servo started on its reference is not at rest there (gravity, the reference's
+    # acceleration): its stiff modes ring for a few time constants, faster than the samples
+    # resolve; the recorded part starts once they have died out
+    settle = settling_time(model, forced=forcing != "implicit")
     bar = tqdm(total=n_steps * n_trajectories, desc=f"MuJoCo {system.name}", unit="step",
                disable=None if progress is None else not progress, leave=False)
     trajectories = []
@@ -550,9 +561,10 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                     actuator_signals(system, model, forcing, rng, actuators, n_components,
                                      max_frequency, amplitude_scale, amplitude, backoff=factor)
                 q0, qd0 = start_on_reference(system, signals, q0, qd0)
-                clean = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
-                                            bar if attempt == 0 else None,
+                clean = simulate_trajectory(system, duration + settle, signals, q0, qd0,
+                                            sample_every, bar if attempt == 0 else None,
                                             control_at="midpoint", integrator=integration)
+                clean = settled(clean, settle)
                 if clean.constraint_active.mean() <= max_constrained or (
                     attempt == attempts - 1
                 ):

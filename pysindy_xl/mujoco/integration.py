@@ -21,7 +21,8 @@ continuous flow. Two things go wrong with a published arm model's own settings:
 
 :func:`choose_integration` evaluates ``A`` at the reference pose and at random poses inside
 the joint ranges (``M`` changes with the pose) and prices both remedies in substeps of the
-model's time step: RK4 with ``h |lambda| <= RK4_BOUND`` everywhere (well inside the region),
+model's time step: RK4 with ``h |lambda| <= RK4_BOUND`` everywhere (well inside the region,
+and fine enough that the control held over a step does not ring the stiff modes),
 or the model's implicit step (``implicitfast`` for models authored with ``Euler`` or ``RK4``)
 with its inertia bias ``h max_i D_ii`` at most ``BIAS_TOLERANCE`` of the largest entry of
 ``M`` (the normalization of the mass-matrix error of
@@ -45,19 +46,24 @@ import numpy as np
 
 __all__ = ["Integration", "choose_integration", "linear_modes", "check_run",
            "UnstableSimulationError", "INTEGRATORS", "RK4_BOUND", "BIAS_TOLERANCE",
-           "RK4_COST", "RK4_MAX_SUBSTEPS", "MAX_HINGE_VELOCITY", "MAX_SLIDE_VELOCITY"]
+           "RK4_COST", "RK4_MAX_SUBSTEPS", "settling_time", "settled", "MAX_HINGE_VELOCITY",
+           "MAX_SLIDE_VELOCITY"]
 
 #: MuJoCo's integrators by name.
 INTEGRATORS = {"Euler": 0, "RK4": 1, "implicit": 2, "implicitfast": 3}
 
-#: Largest ``h |lambda|`` of an RK4 step (its region reaches 2.785 on the negative real axis).
-RK4_BOUND = 2.0
+#: Largest ``h |lambda|`` of an RK4 step: far inside its stability region (2.785 on the
+#: negative real axis), and small enough that the control, held over each step, does not ring
+#: the stiff servo modes (with ``h |lambda| >= 1`` they settle on the held control within
+#: every step, and the recorded velocities and forces carry a sawtooth of ``kv`` times the
+#: reference's change over a step).
+RK4_BOUND = 0.25
 #: Largest inertia bias ``h max_i D_ii`` of an implicit step, relative to ``max |M_ij|``.
 BIAS_TOLERANCE = 5e-3
 #: Cost of an RK4 step in implicit steps (four evaluations against one and a factorization).
 RK4_COST = 4.0
 #: RK4 (no inertia bias at all) is kept up to this many substeps even where it costs more.
-RK4_MAX_SUBSTEPS = 32
+RK4_MAX_SUBSTEPS = 64
 #: Velocity bound of a sane run: hinge joints (rad/s) and slide joints (m/s).
 MAX_HINGE_VELOCITY = 100.0
 MAX_SLIDE_VELOCITY = 20.0
@@ -251,7 +257,7 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
     ...   <actuator><position joint="j" kp="3000" kv="300"/></actuator></mujoco>''')
     >>> choice = choose_integration(model)
     >>> choice.integrator, choice.substeps, choice.stability <= RK4_BOUND
-    ('RK4', 300, True)
+    ('RK4', 2400, True)
     """
     from .._validation import check_option
 
@@ -388,3 +394,53 @@ def check_run(model, qpos, qvel, qacc, energy=None, bad_accelerations: int = 0,
                 f"{label}: the energy of an unforced run grew by {growth:.3g} J{how}{advice}")
     return {"peak_velocity": {name: float(p) for name, p in zip(names, peak, strict=True)},
             "velocity_bound": {name: float(b) for name, b in zip(names, bound, strict=True)}}
+
+
+def settling_time(model, forced: bool = True) -> float:
+    """Time after which the stiff servo modes excited by a start on the reference are gone:
+    20 time constants of the fastest servo's bandwidth, at most 0.1 s (the stiff modes are
+    far faster), in whole model steps; zero without position servos or without forcing.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+    forced : bool, default True
+        Whether the run is driven (an undriven run starts where it is drawn).
+
+    Returns
+    -------
+    float
+        Seconds.
+    """
+    from .actuation import servo_bandwidths
+
+    bandwidth = servo_bandwidths(model)
+    if not forced or not np.any(np.isfinite(bandwidth)):
+        return 0.0
+    steps = np.ceil(min(0.1, 20.0 / np.nanmax(bandwidth)) / model.opt.timestep)
+    return float(steps * model.opt.timestep)
+
+
+def settled(trajectory, settle: float):
+    """The trajectory from time ``settle`` on (times kept: the controls are functions of time).
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+    settle : float
+        Seconds to drop from the start; ``info["settle"]`` records them.
+
+    Returns
+    -------
+    Trajectory
+    """
+    from ..data.dataset import Trajectory
+
+    if settle <= 0:
+        return trajectory
+    keep = trajectory.t >= trajectory.t[0] + settle - 1e-12
+    fields = {key: (value[keep] if isinstance(value, np.ndarray) and value.ndim
+                    and len(value) == len(keep) else value)
+              for key, value in vars(trajectory).items()}
+    fields["info"] = dict(trajectory.info, settle=settle)
+    return Trajectory(**fields)

@@ -23,11 +23,11 @@ the *combination* of physical parameters that :attr:`KinematicCatalog.parameters
 identified model reports physical parameters.
 
 The derivation runs on sparse trigonometric polynomials
-(:mod:`pysindy_xl.feature_library.trigpoly`, with
-``cos^2 = 1 - sin^2`` as canonical form), not on generic sympy expressions, and
-:class:`PolynomialLagrangeLibrary` derives the Euler-Lagrange columns the same way: a 4-joint
-spatial arm with tilted axes takes about 1 s to derive and 2 s to turn into a library, a 7-joint
-robot-like arm about 6 s and 7 s (see ``benchmarks/kinematic_catalog.py``).
+(:mod:`pysindy_xl.feature_library.trigpoly`, with ``cos^2 = 1 - sin^2`` as canonical form), not
+on generic sympy expressions, and stays there: the catalog's terms are a
+:class:`~pysindy_xl.feature_library.trigterms.TrigTerms` whose library derives its columns,
+names and evaluators from the polynomials (and the columns derived here); a term's sympy
+expression is built only when read. Timings: ``benchmarks/kinematic_catalog.py``.
 
 Friction and springs are not Lagrangian: each joint adds classical candidates (viscous
 ``qvel_k``, smooth Coulomb ``tanh(qvel_k / eps)``, and ``qpos_k - springref_k`` for joints with
@@ -47,10 +47,12 @@ import time
 
 import mujoco
 import numpy as np
+import threadpoolctl
 
 from ..feature_library import PolynomialLagrangeLibrary
 from ..feature_library.joint_friction import FRICTION_MODELS
-from ..feature_library.trigpoly import evaluate_many, state_values
+from ..feature_library.trigpoly import euler_lagrange_many, evaluate_many, state_values
+from ..feature_library.trigterms import TrigTerms
 from ..physical.rigid_body import KinematicTree
 from ..symbols import Coordinates
 from ._kinematic_build import (
@@ -200,7 +202,7 @@ class KinematicCatalog:
         )
 
         libraries = [ExternalForces(self.coords, interlink=interlink),
-                     PolynomialLagrangeLibrary(self.coords, list(self.lagrange_terms),
+                     PolynomialLagrangeLibrary(self.coords, _shared(self.lagrange_terms),
                                                parameters=[dict(p) for p in self.parameters],
                                                tree=self.tree)]
         if classical and self.classical_terms:
@@ -268,8 +270,10 @@ class KinematicCatalog:
         scale = -1.0 / force[0]
         out = np.zeros(len(self.lagrange_terms))
         index = {name: k for k, name in enumerate(names)}
-        for j, term in enumerate(self.lagrange_terms):
-            name = f"L[{term}]"
+        terms = self.lagrange_terms
+        texts = terms.names() if isinstance(terms, TrigTerms) else [str(t) for t in terms]
+        for j, text in enumerate(texts):
+            name = f"L[{text}]"
             if name not in index:
                 raise ValueError(f"model: its catalog has no feature {name!r}")
             out[j] = coefficients[index[name]] * scale
@@ -416,6 +420,12 @@ class KinematicCatalog:
                 cells.append(f"{float(coefficients[j]):.{digits}g}")
             lines.append("  |  ".join(cells))
         return "\n".join(lines)
+
+
+def _shared(terms):
+    """The catalog's terms for a library: a :class:`TrigTerms` as is (immutable), a copy of
+    a list."""
+    return terms if isinstance(terms, TrigTerms) else list(terms)
 
 
 def _states(a, name: str, n: int) -> np.ndarray:
@@ -569,7 +579,7 @@ def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
         candidates.append(0.5 * (joints[k]["velocity"] * joints[k]["velocity"]))
         names.append(f"{system.joint_names[k]}.armature")
         values.append(float(model.dof_armature[model.jnt_dofadr[k]]))
-    columns = [candidate.euler_lagrange() for candidate in candidates]
+    columns = euler_lagrange_many(candidates)
     rng = np.random.default_rng(seed)
     n_samples = 2 * len(candidates) // n + 20
     evaluated = evaluate_many([e for column in columns for e in column],
@@ -577,9 +587,11 @@ def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
     # rows coordinate-major like the feature libraries: (equation, sample)
     regressor = evaluated.reshape(n_samples, len(candidates), n).transpose(2, 0, 1)
     regressor = regressor.reshape(n * n_samples, len(candidates))
-    kept = independent_regressor_columns(regressor)
-    # every column is a combination of the kept ones: base = combination @ physical
-    combination, *_ = np.linalg.lstsq(regressor[:, kept], regressor, rcond=None)
+    # small dense problems: one BLAS thread (threads only contend, as in XLSINDy.fit)
+    with threadpoolctl.threadpool_limits(limits=1, user_api="blas"):
+        kept = independent_regressor_columns(regressor)
+        # every column is a combination of the kept ones: base = combination @ physical
+        combination, *_ = np.linalg.lstsq(regressor[:, kept], regressor, rcond=None)
     # exact combinations come out within ~1e-14: round the noise away (0.9999999999999999)
     combination = np.round(combination, 12)
     combination[np.abs(combination) < 1e-10] = 0.0
@@ -591,7 +603,9 @@ def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
         system, model, coulomb, coulomb_scale)
     return KinematicCatalog(
         system=system, coords=coords,
-        lagrange_terms=[candidates[j].to_sympy(coords) for j in kept],
+        # sympy expressions built only when read: the library derives from the polynomials
+        lagrange_terms=TrigTerms([candidates[j] for j in kept], coords,
+                                 columns=[columns[j] for j in kept]),
         parameters=parameters, physical_names=names, combination=combination,
         physical_values=np.array(values), classical_terms=classical_terms,
         classical_mask=mask, classical_kinds=kinds, classical_values=classical_values,

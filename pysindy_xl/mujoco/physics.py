@@ -40,7 +40,9 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     dict
         ``mass_error`` and ``force_error``: largest error relative to the largest entry of
         MuJoCo's matrix / vector over the states; ``scale``: the factor applied to the
-        identified model (1 for a force-normalized fit); ``positive_definite``: the
+        identified model (1 for a force-normalized fit); ``gravity_error``: the same for the
+        forces at rest (``qd = 0``: gravity and joint springs, MuJoCo's
+        ``qfrc_spring - qfrc_bias``); ``positive_definite``: the
         identified mass matrix is positive definite at every state; ``condition``: its
         largest condition number; ``unidentified``: names of the coordinates whose row of
         the identified mass matrix is zero at every state (no inertia identified, e.g. a
@@ -84,6 +86,7 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     q, qd = np.empty((n_states, system.n)), np.empty((n_states, system.n))
     mass_ref = np.empty((n_states, system.n, system.n))
     force_ref = np.empty((n_states, system.n))
+    gravity_ref = np.empty((n_states, system.n))
     full = np.empty((mj_model.nv, mj_model.nv))
     skipped = 0
     for k in range(n_states):
@@ -104,17 +107,23 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
             mujoco.mj_fullM(mj_model, full, data.qM)
         mass_ref[k] = matrix @ full @ matrix.T
         force_ref[k] = matrix @ (data.qfrc_passive - data.qfrc_bias + data.qfrc_constraint)
+        data.qvel[:] = 0.0  # at rest: gravity and springs only
+        mujoco.mj_forward(mj_model, data)
+        gravity_ref[k] = matrix @ (data.qfrc_spring - data.qfrc_bias)
     z = stack_variables(q, qd, None, np.zeros_like(q), np.zeros(n_states))
     mass, force = dynamics.mass_and_forcing(z)
+    gravity = dynamics.mass_and_forcing(stack_variables(
+        q, np.zeros_like(qd), None, np.zeros_like(q), np.zeros(n_states)))[1]
     held = np.isin(system.coordinate_names, list(getattr(model, "still_coordinates_", ())))
     names = [name for name, h in zip(system.coordinate_names, held, strict=True) if not h]
     mass, mass_ref = (m[:, ~held][:, :, ~held] for m in (mass, mass_ref))
     force, force_ref = force[:, ~held], force_ref[:, ~held]
+    gravity, gravity_ref = gravity[:, ~held], gravity_ref[:, ~held]
     factor = float(np.sum(mass * mass_ref) / np.sum(mass * mass)) if np.any(mass) else 1.0
     forces = model.feature_library_.force_columns_
     if np.allclose(model.coefficients()[forces], -1.0):
         factor = 1.0  # force-normalized: compare in absolute terms
-    mass, force = mass * factor, force * factor
+    mass, force, gravity = mass * factor, force * factor, gravity * factor
     eigenvalues = np.linalg.eigvalsh((mass + np.swapaxes(mass, 1, 2)) / 2)
     empty = np.all(np.abs(mass) <= 1e-12 * max(np.abs(mass).max(), 1e-300), axis=(0, 2))
     return {
@@ -124,6 +133,8 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
         "mass_error": float(np.abs(mass - mass_ref).max() / np.abs(mass_ref).max()),
         "force_error": float(np.abs(force - force_ref).max()
                              / max(np.abs(force_ref).max(), 1e-300)),
+        "gravity_error": float(np.abs(gravity - gravity_ref).max()
+                               / max(np.abs(gravity_ref).max(), 1e-300)),
         "scale": factor,
         "positive_definite": bool(np.all(eigenvalues > 0)),
         "condition": float(np.max(np.abs(eigenvalues).max(axis=1)

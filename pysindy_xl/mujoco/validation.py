@@ -416,7 +416,13 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
         In closed loop, the largest relative actuator-force error (``force_error``, see the
         module docstring) of a valid model.
     **integrator_options
-        Passed to ``model.simulate`` (``rtol``, ``atol``, ``timeout``...).
+        Passed to ``model.simulate`` (``method``, ``rtol``, ``atol``, ``timeout``...). The
+        default, scipy's ``DOP853`` at tight tolerances, is the accurate path; servos make
+        the closed loop stiff, so it takes thousands of evaluations of the model per second
+        of motion. ``method="ROS2"`` (an L-stable Rosenbrock method,
+        :mod:`pysindy_xl.rosenbrock`, steps of at most the MuJoCo model's time step under a
+        local error bound of ``1e-3``) takes fewer at a looser accuracy (see
+        ``benchmarks/closed_loop_validation.py``).
 
     Returns
     -------
@@ -505,6 +511,9 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     use_forces, options = None, dict(integrator_options)
     if closed:
         options["feedback"] = law  # the servos act on the model's own state
+        if options.get("method") == "ROS2" and "step" not in options and system is not None:
+            interval = float(np.min(np.diff(trajectory.t)))
+            options["step"] = min(float(get_system(system).mj_model().opt.timestep), interval)
     elif law is not None and not law.state_dependent:
         use_forces = law  # the continuous signal MuJoCo applied at each internal step
     elif np.any(forces != 0):

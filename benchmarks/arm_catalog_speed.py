@@ -1,0 +1,97 @@
+"""Time of a 7-joint arm's kinematic catalog and of catalog + fit, wall and CPU.
+
+For the panda-like arm of ``benchmarks/robot_arms.py`` (and optionally the arms of
+``tests/kinematic_models.py``): ``kinematic_catalog`` from a cold cache (``catalog``),
+``catalog.library().fit()`` (``library``), and ``kinematic_catalog`` +
+``XLSINDy(catalog.library()).fit(q, t, u=tau)`` on two MuJoCo trajectories of 3,000 samples
+each, every cache cleared first (``catalog_fit``). Each is repeated; the table gives the best
+and the median, wall and process CPU time. Run the same command before and after a change in
+the same conditions (``PYTHONPATH`` pointing at each version) and compare.
+
+Usage: ``python benchmarks/arm_catalog_speed.py --label after [--repeats 3]``; appends to
+``benchmarks/results/arm_catalog_speed.json``.
+"""
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import sys
+import time
+
+import numpy as np
+
+import pysindy_xl as px
+from pysindy_xl.feature_library import _base, polynomial_lagrange
+from pysindy_xl.mujoco import MJCFSystem, generate_dataset
+from pysindy_xl.mujoco import kinematic as kinematic_module
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from robot_arms import arm_mjcf  # noqa: E402
+
+RESULTS = os.path.join(HERE, "results", "arm_catalog_speed.json")
+
+
+def clear_caches():
+    kinematic_module._CACHE.clear()
+    polynomial_lagrange._DERIVATIONS.clear()
+    _base._DERIVED.clear()
+
+
+def timed(function):
+    wall, cpu = time.perf_counter(), time.process_time()
+    out = function()
+    return out, time.perf_counter() - wall, time.process_time() - cpu
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--label", required=True, help="e.g. before or after")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--samples", type=int, default=3000, help="per trajectory (two)")
+    args = parser.parse_args()
+    system = MJCFSystem(arm_mjcf("panda"), force_amplitude=1.0)
+    step = system.mj_model().opt.timestep
+    data = generate_dataset(system, n_trajectories=2, duration=args.samples * step, seed=0,
+                            progress=False)
+    fit_arguments = data.fit_arguments(forces="tau")
+    times = {"catalog": [], "library": [], "catalog_fit": []}
+    for _ in range(args.repeats):
+        clear_caches()
+        catalog, wall, cpu = timed(lambda: px.kinematic_catalog(system))
+        times["catalog"].append((wall, cpu))
+        clear_caches()
+        _, wall, cpu = timed(lambda catalog=catalog: catalog.library().fit())
+        times["library"].append((wall, cpu))
+        clear_caches()
+        model, wall, cpu = timed(lambda: px.XLSINDy(px.kinematic_catalog(system).library())
+                                 .fit(**fit_arguments))
+        times["catalog_fit"].append((wall, cpu))
+    record = {
+        "label": args.label, "pysindy_xl": os.path.dirname(px.__file__),
+        "machine": {"python": platform.python_version(), "cpus": os.cpu_count(),
+                    "load_average": os.getloadavg()},
+        "arm": "panda (benchmarks/robot_arms.py)", "joints": system.n,
+        "samples": int(sum(len(t) for t in fit_arguments["t"])),
+        "coefficients_checksum": float(np.sum(np.abs(model.coefficients()))),
+    }
+    for key, values in times.items():
+        walls, cpus = [v[0] for v in values], [v[1] for v in values]
+        record[key] = {"wall_best": round(min(walls), 3), "wall_median": round(
+            statistics.median(walls), 3), "cpu_best": round(min(cpus), 3),
+            "cpu_median": round(statistics.median(cpus), 3)}
+    print(json.dumps(record))
+    os.makedirs(os.path.dirname(RESULTS), exist_ok=True)
+    records = []
+    if os.path.exists(RESULTS):
+        with open(RESULTS, encoding="utf-8") as f:
+            records = json.load(f)
+    records.append(record)
+    with open(RESULTS, "w", encoding="utf-8") as f:
+        json.dump(records, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,116 @@
+"""Terms held as trigonometric polynomials (TrigTerms): the same names, columns, files and
+coefficients as their sympy expressions, without building those expressions."""
+
+import pickle
+
+import numpy as np
+import pytest
+import sympy as sp
+from kinematic_models import CART_DOUBLE_PENDULUM, PLANAR_ARM, robot_arm
+from sklearn.base import clone
+
+import pysindy_xl as px
+from pysindy_xl.feature_library import PolynomialLagrangeLibrary, stack_variables
+from pysindy_xl.feature_library.trigpoly import TrigPolynomial, euler_lagrange_many
+from pysindy_xl.feature_library.trigterms import TrigTerms
+from pysindy_xl.mujoco import MJCFSystem
+
+
+def _random_polynomials(n, angles, rng, count=200):
+    out = []
+    for _ in range(count):
+        size = int(rng.integers(1, 4))
+        exponents = rng.integers(0, 3, (size, 4 * n)) * (rng.random((size, 4 * n)) < 0.4)
+        exponents[:, 3 * n:] = 0
+        exponents[:, n:2 * n] *= np.asarray(angles)  # no cosine of a linear coordinate
+        values = rng.choice([1.0, 0.5, 2.0, 9.81, 1e-5, 3.25e7, 0.1, 0.123456789], size)
+        signs = rng.choice([1.0, -1.0], size)
+        polynomial = TrigPolynomial(exponents, values * signs, angles)
+        if not polynomial.is_zero:
+            out.append(polynomial)
+    out.append(TrigPolynomial.constant(2.5, angles))
+    out.append(TrigPolynomial.constant(-1.0, angles))
+    return out
+
+
+@pytest.mark.parametrize("angles", [(True,), (True, False), (False, True, True)])
+def test_names_are_sympys_str(angles):
+    """Names are formatted from the exponent rows, exactly as sympy prints the expression."""
+    n = len(angles)
+    coords = px.Coordinates([f"q{k}" for k in range(n)])
+    polynomials = _random_polynomials(n, angles, np.random.default_rng(n))
+    terms = TrigTerms(polynomials, coords)
+    assert terms.names() == [str(p.to_sympy(coords)) for p in polynomials]
+
+
+@pytest.mark.parametrize("xml", [PLANAR_ARM, CART_DOUBLE_PENDULUM, robot_arm(5)],
+                         ids=["planar", "cart-two-link", "robot-5"])
+def test_catalog_library_matches_the_sympy_terms(xml):
+    """The catalog's library (polynomial terms) and the same library given the sympy
+    expressions of its terms have the same names, columns and file description; fitting the
+    first builds no sympy term."""
+    catalog = px.kinematic_catalog(MJCFSystem(xml))
+    terms = catalog.lagrange_terms
+    fresh = TrigTerms(terms.polynomials, terms.coords)  # nothing built yet
+    fast = PolynomialLagrangeLibrary(catalog.coords, fresh, catalog.parameters,
+                                     catalog.tree).fit()
+    assert all(e is None for e in fresh._exprs)
+    expressions = [p.to_sympy(catalog.coords) for p in terms.polynomials]
+    slow = PolynomialLagrangeLibrary(catalog.coords, expressions, catalog.parameters,
+                                     catalog.tree).fit()
+    assert fast.get_feature_names() == slow.get_feature_names()
+    assert fast.get_feature_names() == [f"L[{e}]" for e in expressions]
+    rng = np.random.default_rng(0)
+    x = stack_variables(*rng.normal(size=(4, 30, catalog.coords.n)))
+    np.testing.assert_array_equal(fast.transform(x), slow.transform(x))
+    assert fast.symbolic_matrix_ == slow.symbolic_matrix_
+    assert fast.to_spec() == slow.to_spec()
+    assert list(fresh) == expressions  # items built on demand are the expressions
+    assert fresh + [sp.Integer(1)] == expressions + [1] and [] + fresh == expressions
+    assert fresh[-1] == expressions[-1] and fresh[:2] == expressions[:2]
+
+
+def test_trig_terms_are_shared_and_pickle():
+    catalog = px.kinematic_catalog(MJCFSystem(robot_arm(4)))
+    library = catalog.library()
+    lagrange = library.libraries[1]
+    assert clone(lagrange).terms is lagrange.terms
+    again = pickle.loads(pickle.dumps(lagrange.fit()))
+    assert again.terms == lagrange.terms
+    assert again.get_feature_names() == lagrange.get_feature_names()
+
+
+def test_acceleration_in_a_term_is_refused():
+    coords = px.Coordinates(["a"])
+    exponents = np.zeros((1, 4))
+    exponents[0, 3] = 1  # a_ddot
+    terms = TrigTerms([TrigPolynomial(exponents, [1.0], (True,))], coords)
+    with pytest.raises(ValueError, match="terms: .*accelerations"):
+        PolynomialLagrangeLibrary(coords, terms).fit()
+
+
+def test_bad_polynomials_are_refused():
+    coords = px.Coordinates(["a", "b"])
+    with pytest.raises(ValueError, match="polynomials"):
+        TrigTerms([TrigPolynomial.constant(1.0, (True,))], coords)
+    with pytest.raises(ValueError, match="polynomials"):
+        TrigTerms([TrigPolynomial.constant(1.0, (True, True)),
+                   TrigPolynomial.constant(1.0, (True, False))], coords)
+    assert sp.sympify(TrigTerms([TrigPolynomial.constant(1.0, (True, True))], coords)[0]) == 1
+
+
+@pytest.mark.parametrize("angles", [(True, True, True), (False, True, False)])
+def test_euler_lagrange_many_is_each_polynomials_bit_for_bit(angles):
+    """The stacked derivation gives exactly (same rows, same bits) each polynomial's own
+    Euler-Lagrange column, including merged and dropped round-off terms."""
+    n = len(angles)
+    rng = np.random.default_rng(7)
+    polynomials = _random_polynomials(n, angles, rng, count=60)
+    polynomials += px.kinematic_catalog(MJCFSystem(robot_arm(3))).lagrange_terms.polynomials \
+        if angles == (True, True, True) else []
+    stacked = euler_lagrange_many(polynomials)
+    for polynomial, column in zip(polynomials, stacked, strict=True):
+        for alone, together in zip(polynomial.euler_lagrange(), column, strict=True):
+            np.testing.assert_array_equal(alone.exponents, together.exponents)
+            np.testing.assert_array_equal(alone.coefficients, together.coefficients)
+    assert euler_lagrange_many([]) == []
