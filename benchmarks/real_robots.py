@@ -1,0 +1,235 @@
+"""Real robot logs: held-out joint torques of pysindy-xl against IDIM-LS and the maker's model.
+
+Arms and logs (``benchmarks/data/real/``; sources, licences and columns in its README):
+
+* ``kinova-gen3``: a Kinova Gen3 (7 joints, link-side joint torque sensors) at 1 kHz, one
+  4.9 s excitation run: the first two thirds identify, the last third is predicted. Robot
+  description: Kinova's ``gen3.urdf`` (meshes removed).
+* ``ur5``: a UR5 (6 joints, motor currents, no torque sensors) at about 100 Hz with jittered
+  stamps (2-13 ms): one 56 s run identifies, a second 56 s run with other harmonics is
+  predicted. Torque is ``K_j * current_j`` with one constant per joint, estimated once on the
+  identification run by least squares of the URDF's nominal inverse dynamics plus viscous,
+  Coulomb and offset columns on the current (UR does not publish the constants); every method
+  sees the same torques. Robot description: ``ur5_robot.urdf`` of ``example-robot-data``.
+
+Methods, each on the same training samples:
+
+* ``default``: ``XLSINDy(kinematic_catalog(system).library()).fit(q, t, u=tau)`` on the log
+  as recorded (its own smoother, weak form, physically consistent fit);
+* ``default-friction``: the same with ``kinematic_catalog(system, friction="all")``: every
+  joint offered viscous, Coulomb, asymmetric, Stribeck and offset terms, the fit selecting
+  among them;
+* ``strong`` and ``strong-friction``: the same catalogs and optimizer in the strong form, on
+  the IDIM filter's derivatives and filtered torques;
+* ``idim-ls``: :mod:`idim` (Pinocchio's regressor of the URDF, rotor inertia, viscous,
+  Coulomb and offset per joint, uniform grid, zero-phase Butterworth at the cutoff its own
+  time-blocked cross-validation picks, decimation, OLS then WLS);
+* ``published``: the URDF's own inertial parameters (Pinocchio's RNEA), no friction.
+
+Metric: on the held-out samples, each method's torques from the same held-out derivatives
+against the raw measured torques: RMS per joint in N m and relative to the joint's RMS torque,
+and the total relative error ``|tau_pred - tau|_F / |tau|_F``. Two derivative estimates are
+reported: ``butterworth`` (IDIM's filter at its chosen cutoff, the main table) and
+``smoother`` (the package's default smoother on the held-out positions).
+
+Usage: ``python benchmarks/real_robots.py [--arms kinova-gen3,ur5]``; writes
+``benchmarks/results/real_robots.md`` and ``.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import sys
+import time
+import warnings
+
+import numpy as np
+
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+import idim  # noqa: E402
+
+DATA = pathlib.Path(__file__).parent / "data" / "real"
+RESULTS = pathlib.Path(__file__).parent / "results"
+
+
+def _ur5_urdf() -> pathlib.Path:
+    """The UR5 description shipped by the ``example-robot-data`` package."""
+    import importlib.metadata
+
+    return pathlib.Path(importlib.metadata.distribution("example-robot-data").locate_file(
+        "cmeel.prefix/share/example-robot-data/robots/ur_description/urdf/ur5_robot.urdf"))
+
+
+def _load(name):
+    with np.load(DATA / f"{name}.npz") as f:
+        return {k: f[k] for k in f.files}
+
+
+def kinova():
+    """Training and held-out ``(t, q, tau)`` of the Kinova Gen3 log, and its URDF."""
+    run = _load("kinova_gen3_quadratic")
+    cut = int(len(run["t"]) * 2 / 3)
+    train = tuple(run[k][:cut] for k in ("t", "q", "tau"))
+    test = tuple(run[k][cut:] for k in ("t", "q", "tau"))
+    return train, test, DATA / "gen3.urdf"
+
+
+def ur5():
+    """Training and held-out ``(t, q, tau)`` of the UR5 logs, and its URDF."""
+    urdf = _ur5_urdf()
+    train, test = _load("ur5_14harm50sec"), _load("ur5_15harm50sec")
+    constants = _torque_constants(urdf, train["t"], train["q"], train["current"])
+    return ((train["t"], train["q"], train["current"] * constants),
+            (test["t"], test["q"], test["current"] * constants), urdf)
+
+
+def _torque_constants(urdf, t, q, current, cutoff=4.0):
+    """Per joint, the factor from current to torque: least squares of the URDF's nominal
+    torque plus friction columns on the measured current."""
+    nominal = idim.pinocchio_inverse_dynamics(urdf)
+    _, qf, qd, qdd, cf = idim.filtered_states(t, q, cutoff, current)
+    tau = nominal(qf, qd, qdd)
+    constants = []
+    for j in range(q.shape[1]):
+        columns = np.column_stack([tau[:, j], qd[:, j], np.sign(qd[:, j]), np.ones(len(qd))])
+        slope = np.linalg.lstsq(columns, cf[:, j], rcond=None)[0][0]
+        constants.append(1.0 / slope)
+    return np.array(constants)
+
+
+def mjcf_system(urdf):
+    """The package's system of a URDF (MuJoCo compiles it; meshes are not needed)."""
+    from pysindy_xl.mujoco import MJCFSystem
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the Kinova URDF's impossible inertias, balanced
+        return MJCFSystem(str(urdf))
+
+
+def fit_package(catalog, t, q, tau, formulation="auto", derivatives=None):
+    """``XLSINDy(catalog.library())`` fitted on one run, and its fit time."""
+    import pysindy_xl as px
+
+    start = time.perf_counter()
+    kwargs = {} if derivatives is None else dict(x_dot=derivatives[0], x_ddot=derivatives[1])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = px.XLSINDy(catalog.library(), formulation=formulation).fit(q, t, u=tau,
+                                                                            **kwargs)
+    return model, time.perf_counter() - start
+
+
+def catalogs(system):
+    """The default kinematic catalog and the one offering every joint friction model, and
+    the seconds each took to derive."""
+    from pysindy_xl.mujoco import kinematic_catalog
+
+    built, seconds = {}, {}
+    for name, friction in (("default", None), ("friction", "all")):
+        start = time.perf_counter()
+        built[name] = kinematic_catalog(system, friction=friction)
+        seconds[name] = time.perf_counter() - start
+    return built, seconds
+
+
+def scores(predicted, measured):
+    rms = np.sqrt(np.mean((predicted - measured) ** 2, axis=0))
+    scale = np.sqrt(np.mean(measured**2, axis=0))
+    return {"rms_Nm": rms.tolist(), "relative": (rms / scale).tolist(),
+            "total": idim.relative_error(predicted, measured)}
+
+
+def run(arm):
+    train, test, urdf = {"kinova-gen3": kinova, "ur5": ur5}[arm]()
+    t, q, tau = train
+    record = {"arm": arm, "train_samples": len(t), "test_samples": len(test[0]),
+              "train_step_ms": [1e3 * float(np.min(np.diff(t))), 1e3 * float(np.median(
+                  np.diff(t))), 1e3 * float(np.max(np.diff(t)))]}
+    start = time.perf_counter()
+    baseline = idim.choose_cutoff(idim.pinocchio_regressor(urdf), [(t, q, tau)])
+    record["idim_s"] = time.perf_counter() - start
+    record["idim_cutoff_hz"] = baseline.cutoff
+    record["idim_cv"] = baseline.scores
+    cutoff = baseline.cutoff
+
+    system = mjcf_system(urdf)
+    built, record["catalog_s"] = catalogs(system)
+    models, record["fit_s"] = {}, {}
+    models["default"], record["fit_s"]["default"] = fit_package(built["default"], t, q, tau)
+    models["default-friction"], record["fit_s"]["default-friction"] = fit_package(
+        built["friction"], t, q, tau)
+    _, qf, qd, qdd, _ = idim.filtered_states(t, q, cutoff)
+    grid, _, _, _, tauf = idim.filtered_states(t, q, cutoff, tau)
+    for name, catalog in (("strong", built["default"]), ("strong-friction", built["friction"])):
+        models[name], record["fit_s"][name] = fit_package(
+            catalog, grid, qf, tauf, formulation="strong", derivatives=(qd, qdd))
+    published = idim.pinocchio_inverse_dynamics(urdf)
+
+    predictors = {name: model.predict_forces for name, model in models.items()}
+    predictors.update({"idim-ls": baseline.predict_forces, "published": published})
+    held = {}
+    t_test, q_test, tau_test = test
+    grid, qf, qd, qdd, _ = idim.filtered_states(t_test, q_test, cutoff)
+    measured = np.column_stack([np.interp(grid, t_test, tau_test[:, j])
+                                for j in range(tau_test.shape[1])])
+    held["butterworth"] = (qf, qd, qdd, measured)
+    from pysindy_xl.weak import WhittakerSmoother
+
+    smoothed = (models["default"].smoother or WhittakerSmoother()).smooth(t_test, q_test)
+    held["smoother"] = (*smoothed, tau_test)
+    from pysindy_xl.held_out import scoring_derivatives
+
+    held["spline"] = (*scoring_derivatives(t_test, q_test), tau_test)
+    record["scores"] = {
+        derivatives: {name: scores(predict(*states[:3]), states[3])
+                      for name, predict in predictors.items()}
+        for derivatives, states in held.items()}
+    record["joints"] = list(system.coordinate_names)
+    return record
+
+
+def table(records) -> str:
+    lines = ["# Real robot logs: held-out joint torques", "",
+             "Generated by `python benchmarks/real_robots.py`; see its docstring for data, "
+             "splits and methods. RMS in N m, relative to each joint's RMS torque in "
+             "parentheses; `total` is `|tau_pred - tau|_F / |tau|_F`.", ""]
+    for r in records:
+        lines += [f"## {r['arm']}", "",
+                  f"{r['train_samples']} training samples (steps min/median/max "
+                  f"{r['train_step_ms'][0]:.2f}/{r['train_step_ms'][1]:.2f}/"
+                  f"{r['train_step_ms'][2]:.2f} ms), {r['test_samples']} held out. "
+                  "Catalogs " + ", ".join(f"{k} {v:.1f} s" for k, v in r["catalog_s"].items())
+                  + "; fits " + ", ".join(f"{k} {v:.1f} s" for k, v in r["fit_s"].items())
+                  + f"; IDIM-LS with its cutoff search "
+                  f"{r['idim_s']:.1f} s (cutoff {r['idim_cutoff_hz']:g} Hz).", ""]
+        for derivatives, by_method in r["scores"].items():
+            lines += [f"Held-out derivatives: **{derivatives}**", "",
+                      "| method | total | " + " | ".join(r["joints"]) + " |",
+                      "|---" * (len(r["joints"]) + 2) + "|"]
+            for name, s in by_method.items():
+                cells = [f"{a:.3g} ({100 * b:.1f} %)" for a, b in
+                         zip(s["rms_Nm"], s["relative"], strict=True)]
+                lines.append(f"| {name} | {100 * s['total']:.2f} % | " + " | ".join(cells)
+                             + " |")
+            lines.append("")
+    return "\n".join(lines) + "\n"
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--arms", default="kinova-gen3,ur5")
+    args = parser.parse_args()
+    records = []
+    for arm in args.arms.split(","):
+        print(f"{arm} ...", flush=True)
+        records.append(run(arm))
+        print(table(records[-1:]), flush=True)
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / "real_robots.json").write_text(json.dumps(records, indent=1))
+    (RESULTS / "real_robots.md").write_text(table(records))
+
+
+if __name__ == "__main__":
+    main()
