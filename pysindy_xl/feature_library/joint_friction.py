@@ -116,7 +116,7 @@ class JointFrictionLibrary(SymbolicLibrary):
     kinds_ : list of (str, str)
         ``(model, joint)`` of each feature.
     joints_ : list of str
-    weights_ : ndarray, shape (n, len(joints_))
+    weights_ : ndarray, shape (n, n_joints)
 
     Examples
     --------
@@ -198,7 +198,7 @@ class JointFrictionLibrary(SymbolicLibrary):
 
         Parameters
         ----------
-        coef : array, shape (n_output_features_,)
+        coef : array, shape (n_features,)
 
         Returns
         -------

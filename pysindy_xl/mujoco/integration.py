@@ -248,7 +248,7 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
     Examples
     --------
     A stiff servo (kv = 300) on a light link (1e-3 kg m^2) at MuJoCo's 2 ms step: RK4 at the
-    model's step would be far outside its stability region (h |lambda| = 600).
+    model's step would be far outside its stability region (``h |lambda| = 600``).
 
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string('''<mujoco><option integrator="implicitfast"/>
