@@ -277,8 +277,9 @@ class _NotPolynomial(ValueError):
     """A factor that is not a power of ``sin q``, ``cos q``, ``q`` or ``qd``."""
 
 
-def _normalize(exponents, coefficients, angles):
-    """Rewrite cos^2 = 1 - sin^2, merge equal monomials, drop zero and round-off terms."""
+def _reduce_cosine_squares(exponents, coefficients, owners, angles):
+    """Rewrite ``cos^2 = 1 - sin^2`` until no cosine power reaches 2 (``owners``, if not None,
+    follow their rows)."""
     n = len(angles)
     angle_slots = [n + j for j in range(n) if angles[j]]
     while angle_slots:
@@ -298,6 +299,15 @@ def _normalize(exponents, coefficients, angles):
         exponents = np.vstack([exponents[~first], base, with_sine])
         coefficients = np.concatenate([coefficients[~first], coefficients[picked_rows],
                                        -coefficients[picked_rows]])
+        if owners is not None:
+            owners = np.concatenate([owners[~first], owners[picked_rows],
+                                     owners[picked_rows]])
+    return exponents, coefficients, owners
+
+
+def _normalize(exponents, coefficients, angles):
+    """Rewrite cos^2 = 1 - sin^2, merge equal monomials, drop zero and round-off terms."""
+    exponents, coefficients, _ = _reduce_cosine_squares(exponents, coefficients, None, angles)
     if len(coefficients) == 0:
         return exponents, coefficients
     exponents = np.ascontiguousarray(exponents)
@@ -404,25 +414,8 @@ class _Stack:
 
 def _normalize_owned(exponents, coefficients, owners, angles, count):
     """:func:`_normalize` of each owner's rows (the same operations, per owner)."""
-    n = len(angles)
-    angle_slots = [n + j for j in range(n) if angles[j]]
-    while angle_slots:
-        high = exponents[:, angle_slots] >= 2
-        if not high.any():
-            break
-        row, which = np.nonzero(high)
-        first = np.zeros(len(exponents), dtype=bool)
-        picked_rows, index = np.unique(row, return_index=True)
-        first[picked_rows] = True
-        slot = np.array(angle_slots)[which[index]]
-        base = exponents[picked_rows].copy()
-        base[np.arange(len(base)), slot] -= 2
-        with_sine = base.copy()
-        with_sine[np.arange(len(base)), slot - n] += 2
-        exponents = np.vstack([exponents[~first], base, with_sine])
-        coefficients = np.concatenate([coefficients[~first], coefficients[picked_rows],
-                                       -coefficients[picked_rows]])
-        owners = np.concatenate([owners[~first], owners[picked_rows], owners[picked_rows]])
+    exponents, coefficients, owners = _reduce_cosine_squares(exponents, coefficients, owners,
+                                                             angles)
     if len(coefficients) == 0:
         return exponents, coefficients, owners
     # the owner first in each key: rows group by owner, and within an owner sort as alone
