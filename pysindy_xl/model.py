@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
@@ -40,6 +41,14 @@ from .regression import (
     trajectory_data,
 )
 from .still import block_rows, driven_coordinates, still_columns, still_coordinates
+from .weak import BumpTestFunctions
+from .weak.selection import (
+    FORCE_NOISE_WIDTHS,
+    SCORING_BANDWIDTH,
+    NoiseModel,
+    bandwidth_half_width,
+    choose_noise_model,
+)
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
 
@@ -386,12 +395,17 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             noise = noise.columns(keep)
             noise = noise.coordinates(moving) if still.any() else noise
         structure = library.physical_structure()  # for optimizers that constrain to it
-        optimizer = solve_weak_problem(optimizer, CatalogProblem.from_arrays(
+        problem = CatalogProblem.from_arrays(
             theta[block_rows(n, theta.shape[0], moving)][:, keep], int(moving.sum()),
             force_columns, mass_matrices=mass,
-            physical=None if structure is None else structure.select(keep)), noise,
-            forced[moving].any() if self.residual_covariance == "auto"
-            else self.residual_covariance)
+            physical=None if structure is None else structure.select(keep))
+        weigh = (forced[moving].any() if self.residual_covariance == "auto"
+                 else self.residual_covariance)
+        if (self.residual_covariance == "auto" and self.test_functions is None
+                and noise is not None and forced[moving].all()):
+            problem, noise, weigh = self._choose_noise_model(
+                library, data, regression, problem, noise, optimizer, keep, moving)
+        optimizer = solve_weak_problem(optimizer, problem, noise, weigh)
         coef = np.zeros(theta.shape[1])
         coef[keep] = optimizer.coef_
         self.feature_library_ = library
@@ -418,6 +432,52 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         self._build_dynamics()
         self._check_mass_matrix(z)
         return self
+
+    def _choose_noise_model(self, library, data, regression, problem, noise, optimizer, keep,
+                            moving):
+        """Position noise (the rows as built, weighted) or force noise (narrow test
+        functions, unweighted), whichever predicts held-out time blocks best
+        (:mod:`pysindy_xl.weak.selection`); the choice and every candidate's error go to
+        ``weak_info_["noise_model"]``. Returns the problem, noise and weighting to fit."""
+        info = regression.weak_info
+        tests = BumpTestFunctions()
+        steps = np.concatenate([np.diff(d["t"]) for d in data])
+        scoring = max(bandwidth_half_width(SCORING_BANDWIDTH, tests.power),
+                      tests.min_samples * float(np.quantile(steps, 0.999)))
+        widths = sorted({min(scoring * m, info["half_width"]) for m in FORCE_NOISE_WIDTHS})
+        n = library.coords.n
+
+        def rows(half_width):
+            built = build_regression(library, data, "weak", tests, self.smoother, half_width,
+                                     moving=moving, propagate=False)
+            theta = built.theta[block_rows(n, built.theta.shape[0], moving)][:, keep]
+            return theta, built.weak_info["supports"], built.weak_info
+
+        candidates = [(NoiseModel("positions", info["half_width"], True), problem.theta,
+                       info["supports"], noise)]
+        built = {}
+        for width in widths:
+            theta, supports, built[width] = rows(width)
+            candidates.append((NoiseModel("forces", width, False), theta, supports, None))
+        reference = rows(scoring)[:2]
+        spans = np.array([[d["t"][0], d["t"][-1]] for d in data])
+
+        def solve(theta, propagated, weigh):
+            return solve_weak_problem(clone(optimizer), dataclasses.replace(
+                problem, theta=theta), propagated, weigh).coef_
+
+        best, errors = choose_noise_model(candidates, reference, spans,
+                                          problem.force_columns, solve)
+        chosen = candidates[0 if best is None else best]
+        self.weak_info_ = {**(info if chosen[0].weigh else built[chosen[0].half_width]),
+                           "noise_model": {
+                               "chosen": chosen[0].name, "half_width": chosen[0].half_width,
+                               "candidates": [
+                                   {"noise": c[0].name, "half_width": c[0].half_width,
+                                    "held_out_error": e}
+                                   for c, e in zip(candidates, errors, strict=False)],
+                               "scoring_half_width": scoring}}
+        return dataclasses.replace(problem, theta=chosen[1]), chosen[3], chosen[0].weigh
 
     def _check_options(self):
         """Options of the estimator, checked at the start of fit (one layer: _validation)."""

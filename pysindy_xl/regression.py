@@ -153,7 +153,7 @@ def trajectory_data(x, t, x_dot, x_ddot, u, n: int, sample_mask=None,
 
 
 def build_regression(library, data, formulation: str, test_functions=None, smoother=None,
-                     half_width=None, moving=None) -> Regression:
+                     half_width=None, moving=None, propagate=True) -> Regression:
     """The rows of a fitted catalog on trajectories, in the strong or weak formulation.
 
     Parameters
@@ -171,6 +171,9 @@ def build_regression(library, data, formulation: str, test_functions=None, smoot
     moving : array of bool, shape (n,), optional
         Weak form: the coordinates whose spectra choose the default half-width (default all;
         a fit leaves out those that hold still, :mod:`pysindy_xl.still`).
+    propagate : bool, default True
+        Weak form: propagate the noise of the positions into the rows (``Regression.noise``);
+        False: the rows only.
 
     Returns
     -------
@@ -193,7 +196,8 @@ def build_regression(library, data, formulation: str, test_functions=None, smoot
                 width_multiples=UNFORCED_WIDTH_MULTIPLES if unforced else None)
         theta, states, noise, info = weak_regression(
             library, data, test_functions,
-            copy.deepcopy(smoother) or WhittakerSmoother(), noise="draws",
+            copy.deepcopy(smoother) or WhittakerSmoother(),
+            noise="draws" if propagate else "none",
             half_width=half_width, width_columns=moving)
         return Regression(theta, states, "weak", noise, info)
     if formulation != "strong":

@@ -77,7 +77,7 @@ class PhysicalOptimizer(WrappingOptimizer, CatalogOptimizer):
         the explained signal (``(b - b_u)^T A (b - b_u) / b_u^T A b_u``, the solver's
         accuracy being about 1e-9).
     solver : str, optional
-        cvxpy solver name (``"CLARABEL"``, ``"SCS"``); default cvxpy's choice.
+        cvxpy solver name (``"CLARABEL"``, ``"SCS"``); default :data:`~pysindy_xl.physical.sdp.DEFAULT_SOLVERS`.
 
     Attributes
     ----------

@@ -147,6 +147,29 @@ class WeakNoise:
         return dataclasses.replace(self, draws=self.draws[:, rows],
                                    n_coordinates=int(chosen.size), runs=runs)
 
+    def rows(self, keep) -> WeakNoise:
+        """The draws of the rows ``keep`` (a boolean mask over the rows, the same test
+        functions for every coordinate) only, with the runs cut where rows are left out.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> noise = WeakNoise(np.zeros((2, 10, 1)), 2, np.array([[0, 5, 0, 1], [5, 10, 1, 1]]))
+        >>> part = noise.rows(np.tile([True, True, False, True, True], 2))
+        >>> part.draws.shape, part.runs[:, :2].tolist()
+        ((2, 8, 1), [[0, 2], [2, 4], [4, 6], [6, 8]])
+        """
+        keep = np.asarray(keep, dtype=bool)
+        index = np.cumsum(keep) - 1
+        runs = []
+        for start, stop, group, overlap in self.runs:
+            kept = np.flatnonzero(keep[start:stop]) + start
+            runs += [(index[piece[0]], index[piece[-1]] + 1, group, overlap)
+                     for piece in np.split(kept, np.flatnonzero(np.diff(kept) > 1) + 1)
+                     if piece.size]
+        return dataclasses.replace(self, draws=self.draws[:, keep],
+                                   runs=np.array(runs, dtype=int).reshape(-1, 4))
+
     def whitened(self, whiten: RowWhitener) -> WeakNoise:
         """The draws of the whitened rows."""
         moved = whiten(np.moveaxis(self.draws, 1, 0))

@@ -12,6 +12,7 @@ import copy
 import warnings
 
 import numpy as np
+import scipy.sparse
 
 from ..feature_library import stack_variables
 from .noise import WeakNoise, draw_moments
@@ -165,10 +166,11 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
     smoother : WhittakerSmoother
         Anything with ``smooth(t, x) -> (q, qd, qdd)``; it propagates the noise of the
         positions when it also has ``noise_`` and ``resmooth`` (see :func:`propagated_draws`).
-    noise : {"moments", "draws"}, default "moments"
+    noise : {"moments", "draws", "none"}, default "moments"
         What to return of the propagated noise: its moments, or its draws with the
         structure of the rows (:class:`~pysindy_xl.weak.noise.WeakNoise`, which gives the
-        moments and the covariance of a law's residual).
+        moments and the covariance of a law's residual); ``"none"``: rows only, the noise
+        is not propagated.
     half_width : float, optional
         Half-width of the test functions (s); default: :func:`shared_half_width`.
     width_columns : array of bool, shape (n,), optional
@@ -191,8 +193,10 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         ``half_width`` (s), ``test_functions`` (count per piece used), ``noise`` (the
         smoother's noise estimate per coordinate on the first piece), ``time_grid``
         (:func:`~pysindy_xl.weak.timegrid.grid_summary` of the stamps), ``gaps`` (the cuts
-        of :func:`~pysindy_xl.weak.timegrid.split_at_gaps`) and ``segments`` (for each piece
-        used, its trajectory).
+        of :func:`~pysindy_xl.weak.timegrid.split_at_gaps`), ``segments`` (for each piece
+        used, its trajectory) and ``supports`` (for each test function, in the order of the
+        rows of one coordinate: its trajectory and the first and last time of its support,
+        shape (K, 3)).
 
     Notes
     -----
@@ -217,8 +221,8 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
     >>> theta.shape[1], states.shape, moments.shape, info["half_width"]
     (3, (2001, 5), (1, 3, 3), 2.0)
     """
-    if noise not in ("moments", "draws"):
-        raise ValueError(f"noise: expected 'moments' or 'draws', got {noise!r}")
+    if noise not in ("moments", "draws", "none"):
+        raise ValueError(f"noise: expected 'moments', 'draws' or 'none', got {noise!r}")
     for name, value, kind in (("test_functions", test_functions, "matrices"),
                               ("smoother", smoother, "smooth")):
         if not callable(getattr(value, kind, None)):
@@ -283,12 +287,12 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
                 "uniform steps; the stamps may be arrival times of samples taken at a fixed "
                 "rate, whose delays pass for motion: if so, pass uniform times",
                 UserWarning, stacklevel=4)
-    propagate = all(estimated(piece) for piece in smoothing)
+    propagate = noise != "none" and all(estimated(piece) for piece in smoothing)
     n_samples = sum(len(d["t"]) for d in pieces)
     n_draws = int(np.clip(np.ceil(_PROPAGATION_SAMPLES / max(n_samples, 1)), 1, 16))
     rng = np.random.default_rng(0)  # reproducible fits
     n = library.coords.n
-    blocks, draws, runs = [], [], []
+    blocks, draws, runs, supports = [], [], [], []
     for k, (d, z) in enumerate(zip(pieces, states, strict=True)):
         phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
         overlap, kept = _overlap_rows(phi), np.arange(phi.shape[0])
@@ -299,6 +303,7 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
                 continue
         block = library.weak_transform(z, phi, dphi)
         blocks.append(block.reshape(n, phi.shape[0], -1))
+        supports.append(_supports(phi, d["t"], source[usable[k]]))
         runs.append((np.split(np.arange(len(kept)), np.flatnonzero(np.diff(kept) > 1) + 1),
                      overlap))
         if propagate:
@@ -314,10 +319,21 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
                                n, _row_runs(runs, n))
     info = {"half_width": half_width, "test_functions": [b.shape[1] for b in blocks],
             "noise": None if noise_level is None else np.asarray(noise_level).tolist(),
-            "time_grid": summary, "gaps": gaps, "segments": source[usable].tolist()}
+            "time_grid": summary, "gaps": gaps, "segments": source[usable].tolist(),
+            "supports": np.concatenate(supports)}
     if noise == "moments" and propagated is not None:
         propagated = propagated.moments()
     return theta, np.vstack(states), propagated, info
+
+
+def _supports(phi, t, trajectory) -> np.ndarray:
+    """``(trajectory, first time, last time)`` of the support of each test function (row of
+    ``phi``), shape (K, 3)."""
+    phi = scipy.sparse.csr_matrix(phi)
+    starts = phi.indptr[:-1]
+    first = np.minimum.reduceat(phi.indices, starts)
+    last = np.maximum.reduceat(phi.indices, starts)
+    return np.column_stack([np.full(len(first), float(trajectory)), t[first], t[last]])
 
 
 def _overlap_rows(phi) -> int:

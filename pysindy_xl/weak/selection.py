@@ -1,0 +1,162 @@
+"""Which noise model a weak fit of measured forces uses, chosen by held-out force error.
+
+A weak fit from positions and forces can read its data in two ways:
+
+* **position noise** (simulation, cheap encoders): the positions carry the noise, the rows are
+  weighted by the covariance that this noise propagates into them (generalized least
+  squares, :meth:`~pysindy_xl.weak.WeakNoise.whitener`), and the test functions are as wide as
+  the spectrum of the motion allows (:meth:`~pysindy_xl.weak.BumpTestFunctions.half_width`);
+* **force noise** (real arms: nearly exact encoders, noisy torque sensors or motor
+  currents, an approximate model class): the rows are fitted as they are, and the test
+  functions are narrow, a low-pass of the force equation at the bandwidth that torques are
+  judged at (:data:`SCORING_BANDWIDTH`), or a few times wider.
+
+Neither is assumed: each candidate is fitted on time blocks of the data and predicts the
+others (:func:`choose_noise_model`). The held-out error is read in the weak form itself, on
+the rows of one common set of narrow test functions, so no candidate is scored through
+derivatives that another estimated: for a law ``xi`` with force columns ``f``, over the
+held-out rows ``Theta_ref`` of all folds,
+
+.. math::
+
+    e = \\frac{\\| \\Theta_\\text{ref} \\xi \\|}{\\| \\Theta_{\\text{ref}, f} \\xi_f \\|},
+
+the residual of the equations of motion, a low-pass of the torque error, relative to the
+forces filtered alike.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["SCORING_BANDWIDTH", "NoiseModel", "bandwidth_half_width", "choose_noise_model",
+           "time_folds"]
+
+#: Bandwidth (Hz) at which held-out forces are compared: the torque signal of a robot joint
+#: (:mod:`pysindy_xl.held_out` bounds its scoring derivatives at the same frequency).
+SCORING_BANDWIDTH = 10.0
+
+#: Widths of the force-noise candidates, in multiples of the scoring width.
+FORCE_NOISE_WIDTHS = (1.0, 2.0, 4.0)
+
+
+def bandwidth_half_width(bandwidth: float, power: int = 6) -> float:
+    """Half-width (s) of the bump ``(1 - s^2)^power`` whose response falls by 3 dB at
+    ``bandwidth`` (Hz).
+
+    The bump is close to a Gaussian of standard deviation ``h / sqrt(2 power + 3)`` (its
+    variance as a density on ``[-h, h]``), whose response is ``1/sqrt(2)`` at
+    ``sqrt(ln 2) / (2 pi sigma)``.
+
+    Examples
+    --------
+    >>> round(bandwidth_half_width(10.0), 4)
+    0.0513
+    """
+    return math.sqrt(math.log(2.0) * (2 * power + 3)) / (2 * math.pi * bandwidth)
+
+
+@dataclass(frozen=True)
+class NoiseModel:
+    """One way to read the data: test-function half-width and whether rows are weighted."""
+
+    name: str
+    half_width: float
+    weigh: bool
+
+
+def time_folds(supports: np.ndarray, spans: np.ndarray, n_blocks: int):
+    """Contiguous time blocks of every trajectory, as masks over test functions.
+
+    Parameters
+    ----------
+    supports : array, shape (K, 3)
+        Each test function's trajectory and first and last time of its support
+        (``weak_info_["supports"]``).
+    spans : array, shape (T, 2)
+        First and last time of each trajectory.
+    n_blocks : int
+
+    Returns
+    -------
+    fit, held : ndarray of bool, shape (n_blocks, K)
+        ``fit[k]``: the test functions whose support misses block ``k`` of their trajectory;
+        ``held[k]``: those whose support lies inside it.
+
+    Examples
+    --------
+    >>> supports = np.array([[0, 0.0, 0.4], [0, 0.3, 0.7], [0, 0.6, 1.0]])
+    >>> fit, held = time_folds(supports, np.array([[0.0, 1.0]]), 2)
+    >>> fit.astype(int).tolist(), held.astype(int).tolist()
+    [[0, 0, 1], [1, 0, 0]]
+    """
+    trajectory = supports[:, 0].astype(int)
+    start, stop = spans[trajectory, 0], spans[trajectory, 1]
+    fractions = np.linspace(0.0, 1.0, n_blocks + 1)
+    edges = start[None, :] + fractions[:, None] * (stop - start)[None, :]  # (B + 1, K)
+    first, last = supports[None, :, 1], supports[None, :, 2]
+    held = (first >= edges[:-1]) & (last <= edges[1:])
+    fit = (last < edges[:-1]) | (first > edges[1:])
+    return fit, held
+
+
+def choose_noise_model(candidates, reference, spans, force_columns, solve, n_blocks=5):
+    """The candidate whose fits predict held-out time blocks best.
+
+    Parameters
+    ----------
+    candidates : list of (NoiseModel, rows, supports, noise)
+        Each candidate's weak rows (coordinate-major, the same coordinates and columns for
+        all), its test functions' supports (:func:`time_folds`) and the propagated noise of
+        its rows (a :class:`~pysindy_xl.weak.WeakNoise` or None).
+    reference : (rows, supports)
+        The scoring rows: narrow test functions shared by all candidates.
+    spans : array, shape (T, 2)
+        First and last time of each trajectory.
+    force_columns : list of int
+        The columns of the forces.
+    solve : callable
+        ``solve(rows, noise, weigh) -> coef``: the fit of one candidate on some rows.
+    n_blocks : int, default 5
+
+    Returns
+    -------
+    best : int or None
+        Index of the chosen candidate; None when the data are too short to hold out blocks
+        (some fold would fit on fewer rows than it has columns).
+    errors : list of float
+        Each candidate's held-out relative error (``inf`` where a fold's fit failed).
+    """
+    rows_ref, supports_ref = reference
+    n_coordinates = rows_ref.shape[0] // len(supports_ref)
+    _, held = time_folds(supports_ref, spans, n_blocks)
+    held_rows = np.tile(held, n_coordinates)
+    force = np.asarray(force_columns, dtype=int)
+    if not held.any(axis=1).all():
+        return None, []
+    errors = []
+    for model, rows, supports, noise in candidates:
+        fit, _ = time_folds(supports, spans, n_blocks)
+        if (fit.sum(axis=1) * n_coordinates < rows.shape[1]).any():
+            return None, []
+        fit_rows = np.tile(fit, n_coordinates)
+        residual = forces = 0.0
+        for k in range(n_blocks):
+            try:
+                with warnings.catch_warnings():  # a fold's fit speaks through its score
+                    warnings.simplefilter("ignore")
+                    coef = solve(rows[fit_rows[k]],
+                                 None if noise is None else noise.rows(fit_rows[k]),
+                                 model.weigh)
+            except (ValueError, RuntimeError, np.linalg.LinAlgError):
+                residual = np.inf
+                break
+            scored = rows_ref[held_rows[k]]
+            residual += float(np.sum((scored @ coef) ** 2))
+            forces += float(np.sum((scored[:, force] @ coef[force]) ** 2))
+        errors.append(math.sqrt(residual / forces) if forces > 0 else np.inf)
+    return int(np.argmin(errors)), errors
