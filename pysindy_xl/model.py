@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import hashlib
 import warnings
 
 import numpy as np
@@ -41,7 +43,7 @@ from .regression import (
     trajectory_data,
 )
 from .still import block_rows, driven_coordinates, still_columns, still_coordinates
-from .weak import BumpTestFunctions
+from .weak import BumpTestFunctions, WhittakerSmoother
 from .weak.selection import (
     FORCE_NOISE_WIDTHS,
     SCORING_BANDWIDTH,
@@ -63,6 +65,25 @@ def _probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndar
     rng = np.random.default_rng(seed)
     low, high = z.min(axis=0), z.max(axis=0)
     return rng.uniform(low, high, size=(n_points, z.shape[1]))
+
+
+class _RememberedSmoother:
+    """A smoother that smooths each distinct trajectory piece once: the candidate noise
+    models' rows are built from the same pieces (no propagation, so no ``resmooth``)."""
+
+    def __init__(self, smoother=None):
+        self.smoother = smoother or WhittakerSmoother()
+        self.smoothed = {}
+
+    def __deepcopy__(self, memo):  # copies share what was smoothed (each smooths a copy)
+        return self
+
+    def smooth(self, t, x):
+        key = hashlib.sha1(np.ascontiguousarray(t).tobytes()
+                           + np.ascontiguousarray(x).tobytes()).hexdigest()
+        if key not in self.smoothed:
+            self.smoothed[key] = copy.deepcopy(self.smoother).smooth(t, x)
+        return self.smoothed[key]
 
 
 class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
@@ -440,7 +461,7 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         (:mod:`pysindy_xl.weak.selection`); the choice and every candidate's error go to
         ``weak_info_["noise_model"]``. Returns the problem, noise and weighting to fit."""
         info = regression.weak_info
-        tests = BumpTestFunctions()
+        tests, smoother = BumpTestFunctions(), _RememberedSmoother(self.smoother)
         steps = np.concatenate([np.diff(d["t"]) for d in data])
         scoring = max(bandwidth_half_width(SCORING_BANDWIDTH, tests.power),
                       tests.min_samples * float(np.quantile(steps, 0.999)))
@@ -448,7 +469,7 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         n = library.coords.n
 
         def rows(half_width):
-            built = build_regression(library, data, "weak", tests, self.smoother, half_width,
+            built = build_regression(library, data, "weak", tests, smoother, half_width,
                                      moving=moving, propagate=False)
             theta = built.theta[block_rows(n, built.theta.shape[0], moving)][:, keep]
             return theta, built.weak_info["supports"], built.weak_info
@@ -459,7 +480,12 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         for width in widths:
             theta, supports, built[width] = rows(width)
             candidates.append((NoiseModel("forces", width, False), theta, supports, None))
-        reference = rows(scoring)[:2]
+        scored = build_regression(library, data, "weak", tests, self.smoother, scoring,
+                                  moving=moving)
+        reference = (scored.theta[block_rows(n, scored.theta.shape[0], moving)][:, keep],
+                     scored.weak_info["supports"],
+                     None if scored.noise is None else scored.noise.columns(keep).coordinates(
+                         moving))
         spans = np.array([[d["t"][0], d["t"][-1]] for d in data])
 
         def solve(theta, propagated, weigh):

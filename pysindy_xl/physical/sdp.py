@@ -13,6 +13,8 @@ Slotine, 2017): every body's pseudo-inertia :math:`J_b(\pi) \succeq 0`
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from .._optional import import_optional
@@ -48,10 +50,15 @@ def body_constraints(structure, pi) -> list:
 DEFAULT_SOLVERS = ("CLARABEL", "SCS")
 
 
+@functools.cache
+def _default_solvers() -> tuple:
+    installed = _cvxpy().installed_solvers()
+    return tuple(name for name in DEFAULT_SOLVERS if name in installed) or (None,)
+
+
 def _solve(problem, solver, who):
     cp = _cvxpy()
-    solvers = [solver] if solver is not None else [
-        name for name in DEFAULT_SOLVERS if name in cp.installed_solvers()] or [None]
+    solvers = [solver] if solver is not None else _default_solvers()
     for name in solvers:
         try:
             problem.solve(solver=name)

@@ -262,7 +262,7 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         if d["x_dot"] is not None:  # measured velocities are better than estimated ones
             q, qd = d["x"], d["x_dot"]
             smoothing[-1] = None
-        elif not propagates and not warned:
+        elif not propagates and not warned and noise != "none":
             warned = True
             warnings.warn(
                 f"smoother: {type(smoother).__name__} has no resmooth method (and noise_ "

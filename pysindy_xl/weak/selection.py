@@ -1,4 +1,4 @@
-"""Which noise model a weak fit of measured forces uses, chosen by held-out force error.
+r"""Which noise model a weak fit of measured forces uses, chosen by held-out force error.
 
 A weak fit from positions and forces can read its data in two ways:
 
@@ -19,10 +19,15 @@ held-out rows ``Theta_ref`` of all folds,
 
 .. math::
 
-    e = \\frac{\\| \\Theta_\\text{ref} \\xi \\|}{\\| \\Theta_{\\text{ref}, f} \\xi_f \\|},
+    e = \frac{\| \Theta_\text{ref} \xi \|}{\| \Theta_{\text{ref}, f} \xi_f \|},
 
 the residual of the equations of motion, a low-pass of the torque error, relative to the
-forces filtered alike.
+forces filtered alike. Noisy positions put noise into the scoring rows themselves, and a law
+shrunk towards zero (the attenuation that errors in the variables cause in an uncorrected
+fit) predicts noisy rows better than the true law does; so the expected share of that noise,
+:math:`\xi^T \mathrm{E}[E^T E] \xi` for the propagated errors ``E`` of the held-out rows
+(:class:`~pysindy_xl.weak.WeakNoise`), is taken out of each residual: what is compared is the
+error on the noise-free rows.
 """
 
 from __future__ import annotations
@@ -39,6 +44,18 @@ __all__ = ["SCORING_BANDWIDTH", "NoiseModel", "bandwidth_half_width", "choose_no
 #: Bandwidth (Hz) at which held-out forces are compared: the torque signal of a robot joint
 #: (:mod:`pysindy_xl.held_out` bounds its scoring derivatives at the same frequency).
 SCORING_BANDWIDTH = 10.0
+
+#: A candidate replaces the first one (the default) only when its held-out error is lower by
+#: this fraction, and on most of the blocks: where the data cannot tell the candidates apart
+#: (position noise swamping the held-out rows, whose errors then differ by a percent or
+#: less), the default stays.
+MARGIN = 0.05
+
+#: Largest share of the first candidate's held-out residual that the noise of the positions
+#: may make up for another candidate to replace it: beyond, the scoring rows say more about
+#: that noise than about the laws (and removing its expected share leaves a difference of
+#: two large, uncertain numbers).
+NOISE_SHARE = 0.5
 
 #: Widths of the force-noise candidates, in multiples of the scoring width.
 FORCE_NOISE_WIDTHS = (1.0, 2.0, 4.0)
@@ -105,7 +122,8 @@ def time_folds(supports: np.ndarray, spans: np.ndarray, n_blocks: int):
 
 
 def choose_noise_model(candidates, reference, spans, force_columns, solve, n_blocks=5):
-    """The candidate whose fits predict held-out time blocks best.
+    """The candidate whose fits predict held-out time blocks best, if significantly better
+    than the first.
 
     Parameters
     ----------
@@ -113,8 +131,10 @@ def choose_noise_model(candidates, reference, spans, force_columns, solve, n_blo
         Each candidate's weak rows (coordinate-major, the same coordinates and columns for
         all), its test functions' supports (:func:`time_folds`) and the propagated noise of
         its rows (a :class:`~pysindy_xl.weak.WeakNoise` or None).
-    reference : (rows, supports)
-        The scoring rows: narrow test functions shared by all candidates.
+    reference : (rows, supports, noise)
+        The scoring rows: narrow test functions shared by all candidates, and the noise the
+        positions propagate into them (a :class:`~pysindy_xl.weak.WeakNoise` or None), whose
+        share of each held-out residual is taken out (below).
     spans : array, shape (T, 2)
         First and last time of each trajectory.
     force_columns : list of int
@@ -126,25 +146,29 @@ def choose_noise_model(candidates, reference, spans, force_columns, solve, n_blo
     Returns
     -------
     best : int or None
-        Index of the chosen candidate; None when the data are too short to hold out blocks
-        (some fold would fit on fewer rows than it has columns).
+        Index of the chosen candidate: the one of smallest held-out error among those that
+        beat the first by :data:`MARGIN` in total and on more than half of the blocks,
+        while the noise of the positions makes up less than :data:`NOISE_SHARE` of the
+        first's held-out residual; else 0. None when the data are too short to hold out
+        blocks (some fold would fit on fewer rows than it has columns).
     errors : list of float
         Each candidate's held-out relative error (``inf`` where a fold's fit failed).
     """
-    rows_ref, supports_ref = reference
+    rows_ref, supports_ref, noise_ref = reference
     n_coordinates = rows_ref.shape[0] // len(supports_ref)
     _, held = time_folds(supports_ref, spans, n_blocks)
     held_rows = np.tile(held, n_coordinates)
     force = np.asarray(force_columns, dtype=int)
     if not held.any(axis=1).all():
         return None, []
-    errors = []
-    for model, rows, supports, noise in candidates:
+    residuals = np.full((len(candidates), n_blocks), np.inf)
+    forces = np.ones((len(candidates), n_blocks))
+    noisy = np.zeros((len(candidates), n_blocks))
+    for c, (model, rows, supports, noise) in enumerate(candidates):
         fit, _ = time_folds(supports, spans, n_blocks)
         if (fit.sum(axis=1) * n_coordinates < rows.shape[1]).any():
             return None, []
         fit_rows = np.tile(fit, n_coordinates)
-        residual = forces = 0.0
         for k in range(n_blocks):
             try:
                 with warnings.catch_warnings():  # a fold's fit speaks through its score
@@ -153,10 +177,19 @@ def choose_noise_model(candidates, reference, spans, force_columns, solve, n_blo
                                  None if noise is None else noise.rows(fit_rows[k]),
                                  model.weigh)
             except (ValueError, RuntimeError, np.linalg.LinAlgError):
-                residual = np.inf
                 break
             scored = rows_ref[held_rows[k]]
-            residual += float(np.sum((scored @ coef) ** 2))
-            forces += float(np.sum((scored[:, force] @ coef[force]) ** 2))
-        errors.append(math.sqrt(residual / forces) if forces > 0 else np.inf)
-    return int(np.argmin(errors)), errors
+            residuals[c, k] = np.sum((scored @ coef) ** 2)
+            if noise_ref is not None:  # the noise of the positions in the scoring rows
+                noisy[c, k] = np.mean(np.sum(
+                    (noise_ref.draws[:, held_rows[k]] @ coef) ** 2, axis=1))
+            forces[c, k] = np.sum((scored[:, force] @ coef[force]) ** 2)
+    clean = residuals - noisy
+    with np.errstate(invalid="ignore", divide="ignore"):
+        errors = np.sqrt(np.maximum(clean.sum(axis=1), 0.0) / forces.sum(axis=1))
+        audible = noisy[0].sum() < NOISE_SHARE * residuals[0].sum()
+    wins = (clean < clean[:1]).sum(axis=1)
+    better = np.flatnonzero(np.isfinite(errors) & (errors < (1 - MARGIN) * errors[0])
+                            & (wins > n_blocks / 2) & audible)
+    best = int(better[np.argmin(errors[better])]) if better.size else 0
+    return best, errors.tolist()
