@@ -15,7 +15,9 @@ Arms and logs (``benchmarks/data/real/``; sources, licences and columns in its R
 Methods, each on the same training samples:
 
 * ``default``: ``XLSINDy(kinematic_catalog(system).library()).fit(q, t, u=tau)`` on the log
-  as recorded (its own smoother, weak form, physically consistent fit);
+  as recorded (its own smoother, weak form, physically consistent fit, the noise model chosen
+  by time-blocked held-out force error on the training run, :mod:`pysindy_xl.weak.selection`;
+  the choice is reported above each table);
 * ``default-friction``: the same with ``kinematic_catalog(system, friction="all")``: every
   joint offered viscous, Coulomb, asymmetric, Stribeck and offset terms, the fit selecting
   among them;
@@ -160,6 +162,8 @@ def run(arm):
     models["default"], record["fit_s"]["default"] = fit_package(built["default"], t, q, tau)
     models["default-friction"], record["fit_s"]["default-friction"] = fit_package(
         built["friction"], t, q, tau)
+    record["noise_model"] = {name: (models[name].weak_info_ or {}).get("noise_model")
+                             for name in ("default", "default-friction")}
     _, qf, qd, qdd, _ = idim.filtered_states(t, q, cutoff)
     grid, _, _, _, tauf = idim.filtered_states(t, q, cutoff, tau)
     for name, catalog in (("strong", built["default"]), ("strong-friction", built["friction"])):
@@ -204,6 +208,14 @@ def table(records) -> str:
                   + "; fits " + ", ".join(f"{k} {v:.1f} s" for k, v in r["fit_s"].items())
                   + f"; IDIM-LS with its cutoff search "
                   f"{r['idim_s']:.1f} s (cutoff {r['idim_cutoff_hz']:g} Hz).", ""]
+        for name, choice in r.get("noise_model", {}).items():
+            if choice:
+                lines += [f"Noise model of `{name}`: **{choice['chosen']}** (half-width "
+                          f"{choice['half_width']:.3g} s); held-out errors of the candidates "
+                          "on the training run: " + ", ".join(
+                              f"{c['noise']} {c['half_width']:.3g} s: "
+                              f"{100 * c['held_out_error']:.2f} %"
+                              for c in choice["candidates"]) + ".", ""]
         for derivatives, by_method in r["scores"].items():
             lines += [f"Held-out derivatives: **{derivatives}**", "",
                       "| method | total | " + " | ".join(r["joints"]) + " |",
