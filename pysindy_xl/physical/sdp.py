@@ -13,7 +13,11 @@ Slotine, 2017): every body's pseudo-inertia :math:`J_b(\pi) \succeq 0`
 
 from __future__ import annotations
 
+import collections
+import dataclasses
 import functools
+import hashlib
+import threading
 
 import numpy as np
 
@@ -120,6 +124,61 @@ def realize(structure, beta, reference=None, closeness: float = 1e-6, solver=Non
     return value, float(np.linalg.norm(combination @ value - beta) / scale_beta)
 
 
+@dataclasses.dataclass
+class _Program:
+    problem: object
+    b: object
+    pi: object
+    factor: object
+    target: object
+    base_scale: object
+    zero: object
+    weight: object
+    lock: threading.Lock = dataclasses.field(default_factory=threading.Lock)
+
+
+_PROGRAMS: collections.OrderedDict = collections.OrderedDict()
+_PROGRAMS_LOCK = threading.Lock()
+
+
+def _least_squares_program(structure, n_columns: int) -> _Program:
+    """The program of :func:`consistent_least_squares` for one structure and width, with its
+    data as cvxpy parameters: built and canonicalized once, then solved for each new fit
+    (the fits of a cross-validation, of an ensemble's refits) at the cost of the solver."""
+    key = hashlib.sha1(b"".join(np.ascontiguousarray(a, dtype=float).tobytes() + str(
+        np.shape(a)).encode() for a in (
+            structure.combination, structure.base_columns, structure.friction_columns,
+            structure.armature, structure.body_indices, [n_columns]))).hexdigest()
+    with _PROGRAMS_LOCK:
+        if key in _PROGRAMS:
+            _PROGRAMS.move_to_end(key)
+            return _PROGRAMS[key]
+    cp = _cvxpy()
+    base = structure.base_columns
+    b = cp.Variable(n_columns)
+    pi = cp.Variable(len(structure.names))
+    factor = cp.Parameter((n_columns, n_columns))
+    target = cp.Parameter(n_columns)
+    base_scale = cp.Parameter(len(base))
+    zero = cp.Parameter(n_columns, nonneg=True)
+    weight = cp.Parameter(nonneg=True)
+    constraints = body_constraints(structure, pi)
+    # base parameters: b_j / scale_j = C_j pi (in the unit-RMS columns)
+    if len(base):
+        constraints.append(b[base] == cp.multiply(base_scale, structure.combination @ pi))
+    if len(structure.friction_columns):
+        constraints.append(b[structure.friction_columns] >= 0)
+    constraints.append(cp.multiply(zero, b) == 0)
+    problem = cp.Problem(cp.Minimize(cp.norm(factor @ b - target)
+                                     + weight * cp.sum_squares(pi)), constraints)
+    program = _Program(problem, b, pi, factor, target, base_scale, zero, weight)
+    with _PROGRAMS_LOCK:
+        _PROGRAMS[key] = program
+        while len(_PROGRAMS) > 16:
+            _PROGRAMS.popitem(last=False)
+    return program
+
+
 def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=None,
                              regularization: float = 1e-9):
     r"""Least squares under physical consistency, as the projection of an unconstrained fit.
@@ -169,7 +228,6 @@ def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=
         ``(b - b_u)^T A (b - b_u) / b_u^T A b_u``: the share of the explained signal the
         constraints cost (0 when ``b_u`` is consistent, to the solver's tolerance).
     """
-    cp = _cvxpy()
     x = np.asarray(x, dtype=float)
     coef = np.asarray(coef, dtype=float)
     scale = np.sqrt(np.mean(x**2, axis=0))
@@ -185,28 +243,25 @@ def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=
     factor = np.sqrt(np.clip(values, 0.0, None))[:, None] * vectors.T
     size = max(float(np.linalg.norm(factor @ scaled)), 1e-300)
     factor = factor / size
-    b = cp.Variable(len(coef))
-    pi = cp.Variable(len(structure.names))
-    constraints = body_constraints(structure, pi)
-    base = structure.base_columns
-    # base parameters: b_j / scale_j = C_j pi (in the unit-RMS columns)
-    if len(base):
-        constraints.append(b[base] == cp.multiply(scale[base], structure.combination @ pi))
-    if len(structure.friction_columns):
-        constraints.append(b[structure.friction_columns] >= 0)
-    if zero is not None and np.any(zero):
-        constraints.append(b[np.flatnonzero(zero)] == 0)
     # pi's own scale: that of the base parameters it makes
+    base = structure.base_columns
     pi_scale = max(float(np.linalg.norm(coef[base])), 1e-12) if len(base) else 1.0
-    objective = (cp.norm(factor @ (b - scaled))
-                 + regularization * cp.sum_squares(pi) / pi_scale**2)
-    problem = cp.Problem(cp.Minimize(objective), constraints)
-    _solve(problem, solver, "consistent_least_squares")
-    if b.value is None or pi.value is None:
+    program = _least_squares_program(structure, len(coef))
+    with program.lock:  # the program's parameters are set, then it is solved
+        program.factor.value = factor
+        program.target.value = factor @ scaled
+        program.base_scale.value = scale[base]
+        program.zero.value = (np.zeros(len(coef)) if zero is None
+                              else np.asarray(zero, dtype=float))
+        program.weight.value = regularization / pi_scale**2
+        _solve(program.problem, solver, "consistent_least_squares")
+        b, pi = program.b.value, program.pi.value
+    if b is None or pi is None:
         raise RuntimeError("consistent_least_squares: the semidefinite program found no "
                            "solution")
-    pi_value = structure.nearest_consistent(pi.value)
-    out = np.asarray(b.value, dtype=float) / scale
+    b, pi = np.array(b, dtype=float), np.array(pi, dtype=float)
+    pi_value = structure.nearest_consistent(pi)
+    out = b / scale
     out[base] = structure.combination @ pi_value  # exactly the realized base parameters
     if zero is not None:
         out[np.asarray(zero, dtype=bool)] = 0.0
