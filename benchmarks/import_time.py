@@ -6,6 +6,7 @@ caches of a previous import never help. Measured:
 * ``import pysindy`` and ``import pysindy_xl`` (time of the import statement, in-process);
 * ``pysindy_xl.XLSINDy`` (``import pysindy_xl`` followed by the first touch of the estimator:
   what a fit pays before its first sample, since the public names load on first use);
+* ``import pysindy_xl.mujoco`` (the simulation subpackage: its public names load on first use);
 * ``pysindy-xl --help`` (wall time of the whole command, interpreter start included), run as
   ``python -m pysindy_xl.cli --help`` from the working tree;
 * the same, again, in a *light* environment where cvxpy, JAX and MuJoCo are made unimportable
@@ -53,6 +54,7 @@ STATEMENTS = {
     "import pysindy": "import pysindy",
     "import pysindy_xl": "import pysindy_xl",
     "pysindy_xl.XLSINDy": "import pysindy_xl\npysindy_xl.XLSINDy",
+    "import pysindy_xl.mujoco": "import pysindy_xl.mujoco",
 }
 
 

@@ -485,7 +485,7 @@ class MassMatrixDynamics:
 
     def _simulate_ros2(self, x0, t, force, law, step, divergence_bound, timeout):
         """:meth:`simulate` with :func:`pysindy_xl.rosenbrock.ros2`."""
-        from .rosenbrock import RosenbrockStop, ros2
+        from .mujoco.simulation.rosenbrock import RosenbrockStop, ros2
 
         n = self._n
         step = float(np.min(np.diff(t))) if step is None else check_option(

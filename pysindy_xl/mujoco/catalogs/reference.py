@@ -35,8 +35,8 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from ..symbols import monomials, products
-from .systems import MuJoCoSystem, equations_of_motion, get_system
+from ...symbols import monomials, products
+from ..systems.registry import MuJoCoSystem, equations_of_motion, get_system
 
 __all__ = ["CATALOG_KINDS", "lagrange_terms", "classical_terms", "reference_catalog",
            "true_coefficients", "dry_friction_terms"]
@@ -236,7 +236,7 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
     >>> reference_catalog("cart-pole", "kinematic").fit().n_output_features_
     9
     """
-    from ..feature_library import (
+    from ...feature_library import (
         CatalogRepartition,
         ClassicalLibrary,
         ExternalForces,

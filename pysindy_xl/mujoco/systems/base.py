@@ -7,15 +7,9 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from .._optional import import_optional
-from .._validation import check_option
-from ..symbols import Coordinates
-
-
-def import_mujoco():
-    """The ``mujoco`` module, imported on first use (clear error naming the extra)."""
-    return import_optional("mujoco", purpose="MuJoCo simulation (pysindy_xl.mujoco)")
-
+from ..._validation import check_option
+from ...symbols import Coordinates
+from .. import import_mujoco
 
 __all__ = ["MuJoCoSystem", "equations_of_motion"]
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from ._system_base import MuJoCoSystem, check_non_negative, check_positive, mjcf_float
+from .base import MuJoCoSystem, check_non_negative, check_positive, mjcf_float
 
 __all__ = ["CartPole", "DoublePendulum", "CartDoublePendulum", "TriplePendulum"]
 

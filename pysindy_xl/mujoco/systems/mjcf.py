@@ -8,7 +8,8 @@ import re
 
 import numpy as np
 
-from ._system_base import MuJoCoSystem, check_positive, import_mujoco
+from .. import import_mujoco
+from .base import MuJoCoSystem, check_positive
 from .urdf import is_urdf, urdf_spec
 
 __all__ = ["MJCFSystem"]

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import import_mujoco
+
 __all__ = ["SumOfSinusoids", "FORCING_MODES", "within_servo_reach", "REFERENCE_SPEED",
            "SERVO_BANDWIDTH_FRACTION"]
 
@@ -216,9 +218,9 @@ def within_servo_reach(signals: SumOfSinusoids, model) -> SumOfSinusoids:
     SumOfSinusoids
         ``signals`` itself when no driven actuator is a position servo.
     """
-    import mujoco
+    mujoco = import_mujoco()
 
-    from .actuation import servo_bandwidths
+    from ..systems.actuation import servo_bandwidths
 
     bandwidth = servo_bandwidths(model)
     servo = np.isfinite(bandwidth) & np.any(signals.amplitudes != 0, axis=1)
