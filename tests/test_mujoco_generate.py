@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
+from pysindy_xl.data import add_noise
 from pysindy_xl.mujoco import (
     CartPole,
     DoublePendulum,
     SumOfSinusoids,
-    add_noise,
     generate_dataset,
     simulate_trajectory,
 )

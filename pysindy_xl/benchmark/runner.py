@@ -103,7 +103,8 @@ def trajectory_data(spec: TrajectorySpec, n_trajectories: int, duration: float,
     seconds : float
         Time spent simulating.
     """
-    from ..mujoco import Dataset, add_noise, generate_dataset
+    from ..data import Dataset, add_noise
+    from ..mujoco import generate_dataset
     from ..mujoco.evaluation.validation import validation_trajectory
 
     start = time.perf_counter()

@@ -426,9 +426,8 @@ def _names(text):
 def _load(args, path, system=None):
     """A data file of ``identify`` (DATA or a --validate file) with the column options; the
     joints of a ROS bag are the system's (its joint names, in its order) unless named."""
-    from pysindy_xl.data import load_data
+    from pysindy_xl.data import DatasetError, load_data
     from pysindy_xl.data.rosbag import is_rosbag
-    from pysindy_xl.mujoco import DatasetError
 
     columns = _column_map(getattr(args, "column", None))
     coordinates = _names(args.coordinates)

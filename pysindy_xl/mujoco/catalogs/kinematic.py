@@ -32,7 +32,7 @@ expression is built only when read. Timings: ``benchmarks/kinematic_catalog.py``
 Friction and springs are not Lagrangian: each joint adds classical candidates (viscous
 ``qvel_k``, smooth Coulomb ``tanh(qvel_k / eps)``, and ``qpos_k - springref_k`` for joints with
 stiffness), entered in the equations that the joint force reaches (``B = T^-T``, see
-:mod:`pysindy_xl.mujoco.systems`). Coordinates are those of the system: ``q = T @ qpos``.
+:mod:`pysindy_xl.mujoco.systems.registry`). Coordinates are those of the system: ``q = T @ qpos``.
 With ``friction=`` the joints' friction comes instead from the models of real joints
 (viscous, Coulomb, asymmetric Coulomb, Stribeck, torque-sensor offset;
 :class:`~pysindy_xl.feature_library.JointFrictionLibrary`), one column per joint and model,

@@ -202,8 +202,8 @@ def within_servo_reach(signals: SumOfSinusoids, model) -> SumOfSinusoids:
     """The position servos' references of ``signals`` slowed to their reach.
 
     The band of each servo's reference is scaled below ``SERVO_BANDWIDTH_FRACTION`` of the
-    servo's bandwidth (:func:`~pysindy_xl.mujoco.actuation.servo_bandwidths`), its amplitudes
-    so that its speed bound ``sum_k 2 pi f_k A_k`` (in joint units) stays below
+    servo's bandwidth (:func:`~pysindy_xl.mujoco.systems.actuation.servo_bandwidths`), its
+    amplitudes so that its speed bound ``sum_k 2 pi f_k A_k`` (in joint units) stays below
     ``REFERENCE_SPEED``. Faster references are not tracked: the servo saturates, chatters,
     and drives its joint far faster than any real arm moves.
 

@@ -1,5 +1,6 @@
 """The base class of every MuJoCo system: an MJCF model with the textbook description of the
-same mechanism (coordinate, force and friction conventions: :mod:`pysindy_xl.mujoco.systems`).
+same mechanism (coordinate, force and friction conventions:
+:mod:`pysindy_xl.mujoco.systems.registry`).
 """
 
 from __future__ import annotations

@@ -41,7 +41,7 @@ class MJCFSystem(MuJoCoSystem):
     source : str or os.PathLike
         Path to an MJCF file or a URDF file (``.urdf``), or the MJCF or URDF text itself (a
         string starting with ``<``). A URDF is read with its inertials and without its
-        meshes, with a motor on every joint (see :mod:`pysindy_xl.mujoco.urdf`).
+        meshes, with a motor on every joint (see :mod:`pysindy_xl.mujoco.systems.urdf`).
     force_amplitude : float, default 1.0
         Amplitude of the random force of an actuator without ``ctrlrange``.
     joints : list of str, optional

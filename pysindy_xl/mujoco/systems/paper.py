@@ -2,7 +2,7 @@
 and a (chaotic) three-link pendulum.
 
 Each class writes its MJCF text from its parameters and knows the same mechanism's textbook
-Lagrangian (coordinate conventions: :mod:`pysindy_xl.mujoco.systems`).
+Lagrangian (coordinate conventions: :mod:`pysindy_xl.mujoco.systems.registry`).
 """
 
 from __future__ import annotations

@@ -31,7 +31,7 @@ visualisation, add no mass. Contacts are disabled and the integrator is RK4 with
 step, so that MuJoCo's trajectories follow the continuous equations closely.
 
 The base class and its conventions are in ``_system_base``, the paper's systems in
-:mod:`pysindy_xl.mujoco.paper_systems`, user MJCF files in :mod:`pysindy_xl.mujoco.mjcf_system`;
+:mod:`pysindy_xl.mujoco.systems.paper`, user MJCF files in :mod:`pysindy_xl.mujoco.systems.mjcf`;
 this module is the registry and keeps every name importable from here.
 """
 
