@@ -167,8 +167,8 @@ def dry_friction_terms(system, eps: float = 1e-3) -> tuple[list[sp.Expr], np.nda
     eps : float, default 1e-3
         Velocity scale of the smoothing (m/s or rad/s): much smaller than the typical
         velocity, so the term is ``sign(qd)`` except near rest (MuJoCo's frictionloss is
-        close to an exact sign: on a block with frictionloss 0.5 and damping 0.4, eps = 1e-3
-        recovers both within 0.2 %, eps = 1e-2 biases the damping by 10 %).
+        close to an exact sign; a wider smoothing leaks part of the friction into the
+        identified damping).
 
     Returns
     -------
