@@ -15,14 +15,12 @@ from .. import import_mujoco
 __all__ = ["MuJoCoSystem", "equations_of_motion"]
 
 
-def check_positive(value, name: str) -> float:
-    """A physical parameter that must be a positive number (never a string or a bool)."""
-    return check_option(name, value, "real", low=0, low_open=True)
-
-
-def check_non_negative(value, name: str) -> float:
-    """A physical parameter that must be a non-negative number (never a string or a bool)."""
-    return check_option(name, value, "real", low=0)
+def checked_parameters(**values) -> dict:
+    """Physical parameters checked by name: numbers (never a string or a bool), positive but
+    for gravity and dampings, which may be zero."""
+    return {name: check_option(name, value, "real", low=0,
+                               low_open=name != "gravity" and "damping" not in name)
+            for name, value in values.items()}
 
 
 def mjcf_float(value: float) -> str:

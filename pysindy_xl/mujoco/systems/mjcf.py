@@ -9,7 +9,7 @@ import re
 import numpy as np
 
 from .. import import_mujoco
-from .base import MuJoCoSystem, check_positive
+from .base import MuJoCoSystem, checked_parameters
 from .urdf import is_urdf, urdf_spec
 
 __all__ = ["MJCFSystem"]
@@ -145,7 +145,7 @@ class MJCFSystem(MuJoCoSystem):
         )
         self.mixed_actuators = self.actuated_joints[:1]
         self._parameters = {"source": self.path or "<string>",
-                            "force_amplitude": check_positive(force_amplitude, "force_amplitude"),
+                            **checked_parameters(force_amplitude=force_amplitude),
                             "timestep": float(model.opt.timestep)}
         if joints is not None:
             self._parameters["joints"] = list(self.joint_names)
