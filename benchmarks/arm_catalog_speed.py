@@ -25,7 +25,7 @@ import numpy as np
 import pysindy_xl as px
 from pysindy_xl.feature_library import _base, polynomial_lagrange
 from pysindy_xl.mujoco import MJCFSystem, generate_dataset
-from pysindy_xl.mujoco import kinematic as kinematic_module
+from pysindy_xl.mujoco.catalogs import kinematic as kinematic_module
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)

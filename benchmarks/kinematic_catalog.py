@@ -33,7 +33,7 @@ import numpy as np
 import pysindy_xl as px
 from pysindy_xl.feature_library import stack_variables
 from pysindy_xl.mujoco import MJCFSystem, generate_dataset, get_system, reference_catalog
-from pysindy_xl.mujoco import kinematic as kinematic_module
+from pysindy_xl.mujoco.catalogs import kinematic as kinematic_module
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 import kinematic_models  # noqa: E402

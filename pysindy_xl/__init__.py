@@ -42,7 +42,7 @@ _LAZY = {
     "SingularMassMatrixError": "dynamics",
     "BumpTestFunctions": "weak",
     "WhittakerSmoother": "weak",
-    "kinematic_catalog": "mujoco.kinematic",  # reads MJCF through mujoco: loaded on first use
+    "kinematic_catalog": "mujoco.catalogs.kinematic",  # reads MJCF through mujoco: on first use
 }
 
 __all__ = [
@@ -83,7 +83,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         stack_variables,
     )
     from .model import XLSINDy
-    from .mujoco.kinematic import kinematic_catalog
+    from .mujoco.catalogs.kinematic import kinematic_catalog
     from .optimizers import (
         EnsembleOptimizer,
         ExplicitOptimizer,

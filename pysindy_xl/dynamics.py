@@ -366,10 +366,10 @@ class MassMatrixDynamics:
             the fewest evaluations at the default tolerances (each evaluation of a many-joint
             model costs far more than the solver's own work); ``"Radau"`` or ``"BDF"`` for
             stiff models. ``"ROS2"``: an L-stable Rosenbrock method of order two
-            (:mod:`pysindy_xl.rosenbrock`), steps of at most ``step`` under a local error
-            bound of ``1e-3 (1 + |y|)`` (``rtol`` and ``atol`` unused), two evaluations per
-            step however stiff the model (stiff servos in closed loop): fewer evaluations
-            than ``DOP853`` at a looser accuracy.
+            (:mod:`pysindy_xl.mujoco.simulation.rosenbrock`), steps of at most ``step`` under a
+            local error bound of ``1e-3 (1 + |y|)`` (``rtol`` and ``atol`` unused), two
+            evaluations per step however stiff the model (stiff servos in closed loop): fewer
+            evaluations than ``DOP853`` at a looser accuracy.
         rtol, atol : float
             Tolerances of the solver.
         divergence_bound : float
@@ -484,8 +484,8 @@ class MassMatrixDynamics:
 
 
     def _simulate_ros2(self, x0, t, force, law, step, divergence_bound, timeout):
-        """:meth:`simulate` with :func:`pysindy_xl.rosenbrock.ros2`."""
-        from .rosenbrock import RosenbrockStop, ros2
+        """:meth:`simulate` with :func:`pysindy_xl.mujoco.simulation.rosenbrock.ros2`."""
+        from .mujoco.simulation.rosenbrock import RosenbrockStop, ros2
 
         n = self._n
         step = float(np.min(np.diff(t))) if step is None else check_option(

@@ -213,7 +213,7 @@ class ForceScore:
         ...     (pathlib.Path(tmp) / "torques.png").stat().st_size > 0
         True
         """
-        from pysindy_xl.mujoco.plots import new_figure
+        from pysindy_xl.mujoco.evaluation.plots import new_figure
 
         n = len(self.names)
         figure = new_figure(8, 1.6 * n + 0.8)

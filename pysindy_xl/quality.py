@@ -293,7 +293,7 @@ def plot_identification(model, trajectory, path, title=None, forced=True) -> dic
     (True, False, True)
     """
     from pysindy_xl.dynamics import DynamicsError
-    from pysindy_xl.mujoco.plots import new_figure
+    from pysindy_xl.mujoco.evaluation.plots import new_figure
 
     if model.dynamics_ is None:
         raise ValueError("model: the identified equations contain no acceleration; nothing "

@@ -12,22 +12,20 @@ import numpy as np
 import pytest
 
 import pysindy_xl as px
+from pysindy_xl.data import noise_levels, unconstrained_samples, unconstrained_windows
 from pysindy_xl.mujoco import (
     ConstraintWarning,
     MJCFSystem,
     SumOfSinusoids,
     compare_trajectories,
     generate_dataset,
-    noise_levels,
     reference_catalog,
     simulate_trajectory,
     system_from_metadata,
-    unconstrained_samples,
-    unconstrained_windows,
     validate_model,
     validation_trajectory,
 )
-from pysindy_xl.mujoco.generate import actuator_force_function
+from pysindy_xl.mujoco.simulation.generate import actuator_force_function
 
 MODELS = pathlib.Path(__file__).parent / "models"
 

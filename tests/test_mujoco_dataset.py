@@ -5,7 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from pysindy_xl.mujoco import Dataset, DatasetError, Trajectory, generate_dataset, load_dataset
+from pysindy_xl.data import DatasetError
+from pysindy_xl.mujoco import Dataset, Trajectory, generate_dataset, load_dataset
 
 
 @pytest.fixture(scope="module")

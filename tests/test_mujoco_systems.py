@@ -212,6 +212,40 @@ def test_user_mjcf_system(tmp_path):
         system.lagrangian()
 
 
+def test_get_system_reads_mjcf_text_and_any_existing_file(tmp_path):
+    path = tmp_path / "pendulum.model"  # a file without the .xml suffix
+    path.write_text(USER_PENDULUM)
+    for source in (USER_PENDULUM, str(path)):
+        system = get_system(source)
+        assert isinstance(system, MJCFSystem) and system.coords.names == ("swing",)
+    # registry names win over files of the same name; unknown names still fail clearly
+    (tmp_path / "cart-pole").write_text(USER_PENDULUM)
+    assert isinstance(get_system(str(tmp_path / "cart-pole")), MJCFSystem)
+    assert isinstance(get_system("cart-pole"), CartPole)
+    with pytest.raises(ValueError, match="unknown system 'no-such-system'"):
+        get_system("no-such-system")
+
+
+def test_mujoco_package_is_lazy_and_keeps_its_public_names():
+    import subprocess
+    import sys
+
+    # names of the public API contract (shared/API.md) under pysindy_xl.mujoco
+    contract = ["get_system", "MJCFSystem", "generate_dataset", "load_dataset", "Dataset",
+                "Trajectory", "simulate_trajectory", "validation_trajectory", "validate_model",
+                "reference_catalog", "actuator_law", "start_on_reference", "kinematic_catalog"]
+    code = (
+        "import sys, pysindy_xl.mujoco as m\n"
+        "heavy = ('mujoco', 'sympy', 'pysindy', 'sklearn', 'scipy', 'matplotlib', 'jax')\n"
+        "print(sorted(h for h in heavy if h in sys.modules))\n"
+        "print(sorted(n for n in m.__all__ if getattr(m, n, None) is None))\n"
+        f"print(sorted(set({contract!r}) - set(m.__all__)))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split("\n")
+    assert out[:3] == ["[]", "[]", "[]"]
+
+
 def test_user_mjcf_errors(tmp_path):
     with pytest.raises(ValueError, match="does not exist"):
         MJCFSystem(tmp_path / "missing.xml")

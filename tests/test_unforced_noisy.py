@@ -17,7 +17,7 @@ import pytest
 
 import pysindy_xl as px
 from pysindy_xl.mujoco import CartDoublePendulum, generate_dataset
-from pysindy_xl.mujoco.kinematic import kinematic_catalog
+from pysindy_xl.mujoco.catalogs.kinematic import kinematic_catalog
 from pysindy_xl.optimizers import UndeterminedLawWarning, default_optimizer, select_law
 
 

@@ -18,7 +18,7 @@ import pytest
 mujoco = pytest.importorskip("mujoco")
 
 from pysindy_xl.mujoco import MJCFSystem, get_system, kinematic_catalog  # noqa: E402
-from pysindy_xl.mujoco.systems import system_from_metadata  # noqa: E402
+from pysindy_xl.mujoco.systems.registry import system_from_metadata  # noqa: E402
 
 KINOVA = pathlib.Path(__file__).parent / "models" / "kinova_gen3.urdf"
 

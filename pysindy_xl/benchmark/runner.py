@@ -103,8 +103,9 @@ def trajectory_data(spec: TrajectorySpec, n_trajectories: int, duration: float,
     seconds : float
         Time spent simulating.
     """
-    from ..mujoco import Dataset, add_noise, generate_dataset
-    from ..mujoco.validation import validation_trajectory
+    from ..data import Dataset, add_noise
+    from ..mujoco import generate_dataset
+    from ..mujoco.evaluation.validation import validation_trajectory
 
     start = time.perf_counter()
     system = system_for(spec)
@@ -155,7 +156,7 @@ def _identify(task: Task, system, dataset):
     """Fit one configuration; returns the model (anything with ``simulate``)."""
     import pysindy_xl as px
 
-    from ..mujoco.catalogs import reference_catalog
+    from ..mujoco.catalogs.reference import reference_catalog
 
     forced = task.trajectory.forcing != "implicit"
     arguments = dataset.fit_arguments(forces="tau" if forced else None)
@@ -188,7 +189,7 @@ def _model_summary(task: Task, system, model) -> dict:
                "coefficients": {names[k]: float(coef[k]) for k in np.flatnonzero(coef)},
                "dropped_features": len(getattr(model, "dropped_features_", {}) or {})}
     try:
-        from ..mujoco.catalogs import true_coefficients
+        from ..mujoco.catalogs.reference import true_coefficients
 
         truth, missing = true_coefficients(system, model.feature_library_)
         # an implicit law is only defined up to a factor: compare at the best common scale
@@ -237,7 +238,7 @@ def execute_task(task: Task, settings: GridSettings, deadline: float | None = No
 
 def _execute(task, settings, deadline, stage) -> dict:
     from ..dynamics import DynamicsError
-    from ..mujoco.validation import validate_model
+    from ..mujoco.evaluation.validation import validate_model
 
     record = base_record(task, settings)
     spec = task.trajectory

@@ -128,7 +128,7 @@ def run_demo(args) -> dict:
     files = {}
     start = time.perf_counter()
     if not args.no_plots and result is not None:
-        from pysindy_xl.mujoco.plots import plot_validation
+        from pysindy_xl.mujoco.evaluation.plots import plot_validation
 
         path = os.path.join(args.out, "validation.png")
         plot_validation(result, path, model.get_feature_names(), model.coefficients(), truth,
@@ -198,7 +198,7 @@ def run_demo(args) -> dict:
 def _validate(model, system, args):
     """``(ValidationResult, None)`` against a fresh MuJoCo run, or ``(None, reason)``."""
     from pysindy_xl.dynamics import DynamicsError
-    from pysindy_xl.mujoco.validation import validate_model
+    from pysindy_xl.mujoco.evaluation.validation import validate_model
 
     try:
         return validate_model(model, system, duration=args.validation_duration,
@@ -234,7 +234,7 @@ def _validation_line(result, failure, args) -> str:
 def _physics(model, system, args):
     """The identified mass matrix and unforced dynamics against MuJoCo's, or None."""
     from pysindy_xl.dynamics import DynamicsError
-    from pysindy_xl.mujoco.validation import compare_physics
+    from pysindy_xl.mujoco.evaluation.physics import compare_physics
 
     try:
         return compare_physics(model, system, seed=args.seed)
@@ -426,9 +426,8 @@ def _names(text):
 def _load(args, path, system=None):
     """A data file of ``identify`` (DATA or a --validate file) with the column options; the
     joints of a ROS bag are the system's (its joint names, in its order) unless named."""
-    from pysindy_xl.data import load_data
+    from pysindy_xl.data import DatasetError, load_data
     from pysindy_xl.data.rosbag import is_rosbag
-    from pysindy_xl.mujoco import DatasetError
 
     columns = _column_map(getattr(args, "column", None))
     coordinates = _names(args.coordinates)

@@ -105,7 +105,7 @@ def data_lines(system, dataset):
              f"= {period * 1e3:g} ms"]
     integration = meta.get("integration")
     if integration and getattr(system, "mj_model", None) is not None:
-        from pysindy_xl.mujoco.generate import INTEGRATORS
+        from pysindy_xl.mujoco.simulation.generate import INTEGRATORS
 
         authored = int(system.mj_model().opt.integrator)
         if INTEGRATORS.get(integration["integrator"]) != authored or integration["substeps"] > 1:
@@ -210,7 +210,7 @@ def check_solver(solver, forced, threshold, auto=False):
 
 def fit_model(system, dataset, args, solver, forced, return_arguments=False):
     import pysindy_xl as px
-    from pysindy_xl.mujoco.catalogs import reference_catalog
+    from pysindy_xl.mujoco.catalogs.reference import reference_catalog
 
     optimizer = check_solver(solver, forced, args.threshold,
                              auto=getattr(args, "solver", "auto") == "auto")
@@ -231,7 +231,7 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
 
 def summarize_coefficients(system, model):
     """True coefficients and errors against them (None for systems without ground truth)."""
-    from pysindy_xl.mujoco.catalogs import true_coefficients
+    from pysindy_xl.mujoco.catalogs.reference import true_coefficients
 
     try:  # known Lagrangians, and the MJCF's own values in its kinematic catalog
         truth, missing = true_coefficients(system, model.feature_library_)

@@ -20,7 +20,7 @@ column             content
 coordinate, in header order. Several trajectories in one table are split by the id column
 (rows of one id keep their order; ids in order of first appearance).
 
-Every mistake raises :class:`~pysindy_xl.mujoco.DatasetError` (a :class:`ValueError`) naming
+Every mistake raises :class:`~pysindy_xl.data.DatasetError` (a :class:`ValueError`) naming
 the file (or DataFrame) and the column, and the line for a bad cell.
 """
 

@@ -79,7 +79,9 @@ def write_mjcf(catalog, pi, friction, path, joint_friction=None) -> str:
     str
         The MJCF text written.
     """
-    import mujoco
+    from ..mujoco import import_mujoco
+
+    mujoco = import_mujoco()
 
     system = catalog.system
     spec = mujoco.MjSpec.from_string(system.xml())
@@ -129,7 +131,9 @@ def _principal_axes(inertia):
     (``diaginertia`` or ``fullinertia``, which MuJoCo refuses together). Moments below a
     billionth of the largest, a point mass's or a rod's, are raised to it: MuJoCo refuses
     zero moments on a moving body."""
-    import mujoco
+    from ..mujoco import import_mujoco
+
+    mujoco = import_mujoco()
 
     moments, axes = np.linalg.eigh((inertia + inertia.T) / 2)
     if np.linalg.det(axes) < 0:

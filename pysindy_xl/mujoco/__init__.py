@@ -1,123 +1,93 @@
 """MuJoCo systems, data generation, reference catalogs and validation of identified models.
 
-The pipeline of the paper as a library: MJCF models of the cart-pole, the double pendulum and
-the double pendulum on a cart (:mod:`.systems`), randomly forced trajectories with noise
-(:mod:`.generate`), datasets as NPZ + JSON (:mod:`.dataset`), the reference catalogs of the
-paper's comparison (:mod:`.catalogs`), catalogs derived from the kinematic tree of any MJCF
-model (:mod:`.kinematic`) and the validation of an identified model against a fresh MuJoCo
-trajectory (:mod:`.validation`, :mod:`.plots`), open loop or closed loop through the MJCF's
-actuator law (:mod:`.actuation`). Every generated run is integrated stably and faithfully to
-the continuous equations, and checked (:mod:`.integration`).
+The pipeline of the paper as a library, one subpackage a concern:
+
+- :mod:`.systems`: the paper's MJCF models (cart-pole, double pendulum, double pendulum on a
+  cart, triple pendulum), any MJCF or URDF model, the registry, and the MJCF's actuator law;
+- :mod:`.simulation`: randomly forced or designed (Fourier, optimized excitation)
+  trajectories with noise, integrated stably and faithfully to the continuous equations and
+  checked; the stiff closed-loop integrator of identified models;
+- :mod:`.catalogs`: the reference catalogs of the paper's comparison, catalogs derived from
+  the kinematic tree of any MJCF model, payload identification on such a catalog;
+- :mod:`.evaluation`: validation of an identified model against a fresh MuJoCo trajectory,
+  open loop or closed loop through the MJCF's actuator law, the physics check, the figures.
+
+The public names are loaded on first use (PEP 562): ``import pysindy_xl.mujoco`` imports
+neither MuJoCo, SymPy, PySINDy nor matplotlib until a name that needs them is touched.
+
+Examples
+--------
+>>> import pysindy_xl.mujoco as pxm
+>>> pxm.get_system("cart-pole").coordinate_names
+('x', 'theta')
 """
 
-from ..data.constraints import contiguous_segments, unconstrained_samples, unconstrained_windows
-from ..data.dataset import Dataset, DatasetError, Trajectory, load_dataset
-from .actuation import ActuatorLaw, actuator_law, start_on_reference
-from .catalogs import (
-    CATALOG_KINDS,
-    classical_terms,
-    lagrange_terms,
-    reference_catalog,
-    true_coefficients,
-)
-from .excitation import excitation_trajectory
-from .forcing import FORCING_MODES, SumOfSinusoids
-from .fourier import FourierTrajectory
-from .generate import (
-    NOISE_MODELS,
-    ConstraintWarning,
-    add_noise,
-    generate_dataset,
-    noise_levels,
-    simulate_trajectory,
-)
-from .integration import Integration, UnstableSimulationError, choose_integration
-from .kinematic import KinematicCatalog, PolynomialLagrangeLibrary, kinematic_catalog
-from .payload import Payload, identify_payload
-from .systems import (
-    SYSTEMS,
-    CartDoublePendulum,
-    CartPole,
-    DoublePendulum,
-    MJCFSystem,
-    MuJoCoSystem,
-    TriplePendulum,
-    coordinate_system,
-    default_xml_path,
-    equations_of_motion,
-    get_system,
-    system_from_metadata,
-)
-from .validation import (
-    DEFAULT_DIVERGENCE_BOUND,
-    ValidationResult,
-    compare_physics,
-    compare_trajectories,
-    validate_model,
-    validation_trajectory,
-)
+from __future__ import annotations
 
-__all__ = [
-    "Integration",
-    "UnstableSimulationError",
-    "choose_integration",
-    "SYSTEMS",
-    "CartDoublePendulum",
-    "CartPole",
-    "DoublePendulum",
-    "MJCFSystem",
-    "MuJoCoSystem",
-    "TriplePendulum",
-    "default_xml_path",
-    "equations_of_motion",
-    "get_system",
-    "system_from_metadata",
-    "coordinate_system",
-    "unconstrained_samples",
-    "unconstrained_windows",
-    "contiguous_segments",
-    "NOISE_MODELS",
-    "ConstraintWarning",
-    "noise_levels",
-    "FORCING_MODES",
-    "SumOfSinusoids",
-    "FourierTrajectory",
-    "excitation_trajectory",
-    "Payload",
-    "identify_payload",
-    "add_noise",
-    "generate_dataset",
-    "simulate_trajectory",
-    "Dataset",
-    "DatasetError",
-    "Trajectory",
-    "load_dataset",
-    "CATALOG_KINDS",
-    "classical_terms",
-    "lagrange_terms",
-    "reference_catalog",
-    "true_coefficients",
-    "KinematicCatalog",
-    "PolynomialLagrangeLibrary",
-    "kinematic_catalog",
-    "DEFAULT_DIVERGENCE_BOUND",
-    "ValidationResult",
-    "compare_trajectories",
-    "start_on_reference",
-    "compare_physics",
-    "validate_model",
-    "ActuatorLaw",
-    "actuator_law",
-    "validation_trajectory",
-    "plot_validation",
-    "plot_coefficients",
-]
+import importlib
+
+from .._optional import import_optional
+
+# public name -> submodule that defines it (imported on first attribute access)
+_LAZY = {
+    **dict.fromkeys(("ActuatorLaw", "actuator_law", "start_on_reference"), "systems.actuation"),
+    **dict.fromkeys(("SYSTEMS", "CartDoublePendulum", "CartPole", "DoublePendulum",
+                     "MJCFSystem", "MuJoCoSystem", "TriplePendulum", "coordinate_system",
+                     "default_xml_path", "equations_of_motion", "get_system",
+                     "system_from_metadata"), "systems.registry"),
+    **dict.fromkeys(("ConstraintWarning", "generate_dataset", "simulate_trajectory"),
+                    "simulation.generate"),
+    **dict.fromkeys(("Integration", "UnstableSimulationError", "choose_integration"),
+                    "simulation.integration"),
+    **dict.fromkeys(("FORCING_MODES", "SumOfSinusoids"), "simulation.forcing"),
+    "FourierTrajectory": "simulation.fourier",
+    "excitation_trajectory": "simulation.excitation",
+    **dict.fromkeys(("CATALOG_KINDS", "classical_terms", "lagrange_terms", "reference_catalog",
+                     "true_coefficients"), "catalogs.reference"),
+    **dict.fromkeys(("KinematicCatalog", "PolynomialLagrangeLibrary", "kinematic_catalog"),
+                    "catalogs.kinematic"),
+    **dict.fromkeys(("Payload", "identify_payload"), "catalogs.payload"),
+    **dict.fromkeys(("DEFAULT_DIVERGENCE_BOUND", "ValidationResult", "compare_trajectories",
+                     "validate_model", "validation_trajectory"), "evaluation.validation"),
+    "compare_physics": "evaluation.physics",
+    **dict.fromkeys(("plot_validation", "plot_coefficients"), "evaluation.plots"),
+    # the data of a generated run (kept here by the public API; defined in pysindy_xl.data)
+    **dict.fromkeys(("Dataset", "Trajectory", "load_dataset"), "..data.dataset"),
+}
+
+__all__ = ["import_mujoco", *_LAZY]
+
+def import_mujoco():
+    """The ``mujoco`` module, imported on first use: the one way this package imports MuJoCo.
+
+    Returns
+    -------
+    module
+        ``mujoco``.
+
+    Raises
+    ------
+    pysindy_xl._optional.MissingExtraError
+        If MuJoCo is not installed (an ImportError naming the ``pysindy-xl[mujoco]`` extra).
+
+    Examples
+    --------
+    >>> from pysindy_xl.mujoco import import_mujoco
+    >>> hasattr(import_mujoco(), "MjModel")
+    True
+    """
+    return import_optional("mujoco", purpose="MuJoCo simulation (pysindy_xl.mujoco)")
 
 
 def __getattr__(name):
-    # plots import matplotlib: load them on first use only
-    if name in ("plot_validation", "plot_coefficients"):
-        from . import plots
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    relative = module if module.startswith(".") else f".{module}"
+    value = getattr(importlib.import_module(relative, __name__), name)
+    globals()[name] = value  # later accesses skip __getattr__
+    return value
 
-        return getattr(plots, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

@@ -35,8 +35,8 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from ..symbols import monomials, products
-from .systems import MuJoCoSystem, equations_of_motion, get_system
+from ...symbols import monomials, products
+from ..systems.registry import MuJoCoSystem, equations_of_motion, get_system
 
 __all__ = ["CATALOG_KINDS", "lagrange_terms", "classical_terms", "reference_catalog",
            "true_coefficients", "dry_friction_terms"]
@@ -167,8 +167,8 @@ def dry_friction_terms(system, eps: float = 1e-3) -> tuple[list[sp.Expr], np.nda
     eps : float, default 1e-3
         Velocity scale of the smoothing (m/s or rad/s): much smaller than the typical
         velocity, so the term is ``sign(qd)`` except near rest (MuJoCo's frictionloss is
-        close to an exact sign: on a block with frictionloss 0.5 and damping 0.4, eps = 1e-3
-        recovers both within 0.2 %, eps = 1e-2 biases the damping by 10 %).
+        close to an exact sign; a wider smoothing leaks part of the friction into the
+        identified damping).
 
     Returns
     -------
@@ -236,7 +236,7 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
     >>> reference_catalog("cart-pole", "kinematic").fit().n_output_features_
     9
     """
-    from ..feature_library import (
+    from ...feature_library import (
         CatalogRepartition,
         ClassicalLibrary,
         ExternalForces,

@@ -8,7 +8,8 @@ import re
 
 import numpy as np
 
-from ._system_base import MuJoCoSystem, check_positive, import_mujoco
+from .. import import_mujoco
+from .base import MuJoCoSystem, checked_parameters
 from .urdf import is_urdf, urdf_spec
 
 __all__ = ["MJCFSystem"]
@@ -40,7 +41,7 @@ class MJCFSystem(MuJoCoSystem):
     source : str or os.PathLike
         Path to an MJCF file or a URDF file (``.urdf``), or the MJCF or URDF text itself (a
         string starting with ``<``). A URDF is read with its inertials and without its
-        meshes, with a motor on every joint (see :mod:`pysindy_xl.mujoco.urdf`).
+        meshes, with a motor on every joint (see :mod:`pysindy_xl.mujoco.systems.urdf`).
     force_amplitude : float, default 1.0
         Amplitude of the random force of an actuator without ``ctrlrange``.
     joints : list of str, optional
@@ -144,7 +145,7 @@ class MJCFSystem(MuJoCoSystem):
         )
         self.mixed_actuators = self.actuated_joints[:1]
         self._parameters = {"source": self.path or "<string>",
-                            "force_amplitude": check_positive(force_amplitude, "force_amplitude"),
+                            **checked_parameters(force_amplitude=force_amplitude),
                             "timestep": float(model.opt.timestep)}
         if joints is not None:
             self._parameters["joints"] = list(self.joint_names)

@@ -2,7 +2,7 @@
 and a (chaotic) three-link pendulum.
 
 Each class writes its MJCF text from its parameters and knows the same mechanism's textbook
-Lagrangian (coordinate conventions: :mod:`pysindy_xl.mujoco.systems`).
+Lagrangian (coordinate conventions: :mod:`pysindy_xl.mujoco.systems.registry`).
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from ._system_base import MuJoCoSystem, check_non_negative, check_positive, mjcf_float
+from .base import MuJoCoSystem, checked_parameters, mjcf_float
 
 __all__ = ["CartPole", "DoublePendulum", "CartDoublePendulum", "TriplePendulum"]
 
@@ -103,16 +103,10 @@ class CartPole(MuJoCoSystem):
 
     def __init__(self, cart_mass=1.0, pole_mass=0.5, length=0.8, cart_damping=0.5,
                  pole_damping=0.1, gravity=9.81, point_inertia=1e-6, timestep=1e-3):
-        self._parameters = {
-            "cart_mass": check_positive(cart_mass, "cart_mass"),
-            "pole_mass": check_positive(pole_mass, "pole_mass"),
-            "length": check_positive(length, "length"),
-            "cart_damping": check_non_negative(cart_damping, "cart_damping"),
-            "pole_damping": check_non_negative(pole_damping, "pole_damping"),
-            "gravity": check_non_negative(gravity, "gravity"),
-            "point_inertia": check_positive(point_inertia, "point_inertia"),
-            "timestep": check_positive(timestep, "timestep"),
-        }
+        self._parameters = checked_parameters(
+            cart_mass=cart_mass, pole_mass=pole_mass, length=length, cart_damping=cart_damping,
+            pole_damping=pole_damping, gravity=gravity, point_inertia=point_inertia,
+            timestep=timestep)
 
     @property
     def joint_damping(self):
@@ -206,17 +200,9 @@ class DoublePendulum(MuJoCoSystem):
 
     def __init__(self, mass1=1.0, mass2=0.8, length1=1.0, length2=0.7, damping1=0.3,
                  damping2=0.15, gravity=9.81, point_inertia=1e-6, timestep=1e-3):
-        self._parameters = {
-            "mass1": check_positive(mass1, "mass1"),
-            "mass2": check_positive(mass2, "mass2"),
-            "length1": check_positive(length1, "length1"),
-            "length2": check_positive(length2, "length2"),
-            "damping1": check_non_negative(damping1, "damping1"),
-            "damping2": check_non_negative(damping2, "damping2"),
-            "gravity": check_non_negative(gravity, "gravity"),
-            "point_inertia": check_positive(point_inertia, "point_inertia"),
-            "timestep": check_positive(timestep, "timestep"),
-        }
+        self._parameters = checked_parameters(
+            mass1=mass1, mass2=mass2, length1=length1, length2=length2, damping1=damping1,
+            damping2=damping2, gravity=gravity, point_inertia=point_inertia, timestep=timestep)
 
     @property
     def joint_to_coordinates(self):
@@ -317,19 +303,10 @@ class CartDoublePendulum(MuJoCoSystem):
     def __init__(self, cart_mass=1.0, mass1=0.5, mass2=0.4, length1=0.7, length2=0.5,
                  cart_damping=0.5, damping1=0.1, damping2=0.05, gravity=9.81,
                  point_inertia=1e-6, timestep=1e-3):
-        self._parameters = {
-            "cart_mass": check_positive(cart_mass, "cart_mass"),
-            "mass1": check_positive(mass1, "mass1"),
-            "mass2": check_positive(mass2, "mass2"),
-            "length1": check_positive(length1, "length1"),
-            "length2": check_positive(length2, "length2"),
-            "cart_damping": check_non_negative(cart_damping, "cart_damping"),
-            "damping1": check_non_negative(damping1, "damping1"),
-            "damping2": check_non_negative(damping2, "damping2"),
-            "gravity": check_non_negative(gravity, "gravity"),
-            "point_inertia": check_positive(point_inertia, "point_inertia"),
-            "timestep": check_positive(timestep, "timestep"),
-        }
+        self._parameters = checked_parameters(
+            cart_mass=cart_mass, mass1=mass1, mass2=mass2, length1=length1, length2=length2,
+            cart_damping=cart_damping, damping1=damping1, damping2=damping2, gravity=gravity,
+            point_inertia=point_inertia, timestep=timestep)
 
     @property
     def joint_to_coordinates(self):
@@ -416,17 +393,10 @@ class TriplePendulum(MuJoCoSystem):
     def __init__(self, mass1=1.0, mass2=0.8, mass3=0.6, length1=0.8, length2=0.6, length3=0.5,
                  damping1=0.2, damping2=0.1, damping3=0.05, gravity=9.81, point_inertia=1e-6,
                  timestep=1e-3):
-        self._parameters = {
-            **{f"mass{k}": check_positive(v, f"mass{k}")
-               for k, v in enumerate((mass1, mass2, mass3), 1)},
-            **{f"length{k}": check_positive(v, f"length{k}")
-               for k, v in enumerate((length1, length2, length3), 1)},
-            **{f"damping{k}": check_non_negative(v, f"damping{k}")
-               for k, v in enumerate((damping1, damping2, damping3), 1)},
-            "gravity": check_non_negative(gravity, "gravity"),
-            "point_inertia": check_positive(point_inertia, "point_inertia"),
-            "timestep": check_positive(timestep, "timestep"),
-        }
+        self._parameters = checked_parameters(
+            mass1=mass1, mass2=mass2, mass3=mass3, length1=length1, length2=length2,
+            length3=length3, damping1=damping1, damping2=damping2, damping3=damping3,
+            gravity=gravity, point_inertia=point_inertia, timestep=timestep)
 
     @property
     def joint_to_coordinates(self):

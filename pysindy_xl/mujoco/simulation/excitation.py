@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 import threadpoolctl
 
+from .. import import_mujoco
 from .fourier import FourierTrajectory, _basis, _positive
 
 __all__ = ["excitation_trajectory"]
@@ -70,7 +71,7 @@ class _Design:
 
     def regressor(self, states):
         """``W`` of stacked states (3, N, n): shape (n, N, p), coordinate-major rows."""
-        from ..feature_library import stack_variables
+        from ...feature_library import stack_variables
 
         n_samples = states.shape[1]
         theta = self.library.transform(stack_variables(*states, np.zeros_like(states[0])))
@@ -269,7 +270,7 @@ def _per_joint(value, name, n, default):
 def _mjcf_limits(system, position_limits, torque_limits):
     """Default position limits (joint ranges within the servos' reach, 5 % margin) and torque
     limits (actuator force ranges) of an MJCF whose coordinates are its joints."""
-    import mujoco
+    mujoco = import_mujoco()
 
     model = system.mj_model()
     n = system.n
@@ -381,8 +382,8 @@ def excitation_trajectory(system, n_harmonics: int = 5, period: float = 10.0,
     >>> bool(best.condition_number < plain.condition_number)
     True
     """
-    from ._kinematic_build import resolve_system
-    from .kinematic import kinematic_catalog
+    from ..catalogs.kinematic import kinematic_catalog
+    from ..systems.registry import get_system as resolve_system
 
     system = resolve_system(system)
     if isinstance(n_harmonics, bool) or not isinstance(n_harmonics, (int, np.integer)) \

@@ -1,5 +1,6 @@
 """The base class of every MuJoCo system: an MJCF model with the textbook description of the
-same mechanism (coordinate, force and friction conventions: :mod:`pysindy_xl.mujoco.systems`).
+same mechanism (coordinate, force and friction conventions:
+:mod:`pysindy_xl.mujoco.systems.registry`).
 """
 
 from __future__ import annotations
@@ -7,27 +8,19 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from .._optional import import_optional
-from .._validation import check_option
-from ..symbols import Coordinates
-
-
-def import_mujoco():
-    """The ``mujoco`` module, imported on first use (clear error naming the extra)."""
-    return import_optional("mujoco", purpose="MuJoCo simulation (pysindy_xl.mujoco)")
-
+from ..._validation import check_option
+from ...symbols import Coordinates
+from .. import import_mujoco
 
 __all__ = ["MuJoCoSystem", "equations_of_motion"]
 
 
-def check_positive(value, name: str) -> float:
-    """A physical parameter that must be a positive number (never a string or a bool)."""
-    return check_option(name, value, "real", low=0, low_open=True)
-
-
-def check_non_negative(value, name: str) -> float:
-    """A physical parameter that must be a non-negative number (never a string or a bool)."""
-    return check_option(name, value, "real", low=0)
+def checked_parameters(**values) -> dict:
+    """Physical parameters checked by name: numbers (never a string or a bool), positive but
+    for gravity and dampings, which may be zero."""
+    return {name: check_option(name, value, "real", low=0,
+                               low_open=name != "gravity" and "damping" not in name)
+            for name, value in values.items()}
 
 
 def mjcf_float(value: float) -> str:

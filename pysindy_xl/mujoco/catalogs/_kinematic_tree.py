@@ -12,13 +12,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 
-from ..feature_library.trigpoly import TrigPolynomial
-from ..physical.rigid_body import KinematicTree
-from ..physical.structure import INERTIAL_PARAMETERS
-from .systems import MuJoCoSystem
+from ...feature_library.trigpoly import TrigPolynomial
+from ...physical.rigid_body import KinematicTree
+from ...physical.structure import INERTIAL_PARAMETERS
+from .. import import_mujoco
+from ..systems.registry import MuJoCoSystem
 
 __all__ = ["INERTIAL_PARAMETERS", "body_functions", "kinematic_tree", "physical_values"]
 
@@ -54,7 +54,7 @@ def _numeric(values) -> list[float]:
 
 def _quat_matrix(quat) -> list[list[float]]:
     matrix = np.zeros(9)
-    mujoco.mju_quat2Mat(matrix, np.asarray(quat, dtype=float))
+    import_mujoco().mju_quat2Mat(matrix, np.asarray(quat, dtype=float))
     rows = _numeric(matrix)
     return [rows[0:3], rows[3:6], rows[6:9]]
 
@@ -95,6 +95,7 @@ def _joint_variables(system: MuJoCoSystem, model):
     def slot(index):
         return TrigPolynomial.slot(n, index, is_angle)
 
+    mujoco = import_mujoco()
     hinge = int(mujoco.mjtJoint.mjJNT_HINGE)
     joints = []
     for k in range(model.njnt):
@@ -200,7 +201,7 @@ def physical_values(model, body: int) -> np.ndarray:
     mass = float(model.body_mass[body])
     centre = np.array(model.body_ipos[body], dtype=float)
     principal = np.zeros(9)
-    mujoco.mju_quat2Mat(principal, np.asarray(model.body_iquat[body], dtype=float))
+    import_mujoco().mju_quat2Mat(principal, np.asarray(model.body_iquat[body], dtype=float))
     principal = principal.reshape(3, 3)
     inertia = principal @ np.diag(model.body_inertia[body]) @ principal.T
     # parallel-axis theorem: from the centre of mass to the body frame origin
@@ -212,6 +213,7 @@ def physical_values(model, body: int) -> np.ndarray:
 def kinematic_tree(system: MuJoCoSystem, model) -> KinematicTree:
     """The numeric :class:`~pysindy_xl.physical.rigid_body.KinematicTree` of an MJCF model:
     the same frames as :func:`body_functions`, for the rigid-body kernel."""
+    mujoco = import_mujoco()
     bodies = range(1, model.nbody)
     rotations = np.zeros((model.nbody - 1, 9))
     for b in bodies:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import import_mujoco
+
 __all__ = ["SumOfSinusoids", "FORCING_MODES", "within_servo_reach", "REFERENCE_SPEED",
            "SERVO_BANDWIDTH_FRACTION"]
 
@@ -200,8 +202,8 @@ def within_servo_reach(signals: SumOfSinusoids, model) -> SumOfSinusoids:
     """The position servos' references of ``signals`` slowed to their reach.
 
     The band of each servo's reference is scaled below ``SERVO_BANDWIDTH_FRACTION`` of the
-    servo's bandwidth (:func:`~pysindy_xl.mujoco.actuation.servo_bandwidths`), its amplitudes
-    so that its speed bound ``sum_k 2 pi f_k A_k`` (in joint units) stays below
+    servo's bandwidth (:func:`~pysindy_xl.mujoco.systems.actuation.servo_bandwidths`), its
+    amplitudes so that its speed bound ``sum_k 2 pi f_k A_k`` (in joint units) stays below
     ``REFERENCE_SPEED``. Faster references are not tracked: the servo saturates, chatters,
     and drives its joint far faster than any real arm moves.
 
@@ -216,9 +218,9 @@ def within_servo_reach(signals: SumOfSinusoids, model) -> SumOfSinusoids:
     SumOfSinusoids
         ``signals`` itself when no driven actuator is a position servo.
     """
-    import mujoco
+    mujoco = import_mujoco()
 
-    from .actuation import servo_bandwidths
+    from ..systems.actuation import servo_bandwidths
 
     bandwidth = servo_bandwidths(model)
     servo = np.isfinite(bandwidth) & np.any(signals.amplitudes != 0, axis=1)

@@ -12,10 +12,12 @@ import os
 
 import numpy as np
 
-from .._validation import check_option
-from ..data.dataset import Dataset, Trajectory
-from ..data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
-from .actuation import actuator_force_function, start_on_reference
+from ..._validation import check_option
+from ...data.dataset import Dataset, Trajectory
+from ...data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
+from .. import import_mujoco
+from ..systems.actuation import actuator_force_function, start_on_reference
+from ..systems.registry import MuJoCoSystem, get_system
 from .forcing import FORCING_MODES, SumOfSinusoids, within_servo_reach
 from .integration import (
     INTEGRATORS,
@@ -26,7 +28,6 @@ from .integration import (
     settled,
     settling_time,
 )
-from .systems import MuJoCoSystem, get_system
 
 __all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "actuator_signals",
            "noise_levels", "NOISE_KEYS", "NOISE_MODELS",
@@ -34,15 +35,9 @@ __all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "actuator_sig
            "UnstableSimulationError", "choose_integration"]
 
 
-def _import_mujoco():
-    import mujoco
-
-    return mujoco
-
-
 def _actuators(model) -> list[tuple[str, str | None]]:
     """(actuator name, driven joint name or None) for each actuator of the model."""
-    mujoco = _import_mujoco()
+    mujoco = import_mujoco()
     out = []
     for a in range(model.nu):
         name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) or f"actuator{a}"
@@ -92,7 +87,7 @@ def _fraction(value, name: str) -> float:
 
 
 def _constraint_kinds():
-    mujoco = _import_mujoco()
+    mujoco = import_mujoco()
     c = mujoco.mjtConstraint
     friction = np.array([int(c.mjCNSTR_FRICTION_DOF), int(c.mjCNSTR_FRICTION_TENDON)])
     limits = np.array([int(c.mjCNSTR_LIMIT_JOINT), int(c.mjCNSTR_LIMIT_TENDON)])
@@ -259,7 +254,7 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     >>> bool(trajectory.constraint_active.any())  # no limit, no contact
     False
     """
-    mujoco = _import_mujoco()
+    mujoco = import_mujoco()
     system = get_system(system)
     duration = check_option("duration", duration, "real", low=0, low_open=True)
     sample_every = check_option("sample_every", sample_every, "int", low=1)

@@ -23,7 +23,7 @@ import dataclasses
 
 import numpy as np
 
-from ..physical.structure import INERTIAL_PARAMETERS, PhysicalStructure
+from ...physical.structure import INERTIAL_PARAMETERS, PhysicalStructure
 
 __all__ = ["Payload", "identify_payload"]
 
@@ -158,10 +158,10 @@ def identify_payload(catalog, q, t, tau, qd=None, qdd=None, arm=None, body=None)
     >>> payload.body, round(payload.mass, 4), payload.com.round(4)[[0, 2]]
     ('hand', 0.3, array([0.1, 0. ]))
     """
-    from .._inputs import check_array
-    from ..feature_library import stack_variables
-    from ..physical.sdp import consistent_least_squares
-    from ..weak import BumpTestFunctions, WhittakerSmoother, weak_regression
+    from ..._inputs import check_array
+    from ...feature_library import stack_variables
+    from ...physical.sdp import consistent_least_squares
+    from ...weak import BumpTestFunctions, WhittakerSmoother, weak_regression
 
     library = catalog.library().fit()
     n = catalog.coords.n

@@ -28,14 +28,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from .systems import get_system
+from .. import import_mujoco
+from .registry import get_system
 
 __all__ = ["ActuatorLaw", "actuator_law", "actuator_force_function", "servo_bandwidths"]
 
 
 def _supported(model, a: int) -> bool:
     """Whether actuator ``a`` follows the law of the module docstring."""
-    import mujoco
+    mujoco = import_mujoco()
 
     return (int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)
             and int(model.actuator_dyntype[a]) == int(mujoco.mjtDyn.mjDYN_NONE)
@@ -93,7 +94,7 @@ class ActuatorLaw:
     """
 
     def __init__(self, system, signals, force_input: str):
-        import mujoco
+        mujoco = import_mujoco()
 
         model = system.mj_model()
         self.n = int(system.n)
@@ -374,7 +375,7 @@ def servo_bandwidths(model) -> np.ndarray:
     >>> servo_bandwidths(model).round(3)  # overdamped: nearly kp / kv
     array([5.013,   nan])
     """
-    import mujoco
+    mujoco = import_mujoco()
 
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)

@@ -25,6 +25,7 @@ import os
 
 import numpy as np
 
+from .. import import_mujoco
 from .forcing import SumOfSinusoids
 
 __all__ = ["FourierTrajectory"]
@@ -165,7 +166,7 @@ class FourierTrajectory:
             If the system's size differs, an actuator is not a position servo on a joint, or a
             coordinate has no servo.
         """
-        from .systems import get_system
+        from ..systems.registry import get_system
 
         system = get_system(system)
         servo = _position_servos(system, "reference")
@@ -284,7 +285,7 @@ def _basis(t, w: float, L: int, order: int) -> np.ndarray:
 
 def _position_servos(system, argument: str):
     """``(G, c)`` with ``ctrl = c + G q`` putting every position servo on the positions ``q``."""
-    import mujoco
+    mujoco = import_mujoco()
 
     model = system.mj_model()
     inverse = np.linalg.inv(system.joint_to_coordinates)  # qpos = T^-1 q

@@ -32,7 +32,7 @@ expression is built only when read. Timings: ``benchmarks/kinematic_catalog.py``
 Friction and springs are not Lagrangian: each joint adds classical candidates (viscous
 ``qvel_k``, smooth Coulomb ``tanh(qvel_k / eps)``, and ``qpos_k - springref_k`` for joints with
 stiffness), entered in the equations that the joint force reaches (``B = T^-T``, see
-:mod:`pysindy_xl.mujoco.systems`). Coordinates are those of the system: ``q = T @ qpos``.
+:mod:`pysindy_xl.mujoco.systems.registry`). Coordinates are those of the system: ``q = T @ qpos``.
 With ``friction=`` the joints' friction comes instead from the models of real joints
 (viscous, Coulomb, asymmetric Coulomb, Stribeck, torque-sensor offset;
 :class:`~pysindy_xl.feature_library.JointFrictionLibrary`), one column per joint and model,
@@ -45,22 +45,22 @@ import dataclasses
 import hashlib
 import time
 
-import mujoco
 import numpy as np
 import threadpoolctl
 
-from ..feature_library import PolynomialLagrangeLibrary
-from ..feature_library.joint_friction import FRICTION_MODELS
-from ..feature_library.trigpoly import euler_lagrange_many, evaluate_many, state_values
-from ..feature_library.trigterms import TrigTerms
-from ..physical.rigid_body import KinematicTree
-from ..symbols import Coordinates
+from ...feature_library import PolynomialLagrangeLibrary
+from ...feature_library.joint_friction import FRICTION_MODELS
+from ...feature_library.trigpoly import euler_lagrange_many, evaluate_many, state_values
+from ...feature_library.trigterms import TrigTerms
+from ...physical.rigid_body import KinematicTree
+from ...symbols import Coordinates
+from .. import import_mujoco
+from ..systems.registry import MuJoCoSystem, get_system
 from ._kinematic_build import (
     classical_candidates,
     independent_regressor_columns,
     joint_coordinates,
     random_joint_values,
-    resolve_system,
 )
 from ._kinematic_tree import (
     INERTIAL_PARAMETERS,
@@ -68,7 +68,6 @@ from ._kinematic_tree import (
     kinematic_tree,
     physical_values,
 )
-from .systems import MuJoCoSystem
 
 __all__ = ["KinematicCatalog", "PolynomialLagrangeLibrary", "kinematic_catalog",
            "INERTIAL_PARAMETERS"]
@@ -194,7 +193,7 @@ class KinematicCatalog:
         >>> lib.get_feature_names()[-2:]
         ['C_theta[theta_dot]', 'C_theta[tanh(100.0*theta_dot)]']
         """
-        from ..feature_library import (
+        from ...feature_library import (
             CatalogRepartition,
             ClassicalLibrary,
             ExternalForces,
@@ -503,7 +502,7 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
     >>> len(catalog.library().fit().get_feature_names())  # force, 3 Lagrange, 2 friction
     6
     """
-    system = resolve_system(system)
+    system = get_system(system)
     for name, value in (("coulomb_scale", coulomb_scale), ("stribeck_scale", stribeck_scale)):
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
                 np.isfinite(value) and value > 0):
@@ -513,6 +512,7 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
     if model.nq != system.n or model.nv != system.n:
         raise ValueError(f"system: MJCF has nq={model.nq}, nv={model.nv}; expected one hinge or "
                          f"slide joint per coordinate ({system.n})")
+    mujoco = import_mujoco()
     for k in range(model.njnt):
         if int(model.jnt_type[k]) not in (int(mujoco.mjtJoint.mjJNT_HINGE),
                                           int(mujoco.mjtJoint.mjJNT_SLIDE)):
@@ -566,6 +566,7 @@ def _with_joint_models(catalog, system, model, friction, scales) -> KinematicCat
 
 
 def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
+    mujoco = import_mujoco()
     coords = system.coords
     n = coords.n
     functions, joints = body_functions(system, model)

@@ -60,13 +60,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from ..data.dataset import Trajectory
-from .actuation import actuator_law, start_on_reference
-from .forcing import FORCING_MODES, SumOfSinusoids
-from .generate import actuator_signals, simulate_trajectory
-from .integration import choose_integration
+from ...data.dataset import Trajectory
+from ..simulation.forcing import FORCING_MODES, SumOfSinusoids
+from ..simulation.generate import actuator_signals, simulate_trajectory
+from ..simulation.integration import choose_integration
+from ..systems.actuation import actuator_law, start_on_reference
+from ..systems.registry import get_system
 from .physics import compare_physics
-from .systems import get_system
 
 __all__ = ["ValidationResult", "validate_model", "compare_trajectories",
            "validation_trajectory", "DEFAULT_DIVERGENCE_BOUND", "DEFAULT_FORCE_BOUND", "DRIVES",
@@ -451,7 +451,7 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     >>> result.drive  # a motor on the cart: its force is a function of time
     'open-loop'
     """
-    from ..dynamics import SimulationError
+    from ...dynamics import SimulationError
 
     if trajectory is None:
         if system is None:

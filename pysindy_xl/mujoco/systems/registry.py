@@ -31,7 +31,7 @@ visualisation, add no mass. Contacts are disabled and the integrator is RK4 with
 step, so that MuJoCo's trajectories follow the continuous equations closely.
 
 The base class and its conventions are in ``_system_base``, the paper's systems in
-:mod:`pysindy_xl.mujoco.paper_systems`, user MJCF files in :mod:`pysindy_xl.mujoco.mjcf_system`;
+:mod:`pysindy_xl.mujoco.systems.paper`, user MJCF files in :mod:`pysindy_xl.mujoco.systems.mjcf`;
 this module is the registry and keeps every name importable from here.
 """
 
@@ -42,10 +42,10 @@ from importlib import resources
 
 import numpy as np
 
-from ..symbols import Coordinates
-from ._system_base import MuJoCoSystem, equations_of_motion
-from .mjcf_system import MJCFSystem
-from .paper_systems import CartDoublePendulum, CartPole, DoublePendulum, TriplePendulum
+from ...symbols import Coordinates
+from .base import MuJoCoSystem, equations_of_motion
+from .mjcf import MJCFSystem
+from .paper import CartDoublePendulum, CartPole, DoublePendulum, TriplePendulum
 
 __all__ = [
     "MuJoCoSystem",
@@ -78,9 +78,9 @@ def get_system(name, **parameters) -> MuJoCoSystem:
     ----------
     name : str, os.PathLike or MuJoCoSystem
         ``"cart-pole"``, ``"double-pendulum"``, ``"cart-double-pendulum"``,
-        ``"triple-pendulum"`` (underscores
-        accepted), a path to an MJCF ``.xml`` or a URDF ``.urdf`` file, or a system (returned
-        as is).
+        ``"triple-pendulum"`` (underscores accepted), a path to an MJCF ``.xml`` or a URDF
+        ``.urdf`` file (or to any existing file, read as MJCF), MJCF text, or a system
+        (returned as is).
     **parameters
         Passed to the system's constructor.
 
@@ -97,18 +97,20 @@ def get_system(name, **parameters) -> MuJoCoSystem:
         if parameters:
             raise ValueError("parameters: cannot be given together with a system instance")
         return name
-    if isinstance(name, os.PathLike) or (
-            isinstance(name, str) and name.lower().endswith((".xml", ".urdf"))):
+    if isinstance(name, os.PathLike) or (isinstance(name, str) and (
+            name.lower().endswith((".xml", ".urdf")) or name.lstrip().startswith("<"))):
         return MJCFSystem(name, **parameters)
     if not isinstance(name, str):
         raise TypeError(f"name: expected a system name or an MJCF path, got {type(name).__name__}")
     key = name.strip().lower().replace("_", "-")
-    if key not in SYSTEMS:
-        raise ValueError(
-            f"name: unknown system {name!r}; expected one of {sorted(SYSTEMS)} or a path to an "
-            "MJCF .xml or URDF .urdf file"
-        )
-    return SYSTEMS[key](**parameters)
+    if key in SYSTEMS:
+        return SYSTEMS[key](**parameters)
+    if os.path.isfile(name):
+        return MJCFSystem(name, **parameters)
+    raise ValueError(
+        f"name: unknown system {name!r}; expected one of {sorted(SYSTEMS)} or a path to an "
+        "MJCF .xml or URDF .urdf file"
+    )
 
 
 def system_from_metadata(metadata: dict, **parameters) -> MuJoCoSystem:

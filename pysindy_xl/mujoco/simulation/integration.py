@@ -44,6 +44,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from .. import import_mujoco
+
 __all__ = ["Integration", "choose_integration", "linear_modes", "check_run",
            "UnstableSimulationError", "INTEGRATORS", "RK4_BOUND", "BIAS_TOLERANCE",
            "RK4_COST", "RK4_MAX_SUBSTEPS", "settling_time", "settled", "MAX_HINGE_VELOCITY",
@@ -140,7 +142,7 @@ class Integration:
 
 def _stiffness(model, data) -> tuple[np.ndarray, np.ndarray]:
     """``K``, ``D`` (nv x nv) of the servos, joint springs and damping at ``data``'s pose."""
-    import mujoco
+    mujoco = import_mujoco()
 
     mujoco.mj_forward(model, data)
     moments = np.zeros((model.nu, model.nv))
@@ -158,7 +160,7 @@ def _stiffness(model, data) -> tuple[np.ndarray, np.ndarray]:
 
 def _poses(model, n_poses: int, seed) -> np.ndarray:
     """The reference pose and ``n_poses - 1`` random poses inside the joint ranges."""
-    import mujoco
+    mujoco = import_mujoco()
 
     rng = np.random.default_rng(seed)
     poses = np.tile(model.qpos0, (n_poses, 1))
@@ -202,7 +204,7 @@ def linear_modes(model, n_poses: int = 8, seed=0) -> tuple[float, float]:
     >>> round(rate), round(damping_rate)
     (9990, 10000)
     """
-    import mujoco
+    mujoco = import_mujoco()
 
     data = mujoco.MjData(model)
     nv = model.nv
@@ -259,7 +261,7 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
     >>> choice.integrator, choice.substeps, choice.stability <= RK4_BOUND
     ('RK4', 2400, True)
     """
-    from .._validation import check_option
+    from ..._validation import check_option
 
     check_option("integrator", integrator, "choice", choices=("auto", "model", *INTEGRATORS))
     if substeps is not None:
@@ -302,7 +304,7 @@ def _implicit_stable(model, step: float, n_poses: int) -> bool:
 
     The linearized step is ``v' = v + h (M + h D)^-1 (-K x - D v)``, ``x' = x + h v'``.
     """
-    import mujoco
+    mujoco = import_mujoco()
 
     data = mujoco.MjData(model)
     nv = model.nv
@@ -359,7 +361,7 @@ def check_run(model, qpos, qvel, qacc, energy=None, bad_accelerations: int = 0,
     >>> check_run(model, np.zeros((3, 1)), np.array([[0.0], [1.0], [2.0]]), np.zeros((3, 1)))
     {'peak_velocity': {'j': 2.0}, 'velocity_bound': {'j': 100.0}}
     """
-    import mujoco
+    mujoco = import_mujoco()
 
     qvel = np.asarray(qvel, dtype=float)
     names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
@@ -412,7 +414,7 @@ def settling_time(model, forced: bool = True) -> float:
     float
         Seconds.
     """
-    from .actuation import servo_bandwidths
+    from ..systems.actuation import servo_bandwidths
 
     bandwidth = servo_bandwidths(model)
     if not forced or not np.any(np.isfinite(bandwidth)):
@@ -434,7 +436,7 @@ def settled(trajectory, settle: float):
     -------
     Trajectory
     """
-    from ..data.dataset import Trajectory
+    from ...data.dataset import Trajectory
 
     if settle <= 0:
         return trajectory

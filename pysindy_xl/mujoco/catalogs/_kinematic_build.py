@@ -1,37 +1,21 @@
-"""Steps of building a kinematic catalog (:mod:`.kinematic`): resolving the system, random
-states, the reduction to independent columns, and the classical (friction, spring) candidates.
+"""Steps of building a kinematic catalog (:mod:`.kinematic`): random states, the reduction to
+independent columns, and the classical (friction, spring) candidates.
 """
 
 from __future__ import annotations
-
-import os
 
 import numpy as np
 import scipy.linalg
 import sympy as sp
 
-from ..feature_library.trigpoly import state_values
-from .systems import MJCFSystem, MuJoCoSystem, get_system
+from ...feature_library.trigpoly import state_values
+from ..systems.registry import MuJoCoSystem
 
 # A column whose part orthogonal to the kept columns is below this fraction of its norm is
 # dependent; exact dependencies leave ~1e-14, independent columns O(1e-3) or more.
 _INDEPENDENCE_TOL = 1e-9
 # Columns taken in preference order only when at least this fraction of them is new.
 _WELL_CONDITIONED = 0.05
-
-
-def resolve_system(system) -> MuJoCoSystem:
-    if isinstance(system, MuJoCoSystem):
-        return system
-    if isinstance(system, str) and system.lstrip().startswith("<"):
-        return MJCFSystem(system)
-    if isinstance(system, (str, os.PathLike)):
-        if isinstance(system, str) and not system.endswith(".xml") and os.path.isfile(system):
-            return MJCFSystem(system)
-        return get_system(system)
-    raise TypeError(
-        f"system: expected a MuJoCoSystem, an MJCF path or MJCF text, got {type(system).__name__}"
-    )
 
 
 def independent_regressor_columns(matrix: np.ndarray) -> list[int]:

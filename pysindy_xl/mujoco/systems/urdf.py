@@ -32,7 +32,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from ._system_base import import_mujoco
+from .. import import_mujoco
 
 __all__ = ["urdf_spec", "urdf_to_mjcf", "is_urdf"]
 

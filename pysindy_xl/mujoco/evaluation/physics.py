@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .systems import get_system
+from .. import import_mujoco
+from ..systems.registry import get_system
 
 __all__ = ["compare_physics"]
 
@@ -71,9 +72,9 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     >>> physics["positive_definite"], physics["scale"]
     (True, 1.0)
     """
-    import mujoco
+    mujoco = import_mujoco()
 
-    from .. import stack_variables
+    from ... import stack_variables
 
     system = get_system(system)
     dynamics = model._require_dynamics() if hasattr(model, "_require_dynamics") else None
