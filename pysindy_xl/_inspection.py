@@ -25,8 +25,8 @@ from ._equations import (
     uncertainty_lines,
 )
 from ._inputs import check_array, sample_times
-from .regression import differentiation_function
-from .still import held_note
+from .fit import differentiation_function
+from .fit.still import held_note
 from .weak import WhittakerSmoother
 
 __all__ = ["InspectionMixin"]

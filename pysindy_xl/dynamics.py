@@ -537,7 +537,7 @@ class CatalogDynamics(MassMatrixDynamics):
         One coefficient per feature; only the non-zero ones are read.
     held : array of bool, shape (n,), optional
         Coordinates held by the model (coordinates that stood still in the data, see
-        :mod:`pysindy_xl.still`): their equation is replaced by ``qdd_c = 0`` (a unit row of
+        :mod:`pysindy_xl.fit.still`): their equation is replaced by ``qdd_c = 0`` (a unit row of
         ``M``, zero ``f``), whatever the catalog's entries in it.
 
     Attributes

@@ -13,47 +13,23 @@ from sklearn.utils.validation import check_is_fitted
 from ._equations import has_parameter_map
 from ._fitted import DynamicsMixin
 from ._inspection import InspectionMixin
-from ._validation import check_instance, check_option
-from .diagnostics import (
-    IdentificationWarning,
-    column_mass_matrices,
-    mass_matrices,
-    mass_matrix_report,
-    orient_free_laws,
-)
+from ._validation import IdentificationWarning, check_instance, check_option
 from .dynamics import CatalogDynamics
 from .feature_library import CatalogRepartition, SymbolicLibrary
-from .io import invalid_model_file, read_model_file
-from .optimizers import (
-    SOLVER_KINDS,
-    CatalogProblem,
-    ExplicitOptimizer,
-    default_optimizer,
-    independent_columns,
-)
-from .regression import (
+from .fit import (
     FORMULATIONS,
-    Regression,
-    build_regression,
+    build_problem,
     differentiation_function,
-    solve_weak_problem,
+    resolve_formulation,
+    resolve_optimizer,
+    solve,
     trajectory_data,
 )
-from .still import block_rows, driven_coordinates, still_columns, still_coordinates
+from .fit.diagnostics import mass_matrices, mass_matrix_report, orient_free_laws
+from .io import invalid_model_file, read_model_file
+from .optimizers import SOLVER_KINDS, CatalogProblem, catalog_tags
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
-
-
-def _probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndarray:
-    """Random points in the bounding box of the data, each variable drawn independently.
-
-    Column dependencies found on these points are identities of the catalog (true for any
-    data, such as ``cos^2 + sin^2 = 1``), never the physical law that the trajectories obey and
-    the regression is looking for.
-    """
-    rng = np.random.default_rng(seed)
-    low, high = z.min(axis=0), z.max(axis=0)
-    return rng.uniform(low, high, size=(n_points, z.shape[1]))
 
 
 class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
@@ -100,7 +76,7 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
     test_functions : BumpTestFunctions, optional
         Test functions of the weak formulation (default: bumps whose width comes from the
         data's spectrum; on unforced data bumps of three widths,
-        :data:`~pysindy_xl.regression.UNFORCED_WIDTH_MULTIPLES`).
+        :data:`~pysindy_xl.fit.UNFORCED_WIDTH_MULTIPLES`).
     smoother : WhittakerSmoother, optional
         Estimates positions and velocities for the weak formulation from noisy positions
         (default ``WhittakerSmoother()``: smoothness chosen from the data). Measured
@@ -228,29 +204,29 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         )
 
     def _trajectories(self, x, t, x_dot, x_ddot, u, n, differentiate=True, sample_mask=None):
-        """Validate the fit/score inputs; returns per-trajectory dicts of arrays
-        (:func:`~pysindy_xl.regression.trajectory_data`).
-
-        With ``differentiate=False`` missing velocities and accelerations stay ``None``;
-        otherwise they are estimated with ``differentiation_method`` or, by default, with the
-        estimate the optimizer prefers (its ``derivative_estimate``; unforced data: unbiased).
-        """
+        """Validate the fit/score inputs (:func:`~pysindy_xl.fit.trajectory_data`); missing
+        derivatives are estimated with ``differentiation_method`` or the estimate the
+        optimizer's tags prefer (unforced data: unbiased), or stay None
+        (``differentiate=False``)."""
         derivative = None
         if differentiate:
-            prefers = (getattr(self.optimizer, "derivative_estimate", "unbiased")
-                       if not isinstance(self.optimizer, str)
-                       else "unbiased" if self.optimizer == "implicit" else "smoothed")
+            optimizer = self.optimizer
+            prefers = ("unbiased" if optimizer is None or optimizer == "implicit" else
+                       "smoothed" if isinstance(optimizer, str)
+                       else catalog_tags(optimizer).derivative_estimate)
             derivative = differentiation_function(self.differentiation_method,
                                                   unbiased=u is None and prefers == "unbiased")
         return trajectory_data(x, self.t_default if t is None else t, x_dot, x_ddot, u, n,
                                sample_mask, derivative)
 
     def regression(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None,
-                   formulation=None) -> Regression:
-        """The rows of the fitted catalog on data, built as :meth:`fit` builds them.
+                   formulation=None) -> CatalogProblem:
+        """The catalog problem of the fitted model on data, built as :meth:`fit` builds it
+        (:func:`~pysindy_xl.fit.build_problem`, every catalog column but those of the
+        coordinates held still).
 
-        The residual ``regression(...).theta @ coefficients()`` is zero for data that obey
-        the identified equations exactly (the fit-quality report of
+        ``problem.theta @ coef_[problem.catalog_map.columns]`` is zero for data that obey the
+        identified equations exactly (the fit-quality report of
         :func:`pysindy_xl.quality.fit_quality` is made of it).
 
         Parameters
@@ -262,8 +238,8 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
 
         Returns
         -------
-        Regression
-            See :class:`pysindy_xl.regression.Regression`.
+        CatalogProblem
+            With its ``catalog_map`` (:class:`~pysindy_xl.fit.CatalogMap`).
         """
         check_is_fitted(self, "coef_")
         formulation = formulation or self.formulation_ or "strong"
@@ -272,9 +248,10 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         data = self._trajectories(x, t, x_dot, x_ddot, u, self.n_coordinates_,
                                   differentiate=formulation == "strong", sample_mask=sample_mask)
         info = self.weak_info_ if formulation == self.formulation_ else None
-        return build_regression(self.feature_library_, data, formulation, self.test_functions,
-                                self.smoother, None if info is None else info["half_width"],
-                                moving=~self._held())
+        return build_problem(self.feature_library_, data, formulation,
+                             test_functions=self.test_functions, smoother=self.smoother,
+                             half_width=None if info is None else info["half_width"],
+                             still=self._held())
 
     # -- fit ---------------------------------------------------------------------------------
     def fit(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None):
@@ -322,101 +299,67 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         return self
 
     def _fit(self, x, t, x_dot, x_ddot, u, sample_mask):
-        # a clone: fit never mutates its parameters (the user's catalog stays as given)
+        """check -> build -> solve -> wrap."""
+        library, data, formulation = self._check(x, t, x_dot, x_ddot, u, sample_mask)
+        problem = build_problem(library, data, formulation, test_functions=self.test_functions,
+                                smoother=self.smoother, hold_still=self.hold_still,
+                                drop_dependent=self.drop_dependent)
+        weigh = self.residual_covariance
+        if weigh == "auto":  # the weighting pays where some coordinate is forced
+            weigh = problem.catalog_map.forced[problem.catalog_map.coordinates].any()
+        optimizer = solve(resolve_optimizer(self.optimizer, problem, library), problem,
+                          library, weigh)
+        return self._wrap(library, problem, optimizer)
+
+    def _check(self, x, t, x_dot, x_ddot, u, sample_mask):
+        """The fitted clone of the catalog (fit never mutates its parameters), the checked
+        trajectories and the formulation."""
         library = clone(self._library())
         library.fit()
-        coords = library.coords
-        n = coords.n
-        formulation = self._resolve_formulation(x_dot, x_ddot)
-        data = self._trajectories(x, t, x_dot, x_ddot, u, n,
+        formulation = resolve_formulation(self.formulation, x_dot is not None
+                                          and x_ddot is not None, self.differentiation_method)
+        data = self._trajectories(x, t, x_dot, x_ddot, u, library.coords.n,
                                   differentiate=formulation == "strong", sample_mask=sample_mask)
-        if not any(library.symbolic_matrix_[:, j].free_symbols & set(coords.qdd)
+        if not any(library.symbolic_matrix_[:, j].free_symbols & set(library.coords.qdd)
                    for j in range(library.n_output_features_)):
             raise ValueError(
                 "feature_library: no term contains an acceleration; add Lagrangian terms with "
                 "velocities (e.g. q_dot**2) or classical terms in q_ddot"
             )
-        still = np.zeros(n, dtype=bool)
-        if self.hold_still is not False:
-            still = still_coordinates(
-                [d["x"] for d in data], [d["t"] for d in data],
-                driven_coordinates(library, None if u is None else [d["u"] for d in data]),
-                float(self.hold_still))
-        self._check_moving(data, coords.names, still)
-        regression = build_regression(library, data, formulation, self.test_functions,
-                                      self.smoother, moving=~still)
-        theta, z, noise = regression.theta, regression.states, regression.noise
-        self.weak_info_ = regression.weak_info
-        library.check_domain(z)
-        forced = np.zeros(n, dtype=bool)
-        if u is not None:
-            force_block = theta[:, library.force_columns_].reshape(n, -1,
-                                                                   len(library.force_columns_))
-            forced = np.any(force_block != 0, axis=(1, 2))
-        moving = ~still
-        # the equations of still coordinates and the columns of their motion leave the problem
-        left_out = still_columns(library, still)
-        candidates = np.setdiff1d(np.arange(theta.shape[1]), list(left_out))
-        if self.drop_dependent:
-            probe = library.transform(_probe_points(z))
-            order = library.column_priority()
-            order = order[np.isin(order, candidates)]
-            local, dropped = independent_columns(
-                probe[block_rows(n, probe.shape[0], moving)][:, candidates],
-                np.searchsorted(candidates, order), n_blocks=int(moving.sum()),
-                force_columns=np.flatnonzero(np.isin(candidates, library.force_columns_)))
-            keep = candidates[local]
-            dropped = {int(candidates[j]): reason for j, reason in dropped.items()}
-        else:
-            keep, dropped = candidates, {}
-        dropped.update(left_out)
-        force_columns = [int(np.flatnonzero(keep == j)[0]) for j in library.force_columns_
-                         if j in keep]
         if u is None and (self.optimizer == "explicit"
-                          or getattr(self.optimizer, "requires_forces", False)):
+                          or catalog_tags(self.optimizer).requires_forces):
             raise ValueError(
                 "u: explicit regression needs the generalized forces; pass u, or use "
                 "ImplicitOptimizer / MixedOptimizer for unforced data"
             )
-        optimizer = self._optimizer(forced[moving], noise is not None, library)
-        mass = None
-        if noise is not None and getattr(optimizer, "uses_mass_matrices", False):
-            mass = column_mass_matrices(library, z)[:, keep][:, :, moving][:, :, :, moving]
-        if noise is not None:
-            noise = noise.columns(keep)
-            noise = noise.coordinates(moving) if still.any() else noise
-        structure = library.physical_structure()  # for optimizers that constrain to it
-        optimizer = solve_weak_problem(optimizer, CatalogProblem.from_arrays(
-            theta[block_rows(n, theta.shape[0], moving)][:, keep], int(moving.sum()),
-            force_columns, mass_matrices=mass,
-            physical=None if structure is None else structure.select(keep)), noise,
-            forced[moving].any() if self.residual_covariance == "auto"
-            else self.residual_covariance)
-        coef = np.zeros(theta.shape[1])
-        coef[keep] = optimizer.coef_
+        return library, data, formulation
+
+    def _wrap(self, library, problem, optimizer):
+        """The fitted state: the coefficients mapped back to the catalog, the optimizer's
+        reports, the dynamics in mass-matrix form and their check."""
+        origin = problem.catalog_map
+        names = library.get_feature_names()
         self.feature_library_ = library
         self.optimizer_ = optimizer
-        self.coef_ = coef
+        self.coef_ = origin.to_catalog(optimizer.coef_)
         self.inclusion_probability_ = self.coef_interval_ = None
         if hasattr(optimizer, "inclusion_probability_"):  # an ensemble: map to the catalog
-            self.inclusion_probability_ = np.zeros(theta.shape[1])
-            self.inclusion_probability_[keep] = optimizer.inclusion_probability_
-            self.coef_interval_ = np.zeros((2, theta.shape[1]))
-            self.coef_interval_[:, keep] = optimizer.coef_interval_
-        names = library.get_feature_names()
-        self.dropped_features_ = {names[j]: reason for j, reason in dropped.items()}
+            self.inclusion_probability_ = origin.to_catalog(optimizer.inclusion_probability_)
+            self.coef_interval_ = origin.to_catalog(optimizer.coef_interval_)
+        self.dropped_features_ = {names[j]: reason for j, reason in origin.dropped.items()}
         report = getattr(optimizer, "consistency_", None)  # a physically constrained fit
         self.physical_consistency_ = None if report is None else {**report, "negative_friction": [
-            names[keep[j]] for j in report["negative_friction"]]}
-        self.n_coordinates_ = n
-        self.n_samples_ = z.shape[0]
-        self.forced_coordinates_ = forced
-        self.still_coordinates_ = [name for name, held in zip(coords.names, still, strict=True)
-                                   if held]
-        self.formulation_ = formulation
+            names[origin.columns[j]] for j in report["negative_friction"]]}
+        self.n_coordinates_ = library.coords.n
+        self.n_samples_ = origin.states.shape[0]
+        self.forced_coordinates_ = origin.forced
+        self.still_coordinates_ = [name for name, moving in zip(
+            library.coords.names, origin.coordinates, strict=True) if not moving]
+        self.formulation_ = origin.formulation
+        self.weak_info_ = origin.weak_info
         self.selection_ = getattr(optimizer, "selection_", None)
         self._build_dynamics()
-        self._check_mass_matrix(z)
+        self._check_mass_matrix(origin.states)
         return self
 
     def _check_options(self):
@@ -448,18 +391,6 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             if isinstance(value, type):
                 check_instance(name, value, name.replace("_", " "))
 
-    @staticmethod
-    def _check_moving(data, names, still):
-        """Refuse coordinates that never move unless held (``still``): they carry no dynamics
-        to identify; and data where every coordinate holds still."""
-        if still.all():
-            raise ValueError("x: no coordinate moves beyond the noise of the positions; there "
-                             "are no dynamics to identify")
-        for i, name in enumerate(names):
-            if not still[i] and all(np.ptp(d["x"][:, i]) == 0 for d in data):
-                raise ValueError(f"x: coordinate {name!r} is constant on every sample; a "
-                                 "coordinate that never moves carries no dynamics to identify")
-
     def _check_mass_matrix(self, z):
         """Orient the laws no force scales, then measure ``M(q)`` on the training states
         (``mass_matrix_check_``; warns when it is not positive definite)."""
@@ -480,34 +411,6 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
                   "bodies, whose mass matrix is positive definite"
                   if has_parameter_map(library) else "")
         self.mass_matrix_check_ = mass_matrix_report(mass, eig, library.coords.names, remedy)
-
-    def _resolve_formulation(self, x_dot, x_ddot) -> str:
-        if self.formulation != "auto":  # checked by _check_options
-            return self.formulation
-        measured = x_dot is not None and x_ddot is not None
-        return "strong" if measured or self.differentiation_method is not None else "weak"
-
-    def _optimizer(self, forced: np.ndarray, estimated: bool, library):
-        """The optimizer to fit: a clone of the user's, or
-        :func:`~pysindy_xl.optimizers.default_optimizer` for the data (``estimated``: the
-        columns come from noisy positions only) and the catalog ``library``."""
-        if self.optimizer is None or isinstance(self.optimizer, str):
-            structure = library.physical_structure()
-            return default_optimizer(
-                forced, estimated, kind=self.optimizer,
-                complete=getattr(library, "complete_catalog", False),
-                physical=structure is not None,
-                selective=structure is not None and len(structure.selectable_columns) > 0)
-        if not hasattr(self.optimizer, "fit_catalog"):
-            if callable(getattr(self.optimizer, "fit", None)):
-                # a pysindy (or scikit-learn) regressor: explicit regression through it
-                return ExplicitOptimizer(method=clone(self.optimizer))
-            raise TypeError(
-                "optimizer: expected a catalog optimizer with fit_catalog (ExplicitOptimizer, "
-                "ImplicitOptimizer, MixedOptimizer) or a regressor with fit(X, y) such as "
-                f"pysindy's STLSQ, got {type(self.optimizer).__name__}"
-            )
-        return clone(self.optimizer)
 
     def _build_dynamics(self):
         """``dynamics_``: the identified equations in mass-matrix form, combined numerically

@@ -301,7 +301,7 @@ def model_lines(model, truth=None):
         physical_parameters,
         prints_equations,
     )
-    from pysindy_xl.still import held_note
+    from pysindy_xl.fit.still import held_note
 
     lines = []
     if has_parameter_map(model.feature_library_):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import numbers
 import warnings
 
@@ -252,8 +253,12 @@ class ExplicitOptimizer(CatalogOptimizer):
     array([ 0.5,  0. , -3. ,  0. ])
     """
 
-    requires_forces = True
     spec_type = "ExplicitOptimizer"
+
+    def catalog_tags(self):
+        """Explicit regression: the problem needs force columns (see
+        :class:`~pysindy_xl.optimizers.CatalogTags`)."""
+        return dataclasses.replace(super().catalog_tags(), requires_forces=True)
 
     def __init__(self, method="threshold", threshold="auto", alpha=1e-4, refit=True,
                  max_iter=1000, select="all"):

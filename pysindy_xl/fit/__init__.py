@@ -1,0 +1,41 @@
+"""The fit stage: trajectories in, a catalog problem out, solved.
+
+One fit of :class:`~pysindy_xl.XLSINDy` goes one way through here::
+
+    trajectory_data  ->  build_problem  ->  resolve_optimizer, solve  ->  (the model wraps)
+    checked arrays       CatalogProblem     fitted optimizer
+
+* :mod:`~pysindy_xl.fit.trajectories`: the checked arrays of ``fit``, the formulation
+  (:func:`resolve_formulation`), missing derivatives for the strong form;
+* :mod:`~pysindy_xl.fit.build`: the :class:`~pysindy_xl.optimizers.CatalogProblem` of the
+  catalog on the data, strong or weak, with its row noise and its :class:`CatalogMap` back
+  to the catalog (still coordinates, :mod:`~pysindy_xl.fit.still`, and dependent columns
+  left out);
+* :mod:`~pysindy_xl.fit.solve`: the optimizer for the problem and the reweighting solver;
+* :mod:`~pysindy_xl.fit.diagnostics`: the identified mass matrix on the training states.
+
+:meth:`XLSINDy.regression <pysindy_xl.XLSINDy.regression>` and the fit-quality report
+(:mod:`pysindy_xl.quality`) build their rows with the same :func:`build_problem`.
+"""
+
+from .build import UNFORCED_WIDTH_MULTIPLES, CatalogMap, build_problem, probe_points
+from .solve import resolve_optimizer, solve
+from .trajectories import (
+    FORMULATIONS,
+    differentiation_function,
+    resolve_formulation,
+    trajectory_data,
+)
+
+__all__ = [
+    "CatalogMap",
+    "build_problem",
+    "probe_points",
+    "resolve_optimizer",
+    "solve",
+    "trajectory_data",
+    "differentiation_function",
+    "resolve_formulation",
+    "FORMULATIONS",
+    "UNFORCED_WIDTH_MULTIPLES",
+]
