@@ -5,29 +5,27 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-import sympy as sp
 import threadpoolctl
 from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_is_fitted
 
-from ._equations import has_parameter_map
-from ._fitted import DynamicsMixin
-from ._inspection import InspectionMixin
 from ._validation import IdentificationWarning, check_instance, check_option
-from .dynamics import CatalogDynamics
+from .dynamics.fitted import DynamicsMixin
 from .feature_library import CatalogRepartition, SymbolicLibrary
 from .fit import (
     FORMULATIONS,
     build_problem,
+    catalog_dynamics,
     differentiation_function,
+    fitted_state,
     resolve_formulation,
     resolve_optimizer,
     solve,
     trajectory_data,
 )
-from .fit.diagnostics import mass_matrices, mass_matrix_report, orient_free_laws
 from .io import invalid_model_file, read_model_file
 from .optimizers import SOLVER_KINDS, CatalogProblem, catalog_tags
+from .report.inspection import InspectionMixin
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
 
@@ -83,18 +81,11 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         ``x_dot`` is used as given.
     residual_covariance : bool or "auto", default "auto"
         Weak formulation on positions only (the smoother estimated the noise, no ``x_dot``):
-        weigh the rows by the covariance of the residual, generalized least squares. A pilot
-        fit gives a first law (an ensemble's pilot is one fit of its base optimizer); the
-        noise propagated into the rows gives the covariance of its residual (rows of
-        overlapping test functions are correlated); the optimizer then fits the whitened rows
-        (:meth:`~pysindy_xl.weak.WeakNoise.whitener`, the iterative reweighting of WENDy),
-        again with the weights of its own law while the support it finds differs from the
-        one that set them (at most three weighted fits). Each coordinate's whitened rows are
-        in units of their own noise, so the optimizer fits them as they are (a problem with
-        ``balance=False``) rather than rebalancing the coordinates by their scales.
-        ``"auto"``: when some coordinate is forced, where the weighting finds more exact laws;
-        on unforced data it finds fewer (the "Noisy data" guide has the figures).
-        ``False``: one fit of the rows as they are.
+        weigh the rows by the covariance of the residual, generalized least squares
+        iteratively reweighted from a pilot law (:func:`pysindy_xl.fit.solve`; the rows of
+        overlapping test functions are correlated). ``"auto"``: when some coordinate is
+        forced, where the weighting finds more exact laws (on unforced data it finds fewer:
+        the "Noisy data" guide has the figures). ``False``: one fit of the rows as they are.
     blas_threads : int or None, default 1
         BLAS threads during ``fit`` (threadpoolctl). The fit's linear algebra is many QR
         factorizations of tall, narrow matrices, where threads mostly compete (measured in
@@ -304,12 +295,11 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         problem = build_problem(library, data, formulation, test_functions=self.test_functions,
                                 smoother=self.smoother, hold_still=self.hold_still,
                                 drop_dependent=self.drop_dependent)
-        weigh = self.residual_covariance
-        if weigh == "auto":  # the weighting pays where some coordinate is forced
-            weigh = problem.catalog_map.forced[problem.catalog_map.coordinates].any()
         optimizer = solve(resolve_optimizer(self.optimizer, problem, library), problem,
-                          library, weigh)
-        return self._wrap(library, problem, optimizer)
+                          library, weigh=self.residual_covariance)
+        for name, value in fitted_state(library, problem, optimizer).items():  # wrap
+            setattr(self, name, value)
+        return self
 
     def _check(self, x, t, x_dot, x_ddot, u, sample_mask):
         """The fitted clone of the catalog (fit never mutates its parameters), the checked
@@ -333,34 +323,6 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
                 "ImplicitOptimizer / MixedOptimizer for unforced data"
             )
         return library, data, formulation
-
-    def _wrap(self, library, problem, optimizer):
-        """The fitted state: the coefficients mapped back to the catalog, the optimizer's
-        reports, the dynamics in mass-matrix form and their check."""
-        origin = problem.catalog_map
-        names = library.get_feature_names()
-        self.feature_library_ = library
-        self.optimizer_ = optimizer
-        self.coef_ = origin.to_catalog(optimizer.coef_)
-        self.inclusion_probability_ = self.coef_interval_ = None
-        if hasattr(optimizer, "inclusion_probability_"):  # an ensemble: map to the catalog
-            self.inclusion_probability_ = origin.to_catalog(optimizer.inclusion_probability_)
-            self.coef_interval_ = origin.to_catalog(optimizer.coef_interval_)
-        self.dropped_features_ = {names[j]: reason for j, reason in origin.dropped.items()}
-        report = getattr(optimizer, "consistency_", None)  # a physically constrained fit
-        self.physical_consistency_ = None if report is None else {**report, "negative_friction": [
-            names[origin.columns[j]] for j in report["negative_friction"]]}
-        self.n_coordinates_ = library.coords.n
-        self.n_samples_ = origin.states.shape[0]
-        self.forced_coordinates_ = origin.forced
-        self.still_coordinates_ = [name for name, moving in zip(
-            library.coords.names, origin.coordinates, strict=True) if not moving]
-        self.formulation_ = origin.formulation
-        self.weak_info_ = origin.weak_info
-        self.selection_ = getattr(optimizer, "selection_", None)
-        self._build_dynamics()
-        self._check_mass_matrix(origin.states)
-        return self
 
     def _check_options(self):
         """Options of the estimator, checked at the start of fit (one layer: _validation)."""
@@ -391,37 +353,10 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             if isinstance(value, type):
                 check_instance(name, value, name.replace("_", " "))
 
-    def _check_mass_matrix(self, z):
-        """Orient the laws no force scales, then measure ``M(q)`` on the training states
-        (``mass_matrix_check_``; warns when it is not positive definite)."""
-        self.mass_matrix_check_ = None
-        if self.dynamics_ is None:
-            return
-        mass, eig = mass_matrices(self.dynamics_, z)
-        library = self.feature_library_
-        matrix = library.symbolic_matrix_.copy()
-        for c in np.flatnonzero(self._held()):  # held equations are not the catalog's
-            matrix[c, :] = sp.zeros(1, matrix.shape[1])
-        self.coef_, flipped = orient_free_laws(self.coef_, matrix, library.force_columns_,
-                                               mass)
-        if flipped:
-            self._build_dynamics()
-            mass, eig = mass_matrices(self.dynamics_, z)
-        remedy = ("; fit with optimizer=px.PhysicalOptimizer(...) for parameters of rigid "
-                  "bodies, whose mass matrix is positive definite"
-                  if has_parameter_map(library) else "")
-        self.mass_matrix_check_ = mass_matrix_report(mass, eig, library.coords.names, remedy)
-
     def _build_dynamics(self):
-        """``dynamics_``: the identified equations in mass-matrix form, combined numerically
-        from the catalog's columns (:class:`~pysindy_xl.dynamics.CatalogDynamics`); None when
-        no identified term contains an acceleration."""
-        library = self.feature_library_
-        accelerations = set(library.coords.qdd)
-        has_acc = any(library.symbolic_matrix_[:, j].free_symbols & accelerations
-                      for j in np.flatnonzero(self.coef_))
-        self.dynamics_ = CatalogDynamics(library, self.coef_, self._held()) if has_acc \
-            else None
+        """``dynamics_`` from the fitted coefficients
+        (:func:`~pysindy_xl.fit.wrap.catalog_dynamics`)."""
+        self.dynamics_ = catalog_dynamics(self.feature_library_, self.coef_, self._held())
 
     def _held(self) -> np.ndarray:
         """Mask of the coordinates held by the model (``still_coordinates_``)."""

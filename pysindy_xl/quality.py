@@ -235,7 +235,7 @@ def quality_lines(quality) -> list:
         lines.append(f"  held-out noise ratio of the chosen law (5-fold cross-validation; about "
                      f"1 when it leaves only the propagated noise): "
                      f"{quality['cv_noise_ratio']:.3g}")
-    from ._equations import consistency_line  # sympy: not imported by the CLI's --help
+    from .report.equations import consistency_line  # sympy: not imported by the CLI's --help
 
     consistency = consistency_line(quality.get("physical_consistency"))
     if consistency:

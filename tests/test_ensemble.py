@@ -242,9 +242,9 @@ class _RecordingImplicit(px.ImplicitOptimizer):
 
     received = []
 
-    def fit_problem(self, problem):
+    def fit_problem(self, problem, support=None):
         _RecordingImplicit.received.append(problem.mass_matrices)
-        return super().fit_problem(problem)
+        return super().fit_problem(problem, support)
 
 
 def test_every_fit_gets_the_mass_matrices_its_optimizer_takes():
@@ -256,7 +256,7 @@ def test_every_fit_gets_the_mass_matrices_its_optimizer_takes():
     _RecordingImplicit.received.clear()
     implicit = px.EnsembleOptimizer(_RecordingImplicit(), n_models=4).fit_catalog(
         theta, 1, [], noise_moments=moments, mass_matrices=masses)
-    assert len(_RecordingImplicit.received) == 4
+    assert len(_RecordingImplicit.received) == 5  # four subsample fits and the refit
     for received in _RecordingImplicit.received:
         np.testing.assert_array_equal(received, masses)
     assert implicit.aggregate_ == "refit"

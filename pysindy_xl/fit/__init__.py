@@ -2,8 +2,8 @@
 
 One fit of :class:`~pysindy_xl.XLSINDy` goes one way through here::
 
-    trajectory_data  ->  build_problem  ->  resolve_optimizer, solve  ->  (the model wraps)
-    checked arrays       CatalogProblem     fitted optimizer
+    trajectory_data  ->  build_problem   ->  resolve_optimizer, solve  ->  fitted_state
+    checked arrays       CatalogProblem      fitted optimizer              fitted attributes
 
 * :mod:`~pysindy_xl.fit.trajectories`: the checked arrays of ``fit``, the formulation
   (:func:`resolve_formulation`), missing derivatives for the strong form;
@@ -12,6 +12,8 @@ One fit of :class:`~pysindy_xl.XLSINDy` goes one way through here::
   to the catalog (still coordinates, :mod:`~pysindy_xl.fit.still`, and dependent columns
   left out);
 * :mod:`~pysindy_xl.fit.solve`: the optimizer for the problem and the reweighting solver;
+* :mod:`~pysindy_xl.fit.wrap`: the solution back in the catalog's terms, the identified
+  dynamics in mass-matrix form, the orientation of free laws;
 * :mod:`~pysindy_xl.fit.diagnostics`: the identified mass matrix on the training states.
 
 :meth:`XLSINDy.regression <pysindy_xl.XLSINDy.regression>` and the fit-quality report
@@ -26,6 +28,7 @@ from .trajectories import (
     resolve_formulation,
     trajectory_data,
 )
+from .wrap import catalog_dynamics, fitted_state
 
 __all__ = [
     "CatalogMap",
@@ -33,6 +36,8 @@ __all__ = [
     "probe_points",
     "resolve_optimizer",
     "solve",
+    "fitted_state",
+    "catalog_dynamics",
     "trajectory_data",
     "differentiation_function",
     "resolve_formulation",

@@ -92,7 +92,9 @@ def solve(optimizer, problem, library=None, weigh=False):
     problem : CatalogProblem
     library : fitted CatalogRepartition, optional
         The problem's catalog, for its columns' mass matrices.
-    weigh : bool, default False
+    weigh : bool or "auto", default False
+        ``"auto"``: when some coordinate of the problem is forced (its
+        :class:`~pysindy_xl.fit.CatalogMap` says), where the weighting finds more exact laws.
 
     Returns
     -------
@@ -107,6 +109,9 @@ def solve(optimizer, problem, library=None, weigh=False):
     array([-1.,  2.])
     """
     noise = problem.row_noise
+    if isinstance(weigh, str) and weigh == "auto":
+        origin = problem.catalog_map
+        weigh = origin is not None and bool(origin.forced[origin.coordinates].any())
     if noise is not None and library is not None \
             and catalog_tags(optimizer).uses_mass_matrices:
         problem = with_mass_matrices(problem, library)

@@ -12,9 +12,9 @@ import numpy as np
 from sklearn.metrics import r2_score
 from sklearn.utils.validation import check_is_fitted
 
-from ._inputs import as_list, check_array
-from ._validation import check_instance
-from .dynamics import MassMatrixDynamics
+from .._inputs import as_list, check_array
+from .._validation import check_instance
+from .mass_matrix import MassMatrixDynamics
 
 __all__ = ["DynamicsMixin"]
 
@@ -106,7 +106,7 @@ class DynamicsMixin:
         x = check_array(x, "x", n_columns=n)
         x_dot = check_array(x_dot, "x_dot", x.shape)
         x_ddot = check_array(x_ddot, "x_ddot", x.shape)
-        from .feature_library import stack_variables
+        from ..feature_library import stack_variables
 
         mass, free = dynamics.mass_and_forcing(stack_variables(x, x_dot))
         return np.einsum("sij,sj->si", mass, x_ddot) - free
@@ -151,7 +151,7 @@ class DynamicsMixin:
         >>> round(float(score.rms[0]), 6), score.derivatives
         (0.02, 'measured')
         """
-        from .held_out import score_forces
+        from ..held_out import score_forces
 
         self._require_dynamics()
         return score_forces(self, x, t, u, x_dot, x_ddot, smoother, max_frequency)
@@ -247,7 +247,7 @@ class DynamicsMixin:
         callable
             jit-, vmap- and grad-compatible; see :mod:`pysindy_xl.export.jax_dynamics`.
         """
-        from .export.jax_dynamics import dynamics_function
+        from ..export.jax_dynamics import dynamics_function
 
         return dynamics_function(self._require_dynamics())
 
@@ -259,7 +259,7 @@ class DynamicsMixin:
         ----------
         path : str or os.PathLike
         """
-        from .io import save_model
+        from ..io import save_model
 
         save_model(self, path)
 
@@ -289,7 +289,7 @@ class DynamicsMixin:
             joint models MJCF cannot state (asymmetric Coulomb, Stribeck, torque offset: a
             catalog built with ``friction=``), left out of the file.
         """
-        from .export.mjcf import to_mjcf
+        from ..export.mjcf import to_mjcf
 
         check_is_fitted(self, "coef_")
         return to_mjcf(self, path, template)
@@ -312,6 +312,6 @@ class DynamicsMixin:
         pysindy_xl.export.gym_env.IdentifiedDynamicsEnv
             Observation ``[q, qd]``, action the forces of the actuated coordinates.
         """
-        from .export.gym_env import make_env
+        from ..export.gym_env import make_env
 
         return make_env(self, dt, **options)

@@ -20,11 +20,11 @@ import scipy.integrate
 import scipy.interpolate
 import sympy as sp
 
-from ._simulation_inputs import feedback_function, force_function
-from ._validation import check_numeric_array, check_option, check_times
-from .feature_library import Terms, compile_terms, decompose, scalar_function, stack_variables
-from .physical.rigid_body import rigid_body_dynamics
-from .symbols import Coordinates
+from .._validation import check_numeric_array, check_option, check_times
+from ..feature_library import Terms, compile_terms, decompose, scalar_function, stack_variables
+from ..physical.rigid_body import rigid_body_dynamics
+from ..symbols import Coordinates
+from .inputs import feedback_function, force_function
 
 __all__ = [
     "MassMatrixDynamics",
@@ -146,7 +146,7 @@ class MassMatrixDynamics:
     def __init__(self, coords: Coordinates, equations):
         if not isinstance(coords, Coordinates):
             raise TypeError(f"coords: expected Coordinates, got {type(coords).__name__}")
-        from .expressions import as_expression
+        from ..expressions import as_expression
 
         if isinstance(equations, (str, sp.Basic)) or not hasattr(equations, "__iter__"):
             raise TypeError("equations: expected a list of expressions, one per coordinate")
@@ -485,7 +485,7 @@ class MassMatrixDynamics:
 
     def _simulate_ros2(self, x0, t, force, law, step, divergence_bound, timeout):
         """:meth:`simulate` with :func:`pysindy_xl.rosenbrock.ros2`."""
-        from .rosenbrock import RosenbrockStop, ros2
+        from ..rosenbrock import RosenbrockStop, ros2
 
         n = self._n
         step = float(np.min(np.diff(t))) if step is None else check_option(
