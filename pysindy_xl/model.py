@@ -6,25 +6,23 @@ import warnings
 
 import numpy as np
 import threadpoolctl
-from sklearn.base import BaseEstimator, clone
+from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from ._validation import IdentificationWarning, check_instance, check_option
 from .dynamics.fitted import DynamicsMixin
-from .feature_library import CatalogRepartition, SymbolicLibrary
 from .fit import (
     FORMULATIONS,
     build_problem,
     catalog_dynamics,
-    differentiation_function,
+    check_fit,
+    estimator_trajectories,
     fitted_state,
-    resolve_formulation,
     resolve_optimizer,
     solve,
-    trajectory_data,
 )
 from .io import invalid_model_file, read_model_file
-from .optimizers import SOLVER_KINDS, CatalogProblem, catalog_tags
+from .optimizers import SOLVER_KINDS, CatalogProblem
 from .report.inspection import InspectionMixin
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
@@ -179,37 +177,6 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         self.residual_covariance = residual_covariance
         self.hold_still = hold_still
 
-    # -- data handling -----------------------------------------------------------------------
-    def _library(self) -> CatalogRepartition:
-        lib = self.feature_library
-        if lib is None:
-            raise ValueError("feature_library: a catalog is required (e.g. LagrangeLibrary)")
-        if isinstance(lib, CatalogRepartition):
-            lib.flat_libraries()  # a catalog nested in itself: a clear error, not recursion
-            return lib
-        if isinstance(lib, SymbolicLibrary):
-            return CatalogRepartition([lib])
-        raise TypeError(
-            "feature_library: expected a pysindy_xl library (LagrangeLibrary, ClassicalLibrary, "
-            f"ExternalForces, CatalogRepartition), got {type(lib).__name__}"
-        )
-
-    def _trajectories(self, x, t, x_dot, x_ddot, u, n, differentiate=True, sample_mask=None):
-        """Validate the fit/score inputs (:func:`~pysindy_xl.fit.trajectory_data`); missing
-        derivatives are estimated with ``differentiation_method`` or the estimate the
-        optimizer's tags prefer (unforced data: unbiased), or stay None
-        (``differentiate=False``)."""
-        derivative = None
-        if differentiate:
-            optimizer = self.optimizer
-            prefers = ("unbiased" if optimizer is None or optimizer == "implicit" else
-                       "smoothed" if isinstance(optimizer, str)
-                       else catalog_tags(optimizer).derivative_estimate)
-            derivative = differentiation_function(self.differentiation_method,
-                                                  unbiased=u is None and prefers == "unbiased")
-        return trajectory_data(x, self.t_default if t is None else t, x_dot, x_ddot, u, n,
-                               sample_mask, derivative)
-
     def regression(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None,
                    formulation=None) -> CatalogProblem:
         """The catalog problem of the fitted model on data, built as :meth:`fit` builds it
@@ -236,8 +203,8 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         formulation = formulation or self.formulation_ or "strong"
         if formulation not in ("strong", "weak"):
             raise ValueError(f"formulation: expected 'strong' or 'weak', got {formulation!r}")
-        data = self._trajectories(x, t, x_dot, x_ddot, u, self.n_coordinates_,
-                                  differentiate=formulation == "strong", sample_mask=sample_mask)
+        data = estimator_trajectories(self, x, t, x_dot, x_ddot, u, self.n_coordinates_,
+                                      formulation == "strong", sample_mask)
         info = self.weak_info_ if formulation == self.formulation_ else None
         return build_problem(self.feature_library_, data, formulation,
                              test_functions=self.test_functions, smoother=self.smoother,
@@ -291,7 +258,7 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
 
     def _fit(self, x, t, x_dot, x_ddot, u, sample_mask):
         """check -> build -> solve -> wrap."""
-        library, data, formulation = self._check(x, t, x_dot, x_ddot, u, sample_mask)
+        library, data, formulation = check_fit(self, x, t, x_dot, x_ddot, u, sample_mask)
         problem = build_problem(library, data, formulation, test_functions=self.test_functions,
                                 smoother=self.smoother, hold_still=self.hold_still,
                                 drop_dependent=self.drop_dependent)
@@ -300,29 +267,6 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         for name, value in fitted_state(library, problem, optimizer).items():  # wrap
             setattr(self, name, value)
         return self
-
-    def _check(self, x, t, x_dot, x_ddot, u, sample_mask):
-        """The fitted clone of the catalog (fit never mutates its parameters), the checked
-        trajectories and the formulation."""
-        library = clone(self._library())
-        library.fit()
-        formulation = resolve_formulation(self.formulation, x_dot is not None
-                                          and x_ddot is not None, self.differentiation_method)
-        data = self._trajectories(x, t, x_dot, x_ddot, u, library.coords.n,
-                                  differentiate=formulation == "strong", sample_mask=sample_mask)
-        if not any(library.symbolic_matrix_[:, j].free_symbols & set(library.coords.qdd)
-                   for j in range(library.n_output_features_)):
-            raise ValueError(
-                "feature_library: no term contains an acceleration; add Lagrangian terms with "
-                "velocities (e.g. q_dot**2) or classical terms in q_ddot"
-            )
-        if u is None and (self.optimizer == "explicit"
-                          or catalog_tags(self.optimizer).requires_forces):
-            raise ValueError(
-                "u: explicit regression needs the generalized forces; pass u, or use "
-                "ImplicitOptimizer / MixedOptimizer for unforced data"
-            )
-        return library, data, formulation
 
     def _check_options(self):
         """Options of the estimator, checked at the start of fit (one layer: _validation)."""

@@ -3,7 +3,8 @@
 :class:`DynamicsMixin` is the second half of :class:`~pysindy_xl.XLSINDy` (the first,
 :mod:`pysindy_xl.model`, fits): everything here needs only the fitted state ``coef_``,
 ``dynamics_`` (the :class:`~pysindy_xl.MassMatrixDynamics` of the identified equations),
-``n_coordinates_`` and the host's ``_trajectories`` input handling.
+``n_coordinates_`` and the host's parameters (its input handling is the fit stage's,
+:func:`~pysindy_xl.fit.estimator_trajectories`).
 """
 
 from __future__ import annotations
@@ -172,7 +173,9 @@ class DynamicsMixin:
         """
         self._require_dynamics()
         check_instance("metric", metric, "a function metric(true, predicted)", "__call__")
-        data = self._trajectories(x, t, x_dot, x_ddot, u, self.n_coordinates_)
+        from ..fit import estimator_trajectories
+
+        data = estimator_trajectories(self, x, t, x_dot, x_ddot, u, self.n_coordinates_)
         true = np.vstack([d["x_ddot"] for d in data])
         predicted = np.vstack([
             self.dynamics_.accelerations(d["x"], d["x_dot"], d["u"], d["t"]) for d in data

@@ -2,11 +2,11 @@
 
 One fit of :class:`~pysindy_xl.XLSINDy` goes one way through here::
 
-    trajectory_data  ->  build_problem   ->  resolve_optimizer, solve  ->  fitted_state
-    checked arrays       CatalogProblem      fitted optimizer              fitted attributes
+    check_fit       ->  build_problem   ->  resolve_optimizer, solve  ->  fitted_state
+    catalog, arrays     CatalogProblem      fitted optimizer              fitted attributes
 
-* :mod:`~pysindy_xl.fit.trajectories`: the checked arrays of ``fit``, the formulation
-  (:func:`resolve_formulation`), missing derivatives for the strong form;
+* :mod:`~pysindy_xl.fit.trajectories`: the catalog, the checked arrays of ``fit``, the
+  formulation (:func:`resolve_formulation`), missing derivatives for the strong form;
 * :mod:`~pysindy_xl.fit.build`: the :class:`~pysindy_xl.optimizers.CatalogProblem` of the
   catalog on the data, strong or weak, with its row noise and its :class:`CatalogMap` back
   to the catalog (still coordinates, :mod:`~pysindy_xl.fit.still`, and dependent columns
@@ -24,7 +24,9 @@ from .build import UNFORCED_WIDTH_MULTIPLES, CatalogMap, build_problem, probe_po
 from .solve import resolve_optimizer, solve
 from .trajectories import (
     FORMULATIONS,
+    check_fit,
     differentiation_function,
+    estimator_trajectories,
     resolve_formulation,
     trajectory_data,
 )
@@ -38,6 +40,8 @@ __all__ = [
     "solve",
     "fitted_state",
     "catalog_dynamics",
+    "check_fit",
+    "estimator_trajectories",
     "trajectory_data",
     "differentiation_function",
     "resolve_formulation",

@@ -1,22 +1,26 @@
-"""The trajectories of a fit: checked arrays, the formulation, missing derivatives.
+"""The check step of the fit stage: the catalog, the formulation, the checked trajectories.
 
-The first step of the fit stage (:mod:`pysindy_xl.fit`): :func:`trajectory_data` validates the
-arrays of ``fit`` (one trajectory or a list) and estimates missing velocities and
-accelerations with a differentiation function (:func:`differentiation_function`), which the
-strong form needs; :func:`resolve_formulation` chooses between the strong and the weak form.
+:func:`check_fit` is the first step of a fit (:mod:`pysindy_xl.fit`): a fitted clone of the
+estimator's catalog, the formulation (:func:`resolve_formulation`) and the trajectories,
+validated by :func:`trajectory_data` (one trajectory or a list), with the missing velocities
+and accelerations the strong form needs estimated by a differentiation function
+(:func:`differentiation_function`) of the kind the optimizer's tags prefer.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pysindy as ps
+from sklearn.base import clone
 
 from .._inputs import trajectory_arrays
+from ..feature_library import CatalogRepartition, SymbolicLibrary
+from ..optimizers import catalog_tags
 from ..weak import differentiate
 from ..weak.smoothing import is_uniform
 
-__all__ = ["trajectory_data", "differentiation_function", "resolve_formulation",
-           "FORMULATIONS"]
+__all__ = ["check_fit", "estimator_trajectories", "trajectory_data",
+           "differentiation_function", "resolve_formulation", "FORMULATIONS"]
 
 FORMULATIONS = ("auto", "strong", "weak")
 
@@ -127,3 +131,90 @@ def resolve_formulation(formulation: str, measured: bool, differentiation_method
     if formulation != "auto":
         return formulation
     return "strong" if measured or differentiation_method is not None else "weak"
+
+
+def _catalog(feature_library) -> CatalogRepartition:
+    """The estimator's catalog as a :class:`~pysindy_xl.CatalogRepartition`."""
+    if feature_library is None:
+        raise ValueError("feature_library: a catalog is required (e.g. LagrangeLibrary)")
+    if isinstance(feature_library, CatalogRepartition):
+        feature_library.flat_libraries()  # a catalog nested in itself: a clear error
+        return feature_library
+    if isinstance(feature_library, SymbolicLibrary):
+        return CatalogRepartition([feature_library])
+    raise TypeError(
+        "feature_library: expected a pysindy_xl library (LagrangeLibrary, ClassicalLibrary, "
+        f"ExternalForces, CatalogRepartition), got {type(feature_library).__name__}"
+    )
+
+
+def estimator_trajectories(estimator, x, t, x_dot, x_ddot, u, n, differentiate=True,
+                           sample_mask=None) -> list[dict]:
+    """The checked trajectories of a call of ``estimator`` (an :class:`~pysindy_xl.XLSINDy`).
+
+    ``t`` defaults to ``estimator.t_default``; missing derivatives are estimated with its
+    ``differentiation_method`` or, by default, with the estimate its optimizer's tags prefer
+    (``derivative_estimate``; unforced data: unbiased), or stay None with
+    ``differentiate=False``.
+
+    Returns
+    -------
+    list of dict
+        As :func:`trajectory_data`.
+    """
+    derivative = None
+    if differentiate:
+        optimizer = estimator.optimizer
+        prefers = ("unbiased" if optimizer is None or optimizer == "implicit" else
+                   "smoothed" if isinstance(optimizer, str)
+                   else catalog_tags(optimizer).derivative_estimate)
+        derivative = differentiation_function(estimator.differentiation_method,
+                                              unbiased=u is None and prefers == "unbiased")
+    return trajectory_data(x, estimator.t_default if t is None else t, x_dot, x_ddot, u, n,
+                           sample_mask, derivative)
+
+
+def check_fit(estimator, x, t, x_dot, x_ddot, u, sample_mask):
+    """The check step of ``estimator.fit``: its catalog, trajectories and formulation.
+
+    Parameters
+    ----------
+    estimator : XLSINDy
+        Its parameters are read, never changed (the catalog is cloned before it is fitted).
+    x, t, x_dot, x_ddot, u, sample_mask
+        As :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes them.
+
+    Returns
+    -------
+    library : fitted CatalogRepartition
+    data : list of dict
+        :func:`trajectory_data`, with the derivatives the strong form needs.
+    formulation : {"strong", "weak"}
+
+    Raises
+    ------
+    ValueError
+        Naming the argument: bad arrays, a catalog without accelerations, an explicit
+        optimizer without forces.
+    """
+    library = clone(_catalog(estimator.feature_library))
+    library.fit()
+    formulation = resolve_formulation(estimator.formulation, x_dot is not None
+                                      and x_ddot is not None,
+                                      estimator.differentiation_method)
+    data = estimator_trajectories(estimator, x, t, x_dot, x_ddot, u, library.coords.n,
+                                  formulation == "strong", sample_mask)
+    accelerations = set(library.coords.qdd)
+    if not any(library.symbolic_matrix_[:, j].free_symbols & accelerations
+               for j in range(library.n_output_features_)):
+        raise ValueError(
+            "feature_library: no term contains an acceleration; add Lagrangian terms with "
+            "velocities (e.g. q_dot**2) or classical terms in q_ddot"
+        )
+    optimizer = estimator.optimizer
+    if u is None and (optimizer == "explicit" or catalog_tags(optimizer).requires_forces):
+        raise ValueError(
+            "u: explicit regression needs the generalized forces; pass u, or use "
+            "ImplicitOptimizer / MixedOptimizer for unforced data"
+        )
+    return library, data, formulation

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import numbers
 import warnings
 
 import numpy as np
@@ -188,9 +187,6 @@ def corrected_least_squares(x, y, noise_moments=None, max_noise_share: float = 0
         return coef / scale, share
     return np.linalg.solve(np.eye(len(coef)) - ratio, coef) / scale, share
 
-
-def _is_real(value) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, bool) and value == value
 
 
 class ExplicitOptimizer(CatalogOptimizer):
