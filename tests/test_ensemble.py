@@ -109,7 +109,7 @@ def test_complementary_pairs_count_a_term_only_when_both_halves_keep_it():
 
 
 class _LeastSquares(CatalogOptimizer):
-    """A catalog optimizer without fit_support: plain least squares on every column."""
+    """A catalog optimizer that cannot refit a given support: least squares on every column."""
 
     def _solve(self, problem):
         theta, force_columns = problem.theta, problem.force_columns
@@ -133,7 +133,7 @@ def test_refit_is_the_least_squares_of_the_included_terms_on_all_rows():
     np.testing.assert_allclose(refit.coef_[[1, 3]], expected, rtol=1e-12)
     assert not np.allclose(median.coef_[[1, 3]], expected, rtol=1e-6, atol=0)
     np.testing.assert_allclose(refit.coef_interval_.mean(axis=0)[[1, 3]], expected)
-    with pytest.raises(ValueError, match="aggregate: 'refit' needs an optimizer with fit_"):
+    with pytest.raises(ValueError, match="aggregate: 'refit' needs an optimizer that refits"):
         px.EnsembleOptimizer(_LeastSquares(), aggregate="refit").fit_catalog(theta, 1, [0])
     assert px.EnsembleOptimizer(_LeastSquares(), n_models=4).fit_catalog(
         theta, 1, [0]).aggregate_ == "median"

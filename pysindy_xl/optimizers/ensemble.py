@@ -79,10 +79,10 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
         Inclusion probability from which a term enters the ensemble's model.
     aggregate : {"auto", "refit", "median"}, default "auto"
         Coefficients of the included terms. ``"refit"``: the optimizer's least squares on all
-        the rows with the included terms (its ``fit_support``, e.g.
-        :meth:`ExplicitOptimizer.fit_support`, with the same noise correction);
-        ``"median"``: the median over the fits that keep the term; ``"auto"``: ``"refit"``
-        when the optimizer has ``fit_support``, ``"median"`` otherwise.
+        the rows with the included terms (its ``fit_problem(problem, support)``, with the
+        same noise correction); ``"median"``: the median over the fits that keep the term;
+        ``"auto"``: ``"refit"`` when the optimizer's tags say it can refit (``can_refit``),
+        ``"median"`` otherwise.
     sampling : {"subsamples", "complementary_pairs"}, default "subsamples"
         ``"subsamples"``: each fit on a random ``fraction`` of the chunks, inclusion = fraction
         of the fits keeping the term. ``"complementary_pairs"``: ``n_models / 2`` pairs of
@@ -176,8 +176,9 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
         check_option("aggregate", self.aggregate, "choice", choices=AGGREGATES)
         base = self._base()
         if self.aggregate == "refit" and not catalog_tags(base).can_refit:
-            raise ValueError(f"aggregate: 'refit' needs an optimizer with fit_support, "
-                             f"{type(base).__name__} has none (use 'median' or 'auto')")
+            raise ValueError(f"aggregate: 'refit' needs an optimizer that refits a support "
+                             f"(tag can_refit), {type(base).__name__} does not (use 'median' "
+                             "or 'auto')")
         if self.sampling == "complementary_pairs" and self.n_models % 2:
             raise ValueError(f"n_models: complementary pairs need an even number of fits, got "
                              f"{self.n_models}")

@@ -177,7 +177,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         laws were stable.
     column_converged_ : ndarray of bool, shape (F,)
     selection_method_ : {"sindy-pi", "noise ratio", "given support"}
-        How the laws were found (the last by :meth:`fit_support`).
+        How the laws were found (the last by a refit of a given support).
     selection_ : LawSelection
         Noise-ratio mode: how the first law's support was chosen (held-out ratio per size).
     law_selections_ : list of LawSelection
