@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import pysindy_xl as px
-from pysindy_xl.optimizers import homogeneous
 from pysindy_xl.fit import UNFORCED_WIDTH_MULTIPLES, build_problem, trajectory_data
+from pysindy_xl.optimizers import homogeneous
 from pysindy_xl.weak import BumpTestFunctions
 
 
