@@ -107,6 +107,17 @@ def probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndarr
     data, such as ``cos^2 + sin^2 = 1``), never the physical law that the trajectories obey
     and the regression is looking for.
 
+    Parameters
+    ----------
+    z : ndarray, shape (S, V)
+        States of the data (the library's inputs).
+    n_points : int, default 4000
+    seed : int, default 0
+
+    Returns
+    -------
+    ndarray, shape (n_points, V)
+
     Examples
     --------
     >>> import numpy as np

@@ -50,6 +50,13 @@ def resolve_optimizer(optimizer, problem, library):
     Returns
     -------
     estimator
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy as ps, pysindy_xl as px
+    >>> problem = px.optimizers.CatalogProblem.from_arrays(np.eye(3), 1, [0])
+    >>> resolve_optimizer(ps.STLSQ(), problem, None)
+    ExplicitOptimizer(method=STLSQ())
     """
     if optimizer is None or isinstance(optimizer, str):
         origin = problem.catalog_map

@@ -157,6 +157,15 @@ def estimator_trajectories(estimator, x, t, x_dot, x_ddot, u, n, differentiate=T
     (``derivative_estimate``; unforced data: unbiased), or stay None with
     ``differentiate=False``.
 
+    Parameters
+    ----------
+    estimator : XLSINDy
+    x, t, x_dot, x_ddot, u, sample_mask
+        As :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes them.
+    n : int
+        Coordinates.
+    differentiate : bool, default True
+
     Returns
     -------
     list of dict
@@ -196,6 +205,16 @@ def check_fit(estimator, x, t, x_dot, x_ddot, u, sample_mask):
     ValueError
         Naming the argument: bad arrays, a catalog without accelerations, an explicit
         optimizer without forces.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> model = px.XLSINDy(px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]))
+    >>> t = np.linspace(0, 1, 101)
+    >>> library, data, formulation = check_fit(model, np.sin(t), t, None, None, np.cos(t), None)
+    >>> library.get_feature_names(), formulation, data[0]["x_dot"]
+    (['F[tau]', 'L[x_dot**2]', 'L[x**2]'], 'weak', None)
     """
     library = clone(_catalog(estimator.feature_library))
     library.fit()
