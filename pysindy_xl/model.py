@@ -99,7 +99,7 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         Leave out of the regression the coordinates that hold still in the data: undriven,
         and on every trajectory at rest or in uniform motion up to ``hold_still`` times the
         noise level estimated from the positions (the standard deviation of their departure
-        from a straight line in time); see :mod:`pysindy_xl.still` for the criterion.
+        from a straight line in time); see :mod:`pysindy_xl.fit.still` for the criterion.
         Their equations and the catalog columns that involve their motion (or only their
         positions) are removed, the other coordinates are identified as if they were
         absent, and the model holds them (zero acceleration), saying so in :meth:`print`.
