@@ -1,29 +1,20 @@
-"""The builder of the fit stage: a catalog and trajectories in, one catalog problem out.
+"""The build step of the fit stage: a catalog and trajectories in, one catalog problem out.
 
-:func:`build_problem` turns checked trajectories (:func:`~pysindy_xl.fit.trajectory_data`)
-into the :class:`~pysindy_xl.optimizers.CatalogProblem` an optimizer solves, in four steps:
+:func:`build_problem` leaves out the coordinates that hold still in the data
+(:mod:`~pysindy_xl.fit.still`) and the catalog columns of their motion; builds the rows of the
+formulation, ``"strong"`` (the catalog's columns at every unmasked sample) or ``"weak"`` (the
+columns integrated against test functions of smoothed positions,
+:func:`~pysindy_xl.weak.weak_regression`, with the propagated noise of the positions); drops
+the exactly dependent columns (found on random points of the data's bounding box,
+:func:`probe_points`: identities of the catalog, never the physical law); and returns the
+:class:`~pysindy_xl.optimizers.CatalogProblem` with its row noise
+(:class:`~pysindy_xl.weak.WeakNoise`), the physical structure of its columns and its
+:class:`CatalogMap` back to the catalog. Rows are coordinate-major over all trajectories.
 
-1. **Still coordinates** (:mod:`pysindy_xl.fit.still`): the coordinates that hold still in
-   the data leave the problem, with the catalog columns of their motion.
-2. **Rows** of the formulation: ``"strong"``, the catalog's columns at every unmasked sample
-   (:meth:`SymbolicLibrary.transform <pysindy_xl.feature_library.SymbolicLibrary.transform>`),
-   or ``"weak"``, the columns integrated against test functions of smoothed positions
-   (:func:`~pysindy_xl.weak.weak_regression`), with the propagated noise of the positions.
-   Without forces (no ``u``) the default test functions come in several widths
-   (:data:`UNFORCED_WIDTH_MULTIPLES`): an unforced law is known only up to a factor and is
-   told from the other laws the catalog holds by the noise ratio alone, which one width's
-   rows determine poorly from noisy positions; a force column fixes the scale of a forced
-   law, whose rows keep the single width.
-3. **Columns**: exactly dependent catalog columns are dropped (the test runs on random points
-   of the data's bounding box, :func:`probe_points`, so it finds identities of the catalog,
-   never the physical law).
-4. **The problem**: the rows of the moving coordinates and the kept columns, the row noise
-   (:class:`~pysindy_xl.weak.WeakNoise`, with its moments and draws), the physical structure
-   of the columns, and the :class:`CatalogMap` back to the catalog.
-
-Rows are coordinate-major over all trajectories (``R`` rows, samples or test functions, per
-coordinate). :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>`, :meth:`XLSINDy.regression
-<pysindy_xl.XLSINDy.regression>` and the fit-quality report all build their rows here.
+Without forces the default test functions come in several widths
+(:data:`UNFORCED_WIDTH_MULTIPLES`): an unforced law is known only up to a factor and is told
+from the other laws the catalog holds by the noise ratio alone, which one width's rows
+determine poorly from noisy positions; a force column fixes the scale of a forced law.
 """
 
 from __future__ import annotations
