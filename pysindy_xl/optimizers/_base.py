@@ -303,11 +303,13 @@ class CatalogOptimizer(BaseEstimator):
 
     Examples
     --------
-    A least-squares solver with the force coefficient fixed to -1 implements one method:
+    A least-squares solver with the force coefficient fixed to -1 implements one method and
+    declares its tags (explicit regression: it needs forces):
 
-    >>> import numpy as np
+    >>> import dataclasses, numpy as np
     >>> class LeastSquares(CatalogOptimizer):
-    ...     requires_forces = True
+    ...     def catalog_tags(self):
+    ...         return dataclasses.replace(super().catalog_tags(), requires_forces=True)
     ...     def _solve(self, problem):
     ...         theta, forces = problem.theta, problem.force_columns
     ...         rest = np.setdiff1d(np.arange(problem.n_features), forces)
@@ -318,6 +320,8 @@ class CatalogOptimizer(BaseEstimator):
     >>> theta = np.column_stack([[1.0, 2.0, 3.0], [0.5, 1.0, 1.5]])
     >>> LeastSquares().fit_catalog(theta, 1, [0]).coef_
     array([-1.,  2.])
+    >>> LeastSquares().requires_forces, LeastSquares().can_refit
+    (True, False)
     >>> LeastSquares().to_spec()["type"]
     'pysindy_xl.optimizers._base.LeastSquares'
     """
@@ -355,19 +359,6 @@ class CatalogOptimizer(BaseEstimator):
         """
         return CatalogTags(
             can_refit=type(self)._solve_support is not CatalogOptimizer._solve_support)
-
-    requires_forces = property(lambda self: self.catalog_tags().requires_forces,
-                               doc="Tag ``requires_forces`` (:meth:`catalog_tags`).")
-    uses_mass_matrices = property(lambda self: self.catalog_tags().uses_mass_matrices,
-                                  doc="Tag ``uses_mass_matrices`` (:meth:`catalog_tags`).")
-    uses_noise_draws = property(lambda self: self.catalog_tags().uses_noise_draws,
-                                doc="Tag ``uses_noise_draws`` (:meth:`catalog_tags`).")
-    derivative_estimate = property(lambda self: self.catalog_tags().derivative_estimate,
-                                   doc="Tag ``derivative_estimate`` (:meth:`catalog_tags`).")
-    can_refit = property(lambda self: self.catalog_tags().can_refit,
-                         doc="Tag ``can_refit`` (:meth:`catalog_tags`).")
-    balances_rows = property(lambda self: self.catalog_tags().balances_rows,
-                             doc="Tag ``balances_rows`` (:meth:`catalog_tags`).")
 
     # -- the template of a fit ------------------------------------------------------------
     def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None,
@@ -475,6 +466,15 @@ class CatalogOptimizer(BaseEstimator):
             elif is_plain(value):
                 params[key] = value
         return {"type": self.spec_type, "params": params}
+
+
+def _tag_attribute(name: str) -> property:
+    return property(lambda self: getattr(self.catalog_tags(), name),
+                    doc=f"Tag ``{name}`` (:meth:`CatalogOptimizer.catalog_tags`).")
+
+
+for _name in TAG_NAMES:  # the tags answer as read-only attributes too
+    setattr(CatalogOptimizer, _name, _tag_attribute(_name))
 
 
 def optimizer_from_spec(spec, where: str = "optimizer", depth: int = 0):
