@@ -35,8 +35,8 @@ _LAZY = {
     "NoLawFoundError": "optimizers",
     "TotalLeastSquaresOptimizer": "optimizers",
     "XLSINDy": "model",
-    "IdentificationWarning": "diagnostics",
-    "UnexplainedCoordinateWarning": "diagnostics",
+    "IdentificationWarning": "_validation",
+    "UnexplainedCoordinateWarning": "_validation",
     "MassMatrixDynamics": "dynamics",
     "SimulationError": "dynamics",
     "SingularMassMatrixError": "dynamics",
@@ -73,7 +73,7 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
-    from .diagnostics import IdentificationWarning, UnexplainedCoordinateWarning
+    from ._validation import IdentificationWarning, UnexplainedCoordinateWarning
     from .dynamics import MassMatrixDynamics, SimulationError, SingularMassMatrixError
     from .feature_library import (
         CatalogRepartition,

@@ -3,7 +3,9 @@
 Every public entry point checks its options with :func:`check_option` and its arrays with
 :func:`check_numeric_array`, so that a mistake is answered by a ``ValueError`` or ``TypeError``
 that names the argument and says what was expected, whatever the entry point. (Symbolic
-catalog terms have their own layer, :func:`pysindy_xl.expressions.check_term`.)
+catalog terms have their own layer, :func:`pysindy_xl.expressions.check_term`.) The warnings
+the package gives about what it identified (:class:`IdentificationWarning`) are defined here
+too, below every module that raises them.
 """
 
 from __future__ import annotations
@@ -13,10 +15,22 @@ import numbers
 
 import numpy as np
 
-__all__ = ["check_option", "check_numeric_array", "check_instance", "check_indices", "check_times",
+__all__ = ["IdentificationWarning", "UnexplainedCoordinateWarning", "check_option",
+           "check_numeric_array", "check_instance", "check_indices", "check_times",
            "argument_type"]
 
 _KINDS = ("bool", "int", "real", "choice")
+
+
+class IdentificationWarning(UserWarning):
+    """The identified model looks wrong on its own training data (e.g. an indefinite mass
+    matrix): it will not simulate faithfully there."""
+
+
+class UnexplainedCoordinateWarning(IdentificationWarning):
+    """No identified term (besides the forces) enters some coordinate's equation: the model
+    cannot predict that coordinate. :class:`~pysindy_xl.MixedOptimizer` expects it of its
+    explicit part (it then solves those coordinates implicitly) and silences it there."""
 
 
 def _describe_range(low, high, low_open, high_open) -> str:

@@ -2,88 +2,31 @@
 
 from __future__ import annotations
 
-import copy
-import dataclasses
-import hashlib
 import warnings
 
 import numpy as np
-import sympy as sp
 import threadpoolctl
-from sklearn.base import BaseEstimator, clone
+from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-from ._equations import has_parameter_map
-from ._fitted import DynamicsMixin
-from ._inspection import InspectionMixin
-from ._validation import check_instance, check_option
-from .diagnostics import (
-    IdentificationWarning,
-    column_mass_matrices,
-    mass_matrices,
-    mass_matrix_report,
-    orient_free_laws,
-)
-from .dynamics import CatalogDynamics
-from .feature_library import CatalogRepartition, SymbolicLibrary
-from .io import invalid_model_file, read_model_file
-from .optimizers import (
-    SOLVER_KINDS,
-    CatalogProblem,
-    ExplicitOptimizer,
-    default_optimizer,
-    independent_columns,
-)
-from .regression import (
+from ._validation import IdentificationWarning, check_instance, check_option
+from .dynamics.fitted import DynamicsMixin
+from .fit import (
     FORMULATIONS,
-    Regression,
-    build_regression,
-    differentiation_function,
-    solve_weak_problem,
-    trajectory_data,
-)
-from .still import block_rows, driven_coordinates, still_columns, still_coordinates
-from .weak import BumpTestFunctions, WhittakerSmoother
-from .weak.selection import (
-    FORCE_NOISE_WIDTHS,
-    SCORING_BANDWIDTH,
-    NoiseModel,
-    bandwidth_half_width,
+    build_problem,
+    catalog_dynamics,
+    check_fit,
     choose_noise_model,
+    estimator_trajectories,
+    fitted_state,
+    resolve_optimizer,
+    solve,
 )
+from .io import invalid_model_file, read_model_file
+from .optimizers import SOLVER_KINDS, CatalogProblem
+from .report.inspection import InspectionMixin
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
-
-
-def _probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndarray:
-    """Random points in the bounding box of the data, each variable drawn independently.
-
-    Column dependencies found on these points are identities of the catalog (true for any
-    data, such as ``cos^2 + sin^2 = 1``), never the physical law that the trajectories obey and
-    the regression is looking for.
-    """
-    rng = np.random.default_rng(seed)
-    low, high = z.min(axis=0), z.max(axis=0)
-    return rng.uniform(low, high, size=(n_points, z.shape[1]))
-
-
-class _RememberedSmoother:
-    """A smoother that smooths each distinct trajectory piece once: the candidate noise
-    models' rows are built from the same pieces (no propagation, so no ``resmooth``)."""
-
-    def __init__(self, smoother=None):
-        self.smoother = smoother or WhittakerSmoother()
-        self.smoothed = {}
-
-    def __deepcopy__(self, memo):  # copies share what was smoothed (each smooths a copy)
-        return self
-
-    def smooth(self, t, x):
-        key = hashlib.sha1(np.ascontiguousarray(t).tobytes()
-                           + np.ascontiguousarray(x).tobytes()).hexdigest()
-        if key not in self.smoothed:
-            self.smoothed[key] = copy.deepcopy(self.smoother).smooth(t, x)
-        return self.smoothed[key]
 
 
 class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
@@ -130,25 +73,18 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
     test_functions : BumpTestFunctions, optional
         Test functions of the weak formulation (default: bumps whose width comes from the
         data's spectrum; on unforced data bumps of three widths,
-        :data:`~pysindy_xl.regression.UNFORCED_WIDTH_MULTIPLES`).
+        :data:`~pysindy_xl.fit.UNFORCED_WIDTH_MULTIPLES`).
     smoother : WhittakerSmoother, optional
         Estimates positions and velocities for the weak formulation from noisy positions
         (default ``WhittakerSmoother()``: smoothness chosen from the data). Measured
         ``x_dot`` is used as given.
     residual_covariance : bool or "auto", default "auto"
         Weak formulation on positions only (the smoother estimated the noise, no ``x_dot``):
-        weigh the rows by the covariance of the residual, generalized least squares. A pilot
-        fit gives a first law (an ensemble's pilot is one fit of its base optimizer); the
-        noise propagated into the rows gives the covariance of its residual (rows of
-        overlapping test functions are correlated); the optimizer then fits the whitened rows
-        (:meth:`~pysindy_xl.weak.WeakNoise.whitener`, the iterative reweighting of WENDy),
-        again with the weights of its own law while the support it finds differs from the
-        one that set them (at most three weighted fits). Each coordinate's whitened rows are
-        in units of their own noise, so the optimizer fits them as they are (a problem with
-        ``balance=False``) rather than rebalancing the coordinates by their scales.
-        ``"auto"``: when some coordinate is forced, where the weighting finds more exact laws;
-        on unforced data it finds fewer (the "Noisy data" guide has the figures).
-        ``False``: one fit of the rows as they are.
+        weigh the rows by the covariance of the residual, generalized least squares
+        iteratively reweighted from a pilot law (:func:`pysindy_xl.fit.solve`; the rows of
+        overlapping test functions are correlated). ``"auto"``: when some coordinate is
+        forced, where the weighting finds more exact laws (on unforced data it finds fewer:
+        the "Noisy data" guide has the figures). ``False``: one fit of the rows as they are.
     blas_threads : int or None, default 1
         BLAS threads during ``fit`` (threadpoolctl). The fit's linear algebra is many QR
         factorizations of tall, narrow matrices, where threads mostly compete (measured in
@@ -164,7 +100,7 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         Leave out of the regression the coordinates that hold still in the data: undriven,
         and on every trajectory at rest or in uniform motion up to ``hold_still`` times the
         noise level estimated from the positions (the standard deviation of their departure
-        from a straight line in time); see :mod:`pysindy_xl.still` for the criterion.
+        from a straight line in time); see :mod:`pysindy_xl.fit.still` for the criterion.
         Their equations and the catalog columns that involve their motion (or only their
         positions) are removed, the other coordinates are identified as if they were
         absent, and the model holds them (zero acceleration), saying so in :meth:`print`.
@@ -242,45 +178,14 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         self.residual_covariance = residual_covariance
         self.hold_still = hold_still
 
-    # -- data handling -----------------------------------------------------------------------
-    def _library(self) -> CatalogRepartition:
-        lib = self.feature_library
-        if lib is None:
-            raise ValueError("feature_library: a catalog is required (e.g. LagrangeLibrary)")
-        if isinstance(lib, CatalogRepartition):
-            lib.flat_libraries()  # a catalog nested in itself: a clear error, not recursion
-            return lib
-        if isinstance(lib, SymbolicLibrary):
-            return CatalogRepartition([lib])
-        raise TypeError(
-            "feature_library: expected a pysindy_xl library (LagrangeLibrary, ClassicalLibrary, "
-            f"ExternalForces, CatalogRepartition), got {type(lib).__name__}"
-        )
-
-    def _trajectories(self, x, t, x_dot, x_ddot, u, n, differentiate=True, sample_mask=None):
-        """Validate the fit/score inputs; returns per-trajectory dicts of arrays
-        (:func:`~pysindy_xl.regression.trajectory_data`).
-
-        With ``differentiate=False`` missing velocities and accelerations stay ``None``;
-        otherwise they are estimated with ``differentiation_method`` or, by default, with the
-        estimate the optimizer prefers (its ``derivative_estimate``; unforced data: unbiased).
-        """
-        derivative = None
-        if differentiate:
-            prefers = (getattr(self.optimizer, "derivative_estimate", "unbiased")
-                       if not isinstance(self.optimizer, str)
-                       else "unbiased" if self.optimizer == "implicit" else "smoothed")
-            derivative = differentiation_function(self.differentiation_method,
-                                                  unbiased=u is None and prefers == "unbiased")
-        return trajectory_data(x, self.t_default if t is None else t, x_dot, x_ddot, u, n,
-                               sample_mask, derivative)
-
     def regression(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None,
-                   formulation=None) -> Regression:
-        """The rows of the fitted catalog on data, built as :meth:`fit` builds them.
+                   formulation=None) -> CatalogProblem:
+        """The catalog problem of the fitted model on data, built as :meth:`fit` builds it
+        (:func:`~pysindy_xl.fit.build_problem`, every catalog column but those of the
+        coordinates held still).
 
-        The residual ``regression(...).theta @ coefficients()`` is zero for data that obey
-        the identified equations exactly (the fit-quality report of
+        ``problem.theta @ coef_[problem.catalog_map.columns]`` is zero for data that obey the
+        identified equations exactly (the fit-quality report of
         :func:`pysindy_xl.quality.fit_quality` is made of it).
 
         Parameters
@@ -292,19 +197,20 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
 
         Returns
         -------
-        Regression
-            See :class:`pysindy_xl.regression.Regression`.
+        CatalogProblem
+            With its ``catalog_map`` (:class:`~pysindy_xl.fit.CatalogMap`).
         """
         check_is_fitted(self, "coef_")
         formulation = formulation or self.formulation_ or "strong"
         if formulation not in ("strong", "weak"):
             raise ValueError(f"formulation: expected 'strong' or 'weak', got {formulation!r}")
-        data = self._trajectories(x, t, x_dot, x_ddot, u, self.n_coordinates_,
-                                  differentiate=formulation == "strong", sample_mask=sample_mask)
+        data = estimator_trajectories(self, x, t, x_dot, x_ddot, u, self.n_coordinates_,
+                                      formulation == "strong", sample_mask)
         info = self.weak_info_ if formulation == self.formulation_ else None
-        return build_regression(self.feature_library_, data, formulation, self.test_functions,
-                                self.smoother, None if info is None else info["half_width"],
-                                moving=~self._held())
+        return build_problem(self.feature_library_, data, formulation,
+                             test_functions=self.test_functions, smoother=self.smoother,
+                             half_width=None if info is None else info["half_width"],
+                             still=self._held())
 
     # -- fit ---------------------------------------------------------------------------------
     def fit(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None):
@@ -352,158 +258,18 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         return self
 
     def _fit(self, x, t, x_dot, x_ddot, u, sample_mask):
-        # a clone: fit never mutates its parameters (the user's catalog stays as given)
-        library = clone(self._library())
-        library.fit()
-        coords = library.coords
-        n = coords.n
-        formulation = self._resolve_formulation(x_dot, x_ddot)
-        data = self._trajectories(x, t, x_dot, x_ddot, u, n,
-                                  differentiate=formulation == "strong", sample_mask=sample_mask)
-        if not any(library.symbolic_matrix_[:, j].free_symbols & set(coords.qdd)
-                   for j in range(library.n_output_features_)):
-            raise ValueError(
-                "feature_library: no term contains an acceleration; add Lagrangian terms with "
-                "velocities (e.g. q_dot**2) or classical terms in q_ddot"
-            )
-        still = np.zeros(n, dtype=bool)
-        if self.hold_still is not False:
-            still = still_coordinates(
-                [d["x"] for d in data], [d["t"] for d in data],
-                driven_coordinates(library, None if u is None else [d["u"] for d in data]),
-                float(self.hold_still))
-        self._check_moving(data, coords.names, still)
-        regression = build_regression(library, data, formulation, self.test_functions,
-                                      self.smoother, moving=~still)
-        theta, z, noise = regression.theta, regression.states, regression.noise
-        self.weak_info_ = regression.weak_info
-        library.check_domain(z)
-        forced = np.zeros(n, dtype=bool)
-        if u is not None:
-            force_block = theta[:, library.force_columns_].reshape(n, -1,
-                                                                   len(library.force_columns_))
-            forced = np.any(force_block != 0, axis=(1, 2))
-        moving = ~still
-        # the equations of still coordinates and the columns of their motion leave the problem
-        left_out = still_columns(library, still)
-        candidates = np.setdiff1d(np.arange(theta.shape[1]), list(left_out))
-        if self.drop_dependent:
-            probe = library.transform(_probe_points(z))
-            order = library.column_priority()
-            order = order[np.isin(order, candidates)]
-            local, dropped = independent_columns(
-                probe[block_rows(n, probe.shape[0], moving)][:, candidates],
-                np.searchsorted(candidates, order), n_blocks=int(moving.sum()),
-                force_columns=np.flatnonzero(np.isin(candidates, library.force_columns_)))
-            keep = candidates[local]
-            dropped = {int(candidates[j]): reason for j, reason in dropped.items()}
-        else:
-            keep, dropped = candidates, {}
-        dropped.update(left_out)
-        force_columns = [int(np.flatnonzero(keep == j)[0]) for j in library.force_columns_
-                         if j in keep]
-        if u is None and (self.optimizer == "explicit"
-                          or getattr(self.optimizer, "requires_forces", False)):
-            raise ValueError(
-                "u: explicit regression needs the generalized forces; pass u, or use "
-                "ImplicitOptimizer / MixedOptimizer for unforced data"
-            )
-        optimizer = self._optimizer(forced[moving], noise is not None, library)
-        mass = None
-        if noise is not None and getattr(optimizer, "uses_mass_matrices", False):
-            mass = column_mass_matrices(library, z)[:, keep][:, :, moving][:, :, :, moving]
-        if noise is not None:
-            noise = noise.columns(keep)
-            noise = noise.coordinates(moving) if still.any() else noise
-        structure = library.physical_structure()  # for optimizers that constrain to it
-        problem = CatalogProblem.from_arrays(
-            theta[block_rows(n, theta.shape[0], moving)][:, keep], int(moving.sum()),
-            force_columns, mass_matrices=mass,
-            physical=None if structure is None else structure.select(keep))
-        weigh = (forced[moving].any() if self.residual_covariance == "auto"
-                 else self.residual_covariance)
-        if (self.residual_covariance == "auto" and self.test_functions is None
-                and noise is not None and forced[moving].all()):
-            problem, noise, weigh = self._choose_noise_model(
-                library, data, regression, problem, noise, optimizer, keep, moving)
-        optimizer = solve_weak_problem(optimizer, problem, noise, weigh)
-        coef = np.zeros(theta.shape[1])
-        coef[keep] = optimizer.coef_
-        self.feature_library_ = library
-        self.optimizer_ = optimizer
-        self.coef_ = coef
-        self.inclusion_probability_ = self.coef_interval_ = None
-        if hasattr(optimizer, "inclusion_probability_"):  # an ensemble: map to the catalog
-            self.inclusion_probability_ = np.zeros(theta.shape[1])
-            self.inclusion_probability_[keep] = optimizer.inclusion_probability_
-            self.coef_interval_ = np.zeros((2, theta.shape[1]))
-            self.coef_interval_[:, keep] = optimizer.coef_interval_
-        names = library.get_feature_names()
-        self.dropped_features_ = {names[j]: reason for j, reason in dropped.items()}
-        report = getattr(optimizer, "consistency_", None)  # a physically constrained fit
-        self.physical_consistency_ = None if report is None else {**report, "negative_friction": [
-            names[keep[j]] for j in report["negative_friction"]]}
-        self.n_coordinates_ = n
-        self.n_samples_ = z.shape[0]
-        self.forced_coordinates_ = forced
-        self.still_coordinates_ = [name for name, held in zip(coords.names, still, strict=True)
-                                   if held]
-        self.formulation_ = formulation
-        self.selection_ = getattr(optimizer, "selection_", None)
-        self._build_dynamics()
-        self._check_mass_matrix(z)
+        """check -> build -> choose the noise model -> solve -> wrap."""
+        library, data, formulation = check_fit(self, x, t, x_dot, x_ddot, u, sample_mask)
+        problem = build_problem(library, data, formulation, test_functions=self.test_functions,
+                                smoother=self.smoother, hold_still=self.hold_still,
+                                drop_dependent=self.drop_dependent)
+        optimizer = resolve_optimizer(self.optimizer, problem, library)
+        problem, weigh = choose_noise_model(problem, library, data, optimizer, self.smoother,
+                                            self.residual_covariance, self.test_functions)
+        optimizer = solve(optimizer, problem, library, weigh=weigh)
+        for name, value in fitted_state(library, problem, optimizer).items():  # wrap
+            setattr(self, name, value)
         return self
-
-    def _choose_noise_model(self, library, data, regression, problem, noise, optimizer, keep,
-                            moving):
-        """Position noise (the rows as built, weighted) or force noise (narrow test
-        functions, unweighted), whichever predicts held-out time blocks best
-        (:mod:`pysindy_xl.weak.selection`); the choice and every candidate's error go to
-        ``weak_info_["noise_model"]``. Returns the problem, noise and weighting to fit."""
-        info = regression.weak_info
-        tests, smoother = BumpTestFunctions(), _RememberedSmoother(self.smoother)
-        steps = np.concatenate([np.diff(d["t"]) for d in data])
-        scoring = max(bandwidth_half_width(SCORING_BANDWIDTH, tests.power),
-                      tests.min_samples * float(np.quantile(steps, 0.999)))
-        widths = sorted({min(scoring * m, info["half_width"]) for m in FORCE_NOISE_WIDTHS})
-        n = library.coords.n
-
-        def rows(half_width):
-            built = build_regression(library, data, "weak", tests, smoother, half_width,
-                                     moving=moving, propagate=False)
-            theta = built.theta[block_rows(n, built.theta.shape[0], moving)][:, keep]
-            return theta, built.weak_info["supports"], built.weak_info
-
-        candidates = [(NoiseModel("positions", info["half_width"], True), problem.theta,
-                       info["supports"], noise)]
-        built = {}
-        for width in widths:
-            theta, supports, built[width] = rows(width)
-            candidates.append((NoiseModel("forces", width, False), theta, supports, None))
-        scored = build_regression(library, data, "weak", tests, self.smoother, scoring,
-                                  moving=moving)
-        reference = (scored.theta[block_rows(n, scored.theta.shape[0], moving)][:, keep],
-                     scored.weak_info["supports"],
-                     None if scored.noise is None else scored.noise.columns(keep).coordinates(
-                         moving))
-        spans = np.array([[d["t"][0], d["t"][-1]] for d in data])
-
-        def solve(theta, propagated, weigh):
-            return solve_weak_problem(clone(optimizer), dataclasses.replace(
-                problem, theta=theta), propagated, weigh).coef_
-
-        best, errors = choose_noise_model(candidates, reference, spans,
-                                          problem.force_columns, solve)
-        chosen = candidates[0 if best is None else best]
-        self.weak_info_ = {**(info if chosen[0].weigh else built[chosen[0].half_width]),
-                           "noise_model": {
-                               "chosen": chosen[0].name, "half_width": chosen[0].half_width,
-                               "candidates": [
-                                   {"noise": c[0].name, "half_width": c[0].half_width,
-                                    "held_out_error": e}
-                                   for c, e in zip(candidates, errors, strict=False)],
-                               "scoring_half_width": scoring}}
-        return dataclasses.replace(problem, theta=chosen[1]), chosen[3], chosen[0].weigh
 
     def _check_options(self):
         """Options of the estimator, checked at the start of fit (one layer: _validation)."""
@@ -534,77 +300,10 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             if isinstance(value, type):
                 check_instance(name, value, name.replace("_", " "))
 
-    @staticmethod
-    def _check_moving(data, names, still):
-        """Refuse coordinates that never move unless held (``still``): they carry no dynamics
-        to identify; and data where every coordinate holds still."""
-        if still.all():
-            raise ValueError("x: no coordinate moves beyond the noise of the positions; there "
-                             "are no dynamics to identify")
-        for i, name in enumerate(names):
-            if not still[i] and all(np.ptp(d["x"][:, i]) == 0 for d in data):
-                raise ValueError(f"x: coordinate {name!r} is constant on every sample; a "
-                                 "coordinate that never moves carries no dynamics to identify")
-
-    def _check_mass_matrix(self, z):
-        """Orient the laws no force scales, then measure ``M(q)`` on the training states
-        (``mass_matrix_check_``; warns when it is not positive definite)."""
-        self.mass_matrix_check_ = None
-        if self.dynamics_ is None:
-            return
-        mass, eig = mass_matrices(self.dynamics_, z)
-        library = self.feature_library_
-        matrix = library.symbolic_matrix_.copy()
-        for c in np.flatnonzero(self._held()):  # held equations are not the catalog's
-            matrix[c, :] = sp.zeros(1, matrix.shape[1])
-        self.coef_, flipped = orient_free_laws(self.coef_, matrix, library.force_columns_,
-                                               mass)
-        if flipped:
-            self._build_dynamics()
-            mass, eig = mass_matrices(self.dynamics_, z)
-        remedy = ("; fit with optimizer=px.PhysicalOptimizer(...) for parameters of rigid "
-                  "bodies, whose mass matrix is positive definite"
-                  if has_parameter_map(library) else "")
-        self.mass_matrix_check_ = mass_matrix_report(mass, eig, library.coords.names, remedy)
-
-    def _resolve_formulation(self, x_dot, x_ddot) -> str:
-        if self.formulation != "auto":  # checked by _check_options
-            return self.formulation
-        measured = x_dot is not None and x_ddot is not None
-        return "strong" if measured or self.differentiation_method is not None else "weak"
-
-    def _optimizer(self, forced: np.ndarray, estimated: bool, library):
-        """The optimizer to fit: a clone of the user's, or
-        :func:`~pysindy_xl.optimizers.default_optimizer` for the data (``estimated``: the
-        columns come from noisy positions only) and the catalog ``library``."""
-        if self.optimizer is None or isinstance(self.optimizer, str):
-            structure = library.physical_structure()
-            return default_optimizer(
-                forced, estimated, kind=self.optimizer,
-                complete=getattr(library, "complete_catalog", False),
-                physical=structure is not None,
-                selective=structure is not None and len(structure.selectable_columns) > 0)
-        if not hasattr(self.optimizer, "fit_catalog"):
-            if callable(getattr(self.optimizer, "fit", None)):
-                # a pysindy (or scikit-learn) regressor: explicit regression through it
-                return ExplicitOptimizer(method=clone(self.optimizer))
-            raise TypeError(
-                "optimizer: expected a catalog optimizer with fit_catalog (ExplicitOptimizer, "
-                "ImplicitOptimizer, MixedOptimizer) or a regressor with fit(X, y) such as "
-                f"pysindy's STLSQ, got {type(self.optimizer).__name__}"
-            )
-        return clone(self.optimizer)
-
     def _build_dynamics(self):
-        """``dynamics_``: the identified equations in mass-matrix form, combined numerically
-        from the catalog's columns (:class:`~pysindy_xl.dynamics.CatalogDynamics`); None when
-        no identified term contains an acceleration."""
-        library = self.feature_library_
-        accelerations = set(library.coords.qdd)
-        has_acc = any(library.symbolic_matrix_[:, j].free_symbols & accelerations
-                      for j in np.flatnonzero(self.coef_))
-        self.dynamics_ = CatalogDynamics(library, self.coef_, self._held()) if has_acc \
-            else None
+        """``dynamics_`` from the fitted coefficients
+        (:func:`~pysindy_xl.fit.wrap.catalog_dynamics`)."""
+        self.dynamics_ = catalog_dynamics(self.feature_library_, self.coef_, self._held())
 
     def _held(self) -> np.ndarray:
         """Mask of the coordinates held by the model (``still_coordinates_``)."""

@@ -1,7 +1,8 @@
 """How well an identified model explains its own data, and how it simulates it.
 
-:func:`fit_quality` rebuilds the regression the model solved (strong or weak form, through
-:meth:`XLSINDy.regression <pysindy_xl.XLSINDy.regression>`) and reports
+:func:`fit_quality` rebuilds the problem the model solved (strong or weak form, through
+:meth:`XLSINDy.regression <pysindy_xl.XLSINDy.regression>`, the fit stage's builder) and
+reports
 ``R^2`` per coordinate, the held-out score of its sparsity selection and, after a bagged fit,
 the stability of its terms; :func:`plot_identification` simulates the model from a recorded
 trajectory. The ``pysindy-xl identify`` command prints and plots both.
@@ -70,23 +71,22 @@ def fit_quality(model, arguments) -> dict:
         raise TypeError("arguments: expected the dict of fit arguments (with 'x'), got "
                         f"{type(arguments).__name__}")
     fit_keys = ("x", "t", "x_dot", "x_ddot", "u", "sample_mask")
-    theta = model.regression(**{key: arguments.get(key) for key in fit_keys}).theta
-    coef = model.coef_
-    names = model.feature_library_.coords.names
-    held = list(getattr(model, "still_coordinates_", ()))
-    moving = ~np.isin(names, held)
-    theta = theta.reshape(len(names), -1, theta.shape[1])[moving].reshape(-1, theta.shape[1])
-    names = [name for name, m in zip(names, moving, strict=True) if m]
+    problem = model.regression(**{key: arguments.get(key) for key in fit_keys})
+    theta, origin = problem.theta, problem.catalog_map
+    coef = model.coef_[origin.columns]
+    names = [name for name, moving in zip(model.feature_library_.coords.names,
+                                          origin.coordinates, strict=True) if moving]
     n = len(names)
-    forces = list(model.feature_library_.force_columns_)
+    forces = problem.force_columns
     residual = theta @ coef
-    forced = bool(forces) and np.any(coef[forces] != 0) and np.any(theta[:, forces] != 0)
+    forced = bool(len(forces)) and np.any(coef[forces] != 0) and np.any(theta[:, forces] != 0)
     if forced:
         target, target_name = theta[:, forces] @ coef[forces], "forces"
     else:
         norms = np.linalg.norm(theta * coef, axis=0)
         j = int(np.argmax(norms))
-        target, target_name = theta[:, j] * coef[j], model.get_feature_names()[j]
+        target = theta[:, j] * coef[j]
+        target_name = model.get_feature_names()[origin.columns[j]]
 
     def r2(r, b):
         denominator = float(b @ b)
@@ -102,7 +102,7 @@ def fit_quality(model, arguments) -> dict:
     return {"r2": r2(residual, target), "r2_per_coordinate": per,
             "formulation": model.formulation_, "target": target_name,
             "rows": int(theta.shape[0]), **held_out, "stability": _stability(model),
-            "held_still": held,
+            "held_still": list(getattr(model, "still_coordinates_", ())),
             "physical_consistency": getattr(model, "physical_consistency_", None)}
 
 
@@ -235,7 +235,7 @@ def quality_lines(quality) -> list:
         lines.append(f"  held-out noise ratio of the chosen law (5-fold cross-validation; about "
                      f"1 when it leaves only the propagated noise): "
                      f"{quality['cv_noise_ratio']:.3g}")
-    from ._equations import consistency_line  # sympy: not imported by the CLI's --help
+    from .report.equations import consistency_line  # sympy: not imported by the CLI's --help
 
     consistency = consistency_line(quality.get("physical_consistency"))
     if consistency:

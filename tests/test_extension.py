@@ -2,10 +2,13 @@
 
 Nothing here edits the package: the library (a Rayleigh dissipation function) and the
 optimizer (least squares with the forces fixed, pruned by a relative threshold) register
-themselves when defined, and fit, print, save, load and pickle like the built-in ones.
+themselves when defined, and fit, print, save, load and pickle like the built-in ones. The
+optimizer declares its capabilities once (its ``catalog_tags``) and works, unchanged, inside
+the ensemble and the physically consistent wrappers, which forward those tags.
 Ground truth: a damped, forced Duffing oscillator integrated by scipy at tight tolerance.
 """
 
+import dataclasses
 import json
 import pickle
 
@@ -16,7 +19,7 @@ import sympy as sp
 
 import pysindy_xl as px
 from pysindy_xl.feature_library import LIBRARY_TYPES, SymbolicLibrary
-from pysindy_xl.optimizers import OPTIMIZER_TYPES, CatalogOptimizer
+from pysindy_xl.optimizers import OPTIMIZER_TYPES, CatalogOptimizer, CatalogTags, catalog_tags
 
 MASS, DAMPING, STIFFNESS, HARDENING = 0.7, 0.15, 2.0, 0.5
 
@@ -54,9 +57,11 @@ class RayleighDissipation(SymbolicLibrary):
 
 class ThresholdedLeastSquares(CatalogOptimizer):
     """Least squares with the forces fixed to -1, dropping terms whose contribution is below
-    ``threshold`` times the largest, refitted until the support settles."""
+    ``threshold`` times the largest, refitted until the support settles; refits a given
+    support (``_solve_support``)."""
 
-    requires_forces = True
+    def catalog_tags(self):  # its capabilities, declared once: explicit regression
+        return dataclasses.replace(super().catalog_tags(), requires_forces=True)
 
     def __init__(self, threshold=1e-3):
         self.threshold = threshold
@@ -65,21 +70,26 @@ class ThresholdedLeastSquares(CatalogOptimizer):
         if not 0 <= self.threshold < 1:
             raise ValueError(f"threshold: expected a number in [0, 1), got {self.threshold}")
 
-    def _solve(self, problem):
+    def _solve(self, problem, support=None):
         theta, forces = problem.theta, problem.force_columns
-        support = np.setdiff1d(np.arange(problem.n_features), forces)
+        terms = np.setdiff1d(np.arange(problem.n_features), forces)
+        if support is not None:
+            terms = terms[support[terms]]
         rhs = theta[:, forces].sum(axis=1)
         while True:
-            coef = np.linalg.lstsq(theta[:, support], rhs, rcond=None)[0]
-            size = np.abs(coef) * np.linalg.norm(theta[:, support], axis=0)
+            coef = np.linalg.lstsq(theta[:, terms], rhs, rcond=None)[0]
+            size = np.abs(coef) * np.linalg.norm(theta[:, terms], axis=0)
             keep = size >= self.threshold * size.max()
-            if keep.all():
+            if keep.all() or support is not None:
                 break
-            support = support[keep]
+            terms = terms[keep]
         self.coef_ = np.zeros(problem.n_features)
-        self.coef_[support] = coef
+        self.coef_[terms] = coef
         self.coef_[forces] = -1.0
         return self
+
+    def _solve_support(self, problem, support):
+        return self._solve(problem, support)
 
 
 def _duffing(seed=0):
@@ -105,16 +115,27 @@ def _duffing(seed=0):
     return t, x[:, None], v[:, None], a[:, None], u[:, None]
 
 
-@pytest.fixture(scope="module")
-def fitted():
+def _catalog():
     coords = px.Coordinates(["x"])
     q, qd = coords.q[0], coords.qd[0]
-    catalog = px.CatalogRepartition([
+    return px.CatalogRepartition([
         px.LagrangeLibrary(coords, [qd**2, q**2, q**4, q**3]),
         RayleighDissipation(coords, [qd**2, qd**4]),
     ])
+
+
+#: The true coefficients of the catalog: L = m/2 x'^2 - k/2 x^2 - h/4 x^4, D = c/2 x'^2; the
+#: Euler-Lagrange operator gives m x'' + k x + h x^3 + c x' = u
+EXPECTED = {"F[tau]": -1.0, "L[x_dot**2]": MASS / 2, "L[x**2]": -STIFFNESS / 2,
+            "L[x**4]": -HARDENING / 4, "L[x**3]": 0.0, "D[x_dot**2]": DAMPING / 2,
+            "D[x_dot**4]": 0.0}
+
+
+@pytest.fixture(scope="module")
+def fitted():
     t, x, v, a, u = _duffing()
-    model = px.XLSINDy(catalog, ThresholdedLeastSquares()).fit(x, t, x_dot=v, x_ddot=a, u=u)
+    model = px.XLSINDy(_catalog(), ThresholdedLeastSquares()).fit(x, t, x_dot=v, x_ddot=a,
+                                                                   u=u)
     return model, (t, x, v, a, u)
 
 
@@ -127,12 +148,7 @@ def test_the_new_types_registered_themselves():
 def test_a_new_library_and_optimizer_identify_the_true_law(fitted, capsys):
     model, _ = fitted
     coef = dict(zip(model.get_feature_names(), model.coefficients(), strict=True))
-    # L = m/2 x'^2 - k/2 x^2 - h/4 x^4, D = c/2 x'^2: the Euler-Lagrange operator gives
-    # m x'' + k x + h x^3 + c x' = u
-    expected = {"F[tau]": -1.0, "L[x_dot**2]": MASS / 2, "L[x**2]": -STIFFNESS / 2,
-                "L[x**4]": -HARDENING / 4, "L[x**3]": 0.0, "D[x_dot**2]": DAMPING / 2,
-                "D[x_dot**4]": 0.0}
-    for name, value in expected.items():
+    for name, value in EXPECTED.items():
         assert coef[name] == pytest.approx(value, rel=1e-6, abs=1e-9), name
     assert model.optimizer_.__class__ is ThresholdedLeastSquares
     model.print()
@@ -178,3 +194,52 @@ def test_a_file_naming_an_unregistered_type_is_refused(fitted, tmp_path):
 def test_a_name_taken_by_another_class_is_refused():
     with pytest.raises(TypeError, match="spec_type: 'LagrangeLibrary' is already the name"):
         type("Impostor", (SymbolicLibrary,), {"spec_type": "LagrangeLibrary"})
+
+
+def test_the_wrappers_forward_the_tags_declared_once():
+    own = ThresholdedLeastSquares().catalog_tags()
+    assert own == CatalogTags(requires_forces=True, can_refit=True)
+    assert ThresholdedLeastSquares().requires_forces  # the tags answer as attributes too
+    ensemble = catalog_tags(px.EnsembleOptimizer(ThresholdedLeastSquares()))
+    assert ensemble == dataclasses.replace(own, can_refit=False, balances_rows=False)
+    physical = catalog_tags(px.PhysicalOptimizer(ThresholdedLeastSquares()))
+    assert physical == dataclasses.replace(own, balances_rows=False)
+
+
+@pytest.mark.parametrize("wrapper", [
+    lambda base: px.EnsembleOptimizer(base, n_models=6, fraction=0.6),
+    lambda base: px.PhysicalOptimizer(base),
+], ids=["ensemble", "physical"])
+def test_the_new_optimizer_works_inside_the_wrappers_unchanged(wrapper):
+    t, x, v, a, u = _duffing()
+    model = px.XLSINDy(_catalog(), wrapper(ThresholdedLeastSquares())).fit(
+        x, t, x_dot=v, x_ddot=a, u=u)
+    coef = dict(zip(model.get_feature_names(), model.coefficients(), strict=True))
+    for name, value in EXPECTED.items():
+        assert coef[name] == pytest.approx(value, rel=1e-6, abs=1e-9), name
+    if isinstance(model.optimizer_, px.EnsembleOptimizer):  # it refits: the tag said so
+        assert model.optimizer_.aggregate_ == "refit"
+        np.testing.assert_array_equal(model.inclusion_probability_ > 0.5,
+                                      np.array(list(EXPECTED.values())) != 0)
+    else:  # the selecting fit inside is the new optimizer's
+        assert isinstance(model.optimizer_.optimizer_, ThresholdedLeastSquares)
+    # its requires_forces reaches the estimator through the wrapper: unforced data refused
+    with pytest.raises(ValueError, match="u: explicit regression needs the generalized"):
+        px.XLSINDy(_catalog(), wrapper(ThresholdedLeastSquares())).fit(x, t, x_dot=v,
+                                                                      x_ddot=a)
+
+
+class _LegacyDeclared(CatalogOptimizer):
+    """Capabilities as class attributes (before CatalogTags): they still declare the tags."""
+
+    requires_forces = True
+    derivative_estimate = "unbiased"
+
+    def _solve(self, problem):  # pragma: no cover - never fitted here
+        raise NotImplementedError
+
+
+def test_tags_declared_as_class_attributes_still_count():
+    tags = _LegacyDeclared().catalog_tags()
+    assert tags.requires_forces and tags.derivative_estimate == "unbiased"
+    assert catalog_tags(px.EnsembleOptimizer(_LegacyDeclared())).requires_forces

@@ -115,3 +115,41 @@ def test_a_failed_fit_still_reports_its_warnings_at_the_callers_line(cart_pole_d
         with pytest.raises(np.linalg.LinAlgError, match="singular"):
             model.fit(noisy, t, u=data["tau"])
     assert [record.filename for record in records] == [__file__]
+
+
+def test_a_positions_only_fit_enters_the_model_module_once():
+    """The fit is a line, not a star: check -> build -> solve -> wrap are calls out of
+    ``model.py`` that return, and nothing the fit calls comes back into ``model.py``."""
+    import sys
+
+    import pysindy_xl.model as model_module
+
+    c = px.Coordinates(["x"])
+    library = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2, c.q[0] ** 4])
+    t = np.linspace(0, 20, 2001)
+    x = (np.sin(1.3 * t) + 0.4 * np.sin(2.9 * t))[:, None]
+    u = 2.0 * (-1.69 * np.sin(1.3 * t) - 3.364 * np.sin(2.9 * t))[:, None] + 3 * x
+    noisy = x + 1e-3 * np.random.default_rng(0).normal(size=x.shape)
+    model = px.XLSINDy(library)
+    entries, returns = [], set()
+    here = model_module.__file__
+    package = here.rsplit("model.py", 1)[0]
+
+    def profile(frame, event, arg):
+        inside, caller = frame.f_code.co_filename, frame.f_back.f_code.co_filename
+        if event == "call" and inside == here and caller != here:
+            entries.append(frame.f_code.co_name)
+        if event == "return" and caller == here and inside != here \
+                and inside.startswith(package):
+            returns.add(inside[len(package):])
+
+    sys.setprofile(profile)
+    try:
+        model.fit(noisy, t, u=u)
+    finally:
+        sys.setprofile(None)
+    assert entries == ["fit"]
+    # what returns into model.py: the option checks and the four steps of the fit stage
+    assert returns <= {"_validation.py", "fit/trajectories.py", "fit/build.py",
+                       "fit/solve.py", "fit/wrap.py"}, returns
+    assert model.formulation_ == "weak" and model.dynamics_ is not None

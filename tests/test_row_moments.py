@@ -80,7 +80,7 @@ def test_only_optimizers_that_use_the_draws_get_them():
 
     class Spy(ImplicitOptimizer):
         def _solve(self, problem):
-            seen[type(self).uses_noise_draws] = problem.noise_draws is not None
+            seen[self.catalog_tags().uses_noise_draws] = problem.noise_draws is not None
             return super()._solve(problem)
 
     class QuietSpy(Spy):

@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 import pysindy_xl as px
+from pysindy_xl.fit.still import driven_coordinates, noise_level, still_coordinates
 from pysindy_xl.mujoco import MJCFSystem, generate_dataset, reference_catalog
 from pysindy_xl.mujoco.evaluation.physics import compare_physics
 from pysindy_xl.quality import fit_quality, quality_lines
-from pysindy_xl.still import driven_coordinates, noise_level, still_coordinates
 
 MODELS = pathlib.Path(__file__).parent / "models"
 PATH = MODELS / "pendulum_and_target.xml"

@@ -185,7 +185,7 @@ def test_repeated_stamps_are_refused_by_name():
 def test_strong_form_derivatives_on_jittered_stamps_are_as_accurate_as_on_uniform_ones():
     # The default smoothed differences (Savitzky-Golay, then central differences) smoothed in
     # sample order: on a log's stamps the accelerations were 10 times their own size in error.
-    from pysindy_xl.regression import differentiation_function
+    from pysindy_xl.fit import differentiation_function
 
     log = _log_stamps(5.0, 1e-3, np.random.default_rng(1))
     derivative = differentiation_function()

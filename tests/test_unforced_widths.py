@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import pysindy_xl as px
+from pysindy_xl.fit import UNFORCED_WIDTH_MULTIPLES, build_problem, trajectory_data
 from pysindy_xl.optimizers import homogeneous
-from pysindy_xl.regression import UNFORCED_WIDTH_MULTIPLES, build_regression, trajectory_data
 from pysindy_xl.weak import BumpTestFunctions
 
 
@@ -50,10 +50,10 @@ def test_unforced_data_get_rows_of_several_widths(cart_pole_system):
     library = px.CatalogRepartition([px.ExternalForces(cart_pole_system.coords),
                                      px.LagrangeLibrary(cart_pole_system.coords, [
                                          cart_pole_system.coords.qd[0] ** 2])]).fit()
-    unforced = build_regression(library, trajectory_data(run["q"], t, None, None, None, 2),
-                                "weak")
-    forced = build_regression(library, trajectory_data(run["q"], t, None, None,
-                                                       np.zeros_like(run["q"]), 2), "weak")
+    unforced = build_problem(library, trajectory_data(run["q"], t, None, None, None, 2),
+                             "weak").catalog_map
+    forced = build_problem(library, trajectory_data(run["q"], t, None, None,
+                                                    np.zeros_like(run["q"]), 2), "weak").catalog_map
     assert unforced.weak_info["half_width"] == forced.weak_info["half_width"]
     single = forced.weak_info["test_functions"][0]
     h, duration = forced.weak_info["half_width"], t[-1] - t[0]

@@ -295,13 +295,13 @@ def model_lines(model, truth=None):
     """The identified model as printed: the physical parameters of a kinematic catalog (next
     to the true ones when the coefficient vector ``truth`` is known), the Lagrangian and
     equations unless they run for pages, the coordinates held still."""
-    from pysindy_xl._equations import (
+    from pysindy_xl.fit.still import held_note
+    from pysindy_xl.report.equations import (
         has_parameter_map,
         parameter_lines,
         physical_parameters,
         prints_equations,
     )
-    from pysindy_xl.still import held_note
 
     lines = []
     if has_parameter_map(model.feature_library_):

@@ -1,7 +1,9 @@
 """Catalog optimizers: explicit, implicit (SINDy-PI; total least squares on complete catalogs),
 mixed, ensemble and physically consistent regression.
 
-Each solves a :class:`~pysindy_xl.optimizers.problem.CatalogProblem`; see
+Each solves a :class:`~pysindy_xl.optimizers.problem.CatalogProblem` through one entry
+point, ``fit_problem``, and says what it can do and needs in one
+:class:`~pysindy_xl.optimizers.tags.CatalogTags`; see
 :mod:`pysindy_xl.optimizers._base` for the template of a fit that they share.
 """
 
@@ -27,11 +29,14 @@ from .mixed import MixedOptimizer, activation_closure
 from .physical import PhysicalOptimizer
 from .problem import CatalogProblem, balance_coordinates, coordinate_weights
 from .selection import SelectionResult, refine_by_swaps, select_support
+from .tags import CatalogTags, catalog_tags
 from .total_least_squares import TotalLeastSquaresOptimizer
 
 __all__ = [
     "CatalogOptimizer",
     "CatalogProblem",
+    "CatalogTags",
+    "catalog_tags",
     "OPTIMIZER_TYPES",
     "optimizer_from_spec",
     "pilot_optimizer",

@@ -8,23 +8,25 @@ balance=True, reference_columns=None) -> self``
     checks the arguments once into a :class:`~pysindy_xl.optimizers.problem.CatalogProblem`
     and calls :meth:`CatalogOptimizer.fit_problem`,
 
-``fit_problem(problem) -> self``
+``fit_problem(problem) -> self``, the one entry point of the fit stage,
     checks the optimizer's parameters, balances the coordinate blocks of the rows
     (:meth:`CatalogProblem.balanced <pysindy_xl.optimizers.problem.CatalogProblem.balanced>`)
-    unless the optimizer hands the problem on to others (``balances_rows = False``), and calls
+    unless the optimizer hands the problem on to others (tag ``balances_rows`` False), and calls
     the one method a new optimizer implements, ``_solve(problem) -> self``, which sets
     ``coef_`` of shape ``(F,)``: the full coefficient vector, force columns included, with
     ``theta @ coef_ ~ 0``.
 
 An optimizer that can refit a given support (the last step of an ensemble) implements
-``_solve_support(problem, support)`` too, reached through ``fit_support``. What an optimizer
-needs or prefers is said by attributes, read by :class:`~pysindy_xl.XLSINDy` and the
-composite optimizers: ``requires_forces`` (explicit regression), ``uses_mass_matrices``
-(the mass matrices of the columns are worth computing), ``uses_noise_draws`` (the
-row-resolved noise, ``CatalogProblem.noise_draws``, is worth passing), ``derivative_estimate``
-(``"smoothed"`` or ``"unbiased"`` derivatives for the strong form), ``can_refit``. An
-optimizer may also offer ``pilot()``, an unfitted cheaper optimizer of the same law for a
-first estimate (:func:`pilot_optimizer`).
+``_solve_support(problem, support)`` too, reached through ``fit_problem(problem, support)``.
+What an optimizer needs or can do is one object, its
+:class:`~pysindy_xl.optimizers.tags.CatalogTags` (``catalog_tags()``, read with
+:func:`~pysindy_xl.optimizers.tags.catalog_tags`): ``requires_forces`` (explicit
+regression), ``uses_mass_matrices``, ``uses_noise_draws``, ``derivative_estimate``,
+``can_refit``, ``balances_rows``. A subclass declares them once, overriding
+``catalog_tags`` (``dataclasses.replace(super().catalog_tags(), ...)``); the tags' names
+answer as read-only attributes too, and a subclass that sets them as class attributes
+declares its tags that way. An optimizer may also offer ``pilot()``, an unfitted cheaper
+optimizer of the same law for a first estimate (:func:`pilot_optimizer`).
 
 Optimizers describe themselves for persistence: ``to_spec()`` writes the type and plain
 parameters (nested catalog optimizers as specs of their own); :func:`optimizer_from_spec`
@@ -41,9 +43,10 @@ import numpy as np
 import scipy.linalg
 from sklearn.base import BaseEstimator, clone
 
-from ..diagnostics import UnexplainedCoordinateWarning
+from .._validation import UnexplainedCoordinateWarning
 from ..registry import is_plain, register_type
 from .problem import CatalogProblem, check_support, coordinate_weights, scale_blocks
+from .tags import TAG_NAMES, CatalogTags, catalog_tags
 
 __all__ = [
     "CatalogOptimizer",
@@ -70,8 +73,8 @@ def solve_problem(optimizer, problem: CatalogProblem):
     ----------
     optimizer : CatalogOptimizer or object with ``fit_catalog``
         The package's optimizers get the whole problem (:meth:`CatalogOptimizer.fit_problem`),
-        less the draws of the rows' errors unless they use them (``uses_noise_draws``: the
-        others fit on the same moments whether or not the draws come along); any other
+        less the draws of the rows' errors unless their tags use them (``uses_noise_draws``:
+        the others fit on the same moments whether or not the draws come along); any other
         object the bare ``fit_catalog(theta, n_coordinates, force_columns)``.
     problem : CatalogProblem
 
@@ -88,8 +91,7 @@ def solve_problem(optimizer, problem: CatalogProblem):
     array([-1.,  2.])
     """
     if isinstance(optimizer, CatalogOptimizer):
-        if problem.noise_draws is not None and not getattr(optimizer, "uses_noise_draws",
-                                                               False):
+        if problem.noise_draws is not None and not catalog_tags(optimizer).uses_noise_draws:
             problem = dataclasses.replace(problem, noise_draws=None)
         return optimizer.fit_problem(problem)
     return optimizer.fit_catalog(problem.theta, problem.n_coordinates, problem.force_columns)
@@ -301,11 +303,13 @@ class CatalogOptimizer(BaseEstimator):
 
     Examples
     --------
-    A least-squares solver with the force coefficient fixed to -1 implements one method:
+    A least-squares solver with the force coefficient fixed to -1 implements one method and
+    declares its tags (explicit regression: it needs forces):
 
-    >>> import numpy as np
+    >>> import dataclasses, numpy as np
     >>> class LeastSquares(CatalogOptimizer):
-    ...     requires_forces = True
+    ...     def catalog_tags(self):
+    ...         return dataclasses.replace(super().catalog_tags(), requires_forces=True)
     ...     def _solve(self, problem):
     ...         theta, forces = problem.theta, problem.force_columns
     ...         rest = np.setdiff1d(np.arange(problem.n_features), forces)
@@ -316,28 +320,45 @@ class CatalogOptimizer(BaseEstimator):
     >>> theta = np.column_stack([[1.0, 2.0, 3.0], [0.5, 1.0, 1.5]])
     >>> LeastSquares().fit_catalog(theta, 1, [0]).coef_
     array([-1.,  2.])
+    >>> LeastSquares().requires_forces, LeastSquares().can_refit
+    (True, False)
     >>> LeastSquares().to_spec()["type"]
     'pysindy_xl.optimizers._base.LeastSquares'
     """
 
-    #: explicit regression: the problem must have force columns (XLSINDy refuses u=None)
-    requires_forces = False
-    #: the column mass matrices improve the fit (XLSINDy computes them only then)
-    uses_mass_matrices = False
-    #: the draws of the rows' errors improve the fit (XLSINDy passes them only then)
-    uses_noise_draws = False
-    #: derivatives the strong form should use: "smoothed" (bias small next to noise) or
-    #: "unbiased" (a null-space search that the smoothing bias alone can hide the law from)
-    derivative_estimate = "smoothed"
-    #: balance the coordinate blocks before ``_solve``; False for optimizers that hand the
-    #: problem on to others, which balance their own parts
-    balances_rows = True
     #: the name a model file gives this class (default: ``module.QualifiedName``)
     spec_type: str
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
         register_type(OPTIMIZER_TYPES, cls)
+        # tags set as class attributes (``requires_forces = True``) declare the class's tags
+        declared = {name: cls.__dict__[name] for name in TAG_NAMES
+                    if name in cls.__dict__ and not isinstance(cls.__dict__[name], property)}
+        if declared:
+            for name in declared:
+                delattr(cls, name)
+            inherited = cls.catalog_tags
+
+            def tags(self, _inherited=inherited, _declared=declared):
+                return dataclasses.replace(_inherited(self), **_declared)
+
+            cls.catalog_tags = tags
+
+    # -- capabilities ----------------------------------------------------------------------
+    def catalog_tags(self) -> CatalogTags:
+        """What this optimizer can do and needs (:class:`~pysindy_xl.optimizers.CatalogTags`).
+
+        A subclass extends its parent's: ``dataclasses.replace(super().catalog_tags(),
+        requires_forces=True)``. ``can_refit`` is True when the class implements
+        ``_solve_support``.
+
+        Returns
+        -------
+        CatalogTags
+        """
+        return CatalogTags(
+            can_refit=type(self)._solve_support is not CatalogOptimizer._solve_support)
 
     # -- the template of a fit ------------------------------------------------------------
     def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None,
@@ -357,7 +378,7 @@ class CatalogOptimizer(BaseEstimator):
             position noise). Optimizers that do not use them ignore them.
         mass_matrices : array, shape (S, F, n_coordinates, n_coordinates), optional
             Each column's contribution to the mass matrix at sample states
-            (:func:`~pysindy_xl.diagnostics.column_mass_matrices`).
+            (:func:`~pysindy_xl.fit.diagnostics.column_mass_matrices`).
         balance : bool, default True
             Rescale the coordinate blocks by
             :func:`~pysindy_xl.optimizers.coordinate_weights` before solving (a unit-free
@@ -378,47 +399,37 @@ class CatalogOptimizer(BaseEstimator):
             theta, n_coordinates, force_columns, noise_moments, mass_matrices, balance,
             reference_columns, physical))
 
-    def fit_problem(self, problem: CatalogProblem):
+    def fit_problem(self, problem: CatalogProblem, support=None):
         """Solve a checked :class:`~pysindy_xl.optimizers.problem.CatalogProblem`.
-
-        Returns
-        -------
-        self
-        """
-        self._check_params()
-        return self._solve(problem.balanced() if self.balances_rows else problem)
-
-    def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None,
-                    balance=True):
-        """Fit the terms of ``support`` on every row, nothing selected (see ``can_refit``).
 
         Parameters
         ----------
-        theta, n_coordinates, force_columns, noise_moments, balance
-            As in :meth:`fit_catalog`.
-        support : array of bool, shape (F,)
-            Terms to fit; the others get 0.
+        problem : CatalogProblem
+        support : array of bool, shape (F,), optional
+            Fit the terms of ``support`` on every row, nothing selected (the others get 0);
+            needs the tag ``can_refit``.
 
         Returns
         -------
         self
         """
+        self._check_params()
+        problem = problem.balanced() if self.catalog_tags().balances_rows else problem
+        if support is None:
+            return self._solve(problem)
+        return self._solve_support(problem, check_support(support, problem.n_features))
+
+    def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None,
+                    balance=True):
+        """``fit_problem(CatalogProblem.from_arrays(...), support)`` (kept for callers of
+        earlier versions)."""
         problem = CatalogProblem.from_arrays(theta, n_coordinates, force_columns,
                                              noise_moments, balance=balance)
-        return self.refit_problem(problem, support)
+        return self.fit_problem(problem, support)
 
     def refit_problem(self, problem: CatalogProblem, support):
-        """:meth:`fit_support` on a checked problem."""
-        self._check_params()
-        support = check_support(support, problem.n_features)
-        return self._solve_support(problem.balanced() if self.balances_rows else problem,
-                                   support)
-
-    @property
-    def can_refit(self) -> bool:
-        """Whether :meth:`fit_support` is available (the class implements
-        ``_solve_support``)."""
-        return type(self)._solve_support is not CatalogOptimizer._solve_support
+        """``fit_problem(problem, support)`` (kept for callers of earlier versions)."""
+        return self.fit_problem(problem, support)
 
     # -- to implement ---------------------------------------------------------------------
     def _solve(self, problem: CatalogProblem):  # pragma: no cover - abstract
@@ -455,6 +466,15 @@ class CatalogOptimizer(BaseEstimator):
             elif is_plain(value):
                 params[key] = value
         return {"type": self.spec_type, "params": params}
+
+
+def _tag_attribute(name: str) -> property:
+    return property(lambda self: getattr(self.catalog_tags(), name),
+                    doc=f"Tag ``{name}`` (:meth:`CatalogOptimizer.catalog_tags`).")
+
+
+for _name in TAG_NAMES:  # the tags answer as read-only attributes too
+    setattr(CatalogOptimizer, _name, _tag_attribute(_name))
 
 
 def optimizer_from_spec(spec, where: str = "optimizer", depth: int = 0):

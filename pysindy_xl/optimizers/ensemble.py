@@ -41,6 +41,7 @@ subsamples.
 from __future__ import annotations
 
 import collections
+import dataclasses
 import warnings
 
 import joblib
@@ -51,6 +52,7 @@ from sklearn.base import clone
 from .._validation import check_instance, check_option
 from ._base import CatalogOptimizer, solve_problem, warn_unexplained
 from ._wrapping import WrappingOptimizer
+from .tags import catalog_tags
 
 __all__ = ["EnsembleOptimizer"]
 
@@ -77,10 +79,10 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
         Inclusion probability from which a term enters the ensemble's model.
     aggregate : {"auto", "refit", "median"}, default "auto"
         Coefficients of the included terms. ``"refit"``: the optimizer's least squares on all
-        the rows with the included terms (its ``fit_support``, e.g.
-        :meth:`ExplicitOptimizer.fit_support`, with the same noise correction);
-        ``"median"``: the median over the fits that keep the term; ``"auto"``: ``"refit"``
-        when the optimizer has ``fit_support``, ``"median"`` otherwise.
+        the rows with the included terms (its ``fit_problem(problem, support)``, with the
+        same noise correction); ``"median"``: the median over the fits that keep the term;
+        ``"auto"``: ``"refit"`` when the optimizer's tags say it can refit (``can_refit``),
+        ``"median"`` otherwise.
     sampling : {"subsamples", "complementary_pairs"}, default "subsamples"
         ``"subsamples"``: each fit on a random ``fraction`` of the chunks, inclusion = fraction
         of the fits keeping the term. ``"complementary_pairs"``: ``n_models / 2`` pairs of
@@ -133,9 +135,13 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
     True
     """
 
-    #: every fit balances its own subsample
-    balances_rows = False
     spec_type = "EnsembleOptimizer"
+
+    def catalog_tags(self):
+        """The base optimizer's tags; every fit balances its own subsample (see
+        :class:`~pysindy_xl.optimizers.CatalogTags`)."""
+        return dataclasses.replace(catalog_tags(self._base()), balances_rows=False,
+                                   can_refit=False)
 
     def __init__(self, optimizer=None, n_models=20, fraction=0.7, n_chunks=20, inclusion=0.5,
                  confidence=0.95, random_state=0, n_jobs=None, sampling="subsamples",
@@ -169,17 +175,13 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
         check_option("sampling", self.sampling, "choice", choices=SAMPLINGS)
         check_option("aggregate", self.aggregate, "choice", choices=AGGREGATES)
         base = self._base()
-        if self.aggregate == "refit" and not getattr(base, "can_refit", False):
-            raise ValueError(f"aggregate: 'refit' needs an optimizer with fit_support, "
-                             f"{type(base).__name__} has none (use 'median' or 'auto')")
+        if self.aggregate == "refit" and not catalog_tags(base).can_refit:
+            raise ValueError(f"aggregate: 'refit' needs an optimizer that refits a support "
+                             f"(tag can_refit), {type(base).__name__} does not (use 'median' "
+                             "or 'auto')")
         if self.sampling == "complementary_pairs" and self.n_models % 2:
             raise ValueError(f"n_models: complementary pairs need an even number of fits, got "
                              f"{self.n_models}")
-
-    @property
-    def requires_forces(self) -> bool:
-        """As the base optimizer."""
-        return getattr(self._base(), "requires_forces", False)
 
     def _solve(self, problem):
         """Fit the base optimizer on subsamples of the problem's rows (the same chunks of
@@ -229,14 +231,14 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
             self.inclusion_probability_ = np.mean(samples != 0, axis=0)
         included = self.inclusion_probability_ >= self.inclusion
         self.aggregate_ = ("refit" if self.aggregate == "refit" or (
-            self.aggregate == "auto" and getattr(base, "can_refit", False)) else "median")
+            self.aggregate == "auto" and catalog_tags(base).can_refit) else "median")
         if self.aggregate_ == "refit":
             refit = (f"EnsembleOptimizer: the refit on the {int(included.sum())} term(s) kept "
                      f"by at least {self.inclusion} of the fits")
             try:
                 with warnings.catch_warnings(record=True) as caught:
                     warnings.simplefilter("always")
-                    coef = clone(base).refit_problem(problem, included).coef_
+                    coef = clone(base).fit_problem(problem, included).coef_
             except (ValueError, RuntimeError) as error:  # e.g. no law on the agreed terms
                 raise type(error)(
                     f"{refit} failed ({error}); the fits disagree, try aggregate='median', a "

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import numbers
+import dataclasses
 import warnings
 
 import numpy as np
@@ -188,9 +188,6 @@ def corrected_least_squares(x, y, noise_moments=None, max_noise_share: float = 0
     return np.linalg.solve(np.eye(len(coef)) - ratio, coef) / scale, share
 
 
-def _is_real(value) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, bool) and value == value
-
 
 class ExplicitOptimizer(CatalogOptimizer):
     """Sparse regression when the generalized forces are known on the coordinates.
@@ -252,8 +249,12 @@ class ExplicitOptimizer(CatalogOptimizer):
     array([ 0.5,  0. , -3. ,  0. ])
     """
 
-    requires_forces = True
     spec_type = "ExplicitOptimizer"
+
+    def catalog_tags(self):
+        """Explicit regression: the problem needs force columns (see
+        :class:`~pysindy_xl.optimizers.CatalogTags`)."""
+        return dataclasses.replace(super().catalog_tags(), requires_forces=True)
 
     def __init__(self, method="threshold", threshold="auto", alpha=1e-4, refit=True,
                  max_iter=1000, select="all"):

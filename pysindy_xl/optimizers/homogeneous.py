@@ -223,7 +223,7 @@ def combine_laws(laws) -> tuple[np.ndarray, list]:
 def definite_mass(mass_matrices, law) -> bool:
     """Whether the law's mass matrix ``sum_j law_j M_j`` is definite (of either sign: a law
     has no sign) on every state, judged unit free as
-    :func:`~pysindy_xl.diagnostics.mass_matrix_report` does.
+    :func:`~pysindy_xl.fit.diagnostics.mass_matrix_report` does.
 
     Parameters
     ----------
@@ -392,7 +392,7 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     swaps : bool, default True
     mass_matrices : array, shape (S, F, n_blocks, n_blocks), optional
         Each column's contribution to the mass matrix on sample states
-        (:func:`~pysindy_xl.diagnostics.column_mass_matrices`): laws whose mass matrix is not
+        (:func:`~pysindy_xl.fit.diagnostics.column_mass_matrices`): laws whose mass matrix is not
         definite there are not candidates (unless no law is definite), and the admissible
         lasso gives further starts.
     noise_draws : array, shape (D, n_rows, F), optional

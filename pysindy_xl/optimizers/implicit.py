@@ -56,6 +56,7 @@ law that holds in every equation: ``coef_`` is the sum of the normalized laws ch
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
@@ -176,7 +177,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         laws were stable.
     column_converged_ : ndarray of bool, shape (F,)
     selection_method_ : {"sindy-pi", "noise ratio", "given support"}
-        How the laws were found (the last by :meth:`fit_support`).
+        How the laws were found (the last by a refit of a given support).
     selection_ : LawSelection
         Noise-ratio mode: how the first law's support was chosen (held-out ratio per size).
     law_selections_ : list of LawSelection
@@ -204,10 +205,13 @@ class ImplicitOptimizer(CatalogOptimizer):
     (array([-2. ,  0.5,  1. ,  0. ]), [[0, 1, 2]])
     """
 
-    uses_mass_matrices = True
-    uses_noise_draws = True
-    derivative_estimate = "unbiased"
     spec_type = "ImplicitOptimizer"
+
+    def catalog_tags(self):
+        """Uses the mass matrices and noise draws; wants unbiased derivatives (see
+        :class:`~pysindy_xl.optimizers.CatalogTags`)."""
+        return dataclasses.replace(super().catalog_tags(), uses_mass_matrices=True,
+                                   uses_noise_draws=True, derivative_estimate="unbiased")
 
     def __init__(
         self,

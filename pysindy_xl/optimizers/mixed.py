@@ -25,16 +25,17 @@ exactly the implicit optimizer.
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
 from sklearn.base import clone
 
-from .._validation import check_instance, check_option
-from ..diagnostics import UnexplainedCoordinateWarning
+from .._validation import UnexplainedCoordinateWarning, check_instance, check_option
 from ._base import CatalogOptimizer, pilot_optimizer, solve_problem
 from .implicit import ImplicitOptimizer, NoLawFoundError, coordinates_touched
 from .problem import balance_coordinates
+from .tags import catalog_tags
 
 __all__ = ["MixedOptimizer", "activation_closure"]
 
@@ -125,9 +126,16 @@ class MixedOptimizer(CatalogOptimizer):
     ('mixed', array([-1.,  1.,  4.,  1.,  9.]))
     """
 
-    #: the parts balance their own sub-problems
-    balances_rows = False
     spec_type = "MixedOptimizer"
+
+    def catalog_tags(self):
+        """The parts balance their own sub-problems; the mass matrices and noise draws are
+        used when a part uses them (see :class:`~pysindy_xl.optimizers.CatalogTags`)."""
+        parts = [catalog_tags(part) for part in self._sub_optimizers()]
+        return dataclasses.replace(
+            super().catalog_tags(), balances_rows=False,
+            uses_mass_matrices=any(tags.uses_mass_matrices for tags in parts),
+            uses_noise_draws=any(tags.uses_noise_draws for tags in parts))
 
     def __init__(self, explicit_optimizer=None, implicit_optimizer=None, rtol=1e-10):
         self.explicit_optimizer = explicit_optimizer
@@ -183,17 +191,6 @@ class MixedOptimizer(CatalogOptimizer):
         self.mode_ = "implicit" if y is None else "explicit"
         self.coef_ = np.asarray(fitted.coef_, dtype=float).copy()
         return self
-
-    @property
-    def uses_mass_matrices(self) -> bool:
-        """Whether a part uses the column mass matrices."""
-        return any(getattr(part, "uses_mass_matrices", False)
-                   for part in self._sub_optimizers())
-
-    @property
-    def uses_noise_draws(self) -> bool:
-        """Whether a part uses the draws of the rows' errors."""
-        return any(getattr(part, "uses_noise_draws", False) for part in self._sub_optimizers())
 
     def _solve(self, problem):
         """Mixed explicit/implicit regression (see the module docstring); each part gets its

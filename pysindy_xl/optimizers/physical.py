@@ -26,6 +26,8 @@ base parameters the selection left out may leave zero (``base_parameters="select
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 from sklearn.base import clone
 
@@ -34,6 +36,7 @@ from ..physical.sdp import consistent_least_squares
 from ._base import CatalogOptimizer, solve_problem, warn_unexplained
 from ._wrapping import WrappingOptimizer
 from .explicit import corrected_least_squares, explicit_regression
+from .tags import catalog_tags
 
 __all__ = ["PhysicalOptimizer"]
 
@@ -77,7 +80,8 @@ class PhysicalOptimizer(WrappingOptimizer, CatalogOptimizer):
         the explained signal (``(b - b_u)^T A (b - b_u) / b_u^T A b_u``, the solver's
         accuracy being about 1e-9).
     solver : str, optional
-        cvxpy solver name (``"CLARABEL"``, ``"SCS"``); default :data:`~pysindy_xl.physical.sdp.DEFAULT_SOLVERS`.
+        cvxpy solver name (``"CLARABEL"``, ``"SCS"``); default the first of
+        :data:`~pysindy_xl.physical.sdp.DEFAULT_SOLVERS` that succeeds.
 
     Attributes
     ----------
@@ -119,10 +123,14 @@ class PhysicalOptimizer(WrappingOptimizer, CatalogOptimizer):
     (False, np.float64(-0.02), array([-1. ,  0.5,  2. ,  0. ]))
     """
 
-    requires_forces = True
-    #: the selecting optimizer balances its own problem; the refit balances it again
-    balances_rows = False
     spec_type = "PhysicalOptimizer"
+
+    def catalog_tags(self):
+        """The selecting optimizer's tags; explicit, it refits a support, and balances its
+        problem itself (the selecting optimizer its own; the refit again); see
+        :class:`~pysindy_xl.optimizers.CatalogTags`."""
+        return dataclasses.replace(catalog_tags(self._base()), requires_forces=True,
+                                   can_refit=True, balances_rows=False)
 
     def __init__(self, optimizer=None, base_parameters="selected", tolerance=1e-8, solver=None):
         self.optimizer = optimizer
@@ -133,7 +141,7 @@ class PhysicalOptimizer(WrappingOptimizer, CatalogOptimizer):
     def _check_params(self):
         if self.optimizer is not None:
             check_instance("optimizer", self.optimizer, "a catalog optimizer", "fit_catalog")
-            if not getattr(self.optimizer, "requires_forces", False):
+            if not catalog_tags(self.optimizer).requires_forces:
                 raise ValueError(f"optimizer: the terms must be selected by explicit "
                                  f"regression, {type(self.optimizer).__name__} is not")
         check_option("base_parameters", self.base_parameters, "choice",

@@ -20,7 +20,13 @@ of coordinate 1, ...; see :mod:`pysindy_xl.feature_library._base`) and what is k
 * ``noise_draws`` ``(D, n_coordinates * N, F)``: Monte Carlo draws of the rows' errors, whose
   second moments are ``noise_moments``. They resolve the noise row by row: the propagated
   noise varies along a trajectory, and a part of the rows (a cross-validation fold, an
-  ensemble's subsample) gets its own moments instead of its share of the block's.
+  ensemble's subsample) gets its own moments instead of its share of the block's;
+* ``row_noise``: the noise object the moments and draws come from
+  (:class:`~pysindy_xl.weak.WeakNoise`: it also whitens the rows for a given law, what the
+  reweighting solver :func:`pysindy_xl.fit.solve` does);
+* ``catalog_map``: where the problem came from (a :class:`pysindy_xl.fit.CatalogMap`: the
+  catalog column of each column, the coordinates of the blocks, the states of the rows), so
+  that a solution maps back to the catalog.
 
 Every row of ``theta @ coef = 0`` holds exactly, so multiplying the rows of one coordinate block
 by a constant changes how the regression weighs the blocks, never the true coefficients:
@@ -73,6 +79,10 @@ class CatalogProblem:
     reference_columns : ndarray of int or None
     physical : PhysicalStructure or None
     noise_draws : ndarray, shape (D, n_coordinates * N, F), or None
+    row_noise : WeakNoise or None
+    catalog_map : CatalogMap or None
+        Both describe the whole problem: sub-problems, subsamples and balanced copies drop
+        ``row_noise``, sub-problems and subsamples ``catalog_map``.
 
     Examples
     --------
@@ -100,11 +110,13 @@ class CatalogProblem:
     reference_columns: np.ndarray | None = None
     physical: PhysicalStructure | None = None
     noise_draws: np.ndarray | None = None
+    row_noise: object = None
+    catalog_map: object = None
 
     @classmethod
     def from_arrays(cls, theta, n_coordinates, force_columns, noise_moments=None,
                     mass_matrices=None, balance=True, reference_columns=None, physical=None,
-                    noise_draws=None):
+                    noise_draws=None, row_noise=None, catalog_map=None):
         """Check the arguments of ``fit_catalog`` and hold them as a problem.
 
         Parameters
@@ -121,6 +133,8 @@ class CatalogProblem:
         noise_draws : array, shape (D, n_coordinates * N, F), optional
             Draws of the rows' errors; ``noise_moments`` default to their second moments
             (:func:`~pysindy_xl.weak.noise.draw_moments`).
+        row_noise, catalog_map : optional
+            Held as they are (see the class docstring).
 
         Returns
         -------
@@ -169,7 +183,7 @@ class CatalogProblem:
             if np.any((used < 0) | (used >= n_features)):
                 raise ValueError(f"physical: column indices must lie in [0, {n_features})")
         return cls(theta, n, force_columns, noise_moments, mass_matrices, bool(balance),
-                   reference_columns, physical, noise_draws)
+                   reference_columns, physical, noise_draws, row_noise, catalog_map)
 
     @property
     def n_samples(self) -> int:
@@ -201,7 +215,8 @@ class CatalogProblem:
         if draws is not None:
             draws = draws * np.repeat(weights, self.n_samples)[None, :, None]
         return dataclasses.replace(self, theta=scale_blocks(self.theta, weights),
-                                   noise_moments=moments, noise_draws=draws, balance=False)
+                                   noise_moments=moments, noise_draws=draws, balance=False,
+                                   row_noise=None)
 
     def pooled_moments(self) -> np.ndarray | None:
         """The noise moments of all rows together, shape (F, F), or None."""
@@ -249,7 +264,7 @@ class CatalogProblem:
                                    force_columns=np.asarray(force_columns, dtype=int),
                                    noise_moments=moments, mass_matrices=mass,
                                    reference_columns=reference, physical=physical,
-                                   noise_draws=draws)
+                                   noise_draws=draws, row_noise=None, catalog_map=None)
 
     def subsample(self, samples) -> CatalogProblem:
         """The rows of ``samples`` (indices within a block) in every coordinate block.
@@ -267,7 +282,7 @@ class CatalogProblem:
         elif moments is not None:
             moments = moments * (len(samples) / self.n_samples)
         return dataclasses.replace(self, theta=self.theta[rows], noise_moments=moments,
-                                   noise_draws=draws)
+                                   noise_draws=draws, row_noise=None, catalog_map=None)
 
 
 def check_noise_moments(noise_moments, n_coordinates: int, n_features: int) -> np.ndarray:

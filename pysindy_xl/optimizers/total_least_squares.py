@@ -34,6 +34,7 @@ In both, given the columns' mass matrices, the sign is the one of a positive kin
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
@@ -93,9 +94,13 @@ class TotalLeastSquaresOptimizer(CatalogOptimizer):
     (array([ 1., -2., -1.]), 0)
     """
 
-    uses_mass_matrices = True
-    derivative_estimate = "unbiased"
     spec_type = "TotalLeastSquaresOptimizer"
+
+    def catalog_tags(self):
+        """Uses the mass matrices; wants unbiased derivatives (see
+        :class:`~pysindy_xl.optimizers.CatalogTags`)."""
+        return dataclasses.replace(super().catalog_tags(), uses_mass_matrices=True,
+                                   derivative_estimate="unbiased")
 
     def __init__(self, undetermined_ratio=3.0, normalization="dominant"):
         self.undetermined_ratio = undetermined_ratio

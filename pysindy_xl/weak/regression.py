@@ -39,7 +39,7 @@ def shared_half_width(test_functions, trajectories, columns=None) -> float:
         With keys ``"t"`` (N,) and ``"x"`` (N, n).
     columns : array of bool, shape (n,), optional
         The coordinates whose spectra set the width (default all); coordinates held still
-        (:mod:`pysindy_xl.still`) have only the noise's, which would ask for the narrowest.
+        (:mod:`pysindy_xl.fit.still`) have only the noise's, which would ask for the narrowest.
 
     Returns
     -------

@@ -420,7 +420,7 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
         default, scipy's ``DOP853`` at tight tolerances, is the accurate path; servos make
         the closed loop stiff, so it takes thousands of evaluations of the model per second
         of motion. ``method="ROS2"`` (an L-stable Rosenbrock method,
-        :mod:`pysindy_xl.rosenbrock`, steps of at most the MuJoCo model's time step under a
+        :mod:`pysindy_xl.dynamics.rosenbrock`, steps of at most the MuJoCo model's time step under a
         local error bound of ``1e-3``) takes fewer at a looser accuracy (see
         ``benchmarks/closed_loop_validation.py``).
 

@@ -2,6 +2,5 @@
 
 Random sums of sinusoids (:mod:`.forcing`) or designed periodic trajectories (:mod:`.fourier`,
 :mod:`.excitation`) drive a system; :mod:`.generate` integrates it in MuJoCo with an integrator
-and step chosen and checked by :mod:`.integration`, and adds noise. :mod:`.rosenbrock` integrates
-identified models in stiff closed loops.
+and step chosen and checked by :mod:`.integration`, and adds noise.
 """

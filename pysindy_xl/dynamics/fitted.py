@@ -3,7 +3,8 @@
 :class:`DynamicsMixin` is the second half of :class:`~pysindy_xl.XLSINDy` (the first,
 :mod:`pysindy_xl.model`, fits): everything here needs only the fitted state ``coef_``,
 ``dynamics_`` (the :class:`~pysindy_xl.MassMatrixDynamics` of the identified equations),
-``n_coordinates_`` and the host's ``_trajectories`` input handling.
+``n_coordinates_`` and the host's parameters (its input handling is the fit stage's,
+:func:`~pysindy_xl.fit.estimator_trajectories`).
 """
 
 from __future__ import annotations
@@ -12,9 +13,9 @@ import numpy as np
 from sklearn.metrics import r2_score
 from sklearn.utils.validation import check_is_fitted
 
-from ._inputs import as_list, check_array
-from ._validation import check_instance
-from .dynamics import MassMatrixDynamics
+from .._inputs import as_list, check_array
+from .._validation import check_instance
+from .mass_matrix import MassMatrixDynamics
 
 __all__ = ["DynamicsMixin"]
 
@@ -106,7 +107,7 @@ class DynamicsMixin:
         x = check_array(x, "x", n_columns=n)
         x_dot = check_array(x_dot, "x_dot", x.shape)
         x_ddot = check_array(x_ddot, "x_ddot", x.shape)
-        from .feature_library import stack_variables
+        from ..feature_library import stack_variables
 
         mass, free = dynamics.mass_and_forcing(stack_variables(x, x_dot))
         return np.einsum("sij,sj->si", mass, x_ddot) - free
@@ -151,7 +152,7 @@ class DynamicsMixin:
         >>> round(float(score.rms[0]), 6), score.derivatives
         (0.02, 'measured')
         """
-        from .held_out import score_forces
+        from ..held_out import score_forces
 
         self._require_dynamics()
         return score_forces(self, x, t, u, x_dot, x_ddot, smoother, max_frequency)
@@ -172,7 +173,9 @@ class DynamicsMixin:
         """
         self._require_dynamics()
         check_instance("metric", metric, "a function metric(true, predicted)", "__call__")
-        data = self._trajectories(x, t, x_dot, x_ddot, u, self.n_coordinates_)
+        from ..fit import estimator_trajectories
+
+        data = estimator_trajectories(self, x, t, x_dot, x_ddot, u, self.n_coordinates_)
         true = np.vstack([d["x_ddot"] for d in data])
         predicted = np.vstack([
             self.dynamics_.accelerations(d["x"], d["x_dot"], d["u"], d["t"]) for d in data
@@ -247,7 +250,7 @@ class DynamicsMixin:
         callable
             jit-, vmap- and grad-compatible; see :mod:`pysindy_xl.export.jax_dynamics`.
         """
-        from .export.jax_dynamics import dynamics_function
+        from ..export.jax_dynamics import dynamics_function
 
         return dynamics_function(self._require_dynamics())
 
@@ -259,7 +262,7 @@ class DynamicsMixin:
         ----------
         path : str or os.PathLike
         """
-        from .io import save_model
+        from ..io import save_model
 
         save_model(self, path)
 
@@ -289,7 +292,7 @@ class DynamicsMixin:
             joint models MJCF cannot state (asymmetric Coulomb, Stribeck, torque offset: a
             catalog built with ``friction=``), left out of the file.
         """
-        from .export.mjcf import to_mjcf
+        from ..export.mjcf import to_mjcf
 
         check_is_fitted(self, "coef_")
         return to_mjcf(self, path, template)
@@ -312,6 +315,6 @@ class DynamicsMixin:
         pysindy_xl.export.gym_env.IdentifiedDynamicsEnv
             Observation ``[q, qd]``, action the forces of the actuated coordinates.
         """
-        from .export.gym_env import make_env
+        from ..export.gym_env import make_env
 
         return make_env(self, dt, **options)

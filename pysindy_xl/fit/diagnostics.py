@@ -13,25 +13,14 @@ import warnings
 
 import numpy as np
 
+from .._validation import IdentificationWarning
+
 __all__ = [
-    "IdentificationWarning",
-    "UnexplainedCoordinateWarning",
     "column_mass_matrices",
     "mass_matrices",
     "orient_free_laws",
     "mass_matrix_report",
 ]
-
-
-class IdentificationWarning(UserWarning):
-    """The identified model looks wrong on its own training data (e.g. an indefinite mass
-    matrix): it will not simulate faithfully there."""
-
-
-class UnexplainedCoordinateWarning(IdentificationWarning):
-    """No identified term (besides the forces) enters some coordinate's equation: the model
-    cannot predict that coordinate. :class:`~pysindy_xl.MixedOptimizer` expects it of its
-    explicit part (it then solves those coordinates implicitly) and silences it there."""
 
 
 def mass_matrices(dynamics, states, max_states: int = 2000):

@@ -20,11 +20,11 @@ import scipy.integrate
 import scipy.interpolate
 import sympy as sp
 
-from ._simulation_inputs import feedback_function, force_function
-from ._validation import check_numeric_array, check_option, check_times
-from .feature_library import Terms, compile_terms, decompose, scalar_function, stack_variables
-from .physical.rigid_body import rigid_body_dynamics
-from .symbols import Coordinates
+from .._validation import check_numeric_array, check_option, check_times
+from ..feature_library import Terms, compile_terms, decompose, scalar_function, stack_variables
+from ..physical.rigid_body import rigid_body_dynamics
+from ..symbols import Coordinates
+from .inputs import feedback_function, force_function
 
 __all__ = [
     "MassMatrixDynamics",
@@ -146,7 +146,7 @@ class MassMatrixDynamics:
     def __init__(self, coords: Coordinates, equations):
         if not isinstance(coords, Coordinates):
             raise TypeError(f"coords: expected Coordinates, got {type(coords).__name__}")
-        from .expressions import as_expression
+        from ..expressions import as_expression
 
         if isinstance(equations, (str, sp.Basic)) or not hasattr(equations, "__iter__"):
             raise TypeError("equations: expected a list of expressions, one per coordinate")
@@ -366,7 +366,7 @@ class MassMatrixDynamics:
             the fewest evaluations at the default tolerances (each evaluation of a many-joint
             model costs far more than the solver's own work); ``"Radau"`` or ``"BDF"`` for
             stiff models. ``"ROS2"``: an L-stable Rosenbrock method of order two
-            (:mod:`pysindy_xl.mujoco.simulation.rosenbrock`), steps of at most ``step`` under a
+            (:mod:`pysindy_xl.dynamics.rosenbrock`), steps of at most ``step`` under a
             local error bound of ``1e-3 (1 + |y|)`` (``rtol`` and ``atol`` unused), two
             evaluations per step however stiff the model (stiff servos in closed loop): fewer
             evaluations than ``DOP853`` at a looser accuracy.
@@ -484,8 +484,8 @@ class MassMatrixDynamics:
 
 
     def _simulate_ros2(self, x0, t, force, law, step, divergence_bound, timeout):
-        """:meth:`simulate` with :func:`pysindy_xl.mujoco.simulation.rosenbrock.ros2`."""
-        from .mujoco.simulation.rosenbrock import RosenbrockStop, ros2
+        """:meth:`simulate` with :func:`pysindy_xl.dynamics.rosenbrock.ros2`."""
+        from .rosenbrock import RosenbrockStop, ros2
 
         n = self._n
         step = float(np.min(np.diff(t))) if step is None else check_option(
@@ -537,7 +537,7 @@ class CatalogDynamics(MassMatrixDynamics):
         One coefficient per feature; only the non-zero ones are read.
     held : array of bool, shape (n,), optional
         Coordinates held by the model (coordinates that stood still in the data, see
-        :mod:`pysindy_xl.still`): their equation is replaced by ``qdd_c = 0`` (a unit row of
+        :mod:`pysindy_xl.fit.still`): their equation is replaced by ``qdd_c = 0`` (a unit row of
         ``M``, zero ``f``), whatever the catalog's entries in it.
 
     Attributes

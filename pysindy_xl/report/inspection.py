@@ -13,7 +13,11 @@ import numpy as np
 import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
-from ._equations import (
+from .._inputs import check_array, sample_times
+from ..fit import differentiation_function
+from ..fit.still import held_note
+from ..weak import WhittakerSmoother
+from .equations import (
     consistency_line,
     equation_strings,
     has_parameter_map,
@@ -24,10 +28,6 @@ from ._equations import (
     significant,
     uncertainty_lines,
 )
-from ._inputs import check_array, sample_times
-from .regression import differentiation_function
-from .still import held_note
-from .weak import WhittakerSmoother
 
 __all__ = ["InspectionMixin"]
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from .physical.structure import friction_kind
+from ..physical.structure import friction_kind
 
 __all__ = ["significant", "equation_strings", "identified_lagrangian", "uncertainty_lines"]
 

@@ -1,0 +1,273 @@
+"""The build step of the fit stage: a catalog and trajectories in, one catalog problem out.
+
+:func:`build_problem` leaves out the coordinates that hold still in the data
+(:mod:`~pysindy_xl.fit.still`) and the catalog columns of their motion; builds the rows of the
+formulation, ``"strong"`` (the catalog's columns at every unmasked sample) or ``"weak"`` (the
+columns integrated against test functions of smoothed positions,
+:func:`~pysindy_xl.weak.weak_regression`, with the propagated noise of the positions); drops
+the exactly dependent columns (found on random points of the data's bounding box,
+:func:`probe_points`: identities of the catalog, never the physical law); and returns the
+:class:`~pysindy_xl.optimizers.CatalogProblem` with its row noise
+(:class:`~pysindy_xl.weak.WeakNoise`), the physical structure of its columns and its
+:class:`CatalogMap` back to the catalog. Rows are coordinate-major over all trajectories.
+
+Without forces the default test functions come in several widths
+(:data:`UNFORCED_WIDTH_MULTIPLES`): an unforced law is known only up to a factor and is told
+from the other laws the catalog holds by the noise ratio alone, which one width's rows
+determine poorly from noisy positions; a force column fixes the scale of a forced law.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+
+import numpy as np
+
+from ..feature_library import stack_variables
+from ..optimizers import CatalogProblem, independent_columns
+from ..weak import BumpTestFunctions, WhittakerSmoother, weak_regression
+from .diagnostics import column_mass_matrices
+from .still import block_rows, driven_coordinates, still_columns, still_coordinates
+
+__all__ = ["CatalogMap", "build_problem", "probe_points", "with_mass_matrices",
+           "UNFORCED_WIDTH_MULTIPLES"]
+
+#: Test-function widths of the unforced weak form, in multiples of the spectrum's width
+#: (:class:`~pysindy_xl.weak.BumpTestFunctions`, ``width_multiples``).
+UNFORCED_WIDTH_MULTIPLES = (1.0, 1.5, 2.0)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class CatalogMap:
+    """Where a catalog problem comes from: the map from its columns and blocks back to the
+    catalog, and the states of its rows.
+
+    Attributes
+    ----------
+    columns : ndarray of int, shape (k,)
+        The catalog column of each problem column.
+    n_features : int
+        Catalog columns.
+    coordinates : ndarray of bool, shape (n,)
+        The catalog coordinates whose equations are the problem's blocks (the others hold
+        still).
+    forced : ndarray of bool, shape (n,)
+        Coordinates on which a recorded force acts.
+    dropped : dict of int to str
+        Catalog columns left out of the problem, with the reason.
+    states : ndarray, shape (S, 4n + 1)
+        The library inputs the rows come from (smoothed for the weak form).
+    formulation : {"strong", "weak"}
+    weak_info : dict or None
+        Weak form: test-function half-width, test functions per piece, the smoother's noise
+        estimate, the time grid (:func:`~pysindy_xl.weak.weak_regression`).
+    """
+
+    columns: np.ndarray
+    n_features: int
+    coordinates: np.ndarray
+    forced: np.ndarray
+    dropped: dict
+    states: np.ndarray
+    formulation: str
+    weak_info: dict | None = None
+
+    def to_catalog(self, values) -> np.ndarray:
+        """``values`` of the problem's columns (last axis) spread over the catalog's columns,
+        zero elsewhere.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> m = CatalogMap(np.array([0, 2]), 3, np.ones(1, bool), np.ones(1, bool), {},
+        ...                np.zeros((1, 5)), "strong")
+        >>> m.to_catalog([4.0, 5.0]).tolist()
+        [4.0, 0.0, 5.0]
+        """
+        values = np.asarray(values, dtype=float)
+        out = np.zeros(values.shape[:-1] + (self.n_features,))
+        out[..., self.columns] = values
+        return out
+
+
+def probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndarray:
+    """Random points in the bounding box of the data, each variable drawn independently.
+
+    Column dependencies found on these points are identities of the catalog (true for any
+    data, such as ``cos^2 + sin^2 = 1``), never the physical law that the trajectories obey
+    and the regression is looking for.
+
+    Parameters
+    ----------
+    z : ndarray, shape (S, V)
+        States of the data (the library's inputs).
+    n_points : int, default 4000
+    seed : int, default 0
+
+    Returns
+    -------
+    ndarray, shape (n_points, V)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> probe_points(np.array([[0.0, 1.0], [1.0, 3.0]]), n_points=5).shape
+    (5, 2)
+    """
+    rng = np.random.default_rng(seed)
+    low, high = z.min(axis=0), z.max(axis=0)
+    return rng.uniform(low, high, size=(n_points, z.shape[1]))
+
+
+def _rows(library, data, formulation, test_functions, smoother, half_width, moving,
+          propagate=True):
+    """Rows ``(n * R, F)`` of the whole catalog, the states and, for the weak form, the row
+    noise and the weak-form information."""
+    if formulation == "weak":
+        if test_functions is None:
+            unforced = all(d["u"] is None for d in data)
+            test_functions = BumpTestFunctions(
+                width_multiples=UNFORCED_WIDTH_MULTIPLES if unforced else None)
+        return weak_regression(library, data, test_functions,
+                               copy.deepcopy(smoother) or WhittakerSmoother(),
+                               noise="draws" if propagate else "none",
+                               half_width=half_width, width_columns=moving)
+    if formulation != "strong":
+        raise ValueError(f"formulation: expected 'strong' or 'weak', got {formulation!r}")
+    states = np.vstack([
+        stack_variables(d["x"], d["x_dot"], d["x_ddot"], d["u"], d["t"])[d["mask"]]
+        for d in data])
+    if len(states) == 0:
+        raise ValueError("sample_mask: no sample left to fit")
+    return library.transform(states), states, None, None
+
+
+def _check_moving(data, names, still):
+    """Refuse coordinates that never move unless held (``still``): they carry no dynamics to
+    identify; and data where every coordinate holds still."""
+    if still.all():
+        raise ValueError("x: no coordinate moves beyond the noise of the positions; there "
+                         "are no dynamics to identify")
+    for i, name in enumerate(names):
+        if not still[i] and all(np.ptp(d["x"][:, i]) == 0 for d in data):
+            raise ValueError(f"x: coordinate {name!r} is constant on every sample; a "
+                             "coordinate that never moves carries no dynamics to identify")
+
+
+def build_problem(library, data, formulation: str, *, test_functions=None, smoother=None,
+                  half_width=None, hold_still=False, still=None,
+                  drop_dependent=False, propagate=True) -> CatalogProblem:
+    """The catalog problem of ``library`` on trajectories ``data`` (see the module docstring).
+
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+    data : list of dict
+        From :func:`~pysindy_xl.fit.trajectory_data`; the strong form needs ``x_dot`` and
+        ``x_ddot``.
+    formulation : {"strong", "weak"}
+    test_functions, smoother : optional
+        Weak form: default ``BumpTestFunctions()`` (of the widths
+        :data:`UNFORCED_WIDTH_MULTIPLES` when no trajectory has forces) and
+        ``WhittakerSmoother()``; the smoother is copied (smoothing fits it).
+    half_width : float, optional
+        Weak form: the test functions' half-width (default: chosen from the data).
+    hold_still : float or False, default False
+        Find the coordinates that hold still in the data, with this threshold
+        (:func:`~pysindy_xl.fit.still.still_coordinates`), and leave them out.
+    still : array of bool, shape (n,), optional
+        The coordinates to leave out, when known (a fitted model's); overrides
+        ``hold_still``.
+    drop_dependent : bool, default False
+        Leave out the catalog columns that are zero or exact linear combinations of
+        preferred ones (:func:`~pysindy_xl.optimizers.independent_columns`).
+    propagate : bool, default True
+        Weak form: propagate the noise of the positions into the rows (``row_noise``);
+        False: the rows only.
+
+    Returns
+    -------
+    CatalogProblem
+        With ``row_noise`` (weak form) and ``catalog_map`` (a :class:`CatalogMap`).
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> from pysindy_xl.fit import trajectory_data
+    >>> c = px.Coordinates(["x"])
+    >>> library = px.CatalogRepartition([px.LagrangeLibrary(c, [c.qd[0] ** 2])]).fit()
+    >>> t = np.linspace(0, 1, 11)
+    >>> data = trajectory_data(np.sin(t), t, np.cos(t), -np.sin(t), None, 1)
+    >>> problem = build_problem(library, data, "strong")
+    >>> problem.theta.shape, problem.catalog_map.columns.tolist()
+    ((11, 2), [0, 1])
+    """
+    coords = library.coords
+    n = coords.n
+    forces = None if all(d["u"] is None for d in data) else [d["u"] for d in data]
+    if still is None:
+        still = np.zeros(n, dtype=bool)
+        if hold_still is not False:
+            still = still_coordinates([d["x"] for d in data], [d["t"] for d in data],
+                                      driven_coordinates(library, forces), float(hold_still))
+        _check_moving(data, coords.names, still)
+    still = np.asarray(still, dtype=bool)
+    moving = ~still
+    theta, states, noise, info = _rows(library, data, formulation, test_functions, smoother,
+                                       half_width, moving, propagate)
+    library.check_domain(states)
+    forced = np.zeros(n, dtype=bool)
+    if forces is not None:
+        block = theta[:, library.force_columns_].reshape(n, -1, len(library.force_columns_))
+        forced = np.any(block != 0, axis=(1, 2))
+    # the equations of still coordinates and the columns of their motion leave the problem
+    left_out = still_columns(library, still)
+    candidates = np.setdiff1d(np.arange(theta.shape[1]), list(left_out))
+    if drop_dependent:
+        probe = library.transform(probe_points(states))
+        order = library.column_priority()
+        order = order[np.isin(order, candidates)]
+        local, dropped = independent_columns(
+            probe[block_rows(n, probe.shape[0], moving)][:, candidates],
+            np.searchsorted(candidates, order), n_blocks=int(moving.sum()),
+            force_columns=np.flatnonzero(np.isin(candidates, library.force_columns_)))
+        keep = candidates[local]
+        dropped = {int(candidates[j]): reason for j, reason in dropped.items()}
+    else:
+        keep, dropped = candidates, {}
+    dropped.update(left_out)
+    force_columns = [int(np.flatnonzero(keep == j)[0]) for j in library.force_columns_
+                     if j in keep]
+    if noise is not None:
+        noise = noise.columns(keep)
+        noise = noise.coordinates(moving) if still.any() else noise
+    structure = library.physical_structure()  # for optimizers that constrain to it
+    return CatalogProblem.from_arrays(
+        theta[block_rows(n, theta.shape[0], moving)][:, keep], int(moving.sum()),
+        force_columns, physical=None if structure is None else structure.select(keep),
+        noise_moments=None if noise is None else noise.moments(),
+        noise_draws=None if noise is None else noise.draws, row_noise=noise,
+        catalog_map=CatalogMap(keep, theta.shape[1], moving, forced, dropped, states,
+                               formulation, info))
+
+
+def with_mass_matrices(problem: CatalogProblem, library) -> CatalogProblem:
+    """``problem`` with the mass matrices of its columns at (up to 200 of) its states
+    (:func:`~pysindy_xl.fit.diagnostics.column_mass_matrices`), for the optimizers that use
+    them.
+
+    Parameters
+    ----------
+    problem : CatalogProblem
+        Built by :func:`build_problem` (its ``catalog_map`` gives columns and states).
+    library : fitted CatalogRepartition
+
+    Returns
+    -------
+    CatalogProblem
+    """
+    origin = problem.catalog_map
+    moving = origin.coordinates
+    mass = column_mass_matrices(library, origin.states)[:, origin.columns]
+    return dataclasses.replace(problem, mass_matrices=mass[:, :, moving][:, :, :, moving])

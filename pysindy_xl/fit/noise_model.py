@@ -1,0 +1,142 @@
+"""The choose step of the fit stage: where the noise of measured-force data sits.
+
+A weak problem of positions and measured forces is built for position noise (test functions
+as wide as the motion's spectrum allows, rows weighted by the noise the positions propagate
+into them). :func:`choose_noise_model` also builds it for force noise (narrow test
+functions, unweighted rows) and keeps whichever predicts held-out time blocks of the data
+best, by the rule and the derivative-free score of :mod:`pysindy_xl.weak.selection`.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import hashlib
+
+import numpy as np
+from sklearn.base import clone
+
+from ..optimizers import catalog_tags
+from ..weak import BumpTestFunctions, WhittakerSmoother
+from ..weak.selection import (
+    FORCE_NOISE_WIDTHS,
+    SCORING_BANDWIDTH,
+    NoiseModel,
+    bandwidth_half_width,
+)
+from ..weak.selection import (
+    choose_noise_model as choose_candidate,
+)
+from .build import build_problem, with_mass_matrices
+from .solve import solve
+
+__all__ = ["choose_noise_model"]
+
+
+class _RememberedSmoother:
+    """A smoother that smooths each distinct trajectory piece once: the candidates' rows are
+    built from the same pieces (without propagation, so without ``resmooth``)."""
+
+    def __init__(self, smoother=None):
+        self.smoother = smoother or WhittakerSmoother()
+        self.smoothed = {}
+
+    def __deepcopy__(self, memo):  # copies share what was smoothed (each smooths a copy)
+        return self
+
+    def smooth(self, t, x):
+        key = hashlib.sha1(np.ascontiguousarray(t).tobytes()
+                           + np.ascontiguousarray(x).tobytes()).hexdigest()
+        if key not in self.smoothed:
+            self.smoothed[key] = copy.deepcopy(self.smoother).smooth(t, x)
+        return self.smoothed[key]
+
+
+def _applies(problem, residual_covariance, test_functions) -> bool:
+    origin = problem.catalog_map
+    return (residual_covariance == "auto" and test_functions is None
+            and problem.row_noise is not None and origin is not None
+            and origin.formulation == "weak"
+            and bool(origin.forced[origin.coordinates].all()))
+
+
+def choose_noise_model(problem, library, data, optimizer, smoother=None,
+                       residual_covariance="auto", test_functions=None):
+    """The problem and weighting to solve: position noise (``problem`` as built, weighted)
+    or force noise (narrow test functions, unweighted), by held-out force error.
+
+    Chosen only for the weak form on positions and forces of every moving coordinate, with
+    the default test functions and ``residual_covariance="auto"``; otherwise ``problem`` and
+    ``residual_covariance`` come back as they are. The choice and every candidate's error
+    are recorded in the problem's ``catalog_map.weak_info["noise_model"]``.
+
+    Parameters
+    ----------
+    problem : CatalogProblem
+        From :func:`~pysindy_xl.fit.build_problem` (weak form, with its row noise).
+    library : fitted CatalogRepartition
+    data : list of dict
+        The trajectories the problem was built from.
+    optimizer : catalog optimizer
+        Cloned for each fit on time blocks.
+    smoother, residual_covariance, test_functions
+        The estimator's settings.
+
+    Returns
+    -------
+    problem : CatalogProblem
+    weigh : bool or "auto"
+        For :func:`~pysindy_xl.fit.solve`.
+    """
+    if not _applies(problem, residual_covariance, test_functions):
+        return problem, residual_covariance
+    origin = problem.catalog_map
+    info = origin.weak_info
+    tests, remembered = BumpTestFunctions(), _RememberedSmoother(smoother)
+    steps = np.concatenate([np.diff(d["t"]) for d in data])
+    scoring = max(bandwidth_half_width(SCORING_BANDWIDTH, tests.power),
+                  tests.min_samples * float(np.quantile(steps, 0.999)))
+    widths = sorted({min(scoring * m, info["half_width"]) for m in FORCE_NOISE_WIDTHS})
+
+    def built(half_width, propagate=False):
+        other = build_problem(library, data, "weak", test_functions=tests,
+                              smoother=remembered if not propagate else smoother,
+                              half_width=half_width, still=~origin.coordinates,
+                              propagate=propagate)
+        columns = np.searchsorted(other.catalog_map.columns, origin.columns)
+        noise = None if other.row_noise is None else other.row_noise.columns(columns)
+        return dataclasses.replace(
+            problem, theta=other.theta[:, columns], row_noise=noise,
+            noise_moments=None if noise is None else noise.moments(),
+            noise_draws=None if noise is None else noise.draws,
+            catalog_map=dataclasses.replace(origin, weak_info=other.catalog_map.weak_info))
+
+    candidates = [(NoiseModel("positions", info["half_width"], True), problem)]
+    candidates += [(NoiseModel("forces", width, False), built(width)) for width in widths]
+    scored = built(scoring, propagate=True)
+
+    if catalog_tags(optimizer).uses_mass_matrices:  # once, for every fit on blocks
+        problem = with_mass_matrices(problem, library)
+
+    def fit(rows, noise, weigh):
+        part = dataclasses.replace(
+            problem, theta=rows, row_noise=noise,
+            noise_moments=None if noise is None else noise.moments(),
+            noise_draws=None if noise is None else noise.draws)
+        return solve(clone(optimizer), part, weigh=weigh).coef_
+
+    spans = np.array([[d["t"][0], d["t"][-1]] for d in data])
+    best, errors = choose_candidate(
+        [(model, p.theta, p.catalog_map.weak_info["supports"], p.row_noise)
+         for model, p in candidates],
+        (scored.theta, scored.catalog_map.weak_info["supports"], scored.row_noise),
+        spans, problem.force_columns, fit)
+    model, chosen = candidates[0 if best is None else best]
+    record = {"chosen": model.name, "half_width": model.half_width,
+              "scoring_half_width": scoring,
+              "candidates": [{"noise": m.name, "half_width": m.half_width,
+                              "held_out_error": e}
+                             for (m, _), e in zip(candidates, errors, strict=False)]}
+    chosen_info = {**chosen.catalog_map.weak_info, "noise_model": record}
+    return (dataclasses.replace(chosen, catalog_map=dataclasses.replace(
+        chosen.catalog_map, weak_info=chosen_info)), model.weigh)

@@ -1,0 +1,239 @@
+"""The check step of the fit stage: the catalog, the formulation, the checked trajectories.
+
+:func:`check_fit` is the first step of a fit (:mod:`pysindy_xl.fit`): a fitted clone of the
+estimator's catalog, the formulation (:func:`resolve_formulation`) and the trajectories,
+validated by :func:`trajectory_data` (one trajectory or a list), with the missing velocities
+and accelerations the strong form needs estimated by a differentiation function
+(:func:`differentiation_function`) of the kind the optimizer's tags prefer.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pysindy as ps
+from sklearn.base import clone
+
+from .._inputs import trajectory_arrays
+from ..feature_library import CatalogRepartition, SymbolicLibrary
+from ..optimizers import catalog_tags
+from ..weak import differentiate
+from ..weak.smoothing import is_uniform
+
+__all__ = ["check_fit", "estimator_trajectories", "trajectory_data",
+           "differentiation_function", "resolve_formulation", "FORMULATIONS"]
+
+FORMULATIONS = ("auto", "strong", "weak")
+
+
+def differentiation_function(method=None, unbiased: bool = False):
+    """The function ``derivative(values, t)`` that estimates missing derivatives.
+
+    Parameters
+    ----------
+    method : pysindy differentiation method, optional
+        Used as it is when given.
+    unbiased : bool, default False
+        Without ``method``: fourth-order finite differences (no smoothing bias, which a
+        null-space search of unforced data cannot tell from the law) instead of
+        ``ps.SmoothedFiniteDifference()`` (robust to moderate noise; off a uniform grid its
+        Savitzky-Golay smoothing is done on the actual times).
+
+    Returns
+    -------
+    callable
+        Checks that the result has the shape of its input and is finite.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 1, 101)
+    >>> d = differentiation_function(unbiased=True)(t[:, None] ** 2, t)
+    >>> bool(np.allclose(d[:, 0], 2 * t))
+    True
+    """
+    if method is None:
+        method = ps.FiniteDifference(order=4) if unbiased else _smoothed_difference
+    if not callable(method):
+        raise TypeError("differentiation_method: expected a pysindy differentiation method")
+
+    def derivative(values, t):
+        result = np.asarray(method(values, t), dtype=float)
+        if result.shape != values.shape or not np.all(np.isfinite(result)):
+            raise ValueError("differentiation_method: returned an invalid derivative")
+        return result
+
+    return derivative
+
+
+def _smoothed_difference(values, t):
+    """``ps.SmoothedFiniteDifference()`` (Savitzky-Golay, 11 samples, cubic, then central
+    differences) with its smoothing done on the actual times off a uniform grid: read in
+    sample order, a smooth signal on jittered stamps looks noisy (a 1 kHz log jittering by
+    8 %: accelerations 10 times their own size in error)."""
+    if np.isscalar(t) or is_uniform(t) or len(t) < 11:
+        return ps.SmoothedFiniteDifference()(values, t)
+    return ps.FiniteDifference()(differentiate(t, values, 0, stencil=11, degree=3), t)
+
+
+def trajectory_data(x, t, x_dot, x_ddot, u, n: int, sample_mask=None,
+                    derivative=None) -> list[dict]:
+    """The validated trajectories of ``fit``: one dict of arrays per trajectory.
+
+    Parameters
+    ----------
+    x, t, x_dot, x_ddot, u, sample_mask
+        As :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes them (``t`` already defaulted).
+    n : int
+        Coordinates.
+    derivative : callable, optional
+        ``derivative(values, t)`` (:func:`differentiation_function`) for missing velocities
+        and accelerations; without it they stay None.
+
+    Returns
+    -------
+    list of dict
+        Keys ``"x"``, ``"t"``, ``"x_dot"``, ``"x_ddot"``, ``"u"``, ``"mask"``.
+    """
+    data = trajectory_arrays(x, t, x_dot, x_ddot, u, sample_mask, n)
+    if derivative is not None:
+        for arrays in data:
+            if arrays["x_dot"] is None:
+                arrays["x_dot"] = derivative(arrays["x"], arrays["t"])
+            if arrays["x_ddot"] is None:
+                arrays["x_ddot"] = derivative(arrays["x_dot"], arrays["t"])
+    return data
+
+
+def resolve_formulation(formulation: str, measured: bool, differentiation_method=None) -> str:
+    """The formulation a fit uses: ``"strong"`` or ``"weak"``.
+
+    The one place that resolves ``formulation="auto"``: strong when the derivatives are
+    ``measured`` (velocities and accelerations given) or a ``differentiation_method`` is set,
+    weak (integrated against test functions of smoothed positions) otherwise.
+
+    Parameters
+    ----------
+    formulation : {"auto", "strong", "weak"}
+    measured : bool
+        Whether ``x_dot`` and ``x_ddot`` were given.
+    differentiation_method : optional
+        The estimator's.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> resolve_formulation("auto", measured=False), resolve_formulation("auto", True)
+    ('weak', 'strong')
+    """
+    if formulation != "auto":
+        return formulation
+    return "strong" if measured or differentiation_method is not None else "weak"
+
+
+def _catalog(feature_library) -> CatalogRepartition:
+    """The estimator's catalog as a :class:`~pysindy_xl.CatalogRepartition`."""
+    if feature_library is None:
+        raise ValueError("feature_library: a catalog is required (e.g. LagrangeLibrary)")
+    if isinstance(feature_library, CatalogRepartition):
+        feature_library.flat_libraries()  # a catalog nested in itself: a clear error
+        return feature_library
+    if isinstance(feature_library, SymbolicLibrary):
+        return CatalogRepartition([feature_library])
+    raise TypeError(
+        "feature_library: expected a pysindy_xl library (LagrangeLibrary, ClassicalLibrary, "
+        f"ExternalForces, CatalogRepartition), got {type(feature_library).__name__}"
+    )
+
+
+def estimator_trajectories(estimator, x, t, x_dot, x_ddot, u, n, differentiate=True,
+                           sample_mask=None) -> list[dict]:
+    """The checked trajectories of a call of ``estimator`` (an :class:`~pysindy_xl.XLSINDy`).
+
+    ``t`` defaults to ``estimator.t_default``; missing derivatives are estimated with its
+    ``differentiation_method`` or, by default, with the estimate its optimizer's tags prefer
+    (``derivative_estimate``; unforced data: unbiased), or stay None with
+    ``differentiate=False``.
+
+    Parameters
+    ----------
+    estimator : XLSINDy
+    x, t, x_dot, x_ddot, u, sample_mask
+        As :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes them.
+    n : int
+        Coordinates.
+    differentiate : bool, default True
+
+    Returns
+    -------
+    list of dict
+        As :func:`trajectory_data`.
+    """
+    derivative = None
+    if differentiate:
+        optimizer = estimator.optimizer
+        prefers = ("unbiased" if optimizer is None or optimizer == "implicit" else
+                   "smoothed" if isinstance(optimizer, str)
+                   else catalog_tags(optimizer).derivative_estimate)
+        derivative = differentiation_function(estimator.differentiation_method,
+                                              unbiased=u is None and prefers == "unbiased")
+    return trajectory_data(x, estimator.t_default if t is None else t, x_dot, x_ddot, u, n,
+                           sample_mask, derivative)
+
+
+def check_fit(estimator, x, t, x_dot, x_ddot, u, sample_mask):
+    """The check step of ``estimator.fit``: its catalog, trajectories and formulation.
+
+    Parameters
+    ----------
+    estimator : XLSINDy
+        Its parameters are read, never changed (the catalog is cloned before it is fitted).
+    x, t, x_dot, x_ddot, u, sample_mask
+        As :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes them.
+
+    Returns
+    -------
+    library : fitted CatalogRepartition
+    data : list of dict
+        :func:`trajectory_data`, with the derivatives the strong form needs.
+    formulation : {"strong", "weak"}
+
+    Raises
+    ------
+    ValueError
+        Naming the argument: bad arrays, a catalog without accelerations, an explicit
+        optimizer without forces.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> model = px.XLSINDy(px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]))
+    >>> t = np.linspace(0, 1, 101)
+    >>> library, data, formulation = check_fit(model, np.sin(t), t, None, None, np.cos(t), None)
+    >>> library.get_feature_names(), formulation, data[0]["x_dot"]
+    (['F[tau]', 'L[x_dot**2]', 'L[x**2]'], 'weak', None)
+    """
+    library = clone(_catalog(estimator.feature_library))
+    library.fit()
+    formulation = resolve_formulation(estimator.formulation, x_dot is not None
+                                      and x_ddot is not None,
+                                      estimator.differentiation_method)
+    data = estimator_trajectories(estimator, x, t, x_dot, x_ddot, u, library.coords.n,
+                                  formulation == "strong", sample_mask)
+    accelerations = set(library.coords.qdd)
+    if not any(library.symbolic_matrix_[:, j].free_symbols & accelerations
+               for j in range(library.n_output_features_)):
+        raise ValueError(
+            "feature_library: no term contains an acceleration; add Lagrangian terms with "
+            "velocities (e.g. q_dot**2) or classical terms in q_ddot"
+        )
+    optimizer = estimator.optimizer
+    if u is None and (optimizer == "explicit" or catalog_tags(optimizer).requires_forces):
+        raise ValueError(
+            "u: explicit regression needs the generalized forces; pass u, or use "
+            "ImplicitOptimizer / MixedOptimizer for unforced data"
+        )
+    return library, data, formulation
