@@ -237,7 +237,10 @@ class BumpTestFunctions:
         """
         self._check_params()
         t = np.asarray(t, dtype=float)
-        step = (t[-1] - t[0]) / (len(t) - 1)
+        # the floor resolves the bump at (nearly) every step, so that steps no longer than
+        # usual are never taken for gaps (max_gap); the mean step would be exceeded by the
+        # rounding of a uniform grid's stamps and by every longer step of a jittered one
+        step = float(np.quantile(np.diff(t), 0.99)) if len(t) > 2 else t[-1] - t[0]
         if self.width != "auto":
             h = float(self.width)
         else:

@@ -75,7 +75,7 @@ def split_at_gaps(trajectories, max_gap: float):
     segments, source, gaps = [], [], []
     for k, d in enumerate(trajectories):
         steps = np.diff(d["t"])
-        cuts = np.flatnonzero(steps > max_gap)
+        cuts = np.flatnonzero(steps > max_gap * (1 + 1e-9))  # not the stamps' rounding
         if cuts.size == 0:
             segments.append(d)
             source.append(k)
