@@ -70,12 +70,10 @@ def runs():
 
 def consistent(payload) -> bool:
     """Whether the payload's pseudo-inertia is positive semidefinite (to solver tolerance)."""
-    m, h, second = payload.parameters[0], payload.parameters[1:4], payload.parameters[4:]
-    ixx, iyy, izz, ixy, ixz, iyz = second
-    inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-    sigma = 0.5 * np.trace(inertia) * np.eye(3) - inertia
-    pseudo = np.block([[sigma, h[:, None]], [h[None, :], np.array([[m]])]])
-    return bool(np.linalg.eigvalsh(pseudo)[0] >= -1e-6 * max(1.0, abs(m)))
+    from pysindy_xl.physical import pseudo_inertia_matrix
+
+    lowest = np.linalg.eigvalsh(pseudo_inertia_matrix(payload.parameters))[0]
+    return bool(lowest >= -1e-6 * max(1.0, abs(payload.mass)))
 
 
 def run():
