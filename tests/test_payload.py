@@ -67,3 +67,34 @@ def test_bad_payload_inputs_are_named(loaded_run):
         identify_payload(catalog, run.q, run.t[1:], run.tau)
     with pytest.raises(ValueError, match="arm"):
         identify_payload(catalog, run.q, run.t, run.tau, run.qd, run.qdd, arm=np.zeros(3))
+
+
+def test_the_payload_forces_are_mujocos_loaded_minus_unloaded_inverse_dynamics(loaded_run):
+    import mujoco
+
+    from pysindy_xl.mujoco import Payload
+
+    catalog, run, arm, loaded = loaded_run
+    com = POSITION + COM  # in the last body's frame (the load body is not rotated)
+    about_origin = np.diag(INERTIA) + MASS * (com @ com * np.eye(3) - np.outer(com, com))
+    parameters = np.r_[MASS, MASS * com, np.diag(about_origin), about_origin[0, 1],
+                       about_origin[0, 2], about_origin[1, 2]]
+    payload = Payload("r2", parameters, MASS, com, np.diag(INERTIA), 10, 0.0)
+    rng = np.random.default_rng(3)
+    q, qd, qdd = rng.uniform(-2, 2, (3, 50, run.q.shape[1]))
+    inverse = []
+    for xml in (loaded, arm):
+        model = mujoco.MjModel.from_xml_string(xml)
+        data = mujoco.MjData(model)
+        rows = []
+        for k in range(len(q)):  # a test's reference, not library code
+            data.qpos[:], data.qvel[:], data.qacc[:] = q[k], qd[k], qdd[k]
+            mujoco.mj_inverse(model, data)
+            rows.append(data.qfrc_inverse.copy())
+        inverse.append(np.array(rows))
+    expected = inverse[0] - inverse[1]
+    assert np.abs(expected).max() > 0.1  # the load matters at these states
+    np.testing.assert_allclose(payload.forces(catalog, q, qd, qdd), expected, rtol=1e-6,
+                               atol=1e-8 * np.abs(expected).max())
+    with pytest.raises(ValueError, match="qdd"):
+        payload.forces(catalog, q, qd, qdd[:, :1])

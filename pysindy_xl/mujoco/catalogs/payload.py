@@ -79,6 +79,67 @@ class Payload:
                 "com": self.com.tolist(), "inertia": self.inertia.tolist(),
                 "identifiable": self.identifiable, "residual": self.residual}
 
+    def forces(self, catalog, q, qd, qdd) -> np.ndarray:
+        """Joint torques the payload adds to the arm: inverse dynamics of the payload alone.
+
+        ``W(q, qd, qdd) C_b pi_p``, the regression :func:`identify_payload` solves, in the
+        strong form; added to the arm's :meth:`~pysindy_xl.XLSINDy.predict_forces` it
+        predicts the loaded arm.
+
+        Parameters
+        ----------
+        catalog : KinematicCatalog
+            The arm's catalog (the one the payload was identified with).
+        q, qd, qdd : array, shape (N, n)
+            Positions, velocities and accelerations.
+
+        Returns
+        -------
+        ndarray, shape (N, n)
+
+        Raises
+        ------
+        ValueError
+            If the shapes do not match the catalog or it has no body ``self.body``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from pysindy_xl.mujoco import kinematic_catalog
+        >>> arm = kinematic_catalog('''<mujoco><option gravity="0 0 -9.81"/><worldbody>
+        ...   <body name="hand"><joint name="a" axis="0 1 0"/>
+        ...   <inertial pos="0.5 0 0" mass="1" diaginertia="1 1 1"/></body>
+        ...   </worldbody></mujoco>''')
+        >>> payload = Payload("hand", np.r_[2.0, 1.0, np.zeros(8)], 2.0,
+        ...                   np.array([0.5, 0, 0]), np.zeros((3, 3)), 10, 0.0)
+        >>> zero = np.zeros((1, 1))
+        >>> float(abs(payload.forces(arm, zero, zero, zero)[0, 0]).round(3))  # 2 kg at 0.5 m
+        9.81
+        """
+        from ..._inputs import check_array
+        from ...feature_library import stack_variables
+
+        library = catalog.library().fit()
+        q = check_array(q, "q", n_columns=catalog.coords.n)
+        qd, qdd = check_array(qd, "qd", q.shape), check_array(qdd, "qdd", q.shape)
+        rows = library.transform(stack_variables(q, qd, qdd, np.zeros_like(q)))
+        forces = _regressor(catalog, library, self.body, rows) @ self.parameters
+        return forces.reshape(q.shape[1], -1).T
+
+
+def _bodies(catalog) -> list:
+    return list(dict.fromkeys(name.rsplit(".", 1)[0] for name in catalog.physical_names
+                              if name.rsplit(".", 1)[1] in INERTIAL_PARAMETERS))
+
+
+def _regressor(catalog, library, body, rows) -> np.ndarray:
+    """``W C_b``: the catalog's Lagrange rows mapped onto the ten parameters of ``body``."""
+    if body not in _bodies(catalog):
+        raise ValueError(f"body: expected one of {_bodies(catalog)}, got {body!r}")
+    lagrange = [j for j, c in enumerate(library.categories_) if c == "lagrange"]
+    index = [list(catalog.physical_names).index(f"{body}.{p}") for p in INERTIAL_PARAMETERS]
+    return rows[:, lagrange] @ catalog.combination[:, index]
+
 
 def _arm_coefficients(catalog, library, arm):
     if arm is None:
@@ -170,8 +231,7 @@ def identify_payload(catalog, q, t, tau, qd=None, qdd=None, arm=None, body=None)
     t = np.asarray(t, dtype=float)
     if t.shape != (len(q),) or not np.all(np.isfinite(t)):
         raise ValueError(f"t: expected {len(q)} finite sample times, got shape {t.shape}")
-    bodies = list(dict.fromkeys(name.rsplit(".", 1)[0] for name in catalog.physical_names
-                                if name.rsplit(".", 1)[1] in INERTIAL_PARAMETERS))
+    bodies = _bodies(catalog)
     body = bodies[-1] if body is None else body
     if body not in bodies:
         raise ValueError(f"body: expected one of {bodies}, got {body!r}")
@@ -189,9 +249,7 @@ def identify_payload(catalog, q, t, tau, qd=None, qdd=None, arm=None, body=None)
     rest = np.setdiff1d(np.arange(rows.shape[1]), forces)
     measured = rows[:, forces].sum(axis=1)
     residual = measured - rows[:, rest] @ coef[rest]
-    lagrange = [j for j, c in enumerate(library.categories_) if c == "lagrange"]
-    index = [list(catalog.physical_names).index(f"{body}.{p}") for p in INERTIAL_PARAMETERS]
-    regressor = rows[:, lagrange] @ catalog.combination[:, index]  # (rows, 10)
+    regressor = _regressor(catalog, library, body, rows)  # (rows, 10)
     unconstrained = np.linalg.lstsq(regressor, residual, rcond=None)[0]
     structure = PhysicalStructure.from_maps([{f"payload.{p}": 1.0} for p in INERTIAL_PARAMETERS],
                                             base_columns=np.arange(10))
