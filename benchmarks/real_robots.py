@@ -5,12 +5,12 @@ Arms and logs (``benchmarks/data/real/``; sources, licences and columns in its R
 * ``kinova-gen3``: a Kinova Gen3 (7 joints, link-side joint torque sensors) at 1 kHz, one
   4.9 s excitation run: the first two thirds identify, the last third is predicted. Robot
   description: Kinova's ``gen3.urdf`` (meshes removed).
-* ``ur5``: a UR5 (6 joints, motor currents, no torque sensors) at about 100 Hz with jittered
-  stamps (2-13 ms): one 56 s run identifies, a second 56 s run with other harmonics is
-  predicted. Torque is ``K_j * current_j`` with one constant per joint, estimated once on the
-  identification run by least squares of the URDF's nominal inverse dynamics plus viscous,
-  Coulomb and offset columns on the current (UR does not publish the constants); every method
-  sees the same torques. Robot description: ``ur5_robot.urdf`` of ``example-robot-data``.
+* ``ur10e``: a UR10e (6 joints, motor currents, no torque sensors; the logs' directory says
+  UR5, see the data README) at about 100 Hz with jittered stamps (2-13 ms): one 56 s run
+  identifies, a second 56 s run with other harmonics is predicted. Torque is
+  ``K_j * current_j`` with the controller's own constants, read off the identification run's
+  target torque and target current (``real_payload.controller_constants``); every method sees
+  the same torques. Robot description: ``ur10e.urdf`` (ros-industrial, meshes removed).
 
 Methods, each on the same training samples:
 
@@ -34,7 +34,7 @@ and the total relative error ``|tau_pred - tau|_F / |tau|_F``. Two derivative es
 reported: ``butterworth`` (IDIM's filter at its chosen cutoff, the main table) and
 ``smoother`` (the package's default smoother on the held-out positions).
 
-Usage: ``python benchmarks/real_robots.py [--arms kinova-gen3,ur5]``; writes
+Usage: ``python benchmarks/real_robots.py [--arms kinova-gen3,ur10e]``; writes
 ``benchmarks/results/real_robots.md`` and ``.json``.
 """
 
@@ -56,14 +56,6 @@ DATA = pathlib.Path(__file__).parent / "data" / "real"
 RESULTS = pathlib.Path(__file__).parent / "results"
 
 
-def _ur5_urdf() -> pathlib.Path:
-    """The UR5 description shipped by the ``example-robot-data`` package."""
-    import importlib.metadata
-
-    return pathlib.Path(importlib.metadata.distribution("example-robot-data").locate_file(
-        "cmeel.prefix/share/example-robot-data/robots/ur_description/urdf/ur5_robot.urdf"))
-
-
 def _load(name):
     with np.load(DATA / f"{name}.npz") as f:
         return {k: f[k] for k in f.files}
@@ -78,27 +70,14 @@ def kinova():
     return train, test, DATA / "gen3.urdf"
 
 
-def ur5():
-    """Training and held-out ``(t, q, tau)`` of the UR5 logs, and its URDF."""
-    urdf = _ur5_urdf()
+def ur10e():
+    """Training and held-out ``(t, q, tau)`` of the UR10e logs, and its URDF."""
+    from real_payload import controller_constants
+
     train, test = _load("ur5_14harm50sec"), _load("ur5_15harm50sec")
-    constants = _torque_constants(urdf, train["t"], train["q"], train["current"])
+    constants = controller_constants(train)
     return ((train["t"], train["q"], train["current"] * constants),
-            (test["t"], test["q"], test["current"] * constants), urdf)
-
-
-def _torque_constants(urdf, t, q, current, cutoff=4.0):
-    """Per joint, the factor from current to torque: least squares of the URDF's nominal
-    torque plus friction columns on the measured current."""
-    nominal = idim.pinocchio_inverse_dynamics(urdf)
-    _, qf, qd, qdd, cf = idim.filtered_states(t, q, cutoff, current)
-    tau = nominal(qf, qd, qdd)
-    constants = []
-    for j in range(q.shape[1]):
-        columns = np.column_stack([tau[:, j], qd[:, j], np.sign(qd[:, j]), np.ones(len(qd))])
-        slope = np.linalg.lstsq(columns, cf[:, j], rcond=None)[0][0]
-        constants.append(1.0 / slope)
-    return np.array(constants)
+            (test["t"], test["q"], test["current"] * constants), DATA / "ur10e.urdf")
 
 
 def mjcf_system(urdf):
@@ -144,7 +123,7 @@ def scores(predicted, measured):
 
 
 def run(arm):
-    train, test, urdf = {"kinova-gen3": kinova, "ur5": ur5}[arm]()
+    train, test, urdf = {"kinova-gen3": kinova, "ur10e": ur10e}[arm]()
     t, q, tau = train
     record = {"arm": arm, "train_samples": len(t), "test_samples": len(test[0]),
               "train_step_ms": [1e3 * float(np.min(np.diff(t))), 1e3 * float(np.median(
@@ -231,7 +210,7 @@ def table(records) -> str:
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--arms", default="kinova-gen3,ur5")
+    parser.add_argument("--arms", default="kinova-gen3,ur10e")
     args = parser.parse_args()
     records = []
     for arm in args.arms.split(","):
