@@ -19,7 +19,7 @@ the controller on the unloaded run: the log holds the controller's target torque
 target current it commands, and least squares of the one on the other plus friction columns
 gives the controller's own ``K_j`` (:func:`controller_constants`). No loaded data and no
 payload mass enter the constants, so the payload's mass is an independent check. For
-comparison the record also holds the constants ``real_robots._torque_constants`` fits (the
+comparison the record also holds the constants ``_torque_constants`` fits (the
 URDF's nominal inverse dynamics on the current): close on the shoulder and elbow,
 meaningless on the wrists, whose nominal torques are too small to fix a scale.
 
@@ -52,13 +52,27 @@ import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 import idim  # noqa: E402
-from real_robots import _load, _torque_constants, fit_package, mjcf_system, scores  # noqa: E402
+from real_robots import _load, fit_package, mjcf_system, scores  # noqa: E402
 
 DATA = pathlib.Path(__file__).parent / "data" / "real"
 RESULTS = pathlib.Path(__file__).parent / "results"
 URDF = DATA / "ur10e.urdf"
 DOCUMENTED_MASS = 2.805  # kg, m_load of shamilmamedov/dynamic_calibration's drive-gain script
 LOADED = ("ur5_14harm50secLoad", "ur5_15harm50secLoad")
+
+
+def _torque_constants(urdf, t, q, current, cutoff=4.0):
+    """Per joint, the factor from current to torque: least squares of the URDF's nominal
+    torque plus friction columns on the measured current."""
+    nominal = idim.pinocchio_inverse_dynamics(urdf)
+    _, qf, qd, qdd, cf = idim.filtered_states(t, q, cutoff, current)
+    tau = nominal(qf, qd, qdd)
+    constants = []
+    for j in range(q.shape[1]):
+        columns = np.column_stack([tau[:, j], qd[:, j], np.sign(qd[:, j]), np.ones(len(qd))])
+        slope = np.linalg.lstsq(columns, cf[:, j], rcond=None)[0][0]
+        constants.append(1.0 / slope)
+    return np.array(constants)
 
 
 def controller_constants(run):
