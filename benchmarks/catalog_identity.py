@@ -15,6 +15,7 @@ import argparse
 import json
 import os
 import sys
+import warnings
 
 import numpy as np
 
@@ -36,13 +37,16 @@ SYSTEMS = [
     ("cart-two-link", kinematic_models.CART_DOUBLE_PENDULUM, 3.0, 400),
     ("robot-arm-5", kinematic_models.robot_arm(5), 1.0, 400),
     ("panda", arm_mjcf("panda"), 1.0, 1650),
+    ("kinova-gen3", os.path.join(HERE, "data", "real", "gen3.urdf"), 1.0, 1650),
 ]
 
 
 def system_of(source, amplitude):
     if amplitude is None:
         return px.mujoco.get_system(source)
-    return MJCFSystem(source, force_amplitude=amplitude)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the Kinova URDF's impossible inertias, balanced
+        return MJCFSystem(source, force_amplitude=amplitude)
 
 
 def record(name, source, amplitude, samples):
