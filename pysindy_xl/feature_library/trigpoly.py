@@ -22,6 +22,7 @@ __all__ = ["TrigPolynomial", "euler_lagrange_many", "evaluate_many", "state_valu
 
 # Coefficients below this fraction of the largest one are round-off of float arithmetic.
 _ROUND_OFF = 1e-13
+_BLOCK_VALUES = 1 << 21  # factor values gathered at once by evaluate_many
 
 
 class TrigPolynomial:
@@ -305,15 +306,36 @@ def _reduce_cosine_squares(exponents, coefficients, owners, angles):
     return exponents, coefficients, owners
 
 
+def _unique_rows(rows) -> tuple[np.ndarray, np.ndarray]:
+    """``(index, inverse)`` of ``numpy.unique`` on the rows of an int16 array read as bytes
+    (first occurrences, rows in the order of their bytes), from one int64 key per row.
+
+    A row's bytes compare as its entries, each entry as its two little-endian bytes: an entry
+    in ``[0, 256)`` as its value, any other as its byte-swapped value. Entries so mapped are
+    the digits of a mixed-radix number, the first entry most significant, whose order is the
+    order of the bytes; rows too wide for one int64 are compared as bytes.
+    """
+    rows = np.ascontiguousarray(rows, dtype=np.int16)
+    digits = rows.view(np.uint16).astype(np.int64)
+    wide = (digits >= 256).any(axis=0)
+    digits[:, wide] = rows[:, wide].view(np.uint16).byteswap().astype(np.int64)
+    radix = digits.max(axis=0, initial=0) + 1
+    if np.sum(np.log2(radix)) < 62:
+        weights = np.cumprod(np.concatenate([[1], radix[:0:-1]]))[::-1][:rows.shape[1]]
+        keys = digits @ weights
+    else:
+        keys = rows.view(np.dtype((np.void, 2 * rows.shape[1]))).ravel()
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    return first, inverse.ravel()
+
+
 def _normalize(exponents, coefficients, angles):
     """Rewrite cos^2 = 1 - sin^2, merge equal monomials, drop zero and round-off terms."""
     exponents, coefficients, _ = _reduce_cosine_squares(exponents, coefficients, None, angles)
     if len(coefficients) == 0:
         return exponents, coefficients
-    exponents = np.ascontiguousarray(exponents)
-    keys = exponents.view(np.dtype((np.void, exponents.dtype.itemsize * exponents.shape[1])))
-    _, first, inverse = np.unique(keys.ravel(), return_index=True, return_inverse=True)
-    merged = np.bincount(inverse.ravel(), weights=coefficients, minlength=len(first))
+    first, inverse = _unique_rows(exponents)
+    merged = np.bincount(inverse, weights=coefficients, minlength=len(first))
     scale = np.abs(coefficients).max()
     keep = np.abs(merged) > _ROUND_OFF * max(scale, 1.0)
     return exponents[first[keep]], merged[keep]
@@ -419,10 +441,8 @@ def _normalize_owned(exponents, coefficients, owners, angles, count):
     if len(coefficients) == 0:
         return exponents, coefficients, owners
     # the owner first in each key: rows group by owner, and within an owner sort as alone
-    keyed = np.ascontiguousarray(np.column_stack([owners.astype(np.int16), exponents]))
-    keys = keyed.view(np.dtype((np.void, keyed.dtype.itemsize * keyed.shape[1])))
-    _, first, inverse = np.unique(keys.ravel(), return_index=True, return_inverse=True)
-    merged = np.bincount(inverse.ravel(), weights=coefficients, minlength=len(first))
+    first, inverse = _unique_rows(np.column_stack([owners.astype(np.int16), exponents]))
+    merged = np.bincount(inverse, weights=coefficients, minlength=len(first))
     scale = np.zeros(count)
     np.maximum.at(scale, owners, np.abs(coefficients))
     kept_owners = owners[first]
@@ -459,15 +479,25 @@ def evaluate_many(polynomials, values: np.ndarray) -> np.ndarray:
     owner = np.concatenate([np.full(len(p.coefficients), k) for k, p in enumerate(polynomials)]
                            + [np.zeros(0, dtype=int)]).astype(int)
     coefficients = np.concatenate([p.coefficients for p in polynomials] + [np.zeros(0)])
-    exponents = np.ascontiguousarray(exponents.astype(np.int16))
-    keys = exponents.view(np.dtype((np.void, exponents.dtype.itemsize * width))).ravel()
-    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    exponents = exponents.astype(np.int16)
+    first, inverse = _unique_rows(exponents)
     distinct = exponents[first]
+    # a monomial is the product of its factors in the order of their slots (the powers of the
+    # slot values, each computed once), multiplied left to right by a reduction over blocks
+    # of monomials
+    rows, slots = np.nonzero(distinct)  # row by row, slots increasing
+    base = int(distinct.max(initial=0)) + 1
+    codes, factors = np.unique(slots * base + distinct[rows, slots], return_inverse=True)
+    table = values.T[codes // base] ** (codes % base)[:, None]
+    starts = np.searchsorted(rows, np.arange(len(distinct)))
+    used = np.flatnonzero(np.diff(np.append(starts, len(rows))))  # not the constant
     monomials = np.ones((len(distinct), values.shape[0]))  # a row per monomial
-    for slot in np.flatnonzero(distinct.any(axis=0)):
-        powers = distinct[:, slot]
-        used = np.flatnonzero(powers > 0)
-        monomials[used] *= values[None, :, slot] ** powers[used, None]
+    for block in np.array_split(used, -(-len(rows) * values.shape[0] // _BLOCK_VALUES)):
+        if len(block):
+            first_factor = starts[block[0]]
+            stop = starts[block[-1] + 1] if block[-1] + 1 < len(starts) else len(rows)
+            monomials[block] = np.multiply.reduceat(table[factors.ravel()[first_factor:stop]],
+                                                    starts[block] - first_factor, axis=0)
     mapping = scipy.sparse.csr_matrix((coefficients, (inverse.ravel(), owner)),
                                       shape=(len(distinct), len(polynomials)))
     return np.asarray((mapping.T @ monomials).T)
