@@ -282,27 +282,25 @@ def _reduce_cosine_squares(exponents, coefficients, owners, angles):
     """Rewrite ``cos^2 = 1 - sin^2`` until no cosine power reaches 2 (``owners``, if not None,
     follow their rows)."""
     n = len(angles)
-    angle_slots = [n + j for j in range(n) if angles[j]]
-    while angle_slots:
-        high = exponents[:, angle_slots] >= 2
-        if not high.any():
+    angle = np.asarray(angles, dtype=bool)
+    while angle.any():
+        high = (exponents[:, n:2 * n] >= 2) & angle
+        rows = np.flatnonzero(high.any(axis=1))
+        if not len(rows):
             break
-        row, which = np.nonzero(high)
-        first = np.zeros(len(exponents), dtype=bool)
         # one reduction per row and pass: the first angle whose cosine power is >= 2
-        picked_rows, index = np.unique(row, return_index=True)
-        first[picked_rows] = True
-        slot = np.array(angle_slots)[which[index]]
-        base = exponents[picked_rows].copy()
+        slot = n + np.argmax(high[rows], axis=1)
+        first = np.zeros(len(exponents), dtype=bool)
+        first[rows] = True
+        base = exponents[rows]
         base[np.arange(len(base)), slot] -= 2
         with_sine = base.copy()
         with_sine[np.arange(len(base)), slot - n] += 2
         exponents = np.vstack([exponents[~first], base, with_sine])
-        coefficients = np.concatenate([coefficients[~first], coefficients[picked_rows],
-                                       -coefficients[picked_rows]])
+        coefficients = np.concatenate([coefficients[~first], coefficients[rows],
+                                       -coefficients[rows]])
         if owners is not None:
-            owners = np.concatenate([owners[~first], owners[picked_rows],
-                                     owners[picked_rows]])
+            owners = np.concatenate([owners[~first], owners[rows], owners[rows]])
     return exponents, coefficients, owners
 
 
@@ -310,19 +308,18 @@ def _unique_rows(rows) -> tuple[np.ndarray, np.ndarray]:
     """``(index, inverse)`` of ``numpy.unique`` on the rows of an int16 array read as bytes
     (first occurrences, rows in the order of their bytes), from one int64 key per row.
 
-    A row's bytes compare as its entries, each entry as its two little-endian bytes: an entry
-    in ``[0, 256)`` as its value, any other as its byte-swapped value. Entries so mapped are
-    the digits of a mixed-radix number, the first entry most significant, whose order is the
-    order of the bytes; rows too wide for one int64 are compared as bytes.
+    Entries in ``[0, 256)`` compare as bytes as they do as numbers: each column that varies
+    is a digit of a mixed-radix number, the first column most significant. Other entries, or
+    rows whose digits overflow an int64, are compared as bytes.
     """
     rows = np.ascontiguousarray(rows, dtype=np.int16)
-    digits = rows.view(np.uint16).astype(np.int64)
-    wide = (digits >= 256).any(axis=0)
-    digits[:, wide] = rows[:, wide].view(np.uint16).byteswap().astype(np.int64)
-    radix = digits.max(axis=0, initial=0) + 1
-    if np.sum(np.log2(radix)) < 62:
-        weights = np.cumprod(np.concatenate([[1], radix[:0:-1]]))[::-1][:rows.shape[1]]
-        keys = digits @ weights
+    low = rows.min(axis=0, initial=0)
+    high = rows.max(axis=0, initial=0)
+    used = np.flatnonzero(high > low)
+    radix = (high[used] - low[used]).astype(np.int64) + 1
+    if low.min(initial=0) >= 0 and high.max(initial=0) < 256 and np.sum(np.log2(radix)) < 62:
+        weights = np.cumprod(np.concatenate([[1], radix[:0:-1]]))[::-1][:len(used)]
+        keys = (rows[:, used] - low[used]).astype(np.int64) @ weights
     else:
         keys = rows.view(np.dtype((np.void, 2 * rows.shape[1]))).ravel()
     _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
