@@ -236,20 +236,24 @@ class TrigPolynomial:
         # flat products and sum, built without canonicalization (sympy's own constructors;
         # the products of powers and numbers are commutative)
         rows, slots = np.nonzero(self.exponents)  # row by row, slots increasing
-        powers = self.exponents[rows, slots].astype(int)
-        codes = slots * (int(powers.max(initial=1)) + 1) + powers
-        table = np.empty(int(codes.max(initial=0)) + 1, dtype=object)
-        for code in np.unique(codes).tolist():  # each power built once
-            k, e = divmod(code, int(powers.max(initial=1)) + 1)
-            table[code] = atoms[k] if e == 1 else sp.Pow(atoms[k], e)
-        factors = table[codes].tolist()
+        base = int(self.exponents.max(initial=1)) + 1
+        codes, factor = np.unique(slots * base + self.exponents[rows, slots],
+                                  return_inverse=True)
+        table = [atoms[k] if e == 1 else sp.Pow(atoms[k], e)  # each power built once
+                 for k, e in zip((codes // base).tolist(), (codes % base).tolist(),
+                                 strict=True)]
+        factors = [table[f] for f in factor.ravel().tolist()]
+        values, number = np.unique(self.coefficients, return_inverse=True)
+        numbers = [_fast_number(v) for v in values.tolist()]
         bounds = np.searchsorted(rows, np.arange(len(self.coefficients) + 1)).tolist()
+        mul = sp.Mul._from_args
         terms = []
-        for r, value in enumerate(self.coefficients.tolist()):
+        for r, (value, k) in enumerate(zip(self.coefficients.tolist(), number.ravel().tolist(),
+                                           strict=True)):
             row = factors[bounds[r]:bounds[r + 1]]
             if value != 1 or not row:
-                row.insert(0, _fast_number(value))
-            terms.append(sp.Mul._from_args(row, True) if len(row) > 1 else row[0])
+                row.insert(0, numbers[k])
+            terms.append(mul(row, True) if len(row) > 1 else row[0])
         if len(terms) > 1:
             return sp.Add._from_args(terms, True)
         return terms[0] if terms else sp.S.Zero
