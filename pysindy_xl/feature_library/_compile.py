@@ -20,6 +20,8 @@ import numpy as np
 import scipy.sparse
 import sympy as sp
 
+from .trigpoly import _unique_rows
+
 __all__ = ["compile_entries", "Terms", "decompose", "compile_terms", "scalar_function"]
 
 _BLOCK = 16_384
@@ -295,8 +297,6 @@ def _angle_atoms(atom_list) -> np.ndarray:
 def _keys(powers) -> tuple[list, np.ndarray]:
     """The distinct rows of ``powers`` as monomials (sorted tuples of ``(atom, power)``), and
     each row's position among them."""
-    from .trigpoly import _unique_rows
-
     first, inverse = _unique_rows(powers)
     distinct = powers[first]
     rows, atoms = np.nonzero(distinct)
@@ -435,8 +435,6 @@ def _compile_terms(variables: tuple, terms: Terms):
     if not plan.direct:  # factored: kept when it builds fewer values than the flat plan
         # (at least one value per distinct monomial; built only when that does not decide)
         powers, _, _, n_entries = terms.arrays()
-        from .trigpoly import _unique_rows
-
         if plan.size >= len(_unique_rows(powers)[0]) + n_entries:
             flat = _Plan(terms, np.zeros(len(atom_list), dtype=bool))
             plan = plan if plan.size < flat.size else flat
