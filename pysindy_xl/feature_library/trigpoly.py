@@ -322,8 +322,11 @@ def _unique_rows(rows) -> tuple[np.ndarray, np.ndarray]:
     used = np.flatnonzero(high > low)
     radix = (high[used] - low[used]).astype(np.int64) + 1
     if low.min(initial=0) >= 0 and high.max(initial=0) < 256 and np.sum(np.log2(radix)) < 62:
-        weights = np.cumprod(np.concatenate([[1], radix[:0:-1]]))[::-1][:len(used)]
-        keys = (rows[:, used] - low[used]).astype(np.int64) @ weights
+        keys = np.zeros(len(rows), dtype=np.int64)
+        for column, base in zip(used.tolist(), radix.tolist(), strict=True):
+            keys *= base
+            keys += rows[:, column]
+            keys -= low[column]
     else:
         keys = rows.view(np.dtype((np.void, 2 * rows.shape[1]))).ravel()
     _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
