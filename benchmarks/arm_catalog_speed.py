@@ -8,9 +8,10 @@ Steps: ``kinematic_catalog`` from a cold cache (``catalog``), ``catalog.library(
 (``library``), and ``kinematic_catalog`` + ``XLSINDy(catalog.library()).fit(q, t, u=tau)``,
 every cache cleared first (``catalog_fit``), then the same again with the caches it
 filled (``refit``: the regression alone, so that ``catalog_fit - refit`` is what deriving
-the catalog costs a first fit, measured in the same conditions). Each is repeated; the record gives the best and
-the median, wall and process CPU time. Run the same command before and after a change in
-the same conditions (``PYTHONPATH`` pointing at each version) and compare.
+the catalog costs a first fit, measured in the same conditions). Each is repeated; the
+record gives the best and the median, wall and process CPU time. Run the same command
+before and after a change in the same conditions (``PYTHONPATH`` pointing at each version)
+and compare.
 
 Usage: ``python benchmarks/arm_catalog_speed.py --label after [--arm kinova-gen3]
 [--repeats 3]``; appends to ``benchmarks/results/arm_catalog_speed.json``.
