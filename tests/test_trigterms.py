@@ -166,6 +166,8 @@ def test_terms_as_arrays_evaluate_bit_for_bit_as_tuples():
     assert arrays._entries is None  # derived as arrays
     tuples = Terms(arrays.atoms, [list(entry) for entry in arrays.entries])
     assert tuples == arrays
+    for made, given in zip(tuples.arrays(), arrays.arrays(), strict=True):  # both ways
+        np.testing.assert_array_equal(made, given)
     order = np.random.default_rng(0).permutation(len(tuples))[:40]
     assert Terms.from_arrays(arrays.atoms, *arrays.arrays()).take(order) == tuples.take(order)
     variables = part.coords.variables

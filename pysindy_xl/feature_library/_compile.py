@@ -120,13 +120,8 @@ class Terms:
 
 def _entries_of(powers, coefficients, owners, n_entries) -> list:
     """The lists of ``(coefficient, monomial)`` of terms held as arrays."""
-    rows, atoms = np.nonzero(powers)  # row by row, atoms increasing
-    shared: dict = {}  # (atom, power) tuples shared
-    factors = [shared.setdefault(pair, pair) for pair in zip(
-        atoms.tolist(), powers[rows, atoms].tolist(), strict=True)]
-    bounds = np.searchsorted(rows, np.arange(len(coefficients) + 1)).tolist()
-    terms = [(coef, tuple(factors[bounds[r]:bounds[r + 1]]))
-             for r, coef in enumerate(coefficients.tolist())]
+    keys, which = _keys(powers)
+    terms = list(zip(coefficients.tolist(), [keys[m] for m in which.tolist()], strict=True))
     cuts = np.searchsorted(owners, np.arange(n_entries + 1)).tolist()
     return [terms[cuts[k]:cuts[k + 1]] for k in range(n_entries)]
 
