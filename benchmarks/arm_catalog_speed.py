@@ -1,15 +1,20 @@
 """Time of a 7-joint arm's kinematic catalog and of catalog + fit, wall and CPU.
 
-For the panda-like arm of ``benchmarks/robot_arms.py`` (and optionally the arms of
-``tests/kinematic_models.py``): ``kinematic_catalog`` from a cold cache (``catalog``),
-``catalog.library().fit()`` (``library``), and ``kinematic_catalog`` +
-``XLSINDy(catalog.library()).fit(q, t, u=tau)`` on two MuJoCo trajectories of 3,000 samples
-each, every cache cleared first (``catalog_fit``). Each is repeated; the table gives the best
-and the median, wall and process CPU time. Run the same command before and after a change in
-the same conditions (``PYTHONPATH`` pointing at each version) and compare.
+Arms (``--arm``): ``panda``, the panda-like arm of ``benchmarks/robot_arms.py``, fitted on two
+MuJoCo trajectories of ``--samples`` samples each; ``kinova-gen3``, the real Kinova Gen3
+URDF (joint frames not aligned with the axes: ten times the monomials of the panda's
+columns), fitted on the training part of its real log (``benchmarks/real_robots.py``).
+Steps: ``kinematic_catalog`` from a cold cache (``catalog``), ``catalog.library().fit()``
+(``library``), and ``kinematic_catalog`` + ``XLSINDy(catalog.library()).fit(q, t, u=tau)``,
+every cache cleared first (``catalog_fit``), then the same again with the caches it
+filled (``refit``: the regression alone, so that ``catalog_fit - refit`` is what deriving
+the catalog costs a first fit, measured in the same conditions). Each is repeated; the
+record gives the best and the median, wall and process CPU time. Run the same command
+before and after a change in the same conditions (``PYTHONPATH`` pointing at each version)
+and compare.
 
-Usage: ``python benchmarks/arm_catalog_speed.py --label after [--repeats 3]``; appends to
-``benchmarks/results/arm_catalog_speed.json``.
+Usage: ``python benchmarks/arm_catalog_speed.py --label after [--arm kinova-gen3]
+[--repeats 3]``; appends to ``benchmarks/results/arm_catalog_speed.json``.
 """
 
 import argparse
@@ -19,11 +24,12 @@ import platform
 import statistics
 import sys
 import time
+import warnings
 
 import numpy as np
 
 import pysindy_xl as px
-from pysindy_xl.feature_library import _base, polynomial_lagrange
+from pysindy_xl.feature_library import _base, polynomial_lagrange, repartition
 from pysindy_xl.mujoco import MJCFSystem, generate_dataset
 from pysindy_xl.mujoco.catalogs import kinematic as kinematic_module
 
@@ -38,6 +44,7 @@ def clear_caches():
     kinematic_module._CACHE.clear()
     polynomial_lagrange._DERIVATIONS.clear()
     _base._DERIVED.clear()
+    getattr(repartition, "_MERGED", {}).clear()
 
 
 def timed(function):
@@ -51,13 +58,24 @@ def main():
     parser.add_argument("--label", required=True, help="e.g. before or after")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--samples", type=int, default=3000, help="per trajectory (two)")
+    parser.add_argument("--arm", choices=("panda", "kinova-gen3"), default="panda")
     args = parser.parse_args()
-    system = MJCFSystem(arm_mjcf("panda"), force_amplitude=1.0)
-    step = system.mj_model().opt.timestep
-    data = generate_dataset(system, n_trajectories=2, duration=args.samples * step, seed=0,
-                            progress=False)
-    fit_arguments = data.fit_arguments(forces="tau")
-    times = {"catalog": [], "library": [], "catalog_fit": []}
+    warnings.simplefilter("ignore")  # the Kinova URDF's impossible inertias, balanced
+    if args.arm == "panda":
+        system = MJCFSystem(arm_mjcf("panda"), force_amplitude=1.0)
+        step = system.mj_model().opt.timestep
+        data = generate_dataset(system, n_trajectories=2, duration=args.samples * step,
+                                seed=0, progress=False)
+        fit_arguments = data.fit_arguments(forces="tau")
+        samples = int(sum(len(t) for t in fit_arguments["t"]))
+    else:
+        import real_robots
+
+        (t, q, tau), _, urdf = real_robots.kinova()
+        system = real_robots.mjcf_system(urdf)
+        fit_arguments = {"x": q, "t": t, "u": tau}
+        samples = len(t)
+    times = {"catalog": [], "library": [], "catalog_fit": [], "refit": []}
     for _ in range(args.repeats):
         clear_caches()
         catalog, wall, cpu = timed(lambda: px.kinematic_catalog(system))
@@ -69,12 +87,14 @@ def main():
         model, wall, cpu = timed(lambda: px.XLSINDy(px.kinematic_catalog(system).library())
                                  .fit(**fit_arguments))
         times["catalog_fit"].append((wall, cpu))
+        _, wall, cpu = timed(lambda: px.XLSINDy(px.kinematic_catalog(system).library())
+                             .fit(**fit_arguments))
+        times["refit"].append((wall, cpu))
     record = {
         "label": args.label, "pysindy_xl": os.path.dirname(px.__file__),
         "machine": {"python": platform.python_version(), "cpus": os.cpu_count(),
                     "load_average": os.getloadavg()},
-        "arm": "panda (benchmarks/robot_arms.py)", "joints": system.n,
-        "samples": int(sum(len(t) for t in fit_arguments["t"])),
+        "arm": args.arm, "joints": system.n, "samples": samples,
         "coefficients_checksum": float(np.sum(np.abs(model.coefficients()))),
     }
     for key, values in times.items():

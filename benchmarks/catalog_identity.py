@@ -15,6 +15,7 @@ import argparse
 import json
 import os
 import sys
+import warnings
 
 import numpy as np
 
@@ -36,13 +37,17 @@ SYSTEMS = [
     ("cart-two-link", kinematic_models.CART_DOUBLE_PENDULUM, 3.0, 400),
     ("robot-arm-5", kinematic_models.robot_arm(5), 1.0, 400),
     ("panda", arm_mjcf("panda"), 1.0, 1650),
+    # a real arm (non-axis-aligned joint frames), fitted on the first 1,650 samples of its log
+    ("kinova-gen3", os.path.join(HERE, "data", "real", "gen3.urdf"), 1.0, "log"),
 ]
 
 
 def system_of(source, amplitude):
     if amplitude is None:
         return px.mujoco.get_system(source)
-    return MJCFSystem(source, force_amplitude=amplitude)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the Kinova URDF's impossible inertias, balanced
+        return MJCFSystem(source, force_amplitude=amplitude)
 
 
 def record(name, source, amplitude, samples):
@@ -53,10 +58,18 @@ def record(name, source, amplitude, samples):
     n = system.n
     q, qd, qdd, tau = rng.normal(size=(4, 50, n))
     columns = library.transform(stack_variables(q, qd, qdd, tau))
-    step = system.mj_model().opt.timestep
-    data = generate_dataset(system, n_trajectories=2, duration=samples * step, seed=0,
-                            progress=False)
-    model = px.XLSINDy(catalog.library()).fit(**data.fit_arguments(forces="tau"))
+    if samples == "log":
+        import real_robots
+
+        (t, q, tau), _, _ = real_robots.kinova()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model = px.XLSINDy(catalog.library()).fit(q[:1650], t[:1650], u=tau[:1650])
+    else:
+        step = system.mj_model().opt.timestep
+        data = generate_dataset(system, n_trajectories=2, duration=samples * step, seed=0,
+                                progress=False)
+        model = px.XLSINDy(catalog.library()).fit(**data.fit_arguments(forces="tau"))
     return {
         f"{name}/terms": np.array(json.dumps([str(t) for t in catalog.lagrange_terms])),
         f"{name}/parameters": np.array(json.dumps(catalog.parameters)),

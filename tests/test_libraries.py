@@ -645,7 +645,7 @@ def test_compiled_entries_factored_by_angles_match_lambdify():
     terms = decompose(exprs)
     inner = _angle_atoms(terms.atoms)
     assert inner.any() and not inner.all()
-    plan = _Plan(terms.entries, inner)
+    plan = _Plan(terms, inner)
     assert not plan.direct and plan.coefficients.shape[0] < len(plan.index)  # shared
     variables = [a, b, v, w, u]
     z = np.random.default_rng(0).uniform(-2, 2, size=(300, 5))

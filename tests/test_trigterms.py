@@ -114,3 +114,69 @@ def test_euler_lagrange_many_is_each_polynomials_bit_for_bit(angles):
             np.testing.assert_array_equal(alone.exponents, together.exponents)
             np.testing.assert_array_equal(alone.coefficients, together.coefficients)
     assert euler_lagrange_many([]) == []
+
+
+def test_unique_rows_is_numpys_unique_of_the_row_bytes():
+    """One int64 key per row sorts and groups rows as their bytes do, including entries a
+    key cannot hold (negative or past one byte, compared as bytes)."""
+    from pysindy_xl.feature_library.trigpoly import _unique_rows
+
+    rng = np.random.default_rng(3)
+    for high in (1, 3, 300, 40_000):
+        for _ in range(20):
+            rows = rng.integers(-high if high > 300 else 0, high, (int(rng.integers(1, 60)), 9))
+            rows = np.vstack([rows, rows[: len(rows) // 2]]).astype(np.int16)
+            keys = rows.view(np.dtype((np.void, rows.shape[1] * 2))).ravel()
+            _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+            found = _unique_rows(rows)
+            np.testing.assert_array_equal(found[0], first)
+            np.testing.assert_array_equal(found[1], inverse.ravel())
+
+
+def test_evaluate_many_matches_the_sympy_expressions():
+    """Monomials evaluated factor by factor equal the polynomials' sympy expressions."""
+    from pysindy_xl.feature_library.trigpoly import evaluate_many, state_values
+
+    angles = (True, False, True)
+    coords = px.Coordinates(["a", "b", "c"])
+    polynomials = _random_polynomials(3, angles, np.random.default_rng(5), count=40)
+    rng = np.random.default_rng(6)
+    q, qd = rng.uniform(-2, 2, (2, 25, 3))
+    states = state_values(q, qd, angles=angles)
+    values = evaluate_many(polynomials, states)
+    # round-off bound: the sum of the terms' magnitudes
+    scale = evaluate_many([TrigPolynomial(p.exponents, np.abs(p.coefficients), angles,
+                                          normalize=False) for p in polynomials],
+                          np.abs(states))
+    for k, polynomial in enumerate(polynomials):
+        expected = sp.lambdify(list(coords.q) + list(coords.qd),
+                               polynomial.to_sympy(coords), "numpy")(*q.T, *qd.T)
+        assert np.all(np.abs(values[:, k] - expected) <= 1e-13 * scale[:, k] + 1e-300)
+
+
+def test_terms_as_arrays_evaluate_bit_for_bit_as_tuples():
+    """Terms given as arrays (a polynomial library's columns) hold the same entries as their
+    tuples, reorder as they do, and compile to an evaluator with the same bits; both agree
+    with the sympy columns."""
+    from pysindy_xl.feature_library._compile import Terms, compile_terms
+
+    library = px.kinematic_catalog(MJCFSystem(robot_arm(3))).library().fit()
+    part = next(lib for lib in library.libraries_ if isinstance(lib, PolynomialLagrangeLibrary))
+    arrays = part.column_terms()
+    assert arrays._entries is None  # derived as arrays
+    tuples = Terms(arrays.atoms, [list(entry) for entry in arrays.entries])
+    assert tuples == arrays
+    for made, given in zip(tuples.arrays(), arrays.arrays(), strict=True):  # both ways
+        np.testing.assert_array_equal(made, given)
+    order = np.random.default_rng(0).permutation(len(tuples))[:40]
+    assert Terms.from_arrays(arrays.atoms, *arrays.arrays()).take(order) == tuples.take(order)
+    variables = part.coords.variables
+    z = np.random.default_rng(1).normal(size=(64, len(variables)))
+    fast = compile_terms(variables, arrays)(z, stacked=True)
+    slow = compile_terms(variables, tuples)(z, stacked=True)
+    np.testing.assert_array_equal(fast, slow)
+    matrix = part.symbolic_matrix_
+    for k, (c, j) in enumerate(part.entry_index_[:30]):
+        expected = sp.lambdify(variables, matrix[c, j], "numpy")(*z.T)
+        np.testing.assert_allclose(fast[k], expected, rtol=1e-10, atol=1e-10)
+    assert pickle.loads(pickle.dumps(arrays)) == arrays

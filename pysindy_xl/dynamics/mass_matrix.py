@@ -667,7 +667,7 @@ def _catalog_terms(library, coef, held, features=None) -> Terms:
         terms = decompose([sp.expand(library.symbolic_matrix_[c, j])
                            for c, j in index[active]])
     else:
-        terms = Terms(terms.atoms, [terms.entries[k] for k in active])
+        terms = terms.take(active)
     return _mass_and_forcing_terms(library.coords, terms, index[active, 0],
                                    coef[index[active, 1]], held)
 

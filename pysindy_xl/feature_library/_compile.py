@@ -16,11 +16,11 @@ generated code (one short statement per monomial and term), for simulators.
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import scipy.sparse
 import sympy as sp
+
+from .trigpoly import _unique_rows
 
 __all__ = ["compile_entries", "Terms", "decompose", "compile_terms", "scalar_function"]
 
@@ -30,9 +30,13 @@ _BLOCK_VALUES = 1 << 21  # values built at once (16 MiB of floats: blocks stay i
 Monomial = tuple  # sorted tuple of (atom index, integer power)
 
 
-@dataclasses.dataclass
 class Terms:
     """Entries as polynomials in atoms.
+
+    Held as lists of ``(coefficient, monomial)`` or as arrays (one row per term, see
+    :meth:`from_arrays`), each form built from the other on first use: catalogs derived as
+    arrays (trigonometric polynomials) are merged, reordered and compiled without building a
+    Python tuple per term.
 
     Attributes
     ----------
@@ -43,14 +47,96 @@ class Terms:
         ``(atom index, power)`` (the empty tuple for a constant).
     """
 
-    atoms: list
-    entries: list
-    # what derives from these terms, computed once (evaluators compiled for some variables,
-    # reorderings): closures and caches, never pickled
-    _memo: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
+    def __init__(self, atoms, entries):
+        self.atoms = list(atoms)
+        self._entries = entries
+        self._arrays = None
+        # what derives from these terms, computed once (evaluators compiled for some
+        # variables, reorderings): closures and caches, never pickled
+        self._memo: dict = {}
+
+    @classmethod
+    def from_arrays(cls, atoms, powers, coefficients, owners, n_entries) -> Terms:
+        """Terms given as one row per term, the rows of an entry together and in entry order.
+
+        Parameters
+        ----------
+        atoms : list of sympy.Expr
+        powers : ndarray of int, shape (T, len(atoms))
+            Each term's power of each atom.
+        coefficients : ndarray of float, shape (T,)
+        owners : ndarray of int, shape (T,)
+            Each term's entry, non-decreasing.
+        n_entries : int
+        """
+        terms = cls(atoms, None)
+        terms._arrays = (np.asarray(powers, dtype=np.int16).reshape(-1, len(terms.atoms)),
+                         np.asarray(coefficients, dtype=float).reshape(-1),
+                         np.asarray(owners, dtype=np.intp).reshape(-1), int(n_entries))
+        return terms
+
+    @property
+    def entries(self) -> list:
+        if self._entries is None:
+            self._entries = _entries_of(*self._arrays)
+        return self._entries
+
+    def arrays(self) -> tuple:
+        """``(powers, coefficients, owners, n_entries)`` (see :meth:`from_arrays`)."""
+        if self._arrays is None:
+            self._arrays = _arrays_of(self.entries, len(self.atoms))
+        return self._arrays
+
+    def take(self, order) -> Terms:
+        """The terms of the entries ``order`` (indices), in that order."""
+        order = np.asarray(order, dtype=np.intp).reshape(-1)
+        if self._entries is not None:
+            return Terms(self.atoms, [self._entries[k] for k in order.tolist()])
+        powers, coefficients, owners, n_entries = self._arrays
+        starts = np.searchsorted(owners, np.arange(n_entries + 1))
+        sizes = (starts[1:] - starts[:-1])[order]
+        rows = np.repeat(starts[order] - np.cumsum(sizes) + sizes, sizes) + np.arange(
+            int(sizes.sum()))
+        return Terms.from_arrays(self.atoms, powers[rows], coefficients[rows],
+                                 np.repeat(np.arange(len(order)), sizes), len(order))
+
+    def __len__(self):
+        return len(self._entries) if self._entries is not None else self._arrays[3]
+
+    def __eq__(self, other):
+        if not isinstance(other, Terms):
+            return NotImplemented
+        return self.atoms == other.atoms and self.entries == other.entries
+
+    __hash__ = None
+
+    def __repr__(self):
+        return f"Terms(atoms={self.atoms!r}, entries={self.entries!r})"
 
     def __getstate__(self):
-        return {"atoms": self.atoms, "entries": self.entries, "_memo": {}}
+        return {"atoms": self.atoms, "_entries": self._entries, "_arrays": self._arrays,
+                "_memo": {}}
+
+
+def _entries_of(powers, coefficients, owners, n_entries) -> list:
+    """The lists of ``(coefficient, monomial)`` of terms held as arrays."""
+    keys, which = _keys(powers)
+    terms = list(zip(coefficients.tolist(), [keys[m] for m in which.tolist()], strict=True))
+    cuts = np.searchsorted(owners, np.arange(n_entries + 1)).tolist()
+    return [terms[cuts[k]:cuts[k + 1]] for k in range(n_entries)]
+
+
+def _arrays_of(entries, n_atoms) -> tuple:
+    """The arrays (see :meth:`Terms.from_arrays`) of lists of ``(coefficient, monomial)``."""
+    sizes = [len(entry) for entry in entries]
+    coefficients = np.array([coef for entry in entries for coef, _ in entry], dtype=float)
+    powers = np.zeros((len(coefficients), n_atoms), dtype=np.int16)
+    pairs = [(r, a, p) for r, (_, key) in enumerate(term for entry in entries for term in entry)
+             for a, p in key]
+    if pairs:
+        rows, atoms, values = np.array(pairs, dtype=np.intp).T
+        np.add.at(powers, (rows, atoms), values)
+    return powers, coefficients, np.repeat(np.arange(len(entries)), sizes), len(entries)
 
 
 def _decompose(expr: sp.Expr, atoms: dict) -> list[tuple[float, Monomial]]:
@@ -203,77 +289,101 @@ def _angle_atoms(atom_list) -> np.ndarray:
                     dtype=bool)
 
 
-def _factored(entries, inner) -> tuple[list, list]:
-    """Every term's monomial split into its ``inner`` atoms and the rest (outer).
-
-    Returns the distinct ``(outer monomial, entry)`` pairs, ordered by outer monomial, and
-    per pair its terms ``(coefficient, inner monomial)``."""
-    inner = inner.tolist()
-    grouped: dict = {}
-    splits: dict = {}  # monomial -> (outer part, inner part), shared by its terms
-    for k, entry in enumerate(entries):
-        for coef, key in entry:
-            split = splits.get(key)
-            if split is None:
-                outer = tuple(p for p in key if not inner[p[0]])
-                split = splits[key] = (outer, tuple(p for p in key if inner[p[0]])
-                                       if outer else key)
-            grouped.setdefault((split[0], k), []).append((coef, split[1]))
-    pairs = sorted(grouped, key=lambda pair: (len(pair[0]), pair))
-    return pairs, [grouped[pair] for pair in pairs]
+def _keys(powers) -> tuple[list, np.ndarray]:
+    """The distinct rows of ``powers`` as monomials (sorted tuples of ``(atom, power)``), and
+    each row's position among them."""
+    first, inverse = _unique_rows(powers)
+    distinct = powers[first]
+    rows, atoms = np.nonzero(distinct)
+    pairs = list(zip(atoms.tolist(), distinct[rows, atoms].tolist(), strict=True))
+    bounds = np.searchsorted(rows, np.arange(len(distinct) + 1)).tolist()
+    return [tuple(pairs[bounds[m]:bounds[m + 1]]) for m in range(len(distinct))], inverse
 
 
-def _distinct_polynomials(polynomials) -> tuple[list, np.ndarray, np.ndarray]:
-    """The distinct polynomials up to a factor (a symmetric mass matrix gives the same
-    coefficient function to ``dL/dqd_i`` through ``qd_j`` and to ``dL/dqd_j`` through
-    ``qd_i``): ``(distinct, index, scale)`` with ``polynomials[m] = scale[m] *
-    distinct[index[m]]``."""
-    found: dict = {}
-    distinct, index, scale = [], [], []
-    for terms in polynomials:
-        terms = sorted(terms, key=lambda term: term[1])
-        first = terms[0][0] if terms and terms[0][0] != 0 else 1.0
-        normal = tuple((coef / first, key) for coef, key in terms)
-        position = found.get(normal)
-        if position is None:
-            position = found[normal] = len(distinct)
-            distinct.append(normal)
-        index.append(position)
-        scale.append(first)
-    return distinct, np.array(index, dtype=int), np.array(scale, dtype=float)
+def _ranks(keys) -> np.ndarray:
+    """Each monomial's rank in the order of the tuples."""
+    ranks = np.empty(len(keys), dtype=np.intp)
+    ranks[sorted(range(len(keys)), key=keys.__getitem__)] = np.arange(len(keys))
+    return ranks
 
 
 class _Plan:
     """How to evaluate entries: ``entry = sum over outer monomials u of u times a
     polynomial in the inner atoms``, each distinct polynomial (up to a factor) once.
 
-    Without outer atoms (``inner`` all true or all false) every entry is one polynomial of
-    all the atoms, evaluated as such."""
+    The terms of each entry are grouped by their outer monomial into *pairs* ``(u, entry)``,
+    ordered by ``u`` (fewer atoms first, then as tuples) and entry; the polynomial of a pair
+    is its terms' inner monomials, sorted as tuples, and its coefficients divided by the
+    first one (the polynomials equal up to a factor are one: a symmetric mass matrix gives
+    the same coefficient function to ``dL/dqd_i`` through ``qd_j`` and to ``dL/dqd_j``
+    through ``qd_i``). Without outer atoms (``inner`` all true or all false) every entry is
+    one polynomial of all the atoms, evaluated as such."""
 
-    def __init__(self, entries, inner):
-        self.n_entries = len(entries)
+    def __init__(self, terms: Terms, inner):
+        powers, coefficients, owners, self.n_entries = terms.arrays()
         factor = inner.any() and not inner.all()
-        pairs, polynomials = (_factored(entries, inner) if factor
-                              else ([((), k) for k in range(len(entries))], entries))
-        distinct, self.index, scale = _distinct_polynomials(polynomials)
-        self.values = _MonomialValues({key for terms in distinct for _, key in terms})
-        self.coefficients = _coefficients(distinct, self.values.position)
-        outer_keys = [key for key, _ in pairs]
-        self.outer = _MonomialValues(set(outer_keys) - {()})
-        bounds = [0] + [m for m in range(1, len(pairs)) if outer_keys[m] != outer_keys[m - 1]]
-        bounds.append(len(pairs))
-        self.runs = [(a, b, self.outer.position[outer_keys[a]])
-                     for a, b in zip(bounds[:-1], bounds[1:], strict=True) if outer_keys[a]]
+        # pairs (outer monomial, entry), in order, and each term's pair
+        outer_powers = powers * ~inner if factor else np.zeros((len(powers), 0), np.int16)
+        outer_keys, outer_of = _keys(outer_powers)
+        outer_rank = _ranks([(len(key), key) for key in outer_keys])
+        if factor:
+            codes = outer_rank[outer_of] * max(self.n_entries, 1) + owners
+            pair_codes, pair_of = np.unique(codes, return_inverse=True)
+            pair_outer = np.argsort(outer_rank)[pair_codes // max(self.n_entries, 1)]
+            pair_entry = pair_codes % max(self.n_entries, 1)
+        else:  # one pair per entry, even without terms
+            pair_of, pair_entry = owners, np.arange(self.n_entries)
+            pair_outer = np.zeros(self.n_entries, dtype=np.intp)
+            outer_keys = [()]
+        pair_of = pair_of.ravel()
+        n_pairs = len(pair_entry)
+        # each pair's terms sorted by inner monomial (stable), divided by the first one
+        inner_keys, inner_of = _keys(powers * inner if factor else powers)
+        order = np.lexsort((_ranks(inner_keys)[inner_of], pair_of))
+        pair_sorted, inner_sorted = pair_of[order], inner_of[order]
+        bounds = np.searchsorted(pair_sorted, np.arange(n_pairs + 1))
+        first = np.ones(n_pairs)
+        leading = coefficients[order[bounds[:-1][bounds[:-1] < bounds[1:]]]]
+        first[bounds[:-1] < bounds[1:]] = np.where(leading != 0, leading, 1.0)
+        normal = coefficients[order] / first[pair_sorted]
+        # the distinct polynomials, in order of first appearance
+        found: dict = {}
+        index = np.empty(n_pairs, dtype=np.intp)
+        for m in range(n_pairs):
+            a, b = bounds[m], bounds[m + 1]
+            key = ((normal[a:b] + 0.0).tobytes(), inner_sorted[a:b].tobytes())
+            index[m] = found.setdefault(key, len(found))
+        self.index = index
+        distinct = np.flatnonzero(np.r_[True, np.diff(
+            np.maximum.accumulate(index)) > 0]) if n_pairs else np.zeros(0, np.intp)
+        # the terms of the distinct polynomials, in order
+        sizes = bounds[1:] - bounds[:-1]
+        rows = np.repeat(bounds[distinct] - np.cumsum(sizes[distinct]) + sizes[distinct],
+                         sizes[distinct]) + np.arange(int(sizes[distinct].sum()))
+        polynomial_of = np.repeat(np.arange(len(distinct)), sizes[distinct])
+        wanted_ids = inner_sorted[rows]
+        seen = np.unique(wanted_ids, return_index=True)[1]
+        wanted = {inner_keys[m] for m in wanted_ids[np.sort(seen)].tolist()}
+        self.values = _MonomialValues(wanted)
+        position = np.array([self.values.position[key] for key in inner_keys], dtype=np.intp)
+        self.coefficients = scipy.sparse.csr_matrix(
+            (normal[rows], (polynomial_of, position[wanted_ids])),
+            shape=(len(distinct), self.values.size))
+        keys_of_pairs = [outer_keys[m] for m in pair_outer.tolist()]
+        self.outer = _MonomialValues(set(keys_of_pairs) - {()})
+        cuts = [0] + [m for m in range(1, n_pairs) if pair_outer[m] != pair_outer[m - 1]]
+        cuts.append(n_pairs)
+        self.runs = [(a, b, self.outer.position[keys_of_pairs[a]])
+                     for a, b in zip(cuts[:-1], cuts[1:], strict=True) if keys_of_pairs[a]]
         self.sum = scipy.sparse.csr_matrix(
-            (scale, ([k for _, k in pairs], np.arange(len(pairs)))),
-            shape=(len(entries), len(pairs)))
+            (first, (pair_entry, np.arange(n_pairs))), shape=(self.n_entries, n_pairs))
         # the polynomials are the entries themselves: no gather, scaling nor sum
-        self.direct = (not self.runs and len(distinct) == len(pairs)
-                       and np.array_equal(self.index, np.arange(len(pairs)))
-                       and np.all(scale == 1.0) and [k for _, k in pairs] == list(
-                           range(len(entries))))
+        self.direct = (not self.runs and len(distinct) == n_pairs
+                       and np.array_equal(index, np.arange(n_pairs))
+                       and np.all(first == 1.0)
+                       and np.array_equal(pair_entry, np.arange(self.n_entries)))
         self.size = (self.values.size + self.coefficients.shape[0]
-                     + (0 if self.direct else self.outer.size + 2 * len(pairs)))
+                     + (0 if self.direct else self.outer.size + 2 * n_pairs))
 
     def __call__(self, atom_rows: np.ndarray) -> np.ndarray:
         polynomials = np.asarray(self.coefficients @ self.values(atom_rows))
@@ -285,15 +395,6 @@ class _Plan:
             for a, b, u in self.runs:
                 pairs[a:b] *= outer[u]
         return np.asarray(self.sum @ pairs)
-
-
-def _coefficients(entries, position) -> scipy.sparse.csr_matrix:
-    """Sparse matrix of the entries' coefficients over the monomials at ``position``;
-    duplicate (entry, monomial) pairs are summed, as the terms are."""
-    rows = [k for k, e in enumerate(entries) for _ in e]
-    cols = [position[key] for e in entries for _, key in e]
-    coefs = [c for e in entries for c, _ in e]
-    return scipy.sparse.csr_matrix((coefs, (rows, cols)), shape=(len(entries), len(position)))
 
 
 def compile_terms(variables, terms: Terms):
@@ -320,19 +421,19 @@ def compile_terms(variables, terms: Terms):
 
 def _compile_terms(variables: tuple, terms: Terms):
     position = {v: k for k, v in enumerate(variables)}
-    atom_list, entries = terms.atoms, terms.entries
+    atom_list = terms.atoms
     unknown = set().union(*(a.free_symbols for a in atom_list)) - set(variables)
     if unknown:
         raise ValueError(f"exprs: unknown symbols {sorted(map(str, unknown))}")
     atom_functions = [_atom_function(a, position, variables) for a in atom_list]
-    plan = _Plan(entries, _angle_atoms(atom_list))
+    plan = _Plan(terms, _angle_atoms(atom_list))
     if not plan.direct:  # factored: kept when it builds fewer values than the flat plan
         # (at least one value per distinct monomial; built only when that does not decide)
-        flat_size = len({key for entry in entries for _, key in entry}) + len(entries)
-        if plan.size >= flat_size:
-            flat = _Plan(entries, np.zeros(len(atom_list), dtype=bool))
+        powers, _, _, n_entries = terms.arrays()
+        if plan.size >= len(_unique_rows(powers)[0]) + n_entries:
+            flat = _Plan(terms, np.zeros(len(atom_list), dtype=bool))
             plan = plan if plan.size < flat.size else flat
-    n_entries = len(entries)
+    n_entries = len(terms)
     # blocks of samples keep the values built at once (values x block) near _BLOCK_VALUES
     block = int(np.clip(_BLOCK_VALUES // max(plan.size, 1), 64, _BLOCK))
 

@@ -172,17 +172,12 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         coords = self.coords
         atoms = ([sp.sin(q) if angle else q for q, angle in zip(coords.q, angles, strict=True)]
                  + [sp.cos(q) for q in coords.q] + list(coords.qd) + list(coords.qdd))
-        entries = []
-        pairs: dict = {}  # (slot, power) tuples shared
-        for polynomial in polynomials:
-            rows, slots = np.nonzero(polynomial.exponents)  # row by row, slots increasing
-            powers = polynomial.exponents[rows, slots].tolist()
-            factors = [pairs.setdefault(pair, pair)
-                       for pair in zip(slots.tolist(), powers, strict=True)]
-            bounds = np.searchsorted(rows, np.arange(len(polynomial.coefficients) + 1)).tolist()
-            entries.append([(coef, tuple(factors[bounds[r]:bounds[r + 1]])) for r, coef
-                            in enumerate(polynomial.coefficients.tolist())])
-        return Terms(atoms, entries)
+        sizes = [len(p.coefficients) for p in polynomials]
+        return Terms.from_arrays(
+            atoms, np.vstack([p.exponents for p in polynomials]
+                             + [np.zeros((0, len(atoms)), dtype=np.int16)]),
+            np.concatenate([p.coefficients for p in polynomials] + [np.zeros(0)]),
+            np.repeat(np.arange(len(polynomials)), sizes), len(polynomials))
 
     def to_spec(self) -> dict:
         """JSON description: each term that is a trigonometric polynomial in canonical form as

@@ -36,30 +36,27 @@ def _merged(slices, parts) -> tuple[np.ndarray, Terms]:
 
 def _merge(slices, parts) -> tuple[np.ndarray, Terms]:
     atoms: dict = {}
-    indices, entries = [], []
+    indices, blocks = [], []
     for columns, (index, terms) in zip(slices, parts, strict=True):
         remap = [atoms.setdefault(atom, len(atoms)) for atom in terms.atoms]
-        shifted = np.array(index, dtype=int).reshape(len(terms.entries), -1)
+        shifted = np.array(index, dtype=int).reshape(len(terms), -1)
         shifted[:, -1] += columns.start
         indices.append(shifted)
-        if remap == list(range(len(remap))):  # the first library's atoms: entries as they are
-            entries += terms.entries
-        elif all(np.diff(remap) > 0):  # order kept: no sorting
-            moved: dict = {}  # each distinct monomial remapped once
-
-            def move(key, moved=moved, remap=remap):
-                found = moved.get(key)
-                if found is None:
-                    found = moved[key] = tuple((remap[a], p) for a, p in key)
-                return found
-
-            entries += [[(coef, move(key)) for coef, key in entry] for entry in terms.entries]
-        else:
-            entries += [[(coef, tuple(sorted((remap[a], p) for a, p in key)))
-                         for coef, key in entry] for entry in terms.entries]
+        blocks.append((remap, terms.arrays()))
     width = max((i.shape[1] for i in indices), default=2)
+    powers = np.zeros((sum(len(b[1][1]) for b in blocks), len(atoms)), dtype=np.int16)
+    start, entries = 0, 0
+    coefficients, owners = [], []
+    for remap, (block_powers, block_coefficients, block_owners, n_entries) in blocks:
+        powers[start:start + len(block_coefficients), remap] = block_powers
+        start += len(block_coefficients)
+        coefficients.append(block_coefficients)
+        owners.append(block_owners + entries)
+        entries += n_entries
     return (np.vstack(indices) if indices else np.zeros((0, width), dtype=int),
-            Terms(sorted(atoms, key=atoms.get), entries))
+            Terms.from_arrays(sorted(atoms, key=atoms.get), powers,
+                              np.concatenate(coefficients + [np.zeros(0)]),
+                              np.concatenate(owners + [np.zeros(0, dtype=np.intp)]), entries))
 
 
 def _monomial_coefficients(expr: sp.Expr) -> dict:
@@ -200,8 +197,8 @@ class CatalogRepartition(SymbolicLibrary):
         ordered = terms._memo.get(key)  # shared by clones, with its compiled evaluator
         if ordered is None:
             position = {(int(c), int(j)): k for k, (c, j) in enumerate(index)}
-            ordered = terms._memo[key] = Terms(terms.atoms, [
-                terms.entries[position[(int(c), int(j))]] for c, j in self.entry_index_])
+            ordered = terms._memo[key] = terms.take(
+                [position[(int(c), int(j))] for c, j in self.entry_index_])
         return ordered
 
     def _derive_weak_terms(self):

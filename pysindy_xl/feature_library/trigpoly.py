@@ -22,6 +22,7 @@ __all__ = ["TrigPolynomial", "euler_lagrange_many", "evaluate_many", "state_valu
 
 # Coefficients below this fraction of the largest one are round-off of float arithmetic.
 _ROUND_OFF = 1e-13
+_BLOCK_VALUES = 1 << 21  # factor values gathered at once by evaluate_many
 
 
 class TrigPolynomial:
@@ -235,20 +236,24 @@ class TrigPolynomial:
         # flat products and sum, built without canonicalization (sympy's own constructors;
         # the products of powers and numbers are commutative)
         rows, slots = np.nonzero(self.exponents)  # row by row, slots increasing
-        powers = self.exponents[rows, slots].astype(int)
-        codes = slots * (int(powers.max(initial=1)) + 1) + powers
-        table = np.empty(int(codes.max(initial=0)) + 1, dtype=object)
-        for code in np.unique(codes).tolist():  # each power built once
-            k, e = divmod(code, int(powers.max(initial=1)) + 1)
-            table[code] = atoms[k] if e == 1 else sp.Pow(atoms[k], e)
-        factors = table[codes].tolist()
+        base = int(self.exponents.max(initial=1)) + 1
+        codes, factor = np.unique(slots * base + self.exponents[rows, slots],
+                                  return_inverse=True)
+        table = [atoms[k] if e == 1 else sp.Pow(atoms[k], e)  # each power built once
+                 for k, e in zip((codes // base).tolist(), (codes % base).tolist(),
+                                 strict=True)]
+        factors = [table[f] for f in factor.ravel().tolist()]
+        values, number = np.unique(self.coefficients, return_inverse=True)
+        numbers = [_fast_number(v) for v in values.tolist()]
         bounds = np.searchsorted(rows, np.arange(len(self.coefficients) + 1)).tolist()
+        mul = sp.Mul._from_args
         terms = []
-        for r, value in enumerate(self.coefficients.tolist()):
+        for r, (value, k) in enumerate(zip(self.coefficients.tolist(), number.ravel().tolist(),
+                                           strict=True)):
             row = factors[bounds[r]:bounds[r + 1]]
             if value != 1 or not row:
-                row.insert(0, _fast_number(value))
-            terms.append(sp.Mul._from_args(row, True) if len(row) > 1 else row[0])
+                row.insert(0, numbers[k])
+            terms.append(mul(row, True) if len(row) > 1 else row[0])
         if len(terms) > 1:
             return sp.Add._from_args(terms, True)
         return terms[0] if terms else sp.S.Zero
@@ -281,28 +286,51 @@ def _reduce_cosine_squares(exponents, coefficients, owners, angles):
     """Rewrite ``cos^2 = 1 - sin^2`` until no cosine power reaches 2 (``owners``, if not None,
     follow their rows)."""
     n = len(angles)
-    angle_slots = [n + j for j in range(n) if angles[j]]
-    while angle_slots:
-        high = exponents[:, angle_slots] >= 2
-        if not high.any():
+    angle = np.asarray(angles, dtype=bool)
+    while angle.any():
+        high = (exponents[:, n:2 * n] >= 2) & angle
+        rows = np.flatnonzero(high.any(axis=1))
+        if not len(rows):
             break
-        row, which = np.nonzero(high)
-        first = np.zeros(len(exponents), dtype=bool)
         # one reduction per row and pass: the first angle whose cosine power is >= 2
-        picked_rows, index = np.unique(row, return_index=True)
-        first[picked_rows] = True
-        slot = np.array(angle_slots)[which[index]]
-        base = exponents[picked_rows].copy()
+        slot = n + np.argmax(high[rows], axis=1)
+        first = np.zeros(len(exponents), dtype=bool)
+        first[rows] = True
+        base = exponents[rows]
         base[np.arange(len(base)), slot] -= 2
         with_sine = base.copy()
         with_sine[np.arange(len(base)), slot - n] += 2
         exponents = np.vstack([exponents[~first], base, with_sine])
-        coefficients = np.concatenate([coefficients[~first], coefficients[picked_rows],
-                                       -coefficients[picked_rows]])
+        coefficients = np.concatenate([coefficients[~first], coefficients[rows],
+                                       -coefficients[rows]])
         if owners is not None:
-            owners = np.concatenate([owners[~first], owners[picked_rows],
-                                     owners[picked_rows]])
+            owners = np.concatenate([owners[~first], owners[rows], owners[rows]])
     return exponents, coefficients, owners
+
+
+def _unique_rows(rows) -> tuple[np.ndarray, np.ndarray]:
+    """``(index, inverse)`` of ``numpy.unique`` on the rows of an int16 array read as bytes
+    (first occurrences, rows in the order of their bytes), from one int64 key per row.
+
+    Entries in ``[0, 256)`` compare as bytes as they do as numbers: each column that varies
+    is a digit of a mixed-radix number, the first column most significant. Other entries, or
+    rows whose digits overflow an int64, are compared as bytes.
+    """
+    rows = np.ascontiguousarray(rows, dtype=np.int16)
+    low = rows.min(axis=0, initial=0)
+    high = rows.max(axis=0, initial=0)
+    used = np.flatnonzero(high > low)
+    radix = (high[used] - low[used]).astype(np.int64) + 1
+    if low.min(initial=0) >= 0 and high.max(initial=0) < 256 and np.sum(np.log2(radix)) < 62:
+        keys = np.zeros(len(rows), dtype=np.int64)
+        for column, base in zip(used.tolist(), radix.tolist(), strict=True):
+            keys *= base
+            keys += rows[:, column]
+            keys -= low[column]
+    else:
+        keys = rows.view(np.dtype((np.void, 2 * rows.shape[1]))).ravel()
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    return first, inverse.ravel()
 
 
 def _normalize(exponents, coefficients, angles):
@@ -310,10 +338,8 @@ def _normalize(exponents, coefficients, angles):
     exponents, coefficients, _ = _reduce_cosine_squares(exponents, coefficients, None, angles)
     if len(coefficients) == 0:
         return exponents, coefficients
-    exponents = np.ascontiguousarray(exponents)
-    keys = exponents.view(np.dtype((np.void, exponents.dtype.itemsize * exponents.shape[1])))
-    _, first, inverse = np.unique(keys.ravel(), return_index=True, return_inverse=True)
-    merged = np.bincount(inverse.ravel(), weights=coefficients, minlength=len(first))
+    first, inverse = _unique_rows(exponents)
+    merged = np.bincount(inverse, weights=coefficients, minlength=len(first))
     scale = np.abs(coefficients).max()
     keep = np.abs(merged) > _ROUND_OFF * max(scale, 1.0)
     return exponents[first[keep]], merged[keep]
@@ -419,10 +445,8 @@ def _normalize_owned(exponents, coefficients, owners, angles, count):
     if len(coefficients) == 0:
         return exponents, coefficients, owners
     # the owner first in each key: rows group by owner, and within an owner sort as alone
-    keyed = np.ascontiguousarray(np.column_stack([owners.astype(np.int16), exponents]))
-    keys = keyed.view(np.dtype((np.void, keyed.dtype.itemsize * keyed.shape[1])))
-    _, first, inverse = np.unique(keys.ravel(), return_index=True, return_inverse=True)
-    merged = np.bincount(inverse.ravel(), weights=coefficients, minlength=len(first))
+    first, inverse = _unique_rows(np.column_stack([owners.astype(np.int16), exponents]))
+    merged = np.bincount(inverse, weights=coefficients, minlength=len(first))
     scale = np.zeros(count)
     np.maximum.at(scale, owners, np.abs(coefficients))
     kept_owners = owners[first]
@@ -459,15 +483,25 @@ def evaluate_many(polynomials, values: np.ndarray) -> np.ndarray:
     owner = np.concatenate([np.full(len(p.coefficients), k) for k, p in enumerate(polynomials)]
                            + [np.zeros(0, dtype=int)]).astype(int)
     coefficients = np.concatenate([p.coefficients for p in polynomials] + [np.zeros(0)])
-    exponents = np.ascontiguousarray(exponents.astype(np.int16))
-    keys = exponents.view(np.dtype((np.void, exponents.dtype.itemsize * width))).ravel()
-    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    exponents = exponents.astype(np.int16)
+    first, inverse = _unique_rows(exponents)
     distinct = exponents[first]
+    # a monomial is the product of its factors in the order of their slots (the powers of the
+    # slot values, each computed once), multiplied left to right by a reduction over blocks
+    # of monomials
+    rows, slots = np.nonzero(distinct)  # row by row, slots increasing
+    base = int(distinct.max(initial=0)) + 1
+    codes, factors = np.unique(slots * base + distinct[rows, slots], return_inverse=True)
+    table = values.T[codes // base] ** (codes % base)[:, None]
+    starts = np.searchsorted(rows, np.arange(len(distinct)))
+    used = np.flatnonzero(np.diff(np.append(starts, len(rows))))  # not the constant
     monomials = np.ones((len(distinct), values.shape[0]))  # a row per monomial
-    for slot in np.flatnonzero(distinct.any(axis=0)):
-        powers = distinct[:, slot]
-        used = np.flatnonzero(powers > 0)
-        monomials[used] *= values[None, :, slot] ** powers[used, None]
+    for block in np.array_split(used, -(-len(rows) * values.shape[0] // _BLOCK_VALUES)):
+        if len(block):
+            first_factor = starts[block[0]]
+            stop = starts[block[-1] + 1] if block[-1] + 1 < len(starts) else len(rows)
+            monomials[block] = np.multiply.reduceat(table[factors.ravel()[first_factor:stop]],
+                                                    starts[block] - first_factor, axis=0)
     mapping = scipy.sparse.csr_matrix((coefficients, (inverse.ravel(), owner)),
                                       shape=(len(distinct), len(polynomials)))
     return np.asarray((mapping.T @ monomials).T)

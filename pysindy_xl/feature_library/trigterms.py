@@ -188,7 +188,7 @@ class _Printer:
         for r, value in enumerate(coefficients[rows].tolist()):
             parts = texts[bounds[r]:bounds[r + 1]]
             magnitude = abs(value)
-            if not parts or _number(magnitude) != 1:
+            if not parts or magnitude != 1.0:  # sympy's number 1 is the float 1.0 alone
                 parts.insert(0, self.number(magnitude))
             pieces.append(("-" if value < 0 else "", "*".join(parts)))
         if (len(pieces) == 2 and not exponents[rows[1]].any() and coefficients[rows[1]] > 0
