@@ -189,7 +189,8 @@ def _controls(signals, times, nu: int) -> np.ndarray:
 
 def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None,
                         sample_every: int = 1, progress=None, substeps: int = 1,
-                        control_at: str = "start", integrator: str | None = None) -> Trajectory:
+                        control_at: str = "start", integrator: str | None = None,
+                        mj_model=None) -> Trajectory:
     """Simulate one MuJoCo trajectory and return it in generalized coordinates.
 
     Parameters
@@ -264,7 +265,7 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     duration = check_option("duration", duration, "real", low=0, low_open=True)
     sample_every = check_option("sample_every", sample_every, "int", low=1)
     substeps = check_option("substeps", substeps, "int", low=1)
-    model = system.mj_model()
+    model = system.mj_model() if mj_model is None else mj_model
     data = mujoco.MjData(model)
     n = system.n
     if model.nq != n or model.nv != n:
