@@ -214,8 +214,8 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     """
     import mujoco
 
-    from ..mujoco import kinematic_catalog
     from ..feature_library import stack_variables
+    from ..mujoco import kinematic_catalog
 
     try:
         catalog = kinematic_catalog(system)
@@ -253,8 +253,7 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
         extra = [m for m, v in own.items() if m in _NOT_IN_MJCF and v != 0]
         if extra:
             return None, f"joint {joint!r}: {', '.join(extra)} friction has no MJCF attribute"
-    for j, (joint, coordinate) in enumerate(zip(system.joint_names, system.coordinate_names,
-                                                strict=True)):
+    for joint, coordinate in zip(system.joint_names, system.coordinate_names, strict=True):
         dof = mj.jnt_dofadr[mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_JOINT, joint)]
         own = joints.get(joint)
         viscous, dry = ((own.get("viscous", 0.0), own.get("coulomb", 0.0)) if own is not None

@@ -445,10 +445,11 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
         ``mujoco`` where the model can be stated in MuJoCo, ``model`` otherwise; ``mujoco``
         refuses a model it cannot state. Open loop always uses ``model``.
     **integrator_options
-        Passed to ``model.simulate`` (the ``model`` simulator) (``method``, ``rtol``, ``atol``, ``timeout``...). The
-        default, scipy's ``DOP853`` at tight tolerances, is the accurate path; servos make
-        the closed loop stiff, so it takes thousands of evaluations of the model per second
-        of motion. ``method="ROS2"`` (an L-stable Rosenbrock method,
+        Passed to ``model.simulate`` by the ``model`` simulator (``method``, ``rtol``,
+        ``atol``, ``timeout``...). The default, scipy's ``DOP853`` at tight tolerances, is
+        the accurate path; servos make the closed loop stiff, so it takes thousands of
+        evaluations of the model per second of motion. ``method="ROS2"`` (an L-stable
+        Rosenbrock method,
         :mod:`pysindy_xl.rosenbrock`, steps of at most the MuJoCo model's time step under a
         local error bound of ``1e-3``) takes fewer at a looser accuracy (see
         ``benchmarks/closed_loop_validation.py``).
