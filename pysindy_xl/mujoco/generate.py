@@ -178,9 +178,15 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
     return within_servo_reach(signals, model)
 
 
-def _controls(signals, times, nu: int) -> np.ndarray:
-    """``signals(times)`` checked to shape (len(times), nu)."""
-    values = np.asarray(signals(times), dtype=float)
+def _controls(signals, times, nu: int, substeps: int = 1) -> np.ndarray:
+    """``signals(times)`` checked to shape (len(times), nu); ``times`` in blocks of
+    ``substeps`` evenly spaced ones (a sum of sinusoids is then evaluated on the grid, see
+    :meth:`SumOfSinusoids.on_grid`)."""
+    if isinstance(signals, SumOfSinusoids) and substeps > 1 and len(times) % substeps == 0:
+        step = (times[-1] - times[0]) / (len(times) - 1)
+        values = signals.on_grid(times[::substeps], np.arange(substeps) * step)
+    else:
+        values = np.asarray(signals(times), dtype=float)
     if values.shape != (len(times), nu):
         raise ValueError(f"signals: expected values of shape (n_times, nu={nu}), got "
                          f"{values.shape}")
@@ -338,7 +344,7 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
         if k < n_fine:
             if k % chunk == 0:  # the controls of the next chunk of internal steps
                 ctrl = np.zeros((min(chunk, n_fine - k), model.nu)) if signals is None else \
-                    _controls(signals, fine_times[k:k + chunk] + shift, model.nu)
+                    _controls(signals, fine_times[k:k + chunk] + shift, model.nu, substeps)
             data.ctrl[:] = ctrl[k % chunk]
             mujoco.mj_step(model, data)
         if progress is not None and (k + 1) % (1000 * substeps) == 0:
