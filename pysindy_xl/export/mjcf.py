@@ -174,7 +174,7 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
 
     Bodies get the identified inertial parameters closest to the template's
     (``pi_0 + C^+ (beta - C pi_0)``, any solution of ``C pi = beta`` has the same equations),
-    joints their armature, viscous damping and dry friction (``frictionloss``; MuJoCo's
+    joints their armature, stiffness, viscous damping and dry friction (``frictionloss``; MuJoCo's
     constraint force of that magnitude, where the model has the smooth sign
     ``tanh(qd / eps)``). The result is accepted only if MuJoCo's ``mj_fullM`` and its
     passive minus bias forces (minus ``frictionloss sign(qd)``) equal the model's ``M`` and
@@ -253,14 +253,21 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
         extra = [m for m, v in own.items() if m in _NOT_IN_MJCF and v != 0]
         if extra:
             return None, f"joint {joint!r}: {', '.join(extra)} friction has no MJCF attribute"
+    names = list(model.get_feature_names())
+    scale = -1.0 / next(c for c, name in zip(model.coefficients(), names, strict=True)
+                        if name.startswith("F["))
     for joint, coordinate in zip(system.joint_names, system.coordinate_names, strict=True):
-        dof = mj.jnt_dofadr[mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_JOINT, joint)]
+        index = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_JOINT, joint)
+        dof = mj.jnt_dofadr[index]
         own = joints.get(joint)
         viscous, dry = ((own.get("viscous", 0.0), own.get("coulomb", 0.0)) if own is not None
                         else (parameters["friction"][coordinate]["viscous"],
                               parameters["friction"][coordinate]["dry"]))
         mj.dof_armature[dof] = values.get(f"{joint}.armature", mj.dof_armature[dof])
         mj.dof_damping[dof], mj.dof_frictionloss[dof] = viscous, dry
+        spring = f"C_{coordinate}[{coordinate}]"  # a classical stiffness column, -k q
+        mj.jnt_stiffness[index] = (model.coefficients()[names.index(spring)] * scale
+                                   if spring in names else 0.0)
     data = mujoco.MjData(mj)
     mujoco.mj_setConst(mj, data)
     # the check: MuJoCo's M and f against the model's at random states
