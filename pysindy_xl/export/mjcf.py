@@ -203,14 +203,14 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     >>> import pysindy_xl as px
     >>> from pysindy_xl.mujoco import MJCFSystem, generate_dataset, kinematic_catalog
     >>> system = MJCFSystem('''<mujoco><worldbody><body><joint name="j" axis="0 1 0"
-    ...   damping="0.1"/><geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
-    ...   </body></worldbody><actuator><motor joint="j"/></actuator></mujoco>''')
+    ...   damping="0.1" stiffness="0.5"/><geom type="capsule" fromto="0 0 0 0.3 0 0"
+    ...   size="0.03"/></body></worldbody><actuator><motor joint="j"/></actuator></mujoco>''')
     >>> data = generate_dataset(system, n_trajectories=1, duration=1.0, seed=0,
     ...                         progress=False)
     >>> fitted = px.XLSINDy(kinematic_catalog(system).library(), px.ExplicitOptimizer())
     >>> mj_model, reason = identified_mj_model(fitted.fit(**data.fit_arguments()), system)
-    >>> reason, round(float(mj_model.dof_damping[0]), 3)
-    (None, 0.1)
+    >>> reason, round(float(mj_model.dof_damping[0]), 3), round(float(mj_model.jnt_stiffness[0]), 3)
+    (None, 0.1, 0.5)
     """
     import mujoco
 
