@@ -21,8 +21,9 @@ friction of each joint (``damping`` and ``frictionloss``; the asymmetric, Stribe
 torque-offset models of real joints have no MJCF attribute and are left out).
 
 :func:`identified_mj_model` puts the identified parameters straight into a compiled copy of
-the template (no semidefinite program: the physical parameters closest to the template's,
-``pi = pi_0 + C^+ (beta - C pi_0)``) and accepts it only where MuJoCo then reproduces the
+the template (no semidefinite program: the parameters closest to the template's relative to
+their size, ``pi = pi_0 + W (C W)^+ (beta - C pi_0)`` with ``W = diag(|pi_0|)``, rigid or not:
+MuJoCo's algebra is linear in them) and accepts it only where MuJoCo then reproduces the
 identified equations, ``M(q)`` and ``f(q, qd)`` at random states, to a tight tolerance: the
 model MuJoCo can step in place of the identified equations (closed-loop validation in
 :func:`pysindy_xl.mujoco.validate_model`).
@@ -172,8 +173,9 @@ def to_mjcf(model, path, template) -> dict:
 def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 6, seed=0):
     """The system's compiled MuJoCo model with a fitted model's parameters, or why not.
 
-    Bodies get the identified inertial parameters closest to the template's
-    (``pi_0 + C^+ (beta - C pi_0)``, any solution of ``C pi = beta`` has the same equations),
+    Bodies get the identified inertial parameters closest to the template's, each change
+    relative to the template value (``pi = pi_0 + W (C W)^+ (beta - C pi_0)``,
+    ``W = diag(|pi_0|)``; any solution of ``C pi = beta`` has the same equations),
     joints their armature, stiffness, viscous damping and dry friction (``frictionloss``; MuJoCo's
     constraint force of that magnitude, where the model has the smooth sign
     ``tanh(qd / eps)``). The result is accepted only if MuJoCo's ``mj_fullM`` and its
@@ -225,7 +227,12 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
         return None, f"not a kinematic-catalog model of this system ({error})"
     pi0 = np.asarray(catalog.physical_values, dtype=float)
     combination = np.asarray(catalog.combination, dtype=float)
-    pi = pi0 + np.linalg.lstsq(combination, beta - combination @ pi0, rcond=None)[0]
+    # the least change relative to each template value: a base parameter's correction lands
+    # on the parameters it is made of in proportion to their size (not on a mass it barely
+    # depends on, which the plain least-norm correction can drive negative)
+    weight = np.abs(pi0) + 1e-6 * np.abs(pi0).max()
+    pi = pi0 + weight * np.linalg.lstsq(combination * weight, beta - combination @ pi0,
+                                        rcond=None)[0]
     values = dict(zip(catalog.physical_names, pi, strict=True))
     mj = system.mj_model()
     n = system.n
@@ -235,9 +242,9 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
         name = mujoco.mj_id2name(mj, mujoco.mjtObj.mjOBJ_BODY, body)
         if f"{name}.m" not in values:
             continue
-        mass = values[f"{name}.m"]
-        if not mass > 0:
-            return None, f"body {name!r}: identified mass {mass:.3g} is not positive"
+        mass = values[f"{name}.m"]  # MuJoCo's algebra is linear in it: any sign will do
+        if not abs(mass) > 1e-9 * max(abs(pi0).max(), 1.0):
+            return None, f"body {name!r}: identified mass {mass:.3g} is zero"
         centre = np.array([values[f"{name}.mc{axis}"] for axis in "xyz"]) / mass
         inertia = np.array([[values[f"{name}.I{a}{b}" if f"{name}.I{a}{b}" in values
                                     else f"{name}.I{b}{a}"] for b in "xyz"] for a in "xyz"])
@@ -268,8 +275,9 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
         spring = f"C_{coordinate}[{coordinate}]"  # a classical stiffness column, -k q
         mj.jnt_stiffness[index] = (model.coefficients()[names.index(spring)] * scale
                                    if spring in names else 0.0)
+    # the template's derived constants are kept (mj_setConst not called): the constraint
+    # softness of frictionloss scales with them, as in the reference run
     data = mujoco.MjData(mj)
-    mujoco.mj_setConst(mj, data)
     # the check: MuJoCo's M and f against the model's at random states
     rng = np.random.default_rng(seed)
     q = rng.uniform(-np.pi, np.pi, (n_states, n))
