@@ -254,6 +254,9 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
             axes[:, 0] = -axes[:, 0]
         mujoco.mju_mat2Quat(mj.body_iquat[body], np.ascontiguousarray(axes).reshape(-1))
         mj.body_mass[body], mj.body_ipos[body], mj.body_inertia[body] = mass, centre, moments
+        # the inertial frame is no longer the body's own, nor is the inertia diagonal
+        mj.body_sameframe[body] = mj.body_simple[body] = 0
+    mj.dof_simplenum[:] = 0
     parameters = model.physical_parameters()
     joints = parameters.get("joint_friction", {})
     for joint, own in joints.items():
