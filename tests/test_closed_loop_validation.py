@@ -269,3 +269,9 @@ def test_models_mujoco_cannot_state_fall_back(servo_arm):
         validate_model(stale, system, trajectory=reference, simulator="mujoco")
     with pytest.raises(ValueError, match="simulator: expected"):
         validate_model(model, system, trajectory=reference, simulator="jax")
+    # an indefinite mass matrix: MuJoCo cannot factor it, the model is not stepped there
+    indefinite = copy.deepcopy(model)
+    indefinite.coef_[indefinite.get_feature_names().index("L[0.5*wrist_dot**2]")] -= 1.0
+    indefinite._build_dynamics()
+    mj_model, reason = identified_mj_model(indefinite, system)
+    assert mj_model is None and "not positive definite" in reason

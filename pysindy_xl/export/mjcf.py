@@ -181,8 +181,9 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     ``tanh(qd / eps)``). The result is accepted only if MuJoCo's ``mj_fullM`` and its
     passive minus bias forces (minus ``frictionloss sign(qd)``) equal the model's ``M`` and
     ``f`` at ``n_states`` random states (velocities far from zero, where the smooth sign is
-    one) within ``tolerance`` of their largest entries: models with terms MJCF cannot state
-    (other catalogs, held coordinates, joint offsets, asymmetric friction) are refused.
+    one) within ``tolerance`` of their largest entries, and only with a positive definite
+    ``M`` there (MuJoCo factors it): models with terms MJCF cannot state (other catalogs, held
+    coordinates, joint offsets, asymmetric friction) are refused.
 
     Parameters
     ----------
@@ -287,6 +288,9 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     qd = rng.uniform(0.5, 1.5, (n_states, n)) * rng.choice([-1.0, 1.0], (n_states, n))
     mass, force = dynamics.mass_and_forcing(stack_variables(q, qd, None, np.zeros((n_states, n)),
                                                             np.zeros(n_states)))
+    if not np.all(np.linalg.eigvalsh(mass)[:, 0] > 0):
+        return None, ("the identified mass matrix is not positive definite: MuJoCo cannot "
+                      "factor it")
     matrix = system.force_matrix()
     qpos, qvel = system.from_generalized(q, qd)
     full = np.zeros((n, n))
