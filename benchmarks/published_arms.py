@@ -37,6 +37,7 @@ def run_arm(arm: str, timeout: float, extra: list[str]) -> dict:
     command = [sys.executable, "-m", "pysindy_xl.cli", "demo", os.path.join(MODELS, f"{arm}.xml"),
                "--noise", "0.01", "--no-plots", "--quiet", "--out", out, *extra]
     env = dict(os.environ, PYTHONPATH=os.path.dirname(HERE))
+    load_before = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
     start = time.perf_counter()
     try:
         done = subprocess.run(command, capture_output=True, text=True, timeout=timeout, env=env)
@@ -44,7 +45,9 @@ def run_arm(arm: str, timeout: float, extra: list[str]) -> dict:
     except subprocess.TimeoutExpired:
         code, tail = "timeout", ""
     record = {"arm": arm, "exit": code, "time_s": time.perf_counter() - start,
-              "options": ["--noise", "0.01", *extra]}
+              "options": ["--noise", "0.01", *extra],
+              "load_average": [load_before,
+                               os.getloadavg()[0] if hasattr(os, "getloadavg") else None]}
     path = os.path.join(out, "report.json")
     if os.path.exists(path):
         with open(path, encoding="utf-8") as handle:
@@ -54,6 +57,7 @@ def run_arm(arm: str, timeout: float, extra: list[str]) -> dict:
         record.update(
             valid=validation.get("valid"), failure=validation.get("failure"),
             drive=validation.get("drive"), force_error=validation.get("force_error"),
+            simulator=validation.get("simulator"),
             position_rmse=validation.get("position_rmse"),
             mass_error=physics.get("mass_error"), gravity_error=physics.get("gravity_error"),
             peak_velocity=max(peak.values()) if peak else None,
@@ -82,6 +86,22 @@ def table(records) -> str:
     return "\n".join(lines)
 
 
+def details(records) -> str:
+    """Per arm: the closed-loop force error, who simulated the model, the phases' times and
+    the machine's load average (1 min) before and after the run."""
+    lines = ["| arm | force error | simulator | generate / identify / validate (s) | load "
+             "before, after | failure |", "|---|---|---|---|---|---|"]
+    for r in records:
+        times = r.get("timings") or {}
+        phases = " / ".join(f"{times[k]:.0f}" if k in times else "-"
+                            for k in ("generate", "identify", "validate"))
+        load = ", ".join("-" if v is None else f"{v:.1f}" for v in r.get("load_average", ()))
+        failure = r.get("failure") or r.get("error") or "-"
+        lines.append(f"| {r['arm']} | {_cell(r.get('force_error'), '{:.4f}')} | "
+                     f"{r.get('simulator') or '-'} | {phases} | {load} | {failure} |")
+    return "\n".join(lines)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("arms", nargs="*", default=list(ARMS))
@@ -98,11 +118,13 @@ def main(argv=None):
         os.makedirs(RESULTS, exist_ok=True)
         with open(os.path.join(RESULTS, "published_arms.jsonl"), "a", encoding="utf-8") as f:
             f.write(json.dumps(record) + "\n")
-    text = table(records)
+    text = table(records) + "\n\n" + details(records)
     print(text)
     with open(os.path.join(RESULTS, "published_arms.md"), "w", encoding="utf-8") as handle:
         handle.write("# `pysindy-xl demo ARM.xml --noise 0.01` on published arms\n\n"
-                     f"Options: {' '.join(['--noise', '0.01', *extra])}. {args.label}\n\n"
+                     f"Options: {' '.join(['--noise', '0.01', *extra])}. {args.label}\n"
+                     f"Machine: {os.cpu_count()} cores, shared with other jobs; the load "
+                     "average of each run is in the second table (wall times grow with it).\n\n"
                      + text + "\n")
 
 

@@ -226,3 +226,52 @@ def test_drive_errors(servo_arm):
     with pytest.raises(ValueError, match="drive: closed loop .*no controls"):
         validate_model(model, system, trajectory=reference, drive="closed-loop")
     assert validate_model(model, system, trajectory=reference).drive == "open-loop"
+
+
+def test_mujoco_and_model_simulators_agree(servo_arm, exact_closed_loop):
+    """MuJoCo stepping the identified parameters and scipy integrating the identified
+    equations are the same closed loop: the exact model and a wrong one get the same
+    trajectories and verdicts from both."""
+    system, model = servo_arm
+    reference, fast = exact_closed_loop
+    assert fast.simulator == "mujoco" and fast.to_dict()["simulator"] == "mujoco"
+    slow = validate_model(model, system, trajectory=reference, simulator="model")
+    assert slow.simulator == "model" and slow.valid and fast.valid
+    n = system.n
+    assert np.abs(fast.prediction[:, :n] - slow.prediction[:, :n]).max() < 1e-5
+    assert np.abs(fast.prediction[:, n:] - slow.prediction[:, n:]).max() < 1e-3
+    wrong = copy.deepcopy(model)
+    wrong.coef_[wrong.get_feature_names().index("L[0.5*shoulder_dot**2]")] *= 1.3
+    wrong._build_dynamics()
+    results = [validate_model(wrong, system, trajectory=reference, simulator=simulator)
+               for simulator in ("mujoco", "model")]
+    assert [r.simulator for r in results] == ["mujoco", "model"]
+    assert not any(r.valid for r in results)
+    gap = np.abs(results[0].prediction - results[1].prediction)
+    assert gap[:, :n].max() < 1e-4 * np.abs(reference.q).max()
+    assert results[0].force_error == pytest.approx(results[1].force_error, rel=1e-3)
+
+
+def test_models_mujoco_cannot_state_fall_back(servo_arm):
+    """A model whose equations MuJoCo does not reproduce (here: equations that no longer
+    match its coefficients) is integrated by its own simulator; asking for MuJoCo is an
+    error."""
+    from pysindy_xl.export.mjcf import identified_mj_model
+
+    system, model = servo_arm
+    reference = validation_trajectory(system, duration=0.2, seed=1)
+    stale = copy.deepcopy(model)  # coefficients changed, equations not rebuilt: they differ
+    stale.coef_[stale.get_feature_names().index("L[0.5*shoulder_dot**2]")] *= 1.3
+    mj_model, reason = identified_mj_model(stale, system)
+    assert mj_model is None and "differs from the model" in reason
+    assert validate_model(stale, system, trajectory=reference).simulator == "model"
+    with pytest.raises(ValueError, match="simulator: MuJoCo cannot step this model"):
+        validate_model(stale, system, trajectory=reference, simulator="mujoco")
+    with pytest.raises(ValueError, match="simulator: expected"):
+        validate_model(model, system, trajectory=reference, simulator="jax")
+    # an indefinite mass matrix: MuJoCo cannot factor it, the model is not stepped there
+    indefinite = copy.deepcopy(model)
+    indefinite.coef_[indefinite.get_feature_names().index("L[0.5*wrist_dot**2]")] -= 1.0
+    indefinite._build_dynamics()
+    mj_model, reason = identified_mj_model(indefinite, system)
+    assert mj_model is None and "not positive definite" in reason

@@ -132,8 +132,8 @@ def build_parser() -> argparse.ArgumentParser:
                            "exclude them from the regression, pass the recorded constraint "
                            "forces as known forces, or include them unchanged (default: "
                            "exclude)")
-    demo.add_argument("--validation-duration", type=_positive_float, default=10.0,
-                      help="seconds of the validation trajectory (default: 10)")
+    demo.add_argument("--validation-duration", type=_positive_float, default=4.0,
+                      help="seconds of the validation trajectory (default: 4)")
     demo.add_argument("--out", default="pysindy-xl-demo", metavar="DIR",
                       help="output directory for report.json and plots (default: "
                            "./pysindy-xl-demo)")

@@ -19,13 +19,21 @@ and armatures are non-negative. :func:`consistent_parameters` solves the semidef
 :func:`write_mjcf` writes them into the template's MJCF with the identified viscous and dry
 friction of each joint (``damping`` and ``frictionloss``; the asymmetric, Stribeck and
 torque-offset models of real joints have no MJCF attribute and are left out).
+
+:func:`identified_mj_model` puts the identified parameters straight into a compiled copy of
+the template (no semidefinite program: the parameters closest to the template's relative to
+their size, ``pi = pi_0 + W (C W)^+ (beta - C pi_0)`` with ``W = diag(|pi_0|)``, rigid or not:
+MuJoCo's algebra is linear in them) and accepts it only where MuJoCo then reproduces the
+identified equations, ``M(q)`` and ``f(q, qd)`` at random states, to a tight tolerance: the
+model MuJoCo can step in place of the identified equations (closed-loop validation in
+:func:`pysindy_xl.mujoco.validate_model`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["consistent_parameters", "write_mjcf", "to_mjcf"]
+__all__ = ["consistent_parameters", "write_mjcf", "to_mjcf", "identified_mj_model"]
 
 #: Joint models MJCF cannot state (left out of the file, listed in ``dropped``).
 _NOT_IN_MJCF = ("asymmetric", "stribeck", "offset")
@@ -164,3 +172,143 @@ def to_mjcf(model, path, template) -> dict:
     return {"physical_parameters": dict(zip(catalog.physical_names, pi.tolist(), strict=True)),
             "residual": residual,
             "dropped": {joint: values for joint, values in dropped.items() if values}}
+
+
+def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 6, seed=0):
+    """The system's compiled MuJoCo model with a fitted model's parameters, or why not.
+
+    Bodies get the identified inertial parameters closest to the template's, each change
+    relative to the template value (``pi = pi_0 + W (C W)^+ (beta - C pi_0)``,
+    ``W = diag(|pi_0|)``; any solution of ``C pi = beta`` has the same equations),
+    joints their armature, stiffness, viscous damping and dry friction (``frictionloss``; MuJoCo's
+    constraint force of that magnitude, where the model has the smooth sign
+    ``tanh(qd / eps)``). The result is accepted only if MuJoCo's ``mj_fullM`` and its
+    passive minus bias forces (minus ``frictionloss sign(qd)``) equal the model's ``M`` and
+    ``f`` at ``n_states`` random states (velocities far from zero, where the smooth sign is
+    one) within ``tolerance`` of their largest entries, and only with a positive definite
+    ``M`` there (MuJoCo factors it): models with terms MJCF cannot state (other catalogs, held
+    coordinates, joint offsets, asymmetric friction) are refused.
+
+    Parameters
+    ----------
+    model : fitted XLSINDy
+        Fitted with ``kinematic_catalog(system).library()`` (or a catalog with its terms).
+    system : MJCFSystem
+        The template the model was identified on.
+    tolerance : float, default 1e-6
+    n_states : int, default 6
+    seed : int, optional
+
+    Returns
+    -------
+    mj_model : mujoco.MjModel or None
+    reason : str or None
+        Why the model cannot be stated in MuJoCo (None when it can).
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> from pysindy_xl.mujoco import MJCFSystem, generate_dataset, kinematic_catalog
+    >>> system = MJCFSystem('''<mujoco><worldbody><body><joint name="j" axis="0 1 0"
+    ...   damping="0.1" stiffness="0.5"/><geom type="capsule" fromto="0 0 0 0.3 0 0"
+    ...   size="0.03"/></body></worldbody><actuator><motor joint="j"/></actuator></mujoco>''')
+    >>> data = generate_dataset(system, n_trajectories=1, duration=1.0, seed=0,
+    ...                         progress=False)
+    >>> fitted = px.XLSINDy(kinematic_catalog(system).library(), px.ExplicitOptimizer())
+    >>> mj_model, reason = identified_mj_model(fitted.fit(**data.fit_arguments()), system)
+    >>> reason, round(float(mj_model.dof_damping[0]), 3), round(float(mj_model.jnt_stiffness[0]), 3)
+    (None, 0.1, 0.5)
+    """
+    from ..feature_library import stack_variables
+    from ..mujoco import import_mujoco, kinematic_catalog
+
+    mujoco = import_mujoco()
+
+    try:
+        catalog = kinematic_catalog(system)
+        beta = catalog.lagrange_coefficients(model)
+        dynamics = model._require_dynamics()
+    except (ValueError, TypeError, AttributeError) as error:
+        return None, f"not a kinematic-catalog model of this system ({error})"
+    pi0 = np.asarray(catalog.physical_values, dtype=float)
+    combination = np.asarray(catalog.combination, dtype=float)
+    # the least change relative to each template value: a base parameter's correction lands
+    # on the parameters it is made of in proportion to their size (not on a mass it barely
+    # depends on, which the plain least-norm correction can drive negative)
+    weight = np.abs(pi0) + 1e-6 * np.abs(pi0).max()
+    pi = pi0 + weight * np.linalg.lstsq(combination * weight, beta - combination @ pi0,
+                                        rcond=None)[0]
+    values = dict(zip(catalog.physical_names, pi, strict=True))
+    mj = system.mj_model()
+    n = system.n
+    if mj.nv != n or mj.nq != n or mj.neq:
+        return None, "the MJCF has free, ball or equality-constrained joints"
+    for body in range(1, mj.nbody):
+        name = mujoco.mj_id2name(mj, mujoco.mjtObj.mjOBJ_BODY, body)
+        if f"{name}.m" not in values:
+            continue
+        mass = values[f"{name}.m"]  # MuJoCo's algebra is linear in it: any sign will do
+        if not abs(mass) > 1e-9 * max(abs(pi0).max(), 1.0):
+            return None, f"body {name!r}: identified mass {mass:.3g} is zero"
+        centre = np.array([values[f"{name}.mc{axis}"] for axis in "xyz"]) / mass
+        inertia = np.array([[values[f"{name}.I{a}{b}" if f"{name}.I{a}{b}" in values
+                                    else f"{name}.I{b}{a}"] for b in "xyz"] for a in "xyz"])
+        inertia = inertia - mass * (centre @ centre * np.eye(3) - np.outer(centre, centre))
+        moments, axes = np.linalg.eigh(inertia)  # a rotation: MuJoCo's principal axes
+        if np.linalg.det(axes) < 0:
+            axes[:, 0] = -axes[:, 0]
+        mujoco.mju_mat2Quat(mj.body_iquat[body], np.ascontiguousarray(axes).reshape(-1))
+        mj.body_mass[body], mj.body_ipos[body], mj.body_inertia[body] = mass, centre, moments
+        # the inertial frame is no longer the body's own, nor is the inertia diagonal
+        mj.body_sameframe[body] = mj.body_simple[body] = 0
+    mj.dof_simplenum[:] = 0
+    parameters = model.physical_parameters()
+    joints = parameters.get("joint_friction", {})
+    for joint, own in joints.items():
+        extra = [m for m, v in own.items() if m in _NOT_IN_MJCF and v != 0]
+        if extra:
+            return None, f"joint {joint!r}: {', '.join(extra)} friction has no MJCF attribute"
+    names = list(model.get_feature_names())
+    scale = -1.0 / next(c for c, name in zip(model.coefficients(), names, strict=True)
+                        if name.startswith("F["))
+    for joint, coordinate in zip(system.joint_names, system.coordinate_names, strict=True):
+        index = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_JOINT, joint)
+        dof = mj.jnt_dofadr[index]
+        own = joints.get(joint)
+        viscous, dry = ((own.get("viscous", 0.0), own.get("coulomb", 0.0)) if own is not None
+                        else (parameters["friction"][coordinate]["viscous"],
+                              parameters["friction"][coordinate]["dry"]))
+        mj.dof_armature[dof] = values.get(f"{joint}.armature", mj.dof_armature[dof])
+        mj.dof_damping[dof], mj.dof_frictionloss[dof] = viscous, dry
+        spring = f"C_{coordinate}[{coordinate}]"  # a classical stiffness column, -k q
+        mj.jnt_stiffness[index] = (model.coefficients()[names.index(spring)] * scale
+                                   if spring in names else 0.0)
+    # the template's derived constants are kept (mj_setConst not called): the constraint
+    # softness of frictionloss scales with them, as in the reference run
+    data = mujoco.MjData(mj)
+    # the check: MuJoCo's M and f against the model's at random states
+    rng = np.random.default_rng(seed)
+    q = rng.uniform(-np.pi, np.pi, (n_states, n))
+    qd = rng.uniform(0.5, 1.5, (n_states, n)) * rng.choice([-1.0, 1.0], (n_states, n))
+    mass, force = dynamics.mass_and_forcing(stack_variables(q, qd, None, np.zeros((n_states, n)),
+                                                            np.zeros(n_states)))
+    if not np.all(np.linalg.eigvalsh(mass)[:, 0] > 0):
+        return None, ("the identified mass matrix is not positive definite: MuJoCo cannot "
+                      "factor it")
+    matrix = system.force_matrix()
+    qpos, qvel = system.from_generalized(q, qd)
+    full = np.zeros((n, n))
+    for k in range(n_states):
+        data.qpos[:], data.qvel[:] = qpos[k], qvel[k]
+        mujoco.mj_forward(mj, data)
+        mujoco.mj_fullM(mj, data, full)
+        mj_force = (data.qfrc_passive - data.qfrc_bias
+                    - mj.dof_frictionloss * np.sign(data.qvel))
+        mass_gap = np.abs(matrix @ full @ matrix.T - mass[k]).max() / np.abs(mass[k]).max()
+        force_gap = np.abs(matrix @ mj_force - force[k]).max() / max(
+            np.abs(force[k]).max(), 1e-12)
+        if not (mass_gap <= tolerance and force_gap <= tolerance):
+            return None, (f"MuJoCo with the identified parameters differs from the model "
+                          f"(mass matrix {mass_gap:.2g}, forces {force_gap:.2g}): a term "
+                          "MJCF cannot state")
+    return mj, None

@@ -173,9 +173,15 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
     return within_servo_reach(signals, model)
 
 
-def _controls(signals, times, nu: int) -> np.ndarray:
-    """``signals(times)`` checked to shape (len(times), nu)."""
-    values = np.asarray(signals(times), dtype=float)
+def _controls(signals, times, nu: int, substeps: int = 1) -> np.ndarray:
+    """``signals(times)`` checked to shape (len(times), nu); ``times`` in blocks of
+    ``substeps`` evenly spaced ones (a sum of sinusoids is then evaluated on the grid, see
+    :meth:`SumOfSinusoids.on_grid`)."""
+    if isinstance(signals, SumOfSinusoids) and substeps > 1 and len(times) % substeps == 0:
+        step = (times[-1] - times[0]) / (len(times) - 1)
+        values = signals.on_grid(times[::substeps], np.arange(substeps) * step)
+    else:
+        values = np.asarray(signals(times), dtype=float)
     if values.shape != (len(times), nu):
         raise ValueError(f"signals: expected values of shape (n_times, nu={nu}), got "
                          f"{values.shape}")
@@ -184,7 +190,8 @@ def _controls(signals, times, nu: int) -> np.ndarray:
 
 def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None,
                         sample_every: int = 1, progress=None, substeps: int = 1,
-                        control_at: str = "start", integrator: str | None = None) -> Trajectory:
+                        control_at: str = "start", integrator: str | None = None,
+                        mj_model=None) -> Trajectory:
     """Simulate one MuJoCo trajectory and return it in generalized coordinates.
 
     Parameters
@@ -259,7 +266,7 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     duration = check_option("duration", duration, "real", low=0, low_open=True)
     sample_every = check_option("sample_every", sample_every, "int", low=1)
     substeps = check_option("substeps", substeps, "int", low=1)
-    model = system.mj_model()
+    model = system.mj_model() if mj_model is None else mj_model
     data = mujoco.MjData(model)
     n = system.n
     if model.nq != n or model.nv != n:
@@ -332,7 +339,7 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
         if k < n_fine:
             if k % chunk == 0:  # the controls of the next chunk of internal steps
                 ctrl = np.zeros((min(chunk, n_fine - k), model.nu)) if signals is None else \
-                    _controls(signals, fine_times[k:k + chunk] + shift, model.nu)
+                    _controls(signals, fine_times[k:k + chunk] + shift, model.nu, substeps)
             data.ctrl[:] = ctrl[k % chunk]
             mujoco.mj_step(model, data)
         if progress is not None and (k + 1) % (1000 * substeps) == 0:
