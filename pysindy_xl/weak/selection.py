@@ -57,6 +57,10 @@ MARGIN = 0.05
 #: two large, uncertain numbers).
 NOISE_SHARE = 0.5
 
+#: Time blocks per trajectory, tried in turn until every candidate can be fitted outside
+#: each block (wide test functions on short data leave few rows outside five blocks).
+BLOCK_COUNTS = (5, 3)
+
 #: Widths of the force-noise candidates, in multiples of the scoring width.
 FORCE_NOISE_WIDTHS = (1.0, 2.0, 4.0)
 
@@ -121,7 +125,8 @@ def time_folds(supports: np.ndarray, spans: np.ndarray, n_blocks: int):
     return fit, held
 
 
-def choose_noise_model(candidates, reference, spans, force_columns, solve, n_blocks=5):
+def choose_noise_model(candidates, reference, spans, force_columns, solve,
+                       n_blocks=BLOCK_COUNTS):
     """The candidate whose fits predict held-out time blocks best, if significantly better
     than the first.
 
@@ -141,7 +146,9 @@ def choose_noise_model(candidates, reference, spans, force_columns, solve, n_blo
         The columns of the forces.
     solve : callable
         ``solve(rows, noise, weigh) -> coef``: the fit of one candidate on some rows.
-    n_blocks : int, default 5
+    n_blocks : int or sequence of int, default :data:`BLOCK_COUNTS`
+        Time blocks per trajectory; of several counts, the first at which every candidate
+        has more rows outside each block than columns and every block holds scoring rows.
 
     Returns
     -------
@@ -150,24 +157,29 @@ def choose_noise_model(candidates, reference, spans, force_columns, solve, n_blo
         beat the first by :data:`MARGIN` in total and on more than half of the blocks,
         while the noise of the positions makes up less than :data:`NOISE_SHARE` of the
         first's held-out residual; else 0. None when the data are too short to hold out
-        blocks (some fold would fit on fewer rows than it has columns).
+        blocks at any of the counts.
     errors : list of float
         Each candidate's held-out relative error (``inf`` where a fold's fit failed).
     """
     rows_ref, supports_ref, noise_ref = reference
     n_coordinates = rows_ref.shape[0] // len(supports_ref)
+
+    def feasible(count):
+        return (time_folds(supports_ref, spans, count)[1].any(axis=1).all()
+                and all((time_folds(supports, spans, count)[0].sum(axis=1) * n_coordinates
+                         >= rows.shape[1]).all() for _, rows, supports, _ in candidates))
+
+    n_blocks = next((int(count) for count in np.atleast_1d(n_blocks) if feasible(count)), None)
+    if n_blocks is None:
+        return None, []
     _, held = time_folds(supports_ref, spans, n_blocks)
     held_rows = np.tile(held, n_coordinates)
     force = np.asarray(force_columns, dtype=int)
-    if not held.any(axis=1).all():
-        return None, []
     residuals = np.full((len(candidates), n_blocks), np.inf)
     forces = np.ones((len(candidates), n_blocks))
     noisy = np.zeros((len(candidates), n_blocks))
     for c, (model, rows, supports, noise) in enumerate(candidates):
         fit, _ = time_folds(supports, spans, n_blocks)
-        if (fit.sum(axis=1) * n_coordinates < rows.shape[1]).any():
-            return None, []
         fit_rows = np.tile(fit, n_coordinates)
         for k in range(n_blocks):
             try:
