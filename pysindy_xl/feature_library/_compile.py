@@ -117,6 +117,9 @@ class Terms:
         return {"atoms": self.atoms, "_entries": self._entries, "_arrays": self._arrays,
                 "_memo": {}}
 
+    def __setstate__(self, state):  # states of either form, or of the tuple form only
+        self.__dict__.update({"_entries": None, "_arrays": None, "_memo": {}, **state})
+
 
 def _entries_of(powers, coefficients, owners, n_entries) -> list:
     """The lists of ``(coefficient, monomial)`` of terms held as arrays."""
