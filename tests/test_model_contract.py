@@ -150,6 +150,6 @@ def test_a_positions_only_fit_enters_the_model_module_once():
         sys.setprofile(None)
     assert entries == ["fit"]
     # what returns into model.py: the option checks and the steps of the fit stage
-    assert returns <= {"_validation.py", "fit/trajectories.py", "fit/build.py", "fit/noise_model.py",
-                       "fit/solve.py", "fit/wrap.py"}, returns
+    assert returns <= {"_validation.py", "fit/trajectories.py", "fit/build.py",
+                       "fit/noise_model.py", "fit/solve.py", "fit/wrap.py"}, returns
     assert model.formulation_ == "weak" and model.dynamics_ is not None
