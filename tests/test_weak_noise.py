@@ -85,7 +85,7 @@ def test_moments_are_those_of_the_draws(cart_pole_system):
     parts = [weak_regression(library, [trajectory], px.BumpTestFunctions(),
                              px.WhittakerSmoother(), noise=kind) for kind in ("moments", "draws")]
     np.testing.assert_allclose(parts[0][2], parts[1][2].moments(), rtol=1e-12)
-    with pytest.raises(ValueError, match="noise: expected 'moments' or 'draws'"):
+    with pytest.raises(ValueError, match="noise: expected 'moments', 'draws' or 'none'"):
         weak_regression(library, [trajectory], px.BumpTestFunctions(), px.WhittakerSmoother(),
                         noise="both")
 

@@ -113,7 +113,7 @@ def time_folds(supports: np.ndarray, spans: np.ndarray, n_blocks: int):
     >>> supports = np.array([[0, 0.0, 0.4], [0, 0.3, 0.7], [0, 0.6, 1.0]])
     >>> fit, held = time_folds(supports, np.array([[0.0, 1.0]]), 2)
     >>> fit.astype(int).tolist(), held.astype(int).tolist()
-    [[0, 0, 1], [1, 0, 0]]
+    ([[0, 0, 1], [1, 0, 0]], [[1, 0, 0], [0, 0, 1]])
     """
     trajectory = supports[:, 0].astype(int)
     start, stop = spans[trajectory, 0], spans[trajectory, 1]
