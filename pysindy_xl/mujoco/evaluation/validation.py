@@ -588,9 +588,10 @@ def _mujoco_closed_loop(model, system, trajectory, substeps, required):
     """``(states, failure)`` of the identified model stepped by MuJoCo under the MJCF's
     actuators and the reference's controls (module docstring), or None where MuJoCo cannot
     state the model (a ValueError when ``required``)."""
-    import mujoco
+    from ...export.mjcf import identified_mj_model
+    from .. import import_mujoco
 
-    from ..export.mjcf import identified_mj_model
+    mujoco = import_mujoco()
 
     mj, reason = identified_mj_model(model, system)
     t = trajectory.t
