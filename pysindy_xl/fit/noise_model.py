@@ -16,7 +16,7 @@ import hashlib
 import numpy as np
 from sklearn.base import clone
 
-from ..optimizers import catalog_tags
+from ..optimizers import EnsembleOptimizer, catalog_tags
 from ..weak import BumpTestFunctions, WhittakerSmoother
 from ..weak.selection import (
     FORCE_NOISE_WIDTHS,
@@ -52,6 +52,19 @@ class _RememberedSmoother:
         return self.smoothed[key]
 
 
+def _unbagged(optimizer):
+    """``optimizer`` (unfitted) with any :class:`~pysindy_xl.EnsembleOptimizer` inside it
+    replaced by its base optimizer: the fits on time blocks compare noise models, for which
+    one fit stands for the bag's point estimate at a twentieth of the cost."""
+    if isinstance(optimizer, EnsembleOptimizer):
+        return _unbagged(optimizer.optimizer)
+    params = optimizer.get_params(deep=False) if hasattr(optimizer, "get_params") else {}
+    inner = params.get("optimizer")
+    if inner is not None and hasattr(inner, "get_params"):
+        return clone(optimizer).set_params(optimizer=_unbagged(inner))
+    return clone(optimizer)
+
+
 def _applies(problem, residual_covariance, test_functions) -> bool:
     origin = problem.catalog_map
     return (residual_covariance == "auto" and test_functions is None
@@ -78,7 +91,7 @@ def choose_noise_model(problem, library, data, optimizer, smoother=None,
     data : list of dict
         The trajectories the problem was built from.
     optimizer : catalog optimizer
-        Cloned for each fit on time blocks.
+        Cloned for each fit on time blocks, without bagging (an ensemble's base optimizer).
     smoother, residual_covariance, test_functions
         The estimator's settings.
 
@@ -123,7 +136,7 @@ def choose_noise_model(problem, library, data, optimizer, smoother=None,
             problem, theta=rows, row_noise=noise,
             noise_moments=None if noise is None else noise.moments(),
             noise_draws=None if noise is None else noise.draws)
-        return solve(clone(optimizer), part, weigh=weigh).coef_
+        return solve(_unbagged(optimizer), part, weigh=weigh).coef_
 
     spans = np.array([[d["t"][0], d["t"][-1]] for d in data])
     best, errors = choose_candidate(
