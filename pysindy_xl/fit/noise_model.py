@@ -56,8 +56,8 @@ def _unbagged(optimizer):
     """``optimizer`` (unfitted) with any :class:`~pysindy_xl.EnsembleOptimizer` inside it
     replaced by its base optimizer: the fits on time blocks compare noise models, for which
     one fit stands for the bag's point estimate at a twentieth of the cost."""
-    if isinstance(optimizer, EnsembleOptimizer):
-        return _unbagged(optimizer.optimizer)
+    if isinstance(optimizer, EnsembleOptimizer):  # its pilot: one fit of its base
+        return _unbagged(optimizer.pilot())
     params = optimizer.get_params(deep=False) if hasattr(optimizer, "get_params") else {}
     inner = params.get("optimizer")
     if inner is not None and hasattr(inner, "get_params"):
