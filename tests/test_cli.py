@@ -26,7 +26,7 @@ def test_readme_demo_cart_pole(tmp_path, capsys):
     report = read_report(tmp_path)
     assert report["validation"]["valid"] is True
     assert report["validation"]["position_rmse"] < 0.01
-    assert report["validation"]["horizon"] == pytest.approx(10.0)
+    assert report["validation"]["horizon"] == pytest.approx(4.0)  # the demo's default
     assert report["coefficient_summary"]["support_recovered"] is True
     assert report["coefficient_summary"]["max_relative_error"] < 1e-6
     assert (tmp_path / "validation.png").stat().st_size > 10_000
