@@ -11,7 +11,12 @@ from scipy.integrate import solve_ivp
 
 import pysindy_xl as px
 from pysindy_xl.weak import WeakNoise
-from pysindy_xl.weak.selection import bandwidth_half_width, choose_noise_model, time_folds
+from pysindy_xl.weak.selection import (
+    NoiseModel,
+    bandwidth_half_width,
+    choose_noise_model,
+    time_folds,
+)
 
 GRAVITY = 9.81
 
@@ -110,6 +115,35 @@ def test_too_short_data_keep_the_default():
     best, errors = choose_noise_model([(None, rows, supports, None)], (rows, supports, None),
                                       np.array([[0.0, 10.0]]), [0], None)
     assert best is None and errors == []
+
+
+def test_a_candidate_too_wide_for_the_blocks_yields_to_one_that_fits():
+    """Short data: the first candidate's wide test functions leave too few rows outside any
+    block, the second's narrow ones plenty. The second is scored and chosen (its law
+    ``f = 2 x`` recovered); the first counts as unfitted (``inf``) instead of blocking the
+    choice."""
+    rng = np.random.default_rng(0)
+    spans = np.array([[0.0, 10.0]])
+
+    def rows_of(supports):
+        x = rng.normal(size=len(supports))
+        return np.column_stack([2.0 * x + 0.01 * rng.normal(size=len(x)), -x])
+
+    wide = np.array([[0, 0.0, 6.0], [0, 2.0, 8.0], [0, 4.0, 10.0]])
+    start = np.linspace(0.0, 9.8, 200)
+    narrow = np.column_stack([np.zeros(200), start, start + 0.2])
+    rows = rows_of(narrow)
+
+    def solve(theta, noise, weigh):  # the force column's coefficient fixed at 1
+        slope = np.linalg.lstsq(theta[:, 1:], -theta[:, 0], rcond=None)[0]
+        return np.concatenate([[1.0], slope])
+
+    best, errors = choose_noise_model(
+        [(NoiseModel("positions", 3.0, True), rows_of(wide), wide, None),
+         (NoiseModel("forces", 0.1, False), rows, narrow, None)],
+        (rows, narrow, None), spans, [0], solve)
+    assert best == 1
+    assert errors[0] == np.inf and errors[1] < 0.01
 
 
 def test_bandwidth_half_width_matches_the_bump_response():

@@ -19,7 +19,6 @@ from sklearn.base import clone
 from ..optimizers import EnsembleOptimizer, catalog_tags
 from ..weak import BumpTestFunctions, WhittakerSmoother
 from ..weak.selection import (
-    FORCE_NOISE_WIDTHS,
     SCORING_BANDWIDTH,
     NoiseModel,
     bandwidth_half_width,
@@ -109,7 +108,7 @@ def choose_noise_model(problem, library, data, optimizer, smoother=None,
     steps = np.concatenate([np.diff(d["t"]) for d in data])
     scoring = max(bandwidth_half_width(SCORING_BANDWIDTH, tests.power),
                   tests.min_samples * float(np.quantile(steps, 0.999)))
-    widths = sorted({min(scoring * m, info["half_width"]) for m in FORCE_NOISE_WIDTHS})
+    width = min(scoring, info["half_width"])
 
     def built(half_width, propagate=False):
         other = build_problem(library, data, "weak", test_functions=tests,
@@ -124,9 +123,11 @@ def choose_noise_model(problem, library, data, optimizer, smoother=None,
             noise_draws=None if noise is None else noise.draws,
             catalog_map=dataclasses.replace(origin, weak_info=other.catalog_map.weak_info))
 
-    candidates = [(NoiseModel("positions", info["half_width"], True), problem)]
-    candidates += [(NoiseModel("forces", width, False), built(width)) for width in widths]
     scored = built(scoring, propagate=True)
+    forces = dataclasses.replace(scored, row_noise=None, noise_moments=None,
+                                 noise_draws=None) if width == scoring else built(width)
+    candidates = [(NoiseModel("positions", info["half_width"], True), problem),
+                  (NoiseModel("forces", width, False), forces)]
 
     if catalog_tags(optimizer).uses_mass_matrices:  # once, for every fit on blocks
         problem = with_mass_matrices(problem, library)

@@ -9,7 +9,11 @@ A weak fit from positions and forces can read its data in two ways:
 * **force noise** (real arms: nearly exact encoders, noisy torque sensors or motor
   currents, an approximate model class): the rows are fitted as they are, and the test
   functions are narrow, a low-pass of the force equation at the bandwidth that torques are
-  judged at (:data:`SCORING_BANDWIDTH`), or a few times wider.
+  judged at (:data:`SCORING_BANDWIDTH`). Not wider: exact positions put no noise into the
+  regressors, so narrow rows lose nothing to errors in the variables, and they keep the
+  information of the motion's fast parts (accelerations) that wide rows average away; on a
+  short log, where time blocks hold out interpolation only, a width chosen among several by
+  held-out blocks extrapolates worse.
 
 Neither is assumed: each candidate is fitted on time blocks of the data and predicts the
 others (:func:`choose_noise_model`). The held-out error is read in the weak form itself, on
@@ -60,9 +64,6 @@ NOISE_SHARE = 0.5
 #: Time blocks per trajectory, tried in turn until every candidate can be fitted outside
 #: each block (wide test functions on short data leave few rows outside five blocks).
 BLOCK_COUNTS = (5, 3)
-
-#: Widths of the force-noise candidates, in multiples of the scoring width.
-FORCE_NOISE_WIDTHS = (1.0, 2.0, 4.0)
 
 
 def bandwidth_half_width(bandwidth: float, power: int = 6) -> float:
@@ -148,7 +149,9 @@ def choose_noise_model(candidates, reference, spans, force_columns, solve,
         ``solve(rows, noise, weigh) -> coef``: the fit of one candidate on some rows.
     n_blocks : int or sequence of int, default :data:`BLOCK_COUNTS`
         Time blocks per trajectory; of several counts, the first at which every candidate
-        has more rows outside each block than columns and every block holds scoring rows.
+        has more rows outside each block than columns and every block holds scoring rows,
+        else the first at which some candidate has (the others cannot compete: on short
+        data, wide test functions leave too few rows).
 
     Returns
     -------
@@ -164,12 +167,17 @@ def choose_noise_model(candidates, reference, spans, force_columns, solve,
     rows_ref, supports_ref, noise_ref = reference
     n_coordinates = rows_ref.shape[0] // len(supports_ref)
 
-    def feasible(count):
-        return (time_folds(supports_ref, spans, count)[1].any(axis=1).all()
-                and all((time_folds(supports, spans, count)[0].sum(axis=1) * n_coordinates
-                         >= rows.shape[1]).all() for _, rows, supports, _ in candidates))
+    def feasible(count):  # which candidates can be fitted outside every block
+        if not time_folds(supports_ref, spans, count)[1].any(axis=1).all():
+            return np.zeros(len(candidates), dtype=bool)
+        return np.array([(time_folds(supports, spans, count)[0].sum(axis=1) * n_coordinates
+                          >= rows.shape[1]).all() for _, rows, supports, _ in candidates])
 
-    n_blocks = next((int(count) for count in np.atleast_1d(n_blocks) if feasible(count)), None)
+    counts = [int(count) for count in np.atleast_1d(n_blocks)]
+    usable = [feasible(count) for count in counts]
+    n_blocks, fits = next(((c, u) for c, u in zip(counts, usable, strict=True) if u.all()),
+                          next(((c, u) for c, u in zip(counts, usable, strict=True)
+                                if u.any()), (None, None)))
     if n_blocks is None:
         return None, []
     _, held = time_folds(supports_ref, spans, n_blocks)
@@ -179,6 +187,8 @@ def choose_noise_model(candidates, reference, spans, force_columns, solve,
     forces = np.ones((len(candidates), n_blocks))
     noisy = np.zeros((len(candidates), n_blocks))
     for c, (model, rows, supports, noise) in enumerate(candidates):
+        if not fits[c]:  # too few rows outside the blocks: as good as unfitted
+            continue
         fit, _ = time_folds(supports, spans, n_blocks)
         fit_rows = np.tile(fit, n_coordinates)
         for k in range(n_blocks):
@@ -199,7 +209,10 @@ def choose_noise_model(candidates, reference, spans, force_columns, solve,
     clean = residuals - noisy
     with np.errstate(invalid="ignore", divide="ignore"):
         errors = np.sqrt(np.maximum(clean.sum(axis=1), 0.0) / forces.sum(axis=1))
-        audible = noisy[0].sum() < NOISE_SHARE * residuals[0].sum()
+        # the noise share is read off the first candidate, or the best fitted one when the
+        # first could not be fitted on the blocks
+        base = 0 if np.isfinite(errors[0]) else int(np.argmin(errors))
+        audible = noisy[base].sum() < NOISE_SHARE * residuals[base].sum()
     wins = (clean < clean[:1]).sum(axis=1)
     better = np.flatnonzero(np.isfinite(errors) & (errors < (1 - MARGIN) * errors[0])
                             & (wins > n_blocks / 2) & audible)
