@@ -146,6 +146,31 @@ def test_a_candidate_too_wide_for_the_blocks_yields_to_one_that_fits():
     assert errors[0] == np.inf and errors[1] < 0.01
 
 
+@pytest.mark.parametrize(("position_noise", "chosen"), [(0.1, 0), (0.01, 1)])
+def test_noisy_positions_in_the_scoring_rows_keep_the_first_candidate(position_noise, chosen):
+    """The second candidate's law is exact, the first's 25 % off. Where the positions' noise
+    (draws of the scoring rows' errors) makes up more than a tenth of the first's held-out
+    residual, the comparison is not trusted and the first stays; where it is small, the
+    better law is chosen."""
+    rng = np.random.default_rng(0)
+    start = np.linspace(0.0, 9.8, 200)
+    supports = np.column_stack([np.zeros(200), start, start + 0.2])
+    x = rng.normal(size=200)
+    rows = np.column_stack([2.0 * x, -x])
+    draws = position_noise * rng.normal(size=(50, 200, 2))
+    noise = WeakNoise(draws, 1, np.array([[0, 200, 0, 2]]))
+
+    def solve(theta, noise, weigh):
+        return np.array([1.0, 2.5 if weigh else 2.0])
+
+    best, errors = choose_noise_model(
+        [(NoiseModel("positions", 0.2, True), rows, supports, None),
+         (NoiseModel("forces", 0.2, False), rows, supports, None)],
+        (rows, supports, noise), np.array([[0.0, 10.0]]), [0], solve)
+    assert best == chosen
+    assert errors[1] < 0.5 * errors[0]
+
+
 def test_bandwidth_half_width_matches_the_bump_response():
     """At the half-width for 10 Hz, the bump's frequency response (by quadrature) is
     1/sqrt(2) at 10 Hz, to 2 %."""
