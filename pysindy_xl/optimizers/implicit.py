@@ -67,7 +67,8 @@ from .._validation import check_option
 from ._base import CatalogOptimizer, coordinates_touched, warn_unexplained
 from ._sindy_pi import extract_laws, homothetic_groups, null_space_start, solve_cvxpy
 from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
-from .homogeneous import UndeterminedLawWarning, combine_laws, normalize_law, select_laws
+from .homogeneous import select_laws
+from .laws import UndeterminedLawWarning, combine_laws, normalize_law
 from .noise_ratio import noise_ratio_law
 from .problem import CatalogProblem
 
