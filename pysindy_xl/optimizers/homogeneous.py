@@ -230,14 +230,10 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
                noise_draws=None) -> tuple[np.ndarray, float, LawSelection]:
     """Sparsest homogeneous law of noisy columns, by held-out noise ratio.
 
-    Candidates are the supports of the backward and forward paths
-    (:func:`law_elimination_path`, :func:`law_forward_path`), given ``mass_matrices`` the
-    backward paths inside the supports of the admissible lasso
-    (:func:`~pysindy_xl.optimizers.admissible.admissible_supports`) and, with ``swaps``, of a path
-    refined by single swaps (:func:`refine_law_by_swaps`) at every size, from the best
-    admissible path support down, then the best path supports of every size up to the law
-    chosen so far refined at their own size. The choice is the smallest admissible support
-    within one standard error (its own or the best's, the larger) of the best.
+    Candidates are the supports of the greedy paths, given ``mass_matrices`` of the admissible
+    lasso and, with ``swaps``, of the swap-refined searches; the choice is the smallest
+    admissible support within one standard error of the best (steps 1-5 of the module
+    documentation).
 
     Parameters
     ----------

@@ -42,16 +42,10 @@ same family of solutions with a rescaled weight.
 
 Normalization of the laws
 -------------------------
-A law is defined up to a factor. Each extracted law is scaled so that
-
-* the force column equals ``-1`` when a (non-zero) force column is in its support (the explicit
-  convention: ``EL(L) + friction = tau``);
-* otherwise its dominant term (largest contribution ``||theta_k xi_k||``, restricted to
-  ``reference_columns`` when given, e.g. the acceleration-containing columns) equals ``+1``.
-
-Several laws (one per decoupled subsystem) live on disjoint supports, so their sum is again a
-law that holds in every equation: ``coef_`` is the sum of the normalized laws chosen greedily
-(best first) among those whose supports do not overlap.
+A law is defined up to a factor: a force column in its support gets ``-1`` (the explicit
+convention ``EL(L) + friction = tau``), else its dominant term ``+1``
+(:func:`~pysindy_xl.optimizers.laws.normalize_law`). Laws of decoupled subsystems live on
+disjoint supports: ``coef_`` is their sum (:func:`~pysindy_xl.optimizers.laws.combine_laws`).
 """
 
 from __future__ import annotations
