@@ -5,7 +5,8 @@ The identified equations are linear in the accelerations. ``M`` holds their coef
 (:class:`~pysindy_xl.feature_library._compile.Terms`), evaluated by one vectorized kernel on
 many states and by flat generated code at one state, and the accelerations follow from a
 batched linear solve. No symbolic solve is ever performed, and nothing is lambdified whole.
-:class:`MassMatrixDynamics` starts from equations; :class:`~pysindy_xl.dynamics.CatalogDynamics` from a catalog and its coefficients.
+:class:`MassMatrixDynamics` starts from equations, :class:`~pysindy_xl.dynamics.CatalogDynamics`
+from a catalog and its coefficients.
 """
 
 from __future__ import annotations
@@ -22,13 +23,8 @@ from ..feature_library import Terms, compile_terms, decompose, scalar_function, 
 from ..symbols import Coordinates
 from .inputs import feedback_function, force_function
 
-__all__ = [
-    "MassMatrixDynamics",
-    "DynamicsError",
-    "SingularMassMatrixError",
-    "SimulationError",
-    "force_function",
-]
+__all__ = ["MassMatrixDynamics", "DynamicsError", "SingularMassMatrixError", "SimulationError",
+           "force_function"]
 
 
 class DynamicsError(RuntimeError):

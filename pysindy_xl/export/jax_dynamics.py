@@ -39,17 +39,8 @@ from ._jax_trig import fast_cos, fast_sin
 jax = import_optional("jax", purpose="pysindy_xl.export.jax_dynamics (XLSINDy.to_jax)")
 jnp = import_optional("jax.numpy", purpose="pysindy_xl.export.jax_dynamics (XLSINDy.to_jax)")
 
-__all__ = [
-    "BatchSimulation",
-    "dynamics_function",
-    "euler_step",
-    "fast_cos",
-    "fast_sin",
-    "rk4_step",
-    "semi_implicit_euler_step",
-    "simulate",
-    "simulate_batch",
-]
+__all__ = ["BatchSimulation", "dynamics_function", "euler_step", "fast_cos", "fast_sin",
+           "rk4_step", "semi_implicit_euler_step", "simulate", "simulate_batch"]
 
 #: Largest system solved by unrolled Gaussian elimination; larger ones call LAPACK.
 _UNROLLED_MAX_N = 4

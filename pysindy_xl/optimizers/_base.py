@@ -48,16 +48,8 @@ from ..registry import is_plain, register_type
 from .problem import CatalogProblem, check_support, coordinate_weights, scale_blocks
 from .tags import TAG_NAMES, CatalogTags, catalog_tags
 
-__all__ = [
-    "CatalogOptimizer",
-    "OPTIMIZER_TYPES",
-    "coordinates_touched",
-    "independent_columns",
-    "optimizer_from_spec",
-    "pilot_optimizer",
-    "solve_problem",
-    "warn_unexplained",
-]
+__all__ = ["CatalogOptimizer", "OPTIMIZER_TYPES", "coordinates_touched", "independent_columns",
+           "optimizer_from_spec", "pilot_optimizer", "solve_problem", "warn_unexplained"]
 
 #: Every catalog optimizer by its ``spec_type``: what a model file may name.
 OPTIMIZER_TYPES: dict[str, type] = {}

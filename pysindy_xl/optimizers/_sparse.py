@@ -20,15 +20,8 @@ import numpy as np
 import scipy.linalg
 from sklearn.exceptions import ConvergenceWarning
 
-__all__ = [
-    "LassoResult",
-    "column_norms",
-    "kkt_violation",
-    "lasso_gram",
-    "null_vector",
-    "soft_threshold",
-    "triangular_factor",
-]
+__all__ = ["LassoResult", "column_norms", "kkt_violation", "lasso_gram", "null_vector",
+           "soft_threshold", "triangular_factor"]
 
 
 def column_norms(matrix, rtol: float = 1e-12) -> tuple[np.ndarray, np.ndarray]:

@@ -7,13 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = [
-    "UndeterminedLawWarning",
-    "combine_laws",
-    "definite_mass",
-    "explained_coordinates",
-    "normalize_law",
-]
+__all__ = ["UndeterminedLawWarning", "combine_laws", "definite_mass", "explained_coordinates",
+           "normalize_law"]
 
 
 class UndeterminedLawWarning(UserWarning):
