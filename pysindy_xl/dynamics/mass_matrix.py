@@ -326,22 +326,11 @@ class MassMatrixDynamics:
         s = np.linalg.svd(mass, compute_uv=False)
         return ~(s[:, -1] > rcond * s[:, 0])
 
-    def simulate(
-        self,
-        x0,
-        t,
-        u=None,
-        *,
-        method: str = "DOP853",
-        rtol: float = 1e-8,
-        atol: float = 1e-10,
-        divergence_bound: float = 1e6,
-        max_evaluations: int = 1_000_000,
-        timeout: float | None = 300.0,
-        interpolation: str = "cubic",
-        feedback=None,
-        step: float | None = None,
-    ) -> np.ndarray:
+    def simulate(self, x0, t, u=None, *, method: str = "DOP853", rtol: float = 1e-8,
+                 atol: float = 1e-10, divergence_bound: float = 1e6,
+                 max_evaluations: int = 1_000_000, timeout: float | None = 300.0,
+                 interpolation: str = "cubic", feedback=None,
+                 step: float | None = None) -> np.ndarray:
         """Integrate the dynamics with one of scipy's adaptive ODE solvers, or ROS2.
 
         Parameters

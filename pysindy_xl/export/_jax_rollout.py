@@ -170,19 +170,8 @@ def _prepare(f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched):
     return f, x0, u, dt, t0, bound
 
 
-def simulate(
-    f,
-    x0,
-    u,
-    dt,
-    *,
-    t0=0.0,
-    n_steps=None,
-    method="rk4",
-    interpolation="zoh",
-    bound=None,
-    final_only=False,
-):
+def simulate(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation="zoh",
+             bound=None, final_only=False):
     """Integrate one trajectory with a fixed step inside ``jax.lax.scan``.
 
     Parameters
@@ -244,19 +233,8 @@ def simulate(
     )
 
 
-def simulate_batch(
-    f,
-    x0,
-    u,
-    dt,
-    *,
-    t0=0.0,
-    n_steps=None,
-    method="rk4",
-    interpolation="zoh",
-    bound=None,
-    final_only=False,
-):
+def simulate_batch(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation="zoh",
+                   bound=None, final_only=False):
     """Integrate ``B`` trajectories at once (``vmap`` of :func:`simulate`).
 
     Runs on the default JAX device (CPU, or GPU where present). Trajectories are

@@ -208,21 +208,9 @@ class ImplicitOptimizer(CatalogOptimizer):
         return dataclasses.replace(super().catalog_tags(), uses_mass_matrices=True,
                                    uses_noise_draws=True, derivative_estimate="unbiased")
 
-    def __init__(
-        self,
-        alpha="auto",
-        solver="fista",
-        cvxpy_solver=None,
-        angle_tol=5.0,
-        min_group_size=2,
-        min_membership=0.1,
-        max_residual_ratio=10.0,
-        threshold=1e-3,
-        refit=True,
-        tol=1e-4,
-        max_iter=20_000,
-        early_stopping=True,
-    ):
+    def __init__(self, alpha="auto", solver="fista", cvxpy_solver=None, angle_tol=5.0,
+                 min_group_size=2, min_membership=0.1, max_residual_ratio=10.0, threshold=1e-3,
+                 refit=True, tol=1e-4, max_iter=20_000, early_stopping=True):
         self.alpha = alpha
         self.solver = solver
         self.cvxpy_solver = cvxpy_solver
