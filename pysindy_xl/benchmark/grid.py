@@ -19,20 +19,9 @@ import hashlib
 import json
 from dataclasses import asdict, dataclass, fields, replace
 
-__all__ = [
-    "CATALOGS",
-    "SOLVERS",
-    "BASELINE",
-    "FORCINGS",
-    "SYSTEM_NAMES",
-    "TrajectorySpec",
-    "Task",
-    "GridSettings",
-    "PRESETS",
-    "config_label",
-    "all_configurations",
-    "solver_applies",
-]
+__all__ = ["CATALOGS", "SOLVERS", "BASELINE", "FORCINGS", "SYSTEM_NAMES", "TrajectorySpec",
+           "Task", "GridSettings", "PRESETS", "config_label", "all_configurations",
+           "solver_applies"]
 
 #: The paper's three catalogs, then the kinematic-tree catalog (the row added by issue 12).
 CATALOGS = ("mixed", "lagrange", "classical", "kinematic")

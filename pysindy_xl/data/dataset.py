@@ -454,23 +454,15 @@ class Dataset:
 
     @classmethod
     def load(cls, path) -> Dataset:
-        """Read a dataset written by :meth:`save` or a user's NPZ (see module docstring).
-
-        Same as :func:`load_dataset`.
+        """Read a dataset written by :meth:`save` or a user's NPZ: :func:`load_dataset`.
 
         Parameters
         ----------
         path : str or os.PathLike
-            The NPZ file.
 
         Returns
         -------
         Dataset
-
-        Raises
-        ------
-        DatasetError
-            If the file is missing, not an NPZ, or its arrays are missing or malformed.
 
         Examples
         --------

@@ -117,22 +117,15 @@ class DynamicsMixin:
         """Held-out force prediction: RMS per coordinate (in force units and relative), total.
 
         The robotics validation of an identified arm on a run it never saw: the torques
-        :meth:`predict_forces` needs to move as recorded against the measured ones. The
-        derivatives not given are estimated the same way whatever the model (a quintic
-        smoothing spline of the positions; :mod:`pysindy_xl.held_out`), so that models
-        identified by different methods score on the same numbers.
+        :meth:`predict_forces` needs to move as recorded against the measured ones, with the
+        derivatives not given estimated the same way whatever the model
+        (:mod:`pysindy_xl.held_out`).
 
         Parameters
         ----------
-        x, t, u : array or list of arrays
-            Positions, times and measured generalized forces of the held-out run(s).
-        x_dot, x_ddot : same layout, optional
-            Measured velocities and accelerations.
-        smoother : object with ``smooth(t, x)``, optional
-            Replaces the default estimate of the derivatives.
-        max_frequency : float, default 10.0
-            Highest bandwidth (Hz) of the default estimate; the positions of a real arm carry
-            ripple that a purely data-driven smoothness differentiates into large accelerations.
+        x, t, u, x_dot, x_ddot, smoother, max_frequency
+            As in :func:`pysindy_xl.held_out.score_forces`: the held-out run(s), measured
+            forces and derivatives, and the default derivative estimate's settings.
 
         Returns
         -------

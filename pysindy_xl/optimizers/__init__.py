@@ -23,8 +23,9 @@ from .explicit import (
     hard_threshold_regression,
     proximal_gradient_lasso,
 )
-from .homogeneous import LawSelection, UndeterminedLawWarning, select_law
+from .homogeneous import LawSelection, select_law
 from .implicit import ImplicitOptimizer, NoLawFoundError, homothetic_groups
+from .laws import UndeterminedLawWarning
 from .mixed import MixedOptimizer, activation_closure
 from .physical import PhysicalOptimizer
 from .problem import CatalogProblem, balance_coordinates, coordinate_weights

@@ -48,16 +48,8 @@ from ..registry import is_plain, register_type
 from .problem import CatalogProblem, check_support, coordinate_weights, scale_blocks
 from .tags import TAG_NAMES, CatalogTags, catalog_tags
 
-__all__ = [
-    "CatalogOptimizer",
-    "OPTIMIZER_TYPES",
-    "coordinates_touched",
-    "independent_columns",
-    "optimizer_from_spec",
-    "pilot_optimizer",
-    "solve_problem",
-    "warn_unexplained",
-]
+__all__ = ["CatalogOptimizer", "OPTIMIZER_TYPES", "coordinates_touched", "independent_columns",
+           "optimizer_from_spec", "pilot_optimizer", "solve_problem", "warn_unexplained"]
 
 #: Every catalog optimizer by its ``spec_type``: what a model file may name.
 OPTIMIZER_TYPES: dict[str, type] = {}
@@ -122,8 +114,6 @@ def pilot_optimizer(optimizer):
     """
     pilot = getattr(optimizer, "pilot", None)
     return pilot() if callable(pilot) else clone(optimizer)
-
-
 
 
 def coordinates_touched(theta, n_coordinates: int, rtol: float = 1e-10) -> np.ndarray:
@@ -203,8 +193,6 @@ def warn_unexplained(owner: str, theta, n_coordinates: int, coef, force_columns=
             f"{unexplained.tolist()}; the model cannot predict them",
             UnexplainedCoordinateWarning, stacklevel=stacklevel + 1)
     return unexplained
-
-
 
 
 def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int = 20_000,
@@ -367,29 +355,12 @@ class CatalogOptimizer(BaseEstimator):
 
         Parameters
         ----------
-        theta : array, shape (n_coordinates * N, F)
-            Stacked regression matrix, rows coordinate-major.
-        n_coordinates : int
-        force_columns : sequence of int
-            Columns of the external forces.
-        noise_moments : array, shape (n_coordinates, F, F), optional
-            ``E[E_c^T E_c]`` of the errors ``E_c`` in each coordinate's rows (errors in
-            variables; the weak form of :class:`~pysindy_xl.XLSINDy` passes the propagated
-            position noise). Optimizers that do not use them ignore them.
-        mass_matrices : array, shape (S, F, n_coordinates, n_coordinates), optional
-            Each column's contribution to the mass matrix at sample states
-            (:func:`~pysindy_xl.fit.diagnostics.column_mass_matrices`).
-        balance : bool, default True
-            Rescale the coordinate blocks by
-            :func:`~pysindy_xl.optimizers.coordinate_weights` before solving (a unit-free
-            regression). False where the caller has weighed the blocks already: rows
-            whitened by the covariance of the residual are each in units of their own noise,
-            and a rebalancing would undo that weighting.
-        reference_columns : sequence of int, optional
-            Columns allowed to carry the ``+1`` of an unforced law; default: any column.
-        physical : PhysicalStructure, optional
-            What the columns stand for physically (:mod:`pysindy_xl.physical`); used by
-            optimizers that constrain the coefficients to physically consistent values.
+        theta, n_coordinates, force_columns, noise_moments, mass_matrices, balance, \
+reference_columns, physical
+            The fields of a :class:`~pysindy_xl.optimizers.problem.CatalogProblem` (its module
+            documents each), checked by :meth:`CatalogProblem.from_arrays
+            <pysindy_xl.optimizers.problem.CatalogProblem.from_arrays>`. Optimizers ignore
+            what they do not use (see their tags).
 
         Returns
         -------
@@ -425,10 +396,6 @@ class CatalogOptimizer(BaseEstimator):
         earlier versions)."""
         problem = CatalogProblem.from_arrays(theta, n_coordinates, force_columns,
                                              noise_moments, balance=balance)
-        return self.fit_problem(problem, support)
-
-    def refit_problem(self, problem: CatalogProblem, support):
-        """``fit_problem(problem, support)`` (kept for callers of earlier versions)."""
         return self.fit_problem(problem, support)
 
     # -- to implement ---------------------------------------------------------------------

@@ -20,15 +20,8 @@ import numpy as np
 import scipy.linalg
 from sklearn.exceptions import ConvergenceWarning
 
-__all__ = [
-    "LassoResult",
-    "column_norms",
-    "kkt_violation",
-    "lasso_gram",
-    "null_vector",
-    "soft_threshold",
-    "triangular_factor",
-]
+__all__ = ["LassoResult", "column_norms", "kkt_violation", "lasso_gram", "null_vector",
+           "soft_threshold", "triangular_factor"]
 
 
 def column_norms(matrix, rtol: float = 1e-12) -> tuple[np.ndarray, np.ndarray]:
@@ -223,20 +216,9 @@ def _fista(
     return n_iter, converged
 
 
-def lasso_gram(
-    gram,
-    targets,
-    alpha,
-    mask=None,
-    coef_init=None,
-    tol: float = 1e-4,
-    max_iter: int = 20_000,
-    continuation: bool = True,
-    check_every: int = 10,
-    warn: bool = True,
-    callback=None,
-    atol: float = 1e-8,
-) -> LassoResult:
+def lasso_gram(gram, targets, alpha, mask=None, coef_init=None, tol: float = 1e-4,
+               max_iter: int = 20_000, continuation: bool = True, check_every: int = 10,
+               warn: bool = True, callback=None, atol: float = 1e-8) -> LassoResult:
     """Solve K Lasso problems sharing one Gram matrix, all at once.
 
     For every column k: ``min_x 1/2 x^T G x - b_k^T x + alpha ||x||_1`` with ``x_i = 0`` where

@@ -5,7 +5,7 @@ many sparse combinations that nearly vanish on the data without being a Lagrangi
 system: the balance of a conserved momentum written with constant inertia terms (its mass
 matrix has rank one: it is one equation, not ``n``), or a law on the rows of some coordinates
 only. Their noise ratios are small, so greedy paths over the whole catalog end in them, and
-no support on those paths is admissible (:func:`~pysindy_xl.optimizers.homogeneous.
+no support on those paths is admissible (:func:`~pysindy_xl.optimizers.laws.
 definite_mass`). The true law is the one that also defines motion: its mass matrix
 ``M(xi) = sum_j xi_j M_j`` is positive definite.
 

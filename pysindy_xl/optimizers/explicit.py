@@ -14,13 +14,8 @@ from .._validation import check_instance, check_numeric_array, check_option
 from ._base import CatalogOptimizer, warn_unexplained
 from .selection import select_support
 
-__all__ = [
-    "ExplicitOptimizer",
-    "hard_threshold_regression",
-    "proximal_gradient_lasso",
-    "corrected_least_squares",
-    "explicit_regression",
-]
+__all__ = ["ExplicitOptimizer", "hard_threshold_regression", "proximal_gradient_lasso",
+           "corrected_least_squares", "explicit_regression"]
 
 _METHODS = ("threshold", "lasso", "lassocv", "proximal")
 

@@ -48,6 +48,7 @@ from ..weak.noise import draw_moments
 from ._base import coordinates_touched
 from ._sparse import column_norms, triangular_factor
 from .admissible import admissible_supports
+from .laws import definite_mass, explained_coordinates
 from .noise_ratio import (
     eliminate_one,
     law_elimination_path,
@@ -58,17 +59,7 @@ from .noise_ratio import (
 )
 from .selection import ChosenSupport, fold_labels, fold_summary
 
-__all__ = [
-    "LawSelection",
-    "RowMoments",
-    "UndeterminedLawWarning",
-    "combine_laws",
-    "definite_mass",
-    "explained_coordinates",
-    "normalize_law",
-    "select_law",
-    "select_laws",
-]
+__all__ = ["LawSelection", "RowMoments", "select_law", "select_laws"]
 
 
 #: Rows left out of the training rows on each side of a held-out fold, as a fraction of a
@@ -117,135 +108,6 @@ class RowMoments:
     def columns(self, keep) -> RowMoments:
         """The moments of the columns ``keep`` only."""
         return dataclasses.replace(self, draws=self.draws[:, :, keep])
-
-
-class UndeterminedLawWarning(UserWarning):
-    """The data hold several different laws to the noise: which one is the system's is not
-    determined by them."""
-
-
-def explained_coordinates(theta, law, n_blocks: int, min_share: float = 1e-3) -> np.ndarray:
-    """Coordinates whose equation a law explains: the squared contributions of its terms in
-    that coordinate's rows carry at least ``min_share`` of the largest coordinate's.
-
-    A term that merely touches a coordinate with a negligible coefficient does not explain
-    it. ``theta`` must have balanced coordinate blocks
-    (:func:`~pysindy_xl.optimizers.coordinate_weights`), so that the shares compare
-    equations, not units.
-
-    Parameters
-    ----------
-    theta : array, shape (n_blocks * N, k)
-        Columns of the law's support.
-    law : array, shape (k,)
-    n_blocks : int
-    min_share : float, default 1e-3
-
-    Returns
-    -------
-    ndarray of bool, shape (n_blocks,)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> theta = np.array([[1.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.0, 1.0]])
-    >>> explained_coordinates(theta, np.array([1.0, 1e-4]), 2).tolist()
-    [True, False]
-    """
-    contributions = (np.asarray(theta, dtype=float) * law).reshape(n_blocks, -1, len(law))
-    shares = np.sum(contributions**2, axis=(1, 2))
-    return shares >= min_share * max(float(shares.max(initial=0.0)), 1e-300)
-
-
-def normalize_law(law, norms, force_columns, reference_columns=None) -> np.ndarray:
-    """A law scaled to the catalog's convention: a force column in its support gets ``-1``
-    (the one with the largest contribution ``|law_j| norms_j``), otherwise its dominant term
-    (among ``reference_columns`` when it has any) gets ``+1``.
-
-    Parameters
-    ----------
-    law : array, shape (F,)
-    norms : array, shape (F,)
-        Column norms of the regression matrix.
-    force_columns : array of int
-    reference_columns : array of int, optional
-
-    Returns
-    -------
-    ndarray, shape (F,)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> normalize_law(np.array([0.5, -1.0, 0.0]), np.ones(3), np.array([0])).tolist()
-    [-1.0, 2.0, 0.0]
-    """
-    support = np.flatnonzero(law)
-    contribution = np.abs(law) * norms
-    forces = np.intersect1d(support, force_columns)
-    if forces.size:
-        pivot = forces[np.argmax(contribution[forces])]
-        return law / -law[pivot] + 0.0
-    candidates = support
-    if reference_columns is not None and np.intersect1d(support, reference_columns).size:
-        candidates = np.intersect1d(support, reference_columns)
-    pivot = candidates[np.argmax(contribution[candidates])]
-    return law / law[pivot] + 0.0
-
-
-def combine_laws(laws) -> tuple[np.ndarray, list]:
-    """Sum of the laws with pairwise disjoint supports, chosen in order (best first): laws of
-    uncoupled subsystems hold in every equation together.
-
-    Parameters
-    ----------
-    laws : array, shape (n_laws, F)
-
-    Returns
-    -------
-    coef : ndarray, shape (F,)
-    chosen : list of int
-        Indices of the summed laws.
-    """
-    coef = np.zeros(laws.shape[1])
-    used = np.zeros(laws.shape[1], dtype=bool)
-    chosen = []
-    for k, law in enumerate(laws):
-        support = law != 0
-        if np.any(support & used):
-            continue
-        coef += law
-        used |= support
-        chosen.append(k)
-    return coef, chosen
-
-
-def definite_mass(mass_matrices, law) -> bool:
-    """Whether the law's mass matrix ``sum_j law_j M_j`` is definite (of either sign: a law
-    has no sign) on every state, judged unit free as
-    :func:`~pysindy_xl.fit.diagnostics.mass_matrix_report` does.
-
-    Parameters
-    ----------
-    mass_matrices : array, shape (S, k, n, n)
-    law : array, shape (k,)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> columns = np.array([[[[1.0, 0.0], [0.0, 0.0]], [[0.0, 0.0], [0.0, 1.0]]]])
-    >>> definite_mass(columns, np.array([-2.0, -1.0])), definite_mass(columns, [1.0, 0.0])
-    (True, False)
-    """
-    mass = np.einsum("sfij,f->sij", np.asarray(mass_matrices, dtype=float), law)
-    mass = (mass + np.swapaxes(mass, 1, 2)) / 2
-    diagonal = np.max(np.abs(np.diagonal(mass, axis1=1, axis2=2)), axis=0, initial=0.0)
-    unit = 1.0 / np.sqrt(np.where(diagonal > 0, diagonal, 1.0))
-    eigenvalues = np.linalg.eigvalsh(mass * unit[None, :, None] * unit[None, None, :])
-    if np.median(np.trace(mass, axis1=1, axis2=2)) < 0:
-        eigenvalues = -eigenvalues
-    scale = max(float(np.abs(eigenvalues).max(initial=0.0)), 1e-300)
-    return bool(np.all(eigenvalues.min(axis=1) > 1e-9 * scale))
 
 
 @dataclasses.dataclass
@@ -368,14 +230,10 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
                noise_draws=None) -> tuple[np.ndarray, float, LawSelection]:
     """Sparsest homogeneous law of noisy columns, by held-out noise ratio.
 
-    Candidates are the supports of the backward and forward paths
-    (:func:`law_elimination_path`, :func:`law_forward_path`), given ``mass_matrices`` the
-    backward paths inside the supports of the admissible lasso
-    (:func:`~pysindy_xl.optimizers.admissible.admissible_supports`) and, with ``swaps``, of a path
-    refined by single swaps (:func:`refine_law_by_swaps`) at every size, from the best
-    admissible path support down, then the best path supports of every size up to the law
-    chosen so far refined at their own size. The choice is the smallest admissible support
-    within one standard error (its own or the best's, the larger) of the best.
+    Candidates are the supports of the greedy paths, given ``mass_matrices`` of the admissible
+    lasso and, with ``swaps``, of the swap-refined searches; the choice is the smallest
+    admissible support within one standard error of the best (steps 1-5 of the module
+    documentation).
 
     Parameters
     ----------

@@ -42,16 +42,10 @@ same family of solutions with a rescaled weight.
 
 Normalization of the laws
 -------------------------
-A law is defined up to a factor. Each extracted law is scaled so that
-
-* the force column equals ``-1`` when a (non-zero) force column is in its support (the explicit
-  convention: ``EL(L) + friction = tau``);
-* otherwise its dominant term (largest contribution ``||theta_k xi_k||``, restricted to
-  ``reference_columns`` when given, e.g. the acceleration-containing columns) equals ``+1``.
-
-Several laws (one per decoupled subsystem) live on disjoint supports, so their sum is again a
-law that holds in every equation: ``coef_`` is the sum of the normalized laws chosen greedily
-(best first) among those whose supports do not overlap.
+A law is defined up to a factor: a force column in its support gets ``-1`` (the explicit
+convention ``EL(L) + friction = tau``), else its dominant term ``+1``
+(:func:`~pysindy_xl.optimizers.laws.normalize_law`). Laws of decoupled subsystems live on
+disjoint supports: ``coef_`` is their sum (:func:`~pysindy_xl.optimizers.laws.combine_laws`).
 """
 
 from __future__ import annotations
@@ -67,7 +61,8 @@ from .._validation import check_option
 from ._base import CatalogOptimizer, coordinates_touched, warn_unexplained
 from ._sindy_pi import extract_laws, homothetic_groups, null_space_start, solve_cvxpy
 from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
-from .homogeneous import UndeterminedLawWarning, combine_laws, normalize_law, select_laws
+from .homogeneous import select_laws
+from .laws import UndeterminedLawWarning, combine_laws, normalize_law
 from .noise_ratio import noise_ratio_law
 from .problem import CatalogProblem
 
@@ -213,21 +208,9 @@ class ImplicitOptimizer(CatalogOptimizer):
         return dataclasses.replace(super().catalog_tags(), uses_mass_matrices=True,
                                    uses_noise_draws=True, derivative_estimate="unbiased")
 
-    def __init__(
-        self,
-        alpha="auto",
-        solver="fista",
-        cvxpy_solver=None,
-        angle_tol=5.0,
-        min_group_size=2,
-        min_membership=0.1,
-        max_residual_ratio=10.0,
-        threshold=1e-3,
-        refit=True,
-        tol=1e-4,
-        max_iter=20_000,
-        early_stopping=True,
-    ):
+    def __init__(self, alpha="auto", solver="fista", cvxpy_solver=None, angle_tol=5.0,
+                 min_group_size=2, min_membership=0.1, max_residual_ratio=10.0, threshold=1e-3,
+                 refit=True, tol=1e-4, max_iter=20_000, early_stopping=True):
         self.alpha = alpha
         self.solver = solver
         self.cvxpy_solver = cvxpy_solver

@@ -50,15 +50,8 @@ from .._validation import check_indices, check_numeric_array, check_option
 from ..physical.structure import PhysicalStructure
 from ..weak.noise import draw_moments as _draw_moments
 
-__all__ = [
-    "CatalogProblem",
-    "check_mass_matrices",
-    "check_noise_moments",
-    "check_support",
-    "balance_coordinates",
-    "coordinate_weights",
-    "scale_blocks",
-]
+__all__ = ["CatalogProblem", "check_mass_matrices", "check_noise_moments", "check_support",
+           "balance_coordinates", "coordinate_weights", "scale_blocks"]
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

@@ -42,15 +42,8 @@ import scipy.linalg
 
 from ._swaps import _first_swaps, _swap_search
 
-__all__ = [
-    "elimination_path",
-    "forward_path",
-    "cross_validated_size",
-    "cross_validated_supports",
-    "refine_by_swaps",
-    "select_support",
-    "SelectionResult",
-]
+__all__ = ["elimination_path", "forward_path", "cross_validated_size", "cross_validated_supports",
+           "refine_by_swaps", "select_support", "SelectionResult"]
 
 
 def _scaled(x):

@@ -21,7 +21,7 @@ directions fits, so the combination is undetermined. They are reported in ``unde
 and a warning says so, rather than one of them being returned as if it were the law.
 
 **Normalization.** A law is defined up to a factor. ``normalization="dominant"`` follows the
-catalog's convention (:func:`~pysindy_xl.optimizers.homogeneous.normalize_law`: a non-zero
+catalog's convention (:func:`~pysindy_xl.optimizers.laws.normalize_law`: a non-zero
 force column ``-1``, otherwise the dominant term ``+1``); ``"inertia"`` scales the law to a
 unit reference inertia, the mean over the sample states of the trace of its mass matrix
 ``M(q) = sum_j xi_j M_j(q)`` equal to the number of coordinates,
@@ -42,7 +42,7 @@ import numpy as np
 from .._validation import check_option
 from ._base import CatalogOptimizer, warn_unexplained
 from ._sparse import column_norms, null_vector, triangular_factor
-from .homogeneous import UndeterminedLawWarning, normalize_law
+from .laws import UndeterminedLawWarning, normalize_law
 from .noise_ratio import noise_pencil
 
 __all__ = ["TotalLeastSquaresOptimizer"]

@@ -144,11 +144,7 @@ class CartPole(MuJoCoSystem):
         return kinetic - potential
 
     def xml(self):
-        """MJCF text of the cart-pole with the current parameters.
-
-        Returns
-        -------
-        str
+        """MJCF text of the cart-pole (see :meth:`MuJoCoSystem.xml`).
 
         Examples
         --------
@@ -239,11 +235,7 @@ class DoublePendulum(MuJoCoSystem):
         return _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=None)
 
     def xml(self):
-        """MJCF text of the double pendulum with the current parameters.
-
-        Returns
-        -------
-        str
+        """MJCF text of the double pendulum (see :meth:`MuJoCoSystem.xml`).
 
         Examples
         --------
@@ -345,11 +337,7 @@ class CartDoublePendulum(MuJoCoSystem):
                                           cart_mass=p["cart_mass"])
 
     def xml(self):
-        """MJCF text of the double pendulum on a cart with the current parameters.
-
-        Returns
-        -------
-        str
+        """MJCF text of the double pendulum on a cart (see :meth:`MuJoCoSystem.xml`).
 
         Examples
         --------
@@ -444,11 +432,7 @@ class TriplePendulum(MuJoCoSystem):
         return kinetic - potential
 
     def xml(self):
-        """MJCF text of the three-link pendulum with the current parameters.
-
-        Returns
-        -------
-        str
+        """MJCF text of the three-link pendulum (see :meth:`MuJoCoSystem.xml`).
 
         Examples
         --------

@@ -47,20 +47,9 @@ from .base import MuJoCoSystem, equations_of_motion
 from .mjcf import MJCFSystem
 from .paper import CartDoublePendulum, CartPole, DoublePendulum, TriplePendulum
 
-__all__ = [
-    "MuJoCoSystem",
-    "coordinate_system",
-    "CartPole",
-    "DoublePendulum",
-    "CartDoublePendulum",
-    "TriplePendulum",
-    "MJCFSystem",
-    "SYSTEMS",
-    "get_system",
-    "default_xml_path",
-    "equations_of_motion",
-    "system_from_metadata",
-]
+__all__ = ["MuJoCoSystem", "coordinate_system", "CartPole", "DoublePendulum",
+           "CartDoublePendulum", "TriplePendulum", "MJCFSystem", "SYSTEMS", "get_system",
+           "default_xml_path", "equations_of_motion", "system_from_metadata"]
 
 
 SYSTEMS = {
