@@ -194,17 +194,29 @@ class ActuatorLaw:
         return values.reshape(self.n) if single else values
 
     def rest_state(self, t: float, q, qd, dt: float = 1e-4):
-        """The state nearest ``(q, qd)`` at which every position servo sits on its reference.
+        """The state nearest ``(q, qd)`` at which every position servo follows its reference
+        with no force.
 
         A servo with a position feedback (``bias[1] < 0``: ``position`` actuators, ``general``
-        ones with an affine bias and a constant gain) pulls its joint to the length
-        ``ell* = -(gain * ctrl + bias[0]) / bias[1]``. With ``A`` the servos' lengths per
+        ones with an affine bias and a constant gain) applies
+        ``F = gain * ctrl + bias[0] + bias[1] ell + bias[2] v``. Its joint moves at the rate
+        of the reference, ``v* = d/dt (-(gain * ctrl + bias[0]) / bias[1])``, with no force
+        at the length
+
+        .. math::
+
+            \\ell^* = -\\frac{\\mathrm{gain}\\,\\mathrm{ctrl} + b_0 + b_2 v^*}{b_1}
+
+        (a servo whose damping acts on the joint's own velocity, ``b_2 = -kv``, lags its
+        reference by ``kv v* / kp`` in steady tracking). With ``A`` the servos' lengths per
         generalized coordinate (``ell = A q``), the positions are moved to
-        ``q + pinv(A) (ell* - A q)`` (the smallest change that puts every servo on its
-        reference) and the velocities likewise onto ``d ell* / dt``. Other coordinates keep
-        their values. Starting a run there spares the servos the transient of a random
-        initial error, which saturates them and drives the joints far faster than the
-        reference.
+        ``q + pinv(A) (ell* - A q)`` (the smallest change that puts every servo there) and
+        the velocities likewise onto ``v*``. Other coordinates keep their values. Starting a
+        run there spares the servos the transient of a random initial error; starting on the
+        reference itself at the reference's rate would ask ``kv v*`` of a stiff servo at once,
+        which saturates it and, on a light link, makes a time-stepping integrator chatter
+        between the force limits (the servo's damping is not applied while its force is
+        clamped).
 
         Parameters
         ----------
@@ -219,6 +231,20 @@ class ActuatorLaw:
         -------
         q, qd : ndarray, shape (n,)
             Unchanged when no actuator is a position servo.
+
+        Examples
+        --------
+        A servo ``kp = 100``, ``kv = 10`` whose reference moves at 1 rad/s starts 0.1 rad
+        behind it, where its force ``100 * 0.1 - 10 * 1`` vanishes:
+
+        >>> from pysindy_xl.mujoco import MJCFSystem, SumOfSinusoids
+        >>> servo = MJCFSystem('''<mujoco><worldbody><body><joint name="j"/>
+        ...   <geom size="0.1" mass="1"/></body></worldbody>
+        ...   <actuator><position joint="j" kp="100" kv="10"/></actuator></mujoco>''')
+        >>> law = actuator_law(servo, SumOfSinusoids([[0.1]], [[1 / (0.2 * np.pi)]], [[0.0]]))
+        >>> q, qd = law.rest_state(0.0, [0.3], [0.0])
+        >>> q.round(6), qd.round(6), law(0.0, q, qd).round(6)
+        (array([-0.1]), array([1.]), array([0.]))
         """
         q, qd = np.array(q, dtype=float), np.array(qd, dtype=float)
         servo = (self._bias[:, 1] < 0) & np.all(self._gain[:, 1:] == 0, axis=1)
@@ -230,8 +256,8 @@ class ActuatorLaw:
         def reference(times):
             return -(gain * self.controls(times)[:, servo] + bias[:, 0]) / bias[:, 1]
 
-        target = reference(np.array([t]))[0]
         rate = (reference(np.array([t + dt])) - reference(np.array([t - dt])))[0] / (2 * dt)
+        target = reference(np.array([t]))[0] - bias[:, 2] * rate / bias[:, 1]
         inverse = np.linalg.pinv(lengths)
         return q + inverse @ (target - lengths @ q), qd + inverse @ (rate - lengths @ qd)
 
