@@ -31,7 +31,16 @@ import numpy as np
 from .. import import_mujoco
 from .registry import get_system
 
-__all__ = ["ActuatorLaw", "actuator_law", "actuator_force_function", "servo_bandwidths"]
+__all__ = ["ActuatorLaw", "actuator_law", "actuator_force_function", "servo_bandwidths",
+           "tracking_controller", "tracked_model", "TRACKING_BANDWIDTH", "TRACKING_ERROR"]
+
+#: Closed-loop bandwidth (rad/s) of the tracking controller of plain torque motors
+#: (:func:`tracking_controller`): twice the top of the random references' band (1.5 Hz by
+#: default) over ``SERVO_BANDWIDTH_FRACTION``, so that the references are followed.
+TRACKING_BANDWIDTH = 2 * np.pi * 5.0
+#: Tracking error, as a fraction of the joint's range, at which the tracking controller's
+#: stiffness balances the joint's largest static load (gravity over the range, dry friction).
+TRACKING_ERROR = 0.02
 
 
 def _supported(model, a: int) -> bool:
@@ -63,6 +72,9 @@ class ActuatorLaw:
     force_input : {"tau", "u"}
         Forces on the system's coordinates (``B @ qfrc_actuator``, ``B`` the system's
         ``force_matrix()``) or on MuJoCo's joints (``qfrc_actuator``).
+    mj_model : mujoco.MjModel, optional
+        Whose actuators act (default ``system.mj_model()``; e.g. the model of
+        :func:`tracked_model`, whose motors track a reference).
 
     Attributes
     ----------
@@ -93,10 +105,10 @@ class ActuatorLaw:
     (3, 1)
     """
 
-    def __init__(self, system, signals, force_input: str):
+    def __init__(self, system, signals, force_input: str, mj_model=None):
         mujoco = import_mujoco()
 
-        model = system.mj_model()
+        model = system.mj_model() if mj_model is None else mj_model
         self.n = int(system.n)
         self.signals = signals
         self.force_input = force_input
@@ -266,7 +278,7 @@ class ActuatorLaw:
         return f"ActuatorLaw({kind}, n={self.n}, nu={self._nu}, force_input={self.force_input!r})"
 
 
-def start_on_reference(system, signals, q0, qd0):
+def start_on_reference(system, signals, q0, qd0, mj_model=None):
     """Move a random initial state onto the position servos' reference (driven runs only).
 
     Parameters
@@ -276,19 +288,22 @@ def start_on_reference(system, signals, q0, qd0):
         The run's controls; None (an undriven run, whose only excitation is its initial
         state) leaves the state as drawn.
     q0, qd0 : array, shape (n,)
+    mj_model : mujoco.MjModel, optional
+        Whose actuators act (default ``system.mj_model()``).
 
     Returns
     -------
     q0, qd0 : ndarray, shape (n,)
         See :meth:`ActuatorLaw.rest_state`; unchanged without position servos.
     """
-    law = None if signals is None else actuator_law(system, signals)
+    law = None if signals is None else actuator_law(system, signals, mj_model=mj_model)
     if law is None or not law.state_dependent:
         return np.asarray(q0, dtype=float), np.asarray(qd0, dtype=float)
     return law.rest_state(0.0, q0, qd0)
 
 
-def actuator_law(system, signals=None, force_input: str = "tau") -> ActuatorLaw | None:
+def actuator_law(system, signals=None, force_input: str = "tau",
+                 mj_model=None) -> ActuatorLaw | None:
     """The MJCF's actuator law driven by ``signals``, or None when MuJoCo's is another.
 
     Parameters
@@ -300,6 +315,8 @@ def actuator_law(system, signals=None, force_input: str = "tau") -> ActuatorLaw 
         ``info["signals"]`` of a trajectory); None: zero controls.
     force_input : {"tau", "u"}, default "tau"
         Generalized forces on the coordinates (``B @ qfrc_actuator``) or joint forces.
+    mj_model : mujoco.MjModel, optional
+        Whose actuators act (default ``system.mj_model()``).
 
     Returns
     -------
@@ -327,12 +344,12 @@ def actuator_law(system, signals=None, force_input: str = "tau") -> ActuatorLaw 
     if signals is not None and not callable(signals):
         raise TypeError(f"signals: expected a function of time or None, got "
                         f"{type(signals).__name__}")
-    model = system.mj_model()
+    model = system.mj_model() if mj_model is None else mj_model
     if not all(_supported(model, a) for a in range(model.nu)):
         return None
     if np.any(getattr(model, "jnt_actgravcomp", 0)):
         return None  # gravity compensation routed through the actuators
-    return ActuatorLaw(system, signals, force_input)
+    return ActuatorLaw(system, signals, force_input, model)
 
 
 def actuator_force_function(system, signals, force_input: str = "tau"):
@@ -419,4 +436,188 @@ def servo_bandwidths(model) -> np.ndarray:
         stiffness = gear**2 * kp
         roots = np.roots([m, damping, stiffness])
         out[a] = float(np.min(np.abs(roots)))
+    return out
+
+
+def _plain_motor(model, a: int) -> bool:
+    """Whether actuator ``a`` is a plain torque motor (fixed gain, no bias) on a limited
+    hinge or slide joint."""
+    mujoco = import_mujoco()
+
+    joint = model.actuator_trnid[a, 0]
+    return (_supported(model, a)
+            and int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_FIXED)
+            and int(model.actuator_biastype[a]) == int(mujoco.mjtBias.mjBIAS_NONE)
+            and bool(model.jnt_limited[joint])
+            and int(model.jnt_type[joint]) in (int(mujoco.mjtJoint.mjJNT_HINGE),
+                                               int(mujoco.mjtJoint.mjJNT_SLIDE)))
+
+
+def _torque_range(model, a: int) -> tuple[float, float]:
+    """The force range of motor ``a`` (``gain * ctrlrange`` within ``forcerange``)."""
+    low, high = -np.inf, np.inf
+    if model.actuator_ctrllimited[a]:
+        bounds = model.actuator_gainprm[a, 0] * model.actuator_ctrlrange[a]
+        low, high = float(bounds.min()), float(bounds.max())
+    if model.actuator_forcelimited[a]:
+        low = max(low, float(model.actuator_forcerange[a, 0]))
+        high = min(high, float(model.actuator_forcerange[a, 1]))
+    return low, high
+
+
+def gravity_torques(model, poses) -> np.ndarray:
+    """Gravity's generalized forces (``qfrc_bias`` at rest) at each pose, shape (P, nv)."""
+    mujoco = import_mujoco()
+
+    data = mujoco.MjData(model)
+    out = np.empty((len(poses), model.nv))
+    for k, pose in enumerate(poses):  # a handful of poses: one forward pass each
+        data.qpos[:], data.qvel[:] = pose, 0.0
+        mujoco.mj_forward(model, data)
+        out[k] = data.qfrc_bias
+    return out
+
+
+def tracking_controller(model, actuators=None, n_poses: int = 16, seed=0) -> dict | None:
+    """A PD controller with which plain torque motors track a position reference.
+
+    Random torques cannot excite an arm whose motors carry its weight: open loop it falls
+    onto its joint stops, and every sample is constrained. A controller that tracks a
+    reference inside the joint ranges keeps it there, as on a real robot; the recorded input
+    is still the motor torque. Each motor ``a`` on joint ``j`` (gear ``g``) becomes the servo
+    ``F = kp (ctrl - g q_j) - kv g qd_j`` (MuJoCo's ``position`` actuator: the reference
+    ``ctrl / g`` is a control signal like any other, the controller a state-dependent
+    actuator law), within the motor's own force range, with the joint stiffness ``K`` and
+    damping ``D`` (``kp = K / g^2``, ``kv = D / g^2``)
+
+    .. math::
+
+        K = \\max\\Big(m\\,\\omega^2,\\;
+            \\frac{\\max_q |g_j(q)| + f_j}{e\\,(q_j^{\\max} - q_j^{\\min})}\\Big),
+        \\qquad D = 2\\sqrt{K m}
+
+    (``m``: the joint's diagonal of ``mj_fullM`` at the reference pose, armature included;
+    ``g_j(q)``: gravity's torque at ``n_poses`` random poses in the ranges; ``f_j``: dry
+    friction; ``omega = TRACKING_BANDWIDTH``, ``e = TRACKING_ERROR``): critically damped, as
+    fast as ``omega`` and stiff enough that the largest static load moves the joint by at
+    most ``e`` of its range. Joint damping only slows it.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+    actuators : array of int, optional
+        Candidate actuators (default all); those that are plain motors on limited hinge or
+        slide joints are tracked.
+    n_poses : int, default 16
+        Random poses at which gravity is evaluated.
+    seed : int, default 0
+
+    Returns
+    -------
+    dict or None
+        ``actuators`` (indices), ``kp``, ``kv``, ``ctrlrange`` (the joint ranges in actuator
+        length units) and ``forcerange`` (the motors' force ranges, None where unbounded): a JSON
+        description for :func:`tracked_model`; None when no actuator qualifies.
+
+    Examples
+    --------
+    A 1 kg pendulum of 0.5 m on a motor, range +-2 rad: gravity's 4.9 N m over 2 % of
+    the 4 rad range asks a stiffness of 61 N m / rad, above ``m omega^2`` (0.25 kg m^2
+    at 10 pi rad/s: 247):
+
+    >>> import mujoco
+    >>> model = mujoco.MjModel.from_xml_string('''<mujoco><worldbody><body>
+    ...   <joint name="j" axis="0 1 0" range="-2 2"/>
+    ...   <inertial pos="0 0 -0.5" mass="1" diaginertia="1e-6 1e-6 1e-6"/></body></worldbody>
+    ...   <actuator><motor joint="j"/></actuator></mujoco>''')
+    >>> controller = tracking_controller(model)
+    >>> round(controller["kp"][0], 1), round(controller["kv"][0], 2)
+    (246.7, 15.71)
+    """
+    mujoco = import_mujoco()
+
+    candidates = range(model.nu) if actuators is None else np.atleast_1d(actuators)
+    tracked = [int(a) for a in candidates if _plain_motor(model, int(a))]
+    if not tracked:
+        return None
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    mass = np.zeros((model.nv, model.nv))
+    mujoco.mj_fullM(model, data, mass)
+    rng = np.random.default_rng(seed)
+    poses = np.tile(model.qpos0, (n_poses, 1))
+    for j in np.flatnonzero(model.jnt_limited):
+        if int(model.jnt_type[j]) in (int(mujoco.mjtJoint.mjJNT_HINGE),
+                                      int(mujoco.mjtJoint.mjJNT_SLIDE)):
+            poses[:, model.jnt_qposadr[j]] = rng.uniform(*model.jnt_range[j], n_poses)
+    gravity = np.abs(gravity_torques(model, np.vstack([model.qpos0, poses]))).max(axis=0)
+    out = {"actuators": tracked, "kp": [], "kv": [], "ctrlrange": [], "forcerange": []}
+    for a in tracked:
+        joint = model.actuator_trnid[a, 0]
+        dof, gear = model.jnt_dofadr[joint], float(model.actuator_gear[a, 0])
+        m = mass[dof, dof]
+        load = gravity[dof] + model.dof_frictionloss[dof]
+        width = float(np.ptp(model.jnt_range[joint]))
+        stiffness = max(m * TRACKING_BANDWIDTH**2, load / (TRACKING_ERROR * width))
+        out["kp"].append(float(stiffness / gear**2))
+        out["kv"].append(float(2 * np.sqrt(stiffness * m) / gear**2))
+        out["ctrlrange"].append(sorted(float(gear * r) for r in model.jnt_range[joint]))
+        out["forcerange"].append([v if np.isfinite(v) else None for v in _torque_range(model, a)])
+    return out
+
+
+def tracked_model(model, controller: dict):
+    """A copy of ``model`` whose motors follow ``controller`` (:func:`tracking_controller`).
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The model the controller was made for, or one with the same actuators (e.g. the
+        identified model of :func:`~pysindy_xl.export.mjcf.identified_mj_model`).
+    controller : dict
+        As returned by :func:`tracking_controller` (or read back from JSON).
+
+    Returns
+    -------
+    mujoco.MjModel
+        Its tracked actuators are ``position`` servos (gain ``kp``, bias ``(0, -kp, -kv)``),
+        controls limited to ``ctrlrange``, forces to ``forcerange``.
+
+    Raises
+    ------
+    ValueError
+        If ``controller`` names an actuator the model does not have.
+
+    Examples
+    --------
+    >>> import mujoco
+    >>> model = mujoco.MjModel.from_xml_string('''<mujoco><worldbody><body>
+    ...   <joint name="j" axis="0 1 0" range="-2 2"/>
+    ...   <inertial pos="0 0 -0.5" mass="1" diaginertia="1e-6 1e-6 1e-6"/></body></worldbody>
+    ...   <actuator><motor joint="j"/></actuator></mujoco>''')
+    >>> servo = tracked_model(model, {"actuators": [0], "kp": [100.0], "kv": [10.0],
+    ...                               "ctrlrange": [[-2.0, 2.0]], "forcerange": [[-5, 5]]})
+    >>> servo.actuator_biasprm[0, :3], servo.actuator_forcerange[0]
+    (array([   0., -100.,  -10.]), array([-5.,  5.]))
+    """
+    import copy
+
+    mujoco = import_mujoco()
+
+    out = copy.deepcopy(model)
+    for i, a in enumerate(controller["actuators"]):
+        if not 0 <= int(a) < model.nu:
+            raise ValueError(f"controller: actuator {a} is not one of the model's {model.nu}")
+        kp, kv = float(controller["kp"][i]), float(controller["kv"][i])
+        out.actuator_gaintype[a] = int(mujoco.mjtGain.mjGAIN_FIXED)
+        out.actuator_biastype[a] = int(mujoco.mjtBias.mjBIAS_AFFINE)
+        out.actuator_gainprm[a, :3] = (kp, 0.0, 0.0)
+        out.actuator_biasprm[a, :3] = (0.0, -kp, -kv)
+        out.actuator_ctrllimited[a] = 1
+        out.actuator_ctrlrange[a] = controller["ctrlrange"][i]
+        low, high = (np.inf * sign if v is None else float(v)
+                     for v, sign in zip(controller["forcerange"][i], (-1, 1), strict=True))
+        out.actuator_forcelimited[a] = int(np.isfinite(low) or np.isfinite(high))
+        out.actuator_forcerange[a] = (low if np.isfinite(low) else -1e30,
+                                      high if np.isfinite(high) else 1e30)
     return out
