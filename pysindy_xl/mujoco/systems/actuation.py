@@ -32,7 +32,8 @@ from .. import import_mujoco
 from .registry import get_system
 
 __all__ = ["ActuatorLaw", "actuator_law", "actuator_force_function", "servo_bandwidths",
-           "tracking_controller", "tracked_model", "TRACKING_BANDWIDTH", "TRACKING_ERROR"]
+           "tracking_controller", "tracked_model", "plain_motors", "gravity_torques",
+           "TRACKING_BANDWIDTH", "TRACKING_ERROR"]
 
 #: Closed-loop bandwidth (rad/s) of the tracking controller of plain torque motors
 #: (:func:`tracking_controller`): twice the top of the random references' band (1.5 Hz by
@@ -465,8 +466,33 @@ def _torque_range(model, a: int) -> tuple[float, float]:
     return low, high
 
 
+def plain_motors(model) -> np.ndarray:
+    """Which actuators are plain torque motors (fixed gain, no bias) on a limited hinge or
+    slide joint: those :func:`tracking_controller` can make track a reference.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+
+    Returns
+    -------
+    ndarray of bool, shape (nu,)
+    """
+    return np.array([_plain_motor(model, a) for a in range(model.nu)], dtype=bool)
+
+
 def gravity_torques(model, poses) -> np.ndarray:
-    """Gravity's generalized forces (``qfrc_bias`` at rest) at each pose, shape (P, nv)."""
+    """Gravity's generalized forces (MuJoCo's ``qfrc_bias`` at rest) at each pose.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+    poses : array, shape (P, nq)
+
+    Returns
+    -------
+    ndarray, shape (P, nv)
+    """
     mujoco = import_mujoco()
 
     data = mujoco.MjData(model)
