@@ -11,8 +11,9 @@ from ..simulation.forcing import FORCING_MODES, SumOfSinusoids
 from ..simulation.generate import actuator_signals, simulate_trajectory
 from ..simulation.integration import UnstableSimulationError, choose_integration
 from ..simulation.signals import motor_tracking
-from ..systems.actuation import start_on_reference, tracked_model
+from ..systems.actuation import start_on_reference
 from ..systems.registry import get_system
+from ..systems.tracking import tracked_model
 
 __all__ = ["validation_trajectory", "mujoco_closed_loop"]
 

@@ -78,8 +78,9 @@ from scipy.interpolate import CubicSpline
 
 from ...data.dataset import Trajectory
 from ..simulation.forcing import SumOfSinusoids
-from ..systems.actuation import actuator_law, tracked_model
+from ..systems.actuation import actuator_law
 from ..systems.registry import get_system
+from ..systems.tracking import tracked_model
 from .physics import compare_physics
 from .runs import mujoco_closed_loop, validation_trajectory
 

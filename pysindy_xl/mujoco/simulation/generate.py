@@ -17,8 +17,9 @@ from ..._validation import check_option
 from ...data.dataset import Dataset, Trajectory
 from ...data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
 from .. import import_mujoco
-from ..systems.actuation import actuator_force_function, start_on_reference, tracked_model
+from ..systems.actuation import actuator_force_function, start_on_reference
 from ..systems.registry import get_system
+from ..systems.tracking import tracked_model
 from .forcing import FORCING_MODES, SumOfSinusoids
 from .integration import (
     INTEGRATORS,

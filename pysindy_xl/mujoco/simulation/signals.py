@@ -5,7 +5,7 @@ the arm, a controller that tracks them as references.
 references for servos, kept within the servos' reach). :func:`motor_tracking` decides how
 plain torque motors are driven: open loop, the signals are their torques; tracked, the
 signals are position references that a PD controller
-(:func:`~pysindy_xl.mujoco.systems.actuation.tracking_controller`) follows, the recorded input
+(:func:`~pysindy_xl.mujoco.systems.tracking.tracking_controller`) follows, the recorded input
 being the torque the motors apply.
 """
 
@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from .. import import_mujoco
-from ..systems.actuation import gravity_torques, plain_motors, tracking_controller
 from ..systems.registry import MuJoCoSystem
+from ..systems.tracking import gravity_torques, plain_motors, tracking_controller
 from .forcing import FORCING_MODES, SumOfSinusoids, within_servo_reach
 
 __all__ = ["actuator_signals", "motor_tracking", "CONTROLS"]
@@ -169,8 +169,8 @@ def motor_tracking(system, model, forcing: str = "explicit", actuators=None,
     reference pose outweighs a motor's random torque, the arm falls onto its joint stops
     and every sample is constrained. Tracked, each driven plain motor on a limited joint
     follows its signal as a position reference inside the joint's range
-    (:func:`~pysindy_xl.mujoco.systems.actuation.tracking_controller`, applied to the model
-    by :func:`~pysindy_xl.mujoco.systems.actuation.tracked_model`); the recorded input is the
+    (:func:`~pysindy_xl.mujoco.systems.tracking.tracking_controller`, applied to the model
+    by :func:`~pysindy_xl.mujoco.systems.tracking.tracked_model`); the recorded input is the
     torque the motors apply, and validation drives the identified model with the same
     controller.
 
@@ -190,7 +190,7 @@ def motor_tracking(system, model, forcing: str = "explicit", actuators=None,
     Returns
     -------
     dict or None
-        The controller (:func:`~pysindy_xl.mujoco.systems.actuation.tracking_controller`);
+        The controller (:func:`~pysindy_xl.mujoco.systems.tracking.tracking_controller`);
         None for open-loop forcing.
 
     Raises
