@@ -90,6 +90,7 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
     for _ in range(4 if backoff else 1):
         q0, qd0 = system.random_initial_state(rng, scale=initial_scale * factor)
         signals = actuator_signals(system, model, forcing, rng, actuators, backoff=factor,
+                                   tracking=controller,
                                    **signal_options)
         q0, qd0 = start_on_reference(system, signals, q0, qd0, model)
         trajectory = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,

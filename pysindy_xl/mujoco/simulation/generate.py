@@ -447,7 +447,8 @@ motor_tracking`): their random signals are torques (open loop) or position refer
                 q0, qd0 = system.random_initial_state(rng, scale=initial_scale * factor)
                 signals = reference.controls(system) if reference is not None else \
                     actuator_signals(system, model, forcing, rng, actuators, n_components,
-                                     max_frequency, amplitude_scale, amplitude, backoff=factor)
+                                     max_frequency, amplitude_scale, amplitude, backoff=factor,
+                                     tracking=controller)
                 q0, qd0 = start_on_reference(system, signals, q0, qd0, model)
                 clean = simulate_trajectory(system, duration + settle, signals, q0, qd0,
                                             sample_every, bar if attempt == 0 else None,

@@ -22,6 +22,10 @@ __all__ = ["actuator_signals", "motor_tracking", "CONTROLS"]
 
 #: How plain torque motors are driven (see :func:`motor_tracking`).
 CONTROLS = ("auto", "open-loop", "tracking")
+#: Default peak of a tracked motor's reference, as a fraction of its joint's half range: the
+#: controller keeps the joint near its reference, so the reference may span most of the range
+#: (the training states then cover the poses the arm is used in).
+TRACKED_AMPLITUDE = 0.9
 
 
 def _actuators(model) -> list[tuple[str, str | None]]:
@@ -78,7 +82,7 @@ def _fraction(value, name: str) -> float:
 def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.Generator,
                      actuators=None, n_components: int = 6, max_frequency: float = 1.5,
                      amplitude_scale: float = 1.0, amplitude=None,
-                     backoff: float = 1.0) -> SumOfSinusoids | None:
+                     backoff: float = 1.0, tracking=None) -> SumOfSinusoids | None:
     """Random control signals (one per actuator of ``model``) for a forcing mode.
 
     Undriven actuators get a zero signal. An actuator with a ``ctrlrange`` oscillates around
@@ -112,9 +116,12 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
         Peak of the signal as a fraction of the ``ctrlrange`` half-width (in (0, 1]); also
         multiplies the amplitudes of actuators without ``ctrlrange``. Default: 0.5 of the
         control range (the full range tends to drive a model into its joint stops), 1 for
-        actuators without range.
+        actuators without range; ``TRACKED_AMPLITUDE`` of the range for tracked motors.
     backoff : float, default 1.0
         Multiplies every amplitude (the automatic back-off of :func:`generate_dataset`).
+    tracking : dict, optional
+        The controller of :func:`motor_tracking` when ``model`` is the tracked model: its
+        actuators' signals are position references.
 
     Returns
     -------
@@ -135,7 +142,7 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
     driven = _driven_mask(system, model, forcing, actuators)
     if not driven.any():
         return None
-    scales, offsets = _scales(system, model, amplitude_scale, amplitude)
+    scales, offsets = _scales(system, model, amplitude_scale, amplitude, tracking)
     scales = np.where(driven, scales * float(backoff), 0.0)
     offsets = np.where(driven, offsets, 0.0)
     signals = SumOfSinusoids.random(scales, rng, n_components=n_components,
@@ -143,16 +150,18 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
     return within_servo_reach(signals, model)
 
 
-def _scales(system, model, amplitude_scale, amplitude):
+def _scales(system, model, amplitude_scale, amplitude, tracking=None):
     """Peak and offset of each actuator's random signal (see :func:`actuator_signals`)."""
     if amplitude is not None:
         amplitude = _fraction(amplitude, "amplitude")
     amplitudes = system.force_amplitudes
+    tracked = set() if tracking is None else set(tracking["actuators"])
     scales, offsets = np.zeros(model.nu), np.zeros(model.nu)
     for a, (_, joint) in enumerate(_actuators(model)):
         if model.actuator_ctrllimited[a]:
             low, high = model.actuator_ctrlrange[a]
-            fraction = 0.5 if amplitude is None else amplitude
+            default = TRACKED_AMPLITUDE if a in tracked else 0.5
+            fraction = default if amplitude is None else amplitude
             scales[a], offsets[a] = fraction * (high - low) / 2, (high + low) / 2
         else:
             scales[a] = amplitudes.get(joint, 1.0) * amplitude_scale * (

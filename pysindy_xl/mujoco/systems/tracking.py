@@ -114,7 +114,10 @@ def tracking_controller(model, actuators=None, n_poses: int = 16, seed=0) -> dic
     ``g_j(q)``: gravity's torque at ``n_poses`` random poses in the ranges; ``f_j``: dry
     friction; ``omega = TRACKING_BANDWIDTH``, ``e = TRACKING_ERROR``): critically damped, as
     fast as ``omega`` and stiff enough that the largest static load moves the joint by at
-    most ``e`` of its range. Joint damping only slows it.
+    most ``e`` of its range. The joint's own damping slows the loop; the references are kept
+    within the loop's actual bandwidth
+    (:func:`~pysindy_xl.mujoco.systems.actuation.servo_bandwidths`, with that damping) by
+    :func:`~pysindy_xl.mujoco.simulation.forcing.within_servo_reach`.
 
     Parameters
     ----------
