@@ -99,6 +99,10 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
         faithful integration chosen from the model (:func:`choose_integration`, with at least
         ``substeps`` substeps); an :class:`~pysindy_xl.mujoco.integration.Integration`: its
         integrator and substeps.
+    mj_model : mujoco.MjModel, optional
+        The compiled model to step (default ``system.mj_model()``; e.g. an arm whose motors
+        track a reference, :func:`~pysindy_xl.mujoco.systems.tracking.tracked_model`); a copy
+        is stepped.
 
     Returns
     -------

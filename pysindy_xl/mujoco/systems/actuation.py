@@ -288,6 +288,18 @@ def start_on_reference(system, signals, q0, qd0, mj_model=None):
     -------
     q0, qd0 : ndarray, shape (n,)
         See :meth:`ActuatorLaw.rest_state`; unchanged without position servos.
+
+    Examples
+    --------
+    A servo (``kp = 100``, ``kv = 10``) whose reference holds 0.5 rad: the run starts there.
+
+    >>> from pysindy_xl.mujoco import MJCFSystem, SumOfSinusoids
+    >>> servo = MJCFSystem('''<mujoco><worldbody><body><joint name="j"/>
+    ...   <geom size="0.1" mass="1"/></body></worldbody>
+    ...   <actuator><position joint="j" kp="100" kv="10"/></actuator></mujoco>''')
+    >>> hold = SumOfSinusoids([[0.0]], [[1.0]], [[0.0]], offsets=[0.5])
+    >>> start_on_reference(servo, hold, [0.2], [1.0])
+    (array([0.5]), array([0.]))
     """
     law = None if signals is None else actuator_law(system, signals, mj_model=mj_model)
     if law is None or not law.state_dependent:
