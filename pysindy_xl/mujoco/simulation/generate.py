@@ -363,10 +363,11 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         every run plays through the system's position servos (its ``controls(system)``)
         instead of random signals; no back-off. The metadata keep it (``reference``).
     control : {"auto", "open-loop", "tracking"}, default "auto"
-        How plain torque motors are driven (:func:`~pysindy_xl.mujoco.simulation.signals.\
-motor_tracking`): their random signals are torques (open loop) or position references
-        that a PD controller tracks inside the joint ranges (the recorded input is the torque
-        the motors apply). ``auto`` tracks where gravity outweighs the motors' random torques.
+        How plain torque motors are driven
+        (:func:`~pysindy_xl.mujoco.simulation.signals.motor_tracking`): their random signals
+        are torques (open loop) or position references that a PD controller tracks inside
+        the joint ranges (the recorded input is the torque the motors apply). ``auto`` tracks
+        where gravity outweighs the motors' random torques.
         The metadata keep the controller (``tracking``, None in open loop), and so does each
         trajectory's ``info``.
 
