@@ -227,18 +227,22 @@ def test_servo_samples_obey_the_continuous_law():
 
 def test_driven_servo_runs_start_on_the_reference():
     """A random initial error would make the servos jump at it (saturating, far faster than
-    the reference): driven runs start where every servo sits on its reference."""
-    from pysindy_xl.mujoco import MJCFSystem
+    the reference): driven runs start where every servo follows its reference with no
+    force, moving at the reference's rate."""
+    from pysindy_xl.mujoco import MJCFSystem, actuator_law
 
     system = MJCFSystem(RK4_SERVO_ARM)
     data = generate_dataset(system, n_trajectories=2, duration=0.5, seed=1, progress=False)
     for trajectory in data.trajectories:
         signals = SumOfSinusoids.from_dict(trajectory.info["signals"])
         reference = np.clip(signals(np.array([0.0, 1e-5]))[:, :2], -1.5, 1.5)
-        # the run starts on the reference; the recording once its stiff modes have settled
-        np.testing.assert_allclose(trajectory.info["q0"], reference[0], atol=1e-12)
-        np.testing.assert_allclose(trajectory.info["qd0"], (reference[1] - reference[0]) / 1e-5,
-                                   rtol=1e-3, atol=1e-6)
+        q0, qd0 = np.array(trajectory.info["q0"]), np.array(trajectory.info["qd0"])
+        # the run starts at zero servo force; the recording once its stiff modes have settled
+        np.testing.assert_allclose(qd0, (reference[1] - reference[0]) / 1e-5, rtol=1e-3,
+                                   atol=1e-6)
+        np.testing.assert_allclose(actuator_law(system, signals)(0.0, q0, qd0), 0.0,
+                                   atol=1e-9)
+        assert np.abs(q0 - reference[0]).max() > 1e-3  # behind a moving reference
         assert trajectory.t[0] == trajectory.info["settle"] > 0
     undriven = generate_dataset(system, n_trajectories=1, duration=0.1, seed=1,
                                 forcing="implicit", progress=False).trajectories[0]

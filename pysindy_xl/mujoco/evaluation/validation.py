@@ -77,12 +77,12 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from ...data.dataset import Trajectory
-from ..simulation.forcing import FORCING_MODES, SumOfSinusoids
-from ..simulation.generate import actuator_signals, simulate_trajectory
-from ..simulation.integration import UnstableSimulationError, choose_integration
-from ..systems.actuation import actuator_law, start_on_reference
+from ..simulation.forcing import SumOfSinusoids
+from ..systems.actuation import actuator_law
 from ..systems.registry import get_system
+from ..systems.tracking import tracked_model
 from .physics import compare_physics
+from .runs import mujoco_closed_loop, validation_trajectory
 
 __all__ = ["ValidationResult", "validate_model", "compare_trajectories",
            "validation_trajectory", "DEFAULT_DIVERGENCE_BOUND", "DEFAULT_FORCE_BOUND", "DRIVES",
@@ -320,92 +320,13 @@ def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVE
     )
 
 
-def validation_trajectory(system, duration: float = 10.0, forcing: str = "explicit",
-                          actuators=None, seed=None, sample_every: int = 10,
-                          initial_scale: float = 1.0, substeps: int = 4,
-                          backoff: bool = True, integrator: str = "auto",
-                          **signal_options) -> Trajectory:
-    """A fresh noise-free MuJoCo trajectory with random initial state and forcing.
-
-    Parameters
-    ----------
-    system : MuJoCoSystem or str
-        A system, a registry name or an MJCF path.
-    duration : float, default 10.0
-        Simulated time (s).
-    forcing : {"explicit", "implicit", "mixed"}
-        Which actuators are driven (see :func:`generate_dataset`).
-    actuators : list of str, optional
-        Driven actuators in ``mixed`` mode.
-    seed : int, optional
-        Seed of the initial state and the signals.
-    sample_every : int, default 10
-        Record every ``sample_every``-th MuJoCo step.
-    initial_scale : float, default 1.0
-        Scale of the random initial state.
-    substeps : int, default 4
-        MuJoCo internal steps per model time step (a finer reference, see the module
-        docstring); with ``integrator="auto"`` at least this many.
-    backoff : bool, default True
-        When a joint limit, contact or equality constraint acts, draw again with half the
-        forcing amplitude and initial spread (at most three times) and keep the draw whose
-        first constraint comes latest (``info["backoff"]`` records the factor).
-    integrator : {"auto", "model", "Euler", "RK4", "implicit", "implicitfast"}, default "auto"
-        MuJoCo's integrator: ``"auto"`` is a stable integration faithful to the continuous
-        equations (see :func:`~pysindy_xl.mujoco.integration.choose_integration`);
-        ``"model"`` keeps the authored one.
-    **signal_options
-        ``n_components``, ``max_frequency``, ``amplitude_scale``, ``amplitude`` of the random
-        forces.
-
-    Returns
-    -------
-    Trajectory
-        With clean ``q, qd, qdd, tau, u`` and the constraint data; ``info["signals"]`` holds
-        the controls (None when no actuator is driven: zero controls, under which servos hold
-        their zero reference).
-
-    Examples
-    --------
-    >>> trajectory = validation_trajectory("double-pendulum", duration=0.5, forcing="implicit",
-    ...                                    seed=0)
-    >>> trajectory.t[:3], trajectory.q.shape, bool((trajectory.tau == 0).all())
-    (array([0.  , 0.01, 0.02]), (51, 2), True)
-    """
-    system = get_system(system)
-    if forcing not in FORCING_MODES:
-        raise ValueError(f"forcing: expected one of {FORCING_MODES}, got {forcing!r}")
-    rng = np.random.default_rng(seed)
-    model = system.mj_model()
-    integration = choose_integration(model, integrator, substeps)
-    best, best_start, factor = None, -1, 1.0
-    for _ in range(4 if backoff else 1):
-        q0, qd0 = system.random_initial_state(rng, scale=initial_scale * factor)
-        signals = actuator_signals(system, model, forcing, rng, actuators, backoff=factor,
-                                   **signal_options)
-        q0, qd0 = start_on_reference(system, signals, q0, qd0)
-        trajectory = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
-                                         control_at="midpoint", integrator=integration)
-        trajectory.info.setdefault("signals", None)  # the controls are known: zero
-        active = trajectory.constraint_active
-        start = int(np.argmax(active)) if active.any() else len(active)
-        if factor < 1:
-            trajectory.info["backoff"] = factor
-        if start > best_start:
-            best, best_start = trajectory, start
-        if start == len(active):
-            break
-        factor /= 2
-    return best
-
-
 def validate_model(model, system=None, trajectory: Trajectory | None = None,
                    duration: float = 10.0, forcing: str = "explicit", actuators=None, seed=None,
                    divergence_bound: float = DEFAULT_DIVERGENCE_BOUND, force_input: str = "tau",
                    sample_every: int = 10, substeps: int = 4, initial_scale: float = 1.0,
                    amplitude=None, constraints: str = "truncate", drive: str = "auto",
                    force_bound: float = DEFAULT_FORCE_BOUND, simulator: str = "auto",
-                   **integrator_options) -> ValidationResult:
+                   control: str = "auto", **integrator_options) -> ValidationResult:
     """Simulate an identified model against a fresh MuJoCo trajectory and score it.
 
     Parameters
@@ -444,6 +365,10 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
         What steps the model in closed loop (see the module docstring): ``auto`` is
         ``mujoco`` where the model can be stated in MuJoCo, ``model`` otherwise; ``mujoco``
         refuses a model it cannot state. Open loop always uses ``model``.
+    control : {"auto", "open-loop", "tracking"}, default "auto"
+        How the fresh trajectory drives plain torque motors (see
+        :func:`validation_trajectory`); a tracked reference (``info["tracking"]``) drives the
+        model in closed loop with the same controller.
     **integrator_options
         Passed to ``model.simulate`` by the ``model`` simulator (``method``, ``rtol``,
         ``atol``, ``timeout``...). The default, scipy's ``DOP853`` at tight tolerances, is
@@ -489,7 +414,8 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
             raise ValueError("system: give a system to simulate or a reference trajectory")
         options = {} if amplitude is None else {"amplitude": amplitude}
         trajectory = validation_trajectory(system, duration, forcing, actuators, seed,
-                                           sample_every, initial_scale, substeps, **options)
+                                           sample_every, initial_scale, substeps,
+                                           control=control, **options)
         names = get_system(system).coordinate_names
     else:
         if not isinstance(trajectory, Trajectory):
@@ -526,10 +452,13 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     reference = trajectory.state
     law = None
     known = "signals" in trajectory.info  # None: recorded without controls (all zero)
+    controller = trajectory.info.get("tracking")
     if system is not None and known:
         signals = trajectory.info["signals"]
+        actuated = None if controller is None else tracked_model(
+            get_system(system).mj_model(), controller)
         law = actuator_law(system, None if signals is None else SumOfSinusoids.from_dict(
-            signals), force_input)
+            signals), force_input, actuated)
     if drive == "closed-loop" and law is None:
         raise ValueError(
             "drive: closed loop needs the system's actuator law (a system given, every "
@@ -542,7 +471,7 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     if simulator not in SIMULATORS:
         raise ValueError(f"simulator: expected one of {SIMULATORS}, got {simulator!r}")
     if closed and simulator != "model":
-        stepped = _mujoco_closed_loop(model, get_system(system), trajectory, substeps,
+        stepped = mujoco_closed_loop(model, get_system(system), trajectory, substeps,
                                       required=simulator == "mujoco")
         if stepped is not None:
             prediction, failure = stepped
@@ -582,40 +511,6 @@ def _closed_result(result, law, constrained_at, force_bound, simulator) -> Valid
     result.force_error = _closed_loop_force_error(law, result)
     result.valid = result.valid and result.force_error <= force_bound
     return result
-
-
-def _mujoco_closed_loop(model, system, trajectory, substeps, required):
-    """``(states, failure)`` of the identified model stepped by MuJoCo under the MJCF's
-    actuators and the reference's controls (module docstring), or None where MuJoCo cannot
-    state the model (a ValueError when ``required``)."""
-    from ...export.mjcf import identified_mj_model
-    from .. import import_mujoco
-
-    mujoco = import_mujoco()
-
-    mj, reason = identified_mj_model(model, system)
-    t = trajectory.t
-    timestep = float(mj.opt.timestep) if mj is not None else 0.0
-    every = int(round((t[1] - t[0]) / timestep)) if mj is not None else 0
-    if mj is not None and not (t[0] == 0 and every >= 1 and np.allclose(
-            np.diff(t), every * timestep)):
-        mj, reason = None, "the reference is not sampled on the model's time steps from t = 0"
-    if mj is None:
-        if required:
-            raise ValueError(f"simulator: MuJoCo cannot step this model: {reason}")
-        return None
-    signals = trajectory.info["signals"]
-    signals = None if signals is None else SumOfSinusoids.from_dict(signals)
-    mj.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_LIMIT) | int(
-        mujoco.mjtDisableBit.mjDSBL_CONTACT)
-    integration = choose_integration(mj, "auto", substeps)
-    try:
-        run = simulate_trajectory(system, t[-1], signals, trajectory.q[0], trajectory.qd[0],
-                                  every, control_at="midpoint", integrator=integration,
-                                  mj_model=mj)
-    except UnstableSimulationError as error:
-        return trajectory.state[:0], f"diverged ({error})"
-    return run.state[:len(t)], None
 
 
 def _closed_loop_force_error(law, result: ValidationResult) -> float:

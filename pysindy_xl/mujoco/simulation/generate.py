@@ -8,6 +8,7 @@ the actuator type) and mapped to the textbook coordinates with the system's forc
 
 from __future__ import annotations
 
+import copy
 import os
 
 import numpy as np
@@ -17,8 +18,9 @@ from ...data.dataset import Dataset, Trajectory
 from ...data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
 from .. import import_mujoco
 from ..systems.actuation import actuator_force_function, start_on_reference
-from ..systems.registry import MuJoCoSystem, get_system
-from .forcing import FORCING_MODES, SumOfSinusoids, within_servo_reach
+from ..systems.registry import get_system
+from ..systems.tracking import tracked_model
+from .forcing import FORCING_MODES, SumOfSinusoids
 from .integration import (
     INTEGRATORS,
     Integration,
@@ -28,62 +30,12 @@ from .integration import (
     settled,
     settling_time,
 )
+from .signals import CONTROLS, _fraction, actuator_signals, motor_tracking
 
 __all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "actuator_signals",
            "noise_levels", "NOISE_KEYS", "NOISE_MODELS",
            "ConstraintWarning", "actuator_force_function", "faithful_integrator", "INTEGRATORS",
-           "UnstableSimulationError", "choose_integration"]
-
-
-def _actuators(model) -> list[tuple[str, str | None]]:
-    """(actuator name, driven joint name or None) for each actuator of the model."""
-    mujoco = import_mujoco()
-    out = []
-    for a in range(model.nu):
-        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) or f"actuator{a}"
-        joint = None
-        if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT):
-            joint = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, model.actuator_trnid[a, 0])
-        out.append((name, joint))
-    return out
-
-
-def _driven_mask(system: MuJoCoSystem, model, forcing: str, actuators) -> np.ndarray:
-    pairs = _actuators(model)
-    if forcing == "implicit":
-        if actuators:
-            raise ValueError("actuators: not used with forcing='implicit' (no force applied)")
-        return np.zeros(len(pairs), dtype=bool)
-    if forcing == "explicit":
-        if actuators:
-            raise ValueError("actuators: not used with forcing='explicit' (every actuator driven)")
-        if not pairs:
-            raise ValueError(
-                "forcing: the model has no actuator; add <motor> elements to the MJCF or use "
-                "forcing='implicit'"
-            )
-        return np.ones(len(pairs), dtype=bool)
-    chosen = system.mixed_actuators if actuators is None else actuators
-    if isinstance(chosen, str):
-        chosen = [chosen]
-    chosen = list(chosen)
-    known = {name for pair in pairs for name in pair if name}
-    unknown = [c for c in chosen if c not in known]
-    if unknown or not chosen:
-        raise ValueError(
-            f"actuators: expected a non-empty list of actuator or joint names among "
-            f"{sorted(known)}, got {chosen!r}"
-        )
-    return np.array([name in chosen or joint in chosen for name, joint in pairs])
-
-
-def _fraction(value, name: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{name}: expected a number in (0, 1], got {value!r}")
-    value = float(value)
-    if not (np.isfinite(value) and 0 < value <= 1):
-        raise ValueError(f"{name}: expected a number in (0, 1], got {value!r}")
-    return value
+           "UnstableSimulationError", "choose_integration", "CONTROLS"]
 
 
 def _constraint_kinds():
@@ -93,84 +45,6 @@ def _constraint_kinds():
     limits = np.array([int(c.mjCNSTR_LIMIT_JOINT), int(c.mjCNSTR_LIMIT_TENDON)])
     equality = np.array([int(c.mjCNSTR_EQUALITY)])
     return friction, limits, equality, int(c.mjCNSTR_LIMIT_JOINT)
-
-
-def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.Generator,
-                     actuators=None, n_components: int = 6, max_frequency: float = 1.5,
-                     amplitude_scale: float = 1.0, amplitude=None,
-                     backoff: float = 1.0) -> SumOfSinusoids | None:
-    """Random control signals (one per actuator of ``model``) for a forcing mode.
-
-    Undriven actuators get a zero signal. An actuator with a ``ctrlrange`` oscillates around
-    the middle of the range with a peak of ``amplitude`` times the half-range; the others
-    with ``system.force_amplitudes`` (by joint) times ``amplitude_scale`` (and times
-    ``amplitude`` when given). A position servo's reference stays within its reach: its
-    frequencies below ``SERVO_BANDWIDTH_FRACTION`` of the servo's bandwidth
-    (:func:`~pysindy_xl.mujoco.actuation.servo_bandwidths`) and its peak speed below
-    ``REFERENCE_SPEED`` (pi rad/s, 1 m/s), so that the servo tracks it without saturating
-    or chattering.
-
-    Parameters
-    ----------
-    system : MuJoCoSystem
-        Gives the force amplitudes and the default actuators of the ``mixed`` mode.
-    model : mujoco.MjModel
-        The compiled model (``system.mj_model()``), whose actuators get the signals.
-    forcing : {"explicit", "implicit", "mixed"}
-        Which actuators are driven (see :func:`generate_dataset`).
-    rng : numpy.random.Generator
-        Source of the random draws.
-    actuators : list of str, optional
-        Actuator or joint names driven in ``mixed`` mode (default ``system.mixed_actuators``).
-    n_components : int, default 6
-        Sinusoids per signal.
-    max_frequency : float, default 1.5
-        Highest frequency (Hz).
-    amplitude_scale : float, default 1.0
-        Multiplies the amplitudes of actuators without ``ctrlrange``.
-    amplitude : float, optional
-        Peak of the signal as a fraction of the ``ctrlrange`` half-width (in (0, 1]); also
-        multiplies the amplitudes of actuators without ``ctrlrange``. Default: 0.5 of the
-        control range (the full range tends to drive a model into its joint stops), 1 for
-        actuators without range.
-    backoff : float, default 1.0
-        Multiplies every amplitude (the automatic back-off of :func:`generate_dataset`).
-
-    Returns
-    -------
-    SumOfSinusoids or None
-        One signal per actuator; None with implicit forcing (no force at all).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> system = get_system("cart-pole")
-    >>> signals = actuator_signals(system, system.mj_model(), "mixed", np.random.default_rng(0))
-    >>> signals.n_signals, signals.amplitudes.sum(axis=1)  # slider driven, hinge free
-    (2, array([3., 0.]))
-    """
-    if forcing not in FORCING_MODES:
-        raise ValueError(f"forcing: expected one of {FORCING_MODES}, got {forcing!r}")
-    driven = _driven_mask(system, model, forcing, actuators)
-    if not driven.any():
-        return None
-    if amplitude is not None:
-        amplitude = _fraction(amplitude, "amplitude")
-    amplitudes = system.force_amplitudes
-    scales, offsets = np.zeros(model.nu), np.zeros(model.nu)
-    for a, (_, joint) in enumerate(_actuators(model)):
-        if model.actuator_ctrllimited[a]:
-            low, high = model.actuator_ctrlrange[a]
-            fraction = 0.5 if amplitude is None else amplitude
-            scales[a], offsets[a] = fraction * (high - low) / 2, (high + low) / 2
-        else:
-            scales[a] = amplitudes.get(joint, 1.0) * amplitude_scale * (
-                1.0 if amplitude is None else amplitude)
-    scales = np.where(driven, scales * float(backoff), 0.0)
-    offsets = np.where(driven, offsets, 0.0)
-    signals = SumOfSinusoids.random(scales, rng, n_components=n_components,
-                                    max_frequency=max_frequency, offsets=offsets)
-    return within_servo_reach(signals, model)
 
 
 def _controls(signals, times, nu: int, substeps: int = 1) -> np.ndarray:
@@ -225,6 +99,10 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
         faithful integration chosen from the model (:func:`choose_integration`, with at least
         ``substeps`` substeps); an :class:`~pysindy_xl.mujoco.integration.Integration`: its
         integrator and substeps.
+    mj_model : mujoco.MjModel, optional
+        The compiled model to step (default ``system.mj_model()``; e.g. an arm whose motors
+        track a reference, :func:`~pysindy_xl.mujoco.systems.tracking.tracked_model`); a copy
+        is stepped.
 
     Returns
     -------
@@ -266,7 +144,8 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     duration = check_option("duration", duration, "real", low=0, low_open=True)
     sample_every = check_option("sample_every", sample_every, "int", low=1)
     substeps = check_option("substeps", substeps, "int", low=1)
-    model = system.mj_model() if mj_model is None else mj_model
+    # a given model is copied: the run sets its time step and integrator
+    model = system.mj_model() if mj_model is None else copy.deepcopy(mj_model)
     data = mujoco.MjData(model)
     n = system.n
     if model.nq != n or model.nv != n:
@@ -414,7 +293,7 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                      progress=None, noise_model: str = "positions", derivatives=None,
                      amplitude=None, backoff: bool = True, max_constrained: float = 0.1,
                      min_unconstrained: float = 0.5, integrator: str = "auto",
-                     reference=None) -> Dataset:
+                     reference=None, control: str = "auto") -> Dataset:
     """Simulate several randomly forced MuJoCo trajectories of a system.
 
     Parameters
@@ -483,6 +362,14 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         A planned trajectory (e.g. :func:`~pysindy_xl.mujoco.excitation_trajectory`) that
         every run plays through the system's position servos (its ``controls(system)``)
         instead of random signals; no back-off. The metadata keep it (``reference``).
+    control : {"auto", "open-loop", "tracking"}, default "auto"
+        How plain torque motors are driven
+        (:func:`~pysindy_xl.mujoco.simulation.signals.motor_tracking`): their random signals
+        are torques (open loop) or position references that a PD controller tracks inside
+        the joint ranges (the recorded input is the torque the motors apply). ``auto`` tracks
+        where gravity outweighs the motors' random torques.
+        The metadata keep the controller (``tracking``, None in open loop), and so does each
+        trajectory's ``info``.
 
     Returns
     -------
@@ -541,6 +428,10 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     if reference is not None and not callable(getattr(reference, "controls", None)):
         raise TypeError(f"reference: expected a FourierTrajectory, got {type(reference).__name__}")
     model = system.mj_model()
+    controller = None if reference is not None else motor_tracking(
+        system, model, forcing, actuators, amplitude_scale, amplitude, control)
+    if controller is not None:
+        model = tracked_model(model, controller)
     rng = np.random.default_rng(seed)
     n_steps = int(round(float(duration) / model.opt.timestep)) + 1
     if n_steps > 100_000_000:
@@ -561,11 +452,13 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                 q0, qd0 = system.random_initial_state(rng, scale=initial_scale * factor)
                 signals = reference.controls(system) if reference is not None else \
                     actuator_signals(system, model, forcing, rng, actuators, n_components,
-                                     max_frequency, amplitude_scale, amplitude, backoff=factor)
-                q0, qd0 = start_on_reference(system, signals, q0, qd0)
+                                     max_frequency, amplitude_scale, amplitude, backoff=factor,
+                                     tracking=controller)
+                q0, qd0 = start_on_reference(system, signals, q0, qd0, model)
                 clean = simulate_trajectory(system, duration + settle, signals, q0, qd0,
                                             sample_every, bar if attempt == 0 else None,
-                                            control_at="midpoint", integrator=integration)
+                                            control_at="midpoint", integrator=integration,
+                                            mj_model=model)
                 clean = settled(clean, settle)
                 if clean.constraint_active.mean() <= max_constrained or (
                     attempt == attempts - 1
@@ -574,6 +467,8 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                 factor /= 2
             if factor < 1:
                 clean.info["backoff"] = factor
+            if controller is not None:
+                clean.info["tracking"] = controller
             noisy = add_noise(clean, levels, rng, system.force_matrix())
             if not derivatives:
                 noisy.qd = noisy.qdd = None
@@ -600,6 +495,7 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         "force_matrix": system.force_matrix().tolist(),
         "joint_names": list(system.joint_names),
         "reference": None if reference is None else reference.to_dict(),
+        "tracking": controller,
     }
     metadata.update(getattr(system, "metadata", lambda: {})())
     dataset = Dataset(trajectories, system.coordinate_names, metadata)

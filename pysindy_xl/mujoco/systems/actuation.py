@@ -34,6 +34,7 @@ from .registry import get_system
 __all__ = ["ActuatorLaw", "actuator_law", "actuator_force_function", "servo_bandwidths"]
 
 
+
 def _supported(model, a: int) -> bool:
     """Whether actuator ``a`` follows the law of the module docstring."""
     mujoco = import_mujoco()
@@ -63,6 +64,10 @@ class ActuatorLaw:
     force_input : {"tau", "u"}
         Forces on the system's coordinates (``B @ qfrc_actuator``, ``B`` the system's
         ``force_matrix()``) or on MuJoCo's joints (``qfrc_actuator``).
+    mj_model : mujoco.MjModel, optional
+        Whose actuators act (default ``system.mj_model()``; e.g. the model of
+        :func:`~pysindy_xl.mujoco.systems.tracking.tracked_model`, whose motors track a
+        reference).
 
     Attributes
     ----------
@@ -93,10 +98,10 @@ class ActuatorLaw:
     (3, 1)
     """
 
-    def __init__(self, system, signals, force_input: str):
+    def __init__(self, system, signals, force_input: str, mj_model=None):
         mujoco = import_mujoco()
 
-        model = system.mj_model()
+        model = system.mj_model() if mj_model is None else mj_model
         self.n = int(system.n)
         self.signals = signals
         self.force_input = force_input
@@ -194,17 +199,29 @@ class ActuatorLaw:
         return values.reshape(self.n) if single else values
 
     def rest_state(self, t: float, q, qd, dt: float = 1e-4):
-        """The state nearest ``(q, qd)`` at which every position servo sits on its reference.
+        """The state nearest ``(q, qd)`` at which every position servo follows its reference
+        with no force.
 
         A servo with a position feedback (``bias[1] < 0``: ``position`` actuators, ``general``
-        ones with an affine bias and a constant gain) pulls its joint to the length
-        ``ell* = -(gain * ctrl + bias[0]) / bias[1]``. With ``A`` the servos' lengths per
+        ones with an affine bias and a constant gain) applies
+        ``F = gain * ctrl + bias[0] + bias[1] ell + bias[2] v``. Its joint moves at the rate
+        of the reference, ``v* = d/dt (-(gain * ctrl + bias[0]) / bias[1])``, with no force
+        at the length
+
+        .. math::
+
+            \\ell^* = -\\frac{\\mathrm{gain}\\,\\mathrm{ctrl} + b_0 + b_2 v^*}{b_1}
+
+        (a servo whose damping acts on the joint's own velocity, ``b_2 = -kv``, lags its
+        reference by ``kv v* / kp`` in steady tracking). With ``A`` the servos' lengths per
         generalized coordinate (``ell = A q``), the positions are moved to
-        ``q + pinv(A) (ell* - A q)`` (the smallest change that puts every servo on its
-        reference) and the velocities likewise onto ``d ell* / dt``. Other coordinates keep
-        their values. Starting a run there spares the servos the transient of a random
-        initial error, which saturates them and drives the joints far faster than the
-        reference.
+        ``q + pinv(A) (ell* - A q)`` (the smallest change that puts every servo there) and
+        the velocities likewise onto ``v*``. Other coordinates keep their values. Starting a
+        run there spares the servos the transient of a random initial error; starting on the
+        reference itself at the reference's rate would ask ``kv v*`` of a stiff servo at once,
+        which saturates it and, on a light link, makes a time-stepping integrator chatter
+        between the force limits (the servo's damping is not applied while its force is
+        clamped).
 
         Parameters
         ----------
@@ -219,6 +236,20 @@ class ActuatorLaw:
         -------
         q, qd : ndarray, shape (n,)
             Unchanged when no actuator is a position servo.
+
+        Examples
+        --------
+        A servo ``kp = 100``, ``kv = 10`` whose reference moves at 1 rad/s starts 0.1 rad
+        behind it, where its force ``100 * 0.1 - 10 * 1`` vanishes:
+
+        >>> from pysindy_xl.mujoco import MJCFSystem, SumOfSinusoids
+        >>> servo = MJCFSystem('''<mujoco><worldbody><body><joint name="j"/>
+        ...   <geom size="0.1" mass="1"/></body></worldbody>
+        ...   <actuator><position joint="j" kp="100" kv="10"/></actuator></mujoco>''')
+        >>> law = actuator_law(servo, SumOfSinusoids([[0.1]], [[1 / (0.2 * np.pi)]], [[0.0]]))
+        >>> q, qd = law.rest_state(0.0, [0.3], [0.0])
+        >>> q.round(6), qd.round(6), law(0.0, q, qd).round(6)
+        (array([-0.1]), array([1.]), array([0.]))
         """
         q, qd = np.array(q, dtype=float), np.array(qd, dtype=float)
         servo = (self._bias[:, 1] < 0) & np.all(self._gain[:, 1:] == 0, axis=1)
@@ -230,8 +261,8 @@ class ActuatorLaw:
         def reference(times):
             return -(gain * self.controls(times)[:, servo] + bias[:, 0]) / bias[:, 1]
 
-        target = reference(np.array([t]))[0]
         rate = (reference(np.array([t + dt])) - reference(np.array([t - dt])))[0] / (2 * dt)
+        target = reference(np.array([t]))[0] - bias[:, 2] * rate / bias[:, 1]
         inverse = np.linalg.pinv(lengths)
         return q + inverse @ (target - lengths @ q), qd + inverse @ (rate - lengths @ qd)
 
@@ -240,7 +271,7 @@ class ActuatorLaw:
         return f"ActuatorLaw({kind}, n={self.n}, nu={self._nu}, force_input={self.force_input!r})"
 
 
-def start_on_reference(system, signals, q0, qd0):
+def start_on_reference(system, signals, q0, qd0, mj_model=None):
     """Move a random initial state onto the position servos' reference (driven runs only).
 
     Parameters
@@ -250,19 +281,34 @@ def start_on_reference(system, signals, q0, qd0):
         The run's controls; None (an undriven run, whose only excitation is its initial
         state) leaves the state as drawn.
     q0, qd0 : array, shape (n,)
+    mj_model : mujoco.MjModel, optional
+        Whose actuators act (default ``system.mj_model()``).
 
     Returns
     -------
     q0, qd0 : ndarray, shape (n,)
         See :meth:`ActuatorLaw.rest_state`; unchanged without position servos.
+
+    Examples
+    --------
+    A servo (``kp = 100``, ``kv = 10``) whose reference holds 0.5 rad: the run starts there.
+
+    >>> from pysindy_xl.mujoco import MJCFSystem, SumOfSinusoids
+    >>> servo = MJCFSystem('''<mujoco><worldbody><body><joint name="j"/>
+    ...   <geom size="0.1" mass="1"/></body></worldbody>
+    ...   <actuator><position joint="j" kp="100" kv="10"/></actuator></mujoco>''')
+    >>> hold = SumOfSinusoids([[0.0]], [[1.0]], [[0.0]], offsets=[0.5])
+    >>> start_on_reference(servo, hold, [0.2], [1.0])
+    (array([0.5]), array([0.]))
     """
-    law = None if signals is None else actuator_law(system, signals)
+    law = None if signals is None else actuator_law(system, signals, mj_model=mj_model)
     if law is None or not law.state_dependent:
         return np.asarray(q0, dtype=float), np.asarray(qd0, dtype=float)
     return law.rest_state(0.0, q0, qd0)
 
 
-def actuator_law(system, signals=None, force_input: str = "tau") -> ActuatorLaw | None:
+def actuator_law(system, signals=None, force_input: str = "tau",
+                 mj_model=None) -> ActuatorLaw | None:
     """The MJCF's actuator law driven by ``signals``, or None when MuJoCo's is another.
 
     Parameters
@@ -274,6 +320,8 @@ def actuator_law(system, signals=None, force_input: str = "tau") -> ActuatorLaw 
         ``info["signals"]`` of a trajectory); None: zero controls.
     force_input : {"tau", "u"}, default "tau"
         Generalized forces on the coordinates (``B @ qfrc_actuator``) or joint forces.
+    mj_model : mujoco.MjModel, optional
+        Whose actuators act (default ``system.mj_model()``).
 
     Returns
     -------
@@ -301,12 +349,12 @@ def actuator_law(system, signals=None, force_input: str = "tau") -> ActuatorLaw 
     if signals is not None and not callable(signals):
         raise TypeError(f"signals: expected a function of time or None, got "
                         f"{type(signals).__name__}")
-    model = system.mj_model()
+    model = system.mj_model() if mj_model is None else mj_model
     if not all(_supported(model, a) for a in range(model.nu)):
         return None
     if np.any(getattr(model, "jnt_actgravcomp", 0)):
         return None  # gravity compensation routed through the actuators
-    return ActuatorLaw(system, signals, force_input)
+    return ActuatorLaw(system, signals, force_input, model)
 
 
 def actuator_force_function(system, signals, force_input: str = "tau"):

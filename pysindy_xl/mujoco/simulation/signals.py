@@ -1,0 +1,242 @@
+"""What drives a generated run's actuators: random signals, and when torque motors cannot hold
+the arm, a controller that tracks them as references.
+
+:func:`actuator_signals` draws one random sum of sinusoids per actuator (forces for motors,
+references for servos, kept within the servos' reach). :func:`motor_tracking` decides how
+plain torque motors are driven: open loop, the signals are their torques; tracked, the
+signals are position references that a PD controller
+(:func:`~pysindy_xl.mujoco.systems.tracking.tracking_controller`) follows, the recorded input
+being the torque the motors apply.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import import_mujoco
+from ..systems.registry import MuJoCoSystem
+from ..systems.tracking import gravity_torques, plain_motors, tracking_controller
+from .forcing import FORCING_MODES, SumOfSinusoids, within_servo_reach
+
+__all__ = ["actuator_signals", "motor_tracking", "CONTROLS"]
+
+#: How plain torque motors are driven (see :func:`motor_tracking`).
+CONTROLS = ("auto", "open-loop", "tracking")
+#: Default peak of a tracked motor's reference, as a fraction of its joint's half range: the
+#: controller keeps the joint near its reference, so the reference may span most of the range
+#: (the training states then cover the poses the arm is used in).
+TRACKED_AMPLITUDE = 0.9
+
+
+def _actuators(model) -> list[tuple[str, str | None]]:
+    """(actuator name, driven joint name or None) for each actuator of the model."""
+    mujoco = import_mujoco()
+    out = []
+    for a in range(model.nu):
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) or f"actuator{a}"
+        joint = None
+        if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT):
+            joint = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, model.actuator_trnid[a, 0])
+        out.append((name, joint))
+    return out
+
+
+def _driven_mask(system: MuJoCoSystem, model, forcing: str, actuators) -> np.ndarray:
+    pairs = _actuators(model)
+    if forcing == "implicit":
+        if actuators:
+            raise ValueError("actuators: not used with forcing='implicit' (no force applied)")
+        return np.zeros(len(pairs), dtype=bool)
+    if forcing == "explicit":
+        if actuators:
+            raise ValueError("actuators: not used with forcing='explicit' (every actuator driven)")
+        if not pairs:
+            raise ValueError(
+                "forcing: the model has no actuator; add <motor> elements to the MJCF or use "
+                "forcing='implicit'"
+            )
+        return np.ones(len(pairs), dtype=bool)
+    chosen = system.mixed_actuators if actuators is None else actuators
+    if isinstance(chosen, str):
+        chosen = [chosen]
+    chosen = list(chosen)
+    known = {name for pair in pairs for name in pair if name}
+    unknown = [c for c in chosen if c not in known]
+    if unknown or not chosen:
+        raise ValueError(
+            f"actuators: expected a non-empty list of actuator or joint names among "
+            f"{sorted(known)}, got {chosen!r}"
+        )
+    return np.array([name in chosen or joint in chosen for name, joint in pairs])
+
+
+def _fraction(value, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name}: expected a number in (0, 1], got {value!r}")
+    value = float(value)
+    if not (np.isfinite(value) and 0 < value <= 1):
+        raise ValueError(f"{name}: expected a number in (0, 1], got {value!r}")
+    return value
+
+
+def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.Generator,
+                     actuators=None, n_components: int = 6, max_frequency: float = 1.5,
+                     amplitude_scale: float = 1.0, amplitude=None,
+                     backoff: float = 1.0, tracking=None) -> SumOfSinusoids | None:
+    """Random control signals (one per actuator of ``model``) for a forcing mode.
+
+    Undriven actuators get a zero signal. An actuator with a ``ctrlrange`` oscillates around
+    the middle of the range with a peak of ``amplitude`` times the half-range; the others
+    with ``system.force_amplitudes`` (by joint) times ``amplitude_scale`` (and times
+    ``amplitude`` when given). A position servo's reference stays within its reach: its
+    frequencies below ``SERVO_BANDWIDTH_FRACTION`` of the servo's bandwidth
+    (:func:`~pysindy_xl.mujoco.actuation.servo_bandwidths`) and its peak speed below
+    ``REFERENCE_SPEED`` (pi rad/s, 1 m/s), so that the servo tracks it without saturating
+    or chattering.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        Gives the force amplitudes and the default actuators of the ``mixed`` mode.
+    model : mujoco.MjModel
+        The compiled model (``system.mj_model()``), whose actuators get the signals.
+    forcing : {"explicit", "implicit", "mixed"}
+        Which actuators are driven (see :func:`generate_dataset`).
+    rng : numpy.random.Generator
+        Source of the random draws.
+    actuators : list of str, optional
+        Actuator or joint names driven in ``mixed`` mode (default ``system.mixed_actuators``).
+    n_components : int, default 6
+        Sinusoids per signal.
+    max_frequency : float, default 1.5
+        Highest frequency (Hz).
+    amplitude_scale : float, default 1.0
+        Multiplies the amplitudes of actuators without ``ctrlrange``.
+    amplitude : float, optional
+        Peak of the signal as a fraction of the ``ctrlrange`` half-width (in (0, 1]); also
+        multiplies the amplitudes of actuators without ``ctrlrange``. Default: 0.5 of the
+        control range (the full range tends to drive a model into its joint stops), 1 for
+        actuators without range; ``TRACKED_AMPLITUDE`` of the range for tracked motors.
+    backoff : float, default 1.0
+        Multiplies every amplitude (the automatic back-off of :func:`generate_dataset`).
+    tracking : dict, optional
+        The controller of :func:`motor_tracking` when ``model`` is the tracked model: its
+        actuators' signals are position references.
+
+    Returns
+    -------
+    SumOfSinusoids or None
+        One signal per actuator; None with implicit forcing (no force at all).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pysindy_xl.mujoco import get_system
+    >>> system = get_system("cart-pole")
+    >>> signals = actuator_signals(system, system.mj_model(), "mixed", np.random.default_rng(0))
+    >>> signals.n_signals, signals.amplitudes.sum(axis=1)  # slider driven, hinge free
+    (2, array([3., 0.]))
+    """
+    if forcing not in FORCING_MODES:
+        raise ValueError(f"forcing: expected one of {FORCING_MODES}, got {forcing!r}")
+    driven = _driven_mask(system, model, forcing, actuators)
+    if not driven.any():
+        return None
+    scales, offsets = _scales(system, model, amplitude_scale, amplitude, tracking)
+    scales = np.where(driven, scales * float(backoff), 0.0)
+    offsets = np.where(driven, offsets, 0.0)
+    signals = SumOfSinusoids.random(scales, rng, n_components=n_components,
+                                    max_frequency=max_frequency, offsets=offsets)
+    return within_servo_reach(signals, model)
+
+
+def _scales(system, model, amplitude_scale, amplitude, tracking=None):
+    """Peak and offset of each actuator's random signal (see :func:`actuator_signals`)."""
+    if amplitude is not None:
+        amplitude = _fraction(amplitude, "amplitude")
+    amplitudes = system.force_amplitudes
+    tracked = set() if tracking is None else set(tracking["actuators"])
+    scales, offsets = np.zeros(model.nu), np.zeros(model.nu)
+    for a, (_, joint) in enumerate(_actuators(model)):
+        if model.actuator_ctrllimited[a]:
+            low, high = model.actuator_ctrlrange[a]
+            default = TRACKED_AMPLITUDE if a in tracked else 0.5
+            fraction = default if amplitude is None else amplitude
+            scales[a], offsets[a] = fraction * (high - low) / 2, (high + low) / 2
+        else:
+            scales[a] = amplitudes.get(joint, 1.0) * amplitude_scale * (
+                1.0 if amplitude is None else amplitude)
+    return scales, offsets
+
+
+def motor_tracking(system, model, forcing: str = "explicit", actuators=None,
+                   amplitude_scale: float = 1.0, amplitude=None,
+                   control: str = "auto") -> dict | None:
+    """The controller with which a run's plain torque motors track their signals, or None.
+
+    Random torques excite an arm only if its motors can hold it: where gravity at the
+    reference pose outweighs a motor's random torque, the arm falls onto its joint stops
+    and every sample is constrained. Tracked, each driven plain motor on a limited joint
+    follows its signal as a position reference inside the joint's range
+    (:func:`~pysindy_xl.mujoco.systems.tracking.tracking_controller`, applied to the model
+    by :func:`~pysindy_xl.mujoco.systems.tracking.tracked_model`); the recorded input is the
+    torque the motors apply, and validation drives the identified model with the same
+    controller.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem
+    model : mujoco.MjModel
+        The system's compiled model.
+    forcing, actuators, amplitude_scale, amplitude
+        The run's forcing (see :func:`actuator_signals`).
+    control : {"auto", "open-loop", "tracking"}, default "auto"
+        ``open-loop``: the signals are the motors' torques; ``tracking``: every driven plain
+        motor on a limited joint tracks; ``auto``: tracking when some of them is weaker than
+        gravity at the reference pose (the peak of its random torque below the gravity
+        torque on its joint), open loop otherwise.
+
+    Returns
+    -------
+    dict or None
+        The controller (:func:`~pysindy_xl.mujoco.systems.tracking.tracking_controller`);
+        None for open-loop forcing.
+
+    Raises
+    ------
+    ValueError
+        If ``control`` is unknown, or ``"tracking"`` where no driven actuator is a plain
+        motor on a limited joint.
+
+    Examples
+    --------
+    The paper's pendulums have no joint limits: their motors are driven open loop.
+
+    >>> from pysindy_xl.mujoco import get_system
+    >>> system = get_system("double-pendulum")
+    >>> print(motor_tracking(system, system.mj_model()))
+    None
+    """
+    if control not in CONTROLS:
+        raise ValueError(f"control: expected one of {CONTROLS}, got {control!r}")
+    if control == "open-loop" or forcing == "implicit":
+        return None
+    driven = _driven_mask(system, model, forcing, actuators)
+    candidates = np.flatnonzero(driven & plain_motors(model))
+    if control == "auto":
+        if not len(candidates):
+            return None
+        scales, _ = _scales(system, model, amplitude_scale, amplitude)
+        gravity = gravity_torques(model, [model.qpos0])[0]
+        dof = model.jnt_dofadr[model.actuator_trnid[candidates, 0]]
+        torque = scales[candidates] * np.abs(model.actuator_gainprm[candidates, 0]
+                                             * model.actuator_gear[candidates, 0])
+        if not np.any(torque < np.abs(gravity[dof])):
+            return None
+    controller = tracking_controller(model, candidates)
+    if controller is None and control == "tracking":
+        raise ValueError("control: 'tracking' needs a driven plain torque motor on a limited "
+                         "hinge or slide joint; the model has none")
+    return controller
+
+
