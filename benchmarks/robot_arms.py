@@ -80,8 +80,9 @@ RESULTS = pathlib.Path(__file__).resolve().parent / "results"
 #: Records of older data generators are not mixed with new ones: 2 = controls held at each
 #: step's midpoint, forces recorded under the continuous signal, servo runs starting on
 #: their reference; 3 = integration chosen from the model's stiffness, references within the
-#: servos' reach, recording after the settle time.
-DATA_VERSION = 3
+#: servos' reach, recording after the settle time; 4 = servo runs starting where the servos
+#: push nothing while moving with their reference.
+DATA_VERSION = 4
 
 #: (axis, offset of the joint from its parent, centre of mass, mass, inertia diagonal, range)
 ARMS = {
