@@ -38,13 +38,20 @@ __all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "actuator_sig
            "UnstableSimulationError", "choose_integration", "CONTROLS"]
 
 
+#: Kinds of constraint rows (:func:`_constraint_kinds`).
+_CONTACT, _FRICTION, _LIMIT, _EQUALITY = range(4)
+
+
 def _constraint_kinds():
+    """The kind of every MuJoCo constraint type (a lookup table indexed by ``efc_type``: one
+    gather per sample instead of set membership tests) and the joint-limit type."""
     mujoco = import_mujoco()
     c = mujoco.mjtConstraint
-    friction = np.array([int(c.mjCNSTR_FRICTION_DOF), int(c.mjCNSTR_FRICTION_TENDON)])
-    limits = np.array([int(c.mjCNSTR_LIMIT_JOINT), int(c.mjCNSTR_LIMIT_TENDON)])
-    equality = np.array([int(c.mjCNSTR_EQUALITY)])
-    return friction, limits, equality, int(c.mjCNSTR_LIMIT_JOINT)
+    kinds = np.full(max(int(v) for v in c.__members__.values()) + 1, _CONTACT, dtype=np.int8)
+    kinds[[int(c.mjCNSTR_FRICTION_DOF), int(c.mjCNSTR_FRICTION_TENDON)]] = _FRICTION
+    kinds[[int(c.mjCNSTR_LIMIT_JOINT), int(c.mjCNSTR_LIMIT_TENDON)]] = _LIMIT
+    kinds[int(c.mjCNSTR_EQUALITY)] = _EQUALITY
+    return kinds, int(c.mjCNSTR_LIMIT_JOINT)
 
 
 def _controls(signals, times, nu: int, substeps: int = 1) -> np.ndarray:
@@ -190,7 +197,7 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     qpos, qvel, qacc, force, constraint = (np.empty((len(recorded), n)) for _ in range(5))
     energy = np.empty((len(recorded), 2))
     active = np.zeros(len(recorded), dtype=bool)
-    friction_types, limit_types, equality_types, joint_limit = _constraint_kinds()
+    kind_of, joint_limit = _constraint_kinds()
     limit_hits = np.zeros(model.njnt, dtype=np.int64)
     contact_samples = equality_samples = 0
     r = 0
@@ -204,16 +211,15 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
             force[r] = data.qfrc_actuator
             constraint[r] = data.qfrc_constraint
             if data.nefc:
-                kinds = data.efc_type[:data.nefc]
-                pushing = (np.abs(data.efc_force[:data.nefc]) > 0) & ~np.isin(kinds,
-                                                                              friction_types)
+                types = data.efc_type[:data.nefc]
+                kinds = kind_of[types]
+                pushing = (np.abs(data.efc_force[:data.nefc]) > 0) & (kinds != _FRICTION)
                 if pushing.any():
                     active[r] = True
-                    hit = pushing & (kinds == joint_limit)
+                    hit = pushing & (types == joint_limit)
                     limit_hits[np.unique(data.efc_id[:data.nefc][hit])] += 1
-                    contact_samples += bool(np.any(pushing & ~np.isin(
-                        kinds, np.r_[limit_types, equality_types])))
-                    equality_samples += bool(np.any(pushing & np.isin(kinds, equality_types)))
+                    contact_samples += bool(np.any(pushing & (kinds == _CONTACT)))
+                    equality_samples += bool(np.any(pushing & (kinds == _EQUALITY)))
             r += 1
         if k < n_fine:
             if k % chunk == 0:  # the controls of the next chunk of internal steps
