@@ -18,6 +18,8 @@ model is ``Theta @ xi = 0``, i.e. for each coordinate ``c``: ``sum_j xi_j E[c, j
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
 from collections.abc import Sequence
 
 import numpy as np
@@ -33,7 +35,8 @@ from ..symbols import Coordinates
 from ._compile import Terms, compile_entries, compile_terms, decompose
 from ._weak import integrate_by_parts
 
-__all__ = ["SymbolicLibrary", "stack_variables", "compile_entries", "LIBRARY_TYPES"]
+__all__ = ["SymbolicLibrary", "stack_variables", "compile_entries", "LIBRARY_TYPES",
+           "remembered_weak_values"]
 
 #: Every catalog category by its ``spec_type``: what a model file may name. A subclass of
 #: :class:`SymbolicLibrary` registers itself when it is defined (in this package or in a
@@ -41,6 +44,7 @@ __all__ = ["SymbolicLibrary", "stack_variables", "compile_entries", "LIBRARY_TYP
 LIBRARY_TYPES: dict[str, type] = {}
 
 _WEAK_BLOCK = 8192  # samples per block of the weak evaluation
+_WEAK_MEMO_BYTES = 1 << 28  # values kept by remembered_weak_values, at most
 
 #: Derived terms by content, most recently used last: a fitted model's clone of a catalog
 #: (every fit clones the user's) derives the same entries again, and with the same
@@ -59,6 +63,43 @@ def _derived(key, derive):
     while len(_DERIVED) > _CACHED_DERIVED:
         del _DERIVED[next(iter(_DERIVED))]
     return found
+
+
+@contextlib.contextmanager
+def remembered_weak_values(library):
+    """Within the block, ``library.weak_transform`` evaluates the entries of each distinct
+    state array once and contracts the values it kept with any test functions.
+
+    Weak problems of the same smoothed states with other test functions (the candidates of
+    a noise-model choice, their propagated noise draws) then cost only their contraction;
+    the results are those of separate evaluations, bit for bit. The values (at most
+    ``_WEAK_MEMO_BYTES``) are released when the block ends; re-entrant.
+
+    Parameters
+    ----------
+    library : SymbolicLibrary
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> library = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit()
+    >>> z = px.stack_variables(np.ones((20, 1)), np.ones((20, 1)))
+    >>> phi = np.full((2, 20), 0.05)
+    >>> with remembered_weak_values(library):
+    ...     first = library.weak_transform(z, phi, phi)
+    ...     again = library.weak_transform(z, 2 * phi, phi)
+    >>> bool(np.array_equal(again, library.weak_transform(z, 2 * phi, phi)))
+    True
+    """
+    outer = "_weak_memo" in library.__dict__
+    if not outer:
+        library._weak_memo = {}
+    try:
+        yield library
+    finally:
+        if not outer:
+            library.__dict__.pop("_weak_memo", None)
 
 
 class TermChain(Sequence):
@@ -244,6 +285,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
         for stale in ("weak_P_", "weak_Q_", "_weak_evaluate", "_weak_entry_index",
                       "_column_terms", "_weak_terms"):
             self.__dict__.pop(stale, None)
+        self.__dict__.get("_weak_memo", {}).clear()  # values of the former entries
         self.n_features_in_ = len(self.coords.variables)
 
     def _check_columns(self, names, matrix) -> None:
@@ -290,7 +332,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
     def __getstate__(self):
         # compiled evaluators are closures: rebuilt on first use after unpickling
         state = self.__dict__.copy()
-        for key in ("_evaluate", "_weak_evaluate", "_weak_entry_index"):
+        for key in ("_evaluate", "_weak_evaluate", "_weak_entry_index", "_weak_memo"):
             state.pop(key, None)
         return state
 
@@ -458,10 +500,12 @@ class SymbolicLibrary(BaseFeatureLibrary):
         parts = [np.flatnonzero(index[:, 0] == part) for part in (0, 1)]
         n_windows = phi.shape[0]
         contributions = np.zeros((n_windows, len(index)))
+        with np.errstate(all="ignore"):
+            blocks = self._weak_values(x)
         for start in range(0, n_samples, _WEAK_BLOCK):  # blocks of samples bound the memory
             stop = min(start + _WEAK_BLOCK, n_samples)
             with np.errstate(all="ignore"):
-                values = self._weak_evaluate(x[start:stop], stacked=True)  # entries x samples
+                values = next(blocks)  # entries x samples
             for part, entries in enumerate(parts):
                 if len(entries):
                     # samples x entries in C order, as the sparse product reads them
@@ -472,6 +516,23 @@ class SymbolicLibrary(BaseFeatureLibrary):
         weak = weak.reshape(n * n_windows, n_features)
         self._check_finite_output(weak, n_windows)
         return weak
+
+    def _weak_values(self, x):
+        """The entries of :meth:`weak_terms` on blocks of ``_WEAK_BLOCK`` samples of ``x``,
+        each an array (entries, samples), evaluated as they are read; within
+        :func:`remembered_weak_values`, all at once and kept for the same ``x``."""
+        blocks = (self._weak_evaluate(x[start:start + _WEAK_BLOCK], stacked=True)
+                  for start in range(0, x.shape[0], _WEAK_BLOCK))
+        memo = self.__dict__.get("_weak_memo")
+        if memo is None:
+            return blocks
+        key = hashlib.sha1(np.ascontiguousarray(x)).digest()
+        if key not in memo:
+            values = list(blocks)
+            if sum(v.nbytes for kept in [values, *memo.values()] for v in kept) > _WEAK_MEMO_BYTES:
+                return iter(values)
+            memo[key] = values
+        return iter(memo[key])
 
     def get_feature_names(self, input_features=None) -> list[str]:
         """Names of the features, in column order.
