@@ -36,7 +36,7 @@ from ._compile import Terms, compile_entries, compile_terms, decompose
 from ._weak import integrate_by_parts
 
 __all__ = ["SymbolicLibrary", "stack_variables", "compile_entries", "LIBRARY_TYPES",
-           "remembered_weak_values"]
+           "remembered_weak_values", "DeferredMatrix"]
 
 #: Every catalog category by its ``spec_type``: what a model file may name. A subclass of
 #: :class:`SymbolicLibrary` registers itself when it is defined (in this package or in a
@@ -100,6 +100,26 @@ def remembered_weak_values(library):
     finally:
         if not outer:
             library.__dict__.pop("_weak_memo", None)
+
+
+class DeferredMatrix:
+    """A library's symbolic matrix known by its structure, the sympy matrix built on first
+    read of ``symbolic_matrix_``: a fit needs only which entries are non-zero, which
+    variables each involves and how many terms each has, and building the sympy entries of
+    an arm's catalog costs seconds.
+
+    Parameters
+    ----------
+    variables : ndarray of bool, shape (n, F, V)
+        Whether entry ``(c, j)`` involves variable ``v`` of ``coords.variables``.
+    sizes : ndarray of int, shape (n, F)
+        Terms of each entry (0: the entry is zero).
+    """
+
+    def __init__(self, variables, sizes):
+        self.variables = np.asarray(variables, dtype=bool)
+        self.sizes = np.asarray(sizes, dtype=int)
+        self.shape = self.sizes.shape
 
 
 class TermChain(Sequence):
@@ -272,21 +292,90 @@ class SymbolicLibrary(BaseFeatureLibrary):
         n = self.coords.n
         if matrix.shape != (n, len(names)):
             raise RuntimeError("internal error: symbolic matrix shape does not match names")
-        self._check_columns(names, matrix)
+        if not isinstance(matrix, DeferredMatrix):
+            self._check_columns(names, matrix)
         self.feature_names_ = list(names)
-        self.symbolic_matrix_ = matrix
+        self._symbolic_matrix = matrix
+        self.__dict__.pop("_structure", None)
         self.n_output_features_ = len(names)
         terms = self._feature_terms()
         # a lazy sequence (terms built on demand, e.g. TrigTerms) stays one
         self.feature_terms_ = (terms if isinstance(terms, Sequence)
                                and not isinstance(terms, (list, str)) else list(terms))
-        self.entry_index_ = np.array([(c, j) for c in range(n) for j in range(len(names))
-                                      if matrix[c, j] != 0], dtype=int).reshape(-1, 2)
+        if isinstance(matrix, DeferredMatrix):
+            self.entry_index_ = np.argwhere(matrix.sizes > 0).reshape(-1, 2)
+        else:
+            self.entry_index_ = np.array([(c, j) for c in range(n) for j in range(len(names))
+                                          if matrix[c, j] != 0], dtype=int).reshape(-1, 2)
         for stale in ("weak_P_", "weak_Q_", "_weak_evaluate", "_weak_entry_index",
                       "_column_terms", "_weak_terms"):
             self.__dict__.pop(stale, None)
         self.__dict__.get("_weak_memo", {}).clear()  # values of the former entries
         self.n_features_in_ = len(self.coords.variables)
+
+    @property
+    def symbolic_matrix_(self) -> sp.Matrix:
+        """The sympy matrix of the columns (fitted; built on first read when the library
+        derived only its structure, :class:`DeferredMatrix`)."""
+        matrix = self.__dict__.get("_symbolic_matrix")
+        if matrix is None:
+            raise AttributeError(f"{type(self).__name__} is not fitted: no symbolic_matrix_")
+        if isinstance(matrix, DeferredMatrix):
+            matrix = self._symbolic_matrix = self._deferred_matrix()
+        return matrix
+
+    def _deferred_matrix(self) -> sp.Matrix:
+        """The sympy matrix of a library whose ``_build_symbolic`` returned a
+        :class:`DeferredMatrix`."""
+        raise NotImplementedError
+
+    def _entry_structure(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(variables, sizes)`` of :class:`DeferredMatrix`, from the sympy matrix when the
+        library did not derive them."""
+        check_is_fitted(self, "entry_index_")
+        found = self.__dict__.get("_structure")
+        if found is None:
+            matrix = self._symbolic_matrix
+            if isinstance(matrix, DeferredMatrix):
+                found = (matrix.variables, matrix.sizes)
+            else:
+                position = {v: k for k, v in enumerate(self.coords.variables)}
+                variables = np.zeros(matrix.shape + (len(position),), dtype=bool)
+                sizes = np.zeros(matrix.shape, dtype=int)
+                for c, j in self.entry_index_:
+                    entry = matrix[c, j]
+                    sizes[c, j] = len(sp.Add.make_args(entry))
+                    variables[c, j, [position[v] for v in entry.free_symbols
+                                     if v in position]] = True
+                found = (variables, sizes)
+            self._structure = found
+        return found
+
+    def involves(self, symbols) -> np.ndarray:
+        """Which entries involve any of ``symbols`` (variables of ``coords``).
+
+        Parameters
+        ----------
+        symbols : iterable of sympy.Symbol
+
+        Returns
+        -------
+        ndarray of bool, shape (n, F)
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit().involves(c.qdd).tolist()
+        [[True, False]]
+        """
+        variables = list(self.coords.variables)
+        wanted = [variables.index(s) for s in symbols if s in variables]
+        return self._entry_structure()[0][:, :, wanted].any(axis=2)
+
+    def entry_sizes(self) -> np.ndarray:
+        """Terms of each entry of the columns (0 where the entry is zero), shape (n, F)."""
+        return self._entry_structure()[1]
 
     def _check_columns(self, names, matrix) -> None:
         """Refuse derived columns that cannot be evaluated (e.g. a DiracDelta from
@@ -319,7 +408,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
         Terms
             See :class:`pysindy_xl.feature_library._compile.Terms`.
         """
-        check_is_fitted(self, "symbolic_matrix_")
+        check_is_fitted(self, "entry_index_")
         terms = self.__dict__.get("_column_terms")
         if terms is None:
             terms = self._column_terms = self._derive_column_terms()
@@ -332,9 +421,16 @@ class SymbolicLibrary(BaseFeatureLibrary):
     def __getstate__(self):
         # compiled evaluators are closures: rebuilt on first use after unpickling
         state = self.__dict__.copy()
-        for key in ("_evaluate", "_weak_evaluate", "_weak_entry_index", "_weak_memo"):
+        for key in ("_evaluate", "_weak_evaluate", "_weak_entry_index", "_weak_memo",
+                    "_structure"):
             state.pop(key, None)
         return state
+
+    def __setstate__(self, state):
+        if "symbolic_matrix_" in state:  # the state of an earlier version
+            state = dict(state)
+            state["_symbolic_matrix"] = state.pop("symbolic_matrix_")
+        super().__setstate__(state)
 
     def _check_input(self, x) -> np.ndarray:
         x = check_numeric_array(x, "x", finite=False, min_samples=0)
@@ -389,7 +485,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
         theta : ndarray, shape (n * N, F)
             Rows coordinate-major, one column per feature.
         """
-        check_is_fitted(self, "symbolic_matrix_")
+        check_is_fitted(self, "entry_index_")
         if not hasattr(self, "_evaluate"):  # symbolic part fitted by a CatalogRepartition
             self._compile()
         x = self._check_input(x)
@@ -423,7 +519,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
             Free of accelerations. For a Lagrange term ``L_k``: ``P[i, k] = dL_k/dqd_i`` and
             ``Q[i, k] = dL_k/dq_i``.
         """
-        check_is_fitted(self, "symbolic_matrix_")
+        check_is_fitted(self, "entry_index_")
         if not hasattr(self, "weak_P_"):
             self.weak_P_, self.weak_Q_ = self._build_weak_symbolic()
         return self.weak_P_, self.weak_Q_
@@ -439,7 +535,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
         terms : Terms
             One entry per row of ``index``.
         """
-        check_is_fitted(self, "symbolic_matrix_")
+        check_is_fitted(self, "entry_index_")
         found = self.__dict__.get("_weak_terms")
         if found is None:
             found = self._weak_terms = self._derive_weak_terms()
@@ -557,7 +653,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
         sympy.Matrix, shape (n, F)
             Entry ``[c, j]`` is feature ``j`` in the equation of coordinate ``c``.
         """
-        if not hasattr(self, "symbolic_matrix_"):
+        if not hasattr(self, "entry_index_"):
             self.fit()
         return self.symbolic_matrix_
 
