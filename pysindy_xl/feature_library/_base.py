@@ -321,6 +321,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
         if matrix is None:
             raise AttributeError(f"{type(self).__name__} is not fitted: no symbolic_matrix_")
         if isinstance(matrix, DeferredMatrix):
+            self.__dict__.setdefault("_structure", (matrix.variables, matrix.sizes))
             matrix = self._symbolic_matrix = self._deferred_matrix()
         return matrix
 
