@@ -33,10 +33,11 @@ from .._validation import check_numeric_array
 from ..registry import register_type
 from ..symbols import Coordinates
 from ._compile import Terms, compile_entries, compile_terms, decompose
+from ._structure import ColumnStructure, DeferredMatrix
 from ._weak import integrate_by_parts
 
 __all__ = ["SymbolicLibrary", "stack_variables", "compile_entries", "LIBRARY_TYPES",
-           "remembered_weak_values", "DeferredMatrix"]
+           "remembered_weak_values"]
 
 #: Every catalog category by its ``spec_type``: what a model file may name. A subclass of
 #: :class:`SymbolicLibrary` registers itself when it is defined (in this package or in a
@@ -68,27 +69,20 @@ def _derived(key, derive):
 @contextlib.contextmanager
 def remembered_weak_values(library):
     """Within the block, ``library.weak_transform`` evaluates the entries of each distinct
-    state array once and contracts the values it kept with any test functions.
+    state array once (at most ``_WEAK_MEMO_BYTES`` kept, released at the end; re-entrant).
 
-    Weak problems of the same smoothed states with other test functions (the candidates of
-    a noise-model choice, their propagated noise draws) then cost only their contraction;
-    the results are those of separate evaluations, bit for bit. The values (at most
-    ``_WEAK_MEMO_BYTES``) are released when the block ends; re-entrant.
-
-    Parameters
-    ----------
-    library : SymbolicLibrary
+    Weak rows of the same smoothed states under other test functions (the candidates of a
+    noise-model choice, their noise draws) then cost only their contraction, and are those
+    of separate evaluations bit for bit.
 
     Examples
     --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> library = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit()
-    >>> z = px.stack_variables(np.ones((20, 1)), np.ones((20, 1)))
-    >>> phi = np.full((2, 20), 0.05)
+    >>> z, phi = px.stack_variables(np.ones((20, 1)), np.ones((20, 1))), np.full((2, 20), 0.05)
     >>> with remembered_weak_values(library):
-    ...     first = library.weak_transform(z, phi, phi)
-    ...     again = library.weak_transform(z, 2 * phi, phi)
+    ...     _, again = library.weak_transform(z, phi, phi), library.weak_transform(z, 2 * phi, phi)
     >>> bool(np.array_equal(again, library.weak_transform(z, 2 * phi, phi)))
     True
     """
@@ -100,26 +94,6 @@ def remembered_weak_values(library):
     finally:
         if not outer:
             library.__dict__.pop("_weak_memo", None)
-
-
-class DeferredMatrix:
-    """A library's symbolic matrix known by its structure, the sympy matrix built on first
-    read of ``symbolic_matrix_``: a fit needs only which entries are non-zero, which
-    variables each involves and how many terms each has, and building the sympy entries of
-    an arm's catalog costs seconds.
-
-    Parameters
-    ----------
-    variables : ndarray of bool, shape (n, F, V)
-        Whether entry ``(c, j)`` involves variable ``v`` of ``coords.variables``.
-    sizes : ndarray of int, shape (n, F)
-        Terms of each entry (0: the entry is zero).
-    """
-
-    def __init__(self, variables, sizes):
-        self.variables = np.asarray(variables, dtype=bool)
-        self.sizes = np.asarray(sizes, dtype=int)
-        self.shape = self.sizes.shape
 
 
 class TermChain(Sequence):
@@ -200,7 +174,7 @@ def stack_variables(q, qd, qdd=None, tau=None, t=None) -> np.ndarray:
     return np.column_stack(parts + [t])
 
 
-class SymbolicLibrary(BaseFeatureLibrary):
+class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
     """Base class of the catalog categories: a matrix of symbolic columns, compiled once.
 
     Subclasses implement :meth:`_build_symbolic` returning the feature names and the sympy
@@ -313,71 +287,6 @@ class SymbolicLibrary(BaseFeatureLibrary):
         self.__dict__.get("_weak_memo", {}).clear()  # values of the former entries
         self.n_features_in_ = len(self.coords.variables)
 
-    @property
-    def symbolic_matrix_(self) -> sp.Matrix:
-        """The sympy matrix of the columns (fitted; built on first read when the library
-        derived only its structure, :class:`DeferredMatrix`)."""
-        matrix = self.__dict__.get("_symbolic_matrix")
-        if matrix is None:
-            raise AttributeError(f"{type(self).__name__} is not fitted: no symbolic_matrix_")
-        if isinstance(matrix, DeferredMatrix):
-            self.__dict__.setdefault("_structure", (matrix.variables, matrix.sizes))
-            matrix = self._symbolic_matrix = self._deferred_matrix()
-        return matrix
-
-    def _deferred_matrix(self) -> sp.Matrix:
-        """The sympy matrix of a library whose ``_build_symbolic`` returned a
-        :class:`DeferredMatrix`."""
-        raise NotImplementedError
-
-    def _entry_structure(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(variables, sizes)`` of :class:`DeferredMatrix`, from the sympy matrix when the
-        library did not derive them."""
-        check_is_fitted(self, "entry_index_")
-        found = self.__dict__.get("_structure")
-        if found is None:
-            matrix = self._symbolic_matrix
-            if isinstance(matrix, DeferredMatrix):
-                found = (matrix.variables, matrix.sizes)
-            else:
-                position = {v: k for k, v in enumerate(self.coords.variables)}
-                variables = np.zeros(matrix.shape + (len(position),), dtype=bool)
-                sizes = np.zeros(matrix.shape, dtype=int)
-                for c, j in self.entry_index_:
-                    entry = matrix[c, j]
-                    sizes[c, j] = len(sp.Add.make_args(entry))
-                    variables[c, j, [position[v] for v in entry.free_symbols
-                                     if v in position]] = True
-                found = (variables, sizes)
-            self._structure = found
-        return found
-
-    def involves(self, symbols) -> np.ndarray:
-        """Which entries involve any of ``symbols`` (variables of ``coords``).
-
-        Parameters
-        ----------
-        symbols : iterable of sympy.Symbol
-
-        Returns
-        -------
-        ndarray of bool, shape (n, F)
-
-        Examples
-        --------
-        >>> import pysindy_xl as px
-        >>> c = px.Coordinates(["x"])
-        >>> px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit().involves(c.qdd).tolist()
-        [[True, False]]
-        """
-        variables = list(self.coords.variables)
-        wanted = [variables.index(s) for s in symbols if s in variables]
-        return self._entry_structure()[0][:, :, wanted].any(axis=2)
-
-    def entry_sizes(self) -> np.ndarray:
-        """Terms of each entry of the columns (0 where the entry is zero), shape (n, F)."""
-        return self._entry_structure()[1]
-
     def _check_columns(self, names, matrix) -> None:
         """Refuse derived columns that cannot be evaluated (e.g. a DiracDelta from
         differentiating Abs twice), naming the feature."""
@@ -429,8 +338,8 @@ class SymbolicLibrary(BaseFeatureLibrary):
 
     def __setstate__(self, state):
         if "symbolic_matrix_" in state:  # the state of an earlier version
-            state = dict(state)
-            state["_symbolic_matrix"] = state.pop("symbolic_matrix_")
+            state = {"_symbolic_matrix" if k == "symbolic_matrix_" else k: v
+                     for k, v in state.items()}
         super().__setstate__(state)
 
     def _check_input(self, x) -> np.ndarray:
@@ -597,7 +506,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
         parts = [np.flatnonzero(index[:, 0] == part) for part in (0, 1)]
         n_windows = phi.shape[0]
         contributions = np.zeros((n_windows, len(index)))
-        with np.errstate(all="ignore"):
+        with np.errstate(all="ignore"):  # (kept values are evaluated here)
             blocks = self._weak_values(x)
         for start in range(0, n_samples, _WEAK_BLOCK):  # blocks of samples bound the memory
             stop = min(start + _WEAK_BLOCK, n_samples)
@@ -615,9 +524,8 @@ class SymbolicLibrary(BaseFeatureLibrary):
         return weak
 
     def _weak_values(self, x):
-        """The entries of :meth:`weak_terms` on blocks of ``_WEAK_BLOCK`` samples of ``x``,
-        each an array (entries, samples), evaluated as they are read; within
-        :func:`remembered_weak_values`, all at once and kept for the same ``x``."""
+        """:meth:`weak_terms` on blocks of ``_WEAK_BLOCK`` samples of ``x`` (entries, samples),
+        evaluated when read; all at once and kept within :func:`remembered_weak_values`."""
         blocks = (self._weak_evaluate(x[start:start + _WEAK_BLOCK], stacked=True)
                   for start in range(0, x.shape[0], _WEAK_BLOCK))
         memo = self.__dict__.get("_weak_memo")

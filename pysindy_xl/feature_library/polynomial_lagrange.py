@@ -15,8 +15,8 @@ import sympy as sp
 from ..expressions import format_expression
 from ..physical.rigid_body import KinematicTree, physical_parameters_from_base
 from ..symbols import as_expr_list
-from ._base import DeferredMatrix
 from ._compile import Terms
+from ._structure import DeferredMatrix
 from .lagrange import LagrangeLibrary
 from .trigpoly import TrigPolynomial, euler_lagrange_many
 from .trigterms import TrigTerms

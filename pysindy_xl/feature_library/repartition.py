@@ -6,8 +6,9 @@ import numpy as np
 import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
-from ._base import DeferredMatrix, SymbolicLibrary, TermChain
+from ._base import SymbolicLibrary, TermChain
 from ._compile import Terms
+from ._structure import DeferredMatrix
 from .external_forces import ExternalForces
 
 __all__ = ["CatalogRepartition"]
