@@ -479,11 +479,10 @@ def evaluate_many(polynomials, values: np.ndarray) -> np.ndarray:
     ndarray, shape (N, len(polynomials))
     """
     width = values.shape[1]
-    exponents = np.vstack([p.exponents for p in polynomials] + [np.zeros((0, width))])
-    owner = np.concatenate([np.full(len(p.coefficients), k) for k, p in enumerate(polynomials)]
-                           + [np.zeros(0, dtype=int)]).astype(int)
+    exponents = np.vstack([p.exponents for p in polynomials]  # int16, not upcast
+                          + [np.zeros((0, width), dtype=np.int16)])
+    owner = np.repeat(np.arange(len(polynomials)), [len(p.coefficients) for p in polynomials])
     coefficients = np.concatenate([p.coefficients for p in polynomials] + [np.zeros(0)])
-    exponents = exponents.astype(np.int16)
     first, inverse = _unique_rows(exponents)
     distinct = exponents[first]
     # a monomial is the product of its factors in the order of their slots (the powers of the
