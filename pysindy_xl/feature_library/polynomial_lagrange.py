@@ -18,7 +18,7 @@ from ..symbols import as_expr_list
 from ._compile import Terms
 from ._structure import DeferredMatrix
 from .lagrange import LagrangeLibrary
-from .trigpoly import TrigPolynomial, euler_lagrange_many
+from .trigpoly import TrigPolynomial, euler_lagrange_many, partial_derivatives_many
 from .trigterms import TrigTerms
 
 __all__ = ["PolynomialLagrangeLibrary"]
@@ -164,11 +164,10 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         derivation = self._polynomial_columns
         if derivation.weak_terms is None:
             index, entries = [], []
+            parts = partial_derivatives_many(derivation.polynomials)
             for part in (0, 1):
                 for c in range(self.coords.n):
-                    for j, polynomial in enumerate(derivation.polynomials):
-                        derivative = (polynomial.diff_velocity(c) if part == 0
-                                      else polynomial.diff_position(c))
+                    for j, derivative in enumerate(parts[part][c]):
                         if not derivative.is_zero:
                             index.append((part, c, j))
                             entries.append(derivative)
