@@ -4,7 +4,8 @@ A fit needs to know only which entries of the columns are non-zero, which variab
 involves and how many terms each has; a library that derives its columns another way
 (trigonometric polynomials on exponent arrays) gives that structure as a
 :class:`DeferredMatrix` and builds its sympy matrix on the first read of
-``symbolic_matrix_`` (printing, equations), which for an arm's catalog costs seconds.
+``symbolic_matrix_`` (printing, equations): the columns of an arm's catalog hold hundreds
+of thousands of terms, whose sympy objects a fit does not need.
 """
 
 from __future__ import annotations
