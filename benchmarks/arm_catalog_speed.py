@@ -3,7 +3,8 @@
 Arms (``--arm``): ``panda``, the panda-like arm of ``benchmarks/robot_arms.py``, fitted on two
 MuJoCo trajectories of ``--samples`` samples each; ``kinova-gen3``, the real Kinova Gen3
 URDF (joint frames not aligned with the axes: ten times the monomials of the panda's
-columns), fitted on the training part of its real log (``benchmarks/real_robots.py``).
+columns), fitted on the training part of its real log (``benchmarks/real_robots.py``);
+``ur10e``, the 6-joint UR10e URDF on its identification run (5,375 samples, jittered stamps).
 Steps: ``kinematic_catalog`` from a cold cache (``catalog``), ``catalog.library().fit()``
 (``library``), and ``kinematic_catalog`` + ``XLSINDy(catalog.library()).fit(q, t, u=tau)``,
 every cache cleared first (``catalog_fit``), then the same again with the caches it
@@ -58,7 +59,7 @@ def main():
     parser.add_argument("--label", required=True, help="e.g. before or after")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--samples", type=int, default=3000, help="per trajectory (two)")
-    parser.add_argument("--arm", choices=("panda", "kinova-gen3"), default="panda")
+    parser.add_argument("--arm", choices=("panda", "kinova-gen3", "ur10e"), default="panda")
     args = parser.parse_args()
     warnings.simplefilter("ignore")  # the Kinova URDF's impossible inertias, balanced
     if args.arm == "panda":
@@ -71,10 +72,12 @@ def main():
     else:
         import real_robots
 
-        (t, q, tau), _, urdf = real_robots.kinova()
+        (t, q, tau), _, urdf = (real_robots.kinova() if args.arm == "kinova-gen3"
+                                else real_robots.ur10e())
         system = real_robots.mjcf_system(urdf)
         fit_arguments = {"x": q, "t": t, "u": tau}
         samples = len(t)
+    load = os.getloadavg()
     times = {"catalog": [], "library": [], "catalog_fit": [], "refit": []}
     for _ in range(args.repeats):
         clear_caches()
@@ -93,7 +96,7 @@ def main():
     record = {
         "label": args.label, "pysindy_xl": os.path.dirname(px.__file__),
         "machine": {"python": platform.python_version(), "cpus": os.cpu_count(),
-                    "load_average": os.getloadavg()},
+                    "load_average": load, "load_average_end": os.getloadavg()},
         "arm": args.arm, "joints": system.n, "samples": samples,
         "coefficients_checksum": float(np.sum(np.abs(model.coefficients()))),
     }

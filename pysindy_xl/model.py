@@ -11,6 +11,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ._validation import IdentificationWarning, check_instance, check_option
 from .dynamics.fitted import DynamicsMixin
+from .feature_library import remembered_weak_values
 from .fit import (
     FORMULATIONS,
     build_problem,
@@ -260,12 +261,15 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
     def _fit(self, x, t, x_dot, x_ddot, u, sample_mask):
         """check -> build -> choose the noise model -> solve -> wrap."""
         library, data, formulation = check_fit(self, x, t, x_dot, x_ddot, u, sample_mask)
-        problem = build_problem(library, data, formulation, test_functions=self.test_functions,
-                                smoother=self.smoother, hold_still=self.hold_still,
-                                drop_dependent=self.drop_dependent)
-        optimizer = resolve_optimizer(self.optimizer, problem, library)
-        problem, weigh = choose_noise_model(problem, library, data, optimizer, self.smoother,
-                                            self.residual_covariance, self.test_functions)
+        with remembered_weak_values(library):  # the candidates' rows share its values
+            problem = build_problem(library, data, formulation,
+                                    test_functions=self.test_functions, smoother=self.smoother,
+                                    hold_still=self.hold_still,
+                                    drop_dependent=self.drop_dependent)
+            optimizer = resolve_optimizer(self.optimizer, problem, library)
+            problem, weigh = choose_noise_model(problem, library, data, optimizer,
+                                                self.smoother, self.residual_covariance,
+                                                self.test_functions)
         optimizer = solve(optimizer, problem, library, weigh=weigh)
         for name, value in fitted_state(library, problem, optimizer).items():  # wrap
             setattr(self, name, value)

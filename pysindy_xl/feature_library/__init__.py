@@ -3,7 +3,13 @@
 See :mod:`pysindy_xl.feature_library._base` for the layout of the stacked regression matrix.
 """
 
-from ._base import LIBRARY_TYPES, SymbolicLibrary, compile_entries, stack_variables
+from ._base import (
+    LIBRARY_TYPES,
+    SymbolicLibrary,
+    compile_entries,
+    remembered_weak_values,
+    stack_variables,
+)
 
 # the compiled evaluation of symbolic terms is re-exported for the simulators of the package
 # (``dynamics``), so that no module outside this folder imports the private ``_compile``
@@ -29,6 +35,7 @@ __all__ = [
     "JointFrictionLibrary",
     "CatalogRepartition",
     "stack_variables",
+    "remembered_weak_values",
     "compile_entries",
     "euler_lagrange",
     "pysindy_library_terms",

@@ -18,6 +18,8 @@ model is ``Theta @ xi = 0``, i.e. for each coordinate ``c``: ``sum_j xi_j E[c, j
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
 from collections.abc import Sequence
 
 import numpy as np
@@ -31,9 +33,11 @@ from .._validation import check_numeric_array
 from ..registry import register_type
 from ..symbols import Coordinates
 from ._compile import Terms, compile_entries, compile_terms, decompose
+from ._structure import ColumnStructure, DeferredMatrix
 from ._weak import integrate_by_parts
 
-__all__ = ["SymbolicLibrary", "stack_variables", "compile_entries", "LIBRARY_TYPES"]
+__all__ = ["SymbolicLibrary", "stack_variables", "compile_entries", "LIBRARY_TYPES",
+           "remembered_weak_values"]
 
 #: Every catalog category by its ``spec_type``: what a model file may name. A subclass of
 #: :class:`SymbolicLibrary` registers itself when it is defined (in this package or in a
@@ -41,6 +45,7 @@ __all__ = ["SymbolicLibrary", "stack_variables", "compile_entries", "LIBRARY_TYP
 LIBRARY_TYPES: dict[str, type] = {}
 
 _WEAK_BLOCK = 8192  # samples per block of the weak evaluation
+_WEAK_MEMO_BYTES = 1 << 28  # values kept by remembered_weak_values, at most
 
 #: Derived terms by content, most recently used last: a fitted model's clone of a catalog
 #: (every fit clones the user's) derives the same entries again, and with the same
@@ -59,6 +64,36 @@ def _derived(key, derive):
     while len(_DERIVED) > _CACHED_DERIVED:
         del _DERIVED[next(iter(_DERIVED))]
     return found
+
+
+@contextlib.contextmanager
+def remembered_weak_values(library):
+    """Within the block, ``library.weak_transform`` evaluates the entries of each distinct
+    state array once (at most ``_WEAK_MEMO_BYTES`` kept, released at the end; re-entrant).
+
+    Weak rows of the same smoothed states under other test functions (the candidates of a
+    noise-model choice, their noise draws) then cost only their contraction, and are those
+    of separate evaluations bit for bit.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> library = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit()
+    >>> z, phi = px.stack_variables(np.ones((20, 1)), np.ones((20, 1))), np.full((2, 20), 0.05)
+    >>> with remembered_weak_values(library):
+    ...     _, again = library.weak_transform(z, phi, phi), library.weak_transform(z, 2 * phi, phi)
+    >>> bool(np.array_equal(again, library.weak_transform(z, 2 * phi, phi)))
+    True
+    """
+    outer = "_weak_memo" in library.__dict__
+    if not outer:
+        library._weak_memo = {}
+    try:
+        yield library
+    finally:
+        if not outer:
+            library.__dict__.pop("_weak_memo", None)
 
 
 class TermChain(Sequence):
@@ -139,7 +174,7 @@ def stack_variables(q, qd, qdd=None, tau=None, t=None) -> np.ndarray:
     return np.column_stack(parts + [t])
 
 
-class SymbolicLibrary(BaseFeatureLibrary):
+class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
     """Base class of the catalog categories: a matrix of symbolic columns, compiled once.
 
     Subclasses implement :meth:`_build_symbolic` returning the feature names and the sympy
@@ -231,19 +266,25 @@ class SymbolicLibrary(BaseFeatureLibrary):
         n = self.coords.n
         if matrix.shape != (n, len(names)):
             raise RuntimeError("internal error: symbolic matrix shape does not match names")
-        self._check_columns(names, matrix)
+        if not isinstance(matrix, DeferredMatrix):
+            self._check_columns(names, matrix)
         self.feature_names_ = list(names)
-        self.symbolic_matrix_ = matrix
+        self._symbolic_matrix = matrix
+        self.__dict__.pop("_structure", None)
         self.n_output_features_ = len(names)
         terms = self._feature_terms()
         # a lazy sequence (terms built on demand, e.g. TrigTerms) stays one
         self.feature_terms_ = (terms if isinstance(terms, Sequence)
                                and not isinstance(terms, (list, str)) else list(terms))
-        self.entry_index_ = np.array([(c, j) for c in range(n) for j in range(len(names))
-                                      if matrix[c, j] != 0], dtype=int).reshape(-1, 2)
+        if isinstance(matrix, DeferredMatrix):
+            self.entry_index_ = np.argwhere(matrix.sizes > 0).reshape(-1, 2)
+        else:
+            self.entry_index_ = np.array([(c, j) for c in range(n) for j in range(len(names))
+                                          if matrix[c, j] != 0], dtype=int).reshape(-1, 2)
         for stale in ("weak_P_", "weak_Q_", "_weak_evaluate", "_weak_entry_index",
                       "_column_terms", "_weak_terms"):
             self.__dict__.pop(stale, None)
+        self.__dict__.get("_weak_memo", {}).clear()  # values of the former entries
         self.n_features_in_ = len(self.coords.variables)
 
     def _check_columns(self, names, matrix) -> None:
@@ -277,7 +318,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
         Terms
             See :class:`pysindy_xl.feature_library._compile.Terms`.
         """
-        check_is_fitted(self, "symbolic_matrix_")
+        check_is_fitted(self, "entry_index_")
         terms = self.__dict__.get("_column_terms")
         if terms is None:
             terms = self._column_terms = self._derive_column_terms()
@@ -290,9 +331,16 @@ class SymbolicLibrary(BaseFeatureLibrary):
     def __getstate__(self):
         # compiled evaluators are closures: rebuilt on first use after unpickling
         state = self.__dict__.copy()
-        for key in ("_evaluate", "_weak_evaluate", "_weak_entry_index"):
+        for key in ("_evaluate", "_weak_evaluate", "_weak_entry_index", "_weak_memo",
+                    "_structure"):
             state.pop(key, None)
         return state
+
+    def __setstate__(self, state):
+        if "symbolic_matrix_" in state:  # the state of an earlier version
+            state = {"_symbolic_matrix" if k == "symbolic_matrix_" else k: v
+                     for k, v in state.items()}
+        super().__setstate__(state)
 
     def _check_input(self, x) -> np.ndarray:
         x = check_numeric_array(x, "x", finite=False, min_samples=0)
@@ -347,7 +395,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
         theta : ndarray, shape (n * N, F)
             Rows coordinate-major, one column per feature.
         """
-        check_is_fitted(self, "symbolic_matrix_")
+        check_is_fitted(self, "entry_index_")
         if not hasattr(self, "_evaluate"):  # symbolic part fitted by a CatalogRepartition
             self._compile()
         x = self._check_input(x)
@@ -381,7 +429,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
             Free of accelerations. For a Lagrange term ``L_k``: ``P[i, k] = dL_k/dqd_i`` and
             ``Q[i, k] = dL_k/dq_i``.
         """
-        check_is_fitted(self, "symbolic_matrix_")
+        check_is_fitted(self, "entry_index_")
         if not hasattr(self, "weak_P_"):
             self.weak_P_, self.weak_Q_ = self._build_weak_symbolic()
         return self.weak_P_, self.weak_Q_
@@ -397,7 +445,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
         terms : Terms
             One entry per row of ``index``.
         """
-        check_is_fitted(self, "symbolic_matrix_")
+        check_is_fitted(self, "entry_index_")
         found = self.__dict__.get("_weak_terms")
         if found is None:
             found = self._weak_terms = self._derive_weak_terms()
@@ -458,10 +506,12 @@ class SymbolicLibrary(BaseFeatureLibrary):
         parts = [np.flatnonzero(index[:, 0] == part) for part in (0, 1)]
         n_windows = phi.shape[0]
         contributions = np.zeros((n_windows, len(index)))
+        with np.errstate(all="ignore"):  # (kept values are evaluated here)
+            blocks = self._weak_values(x)
         for start in range(0, n_samples, _WEAK_BLOCK):  # blocks of samples bound the memory
             stop = min(start + _WEAK_BLOCK, n_samples)
             with np.errstate(all="ignore"):
-                values = self._weak_evaluate(x[start:stop], stacked=True)  # entries x samples
+                values = next(blocks)  # entries x samples
             for part, entries in enumerate(parts):
                 if len(entries):
                     # samples x entries in C order, as the sparse product reads them
@@ -472,6 +522,22 @@ class SymbolicLibrary(BaseFeatureLibrary):
         weak = weak.reshape(n * n_windows, n_features)
         self._check_finite_output(weak, n_windows)
         return weak
+
+    def _weak_values(self, x):
+        """:meth:`weak_terms` on blocks of ``_WEAK_BLOCK`` samples of ``x`` (entries, samples),
+        evaluated when read; all at once and kept within :func:`remembered_weak_values`."""
+        blocks = (self._weak_evaluate(x[start:start + _WEAK_BLOCK], stacked=True)
+                  for start in range(0, x.shape[0], _WEAK_BLOCK))
+        memo = self.__dict__.get("_weak_memo")
+        if memo is None:
+            return blocks
+        key = hashlib.sha1(np.ascontiguousarray(x)).digest()
+        if key not in memo:
+            values = list(blocks)
+            if sum(v.nbytes for kept in [values, *memo.values()] for v in kept) > _WEAK_MEMO_BYTES:
+                return iter(values)
+            memo[key] = values
+        return iter(memo[key])
 
     def get_feature_names(self, input_features=None) -> list[str]:
         """Names of the features, in column order.
@@ -496,7 +562,7 @@ class SymbolicLibrary(BaseFeatureLibrary):
         sympy.Matrix, shape (n, F)
             Entry ``[c, j]`` is feature ``j`` in the equation of coordinate ``c``.
         """
-        if not hasattr(self, "symbolic_matrix_"):
+        if not hasattr(self, "entry_index_"):
             self.fit()
         return self.symbolic_matrix_
 

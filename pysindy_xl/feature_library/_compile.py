@@ -9,12 +9,17 @@ entries are decomposed once into :class:`Terms`: an atom list and, per entry, a 
 monomial degree by degree (a monomial is a monomial one degree lower times one atom: one gather
 and one product per degree, shared across all entries), and the entries as one sparse product
 of the coefficient matrix with the monomial values; samples are processed in blocks, so
-intermediate arrays stay small whatever the number of samples.
+intermediate arrays stay small whatever the number of samples; the blocks are shared among
+:data:`THREADS` threads (the sparse products and array operations release the GIL; each
+block's arithmetic is the same in any thread).
 :func:`scalar_function` evaluates the same terms at one state with Python floats, from flat
 generated code (one short statement per monomial and term), for simulators.
 """
 
 from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import scipy.sparse
@@ -28,6 +33,30 @@ _BLOCK = 16_384
 _BLOCK_VALUES = 1 << 21  # values built at once (16 MiB of floats: blocks stay in the cache)
 
 Monomial = tuple  # sorted tuple of (atom index, integer power)
+
+#: Threads that evaluate blocks of samples side by side (at most the CPUs).
+THREADS = max(1, min(os.cpu_count() or 1, 4))
+_POOL: list = []  # the executor, made on first use (and dropped in a forked child)
+os.register_at_fork(after_in_child=_POOL.clear)
+
+
+def _blocks_map(function, starts) -> None:
+    """``function(start)`` for every block start, in threads when there are several blocks,
+    under the caller's floating-point error handling."""
+    if THREADS == 1 or len(starts) < 2:
+        for start in starts:
+            function(start)
+        return
+    if not _POOL:
+        _POOL.append(ThreadPoolExecutor(THREADS, thread_name_prefix="pysindy_xl"))
+    errors = np.geterr()  # thread-local: the workers take the caller's
+
+    def run(start):
+        with np.errstate(**errors):
+            function(start)
+
+    for _ in _POOL[0].map(run, starts):
+        pass
 
 
 class Terms:
@@ -451,15 +480,18 @@ def _compile_terms(variables: tuple, terms: Terms):
         n_samples = z.shape[0]
         atom_rows = atom_values(z.T, n_samples)
         outputs = np.empty((n_entries, n_samples)) if targets is None else None
-        for start in range(0, n_samples, block):
+
+        def evaluate_block(start):  # blocks write to their own samples only
             stop = min(start + block, n_samples)
             values = plan(atom_rows[:, start:stop])
             if outputs is not None:
                 outputs[:, start:stop] = values
-                continue
+                return
             for k, target in enumerate(targets):
                 if target is not None:
                     target[start:stop] = values[k]
+
+        _blocks_map(evaluate_block, range(0, n_samples, block))
         if targets is not None:
             return None
         return outputs if stacked else list(outputs)

@@ -16,8 +16,9 @@ from ..expressions import format_expression
 from ..physical.rigid_body import KinematicTree, physical_parameters_from_base
 from ..symbols import as_expr_list
 from ._compile import Terms
+from ._structure import DeferredMatrix
 from .lagrange import LagrangeLibrary
-from .trigpoly import TrigPolynomial, euler_lagrange_many
+from .trigpoly import TrigPolynomial, euler_lagrange_many, partial_derivatives_many
 from .trigterms import TrigTerms
 
 __all__ = ["PolynomialLagrangeLibrary"]
@@ -122,7 +123,16 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         # the exact terms and columns, for column_terms and weak_terms
         self._polynomial_columns = derivation
         self.zero_terms_ = list(derivation.zero_terms)
-        return list(derivation.names), derivation.matrix
+        return list(derivation.names), derivation.structure
+
+    def _deferred_matrix(self) -> sp.Matrix:
+        derivation = self._polynomial_columns
+        if derivation.matrix is None:  # shared by clones of this library
+            columns = [[e.to_sympy(self.coords, evaluate=False) for e in column]
+                       for column in derivation.derived]
+            derivation.matrix = sp.Matrix(self.coords.n, len(columns),
+                                          lambda i, j: columns[j][i])
+        return derivation.matrix
 
     def check_domain(self, x) -> None:
         """Trigonometric polynomials are defined everywhere: only the symbolically derived
@@ -154,11 +164,10 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         derivation = self._polynomial_columns
         if derivation.weak_terms is None:
             index, entries = [], []
+            parts = partial_derivatives_many(derivation.polynomials)
             for part in (0, 1):
                 for c in range(self.coords.n):
-                    for j, polynomial in enumerate(derivation.polynomials):
-                        derivative = (polynomial.diff_velocity(c) if part == 0
-                                      else polynomial.diff_position(c))
+                    for j, derivative in enumerate(parts[part][c]):
                         if not derivative.is_zero:
                             index.append((part, c, j))
                             entries.append(derivative)
@@ -286,8 +295,9 @@ class _Derivation:
     polynomials: list
     derived: list  # per term, its Euler-Lagrange column (one polynomial per coordinate)
     names: list
-    matrix: sp.Matrix
+    structure: DeferredMatrix  # of the columns; their sympy matrix built on first use
     zero_terms: list
+    matrix: sp.Matrix | None = None
     column_terms: Terms | None = None
     weak_terms: tuple | None = None
 
@@ -324,10 +334,18 @@ def _derive_trig(terms: TrigTerms):
 
 def _derivation(coords, polynomials, derived, names):
     angles = polynomials[0].angles
-    columns = [[e.to_sympy(coords, evaluate=False) for e in column] for column in derived]
-    matrix = sp.Matrix(coords.n, len(polynomials), lambda i, j: columns[j][i])
+    n = coords.n
+    # each slot's variable: sin q | q, cos q, qd, qdd (coords.variables: q, qd, qdd, tau, t)
+    slots = np.zeros((4 * n, len(coords.variables)), dtype=bool)
+    slots[np.arange(4 * n), np.r_[np.arange(n), np.arange(n), np.arange(n, 3 * n)]] = True
+    used = np.array([[e.exponents.any(axis=0) for e in column] for column in derived],
+                    dtype=bool).reshape(len(derived), n, 4 * n)
+    structure = DeferredMatrix(
+        np.swapaxes(used @ slots, 0, 1),
+        np.array([[len(e.coefficients) for e in column] for column in derived],
+                 dtype=int).reshape(len(derived), n).T)
     zero_terms = [j for j, column in enumerate(derived) if all(e.is_zero for e in column)]
-    return _Derivation(angles, polynomials, derived, names, matrix, zero_terms)
+    return _Derivation(angles, polynomials, derived, names, structure, zero_terms)
 
 
 def _angles(terms, coords) -> tuple:

@@ -8,6 +8,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ._base import SymbolicLibrary, TermChain
 from ._compile import Terms
+from ._structure import DeferredMatrix
 from .external_forces import ExternalForces
 
 __all__ = ["CatalogRepartition"]
@@ -173,14 +174,18 @@ class CatalogRepartition(SymbolicLibrary):
             lib._fit_symbolic()
             start = len(names)
             names.extend(lib.feature_names_)
-            blocks.append(lib.symbolic_matrix_)
+            blocks.append(lib._entry_structure())
             slices.append(slice(start, len(names)))
         self.libraries_ = libraries
         self.slices_ = slices
         self.categories_ = [lib.category for lib in libraries
                             for _ in range(lib.n_output_features_)]
         self.force_columns_ = [j for j, cat in enumerate(self.categories_) if cat == "forces"]
-        return names, sp.Matrix.hstack(*blocks)
+        return names, DeferredMatrix(np.concatenate([v for v, _ in blocks], axis=1),
+                                     np.concatenate([z for _, z in blocks], axis=1))
+
+    def _deferred_matrix(self) -> sp.Matrix:
+        return sp.Matrix.hstack(*(lib.symbolic_matrix_ for lib in self.libraries_))
 
     def _feature_terms(self):
         return TermChain([lib.feature_terms_ for lib in self.libraries_])
@@ -242,7 +247,7 @@ class CatalogRepartition(SymbolicLibrary):
         """
         from ..physical.structure import catalog_structure
 
-        check_is_fitted(self, "symbolic_matrix_")
+        check_is_fitted(self, "entry_index_")
         return catalog_structure(self)
 
     def column_priority(self) -> np.ndarray:
@@ -256,11 +261,8 @@ class CatalogRepartition(SymbolicLibrary):
         -------
         ndarray of int, shape (F,)
         """
-        check_is_fitted(self, "symbolic_matrix_")
-        complexity = [
-            sum(len(sp.Add.make_args(e)) for e in self.symbolic_matrix_[:, j] if e != 0)
-            for j in range(self.n_output_features_)
-        ]
+        check_is_fitted(self, "entry_index_")
+        complexity = self.entry_sizes().sum(axis=0).tolist()
         ranks = [lib.column_rank for lib in self.libraries_ for _ in range(lib.n_output_features_)]
         keys = [(ranks[j], complexity[j], j) for j in range(self.n_output_features_)]
         return np.array([k[-1] for k in sorted(keys)], dtype=int)
@@ -288,7 +290,7 @@ class CatalogRepartition(SymbolicLibrary):
         ValueError
             If a part of the model is not representable in the catalog.
         """
-        if not hasattr(self, "symbolic_matrix_"):
+        if not hasattr(self, "entry_index_"):
             self.fit()
         xi = np.zeros(self.n_output_features_)
         xi[self.force_columns_] = forces

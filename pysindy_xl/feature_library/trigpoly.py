@@ -18,7 +18,8 @@ import scipy.sparse
 import sympy as sp
 from mpmath import libmp as mlib
 
-__all__ = ["TrigPolynomial", "euler_lagrange_many", "evaluate_many", "state_values"]
+__all__ = ["TrigPolynomial", "euler_lagrange_many", "partial_derivatives_many",
+           "evaluate_many", "state_values"]
 
 # Coefficients below this fraction of the largest one are round-off of float arithmetic.
 _ROUND_OFF = 1e-13
@@ -368,12 +369,7 @@ def euler_lagrange_many(polynomials) -> list[list[TrigPolynomial]]:
     polynomials = list(polynomials)
     if not polynomials:
         return []
-    angles = polynomials[0].angles
-    n, count = len(angles), len(polynomials)
-    stack = _Stack(np.vstack([p.exponents for p in polynomials]),
-                   np.concatenate([p.coefficients for p in polynomials]),
-                   np.concatenate([np.full(len(p.coefficients), k, dtype=np.int16)
-                                   for k, p in enumerate(polynomials)]), angles, count)
+    stack, n, count = _Stack.of(polynomials), len(polynomials[0].angles), len(polynomials)
     rows = []
     for i in range(n):
         velocity = stack.diff_slot(2 * n + i)
@@ -386,10 +382,29 @@ def euler_lagrange_many(polynomials) -> list[list[TrigPolynomial]]:
     return [[row.part(k) for row in rows] for k in range(count)]
 
 
+def partial_derivatives_many(polynomials) -> list:
+    """``[[dL/dqd_c], [dL/dq_c]]`` (per coordinate ``c``, a list over the polynomials ``L``)
+    of many polynomials at once, bit for bit as :meth:`TrigPolynomial.diff_velocity` and
+    :meth:`TrigPolynomial.diff_position` of each (see :func:`euler_lagrange_many`)."""
+    stack, n = _Stack.of(polynomials), len(polynomials[0].angles)
+    return [[[derivative.part(k) for k in range(len(polynomials))]
+             for derivative in (stack.diff_slot(2 * n + c) if part == 0
+                                else stack.diff_position(c) for c in range(n))]
+            for part in (0, 1)]
+
+
 class _Stack:
     """Polynomials stacked with their owner: the steps of :meth:`TrigPolynomial.euler_lagrange`."""
 
     __slots__ = ("exponents", "coefficients", "owners", "angles", "count")
+
+    @classmethod
+    def of(cls, polynomials) -> _Stack:
+        return cls(np.vstack([p.exponents for p in polynomials]),
+                   np.concatenate([p.coefficients for p in polynomials]),
+                   np.concatenate([np.full(len(p.coefficients), k, dtype=np.int16)
+                                   for k, p in enumerate(polynomials)]),
+                   polynomials[0].angles, len(polynomials))
 
     def __init__(self, exponents, coefficients, owners, angles, count, normalize=False):
         if normalize:
@@ -479,11 +494,10 @@ def evaluate_many(polynomials, values: np.ndarray) -> np.ndarray:
     ndarray, shape (N, len(polynomials))
     """
     width = values.shape[1]
-    exponents = np.vstack([p.exponents for p in polynomials] + [np.zeros((0, width))])
-    owner = np.concatenate([np.full(len(p.coefficients), k) for k, p in enumerate(polynomials)]
-                           + [np.zeros(0, dtype=int)]).astype(int)
+    exponents = np.vstack([p.exponents for p in polynomials]  # int16, not upcast
+                          + [np.zeros((0, width), dtype=np.int16)])
+    owner = np.repeat(np.arange(len(polynomials)), [len(p.coefficients) for p in polynomials])
     coefficients = np.concatenate([p.coefficients for p in polynomials] + [np.zeros(0)])
-    exponents = exponents.astype(np.int16)
     first, inverse = _unique_rows(exponents)
     distinct = exponents[first]
     # a monomial is the product of its factors in the order of their slots (the powers of the

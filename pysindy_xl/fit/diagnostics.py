@@ -105,7 +105,8 @@ def orient_free_laws(coef, symbolic_matrix, force_columns, mass):
     Parameters
     ----------
     coef : ndarray, shape (F,)
-    symbolic_matrix : sympy.Matrix, shape (n, F)
+    symbolic_matrix : sympy.Matrix or array of bool, shape (n, F)
+        The catalog's columns, or which of their entries are non-zero.
     force_columns : sequence of int
     mass : ndarray, shape (S, n, n)
         Mass matrices at the training states.
@@ -125,10 +126,10 @@ def orient_free_laws(coef, symbolic_matrix, force_columns, mass):
     (array([0. , 0.5]), True)
     """
     coef = np.array(coef, dtype=float)
-    n = symbolic_matrix.shape[0]
+    nonzero = np.asarray(symbolic_matrix, dtype=object) != 0
+    n = nonzero.shape[0]
     active = np.flatnonzero(coef)
-    touches = np.array([[symbolic_matrix[c, j] != 0 for j in active] for c in range(n)],
-                       dtype=bool).reshape(n, len(active))
+    touches = nonzero[:, active].astype(bool).reshape(n, len(active))
     group = np.arange(n)  # union of the coordinates that share an active column
     for column in touches.T:
         members = np.flatnonzero(column)

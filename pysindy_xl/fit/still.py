@@ -124,10 +124,11 @@ def driven_coordinates(library, forces) -> np.ndarray:
         return np.zeros(n, dtype=bool)
     acting = np.any([np.any(np.asarray(u) != 0, axis=0) for u in forces if u is not None],
                     axis=0)
-    matrix = library.symbolic_matrix_
-    return np.array([any(acting[k] for j in library.force_columns_
-                         for k, tau in enumerate(coords.tau) if tau in matrix[c, j].free_symbols)
-                     for c in range(n)], dtype=bool)
+    driven = np.zeros(n, dtype=bool)
+    for k, tau in enumerate(coords.tau):
+        if acting[k]:
+            driven |= library.involves([tau])[:, library.force_columns_].any(axis=1)
+    return driven
 
 
 def still_coordinates(positions, times, forced, threshold: float) -> np.ndarray:
@@ -204,19 +205,21 @@ def still_columns(library, still) -> dict:
     if not still.any():
         return {}
     coords = library.coords
-    matrix = library.symbolic_matrix_
     moving = np.flatnonzero(~still)
     held = np.flatnonzero(still)
     motion = {symbol: coords.names[i] for i in held
               for symbol in (coords.qd[i], coords.qdd[i], coords.tau[i])}
     positions = {coords.q[i] for i in held}
+    variables = list(coords.variables)
+    # (F, V): the variables of each column's entries in the moving equations
+    uses = np.stack([library.involves([v])[moving].any(axis=0) for v in variables], axis=1)
+    nonzero = (library.entry_sizes()[moving] > 0).any(axis=0)
     reasons = {}
-    for j in range(matrix.shape[1]):
-        entries = [matrix[c, j] for c in moving if matrix[c, j] != 0]
-        if not entries:
+    for j in range(library.n_output_features_):
+        if not nonzero[j]:
             reasons[j] = "only in the equations of still coordinates"
             continue
-        symbols = set().union(*(e.free_symbols for e in entries))
+        symbols = {variables[v] for v in np.flatnonzero(uses[j])}
         involved = sorted({motion[s] for s in symbols if s in motion})
         if involved:
             reasons[j] = f"involves the motion of still coordinate(s) {', '.join(involved)}"

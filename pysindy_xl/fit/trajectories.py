@@ -223,9 +223,7 @@ def check_fit(estimator, x, t, x_dot, x_ddot, u, sample_mask):
                                       estimator.differentiation_method)
     data = estimator_trajectories(estimator, x, t, x_dot, x_ddot, u, library.coords.n,
                                   formulation == "strong", sample_mask)
-    accelerations = set(library.coords.qdd)
-    if not any(library.symbolic_matrix_[:, j].free_symbols & accelerations
-               for j in range(library.n_output_features_)):
+    if not library.involves(library.coords.qdd).any():
         raise ValueError(
             "feature_library: no term contains an acceleration; add Lagrangian terms with "
             "velocities (e.g. q_dot**2) or classical terms in q_ddot"

@@ -11,7 +11,6 @@ the training states (:func:`checked_dynamics`): the fitted attributes of
 from __future__ import annotations
 
 import numpy as np
-import sympy as sp
 
 from ..dynamics import CatalogDynamics
 from ..report.equations import has_parameter_map
@@ -36,9 +35,7 @@ def catalog_dynamics(library, coef, held):
     -------
     CatalogDynamics or None
     """
-    accelerations = set(library.coords.qdd)
-    if not any(library.symbolic_matrix_[:, j].free_symbols & accelerations
-               for j in np.flatnonzero(coef)):
+    if not library.involves(library.coords.qdd)[:, np.flatnonzero(coef)].any():
         return None
     return CatalogDynamics(library, coef, held)
 
@@ -60,10 +57,9 @@ def checked_dynamics(library, coef, held, states):
     if dynamics is None:
         return coef, None, None
     mass, eig = mass_matrices(dynamics, states)
-    matrix = library.symbolic_matrix_.copy()
-    for c in np.flatnonzero(held):  # held equations are not the catalog's
-        matrix[c, :] = sp.zeros(1, matrix.shape[1])
-    coef, flipped = orient_free_laws(coef, matrix, library.force_columns_, mass)
+    nonzero = library.entry_sizes() > 0
+    nonzero[held] = False  # held equations are not the catalog's
+    coef, flipped = orient_free_laws(coef, nonzero, library.force_columns_, mass)
     if flipped:
         dynamics = catalog_dynamics(library, coef, held)
         mass, eig = mass_matrices(dynamics, states)

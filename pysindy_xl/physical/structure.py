@@ -285,7 +285,7 @@ def friction_columns(library) -> list:
     for j, category in enumerate(library.categories_):
         if category != "classical" or j in joint_models:
             continue
-        entering = [i for i in range(coords.n) if library.symbolic_matrix_[i, j] != 0]
+        entering = np.flatnonzero(library.entry_sizes()[:, j] > 0).tolist()
         if len(entering) == 1 and friction_kind(library.feature_terms_[j],
                                                 coords.qd[entering[0]]):
             out.append(j)

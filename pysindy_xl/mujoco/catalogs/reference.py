@@ -353,7 +353,7 @@ def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.
     system = get_system(system)
     if not hasattr(catalog, "ideal_coefficients"):
         raise TypeError("catalog: expected a CatalogRepartition")
-    if not hasattr(catalog, "symbolic_matrix_"):
+    if not hasattr(catalog, "entry_index_"):
         catalog.fit()
     coords = system.coords
     names = catalog.get_feature_names()

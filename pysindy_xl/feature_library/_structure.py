@@ -1,0 +1,104 @@
+"""The structure of a library's symbolic columns, known without their sympy matrix.
+
+A fit needs to know only which entries of the columns are non-zero, which variables each
+involves and how many terms each has; a library that derives its columns another way
+(trigonometric polynomials on exponent arrays) gives that structure as a
+:class:`DeferredMatrix` and builds its sympy matrix on the first read of
+``symbolic_matrix_`` (printing, equations): the columns of an arm's catalog hold hundreds
+of thousands of terms, whose sympy objects a fit does not need.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+from sklearn.utils.validation import check_is_fitted
+
+__all__ = ["DeferredMatrix", "ColumnStructure"]
+
+
+class DeferredMatrix:
+    """A library's symbolic matrix known by its structure (see the module docstring).
+
+    Parameters
+    ----------
+    variables : ndarray of bool, shape (n, F, V)
+        Whether entry ``(c, j)`` involves variable ``v`` of ``coords.variables``.
+    sizes : ndarray of int, shape (n, F)
+        Terms of each entry (0: the entry is zero).
+    """
+
+    def __init__(self, variables, sizes):
+        self.variables = np.asarray(variables, dtype=bool)
+        self.sizes = np.asarray(sizes, dtype=int)
+        self.shape = self.sizes.shape
+
+
+class ColumnStructure:
+    """``symbolic_matrix_`` (built on first read when deferred) and the structure of the
+    columns, for :class:`~pysindy_xl.feature_library.SymbolicLibrary`."""
+
+    @property
+    def symbolic_matrix_(self) -> sp.Matrix:
+        """The sympy matrix of the columns (fitted; built on first read when the library
+        derived only its structure, :class:`DeferredMatrix`)."""
+        matrix = self.__dict__.get("_symbolic_matrix")
+        if matrix is None:
+            raise AttributeError(f"{type(self).__name__} is not fitted: no symbolic_matrix_")
+        if isinstance(matrix, DeferredMatrix):
+            self.__dict__.setdefault("_structure", (matrix.variables, matrix.sizes))
+            matrix = self._symbolic_matrix = self._deferred_matrix()
+        return matrix
+
+    def _deferred_matrix(self) -> sp.Matrix:
+        """The sympy matrix of a library whose ``_build_symbolic`` returned a
+        :class:`DeferredMatrix`."""
+        raise NotImplementedError
+
+    def _entry_structure(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(variables, sizes)`` of :class:`DeferredMatrix`, from the sympy matrix when the
+        library did not derive them."""
+        check_is_fitted(self, "entry_index_")
+        found = self.__dict__.get("_structure")
+        if found is None:
+            matrix = self._symbolic_matrix
+            if isinstance(matrix, DeferredMatrix):
+                found = (matrix.variables, matrix.sizes)
+            else:
+                position = {v: k for k, v in enumerate(self.coords.variables)}
+                variables = np.zeros(matrix.shape + (len(position),), dtype=bool)
+                sizes = np.zeros(matrix.shape, dtype=int)
+                for c, j in self.entry_index_:
+                    entry = matrix[c, j]
+                    sizes[c, j] = len(sp.Add.make_args(entry))
+                    variables[c, j, [position[v] for v in entry.free_symbols
+                                     if v in position]] = True
+                found = (variables, sizes)
+            self._structure = found
+        return found
+
+    def involves(self, symbols) -> np.ndarray:
+        """Which entries involve any of ``symbols`` (variables of ``coords``).
+
+        Parameters
+        ----------
+        symbols : iterable of sympy.Symbol
+
+        Returns
+        -------
+        ndarray of bool, shape (n, F)
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit().involves(c.qdd).tolist()
+        [[True, False]]
+        """
+        variables = list(self.coords.variables)
+        wanted = [variables.index(s) for s in symbols if s in variables]
+        return self._entry_structure()[0][:, :, wanted].any(axis=2)
+
+    def entry_sizes(self) -> np.ndarray:
+        """Terms of each entry of the columns (0 where the entry is zero), shape (n, F)."""
+        return self._entry_structure()[1]
