@@ -57,10 +57,10 @@ def test_noise_model_choice_evaluates_each_smoothed_state_once(monkeypatch):
     np.testing.assert_array_equal(model.coef_, again.coef_)
     assert model.weak_info_["noise_model"] == again.weak_info_["noise_model"]
     # the states and the noise draws of the position-noise rows, evaluated once for the
-    # three force-noise candidates and the scoring rows and their draws as well
+    # force-noise candidate (the scoring rows) and their draws as well
     n_draws = int(np.clip(np.ceil(24_000 / len(t)), 1, 16))
     assert once == (1 + n_draws) * len(t)
-    assert sum(evaluated) == (5 + 2 * n_draws) * len(t)
+    assert sum(evaluated) == (2 + 2 * n_draws) * len(t)
     assert "_weak_memo" not in model.feature_library_.__dict__
 
 
