@@ -71,9 +71,8 @@ def remembered_weak_values(library):
     """Within the block, ``library.weak_transform`` evaluates the entries of each distinct
     state array once (at most ``_WEAK_MEMO_BYTES`` kept, released at the end; re-entrant).
 
-    Weak rows of the same smoothed states under other test functions (the candidates of a
-    noise-model choice, their noise draws) then cost only their contraction, and are those
-    of separate evaluations bit for bit.
+    Weak rows of the same states under other test functions (a noise-model choice's
+    candidates) then cost only their contraction, bit for bit as separate evaluations.
 
     Examples
     --------

@@ -4,10 +4,13 @@ independent columns, and the classical (friction, spring) candidates.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import scipy.linalg
 import sympy as sp
 
+from ...feature_library.joint_friction import FRICTION_MODELS
 from ...feature_library.trigpoly import state_values
 from ..systems.registry import MuJoCoSystem
 
@@ -108,3 +111,31 @@ def classical_candidates(system, model, coulomb, coulomb_scale, friction=True):
             values.extend(float(value) * force_map[reaches, k])
     mask = np.array(mask, dtype=bool).reshape(-1, coords.n)
     return terms, mask, kinds, np.array(values)
+
+
+def friction_models(friction) -> tuple:
+    """``friction=`` as a tuple of model names in :data:`FRICTION_MODELS` order."""
+    if friction is None:
+        return ()
+    if isinstance(friction, str):
+        friction = FRICTION_MODELS if friction == "all" else (friction,)
+    try:
+        names = list(friction)
+    except TypeError:
+        names = [friction]
+    unknown = [f for f in names if f not in FRICTION_MODELS]
+    if unknown or not names:
+        raise ValueError(f"friction: expected 'all' or names among {FRICTION_MODELS}, got "
+                         f"{friction!r}")
+    return tuple(m for m in FRICTION_MODELS if m in names)
+
+
+def with_joint_models(catalog, system, model, friction, scales):
+    """The catalog with the joint models ``friction`` instead of its viscous and Coulomb
+    candidates (springs stay classical)."""
+    terms, mask, kinds, values = classical_candidates(system, model, False, scales[0],
+                                                      friction=False)
+    return dataclasses.replace(
+        catalog, classical_terms=terms, classical_mask=mask, classical_kinds=kinds,
+        classical_values=values, friction_models=friction, friction_scales=scales,
+        joint_velocities=joint_coordinates(system, model)[1])

@@ -49,7 +49,6 @@ import numpy as np
 import threadpoolctl
 
 from ...feature_library import PolynomialLagrangeLibrary
-from ...feature_library.joint_friction import FRICTION_MODELS
 from ...feature_library.trigpoly import euler_lagrange_many, evaluate_many, state_values
 from ...feature_library.trigterms import TrigTerms
 from ...physical.rigid_body import KinematicTree
@@ -58,9 +57,10 @@ from .. import import_mujoco
 from ..systems.registry import MuJoCoSystem, get_system
 from ._kinematic_build import (
     classical_candidates,
+    friction_models,
     independent_regressor_columns,
-    joint_coordinates,
     random_joint_values,
+    with_joint_models,
 )
 from ._kinematic_tree import (
     INERTIAL_PARAMETERS,
@@ -507,7 +507,7 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
                 np.isfinite(value) and value > 0):
             raise ValueError(f"{name}: expected a positive number, got {value!r}")
-    friction = _friction_models(friction)
+    friction = friction_models(friction)
     model = system.mj_model()
     if model.nq != system.n or model.nv != system.n:
         raise ValueError(f"system: MJCF has nq={model.nq}, nv={model.nv}; expected one hinge or "
@@ -528,41 +528,13 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
     start = time.perf_counter()
     catalog = _build(system, model, bool(coulomb), float(coulomb_scale), seed)
     if friction:
-        catalog = _with_joint_models(catalog, system, model, friction,
+        catalog = with_joint_models(catalog, system, model, friction,
                                      (float(coulomb_scale), float(stribeck_scale)))
     catalog.build_seconds = time.perf_counter() - start
     if len(_CACHE) >= _CACHE_SIZE:
         _CACHE.pop(next(iter(_CACHE)))
     _CACHE[key] = catalog
     return catalog
-
-
-def _friction_models(friction) -> tuple:
-    """``friction=`` as a tuple of model names in :data:`FRICTION_MODELS` order."""
-    if friction is None:
-        return ()
-    if isinstance(friction, str):
-        friction = FRICTION_MODELS if friction == "all" else (friction,)
-    try:
-        names = list(friction)
-    except TypeError:
-        names = [friction]
-    unknown = [f for f in names if f not in FRICTION_MODELS]
-    if unknown or not names:
-        raise ValueError(f"friction: expected 'all' or names among {FRICTION_MODELS}, got "
-                         f"{friction!r}")
-    return tuple(m for m in FRICTION_MODELS if m in names)
-
-
-def _with_joint_models(catalog, system, model, friction, scales) -> KinematicCatalog:
-    """The catalog with the joint models ``friction`` instead of its viscous and Coulomb
-    candidates (springs stay classical)."""
-    terms, mask, kinds, values = classical_candidates(system, model, False, scales[0],
-                                                      friction=False)
-    return dataclasses.replace(
-        catalog, classical_terms=terms, classical_mask=mask, classical_kinds=kinds,
-        classical_values=values, friction_models=friction, friction_scales=scales,
-        joint_velocities=joint_coordinates(system, model)[1])
 
 
 def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
