@@ -56,7 +56,9 @@ def triangular_factor(matrix) -> np.ndarray:
     can be computed on the small ``R`` instead, with better conditioning than the Gram matrix.
     """
     matrix = np.asarray(matrix, dtype=float)
-    return scipy.linalg.qr(matrix, mode="r", check_finite=False)[0][: min(matrix.shape)]
+    # "raw": the same factorization, but R is cut from the leading rows before ``triu``
+    # (mode "r" masks the whole tall array, which costs as much as the factorization)
+    return scipy.linalg.qr(matrix, mode="raw", check_finite=False)[1]
 
 
 def soft_threshold(values, threshold):
