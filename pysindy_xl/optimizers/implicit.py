@@ -70,6 +70,10 @@ __all__ = ["ImplicitOptimizer", "NoLawFoundError", "coordinates_touched", "homot
 
 _SOLVERS = ("fista", "cvxpy")
 
+#: Iterations of the fast solver between two extractions of the laws (early stopping): its
+#: convergence checks, so that the laws are checked as soon as their columns converge.
+_LAW_CHECK_EVERY = 10
+
 
 class NoLawFoundError(RuntimeError):
     """Implicit regression found no sparse law in the regression matrix."""
@@ -134,7 +138,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         Iteration budget of the fast solver.
     early_stopping : bool, default True
         Fast solver only: stop as soon as the extracted laws are identical at two consecutive
-        checks (every 100 iterations) and every column of their groups has converged; the
+        checks (every 10 iterations) and every column of their groups has converged; the
         other columns (which belong to no law) may then be left inexact, see
         ``column_converged_``. False solves every column to ``tol``.
 
@@ -550,6 +554,7 @@ class ImplicitOptimizer(CatalogOptimizer):
             gram, gram, self.alpha_, mask=mask, coef_init=null_space_start(r_factor),
             tol=self.tol, max_iter=int(self.max_iter), warn=False,
             callback=laws_settled if self.early_stopping else None,
+            callback_every=_LAW_CHECK_EVERY,
         )
         self.n_iter_ = result.n_iter
         self._column_converged = result.converged
