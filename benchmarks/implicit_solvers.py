@@ -22,9 +22,9 @@ For each solver and size the script prints the wall time and whether the extract
 true support. Every solver run happens in a child process with a time limit (``--timeout``).
 
 ``--systems cart-pole double-pendulum`` times instead the clean implicit fits of the paper's
-systems (MuJoCo, unforced, damping as in Table 1, three trajectories of 10 s every 2 ms, the
+systems (MuJoCo, unforced, damping as in Table 1, three trajectories of 10 s every 1 ms, the
 ``mixed`` reference catalog), in this process, BLAS on one thread, the timings of one system
-interleaved so that they share the load:
+interleaved so that they share the load, the garbage collected before each:
 
 * ``fit``: ``XLSINDy(catalog, ImplicitOptimizer()).fit`` end to end, on a fresh catalog each
   time (its symbolic fit, the rows, the problem, the solve, the wrap);
@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import gc
 import io
 import json
 import multiprocessing as mp
@@ -227,6 +228,7 @@ def time_system(system, repeats, label, catalog="mixed"):
         for _ in range(repeats):
             for name, (set_up, run) in runs.items():
                 subject = set_up()
+                gc.collect()  # no run pays for the garbage of another (cvxpy leaves much)
                 start = time.perf_counter()
                 run(subject)
                 times[name].append(time.perf_counter() - start)
