@@ -275,7 +275,10 @@ def write_systems(rows):
                      f"{r['SINDyPI_over_optimizer']:.1f} | {r['SINDyPI_over_fit']:.1f} | "
                      f"{'yes' if r['same_law'] else 'NO'} | "
                      f"{r['load_average'][0]:.1f} / {r['load_average'][1]:.1f} |")
-    RESULTS.with_suffix(".md").write_text("\n".join(lines) + "\n")
+    md_path = RESULTS.with_suffix(".md")
+    old_md = md_path.read_text() if md_path.exists() else ""
+    notes = old_md[old_md.index("\n## Notes"):] if "\n## Notes" in old_md else ""  # kept
+    md_path.write_text("\n".join(lines) + "\n" + notes)
 
 
 def main(argv=None):
