@@ -425,7 +425,7 @@ class ImplicitOptimizer(CatalogOptimizer):
             raise NoLawFoundError(
                 f"theta: {active.size} non-zero column(s); implicit regression needs at least 2"
             )
-        scaled = theta[:, active] / norms[active]
+        scaled = (theta if active.size == n_features else theta[:, active]) / norms[active]
         r_factor = triangular_factor(scaled)
         x_scaled = self._sindy_pi_matrix(r_factor)
 
