@@ -131,6 +131,41 @@ def test_fast_and_cvxpy_agree_on_the_solution_matrix():
     np.testing.assert_array_equal(fast.coef_ != 0, ref.coef_ != 0)
 
 
+def test_early_stopping_finds_the_full_solve_laws_in_few_iterations():
+    # An exact law is read off the null-space start: the laws are checked at every
+    # convergence check, so the solver stops within a few checks with the very law (bit for
+    # bit: the refit depends on the support only) that solving every column gives.
+    theta, (truth,) = planted_matrix(n_free=20, seed=5)
+    early = ImplicitOptimizer().fit(theta)
+    full = ImplicitOptimizer(early_stopping=False).fit(theta)
+    assert early.converged_ and early.n_iter_ <= 30 < full.n_iter_
+    assert np.array_equal(early.coef_ != 0, truth != 0)
+    np.testing.assert_array_equal(early.coef_, full.coef_)
+    # Noisy columns: the laws do not settle within the probe, the solve starts over (laws
+    # checked every 100 iterations) and still stops long before every column converges.
+    noisy = theta + 1e-3 * np.random.default_rng(5).normal(size=theta.shape) * theta.std(0)
+    early = ImplicitOptimizer().fit(noisy)
+    full = ImplicitOptimizer(early_stopping=False).fit(noisy)
+    assert early.converged_ and 50 < early.n_iter_ < full.n_iter_
+    assert np.array_equal(early.coef_ != 0, truth != 0)
+    np.testing.assert_array_equal(early.coef_, full.coef_)
+
+
+def test_triangular_factor_is_scipys_r():
+    import scipy.linalg
+
+    from pysindy_xl.optimizers._sparse import triangular_factor
+
+    rng = np.random.default_rng(0)
+    for shape in [(500, 7), (7, 7), (3, 5), (1, 4)]:
+        matrix = rng.normal(size=shape)
+        expected = scipy.linalg.qr(matrix, mode="r")[0][: min(shape)]
+        np.testing.assert_array_equal(triangular_factor(matrix), expected)
+    r_factor = triangular_factor(matrix := rng.normal(size=(200, 6)))
+    np.testing.assert_allclose(r_factor.T @ r_factor, matrix.T @ matrix, rtol=1e-12)
+    assert np.array_equal(r_factor, np.triu(r_factor))
+
+
 def test_decoupled_laws_are_combined_on_disjoint_supports():
     theta, truths = planted_matrix(
         n_free=12, laws=((0, [0, 1, 2], [1.0, -2.0, 0.7]), (1, [6, 7], [3.0, 0.4])), seed=5

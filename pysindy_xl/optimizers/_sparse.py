@@ -56,7 +56,9 @@ def triangular_factor(matrix) -> np.ndarray:
     can be computed on the small ``R`` instead, with better conditioning than the Gram matrix.
     """
     matrix = np.asarray(matrix, dtype=float)
-    return scipy.linalg.qr(matrix, mode="r", check_finite=False)[0][: min(matrix.shape)]
+    # "raw": the same factorization, but R is cut from the leading rows before ``triu``
+    # (mode "r" masks the whole tall array, which costs as much as the factorization)
+    return scipy.linalg.qr(matrix, mode="raw", check_finite=False)[1]
 
 
 def soft_threshold(values, threshold):
@@ -218,7 +220,8 @@ def _fista(
 
 def lasso_gram(gram, targets, alpha, mask=None, coef_init=None, tol: float = 1e-4,
                max_iter: int = 20_000, continuation: bool = True, check_every: int = 10,
-               warn: bool = True, callback=None, atol: float = 1e-8) -> LassoResult:
+               warn: bool = True, callback=None, atol: float = 1e-8,
+               callback_every: int = 100) -> LassoResult:
     """Solve K Lasso problems sharing one Gram matrix, all at once.
 
     For every column k: ``min_x 1/2 x^T G x - b_k^T x + alpha ||x||_1`` with ``x_i = 0`` where
@@ -255,13 +258,16 @@ def lasso_gram(gram, targets, alpha, mask=None, coef_init=None, tol: float = 1e-
     warn : bool
         Emit a :class:`~sklearn.exceptions.ConvergenceWarning` when some column did not converge.
     callback : callable, optional
-        ``callback(coef, converged) -> bool``, called every 100 iterations (``converged``:
-        boolean per column, at the current stage's alpha); returning True stops early (the
-        caller decides that what it needs has converged; the other columns may be left at an
-        intermediate stage of the continuation path).
+        ``callback(coef, converged) -> bool``, called every ``callback_every`` iterations of
+        a stage (``converged``: boolean per column, at the current stage's alpha); returning
+        True stops early (the caller decides that what it needs has converged; the other
+        columns may be left at an intermediate stage of the continuation path).
     atol : float
         Absolute floor of the convergence threshold: the rounding level of the gradient on
         unit-norm columns, below which a tiny ``alpha`` could not be resolved.
+    callback_every : int, default 100
+        Iterations between calls of ``callback`` (a multiple of ``check_every`` sees the
+        latest convergence flags).
 
     Returns
     -------
@@ -337,7 +343,7 @@ def lasso_gram(gram, targets, alpha, mask=None, coef_init=None, tol: float = 1e-
             break
         used, converged = _fista(
             gram, masked_targets, stage_alpha, mask, coef, lipschitz, stage_tol, budget,
-            int(check_every), callback,
+            int(check_every), callback, int(callback_every),
         )
         n_iter += used
         if used < budget and not np.all(converged):
