@@ -36,6 +36,11 @@ def _interlink_matrix(interlink, n: int) -> np.ndarray:
     return matrix
 
 
+def _exact(value: float) -> sp.Expr:
+    """``value`` as the exact number it stands for (an integer directly: ``nsimplify`` is slow)."""
+    return sp.Integer(int(value)) if value == int(value) else sp.nsimplify(value)
+
+
 def signed_indices_to_interlink(indices, n: int) -> np.ndarray:
     """Interlink matrix from per-coordinate lists of signed 1-based input indices.
 
@@ -123,7 +128,7 @@ class ExternalForces(SymbolicLibrary):
         self.interlink_ = matrix
         tau = sp.Matrix(self.coords.tau)
         column = sp.Matrix(
-            [sum(sp.nsimplify(matrix[c, k]) * tau[k] for k in range(self.coords.n))
+            [sum(_exact(matrix[c, k]) * tau[k] for k in range(self.coords.n) if matrix[c, k])
              for c in range(self.coords.n)]
         )
         return ["F[tau]"], column

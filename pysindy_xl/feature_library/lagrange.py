@@ -8,7 +8,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..expressions import format_expression
 from ..symbols import Coordinates, as_expr_list
-from ._base import SymbolicLibrary
+from ._base import SymbolicLibrary, _derived
 
 __all__ = ["LagrangeLibrary", "euler_lagrange"]
 
@@ -40,6 +40,19 @@ def _diff(expr: sp.Expr, symbol: sp.Symbol) -> sp.Expr:
     if isinstance(expr, sp.cos):
         return -sp.sin(expr.args[0]) * _diff(expr.args[0], symbol)
     return sp.diff(expr, symbol)
+
+
+def _defined_everywhere(expr: sp.Expr) -> bool:
+    """Whether ``expr`` is finite at every finite value of its symbols: built from finite
+    numbers and symbols by sums, products, nonnegative integer powers, ``sin`` and ``cos``."""
+    if expr.is_Symbol or isinstance(expr, sp.NumberSymbol):
+        return True
+    if expr.is_Number:
+        return bool(expr.is_finite)
+    if isinstance(expr, sp.Pow):
+        return bool(expr.exp.is_Integer and expr.exp >= 0) and _defined_everywhere(expr.base)
+    return (isinstance(expr, (sp.Add, sp.Mul, sp.sin, sp.cos))
+            and all(_defined_everywhere(a) for a in expr.args))
 
 
 def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:
@@ -139,10 +152,15 @@ class LagrangeLibrary(SymbolicLibrary):
                     "only positions, velocities and t are allowed"
                 )
         self.terms_ = terms
-        columns = [euler_lagrange(term, self.coords) for term in terms]
+        # the same terms of the same coordinates derive the same columns: derived once
+        # (refits, resampled and cross-validated fits rebuild equal catalogs)
+        names, columns = _derived(
+            ("euler-lagrange", self.coords.variables, tuple(terms)),
+            lambda: (tuple(f"L[{term}]" for term in terms),
+                     tuple(tuple(euler_lagrange(term, self.coords)) for term in terms)))
         matrix = sp.Matrix(self.coords.n, len(terms), lambda i, j: columns[j][i])
         self.zero_terms_ = [j for j, col in enumerate(columns) if all(e == 0 for e in col)]
-        return [f"L[{term}]" for term in terms], matrix
+        return list(names), matrix
 
     def _feature_terms(self):
         return self.terms_
@@ -152,6 +170,8 @@ class LagrangeLibrary(SymbolicLibrary):
 
         A Lagrangian term outside its domain (``log(x)`` at ``x <= 0``, ``sqrt(x)`` at
         ``x < 0``) has no meaning there, even where its Euler-Lagrange column is finite.
+        Terms finite wherever their variables are (polynomials in them, ``sin``, ``cos``)
+        have no such domain and are not evaluated.
 
         Parameters
         ----------
@@ -168,13 +188,15 @@ class LagrangeLibrary(SymbolicLibrary):
         ...
         ValueError: feature_library: the Lagrangian term log(x) is NaN or inf on 1 of 1 samples...
         """
-        from ._compile import compile_entries
-
         check_is_fitted(self, "terms_")
         x = self._check_input(x)
+        terms, evaluate = _derived(("domain check", self.coords.variables, tuple(self.terms_)),
+                                   lambda: self._domain_check())
+        if not terms:
+            return
         with np.errstate(all="ignore"):
-            values = compile_entries(self.coords.variables, self.terms_)(x)
-        for term, value in zip(self.terms_, values, strict=True):
+            values = evaluate(x)
+        for term, value in zip(terms, values, strict=True):
             bad = ~np.isfinite(value)
             if bad.any():
                 raise ValueError(
@@ -183,6 +205,13 @@ class LagrangeLibrary(SymbolicLibrary):
                     f"{int(np.flatnonzero(bad)[0])}): the data leave its domain (log, sqrt, 1/x "
                     "of values <= 0) or overflow it"
                 )
+
+    def _domain_check(self):
+        """The terms that may be undefined somewhere, and their compiled evaluation."""
+        from ._compile import compile_entries
+
+        terms = [term for term in self.terms_ if not _defined_everywhere(term)]
+        return terms, (compile_entries(self.coords.variables, terms) if terms else None)
 
     def _build_weak_symbolic(self):
         # P = dL/dqd and Q = dL/dq: the Euler-Lagrange column before its time derivative

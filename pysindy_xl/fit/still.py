@@ -163,6 +163,8 @@ def still_coordinates(positions, times, forced, threshold: float) -> np.ndarray:
     forced = np.asarray(forced, dtype=bool)
     still = ~forced
     for x, t in zip(positions, times, strict=True):
+        if not still.any():  # one moving trajectory per coordinate decides it
+            break
         x = np.asarray(x, dtype=float)
         t = np.asarray(t, dtype=float)
         line = np.column_stack([np.ones_like(t), t - t.mean()])
