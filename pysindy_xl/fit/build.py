@@ -155,6 +155,17 @@ def _check_moving(data, names, still):
                              "coordinate that never moves carries no dynamics to identify")
 
 
+def _selected(theta, n, moving, keep) -> np.ndarray:
+    """The rows of the moving coordinates and the kept columns of ``theta``, column-major;
+    ``theta`` itself where it keeps everything (the rows are fresh, and copying them is a
+    good part of a clean fit)."""
+    if not moving.all():
+        theta = theta[block_rows(n, theta.shape[0], moving)]
+    if len(keep) < theta.shape[1]:
+        theta = theta[:, keep]
+    return np.asfortranarray(theta)
+
+
 def build_problem(library, data, formulation: str, *, test_functions=None, smoother=None,
                   half_width=None, hold_still=False, still=None,
                   drop_dependent=False, propagate=True) -> CatalogProblem:
@@ -244,7 +255,7 @@ def build_problem(library, data, formulation: str, *, test_functions=None, smoot
         noise = noise.coordinates(moving) if still.any() else noise
     structure = library.physical_structure()  # for optimizers that constrain to it
     return CatalogProblem.from_arrays(
-        theta[block_rows(n, theta.shape[0], moving)][:, keep], int(moving.sum()),
+        _selected(theta, n, moving, keep), int(moving.sum()),
         force_columns, physical=None if structure is None else structure.select(keep),
         noise_moments=None if noise is None else noise.moments(),
         noise_draws=None if noise is None else noise.draws, row_noise=noise,
