@@ -174,3 +174,31 @@ def test_plot_of_the_weak_fit_from_noisy_positions(tmp_path, capsys):
     assert _r2(text) > 0.99
     rmse = float(re.search(r"position RMSE theta ([0-9.e-]+)", text).group(1))
     assert rmse < 0.05 * q.std()
+
+
+def test_joint_models_option_finds_a_torque_sensor_offset(tmp_path, capsys):
+    """``--joint-models``: the kinematic catalog offers the joint models of real arms, and the
+    fit finds the constant offset of a torque sensor (ground truth: the offset added to the
+    torques MuJoCo applied); without the option there is no offset to find."""
+    from pysindy_xl.mujoco import MJCFSystem, generate_dataset
+
+    xml = tmp_path / "pendulum.xml"
+    xml.write_text("""<mujoco><option timestep="0.001" integrator="RK4"/>
+      <worldbody><body><joint name="swing" type="hinge" axis="0 1 0" damping="0.2"/>
+      <inertial pos="0 0 -0.5" mass="1" diaginertia="0.01 0.01 0.01"/></body></worldbody>
+      <actuator><motor joint="swing"/></actuator></mujoco>""")
+    run = generate_dataset(MJCFSystem(str(xml)), n_trajectories=1, duration=6.0, seed=1,
+                           progress=False).trajectories[0]
+    offset = 0.3
+    data = write_csv(tmp_path / "log.csv", ["t", "swing", "tau_swing"],
+                     [run.t, run.q[:, 0], run.tau[:, 0] + offset])
+    arguments = ["identify", str(data), "--system", str(xml), "--quiet", "--cv-blocks", "0"]
+    model = run_identify(build_parser().parse_args(
+        [*arguments, "--joint-models", "viscous,offset"]))
+    found = model.physical_parameters()["joint_friction"]["swing"]
+    assert found["offset"] == pytest.approx(offset, rel=0.02)
+    assert found["viscous"] == pytest.approx(0.2, rel=0.05)
+    plain = run_identify(build_parser().parse_args(arguments))
+    assert "joint_friction" not in plain.physical_parameters()
+    assert main([*arguments, "--catalog", "mixed", "--joint-models", "all"]) == 1
+    assert "only the 'kinematic' catalog offers joint models" in capsys.readouterr().err

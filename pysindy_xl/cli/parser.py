@@ -25,6 +25,14 @@ def _bandwidth(text):
     return float("inf") if text.strip().lower() == "inf" else _positive_float(text)
 
 
+def _joint_models(text):
+    """``all`` or comma-separated joint model names (checked by the kinematic catalog)."""
+    names = tuple(name.strip() for name in text.split(",") if name.strip())
+    if not names:
+        raise argparse.ArgumentTypeError("expected 'all' or comma-separated model names")
+    return "all" if names == ("all",) else names
+
+
 def _add_generation_options(parser, duration=10.0, trajectories=2):
     parser.add_argument("--forcing", choices=FORCINGS, default="explicit",
                         help="implicit: no force, random initial state; explicit: every "
@@ -72,6 +80,11 @@ def _add_fit_options(parser):
                         help="relative pruning threshold of the explicit solver")
     parser.add_argument("--friction", choices=("auto", "diagonal", "full"), default="auto",
                         help="friction terms of the catalogs (default: auto)")
+    parser.add_argument("--joint-models", type=_joint_models, default=None, metavar="MODELS",
+                        help="kinematic catalog: friction and sensor models of real joints "
+                             "offered for every joint, the fit selecting what each needs; "
+                             "comma-separated among viscous, coulomb, asymmetric, stribeck, "
+                             "offset, or all (default: viscous and smooth Coulomb)")
     parser.add_argument("--velocity-degree", type=_positive_int, default=2,
                         help="degree of the velocity monomials of the catalog (default: 2)")
     parser.add_argument("--trig-degree", type=_positive_int, default=2,

@@ -214,8 +214,15 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
 
     optimizer = check_solver(solver, forced, args.threshold,
                              auto=getattr(args, "solver", "auto") == "auto")
-    catalog = reference_catalog(system, args.catalog, velocity_degree=args.velocity_degree,
-                                trig_degree=args.trig_degree, friction=args.friction)
+    try:
+        catalog = reference_catalog(system, args.catalog, velocity_degree=args.velocity_degree,
+                                    trig_degree=args.trig_degree, friction=args.friction,
+                                    joint_models=getattr(args, "joint_models", None))
+    except ValueError as error:
+        if not str(error).startswith(("friction:", "joint_models:")):
+            raise
+        # unknown joint model names, or joint models asked of another catalog
+        raise CLIError(f"--joint-models: {str(error).split(': ', 1)[1]}") from None
     model = px.XLSINDy(catalog, optimizer, formulation=getattr(args, "formulation", "auto"),
                        **({} if getattr(args, "hold_still", True) else {"hold_still": False}))
     try:

@@ -200,7 +200,8 @@ def dry_friction_terms(system, eps: float = 1e-3) -> tuple[list[sp.Expr], np.nda
 
 def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
                       trig_degree: int = 2, friction: str = "auto", interlink=None,
-                      dry_friction: bool | None = None, dry_friction_eps: float = 1e-3):
+                      dry_friction: bool | None = None, dry_friction_eps: float = 1e-3,
+                      joint_models=None):
     """The paper's reference catalog of a system (see the module docstring).
 
     Parameters
@@ -222,6 +223,10 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
         model has ``frictionloss``.
     dry_friction_eps : float, default 1e-3
         Their velocity scale.
+    joint_models : sequence of str or "all", optional
+        ``"kinematic"`` only: the friction and sensor models of real joints offered for
+        every joint, the fit selecting what each needs (``friction`` of
+        :func:`~pysindy_xl.mujoco.kinematic_catalog`). Default: viscous and smooth Coulomb.
 
     Returns
     -------
@@ -249,7 +254,10 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
     if kind == "kinematic":
         from .kinematic import kinematic_catalog
 
-        return kinematic_catalog(system).library(interlink=interlink)
+        return kinematic_catalog(system, friction=joint_models).library(interlink=interlink)
+    if joint_models is not None:
+        raise ValueError(f"joint_models: only the 'kinematic' catalog offers joint models, not "
+                         f"{kind!r}")
     coords = system.coords
     friction_mask = _friction_mask(system, friction)
     terms = lagrange_terms(system, velocity_degree, trig_degree)
