@@ -66,14 +66,18 @@ SMALL = """<?xml version="1.0"?>
 """
 
 
-def _ur5_path():
+def _robot_data_path(relative):
+    """A URDF of the ``example-robot-data`` package, None without it."""
     try:
         dist = importlib.metadata.distribution("example-robot-data")
     except importlib.metadata.PackageNotFoundError:
         return None
-    path = dist.locate_file("cmeel.prefix/share/example-robot-data/robots/ur_description/"
-                            "urdf/ur5_robot.urdf")
+    path = dist.locate_file(f"cmeel.prefix/share/example-robot-data/robots/{relative}")
     return pathlib.Path(path) if pathlib.Path(path).is_file() else None
+
+
+def _ur5_path():
+    return _robot_data_path("ur_description/urdf/ur5_robot.urdf")
 
 
 def _balanced(text: str) -> str:
@@ -256,3 +260,37 @@ def test_a_broken_urdf_is_refused_with_the_argument_named(tmp_path):
         MJCFSystem(path)
     with pytest.raises(ValueError, match="does not exist"):
         MJCFSystem(tmp_path / "absent.urdf")
+
+
+def test_identify_locks_the_joints_a_log_does_not_record(tmp_path, capsys):
+    """A 7-joint arm's log with a URDF that also has its gripper (two fingers, the second a
+    mimic joint): ``identify`` locks the fingers at their reference pose, and the arm's mass
+    matrix is the full model's block of the arm's joints there (MuJoCo's ``mj_fullM``)."""
+    from pysindy_xl.cli import build_parser
+    from pysindy_xl.cli.commands import _identify_inputs
+
+    urdf = _robot_data_path("panda_description/urdf/panda.urdf")
+    if urdf is None:
+        pytest.skip("example-robot-data is not installed")
+    names = [f"panda_joint{k}" for k in range(1, 8)]
+    t = np.arange(0.0, 1.0, 0.002)
+    q = 0.4 * np.sin(np.outer(t, 0.5 + np.arange(7) * 0.3))
+    data = tmp_path / "log.csv"
+    np.savetxt(data, np.column_stack([t, q]), delimiter=",", comments="",
+               header=",".join(["t", *names]))
+    dataset, system = _identify_inputs(build_parser().parse_args(
+        ["identify", str(data), "--system", str(urdf)]))
+    assert "locked at their reference pose: panda_finger_joint1, panda_finger_joint2" in (
+        capsys.readouterr().err)
+    assert system.coordinate_names == tuple(names) and dataset.n == 7
+    full = MJCFSystem(str(urdf)).mj_model()
+    locked = system.mj_model()
+    for m in (full, locked):
+        data_m = mujoco.MjData(m)
+        data_m.qpos[:7] = q[100]
+        mujoco.mj_forward(m, data_m)
+        matrix = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(m, data_m, matrix)
+        if m is full:
+            expected = matrix[:7, :7]
+    np.testing.assert_allclose(matrix, expected, rtol=1e-10, atol=1e-12)

@@ -17,6 +17,7 @@ from .steps import (
     data_lines,
     dataset_for,
     dataset_system,
+    display_name,
     fit_model,
     generate_data,
     joint_parameters,
@@ -101,7 +102,7 @@ def run_demo(args) -> dict:
     output_directory(args.out)
     timings = {}
     quiet = args.quiet
-    log(quiet, f"pysindy-xl demo: {system.name} {system.parameters}")
+    log(quiet, f"pysindy-xl demo: {display_name(system)} {system.parameters}")
     log(quiet, f"  forcing {args.forcing}, noise {args.noise:g} ({args.noise_model}), catalog "
                 f"{args.catalog}, solver {solver}, seed {args.seed}")
 
@@ -132,7 +133,7 @@ def run_demo(args) -> dict:
 
         path = os.path.join(args.out, "validation.png")
         plot_validation(result, path, model.get_feature_names(), model.coefficients(), truth,
-                        title=f"{system.name} ({args.catalog} catalog, {solver} solver)")
+                        title=f"{display_name(system)} ({args.catalog} catalog, {solver} solver)")
         files["validation_plot"] = path
         timings["plot"] = time.perf_counter() - start
 
@@ -348,7 +349,7 @@ def run_identify(args):
             active = np.any(np.vstack([tr.tau for tr in dataset.trajectories]) != 0, axis=0)
             solver = "explicit" if active.all() else "mixed"
     n_samples = sum(tr.n_samples for tr in dataset.trajectories)
-    progress(f"building the {args.catalog} catalog of {system.name} and fitting "
+    progress(f"building the {args.catalog} catalog of {display_name(system)} and fitting "
              f"({formulation} form: "
              + ("smoothing positions, integrating against test functions" if formulation ==
                 "weak" else "catalog at every sample")
@@ -356,7 +357,7 @@ def run_identify(args):
     model, arguments = fit_model(system, dataset, args, solver, forced, return_arguments=True)
     progress(f"fitted: {int(np.count_nonzero(model.coefficients()))} terms of "
              f"{len(model.get_feature_names())}; computing the fit quality")
-    print(f"{system.name}: {dataset.n_trajectories} trajectories, {n_samples} samples, "
+    print(f"{display_name(system)}: {dataset.n_trajectories} trajectories, {n_samples} samples, "
           f"{args.catalog} catalog, {solver} solver, {model.formulation_} formulation")
     for line in model_lines(model):
         print(line)
@@ -381,7 +382,7 @@ def run_identify(args):
         score = held_out_verdict(args, model, system, arguments,
                                  lambda path: _load(args, path, system), progress)
         if args.plot:
-            score.plot(args.plot, title=f"{system.name}: held-out torques, measured and "
+            score.plot(args.plot, title=f"{display_name(system)}: held-out torques, measured and "
                                         f"predicted ({100 * score.total:.2f} % relative RMS)")
             print(f"torque plot: {args.plot} (measured against predicted torques)")
     replay = getattr(args, "open_loop", None) or (args.plot if score is None else None)
@@ -393,7 +394,7 @@ def run_identify(args):
                            "nothing to simulate")
         result = plot_identification(
             model, dataset.trajectories[0], replay, forced=forced,
-            title=f"{system.name}: identified model against trajectory 0\n({args.catalog} "
+            title=f"{display_name(system)}: identified model against trajectory 0\n({args.catalog} "
                   f"catalog, {solver} solver, {model.formulation_} form)")
         rmse = ", ".join(f"{name} {value:.3g}" for name, value in
                          zip(model.feature_library_.coords.names, result["rmse"], strict=True))
@@ -464,6 +465,8 @@ def _identify_inputs(args):
                            "--coordinates (no --system)")
         # a dataset of a user's MJCF carries the model (path or XML) in its metadata
         system = given or dataset_system(dataset.metadata)
+        if given is not None:
+            system = _joints_of_the_log(system, dataset, args.system)
         return dataset_for(system, dataset), system
     if not args.data.lower().endswith(".npz") or coordinates:
         if not angles:
@@ -475,6 +478,20 @@ def _identify_inputs(args):
             raise CLIError(f"--angles: {error}") from None
     raise CLIError("--system: the dataset names no system; pass --system NAME (or an MJCF "
                    ".xml), or --coordinates x,theta [--angles theta]")
+
+
+def _joints_of_the_log(system, dataset, path):
+    """A robot description restricted to the joints its log records, the others locked at
+    their reference pose (e.g. a 7-joint arm's log with a URDF that also has its gripper's
+    fingers); the system as it is otherwise."""
+    names = dataset.coordinate_names
+    others = [c for c in system.coordinate_names if c not in names]
+    if (not others or not set(names) < set(system.coordinate_names)
+            or not str(path).lower().endswith((".xml", ".urdf"))):
+        return system
+    print(f"note: joints not in the data are locked at their reference pose: "
+          f"{', '.join(others)}", file=sys.stderr)
+    return system_by_name(path, list(names))
 
 
 def _save_atomically(model, path):

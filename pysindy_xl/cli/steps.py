@@ -40,6 +40,11 @@ def _optimizer(solver: str, threshold=None):
     return cls()
 
 
+def display_name(system) -> str:
+    """The name to show for ``system``: a model file's name (``ur10e.urdf``), else its own."""
+    return os.path.basename(getattr(system, "path", None) or "") or system.name
+
+
 def system_by_name(name, joints=None):
     from pysindy_xl.mujoco import MuJoCoSystem, get_system
 
@@ -152,7 +157,7 @@ def dataset_for(system, dataset):
     if dataset.n != system.n:
         raise CLIError(
             f"DATA: the dataset has {dataset.n} coordinates {list(names)}, the system "
-            f"{system.name} has {system.n} {list(system.coordinate_names)}"
+            f"{display_name(system)} has {system.n} {list(system.coordinate_names)}"
         )
     if names == tuple(f"q{k}" for k in range(dataset.n)):  # unnamed: adopt the system's
         return Dataset(dataset.trajectories, system.coordinate_names, dataset.metadata)
@@ -169,7 +174,7 @@ def dataset_for(system, dataset):
                         for tr in dataset.trajectories]
         return Dataset(trajectories, system.coordinate_names, dataset.metadata)
     raise CLIError(
-        f"DATA: coordinate names {list(names)} do not match the system {system.name} "
+        f"DATA: coordinate names {list(names)} do not match the system {display_name(system)} "
         f"{list(system.coordinate_names)}"
     )
 

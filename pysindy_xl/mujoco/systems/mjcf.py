@@ -181,6 +181,12 @@ class MJCFSystem(MuJoCoSystem):
                 if actuator.target == name:
                     spec.delete(actuator)
             spec.delete(joint)
+        # a joint coupling to a locked joint (a URDF mimic joint: a gripper's second finger)
+        # goes with it
+        for equality in list(spec.equalities):
+            if equality.type == mujoco.mjtEq.mjEQ_JOINT and (
+                    equality.name1 in excluded or equality.name2 in excluded):
+                spec.delete(equality)
         self.trimmed_keyframes = _trim_keyframes(spec, [name in joints for name in names],
                                                  kept_actuators)
         self._spec, self.excluded_joints = spec, tuple(excluded)
