@@ -37,7 +37,7 @@ import dataclasses
 
 import numpy as np
 
-from ._inputs import as_list, check_array
+from ._inputs import aligned, as_list, check_array
 from ._validation import check_option
 
 __all__ = ["ForceScore", "score_forces", "blocked_cross_validation", "scoring_derivatives",
@@ -297,18 +297,11 @@ def _runs(n, x, t, u, x_dot, x_ddot):
     """Checked per-run arrays: lists of x, t, u, x_dot, x_ddot (None entries allowed); ``n``
     coordinates, or None to take them from ``x``."""
     xs, is_list = as_list(x, "x")
-    layout = {}
-    for name, value in (("t", t), ("u", u), ("x_dot", x_dot), ("x_ddot", x_ddot)):
+    for name, value in (("t", t), ("u", u)):
         if value is None:
-            if name in ("t", "u"):
-                raise ValueError(f"{name}: required to score forces")
-            layout[name] = [None] * len(xs)
-            continue
-        values, listed = as_list(value, name)
-        if listed != is_list or len(values) != len(xs):
-            raise ValueError(f"{name}: expected the same layout as x ({len(xs)} "
-                             f"{'runs' if is_list else 'array'})")
-        layout[name] = values
+            raise ValueError(f"{name}: required to score forces")
+    layout = {name: aligned(value, name, xs, is_list, "runs") for name, value in
+              (("t", t), ("u", u), ("x_dot", x_dot), ("x_ddot", x_ddot))}
     runs = []
     for k, xk in enumerate(xs):
         label = f"[{k}]" if is_list else ""

@@ -13,7 +13,7 @@ import numpy as np
 from sklearn.metrics import r2_score
 from sklearn.utils.validation import check_is_fitted
 
-from .._inputs import as_list, check_array
+from .._inputs import aligned, as_list, check_array
 from .._validation import check_instance
 from .mass_matrix import MassMatrixDynamics
 
@@ -50,10 +50,7 @@ class DynamicsMixin:
         dynamics = self._require_dynamics()
         n = self.n_coordinates_
         xs, is_list = as_list(x, "x")
-        xds, xd_list = as_list(x_dot, "x_dot")
-        us, u_list = as_list(u, "u") if u is not None else ([None] * len(xs), is_list)
-        if xd_list != is_list or len(xds) != len(xs) or u_list != is_list or len(us) != len(xs):
-            raise ValueError("x_dot, u: expected the same layout as x")
+        xds, us = aligned(x_dot, "x_dot", xs, is_list), aligned(u, "u", xs, is_list)
         out = []
         for k, (xk, xdk, uk) in enumerate(zip(xs, xds, us, strict=True)):
             label = f"[{k}]" if is_list else ""
