@@ -29,6 +29,11 @@ Paths of supports, each step from one decomposition of the current pencil
   of the bordered pencil's secular equation; the column that lowers it most comes in;
 * **swaps** (:func:`refine_law_by_swaps`): exchanges of one selected and one unselected
   column while the ratio drops (the 1-swap local search of L0Learn).
+
+Throughout, ``r_factor`` (m, F) is ``Theta`` or any factor with the same ``R^T R = Theta^T
+Theta`` (the triangular factor; unit-scale columns for the paths) and ``moments`` (F, F) the
+``E[E^T E]`` of the errors of the same rows and columns. A path's ``order[:k]`` is its support
+of size ``k`` (``k >= 2``).
 """
 
 from __future__ import annotations
@@ -81,19 +86,8 @@ def noise_pencil(r_factor, moments):
 
 
 def noise_ratio_law(r_factor, moments) -> tuple[float, np.ndarray]:
-    """Smallest noise ratio on all the columns and its law (unit norm, largest entry positive).
-
-    Parameters
-    ----------
-    r_factor : array, shape (m, k)
-        ``Theta`` or any factor with the same ``R^T R = Theta^T Theta`` (the triangular factor).
-    moments : array, shape (k, k)
-        ``E[E^T E]`` of the errors of the same rows.
-
-    Returns
-    -------
-    ratio : float
-    law : ndarray, shape (k,)
+    """Smallest noise ratio on all the columns and its law: ``(ratio, law)``, the law of unit
+    norm with its largest entry positive.
 
     Examples
     --------
@@ -144,18 +138,6 @@ def _constrained_minima(values, vectors, n_bisections: int = 48) -> np.ndarray:
 def law_elimination_path(r_factor, moments) -> np.ndarray:
     """Columns ordered from most to least needed by backward elimination of the noise ratio.
 
-    Parameters
-    ----------
-    r_factor : array, shape (m, F)
-        ``Theta`` or its triangular factor, unit-scale columns.
-    moments : array, shape (F, F)
-        ``E[E^T E]`` on the same columns.
-
-    Returns
-    -------
-    ndarray of int, shape (F,)
-        ``order[:k]`` is the support of size ``k`` (``k >= 2``) of the path.
-
     Examples
     --------
     >>> import numpy as np
@@ -185,21 +167,8 @@ def eliminate_one(r_factor, moments, support) -> np.ndarray:
 
 def law_forward_path(r_factor, moments, max_size=None) -> np.ndarray:
     """Columns in the order forward selection adds them: the pair with the smallest noise
-    ratio first, then the column whose addition lowers the ratio most.
-
-    Parameters
-    ----------
-    r_factor : array, shape (m, F)
-        ``Theta`` or its triangular factor, unit-scale columns.
-    moments : array, shape (F, F)
-    max_size : int, optional
-        Stop after this many columns (default: all).
-
-    Returns
-    -------
-    ndarray of int
-        ``order[:k]`` is the support of size ``k`` (``k >= 2``) of the path.
-    """
+    ratio first, then the column whose addition lowers the ratio most (stopping after
+    ``max_size`` columns, default all)."""
     n_features = r_factor.shape[1]
     max_size = n_features if max_size is None else min(int(max_size), n_features)
     gram = r_factor.T @ r_factor
@@ -326,22 +295,10 @@ def refine_law_by_swaps(r_factor, moments, support, max_swaps: int = 50,
     :func:`_smallest_bordered_root`, and it is confirmed by an exact computation before it is
     taken.
 
-    Parameters
-    ----------
-    r_factor : array, shape (m, F)
-        ``Theta`` or its triangular factor, unit-scale columns.
-    moments : array, shape (F, F)
-    support : array of int
-    max_swaps : int, default 50
-    memo : dict, optional
-        Refined supports by the supports they passed through (frozensets), shared between
-        calls on the same ``r_factor`` and ``moments``: the search is deterministic, so a
-        support already visited ends where it ended before.
-
-    Returns
-    -------
-    ndarray of int
-        The refined support, sorted.
+    At most ``max_swaps`` exchanges; returns the refined support, sorted. ``memo`` (a dict
+    shared between calls on the same ``r_factor`` and ``moments``) holds refined supports by
+    the supports they passed through (frozensets): the search is deterministic, so a support
+    already visited ends where it ended before.
     """
     memo = {} if memo is None else memo
     gram = r_factor.T @ r_factor
