@@ -45,14 +45,6 @@ def quadrature_weights(t) -> np.ndarray:
     (fourth order; 1e-5 on the same signal), except where nearly coincident samples make
     that cubic's weights large and of both signs: those intervals keep the trapezoid.
 
-    Parameters
-    ----------
-    t : array, shape (N,)
-
-    Returns
-    -------
-    ndarray, shape (N,)
-
     Examples
     --------
     >>> quadrature_weights([0.0, 1.0, 2.0])
@@ -102,7 +94,8 @@ _CHI2_1_MEDIAN = 0.454936423119572
 
 
 def corner_frequency(t, x, energy: float = 0.99) -> float:
-    """Frequency (Hz) below which the signal part of the positions' spectrum lies.
+    """Frequency (Hz) below which the signal part of the spectrum of positions ``x`` (N, n)
+    lies.
 
     The spectrum of each coordinate (cosine transform after removing a linear trend and
     tapering the ends, on the samples treated as uniform with the mean step) is split into a
@@ -116,16 +109,6 @@ def corner_frequency(t, x, energy: float = 0.99) -> float:
     them at zero, or taking the median itself as the floor, leaves about half the noise
     power in the "signal", which pushes the corner up when the detrended signal is small
     against the noise, e.g. a drifting cart).
-
-    Parameters
-    ----------
-    t : array, shape (N,)
-    x : array, shape (N, n)
-    energy : float, default 0.99
-
-    Returns
-    -------
-    float
 
     Examples
     --------
@@ -223,18 +206,8 @@ class BumpTestFunctions:
                              f"{self.width_multiples!r}")
 
     def half_width(self, t, x=None) -> float:
-        """Half-width ``h`` (time units) for a trajectory.
-
-        Parameters
-        ----------
-        t : array, shape (N,)
-        x : array, shape (N, n), optional
-            Positions, needed when ``width="auto"``.
-
-        Returns
-        -------
-        float
-        """
+        """Half-width ``h`` (time units) for a trajectory of times ``t`` (N,) and positions
+        ``x`` (N, n), which ``width="auto"`` needs."""
         self._check_params()
         t = np.asarray(t, dtype=float)
         # the floor resolves the bump at (nearly) every step, so that steps no longer than
