@@ -185,27 +185,18 @@ class DynamicsMixin:
             Generalized forces as a function of time (arrays are interpolated by a cubic
             spline by default).
         feedback : callable, optional
-            A feedback law ``feedback(t, q, qd) -> (n,)``: generalized forces from the time
-            and the model's own simulated state (``q``, ``qd`` arrays of shape (n,)),
-            evaluated at every step of the integrator and added to ``u``. This is how a
-            servo-driven system is simulated the way it ran: the servos react to the
-            model's motion (:func:`pysindy_xl.mujoco.actuator_law` gives an MJCF's actuator
-            law in this form).
+            A feedback law ``feedback(t, q, qd) -> (n,)`` evaluated at every step and added to
+            ``u``: a servo-driven system simulated the way it ran, its servos reacting to the
+            model's motion (:func:`pysindy_xl.mujoco.actuator_law` gives an MJCF's law).
         **integrator_options
             Passed to :meth:`MassMatrixDynamics.simulate` (``method``, ``rtol``, ``atol``,
-            ``divergence_bound``, ``max_evaluations``, ``timeout``, ``interpolation``).
+            ``divergence_bound``, ``max_evaluations``, ``timeout``, ``interpolation``), which
+            also says what it raises (:class:`SimulationError` holds the valid part of the
+            trajectory).
 
         Returns
         -------
         ndarray, shape (T, 2n)
-
-        Raises
-        ------
-        SimulationError
-            When the model diverges or its mass matrix becomes singular; the exception holds
-            the valid part of the trajectory.
-        TypeError, ValueError
-            If ``feedback`` is not callable or does not return ``n`` finite values at ``x0``.
 
         Examples
         --------
