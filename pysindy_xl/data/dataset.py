@@ -45,8 +45,9 @@ CONSTRAINT_HANDLING = ("exclude", "known", "include")
 class Trajectory:
     """One sampled trajectory in generalized coordinates.
 
-    The arrays are converted to float and checked on construction; a 1-D ``q`` is a single
-    coordinate.
+    The parameters are the attributes, converted to float (``constraint_active`` to bool)
+    and checked on construction (a :class:`DatasetError` names a wrong shape, NaN or inf, or
+    times that do not increase); a 1-D ``q`` is a single coordinate.
 
     Parameters
     ----------
@@ -68,20 +69,6 @@ class Trajectory:
     constraint_active : array of bool, shape (N,), optional
         Samples where a limit, contact or equality constraint acts (frictionloss excluded:
         it is part of the dynamics that the catalogs can model).
-
-    Attributes
-    ----------
-    t : ndarray, shape (N,)
-    q : ndarray, shape (N, n)
-    qd, qdd, tau, u, tau_constraint, u_constraint : ndarray, shape (N, n), or None
-        As given.
-    info : dict
-    constraint_active : ndarray of bool, shape (N,), or None
-
-    Raises
-    ------
-    DatasetError
-        If an array has the wrong shape, holds NaN or inf, or the times do not increase.
 
     Examples
     --------
@@ -156,7 +143,8 @@ def _check_series(a, name: str, n_samples: int, n: int | None) -> np.ndarray:
 
 
 class Dataset:
-    """Several trajectories of one system plus JSON metadata.
+    """Several trajectories of one system plus JSON metadata (the parameters are the
+    attributes; ``coordinate_names`` becomes a tuple).
 
     Parameters
     ----------
@@ -164,12 +152,6 @@ class Dataset:
     coordinate_names : sequence of str
     metadata : dict, optional
         JSON-serializable (system name and parameters, forcing mode, noise, seed...).
-
-    Attributes
-    ----------
-    trajectories : list of Trajectory
-    coordinate_names : tuple of str
-    metadata : dict
 
     Raises
     ------
@@ -383,12 +365,8 @@ class Dataset:
 
     # -- persistence ---------------------------------------------------------------------
     def to_arrays(self) -> dict:
-        """The NPZ arrays (see the module docstring).
-
-        Returns
-        -------
-        dict of str to ndarray
-            All trajectories concatenated, with ``trajectory`` ids and the JSON ``metadata``.
+        """The NPZ arrays (see the module docstring) by name: all trajectories concatenated,
+        with ``trajectory`` ids and the JSON ``metadata``.
 
         Examples
         --------
@@ -416,19 +394,9 @@ class Dataset:
         return arrays
 
     def save(self, path, write_json: bool = True):
-        """Write ``path`` (``.npz`` appended when missing) and the JSON metadata beside it.
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            The NPZ file; the JSON copy of the metadata goes to the same name with ``.json``.
-        write_json : bool, default True
-            Also write the JSON file (the metadata are inside the NPZ in any case).
-
-        Returns
-        -------
-        pathlib.Path
-            The NPZ path written.
+        """Write ``path`` (``.npz`` appended when missing) and, with ``write_json``, a JSON copy
+        of the metadata beside it (same name, ``.json``; the NPZ holds them in any case).
+        Returns the NPZ path written.
 
         Examples
         --------
@@ -456,14 +424,6 @@ class Dataset:
     def load(cls, path) -> Dataset:
         """Read a dataset written by :meth:`save` or a user's NPZ: :func:`load_dataset`.
 
-        Parameters
-        ----------
-        path : str or os.PathLike
-
-        Returns
-        -------
-        Dataset
-
         Examples
         --------
         >>> import tempfile, pathlib, numpy as np
@@ -483,21 +443,9 @@ class Dataset:
 
 
 def load_dataset(path) -> Dataset:
-    """Read a dataset NPZ (with embedded or side-car JSON metadata, or none).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        An ``.npz`` file holding at least ``t`` (N,) and ``q`` (N, n); see the module docstring.
-
-    Returns
-    -------
-    Dataset
-
-    Raises
-    ------
-    DatasetError
-        With a message naming the missing or malformed array.
+    """Read a dataset NPZ (with embedded or side-car JSON metadata, or none): at least ``t``
+    (N,) and ``q`` (N, n), see the module docstring. A :class:`DatasetError` names a missing or
+    malformed array.
 
     Examples
     --------
