@@ -51,13 +51,8 @@ def noise_levels(noise, noise_model: str = "positions") -> dict:
     Returns
     -------
     dict
-        ``{"q": ..., "qd": ..., "qdd": ..., "tau": ...}``, floats.
-
-    Raises
-    ------
-    ValueError
-        If ``noise_model`` is unknown, a level is negative or not a number, or a dict names
-        velocity or acceleration noise under the ``positions`` model.
+        ``{"q": ..., "qd": ..., "qdd": ..., "tau": ...}``, floats. A dict naming velocity or
+        acceleration noise under the ``positions`` model is refused.
 
     Examples
     --------
@@ -84,10 +79,10 @@ def add_noise(trajectory: Trajectory, noise, rng: np.random.Generator,
               force_matrix=None) -> Trajectory:
     """Gaussian noise at relative levels: sigma = level * std of each column.
 
+    Returns a new trajectory; ``trajectory`` (clean data) is not modified.
+
     Parameters
     ----------
-    trajectory : Trajectory
-        Clean data; not modified.
     noise : float or dict
         One level for ``q``, ``qd``, ``qdd`` and the forces, or a dict with some of the keys
         ``"q", "qd", "qdd", "tau"``. The force noise is added to the joint forces ``u`` (the
@@ -96,16 +91,6 @@ def add_noise(trajectory: Trajectory, noise, rng: np.random.Generator,
         Source of the noise.
     force_matrix : array (n, n), optional
         ``B``; identity when absent.
-
-    Returns
-    -------
-    Trajectory
-        A new trajectory (the input is not modified).
-
-    Raises
-    ------
-    ValueError
-        If a level is negative or not a number, or ``noise`` has an unknown key.
 
     Examples
     --------
@@ -131,14 +116,11 @@ def add_noise(trajectory: Trajectory, noise, rng: np.random.Generator,
         tau = u @ matrix.T
     else:
         tau = noisy(trajectory.tau, levels["tau"])
-    def copy(a):
-        return None if a is None else a.copy()
-
     return Trajectory(
         t=trajectory.t.copy(), q=noisy(trajectory.q, levels["q"]),
         qd=noisy(trajectory.qd, levels["qd"]), qdd=noisy(trajectory.qdd, levels["qdd"]),
         tau=tau, u=u, info=dict(trajectory.info),
-        tau_constraint=copy(trajectory.tau_constraint),
-        u_constraint=copy(trajectory.u_constraint),
-        constraint_active=copy(trajectory.constraint_active),
+        tau_constraint=noisy(trajectory.tau_constraint, 0),
+        u_constraint=noisy(trajectory.u_constraint, 0),
+        constraint_active=noisy(trajectory.constraint_active, 0),
     )
