@@ -48,13 +48,7 @@ _REQUIRED = ("run_id", "trajectory_id", "config", "status")
 
 
 def check_record(record) -> dict:
-    """Validate a record's required fields; returns it.
-
-    Raises
-    ------
-    ValueError
-        If a required field is missing or the status is unknown.
-    """
+    """Validate a record's required fields and status; returns it."""
     if not isinstance(record, dict):
         raise TypeError(f"record: expected a dict, got {type(record).__name__}")
     missing = [k for k in _REQUIRED if k not in record]
@@ -82,14 +76,6 @@ def read_records(path) -> list[dict]:
     A torn last line (a writer killed mid-line) and any other unreadable line (a damaged
     file) are skipped with a warning naming the line: their runs count as not done and are
     run again.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-
-    Returns
-    -------
-    list of dict
     """
     if not os.path.exists(path):
         return []
@@ -171,13 +157,8 @@ class RecordStore:
         """Exclusive use of the records file for the duration of a grid.
 
         A second grid on the same output refuses at once (:class:`GridBusyError` naming the
-        holder)
-        instead of interleaving runs; the lock (``flock`` on ``PATH.lock``) dies with its
-        process, so a killed grid never leaves a stale lock behind.
-
-        Yields
-        ------
-        None
+        holder) instead of interleaving runs; the lock (``flock`` on ``PATH.lock``) dies with
+        its process, so a killed grid never leaves a stale lock behind.
         """
         lock_path = self.path + ".lock"
         handle = open(lock_path, "a+")  # noqa: SIM115 - held for the whole context
@@ -241,7 +222,6 @@ def json_finite(value):
     if isinstance(value, np.bool_):
         return bool(value)
     return value
-
 
 
 def base_record(task: Task, settings: GridSettings) -> dict:

@@ -62,19 +62,8 @@ def _git_state() -> dict:
 
 
 def machine_description(n_jobs=None, backend=None) -> dict:
-    """The machine and software a grid ran on (JSON-serializable).
-
-    Parameters
-    ----------
-    n_jobs : int, optional
-        Parallel jobs used.
-    backend : str, optional
-        joblib backend used.
-
-    Returns
-    -------
-    dict
-    """
+    """The machine and software a grid ran on, with the parallel jobs and joblib backend used
+    (a JSON-serializable dict)."""
     from importlib import metadata
 
     versions = {}
@@ -139,16 +128,9 @@ def grid_summary(records, configs=None, reference: str = "mixed x mixed") -> dic
 
 
 def plot_table(table, records, path) -> None:
-    """Figure: outcome counts per configuration and the validation errors of valid runs.
-
-    Parameters
-    ----------
-    table : list of dict
-        From :func:`~pysindy_xl.benchmark.ranking.ranking_table`.
-    records : list of dict
-    path : str or os.PathLike
-        PNG file to write.
-    """
+    """PNG figure at ``path``: outcome counts per configuration (the ``table`` of
+    :func:`~pysindy_xl.benchmark.ranking.ranking_table`) and the validation errors of the
+    valid runs among ``records``."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -213,21 +195,10 @@ def _settings_lines(settings) -> list[str]:
 def write_report(records, out_dir, settings=None, machine=None, configs=None) -> dict:
     """Write ``table.md``, ``table.csv``, ``table.png`` and ``summary.json`` to ``out_dir``.
 
-    Parameters
-    ----------
-    records : list of dict
-    out_dir : str or os.PathLike
-    settings : GridSettings or dict, optional
-        Described in the Markdown file.
-    machine : dict, optional
-        From :func:`machine_description`; written to ``machine.json`` and summarized.
-    configs : sequence of str, optional
-        Configurations listed even without records.
-
-    Returns
-    -------
-    dict
-        ``{"table": rows, "summary": ..., "files": {...}}``.
+    The Markdown file describes ``settings`` (GridSettings or dict) and summarizes
+    ``machine`` (from :func:`machine_description`, also written to ``machine.json``);
+    ``configs`` are listed even without records. Returns ``{"table": rows, "summary": ...,
+    "files": {...}}``.
     """
     os.makedirs(out_dir, exist_ok=True)
     records = latest_records(list(records))
