@@ -30,18 +30,16 @@ from __future__ import annotations
 import contextlib
 import fcntl
 import json
-import math
 import os
 import time
 import traceback
 import warnings
 
-import numpy as np
-
+from ..registry import json_finite
 from .grid import GridSettings, Task
 
 __all__ = ["STATUSES", "RecordStore", "GridBusyError", "read_records", "latest_records",
-           "check_record"]
+           "check_record", "json_finite"]
 
 STATUSES = ("ok", "invalid", "timeout", "error")
 _REQUIRED = ("run_id", "trajectory_id", "config", "status")
@@ -208,22 +206,6 @@ class RecordStore:
 
 
 # -- building a run's record (the runner and its isolation) ----------------------------------------
-def json_finite(value):
-    """JSON-safe copy: non-finite floats become None, numpy scalars plain numbers."""
-    if isinstance(value, dict):
-        return {str(k): json_finite(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_finite(v) for v in value]
-    if isinstance(value, (np.floating, float)):
-        value = float(value)
-        return value if math.isfinite(value) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.bool_):
-        return bool(value)
-    return value
-
-
 def base_record(task: Task, settings: GridSettings) -> dict:
     import pysindy_xl
 

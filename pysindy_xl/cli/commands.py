@@ -1,4 +1,9 @@
-"""The ``run_*`` functions behind the subcommands, and :func:`main`, which dispatches to them."""
+"""The ``run_*`` functions behind the subcommands, and :func:`main`, which dispatches to them.
+
+Each ``run_NAME(args)`` takes the parsed arguments of its subcommand
+(``build_parser().parse_args(["NAME", ...])``) and raises :class:`~pysindy_xl.cli.steps.CLIError`
+with the message the command prints when its input or one of its steps fails.
+"""
 
 from __future__ import annotations
 
@@ -10,6 +15,7 @@ import time
 import numpy as np
 
 from ..quality import fit_quality, plot_identification, quality_lines
+from ..registry import json_finite
 from .parser import build_parser
 from .steps import (
     CLIError,
@@ -25,7 +31,6 @@ from .steps import (
     output_directory,
     output_file,
     resolve_catalog,
-    strict_json,
     summarize_coefficients,
     system_by_name,
 )
@@ -44,11 +49,6 @@ def run_demo(args) -> dict:
     trajectory, prints the equations and metrics, and writes ``report.json`` (and
     ``validation.png`` unless ``--no-plots``) to ``args.out``.
 
-    Parameters
-    ----------
-    args : argparse.Namespace
-        Parsed ``demo`` arguments (``build_parser().parse_args(["demo", ...])``).
-
     Returns
     -------
     dict
@@ -56,11 +56,6 @@ def run_demo(args) -> dict:
         the true ones), physical parameters, the Lagrangian and equations (None for a
         catalog of physical parameters whose equations run for pages), ``coefficient_summary``,
         ``validation`` metrics, ``timings_s``, ``files``.
-
-    Raises
-    ------
-    CLIError
-        If the system, the solver or the data generation fails, or the identification does.
 
     Examples
     --------
@@ -189,7 +184,7 @@ def run_demo(args) -> dict:
     }
     path = os.path.join(args.out, "report.json")
     with open(path, "w", encoding="utf-8") as handle:
-        json.dump(strict_json(report), handle, indent=2, allow_nan=False)
+        json.dump(json_finite(report), handle, indent=2, allow_nan=False)
     print(f"report: {path}" + (f", plot: {files['validation_plot']}" if files else "")
           + f" ({timings['total']:.1f} s)")
     return report
@@ -268,22 +263,6 @@ def run_identify(args):
     Loads the dataset, picks the solver from its forces (``--solver auto``), fits the
     reference catalog, prints the model (and its error against the true one for a known
     system) and saves it as JSON with ``--out``.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        Parsed ``identify`` arguments (``build_parser().parse_args(["identify", ...])``).
-
-    Returns
-    -------
-    XLSINDy
-        The fitted model.
-
-    Raises
-    ------
-    CLIError
-        If the dataset cannot be read, names no system, does not match the system, or the
-        identification fails.
 
     Examples
     --------
@@ -493,22 +472,7 @@ def _save_atomically(model, path):
 
 
 def run_generate(args):
-    """Run ``pysindy-xl generate``; returns the NPZ path written.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        Parsed ``generate`` arguments (``build_parser().parse_args(["generate", ...])``).
-
-    Returns
-    -------
-    pathlib.Path
-        The NPZ file (its JSON metadata lie beside it).
-
-    Raises
-    ------
-    CLIError
-        If the system is unknown, the generation fails or the output directory is missing.
+    """Run ``pysindy-xl generate``; returns the NPZ path written (its JSON metadata beside).
 
     Examples
     --------
@@ -532,17 +496,8 @@ def run_generate(args):
 
 
 def main(argv=None) -> int:
-    """Entry point of the ``pysindy-xl`` command.
-
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments (default: ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        Exit status: 0 on success, 1 on an error, 2 on a usage error.
+    """Entry point of the ``pysindy-xl`` command on ``argv`` (default ``sys.argv[1:]``);
+    returns the exit status: 0 on success, 1 on an error, 2 on a usage error.
 
     Examples
     --------
