@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._optional import import_optional
+from .._validation import check_option
 from ..dynamics import DynamicsError
 
 gymnasium = import_optional("gymnasium", purpose="XLSINDy.to_gymnasium (pysindy_xl.export.gym_env)")
@@ -115,16 +116,9 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
         if not np.isfinite(dt) or dt <= 0:
             raise ValueError(f"dt: expected a positive number of seconds, got {dt!r}")
         self.dt = dt
-        if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) \
-                or substeps < 1:
-            raise ValueError(f"substeps: expected an integer >= 1, got {substeps!r}")
-        self.substeps = int(substeps)
-        if max_episode_steps is not None and (
-                isinstance(max_episode_steps, bool)
-                or not isinstance(max_episode_steps, (int, np.integer)) or max_episode_steps < 1):
-            raise ValueError(f"max_episode_steps: expected None or an integer >= 1, got "
-                             f"{max_episode_steps!r}")
-        self.max_episode_steps = max_episode_steps
+        self.substeps = check_option("substeps", substeps, "int", low=1)
+        self.max_episode_steps = check_option("max_episode_steps", max_episode_steps, "int",
+                                              low=1, allow_none=True)
         for name, f in (("reward", reward), ("terminated", terminated)):
             if f is not None and not callable(f):
                 raise TypeError(f"{name}: expected a callable, got {type(f).__name__}")
@@ -159,20 +153,8 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
 
     # -- gymnasium API --------------------------------------------------------------------
     def reset(self, *, seed=None, options=None):
-        """Start an episode.
-
-        Parameters
-        ----------
-        seed : int, optional
-            Seeds ``np_random`` (the initial state).
-        options : dict, optional
-            ``{"state": array (2n,)}`` starts from that state.
-
-        Returns
-        -------
-        observation : ndarray, shape (2n,)
-        info : dict
-        """
+        """Start an episode: ``(observation (2n,), info)``. ``seed`` seeds ``np_random`` (the
+        initial state); ``options={"state": array (2n,)}`` starts from that state."""
         super().reset(seed=seed)
         if options and "state" in options:
             state = np.asarray(options["state"], dtype=float)
@@ -191,22 +173,10 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
         return state.copy(), {}
 
     def step(self, action):
-        """Advance ``dt`` seconds with the action held constant.
-
-        Parameters
-        ----------
-        action : array, shape (len(actuated),)
-            Forces of the actuated coordinates (clipped to the action space).
-
-        Returns
-        -------
-        observation : ndarray, shape (2n,)
-        reward : float
-        terminated : bool
-        truncated : bool
-        info : dict
-            ``{"time": t}``, plus ``"failure"`` when the dynamics failed.
-        """
+        """Advance ``dt`` seconds with the action (the forces of the actuated coordinates,
+        clipped to the action space) held constant: Gymnasium's ``(observation, reward,
+        terminated, truncated, info)``, ``info`` holding ``"time"`` and, when the dynamics
+        failed, ``"failure"``."""
         action = np.asarray(action, dtype=float).reshape(-1)
         if action.shape != self.action_space.shape:
             raise ValueError(f"action: expected shape {self.action_space.shape}, got "
