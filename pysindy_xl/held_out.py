@@ -293,12 +293,6 @@ def _with_derivatives(run, smoother, max_frequency=MAX_FREQUENCY):
     return q, qd, qdd, source
 
 
-def _predict(model, q, t, u, qd, qdd):
-    from .quality import force_prediction
-
-    return force_prediction(model, q, t, u, qd, qdd)["predicted"]
-
-
 def score_forces(model, x, t, u, x_dot=None, x_ddot=None, smoother=None,
                  max_frequency: float = MAX_FREQUENCY) -> ForceScore:
     """Held-out force prediction of a fitted model (see the module documentation).
@@ -342,7 +336,7 @@ def score_forces(model, x, t, u, x_dot=None, x_ddot=None, smoother=None,
     times, measured, predicted, sources = [], [], [], set()
     for run in runs:
         q, qd, qdd, source = _with_derivatives(run, smoother, max_frequency)
-        predicted.append(_predict(model, q, run["t"], run["u"], qd, qdd))
+        predicted.append(model.predict_forces(q, qd, qdd))
         times.append(run["t"])
         measured.append(run["u"])
         sources.add(source)
@@ -432,8 +426,7 @@ def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: 
         for k, a, b in fold:
             q, qd, qdd, _ = scoring[k]
             run = runs[k]
-            predicted[k][a:b] = _predict(fitted, q[a:b], run["t"][a:b], run["u"][a:b],
-                                         qd[a:b], qdd[a:b])
+            predicted[k][a:b] = fitted.predict_forces(q[a:b], qd[a:b], qdd[a:b])
             error += float(np.sum((predicted[k][a:b] - run["u"][a:b]) ** 2))
             norm += float(np.sum(run["u"][a:b] ** 2))
         totals.append(float(np.sqrt(error / norm)) if norm > 0 else float("inf"))
