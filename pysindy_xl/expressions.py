@@ -3,8 +3,7 @@
 Saved models and pysindy feature names are turned back into sympy expressions by this parser,
 which only knows numbers, the symbols it is given, a whitelist of functions and the operators
 ``+ - * / ** ^`` (and implicit multiplication by juxtaposition, as in pysindy's ``"x y^2"``).
-Nothing in a file can make it execute code. The checks below name the argument ``name`` in
-their messages.
+Nothing in a file can make it execute code.
 """
 
 from __future__ import annotations
@@ -74,6 +73,14 @@ class _FullPrecisionPrinter(StrPrinter):
 
 def format_expression(expr: sp.Expr) -> str:
     """Text of ``expr`` that :func:`parse_expression` turns back into the same expression.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+
+    Returns
+    -------
+    str
 
     Examples
     --------
@@ -269,10 +276,17 @@ def parse_expression(text: str, symbols: dict[str, sp.Symbol]) -> sp.Expr:
 def expression_size(expr: sp.Expr) -> dict:
     """Cheap upper bounds on the work an expression causes, computed without expanding it.
 
-    ``terms``: an upper bound on the number of terms of ``sympy.expand(expr)`` (a power
-    ``(a + b + ...)**n`` of ``k`` terms counts ``C(n + k - 1, k - 1)``; a function call counts
-    the size of its argument); ``depth``: the nesting depth of function calls;
-    ``operations``: the number of nodes of the expression tree.
+    Parameters
+    ----------
+    expr : sympy.Expr
+
+    Returns
+    -------
+    dict
+        ``terms``: an upper bound on the number of terms of ``sympy.expand(expr)`` (a power
+        ``(a + b + ...)**n`` of ``k`` terms counts ``C(n + k - 1, k - 1)``; a function call
+        counts the size of its argument); ``depth``: the nesting depth of function calls;
+        ``operations``: the number of nodes of the expression tree.
 
     Examples
     --------
@@ -320,8 +334,20 @@ def check_term(expr, name: str) -> None:
 
     A catalog term is built from numbers, symbols, ``+ - * / **`` and the functions of
     :data:`FUNCTIONS` only: derivatives, integrals, undefined functions, relations and other
-    sympy objects cannot be evaluated on data (nor saved and loaded): ``TypeError`` for what
-    is not a sympy expression, ``ValueError`` for anything else outside the grammar.
+    sympy objects cannot be evaluated on data (nor saved and loaded).
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+    name : str
+        Argument name used in the error message.
+
+    Raises
+    ------
+    TypeError
+        When ``expr`` is not a sympy expression.
+    ValueError
+        When it contains something other than the grammar's operations and functions.
 
     Examples
     --------
@@ -356,6 +382,12 @@ def check_real_expression(expr: sp.Expr, name: str) -> None:
     ``x/0`` (``zoo``), ``0/0`` (``nan``), ``sqrt(-1)`` or ``log(0)`` make no sense in a catalog
     term, and NumPy would evaluate them to NaN or silently drop an imaginary part.
 
+    Parameters
+    ----------
+    expr : sympy.Expr
+    name : str
+        Argument name used in the error message.
+
     Examples
     --------
     >>> import sympy as sp
@@ -378,9 +410,19 @@ def check_real_expression(expr: sp.Expr, name: str) -> None:
 def as_expression(value, symbols: dict[str, sp.Symbol], name: str) -> sp.Expr:
     """A sympy expression from a user's value: strings go through the restricted grammar.
 
-    ``sympify`` evaluates Python; public helpers that accept strings (``value``: an
-    expression, a string or a real number) use this instead. ``symbols`` are the names a
-    string may use (e.g. ``Coordinates.symbol_table()``).
+    ``sympify`` evaluates Python; public helpers that accept strings use this instead.
+
+    Parameters
+    ----------
+    value : sympy.Expr, str or real number
+    symbols : dict of str to sympy.Symbol
+        The names a string may use (e.g. ``Coordinates.symbol_table()``).
+    name : str
+        Argument name used in the error messages.
+
+    Returns
+    -------
+    sympy.Expr
 
     Examples
     --------

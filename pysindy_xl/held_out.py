@@ -60,6 +60,13 @@ class ForceScore:
     Built by :func:`score_forces`, :func:`blocked_cross_validation` or
     :meth:`from_predictions`; the parameters are the attributes below.
 
+    Parameters
+    ----------
+    names, rms, relative, total, measured_rms, n_samples, derivatives, t, measured, predicted
+        See Attributes.
+    folds : list of float, optional
+        See Attributes.
+
     Attributes
     ----------
     names : tuple of str
@@ -105,8 +112,23 @@ class ForceScore:
 
     @classmethod
     def from_predictions(cls, names, t, measured, predicted, derivatives, folds=None):
-        """The scores of predicted against measured forces (arguments as the attributes:
-        per run, times (N,), measured and predicted forces (N, n))."""
+        """The scores of predicted against measured forces.
+
+        Parameters
+        ----------
+        names : sequence of str
+            Coordinate names.
+        t, measured, predicted : list of ndarray
+            Per run: times (N,), measured and predicted forces (N, n).
+        derivatives : str
+            Where the velocities and accelerations came from.
+        folds : list of float, optional
+            Total relative error of each cross-validation fold.
+
+        Returns
+        -------
+        ForceScore
+        """
         error = np.vstack([p - m for p, m in zip(predicted, measured, strict=True)])
         stacked = np.vstack(measured)
         rms = np.sqrt(np.mean(error**2, axis=0))
@@ -118,8 +140,13 @@ class ForceScore:
                    list(t), list(measured), list(predicted), folds)
 
     def to_dict(self) -> dict:
-        """JSON-ready figures (no series): ``rms``, ``relative``, ``measured_rms`` (per
-        coordinate name), ``total``, ``n_samples``, ``derivatives``, ``folds``.
+        """JSON-ready figures (no series).
+
+        Returns
+        -------
+        dict
+            ``rms``, ``relative``, ``measured_rms`` (per coordinate name), ``total``,
+            ``n_samples``, ``derivatives``, ``folds``.
 
         Examples
         --------
@@ -137,8 +164,16 @@ class ForceScore:
                 "derivatives": self.derivatives, "folds": self.folds}
 
     def lines(self, units="N m") -> list:
-        """Per-coordinate lines (RMS in force units and %) and the total; ``units`` of the
-        forces, one for all coordinates or one each.
+        """Per-coordinate lines (RMS in force units and %) and the total.
+
+        Parameters
+        ----------
+        units : str or sequence of str, default "N m"
+            Unit of the forces, one for all coordinates or one each.
+
+        Returns
+        -------
+        list of str
 
         Examples
         --------
@@ -159,8 +194,13 @@ class ForceScore:
         return out
 
     def plot(self, path, title=None):
-        """Measured against predicted forces, one panel per coordinate (Agg canvas), written
-        as PNG to ``path``.
+        """Measured against predicted forces, one panel per coordinate (Agg canvas).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            PNG file to write.
+        title : str, optional
 
         Examples
         --------

@@ -67,6 +67,12 @@ class ModelFile:
 def save_model(model, path) -> None:
     """Write a fitted :class:`~pysindy_xl.XLSINDy` to ``path`` as JSON.
 
+    Parameters
+    ----------
+    model : XLSINDy
+        A fitted model.
+    path : str or os.PathLike
+
     Examples
     --------
     >>> import json, os, tempfile
@@ -158,8 +164,17 @@ def _uncertainty_from_document(document, n_features, path):
 
 
 def invalid_model_file(path, what: str) -> ValueError:
-    """The ``ValueError`` (to raise) for a file that is not a valid model file, saying ``what``
-    is wrong.
+    """The error for a file that is not a valid model file, saying ``what`` is wrong.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    what : str
+
+    Returns
+    -------
+    ValueError
+        To raise.
 
     Examples
     --------
@@ -178,8 +193,20 @@ def _expect(condition: bool, path, what: str):
 
 
 def read_model_file(path) -> ModelFile:
-    """Read and check a model written by :func:`save_model`: its :class:`ModelFile`, or a
-    ``ValueError`` saying what makes the file invalid.
+    """Read and check a model written by :func:`save_model`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    ModelFile
+
+    Raises
+    ------
+    ValueError
+        If the file is not a valid model file (the message says what is wrong).
 
     Examples
     --------

@@ -25,8 +25,12 @@ def fit_quality(model, arguments) -> dict:
     unforced (implicit) data the largest single term ``Theta_j xi_j``. R^2 = 1 is an exact
     fit; 0 is no better than predicting zero force.
 
-    ``arguments`` is the dict of keyword arguments that the fitted ``model``'s ``fit``
-    received (``Dataset.fit_arguments``).
+    Parameters
+    ----------
+    model : XLSINDy
+        A fitted model.
+    arguments : dict
+        The keyword arguments its ``fit`` received (``Dataset.fit_arguments``).
 
     Returns
     -------
@@ -42,6 +46,11 @@ def fit_quality(model, arguments) -> dict:
         each as ``[name, fraction]``, else ``None``) and ``held_still`` (the coordinates the
         model holds still, ``still_coordinates_``: their equations were not identified, and
         their rows are left out of the R^2).
+
+    Raises
+    ------
+    TypeError
+        If ``arguments`` is not a dict with ``x``.
 
     Examples
     --------

@@ -89,7 +89,12 @@ class Coordinates:
         return self.q + self.qd + self.qdd + self.tau + (self.t,)
 
     def symbol_table(self) -> dict[str, sp.Symbol]:
-        """Map from symbol name to symbol, used to parse saved expressions."""
+        """Map from symbol name to symbol, used to parse saved expressions.
+
+        Returns
+        -------
+        dict of str to sympy.Symbol
+        """
         return {str(s): s for s in self.variables}
 
     def __eq__(self, other) -> bool:

@@ -48,9 +48,20 @@ def config_label(catalog: str, solver: str) -> str:
 
 
 def all_configurations(include_baseline: bool = True) -> list[tuple[str, str]]:
-    """``(catalog, solver)`` pairs in table order: the 9 of the paper (3 catalogs x 3
-    solvers), the 3 of the kinematic catalog, then (``include_baseline``) the pysindy.SINDy
-    baseline ``("classical", "pysindy")``.
+    """Catalog x solver configurations, then the SINDy baseline.
+
+    The 9 of the paper (3 catalogs x 3 solvers), the 3 of the kinematic catalog, then the
+    pysindy.SINDy baseline.
+
+    Parameters
+    ----------
+    include_baseline : bool, default True
+        Append the pysindy.SINDy baseline ``("classical", "pysindy")``.
+
+    Returns
+    -------
+    list of (str, str)
+        ``(catalog, solver)`` pairs in table order.
 
     Examples
     --------

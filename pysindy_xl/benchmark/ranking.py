@@ -51,8 +51,17 @@ def _same(a: float, b: float) -> bool:
 
 
 def rank_trajectory(records) -> dict[str, int]:
-    """Competition ranks ``{config: rank}`` (1 the best) of the ``ok`` records among the
-    records of one trajectory.
+    """Competition ranks of the valid records of one trajectory.
+
+    Parameters
+    ----------
+    records : list of dict
+        Records of one trajectory (any status).
+
+    Returns
+    -------
+    dict
+        ``{config: rank}`` for the records with status ``ok``; rank 1 is the best.
 
     Examples
     --------
@@ -154,8 +163,19 @@ def _cell(value, column) -> str:
 
 
 def format_table(table, extra: bool = False) -> str:
-    """The table of :func:`ranking_table` as aligned text, in the paper's column order (with
-    ``extra``, also the columns that are not in the paper)."""
+    """The table as aligned text, in the paper's column order.
+
+    Parameters
+    ----------
+    table : list of dict
+        From :func:`ranking_table`.
+    extra : bool, default False
+        Also print the columns that are not in the paper.
+
+    Returns
+    -------
+    str
+    """
     columns = TABLE_COLUMNS + (EXTRA_COLUMNS if extra else ())
     rows = [[_cell(row[c], c) for c in columns] for row in table]
     widths = [max(len(c), *(len(r[k]) for r in rows)) if rows else len(c)

@@ -74,6 +74,14 @@ def read_records(path) -> list[dict]:
     A torn last line (a writer killed mid-line) and any other unreadable line (a damaged
     file) are skipped with a warning naming the line: their runs count as not done and are
     run again.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    list of dict
     """
     if not os.path.exists(path):
         return []

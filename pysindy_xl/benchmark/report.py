@@ -62,8 +62,19 @@ def _git_state() -> dict:
 
 
 def machine_description(n_jobs=None, backend=None) -> dict:
-    """The machine and software a grid ran on, with the parallel jobs and joblib backend used
-    (a JSON-serializable dict)."""
+    """The machine and software a grid ran on (JSON-serializable).
+
+    Parameters
+    ----------
+    n_jobs : int, optional
+        Parallel jobs used.
+    backend : str, optional
+        joblib backend used.
+
+    Returns
+    -------
+    dict
+    """
     from importlib import metadata
 
     versions = {}
@@ -195,10 +206,21 @@ def _settings_lines(settings) -> list[str]:
 def write_report(records, out_dir, settings=None, machine=None, configs=None) -> dict:
     """Write ``table.md``, ``table.csv``, ``table.png`` and ``summary.json`` to ``out_dir``.
 
-    The Markdown file describes ``settings`` (GridSettings or dict) and summarizes
-    ``machine`` (from :func:`machine_description`, also written to ``machine.json``);
-    ``configs`` are listed even without records. Returns ``{"table": rows, "summary": ...,
-    "files": {...}}``.
+    Parameters
+    ----------
+    records : list of dict
+    out_dir : str or os.PathLike
+    settings : GridSettings or dict, optional
+        Described in the Markdown file.
+    machine : dict, optional
+        From :func:`machine_description`; written to ``machine.json`` and summarized.
+    configs : sequence of str, optional
+        Configurations listed even without records.
+
+    Returns
+    -------
+    dict
+        ``{"table": rows, "summary": ..., "files": {...}}``.
     """
     os.makedirs(out_dir, exist_ok=True)
     records = latest_records(list(records))

@@ -209,11 +209,22 @@ def execute_task(task: Task, settings: GridSettings, deadline: float | None = No
                  stage=None) -> dict:
     """Run one task in this process and return its record (no time limit of its own).
 
-    ``deadline`` is the ``time.perf_counter()`` value by which the run must end (the
-    validation simulation gets the remaining time as its own timeout); ``stage`` is called
-    with ``"generate"``, ``"fit"``, ``"validate"`` as the run advances. The warnings raised
-    during the run (convergence...) are collected in the record's ``warnings`` list (see
-    :mod:`~pysindy_xl.benchmark.records`) instead of being printed.
+    Parameters
+    ----------
+    task : Task
+    settings : GridSettings
+        Data settings of the grid.
+    deadline : float, optional
+        ``time.perf_counter()`` value by which the run must end: the validation simulation
+        gets the remaining time as its own timeout.
+    stage : callable, optional
+        Called with ``"generate"``, ``"fit"``, ``"validate"`` as the run advances.
+
+    Returns
+    -------
+    dict
+        The record (see :mod:`~pysindy_xl.benchmark.records`); the warnings raised during the
+        run (convergence...) are collected in its ``warnings`` list instead of being printed.
     """
     stage = stage or (lambda name: None)
     with warnings.catch_warnings(record=True) as caught:
@@ -297,13 +308,27 @@ def _prefetch(task: Task, settings: GridSettings) -> None:
 
 def run_task(task: Task, settings: GridSettings, timeout: float | None = None,
              isolation: str = "auto", function=None, blas_threads: int | None = None) -> dict:
-    """Run one task under its time limit (``timeout`` s, default ``settings.timeout``) and
-    return its record, with ``finished_at``; never raises for a failing run.
+    """Run one task under its time limit; never raises for a failing run.
 
-    ``isolation`` is one of ``"auto"`` (``"process"`` where fork exists), ``"process"``,
-    ``"signal"``, ``"none"`` (see the module docstring); ``function(task, settings, deadline,
-    stage) -> record`` replaces :func:`execute_task` (tests, custom benchmarks);
-    ``blas_threads`` limits BLAS during the run (:func:`blas_thread_limit`; None: no limit).
+    Parameters
+    ----------
+    task : Task
+    settings : GridSettings
+    timeout : float, optional
+        Seconds (default ``settings.timeout``).
+    isolation : {"auto", "process", "signal", "none"}
+        See the module docstring; ``auto`` picks ``process`` where fork exists.
+    function : callable, optional
+        ``function(task, settings, deadline, stage) -> record`` (default
+        :func:`execute_task`); for tests and custom benchmarks.
+    blas_threads : int, optional
+        Limit BLAS to this many threads during the run (see :func:`blas_thread_limit`);
+        default: no limit.
+
+    Returns
+    -------
+    dict
+        The record, with ``finished_at``.
     """
     with blas_thread_limit(blas_threads):
         return _run_task(task, settings, timeout, isolation, function)

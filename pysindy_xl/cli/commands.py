@@ -1,9 +1,4 @@
-"""The ``run_*`` functions behind the subcommands, and :func:`main`, which dispatches to them.
-
-Each ``run_NAME(args)`` takes the parsed arguments of its subcommand
-(``build_parser().parse_args(["NAME", ...])``) and raises :class:`~pysindy_xl.cli.steps.CLIError`
-with the message the command prints when its input or one of its steps fails.
-"""
+"""The ``run_*`` functions behind the subcommands, and :func:`main`, which dispatches to them."""
 
 from __future__ import annotations
 
@@ -49,6 +44,11 @@ def run_demo(args) -> dict:
     trajectory, prints the equations and metrics, and writes ``report.json`` (and
     ``validation.png`` unless ``--no-plots``) to ``args.out``.
 
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed ``demo`` arguments (``build_parser().parse_args(["demo", ...])``).
+
     Returns
     -------
     dict
@@ -56,6 +56,11 @@ def run_demo(args) -> dict:
         the true ones), physical parameters, the Lagrangian and equations (None for a
         catalog of physical parameters whose equations run for pages), ``coefficient_summary``,
         ``validation`` metrics, ``timings_s``, ``files``.
+
+    Raises
+    ------
+    CLIError
+        If the system, the solver or the data generation fails, or the identification does.
 
     Examples
     --------
@@ -263,6 +268,22 @@ def run_identify(args):
     Loads the dataset, picks the solver from its forces (``--solver auto``), fits the
     reference catalog, prints the model (and its error against the true one for a known
     system) and saves it as JSON with ``--out``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed ``identify`` arguments (``build_parser().parse_args(["identify", ...])``).
+
+    Returns
+    -------
+    XLSINDy
+        The fitted model.
+
+    Raises
+    ------
+    CLIError
+        If the dataset cannot be read, names no system, does not match the system, or the
+        identification fails.
 
     Examples
     --------
@@ -472,7 +493,22 @@ def _save_atomically(model, path):
 
 
 def run_generate(args):
-    """Run ``pysindy-xl generate``; returns the NPZ path written (its JSON metadata beside).
+    """Run ``pysindy-xl generate``; returns the NPZ path written.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed ``generate`` arguments (``build_parser().parse_args(["generate", ...])``).
+
+    Returns
+    -------
+    pathlib.Path
+        The NPZ file (its JSON metadata lie beside it).
+
+    Raises
+    ------
+    CLIError
+        If the system is unknown, the generation fails or the output directory is missing.
 
     Examples
     --------
@@ -496,8 +532,17 @@ def run_generate(args):
 
 
 def main(argv=None) -> int:
-    """Entry point of the ``pysindy-xl`` command on ``argv`` (default ``sys.argv[1:]``);
-    returns the exit status: 0 on success, 1 on an error, 2 on a usage error.
+    """Entry point of the ``pysindy-xl`` command.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status: 0 on success, 1 on an error, 2 on a usage error.
 
     Examples
     --------

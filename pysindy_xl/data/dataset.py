@@ -365,8 +365,12 @@ class Dataset:
 
     # -- persistence ---------------------------------------------------------------------
     def to_arrays(self) -> dict:
-        """The NPZ arrays (see the module docstring) by name: all trajectories concatenated,
-        with ``trajectory`` ids and the JSON ``metadata``.
+        """The NPZ arrays (see the module docstring).
+
+        Returns
+        -------
+        dict of str to ndarray
+            All trajectories concatenated, with ``trajectory`` ids and the JSON ``metadata``.
 
         Examples
         --------
@@ -394,9 +398,19 @@ class Dataset:
         return arrays
 
     def save(self, path, write_json: bool = True):
-        """Write ``path`` (``.npz`` appended when missing) and, with ``write_json``, a JSON copy
-        of the metadata beside it (same name, ``.json``; the NPZ holds them in any case).
-        Returns the NPZ path written.
+        """Write ``path`` (``.npz`` appended when missing) and the JSON metadata beside it.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The NPZ file; the JSON copy of the metadata goes to the same name with ``.json``.
+        write_json : bool, default True
+            Also write the JSON file (the metadata are inside the NPZ in any case).
+
+        Returns
+        -------
+        pathlib.Path
+            The NPZ path written.
 
         Examples
         --------
@@ -424,6 +438,14 @@ class Dataset:
     def load(cls, path) -> Dataset:
         """Read a dataset written by :meth:`save` or a user's NPZ: :func:`load_dataset`.
 
+        Parameters
+        ----------
+        path : str or os.PathLike
+
+        Returns
+        -------
+        Dataset
+
         Examples
         --------
         >>> import tempfile, pathlib, numpy as np
@@ -443,9 +465,21 @@ class Dataset:
 
 
 def load_dataset(path) -> Dataset:
-    """Read a dataset NPZ (with embedded or side-car JSON metadata, or none): at least ``t``
-    (N,) and ``q`` (N, n), see the module docstring. A :class:`DatasetError` names a missing or
-    malformed array.
+    """Read a dataset NPZ (with embedded or side-car JSON metadata, or none).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An ``.npz`` file holding at least ``t`` (N,) and ``q`` (N, n); see the module docstring.
+
+    Returns
+    -------
+    Dataset
+
+    Raises
+    ------
+    DatasetError
+        With a message naming the missing or malformed array.
 
     Examples
     --------

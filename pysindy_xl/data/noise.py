@@ -79,10 +79,10 @@ def add_noise(trajectory: Trajectory, noise, rng: np.random.Generator,
               force_matrix=None) -> Trajectory:
     """Gaussian noise at relative levels: sigma = level * std of each column.
 
-    Returns a new trajectory; ``trajectory`` (clean data) is not modified.
-
     Parameters
     ----------
+    trajectory : Trajectory
+        Clean data; not modified.
     noise : float or dict
         One level for ``q``, ``qd``, ``qdd`` and the forces, or a dict with some of the keys
         ``"q", "qd", "qdd", "tau"``. The force noise is added to the joint forces ``u`` (the
@@ -91,6 +91,16 @@ def add_noise(trajectory: Trajectory, noise, rng: np.random.Generator,
         Source of the noise.
     force_matrix : array (n, n), optional
         ``B``; identity when absent.
+
+    Returns
+    -------
+    Trajectory
+        A new trajectory (the input is not modified).
+
+    Raises
+    ------
+    ValueError
+        If a level is negative or not a number, or ``noise`` has an unknown key.
 
     Examples
     --------

@@ -181,11 +181,20 @@ def read_rosbag(paths, coordinates=None, columns=None, topic=None):
     topic : str, optional
         The JointState topic; default the bag's only one.
 
-    The dataset's ``metadata`` records the bags, the topic and the joint of each coordinate;
-    each trajectory's ``info`` its bag, the absolute first stamp (``t0_ns``), where the times
-    come from and the skipped messages. A :class:`DatasetError` names the bag (unreadable, no
-    or several JointState topics, missing joints, times that do not increase); without the
-    ``rosbags`` package an ImportError names ``pip install pysindy-xl[ros]``.
+    Returns
+    -------
+    Dataset
+        ``metadata`` records the bags, the topic and the joint of each coordinate; each
+        trajectory's ``info`` its bag, the absolute first stamp (``t0_ns``), where the times
+        come from and the skipped messages.
+
+    Raises
+    ------
+    DatasetError
+        Naming the bag: unreadable bag, no or several JointState topics, missing joints,
+        times that do not increase.
+    ImportError
+        Without the ``rosbags`` package (``pip install pysindy-xl[ros]``).
 
     Examples
     --------

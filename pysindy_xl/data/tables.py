@@ -20,11 +20,8 @@ column             content
 coordinate, in header order. Several trajectories in one table are split by the id column
 (rows of one id keep their order; ids in order of first appearance).
 
-Every reader returns a :class:`Dataset`. Every mistake raises
-:class:`~pysindy_xl.data.DatasetError` (a :class:`ValueError`) naming the file (or DataFrame)
-and the column, and the line (or row) of a bad cell: a missing column, a header that does not
-split with the delimiter, a non-numeric, empty, NaN or inf cell, times not strictly
-increasing within a trajectory, a trajectory of fewer than 2 samples.
+Every mistake raises :class:`~pysindy_xl.data.DatasetError` (a :class:`ValueError`) naming
+the file (or DataFrame) and the column, and the line for a bad cell.
 """
 
 from __future__ import annotations
@@ -244,7 +241,18 @@ def read_csv(path, coordinates=None, columns=None, delimiter=","):
     delimiter : str, default ","
         Field separator (``";"``, ``"\\t"``...).
 
-    The dataset's ``metadata["columns"]`` records which columns were read.
+    Returns
+    -------
+    Dataset
+        ``coordinate_names`` as resolved; ``metadata["columns"]`` records which columns
+        were read.
+
+    Raises
+    ------
+    DatasetError
+        Naming the file and the column: missing column, a header that does not split with
+        ``delimiter``, a non-numeric, empty, NaN or inf cell (with its line), times not
+        strictly increasing within a trajectory, a trajectory of fewer than 2 samples.
 
     Examples
     --------
@@ -286,7 +294,16 @@ def from_columns(data, coordinates=None, columns=None, name="data"):
     coordinates, columns
         As in :func:`read_csv`.
     name : str, default "data"
-        How errors name the source (rows numbered from 0).
+        How errors name the source.
+
+    Returns
+    -------
+    Dataset
+
+    Raises
+    ------
+    DatasetError
+        As :func:`read_csv`, rows numbered from 0.
 
     Examples
     --------
@@ -328,6 +345,17 @@ def from_dataframe(frame, coordinates=None, columns=None):
     coordinates, columns
         As in :func:`read_csv`.
 
+    Returns
+    -------
+    Dataset
+
+    Raises
+    ------
+    TypeError
+        If ``frame`` is not a DataFrame.
+    DatasetError
+        As :func:`read_csv`, with the row label of a bad cell.
+
     Examples
     --------
     >>> import numpy as np
@@ -368,6 +396,17 @@ def load_data(source, coordinates=None, columns=None, delimiter=None, topic=None
         Field separator of a text file (default: tab for ``.tsv``, comma otherwise).
     topic : str, optional
         The ``sensor_msgs/JointState`` topic of a ROS bag (default: its only one).
+
+    Returns
+    -------
+    Dataset
+
+    Raises
+    ------
+    DatasetError
+        Naming the file and the column of the problem.
+    TypeError
+        If ``source`` is none of the above.
 
     Examples
     --------

@@ -16,11 +16,23 @@ _INTERPOLATIONS = ("cubic", "linear", "previous")
 def force_function(u, t: np.ndarray, n: int, interpolation: str = "cubic"):
     """Turn the ``u`` argument of ``simulate`` into a function of time.
 
-    ``u`` is None, an array (len(t), n) or a callable ``u(t) -> (n,)``; the result is a
-    callable ``u(t) -> ndarray (n,)``. ``interpolation`` says how an array is read between
-    samples: a cubic spline (smooth forces: adaptive integrators take far fewer steps than on
-    the kinks of a linear interpolant), linear, or zero-order hold (``"previous"``, for
-    piecewise-constant actuator commands).
+    Parameters
+    ----------
+    u : None, array (len(t), n), or callable ``u(t) -> (n,)``
+        Generalized forces.
+    t : ndarray, shape (T,)
+        Simulation times.
+    n : int
+        Number of coordinates.
+    interpolation : {"cubic", "linear", "previous"}
+        How an array ``u`` is read between samples: a cubic spline (smooth forces: adaptive
+        integrators take far fewer steps than on the kinks of a linear interpolant), linear,
+        or zero-order hold (``"previous"``, for piecewise-constant actuator commands).
+
+    Returns
+    -------
+    callable
+        ``u(t) -> ndarray (n,)``.
 
     Examples
     --------
@@ -73,11 +85,29 @@ def force_function(u, t: np.ndarray, n: int, interpolation: str = "cubic"):
 def feedback_function(feedback, x0: np.ndarray, t0: float, n: int):
     """Check the ``feedback`` argument of ``simulate`` and wrap it for the integrator.
 
-    ``feedback(t, q, qd) -> (n,)`` gives generalized forces from the time and the state; it is
-    evaluated once at the initial state ``x0`` (2n,) and time ``t0``, and refused (naming the
-    argument) unless callable and returning ``n`` finite values there. Returns ``f(t, state)
-    -> ndarray (n,)`` (``q``, ``qd`` passed as copies, so the law cannot alter the
-    integrator's state), or None for no feedback.
+    Parameters
+    ----------
+    feedback : None or callable
+        ``feedback(t, q, qd) -> (n,)``: generalized forces from the time and the state.
+    x0 : ndarray, shape (2n,)
+        Initial state, at which the law is evaluated once to check its output.
+    t0 : float
+        Initial time.
+    n : int
+        Number of coordinates.
+
+    Returns
+    -------
+    callable or None
+        ``f(t, state) -> ndarray (n,)`` (``q``, ``qd`` are passed as copies, so the law cannot
+        alter the integrator's state); None when ``feedback`` is None.
+
+    Raises
+    ------
+    TypeError
+        If ``feedback`` is not callable.
+    ValueError
+        If it does not return ``n`` values, or returns non-finite ones at the initial state.
 
     Examples
     --------

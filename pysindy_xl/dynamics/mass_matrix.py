@@ -217,8 +217,18 @@ class MassMatrixDynamics:
         self._compile()
 
     def mass_and_forcing(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The mass matrix (N, n, n) and the forcing (N, n) at the samples of ``z``, the
-        stacked variables (N, 4n + 1) of :func:`~pysindy_xl.stack_variables`."""
+        """Evaluate the mass matrix and the forcing on many samples.
+
+        Parameters
+        ----------
+        z : ndarray, shape (N, 4n + 1)
+            Stacked variables (see :func:`~pysindy_xl.stack_variables`).
+
+        Returns
+        -------
+        mass : ndarray, shape (N, n, n)
+        forcing : ndarray, shape (N, n)
+        """
         n, n_samples = self._n, z.shape[0]
         values = [np.broadcast_to(v, (n_samples,)) for v in self._evaluate(z)]
         mass = np.stack(values[: n * n], axis=-1).reshape(n_samples, n, n)
@@ -226,11 +236,25 @@ class MassMatrixDynamics:
         return mass, force
 
     def accelerations(self, q, qd, tau=None, t=None, rcond: float = 1e-12) -> np.ndarray:
-        """Accelerations ``qdd = M^-1 f`` (N, n) at many states at once.
+        """Accelerations ``qdd = M^-1 f`` at many states at once.
 
-        ``q``, ``qd``, ``tau`` (generalized forces, zero when absent) are (N, n), ``t`` (N,).
-        Raises :class:`SingularMassMatrixError` where the reciprocal condition number of ``M``
-        is below ``rcond``.
+        Parameters
+        ----------
+        q, qd : array, shape (N, n)
+        tau : array, shape (N, n), optional
+            Generalized forces (inputs), zero when absent.
+        t : array, shape (N,), optional
+        rcond : float
+            Reciprocal condition number of ``M`` below which it counts as singular.
+
+        Returns
+        -------
+        ndarray, shape (N, n)
+
+        Raises
+        ------
+        SingularMassMatrixError
+            Where ``M`` is singular.
         """
         arrays = {"q": q, "qd": qd, "tau": tau, "t": t}
         for name, value in arrays.items():
@@ -254,10 +278,24 @@ class MassMatrixDynamics:
         """``d(state)/dt = [qd, M^-1 f]`` at one state: the fast path used by simulators.
 
         Evaluates ``M`` and ``f`` with Python floats (no NumPy call per entry), which is an
-        order of magnitude faster than :meth:`accelerations` on a single sample. ``state`` is
-        ``[q, qd]`` (2n,), ``u`` the generalized forces (n,) (zero when absent). Raises
-        :class:`SingularMassMatrixError` if ``M`` is singular there, or ``M`` or ``f`` is not
-        finite.
+        order of magnitude faster than :meth:`accelerations` on a single sample.
+
+        Parameters
+        ----------
+        state : array, shape (2n,)
+            ``[q, qd]``.
+        u : array, shape (n,), optional
+            Generalized forces; zero when absent.
+        t : float
+
+        Returns
+        -------
+        ndarray, shape (2n,)
+
+        Raises
+        ------
+        SingularMassMatrixError
+            If ``M`` is singular there, or ``M`` or ``f`` is not finite.
 
         Examples
         --------

@@ -1,12 +1,4 @@
-"""Fixed-step integrators of ``x' = f(x, u, t)`` for JAX (see :mod:`.jax_dynamics`).
-
-Every step is ``step(f, state, t, dt, u_start, u_end=None) -> state at t + dt``, a pure
-function: ``f(state, u, t) -> d(state)/dt`` (e.g. from :func:`.dynamics_function`);
-``state`` an array (..., 2n) ``[q, qd]`` or a tuple of 2n per-component arrays, in the layout
-``f`` takes (the result has the same layout); ``u_start`` the force at ``t`` (array (..., n)
-or tuple of n arrays); ``u_end`` the force at ``t + dt``, interpolated linearly inside the
-step by the schemes that sample the force more than once (else ``u_start`` is held).
-"""
+"""Fixed-step integrators of ``x' = f(x, u, t)`` for JAX (see :mod:`.jax_dynamics`)."""
 
 from __future__ import annotations
 
@@ -32,6 +24,24 @@ def _axpy(x, a, y):
 
 def rk4_step(f, state, t, dt, u_start, u_end=None):
     """One classical Runge-Kutta step of ``d(state)/dt = f(state, u, t)``.
+
+    Parameters
+    ----------
+    f : callable
+        ``f(state, u, t) -> d(state)/dt``, e.g. from :func:`dynamics_function`.
+    state : array (..., 2n) or tuple of 2n arrays
+        State at ``t``, in the layout ``f`` takes.
+    t, dt : float
+        Time at the start of the step and step length.
+    u_start : array (..., n) or tuple of n arrays
+        Force at ``t``.
+    u_end : same as u_start, optional
+        Force at ``t + dt``; when given the force is interpolated linearly inside the
+        step, otherwise ``u_start`` is held.
+
+    Returns
+    -------
+    State at ``t + dt``, same layout as ``state``.
 
     Examples
     --------
@@ -74,6 +84,24 @@ def semi_implicit_euler_step(f, state, t, dt, u_start, u_end=None):
     ``qd' = qd + dt qdd(q, qd, u(t))``, ``q' = q + dt qd'``: first order, but it keeps the
     energy of conservative systems bounded where explicit Euler pumps it up.
 
+    Parameters
+    ----------
+    f : callable
+        ``f(state, u, t) -> d(state)/dt``, e.g. from :func:`dynamics_function`.
+    state : array (..., 2n) or tuple of 2n arrays
+        State ``[q, qd]`` at ``t``.
+    t, dt : float
+        Time at the start of the step and step length.
+    u_start : array (..., n) or tuple of n arrays
+        Force at ``t``, used over the whole step.
+    u_end : optional
+        Accepted for the signature of :func:`rk4_step`, unused (a first-order scheme
+        samples the force once).
+
+    Returns
+    -------
+    State at ``t + dt``, same layout as ``state``.
+
     Examples
     --------
     >>> import jax.numpy as jnp
@@ -91,6 +119,23 @@ def semi_implicit_euler_step(f, state, t, dt, u_start, u_end=None):
 
 def euler_step(f, state, t, dt, u_start, u_end=None):
     """One explicit Euler step, ``state + dt f(state, u(t), t)``.
+
+    Parameters
+    ----------
+    f : callable
+        ``f(state, u, t) -> d(state)/dt``.
+    state : array (..., 2n) or tuple of 2n arrays
+        State at ``t``.
+    t, dt : float
+        Time at the start of the step and step length.
+    u_start : array (..., n) or tuple of n arrays
+        Force at ``t``.
+    u_end : optional
+        Unused (see :func:`semi_implicit_euler_step`).
+
+    Returns
+    -------
+    State at ``t + dt``, same layout as ``state``.
 
     Examples
     --------

@@ -153,8 +153,20 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
 
     # -- gymnasium API --------------------------------------------------------------------
     def reset(self, *, seed=None, options=None):
-        """Start an episode: ``(observation (2n,), info)``. ``seed`` seeds ``np_random`` (the
-        initial state); ``options={"state": array (2n,)}`` starts from that state."""
+        """Start an episode.
+
+        Parameters
+        ----------
+        seed : int, optional
+            Seeds ``np_random`` (the initial state).
+        options : dict, optional
+            ``{"state": array (2n,)}`` starts from that state.
+
+        Returns
+        -------
+        observation : ndarray, shape (2n,)
+        info : dict
+        """
         super().reset(seed=seed)
         if options and "state" in options:
             state = np.asarray(options["state"], dtype=float)
@@ -173,10 +185,22 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
         return state.copy(), {}
 
     def step(self, action):
-        """Advance ``dt`` seconds with the action (the forces of the actuated coordinates,
-        clipped to the action space) held constant: Gymnasium's ``(observation, reward,
-        terminated, truncated, info)``, ``info`` holding ``"time"`` and, when the dynamics
-        failed, ``"failure"``."""
+        """Advance ``dt`` seconds with the action held constant.
+
+        Parameters
+        ----------
+        action : array, shape (len(actuated),)
+            Forces of the actuated coordinates (clipped to the action space).
+
+        Returns
+        -------
+        observation : ndarray, shape (2n,)
+        reward : float
+        terminated : bool
+        truncated : bool
+        info : dict
+            ``{"time": t}``, plus ``"failure"`` when the dynamics failed.
+        """
         action = np.asarray(action, dtype=float).reshape(-1)
         if action.shape != self.action_space.shape:
             raise ValueError(f"action: expected shape {self.action_space.shape}, got "

@@ -56,9 +56,17 @@ _LAZY = {
 __all__ = ["import_mujoco", *_LAZY]
 
 def import_mujoco():
-    """The ``mujoco`` module, imported on first use: the one way this package imports MuJoCo
-    (without it, a :class:`~pysindy_xl._optional.MissingExtraError`, an ImportError naming
-    the ``pysindy-xl[mujoco]`` extra).
+    """The ``mujoco`` module, imported on first use: the one way this package imports MuJoCo.
+
+    Returns
+    -------
+    module
+        ``mujoco``.
+
+    Raises
+    ------
+    pysindy_xl._optional.MissingExtraError
+        If MuJoCo is not installed (an ImportError naming the ``pysindy-xl[mujoco]`` extra).
 
     Examples
     --------

@@ -45,11 +45,20 @@ _MAX_NESTING = 3
 
 
 def solve_problem(optimizer, problem: CatalogProblem):
-    """Fit ``optimizer`` on ``problem``; return the fitted optimizer.
+    """Fit ``optimizer`` on ``problem``.
 
-    A :class:`CatalogOptimizer` gets the whole problem (:meth:`CatalogOptimizer.fit_problem`),
-    less the draws of the rows' errors unless its tags use them (``uses_noise_draws``); any
-    other object the bare ``fit_catalog(theta, n_coordinates, force_columns)``.
+    Parameters
+    ----------
+    optimizer : CatalogOptimizer or object with ``fit_catalog``
+        The package's optimizers get the whole problem (:meth:`CatalogOptimizer.fit_problem`),
+        less the draws of the rows' errors unless their tags use them (``uses_noise_draws``:
+        the others fit on the same moments whether or not the draws come along); any other
+        object the bare ``fit_catalog(theta, n_coordinates, force_columns)``.
+    problem : CatalogProblem
+
+    Returns
+    -------
+    The fitted optimizer.
 
     Examples
     --------
@@ -73,6 +82,15 @@ def pilot_optimizer(optimizer):
     :class:`~pysindy_xl.XLSINDy`), an optimizer may offer a cheaper stand-in through its
     ``pilot()`` method (an ensemble: one fit of its base optimizer instead of
     ``n_models``); otherwise the pilot is a clone of ``optimizer``.
+
+    Parameters
+    ----------
+    optimizer : estimator
+
+    Returns
+    -------
+    estimator
+        Unfitted.
 
     Examples
     --------

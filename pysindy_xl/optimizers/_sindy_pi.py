@@ -18,9 +18,21 @@ def homothetic_groups(vectors, angle_tol: float, order=None) -> list[np.ndarray]
     """Group column vectors that point along the same line (up to sign), greedily.
 
     Columns are visited in ``order``; each unassigned column seeds a group with every other
-    unassigned column whose angle to it (modulo sign) is at most ``angle_tol`` degrees (zero
-    columns are never grouped). ``order`` is the seeding order, best candidate first (default:
-    column order). Returns the groups (sorted indices) in seeding order, singletons included.
+    unassigned column whose angle to it (modulo sign) is at most ``angle_tol`` degrees.
+
+    Parameters
+    ----------
+    vectors : array, shape (F, K)
+        Columns to group (zero columns are never grouped).
+    angle_tol : float
+        Angular tolerance in degrees.
+    order : array of int, optional
+        Seeding order, best candidate first (default: column order).
+
+    Returns
+    -------
+    list of ndarray of int
+        Groups (sorted indices), in seeding order; singletons included.
 
     Examples
     --------

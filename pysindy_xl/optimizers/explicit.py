@@ -1,8 +1,4 @@
-"""Explicit regression: the forces are known, solve ``Theta_rest @ xi = force``.
-
-The solvers of ``x @ coef ~ y`` take the columns ``x`` (n_rows, F) and the target ``y``
-(n_rows,) and return ``coef`` (F,).
-"""
+"""Explicit regression: the forces are known, solve ``Theta_rest @ xi = force``."""
 
 from __future__ import annotations
 
@@ -29,8 +25,22 @@ def hard_threshold_regression(x, y, threshold: float = 0.01, max_iter: int = 100
 
     At each iteration the active columns are fitted by least squares, and a column is pruned
     when its condition value ``|coef_j| * rms(x_j)`` (its contribution to the fit) is below
-    ``threshold`` (in [0, 1)) times the largest one; repeat until the support is stable, at
-    most ``max_iter`` rounds. Columns of ``keep`` (bool, (F,)) are never pruned.
+    ``threshold`` times the largest one; repeat until the support is stable.
+
+    Parameters
+    ----------
+    x : array, shape (n_rows, F)
+    y : array, shape (n_rows,)
+    threshold : float
+        Relative condition value below which a term is pruned, in [0, 1).
+    max_iter : int
+        Maximal number of prune-and-refit rounds.
+    keep : array of bool, shape (F,), optional
+        Columns never pruned.
+
+    Returns
+    -------
+    coef : ndarray, shape (F,)
 
     Examples
     --------
@@ -64,9 +74,21 @@ def hard_threshold_regression(x, y, threshold: float = 0.01, max_iter: int = 100
 def proximal_gradient_lasso(x, y, alpha: float, max_iter: int = 10_000, tol: float = 1e-10):
     """Lasso ``min 1/(2 n) ||x c - y||^2 + alpha ||c||_1`` by accelerated proximal gradient.
 
-    The columns should be normalized (the step size is set by the largest singular value).
-    Stops when the relative change of the iterate falls below ``tol`` (``converged``) or after
-    ``max_iter`` iterations; returns ``(coef, converged)``.
+    Parameters
+    ----------
+    x : array, shape (n_rows, F)
+        Columns should be normalized (the step size is set by the largest singular value).
+    y : array, shape (n_rows,)
+    alpha : float
+        Regularization weight, >= 0.
+    max_iter : int
+    tol : float
+        Stop when the relative change of the iterate falls below ``tol``.
+
+    Returns
+    -------
+    coef : ndarray, shape (F,)
+    converged : bool
 
     Examples
     --------
@@ -111,9 +133,19 @@ def corrected_least_squares(x, y, noise_moments=None, max_noise_share: float = 0
     eigenvalue of ``(x^T x)^{-1} S`` above ``max_noise_share``) the correction would amplify
     noise, and plain least squares is returned.
 
-    ``noise_moments`` is ``S`` (k, k) (None: plain least squares). Returns ``(coef,
-    noise_share)``, the share being the largest eigenvalue of ``(x^T x)^{-1} S`` (0 without
-    ``S``).
+    Parameters
+    ----------
+    x : array, shape (n_rows, k)
+    y : array, shape (n_rows,)
+    noise_moments : array, shape (k, k), optional
+        ``S``; None gives plain least squares.
+    max_noise_share : float, default 0.5
+
+    Returns
+    -------
+    coef : ndarray, shape (k,)
+    noise_share : float
+        Largest eigenvalue of ``(x^T x)^{-1} S`` (0 without ``S``).
 
     Examples
     --------
@@ -248,7 +280,17 @@ class ExplicitOptimizer(CatalogOptimizer):
                              f"{self.method!r}")
 
     def fit(self, X, y):
-        """Solve ``X @ coef_ = y`` sparsely (``X`` (n_rows, F), ``y`` (n_rows,)); returns self."""
+        """Solve ``X @ coef_ = y`` sparsely.
+
+        Parameters
+        ----------
+        X : array, shape (n_rows, F)
+        y : array, shape (n_rows,)
+
+        Returns
+        -------
+        self
+        """
         return self._fit(X, y, n_blocks=1)
 
     def _fit(self, X, y, n_blocks, noise_moments=None, keep=None):

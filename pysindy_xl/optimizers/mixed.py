@@ -41,9 +41,20 @@ __all__ = ["MixedOptimizer", "activation_closure"]
 
 
 def activation_closure(touches, seed) -> tuple[np.ndarray, np.ndarray]:
-    """Fixed point of the activation graph from the ``seed`` coordinates, given ``touches[c,
-    j]`` (column j enters the equation of coordinate c): the activated coordinates and the
-    columns touching them, boolean masks.
+    """Fixed point of the activation graph.
+
+    Parameters
+    ----------
+    touches : array of bool, shape (n_coordinates, F)
+        ``touches[c, j]``: column j enters the equation of coordinate c.
+    seed : array of bool, shape (n_coordinates,)
+        Initially activated coordinates.
+
+    Returns
+    -------
+    coordinates : ndarray of bool, shape (n_coordinates,)
+    columns : ndarray of bool, shape (F,)
+        Columns touching an activated coordinate.
 
     Examples
     --------
@@ -159,7 +170,16 @@ class MixedOptimizer(CatalogOptimizer):
 
         With the known right-hand side ``y`` (a force), mixed regression reduces to its
         explicit part, ``X @ coef_ = y``; without, to its implicit part, ``X @ coef_ = 0``.
-        Coordinate blocks and force columns need :meth:`fit_catalog`. Returns self.
+        Coordinate blocks and force columns need :meth:`fit_catalog`.
+
+        Parameters
+        ----------
+        X : array, shape (n_rows, F)
+        y : array, shape (n_rows,), optional
+
+        Returns
+        -------
+        self
         """
         self._check_params()
         explicit, implicit = self._sub_optimizers()

@@ -110,10 +110,34 @@ class CatalogProblem:
     def from_arrays(cls, theta, n_coordinates, force_columns, noise_moments=None,
                     mass_matrices=None, balance=True, reference_columns=None, physical=None,
                     noise_draws=None, row_noise=None, catalog_map=None):
-        """Check the fields (see the class and module docstrings) and hold them as a problem;
-        a ``ValueError`` or ``TypeError`` names a wrong one. ``noise_moments`` default to the
-        second moments of ``noise_draws`` (:func:`~pysindy_xl.weak.noise.draw_moments`);
-        ``row_noise`` and ``catalog_map`` are held as they are."""
+        """Check the arguments of ``fit_catalog`` and hold them as a problem.
+
+        Parameters
+        ----------
+        theta : array, shape (n_coordinates * N, F)
+        n_coordinates : int
+        force_columns : sequence of int
+        noise_moments : array, shape (n_coordinates, F, F), optional
+        mass_matrices : array, shape (S, F, n_coordinates, n_coordinates), optional
+        balance : bool, default True
+        reference_columns : sequence of int, optional
+        physical : PhysicalStructure, optional
+            In the columns of ``theta``.
+        noise_draws : array, shape (D, n_coordinates * N, F), optional
+            Draws of the rows' errors; ``noise_moments`` default to their second moments
+            (:func:`~pysindy_xl.weak.noise.draw_moments`).
+        row_noise, catalog_map : optional
+            Held as they are (see the class docstring).
+
+        Returns
+        -------
+        CatalogProblem
+
+        Raises
+        ------
+        ValueError, TypeError
+            Naming the argument that is wrong.
+        """
         theta = check_numeric_array(theta, "theta", finite=False, min_samples=0)
         if theta.ndim != 2 or theta.shape[0] == 0 or theta.shape[1] == 0:
             raise ValueError(f"theta: expected a non-empty 2-D array, got shape {theta.shape}")
@@ -197,9 +221,21 @@ class CatalogProblem:
         return (blocks[:, None] * self.n_samples + np.arange(self.n_samples)).ravel()
 
     def subproblem(self, coordinates, columns, force_columns=None) -> CatalogProblem:
-        """The rows of ``coordinates`` (bool, (n_coordinates,)) and the ``columns`` (in this
-        order), with their moments and masses. ``force_columns`` index ``columns``; default:
-        this problem's force columns among ``columns``."""
+        """The rows of ``coordinates`` and the ``columns``, with their moments and masses.
+
+        Parameters
+        ----------
+        coordinates : array of bool, shape (n_coordinates,)
+        columns : array of int
+            Catalog columns kept, in this order.
+        force_columns : array of int, optional
+            Force columns of the sub-problem, as indices into ``columns``; default: those of
+            this problem that are among ``columns``.
+
+        Returns
+        -------
+        CatalogProblem
+        """
         coordinates = np.asarray(coordinates, dtype=bool)
         columns = np.asarray(columns, dtype=int)
         if force_columns is None:
@@ -365,8 +401,19 @@ def coordinate_weights(theta, n_coordinates: int, force_columns=None) -> np.ndar
 
 def balance_coordinates(theta, n_coordinates: int, force_columns=None) -> np.ndarray:
     """``theta`` with the rows of each coordinate block multiplied by its
-    :func:`coordinate_weights` (same arguments; a new array, ``theta`` itself for a single
-    block).
+    :func:`coordinate_weights` (a new array; ``theta`` itself for a single block).
+
+    Parameters
+    ----------
+    theta : array, shape (n_coordinates * N, F)
+        Stacked regression matrix, rows coordinate-major.
+    n_coordinates : int
+    force_columns : sequence of int, optional
+        Columns whose scale is not free (see :func:`coordinate_weights`).
+
+    Returns
+    -------
+    ndarray, shape (n_coordinates * N, F)
 
     Examples
     --------

@@ -174,7 +174,18 @@ def refine_by_swaps(x, y, support, max_swaps: int = 50) -> np.ndarray:
     heuristics of L0Learn (Hazimeh and Mazumder, 2020), which greedy forward or backward
     paths lack.
 
-    Returns the refined columns, sorted.
+    Parameters
+    ----------
+    x : array, shape (n_rows, F)
+    y : array, shape (n_rows,)
+    support : array of int
+        Starting columns.
+    max_swaps : int, default 50
+
+    Returns
+    -------
+    support : ndarray of int
+        Refined columns, sorted.
 
     Examples
     --------
@@ -348,6 +359,11 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
 
     Parameters
     ----------
+    x : array, shape (n_rows, F)
+    y : array, shape (n_rows,)
+    n_blocks : int, default 1
+        Equal row blocks (coordinates) inside which folds are contiguous.
+    n_folds : int, default 5
     max_size : int, optional
         Largest model considered (default: all columns, at most the rows of a fold's
         training set).

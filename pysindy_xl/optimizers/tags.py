@@ -60,9 +60,17 @@ TAG_NAMES = tuple(field.name for field in dataclasses.fields(CatalogTags))
 
 
 def catalog_tags(optimizer) -> CatalogTags:
-    """The :class:`CatalogTags` of ``optimizer``: a catalog optimizer's ``catalog_tags()``, or
-    for any other object with ``fit_catalog`` its attributes of the tags' names (defaults
-    otherwise).
+    """The :class:`CatalogTags` of ``optimizer``.
+
+    Parameters
+    ----------
+    optimizer : object
+        A catalog optimizer (its ``catalog_tags()``), or any object with ``fit_catalog``,
+        whose attributes of the tags' names are read (defaults otherwise).
+
+    Returns
+    -------
+    CatalogTags
 
     Examples
     --------

@@ -44,6 +44,14 @@ def quadrature_weights(t) -> np.ndarray:
     (fourth order), except where nearly coincident samples make
     that cubic's weights large and of both signs: those intervals keep the trapezoid.
 
+    Parameters
+    ----------
+    t : array, shape (N,)
+
+    Returns
+    -------
+    ndarray, shape (N,)
+
     Examples
     --------
     >>> quadrature_weights([0.0, 1.0, 2.0])
@@ -93,8 +101,7 @@ _CHI2_1_MEDIAN = 0.454936423119572
 
 
 def corner_frequency(t, x, energy: float = 0.99) -> float:
-    """Frequency (Hz) below which the signal part of the spectrum of positions ``x`` (N, n)
-    lies.
+    """Frequency (Hz) below which the signal part of the positions' spectrum lies.
 
     The spectrum of each coordinate (cosine transform after removing a linear trend and
     tapering the ends, on the samples treated as uniform with the mean step) is split into a
@@ -108,6 +115,16 @@ def corner_frequency(t, x, energy: float = 0.99) -> float:
     them at zero, or taking the median itself as the floor, leaves about half the noise
     power in the "signal", which pushes the corner up when the detrended signal is small
     against the noise, e.g. a drifting cart).
+
+    Parameters
+    ----------
+    t : array, shape (N,)
+    x : array, shape (N, n)
+    energy : float, default 0.99
+
+    Returns
+    -------
+    float
 
     Examples
     --------
@@ -205,8 +222,18 @@ class BumpTestFunctions:
                              f"{self.width_multiples!r}")
 
     def half_width(self, t, x=None) -> float:
-        """Half-width ``h`` (time units) for a trajectory of times ``t`` (N,) and positions
-        ``x`` (N, n), which ``width="auto"`` needs."""
+        """Half-width ``h`` (time units) for a trajectory.
+
+        Parameters
+        ----------
+        t : array, shape (N,)
+        x : array, shape (N, n), optional
+            Positions, needed when ``width="auto"``.
+
+        Returns
+        -------
+        float
+        """
         self._check_params()
         t = np.asarray(t, dtype=float)
         # the floor resolves the bump at (nearly) every step, so that steps no longer than

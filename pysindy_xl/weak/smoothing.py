@@ -105,9 +105,20 @@ def finite_difference_weights(t, derivative: int, stencil: int = 5, degree=None)
 
 def differentiate(t, values, derivative: int = 1, stencil: int = 5,
                   degree=None) -> np.ndarray:
-    """Derivative of smooth sampled ``values`` (N, ...) along axis 0 (five-point stencils), same
-    shape; ``stencil`` and ``degree`` as in :func:`finite_difference_weights` (a smoothing local
-    polynomial when ``degree < stencil - 1``).
+    """Derivative of smooth sampled ``values`` (N, ...) along axis 0 (five-point stencils).
+
+    Parameters
+    ----------
+    t : array, shape (N,)
+    values : array, shape (N, ...)
+    derivative : int, default 1
+    stencil, degree : optional
+        As in :func:`finite_difference_weights` (a smoothing local polynomial when
+        ``degree < stencil - 1``).
+
+    Returns
+    -------
+    ndarray, same shape as ``values``
 
     Examples
     --------

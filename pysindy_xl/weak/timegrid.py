@@ -46,12 +46,23 @@ STAMP_NOISE_RATIO = 2.0
 
 
 def split_at_gaps(trajectories, max_gap: float):
-    """Cut trajectories (dicts of ``"t"`` (N,) and other per-sample arrays or None) where a
-    time step exceeds ``max_gap``.
+    """Cut trajectories where a time step exceeds ``max_gap``.
 
-    Returns ``(segments, source, gaps)``: the pieces in order, with the same keys (a
-    trajectory without a gap is passed as is); the index of each segment's trajectory; one
-    dict per cut, ``trajectory``, ``time`` (the last stamp before the gap) and ``length``.
+    Parameters
+    ----------
+    trajectories : list of dict
+        Each with ``"t"`` (N,) and other arrays of N samples along their first axis (or None).
+    max_gap : float
+        Longest step kept inside a segment (time units).
+
+    Returns
+    -------
+    segments : list of dict
+        The pieces, in order, with the same keys; a trajectory without a gap is passed as is.
+    source : ndarray of int
+        For each segment, the index of its trajectory.
+    gaps : list of dict
+        One per cut: ``trajectory``, ``time`` (the last stamp before the gap) and ``length``.
 
     Examples
     --------
@@ -84,8 +95,18 @@ def _per_sample(value, n_samples: int) -> bool:
 
 
 def grid_summary(times) -> dict:
-    """The time steps of the stamps of all trajectories: ``uniform`` (every grid's steps equal
-    to 1e-3 of their mean), ``median_step``, ``max_step`` and ``min_step``.
+    """Median and largest time step, and whether the grids are uniform.
+
+    Parameters
+    ----------
+    times : list of arrays
+        The stamps of each trajectory.
+
+    Returns
+    -------
+    dict
+        ``uniform`` (every grid's steps equal to 1e-3 of their mean), ``median_step``,
+        ``max_step`` and ``min_step`` over all trajectories.
 
     Examples
     --------
@@ -103,10 +124,21 @@ def stamp_noise_ratio(t, x, noise, order: int = 3) -> float:
     """Median over coordinates of the positions' noise at their stamps over their noise read
     at uniform steps.
 
-    ``noise`` (n,) is the noise level of ``x`` (N, n) at the stamps ``t`` (e.g. a
-    :class:`~pysindy_xl.WhittakerSmoother`'s ``noise_``, penalty of order ``order``). Below 1
-    for stamps that are the sampling times of a smooth motion; above
-    :data:`STAMP_NOISE_RATIO`, the stamps look like arrival times.
+    Parameters
+    ----------
+    t : array, shape (N,)
+    x : array, shape (N, n)
+    noise : array, shape (n,)
+        The noise level at the stamps (e.g. a :class:`~pysindy_xl.WhittakerSmoother`'s
+        ``noise_`` on ``t``).
+    order : int, default 3
+        Order of the smoother's penalty.
+
+    Returns
+    -------
+    float
+        Below 1 for stamps that are the sampling times of a smooth motion; above
+        :data:`STAMP_NOISE_RATIO`, the stamps look like arrival times.
 
     Examples
     --------
