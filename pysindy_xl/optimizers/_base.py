@@ -351,14 +351,6 @@ reference_columns, physical
             return self._solve(problem)
         return self._solve_support(problem, check_support(support, problem.n_features))
 
-    def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None,
-                    balance=True):
-        """``fit_problem(CatalogProblem.from_arrays(...), support)`` (kept for callers of
-        earlier versions)."""
-        problem = CatalogProblem.from_arrays(theta, n_coordinates, force_columns,
-                                             noise_moments, balance=balance)
-        return self.fit_problem(problem, support)
-
     # -- to implement ---------------------------------------------------------------------
     def _solve(self, problem: CatalogProblem):  # pragma: no cover - abstract
         raise NotImplementedError(f"{type(self).__name__}: _solve(problem) is not implemented")
