@@ -1,4 +1,8 @@
-"""The ``run_*`` functions behind the subcommands, and :func:`main`, which dispatches to them."""
+"""The ``run_*`` functions behind the subcommands, and :func:`main`, which dispatches to them.
+
+Each raises :class:`~pysindy_xl.cli.steps.CLIError`, with the message the command prints, when
+its input or one of its steps fails.
+"""
 
 from __future__ import annotations
 
@@ -56,11 +60,6 @@ def run_demo(args) -> dict:
         the true ones), physical parameters, the Lagrangian and equations (None for a
         catalog of physical parameters whose equations run for pages), ``coefficient_summary``,
         ``validation`` metrics, ``timings_s``, ``files``.
-
-    Raises
-    ------
-    CLIError
-        If the system, the solver or the data generation fails, or the identification does.
 
     Examples
     --------
@@ -278,12 +277,6 @@ def run_identify(args):
     -------
     XLSINDy
         The fitted model.
-
-    Raises
-    ------
-    CLIError
-        If the dataset cannot be read, names no system, does not match the system, or the
-        identification fails.
 
     Examples
     --------
@@ -504,11 +497,6 @@ def run_generate(args):
     -------
     pathlib.Path
         The NPZ file (its JSON metadata lie beside it).
-
-    Raises
-    ------
-    CLIError
-        If the system is unknown, the generation fails or the output directory is missing.
 
     Examples
     --------
