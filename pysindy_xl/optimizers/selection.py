@@ -359,11 +359,8 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
 
     Parameters
     ----------
-    x : array, shape (n_rows, F)
-    y : array, shape (n_rows,)
-    n_blocks : int, default 1
-        Equal row blocks (coordinates) inside which folds are contiguous.
-    n_folds : int, default 5
+    x, y, n_blocks, n_folds
+        See the module docstring.
     max_size : int, optional
         Largest model considered (default: all columns, at most the rows of a fold's
         training set).
