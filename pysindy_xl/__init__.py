@@ -12,36 +12,25 @@ optional back ends (cvxpy, JAX, MuJoCo, matplotlib) only where they are used.
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
+
+from ._optional import lazy_attributes
 
 __version__ = "0.1.0"
 
 # public name -> submodule that defines it (imported on first attribute access)
 _LAZY = {
-    "Coordinates": "symbols",
-    "monomials": "symbols",
-    "products": "symbols",
-    "LagrangeLibrary": "feature_library",
-    "ClassicalLibrary": "feature_library",
-    "ExternalForces": "feature_library",
-    "CatalogRepartition": "feature_library",
-    "stack_variables": "feature_library",
-    "ExplicitOptimizer": "optimizers",
-    "ImplicitOptimizer": "optimizers",
-    "MixedOptimizer": "optimizers",
-    "EnsembleOptimizer": "optimizers",
-    "PhysicalOptimizer": "optimizers",
-    "NoLawFoundError": "optimizers",
-    "TotalLeastSquaresOptimizer": "optimizers",
+    **dict.fromkeys(("Coordinates", "monomials", "products"), "symbols"),
+    **dict.fromkeys(("LagrangeLibrary", "ClassicalLibrary", "ExternalForces",
+                     "CatalogRepartition", "stack_variables"), "feature_library"),
+    **dict.fromkeys(("ExplicitOptimizer", "ImplicitOptimizer", "MixedOptimizer",
+                     "EnsembleOptimizer", "PhysicalOptimizer", "NoLawFoundError",
+                     "TotalLeastSquaresOptimizer"), "optimizers"),
     "XLSINDy": "model",
-    "IdentificationWarning": "_validation",
-    "UnexplainedCoordinateWarning": "_validation",
-    "MassMatrixDynamics": "dynamics",
-    "SimulationError": "dynamics",
-    "SingularMassMatrixError": "dynamics",
-    "BumpTestFunctions": "weak",
-    "WhittakerSmoother": "weak",
+    **dict.fromkeys(("IdentificationWarning", "UnexplainedCoordinateWarning"), "_validation"),
+    **dict.fromkeys(("MassMatrixDynamics", "SimulationError", "SingularMassMatrixError"),
+                    "dynamics"),
+    **dict.fromkeys(("BumpTestFunctions", "WhittakerSmoother"), "weak"),
     "kinematic_catalog": "mujoco.catalogs.kinematic",  # reads MJCF through mujoco: on first use
 }
 
@@ -97,14 +86,4 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
     from .weak import BumpTestFunctions, WhittakerSmoother
 
 
-def __getattr__(name):
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value  # later accesses skip __getattr__
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_attributes(__name__, _LAZY)

@@ -11,7 +11,8 @@ import numpy as np
 
 from ._validation import check_numeric_array, check_times
 
-__all__ = ["as_list", "check_array", "check_mask", "sample_times", "trajectory_arrays"]
+__all__ = ["aligned", "as_list", "check_array", "check_mask", "sample_times",
+           "trajectory_arrays"]
 
 MAX_ABS = 1e100  # larger data overflow in the products and squares of the regression
 
@@ -27,6 +28,17 @@ def as_list(value, name: str) -> tuple[list, bool]:
                                  f"(or {name}=None for all of them)")
         return list(value), True
     return [value], False
+
+
+def aligned(value, name: str, xs: list, is_list: bool, what: str = "trajectories") -> list:
+    """``value`` as a list laid out like ``xs`` (``as_list`` of ``x``); Nones when absent."""
+    if value is None:
+        return [None] * len(xs)
+    values, listed = as_list(value, name)
+    if listed != is_list or len(values) != len(xs):
+        raise ValueError(f"{name}: expected the same layout as x ({len(xs)} "
+                         f"{what if is_list else 'array'})")
+    return values
 
 
 def check_array(a, name: str, shape=None, n_columns=None) -> np.ndarray:
@@ -96,17 +108,8 @@ def trajectory_arrays(x, t, x_dot, x_ddot, u, sample_mask, n: int) -> list[dict]
         ts = list(t)
     else:
         ts = [t] * len(xs)
-    optional = {}
-    for name, value in (("x_dot", x_dot), ("x_ddot", x_ddot), ("u", u),
-                        ("sample_mask", sample_mask)):
-        if value is None:
-            optional[name] = [None] * len(xs)
-            continue
-        values, value_is_list = as_list(value, name)
-        if value_is_list != is_list or len(values) != len(xs):
-            raise ValueError(f"{name}: expected the same layout as x ({len(xs)} "
-                             f"{'trajectories' if is_list else 'array'})")
-        optional[name] = values
+    optional = {name: aligned(value, name, xs, is_list) for name, value in
+                (("x_dot", x_dot), ("x_ddot", x_ddot), ("u", u), ("sample_mask", sample_mask))}
     out = []
     for k, (xk, tk) in enumerate(zip(xs, ts, strict=True)):
         label = f"[{k}]" if is_list else ""

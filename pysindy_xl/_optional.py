@@ -16,8 +16,9 @@ solver="cvxpy")``). Heavier back ends are optional and imported only where used:
 from __future__ import annotations
 
 import importlib
+import sys
 
-__all__ = ["EXTRAS", "MissingExtraError", "import_optional"]
+__all__ = ["EXTRAS", "MissingExtraError", "import_optional", "lazy_attributes"]
 
 #: extra of ``pyproject.toml`` that installs each optional top-level module
 EXTRAS = {
@@ -89,3 +90,32 @@ install it with: pip install "pysindy-xl[all]"
             f"{purpose or name} needs the optional package {top!r}, which is not installed "
             f"({error}); install it with: {how}"
         ) from error
+
+
+def lazy_attributes(package: str, table: dict):
+    """``__getattr__`` and ``__dir__`` (PEP 562) of a package whose public names are loaded on
+    first use: ``table`` maps each name to the submodule that defines it (relative to
+    ``package``; a leading dot goes further up), and a loaded name is cached in the package.
+
+    Examples
+    --------
+    >>> import pysindy_xl
+    >>> getattr_, dir_ = lazy_attributes("pysindy_xl", {"monomials": "symbols"})
+    >>> getattr_("monomials").__name__, "monomials" in dir_()
+    ('monomials', True)
+    """
+    namespace = sys.modules[package].__dict__
+
+    def __getattr__(name):
+        module = table.get(name)
+        if module is None:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        relative = module if module.startswith(".") else f".{module}"
+        value = getattr(importlib.import_module(relative, package), name)
+        namespace[name] = value  # later accesses skip __getattr__
+        return value
+
+    def __dir__():
+        return sorted(set(namespace) | set(namespace.get("__all__", table)))
+
+    return __getattr__, __dir__

@@ -439,10 +439,7 @@ def as_expression(value, symbols: dict[str, sp.Symbol], name: str) -> sp.Expr:
         try:
             return parse_expression(value, symbols)
         except ValueError as err:
-            message = str(err)
-            for prefix in ("text: ", ):
-                message = message.removeprefix(prefix)
-            raise ValueError(f"{name}: {message}") from None
+            raise ValueError(f"{name}: {str(err).removeprefix('text: ')}") from None
     if isinstance(value, (bool, np.bool_)):
         raise TypeError(f"{name}: expected a sympy expression or a string, got a bool")
     if isinstance(value, numbers.Real):

@@ -37,7 +37,7 @@ import dataclasses
 
 import numpy as np
 
-from ._inputs import as_list, check_array
+from ._inputs import aligned, as_list, check_array
 from ._validation import check_option
 
 __all__ = ["ForceScore", "score_forces", "blocked_cross_validation", "scoring_derivatives",
@@ -297,18 +297,11 @@ def _runs(n, x, t, u, x_dot, x_ddot):
     """Checked per-run arrays: lists of x, t, u, x_dot, x_ddot (None entries allowed); ``n``
     coordinates, or None to take them from ``x``."""
     xs, is_list = as_list(x, "x")
-    layout = {}
-    for name, value in (("t", t), ("u", u), ("x_dot", x_dot), ("x_ddot", x_ddot)):
+    for name, value in (("t", t), ("u", u)):
         if value is None:
-            if name in ("t", "u"):
-                raise ValueError(f"{name}: required to score forces")
-            layout[name] = [None] * len(xs)
-            continue
-        values, listed = as_list(value, name)
-        if listed != is_list or len(values) != len(xs):
-            raise ValueError(f"{name}: expected the same layout as x ({len(xs)} "
-                             f"{'runs' if is_list else 'array'})")
-        layout[name] = values
+            raise ValueError(f"{name}: required to score forces")
+    layout = {name: aligned(value, name, xs, is_list, "runs") for name, value in
+              (("t", t), ("u", u), ("x_dot", x_dot), ("x_ddot", x_ddot))}
     runs = []
     for k, xk in enumerate(xs):
         label = f"[{k}]" if is_list else ""
@@ -338,12 +331,6 @@ def _with_derivatives(run, smoother, max_frequency=MAX_FREQUENCY):
         source = source.replace(f"at most {MAX_FREQUENCY:g} Hz",
                                 f"at most {max_frequency:g} Hz")
     return q, qd, qdd, source
-
-
-def _predict(model, q, t, u, qd, qdd):
-    from .quality import force_prediction
-
-    return force_prediction(model, q, t, u, qd, qdd)["predicted"]
 
 
 def score_forces(model, x, t, u, x_dot=None, x_ddot=None, smoother=None,
@@ -389,7 +376,7 @@ def score_forces(model, x, t, u, x_dot=None, x_ddot=None, smoother=None,
     times, measured, predicted, sources = [], [], [], set()
     for run in runs:
         q, qd, qdd, source = _with_derivatives(run, smoother, max_frequency)
-        predicted.append(_predict(model, q, run["t"], run["u"], qd, qdd))
+        predicted.append(model.predict_forces(q, qd, qdd))
         times.append(run["t"])
         measured.append(run["u"])
         sources.add(source)
@@ -479,8 +466,7 @@ def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: 
         for k, a, b in fold:
             q, qd, qdd, _ = scoring[k]
             run = runs[k]
-            predicted[k][a:b] = _predict(fitted, q[a:b], run["t"][a:b], run["u"][a:b],
-                                         qd[a:b], qdd[a:b])
+            predicted[k][a:b] = fitted.predict_forces(q[a:b], qd[a:b], qdd[a:b])
             error += float(np.sum((predicted[k][a:b] - run["u"][a:b]) ** 2))
             norm += float(np.sum(run["u"][a:b] ** 2))
         totals.append(float(np.sqrt(error / norm)) if norm > 0 else float("inf"))

@@ -2,10 +2,9 @@
 
 :func:`fit_quality` rebuilds the problem the model solved (strong or weak form, through
 :meth:`XLSINDy.regression <pysindy_xl.XLSINDy.regression>`, the fit stage's builder) and
-reports
-``R^2`` per coordinate, the held-out score of its sparsity selection and, after a bagged fit,
-the stability of its terms; :func:`plot_identification` simulates the model from a recorded
-trajectory. The ``pysindy-xl identify`` command prints and plots both.
+reports ``R^2`` per coordinate, the held-out score of its sparsity selection and, after a
+bagged fit, the stability of its terms; :func:`plot_identification` simulates the model
+from a recorded trajectory. The ``pysindy-xl identify`` command prints and plots both.
 """
 
 from __future__ import annotations
@@ -112,20 +111,9 @@ def force_prediction(model, x, t, u, x_dot=None, x_ddot=None) -> dict:
     The robotics validation of an identified model: on a fresh trajectory, the forces
     :meth:`~pysindy_xl.XLSINDy.predict_forces` needs to move as recorded against the
     measured ones, per coordinate. Derivatives that are not given are estimated from the
-    positions by the model's smoother (noisy positions are the main case).
-
-    Parameters
-    ----------
-    model : XLSINDy
-        A fitted model.
-    x : array (N, n)
-        Positions.
-    t : array (N,)
-        Sample times.
-    u : array (N, n)
-        Measured generalized forces.
-    x_dot, x_ddot : array (N, n), optional
-        Measured velocities and accelerations.
+    positions by the model's smoother (noisy positions are the main case). ``x``, ``u``,
+    ``x_dot``, ``x_ddot`` are (N, n) arrays of positions, measured forces, velocities and
+    accelerations; ``t`` (N,) the sample times.
 
     Returns
     -------
@@ -182,15 +170,6 @@ def _stability(model):
 
 def quality_lines(quality) -> list:
     """The lines ``pysindy-xl identify`` prints for a :func:`fit_quality` result.
-
-    Parameters
-    ----------
-    quality : dict
-        As returned by :func:`fit_quality`.
-
-    Returns
-    -------
-    list of str
 
     Examples
     --------
@@ -249,31 +228,13 @@ def plot_identification(model, trajectory, path, title=None, forced=True) -> dic
     The model runs under the trajectory's recorded generalized forces (when ``forced``) from
     its first sample (velocity: the recorded one, or the model's smoother estimate); the
     figure has one panel per coordinate, recorded positions against simulated ones. Drawn on
-    matplotlib's Agg canvas (no display needed).
-
-    Parameters
-    ----------
-    model : XLSINDy
-        A fitted model with dynamics.
-    trajectory : Trajectory
-        Recorded data (``t``, ``q``, optional ``qd`` and ``tau``).
-    path : str or os.PathLike
-        PNG file to write.
-    title : str, optional
-        Figure title.
-    forced : bool, default True
-        Apply the recorded ``tau`` (ignored when the trajectory has none).
+    matplotlib's Agg canvas (no display needed), written as PNG to ``path``.
 
     Returns
     -------
     dict
         ``rmse`` (position RMSE per coordinate over the simulated span), ``simulated_until``
         (s; the end of the data unless the model diverged) and ``diverged`` (bool).
-
-    Raises
-    ------
-    ValueError
-        If the model has no dynamics (no acceleration term identified).
 
     Examples
     --------

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["register_type", "is_plain"]
+import numpy as np
+
+__all__ = ["register_type", "is_plain", "json_finite"]
 
 
 def register_type(registry: dict, cls: type) -> None:
@@ -56,3 +58,25 @@ def is_plain(value) -> bool:
     """
     return value is None or (isinstance(value, (bool, int, float, str))
                              and not (isinstance(value, float) and not math.isfinite(value)))
+
+
+def json_finite(value):
+    """JSON-safe copy: non-finite floats become None, numpy scalars plain numbers.
+
+    Examples
+    --------
+    >>> json_finite({"rmse": float("inf"), "n": np.int64(3), "x": [np.float64(0.5)]})
+    {'rmse': None, 'n': 3, 'x': [0.5]}
+    """
+    if isinstance(value, dict):
+        return {str(k): json_finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_finite(v) for v in value]
+    if isinstance(value, (np.floating, float)):
+        value = float(value)
+        return value if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value

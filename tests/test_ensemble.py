@@ -12,7 +12,7 @@ from ground_truth import random_force, random_initial_state
 from test_explicit_identification import _true_coefficients, paper_catalog
 
 import pysindy_xl as px
-from pysindy_xl.optimizers import CatalogOptimizer
+from pysindy_xl.optimizers import CatalogOptimizer, CatalogProblem
 
 
 def _noisy(system, seed, level=0.01, duration=30.0, active=None):
@@ -140,7 +140,8 @@ def test_refit_is_the_least_squares_of_the_included_terms_on_all_rows():
     with pytest.raises(ValueError, match="aggregate"):
         px.EnsembleOptimizer(aggregate="mean").fit_catalog(theta, 1, [0])
     with pytest.raises(ValueError, match=r"support: expected a boolean array of shape \(5,\)"):
-        px.ExplicitOptimizer().fit_support(theta, 1, [0], [1, 1, 0, 1, 0])
+        px.ExplicitOptimizer().fit_problem(
+            CatalogProblem.from_arrays(theta, 1, [0]), [1, 1, 0, 1, 0])
 
 
 def test_refit_coefficients_are_closer_to_the_truth_than_the_median(cart_pole_system):

@@ -10,7 +10,7 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.linear_model import Lasso
 
 import pysindy_xl as px
-from pysindy_xl.optimizers import hard_threshold_regression, proximal_gradient_lasso
+from pysindy_xl.optimizers import CatalogProblem, hard_threshold_regression, proximal_gradient_lasso
 
 # Column scales spanning 6 orders of magnitude: the optimizer must normalize internally.
 SCALES = np.array([1.0, 10.0, 0.1, 1.0, 5.0, 1.0, 0.01, 1e3])
@@ -281,10 +281,12 @@ def test_a_coordinate_no_identified_term_enters_is_named():
     np.testing.assert_allclose(opt.coef_, [-1.0, 2.0, 0.0], atol=1e-12)
     # b kept by hand gets a coefficient of round-off size: still no explanation of coordinate 1
     with pytest.warns(px.IdentificationWarning, match=r"coordinate\(s\) \[1\]"):
-        kept = px.ExplicitOptimizer().fit_support(theta, 2, [0], np.array([True, True, True]))
+        kept = px.ExplicitOptimizer().fit_problem(
+            CatalogProblem.from_arrays(theta, 2, [0]), np.array([True, True, True]))
     assert abs(kept.coef_[2]) < 1e-12
     with pytest.warns(px.IdentificationWarning, match=r"coordinate\(s\) \[0, 1\]"):
-        px.ExplicitOptimizer().fit_support(theta, 2, [0], np.array([True, False, False]))
+        px.ExplicitOptimizer().fit_problem(
+            CatalogProblem.from_arrays(theta, 2, [0]), np.array([True, False, False]))
 
 
 def test_explained_coordinates_do_not_warn():
@@ -319,9 +321,11 @@ def test_balance_false_fits_the_blocks_as_weighed_by_the_caller():
     rebalanced = np.linalg.lstsq(balanced[:, 1:], balanced[:, 0], rcond=None)[0]
     assert weights[1] / weights[0] > 100  # the small block is weighed up
     assert abs(as_given[0] - rebalanced[0]) > 0.3  # so the two answers differ
-    unbalanced = px.ExplicitOptimizer().fit_support(theta, 2, [0], support, balance=False)
+    unbalanced = px.ExplicitOptimizer().fit_problem(
+        CatalogProblem.from_arrays(theta, 2, [0], balance=False), support)
     np.testing.assert_allclose(unbalanced.coef_[1:], as_given, rtol=1e-10)
-    default = px.ExplicitOptimizer().fit_support(theta, 2, [0], support)
+    default = px.ExplicitOptimizer().fit_problem(
+        CatalogProblem.from_arrays(theta, 2, [0]), support)
     np.testing.assert_allclose(default.coef_[1:], rebalanced, rtol=1e-10)
     # the selection weighs the rows the same way: column 2, which only the small block
     # needs, is not worth a term as given, and is one when the blocks are rebalanced

@@ -243,7 +243,7 @@ PREDICT_ERRORS = {
     "u_nan": (lambda d: (d["x"], d["x_dot"], _nan_at(d["u"])), r"u: contains NaN or inf"),
     "u_short": (lambda d: (d["x"], d["x_dot"], d["u"][:-1]), r"u: expected shape"),
     "x_dot_missing": (lambda d: (d["x"], None, None), r"x_dot"),
-    "layout": (lambda d: ([d["x"]], d["x_dot"], None), r"x_dot, u: expected the same layout"),
+    "layout": (lambda d: ([d["x"]], d["x_dot"], None), r"x_dot: expected the same layout"),
     "layout_u": (lambda d: ([d["x"]], [d["x_dot"]], d["u"]), r"expected the same layout"),
     "list_length": (lambda d: ([d["x"]] * 2, [d["x_dot"]], None), r"expected the same layout"),
     "list_item": (lambda d: ([d["x"], d["x"]], [d["x_dot"], _nan_at(d["x_dot"])], None),

@@ -13,6 +13,7 @@ from ground_truth import random_initial_state
 from test_implicit import paper_catalog
 
 import pysindy_xl as px
+from pysindy_xl.optimizers import CatalogProblem
 from pysindy_xl.optimizers.homogeneous import select_law
 from pysindy_xl.optimizers.noise_ratio import (
     _bordered_minima,
@@ -363,7 +364,8 @@ def _two_uncoupled_laws(seed, n_samples=3000, sigma=0.05):
 def test_implicit_fit_support_gives_each_uncoupled_group_its_noise_ratio_law():
     theta, moments = _two_uncoupled_laws(0)
     support = np.array([True] * 6 + [False])
-    opt = px.ImplicitOptimizer().fit_support(theta, 2, [], support, noise_moments=moments)
+    opt = px.ImplicitOptimizer().fit_problem(
+        CatalogProblem.from_arrays(theta, 2, [], noise_moments=moments), support)
     assert opt.selection_method_ == "given support"
     assert [g.tolist() for g in opt.law_groups_] == [[0, 1, 2], [3, 4, 5]]
     for group, law in zip(([0, 1, 2], [3, 4, 5]), ([-2.0, 0.5, 1.0], [-1.0, 3.0, 1.0]),
@@ -379,19 +381,24 @@ def test_implicit_fit_support_gives_each_uncoupled_group_its_noise_ratio_law():
         assert 0.9 < values[0] < 1.1  # the law holds to the noise
     assert opt.coef_[6] == 0
     # without noise moments: the smallest right singular vector of the unit-norm columns
-    plain = px.ImplicitOptimizer().fit_support(theta, 2, [], support)
+    plain = px.ImplicitOptimizer().fit_problem(
+        CatalogProblem.from_arrays(theta, 2, []), support)
     unit = theta[:, :3] / np.linalg.norm(theta[:, :3], axis=0)
     vector = np.linalg.svd(unit)[2][-1] / np.linalg.norm(theta[:, :3], axis=0)
     np.testing.assert_allclose(plain.coef_[:3], vector / vector[2], rtol=1e-9)
     assert plain.law_noise_ratios_ is None
     with pytest.raises(ValueError, match=r"support: expected a boolean array of shape \(7,\)"):
-        px.ImplicitOptimizer().fit_support(theta, 2, [], support.astype(int))
+        px.ImplicitOptimizer().fit_problem(
+            CatalogProblem.from_arrays(theta, 2, []), support.astype(int))
     with pytest.raises(px.NoLawFoundError, match="a law needs at least two terms"):
-        px.ImplicitOptimizer().fit_support(theta, 2, [], np.eye(7, dtype=bool)[0])
+        px.ImplicitOptimizer().fit_problem(
+            CatalogProblem.from_arrays(theta, 2, []), np.eye(7, dtype=bool)[0])
     with pytest.raises(px.NoLawFoundError, match="0 non-zero column"):
-        px.ImplicitOptimizer().fit_support(theta, 2, [], np.zeros(7, dtype=bool))
+        px.ImplicitOptimizer().fit_problem(
+            CatalogProblem.from_arrays(theta, 2, []), np.zeros(7, dtype=bool))
     with pytest.raises(px.NoLawFoundError, match="share a coordinate"):  # 0 and 3: uncoupled
-        px.ImplicitOptimizer().fit_support(theta, 2, [], np.isin(np.arange(7), [0, 3]))
+        px.ImplicitOptimizer().fit_problem(
+            CatalogProblem.from_arrays(theta, 2, []), np.isin(np.arange(7), [0, 3]))
 
 
 def test_implicit_ensemble_refits_the_agreed_terms_instead_of_median_laws():
@@ -400,8 +407,8 @@ def test_implicit_ensemble_refits_the_agreed_terms_instead_of_median_laws():
         theta, 2, [], noise_moments=moments)
     assert ensemble.aggregate_ == "refit"
     np.testing.assert_array_equal(ensemble.coef_ != 0, [True] * 6 + [False])
-    refit = px.ImplicitOptimizer().fit_support(theta, 2, [], ensemble.coef_ != 0,
-                                               noise_moments=moments)
+    refit = px.ImplicitOptimizer().fit_problem(
+        CatalogProblem.from_arrays(theta, 2, [], noise_moments=moments), ensemble.coef_ != 0)
     np.testing.assert_allclose(ensemble.coef_, refit.coef_, rtol=1e-12)
     median = np.median(ensemble.coef_samples_, axis=0)
     assert not np.allclose(ensemble.coef_, median, rtol=1e-9, atol=0)

@@ -25,19 +25,9 @@ __all__ = ["SINDyBaseline", "baseline_terms"]
 
 
 def baseline_terms(catalog) -> list[sp.Expr]:
-    """Terms of a classical catalog that an explicit model ``qdd = f(q, qd, u)`` can use.
-
-    Parameters
-    ----------
-    catalog : CatalogRepartition
-        A catalog holding a :class:`~pysindy_xl.ClassicalLibrary` (e.g.
-        ``reference_catalog(system, "classical")``).
-
-    Returns
-    -------
-    list of sympy.Expr
-        Distinct classical terms without any acceleration symbol, in catalog order.
-    """
+    """Terms of a classical catalog (e.g. ``reference_catalog(system, "classical")``) that an
+    explicit model ``qdd = f(q, qd, u)`` can use: the distinct classical terms without any
+    acceleration symbol, in catalog order."""
     catalog.symbolic_matrix()  # the columns, derived on first use
     accelerations = set(catalog.coords.qdd)
     found = []
@@ -79,12 +69,7 @@ class SINDyBaseline:
         self.optimizer = optimizer
 
     def fit(self, x, t, x_dot, x_ddot, u=None):
-        """Fit on lists of per-trajectory arrays (the layout of ``Dataset.fit_arguments``).
-
-        Returns
-        -------
-        self
-        """
+        """Fit on lists of per-trajectory arrays (the layout of ``Dataset.fit_arguments``)."""
         import pysindy as ps
 
         from ..dynamics import MassMatrixDynamics

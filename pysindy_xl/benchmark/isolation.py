@@ -128,22 +128,9 @@ def run_with_signal(function, task, settings, timeout):
 
 
 def blas_thread_limit(blas_threads: int | None):
-    """A context limiting BLAS thread pools to ``blas_threads`` (no limit for None).
-
-    Parameters
-    ----------
-    blas_threads : int or None
-        Threads of every BLAS library loaded (OpenBLAS, MKL, BLIS...), via
-        :func:`threadpoolctl.threadpool_limits`; None leaves them as they are.
-
-    Returns
-    -------
-    context manager
-
-    Raises
-    ------
-    ValueError
-        If ``blas_threads`` is not None or an integer >= 1.
+    """A context limiting the thread pools of every BLAS library loaded (OpenBLAS, MKL,
+    BLIS...) to ``blas_threads`` (an integer >= 1), via :func:`threadpoolctl.threadpool_limits`;
+    None leaves them as they are.
 
     Examples
     --------

@@ -30,31 +30,23 @@ from __future__ import annotations
 import contextlib
 import fcntl
 import json
-import math
 import os
 import time
 import traceback
 import warnings
 
-import numpy as np
-
+from ..registry import json_finite
 from .grid import GridSettings, Task
 
 __all__ = ["STATUSES", "RecordStore", "GridBusyError", "read_records", "latest_records",
-           "check_record"]
+           "check_record", "json_finite"]
 
 STATUSES = ("ok", "invalid", "timeout", "error")
 _REQUIRED = ("run_id", "trajectory_id", "config", "status")
 
 
 def check_record(record) -> dict:
-    """Validate a record's required fields; returns it.
-
-    Raises
-    ------
-    ValueError
-        If a required field is missing or the status is unknown.
-    """
+    """Validate a record's required fields and status; returns it."""
     if not isinstance(record, dict):
         raise TypeError(f"record: expected a dict, got {type(record).__name__}")
     missing = [k for k in _REQUIRED if k not in record]
@@ -171,13 +163,8 @@ class RecordStore:
         """Exclusive use of the records file for the duration of a grid.
 
         A second grid on the same output refuses at once (:class:`GridBusyError` naming the
-        holder)
-        instead of interleaving runs; the lock (``flock`` on ``PATH.lock``) dies with its
-        process, so a killed grid never leaves a stale lock behind.
-
-        Yields
-        ------
-        None
+        holder) instead of interleaving runs; the lock (``flock`` on ``PATH.lock``) dies with
+        its process, so a killed grid never leaves a stale lock behind.
         """
         lock_path = self.path + ".lock"
         handle = open(lock_path, "a+")  # noqa: SIM115 - held for the whole context
@@ -227,23 +214,6 @@ class RecordStore:
 
 
 # -- building a run's record (the runner and its isolation) ----------------------------------------
-def json_finite(value):
-    """JSON-safe copy: non-finite floats become None, numpy scalars plain numbers."""
-    if isinstance(value, dict):
-        return {str(k): json_finite(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_finite(v) for v in value]
-    if isinstance(value, (np.floating, float)):
-        value = float(value)
-        return value if math.isfinite(value) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.bool_):
-        return bool(value)
-    return value
-
-
-
 def base_record(task: Task, settings: GridSettings) -> dict:
     import pysindy_xl
 

@@ -139,16 +139,9 @@ def grid_summary(records, configs=None, reference: str = "mixed x mixed") -> dic
 
 
 def plot_table(table, records, path) -> None:
-    """Figure: outcome counts per configuration and the validation errors of valid runs.
-
-    Parameters
-    ----------
-    table : list of dict
-        From :func:`~pysindy_xl.benchmark.ranking.ranking_table`.
-    records : list of dict
-    path : str or os.PathLike
-        PNG file to write.
-    """
+    """PNG figure at ``path``: outcome counts per configuration (the ``table`` of
+    :func:`~pysindy_xl.benchmark.ranking.ranking_table`) and the validation errors of the
+    valid runs among ``records``."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)

@@ -1,4 +1,8 @@
-"""The ``run_*`` functions behind the subcommands, and :func:`main`, which dispatches to them."""
+"""The ``run_*`` functions behind the subcommands, and :func:`main`, which dispatches to them.
+
+Each raises :class:`~pysindy_xl.cli.steps.CLIError`, with the message the command prints, when
+its input or one of its steps fails.
+"""
 
 from __future__ import annotations
 
@@ -10,6 +14,7 @@ import time
 import numpy as np
 
 from ..quality import fit_quality, plot_identification, quality_lines
+from ..registry import json_finite
 from .parser import build_parser
 from .steps import (
     CLIError,
@@ -26,7 +31,6 @@ from .steps import (
     output_directory,
     output_file,
     resolve_catalog,
-    strict_json,
     summarize_coefficients,
     system_by_name,
 )
@@ -57,11 +61,6 @@ def run_demo(args) -> dict:
         the true ones), physical parameters, the Lagrangian and equations (None for a
         catalog of physical parameters whose equations run for pages), ``coefficient_summary``,
         ``validation`` metrics, ``timings_s``, ``files``.
-
-    Raises
-    ------
-    CLIError
-        If the system, the solver or the data generation fails, or the identification does.
 
     Examples
     --------
@@ -190,7 +189,7 @@ def run_demo(args) -> dict:
     }
     path = os.path.join(args.out, "report.json")
     with open(path, "w", encoding="utf-8") as handle:
-        json.dump(strict_json(report), handle, indent=2, allow_nan=False)
+        json.dump(json_finite(report), handle, indent=2, allow_nan=False)
     print(f"report: {path}" + (f", plot: {files['validation_plot']}" if files else "")
           + f" ({timings['total']:.1f} s)")
     return report
@@ -279,12 +278,6 @@ def run_identify(args):
     -------
     XLSINDy
         The fitted model.
-
-    Raises
-    ------
-    CLIError
-        If the dataset cannot be read, names no system, does not match the system, or the
-        identification fails.
 
     Examples
     --------
@@ -521,11 +514,6 @@ def run_generate(args):
     -------
     pathlib.Path
         The NPZ file (its JSON metadata lie beside it).
-
-    Raises
-    ------
-    CLIError
-        If the system is unknown, the generation fails or the output directory is missing.
 
     Examples
     --------

@@ -286,17 +286,6 @@ def joint_parameters(system, model):
     return out
 
 
-def strict_json(value):
-    """JSON-safe copy: non-finite floats (an infinite RMSE) become null."""
-    if isinstance(value, dict):
-        return {k: strict_json(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [strict_json(v) for v in value]
-    if isinstance(value, float) and not np.isfinite(value):
-        return None
-    return value
-
-
 def _rounded(expr, digits=4):
     import sympy as sp
 

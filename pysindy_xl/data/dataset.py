@@ -45,8 +45,9 @@ CONSTRAINT_HANDLING = ("exclude", "known", "include")
 class Trajectory:
     """One sampled trajectory in generalized coordinates.
 
-    The arrays are converted to float and checked on construction; a 1-D ``q`` is a single
-    coordinate.
+    The parameters are the attributes, converted to float (``constraint_active`` to bool)
+    and checked on construction (a :class:`DatasetError` names a wrong shape, NaN or inf, or
+    times that do not increase); a 1-D ``q`` is a single coordinate.
 
     Parameters
     ----------
@@ -68,20 +69,6 @@ class Trajectory:
     constraint_active : array of bool, shape (N,), optional
         Samples where a limit, contact or equality constraint acts (frictionloss excluded:
         it is part of the dynamics that the catalogs can model).
-
-    Attributes
-    ----------
-    t : ndarray, shape (N,)
-    q : ndarray, shape (N, n)
-    qd, qdd, tau, u, tau_constraint, u_constraint : ndarray, shape (N, n), or None
-        As given.
-    info : dict
-    constraint_active : ndarray of bool, shape (N,), or None
-
-    Raises
-    ------
-    DatasetError
-        If an array has the wrong shape, holds NaN or inf, or the times do not increase.
 
     Examples
     --------
@@ -156,7 +143,8 @@ def _check_series(a, name: str, n_samples: int, n: int | None) -> np.ndarray:
 
 
 class Dataset:
-    """Several trajectories of one system plus JSON metadata.
+    """Several trajectories of one system plus JSON metadata (the parameters are the
+    attributes; ``coordinate_names`` becomes a tuple).
 
     Parameters
     ----------
@@ -164,12 +152,6 @@ class Dataset:
     coordinate_names : sequence of str
     metadata : dict, optional
         JSON-serializable (system name and parameters, forcing mode, noise, seed...).
-
-    Attributes
-    ----------
-    trajectories : list of Trajectory
-    coordinate_names : tuple of str
-    metadata : dict
 
     Raises
     ------

@@ -62,26 +62,10 @@ def _read_npz(path: str) -> dict:
 
 
 def read_dataset_arrays(path) -> tuple[dict, dict, list, list]:
-    """The checked arrays of a dataset NPZ and its metadata (embedded, side-car JSON or none).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-
-    Returns
-    -------
-    arrays : dict of str to ndarray
-        Every numeric array of the file, ``q`` as (N, n).
-    metadata : dict
-    coordinate_names : list of str
-    bounds : list of (int, int)
-        Sample range of each trajectory (the samples of one trajectory are contiguous).
-
-    Raises
-    ------
-    DatasetError
-        If the file is missing, not an NPZ, or its arrays are missing or malformed.
-    """
+    """The checked contents of a dataset NPZ: ``(arrays, metadata, coordinate_names,
+    bounds)``, every numeric array by name (``q`` as (N, n)), the metadata (embedded, side-car
+    JSON or none) and the contiguous sample range ``(start, stop)`` of each trajectory. A
+    :class:`DatasetError` says what is wrong with a missing, non-NPZ or malformed file."""
     path = os.fspath(path)
     arrays = _read_npz(path)
     missing = [k for k in ("t", "q") if k not in arrays]

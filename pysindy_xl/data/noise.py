@@ -51,13 +51,8 @@ def noise_levels(noise, noise_model: str = "positions") -> dict:
     Returns
     -------
     dict
-        ``{"q": ..., "qd": ..., "qdd": ..., "tau": ...}``, floats.
-
-    Raises
-    ------
-    ValueError
-        If ``noise_model`` is unknown, a level is negative or not a number, or a dict names
-        velocity or acceleration noise under the ``positions`` model.
+        ``{"q": ..., "qd": ..., "qdd": ..., "tau": ...}``, floats. A dict naming velocity or
+        acceleration noise under the ``positions`` model is refused.
 
     Examples
     --------
@@ -131,14 +126,11 @@ def add_noise(trajectory: Trajectory, noise, rng: np.random.Generator,
         tau = u @ matrix.T
     else:
         tau = noisy(trajectory.tau, levels["tau"])
-    def copy(a):
-        return None if a is None else a.copy()
-
     return Trajectory(
         t=trajectory.t.copy(), q=noisy(trajectory.q, levels["q"]),
         qd=noisy(trajectory.qd, levels["qd"]), qdd=noisy(trajectory.qdd, levels["qdd"]),
         tau=tau, u=u, info=dict(trajectory.info),
-        tau_constraint=copy(trajectory.tau_constraint),
-        u_constraint=copy(trajectory.u_constraint),
-        constraint_active=copy(trajectory.constraint_active),
+        tau_constraint=noisy(trajectory.tau_constraint, 0),
+        u_constraint=noisy(trajectory.u_constraint, 0),
+        constraint_active=noisy(trajectory.constraint_active, 0),
     )

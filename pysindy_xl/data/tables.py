@@ -21,7 +21,10 @@ coordinate, in header order. Several trajectories in one table are split by the 
 (rows of one id keep their order; ids in order of first appearance).
 
 Every mistake raises :class:`~pysindy_xl.data.DatasetError` (a :class:`ValueError`) naming
-the file (or DataFrame) and the column, and the line for a bad cell.
+the file (or DataFrame) and the column, and the line (row number or label) of a bad cell: a
+missing column, a header that does not split with the delimiter, a non-numeric, empty, NaN or
+inf cell, times not strictly increasing within a trajectory, a trajectory of fewer than 2
+samples. A source of another type is a ``TypeError``.
 """
 
 from __future__ import annotations
@@ -247,13 +250,6 @@ def read_csv(path, coordinates=None, columns=None, delimiter=","):
         ``coordinate_names`` as resolved; ``metadata["columns"]`` records which columns
         were read.
 
-    Raises
-    ------
-    DatasetError
-        Naming the file and the column: missing column, a header that does not split with
-        ``delimiter``, a non-numeric, empty, NaN or inf cell (with its line), times not
-        strictly increasing within a trajectory, a trajectory of fewer than 2 samples.
-
     Examples
     --------
     >>> import pathlib, tempfile
@@ -300,11 +296,6 @@ def from_columns(data, coordinates=None, columns=None, name="data"):
     -------
     Dataset
 
-    Raises
-    ------
-    DatasetError
-        As :func:`read_csv`, rows numbered from 0.
-
     Examples
     --------
     >>> import numpy as np
@@ -348,13 +339,6 @@ def from_dataframe(frame, coordinates=None, columns=None):
     Returns
     -------
     Dataset
-
-    Raises
-    ------
-    TypeError
-        If ``frame`` is not a DataFrame.
-    DatasetError
-        As :func:`read_csv`, with the row label of a bad cell.
 
     Examples
     --------
@@ -400,13 +384,6 @@ def load_data(source, coordinates=None, columns=None, delimiter=None, topic=None
     Returns
     -------
     Dataset
-
-    Raises
-    ------
-    DatasetError
-        Naming the file and the column of the problem.
-    TypeError
-        If ``source`` is none of the above.
 
     Examples
     --------

@@ -1,6 +1,4 @@
-"""Mass-matrix form of a catalog's equations, ``sum_j xi_j E[c, j] = 0``, built numerically
-from the column entries with a non-zero coefficient (a robot arm's equations are never expanded
-symbolically), with kinematic-tree libraries evaluated by the rigid-body kernel."""
+"""Mass-matrix form of a catalog's equations, built numerically (:class:`CatalogDynamics`)."""
 
 from __future__ import annotations
 

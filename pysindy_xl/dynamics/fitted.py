@@ -13,7 +13,7 @@ import numpy as np
 from sklearn.metrics import r2_score
 from sklearn.utils.validation import check_is_fitted
 
-from .._inputs import as_list, check_array
+from .._inputs import aligned, as_list, check_array
 from .._validation import check_instance
 from .mass_matrix import MassMatrixDynamics
 
@@ -50,10 +50,7 @@ class DynamicsMixin:
         dynamics = self._require_dynamics()
         n = self.n_coordinates_
         xs, is_list = as_list(x, "x")
-        xds, xd_list = as_list(x_dot, "x_dot")
-        us, u_list = as_list(u, "u") if u is not None else ([None] * len(xs), is_list)
-        if xd_list != is_list or len(xds) != len(xs) or u_list != is_list or len(us) != len(xs):
-            raise ValueError("x_dot, u: expected the same layout as x")
+        xds, us = aligned(x_dot, "x_dot", xs, is_list), aligned(u, "u", xs, is_list)
         out = []
         for k, (xk, xdk, uk) in enumerate(zip(xs, xds, us, strict=True)):
             label = f"[{k}]" if is_list else ""
@@ -188,27 +185,18 @@ class DynamicsMixin:
             Generalized forces as a function of time (arrays are interpolated by a cubic
             spline by default).
         feedback : callable, optional
-            A feedback law ``feedback(t, q, qd) -> (n,)``: generalized forces from the time
-            and the model's own simulated state (``q``, ``qd`` arrays of shape (n,)),
-            evaluated at every step of the integrator and added to ``u``. This is how a
-            servo-driven system is simulated the way it ran: the servos react to the
-            model's motion (:func:`pysindy_xl.mujoco.actuator_law` gives an MJCF's actuator
-            law in this form).
+            A feedback law ``feedback(t, q, qd) -> (n,)`` evaluated at every step and added to
+            ``u``: a servo-driven system simulated the way it ran, its servos reacting to the
+            model's motion (:func:`pysindy_xl.mujoco.actuator_law` gives an MJCF's law).
         **integrator_options
             Passed to :meth:`MassMatrixDynamics.simulate` (``method``, ``rtol``, ``atol``,
-            ``divergence_bound``, ``max_evaluations``, ``timeout``, ``interpolation``).
+            ``divergence_bound``, ``max_evaluations``, ``timeout``, ``interpolation``), which
+            also says what it raises (:class:`SimulationError` holds the valid part of the
+            trajectory).
 
         Returns
         -------
         ndarray, shape (T, 2n)
-
-        Raises
-        ------
-        SimulationError
-            When the model diverges or its mass matrix becomes singular; the exception holds
-            the valid part of the trajectory.
-        TypeError, ValueError
-            If ``feedback`` is not callable or does not return ``n`` finite values at ``x0``.
 
         Examples
         --------

@@ -1,6 +1,6 @@
 """What drives a simulation: forces as a function of time (``u``) and of the state
 (``feedback``), checked once at the boundary and turned into fast callables for the
-integrator's right-hand side."""
+integrator's right-hand side, for ``n`` coordinates and simulation times ``t``."""
 
 from __future__ import annotations
 

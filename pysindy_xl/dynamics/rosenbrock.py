@@ -65,22 +65,15 @@ def ros2(parts, x0, t, step, jacobian_every: int = 50, divergence_bound: float =
          tolerance: float | None = 1e-5):
     """Integrate ``M(q, v) qdd = g(t, q, v)`` with ROS2 (module docstring).
 
+    ``parts(t, state) -> (M, g)`` gives the mass matrix (n, n) and the forces (n,) at a state
+    ``[q, v]``; the run starts at ``x0`` (2n,), reports the increasing times ``t`` (T,) and
+    takes internal steps of at most ``step``, stopping when a state component exceeds
+    ``divergence_bound`` or after ``timeout`` seconds of wall-clock time.
+
     Parameters
     ----------
-    parts : callable
-        ``parts(t, state) -> (M, g)``: the mass matrix (n, n) and the forces (n,) at a state
-        ``[q, v]``.
-    x0 : array, shape (2n,)
-    t : array, shape (T,)
-        Increasing output times.
-    step : float
-        Largest internal step.
     jacobian_every : int, default 50
         Steps between two evaluations of ``G_q``, ``G_v`` (``4n`` evaluations each time).
-    divergence_bound : float
-        Stop when a state component exceeds it.
-    timeout : float, optional
-        Wall-clock bound (s).
     dq, dv : float
         Secant steps of the Jacobians in positions and velocities (a secant over ``dv``
         averages a smooth dry-friction sign instead of taking its slope at rest).
@@ -90,14 +83,8 @@ def ros2(parts, x0, t, step, jacobian_every: int = 50, divergence_bound: float =
         shrink where the motion is hard (a dry-friction reversal) and grow back to ``step``.
         None: fixed steps of at most ``step`` (each output interval cut into equal steps).
 
-    Returns
-    -------
-    ndarray, shape (T, 2n)
-
-    Raises
-    ------
-    RosenbrockStop
-        On a non-finite or singular step, divergence or timeout (with the valid rows).
+    Returns the states (T, 2n); raises :class:`RosenbrockStop` (with the valid rows) on a
+    non-finite or singular step, divergence or timeout.
 
     Examples
     --------

@@ -1,4 +1,12 @@
-"""Fixed-step integrators of ``x' = f(x, u, t)`` for JAX (see :mod:`.jax_dynamics`)."""
+"""Fixed-step integrators of ``x' = f(x, u, t)`` for JAX (see :mod:`.jax_dynamics`).
+
+Every step is a pure function ``step(f, state, t, dt, u_start, u_end=None)`` returning the
+state at ``t + dt`` in the layout of ``state``: ``f(state, u, t) -> d(state)/dt`` (e.g. from
+:func:`.dynamics_function`); ``state`` an array (..., 2n) ``[q, qd]`` or a tuple of 2n
+per-component arrays, as ``f`` takes it; ``u_start`` the force at ``t`` (array (..., n) or
+tuple of n arrays); ``u_end`` the force at ``t + dt``, interpolated linearly inside the step
+by the schemes that sample the force more than once (otherwise ``u_start`` is held).
+"""
 
 from __future__ import annotations
 
@@ -10,10 +18,6 @@ jnp = import_optional("jax.numpy", purpose="pysindy_xl.export.jax_dynamics (XLSI
 __all__ = ["euler_step", "rk4_step", "semi_implicit_euler_step"]
 
 
-# --------------------------------------------------------------------------------------
-# Fixed-step schemes: pure functions of one state (an array (..., 2n) or a tuple of 2n
-# per-component arrays, matching what f takes)
-# --------------------------------------------------------------------------------------
 def _force_at(u_start, u_end, fraction):
     """Force at ``t + fraction * dt``: held when ``u_end`` is None, else linear."""
     if u_end is None:
@@ -31,17 +35,8 @@ def rk4_step(f, state, t, dt, u_start, u_end=None):
 
     Parameters
     ----------
-    f : callable
-        ``f(state, u, t) -> d(state)/dt``, e.g. from :func:`dynamics_function`.
-    state : array (..., 2n) or tuple of 2n arrays
-        State at ``t``, in the layout ``f`` takes.
-    t, dt : float
-        Time at the start of the step and step length.
-    u_start : array (..., n) or tuple of n arrays
-        Force at ``t``.
-    u_end : same as u_start, optional
-        Force at ``t + dt``; when given the force is interpolated linearly inside the
-        step, otherwise ``u_start`` is held.
+    f, state, t, dt, u_start, u_end
+        See the module docstring.
 
     Returns
     -------
@@ -90,17 +85,8 @@ def semi_implicit_euler_step(f, state, t, dt, u_start, u_end=None):
 
     Parameters
     ----------
-    f : callable
-        ``f(state, u, t) -> d(state)/dt``, e.g. from :func:`dynamics_function`.
-    state : array (..., 2n) or tuple of 2n arrays
-        State ``[q, qd]`` at ``t``.
-    t, dt : float
-        Time at the start of the step and step length.
-    u_start : array (..., n) or tuple of n arrays
-        Force at ``t``, used over the whole step.
-    u_end : optional
-        Accepted for the signature of :func:`rk4_step`, unused (a first-order scheme
-        samples the force once).
+    f, state, t, dt, u_start, u_end
+        See the module docstring.
 
     Returns
     -------
@@ -126,16 +112,8 @@ def euler_step(f, state, t, dt, u_start, u_end=None):
 
     Parameters
     ----------
-    f : callable
-        ``f(state, u, t) -> d(state)/dt``.
-    state : array (..., 2n) or tuple of 2n arrays
-        State at ``t``.
-    t, dt : float
-        Time at the start of the step and step length.
-    u_start : array (..., n) or tuple of n arrays
-        Force at ``t``.
-    u_end : optional
-        Unused (see :func:`semi_implicit_euler_step`).
+    f, state, t, dt, u_start, u_end
+        See the module docstring.
 
     Returns
     -------

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._optional import import_optional
+from .._validation import check_option
 from ..dynamics import DynamicsError
 
 gymnasium = import_optional("gymnasium", purpose="XLSINDy.to_gymnasium (pysindy_xl.export.gym_env)")
@@ -115,16 +116,9 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
         if not np.isfinite(dt) or dt <= 0:
             raise ValueError(f"dt: expected a positive number of seconds, got {dt!r}")
         self.dt = dt
-        if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) \
-                or substeps < 1:
-            raise ValueError(f"substeps: expected an integer >= 1, got {substeps!r}")
-        self.substeps = int(substeps)
-        if max_episode_steps is not None and (
-                isinstance(max_episode_steps, bool)
-                or not isinstance(max_episode_steps, (int, np.integer)) or max_episode_steps < 1):
-            raise ValueError(f"max_episode_steps: expected None or an integer >= 1, got "
-                             f"{max_episode_steps!r}")
-        self.max_episode_steps = max_episode_steps
+        self.substeps = check_option("substeps", substeps, "int", low=1)
+        self.max_episode_steps = check_option("max_episode_steps", max_episode_steps, "int",
+                                              low=1, allow_none=True)
         for name, f in (("reward", reward), ("terminated", terminated)):
             if f is not None and not callable(f):
                 raise TypeError(f"{name}: expected a callable, got {type(f).__name__}")

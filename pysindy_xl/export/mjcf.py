@@ -42,20 +42,10 @@ _NOT_IN_MJCF = ("asymmetric", "stribeck", "offset")
 def consistent_parameters(catalog, beta, closeness: float = 1e-6):
     """Physically consistent inertial parameters reproducing base parameters ``beta``.
 
-    Parameters
-    ----------
-    catalog : KinematicCatalog
-        Its ``combination`` ``C`` and ``physical_values`` (the template's ``pi_0``).
-    beta : array, shape (len(catalog.lagrange_terms),)
-    closeness : float, default 1e-6
-        Weight ``epsilon`` of the distance to the template's parameters.
-
-    Returns
-    -------
-    pi : ndarray, shape (len(catalog.physical_names),)
-    residual : float
-        ``|C pi - beta| / |beta|``: zero (to the solver's tolerance) when ``beta`` is
-        realizable by rigid bodies.
+    Uses the catalog's ``combination`` ``C`` and ``physical_values`` (the template's
+    ``pi_0``), ``closeness`` weighing the distance to ``pi_0``. Returns ``(pi, residual)``,
+    ``residual = |C pi - beta| / |beta|`` zero (to the solver's tolerance) when ``beta`` is
+    realizable by rigid bodies.
     """
     from ..physical import PhysicalStructure, realize
 
@@ -189,21 +179,10 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     ``M`` there (MuJoCo factors it): models with terms MJCF cannot state (other catalogs, held
     coordinates, joint offsets, asymmetric friction) are refused.
 
-    Parameters
-    ----------
-    model : fitted XLSINDy
-        Fitted with ``kinematic_catalog(system).library()`` (or a catalog with its terms).
-    system : MJCFSystem
-        The template the model was identified on.
-    tolerance : float, default 1e-6
-    n_states : int, default 6
-    seed : int, optional
-
-    Returns
-    -------
-    mj_model : mujoco.MjModel or None
-    reason : str or None
-        Why the model cannot be stated in MuJoCo (None when it can).
+    ``model`` is fitted with ``kinematic_catalog(system).library()`` (or a catalog with its
+    terms) on the template ``system``, an :class:`~pysindy_xl.mujoco.MJCFSystem`; ``seed``
+    draws the states. Returns ``(mj_model, None)``, or ``(None, reason)``: why the model
+    cannot be stated in MuJoCo.
 
     Examples
     --------

@@ -24,9 +24,7 @@ Examples
 
 from __future__ import annotations
 
-import importlib
-
-from .._optional import import_optional
+from .._optional import import_optional, lazy_attributes
 
 # public name -> submodule that defines it (imported on first attribute access)
 _LAZY = {
@@ -79,15 +77,4 @@ def import_mujoco():
     return import_optional("mujoco", purpose="MuJoCo simulation (pysindy_xl.mujoco)")
 
 
-def __getattr__(name):
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    relative = module if module.startswith(".") else f".{module}"
-    value = getattr(importlib.import_module(relative, __name__), name)
-    globals()[name] = value  # later accesses skip __getattr__
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_attributes(__name__, _LAZY)

@@ -1,37 +1,23 @@
 """What the catalog optimizers share: the template of a fit and column bookkeeping.
 
-Every optimizer of this package is a scikit-learn estimator derived from
-:class:`CatalogOptimizer`. A fit goes one way:
+Every optimizer of this package derives from :class:`CatalogOptimizer`, a scikit-learn
+estimator. A fit goes one way: ``fit_catalog(theta, n_coordinates, force_columns, ...)``
+checks its arguments once into a :class:`~pysindy_xl.optimizers.problem.CatalogProblem`;
+``fit_problem(problem, support=None)``, the one entry point of the fit stage, checks the
+optimizer's parameters, balances the coordinate blocks of the rows
+(:meth:`CatalogProblem.balanced <pysindy_xl.optimizers.problem.CatalogProblem.balanced>`,
+unless the tag ``balances_rows`` is False) and calls the one method a new optimizer implements,
+``_solve(problem) -> self``, which sets ``coef_`` (F,): the full coefficient vector, force
+columns included, with ``theta @ coef_ ~ 0``. An optimizer that can refit a given support
+(the last step of an ensemble) also implements ``_solve_support(problem, support)``.
 
-``fit_catalog(theta, n_coordinates, force_columns, noise_moments=None, mass_matrices=None,
-balance=True, reference_columns=None) -> self``
-    checks the arguments once into a :class:`~pysindy_xl.optimizers.problem.CatalogProblem`
-    and calls :meth:`CatalogOptimizer.fit_problem`,
-
-``fit_problem(problem) -> self``, the one entry point of the fit stage,
-    checks the optimizer's parameters, balances the coordinate blocks of the rows
-    (:meth:`CatalogProblem.balanced <pysindy_xl.optimizers.problem.CatalogProblem.balanced>`)
-    unless the optimizer hands the problem on to others (tag ``balances_rows`` False), and calls
-    the one method a new optimizer implements, ``_solve(problem) -> self``, which sets
-    ``coef_`` of shape ``(F,)``: the full coefficient vector, force columns included, with
-    ``theta @ coef_ ~ 0``.
-
-An optimizer that can refit a given support (the last step of an ensemble) implements
-``_solve_support(problem, support)`` too, reached through ``fit_problem(problem, support)``.
 What an optimizer needs or can do is one object, its
-:class:`~pysindy_xl.optimizers.tags.CatalogTags` (``catalog_tags()``, read with
-:func:`~pysindy_xl.optimizers.tags.catalog_tags`): ``requires_forces`` (explicit
-regression), ``uses_mass_matrices``, ``uses_noise_draws``, ``derivative_estimate``,
-``can_refit``, ``balances_rows``. A subclass declares them once, overriding
-``catalog_tags`` (``dataclasses.replace(super().catalog_tags(), ...)``); the tags' names
-answer as read-only attributes too, and a subclass that sets them as class attributes
-declares its tags that way. An optimizer may also offer ``pilot()``, an unfitted cheaper
-optimizer of the same law for a first estimate (:func:`pilot_optimizer`).
-
-Optimizers describe themselves for persistence: ``to_spec()`` writes the type and plain
-parameters (nested catalog optimizers as specs of their own); :func:`optimizer_from_spec`
-reads them back through the registry :data:`OPTIMIZER_TYPES`, where every subclass enters
-when it is defined.
+:class:`~pysindy_xl.optimizers.tags.CatalogTags` (``catalog_tags()``), declared once by a
+subclass (overriding ``catalog_tags`` or setting the tags as class attributes) and readable
+as attributes too. ``pilot()`` may offer a cheaper optimizer of the same law for a first
+estimate (:func:`pilot_optimizer`). ``to_spec()`` writes the type and plain parameters for
+persistence; :func:`optimizer_from_spec` reads them back through the registry
+:data:`OPTIMIZER_TYPES`, which every subclass enters when it is defined.
 """
 
 from __future__ import annotations
@@ -117,20 +103,9 @@ def pilot_optimizer(optimizer):
 
 
 def coordinates_touched(theta, n_coordinates: int, rtol: float = 1e-10) -> np.ndarray:
-    """Which coordinate equations each column enters (is not identically zero in).
-
-    Parameters
-    ----------
-    theta : array, shape (n_coordinates * N, F)
-        Stacked regression matrix, rows coordinate-major.
-    n_coordinates : int
-    rtol : float
-        A block counts as zero when its norm is at most ``rtol`` times the column's largest
-        block norm.
-
-    Returns
-    -------
-    ndarray of bool, shape (n_coordinates, F)
+    """Which coordinate equations each column of ``theta`` (rows coordinate-major) enters,
+    as a boolean array (n_coordinates, F); a block counts as zero when its norm is at most
+    ``rtol`` times the column's largest block norm.
 
     Examples
     --------
@@ -155,25 +130,11 @@ def warn_unexplained(owner: str, theta, n_coordinates: int, coef, force_columns=
     predict it, however small its residual. Fits on noisy data end there when the candidate
     terms of a weakly excited coordinate are all pruned.
 
-    Parameters
-    ----------
-    owner : str
-        Who warns (the optimizer's name).
-    theta : array, shape (n_coordinates * N, F)
-    n_coordinates : int
-    coef : array, shape (F,)
-    force_columns : sequence of int
-    stacklevel : int, default 2
-        As for :func:`warnings.warn`, counted from the caller (2: the caller's caller).
-    rtol : float, default 1e-8
-        A term explains a coordinate when its contribution there (the norm of its column
-        block times its coefficient) exceeds ``rtol`` times the largest contribution of any
-        identified term or force to any coordinate.
-
-    Returns
-    -------
-    ndarray of int
-        The unexplained coordinates (empty when every coordinate is explained).
+    A term explains a coordinate when its contribution there (the norm of its column block
+    times its coefficient) exceeds ``rtol`` times the largest contribution of any identified
+    term or force to any coordinate. ``owner`` (the optimizer's name) is the warning's author,
+    ``stacklevel`` as for :func:`warnings.warn` counted from the caller. Returns the
+    unexplained coordinates (empty when every coordinate is explained).
     """
     coef = np.asarray(coef, dtype=float)
     used = np.flatnonzero(coef)
@@ -389,14 +350,6 @@ reference_columns, physical
         if support is None:
             return self._solve(problem)
         return self._solve_support(problem, check_support(support, problem.n_features))
-
-    def fit_support(self, theta, n_coordinates, force_columns, support, noise_moments=None,
-                    balance=True):
-        """``fit_problem(CatalogProblem.from_arrays(...), support)`` (kept for callers of
-        earlier versions)."""
-        problem = CatalogProblem.from_arrays(theta, n_coordinates, force_columns,
-                                             noise_moments, balance=balance)
-        return self.fit_problem(problem, support)
 
     # -- to implement ---------------------------------------------------------------------
     def _solve(self, problem: CatalogProblem):  # pragma: no cover - abstract

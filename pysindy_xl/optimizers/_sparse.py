@@ -25,18 +25,8 @@ __all__ = ["LassoResult", "column_norms", "kkt_violation", "lasso_gram", "null_v
 
 
 def column_norms(matrix, rtol: float = 1e-12) -> tuple[np.ndarray, np.ndarray]:
-    """Euclidean norms of the columns and which of them count as non-zero.
-
-    Parameters
-    ----------
-    matrix : array, shape (n_rows, F)
-    rtol : float
-        A column whose norm is at most ``rtol`` times the largest one counts as zero.
-
-    Returns
-    -------
-    norms : ndarray, shape (F,)
-    nonzero : ndarray of bool, shape (F,)
+    """Euclidean norms of the columns and which of them count as non-zero: more than ``rtol``
+    times the largest.
 
     Examples
     --------
@@ -71,19 +61,8 @@ def kkt_violation(gram, targets, coef, alpha, mask=None) -> np.ndarray:
     """Largest violation of the Lasso optimality conditions, per column.
 
     At an optimum ``g = G x - b`` satisfies ``g_i = -alpha sign(x_i)`` where ``x_i != 0`` and
-    ``|g_i| <= alpha`` where ``x_i = 0`` (masked entries are free of conditions).
-
-    Parameters
-    ----------
-    gram : array, shape (F, F)
-    targets : array, shape (F, K)
-    coef : array, shape (F, K)
-    alpha : float or array of shape (K,)
-    mask : array of bool, shape (F, K), optional
-
-    Returns
-    -------
-    ndarray, shape (K,)
+    ``|g_i| <= alpha`` where ``x_i = 0`` (masked entries are free of conditions). Arguments
+    as in :func:`lasso_gram`; returns one violation per column, shape (K,).
     """
     grad = gram @ coef - targets
     alpha = np.broadcast_to(np.asarray(alpha, dtype=float), (coef.shape[1],))
@@ -222,10 +201,9 @@ def lasso_gram(gram, targets, alpha, mask=None, coef_init=None, tol: float = 1e-
                max_iter: int = 20_000, continuation: bool = True, check_every: int = 10,
                warn: bool = True, callback=None, atol: float = 1e-8,
                callback_every: int = 100) -> LassoResult:
-    """Solve K Lasso problems sharing one Gram matrix, all at once.
+    """Solve K Lasso problems sharing one Gram matrix, all at once (see the module docstring).
 
-    For every column k: ``min_x 1/2 x^T G x - b_k^T x + alpha ||x||_1`` with ``x_i = 0`` where
-    ``mask[i, k]`` is False. The solver is accelerated proximal gradient (FISTA) on all columns
+    The solver is accelerated proximal gradient (FISTA) on all columns
     together (one matrix-matrix product per iteration), with per-column adaptive restart, a
     continuation path on ``alpha`` (from the smallest value that zeroes every column down to
     ``alpha``, each stage warm-started from the previous one; columns given a non-zero warm
@@ -363,18 +341,8 @@ def lasso_gram(gram, targets, alpha, mask=None, coef_init=None, tol: float = 1e-
 
 
 def null_vector(matrix) -> tuple[np.ndarray, float]:
-    """Unit vector ``v`` minimizing ``||A v||`` (last right singular vector) and that minimum.
-
-    Parameters
-    ----------
-    matrix : array, shape (n_rows, k)
-
-    Returns
-    -------
-    vector : ndarray, shape (k,)
-        Sign fixed so that its entry of largest magnitude is positive.
-    singular_value : float
-        ``||A v||``; zero when fewer rows than columns.
+    """Unit vector ``v`` minimizing ``||A v||`` (last right singular vector, its entry of
+    largest magnitude positive) and that minimum (zero when fewer rows than columns).
 
     Examples
     --------

@@ -41,17 +41,10 @@ PENALTIES = (0.03, 0.1, 0.3, 1.0, 3.0)
 
 
 def reference_mass_matrices(mass_matrices) -> np.ndarray:
-    """Each column's mass matrix averaged over the states, symmetric, in units of a reference
-    inertia per coordinate: the median of the non-zero magnitudes of the columns' diagonal
-    entries for that coordinate (1 where no column has one).
-
-    Parameters
-    ----------
-    mass_matrices : array, shape (S, F, n, n)
-
-    Returns
-    -------
-    ndarray, shape (F, n, n)
+    """Each column's mass matrix (of ``mass_matrices``, (S, F, n, n)) averaged over the states,
+    symmetric, in units of a reference inertia per coordinate: the median of the non-zero
+    magnitudes of the columns' diagonal entries for that coordinate (1 where no column has
+    one). Shape (F, n, n).
 
     Examples
     --------

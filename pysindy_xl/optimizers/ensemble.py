@@ -23,8 +23,8 @@ come out split unevenly, and a model that simulates the system badly.
 Complementary pairs
 -------------------
 Subsamples of 70 % of one recording share most of its noise, so a term that fits that noise by
-chance is kept by many of them: with ~100 candidates, some false term typically reaches an
-inclusion of 0.25-0.4. With ``sampling="complementary_pairs"`` (Shah and Samworth, 2013) the
+chance is kept by many of them: among a hundred candidates, some false term typically reaches
+a sizeable inclusion. With ``sampling="complementary_pairs"`` (Shah and Samworth, 2013) the
 fits come in pairs of disjoint halves ``(A_b, A_b^c)`` of the chunks, and a term counts as
 included by a pair only when both halves keep it:
 

@@ -21,21 +21,9 @@ def explained_coordinates(theta, law, n_blocks: int, min_share: float = 1e-3) ->
     that coordinate's rows carry at least ``min_share`` of the largest coordinate's.
 
     A term that merely touches a coordinate with a negligible coefficient does not explain
-    it. ``theta`` must have balanced coordinate blocks
-    (:func:`~pysindy_xl.optimizers.coordinate_weights`), so that the shares compare
-    equations, not units.
-
-    Parameters
-    ----------
-    theta : array, shape (n_blocks * N, k)
-        Columns of the law's support.
-    law : array, shape (k,)
-    n_blocks : int
-    min_share : float, default 1e-3
-
-    Returns
-    -------
-    ndarray of bool, shape (n_blocks,)
+    it. ``theta`` (n_blocks * N, k), the columns of the law's support, must have balanced
+    coordinate blocks (:func:`~pysindy_xl.optimizers.coordinate_weights`), so that the
+    shares compare equations, not units. Returns a boolean array (n_blocks,).
 
     Examples
     --------
@@ -52,19 +40,8 @@ def explained_coordinates(theta, law, n_blocks: int, min_share: float = 1e-3) ->
 def normalize_law(law, norms, force_columns, reference_columns=None) -> np.ndarray:
     """A law scaled to the catalog's convention: a force column in its support gets ``-1``
     (the one with the largest contribution ``|law_j| norms_j``), otherwise its dominant term
-    (among ``reference_columns`` when it has any) gets ``+1``.
-
-    Parameters
-    ----------
-    law : array, shape (F,)
-    norms : array, shape (F,)
-        Column norms of the regression matrix.
-    force_columns : array of int
-    reference_columns : array of int, optional
-
-    Returns
-    -------
-    ndarray, shape (F,)
+    (among ``reference_columns`` when it has any) gets ``+1``; ``norms`` are the column norms
+    of the regression matrix.
 
     Examples
     --------
@@ -87,18 +64,8 @@ def normalize_law(law, norms, force_columns, reference_columns=None) -> np.ndarr
 
 def combine_laws(laws) -> tuple[np.ndarray, list]:
     """Sum of the laws with pairwise disjoint supports, chosen in order (best first): laws of
-    uncoupled subsystems hold in every equation together.
-
-    Parameters
-    ----------
-    laws : array, shape (n_laws, F)
-
-    Returns
-    -------
-    coef : ndarray, shape (F,)
-    chosen : list of int
-        Indices of the summed laws.
-    """
+    uncoupled subsystems hold in every equation together. Returns the sum (F,) and the
+    indices of the summed laws (rows of ``laws``, shape (n_laws, F))."""
     coef = np.zeros(laws.shape[1])
     used = np.zeros(laws.shape[1], dtype=bool)
     chosen = []
@@ -115,12 +82,8 @@ def combine_laws(laws) -> tuple[np.ndarray, list]:
 def definite_mass(mass_matrices, law) -> bool:
     """Whether the law's mass matrix ``sum_j law_j M_j`` is definite (of either sign: a law
     has no sign) on every state, judged unit free as
-    :func:`~pysindy_xl.fit.diagnostics.mass_matrix_report` does.
-
-    Parameters
-    ----------
-    mass_matrices : array, shape (S, k, n, n)
-    law : array, shape (k,)
+    :func:`~pysindy_xl.fit.diagnostics.mass_matrix_report` does; ``mass_matrices`` (S, k, n, n)
+    holds each column's mass matrix at ``S`` states.
 
     Examples
     --------

@@ -29,6 +29,11 @@ Paths of supports, each step from one decomposition of the current pencil
   of the bordered pencil's secular equation; the column that lowers it most comes in;
 * **swaps** (:func:`refine_law_by_swaps`): exchanges of one selected and one unselected
   column while the ratio drops (the 1-swap local search of L0Learn).
+
+Throughout, ``r_factor`` (m, F) is ``Theta`` or any factor with the same ``R^T R = Theta^T
+Theta`` (the triangular factor; unit-scale columns for the paths) and ``moments`` (F, F) the
+``E[E^T E]`` of the errors of the same rows and columns. A path's ``order[:k]`` is its support
+of size ``k`` (``k >= 2``).
 """
 
 from __future__ import annotations
@@ -81,19 +86,8 @@ def noise_pencil(r_factor, moments):
 
 
 def noise_ratio_law(r_factor, moments) -> tuple[float, np.ndarray]:
-    """Smallest noise ratio on all the columns and its law (unit norm, largest entry positive).
-
-    Parameters
-    ----------
-    r_factor : array, shape (m, k)
-        ``Theta`` or any factor with the same ``R^T R = Theta^T Theta`` (the triangular factor).
-    moments : array, shape (k, k)
-        ``E[E^T E]`` of the errors of the same rows.
-
-    Returns
-    -------
-    ratio : float
-    law : ndarray, shape (k,)
+    """Smallest noise ratio on all the columns and its law: ``(ratio, law)``, the law of unit
+    norm with its largest entry positive.
 
     Examples
     --------
@@ -112,22 +106,15 @@ def noise_ratio_law(r_factor, moments) -> tuple[float, np.ndarray]:
     return float(values[0]), law * np.sign(law[np.argmax(np.abs(law))])
 
 
+# The secular-equation helpers below read the pencil of the current support: ``values`` (k,)
+# its ascending generalized eigenvalues (or (k, m), each candidate's own), ``vectors`` (k, k)
+# their S-orthonormal eigenvectors (columns), and for ``m`` candidate columns ``cross_gram``,
+# ``cross_moments`` (k, m), the projections ``V^T c`` and ``V^T d`` of their Gram and moment
+# columns, and ``gram_diag``, ``moments_diag`` (m,), their own diagonal entries.
 def _constrained_minima(values, vectors, n_bisections: int = 48) -> np.ndarray:
-    """Smallest eigenvalue of the pencil with ``xi_j = 0``, for every ``j`` at once.
-
-    Parameters
-    ----------
-    values : array, shape (k,)
-        Ascending generalized eigenvalues.
-    vectors : array, shape (k, k)
-        Their ``S``-orthonormal eigenvectors (columns).
-
-    Returns
-    -------
-    ndarray, shape (k,)
-        The root in ``[values[0], values[1]]`` of ``sum_i w_i^2 / (values[i] - mu)`` with
-        ``w = vectors[j]`` (Cauchy interlacing puts it there; the function increases on it).
-    """
+    """Smallest eigenvalue of the pencil with ``xi_j = 0``, for every ``j`` at once: the root in
+    ``[values[0], values[1]]`` of ``sum_i w_i^2 / (values[i] - mu)`` with ``w = vectors[j]``
+    (Cauchy interlacing puts it there; the function increases on it)."""
     weights = vectors**2  # row j: w_i^2 of the constraint xi_j = 0
     low = np.full(values.size, values[0])
     high = np.full(values.size, values[1])
@@ -143,18 +130,6 @@ def _constrained_minima(values, vectors, n_bisections: int = 48) -> np.ndarray:
 
 def law_elimination_path(r_factor, moments) -> np.ndarray:
     """Columns ordered from most to least needed by backward elimination of the noise ratio.
-
-    Parameters
-    ----------
-    r_factor : array, shape (m, F)
-        ``Theta`` or its triangular factor, unit-scale columns.
-    moments : array, shape (F, F)
-        ``E[E^T E]`` on the same columns.
-
-    Returns
-    -------
-    ndarray of int, shape (F,)
-        ``order[:k]`` is the support of size ``k`` (``k >= 2``) of the path.
 
     Examples
     --------
@@ -185,21 +160,8 @@ def eliminate_one(r_factor, moments, support) -> np.ndarray:
 
 def law_forward_path(r_factor, moments, max_size=None) -> np.ndarray:
     """Columns in the order forward selection adds them: the pair with the smallest noise
-    ratio first, then the column whose addition lowers the ratio most.
-
-    Parameters
-    ----------
-    r_factor : array, shape (m, F)
-        ``Theta`` or its triangular factor, unit-scale columns.
-    moments : array, shape (F, F)
-    max_size : int, optional
-        Stop after this many columns (default: all).
-
-    Returns
-    -------
-    ndarray of int
-        ``order[:k]`` is the support of size ``k`` (``k >= 2``) of the path.
-    """
+    ratio first, then the column whose addition lowers the ratio most (stopping after
+    ``max_size`` columns, default all)."""
     n_features = r_factor.shape[1]
     max_size = n_features if max_size is None else min(int(max_size), n_features)
     gram = r_factor.T @ r_factor
@@ -242,18 +204,6 @@ def _bordered_minima(values, cross_gram, cross_moments, gram_diag, moments_diag,
     ``f(mu) = g_ii - mu s_ii - sum_m (a_m - mu b_m)^2 / (lambda_m - mu)``, ``a = V^T c``,
     ``b = V^T d`` (the Schur complement of the bordered pencil; interlacing puts exactly one
     root there, and ``f`` is positive below it).
-
-    Parameters
-    ----------
-    values : array, shape (k,) or (k, m)
-        The current pencil's eigenvalues, or each candidate's own.
-    cross_gram, cross_moments : array, shape (k, m)
-        ``V^T c`` and ``V^T d`` of the ``m`` candidates.
-    gram_diag, moments_diag : array, shape (m,)
-
-    Returns
-    -------
-    ndarray, shape (m,)
     """
     values = values[:, None] if values.ndim == 1 else values
     low = np.zeros(cross_gram.shape[1])
@@ -276,21 +226,8 @@ def _smallest_bordered_root(ceiling, values, cross_gram, cross_moments, gram_dia
     ``ceiling`` are dropped by one evaluation of ``f``, and one bisection of a threshold shared
     by the rest drops every candidate whose root lies above a root already bracketed below.
     At a local optimum of the swaps no candidate passes the first test, and that costs one
-    evaluation instead of ``n_bisections``.
-
-    Parameters
-    ----------
-    ceiling : float
-        At most the smallest pencil eigenvalue of every candidate's current columns.
-    values : array, shape (k, m)
-        Each candidate's current pencil eigenvalues (columns may repeat).
-    cross_gram, cross_moments : array, shape (k, m)
-    gram_diag, moments_diag : array, shape (m,)
-
-    Returns
-    -------
-    (int, float) or None
-        The candidate's index and its root.
+    evaluation instead of ``n_bisections``. ``ceiling`` is at most the smallest pencil
+    eigenvalue of every candidate's current columns. Returns ``(index, root)`` or None.
     """
     def secular(mu, alive):
         return _bordered_secular(mu, values[:, alive], cross_gram[:, alive],
@@ -326,22 +263,10 @@ def refine_law_by_swaps(r_factor, moments, support, max_swaps: int = 50,
     :func:`_smallest_bordered_root`, and it is confirmed by an exact computation before it is
     taken.
 
-    Parameters
-    ----------
-    r_factor : array, shape (m, F)
-        ``Theta`` or its triangular factor, unit-scale columns.
-    moments : array, shape (F, F)
-    support : array of int
-    max_swaps : int, default 50
-    memo : dict, optional
-        Refined supports by the supports they passed through (frozensets), shared between
-        calls on the same ``r_factor`` and ``moments``: the search is deterministic, so a
-        support already visited ends where it ended before.
-
-    Returns
-    -------
-    ndarray of int
-        The refined support, sorted.
+    At most ``max_swaps`` exchanges; returns the refined support, sorted. ``memo`` (a dict
+    shared between calls on the same ``r_factor`` and ``moments``) holds refined supports by
+    the supports they passed through (frozensets): the search is deterministic, so a support
+    already visited ends where it ended before.
     """
     memo = {} if memo is None else memo
     gram = r_factor.T @ r_factor
@@ -387,23 +312,9 @@ def _swap_secular_at_the_law(values, vectors, cross_gram, cross_moments, gram_di
     with ``w = V^T u`` (``x = w_1``), ``y = V_{j1}`` and ``P, Q, R`` the sums over ``m >= 2``
     of ``w_m^2``, ``V_{jm} w_m`` and ``V_{jm}^2`` over ``lambda_m - lambda_1``. One
     decomposition serves all ``k x n`` swaps, where each removal's own pencil costs
-    ``O(k^3)``.
-
-    Parameters
-    ----------
-    values : array, shape (k,)
-        The support's pencil eigenvalues, ascending.
-    vectors : array, shape (k, k)
-        Its ``S``-orthonormal eigenvectors (columns).
-    cross_gram, cross_moments : array, shape (k, n)
-        ``V^T G_Si`` and ``V^T S_Si`` of the ``n`` columns outside.
-    gram_diag, moments_diag : array, shape (n,)
-
-    Returns
-    -------
-    ndarray, shape (k, n)
-        Positive where swapping ``j`` for ``i`` cannot lower the ratio below ``lambda_1``;
-        not finite where the removed column carries no weight in the law (``y_j = 0``).
+    ``O(k^3)``. The candidates are the ``n`` columns outside the support. The result (k, n) is
+    positive where swapping ``j`` for ``i`` cannot lower the ratio below ``lambda_1``, not
+    finite where the removed column carries no weight in the law (``y_j = 0``).
     """
     law_ratio = values[0]
     gaps = values[1:] - law_ratio

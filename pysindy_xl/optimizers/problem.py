@@ -114,29 +114,15 @@ class CatalogProblem:
 
         Parameters
         ----------
-        theta : array, shape (n_coordinates * N, F)
-        n_coordinates : int
-        force_columns : sequence of int
-        noise_moments : array, shape (n_coordinates, F, F), optional
-        mass_matrices : array, shape (S, F, n_coordinates, n_coordinates), optional
-        balance : bool, default True
-        reference_columns : sequence of int, optional
-        physical : PhysicalStructure, optional
-            In the columns of ``theta``.
-        noise_draws : array, shape (D, n_coordinates * N, F), optional
-            Draws of the rows' errors; ``noise_moments`` default to their second moments
-            (:func:`~pysindy_xl.weak.noise.draw_moments`).
-        row_noise, catalog_map : optional
-            Held as they are (see the class docstring).
+        theta, n_coordinates, force_columns, noise_moments, mass_matrices, balance, \
+reference_columns, physical, noise_draws, row_noise, catalog_map
+            The fields, as the class and module docstrings describe them; a ``ValueError``
+            or ``TypeError`` names a wrong one. ``noise_moments`` default to the second
+            moments of ``noise_draws`` (:func:`~pysindy_xl.weak.noise.draw_moments`).
 
         Returns
         -------
         CatalogProblem
-
-        Raises
-        ------
-        ValueError, TypeError
-            Naming the argument that is wrong.
         """
         theta = check_numeric_array(theta, "theta", finite=False, min_samples=0)
         if theta.ndim != 2 or theta.shape[0] == 0 or theta.shape[1] == 0:
@@ -405,11 +391,8 @@ def balance_coordinates(theta, n_coordinates: int, force_columns=None) -> np.nda
 
     Parameters
     ----------
-    theta : array, shape (n_coordinates * N, F)
-        Stacked regression matrix, rows coordinate-major.
-    n_coordinates : int
-    force_columns : sequence of int, optional
-        Columns whose scale is not free (see :func:`coordinate_weights`).
+    theta, n_coordinates, force_columns
+        As in :func:`coordinate_weights`.
 
     Returns
     -------

@@ -31,6 +31,10 @@ noise. Instead:
    own spread, so they are cut. The best is taken over the path models only: the minimum
    over their many refinements as well would be optimistically low (the winner's curse of a
    larger search) and let noise-fitting terms back in.
+
+Throughout, ``x`` (n_rows, F) and ``y`` (n_rows,) are the regression's columns and target, and
+the ``n_folds`` folds are contiguous inside each of ``n_blocks`` equal row blocks (the
+coordinates). Held-out errors are mean squares relative to the mean square of ``y``.
 """
 
 from __future__ import annotations
@@ -75,17 +79,8 @@ def _triangular_system(x, y):
 
 
 def elimination_path(x, y) -> np.ndarray:
-    """Column order from most to least needed, by backward elimination.
-
-    Parameters
-    ----------
-    x : array, shape (n_rows, F)
-    y : array, shape (n_rows,)
-
-    Returns
-    -------
-    order : ndarray of int, shape (F,)
-        ``order[:k]`` is the elimination path's model of size ``k``. Zero columns come last.
+    """Column order (F,) from most to least needed, by backward elimination: ``order[:k]`` is
+    the path's model of size ``k``; zero columns come last.
 
     Examples
     --------
@@ -135,15 +130,6 @@ def forward_path(x, y) -> np.ndarray:
     already chosen, is added (orthogonal least squares). Greedy in the other direction from
     :func:`elimination_path`: it finds one true term that a pair of correlated candidates
     imitates, where backward elimination may keep the pair.
-
-    Parameters
-    ----------
-    x : array, shape (n_rows, F)
-    y : array, shape (n_rows,)
-
-    Returns
-    -------
-    order : ndarray of int, shape (F,)
 
     Examples
     --------
@@ -266,24 +252,8 @@ def _systems(x, y, n_blocks: int, n_folds: int) -> tuple[tuple, list]:
 
 
 def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
-    """Held-out error of every nested model ``order[:k]``, ``k = 1..max_size``.
-
-    Parameters
-    ----------
-    x : array, shape (n_rows, F)
-    y : array, shape (n_rows,)
-    order : array of int
-        Nested column order (:func:`elimination_path`).
-    n_blocks : int, default 1
-        Equal row blocks (coordinates) inside which folds are contiguous.
-    n_folds : int, default 5
-
-    Returns
-    -------
-    errors : ndarray, shape (n_folds, len(order))
-        Mean squared held-out error of each fold and model size (size ``k`` at index
-        ``k - 1``), relative to the mean square of ``y``.
-    """
+    """Held-out error (n_folds, len(order)) of every nested model ``order[:k]`` (at index
+    ``k - 1``) of a column order (e.g. :func:`elimination_path`), per fold."""
     return _nested_errors(_fold_systems(x, y, n_blocks, n_folds), order, n_folds)
 
 
@@ -313,22 +283,8 @@ def _nested_errors(folds, order, n_folds: int) -> np.ndarray:
 
 
 def cross_validated_supports(x, y, supports, n_blocks: int = 1, n_folds: int = 5):
-    """Held-out error of arbitrary (not nested) supports, folds as in
-    :func:`cross_validated_size`.
-
-    Parameters
-    ----------
-    x : array, shape (n_rows, F)
-    y : array, shape (n_rows,)
-    supports : list of arrays of int
-    n_blocks, n_folds : int
-
-    Returns
-    -------
-    errors : ndarray, shape (n_folds, len(supports))
-        Mean squared held-out error relative to the mean square of ``y`` (inf where a fold's
-        training rows cannot determine the model).
-    """
+    """Held-out error (n_folds, len(supports)) of arbitrary (not nested) supports, per fold
+    (inf where a fold's training rows cannot determine the model)."""
     return _support_errors(_fold_systems(x, y, n_blocks, n_folds), supports, n_folds)
 
 
@@ -403,11 +359,8 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
 
     Parameters
     ----------
-    x : array, shape (n_rows, F)
-    y : array, shape (n_rows,)
-    n_blocks : int, default 1
-        Equal row blocks (coordinates) inside which folds are contiguous.
-    n_folds : int, default 5
+    x, y, n_blocks, n_folds
+        See the module docstring.
     max_size : int, optional
         Largest model considered (default: all columns, at most the rows of a fold's
         training set).

@@ -20,7 +20,9 @@ Spatial vectors are ``[angular; linear]``: a motion ``[w; v_O]`` (angular veloci
 the body point at the world origin), a force ``[n_O; f]`` (moment about the origin, force). A
 hinge of world axis ``a`` through ``p`` has the screw ``[a; p x a]``, a slide ``[0; a]``.
 
-Every function takes the array module ``xp`` (NumPy or ``jax.numpy``) and works on a leading
+Every function takes a :class:`KinematicTree` ``tree``, its parameters ``pi`` (shape
+(len(tree.physical_names),): the inertial parameters of the moving bodies, then armatures; any
+real values) and the array module ``xp`` (NumPy or ``jax.numpy``), and works on a leading
 batch axis without in-place updates, so the same code serves the simulators and
 :meth:`XLSINDy.to_jax <pysindy_xl.XLSINDy.to_jax>`.
 
@@ -256,21 +258,9 @@ def physical_parameters_from_base(tree: KinematicTree, maps, beta) -> np.ndarray
     Any solution gives the same equations (the dynamics depend on :math:`C \pi` only); the
     least-norm one is well defined and needs no physical reference.
 
-    Parameters
-    ----------
-    tree : KinematicTree
-    maps : sequence of dict, length K
-        A kinematic catalog's ``parameters``: the combination each base parameter stands for.
-    beta : array, shape (K,)
-
-    Returns
-    -------
-    ndarray, shape (len(tree.physical_names),)
-
-    Raises
-    ------
-    ValueError
-        If a map names a parameter the tree does not have.
+    ``maps`` (K dicts) is a kinematic catalog's ``parameters``, the combination each base
+    parameter of ``beta`` (K,) stands for; a ``ValueError`` names a parameter the tree does
+    not have.
     """
     index = {name: p for p, name in enumerate(tree.physical_names)}
     combination = np.zeros((len(maps), len(index)))
@@ -323,11 +313,8 @@ def joint_screws(tree: KinematicTree, qpos, xp=np):
 
     Parameters
     ----------
-    tree : KinematicTree
     qpos : array, shape (N, J)
         Joint positions (MuJoCo's ``qpos``).
-    xp : module
-        ``numpy`` or ``jax.numpy``.
 
     Returns
     -------
@@ -376,11 +363,7 @@ def joint_screws(tree: KinematicTree, qpos, xp=np):
 def world_inertias(tree: KinematicTree, pi, rotations, positions, xp=np):
     """Inertial parameters of every moving body in world coordinates, about the world origin.
 
-    Parameters
-    ----------
-    tree : KinematicTree
-    pi : array, shape (len(tree.physical_names),)
-    rotations, positions : arrays from :func:`joint_screws`
+    ``rotations`` and ``positions`` come from :func:`joint_screws`.
 
     Returns
     -------
@@ -439,15 +422,7 @@ def rigid_body_dynamics(tree: KinematicTree, pi, q, qd, xp=np):
     ``pi``), :math:`M_{kl} = s_k^T I^c_l s_l` when ``k`` moves ``l``'s axis, and
     :math:`b_k = s_k^T \sum_b (I_b a_b + v_b \times^* I_b v_b - g_b)` over those bodies.
 
-    Parameters
-    ----------
-    tree : KinematicTree
-    pi : array, shape (len(tree.physical_names),)
-        Inertial parameters of the moving bodies, then armatures; any real values.
-    q, qd : array, shape (N, J)
-        Positions and velocities in the system's coordinates.
-    xp : module
-        ``numpy`` or ``jax.numpy``.
+    ``q``, ``qd`` (N, J) are positions and velocities in the system's coordinates.
 
     Returns
     -------

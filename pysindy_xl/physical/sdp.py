@@ -87,24 +87,11 @@ def realize(structure, beta, reference=None, closeness: float = 1e-6, solver=Non
     residual's norm, not its square, is an exact penalty, and the solver's tolerance bounds
     the norm itself), among them the closest to ``pi_0``.
 
-    Parameters
-    ----------
-    structure : PhysicalStructure
-        Base parameter ``j`` is ``structure.combination[j] @ pi``.
-    beta : array, shape (k,)
-    reference : array, shape (len(structure.names),), optional
-        ``pi_0``; default zeros (then ``epsilon`` weighs ``|pi|^2``).
-    closeness : float, default 1e-6
-        ``epsilon``.
-    solver : str, optional
-        cvxpy solver name; default the first of :data:`DEFAULT_SOLVERS` that succeeds.
-
-    Returns
-    -------
-    pi : ndarray, shape (len(structure.names),)
-    residual : float
-        ``|C pi - beta| / |beta|``: zero (to the solver's tolerance) when ``beta`` is
-        realizable by rigid bodies.
+    Base parameter ``j`` is ``structure.combination[j] @ pi``; ``reference`` is ``pi_0``
+    (default zeros: ``epsilon = closeness`` then weighs ``|pi|^2``); ``solver`` a cvxpy solver
+    name (default: the first of :data:`DEFAULT_SOLVERS` that succeeds). Returns ``(pi,
+    residual)``, ``residual = |C pi - beta| / |beta|`` zero (to the solver's tolerance) when
+    ``beta`` is realizable by rigid bodies.
     """
     cp = _cvxpy()
     beta = np.asarray(beta, dtype=float)
@@ -214,8 +201,7 @@ def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=
         Coefficients held at zero (the terms a sparse fit left out: their base parameters
         are zero, and must be realizable as such too).
     solver : str, optional
-        cvxpy solver name; default the first of :data:`DEFAULT_SOLVERS` that succeeds.
-    regularization : float, default 1e-9
+        As in :func:`realize`.
 
     Returns
     -------

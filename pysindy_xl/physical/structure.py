@@ -84,21 +84,9 @@ class PhysicalStructure:
     @classmethod
     def from_maps(cls, maps, base_columns, friction_columns=(),
                   selectable_columns=()) -> PhysicalStructure:
-        """The structure of base parameters given as ``{physical name: weight}`` maps.
-
-        Parameters
-        ----------
-        maps : sequence of dict
-            One per base parameter (a kinematic catalog's ``parameters``).
-        base_columns : sequence of int
-            The column of each map.
-        friction_columns : sequence of int
-        selectable_columns : sequence of int
-
-        Returns
-        -------
-        PhysicalStructure
-        """
+        """The structure of base parameters given as ``{physical name: weight}`` maps, one per
+        base parameter (a kinematic catalog's ``parameters``), each in its ``base_columns``
+        entry (the other arguments are the fields)."""
         used = list(dict.fromkeys(name for m in maps for name in m))
         bodies = list(dict.fromkeys(name.rsplit(".", 1)[0] for name in used
                                     if name.rsplit(".", 1)[-1] in INERTIAL_PARAMETERS))
@@ -237,20 +225,10 @@ def friction_kind(term, velocity) -> str | None:
 
 
 def catalog_structure(library) -> PhysicalStructure | None:
-    """The physical structure of a fitted catalog's columns, or None when it has none.
-
-    Parameters
-    ----------
-    library : fitted CatalogRepartition
-        Its Lagrange libraries with a ``parameters`` map (a kinematic catalog's) give the base
-        parameters; its classical columns ``qd_c`` and ``tanh(k qd_c)`` (entering the equation
-        of ``c``) the friction.
-
-    Returns
-    -------
-    PhysicalStructure or None
-        None when no library maps its terms to physical parameters.
-    """
+    """The physical structure of a fitted catalog's columns, or None when no library maps its
+    terms to physical parameters: its Lagrange libraries with a ``parameters`` map (a
+    kinematic catalog's) give the base parameters, its classical columns ``qd_c`` and
+    ``tanh(k qd_c)`` (entering the equation of ``c``) the friction."""
     maps, columns = [], []
     for lib, block in zip(library.libraries_, library.slices_, strict=True):
         parameters = getattr(lib, "parameters", None)

@@ -1,7 +1,8 @@
 """Readable forms of an identified coefficient vector: equations, Lagrangian, uncertainty.
 
-Pure functions of a fitted catalog (:class:`~pysindy_xl.CatalogRepartition`) and its
-coefficients; :class:`~pysindy_xl.XLSINDy` prints and returns them.
+Pure functions of a fitted catalog ``library`` (:class:`~pysindy_xl.CatalogRepartition`)
+and its coefficients ``coef`` (shape (F,)); :class:`~pysindy_xl.XLSINDy` prints and returns
+them. ``precision`` is the number of significant digits printed.
 """
 
 from __future__ import annotations
@@ -28,19 +29,7 @@ def significant(expr: sp.Expr, digits: int) -> sp.Expr:
 
 
 def equation_strings(coef: np.ndarray, library, precision: int) -> list[str]:
-    """One ``lhs = forces`` string per coordinate.
-
-    Parameters
-    ----------
-    coef : ndarray, shape (F,)
-    library : fitted CatalogRepartition
-    precision : int
-        Significant digits of the coefficients.
-
-    Returns
-    -------
-    list of str
-    """
+    """One ``lhs = forces`` string per coordinate."""
     matrix = library.symbolic_matrix_
     forces = set(library.force_columns_)
     active = np.flatnonzero(coef)
@@ -55,17 +44,7 @@ def equation_strings(coef: np.ndarray, library, precision: int) -> list[str]:
 
 
 def identified_lagrangian(coef: np.ndarray, library) -> sp.Expr:
-    """The Lagrange terms of ``library`` weighted by ``coef`` (0 without Lagrange terms).
-
-    Parameters
-    ----------
-    coef : ndarray, shape (F,)
-    library : fitted CatalogRepartition
-
-    Returns
-    -------
-    sympy.Expr
-    """
+    """The Lagrange terms of ``library`` weighted by ``coef`` (0 without Lagrange terms)."""
     return sp.Add(*(sp.Float(coef[j]) * library.feature_terms_[j]
                     for j, category in enumerate(library.categories_)
                     if category == "lagrange" and coef[j] != 0))
@@ -73,19 +52,7 @@ def identified_lagrangian(coef: np.ndarray, library) -> sp.Expr:
 
 def uncertainty_lines(names, coef, interval, probability, precision: int) -> list[str]:
     """``name  coefficient  [low, high]  P=p`` for every term any ensemble fit included,
-    most probable first.
-
-    Parameters
-    ----------
-    names : list of str
-    coef : ndarray, shape (F,)
-    interval : ndarray, shape (2, F)
-    probability : ndarray, shape (F,)
-    precision : int
-
-    Returns
-    -------
-    list of str
+    most probable first (``interval`` (2, F) and ``probability`` (F,) of the ensemble).
 
     Examples
     --------
@@ -124,17 +91,7 @@ def has_parameter_map(library) -> bool:
 
 def physical_parameters(coef: np.ndarray, library) -> dict:
     """The identified model in physical terms (see :meth:`XLSINDy.physical_parameters
-    <pysindy_xl.XLSINDy.physical_parameters>`).
-
-    Parameters
-    ----------
-    coef : ndarray, shape (F,)
-    library : fitted CatalogRepartition
-
-    Returns
-    -------
-    dict
-    """
+    <pysindy_xl.XLSINDy.physical_parameters>`), a dict."""
     forces = [coef[j] for j in library.force_columns_ if coef[j] != 0]
     scale = -1.0 / forces[0] if forces else None
     factor = 1.0 if scale is None else scale

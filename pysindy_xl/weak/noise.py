@@ -9,30 +9,26 @@ estimated level, added to the recorded positions and smoothed again, changes the
   correction of the optimizers (:meth:`WeakNoise.moments`).
 * **The covariance of a law's residual.** The rows are not independent: neighbouring test
   functions overlap and the smoother spreads the noise of each sample over its neighbours, so
-  the residual ``r = Theta xi`` of a law is correlated over about one test-function support
-  (on the benchmark systems the residuals of rows half a support apart correlate at -0.4 to
-  -0.56). Least squares weighs these rows as if they were independent. Generalized least
+  the residual ``r = Theta xi`` of a law is correlated over about one test-function support.
+  Least squares weighs these rows as if they were independent. Generalized least
   squares whitens them first: with ``Sigma = C C^T`` the covariance of the residual of a pilot
   law, it regresses ``C^{-1} Theta``. This is the reweighting of WENDy (Bortz, Messenger and
   Dukic, *Bull. Math. Biol.* 85, 2023), with the covariance taken from the draws instead of a
   linearization of the catalog.
 
 The covariance (:meth:`WeakNoise.whitener`) is estimated per run of consecutive test
-functions of one coordinate and trajectory, as stationary. The residual's spread varies
-within a trajectory by a factor of about 1.5 in variance on the benchmark systems, too little
-to pay for estimating it row by row from a few draws. The autocovariance is pooled over the
-runs and draws of the coordinate and trajectory and tapered (Bartlett) to zero beyond twice the
-rows over which the test functions overlap. The taper keeps it positive definite
-(Schur product of two positive-definite sequences) and banded, so the factor is a banded
-Cholesky factor and whitening costs ``O(rows x bandwidth)`` per column.
+functions of one coordinate and trajectory, as stationary: the residual's spread varies too
+little within a trajectory to pay for estimating it row by row from a few draws. The
+autocovariance is pooled over the runs and draws of the coordinate and trajectory and tapered
+(Bartlett) to zero beyond twice the rows over which the test functions overlap. The taper
+keeps it positive definite (Schur product of two positive-definite sequences) and banded, so
+the factor is a banded Cholesky factor and whitening costs ``O(rows x bandwidth)`` per column.
 
-The whitening is partial. The residual's spectrum nearly vanishes at low frequencies (the
+The whitening is partial: the residual's spectrum nearly vanishes at low frequencies (the
 test functions' derivatives) and high ones (their smoothness), which a tapered estimate
-fills in: on the benchmark systems the whitened draws keep a variance of about 0.6 (1 if the
-whitening were exact) and lag correlations of 0.3-0.5, whatever the taper length (2 to 8
-overlaps). A regularized generalized least squares, then: what it gains on forced systems and
-costs on others is measured in ``benchmarks/results/noise_sweep.md`` (``weak`` against
-``weak_ols``).
+fills in, so the whitened draws stay correlated whatever the taper length. A regularized
+generalized least squares, then: what it gains and costs is measured in
+``benchmarks/results/noise_sweep.md`` (``weak`` against ``weak_ols``).
 """
 
 from __future__ import annotations

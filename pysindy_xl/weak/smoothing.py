@@ -22,8 +22,7 @@ both from noisy positions with no hand-set window:
   gains ``H_k = 1 / (1 + lambda (2 sin(pi k / 2N))^(2d))``. On a non-uniform grid (dropped
   samples, variable logging rates) that shortcut is wrong: read in sample order, a smooth
   signal sampled at irregular times has steps that look like white noise (velocity times
-  the spread of the steps; on a 100 Hz record with 30 % of the samples lost, as much as a
-  1 % position noise), so the noise is overestimated and the velocities left 5x too rough.
+  the spread of the steps), so the noise is overestimated and the velocities left too rough.
   There the smoother is solved on the actual grid for each ``lambda`` (one banded LU), with
   the traces estimated by Hutchinson's method (random sign probes, solved with the data as
   extra right-hand sides).
