@@ -285,62 +285,103 @@ class _NotPolynomial(ValueError):
 
 def _reduce_cosine_squares(exponents, coefficients, owners, angles):
     """Rewrite ``cos^2 = 1 - sin^2`` until no cosine power reaches 2 (``owners``, if not None,
-    follow their rows)."""
+    follow their rows).
+
+    Each pass rewrites, in every row with a cosine power >= 2, the first such angle, and puts
+    the unchanged rows first, then the rewritten rows with ``cos^(k-2)``, then those with
+    ``-sin^2 cos^(k-2)``. Rows without such a power stay where a pass puts them, so only
+    the rows rewritten last are looked at again.
+    """
     n = len(angles)
+    cosines = exponents[:, n:2 * n][:, np.asarray(angles, dtype=bool)] if any(angles) else None
+    if cosines is None or len(exponents) == 0 or cosines.max() < 2:
+        return exponents, coefficients, owners
     angle = np.asarray(angles, dtype=bool)
-    while angle.any():
+    done = []  # (exponents, coefficients, owners) of rows that no later pass changes
+    while True:
         high = (exponents[:, n:2 * n] >= 2) & angle
-        rows = np.flatnonzero(high.any(axis=1))
+        reduced = high.any(axis=1)
+        rows = np.flatnonzero(reduced)
         if not len(rows):
             break
         # one reduction per row and pass: the first angle whose cosine power is >= 2
         slot = n + np.argmax(high[rows], axis=1)
-        first = np.zeros(len(exponents), dtype=bool)
-        first[rows] = True
+        kept = ~reduced
+        done.append((exponents[kept], coefficients[kept],
+                     None if owners is None else owners[kept]))
         base = exponents[rows]
         base[np.arange(len(base)), slot] -= 2
         with_sine = base.copy()
         with_sine[np.arange(len(base)), slot - n] += 2
-        exponents = np.vstack([exponents[~first], base, with_sine])
-        coefficients = np.concatenate([coefficients[~first], coefficients[rows],
-                                       -coefficients[rows]])
+        exponents = np.vstack([base, with_sine])
+        coefficients = np.concatenate([coefficients[rows], -coefficients[rows]])
         if owners is not None:
-            owners = np.concatenate([owners[~first], owners[rows], owners[rows]])
+            owners = np.concatenate([owners[rows], owners[rows]])
+    exponents = np.vstack([d[0] for d in done] + [exponents])
+    coefficients = np.concatenate([d[1] for d in done] + [coefficients])
+    if owners is not None:
+        owners = np.concatenate([d[2] for d in done] + [owners])
     return exponents, coefficients, owners
 
 
-def _unique_rows(rows) -> tuple[np.ndarray, np.ndarray]:
-    """``(index, inverse)`` of ``numpy.unique`` on the rows of an int16 array read as bytes
-    (first occurrences, rows in the order of their bytes), from one int64 key per row.
+def _sorted_groups(rows) -> tuple[np.ndarray, np.ndarray]:
+    """``(order, starts)``: a stable order of the rows of an int16 array that sorts them as
+    ``numpy.unique`` sorts rows read as bytes, and where each group of equal rows starts in
+    it.
 
     Entries in ``[0, 256)`` compare as bytes as they do as numbers: each column that varies
     is a digit of a mixed-radix number, the first column most significant. Other entries, or
     rows whose digits overflow an int64, are compared as bytes.
     """
     rows = np.ascontiguousarray(rows, dtype=np.int16)
-    low = rows.min(axis=0, initial=0)
-    high = rows.max(axis=0, initial=0)
+    if len(rows) < 2:
+        return np.arange(len(rows)), np.zeros(min(len(rows), 1), dtype=np.intp)
+    low = rows.min(axis=0)
+    high = rows.max(axis=0)
     used = np.flatnonzero(high > low)
     radix = (high[used] - low[used]).astype(np.int64) + 1
-    if low.min(initial=0) >= 0 and high.max(initial=0) < 256 and np.sum(np.log2(radix)) < 62:
-        keys = np.zeros(len(rows), dtype=np.int64)
-        for column, base in zip(used.tolist(), radix.tolist(), strict=True):
-            keys *= base
-            keys += rows[:, column]
-            keys -= low[column]
+    if low.min() >= 0 and high.max() < 256 and np.sum(np.log2(radix)) < 62:
+        weights = np.zeros(rows.shape[1], dtype=np.int64)
+        weights[used] = np.cumprod(np.append(1, radix[:0:-1]))[::-1]
+        keys = rows @ weights  # the constant offset of the lows keeps the order
     else:
         keys = rows.view(np.dtype((np.void, 2 * rows.shape[1]))).ravel()
-    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
-    return first, inverse.ravel()
+    order = np.argsort(keys, kind="stable")
+    ordered = keys[order]
+    return order, np.flatnonzero(np.append(True, ordered[1:] != ordered[:-1]))
+
+
+def _unique_rows(rows) -> tuple[np.ndarray, np.ndarray]:
+    """``(index, inverse)`` of ``numpy.unique`` on the rows of an int16 array read as bytes
+    (first occurrences, rows in the order of their bytes); see :func:`_sorted_groups`."""
+    order, starts = _sorted_groups(rows)
+    group = np.zeros(len(order), dtype=np.intp)
+    group[starts[1:]] = 1
+    inverse = np.empty(len(order), dtype=np.intp)
+    inverse[order] = np.cumsum(group)
+    return order[starts], inverse
+
+
+def _merge(exponents, coefficients, key_rows=None):
+    """The distinct rows (sorted) and the sums of their coefficients, each sum taken in the
+    order of the rows (as ``numpy.bincount``), and which input row each distinct row first
+    is."""
+    order, starts = _sorted_groups(exponents if key_rows is None else key_rows)
+    group = np.zeros(len(order), dtype=np.intp)
+    group[starts[1:]] = 1
+    merged = np.bincount(np.cumsum(group), weights=coefficients[order], minlength=len(starts))
+    return order[starts], merged
 
 
 def _normalize(exponents, coefficients, angles):
     """Rewrite cos^2 = 1 - sin^2, merge equal monomials, drop zero and round-off terms."""
     exponents, coefficients, _ = _reduce_cosine_squares(exponents, coefficients, None, angles)
-    if len(coefficients) == 0:
-        return exponents, coefficients
-    first, inverse = _unique_rows(exponents)
-    merged = np.bincount(inverse, weights=coefficients, minlength=len(first))
+    if len(coefficients) <= 1:  # the rule below for one term, without arrays
+        value = float(coefficients[0]) if len(coefficients) else 0.0
+        if abs(value) > _ROUND_OFF * max(abs(value), 1.0):
+            return exponents, coefficients
+        return exponents[:0], coefficients[:0]
+    first, merged = _merge(exponents, coefficients)
     scale = np.abs(coefficients).max()
     keep = np.abs(merged) > _ROUND_OFF * max(scale, 1.0)
     return exponents[first[keep]], merged[keep]
@@ -460,8 +501,8 @@ def _normalize_owned(exponents, coefficients, owners, angles, count):
     if len(coefficients) == 0:
         return exponents, coefficients, owners
     # the owner first in each key: rows group by owner, and within an owner sort as alone
-    first, inverse = _unique_rows(np.column_stack([owners.astype(np.int16), exponents]))
-    merged = np.bincount(inverse, weights=coefficients, minlength=len(first))
+    first, merged = _merge(exponents, coefficients,
+                           np.column_stack([owners.astype(np.int16), exponents]))
     scale = np.zeros(count)
     np.maximum.at(scale, owners, np.abs(coefficients))
     kept_owners = owners[first]
