@@ -324,53 +324,70 @@ def _reduce_cosine_squares(exponents, coefficients, owners, angles):
     return exponents, coefficients, owners
 
 
-def _sorted_groups(rows) -> tuple[np.ndarray, np.ndarray]:
-    """``(order, starts)``: a stable order of the rows of an int16 array that sorts them as
-    ``numpy.unique`` sorts rows read as bytes, and where each group of equal rows starts in
-    it.
+_CHUNK = 8192  # rows turned into keys at once (kept in cache)
 
-    Entries in ``[0, 256)`` compare as bytes as they do as numbers: each column that varies
-    is a digit of a mixed-radix number, the first column most significant. Other entries, or
-    rows whose digits overflow an int64, are compared as bytes.
+
+def _row_keys(rows, major=None):
+    """One key per row of a non-negative int16 array, ordered as the rows are
+    lexicographically (``major``, if given, before the first column), or None when the
+    entries are negative, reach 256 or need more than 62 bits.
+
+    Each column is a bit field as wide as the largest entry needs, the first column most
+    significant; the keys are exact integers, as float64 (one BLAS product per chunk) when
+    they fit in 52 bits.
+    """
+    n_rows, width = rows.shape
+    wide = n_rows // 64 * 64  # one reduction with a long inner loop, then fold
+    ored = np.bitwise_or.reduce(rows[wide:], axis=0)
+    if wide:
+        ored |= np.bitwise_or.reduce(np.bitwise_or.reduce(
+            rows[:wide].reshape(-1, 64 * width), axis=0).reshape(64, width), axis=0)
+    if ored.min() < 0 or ored.max() >= 256:
+        return None
+    bits = np.ceil(np.log2(ored.astype(float) + 1.0)).astype(np.int64)
+    major_bits = 0 if major is None else int(major.max(initial=0)).bit_length()
+    total = int(bits.sum()) + major_bits
+    if total > 62:
+        return None
+    shifts = np.cumsum(bits[::-1])[::-1] - bits
+    dtype = float if total <= 52 else np.int64
+    weights = (np.int64(1) << shifts).astype(dtype)
+    keys = np.empty(n_rows, dtype=dtype)
+    for start in range(0, n_rows, _CHUNK):
+        np.matmul(rows[start:start + _CHUNK].astype(dtype), weights,
+                  out=keys[start:start + _CHUNK])
+    if major_bits:
+        keys += major.astype(dtype) * dtype(1 << (total - major_bits))
+    return keys
+
+
+def _unique_rows(rows, major=None) -> tuple[np.ndarray, np.ndarray]:
+    """``(index, inverse)`` of ``numpy.unique`` on the rows of an int16 array read as bytes
+    (first occurrences, rows in the order of their bytes; ``major``, an array of small
+    non-negative integers, sorts before the first column).
+
+    Entries in ``[0, 256)`` compare as bytes as they do as numbers, so such rows sort by
+    one integer key per row (:func:`_row_keys`); other rows are compared as bytes.
     """
     rows = np.ascontiguousarray(rows, dtype=np.int16)
     if len(rows) < 2:
-        return np.arange(len(rows)), np.zeros(min(len(rows), 1), dtype=np.intp)
-    low = rows.min(axis=0)
-    high = rows.max(axis=0)
-    used = np.flatnonzero(high > low)
-    radix = (high[used] - low[used]).astype(np.int64) + 1
-    if low.min() >= 0 and high.max() < 256 and np.sum(np.log2(radix)) < 62:
-        weights = np.zeros(rows.shape[1], dtype=np.int64)
-        weights[used] = np.cumprod(np.append(1, radix[:0:-1]))[::-1]
-        keys = rows @ weights  # the constant offset of the lows keeps the order
-    else:
+        return np.arange(len(rows)), np.zeros(len(rows), dtype=np.intp)
+    keys = _row_keys(rows, major)
+    if keys is None:
+        if major is not None:
+            rows = np.column_stack([major.astype(np.int16), rows])
         keys = rows.view(np.dtype((np.void, 2 * rows.shape[1]))).ravel()
-    order = np.argsort(keys, kind="stable")
+        _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+        return first, inverse.ravel()
+    order = np.argsort(keys)  # not stable: the first of each group is its smallest index
     ordered = keys[order]
-    return order, np.flatnonzero(np.append(True, ordered[1:] != ordered[:-1]))
-
-
-def _unique_rows(rows) -> tuple[np.ndarray, np.ndarray]:
-    """``(index, inverse)`` of ``numpy.unique`` on the rows of an int16 array read as bytes
-    (first occurrences, rows in the order of their bytes); see :func:`_sorted_groups`."""
-    order, starts = _sorted_groups(rows)
-    group = np.zeros(len(order), dtype=np.intp)
-    group[starts[1:]] = 1
-    inverse = np.empty(len(order), dtype=np.intp)
-    inverse[order] = np.cumsum(group)
-    return order[starts], inverse
-
-
-def _merge(exponents, coefficients, key_rows=None):
-    """The distinct rows (sorted) and the sums of their coefficients, each sum taken in the
-    order of the rows (as ``numpy.bincount``), and which input row each distinct row first
-    is."""
-    order, starts = _sorted_groups(exponents if key_rows is None else key_rows)
-    group = np.zeros(len(order), dtype=np.intp)
-    group[starts[1:]] = 1
-    merged = np.bincount(np.cumsum(group), weights=coefficients[order], minlength=len(starts))
-    return order[starts], merged
+    new = np.empty(len(keys), dtype=bool)
+    new[0] = True
+    np.not_equal(ordered[1:], ordered[:-1], out=new[1:])
+    starts = np.flatnonzero(new)
+    inverse = np.empty(len(keys), dtype=np.intp)
+    inverse[order] = np.cumsum(new) - 1
+    return np.minimum.reduceat(order, starts), inverse
 
 
 def _normalize(exponents, coefficients, angles):
@@ -381,7 +398,8 @@ def _normalize(exponents, coefficients, angles):
         if abs(value) > _ROUND_OFF * max(abs(value), 1.0):
             return exponents, coefficients
         return exponents[:0], coefficients[:0]
-    first, merged = _merge(exponents, coefficients)
+    first, inverse = _unique_rows(exponents)
+    merged = np.bincount(inverse, weights=coefficients, minlength=len(first))
     scale = np.abs(coefficients).max()
     keep = np.abs(merged) > _ROUND_OFF * max(scale, 1.0)
     return exponents[first[keep]], merged[keep]
@@ -501,8 +519,8 @@ def _normalize_owned(exponents, coefficients, owners, angles, count):
     if len(coefficients) == 0:
         return exponents, coefficients, owners
     # the owner first in each key: rows group by owner, and within an owner sort as alone
-    first, merged = _merge(exponents, coefficients,
-                           np.column_stack([owners.astype(np.int16), exponents]))
+    first, inverse = _unique_rows(exponents, major=owners)
+    merged = np.bincount(inverse, weights=coefficients, minlength=len(first))
     scale = np.zeros(count)
     np.maximum.at(scale, owners, np.abs(coefficients))
     kept_owners = owners[first]
