@@ -23,7 +23,6 @@ __all__ = ["TrigPolynomial", "euler_lagrange_many", "partial_derivatives_many",
 
 # Coefficients below this fraction of the largest one are round-off of float arithmetic.
 _ROUND_OFF = 1e-13
-_BLOCK_VALUES = 1 << 21  # factor values gathered at once by evaluate_many
 
 
 class TrigPolynomial:
@@ -560,21 +559,27 @@ def evaluate_many(polynomials, values: np.ndarray) -> np.ndarray:
     first, inverse = _unique_rows(exponents)
     distinct = exponents[first]
     # a monomial is the product of its factors in the order of their slots (the powers of the
-    # slot values, each computed once), multiplied left to right by a reduction over blocks
-    # of monomials
+    # slot values, each computed once), multiplied left to right, all monomials of the same
+    # number of factors at once
     rows, slots = np.nonzero(distinct)  # row by row, slots increasing
     base = int(distinct.max(initial=0)) + 1
-    codes, factors = np.unique(slots * base + distinct[rows, slots], return_inverse=True)
+    codes = slots * base + distinct[rows, slots]
+    present = np.zeros(width * base, dtype=bool)
+    present[codes] = True
+    factors = (np.cumsum(present) - 1)[codes]
+    codes = np.flatnonzero(present)
     table = values.T[codes // base] ** (codes % base)[:, None]
-    starts = np.searchsorted(rows, np.arange(len(distinct)))
-    used = np.flatnonzero(np.diff(np.append(starts, len(rows))))  # not the constant
-    monomials = np.ones((len(distinct), values.shape[0]))  # a row per monomial
-    for block in np.array_split(used, -(-len(rows) * values.shape[0] // _BLOCK_VALUES)):
-        if len(block):
-            first_factor = starts[block[0]]
-            stop = starts[block[-1] + 1] if block[-1] + 1 < len(starts) else len(rows)
-            monomials[block] = np.multiply.reduceat(table[factors.ravel()[first_factor:stop]],
-                                                    starts[block] - first_factor, axis=0)
+    counts = np.bincount(rows, minlength=len(distinct))
+    starts = np.cumsum(counts) - counts
+    monomials = np.empty((len(distinct), values.shape[0]))  # a row per monomial
+    monomials[counts == 0] = 1.0
+    for count in np.unique(counts[counts > 0]).tolist():
+        members = np.flatnonzero(counts == count)
+        where = starts[members]
+        product = table[factors[where]]
+        for k in range(1, count):
+            product *= table[factors[where + k]]
+        monomials[members] = product
     mapping = scipy.sparse.csr_matrix((coefficients, (inverse.ravel(), owner)),
                                       shape=(len(distinct), len(polynomials)))
     return np.asarray((mapping.T @ monomials).T)
