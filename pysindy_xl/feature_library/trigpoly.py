@@ -292,10 +292,9 @@ def _reduce_cosine_squares(exponents, coefficients, owners, angles):
     the rows rewritten last are looked at again.
     """
     n = len(angles)
-    cosines = exponents[:, n:2 * n][:, np.asarray(angles, dtype=bool)] if any(angles) else None
-    if cosines is None or len(exponents) == 0 or cosines.max() < 2:
-        return exponents, coefficients, owners
     angle = np.asarray(angles, dtype=bool)
+    if not angle.any() or not len(exponents) or _column_or(exponents)[n:2 * n][angle].max() < 2:
+        return exponents, coefficients, owners  # (an entry >= 2 has a bit >= 2)
     done = []  # (exponents, coefficients, owners) of rows that no later pass changes
     while True:
         high = (exponents[:, n:2 * n] >= 2) & angle
@@ -326,6 +325,17 @@ def _reduce_cosine_squares(exponents, coefficients, owners, angles):
 _CHUNK = 8192  # rows turned into keys at once (kept in cache)
 
 
+def _column_or(rows) -> np.ndarray:
+    """The bitwise or of each column of a C-contiguous 2-d int array (one reduction with a
+    long inner loop, then a fold)."""
+    wide = len(rows) // 64 * 64
+    ored = np.bitwise_or.reduce(rows[wide:], axis=0)
+    if wide:
+        ored |= np.bitwise_or.reduce(np.bitwise_or.reduce(
+            rows[:wide].reshape(-1, 64 * rows.shape[1]), axis=0).reshape(64, -1), axis=0)
+    return ored
+
+
 def _row_keys(rows, major=None):
     """One key per row of a non-negative int16 array, ordered as the rows are
     lexicographically (``major``, if given, before the first column), or None when the
@@ -336,11 +346,7 @@ def _row_keys(rows, major=None):
     they fit in 52 bits.
     """
     n_rows, width = rows.shape
-    wide = n_rows // 64 * 64  # one reduction with a long inner loop, then fold
-    ored = np.bitwise_or.reduce(rows[wide:], axis=0)
-    if wide:
-        ored |= np.bitwise_or.reduce(np.bitwise_or.reduce(
-            rows[:wide].reshape(-1, 64 * width), axis=0).reshape(64, width), axis=0)
+    ored = _column_or(rows)
     if ored.min() < 0 or ored.max() >= 256:
         return None
     bits = np.ceil(np.log2(ored.astype(float) + 1.0)).astype(np.int64)
