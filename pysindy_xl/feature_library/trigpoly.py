@@ -443,7 +443,8 @@ def euler_lagrange_many(polynomials) -> list[list[TrigPolynomial]]:
             pieces.append(velocity.diff_slot(2 * n + j).times_slot(3 * n + j))
         derivative = _Stack.sum(pieces)
         rows.append(_Stack.sum([derivative, stack.diff_position(i).negative()]))
-    return [[row.part(k) for row in rows] for k in range(count)]
+    parts = [row.parts() for row in rows]
+    return [[part[k] for part in parts] for k in range(count)]
 
 
 def partial_derivatives_many(polynomials) -> list:
@@ -451,7 +452,7 @@ def partial_derivatives_many(polynomials) -> list:
     of many polynomials at once, bit for bit as :meth:`TrigPolynomial.diff_velocity` and
     :meth:`TrigPolynomial.diff_position` of each (see :func:`euler_lagrange_many`)."""
     stack, n = _Stack.of(polynomials), len(polynomials[0].angles)
-    return [[[derivative.part(k) for k in range(len(polynomials))]
+    return [[derivative.parts()
              for derivative in (stack.diff_slot(2 * n + c) if part == 0
                                 else stack.diff_position(c) for c in range(n))]
             for part in (0, 1)]
@@ -511,10 +512,12 @@ class _Stack:
                            np.concatenate([s.coefficients for s in stacks]),
                            np.concatenate([s.owners for s in stacks]), normalize=True)
 
-    def part(self, k) -> TrigPolynomial:
-        rows = self.owners == k
-        return TrigPolynomial(self.exponents[rows], self.coefficients[rows], self.angles,
-                              normalize=False)
+    def parts(self) -> list[TrigPolynomial]:
+        """The polynomial of each owner (the rows are sorted by owner)."""
+        bounds = np.searchsorted(self.owners, np.arange(self.count + 1)).tolist()
+        return [TrigPolynomial(self.exponents[a:b], self.coefficients[a:b], self.angles,
+                               normalize=False)
+                for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
 
 def _normalize_owned(exponents, coefficients, owners, angles, count):
