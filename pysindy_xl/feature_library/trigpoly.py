@@ -13,6 +13,8 @@ for a linear coordinate), ``[n, 2n)`` ``cos q_j`` (unused for a linear coordinat
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import scipy.sparse
 import sympy as sp
@@ -59,7 +61,10 @@ class TrigPolynomial:
     @classmethod
     def constant(cls, value: float, angles) -> TrigPolynomial:
         """The constant polynomial ``value``."""
-        return cls(np.zeros((1, 4 * len(angles))), [float(value)], angles)
+        value = float(value)
+        keep = abs(value) > _ROUND_OFF * max(abs(value), 1.0)  # as normalized
+        return cls(np.zeros((int(keep), 4 * len(angles)), dtype=np.int16), [value] * keep,
+                   angles, normalize=False)
 
     @classmethod
     def slot(cls, n: int, index: int, angles) -> TrigPolynomial:
@@ -282,6 +287,13 @@ class _NotPolynomial(ValueError):
     """A factor that is not a power of ``sin q``, ``cos q``, ``q`` or ``qd``."""
 
 
+@functools.lru_cache(maxsize=64)
+def _angle_slots(angles):
+    """Which coordinates are angles (bool array) and their cosine slots."""
+    angle = np.asarray(angles, dtype=bool)
+    return angle, len(angles) + np.flatnonzero(angle)
+
+
 def _reduce_cosine_squares(exponents, coefficients, owners, angles):
     """Rewrite ``cos^2 = 1 - sin^2`` until no cosine power reaches 2 (``owners``, if not None,
     follow their rows).
@@ -292,9 +304,11 @@ def _reduce_cosine_squares(exponents, coefficients, owners, angles):
     the rows rewritten last are looked at again.
     """
     n = len(angles)
-    angle = np.asarray(angles, dtype=bool)
-    if not angle.any() or not len(exponents) or _column_or(exponents)[n:2 * n][angle].max() < 2:
-        return exponents, coefficients, owners  # (an entry >= 2 has a bit >= 2)
+    angle, cosines = _angle_slots(angles)
+    if not len(cosines) or not len(exponents) or (
+            exponents[:, cosines] if len(exponents) <= _FEW
+            else _column_or(exponents)[cosines]).max() < 2:  # (an entry >= 2 has a bit >= 2)
+        return exponents, coefficients, owners
     done = []  # (exponents, coefficients, owners) of rows that no later pass changes
     while True:
         high = (exponents[:, n:2 * n] >= 2) & angle
@@ -323,6 +337,7 @@ def _reduce_cosine_squares(exponents, coefficients, owners, angles):
 
 
 _CHUNK = 8192  # rows turned into keys at once (kept in cache)
+_FEW = 32  # fewer rows are sorted as Python lists
 
 
 def _column_or(rows) -> np.ndarray:
@@ -377,6 +392,16 @@ def _unique_rows(rows, major=None) -> tuple[np.ndarray, np.ndarray]:
     rows = np.ascontiguousarray(rows, dtype=np.int16)
     if len(rows) < 2:
         return np.arange(len(rows)), np.zeros(len(rows), dtype=np.intp)
+    if len(rows) <= _FEW and major is None and rows.min() >= 0 and rows.max() < 256:
+        # a few rows: sorted as lists (stable, so each group starts with its first row)
+        listed = rows.tolist()
+        order = sorted(range(len(listed)), key=listed.__getitem__)
+        first, inverse = [], [0] * len(listed)
+        for k in order:
+            if not first or listed[k] != listed[first[-1]]:
+                first.append(k)
+            inverse[k] = len(first) - 1
+        return np.array(first, dtype=np.intp), np.array(inverse, dtype=np.intp)
     keys = _row_keys(rows, major)
     if keys is None:
         if major is not None:
