@@ -390,8 +390,8 @@ def _unique_rows(rows, major=None) -> tuple[np.ndarray, np.ndarray]:
     one integer key per row (:func:`_row_keys`); other rows are compared as bytes.
     """
     rows = np.ascontiguousarray(rows, dtype=np.int16)
-    if len(rows) < 2:
-        return np.arange(len(rows)), np.zeros(len(rows), dtype=np.intp)
+    if len(rows) < 2 or not rows.shape[1]:  # (rows without columns are all equal)
+        return np.arange(min(len(rows), 1)), np.zeros(len(rows), dtype=np.intp)
     if len(rows) <= _FEW and major is None and rows.min() >= 0 and rows.max() < 256:
         # a few rows: sorted as lists (stable, so each group starts with its first row)
         listed = rows.tolist()
