@@ -283,15 +283,13 @@ class KinematicCatalog:
     def _quantity(self, key) -> list:
         """Per term, the polynomials of ``key``: mass-matrix entries or bias forces."""
         if key not in self._compiled:
-            n = self.coords.n
-            rows = []
-            for term in self._polynomials:
-                if key == "mass":
-                    momenta = [term.diff_velocity(i) for i in range(n)]
-                    rows.append([p.diff_velocity(k) for p in momenta for k in range(n)])
-                else:  # the equations with qdd = 0 (and qd = 0 for gravity)
-                    rest = key == "gravity"
-                    rows.append([e.at_rest(velocities=rest) for e in term.euler_lagrange()])
+            n, terms = self.coords.n, self._polynomials
+            if key == "mass":
+                rows = [[p.diff_velocity(i).diff_velocity(k) for i in range(n) for k in range(n)]
+                        for p in terms]
+            else:  # the equations (derived with the terms) with qdd = 0 (and qd = 0: gravity)
+                rows = [[e.at_rest(velocities=key == "gravity") for e in column]
+                        for column in self.lagrange_terms.columns]
             self._compiled[key] = rows
         return self._compiled[key]
 
@@ -447,8 +445,9 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
 
     Every moving body contributes the ten functions of ``(q, qd)`` that multiply its inertial
     parameters, every joint its armature ``qvel^2 / 2``; the set is reduced to independent
-    Euler-Lagrange columns (base parameters, see the module docstring). Results are cached by
-    model text, coordinates and options.
+    Euler-Lagrange columns (base parameters, see the module docstring). Results are cached in
+    memory by model text, coordinates and options, and the derivation on disk by the model's
+    kinematic content (``PYSINDY_XL_CACHE=off`` turns that off; see ``_derivation_cache``).
 
     Parameters
     ----------
@@ -539,8 +538,7 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
 
 
 def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
-    mujoco = import_mujoco()
-    coords = system.coords
+    mujoco, coords = import_mujoco(), system.coords
     bodies = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}"
               for b in range(model.nbody)]
     digest = _derivation_cache.key(system, model, bodies, seed)
@@ -552,10 +550,8 @@ def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
     names, combination, kept = derived["names"], derived["combination"], derived["terms"]
     values = [x for b in derived["bodies"] for x in physical_values(model, b)]
     values += [float(model.dof_armature[model.jnt_dofadr[k]]) for k in range(model.njnt)]
-    parameters = [
-        {names[p]: float(combination[j, p]) for p in np.flatnonzero(combination[j])}
-        for j in range(len(kept))
-    ]
+    parameters = [{names[p]: float(combination[j, p]) for p in np.flatnonzero(combination[j])}
+                  for j in range(len(kept))]
     classical_terms, mask, kinds, classical_values = classical_candidates(
         system, model, coulomb, coulomb_scale)
     return KinematicCatalog(
