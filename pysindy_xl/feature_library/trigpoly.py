@@ -298,41 +298,45 @@ def _reduce_cosine_squares(exponents, coefficients, owners, angles):
     """Rewrite ``cos^2 = 1 - sin^2`` until no cosine power reaches 2 (``owners``, if not None,
     follow their rows).
 
-    Each pass rewrites, in every row with a cosine power >= 2, the first such angle, and puts
-    the unchanged rows first, then the rewritten rows with ``cos^(k-2)``, then those with
-    ``-sin^2 cos^(k-2)``. Rows without such a power stay where a pass puts them, so only
-    the rows rewritten last are looked at again.
+    A row with ``p`` halves of cosine powers (``sum_j floor(k_j / 2)``) becomes ``2^p`` rows:
+    each half either dropped or traded for ``-sin^2``. The rows come in the order of
+    rewriting one half per pass, angles in order (the unchanged rows first, then the
+    rewritten rows with ``cos^(k-2)``, then those with ``-sin^2 cos^(k-2)``, pass after
+    pass): by ``p``, then by the choices of the last pass to the first, then by row.
     """
-    n = len(angles)
     angle, cosines = _angle_slots(angles)
     if not len(cosines) or not len(exponents) or (
             exponents[:, cosines] if len(exponents) <= _FEW
             else _column_or(exponents)[cosines]).max() < 2:  # (an entry >= 2 has a bit >= 2)
         return exponents, coefficients, owners
-    done = []  # (exponents, coefficients, owners) of rows that no later pass changes
-    while True:
-        high = (exponents[:, n:2 * n] >= 2) & angle
-        reduced = high.any(axis=1)
-        rows = np.flatnonzero(reduced)
+    halves = exponents[:, cosines] // 2
+    passes = halves.sum(axis=1)
+    pieces = []  # (exponents, coefficients, owners) by number of passes
+    for count in range(int(passes.max()) + 1):
+        rows = np.flatnonzero(passes == count)
         if not len(rows):
-            break
-        # one reduction per row and pass: the first angle whose cosine power is >= 2
-        slot = n + np.argmax(high[rows], axis=1)
-        kept = ~reduced
-        done.append((exponents[kept], coefficients[kept],
-                     None if owners is None else owners[kept]))
+            continue
         base = exponents[rows]
-        base[np.arange(len(base)), slot] -= 2
-        with_sine = base.copy()
-        with_sine[np.arange(len(base)), slot - n] += 2
-        exponents = np.vstack([base, with_sine])
-        coefficients = np.concatenate([coefficients[rows], -coefficients[rows]])
-        if owners is not None:
-            owners = np.concatenate([owners[rows], owners[rows]])
-    exponents = np.vstack([d[0] for d in done] + [exponents])
-    coefficients = np.concatenate([d[1] for d in done] + [coefficients])
+        if count:
+            base[:, cosines] %= 2
+            # each pass's angle (its sine slot), and each child's choices (bit i: pass i)
+            sines = np.repeat(np.tile(cosines - len(angles), len(rows)),
+                              halves[rows].ravel()).reshape(len(rows), count)
+            choices = (np.arange(2 ** count)[:, None] >> np.arange(count)) & 1
+            base = np.repeat(base[None], 2 ** count, axis=0)
+            for i in range(count):
+                base[:, np.arange(len(rows)), sines[:, i]] += 2 * choices[:, i:i + 1].astype(
+                    np.int16)
+            signs = np.where(choices.sum(axis=1) % 2, -1.0, 1.0)
+            pieces.append((base.reshape(-1, exponents.shape[1]),
+                           (signs[:, None] * coefficients[rows]).ravel(),
+                           None if owners is None else np.tile(owners[rows], 2 ** count)))
+        else:
+            pieces.append((base, coefficients[rows], None if owners is None else owners[rows]))
+    exponents = np.vstack([p[0] for p in pieces])
+    coefficients = np.concatenate([p[1] for p in pieces])
     if owners is not None:
-        owners = np.concatenate([d[2] for d in done] + [owners])
+        owners = np.concatenate([p[2] for p in pieces])
     return exponents, coefficients, owners
 
 
