@@ -22,6 +22,7 @@ import glob
 import hashlib
 import os
 import tempfile
+import zipfile
 
 import numpy as np
 
@@ -140,6 +141,6 @@ def load(digest, angles) -> dict | None:
                        "combination": data["combination"].astype(float),
                        "n_candidates": int(data["n_candidates"]), "terms": terms,
                        "columns": [columns[k * n:(k + 1) * n] for k in range(len(terms))]}
-    except (OSError, KeyError, ValueError, EOFError):
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
         return None
     return derived if len(columns) == n * len(terms) else None
