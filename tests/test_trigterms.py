@@ -119,7 +119,7 @@ def test_euler_lagrange_many_is_each_polynomials_bit_for_bit(angles):
 def test_unique_rows_is_numpys_unique_of_the_row_bytes():
     """One int64 key per row sorts and groups rows as their bytes do, including entries a
     key cannot hold (negative or past one byte, compared as bytes)."""
-    from pysindy_xl.feature_library.trigpoly import _unique_rows
+    from pysindy_xl.feature_library._monomials import _unique_rows
 
     rng = np.random.default_rng(3)
     for high in (1, 3, 300, 40_000):
@@ -206,11 +206,8 @@ def _cosine_squares_pass_by_pass(exponents, coefficients, owners, angles):
 def test_cosine_squares_rewrite_row_for_row_and_keep_the_values():
     """High cosine powers of several angles become the rows (same order, same bits) of the
     pass-by-pass rewriting, and the polynomial keeps its values (cos^2 + sin^2 = 1)."""
-    from pysindy_xl.feature_library.trigpoly import (
-        _reduce_cosine_squares,
-        evaluate_many,
-        state_values,
-    )
+    from pysindy_xl.feature_library._monomials import _reduce_cosine_squares
+    from pysindy_xl.feature_library.trigpoly import evaluate_many, state_values
 
     angles = (True, False, True, True)
     rng = np.random.default_rng(11)

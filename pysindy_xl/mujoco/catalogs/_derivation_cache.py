@@ -51,7 +51,9 @@ def _code_digest() -> str | None:
     digest = hashlib.sha256(f"{_FORMAT} {np.__version__} {import_mujoco().__version__}".encode())
     here = os.path.dirname(os.path.abspath(__file__))
     try:
-        for path in [trigpoly.__file__] + [os.path.join(here, name) for name in _SOURCES]:
+        polynomials = os.path.dirname(os.path.abspath(trigpoly.__file__))
+        for path in ([os.path.join(polynomials, name) for name in ("trigpoly.py", "_monomials.py")]
+                     + [os.path.join(here, name) for name in _SOURCES]):
             with open(path, "rb") as f:
                 digest.update(f.read())
     except OSError:
