@@ -13,7 +13,7 @@ import pytest
 from kinematic_models import SPATIAL_ARM
 
 from pysindy_xl.mujoco import MJCFSystem
-from pysindy_xl.mujoco.catalogs import kinematic
+from pysindy_xl.mujoco.catalogs import _derivation_cache, kinematic
 from pysindy_xl.mujoco.catalogs.kinematic import kinematic_catalog
 
 
@@ -58,7 +58,7 @@ def test_a_second_derivation_is_read_back_identical(cache, monkeypatch):
     np.testing.assert_array_equal(first.base_parameters, second.base_parameters)
 
 
-def test_other_masses_hit_and_other_kinematics_miss(cache, monkeypatch):
+def test_other_masses_hit_other_kinematics_or_code_miss(cache, monkeypatch):
     kinematic_catalog(SPATIAL_ARM)
     kinematic._CACHE.clear()
     heavier = SPATIAL_ARM.replace('mass="1.0"', 'mass="3.0"')
@@ -68,6 +68,10 @@ def test_other_masses_hit_and_other_kinematics_miss(cache, monkeypatch):
         catalog = kinematic_catalog(MJCFSystem(heavier))  # same kinematics: read back
         with pytest.raises(AssertionError, match="derived although cached"):
             kinematic_catalog(moved)
+        kinematic._CACHE.clear()  # other deriving code: other keys
+        patch.setattr(_derivation_cache, "_code_digest", lambda: "another version")
+        with pytest.raises(AssertionError, match="derived although cached"):
+            kinematic_catalog(MJCFSystem(heavier))
     # the base parameters of the read-back derivation are those of the heavier arm
     model = mujoco.MjModel.from_xml_string(heavier)
     data = mujoco.MjData(model)
