@@ -21,6 +21,8 @@ from mpmath import libmp as mlib
 
 from ._monomials import _ROUND_OFF, _normalize, _normalize_owned, _unique_rows
 
+_BLOCK_VALUES = 1 << 17  # monomial values multiplied at once by evaluate_many
+
 __all__ = ["TrigPolynomial", "euler_lagrange_many", "partial_derivatives_many",
            "evaluate_many", "state_values"]
 
@@ -442,13 +444,16 @@ def evaluate_many(polynomials, values: np.ndarray) -> np.ndarray:
     starts = np.cumsum(counts) - counts
     monomials = np.empty((len(distinct), values.shape[0]))  # a row per monomial
     monomials[counts == 0] = 1.0
+    step = max(1, _BLOCK_VALUES // values.shape[0])  # blocks of rows: memory reused
     for count in np.unique(counts[counts > 0]).tolist():
-        members = np.flatnonzero(counts == count)
-        where = starts[members]
-        product = table[factors[where]]
-        for k in range(1, count):
-            product *= table[factors[where + k]]
-        monomials[members] = product
+        rows_of_count = np.flatnonzero(counts == count)
+        for start in range(0, len(rows_of_count), step):
+            members = rows_of_count[start:start + step]
+            where = starts[members]
+            product = table[factors[where]]
+            for k in range(1, count):
+                product *= table[factors[where + k]]
+            monomials[members] = product
     mapping = scipy.sparse.csr_matrix((coefficients, (inverse.ravel(), owner)),
                                       shape=(len(distinct), len(polynomials)))
     return np.asarray((mapping.T @ monomials).T)
