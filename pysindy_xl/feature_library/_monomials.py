@@ -150,9 +150,8 @@ def _normalize(exponents, coefficients, angles):
     exponents, coefficients, _ = _reduce_cosine_squares(exponents, coefficients, None, angles)
     if len(coefficients) <= 1:  # the rule below for one term, without arrays
         value = float(coefficients[0]) if len(coefficients) else 0.0
-        if abs(value) > _ROUND_OFF * max(abs(value), 1.0):
-            return exponents, coefficients
-        return exponents[:0], coefficients[:0]
+        keep = abs(value) > _ROUND_OFF * max(abs(value), 1.0)
+        return exponents[:int(keep)].copy(), coefficients[:int(keep)].copy()
     first, inverse = _unique_rows(exponents)
     merged = np.bincount(inverse, weights=coefficients, minlength=len(first))
     scale = np.abs(coefficients).max()
