@@ -119,7 +119,7 @@ def test_euler_lagrange_many_is_each_polynomials_bit_for_bit(angles):
 def test_unique_rows_is_numpys_unique_of_the_row_bytes():
     """One int64 key per row sorts and groups rows as their bytes do, including entries a
     key cannot hold (negative or past one byte, compared as bytes)."""
-    from pysindy_xl.feature_library.trigpoly import _unique_rows
+    from pysindy_xl.feature_library._monomials import _unique_rows
 
     rng = np.random.default_rng(3)
     for high in (1, 3, 300, 40_000):
@@ -180,3 +180,48 @@ def test_terms_as_arrays_evaluate_bit_for_bit_as_tuples():
         expected = sp.lambdify(variables, matrix[c, j], "numpy")(*z.T)
         np.testing.assert_allclose(fast[k], expected, rtol=1e-10, atol=1e-10)
     assert pickle.loads(pickle.dumps(arrays)) == arrays
+
+
+def _cosine_squares_pass_by_pass(exponents, coefficients, owners, angles):
+    """The rewriting one pass at a time: in each row, the first angle whose cosine power is
+    >= 2; unchanged rows, then ``cos^(k-2)`` rows, then ``-sin^2 cos^(k-2)`` rows."""
+    n, angle = len(angles), np.asarray(angles)
+    while True:
+        high = (exponents[:, n:2 * n] >= 2) & angle
+        rows = np.flatnonzero(high.any(axis=1))
+        if not len(rows):
+            return exponents, coefficients, owners
+        slot = n + np.argmax(high[rows], axis=1)
+        keep = ~high.any(axis=1)
+        base = exponents[rows]
+        base[np.arange(len(rows)), slot] -= 2
+        sine = base.copy()
+        sine[np.arange(len(rows)), slot - n] += 2
+        exponents = np.vstack([exponents[keep], base, sine])
+        coefficients = np.concatenate([coefficients[keep], coefficients[rows],
+                                       -coefficients[rows]])
+        owners = np.concatenate([owners[keep], owners[rows], owners[rows]])
+
+
+def test_cosine_squares_rewrite_row_for_row_and_keep_the_values():
+    """High cosine powers of several angles become the rows (same order, same bits) of the
+    pass-by-pass rewriting, and the polynomial keeps its values (cos^2 + sin^2 = 1)."""
+    from pysindy_xl.feature_library._monomials import _reduce_cosine_squares
+    from pysindy_xl.feature_library.trigpoly import evaluate_many, state_values
+
+    angles = (True, False, True, True)
+    rng = np.random.default_rng(11)
+    exponents = rng.integers(0, 6, (40, 16)).astype(np.int16)
+    exponents[:, 5] = 0  # no cosine of the linear coordinate
+    coefficients, owners = rng.normal(size=40), rng.integers(0, 5, 40)
+    found = _reduce_cosine_squares(exponents, coefficients, owners, angles)
+    expected = _cosine_squares_pass_by_pass(exponents, coefficients, owners, angles)
+    for a, b in zip(found, expected, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert found[0][:, [4, 6, 7]].max() < 2 and len(found[0]) > 10 * len(exponents)
+    q, qd, qdd = rng.uniform(-2, 2, (3, 10, 4))
+    states = state_values(q, qd, qdd, angles=angles)
+    before = evaluate_many([TrigPolynomial(exponents, coefficients, angles, normalize=False)],
+                           states)
+    after = evaluate_many([TrigPolynomial(found[0], found[1], angles, normalize=False)], states)
+    np.testing.assert_allclose(after, before, rtol=1e-9)

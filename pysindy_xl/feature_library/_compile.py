@@ -25,7 +25,7 @@ import numpy as np
 import scipy.sparse
 import sympy as sp
 
-from .trigpoly import _unique_rows
+from ._monomials import _unique_rows
 
 __all__ = ["compile_entries", "Terms", "decompose", "compile_terms", "scalar_function"]
 

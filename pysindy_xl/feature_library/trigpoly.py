@@ -4,7 +4,8 @@ The kinematic catalog multiplies rotation matrices and velocity vectors of whole
 sympy's generic expressions spend most of that time in assumptions and automatic
 simplification. Here a polynomial is two arrays (exponents, coefficients), products are outer
 sums of exponents, ``cos(q)**2`` is always rewritten as ``1 - sin(q)**2`` (a canonical form, so
-identities cancel), and equal monomials are merged with one ``numpy.unique``.
+identities cancel), and equal monomials are merged by one sort of integer row keys
+(:mod:`._monomials`).
 
 Slots of the exponent rows, for ``n`` coordinates: ``[0, n)`` ``sin q_j`` (or ``q_j`` itself
 for a linear coordinate), ``[n, 2n)`` ``cos q_j`` (unused for a linear coordinate), ``[2n, 3n)``
@@ -18,12 +19,13 @@ import scipy.sparse
 import sympy as sp
 from mpmath import libmp as mlib
 
+from ._monomials import _ROUND_OFF, _normalize, _normalize_owned, _unique_rows
+
+_BLOCK_VALUES = 1 << 17  # monomial values multiplied at once by evaluate_many
+
 __all__ = ["TrigPolynomial", "euler_lagrange_many", "partial_derivatives_many",
            "evaluate_many", "state_values"]
 
-# Coefficients below this fraction of the largest one are round-off of float arithmetic.
-_ROUND_OFF = 1e-13
-_BLOCK_VALUES = 1 << 21  # factor values gathered at once by evaluate_many
 
 
 class TrigPolynomial:
@@ -60,7 +62,10 @@ class TrigPolynomial:
     @classmethod
     def constant(cls, value: float, angles) -> TrigPolynomial:
         """The constant polynomial ``value``."""
-        return cls(np.zeros((1, 4 * len(angles))), [float(value)], angles)
+        value = float(value)
+        keep = abs(value) > _ROUND_OFF * max(abs(value), 1.0)  # as normalized
+        return cls(np.zeros((int(keep), 4 * len(angles)), dtype=np.int16), [value] * keep,
+                   angles, normalize=False)
 
     @classmethod
     def slot(cls, n: int, index: int, angles) -> TrigPolynomial:
@@ -283,69 +288,6 @@ class _NotPolynomial(ValueError):
     """A factor that is not a power of ``sin q``, ``cos q``, ``q`` or ``qd``."""
 
 
-def _reduce_cosine_squares(exponents, coefficients, owners, angles):
-    """Rewrite ``cos^2 = 1 - sin^2`` until no cosine power reaches 2 (``owners``, if not None,
-    follow their rows)."""
-    n = len(angles)
-    angle = np.asarray(angles, dtype=bool)
-    while angle.any():
-        high = (exponents[:, n:2 * n] >= 2) & angle
-        rows = np.flatnonzero(high.any(axis=1))
-        if not len(rows):
-            break
-        # one reduction per row and pass: the first angle whose cosine power is >= 2
-        slot = n + np.argmax(high[rows], axis=1)
-        first = np.zeros(len(exponents), dtype=bool)
-        first[rows] = True
-        base = exponents[rows]
-        base[np.arange(len(base)), slot] -= 2
-        with_sine = base.copy()
-        with_sine[np.arange(len(base)), slot - n] += 2
-        exponents = np.vstack([exponents[~first], base, with_sine])
-        coefficients = np.concatenate([coefficients[~first], coefficients[rows],
-                                       -coefficients[rows]])
-        if owners is not None:
-            owners = np.concatenate([owners[~first], owners[rows], owners[rows]])
-    return exponents, coefficients, owners
-
-
-def _unique_rows(rows) -> tuple[np.ndarray, np.ndarray]:
-    """``(index, inverse)`` of ``numpy.unique`` on the rows of an int16 array read as bytes
-    (first occurrences, rows in the order of their bytes), from one int64 key per row.
-
-    Entries in ``[0, 256)`` compare as bytes as they do as numbers: each column that varies
-    is a digit of a mixed-radix number, the first column most significant. Other entries, or
-    rows whose digits overflow an int64, are compared as bytes.
-    """
-    rows = np.ascontiguousarray(rows, dtype=np.int16)
-    low = rows.min(axis=0, initial=0)
-    high = rows.max(axis=0, initial=0)
-    used = np.flatnonzero(high > low)
-    radix = (high[used] - low[used]).astype(np.int64) + 1
-    if low.min(initial=0) >= 0 and high.max(initial=0) < 256 and np.sum(np.log2(radix)) < 62:
-        keys = np.zeros(len(rows), dtype=np.int64)
-        for column, base in zip(used.tolist(), radix.tolist(), strict=True):
-            keys *= base
-            keys += rows[:, column]
-            keys -= low[column]
-    else:
-        keys = rows.view(np.dtype((np.void, 2 * rows.shape[1]))).ravel()
-    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
-    return first, inverse.ravel()
-
-
-def _normalize(exponents, coefficients, angles):
-    """Rewrite cos^2 = 1 - sin^2, merge equal monomials, drop zero and round-off terms."""
-    exponents, coefficients, _ = _reduce_cosine_squares(exponents, coefficients, None, angles)
-    if len(coefficients) == 0:
-        return exponents, coefficients
-    first, inverse = _unique_rows(exponents)
-    merged = np.bincount(inverse, weights=coefficients, minlength=len(first))
-    scale = np.abs(coefficients).max()
-    keep = np.abs(merged) > _ROUND_OFF * max(scale, 1.0)
-    return exponents[first[keep]], merged[keep]
-
-
 def euler_lagrange_many(polynomials) -> list[list[TrigPolynomial]]:
     """:meth:`TrigPolynomial.euler_lagrange` of many polynomials at once, bit for bit.
 
@@ -379,7 +321,8 @@ def euler_lagrange_many(polynomials) -> list[list[TrigPolynomial]]:
             pieces.append(velocity.diff_slot(2 * n + j).times_slot(3 * n + j))
         derivative = _Stack.sum(pieces)
         rows.append(_Stack.sum([derivative, stack.diff_position(i).negative()]))
-    return [[row.part(k) for row in rows] for k in range(count)]
+    parts = [row.parts() for row in rows]
+    return [[part[k] for part in parts] for k in range(count)]
 
 
 def partial_derivatives_many(polynomials) -> list:
@@ -387,7 +330,7 @@ def partial_derivatives_many(polynomials) -> list:
     of many polynomials at once, bit for bit as :meth:`TrigPolynomial.diff_velocity` and
     :meth:`TrigPolynomial.diff_position` of each (see :func:`euler_lagrange_many`)."""
     stack, n = _Stack.of(polynomials), len(polynomials[0].angles)
-    return [[[derivative.part(k) for k in range(len(polynomials))]
+    return [[derivative.parts()
              for derivative in (stack.diff_slot(2 * n + c) if part == 0
                                 else stack.diff_position(c) for c in range(n))]
             for part in (0, 1)]
@@ -447,26 +390,12 @@ class _Stack:
                            np.concatenate([s.coefficients for s in stacks]),
                            np.concatenate([s.owners for s in stacks]), normalize=True)
 
-    def part(self, k) -> TrigPolynomial:
-        rows = self.owners == k
-        return TrigPolynomial(self.exponents[rows], self.coefficients[rows], self.angles,
-                              normalize=False)
-
-
-def _normalize_owned(exponents, coefficients, owners, angles, count):
-    """:func:`_normalize` of each owner's rows (the same operations, per owner)."""
-    exponents, coefficients, owners = _reduce_cosine_squares(exponents, coefficients, owners,
-                                                             angles)
-    if len(coefficients) == 0:
-        return exponents, coefficients, owners
-    # the owner first in each key: rows group by owner, and within an owner sort as alone
-    first, inverse = _unique_rows(np.column_stack([owners.astype(np.int16), exponents]))
-    merged = np.bincount(inverse, weights=coefficients, minlength=len(first))
-    scale = np.zeros(count)
-    np.maximum.at(scale, owners, np.abs(coefficients))
-    kept_owners = owners[first]
-    keep = np.abs(merged) > _ROUND_OFF * np.maximum(scale[kept_owners], 1.0)
-    return exponents[first[keep]], merged[keep], kept_owners[keep]
+    def parts(self) -> list[TrigPolynomial]:
+        """The polynomial of each owner (the rows are sorted by owner)."""
+        bounds = np.searchsorted(self.owners, np.arange(self.count + 1)).tolist()
+        return [TrigPolynomial(self.exponents[a:b], self.coefficients[a:b], self.angles,
+                               normalize=False)
+                for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
 
 def state_values(q, qd=None, qdd=None, angles=()) -> np.ndarray:
@@ -501,21 +430,30 @@ def evaluate_many(polynomials, values: np.ndarray) -> np.ndarray:
     first, inverse = _unique_rows(exponents)
     distinct = exponents[first]
     # a monomial is the product of its factors in the order of their slots (the powers of the
-    # slot values, each computed once), multiplied left to right by a reduction over blocks
-    # of monomials
+    # slot values, each computed once), multiplied left to right, all monomials of the same
+    # number of factors at once
     rows, slots = np.nonzero(distinct)  # row by row, slots increasing
     base = int(distinct.max(initial=0)) + 1
-    codes, factors = np.unique(slots * base + distinct[rows, slots], return_inverse=True)
+    codes = slots * base + distinct[rows, slots]
+    present = np.zeros(width * base, dtype=bool)
+    present[codes] = True
+    factors = (np.cumsum(present) - 1)[codes]
+    codes = np.flatnonzero(present)
     table = values.T[codes // base] ** (codes % base)[:, None]
-    starts = np.searchsorted(rows, np.arange(len(distinct)))
-    used = np.flatnonzero(np.diff(np.append(starts, len(rows))))  # not the constant
-    monomials = np.ones((len(distinct), values.shape[0]))  # a row per monomial
-    for block in np.array_split(used, -(-len(rows) * values.shape[0] // _BLOCK_VALUES)):
-        if len(block):
-            first_factor = starts[block[0]]
-            stop = starts[block[-1] + 1] if block[-1] + 1 < len(starts) else len(rows)
-            monomials[block] = np.multiply.reduceat(table[factors.ravel()[first_factor:stop]],
-                                                    starts[block] - first_factor, axis=0)
+    counts = np.bincount(rows, minlength=len(distinct))
+    starts = np.cumsum(counts) - counts
+    monomials = np.empty((len(distinct), values.shape[0]))  # a row per monomial
+    monomials[counts == 0] = 1.0
+    step = max(1, _BLOCK_VALUES // values.shape[0])  # blocks of rows: memory reused
+    for count in np.unique(counts[counts > 0]).tolist():
+        rows_of_count = np.flatnonzero(counts == count)
+        for start in range(0, len(rows_of_count), step):
+            members = rows_of_count[start:start + step]
+            where = starts[members]
+            product = table[factors[where]]
+            for k in range(1, count):
+                product *= table[factors[where + k]]
+            monomials[members] = product
     mapping = scipy.sparse.csr_matrix((coefficients, (inverse.ravel(), owner)),
                                       shape=(len(distinct), len(polynomials)))
     return np.asarray((mapping.T @ monomials).T)

@@ -15,7 +15,7 @@ import numpy as np
 import sympy as sp
 from sympy.printing.str import StrPrinter
 
-from .trigpoly import _number
+from .trigpoly import _fast_number, _number
 
 __all__ = ["TrigTerms"]
 
@@ -165,7 +165,8 @@ class _Printer:
         found = self.numbers.get(value)
         if found is None:
             # inside a sum or product sympy strips a float's trailing zeros
-            found = self.numbers[value] = _NESTED.doprint(_number(value))
+            found = self.numbers[value] = (str(int(value)) if value == int(value)
+                                           else _NESTED._print_Float(_fast_number(value)))
         return found
 
     def __call__(self, polynomial) -> str:
@@ -180,9 +181,12 @@ class _Printer:
         rows = np.lexsort((-ordered).T[::-1])  # decreasing lexicographic order
         ordered = ordered[rows]
         nonzero_rows, columns = np.nonzero(ordered)
-        powers = ordered[nonzero_rows, columns].tolist()
-        slots = self.order[columns].tolist()
-        texts = [self._factor(k, e) for k, e in zip(slots, powers, strict=True)]
+        base = int(ordered.max()) + 1
+        codes, factor = np.unique(self.order[columns] * base + ordered[nonzero_rows, columns],
+                                  return_inverse=True)
+        table = np.array([self._factor(c // base, c % base) for c in codes.tolist()],
+                         dtype=object)
+        texts = table[factor.ravel()].tolist()  # each factor's text, row by row
         bounds = np.searchsorted(nonzero_rows, np.arange(len(rows) + 1)).tolist()
         pieces = []
         for r, value in enumerate(coefficients[rows].tolist()):

@@ -55,6 +55,7 @@ from ...physical.rigid_body import KinematicTree
 from ...symbols import Coordinates
 from .. import import_mujoco
 from ..systems.registry import MuJoCoSystem, get_system
+from . import _derivation_cache
 from ._kinematic_build import (
     classical_candidates,
     friction_models,
@@ -282,15 +283,13 @@ class KinematicCatalog:
     def _quantity(self, key) -> list:
         """Per term, the polynomials of ``key``: mass-matrix entries or bias forces."""
         if key not in self._compiled:
-            n = self.coords.n
-            rows = []
-            for term in self._polynomials:
-                if key == "mass":
-                    momenta = [term.diff_velocity(i) for i in range(n)]
-                    rows.append([p.diff_velocity(k) for p in momenta for k in range(n)])
-                else:  # the equations with qdd = 0 (and qd = 0 for gravity)
-                    rest = key == "gravity"
-                    rows.append([e.at_rest(velocities=rest) for e in term.euler_lagrange()])
+            n, terms = self.coords.n, self._polynomials
+            if key == "mass":
+                rows = [[p.diff_velocity(i).diff_velocity(k) for i in range(n) for k in range(n)]
+                        for p in terms]
+            else:  # the equations (derived with the terms) with qdd = 0 (and qd = 0: gravity)
+                rows = [[e.at_rest(velocities=key == "gravity") for e in column]
+                        for column in self.lagrange_terms.columns]
             self._compiled[key] = rows
         return self._compiled[key]
 
@@ -446,8 +445,9 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
 
     Every moving body contributes the ten functions of ``(q, qd)`` that multiply its inertial
     parameters, every joint its armature ``qvel^2 / 2``; the set is reduced to independent
-    Euler-Lagrange columns (base parameters, see the module docstring). Results are cached by
-    model text, coordinates and options.
+    Euler-Lagrange columns (base parameters, see the module docstring). Results are cached in
+    memory by model text, coordinates and options, and the derivation on disk by the model's
+    kinematic content (``PYSINDY_XL_CACHE=off`` turns that off; see ``_derivation_cache``).
 
     Parameters
     ----------
@@ -538,20 +538,47 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
 
 
 def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
-    mujoco = import_mujoco()
-    coords = system.coords
-    n = coords.n
+    mujoco, coords = import_mujoco(), system.coords
+    bodies = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}"
+              for b in range(model.nbody)]
+    digest = _derivation_cache.key(system, model, bodies, seed)
+    derived = _derivation_cache.load(digest, tuple(j in system.angle_coordinates
+                                                    for j in range(coords.n)))
+    if derived is None:
+        derived = _derive(system, model, bodies, seed)
+        _derivation_cache.save(digest, derived)
+    names, combination, kept = derived["names"], derived["combination"], derived["terms"]
+    values = [x for b in derived["bodies"] for x in physical_values(model, b)]
+    values += [float(model.dof_armature[model.jnt_dofadr[k]]) for k in range(model.njnt)]
+    parameters = [{names[p]: float(combination[j, p]) for p in np.flatnonzero(combination[j])}
+                  for j in range(len(kept))]
+    classical_terms, mask, kinds, classical_values = classical_candidates(
+        system, model, coulomb, coulomb_scale)
+    return KinematicCatalog(
+        system=system, coords=coords,
+        # sympy expressions built only when read: the library derives from the polynomials
+        lagrange_terms=TrigTerms(kept, coords, columns=derived["columns"]),
+        parameters=parameters, physical_names=names, combination=combination,
+        physical_values=np.array(values), classical_terms=classical_terms,
+        classical_mask=mask, classical_kinds=kinds, classical_values=classical_values,
+        n_candidates=derived["n_candidates"], tree=kinematic_tree(system, model),
+        _polynomials=list(kept),
+    )
+
+
+def _derive(system, model, bodies, seed) -> dict:
+    """The catalog's Lagrangian part from the kinematic tree: every body's ten functions and
+    every joint's armature term, reduced to independent Euler-Lagrange columns (see
+    :func:`._derivation_cache.load` for the entries)."""
+    n = system.coords.n
     functions, joints = body_functions(system, model)
-    candidates, names, values = [], [], []
+    candidates, names = [], []
     for b, functions_of_body in functions.items():
-        body = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}"
         candidates.extend(functions_of_body)
-        names.extend(f"{body}.{p}" for p in INERTIAL_PARAMETERS)
-        values.extend(physical_values(model, b))
+        names.extend(f"{bodies[b]}.{p}" for p in INERTIAL_PARAMETERS)
     for k in range(model.njnt):
         candidates.append(0.5 * (joints[k]["velocity"] * joints[k]["velocity"]))
         names.append(f"{system.joint_names[k]}.armature")
-        values.append(float(model.dof_armature[model.jnt_dofadr[k]]))
     columns = euler_lagrange_many(candidates)
     rng = np.random.default_rng(seed)
     n_samples = 2 * len(candidates) // n + 20
@@ -568,20 +595,6 @@ def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
     # exact combinations come out within ~1e-14: round the noise away (0.9999999999999999)
     combination = np.round(combination, 12)
     combination[np.abs(combination) < 1e-10] = 0.0
-    parameters = [
-        {names[p]: float(combination[j, p]) for p in np.flatnonzero(combination[j])}
-        for j in range(len(kept))
-    ]
-    classical_terms, mask, kinds, classical_values = classical_candidates(
-        system, model, coulomb, coulomb_scale)
-    return KinematicCatalog(
-        system=system, coords=coords,
-        # sympy expressions built only when read: the library derives from the polynomials
-        lagrange_terms=TrigTerms([candidates[j] for j in kept], coords,
-                                 columns=[columns[j] for j in kept]),
-        parameters=parameters, physical_names=names, combination=combination,
-        physical_values=np.array(values), classical_terms=classical_terms,
-        classical_mask=mask, classical_kinds=kinds, classical_values=classical_values,
-        n_candidates=len(candidates), tree=kinematic_tree(system, model),
-        _polynomials=[candidates[j] for j in kept],
-    )
+    return {"bodies": list(functions), "names": names, "combination": combination,
+            "n_candidates": len(candidates), "terms": [candidates[j] for j in kept],
+            "columns": [columns[j] for j in kept]}

@@ -1,0 +1,148 @@
+"""An on-disk cache of kinematic-catalog derivations, keyed by the model's kinematic content.
+
+The derivation of a catalog (the trigonometric polynomials of every body, their
+Euler-Lagrange columns, the numerical reduction to base parameters) depends on the kinematic
+tree alone: bodies' offsets and orientations, joints' types, axes, anchors and references,
+gravity, the coordinates, the names and the seed; never on masses, inertias or armatures.
+It is stored as an NPZ file (arrays only, read without pickle) named by a digest of that
+content, of the deriving code, of numpy's and MuJoCo's versions and of the file format,
+written to a temporary file and renamed (readers never see half a file); a file that is
+missing, unreadable or of another format is a miss.
+
+The directory is ``$PYSINDY_XL_CACHE`` if set, else ``$XDG_CACHE_HOME/pysindy_xl`` (default
+``~/.cache/pysindy_xl``); ``PYSINDY_XL_CACHE=off`` (or ``0``, ``false``, ``no``, empty) turns
+the cache off. A directory that cannot be created or written is skipped silently: the
+derivation is then kept in memory only. The newest :data:`_KEEP` files are kept.
+"""
+
+from __future__ import annotations
+
+import functools
+import glob
+import hashlib
+import os
+import tempfile
+import zipfile
+
+import numpy as np
+
+from ...feature_library import trigpoly
+from ...feature_library.trigpoly import TrigPolynomial
+from .. import import_mujoco
+
+_FORMAT = 1  # bump when the stored arrays change
+_KEEP = 16
+_OFF = {"", "0", "off", "false", "no", "none"}
+_SOURCES = ("kinematic.py", "_kinematic_tree.py", "_kinematic_build.py", "_derivation_cache.py")
+
+
+def directory() -> str | None:
+    """The cache directory, or None when the cache is off."""
+    value = os.environ.get("PYSINDY_XL_CACHE")
+    if value is not None:
+        return None if value.strip().lower() in _OFF else value
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return os.path.join(base, "pysindy_xl")
+
+
+@functools.cache
+def _code_digest() -> str | None:
+    """A digest of the code that derives catalogs (a change of it is a new key)."""
+    digest = hashlib.sha256(f"{_FORMAT} {np.__version__} {import_mujoco().__version__}".encode())
+    here = os.path.dirname(os.path.abspath(__file__))
+    try:
+        polynomials = os.path.dirname(os.path.abspath(trigpoly.__file__))
+        for path in ([os.path.join(polynomials, name) for name in ("trigpoly.py", "_monomials.py")]
+                     + [os.path.join(here, name) for name in _SOURCES]):
+            with open(path, "rb") as f:
+                digest.update(f.read())
+    except OSError:
+        return None
+    return digest.hexdigest()
+
+
+def key(system, model, names, seed) -> str | None:
+    """The digest of what a derivation depends on (None: not cacheable)."""
+    code = _code_digest()
+    if code is None:
+        return None
+    digest = hashlib.sha256(code.encode())
+    digest.update(repr((tuple(names), tuple(system.joint_names), tuple(system.coordinate_names),
+                        sorted(system.angle_coordinates), int(seed))).encode())
+    for array in (model.body_parentid, model.body_pos, model.body_quat, model.body_jntnum,
+                  model.body_jntadr, model.jnt_type, model.jnt_axis, model.jnt_pos,
+                  model.jnt_qposadr, model.jnt_dofadr, model.qpos0, model.opt.gravity,
+                  system.joint_to_coordinates):
+        array = np.ascontiguousarray(array)
+        digest.update(f"{array.dtype.str}{array.shape}".encode() + array.tobytes())
+    return digest.hexdigest()
+
+
+def _path(folder, digest):
+    return os.path.join(folder, f"kinematic-{digest}.npz")
+
+
+def _stacked(polynomials, prefix):
+    return {f"{prefix}_exponents": np.vstack([p.exponents for p in polynomials]).astype(np.uint8),
+            f"{prefix}_coefficients": np.concatenate([p.coefficients for p in polynomials]),
+            f"{prefix}_lengths": np.array([len(p.coefficients) for p in polynomials])}
+
+
+def _unstacked(data, prefix, angles):
+    bounds = np.cumsum(np.append(0, data[f"{prefix}_lengths"])).tolist()
+    exponents = data[f"{prefix}_exponents"].astype(np.int16)
+    coefficients = data[f"{prefix}_coefficients"]
+    return [TrigPolynomial(exponents[a:b], coefficients[a:b], angles, normalize=False)
+            for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+
+def save(digest, derived) -> None:
+    """Store a derivation (see :func:`load`); nothing happens where it cannot be written."""
+    folder = directory()
+    terms = derived["terms"]
+    if folder is None or digest is None or not terms or any(
+            p.exponents.max(initial=0) > 255 for p in terms):
+        return
+    columns = [p for column in derived["columns"] for p in column]
+    arrays = {"format": np.array(_FORMAT), "bodies": np.asarray(derived["bodies"]),
+              "names": np.array(derived["names"], dtype=str),
+              "combination": derived["combination"],
+              "n_candidates": np.array(derived["n_candidates"]),
+              **_stacked(terms, "terms"), **_stacked(columns, "columns")}
+    try:
+        os.makedirs(folder, exist_ok=True)
+        handle, temporary = tempfile.mkstemp(dir=folder, suffix=".tmp")
+        try:
+            with os.fdopen(handle, "wb") as f:
+                np.savez(f, **arrays)
+            os.replace(temporary, _path(folder, digest))
+        finally:
+            if os.path.exists(temporary):
+                os.unlink(temporary)
+        for old in sorted(glob.glob(os.path.join(folder, "kinematic-*.npz")),
+                          key=os.path.getmtime)[:-_KEEP]:
+            os.unlink(old)
+    except OSError:
+        pass
+
+
+def load(digest, angles) -> dict | None:
+    """The derivation stored under ``digest``: ``bodies`` (moving body ids), ``names``
+    (physical parameters), ``terms`` (kept polynomials), ``columns`` (their Euler-Lagrange
+    columns), ``combination``, ``n_candidates``; None if absent, off or unreadable."""
+    folder, n = directory(), len(angles)
+    if folder is None or digest is None:
+        return None
+    try:
+        with np.load(_path(folder, digest), allow_pickle=False) as data:
+            if int(data["format"]) != _FORMAT:
+                return None
+            terms = _unstacked(data, "terms", angles)
+            columns = _unstacked(data, "columns", angles)
+            derived = {"bodies": data["bodies"].tolist(), "names": data["names"].tolist(),
+                       "combination": data["combination"].astype(float),
+                       "n_candidates": int(data["n_candidates"]), "terms": terms,
+                       "columns": [columns[k * n:(k + 1) * n] for k in range(len(terms))]}
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
+        return None
+    return derived if len(columns) == n * len(terms) else None
