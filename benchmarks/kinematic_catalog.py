@@ -30,6 +30,8 @@ import time
 
 import numpy as np
 
+os.environ["PYSINDY_XL_CACHE"] = "off"  # derivation times: no on-disk cache
+
 import pysindy_xl as px
 from pysindy_xl.feature_library import stack_variables
 from pysindy_xl.mujoco import MJCFSystem, generate_dataset, get_system, reference_catalog
