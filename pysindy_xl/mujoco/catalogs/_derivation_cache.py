@@ -114,7 +114,7 @@ def save(digest, derived) -> None:
         handle, temporary = tempfile.mkstemp(dir=folder, suffix=".tmp")
         try:
             with os.fdopen(handle, "wb") as f:
-                np.savez_compressed(f, **arrays)  # exponents compress 7x
+                np.savez(f, **arrays)  # uncompressed: deflating a large arm costs 0.6 s
             os.replace(temporary, _path(folder, digest))
         finally:
             if os.path.exists(temporary):
