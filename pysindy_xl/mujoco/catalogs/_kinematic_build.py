@@ -10,8 +10,10 @@ import numpy as np
 import scipy.linalg
 import sympy as sp
 
+from ...feature_library import integrate_by_parts
 from ...feature_library.joint_friction import FRICTION_MODELS
 from ...feature_library.trigpoly import state_values
+from .. import import_mujoco
 from ..systems.registry import MuJoCoSystem
 
 # A column whose part orthogonal to the kept columns is below this fraction of its norm is
@@ -85,12 +87,123 @@ def joint_coordinates(system, model):
     return qpos, qvel
 
 
+def dry_friction_scales(model) -> tuple[np.ndarray, np.ndarray]:
+    """How MuJoCo regularizes each degree of freedom's ``frictionloss``: a velocity scale
+    ``s`` and a lead time ``tau``.
+
+    MuJoCo applies dry friction as a soft constraint row on the dof (its force ``f``, its
+    acceleration ``a``, velocity ``v``); the solver minimizes a Huber cost, so that
+
+    .. math:: f = -F \\, \\mathrm{sat}\\!\\left(\\frac{a + b v}{R F}\\right)
+              = -F \\, \\mathrm{sat}\\!\\left(\\frac{v + \\tau a}{s}\\right),
+              \\qquad \\mathrm{sat}(x) = \\max(-1, \\min(1, x)),
+
+    with ``F`` the frictionloss, ``b = 2 / (d_max t_c)`` the reference damping of
+    ``solreffriction = (t_c, zeta)`` (``t_c`` at least twice the time step; a negative
+    ``solref`` gives ``b = -solref[1] / d_max`` directly), ``R = (1 - d_0) / d_0 w_0`` the
+    regularizer from the impedance ``d_0`` of ``solimpfriction`` at zero violation (its
+    ``d_min``) and the dof's inverse inertia at ``qpos0`` (``dof_invweight0``). Hence
+    ``tau = 1 / b`` and ``s = R F / b``. The friction saturates at ``+-F`` only once the velocity
+    predicted ``tau`` ahead exceeds ``s``; below it acts as a damping ``b / R`` plus an inertia
+    ``1 / R``, which on a light link (large ``w_0``) may exceed the link's own.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+
+    Returns
+    -------
+    scale, lead : ndarray, shape (nv,)
+        ``s`` (velocity units of the dof; zero where ``frictionloss`` is zero) and ``tau`` (s).
+
+    Examples
+    --------
+    >>> import mujoco
+    >>> model = mujoco.MjModel.from_xml_string(
+    ...     '<mujoco><worldbody><body><joint frictionloss="2"/><geom size=".1" mass="1"/>'
+    ...     '</body></worldbody></mujoco>')
+    >>> scale, lead = dry_friction_scales(model)
+    >>> round(float(lead[0]), 6)  # d_max t_c / 2: default solref (0.02, 1), d_max 0.95
+    0.0095
+    """
+    solref, solimp = model.dof_solref, model.dof_solimp
+    d_min = np.clip(solimp[:, 0], 1e-4, 0.9999)  # MuJoCo's mjMINIMP, mjMAXIMP
+    d_max = np.clip(solimp[:, 1], 1e-4, 0.9999)
+    timeconst = solref[:, 0]
+    if not model.opt.disableflags & int(import_mujoco().mjtDisableBit.mjDSBL_REFSAFE):
+        timeconst = np.maximum(timeconst, 2 * model.opt.timestep)
+    damping = np.where(solref[:, 0] > 0, 2 / (d_max * np.maximum(timeconst, 1e-300)),
+                       -solref[:, 1] / d_max)
+    regularizer = (1 - d_min) / d_min * model.dof_invweight0
+    return regularizer * model.dof_frictionloss / damping, 1 / damping
+
+
+def regularized_dry_friction(velocity, acceleration, scale: float, lead: float):
+    """The unit dry friction of :func:`dry_friction_scales`, to first order in its lead.
+
+    ``sat((v + tau a) / s) ~ sat(v / s) + tau d/dt sat(v / s)``: exact while the velocity
+    stays inside ``|v| < s`` (the damping and inertia of the sticking zone) or outside it
+    (``sign(v)``); at a reversal the switch of the friction ``tau`` early becomes an impulse
+    of the same area at the reversal, which test functions wider than ``tau`` cannot tell
+    apart. The term is a velocity function plus an exact time derivative (the weak form
+    integrates it by parts).
+
+    Parameters
+    ----------
+    velocity, acceleration : sympy.Expr
+        The joint's velocity and acceleration in the coordinates.
+    scale, lead : float
+        ``s`` and ``tau``.
+
+    Returns
+    -------
+    sympy.Expr
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> v, a = sp.symbols("v a", real=True)
+    >>> term = regularized_dry_friction(v, a, 0.5, 0.01)
+    >>> float(term.subs({v: 0.25, a: 3.0})), float(term.subs({v: 2.0, a: 3.0}))
+    (0.56, 1.0)
+    """
+    x = velocity / sp.Float(scale)
+    inside = (sp.sign(x + 1) - sp.sign(x - 1)) / 2
+    return (sp.Abs(x + 1) - sp.Abs(x - 1)) / 2 + sp.Float(lead / scale) * inside * acceleration
+
+
+def _dry_friction_terms(system, model, qvel, coulomb_scale):
+    """Per joint, the candidate of its ``frictionloss``: MuJoCo's regularized dry friction
+    (:func:`regularized_dry_friction`) where the joint has one and the feature libraries'
+    weak form can integrate its acceleration by parts, else ``tanh(qvel / coulomb_scale)``."""
+    coords = system.coords
+    to_acceleration = dict(zip(coords.qd, coords.qdd, strict=True))
+    scale, lead = dry_friction_scales(model)
+    terms = []
+    for k in range(model.njnt):
+        dof = model.jnt_dofadr[k]
+        term = sp.tanh(qvel[k] / coulomb_scale)
+        if scale[dof] > 0:
+            candidate = regularized_dry_friction(qvel[k], qvel[k].subs(to_acceleration),
+                                                 float(scale[dof]), float(lead[dof]))
+            try:
+                integrate_by_parts(candidate, coords)
+                term = candidate
+            except ValueError:  # a weak form without velocity-dependent momenta
+                pass
+        terms.append(term)
+    return terms
+
+
 def classical_candidates(system, model, coulomb, coulomb_scale, friction=True):
     """Friction (unless not ``friction``) and spring candidates per joint, in the
-    coordinates, with their MJCF values."""
+    coordinates, with their MJCF values; the Coulomb candidate of a joint with
+    ``frictionloss`` follows MuJoCo's regularization of it (:func:`_dry_friction_terms`)."""
     coords = system.coords
     force_map = system.force_matrix()
     qpos, qvel = joint_coordinates(system, model)
+    dry = _dry_friction_terms(system, model, qvel, coulomb_scale) if coulomb and friction \
+        else None
     terms, mask, kinds, values = [], [], [], []
     for k in range(model.njnt):
         name = system.joint_names[k]
@@ -98,8 +211,7 @@ def classical_candidates(system, model, coulomb, coulomb_scale, friction=True):
         reaches = np.abs(force_map[:, k]) > 1e-12
         candidates = [("viscous", qvel[k], model.dof_damping[dof])] if friction else []
         if coulomb and friction:
-            candidates.append(("coulomb", sp.tanh(qvel[k] / coulomb_scale),
-                               model.dof_frictionloss[dof]))
+            candidates.append(("coulomb", dry[k], model.dof_frictionloss[dof]))
         if model.jnt_stiffness[k] > 0:
             rest = float(model.qpos_spring[model.jnt_qposadr[k]])
             candidates.append(("spring", qpos[k] - rest, model.jnt_stiffness[k]))
