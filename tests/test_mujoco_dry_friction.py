@@ -1,0 +1,112 @@
+"""MuJoCo's dry friction (``frictionloss``) as the kinematic catalog models it.
+
+Ground truth: MuJoCo's own friction forces (``qfrc_constraint`` of a model whose only
+constraints are its friction rows) against the scales that ``dry_friction_scales`` derives
+from the model's frictionloss, solref, solimp and dof inverse inertia.
+"""
+
+import numpy as np
+import pytest
+import sympy as sp
+
+mujoco = pytest.importorskip("mujoco")
+
+from pysindy_xl.mujoco.catalogs._kinematic_build import (  # noqa: E402
+    dry_friction_scales,
+    regularized_dry_friction,
+)
+
+# a heavy shoulder and a light wrist (its soft friction never saturates at moderate speeds),
+# one joint with the default friction regularization, one with its own
+ARM = """
+<mujoco>
+  <option timestep="{step}" integrator="RK4"/>
+  <worldbody>
+    <body>
+      <joint name="shoulder" axis="0 0 1" frictionloss="1.5" damping="0.2"/>
+      <geom type="capsule" fromto="0 0 0 .4 0 0" size=".04" mass="2" contype="0"
+            conaffinity="0"/>
+      <body pos=".4 0 0">
+        <joint name="wrist" axis="0 0 1" frictionloss="0.3" solreffriction="0.01 1"
+               solimpfriction="0.8 0.9 0.001" damping="0.01"/>
+        <geom type="capsule" fromto="0 0 0 .05 0 0" size=".01" mass=".05" contype="0"
+              conaffinity="0"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator><motor joint="shoulder"/><motor joint="wrist"/></actuator>
+</mujoco>
+"""
+
+
+def _run(step=1e-4, duration=2.0, seed=0):
+    """A run under random smooth torques: friction force, velocity, acceleration per step."""
+    model = mujoco.MjModel.from_xml_string(ARM.format(step=step))
+    data = mujoco.MjData(model)
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(duration / step)) * step
+    freqs, phases = rng.uniform(0.5, 3.0, (2, 4)), rng.uniform(0, 2 * np.pi, (2, 4))
+    torque = np.array([2.0, 0.2])[:, None] * np.sin(
+        2 * np.pi * freqs[:, :, None] * t + phases[:, :, None]).sum(axis=1)
+    friction, velocity, acceleration = (np.empty((len(t), 2)) for _ in range(3))
+    for k in range(len(t)):
+        data.ctrl[:] = torque[:, k]
+        mujoco.mj_forward(model, data)
+        friction[k], velocity[k], acceleration[k] = data.qfrc_constraint, data.qvel, data.qacc
+        mujoco.mj_step(model, data)
+    return model, t, friction, velocity, acceleration
+
+
+@pytest.fixture(scope="module")
+def run():
+    return _run()
+
+
+def test_scales_give_mujocos_friction_force(run):
+    """f = -F sat((v + tau a) / s) with the derived scales, to round-off, in both regimes."""
+    model, _, friction, velocity, acceleration = run
+    scale, lead = dry_friction_scales(model)
+    loss = model.dof_frictionloss
+    argument = (velocity + lead * acceleration) / scale
+    assert np.abs(friction + loss * np.clip(argument, -1, 1)).max() < 1e-8 * loss.max()
+    saturated = np.abs(argument) >= 1
+    # the shoulder mostly slides, the light wrist mostly sticks (soft-constraint inertia)
+    assert saturated[:, 0].mean() > 0.5 and saturated[:, 1].mean() < 0.5
+    assert saturated[:, 1].any() and not saturated[:, 0].all()
+    # the wrist's own solref / solimp are used: a lead of d_max t_c / 2
+    assert lead[1] == pytest.approx(0.9 * 0.01 / 2) and lead[0] == pytest.approx(0.95 * 0.02 / 2)
+
+
+def test_refsafe_and_direct_solref():
+    """solref's time constant is raised to two time steps (MuJoCo's refsafe); a negative
+    solref gives the damping directly."""
+    model = mujoco.MjModel.from_xml_string(ARM.format(step=0.01))
+    assert dry_friction_scales(model)[1][1] == pytest.approx(0.9 * 0.02 / 2)
+    model.dof_solref[1] = (-100.0, -50.0)
+    assert dry_friction_scales(model)[1][1] == pytest.approx(0.9 / 50.0)
+
+
+def test_weak_projection_of_the_candidate_matches_mujoco(run):
+    """Against test functions wider than the lead, the candidate -F [sat(v/s) + tau d/dt
+    sat(v/s)] carries MuJoCo's friction impulses, exactly on the sticking wrist (damping and
+    inertia of the soft constraint), to first order in the lead on the sliding shoulder
+    (MuJoCo switches the friction tau early and relaxes into sticking over a few tau: the
+    candidate halves the gap of tanh(v / 0.01) there, and removes it on the wrist)."""
+    model, t, friction, velocity, acceleration = run
+    scale, lead = dry_friction_scales(model)
+    v, a = sp.symbols("v a", real=True)
+    step = t[1] - t[0]
+    centers = np.arange(0.15, t[-1] - 0.15, 0.05)
+    phi = np.clip(1 - ((t[None, :] - centers[:, None]) / 0.15) ** 2, 0, None) ** 2
+    gaps = {}
+    for j in range(2):
+        term = sp.lambdify((v, a), regularized_dry_friction(v, a, scale[j], lead[j]))
+        candidate = -model.dof_frictionloss[j] * term(velocity[:, j], acceleration[:, j])
+        smooth = -model.dof_frictionloss[j] * np.tanh(velocity[:, j] / 0.01)
+        truth = phi @ friction[:, j] * step
+        norm = np.linalg.norm(truth)
+        gaps[j] = [np.linalg.norm(phi @ model_force * step - truth) / norm
+                   for model_force in (candidate, smooth)]
+    (shoulder, shoulder_smooth), (wrist, wrist_smooth) = gaps[0], gaps[1]
+    assert shoulder < 0.05 and shoulder < shoulder_smooth / 2, gaps
+    assert wrist < 0.01 and wrist < wrist_smooth / 50, gaps
