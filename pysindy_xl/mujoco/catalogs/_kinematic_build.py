@@ -10,7 +10,6 @@ import numpy as np
 import scipy.linalg
 import sympy as sp
 
-from ...feature_library import integrate_by_parts
 from ...feature_library.joint_friction import FRICTION_MODELS
 from ...feature_library.trigpoly import state_values
 from .. import import_mujoco
@@ -21,6 +20,11 @@ from ..systems.registry import MuJoCoSystem
 _INDEPENDENCE_TOL = 1e-9
 # Columns taken in preference order only when at least this fraction of them is new.
 _WELL_CONDITIONED = 0.05
+#: Model a joint's ``frictionloss`` as MuJoCo regularizes it (:func:`regularized_dry_friction`)
+#: instead of ``tanh(qvel / coulomb_scale)``. Off until the weak form integrates accelerations
+#: with velocity-dependent coefficients by parts, the MJCF export states the term as
+#: ``frictionloss`` and the closed-loop validation steps it in MuJoCo (issue 42).
+REGULARIZED_DRY_FRICTION = False
 
 
 def independent_regressor_columns(matrix: np.ndarray) -> list[int]:
@@ -174,25 +178,16 @@ def regularized_dry_friction(velocity, acceleration, scale: float, lead: float):
 
 def _dry_friction_terms(system, model, qvel, coulomb_scale):
     """Per joint, the candidate of its ``frictionloss``: MuJoCo's regularized dry friction
-    (:func:`regularized_dry_friction`) where the joint has one and the feature libraries'
-    weak form can integrate its acceleration by parts, else ``tanh(qvel / coulomb_scale)``."""
+    (:func:`regularized_dry_friction`) where the joint has one and
+    :data:`REGULARIZED_DRY_FRICTION` is set, else ``tanh(qvel / coulomb_scale)``."""
     coords = system.coords
     to_acceleration = dict(zip(coords.qd, coords.qdd, strict=True))
     scale, lead = dry_friction_scales(model)
-    terms = []
-    for k in range(model.njnt):
-        dof = model.jnt_dofadr[k]
-        term = sp.tanh(qvel[k] / coulomb_scale)
-        if scale[dof] > 0:
-            candidate = regularized_dry_friction(qvel[k], qvel[k].subs(to_acceleration),
-                                                 float(scale[dof]), float(lead[dof]))
-            try:
-                integrate_by_parts(candidate, coords)
-                term = candidate
-            except ValueError:  # a weak form without velocity-dependent momenta
-                pass
-        terms.append(term)
-    return terms
+    return [regularized_dry_friction(qvel[k], qvel[k].subs(to_acceleration),
+                                     float(scale[model.jnt_dofadr[k]]),
+                                     float(lead[model.jnt_dofadr[k]]))
+            if REGULARIZED_DRY_FRICTION and scale[model.jnt_dofadr[k]] > 0
+            else sp.tanh(qvel[k] / coulomb_scale) for k in range(model.njnt)]
 
 
 def classical_candidates(system, model, coulomb, coulomb_scale, friction=True):
