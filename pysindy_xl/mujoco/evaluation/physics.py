@@ -9,8 +9,6 @@ from ..systems.registry import get_system
 
 __all__ = ["compare_physics"]
 
-# velocity factor of the states where the mass matrix is read (every joint sliding)
-_SLIDING = 1e4
 
 
 def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8) -> dict:
@@ -24,12 +22,6 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     Coriolis, damping, springs, dry friction), both mapped to the system's coordinates
     (``B M B^T``, ``B f``). An implicit (unforced) law is defined up to a factor: both are
     first scaled by the least-squares factor that best matches the mass matrices.
-
-    The identified mass matrix is read at the states' velocities scaled by a large factor,
-    where every joint slides: a rigid body's mass matrix does not depend on the velocities,
-    but a dry friction regularized like MuJoCo's (the kinematic catalog's candidate of a
-    joint with ``frictionloss``) adds its soft constraint's inertia inside its sticking zone,
-    which ``mj_fullM`` leaves out.
 
     Parameters
     ----------
@@ -120,10 +112,7 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
         mujoco.mj_forward(mj_model, data)
         gravity_ref[k] = matrix @ (data.qfrc_spring - data.qfrc_bias)
     z = stack_variables(q, qd, None, np.zeros_like(q), np.zeros(n_states))
-    force = dynamics.mass_and_forcing(z)[1]
-    # the mass matrix while every joint slides (see the docstring)
-    mass = dynamics.mass_and_forcing(stack_variables(
-        q, _SLIDING * qd, None, np.zeros_like(q), np.zeros(n_states)))[0]
+    mass, force = dynamics.mass_and_forcing(z)
     gravity = dynamics.mass_and_forcing(stack_variables(
         q, np.zeros_like(qd), None, np.zeros_like(q), np.zeros(n_states)))[1]
     held = np.isin(system.coordinate_names, list(getattr(model, "still_coordinates_", ())))
