@@ -192,8 +192,9 @@ def _dry_friction_terms(system, model, qvel, coulomb_scale):
 
 def classical_candidates(system, model, coulomb, coulomb_scale, friction=True):
     """Friction (unless not ``friction``) and spring candidates per joint, in the
-    coordinates, with their MJCF values; the Coulomb candidate of a joint with
-    ``frictionloss`` follows MuJoCo's regularization of it (:func:`_dry_friction_terms`)."""
+    coordinates, with their MJCF values; with :data:`REGULARIZED_DRY_FRICTION` the Coulomb
+    candidate of a joint with ``frictionloss`` follows MuJoCo's regularization of it
+    (:func:`_dry_friction_terms`)."""
     coords = system.coords
     force_map = system.force_matrix()
     qpos, qvel = joint_coordinates(system, model)
