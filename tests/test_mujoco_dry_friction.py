@@ -11,10 +11,8 @@ import sympy as sp
 
 mujoco = pytest.importorskip("mujoco")
 
-from pysindy_xl.mujoco.catalogs._kinematic_build import (  # noqa: E402
-    dry_friction_scales,
-    regularized_dry_friction,
-)
+from pysindy_xl.mujoco.catalogs._kinematic_build import regularized_dry_friction  # noqa: E402
+from pysindy_xl.mujoco.systems.friction import dry_friction_scales  # noqa: E402
 
 # a heavy shoulder and a light wrist (its soft friction never saturates at moderate speeds),
 # one joint with the default friction regularization, one with its own
