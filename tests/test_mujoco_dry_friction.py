@@ -108,3 +108,44 @@ def test_weak_projection_of_the_candidate_matches_mujoco(run):
     (shoulder, shoulder_smooth), (wrist, wrist_smooth) = gaps[0], gaps[1]
     assert shoulder < 0.05 and shoulder < shoulder_smooth / 2, gaps
     assert wrist < 0.01 and wrist < wrist_smooth / 50, gaps
+
+
+@pytest.mark.filterwarnings("ignore")  # the fit only gives the model its structure
+def test_compare_physics_reads_the_mass_matrix_where_joints_slide(monkeypatch):
+    """With MuJoCo's regularized dry friction in the catalog, the model with the MJCF's own
+    coefficients has the soft constraint's inertia 1/R inside the sticking zone (as MuJoCo
+    does); the mass matrix compared with mj_fullM is the rigid body's, read where the joints
+    slide."""
+    import pysindy_xl as px
+    from pysindy_xl.mujoco import MJCFSystem, generate_dataset
+    from pysindy_xl.mujoco.catalogs import _kinematic_build, kinematic
+    from pysindy_xl.mujoco.evaluation.physics import compare_physics
+
+    monkeypatch.setattr(_kinematic_build, "REGULARIZED_DRY_FRICTION", True)
+    monkeypatch.setattr(kinematic, "_CACHE", {})
+    # a stiff friction regularization on the wrist: its sticking inertia 1/R is ~100 times
+    # the link's, over a sticking zone of 0.3 rad/s
+    system = MJCFSystem(ARM.format(step=1e-3).replace('solimpfriction="0.8 0.9 0.001"',
+                                                       'solimpfriction="0.99 0.99 0.001"'))
+    scale = dry_friction_scales(system.mj_model())[0]
+    assert 0.1 < scale[1] < 1.0
+    catalog = kinematic.kinematic_catalog(system)
+    assert sum(term.has(sp.Abs) for term in catalog.classical_terms) == 2
+    data = generate_dataset(system, n_trajectories=1, duration=0.5, seed=0, progress=False)
+    model = px.XLSINDy(catalog.library(), px.ExplicitOptimizer(), formulation="strong")
+    model.fit(**data.fit_arguments())
+    model.coef_ = catalog.true_coefficients()  # the MJCF's own model
+    model._build_dynamics()
+    # inside the wrist's sticking zone the model carries MuJoCo's soft inertia
+    mj_model = system.mj_model()
+    inverse_r = 0.99 / 0.01 / mj_model.dof_invweight0[1]
+    z = px.stack_variables(np.zeros((1, 2)), np.array([[1.0, 0.5 * scale[1]]]), None,
+                           np.zeros((1, 2)), np.zeros(1))
+    sliding = px.stack_variables(np.zeros((1, 2)), np.array([[1.0, 3 * scale[1]]]), None,
+                                 np.zeros((1, 2)), np.zeros(1))
+    dynamics = model._require_dynamics()
+    gap = dynamics.mass_and_forcing(z)[0] - dynamics.mass_and_forcing(sliding)[0]
+    assert gap[0, 1, 1] == pytest.approx(inverse_r, rel=1e-9)
+    assert inverse_r > 0.01 * np.abs(dynamics.mass_and_forcing(sliding)[0]).max()
+    physics = compare_physics(model, system, n_states=8, seed=0)
+    assert physics["mass_error"] < 1e-8
