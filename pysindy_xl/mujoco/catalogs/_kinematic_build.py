@@ -12,6 +12,7 @@ import sympy as sp
 
 from ...feature_library.joint_friction import FRICTION_MODELS
 from ...feature_library.trigpoly import state_values
+from ..systems.friction import dry_friction_scales
 from ..systems.registry import MuJoCoSystem
 
 # A column whose part orthogonal to the kept columns is below this fraction of its norm is
@@ -19,6 +20,11 @@ from ..systems.registry import MuJoCoSystem
 _INDEPENDENCE_TOL = 1e-9
 # Columns taken in preference order only when at least this fraction of them is new.
 _WELL_CONDITIONED = 0.05
+#: Model a joint's ``frictionloss`` as MuJoCo regularizes it (:func:`regularized_dry_friction`)
+#: instead of ``tanh(qvel / coulomb_scale)``. Off until the weak form integrates accelerations
+#: with velocity-dependent coefficients by parts, the MJCF export states the term as
+#: ``frictionloss`` and the closed-loop validation steps it in MuJoCo (issue 42).
+REGULARIZED_DRY_FRICTION = False
 
 
 def independent_regressor_columns(matrix: np.ndarray) -> list[int]:
@@ -85,12 +91,65 @@ def joint_coordinates(system, model):
     return qpos, qvel
 
 
+def regularized_dry_friction(velocity, acceleration, scale: float, lead: float):
+    """The unit dry friction of
+    :func:`~pysindy_xl.mujoco.systems.friction.dry_friction_scales`, to first order in its lead.
+
+    ``sat((v + tau a) / s) ~ sat(v / s) + tau d/dt sat(v / s)``: exact while the velocity
+    stays inside ``|v| < s`` (the damping and inertia of the sticking zone) or outside it
+    (``sign(v)``); at a reversal the switch of the friction ``tau`` early becomes an impulse
+    of the same area at the reversal, which test functions wider than ``tau`` cannot tell
+    apart. The term is a velocity function plus an exact time derivative (the weak form
+    integrates it by parts).
+
+    Parameters
+    ----------
+    velocity, acceleration : sympy.Expr
+        The joint's velocity and acceleration in the coordinates.
+    scale, lead : float
+        ``s`` and ``tau``.
+
+    Returns
+    -------
+    sympy.Expr
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> v, a = sp.symbols("v a", real=True)
+    >>> term = regularized_dry_friction(v, a, 0.5, 0.01)
+    >>> float(term.subs({v: 0.25, a: 3.0})), float(term.subs({v: 2.0, a: 3.0}))
+    (0.56, 1.0)
+    """
+    x = velocity / sp.Float(scale)
+    inside = (sp.sign(x + 1) - sp.sign(x - 1)) / 2
+    return (sp.Abs(x + 1) - sp.Abs(x - 1)) / 2 + sp.Float(lead / scale) * inside * acceleration
+
+
+def _dry_friction_terms(system, model, qvel, coulomb_scale):
+    """Per joint, the candidate of its ``frictionloss``: MuJoCo's regularized dry friction
+    (:func:`regularized_dry_friction`) where the joint has one and
+    :data:`REGULARIZED_DRY_FRICTION` is set, else ``tanh(qvel / coulomb_scale)``."""
+    coords = system.coords
+    to_acceleration = dict(zip(coords.qd, coords.qdd, strict=True))
+    scale, lead = dry_friction_scales(model)
+    return [regularized_dry_friction(qvel[k], qvel[k].subs(to_acceleration),
+                                     float(scale[model.jnt_dofadr[k]]),
+                                     float(lead[model.jnt_dofadr[k]]))
+            if REGULARIZED_DRY_FRICTION and scale[model.jnt_dofadr[k]] > 0
+            else sp.tanh(qvel[k] / coulomb_scale) for k in range(model.njnt)]
+
+
 def classical_candidates(system, model, coulomb, coulomb_scale, friction=True):
     """Friction (unless not ``friction``) and spring candidates per joint, in the
-    coordinates, with their MJCF values."""
+    coordinates, with their MJCF values; with :data:`REGULARIZED_DRY_FRICTION` the Coulomb
+    candidate of a joint with ``frictionloss`` follows MuJoCo's regularization of it
+    (:func:`_dry_friction_terms`)."""
     coords = system.coords
     force_map = system.force_matrix()
     qpos, qvel = joint_coordinates(system, model)
+    dry = _dry_friction_terms(system, model, qvel, coulomb_scale) if coulomb and friction \
+        else None
     terms, mask, kinds, values = [], [], [], []
     for k in range(model.njnt):
         name = system.joint_names[k]
@@ -98,8 +157,7 @@ def classical_candidates(system, model, coulomb, coulomb_scale, friction=True):
         reaches = np.abs(force_map[:, k]) > 1e-12
         candidates = [("viscous", qvel[k], model.dof_damping[dof])] if friction else []
         if coulomb and friction:
-            candidates.append(("coulomb", sp.tanh(qvel[k] / coulomb_scale),
-                               model.dof_frictionloss[dof]))
+            candidates.append(("coulomb", dry[k], model.dof_frictionloss[dof]))
         if model.jnt_stiffness[k] > 0:
             rest = float(model.qpos_spring[model.jnt_qposadr[k]])
             candidates.append(("spring", qpos[k] - rest, model.jnt_stiffness[k]))
