@@ -11,8 +11,8 @@ import sympy as sp
 
 mujoco = pytest.importorskip("mujoco")
 
-from pysindy_xl.mujoco.catalogs._kinematic_build import regularized_dry_friction  # noqa: E402
 from pysindy_xl.mujoco.systems.friction import dry_friction_scales  # noqa: E402
+from pysindy_xl.physical.friction import regularized_dry_friction  # noqa: E402
 
 # a heavy shoulder and a light wrist (its soft friction never saturates at moderate speeds),
 # one joint with the default friction regularization, one with its own
@@ -111,31 +111,34 @@ def test_weak_projection_of_the_candidate_matches_mujoco(run):
 
 
 @pytest.mark.filterwarnings("ignore")  # the fit only gives the model its structure
-def test_compare_physics_reads_the_mass_matrix_where_joints_slide(monkeypatch):
+def test_mujoco_law_model_reads_its_rigid_mass_and_exports_its_frictionloss():
     """With MuJoCo's regularized dry friction in the catalog, the model with the MJCF's own
     coefficients has the soft constraint's inertia 1/R inside the sticking zone (as MuJoCo
     does); the mass matrix compared with mj_fullM is the rigid body's, read where the joints
-    slide."""
+    slide; the law counts as dry friction, and the MJCF export states it as frictionloss."""
     import pysindy_xl as px
-    from pysindy_xl.mujoco import MJCFSystem, generate_dataset
-    from pysindy_xl.mujoco.catalogs import _kinematic_build, kinematic
+    from pysindy_xl.export.mjcf import identified_mj_model
+    from pysindy_xl.mujoco import MJCFSystem, generate_dataset, kinematic_catalog
     from pysindy_xl.mujoco.evaluation.physics import compare_physics
+    from pysindy_xl.physical import friction_columns
 
-    monkeypatch.setattr(_kinematic_build, "REGULARIZED_DRY_FRICTION", True)
-    monkeypatch.setattr(kinematic, "_CACHE", {})
     # a stiff friction regularization on the wrist: its sticking inertia 1/R is ~100 times
     # the link's, over a sticking zone of 0.3 rad/s
     system = MJCFSystem(ARM.format(step=1e-3).replace('solimpfriction="0.8 0.9 0.001"',
                                                        'solimpfriction="0.99 0.99 0.001"'))
     scale = dry_friction_scales(system.mj_model())[0]
     assert 0.1 < scale[1] < 1.0
-    catalog = kinematic.kinematic_catalog(system)
+    catalog = kinematic_catalog(system, coulomb_law="mujoco")
     assert sum(term.has(sp.Abs) for term in catalog.classical_terms) == 2
+    assert not any(term.has(sp.Abs) for term in kinematic_catalog(system).classical_terms)
     data = generate_dataset(system, n_trajectories=1, duration=0.5, seed=0, progress=False)
     model = px.XLSINDy(catalog.library(), px.ExplicitOptimizer(), formulation="strong")
     model.fit(**data.fit_arguments())
     model.coef_ = catalog.true_coefficients()  # the MJCF's own model
     model._build_dynamics()
+    library = model.feature_library_
+    dry = [j for j in friction_columns(library) if library.feature_terms_[j].has(sp.Abs)]
+    assert len(dry) == 2
     # inside the wrist's sticking zone the model carries MuJoCo's soft inertia
     mj_model = system.mj_model()
     inverse_r = 0.99 / 0.01 / mj_model.dof_invweight0[1]
@@ -149,3 +152,17 @@ def test_compare_physics_reads_the_mass_matrix_where_joints_slide(monkeypatch):
     assert inverse_r > 0.01 * np.abs(dynamics.mass_and_forcing(sliding)[0]).max()
     physics = compare_physics(model, system, n_states=8, seed=0)
     assert physics["mass_error"] < 1e-8
+    exported, reason = identified_mj_model(model, system)
+    assert reason is None
+    np.testing.assert_allclose(exported.dof_frictionloss, mj_model.dof_frictionloss, rtol=1e-9)
+    np.testing.assert_allclose(exported.dof_damping, mj_model.dof_damping, rtol=1e-9)
+
+
+def test_coulomb_law_is_checked():
+    from pysindy_xl.mujoco import kinematic_catalog
+    from pysindy_xl.mujoco.catalogs.reference import reference_catalog
+
+    with pytest.raises(ValueError, match="coulomb_law: expected one of"):
+        kinematic_catalog(ARM.format(step=1e-3), coulomb_law="tanh")
+    with pytest.raises(ValueError, match="coulomb_law: only the 'kinematic' catalog"):
+        reference_catalog("cart-pole", "mixed", coulomb_law="mujoco")

@@ -12,6 +12,7 @@ from test_explicit_identification import _true_coefficients, paper_catalog
 import pysindy_xl as px
 from pysindy_xl.feature_library._weak import integrate_by_parts
 from pysindy_xl.optimizers.selection import select_support
+from pysindy_xl.physical.friction import regularized_dry_friction
 from pysindy_xl.weak import BumpTestFunctions, WhittakerSmoother, quadrature_weights
 
 # ---------------------------------------------------------------------------- weak matrix
@@ -64,16 +65,47 @@ def test_integration_by_parts_splits():
     p, q = integrate_by_parts(c.q[1] ** 2 * c.qdd[0] + c.tau[0], c)
     assert p == c.q[1] ** 2 * c.qd[0]
     assert sp.expand(q - (2 * c.q[1] * c.qd[1] * c.qd[0] - c.tau[0])) == 0
-    with pytest.raises(ValueError, match="acceleration x_ddot.*not a function of the positions"):
-        integrate_by_parts(c.qd[0] * c.qdd[0], c)
-    with pytest.raises(ValueError, match="formulation='strong'"):
+    # y_dot x_ddot is no velocity gradient (d/dx_dot of G would be y_dot, d/dy_dot zero)
+    with pytest.raises(ValueError, match="not the velocity gradient of one function"):
+        integrate_by_parts(c.qd[1] * c.qdd[0], c)
+    with pytest.raises(ValueError, match="depends on forces or accelerations.*'strong'"):
         integrate_by_parts(c.qdd[0] ** 2, c)
+
+
+def test_velocity_dependent_accelerations_integrate_by_parts():
+    """E = d/dt P - Q for accelerations with velocity-dependent coefficients (a joint
+    velocity's function times its derivative; MuJoCo's dry friction with its lead and
+    sticking zone): against a bump, -int phi' P - int phi Q equals the quadrature of phi E
+    on a fine grid along a known trajectory."""
+    c = px.Coordinates(["x", "y"])
+    relative = c.qd[0] - c.qd[1]
+    entries = [sp.tanh(3 * relative) * (c.qdd[0] - c.qdd[1]) + sp.cos(c.q[1]) * c.qd[0],
+               regularized_dry_friction(c.qd[0], c.qdd[0], 0.4, 0.05),
+               c.qd[0] ** 2 * sp.sin(c.q[1]) * c.qdd[0]]
+    t = np.linspace(0.0, 4.0, 400_001)
+    x, xd, xdd = np.sin(1.3 * t), 1.3 * np.cos(1.3 * t), -1.69 * np.sin(1.3 * t)
+    y, yd, ydd = 0.5 * np.cos(0.7 * t), -0.35 * np.sin(0.7 * t), -0.245 * np.cos(0.7 * t)
+    values = dict(zip([*c.q, *c.qd, *c.qdd], [x, y, xd, yd, xdd, ydd], strict=True))
+    phi = np.clip(1 - ((t - 2.0) / 1.8) ** 2, 0, None) ** 3
+    dphi = np.gradient(phi, t)
+
+    def at(expr):
+        free = sorted(expr.free_symbols, key=str)
+        return np.broadcast_to(sp.lambdify(free, expr, "numpy")(*(values[s] for s in free)),
+                               t.shape)
+
+    for entry in entries:
+        p, q = integrate_by_parts(entry, c)
+        assert not (p.free_symbols | q.free_symbols) & set(c.qdd)
+        pointwise = simpson(phi * at(entry), x=t)
+        weak = -simpson(dphi * at(p), x=t) - simpson(phi * at(q), x=t)
+        assert weak == pytest.approx(pointwise, rel=1e-6, abs=1e-9), entry
 
 
 def test_weak_refuses_unintegrable_classical_term(cart_pole_system):
     system = cart_pole_system
     c = system.coords
-    library = paper_catalog(c, [1]) + px.ClassicalLibrary(c, [c.qd[0] * c.qdd[0]])
+    library = paper_catalog(c, [1]) + px.ClassicalLibrary(c, [c.qd[1] * c.qdd[0]])
     t = np.arange(0, 5, 0.01)
     data = system.simulate(random_initial_state(system, 0), t, random_force(system, 0))
     with pytest.raises(ValueError, match="formulation='strong'"):

@@ -67,7 +67,7 @@ def _add_generation_options(parser, duration=10.0, trajectories=2):
                              "at their reference pose (removed with their actuators)")
 
 
-def _add_fit_options(parser):
+def _add_fit_options(parser, coulomb_law="smooth"):
     parser.add_argument("--catalog", choices=(*CATALOGS, "auto"), default="auto",
                         help="lagrange, classical, mixed (Lagrange + friction) or kinematic "
                              "(derived from the MJCF kinematic tree); auto: kinematic for any "
@@ -85,6 +85,10 @@ def _add_fit_options(parser):
                              "offered for every joint, the fit selecting what each needs; "
                              "comma-separated among viscous, coulomb, asymmetric, stribeck, "
                              "offset, or all (default: viscous and smooth Coulomb)")
+    parser.add_argument("--coulomb-law", choices=("smooth", "mujoco"), default=coulomb_law,
+                        help="kinematic catalog: law of the Coulomb candidates, smooth "
+                             "(tanh, real joints) or mujoco (MuJoCo's regularized frictionloss, "
+                             f"for data MuJoCo simulated from the model) (default: {coulomb_law})")
     parser.add_argument("--velocity-degree", type=_positive_int, default=2,
                         help="degree of the velocity monomials of the catalog (default: 2)")
     parser.add_argument("--trig-degree", type=_positive_int, default=2,
@@ -139,7 +143,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help="cart-pole, double-pendulum, cart-double-pendulum, triple-pendulum, "
                            "an MJCF .xml or a URDF .urdf")
     _add_generation_options(demo)
-    _add_fit_options(demo)
+    _add_fit_options(demo, coulomb_law="mujoco")  # the demo's data come from MuJoCo
     demo.add_argument("--constraints", choices=CONSTRAINTS, default="exclude",
                       help="samples where a joint limit, contact or equality constraint acts: "
                            "exclude them from the regression, pass the recorded constraint "

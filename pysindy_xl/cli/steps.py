@@ -222,7 +222,9 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
     try:
         catalog = reference_catalog(system, args.catalog, velocity_degree=args.velocity_degree,
                                     trig_degree=args.trig_degree, friction=args.friction,
-                                    joint_models=getattr(args, "joint_models", None))
+                                    joint_models=getattr(args, "joint_models", None),
+                                    **({"coulomb_law": getattr(args, "coulomb_law", "smooth")}
+                                       if args.catalog == "kinematic" else {}))
     except ValueError as error:
         if not str(error).startswith(("friction:", "joint_models:")):
             raise

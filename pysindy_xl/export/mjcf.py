@@ -172,10 +172,11 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     ``W = diag(|pi_0|)``; any solution of ``C pi = beta`` has the same equations),
     joints their armature, stiffness, viscous damping and dry friction (``frictionloss``; MuJoCo's
     constraint force of that magnitude, where the model has the smooth sign
-    ``tanh(qd / eps)``). The result is accepted only if MuJoCo's ``mj_fullM`` and its
-    passive minus bias forces (minus ``frictionloss sign(qd)``) equal the model's ``M`` and
-    ``f`` at ``n_states`` random states (velocities far from zero, where the smooth sign is
-    one) within ``tolerance`` of their largest entries, and only with a positive definite
+    ``tanh(qd / eps)`` or MuJoCo's own regularized law). The result is accepted only if
+    MuJoCo's ``mj_fullM`` and its passive minus bias forces (minus ``frictionloss sign(qd)``)
+    equal the model's ``M`` and ``f`` at ``n_states`` random states (every joint sliding:
+    velocities far from zero and outside every sticking zone) within ``tolerance`` of their
+    largest entries, and only with a positive definite
     ``M`` there (MuJoCo factors it): models with terms MJCF cannot state (other catalogs, held
     coordinates, joint offsets, asymmetric friction) are refused.
 
@@ -200,6 +201,7 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     """
     from ..feature_library import stack_variables
     from ..mujoco import import_mujoco, kinematic_catalog
+    from ..mujoco.systems.friction import sliding_velocities
 
     mujoco = import_mujoco()
 
@@ -269,6 +271,8 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     rng = np.random.default_rng(seed)
     q = rng.uniform(-np.pi, np.pi, (n_states, n))
     qd = rng.uniform(0.5, 1.5, (n_states, n)) * rng.choice([-1.0, 1.0], (n_states, n))
+    # where every joint slides, for the template's and the identified friction's scales
+    qd = sliding_velocities(system, mj, q, sliding_velocities(system, system.mj_model(), q, qd))
     mass, force = dynamics.mass_and_forcing(stack_variables(q, qd, None, np.zeros((n_states, n)),
                                                             np.zeros(n_states)))
     if not np.all(np.linalg.eigvalsh(mass)[:, 0] > 0):

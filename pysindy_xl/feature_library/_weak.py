@@ -11,6 +11,8 @@ splits any other entry (classical terms, forces).
 
 from __future__ import annotations
 
+import mpmath
+import numpy as np
 import sympy as sp
 
 from ..symbols import Coordinates
@@ -50,6 +52,10 @@ def integrate_by_parts(expr: sp.Expr, coords: Coordinates) -> tuple[sp.Expr, sp.
       ``P = a qd_j`` and the remainder of its time derivative goes to ``Q``;
     * ``g(q_j) * qd_j`` with ``g`` a polynomial (viscous friction ``qd_j`` is the common case)
       is an exact time derivative: ``P = int g dq_j``, so the weak column needs no velocity;
+    * ``sum_j c_j(q, qd) qdd_j`` with velocity-dependent coefficients that are the velocity
+      gradient of one function ``G(q, qd)`` (``c_j = dG/dqd_j``; e.g. ``h(w) d/dt w`` for a
+      joint velocity ``w``, as in a dry friction's lead) becomes ``P = G`` and
+      ``Q = dG/dq . qd + dG/dt``;
     * everything else, a function of ``(q, qd, tau, t)``, goes to ``Q = -E``.
 
     Parameters
@@ -65,8 +71,9 @@ def integrate_by_parts(expr: sp.Expr, coords: Coordinates) -> tuple[sp.Expr, sp.
     Raises
     ------
     ValueError
-        When an acceleration has a coefficient that depends on velocities, forces or
-        accelerations (a nonlinear acceleration term): no integration by parts removes it.
+        When an acceleration has a coefficient that depends on forces or accelerations, or
+        velocity-dependent coefficients that are not one function's velocity gradient: no
+        integration by parts removes them.
 
     Examples
     --------
@@ -76,22 +83,27 @@ def integrate_by_parts(expr: sp.Expr, coords: Coordinates) -> tuple[sp.Expr, sp.
     (x, 0)
     >>> integrate_by_parts(sp.cos(c.q[0]) * c.qdd[0], c)
     (x_dot*cos(x), -x_dot**2*sin(x))
+    >>> integrate_by_parts(c.qd[0] ** 2 * c.qdd[0], c)
+    (x_dot**3/3, 0)
     """
     expr = sp.expand(sp.sympify(expr))
     positions = set(coords.q) | {coords.t}
     momentum = sp.Integer(0)
     rest = expr
+    velocity_dependent = {}  # qd_j: the coefficient of qdd_j, a function of (q, qd, t)
     for qd, qdd in zip(coords.qd, coords.qdd, strict=True):
         if qdd not in rest.free_symbols:
             continue
         coefficient = sp.expand(sp.diff(rest, qdd))
-        if not coefficient.free_symbols <= positions:
+        if coefficient.free_symbols <= positions:
+            momentum += coefficient * qd
+        elif coefficient.free_symbols <= positions | set(coords.qd):
+            velocity_dependent[qd] = coefficient
+        else:
             raise ValueError(
-                f"terms: the acceleration {qdd} in {expr} has a coefficient that is not a "
-                "function of the positions, so the weak form cannot integrate it by parts; "
-                "use formulation='strong' or rewrite the term"
-            )
-        momentum += coefficient * qd
+                f"terms: the acceleration {qdd} in {expr} has a coefficient that depends on "
+                "forces or accelerations, so the weak form cannot integrate it by parts; use "
+                "formulation='strong' or rewrite the term")
         rest = sp.expand(rest - coefficient * qdd)
     exact = sp.Integer(0)
     velocities = dict(zip(coords.qd, coords.q, strict=True))
@@ -108,4 +120,53 @@ def integrate_by_parts(expr: sp.Expr, coords: Coordinates) -> tuple[sp.Expr, sp.
     # E = d/dt P - Q: the time derivative of the acceleration part's P has no acceleration
     # left after subtracting E's own acceleration terms, and the exact part is E's term.
     q_part = sp.expand(time_derivative(momentum, coords) - expr)
-    return momentum, q_part
+    if not velocity_dependent:
+        return momentum, q_part
+    potential = _velocity_potential(velocity_dependent, coords)
+    if potential is None:
+        raise ValueError(
+            f"terms: the accelerations in {expr} have velocity-dependent coefficients that are "
+            "not the velocity gradient of one function, so the weak form cannot integrate "
+            "them by parts; use formulation='strong' or rewrite the term")
+    # d/dt G = dG/dq . qd + dG/dt + sum_j c_j qdd_j: its acceleration part is E's own
+    moved = sum((c * qdd for qd, qdd in zip(coords.qd, coords.qdd, strict=True)
+                 if (c := velocity_dependent.get(qd)) is not None), sp.Integer(0))
+    q_part = sp.expand(q_part + moved + sp.diff(potential, coords.t) + sum(
+        (sp.diff(potential, q) * qd for q, qd in zip(coords.q, coords.qd, strict=True)),
+        sp.Integer(0)))
+    return momentum + potential, q_part
+
+
+def _velocity_potential(coefficients: dict, coords: Coordinates):
+    """``G(q, qd, t)`` with ``dG/dqd_j = coefficients[qd_j]`` (zero where absent), or None.
+
+    Built one velocity at a time (``G += int (c_j - dG/dqd_j) dqd_j``, the usual construction
+    of a potential) and accepted when its gradient matches every coefficient. Equality is
+    checked at states spread over several orders of magnitude, at 30 digits: piecewise
+    coefficients (a friction's sticking zone) have no identity that sympy proves reliably,
+    and antiderivatives such as ``log(tanh(w) + 1)`` cancel in double precision.
+    """
+    variables = [*coords.q, *coords.qd, coords.t]
+    rng = np.random.default_rng(0)
+    states = rng.choice([-1.0, 1.0], (24, len(variables))) * 10.0 ** rng.uniform(
+        -3, 1, (24, len(variables)))
+
+    def vanishes(gap, scale):
+        gap_at = sp.lambdify(variables, gap, "mpmath")
+        scale_at = sp.lambdify(variables, scale, "mpmath")
+        with mpmath.workdps(30):
+            return all(abs(gap_at(*state)) <= 1e-12 * (1 + abs(scale_at(*state)))
+                       for state in states)
+
+    potential = sp.Integer(0)
+    for qd in coords.qd:
+        target = coefficients.get(qd, sp.Integer(0))
+        residual = target - sp.diff(potential, qd)
+        if not vanishes(residual, target):
+            potential += sp.integrate(residual, qd)
+            if potential.has(sp.Integral) or not vanishes(
+                    target - sp.diff(potential, qd), target):
+                return None
+    if all(vanishes(c - sp.diff(potential, qd), c) for qd, c in coefficients.items()):
+        return potential
+    return None

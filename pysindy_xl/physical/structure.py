@@ -21,7 +21,8 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-import sympy as sp
+
+from .friction import dry_friction_law
 
 __all__ = ["INERTIAL_PARAMETERS", "PhysicalStructure", "catalog_structure", "friction_kind",
            "pseudo_inertia_matrix"]
@@ -214,14 +215,14 @@ def pseudo_inertia_matrix(parameters):
     return np.array(rows, dtype=float)
 
 
-def friction_kind(term, velocity) -> str | None:
-    """``"viscous"`` for the term ``qd_c``, ``"dry"`` for ``tanh(k qd_c)`` or ``sign(qd_c)``
-    (``velocity`` is ``qd_c``), None for any other term."""
+def friction_kind(term, velocity, acceleration=None) -> str | None:
+    """``"viscous"`` for the term ``qd_c``, ``"dry"`` for a unit dry friction law of ``qd_c``
+    (``tanh(k qd_c)``, ``sign(qd_c)`` or MuJoCo's regularized law with the acceleration
+    ``qdd_c``, :func:`~pysindy_xl.physical.friction.dry_friction_law`), None for any other
+    term."""
     if term == velocity:
         return "viscous"
-    if term.func in (sp.tanh, sp.sign) and term.free_symbols == {velocity}:
-        return "dry"
-    return None
+    return "dry" if dry_friction_law(term, velocity, acceleration) else None
 
 
 def catalog_structure(library) -> PhysicalStructure | None:
@@ -265,6 +266,6 @@ def friction_columns(library) -> list:
             continue
         entering = np.flatnonzero(library.entry_sizes()[:, j] > 0).tolist()
         if len(entering) == 1 and friction_kind(library.feature_terms_[j],
-                                                coords.qd[entering[0]]):
+                                                coords.qd[entering[0]], coords.qdd[entering[0]]):
             out.append(j)
     return sorted(out)

@@ -12,6 +12,7 @@ import sympy as sp
 
 from ...feature_library.joint_friction import FRICTION_MODELS
 from ...feature_library.trigpoly import state_values
+from ...physical.friction import regularized_dry_friction
 from ..systems.friction import dry_friction_scales
 from ..systems.registry import MuJoCoSystem
 
@@ -20,11 +21,8 @@ from ..systems.registry import MuJoCoSystem
 _INDEPENDENCE_TOL = 1e-9
 # Columns taken in preference order only when at least this fraction of them is new.
 _WELL_CONDITIONED = 0.05
-#: Model a joint's ``frictionloss`` as MuJoCo regularizes it (:func:`regularized_dry_friction`)
-#: instead of ``tanh(qvel / coulomb_scale)``. Off until the weak form integrates accelerations
-#: with velocity-dependent coefficients by parts, the MJCF export states the term as
-#: ``frictionloss`` and the closed-loop validation steps it in MuJoCo (issue 42).
-REGULARIZED_DRY_FRICTION = False
+#: Laws of the Coulomb candidate (:func:`_dry_friction_terms`).
+COULOMB_LAWS = ("smooth", "mujoco")
 
 
 def independent_regressor_columns(matrix: np.ndarray) -> list[int]:
@@ -91,65 +89,29 @@ def joint_coordinates(system, model):
     return qpos, qvel
 
 
-def regularized_dry_friction(velocity, acceleration, scale: float, lead: float):
-    """The unit dry friction of
-    :func:`~pysindy_xl.mujoco.systems.friction.dry_friction_scales`, to first order in its lead.
-
-    ``sat((v + tau a) / s) ~ sat(v / s) + tau d/dt sat(v / s)``: exact while the velocity
-    stays inside ``|v| < s`` (the damping and inertia of the sticking zone) or outside it
-    (``sign(v)``); at a reversal the switch of the friction ``tau`` early becomes an impulse
-    of the same area at the reversal, which test functions wider than ``tau`` cannot tell
-    apart. The term is a velocity function plus an exact time derivative (the weak form
-    integrates it by parts).
-
-    Parameters
-    ----------
-    velocity, acceleration : sympy.Expr
-        The joint's velocity and acceleration in the coordinates.
-    scale, lead : float
-        ``s`` and ``tau``.
-
-    Returns
-    -------
-    sympy.Expr
-
-    Examples
-    --------
-    >>> import sympy as sp
-    >>> v, a = sp.symbols("v a", real=True)
-    >>> term = regularized_dry_friction(v, a, 0.5, 0.01)
-    >>> float(term.subs({v: 0.25, a: 3.0})), float(term.subs({v: 2.0, a: 3.0}))
-    (0.56, 1.0)
-    """
-    x = velocity / sp.Float(scale)
-    inside = (sp.sign(x + 1) - sp.sign(x - 1)) / 2
-    return (sp.Abs(x + 1) - sp.Abs(x - 1)) / 2 + sp.Float(lead / scale) * inside * acceleration
-
-
-def _dry_friction_terms(system, model, qvel, coulomb_scale):
-    """Per joint, the candidate of its ``frictionloss``: MuJoCo's regularized dry friction
-    (:func:`regularized_dry_friction`) where the joint has one and
-    :data:`REGULARIZED_DRY_FRICTION` is set, else ``tanh(qvel / coulomb_scale)``."""
-    coords = system.coords
-    to_acceleration = dict(zip(coords.qd, coords.qdd, strict=True))
+def _dry_friction_terms(system, model, qvel, coulomb_scale, coulomb_law):
+    """Per joint, the unit law of its dry friction: MuJoCo's regularization of the joint's
+    ``frictionloss`` (:func:`~pysindy_xl.physical.friction.regularized_dry_friction`) for
+    ``coulomb_law="mujoco"`` where the joint has one, else ``tanh(qvel / coulomb_scale)``."""
+    to_acceleration = dict(zip(system.coords.qd, system.coords.qdd, strict=True))
     scale, lead = dry_friction_scales(model)
-    return [regularized_dry_friction(qvel[k], qvel[k].subs(to_acceleration),
-                                     float(scale[model.jnt_dofadr[k]]),
-                                     float(lead[model.jnt_dofadr[k]]))
-            if REGULARIZED_DRY_FRICTION and scale[model.jnt_dofadr[k]] > 0
+    scale, lead = scale[model.jnt_dofadr], lead[model.jnt_dofadr]
+    return [regularized_dry_friction(qvel[k], qvel[k].subs(to_acceleration), float(scale[k]),
+                                     float(lead[k]))
+            if coulomb_law == "mujoco" and scale[k] > 0
             else sp.tanh(qvel[k] / coulomb_scale) for k in range(model.njnt)]
 
 
-def classical_candidates(system, model, coulomb, coulomb_scale, friction=True):
+def classical_candidates(system, model, coulomb, coulomb_scale, friction=True,
+                         coulomb_law="smooth"):
     """Friction (unless not ``friction``) and spring candidates per joint, in the
-    coordinates, with their MJCF values; with :data:`REGULARIZED_DRY_FRICTION` the Coulomb
-    candidate of a joint with ``frictionloss`` follows MuJoCo's regularization of it
-    (:func:`_dry_friction_terms`)."""
+    coordinates, with their MJCF values; the Coulomb candidate's law is
+    :func:`_dry_friction_terms`'s."""
     coords = system.coords
     force_map = system.force_matrix()
     qpos, qvel = joint_coordinates(system, model)
-    dry = _dry_friction_terms(system, model, qvel, coulomb_scale) if coulomb and friction \
-        else None
+    dry = (_dry_friction_terms(system, model, qvel, coulomb_scale, coulomb_law)
+           if coulomb and friction else None)
     terms, mask, kinds, values = [], [], [], []
     for k in range(model.njnt):
         name = system.joint_names[k]

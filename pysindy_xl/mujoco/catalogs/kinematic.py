@@ -57,6 +57,7 @@ from .. import import_mujoco
 from ..systems.registry import MuJoCoSystem, get_system
 from . import _derivation_cache
 from ._kinematic_build import (
+    COULOMB_LAWS,
     classical_candidates,
     friction_models,
     independent_regressor_columns,
@@ -439,8 +440,8 @@ def _states(a, name: str, n: int) -> np.ndarray:
 
 # -- derivation ----------------------------------------------------------------------------
 def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
-                      seed: int = 0, friction=None,
-                      stribeck_scale: float = 0.1) -> KinematicCatalog:
+                      seed: int = 0, friction=None, stribeck_scale: float = 0.1,
+                      coulomb_law: str = "smooth") -> KinematicCatalog:
     """Candidate Lagrangian and Newtonian terms derived from the kinematic tree of a model.
 
     Every moving body contributes the ten functions of ``(q, qd)`` that multiply its inertial
@@ -470,6 +471,13 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
         unselected. Default: the viscous and Coulomb candidates above.
     stribeck_scale : float, default 0.1
         Velocity scale ``v_s`` of the Stribeck model ``tanh(v / eps) exp(-(v / v_s)^2)``.
+    coulomb_law : {"smooth", "mujoco"}, default "smooth"
+        The Coulomb candidate's law: ``"smooth"``, ``tanh(qvel / coulomb_scale)`` (real
+        joints); ``"mujoco"``, for data MuJoCo simulated from this model: where a joint has
+        ``frictionloss``, MuJoCo's regularization of it
+        (:func:`~pysindy_xl.physical.friction.regularized_dry_friction` with the scales of
+        :func:`~pysindy_xl.mujoco.systems.friction.dry_friction_scales`), whose sticking
+        zone and lead the smooth sign misses and a fit would take for inertia.
 
     Returns
     -------
@@ -481,8 +489,8 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
     TypeError
         If ``system`` is not a system, path or MJCF text.
     ValueError
-        If the model has a joint other than hinge or slide, a scale is not positive or
-        ``friction`` names an unknown model.
+        If the model has a joint other than hinge or slide, a scale is not positive,
+        ``friction`` names an unknown model or ``coulomb_law`` is not a law above.
 
     Examples
     --------
@@ -507,6 +515,8 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
                 np.isfinite(value) and value > 0):
             raise ValueError(f"{name}: expected a positive number, got {value!r}")
+    if coulomb_law not in COULOMB_LAWS:
+        raise ValueError(f"coulomb_law: expected one of {COULOMB_LAWS}, got {coulomb_law!r}")
     friction = friction_models(friction)
     model = system.mj_model()
     if model.nq != system.n or model.nv != system.n:
@@ -520,13 +530,13 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
                              "joint; only those are supported")
     key = (hashlib.sha256(system.xml().encode()).hexdigest(), system.coordinate_names,
            system.joint_to_coordinates.tobytes(), bool(coulomb), float(coulomb_scale), seed,
-           friction, float(stribeck_scale))
+           friction, float(stribeck_scale), coulomb_law)
     if key in _CACHE:
         # same model text and coordinates: same catalog, but bound to the system given (its
         # other settings, e.g. force amplitudes, matter to whoever uses catalog.system)
         return dataclasses.replace(_CACHE[key], system=system)
     start = time.perf_counter()
-    catalog = _build(system, model, bool(coulomb), float(coulomb_scale), seed)
+    catalog = _build(system, model, bool(coulomb), float(coulomb_scale), seed, coulomb_law)
     if friction:
         catalog = with_joint_models(catalog, system, model, friction,
                                      (float(coulomb_scale), float(stribeck_scale)))
@@ -537,7 +547,7 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
     return catalog
 
 
-def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
+def _build(system, model, coulomb, coulomb_scale, seed, coulomb_law) -> KinematicCatalog:
     mujoco, coords = import_mujoco(), system.coords
     bodies = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}"
               for b in range(model.nbody)]
@@ -553,7 +563,7 @@ def _build(system, model, coulomb, coulomb_scale, seed) -> KinematicCatalog:
     parameters = [{names[p]: float(combination[j, p]) for p in np.flatnonzero(combination[j])}
                   for j in range(len(kept))]
     classical_terms, mask, kinds, classical_values = classical_candidates(
-        system, model, coulomb, coulomb_scale)
+        system, model, coulomb, coulomb_scale, coulomb_law=coulomb_law)
     return KinematicCatalog(
         system=system, coords=coords,
         # sympy expressions built only when read: the library derives from the polynomials

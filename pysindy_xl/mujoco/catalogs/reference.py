@@ -201,7 +201,7 @@ def dry_friction_terms(system, eps: float = 1e-3) -> tuple[list[sp.Expr], np.nda
 def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
                       trig_degree: int = 2, friction: str = "auto", interlink=None,
                       dry_friction: bool | None = None, dry_friction_eps: float = 1e-3,
-                      joint_models=None):
+                      joint_models=None, coulomb_law: str = "smooth"):
     """The paper's reference catalog of a system (see the module docstring).
 
     Parameters
@@ -227,6 +227,10 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
         ``"kinematic"`` only: the friction and sensor models of real joints offered for
         every joint, the fit selecting what each needs (``friction`` of
         :func:`~pysindy_xl.mujoco.kinematic_catalog`). Default: viscous and smooth Coulomb.
+    coulomb_law : {"smooth", "mujoco"}, default "smooth"
+        ``"kinematic"`` only: the law of the Coulomb candidates (``coulomb_law`` of
+        :func:`~pysindy_xl.mujoco.kinematic_catalog`; ``"mujoco"`` for data MuJoCo
+        simulated from the system's model).
 
     Returns
     -------
@@ -254,9 +258,13 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
     if kind == "kinematic":
         from .kinematic import kinematic_catalog
 
-        return kinematic_catalog(system, friction=joint_models).library(interlink=interlink)
+        return kinematic_catalog(system, friction=joint_models,
+                                 coulomb_law=coulomb_law).library(interlink=interlink)
     if joint_models is not None:
         raise ValueError(f"joint_models: only the 'kinematic' catalog offers joint models, not "
+                         f"{kind!r}")
+    if coulomb_law != "smooth":
+        raise ValueError(f"coulomb_law: only the 'kinematic' catalog has other laws, not "
                          f"{kind!r}")
     coords = system.coords
     friction_mask = _friction_mask(system, friction)
@@ -293,16 +301,18 @@ def _kinematic_truth(system, catalog, names, forces):
     hinge), not the per-coordinate velocities of :meth:`MuJoCoSystem.friction`, so the generic
     matching below would miss them.
     """
+    from ._kinematic_build import COULOMB_LAWS
     from .kinematic import PolynomialLagrangeLibrary, kinematic_catalog
 
     if not any(isinstance(lib, PolynomialLagrangeLibrary) for lib in catalog.libraries_):
         return None
     forces_library = next(lib for lib in catalog.libraries_ if lib.category == "forces")
-    kinematic = kinematic_catalog(system)
-    reference = kinematic.library(interlink=forces_library.interlink)
-    if reference.fit().get_feature_names() != names:
-        return None
-    return kinematic.true_coefficients(forces=forces)
+    for law in COULOMB_LAWS:
+        kinematic = kinematic_catalog(system, coulomb_law=law)
+        reference = kinematic.library(interlink=forces_library.interlink)
+        if reference.fit().get_feature_names() == names:
+            return kinematic.true_coefficients(forces=forces)
+    return None
 
 
 def _classical_name(coords, term, i) -> str:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import import_mujoco
-from ..systems.friction import dry_friction_scales
+from ..systems.friction import sliding_velocities
 from ..systems.registry import get_system
 
 __all__ = ["compare_physics"]
@@ -25,8 +25,8 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     first scaled by the least-squares factor that best matches the mass matrices.
 
     The identified mass matrix is read where every joint with ``frictionloss`` slides (its
-    speed raised to at least twice the sticking scale of
-    :func:`~pysindy_xl.mujoco.systems.friction.dry_friction_scales`): a rigid body's mass
+    speed raised to at least twice the sticking scale,
+    :func:`~pysindy_xl.mujoco.systems.friction.sliding_velocities`): a rigid body's mass
     matrix does not depend on the velocities, but a dry friction modelled as MuJoCo
     regularizes it adds the soft constraint's inertia inside its sticking zone, which
     ``mj_fullM`` leaves out.
@@ -121,11 +121,9 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
         gravity_ref[k] = matrix @ (data.qfrc_spring - data.qfrc_bias)
     z = stack_variables(q, qd, None, np.zeros_like(q), np.zeros(n_states))
     force = dynamics.mass_and_forcing(z)[1]
-    qpos, qvel = system.from_generalized(q, qd)
-    sliding = 2 * dry_friction_scales(mj_model)[0]  # zero without frictionloss
-    qvel = np.where(qvel < 0, -1.0, 1.0) * np.maximum(np.abs(qvel), sliding)
     mass = dynamics.mass_and_forcing(stack_variables(
-        q, system.to_generalized(qpos, qvel)[1], None, np.zeros_like(q), np.zeros(n_states)))[0]
+        q, sliding_velocities(system, mj_model, q, qd), None, np.zeros_like(q),
+        np.zeros(n_states)))[0]
     gravity = dynamics.mass_and_forcing(stack_variables(
         q, np.zeros_like(qd), None, np.zeros_like(q), np.zeros(n_states)))[1]
     held = np.isin(system.coordinate_names, list(getattr(model, "still_coordinates_", ())))

@@ -6,7 +6,7 @@ import numpy as np
 
 from .. import import_mujoco
 
-__all__ = ["dry_friction_scales"]
+__all__ = ["dry_friction_scales", "sliding_velocities"]
 
 
 def dry_friction_scales(model) -> tuple[np.ndarray, np.ndarray]:
@@ -58,3 +58,30 @@ def dry_friction_scales(model) -> tuple[np.ndarray, np.ndarray]:
                        -solref[:, 1] / d_max)
     regularizer = (1 - d_min) / d_min * model.dof_invweight0
     return regularizer * model.dof_frictionloss / damping, 1 / damping
+
+
+def sliding_velocities(system, model, q, qd, margin: float = 2.0) -> np.ndarray:
+    """``qd`` with every joint speed raised to at least ``margin`` times its sticking scale.
+
+    Where every joint slides, MuJoCo's dry friction is ``-F sign(v)`` and its mass matrix the
+    rigid body's (``mj_fullM``): a model with MuJoCo's regularized dry friction matches both
+    only there.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem
+    model : mujoco.MjModel
+        Whose scales (:func:`dry_friction_scales`) apply; one dof per joint.
+    q, qd : ndarray, shape (N, n)
+        States in the system's coordinates.
+    margin : float, default 2.0
+
+    Returns
+    -------
+    ndarray, shape (N, n)
+        The velocities in the coordinates (unchanged without ``frictionloss``).
+    """
+    qpos, qvel = system.from_generalized(q, qd)
+    least = margin * dry_friction_scales(model)[0]
+    qvel = np.where(qvel < 0, -1.0, 1.0) * np.maximum(np.abs(qvel), least)
+    return system.to_generalized(qpos, qvel)[1]
