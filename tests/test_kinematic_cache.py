@@ -30,7 +30,7 @@ def _no_derivation(monkeypatch):
     def fail(*args, **kwargs):
         raise AssertionError("derived although cached")
 
-    monkeypatch.setattr(kinematic, "_derive", fail)
+    monkeypatch.setattr(kinematic, "derive_lagrangian", fail)
 
 
 def _files(folder):

@@ -1,5 +1,6 @@
-"""Steps of building a kinematic catalog (:mod:`.kinematic`): random states, the reduction to
-independent columns, and the classical (friction, spring) candidates.
+"""Steps of building a kinematic catalog (:mod:`.kinematic`): random states, the derivation of
+the Lagrangian part reduced to independent columns, and the classical (friction, spring)
+candidates.
 """
 
 from __future__ import annotations
@@ -9,12 +10,14 @@ import dataclasses
 import numpy as np
 import scipy.linalg
 import sympy as sp
+import threadpoolctl
 
 from ...feature_library.joint_friction import FRICTION_MODELS
-from ...feature_library.trigpoly import state_values
+from ...feature_library.trigpoly import euler_lagrange_many, evaluate_many, state_values
 from ...physical.friction import regularized_dry_friction
 from ..systems.friction import dry_friction_scales
 from ..systems.registry import MuJoCoSystem
+from ._kinematic_tree import INERTIAL_PARAMETERS, body_functions
 
 # A column whose part orthogonal to the kept columns is below this fraction of its norm is
 # dependent; exact dependencies leave ~1e-14, independent columns O(1e-3) or more.
@@ -159,3 +162,37 @@ def with_joint_models(catalog, system, model, friction, scales):
         catalog, classical_terms=terms, classical_mask=mask, classical_kinds=kinds,
         classical_values=values, friction_models=friction, friction_scales=scales,
         joint_velocities=joint_coordinates(system, model)[1])
+
+
+def derive_lagrangian(system, model, bodies, seed) -> dict:
+    """The catalog's Lagrangian part from the kinematic tree: every body's ten functions and
+    every joint's armature term, reduced to independent Euler-Lagrange columns (see
+    :func:`._derivation_cache.load` for the entries)."""
+    n = system.coords.n
+    functions, joints = body_functions(system, model)
+    candidates, names = [], []
+    for b, functions_of_body in functions.items():
+        candidates.extend(functions_of_body)
+        names.extend(f"{bodies[b]}.{p}" for p in INERTIAL_PARAMETERS)
+    for k in range(model.njnt):
+        candidates.append(0.5 * (joints[k]["velocity"] * joints[k]["velocity"]))
+        names.append(f"{system.joint_names[k]}.armature")
+    columns = euler_lagrange_many(candidates)
+    rng = np.random.default_rng(seed)
+    n_samples = 2 * len(candidates) // n + 20
+    evaluated = evaluate_many([e for column in columns for e in column],
+                              random_joint_values(system, n_samples, rng))
+    # rows coordinate-major like the feature libraries: (equation, sample)
+    regressor = evaluated.reshape(n_samples, len(candidates), n).transpose(2, 0, 1)
+    regressor = regressor.reshape(n * n_samples, len(candidates))
+    # small dense problems: one BLAS thread (threads only contend, as in XLSINDy.fit)
+    with threadpoolctl.threadpool_limits(limits=1, user_api="blas"):
+        kept = independent_regressor_columns(regressor)
+        # every column is a combination of the kept ones: base = combination @ physical
+        combination, *_ = np.linalg.lstsq(regressor[:, kept], regressor, rcond=None)
+    # exact combinations come out within ~1e-14: round the noise away (0.9999999999999999)
+    combination = np.round(combination, 12)
+    combination[np.abs(combination) < 1e-10] = 0.0
+    return {"bodies": list(functions), "names": names, "combination": combination,
+            "n_candidates": len(candidates), "terms": [candidates[j] for j in kept],
+            "columns": [columns[j] for j in kept]}

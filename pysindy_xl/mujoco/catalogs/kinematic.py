@@ -46,10 +46,9 @@ import hashlib
 import time
 
 import numpy as np
-import threadpoolctl
 
 from ...feature_library import PolynomialLagrangeLibrary
-from ...feature_library.trigpoly import euler_lagrange_many, evaluate_many, state_values
+from ...feature_library.trigpoly import evaluate_many, state_values
 from ...feature_library.trigterms import TrigTerms
 from ...physical.rigid_body import KinematicTree
 from ...symbols import Coordinates
@@ -59,17 +58,11 @@ from . import _derivation_cache
 from ._kinematic_build import (
     COULOMB_LAWS,
     classical_candidates,
+    derive_lagrangian,
     friction_models,
-    independent_regressor_columns,
-    random_joint_values,
     with_joint_models,
 )
-from ._kinematic_tree import (
-    INERTIAL_PARAMETERS,
-    body_functions,
-    kinematic_tree,
-    physical_values,
-)
+from ._kinematic_tree import INERTIAL_PARAMETERS, kinematic_tree, physical_values
 
 __all__ = ["KinematicCatalog", "PolynomialLagrangeLibrary", "kinematic_catalog",
            "INERTIAL_PARAMETERS"]
@@ -555,7 +548,7 @@ def _build(system, model, coulomb, coulomb_scale, seed, coulomb_law) -> Kinemati
     derived = _derivation_cache.load(digest, tuple(j in system.angle_coordinates
                                                     for j in range(coords.n)))
     if derived is None:
-        derived = _derive(system, model, bodies, seed)
+        derived = derive_lagrangian(system, model, bodies, seed)
         _derivation_cache.save(digest, derived)
     names, combination, kept = derived["names"], derived["combination"], derived["terms"]
     values = [x for b in derived["bodies"] for x in physical_values(model, b)]
@@ -574,37 +567,3 @@ def _build(system, model, coulomb, coulomb_scale, seed, coulomb_law) -> Kinemati
         n_candidates=derived["n_candidates"], tree=kinematic_tree(system, model),
         _polynomials=list(kept),
     )
-
-
-def _derive(system, model, bodies, seed) -> dict:
-    """The catalog's Lagrangian part from the kinematic tree: every body's ten functions and
-    every joint's armature term, reduced to independent Euler-Lagrange columns (see
-    :func:`._derivation_cache.load` for the entries)."""
-    n = system.coords.n
-    functions, joints = body_functions(system, model)
-    candidates, names = [], []
-    for b, functions_of_body in functions.items():
-        candidates.extend(functions_of_body)
-        names.extend(f"{bodies[b]}.{p}" for p in INERTIAL_PARAMETERS)
-    for k in range(model.njnt):
-        candidates.append(0.5 * (joints[k]["velocity"] * joints[k]["velocity"]))
-        names.append(f"{system.joint_names[k]}.armature")
-    columns = euler_lagrange_many(candidates)
-    rng = np.random.default_rng(seed)
-    n_samples = 2 * len(candidates) // n + 20
-    evaluated = evaluate_many([e for column in columns for e in column],
-                              random_joint_values(system, n_samples, rng))
-    # rows coordinate-major like the feature libraries: (equation, sample)
-    regressor = evaluated.reshape(n_samples, len(candidates), n).transpose(2, 0, 1)
-    regressor = regressor.reshape(n * n_samples, len(candidates))
-    # small dense problems: one BLAS thread (threads only contend, as in XLSINDy.fit)
-    with threadpoolctl.threadpool_limits(limits=1, user_api="blas"):
-        kept = independent_regressor_columns(regressor)
-        # every column is a combination of the kept ones: base = combination @ physical
-        combination, *_ = np.linalg.lstsq(regressor[:, kept], regressor, rcond=None)
-    # exact combinations come out within ~1e-14: round the noise away (0.9999999999999999)
-    combination = np.round(combination, 12)
-    combination[np.abs(combination) < 1e-10] = 0.0
-    return {"bodies": list(functions), "names": names, "combination": combination,
-            "n_candidates": len(candidates), "terms": [candidates[j] for j in kept],
-            "columns": [columns[j] for j in kept]}
