@@ -69,7 +69,9 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         int phi Q dt``, see :meth:`SymbolicLibrary.weak_transform
         <pysindy_xl.feature_library.SymbolicLibrary.weak_transform>`), fed by smoothed
         positions and velocities: the robust choice for measured positions. ``"auto"``: strong
-        when ``x_dot`` and ``x_ddot`` are given or a ``differentiation_method`` is set, weak
+        when a ``differentiation_method`` is set, or when ``x_dot`` and ``x_ddot`` are given
+        and no entry is an impulse (an acceleration with a switching coefficient, such as
+        MuJoCo's dry friction's lead; :func:`~pysindy_xl.fit.resolve_formulation`), weak
         otherwise.
     test_functions : BumpTestFunctions, optional
         Test functions of the weak formulation (default: bumps whose width comes from the

@@ -166,3 +166,33 @@ def test_coulomb_law_is_checked():
         kinematic_catalog(ARM.format(step=1e-3), coulomb_law="tanh")
     with pytest.raises(ValueError, match="coulomb_law: only the 'kinematic' catalog"):
         reference_catalog("cart-pole", "mixed", coulomb_law="mujoco")
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_auto_formulation_fits_the_mujoco_law_in_the_weak_form():
+    """Measured derivatives normally mean the strong form; MuJoCo's law has an impulse at each
+    reversal (its lead), which samples miss, so "auto" integrates it by parts instead. On
+    noise-free data of an arm with frictionloss, the smooth sign (strong form) moves the
+    sticking zone into the inertia; MuJoCo's law recovers the mass matrix (mj_fullM) and the
+    MJCF's friction."""
+    import pysindy_xl as px
+    from pysindy_xl.mujoco import MJCFSystem, generate_dataset, kinematic_catalog
+    from pysindy_xl.mujoco.evaluation.physics import compare_physics
+
+    # dry friction the default forcing overcomes (the shoulder's 1.5 N m would hold it)
+    system = MJCFSystem(ARM.format(step=1e-3).replace('frictionloss="1.5"', 'frictionloss="0.2"')
+                        .replace('frictionloss="0.3"', 'frictionloss="0.02"'))
+    data = generate_dataset(system, n_trajectories=2, duration=2.0, seed=2, progress=False)
+    arguments = data.fit_arguments(forces="tau")
+    assert arguments["x_dot"] is not None and arguments["x_ddot"] is not None
+    smooth = px.XLSINDy(kinematic_catalog(system).library()).fit(**arguments)
+    model = px.XLSINDy(kinematic_catalog(system, coulomb_law="mujoco").library())
+    model.fit(**arguments)
+    assert (smooth.formulation_, model.formulation_) == ("strong", "weak")
+    smooth_error = compare_physics(smooth, system)["mass_error"]
+    error = compare_physics(model, system)["mass_error"]
+    assert error < 0.02 and error < smooth_error / 3, (error, smooth_error)
+    friction = model.physical_parameters()["friction"]
+    assert friction["wrist"]["dry"] == pytest.approx(0.02, rel=0.05)
+    assert friction["shoulder"]["dry"] == pytest.approx(0.2, rel=0.2)
+    assert friction["wrist"]["viscous"] == pytest.approx(0.01, rel=0.05)

@@ -98,7 +98,9 @@ def _add_fit_options(parser, coulomb_law="smooth"):
                              "differentiates velocities and accelerations); weak: equations "
                              "integrated against test functions on smoothed positions, the "
                              "robust choice for noisy positions; auto: strong when velocities "
-                             "and accelerations are in the data, weak otherwise (default: auto)")
+                             "and accelerations are in the data (unless the catalog has "
+                             "impulses, such as MuJoCo's dry friction), weak otherwise "
+                             "(default: auto)")
     parser.add_argument("--no-hold-still", dest="hold_still", action="store_false",
                         help="fit every coordinate, also those that hold still in the data "
                              "(undriven, at rest or in uniform motion within the noise; by "

@@ -16,6 +16,10 @@ from sklearn.utils.validation import check_is_fitted
 
 __all__ = ["DeferredMatrix", "ColumnStructure"]
 
+# Functions that switch: a coefficient of an acceleration made of them is an impulse
+_SWITCHES = (sp.sign, sp.Abs, sp.Piecewise, sp.Heaviside, sp.DiracDelta, sp.floor,
+             sp.ceiling, sp.Max, sp.Min)
+
 
 class DeferredMatrix:
     """A library's symbolic matrix known by its structure (see the module docstring).
@@ -102,3 +106,31 @@ class ColumnStructure:
     def entry_sizes(self) -> np.ndarray:
         """Terms of each entry of the columns (0 where the entry is zero), shape (n, F)."""
         return self._entry_structure()[1]
+
+    def impulsive(self) -> bool:
+        """Whether an acceleration enters an entry with a coefficient that switches with the
+        state (``sign``, ``Abs``, ``Piecewise``, ...; e.g. the lead of MuJoCo's regularized
+        dry friction, ``tau d/dt sat(v / s)``).
+
+        Such an entry is an impulse at each switch: samples catch it or miss it by chance,
+        while integration by parts states it exactly, so ``formulation="auto"`` fits a catalog
+        with one in the weak form.
+
+        Examples
+        --------
+        >>> import sympy as sp, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> px.ClassicalLibrary(c, [c.qd[0], sp.Abs(c.qd[0]) * c.qdd[0]]).fit().impulsive()
+        True
+        >>> px.ClassicalLibrary(c, [sp.sign(c.qd[0]), c.qd[0] ** 2 * c.qdd[0]]).fit().impulsive()
+        False
+        """
+        check_is_fitted(self, "entry_index_")
+        matrix = self.symbolic_matrix_
+        for c, j in self.entry_index_:
+            entry = matrix[c, j]
+            if entry.has(*_SWITCHES) and any(
+                    sp.diff(entry, qdd).has(*_SWITCHES) for qdd in self.coords.qdd
+                    if qdd in entry.free_symbols):
+                return True
+        return False

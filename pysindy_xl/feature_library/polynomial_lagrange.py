@@ -134,6 +134,12 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
                                           lambda i, j: columns[j][i])
         return derivation.matrix
 
+    def impulsive(self) -> bool:
+        """Polynomial columns have smooth coefficients (not built into sympy to say so)."""
+        if self.__dict__.get("_polynomial_columns") is not None:
+            return False
+        return super().impulsive()
+
     def check_domain(self, x) -> None:
         """Trigonometric polynomials are defined everywhere: only the symbolically derived
         terms (any term that is not such a polynomial) need the check of

@@ -187,6 +187,9 @@ class CatalogRepartition(SymbolicLibrary):
     def _deferred_matrix(self) -> sp.Matrix:
         return sp.Matrix.hstack(*(lib.symbolic_matrix_ for lib in self.libraries_))
 
+    def impulsive(self) -> bool:
+        return any(lib.impulsive() for lib in self.libraries_)
+
     def _feature_terms(self):
         return TermChain([lib.feature_terms_ for lib in self.libraries_])
 

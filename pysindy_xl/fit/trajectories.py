@@ -104,12 +104,16 @@ def trajectory_data(x, t, x_dot, x_ddot, u, n: int, sample_mask=None,
     return data
 
 
-def resolve_formulation(formulation: str, measured: bool, differentiation_method=None) -> str:
+def resolve_formulation(formulation: str, measured: bool, differentiation_method=None,
+                        impulsive: bool = False) -> str:
     """The formulation a fit uses: ``"strong"`` or ``"weak"``.
 
-    The one place that resolves ``formulation="auto"``: strong when the derivatives are
-    ``measured`` (velocities and accelerations given) or a ``differentiation_method`` is set,
-    weak (integrated against test functions of smoothed positions) otherwise.
+    The one place that resolves ``formulation="auto"``: strong when a
+    ``differentiation_method`` is set, or when the derivatives are ``measured`` (velocities
+    and accelerations given) and no catalog entry is ``impulsive``
+    (:meth:`~pysindy_xl.feature_library.SymbolicLibrary.impulsive`: sampled pointwise, an
+    impulse is caught or missed by chance; integrated by parts it is exact); weak
+    (integrated against test functions of smoothed positions) otherwise.
 
     Parameters
     ----------
@@ -118,6 +122,8 @@ def resolve_formulation(formulation: str, measured: bool, differentiation_method
         Whether ``x_dot`` and ``x_ddot`` were given.
     differentiation_method : optional
         The estimator's.
+    impulsive : bool, default False
+        Whether the catalog has an impulsive entry.
 
     Returns
     -------
@@ -127,10 +133,14 @@ def resolve_formulation(formulation: str, measured: bool, differentiation_method
     --------
     >>> resolve_formulation("auto", measured=False), resolve_formulation("auto", True)
     ('weak', 'strong')
+    >>> resolve_formulation("auto", True, impulsive=True)
+    'weak'
     """
     if formulation != "auto":
         return formulation
-    return "strong" if measured or differentiation_method is not None else "weak"
+    if differentiation_method is not None:
+        return "strong"
+    return "strong" if measured and not impulsive else "weak"
 
 
 def _catalog(feature_library) -> CatalogRepartition:
@@ -218,9 +228,10 @@ def check_fit(estimator, x, t, x_dot, x_ddot, u, sample_mask):
     """
     library = clone(_catalog(estimator.feature_library))
     library.fit()
-    formulation = resolve_formulation(estimator.formulation, x_dot is not None
-                                      and x_ddot is not None,
-                                      estimator.differentiation_method)
+    measured = x_dot is not None and x_ddot is not None
+    formulation = resolve_formulation(
+        estimator.formulation, measured, estimator.differentiation_method,
+        impulsive=measured and estimator.formulation == "auto" and library.impulsive())
     data = estimator_trajectories(estimator, x, t, x_dot, x_ddot, u, library.coords.n,
                                   formulation == "strong", sample_mask)
     if not library.involves(library.coords.qdd).any():
