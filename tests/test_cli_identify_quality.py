@@ -202,3 +202,18 @@ def test_joint_models_option_finds_a_torque_sensor_offset(tmp_path, capsys):
     assert "joint_friction" not in plain.physical_parameters()
     assert main([*arguments, "--catalog", "mixed", "--joint-models", "all"]) == 1
     assert "only the 'kinematic' catalog offers joint models" in capsys.readouterr().err
+    assert main([*arguments, "--joint-models", "all", "--coulomb-law", "mujoco"]) == 1
+    assert "--coulomb-law: 'mujoco' is a law of the Coulomb candidate" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv, law", [
+    (["demo", "arm.xml"], "mujoco"),  # the demo's data come from MuJoCo
+    (["demo", "arm.xml", "--joint-models", "all"], "smooth"),
+    (["demo", "arm.xml", "--coulomb-law", "smooth"], "smooth"),
+    (["identify", "log.csv"], "smooth"),  # a log may come from a real joint
+    (["identify", "log.csv", "--coulomb-law", "mujoco"], "mujoco"),
+])
+def test_coulomb_law_defaults_follow_the_data_source(argv, law):
+    from pysindy_xl.cli.steps import coulomb_law
+
+    assert coulomb_law(build_parser().parse_args(argv)) == law

@@ -85,10 +85,12 @@ def _add_fit_options(parser, coulomb_law="smooth"):
                              "offered for every joint, the fit selecting what each needs; "
                              "comma-separated among viscous, coulomb, asymmetric, stribeck, "
                              "offset, or all (default: viscous and smooth Coulomb)")
-    parser.add_argument("--coulomb-law", choices=("smooth", "mujoco"), default=coulomb_law,
+    parser.add_argument("--coulomb-law", choices=("smooth", "mujoco"), default=None,
                         help="kinematic catalog: law of the Coulomb candidates, smooth "
                              "(tanh, real joints) or mujoco (MuJoCo's regularized frictionloss, "
-                             f"for data MuJoCo simulated from the model) (default: {coulomb_law})")
+                             f"for data MuJoCo simulated from the model) (default: {coulomb_law}"
+                             "; smooth with --joint-models)")
+    parser.set_defaults(default_coulomb_law=coulomb_law)
     parser.add_argument("--velocity-degree", type=_positive_int, default=2,
                         help="degree of the velocity monomials of the catalog (default: 2)")
     parser.add_argument("--trig-degree", type=_positive_int, default=2,

@@ -213,6 +213,17 @@ def check_solver(solver, forced, threshold, auto=False):
     return _optimizer(solver, threshold)
 
 
+def coulomb_law(args) -> str:
+    """``--coulomb-law``, or the command's default: ``smooth`` where joint models replace the
+    Coulomb candidate."""
+    law = getattr(args, "coulomb_law", None)
+    if law is not None:
+        return law
+    if getattr(args, "joint_models", None) is not None:
+        return "smooth"
+    return getattr(args, "default_coulomb_law", "smooth")
+
+
 def fit_model(system, dataset, args, solver, forced, return_arguments=False):
     import pysindy_xl as px
     from pysindy_xl.mujoco.catalogs.reference import reference_catalog
@@ -223,9 +234,11 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
         catalog = reference_catalog(system, args.catalog, velocity_degree=args.velocity_degree,
                                     trig_degree=args.trig_degree, friction=args.friction,
                                     joint_models=getattr(args, "joint_models", None),
-                                    **({"coulomb_law": getattr(args, "coulomb_law", "smooth")}
+                                    **({"coulomb_law": coulomb_law(args)}
                                        if args.catalog == "kinematic" else {}))
     except ValueError as error:
+        if str(error).startswith("coulomb_law:"):
+            raise CLIError(f"--coulomb-law: {str(error).split(': ', 1)[1]}") from None
         if not str(error).startswith(("friction:", "joint_models:")):
             raise
         # unknown joint model names, or joint models asked of another catalog

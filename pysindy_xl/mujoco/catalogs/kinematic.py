@@ -470,7 +470,8 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
         ``frictionloss``, MuJoCo's regularization of it
         (:func:`~pysindy_xl.physical.friction.regularized_dry_friction` with the scales of
         :func:`~pysindy_xl.mujoco.systems.friction.dry_friction_scales`), whose sticking
-        zone and lead the smooth sign misses and a fit would take for inertia.
+        zone and lead the smooth sign misses and a fit would take for inertia. Not with
+        ``friction``.
 
     Returns
     -------
@@ -511,6 +512,9 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
     if coulomb_law not in COULOMB_LAWS:
         raise ValueError(f"coulomb_law: expected one of {COULOMB_LAWS}, got {coulomb_law!r}")
     friction = friction_models(friction)
+    if friction and coulomb_law != "smooth":
+        raise ValueError(f"coulomb_law: {coulomb_law!r} is a law of the Coulomb candidate, which "
+                         "the joint models of friction= replace (laws of real joints)")
     model = system.mj_model()
     if model.nq != system.n or model.nv != system.n:
         raise ValueError(f"system: MJCF has nq={model.nq}, nv={model.nv}; expected one hinge or "
