@@ -215,5 +215,11 @@ def test_joint_models_option_finds_a_torque_sensor_offset(tmp_path, capsys):
 ])
 def test_coulomb_law_defaults_follow_the_data_source(argv, law):
     from pysindy_xl.cli.steps import coulomb_law
+    from pysindy_xl.mujoco import generate_dataset
 
-    assert coulomb_law(build_parser().parse_args(argv)) == law
+    args = build_parser().parse_args(argv)
+    assert coulomb_law(args) == law
+    # a dataset MuJoCo generated (pysindy-xl generate) is MuJoCo's data whatever the command
+    simulated = generate_dataset("cart-pole", n_trajectories=1, duration=0.05, progress=False)
+    given = "--coulomb-law" in argv or "--joint-models" in argv
+    assert coulomb_law(args, simulated) == (law if given else "mujoco")

@@ -89,7 +89,8 @@ def _add_fit_options(parser, coulomb_law="smooth"):
                         help="kinematic catalog: law of the Coulomb candidates, smooth "
                              "(tanh, real joints) or mujoco (MuJoCo's regularized frictionloss, "
                              f"for data MuJoCo simulated from the model) (default: {coulomb_law}"
-                             "; smooth with --joint-models)")
+                             ", mujoco for a dataset MuJoCo generated, smooth with "
+                             "--joint-models)")
     parser.set_defaults(default_coulomb_law=coulomb_law)
     parser.add_argument("--velocity-degree", type=_positive_int, default=2,
                         help="degree of the velocity monomials of the catalog (default: 2)")

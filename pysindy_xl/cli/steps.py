@@ -213,14 +213,17 @@ def check_solver(solver, forced, threshold, auto=False):
     return _optimizer(solver, threshold)
 
 
-def coulomb_law(args) -> str:
-    """``--coulomb-law``, or the command's default: ``smooth`` where joint models replace the
-    Coulomb candidate."""
+def coulomb_law(args, dataset=None) -> str:
+    """``--coulomb-law``, or the default of the data's source: ``mujoco`` for the demo and for
+    a dataset MuJoCo simulated (``generate_dataset`` records its ``integration``), ``smooth``
+    for any other log and where joint models replace the Coulomb candidate."""
     law = getattr(args, "coulomb_law", None)
     if law is not None:
         return law
     if getattr(args, "joint_models", None) is not None:
         return "smooth"
+    if dataset is not None and "integration" in dataset.metadata:
+        return "mujoco"
     return getattr(args, "default_coulomb_law", "smooth")
 
 
@@ -234,7 +237,7 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
         catalog = reference_catalog(system, args.catalog, velocity_degree=args.velocity_degree,
                                     trig_degree=args.trig_degree, friction=args.friction,
                                     joint_models=getattr(args, "joint_models", None),
-                                    **({"coulomb_law": coulomb_law(args)}
+                                    **({"coulomb_law": coulomb_law(args, dataset)}
                                        if args.catalog == "kinematic" else {}))
     except ValueError as error:
         if str(error).startswith("coulomb_law:"):
