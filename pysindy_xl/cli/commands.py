@@ -322,10 +322,10 @@ def run_identify(args):
                                                   "--open-loop")):
         if path:
             output_file(path, option)
+    from ..fit import resolve_formulation
+
     measured = dataset.has("qd") and dataset.has("qdd")
-    formulation = args.formulation
-    if formulation == "auto":
-        formulation = "strong" if measured else "weak"
+    formulation = resolve_formulation(args.formulation, measured)
     if not measured:
         print("note: velocities/accelerations missing: "
               + ("weak formulation on smoothed positions" if formulation == "weak" else
@@ -342,11 +342,12 @@ def run_identify(args):
             active = np.any(np.vstack([tr.tau for tr in dataset.trajectories]) != 0, axis=0)
             solver = "explicit" if active.all() else "mixed"
     n_samples = sum(tr.n_samples for tr in dataset.trajectories)
+    form = ("weak form: smoothing positions, integrating against test functions"
+            if formulation == "weak" else "strong form: catalog at every sample")
+    if args.formulation == "auto" and measured:
+        form += " (weak if the catalog has impulses)"
     progress(f"building the {args.catalog} catalog of {display_name(system)} and fitting "
-             f"({formulation} form: "
-             + ("smoothing positions, integrating against test functions" if formulation ==
-                "weak" else "catalog at every sample")
-             + f", {solver} regression with sparsity selection) on {n_samples} samples")
+             f"({form}, {solver} regression with sparsity selection) on {n_samples} samples")
     model, arguments = fit_model(system, dataset, args, solver, forced, return_arguments=True)
     progress(f"fitted: {int(np.count_nonzero(model.coefficients()))} terms of "
              f"{len(model.get_feature_names())}; computing the fit quality")
