@@ -128,6 +128,18 @@ def test_the_optimized_regressor_is_better_conditioned(system, designs):
     np.testing.assert_array_equal(again.a, best.a)
 
 
+def test_the_progress_bar_counts_iterations_and_changes_nothing(system, designs, capsys):
+    """The bar advances by every start's share of iterations (stopping early counts the
+    rest) and shows the best condition number; the design is the one made without it."""
+    kwargs = dict(n_harmonics=3, period=4.0, restarts=1, seed=3, **LIMITS)
+    shown = excitation_trajectory(system, progress=True, **kwargs)
+    np.testing.assert_array_equal(shown.a, designs[0].a)
+    np.testing.assert_array_equal(shown.b, designs[0].b)
+    err = capsys.readouterr().err
+    assert "excitation design" in err and "100/100" in err
+    assert f"condition={shown.condition_number:.3g}" in err
+
+
 def test_the_csv_and_the_json_round_trip(tmp_path):
     trajectory = random_series(1)
     path = tmp_path / "excitation.csv"
