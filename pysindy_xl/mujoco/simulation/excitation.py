@@ -194,9 +194,10 @@ class _Design:
         return self.fit_to_limits(x, bases, grow=True)
 
     def optimize(self, x, bases, rest_at_start, max_iter, callback=None):
-        """SLSQP from ``x`` (``callback`` after each iteration). Each limit enters through its margin at the lowest local minima
-        along the period (at most ``L`` for a series of ``L`` harmonics; ``3 L`` kept for the
-        torques): a fixed, small number of rows instead of one per sample and limit."""
+        """SLSQP from ``x`` (``callback`` after each iteration). Each limit enters through
+        its margin at the lowest local minima along the period (at most ``L`` for a series of
+        ``L`` harmonics; ``3 L`` kept for the torques): a fixed, small number of rows instead
+        of one per sample and limit."""
         from scipy.optimize import minimize
 
         A, c = self.linear_constraints(bases)
