@@ -633,9 +633,10 @@ def test_clone_of_fitted_library_is_unfitted_and_refits_identically(name):
 
 
 def test_compiled_entries_factored_by_angles_match_lambdify():
-    """Velocity monomials times trigonometric coefficient functions (evaluated factored),
-    entries equal up to a factor (evaluated once), constants and plain polynomials."""
-    from pysindy_xl.feature_library._compile import _angle_atoms, _Plan, decompose
+    """Velocity monomials times trigonometric coefficient functions (evaluated factored, one
+    angle after the other), entries equal up to a factor (evaluated once), constants and
+    plain polynomials."""
+    from pysindy_xl.feature_library._compile import _angle_groups, _best_plan, _Plan, decompose
 
     a, b, v, w, u = sp.symbols("a b v w u")
     coefficient = 1 + sp.cos(a) ** 2 * sp.sin(b) - 3 * sp.sin(a) * sp.cos(b) ** 3
@@ -643,10 +644,26 @@ def test_compiled_entries_factored_by_angles_match_lambdify():
              sp.expand(v**2 * sp.cos(a) + u * sp.sin(b) ** 4 + sp.tanh(10 * v)),
              sp.Integer(3), sp.expand(v * w + w**2 * a), sp.Integer(0) * v]
     terms = decompose(exprs)
-    inner = _angle_atoms(terms.atoms)
-    assert inner.any() and not inner.all()
+    groups = _angle_groups(terms.atoms, [a, b, v, w, u])
+    assert [sorted(map(str, np.array(terms.atoms)[g])) for g in groups] == [
+        ["cos(b)", "sin(b)"], ["a", "cos(a)", "sin(a)"]]  # the later angle factored out first
+    inner = np.any(groups, axis=0)
     plan = _Plan(terms, inner)
-    assert not plan.direct and plan.coefficients.shape[0] < len(plan.index)  # shared
+    assert not plan.direct and plan.index.max() + 1 < len(plan.index)  # shared
+    # a product of polynomials in each angle: sums over the monomials of b of polynomials
+    # of a (each once) take fewer operations than all the products
+    product = sp.expand((1 + sp.sin(a) + 2 * sp.cos(a) * sp.sin(a)) ** 3
+                        * (1 + 3 * sp.sin(b) - sp.cos(b)) ** 3)
+    nested_terms = decompose([sp.expand(v * product), sp.expand(w * product * sp.cos(b))])
+    nested_groups = _angle_groups(nested_terms.atoms, [a, b, v, w, u])
+    angles = np.any(nested_groups, axis=0)
+    nested = _best_plan(nested_terms, np.ones(len(angles), dtype=bool),
+                        [~angles, *nested_groups])
+    flat = _Plan(nested_terms, np.zeros(len(angles), dtype=bool))
+    assert isinstance(nested.polynomials.polynomials, _Plan)  # of b, of a
+    assert nested.cost < flat.cost / 2
+    atom_rows = np.random.default_rng(1).uniform(-1, 1, size=(len(angles), 50))
+    np.testing.assert_allclose(nested(atom_rows), flat(atom_rows), rtol=1e-12, atol=1e-12)
     variables = [a, b, v, w, u]
     z = np.random.default_rng(0).uniform(-2, 2, size=(300, 5))
     values = px.feature_library.compile_entries(variables, exprs)(z)

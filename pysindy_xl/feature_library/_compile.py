@@ -308,35 +308,57 @@ class _MonomialValues:
         return values
 
 
-def _angle_atoms(atom_list) -> np.ndarray:
-    """Atoms that are functions of the angles only (the variables found inside a sine or a
-    cosine): the atoms of a mechanical catalog's coefficient functions."""
+def _angle_groups(atom_list, variables) -> list:
+    """Masks of the atoms that are functions of the angles only (the variables found inside
+    a sine or a cosine: the atoms of a mechanical catalog's coefficient functions), one mask
+    per set of angles, the sets of later variables first (the distal joints of a chain)."""
     angles = set()
     for atom in atom_list:
         for trig in atom.atoms(sp.sin, sp.cos):
             angles |= trig.free_symbols
-    if not angles:
-        return np.zeros(len(atom_list), dtype=bool)
-    return np.array([bool(a.free_symbols) and a.free_symbols <= angles for a in atom_list],
-                    dtype=bool)
+    position = {v: k for k, v in enumerate(variables)}
+    owners = [frozenset(a.free_symbols) if a.free_symbols and a.free_symbols <= angles
+              else None for a in atom_list]
+    groups = sorted({owner for owner in owners if owner is not None},
+                    key=lambda owner: sorted((position[v] for v in owner), reverse=True),
+                    reverse=True)
+    return [np.array([owner == group for owner in owners], dtype=bool) for group in groups]
+
+
+def _best_plan(terms: Terms, inner, peel) -> _Plan:
+    """The cheaper of the flat plan of ``terms`` and the plan that factors the atoms
+    ``peel[0]`` out of the ``inner`` ones (and so on, recursively, with ``peel[1:]``).
+
+    The coefficient functions of an arm's catalog are polynomials in the sines and cosines of
+    all its joints; written as polynomials in the last joint's whose coefficients are
+    polynomials in the others (each distinct one once), and so on down the chain, they take
+    fewer operations than as sums of products of all the joints' atoms."""
+    powers = terms.arrays()[0]
+    present = inner & powers.any(axis=0)
+    peel = [group for group in peel if (present & group).any() and (present & ~group).any()]
+    if not peel:
+        return _Plan(terms, np.zeros(len(inner), dtype=bool))
+    factored = _Plan(terms, inner & ~peel[0], peel[1:])
+    # the flat plan makes each monomial and multiplies it by a coefficient at least once
+    if factored.cost < 2 * len(_unique_rows(powers)[0]):
+        return factored
+    flat = _Plan(terms, np.zeros(len(inner), dtype=bool))
+    return factored if factored.cost < flat.cost else flat
 
 
 def _keys(powers) -> tuple[list, np.ndarray]:
     """The distinct rows of ``powers`` as monomials (sorted tuples of ``(atom, power)``), and
     each row's position among them."""
     first, inverse = _unique_rows(powers)
-    distinct = powers[first]
-    rows, atoms = np.nonzero(distinct)
-    pairs = list(zip(atoms.tolist(), distinct[rows, atoms].tolist(), strict=True))
-    bounds = np.searchsorted(rows, np.arange(len(distinct) + 1)).tolist()
-    return [tuple(pairs[bounds[m]:bounds[m + 1]]) for m in range(len(distinct))], inverse
+    return _monomials(powers[first]), inverse
 
 
-def _ranks(keys) -> np.ndarray:
-    """Each monomial's rank in the order of the tuples."""
-    ranks = np.empty(len(keys), dtype=np.intp)
-    ranks[sorted(range(len(keys)), key=keys.__getitem__)] = np.arange(len(keys))
-    return ranks
+def _monomials(powers) -> list:
+    """The rows of ``powers`` as monomials (sorted tuples of ``(atom, power)``)."""
+    rows, atoms = np.nonzero(powers)
+    pairs = list(zip(atoms.tolist(), powers[rows, atoms].tolist(), strict=True))
+    bounds = np.searchsorted(rows, np.arange(len(powers) + 1)).tolist()
+    return [tuple(pairs[bounds[m]:bounds[m + 1]]) for m in range(len(powers))]
 
 
 class _Plan:
@@ -351,27 +373,31 @@ class _Plan:
     through ``qd_i``). Without outer atoms (``inner`` all true or all false) every entry is
     one polynomial of all the atoms, evaluated as such."""
 
-    def __init__(self, terms: Terms, inner):
+    def __init__(self, terms: Terms, inner, peel=()):
         powers, coefficients, owners, self.n_entries = terms.arrays()
-        factor = inner.any() and not inner.all()
+        factor = bool(inner.any() and not inner.all())
+        entries = max(self.n_entries, 1)
         # pairs (outer monomial, entry), in order, and each term's pair
-        outer_powers = powers * ~inner if factor else np.zeros((len(powers), 0), np.int16)
-        outer_keys, outer_of = _keys(outer_powers)
-        outer_rank = _ranks([(len(key), key) for key in outer_keys])
         if factor:
-            codes = outer_rank[outer_of] * max(self.n_entries, 1) + owners
-            pair_codes, pair_of = np.unique(codes, return_inverse=True)
-            pair_outer = np.argsort(outer_rank)[pair_codes // max(self.n_entries, 1)]
-            pair_entry = pair_codes % max(self.n_entries, 1)
+            outer_powers = powers * ~inner
+            outer_first, outer_of = _unique_rows(outer_powers)
+            outer_rank = np.empty(len(outer_first), dtype=np.intp)  # by degree (1 first)
+            outer_rank[np.argsort(outer_powers[outer_first].sum(axis=1), kind="stable")] = \
+                np.arange(len(outer_first))
+            pair_codes, pair_of = np.unique(outer_rank[outer_of] * entries + owners,
+                                            return_inverse=True)
+            pair_outer = np.argsort(outer_rank)[pair_codes // entries]
+            pair_entry = pair_codes % entries
+            outer_keys = _monomials(outer_powers[outer_first])
         else:  # one pair per entry, even without terms
             pair_of, pair_entry = owners, np.arange(self.n_entries)
-            pair_outer = np.zeros(self.n_entries, dtype=np.intp)
-            outer_keys = [()]
+            pair_outer, outer_keys = np.zeros(self.n_entries, dtype=np.intp), [()]
         pair_of = pair_of.ravel()
         n_pairs = len(pair_entry)
         # each pair's terms sorted by inner monomial (stable), divided by the first one
-        inner_keys, inner_of = _keys(powers * inner if factor else powers)
-        order = np.lexsort((_ranks(inner_keys)[inner_of], pair_of))
+        inner_powers = powers * inner if factor else powers
+        inner_first, inner_of = _unique_rows(inner_powers)
+        order = np.lexsort((inner_of, pair_of))
         pair_sorted, inner_sorted = pair_of[order], inner_of[order]
         bounds = np.searchsorted(pair_sorted, np.arange(n_pairs + 1))
         first = np.ones(n_pairs)
@@ -381,9 +407,12 @@ class _Plan:
         # the distinct polynomials, in order of first appearance
         found: dict = {}
         index = np.empty(n_pairs, dtype=np.intp)
+        # compared to 40 bits: coefficients normalized twice (a factor's polynomial within
+        # a polynomial) differ in their last bits
+        rounded = ((normal + 0.0).view(np.int64) + (1 << 11)) & ~np.int64((1 << 12) - 1)
         for m in range(n_pairs):
             a, b = bounds[m], bounds[m + 1]
-            key = ((normal[a:b] + 0.0).tobytes(), inner_sorted[a:b].tobytes())
+            key = (rounded[a:b].tobytes(), inner_sorted[a:b].tobytes())
             index[m] = found.setdefault(key, len(found))
         self.index = index
         distinct = np.flatnonzero(np.r_[True, np.diff(
@@ -394,19 +423,24 @@ class _Plan:
                          sizes[distinct]) + np.arange(int(sizes[distinct].sum()))
         polynomial_of = np.repeat(np.arange(len(distinct)), sizes[distinct])
         wanted_ids = inner_sorted[rows]
-        seen = np.unique(wanted_ids, return_index=True)[1]
-        wanted = {inner_keys[m] for m in wanted_ids[np.sort(seen)].tolist()}
-        self.values = _MonomialValues(wanted)
-        position = np.array([self.values.position[key] for key in inner_keys], dtype=np.intp)
-        self.coefficients = scipy.sparse.csr_matrix(
-            (normal[rows], (polynomial_of, position[wanted_ids])),
-            shape=(len(distinct), self.values.size))
-        keys_of_pairs = [outer_keys[m] for m in pair_outer.tolist()]
-        self.outer = _MonomialValues(set(keys_of_pairs) - {()})
-        cuts = [0] + [m for m in range(1, n_pairs) if pair_outer[m] != pair_outer[m - 1]]
-        cuts.append(n_pairs)
-        self.runs = [(a, b, self.outer.position[keys_of_pairs[a]])
-                     for a, b in zip(cuts[:-1], cuts[1:], strict=True) if keys_of_pairs[a]]
+        if factor:  # the distinct polynomials of the inner atoms: terms of their own
+            self.polynomials = _best_plan(Terms.from_arrays(
+                terms.atoms, inner_powers[order[rows]], normal[rows], polynomial_of,
+                len(distinct)), inner, peel)
+        else:
+            used, position = np.unique(wanted_ids, return_inverse=True)
+            keys = _monomials(inner_powers[inner_first[used]])
+            self.polynomials = _MonomialValues(keys)
+            columns = np.array([self.polynomials.position[key] for key in keys], dtype=np.intp)
+            self.coefficients = scipy.sparse.csr_matrix(
+                (normal[rows], (polynomial_of, columns[position.ravel()])),
+                shape=(len(distinct), self.polynomials.size))
+        self.outer = _MonomialValues([key for key in outer_keys if key])
+        cuts = np.flatnonzero(np.diff(pair_outer)) + 1
+        bounds = np.concatenate([[0], cuts, [n_pairs]]).tolist()
+        self.runs = [(a, b, self.outer.position[outer_keys[pair_outer[a]]])
+                     for a, b in zip(bounds[:-1], bounds[1:], strict=True)
+                     if outer_keys[pair_outer[a]]]
         self.sum = scipy.sparse.csr_matrix(
             (first, (pair_entry, np.arange(n_pairs))), shape=(self.n_entries, n_pairs))
         # the polynomials are the entries themselves: no gather, scaling nor sum
@@ -414,11 +448,19 @@ class _Plan:
                        and np.array_equal(index, np.arange(n_pairs))
                        and np.all(first == 1.0)
                        and np.array_equal(pair_entry, np.arange(self.n_entries)))
-        self.size = (self.values.size + self.coefficients.shape[0]
-                     + (0 if self.direct else self.outer.size + 2 * n_pairs))
+        # rows built at once, and operations per sample (a product and a sum per term and
+        # per pair, a product per monomial)
+        inner_size, inner_cost = ((self.polynomials.size, self.polynomials.cost) if factor else
+                                  (self.polynomials.size + len(distinct),
+                                   self.coefficients.nnz + self.polynomials.size))
+        self.size = inner_size + (0 if self.direct else self.outer.size + 2 * n_pairs)
+        self.cost = inner_cost + (0 if self.direct else self.outer.size + 2 * n_pairs)
 
     def __call__(self, atom_rows: np.ndarray) -> np.ndarray:
-        polynomials = np.asarray(self.coefficients @ self.values(atom_rows))
+        if isinstance(self.polynomials, _Plan):
+            polynomials = self.polynomials(atom_rows)
+        else:
+            polynomials = np.asarray(self.coefficients @ self.polynomials(atom_rows))
         if self.direct:
             return polynomials
         pairs = polynomials[self.index]
@@ -458,13 +500,9 @@ def _compile_terms(variables: tuple, terms: Terms):
     if unknown:
         raise ValueError(f"exprs: unknown symbols {sorted(map(str, unknown))}")
     atom_functions = [_atom_function(a, position, variables) for a in atom_list]
-    plan = _Plan(terms, _angle_atoms(atom_list))
-    if not plan.direct:  # factored: kept when it builds fewer values than the flat plan
-        # (at least one value per distinct monomial; built only when that does not decide)
-        powers, _, _, n_entries = terms.arrays()
-        if plan.size >= len(_unique_rows(powers)[0]) + n_entries:
-            flat = _Plan(terms, np.zeros(len(atom_list), dtype=bool))
-            plan = plan if plan.size < flat.size else flat
+    groups = _angle_groups(atom_list, variables)
+    angles = np.any(groups, axis=0) if groups else np.zeros(len(atom_list), dtype=bool)
+    plan = _best_plan(terms, np.ones(len(atom_list), dtype=bool), [~angles, *groups])
     n_entries = len(terms)
     # blocks of samples keep the values built at once (values x block) near _BLOCK_VALUES
     block = int(np.clip(_BLOCK_VALUES // max(plan.size, 1), 64, _BLOCK))
