@@ -339,8 +339,9 @@ def _best_plan(terms: Terms, inner, peel) -> _Plan:
     if not peel:
         return _Plan(terms, np.zeros(len(inner), dtype=bool))
     factored = _Plan(terms, inner & ~peel[0], peel[1:])
-    # the flat plan makes each monomial and multiplies it by a coefficient at least once
-    if factored.cost < 2 * len(_unique_rows(powers)[0]):
+    # the flat plan's cost when it shares no polynomial (the entries of a factored plan's
+    # polynomials are distinct): a product per monomial, one per term
+    if factored.cost < len(powers) + len(_unique_rows(powers)[0]):
         return factored
     flat = _Plan(terms, np.zeros(len(inner), dtype=bool))
     return factored if factored.cost < flat.cost else flat
@@ -379,7 +380,7 @@ class _Plan:
         entries = max(self.n_entries, 1)
         # pairs (outer monomial, entry), in order, and each term's pair
         if factor:
-            outer_powers = powers * ~inner
+            outer_powers = powers[:, ~inner]
             outer_first, outer_of = _unique_rows(outer_powers)
             outer_rank = np.empty(len(outer_first), dtype=np.intp)  # by degree (1 first)
             outer_rank[np.argsort(outer_powers[outer_first].sum(axis=1), kind="stable")] = \
@@ -388,14 +389,18 @@ class _Plan:
                                             return_inverse=True)
             pair_outer = np.argsort(outer_rank)[pair_codes // entries]
             pair_entry = pair_codes % entries
-            outer_keys = _monomials(outer_powers[outer_first])
+            distinct_outer = np.zeros((len(outer_first), len(inner)), dtype=np.int16)
+            distinct_outer[:, ~inner] = outer_powers[outer_first]
+            outer_keys = _monomials(distinct_outer)
         else:  # one pair per entry, even without terms
             pair_of, pair_entry = owners, np.arange(self.n_entries)
             pair_outer, outer_keys = np.zeros(self.n_entries, dtype=np.intp), [()]
         pair_of = pair_of.ravel()
         n_pairs = len(pair_entry)
         # each pair's terms sorted by inner monomial (stable), divided by the first one
-        inner_powers = powers * inner if factor else powers
+        # (the inner atoms only: the factored polynomials are evaluated on their rows)
+        self.inner = np.flatnonzero(inner) if factor else None
+        inner_powers = powers[:, self.inner] if factor else powers
         inner_first, inner_of = _unique_rows(inner_powers)
         order = np.lexsort((inner_of, pair_of))
         pair_sorted, inner_sorted = pair_of[order], inner_of[order]
@@ -425,8 +430,9 @@ class _Plan:
         wanted_ids = inner_sorted[rows]
         if factor:  # the distinct polynomials of the inner atoms: terms of their own
             self.polynomials = _best_plan(Terms.from_arrays(
-                terms.atoms, inner_powers[order[rows]], normal[rows], polynomial_of,
-                len(distinct)), inner, peel)
+                [terms.atoms[k] for k in self.inner], inner_powers[order[rows]], normal[rows],
+                polynomial_of, len(distinct)), np.ones(len(self.inner), dtype=bool),
+                [group[self.inner] for group in peel])
         else:
             used, position = np.unique(wanted_ids, return_inverse=True)
             keys = _monomials(inner_powers[inner_first[used]])
@@ -457,8 +463,8 @@ class _Plan:
         self.cost = inner_cost + (0 if self.direct else self.outer.size + 2 * n_pairs)
 
     def __call__(self, atom_rows: np.ndarray) -> np.ndarray:
-        if isinstance(self.polynomials, _Plan):
-            polynomials = self.polynomials(atom_rows)
+        if self.inner is not None:
+            polynomials = self.polynomials(atom_rows[self.inner])
         else:
             polynomials = np.asarray(self.coefficients @ self.polynomials(atom_rows))
         if self.direct:
