@@ -362,6 +362,38 @@ def _monomials(powers) -> list:
     return [tuple(pairs[bounds[m]:bounds[m + 1]]) for m in range(len(powers))]
 
 
+def _distinct_runs(bounds, *columns) -> np.ndarray:
+    """For each run ``bounds[m]:bounds[m + 1]`` of the rows of ``columns`` (integer arrays),
+    the number of the first run equal to it, counted in order of first appearance.
+
+    Runs are grouped by a hash of their rows, and each group is checked row by row against
+    its first run (a collision, never seen, falls back to comparing the runs one by one)."""
+    sizes = np.diff(bounds)
+    offsets = np.arange(int(bounds[-1])) - np.repeat(bounds[:-1], sizes)
+    mixed = offsets.astype(np.uint64) * np.uint64(0x9E3779B97F4A7C15)
+    for k, column in enumerate(columns):
+        mixed ^= column.astype(np.int64).view(np.uint64) * np.uint64(0xBF58476D1CE4E5B9 + 2 * k)
+        mixed ^= mixed >> np.uint64(31)
+        mixed *= np.uint64(0x94D049BB133111EB)
+    hashes = np.zeros(len(sizes), dtype=np.uint64)
+    starts = bounds[:-1][sizes > 0]
+    if starts.size:
+        hashes[sizes > 0] = np.add.reduceat(mixed, starts)
+    keys = np.rec.fromarrays([sizes, hashes])
+    _, first, group = np.unique(keys, return_index=True, return_inverse=True)
+    group = group.ravel()
+    representative = first[group]
+    rows = np.repeat(bounds[representative] - bounds[:-1], sizes) + np.arange(int(bounds[-1]))
+    if not all(np.array_equal(column, column[rows]) for column in columns):
+        found: dict = {}
+        return np.array([found.setdefault(tuple(column[a:b].tobytes() for column in columns),
+                                          len(found))
+                         for a, b in zip(bounds[:-1], bounds[1:], strict=True)], dtype=np.intp)
+    rank = np.empty(len(first), dtype=np.intp)
+    rank[np.argsort(first)] = np.arange(len(first))
+    return rank[group]
+
+
 class _Plan:
     """How to evaluate entries: ``entry = sum over outer monomials u of u times a
     polynomial in the inner atoms``, each distinct polynomial (up to a factor) once.
@@ -402,23 +434,19 @@ class _Plan:
         self.inner = np.flatnonzero(inner) if factor else None
         inner_powers = powers[:, self.inner] if factor else powers
         inner_first, inner_of = _unique_rows(inner_powers)
-        order = np.lexsort((inner_of, pair_of))
+        order = np.argsort(pair_of.astype(np.int64) * max(len(inner_first), 1) + inner_of,
+                           kind="stable")
         pair_sorted, inner_sorted = pair_of[order], inner_of[order]
         bounds = np.searchsorted(pair_sorted, np.arange(n_pairs + 1))
         first = np.ones(n_pairs)
         leading = coefficients[order[bounds[:-1][bounds[:-1] < bounds[1:]]]]
         first[bounds[:-1] < bounds[1:]] = np.where(leading != 0, leading, 1.0)
         normal = coefficients[order] / first[pair_sorted]
-        # the distinct polynomials, in order of first appearance
-        found: dict = {}
-        index = np.empty(n_pairs, dtype=np.intp)
-        # compared to 40 bits: coefficients normalized twice (a factor's polynomial within
-        # a polynomial) differ in their last bits
+        # the distinct polynomials, in order of first appearance (coefficients compared to
+        # 40 bits: normalized twice, a factor's polynomial within a polynomial, they differ
+        # in their last bits)
         rounded = ((normal + 0.0).view(np.int64) + (1 << 11)) & ~np.int64((1 << 12) - 1)
-        for m in range(n_pairs):
-            a, b = bounds[m], bounds[m + 1]
-            key = (rounded[a:b].tobytes(), inner_sorted[a:b].tobytes())
-            index[m] = found.setdefault(key, len(found))
+        index = _distinct_runs(bounds, rounded, inner_sorted)
         self.index = index
         distinct = np.flatnonzero(np.r_[True, np.diff(
             np.maximum.accumulate(index)) > 0]) if n_pairs else np.zeros(0, np.intp)
