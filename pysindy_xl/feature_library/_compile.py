@@ -341,7 +341,8 @@ def _best_plan(terms: Terms, inner, peel) -> _Plan:
     factored = _Plan(terms, inner & ~peel[0], peel[1:])
     # the flat plan's cost when it shares no polynomial (the entries of a factored plan's
     # polynomials are distinct): a product per monomial, one per term
-    if factored.cost < len(powers) + len(_unique_rows(powers)[0]):
+    if factored.cost < len(powers) or factored.cost < len(powers) + len(
+            _unique_rows(powers)[0]):
         return factored
     flat = _Plan(terms, np.zeros(len(inner), dtype=bool))
     return factored if factored.cost < flat.cost else flat
