@@ -636,7 +636,8 @@ def test_compiled_entries_factored_by_angles_match_lambdify():
     """Velocity monomials times trigonometric coefficient functions (evaluated factored, one
     angle after the other), entries equal up to a factor (evaluated once), constants and
     plain polynomials."""
-    from pysindy_xl.feature_library._compile import _angle_groups, _best_plan, _Plan, decompose
+    from pysindy_xl.feature_library._compile import _angle_groups, decompose
+    from pysindy_xl.feature_library._plans import Plan, best_plan
 
     a, b, v, w, u = sp.symbols("a b v w u")
     coefficient = 1 + sp.cos(a) ** 2 * sp.sin(b) - 3 * sp.sin(a) * sp.cos(b) ** 3
@@ -648,7 +649,7 @@ def test_compiled_entries_factored_by_angles_match_lambdify():
     assert [sorted(map(str, np.array(terms.atoms)[g])) for g in groups] == [
         ["cos(b)", "sin(b)"], ["a", "cos(a)", "sin(a)"]]  # the later angle factored out first
     inner = np.any(groups, axis=0)
-    plan = _Plan(terms, inner)
+    plan = Plan(terms.arrays(), inner)
     assert not plan.direct and plan.index.max() + 1 < len(plan.index)  # shared
     # a product of polynomials in each angle: sums over the monomials of b of polynomials
     # of a (each once) take fewer operations than all the products
@@ -657,10 +658,10 @@ def test_compiled_entries_factored_by_angles_match_lambdify():
     nested_terms = decompose([sp.expand(v * product), sp.expand(w * product * sp.cos(b))])
     nested_groups = _angle_groups(nested_terms.atoms, [a, b, v, w, u])
     angles = np.any(nested_groups, axis=0)
-    nested = _best_plan(nested_terms, np.ones(len(angles), dtype=bool),
-                        [~angles, *nested_groups])
-    flat = _Plan(nested_terms, np.zeros(len(angles), dtype=bool))
-    assert isinstance(nested.polynomials.polynomials, _Plan)  # of b, of a
+    nested = best_plan(nested_terms.arrays(), np.ones(len(angles), dtype=bool),
+                       [~angles, *nested_groups])
+    flat = Plan(nested_terms.arrays(), np.zeros(len(angles), dtype=bool))
+    assert isinstance(nested.polynomials.polynomials, Plan)  # of b, of a
     assert nested.cost < flat.cost / 2
     atom_rows = np.random.default_rng(1).uniform(-1, 1, size=(len(angles), 50))
     np.testing.assert_allclose(nested(atom_rows), flat(atom_rows), rtol=1e-12, atol=1e-12)
