@@ -135,6 +135,16 @@ def _monomials(powers) -> list:
     return [tuple(pairs[bounds[m]:bounds[m + 1]]) for m in range(len(powers))]
 
 
+def _distinct_codes(codes, space):
+    """``numpy.unique(codes, return_inverse=True)`` of non-negative integers below ``space``,
+    by a table of the codes present when it is no larger than a few times the codes."""
+    if space > 8 * len(codes) + 1024:
+        return np.unique(codes, return_inverse=True)
+    present = np.zeros(space, dtype=bool)
+    present[codes] = True
+    return np.flatnonzero(present), (np.cumsum(present) - 1)[codes]
+
+
 def _distinct_runs(bounds, *columns) -> np.ndarray:
     """For each run ``bounds[m]:bounds[m + 1]`` of the rows of ``columns`` (integer arrays),
     the number of the first run equal to it, counted in order of first appearance.
@@ -196,13 +206,13 @@ class Plan:
         entries = max(self.n_entries, 1)
         # pairs (outer monomial, entry), in order, and each term's pair
         if factor:
-            outer_powers = powers[:, ~inner]
+            outer_powers = powers.compress(~inner, axis=1)  # (faster than a fancy index)
             outer_first, outer_of = _unique_rows(outer_powers)
             outer_rank = np.empty(len(outer_first), dtype=np.intp)  # by degree (1 first)
             outer_rank[np.argsort(outer_powers[outer_first].sum(axis=1), kind="stable")] = \
                 np.arange(len(outer_first))
-            pair_codes, pair_of = np.unique(outer_rank[outer_of] * entries + owners,
-                                            return_inverse=True)
+            pair_codes, pair_of = _distinct_codes(outer_rank[outer_of] * entries + owners,
+                                                  len(outer_first) * entries)
             pair_outer = np.argsort(outer_rank)[pair_codes // entries]
             pair_entry = pair_codes % entries
             distinct_outer = np.zeros((len(outer_first), len(inner)), dtype=np.int16)
@@ -216,7 +226,7 @@ class Plan:
         # each pair's terms sorted by inner monomial (stable), divided by the first one
         # (the inner atoms only: the factored polynomials are evaluated on their rows)
         self.inner = np.flatnonzero(inner) if factor else None
-        inner_powers = powers[:, self.inner] if factor else powers
+        inner_powers = powers.compress(inner, axis=1) if factor else powers
         inner_first, inner_of = _unique_rows(inner_powers)
         order = np.argsort(pair_of.astype(np.int64) * max(len(inner_first), 1) + inner_of,
                            kind="stable")
