@@ -671,3 +671,37 @@ def test_compiled_entries_factored_by_angles_match_lambdify():
     for expr, value in zip(exprs, values, strict=True):
         expected = np.broadcast_to(sp.lambdify(variables, expr, "numpy")(*z.T), (300,))
         np.testing.assert_allclose(value, expected, rtol=1e-12, atol=1e-12)
+
+
+def test_compiled_arm_like_entries_match_lambdify():
+    """Entries shaped like an arm's (velocity products times products of per-joint
+    trigonometric factors, the same coefficient functions shared across entries up to a
+    factor), evaluated through nested plans, equal the lambdified expressions."""
+    from pysindy_xl.feature_library._compile import _angle_groups, decompose
+    from pysindy_xl.feature_library._plans import Plan, best_plan
+
+    rng = np.random.default_rng(3)
+    q = sp.symbols("q1:4")
+    qd = sp.symbols("v1:4")
+    factors = [[sp.Integer(1), sp.sin(a), sp.cos(a), sp.sin(a) ** 2, sp.sin(a) * sp.cos(a)]
+               for a in q]
+
+    def chain(k):  # a random polynomial of the first k + 1 angles, as nested products
+        return sp.expand(sum(rng.normal() * f * (chain(k - 1) if k else 1)
+                             for f in rng.choice(factors[k], 3, replace=False)))
+
+    shared = [chain(2) for _ in range(3)]
+    exprs = [sp.expand(qd[i] * qd[j] * shared[(i + j) % 3] * (2.0 if i < j else 1.0)
+                       + qd[i] * chain(1)) for i in range(3) for j in range(3)]
+    terms = decompose(exprs)
+    groups = _angle_groups(terms.atoms, [*q, *qd])
+    angles = np.any(groups, axis=0)
+    plan = best_plan(terms.arrays(), np.ones(len(angles), dtype=bool), [~angles, *groups])
+    # the velocities factored out, then q3's atoms, at a fraction of the flat cost
+    assert isinstance(plan.polynomials.polynomials, Plan)
+    assert plan.cost < Plan(terms.arrays(), np.zeros(len(angles), dtype=bool)).cost / 2
+    z = rng.uniform(-2, 2, size=(200, 6))
+    values = px.feature_library.compile_entries([*q, *qd], exprs)(z)
+    for expr, value in zip(exprs, values, strict=True):
+        expected = sp.lambdify([*q, *qd], expr, "numpy")(*z.T)
+        np.testing.assert_allclose(value, expected, rtol=1e-11, atol=1e-11)
