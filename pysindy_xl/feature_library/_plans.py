@@ -150,7 +150,15 @@ def _distinct_runs(bounds, *columns) -> np.ndarray:
     the number of the first run equal to it, counted in order of first appearance.
 
     Runs are grouped by a hash of their rows, and each group is checked row by row against
-    its first run (a collision, never seen, falls back to comparing the runs one by one)."""
+    its first run (a collision, never seen, falls back to comparing the runs one by one).
+
+    Examples
+    --------
+    >>> bounds = np.array([0, 2, 4, 4, 6, 7, 9])
+    >>> a, b = np.array([1, 2, 1, 2, 3, 4, 1, 1, 2]), np.array([5, 6, 5, 6, 5, 6, 5, 5, 6])
+    >>> _distinct_runs(bounds, a, b).tolist()
+    [0, 0, 1, 2, 3, 0]
+    """
     sizes = np.diff(bounds)
     offsets = np.arange(int(bounds[-1])) - np.repeat(bounds[:-1], sizes)
     mixed = offsets.astype(np.uint64) * np.uint64(0x9E3779B97F4A7C15)
