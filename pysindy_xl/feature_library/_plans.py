@@ -111,7 +111,18 @@ def best_plan(arrays, inner, peel) -> Plan:
     The coefficient functions of an arm's catalog are polynomials in the sines and cosines of
     all its joints; written as polynomials in the last joint's whose coefficients are
     polynomials in the others (each distinct one once), and so on down the chain, they take
-    fewer operations than as sums of products of all the joints' atoms."""
+    fewer operations than as sums of products of all the joints' atoms.
+
+    Examples
+    --------
+    ``v s + 2 v`` in the atoms ``(v, s)``, ``v`` factored out: ``v (s + 2)``.
+
+    >>> arrays = (np.array([[1, 1], [1, 0]], dtype=np.int16), np.array([1.0, 2.0]),
+    ...           np.array([0, 0]), 1)
+    >>> plan = best_plan(arrays, np.array([True, True]), [np.array([True, False])])
+    >>> plan(np.array([[3.0], [0.5]])).ravel().tolist()
+    [7.5]
+    """
     powers = arrays[0]
     present = inner & powers.any(axis=0)
     peel = [group for group in peel if (present & group).any() and (present & ~group).any()]
