@@ -633,9 +633,11 @@ def test_clone_of_fitted_library_is_unfitted_and_refits_identically(name):
 
 
 def test_compiled_entries_factored_by_angles_match_lambdify():
-    """Velocity monomials times trigonometric coefficient functions (evaluated factored),
-    entries equal up to a factor (evaluated once), constants and plain polynomials."""
-    from pysindy_xl.feature_library._compile import _angle_atoms, _Plan, decompose
+    """Velocity monomials times trigonometric coefficient functions (evaluated factored, one
+    angle after the other), entries equal up to a factor (evaluated once), constants and
+    plain polynomials."""
+    from pysindy_xl.feature_library._compile import _angle_groups, decompose
+    from pysindy_xl.feature_library._plans import Plan, best_plan
 
     a, b, v, w, u = sp.symbols("a b v w u")
     coefficient = 1 + sp.cos(a) ** 2 * sp.sin(b) - 3 * sp.sin(a) * sp.cos(b) ** 3
@@ -643,13 +645,63 @@ def test_compiled_entries_factored_by_angles_match_lambdify():
              sp.expand(v**2 * sp.cos(a) + u * sp.sin(b) ** 4 + sp.tanh(10 * v)),
              sp.Integer(3), sp.expand(v * w + w**2 * a), sp.Integer(0) * v]
     terms = decompose(exprs)
-    inner = _angle_atoms(terms.atoms)
-    assert inner.any() and not inner.all()
-    plan = _Plan(terms, inner)
-    assert not plan.direct and plan.coefficients.shape[0] < len(plan.index)  # shared
+    groups = _angle_groups(terms.atoms, [a, b, v, w, u])
+    assert [sorted(map(str, np.array(terms.atoms)[g])) for g in groups] == [
+        ["cos(b)", "sin(b)"], ["a", "cos(a)", "sin(a)"]]  # the later angle factored out first
+    inner = np.any(groups, axis=0)
+    plan = Plan(terms.arrays(), inner)
+    assert not plan.direct and plan.index.max() + 1 < len(plan.index)  # shared
+    # a product of polynomials in each angle: sums over the monomials of b of polynomials
+    # of a (each once) take fewer operations than all the products
+    product = sp.expand((1 + sp.sin(a) + 2 * sp.cos(a) * sp.sin(a)) ** 3
+                        * (1 + 3 * sp.sin(b) - sp.cos(b)) ** 3)
+    nested_terms = decompose([sp.expand(v * product), sp.expand(w * product * sp.cos(b))])
+    nested_groups = _angle_groups(nested_terms.atoms, [a, b, v, w, u])
+    angles = np.any(nested_groups, axis=0)
+    nested = best_plan(nested_terms.arrays(), np.ones(len(angles), dtype=bool),
+                       [~angles, *nested_groups])
+    flat = Plan(nested_terms.arrays(), np.zeros(len(angles), dtype=bool))
+    assert isinstance(nested.polynomials.polynomials, Plan)  # of b, of a
+    assert nested.cost < flat.cost / 2
+    atom_rows = np.random.default_rng(1).uniform(-1, 1, size=(len(angles), 50))
+    np.testing.assert_allclose(nested(atom_rows), flat(atom_rows), rtol=1e-12, atol=1e-12)
     variables = [a, b, v, w, u]
     z = np.random.default_rng(0).uniform(-2, 2, size=(300, 5))
     values = px.feature_library.compile_entries(variables, exprs)(z)
     for expr, value in zip(exprs, values, strict=True):
         expected = np.broadcast_to(sp.lambdify(variables, expr, "numpy")(*z.T), (300,))
         np.testing.assert_allclose(value, expected, rtol=1e-12, atol=1e-12)
+
+
+def test_compiled_arm_like_entries_match_lambdify():
+    """Entries shaped like an arm's (velocity products times products of per-joint
+    trigonometric factors, the same coefficient functions shared across entries up to a
+    factor), evaluated through nested plans, equal the lambdified expressions."""
+    from pysindy_xl.feature_library._compile import _angle_groups, decompose
+    from pysindy_xl.feature_library._plans import Plan, best_plan
+
+    rng = np.random.default_rng(3)
+    q = sp.symbols("q1:4")
+    qd = sp.symbols("v1:4")
+    factors = [[sp.Integer(1), sp.sin(a), sp.cos(a), sp.sin(a) ** 2, sp.sin(a) * sp.cos(a)]
+               for a in q]
+
+    def chain(k):  # a random polynomial of the first k + 1 angles, as nested products
+        return sp.expand(sum(rng.normal() * f * (chain(k - 1) if k else 1)
+                             for f in rng.choice(factors[k], 3, replace=False)))
+
+    shared = [chain(2) for _ in range(3)]
+    exprs = [sp.expand(qd[i] * qd[j] * shared[(i + j) % 3] * (2.0 if i < j else 1.0)
+                       + qd[i] * chain(1)) for i in range(3) for j in range(3)]
+    terms = decompose(exprs)
+    groups = _angle_groups(terms.atoms, [*q, *qd])
+    angles = np.any(groups, axis=0)
+    plan = best_plan(terms.arrays(), np.ones(len(angles), dtype=bool), [~angles, *groups])
+    # the velocities factored out, then q3's atoms, at a fraction of the flat cost
+    assert isinstance(plan.polynomials.polynomials, Plan)
+    assert plan.cost < Plan(terms.arrays(), np.zeros(len(angles), dtype=bool)).cost / 2
+    z = rng.uniform(-2, 2, size=(200, 6))
+    values = px.feature_library.compile_entries([*q, *qd], exprs)(z)
+    for expr, value in zip(exprs, values, strict=True):
+        expected = sp.lambdify([*q, *qd], expr, "numpy")(*z.T)
+        np.testing.assert_allclose(value, expected, rtol=1e-11, atol=1e-11)
