@@ -16,8 +16,9 @@ record gives the best and the median, wall and process CPU time. Run the same co
 before and after a change in the same conditions (``PYTHONPATH`` pointing at each version)
 and compare.
 
-Usage: ``python benchmarks/arm_catalog_speed.py --label after [--arm kinova-gen3]
-[--repeats 3]``; appends to ``benchmarks/results/arm_catalog_speed.json``.
+Usage: ``python benchmarks/arm_catalog_speed.py --label after [--arm kinova-gen3
+[--log-samples 15000]] [--repeats 3]`` (``--log-samples``: the real log repeated as separate
+runs to that many samples); appends to ``benchmarks/results/arm_catalog_speed.json``.
 """
 
 import argparse
@@ -63,6 +64,9 @@ def main():
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--samples", type=int, default=3000, help="per trajectory (two)")
     parser.add_argument("--arm", choices=("panda", "kinova-gen3", "ur10e"), default="panda")
+    parser.add_argument("--log-samples", type=int, default=None,
+                        help="real arms: samples in all, the training log repeated as runs "
+                             "(default: the log once)")
     args = parser.parse_args()
     warnings.simplefilter("ignore")  # the Kinova URDF's impossible inertias, balanced
     if args.arm == "panda":
@@ -78,8 +82,13 @@ def main():
         (t, q, tau), _, urdf = (real_robots.kinova() if args.arm == "kinova-gen3"
                                 else real_robots.ur10e())
         system = real_robots.mjcf_system(urdf)
-        fit_arguments = {"x": q, "t": t, "u": tau}
-        samples = len(t)
+        # the log as separate runs: whole copies, then its start, to --log-samples in all
+        total = args.log_samples or len(t)
+        pieces = [slice(0, len(t))] * (total // len(t)) + (
+            [slice(0, total % len(t))] if total % len(t) else [])
+        fit_arguments = {"x": [q[k] for k in pieces], "t": [t[k] for k in pieces],
+                         "u": [tau[k] for k in pieces]}
+        samples = total
     load = os.getloadavg()
     times = {"catalog": [], "catalog_disk": [], "library": [], "catalog_fit": [], "refit": []}
     disk = tempfile.mkdtemp(prefix="arm_catalog_speed")
