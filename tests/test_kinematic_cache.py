@@ -56,6 +56,8 @@ def test_a_second_derivation_is_read_back_identical(cache, monkeypatch):
     second = kinematic_catalog(SPATIAL_ARM)
     _same(first, second)
     np.testing.assert_array_equal(first.base_parameters, second.base_parameters)
+    # the names stored with the derivation are sympy's str of the terms
+    assert second.lagrange_terms.names() == [str(term) for term in second.lagrange_terms]
 
 
 def test_other_masses_hit_other_kinematics_or_code_miss(cache, monkeypatch):

@@ -38,6 +38,8 @@ class TrigTerms(Sequence):
     columns : sequence of list of TrigPolynomial, optional
         The Euler-Lagrange column of each polynomial
         (:meth:`TrigPolynomial.euler_lagrange`), when already derived.
+    names : sequence of str, optional
+        :meth:`names`, when already formatted (read back from a cache).
 
     Examples
     --------
@@ -51,7 +53,7 @@ class TrigTerms(Sequence):
     ['9.81*sin(a)']
     """
 
-    def __init__(self, polynomials, coords, columns=None):
+    def __init__(self, polynomials, coords, columns=None, names=None):
         self.polynomials = tuple(polynomials)
         self.coords = coords
         self.angles = self.polynomials[0].angles if self.polynomials else (False,) * coords.n
@@ -62,7 +64,10 @@ class TrigTerms(Sequence):
                              f"{len(self.angles)}")
         self.columns = None if columns is None else tuple(tuple(c) for c in columns)
         self._exprs = [None] * len(self.polynomials)
-        self._names = None
+        self._names = None if names is None else [str(name) for name in names]
+        if self._names is not None and len(self._names) != len(self.polynomials):
+            raise ValueError(f"names: expected {len(self.polynomials)} names, got "
+                             f"{len(self._names)}")
         self._key = None
 
     def __len__(self):

@@ -30,7 +30,7 @@ from ...feature_library import trigpoly
 from ...feature_library.trigpoly import TrigPolynomial
 from .. import import_mujoco
 
-_FORMAT = 1  # bump when the stored arrays change
+_FORMAT = 2  # bump when the stored arrays change
 _KEEP = 16
 _OFF = {"", "0", "off", "false", "no", "none"}
 _SOURCES = ("kinematic.py", "_kinematic_tree.py", "_kinematic_build.py", "_derivation_cache.py")
@@ -52,7 +52,8 @@ def _code_digest() -> str | None:
     here = os.path.dirname(os.path.abspath(__file__))
     try:
         polynomials = os.path.dirname(os.path.abspath(trigpoly.__file__))
-        for path in ([os.path.join(polynomials, name) for name in ("trigpoly.py", "_monomials.py")]
+        for path in ([os.path.join(polynomials, name)
+                      for name in ("trigpoly.py", "_monomials.py", "trigterms.py")]
                      + [os.path.join(here, name) for name in _SOURCES]):
             with open(path, "rb") as f:
                 digest.update(f.read())
@@ -106,6 +107,7 @@ def save(digest, derived) -> None:
     columns = [p for column in derived["columns"] for p in column]
     arrays = {"format": np.array(_FORMAT), "bodies": np.asarray(derived["bodies"]),
               "names": np.array(derived["names"], dtype=str),
+              "term_names": np.array(derived["term_names"], dtype=str),
               "combination": derived["combination"],
               "n_candidates": np.array(derived["n_candidates"]),
               **_stacked(terms, "terms"), **_stacked(columns, "columns")}
@@ -128,8 +130,9 @@ def save(digest, derived) -> None:
 
 def load(digest, angles) -> dict | None:
     """The derivation stored under ``digest``: ``bodies`` (moving body ids), ``names``
-    (physical parameters), ``terms`` (kept polynomials), ``columns`` (their Euler-Lagrange
-    columns), ``combination``, ``n_candidates``; None if absent, off or unreadable."""
+    (physical parameters), ``terms`` (kept polynomials), ``term_names`` (their ``str``),
+    ``columns`` (their Euler-Lagrange columns), ``combination``, ``n_candidates``; None if
+    absent, off or unreadable."""
     folder, n = directory(), len(angles)
     if folder is None or digest is None:
         return None
@@ -142,6 +145,7 @@ def load(digest, angles) -> dict | None:
             derived = {"bodies": data["bodies"].tolist(), "names": data["names"].tolist(),
                        "combination": data["combination"].astype(float),
                        "n_candidates": int(data["n_candidates"]), "terms": terms,
+                       "term_names": data["term_names"].tolist(),
                        "columns": [columns[k * n:(k + 1) * n] for k in range(len(terms))]}
     except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
         return None

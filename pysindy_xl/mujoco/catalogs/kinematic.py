@@ -553,6 +553,8 @@ def _build(system, model, coulomb, coulomb_scale, seed, coulomb_law) -> Kinemati
                                                     for j in range(coords.n)))
     if derived is None:
         derived = derive_lagrangian(system, model, bodies, seed)
+        if _derivation_cache.directory() is not None:  # names formatted once, stored with it
+            derived["term_names"] = TrigTerms(derived["terms"], coords).names()
         _derivation_cache.save(digest, derived)
     names, combination, kept = derived["names"], derived["combination"], derived["terms"]
     values = [x for b in derived["bodies"] for x in physical_values(model, b)]
@@ -564,7 +566,8 @@ def _build(system, model, coulomb, coulomb_scale, seed, coulomb_law) -> Kinemati
     return KinematicCatalog(
         system=system, coords=coords,
         # sympy expressions built only when read: the library derives from the polynomials
-        lagrange_terms=TrigTerms(kept, coords, columns=derived["columns"]),
+        lagrange_terms=TrigTerms(kept, coords, columns=derived["columns"],
+                                 names=derived.get("term_names")),
         parameters=parameters, physical_names=names, combination=combination,
         physical_values=np.array(values), classical_terms=classical_terms,
         classical_mask=mask, classical_kinds=kinds, classical_values=classical_values,
