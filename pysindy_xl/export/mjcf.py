@@ -176,9 +176,9 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     MuJoCo's ``mj_fullM`` and its passive minus bias forces (minus ``frictionloss sign(qd)``)
     equal the model's ``M`` and ``f`` at ``n_states`` random states (every joint sliding:
     velocities far from zero and outside every sticking zone) within ``tolerance`` of their
-    largest entries, and only with a positive definite
-    ``M`` there (MuJoCo factors it): models with terms MJCF cannot state (other catalogs, held
-    coordinates, joint offsets, asymmetric friction) are refused.
+    largest entries, and only with a positive definite ``M`` there (MuJoCo factors it):
+    models with terms MJCF cannot state (other catalogs, held coordinates, joint offsets,
+    asymmetric friction) are refused.
 
     ``model`` is fitted with ``kinematic_catalog(system).library()`` (or a catalog with its
     terms) on the template ``system``, an :class:`~pysindy_xl.mujoco.MJCFSystem`; ``seed``

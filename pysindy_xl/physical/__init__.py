@@ -4,8 +4,8 @@
 images of the bodies' inertial parameters, friction coefficients, with the dry friction laws of
 :mod:`.friction`); :mod:`.sdp` states rigid bodies' constraints on them as linear matrix
 inequalities and solves the programs that realize base parameters or fit under the constraints
-(cvxpy); :mod:`.rigid_body` evaluates the
-equations of motion of any parameters on the kinematic tree (mass matrix, bias forces). Used by
+(cvxpy); :mod:`.rigid_body` evaluates the equations of motion of any parameters on the
+kinematic tree (mass matrix, bias forces). Used by
 :class:`~pysindy_xl.optimizers.PhysicalOptimizer` and the MJCF export.
 """
 
