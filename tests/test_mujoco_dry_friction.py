@@ -196,3 +196,33 @@ def test_auto_formulation_fits_the_mujoco_law_in_the_weak_form():
     assert friction["wrist"]["dry"] == pytest.approx(0.02, rel=0.05)
     assert friction["shoulder"]["dry"] == pytest.approx(0.2, rel=0.2)
     assert friction["wrist"]["viscous"] == pytest.approx(0.01, rel=0.05)
+
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_mujoco_law_model_saves_loads_and_exports_to_jax(tmp_path):
+    """The law's Abs and sign survive the model file and the JAX export: the same
+    accelerations inside and outside the sticking zones."""
+    import pysindy_xl as px
+    from pysindy_xl.mujoco import MJCFSystem, generate_dataset, kinematic_catalog
+
+    system = MJCFSystem(ARM.format(step=1e-3))
+    data = generate_dataset(system, n_trajectories=1, duration=1.0, seed=0, progress=False)
+    model = px.XLSINDy(kinematic_catalog(system, coulomb_law="mujoco").library(),
+                       px.ExplicitOptimizer()).fit(**data.fit_arguments(forces="tau"))
+    assert sum(c != 0 for name, c in zip(model.get_feature_names(), model.coefficients(),
+                                         strict=True) if "Abs" in name) == 2  # both joints'
+    scale = dry_friction_scales(system.mj_model())[0]
+    rng = np.random.default_rng(0)
+    q = rng.uniform(-1, 1, (40, 2))
+    # velocities inside and outside each joint's sticking zone
+    qd = scale * rng.choice([0.3, 0.9, 1.5, 4.0], (40, 2)) * rng.choice([-1, 1], (40, 2))
+    u = rng.normal(size=(40, 2))
+    expected = model.predict(q, qd, u)
+    model.save(tmp_path / "model.json")
+    np.testing.assert_allclose(px.XLSINDy.load(tmp_path / "model.json").predict(q, qd, u),
+                               expected, rtol=1e-12, atol=1e-12)
+    jax = pytest.importorskip("jax")
+    with jax.enable_x64(True):
+        derivative = np.asarray(model.to_jax()(np.hstack([q, qd]), u))
+    np.testing.assert_allclose(derivative[:, 2:], expected, rtol=1e-9, atol=1e-9)
