@@ -30,7 +30,7 @@ from ...feature_library import trigpoly
 from ...feature_library.trigpoly import TrigPolynomial
 from .. import import_mujoco
 
-_FORMAT = 2  # bump when the stored arrays change
+_FORMAT = 3  # bump when the stored arrays change
 _KEEP = 16
 _OFF = {"", "0", "off", "false", "no", "none"}
 _SOURCES = ("kinematic.py", "_kinematic_tree.py", "_kinematic_build.py", "_derivation_cache.py")
@@ -97,6 +97,20 @@ def _unstacked(data, prefix, angles):
             for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
 
+def _encoded(strings, prefix):
+    """Strings as one UTF-8 byte array and their lengths (a fixed-width string array pads
+    every name to the longest, and a term's name can run to a million characters)."""
+    encoded = [text.encode() for text in strings]
+    return {f"{prefix}_bytes": np.frombuffer(b"".join(encoded), dtype=np.uint8),
+            f"{prefix}_lengths": np.array([len(b) for b in encoded], dtype=np.int64)}
+
+
+def _decoded(data, prefix):
+    joined = data[f"{prefix}_bytes"].tobytes()
+    bounds = np.cumsum(np.append(0, data[f"{prefix}_lengths"])).tolist()
+    return [joined[a:b].decode() for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+
 def save(digest, derived) -> None:
     """Store a derivation (see :func:`load`); nothing happens where it cannot be written."""
     folder = directory()
@@ -107,7 +121,7 @@ def save(digest, derived) -> None:
     columns = [p for column in derived["columns"] for p in column]
     arrays = {"format": np.array(_FORMAT), "bodies": np.asarray(derived["bodies"]),
               "names": np.array(derived["names"], dtype=str),
-              "term_names": np.array(derived["term_names"], dtype=str),
+              **_encoded(derived["term_names"], "term_names"),
               "combination": derived["combination"],
               "n_candidates": np.array(derived["n_candidates"]),
               **_stacked(terms, "terms"), **_stacked(columns, "columns")}
@@ -145,7 +159,7 @@ def load(digest, angles) -> dict | None:
             derived = {"bodies": data["bodies"].tolist(), "names": data["names"].tolist(),
                        "combination": data["combination"].astype(float),
                        "n_candidates": int(data["n_candidates"]), "terms": terms,
-                       "term_names": data["term_names"].tolist(),
+                       "term_names": _decoded(data, "term_names"),
                        "columns": [columns[k * n:(k + 1) * n] for k in range(len(terms))]}
     except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
         return None
