@@ -705,3 +705,34 @@ def test_compiled_arm_like_entries_match_lambdify():
     for expr, value in zip(exprs, values, strict=True):
         expected = sp.lambdify([*q, *qd], expr, "numpy")(*z.T)
         np.testing.assert_allclose(value, expected, rtol=1e-11, atol=1e-11)
+
+
+def test_large_plans_are_stored_on_disk_and_read_back_identical(tmp_path, monkeypatch):
+    """A plan is stored when first made and read back, planning impossible, with the same
+    values as a fresh one and as lambdify; other terms or another planning code miss."""
+    from pysindy_xl.feature_library import _plans
+    from pysindy_xl.feature_library._compile import compile_terms, decompose
+
+    monkeypatch.setenv("PYSINDY_XL_CACHE", str(tmp_path))
+    monkeypatch.setattr(_plans, "STORED_TERMS", 1)  # (a small catalog stands for a large one)
+    a, b, v = sp.symbols("a b v")
+    exprs = [sp.expand(v * (1 + sp.sin(a) + sp.cos(a) * sp.sin(b)) ** 3),
+             sp.expand(v**2 * sp.cos(b) ** 2 - 2 * sp.sin(a)), sp.Integer(4)]
+    z = np.random.default_rng(0).uniform(-2, 2, size=(100, 3))
+    fresh = compile_terms([a, b, v], decompose(exprs))(z, stacked=True)
+    assert len(list(tmp_path.glob("plan-*.npz"))) == 1
+
+    def fail(*args, **kwargs):
+        raise AssertionError("planned although stored")
+
+    monkeypatch.setattr(_plans, "best_plan", fail)
+    stored = compile_terms([a, b, v], decompose(exprs))(z, stacked=True)
+    np.testing.assert_array_equal(stored, fresh)
+    for expr, value in zip(exprs, stored, strict=True):
+        expected = np.broadcast_to(sp.lambdify([a, b, v], expr, "numpy")(*z.T), (100,))
+        np.testing.assert_allclose(value, expected, rtol=1e-12, atol=1e-12)
+    with pytest.raises(AssertionError, match="planned"):  # other terms: a miss
+        compile_terms([a, b, v], decompose([sp.expand(v * sp.sin(a) ** 2)]))
+    monkeypatch.setattr(_plans, "_code_digest", lambda: "other planning code")
+    with pytest.raises(AssertionError, match="planned"):
+        compile_terms([a, b, v], decompose(exprs))

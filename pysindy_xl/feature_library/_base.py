@@ -240,7 +240,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
 
     # -- pysindy / scikit-learn interface ------------------------------------------------
     def fit(self, x=None, y=None):
-        """Derive the symbolic columns and compile them.
+        """Derive the symbolic columns (their evaluator is compiled on first use).
 
         Parameters
         ----------
@@ -253,7 +253,6 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         self
         """
         self._fit_symbolic()
-        self._compile()
         if x is not None:
             self._check_input(x)
         return self
@@ -395,7 +394,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
             Rows coordinate-major, one column per feature.
         """
         check_is_fitted(self, "entry_index_")
-        if not hasattr(self, "_evaluate"):  # symbolic part fitted by a CatalogRepartition
+        if not hasattr(self, "_evaluate"):  # compiled on first use: weak fits need none
             self._compile()
         x = self._check_input(x)
         n_samples = x.shape[0]

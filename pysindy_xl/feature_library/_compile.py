@@ -27,7 +27,7 @@ import numpy as np
 import sympy as sp
 
 from ._monomials import _unique_rows
-from ._plans import _monomials, best_plan
+from ._plans import _monomials, stored_plan
 
 __all__ = ["compile_entries", "Terms", "decompose", "compile_terms", "scalar_function"]
 
@@ -302,8 +302,8 @@ def _compile_terms(variables: tuple, terms: Terms):
     atom_functions = [_atom_function(a, position, variables) for a in atom_list]
     groups = _angle_groups(atom_list, variables)
     angles = np.any(groups, axis=0) if groups else np.zeros(len(atom_list), dtype=bool)
-    plan = best_plan(terms.arrays(), np.ones(len(atom_list), dtype=bool),
-                     [~angles, *groups])
+    plan = stored_plan(terms.arrays(), np.ones(len(atom_list), dtype=bool),
+                       [~angles, *groups])
     n_entries = len(terms)
     # blocks of samples keep the values built at once (values x block) near _BLOCK_VALUES
     block = int(np.clip(_BLOCK_VALUES // max(plan.size, 1), 64, _BLOCK))

@@ -13,12 +13,18 @@ the other, for as long as that saves operations.
 
 from __future__ import annotations
 
+import functools
+import hashlib
+import os
+
 import numpy as np
+import scipy
 import scipy.sparse
 
+from .. import _disk_cache
 from ._monomials import _unique_rows
 
-__all__ = ["Plan", "best_plan", "MonomialValues"]
+__all__ = ["Plan", "best_plan", "MonomialValues", "plan_arrays", "plan_of", "stored_plan"]
 
 Monomial = tuple  # sorted tuple of (atom index, integer power)
 
@@ -315,3 +321,114 @@ class Plan:
             for a, b, u in self.runs:
                 pairs[a:b] *= outer[u]
         return np.asarray(self.sum @ pairs)
+
+
+# -- plans kept on disk ----------------------------------------------------------------------
+#: Terms from which a plan is stored on disk: smaller ones are planned faster than read.
+STORED_TERMS = 50_000
+_PLAN_FORMAT = 1
+
+
+def _csr_arrays(matrix, prefix) -> dict:
+    return {f"{prefix}data": matrix.data, f"{prefix}indices": matrix.indices,
+            f"{prefix}indptr": matrix.indptr, f"{prefix}shape": np.array(matrix.shape)}
+
+
+def _csr_of(data, prefix):
+    return scipy.sparse.csr_matrix((data[f"{prefix}data"], data[f"{prefix}indices"],
+                                    data[f"{prefix}indptr"]), shape=tuple(data[f"{prefix}shape"]))
+
+
+def _values_arrays(values: MonomialValues, prefix) -> dict:
+    first, atoms = values.first
+    return {f"{prefix}header": np.array([values.size, values.constant, first.start, first.stop]),
+            f"{prefix}atoms": atoms,
+            f"{prefix}levels": np.array([(a, b, len(runs)) for a, b, _, runs in values.levels],
+                                        dtype=np.intp).reshape(-1, 3),
+            f"{prefix}parents": np.concatenate([p for _, _, p, _ in values.levels] or [[]]),
+            f"{prefix}runs": np.array([r for *_, runs in values.levels for r in runs],
+                                      dtype=np.intp).reshape(-1, 3)}
+
+
+def _values_of(data, prefix) -> MonomialValues:
+    values = MonomialValues.__new__(MonomialValues)
+    size, constant, start, stop = data[f"{prefix}header"].tolist()
+    values.size, values.constant = size, bool(constant)
+    values.first = (slice(start, stop), data[f"{prefix}atoms"])
+    parents = data[f"{prefix}parents"].astype(np.intp)
+    runs = [tuple(r) for r in data[f"{prefix}runs"].tolist()]
+    values.levels, used, offset = [], 0, 0
+    for a, b, count in data[f"{prefix}levels"].tolist():
+        values.levels.append((a, b, parents[offset:offset + b - a], runs[used:used + count]))
+        offset, used = offset + b - a, used + count
+    return values
+
+
+def plan_arrays(plan: Plan, prefix="") -> dict:
+    """A plan as named arrays (:func:`plan_of` reads them back): what evaluation uses."""
+    arrays = {f"{prefix}header": np.array([plan.n_entries, plan.size, plan.cost, plan.direct,
+                                           plan.inner is not None]),
+              f"{prefix}index": plan.index, f"{prefix}pair_runs": np.array(
+                  plan.runs, dtype=np.intp).reshape(-1, 3),
+              **_csr_arrays(plan.sum, f"{prefix}sum."),
+              **_values_arrays(plan.outer, f"{prefix}outer.")}
+    if plan.inner is not None:
+        return {**arrays, f"{prefix}inner": plan.inner,
+                **plan_arrays(plan.polynomials, f"{prefix}p.")}
+    return {**arrays, **_csr_arrays(plan.coefficients, f"{prefix}coefficients."),
+            **_values_arrays(plan.polynomials, f"{prefix}monomials.")}
+
+
+def plan_of(data, prefix="") -> Plan:
+    """The plan stored by :func:`plan_arrays`."""
+    plan = Plan.__new__(Plan)
+    plan.n_entries, plan.size, plan.cost, direct, factored = \
+        data[f"{prefix}header"].tolist()
+    plan.direct = bool(direct)
+    plan.index = data[f"{prefix}index"]
+    plan.runs = [tuple(r) for r in data[f"{prefix}pair_runs"].tolist()]
+    plan.sum = _csr_of(data, f"{prefix}sum.")
+    plan.outer = _values_of(data, f"{prefix}outer.")
+    if factored:
+        plan.inner = data[f"{prefix}inner"]
+        plan.polynomials = plan_of(data, f"{prefix}p.")
+    else:
+        plan.inner = None
+        plan.coefficients = _csr_of(data, f"{prefix}coefficients.")
+        plan.polynomials = _values_of(data, f"{prefix}monomials.")
+    return plan
+
+
+@functools.cache
+def _code_digest() -> str | None:
+    here = os.path.dirname(os.path.abspath(__file__))
+    digest = _disk_cache.source_digest([os.path.join(here, name) for name in (
+        "_plans.py", "_monomials.py")], _PLAN_FORMAT, scipy.__version__)
+    return None if digest is None else digest.hexdigest()
+
+
+def stored_plan(arrays, inner, peel) -> Plan:
+    """:func:`best_plan`, read back from the disk cache (:mod:`pysindy_xl._disk_cache`) for
+    terms of :data:`STORED_TERMS` or more, and stored there when first made.
+
+    The file is named by a digest of the terms, the atom masks and the planning code, so a
+    plan is only ever read for the very terms it was made for.
+    """
+    code = _code_digest()
+    if len(arrays[1]) < STORED_TERMS or code is None or _disk_cache.directory() is None:
+        return best_plan(arrays, inner, peel)
+    digest = hashlib.sha256(code.encode())
+    for array in (*arrays[:3], np.array(arrays[3]), inner, *peel):
+        array = np.ascontiguousarray(array)
+        digest.update(f"{array.dtype.str}{array.shape}".encode())
+        digest.update(array.reshape(-1).view(np.uint8))  # (the buffer itself: no copy)
+    name = digest.hexdigest()
+    stored = _disk_cache.read_arrays("plan", name)
+    if stored is not None:
+        try:
+            return plan_of(stored)
+        except (KeyError, ValueError, TypeError):
+            pass
+    plan = best_plan(arrays, inner, peel)
+    _disk_cache.write_arrays("plan", name, plan_arrays(plan))
+    return plan

@@ -4,62 +4,43 @@ The derivation of a catalog (the trigonometric polynomials of every body, their
 Euler-Lagrange columns, the numerical reduction to base parameters) depends on the kinematic
 tree alone: bodies' offsets and orientations, joints' types, axes, anchors and references,
 gravity, the coordinates, the names and the seed; never on masses, inertias or armatures.
-It is stored as an NPZ file (arrays only, read without pickle) named by a digest of that
-content, of the deriving code, of numpy's and MuJoCo's versions and of the file format,
-written to a temporary file and renamed (readers never see half a file); a file that is
-missing, unreadable or of another format is a miss.
-
-The directory is ``$PYSINDY_XL_CACHE`` if set, else ``$XDG_CACHE_HOME/pysindy_xl`` (default
-``~/.cache/pysindy_xl``); ``PYSINDY_XL_CACHE=off`` (or ``0``, ``false``, ``no``, empty) turns
-the cache off. A directory that cannot be created or written is skipped silently: the
-derivation is then kept in memory only. The newest :data:`_KEEP` files are kept.
+It is stored by :mod:`pysindy_xl._disk_cache` (an NPZ file of arrays, read without pickle,
+named by a digest of that content, of the deriving code, of numpy's and MuJoCo's versions and
+of the file format; ``PYSINDY_XL_CACHE`` chooses the directory or turns it off).
 """
 
 from __future__ import annotations
 
 import functools
-import glob
 import hashlib
 import os
-import tempfile
-import zipfile
 
 import numpy as np
 
+from ... import _disk_cache
+from ..._disk_cache import directory
 from ...feature_library import trigpoly
 from ...feature_library.trigpoly import TrigPolynomial
 from .. import import_mujoco
 
+__all__ = ["directory", "key", "load", "save"]
+
 _FORMAT = 3  # bump when the stored arrays change
-_KEEP = 16
-_OFF = {"", "0", "off", "false", "no", "none"}
+_KIND = "kinematic"
 _SOURCES = ("kinematic.py", "_kinematic_tree.py", "_kinematic_build.py", "_derivation_cache.py")
-
-
-def directory() -> str | None:
-    """The cache directory, or None when the cache is off."""
-    value = os.environ.get("PYSINDY_XL_CACHE")
-    if value is not None:
-        return None if value.strip().lower() in _OFF else value
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return os.path.join(base, "pysindy_xl")
 
 
 @functools.cache
 def _code_digest() -> str | None:
     """A digest of the code that derives catalogs (a change of it is a new key)."""
-    digest = hashlib.sha256(f"{_FORMAT} {np.__version__} {import_mujoco().__version__}".encode())
     here = os.path.dirname(os.path.abspath(__file__))
-    try:
-        polynomials = os.path.dirname(os.path.abspath(trigpoly.__file__))
-        for path in ([os.path.join(polynomials, name)
-                      for name in ("trigpoly.py", "_monomials.py", "trigterms.py")]
-                     + [os.path.join(here, name) for name in _SOURCES]):
-            with open(path, "rb") as f:
-                digest.update(f.read())
-    except OSError:
-        return None
-    return digest.hexdigest()
+    polynomials = os.path.dirname(os.path.abspath(trigpoly.__file__))
+    digest = _disk_cache.source_digest(
+        [os.path.join(polynomials, name) for name in ("trigpoly.py", "_monomials.py",
+                                                       "trigterms.py")]
+        + [os.path.join(here, name) for name in _SOURCES],
+        _FORMAT, import_mujoco().__version__)
+    return None if digest is None else digest.hexdigest()
 
 
 def key(system, model, names, seed) -> str | None:
@@ -77,10 +58,6 @@ def key(system, model, names, seed) -> str | None:
         array = np.ascontiguousarray(array)
         digest.update(f"{array.dtype.str}{array.shape}".encode() + array.tobytes())
     return digest.hexdigest()
-
-
-def _path(folder, digest):
-    return os.path.join(folder, f"kinematic-{digest}.npz")
 
 
 def _stacked(polynomials, prefix):
@@ -113,33 +90,17 @@ def _decoded(data, prefix):
 
 def save(digest, derived) -> None:
     """Store a derivation (see :func:`load`); nothing happens where it cannot be written."""
-    folder = directory()
     terms = derived["terms"]
-    if folder is None or digest is None or not terms or any(
+    if directory() is None or digest is None or not terms or any(
             p.exponents.max(initial=0) > 255 for p in terms):
         return
     columns = [p for column in derived["columns"] for p in column]
-    arrays = {"format": np.array(_FORMAT), "bodies": np.asarray(derived["bodies"]),
-              "names": np.array(derived["names"], dtype=str),
-              **_encoded(derived["term_names"], "term_names"),
-              "combination": derived["combination"],
-              "n_candidates": np.array(derived["n_candidates"]),
-              **_stacked(terms, "terms"), **_stacked(columns, "columns")}
-    try:
-        os.makedirs(folder, exist_ok=True)
-        handle, temporary = tempfile.mkstemp(dir=folder, suffix=".tmp")
-        try:
-            with os.fdopen(handle, "wb") as f:
-                np.savez(f, **arrays)  # uncompressed: deflating a large arm costs 0.6 s
-            os.replace(temporary, _path(folder, digest))
-        finally:
-            if os.path.exists(temporary):
-                os.unlink(temporary)
-        for old in sorted(glob.glob(os.path.join(folder, "kinematic-*.npz")),
-                          key=os.path.getmtime)[:-_KEEP]:
-            os.unlink(old)
-    except OSError:
-        pass
+    _disk_cache.write_arrays(_KIND, digest, {
+        "format": np.array(_FORMAT), "bodies": np.asarray(derived["bodies"]),
+        "names": np.array(derived["names"], dtype=str),
+        **_encoded(derived["term_names"], "term_names"),
+        "combination": derived["combination"], "n_candidates": np.array(derived["n_candidates"]),
+        **_stacked(terms, "terms"), **_stacked(columns, "columns")})
 
 
 def load(digest, angles) -> dict | None:
@@ -147,20 +108,18 @@ def load(digest, angles) -> dict | None:
     (physical parameters), ``terms`` (kept polynomials), ``term_names`` (their ``str``),
     ``columns`` (their Euler-Lagrange columns), ``combination``, ``n_candidates``; None if
     absent, off or unreadable."""
-    folder, n = directory(), len(angles)
-    if folder is None or digest is None:
+    n = len(angles)
+    data = None if digest is None else _disk_cache.read_arrays(_KIND, digest)
+    if data is None or int(data.get("format", -1)) != _FORMAT:
         return None
     try:
-        with np.load(_path(folder, digest), allow_pickle=False) as data:
-            if int(data["format"]) != _FORMAT:
-                return None
-            terms = _unstacked(data, "terms", angles)
-            columns = _unstacked(data, "columns", angles)
-            derived = {"bodies": data["bodies"].tolist(), "names": data["names"].tolist(),
-                       "combination": data["combination"].astype(float),
-                       "n_candidates": int(data["n_candidates"]), "terms": terms,
-                       "term_names": _decoded(data, "term_names"),
-                       "columns": [columns[k * n:(k + 1) * n] for k in range(len(terms))]}
-    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
+        terms = _unstacked(data, "terms", angles)
+        columns = _unstacked(data, "columns", angles)
+        derived = {"bodies": data["bodies"].tolist(), "names": data["names"].tolist(),
+                   "combination": data["combination"].astype(float),
+                   "n_candidates": int(data["n_candidates"]), "terms": terms,
+                   "term_names": _decoded(data, "term_names"),
+                   "columns": [columns[k * n:(k + 1) * n] for k in range(len(terms))]}
+    except (KeyError, ValueError, UnicodeDecodeError):
         return None
     return derived if len(columns) == n * len(terms) else None
