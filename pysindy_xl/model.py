@@ -19,6 +19,7 @@ from .fit import (
     check_fit,
     choose_noise_model,
     estimator_trajectories,
+    fit_smoother,
     fitted_state,
     resolve_optimizer,
     solve,
@@ -263,14 +264,15 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
     def _fit(self, x, t, x_dot, x_ddot, u, sample_mask):
         """check -> build -> choose the noise model -> solve -> wrap."""
         library, data, formulation = check_fit(self, x, t, x_dot, x_ddot, u, sample_mask)
+        smoother = fit_smoother(self.smoother)  # the candidates' rows smooth alike
         with remembered_weak_values(library):  # the candidates' rows share its values
             problem = build_problem(library, data, formulation,
-                                    test_functions=self.test_functions, smoother=self.smoother,
+                                    test_functions=self.test_functions, smoother=smoother,
                                     hold_still=self.hold_still,
                                     drop_dependent=self.drop_dependent)
             optimizer = resolve_optimizer(self.optimizer, problem, library)
             problem, weigh = choose_noise_model(problem, library, data, optimizer,
-                                                self.smoother, self.residual_covariance,
+                                                smoother, self.residual_covariance,
                                                 self.test_functions)
         optimizer = solve(optimizer, problem, library, weigh=weigh)
         for name, value in fitted_state(library, problem, optimizer).items():  # wrap

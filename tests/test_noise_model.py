@@ -179,3 +179,31 @@ def test_bandwidth_half_width_matches_the_bump_response():
     bump = (1 - s**2) ** 6
     response = np.trapezoid(bump * np.cos(2 * np.pi * 10.0 * h * s), s) / np.trapezoid(bump, s)
     assert response == pytest.approx(2**-0.5, rel=0.02)
+
+
+def test_the_candidates_rows_smooth_each_piece_once_and_change_nothing(monkeypatch):
+    """The noise-model choice builds its rows again from the same pieces and draws: with
+    the fit's remembering smoother each is smoothed once, and the fit is the same, to the
+    bit, as with a smoother that smooths again every time."""
+    from pysindy_xl import model as model_module
+
+    t, q, tau = _pendulum(duration=12.0)
+    q = q + 1e-3 * np.random.default_rng(0).normal(size=q.shape)
+    calls = {"smooth": 0, "resmooth": 0}
+
+    class Counting(px.WhittakerSmoother):
+        def smooth(self, t, x):
+            calls["smooth"] += 1
+            return super().smooth(t, x)
+
+        def resmooth(self, t, x):
+            calls["resmooth"] += 1
+            return super().resmooth(t, x)
+
+    remembered = px.XLSINDy(_library(), smoother=Counting()).fit(q, t, u=tau)
+    assert "noise_model" in remembered.weak_info_  # the choice was made: rows built twice
+    assert calls == {"smooth": 1, "resmooth": 1}
+    monkeypatch.setattr(model_module, "fit_smoother", lambda smoother: smoother)
+    again = px.XLSINDy(_library(), smoother=Counting()).fit(q, t, u=tau)
+    assert calls == {"smooth": 3, "resmooth": 3}  # the default rows, then the scoring rows
+    np.testing.assert_array_equal(again.coef_, remembered.coef_)

@@ -23,7 +23,7 @@ One fit of :class:`~pysindy_xl.XLSINDy` goes one way through here::
 """
 
 from .build import UNFORCED_WIDTH_MULTIPLES, CatalogMap, build_problem, probe_points
-from .noise_model import choose_noise_model
+from .noise_model import RememberedSmoother, choose_noise_model, fit_smoother
 from .solve import resolve_optimizer, solve
 from .trajectories import (
     FORMULATIONS,
@@ -41,6 +41,8 @@ __all__ = [
     "probe_points",
     "resolve_optimizer",
     "choose_noise_model",
+    "fit_smoother",
+    "RememberedSmoother",
     "solve",
     "fitted_state",
     "catalog_dynamics",

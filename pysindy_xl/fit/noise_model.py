@@ -29,26 +29,61 @@ from ..weak.selection import (
 from .build import build_problem, with_mass_matrices
 from .solve import solve
 
-__all__ = ["choose_noise_model"]
+__all__ = ["RememberedSmoother", "choose_noise_model", "fit_smoother"]
 
 
-class _RememberedSmoother:
-    """A smoother that smooths each distinct trajectory piece once: the candidates' rows are
-    built from the same pieces (without propagation, so without ``resmooth``)."""
+class RememberedSmoother:
+    """A smoother that smooths each distinct input once, for the several problems of one fit.
+
+    The default rows, the candidates' rows and the scoring rows of :func:`choose_noise_model`
+    smooth the same trajectory pieces, and propagate the same noisy draws (their generator is
+    seeded); results are kept by the content of ``(t, x)`` and, for :meth:`resmooth`, of the
+    weights. Copies share what was smoothed (``deepcopy`` is the object itself), and a
+    shallow copy keeps the weights of its last :meth:`smooth`, as the weak regression's
+    propagation needs. For smoothers that propagate (with ``resmooth``): the others are
+    never asked twice.
+    """
 
     def __init__(self, smoother=None):
         self.smoother = smoother or WhittakerSmoother()
-        self.smoothed = {}
+        self._results = {}
 
-    def __deepcopy__(self, memo):  # copies share what was smoothed (each smooths a copy)
+    def __deepcopy__(self, memo):
         return self
 
+    @staticmethod
+    def _key(*arrays):
+        digest = hashlib.sha1()
+        for array in arrays:
+            digest.update(np.ascontiguousarray(array, dtype=float).reshape(-1).view(np.uint8))
+        return digest.hexdigest()
+
     def smooth(self, t, x):
-        key = hashlib.sha1(np.ascontiguousarray(t).tobytes()
-                           + np.ascontiguousarray(x).tobytes()).hexdigest()
-        if key not in self.smoothed:
-            self.smoothed[key] = copy.deepcopy(self.smoother).smooth(t, x)
-        return self.smoothed[key]
+        key = ("smooth", self._key(t, x))
+        if key not in self._results:
+            fitted = copy.deepcopy(self.smoother)
+            self._results[key] = (fitted, fitted.smooth(t, x))
+        self._fitted, result = self._results[key]
+        for name in ("lam_", "noise_"):
+            if hasattr(self._fitted, name):
+                setattr(self, name, getattr(self._fitted, name))
+        return result
+
+    def resmooth(self, t, x):
+        weights = getattr(self._fitted, "lam_", ())
+        key = ("resmooth", self._key(t, x, weights))
+        if key not in self._results:
+            self._results[key] = self._fitted.resmooth(t, x)
+        return self._results[key]
+
+
+def fit_smoother(smoother=None):
+    """The smoother of one fit: ``smoother`` (default :class:`WhittakerSmoother`) remembered
+    (:class:`RememberedSmoother`) where it propagates the noise of the positions, the case in
+    which :func:`choose_noise_model` builds the rows again."""
+    smoother = smoother or WhittakerSmoother()
+    return (RememberedSmoother(smoother) if callable(getattr(smoother, "resmooth", None))
+            else smoother)
 
 
 def _unbagged(optimizer):
@@ -104,7 +139,9 @@ def choose_noise_model(problem, library, data, optimizer, smoother=None,
         return problem, residual_covariance
     origin = problem.catalog_map
     info = origin.weak_info
-    tests, remembered = BumpTestFunctions(), _RememberedSmoother(smoother)
+    tests = BumpTestFunctions()
+    remembered = (smoother if isinstance(smoother, RememberedSmoother)
+                  else RememberedSmoother(smoother))
     steps = np.concatenate([np.diff(d["t"]) for d in data])
     scoring = max(bandwidth_half_width(SCORING_BANDWIDTH, tests.power),
                   tests.min_samples * float(np.quantile(steps, 0.999)))
@@ -112,7 +149,7 @@ def choose_noise_model(problem, library, data, optimizer, smoother=None,
 
     def built(half_width, propagate=False):
         other = build_problem(library, data, "weak", test_functions=tests,
-                              smoother=remembered if not propagate else smoother,
+                              smoother=remembered,
                               half_width=half_width, still=~origin.coordinates,
                               propagate=propagate)
         columns = np.searchsorted(other.catalog_map.columns, origin.columns)
