@@ -81,40 +81,35 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     duration : float
         Simulated time (s); rounded to a whole number of MuJoCo time steps.
     signals : callable, optional
-        ``signals(times) -> (len(times), nu)`` control of every actuator, held over each
-        internal step (e.g. a :class:`SumOfSinusoids`). None: no control.
+        ``signals(times) -> (len(times), nu)`` control of every actuator (e.g. a
+        :class:`SumOfSinusoids`). None: no control.
     q0, qd0 : array, shape (n,), optional
         Initial generalized state (default: the model's ``qpos0``, at rest).
     sample_every : int, default 1
         Record every ``sample_every``-th time step of the model.
     progress : tqdm.tqdm, optional
-        A progress bar advanced by the number of simulated steps.
+        Advanced by the number of simulated steps.
     substeps : int, default 1
-        MuJoCo integrates with ``timestep / substeps``, controls updated at every internal
-        step; sample times do not change.
+        MuJoCo integrates with ``timestep / substeps``; sample times do not change.
     control_at : {"start", "midpoint"}, default "start"
-        Where ``signals`` is read for each internal step: its start, or its midpoint
-        (second order; a start hold lags by half a step, which a servo's ``kp`` turns into
-        an apparent viscous friction ``kp * h / 2``).
+        Where ``signals`` is read for each internal step (midpoint: second order; a start
+        hold lags by half a step, which a servo's ``kp`` turns into a viscous friction).
     integrator : {"auto", "Euler", "RK4", "implicit", "implicitfast"} or Integration, optional
-        Default: the model's. ``"auto"``: :func:`choose_integration` (at least ``substeps``).
+        Default: the model's. ``"auto"``: :func:`choose_integration`.
     mj_model : mujoco.MjModel, optional
-        The compiled model to step, copied (default ``system.mj_model()``; e.g.
-        :func:`~pysindy_xl.mujoco.systems.tracking.tracked_model`).
+        The compiled model to step, copied (default ``system.mj_model()``).
 
     Returns
     -------
     Trajectory
         ``t, q, qd, qdd, tau, u`` (``u``: MuJoCo joint forces; ``tau = u @ B.T``),
-        ``u_constraint`` (``qfrc_constraint``), ``tau_constraint``, the mask
-        ``constraint_active``; ``info`` counts ``limit_hits`` per joint, contact and equality
-        samples.
+        ``u_constraint``, ``tau_constraint``, the mask ``constraint_active``; ``info`` counts
+        ``limit_hits`` per joint, contact and equality samples.
 
     Raises
     ------
     UnstableSimulationError
-        A ``RuntimeError``: the run left the physics
-        (:func:`~pysindy_xl.mujoco.integration.check_run`).
+        The run left the physics (:func:`~pysindy_xl.mujoco.integration.check_run`).
 
     Examples
     --------
@@ -269,10 +264,8 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     ----------
     system : MuJoCoSystem or str
         A system, a registry name (``"cart-pole"``...) or a path to a user's MJCF file.
-    n_trajectories : int, default 4
-        Number of trajectories, each with its own initial state and signals.
-    duration : float, default 10.0
-        Seconds per trajectory.
+    n_trajectories, duration : int, float
+        Trajectories (each its own initial state and signals) and seconds per trajectory.
     forcing : {"explicit", "implicit", "mixed"}
         ``implicit``: no force, random initial condition only; ``explicit``: every actuator
         driven by a random sum of sinusoids; ``mixed``: only ``actuators`` driven.
@@ -285,12 +278,10 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         Seed of every random draw (initial states, signals, noise).
     sample_every : int, default 1
         Record every ``sample_every``-th MuJoCo step.
-    n_components, max_frequency, amplitude_scale : optional
-        Shape of the random signals (:meth:`SumOfSinusoids.random`); ``amplitude_scale``
-        multiplies the system's force amplitudes.
+    n_components, max_frequency, amplitude_scale, amplitude
+        Shape of the random signals (:func:`actuator_signals`).
     initial_scale : float, default 1.0
-        Scale of the random initial state (``MuJoCoSystem.random_initial_state``); joints
-        under position servos start on their reference
+        Scale of the random initial state; position servos start on their reference
         (:func:`~pysindy_xl.mujoco.start_on_reference`).
     progress : bool, optional
         Show a tqdm progress bar (default: only on a terminal).
@@ -300,29 +291,19 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     derivatives : bool, optional
         Keep MuJoCo's exact velocities and accelerations. Default: kept unless
         ``noise_model="positions"`` with position noise > 0.
-    amplitude : float, optional
-        Forcing peak as a fraction of each actuator's ``ctrlrange`` half-width
-        (:func:`actuator_signals`; default 0.5).
-    backoff : bool, default True
-        When more than ``max_constrained`` of a trajectory's samples are constrained (joint
-        limits, contacts), simulate it again with half the forcing amplitude and initial
-        spread, at most three times.
-    max_constrained : float, default 0.1
+    backoff, max_constrained : bool, float
+        When more than ``max_constrained`` of a trajectory's samples are constrained,
+        simulate it again with half the forcing amplitude and initial spread (three times).
     min_unconstrained : float, default 0.5
-        Warn (:class:`ConstraintWarning`) when less than this fraction of all samples is
-        unconstrained.
+        Warn (:class:`ConstraintWarning`) below this unconstrained fraction of all samples.
     integrator : {"auto", "model", "Euler", "RK4", "implicit", "implicitfast"}, default "auto"
-        ``"auto"``: a stable integration faithful to the continuous equations
-        (:func:`choose_integration`); ``"model"``: as authored; a name: that integrator at
-        the model's step. Each step holds the controls of its midpoint.
+        ``"auto"``: stable and faithful to the continuous equations
+        (:func:`choose_integration`); ``"model"``: as authored; a name: that integrator.
     reference : FourierTrajectory, optional
         A planned trajectory (e.g. :func:`~pysindy_xl.mujoco.excitation_trajectory`) every run
         plays through the position servos instead of random signals; no back-off.
     control : {"auto", "open-loop", "tracking"}, default "auto"
-        Plain torque motors' random signals are torques (open loop) or position references
-        a PD controller tracks inside the joint ranges
-        (:func:`~pysindy_xl.mujoco.simulation.signals.motor_tracking`); ``auto`` tracks where
-        gravity outweighs the motors' random torques.
+        How plain torque motors are driven (:func:`motor_tracking`).
 
     Returns
     -------
