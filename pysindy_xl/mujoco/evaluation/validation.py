@@ -234,32 +234,25 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
         Simulated to produce the reference (ignored when ``trajectory`` is given).
     trajectory : Trajectory, optional
         Reference trajectory to use instead of simulating one.
-    duration, forcing, actuators, seed, sample_every, substeps, initial_scale, amplitude
+    duration, forcing, actuators, seed, sample_every, substeps, initial_scale, amplitude, control
         Of the fresh trajectory, as in :func:`validation_trajectory`.
-    divergence_bound : float, default 0.2
-        See the module docstring.
+    divergence_bound, force_bound : float
+        See the module docstring (``force_bound``: closed loop only).
     force_input : {"tau", "u"}, default "tau"
-        Forces given to the model: generalized forces or joint forces (for a model fitted
-        with ``interlink=system.force_matrix()``).
+        Generalized forces, or joint forces (a model fitted with
+        ``interlink=system.force_matrix()``).
     constraints : {"truncate", "ignore"}, default "truncate"
-        When a joint limit, contact or equality acts in the reference, ``truncate`` compares
-        up to the first such sample (the result's ``constrained_at``); ``ignore`` does not.
+        ``truncate`` compares up to the first sample where a constraint acts in the
+        reference (the result's ``constrained_at``).
     drive : {"auto", "closed-loop", "open-loop"}, default "auto"
         ``auto``: closed loop when the actuators have a state-dependent law (servos) and the
-        reference's controls are known (``trajectory.info["signals"]``), open loop otherwise.
-        ``closed-loop`` requires both; ``open-loop`` replays the recorded forces.
-    force_bound : float, default 0.05
-        In closed loop, the largest ``force_error`` of a valid model.
+        reference's controls are known (``trajectory.info["signals"]``); ``closed-loop``
+        requires both; ``open-loop`` replays the recorded forces.
     simulator : {"auto", "mujoco", "model"}, default "auto"
-        What steps the model in closed loop: ``auto`` is ``mujoco`` where the model can be
-        stated in MuJoCo, ``model`` otherwise; ``mujoco`` refuses a model it cannot state.
-    control : {"auto", "open-loop", "tracking"}, default "auto"
-        As in :func:`validation_trajectory`; a tracked reference drives the model in closed
-        loop with the same controller.
+        In closed loop: ``auto`` is ``mujoco`` where the model can be stated in MuJoCo;
+        ``mujoco`` refuses a model it cannot state.
     **integrator_options
-        Passed to ``model.simulate`` by the ``model`` simulator (``method``, ``rtol``,
-        ``atol``, ``timeout``...); ``method="ROS2"`` (:mod:`pysindy_xl.dynamics.rosenbrock`)
-        steps at most the MuJoCo model's time step.
+        Passed to ``model.simulate`` by the ``model`` simulator (``method``, ``rtol``...).
 
     Returns
     -------

@@ -260,30 +260,13 @@ def check_run(model, qpos, qvel, qacc, energy=None, bad_accelerations: int = 0,
               integration: Integration | None = None, label: str = "MuJoCo run") -> dict:
     """Check a finished MuJoCo run; raise on any sign of a numerical instability.
 
-    Parameters
-    ----------
-    model : mujoco.MjModel
-    qpos, qvel, qacc : array, shape (T, nq), (T, nv), (T, nv)
-    energy : array, shape (T, 2), optional
-        Potential and kinetic energy (``data.energy``) of an unforced run: growth of their sum
-        beyond 5 % of the largest kinetic energy plus the potential's range is an instability.
-    bad_accelerations : int, default 0
-        MuJoCo's ``mjWARN_BADQACC`` count of the run.
-    integration : Integration, optional
-        How the run was integrated; it and ``label`` are named in the error.
+    ``qpos, qvel, qacc`` (T, nq), (T, nv), (T, nv) are the recorded states; ``energy``
+    (T, 2), of an unforced run, MuJoCo's potential and kinetic energy (growth of their sum
+    beyond 5 % of the largest kinetic energy plus the potential's range is an instability);
+    ``bad_accelerations`` MuJoCo's ``mjWARN_BADQACC`` count; ``integration`` and ``label``
+    are named in the :class:`UnstableSimulationError`, with the option to change.
+    Returns ``peak_velocity`` (the largest ``|qvel|``) and ``velocity_bound`` by joint.
 
-    Returns
-    -------
-    dict
-        ``peak_velocity`` (by joint, the largest ``|qvel|``) and ``velocity_bound``.
-
-    Raises
-    ------
-    UnstableSimulationError
-        With the reason and the option to change (``integrator="auto"``, ``substeps``).
-
-    Examples
-    --------
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string(
     ...     '<mujoco><worldbody><body><joint name="j"/><geom size="0.1"/></body></worldbody>'

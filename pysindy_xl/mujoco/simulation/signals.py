@@ -78,10 +78,11 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
                      backoff: float = 1.0, tracking=None) -> SumOfSinusoids | None:
     """Random control signals (one per actuator of ``model``) for a forcing mode.
 
-    Undriven actuators get zero. An actuator with a ``ctrlrange`` oscillates around the
-    middle of the range; the others with ``system.force_amplitudes`` (by joint) times
-    ``amplitude_scale``. A position servo's reference is kept within its reach
-    (:func:`~pysindy_xl.mujoco.simulation.forcing.within_servo_reach`).
+    Undriven actuators get zero; an actuator with a ``ctrlrange`` oscillates around its
+    middle, the others with ``system.force_amplitudes`` (by joint) times ``amplitude_scale``;
+    a position servo's reference is kept within its reach
+    (:func:`~pysindy_xl.mujoco.simulation.forcing.within_servo_reach`). None with implicit
+    forcing.
 
     Parameters
     ----------
@@ -89,26 +90,18 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
         Gives the force amplitudes and the default actuators of the ``mixed`` mode.
     model : mujoco.MjModel
         The compiled model, whose actuators get the signals.
-    forcing : {"explicit", "implicit", "mixed"}
+    forcing, actuators
+        As in :func:`generate_dataset`.
     rng : numpy.random.Generator
-    actuators : list of str, optional
-        Actuator or joint names driven in ``mixed`` mode (default ``system.mixed_actuators``).
     n_components, max_frequency
         Sinusoids per signal and the highest frequency (Hz).
-    amplitude_scale : float, default 1.0
-        Multiplies the amplitudes of actuators without ``ctrlrange``.
     amplitude : float, optional
         Peak as a fraction of the ``ctrlrange`` half-width, in (0, 1]; also multiplies the
         others. Default: 0.5 of the range (``TRACKED_AMPLITUDE`` for tracked motors), 1 else.
     backoff : float, default 1.0
-        Multiplies every amplitude (the back-off of :func:`generate_dataset`).
+        Multiplies every amplitude.
     tracking : dict, optional
         The controller of :func:`motor_tracking` when ``model`` is the tracked model.
-
-    Returns
-    -------
-    SumOfSinusoids or None
-        None with implicit forcing (no force at all).
 
     Examples
     --------
