@@ -60,32 +60,25 @@ class KinematicCatalog:
 
     Attributes
     ----------
-    system : MuJoCoSystem
-    coords : Coordinates
     lagrange_terms : list of sympy.Expr
         Minimal independent candidate Lagrangian terms (one per base parameter).
     parameters : list of dict
         Per term, the combination ``{physical name: weight}`` its coefficient stands for.
-    physical_names : list of str
+    physical_names, physical_values : list of str, ndarray
         ``"<body>.<p>"`` for ``p`` in :data:`INERTIAL_PARAMETERS` (about the body frame
-        origin, in the body frame) and ``"<joint>.armature"``.
+        origin, in the body frame) and ``"<joint>.armature"``; the MJCF model's values.
     combination : ndarray, shape (len(lagrange_terms), len(physical_names))
         ``base = combination @ physical``.
-    physical_values : ndarray, shape (len(physical_names),)
-        The physical parameters of the MJCF model.
     classical_terms, classical_mask, classical_kinds, classical_values
         Newtonian candidates (viscous, smooth Coulomb, spring) per joint, the equations each
         enters (bool, (n_terms, n)), their ``(kind, joint)`` and MJCF values.
     n_candidates : int
         Lagrangian functions before the reduction.
-    build_seconds : float
     tree : KinematicTree
         The numeric kinematic tree (:mod:`pysindy_xl.physical.rigid_body`).
-    friction_models, friction_scales
-        The joint models of ``friction=`` (empty: friction as ``classical_terms``) and
-        ``(coulomb_scale, stribeck_scale)``.
-    joint_velocities : list of sympy.Expr
-        Each joint's velocity in the coordinates.
+    friction_models, friction_scales, joint_velocities
+        The joint models of ``friction=`` (empty: friction as ``classical_terms``), their
+        ``(coulomb_scale, stribeck_scale)`` and each joint's velocity in the coordinates.
 
     Examples
     --------
@@ -330,39 +323,29 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
                       coulomb_law: str = "smooth") -> KinematicCatalog:
     """Candidate Lagrangian and Newtonian terms derived from the kinematic tree of a model.
 
-    Every moving body contributes the ten functions of ``(q, qd)`` that multiply its inertial
-    parameters, every joint its armature ``qvel^2 / 2``; the set is reduced to independent
-    Euler-Lagrange columns (base parameters, see the module docstring). Cached in memory by
-    model text, coordinates and options, and on disk by kinematic content
-    (``PYSINDY_XL_CACHE=off`` turns that off).
+    Every moving body contributes the ten functions multiplying its inertial parameters,
+    every joint its armature ``qvel^2 / 2``, reduced to independent Euler-Lagrange columns
+    (base parameters). Cached in memory by model text, coordinates and options, and on disk
+    by kinematic content (``PYSINDY_XL_CACHE=off`` turns that off).
 
     Parameters
     ----------
     system : MuJoCoSystem, str or os.PathLike
         A system (coordinates ``q = T @ qpos``), a registry name, an MJCF path or MJCF text
         (MuJoCo's joint coordinates). Hinge and slide joints only.
-    coulomb : bool, default True
+    coulomb, coulomb_scale : bool, float
         Add a smooth Coulomb candidate ``tanh(qvel / coulomb_scale)`` per joint.
-    coulomb_scale : float, default 0.01
-        Velocity scale of the smooth Coulomb law (and of the joint models' smooth sign).
     seed : int, default 0
         Seed of the random states of the numerical reduction.
     friction : sequence of str or "all", optional
-        Models of real joints offered for every joint, among ``"viscous"``, ``"coulomb"``,
-        ``"asymmetric"``, ``"stribeck"``, ``"offset"``
-        (:class:`~pysindy_xl.feature_library.JointFrictionLibrary`); they replace the viscous
-        and Coulomb candidates (``coulomb`` then does not apply).
-    stribeck_scale : float, default 0.1
-        Velocity scale ``v_s`` of the Stribeck model ``tanh(v / eps) exp(-(v / v_s)^2)``.
+        Models of real joints offered for every joint (``"viscous"``, ``"coulomb"``,
+        ``"asymmetric"``, ``"stribeck"``, ``"offset"``;
+        :class:`~pysindy_xl.feature_library.JointFrictionLibrary`), replacing the viscous and
+        Coulomb candidates; ``stribeck_scale`` is the Stribeck model's ``v_s``.
     coulomb_law : {"smooth", "mujoco"}, default "smooth"
-        ``"smooth"``: ``tanh(qvel / coulomb_scale)`` (real joints); ``"mujoco"``: MuJoCo's
-        regularized ``frictionloss``
+        ``"mujoco"``: MuJoCo's regularized ``frictionloss``
         (:func:`~pysindy_xl.physical.friction.regularized_dry_friction`), for data MuJoCo
         simulated from this model. Not with ``friction``.
-
-    Returns
-    -------
-    KinematicCatalog
 
     Raises
     ------
