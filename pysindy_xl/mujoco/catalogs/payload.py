@@ -132,10 +132,8 @@ def identify_payload(catalog, q, t, tau, qd=None, qdd=None, arm=None, body=None)
     ----------
     catalog : KinematicCatalog
         The arm's catalog without the payload (:func:`~pysindy_xl.mujoco.kinematic_catalog`).
-    q, tau : array, shape (N, n)
-        Positions and joint torques of the loaded run.
-    t : array, shape (N,)
-        Its sample times.
+    q, t, tau : array, shapes (N, n), (N,), (N, n)
+        Positions, sample times and joint torques of the loaded run.
     qd, qdd : array, shape (N, n), optional
         Without both, the regression is the weak form
         (:func:`~pysindy_xl.weak.weak_regression`), with ``arm``'s test functions and
@@ -145,10 +143,6 @@ def identify_payload(catalog, q, t, tau, qd=None, qdd=None, arm=None, body=None)
         vector (force coefficient -1), or None for the MJCF's nominal values.
     body : str, optional
         The body carrying the payload; default the last body of the chain.
-
-    Returns
-    -------
-    Payload
 
     Raises
     ------

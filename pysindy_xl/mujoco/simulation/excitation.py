@@ -319,27 +319,20 @@ def excitation_trajectory(system, n_harmonics: int = 5, period: float = 10.0,
     system : MuJoCoSystem, str or os.PathLike
         The robot; its MJCF's nominal inertials give the torques checked against
         ``torque_limits``.
-    n_harmonics : int, default 5
-        Harmonics ``L`` per joint; the highest frequency is ``n_harmonics / period`` Hz.
-    period : float, default 10.0
-        Period (s).
+    n_harmonics, period : int, float
+        Harmonics ``L`` per joint and period (s); the top frequency is ``L / period`` Hz.
     position_limits : array (n, 2), optional
         ``(low, high)`` per coordinate. Default: the MJCF's joint ranges, narrowed to a
         position servo's reach, less 5 % of the width at each end.
-    velocity_limits, acceleration_limits : float or array (n,), optional
-        Largest ``|qd_j|`` and ``|qdd_j|`` (``inf``, the default: none).
-    torque_limits : float or array (n,), optional
-        Largest ``|tau_j|`` of the nominal model. Default: the MJCF's actuator force ranges
-        (``actuatorfrcrange``, ``forcerange`` times gear), else none.
-    restarts : int, default 3
-        Random starts; the best optimum is returned.
-    seed : int, default 0
+    velocity_limits, acceleration_limits, torque_limits : float or array (n,), optional
+        Largest ``|qd_j|``, ``|qdd_j|`` and nominal ``|tau_j|`` (``inf``: none). Default
+        torques: the MJCF's actuator force ranges.
+    restarts, seed, max_iter : int
+        Random starts (the best optimum is returned), their seed, SLSQP iterations per start.
     optimize : bool, default True
         False: the best random start (scaled to touch the limits), the baseline.
     rest_at_start : bool, default True
         Start and end at rest (``qd = qdd = 0`` at ``t = 0``).
-    max_iter : int, default 100
-        SLSQP iterations per start.
     progress : bool, optional
         Show a tqdm progress bar (default: only on a terminal).
 
