@@ -47,22 +47,15 @@ class ActuatorLaw:
     one state or many at once. ``state_dependent``: some force depends on the state (servo,
     affine gain or bias), so the law must run in closed loop; False for motors.
 
-    Examples
-    --------
     A position servo (``kp = 10``, ``kv = 1``) on a hinge, its reference fixed at 0.5 rad:
 
-    >>> import numpy as np
     >>> from pysindy_xl.mujoco import MJCFSystem, SumOfSinusoids
     >>> servo = MJCFSystem('''<mujoco><worldbody><body><joint name="hinge"/>
     ...   <geom size="0.1" mass="1"/></body></worldbody>
     ...   <actuator><position joint="hinge" kp="10" kv="1"/></actuator></mujoco>''')
     >>> law = actuator_law(servo, SumOfSinusoids([[0.0]], [[1.0]], [[0.0]], offsets=[0.5]))
-    >>> law.state_dependent
-    True
-    >>> law(0.0, [0.2], [1.0])  # 10 * (0.5 - 0.2) - 1 * 1.0
-    array([2.])
-    >>> law(np.zeros(3), np.zeros((3, 1)), np.zeros((3, 1))).shape  # many states at once
-    (3, 1)
+    >>> law.state_dependent, law(0.0, [0.2], [1.0])  # 10 * (0.5 - 0.2) - 1 * 1.0
+    (True, array([2.]))
     """
 
     def __init__(self, system, signals, force_input: str, mj_model=None):
@@ -231,10 +224,6 @@ def actuator_law(system, signals=None, force_input: str = "tau",
     ActuatorLaw or None
         None when some actuator is outside the module's law (tendon or site transmission,
         activation dynamics, muscle, gravity compensation).
-    Raises
-    ------
-    ValueError
-        If ``force_input`` is not "tau" or "u".
 
     Examples
     --------
@@ -265,12 +254,9 @@ def actuator_force_function(system, signals, force_input: str = "tau"):
     on joints. None when the forces depend on the state (servos; see :func:`actuator_law`) or
     an actuator is outside its law. Parameters as in :func:`actuator_law`.
 
-    Examples
-    --------
     >>> from pysindy_xl.mujoco import SumOfSinusoids
     >>> force = SumOfSinusoids([[1.0], [0.0]], [[1.0], [1.0]], [[0.0], [0.0]])
-    >>> f = actuator_force_function("cart-pole", force)
-    >>> f(0.25)
+    >>> actuator_force_function("cart-pole", force)(0.25)
     array([1., 0.])
     """
     law = actuator_law(system, signals, force_input)
@@ -286,8 +272,6 @@ def servo_bandwidths(model) -> np.ndarray:
     inertia ``m`` (``mj_fullM``'s diagonal, armature included) and damping ``d`` closes the loop
     ``m s^2 + (kv + d) s + kp``; its slower pole is how fast it can follow its reference.
 
-    Examples
-    --------
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string('''<mujoco><worldbody><body>
     ...   <joint name="j" axis="0 0 1"/>
