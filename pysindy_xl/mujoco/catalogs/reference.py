@@ -159,13 +159,12 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
     interlink : array (n, n), optional
         Passed to :class:`~pysindy_xl.ExternalForces` (``system.force_matrix()`` to fit with
         MuJoCo joint forces ``u``).
-    dry_friction : bool, optional
-        Add the candidates of :func:`dry_friction_terms` (default: when the model has
-        ``frictionloss``); ``dry_friction_eps`` is their velocity scale.
+    dry_friction, dry_friction_eps : bool, float
+        Add :func:`dry_friction_terms` with this scale (default: when the model has
+        ``frictionloss``).
     joint_models, coulomb_law
-        ``"kinematic"`` only: ``friction`` and ``coulomb_law`` of
-        :func:`~pysindy_xl.mujoco.kinematic_catalog`; the degree and friction options do not
-        apply to it.
+        ``"kinematic"`` only (which takes no degree or friction option): ``friction`` and
+        ``coulomb_law`` of :func:`~pysindy_xl.mujoco.kinematic_catalog`.
 
     Returns
     -------
@@ -250,35 +249,16 @@ def _classical_name(coords, term, i) -> str:
 
 
 def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.0):
-    """Coefficient vector of the system's true model in a catalog, and what it misses.
+    """Coefficient vector ``xi`` (F,) of the system's true model in a catalog, and ``missing``.
 
     The Lagrangian goes to the Lagrange terms when the catalog has any, otherwise its
     Euler-Lagrange expansion goes to the classical terms; friction goes to classical terms.
+    ``system`` has a known Lagrangian, or ``catalog`` is its kinematic catalog; ``catalog``
+    (e.g. :func:`reference_catalog`) is fitted here when needed; ``forces`` is the force
+    column's coefficient. ``missing`` lists the parts of the true model the catalog cannot
+    hold; with ``strict`` they raise a ValueError instead, as does a system with no known
+    model.
 
-    Parameters
-    ----------
-    system : MuJoCoSystem or str
-        A system with a known Lagrangian, or any MJCF model with its kinematic catalog.
-    catalog : CatalogRepartition
-        Fitted or not, e.g. from :func:`reference_catalog`.
-    strict : bool, default False
-        Raise when part of the true model is not in the catalog; otherwise leave it out.
-    forces : float, default -1.0
-        Coefficient of the force column.
-
-    Returns
-    -------
-    xi : ndarray, shape (F,)
-    missing : list of str
-        Parts of the true model not representable in the catalog (empty when exact).
-
-    Raises
-    ------
-    ValueError
-        If the system has no known model, or with ``strict`` when the catalog lacks part of it.
-
-    Examples
-    --------
     >>> catalog = reference_catalog("cart-pole", "mixed", trig_degree=1)
     >>> xi, missing = true_coefficients("cart-pole", catalog)
     >>> {name: round(float(v), 4) for name, v in zip(catalog.get_feature_names(), xi) if v}

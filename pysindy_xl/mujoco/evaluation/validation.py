@@ -61,28 +61,13 @@ class ValidationResult:
     """Comparison of a model's simulation with a MuJoCo trajectory.
 
     Made by :func:`compare_trajectories` or :func:`validate_model`; the metrics are those of
-    the module docstring (``position_rmse``, ``simulated_rmse``, ``divergence_time``,
-    ``force_error``, ``valid``).
+    the module docstring. ``t`` (T,) sample times; ``reference`` (T, 2n) MuJoCo's states
+    ``[q, qd]``; ``prediction`` (k, 2n) the model's at ``t[:k]`` (``k < T`` when its
+    simulation failed, ``failure`` saying why); ``forces`` (T, n) those given to the model
+    (closed loop: MuJoCo's actuator forces); ``constrained_at`` when a constraint started to
+    act in the reference, where the comparison stopped; ``drive`` and ``simulator`` how the
+    model was driven and what stepped it.
 
-    Parameters
-    ----------
-    t : ndarray, shape (T,)
-    reference : ndarray, shape (T, 2n)
-        MuJoCo state ``[q, qd]``.
-    prediction : ndarray, shape (k, 2n)
-        Model state at ``t[:k]``; ``k < T`` when the simulation failed.
-    forces : ndarray, shape (T, n)
-        Forces given to the model in open loop; in closed loop, MuJoCo's actuator forces.
-    position_rmse_per_coordinate : ndarray, shape (n,)
-    failure : str or None
-        Reason of a failed simulation (``SimulationError.reason``).
-    constrained_at : float or None
-        When a constraint started to act in the reference, where the comparison stopped.
-    drive, simulator
-        How the model was driven and what stepped it (module docstring).
-
-    Examples
-    --------
     A prediction that stops half-way:
 
     >>> t = np.linspace(0.0, 0.9, 10)
