@@ -20,26 +20,14 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     qfrc_constraint``, mapped to the coordinates (``B M B^T``, ``B f``). An implicit law is
     first scaled by the least-squares factor matching the mass matrices. The mass matrix is
     read where every joint with ``frictionloss`` slides
-    (:func:`~pysindy_xl.mujoco.systems.friction.sliding_velocities`): a regularized dry
-    friction adds inertia inside its sticking zone, which ``mj_fullM`` leaves out.
+    (:func:`~pysindy_xl.mujoco.systems.friction.sliding_velocities`).
 
-    Returns
-    -------
-    dict
-        ``mass_error``, ``force_error``, ``gravity_error`` (at rest: ``qfrc_spring -
-        qfrc_bias``): largest error relative to MuJoCo's largest entry; ``scale``: the factor
-        applied (1 for a force-normalized fit); ``positive_definite`` and ``condition`` of
-        the identified mass matrix; ``unidentified``: coordinates whose mass row is zero
-        (leave their joints out with ``joints=``); ``held``: ``still_coordinates_``, left
-        out; ``contact_states_skipped``.
+    Returns a dict: ``mass_error``, ``force_error``, ``gravity_error`` (at rest), each the
+    largest error relative to MuJoCo's largest entry; ``scale``; ``positive_definite`` and
+    ``condition`` of the identified mass matrix; ``unidentified`` (coordinates whose mass row
+    is zero); ``held`` (``still_coordinates_``, left out); ``contact_states_skipped``.
+    ValueError when contacts act at all of ``20 * n_states`` draws.
 
-    Raises
-    ------
-    ValueError
-        If contacts are active at every one of ``20 * n_states`` random states.
-
-    Examples
-    --------
     >>> import pysindy_xl as px
     >>> from pysindy_xl.mujoco import generate_dataset, reference_catalog
     >>> data = generate_dataset("cart-pole", n_trajectories=1, duration=1.0, seed=0,

@@ -173,25 +173,11 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
                        n_poses: int = 8) -> Integration:
     """The integration of a MuJoCo model: stable and faithful to the continuous equations.
 
-    Parameters
-    ----------
-    model : mujoco.MjModel
-        The compiled model (its ``opt.integrator`` and ``opt.timestep`` as authored).
-    integrator : {"auto", "model", "Euler", "RK4", "implicit", "implicitfast"}
-        ``"auto"``: the cheaper of RK4 and the model's implicit step that is stable and
-        faithful (module docstring); ``"model"``: as authored; a name: that integrator.
-    substeps : int, optional
-        With ``"auto"``, a lower bound on the chosen number; otherwise the number (default 1).
-    n_poses : int, default 8
-        Poses at which the linearized dynamics are examined (:func:`linear_modes`).
-
-    Returns
-    -------
-    Integration
-
-    Examples
-    --------
-    A stiff servo (kv = 300) on a light link (1e-3 kg m^2) at MuJoCo's 2 ms step:
+    ``integrator``: ``"auto"``, the cheaper of RK4 and the model's implicit step that is
+    stable and faithful (module docstring); ``"model"``, as authored; a name, that integrator.
+    ``substeps``: with ``"auto"`` a lower bound, otherwise the number (default 1).
+    ``n_poses``: poses of :func:`linear_modes`. A stiff servo (kv = 300) on a light link
+    (1e-3 kg m^2) at MuJoCo's 2 ms step:
 
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string('''<mujoco><option integrator="implicitfast"/>

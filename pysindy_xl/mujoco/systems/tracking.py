@@ -74,9 +74,9 @@ def gravity_torques(model, poses) -> np.ndarray:
 def tracking_controller(model, actuators=None, n_poses: int = 16, seed=0) -> dict | None:
     """A PD controller with which plain torque motors track a position reference.
 
-    Each motor ``a`` on joint ``j`` (gear ``g``) becomes MuJoCo's ``position`` servo
-    ``F = kp (ctrl - g q_j) - kv g qd_j`` within its own force range, with ``kp = K / g^2``,
-    ``kv = D / g^2`` and
+    Each motor on joint ``j`` (gear ``g``) becomes MuJoCo's ``position`` servo
+    ``F = kp (ctrl - g q_j) - kv g qd_j`` within its force range, ``kp = K / g^2``,
+    ``kv = D / g^2``,
 
     .. math::
 
@@ -86,21 +86,15 @@ def tracking_controller(model, actuators=None, n_poses: int = 16, seed=0) -> dic
 
     (``m``: the joint's diagonal of ``mj_fullM``; ``g_j(q)``: gravity's torque at ``n_poses``
     random poses; ``f_j``: dry friction; ``omega = TRACKING_BANDWIDTH``,
-    ``e = TRACKING_ERROR``): critically damped, and stiff enough that the largest static load
-    moves the joint by at most ``e`` of its range.
-
-    Returns a JSON description for :func:`tracked_model` (``actuators``, ``kp``, ``kv``,
-    ``ctrlrange`` in actuator length units, ``forcerange`` with None where unbounded), or
+    ``e = TRACKING_ERROR``). Returns the JSON description :func:`tracked_model` reads, or
     None when none of ``actuators`` (default all) is a plain motor on a limited joint.
-
-    A 1 kg pendulum of 0.5 m, range +-2 rad: ``m omega^2`` (247) outweighs gravity's need (61):
 
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string('''<mujoco><worldbody><body>
     ...   <joint name="j" axis="0 1 0" range="-2 2"/>
     ...   <inertial pos="0 0 -0.5" mass="1" diaginertia="1e-6 1e-6 1e-6"/></body></worldbody>
     ...   <actuator><motor joint="j"/></actuator></mujoco>''')
-    >>> controller = tracking_controller(model)
+    >>> controller = tracking_controller(model)  # m omega^2 outweighs gravity's need
     >>> round(controller["kp"][0], 1), round(controller["kv"][0], 2)
     (246.7, 15.71)
     """
