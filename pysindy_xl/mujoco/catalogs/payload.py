@@ -26,24 +26,12 @@ __all__ = ["Payload", "identify_payload"]
 class Payload:
     """Inertial parameters of a payload identified by :func:`identify_payload`.
 
-    Parameters
-    ----------
-    body : str
-        The body carrying it (its frame is the reference of the parameters).
-    parameters : ndarray, shape (10,)
-        ``m, mcx, mcy, mcz, Ixx, Iyy, Izz, Ixy, Ixz, Iyz`` (about the body frame origin).
-    mass : float
-    com : ndarray, shape (3,)
-        Centre of mass in the body frame.
-    inertia : ndarray, shape (3, 3)
-        Inertia about the centre of mass, in the body frame.
-    identifiable : int
-        Number of independent combinations of the ten that the run determines.
-    residual : float
-        Relative RMS of the torques (or weak-form projections) left unexplained.
+    ``body`` carries it (its frame is the parameters' reference); ``parameters`` (10,) are
+    ``m, mcx, mcy, mcz, Ixx, Iyy, Izz, Ixy, Ixz, Iyz`` (about the body frame origin);
+    ``com`` (3,) and ``inertia`` (3, 3) are about the centre of mass, in the body frame;
+    ``identifiable`` counts the independent combinations of the ten the run determines;
+    ``residual`` is the relative RMS of the torques (or weak-form projections) unexplained.
 
-    Examples
-    --------
     >>> payload = Payload("hand", np.r_[2.0, 0.2, 0, 0, np.zeros(6)], 2.0,
     ...                   np.array([0.1, 0, 0]), np.zeros((3, 3)), 10, 0.0)
     >>> payload.to_dict()["com"]

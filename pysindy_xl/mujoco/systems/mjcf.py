@@ -33,21 +33,18 @@ class MJCFSystem(MuJoCoSystem):
     """A user's MJCF model: coordinates are MuJoCo's joint coordinates.
 
     Hinge and slide joints only (``q = qpos``); hinges count as angles for the catalogs. The
-    true Lagrangian is unknown (:meth:`lagrangian` raises); joint damping is read from the
-    model as diagonal friction.
+    true Lagrangian is unknown; joint damping is read from the model as diagonal friction.
 
     Parameters
     ----------
     source : str or os.PathLike
-        Path to an MJCF or URDF (``.urdf``) file, or the text itself (starting with ``<``). A
-        URDF is read with its inertials, without meshes, with a motor on every joint
-        (:mod:`pysindy_xl.mujoco.systems.urdf`).
+        Path to an MJCF or URDF (``.urdf``) file, or the text itself (starting with ``<``); a
+        URDF as read by :mod:`pysindy_xl.mujoco.systems.urdf`.
     force_amplitude : float, default 1.0
         Amplitude of the random force of an actuator without ``ctrlrange``.
     joints : list of str, optional
         Identify these joints only; the others are locked at their reference pose (removed
-        with their actuators; their bodies move rigidly with, and load, their parents).
-        ``excluded_joints`` and ``trimmed_keyframes`` record what was removed or cut.
+        with their actuators, ``excluded_joints``; their bodies load their parents).
 
     Examples
     --------
