@@ -1,22 +1,12 @@
 """MuJoCo systems, data generation, reference catalogs and validation of identified models.
 
-The pipeline of the paper as a library, one subpackage a concern:
+One subpackage a concern: :mod:`.systems` (the paper's MJCF models, any MJCF or URDF model,
+the registry, the actuator law), :mod:`.simulation` (forced or designed trajectories,
+integrated stably and faithfully, with noise), :mod:`.catalogs` (reference and kinematic-tree
+catalogs, payloads) and :mod:`.evaluation` (validation, the physics check, figures). Public
+names load on first use (PEP 562): importing this package imports neither MuJoCo, SymPy,
+PySINDy nor matplotlib.
 
-- :mod:`.systems`: the paper's MJCF models (cart-pole, double pendulum, double pendulum on a
-  cart, triple pendulum), any MJCF or URDF model, the registry, and the MJCF's actuator law;
-- :mod:`.simulation`: randomly forced or designed (Fourier, optimized excitation)
-  trajectories with noise, integrated stably and faithfully to the continuous equations and
-  checked; the stiff closed-loop integrator of identified models;
-- :mod:`.catalogs`: the reference catalogs of the paper's comparison, catalogs derived from
-  the kinematic tree of any MJCF model, payload identification on such a catalog;
-- :mod:`.evaluation`: validation of an identified model against a fresh MuJoCo trajectory,
-  open loop or closed loop through the MJCF's actuator law, the physics check, the figures.
-
-The public names are loaded on first use (PEP 562): ``import pysindy_xl.mujoco`` imports
-neither MuJoCo, SymPy, PySINDy nor matplotlib until a name that needs them is touched.
-
-Examples
---------
 >>> import pysindy_xl.mujoco as pxm
 >>> pxm.get_system("cart-pole").coordinate_names
 ('x', 'theta')
@@ -58,18 +48,9 @@ __all__ = ["import_mujoco", *_LAZY]
 def import_mujoco():
     """The ``mujoco`` module, imported on first use: the one way this package imports MuJoCo.
 
-    Returns
-    -------
-    module
-        ``mujoco``.
+    Raises :class:`pysindy_xl._optional.MissingExtraError` (an ImportError naming the
+    ``pysindy-xl[mujoco]`` extra) when MuJoCo is not installed.
 
-    Raises
-    ------
-    pysindy_xl._optional.MissingExtraError
-        If MuJoCo is not installed (an ImportError naming the ``pysindy-xl[mujoco]`` extra).
-
-    Examples
-    --------
     >>> from pysindy_xl.mujoco import import_mujoco
     >>> hasattr(import_mujoco(), "MjModel")
     True

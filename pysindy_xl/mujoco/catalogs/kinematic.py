@@ -1,42 +1,22 @@
 """Catalogs from the kinematic tree: candidate Lagrangians of any rigid-body MJCF model.
 
-The Lagrangian of a rigid body is linear in its ten inertial parameters: mass ``m``, first
-moments ``m c`` and rotational inertia ``I_o`` about the body frame origin (all in the body
-frame). With ``v`` and ``w`` the linear velocity of the body origin and the angular velocity,
-both in body coordinates, ``g_b = R^T g`` the gravity vector in body coordinates and ``h = g.p_o``,
+A rigid body's Lagrangian is linear in its ten inertial parameters (mass ``m``, first moments
+``m c``, inertia ``I_o`` about the body origin, in the body frame). With ``v``, ``w`` the body
+origin's linear and angular velocity in body coordinates, ``g_b = R^T g`` and ``h = g.p_o``,
 
     ``L_b = m (v.v / 2 + h) + m c . (v x w + g_b) + w . I_o w / 2``,
 
-so the functions of ``(q, qd)`` that multiply the parameters come from the kinematics alone
-(joint types, axes, anchors, body offsets and orientations), which an MJCF file gives before any
-mass. Together with the armature of each joint (``armature_k qvel_k^2 / 2``) they form a catalog
-whose span holds the true Lagrangian of *every* mass distribution of the mechanism.
-
-Many of those functions are redundant: their Euler-Lagrange columns are zero (a body fixed to
-the world, a total time derivative) or linear combinations of others (robotics calls the
-independent combinations *base parameters*). :func:`kinematic_catalog` keeps a minimal set:
-it evaluates every Euler-Lagrange column at random states, takes the rank from a pivoted QR,
-and keeps that many columns, in a fixed order of preference (bodies from the root, mass before
-first moments before inertia, armature last) as long as each adds a well-conditioned new
-direction. The dependent parameters fold into the kept ones: the coefficient of a kept term is
-the *combination* of physical parameters that :attr:`KinematicCatalog.parameters` records, so an
-identified model reports physical parameters.
-
+so the functions multiplying the parameters come from the kinematics alone. With each joint's
+armature (``armature_k qvel_k^2 / 2``) they span the Lagrangian of every mass distribution.
+:func:`kinematic_catalog` keeps an independent subset (base parameters): the rank of the
+Euler-Lagrange columns at random states from a pivoted QR, columns kept in a fixed order of
+preference; dependent parameters fold into kept ones (:attr:`KinematicCatalog.parameters`).
 The derivation runs on sparse trigonometric polynomials
-(:mod:`pysindy_xl.feature_library.trigpoly`, with ``cos^2 = 1 - sin^2`` as canonical form), not
-on generic sympy expressions, and stays there: the catalog's terms are a
-:class:`~pysindy_xl.feature_library.trigterms.TrigTerms` whose library derives its columns,
-names and evaluators from the polynomials (and the columns derived here); a term's sympy
-expression is built only when read. Timings: ``benchmarks/kinematic_catalog.py``.
+(:mod:`pysindy_xl.feature_library.trigpoly`); sympy expressions are built only when read.
 
-Friction and springs are not Lagrangian: each joint adds classical candidates (viscous
-``qvel_k``, smooth Coulomb ``tanh(qvel_k / eps)``, and ``qpos_k - springref_k`` for joints with
-stiffness), entered in the equations that the joint force reaches (``B = T^-T``, see
-:mod:`pysindy_xl.mujoco.systems.registry`). Coordinates are those of the system: ``q = T @ qpos``.
-With ``friction=`` the joints' friction comes instead from the models of real joints
-(viscous, Coulomb, asymmetric Coulomb, Stribeck, torque-sensor offset;
-:class:`~pysindy_xl.feature_library.JointFrictionLibrary`), one column per joint and model,
-among which the default fit selects what each joint needs.
+Friction and springs are classical candidates per joint (viscous, smooth Coulomb, spring),
+entered in the equations the joint force reaches (``B = T^-T``); with ``friction=`` the
+models of real joints (:class:`~pysindy_xl.feature_library.JointFrictionLibrary`) instead.
 """
 
 from __future__ import annotations
@@ -76,49 +56,29 @@ _CACHE_SIZE = 16
 class KinematicCatalog:
     """Candidate terms of a rigid-body mechanism, derived from its kinematic tree.
 
-    Built by :func:`kinematic_catalog`; use :meth:`library` for the feature library.
+    Built by :func:`kinematic_catalog`; :meth:`library` is its feature library.
 
     Attributes
     ----------
-    system : MuJoCoSystem
-        The system whose coordinates the terms use.
-    coords : Coordinates
-        ``system.coords``.
     lagrange_terms : list of sympy.Expr
-        Minimal independent set of candidate Lagrangian terms (one per base parameter).
+        Minimal independent candidate Lagrangian terms (one per base parameter).
     parameters : list of dict
-        For each Lagrange term, the physical-parameter combination its coefficient stands for,
-        ``{physical parameter name: weight}``.
-    physical_names : list of str
-        All physical parameters: ``"<body>.<p>"`` for ``p`` in :data:`INERTIAL_PARAMETERS`
-        (inertia about the body frame origin, in the body frame) and ``"<joint>.armature"``.
+        Per term, the combination ``{physical name: weight}`` its coefficient stands for.
+    physical_names, physical_values : list of str, ndarray
+        ``"<body>.<p>"`` for ``p`` in :data:`INERTIAL_PARAMETERS` (about the body frame
+        origin, in the body frame) and ``"<joint>.armature"``; the MJCF model's values.
     combination : ndarray, shape (len(lagrange_terms), len(physical_names))
-        ``base = combination @ physical``: base parameters from physical parameters.
-    physical_values : ndarray, shape (len(physical_names),)
-        The physical parameters of the MJCF model.
-    classical_terms : list of sympy.Expr
-        Newtonian candidates (viscous, smooth Coulomb, spring), one per joint and kind.
-    classical_mask : ndarray of bool, shape (len(classical_terms), n)
-        Equations each classical term enters.
-    classical_kinds : list of tuple
-        ``(kind, joint name)`` of each classical term, ``kind`` in ``"viscous"``,
-        ``"coulomb"``, ``"spring"``.
-    classical_values : ndarray
-        MJCF values of the classical features (damping, frictionloss, stiffness mapped to the
-        coordinates), in the feature order of :meth:`library`.
+        ``base = combination @ physical``.
+    classical_terms, classical_mask, classical_kinds, classical_values
+        Newtonian candidates (viscous, smooth Coulomb, spring) per joint, the equations each
+        enters (bool, (n_terms, n)), their ``(kind, joint)`` and MJCF values.
     n_candidates : int
-        Lagrangian functions before the reduction (ten per moving body plus one per joint).
-    build_seconds : float
-        Time of the symbolic derivation and reduction.
+        Lagrangian functions before the reduction.
     tree : KinematicTree
-        The numeric kinematic tree (the rigid-body kernel that models of the catalog
-        simulate with, see :mod:`pysindy_xl.physical.rigid_body`).
-    friction_models : tuple of str
-        The joint models of ``friction=`` (empty: friction as ``classical_terms``).
-    friction_scales : tuple of float
-        ``(coulomb_scale, stribeck_scale)`` of the joint models.
-    joint_velocities : list of sympy.Expr
-        Each joint's velocity in the coordinates.
+        The numeric kinematic tree (:mod:`pysindy_xl.physical.rigid_body`).
+    friction_models, friction_scales, joint_velocities
+        The joint models of ``friction=`` (empty: friction as ``classical_terms``), their
+        ``(coulomb_scale, stribeck_scale)`` and each joint's velocity in the coordinates.
 
     Examples
     --------
@@ -154,12 +114,6 @@ class KinematicCatalog:
     def base_parameters(self) -> np.ndarray:
         """Base parameters of the MJCF model: the true coefficients of :attr:`lagrange_terms`.
 
-        Returns
-        -------
-        ndarray, shape (len(lagrange_terms),)
-
-        Examples
-        --------
         >>> kinematic_catalog("cart-pole").base_parameters.round(4)
         array([ 1.5 ,  0.  , -0.4 ,  0.32])
         """
@@ -168,20 +122,9 @@ class KinematicCatalog:
     def library(self, interlink=None, classical: bool = True):
         """The catalog as a feature library: forces, Lagrange terms, classical terms.
 
-        Parameters
-        ----------
-        interlink : array (n, n), optional
-            Passed to :class:`~pysindy_xl.ExternalForces` (``system.force_matrix()`` to fit
-            with MuJoCo joint forces ``u``).
-        classical : bool, default True
-            Include the Newtonian candidates (friction, springs).
+        ``interlink`` goes to :class:`~pysindy_xl.ExternalForces` (``system.force_matrix()``
+        to fit with MuJoCo joint forces); ``classical=False`` leaves out friction and springs.
 
-        Returns
-        -------
-        CatalogRepartition
-
-        Examples
-        --------
         >>> lib = kinematic_catalog("cart-pole").library().fit()
         >>> lib.get_feature_names()[:2]
         ['F[tau]', 'L[0.5*x_dot**2]']
@@ -211,22 +154,11 @@ class KinematicCatalog:
     def true_coefficients(self, forces: float = -1.0) -> np.ndarray:
         """Coefficient vector of the MJCF model in :meth:`library` (with classical terms).
 
-        Viscous and spring terms get the MJCF damping and stiffness (mapped to the
-        coordinates with ``B``); smooth Coulomb terms get MuJoCo's ``frictionloss`` (an
-        approximation: MuJoCo's dry friction is a constraint, not a smooth law); the other
-        joint models (asymmetric, Stribeck, offset), which MJCF does not have, zero.
+        Viscous and spring terms get the MJCF damping and stiffness; smooth Coulomb terms
+        MuJoCo's ``frictionloss`` (approximate: MuJoCo's dry friction is a constraint); joint
+        models MJCF lacks (asymmetric, Stribeck, offset) zero. ``forces`` is the coefficient
+        of the force column.
 
-        Parameters
-        ----------
-        forces : float, default -1.0
-            Coefficient of the force column.
-
-        Returns
-        -------
-        ndarray, shape (1 + len(lagrange_terms) + n_classical_features,)
-
-        Examples
-        --------
         >>> kinematic_catalog("cart-pole").true_coefficients().round(4)
         array([-1.  ,  1.5 ,  0.  , -0.4 ,  0.32,  0.5 ,  0.  ,  0.1 ,  0.  ])
         """
@@ -238,23 +170,14 @@ class KinematicCatalog:
                                joint_models])
 
     def lagrange_coefficients(self, model) -> np.ndarray:
-        """Coefficients of :attr:`lagrange_terms` in a fitted model, force coefficient -1.
+        """Coefficients of :attr:`lagrange_terms` in a model fitted with :meth:`library`.
 
-        Parameters
-        ----------
-        model : XLSINDy
-            Fitted with :meth:`library` (features matched by name; an implicit model is
-            rescaled so that its force coefficient is -1).
-
-        Returns
-        -------
-        ndarray, shape (len(lagrange_terms),)
+        Features are matched by name and scaled so that the force coefficient is -1.
 
         Raises
         ------
         ValueError
-            If the model's catalog lacks a Lagrange term of this catalog, or has no force
-            coefficient to scale by.
+            If the model lacks a Lagrange term of this catalog or a non-zero force coefficient.
         """
         names = list(model.get_feature_names())
         coefficients = np.asarray(model.coefficients(), dtype=float)
@@ -304,19 +227,14 @@ class KinematicCatalog:
         return np.einsum("sfr,f->sr", values, beta)
 
     def mass_matrix(self, q, coefficients=None) -> np.ndarray:
-        """Mass matrix ``M(q)`` in the system's coordinates.
+        """Mass matrix ``M(q)`` in the system's coordinates, shape (N, n, n) or (n, n).
 
         Parameters
         ----------
         q : array, shape (N, n) or (n,)
-            Positions.
         coefficients : array, shape (len(lagrange_terms),), optional
-            Lagrange coefficients (e.g. from :meth:`lagrange_coefficients`); default the
-            MJCF model's base parameters.
-
-        Returns
-        -------
-        ndarray, shape (N, n, n) or (n, n)
+            Lagrange coefficients (e.g. :meth:`lagrange_coefficients`); default
+            :attr:`base_parameters`.
 
         Examples
         --------
@@ -330,20 +248,10 @@ class KinematicCatalog:
         return out[0] if single else out
 
     def gravity_torque(self, q, coefficients=None) -> np.ndarray:
-        """Generalized gravity force ``dV/dq`` (the equations read ``M qdd + c + dV/dq = tau``).
+        """Generalized gravity force ``dV/dq``, shape of ``q`` (``M qdd + c + dV/dq = tau``).
 
-        Parameters
-        ----------
-        q : array, shape (N, n) or (n,)
-        coefficients : array, optional
-            See :meth:`mass_matrix`.
+        ``coefficients`` as in :meth:`mass_matrix`.
 
-        Returns
-        -------
-        ndarray, shape (N, n) or (n,)
-
-        Examples
-        --------
         >>> kinematic_catalog("cart-pole").gravity_torque([0.0, np.pi / 2]).round(4)
         array([0.   , 3.924])
         """
@@ -352,20 +260,10 @@ class KinematicCatalog:
         return out[0] if single else out
 
     def bias_forces(self, q, qd, coefficients=None) -> np.ndarray:
-        """Coriolis, centrifugal and gravity forces: the equations with ``qdd = 0``.
+        """Coriolis, centrifugal and gravity forces, shape of ``q``: the equations at ``qdd = 0``.
 
-        Parameters
-        ----------
-        q, qd : array, shape (N, n) or (n,)
-        coefficients : array, optional
-            See :meth:`mass_matrix`.
+        ``coefficients`` as in :meth:`mass_matrix`.
 
-        Returns
-        -------
-        ndarray, shape (N, n) or (n,)
-
-        Examples
-        --------
         >>> kinematic_catalog("cart-pole").bias_forces([0.0, 0.0], [0.0, 2.0]).round(4)
         array([0., 0.])
         """
@@ -376,19 +274,8 @@ class KinematicCatalog:
     def report(self, coefficients=None, digits: int = 4, terms: bool = True) -> str:
         """Table of the base parameters: term, combination, MJCF value, identified value.
 
-        Parameters
-        ----------
-        coefficients : array, optional
-            Identified Lagrange coefficients (see :meth:`lagrange_coefficients`).
-        digits : int, default 4
-            Significant digits.
-        terms : bool, default True
-            Include the column of catalog terms (long for spatial arms).
-
-        Returns
-        -------
-        str
-            One line per base parameter, columns separated by ``|``.
+        ``coefficients`` are identified Lagrange coefficients (:meth:`lagrange_coefficients`);
+        ``terms=False`` leaves out the column of terms (long for spatial arms).
 
         Examples
         --------
@@ -415,8 +302,7 @@ class KinematicCatalog:
 
 
 def _shared(terms):
-    """The catalog's terms for a library: a :class:`TrigTerms` as is (immutable), a copy of
-    a list."""
+    """The catalog's terms for a library: a :class:`TrigTerms` as is (immutable), else a copy."""
     return terms if isinstance(terms, TrigTerms) else list(terms)
 
 
@@ -437,54 +323,37 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
                       coulomb_law: str = "smooth") -> KinematicCatalog:
     """Candidate Lagrangian and Newtonian terms derived from the kinematic tree of a model.
 
-    Every moving body contributes the ten functions of ``(q, qd)`` that multiply its inertial
-    parameters, every joint its armature ``qvel^2 / 2``; the set is reduced to independent
-    Euler-Lagrange columns (base parameters, see the module docstring). Results are cached in
-    memory by model text, coordinates and options, and the derivation on disk by the model's
-    kinematic content (``PYSINDY_XL_CACHE=off`` turns that off; see ``_derivation_cache``).
+    Every moving body contributes the ten functions multiplying its inertial parameters,
+    every joint its armature ``qvel^2 / 2``, reduced to independent Euler-Lagrange columns
+    (base parameters). Cached in memory by model text, coordinates and options, and on disk
+    by kinematic content (``PYSINDY_XL_CACHE=off`` turns that off).
 
     Parameters
     ----------
     system : MuJoCoSystem, str or os.PathLike
-        A system (its coordinates ``q = T @ qpos`` are used), a registry name, a path to an
-        MJCF file or the MJCF text (coordinates: MuJoCo's joint coordinates). Hinge and slide
-        joints only.
-    coulomb : bool, default True
+        A system (coordinates ``q = T @ qpos``), a registry name, an MJCF path or MJCF text
+        (MuJoCo's joint coordinates). Hinge and slide joints only.
+    coulomb, coulomb_scale : bool, float
         Add a smooth Coulomb candidate ``tanh(qvel / coulomb_scale)`` per joint.
-    coulomb_scale : float, default 0.01
-        Velocity scale of the smooth Coulomb law (and of the joint models' smooth sign).
     seed : int, default 0
         Seed of the random states of the numerical reduction.
     friction : sequence of str or "all", optional
-        Friction and sensor models of real joints offered for every joint, among
-        ``"viscous"``, ``"coulomb"``, ``"asymmetric"``, ``"stribeck"``, ``"offset"``
-        (:class:`~pysindy_xl.feature_library.JointFrictionLibrary`; ``"all"``: every one).
-        They replace the viscous and Coulomb candidates (``coulomb`` then does not apply),
-        and the default fit selects among them what each joint needs, the base parameters
-        unselected. Default: the viscous and Coulomb candidates above.
-    stribeck_scale : float, default 0.1
-        Velocity scale ``v_s`` of the Stribeck model ``tanh(v / eps) exp(-(v / v_s)^2)``.
+        Models of real joints offered for every joint (``"viscous"``, ``"coulomb"``,
+        ``"asymmetric"``, ``"stribeck"``, ``"offset"``;
+        :class:`~pysindy_xl.feature_library.JointFrictionLibrary`), replacing the viscous and
+        Coulomb candidates; ``stribeck_scale`` is the Stribeck model's ``v_s``.
     coulomb_law : {"smooth", "mujoco"}, default "smooth"
-        The Coulomb candidate's law: ``"smooth"``, ``tanh(qvel / coulomb_scale)`` (real
-        joints); ``"mujoco"``, for data MuJoCo simulated from this model: where a joint has
-        ``frictionloss``, MuJoCo's regularization of it
-        (:func:`~pysindy_xl.physical.friction.regularized_dry_friction` with the scales of
-        :func:`~pysindy_xl.mujoco.systems.friction.dry_friction_scales`), whose sticking
-        zone and lead the smooth sign misses and a fit would take for inertia. Not with
-        ``friction``.
-
-    Returns
-    -------
-    KinematicCatalog
-        Use ``.library()`` as the feature library of :class:`~pysindy_xl.XLSINDy`.
+        ``"mujoco"``: MuJoCo's regularized ``frictionloss``
+        (:func:`~pysindy_xl.physical.friction.regularized_dry_friction`), for data MuJoCo
+        simulated from this model. Not with ``friction``.
 
     Raises
     ------
     TypeError
         If ``system`` is not a system, path or MJCF text.
     ValueError
-        If the model has a joint other than hinge or slide, a scale is not positive,
-        ``friction`` names an unknown model or ``coulomb_law`` is not a law above.
+        If a joint is not hinge or slide, a scale is not positive, or ``friction`` or
+        ``coulomb_law`` is unknown.
 
     Examples
     --------
@@ -501,8 +370,6 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
     [{'body1.mcx': 1.0}, {'body1.mcz': 1.0}, {'body1.Iyy': 1.0, 'a.armature': 1.0}]
     >>> catalog.base_parameters.round(4)  # m c_x, m c_z, Iyy about the hinge axis
     array([ 0.2  , -1.   ,  0.72])
-    >>> len(catalog.library().fit().get_feature_names())  # force, 3 Lagrange, 2 friction
-    6
     """
     system = get_system(system)
     for name, value in (("coulomb_scale", coulomb_scale), ("stribeck_scale", stribeck_scale)):

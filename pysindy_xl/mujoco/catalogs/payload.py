@@ -1,20 +1,14 @@
 """Payload identification: the ten inertial parameters of a load carried by a known arm.
 
-A payload rigidly attached to a body ``b`` of the arm adds its ten inertial parameters
-``pi_p`` (mass, first moments, inertia about ``b``'s frame origin, in ``b``'s frame) to those
-of ``b``. The base parameters are linear in the bodies' parameters, ``beta = C pi``, so the
-loaded arm's torques are
+A payload rigidly attached to body ``b`` adds its parameters ``pi_p`` (about ``b``'s frame
+origin, in ``b``'s frame) to those of ``b``. With base parameters ``beta = C pi``:
 
 .. math:: \\tau = W(q, \\dot q, \\ddot q)\\,\\beta_{arm} + F(\\dot q) + W\\,C_b\\,\\pi_p ,
 
-``W`` the kinematic catalog's Lagrange columns, ``F`` its friction, ``C_b`` the columns of
-``C`` of body ``b``. With the arm known (identified without the load, or the MJCF's nominal
-values), the residual torques of a loaded run are a linear regression on ``W C_b``;
-:func:`identify_payload` solves it under the payload's own physical consistency (its
-pseudo-inertia positive semidefinite, Wensing, Kim and Slotine 2017) with
-:func:`~pysindy_xl.physical.consistent_least_squares`. Directions of ``pi_p`` the motion does
-not excite are held small by that solver's regularization; ``identifiable`` says how many are
-determined by the data (the rank of ``W C_b``).
+``W`` the kinematic catalog's Lagrange columns, ``F`` its friction, ``C_b`` body ``b``'s
+columns of ``C``. With the arm known, the residual torques of a loaded run are a linear
+regression on ``W C_b``, solved under the payload's physical consistency (pseudo-inertia
+positive semidefinite; :func:`~pysindy_xl.physical.consistent_least_squares`).
 """
 
 from __future__ import annotations
@@ -32,27 +26,12 @@ __all__ = ["Payload", "identify_payload"]
 class Payload:
     """Inertial parameters of a payload identified by :func:`identify_payload`.
 
-    Parameters
-    ----------
-    body : str
-        The body carrying it (its frame is the reference of the parameters).
-    parameters : ndarray, shape (10,)
-        ``m, mcx, mcy, mcz, Ixx, Iyy, Izz, Ixy, Ixz, Iyz`` (inertia about the body frame
-        origin, in the body frame).
-    mass : float
-    com : ndarray, shape (3,)
-        Centre of mass in the body frame.
-    inertia : ndarray, shape (3, 3)
-        Inertia about the centre of mass, in the body frame.
-    identifiable : int
-        Number of independent combinations of the ten that the run determines.
-    residual : float
-        Relative RMS of the torques (or their weak-form projections) left unexplained by the
-        arm and the payload.
+    ``body`` carries it (its frame is the parameters' reference); ``parameters`` (10,) are
+    ``m, mcx, mcy, mcz, Ixx, Iyy, Izz, Ixy, Ixz, Iyz`` (about the body frame origin);
+    ``com`` (3,) and ``inertia`` (3, 3) are about the centre of mass, in the body frame;
+    ``identifiable`` counts the independent combinations of the ten the run determines;
+    ``residual`` is the relative RMS of the torques (or weak-form projections) unexplained.
 
-    Examples
-    --------
-    >>> import numpy as np
     >>> payload = Payload("hand", np.r_[2.0, 0.2, 0, 0, np.zeros(6)], 2.0,
     ...                   np.array([0.1, 0, 0]), np.zeros((3, 3)), 10, 0.0)
     >>> payload.to_dict()["com"]
@@ -68,43 +47,17 @@ class Payload:
     residual: float
 
     def to_dict(self) -> dict:
-        """JSON-serializable description.
-
-        Returns
-        -------
-        dict
-            The attributes, arrays as nested lists.
-        """
+        """JSON-serializable description (arrays as nested lists)."""
         return {"body": self.body, "parameters": self.parameters.tolist(), "mass": self.mass,
                 "com": self.com.tolist(), "inertia": self.inertia.tolist(),
                 "identifiable": self.identifiable, "residual": self.residual}
 
     def forces(self, catalog, q, qd, qdd) -> np.ndarray:
-        """Joint torques the payload adds to the arm: inverse dynamics of the payload alone.
+        """Joint torques (N, n) the payload adds to the arm: ``W(q, qd, qdd) C_b pi_p``.
 
-        ``W(q, qd, qdd) C_b pi_p``, the regression :func:`identify_payload` solves, in the
-        strong form; added to the arm's :meth:`~pysindy_xl.XLSINDy.predict_forces` it
-        predicts the loaded arm.
+        Added to the arm's :meth:`~pysindy_xl.XLSINDy.predict_forces` it predicts the loaded
+        arm; ``catalog`` is the one the payload was identified with, ``q, qd, qdd`` (N, n).
 
-        Parameters
-        ----------
-        catalog : KinematicCatalog
-            The arm's catalog (the one the payload was identified with).
-        q, qd, qdd : array, shape (N, n)
-            Positions, velocities and accelerations.
-
-        Returns
-        -------
-        ndarray, shape (N, n)
-
-        Raises
-        ------
-        ValueError
-            If the shapes do not match the catalog or it has no body ``self.body``.
-
-        Examples
-        --------
-        >>> import numpy as np
         >>> from pysindy_xl.mujoco import kinematic_catalog
         >>> arm = kinematic_catalog('''<mujoco><option gravity="0 0 -9.81"/><worldbody>
         ...   <body name="hand"><joint name="a" axis="0 1 0"/>
@@ -166,40 +119,26 @@ def identify_payload(catalog, q, t, tau, qd=None, qdd=None, arm=None, body=None)
     Parameters
     ----------
     catalog : KinematicCatalog
-        The arm's catalog (:func:`~pysindy_xl.mujoco.kinematic_catalog` of the arm without
-        the payload).
-    q : array, shape (N, n)
-        Positions of the loaded run.
-    t : array, shape (N,)
-        Its sample times.
-    tau : array, shape (N, n)
-        Its joint torques.
+        The arm's catalog without the payload (:func:`~pysindy_xl.mujoco.kinematic_catalog`).
+    q, t, tau : array, shapes (N, n), (N,), (N, n)
+        Positions, sample times and joint torques of the loaded run.
     qd, qdd : array, shape (N, n), optional
-        Velocities and accelerations. Without both, the regression is the weak form of the
-        package's fits (:func:`~pysindy_xl.weak.weak_regression`: test functions against
-        smoothed positions, no accelerations needed), with the test functions and smoother
-        of ``arm`` when it is a fitted model.
+        Without both, the regression is the weak form
+        (:func:`~pysindy_xl.weak.weak_regression`), with ``arm``'s test functions and
+        smoother when it is a fitted model.
     arm : XLSINDy, array or None, optional
         The arm without payload: a model fitted with ``catalog.library()``, its coefficient
         vector (force coefficient -1), or None for the MJCF's nominal values.
     body : str, optional
         The body carrying the payload; default the last body of the chain.
 
-    Returns
-    -------
-    Payload
-
     Raises
     ------
     ValueError
-        If the arrays' shapes differ, ``body`` is not a body of the catalog or ``arm`` does not
-        match it.
-    ImportError
-        Without cvxpy.
+        If the shapes differ, ``body`` is not in the catalog or ``arm`` does not match it.
 
     Examples
     --------
-    >>> import numpy as np
     >>> import pysindy_xl as px
     >>> from pysindy_xl.mujoco import identify_payload, kinematic_catalog
     >>> arm = '''<mujoco><option gravity="0 0 -9.81"/><worldbody><body name="link">

@@ -1,33 +1,17 @@
 """Reference catalogs of the paper's comparison, built for any system.
 
-Three kinds, all with the force column first (:class:`~pysindy_xl.ExternalForces`):
+Kinds, all with the force column first (:class:`~pysindy_xl.ExternalForces`):
+``lagrange``, every product of a velocity monomial (degree <= ``velocity_degree``) and a
+monomial of the angles' ``sin`` and ``cos`` (degree <= ``trig_degree``), the constant
+excluded; ``classical``, each distinct monomial of the Euler-Lagrange expansion of those
+terms in its equations, plus viscous friction; ``mixed``, ``lagrange`` plus viscous friction;
+``kinematic``, :func:`~pysindy_xl.mujoco.kinematic_catalog`'s catalog (exact for any mass
+distribution).
 
-``lagrange``
-    Candidate Lagrangian terms only, paper style: every product of a velocity monomial (degree
-    up to ``velocity_degree``, with 1) and a trigonometric monomial of the angles (``sin`` and
-    ``cos``, degree up to ``trig_degree``, with 1), the constant excluded.
-``classical``
-    The smallest classical (Newtonian) catalog containing every term of the Euler-Lagrange
-    expansion of the ``lagrange`` catalog: each distinct monomial of ``EL_i(term)`` enters the
-    equation of coordinate ``i`` (its own coefficient per equation), plus viscous friction.
-``mixed``
-    ``lagrange`` plus classical viscous friction.
-``kinematic``
-    The catalog derived from the kinematic tree (:func:`~pysindy_xl.mujoco.kinematic_catalog`):
-    one Lagrangian term per base parameter, plus viscous, smooth Coulomb and spring candidates
-    per joint. It contains the true model of any rigid-body mass distribution; the degree and
-    friction options do not apply to it.
-
-Dry friction: when the model has ``frictionloss`` (MuJoCo's dry joint friction, a constraint
-force of magnitude ``frictionloss`` opposing the motion), every catalog gains the smooth
-Coulomb candidate ``tanh(qd_i / eps)`` in the equation of each such joint ``i``; its
-coefficient estimates the joint's ``frictionloss``.
-
-Friction terms are velocities ``qd_j`` in the equation of ``i``. ``friction="auto"`` uses the
-system's :meth:`~pysindy_xl.mujoco.MuJoCoSystem.friction_pattern`: ``qd_i`` in equation ``i``,
-and also the neighbouring velocities that the damping of a relative hinge couples in (so the
-true model of a damped MuJoCo chain is in the catalog); ``"diagonal"`` keeps ``qd_i`` per
-coordinate only, ``"full"`` every pair.
+A model with ``frictionloss`` adds the smooth Coulomb ``tanh(qd_i / eps)`` to each such
+joint's equation. Friction terms are velocities ``qd_j`` in equation ``i``: ``"auto"``
+follows :meth:`~pysindy_xl.mujoco.MuJoCoSystem.friction_pattern` (the velocities a relative
+hinge's damping couples in), ``"diagonal"`` ``qd_i`` only, ``"full"`` every pair.
 """
 
 from __future__ import annotations
@@ -53,19 +37,8 @@ def _check_degree(value, name):
 def lagrange_terms(system, velocity_degree: int = 2, trig_degree: int = 2) -> list[sp.Expr]:
     """Candidate Lagrangian terms: velocity monomials times trigonometric monomials.
 
-    Parameters
-    ----------
-    system : MuJoCoSystem or str
-        A system, a registry name or an MJCF path (see :func:`get_system`).
-    velocity_degree, trig_degree : int, default 2
-        Maximal degrees of the velocity and trigonometric monomials.
+    ``velocity_degree`` and ``trig_degree`` are the monomials' maximal degrees.
 
-    Returns
-    -------
-    list of sympy.Expr
-
-    Examples
-    --------
     >>> len(lagrange_terms("cart-pole"))
     35
     """
@@ -100,23 +73,9 @@ def _monomials_of(expr: sp.Expr) -> list[tuple[sp.Expr, float]]:
 def classical_terms(system, terms) -> tuple[list[sp.Expr], np.ndarray]:
     """Distinct monomials of the Euler-Lagrange expansion of ``terms``, per equation.
 
-    Parameters
-    ----------
-    system : MuJoCoSystem or str
-        A system, a registry name or an MJCF path (gives the coordinates).
-    terms : list of sympy.Expr
-        Candidate Lagrangian terms.
-
-    Returns
-    -------
-    monomials : list of sympy.Expr
-        Without numeric factors, in order of first appearance.
-    mask : ndarray of bool, shape (len(monomials), n)
-        ``mask[k, i]``: monomial ``k`` appears in the expansion of equation ``i``.
-
-    Examples
-    --------
-    The coupling term of the cart-pole expands into three classical monomials:
+    Returns the monomials (no numeric factors, in order of first appearance) and ``mask``
+    (n_monomials, n): ``mask[k, i]``, monomial ``k`` appears in equation ``i``. The coupling
+    term of the cart-pole expands into three classical monomials:
 
     >>> import sympy as sp
     >>> coords = get_system("cart-pole").coords
@@ -159,26 +118,10 @@ def _friction_mask(system: MuJoCoSystem, friction) -> np.ndarray:
 def dry_friction_terms(system, eps: float = 1e-3) -> tuple[list[sp.Expr], np.ndarray]:
     """Smooth Coulomb candidates ``tanh(qd_i / eps)`` for the joints with ``frictionloss``.
 
-    Parameters
-    ----------
-    system : MuJoCoSystem or str
-        A system; only a user's MJCF (:class:`~pysindy_xl.mujoco.MJCFSystem`) reports
-        ``frictionloss``, the shipped systems have none.
-    eps : float, default 1e-3
-        Velocity scale of the smoothing (m/s or rad/s): much smaller than the typical
-        velocity, so the term is ``sign(qd)`` except near rest (MuJoCo's frictionloss is
-        close to an exact sign; a wider smoothing leaks part of the friction into the
-        identified damping).
+    Returns the terms and their mask (n_terms, n), each term in its own coordinate's
+    equation. ``eps`` is much smaller than typical velocities: MuJoCo's frictionloss is
+    close to an exact sign, and a wider smoothing leaks friction into the damping.
 
-    Returns
-    -------
-    terms : list of sympy.Expr
-        One per joint with dry friction.
-    mask : ndarray of bool, shape (len(terms), n)
-        Each term in the equation of its own coordinate.
-
-    Examples
-    --------
     >>> from pysindy_xl.mujoco import MJCFSystem
     >>> xml = ('<mujoco><worldbody><body><joint name="x" type="slide" frictionloss="0.3"/>'
     ...        '<geom size="0.1"/></body></worldbody></mujoco>')
@@ -210,27 +153,18 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
         A system, a registry name or an MJCF path.
     kind : {"lagrange", "classical", "mixed", "kinematic"}, default "mixed"
     velocity_degree, trig_degree : int, default 2
-        Degrees of the candidate Lagrangian terms (see :func:`lagrange_terms`); not used by
-        ``"kinematic"``.
+        Degrees of the candidate Lagrangian terms (:func:`lagrange_terms`).
     friction : {"auto", "diagonal", "full"}, default "auto"
-        Which velocities enter which equation as friction terms; not used by
-        ``"kinematic"`` (which enters each joint's friction where the joint force acts).
+        Which velocities enter which equation as friction terms.
     interlink : array (n, n), optional
-        Passed to :class:`~pysindy_xl.ExternalForces`: use ``system.force_matrix()`` to fit
-        with MuJoCo joint forces ``u`` instead of generalized forces ``tau``.
-    dry_friction : bool, optional
-        Add the smooth Coulomb candidates of :func:`dry_friction_terms`. Default: when the
-        model has ``frictionloss``.
-    dry_friction_eps : float, default 1e-3
-        Their velocity scale.
-    joint_models : sequence of str or "all", optional
-        ``"kinematic"`` only: the friction and sensor models of real joints offered for
-        every joint, the fit selecting what each needs (``friction`` of
-        :func:`~pysindy_xl.mujoco.kinematic_catalog`). Default: viscous and smooth Coulomb.
-    coulomb_law : {"smooth", "mujoco"}, default "smooth"
-        ``"kinematic"`` only: the law of the Coulomb candidates (``coulomb_law`` of
-        :func:`~pysindy_xl.mujoco.kinematic_catalog`; ``"mujoco"`` for data MuJoCo
-        simulated from the system's model).
+        Passed to :class:`~pysindy_xl.ExternalForces` (``system.force_matrix()`` to fit with
+        MuJoCo joint forces ``u``).
+    dry_friction, dry_friction_eps : bool, float
+        Add :func:`dry_friction_terms` with this scale (default: when the model has
+        ``frictionloss``).
+    joint_models, coulomb_law
+        ``"kinematic"`` only (which takes no degree or friction option): ``friction`` and
+        ``coulomb_law`` of :func:`~pysindy_xl.mujoco.kinematic_catalog`.
 
     Returns
     -------
@@ -239,8 +173,7 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
 
     Examples
     --------
-    >>> catalog = reference_catalog("cart-pole", "mixed").fit()
-    >>> catalog.n_output_features_
+    >>> reference_catalog("cart-pole", "mixed").fit().n_output_features_
     38
     >>> reference_catalog("cart-pole", "kinematic").fit().n_output_features_
     9
@@ -295,12 +228,8 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
 
 
 def _kinematic_truth(system, catalog, names, forces):
-    """The MJCF model's exact vector when ``catalog`` is the system's kinematic catalog.
-
-    Its friction terms are joint velocities (``theta2_dot - theta1_dot`` for a relative
-    hinge), not the per-coordinate velocities of :meth:`MuJoCoSystem.friction`, so the generic
-    matching below would miss them.
-    """
+    """The MJCF model's exact vector when ``catalog`` is the system's kinematic catalog (its
+    friction terms are joint velocities, which the generic matching would miss)."""
     from ._kinematic_build import COULOMB_LAWS
     from .kinematic import PolynomialLagrangeLibrary, kinematic_catalog
 
@@ -320,49 +249,22 @@ def _classical_name(coords, term, i) -> str:
 
 
 def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.0):
-    """Coefficient vector of the system's true model in a catalog.
+    """Coefficient vector ``xi`` (F,) of the system's true model in a catalog, and ``missing``.
 
     The Lagrangian goes to the Lagrange terms when the catalog has any, otherwise its
     Euler-Lagrange expansion goes to the classical terms; friction goes to classical terms.
+    ``system`` has a known Lagrangian, or ``catalog`` is its kinematic catalog; ``catalog``
+    (e.g. :func:`reference_catalog`) is fitted here when needed; ``forces`` is the force
+    column's coefficient. ``missing`` lists the parts of the true model the catalog cannot
+    hold; with ``strict`` they raise a ValueError instead, as does a system with no known
+    model.
 
-    Parameters
-    ----------
-    system : MuJoCoSystem or str
-        A system with a known Lagrangian, or any MJCF model with its kinematic catalog
-        (:func:`~pysindy_xl.mujoco.kinematic_catalog`, exact for every model).
-    catalog : CatalogRepartition
-        Fitted or not (fitted here when needed), e.g. from :func:`reference_catalog`.
-    strict : bool, default False
-        Raise when part of the true model is not in the catalog (e.g. friction in a
-        ``lagrange`` catalog); otherwise leave that part out.
-    forces : float, default -1.0
-        Coefficient of the force column.
-
-    Returns
-    -------
-    xi : ndarray, shape (F,)
-    missing : list of str
-        Parts of the true model not representable in the catalog (empty when exact).
-
-    Raises
-    ------
-    ValueError
-        If the system has no known model (no Lagrangian, and the catalog is not its
-        kinematic one), or with ``strict`` when the catalog lacks part of it.
-    TypeError
-        If ``catalog`` is not a :class:`~pysindy_xl.CatalogRepartition`.
-
-    Examples
-    --------
     >>> catalog = reference_catalog("cart-pole", "mixed", trig_degree=1)
     >>> xi, missing = true_coefficients("cart-pole", catalog)
     >>> {name: round(float(v), 4) for name, v in zip(catalog.get_feature_names(), xi) if v}
     {'F[tau]': -1.0, 'L[cos(theta)]': 3.924, 'L[x_dot**2]': 0.75,
      'L[theta_dot*x_dot*cos(theta)]': 0.4, 'L[theta_dot**2]': 0.16, 'C_x[x_dot]': 0.5,
      'C_theta[theta_dot]': 0.1}
-
-    A catalog without friction terms cannot hold the whole model:
-
     >>> _, missing = true_coefficients("cart-pole", reference_catalog("cart-pole", "lagrange"))
     >>> missing
     ['+0.5*x_dot in the equation of x', '+0.1*theta_dot in the equation of theta']

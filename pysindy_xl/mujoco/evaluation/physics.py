@@ -11,63 +11,23 @@ from ..systems.registry import get_system
 __all__ = ["compare_physics"]
 
 
-
 def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8) -> dict:
     """Compare the identified mass matrix and unforced dynamics with MuJoCo's at a few states.
 
-    At random states (``system.random_initial_state``, inside the joint ranges; states where a
-    contact is active after ``mj_forward`` are drawn again, since contact forces are not part
-    of the identified dynamics) the identified
-    equations ``M(q, qd) qdd = f(q, qd, u)`` are evaluated with ``u = 0`` and compared with
-    MuJoCo's ``mj_fullM`` and ``qfrc_passive - qfrc_bias + qfrc_constraint`` (gravity,
-    Coriolis, damping, springs, dry friction), both mapped to the system's coordinates
-    (``B M B^T``, ``B f``). An implicit (unforced) law is defined up to a factor: both are
-    first scaled by the least-squares factor that best matches the mass matrices.
+    At ``n_states`` random states (``system.random_initial_state(scale=scale)``; states with
+    an active contact are drawn again) the identified ``M(q, qd) qdd = f(q, qd, u)`` at
+    ``u = 0`` is compared with ``mj_fullM`` and ``qfrc_passive - qfrc_bias +
+    qfrc_constraint``, mapped to the coordinates (``B M B^T``, ``B f``). An implicit law is
+    first scaled by the least-squares factor matching the mass matrices. The mass matrix is
+    read where every joint with ``frictionloss`` slides
+    (:func:`~pysindy_xl.mujoco.systems.friction.sliding_velocities`).
 
-    The identified mass matrix is read where every joint with ``frictionloss`` slides (its
-    speed raised to at least twice the sticking scale,
-    :func:`~pysindy_xl.mujoco.systems.friction.sliding_velocities`): a rigid body's mass
-    matrix does not depend on the velocities, but a dry friction modelled as MuJoCo
-    regularizes it adds the soft constraint's inertia inside its sticking zone, which
-    ``mj_fullM`` leaves out.
+    Returns a dict: ``mass_error``, ``force_error``, ``gravity_error`` (at rest), each the
+    largest error relative to MuJoCo's largest entry; ``scale``; ``positive_definite`` and
+    ``condition`` of the identified mass matrix; ``unidentified`` (coordinates whose mass row
+    is zero); ``held`` (``still_coordinates_``, left out); ``contact_states_skipped``.
+    ValueError when contacts act at all of ``20 * n_states`` draws.
 
-    Parameters
-    ----------
-    model : fitted XLSINDy
-        With dynamics (its equations contain accelerations).
-    system : MuJoCoSystem or str
-        The system the data came from.
-    n_states : int, default 5
-        Number of random states.
-    seed : int, optional
-        Seed of the states.
-    scale : float, default 0.8
-        Spread of the states (see ``random_initial_state``).
-
-    Returns
-    -------
-    dict
-        ``mass_error`` and ``force_error``: largest error relative to the largest entry of
-        MuJoCo's matrix / vector over the states; ``scale``: the factor applied to the
-        identified model (1 for a force-normalized fit); ``gravity_error``: the same for the
-        forces at rest (``qd = 0``: gravity and joint springs, MuJoCo's
-        ``qfrc_spring - qfrc_bias``); ``positive_definite``: the
-        identified mass matrix is positive definite at every state; ``condition``: its
-        largest condition number; ``unidentified``: names of the coordinates whose row of
-        the identified mass matrix is zero at every state (no inertia identified, e.g. a
-        passive body that no force excites: leave its joints out with ``joints=``);
-        ``held``: the coordinates the model holds still (``still_coordinates_``), left out of
-        the comparison (the others are compared as MuJoCo's equations of their own, exact
-        for a held body that is decoupled from them); ``contact_states_skipped``: random
-        states drawn again because a contact was active.
-
-    Raises
-    ------
-    ValueError
-        If contacts are active at every one of ``20 * n_states`` random states.
-
-    Examples
-    --------
     >>> import pysindy_xl as px
     >>> from pysindy_xl.mujoco import generate_dataset, reference_catalog
     >>> data = generate_dataset("cart-pole", n_trajectories=1, duration=1.0, seed=0,
@@ -77,8 +37,6 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     >>> physics = compare_physics(model, "cart-pole")
     >>> bool(physics["mass_error"] < 1e-6 and physics["force_error"] < 1e-6)
     True
-    >>> physics["positive_definite"], physics["scale"]
-    (True, 1.0)
     """
     mujoco = import_mujoco()
 

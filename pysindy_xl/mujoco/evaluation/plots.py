@@ -1,8 +1,5 @@
-"""Figures of a validation (the paper's Figure 1), drawn with matplotlib's Agg canvas.
-
-The figures are built on :class:`matplotlib.figure.Figure` with an Agg canvas directly, so
-nothing touches pyplot's global state or needs a display.
-"""
+"""Figures of a validation (the paper's Figure 1), on matplotlib Agg canvases (no pyplot
+global state, no display)."""
 
 from __future__ import annotations
 
@@ -24,31 +21,11 @@ def new_figure(width, height):
 
 
 def plot_coefficients(ax, feature_names, coefficients, true_coefficients=None, max_features=40):
-    """Bar chart of identified (and true) coefficients on a symmetric log scale.
+    """Bar chart of identified (and true) coefficients (F,) on a symmetric log scale, on ``ax``.
 
-    Only features that are non-zero in either vector are drawn (at most ``max_features``,
-    the largest first when there are more).
+    Only features non-zero in either vector are drawn (the ``max_features`` largest); a
+    ValueError says when the lengths differ.
 
-    Parameters
-    ----------
-    ax : matplotlib.axes.Axes
-        Where to draw.
-    feature_names : list of str
-        Name of each coefficient (``model.get_feature_names()``).
-    coefficients : array, shape (F,)
-        Identified coefficients.
-    true_coefficients : array, shape (F,), optional
-        Drawn beside the identified ones.
-    max_features : int, default 40
-        Most bars per vector.
-
-    Raises
-    ------
-    ValueError
-        If the lengths of ``feature_names``, ``coefficients`` and ``true_coefficients`` differ.
-
-    Examples
-    --------
     >>> from matplotlib.figure import Figure
     >>> ax = Figure().add_subplot()
     >>> plot_coefficients(ax, ["a", "b", "c"], [1.0, 0.0, -0.5], [1.0, 0.0, -0.4])
@@ -85,34 +62,18 @@ def plot_validation(result, path=None, feature_names=None, coefficients=None,
                     true_coefficients=None, title=None):
     """Trajectories, residuals and coefficients of a validation, as in the paper's Figure 1.
 
-    Parameters
-    ----------
-    result : ValidationResult
-        From :func:`validate_model` or :func:`compare_trajectories`.
-    path : str or os.PathLike, optional
-        Where to save the PNG.
-    feature_names, coefficients, true_coefficients : optional
-        Draw panel (C), the identified (and true) coefficient vector (see
-        :func:`plot_coefficients`).
-    title : str, optional
-        Prefix of the figure title (which gives the RMSE and the validity).
+    ``result`` is a :class:`ValidationResult`; the PNG is saved at ``path`` when given;
+    ``feature_names``, ``coefficients`` (and ``true_coefficients``) draw panel (C) by
+    :func:`plot_coefficients`; ``title`` prefixes the figure title. Returns the
+    :class:`~matplotlib.figure.Figure` on an Agg canvas, not registered with pyplot.
 
-    Returns
-    -------
-    matplotlib.figure.Figure
-        On an Agg canvas, not registered with pyplot.
-
-    Examples
-    --------
-    >>> import pathlib, tempfile, numpy as np
+    >>> import pathlib, tempfile
     >>> from pysindy_xl.mujoco import compare_trajectories
     >>> t = np.linspace(0.0, 1.0, 51)
     >>> reference = np.column_stack([np.sin(t), np.cos(t)])
     >>> result = compare_trajectories(t, reference, reference + 0.01, coordinate_names=["x"])
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     figure = plot_validation(result, pathlib.Path(tmp) / "validation.png", title="demo")
-    ...     print((pathlib.Path(tmp) / "validation.png").stat().st_size > 0)
-    True
     >>> figure.get_suptitle()
     'demo: position RMSE 0.01, valid'
     """

@@ -1,6 +1,5 @@
 """The MuJoCo runs of a validation: the fresh reference trajectory, and the identified model
-stepped by MuJoCo in closed loop (see :mod:`~pysindy_xl.mujoco.evaluation.validation`).
-"""
+stepped by MuJoCo in closed loop (:mod:`~pysindy_xl.mujoco.evaluation.validation`)."""
 
 from __future__ import annotations
 
@@ -28,45 +27,23 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
     Parameters
     ----------
     system : MuJoCoSystem or str
-        A system, a registry name or an MJCF path.
     duration : float, default 10.0
         Simulated time (s).
-    forcing : {"explicit", "implicit", "mixed"}
-        Which actuators are driven (see :func:`generate_dataset`).
-    actuators : list of str, optional
-        Driven actuators in ``mixed`` mode.
-    seed : int, optional
-        Seed of the initial state and the signals.
-    sample_every : int, default 10
-        Record every ``sample_every``-th MuJoCo step.
-    initial_scale : float, default 1.0
-        Scale of the random initial state.
+    forcing, actuators, seed, sample_every, initial_scale, integrator, control
+        As in :func:`generate_dataset`.
     substeps : int, default 4
-        MuJoCo internal steps per model time step (a finer reference, see
-        :mod:`~pysindy_xl.mujoco.evaluation.validation`); with ``integrator="auto"`` at
-        least this many.
+        MuJoCo internal steps per model step (with ``integrator="auto"`` at least this many).
     backoff : bool, default True
-        When a joint limit, contact or equality constraint acts, draw again with half the
-        forcing amplitude and initial spread (at most three times) and keep the draw whose
-        first constraint comes latest (``info["backoff"]`` records the factor).
-    integrator : {"auto", "model", "Euler", "RK4", "implicit", "implicitfast"}, default "auto"
-        MuJoCo's integrator: ``"auto"`` is a stable integration faithful to the continuous
-        equations (see :func:`~pysindy_xl.mujoco.integration.choose_integration`);
-        ``"model"`` keeps the authored one.
-    control : {"auto", "open-loop", "tracking"}, default "auto"
-        How plain torque motors are driven, as in :func:`generate_dataset`
-        (:func:`~pysindy_xl.mujoco.simulation.signals.motor_tracking`); ``info["tracking"]``
-        keeps the controller of a tracked run.
+        When a constraint acts, draw again with half the forcing amplitude and initial
+        spread (at most three times); keep the draw whose first constraint comes latest.
     **signal_options
-        ``n_components``, ``max_frequency``, ``amplitude_scale``, ``amplitude`` of the random
-        forces.
+        ``n_components``, ``max_frequency``, ``amplitude_scale``, ``amplitude``.
 
     Returns
     -------
     Trajectory
-        With clean ``q, qd, qdd, tau, u`` and the constraint data; ``info["signals"]`` holds
-        the controls (None when no actuator is driven: zero controls, under which servos hold
-        their zero reference).
+        Clean, with the constraint data; ``info["signals"]`` holds the controls (None when no
+        actuator is driven: zero controls).
 
     Examples
     --------

@@ -3,70 +3,27 @@
 The model is simulated from the initial state of a new, noise-free MuJoCo trajectory, driven
 the way MuJoCo was, and the two position histories are compared.
 
-Drive: how the identified model is forced (``ValidationResult.drive``).
+Drive (``ValidationResult.drive``): ``open-loop``, the forces MuJoCo applied as a function
+of time (the exact signal for joint motors, else a cubic spline of the recorded forces);
+``closed-loop``, for servos, the MJCF's actuator law
+(:func:`~pysindy_xl.mujoco.actuation.actuator_law`) driven by the run's reference controls
+acts on the model's own state. Replaying a servo run's forces open loop would compare two
+different experiments (nothing corrects drift; servos on their limits hide errors).
 
-``open-loop``
-    The model receives the forces MuJoCo applied, as a function of time: exactly the
-    continuous signal for actuators whose force does not depend on the state (joint motors,
-    see :func:`~pysindy_xl.mujoco.actuation.actuator_force_function`), otherwise a cubic
-    spline of the recorded forces.
-``closed-loop``
-    For servos (``position`` / ``velocity`` actuators, ``general`` ones with an affine bias
-    or gain), whose force depends on the joint state: the MJCF's actuator law
-    (:func:`~pysindy_xl.mujoco.actuation.actuator_law`), driven by the reference controls
-    of the run (the trajectory's ``info["signals"]``), acts on the model's own simulated
-    state, as MuJoCo's servos acted on MuJoCo's. Replaying a servo run's forces open loop
-    compares two different experiments: an exact model drifts away as soon as rounding
-    moves it (nothing corrects it), and a wrong one can look right while the servos sit on
-    their force limits.
+Simulator (``ValidationResult.simulator``), in closed loop: ``mujoco``, MuJoCo itself on a
+copy of the model carrying the identified parameters
+(:func:`~pysindy_xl.export.mjcf.identified_mj_model`, only where it reproduces ``M`` and ``f``
+exactly), limits and contacts off; ``model``, ``model.simulate`` with the law as feedback.
+The reference is integrated at ``timestep / substeps`` with controls read at each internal
+step's midpoint; the model sees the same continuous controls.
 
-Simulator: what steps the identified model in closed loop (``ValidationResult.simulator``).
-
-``mujoco``
-    MuJoCo itself, on a copy of the system's model that carries the identified parameters
-    (:func:`~pysindy_xl.export.mjcf.identified_mj_model`: accepted only where MuJoCo then
-    reproduces the identified ``M`` and ``f`` exactly), under the MJCF's own actuators and the
-    integration :func:`~pysindy_xl.mujoco.integration.choose_integration` picks for it, joint
-    limits and contacts off (the identified equations have none): the same equations as
-    ``model``, stepped in compiled code, in a fraction of a second for seconds of a stiff
-    seven-joint closed loop. The model's dry friction acts as MuJoCo's ``frictionloss``
-    (the reference's mechanism) rather than its smooth sign.
-``model``
-    The identified equations integrated by ``model.simulate`` with the actuator law as
-    feedback (scipy's ``DOP853`` by default): any model, thousands of evaluations per second
-    of a stiff closed loop.
-
-Faithfulness: the MuJoCo reference is integrated at a fine internal step (the model's
-``timestep / substeps``, ``substeps=4`` by default or more where the integration that
-:func:`~pysindy_xl.mujoco.integration.choose_integration` picks, stable and faithful to the
-continuous equations, needs more) with the control updated at every
-internal step (read at the step's midpoint, a second-order hold); the identified model sees
-the same continuous controls. Sample times do not depend on ``substeps``.
-
-Metrics
--------
-``position_rmse``
-    Root mean square of the position error over all samples and coordinates (in the
-    coordinates' units, rad or m), over the **whole horizon**: infinite when the model could
-    not be simulated to the end (its ``divergence_time`` says when it stopped).
-``simulated_rmse``
-    The same over the part the model could simulate (for diagnosis only).
-``divergence_time``
-    First time at which the error of some coordinate ``i`` exceeds
-    ``divergence_bound * max(1, ptp_i)``, with ``ptp_i`` the peak-to-peak range of that
-    coordinate in the MuJoCo trajectory (so the bound is relative to the motion, and absolute,
-    in rad or m, for coordinates that barely move); or the time at which the simulation of the
-    model failed (blow-up, singular mass matrix). None when neither happens.
-``force_error`` (closed loop only)
-    Root mean square, over the simulated samples and coordinates, of the difference between
-    the actuator forces along the model's run and along MuJoCo's (the same law, at each
-    run's own states), relative to the root mean square of MuJoCo's. Feedback hides model
-    error in the positions (stiff servos track their reference whatever the inertia) and
-    shows it in the forces the servos need: the closed-loop counterpart of torque
-    prediction.
-``valid``
-    The model was simulated over the whole horizon and never diverged; in closed loop, also
-    ``force_error <= force_bound`` (see :func:`validate_model`).
+Metrics: ``position_rmse``, the RMS position error over the whole horizon (inf when the model
+stopped early); ``simulated_rmse``, the same over the simulated part; ``divergence_time``,
+the first time some coordinate's error exceeds ``divergence_bound * max(1, ptp_i)`` (``ptp_i``
+its range in the reference) or the simulation failed; ``force_error`` (closed loop), the RMS
+of the actuator forces along the model's run minus MuJoCo's, relative to MuJoCo's (feedback
+hides model error in positions and shows it in forces); ``valid``, simulated to the end, never
+diverged and, in closed loop, ``force_error <= force_bound``.
 """
 
 from __future__ import annotations
@@ -103,60 +60,16 @@ DEFAULT_FORCE_BOUND = 0.05
 class ValidationResult:
     """Comparison of a model's simulation with a MuJoCo trajectory.
 
-    Usually made by :func:`compare_trajectories` or :func:`validate_model`, which compute the
-    metrics (see the module docstring); the fields are stored as given.
+    Made by :func:`compare_trajectories` or :func:`validate_model`; the metrics are those of
+    the module docstring. ``t`` (T,) sample times; ``reference`` (T, 2n) MuJoCo's states
+    ``[q, qd]``; ``prediction`` (k, 2n) the model's at ``t[:k]`` (``k < T`` when its
+    simulation failed, ``failure`` saying why); ``forces`` (T, n) those given to the model
+    (closed loop: MuJoCo's actuator forces); ``constrained_at`` when a constraint started to
+    act in the reference, where the comparison stopped; ``drive`` and ``simulator`` how the
+    model was driven and what stepped it.
 
-    Parameters
-    ----------
-    t : ndarray, shape (T,)
-        Sample times.
-    reference : ndarray, shape (T, 2n)
-        MuJoCo state ``[q, qd]``.
-    prediction : ndarray, shape (k, 2n)
-        Model state at ``t[:k]``; ``k < T`` when the simulation failed.
-    forces : ndarray, shape (T, n)
-        Forces given to the model in open loop; in closed loop, the forces MuJoCo's
-        actuators applied in the reference (the model's follow from its own state).
-    position_rmse : float
-        Root mean square position error over the whole horizon (inf when the simulation
-        stopped early).
-    position_rmse_per_coordinate : ndarray, shape (n,)
-        The same per coordinate.
-    divergence_time : float or None
-        When the prediction left the bound or stopped; None when neither happened.
-    valid : bool
-        Simulated over the whole horizon and never diverged.
-    failure : str or None
-        Reason of a failed simulation (``SimulationError.reason``).
-    divergence_bound : float
-        Relative bound of the divergence test.
-    coordinate_names : tuple of str, optional
-        Names used in plots and in :meth:`to_dict`.
-    simulated_rmse : float, optional
-        Root mean square position error over the simulated part (inf when nothing was).
-    constrained_at : float or None, optional
-        When a constraint (joint limit, contact) started to act in the reference, where the
-        comparison stopped (see :func:`validate_model`); None when none acted.
-    drive : {"open-loop", "closed-loop"}, default "open-loop"
-        How the model was driven (see the module docstring).
-    force_error : float or None, optional
-        Relative actuator-force error of a closed-loop run (see the module docstring); None
-        in open loop.
-    simulator : {"model", "mujoco"}, default "model"
-        What stepped the identified model (see the module docstring).
-
-    Attributes
-    ----------
-    n : int
-        Number of coordinates.
-    simulated_fraction : float
-        Fraction of the horizon the model could simulate.
-
-    Examples
-    --------
     A prediction that stops half-way:
 
-    >>> import numpy as np
     >>> t = np.linspace(0.0, 0.9, 10)
     >>> reference = np.column_stack([np.sin(t), np.cos(t)])
     >>> result = compare_trajectories(t, reference, reference[:5], failure="diverged")
@@ -192,21 +105,9 @@ class ValidationResult:
         return len(self.prediction) / len(self.t)
 
     def to_dict(self) -> dict:
-        """JSON-serializable summary (metrics, no arrays).
+        """JSON-serializable summary: the metrics and fields, ``horizon`` (s), no arrays.
 
-        Returns
-        -------
-        dict
-            ``position_rmse`` (``inf`` when the simulation stopped early; the demo report and
-            the benchmark records write it as null),
-            ``position_rmse_per_coordinate`` (by name), ``divergence_time``, ``valid``,
-            ``failure``, ``divergence_bound``, ``horizon`` (s), ``simulated_fraction``,
-            ``simulated_rmse``, ``constrained_at``, ``drive``, ``force_error`` and
-            ``simulator``.
-
-        Examples
-        --------
-        >>> import json, numpy as np
+        >>> import json
         >>> t = np.linspace(0.0, 1.0, 11)
         >>> reference = np.column_stack([t, np.ones_like(t)])
         >>> result = compare_trajectories(t, reference, reference, coordinate_names=["x"])
@@ -240,30 +141,10 @@ def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVE
                          failure=None, coordinate_names=None, forces=None) -> ValidationResult:
     """Metrics of a predicted trajectory against a reference (see the module docstring).
 
-    Parameters
-    ----------
-    t : array, shape (T,)
-        Sample times.
-    reference : array, shape (T, 2n)
-        Reference states ``[q, qd]``.
-    prediction : array, shape (k, 2n), k <= T
-        Predicted states at ``t[:k]`` (shorter when the prediction stopped early).
-    divergence_bound : float, default 0.2
-        Relative bound of the divergence test (see the module docstring).
-    failure : str, optional
-        Why the prediction stopped early.
-    coordinate_names : sequence of str, optional
-        Default ``q0, q1, ...``.
-    forces : array, shape (T, n), optional
-        Forces given to the model, kept for the plots (default zero).
+    ``t`` (T,) sample times, ``reference`` (T, 2n) states ``[q, qd]``, ``prediction``
+    (k <= T, 2n) states at ``t[:k]`` (shorter when it stopped early, ``failure`` saying why),
+    ``coordinate_names`` default ``q0, q1, ...``, ``forces`` (T, n) kept for the plots.
 
-    Returns
-    -------
-    ValidationResult
-
-    Examples
-    --------
-    >>> import numpy as np
     >>> t = np.linspace(0, 1, 11)
     >>> ref = np.column_stack([t, np.ones_like(t)])
     >>> r = compare_trajectories(t, ref, ref + [0.01, 0.0])
@@ -338,57 +219,35 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
         Simulated to produce the reference (ignored when ``trajectory`` is given).
     trajectory : Trajectory, optional
         Reference trajectory to use instead of simulating one.
-    duration, forcing, actuators, seed, sample_every
-        Of the fresh trajectory (see :func:`validation_trajectory`).
-    divergence_bound : float, default 0.2
-        See the module docstring.
+    duration, forcing, actuators, seed, sample_every, substeps, initial_scale, amplitude, control
+        Of the fresh trajectory, as in :func:`validation_trajectory`.
+    divergence_bound, force_bound : float
+        See the module docstring (``force_bound``: closed loop only).
     force_input : {"tau", "u"}, default "tau"
-        Forces given to the model: generalized forces (default interlink) or joint forces
-        (for a model fitted with ``interlink=system.force_matrix()``).
-    substeps, initial_scale, amplitude
-        Of the fresh trajectory (see :func:`validation_trajectory`).
+        Generalized forces, or joint forces (a model fitted with
+        ``interlink=system.force_matrix()``).
     constraints : {"truncate", "ignore"}, default "truncate"
-        When a joint limit, contact or equality constraint acts in the reference (its
-        ``constraint_active`` mask), which the identified model cannot reproduce:
-        ``truncate`` compares up to the first such sample (``constrained_at`` of the result
-        says when), ``ignore`` compares over the whole horizon anyway.
+        ``truncate`` compares up to the first sample where a constraint acts in the
+        reference (the result's ``constrained_at``).
     drive : {"auto", "closed-loop", "open-loop"}, default "auto"
-        How the model is driven (see the module docstring). ``auto``: closed loop when the
-        system's actuators have a state-dependent law (servos) and the reference's controls
-        are known (``trajectory.info["signals"]``, which :func:`validation_trajectory`
-        records), open loop otherwise. ``closed-loop`` requires both the law and the
-        controls; ``open-loop`` replays the recorded forces whatever the actuators.
-    force_bound : float, default 0.05
-        In closed loop, the largest relative actuator-force error (``force_error``, see the
-        module docstring) of a valid model.
+        ``auto``: closed loop when the actuators have a state-dependent law (servos) and the
+        reference's controls are known (``trajectory.info["signals"]``); ``closed-loop``
+        requires both; ``open-loop`` replays the recorded forces.
     simulator : {"auto", "mujoco", "model"}, default "auto"
-        What steps the model in closed loop (see the module docstring): ``auto`` is
-        ``mujoco`` where the model can be stated in MuJoCo, ``model`` otherwise; ``mujoco``
-        refuses a model it cannot state. Open loop always uses ``model``.
-    control : {"auto", "open-loop", "tracking"}, default "auto"
-        How the fresh trajectory drives plain torque motors (see
-        :func:`validation_trajectory`); a tracked reference (``info["tracking"]``) drives the
-        model in closed loop with the same controller.
+        In closed loop: ``auto`` is ``mujoco`` where the model can be stated in MuJoCo;
+        ``mujoco`` refuses a model it cannot state.
     **integrator_options
-        Passed to ``model.simulate`` by the ``model`` simulator (``method``, ``rtol``,
-        ``atol``, ``timeout``...). The default, scipy's ``DOP853`` at tight tolerances, is
-        the accurate path; servos make the closed loop stiff, so it takes thousands of
-        evaluations of the model per second of motion. ``method="ROS2"`` (an L-stable
-        Rosenbrock method, :mod:`pysindy_xl.dynamics.rosenbrock`, steps of at most the MuJoCo
-        model's time step under a
-        local error bound of ``1e-3``) takes fewer at a looser accuracy (see
-        ``benchmarks/closed_loop_validation.py``).
+        Passed to ``model.simulate`` by the ``model`` simulator (``method``, ``rtol``...).
 
     Returns
     -------
     ValidationResult
-        Its ``drive`` says which drive was used.
 
     Raises
     ------
     ValueError
         If neither ``system`` nor ``trajectory`` is given, on a shape mismatch, with
-        ``drive="closed-loop"`` when there is no actuator law or no known controls, or with
+        ``drive="closed-loop"`` without an actuator law or known controls, or with
         ``simulator="mujoco"`` for a model MuJoCo cannot state.
 
     Examples

@@ -1,29 +1,17 @@
 """Excitation trajectories: Fourier series optimized for the conditioning of the regressor.
 
-The parameters of a robot enter its joint torques linearly, ``tau = W(q, qd, qdd) beta``;
-their least-squares estimate from noisy torques is as good as the regressor ``W`` stacked over
-the samples is well conditioned. Following Swevers et al. (1997), each joint follows a finite
-Fourier series (:class:`~pysindy_xl.mujoco.FourierTrajectory`, parameters
-``x = (q_0, a, b)``) and :func:`excitation_trajectory` minimizes ``log cond W`` over one
-period, ``W`` the kinematic catalog's columns (base parameters, viscous and smooth Coulomb
-friction; :func:`~pysindy_xl.mujoco.kinematic_catalog`), under
+A robot's torques are linear in its parameters, ``tau = W(q, qd, qdd) beta``; their
+least-squares estimate is as good as ``W`` is well conditioned. Following Swevers et al.
+(1997), each joint follows a :class:`~pysindy_xl.mujoco.FourierTrajectory` (``x = (q_0, a, b)``)
+and :func:`excitation_trajectory` minimizes ``log cond W`` over one period (``W``: the
+kinematic catalog's columns) by SLSQP from random feasible starts, under position, velocity
+and acceleration limits (linear in ``x``), torque limits of the nominal model ``W beta_MJCF``
+(nonlinear) and optionally a start at rest (``sum_l a_jl = 0``, ``sum_l l b_jl = 0``).
 
-* joint position, velocity and acceleration limits on a time grid: linear in ``x``;
-* torque limits on the same grid, the torques of the MJCF's nominal inertials
-  ``W beta_MJCF``: smooth, nonlinear;
-* optionally a start (and so, by periodicity, an end) at rest, ``qd(0) = qdd(0) = 0``:
-  ``sum_l a_jl = 0``, ``sum_l l b_jl = 0``.
-
-SLSQP solves it from a few random feasible starts (random series scaled to touch the limits,
-the baseline the optimum is compared with). The gradient needs the regressor's derivatives
-along the trajectory only: a sample's rows depend on that sample's state alone, so perturbing
-one state variable (``q_j``, ``qd_j`` or ``qdd_j``) at every sample at once gives the
-derivative of every row, ``6 n`` evaluations of the regressor by central differences (one call
-on the stacked states) instead of one per parameter. With ``W = U S V^T`` the singular values
-move as ``d s_i = u_i^T dW v_i``, which with the chain rule through the linear series gives the
-gradient of ``log(s_max / s_min)``; the torque constraints' Jacobian comes from the same
-derivatives. Limits are checked, and condition numbers reported, on a grid five times finer than
-the optimization's; a trajectory that leaves its limits between grid points is scaled back.
+A sample's rows depend on its own state only, so perturbing one state variable at every
+sample at once gives every row's derivative: ``6 n`` evaluations by central differences.
+With ``W = U S V^T``, ``d s_i = u_i^T dW v_i`` gives the gradient of ``log(s_max / s_min)``.
+Limits are checked on a grid five times finer than the optimization's.
 """
 
 from __future__ import annotations
@@ -194,10 +182,8 @@ class _Design:
         return self.fit_to_limits(x, bases, grow=True)
 
     def optimize(self, x, bases, rest_at_start, max_iter, callback=None):
-        """SLSQP from ``x`` (``callback`` after each iteration). Each limit enters through
-        its margin at the lowest local minima along the period (at most ``L`` for a series of
-        ``L`` harmonics; ``3 L`` kept for the torques): a fixed, small number of rows instead
-        of one per sample and limit."""
+        """SLSQP from ``x``. Each limit enters through its margin at the lowest local minima
+        along the period (``L + 1``; ``3 L`` for the torques), not one row per sample."""
         from scipy.optimize import minimize
 
         A, c = self.linear_constraints(bases)
@@ -328,49 +314,33 @@ def excitation_trajectory(system, n_harmonics: int = 5, period: float = 10.0,
                           max_iter: int = 100, progress=None) -> FourierTrajectory:
     """A periodic trajectory that excites a robot's dynamics for identification.
 
-    A finite Fourier series per joint whose identification regressor (the kinematic catalog's
-    columns along one period) has the smallest condition number found by SLSQP from
-    ``restarts`` random feasible starts, within joint position, velocity, acceleration and
-    torque limits (see the module docstring for the problem and its gradient).
-
     Parameters
     ----------
     system : MuJoCoSystem, str or os.PathLike
-        The robot (a system, registry name, MJCF path or text); its MJCF's nominal inertials
-        give the torques checked against ``torque_limits``.
-    n_harmonics : int, default 5
-        Harmonics ``L`` per joint; the highest frequency is ``n_harmonics / period`` Hz.
-    period : float, default 10.0
-        Period (s).
+        The robot; its MJCF's nominal inertials give the torques checked against
+        ``torque_limits``.
+    n_harmonics, period : int, float
+        Harmonics ``L`` per joint and period (s); the top frequency is ``L / period`` Hz.
     position_limits : array (n, 2), optional
-        ``(low, high)`` per coordinate. Default: the MJCF's joint ranges, narrowed to what a
-        position servo's control range reaches, less 5 % of the width at each end.
-    velocity_limits, acceleration_limits : float or array (n,), optional
-        Largest ``|qd_j|`` and ``|qdd_j|`` (``inf``: none). Default: no limit.
-    torque_limits : float or array (n,), optional
-        Largest ``|tau_j|`` of the nominal model (``inf``: none). Default: the MJCF's
-        actuator force ranges (``actuatorfrcrange``, ``forcerange`` times gear), else none.
-    restarts : int, default 3
-        Random starts; the best optimum is returned.
-    seed : int, default 0
-        Seed of the random starts: same seed, same trajectory.
+        ``(low, high)`` per coordinate. Default: the MJCF's joint ranges, narrowed to a
+        position servo's reach, less 5 % of the width at each end.
+    velocity_limits, acceleration_limits, torque_limits : float or array (n,), optional
+        Largest ``|qd_j|``, ``|qdd_j|`` and nominal ``|tau_j|`` (``inf``: none). Default
+        torques: the MJCF's actuator force ranges.
+    restarts, seed, max_iter : int
+        Random starts (the best optimum is returned), their seed, SLSQP iterations per start.
     optimize : bool, default True
-        False: return the best random start (random series scaled to touch the limits), the
-        baseline an optimized trajectory is compared with.
+        False: the best random start (scaled to touch the limits), the baseline.
     rest_at_start : bool, default True
-        Start and end at rest (``qd = qdd = 0`` at ``t = 0``), as a robot leaving standstill.
-    max_iter : int, default 100
-        SLSQP iterations per start.
+        Start and end at rest (``qd = qdd = 0`` at ``t = 0``).
     progress : bool, optional
-        Show a tqdm progress bar of the SLSQP iterations with the best condition number so
-        far (a design takes minutes on a 7-joint arm; default: only on a terminal).
+        Show a tqdm progress bar (default: only on a terminal).
 
     Returns
     -------
     FourierTrajectory
         Named by the system's coordinates, with ``condition_number`` and ``info``
-        (``restarts``: each start's condition number before and after, the optimizer's
-        message; ``limits``).
+        (``restarts``: each start's condition number before and after; ``limits``).
 
     Raises
     ------
@@ -380,7 +350,6 @@ def excitation_trajectory(system, n_harmonics: int = 5, period: float = 10.0,
 
     Examples
     --------
-    >>> from pysindy_xl.mujoco import excitation_trajectory
     >>> xml = '''<mujoco><option gravity="0 0 -9.81"/><worldbody><body>
     ...   <joint name="a" axis="0 1 0" range="-1 1" damping="0.1"/>
     ...   <inertial pos="0.1 0 -0.3" mass="1" diaginertia="0.01 0.01 0.01"/>

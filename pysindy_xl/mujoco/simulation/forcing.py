@@ -20,24 +20,12 @@ class SumOfSinusoids:
     Parameters
     ----------
     amplitudes, frequencies, phases : array, shape (n_signals, n_components)
-        Amplitudes, frequencies (Hz) and phases (rad) of each component.
+        Amplitudes, frequencies (Hz) and phases (rad) of each component; finite.
     offsets : array, shape (n_signals,), optional
         Constant part of each signal (default zero).
 
-    Attributes
-    ----------
-    amplitudes, frequencies, phases : ndarray, shape (n_signals, n_components)
-    offsets : ndarray, shape (n_signals,)
-
-    Raises
-    ------
-    ValueError
-        If the arrays are not 2-D of equal shapes, hold NaN or inf, or ``offsets`` does not
-        match the number of signals.
-
     Examples
     --------
-    >>> import numpy as np
     >>> force = SumOfSinusoids([[1.0]], [[0.25]], [[0.0]])
     >>> force(np.array([0.0, 1.0])).round(6)
     array([[0.],
@@ -74,29 +62,11 @@ class SumOfSinusoids:
     @classmethod
     def random(cls, scales, rng: np.random.Generator, n_components: int = 6,
                min_frequency: float = 0.05, max_frequency: float = 1.5, offsets=None):
-        """Draw random signals whose amplitudes sum to ``scales``.
+        """Draw random signals whose component amplitudes sum to ``scales`` (n_signals,).
 
-        Parameters
-        ----------
-        scales : array, shape (n_signals,)
-            Peak amplitude bound of each signal (the sum of its component amplitudes); a zero
-            scale gives a zero signal.
-        rng : numpy.random.Generator
-            Source of the random draws.
-        n_components : int, default 6
-            Sinusoids per signal.
-        min_frequency, max_frequency : float
-            Frequencies are drawn log-uniformly in this band (Hz).
-        offsets : array, shape (n_signals,), optional
-            Constant part of each signal (default zero).
+        ``n_components`` sinusoids per signal, frequencies log-uniform in
+        ``[min_frequency, max_frequency]`` (Hz), phases uniform; a zero scale gives a zero signal.
 
-        Returns
-        -------
-        SumOfSinusoids
-
-        Examples
-        --------
-        >>> import numpy as np
         >>> force = SumOfSinusoids.random([2.0, 0.0], np.random.default_rng(0), n_components=3)
         >>> values = force(np.linspace(0.0, 10.0, 1001))
         >>> values.shape, bool(np.abs(values[:, 0]).max() <= 2.0), bool(np.all(values[:, 1] == 0))
@@ -120,22 +90,9 @@ class SumOfSinusoids:
         return cls(amplitudes, frequencies, phases, offsets)
 
     def __call__(self, t):
-        """Evaluate the signals at times ``t``.
+        """The signals at times ``t``: shape (n_signals,) for a scalar, (N, n_signals) else.
 
-        Parameters
-        ----------
-        t : float or array, shape (N,)
-            Times (s).
-
-        Returns
-        -------
-        ndarray
-            Shape (n_signals,) for a scalar ``t``, (N, n_signals) for an array.
-
-        Examples
-        --------
-        >>> force = SumOfSinusoids([[1.0]], [[0.25]], [[0.0]], offsets=[0.5])
-        >>> force(1.0)
+        >>> SumOfSinusoids([[1.0]], [[0.25]], [[0.0]], offsets=[0.5])(1.0)
         array([1.5])
         """
         t_arr = np.asarray(t, dtype=float)
@@ -144,26 +101,12 @@ class SumOfSinusoids:
         return values[0] if t_arr.ndim == 0 else values
 
     def on_grid(self, starts, offsets) -> np.ndarray:
-        """The signals at every ``starts[b] + offsets[j]``, ``b`` major: a simulation's fine
-        steps (offsets) within each model step (starts).
+        """The signals at every ``starts[b] + offsets[j]``, ``b`` major: shape (B * J, n_signals).
 
-        By the angle-addition formula, ``sin(w (T + s) + p) = sin(w T + p) cos(w s) +
-        cos(w T + p) sin(w s)``: sines at the ``B`` starts and the ``J`` offsets only, then
-        one batched matrix product, instead of a sine per time and component.
+        Equal to ``self(np.add.outer(starts, offsets).ravel())`` to rounding, by the angle
+        addition ``sin(w (T + s) + p) = sin(w T + p) cos(w s) + cos(w T + p) sin(w s)``: sines
+        at the starts and offsets only, then one batched product.
 
-        Parameters
-        ----------
-        starts : array, shape (B,)
-        offsets : array, shape (J,)
-
-        Returns
-        -------
-        ndarray, shape (B * J, n_signals)
-            Equal to ``self(np.add.outer(starts, offsets).ravel())`` to rounding.
-
-        Examples
-        --------
-        >>> import numpy as np
         >>> force = SumOfSinusoids.random([1.0, 2.0], np.random.default_rng(0))
         >>> starts, offsets = np.arange(5) * 0.002, np.arange(4) * 0.0005
         >>> bool(np.allclose(force.on_grid(starts, offsets),
@@ -181,15 +124,8 @@ class SumOfSinusoids:
         return values.reshape(self.n_signals, -1).T + self.offsets
 
     def to_dict(self) -> dict:
-        """JSON-serializable description.
+        """JSON-serializable description (nested lists).
 
-        Returns
-        -------
-        dict
-            Keys ``amplitudes``, ``frequencies``, ``phases``, ``offsets`` (nested lists).
-
-        Examples
-        --------
         >>> SumOfSinusoids([[1.0]], [[0.25]], [[0.0]]).to_dict()
         {'amplitudes': [[1.0]], 'frequencies': [[0.25]], 'phases': [[0.0]], 'offsets': [0.0]}
         """
@@ -198,27 +134,10 @@ class SumOfSinusoids:
 
     @classmethod
     def from_dict(cls, data: dict) -> SumOfSinusoids:
-        """Inverse of :meth:`to_dict`.
+        """Inverse of :meth:`to_dict` (``offsets`` optional); ValueError on a malformed dict.
 
-        Parameters
-        ----------
-        data : dict
-            As written by :meth:`to_dict` (``offsets`` optional).
-
-        Returns
-        -------
-        SumOfSinusoids
-
-        Raises
-        ------
-        ValueError
-            If ``data`` lacks a key or holds malformed arrays.
-
-        Examples
-        --------
         >>> force = SumOfSinusoids([[1.0, 0.5]], [[0.25, 1.0]], [[0.0, 1.0]])
-        >>> copy = SumOfSinusoids.from_dict(force.to_dict())
-        >>> bool((copy(0.3) == force(0.3)).all())
+        >>> bool((SumOfSinusoids.from_dict(force.to_dict())(0.3) == force(0.3)).all())
         True
         """
         try:
@@ -236,24 +155,12 @@ REFERENCE_SPEED = {"hinge": np.pi, "slide": 1.0}
 
 
 def within_servo_reach(signals: SumOfSinusoids, model) -> SumOfSinusoids:
-    """The position servos' references of ``signals`` slowed to their reach.
+    """The position servos' references of ``signals`` (one per actuator) slowed to their reach.
 
-    The band of each servo's reference is scaled below ``SERVO_BANDWIDTH_FRACTION`` of the
-    servo's bandwidth (:func:`~pysindy_xl.mujoco.systems.actuation.servo_bandwidths`), its
-    amplitudes so that its speed bound ``sum_k 2 pi f_k A_k`` (in joint units) stays below
-    ``REFERENCE_SPEED``. Faster references are not tracked: the servo saturates, chatters,
-    and drives its joint far faster than any real arm moves.
-
-    Parameters
-    ----------
-    signals : SumOfSinusoids
-        One signal per actuator of ``model``.
-    model : mujoco.MjModel
-
-    Returns
-    -------
-    SumOfSinusoids
-        ``signals`` itself when no driven actuator is a position servo.
+    Each servo's band is scaled below ``SERVO_BANDWIDTH_FRACTION`` of its bandwidth
+    (:func:`~pysindy_xl.mujoco.systems.actuation.servo_bandwidths`) and its amplitudes so that
+    the speed bound ``sum_k 2 pi f_k A_k`` (joint units) stays below ``REFERENCE_SPEED``: a
+    faster reference saturates the servo. ``signals`` itself when no driven actuator is one.
     """
     mujoco = import_mujoco()
 

@@ -1,7 +1,6 @@
 """Periodic joint trajectories: a finite Fourier series per joint (Swevers et al. 1997).
 
-Each joint follows a finite Fourier series of the base pulsation ``w = 2 pi / period``
-(Swevers, Ganseman, Tukel, De Schutter and Van Brussel, 1997):
+With the base pulsation ``w = 2 pi / period``:
 
 .. math::
 
@@ -10,12 +9,8 @@ Each joint follows a finite Fourier series of the base pulsation ``w = 2 pi / pe
     \\dot q_j(t) = \\sum_l a_{jl}\\cos(w l t) + b_{jl}\\sin(w l t), \\qquad
     \\ddot q_j(t) = \\sum_l w l\\,(b_{jl}\\cos(w l t) - a_{jl}\\sin(w l t)).
 
-The trajectory is periodic (measurements can be averaged over periods), its derivatives are
-exact, and it is linear in its parameters ``(q_0, a, b)``.
-:func:`~pysindy_xl.mujoco.excitation_trajectory` designs one for identification;
-:meth:`FourierTrajectory.to_csv` writes it for a robot controller and
-:meth:`FourierTrajectory.controls` plays it through an MJCF's position servos
-(``generate_dataset(..., reference=trajectory)``).
+Periodic, with exact derivatives, linear in ``(q_0, a, b)``;
+:func:`~pysindy_xl.mujoco.excitation_trajectory` designs one for identification.
 """
 
 from __future__ import annotations
@@ -44,22 +39,13 @@ class FourierTrajectory:
     names : list of str, optional
         Joint (coordinate) names; default ``q0``, ``q1``...
 
-    Attributes
-    ----------
-    condition_number : float or None
-        Condition number of the identification regressor along one period (set by
-        :func:`excitation_trajectory`).
-    info : dict
-        What made the trajectory (set by :func:`excitation_trajectory`).
+    ``condition_number`` and ``info`` are set by :func:`excitation_trajectory`.
 
     Examples
     --------
-    >>> import numpy as np
     >>> trajectory = FourierTrajectory([0.1], [[1.0]], [[0.0]], period=2 * np.pi)
     >>> trajectory.q(np.pi / 2).round(6), trajectory.qd(0.0), trajectory.qdd(0.0)
     (array([1.1]), array([1.]), array([0.]))
-    >>> bool(np.allclose(trajectory.q(0.3), trajectory.q(0.3 + 2 * np.pi)))  # periodic
-    True
     """
 
     def __init__(self, q0, a, b, period, names=None):
@@ -99,72 +85,25 @@ class FourierTrajectory:
         return values[0] if t.ndim == 0 else values
 
     def q(self, t) -> np.ndarray:
-        """Positions at times ``t``.
-
-        Parameters
-        ----------
-        t : float or array, shape (N,)
-
-        Returns
-        -------
-        ndarray
-            Shape (n,) for a scalar ``t``, (N, n) for an array.
-        """
+        """Positions at times ``t``: shape (n,) for a scalar ``t``, (N, n) for an array."""
         return self._evaluate(t, 0)
 
     def qd(self, t) -> np.ndarray:
-        """Velocities at times ``t``, the exact derivative of :meth:`q`.
-
-        Parameters
-        ----------
-        t : float or array, shape (N,)
-
-        Returns
-        -------
-        ndarray
-            Shape (n,) for a scalar ``t``, (N, n) for an array.
-        """
+        """Velocities at times ``t`` (exact), shaped as :meth:`q`."""
         return self._evaluate(t, 1)
 
     def qdd(self, t) -> np.ndarray:
-        """Accelerations at times ``t``, the exact second derivative of :meth:`q`.
-
-        Parameters
-        ----------
-        t : float or array, shape (N,)
-
-        Returns
-        -------
-        ndarray
-            Shape (n,) for a scalar ``t``, (N, n) for an array.
-        """
+        """Accelerations at times ``t`` (exact), shaped as :meth:`q`."""
         return self._evaluate(t, 2)
 
     def controls(self, system) -> SumOfSinusoids:
-        """The controls that make the system's position servos follow this trajectory.
+        """The controls (one signal per actuator) that make the position servos follow this
+        trajectory: the ``reference`` seam of :func:`~pysindy_xl.mujoco.generate_dataset`.
 
-        Each actuator must be a position servo on a joint (``position`` or a ``general``
-        actuator with a fixed gain ``p`` and an affine bias ``b`` pulling towards a length:
-        ``b_1 < 0``); its control is the one whose target length is the joint's reference,
-        ``ctrl = -(b_0 + b_1 g qpos_ref) / p`` (gear ``g``), a sum of sinusoids like the
-        reference. This is the ``reference`` seam of
-        :func:`~pysindy_xl.mujoco.generate_dataset`.
-
-        Parameters
-        ----------
-        system : MuJoCoSystem
-            Whose coordinates the trajectory is in.
-
-        Returns
-        -------
-        SumOfSinusoids
-            One signal per actuator (frequencies ``l / period``).
-
-        Raises
-        ------
-        ValueError
-            If the system's size differs, an actuator is not a position servo on a joint, or a
-            coordinate has no servo.
+        Each actuator must be a position servo on a joint (fixed gain ``p``, affine bias with
+        ``b_1 < 0``); its control puts the target length on the reference,
+        ``ctrl = -(b_0 + b_1 g qpos_ref) / p`` (gear ``g``). A ValueError says when the sizes
+        differ, an actuator is not such a servo or a coordinate has none.
         """
         from ..systems.registry import get_system
 
@@ -187,21 +126,10 @@ class FourierTrajectory:
     def to_csv(self, path, rate: float = 1000.0, periods: int = 1) -> None:
         """Write the trajectory as a table a robot controller can play.
 
-        Columns ``t``, then per joint ``NAME``, ``NAME_dot``, ``NAME_ddot`` (positions,
-        velocities, accelerations: the package's table format, see
-        :func:`~pysindy_xl.read_csv`), one row per ``1 / rate`` seconds from 0 to
+        Columns ``t``, then per joint ``NAME``, ``NAME_dot``, ``NAME_ddot`` (the package's
+        table format, :func:`~pysindy_xl.read_csv`), ``rate`` rows per second from 0 to
         ``periods * period`` inclusive.
 
-        Parameters
-        ----------
-        path : str or os.PathLike
-        rate : float, default 1000.0
-            Rows per second (Hz).
-        periods : int, default 1
-            Periods written.
-
-        Examples
-        --------
         >>> import os, tempfile
         >>> path = os.path.join(tempfile.mkdtemp(), "excitation.csv")
         >>> FourierTrajectory([0.0], [[1.0]], [[0.0]], 1.0, names=["j0"]).to_csv(path, rate=4)
@@ -222,35 +150,15 @@ class FourierTrajectory:
             writer.writerows([[repr(float(v)) for v in row] for row in columns])
 
     def to_dict(self) -> dict:
-        """JSON-serializable description (:meth:`from_dict` reads it back).
-
-        Returns
-        -------
-        dict
-            Keys ``q0``, ``a``, ``b``, ``period``, ``names``, ``condition_number``.
-        """
+        """JSON-serializable description (:meth:`from_dict` reads it back)."""
         return {"q0": self.q0.tolist(), "a": self.a.tolist(), "b": self.b.tolist(),
                 "period": self.period, "names": list(self.names),
                 "condition_number": self.condition_number}
 
     @classmethod
     def from_dict(cls, data: dict) -> FourierTrajectory:
-        """Inverse of :meth:`to_dict`.
-
-        Parameters
-        ----------
-        data : dict
-            As written by :meth:`to_dict` (``names`` and ``condition_number`` optional).
-
-        Returns
-        -------
-        FourierTrajectory
-
-        Raises
-        ------
-        ValueError
-            If ``data`` lacks a key or holds malformed arrays.
-        """
+        """Inverse of :meth:`to_dict` (``names``, ``condition_number`` optional); ValueError on
+        a malformed dict."""
         try:
             out = cls(data["q0"], data["a"], data["b"], data["period"], data.get("names"))
         except (KeyError, TypeError) as error:

@@ -43,8 +43,8 @@ _CONTACT, _FRICTION, _LIMIT, _EQUALITY = range(4)
 
 
 def _constraint_kinds():
-    """The kind of every MuJoCo constraint type (a lookup table indexed by ``efc_type``: one
-    gather per sample instead of set membership tests) and the joint-limit type."""
+    """A lookup table of the kind of every MuJoCo constraint type (indexed by ``efc_type``),
+    and the joint-limit type."""
     mujoco = import_mujoco()
     c = mujoco.mjtConstraint
     kinds = np.full(max(int(v) for v in c.__members__.values()) + 1, _CONTACT, dtype=np.int8)
@@ -55,9 +55,8 @@ def _constraint_kinds():
 
 
 def _controls(signals, times, nu: int, substeps: int = 1) -> np.ndarray:
-    """``signals(times)`` checked to shape (len(times), nu); ``times`` in blocks of
-    ``substeps`` evenly spaced ones (a sum of sinusoids is then evaluated on the grid, see
-    :meth:`SumOfSinusoids.on_grid`)."""
+    """``signals(times)`` checked to shape (len(times), nu); a sum of sinusoids is evaluated on
+    the grid of ``substeps`` evenly spaced times (:meth:`SumOfSinusoids.on_grid`)."""
     if isinstance(signals, SumOfSinusoids) and substeps > 1 and len(times) % substeps == 0:
         step = (times[-1] - times[0]) / (len(times) - 1)
         values = signals.on_grid(times[::substeps], np.arange(substeps) * step)
@@ -82,69 +81,49 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     duration : float
         Simulated time (s); rounded to a whole number of MuJoCo time steps.
     signals : callable, optional
-        ``signals(times) -> (len(times), nu)`` control of every actuator, held constant over
-        each (internal) time step (e.g. a :class:`SumOfSinusoids`). None: no control.
+        ``signals(times) -> (len(times), nu)`` control of every actuator (e.g. a
+        :class:`SumOfSinusoids`). None: no control.
     q0, qd0 : array, shape (n,), optional
-        Initial generalized positions and velocities (default: the model's reference pose
-        ``qpos0``, the joints' ``ref``, at rest).
+        Initial generalized state (default: the model's ``qpos0``, at rest).
     sample_every : int, default 1
         Record every ``sample_every``-th time step of the model.
     progress : tqdm.tqdm, optional
-        A progress bar advanced by the number of simulated steps.
+        Advanced by the number of simulated steps.
     substeps : int, default 1
-        Internal steps per model time step: MuJoCo integrates with ``timestep / substeps``
-        and the control is updated at every internal step (a finer, more faithful
-        reference; the sample times do not change).
+        MuJoCo integrates with ``timestep / substeps``; sample times do not change.
     control_at : {"start", "midpoint"}, default "start"
-        Time at which ``signals`` is read for each internal step, held over the step: its
-        start, or its midpoint (second-order accurate against the continuous signal: a
-        start hold lags it by half a step, which a servo's ``kp`` turns into an apparent
-        viscous friction of ``kp * h / 2``). Either way, a sample at ``t`` records the
-        actuator forces of the continuous signal, ``signals(t)`` at the recorded state.
+        Where ``signals`` is read for each internal step (midpoint: second order; a start
+        hold lags by half a step, which a servo's ``kp`` turns into a viscous friction).
     integrator : {"auto", "Euler", "RK4", "implicit", "implicitfast"} or Integration, optional
-        MuJoCo's integrator for this run; default: the model's. ``"auto"``: a stable and
-        faithful integration chosen from the model (:func:`choose_integration`, with at least
-        ``substeps`` substeps); an :class:`~pysindy_xl.mujoco.integration.Integration`: its
-        integrator and substeps.
+        Default: the model's. ``"auto"``: :func:`choose_integration`.
     mj_model : mujoco.MjModel, optional
-        The compiled model to step (default ``system.mj_model()``; e.g. an arm whose motors
-        track a reference, :func:`~pysindy_xl.mujoco.systems.tracking.tracked_model`); a copy
-        is stepped.
+        The compiled model to step, copied (default ``system.mj_model()``).
 
     Returns
     -------
     Trajectory
-        ``t, q, qd, qdd, tau, u`` (``u``: MuJoCo joint forces; ``tau = u @ B.T``), the
-        constraint forces ``u_constraint`` (``qfrc_constraint``) and ``tau_constraint``, and
-        the mask ``constraint_active`` (a limit, contact or equality constraint acts);
-        ``info`` counts the samples where each joint's limit acts (``limit_hits``), contacts
-        and equality constraints act.
+        ``t, q, qd, qdd, tau, u`` (``u``: MuJoCo joint forces; ``tau = u @ B.T``),
+        ``u_constraint``, ``tau_constraint``, the mask ``constraint_active``; ``info`` counts
+        ``limit_hits`` per joint, contact and equality samples.
 
     Raises
     ------
     UnstableSimulationError
-        A ``RuntimeError``: the run left the physics (NaN or huge accelerations, velocities
-        over a sane bound, energy growth without forcing; see
-        :func:`~pysindy_xl.mujoco.integration.check_run`). Its data are not returned.
+        The run left the physics (:func:`~pysindy_xl.mujoco.integration.check_run`).
 
     Examples
     --------
-    A cart-pole pushed by a 1 Hz force on the cart, sampled every 10 ms; the recorded
-    accelerations satisfy the true equations of motion ``lhs = tau``:
+    A forced cart-pole's recorded accelerations satisfy the true equations ``lhs = tau``:
 
-    >>> import numpy as np, sympy as sp
+    >>> import sympy as sp
     >>> system = get_system("cart-pole")
     >>> force = SumOfSinusoids([[1.0], [0.0]], [[1.0], [1.0]], [[0.0], [0.0]])
     >>> trajectory = simulate_trajectory(system, 0.2, force, q0=[0.0, 0.5], sample_every=10)
-    >>> trajectory.t.shape, trajectory.q.shape
-    ((21,), (21, 2))
     >>> c = system.coords
     >>> lhs = sp.lambdify([*c.q, *c.qd, *c.qdd], system.equations_of_motion())
     >>> values = np.array(lhs(*trajectory.q.T, *trajectory.qd.T, *trajectory.qdd.T)).T
     >>> bool(np.abs(values - trajectory.tau).max() < 1e-9)
     True
-    >>> bool(trajectory.constraint_active.any())  # no limit, no contact
-    False
     """
     mujoco = import_mujoco()
     system = get_system(system)
@@ -257,23 +236,8 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
 def faithful_integrator(model) -> str | None:
     """The integrator :func:`choose_integration` picks where it differs from the model's.
 
-    MuJoCo's ``implicit`` and ``implicitfast`` integrators (and ``Euler`` for joint damping)
-    apply the velocity-dependent forces at the end of the step, so the recorded positions
-    obey ``(M + h (kv + d)) qdd = ...`` rather than the continuous equations; RK4 is exact to
-    ``h^4`` but only stable for ``h |lambda|`` inside its region. The choice, with its
-    substeps, is :func:`choose_integration`'s (module :mod:`~pysindy_xl.mujoco.integration`).
+    None to keep the model's.
 
-    Parameters
-    ----------
-    model : mujoco.MjModel
-
-    Returns
-    -------
-    str or None
-        The integrator name, or None to keep the model's.
-
-    Examples
-    --------
     >>> from pysindy_xl.mujoco import get_system
     >>> print(faithful_integrator(get_system("cart-pole").mj_model()))  # already RK4
     None
@@ -283,13 +247,7 @@ def faithful_integrator(model) -> str | None:
 
 
 class ConstraintWarning(UserWarning):
-    """Joint limits, contacts or equality constraints act on much of the generated data.
-
-    Examples
-    --------
-    >>> issubclass(ConstraintWarning, UserWarning)
-    True
-    """
+    """Joint limits, contacts or equality constraints act on much of the generated data."""
 
 
 def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
@@ -306,10 +264,8 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     ----------
     system : MuJoCoSystem or str
         A system, a registry name (``"cart-pole"``...) or a path to a user's MJCF file.
-    n_trajectories : int, default 4
-        Number of trajectories, each with its own initial state and signals.
-    duration : float, default 10.0
-        Seconds per trajectory.
+    n_trajectories, duration : int, float
+        Trajectories (each its own initial state and signals) and seconds per trajectory.
     forcing : {"explicit", "implicit", "mixed"}
         ``implicit``: no force, random initial condition only; ``explicit``: every actuator
         driven by a random sum of sinusoids; ``mixed``: only ``actuators`` driven.
@@ -317,73 +273,44 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
         Actuator or joint names driven in ``mixed`` mode (default ``system.mixed_actuators``).
     noise : float or dict, default 0.0
         Relative Gaussian noise levels: std = level x each coordinate's standard deviation
-        over the trajectory (see :func:`noise_levels` and :func:`add_noise`).
+        over the trajectory (:func:`noise_levels`, :func:`add_noise`).
     seed : int, optional
-        Seed of every random draw (initial states, signals, noise): same seed, same data.
+        Seed of every random draw (initial states, signals, noise).
     sample_every : int, default 1
-        Record every ``sample_every``-th MuJoCo step (of the model's ``timestep``).
-    n_components, max_frequency, amplitude_scale : optional
-        Shape of the random signals (see :meth:`SumOfSinusoids.random`); ``amplitude_scale``
-        multiplies the system's force amplitudes.
+        Record every ``sample_every``-th MuJoCo step.
+    n_components, max_frequency, amplitude_scale, amplitude
+        Shape of the random signals (:func:`actuator_signals`).
     initial_scale : float, default 1.0
-        Scale of the random initial state (see ``MuJoCoSystem.random_initial_state``: a
-        fraction of each limited joint's range). In a driven run, joints under position
-        servos start on the servos' reference instead
+        Scale of the random initial state; position servos start on their reference
         (:func:`~pysindy_xl.mujoco.start_on_reference`).
     progress : bool, optional
         Show a tqdm progress bar (default: only on a terminal).
     noise_model : {"positions", "all"}, default "positions"
-        ``positions``: noisy recorded positions only; velocities and accelerations are not
-        recorded, the identification differentiates the positions. ``all``: the paper's
-        model, noise on positions, velocities, accelerations and forces.
+        ``positions``: noisy positions only, no velocities or accelerations recorded;
+        ``all``: the paper's model, noise on positions, velocities, accelerations, forces.
     derivatives : bool, optional
-        Keep MuJoCo's exact velocities and accelerations in the dataset. Default: kept
-        unless ``noise_model="positions"`` with position noise > 0 (noise-free data keep
-        them, so that noise-free identification is exact; pass ``False`` to exercise the
-        differentiation on clean positions).
-    amplitude : float, optional
-        Forcing peak as a fraction of each actuator's ``ctrlrange`` half-width (see
-        :func:`actuator_signals`; default 0.5 of the range).
-    backoff : bool, default True
-        When more than ``max_constrained`` of a trajectory's samples are constrained (joint
-        limits, contacts), simulate it again with half the forcing amplitude and initial
-        spread, at most three times.
-    max_constrained : float, default 0.1
-        Constrained fraction of a trajectory above which ``backoff`` acts.
+        Keep MuJoCo's exact velocities and accelerations. Default: kept unless
+        ``noise_model="positions"`` with position noise > 0.
+    backoff, max_constrained : bool, float
+        When more than ``max_constrained`` of a trajectory's samples are constrained,
+        simulate it again with half the forcing amplitude and initial spread (three times).
     min_unconstrained : float, default 0.5
-        Warn (:class:`ConstraintWarning`, naming the joints whose limits are hit) when less
-        than this fraction of all samples is unconstrained.
+        Warn (:class:`ConstraintWarning`) below this unconstrained fraction of all samples.
     integrator : {"auto", "model", "Euler", "RK4", "implicit", "implicitfast"}, default "auto"
-        MuJoCo's integrator. ``"auto"``: a stable integration faithful to the continuous
-        equations that the package identifies, chosen from the model's servo gains, damping
-        and inertia (:func:`choose_integration`: RK4 with substeps inside its stability
-        region, or the model's implicit step with substeps that make its inertia bias
-        negligible); ``"model"``: as authored; a name: that integrator at the model's step.
-        The metadata's ``integrator``, ``substeps`` and ``integration`` (with the reason)
-        say which was used. Each step holds the controls of its midpoint (see
-        :func:`simulate_trajectory`), so the recorded samples obey the continuous equations
-        under the continuous control signal. Every run is checked (finite, velocities
-        under a sane bound); an unstable one raises :class:`UnstableSimulationError`.
+        ``"auto"``: stable and faithful to the continuous equations
+        (:func:`choose_integration`); ``"model"``: as authored; a name: that integrator.
     reference : FourierTrajectory, optional
-        A planned trajectory (e.g. :func:`~pysindy_xl.mujoco.excitation_trajectory`) that
-        every run plays through the system's position servos (its ``controls(system)``)
-        instead of random signals; no back-off. The metadata keep it (``reference``).
+        A planned trajectory (e.g. :func:`~pysindy_xl.mujoco.excitation_trajectory`) every run
+        plays through the position servos instead of random signals; no back-off.
     control : {"auto", "open-loop", "tracking"}, default "auto"
-        How plain torque motors are driven
-        (:func:`~pysindy_xl.mujoco.simulation.signals.motor_tracking`): their random signals
-        are torques (open loop) or position references that a PD controller tracks inside
-        the joint ranges (the recorded input is the torque the motors apply). ``auto`` tracks
-        where gravity outweighs the motors' random torques.
-        The metadata keep the controller (``tracking``, None in open loop), and so does each
-        trajectory's ``info``.
+        How plain torque motors are driven (:func:`motor_tracking`).
 
     Returns
     -------
     Dataset
         Its metadata hold ``constraints`` (:meth:`Dataset.constraint_summary`), the
-        integration (``integrator``, ``substeps``, ``integration``), the largest
-        ``peak_velocity`` of each joint and, for a user's MJCF, the model's path and its XML
-        (so the dataset can be identified alone).
+        integration, ``peak_velocity``, ``reference``, ``tracking`` and, for a user's MJCF,
+        the model's path and XML.
 
     Raises
     ------
@@ -396,13 +323,6 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     ...                         progress=False)
     >>> data.trajectories[0].q.shape, data.metadata["constraints"]["active_fraction"]
     ((101, 2), 0.0)
-
-    Noisy positions only (the default noise model): no velocities nor accelerations recorded
-
-    >>> noisy = generate_dataset("cart-pole", n_trajectories=1, duration=0.1, seed=0,
-    ...                          noise=0.01, progress=False)
-    >>> noisy.has("qd"), noisy.has("qdd"), noisy.metadata["noise"]["q"]
-    (False, False, 0.01)
     """
     import warnings
 

@@ -1,40 +1,25 @@
 r"""A MuJoCo integration that is stable and faithful, chosen from the model; checks of every run.
 
-The package identifies continuous-time equations, so generated positions must follow the
-continuous flow. Two things go wrong with a published arm model's own settings:
+Generated positions must follow the continuous flow; with a published arm's own settings:
 
-* **Implicit steps bias the inertia.** MuJoCo's ``implicit`` and ``implicitfast`` integrators
-  (and ``Euler`` for joint damping) apply the velocity-dependent forces (joint damping ``d``,
-  a servo's ``kv``) at the end of the step: the recorded positions obey
-  ``(M + h D) qdd = f`` with ``D`` the damping matrix, not ``M qdd = f``.
-* **Explicit steps have a stability region.** RK4 is stable only while every mode of the
-  linearized step stays inside its region (``|h lambda| < 2.785`` on the real axis, ``2.83``
-  on the imaginary one). The modes are the eigenvalues of
+* **Implicit steps bias the inertia.** ``implicit`` and ``implicitfast`` (and ``Euler`` for
+  joint damping) apply velocity-dependent forces at the end of the step: the positions obey
+  ``(M + h D) qdd = f``, not ``M qdd = f``.
+* **RK4 has a stability region** (``|h lambda| < 2.785`` on the real axis). The modes are the
+  eigenvalues of
 
   .. math:: A = \begin{pmatrix} 0 & \mathbb 1 \\ -M^{-1} K & -M^{-1} D \end{pmatrix},
 
-  ``K`` the servos' position gains (``kp``, an affine bias's ``-biasprm[1]``) and joint
-  stiffness, ``D`` their velocity gains and joint damping, both mapped through the actuator
-  moments, ``M`` the joint-space inertia (``mj_fullM``, armature included). A servo with
-  ``kv = 200`` on a wrist link of ``1e-3 kg m^2`` has ``|lambda| ~ 2e5 1/s``: RK4 needs
-  ``h < 1e-5 s`` where the model says ``2e-3``.
+  ``K`` the servos' position gains and joint stiffness, ``D`` their velocity gains and joint
+  damping (through the actuator moments), ``M`` the joint-space inertia (``mj_fullM``).
 
-:func:`choose_integration` evaluates ``A`` at the reference pose and at random poses inside
-the joint ranges (``M`` changes with the pose) and prices both remedies in substeps of the
-model's time step: RK4 with ``h |lambda| <= RK4_BOUND`` everywhere (well inside the region,
-and fine enough that the control held over a step does not ring the stiff modes),
-or the model's implicit step (``implicitfast`` for models authored with ``Euler`` or ``RK4``)
-with its inertia bias ``h max_i D_ii`` at most ``BIAS_TOLERANCE`` of the largest entry of
-``M`` (the normalization of the mass-matrix error of
-:func:`~pysindy_xl.mujoco.compare_physics`) and a stable linearized step. An RK4 step costs
-about ``RK4_COST`` implicit steps; the cheaper remedy wins. Models without velocity-dependent
-forces keep their integrator.
-
-:func:`check_run` inspects a finished run: finite states, MuJoCo's bad-acceleration warning,
-velocities under a physically sane bound (``MAX_HINGE_VELOCITY``, ``MAX_SLIDE_VELOCITY``) and,
-for unforced runs, no growth of the total energy. An unstable run raises
-:class:`UnstableSimulationError`, which names the option to change; its data never reach a
-dataset.
+:func:`choose_integration` evaluates ``A`` at the reference pose and random poses and prices
+both remedies in substeps: RK4 with ``h |lambda| <= RK4_BOUND``, or the implicit step with its
+bias ``h max_i D_ii`` at most ``BIAS_TOLERANCE`` of ``max |M_ij|`` and a stable linearized
+step; an RK4 step costs ``RK4_COST`` implicit ones, the cheaper wins. :func:`check_run` raises
+:class:`UnstableSimulationError` on non-finite states, MuJoCo's bad-acceleration warning,
+velocities over ``MAX_HINGE_VELOCITY`` / ``MAX_SLIDE_VELOCITY`` or energy growth of an
+unforced run.
 """
 
 from __future__ import annotations
@@ -54,11 +39,8 @@ __all__ = ["Integration", "choose_integration", "linear_modes", "check_run",
 #: MuJoCo's integrators by name.
 INTEGRATORS = {"Euler": 0, "RK4": 1, "implicit": 2, "implicitfast": 3}
 
-#: Largest ``h |lambda|`` of an RK4 step: far inside its stability region (2.785 on the
-#: negative real axis), and small enough that the control, held over each step, does not ring
-#: the stiff servo modes (with ``h |lambda| >= 1`` they settle on the held control within
-#: every step, and the recorded velocities and forces carry a sawtooth of ``kv`` times the
-#: reference's change over a step).
+#: Largest ``h |lambda|`` of an RK4 step: inside its stability region, and small enough that
+#: the control held over each step does not ring the stiff servo modes.
 RK4_BOUND = 0.25
 #: Largest inertia bias ``h max_i D_ii`` of an implicit step, relative to ``max |M_ij|``.
 BIAS_TOLERANCE = 5e-3
@@ -72,36 +54,17 @@ MAX_SLIDE_VELOCITY = 20.0
 
 
 class UnstableSimulationError(RuntimeError):
-    """A MuJoCo run that left the physics (NaN, huge accelerations or velocities, energy growth).
-
-    Examples
-    --------
-    >>> issubclass(UnstableSimulationError, RuntimeError)
-    True
-    """
+    """A MuJoCo run that left the physics (NaN, huge accelerations or velocities, energy growth)."""
 
 
 @dataclass
 class Integration:
     """How a MuJoCo model is integrated: integrator, substeps per model step, and why.
 
-    Parameters
-    ----------
-    integrator : str
-        A key of :data:`INTEGRATORS`.
-    substeps : int
-        Internal steps per model time step.
-    reason : str
-        Why this integration (printed by the demo, kept in the dataset metadata).
-    rate : float
-        Largest ``|lambda|`` (1/s) of the linearized joint dynamics over the poses examined.
-    damping_rate : float
-        ``max_i D_ii / max |M_ij|`` (1/s): the implicit step's inertia bias per second of step.
-    timestep : float
-        The model's time step (s).
+    ``integrator`` is a key of :data:`INTEGRATORS`; ``reason`` is kept in the dataset
+    metadata; ``rate`` and ``damping_rate`` are those of :func:`linear_modes`; ``timestep``
+    the model's (s).
 
-    Examples
-    --------
     >>> Integration("RK4", 3, "example", 2.7e3, 150.0, 0.002).step
     0.0006666666666666666
     """
@@ -129,12 +92,7 @@ class Integration:
         return self.step * self.damping_rate
 
     def to_dict(self) -> dict:
-        """JSON-serializable description (the fields plus ``step``, ``stability``, ``bias``).
-
-        Returns
-        -------
-        dict
-        """
+        """JSON-serializable description (the fields plus ``step``, ``stability``, ``bias``)."""
         out = asdict(self)
         out.update(step=self.step, stability=self.stability, bias=self.bias)
         return out
@@ -173,26 +131,23 @@ def _poses(model, n_poses: int, seed) -> np.ndarray:
     return poses
 
 
+def _linearized(model, n_poses: int, seed):
+    """``K``, ``D`` (:func:`_stiffness`) and ``M`` (``mj_fullM``) at each pose of :func:`_poses`."""
+    mujoco = import_mujoco()
+    data = mujoco.MjData(model)
+    for pose in _poses(model, max(int(n_poses), 1), seed):
+        data.qpos[:] = pose
+        stiffness, damping = _stiffness(model, data)
+        mass = np.zeros((model.nv, model.nv))
+        mujoco.mj_fullM(model, data, mass)
+        yield stiffness, damping, mass
+
+
 def linear_modes(model, n_poses: int = 8, seed=0) -> tuple[float, float]:
-    """Stiffness of a model's linearized joint dynamics over a few poses.
+    """Stiffness of a model's linearized joint dynamics over ``qpos0`` and random poses.
 
-    Parameters
-    ----------
-    model : mujoco.MjModel
-    n_poses : int, default 8
-        The reference pose ``qpos0`` and ``n_poses - 1`` random poses inside the joint ranges.
-    seed : int, optional
-        Seed of the random poses.
-
-    Returns
-    -------
-    rate : float
-        Largest ``|lambda|`` (1/s) of ``A`` (module docstring) over the poses.
-    damping_rate : float
-        Largest ``max_i D_ii / max |M_ij|`` (1/s) over the poses.
-
-    Examples
-    --------
+    Returns ``rate``, the largest ``|lambda|`` (1/s) of ``A`` (module docstring), and
+    ``damping_rate``, the largest ``max_i D_ii / max |M_ij|`` (1/s), over ``n_poses`` poses.
     A 1e-3 kg m^2 link under a servo with kp = 100, kv = 10 (lambda = -1e4 and -10 1/s):
 
     >>> import mujoco
@@ -204,16 +159,9 @@ def linear_modes(model, n_poses: int = 8, seed=0) -> tuple[float, float]:
     >>> round(rate), round(damping_rate)
     (9990, 10000)
     """
-    mujoco = import_mujoco()
-
-    data = mujoco.MjData(model)
     nv = model.nv
     rate = damping_rate = 0.0
-    mass = np.zeros((nv, nv))
-    for pose in _poses(model, max(int(n_poses), 1), seed):
-        data.qpos[:] = pose
-        stiffness, damping = _stiffness(model, data)
-        mujoco.mj_fullM(model, data, mass)
+    for stiffness, damping, mass in _linearized(model, n_poses, seed):
         state = np.block([[np.zeros((nv, nv)), np.eye(nv)],
                           [-np.linalg.solve(mass, stiffness), -np.linalg.solve(mass, damping)]])
         rate = max(rate, float(np.abs(np.linalg.eigvals(state)).max()))
@@ -225,32 +173,11 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
                        n_poses: int = 8) -> Integration:
     """The integration of a MuJoCo model: stable and faithful to the continuous equations.
 
-    Parameters
-    ----------
-    model : mujoco.MjModel
-        The compiled model (its ``opt.integrator`` and ``opt.timestep`` as authored).
-    integrator : {"auto", "model", "Euler", "RK4", "implicit", "implicitfast"}
-        ``"auto"``: the cheaper of RK4 and the model's implicit step that is stable and
-        faithful (module docstring); ``"model"``: as authored; a name: that integrator.
-    substeps : int, optional
-        Internal steps per model step. With ``"auto"``, a lower bound on the chosen number;
-        otherwise the number used (default 1).
-    n_poses : int, default 8
-        Poses at which the linearized dynamics are examined (see :func:`linear_modes`).
-
-    Returns
-    -------
-    Integration
-
-    Raises
-    ------
-    ValueError
-        If ``integrator`` or ``substeps`` is not one of the accepted values.
-
-    Examples
-    --------
-    A stiff servo (kv = 300) on a light link (1e-3 kg m^2) at MuJoCo's 2 ms step: RK4 at the
-    model's step would be far outside its stability region (``h |lambda| = 600``).
+    ``integrator``: ``"auto"``, the cheaper of RK4 and the model's implicit step that is
+    stable and faithful (module docstring); ``"model"``, as authored; a name, that integrator.
+    ``substeps``: with ``"auto"`` a lower bound, otherwise the number (default 1).
+    ``n_poses``: poses of :func:`linear_modes`. A stiff servo (kv = 300) on a light link
+    (1e-3 kg m^2) at MuJoCo's 2 ms step:
 
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string('''<mujoco><option integrator="implicitfast"/>
@@ -304,15 +231,8 @@ def _implicit_stable(model, step: float, n_poses: int) -> bool:
 
     The linearized step is ``v' = v + h (M + h D)^-1 (-K x - D v)``, ``x' = x + h v'``.
     """
-    mujoco = import_mujoco()
-
-    data = mujoco.MjData(model)
     nv = model.nv
-    mass = np.zeros((nv, nv))
-    for pose in _poses(model, max(int(n_poses), 1), 0):
-        data.qpos[:] = pose
-        stiffness, damping = _stiffness(model, data)
-        mujoco.mj_fullM(model, data, mass)
+    for stiffness, damping, mass in _linearized(model, n_poses, 0):
         solve = np.linalg.solve(mass + step * damping, np.hstack([stiffness, damping]))
         velocity = np.hstack([-step * solve[:, :nv], np.eye(nv) - step * solve[:, nv:]])
         position = np.hstack([np.eye(nv), np.zeros((nv, nv))]) + step * velocity
@@ -326,35 +246,14 @@ def check_run(model, qpos, qvel, qacc, energy=None, bad_accelerations: int = 0,
               integration: Integration | None = None, label: str = "MuJoCo run") -> dict:
     """Check a finished MuJoCo run; raise on any sign of a numerical instability.
 
-    Parameters
-    ----------
-    model : mujoco.MjModel
-    qpos, qvel, qacc : array, shape (T, nq), (T, nv), (T, nv)
-        Recorded states and accelerations.
-    energy : array, shape (T, 2), optional
-        Potential and kinetic energy (MuJoCo's ``data.energy``) of an unforced run: a
-        growth of their sum beyond 5 % of the largest kinetic energy plus the potential
-        energy's range is an instability (a passive model only loses energy).
-    bad_accelerations : int, default 0
-        MuJoCo's ``mjWARN_BADQACC`` count of the run.
-    integration : Integration, optional
-        How the run was integrated (named in the error).
-    label : str
-        Names the run in the error.
+    ``qpos, qvel, qacc`` (T, nq), (T, nv), (T, nv) are the recorded states; ``energy``
+    (T, 2), of an unforced run, MuJoCo's potential and kinetic energy (growth of their sum
+    beyond 5 % of the largest kinetic energy plus the potential's range is an instability);
+    ``bad_accelerations`` MuJoCo's ``mjWARN_BADQACC`` count; ``integration`` and ``label``
+    are named in the :class:`UnstableSimulationError`, with the option to change.
+    Returns ``peak_velocity`` (the largest ``|qvel|``) and ``velocity_bound`` by joint.
 
-    Returns
-    -------
-    dict
-        ``peak_velocity`` (by joint, the largest ``|qvel|``) and ``velocity_bound``.
-
-    Raises
-    ------
-    UnstableSimulationError
-        With the reason and the option to change (``integrator="auto"``, ``substeps``).
-
-    Examples
-    --------
-    >>> import mujoco, numpy as np
+    >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string(
     ...     '<mujoco><worldbody><body><joint name="j"/><geom size="0.1"/></body></worldbody>'
     ...     '</mujoco>')
@@ -399,20 +298,10 @@ def check_run(model, qpos, qvel, qacc, energy=None, bad_accelerations: int = 0,
 
 
 def settling_time(model, forced: bool = True) -> float:
-    """Time after which the stiff servo modes excited by a start on the reference are gone:
-    20 time constants of the fastest servo's bandwidth, at most 0.1 s (the stiff modes are
-    far faster), in whole model steps; zero without position servos or without forcing.
+    """Seconds after which the stiff servo modes excited by a start on the reference are gone.
 
-    Parameters
-    ----------
-    model : mujoco.MjModel
-    forced : bool, default True
-        Whether the run is driven (an undriven run starts where it is drawn).
-
-    Returns
-    -------
-    float
-        Seconds.
+    20 time constants of the fastest servo's bandwidth, at most 0.1 s, in whole model steps;
+    zero without position servos or when the run is not ``forced``.
     """
     from ..systems.actuation import servo_bandwidths
 
@@ -424,18 +313,8 @@ def settling_time(model, forced: bool = True) -> float:
 
 
 def settled(trajectory, settle: float):
-    """The trajectory from time ``settle`` on (times kept: the controls are functions of time).
-
-    Parameters
-    ----------
-    trajectory : Trajectory
-    settle : float
-        Seconds to drop from the start; ``info["settle"]`` records them.
-
-    Returns
-    -------
-    Trajectory
-    """
+    """The trajectory from time ``settle`` (s) on, recorded in ``info["settle"]``; times kept
+    (the controls are functions of time)."""
     from ...data.dataset import Trajectory
 
     if settle <= 0:

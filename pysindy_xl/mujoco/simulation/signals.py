@@ -1,12 +1,6 @@
-"""What drives a generated run's actuators: random signals, and when torque motors cannot hold
-the arm, a controller that tracks them as references.
-
-:func:`actuator_signals` draws one random sum of sinusoids per actuator (forces for motors,
-references for servos, kept within the servos' reach). :func:`motor_tracking` decides how
-plain torque motors are driven: open loop, the signals are their torques; tracked, the
-signals are position references that a PD controller
-(:func:`~pysindy_xl.mujoco.systems.tracking.tracking_controller`) follows, the recorded input
-being the torque the motors apply.
+"""What drives a generated run's actuators: random signals (:func:`actuator_signals`: forces
+for motors, references for servos) and, when torque motors cannot hold the arm, a controller
+that tracks them as references (:func:`motor_tracking`).
 """
 
 from __future__ import annotations
@@ -22,9 +16,8 @@ __all__ = ["actuator_signals", "motor_tracking", "CONTROLS"]
 
 #: How plain torque motors are driven (see :func:`motor_tracking`).
 CONTROLS = ("auto", "open-loop", "tracking")
-#: Default peak of a tracked motor's reference, as a fraction of its joint's half range: the
-#: controller keeps the joint near its reference, so the reference may span most of the range
-#: (the training states then cover the poses the arm is used in).
+#: Default peak of a tracked motor's reference, as a fraction of its joint's half range (the
+#: controller keeps the joint near it, so it may span most of the range).
 TRACKED_AMPLITUDE = 0.9
 
 
@@ -85,52 +78,33 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
                      backoff: float = 1.0, tracking=None) -> SumOfSinusoids | None:
     """Random control signals (one per actuator of ``model``) for a forcing mode.
 
-    Undriven actuators get a zero signal. An actuator with a ``ctrlrange`` oscillates around
-    the middle of the range with a peak of ``amplitude`` times the half-range; the others
-    with ``system.force_amplitudes`` (by joint) times ``amplitude_scale`` (and times
-    ``amplitude`` when given). A position servo's reference stays within its reach: its
-    frequencies below ``SERVO_BANDWIDTH_FRACTION`` of the servo's bandwidth
-    (:func:`~pysindy_xl.mujoco.actuation.servo_bandwidths`) and its peak speed below
-    ``REFERENCE_SPEED`` (pi rad/s, 1 m/s), so that the servo tracks it without saturating
-    or chattering.
+    Undriven actuators get zero; an actuator with a ``ctrlrange`` oscillates around its
+    middle, the others with ``system.force_amplitudes`` (by joint) times ``amplitude_scale``;
+    a position servo's reference is kept within its reach
+    (:func:`~pysindy_xl.mujoco.simulation.forcing.within_servo_reach`). None with implicit
+    forcing.
 
     Parameters
     ----------
     system : MuJoCoSystem
         Gives the force amplitudes and the default actuators of the ``mixed`` mode.
     model : mujoco.MjModel
-        The compiled model (``system.mj_model()``), whose actuators get the signals.
-    forcing : {"explicit", "implicit", "mixed"}
-        Which actuators are driven (see :func:`generate_dataset`).
+        The compiled model, whose actuators get the signals.
+    forcing, actuators
+        As in :func:`generate_dataset`.
     rng : numpy.random.Generator
-        Source of the random draws.
-    actuators : list of str, optional
-        Actuator or joint names driven in ``mixed`` mode (default ``system.mixed_actuators``).
-    n_components : int, default 6
-        Sinusoids per signal.
-    max_frequency : float, default 1.5
-        Highest frequency (Hz).
-    amplitude_scale : float, default 1.0
-        Multiplies the amplitudes of actuators without ``ctrlrange``.
+    n_components, max_frequency
+        Sinusoids per signal and the highest frequency (Hz).
     amplitude : float, optional
-        Peak of the signal as a fraction of the ``ctrlrange`` half-width (in (0, 1]); also
-        multiplies the amplitudes of actuators without ``ctrlrange``. Default: 0.5 of the
-        control range (the full range tends to drive a model into its joint stops), 1 for
-        actuators without range; ``TRACKED_AMPLITUDE`` of the range for tracked motors.
+        Peak as a fraction of the ``ctrlrange`` half-width, in (0, 1]; also multiplies the
+        others. Default: 0.5 of the range (``TRACKED_AMPLITUDE`` for tracked motors), 1 else.
     backoff : float, default 1.0
-        Multiplies every amplitude (the automatic back-off of :func:`generate_dataset`).
+        Multiplies every amplitude.
     tracking : dict, optional
-        The controller of :func:`motor_tracking` when ``model`` is the tracked model: its
-        actuators' signals are position references.
-
-    Returns
-    -------
-    SumOfSinusoids or None
-        One signal per actuator; None with implicit forcing (no force at all).
+        The controller of :func:`motor_tracking` when ``model`` is the tracked model.
 
     Examples
     --------
-    >>> import numpy as np
     >>> from pysindy_xl.mujoco import get_system
     >>> system = get_system("cart-pole")
     >>> signals = actuator_signals(system, system.mj_model(), "mixed", np.random.default_rng(0))
@@ -174,42 +148,16 @@ def motor_tracking(system, model, forcing: str = "explicit", actuators=None,
                    control: str = "auto") -> dict | None:
     """The controller with which a run's plain torque motors track their signals, or None.
 
-    Random torques excite an arm only if its motors can hold it: where gravity at the
-    reference pose outweighs a motor's random torque, the arm falls onto its joint stops
-    and every sample is constrained. Tracked, each driven plain motor on a limited joint
-    follows its signal as a position reference inside the joint's range
-    (:func:`~pysindy_xl.mujoco.systems.tracking.tracking_controller`, applied to the model
-    by :func:`~pysindy_xl.mujoco.systems.tracking.tracked_model`); the recorded input is the
-    torque the motors apply, and validation drives the identified model with the same
-    controller.
+    Where gravity outweighs a motor's random torque the arm falls onto its stops; tracked,
+    each driven plain motor on a limited joint follows its signal as a position reference
+    (:func:`~pysindy_xl.mujoco.systems.tracking.tracking_controller`), the recorded input
+    being the torque it applies. ``forcing``, ``actuators``, ``amplitude_scale`` and
+    ``amplitude`` as in :func:`actuator_signals`.
 
-    Parameters
-    ----------
-    system : MuJoCoSystem
-    model : mujoco.MjModel
-        The system's compiled model.
-    forcing, actuators, amplitude_scale, amplitude
-        The run's forcing (see :func:`actuator_signals`).
-    control : {"auto", "open-loop", "tracking"}, default "auto"
-        ``open-loop``: the signals are the motors' torques; ``tracking``: every driven plain
-        motor on a limited joint tracks; ``auto``: tracking when some of them is weaker than
-        gravity at the reference pose (the peak of its random torque below the gravity
-        torque on its joint), open loop otherwise.
+    ``control``: ``"open-loop"``, the signals are torques; ``"tracking"``, every driven plain
+    motor on a limited joint tracks (ValueError where there is none); ``"auto"``, tracking
+    when some of them has a random peak below gravity's torque at the reference pose.
 
-    Returns
-    -------
-    dict or None
-        The controller (:func:`~pysindy_xl.mujoco.systems.tracking.tracking_controller`);
-        None for open-loop forcing.
-
-    Raises
-    ------
-    ValueError
-        If ``control`` is unknown, or ``"tracking"`` where no driven actuator is a plain
-        motor on a limited joint.
-
-    Examples
-    --------
     The paper's pendulums have no joint limits: their motors are driven open loop.
 
     >>> from pysindy_xl.mujoco import get_system
@@ -238,5 +186,3 @@ def motor_tracking(system, model, forcing: str = "explicit", actuators=None,
         raise ValueError("control: 'tracking' needs a driven plain torque motor on a limited "
                          "hinge or slide joint; the model has none")
     return controller
-
-

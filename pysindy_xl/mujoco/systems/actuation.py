@@ -1,9 +1,7 @@
 """The MJCF's actuator law: the forces MuJoCo's actuators apply, as a function of time and state.
 
-MuJoCo computes each actuator's force from its control and, for servos, from the state of the
-joint it drives (``mj_fwdActuation``). For an actuator with a joint transmission (gear ``g``
-on a hinge or slide with position ``qpos_j`` and velocity ``qvel_j``), no activation dynamics,
-a fixed or affine gain and no or an affine bias:
+For an actuator with a joint transmission (gear ``g`` on joint ``j``), no activation dynamics,
+a fixed or affine gain and no or an affine bias (``mj_fwdActuation``):
 
 .. math::
 
@@ -14,14 +12,10 @@ a fixed or affine gain and no or an affine bias:
     \\mathrm{qfrc\\_actuator}_j = \\mathrm{clip}\\big(\\textstyle\\sum_a g_a F_a,
         \\mathrm{actuatorfrcrange}_j\\big)
 
-(``p``: ``gainprm``, ``b``: ``biasprm``; a ``motor`` has ``p = (1, 0, 0)``, ``b = 0``; a
-``position`` servo ``p = (kp, 0, 0)``, ``b = (0, -kp, -kv)``; a ``velocity`` servo
-``p = (kv, 0, 0)``, ``b = (0, 0, -kv)``). Joint damping, armature, springs and dry friction
-are not part of it: they are the physics the identified model contains.
-
-:class:`ActuatorLaw` evaluates this law on generalized coordinates, for one state or many at
-once; a simulation of an identified model driven by it is a closed-loop simulation, the
-experiment MuJoCo ran (see :func:`~pysindy_xl.mujoco.validate_model`).
+(``p``: ``gainprm``, ``b``: ``biasprm``; a ``position`` servo has ``p = (kp, 0, 0)``,
+``b = (0, -kp, -kv)``). Joint damping, armature, springs and dry friction are the physics the
+identified model contains, not part of it. Driving an identified model by this law is the
+closed-loop experiment MuJoCo ran (:func:`~pysindy_xl.mujoco.validate_model`).
 """
 
 from __future__ import annotations
@@ -32,7 +26,6 @@ from .. import import_mujoco
 from .registry import get_system
 
 __all__ = ["ActuatorLaw", "actuator_law", "actuator_force_function", "servo_bandwidths"]
-
 
 
 def _supported(model, a: int) -> bool:
@@ -50,52 +43,19 @@ def _supported(model, a: int) -> bool:
 class ActuatorLaw:
     """The forces of an MJCF's actuators under given controls, as a function of time and state.
 
-    Made by :func:`actuator_law`, which checks that every actuator follows the law of the
-    module docstring. Calling it evaluates the law on generalized coordinates (the system's
-    ``q``, ``qd``): one state or many at once, without a loop over samples.
+    Made by :func:`actuator_law` (parameters as there); evaluated on generalized ``q``, ``qd``,
+    one state or many at once. ``state_dependent``: some force depends on the state (servo,
+    affine gain or bias), so the law must run in closed loop; False for motors.
 
-    Parameters
-    ----------
-    system : MuJoCoSystem
-        Whose actuators apply the forces.
-    signals : callable or None
-        ``signals(times) -> (len(times), nu)`` controls (e.g. a :class:`SumOfSinusoids`);
-        None: every control is zero (servos hold their zero reference).
-    force_input : {"tau", "u"}
-        Forces on the system's coordinates (``B @ qfrc_actuator``, ``B`` the system's
-        ``force_matrix()``) or on MuJoCo's joints (``qfrc_actuator``).
-    mj_model : mujoco.MjModel, optional
-        Whose actuators act (default ``system.mj_model()``; e.g. the model of
-        :func:`~pysindy_xl.mujoco.systems.tracking.tracked_model`, whose motors track a
-        reference).
-
-    Attributes
-    ----------
-    n : int
-        Number of coordinates.
-    state_dependent : bool
-        Some force depends on the state (a servo, an affine gain or bias with a position or
-        velocity term): the law must run in closed loop. False for motors, whose forces
-        depend on time only.
-    signals, force_input
-        As given.
-
-    Examples
-    --------
     A position servo (``kp = 10``, ``kv = 1``) on a hinge, its reference fixed at 0.5 rad:
 
-    >>> import numpy as np
     >>> from pysindy_xl.mujoco import MJCFSystem, SumOfSinusoids
     >>> servo = MJCFSystem('''<mujoco><worldbody><body><joint name="hinge"/>
     ...   <geom size="0.1" mass="1"/></body></worldbody>
     ...   <actuator><position joint="hinge" kp="10" kv="1"/></actuator></mujoco>''')
     >>> law = actuator_law(servo, SumOfSinusoids([[0.0]], [[1.0]], [[0.0]], offsets=[0.5]))
-    >>> law.state_dependent
-    True
-    >>> law(0.0, [0.2], [1.0])  # 10 * (0.5 - 0.2) - 1 * 1.0
-    array([2.])
-    >>> law(np.zeros(3), np.zeros((3, 1)), np.zeros((3, 1))).shape  # many states at once
-    (3, 1)
+    >>> law.state_dependent, law(0.0, [0.2], [1.0])  # 10 * (0.5 - 0.2) - 1 * 1.0
+    (True, array([2.]))
     """
 
     def __init__(self, system, signals, force_input: str, mj_model=None):
@@ -136,16 +96,7 @@ class ActuatorLaw:
                                     or np.any(self._bias[:, 1:] != 0))
 
     def controls(self, t) -> np.ndarray:
-        """Clamped controls at times ``t``: shape (nu,) for a scalar, (len(t), nu) else.
-
-        Parameters
-        ----------
-        t : float or array, shape (N,)
-
-        Returns
-        -------
-        ndarray
-        """
+        """Clamped controls at times ``t``: shape (nu,) for a scalar, (len(t), nu) else."""
         times = np.atleast_1d(np.asarray(t, dtype=float))
         if self.signals is None:
             ctrl = np.zeros((len(times), self._nu))
@@ -155,26 +106,10 @@ class ActuatorLaw:
         return ctrl[0] if np.ndim(t) == 0 else ctrl
 
     def __call__(self, t, q=None, qd=None) -> np.ndarray:
-        """The forces at time(s) ``t`` and state(s) ``(q, qd)``.
+        """The forces at time(s) ``t`` and state(s) ``(q, qd)``: (n,) for one, (N, n) else.
 
-        Parameters
-        ----------
-        t : float or array, shape (N,)
-            Time(s).
-        q, qd : array, shape (n,) or (N, n), optional
-            Generalized positions and velocities; may be left out when the law is not
-            ``state_dependent``.
-
-        Returns
-        -------
-        ndarray
-            Shape (n,) for a scalar ``t`` and one state, (N, n) otherwise.
-
-        Raises
-        ------
-        ValueError
-            If the law depends on the state and ``q`` or ``qd`` is missing or of the wrong
-            shape.
+        ``q``, ``qd`` (shape (n,) or (N, n)) may be left out when the law is not
+        ``state_dependent``; a ValueError names the one missing or misshapen.
         """
         ctrl = self.controls(t)
         gain = self._gain[:, 0]
@@ -202,43 +137,19 @@ class ActuatorLaw:
         """The state nearest ``(q, qd)`` at which every position servo follows its reference
         with no force.
 
-        A servo with a position feedback (``bias[1] < 0``: ``position`` actuators, ``general``
-        ones with an affine bias and a constant gain) applies
-        ``F = gain * ctrl + bias[0] + bias[1] ell + bias[2] v``. Its joint moves at the rate
-        of the reference, ``v* = d/dt (-(gain * ctrl + bias[0]) / bias[1])``, with no force
-        at the length
+        A servo with position feedback (``bias[1] < 0``, constant gain) has no force at the
+        length and rate
 
         .. math::
 
-            \\ell^* = -\\frac{\\mathrm{gain}\\,\\mathrm{ctrl} + b_0 + b_2 v^*}{b_1}
+            v^* = \\frac{d}{dt}\\Big(-\\frac{\\mathrm{gain}\\,\\mathrm{ctrl} + b_0}{b_1}\\Big),
+            \\quad \\ell^* = -\\frac{\\mathrm{gain}\\,\\mathrm{ctrl} + b_0 + b_2 v^*}{b_1}.
 
-        (a servo whose damping acts on the joint's own velocity, ``b_2 = -kv``, lags its
-        reference by ``kv v* / kp`` in steady tracking). With ``A`` the servos' lengths per
-        generalized coordinate (``ell = A q``), the positions are moved to
-        ``q + pinv(A) (ell* - A q)`` (the smallest change that puts every servo there) and
-        the velocities likewise onto ``v*``. Other coordinates keep their values. Starting a
-        run there spares the servos the transient of a random initial error; starting on the
-        reference itself at the reference's rate would ask ``kv v*`` of a stiff servo at once,
-        which saturates it and, on a light link, makes a time-stepping integrator chatter
-        between the force limits (the servo's damping is not applied while its force is
-        clamped).
+        With ``ell = A q``, positions move to ``q + pinv(A) (ell* - A q)`` (the smallest change)
+        and velocities likewise onto ``v*``. Starting there spares the servos a transient
+        that saturates a stiff servo and makes a time-stepping integrator chatter. ``dt`` is
+        the central-difference step of ``v*``; returns ``(q, qd)``, shape (n,) each.
 
-        Parameters
-        ----------
-        t : float
-            Time of the state.
-        q, qd : array, shape (n,)
-            Generalized positions and velocities to start from.
-        dt : float, default 1e-4
-            Step of the central difference that gives the reference's velocity.
-
-        Returns
-        -------
-        q, qd : ndarray, shape (n,)
-            Unchanged when no actuator is a position servo.
-
-        Examples
-        --------
         A servo ``kp = 100``, ``kv = 10`` whose reference moves at 1 rad/s starts 0.1 rad
         behind it, where its force ``100 * 0.1 - 10 * 1`` vanishes:
 
@@ -274,23 +185,9 @@ class ActuatorLaw:
 def start_on_reference(system, signals, q0, qd0, mj_model=None):
     """Move a random initial state onto the position servos' reference (driven runs only).
 
-    Parameters
-    ----------
-    system : MuJoCoSystem
-    signals : callable or None
-        The run's controls; None (an undriven run, whose only excitation is its initial
-        state) leaves the state as drawn.
-    q0, qd0 : array, shape (n,)
-    mj_model : mujoco.MjModel, optional
-        Whose actuators act (default ``system.mj_model()``).
+    Returns ``(q0, qd0)`` by :meth:`ActuatorLaw.rest_state`; unchanged when ``signals`` is None
+    (an undriven run) or there is no position servo. Parameters as in :func:`actuator_law`.
 
-    Returns
-    -------
-    q0, qd0 : ndarray, shape (n,)
-        See :meth:`ActuatorLaw.rest_state`; unchanged without position servos.
-
-    Examples
-    --------
     A servo (``kp = 100``, ``kv = 10``) whose reference holds 0.5 rad: the run starts there.
 
     >>> from pysindy_xl.mujoco import MJCFSystem, SumOfSinusoids
@@ -314,7 +211,6 @@ def actuator_law(system, signals=None, force_input: str = "tau",
     Parameters
     ----------
     system : MuJoCoSystem or str
-        The system whose actuators are driven.
     signals : callable, optional
         ``signals(times) -> (len(times), nu)`` controls (e.g. a :class:`SumOfSinusoids`, the
         ``info["signals"]`` of a trajectory); None: zero controls.
@@ -326,14 +222,8 @@ def actuator_law(system, signals=None, force_input: str = "tau",
     Returns
     -------
     ActuatorLaw or None
-        None when some actuator is outside the law of the module docstring (a tendon or site
-        transmission, activation dynamics, a muscle, actuator gravity compensation): its
-        forces cannot be written from the joint states alone.
-
-    Raises
-    ------
-    ValueError
-        If ``force_input`` is not "tau" or "u".
+        None when some actuator is outside the module's law (tendon or site transmission,
+        activation dynamics, muscle, gravity compensation).
 
     Examples
     --------
@@ -360,32 +250,13 @@ def actuator_law(system, signals=None, force_input: str = "tau",
 def actuator_force_function(system, signals, force_input: str = "tau"):
     """The forces MuJoCo's actuators apply under ``signals``, as a function of time.
 
-    Exact when the actuators' forces do not depend on the state (plain motors on joints:
-    ``qfrc_actuator = gear * clip(gain * clip(ctrl))``, linear in the clipped controls),
-    evaluated at any time; validation gives the identified model this continuous signal, the
-    one MuJoCo applies at each of its steps. For servos see :func:`actuator_law`.
+    ``f(t) -> (n,)`` for a scalar ``t``, ``(len(t), n)`` for an array; exact for plain motors
+    on joints. None when the forces depend on the state (servos; see :func:`actuator_law`) or
+    an actuator is outside its law. Parameters as in :func:`actuator_law`.
 
-    Parameters
-    ----------
-    system : MuJoCoSystem or str
-        The system whose actuators are driven.
-    signals : callable
-        ``signals(times) -> (len(times), nu)`` (e.g. a :class:`SumOfSinusoids`).
-    force_input : {"tau", "u"}, default "tau"
-        Generalized forces on the coordinates (``B @ qfrc_actuator``) or joint forces.
-
-    Returns
-    -------
-    callable or None
-        ``f(t) -> (n,)`` for a scalar ``t``, ``(len(t), n)`` for an array; None when the
-        forces depend on the state (servos) or an actuator is outside :func:`actuator_law`.
-
-    Examples
-    --------
     >>> from pysindy_xl.mujoco import SumOfSinusoids
     >>> force = SumOfSinusoids([[1.0], [0.0]], [[1.0], [1.0]], [[0.0], [0.0]])
-    >>> f = actuator_force_function("cart-pole", force)
-    >>> f(0.25)
+    >>> actuator_force_function("cart-pole", force)(0.25)
     array([1., 0.])
     """
     law = actuator_law(system, signals, force_input)
@@ -395,25 +266,12 @@ def actuator_force_function(system, signals, force_input: str = "tau"):
 
 
 def servo_bandwidths(model) -> np.ndarray:
-    """The bandwidth (rad/s) of each position servo of a MuJoCo model; NaN for other actuators.
+    """The bandwidth (rad/s) of each position servo of a MuJoCo model, shape (nu,); NaN else.
 
-    A position servo (affine bias with ``biasprm[1] < 0``) of gains ``kp``, ``kv`` on a joint
-    of effective inertia ``m`` (``mj_fullM``'s diagonal at the reference pose, armature
-    included; joint damping ``d`` added to ``kv``) closes the loop
-    ``m s^2 + (kv + d) s + kp``: its slower pole, ``kp / (kv + d)`` when overdamped and
-    ``sqrt(kp / m)`` otherwise, is how fast it can follow its reference. A reference much
-    faster than that is not tracked: the servo saturates or chatters.
+    A position servo (``biasprm[1] < 0``) of gains ``kp``, ``kv`` on a joint of effective
+    inertia ``m`` (``mj_fullM``'s diagonal, armature included) and damping ``d`` closes the loop
+    ``m s^2 + (kv + d) s + kp``; its slower pole is how fast it can follow its reference.
 
-    Parameters
-    ----------
-    model : mujoco.MjModel
-
-    Returns
-    -------
-    ndarray, shape (nu,)
-
-    Examples
-    --------
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string('''<mujoco><worldbody><body>
     ...   <joint name="j" axis="0 0 1"/>

@@ -1,7 +1,5 @@
 """The base class of every MuJoCo system: an MJCF model with the textbook description of the
-same mechanism (coordinate, force and friction conventions:
-:mod:`pysindy_xl.mujoco.systems.registry`).
-"""
+same mechanism (conventions: :mod:`pysindy_xl.mujoco.systems.registry`)."""
 
 from __future__ import annotations
 
@@ -31,24 +29,9 @@ def mjcf_float(value: float) -> str:
 def equations_of_motion(lagrangian: sp.Expr, coords: Coordinates, friction=None) -> list[sp.Expr]:
     """Left-hand sides ``d/dt dL/dqd_i - dL/dq_i + friction_i`` of the equations of motion.
 
-    The equations of motion read ``lhs_i = Q_i`` with ``Q`` the generalized external forces.
-    The time derivative is taken with the chain rule over the coordinate symbols.
+    The equations read ``lhs_i = Q_i`` (generalized external forces); ``friction`` is
+    ``{(term, i): c}``, adding ``c * term`` to equation ``i``.
 
-    Parameters
-    ----------
-    lagrangian : sympy.Expr
-        Lagrangian in ``coords.q`` and ``coords.qd``.
-    coords : Coordinates
-        The generalized coordinates (positions, velocities, accelerations as symbols).
-    friction : dict, optional
-        ``{(term, i): c}``: adds ``c * term`` to equation ``i``.
-
-    Returns
-    -------
-    list of sympy.Expr, one per coordinate
-
-    Examples
-    --------
     >>> import pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> lhs = equations_of_motion(c.qd[0] ** 2 / 2, c, {(c.qd[0], 0): 0.5})
@@ -82,11 +65,10 @@ class MuJoCoSystem:
     name : str
         Registry name (``"cart-pole"``...).
     coordinate_names : tuple of str
-        Names of the generalized coordinates (symbols of :attr:`coords`).
     joint_names : tuple of str
         MuJoCo joints, in the order of ``qpos`` / ``qvel``.
     angle_coordinates : tuple of int
-        Indices of the coordinates that are angles (enter the catalogs through sin and cos).
+        Coordinates that are angles (enter the catalogs through sin and cos).
     mixed_actuators : tuple of str
         Joints driven in the ``mixed`` forcing mode by default.
     has_ground_truth : bool
@@ -166,44 +148,19 @@ class MuJoCoSystem:
         raise NotImplementedError
 
     def lagrangian(self) -> sp.Expr:
-        """True Lagrangian ``T - V`` in the symbols of :attr:`coords`.
-
-        Returns
-        -------
-        sympy.Expr
-            Kinetic minus potential energy, in ``coords.q`` and ``coords.qd``.
-
-        Raises
-        ------
-        NotImplementedError
-            In this base class, which describes no particular system.
-
-        Examples
-        --------
-        >>> from pysindy_xl.mujoco import CartPole
+        """True Lagrangian ``T - V`` in ``coords.q`` and ``coords.qd`` (subclasses define it).
 
         The cart position is cyclic (absent from the Lagrangian of the cart-pole):
 
+        >>> from pysindy_xl.mujoco import CartPole
         >>> sorted(map(str, CartPole().lagrangian().free_symbols))
         ['theta', 'theta_dot', 'x_dot']
         """
         raise NotImplementedError
 
     def xml(self) -> str:
-        """MJCF text of the model with the current parameters.
+        """MJCF text (a complete ``<mujoco>`` document) of the model with current parameters.
 
-        Returns
-        -------
-        str
-            A complete ``<mujoco>`` document.
-
-        Raises
-        ------
-        NotImplementedError
-            In this base class, which describes no particular system.
-
-        Examples
-        --------
         >>> from pysindy_xl.mujoco import CartPole
         >>> CartPole().xml().splitlines()[0]
         '<mujoco model="cart_pole">'
@@ -211,15 +168,8 @@ class MuJoCoSystem:
         raise NotImplementedError
 
     def mj_model(self):
-        """Compiled MuJoCo model of :meth:`xml`.
+        """A new compiled MuJoCo model of :meth:`xml`.
 
-        Returns
-        -------
-        mujoco.MjModel
-            A new model at each call.
-
-        Examples
-        --------
         >>> from pysindy_xl.mujoco import DoublePendulum
         >>> model = DoublePendulum().mj_model()
         >>> model.nq, model.nu, model.opt.timestep
@@ -232,38 +182,21 @@ class MuJoCoSystem:
         """Matrix ``B`` (n, n): generalized force on the coordinates ``= B @ u``.
 
         ``u`` holds one force per MuJoCo degree of freedom (``qfrc_actuator``); ``B = T^-T``
-        by virtual work. Pass it as ``ExternalForces(coords, interlink=B)`` to fit with the
-        joint forces ``u`` instead of the generalized forces ``tau = u @ B.T``.
+        by virtual work. ``ExternalForces(coords, interlink=B)`` fits with ``u``. A motor on
+        the second (relative) hinge of a double pendulum pushes the outer link forward and
+        the inner one back:
 
-        Returns
-        -------
-        ndarray, shape (n, n)
-
-        Examples
-        --------
         >>> from pysindy_xl.mujoco import DoublePendulum
-
-        A motor on the second (relative) hinge of a double pendulum pushes the outer link
-        forward and the inner one back:
-
-        >>> import numpy as np
         >>> DoublePendulum().force_matrix() @ np.array([0.0, 1.0])
         array([-1.,  1.])
         """
         return np.linalg.inv(self.joint_to_coordinates).T
 
     def friction_matrix(self) -> np.ndarray:
-        """Matrix ``F`` (n, n): generalized friction force ``= -F @ qd``.
+        """Matrix ``F`` (n, n), symmetric: generalized friction force ``= -F @ qd``.
 
         ``F = B C T^-1`` with ``C`` the diagonal of joint damping coefficients.
 
-        Returns
-        -------
-        ndarray, shape (n, n)
-            Symmetric; diagonal when every joint measures one coordinate.
-
-        Examples
-        --------
         >>> from pysindy_xl.mujoco import DoublePendulum
         >>> DoublePendulum(damping1=0.3, damping2=0.15).friction_matrix()
         array([[ 0.45, -0.15],
@@ -275,16 +208,9 @@ class MuJoCoSystem:
     def friction_pattern(self) -> np.ndarray:
         """Boolean (n, n): which velocity ``j`` joint damping can put in equation ``i``.
 
-        The structure of :meth:`friction_matrix` with every joint damped, independent of the
-        damping values; the reference catalogs use it for their friction terms.
+        The structure of :meth:`friction_matrix` with every joint damped (used by the
+        reference catalogs' friction terms).
 
-        Returns
-        -------
-        ndarray of bool, shape (n, n)
-            ``pattern[i, j]``: the velocity of coordinate ``j`` may appear in equation ``i``.
-
-        Examples
-        --------
         >>> from pysindy_xl.mujoco import CartDoublePendulum
         >>> CartDoublePendulum().friction_pattern()
         array([[ True, False, False],
@@ -297,17 +223,10 @@ class MuJoCoSystem:
     def friction(self) -> dict:
         """Classical friction terms ``{(qd_j, i): c}`` of the true model.
 
-        Convention of the feature libraries: the term ``qd_j`` with coefficient ``c`` in the
-        equation of coordinate ``i`` stands for the friction force ``-c * qd_j``.
+        The non-zero entries of :meth:`friction_matrix`: the term ``qd_j`` with coefficient
+        ``c`` in equation ``i`` stands for the force ``-c * qd_j`` (``classical=`` of
+        ``ideal_coefficients``).
 
-        Returns
-        -------
-        dict
-            ``{(velocity symbol, equation index): coefficient}``, the non-zero entries of
-            :meth:`friction_matrix`; as ``classical=`` of ``ideal_coefficients``.
-
-        Examples
-        --------
         >>> from pysindy_xl.mujoco import CartPole
         >>> CartPole(cart_damping=0.5, pole_damping=0.1).friction()
         {(x_dot, 0): 0.5, (theta_dot, 1): 0.1}
@@ -324,13 +243,6 @@ class MuJoCoSystem:
     def equations_of_motion(self) -> list[sp.Expr]:
         """Left-hand sides ``EL_i(L) + friction_i``; the motion satisfies ``lhs = B @ u``.
 
-        Returns
-        -------
-        list of sympy.Expr
-            One per coordinate (see the module function :func:`equations_of_motion`).
-
-        Examples
-        --------
         >>> from pysindy_xl.mujoco import CartPole
         >>> CartPole().equations_of_motion()[1]
         0.320001*theta_ddot + 0.1*theta_dot + 0.4*x_ddot*cos(theta) + 3.924*sin(theta)
@@ -338,26 +250,12 @@ class MuJoCoSystem:
         return equations_of_motion(self.lagrangian(), self.coords, self.friction())
 
     def to_generalized(self, qpos, qvel, qacc=None):
-        """Map MuJoCo joint coordinates to the textbook generalized coordinates.
+        """Map MuJoCo ``qpos``, ``qvel`` (and ``qacc``), shape (N, n) or (n,), to ``q, qd, qdd``.
 
-        Parameters
-        ----------
-        qpos, qvel : array, shape (N, n) or (n,)
-            MuJoCo joint positions and velocities (``data.qpos``, ``data.qvel``).
-        qacc : array, shape (N, n) or (n,), optional
-            MuJoCo joint accelerations (``data.qacc``).
+        ``qdd`` is None when ``qacc`` is. The second hinge of a double pendulum measures the
+        relative angle:
 
-        Returns
-        -------
-        q, qd, qdd : ndarray
-            Same shapes; ``qdd`` is None when ``qacc`` is None.
-
-        Examples
-        --------
         >>> from pysindy_xl.mujoco import DoublePendulum
-
-        The second hinge of a double pendulum measures the relative angle:
-
         >>> DoublePendulum().to_generalized([0.1, 0.2], [1.0, 1.0])
         (array([0.1, 0.3]), array([1., 2.]), None)
         """
@@ -374,23 +272,8 @@ class MuJoCoSystem:
         return tuple(out)
 
     def from_generalized(self, q, qd=None):
-        """Inverse of :meth:`to_generalized` for positions and velocities.
+        """Inverse of :meth:`to_generalized`: ``(qpos, qvel)`` (``qvel`` None when ``qd`` is).
 
-        Parameters
-        ----------
-        q : array, shape (N, n) or (n,)
-            Generalized positions.
-        qd : array, shape (N, n) or (n,), optional
-            Generalized velocities.
-
-        Returns
-        -------
-        qpos, qvel : ndarray
-            MuJoCo joint positions and velocities, same shapes (``qvel`` None when ``qd`` is
-            None).
-
-        Examples
-        --------
         >>> from pysindy_xl.mujoco import DoublePendulum
         >>> DoublePendulum().from_generalized([0.1, 0.3], [1.0, 2.0])
         (array([0.1, 0.2]), array([1., 1.]))
@@ -408,26 +291,12 @@ class MuJoCoSystem:
         return qpos, qd @ inverse.T
 
     def random_initial_state(self, rng: np.random.Generator, scale: float = 1.0):
-        """Random initial positions and velocities in the generalized coordinates.
+        """Random initial ``(q0, qd0)``, each shape (n,), in the generalized coordinates.
 
         Angles uniform in ``[-2, 2] * scale`` rad, linear positions in ``[-0.5, 0.5] * scale``
-        m, velocities uniform in ``[-1, 1] * scale``.
+        m, velocities in ``[-1, 1] * scale``.
 
-        Parameters
-        ----------
-        rng : numpy.random.Generator
-            Source of the random draws.
-        scale : float, default 1.0
-            Multiplies every range.
-
-        Returns
-        -------
-        q0, qd0 : ndarray, shape (n,)
-
-        Examples
-        --------
         >>> from pysindy_xl.mujoco import CartPole
-        >>> import numpy as np
         >>> q0, qd0 = CartPole().random_initial_state(np.random.default_rng(0), scale=0.1)
         >>> bool(abs(q0[0]) <= 0.05 and abs(q0[1]) <= 0.2 and np.all(abs(qd0) <= 0.1))
         True

@@ -10,36 +10,20 @@ __all__ = ["dry_friction_scales", "sliding_velocities"]
 
 
 def dry_friction_scales(model) -> tuple[np.ndarray, np.ndarray]:
-    """How MuJoCo regularizes each degree of freedom's ``frictionloss``: a velocity scale
-    ``s`` and a lead time ``tau``.
+    """How MuJoCo regularizes each dof's ``frictionloss``: velocity scale ``s`` and lead ``tau``.
 
-    MuJoCo applies dry friction as a soft constraint row on the dof (its force ``f``, its
-    acceleration ``a``, velocity ``v``); the solver minimizes a Huber cost, so that
+    Dry friction is a soft constraint row; the solver's Huber cost gives
 
     .. math:: f = -F \\, \\mathrm{sat}\\!\\left(\\frac{a + b v}{R F}\\right)
               = -F \\, \\mathrm{sat}\\!\\left(\\frac{v + \\tau a}{s}\\right),
               \\qquad \\mathrm{sat}(x) = \\max(-1, \\min(1, x)),
 
-    with ``F`` the frictionloss, ``b = 2 / (d_max t_c)`` the reference damping of
-    ``solreffriction = (t_c, zeta)`` (``t_c`` at least twice the time step; a negative
-    ``solref`` gives ``b = -solref[1] / d_max`` directly), ``R = (1 - d_0) / d_0 w_0`` the
-    regularizer from the impedance ``d_0`` of ``solimpfriction`` at zero violation (its
-    ``d_min``) and the dof's inverse inertia at ``qpos0`` (``dof_invweight0``). Hence
-    ``tau = 1 / b`` and ``s = R F / b``. The friction saturates at ``+-F`` only once the velocity
-    predicted ``tau`` ahead exceeds ``s``; below it acts as a damping ``b / R`` plus an inertia
-    ``1 / R``, which on a light link (large ``w_0``) may exceed the link's own.
+    ``F`` the frictionloss, ``b = 2 / (d_max t_c)`` the reference damping of
+    ``solreffriction`` (``t_c`` at least twice the step; a negative ``solref`` gives
+    ``b = -solref[1] / d_max``), ``R = (1 - d_0) / d_0 w_0`` from ``solimpfriction``'s
+    ``d_min`` and ``dof_invweight0``: ``tau = 1 / b``, ``s = R F / b`` (shape (nv,) each).
+    Below saturation it acts as a damping ``b / R`` plus an inertia ``1 / R``.
 
-    Parameters
-    ----------
-    model : mujoco.MjModel
-
-    Returns
-    -------
-    scale, lead : ndarray, shape (nv,)
-        ``s`` (velocity units of the dof; zero where ``frictionloss`` is zero) and ``tau`` (s).
-
-    Examples
-    --------
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string(
     ...     '<mujoco><worldbody><body><joint frictionloss="2"/><geom size=".1" mass="1"/>'
@@ -61,26 +45,9 @@ def dry_friction_scales(model) -> tuple[np.ndarray, np.ndarray]:
 
 
 def sliding_velocities(system, model, q, qd, margin: float = 2.0) -> np.ndarray:
-    """``qd`` with every joint speed raised to at least ``margin`` times its sticking scale.
-
-    Where every joint slides, MuJoCo's dry friction is ``-F sign(v)`` and its mass matrix the
-    rigid body's (``mj_fullM``): a model with MuJoCo's regularized dry friction matches both
-    only there.
-
-    Parameters
-    ----------
-    system : MuJoCoSystem
-    model : mujoco.MjModel
-        Whose scales (:func:`dry_friction_scales`) apply; one dof per joint.
-    q, qd : ndarray, shape (N, n)
-        States in the system's coordinates.
-    margin : float, default 2.0
-
-    Returns
-    -------
-    ndarray, shape (N, n)
-        The velocities in the coordinates (unchanged without ``frictionloss``).
-    """
+    """``qd`` (N, n) with every joint speed raised to at least ``margin`` times its sticking
+    scale (:func:`dry_friction_scales` of ``model``): where every joint slides, MuJoCo's dry
+    friction is ``-F sign(v)`` and its mass matrix the rigid body's."""
     qpos, qvel = system.from_generalized(q, qd)
     least = margin * dry_friction_scales(model)[0]
     qvel = np.where(qvel < 0, -1.0, 1.0) * np.maximum(np.abs(qvel), least)

@@ -32,43 +32,22 @@ def _identifier(name: str, index: int, taken: set) -> str:
 class MJCFSystem(MuJoCoSystem):
     """A user's MJCF model: coordinates are MuJoCo's joint coordinates.
 
-    Only hinge and slide joints are supported (each joint one coordinate, ``q = qpos``);
-    hinge angles count as angles for the catalogs. The true Lagrangian is unknown, so
-    :meth:`lagrangian` raises; joint damping is read from the model as diagonal friction.
+    Hinge and slide joints only (``q = qpos``); hinges count as angles for the catalogs. The
+    true Lagrangian is unknown; joint damping is read from the model as diagonal friction.
 
     Parameters
     ----------
     source : str or os.PathLike
-        Path to an MJCF file or a URDF file (``.urdf``), or the MJCF or URDF text itself (a
-        string starting with ``<``). A URDF is read with its inertials and without its
-        meshes, with a motor on every joint (see :mod:`pysindy_xl.mujoco.systems.urdf`).
+        Path to an MJCF or URDF (``.urdf``) file, or the text itself (starting with ``<``); a
+        URDF as read by :mod:`pysindy_xl.mujoco.systems.urdf`.
     force_amplitude : float, default 1.0
         Amplitude of the random force of an actuator without ``ctrlrange``.
     joints : list of str, optional
-        Identify these joints only. The other joints are **locked** at their reference pose
-        (the pose written in the MJCF, ``qpos = ref``): they are removed from the model with
-        the actuators that drive them, and their bodies move rigidly with their parents. A
-        passive body decoupled from the rest (e.g. a target on two slide joints) thus simply
-        leaves the problem; the mass of a locked body still loads its parent, as in the real
-        mechanism with that joint blocked. Default: every joint.
-
-    Attributes
-    ----------
-    path : str or None
-        Absolute path of the MJCF or URDF file (None for text).
-    excluded_joints : tuple of str
-        Joints locked by ``joints``.
-    trimmed_keyframes : tuple of str
-        Keyframes whose ``qpos``, ``qvel``, ``ctrl`` were cut to the kept joints and
-        actuators by ``joints`` (their activations cleared).
+        Identify these joints only; the others are locked at their reference pose (removed
+        with their actuators, ``excluded_joints``; their bodies load their parents).
 
     Examples
     --------
-    >>> xml = '''<mujoco><worldbody><body><joint name="a" type="hinge" axis="0 1 0"/>
-    ... <geom type="sphere" size="0.1" pos="0 0 -1"/></body></worldbody></mujoco>'''
-    >>> MJCFSystem(xml).coords
-    Coordinates(['a'])
-
     Leave a passive target on two slide joints out:
 
     >>> xml = '''<mujoco><worldbody>
@@ -200,8 +179,6 @@ class MJCFSystem(MuJoCoSystem):
     def frictionloss(self) -> np.ndarray:
         """Dry friction (``frictionloss``) of each joint, shape (n,).
 
-        Examples
-        --------
         >>> xml = ('<mujoco><worldbody><body><joint type="slide" frictionloss="0.3"/>'
         ...        '<geom size="0.1"/></body></worldbody></mujoco>')
         >>> MJCFSystem(xml).frictionloss
@@ -214,25 +191,11 @@ class MJCFSystem(MuJoCoSystem):
     def random_initial_state(self, rng: np.random.Generator, scale: float = 1.0):
         """Random initial state inside the joint ranges, around the reference pose.
 
-        A joint with a range starts uniformly between its reference position (``ref``,
-        clipped to the range) and ``scale`` x 90 % of the way to each end of the range, with
-        a velocity of at most ``scale`` x min(1, half the range width) per second; a joint
-        without range as in :meth:`MuJoCoSystem.random_initial_state`, around ``ref``.
+        A joint with a range starts uniformly between its ``ref`` (clipped to the range) and
+        ``scale`` x 90 % of the way to each end, with a velocity of at most ``scale`` x
+        min(1, half the range width) per second; a joint without range as in
+        :meth:`MuJoCoSystem.random_initial_state`, around ``ref``.
 
-        Parameters
-        ----------
-        rng : numpy.random.Generator
-            Source of the random draws.
-        scale : float, default 1.0
-            Fraction of the ranges used.
-
-        Returns
-        -------
-        q0, qd0 : ndarray, shape (n,)
-
-        Examples
-        --------
-        >>> import numpy as np
         >>> xml = ('<mujoco><compiler angle="radian"/><worldbody><body>'
         ...        '<joint type="slide" range="0 0.2" ref="0.05"/><geom size="0.1"/>'
         ...        '</body></worldbody></mujoco>')
@@ -260,18 +223,8 @@ class MJCFSystem(MuJoCoSystem):
     def metadata(self) -> dict:
         """What a dataset records to rebuild this system (:func:`system_from_metadata`).
 
-        Returns
-        -------
-        dict
-            ``model_path`` (absolute, or None), ``model_xml`` (the MJCF text, flattened when
-            it uses ``<include>``) and ``joints`` (None for every joint).
-
-        Examples
-        --------
-        >>> xml = ('<mujoco><worldbody><body><joint name="a" type="slide"/>'
-        ...        '<geom size="0.1"/></body></worldbody></mujoco>')
-        >>> sorted(MJCFSystem(xml).metadata())
-        ['joints', 'model_path', 'model_xml']
+        ``model_path`` (absolute, or None), ``model_xml`` (the MJCF text, flattened when it
+        uses ``<include>``) and ``joints`` (None for every joint).
         """
         text = self._xml
         if "<include " in text and self.path is not None and not self._urdf:
@@ -298,64 +251,21 @@ class MJCFSystem(MuJoCoSystem):
         return {j: self._parameters["force_amplitude"] for j in self.actuated_joints}
 
     def lagrangian(self):
-        """Not available: the true Lagrangian of a user's model is unknown.
-
-        Returns
-        -------
-        sympy.Expr
-            Never returns.
-
-        Raises
-        ------
-        NotImplementedError
-            Always; subclass :class:`MuJoCoSystem` to describe a model with a known Lagrangian.
-
-        Examples
-        --------
-        >>> xml = ('<mujoco><worldbody><body><joint type="slide"/><geom size="0.1"/>'
-        ...        '</body></worldbody></mujoco>')
-        >>> MJCFSystem(xml).lagrangian()
-        Traceback (most recent call last):
-        ...
-        NotImplementedError: MJCFSystem: the true Lagrangian of a user's model is unknown; ...
-        """
+        """Not available: raises NotImplementedError (subclass :class:`MuJoCoSystem` to give a
+        model a known Lagrangian)."""
         raise NotImplementedError(
             "MJCFSystem: the true Lagrangian of a user's model is unknown; subclass "
             "MuJoCoSystem to provide one"
         )
 
     def xml(self):
-        """The MJCF text given (or read from the file given); with ``joints``, the reduced model.
-
-        Returns
-        -------
-        str
-
-        Examples
-        --------
-        >>> xml = ('<mujoco><worldbody><body><joint type="slide"/><geom size="0.1"/>'
-        ...        '</body></worldbody></mujoco>')
-        >>> MJCFSystem(xml).xml() == xml
-        True
-        """
+        """The MJCF text given (or read from the file given); with ``joints``, the reduced model."""
         if self._spec is not None:
             return self._spec.to_xml()
         return self._xml
 
     def mj_model(self):
-        """Compiled MuJoCo model, from the file when one was given (relative assets resolve).
-
-        Returns
-        -------
-        mujoco.MjModel
-
-        Examples
-        --------
-        >>> xml = ('<mujoco><worldbody><body><joint type="slide"/><geom size="0.1"/>'
-        ...        '</body></worldbody></mujoco>')
-        >>> MJCFSystem(xml).mj_model().njnt
-        1
-        """
+        """Compiled MuJoCo model, from the file when one was given (relative assets resolve)."""
         mujoco = import_mujoco()
         if self._spec is not None:
             return self._spec.compile()
@@ -373,10 +283,8 @@ class MJCFSystem(MuJoCoSystem):
 
 
 def _trim_keyframes(spec, kept_joints, kept_actuators) -> tuple:
-    """Keep, in every keyframe, the entries of the kept joints (one ``qpos`` and one ``qvel``
-    each: hinges and slides) and actuators; activations of removed actuators are cleared.
-    Returns the names of the keyframes changed (a keyframe sized for the whole model would
-    not compile)."""
+    """Cut every keyframe to the kept joints and actuators (a keyframe sized for the whole
+    model would not compile); activations of removed actuators cleared. Names of those changed."""
     kept_joints = np.asarray(kept_joints, dtype=bool)
     kept_actuators = np.asarray(kept_actuators, dtype=bool)
     trimmed = []

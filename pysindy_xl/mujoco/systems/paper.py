@@ -84,14 +84,11 @@ class CartPole(MuJoCoSystem):
         Viscous friction of the slider (N s/m) and of the hinge (N m s/rad).
     gravity : float
     point_inertia : float
-        Rotational inertia of the bob about its center (kept tiny; exact in the Lagrangian).
+        Rotational inertia of the bob about its center (tiny; exact in the Lagrangian).
     timestep : float
         MuJoCo time step (RK4).
 
-    Examples
-    --------
-    >>> system = CartPole(pole_mass=0.2)
-    >>> system.coords
+    >>> CartPole(pole_mass=0.2).coords
     Coordinates(['x', 'theta'])
     """
 
@@ -122,12 +119,6 @@ class CartPole(MuJoCoSystem):
     def lagrangian(self):
         """True Lagrangian of the cart-pole (cart, point mass with its tiny inertia, gravity).
 
-        Returns
-        -------
-        sympy.Expr
-
-        Examples
-        --------
         >>> CartPole(cart_mass=1.0, pole_mass=0.5, length=0.8).lagrangian()
         0.1600005*theta_dot**2 + 0.4*theta_dot*x_dot*cos(theta) + 0.75*x_dot**2 + 3.924*cos(theta)
         """
@@ -144,13 +135,7 @@ class CartPole(MuJoCoSystem):
         return kinetic - potential
 
     def xml(self):
-        """MJCF text of the cart-pole (see :meth:`MuJoCoSystem.xml`).
-
-        Examples
-        --------
-        >>> 'name="slider"' in CartPole().xml()
-        True
-        """
+        """MJCF text of the cart-pole (see :meth:`MuJoCoSystem.xml`)."""
         p = self._parameters
         link = _link("pole", "hinge", p["pole_mass"], p["length"], p["pole_damping"],
                      p["point_inertia"], "0 0 0")
@@ -170,19 +155,11 @@ def _pendulum_chain_xml(p: dict, indent: int) -> str:
 class DoublePendulum(MuJoCoSystem):
     """Double pendulum with point masses on massless rods, hanging from a fixed pivot.
 
-    Coordinates ``theta1``, ``theta2``: absolute angles from the downward vertical. MuJoCo's
-    hinges ``hinge1`` and ``hinge2`` measure ``theta1`` and ``theta2 - theta1``.
+    Coordinates ``theta1``, ``theta2``: absolute angles from the downward vertical; hinges
+    ``hinge1`` and ``hinge2`` measure ``theta1`` and ``theta2 - theta1``. ``mass<k>``,
+    ``length<k>``, ``damping<k>`` are each link's bob mass, rod length and hinge damping
+    (relative angle); the others as in :class:`CartPole`.
 
-    Parameters
-    ----------
-    mass1, mass2, length1, length2 : float
-    damping1, damping2 : float
-        Viscous damping of the two hinges (the second one acts on the relative angle).
-    gravity, point_inertia, timestep : float
-        See :class:`CartPole`.
-
-    Examples
-    --------
     >>> DoublePendulum().force_matrix()
     array([[ 1., -1.],
            [ 0.,  1.]])
@@ -217,31 +194,14 @@ class DoublePendulum(MuJoCoSystem):
                 "hinge2": 0.3 * p["mass2"] * g * p["length2"]}
 
     def lagrangian(self):
-        """True Lagrangian of the double pendulum in absolute angles.
-
-        Returns
-        -------
-        sympy.Expr
-
-        Examples
-        --------
-        >>> L = DoublePendulum().lagrangian()
-        >>> sorted(map(str, L.free_symbols))
-        ['theta1', 'theta1_dot', 'theta2', 'theta2_dot']
-        """
+        """True Lagrangian of the double pendulum in absolute angles."""
         p = self._parameters
         th1, th2 = self.coords.q
         thd1, thd2 = self.coords.qd
         return _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=None)
 
     def xml(self):
-        """MJCF text of the double pendulum (see :meth:`MuJoCoSystem.xml`).
-
-        Examples
-        --------
-        >>> DoublePendulum().xml().splitlines()[0]
-        '<mujoco model="double_pendulum">'
-        """
+        """MJCF text of the double pendulum (see :meth:`MuJoCoSystem.xml`)."""
         p = self._parameters
         return (_header("double_pendulum", p["timestep"], p["gravity"])
                 + _pendulum_chain_xml(p, indent=4) + _footer(self.joint_names))
@@ -271,17 +231,9 @@ class CartDoublePendulum(MuJoCoSystem):
     """Double pendulum (point masses) hanging from a cart on a horizontal rail.
 
     Coordinates ``x``, ``theta1``, ``theta2`` (absolute angles); MuJoCo joints ``slider``,
-    ``hinge1``, ``hinge2`` (the last relative to the first link).
+    ``hinge1``, ``hinge2`` (the last relative to the first link). Parameters as in
+    :class:`CartPole` and :class:`DoublePendulum`.
 
-    Parameters
-    ----------
-    cart_mass, mass1, mass2, length1, length2 : float
-    cart_damping, damping1, damping2 : float
-    gravity, point_inertia, timestep : float
-        See :class:`CartPole`.
-
-    Examples
-    --------
     >>> CartDoublePendulum().coords.names
     ('x', 'theta1', 'theta2')
     """
@@ -318,18 +270,7 @@ class CartDoublePendulum(MuJoCoSystem):
                 "hinge2": 0.3 * p["mass2"] * g * p["length2"]}
 
     def lagrangian(self):
-        """True Lagrangian of the double pendulum on a cart.
-
-        Returns
-        -------
-        sympy.Expr
-
-        Examples
-        --------
-        >>> L = CartDoublePendulum().lagrangian()
-        >>> sorted(map(str, L.free_symbols))
-        ['theta1', 'theta1_dot', 'theta2', 'theta2_dot', 'x_dot']
-        """
+        """True Lagrangian of the double pendulum on a cart."""
         p = self._parameters
         _, th1, th2 = self.coords.q
         xd, thd1, thd2 = self.coords.qd
@@ -337,13 +278,7 @@ class CartDoublePendulum(MuJoCoSystem):
                                           cart_mass=p["cart_mass"])
 
     def xml(self):
-        """MJCF text of the double pendulum on a cart (see :meth:`MuJoCoSystem.xml`).
-
-        Examples
-        --------
-        >>> CartDoublePendulum().xml().splitlines()[0]
-        '<mujoco model="cart_double_pendulum">'
-        """
+        """MJCF text of the double pendulum on a cart (see :meth:`MuJoCoSystem.xml`)."""
         p = self._parameters
         link = _pendulum_chain_xml(p, indent=6)
         return (_header("cart_double_pendulum", p["timestep"], p["gravity"])
@@ -355,19 +290,9 @@ class TriplePendulum(MuJoCoSystem):
     """Three-link pendulum with point masses on massless rods, hanging from a fixed pivot.
 
     Coordinates ``theta1``, ``theta2``, ``theta3``: absolute angles from the downward
-    vertical; MuJoCo's hinges ``hinge1``, ``hinge2``, ``hinge3`` measure each link's angle
-    relative to the previous one. Chaotic at moderate energies.
+    vertical; hinges ``hinge1``, ``hinge2``, ``hinge3`` measure each link's angle relative to
+    the previous one. Chaotic at moderate energies. Parameters as in :class:`DoublePendulum`.
 
-    Parameters
-    ----------
-    mass1, mass2, mass3, length1, length2, length3 : float
-    damping1, damping2, damping3 : float
-        Viscous damping of the hinges (relative angles).
-    gravity, point_inertia, timestep : float
-        See :class:`CartPole`.
-
-    Examples
-    --------
     >>> TriplePendulum().coords.names
     ('theta1', 'theta2', 'theta3')
     """
@@ -403,20 +328,11 @@ class TriplePendulum(MuJoCoSystem):
                 for k in (1, 2, 3)}
 
     def lagrangian(self):
-        """True Lagrangian of the three-link pendulum in absolute angles,
+        """True Lagrangian of the three-link pendulum in absolute angles.
+
         ``T = 1/2 sum_ij mu_ij l_i l_j thd_i thd_j cos(th_i - th_j)`` with ``mu_ij`` the mass
         at or beyond link ``max(i, j)``, ``V = -g sum_i mu_ii l_i cos th_i``, plus each bob's
         tiny rotational inertia.
-
-        Returns
-        -------
-        sympy.Expr
-
-        Examples
-        --------
-        >>> L = TriplePendulum().lagrangian()
-        >>> sorted(map(str, L.free_symbols))[:3]
-        ['theta1', 'theta1_dot', 'theta2']
         """
         p = self._parameters
         th, thd = self.coords.q, self.coords.qd
@@ -432,13 +348,7 @@ class TriplePendulum(MuJoCoSystem):
         return kinetic - potential
 
     def xml(self):
-        """MJCF text of the three-link pendulum (see :meth:`MuJoCoSystem.xml`).
-
-        Examples
-        --------
-        >>> TriplePendulum().xml().splitlines()[0]
-        '<mujoco model="triple_pendulum">'
-        """
+        """MJCF text of the three-link pendulum (see :meth:`MuJoCoSystem.xml`)."""
         p = self._parameters
         link3 = _link("link3", "hinge3", p["mass3"], p["length3"], p["damping3"],
                       p["point_inertia"], f"0 0 {mjcf_float(-p['length2'])}", indent=8)

@@ -1,38 +1,20 @@
-"""MuJoCo models of the paper's mechanical systems and of user-supplied MJCF files.
+"""The registry of MuJoCo systems, and their conventions.
 
-Every system couples an MJCF model with the textbook description of the same mechanism:
-generalized coordinates, Lagrangian, friction and the map between MuJoCo's joint coordinates
-and the textbook ones.
+Angles are absolute, from the downward vertical (``theta = 0`` hanging down, a bob at
+``(l sin theta, -l cos theta)``); cart positions ``x`` are horizontal. MuJoCo's hinge angles
+along a chain are relative (``phi2 = theta2 - theta1``): every system maps ``q = T @ qpos``
+(:attr:`MuJoCoSystem.joint_to_coordinates`), alike for velocities and accelerations.
 
-Coordinate conventions
-----------------------
-Angles are absolute and measured from the downward vertical (``theta = 0`` hanging down,
-positive counter-clockwise seen from the front, so a bob sits at ``(l sin theta, -l cos theta)``
-in the plane ``x``-up); cart positions ``x`` are along the horizontal axis.
+By virtual work a joint force ``u`` (one per MuJoCo degree of freedom) is the generalized
+force ``B @ u``, ``B = T^-T`` (:meth:`MuJoCoSystem.force_matrix`): a motor on a relative hinge
+pushes the outer link forward and the inner one back. Joint damping becomes the generalized
+friction ``-B C T^-1 qd``, coupling absolute coordinates; :meth:`MuJoCoSystem.friction` gives
+it with the library's sign (``EL(L) + friction = B @ u``).
 
-MuJoCo's hinge angles along a chain are *relative*: the second hinge of a double pendulum
-measures ``phi2 = theta2 - theta1``. All our systems use a linear map ``q = T @ qpos``
-(:attr:`MuJoCoSystem.joint_to_coordinates`), applied alike to velocities and accelerations.
-
-Forces and friction follow from virtual work. A joint force vector ``u`` (one entry per MuJoCo
-degree of freedom, what actuators and joint damping produce) does the work ``u . dphi =
-u . T^-1 dq``, so the generalized force on the textbook coordinates is ``B @ u`` with
-``B = T^-T`` (:meth:`MuJoCoSystem.force_matrix`). A motor between two links (relative hinge)
-therefore pushes the outer link forward and the inner one back: ``B`` for the double pendulum is
-``[[1, -1], [0, 1]]``. Joint damping ``-c_k dphi_k/dt`` on a relative hinge likewise becomes the
-generalized friction ``-B C T^-1 qd``: it couples the absolute coordinates (the equation of
-``theta1`` feels ``theta2_dot``). :meth:`MuJoCoSystem.friction` returns these terms with the
-library's sign convention (the term ``qd_j`` in the equation of ``i`` with coefficient
-``(B C T^-1)[i, j]``, so that ``EL(L) + friction = B @ u``).
-
-Point masses are modelled with explicit ``<inertial>`` elements (a tiny rotational inertia
-``point_inertia``, which the Lagrangian includes exactly) so that the geoms, drawn only for
-visualisation, add no mass. Contacts are disabled and the integrator is RK4 with a small time
-step, so that MuJoCo's trajectories follow the continuous equations closely.
-
-The base class and its conventions are in ``_system_base``, the paper's systems in
-:mod:`pysindy_xl.mujoco.systems.paper`, user MJCF files in :mod:`pysindy_xl.mujoco.systems.mjcf`;
-this module is the registry and keeps every name importable from here.
+Point masses have explicit ``<inertial>`` elements (a tiny ``point_inertia``, exact in the
+Lagrangian); contacts are off and the integrator is RK4 with a small step. The base class is
+in :mod:`~pysindy_xl.mujoco.systems.base`, the paper's systems in
+:mod:`~pysindy_xl.mujoco.systems.paper`, MJCF files in :mod:`~pysindy_xl.mujoco.systems.mjcf`.
 """
 
 from __future__ import annotations
@@ -67,15 +49,11 @@ def get_system(name, **parameters) -> MuJoCoSystem:
     ----------
     name : str, os.PathLike or MuJoCoSystem
         ``"cart-pole"``, ``"double-pendulum"``, ``"cart-double-pendulum"``,
-        ``"triple-pendulum"`` (underscores accepted), a path to an MJCF ``.xml`` or a URDF
-        ``.urdf`` file (or to any existing file, read as MJCF), MJCF text, or a system
+        ``"triple-pendulum"`` (underscores accepted), a path to an MJCF ``.xml`` or URDF
+        ``.urdf`` file (any other existing file is read as MJCF), MJCF text, or a system
         (returned as is).
     **parameters
         Passed to the system's constructor.
-
-    Returns
-    -------
-    MuJoCoSystem
 
     Examples
     --------
@@ -103,34 +81,13 @@ def get_system(name, **parameters) -> MuJoCoSystem:
 
 
 def system_from_metadata(metadata: dict, **parameters) -> MuJoCoSystem:
-    """The system a dataset was generated with, from its metadata.
+    """The system a dataset was generated with, from its ``Dataset.metadata``.
 
-    Registry systems are rebuilt with their recorded parameters; a user's MJCF from its
-    recorded path when the file still exists, otherwise from the embedded XML, with the same
-    joint selection.
+    Registry systems are rebuilt with their recorded parameters (``parameters`` override
+    them); a user's MJCF from its recorded ``model_path`` when the file exists, otherwise from
+    the embedded ``model_xml``, with the same ``joints``. ValueError when the metadata name
+    no system, or an MJCF dataset records neither path nor XML.
 
-    Parameters
-    ----------
-    metadata : dict
-        ``Dataset.metadata`` (keys ``system``, ``parameters``, and for MJCF models
-        ``model_path``, ``model_xml``, ``joints``).
-    **parameters
-        Override recorded constructor parameters.
-
-    Returns
-    -------
-    MuJoCoSystem
-
-    Raises
-    ------
-    ValueError
-        If the metadata name no system, or an MJCF dataset records neither path nor XML.
-
-    Examples
-    --------
-    >>> system_from_metadata({"system": "cart-pole", "parameters": {"pole_mass": 0.3}})
-    CartPole(cart_mass=1.0, pole_mass=0.3, length=0.8, cart_damping=0.5, pole_damping=0.1, \
-gravity=9.81, point_inertia=1e-06, timestep=0.001)
     >>> xml = ('<mujoco><worldbody><body><joint name="a" type="slide"/>'
     ...        '<geom size="0.1"/></body></worldbody></mujoco>')
     >>> system_from_metadata({"system": "mjcf", "model_xml": xml}).coords
@@ -167,27 +124,8 @@ gravity=9.81, point_inertia=1e-06, timestep=0.001)
 
 
 def default_xml_path(name: str):
-    """Path of the packaged MJCF file of a system with default parameters.
+    """Path (a Traversable inside the package) of a registry system's packaged MJCF file.
 
-    Parameters
-    ----------
-    name : str
-        ``"cart-pole"``, ``"double-pendulum"``, ``"cart-double-pendulum"`` or
-        ``"triple-pendulum"`` (underscores
-        accepted).
-
-    Returns
-    -------
-    importlib.resources.abc.Traversable
-        The file inside the installed package (a :class:`pathlib.Path` for a regular install).
-
-    Raises
-    ------
-    ValueError
-        If ``name`` is not a packaged system.
-
-    Examples
-    --------
     >>> default_xml_path("cart-pole").name
     'cart_pole.xml'
     """
@@ -201,30 +139,11 @@ def default_xml_path(name: str):
 def coordinate_system(names, angles=()):
     """A system description from coordinate names alone, for the reference catalogs.
 
-    What :func:`pysindy_xl.mujoco.reference_catalog` and ``pysindy-xl identify`` need from a
-    system when there is no MJCF file: the coordinates, which of them are angles (they enter
-    the catalog through ``sin`` and ``cos``) and friction ``qd_i`` in the equation of ``i``.
-    No true model, no simulation.
+    What :func:`pysindy_xl.mujoco.reference_catalog` and ``pysindy-xl identify`` need when
+    there is no MJCF file: the coordinates (``["x", "theta"]`` or ``"x,theta"``), which are
+    ``angles`` (through ``sin`` and ``cos``) and friction ``qd_i`` in equation ``i``. No true
+    model (``has_ground_truth`` False), no simulation.
 
-    Parameters
-    ----------
-    names : list of str or str
-        Coordinate names (``["x", "theta"]`` or ``"x,theta"``).
-    angles : list of str or str, default ()
-        The names among ``names`` that are angles.
-
-    Returns
-    -------
-    MuJoCoSystem
-        With ``name`` "coordinates", ``has_ground_truth`` False.
-
-    Raises
-    ------
-    ValueError
-        If an angle is not among the coordinates, or a name is not a valid symbol name.
-
-    Examples
-    --------
     >>> from pysindy_xl.mujoco import reference_catalog
     >>> system = coordinate_system("x,theta", angles="theta")
     >>> system.coordinate_names, system.angle_coordinates

@@ -2,11 +2,9 @@
 reference, as the controller of a real arm does.
 
 Random torques excite an arm only if its motors can hold it against gravity; otherwise it
-falls onto its joint stops. :func:`tracking_controller` designs a PD controller per motor from
-the MJCF's own model and :func:`tracked_model` writes it into a copy of the compiled model as
-``position`` servos (the motors' torque limits kept), so that MuJoCo's actuator law
-(:mod:`~pysindy_xl.mujoco.systems.actuation`) is the controller: generation, the actuator law
-of closed-loop validation and the identified model stepped by MuJoCo all use it unchanged.
+falls onto its joint stops. :func:`tracking_controller` designs a PD controller per motor and
+:func:`tracked_model` writes it into a copy of the model as ``position`` servos, so MuJoCo's
+actuator law (:mod:`~pysindy_xl.mujoco.systems.actuation`) is the controller everywhere.
 """
 
 from __future__ import annotations
@@ -55,32 +53,13 @@ def _torque_range(model, a: int) -> tuple[float, float]:
 
 
 def plain_motors(model) -> np.ndarray:
-    """Which actuators are plain torque motors (fixed gain, no bias) on a limited hinge or
-    slide joint: those :func:`tracking_controller` can make track a reference.
-
-    Parameters
-    ----------
-    model : mujoco.MjModel
-
-    Returns
-    -------
-    ndarray of bool, shape (nu,)
-    """
+    """Boolean (nu,): the actuators :func:`tracking_controller` can make track a reference
+    (plain torque motors on limited hinge or slide joints)."""
     return np.array([_plain_motor(model, a) for a in range(model.nu)], dtype=bool)
 
 
 def gravity_torques(model, poses) -> np.ndarray:
-    """Gravity's generalized forces (MuJoCo's ``qfrc_bias`` at rest) at each pose.
-
-    Parameters
-    ----------
-    model : mujoco.MjModel
-    poses : array, shape (P, nq)
-
-    Returns
-    -------
-    ndarray, shape (P, nv)
-    """
+    """Gravity's generalized forces (``qfrc_bias`` at rest), shape (P, nv), at poses (P, nq)."""
     mujoco = import_mujoco()
 
     data = mujoco.MjData(model)
@@ -95,14 +74,9 @@ def gravity_torques(model, poses) -> np.ndarray:
 def tracking_controller(model, actuators=None, n_poses: int = 16, seed=0) -> dict | None:
     """A PD controller with which plain torque motors track a position reference.
 
-    Random torques cannot excite an arm whose motors carry its weight: open loop it falls
-    onto its joint stops, and every sample is constrained. A controller that tracks a
-    reference inside the joint ranges keeps it there, as on a real robot; the recorded input
-    is still the motor torque. Each motor ``a`` on joint ``j`` (gear ``g``) becomes the servo
-    ``F = kp (ctrl - g q_j) - kv g qd_j`` (MuJoCo's ``position`` actuator: the reference
-    ``ctrl / g`` is a control signal like any other, the controller a state-dependent
-    actuator law), within the motor's own force range, with the joint stiffness ``K`` and
-    damping ``D`` (``kp = K / g^2``, ``kv = D / g^2``)
+    Each motor on joint ``j`` (gear ``g``) becomes MuJoCo's ``position`` servo
+    ``F = kp (ctrl - g q_j) - kv g qd_j`` within its force range, ``kp = K / g^2``,
+    ``kv = D / g^2``,
 
     .. math::
 
@@ -110,44 +84,17 @@ def tracking_controller(model, actuators=None, n_poses: int = 16, seed=0) -> dic
             \\frac{\\max_q |g_j(q)| + f_j}{e\\,(q_j^{\\max} - q_j^{\\min})}\\Big),
         \\qquad D = 2\\sqrt{K m}
 
-    (``m``: the joint's diagonal of ``mj_fullM`` at the reference pose, armature included;
-    ``g_j(q)``: gravity's torque at ``n_poses`` random poses in the ranges; ``f_j``: dry
-    friction; ``omega = TRACKING_BANDWIDTH``, ``e = TRACKING_ERROR``): critically damped, as
-    fast as ``omega`` and stiff enough that the largest static load moves the joint by at
-    most ``e`` of its range. The joint's own damping slows the loop; the references are kept
-    within the loop's actual bandwidth
-    (:func:`~pysindy_xl.mujoco.systems.actuation.servo_bandwidths`, with that damping) by
-    :func:`~pysindy_xl.mujoco.simulation.forcing.within_servo_reach`.
-
-    Parameters
-    ----------
-    model : mujoco.MjModel
-    actuators : array of int, optional
-        Candidate actuators (default all); those that are plain motors on limited hinge or
-        slide joints are tracked.
-    n_poses : int, default 16
-        Random poses at which gravity is evaluated.
-    seed : int, default 0
-
-    Returns
-    -------
-    dict or None
-        ``actuators`` (indices), ``kp``, ``kv``, ``ctrlrange`` (the joint ranges in actuator
-        length units) and ``forcerange`` (the motors' force ranges, None where unbounded): a JSON
-        description for :func:`tracked_model`; None when no actuator qualifies.
-
-    Examples
-    --------
-    A 1 kg pendulum of 0.5 m on a motor, range +-2 rad: gravity's 4.9 N m over 2 % of
-    the 4 rad range asks a stiffness of 61 N m / rad, above ``m omega^2`` (0.25 kg m^2
-    at 10 pi rad/s: 247):
+    (``m``: the joint's diagonal of ``mj_fullM``; ``g_j(q)``: gravity's torque at ``n_poses``
+    random poses; ``f_j``: dry friction; ``omega = TRACKING_BANDWIDTH``,
+    ``e = TRACKING_ERROR``). Returns the JSON description :func:`tracked_model` reads, or
+    None when none of ``actuators`` (default all) is a plain motor on a limited joint.
 
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string('''<mujoco><worldbody><body>
     ...   <joint name="j" axis="0 1 0" range="-2 2"/>
     ...   <inertial pos="0 0 -0.5" mass="1" diaginertia="1e-6 1e-6 1e-6"/></body></worldbody>
     ...   <actuator><motor joint="j"/></actuator></mujoco>''')
-    >>> controller = tracking_controller(model)
+    >>> controller = tracking_controller(model)  # m omega^2 outweighs gravity's need
     >>> round(controller["kp"][0], 1), round(controller["kv"][0], 2)
     (246.7, 15.71)
     """
@@ -186,27 +133,11 @@ def tracking_controller(model, actuators=None, n_poses: int = 16, seed=0) -> dic
 def tracked_model(model, controller: dict):
     """A copy of ``model`` whose motors follow ``controller`` (:func:`tracking_controller`).
 
-    Parameters
-    ----------
-    model : mujoco.MjModel
-        The model the controller was made for, or one with the same actuators (e.g. the
-        identified model of :func:`~pysindy_xl.export.mjcf.identified_mj_model`).
-    controller : dict
-        As returned by :func:`tracking_controller` (or read back from JSON).
+    ``model`` is the one the controller was made for, or one with the same actuators (e.g.
+    :func:`~pysindy_xl.export.mjcf.identified_mj_model`); its tracked actuators become
+    ``position`` servos (gain ``kp``, bias ``(0, -kp, -kv)``), controls limited to
+    ``ctrlrange``, forces to ``forcerange``.
 
-    Returns
-    -------
-    mujoco.MjModel
-        Its tracked actuators are ``position`` servos (gain ``kp``, bias ``(0, -kp, -kv)``),
-        controls limited to ``ctrlrange``, forces to ``forcerange``.
-
-    Raises
-    ------
-    ValueError
-        If ``controller`` names an actuator the model does not have.
-
-    Examples
-    --------
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string('''<mujoco><worldbody><body>
     ...   <joint name="j" axis="0 1 0" range="-2 2"/>

@@ -1,27 +1,17 @@
 """URDF robot descriptions as MJCF: what :class:`~pysindy_xl.mujoco.MJCFSystem` reads.
 
-MuJoCo compiles URDF itself (its parser keeps the ``<inertial>`` of every link, the joint
-axes, origins, limits, ``damping`` and ``friction``); three things stand between a robot's
-URDF and a model the package can use, and :func:`urdf_to_mjcf` settles them:
+MuJoCo compiles URDF itself (inertials, joint axes, origins, limits, damping, friction);
+:func:`urdf_spec` settles what stands between a robot's URDF and a usable model:
 
-- **Meshes.** A URDF names its visual and collision meshes (``package://...`` files that
-  travel with the robot's ROS package, rarely with the URDF). Identification needs the
-  inertials only, so every ``<visual>`` and ``<collision>`` element is dropped: the URDF
-  loads without its meshes, and the compiled model has no geometry (no contacts, and a
-  link without ``<inertial>`` is massless, as URDF says).
-- **Fixed joints.** A link attached by a fixed joint is fused into its parent (MuJoCo's
-  ``fusestatic``, on by default for URDF): its mass and inertia load the parent body, and
-  the mass matrix is unchanged; a ``<mujoco><compiler .../></mujoco>`` element in the URDF
-  still sets MuJoCo's options (``fusestatic="false"`` keeps such links as welded bodies).
-- **Actuators.** URDF has none; a robot's joints are torque-driven, so each hinge and slide
-  joint gets a motor (gear 1, named like its joint; an effort limit becomes MuJoCo's
-  ``actuatorfrcrange``), and the joint torques of a log are its controls.
+- **Meshes** (``package://`` files rarely shipped with the URDF): every ``<visual>`` and
+  ``<collision>`` is dropped; identification needs the inertials only.
+- **Fixed joints**: fused into the parent (MuJoCo's ``fusestatic``); a ``<mujoco><compiler/>``
+  element in the URDF still sets MuJoCo's options.
+- **Actuators**: URDF has none; each hinge and slide joint gets a motor (gear 1, named like
+  its joint; an effort limit becomes ``actuatorfrcrange``).
 
-Published URDFs sometimes carry inertia tensors that no rigid body has (principal moments
-violating ``A + B >= C``); MuJoCo refuses them, and the conversion then lets MuJoCo balance
-them (``balanceinertia``: all three principal moments set to their mean) and warns, naming the
-links. The kinematic catalog does not depend on the inertias (its terms come from the
-kinematics alone), only the model's reference parameter values do.
+Inertia tensors no rigid body has (``A + B < C``) are balanced by MuJoCo (``balanceinertia``)
+with a warning naming the links; the kinematic catalog does not depend on them.
 """
 
 from __future__ import annotations
@@ -40,8 +30,6 @@ __all__ = ["urdf_spec", "urdf_to_mjcf", "is_urdf"]
 def is_urdf(source) -> bool:
     """Whether ``source`` (a path or XML text) is a URDF robot description.
 
-    Examples
-    --------
     >>> is_urdf("arm.urdf"), is_urdf('<robot name="r"><link name="a"/></robot>')
     (True, True)
     >>> is_urdf("<mujoco/>"), is_urdf("arm.xml")
@@ -82,33 +70,12 @@ def _violating_links(root) -> list:
 
 
 def urdf_spec(text: str, where: str = "source", warn: bool = True):
-    """The URDF robot as a MuJoCo spec, without meshes and with a motor on every joint.
+    """The URDF robot as a compilable MuJoCo spec, without meshes and with a motor per joint.
 
-    See the module documentation for what changes on the way (meshes, fixed joints,
-    actuators, inertias that no rigid body has). Compiling the spec keeps the URDF's numbers
-    exactly; :func:`urdf_to_mjcf` writes them as MJCF text (to six significant digits).
+    What changes on the way: see the module docstring. Compiling the spec keeps the URDF's
+    numbers exactly. ``where`` names the argument or file in errors; ``warn``: warn when
+    inertias had to be balanced. ValueError when the text is not a URDF or does not compile.
 
-    Parameters
-    ----------
-    text : str
-        The URDF text.
-    where : str, default "source"
-        Name of the argument or file in error messages.
-    warn : bool, default True
-        Warn when inertias had to be balanced.
-
-    Returns
-    -------
-    mujoco.MjSpec
-        A spec that compiles (``spec.compile()``).
-
-    Raises
-    ------
-    ValueError
-        If the text is not a URDF or MuJoCo cannot compile it.
-
-    Examples
-    --------
     >>> urdf = '''<robot name="arm">
     ...   <link name="base"/>
     ...   <link name="upper"><inertial><origin xyz="0 0 -0.5"/><mass value="1"/>
@@ -163,18 +130,5 @@ def urdf_spec(text: str, where: str = "source", warn: bool = True):
 
 
 def urdf_to_mjcf(text: str, where: str = "source") -> str:
-    """The MJCF text of a URDF robot: :func:`urdf_spec` written out (MuJoCo writes its numbers
-    to six significant digits).
-
-    Parameters
-    ----------
-    text : str
-        The URDF text.
-    where : str, default "source"
-        Name of the argument or file in error messages.
-
-    Returns
-    -------
-    str
-    """
+    """The MJCF text of a URDF robot: :func:`urdf_spec` written out (six significant digits)."""
     return urdf_spec(text, where).to_xml()
