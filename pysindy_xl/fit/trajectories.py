@@ -19,21 +19,13 @@ FORMULATIONS = ("auto", "strong", "weak")
 
 
 def differentiation_function(method=None, unbiased: bool = False):
-    """The function ``derivative(values, t)`` that estimates missing derivatives.
+    """The function ``derivative(values, t)`` that estimates missing derivatives, checking that
+    its result has the input's shape and is finite.
 
-    Parameters
-    ----------
-    method : pysindy differentiation method, optional
-        Used as it is when given.
-    unbiased : bool, default False
-        Without ``method``: fourth-order finite differences (no smoothing bias, which a
-        null-space search of unforced data cannot tell from the law) instead of
-        ``ps.SmoothedFiniteDifference()`` (smoothing on the actual times off a uniform grid).
-
-    Returns
-    -------
-    callable
-        Checks that the result has the shape of its input and is finite.
+    ``method`` (a pysindy differentiation method) is used as it is; without it, ``unbiased``
+    gives fourth-order finite differences (no smoothing bias, which a null-space search of
+    unforced data cannot tell from the law), else ``ps.SmoothedFiniteDifference()`` (smoothing
+    on the actual times off a uniform grid).
 
     Examples
     --------

@@ -59,24 +59,12 @@ def shared_half_width(test_functions, trajectories, columns=None) -> float:
 def propagated_noise(library, d, smoothing, phi, dphi, block, n_draws, rng):
     """Second moments (n, F, F) of the weak columns' errors caused by the noise of the positions.
 
-    Fresh noise of the estimated level is added to the positions, which are smoothed again with
-    the same weights and turned into weak columns; the change ``Delta`` of the columns is
-    distributed (to first order) as their error ``E``, so ``E[E^T E] ~ mean of Delta^T Delta``
-    per coordinate block.
-
-    Parameters
-    ----------
-    library : fitted SymbolicLibrary
-    d : dict
-        One trajectory (``"t"``, ``"x"``, ``"u"``).
-    smoothing : smoother or tuple
-        The smoother as it smoothed this trajectory (with ``noise_`` and ``resmooth``), or
-        ``(lam, noise, order)`` of a :class:`WhittakerSmoother`.
-    phi, dphi : sparse matrices, shape (K, N)
-    block : ndarray, shape (n * K, F)
-        The trajectory's weak columns.
-    n_draws : int
-    rng : numpy Generator
+    Fresh noise of the estimated level is added to the positions of trajectory ``d``, which are
+    smoothed again with the same weights (``smoothing``: the smoother as it smoothed ``d``, with
+    ``noise_`` and ``resmooth``, or ``(lam, noise, order)`` of a :class:`WhittakerSmoother`) and
+    turned into weak columns with ``phi, dphi``; the change ``Delta`` from ``block`` (n * K, F)
+    is distributed (to first order) as the error ``E``: ``E[E^T E] ~ mean of Delta^T Delta`` over
+    ``n_draws`` per coordinate block.
 
     Examples
     --------

@@ -47,11 +47,6 @@ def bandwidth_half_width(bandwidth: float, power: int = 6) -> float:
     """Half-width (s) of the bump ``(1 - s^2)^power`` whose response falls by 3 dB at
     ``bandwidth`` (Hz): the bump is close to a Gaussian of standard deviation
     ``h / sqrt(2 power + 3)``, whose response is ``1/sqrt(2)`` at ``sqrt(ln 2) / (2 pi sigma)``.
-
-    Examples
-    --------
-    >>> round(bandwidth_half_width(10.0), 4)
-    0.0513
     """
     return math.sqrt(math.log(2.0) * (2 * power + 3)) / (2 * math.pi * bandwidth)
 
@@ -66,19 +61,11 @@ class NoiseModel:
 
 
 def time_folds(supports: np.ndarray, spans: np.ndarray, n_blocks: int):
-    """Contiguous time blocks of every trajectory, as masks over test functions.
+    """Contiguous time blocks of every trajectory, as masks ``fit, held`` (n_blocks, K) over test
+    functions: those whose support misses block ``k``, and those inside it.
 
     ``supports`` (K, 3) holds each test function's trajectory and first and last time
     (``weak_info_["supports"]``), ``spans`` (T, 2) each trajectory's first and last time.
-    Returns ``fit, held`` (n_blocks, K): the test functions whose support misses block ``k``,
-    and those inside it.
-
-    Examples
-    --------
-    >>> supports = np.array([[0, 0.0, 0.4], [0, 0.3, 0.7], [0, 0.6, 1.0]])
-    >>> fit, held = time_folds(supports, np.array([[0.0, 1.0]]), 2)
-    >>> fit.astype(int).tolist(), held.astype(int).tolist()
-    ([[0, 0, 1], [1, 0, 0]], [[1, 0, 0], [0, 0, 1]])
     """
     trajectory = supports[:, 0].astype(int)
     start, stop = spans[trajectory, 0], spans[trajectory, 1]

@@ -34,26 +34,13 @@ _LAMBDA_GRID = 10.0 ** np.arange(-4.0, 16.01, 0.25)
 
 
 def finite_difference_weights(t, derivative: int, stencil: int = 5, degree=None):
-    """Per-sample finite-difference stencils of the ``derivative``-th derivative.
+    """Per-sample finite-difference stencils ``index, weights`` (N, stencil) of the
+    ``derivative``-th derivative: ``f^(derivative)(t[i]) ~ sum_j weights[i, j] f[index[i, j]]``.
 
-    Each sample uses the ``stencil`` nearest samples (shifted at the grid's ends); the weights
-    solve the Taylor conditions on the actual offsets. With ``degree < stencil - 1`` they are the
-    least-squares polynomial's of that degree (Savitzky-Golay on the actual times).
-
-    Parameters
-    ----------
-    t : array, shape (N,)
-        Strictly increasing sample times, ``N >= stencil``.
-    derivative : int
-        Smaller than ``stencil``.
-    stencil : int, default 5
-    degree : int, optional
-        Of the local polynomial, at least ``derivative`` (default ``stencil - 1``).
-
-    Returns
-    -------
-    index, weights : ndarray, shape (N, stencil)
-        ``f^(derivative)(t[i]) ~ sum_j weights[i, j] * f[index[i, j]]``.
+    Each sample uses the ``stencil`` nearest samples of the strictly increasing ``t`` (shifted at
+    the grid's ends); the weights solve the Taylor conditions on the actual offsets. With
+    ``degree < stencil - 1`` they are the least-squares polynomial's of that degree
+    (Savitzky-Golay on the actual times).
 
     Examples
     --------
