@@ -37,20 +37,17 @@ class CatalogMap:
     Attributes
     ----------
     columns : ndarray of int, shape (k,)
-        The catalog column of each problem column.
-    n_features : int
-        Catalog columns.
-    coordinates : ndarray of bool, shape (n,)
-        Coordinates whose equations are the problem's blocks (the others hold still).
-    forced : ndarray of bool, shape (n,)
-        Coordinates on which a recorded force acts.
+        The catalog column of each problem column (of ``n_features``).
+    coordinates, forced : ndarray of bool, shape (n,)
+        The coordinates whose equations are the problem's blocks (the others hold still); those
+        a recorded force acts on.
     dropped : dict of int to str
         Catalog columns left out, with the reason.
     states : ndarray, shape (S, 4n + 1)
-        The library inputs of the rows (smoothed for the weak form).
+        The rows' library inputs (smoothed for the weak form).
     formulation : {"strong", "weak"}
     weak_info : dict or None
-        Weak form: :func:`~pysindy_xl.weak.weak_regression`'s information.
+        :func:`~pysindy_xl.weak.weak_regression`'s information.
     """
 
     columns: np.ndarray

@@ -147,10 +147,9 @@ def check_fit(estimator, x, t, x_dot, x_ddot, u, sample_mask):
 
     Returns
     -------
-    library : fitted CatalogRepartition
-    data : list of dict
-        :func:`trajectory_data`, with the derivatives the strong form needs.
-    formulation : {"strong", "weak"}
+    library, data, formulation
+        The fitted catalog, :func:`trajectory_data` (with the derivatives the strong form
+        needs) and ``"strong"`` or ``"weak"``.
 
     Raises
     ------

@@ -81,32 +81,19 @@ def choose_noise_model(candidates, reference, spans, force_columns, solve,
                        n_blocks=BLOCK_COUNTS):
     """The candidate whose fits predict held-out time blocks best, if clearly better than the first.
 
-    Parameters
-    ----------
-    candidates : list of (NoiseModel, rows, supports, noise)
-        Each candidate's weak rows (coordinate-major, same coordinates and columns for all),
-        test-function supports (:func:`time_folds`) and propagated row noise
-        (:class:`~pysindy_xl.weak.WeakNoise` or None).
-    reference : (rows, supports, noise)
-        The common scoring rows and the noise the positions propagate into them.
-    spans : array, shape (T, 2)
-        First and last time of each trajectory.
-    force_columns : list of int
-    solve : callable
-        ``solve(rows, noise, weigh) -> coef``: one candidate's fit on some rows.
-    n_blocks : int or sequence of int, default :data:`BLOCK_COUNTS`
-        Of several counts, the first at which every candidate can be fitted outside each block
-        and every block holds scoring rows, else the first at which some candidate can.
+    ``candidates`` are ``(NoiseModel, rows, supports, noise)``: weak rows (coordinate-major, the
+    same columns for all), test-function supports (:func:`time_folds`) and propagated row noise
+    (:class:`~pysindy_xl.weak.WeakNoise` or None); ``reference`` the common scoring
+    ``(rows, supports, noise)``; ``spans`` (T, 2) each trajectory's first and last time;
+    ``solve(rows, noise, weigh) -> coef`` one candidate's fit. Of several ``n_blocks``, the first
+    at which every candidate can be fitted outside each block (and every block holds scoring
+    rows) is used, else the first at which some candidate can.
 
-    Returns
-    -------
-    best : int or None
-        The candidate of smallest held-out error among those that beat the first by
-        :data:`MARGIN` in total and on most blocks, while the positions' noise makes up less
-        than :data:`NOISE_SHARE` of the first's residual; else 0. None when the data are too
-        short to hold out blocks.
-    errors : list of float
-        Each candidate's held-out relative error (``inf`` where a fold's fit failed).
+    Returns ``(best, errors)``: the candidate of smallest held-out error among those that beat
+    the first by :data:`MARGIN` in total and on most blocks, while the positions' noise makes up
+    less than :data:`NOISE_SHARE` of the first's residual, else 0 (None when the data are too
+    short to hold out blocks); and each candidate's held-out relative error (``inf`` where a
+    fold's fit failed).
     """
     rows_ref, supports_ref, noise_ref = reference
     n_coordinates = rows_ref.shape[0] // len(supports_ref)
