@@ -44,14 +44,15 @@ _DERIVED: dict = {}
 _CACHED_DERIVED = 16
 
 
-def _derived(key, derive):
-    """``derive()``, shared by every call with the same ``key`` (least recently used dropped)."""
-    found = _DERIVED.pop(key, None)
+def _derived(key, derive, cache=_DERIVED, size=_CACHED_DERIVED):
+    """``derive()``, shared by every call with the same ``key`` in ``cache`` (at most ``size``
+    entries, the least recently used dropped first)."""
+    found = cache.pop(key, None)
     if found is None:
         found = derive()
-    _DERIVED[key] = found
-    while len(_DERIVED) > _CACHED_DERIVED:
-        del _DERIVED[next(iter(_DERIVED))]
+    cache[key] = found
+    while len(cache) > size:
+        del cache[next(iter(cache))]
     return found
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
-from ._base import SymbolicLibrary, TermChain
+from ._base import SymbolicLibrary, TermChain, _derived
 from ._compile import Terms
 from ._structure import DeferredMatrix
 from .external_forces import ExternalForces
@@ -25,11 +25,8 @@ def _merged(slices, parts) -> tuple[np.ndarray, Terms]:
     """
     key = (tuple(id(terms) for _, terms in parts), tuple(c.start for c in slices),
            tuple(np.asarray(index).tobytes() for index, _ in parts))
-    found = _MERGED.get(key)
-    if found is None:
-        found = _MERGED[key] = (parts, _merge(slices, parts))  # parts keep the ids valid
-        while len(_MERGED) > _CACHED_MERGES:
-            del _MERGED[next(iter(_MERGED))]
+    # the parts, kept with their merge, keep the ids valid
+    found = _derived(key, lambda: (parts, _merge(slices, parts)), _MERGED, _CACHED_MERGES)
     index, terms = found[1]
     return index.copy(), terms
 
