@@ -127,7 +127,7 @@ class BumpTestFunctions:
         the corner frequency (:func:`corner_frequency`), at least ``min_samples`` samples.
     n_functions : int or "auto", default "auto"
         Test functions per trajectory, evenly spaced; ``"auto"``: enough for every sample to be
-        covered ``overlap`` times, and at least ``min_rows`` in all (see :meth:`matrices`).
+        covered ``overlap`` times.
     power : int, default 6
         Exponent ``p``; the bump and its first ``p - 1`` derivatives vanish at the ends.
     width_factor : float, default 1.0
