@@ -280,9 +280,9 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         self._evaluate = compile_terms(self.coords.variables, self.column_terms())
 
     def column_terms(self) -> Terms:
-        """The non-zero entries of the columns as ``Terms`` (:mod:`._compile`), one per row of
-        ``entry_index_``, decomposed on first use: the kernel of :meth:`transform` and of
-        :class:`~pysindy_xl.dynamics.CatalogDynamics`.
+        """The non-zero entries of the columns, one per row of ``entry_index_``, decomposed on
+        first use (:class:`~pysindy_xl.feature_library._compile.Terms`): the kernel of
+        :meth:`transform` and of :class:`~pysindy_xl.dynamics.CatalogDynamics`.
         """
         check_is_fitted(self, "entry_index_")
         terms = self.__dict__.get("_column_terms")
