@@ -146,7 +146,8 @@ class ClassicalLibrary(SymbolicLibrary):
                 for used in row if used]
 
     def to_spec(self) -> dict:
-        """As :meth:`SymbolicLibrary.to_spec` (terms in the restricted grammar)."""
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec` (terms in the
+        restricted grammar)."""
         if not hasattr(self, "terms_"):
             self.fit()
         return {
@@ -157,7 +158,7 @@ class ClassicalLibrary(SymbolicLibrary):
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """As :meth:`SymbolicLibrary.from_spec`."""
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
         terms = reader.terms(spec)
         mask = reader.matrix(spec, "mask", (len(terms), reader.coords.n), binary=True,
                              shape_name="(n_terms, n)")

@@ -121,7 +121,7 @@ class ExternalForces(SymbolicLibrary):
         return ["F[tau]"], column
 
     def to_spec(self) -> dict:
-        """As :meth:`SymbolicLibrary.to_spec`."""
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
         return {
             "type": self.spec_type,
             "interlink": _interlink_matrix(self.interlink, self.coords.n).tolist(),
@@ -129,7 +129,7 @@ class ExternalForces(SymbolicLibrary):
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """As :meth:`SymbolicLibrary.from_spec`."""
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
         n = reader.coords.n
         return cls(reader.coords,
                    interlink=reader.matrix(spec, "interlink", (n, n), shape_name="(n, n)"))

@@ -186,7 +186,7 @@ class JointFrictionLibrary(SymbolicLibrary):
         return None
 
     def to_spec(self) -> dict:
-        """As :meth:`SymbolicLibrary.to_spec`."""
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
         joints, velocities, weights, models, scales = self._resolved()
         return {"type": self.spec_type, "joints": joints,
                 "velocities": [format_expression(v) for v in velocities],
@@ -195,7 +195,7 @@ class JointFrictionLibrary(SymbolicLibrary):
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """As :meth:`SymbolicLibrary.from_spec`."""
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
         joints = spec.get("joints")
         reader.expect(isinstance(joints, list) and all(isinstance(j, str) for j in joints),
                       "JointFrictionLibrary: 'joints' must be a list of names")

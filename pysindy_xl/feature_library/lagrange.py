@@ -197,11 +197,11 @@ class LagrangeLibrary(SymbolicLibrary):
         )
 
     def to_spec(self) -> dict:
-        """As :meth:`SymbolicLibrary.to_spec`."""
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
         terms = as_expr_list(self.terms, "terms")
         return {"type": self.spec_type, "terms": [format_expression(t) for t in terms]}
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """As :meth:`SymbolicLibrary.from_spec`."""
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
         return cls(reader.coords, reader.terms(spec))

@@ -177,8 +177,9 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
             np.repeat(np.arange(len(polynomials)), sizes), len(polynomials))
 
     def to_spec(self) -> dict:
-        """As :meth:`SymbolicLibrary.to_spec`, a trigonometric polynomial term as its exponent rows
-        and coefficients (exact and compact), any other term in the restricted grammar.
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`, a trigonometric
+        polynomial term as its exponent rows and coefficients (exact and compact), any other
+        term in the restricted grammar.
         """
         coords = self.coords
         if isinstance(self.terms, TrigTerms) and self.terms.coords == coords and len(self.terms):
@@ -218,7 +219,7 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """As :meth:`SymbolicLibrary.from_spec`."""
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
         coords = reader.coords
         angles, items = spec.get("angles"), spec.get("terms")
         reader.expect(isinstance(angles, list) and len(angles) == coords.n

@@ -328,7 +328,7 @@ class CatalogRepartition(SymbolicLibrary):
         )
 
     def to_spec(self) -> dict:
-        """As :meth:`SymbolicLibrary.to_spec`."""
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
         return {
             "type": self.spec_type,
             "libraries": [lib.to_spec() for lib in self.flat_libraries()],
@@ -336,7 +336,8 @@ class CatalogRepartition(SymbolicLibrary):
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """As :meth:`SymbolicLibrary.from_spec`, libraries through ``reader``."""
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec` (each library
+        through ``reader``)."""
         libraries = spec.get("libraries")
         reader.expect(isinstance(libraries, list) and libraries,
                       "libraries must be a non-empty list")
