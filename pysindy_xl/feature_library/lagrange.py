@@ -14,8 +14,8 @@ __all__ = ["LagrangeLibrary", "euler_lagrange"]
 
 
 def _diff(expr: sp.Expr, symbol: sp.Symbol) -> sp.Expr:
-    """Partial derivative by the chain rule on sums, products, powers, sin and cos (several times
-    faster than ``sympy.diff`` on catalog terms); anything else falls back to ``sympy.diff``.
+    """Partial derivative by the chain rule on sums, products, powers, sin and cos (no
+    ``Derivative`` object per node, as ``sympy.diff`` builds); anything else by ``sympy.diff``.
     """
     if symbol not in expr.free_symbols:
         return sp.Integer(0)

@@ -2,10 +2,10 @@
 
 Two arrays (exponents, coefficients): products are outer sums of exponents, ``cos(q)**2`` is
 always rewritten as ``1 - sin(q)**2`` (canonical, so identities cancel) and equal monomials
-merge by one sort of integer row keys (:mod:`._monomials`), far faster than sympy on the
-kinematic catalog's chains. Slots of the exponent rows, for ``n`` coordinates: ``[0, n)``
-``sin q_j`` (``q_j`` for a linear coordinate), ``[n, 2n)`` ``cos q_j``, ``[2n, 3n)``
-``qd_j``, ``[3n, 4n)`` ``qdd_j``.
+merge by one sort of integer row keys (:mod:`._monomials`): none of sympy's assumptions
+and automatic simplification on the kinematic catalog's chains. Slots of the exponent rows,
+for ``n`` coordinates: ``[0, n)`` ``sin q_j`` (``q_j`` for a linear coordinate), ``[n, 2n)``
+``cos q_j``, ``[2n, 3n)`` ``qd_j``, ``[3n, 4n)`` ``qdd_j``.
 """
 
 from __future__ import annotations
