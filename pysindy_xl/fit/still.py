@@ -52,6 +52,14 @@ def driven_coordinates(library, forces) -> np.ndarray:
     Coordinate ``c`` is driven when a force column's entry in its equation contains ``tau_k``
     and the recorded force ``k`` is not zero everywhere. ``library`` is a fitted
     :class:`~pysindy_xl.CatalogRepartition`; ``forces`` a list of arrays (N_k, n), or None.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x", "y"])
+    >>> lib = px.CatalogRepartition([px.LagrangeLibrary(c, [c.qd[0] ** 2])]).fit()
+    >>> driven_coordinates(lib, [np.array([[1.0, 0.0], [2.0, 0.0]])]).tolist()
+    [True, False]
     """
     coords = library.coords
     n = coords.n
@@ -71,6 +79,17 @@ def still_coordinates(positions, times, forced, threshold: float) -> np.ndarray:
 
     ``positions`` and ``times`` are lists of arrays (N_k, n) and (N_k,); ``forced`` (n,) marks the
     coordinates that are never still; ``threshold`` is ``kappa``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 10, 1001)
+    >>> x = np.column_stack([np.sin(t), np.full_like(t, 0.3), np.full_like(t, 0.3)])
+    >>> still_coordinates([x], [t], np.array([False, False, True]), 3.0).tolist()
+    [False, True, False]
+    >>> drift = np.column_stack([np.sin(t), 0.3 + 0.1 * t])  # uniform motion: still too
+    >>> still_coordinates([drift], [t], np.zeros(2, dtype=bool), 3.0).tolist()
+    [False, True]
     """
     forced = np.asarray(forced, dtype=bool)
     still = ~forced
