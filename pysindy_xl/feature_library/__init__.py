@@ -26,21 +26,7 @@ from .polynomial_lagrange import PolynomialLagrangeLibrary
 from .repartition import CatalogRepartition
 from .spec import SpecError, SpecReader
 
-__all__ = [
-    "SymbolicLibrary",
-    "LagrangeLibrary",
-    "PolynomialLagrangeLibrary",
-    "ClassicalLibrary",
-    "ExternalForces",
-    "JointFrictionLibrary",
-    "CatalogRepartition",
-    "stack_variables",
-    "remembered_weak_values",
-    "compile_entries",
-    "euler_lagrange",
-    "pysindy_library_terms",
-    "integrate_by_parts",
-    "LIBRARY_TYPES",
-    "SpecReader",
-    "SpecError",
-]
+__all__ = ["SymbolicLibrary", "LagrangeLibrary", "PolynomialLagrangeLibrary", "ClassicalLibrary",
+           "ExternalForces", "JointFrictionLibrary", "CatalogRepartition", "stack_variables",
+           "remembered_weak_values", "compile_entries", "euler_lagrange", "pysindy_library_terms",
+           "integrate_by_parts", "LIBRARY_TYPES", "SpecReader", "SpecError"]

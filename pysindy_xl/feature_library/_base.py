@@ -1,19 +1,11 @@
 """What every catalog category shares: symbolic columns compiled once to one numeric function.
 
-Regression-matrix layout
-------------------------
-Every library transforms the data array ``Z`` of shape ``(N, 4n + 1)`` whose columns are
-``coords.variables = (q_1..q_n, qd_1..qd_n, qdd_1..qdd_n, tau_1..tau_n, t)`` (see
-:func:`stack_variables`) into the stacked regression matrix ``Theta`` of shape ``(n * N, F)``:
-
-* rows are coordinate-major: rows ``c * N`` to ``(c + 1) * N - 1`` hold the equation of
-  coordinate ``c`` evaluated on all ``N`` samples;
-* columns are catalog features; entry ``(c * N + k, j)`` is the symbolic entry ``E[c, j]`` of
-  :meth:`SymbolicLibrary.symbolic_matrix` evaluated at sample ``k``.
-
-One coefficient vector ``xi`` of length ``F`` is shared by every coordinate, and the identified
-model is ``Theta @ xi = 0``, i.e. for each coordinate ``c``: ``sum_j xi_j E[c, j] = 0``. Sharing
-``xi`` is what lets one Lagrangian term explain several equations at once.
+Every library maps the data ``Z`` (N, 4n + 1), columns ``coords.variables`` (see
+:func:`stack_variables`), to the regression matrix ``Theta`` (n * N, F): rows
+coordinate-major (rows ``c * N`` to ``(c + 1) * N - 1`` hold the equation of coordinate
+``c``), entry ``(c * N + k, j)`` the symbolic entry ``E[c, j]`` at sample ``k``. One
+coefficient vector ``xi`` is shared by every coordinate, the model being ``Theta @ xi = 0``:
+one Lagrangian term explains several equations at once.
 """
 
 from __future__ import annotations
@@ -39,40 +31,36 @@ from ._weak import integrate_by_parts
 __all__ = ["SymbolicLibrary", "stack_variables", "compile_entries", "LIBRARY_TYPES",
            "remembered_weak_values"]
 
-#: Every catalog category by its ``spec_type``: what a model file may name. A subclass of
-#: :class:`SymbolicLibrary` registers itself when it is defined (in this package or in a
-#: user's code); loading looks classes up here and never imports anything.
+#: Every catalog category by its ``spec_type``: what a model file may name. Subclasses
+#: register themselves when defined; loading never imports anything.
 LIBRARY_TYPES: dict[str, type] = {}
 
 _WEAK_BLOCK = 8192  # samples per block of the weak evaluation
 _WEAK_MEMO_BYTES = 1 << 28  # values kept by remembered_weak_values, at most
 
-#: Derived terms by content, most recently used last: a fitted model's clone of a catalog
-#: (every fit clones the user's) derives the same entries again, and with the same
-#: :class:`Terms` object its merged terms and compiled evaluators are found, not rebuilt.
+#: Derived terms by content, most recently used last: a clone of a catalog finds its
+#: :class:`Terms` (and their compiled evaluators) here.
 _DERIVED: dict = {}
 _CACHED_DERIVED = 16
 
 
-def _derived(key, derive):
-    """``derive()``, shared by every call with the same ``key`` (bounded, least recently used
-    dropped first)."""
-    found = _DERIVED.pop(key, None)
+def _derived(key, derive, cache=_DERIVED, size=_CACHED_DERIVED):
+    """``derive()``, shared by every call with the same ``key`` in ``cache`` (at most ``size``
+    entries, the least recently used dropped first)."""
+    found = cache.pop(key, None)
     if found is None:
         found = derive()
-    _DERIVED[key] = found
-    while len(_DERIVED) > _CACHED_DERIVED:
-        del _DERIVED[next(iter(_DERIVED))]
+    cache[key] = found
+    while len(cache) > size:
+        del cache[next(iter(cache))]
     return found
 
 
 @contextlib.contextmanager
 def remembered_weak_values(library):
-    """Within the block, ``library.weak_transform`` evaluates the entries of each distinct
-    state array once (at most ``_WEAK_MEMO_BYTES`` kept, released at the end; re-entrant).
-
-    Weak rows of the same states under other test functions (a noise-model choice's
-    candidates) then cost only their contraction, bit for bit as separate evaluations.
+    """Within the block, ``library.weak_transform`` evaluates the entries of each distinct state
+    array once (at most ``_WEAK_MEMO_BYTES`` kept; re-entrant): weak rows of the same states
+    under other test functions then cost only their contraction, bit for bit the same.
 
     Examples
     --------
@@ -97,7 +85,8 @@ def remembered_weak_values(library):
 
 class TermChain(Sequence):
     """The terms of several libraries one after another, each read from its library's own
-    sequence when asked for (a kinematic catalog's sympy terms are built on demand)."""
+    sequence when asked for (a kinematic catalog's terms are built on demand).
+    """
 
     def __init__(self, parts):
         self.parts = [p if isinstance(p, Sequence) else list(p) for p in parts]
@@ -125,8 +114,7 @@ class TermChain(Sequence):
 
 
 def _clone_parameter(value):
-    """``value`` for a clone: sympy expressions (alone or in a list or tuple) shared, anything
-    else cloned as scikit-learn does."""
+    """``value`` for a clone: sympy expressions shared, anything else cloned (scikit-learn)."""
     if isinstance(value, sp.Basic):
         return value
     if isinstance(value, (list, tuple)) and all(isinstance(v, sp.Basic) for v in value):
@@ -176,12 +164,10 @@ def stack_variables(q, qd, qdd=None, tau=None, t=None) -> np.ndarray:
 class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
     """Base class of the catalog categories: a matrix of symbolic columns, compiled once.
 
-    Subclasses implement :meth:`_build_symbolic` returning the feature names and the sympy
-    matrix ``E`` of shape ``(n, F)`` (entry ``E[c, j]``: contribution of feature ``j`` to the
-    equation of coordinate ``c``). ``fit`` derives ``E`` once and compiles all its non-zero
-    entries into one vectorized evaluator that shares every common product
-    (:func:`compile_entries`); ``transform`` runs it on all samples and writes the entries in
-    place, laid out as described in the module docstring.
+    Subclasses implement :meth:`_build_symbolic`, returning the feature names and the sympy
+    matrix ``E`` (n, F) (``E[c, j]``: feature ``j`` in the equation of coordinate ``c``).
+    ``fit`` derives ``E`` and compiles its non-zero entries into one vectorized evaluator
+    (:func:`compile_entries`); ``transform`` runs it as laid out in the module docstring.
 
     Parameters
     ----------
@@ -218,8 +204,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         self.coords = coords
 
     def __sklearn_clone__(self):
-        """An unfitted copy with the same parameters. Sympy expressions are immutable, so the
-        copy shares them instead of deep-copying them (seconds for an arm's catalog)."""
+        """An unfitted copy with the same parameters, sharing the (immutable) sympy expressions."""
         params = self.get_params(deep=False)
         return type(self)(**{name: _clone_parameter(value) for name, value in params.items()})
 
@@ -228,8 +213,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         raise NotImplementedError
 
     def _feature_terms(self) -> list:
-        """The term each feature stands for (a Lagrangian term for the ``"lagrange"``
-        category, the added function for a classical one), None where there is none."""
+        """The term each feature stands for (a Lagrangian term, an added function), None if none."""
         return [None] * self.n_output_features_
 
     def _check_coords(self):
@@ -240,17 +224,8 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
 
     # -- pysindy / scikit-learn interface ------------------------------------------------
     def fit(self, x=None, y=None):
-        """Derive the symbolic columns (their evaluator is compiled on first use).
-
-        Parameters
-        ----------
-        x : array, shape (N, 4n + 1), optional
-            Library input (see :func:`stack_variables`); only its width is checked.
-        y : ignored
-
-        Returns
-        -------
-        self
+        """Derive the symbolic columns (their evaluator is compiled on first use); ``x``
+        (N, 4n + 1), optional, has only its width checked. Returns self.
         """
         self._fit_symbolic()
         if x is not None:
@@ -286,8 +261,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         self.n_features_in_ = len(self.coords.variables)
 
     def _check_columns(self, names, matrix) -> None:
-        """Refuse derived columns that cannot be evaluated (e.g. a DiracDelta from
-        differentiating Abs twice), naming the feature."""
+        """Refuse derived columns that cannot be evaluated (a DiracDelta), naming the feature."""
         from ..expressions import check_term
 
         for j, feature in enumerate(names):
@@ -305,16 +279,9 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         self._evaluate = compile_terms(self.coords.variables, self.column_terms())
 
     def column_terms(self) -> Terms:
-        """The non-zero entries of the columns as polynomials in a few atoms, one entry per
-        row of ``entry_index_`` (coordinate, feature), decomposed on first use.
-
-        The kernel of :meth:`transform` and of the identified dynamics
-        (:class:`~pysindy_xl.dynamics.CatalogDynamics`).
-
-        Returns
-        -------
-        Terms
-            See :class:`pysindy_xl.feature_library._compile.Terms`.
+        """The non-zero entries of the columns, one per row of ``entry_index_``, decomposed on
+        first use (:class:`~pysindy_xl.feature_library._compile.Terms`): the kernel of
+        :meth:`transform` and of :class:`~pysindy_xl.dynamics.CatalogDynamics`.
         """
         check_is_fitted(self, "entry_index_")
         terms = self.__dict__.get("_column_terms")
@@ -372,34 +339,18 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         )
 
     def check_domain(self, x) -> None:
-        """Raise ``ValueError`` when a candidate term is undefined on the data (no-op here).
-
-        Parameters
-        ----------
-        x : array, shape (N, 4n + 1)
-            Library input (:func:`stack_variables`).
-        """
+        """Raise ``ValueError`` when a candidate term is undefined on ``x`` (no-op here)."""
 
     def transform(self, x) -> np.ndarray:
-        """Evaluate the stacked regression matrix.
-
-        Parameters
-        ----------
-        x : array, shape (N, 4n + 1)
-            Library input built by :func:`stack_variables`.
-
-        Returns
-        -------
-        theta : ndarray, shape (n * N, F)
-            Rows coordinate-major, one column per feature.
+        """The stacked regression matrix (n * N, F), rows coordinate-major, of ``x`` (N, 4n + 1)
+        (:func:`stack_variables`).
         """
         check_is_fitted(self, "entry_index_")
         if not hasattr(self, "_evaluate"):  # compiled on first use: weak fits need none
             self._compile()
         x = self._check_input(x)
         n_samples = x.shape[0]
-        # column-major: each entry is written in place into a contiguous column block (and
-        # LAPACK prefers this layout)
+        # column-major: each entry written in place into a contiguous block (LAPACK's layout)
         theta = np.zeros((self.coords.n * n_samples, self.n_output_features_), order="F")
         targets = [theta[c * n_samples : (c + 1) * n_samples, j] for c, j in self.entry_index_]
         with np.errstate(all="ignore"):
@@ -421,11 +372,8 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
     def weak_matrices(self) -> tuple[sp.Matrix, sp.Matrix]:
         """Symbolic split ``E = d/dt P - Q`` of every entry, derived on first use.
 
-        Returns
-        -------
-        P, Q : sympy.Matrix, shape (n, F)
-            Free of accelerations. For a Lagrange term ``L_k``: ``P[i, k] = dL_k/dqd_i`` and
-            ``Q[i, k] = dL_k/dq_i``.
+        ``P`` and ``Q`` (n, F) are free of accelerations; for a Lagrange term ``L_k``:
+        ``P[i, k] = dL_k/dqd_i`` and ``Q[i, k] = dL_k/dq_i``.
         """
         check_is_fitted(self, "entry_index_")
         if not hasattr(self, "weak_P_"):
@@ -433,15 +381,9 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         return self.weak_P_, self.weak_Q_
 
     def weak_terms(self) -> tuple[np.ndarray, Terms]:
-        """The non-zero entries of ``P`` and ``Q`` (:meth:`weak_matrices`) as polynomial
-        terms, derived on first use.
-
-        Returns
-        -------
-        index : ndarray of int, shape (E, 3)
-            ``(part, coordinate, feature)`` of each entry, part 0 for ``P`` and 1 for ``Q``.
-        terms : Terms
-            One entry per row of ``index``.
+        """The non-zero entries of ``P`` and ``Q`` (:meth:`weak_matrices`) as polynomial terms,
+        derived on first use: ``index`` (E, 3), ``(part, coordinate, feature)`` with part 0 for
+        ``P``, and the ``Terms``, one per row of ``index``.
         """
         check_is_fitted(self, "entry_index_")
         found = self.__dict__.get("_weak_terms")
@@ -469,23 +411,20 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         """Weak regression matrix of one trajectory.
 
         Row ``(c, k)`` of column ``j`` is ``int phi_k E[c, j] dt = -int phi_k' P[c, j] dt -
-        int phi_k Q[c, j] dt`` (:meth:`weak_matrices`), evaluated as two matrix products with
-        the quadrature-weighted test-function matrices.
+        int phi_k Q[c, j] dt`` (:meth:`weak_matrices`): two products with the test matrices.
 
         Parameters
         ----------
         x : array, shape (N, 4n + 1)
-            Library input of one trajectory (:func:`stack_variables`); the acceleration
-            columns are not used.
+            Library input of one trajectory; the accelerations are not used.
         phi, dphi : array or sparse matrix, shape (K, N)
-            Test functions and their time derivatives times quadrature weights (see
-            :class:`~pysindy_xl.weak.BumpTestFunctions`).
+            Quadrature-weighted test functions and their derivatives
+            (:class:`~pysindy_xl.weak.BumpTestFunctions`).
 
         Returns
         -------
         theta : ndarray, shape (n * K, F)
-            Rows coordinate-major (all test functions of coordinate 0 first), one column per
-            feature, as :meth:`transform`.
+            Rows coordinate-major, as :meth:`transform`.
         """
         x = self._check_input(x)
         if phi.shape != dphi.shape or phi.shape[1] != x.shape[0]:
@@ -523,7 +462,8 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
 
     def _weak_values(self, x):
         """:meth:`weak_terms` on blocks of ``_WEAK_BLOCK`` samples of ``x`` (entries, samples),
-        evaluated when read; all at once and kept within :func:`remembered_weak_values`."""
+        evaluated when read; all at once and kept within :func:`remembered_weak_values`.
+        """
         blocks = (self._weak_evaluate(x[start:start + _WEAK_BLOCK], stacked=True)
                   for start in range(0, x.shape[0], _WEAK_BLOCK))
         memo = self.__dict__.get("_weak_memo")
@@ -538,27 +478,13 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         return iter(memo[key])
 
     def get_feature_names(self, input_features=None) -> list[str]:
-        """Names of the features, in column order.
-
-        Parameters
-        ----------
-        input_features : ignored
-            Present for pysindy compatibility; names come from the coordinates.
-
-        Returns
-        -------
-        list of str
-        """
+        """Names of the features, in column order (``input_features``: pysindy's, ignored)."""
         check_is_fitted(self, "feature_names_")
         return list(self.feature_names_)
 
     def symbolic_matrix(self) -> sp.Matrix:
-        """The symbolic columns, derived on first use.
-
-        Returns
-        -------
-        sympy.Matrix, shape (n, F)
-            Entry ``[c, j]`` is feature ``j`` in the equation of coordinate ``c``.
+        """The symbolic columns (n, F), derived on first use: ``[c, j]`` is feature ``j`` in the
+        equation of coordinate ``c``.
         """
         if not hasattr(self, "entry_index_"):
             self.fit()
@@ -569,12 +495,8 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
 
     # -- persistence ----------------------------------------------------------------------
     def to_spec(self) -> dict:
-        """JSON-serializable description of this library (see :mod:`pysindy_xl.io`).
-
-        Returns
-        -------
-        dict
-            ``{"type": spec_type, ...}``, read back by :meth:`from_spec`.
+        """JSON-serializable description ``{"type": spec_type, ...}`` of this library
+        (:mod:`pysindy_xl.io`), read back by :meth:`from_spec`.
         """
         raise NotImplementedError(f"{type(self).__name__}: to_spec is not implemented; a "
                                   "library that can be saved describes itself in plain JSON")
@@ -583,17 +505,9 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
     def from_spec(cls, spec: dict, reader):
         """The library a specification describes (the inverse of :meth:`to_spec`).
 
-        Parameters
-        ----------
-        spec : dict
-            As written by :meth:`to_spec`; untrusted (it comes from a file).
-        reader : pysindy_xl.feature_library.SpecReader
-            Parses the parts of ``spec`` within the loader's budget: ``reader.coords``,
-            ``reader.terms(spec)``, ``reader.matrix(spec, key, shape)``,
-            ``reader.library(spec)`` for nested libraries, ``reader.expect(condition, what)``.
-
-        Returns
-        -------
-        SymbolicLibrary
+        ``spec`` is untrusted (from a file); ``reader`` (a
+        :class:`~pysindy_xl.feature_library.SpecReader`) parses its parts within the loader's
+        budget: ``reader.coords``, ``reader.terms(spec)``, ``reader.matrix(spec, key, shape)``,
+        ``reader.library(spec)``, ``reader.expect(condition, what)``.
         """
         raise NotImplementedError(f"{cls.__name__}: from_spec is not implemented")

@@ -1,11 +1,6 @@
-"""Rows of monomial exponents: sorting, merging and the canonical form of trigonometric
-polynomials (:mod:`.trigpoly`).
-
-A row holds the exponents of one monomial (int16, one column per slot). Rows sort
-lexicographically by one integer key per row (bit fields), equal rows merge with their
-coefficients summed in the order of the rows (as ``numpy.bincount``), and ``cos^2`` is
-rewritten as ``1 - sin^2``; every step gives the same rows in the same order as its
-definition, so that derived coefficients are bit for bit those of the plain algorithm.
+"""Rows of monomial exponents (int16, one column per slot): sorting, merging and the canonical
+form of trigonometric polynomials (:mod:`.trigpoly`), bit for bit the rows and order of the
+plain algorithm.
 """
 
 from __future__ import annotations
@@ -29,11 +24,8 @@ def _reduce_cosine_squares(exponents, coefficients, owners, angles):
     """Rewrite ``cos^2 = 1 - sin^2`` until no cosine power reaches 2 (``owners``, if not None,
     follow their rows).
 
-    A row with ``p`` halves of cosine powers (``sum_j floor(k_j / 2)``) becomes ``2^p`` rows:
-    each half either dropped or traded for ``-sin^2``. The rows come in the order of
-    rewriting one half per pass, angles in order (the unchanged rows first, then the
-    rewritten rows with ``cos^(k-2)``, then those with ``-sin^2 cos^(k-2)``, pass after
-    pass): by ``p``, then by the choices of the last pass to the first, then by row.
+    A row with ``p`` halves of cosine powers becomes ``2^p`` rows, in the order of rewriting one
+    half per pass: by ``p``, then by the choices of the last pass to the first, then by row.
     """
     angle, cosines = _angle_slots(angles)
     if not len(cosines) or not len(exponents) or (
@@ -76,8 +68,7 @@ _FEW = 32  # fewer rows are checked for cosine squares directly
 
 
 def _column_or(rows) -> np.ndarray:
-    """The bitwise or of each column of a C-contiguous 2-d int array (one reduction with a
-    long inner loop, then a fold)."""
+    """The bitwise or of each column of a C-contiguous 2-d int array."""
     wide = len(rows) // 64 * 64
     ored = np.bitwise_or.reduce(rows[wide:], axis=0)
     if wide:
@@ -87,13 +78,9 @@ def _column_or(rows) -> np.ndarray:
 
 
 def _row_keys(rows, major=None):
-    """One key per row of a non-negative int16 array, ordered as the rows are
-    lexicographically (``major``, if given, before the first column), or None when the
-    entries are negative, reach 256 or need more than 62 bits.
-
-    Each column is a bit field as wide as the largest entry needs, the first column most
-    significant; the keys are exact integers, as float64 (one BLAS product per chunk) when
-    they fit in 52 bits.
+    """One key per row of a non-negative int16 array, ordered as the rows are lexicographically
+    (``major``, if given, first), or None when entries are negative, reach 256 or need over 62
+    bits. Each column is a bit field; float64 keys (one BLAS product) when 52 bits suffice.
     """
     n_rows, width = rows.shape
     ored = _column_or(rows)
@@ -117,12 +104,8 @@ def _row_keys(rows, major=None):
 
 
 def _unique_rows(rows, major=None) -> tuple[np.ndarray, np.ndarray]:
-    """``(index, inverse)`` of ``numpy.unique`` on the rows of an int16 array read as bytes
-    (first occurrences, rows in the order of their bytes; ``major``, an array of small
-    non-negative integers, sorts before the first column).
-
-    Entries in ``[0, 256)`` compare as bytes as they do as numbers, so such rows sort by
-    one integer key per row (:func:`_row_keys`); other rows are compared as bytes.
+    """``(index, inverse)`` of ``numpy.unique`` on int16 rows read as bytes (``major``, small
+    non-negative integers, sorting before the first column), by :func:`_row_keys` when it can.
     """
     rows = np.ascontiguousarray(rows, dtype=np.int16)
     if len(rows) < 2 or not rows.shape[1]:  # (rows without columns are all equal)

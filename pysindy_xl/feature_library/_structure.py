@@ -1,11 +1,9 @@
 """The structure of a library's symbolic columns, known without their sympy matrix.
 
-A fit needs to know only which entries of the columns are non-zero, which variables each
-involves and how many terms each has; a library that derives its columns another way
-(trigonometric polynomials on exponent arrays) gives that structure as a
-:class:`DeferredMatrix` and builds its sympy matrix on the first read of
-``symbolic_matrix_`` (printing, equations): the columns of an arm's catalog hold hundreds
-of thousands of terms, whose sympy objects a fit does not need.
+A fit needs only which entries are non-zero, which variables each involves and how many
+terms each has; a library that derives its columns another way (trigonometric polynomials
+on exponent arrays) gives that as a :class:`DeferredMatrix` and builds the sympy matrix on
+the first read of ``symbolic_matrix_``.
 """
 
 from __future__ import annotations
@@ -22,14 +20,8 @@ _SWITCHES = (sp.sign, sp.Abs, sp.Piecewise, sp.Heaviside, sp.DiracDelta, sp.floo
 
 
 class DeferredMatrix:
-    """A library's symbolic matrix known by its structure (see the module docstring).
-
-    Parameters
-    ----------
-    variables : ndarray of bool, shape (n, F, V)
-        Whether entry ``(c, j)`` involves variable ``v`` of ``coords.variables``.
-    sizes : ndarray of int, shape (n, F)
-        Terms of each entry (0: the entry is zero).
+    """A symbolic matrix known by its structure: ``variables`` (n, F, V), whether entry ``(c, j)``
+    involves variable ``v`` of ``coords.variables``, and ``sizes`` (n, F), its terms (0: zero).
     """
 
     def __init__(self, variables, sizes):
@@ -39,13 +31,13 @@ class DeferredMatrix:
 
 
 class ColumnStructure:
-    """``symbolic_matrix_`` (built on first read when deferred) and the structure of the
-    columns, for :class:`~pysindy_xl.feature_library.SymbolicLibrary`."""
+    """``symbolic_matrix_`` (built on first read when deferred) and the structure of the columns,
+    for :class:`~pysindy_xl.feature_library.SymbolicLibrary`.
+    """
 
     @property
     def symbolic_matrix_(self) -> sp.Matrix:
-        """The sympy matrix of the columns (fitted; built on first read when the library
-        derived only its structure, :class:`DeferredMatrix`)."""
+        """The sympy matrix of the columns (built on first read for a :class:`DeferredMatrix`)."""
         matrix = self.__dict__.get("_symbolic_matrix")
         if matrix is None:
             raise AttributeError(f"{type(self).__name__} is not fitted: no symbolic_matrix_")
@@ -55,13 +47,11 @@ class ColumnStructure:
         return matrix
 
     def _deferred_matrix(self) -> sp.Matrix:
-        """The sympy matrix of a library whose ``_build_symbolic`` returned a
-        :class:`DeferredMatrix`."""
+        """The sympy matrix of a library that derived a :class:`DeferredMatrix`."""
         raise NotImplementedError
 
     def _entry_structure(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(variables, sizes)`` of :class:`DeferredMatrix`, from the sympy matrix when the
-        library did not derive them."""
+        """``(variables, sizes)`` as in :class:`DeferredMatrix` (from sympy if needed)."""
         check_is_fitted(self, "entry_index_")
         found = self.__dict__.get("_structure")
         if found is None:
@@ -82,15 +72,7 @@ class ColumnStructure:
         return found
 
     def involves(self, symbols) -> np.ndarray:
-        """Which entries involve any of ``symbols`` (variables of ``coords``).
-
-        Parameters
-        ----------
-        symbols : iterable of sympy.Symbol
-
-        Returns
-        -------
-        ndarray of bool, shape (n, F)
+        """Which entries (n, F) involve any of ``symbols`` (variables of ``coords``).
 
         Examples
         --------
@@ -108,13 +90,11 @@ class ColumnStructure:
         return self._entry_structure()[1]
 
     def impulsive(self) -> bool:
-        """Whether an acceleration enters an entry with a coefficient that switches with the
-        state (``sign``, ``Abs``, ``Piecewise``, ...; e.g. the lead of MuJoCo's regularized
-        dry friction, ``tau d/dt sat(v / s)``).
+        """Whether an acceleration enters an entry with a coefficient that switches with the state
+        (``sign``, ``Abs``, ``Piecewise``, ...; the lead of MuJoCo's dry friction).
 
-        Such an entry is an impulse at each switch: samples catch it or miss it by chance,
-        while integration by parts states it exactly, so ``formulation="auto"`` fits a catalog
-        with one in the weak form.
+        Such an entry is an impulse at each switch, which samples catch or miss by chance while
+        integration by parts states it exactly: ``formulation="auto"`` then fits in the weak form.
 
         Examples
         --------

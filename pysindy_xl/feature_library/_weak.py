@@ -1,12 +1,11 @@
-"""Weak form of a catalog entry: ``E = d/dt P - Q`` with ``P`` and ``Q`` free of accelerations.
+r"""Weak form of a catalog entry: ``E = d/dt P - Q`` with ``P`` and ``Q`` free of accelerations.
 
 Against a test function ``phi`` that vanishes at both ends of its support,
 
-.. math:: \\int \\phi E \\, dt = -\\int \\dot\\phi P \\, dt - \\int \\phi Q \\, dt,
+.. math:: \int \phi E \, dt = -\int \dot\phi P \, dt - \int \phi Q \, dt.
 
-so a catalog column needs no acceleration once each entry is split this way. Lagrange columns
-come split by construction (``P = dL/dqd_i``, ``Q = dL/dq_i``); :func:`integrate_by_parts`
-splits any other entry (classical terms, forces).
+Lagrange columns come split (``P = dL/dqd_i``, ``Q = dL/dq_i``); :func:`integrate_by_parts`
+splits any other entry.
 """
 
 from __future__ import annotations
@@ -23,15 +22,6 @@ __all__ = ["integrate_by_parts", "time_derivative"]
 def time_derivative(expr: sp.Expr, coords: Coordinates) -> sp.Expr:
     """Total time derivative of ``expr(q, qd, t)`` by the chain rule (accelerations appear).
 
-    Parameters
-    ----------
-    expr : sympy.Expr
-    coords : Coordinates
-
-    Returns
-    -------
-    sympy.Expr
-
     Examples
     --------
     >>> import sympy as sp, pysindy_xl as px
@@ -46,34 +36,20 @@ def time_derivative(expr: sp.Expr, coords: Coordinates) -> sp.Expr:
 
 
 def integrate_by_parts(expr: sp.Expr, coords: Coordinates) -> tuple[sp.Expr, sp.Expr]:
-    """Split a catalog entry into ``E = d/dt P - Q`` with ``P``, ``Q`` free of accelerations.
+    """Split a catalog entry ``expr`` (in ``coords.variables``) into ``E = d/dt P - Q`` with ``P``,
+    ``Q`` free of accelerations.
 
-    * ``a(q) * qdd_j`` (coefficient a function of the positions and time only) becomes
-      ``P = a qd_j`` and the remainder of its time derivative goes to ``Q``;
-    * ``g(q_j) * qd_j`` with ``g`` a polynomial (viscous friction ``qd_j`` is the common case)
-      is an exact time derivative: ``P = int g dq_j``, so the weak column needs no velocity;
-    * ``sum_j c_j(q, qd) qdd_j`` with velocity-dependent coefficients that are the velocity
-      gradient of one function ``G(q, qd)`` (``c_j = dG/dqd_j``; e.g. ``h(w) d/dt w`` for a
-      joint velocity ``w``, as in a dry friction's lead) becomes ``P = G`` and
-      ``Q = dG/dq . qd + dG/dt``;
-    * everything else, a function of ``(q, qd, tau, t)``, goes to ``Q = -E``.
-
-    Parameters
-    ----------
-    expr : sympy.Expr
-        Entry in ``coords.variables``.
-    coords : Coordinates
-
-    Returns
-    -------
-    P, Q : sympy.Expr
+    * ``a(q, t) * qdd_j`` gives ``P = a qd_j``, the rest of its time derivative going to ``Q``;
+    * ``g(q_j) * qd_j`` with ``g`` a polynomial is exact: ``P = int g dq_j``;
+    * ``sum_j c_j(q, qd) qdd_j`` with ``c_j = dG/dqd_j`` for one ``G(q, qd)`` (a dry friction's
+      lead) gives ``P = G`` and ``Q = dG/dq . qd + dG/dt``;
+    * everything else goes to ``Q = -E``.
 
     Raises
     ------
     ValueError
-        When an acceleration has a coefficient that depends on forces or accelerations, or
-        velocity-dependent coefficients that are not one function's velocity gradient: no
-        integration by parts removes them.
+        When an acceleration's coefficient depends on forces or accelerations, or
+        velocity-dependent coefficients are not one function's velocity gradient.
 
     Examples
     --------
@@ -140,11 +116,9 @@ def integrate_by_parts(expr: sp.Expr, coords: Coordinates) -> tuple[sp.Expr, sp.
 def _velocity_potential(coefficients: dict, coords: Coordinates):
     """``G(q, qd, t)`` with ``dG/dqd_j = coefficients[qd_j]`` (zero where absent), or None.
 
-    Built one velocity at a time (``G += int (c_j - dG/dqd_j) dqd_j``, the usual construction
-    of a potential) and accepted when its gradient matches every coefficient. Equality is
-    checked at states spread over several orders of magnitude, at 30 digits: piecewise
-    coefficients (a friction's sticking zone) have no identity that sympy proves reliably,
-    and antiderivatives such as ``log(tanh(w) + 1)`` cancel in double precision.
+    Built one velocity at a time and accepted when its gradient matches every coefficient,
+    checked numerically at 30 digits on states spread over orders of magnitude (piecewise
+    coefficients have no identity sympy proves reliably).
     """
     variables = [*coords.q, *coords.qd, coords.t]
     rng = np.random.default_rng(0)

@@ -18,22 +18,10 @@ __all__ = ["ClassicalLibrary", "pysindy_library_terms"]
 def pysindy_library_terms(library: BaseFeatureLibrary, coords: Coordinates) -> list[sp.Expr]:
     """Symbolic form of a pysindy feature library evaluated on the state ``(q, qd)``.
 
-    The library's feature names (with the state symbols as input names) are parsed by the
-    restricted grammar of :mod:`pysindy_xl.expressions`, then the parsed terms are checked
-    numerically against ``library.transform`` on random states, so a library whose names do not
-    describe its features (e.g. a ``CustomLibrary`` with opaque function names) is refused
-    instead of silently mistranslated.
-
-    Parameters
-    ----------
-    library : pysindy.BaseFeatureLibrary
-        E.g. ``ps.PolynomialLibrary(degree=2)`` or ``ps.FourierLibrary()``.
-    coords : Coordinates
-
-    Returns
-    -------
-    list of sympy.Expr
-        One expression per output feature of the library.
+    The feature names are parsed by the restricted grammar of :mod:`pysindy_xl.expressions`,
+    then checked numerically against ``library.transform`` on random states, so a library whose
+    names do not describe its features (a ``CustomLibrary``) is refused, not mistranslated.
+    Returns one expression per output feature.
 
     Examples
     --------
@@ -73,17 +61,15 @@ def pysindy_library_terms(library: BaseFeatureLibrary, coords: Coordinates) -> l
 class ClassicalLibrary(SymbolicLibrary):
     """Newtonian terms entering the equations of chosen coordinates.
 
-    Each (term ``k``, coordinate ``c``) pair with ``mask[k, c]`` true is one feature: the term
-    evaluated in the equation of ``c`` and zero elsewhere, with its own coefficient. Typical use
-    is viscous friction, ``qd_i`` in the equation of ``i``.
+    Each (term ``k``, coordinate ``c``) with ``mask[k, c]`` true is one feature: the term in the
+    equation of ``c``, zero elsewhere (viscous friction: ``qd_i`` in the equation of ``i``).
 
     Parameters
     ----------
     coords : Coordinates
-        Generalized coordinates.
     terms : sequence of sympy.Expr or pysindy.BaseFeatureLibrary
-        Terms in any of ``coords.variables``; a pysindy library is evaluated on the state
-        ``(q, qd)`` and translated to symbolic terms (see :func:`pysindy_library_terms`).
+        Terms in ``coords.variables``; a pysindy library is evaluated on ``(q, qd)``
+        (:func:`pysindy_library_terms`).
     mask : array of bool, shape (n_terms, n), optional
         Which equations each term enters. Default: every equation.
 
@@ -91,7 +77,6 @@ class ClassicalLibrary(SymbolicLibrary):
     ----------
     terms_ : list of sympy.Expr
     mask_ : ndarray of bool, shape (n_terms, n)
-    symbolic_matrix_ : sympy.Matrix, shape (n, F)
 
     Examples
     --------
@@ -161,13 +146,8 @@ class ClassicalLibrary(SymbolicLibrary):
                 for used in row if used]
 
     def to_spec(self) -> dict:
-        """JSON-serializable description of this library (terms in the restricted grammar).
-
-        Returns
-        -------
-        dict
-            Read back by :meth:`from_spec`.
-        """
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec` (terms in the
+        restricted grammar)."""
         if not hasattr(self, "terms_"):
             self.fit()
         return {
@@ -178,9 +158,7 @@ class ClassicalLibrary(SymbolicLibrary):
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """The library :meth:`to_spec` describes (see
-        :meth:`SymbolicLibrary.from_spec <pysindy_xl.feature_library.SymbolicLibrary.from_spec>`).
-        """
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
         terms = reader.terms(spec)
         mask = reader.matrix(spec, "mask", (len(terms), reader.coords.n), binary=True,
                              shape_name="(n_terms, n)")

@@ -42,10 +42,8 @@ def _exact(value: float) -> sp.Expr:
 
 
 def signed_indices_to_interlink(indices, n: int) -> np.ndarray:
-    """Interlink matrix from per-coordinate lists of signed 1-based input indices.
-
-    ``[[1], [-1, 2]]`` means coordinate 0 receives ``u_1`` and coordinate 1 receives
-    ``u_2 - u_1`` (the convention of the original xlsindy code).
+    """Interlink matrix from per-coordinate lists of signed 1-based input indices:
+    ``[[1], [-1, 2]]`` gives coordinate 0 ``u_1`` and coordinate 1 ``u_2 - u_1`` (xlsindy's).
     """
     if not isinstance(indices, (list, tuple)) or len(indices) != n:
         raise ValueError(f"indices: expected one list of signed input indices per coordinate ({n})")
@@ -64,18 +62,16 @@ def signed_indices_to_interlink(indices, n: int) -> np.ndarray:
 class ExternalForces(SymbolicLibrary):
     """Known generalized forces: one column whose entry in equation ``c`` is the force on ``c``.
 
-    With the paper's convention the coefficient of this column is fixed to ``-1`` in explicit
-    regression, so the identified equations read ``EL(L) + classical terms = force``.
+    In explicit regression its coefficient is fixed to ``-1`` (the paper's convention), so the
+    identified equations read ``EL(L) + classical terms = force``.
 
     Parameters
     ----------
     coords : Coordinates
-        Generalized coordinates.
     interlink : array, shape (n, n), optional
-        How the measured inputs ``u`` (one per coordinate, ``tau``) act on the coordinates:
-        generalized force ``= interlink @ u``, so several signed inputs can act on one
-        coordinate (e.g. a motor between two links). Default: input ``i`` acts on coordinate
-        ``i``. See :meth:`from_signed_indices` for the index-list form.
+        Generalized force ``= interlink @ u`` for the measured inputs ``u`` (several signed
+        inputs may act on one coordinate, e.g. a motor between two links). Default: identity.
+        See :meth:`from_signed_indices`.
 
     Attributes
     ----------
@@ -101,17 +97,8 @@ class ExternalForces(SymbolicLibrary):
 
     @classmethod
     def from_signed_indices(cls, coords: Coordinates, indices) -> ExternalForces:
-        """Build from per-coordinate lists of signed 1-based input indices.
-
-        Parameters
-        ----------
-        coords : Coordinates
-        indices : list of list of int
-            ``[[1, -2], [2]]``: coordinate 0 receives ``u_1 - u_2``, coordinate 1 ``u_2``.
-
-        Returns
-        -------
-        ExternalForces
+        """Build from per-coordinate lists of signed 1-based input indices
+        (:func:`signed_indices_to_interlink`).
 
         Examples
         --------
@@ -134,13 +121,7 @@ class ExternalForces(SymbolicLibrary):
         return ["F[tau]"], column
 
     def to_spec(self) -> dict:
-        """JSON-serializable description of this library (terms in the restricted grammar).
-
-        Returns
-        -------
-        dict
-            Read back by :meth:`from_spec`.
-        """
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
         return {
             "type": self.spec_type,
             "interlink": _interlink_matrix(self.interlink, self.coords.n).tolist(),
@@ -148,9 +129,7 @@ class ExternalForces(SymbolicLibrary):
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """The library :meth:`to_spec` describes (see
-        :meth:`SymbolicLibrary.from_spec <pysindy_xl.feature_library.SymbolicLibrary.from_spec>`).
-        """
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
         n = reader.coords.n
         return cls(reader.coords,
                    interlink=reader.matrix(spec, "interlink", (n, n), shape_name="(n, n)"))

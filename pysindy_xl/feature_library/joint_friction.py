@@ -1,9 +1,7 @@
 r"""Friction and sensor models of real joints, linear in their parameters.
 
-Real joints do not follow symmetric viscous + Coulomb friction, and joint-torque sensors read
-with an offset. Each joint ``k`` of velocity ``v = qvel_k`` (in the coordinates) may carry any
-of these terms, every one a fixed function of ``v`` times an unknown coefficient, so that the
-regression stays linear (``eps`` and ``v_s`` are fixed velocity scales):
+Each joint ``k`` of velocity ``v`` may carry any of these terms, a fixed function of ``v``
+times an unknown coefficient (``eps`` and ``v_s`` fixed velocity scales):
 
 ==============  ================================================  =============================
 model           function of the joint velocity ``v``              coefficient
@@ -15,16 +13,10 @@ model           function of the joint velocity ``v``              coefficient
 ``offset``      ``1``                                             torque-sensor offset ``o``
 ==============  ================================================  =============================
 
-The joint's torque ``f_v v + f_c tanh + f_a tanh^2 + f_s tanh exp(..) + o`` acts on the
-coordinates as ``weights[:, k]`` times it (``B = T^-T`` for coordinates ``q = T qpos``), so
-each (joint, model) pair is one column and one coefficient, in the joint's own units.
-
-*Asymmetric Coulomb friction*: moving in the positive direction the friction is
-``f_c + f_a``, in the negative direction ``-(f_c - f_a)``, and zero at rest: separate
-positive- and negative-direction magnitudes ``f_c +- f_a``, still linear. A constant
-(``offset``) differs from the asymmetry only at rest (``|v| < eps``): away from zero
-velocity an asymmetric Coulomb friction and a torque offset are the same torque, and the data
-tell them apart only through their samples near zero velocity.
+The joint's torque acts on the coordinates as ``weights[:, k]`` times it (``B = T^-T`` for
+coordinates ``q = T qpos``). Asymmetric Coulomb friction is ``f_c + f_a`` moving forwards,
+``-(f_c - f_a)`` backwards; away from rest it is the same torque as an offset, told apart
+only by samples near zero velocity.
 """
 
 from __future__ import annotations
@@ -43,20 +35,8 @@ FRICTION_MODELS = ("viscous", "coulomb", "asymmetric", "stribeck", "offset")
 
 
 def friction_function(model: str, velocity, coulomb_scale: float, stribeck_scale: float):
-    """The function of a joint velocity that ``model``'s coefficient multiplies.
-
-    Parameters
-    ----------
-    model : str
-        One of :data:`FRICTION_MODELS`.
-    velocity : sympy.Expr
-        The joint's velocity in the coordinates.
-    coulomb_scale, stribeck_scale : float
-        ``eps`` and ``v_s`` of the module docstring.
-
-    Returns
-    -------
-    sympy.Expr
+    """The function of a joint ``velocity`` that ``model``'s coefficient multiplies (scales as in
+    the module docstring).
 
     Examples
     --------
@@ -89,10 +69,8 @@ def _positive(value, name) -> float:
 class JointFrictionLibrary(SymbolicLibrary):
     """Friction and sensor-offset candidates of each joint (see the module docstring).
 
-    One column per (joint, model): the model's function of the joint velocity, entering
-    the equations as ``weights[:, k]`` times it. A fit that restricts its selection to
-    these columns (``ExplicitOptimizer(select="friction")``, the default for a kinematic
-    catalog built with ``friction=``) decides which model each joint needs.
+    One column per (joint, model). A fit that restricts its selection to these columns
+    (``ExplicitOptimizer(select="friction")``) decides which model each joint needs.
 
     Parameters
     ----------
@@ -100,12 +78,10 @@ class JointFrictionLibrary(SymbolicLibrary):
     joints : sequence of str
         Joint names.
     velocities : sequence of sympy.Expr, optional
-        Each joint's velocity in the coordinates; default ``coords.qd`` (one joint per
-        coordinate).
+        Each joint's velocity in the coordinates; default ``coords.qd``.
     weights : array (n, len(joints)), optional
         The generalized force of a unit joint torque; default the identity.
-    models : sequence of str, default ("viscous", "coulomb", "asymmetric", "stribeck", "offset")
-        The candidate models of every joint (names of :data:`FRICTION_MODELS`).
+    models : sequence of str, default :data:`FRICTION_MODELS`
     coulomb_scale : float, default 0.01
         ``eps``: velocity scale of the smooth sign.
     stribeck_scale : float, default 0.1
@@ -194,16 +170,7 @@ class JointFrictionLibrary(SymbolicLibrary):
         return list(self._terms)
 
     def coefficients_by_joint(self, coef) -> dict:
-        """``{joint: {model: coefficient}}`` of this library's coefficients (its columns).
-
-        Parameters
-        ----------
-        coef : array, shape (n_features,)
-
-        Returns
-        -------
-        dict
-        """
+        """``{joint: {model: coefficient}}`` of ``coef``, this library's coefficients."""
         out = {}
         for (model, joint), value in zip(self.kinds_, np.asarray(coef, dtype=float),
                                          strict=True):
@@ -211,8 +178,7 @@ class JointFrictionLibrary(SymbolicLibrary):
         return out
 
     def coordinate_of(self, joint: str) -> str | None:
-        """The coordinate that ``joint`` is (its torque that coordinate's force, weight 1),
-        None when its torque reaches several coordinates or with another weight."""
+        """The coordinate whose force is ``joint``'s torque (weight 1), else None."""
         column = self.weights_[:, self.joints_.index(joint)]
         reached = np.flatnonzero(column)
         if len(reached) == 1 and column[reached[0]] == 1:
@@ -220,13 +186,7 @@ class JointFrictionLibrary(SymbolicLibrary):
         return None
 
     def to_spec(self) -> dict:
-        """JSON-serializable description (velocities in the restricted grammar).
-
-        Returns
-        -------
-        dict
-            Read back by :meth:`from_spec`.
-        """
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
         joints, velocities, weights, models, scales = self._resolved()
         return {"type": self.spec_type, "joints": joints,
                 "velocities": [format_expression(v) for v in velocities],
@@ -235,8 +195,7 @@ class JointFrictionLibrary(SymbolicLibrary):
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """The library :meth:`to_spec` describes (bounded reading, see
-        :class:`~pysindy_xl.feature_library.spec.SpecReader`)."""
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
         joints = spec.get("joints")
         reader.expect(isinstance(joints, list) and all(isinstance(j, str) for j in joints),
                       "JointFrictionLibrary: 'joints' must be a list of names")

@@ -14,11 +14,8 @@ __all__ = ["LagrangeLibrary", "euler_lagrange"]
 
 
 def _diff(expr: sp.Expr, symbol: sp.Symbol) -> sp.Expr:
-    """Partial derivative by the chain rule on sums, products, powers, sin and cos.
-
-    Catalog terms are products of powers of coordinates and trigonometric functions; this
-    direct recursion is several times faster than ``sympy.diff`` on them, which builds and
-    evaluates a ``Derivative`` object at every node. Anything else falls back to ``sympy.diff``.
+    """Partial derivative by the chain rule on sums, products, powers, sin and cos (no
+    ``Derivative`` object per node, as ``sympy.diff`` builds); anything else by ``sympy.diff``.
     """
     if symbol not in expr.free_symbols:
         return sp.Integer(0)
@@ -43,8 +40,9 @@ def _diff(expr: sp.Expr, symbol: sp.Symbol) -> sp.Expr:
 
 
 def _defined_everywhere(expr: sp.Expr) -> bool:
-    """Whether ``expr`` is finite at every finite value of its symbols: built from finite
-    numbers and symbols by sums, products, nonnegative integer powers, ``sin`` and ``cos``."""
+    """Whether ``expr`` is finite at every finite value of its symbols (sums, products,
+    nonnegative integer powers, ``sin`` and ``cos`` of finite numbers and symbols).
+    """
     if expr.is_Symbol or isinstance(expr, sp.NumberSymbol):
         return True
     if expr.is_Number:
@@ -58,19 +56,8 @@ def _defined_everywhere(expr: sp.Expr) -> bool:
 def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:
     """Euler-Lagrange expressions ``d/dt dL/dqd_i - dL/dq_i`` for every coordinate.
 
-    The total time derivative is expanded with the chain rule over the coordinate symbols,
-    ``d/dt = sum_k qd_k d/dq_k + qdd_k d/dqd_k + d/dt``, so no function of time is involved.
-
-    Parameters
-    ----------
-    lagrangian : sympy.Expr
-        Expression in ``coords.q``, ``coords.qd`` (and possibly ``coords.t``).
-    coords : Coordinates
-
-    Returns
-    -------
-    list of sympy.Expr, length n
-        Expanded expressions, linear in the accelerations.
+    The time derivative is the chain rule ``d/dt = sum_k qd_k d/dq_k + qdd_k d/dqd_k + d/dt``;
+    the expanded expressions (length n) are linear in the accelerations.
 
     Examples
     --------
@@ -99,26 +86,22 @@ def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:
 class LagrangeLibrary(SymbolicLibrary):
     """Candidate Lagrangian terms, each turned into its Euler-Lagrange column.
 
-    Term ``L_k`` contributes the column ``d/dt dL_k/dqd_i - dL_k/dq_i`` to the equation of
-    every coordinate ``i``, so one coefficient per term is shared by all equations.
+    Term ``L_k`` contributes ``d/dt dL_k/dqd_i - dL_k/dq_i`` to the equation of every coordinate
+    ``i``: one coefficient per term, shared by all equations.
 
     Parameters
     ----------
     coords : Coordinates
-        Generalized coordinates.
     terms : sequence of sympy.Expr
-        Candidate terms in ``coords.q`` and ``coords.qd`` (e.g. built with
-        :func:`pysindy_xl.products` of velocity and trigonometric monomials).
+        Candidate terms in ``coords.q``, ``coords.qd`` and ``coords.t`` (e.g. from
+        :func:`pysindy_xl.products`).
 
     Attributes
     ----------
     terms_ : list of sympy.Expr
-        The candidate terms, in column order.
-    symbolic_matrix_ : sympy.Matrix, shape (n, F)
-        Euler-Lagrange column of each term in each equation.
     zero_terms_ : list of int
-        Indices of terms whose Euler-Lagrange column is identically zero (constants, total
-        time derivatives such as ``qd * f(q)``); they can never be identified.
+        Terms whose column is identically zero (constants, total time derivatives): never
+        identifiable.
 
     Examples
     --------
@@ -152,8 +135,7 @@ class LagrangeLibrary(SymbolicLibrary):
                     "only positions, velocities and t are allowed"
                 )
         self.terms_ = terms
-        # the same terms of the same coordinates derive the same columns: derived once
-        # (refits, resampled and cross-validated fits rebuild equal catalogs)
+        # equal catalogs (refits, resampled fits) derive their columns once
         names, columns = _derived(
             ("euler-lagrange", self.coords.variables, tuple(terms)),
             lambda: (tuple(f"L[{term}]" for term in terms),
@@ -166,17 +148,10 @@ class LagrangeLibrary(SymbolicLibrary):
         return self.terms_
 
     def check_domain(self, x) -> None:
-        """Raise ``ValueError`` naming the candidate terms that are NaN or inf on the data.
+        """Raise ``ValueError`` naming the candidate terms that are NaN or inf on ``x``.
 
-        A Lagrangian term outside its domain (``log(x)`` at ``x <= 0``, ``sqrt(x)`` at
-        ``x < 0``) has no meaning there, even where its Euler-Lagrange column is finite.
-        Terms finite wherever their variables are (polynomials in them, ``sin``, ``cos``)
-        have no such domain and are not evaluated.
-
-        Parameters
-        ----------
-        x : array, shape (N, 4n + 1)
-            Library input (:func:`~pysindy_xl.feature_library.stack_variables`).
+        A term outside its domain (``log(x)`` at ``x <= 0``) has no meaning there, even where its
+        column is finite; terms defined everywhere are not evaluated.
 
         Examples
         --------
@@ -222,19 +197,11 @@ class LagrangeLibrary(SymbolicLibrary):
         )
 
     def to_spec(self) -> dict:
-        """JSON-serializable description of this library (terms in the restricted grammar).
-
-        Returns
-        -------
-        dict
-            Read back by :meth:`from_spec`.
-        """
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
         terms = as_expr_list(self.terms, "terms")
         return {"type": self.spec_type, "terms": [format_expression(t) for t in terms]}
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """The library :meth:`to_spec` describes (see
-        :meth:`SymbolicLibrary.from_spec <pysindy_xl.feature_library.SymbolicLibrary.from_spec>`).
-        """
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
         return cls(reader.coords, reader.terms(spec))

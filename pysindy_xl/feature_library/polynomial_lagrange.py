@@ -1,8 +1,6 @@
-"""Lagrangian candidate terms that are trigonometric polynomials, derived on sparse arrays.
-
-The Lagrangians of rigid-body chains (the kinematic catalogs of :mod:`pysindy_xl.mujoco`) are
-polynomials in ``sin q``, ``cos q``, ``q`` and ``qd``; their Euler-Lagrange columns follow from
-the exponent arrays of :mod:`.trigpoly` without sympy's general differentiation.
+"""Lagrangian candidate terms that are trigonometric polynomials, derived on sparse arrays
+(:mod:`.trigpoly`) without sympy's general differentiation: the Lagrangians of rigid-body
+chains (the kinematic catalogs of :mod:`pysindy_xl.mujoco`).
 """
 
 from __future__ import annotations
@@ -15,6 +13,7 @@ import sympy as sp
 from ..expressions import format_expression
 from ..physical.rigid_body import KinematicTree, physical_parameters_from_base
 from ..symbols import as_expr_list
+from ._base import _derived
 from ._compile import Terms
 from ._structure import DeferredMatrix
 from .lagrange import LagrangeLibrary
@@ -27,25 +26,21 @@ __all__ = ["PolynomialLagrangeLibrary"]
 class PolynomialLagrangeLibrary(LagrangeLibrary):
     """:class:`~pysindy_xl.LagrangeLibrary` with a fast derivation for trigonometric polynomials.
 
-    Same parameters, columns and names as ``LagrangeLibrary``. When every term is
-    a polynomial in ``sin q_j``, ``cos q_j`` (angles), ``q_j`` (other coordinates) and
-    ``qd_j``, the Euler-Lagrange columns are derived on sparse arrays (:mod:`.trigpoly`),
-    which is one to two orders of magnitude faster than sympy on the large terms of spatial
-    arms; any other term falls back to the symbolic derivation of ``LagrangeLibrary``.
+    Same columns and names as ``LagrangeLibrary``. When every term is a polynomial in
+    ``sin q_j``, ``cos q_j`` (angles), ``q_j`` (other coordinates) and ``qd_j``, the columns are
+    derived on sparse arrays (:mod:`.trigpoly`); otherwise symbolically.
 
     Parameters
     ----------
-    coords : Coordinates
-    terms : sequence of sympy.Expr
+    coords, terms
+        As in :class:`~pysindy_xl.LagrangeLibrary`.
     parameters : sequence of dict, optional
         One per term: the physical parameters it stands for, ``{name: weight}`` (a kinematic
-        catalog's base parameters, e.g. ``{"link1.m": 1.0, "joint1.armature": 1.0}``); read
-        by :meth:`XLSINDy.physical_parameters <pysindy_xl.XLSINDy.physical_parameters>`.
+        catalog's base parameters); read by :meth:`XLSINDy.physical_parameters
+        <pysindy_xl.XLSINDy.physical_parameters>`.
     tree : KinematicTree, optional
-        The mechanism the terms come from (with ``parameters``, whose names it knows). Models
-        then evaluate the Lagrangian part of their equations with the rigid-body kernel of
-        :mod:`pysindy_xl.physical.rigid_body`, whose cost grows with the number of bodies
-        rather than with the monomials of the expanded columns; the columns stay the same.
+        The mechanism the terms come from (with ``parameters``): models then evaluate their
+        Lagrangian part with the rigid-body kernel of :mod:`pysindy_xl.physical.rigid_body`.
 
     Examples
     --------
@@ -67,18 +62,9 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         self.tree = tree
 
     def rigid_body_parameters(self, coefficients):
-        """Physical parameters ``pi`` of :attr:`tree` whose Lagrangian is
-        ``sum_j coefficients[j] * terms[j]`` (the least-norm solution, see
-        :func:`~pysindy_xl.physical.rigid_body.physical_parameters_from_base`), or ``None``
-        without a tree.
-
-        Parameters
-        ----------
-        coefficients : array, shape (len(terms),)
-
-        Returns
-        -------
-        ndarray or None
+        """Physical parameters of :attr:`tree` whose Lagrangian is ``sum_j coefficients[j] *
+        terms[j]`` (least norm,
+        :func:`~pysindy_xl.physical.rigid_body.physical_parameters_from_base`); None without a tree.
         """
         if self.tree is None:
             return None
@@ -96,9 +82,9 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
 
     @property
     def complete_catalog(self) -> bool:
-        """Whether every term stands for a physical parameter of the law (``parameters``
-        given: a kinematic catalog's base parameters), so that none is spurious and an
-        unforced law needs no selection of terms."""
+        """Whether every term stands for a physical parameter (``parameters`` given), so that an
+        unforced law needs no selection of terms.
+        """
         return self.parameters is not None
 
     def _build_symbolic(self):
@@ -111,12 +97,8 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
             return super()._build_symbolic()  # raises the ValueError of LagrangeLibrary
         coords = self.coords
         key = ("polynomials", terms.key) if trig else (tuple(coords.variables), tuple(terms))
-        derivation = _DERIVATIONS.pop(key, None)
-        if derivation is None:
-            derivation = _derive_trig(terms) if trig else _derive(coords, terms)
-        _DERIVATIONS[key] = derivation  # most recent last
-        while len(_DERIVATIONS) > _CACHED_DERIVATIONS:
-            del _DERIVATIONS[next(iter(_DERIVATIONS))]
+        derivation = _derived(key, lambda: _derive_trig(terms) if trig else _derive(coords, terms),
+                              _DERIVATIONS, _CACHED_DERIVATIONS)
         if derivation is _NOT_POLYNOMIAL:
             return super()._build_symbolic()
         self.terms_ = terms
@@ -135,15 +117,15 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         return derivation.matrix
 
     def impulsive(self) -> bool:
-        """Polynomial columns have smooth coefficients (not built into sympy to say so)."""
+        """Polynomial columns have smooth coefficients."""
         if self.__dict__.get("_polynomial_columns") is not None:
             return False
         return super().impulsive()
 
     def check_domain(self, x) -> None:
-        """Trigonometric polynomials are defined everywhere: only the symbolically derived
-        terms (any term that is not such a polynomial) need the check of
-        :meth:`LagrangeLibrary.check_domain`."""
+        """Only symbolically derived terms need :meth:`LagrangeLibrary.check_domain`: trigonometric
+        polynomials are defined everywhere.
+        """
         if "_polynomial_columns" not in self.__dict__:
             super().check_domain(x)
 
@@ -195,14 +177,9 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
             np.repeat(np.arange(len(polynomials)), sizes), len(polynomials))
 
     def to_spec(self) -> dict:
-        """JSON description: each term that is a trigonometric polynomial in canonical form as
-        its exponent rows and coefficients (exact, and far more compact than the expanded
-        expression of an arm's term), any other term as a string of the restricted grammar.
-
-        Returns
-        -------
-        dict
-            Read back by :meth:`from_spec`.
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`, a trigonometric
+        polynomial term as its exponent rows and coefficients (exact and compact), any other
+        term in the restricted grammar.
         """
         coords = self.coords
         if isinstance(self.terms, TrigTerms) and self.terms.coords == coords and len(self.terms):
@@ -242,9 +219,7 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """The library :meth:`to_spec` describes (see
-        :meth:`SymbolicLibrary.from_spec <pysindy_xl.feature_library.SymbolicLibrary.from_spec>`).
-        """
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
         coords = reader.coords
         angles, items = spec.get("angles"), spec.get("terms")
         reader.expect(isinstance(angles, list) and len(angles) == coords.n
@@ -291,10 +266,8 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
 
 @dataclasses.dataclass
 class _Derivation:
-    """The Euler-Lagrange columns of a list of polynomial terms, and what derives from them.
-
-    Shared by every library with the same coordinates and terms (a fitted model's clone of
-    the user's catalog, a loaded model): deriving a spatial arm's columns costs seconds.
+    """The Euler-Lagrange columns of a list of polynomial terms, and what derives from them;
+    shared by every library with the same coordinates and terms (clones, loaded models).
     """
 
     angles: tuple
@@ -324,8 +297,7 @@ def _derive(coords, terms):
 
 
 def _derive_trig(terms: TrigTerms):
-    """The derivation of terms given as polynomials: names formatted from the exponent rows,
-    the Euler-Lagrange columns those the terms carry (a kinematic catalog derived them)."""
+    """The derivation of terms given as polynomials, with the columns they carry when derived."""
     n = terms.coords.n
     for p in terms.polynomials:
         if p.exponents[:, 3 * n:].any():

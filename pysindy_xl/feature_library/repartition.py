@@ -6,7 +6,7 @@ import numpy as np
 import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
-from ._base import SymbolicLibrary, TermChain
+from ._base import SymbolicLibrary, TermChain, _derived
 from ._compile import Terms
 from ._structure import DeferredMatrix
 from .external_forces import ExternalForces
@@ -19,18 +19,14 @@ _CACHED_MERGES = 8
 
 
 def _merged(slices, parts) -> tuple[np.ndarray, Terms]:
-    """Concatenate the ``(index, terms)`` of several libraries: atoms merged, each index's
-    last column (the feature) shifted to the library's columns in the catalog.
-
-    Clones of a catalog share their libraries' terms (derivations are cached), so the merge
-    of the same parts is reused rather than redone at every fit."""
+    """Concatenate the ``(index, terms)`` of several libraries: atoms merged, each index's last
+    column (the feature) shifted to the library's columns; the merge of the same (cached) parts
+    is reused across clones.
+    """
     key = (tuple(id(terms) for _, terms in parts), tuple(c.start for c in slices),
            tuple(np.asarray(index).tobytes() for index, _ in parts))
-    found = _MERGED.get(key)
-    if found is None:
-        found = _MERGED[key] = (parts, _merge(slices, parts))  # parts keep the ids valid
-        while len(_MERGED) > _CACHED_MERGES:
-            del _MERGED[next(iter(_MERGED))]
+    # the parts, kept with their merge, keep the ids valid
+    found = _derived(key, lambda: (parts, _merge(slices, parts)), _MERGED, _CACHED_MERGES)
     index, terms = found[1]
     return index.copy(), terms
 
@@ -69,32 +65,26 @@ def _monomial_coefficients(expr: sp.Expr) -> dict:
 class CatalogRepartition(SymbolicLibrary):
     """Concatenation of catalog categories into one stacked regression matrix.
 
-    The columns of every library are placed side by side (in the given order); an
-    :class:`ExternalForces` column is prepended when none is given, so the catalog always holds
-    the force column that explicit and mixed regression need. All libraries must share the same
-    :class:`Coordinates`. All symbolic entries are compiled into one NumPy function, so common
-    subexpressions are shared across categories. See :mod:`pysindy_xl.feature_library._base` for
-    the layout of the regression matrix.
+    The libraries' columns are placed side by side, all compiled into one NumPy function; an
+    :class:`ExternalForces` column is prepended when none is given (explicit and mixed
+    regression need it). All libraries share one :class:`Coordinates`.
 
     Parameters
     ----------
     libraries : list of SymbolicLibrary
-        ``ExternalForces``, ``LagrangeLibrary``, ``ClassicalLibrary`` instances (or nested
-        ``CatalogRepartition``, which are flattened).
+        Nested ``CatalogRepartition`` are flattened.
 
     Attributes
     ----------
     libraries_ : list of SymbolicLibrary
         The flattened libraries, force library included.
     slices_ : list of slice
-        Columns of each library in the regression matrix.
+        Columns of each library.
     categories_ : list of str
-        Category of each feature (its library's ``category``): ``"forces"``,
-        ``"lagrange"``, ``"classical"`` or that of a user's library.
+        Category of each feature (``"forces"``, ``"lagrange"``, ``"classical"``, ...).
     feature_terms_ : list
-        The term each feature stands for (its library's ``feature_terms_``).
+        The term each feature stands for.
     force_columns_ : list of int
-        Indices of the force columns.
 
     Examples
     --------
@@ -120,17 +110,17 @@ class CatalogRepartition(SymbolicLibrary):
 
     @property
     def complete_catalog(self) -> bool:
-        """Whether every Lagrangian library of the catalog is complete (its terms are the
-        law's physical parameters, see ``PolynomialLagrangeLibrary.complete_catalog``)."""
+        """Whether every Lagrangian library is complete (its terms are the law's physical
+        parameters, ``PolynomialLagrangeLibrary.complete_catalog``).
+        """
         lagrange = [lib for lib in self.flat_libraries() if lib.category == "lagrange"]
         return bool(lagrange) and all(getattr(lib, "complete_catalog", False)
                                       for lib in lagrange)
 
     def flat_libraries(self, _parents=()) -> list[SymbolicLibrary]:
-        """The libraries, nested catalogs flattened, a force library first when none is given.
-
-        Raises ``TypeError`` for something that is not a library and ``ValueError`` for a
-        catalog nested in itself or libraries of different coordinates.
+        """The libraries, nested catalogs flattened, a force library first when none is given;
+        ``TypeError`` for a non-library, ``ValueError`` for a catalog nested in itself or mixed
+        coordinates.
         """
         if isinstance(self.libraries, SymbolicLibrary) or not hasattr(self.libraries, "__iter__"):
             raise TypeError("libraries: expected a list of pysindy_xl feature libraries")
@@ -197,8 +187,7 @@ class CatalogRepartition(SymbolicLibrary):
         """Each library checked its own columns when it derived them."""
 
     def _derive_column_terms(self) -> Terms:
-        """The libraries' column terms, their atoms merged and their entries in this
-        catalog's ``entry_index_`` order."""
+        """The libraries' column terms, atoms merged, entries in ``entry_index_`` order."""
         index, terms = _merged(self.slices_,
                                [(lib.entry_index_, lib.column_terms()) for lib in self.libraries_])
         key = ("in the order of", self.entry_index_.tobytes())
@@ -210,7 +199,7 @@ class CatalogRepartition(SymbolicLibrary):
         return ordered
 
     def _derive_weak_terms(self):
-        """The libraries' weak terms, their atoms merged (entries in library order)."""
+        """The libraries' weak terms, atoms merged (entries in library order)."""
         return _merged(self.slices_,
                        [lib.weak_terms() for lib in self.libraries_])
 
@@ -220,13 +209,7 @@ class CatalogRepartition(SymbolicLibrary):
                 sp.Matrix.hstack(*(q for _, q in parts)))
 
     def check_domain(self, x) -> None:
-        """Raise ``ValueError`` naming a candidate term undefined on the data.
-
-        Parameters
-        ----------
-        x : array, shape (N, 4n + 1)
-            Library input (see :func:`~pysindy_xl.feature_library.stack_variables`).
-        """
+        """Raise ``ValueError`` naming a candidate term undefined on ``x`` (by each library)."""
         check_is_fitted(self, "libraries_")
         for lib in self.libraries_:
             lib.check_domain(x)
@@ -239,14 +222,9 @@ class CatalogRepartition(SymbolicLibrary):
 
     # -- helpers on the coefficient vector ----------------------------------------------------
     def physical_structure(self):
-        """What the columns stand for physically: base parameters of rigid bodies (from the
-        ``parameters`` maps of Lagrange libraries, a kinematic catalog's) and friction.
-
-        Returns
-        -------
-        PhysicalStructure or None
-            In this catalog's column indices (see :mod:`pysindy_xl.physical`); None when no
-            library maps its terms to physical parameters.
+        """What the columns stand for physically (rigid-body base parameters from the Lagrange
+        libraries' ``parameters`` maps, friction), in column indices (:mod:`pysindy_xl.physical`);
+        None when no library maps its terms to physical parameters.
         """
         from ..physical.structure import catalog_structure
 
@@ -254,15 +232,10 @@ class CatalogRepartition(SymbolicLibrary):
         return catalog_structure(self)
 
     def column_priority(self) -> np.ndarray:
-        """Feature indices from most to least preferred when columns are linearly dependent.
+        """Feature indices (F,) from most to least preferred among linearly dependent columns.
 
-        By the ``column_rank`` of each column's library (force columns first, then Lagrange
-        terms, then classical ones, then other libraries); within a rank the symbolically
-        simpler column first (fewer terms in its entries), then catalog order.
-
-        Returns
-        -------
-        ndarray of int, shape (F,)
+        By the libraries' ``column_rank`` (forces, Lagrange, classical, others), then fewer terms in
+        the column's entries, then catalog order.
         """
         check_is_fitted(self, "entry_index_")
         complexity = self.entry_sizes().sum(axis=0).tolist()
@@ -271,22 +244,18 @@ class CatalogRepartition(SymbolicLibrary):
         return np.array([k[-1] for k in sorted(keys)], dtype=int)
 
     def ideal_coefficients(self, lagrangian=None, classical=None, forces: float = -1.0):
-        """Coefficient vector of a known model in this catalog.
+        """Coefficient vector (F,) of a known model in this catalog.
 
         Parameters
         ----------
         lagrangian : sympy.Expr, optional
-            True Lagrangian; it is expanded (trigonometric sums included) and matched against
-            the Lagrange terms of the catalog. Constant parts are ignored.
+            True Lagrangian, expanded (trigonometric sums included) and matched against the
+            Lagrange terms; constant parts are ignored.
         classical : dict, optional
-            ``{(term, coordinate): value}`` where ``term`` is a sympy expression and
-            ``coordinate`` an index or a name; or ``{feature_name: value}``.
+            ``{(term, coordinate): value}`` (coordinate an index or a name) or
+            ``{feature_name: value}``.
         forces : float, default -1.0
-            Coefficient of the force column (the paper's convention).
-
-        Returns
-        -------
-        ndarray, shape (F,)
+            Coefficient of the force column.
 
         Raises
         ------
@@ -359,13 +328,7 @@ class CatalogRepartition(SymbolicLibrary):
         )
 
     def to_spec(self) -> dict:
-        """JSON-serializable description of this library (terms in the restricted grammar).
-
-        Returns
-        -------
-        dict
-            Read back by :meth:`from_spec`.
-        """
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
         return {
             "type": self.spec_type,
             "libraries": [lib.to_spec() for lib in self.flat_libraries()],
@@ -373,9 +336,8 @@ class CatalogRepartition(SymbolicLibrary):
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """The catalog :meth:`to_spec` describes, each library through ``reader`` (see
-        :meth:`SymbolicLibrary.from_spec <pysindy_xl.feature_library.SymbolicLibrary.from_spec>`).
-        """
+        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec` (each library
+        through ``reader``)."""
         libraries = spec.get("libraries")
         reader.expect(isinstance(libraries, list) and libraries,
                       "libraries must be a non-empty list")

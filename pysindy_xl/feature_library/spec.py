@@ -1,12 +1,9 @@
 """Reading library specifications from untrusted files, within a budget.
 
-A model file describes its catalog as nested ``{"type": ..., ...}`` objects written by each
-library's :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`. :class:`SpecReader` looks
-the type up in :data:`~pysindy_xl.feature_library.LIBRARY_TYPES` (classes already defined: a
-file never makes Python import anything) and hands the object to the class's ``from_spec``
-with itself, so that every library parses its terms and matrices the same bounded way: terms
-in the restricted grammar of :mod:`pysindy_xl.expressions`, at most ``max_terms`` of them and
-``max_size`` expanded terms in all, libraries nested at most ``max_depth`` deep.
+:class:`SpecReader` looks each ``{"type": ...}`` object up in
+:data:`~pysindy_xl.feature_library.LIBRARY_TYPES` (a file never makes Python import anything)
+and hands it to the class's ``from_spec`` with itself, so every library parses its terms and
+matrices the same bounded way.
 """
 
 from __future__ import annotations
@@ -34,15 +31,13 @@ class SpecReader:
     ----------
     coords : Coordinates
     max_terms : int, default 5000
-        Catalog terms in all the specification (about a minute of derivation).
+        Catalog terms in all the specification.
     max_size : int, default 20000
-        Sum over the terms of their expanded size
-        (:func:`~pysindy_xl.expressions.expression_size`).
+        Sum of the terms' expanded sizes (:func:`~pysindy_xl.expressions.expression_size`).
     max_depth : int, default 4
         Nesting of libraries.
     max_monomials : int, default 500000
-        Monomials of the polynomial terms in all (arrays of numbers: cheap to read, each
-        monomial a few floating-point operations of the derivation).
+        Monomials of the polynomial terms in all.
 
     Examples
     --------
@@ -114,8 +109,9 @@ class SpecReader:
         return expr
 
     def polynomial(self, item, width: int, where: str) -> tuple[np.ndarray, np.ndarray]:
-        """``{"exponents": (T, width) small non-negative integers, "coefficients": (T,)
-        finite numbers}``, checked, its ``T`` taken from the monomial budget."""
+        """``{"exponents": (T, width) integers in [0, 64], "coefficients": (T,) finite numbers}``,
+        checked, ``T`` taken from the monomial budget.
+        """
         self.expect(isinstance(item, dict) and set(item) == {"exponents", "coefficients"},
                     f"{where} must be an object with exponents and coefficients")
         coefficients, exponents = item["coefficients"], item["exponents"]
@@ -138,9 +134,8 @@ class SpecReader:
 
     def matrix(self, spec, key: str, shape: tuple, binary: bool = False,
                shape_name: str | None = None) -> np.ndarray:
-        """``spec[key]``: a finite numeric matrix of ``shape`` (0/1 entries with ``binary``).
-
-        ``shape_name`` names the shape in the messages, e.g. ``"(n, n)"``.
+        """``spec[key]``: a finite numeric matrix of ``shape`` (0/1 with ``binary``); ``shape_name``
+        names the shape in the messages, e.g. ``"(n, n)"``.
         """
         where = f"{spec.get('type')}.{key}"
         label = f"{shape_name} = {tuple(shape)}" if shape_name else str(tuple(shape))

@@ -1,15 +1,11 @@
 """Sparse polynomials in ``sin q``, ``cos q``, ``q``, ``qd``, ``qdd`` with float coefficients.
 
-The kinematic catalog multiplies rotation matrices and velocity vectors of whole chains;
-sympy's generic expressions spend most of that time in assumptions and automatic
-simplification. Here a polynomial is two arrays (exponents, coefficients), products are outer
-sums of exponents, ``cos(q)**2`` is always rewritten as ``1 - sin(q)**2`` (a canonical form, so
-identities cancel), and equal monomials are merged by one sort of integer row keys
-(:mod:`._monomials`).
-
-Slots of the exponent rows, for ``n`` coordinates: ``[0, n)`` ``sin q_j`` (or ``q_j`` itself
-for a linear coordinate), ``[n, 2n)`` ``cos q_j`` (unused for a linear coordinate), ``[2n, 3n)``
-``qd_j``, ``[3n, 4n)`` ``qdd_j``.
+Two arrays (exponents, coefficients): products are outer sums of exponents, ``cos(q)**2`` is
+always rewritten as ``1 - sin(q)**2`` (canonical, so identities cancel) and equal monomials
+merge by one sort of integer row keys (:mod:`._monomials`): none of sympy's assumptions
+and automatic simplification on the kinematic catalog's chains. Slots of the exponent rows,
+for ``n`` coordinates: ``[0, n)`` ``sin q_j`` (``q_j`` for a linear coordinate), ``[n, 2n)``
+``cos q_j``, ``[2n, 3n)`` ``qd_j``, ``[3n, 4n)`` ``qdd_j``.
 """
 
 from __future__ import annotations
@@ -27,7 +23,6 @@ __all__ = ["TrigPolynomial", "euler_lagrange_many", "partial_derivatives_many",
            "evaluate_many", "state_values"]
 
 
-
 class TrigPolynomial:
     """A polynomial of the slots described in the module docstring.
 
@@ -36,7 +31,7 @@ class TrigPolynomial:
     exponents : ndarray of int, shape (T, 4n)
     coefficients : ndarray of float, shape (T,)
     angles : tuple of bool, length n
-        Which coordinates are angles (their ``cos`` slot is reduced modulo ``s^2 + c^2 = 1``).
+        Which coordinates are angles (their ``cos`` slot reduced modulo ``s^2 + c^2 = 1``).
     normalize : bool, default True
         Reduce, merge equal monomials and drop round-off.
 
@@ -118,8 +113,9 @@ class TrigPolynomial:
         return self.coefficients.size == 0
 
     def _times_slot(self, index: int) -> TrigPolynomial:
-        """This polynomial times one slot monomial: a shift of one exponent column, which keeps
-        the rows distinct; only a cosine can create a power to rewrite."""
+        """This polynomial times one slot monomial (rows stay distinct; only a cosine can create a
+        power to rewrite).
+        """
         exponents = self.exponents.copy()
         exponents[:, index] += 1
         n = len(self.angles)
@@ -185,12 +181,8 @@ class TrigPolynomial:
     # -- conversion ------------------------------------------------------------------------
     @classmethod
     def from_sympy(cls, expr, coords, angles) -> TrigPolynomial:
-        """Parse a sum of products of ``sin q``, ``cos q`` (angles), ``q`` (others), ``qd``.
-
-        Raises
-        ------
-        ValueError
-            If ``expr`` is not such a polynomial (after expansion).
+        """Parse a sum of products of ``sin q``, ``cos q`` (angles), ``q`` (others) and ``qd``;
+        ``ValueError`` if ``expr`` is not such a polynomial (after expansion).
         """
         n = coords.n
         slots = {}
@@ -224,11 +216,8 @@ class TrigPolynomial:
         return cls(exponents, coefficients, angles)
 
     def to_sympy(self, coords, evaluate: bool = True) -> sp.Expr:
-        """The polynomial as a sympy expression in ``coords``' symbols.
-
-        ``evaluate=False`` skips sympy's canonicalization of every product and sum (most of
-        the cost on large polynomials); the result is a flat sum of flat products, which the
-        feature libraries' compiler reads as is.
+        """The polynomial as a sympy expression in ``coords``' symbols; ``evaluate=False`` skips
+        sympy's canonicalization (a flat sum of flat products, which the compiler reads as is).
         """
         n = len(self.angles)
         atoms = []
@@ -239,8 +228,7 @@ class TrigPolynomial:
             terms = [sp.Mul(_number(value), *[atoms[k] ** int(e) for k, e in enumerate(row) if e])
                      for row, value in zip(self.exponents, self.coefficients, strict=True)]
             return sp.Add(*terms)
-        # flat products and sum, built without canonicalization (sympy's own constructors;
-        # the products of powers and numbers are commutative)
+        # flat products and sum without canonicalization (sympy's own constructors)
         rows, slots = np.nonzero(self.exponents)  # row by row, slots increasing
         base = int(self.exponents.max(initial=1)) + 1
         codes, factor = np.unique(slots * base + self.exponents[rows, slots],
@@ -289,24 +277,10 @@ class _NotPolynomial(ValueError):
 
 
 def euler_lagrange_many(polynomials) -> list[list[TrigPolynomial]]:
-    """:meth:`TrigPolynomial.euler_lagrange` of many polynomials at once, bit for bit.
-
-    The polynomials are stacked with an owner index; every step of the derivation (slot
-    derivatives, products by a slot, sums and their normalization) runs once on the stack,
-    and the normalization merges and drops terms within each owner exactly as it does for one
-    polynomial (the same rows, in the same order, summed in the same order), so the result is
-    identical to deriving each polynomial alone, in a few array operations instead of
-    thousands.
-
-    Parameters
-    ----------
-    polynomials : sequence of TrigPolynomial
-        With the same ``angles``.
-
-    Returns
-    -------
-    list of list of TrigPolynomial
-        Per polynomial, its Euler-Lagrange column (one polynomial per coordinate).
+    """:meth:`TrigPolynomial.euler_lagrange` of many polynomials (same ``angles``) at once, bit for
+    bit: the polynomials are stacked with an owner index and every step runs once on the stack,
+    merging within each owner exactly as for one polynomial. Returns per polynomial its column
+    (one polynomial per coordinate).
     """
     polynomials = list(polynomials)
     if not polynomials:
@@ -326,9 +300,9 @@ def euler_lagrange_many(polynomials) -> list[list[TrigPolynomial]]:
 
 
 def partial_derivatives_many(polynomials) -> list:
-    """``[[dL/dqd_c], [dL/dq_c]]`` (per coordinate ``c``, a list over the polynomials ``L``)
-    of many polynomials at once, bit for bit as :meth:`TrigPolynomial.diff_velocity` and
-    :meth:`TrigPolynomial.diff_position` of each (see :func:`euler_lagrange_many`)."""
+    """``[[dL/dqd_c], [dL/dq_c]]`` (per coordinate ``c``, a list over the polynomials ``L``) at
+    once, bit for bit as :meth:`TrigPolynomial.diff_velocity` and ``diff_position``.
+    """
     stack, n = _Stack.of(polynomials), len(polynomials[0].angles)
     return [[derivative.parts()
              for derivative in (stack.diff_slot(2 * n + c) if part == 0
@@ -410,17 +384,8 @@ def state_values(q, qd=None, qdd=None, angles=()) -> np.ndarray:
 
 
 def evaluate_many(polynomials, values: np.ndarray) -> np.ndarray:
-    """Evaluate polynomials on all states at once.
-
-    Parameters
-    ----------
-    polynomials : list of TrigPolynomial
-    values : ndarray, shape (N, 4n)
-        From :func:`state_values`.
-
-    Returns
-    -------
-    ndarray, shape (N, len(polynomials))
+    """Evaluate ``polynomials`` on all states ``values`` (N, 4n) (:func:`state_values`) at once:
+    (N, len(polynomials)).
     """
     width = values.shape[1]
     exponents = np.vstack([p.exponents for p in polynomials]  # int16, not upcast
@@ -429,9 +394,8 @@ def evaluate_many(polynomials, values: np.ndarray) -> np.ndarray:
     coefficients = np.concatenate([p.coefficients for p in polynomials] + [np.zeros(0)])
     first, inverse = _unique_rows(exponents)
     distinct = exponents[first]
-    # a monomial is the product of its factors in the order of their slots (the powers of the
-    # slot values, each computed once), multiplied left to right, all monomials of the same
-    # number of factors at once
+    # each monomial: its factors' powers (each computed once) multiplied in slot order, all
+    # monomials of the same number of factors at once
     rows, slots = np.nonzero(distinct)  # row by row, slots increasing
     base = int(distinct.max(initial=0)) + 1
     codes = slots * base + distinct[rows, slots]

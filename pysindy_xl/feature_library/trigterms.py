@@ -1,10 +1,4 @@
-"""Candidate terms held as trigonometric polynomials, read as sympy expressions on demand.
-
-A kinematic catalog derives its Lagrangian terms as :class:`~.trigpoly.TrigPolynomial`;
-:class:`TrigTerms` keeps them so, and builds a term's sympy expression (large for a spatial
-arm) only when it is read. Its names are sympy's ``str`` of those expressions, formatted from
-the exponent rows without building them.
-"""
+"""Candidate terms held as trigonometric polynomials, read as sympy expressions on demand."""
 
 from __future__ import annotations
 
@@ -23,12 +17,10 @@ __all__ = ["TrigTerms"]
 class TrigTerms(Sequence):
     """Candidate terms held as trigonometric polynomials, read as sympy expressions on demand.
 
-    A kinematic catalog derives its Lagrangian terms as :class:`TrigPolynomial`; a library
-    that knows this class (:class:`~pysindy_xl.feature_library.PolynomialLagrangeLibrary`)
-    derives its columns, names and evaluators from the polynomials, and the sympy
-    expressions (large for a spatial arm) are built only when someone reads an item. Items
-    are exactly ``polynomial.to_sympy(coords)``; the sequence is immutable, so copies and
-    clones share it.
+    A library that knows this class (:class:`~pysindy_xl.feature_library.PolynomialLagrangeLibrary`)
+    derives its columns, names and evaluators from the polynomials; the (large) sympy expression
+    of an item, exactly ``polynomial.to_sympy(coords)``, is built when read. Immutable: copies
+    and clones share it.
 
     Parameters
     ----------
@@ -36,10 +28,9 @@ class TrigTerms(Sequence):
         All with the same ``angles``.
     coords : Coordinates
     columns : sequence of list of TrigPolynomial, optional
-        The Euler-Lagrange column of each polynomial
-        (:meth:`TrigPolynomial.euler_lagrange`), when already derived.
+        The Euler-Lagrange column of each polynomial, when already derived.
     names : sequence of str, optional
-        :meth:`names`, when already formatted (read back from a cache).
+        :meth:`names`, when already formatted.
 
     Examples
     --------
@@ -143,10 +134,9 @@ _NESTED = StrPrinter({"full_prec": False})
 class _Printer:
     """sympy's ``str`` of ``TrigPolynomial.to_sympy(coords)``, from the exponent rows.
 
-    sympy prints a sum by its monomials in decreasing lexicographic order of their exponents
-    over the generators sorted by ``default_sort_key`` (the constant last), and a product as
-    its sign, its coefficient unless it is one, then its factors sorted by their
-    ``sort_key``; the few atoms and numbers are printed by sympy itself.
+    sympy prints a sum's monomials in decreasing lexicographic order of their exponents over
+    the generators sorted by ``default_sort_key`` (the constant last), and a product as its
+    sign, its coefficient unless one, then its factors by ``sort_key``.
     """
 
     def __init__(self, coords, angles):

@@ -1,20 +1,12 @@
 """The build step of the fit stage: a catalog and trajectories in, one catalog problem out.
 
-:func:`build_problem` leaves out the coordinates that hold still in the data
-(:mod:`~pysindy_xl.fit.still`) and the catalog columns of their motion; builds the rows of the
-formulation, ``"strong"`` (the catalog's columns at every unmasked sample) or ``"weak"`` (the
-columns integrated against test functions of smoothed positions,
-:func:`~pysindy_xl.weak.weak_regression`, with the propagated noise of the positions); drops
-the exactly dependent columns (found on random points of the data's bounding box,
-:func:`probe_points`: identities of the catalog, never the physical law); and returns the
-:class:`~pysindy_xl.optimizers.CatalogProblem` with its row noise
-(:class:`~pysindy_xl.weak.WeakNoise`), the physical structure of its columns and its
-:class:`CatalogMap` back to the catalog. Rows are coordinate-major over all trajectories.
-
-Without forces the default test functions come in several widths
-(:data:`UNFORCED_WIDTH_MULTIPLES`): an unforced law is known only up to a factor and is told
-from the other laws the catalog holds by the noise ratio alone, which one width's rows
-determine poorly from noisy positions; a force column fixes the scale of a forced law.
+:func:`build_problem` leaves out the still coordinates (:mod:`~pysindy_xl.fit.still`) and
+their columns, builds the rows of the strong or weak form (the weak with the propagated noise
+of the positions), drops exactly dependent columns (found on :func:`probe_points`) and
+returns the :class:`~pysindy_xl.optimizers.CatalogProblem` with its row noise and its
+:class:`CatalogMap`. Rows are coordinate-major over all trajectories. Without forces the test
+functions come in several widths (:data:`UNFORCED_WIDTH_MULTIPLES`): an unforced law is told
+from the others by the noise ratio alone, which one width determines poorly.
 """
 
 from __future__ import annotations
@@ -40,28 +32,22 @@ UNFORCED_WIDTH_MULTIPLES = (1.0, 1.5, 2.0)
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class CatalogMap:
-    """Where a catalog problem comes from: the map from its columns and blocks back to the
-    catalog, and the states of its rows.
+    """The map from a catalog problem's columns and blocks back to the catalog, and its states.
 
     Attributes
     ----------
     columns : ndarray of int, shape (k,)
-        The catalog column of each problem column.
-    n_features : int
-        Catalog columns.
-    coordinates : ndarray of bool, shape (n,)
-        The catalog coordinates whose equations are the problem's blocks (the others hold
-        still).
-    forced : ndarray of bool, shape (n,)
-        Coordinates on which a recorded force acts.
+        The catalog column of each problem column (of ``n_features``).
+    coordinates, forced : ndarray of bool, shape (n,)
+        The coordinates whose equations are the problem's blocks (the others hold still); those
+        a recorded force acts on.
     dropped : dict of int to str
-        Catalog columns left out of the problem, with the reason.
+        Catalog columns left out, with the reason.
     states : ndarray, shape (S, 4n + 1)
-        The library inputs the rows come from (smoothed for the weak form).
+        The rows' library inputs (smoothed for the weak form).
     formulation : {"strong", "weak"}
     weak_info : dict or None
-        Weak form: test-function half-width, test functions per piece, the smoother's noise
-        estimate, the time grid (:func:`~pysindy_xl.weak.weak_regression`).
+        :func:`~pysindy_xl.weak.weak_regression`'s information.
     """
 
     columns: np.ndarray
@@ -74,8 +60,7 @@ class CatalogMap:
     weak_info: dict | None = None
 
     def to_catalog(self, values) -> np.ndarray:
-        """``values`` of the problem's columns (last axis) spread over the catalog's columns,
-        zero elsewhere.
+        """``values`` of the problem's columns (last axis) on the catalog's, zero elsewhere.
 
         Examples
         --------
@@ -92,22 +77,9 @@ class CatalogMap:
 
 
 def probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndarray:
-    """Random points in the bounding box of the data, each variable drawn independently.
-
-    Column dependencies found on these points are identities of the catalog (true for any
-    data, such as ``cos^2 + sin^2 = 1``), never the physical law that the trajectories obey
-    and the regression is looking for.
-
-    Parameters
-    ----------
-    z : ndarray, shape (S, V)
-        States of the data (the library's inputs).
-    n_points : int, default 4000
-    seed : int, default 0
-
-    Returns
-    -------
-    ndarray, shape (n_points, V)
+    """``n_points`` random points in the bounding box of the states ``z`` (S, V), each variable
+    drawn independently: dependencies found on them are identities of the catalog (such as
+    ``cos^2 + sin^2 = 1``), never the physical law the trajectories obey.
 
     Examples
     --------
@@ -123,7 +95,8 @@ def probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndarr
 def _rows(library, data, formulation, test_functions, smoother, half_width, moving,
           propagate=True):
     """Rows ``(n * R, F)`` of the whole catalog, the states and, for the weak form, the row
-    noise and the weak-form information."""
+    noise and the weak-form information.
+    """
     if formulation == "weak":
         if test_functions is None:
             unforced = all(d["u"] is None for d in data)
@@ -144,8 +117,7 @@ def _rows(library, data, formulation, test_functions, smoother, half_width, movi
 
 
 def _check_moving(data, names, still):
-    """Refuse coordinates that never move unless held (``still``): they carry no dynamics to
-    identify; and data where every coordinate holds still."""
+    """Refuse coordinates that never move unless held (``still``), and data where all hold still."""
     if still.all():
         raise ValueError("x: no coordinate moves beyond the noise of the positions; there "
                          "are no dynamics to identify")
@@ -157,8 +129,8 @@ def _check_moving(data, names, still):
 
 def _selected(theta, n, moving, keep) -> np.ndarray:
     """The rows of the moving coordinates and the kept columns of ``theta``, column-major;
-    ``theta`` itself where it keeps everything (the rows are fresh, and copying them is a
-    good part of a clean fit)."""
+    ``theta`` itself where it keeps everything (copying fresh rows costs).
+    """
     if not moving.all():
         theta = theta[block_rows(n, theta.shape[0], moving)]
     if len(keep) < theta.shape[1]:
@@ -180,22 +152,19 @@ def build_problem(library, data, formulation: str, *, test_functions=None, smoot
     formulation : {"strong", "weak"}
     test_functions, smoother : optional
         Weak form: default ``BumpTestFunctions()`` (of the widths
-        :data:`UNFORCED_WIDTH_MULTIPLES` when no trajectory has forces) and
-        ``WhittakerSmoother()``; the smoother is copied (smoothing fits it).
+        :data:`UNFORCED_WIDTH_MULTIPLES` without forces) and ``WhittakerSmoother()`` (copied).
     half_width : float, optional
         Weak form: the test functions' half-width (default: chosen from the data).
     hold_still : float or False, default False
-        Find the coordinates that hold still in the data, with this threshold
-        (:func:`~pysindy_xl.fit.still.still_coordinates`), and leave them out.
+        Leave out the coordinates that hold still, with this threshold
+        (:func:`~pysindy_xl.fit.still.still_coordinates`).
     still : array of bool, shape (n,), optional
-        The coordinates to leave out, when known (a fitted model's); overrides
-        ``hold_still``.
+        The coordinates to leave out, when known; overrides ``hold_still``.
     drop_dependent : bool, default False
-        Leave out the catalog columns that are zero or exact linear combinations of
-        preferred ones (:func:`~pysindy_xl.optimizers.independent_columns`).
+        Leave out columns that are zero or exact linear combinations of preferred ones
+        (:func:`~pysindy_xl.optimizers.independent_columns`).
     propagate : bool, default True
-        Weak form: propagate the noise of the positions into the rows (``row_noise``);
-        False: the rows only.
+        Weak form: propagate the noise of the positions into the rows (``row_noise``).
 
     Returns
     -------
@@ -264,19 +233,8 @@ def build_problem(library, data, formulation: str, *, test_functions=None, smoot
 
 
 def with_mass_matrices(problem: CatalogProblem, library) -> CatalogProblem:
-    """``problem`` with the mass matrices of its columns at (up to 200 of) its states
-    (:func:`~pysindy_xl.fit.diagnostics.column_mass_matrices`), for the optimizers that use
-    them.
-
-    Parameters
-    ----------
-    problem : CatalogProblem
-        Built by :func:`build_problem` (its ``catalog_map`` gives columns and states).
-    library : fitted CatalogRepartition
-
-    Returns
-    -------
-    CatalogProblem
+    """``problem`` (from :func:`build_problem`) with the mass matrices of its columns at up to 200
+    of its states (:func:`~pysindy_xl.fit.diagnostics.column_mass_matrices`).
     """
     origin = problem.catalog_map
     moving = origin.coordinates

@@ -1,10 +1,6 @@
-"""Fit-time diagnostics of an identified model on its own training states.
-
-A model can be wrong in ways the regression residual does not show: a mass matrix that is
-indefinite (noise terms, a coordinate without identifiable inertia, a catalog that cannot
-express the dynamics) or a law that no force scales and came out with a negative kinetic
-energy (its sign is arbitrary). :func:`orient_free_laws` fixes the second,
-:func:`mass_matrix_report` measures the first and warns.
+"""Fit-time diagnostics of an identified model on its own training states: the sign of laws
+no force scales (:func:`orient_free_laws`), the definiteness of the mass matrix
+(:func:`mass_matrix_report`).
 """
 
 from __future__ import annotations
@@ -24,19 +20,8 @@ __all__ = [
 
 
 def mass_matrices(dynamics, states, max_states: int = 2000):
-    """Symmetrized mass matrices and their eigenvalues on (up to ``max_states``) states.
-
-    Parameters
-    ----------
-    dynamics : MassMatrixDynamics
-    states : array, shape (N, 4n + 1)
-        Stacked variables (:func:`~pysindy_xl.stack_variables`).
-    max_states : int
-
-    Returns
-    -------
-    mass : ndarray, shape (S, n, n)
-    eigenvalues : ndarray, shape (S, n)
+    """Symmetrized mass matrices (S, n, n) and their eigenvalues (S, n) of ``dynamics`` on up to
+    ``max_states`` of ``states`` (N, 4n + 1).
 
     Examples
     --------
@@ -55,24 +40,11 @@ def mass_matrices(dynamics, states, max_states: int = 2000):
 
 
 def column_mass_matrices(library, states, max_states: int = 200) -> np.ndarray:
-    """Each catalog column's contribution to the mass matrix, on (up to ``max_states``) states.
+    """Each catalog column's mass matrix, (S, F, n, n), on up to ``max_states`` states.
 
-    Every column's Euler-Lagrange expression is affine in the accelerations,
-    ``E_j = M_j(q, qd) qdd + rest``, so ``M_j[:, k]`` is the column evaluated with
-    ``qdd = e_k`` minus the column with ``qdd = 0``: ``n + 1`` evaluations of the library, no
-    symbolic work. A coefficient vector ``xi`` has the mass matrix ``sum_j xi_j M_j``.
-
-    Parameters
-    ----------
-    library : fitted SymbolicLibrary
-    states : array, shape (N, 4n + 1)
-        Stacked variables (:func:`~pysindy_xl.stack_variables`); accelerations and forces
-        are ignored.
-    max_states : int, default 200
-
-    Returns
-    -------
-    ndarray, shape (S, F, n, n)
+    A column is affine in the accelerations, ``E_j = M_j(q, qd) qdd + rest``, so ``M_j[:, k]``
+    is the column at ``qdd = e_k`` minus the column at ``qdd = 0``: ``n + 1`` evaluations, no
+    symbolic work. Coefficients ``xi`` have the mass matrix ``sum_j xi_j M_j``.
 
     Examples
     --------
@@ -99,23 +71,9 @@ def column_mass_matrices(library, states, max_states: int = 200) -> np.ndarray:
 def orient_free_laws(coef, symbolic_matrix, force_columns, mass):
     """Flip the laws that no force scales and whose mass matrix is negative definite.
 
-    Coordinates coupled by identified terms form one law; a law without a non-zero force
-    coefficient (implicit, or the implicit part of a mixed fit) is defined up to its sign.
-
-    Parameters
-    ----------
-    coef : ndarray, shape (F,)
-    symbolic_matrix : sympy.Matrix or array of bool, shape (n, F)
-        The catalog's columns, or which of their entries are non-zero.
-    force_columns : sequence of int
-    mass : ndarray, shape (S, n, n)
-        Mass matrices at the training states.
-
-    Returns
-    -------
-    coef : ndarray, shape (F,)
-        A new vector (the input is not modified).
-    flipped : bool
+    Coordinates coupled by identified terms form one law; without a non-zero force coefficient
+    its sign is arbitrary. ``symbolic_matrix`` (n, F) gives the non-zero entries of the
+    columns, ``mass`` (S, n, n) the mass matrices. Returns a new ``coef`` and whether it flipped.
 
     Examples
     --------
@@ -150,25 +108,11 @@ def orient_free_laws(coef, symbolic_matrix, force_columns, mass):
 
 def mass_matrix_report(mass, eigenvalues, names, remedy: str = "") -> dict:
     """Fraction of states with a positive definite mass matrix, its median condition number;
-    warns (:class:`IdentificationWarning`) naming coordinates without positive inertia.
+    warns (:class:`IdentificationWarning`, ending with ``remedy``) naming coordinates without
+    positive inertia.
 
-    Definiteness is judged unit free, on ``D M D`` with ``D = diag(max |M_ii|)^(-1/2)``
-    (coordinates in micrometres next to radians are fine); the condition number is that of
-    ``M`` itself.
-
-    Parameters
-    ----------
-    mass : ndarray, shape (S, n, n)
-    eigenvalues : ndarray, shape (S, n)
-    names : list of str
-        Coordinate names.
-    remedy : str, optional
-        What the warning suggests (appended to it).
-
-    Returns
-    -------
-    dict
-        ``positive_definite_fraction`` and ``median_condition``.
+    Definiteness is judged unit free, on ``D M D`` with ``D = diag(max |M_ii|)^(-1/2)``; the
+    condition number is that of ``M``.
 
     Examples
     --------
@@ -180,9 +124,7 @@ def mass_matrix_report(mass, eigenvalues, names, remedy: str = "") -> dict:
     >>> mass_matrix_report(micro, np.linalg.eigvalsh(micro), ["a", "b"])
     {'positive_definite_fraction': 1.0, 'median_condition': 500000000000.0}
     """
-    # Definiteness is judged on D M D, D = diag(max_states |M_ii|)^(-1/2): a congruence (same
-    # signs of eigenvalues) that removes the units of the coordinates, so a cart in micrometres
-    # next to a pendulum in radians (M_xx 1e-12 times M_thth) is not called singular.
+    # D M D: a congruence (same signs of eigenvalues) free of the coordinates' units
     diagonal = np.diagonal(mass, axis1=1, axis2=2)
     unit = np.max(np.abs(diagonal), axis=0, initial=0.0)
     unit = 1.0 / np.sqrt(np.where((unit > 0) & np.isfinite(unit), unit, 1.0))

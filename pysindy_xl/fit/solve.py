@@ -1,13 +1,4 @@
-"""The solve step of the fit stage: the optimizer for a problem, and the reweighting solver.
-
-:func:`resolve_optimizer` turns the estimator's ``optimizer`` parameter into an unfitted
-catalog optimizer for a built problem (:func:`~pysindy_xl.optimizers.default_optimizer`
-when none is given). :func:`solve` fits it: the problem gets the mass matrices of its columns
-when the optimizer's tags ask for them, and rows that carry estimated noise (the weak form
-on positions only) can be fitted by iteratively reweighted generalized least squares, the
-rows whitened by the covariance of the residual of the latest law
-(:meth:`~pysindy_xl.weak.WeakNoise.whitener`, the reweighting of WENDy).
-"""
+"""The solve step of the fit stage: the optimizer for a problem, and the reweighting solver."""
 
 from __future__ import annotations
 
@@ -34,22 +25,12 @@ MAX_REWEIGHTS = 3
 
 
 def resolve_optimizer(optimizer, problem, library):
-    """The unfitted optimizer that fits ``problem``.
+    """The unfitted optimizer that fits ``problem`` (from :func:`~pysindy_xl.fit.build_problem`).
 
-    Parameters
-    ----------
-    optimizer : catalog optimizer, regressor, {"explicit", "implicit", "mixed"} or None
-        A catalog optimizer is cloned; a regressor with ``fit(X, y)`` (a pysindy optimizer)
-        runs as ``ExplicitOptimizer(method=...)``; a kind or None gets
-        :func:`~pysindy_xl.optimizers.default_optimizer` for the problem's data (forced
-        coordinates, estimated rows) and the catalog ``library``.
-    problem : CatalogProblem
-        Built by :func:`~pysindy_xl.fit.build_problem`.
-    library : fitted CatalogRepartition
-
-    Returns
-    -------
-    estimator
+    ``optimizer``: a catalog optimizer is cloned; a regressor with ``fit(X, y)`` (a pysindy
+    optimizer) runs as ``ExplicitOptimizer(method=...)``; a kind ("explicit", "implicit",
+    "mixed") or None gets :func:`~pysindy_xl.optimizers.default_optimizer` for the problem's data
+    and the catalog ``library``.
 
     Examples
     --------
@@ -81,31 +62,13 @@ def resolve_optimizer(optimizer, problem, library):
 def solve(optimizer, problem, library=None, weigh=False):
     """Fit ``optimizer`` on ``problem``, reweighting rows that carry estimated noise.
 
-    With ``problem.row_noise`` (:class:`~pysindy_xl.weak.WeakNoise`, the rows' errors drawn
-    again) the problem carries its noise moments and draws (for the optimizers that use
-    them, :func:`~pysindy_xl.optimizers.solve_problem`) and, given ``library``, the mass
-    matrices of its columns when the optimizer's tags ask for them. With ``weigh`` the fit
-    is iteratively reweighted: the rows are whitened by the covariance of the residual of
-    the latest law (starting from the optimizer's pilot law) and refitted, until the support
-    found is the one that set the weights (at most :data:`MAX_REWEIGHTS` fits); only the
-    answer's warnings are shown. Whitened rows are each in units of their own noise, so they
-    are fitted as they are (``balance=False``): rebalancing the blocks by their scales would
-    undo the weighting.
-
-    Parameters
-    ----------
-    optimizer : catalog optimizer
-        Fitted in place (the reweighted fits on clones).
-    problem : CatalogProblem
-    library : fitted CatalogRepartition, optional
-        The problem's catalog, for its columns' mass matrices.
-    weigh : bool or "auto", default False
-        ``"auto"``: when some coordinate of the problem is forced (its
-        :class:`~pysindy_xl.fit.CatalogMap` says), where the weighting finds more exact laws.
-
-    Returns
-    -------
-    The fitted optimizer.
+    Given ``library``, the problem gets the mass matrices of its columns when the optimizer's
+    tags ask for them. With ``weigh`` and ``problem.row_noise`` the fit is iteratively reweighted
+    (the reweighting of WENDy): the rows are whitened by the covariance of the residual of the
+    latest law (:meth:`~pysindy_xl.weak.WeakNoise.whitener`, starting from the pilot law) and
+    refitted unbalanced, until the support is the one that set the weights (at most
+    :data:`MAX_REWEIGHTS` fits). ``weigh="auto"``: when some coordinate of the problem is forced.
+    Returns the fitted optimizer.
 
     Examples
     --------

@@ -1,53 +1,24 @@
 r"""Coordinates that hold still in the data: found at fit time and left out of the regression.
 
-A body that never moves (a passive target beside an arm, a part resting on its support)
-carries no information about its own dynamics: its equation of motion reads ``0 = 0`` on the
-data, up to noise, and its inertia cannot be identified. Left in the regression it makes the
-fit fail (no law explains the noise of its rows; a mass matrix without inertia for it). Such
-a coordinate is *still*, and :class:`~pysindy_xl.XLSINDy` leaves it out of the regression:
+A body that never moves carries no information about its dynamics (its equation reads
+``0 = 0`` up to noise) and, left in, makes the fit fail. Coordinate :math:`i` is *still*
+(:func:`still_coordinates`) when no recorded force acts on it and, on every trajectory, the
+residual :math:`r_i = q_i - a - b t` of the least-squares line through its positions obeys
 
-* **Criterion** (:func:`still_coordinates`). Coordinate :math:`i` is still when it is
-  undriven (no recorded generalized force acts on it: its rows of the force columns are
-  zero) and, on every trajectory :math:`k`, its recorded motion departs from a uniform one
-  by no more than the noise. With :math:`r_i^{(k)}(t) = q_i^{(k)}(t) - a - b t` the residual
-  of the least-squares line through the positions,
+.. math::
 
-  .. math::
+    \operatorname{std}_t r_i \le \kappa \, \hat\sigma_i
+    \quad\text{or}\quad
+    \max_t r_i - \min_t r_i \le 10^{-9} \,(1 + \max_t |q_i|),
 
-      \operatorname{std}_t r_i^{(k)} \le \kappa \, \hat\sigma_i^{(k)}
-      \quad\text{or}\quad
-      \max_t r_i^{(k)} - \min_t r_i^{(k)} \le \epsilon \,(1 + \max_t |q_i^{(k)}|),
-
-  with :math:`\hat\sigma_i^{(k)}` the noise level of the positions, estimated robustly from
-  their third differences (which remove any smooth motion sampled finely enough):
-  :math:`\hat\sigma = 1.4826 \, \operatorname{MAD}(\Delta^3 q) / \sqrt{20}` (white noise of
-  standard deviation :math:`\sigma` has third differences of variance :math:`20 \sigma^2`),
-  :math:`\kappa` the ``hold_still`` threshold of the estimator and :math:`\epsilon = 10^{-9}`
-  (numerically uniform). Pure noise gives a ratio
-  :math:`\operatorname{std} r / \hat\sigma` close to 1; a sinusoid of amplitude :math:`A`
-  under the noise gives :math:`\sqrt{1 + A^2 / (2 \sigma^2)}`, so with the default
-  :math:`\kappa = 2` a motion of amplitude above about 2.5 noise levels keeps its
-  coordinate in the regression. The margin to 1 leaves room for the estimators' scatter on
-  short trajectories; the margin to larger values keeps coupled coordinates that move little
-  (a heavy cart under a pendulum) whose motion, though small, is resolved over many samples.
-  A body at rest is the common case (:math:`b = 0`); a body drifting at
-  constant velocity is the same: its accelerations, all its equation could be identified
-  from, are zero. Such a body is decoupled from the coordinates that move: in a Lagrangian
-  system a coupling term acts on both sides, so it would accelerate the body as the others
-  move.
-* **Leaving out** (:func:`still_columns`). The rows of still coordinates (their equations)
-  are removed, and so is every catalog column that, in the equations of the other
-  coordinates, is zero, involves a velocity, acceleration or force of a still coordinate, or
-  depends on the positions of still coordinates only (a constant on the data). The remaining
-  coordinates are identified as if the still body were absent; columns coupling a still
-  position with moving coordinates stay (the still position is a constant of their law).
-* **In the model** the still coordinates are held: their acceleration is zero
-  (:class:`~pysindy_xl.dynamics.CatalogDynamics` with ``held``), so they keep their initial
-  velocity in a simulation (zero for a body at rest), and the model says so in ``print()``,
-  the quality report and the CLI.
-
-A driven coordinate that does not move (a joint held by its motor) is never still: its
-equation, gravity against the recorded torque, carries information.
+with :math:`\hat\sigma = 1.4826 \, \operatorname{MAD}(\Delta^3 q) / \sqrt{20}` the noise
+level (:func:`noise_level`) and :math:`\kappa` the estimator's ``hold_still``. A sinusoid of
+amplitude :math:`A` gives a ratio :math:`\sqrt{1 + A^2 / (2 \sigma^2)}`, so with
+:math:`\kappa = 2` a motion above about 2.5 noise levels stays in the regression.
+:func:`still_columns` lists the catalog columns left out with them; the model holds still
+coordinates at zero acceleration (:class:`~pysindy_xl.dynamics.CatalogDynamics` ``held``).
+A driven coordinate that does not move is never still: gravity against the recorded torque
+is information.
 """
 
 from __future__ import annotations
@@ -62,29 +33,10 @@ _UNIFORM = 1e-9
 
 
 def noise_level(x) -> np.ndarray:
-    r"""Robust noise level of each column of ``x`` from its third differences.
+    r"""Robust noise level of each column of ``x`` (N, n): ``1.4826 * MAD(diff(x, 3)) / sqrt(20)``.
 
-    ``1.4826 * MAD(diff(x, 3)) / sqrt(20)``: the standard deviation of white noise added to a
-    signal that is smooth at the sampling rate (its third differences are negligible), and
-    insensitive to a few outliers.
-
-    Parameters
-    ----------
-    x : array, shape (N, n)
-
-    Returns
-    -------
-    ndarray, shape (n,)
-        Zeros when ``N < 4``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> rng = np.random.default_rng(0)
-    >>> t = np.linspace(0, 10, 4001)[:, None]
-    >>> sigma = noise_level(np.sin(t) + 0.01 * rng.normal(size=t.shape))
-    >>> bool(abs(sigma[0] - 0.01) < 0.001)
-    True
+    The standard deviation of white noise on a signal smooth at the sampling rate, insensitive
+    to a few outliers; shape (n,), zeros when ``N < 4``.
     """
     x = np.asarray(x, dtype=float)
     if x.shape[0] < 4:
@@ -95,20 +47,11 @@ def noise_level(x) -> np.ndarray:
 
 
 def driven_coordinates(library, forces) -> np.ndarray:
-    """The coordinates on which a recorded force acts through the catalog's force columns.
+    """Bool (n,): the coordinates on which a recorded force acts through the force columns.
 
-    Coordinate ``c`` is driven when an entry of a force column in its equation contains the
-    force ``tau_k`` of a coordinate ``k`` whose recorded force is not zero everywhere.
-
-    Parameters
-    ----------
-    library : fitted CatalogRepartition
-    forces : list of array (N_k, n) or None
-        Recorded generalized forces per trajectory (None: unforced).
-
-    Returns
-    -------
-    ndarray of bool, shape (n,)
+    Coordinate ``c`` is driven when a force column's entry in its equation contains ``tau_k``
+    and the recorded force ``k`` is not zero everywhere. ``library`` is a fitted
+    :class:`~pysindy_xl.CatalogRepartition`; ``forces`` a list of arrays (N_k, n), or None.
 
     Examples
     --------
@@ -132,22 +75,10 @@ def driven_coordinates(library, forces) -> np.ndarray:
 
 
 def still_coordinates(positions, times, forced, threshold: float) -> np.ndarray:
-    """The coordinates that hold still in the data (see the module docstring).
+    """Bool (n,): the coordinates that hold still in the data (see the module docstring).
 
-    Parameters
-    ----------
-    positions : list of array, shape (N_k, n)
-        Recorded positions, one array per trajectory.
-    times : list of array, shape (N_k,)
-        Their sample times.
-    forced : array of bool, shape (n,)
-        Coordinates on which a recorded force acts (never still).
-    threshold : float
-        ``kappa``: motion up to this many noise levels counts as noise.
-
-    Returns
-    -------
-    ndarray of bool, shape (n,)
+    ``positions`` and ``times`` are lists of arrays (N_k, n) and (N_k,); ``forced`` (n,) marks the
+    coordinates that are never still; ``threshold`` is ``kappa``.
 
     Examples
     --------
@@ -175,19 +106,10 @@ def still_coordinates(positions, times, forced, threshold: float) -> np.ndarray:
 
 
 def still_columns(library, still) -> dict:
-    """Catalog columns left out with the still coordinates, with the reason.
+    """Catalog columns left out with the ``still`` coordinates: ``{column index: reason}``.
 
-    Parameters
-    ----------
-    library : fitted CatalogRepartition
-    still : array of bool, shape (n,)
-
-    Returns
-    -------
-    dict of int to str
-        Column index -> reason, for the columns that are zero in the equations of the moving
-        coordinates, involve a velocity, acceleration or force of a still coordinate there,
-        or depend only on positions of still coordinates there.
+    A column goes when, in the equations of the moving coordinates, it is zero, involves a
+    velocity, acceleration or force of a still coordinate, or depends only on still positions.
 
     Examples
     --------

@@ -1,11 +1,4 @@
-"""The check step of the fit stage: the catalog, the formulation, the checked trajectories.
-
-:func:`check_fit` is the first step of a fit (:mod:`pysindy_xl.fit`): a fitted clone of the
-estimator's catalog, the formulation (:func:`resolve_formulation`) and the trajectories,
-validated by :func:`trajectory_data` (one trajectory or a list), with the missing velocities
-and accelerations the strong form needs estimated by a differentiation function
-(:func:`differentiation_function`) of the kind the optimizer's tags prefer.
-"""
+"""The check step of the fit stage: the catalog, the formulation, the checked trajectories."""
 
 from __future__ import annotations
 
@@ -26,22 +19,13 @@ FORMULATIONS = ("auto", "strong", "weak")
 
 
 def differentiation_function(method=None, unbiased: bool = False):
-    """The function ``derivative(values, t)`` that estimates missing derivatives.
+    """The function ``derivative(values, t)`` that estimates missing derivatives, checking that
+    its result has the input's shape and is finite.
 
-    Parameters
-    ----------
-    method : pysindy differentiation method, optional
-        Used as it is when given.
-    unbiased : bool, default False
-        Without ``method``: fourth-order finite differences (no smoothing bias, which a
-        null-space search of unforced data cannot tell from the law) instead of
-        ``ps.SmoothedFiniteDifference()`` (robust to moderate noise; off a uniform grid its
-        Savitzky-Golay smoothing is done on the actual times).
-
-    Returns
-    -------
-    callable
-        Checks that the result has the shape of its input and is finite.
+    ``method`` (a pysindy differentiation method) is used as it is; without it, ``unbiased``
+    gives fourth-order finite differences (no smoothing bias, which a null-space search of
+    unforced data cannot tell from the law), else ``ps.SmoothedFiniteDifference()`` (smoothing
+    on the actual times off a uniform grid).
 
     Examples
     --------
@@ -66,10 +50,9 @@ def differentiation_function(method=None, unbiased: bool = False):
 
 
 def _smoothed_difference(values, t):
-    """``ps.SmoothedFiniteDifference()`` (Savitzky-Golay, 11 samples, cubic, then central
-    differences) with its smoothing done on the actual times off a uniform grid: read in
-    sample order, a smooth signal on jittered stamps looks noisy (a 1 kHz log jittering by
-    8 %: accelerations 10 times their own size in error)."""
+    """``ps.SmoothedFiniteDifference()`` with its smoothing done on the actual times off a uniform
+    grid: read in sample order, a smooth signal on jittered stamps looks noisy.
+    """
     if np.isscalar(t) or is_uniform(t) or len(t) < 11:
         return ps.SmoothedFiniteDifference()(values, t)
     return ps.FiniteDifference()(differentiate(t, values, 0, stencil=11, degree=3), t)
@@ -79,20 +62,10 @@ def trajectory_data(x, t, x_dot, x_ddot, u, n: int, sample_mask=None,
                     derivative=None) -> list[dict]:
     """The validated trajectories of ``fit``: one dict of arrays per trajectory.
 
-    Parameters
-    ----------
-    x, t, x_dot, x_ddot, u, sample_mask
-        As :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes them (``t`` already defaulted).
-    n : int
-        Coordinates.
-    derivative : callable, optional
-        ``derivative(values, t)`` (:func:`differentiation_function`) for missing velocities
-        and accelerations; without it they stay None.
-
-    Returns
-    -------
-    list of dict
-        Keys ``"x"``, ``"t"``, ``"x_dot"``, ``"x_ddot"``, ``"u"``, ``"mask"``.
+    ``x, t, x_dot, x_ddot, u, sample_mask`` as :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes
+    them (``t`` defaulted); ``n`` coordinates; ``derivative(values, t)``
+    (:func:`differentiation_function`) fills missing velocities and accelerations, which
+    otherwise stay None. Keys: ``"x"``, ``"t"``, ``"x_dot"``, ``"x_ddot"``, ``"u"``, ``"mask"``.
     """
     data = trajectory_arrays(x, t, x_dot, x_ddot, u, sample_mask, n)
     if derivative is not None:
@@ -106,28 +79,11 @@ def trajectory_data(x, t, x_dot, x_ddot, u, n: int, sample_mask=None,
 
 def resolve_formulation(formulation: str, measured: bool, differentiation_method=None,
                         impulsive: bool = False) -> str:
-    """The formulation a fit uses: ``"strong"`` or ``"weak"``.
+    """The formulation a fit uses, ``"strong"`` or ``"weak"``: the one place that resolves "auto".
 
-    The one place that resolves ``formulation="auto"``: strong when a
-    ``differentiation_method`` is set, or when the derivatives are ``measured`` (velocities
-    and accelerations given) and no catalog entry is ``impulsive``
-    (:meth:`~pysindy_xl.feature_library.SymbolicLibrary.impulsive`: sampled pointwise, an
-    impulse is caught or missed by chance; integrated by parts it is exact); weak
-    (integrated against test functions of smoothed positions) otherwise.
-
-    Parameters
-    ----------
-    formulation : {"auto", "strong", "weak"}
-    measured : bool
-        Whether ``x_dot`` and ``x_ddot`` were given.
-    differentiation_method : optional
-        The estimator's.
-    impulsive : bool, default False
-        Whether the catalog has an impulsive entry.
-
-    Returns
-    -------
-    str
+    Strong when a ``differentiation_method`` is set, or when the derivatives are ``measured``
+    and no catalog entry is ``impulsive`` (sampled pointwise an impulse is caught or missed by
+    chance; integrated by parts it is exact); weak otherwise.
 
     Examples
     --------
@@ -163,23 +119,9 @@ def estimator_trajectories(estimator, x, t, x_dot, x_ddot, u, n, differentiate=T
     """The checked trajectories of a call of ``estimator`` (an :class:`~pysindy_xl.XLSINDy`).
 
     ``t`` defaults to ``estimator.t_default``; missing derivatives are estimated with its
-    ``differentiation_method`` or, by default, with the estimate its optimizer's tags prefer
+    ``differentiation_method`` or the estimate its optimizer's tags prefer
     (``derivative_estimate``; unforced data: unbiased), or stay None with
-    ``differentiate=False``.
-
-    Parameters
-    ----------
-    estimator : XLSINDy
-    x, t, x_dot, x_ddot, u, sample_mask
-        As :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes them.
-    n : int
-        Coordinates.
-    differentiate : bool, default True
-
-    Returns
-    -------
-    list of dict
-        As :func:`trajectory_data`.
+    ``differentiate=False``. Returns :func:`trajectory_data`'s list.
     """
     derivative = None
     if differentiate:
@@ -199,16 +141,15 @@ def check_fit(estimator, x, t, x_dot, x_ddot, u, sample_mask):
     Parameters
     ----------
     estimator : XLSINDy
-        Its parameters are read, never changed (the catalog is cloned before it is fitted).
+        Read, never changed (the catalog is cloned before it is fitted).
     x, t, x_dot, x_ddot, u, sample_mask
         As :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes them.
 
     Returns
     -------
-    library : fitted CatalogRepartition
-    data : list of dict
-        :func:`trajectory_data`, with the derivatives the strong form needs.
-    formulation : {"strong", "weak"}
+    library, data, formulation
+        The fitted catalog, :func:`trajectory_data` (with the derivatives the strong form
+        needs) and ``"strong"`` or ``"weak"``.
 
     Raises
     ------

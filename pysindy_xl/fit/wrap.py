@@ -1,12 +1,4 @@
-"""The wrap step of the fit stage: a solved catalog problem back in the catalog's terms.
-
-:func:`fitted_state` maps the optimizer's coefficients (and an ensemble's inclusion
-probabilities and intervals) back to the catalog's columns through the problem's
-:class:`~pysindy_xl.fit.CatalogMap`, builds the identified dynamics in mass-matrix form
-(:func:`catalog_dynamics`), orients the laws no force scales and measures the mass matrix on
-the training states (:func:`checked_dynamics`): the fitted attributes of
-:class:`~pysindy_xl.XLSINDy`.
-"""
+"""The wrap step of the fit stage: a solved catalog problem back in the catalog's terms."""
 
 from __future__ import annotations
 
@@ -20,20 +12,9 @@ __all__ = ["fitted_state", "catalog_dynamics", "checked_dynamics"]
 
 
 def catalog_dynamics(library, coef, held):
-    """The identified equations in mass-matrix form, combined numerically from the catalog's
-    columns (:class:`~pysindy_xl.dynamics.CatalogDynamics`); None when no identified term
+    """The identified equations in mass-matrix form (:class:`~pysindy_xl.dynamics.CatalogDynamics`
+    of ``library``, ``coef`` (F,) and the ``held`` coordinates); None when no identified term
     contains an acceleration.
-
-    Parameters
-    ----------
-    library : fitted CatalogRepartition
-    coef : ndarray, shape (F,)
-    held : ndarray of bool, shape (n,)
-        Coordinates the model holds (zero acceleration).
-
-    Returns
-    -------
-    CatalogDynamics or None
     """
     if not library.involves(library.coords.qdd)[:, np.flatnonzero(coef)].any():
         return None
@@ -43,15 +24,9 @@ def catalog_dynamics(library, coef, held):
 def checked_dynamics(library, coef, held, states):
     """Orient the laws no force scales, then measure ``M(q)`` on the training ``states``.
 
-    Returns
-    -------
-    coef : ndarray, shape (F,)
-        With the laws whose mass matrix was negative definite flipped
-        (:func:`~pysindy_xl.fit.diagnostics.orient_free_laws`).
-    dynamics : CatalogDynamics or None
-    check : dict or None
-        :func:`~pysindy_xl.fit.diagnostics.mass_matrix_report` (warns when the mass matrix
-        is not positive definite); None without dynamics.
+    Returns ``(coef, dynamics, check)``: ``coef`` with the laws of negative definite mass matrix
+    flipped (:func:`~pysindy_xl.fit.diagnostics.orient_free_laws`), the dynamics (or None) and
+    :func:`~pysindy_xl.fit.diagnostics.mass_matrix_report` (None without dynamics).
     """
     dynamics = catalog_dynamics(library, coef, held)
     if dynamics is None:
@@ -70,19 +45,9 @@ def checked_dynamics(library, coef, held, states):
 
 
 def fitted_state(library, problem, optimizer) -> dict:
-    """The fitted attributes of :class:`~pysindy_xl.XLSINDy` from a solved problem.
-
-    Parameters
-    ----------
-    library : fitted CatalogRepartition
-    problem : CatalogProblem
-        Built by :func:`~pysindy_xl.fit.build_problem` (with its ``catalog_map``).
-    optimizer : fitted catalog optimizer
-
-    Returns
-    -------
-    dict
-        Attribute name -> value (``coef_``, ``dynamics_``, ``mass_matrix_check_``, ...).
+    """The fitted attributes of :class:`~pysindy_xl.XLSINDy` (name -> value) from a solved
+    ``problem`` (built by :func:`~pysindy_xl.fit.build_problem`), its fitted ``library`` and
+    ``optimizer``.
     """
     origin = problem.catalog_map
     names = library.get_feature_names()

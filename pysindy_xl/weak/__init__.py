@@ -16,20 +16,7 @@ from .smoothing import (
 )
 from .timegrid import grid_summary, split_at_gaps, stamp_noise_ratio
 
-__all__ = [
-    "BumpTestFunctions",
-    "WhittakerSmoother",
-    "corner_frequency",
-    "differentiate",
-    "finite_difference_weights",
-    "quadrature_weights",
-    "whittaker_smooth",
-    "weak_regression",
-    "propagated_noise",
-    "propagated_draws",
-    "WeakNoise",
-    "RowWhitener",
-    "split_at_gaps",
-    "grid_summary",
-    "stamp_noise_ratio",
-]
+__all__ = ["BumpTestFunctions", "WhittakerSmoother", "corner_frequency", "differentiate",
+           "finite_difference_weights", "quadrature_weights", "whittaker_smooth",
+           "weak_regression", "propagated_noise", "propagated_draws", "WeakNoise", "RowWhitener",
+           "split_at_gaps", "grid_summary", "stamp_noise_ratio"]

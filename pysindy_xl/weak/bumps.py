@@ -1,24 +1,15 @@
-"""Test functions of the weak formulation: smooth bumps with compact support in time.
+r"""Test functions of the weak formulation: smooth bumps with compact support in time.
 
-A test function ``phi(t) = (1 - s^2)^p`` with ``s = (t - c) / h`` on ``[c - h, c + h]`` (zero
-outside) vanishes with its first ``p - 1`` derivatives at both ends of its support, so
-integration by parts against it leaves no boundary term:
+A bump ``phi(t) = (1 - s^2)^p``, ``s = (t - c) / h`` on ``[c - h, c + h]``, vanishes with its
+first ``p - 1`` derivatives at both ends, so integration by parts leaves no boundary term:
 
-.. math:: \\int \\phi \\, \\frac{d}{dt} P \\, dt = -\\int \\dot\\phi \\, P \\, dt.
+.. math:: \int \phi \, \frac{d}{dt} P \, dt = -\int \dot\phi \, P \, dt.
 
-:class:`BumpTestFunctions` places such bumps along each trajectory and returns them as
-quadrature-weighted sparse matrices ``Phi`` and ``dPhi`` (test functions x samples), so that
-every integral of the weak regression is one sparse matrix product: ``int phi_k f dt ~
-(Phi @ f)[k]``. The half-width ``h`` is chosen from the data's spectrum (as WSINDy does): the
-corner frequency where the positions' spectrum meets the noise floor sets how much the test
-functions must low-pass.
-
-That width is the narrowest the noise allows, not the only useful one: wider bumps average more
-noise out of each row and see the slow motion, narrower ones resolve the fast motion. With
-``width_multiples`` the rows of several widths ``m h`` are stacked, ordered by their centres so
-that a contiguous stretch of rows (a cross-validation fold) is a stretch of time at every width.
-The rows of different widths share noise, which the errors-in-variables moments account for
-(their expectation needs no independence).
+:class:`BumpTestFunctions` returns the bumps as quadrature-weighted sparse matrices ``Phi``
+and ``dPhi`` (test functions x samples): ``int phi_k f dt ~ (Phi @ f)[k]``. The half-width
+``h`` comes from the corner frequency of the positions' spectrum (as in WSINDy). With
+``width_multiples`` the rows of several widths ``m h`` are stacked, ordered by their centres,
+so that a contiguous stretch of rows is a stretch of time at every width.
 """
 
 from __future__ import annotations
@@ -35,22 +26,12 @@ __all__ = ["BumpTestFunctions", "corner_frequency", "quadrature_weights"]
 
 
 def quadrature_weights(t) -> np.ndarray:
-    """Quadrature weights of a strictly increasing grid: ``int f dt ~ weights @ f``.
+    """Quadrature weights of a strictly increasing grid ``t`` (N,): ``int f dt ~ weights @ f``.
 
-    On a uniform grid, the trapezoidal rule: for integrands that vanish smoothly at both
-    ends (a test function times data) it is of very high order (Euler-Maclaurin). On a
-    non-uniform grid the trapezoidal rule is only second order, so each interval
-    ``[t_i, t_i+1]`` is integrated exactly on the cubic through the four nearest samples
-    (fourth order), except where nearly coincident samples make
-    that cubic's weights large and of both signs: those intervals keep the trapezoid.
-
-    Parameters
-    ----------
-    t : array, shape (N,)
-
-    Returns
-    -------
-    ndarray, shape (N,)
+    The trapezoidal rule on a uniform grid (of very high order for integrands vanishing smoothly
+    at both ends); otherwise each interval is integrated exactly on the cubic through the four
+    nearest samples, except where nearly coincident samples make that cubic's weights large and
+    of both signs (those keep the trapezoid).
 
     Examples
     --------
@@ -71,8 +52,9 @@ def quadrature_weights(t) -> np.ndarray:
 
 
 def _cubic_weights(t) -> np.ndarray:
-    """Weights of the piecewise-cubic rule: interval ``i`` is integrated on the cubic through
-    samples ``i - 1 .. i + 2`` (shifted inside the grid at its ends)."""
+    """Piecewise-cubic weights: interval ``i`` integrated on the cubic through samples
+    ``i - 1 .. i + 2`` (shifted inside the grid at its ends).
+    """
     n_samples = len(t)
     left = np.arange(n_samples - 1)
     index = np.clip(left - 1, 0, n_samples - 4)[:, None] + np.arange(4)
@@ -83,10 +65,8 @@ def _cubic_weights(t) -> np.ndarray:
     moments = ((t[left + 1] - t[left]) / scale)[:, None] ** (powers + 1) / (powers + 1)
     vandermonde_t = offsets[:, None, :] ** powers[None, :, None]  # (interval, power, node)
     local = np.linalg.solve(vandermonde_t, moments[..., None])[..., 0] * scale
-    # Nearly coincident samples (bunched stamps) make the cubic's weights large and of both
-    # signs, which amplify the noise (on a uniform grid they sum in absolute value to 7/6 of
-    # the interval); an interval whose weights sum to more than 4 times its width
-    # falls back to the trapezoid, whose weights are positive on any grid.
+    # weights summing in absolute value to over 4 widths (7/6 on a uniform grid) amplify the
+    # noise: such an interval falls back to the trapezoid, positive on any grid
     width = t[left + 1] - t[left]
     rough = np.abs(local).sum(axis=1) > 4.0 * width
     position = left[rough] - index[rough, 0]
@@ -101,30 +81,13 @@ _CHI2_1_MEDIAN = 0.454936423119572
 
 
 def corner_frequency(t, x, energy: float = 0.99) -> float:
-    """Frequency (Hz) below which the signal part of the positions' spectrum lies.
+    """Frequency (Hz) below which ``energy`` of the signal part of the positions' spectrum lies.
 
-    The spectrum of each coordinate (cosine transform after removing a linear trend and
-    tapering the ends, on the samples treated as uniform with the mean step) is split into a
-    noise floor and the signal above it; the corner is the frequency that holds ``energy`` of
-    the signal power, the largest over coordinates. The floor is the mean noise power per
-    mode, estimated from the upper half of the frequencies (where position data have little
-    signal) as their median power divided by 0.4549, the median of a chi-square variable
-    with one degree of freedom over its mean (white noise gives each mode such a power).
-    The signal power is accumulated without clipping, so that the noise's fluctuations
-    about the floor cancel: the corner then does not move with the noise level (clipping
-    them at zero, or taking the median itself as the floor, leaves about half the noise
-    power in the "signal", which pushes the corner up when the detrended signal is small
-    against the noise, e.g. a drifting cart).
-
-    Parameters
-    ----------
-    t : array, shape (N,)
-    x : array, shape (N, n)
-    energy : float, default 0.99
-
-    Returns
-    -------
-    float
+    Each coordinate of ``x`` (N, n) is detrended, tapered and cosine-transformed (as if sampled
+    uniformly at the mean step). The noise floor is the median power of the upper half of the
+    modes over 0.4549 (the median of a chi-square variable of one degree of freedom); the signal
+    power above it is accumulated without clipping, so the noise's fluctuations cancel and the
+    corner does not move with the noise level. Returns the largest corner over coordinates.
 
     Examples
     --------
@@ -164,7 +127,7 @@ class BumpTestFunctions:
         the corner frequency (:func:`corner_frequency`), at least ``min_samples`` samples.
     n_functions : int or "auto", default "auto"
         Test functions per trajectory, evenly spaced; ``"auto"``: enough for every sample to be
-        covered ``overlap`` times, and at least ``min_rows`` in all (see :meth:`matrices`).
+        covered ``overlap`` times.
     power : int, default 6
         Exponent ``p``; the bump and its first ``p - 1`` derivatives vanish at the ends.
     width_factor : float, default 1.0
@@ -174,9 +137,8 @@ class BumpTestFunctions:
     min_samples : int, default 12
         Smallest half-width in samples (quadrature needs a resolved bump).
     width_multiples : sequence of float, optional
-        Rows of the test functions of half-width ``m h`` for each multiple ``m`` (module
-        documentation); a width whose support does not fit inside the trajectory is left out.
-        Default: ``h`` alone.
+        Stack the rows of half-width ``m h`` for each multiple ``m``; a width that does not
+        fit inside the trajectory is left out. Default: ``h`` alone.
 
     Examples
     --------
@@ -222,23 +184,12 @@ class BumpTestFunctions:
                              f"{self.width_multiples!r}")
 
     def half_width(self, t, x=None) -> float:
-        """Half-width ``h`` (time units) for a trajectory.
-
-        Parameters
-        ----------
-        t : array, shape (N,)
-        x : array, shape (N, n), optional
-            Positions, needed when ``width="auto"``.
-
-        Returns
-        -------
-        float
+        """Half-width ``h`` (time units) for a trajectory ``t`` (N,); positions ``x`` (N, n) are
+        needed when ``width="auto"``.
         """
         self._check_params()
         t = np.asarray(t, dtype=float)
-        # the floor resolves the bump at (nearly) every step, so that steps no longer than
-        # usual are never taken for gaps (max_gap); the mean step would be exceeded by the
-        # rounding of a uniform grid's stamps and by every longer step of a jittered one
+        # the floor resolves the bump at (nearly) every step: usual steps are never gaps
         step = float(np.quantile(np.diff(t), 0.99)) if len(t) > 2 else t[-1] - t[0]
         if self.width != "auto":
             h = float(self.width)
@@ -256,8 +207,7 @@ class BumpTestFunctions:
         return h
 
     def max_gap(self, half_width) -> float:
-        """Longest time step a test function of ``half_width`` may span: ``half_width /
-        min_samples``, the spacing at which the narrowest allowed bump is still resolved;
+        """Longest step a test function of ``half_width`` may span: ``half_width / min_samples``;
         trajectories are cut at longer steps (:mod:`~pysindy_xl.weak.timegrid`).
 
         Examples
@@ -277,17 +227,14 @@ class BumpTestFunctions:
             Strictly increasing sample times.
         x : array, shape (N, n), optional
             Positions, for the automatic width.
-        half_width : float, optional
-            Overrides the width rule (used to share one width across trajectories).
-        n_functions : int, optional
-            Overrides the count rule.
+        half_width, n_functions : optional
+            Override the width and count rules (one width shared across trajectories).
 
         Returns
         -------
         phi, dphi : scipy.sparse.csr_matrix, shape (K, N)
-            ``phi[k, i] = phi_k(t_i) w_i`` and ``dphi[k, i] = phi_k'(t_i) w_i`` with the
-            trapezoidal weights ``w`` (:func:`quadrature_weights`); with several
-            ``width_multiples``, the rows of every width, ordered by their centres.
+            ``phi[k, i] = phi_k(t_i) w_i`` and ``dphi[k, i] = phi_k'(t_i) w_i`` with the weights
+            ``w`` of :func:`quadrature_weights`; several ``width_multiples``: ordered by centres.
         half_width : float
             ``h``, before the multiples.
         """

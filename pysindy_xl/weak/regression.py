@@ -1,9 +1,8 @@
 """The weak regression matrix of several trajectories, as :class:`~pysindy_xl.XLSINDy` fits it.
 
-Each trajectory is smoothed (positions and velocities for the columns' ``P`` and ``Q``), gets
-test functions of one shared width, loses the test functions that touch a masked sample, and
-contributes its ``(n, K, F)`` block; blocks are concatenated along the test functions, so the
-rows stay coordinate-major over all trajectories.
+Each trajectory is smoothed, gets test functions of one shared width, loses those touching a
+masked sample and contributes its ``(n, K, F)`` block; blocks are concatenated along the test
+functions, so rows stay coordinate-major over all trajectories.
 """
 
 from __future__ import annotations
@@ -21,29 +20,15 @@ from .timegrid import STAMP_NOISE_RATIO, grid_summary, split_at_gaps, stamp_nois
 
 __all__ = ["weak_regression", "shared_half_width", "propagated_noise", "propagated_draws"]
 
-#: Samples times draws of the noise propagation: 8 draws of a 3,000-sample record, fewer of
-#: longer records, whose many rows average the estimate as well (one from 24,000 samples).
+#: Samples times draws of the noise propagation (longer records need fewer draws).
 _PROPAGATION_SAMPLES = 24_000
 
 
 def shared_half_width(test_functions, trajectories, columns=None) -> float:
-    """One test-function half-width for all trajectories.
-
-    The narrowest width asked for by the trajectories at least half as long as the longest
-    (short pieces have unreliable spectra).
-
-    Parameters
-    ----------
-    test_functions : BumpTestFunctions
-    trajectories : list of dict
-        With keys ``"t"`` (N,) and ``"x"`` (N, n).
-    columns : array of bool, shape (n,), optional
-        The coordinates whose spectra set the width (default all); coordinates held still
-        (:mod:`pysindy_xl.fit.still`) have only the noise's, which would ask for the narrowest.
-
-    Returns
-    -------
-    float
+    """One test-function half-width for all ``trajectories`` (dicts with ``"t"`` and ``"x"``): the
+    narrowest asked for by those at least half as long as the longest (short pieces have
+    unreliable spectra). Only the coordinates in ``columns`` (bool (n,), default all) set it:
+    still coordinates have only the noise's spectrum.
 
     Examples
     --------
@@ -72,37 +57,17 @@ def shared_half_width(test_functions, trajectories, columns=None) -> float:
 
 
 def propagated_noise(library, d, smoothing, phi, dphi, block, n_draws, rng):
-    """Second moments of the weak columns' errors caused by the noise of the positions.
+    """Second moments (n, F, F) of the weak columns' errors caused by the noise of the positions.
 
-    Fresh noise of the estimated level is added to the recorded positions, which are smoothed
-    again with the same weights and turned into weak columns; the change ``Delta`` of the
-    columns is distributed (to first order) as their error ``E`` due to the original noise,
-    so that ``E[E^T E] ~ mean over draws of Delta^T Delta``, per coordinate block.
-
-    Parameters
-    ----------
-    library : fitted SymbolicLibrary
-    d : dict
-        One trajectory (``"t"``, ``"x"``, ``"u"``).
-    smoothing : smoother or tuple
-        The smoother as it was after smoothing this trajectory, with ``noise_`` (the noise
-        level per coordinate) and ``resmooth(t, x)`` (the same smoothing of other data, see
-        :meth:`WhittakerSmoother.resmooth <pysindy_xl.WhittakerSmoother.resmooth>`); or
-        ``(lam, noise, order)`` of a :class:`WhittakerSmoother`.
-    phi, dphi : sparse matrices, shape (K, N)
-    block : ndarray, shape (n * K, F)
-        The trajectory's weak columns.
-    n_draws : int
-    rng : numpy Generator
-
-    Returns
-    -------
-    ndarray, shape (n, F, F)
+    Fresh noise of the estimated level is added to the positions of trajectory ``d``, which are
+    smoothed again with the same weights (``smoothing``: the smoother as it smoothed ``d``, with
+    ``noise_`` and ``resmooth``, or ``(lam, noise, order)`` of a :class:`WhittakerSmoother`) and
+    turned into weak columns with ``phi, dphi``; the change ``Delta`` from ``block`` (n * K, F)
+    is distributed (to first order) as the error ``E``: ``E[E^T E] ~ mean of Delta^T Delta`` over
+    ``n_draws`` per coordinate block.
 
     Examples
     --------
-    A noisy oscillator: the moments of its two columns (``x_dot^2`` and ``x^2``).
-
     >>> import numpy as np, pysindy_xl as px
     >>> coords = px.Coordinates(["x"])
     >>> library = px.LagrangeLibrary(coords, [coords.qd[0] ** 2, coords.q[0] ** 2]).fit()
@@ -123,17 +88,8 @@ def propagated_noise(library, d, smoothing, phi, dphi, block, n_draws, rng):
 
 
 def propagated_draws(library, d, smoothing, phi, dphi, block, n_draws, rng):
-    """Draws of the change of the weak columns under fresh noise of the estimated level.
-
-    Parameters
-    ----------
-    library, d, smoothing, phi, dphi, block, n_draws, rng
-        As in :func:`propagated_noise`.
-
-    Returns
-    -------
-    ndarray, shape (n_draws, n * K, F)
-        Rows as in ``block`` (coordinate-major).
+    """Draws (n_draws, n * K, F) of the change of the weak columns under fresh noise of the
+    estimated level; arguments as in :func:`propagated_noise`.
     """
     if isinstance(smoothing, tuple):  # (lam, noise, order) of a WhittakerSmoother
         lam, noise, order = smoothing
@@ -155,55 +111,42 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
                     half_width=None, width_columns=None):
     """Weak regression matrix of all trajectories, rows coordinate-major.
 
+    Trajectories are cut at steps longer than ``test_functions.max_gap(half_width)``
+    (:mod:`~pysindy_xl.weak.timegrid`); pieces shorter than one test function are left out
+    with a warning.
+
     Parameters
     ----------
     library : fitted SymbolicLibrary
         The catalog (:meth:`~pysindy_xl.feature_library.SymbolicLibrary.weak_transform`).
     trajectories : list of dict
-        Keys ``"t"``, ``"x"`` (positions), ``"x_dot"`` (measured velocities or None, used as
-        given), ``"u"`` (forces or None) and ``"mask"`` (bool (N,), samples to explain).
+        Keys ``"t"``, ``"x"``, ``"x_dot"`` (measured velocities or None), ``"u"`` (forces or
+        None) and ``"mask"`` (bool (N,), samples to explain).
     test_functions : BumpTestFunctions
     smoother : WhittakerSmoother
-        Anything with ``smooth(t, x) -> (q, qd, qdd)``; it propagates the noise of the
-        positions when it also has ``noise_`` and ``resmooth`` (see :func:`propagated_draws`).
+        Anything with ``smooth(t, x) -> (q, qd, qdd)``; it propagates the positions' noise when
+        it also has ``noise_`` and ``resmooth``.
     noise : {"moments", "draws", "none"}, default "moments"
-        What to return of the propagated noise: its moments, or its draws with the
-        structure of the rows (:class:`~pysindy_xl.weak.noise.WeakNoise`, which gives the
-        moments and the covariance of a law's residual); ``"none"``: rows only, the noise
-        is not propagated.
+        Return the propagated noise's moments, or its draws as a
+        :class:`~pysindy_xl.weak.noise.WeakNoise`; ``"none"``: not propagated.
     half_width : float, optional
-        Half-width of the test functions (s); default: :func:`shared_half_width`.
+        Default: :func:`shared_half_width`.
     width_columns : array of bool, shape (n,), optional
-        The coordinates whose spectra choose the default half-width (default all).
+        The coordinates whose spectra choose the default half-width.
 
     Returns
     -------
     theta : ndarray, shape (n * K, F)
     states : ndarray, shape (N_total, 4n + 1)
-        The smoothed states of all samples (with the smoother's accelerations, for probing
-        the catalog's dependent columns only).
-    noise_moments : ndarray, shape (n, F, F), or None
-        ``E[E_c^T E_c]`` for the errors ``E_c`` of each coordinate's rows due to the position
-        noise (:func:`propagated_noise`), for the errors-in-variables correction of the
-        optimizers (a :class:`~pysindy_xl.weak.noise.WeakNoise` with ``noise="draws"``);
-        None unless the smoother estimated the noise of every trajectory and can smooth
-        again with the same weights (``noise_`` and ``resmooth``, as
-        :class:`WhittakerSmoother`), and no velocities were measured.
+        The smoothed states of the pieces used.
+    noise_moments : ndarray (n, F, F), WeakNoise or None
+        ``E[E_c^T E_c]`` of each coordinate's rows (:func:`propagated_noise`); None unless the
+        smoother estimated the noise of every piece and no velocities were measured.
     info : dict
-        ``half_width`` (s), ``test_functions`` (count per piece used), ``noise`` (the
-        smoother's noise estimate per coordinate on the first piece), ``time_grid``
-        (:func:`~pysindy_xl.weak.timegrid.grid_summary` of the stamps), ``gaps`` (the cuts
-        of :func:`~pysindy_xl.weak.timegrid.split_at_gaps`), ``segments`` (for each piece
-        used, its trajectory) and ``supports`` (for each test function, in the order of the
-        rows of one coordinate: its trajectory and the first and last time of its support,
-        shape (K, 3)).
-
-    Notes
-    -----
-    Trajectories are cut at steps longer than ``test_functions.max_gap(half_width)`` (when
-    the test functions have that method): no test function and no smoother spans such a gap
-    (:mod:`~pysindy_xl.weak.timegrid`). Pieces shorter than one test function are left out
-    with a warning; the states returned are those of the pieces used.
+        ``half_width``, ``test_functions`` (count per piece), ``noise`` (the smoother's
+        estimate), ``time_grid`` (:func:`~pysindy_xl.weak.timegrid.grid_summary`), ``gaps``,
+        ``segments`` (each piece's trajectory) and ``supports`` ((K, 3): each test function's
+        trajectory and first and last time).
 
     Examples
     --------
@@ -327,8 +270,7 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
 
 
 def _supports(phi, t, trajectory) -> np.ndarray:
-    """``(trajectory, first time, last time)`` of the support of each test function (row of
-    ``phi``), shape (K, 3)."""
+    """``(trajectory, first time, last time)`` of each test function's support, shape (K, 3)."""
     phi = scipy.sparse.csr_matrix(phi)
     starts = phi.indptr[:-1]
     first = np.minimum.reduceat(phi.indices, starts)
@@ -344,7 +286,8 @@ def _overlap_rows(phi) -> int:
 
 def _row_runs(runs, n_coordinates):
     """``(start, stop, group, overlap)`` of the runs of consecutive test functions in the
-    coordinate-major rows, from each trajectory's runs (local indices) and overlap."""
+    coordinate-major rows, from each trajectory's runs (local indices) and overlap.
+    """
     counts = [sum(len(run) for run in local) for local, _ in runs]
     offsets = np.concatenate([[0], np.cumsum(counts)])
     rows = []

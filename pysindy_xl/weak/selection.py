@@ -1,37 +1,18 @@
 r"""Which noise model a weak fit of measured forces uses, chosen by held-out force error.
 
-A weak fit from positions and forces can read its data in two ways:
-
-* **position noise** (simulation, cheap encoders): the positions carry the noise, the rows are
-  weighted by the covariance that this noise propagates into them (generalized least
-  squares, :meth:`~pysindy_xl.weak.WeakNoise.whitener`), and the test functions are as wide as
-  the spectrum of the motion allows (:meth:`~pysindy_xl.weak.BumpTestFunctions.half_width`);
-* **force noise** (real arms: nearly exact encoders, noisy torque sensors or motor
-  currents, an approximate model class): the rows are fitted as they are, and the test
-  functions are narrow, a low-pass of the force equation at the bandwidth that torques are
-  judged at (:data:`SCORING_BANDWIDTH`). Not wider: exact positions put no noise into the
-  regressors, so narrow rows lose nothing to errors in the variables, and they keep the
-  information of the motion's fast parts (accelerations) that wide rows average away; on a
-  short log, where time blocks hold out interpolation only, a width chosen among several by
-  held-out blocks extrapolates worse.
-
-Neither is assumed: each candidate is fitted on time blocks of the data and predicts the
-others (:func:`choose_noise_model`). The held-out error is read in the weak form itself, on
-the rows of one common set of narrow test functions, so no candidate is scored through
-derivatives that another estimated: for a law ``xi`` with force columns ``f``, over the
-held-out rows ``Theta_ref`` of all folds,
+**Position noise**: rows weighted by the covariance the positions' noise propagates into
+them (:meth:`~pysindy_xl.weak.WeakNoise.whitener`), test functions as wide as the motion's
+spectrum allows. **Force noise** (nearly exact encoders, noisy torques): rows fitted as they
+are, narrow test functions at :data:`SCORING_BANDWIDTH`. Each candidate is fitted on time
+blocks and predicts the others (:func:`choose_noise_model`), scored on one common set of
+narrow rows :math:`\Theta_\text{ref}`: for a law ``xi`` with force columns ``f``,
 
 .. math::
 
     e = \frac{\| \Theta_\text{ref} \xi \|}{\| \Theta_{\text{ref}, f} \xi_f \|},
 
-the residual of the equations of motion, a low-pass of the torque error, relative to the
-forces filtered alike. Noisy positions put noise into the scoring rows themselves, and a law
-shrunk towards zero (the attenuation that errors in the variables cause in an uncorrected
-fit) predicts noisy rows better than the true law does; so the expected share of that noise,
-:math:`\xi^T \mathrm{E}[E^T E] \xi` for the propagated errors ``E`` of the held-out rows
-(:class:`~pysindy_xl.weak.WeakNoise`), is taken out of each residual: what is compared is the
-error on the noise-free rows.
+with the expected share of the positions' noise, :math:`\xi^T \mathrm{E}[E^T E] \xi`, taken
+out of each residual (a law shrunk towards zero predicts noisy rows better than the true one).
 """
 
 from __future__ import annotations
@@ -49,38 +30,23 @@ __all__ = ["SCORING_BANDWIDTH", "NoiseModel", "bandwidth_half_width", "choose_no
 #: (:mod:`pysindy_xl.held_out` bounds its scoring derivatives at the same frequency).
 SCORING_BANDWIDTH = 10.0
 
-#: A candidate replaces the first one (the default) only when its held-out error is lower by
-#: this fraction, and on most of the blocks: where the data cannot tell the candidates apart
-#: (position noise swamping the held-out rows, whose errors then differ by a percent or
-#: less), the default stays.
+#: A candidate replaces the first (the default) only when its held-out error is lower by this
+#: fraction, and on most of the blocks.
 MARGIN = 0.05
 
-#: Largest share of the first candidate's held-out residual that the noise of the positions
-#: may make up for another candidate to replace it. The force-noise model rests on nearly
-#: exact positions; where their noise is a fair part of the residual, the smoother's bias is
-#: too (it is not in the propagated noise), and the narrow candidate, fitted on rows that
-#: carry the same bias as the scoring rows, is favoured by that alone. Quantized encoders
-#: make up a hundredth or less; positions with noise of a percent of their range, half or
-#: more.
+#: Largest share of the first candidate's held-out residual that the positions' noise may make
+#: up for another candidate to replace it: beyond it the smoother's bias (shared by the narrow
+#: candidate and the scoring rows) would favour the narrow candidate by itself.
 NOISE_SHARE = 0.1
 
-#: Time blocks per trajectory, tried in turn until every candidate can be fitted outside
-#: each block (wide test functions on short data leave few rows outside five blocks).
+#: Time blocks per trajectory, tried in turn until every candidate can be fitted outside each.
 BLOCK_COUNTS = (5, 3)
 
 
 def bandwidth_half_width(bandwidth: float, power: int = 6) -> float:
     """Half-width (s) of the bump ``(1 - s^2)^power`` whose response falls by 3 dB at
-    ``bandwidth`` (Hz).
-
-    The bump is close to a Gaussian of standard deviation ``h / sqrt(2 power + 3)`` (its
-    variance as a density on ``[-h, h]``), whose response is ``1/sqrt(2)`` at
-    ``sqrt(ln 2) / (2 pi sigma)``.
-
-    Examples
-    --------
-    >>> round(bandwidth_half_width(10.0), 4)
-    0.0513
+    ``bandwidth`` (Hz): the bump is close to a Gaussian of standard deviation
+    ``h / sqrt(2 power + 3)``, whose response is ``1/sqrt(2)`` at ``sqrt(ln 2) / (2 pi sigma)``.
     """
     return math.sqrt(math.log(2.0) * (2 * power + 3)) / (2 * math.pi * bandwidth)
 
@@ -95,29 +61,11 @@ class NoiseModel:
 
 
 def time_folds(supports: np.ndarray, spans: np.ndarray, n_blocks: int):
-    """Contiguous time blocks of every trajectory, as masks over test functions.
+    """Contiguous time blocks of every trajectory, as masks ``fit, held`` (n_blocks, K) over test
+    functions: those whose support misses block ``k``, and those inside it.
 
-    Parameters
-    ----------
-    supports : array, shape (K, 3)
-        Each test function's trajectory and first and last time of its support
-        (``weak_info_["supports"]``).
-    spans : array, shape (T, 2)
-        First and last time of each trajectory.
-    n_blocks : int
-
-    Returns
-    -------
-    fit, held : ndarray of bool, shape (n_blocks, K)
-        ``fit[k]``: the test functions whose support misses block ``k`` of their trajectory;
-        ``held[k]``: those whose support lies inside it.
-
-    Examples
-    --------
-    >>> supports = np.array([[0, 0.0, 0.4], [0, 0.3, 0.7], [0, 0.6, 1.0]])
-    >>> fit, held = time_folds(supports, np.array([[0.0, 1.0]]), 2)
-    >>> fit.astype(int).tolist(), held.astype(int).tolist()
-    ([[0, 0, 1], [1, 0, 0]], [[1, 0, 0], [0, 0, 1]])
+    ``supports`` (K, 3) holds each test function's trajectory and first and last time
+    (``weak_info_["supports"]``), ``spans`` (T, 2) each trajectory's first and last time.
     """
     trajectory = supports[:, 0].astype(int)
     start, stop = spans[trajectory, 0], spans[trajectory, 1]
@@ -131,41 +79,21 @@ def time_folds(supports: np.ndarray, spans: np.ndarray, n_blocks: int):
 
 def choose_noise_model(candidates, reference, spans, force_columns, solve,
                        n_blocks=BLOCK_COUNTS):
-    """The candidate whose fits predict held-out time blocks best, if significantly better
-    than the first.
+    """The candidate whose fits predict held-out time blocks best, if clearly better than the first.
 
-    Parameters
-    ----------
-    candidates : list of (NoiseModel, rows, supports, noise)
-        Each candidate's weak rows (coordinate-major, the same coordinates and columns for
-        all), its test functions' supports (:func:`time_folds`) and the propagated noise of
-        its rows (a :class:`~pysindy_xl.weak.WeakNoise` or None).
-    reference : (rows, supports, noise)
-        The scoring rows: narrow test functions shared by all candidates, and the noise the
-        positions propagate into them (a :class:`~pysindy_xl.weak.WeakNoise` or None), whose
-        share of each held-out residual is taken out (below).
-    spans : array, shape (T, 2)
-        First and last time of each trajectory.
-    force_columns : list of int
-        The columns of the forces.
-    solve : callable
-        ``solve(rows, noise, weigh) -> coef``: the fit of one candidate on some rows.
-    n_blocks : int or sequence of int, default :data:`BLOCK_COUNTS`
-        Time blocks per trajectory; of several counts, the first at which every candidate
-        has more rows outside each block than columns and every block holds scoring rows,
-        else the first at which some candidate has (the others cannot compete: on short
-        data, wide test functions leave too few rows).
+    ``candidates`` are ``(NoiseModel, rows, supports, noise)``: weak rows (coordinate-major, the
+    same columns for all), test-function supports (:func:`time_folds`) and propagated row noise
+    (:class:`~pysindy_xl.weak.WeakNoise` or None); ``reference`` the common scoring
+    ``(rows, supports, noise)``; ``spans`` (T, 2) each trajectory's first and last time;
+    ``solve(rows, noise, weigh) -> coef`` one candidate's fit. Of several ``n_blocks``, the first
+    at which every candidate can be fitted outside each block (and every block holds scoring
+    rows) is used, else the first at which some candidate can.
 
-    Returns
-    -------
-    best : int or None
-        Index of the chosen candidate: the one of smallest held-out error among those that
-        beat the first by :data:`MARGIN` in total and on more than half of the blocks,
-        while the noise of the positions makes up less than :data:`NOISE_SHARE` of the
-        first's held-out residual; else 0. None when the data are too short to hold out
-        blocks at any of the counts.
-    errors : list of float
-        Each candidate's held-out relative error (``inf`` where a fold's fit failed).
+    Returns ``(best, errors)``: the candidate of smallest held-out error among those that beat
+    the first by :data:`MARGIN` in total and on most blocks, while the positions' noise makes up
+    less than :data:`NOISE_SHARE` of the first's residual, else 0 (None when the data are too
+    short to hold out blocks); and each candidate's held-out relative error (``inf`` where a
+    fold's fit failed).
     """
     rows_ref, supports_ref, noise_ref = reference
     n_coordinates = rows_ref.shape[0] // len(supports_ref)

@@ -1,33 +1,19 @@
-"""Smoothed positions and their derivatives from noisy samples, tuned from the data.
+r"""Smoothed positions and their derivatives from noisy samples, tuned from the data.
 
-The weak form removes accelerations from the regression, but its columns still need the state
-``(q, qd)`` inside nonlinear functions (``dL/dqd``, ``dL/dq``). :class:`WhittakerSmoother` gives
-both from noisy positions with no hand-set window:
+:class:`WhittakerSmoother` (Whittaker-Henderson, the discrete smoothing spline) solves, per
+coordinate,
 
-* **Smoothing** (Whittaker-Henderson, the discrete smoothing spline): for each coordinate,
+.. math:: \hat z = \arg\min_z \|y - z\|^2 + \lambda \|D_d z\|^2,
 
-  .. math:: \\hat z = \\arg\\min_z \\|y - z\\|^2 + \\lambda \\|D_d z\\|^2,
-
-  where ``D_d`` is the ``d``-th divided difference on the (possibly non-uniform) time grid,
-  scaled by the mean step to the power ``d`` so that ``lambda`` is in sample units, each row
-  weighted by the square root of the time it spans (the penalty is then the quadrature of
-  the integral of the squared ``d``-th derivative, across gaps and bunched samples alike).
-  The system ``(I + lambda D_d^T D_d) z = y`` is banded: one sparse LU solve, linear in the samples.
-* **lambda from the data**: generalized cross-validation (Craven and Wahba),
-  ``GCV(lambda) = N RSS(lambda) / (N - tr H(lambda))^2`` with ``H`` the smoother's hat
-  matrix, estimates the noise level; the weight used by default then minimizes the unbiased
-  risk estimate of the smoothed *velocity* (Stein), which GCV alone leaves too rough. On a
-  uniform grid both are computed for a whole grid of ``lambda`` at once in the
-  cosine-transform domain, where the smoother with reflecting boundaries is diagonal with
-  gains ``H_k = 1 / (1 + lambda (2 sin(pi k / 2N))^(2d))``. On a non-uniform grid (dropped
-  samples, variable logging rates) that shortcut is wrong: read in sample order, a smooth
-  signal sampled at irregular times has steps that look like white noise (velocity times
-  the spread of the steps), so the noise is overestimated and the velocities left too rough.
-  There the smoother is solved on the actual grid for each ``lambda`` (one banded LU), with
-  the traces estimated by Hutchinson's method (random sign probes, solved with the data as
-  extra right-hand sides).
-* **Derivatives** of the smoothed curve by five-point finite differences whose weights are
-  computed per sample for the actual grid (fourth order on uniform grids, one batched solve).
+with ``D_d`` the ``d``-th divided difference on the actual time grid, scaled by the mean
+step to the power ``d`` (``lambda`` in sample units) and each row weighted by the square root
+of the time it spans (the quadrature of the integral of the squared ``d``-th derivative); the
+system is banded. Generalized cross-validation, ``GCV(lambda) = N RSS / (N - tr H)^2``,
+estimates the noise level; the default weight minimizes Stein's risk of the smoothed
+*velocity*. On a uniform grid both are computed in the cosine-transform domain (gains
+``H_k = 1 / (1 + lambda (2 sin(pi k / 2N))^(2d))``); on a non-uniform grid, where that
+shortcut mistakes jitter for noise, by banded solves with Hutchinson trace estimates.
+Derivatives: five-point finite differences on the actual grid.
 """
 
 from __future__ import annotations
@@ -48,32 +34,13 @@ _LAMBDA_GRID = 10.0 ** np.arange(-4.0, 16.01, 0.25)
 
 
 def finite_difference_weights(t, derivative: int, stencil: int = 5, degree=None):
-    """Per-sample finite-difference stencils of the ``derivative``-th derivative.
+    """Per-sample finite-difference stencils ``index, weights`` (N, stencil) of the
+    ``derivative``-th derivative: ``f^(derivative)(t[i]) ~ sum_j weights[i, j] f[index[i, j]]``.
 
-    Each sample uses the ``stencil`` nearest samples (centred inside the grid, shifted at its
-    ends); the weights solve the Taylor conditions on the actual offsets, so any strictly
-    increasing grid works. With ``degree < stencil - 1`` they are those of the least-squares
-    polynomial of that degree through the stencil (Savitzky-Golay on the actual times;
-    ``derivative=0`` smooths).
-
-    Parameters
-    ----------
-    t : array, shape (N,)
-        Strictly increasing sample times, ``N >= stencil``.
-    derivative : int
-        Order of the derivative, smaller than ``stencil``.
-    stencil : int, default 5
-        Points per stencil.
-    degree : int, optional
-        Degree of the local polynomial, at least ``derivative`` (default ``stencil - 1``:
-        interpolation).
-
-    Returns
-    -------
-    index : ndarray of int, shape (N, stencil)
-        Samples used for each output sample.
-    weights : ndarray, shape (N, stencil)
-        ``derivative of f at t[i] ~ sum_j weights[i, j] * f[index[i, j]]``.
+    Each sample uses the ``stencil`` nearest samples of the strictly increasing ``t`` (shifted at
+    the grid's ends); the weights solve the Taylor conditions on the actual offsets. With
+    ``degree < stencil - 1`` they are the least-squares polynomial's of that degree
+    (Savitzky-Golay on the actual times).
 
     Examples
     --------
@@ -105,20 +72,8 @@ def finite_difference_weights(t, derivative: int, stencil: int = 5, degree=None)
 
 def differentiate(t, values, derivative: int = 1, stencil: int = 5,
                   degree=None) -> np.ndarray:
-    """Derivative of smooth sampled ``values`` (N, ...) along axis 0 (five-point stencils).
-
-    Parameters
-    ----------
-    t : array, shape (N,)
-    values : array, shape (N, ...)
-    derivative : int, default 1
-    stencil, degree : optional
-        As in :func:`finite_difference_weights` (a smoothing local polynomial when
-        ``degree < stencil - 1``).
-
-    Returns
-    -------
-    ndarray, same shape as ``values``
+    """Derivative of smooth sampled ``values`` (N, ...) along axis 0; ``stencil`` and ``degree``
+    as in :func:`finite_difference_weights`.
 
     Examples
     --------
@@ -137,11 +92,8 @@ def _divided_difference_matrix(t: np.ndarray, order: int,
                                weighted: bool = False) -> scipy.sparse.csr_matrix:
     """``D`` (N - order, N): ``order``-th divided differences times ``order! * mean_step^order``.
 
-    On a uniform grid this is the plain ``order``-th difference matrix. With ``weighted``
-    each row is also multiplied by ``sqrt(span / (order * mean_step))``, ``span`` the time
-    its samples cover, so that ``||D z||^2`` is the quadrature of the integral of the squared
-    ``order``-th derivative on the actual grid (a row across a gap stands for the whole gap,
-    a row of bunched samples for its short span); on a uniform grid every factor is 1.
+    With ``weighted`` each row is multiplied by ``sqrt(span / (order * mean_step))`` so that
+    ``||D z||^2`` is the quadrature of the squared derivative's integral on the actual grid.
     """
     n_samples = len(t)
     index = np.arange(n_samples - order)[:, None] + np.arange(order + 1)
@@ -159,13 +111,9 @@ def _divided_difference_matrix(t: np.ndarray, order: int,
     )
 
 
-#: Relative spread of the time steps below which a grid counts as uniform (timestamps
-#: rounded to microseconds at 100 Hz spread by 1e-4; the error of reading them as uniform
-#: is then far below any noise).
+#: Relative spread of the time steps below which a grid counts as uniform.
 _UNIFORM_TOLERANCE = 1e-3
-#: Probes of the trace estimates on non-uniform grids (random signs in colours,
-#: :func:`_colored_probes`); the error comes from entries of the smoother this many samples
-#: apart.
+#: Probes of the trace estimates on non-uniform grids (:func:`_colored_probes`).
 _TRACE_PROBES = 16
 
 
@@ -184,21 +132,18 @@ def is_uniform(t) -> bool:
 
 def _choose_lambda(t: np.ndarray, y: np.ndarray, order: int,
                    target: str) -> tuple[float, float]:
-    """Smoothing weight for one series on a uniform grid, in the cosine-transform domain.
+    """``(lambda, sigma)`` of one series on a uniform grid, in the cosine-transform domain.
 
-    Returns ``(lambda, sigma)``. ``sigma`` is the noise level of the GCV fit (residual RMS
-    corrected for the smoother's degrees of freedom). ``target="gcv"`` returns the GCV weight;
-    ``target="velocity"`` the weight that minimizes the unbiased risk estimate (SURE) of the
-    smoothed *velocity*, ``sum_k w_k^2 [(1 - H_k)^2 (P_k - sigma^2) + H_k^2 sigma^2]`` with
-    ``w_k`` the frequency and ``P_k`` the power of mode ``k``: GCV targets the positions and
-    leaves their derivatives too rough. Non-uniform grids: :func:`_choose_lambdas_on_grid`.
+    ``sigma`` is the GCV fit's noise level. ``target="gcv"`` returns the GCV weight;
+    ``"velocity"`` the one minimizing the velocity's risk
+    ``sum_k w_k^2 [(1 - H_k)^2 (P_k - sigma^2) + H_k^2 sigma^2]`` (``w_k`` the frequency,
+    ``P_k`` the power of mode ``k``).
     """
     n_samples = len(y)
     s = np.linspace(-1.0, 1.0, n_samples)
     trend = np.polynomial.polynomial.polyfit(s, y, order - 1)  # unpenalized by D_order
     detrended = y - np.polynomial.polynomial.polyval(s, trend)
-    # A taper removes the slope mismatch at the ends, whose leakage would otherwise pass for
-    # broadband signal; dividing by its mean square keeps the noise power per mode at sigma^2.
+    # a taper against the ends' leakage; over its mean square: noise power per mode sigma^2
     taper = scipy.signal.windows.tukey(n_samples, 0.2)
     power = scipy.fft.dct(detrended * taper, norm="ortho") ** 2 / np.mean(taper**2)
     modes = 2 * np.sin(np.pi * np.arange(n_samples) / (2 * n_samples))
@@ -216,8 +161,9 @@ def _choose_lambda(t: np.ndarray, y: np.ndarray, order: int,
 
 
 def _banded_penalty(t: np.ndarray, order: int) -> np.ndarray:
-    """``D^T D`` of the weighted divided differences in LAPACK band storage (row
-    ``order - k``: the ``k``-th diagonal, aligned by column, as the DIA format stores it)."""
+    """``D^T D`` of the weighted divided differences in LAPACK band storage (row ``order - k``:
+    the ``k``-th diagonal).
+    """
     penalty = _divided_difference_matrix(t, order, weighted=True)
     penalty = (penalty.T @ penalty).todia()
     banded = np.zeros((2 * order + 1, len(t)))
@@ -227,14 +173,10 @@ def _banded_penalty(t: np.ndarray, order: int) -> np.ndarray:
 
 
 def _colored_probes(n_samples: int, n_probes: int, rng) -> np.ndarray:
-    """Probe vectors of a trace estimate: probe ``j`` holds random signs on the samples
-    ``i = j mod n_probes`` and zeros elsewhere.
-
-    ``sum_j r_j^T A r_j`` is then ``tr A`` plus only the entries of ``A`` between samples a
-    multiple of ``n_probes`` apart, each with a random sign (probing with colours, Tang and
-    Saad 2012): for the smoother, whose entries decay within about ``lambda^(1/(2d))``
-    samples, far less variance than the same number of dense random-sign probes, whose
-    estimate sums every off-diagonal entry.
+    """Trace-estimate probes (N, n_probes): probe ``j`` holds random signs on the samples
+    ``i = j mod n_probes``, zero elsewhere (probing with colours, Tang and Saad 2012): the
+    estimate then sums only entries a multiple of ``n_probes`` apart, far less variance for a
+    smoother whose entries decay fast.
     """
     probes = np.zeros((n_samples, n_probes))
     probes[np.arange(n_samples), np.arange(n_samples) % n_probes] = rng.choice(
@@ -243,31 +185,18 @@ def _colored_probes(n_samples: int, n_probes: int, rng) -> np.ndarray:
 
 
 def _choose_lambdas_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
-    """GCV and the velocity risk of the smoother solved on the actual (non-uniform) grid, for
-    every column of ``y`` (N, n) at once.
+    """``(lams, sigmas)`` (n,) by GCV or the velocity risk of the smoother on the actual grid, for
+    all columns of ``y`` (N, n) at once.
 
-    For each ``lambda`` of the grid, ``Z = H Y`` with ``H = (I + lambda D^T D)^-1``, one
-    banded LU for all columns (``H`` depends on the grid, not on the data);
-    ``tr H ~ mean_p r_p^T H r_p`` over random sign vectors ``r_p`` (the same probes for all
-    columns, coloured: :func:`_colored_probes`), and the Stein risk of the velocity (first
-    divided differences ``D_1``, in sample units, weighted by the square root of the Tukey
-    taper of the uniform path, ``W``: the error at the ends, which grows with the weight
-    where the test functions vanish, would otherwise choose a weight 100 times too small) is
-    ``||W D_1 (z - y)||^2 + sigma^2 (2 tr(W D_1 H D_1^T W) - ||W D_1||_F^2)``, whose trace is
-    estimated with the probes ``D_1^T W r_p``. The weights are searched a decade
-    apart, then on the grid's full resolution around each column's best of each criterion.
-    The probes are drawn from a fixed seed: the same data give the same weights.
-
-    Returns
-    -------
-    lams, sigmas : ndarray, shape (n,)
+    Per ``lambda``: one banded LU for all columns and the probes of :func:`_colored_probes`
+    (``tr H`` and ``tr(W D_1 H D_1^T W)``, with ``W`` the square root of the Tukey taper: the
+    smoother's ends, where test functions vanish, would otherwise choose too small a weight).
+    The velocity risk is ``||W D_1 (z - y)||^2 + sigma^2 (2 tr(W D_1 H D_1^T W) - ||W D_1||_F^2)``.
+    Weights are searched a decade apart, then finely around each column's best.
     """
     n_samples, n_columns = y.shape
-    # An LU with pivoting, not Cholesky: at the largest weights the identity is lost to
-    # rounding next to lambda D^T D, which is only semi-definite.
+    # LU, not Cholesky: at the largest weights I + lambda D^T D is semi-definite in rounding
     banded = _banded_penalty(t, order)
-    # the velocity's error is weighed with the taper of the uniform path: the smoother's
-    # ends, where its error grows with the weight, are where the test functions vanish
     taper = np.sqrt(scipy.signal.windows.tukey(n_samples - 1, 0.2))
     first = scipy.sparse.diags(taper) @ _divided_difference_matrix(t, 1)
     rng = np.random.default_rng(0)
@@ -313,23 +242,11 @@ def _choose_lambdas_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
 
 
 def whittaker_smooth(t, x, lams, order: int = 3):
-    """Whittaker-Henderson smoothing of each column with a given weight, and derivatives.
+    """Whittaker-Henderson smoothing of each column of ``x`` (N, n) with weights ``lams`` (n,)
+    (sample units; 0: used as is), and the first two derivatives (five-point stencils).
 
-    Parameters
-    ----------
-    t : array, shape (N,)
-        Strictly increasing sample times.
-    x : array, shape (N, n)
-    lams : array, shape (n,)
-        Weight of each column in sample units (0: the column is used as is); the columns of
-        one weight share one factorization of the smoothing system.
-    order : int, default 3
-        Order of the penalized divided difference.
-
-    Returns
-    -------
-    q, qd, qdd : ndarray, shape (N, n)
-        Smoothed columns and their first and second derivatives (five-point stencils).
+    Columns of one weight share one factorization. ``order`` is that of the penalized divided
+    difference; returns ``q, qd, qdd`` (N, n).
 
     Examples
     --------
@@ -356,28 +273,23 @@ def whittaker_smooth(t, x, lams, order: int = 3):
 class WhittakerSmoother:
     """Discrete smoothing spline with its smoothness chosen by generalized cross-validation.
 
-    See the module documentation for the objective. Used by :class:`~pysindy_xl.XLSINDy` to
-    estimate ``q`` and ``qd`` from noisy positions (weak formulation) and ``qd``, ``qdd``
-    (strong formulation) when it is given as ``smoother``.
+    Used by :class:`~pysindy_xl.XLSINDy` for ``q`` and ``qd`` from noisy positions (weak form)
+    and, given as ``smoother``, for ``qd`` and ``qdd`` (strong form); see the module docstring.
 
     Parameters
     ----------
     order : int, default 3
-        Order ``d`` of the penalized divided difference (3: the penalty of a quintic
-        smoothing spline, which keeps velocities and accelerations smooth).
+        Order ``d`` of the penalized divided difference (3: a quintic smoothing spline).
     lam : float, "velocity" or "gcv", default "velocity"
-        Smoothing weight in sample units, or how to choose it per coordinate from the data:
-        ``"velocity"`` minimizes the estimated error of the smoothed velocity (the quantity
-        the weak columns need), ``"gcv"`` that of the positions (generalized
-        cross-validation); both estimate the noise level by GCV.
+        Weight in sample units, or how to choose it per coordinate: ``"velocity"`` minimizes
+        the estimated error of the smoothed velocity, ``"gcv"`` that of the positions.
 
     Attributes
     ----------
     lam_ : ndarray, shape (n,)
-        Weight used for each coordinate by the last :meth:`smooth`.
+        Weight of each coordinate in the last :meth:`smooth`.
     noise_ : ndarray, shape (n,)
-        Noise standard deviation estimated for each coordinate (residual RMS corrected for
-        the smoother's degrees of freedom).
+        Estimated noise standard deviation of each coordinate.
 
     Examples
     --------
@@ -402,18 +314,8 @@ class WhittakerSmoother:
             check_option("lam", self.lam, "real", low=0)
 
     def smooth(self, t, x):
-        """Smoothed positions, velocities and accelerations.
-
-        Parameters
-        ----------
-        t : array, shape (N,)
-            Strictly increasing sample times (N >= 5).
-        x : array, shape (N, n)
-            Noisy positions.
-
-        Returns
-        -------
-        q, qd, qdd : ndarray, shape (N, n)
+        """Smoothed positions, velocities and accelerations (N, n) of noisy positions ``x``
+        (N, n) at strictly increasing times ``t`` (N >= 5).
         """
         self._check_params()
         t = np.asarray(t, dtype=float)
@@ -435,24 +337,12 @@ class WhittakerSmoother:
         return whittaker_smooth(t, x, lams, self.order)
 
     def resmooth(self, t, x):
-        """Smooth with the weights the last :meth:`smooth` chose, without choosing again.
+        """Smooth ``x`` (N, k * n: ``k`` copies of the coordinates side by side) with the
+        weights the last :meth:`smooth` chose.
 
-        The protocol of a smoother that propagates the noise of the positions into the weak
-        columns (:func:`~pysindy_xl.weak.propagated_draws`): with the weights fixed the
-        smoother is one linear map, so fresh noise of the estimated level ``noise_`` smoothed
-        by it has the spread of the original noise's error. A smoother without ``resmooth``
-        and ``noise_`` is used without that propagation (and a warning).
-
-        Parameters
-        ----------
-        t : array, shape (N,)
-            The sample times of the last :meth:`smooth`.
-        x : array, shape (N, k * n)
-            ``k`` copies of the ``n`` coordinates side by side (e.g. noisy draws).
-
-        Returns
-        -------
-        q, qd, qdd : ndarray, shape (N, k * n)
+        The protocol of a smoother that propagates the positions' noise
+        (:func:`~pysindy_xl.weak.propagated_draws`): with fixed weights the smoother is linear, so
+        fresh noise of level ``noise_`` smoothed by it has the spread of the original noise's error.
 
         Examples
         --------

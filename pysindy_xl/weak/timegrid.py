@@ -1,33 +1,13 @@
 """The time grid of recorded trajectories: what the weak form does with jitter and gaps.
 
-Logged time stamps are rarely uniform: a 1 kHz robot log has steps that jitter about their
-median and occasional gaps of several steps where samples were lost. Every part of the weak
-form works on the stamps as recorded: the smoother penalizes divided differences on the actual
-times, each weighted by the time it spans (:mod:`~pysindy_xl.weak.smoothing`), the test
-functions are placed in time and integrated with quadrature weights of the actual grid
-(:mod:`~pysindy_xl.weak.bumps`), and the propagated noise is drawn per recorded sample.
-
-**Gaps.** A gap is harmless while the signal is resolved across it: the smoother interpolates
-it as a smoothing spline would, and a test function whose support covers it is still
-integrated accurately. A test function of half-width ``h`` counts as resolved with
-``min_samples`` samples per half-width (:class:`~pysindy_xl.weak.BumpTestFunctions`), so a
-step longer than ``h / min_samples`` is a gap no test function or smoother may span: the
-trajectory is cut there into segments, each smoothed and integrated on its own
-(:func:`split_at_gaps`). The fit records each cut (``weak_info_["gaps"]``) and warns about
-segments too short for a test function, which are left out.
-
-**Stamps that are not sampling times.** A logger that stamps each sample when it arrives
-(over a bus, in a loop) records the arrival times of samples taken at a fixed rate: the
-delays then pass for motion, and positions that are smooth in sample order look noisy at
-their stamps. Where samples were taken at their stamps it is the other way round (a smooth
-signal read in sample order on jittered stamps looks noisy). :func:`stamp_noise_ratio`
-compares the two noise levels; the fit warns when the positions are more than
-:data:`STAMP_NOISE_RATIO` times noisier at their stamps and records the ratio
-(``weak_info_["time_grid"]["stamp_noise_ratio"]``); the stamps are still used as given.
-
-**Repeated stamps** (a step of zero or a negative one) are refused at the input with a
-``ValueError`` naming the first of them: two positions at one time are two measurements of
-one sample, and which to keep (or their mean) is the user's decision.
+The weak form works on the stamps as recorded (the smoother's divided differences, the test
+functions' quadrature, the noise drawn per sample). A step longer than ``h / min_samples``
+(:class:`~pysindy_xl.weak.BumpTestFunctions`) is a gap that no test function or smoother may
+span: the trajectory is cut there into segments handled on their own (:func:`split_at_gaps`;
+``weak_info_["gaps"]``). Stamps that are arrival times rather than sampling times make
+positions smooth in sample order look noisy at their stamps: :func:`stamp_noise_ratio`
+compares the two, and the fit warns above :data:`STAMP_NOISE_RATIO`. Repeated stamps are
+refused at the input.
 """
 
 from __future__ import annotations
@@ -38,31 +18,17 @@ from .smoothing import _choose_lambda, is_uniform
 
 __all__ = ["split_at_gaps", "grid_summary", "stamp_noise_ratio", "STAMP_NOISE_RATIO"]
 
-#: Median over coordinates of the noise at the stamps over the noise in sample order above
-#: which the stamps are suspected not to be sampling times (true stamps give less than 1:
-#: a smooth signal read in sample order on jittered stamps looks noisy; arrival stamps
-#: jittering by a tenth of the step give 10 or more).
+#: :func:`stamp_noise_ratio` above which the stamps are suspected not to be sampling times.
 STAMP_NOISE_RATIO = 2.0
 
 
 def split_at_gaps(trajectories, max_gap: float):
-    """Cut trajectories where a time step exceeds ``max_gap``.
+    """Cut ``trajectories`` (dicts with ``"t"`` (N,) and arrays of N samples, or None) where a time
+    step exceeds ``max_gap``.
 
-    Parameters
-    ----------
-    trajectories : list of dict
-        Each with ``"t"`` (N,) and other arrays of N samples along their first axis (or None).
-    max_gap : float
-        Longest step kept inside a segment (time units).
-
-    Returns
-    -------
-    segments : list of dict
-        The pieces, in order, with the same keys; a trajectory without a gap is passed as is.
-    source : ndarray of int
-        For each segment, the index of its trajectory.
-    gaps : list of dict
-        One per cut: ``trajectory``, ``time`` (the last stamp before the gap) and ``length``.
+    Returns the segments (a trajectory without a gap passed as is), the index of each segment's
+    trajectory, and one dict per cut: ``trajectory``, ``time`` (the last stamp before the gap)
+    and ``length``.
 
     Examples
     --------
@@ -95,18 +61,8 @@ def _per_sample(value, n_samples: int) -> bool:
 
 
 def grid_summary(times) -> dict:
-    """Median and largest time step, and whether the grids are uniform.
-
-    Parameters
-    ----------
-    times : list of arrays
-        The stamps of each trajectory.
-
-    Returns
-    -------
-    dict
-        ``uniform`` (every grid's steps equal to 1e-3 of their mean), ``median_step``,
-        ``max_step`` and ``min_step`` over all trajectories.
+    """Median, largest and smallest time step over ``times`` (one array per trajectory), and
+    whether every grid is uniform.
 
     Examples
     --------
@@ -121,24 +77,11 @@ def grid_summary(times) -> dict:
 
 
 def stamp_noise_ratio(t, x, noise, order: int = 3) -> float:
-    """Median over coordinates of the positions' noise at their stamps over their noise read
-    at uniform steps.
+    """Median over coordinates of the positions' ``noise`` (n,) at their stamps ``t`` over their
+    noise read at uniform steps (smoother penalty of ``order``).
 
-    Parameters
-    ----------
-    t : array, shape (N,)
-    x : array, shape (N, n)
-    noise : array, shape (n,)
-        The noise level at the stamps (e.g. a :class:`~pysindy_xl.WhittakerSmoother`'s
-        ``noise_`` on ``t``).
-    order : int, default 3
-        Order of the smoother's penalty.
-
-    Returns
-    -------
-    float
-        Below 1 for stamps that are the sampling times of a smooth motion; above
-        :data:`STAMP_NOISE_RATIO`, the stamps look like arrival times.
+    Below 1 for stamps that are the sampling times of a smooth motion; above
+    :data:`STAMP_NOISE_RATIO`, the stamps look like arrival times.
 
     Examples
     --------
