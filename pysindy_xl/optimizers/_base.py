@@ -91,12 +91,6 @@ def pilot_optimizer(optimizer):
 def coordinates_touched(theta, n_coordinates: int, rtol: float = 1e-10) -> np.ndarray:
     """Boolean (n_coordinates, F): which coordinate equations each column of ``theta`` enters
     (rows coordinate-major; a block is zero at most ``rtol`` times the column's largest block).
-
-    >>> import numpy as np
-    >>> theta = np.array([[1.0, 0.0], [2.0, 0.0], [0.0, 1.0], [3.0, 1.0]])
-    >>> coordinates_touched(theta, 2)
-    array([[ True, False],
-           [ True,  True]])
     """
     theta = np.asarray(theta, dtype=float)
     blocks = theta.reshape(n_coordinates, -1, theta.shape[1])

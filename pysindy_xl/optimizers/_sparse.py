@@ -177,56 +177,15 @@ def lasso_gram(gram, targets, alpha, mask=None, coef_init=None, tol: float = 1e-
     """Solve K Lasso problems sharing one Gram matrix at once (module docstring).
 
     FISTA on all columns together, with adaptive restart, a continuation path on ``alpha``
-    (decades down from the value that zeroes every column; warm-started columns skip it) and an
-    exact finish on stable signed supports.
-
-    Parameters
-    ----------
-    gram : array, shape (F, F)
-        Positive semi-definite, of unit-norm columns (``alpha`` and ``tol`` are then scale free).
-    targets : array, shape (F, K)
-        ``A^T y_k`` for each right-hand side.
-    alpha : float or array of shape (K,)
-        L1 weight(s), > 0.
-    mask : array of bool, shape (F, K), optional
-        Entries allowed to be non-zero (default: all).
-    coef_init : array, shape (F, K), optional
-        Warm start; its non-zero columns start at ``alpha``.
-    tol : float
-        Converged when a column's violation (:func:`kkt_violation`) is at most
-        ``max(tol * alpha, atol)``.
-    max_iter : int
-        Iterations over all stages.
-    continuation : bool
-        Use the alpha path.
-    check_every : int
-        Iterations between convergence checks.
-    warn : bool
-        Warn (``ConvergenceWarning``) when some column did not converge.
-    callback : callable, optional
-        ``callback(coef, converged) -> bool``; True stops early.
-    atol : float
-        Absolute floor of the convergence threshold (the gradient's rounding level).
-    callback_every : int, default 100
-        Iterations between calls of ``callback``.
-
-    Returns
-    -------
-    LassoResult
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> rng = np.random.default_rng(0)
-    >>> a = rng.normal(size=(100, 5)); a /= np.linalg.norm(a, axis=0)
-    >>> y = a @ np.array([[1.0, 0.0], [0.0, 0.0], [0.0, -2.0], [0.0, 0.0], [0.5, 0.0]])
-    >>> result = lasso_gram(a.T @ a, a.T @ y, alpha=1e-6)
-    >>> np.round(result.coef, 4), bool(result.converged.all())
-    (array([[ 1. ,  0. ],
-           [ 0. ,  0. ],
-           [ 0. , -2. ],
-           [ 0. ,  0. ],
-           [ 0.5,  0. ]]), True)
+    (decades down from the value zeroing every column; columns warm-started by a non-zero
+    ``coef_init`` skip it) and an exact finish on stable signed supports. ``gram`` (F, F) of
+    unit-norm columns (so that ``alpha`` and ``tol`` are scale free), ``targets`` (F, K) the
+    ``A^T y_k``, ``alpha`` > 0 per column, ``mask`` (F, K) the entries allowed to be non-zero.
+    A column has converged when its :func:`kkt_violation` is at most ``max(tol * alpha, atol)``
+    (``atol``: the gradient's rounding level); ``max_iter`` counts all stages, checks come every
+    ``check_every`` iterations, and ``callback(coef, converged) -> bool`` every
+    ``callback_every`` stops the solve by returning True. ``warn``: a ``ConvergenceWarning``
+    when some column did not converge. Returns a :class:`LassoResult`.
     """
     gram = np.asarray(gram, dtype=float)
     targets = np.asarray(targets, dtype=float)

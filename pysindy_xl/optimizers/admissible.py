@@ -29,11 +29,6 @@ PENALTIES = (0.03, 0.1, 0.3, 1.0, 3.0)
 def reference_mass_matrices(mass_matrices) -> np.ndarray:
     """Each column's mass matrix (S, F, n, n) averaged over the states, symmetric, per coordinate
     in units of the median non-zero diagonal magnitude (1 where none). Shape (F, n, n).
-
-    >>> import numpy as np
-    >>> m = np.zeros((1, 2, 2, 2)); m[0, 0] = [[4.0, 0.0], [0.0, 0.0]]; m[0, 1] = np.eye(2)
-    >>> reference_mass_matrices(m)[0].tolist()
-    [[1.6, 0.0], [0.0, 0.0]]
     """
     mean = np.mean(np.asarray(mass_matrices, dtype=float), axis=0)
     mean = (mean + np.swapaxes(mean, 1, 2)) / 2
@@ -46,39 +41,11 @@ def reference_mass_matrices(mass_matrices) -> np.ndarray:
 
 def admissible_supports(r_factor, mass_matrices, penalties=PENALTIES,
                         n_reweight: int = 5) -> list:
-    """Supports of sparse laws with a positive definite mean mass matrix (admissible lasso).
-
-    Parameters
-    ----------
-    r_factor : array, shape (m, F)
-        ``Theta`` or a factor with the same Gram matrix.
-    mass_matrices : array, shape (S, F, n, n)
-        Each column's mass matrix on sample states, in the law's units.
-    penalties : sequence of float
-        ``lambda`` relative to the squared residual of the densest admissible law.
-    n_reweight : int, default 5
-        Solves per penalty (the first unweighted).
-
-    Returns
-    -------
-    list of ndarray of int
-        One sorted support per penalty that gave a law; empty without cvxpy or when no
-        combination has a definite mass matrix.
-
-    Examples
-    --------
-    ``c0 + c1 + c2 = 0`` holds, and about as well ``c2 + c3 = 0``, whose column 3 has an inertia
-    of rank one:
-
-    >>> import numpy as np
-    >>> rng = np.random.default_rng(0)
-    >>> a, b, c = rng.normal(size=(3, 400))
-    >>> theta = np.column_stack([a, b, -(a + b), a + b + 1e-3 * c])
-    >>> mass = np.zeros((1, 4, 2, 2))
-    >>> mass[0, 0, 0, 0] = mass[0, 1, 1, 1] = 1.0
-    >>> mass[0, 3] = [[1.0, 1.0], [1.0, 1.0]]
-    >>> {tuple(s.tolist()) for s in admissible_supports(theta, mass)}
-    {(0, 1, 2)}
+    """Supports (sorted, one per penalty that gave a law) of sparse laws whose mean mass matrix is
+    positive definite, by the admissible lasso on ``r_factor`` (``Theta`` or a factor with its
+    Gram matrix) and the columns' ``mass_matrices`` (S, F, n, n) in the law's units;
+    ``penalties`` relative to the densest admissible law's squared residual, ``n_reweight``
+    solves each. Empty without cvxpy or when no combination has a definite mass matrix.
     """
     cp = import_optional("cvxpy", "admissible starts")
     r_factor = np.asarray(r_factor, dtype=float)

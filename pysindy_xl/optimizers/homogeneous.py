@@ -47,15 +47,9 @@ STARTS_PER_SIZE = 3
 
 @dataclasses.dataclass(frozen=True)
 class RowMoments:
-    """Noise moments of any set of rows, from Monte Carlo draws of the rows' errors.
-
-    The propagated noise varies along a trajectory, so a held-out ratio divides by the held-out
-    rows' own moments. ``draws`` (D, n_rows, F); ``floor`` is added to the diagonal per row.
-
-    >>> import numpy as np
-    >>> moments = RowMoments(np.ones((2, 4, 1)))
-    >>> float(moments(np.array([True, True, False, False]))[0, 0])
-    2.0
+    """Noise moments of any set of rows, from Monte Carlo draws ``draws`` (D, n_rows, F) of the
+    rows' errors (``floor`` added to the diagonal per row): the propagated noise varies along a
+    trajectory, so a held-out ratio divides by the held-out rows' own moments.
     """
 
     draws: np.ndarray

@@ -101,16 +101,7 @@ def _constrained_minima(values, vectors, n_bisections: int = 48) -> np.ndarray:
 
 
 def law_elimination_path(r_factor, moments) -> np.ndarray:
-    """Columns ordered from most to least needed by backward elimination of the noise ratio.
-
-    >>> import numpy as np
-    >>> rng = np.random.default_rng(0)
-    >>> a, b, c, d = rng.normal(size=(4, 2000))
-    >>> clean = np.column_stack([a, b, a - 2 * b, c, d])
-    >>> theta = clean + 0.05 * rng.normal(size=clean.shape)
-    >>> sorted(law_elimination_path(theta, 0.0025 * 2000 * np.eye(5))[:3].tolist())
-    [0, 1, 2]
-    """
+    """Columns ordered from most to least needed by backward elimination of the noise ratio."""
     support = np.arange(r_factor.shape[1])
     removed = []
     while len(support) > 2:
