@@ -15,7 +15,7 @@ from ._base import CatalogOptimizer, warn_unexplained
 from .selection import select_support
 
 __all__ = ["ExplicitOptimizer", "hard_threshold_regression", "proximal_gradient_lasso",
-           "corrected_least_squares", "explicit_regression"]
+           "corrected_least_squares", "explicit_regression", "catalog_vector"]
 
 _METHODS = ("threshold", "lasso", "lassocv", "proximal")
 
@@ -392,9 +392,7 @@ class ExplicitOptimizer(CatalogOptimizer):
 
     def _as_catalog_vector(self, coef_rest, rest, problem):
         """Set ``coef_`` over the whole catalog (forces at -1); warn on unexplained coordinates."""
-        coef = np.zeros(problem.n_features)
-        coef[rest] = coef_rest
-        coef[problem.force_columns] = -1.0
+        coef = catalog_vector(coef_rest, rest, problem)
         self.coef_ = coef
         self.n_features_in_ = problem.n_features
         self.support_ = coef != 0
@@ -413,3 +411,11 @@ def explicit_regression(problem):
     force = problem.theta[:, problem.force_columns].sum(axis=1)
     moments = problem.pooled_moments()
     return rest, force, None if moments is None else moments[np.ix_(rest, rest)]
+
+
+def catalog_vector(coef_rest, rest, problem) -> np.ndarray:
+    """The catalog vector (F,) of ``coef_rest`` on the columns ``rest``, forces at -1."""
+    coef = np.zeros(problem.n_features)
+    coef[rest] = coef_rest
+    coef[problem.force_columns] = -1.0
+    return coef

@@ -26,7 +26,7 @@ from .._validation import check_instance, check_option
 from ..physical.sdp import consistent_least_squares
 from ._base import CatalogOptimizer, solve_problem, warn_unexplained
 from ._wrapping import WrappingOptimizer
-from .explicit import corrected_least_squares, explicit_regression
+from .explicit import catalog_vector, corrected_least_squares, explicit_regression
 from .tags import catalog_tags
 
 __all__ = ["PhysicalOptimizer"]
@@ -161,7 +161,7 @@ class PhysicalOptimizer(WrappingOptimizer, CatalogOptimizer):
         coef = np.zeros(len(rest))
         sub = None if moments is None else moments[np.ix_(keep, keep)]
         coef[keep], share = corrected_least_squares(x[:, keep], force, sub)
-        unconstrained = self._catalog_vector(coef, rest, problem)
+        unconstrained = catalog_vector(coef, rest, problem)
         if structure is None or not structure.constrains:
             return {"coef": unconstrained, "unconstrained": unconstrained,
                     "consistency": None, "inertial": None}
@@ -180,17 +180,10 @@ class PhysicalOptimizer(WrappingOptimizer, CatalogOptimizer):
             else np.zeros((0, 4))
         top = float(np.abs(pseudo).max(initial=0.0)) or 1.0
         return {"coef": unconstrained if consistent
-                else self._catalog_vector(constrained, rest, problem),
+                else catalog_vector(constrained, rest, problem),
                 "unconstrained": unconstrained,
                 "consistency": {"consistent": bool(consistent), "cost": float(cost),
                                 "negative_friction": [int(rest[j]) for j in negative],
                                 "min_pseudo_inertia_eigenvalue": float(pseudo.min(initial=0.0)
                                                                        / top)},
                 "inertial": dict(zip(structure.names, pi.tolist(), strict=True))}
-
-    @staticmethod
-    def _catalog_vector(coef_rest, rest, problem):
-        coef = np.zeros(problem.n_features)
-        coef[rest] = coef_rest
-        coef[problem.force_columns] = -1.0
-        return coef

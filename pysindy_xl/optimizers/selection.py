@@ -175,16 +175,10 @@ def fold_labels(n_rows: int, n_blocks: int, n_folds: int) -> np.ndarray:
     return np.minimum(position * n_folds // per_block, n_folds - 1)
 
 
-def _fold_systems(x, y, n_blocks: int, n_folds: int) -> list:
-    """Per fold ``(fold, x_test, y_test, R, Q^T y)``: unit-RMS columns, the training rows reduced,
-    ``y`` divided by its RMS; folds without test or training rows skipped.
-    """
-    return _systems(x, y, n_blocks, n_folds)[1]
-
-
 def _systems(x, y, n_blocks: int, n_folds: int) -> tuple[tuple, list]:
-    """:func:`_reduced` and :func:`_fold_systems` of the same rows, from one triangular system per
-    fold (a fold's training system is the QR of the other folds' stacked systems).
+    """:func:`_reduced` of the rows and, per fold, ``(fold, x_test, y_test, R, Q^T y)``: unit-RMS
+    columns, the training rows reduced (the QR of the other folds' stacked systems), ``y``
+    divided by its RMS; folds without test or training rows skipped.
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -213,7 +207,7 @@ def _systems(x, y, n_blocks: int, n_folds: int) -> tuple[tuple, list]:
 def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
     """Held-out error (n_folds, len(order)) of every nested model ``order[:k]`` (index ``k - 1``).
     """
-    return _nested_errors(_fold_systems(x, y, n_blocks, n_folds), order, n_folds)
+    return _nested_errors(_systems(x, y, n_blocks, n_folds)[1], order, n_folds)
 
 
 def _nested_errors(folds, order, n_folds: int) -> np.ndarray:
@@ -240,7 +234,7 @@ def _nested_errors(folds, order, n_folds: int) -> np.ndarray:
 
 def cross_validated_supports(x, y, supports, n_blocks: int = 1, n_folds: int = 5):
     """Held-out error (n_folds, len(supports)) of arbitrary supports (inf where undetermined)."""
-    return _support_errors(_fold_systems(x, y, n_blocks, n_folds), supports, n_folds)
+    return _support_errors(_systems(x, y, n_blocks, n_folds)[1], supports, n_folds)
 
 
 def _support_errors(folds, supports, n_folds: int) -> np.ndarray:
