@@ -264,12 +264,12 @@ class CatalogOptimizer(BaseEstimator):
 
     def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None,
                     mass_matrices=None, balance=True, reference_columns=None, physical=None):
-        r"""Solve the catalog problem ``theta @ coef_ ~ 0``.
+        """Solve the catalog problem ``theta @ coef_ ~ 0``.
 
         Parameters
         ----------
         theta, n_coordinates, force_columns, noise_moments, mass_matrices, balance, \
-        reference_columns, physical
+reference_columns, physical
             The fields of a :class:`~pysindy_xl.optimizers.problem.CatalogProblem`, checked by
             :meth:`CatalogProblem.from_arrays
             <pysindy_xl.optimizers.problem.CatalogProblem.from_arrays>`.

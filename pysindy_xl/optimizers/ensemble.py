@@ -1,25 +1,5 @@
-r"""Ensembles of catalog fits: inclusion probabilities and coefficient intervals.
-
-Any catalog optimizer is refit on ``n_models`` subsamples of the rows, drawn without
-replacement as contiguous chunks of time, the same in every coordinate's block (neighbouring
-rows share noise through smoothing and test functions):
-
-.. math:: \xi^{(b)} = \text{optimizer}(\Theta_{R_b}), \quad b = 1..B.
-
-Per term it reports the inclusion probability ``P(xi_j != 0)`` and an interval of ``xi_j``;
-the model keeps the terms included in at least ``inclusion`` of the fits and, where the
-optimizer can, refits them on all the rows (``aggregate="refit"``: the median of fits made
-with different companion terms can split a pair of equal terms unevenly).
-
-With ``sampling="complementary_pairs"`` (Shah and Samworth, 2013) the fits come in disjoint
-halves ``(A_b, A_b^c)`` and a pair includes a term only when both halves keep it:
-
-.. math:: \hat\Pi_j = \frac{1}{B} \sum_{b=1}^{B}
-          \mathbb{1}[\xi^{(A_b)}_j \ne 0] \, \mathbb{1}[\xi^{(A_b^c)}_j \ne 0],
-
-so a term fitting noise by chance must fit two independent noise draws; small true terms are
-dropped more often, each fit seeing half the data.
-"""
+"""Ensembles of catalog fits: inclusion probabilities and coefficient intervals
+(:class:`EnsembleOptimizer`)."""
 
 from __future__ import annotations
 
@@ -39,14 +19,27 @@ from .tags import catalog_tags
 
 __all__ = ["EnsembleOptimizer"]
 
-#: Ways of drawing the fits' rows (see the module docs).
+#: Ways of drawing the fits' rows (see ``sampling``).
 SAMPLINGS = ("subsamples", "complementary_pairs")
 #: Ways of computing the coefficients of the included terms (see ``aggregate``).
 AGGREGATES = ("auto", "refit", "median")
 
 
 class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
-    """Subsample-and-refit ensemble around any catalog optimizer (see the module docs).
+    r"""Subsample-and-refit ensemble around any catalog optimizer.
+
+    The optimizer is refit on ``n_models`` subsamples of the rows, contiguous chunks of time
+    drawn without replacement, the same in every coordinate's block (neighbouring rows share
+    noise). Per term it reports the inclusion probability ``P(xi_j != 0)`` and an interval;
+    the model keeps the terms included in at least ``inclusion`` of the fits and, where the
+    optimizer can, refits them on all the rows (the median of fits made with different
+    companion terms can split equal terms unevenly). With complementary pairs (Shah and
+    Samworth, 2013) a pair of disjoint halves includes a term only when both keep it,
+
+    .. math:: \hat\Pi_j = \frac{1}{B} \sum_{b=1}^{B}
+              \mathbb{1}[\xi^{(A_b)}_j \ne 0] \, \mathbb{1}[\xi^{(A_b^c)}_j \ne 0],
+
+    so a chance term must fit two independent noise draws (small true terms drop more often).
 
     Parameters
     ----------

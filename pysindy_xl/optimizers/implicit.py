@@ -1,24 +1,5 @@
-"""Implicit regression: SINDy-PI's constrained problem and homothetic-column clustering.
-
-Without a known force we look for sparse ``xi`` with ``Theta @ xi = 0``. As in SINDy-PI,
-every column is regressed on all the others, on the column-normalized ``Theta~ = Theta D^-1``:
-
-    min_X  1/2 ||Theta~ X - Theta~||_F^2 + alpha ||X||_1   s.t.  diag(X) = 0.        (1)
-
-If column j belongs to a law ``xi``, column j of the solution is ``-xi / xi_j``: the columns
-of a law give the same direction ``v_j = e_j - X[:, j]`` up to scale, the others unrelated
-dense ones. The laws are the groups of homothetic ``v_j`` (within an angle), each taken as
-its principal direction and refit on its support. (The paper's unsquared loss traces the same
-solutions with a rescaled ``alpha``.)
-
-(1) separates into one Lasso per column on the Gram matrix ``G = Theta~^T Theta~``.
-``solver="fista"`` solves them at once (:func:`pysindy_xl.optimizers._sparse.lasso_gram`),
-starting the law columns from the near-null space of ``Theta~`` and, with ``early_stopping``,
-stopping once the laws are stable (the columns of no law may stay inexact, see
-``column_converged_``). ``solver="cvxpy"`` solves (1) on the triangular factor ``R`` of
-``Theta~ = Q R``. A law's force column gets ``-1``, else its dominant term ``+1``
-(:func:`~pysindy_xl.optimizers.laws.normalize_law`); ``coef_`` sums the laws of disjoint
-supports (:func:`~pysindy_xl.optimizers.laws.combine_laws`).
+"""Implicit regression of unforced systems: SINDy-PI's constrained problem and homothetic-column
+clustering (:class:`ImplicitOptimizer`).
 """
 
 from __future__ import annotations
@@ -57,12 +38,19 @@ class NoLawFoundError(RuntimeError):
 class ImplicitOptimizer(CatalogOptimizer):
     """SINDy-PI constrained regression with homothetic-column clustering (unforced systems).
 
-    Solves (1) of the module documentation, groups the homothetic columns, refits each group's
-    direction on its support (pruned with ``threshold``), keeps the qualifying laws and sums those
-    with disjoint supports into ``coef_``. Given the columns' noise moments (the weak form on
-    positions), the laws are instead selected by held-out noise ratio
-    (:func:`~pysindy_xl.optimizers.select_law`), which prefers laws that hold over laws on quiet
-    columns; the SINDy-PI attributes are then not set.
+    Every column of the normalized ``Theta~ = Theta D^-1`` is regressed on the others,
+
+        min_X  1/2 ||Theta~ X - Theta~||_F^2 + alpha ||X||_1   s.t.  diag(X) = 0,        (1)
+
+    so the columns j of a law ``xi`` give one direction ``v_j = e_j - X[:, j]`` up to scale,
+    the others unrelated dense ones. Homothetic directions are grouped, each group's principal
+    direction refit on its support (pruned with ``threshold``), the qualifying laws normalized
+    (:func:`~pysindy_xl.optimizers.laws.normalize_law`) and those of disjoint supports summed
+    into ``coef_``. ``"fista"`` solves the per-column Lassos of (1) at once from the near-null
+    space (:func:`~pysindy_xl.optimizers._sparse.lasso_gram`), ``"cvxpy"`` solves (1) on the
+    triangular factor of ``Theta~``. Given the columns' noise moments, the laws are instead
+    selected by held-out noise ratio (:func:`~pysindy_xl.optimizers.select_law`), which prefers
+    laws that hold over laws on quiet columns; the SINDy-PI attributes are then not set.
 
     Parameters
     ----------

@@ -1,25 +1,5 @@
-"""The catalog regression problem that every catalog optimizer solves.
-
-A :class:`CatalogProblem` is the stacked matrix ``theta`` (n_coordinates * N, F), rows
-coordinate-major, and what is known about it:
-
-* ``force_columns``: the :class:`~pysindy_xl.ExternalForces` columns (coefficient -1);
-* ``noise_moments`` (n_coordinates, F, F): ``E[E_c^T E_c]`` of the errors in each
-  coordinate's rows (errors in variables), and ``noise_draws`` (D, n_coordinates * N, F):
-  Monte Carlo draws of those errors, so that a part of the rows (a fold, a subsample) gets
-  its own moments; ``row_noise``: the :class:`~pysindy_xl.weak.WeakNoise` they come from;
-* ``mass_matrices`` (S, F, n, n): each column's contribution to the mass matrix at ``S``
-  sample states (admissibility of a law);
-* ``balance``: whether the blocks may be rescaled by :func:`coordinate_weights` (False where
-  the caller weighed them);
-* ``reference_columns``: the columns allowed to carry the ``+1`` of an unforced law;
-* ``physical``: a :class:`~pysindy_xl.physical.PhysicalStructure` of the columns;
-* ``catalog_map``: a :class:`pysindy_xl.fit.CatalogMap` back to the catalog.
-
-Every row of ``theta @ coef = 0`` holds exactly, so scaling a block changes how the blocks
-are weighed, never the true coefficients: :meth:`CatalogProblem.balanced` makes the
-regression unit free.
-"""
+"""The catalog regression problem that every catalog optimizer solves (:class:`CatalogProblem`)
+and the balancing of its coordinate blocks."""
 
 from __future__ import annotations
 
@@ -38,10 +18,35 @@ __all__ = ["CatalogProblem", "check_mass_matrices", "check_noise_moments", "chec
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class CatalogProblem:
-    """A validated catalog regression ``theta @ coef ~ 0`` (fields in the module docstring).
+    """A validated catalog regression ``theta @ coef ~ 0``; build it with :meth:`from_arrays`.
 
-    Build it with :meth:`from_arrays`, which checks every argument. Sub-problems, subsamples and
-    balanced copies drop ``row_noise``; sub-problems and subsamples drop ``catalog_map``.
+    Every row holds exactly, so scaling a coordinate block changes how the blocks are weighed,
+    never the true coefficients: :meth:`balanced` makes the regression unit free.
+
+    Parameters
+    ----------
+    theta : ndarray, shape (n_coordinates * N, F)
+        Stacked regression matrix, rows coordinate-major.
+    n_coordinates : int
+        Number of coordinate blocks.
+    force_columns : ndarray of int
+        The :class:`~pysindy_xl.ExternalForces` columns (coefficient -1).
+    noise_moments : ndarray, shape (n_coordinates, F, F), optional
+        ``E[E_c^T E_c]`` of the errors in each coordinate's rows (errors in variables).
+    mass_matrices : ndarray, shape (S, F, n, n), optional
+        Each column's contribution to the mass matrix at ``S`` sample states.
+    balance : bool
+        Whether the blocks may be rescaled by :func:`coordinate_weights`.
+    reference_columns : ndarray of int, optional
+        The columns allowed to carry the ``+1`` of an unforced law.
+    physical : PhysicalStructure, optional
+        What the columns stand for physically.
+    noise_draws : ndarray, shape (D, n_coordinates * N, F), optional
+        Monte Carlo draws of the rows' errors: a part of the rows gets its own moments.
+    row_noise : WeakNoise, optional
+        Where the moments and draws come from (dropped by derived problems).
+    catalog_map : CatalogMap, optional
+        The map back to the catalog (dropped by sub-problems and subsamples).
 
     Examples
     --------
@@ -71,13 +76,13 @@ class CatalogProblem:
     def from_arrays(cls, theta, n_coordinates, force_columns, noise_moments=None,
                     mass_matrices=None, balance=True, reference_columns=None, physical=None,
                     noise_draws=None, row_noise=None, catalog_map=None):
-        r"""Check the arguments of ``fit_catalog`` and hold them as a problem.
+        """Check the arguments of ``fit_catalog`` and hold them as a problem.
 
         Parameters
         ----------
         theta, n_coordinates, force_columns, noise_moments, mass_matrices, balance, \
-        reference_columns, physical, noise_draws, row_noise, catalog_map
-            The fields (module docstring); ``noise_moments`` default to the second moments of
+reference_columns, physical, noise_draws, row_noise, catalog_map
+            The fields (class docstring); ``noise_moments`` default to the second moments of
             ``noise_draws``.
 
         Returns
@@ -279,6 +284,7 @@ def coordinate_weights(theta, n_coordinates: int, force_columns=None) -> np.ndar
     theta : array, shape (n_coordinates * N, F)
         Stacked regression matrix, rows coordinate-major.
     n_coordinates : int
+        Number of coordinate blocks.
     force_columns : sequence of int, optional
         Columns whose scale is not free.
 

@@ -14,7 +14,7 @@ __all__ = ["CatalogTags", "catalog_tags", "TAG_NAMES"]
 class CatalogTags:
     """Capabilities and needs of a catalog optimizer.
 
-    Attributes
+    Parameters
     ----------
     requires_forces : bool, default False
         Explicit regression: the problem must have force columns.
