@@ -1,19 +1,5 @@
-r"""Physically consistent explicit regression: rigid-body parameters and friction.
-
-A kinematic catalog's base parameters are images ``beta = C pi`` of the bodies' inertial
-parameters and its friction columns carry friction (:mod:`pysindy_xl.physical`); an
-unconstrained fit can leave what rigid bodies realize. :class:`PhysicalOptimizer` selects
-the terms with an explicit optimizer, then refits them under rigid bodies' constraints: with
-``b_u`` the unconstrained refit and ``A`` its normal matrix,
-
-.. math:: \min_{b, \pi} \; (b - b_u)^T A (b - b_u) \quad \text{s.t.} \quad
-          b_{\mathcal B} = C \pi, \; J_k(\pi) \succeq 0 \;\forall k, \; a_j \ge 0, \;
-          b_{\mathcal F} \ge 0,
-
-a semidefinite program (cvxpy; :math:`J_k` the pseudo-inertias, :math:`a_j` the armatures,
-:math:`\mathcal F` the friction columns). As a projection onto a convex set holding the true
-parameters, it brings the estimate no farther from them in the norm of ``A``.
-"""
+"""Physically consistent explicit regression: rigid-body parameters and friction
+(:class:`PhysicalOptimizer`)."""
 
 from __future__ import annotations
 
@@ -43,7 +29,10 @@ class PhysicalOptimizer(WrappingOptimizer, CatalogOptimizer):
     """Explicit regression constrained to physically consistent parameters.
 
     ``optimizer`` selects the terms; they are refit on all the rows under rigid bodies'
-    constraints (module docstring). Needs the problem's ``physical`` structure
+    constraints (pseudo-inertias PSD, armatures and friction non-negative) by
+    :func:`~pysindy_xl.physical.consistent_least_squares`: the projection of the unconstrained
+    refit onto the consistent set, which holds the true parameters, in the norm of its normal
+    matrix, so no farther from them. Needs the problem's ``physical`` structure
     (:func:`~pysindy_xl.mujoco.kinematic_catalog` catalogs; without one the fit is
     ``optimizer``'s) and cvxpy.
 

@@ -1,21 +1,5 @@
-r"""Errors-in-variables total least squares on every column of a complete catalog.
-
-Where no column is spurious (a kinematic catalog: each Lagrangian column multiplies one base
-parameter of the true law), an unforced law needs no selection: it is the direction the noisy
-columns (moments ``S = E[E^T E]``) contradict least,
-
-.. math:: \hat\xi = \arg\min_{\xi \ne 0} \rho(\xi), \qquad
-          \rho(\xi) = \frac{\lVert \Theta \xi \rVert^2}{\xi^T S \xi},
-
-the smallest generalized eigenvector of ``(Theta^T Theta, S)``
-(:func:`~pysindy_xl.optimizers.noise_ratio.noise_pencil`; Fuller, 1987, section 4.1).
-When a further pencil value ``rho_k <= undetermined_ratio * max(rho_1, 1)``, a second law
-holds as well (too little excitation): the combination is undetermined, reported in
-``undetermined_`` with a warning. ``normalization="dominant"`` scales as
-:func:`~pysindy_xl.optimizers.laws.normalize_law`; ``"inertia"`` to a mean mass-matrix trace
-of ``n`` over the sample states. Given mass matrices, the sign makes the kinetic energy
-positive.
-"""
+"""Errors-in-variables total least squares on every column of a complete catalog
+(:class:`TotalLeastSquaresOptimizer`)."""
 
 from __future__ import annotations
 
@@ -38,8 +22,15 @@ _NORMALIZATIONS = ("dominant", "inertia")
 class TotalLeastSquaresOptimizer(CatalogOptimizer):
     r"""Unforced law of a complete catalog by errors-in-variables total least squares.
 
-    Every non-zero column is kept; without noise moments, the smallest right singular vector of
-    the unit-norm columns.
+    Where no column is spurious (a kinematic catalog), the unforced law needs no selection: it
+    is the direction the noisy columns (moments ``S = E[E^T E]``) contradict least,
+
+    .. math:: \hat\xi = \arg\min_{\xi \ne 0} \frac{\lVert \Theta \xi \rVert^2}{\xi^T S \xi},
+
+    the smallest generalized eigenvector of ``(Theta^T Theta, S)`` (Fuller, 1987, section
+    4.1); without noise moments, the smallest right singular vector of the unit-norm columns.
+    Further directions whose ratio ``rho_k <= undetermined_ratio * max(rho_1, 1)`` hold as
+    well: the law is then undetermined (``undetermined_``, with a warning).
 
     Parameters
     ----------
@@ -47,7 +38,8 @@ class TotalLeastSquaresOptimizer(CatalogOptimizer):
         Further directions with a noise ratio within this factor of ``max(rho_1, 1)`` are
         reported as undetermined.
     normalization : {"dominant", "inertia"}, default "dominant"
-        Scale of the law (module documentation).
+        :func:`~pysindy_xl.optimizers.laws.normalize_law`, or a mean mass-matrix trace of ``n``
+        over the sample states; given mass matrices, the kinetic energy is made positive.
 
     Attributes
     ----------
@@ -138,7 +130,7 @@ class TotalLeastSquaresOptimizer(CatalogOptimizer):
         return self
 
     def _normalize(self, law, norms, problem):
-        """Scale of the module documentation; sign of a positive kinetic energy."""
+        """Scale of ``normalization``; sign of a positive kinetic energy."""
         law = normalize_law(law, norms, problem.force_columns, problem.reference_columns)
         if problem.mass_matrices is None:
             return law

@@ -1,38 +1,13 @@
 r"""Rigid-body dynamics of a kinematic tree from inertial parameters: ``M(q)`` and bias forces.
 
-A kinematic catalog's Lagrangian :math:`L = \sum_p \pi_p \phi_p(q, \dot q)` is linear in the
-bodies' inertial parameters :math:`\pi` (per body, in its frame: mass, first moments
-:math:`h = m c`, inertia about the frame origin; per joint: armature), so its Euler-Lagrange
-equations are those of rigid bodies with parameters :math:`\pi`, whatever their values:
-
-.. math:: M(q)\,\ddot q + b(q, \dot q) = \sum_b J_b^T \left( I_b \dot V_b
-          + V_b \times^* I_b V_b - G_b \right),
-
-with :math:`M = \sum_b J_b^T I_b J_b + \operatorname{diag}(\text{armature})`, in world
-coordinates at the world origin. The cost grows with the bodies, not with the expanded
-Euler-Lagrange monomials. Spatial vectors are ``[angular; linear]``; a hinge of world axis
-``a`` through ``p`` has the screw ``[a; p x a]``, a slide ``[0; a]``. Every function takes a
-:class:`KinematicTree`, parameters ``pi`` (``tree.physical_names``) and an array module
-``xp`` (NumPy or ``jax.numpy``), batched and without in-place updates, so the same code serves
-the simulators and :meth:`XLSINDy.to_jax <pysindy_xl.XLSINDy.to_jax>`.
-
-Examples
---------
-A point mass ``m = 2`` at distance 0.5 on a hinge about ``y``, gravity along ``-z``:
-
->>> import numpy as np
->>> tree = KinematicTree(body_names=("link",), parents=np.array([-1]),
-...                      offsets=np.zeros((1, 3)), rotations=np.eye(3)[None],
-...                      joint_names=("hinge",), joint_bodies=np.array([0]),
-...                      joint_hinge=np.array([True]), joint_axes=np.array([[0.0, 1, 0]]),
-...                      joint_anchors=np.zeros((1, 3)), joint_references=np.zeros(1),
-...                      joint_to_coordinates=np.eye(1), gravity=np.array([0.0, 0, -9.81]))
->>> pi = np.zeros(11); pi[0], pi[3], pi[4], pi[5] = 2.0, -1.0, 0.5, 0.5  # m, m cz, Ixx, Iyy
->>> mass, bias = rigid_body_dynamics(tree, pi, np.array([[0.0]]), np.array([[0.0]]))
->>> mass.round(4), bias.round(4)  # m l^2, and no torque hanging straight down
-(array([[[0.5]]]), array([[0.]]))
->>> rigid_body_dynamics(tree, pi, np.array([[np.pi / 2]]), np.array([[0.0]]))[1].round(4)
-array([[9.81]])
+A kinematic catalog's Lagrangian is linear in the bodies' inertial parameters :math:`\pi`, so
+its Euler-Lagrange equations are those of rigid bodies with parameters :math:`\pi`, whatever
+their values; evaluated here by composite rigid bodies, at a cost that grows with the bodies,
+not with the expanded equations' monomials. Spatial vectors are ``[angular; linear]`` in world
+coordinates at the world origin. Every function takes a :class:`KinematicTree`, parameters
+``pi`` (``tree.physical_names``) and an array module ``xp`` (NumPy or ``jax.numpy``), batched
+and without in-place updates, so the same code serves the simulators and
+:meth:`XLSINDy.to_jax <pysindy_xl.XLSINDy.to_jax>`.
 """
 
 from __future__ import annotations
@@ -388,6 +363,24 @@ def rigid_body_dynamics(tree: KinematicTree, pi, q, qd, xp=np):
     mass : array, shape (N, J, J)
     bias : array, shape (N, J)
         Coriolis, centrifugal and gravity forces (the equations at ``qdd = 0``).
+
+    Examples
+    --------
+    A point mass ``m = 2`` at distance 0.5 on a hinge about ``y``, gravity along ``-z``:
+
+    >>> import numpy as np
+    >>> tree = KinematicTree(body_names=("link",), parents=np.array([-1]),
+    ...                      offsets=np.zeros((1, 3)), rotations=np.eye(3)[None],
+    ...                      joint_names=("hinge",), joint_bodies=np.array([0]),
+    ...                      joint_hinge=np.array([True]), joint_axes=np.array([[0.0, 1, 0]]),
+    ...                      joint_anchors=np.zeros((1, 3)), joint_references=np.zeros(1),
+    ...                      joint_to_coordinates=np.eye(1), gravity=np.array([0.0, 0, -9.81]))
+    >>> pi = np.zeros(11); pi[0], pi[3], pi[4], pi[5] = 2.0, -1.0, 0.5, 0.5  # m, m cz, Ixx, Iyy
+    >>> mass, bias = rigid_body_dynamics(tree, pi, np.array([[0.0]]), np.array([[0.0]]))
+    >>> mass.round(4), bias.round(4)  # m l^2, and no torque hanging straight down
+    (array([[[0.5]]]), array([[0.]]))
+    >>> rigid_body_dynamics(tree, pi, np.array([[np.pi / 2]]), np.array([[0.0]]))[1].round(4)
+    array([[9.81]])
     """
     inverse = tree._inverse_transform
     qpos, qvel = q @ inverse.T, qd @ inverse.T
