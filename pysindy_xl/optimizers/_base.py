@@ -1,12 +1,6 @@
-"""What the catalog optimizers share: the template of a fit and column bookkeeping.
-
-A :class:`CatalogOptimizer` fits through one entry point, ``fit_problem(problem, support=None)``
-(``fit_catalog`` builds the :class:`~pysindy_xl.optimizers.problem.CatalogProblem` first): it
-checks the parameters, balances the rows' coordinate blocks unless the tag ``balances_rows`` is
-False, and calls ``_solve(problem)``, the one method a new optimizer implements; it sets
-``coef_`` (F,) with ``theta @ coef_ ~ 0``. Refitting a given support is ``_solve_support``.
-Capabilities are one :class:`~pysindy_xl.optimizers.tags.CatalogTags`; ``to_spec`` and
-:func:`optimizer_from_spec` persist an optimizer through the registry :data:`OPTIMIZER_TYPES`.
+"""What the catalog optimizers share: the template of a fit (:class:`CatalogOptimizer`: one entry
+point ``fit_problem``, one method ``_solve`` to implement, one tags object), persistence
+(:func:`optimizer_from_spec`) and column bookkeeping.
 """
 
 from __future__ import annotations
@@ -205,7 +199,15 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
 
 
 class CatalogOptimizer(BaseEstimator):
-    """Base class of the catalog optimizers (the protocol is in the module docstring).
+    """Base class of the catalog optimizers.
+
+    ``fit_problem(problem, support=None)`` (``fit_catalog`` builds the
+    :class:`~pysindy_xl.optimizers.problem.CatalogProblem` first) checks the parameters,
+    balances the coordinate blocks unless the tag ``balances_rows`` is False and calls
+    ``_solve(problem)``, the one method a new optimizer implements: it sets ``coef_`` (F,) with
+    ``theta @ coef_ ~ 0``; ``_solve_support(problem, support)`` refits a given support. Tags
+    are declared by overriding :meth:`catalog_tags` or as class attributes; every subclass
+    enters :data:`OPTIMIZER_TYPES` for :meth:`to_spec` and :func:`optimizer_from_spec`.
 
     Examples
     --------

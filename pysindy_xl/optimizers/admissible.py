@@ -1,17 +1,13 @@
 r"""Sparse laws with a positive definite mass matrix: starts for the unforced law search.
 
-A product catalog holds sparse combinations that nearly vanish without being a Lagrangian (a
-momentum balance, of rank-one inertia; a law of some coordinates only); greedy paths end in
-them. The true law also defines motion: ``M(xi) = sum_j xi_j M_j`` is positive definite.
-With ``Mbar_j`` each column's mean mass matrix in units of a reference inertia, the
-*admissible lasso*
+Greedy paths end in sparse near-laws that define no motion (a momentum balance of rank-one
+inertia). With ``Mbar_j`` each column's mean mass matrix in reference units, the convex
+*admissible lasso* (cvxpy, reweighted as Candès, Wakin and Boyd, 2008)
 
 .. math:: \min_\xi \; \lVert \Theta \xi \rVert^2 + \lambda \sum_j w_j |\xi_j|
           \quad \text{s.t.} \quad \sum_j \xi_j \bar M_j \succeq I
 
-is convex and excludes rank-deficient inertia. It is solved (cvxpy) for a few ``lambda``
-relative to the densest admissible law's residual, reweighted (``w_j = 1 / (|xi_j| + eps)``,
-Candès, Wakin and Boyd, 2008). Its supports are starts: the caller refines them by noise ratio.
+excludes them; its supports are starts that the caller refines by noise ratio.
 """
 
 from __future__ import annotations

@@ -1,17 +1,11 @@
 r"""Errors-in-variables selection of homogeneous laws ``Theta xi = 0`` (unforced, noisy data).
 
-A candidate support is judged by the held-out *noise ratio* of its best law
-(:mod:`~pysindy_xl.optimizers.noise_ratio`: about 1 for a law that holds to the propagated
-noise). Candidates: the backward and forward greedy paths, given the columns' mass matrices
-the paths inside the admissible lasso's supports
-(:func:`~pysindy_xl.optimizers.admissible.admissible_supports`), and swap-refined supports
-(a true column lost early to a correlated pair can come back). Each is scored by
-``n_folds``-fold h-block cross-validation over contiguous rows (a gap of :data:`FOLD_GAP`
-keeps the training rows off the noise the held-out rows share). Only admissible laws
-compete (every coordinate explained, definite mass matrix) when there are any; the choice is
-the smallest support within one standard error of the best, as
-:func:`~pysindy_xl.optimizers.selection.select_support` does for explicit problems.
-:func:`select_laws` repeats it on the coordinates a law leaves unexplained.
+Candidate supports (the noise ratio's backward and forward paths, the paths inside the
+admissible lasso's supports, swap refinements) are scored by the held-out noise ratio of
+their law (:mod:`~pysindy_xl.optimizers.noise_ratio`: about 1 for a law that holds) in
+h-block cross-validation (a gap of :data:`FOLD_GAP` keeps the training rows off the held-out
+rows' noise). Admissible laws (every coordinate explained, definite mass matrix) compete
+alone when there are any; the smallest within one standard error of the best is chosen.
 """
 
 from __future__ import annotations

@@ -1,20 +1,15 @@
 r"""The noise ratio of a homogeneous law ``Theta xi = 0`` and the paths of supports it orders.
 
-With column errors ``Theta = Theta_0 + E`` of known moments ``S = E[E^T E]``, the true law
-leaves the residual ``E xi`` of expected square ``xi^T S xi``, so the *noise ratio*
+With column errors of known moments ``S = E[E^T E]``, the *noise ratio*
 
 .. math:: \rho(\xi) = \frac{\lVert \Theta \xi \rVert^2}{\xi^T S \xi}
 
-is about 1 for the true law and larger for laws the data contradict; the plain residual that
-SINDy-PI minimizes prefers laws on quiet columns instead. Its minimum on a support is the
-smallest generalized eigenvalue of ``(Theta_s^T Theta_s, S_ss)``, whose vector is the
-errors-in-variables estimate (Fuller, 1987, section 4.1), computed from the singular values
-of ``R L^-T`` (``L L^T = S``). The backward path (:func:`law_elimination_path`), forward
-path (:func:`law_forward_path`) and swaps (:func:`refine_law_by_swaps`) solve the secular
-equations of the current pencil ``G V = S V diag(lambda)`` for every candidate at once.
-
-``r_factor`` (m, F) is ``Theta`` or any factor with the same ``R^T R``; ``moments`` (F, F)
-the ``E[E^T E]`` of the same rows and columns; a path's ``order[:k]`` is its support of size k.
+is about 1 for the true law and larger for laws the data contradict (the plain residual
+prefers laws on quiet columns). Its minimum on a support is the smallest eigenvalue of the
+pencil ``(Theta_s^T Theta_s, S_ss)``, from the singular values of ``R L^-T`` (``L L^T = S``;
+Fuller, 1987, 4.1). The paths and swaps solve the pencil's secular equations for all
+candidates at once. ``r_factor`` (m, F) is ``Theta`` or a factor with its ``R^T R``;
+``moments`` (F, F) those of the same rows.
 """
 
 from __future__ import annotations

@@ -1,17 +1,12 @@
-"""Noise-aware choice of the sparsity: nested paths of supports scored by cross-validation.
+"""Noise-aware choice of the sparsity (:func:`select_support`): nested paths of supports scored by
+cross-validation.
 
-A fixed threshold prunes small true terms on clean data and keeps noise-fitting terms on
-noisy data. Instead, backward elimination (drop the column of smallest squared t-statistic
-``beta_j^2 / [(X^T X)^-1]_jj``) and forward stepwise selection each order the columns and
-give one nested model per size; path models are refined by single swaps
-(:func:`refine_by_swaps`, L0Learn's 1-swap search: one true term imitated by a correlated
-pair); every model is scored by ``n_folds``-fold cross-validation over contiguous row blocks,
-and the choice is the smallest model within one standard error of the best *path* model (the
-best over all refinements would be optimistically low).
-
-``x`` (n_rows, F) and ``y`` (n_rows,) are the regression's columns and target; the folds are
-contiguous inside each of ``n_blocks`` equal row blocks (the coordinates); held-out errors are
-mean squares relative to the mean square of ``y``.
+A fixed threshold prunes small true terms on clean data and keeps noise terms on noisy data.
+Backward elimination (smallest squared t-statistic) and forward selection give one nested
+model per size, refined by single swaps (:func:`refine_by_swaps`); each is scored by
+cross-validation over contiguous blocks of rows of each of ``n_blocks`` coordinates (errors
+relative to the mean square of ``y``), and the smallest within one standard error of the best
+*path* model is chosen. ``x`` (n_rows, F) and ``y`` (n_rows,) are the columns and target.
 """
 
 from __future__ import annotations
