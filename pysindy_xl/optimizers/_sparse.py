@@ -1,12 +1,7 @@
-"""Shared sparse-regression numerics: batched Lasso on a Gram matrix, column scaling, null vectors.
-
-:func:`lasso_gram` solves many Lasso problems sharing one design from its Gram matrix:
-
-    for every column k:  min_x  1/2 x^T G x - b_k^T x + alpha ||x||_1,  x_i = 0 where not
-                                                                         mask[i, k]
-
-i.e. ``min 1/2 ||A x - y_k||^2 + alpha ||x||_1`` with ``G = A^T A``, ``b_k = A^T y_k``;
-SINDy-PI is ``B = G`` with the diagonal masked out.
+"""Shared sparse-regression numerics: batched Lasso on a Gram matrix (:func:`lasso_gram`, which
+solves ``min 1/2 x^T G x - b_k^T x + alpha ||x||_1`` for every column ``b_k`` of ``B``, with a
+mask of the entries allowed to be non-zero: SINDy-PI is ``B = G`` without the diagonal),
+column scaling, null vectors.
 """
 
 from __future__ import annotations

@@ -1,13 +1,5 @@
-"""Mixed regression: explicit where a force reaches, implicit on the rest.
-
-Column j *touches* coordinate c when it is not zero in c's rows. From the forced coordinates,
-every column touching an activated coordinate activates all the coordinates it touches, to a
-fixed point (:func:`activation_closure`). The activated block is solved explicitly (force
-coefficient -1 fixes the scale); only coordinates an identified term enters stay explicit.
-The rest is solved implicitly with the columns touching no explicit coordinate, and the two
-coefficient vectors (disjoint columns) are summed. With every coordinate reached the result
-is the explicit optimizer's; with no force, the implicit optimizer's.
-"""
+"""Mixed regression: explicit where a force reaches, implicit on the rest
+(:class:`MixedOptimizer`)."""
 
 from __future__ import annotations
 
@@ -62,7 +54,13 @@ def activation_closure(touches, seed) -> tuple[np.ndarray, np.ndarray]:
 class MixedOptimizer(CatalogOptimizer):
     """Explicit regression on the force-activated subsystem, implicit regression on the rest.
 
-    Standalone use: :meth:`fit_catalog` with the number of coordinates and the force columns.
+    Column j *touches* coordinate c when it is not zero in c's rows. From the forced
+    coordinates, every column touching an activated coordinate activates all it touches
+    (:func:`activation_closure`); that block is solved explicitly, and the coordinates no
+    identified term enters are solved implicitly with the columns touching no explicit
+    coordinate; the two coefficient vectors (disjoint columns) are summed. Every coordinate
+    reached: the explicit optimizer's result; no force: the implicit optimizer's. Standalone
+    use: :meth:`fit_catalog` with the number of coordinates and the force columns.
 
     Parameters
     ----------

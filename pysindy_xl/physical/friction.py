@@ -1,10 +1,6 @@
-r"""Dry friction laws of a joint, and recognizing them in a catalog's terms.
-
-A catalog states dry friction ``F`` as ``F`` times a unit law of the joint velocity ``v``: the
-smooth sign ``tanh(v / eps)`` (or ``sign(v)``), or MuJoCo's regularized ``frictionloss``
-(:func:`regularized_dry_friction`, saturating outside a sticking zone ``|v| < s`` with a lead
-``tau``; :func:`~pysindy_xl.mujoco.systems.friction.dry_friction_scales`).
-:func:`dry_friction_law` reads back which law a term is.
+r"""Dry friction laws of a joint (``tanh(v / eps)`` or ``sign(v)``, and MuJoCo's regularized
+``frictionloss``, :func:`regularized_dry_friction`), and recognizing them in a catalog's terms
+(:func:`dry_friction_law`).
 """
 
 from __future__ import annotations

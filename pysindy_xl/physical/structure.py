@@ -1,12 +1,10 @@
 r"""What makes a catalog's coefficients physical: the rigid bodies behind its base parameters.
 
 A kinematic catalog's Lagrange coefficients are *base parameters* :math:`\beta = C \pi` of
-the bodies' inertial parameters (per body: mass, first moment :math:`h = m c`, inertia about
-the frame origin; per joint: armature); its friction columns carry friction coefficients.
-They are *physically consistent* when some :math:`\pi` with :math:`C \pi = \beta` has every
+the bodies' inertial parameters :math:`\pi`; its friction columns carry friction. They are
+*physically consistent* when some :math:`\pi` with :math:`C \pi = \beta` has every
 pseudo-inertia positive semidefinite and every armature and friction non-negative
-(:mod:`pysindy_xl.physical.sdp`). :class:`PhysicalStructure` holds this in a problem's column
-indices; :func:`catalog_structure` reads it off a fitted catalog.
+(:mod:`pysindy_xl.physical.sdp`).
 """
 
 from __future__ import annotations
