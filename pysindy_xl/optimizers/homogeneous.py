@@ -386,26 +386,12 @@ def _refined_path(r_factor, moments, start, memo=None) -> list:
 
 def select_laws(theta, noise_moments, n_blocks: int, mass_matrices=None,
                 max_ratio_factor: float = 10.0, noise_draws=None) -> tuple[list, list, list]:
-    """Laws for all the coordinates: :func:`select_law`, then again on the coordinates left
-    unexplained with the columns that leave the explained ones alone (uncoupled subsystems).
+    """Laws ``(laws, ratios, selections)`` for all the coordinates: :func:`select_law`, then again
+    on the coordinates left unexplained with the columns that leave the explained ones alone
+    (uncoupled subsystems), a further law kept when its ratio is within ``max_ratio_factor`` of
+    the first's. ``theta`` (n_blocks * N, F) has balanced blocks; the other arguments as in
+    :func:`select_law`.
 
-    Parameters
-    ----------
-    theta : array, shape (n_blocks * N, F)
-        Regression matrix with balanced coordinate blocks.
-    noise_moments, n_blocks, mass_matrices, noise_draws
-        As in :func:`select_law`.
-    max_ratio_factor : float, default 10.0
-        A further law is kept when its noise ratio is within this factor of the first's.
-
-    Returns
-    -------
-    laws : list of ndarray, shape (F,)
-    ratios : list of float
-    selections : list of LawSelection
-
-    Examples
-    --------
     >>> import numpy as np
     >>> rng = np.random.default_rng(0)
     >>> a, b = rng.normal(size=(2, 1000))

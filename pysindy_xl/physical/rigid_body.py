@@ -256,22 +256,9 @@ def _apply(matrix, vector):
 
 
 def joint_screws(tree: KinematicTree, qpos, xp=np):
-    """Forward kinematics: body placements and joint screws in world coordinates.
-
-    All joints' local placements at once, then composed down the tree (one product per frame).
-
-    Parameters
-    ----------
-    qpos : array, shape (N, J)
-        Joint positions (MuJoCo's ``qpos``).
-
-    Returns
-    -------
-    rotations : array, shape (N, B, 3, 3)
-    positions : array, shape (N, B, 3)
-        World orientation and origin of every body frame.
-    screws : array, shape (N, J, 6)
-        ``[axis; anchor x axis]`` (hinge) or ``[0; axis]``.
+    """Forward kinematics at ``qpos`` (N, J): every body frame's world ``rotations`` (N, B, 3, 3)
+    and ``positions`` (N, B, 3), and each joint's unit screw (N, J, 6), ``[axis; anchor x axis]``
+    (hinge) or ``[0; axis]``. All local placements at once, then composed down the tree.
     """
     plan = tree._frame_plan
     hinge = tree.joint_hinge[:, None, None]
