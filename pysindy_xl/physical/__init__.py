@@ -15,19 +15,7 @@ from .structure import (
     pseudo_inertia_matrix,
 )
 
-__all__ = [
-    "INERTIAL_PARAMETERS",
-    "PhysicalStructure",
-    "catalog_structure",
-    "friction_columns",
-    "friction_kind",
-    "pseudo_inertia_matrix",
-    "dry_friction_law",
-    "regularized_dry_friction",
-    "body_constraints",
-    "consistent_least_squares",
-    "realize",
-    "KinematicTree",
-    "physical_parameters_from_base",
-    "rigid_body_dynamics",
-]
+__all__ = ["INERTIAL_PARAMETERS", "PhysicalStructure", "catalog_structure", "friction_columns",
+           "friction_kind", "pseudo_inertia_matrix", "dry_friction_law", "regularized_dry_friction",
+           "body_constraints", "consistent_least_squares", "realize", "KinematicTree",
+           "physical_parameters_from_base", "rigid_body_dynamics"]
