@@ -56,7 +56,7 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
     aggregate : {"auto", "refit", "median"}, default "auto"
         Coefficients of the included terms: the optimizer's refit of them on all the rows
         (``fit_problem(problem, support)``), the median over the fits keeping them, or
-        ``"refit"`` where the tag ``can_refit`` allows.
+        (``"auto"``) the refit where the tag ``can_refit`` allows.
     sampling : {"subsamples", "complementary_pairs"}, default "subsamples"
         Random ``fraction`` of the chunks per fit, or ``n_models / 2`` pairs of disjoint halves
         (``n_models`` even).
