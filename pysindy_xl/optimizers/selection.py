@@ -299,7 +299,7 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     Parameters
     ----------
     x, y, n_blocks, n_folds
-        See the module docstring.
+        Columns (n_rows, F), target (n_rows,), equal row blocks (coordinates) and folds.
     max_size : int, optional
         Largest model considered (default: all columns).
     resolution : float, default 1e-8
