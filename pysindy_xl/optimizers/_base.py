@@ -1,23 +1,6 @@
-"""What the catalog optimizers share: the template of a fit and column bookkeeping.
-
-Every optimizer of this package derives from :class:`CatalogOptimizer`, a scikit-learn
-estimator. A fit goes one way: ``fit_catalog(theta, n_coordinates, force_columns, ...)``
-checks its arguments once into a :class:`~pysindy_xl.optimizers.problem.CatalogProblem`;
-``fit_problem(problem, support=None)``, the one entry point of the fit stage, checks the
-optimizer's parameters, balances the coordinate blocks of the rows
-(:meth:`CatalogProblem.balanced <pysindy_xl.optimizers.problem.CatalogProblem.balanced>`,
-unless the tag ``balances_rows`` is False) and calls the one method a new optimizer implements,
-``_solve(problem) -> self``, which sets ``coef_`` (F,): the full coefficient vector, force
-columns included, with ``theta @ coef_ ~ 0``. An optimizer that can refit a given support
-(the last step of an ensemble) also implements ``_solve_support(problem, support)``.
-
-What an optimizer needs or can do is one object, its
-:class:`~pysindy_xl.optimizers.tags.CatalogTags` (``catalog_tags()``), declared once by a
-subclass (overriding ``catalog_tags`` or setting the tags as class attributes) and readable
-as attributes too. ``pilot()`` may offer a cheaper optimizer of the same law for a first
-estimate (:func:`pilot_optimizer`). ``to_spec()`` writes the type and plain parameters for
-persistence; :func:`optimizer_from_spec` reads them back through the registry
-:data:`OPTIMIZER_TYPES`, which every subclass enters when it is defined.
+"""What the catalog optimizers share: the template of a fit (:class:`CatalogOptimizer`: one entry
+point ``fit_problem``, one method ``_solve`` to implement, one tags object), persistence
+(:func:`optimizer_from_spec`) and column bookkeeping.
 """
 
 from __future__ import annotations
@@ -45,15 +28,15 @@ _MAX_NESTING = 3
 
 
 def solve_problem(optimizer, problem: CatalogProblem):
-    """Fit ``optimizer`` on ``problem``.
+    """Fit ``optimizer`` on ``problem`` and return it.
+
+    The package's optimizers get the whole problem, less the draws of the rows' errors unless
+    their tag ``uses_noise_draws`` is set; any other object gets the bare
+    ``fit_catalog(theta, n_coordinates, force_columns)``.
 
     Parameters
     ----------
     optimizer : CatalogOptimizer or object with ``fit_catalog``
-        The package's optimizers get the whole problem (:meth:`CatalogOptimizer.fit_problem`),
-        less the draws of the rows' errors unless their tags use them (``uses_noise_draws``:
-        the others fit on the same moments whether or not the draws come along); any other
-        object the bare ``fit_catalog(theta, n_coordinates, force_columns)``.
     problem : CatalogProblem
 
     Returns
@@ -76,12 +59,10 @@ def solve_problem(optimizer, problem: CatalogProblem):
 
 
 def pilot_optimizer(optimizer):
-    """An unfitted optimizer for a first estimate of the law that ``optimizer`` would find.
+    """An unfitted optimizer for a cheap first estimate of the law ``optimizer`` would find.
 
-    Where the law only prepares the real fit (the residual covariance of
-    :class:`~pysindy_xl.XLSINDy`), an optimizer may offer a cheaper stand-in through its
-    ``pilot()`` method (an ensemble: one fit of its base optimizer instead of
-    ``n_models``); otherwise the pilot is a clone of ``optimizer``.
+    Its ``pilot()`` method where it has one (an ensemble: one fit of its base optimizer),
+    otherwise a clone.
 
     Parameters
     ----------
@@ -90,7 +71,6 @@ def pilot_optimizer(optimizer):
     Returns
     -------
     estimator
-        Unfitted.
 
     Examples
     --------
@@ -103,17 +83,8 @@ def pilot_optimizer(optimizer):
 
 
 def coordinates_touched(theta, n_coordinates: int, rtol: float = 1e-10) -> np.ndarray:
-    """Which coordinate equations each column of ``theta`` (rows coordinate-major) enters,
-    as a boolean array (n_coordinates, F); a block counts as zero when its norm is at most
-    ``rtol`` times the column's largest block norm.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> theta = np.array([[1.0, 0.0], [2.0, 0.0], [0.0, 1.0], [3.0, 1.0]])
-    >>> coordinates_touched(theta, 2)
-    array([[ True, False],
-           [ True,  True]])
+    """Boolean (n_coordinates, F): which coordinate equations each column of ``theta`` enters
+    (rows coordinate-major; a block is zero at most ``rtol`` times the column's largest block).
     """
     theta = np.asarray(theta, dtype=float)
     blocks = theta.reshape(n_coordinates, -1, theta.shape[1])
@@ -124,23 +95,15 @@ def coordinates_touched(theta, n_coordinates: int, rtol: float = 1e-10) -> np.nd
 
 def warn_unexplained(owner: str, theta, n_coordinates: int, coef, force_columns=(),
                      stacklevel: int = 2, rtol: float = 1e-8) -> np.ndarray:
-    """Warn when no identified term other than the forces enters some coordinate's equation.
+    """Warn (as ``owner``) when no identified term but the forces enters some coordinate's equation,
+    whose model then cannot predict it; return those coordinates.
 
-    Such a coordinate's equation says only ``forces = 0`` (or nothing): the model cannot
-    predict it, however small its residual. Fits on noisy data end there when the candidate
-    terms of a weakly excited coordinate are all pruned.
-
-    A term explains a coordinate when its contribution there (the norm of its column block
-    times its coefficient) exceeds ``rtol`` times the largest contribution of any identified
-    term or force to any coordinate. ``owner`` (the optimizer's name) is the warning's author,
-    ``stacklevel`` as for :func:`warnings.warn` counted from the caller. Returns the
-    unexplained coordinates (empty when every coordinate is explained).
+    A term explains a coordinate when its contribution there exceeds ``rtol`` times the largest
+    contribution of any identified column.
     """
     coef = np.asarray(coef, dtype=float)
     used = np.flatnonzero(coef)
-    # each term's contribution to each coordinate's equation: a term whose coefficient came
-    # out at round-off level (a refit on terms that cannot reach the forced equations) is
-    # no explanation
+    # each term's contribution to each coordinate's equation (round-off ones explain nothing)
     contribution = np.linalg.norm(
         (np.asarray(theta)[:, used] * coef[used]).reshape(n_coordinates, -1, len(used)), axis=1)
     terms = ~np.isin(used, np.asarray(force_columns, dtype=int))
@@ -160,16 +123,11 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
                         n_blocks: int = 1, force_columns=None):
     """Split the columns of ``theta`` into a linearly independent set and the rest.
 
-    Columns are visited in ``priority`` order; a column is kept when its component orthogonal
-    to the span of the columns visited before it exceeds ``rtol`` times its norm (a QR
-    factorization of the column-normalized, priority-ordered matrix, on at most ``max_rows``
-    evenly spaced rows: exact identities such as ``cos^2 + sin^2 = 1`` hold on any subset).
-    With ``n_blocks > 1`` the coordinate blocks of rows are first balanced by
-    :func:`coordinate_weights` (a coupling column whose blocks differ by 1e12 because one
-    coordinate is in micrometres stays independent of the columns of either block alone).
-
-    The test is scale free: only a column that is exactly zero on the rows used (or not
-    finite) is dropped without the QR test, whatever the scales of the other columns.
+    Columns are visited in ``priority`` order and kept when their component orthogonal to the
+    columns before exceeds ``rtol`` times their norm (QR of the column-normalized matrix on at
+    most ``max_rows`` evenly spaced rows). The test is scale free: only exactly zero or
+    non-finite columns are dropped without it. With ``n_blocks > 1`` the coordinate blocks are
+    first balanced by :func:`coordinate_weights`.
 
     Parameters
     ----------
@@ -181,16 +139,16 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
     max_rows : int
         Rows used for the test.
     n_blocks : int
-        Coordinate blocks of rows (``theta`` stacked coordinate-major); 1: no balancing.
+        Coordinate blocks of rows (coordinate-major); 1: no balancing.
     force_columns : sequence of int, optional
-        Force columns, passed to :func:`coordinate_weights`.
+        Passed to :func:`coordinate_weights`.
 
     Returns
     -------
     keep : ndarray of int
         Independent columns, sorted.
     dropped : dict of int to str
-        Dropped columns with the reason (``"zero column"``, ``"non-finite column"`` or
+        Dropped columns and why (``"zero column"``, ``"non-finite column"``,
         ``"linear combination"``).
 
     Examples
@@ -198,14 +156,7 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
     >>> import numpy as np
     >>> a = np.linspace(0, 1, 50)
     >>> theta = np.column_stack([a, a ** 2, 2 * a - a ** 2, np.zeros(50)])
-    >>> keep, dropped = independent_columns(theta)
-    >>> keep, dropped
-    (array([0, 1]), {2: 'linear combination', 3: 'zero column'})
-
-    Scales do not matter, only exact zeros do:
-
-    >>> keep, dropped = independent_columns(theta * [1e-30, 1.0, 1e30, 1.0])
-    >>> keep, dropped
+    >>> independent_columns(theta * [1e-30, 1.0, 1e30, 1.0])
     (array([0, 1]), {2: 'linear combination', 3: 'zero column'})
     """
     theta = np.asarray(theta, dtype=float)
@@ -248,12 +199,20 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
 
 
 class CatalogOptimizer(BaseEstimator):
-    """Base class of the catalog optimizers (see the module docstring for the protocol).
+    """Base class of the catalog optimizers.
+
+    ``fit_problem(problem, support=None)`` (``fit_catalog`` builds the
+    :class:`~pysindy_xl.optimizers.problem.CatalogProblem` first) checks the parameters,
+    balances the coordinate blocks unless the tag ``balances_rows`` is False and calls
+    ``_solve(problem)``, the one method a new optimizer implements: it sets ``coef_`` (F,) with
+    ``theta @ coef_ ~ 0``; ``_solve_support(problem, support)`` refits a given support. Tags
+    are declared by overriding :meth:`catalog_tags` or as class attributes; every subclass
+    enters :data:`OPTIMIZER_TYPES` for :meth:`to_spec` and :func:`optimizer_from_spec`.
 
     Examples
     --------
-    A least-squares solver with the force coefficient fixed to -1 implements one method and
-    declares its tags (explicit regression: it needs forces):
+    A least-squares solver with the force coefficient fixed to -1 implements ``_solve`` and
+    declares its tags:
 
     >>> import dataclasses, numpy as np
     >>> class LeastSquares(CatalogOptimizer):
@@ -294,13 +253,9 @@ class CatalogOptimizer(BaseEstimator):
 
             cls.catalog_tags = tags
 
-    # -- capabilities ----------------------------------------------------------------------
     def catalog_tags(self) -> CatalogTags:
-        """What this optimizer can do and needs (:class:`~pysindy_xl.optimizers.CatalogTags`).
-
-        A subclass extends its parent's: ``dataclasses.replace(super().catalog_tags(),
-        requires_forces=True)``. ``can_refit`` is True when the class implements
-        ``_solve_support``.
+        """What this optimizer can do and needs; a subclass extends its parent's with
+        ``dataclasses.replace(super().catalog_tags(), ...)``.
 
         Returns
         -------
@@ -309,7 +264,6 @@ class CatalogOptimizer(BaseEstimator):
         return CatalogTags(
             can_refit=type(self)._solve_support is not CatalogOptimizer._solve_support)
 
-    # -- the template of a fit ------------------------------------------------------------
     def fit_catalog(self, theta, n_coordinates, force_columns, noise_moments=None,
                     mass_matrices=None, balance=True, reference_columns=None, physical=None):
         """Solve the catalog problem ``theta @ coef_ ~ 0``.
@@ -318,10 +272,9 @@ class CatalogOptimizer(BaseEstimator):
         ----------
         theta, n_coordinates, force_columns, noise_moments, mass_matrices, balance, \
 reference_columns, physical
-            The fields of a :class:`~pysindy_xl.optimizers.problem.CatalogProblem` (its module
-            documents each), checked by :meth:`CatalogProblem.from_arrays
-            <pysindy_xl.optimizers.problem.CatalogProblem.from_arrays>`. Optimizers ignore
-            what they do not use (see their tags).
+            The fields of a :class:`~pysindy_xl.optimizers.problem.CatalogProblem`, checked by
+            :meth:`CatalogProblem.from_arrays
+            <pysindy_xl.optimizers.problem.CatalogProblem.from_arrays>`.
 
         Returns
         -------
@@ -338,8 +291,7 @@ reference_columns, physical
         ----------
         problem : CatalogProblem
         support : array of bool, shape (F,), optional
-            Fit the terms of ``support`` on every row, nothing selected (the others get 0);
-            needs the tag ``can_refit``.
+            Fit only these terms on every row, selecting nothing (needs the tag ``can_refit``).
 
         Returns
         -------
@@ -351,7 +303,6 @@ reference_columns, physical
             return self._solve(problem)
         return self._solve_support(problem, check_support(support, problem.n_features))
 
-    # -- to implement ---------------------------------------------------------------------
     def _solve(self, problem: CatalogProblem):  # pragma: no cover - abstract
         raise NotImplementedError(f"{type(self).__name__}: _solve(problem) is not implemented")
 
@@ -363,17 +314,13 @@ reference_columns, physical
         """Raise ``TypeError``/``ValueError`` naming a parameter with a bad value."""
 
     def pilot(self):
-        """Unfitted optimizer for a first estimate of the law (see :func:`pilot_optimizer`);
-        a clone of this one unless a cheaper stand-in exists."""
+        """Unfitted optimizer for a first estimate of the law (see :func:`pilot_optimizer`)."""
         return clone(self)
 
-    # -- persistence ----------------------------------------------------------------------
     def to_spec(self) -> dict:
-        """JSON description: ``{"type": spec_type, "params": {...}}``.
-
-        Plain parameters are written as they are, nested catalog optimizers as their own
-        specs; other objects (a pysindy regressor, a function) have no JSON form and are left
-        out, so that the loaded optimizer uses their default.
+        """JSON description ``{"type": spec_type, "params": {...}}``: plain parameters as they are,
+        nested optimizers as specs; other objects are left out (the loaded optimizer uses their
+        default).
 
         Returns
         -------
@@ -398,8 +345,8 @@ for _name in TAG_NAMES:  # the tags answer as read-only attributes too
 
 
 def optimizer_from_spec(spec, where: str = "optimizer", depth: int = 0):
-    """The optimizer a (untrusted) spec describes: a registered type, plain parameters among
-    its own, nested optimizers as specs, its parameter checks passed.
+    """The optimizer an untrusted spec describes: registered type, known plain parameters,
+    nested optimizers as specs (bounded depth), its parameter checks passed.
 
     Parameters
     ----------
@@ -408,7 +355,7 @@ def optimizer_from_spec(spec, where: str = "optimizer", depth: int = 0):
     where : str
         Where the spec sits in its file, for the messages.
     depth : int
-        Nesting of this spec in the file's optimizer (bounded).
+        Nesting of this spec in the file's optimizer.
 
     Returns
     -------

@@ -1,6 +1,7 @@
-"""SINDy-PI's building blocks: homothetic grouping of solution columns, the extraction of laws
-from the groups, the null-space warm start of the batched Lasso and the cvxpy reference solver
-(see :class:`~pysindy_xl.optimizers.ImplicitOptimizer` for problem (1) they serve)."""
+"""SINDy-PI's building blocks: homothetic grouping, extraction of laws, the null-space warm
+start and the cvxpy reference solver of problem (1) of
+:class:`~pysindy_xl.optimizers.ImplicitOptimizer`.
+"""
 
 from __future__ import annotations
 
@@ -15,10 +16,10 @@ __all__ = ["extract_laws", "homothetic_groups"]
 
 
 def homothetic_groups(vectors, angle_tol: float, order=None) -> list[np.ndarray]:
-    """Group column vectors that point along the same line (up to sign), greedily.
+    """Group column vectors along the same line (up to sign), greedily.
 
-    Columns are visited in ``order``; each unassigned column seeds a group with every other
-    unassigned column whose angle to it (modulo sign) is at most ``angle_tol`` degrees.
+    Each unassigned column, visited in ``order``, seeds a group with the unassigned columns within
+    ``angle_tol`` degrees of it.
 
     Parameters
     ----------
@@ -27,12 +28,12 @@ def homothetic_groups(vectors, angle_tol: float, order=None) -> list[np.ndarray]
     angle_tol : float
         Angular tolerance in degrees.
     order : array of int, optional
-        Seeding order, best candidate first (default: column order).
+        Seeding order, best first (default: column order).
 
     Returns
     -------
     list of ndarray of int
-        Groups (sorted indices), in seeding order; singletons included.
+        Groups (sorted indices) in seeding order, singletons included.
 
     Examples
     --------
@@ -69,32 +70,16 @@ def _principal_direction(unit_vectors) -> np.ndarray:
 
 def extract_laws(directions, groups, r_factor, *, refit: bool, threshold: float,
                  min_membership: float, max_residual_ratio: float, angle_tol: float):
-    """The laws of the homothetic groups: each group's principal direction, refit on its
-    support, kept when it qualifies.
-
-    Parameters
-    ----------
-    directions : array, shape (F, F)
-        Column directions ``e_j - X[:, j]`` of the solution matrix (unit-norm columns).
-    groups : list of array of int
-        Homothetic groups of at least ``min_group_size`` columns.
-    r_factor : array, shape (m, F)
-        Factor of the normalized matrix (``R^T R = Theta~^T Theta~``).
-    refit, threshold, min_membership, max_residual_ratio, angle_tol
-        As in :class:`~pysindy_xl.ImplicitOptimizer`.
-
-    Returns
-    -------
-    laws : list of ndarray, shape (F,)
-        Best (smallest relative residual) first, duplicates (within ``angle_tol``) dropped.
-    law_groups : list of ndarray of int
-    residuals : list of float
+    """``(laws, law_groups, residuals)`` of the homothetic groups: each group's principal direction
+    (``directions`` (F, F), unit columns ``e_j - X[:, j]``), refit on its support with
+    ``r_factor``, kept when it qualifies; best first, duplicates dropped. The keyword arguments
+    are as in :class:`~pysindy_xl.ImplicitOptimizer`.
     """
     unit = directions / np.linalg.norm(directions, axis=0)
     candidates = []
     for group in groups:
         members = unit[:, group]
-        # Align signs on the first member so that the SVD sees one cluster, not two.
+        # signs aligned on the first member: one cluster for the SVD
         members = members * np.sign(members.T @ members[:, 0])[None, :]
         direction = _principal_direction(members)
         if refit:
@@ -112,7 +97,7 @@ def extract_laws(directions, groups, r_factor, *, refit: bool, threshold: float,
     best = min(c[2] for c in candidates)
     limit = max(best, 1e-12) * max_residual_ratio
     kept = [c for c in candidates if c[2] <= limit]
-    # Drop duplicates: the same law reached from two groups.
+    # drop the same law reached from two groups
     laws, law_groups, residuals = [], [], []
     cos_tol = np.cos(np.deg2rad(angle_tol))
     for law, group, residual in sorted(kept, key=lambda c: c[2]):
@@ -140,14 +125,9 @@ def _refit_on_support(direction, r_factor, threshold: float) -> np.ndarray:
 
 
 def null_space_start(r_factor) -> np.ndarray:
-    """Warm start of the fast solver from the (near-)null space of the normalized matrix.
-
-    With ``V`` the right singular vectors of the smallest singular values (within a factor 10 of
-    the smallest, or below 1e-8 of the largest), column j's least-norm representation by the
-    others along that space is ``-v / v_j`` with ``v = V V[j]^T``. For a column of an exact law
-    this is the exact (unshrunk) solution, so the solver only has to apply the L1 shrinkage;
-    columns with no weight on that space start from zero. The problem is convex: the start
-    changes the speed, not the solution.
+    """Warm start from the near-null space ``V`` of the normalized matrix: column j starts at
+    ``-v / v_j``, ``v = V V[j]^T``, exact for a column of an exact law (zero without weight
+    there). The problem is convex: the start changes the speed, not the solution.
     """
     _, singular, vt = np.linalg.svd(r_factor, full_matrices=True)
     singular = np.concatenate([singular, np.zeros(vt.shape[0] - singular.size)])

@@ -1,14 +1,7 @@
-"""Shared sparse-regression numerics: batched Lasso on a Gram matrix, column scaling, null vectors.
-
-The workhorse is :func:`lasso_gram`, which solves many Lasso problems that share one design
-matrix at once, from its Gram matrix only:
-
-    for every column k:  min_x  1/2 x^T G x - b_k^T x + alpha * ||x||_1   s.t. x_i = 0 where
-                                                                           mask[i, k] is False
-
-which is ``min 1/2 ||A x - y_k||^2 + alpha ||x||_1`` for ``G = A^T A`` and ``b_k = A^T y_k``.
-SINDy-PI (``y_k`` = column k of ``A`` itself, ``x_k = 0``) is the case ``B = G`` with the
-diagonal masked out.
+"""Shared sparse-regression numerics: batched Lasso on a Gram matrix (:func:`lasso_gram`, which
+solves ``min 1/2 x^T G x - b_k^T x + alpha ||x||_1`` for every column ``b_k`` of ``B``, with a
+mask of the entries allowed to be non-zero: SINDy-PI is ``B = G`` without the diagonal),
+column scaling, null vectors.
 """
 
 from __future__ import annotations
@@ -25,11 +18,8 @@ __all__ = ["LassoResult", "column_norms", "kkt_violation", "lasso_gram", "null_v
 
 
 def column_norms(matrix, rtol: float = 1e-12) -> tuple[np.ndarray, np.ndarray]:
-    """Euclidean norms of the columns and which of them count as non-zero: more than ``rtol``
-    times the largest.
+    """Norms of the columns and which count as non-zero (above ``rtol`` times the largest).
 
-    Examples
-    --------
     >>> import numpy as np
     >>> column_norms(np.array([[3.0, 0.0], [4.0, 0.0]]))
     (array([5., 0.]), array([ True, False]))
@@ -40,14 +30,9 @@ def column_norms(matrix, rtol: float = 1e-12) -> tuple[np.ndarray, np.ndarray]:
 
 
 def triangular_factor(matrix) -> np.ndarray:
-    """Upper-triangular ``R`` with ``R^T R = A^T A`` (economic QR), shape (min(n_rows, F), F).
-
-    ``||A x - A y|| = ||R x - R y||`` for all x, y, so every least-squares quantity on ``A``
-    can be computed on the small ``R`` instead, with better conditioning than the Gram matrix.
-    """
+    """``R`` (min(n_rows, F), F) with ``R^T R = A^T A``: least squares on ``A`` done on ``R``."""
     matrix = np.asarray(matrix, dtype=float)
-    # "raw": the same factorization, but R is cut from the leading rows before ``triu``
-    # (mode "r" masks the whole tall array, which costs as much as the factorization)
+    # "raw": R cut from the leading rows (mode "r" masks the whole tall array)
     return scipy.linalg.qr(matrix, mode="raw", check_finite=False)[1]
 
 
@@ -58,11 +43,8 @@ def soft_threshold(values, threshold):
 
 
 def kkt_violation(gram, targets, coef, alpha, mask=None) -> np.ndarray:
-    """Largest violation of the Lasso optimality conditions, per column.
-
-    At an optimum ``g = G x - b`` satisfies ``g_i = -alpha sign(x_i)`` where ``x_i != 0`` and
-    ``|g_i| <= alpha`` where ``x_i = 0`` (masked entries are free of conditions). Arguments
-    as in :func:`lasso_gram`; returns one violation per column, shape (K,).
+    """Largest violation of the Lasso optimality conditions per column, shape (K,): ``g = G x - b``
+    must be ``-alpha sign(x_i)`` on the support and within ``alpha`` off it (masked entries free).
     """
     grad = gram @ coef - targets
     alpha = np.broadcast_to(np.asarray(alpha, dtype=float), (coef.shape[1],))
@@ -76,16 +58,8 @@ def kkt_violation(gram, targets, coef, alpha, mask=None) -> np.ndarray:
 
 @dataclasses.dataclass
 class LassoResult:
-    """Outcome of :func:`lasso_gram`.
-
-    Attributes
-    ----------
-    coef : ndarray, shape (F, K)
-    n_iter : int
-        Proximal-gradient iterations, all continuation stages together.
-    converged : ndarray of bool, shape (K,)
-    violation : ndarray, shape (K,)
-        Final optimality violation (see :func:`kkt_violation`), in the units of ``alpha``.
+    """Outcome of :func:`lasso_gram`: ``coef`` (F, K), ``n_iter`` (all stages), ``converged`` (K,),
+    ``violation`` (K,) in the units of ``alpha``.
     """
 
     coef: np.ndarray
@@ -104,13 +78,9 @@ def _significant(coef, cut=_CUT):
 
 
 def _polish_support(gram, targets, coef, alpha, mask, columns, slack):
-    """Exact Lasso solution on the current significant support and signs, where optimal.
-
-    For column k with support S (entries above ``_CUT`` times the largest) and signs s, the
-    Lasso optimum (if S, s are right) solves ``G_SS x_S = b_S - alpha s``. Accept it when the
-    signs agree and the conditions off the support hold; this finishes in one linear solve what
-    proximal gradient approaches slowly (with a tiny alpha its iterates keep tiny non-zero
-    entries long after the support is found). Returns the indices of the finished columns.
+    """Exact Lasso optimum ``G_SS x_S = b_S - alpha s`` on each column's significant support and
+    signs, accepted where signs and conditions hold (proximal gradient approaches it slowly);
+    returns the finished columns.
     """
     finished = []
     for k in columns:
@@ -143,10 +113,8 @@ def _fista(
     gram, targets, alpha, mask, coef, lipschitz, tol, max_iter, check_every, callback=None,
     callback_every=100,
 ):
-    """Accelerated proximal gradient with per-column adaptive restart; updates ``coef``.
-
-    ``callback(coef, converged) -> bool`` is called every ``callback_every`` iterations; True
-    stops the iterations.
+    """Accelerated proximal gradient with per-column adaptive restart, updating ``coef``;
+    ``callback(coef, converged)`` every ``callback_every`` iterations stops it by returning True.
     """
     n_cols = coef.shape[1]
     active = np.arange(n_cols)
@@ -154,7 +122,7 @@ def _fista(
     momentum = coef.copy()
     t = np.ones(n_cols)
     previous_pattern = np.sign(coef) * _significant(coef)
-    # Signed support at the last exact-finish attempt of each column: never retry the same one.
+    # signed support of each column's last exact-finish attempt
     attempted = [None] * n_cols
     n_iter = 0
     while active.size and n_iter < max_iter:
@@ -201,69 +169,18 @@ def lasso_gram(gram, targets, alpha, mask=None, coef_init=None, tol: float = 1e-
                max_iter: int = 20_000, continuation: bool = True, check_every: int = 10,
                warn: bool = True, callback=None, atol: float = 1e-8,
                callback_every: int = 100) -> LassoResult:
-    """Solve K Lasso problems sharing one Gram matrix, all at once (see the module docstring).
+    """Solve K Lasso problems sharing one Gram matrix at once (module docstring).
 
-    The solver is accelerated proximal gradient (FISTA) on all columns
-    together (one matrix-matrix product per iteration), with per-column adaptive restart, a
-    continuation path on ``alpha`` (from the smallest value that zeroes every column down to
-    ``alpha``, each stage warm-started from the previous one; columns given a non-zero warm
-    start skip it) and an exact finish: once a column's signed support is stable, the optimum
-    on that support is computed by one linear solve and accepted when it satisfies the
-    optimality conditions.
-
-    Parameters
-    ----------
-    gram : array, shape (F, F)
-        Symmetric positive semi-definite; scale the design's columns to unit norm beforehand so
-        that ``alpha`` and ``tol`` are scale free.
-    targets : array, shape (F, K)
-        ``A^T y_k`` for each right-hand side.
-    alpha : float or array of shape (K,)
-        L1 weight(s), > 0.
-    mask : array of bool, shape (F, K), optional
-        Entries allowed to be non-zero (default: all).
-    coef_init : array, shape (F, K), optional
-        Warm start; its non-zero columns start directly at ``alpha`` (no continuation).
-    tol : float
-        Convergence when the largest optimality violation (:func:`kkt_violation`) of a column is
-        at most ``max(tol * alpha, atol)``.
-    max_iter : int
-        Budget of proximal-gradient iterations over all stages.
-    continuation : bool
-        Use the alpha path (much faster for small alpha).
-    check_every : int
-        Iterations between convergence checks.
-    warn : bool
-        Emit a :class:`~sklearn.exceptions.ConvergenceWarning` when some column did not converge.
-    callback : callable, optional
-        ``callback(coef, converged) -> bool``, called every ``callback_every`` iterations of
-        a stage (``converged``: boolean per column, at the current stage's alpha); returning
-        True stops early (the caller decides that what it needs has converged; the other
-        columns may be left at an intermediate stage of the continuation path).
-    atol : float
-        Absolute floor of the convergence threshold: the rounding level of the gradient on
-        unit-norm columns, below which a tiny ``alpha`` could not be resolved.
-    callback_every : int, default 100
-        Iterations between calls of ``callback`` (a multiple of ``check_every`` sees the
-        latest convergence flags).
-
-    Returns
-    -------
-    LassoResult
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> rng = np.random.default_rng(0)
-    >>> a = rng.normal(size=(100, 5)); a /= np.linalg.norm(a, axis=0)
-    >>> y = a @ np.array([[1.0, 0.0], [0.0, 0.0], [0.0, -2.0], [0.0, 0.0], [0.5, 0.0]])
-    >>> result = lasso_gram(a.T @ a, a.T @ y, alpha=1e-6)
-    >>> np.round(result.coef, 4), bool(result.converged.all())
-    (array([[ 1. ,  0. ],
-           [ 0. ,  0. ],
-           [ 0. , -2. ],
-           [ 0. ,  0. ],
-           [ 0.5,  0. ]]), True)
+    FISTA on all columns together, with adaptive restart, a continuation path on ``alpha``
+    (decades down from the value zeroing every column; columns warm-started by a non-zero
+    ``coef_init`` skip it) and an exact finish on stable signed supports. ``gram`` (F, F) of
+    unit-norm columns (so that ``alpha`` and ``tol`` are scale free), ``targets`` (F, K) the
+    ``A^T y_k``, ``alpha`` > 0 per column, ``mask`` (F, K) the entries allowed to be non-zero.
+    A column has converged when its :func:`kkt_violation` is at most ``max(tol * alpha, atol)``
+    (``atol``: the gradient's rounding level); ``max_iter`` counts all stages, checks come every
+    ``check_every`` iterations, and ``callback(coef, converged) -> bool`` every
+    ``callback_every`` stops the solve by returning True. ``warn``: a ``ConvergenceWarning``
+    when some column did not converge. Returns a :class:`LassoResult`.
     """
     gram = np.asarray(gram, dtype=float)
     targets = np.asarray(targets, dtype=float)
@@ -313,8 +230,7 @@ def lasso_gram(gram, targets, alpha, mask=None, coef_init=None, tol: float = 1e-
     n_iter = 0
     for k, stage_alpha in enumerate(stages):
         last = k == len(stages) - 1
-        # Intermediate stages only need a warm start: loose tolerance, bounded effort.
-        # (Warm-started columns already run at alpha and get the final tolerance throughout.)
+        # intermediate stages only warm-start: loose tolerance, bounded effort
         stage_tol = np.maximum(np.where(warm | last, tol, 0.1) * stage_alpha, atol)
         budget = int(max_iter) - n_iter if last else max(1, min(500, int(max_iter) - n_iter))
         if budget <= 0:
@@ -341,11 +257,8 @@ def lasso_gram(gram, targets, alpha, mask=None, coef_init=None, tol: float = 1e-
 
 
 def null_vector(matrix) -> tuple[np.ndarray, float]:
-    """Unit vector ``v`` minimizing ``||A v||`` (last right singular vector, its entry of
-    largest magnitude positive) and that minimum (zero when fewer rows than columns).
+    """Unit ``v`` minimizing ``||A v||`` (largest entry positive) and that minimum.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> v, s = null_vector(np.array([[1.0, -1.0], [2.0, -2.0], [0.5, -0.5]]))
     >>> np.round(v * np.sqrt(2), 6), round(s, 12)

@@ -1,9 +1,5 @@
-"""Single-swap refinement of a support on a reduced least-squares system.
-
-The local best-subset search of :func:`~pysindy_xl.optimizers.selection.refine_by_swaps`
-(the 1-swap search of L0Learn): :func:`_swap_search` exchanges one selected column for an
-unselected one while the residual drops; :func:`_first_swaps` takes the first step of it
-from every nested support of a column order at once.
+"""Single-swap refinement of a support on a reduced least-squares system (the 1-swap search of
+:func:`~pysindy_xl.optimizers.selection.refine_by_swaps`).
 """
 
 from __future__ import annotations
@@ -13,12 +9,10 @@ import scipy.linalg
 
 
 def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2):
-    """The exchange ``(c, j)`` (column ``c`` in for the ``j``-th selected one) that lowers
-    the residual most, or ``(None, None)`` when none lowers it strictly.
-
-    ``remaining2[c, j]`` and ``correlation[c, j]``: squared norm of candidate ``c`` off the
-    span of the support without its ``j``-th column, and its product with that residual;
-    ``removed[j]``: what dropping the ``j``-th column adds back to the residual.
+    """The exchange ``(c, j)`` (column ``c`` in for the ``j``-th selected) lowering the residual
+    most, or ``(None, None)``. ``remaining2``, ``correlation`` (F, k): candidate ``c``'s squared
+    norm off the support without ``j`` and its product with that residual; ``removed`` (k,): what
+    dropping ``j`` adds back.
     """
     allowed = usable.copy()
     allowed[support] = False
@@ -34,16 +28,13 @@ def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y
 
 
 def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
-    """Best-improvement 1-swap search on a reduced system (see :func:`refine_by_swaps`).
+    """Best-improvement 1-swap search on a reduced system.
 
-    With ``x_S = Q R``, the direction of column ``j`` orthogonal to the other selected
-    columns is ``u_j ~ Q R^-T e_j``. Dropping ``j`` adds ``(u_j . y)^2`` to the residual sum
-    of squares and gives every candidate column ``c`` the remaining component
-    ``C_c + u_j (u_j . x_c)`` (``C`` the columns projected off ``span(S)``), so the gains of
-    all ``k x F`` exchanges come from two matrix products per swap, not a refit per pair.
-
-    ``rss`` and ``previous``: the residual sum of squares of ``previous``, the support a
-    first exchange (:func:`_first_swaps`) left for ``support``, to go on from.
+    With ``x_S = Q R``, column ``j``'s direction off the other selected columns is
+    ``u_j ~ Q R^-T e_j``: dropping it adds ``(u_j . y)^2`` to the residual and leaves candidate
+    ``c`` the component ``C_c + u_j (u_j . x_c)``, so all ``k x F`` gains take two matrix
+    products per swap. ``rss`` and ``previous`` continue from a first step of
+    :func:`_first_swaps`.
     """
     support = np.asarray(support, dtype=int)
     norms2 = np.sum(xs**2, axis=0)
@@ -76,17 +67,10 @@ def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
 
 
 def _first_swaps(xs, y, usable, order, sizes):
-    """The first step of :func:`_swap_search` from every nested support ``order[:k]``, ``k``
-    in ``sizes``, at once: ``{k: (rss, swapped support or None when no exchange improves)}``.
-
-    The supports share the leading columns of one QR factorization ``x[:, order] = Q R``:
-    with ``B = Q^T x`` and ``b = Q^T y`` (``Q`` complete, so that projections off the span
-    are sums over the trailing rows, free of cancellation), the residual of ``order[:k]``
-    is ``b[k:]``, the projected columns are ``B[k:]``, and the directions ``u_j`` of
-    :func:`_swap_search` are the rows of ``inv(R)[:k, :k]`` (the leading block of a
-    triangular inverse is the inverse of the leading block), so the exchange gains of all
-    sizes follow from cumulative sums. Sizes past a zero pivot are left out (the search
-    from them stops at once).
+    """The first step of :func:`_swap_search` from every ``order[:k]``, ``k`` in ``sizes``:
+    ``{k: (rss, swapped support or None)}``, from one complete QR of ``x[:, order]`` (residuals
+    and projections are tail sums of ``Q^T x``, ``Q^T y``; the directions rows of the leading
+    block of ``inv(R)``). Sizes past a zero pivot are left out.
     """
     largest = max(sizes, default=0)
     q_factor, r_factor = np.linalg.qr(xs[:, order[:largest]], mode="complete")

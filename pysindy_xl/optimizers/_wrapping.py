@@ -1,10 +1,5 @@
-"""Optimizers that wrap a selecting optimizer.
-
-:class:`~pysindy_xl.optimizers.EnsembleOptimizer` (bagging) and
-:class:`~pysindy_xl.optimizers.PhysicalOptimizer` (the constrained refit) run another catalog
-optimizer, their ``optimizer`` parameter, on the problem. Their tags
-(:class:`~pysindy_xl.optimizers.CatalogTags`) are those of the optimizer they wrap, with what
-the wrapper changes; their pilot is the wrapped optimizer's.
+"""Optimizers that run another catalog optimizer (``optimizer``): the ensemble and the physical
+refit; their tags and pilot are the wrapped optimizer's.
 """
 
 from __future__ import annotations
@@ -22,6 +17,5 @@ class WrappingOptimizer:
         return ExplicitOptimizer() if self.optimizer is None else self.optimizer
 
     def pilot(self):
-        """Unfitted stand-in for a first estimate of the law: the wrapped optimizer's pilot
-        (see :func:`~pysindy_xl.optimizers._base.pilot_optimizer`), on all the rows."""
+        """The wrapped optimizer's pilot (:func:`~pysindy_xl.optimizers._base.pilot_optimizer`)."""
         return pilot_optimizer(self._base())

@@ -1,31 +1,13 @@
 r"""Sparse laws with a positive definite mass matrix: starts for the unforced law search.
 
-An unforced law ``Theta xi = 0`` is only defined up to a factor, and a product catalog holds
-many sparse combinations that nearly vanish on the data without being a Lagrangian of the
-system: the balance of a conserved momentum written with constant inertia terms (its mass
-matrix has rank one: it is one equation, not ``n``), or a law on the rows of some coordinates
-only. Their noise ratios are small, so greedy paths over the whole catalog end in them, and
-no support on those paths is admissible (:func:`~pysindy_xl.optimizers.laws.
-definite_mass`). The true law is the one that also defines motion: its mass matrix
-``M(xi) = sum_j xi_j M_j`` is positive definite.
-
-That requirement also fixes the scale. With ``Mbar_j`` each column's mass matrix averaged over
-the sample states, in units of a reference inertia per coordinate (the median magnitude of
-the columns' diagonal entries), the *admissible lasso*
+Greedy paths end in sparse near-laws that define no motion (a momentum balance of rank-one
+inertia). With ``Mbar_j`` each column's mean mass matrix in reference units, the convex
+*admissible lasso* (cvxpy, reweighted as Candès, Wakin and Boyd, 2008)
 
 .. math:: \min_\xi \; \lVert \Theta \xi \rVert^2 + \lambda \sum_j w_j |\xi_j|
           \quad \text{s.t.} \quad \sum_j \xi_j \bar M_j \succeq I
 
-is convex (a quadratic objective under a linear matrix inequality, an ``n x n`` semidefinite
-constraint) and excludes the laws of rank-deficient inertia, where a linear normalization
-(a unit diagonal, a unit mean kinetic energy) does not. It is solved for a few penalties
-``lambda`` relative to the residual of the densest admissible law (``lambda = 0``), each
-sparsified by reweighting (``w_j = 1 / (|xi_j| + eps)``, Candès, Wakin and Boyd, 2008). The
-supports are starts, not answers: the least-squares residual prefers quiet columns (see
-:mod:`~pysindy_xl.optimizers.noise_ratio`), so the caller refines each by the noise ratio's
-backward elimination and scores it as every other candidate.
-
-The problems are handed to cvxpy.
+excludes them; its supports are starts that the caller refines by noise ratio.
 """
 
 from __future__ import annotations
@@ -41,17 +23,8 @@ PENALTIES = (0.03, 0.1, 0.3, 1.0, 3.0)
 
 
 def reference_mass_matrices(mass_matrices) -> np.ndarray:
-    """Each column's mass matrix (of ``mass_matrices``, (S, F, n, n)) averaged over the states,
-    symmetric, in units of a reference inertia per coordinate: the median of the non-zero
-    magnitudes of the columns' diagonal entries for that coordinate (1 where no column has
-    one). Shape (F, n, n).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> m = np.zeros((1, 2, 2, 2)); m[0, 0] = [[4.0, 0.0], [0.0, 0.0]]; m[0, 1] = np.eye(2)
-    >>> reference_mass_matrices(m)[0].tolist()
-    [[1.6, 0.0], [0.0, 0.0]]
+    """Each column's mass matrix (S, F, n, n) averaged over the states, symmetric, per coordinate
+    in units of the median non-zero diagonal magnitude (1 where none). Shape (F, n, n).
     """
     mean = np.mean(np.asarray(mass_matrices, dtype=float), axis=0)
     mean = (mean + np.swapaxes(mean, 1, 2)) / 2
@@ -64,41 +37,11 @@ def reference_mass_matrices(mass_matrices) -> np.ndarray:
 
 def admissible_supports(r_factor, mass_matrices, penalties=PENALTIES,
                         n_reweight: int = 5) -> list:
-    """Supports of sparse laws with a positive definite mean mass matrix (admissible lasso).
-
-    Parameters
-    ----------
-    r_factor : array, shape (m, F)
-        ``Theta`` or a factor with the same Gram matrix, in the units of the law.
-    mass_matrices : array, shape (S, F, n, n)
-        Each column's mass matrix on sample states, in the same units (a law ``xi`` has the
-        mass matrix ``sum_j xi_j M_j``).
-    penalties : sequence of float
-        ``lambda`` relative to the squared residual of the densest admissible law.
-    n_reweight : int, default 5
-        Solves per penalty (the first unweighted).
-
-    Returns
-    -------
-    list of ndarray of int
-        One support per penalty that gave a law, sorted; empty without cvxpy or when the
-        inequality cannot be met (no combination of the columns has a definite mass matrix).
-
-    Examples
-    --------
-    Two coordinates: columns 0 and 1 carry their inertia, column 2 is a potential; the law
-    ``c0 + c1 + c2 = 0`` holds, and so, about as well, does ``c2 + c3 = 0``, whose column 3
-    has an inertia of rank one (it is one equation, not two):
-
-    >>> import numpy as np
-    >>> rng = np.random.default_rng(0)
-    >>> a, b, c = rng.normal(size=(3, 400))
-    >>> theta = np.column_stack([a, b, -(a + b), a + b + 1e-3 * c])
-    >>> mass = np.zeros((1, 4, 2, 2))
-    >>> mass[0, 0, 0, 0] = mass[0, 1, 1, 1] = 1.0
-    >>> mass[0, 3] = [[1.0, 1.0], [1.0, 1.0]]
-    >>> {tuple(s.tolist()) for s in admissible_supports(theta, mass)}
-    {(0, 1, 2)}
+    """Supports (sorted, one per penalty that gave a law) of sparse laws whose mean mass matrix is
+    positive definite, by the admissible lasso on ``r_factor`` (``Theta`` or a factor with its
+    Gram matrix) and the columns' ``mass_matrices`` (S, F, n, n) in the law's units;
+    ``penalties`` relative to the densest admissible law's squared residual, ``n_reweight``
+    solves each. Empty without cvxpy or when no combination has a definite mass matrix.
     """
     cp = import_optional("cvxpy", "admissible starts")
     r_factor = np.asarray(r_factor, dtype=float)

@@ -1,7 +1,5 @@
-"""The optimizer a fit uses when the user names none: chosen from which coordinates are forced
-and whether the columns come from estimated (noisy) positions.
-
-One policy, used by :class:`~pysindy_xl.XLSINDy` and, through it, by the command line.
+"""The optimizer a fit uses when the user names none (used by :class:`~pysindy_xl.XLSINDy` and
+the command line).
 """
 
 from __future__ import annotations
@@ -26,51 +24,32 @@ def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
                       selective: bool = False):
     """The default catalog optimizer for the data (or of a given kind).
 
-    * every coordinate forced: explicit regression; on estimated columns bagged,
-      ``EnsembleOptimizer(ExplicitOptimizer())``. One cross-validated selection among about a
-      hundred candidates keeps a term that only fits the noise in a sizeable share of fits (a
-      multiple-comparison effect); the terms most subsample fits keep are the true ones. On
-      estimated columns of a complete catalog (every Lagrangian term a physical parameter:
-      a kinematic catalog) nothing is selected, ``ExplicitOptimizer(threshold=0.0)``
-      (bagged as above for its intervals): no term is spurious there, and on noisy columns
-      a selection drops the small true ones (a wrist's armature and damping, whose torques
-      are a hundredth of the shoulder's), leaving joints whose torque the model does not
-      predict at all. On exact columns the automatic threshold keeps every true term and
-      cuts the exact zeros;
-    * no coordinate forced: ``ImplicitOptimizer()``; on estimated columns of a complete
-      catalog, the errors-in-variables law on all the columns,
-      ``TotalLeastSquaresOptimizer()``, for the same reason;
-    * some forced: ``MixedOptimizer``, its explicit part bagged on estimated columns as above;
-    * explicit regression on a catalog whose terms stand for rigid-body parameters (a
-      kinematic catalog): the same, refitted under rigid bodies' constraints,
-      ``PhysicalOptimizer(explicit)``. A consistent estimate is kept as it is; an
-      inconsistent one (an indefinite mass matrix, a negative mass or friction, most often
-      on noisy data and barely excited parameters) is projected onto the consistent set,
-      which holds the truth, so the estimate comes no farther from it;
-    * explicit regression on a catalog with candidate friction and sensor models per joint
-      (``selective``: a kinematic catalog built with ``friction=``): the selection is
-      restricted to those columns, ``ExplicitOptimizer(select="friction")`` (bagged on
-      estimated columns), refitted physically as above. The base parameters keep the
-      no-selection default; the fit decides which friction models each joint needs.
+    * every coordinate forced: ``ExplicitOptimizer()``, bagged by :class:`EnsembleOptimizer` on
+      estimated columns (one selection among a hundred candidates often keeps a noise term; the
+      terms most fits keep are true). On estimated columns of a complete catalog nothing is
+      selected (``threshold=0.0``): no term is spurious, and a selection drops small true ones;
+    * no coordinate forced: ``ImplicitOptimizer()``; on estimated columns of a complete catalog
+      ``TotalLeastSquaresOptimizer()``;
+    * some forced: ``MixedOptimizer``, its explicit part bagged on estimated columns;
+    * explicit on a catalog of rigid-body parameters (``physical``): refit under rigid bodies'
+      constraints, ``PhysicalOptimizer(explicit)``;
+    * with joint friction and sensor models to select (``selective``):
+      ``ExplicitOptimizer(select="friction")``, bagged on estimated columns, refit physically.
 
     Parameters
     ----------
     forced : array of bool, shape (n,)
         Coordinates where a force acts.
     estimated : bool, default False
-        The columns come from noisy positions only (the weak form propagated the smoother's
-        noise estimate into them).
+        The columns come from noisy positions only.
     kind : {"explicit", "implicit", "mixed"}, optional
-        The kind of regression; default: from ``forced`` as above. The bagging policy is the
-        same whatever the kind.
+        Default: from ``forced``.
     complete : bool, default False
         The catalog is complete (``library.complete_catalog``).
     physical : bool, default False
-        The catalog's terms stand for rigid-body parameters (``library.physical_structure()``
-        is not None).
+        ``library.physical_structure()`` is not None.
     selective : bool, default False
-        The catalog has joint models to select among (its physical structure's
-        ``selectable_columns``).
+        The physical structure has ``selectable_columns``.
 
     Returns
     -------

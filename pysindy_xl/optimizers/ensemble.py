@@ -1,42 +1,5 @@
-"""Ensembles of catalog fits: inclusion probabilities and coefficient intervals.
-
-Any catalog optimizer is refit on ``n_models`` subsamples of the rows of the regression
-matrix (strong or weak). Rows are subsampled by contiguous chunks of time, the same chunks in
-every coordinate's block (the rows of one instant belong together, and neighbouring rows are
-correlated through smoothing and overlapping test functions), without replacement, so that
-cross-validated selection inside each fit never sees a row twice:
-
-.. math:: \\xi^{(b)} = \\text{optimizer}(\\Theta_{R_b}), \\quad b = 1..B,
-
-with ``R_b`` a random ``fraction`` of the chunks. The ensemble reports, per catalog term, the
-inclusion probability ``P(xi_j != 0)`` and intervals of ``xi_j`` (from the fits' spread), in the
-coefficients' own (physical) units, and its model keeps the terms included in at least
-``inclusion`` of the fits.
-
-The kept terms are then fitted once more on all the rows (``aggregate="refit"``, the default
-where the optimizer can fit a given support): the ensemble decides *which* terms, the whole data
-*how large*. The median of the fits (``aggregate="median"``) is less accurate: each fit sees
-only part of the rows, and the fits disagree on the support, so the median of one coefficient
-mixes estimates made with different companions: a pair of terms that the truth has equal can
-come out split unevenly, and a model that simulates the system badly.
-
-Complementary pairs
--------------------
-Subsamples of 70 % of one recording share most of its noise, so a term that fits that noise by
-chance is kept by many of them: among a hundred candidates, some false term typically reaches
-a sizeable inclusion. With ``sampling="complementary_pairs"`` (Shah and Samworth, 2013) the
-fits come in pairs of disjoint halves ``(A_b, A_b^c)`` of the chunks, and a term counts as
-included by a pair only when both halves keep it:
-
-.. math:: \\hat\\Pi_j = \\frac{1}{B} \\sum_{b=1}^{B}
-          \\mathbb{1}[\\xi^{(A_b)}_j \\ne 0] \\, \\mathbb{1}[\\xi^{(A_b^c)}_j \\ne 0].
-
-The halves carry independent noise, so a chance term must fit two independent noise draws and
-its inclusion falls to about the square of its single-fit rate, while a term of the law is kept
-by both. The price is power: each fit sees half the data, so small true terms (a weak
-friction on a large catalog at several percent noise) are dropped more often than with 70 %
-subsamples.
-"""
+"""Ensembles of catalog fits: inclusion probabilities and coefficient intervals
+(:class:`EnsembleOptimizer`)."""
 
 from __future__ import annotations
 
@@ -56,14 +19,27 @@ from .tags import catalog_tags
 
 __all__ = ["EnsembleOptimizer"]
 
-#: Ways of drawing the fits' rows (see the module docs).
+#: Ways of drawing the fits' rows (see ``sampling``).
 SAMPLINGS = ("subsamples", "complementary_pairs")
 #: Ways of computing the coefficients of the included terms (see ``aggregate``).
 AGGREGATES = ("auto", "refit", "median")
 
 
 class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
-    """Subsample-and-refit ensemble around any catalog optimizer (see the module docs).
+    r"""Subsample-and-refit ensemble around any catalog optimizer.
+
+    The optimizer is refit on ``n_models`` subsamples of the rows, contiguous chunks of time
+    drawn without replacement, the same in every coordinate's block (neighbouring rows share
+    noise). Per term it reports the inclusion probability ``P(xi_j != 0)`` and an interval;
+    the model keeps the terms included in at least ``inclusion`` of the fits and, where the
+    optimizer can, refits them on all the rows (the median of fits made with different
+    companion terms can split equal terms unevenly). With complementary pairs (Shah and
+    Samworth, 2013) a pair of disjoint halves includes a term only when both keep it,
+
+    .. math:: \hat\Pi_j = \frac{1}{B} \sum_{b=1}^{B}
+              \mathbb{1}[\xi^{(A_b)}_j \ne 0] \, \mathbb{1}[\xi^{(A_b^c)}_j \ne 0],
+
+    so a chance term must fit two independent noise draws (small true terms drop more often).
 
     Parameters
     ----------
@@ -72,54 +48,43 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
     n_models : int, default 20
         Number of fits.
     fraction : float, default 0.7
-        Fraction of the time chunks in each subsample (``sampling="subsamples"``).
+        Fraction of the chunks in each subsample (``sampling="subsamples"``).
     n_chunks : int, default 20
         Contiguous chunks of each coordinate's rows.
     inclusion : float, default 0.5
-        Inclusion probability from which a term enters the ensemble's model.
+        Inclusion probability from which a term enters the model.
     aggregate : {"auto", "refit", "median"}, default "auto"
-        Coefficients of the included terms. ``"refit"``: the optimizer's least squares on all
-        the rows with the included terms (its ``fit_problem(problem, support)``, with the
-        same noise correction); ``"median"``: the median over the fits that keep the term;
-        ``"auto"``: ``"refit"`` when the optimizer's tags say it can refit (``can_refit``),
-        ``"median"`` otherwise.
+        Coefficients of the included terms: the optimizer's refit of them on all the rows
+        (``fit_problem(problem, support)``), the median over the fits keeping them, or
+        (``"auto"``) the refit where the tag ``can_refit`` allows.
     sampling : {"subsamples", "complementary_pairs"}, default "subsamples"
-        ``"subsamples"``: each fit on a random ``fraction`` of the chunks, inclusion = fraction
-        of the fits keeping the term. ``"complementary_pairs"``: ``n_models / 2`` pairs of
-        disjoint halves (``fraction`` unused; ``n_models`` must be even), inclusion = fraction
-        of the pairs whose two halves both keep the term (see the module docs).
+        Random ``fraction`` of the chunks per fit, or ``n_models / 2`` pairs of disjoint halves
+        (``n_models`` even).
     confidence : float, default 0.95
         Coverage of the coefficient intervals.
     random_state : int or None, default 0
     n_jobs : int or None, default None
-        Fits run in parallel by joblib (``None``: one at a time, or as a surrounding
-        ``joblib.parallel_config`` says, e.g. a Dask or Ray backend; ``-1``: every core). The
-        subsamples are drawn first, so the result does not depend on it.
+        joblib workers (``None``: as ``joblib.parallel_config`` says; the result does not
+        depend on it).
     progress : bool, default False
-        Show a tqdm bar over the fits as they finish (a bagged implicit fit of a large
-        catalog takes minutes).
+        Show a tqdm bar over the fits.
 
     Attributes
     ----------
     coef_ : ndarray, shape (F,)
-        Coefficients of the terms included in at least ``inclusion`` of the fits (see
-        ``aggregate``), zero elsewhere.
+        Coefficients of the included terms, zero elsewhere.
     aggregate_ : str
-        ``"refit"`` or ``"median"``: how ``coef_`` was computed.
+        ``"refit"`` or ``"median"``.
     coef_samples_ : ndarray, shape (n_models, F)
-        Coefficients of every fit (failed fits are left out).
+        Coefficients of every successful fit.
     inclusion_probability_ : ndarray, shape (F,)
-        Fraction of the fits (pairs, with complementary pairs) that keep each term; failed
-        fits (pairs) are not counted.
+        Fraction of the successful fits (pairs) that keep each term.
     coef_interval_ : ndarray, shape (2, F)
-        ``confidence`` interval of each coefficient: ``coef_`` for the included terms, the
-        median over the fits (zeros included) for the others, plus or minus Student's quantile
-        times the fits' standard deviation, widened by ``sqrt(f / (1 - f))`` for the subsample
-        fraction ``f`` (delete-d jackknife), since a subsample estimate spreads less around
-        the full-data one than the full-data estimate spreads around the truth.
-        Smoothing bias is not covered.
+        ``confidence`` interval: ``coef_`` (included terms) or the fits' median, plus or minus
+        Student's quantile times the fits' standard deviation widened by ``sqrt(f / (1 - f))``
+        (delete-d jackknife, subsample fraction ``f``). Smoothing bias is not covered.
     n_failed_ : int
-        Fits that raised (e.g. no law found on a subsample).
+        Fits that raised.
 
     Examples
     --------
@@ -138,8 +103,7 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
     spec_type = "EnsembleOptimizer"
 
     def catalog_tags(self):
-        """The base optimizer's tags; every fit balances its own subsample (see
-        :class:`~pysindy_xl.optimizers.CatalogTags`)."""
+        """The base optimizer's tags; every fit balances its own subsample."""
         return dataclasses.replace(catalog_tags(self._base()), balances_rows=False,
                                    can_refit=False)
 
@@ -184,9 +148,9 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
                              f"{self.n_models}")
 
     def _solve(self, problem):
-        """Fit the base optimizer on subsamples of the problem's rows (the same chunks of
-        every coordinate block; each fit gets its rows' share of the noise moments and all
-        the mass matrices), then aggregate (see the class docstring)."""
+        """Fit the base optimizer on subsamples of the rows (with their noise moments), then
+        aggregate.
+        """
         theta = problem.theta
         n_rows = problem.n_samples
         n_chunks = min(int(self.n_chunks), n_rows)
@@ -253,13 +217,8 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
                              problem.force_columns)
         self.coef_ = coef
         share = np.mean([len(chunks) for chunks in subsamples]) / n_chunks
-        # A subsample of a fraction f of the data spreads around the full-data estimate by
-        # sqrt((1 - f) / f) times that estimate's own sampling spread (delete-d jackknife),
-        # so the fits' standard deviation is scaled back up by sqrt(f / (1 - f)). Student's
-        # quantile of that spread (it is estimated from the fits), not the fits' own
-        # percentiles: the 2.5 and 97.5 percentiles of 20 fits are those of the two most
-        # extreme ones, far noisier than a spread measured with all of them (and too narrow
-        # on average).
+        # delete-d jackknife: a subsample of fraction f spreads sqrt((1 - f) / f) times the
+        # full-data estimate's own spread; Student's quantile, not the fits' percentiles
         center = np.where(included, self.coef_, np.median(samples, axis=0))
         half_width = np.zeros_like(center)
         if len(samples) > 1:
@@ -309,11 +268,8 @@ def _complementary_halves(rng, n_chunks, n_pairs):
 
 
 def _fit_subsample(base, problem):
-    """One subsample fit: ``(coef or None when it fails, its warnings as (category,
-    message) pairs, the error that made it fail or None)``.
-
-    The warnings are recorded, not shown: they describe a fit on part of the data (and a
-    process-based joblib backend would lose them), so the ensemble reports them together.
+    """One subsample fit: ``(coef or None, its warnings as (category, message), error or None)``;
+    the warnings are recorded so that the ensemble reports them together.
     """
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -326,8 +282,7 @@ def _fit_subsample(base, problem):
 
 
 def _report_subsample_fits(outcomes):
-    """One warning per distinct message of the subsample fits, with how many fits gave it,
-    and one for the fits that failed (with the first error)."""
+    """One warning per distinct message of the fits (with its count), one for the failed fits."""
     n_fits = len(outcomes)
     counts = collections.Counter(message for _, caught, _ in outcomes for message in
                                  dict.fromkeys(caught))  # each fit counts a message once

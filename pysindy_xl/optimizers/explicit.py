@@ -15,7 +15,7 @@ from ._base import CatalogOptimizer, warn_unexplained
 from .selection import select_support
 
 __all__ = ["ExplicitOptimizer", "hard_threshold_regression", "proximal_gradient_lasso",
-           "corrected_least_squares", "explicit_regression"]
+           "corrected_least_squares", "explicit_regression", "catalog_vector"]
 
 _METHODS = ("threshold", "lasso", "lassocv", "proximal")
 
@@ -23,9 +23,8 @@ _METHODS = ("threshold", "lasso", "lassocv", "proximal")
 def hard_threshold_regression(x, y, threshold: float = 0.01, max_iter: int = 100, keep=None):
     """Least squares with iterative pruning by the paper's condition value.
 
-    At each iteration the active columns are fitted by least squares, and a column is pruned
-    when its condition value ``|coef_j| * rms(x_j)`` (its contribution to the fit) is below
-    ``threshold`` times the largest one; repeat until the support is stable.
+    Each round fits the active columns and prunes those whose condition value
+    ``|coef_j| * rms(x_j)`` is below ``threshold`` times the largest, until the support is stable.
 
     Parameters
     ----------
@@ -77,7 +76,7 @@ def proximal_gradient_lasso(x, y, alpha: float, max_iter: int = 10_000, tol: flo
     Parameters
     ----------
     x : array, shape (n_rows, F)
-        Columns should be normalized (the step size is set by the largest singular value).
+        Normalized columns (the step is set by the largest singular value).
     y : array, shape (n_rows,)
     alpha : float
         Regularization weight, >= 0.
@@ -120,18 +119,14 @@ def proximal_gradient_lasso(x, y, alpha: float, max_iter: int = 10_000, tol: flo
 def corrected_least_squares(x, y, noise_moments=None, max_noise_share: float = 0.5):
     r"""Least squares corrected for errors in the columns (errors in variables).
 
-    With ``x = x_0 + E``, errors ``E`` independent of ``y`` and ``E[E^T E] = S``, the normal
-    equations are biased, ``E[x^T x] = x_0^T x_0 + S``, which shrinks the coefficients towards
-    zero (attenuation). The corrected estimate (Fuller, *Measurement Error Models*, 1987)
-    solves
+    With ``x = x_0 + E`` and ``E[E^T E] = S``, ``E[x^T x] = x_0^T x_0 + S`` shrinks least squares
+    towards zero. The corrected estimate (Fuller, *Measurement Error Models*, 1987) solves
 
     .. math:: (x^T x - S)\,\beta = x^T y, \quad\text{i.e.}\quad
               \beta = (I - (x^T x)^{-1} S)^{-1} \beta_{LS},
 
-    computed from the QR factor of ``x`` (``(x^T x)^{-1} S = R^{-1} R^{-T} S``), so that it
-    costs no accuracy on clean data. Where the errors are not small against the signal (an
-    eigenvalue of ``(x^T x)^{-1} S`` above ``max_noise_share``) the correction would amplify
-    noise, and plain least squares is returned.
+    from the QR factor of ``x``. Where an eigenvalue of ``(x^T x)^{-1} S`` exceeds
+    ``max_noise_share`` the correction would amplify noise: plain least squares is returned.
 
     Parameters
     ----------
@@ -149,8 +144,8 @@ def corrected_least_squares(x, y, noise_moments=None, max_noise_share: float = 0
 
     Examples
     --------
-    A regressor measured with noise of 30 % of its spread: least squares shrinks the slope
-    by ``1 / (1 + 0.3^2)``, the corrected estimate does not.
+    A regressor with noise of 30 % of its spread: least squares shrinks the slope by
+    ``1 / (1 + 0.3^2)``, the corrected estimate does not.
 
     >>> import numpy as np
     >>> rng = np.random.default_rng(0)
@@ -165,8 +160,7 @@ def corrected_least_squares(x, y, noise_moments=None, max_noise_share: float = 0
     x = np.asarray(x, dtype=float)
     scale = np.sqrt(np.mean(x**2, axis=0))
     scale[scale == 0] = 1.0
-    # on normalized columns: the accuracy of every coefficient is then independent of the
-    # units of the others (a column 1e-12 times the rest costs no digits elsewhere)
+    # on normalized columns: no coefficient loses digits to the units of the others
     coef = np.linalg.lstsq(x / scale, y, rcond=None)[0]
     if noise_moments is None or x.shape[1] == 0:
         return coef / scale, 0.0
@@ -183,44 +177,32 @@ def corrected_least_squares(x, y, noise_moments=None, max_noise_share: float = 0
     return np.linalg.solve(np.eye(len(coef)) - ratio, coef) / scale, share
 
 
-
 class ExplicitOptimizer(CatalogOptimizer):
     """Sparse regression when the generalized forces are known on the coordinates.
 
-    With the force column's coefficient fixed to ``-1`` (the paper's convention), the problem
-    ``Theta @ xi = 0`` becomes the ordinary regression ``Theta_rest @ xi_rest = force``.
-    Columns are normalized to unit RMS inside the optimizer and coefficients mapped back.
+    With the force column's coefficient fixed to ``-1`` (the paper's convention),
+    ``Theta @ xi = 0`` becomes ``Theta_rest @ xi_rest = force``, solved on unit-RMS columns.
 
     Parameters
     ----------
     method : {"threshold", "lasso", "lassocv", "proximal"} or estimator, default "threshold"
-        ``"threshold"``: iterative hard thresholding by condition value
-        (:func:`hard_threshold_regression`); ``"lasso"``: scikit-learn ``Lasso(alpha)``;
-        ``"lassocv"``: ``LassoCV`` (alpha by cross-validation); ``"proximal"``: accelerated
-        proximal gradient Lasso (:func:`proximal_gradient_lasso`). Any estimator with
-        ``fit(X, y)`` and ``coef_`` also works, e.g. pysindy's ``STLSQ``, ``SR3`` or ``MIOSR``.
+        Hard thresholding (:func:`hard_threshold_regression`), scikit-learn ``Lasso(alpha)`` or
+        ``LassoCV``, :func:`proximal_gradient_lasso`, or any estimator with ``fit(X, y)`` and
+        ``coef_`` (e.g. pysindy's ``STLSQ``, ``SR3``, ``MIOSR``).
     threshold : "auto" or float, default "auto"
-        How terms are pruned, by ``"threshold"`` and by the refit step. ``"auto"``: the
-        sparsest model of the backward-elimination path whose cross-validated error is within
-        one standard error of the best (:func:`~pysindy_xl.optimizers.selection.select_support`),
-        which keeps small true terms on clean data and cuts noise terms on noisy data (with
-        fewer than 10 rows per coordinate nothing can be held out: the 1 % rule below is used
-        and ``selection_`` stays None). A number in [0, 1): the paper's relative condition
-        value (:func:`hard_threshold_regression`).
+        Pruning of ``"threshold"`` and of the refit. ``"auto"``: the sparsest model within one
+        standard error of the best held-out error
+        (:func:`~pysindy_xl.optimizers.selection.select_support`; under 10 rows per coordinate
+        the 1 % rule). A number in [0, 1): the paper's relative condition value.
     alpha : float, default 1e-4
-        Lasso weight for ``"lasso"`` and ``"proximal"`` (on unit-RMS columns and a unit-RMS
-        target, so it is scale free).
+        Lasso weight of ``"lasso"`` and ``"proximal"`` (unit-RMS columns and target).
     refit : bool, default True
-        After an L1 method or a custom estimator, refit by least squares on the selected
-        support (removes the L1 shrinkage bias), pruned again with ``threshold``.
+        After an L1 method or an estimator, refit by least squares on the support, pruned with
+        ``threshold``.
     max_iter : int, default 1000
     select : {"all", "friction"}, default "all"
-        Which columns the pruning may drop. ``"all"``: any. ``"friction"``: only the joint
-        friction and sensor-offset columns of the problem's physical structure
-        (``selectable_columns``, a kinematic catalog built with ``friction=``); every other
-        column (the base parameters of rigid bodies, which every arm has) stays in the
-        model, so the fit decides which friction models each joint needs and nothing else.
-        Without such columns nothing is selected. Needs ``method="threshold"``.
+        Which columns the pruning may drop: any, or only the friction and sensor-offset columns
+        of the problem's physical structure (``selectable_columns``); needs ``"threshold"``.
 
     Attributes
     ----------
@@ -228,12 +210,10 @@ class ExplicitOptimizer(CatalogOptimizer):
         Coefficients of ``fit``'s columns, or the full catalog vector after ``fit_catalog``.
     support_ : ndarray of bool, shape (F,)
     noise_share_ : float or None
-        With ``noise_moments`` (:meth:`fit_catalog`): the largest eigenvalue of
-        ``(X^T X)^-1 S`` on the selected support, the share of the column errors in the
-        normal equations; the correction is applied below 0.5. None without moments.
+        With noise moments: the largest eigenvalue of ``(X^T X)^-1 S`` on the support (the
+        correction applies below 0.5).
     selection_ : SelectionResult or None
-        With ``threshold="auto"``: the path, the held-out errors and the chosen size (indices
-        refer to the columns of ``fit``, or to the non-force columns after ``fit_catalog``).
+        With ``threshold="auto"`` (indices of ``fit``'s columns, or of the non-force columns).
 
     Examples
     --------
@@ -247,8 +227,7 @@ class ExplicitOptimizer(CatalogOptimizer):
     spec_type = "ExplicitOptimizer"
 
     def catalog_tags(self):
-        """Explicit regression: the problem needs force columns (see
-        :class:`~pysindy_xl.optimizers.CatalogTags`)."""
+        """Explicit regression needs force columns."""
         return dataclasses.replace(super().catalog_tags(), requires_forces=True)
 
     def __init__(self, method="threshold", threshold="auto", alpha=1e-4, refit=True,
@@ -316,8 +295,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         return self
 
     def _prune(self, X, y, n_blocks, noise_moments=None, keep=None):
-        """Sparse least squares on the columns of X with the configured pruning rule
-        (``keep``: a mask of columns never pruned)."""
+        """Sparse least squares with the configured pruning (``keep``: columns never pruned)."""
         if self.threshold != "auto":
             return hard_threshold_regression(X, y, self.threshold, int(self.max_iter), keep)
         n_rows = X.shape[0]
@@ -385,12 +363,8 @@ class ExplicitOptimizer(CatalogOptimizer):
         return estimator
 
     def _solve(self, problem):
-        """Solve the (balanced) catalog problem with the force coefficient fixed to -1.
-
-        With noise moments (errors in the variables: the weak form of
-        :class:`~pysindy_xl.XLSINDy` passes the propagated position noise), the final fit on
-        the selected support is corrected for the attenuation they cause
-        (:func:`corrected_least_squares`; ``noise_share_`` says how large they were).
+        """The catalog problem with the force coefficient at -1; with noise moments the final fit is
+        corrected for attenuation (:func:`corrected_least_squares`).
         """
         rest, force, moments = explicit_regression(problem)
         keep = None
@@ -404,11 +378,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         return self._as_catalog_vector(self.coef_, rest, problem)
 
     def _solve_support(self, problem, support):
-        """Least squares on a given support, nothing selected: the final step of a fit with
-        the support given (the terms in ``support`` besides the force columns, fixed to -1,
-        fitted on every row, corrected for the noise moments as there).
-        :class:`EnsembleOptimizer` uses it to refit the terms its fits agree on with all the
-        data."""
+        """Least squares on a given support, nothing selected (the ensemble's refit)."""
         rest, force, moments = explicit_regression(problem)
         keep = support[rest]
         coef = np.zeros(len(rest))
@@ -421,11 +391,8 @@ class ExplicitOptimizer(CatalogOptimizer):
         return self._as_catalog_vector(coef, rest, problem)
 
     def _as_catalog_vector(self, coef_rest, rest, problem):
-        """Set ``coef_`` over the whole catalog (forces at -1) and warn when it leaves a
-        coordinate unexplained."""
-        coef = np.zeros(problem.n_features)
-        coef[rest] = coef_rest
-        coef[problem.force_columns] = -1.0
+        """Set ``coef_`` over the whole catalog (forces at -1); warn on unexplained coordinates."""
+        coef = catalog_vector(coef_rest, rest, problem)
         self.coef_ = coef
         self.n_features_in_ = problem.n_features
         self.support_ = coef != 0
@@ -435,12 +402,20 @@ class ExplicitOptimizer(CatalogOptimizer):
 
 
 def explicit_regression(problem):
-    """The regression of a catalog problem with known forces: the columns besides the
-    forces (``rest``), the force (the right-hand side) and the noise moments of all rows
-    restricted to ``rest`` (None without noise moments)."""
+    """``(rest, force, moments)``: the non-force columns, the summed force (right-hand side) and the
+    pooled noise moments restricted to ``rest`` (None without).
+    """
     if len(problem.force_columns) == 0:
         raise ValueError("force_columns: explicit regression needs a force column")
     rest = np.setdiff1d(np.arange(problem.n_features), problem.force_columns)
     force = problem.theta[:, problem.force_columns].sum(axis=1)
     moments = problem.pooled_moments()
     return rest, force, None if moments is None else moments[np.ix_(rest, rest)]
+
+
+def catalog_vector(coef_rest, rest, problem) -> np.ndarray:
+    """The catalog vector (F,) of ``coef_rest`` on the columns ``rest``, forces at -1."""
+    coef = np.zeros(problem.n_features)
+    coef[rest] = coef_rest
+    coef[problem.force_columns] = -1.0
+    return coef

@@ -1,41 +1,11 @@
 r"""Errors-in-variables selection of homogeneous laws ``Theta xi = 0`` (unforced, noisy data).
 
-Each candidate support is judged by the *noise ratio* of its best law
-(:mod:`~pysindy_xl.optimizers.noise_ratio`: about 1 for a law that holds to the propagated
-noise, larger for a law the data contradict):
-
-1. **Paths.** The backward and forward paths of supports
-   (:func:`~pysindy_xl.optimizers.noise_ratio.law_elimination_path`,
-   :func:`~pysindy_xl.optimizers.noise_ratio.law_forward_path`) and, given the columns' mass
-   matrices, the backward path inside each support of the admissible lasso
-   (:func:`~pysindy_xl.optimizers.admissible.admissible_supports`: sparse laws whose mean mass
-   matrix is positive definite). On a product catalog of three or more coordinates the greedy
-   paths over all the columns end in laws of rank-deficient inertia (a momentum balance) or
-   of some coordinates only, none of them admissible; the admissible lasso starts next to the
-   law that defines the motion.
-2. **Swaps.** At high noise a greedy path can lose a true column early, imitated by a
-   correlated pair. A third path starts from the best admissible support of the first two
-   (step 4) and refines every support by single swaps before the next elimination; then the
-   best path supports of every size up to the law chosen so far (step 5;
-   :data:`STARTS_PER_SIZE` of each size) are refined at their own size.
-3. **Score.** Every support is scored by ``n_folds``-fold cross-validation over contiguous
-   blocks of rows: the law is estimated on the training rows and its noise ratio measured on
-   the held-out rows (their own moments, given the draws of the rows' errors: the propagated
-   noise varies along a trajectory; else their share of the block's). The training rows stop
-   short of the held-out ones by a gap (h-block cross-validation, :data:`FOLD_GAP`):
-   neighbouring weak rows share noise, and without the gap a large support fitting it holds
-   on the held-out rows seemingly better than the noise allows (held-out ratio below 1).
-4. **Admissible laws.** A law must explain every coordinate (its terms carry a real share of
-   each coordinate's equation) and, given the columns' mass matrices, have a definite mass
-   matrix on the states; the others compete only when no law is admissible.
-5. **Choice.** The smallest support within one standard error of the best (as
-   :func:`~pysindy_xl.optimizers.selection.select_support` does for the explicit problem),
-   the larger of the two laws' errors: a support missing a true term has a held-out ratio
-   far above 1, the extra terms of a larger one do not lower it beyond its spread. The best
-   of many candidates is partly the luckiest, its spread biased low with its ratio.
-
-:func:`select_laws` repeats the selection on the coordinates a law leaves unexplained
-(uncoupled subsystems).
+Candidate supports (the noise ratio's backward and forward paths, the paths inside the
+admissible lasso's supports, swap refinements) are scored by the held-out noise ratio of
+their law (:mod:`~pysindy_xl.optimizers.noise_ratio`: about 1 for a law that holds) in
+h-block cross-validation (a gap of :data:`FOLD_GAP` keeps the training rows off the held-out
+rows' noise). Admissible laws (every coordinate explained, definite mass matrix) compete
+alone when there are any; the smallest within one standard error of the best is chosen.
 """
 
 from __future__ import annotations
@@ -62,8 +32,7 @@ from .selection import ChosenSupport, fold_labels, fold_summary
 __all__ = ["LawSelection", "RowMoments", "select_law", "select_laws"]
 
 
-#: Rows left out of the training rows on each side of a held-out fold, as a fraction of a
-#: fold (:func:`_held_out_ratios`).
+#: Rows left out of the training rows on each side of a held-out fold (fraction of a fold).
 FOLD_GAP = 0.3
 
 #: Path supports of each size refined by swaps (those of lowest held-out ratio).
@@ -72,35 +41,16 @@ STARTS_PER_SIZE = 3
 
 @dataclasses.dataclass(frozen=True)
 class RowMoments:
-    """Noise moments of any set of rows, from Monte Carlo draws of the rows' errors.
-
-    The propagated noise of the weak rows is far from uniform along a trajectory (a term
-    that multiplies the noise by a velocity is noisy where the motion is fast): the share of
-    a block's moments that falls on a stretch of its rows can be several times its share of
-    the rows. A held-out noise ratio divides by the held-out rows' own moments.
-
-    Parameters
-    ----------
-    draws : ndarray, shape (D, n_rows, F)
-        Draws of the rows' errors.
-    floor : float, default 0.0
-        Added to the diagonal per row (the regularization of the block moments, spread
-        over the rows).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> draws = np.ones((2, 4, 1))
-    >>> moments = RowMoments(draws)
-    >>> float(moments(np.array([True, True, False, False]))[0, 0])
-    2.0
+    """Noise moments of any set of rows, from Monte Carlo draws ``draws`` (D, n_rows, F) of the
+    rows' errors (``floor`` added to the diagonal per row): the propagated noise varies along a
+    trajectory, so a held-out ratio divides by the held-out rows' own moments.
     """
 
     draws: np.ndarray
     floor: float = 0.0
 
     def __call__(self, rows) -> np.ndarray:
-        """``E[E_rows^T E_rows]``, shape (F, F), of the rows selected by a mask or indices."""
+        """``E[E_rows^T E_rows]`` (F, F) of the rows selected by a mask or indices."""
         chosen = self.draws[:, rows]
         return draw_moments(chosen, 1)[0] + self.floor * chosen.shape[1] * np.eye(
             chosen.shape[-1])
@@ -117,12 +67,10 @@ class LawSelection(ChosenSupport):
     Parameters
     ----------
     order : ndarray of int
-        Columns from most to least needed (:func:`law_elimination_path`).
-    cv_ratio : ndarray
-        Mean held-out noise ratio of the support of each size (index ``k - 1``; inf for
-        ``k = 1``, which holds no law).
-    cv_spread : ndarray
-        Its standard error over the folds.
+        Columns from most to least needed.
+    cv_ratio, cv_spread : ndarray
+        Mean held-out noise ratio of the best support of each size (index ``k - 1``; inf where
+        none) and its standard error over the folds.
     size : int
         Chosen number of terms.
     best_size : int
@@ -130,12 +78,10 @@ class LawSelection(ChosenSupport):
     rule : str
         How ``size`` was chosen.
     rivals : list of ndarray of int
-        Supports of other admissible laws that hold as well (held-out ratio within the same
-        standard error of the best) and are not the chosen support with terms added: the
-        data do not decide between them and the chosen one. Smallest first.
+        Other admissible supports that hold as well and are not the chosen one with terms
+        added: the data do not decide between them. Smallest first.
     admissible : bool
-        Whether the chosen law is admissible (explains every coordinate; definite mass
-        matrix, given the mass matrices); False when no candidate was.
+        Whether the chosen law is admissible (False when no candidate was).
     cv_relative : float
         The chosen law's mean held-out relative squared residual.
     """
@@ -152,21 +98,13 @@ class LawSelection(ChosenSupport):
 
 
 def _held_out_ratios(theta, moments, supports, n_blocks, n_folds, row_moments=None):
-    """Held-out noise ratio and relative squared residual of the law of every support.
+    """Held-out noise ratios and relative squared residuals ``||Theta xi||^2 / sum_j ||Theta_j
+    xi_j||^2``, each (n_folds, len(supports)), inf where a support cannot be fitted.
 
-    Returns two arrays of shape (n_folds, len(supports)); the relative residual is
-    ``||Theta xi||^2 / sum_j ||Theta_j xi_j||^2`` on the held-out rows (inf where a support
-    cannot be fitted).
-
-    The supports of a path are prefixes of one column order: with the columns in that order,
-    each is a leading block of the triangular factors, so a fold costs one QR and small
-    decompositions (not one decomposition of all the rows' factor per support). The supports
-    of one size are decomposed as one stack. The training rows of a fold leave out
-    :data:`FOLD_GAP` of a fold on each side of its held-out rows.
-
-    ``row_moments(rows) -> (F, F)`` gives the noise moments of any set of rows (from the
-    draws of the rows' errors, :class:`RowMoments`); without it each block's moments are
-    spread evenly over its rows."""
+    Nested supports (a path) are leading blocks of one triangular factor per fold; the supports
+    of one size are decomposed as a stack. ``row_moments`` (:class:`RowMoments`) gives the rows'
+    own moments; without it each block's are spread evenly over its rows.
+    """
     ratios = np.full((n_folds, len(supports)), np.inf)
     relative = np.full((n_folds, len(supports)), np.inf)
     longest = np.asarray(max(supports, key=len))
@@ -188,9 +126,7 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds, row_moments=No
         test = labels == fold
         if not test.any() or test.all():
             continue
-        # h-block cross-validation: the rows next to the held-out stretch share its noise
-        # (overlapping test functions, the smoother's window) and leave the training rows,
-        # or a law fitting that noise would look as if it held on the held-out rows
+        # h-block: the rows next to the held-out ones share their noise
         first, last = position[test].min(), position[test].max()
         training = ~test & ((position < first - gap) | (position > last + gap))
         if row_moments is not None:  # the rows' own noise
@@ -228,44 +164,33 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds, row_moments=No
 def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
                resolution: float = 1e-8, swaps: bool = True, mass_matrices=None,
                noise_draws=None) -> tuple[np.ndarray, float, LawSelection]:
-    """Sparsest homogeneous law of noisy columns, by held-out noise ratio.
-
-    Candidates are the supports of the greedy paths, given ``mass_matrices`` of the admissible
-    lasso and, with ``swaps``, of the swap-refined searches; the choice is the smallest
-    admissible support within one standard error of the best (steps 1-5 of the module
-    documentation).
+    """Sparsest homogeneous law of noisy columns, by held-out noise ratio (module documentation).
 
     Parameters
     ----------
     theta : array, shape (n_rows, F)
-        Regression matrix, rows ``n_blocks`` equal blocks (coordinates).
+        Regression matrix, rows in ``n_blocks`` equal blocks (coordinates).
     noise_moments : array, shape (n_blocks, F, F)
         ``E[E_b^T E_b]`` of each block's errors.
     n_blocks : int, default 1
     n_folds : int, default 5
     resolution : float, default 1e-8
-        Held-out relative squared residuals closer than this to the best count as equal: on
-        clean data the moments are tiny and extra terms fit quadrature errors (as for
-        :func:`~pysindy_xl.optimizers.selection.select_support`).
+        Held-out relative squared residuals this close to the best count as equal (clean data).
     swaps : bool, default True
+        Add the swap-refined supports.
     mass_matrices : array, shape (S, F, n_blocks, n_blocks), optional
         Each column's contribution to the mass matrix on sample states
-        (:func:`~pysindy_xl.fit.diagnostics.column_mass_matrices`): laws whose mass matrix is not
-        definite there are not candidates (unless no law is definite), and the admissible
-        lasso gives further starts.
+        (:func:`~pysindy_xl.fit.diagnostics.column_mass_matrices`): laws indefinite there are not
+        candidates unless none is definite.
     noise_draws : array, shape (D, n_rows, F), optional
-        Draws of the rows' errors whose second moments are ``noise_moments``: each fold's
-        held-out and training rows then get their own moments (:class:`RowMoments`), not
-        their share of the block's. The propagated noise varies along a trajectory, and
-        with even shares the held-out ratio of the true law spreads over the folds several
-        times more than the noise explains.
+        Draws of the rows' errors: each fold's rows get their own moments (:class:`RowMoments`).
 
     Returns
     -------
     law : ndarray, shape (F,)
         Unit-norm law on the selected support (largest entry positive).
     ratio : float
-        Its noise ratio on all the rows (~1 for a law that holds to the noise).
+        Its noise ratio on all the rows.
     selection : LawSelection
 
     Examples
@@ -285,8 +210,7 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     scale[scale == 0] = 1.0
     theta = theta / scale
     moments = moments / np.outer(scale, scale)[None]
-    # a column without noise of its own (a known force) still gets a floor far below the
-    # others' noise, so that the ratios stay finite and comparable
+    # a floor far below the noise for the columns without noise (a known force)
     floor = 1e-10 * np.mean(np.diagonal(moments, axis1=1, axis2=2)) / len(moments)
     moments = moments + floor * np.eye(theta.shape[1])[None]
     total = moments.sum(axis=0)
@@ -311,15 +235,9 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         paths += [("admissible start", supports) for supports in _admissible_starts(
             r_factor, total, mass_matrices / scale[None, :, None, None],
             {frozenset(s.tolist()) for _, supports in paths for s in supports})]
-    # Admissible laws only, when there are any:
-    # - a law that leaves a coordinate out (or enters it with negligible terms) says nothing
-    #   about it, and its ratio is measured on the other rows only. Such laws can hold
-    #   exactly (the unforced cart-pole's pendulum row alone: the Routhian of the cyclic
-    #   cart coordinate); without any law explaining every coordinate (uncoupled subsystems)
-    #   the coordinates are left to further laws;
-    # - with the columns' mass matrices, a law whose mass matrix is not definite on the
-    #   states does not define motion (the unforced cart-pole's momentum balance written as
-    #   a Lagrangian is sparse, holds to the friction, and has det M = 0).
+    # Admissible laws only, when there are any: a law leaving a coordinate out says nothing
+    # of it (the unforced cart-pole's Routhian holds exactly), one with an indefinite mass
+    # matrix defines no motion (its momentum balance: det M = 0).
     verdicts = {}  # admissibility of each support, decided once and only where needed
 
     def admissible_support(support):
@@ -334,8 +252,7 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     def admissible(candidate):
         return admissible_support(candidate.support)
 
-    # the admissibility of a support does not depend on the folds: when some path support is
-    # admissible, only those are cross-validated (the others cannot be chosen)
+    # when some path support is admissible, only those are cross-validated
     kept = [(how, [s for s in supports if admissible_support(s)]) for how, supports in paths]
     if not any(supports for _, supports in kept):
         kept = paths
@@ -351,13 +268,10 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         return next((c for c in ordered if admissible(c)), ordered[0])
 
     def choice(candidates):
-        """``(chosen, within, best, competes)``: the smallest competing candidate within
-        one standard error of the best (the larger of the two laws' errors: the best of many
-        candidates is partly the luckiest, its ratio and spread both biased low, and the
-        supersets of the true law that swaps find dip below it by chance), or within the
-        resolution on the relative residual (clean data: the moments are tiny, the ratios
-        large, and extra terms that fit quadrature errors must not win on that alone) in
-        ratio units, by the best support's ratio-to-relative factor."""
+        """``(chosen, within, best, competes)``: the smallest competing candidate within one
+        standard error of the best (the larger of the two), or within ``resolution`` on the
+        relative residual converted to ratio units.
+        """
         best = best_admissible(candidates)
         # only admissible laws compete, unless there is none
         competes = admissible if admissible(best) else (lambda c: True)
@@ -367,12 +281,8 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         return min(within, key=lambda c: (len(c.support), c.ratio)), within, best, competes
 
     if swaps:
-        # the search starts from the best admissible path law (only admissible laws can be
-        # chosen: an inadmissible best, e.g. a law of one coordinate's rows, may be far
-        # smaller or larger than any admissible one): the swap-refined path from it; then
-        # the best few path supports of every size up to the law chosen so far, each refined
-        # at its size (the others lead mostly to the same local optima; larger sizes would
-        # not be chosen, and their searches cost the most); each support scored once
+        # the swap-refined path from the best admissible path law, then the best few path
+        # supports of every size up to the law chosen so far, refined at their size
         best_path = best_admissible(candidates)
         seen = {frozenset(s.tolist()) for _, supports in paths for s in supports}
         memo = {}  # many starts meet on their way: each search is done once
@@ -424,8 +334,8 @@ class _Candidate:
 
 
 def _rivals(candidates, support, max_rivals: int = 5) -> list:
-    """Supports of ``candidates`` that neither contain ``support`` nor another rival (a law
-    with terms added is no rival), smallest first."""
+    """Supports of ``candidates`` containing neither ``support`` nor another rival, smallest first.
+    """
     chosen, rivals = set(support.tolist()), []
     for candidate in sorted(candidates, key=lambda c: (len(c.support), c.ratio)):
         terms = set(candidate.support.tolist())
@@ -449,10 +359,9 @@ def _scored(theta, moments, supports, how, n_blocks, n_folds, row_moments=None) 
 
 
 def _admissible_starts(r_factor, moments, mass_matrices, seen) -> list:
-    """The supports of the admissible lasso (:func:`~pysindy_xl.optimizers.admissible.
-    admissible_supports`: sparse laws with a definite mass matrix), each with the backward
-    path of the noise ratio inside it (one nested list per start), less the supports in
-    ``seen``."""
+    """The admissible lasso's supports, each with the backward path inside it (one list per start),
+    less the supports in ``seen``.
+    """
     paths = []
     for start in admissible_supports(r_factor, mass_matrices):
         inside = start[law_elimination_path(r_factor[:, start], moments[np.ix_(start, start)])]
@@ -464,9 +373,7 @@ def _admissible_starts(r_factor, moments, mass_matrices, seen) -> list:
 
 
 def _refined_path(r_factor, moments, start, memo=None) -> list:
-    """A second path, refined by swaps at every size: from ``start`` down to two columns,
-    each support is swap-refined before the next elimination, so that a true column the
-    plain path lost early (imitated by a correlated pair) can come back."""
+    """From ``start`` down to two columns, each support swap-refined before the next elimination."""
     supports, support = [], np.asarray(start)
     while len(support) >= 2:
         support = refine_law_by_swaps(r_factor, moments, support, memo=memo)
@@ -479,30 +386,11 @@ def _refined_path(r_factor, moments, start, memo=None) -> list:
 
 def select_laws(theta, noise_moments, n_blocks: int, mass_matrices=None,
                 max_ratio_factor: float = 10.0, noise_draws=None) -> tuple[list, list, list]:
-    """Laws for all the coordinates: :func:`select_law`, then again on the coordinates left
-    unexplained, with the columns that leave the explained ones alone (uncoupled subsystems).
-
-    Parameters
-    ----------
-    theta : array, shape (n_blocks * N, F)
-        Regression matrix with balanced coordinate blocks.
-    noise_moments : array, shape (n_blocks, F, F)
-    n_blocks : int
-    mass_matrices : array, shape (S, F, n_blocks, n_blocks), optional
-    max_ratio_factor : float, default 10.0
-        A further law is kept when its noise ratio is within this factor of the first's.
-    noise_draws : array, shape (D, n_blocks * N, F), optional
-        Draws of the rows' errors (see :func:`select_law`).
-
-    Returns
-    -------
-    laws : list of ndarray, shape (F,)
-    ratios : list of float
-    selections : list of LawSelection
-
-    Examples
-    --------
-    Two uncoupled coordinates, each with its own law:
+    """Laws ``(laws, ratios, selections)`` for all the coordinates: :func:`select_law`, then again
+    on the coordinates left unexplained with the columns that leave the explained ones alone
+    (uncoupled subsystems), a further law kept when its ratio is within ``max_ratio_factor`` of
+    the first's. ``theta`` (n_blocks * N, F) has balanced blocks; the other arguments as in
+    :func:`select_law`.
 
     >>> import numpy as np
     >>> rng = np.random.default_rng(0)

@@ -1,51 +1,5 @@
-"""Implicit regression: SINDy-PI's constrained problem and homothetic-column clustering.
-
-Without a known force there is no left-hand side: we look for sparse ``xi`` with
-``Theta @ xi = 0``. Following SINDy-PI, every column is regressed on all the others,
-
-    min_X  1/2 ||Theta~ X - Theta~||_F^2 + alpha ||X||_1   s.t.  diag(X) = 0,        (1)
-
-on the column-normalized matrix ``Theta~ = Theta D^-1`` (``D`` = column norms, so ``alpha`` is
-scale free). If ``xi`` is a law and column j belongs to it (``xi_j != 0``), column j of the
-solution is ``-xi / xi_j`` (diagonal entry removed): all the columns of a law's support give the
-same direction ``v_j = e_j - X[:, j]`` up to scale. Columns that belong to no law give unrelated,
-dense directions. The post-processing of the paper therefore groups the ``v_j`` that are
-homothetic (within an angular tolerance), keeps the groups that look like laws and takes each
-group's principal direction (SVD).
-
-Solvers
--------
-The squared Frobenius loss of (1) separates into one Lasso per column, all sharing the Gram
-matrix ``G = Theta~^T Theta~``::
-
-    column j:  min_x 1/2 x^T G x - G[:, j]^T x + alpha ||x||_1,   x_j = 0.
-
-``solver="fista"`` (default) solves the F problems at once with accelerated proximal gradient
-on ``G`` (:func:`pysindy_xl.optimizers._sparse.lasso_gram`: one matrix-matrix product per
-iteration, the diagonal constraint as a mask, a continuation path on alpha, an exact finish on
-the detected support). Two things exploit the implicit structure: the columns of a law start
-from their exact representation read off the near-null space of ``Theta~`` (an SVD of the
-``F x F`` factor below), so they only have to absorb the L1 shrinkage; and with
-``early_stopping`` the iterations stop once the extracted laws are stable and every column of
-their groups has converged, leaving the columns that belong to no law (whose ill-conditioned
-Lasso problems are the slow ones, and which cannot be homothetic to a law: a column's own
-entry is 1 in its direction and 0 in any law without it) possibly inexact (see
-``column_converged_``). ``solver="cvxpy"`` hands the same problem (1), written with the
-triangular factor ``R`` of ``Theta~ = Q R`` (``||Theta~ X - Theta~|| = ||R X - R||``, so the
-size does not grow with the number of samples), to a conic solver. Both minimize the same
-objective, so up to solver tolerance (and early stopping) they return the same law columns and
-the same laws; the tests check that they recover the same support.
-
-The paper writes the loss unsquared, ``||Theta X - Theta||_F``; its optimality conditions are
-those of (1) with ``alpha`` replaced by ``alpha * ||Theta X* - Theta||_F``, so it traces the
-same family of solutions with a rescaled weight.
-
-Normalization of the laws
--------------------------
-A law is defined up to a factor: a force column in its support gets ``-1`` (the explicit
-convention ``EL(L) + friction = tau``), else its dominant term ``+1``
-(:func:`~pysindy_xl.optimizers.laws.normalize_law`). Laws of decoupled subsystems live on
-disjoint supports: ``coef_`` is their sum (:func:`~pysindy_xl.optimizers.laws.combine_laws`).
+"""Implicit regression of unforced systems: SINDy-PI's constrained problem and homothetic-column
+clustering (:class:`ImplicitOptimizer`).
 """
 
 from __future__ import annotations
@@ -70,9 +24,8 @@ __all__ = ["ImplicitOptimizer", "NoLawFoundError", "coordinates_touched", "homot
 
 _SOLVERS = ("fista", "cvxpy")
 
-#: Early stopping: iterations of the fast solver between two extractions of the laws in
-#: its first _PROBE_ITER iterations (its convergence checks: exact laws settle within a few),
-#: and after them (the solve restarted).
+#: Early stopping: iterations between two extractions of the laws in the first _PROBE_ITER
+#: iterations (exact laws settle there), and after them (the solve restarted).
 _LAW_CHECK_EVERY = 10
 _PROBE_ITER = 50
 _LAW_CHECK_EVERY_LONG = 100
@@ -85,118 +38,82 @@ class NoLawFoundError(RuntimeError):
 class ImplicitOptimizer(CatalogOptimizer):
     """SINDy-PI constrained regression with homothetic-column clustering (unforced systems).
 
-    Solves problem (1) of the module documentation, groups the homothetic columns of the
-    solution matrix, takes each group's principal direction, refits it on its support (the
-    smallest right singular vector of the normalized matrix restricted to the support, pruned
-    with ``threshold``: this removes the L1 shrinkage), keeps the laws that qualify (at least
-    ``min_group_size`` members, members making up at least ``min_membership`` of the law's
-    terms, a residual within ``max_residual_ratio`` of the best law's) and combines the laws
-    with disjoint supports into ``coef_``.
+    Every column of the normalized ``Theta~ = Theta D^-1`` is regressed on the others,
 
-    Given the noise moments of the columns (:meth:`fit_catalog`; the weak form on positions
-    passes them), the laws are instead selected by their held-out *noise ratio*
-    (:func:`~pysindy_xl.optimizers.select_law`): problem (1) minimizes the plain residual,
-    which on noisy columns prefers laws whose columns are quiet to laws that hold. A law
-    must then cover every coordinate it can; a further law is sought on the coordinates left
-    unexplained (uncoupled subsystems) and kept when its ratio is within
-    ``max_residual_ratio`` of the first's. The SINDy-PI attributes (``solution_matrix_``,
-    ``groups_``, ``alpha_``, ...) are not set in that mode.
+        min_X  1/2 ||Theta~ X - Theta~||_F^2 + alpha ||X||_1   s.t.  diag(X) = 0,        (1)
+
+    so the columns j of a law ``xi`` give one direction ``v_j = e_j - X[:, j]`` up to scale,
+    the others unrelated dense ones. Homothetic directions are grouped, each group's principal
+    direction refit on its support (pruned with ``threshold``), the qualifying laws normalized
+    (:func:`~pysindy_xl.optimizers.laws.normalize_law`) and those of disjoint supports summed
+    into ``coef_``. ``"fista"`` solves the per-column Lassos of (1) at once from the near-null
+    space (:func:`~pysindy_xl.optimizers._sparse.lasso_gram`), ``"cvxpy"`` solves (1) on the
+    triangular factor of ``Theta~``. Given the columns' noise moments, the laws are instead
+    selected by held-out noise ratio (:func:`~pysindy_xl.optimizers.select_law`), which prefers
+    laws that hold over laws on quiet columns; the SINDy-PI attributes are then not set.
 
     Parameters
     ----------
     alpha : float or "auto", default "auto"
-        L1 weight (the paper's lambda) of problem (1) on unit-norm columns. The squared loss
-        weighs a residual r as r^2 / 2 against alpha ||x||_1, so for the law to be every law
-        column's optimum, alpha must lie below the squared residual of the next-best (false)
-        representations, ``s_2^2`` (``s_1 <= s_2`` the two smallest singular values of the
-        normalized matrix; ``s_1`` is the law's own residual), and above the law's ``s_1^2``
-        (noise). ``"auto"`` takes their geometric mean ``s_1 s_2``, clipped to
-        ``[1e-12, 1e-3]``; the chosen value is ``alpha_``. The extracted laws are refit on their
-        support, so a small alpha costs no accuracy.
+        L1 weight of (1) on unit-norm columns. ``"auto"``: ``s_1 s_2`` (the two smallest singular
+        values of the normalized matrix, between the law's and the next-best residual),
+        clipped to ``[1e-12, 1e-3]``; stored in ``alpha_``.
     solver : {"fista", "cvxpy"}, default "fista"
-        Fast batched proximal-gradient solver or the cvxpy reference formulation.
     cvxpy_solver : str, optional
-        Solver name passed to ``cvxpy.Problem.solve`` (e.g. ``"CLARABEL"``, ``"SCS"``,
-        ``"OSQP"``); default: cvxpy's choice.
+        Passed to ``cvxpy.Problem.solve``; default: cvxpy's choice.
     angle_tol : float, default 5.0
         Angular tolerance (degrees) of the homothetic grouping.
     min_group_size : int, default 2
-        Smallest group that can be a law (a law with k terms has up to k members).
+        Smallest group that can be a law.
     min_membership : float, default 0.1
-        Smallest fraction of a law's terms that must be members of its group. Every column of a
-        true law can reach it; a dense near-dependency is reached by few of its columns.
+        Smallest fraction of a law's terms that must be members of its group.
     max_residual_ratio : float, default 10.0
-        Laws whose relative residual ``||Theta~ d|| / ||d||`` (``d`` on unit-norm columns)
-        exceeds this many times the best law's (or 1e-12, whichever is larger) are rejected as
-        near-dependencies.
+        Laws whose relative residual exceeds this many times the best law's are rejected (in
+        noise-ratio mode: further laws whose ratio does).
     threshold : float, default 1e-3
-        Terms whose normalized contribution is below ``threshold`` times the law's largest are
-        pruned during the refit.
+        Relative contribution below which a term is pruned in the refit.
     refit : bool, default True
         Refit each law on its support (else keep the group's principal direction).
     tol : float, default 1e-4
-        Relative optimality tolerance of the fast solver (see ``lasso_gram``); for cvxpy, the
-        solver's own defaults apply.
+        Relative optimality tolerance of the fast solver.
     max_iter : int, default 20000
         Iteration budget of the fast solver.
     early_stopping : bool, default True
-        Fast solver only: stop as soon as the extracted laws are identical at two consecutive
-        checks and every column of their groups has converged; the other columns (which
-        belong to no law) may then be left inexact, see ``column_converged_``. The laws are
-        checked every 10 iterations during the first 50 (exact laws settle there); if they
-        have not settled, the solve starts over with a check every 100 iterations. False
-        solves every column to ``tol``.
+        Fast solver: stop once the laws are the same at two checks and their columns converged.
 
     Attributes
     ----------
     coef_ : ndarray, shape (F,)
-        Combined law (see the module documentation for its normalization).
-    solution_matrix_ : ndarray, shape (F, F)
-        SINDy-PI solution ``X`` in the original column units (``Theta @ X ~ Theta`` on the law
-        columns, zero diagonal); rows/columns of zero features are zero.
-    normalized_solution_matrix_ : ndarray, shape (F, F)
-        The same on unit-norm columns, ``D X D^-1`` (the matrix to plot, paper's Figure 2A).
+        Combined law.
+    solution_matrix_, normalized_solution_matrix_ : ndarray, shape (F, F)
+        SINDy-PI solution ``X`` in the original units and on unit-norm columns (``D X D^-1``).
     column_norms_ : ndarray, shape (F,)
-        Norms of the columns of ``theta`` after the coordinate blocks are balanced
-        (:func:`~pysindy_xl.optimizers.coordinate_weights`; unchanged for one coordinate).
+        Norms of the columns after the coordinate blocks are balanced.
     column_residuals_ : ndarray, shape (F,)
-        Relative residual of each column's direction ``||Theta~ v_j|| / ||v_j||`` (inf for zero
-        columns).
+        ``||Theta~ v_j|| / ||v_j||`` of each column's direction (inf for zero columns).
     groups_ : list of ndarray of int
-        Homothetic groups of at least ``min_group_size`` columns, best seeded first.
+        Homothetic groups of at least ``min_group_size`` columns.
     laws_ : ndarray, shape (n_laws, F)
-        Accepted laws, normalized, best (smallest residual) first.
+        Accepted laws, normalized, best first.
     law_groups_ : list of ndarray of int
-        The group each law was extracted from.
     law_residuals_ : ndarray, shape (n_laws,)
-        Relative residual of each law.
     combined_laws_ : list of int
         Indices of the laws summed into ``coef_``.
     alpha_ : float
-        The L1 weight used.
     n_iter_ : int
         Iterations of the fast solver (0 for cvxpy).
     converged_ : bool
-        Every column converged, or (early stopping) every column of the laws did and the
-        laws were stable.
     column_converged_ : ndarray of bool, shape (F,)
     selection_method_ : {"sindy-pi", "noise ratio", "given support"}
-        How the laws were found (the last by a refit of a given support).
-    selection_ : LawSelection
-        Noise-ratio mode: how the first law's support was chosen (held-out ratio per size).
-    law_selections_ : list of LawSelection
-        Noise-ratio mode: the same for every law.
+    selection_, law_selections_ : LawSelection, list of LawSelection
+        Noise-ratio mode: how the first law's (every law's) support was chosen.
     law_noise_ratios_ : ndarray, shape (n_laws,)
-        Noise-ratio mode: each law's noise ratio on all the rows (about 1 when it holds to
-        the noise).
+        Noise-ratio mode: each law's noise ratio (about 1 when it holds to the noise).
     undetermined_ : ndarray, shape (k, F)
-        Noise-ratio mode: other laws (different terms, normalized as ``coef_``) that the
-        data hold as well as the first law (``selection_.rivals``); empty when the data
-        decide. A :class:`~pysindy_xl.optimizers.UndeterminedLawWarning` names their terms.
+        Noise-ratio mode: rival laws the data hold as well as the first; an
+        :class:`~pysindy_xl.optimizers.UndeterminedLawWarning` names their terms.
     law_holds_ : bool
-        Noise-ratio mode: whether the first law is admissible (explains every coordinate,
-        definite mass matrix) and holds to the noise; a
-        :class:`~pysindy_xl.optimizers.UndeterminedLawWarning` says so when it does not.
+        Noise-ratio mode: the first law is admissible and holds to the noise.
 
     Examples
     --------
@@ -212,8 +129,7 @@ class ImplicitOptimizer(CatalogOptimizer):
     spec_type = "ImplicitOptimizer"
 
     def catalog_tags(self):
-        """Uses the mass matrices and noise draws; wants unbiased derivatives (see
-        :class:`~pysindy_xl.optimizers.CatalogTags`)."""
+        """Uses the mass matrices and noise draws; wants unbiased derivatives."""
         return dataclasses.replace(super().catalog_tags(), uses_mass_matrices=True,
                                    uses_noise_draws=True, derivative_estimate="unbiased")
 
@@ -233,7 +149,6 @@ class ImplicitOptimizer(CatalogOptimizer):
         self.max_iter = max_iter
         self.early_stopping = early_stopping
 
-    # ------------------------------------------------------------------ validation
     def _check_params(self):
         check_option("solver", self.solver, "choice", choices=_SOLVERS)
         if not (isinstance(self.alpha, str) and self.alpha == "auto"):
@@ -253,16 +168,15 @@ class ImplicitOptimizer(CatalogOptimizer):
         check_option("refit", self.refit, "bool")
         check_option("early_stopping", self.early_stopping, "bool")
 
-    # ------------------------------------------------------------------ public API
     def fit(self, X, y=None):
         """Find the sparse laws ``X @ xi = 0`` of a regression matrix.
 
         Parameters
         ----------
         X : array, shape (n_rows, F)
-            Regression matrix (one block: no coordinate structure, no force column).
+            Regression matrix (one block, no force column).
         y : None
-            Ignored; present for scikit-learn compatibility.
+            Ignored.
 
         Returns
         -------
@@ -272,16 +186,8 @@ class ImplicitOptimizer(CatalogOptimizer):
         return self._fit(problem.theta, 1, problem.force_columns, None)
 
     def _solve(self, problem):
-        """Implicit regression on the (balanced) catalog problem.
-
-        Identically zero force columns (unforced data) are ignored; non-zero ones are
-        ordinary columns and fix the scale of a law containing them (coef -1). With noise
-        moments, the laws are selected by their held-out noise ratio
-        (:func:`~pysindy_xl.optimizers.select_law`) instead of problem (1): the least-squares
-        residual that problem (1) minimizes prefers laws whose columns are quiet over laws
-        that hold; ``selection_method_`` says which was used. With mass matrices too, laws
-        whose mass matrix is not definite at the sample states are not selected, unless no
-        candidate law is definite.
+        """Problem (1), or with noise moments the noise-ratio selection (laws with a mass matrix
+        indefinite at the states are avoided); zero force columns are ignored, others fix the scale.
         """
         theta, n = problem.theta, problem.n_coordinates
         if problem.noise_moments is None:
@@ -293,17 +199,9 @@ class ImplicitOptimizer(CatalogOptimizer):
         return self
 
     def _solve_support(self, problem, support):
-        """The laws on a given support, nothing selected.
-
-        The columns of ``support`` fall into groups that share no coordinate (uncoupled
-        subsystems: a chain of columns touching common coordinates links the members of a
-        group). Each group of at least two columns gets the law its columns fit best on every
-        row: with noise moments, the smallest noise ratio
-        (:func:`~pysindy_xl.optimizers.noise_ratio.noise_ratio_law`), otherwise the smallest
-        right singular vector of the unit-norm columns, as the refit of a full fit. The laws
-        are normalized as there and summed. :class:`EnsembleOptimizer` uses it to refit the
-        terms its fits agree on with all the data: a median of laws fitted on different
-        supports is no law.
+        """The laws on a given support, nothing selected: one per group of columns sharing
+        coordinates, fitted on every row (smallest noise ratio, or smallest right singular vector),
+        normalized and summed. The ensemble's refit.
         """
         theta, n_coordinates = problem.theta, problem.n_coordinates
         force_columns = problem.force_columns
@@ -345,16 +243,14 @@ class ImplicitOptimizer(CatalogOptimizer):
         return self
 
     def _set_laws(self, laws, norms, force_columns, reference_columns):
-        """``laws_`` normalized (module documentation) and their disjoint sum ``coef_``."""
+        """``laws_`` normalized and their disjoint sum ``coef_``."""
         self.laws_ = np.array([normalize_law(law, norms, force_columns, reference_columns)
                                for law in laws])
         self.coef_, self.combined_laws_ = combine_laws(self.laws_)
 
-    # ------------------------------------------------------------------ core
     def _fit_noisy(self, theta, n_coordinates, force_columns, reference_columns, moments,
                    mass_matrices, draws=None):
-        """Laws selected by held-out noise ratio, one per group of coordinates they explain
-        (each fold with its rows' own noise moments, given the draws of the rows' errors)."""
+        """Laws selected by held-out noise ratio, one per group of coordinates they explain."""
         self._check_params()
         self.selection_method_ = "noise ratio"
         norms = column_norms(theta)[0]
@@ -379,10 +275,9 @@ class ImplicitOptimizer(CatalogOptimizer):
 
     def _report_rivals(self, theta, moments, selection, law, norms, force_columns,
                        reference_columns):
-        """``undetermined_``: the rival laws of the first law's selection, normalized;
-        ``law_holds_``: whether the first law is admissible and holds to the noise (held-out
-        noise ratio not above 1 by more than two standard errors, or a relative residual at
-        the quadrature level). A warning says what is undetermined or not found."""
+        """Set ``undetermined_`` (rival laws, normalized) and ``law_holds_`` (admissible, held-out
+        ratio within two standard errors of 1), warning when the law is undetermined or not found.
+        """
         size = selection.size
         ratio, spread = selection.cv_ratio[size - 1], selection.cv_spread[size - 1]
         holds = ratio - 2 * spread <= 1 or ratio <= 2 or selection.cv_relative < 1e-8
@@ -429,7 +324,6 @@ class ImplicitOptimizer(CatalogOptimizer):
         r_factor = triangular_factor(scaled)
         x_scaled = self._sindy_pi_matrix(r_factor)
 
-        # The SINDy-PI matrix in both unit systems, embedded in the full catalog.
         self.column_norms_ = norms
         self.normalized_solution_matrix_ = np.zeros((n_features, n_features))
         self.normalized_solution_matrix_[np.ix_(active, active)] = x_scaled
@@ -461,18 +355,15 @@ class ImplicitOptimizer(CatalogOptimizer):
         return self
 
     def plot(self, feature_names=None, axes=None):
-        """The paper's Figure 2: solution matrix, homothetic groups, extracted law.
-
-        Panel A shows ``|normalized_solution_matrix_|`` (log scale), panel B the unit
-        directions ``e_j - X[:, j]`` of the columns of each law's group (one colour per law),
-        panel C the combined coefficients ``coef_``.
+        """The paper's Figure 2: ``|normalized_solution_matrix_|`` (A), the unit directions of each
+        law's group (B), ``coef_`` (C).
 
         Parameters
         ----------
         feature_names : list of str, optional
-            Labels of the catalog columns (e.g. ``library.get_feature_names()``).
+            Labels of the catalog columns.
         axes : sequence of 3 matplotlib Axes, optional
-            Where to draw; default: a new figure with three panels.
+            Default: a new figure.
 
         Returns
         -------
@@ -514,7 +405,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         return list(axes)
 
     def _post_process(self, x_scaled, r_factor):
-        """Column residuals, homothetic groups and the laws (best first), normalized space."""
+        """Column residuals, homothetic groups and laws (best first), in the normalized space."""
         directions = np.eye(x_scaled.shape[0]) - x_scaled
         residuals = np.linalg.norm(r_factor @ directions, axis=0) / np.linalg.norm(
             directions, axis=0
@@ -542,8 +433,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         state = {"signature": None, "stable": False}
 
         def laws_settled(coef, converged):
-            # Stop once the extracted laws are the same at two consecutive checks and every
-            # column that supports them has converged: the other columns cannot change them.
+            # stable laws whose columns converged: the other columns cannot change them
             _, _, laws, law_groups, _ = self._post_process(coef, r_factor)
             if not laws:
                 state["signature"] = None
@@ -566,10 +456,8 @@ class ImplicitOptimizer(CatalogOptimizer):
             result = run(int(self.max_iter), None)
             self.n_iter_ = result.n_iter
         else:
-            # Exact laws (clean data) are read off the start: a short probe that extracts
-            # them at every convergence check ends there. Otherwise the solve starts over,
-            # the laws extracted every _LAW_CHECK_EVERY_LONG iterations only (an extraction
-            # clusters all the columns; laws that take long to settle would pay for it).
+            # a short probe ends on exact laws (read off the start); otherwise start over,
+            # extracting the laws (a clustering of all columns) less often
             result = run(min(_PROBE_ITER, int(self.max_iter)), laws_settled)
             self.n_iter_ = result.n_iter
             if not (state["stable"] or np.all(result.converged)):

@@ -1,7 +1,6 @@
 """A homogeneous law ``Theta xi = 0`` once found: the coordinates it explains, whether its mass
-matrix is definite, its scale in the catalog's convention, and laws of uncoupled subsystems
-combined (used by the implicit and total-least-squares optimizers and the law selection of
-:mod:`~pysindy_xl.optimizers.homogeneous`)."""
+matrix is definite, its scale, and laws of uncoupled subsystems combined.
+"""
 
 from __future__ import annotations
 
@@ -12,21 +11,14 @@ __all__ = ["UndeterminedLawWarning", "combine_laws", "definite_mass", "explained
 
 
 class UndeterminedLawWarning(UserWarning):
-    """The data hold several different laws to the noise: which one is the system's is not
-    determined by them."""
+    """The data hold several different laws to the noise and do not say which is the system's."""
 
 
 def explained_coordinates(theta, law, n_blocks: int, min_share: float = 1e-3) -> np.ndarray:
-    """Coordinates whose equation a law explains: the squared contributions of its terms in
-    that coordinate's rows carry at least ``min_share`` of the largest coordinate's.
+    """Boolean (n_blocks,): coordinates where the law's terms carry at least ``min_share`` of the
+    largest coordinate's squared contribution. ``theta`` (n_blocks * N, k), the law's columns,
+    must have balanced blocks.
 
-    A term that merely touches a coordinate with a negligible coefficient does not explain
-    it. ``theta`` (n_blocks * N, k), the columns of the law's support, must have balanced
-    coordinate blocks (:func:`~pysindy_xl.optimizers.coordinate_weights`), so that the
-    shares compare equations, not units. Returns a boolean array (n_blocks,).
-
-    Examples
-    --------
     >>> import numpy as np
     >>> theta = np.array([[1.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.0, 1.0]])
     >>> explained_coordinates(theta, np.array([1.0, 1e-4]), 2).tolist()
@@ -38,13 +30,9 @@ def explained_coordinates(theta, law, n_blocks: int, min_share: float = 1e-3) ->
 
 
 def normalize_law(law, norms, force_columns, reference_columns=None) -> np.ndarray:
-    """A law scaled to the catalog's convention: a force column in its support gets ``-1``
-    (the one with the largest contribution ``|law_j| norms_j``), otherwise its dominant term
-    (among ``reference_columns`` when it has any) gets ``+1``; ``norms`` are the column norms
-    of the regression matrix.
+    """A law in the catalog's convention: its largest force column (``|law_j| norms_j``) at ``-1``,
+    else its dominant term (among ``reference_columns`` if any) at ``+1``.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> normalize_law(np.array([0.5, -1.0, 0.0]), np.ones(3), np.array([0])).tolist()
     [-1.0, 2.0, 0.0]
@@ -63,9 +51,9 @@ def normalize_law(law, norms, force_columns, reference_columns=None) -> np.ndarr
 
 
 def combine_laws(laws) -> tuple[np.ndarray, list]:
-    """Sum of the laws with pairwise disjoint supports, chosen in order (best first): laws of
-    uncoupled subsystems hold in every equation together. Returns the sum (F,) and the
-    indices of the summed laws (rows of ``laws``, shape (n_laws, F))."""
+    """Sum (F,) of the laws (n_laws, F) with pairwise disjoint supports, best first, and the
+    indices summed: uncoupled subsystems' laws hold together.
+    """
     coef = np.zeros(laws.shape[1])
     used = np.zeros(laws.shape[1], dtype=bool)
     chosen = []
@@ -80,13 +68,9 @@ def combine_laws(laws) -> tuple[np.ndarray, list]:
 
 
 def definite_mass(mass_matrices, law) -> bool:
-    """Whether the law's mass matrix ``sum_j law_j M_j`` is definite (of either sign: a law
-    has no sign) on every state, judged unit free as
-    :func:`~pysindy_xl.fit.diagnostics.mass_matrix_report` does; ``mass_matrices`` (S, k, n, n)
-    holds each column's mass matrix at ``S`` states.
+    """Whether ``sum_j law_j M_j`` is definite (either sign) at every state, unit free as
+    :func:`~pysindy_xl.fit.diagnostics.mass_matrix_report` judges; ``mass_matrices`` (S, k, n, n).
 
-    Examples
-    --------
     >>> import numpy as np
     >>> columns = np.array([[[[1.0, 0.0], [0.0, 0.0]], [[0.0, 0.0], [0.0, 1.0]]]])
     >>> definite_mass(columns, np.array([-2.0, -1.0])), definite_mass(columns, [1.0, 0.0])

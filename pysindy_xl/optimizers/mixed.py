@@ -1,27 +1,5 @@
-"""Mixed regression: explicit where a force reaches, implicit on the rest.
-
-Robots often actuate only some joints. The coordinates that receive a force, and everything
-coupled to them, can be identified explicitly (force coefficient -1 fixes the scale); a
-subsystem no force reaches can only be identified implicitly (its law's scale is free).
-
-Activation graph
-----------------
-Column j *touches* coordinate c when it is not identically zero in the block of rows of c.
-Starting from the forced coordinates (those where a force column is non-zero), every column
-that touches an activated coordinate activates all the coordinates it touches, to a fixed point.
-The activated block (its coordinates' rows, the columns touching them, which by construction
-touch no other coordinate) is solved explicitly. The activation is then updated from that
-solution: only coordinates that an identified (non-zero) term enters stay explicit (a catalog
-may couple a free subsystem to the forced one through candidate terms that the explicit
-solution discards). The remaining coordinates are solved implicitly with the columns that touch
-none of the explicit coordinates. The two coefficient vectors live on disjoint columns and are
-summed.
-
-When the activation reaches every coordinate the explicit step is exactly the explicit
-optimizer on the whole matrix, and the result is that optimizer's when it explains every
-coordinate (always the case when every coordinate is forced); with no force at all it is
-exactly the implicit optimizer.
-"""
+"""Mixed regression: explicit where a force reaches, implicit on the rest
+(:class:`MixedOptimizer`)."""
 
 from __future__ import annotations
 
@@ -76,45 +54,40 @@ def activation_closure(touches, seed) -> tuple[np.ndarray, np.ndarray]:
 class MixedOptimizer(CatalogOptimizer):
     """Explicit regression on the force-activated subsystem, implicit regression on the rest.
 
-    See the module documentation for the activation graph. Standalone use needs the catalog
-    metadata: call :meth:`fit_catalog` with the number of coordinates (the row blocks of
-    ``theta``) and the indices of the force columns.
+    Column j *touches* coordinate c when it is not zero in c's rows. From the forced
+    coordinates, every column touching an activated coordinate activates all it touches
+    (:func:`activation_closure`); that block is solved explicitly, and the coordinates no
+    identified term enters are solved implicitly with the columns touching no explicit
+    coordinate; the two coefficient vectors (disjoint columns) are summed. Every coordinate
+    reached: the explicit optimizer's result; no force: the implicit optimizer's. Standalone
+    use: :meth:`fit_catalog` with the number of coordinates and the force columns.
 
     Parameters
     ----------
     explicit_optimizer : estimator, optional
-        Optimizer of the activated block, with ``fit_catalog``; default
-        ``ExplicitOptimizer()``. It is cloned before fitting.
+        Optimizer of the activated block (cloned); default ``ExplicitOptimizer()``.
     implicit_optimizer : estimator, optional
-        Optimizer of the remaining block; default ``ImplicitOptimizer()``. Cloned before fitting.
+        Optimizer of the rest (cloned); default ``ImplicitOptimizer()``.
     rtol : float, default 1e-10
-        A column block whose norm is at most ``rtol`` times the column's largest block norm
-        does not touch that coordinate.
+        A column block at most ``rtol`` times the column's largest does not touch its coordinate.
 
     Attributes
     ----------
     coef_ : ndarray, shape (F,)
     mode_ : {"explicit", "implicit", "mixed"}
-        What the fit reduced to.
-    forced_coordinates_ : ndarray of bool, shape (n_coordinates,)
-        Coordinates where a force column is non-zero.
-    activated_coordinates_ : ndarray of bool, shape (n_coordinates,)
-        Closure of the activation graph from the forced coordinates.
+    forced_coordinates_, activated_coordinates_ : ndarray of bool, shape (n_coordinates,)
+        Coordinates with a non-zero force, and their activation closure.
     explicit_coordinates_, implicit_coordinates_ : ndarray of bool, shape (n_coordinates,)
         After the update from the explicit solution.
     explicit_columns_, implicit_columns_ : ndarray of int
-        Catalog columns handed to each solver.
     explicit_optimizer_, implicit_optimizer_ : estimator or None
-        The fitted sub-optimizers (None when unused).
+        The fitted parts (None when unused).
     inclusion_probability_, coef_interval_ : ndarray, shape (F,) and (2, F)
-        Only when the explicit part is an :class:`EnsembleOptimizer` and explains every
-        coordinate (``mode_ == "explicit"``): its inclusion probabilities and intervals,
-        which are then the whole model's.
+        Those of an :class:`EnsembleOptimizer` explicit part when it explains every coordinate.
 
     Examples
     --------
-    Two decoupled oscillators, ``x1'' + 4 x1 = u`` forced and ``x2'' + 9 x2 = 0`` free (rows: 2
-    coordinates x 200 samples; columns: force, x1'', x1, x2'', x2):
+    ``x1'' + 4 x1 = u`` forced and ``x2'' + 9 x2 = 0`` free (columns: force, x1'', x1, x2'', x2):
 
     >>> import numpy as np, pysindy_xl as px
     >>> t = np.linspace(0, 20, 200)
@@ -129,8 +102,9 @@ class MixedOptimizer(CatalogOptimizer):
     spec_type = "MixedOptimizer"
 
     def catalog_tags(self):
-        """The parts balance their own sub-problems; the mass matrices and noise draws are
-        used when a part uses them (see :class:`~pysindy_xl.optimizers.CatalogTags`)."""
+        """The parts balance their own sub-problems; mass matrices and draws used where a part
+        does.
+        """
         parts = [catalog_tags(part) for part in self._sub_optimizers()]
         return dataclasses.replace(
             super().catalog_tags(), balances_rows=False,
@@ -158,19 +132,14 @@ class MixedOptimizer(CatalogOptimizer):
         return clone(explicit), clone(implicit)
 
     def pilot(self):
-        """Unfitted stand-in for a first estimate of the law: the same mixed regression
-        with the pilots of both parts (see
-        :func:`~pysindy_xl.optimizers._base.pilot_optimizer`)."""
+        """The same mixed regression with the pilots of both parts."""
         explicit, implicit = self._sub_optimizers()  # validated clones
         return clone(self).set_params(explicit_optimizer=pilot_optimizer(explicit),
                                       implicit_optimizer=pilot_optimizer(implicit))
 
     def fit(self, X, y=None):
-        """Regression on one block of rows, without a catalog's structure.
-
-        With the known right-hand side ``y`` (a force), mixed regression reduces to its
-        explicit part, ``X @ coef_ = y``; without, to its implicit part, ``X @ coef_ = 0``.
-        Coordinate blocks and force columns need :meth:`fit_catalog`.
+        """Regression on one block of rows: the explicit part ``X @ coef_ = y`` given ``y``, else
+        the implicit part ``X @ coef_ = 0``.
 
         Parameters
         ----------
@@ -193,8 +162,7 @@ class MixedOptimizer(CatalogOptimizer):
         return self
 
     def _solve(self, problem):
-        """Mixed explicit/implicit regression (see the module docstring); each part gets its
-        sub-problem: its rows and columns with their noise moments and mass matrices."""
+        """Mixed explicit/implicit regression, each part on its sub-problem."""
         explicit, implicit = self._sub_optimizers()
         theta, n, force_columns = problem.theta, problem.n_coordinates, problem.force_columns
 
@@ -203,9 +171,7 @@ class MixedOptimizer(CatalogOptimizer):
             return solve_problem(optimizer, part)
 
         n_features = theta.shape[1]
-        # the parts balance their own sub-problems; here the balanced matrix only decides
-        # which coordinates a column touches (a coupling column 1e12 apart between a um and a
-        # rad block touches both)
+        # balanced here only to decide which coordinates a column touches
         touches = coordinates_touched(balance_coordinates(theta, n, force_columns), n,
                                       self.rtol)
         forced = touches[:, force_columns].any(axis=1)
@@ -225,7 +191,6 @@ class MixedOptimizer(CatalogOptimizer):
             return self
 
         coef = np.zeros(n_features)
-        # When the whole catalog is reachable this is exactly the explicit optimizer's problem.
         explicit_cols = (np.arange(n_features) if activated.all()
                          else np.flatnonzero(activated_columns))
         with warnings.catch_warnings():
@@ -235,7 +200,6 @@ class MixedOptimizer(CatalogOptimizer):
                 explicit, activated, explicit_cols,
                 np.flatnonzero(np.isin(explicit_cols, force_columns)))
         coef[explicit_cols] = self.explicit_optimizer_.coef_
-        # Only coordinates that an identified term enters are explained explicitly.
         explained = touches[:, coef != 0].any(axis=1)
         if explained.all():
             self._set_mode("explicit", explained, explicit_cols, np.array([], int))

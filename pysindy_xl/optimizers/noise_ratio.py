@@ -1,39 +1,15 @@
 r"""The noise ratio of a homogeneous law ``Theta xi = 0`` and the paths of supports it orders.
 
-Without a force, a law is a direction ``xi`` with ``Theta xi = 0``. When the columns carry
-errors, ``Theta = Theta_0 + E`` with known second moments ``S = E[E^T E]`` (the weak form
-propagates the position noise into them), the true law leaves the residual ``E xi``, whose
-expected square is ``xi^T S xi``. The *noise ratio*
+With column errors of known moments ``S = E[E^T E]``, the *noise ratio*
 
 .. math:: \rho(\xi) = \frac{\lVert \Theta \xi \rVert^2}{\xi^T S \xi}
 
-is therefore close to 1 for the true law, whatever its scale, and larger for any law the data
-contradict. Its minimum over the laws on a support ``s`` is the smallest generalized eigenvalue
-of the pencil ``(Theta_s^T Theta_s, S_ss)``; the minimizer is the consistent
-(errors-in-variables) estimate of the law on that support (Fuller, *Measurement Error Models*,
-1987, section 4.1). It is computed from the singular values of ``R L^-T`` (``R`` a factor of
-``Theta``, ``L L^T = S``), never from the Gram matrix.
-
-The plain least-squares residual ``||Theta xi|| / ||xi||``, which SINDy-PI minimizes, is small
-for laws whose *own noise* ``xi^T S xi`` is small, not only for laws that hold: on a noisy
-unforced cart-pole a kinetic-only law, whose columns are smoothed and quiet, fits with half the
-residual of the true law. The ratio removes that preference.
-
-Paths of supports, each step from one decomposition of the current pencil
-``G V = S V diag(lambda)``, ``V^T S V = I``:
-
-* **backward** (:func:`law_elimination_path`): forcing ``xi_j = 0`` gives the root in
-  ``[lambda_1, lambda_2]`` of the secular equation ``sum_i w_i^2 / (lambda_i - mu) = 0``,
-  ``w = V[j]``; the column whose removal raises the ratio least goes;
-* **forward** (:func:`law_forward_path`): adding a column gives the root in ``[0, lambda_1]``
-  of the bordered pencil's secular equation; the column that lowers it most comes in;
-* **swaps** (:func:`refine_law_by_swaps`): exchanges of one selected and one unselected
-  column while the ratio drops (the 1-swap local search of L0Learn).
-
-Throughout, ``r_factor`` (m, F) is ``Theta`` or any factor with the same ``R^T R = Theta^T
-Theta`` (the triangular factor; unit-scale columns for the paths) and ``moments`` (F, F) the
-``E[E^T E]`` of the errors of the same rows and columns. A path's ``order[:k]`` is its support
-of size ``k`` (``k >= 2``).
+is about 1 for the true law and larger for laws the data contradict (the plain residual
+prefers laws on quiet columns). Its minimum on a support is the smallest eigenvalue of the
+pencil ``(Theta_s^T Theta_s, S_ss)``, from the singular values of ``R L^-T`` (``L L^T = S``;
+Fuller, 1987, 4.1). The paths and swaps solve the pencil's secular equations for all
+candidates at once. ``r_factor`` (m, F) is ``Theta`` or a factor with its ``R^T R``;
+``moments`` (F, F) those of the same rows.
 """
 
 from __future__ import annotations
@@ -45,10 +21,9 @@ __all__ = ["law_elimination_path", "law_forward_path", "noise_ratio_law", "refin
 
 
 def _whitened_factor(r_factor, moments):
-    """``(R L^-T, L)`` with ``L L^T`` the (regularized) moments: the noise ratio of ``xi`` is
-    ``||R L^-T (L^T xi)||^2 / ||L^T xi||^2``. The moments are regularized relative to their own
-    scale, so that a column without noise cannot make them singular. Stacks of problems
-    (leading axes) are whitened at once."""
+    """``(R L^-T, L)``, ``L L^T`` the moments regularized relative to their own scale (a column
+    without noise cannot make them singular); stacks (leading axes) at once.
+    """
     k = moments.shape[-1]
     floor = 1e-10 * np.trace(moments, axis1=-2, axis2=-1) / max(k, 1)
     # no noise at all on these columns: a floor far below the signal's
@@ -64,12 +39,10 @@ def _whitened_factor(r_factor, moments):
 
 
 def noise_pencil(r_factor, moments):
-    """Ascending eigenpairs of the pencil ``(R^T R, S)``, ``V^T S V = I``.
-
-    From the singular values of ``R L^-T`` (never from ``R^T R``, which would square the
-    condition number: on clean data the true law's residual is at the rounding level of the
-    Gram matrix). ``r_factor`` (..., m, k) and ``moments`` (..., k, k) may be stacks of
-    problems; the values are then (..., k) and the vectors (..., k, k)."""
+    """Ascending eigenpairs of the pencil ``(R^T R, S)``, ``V^T S V = I``, from the singular values
+    of ``R L^-T`` (the Gram matrix would square the condition number). Stacks (..., m, k) and
+    (..., k, k) give values (..., k) and vectors (..., k, k).
+    """
     whitened, lower = _whitened_factor(r_factor, moments)
     # all k right singular vectors; the left ones only as many as needed (a tall factor)
     m, k = whitened.shape[-2:]
@@ -86,12 +59,8 @@ def noise_pencil(r_factor, moments):
 
 
 def noise_ratio_law(r_factor, moments) -> tuple[float, np.ndarray]:
-    """Smallest noise ratio on all the columns and its law: ``(ratio, law)``, the law of unit
-    norm with its largest entry positive.
-
-    Examples
-    --------
-    Two noisy copies of one signal: the law ``a - b = 0`` holds to the noise (ratio ~ 1).
+    """Smallest noise ratio on all the columns and its law: ``(ratio, law)``, the law of unit norm
+    with its largest entry positive.
 
     >>> import numpy as np
     >>> rng = np.random.default_rng(0)
@@ -106,15 +75,13 @@ def noise_ratio_law(r_factor, moments) -> tuple[float, np.ndarray]:
     return float(values[0]), law * np.sign(law[np.argmax(np.abs(law))])
 
 
-# The secular-equation helpers below read the pencil of the current support: ``values`` (k,)
-# its ascending generalized eigenvalues (or (k, m), each candidate's own), ``vectors`` (k, k)
-# their S-orthonormal eigenvectors (columns), and for ``m`` candidate columns ``cross_gram``,
-# ``cross_moments`` (k, m), the projections ``V^T c`` and ``V^T d`` of their Gram and moment
-# columns, and ``gram_diag``, ``moments_diag`` (m,), their own diagonal entries.
+# Secular helpers: ``values`` (k,) or (k, m) and ``vectors`` (k, k) the current pencil;
+# ``cross_gram``, ``cross_moments`` (k, m) = V^T of m candidates' columns; ``*_diag`` (m,).
 def _constrained_minima(values, vectors, n_bisections: int = 48) -> np.ndarray:
-    """Smallest eigenvalue of the pencil with ``xi_j = 0``, for every ``j`` at once: the root in
-    ``[values[0], values[1]]`` of ``sum_i w_i^2 / (values[i] - mu)`` with ``w = vectors[j]``
-    (Cauchy interlacing puts it there; the function increases on it)."""
+    """Smallest eigenvalue of the pencil with ``xi_j = 0``, for every ``j``: the root in
+    ``[values[0], values[1]]`` (interlacing) of ``sum_i w_i^2 / (values[i] - mu)``,
+    ``w = vectors[j]``.
+    """
     weights = vectors**2  # row j: w_i^2 of the constraint xi_j = 0
     low = np.full(values.size, values[0])
     high = np.full(values.size, values[1])
@@ -129,19 +96,7 @@ def _constrained_minima(values, vectors, n_bisections: int = 48) -> np.ndarray:
 
 
 def law_elimination_path(r_factor, moments) -> np.ndarray:
-    """Columns ordered from most to least needed by backward elimination of the noise ratio.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> rng = np.random.default_rng(0)
-    >>> a, b, c, d = rng.normal(size=(4, 2000))
-    >>> clean = np.column_stack([a, b, a - 2 * b, c, d])
-    >>> theta = clean + 0.05 * rng.normal(size=clean.shape)
-    >>> order = law_elimination_path(theta, 0.0025 * 2000 * np.eye(5))
-    >>> sorted(order[:3].tolist())
-    [0, 1, 2]
-    """
+    """Columns ordered from most to least needed by backward elimination of the noise ratio."""
     support = np.arange(r_factor.shape[1])
     removed = []
     while len(support) > 2:
@@ -159,9 +114,9 @@ def eliminate_one(r_factor, moments, support) -> np.ndarray:
 
 
 def law_forward_path(r_factor, moments, max_size=None) -> np.ndarray:
-    """Columns in the order forward selection adds them: the pair with the smallest noise
-    ratio first, then the column whose addition lowers the ratio most (stopping after
-    ``max_size`` columns, default all)."""
+    """Columns in the order forward selection adds them (the best pair first, then the column
+    lowering the ratio most), up to ``max_size`` columns.
+    """
     n_features = r_factor.shape[1]
     max_size = n_features if max_size is None else min(int(max_size), n_features)
     gram = r_factor.T @ r_factor
@@ -187,9 +142,9 @@ def law_forward_path(r_factor, moments, max_size=None) -> np.ndarray:
 
 
 def _bordered_secular(mu, values, cross_gram, cross_moments, gram_diag, moments_diag):
-    """The bordered pencil's secular function ``f(mu)`` of every candidate (see
-    :func:`_bordered_minima`); ``mu`` and the arrays broadcast over the candidates (last axis).
-    Positive where the candidate's root lies above ``mu``."""
+    """The bordered pencil's secular function ``f(mu)`` of every candidate (last axis); positive
+    where the candidate's root lies above ``mu``.
+    """
     with np.errstate(divide="ignore", invalid="ignore"):
         coupling = np.sum((cross_gram - mu * cross_moments) ** 2 / (values - mu), axis=-2)
     return gram_diag - mu * moments_diag - coupling
@@ -197,13 +152,9 @@ def _bordered_secular(mu, values, cross_gram, cross_moments, gram_diag, moments_
 
 def _bordered_minima(values, cross_gram, cross_moments, gram_diag, moments_diag,
                      n_bisections: int = 48) -> np.ndarray:
-    """Smallest eigenvalue of the pencil with one more column, for every candidate at once.
-
-    With the pencil's eigenpairs ``(lambda, V)`` on the current columns, adding column ``i``
-    (Gram column ``c``, moment column ``d``) gives the root in ``[0, lambda_1]`` of
-    ``f(mu) = g_ii - mu s_ii - sum_m (a_m - mu b_m)^2 / (lambda_m - mu)``, ``a = V^T c``,
-    ``b = V^T d`` (the Schur complement of the bordered pencil; interlacing puts exactly one
-    root there, and ``f`` is positive below it).
+    """Smallest eigenvalue of the pencil with one more column, for every candidate at once: the
+    root in ``[0, lambda_1]`` of ``f(mu) = g_ii - mu s_ii - sum_m (a_m - mu b_m)^2 / (lambda_m -
+    mu)``, ``a = V^T c``, ``b = V^T d`` (``c``, ``d`` the candidate's Gram and moment columns).
     """
     values = values[:, None] if values.ndim == 1 else values
     low = np.zeros(cross_gram.shape[1])
@@ -219,15 +170,9 @@ def _bordered_minima(values, cross_gram, cross_moments, gram_diag, moments_diag,
 
 def _smallest_bordered_root(ceiling, values, cross_gram, cross_moments, gram_diag,
                             moments_diag, n_bisections: int = 48):
-    """The candidate whose bordered root is smallest, if any lies below ``ceiling``.
-
-    Equivalent to the argmin of :func:`_bordered_minima` over the candidates (to the same
-    bisection resolution), without resolving every root: the candidates whose root lies above
-    ``ceiling`` are dropped by one evaluation of ``f``, and one bisection of a threshold shared
-    by the rest drops every candidate whose root lies above a root already bracketed below.
-    At a local optimum of the swaps no candidate passes the first test, and that costs one
-    evaluation instead of ``n_bisections``. ``ceiling`` is at most the smallest pencil
-    eigenvalue of every candidate's current columns. Returns ``(index, root)`` or None.
+    """``(index, root)`` of the candidate with the smallest bordered root below ``ceiling``, or
+    None: the argmin of :func:`_bordered_minima` by one shared bisection, dropping candidates as
+    soon as a root is bracketed below theirs (at a local optimum: one evaluation).
     """
     def secular(mu, alive):
         return _bordered_secular(mu, values[:, alive], cross_gram[:, alive],
@@ -255,18 +200,10 @@ def refine_law_by_swaps(r_factor, moments, support, max_swaps: int = 50,
                         memo: dict | None = None) -> np.ndarray:
     """Best-improvement single swaps of a law's support, lowering its smallest noise ratio.
 
-    The greedy path can lose a true column that a pair of correlated candidates imitates at
-    high noise; exchanging one selected column for an unselected one while the ratio drops
-    (the 1-swap local search of L0Learn) recovers it. Every swap is first screened from the
-    support's own pencil (:func:`_swap_secular_at_the_law`); only the removals with a swap
-    that can lower the ratio get their own pencils, the best swap among them is found by
-    :func:`_smallest_bordered_root`, and it is confirmed by an exact computation before it is
-    taken.
-
-    At most ``max_swaps`` exchanges; returns the refined support, sorted. ``memo`` (a dict
-    shared between calls on the same ``r_factor`` and ``moments``) holds refined supports by
-    the supports they passed through (frozensets): the search is deterministic, so a support
-    already visited ends where it ended before.
+    Recovers a true column that a correlated pair imitated on the greedy path (L0Learn's 1-swap
+    search); swaps are screened from the support's own pencil and confirmed exactly. At most
+    ``max_swaps``; returns the support, sorted. ``memo`` (shared between calls on the same
+    arguments) maps visited supports to where their search ended.
     """
     memo = {} if memo is None else memo
     gram = r_factor.T @ r_factor
@@ -296,25 +233,16 @@ def refine_law_by_swaps(r_factor, moments, support, max_swaps: int = 50,
 
 def _swap_secular_at_the_law(values, vectors, cross_gram, cross_moments, gram_diag,
                              moments_diag) -> np.ndarray:
-    """Secular function at the support's own ratio of every swap, from the support's pencil.
+    """Secular function at the support's ratio ``c = lambda_1`` of every swap ``j -> i``, (k, n).
 
-    Swapping column ``j`` of the support ``s`` for ``i`` gives the pencil on
-    ``t = s - j + i``. At ``c = lambda_1`` (the support's smallest ratio) ``A = G - c S``
-    (Gram and moment matrices) is positive definite on ``r = s - j`` (interlacing), so
-    ``A_tt`` has a negative eigenvalue, i.e. the swap lowers the ratio, iff the Schur
-    complement ``a_ii - u^T A_rr^-1 u`` (``u = A_ri``) is negative. The block inverse
-    ``A_rr^-1 = H_rr - h h^T / H_jj`` (``H = A_ss^-1``, ``h = H_rj``) turns it into
-    ``a_ii - u^T H u + (H u)_j^2 / H_jj``, and in the eigenbasis of the pencil its limit at
-    ``c = lambda_1`` (where ``H`` is singular) is finite:
+    ``A = G - c S`` is positive definite on ``s - j``, so the swap lowers the ratio iff the Schur
+    complement of ``i`` is negative; in the pencil's eigenbasis it is
 
     .. math:: f_{ji} = a_{ii} - P_i + 2 x_i Q_{ji} / y_j - x_i^2 R_j / y_j^2
 
-    with ``w = V^T u`` (``x = w_1``), ``y = V_{j1}`` and ``P, Q, R`` the sums over ``m >= 2``
-    of ``w_m^2``, ``V_{jm} w_m`` and ``V_{jm}^2`` over ``lambda_m - lambda_1``. One
-    decomposition serves all ``k x n`` swaps, where each removal's own pencil costs
-    ``O(k^3)``. The candidates are the ``n`` columns outside the support. The result (k, n) is
-    positive where swapping ``j`` for ``i`` cannot lower the ratio below ``lambda_1``, not
-    finite where the removed column carries no weight in the law (``y_j = 0``).
+    with ``w = V^T u`` (``u = A_si``, ``x = w_1``), ``y = V_{j1}`` and ``P, Q, R`` the sums over
+    ``m >= 2`` of ``w_m^2``, ``V_{jm} w_m``, ``V_{jm}^2`` over ``lambda_m - lambda_1``. Positive
+    where the swap cannot lower the ratio; not finite where ``y_j = 0``.
     """
     law_ratio = values[0]
     gaps = values[1:] - law_ratio
@@ -331,14 +259,9 @@ def _swap_secular_at_the_law(values, vectors, cross_gram, cross_moments, gram_di
 
 
 def _best_swap(r_factor, moments, gram, support, outside, current):
-    """``(removed, added)`` of the swap with the smallest ratio below ``current``, or None.
-
-    The swaps that can lower the ratio are found from the support's own pencil
-    (:func:`_swap_secular_at_the_law`); only the removals among them get their own pencils,
-    for the exact comparison (:func:`_smallest_bordered_root`)."""
+    """``(removed, added)`` of the swap with the smallest ratio below ``current``, or None."""
     k = len(support)
-    # the support's own factor: the pencils of its subsets are k x k problems, whatever the
-    # number of rows of r_factor
+    # the support's own k x k factor
     factor = scipy.linalg.qr(r_factor[:, support], mode="r", check_finite=False)[0][:k]
     gram_out, moments_out = gram[np.ix_(support, outside)], moments[np.ix_(support, outside)]
     gram_diag, moments_diag = np.diag(gram)[outside], np.diag(moments)[outside]

@@ -1,43 +1,5 @@
-"""The catalog regression problem that every catalog optimizer solves.
-
-A :class:`CatalogProblem` is the stacked regression matrix ``theta`` of shape
-``(n_coordinates * N, F)`` (rows coordinate-major: the ``N`` rows of coordinate 0, then those
-of coordinate 1, ...; see :mod:`pysindy_xl.feature_library._base`) and what is known about it:
-
-* ``force_columns``: the :class:`~pysindy_xl.ExternalForces` columns, whose coefficient is -1
-  in an explicit law;
-* ``noise_moments`` ``(n_coordinates, F, F)``: ``E[E_c^T E_c]`` for the errors ``E_c`` in each
-  coordinate's rows (the weak form's propagated position noise; errors in variables);
-* ``mass_matrices`` ``(S, F, n, n)``: each column's contribution to the mass matrix at ``S``
-  sample states (physical admissibility of a law);
-* ``balance``: whether the coordinate blocks may be rescaled by
-  :func:`~pysindy_xl.optimizers.coordinate_weights` (False where the caller has weighed them,
-  e.g. rows whitened by the covariance of the residual);
-* ``reference_columns``: the columns allowed to carry the ``+1`` of an unforced law;
-* ``physical``: what the columns stand for physically (base parameters of rigid bodies,
-  friction; a :class:`~pysindy_xl.physical.PhysicalStructure` in the problem's columns), for
-  optimizers that constrain the coefficients to physically consistent values;
-* ``noise_draws`` ``(D, n_coordinates * N, F)``: Monte Carlo draws of the rows' errors, whose
-  second moments are ``noise_moments``. They resolve the noise row by row: the propagated
-  noise varies along a trajectory, and a part of the rows (a cross-validation fold, an
-  ensemble's subsample) gets its own moments instead of its share of the block's;
-* ``row_noise``: the noise object the moments and draws come from
-  (:class:`~pysindy_xl.weak.WeakNoise`: it also whitens the rows for a given law, what the
-  reweighting solver :func:`pysindy_xl.fit.solve` does);
-* ``catalog_map``: where the problem came from (a :class:`pysindy_xl.fit.CatalogMap`: the
-  catalog column of each column, the coordinates of the blocks, the states of the rows), so
-  that a solution maps back to the catalog.
-
-Every row of ``theta @ coef = 0`` holds exactly, so multiplying the rows of one coordinate block
-by a constant changes how the regression weighs the blocks, never the true coefficients:
-:meth:`CatalogProblem.balanced` makes the regression unit free (a coordinate in micrometres
-next to one in radians is solved like the same system in metres).
-
-The problem is validated once, where it is made (:meth:`CatalogProblem.from_arrays`); the
-sub-problems of mixed regression (:meth:`~CatalogProblem.subproblem`) and the subsamples of
-an ensemble (:meth:`~CatalogProblem.subsample`) are derived from it, with their noise moments
-(their own, given the draws; else their share) and mass matrices.
-"""
+"""The catalog regression problem that every catalog optimizer solves (:class:`CatalogProblem`)
+and the balancing of its coordinate blocks."""
 
 from __future__ import annotations
 
@@ -56,26 +18,35 @@ __all__ = ["CatalogProblem", "check_mass_matrices", "check_noise_moments", "chec
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class CatalogProblem:
-    """A validated catalog regression ``theta @ coef ~ 0`` (see the module docstring).
+    """A validated catalog regression ``theta @ coef ~ 0``; build it with :meth:`from_arrays`.
 
-    Build it with :meth:`from_arrays`, which checks every argument; the constructor trusts
-    its arguments.
+    Every row holds exactly, so scaling a coordinate block changes how the blocks are weighed,
+    never the true coefficients: :meth:`balanced` makes the regression unit free.
 
-    Attributes
+    Parameters
     ----------
     theta : ndarray, shape (n_coordinates * N, F)
+        Stacked regression matrix, rows coordinate-major.
     n_coordinates : int
+        Number of coordinate blocks.
     force_columns : ndarray of int
-    noise_moments : ndarray, shape (n_coordinates, F, F), or None
-    mass_matrices : ndarray, shape (S, F, n_coordinates, n_coordinates), or None
+        The :class:`~pysindy_xl.ExternalForces` columns (coefficient -1).
+    noise_moments : ndarray, shape (n_coordinates, F, F), optional
+        ``E[E_c^T E_c]`` of the errors in each coordinate's rows (errors in variables).
+    mass_matrices : ndarray, shape (S, F, n, n), optional
+        Each column's contribution to the mass matrix at ``S`` sample states.
     balance : bool
-    reference_columns : ndarray of int or None
-    physical : PhysicalStructure or None
-    noise_draws : ndarray, shape (D, n_coordinates * N, F), or None
-    row_noise : WeakNoise or None
-    catalog_map : CatalogMap or None
-        Both describe the whole problem: sub-problems, subsamples and balanced copies drop
-        ``row_noise``, sub-problems and subsamples ``catalog_map``.
+        Whether the blocks may be rescaled by :func:`coordinate_weights`.
+    reference_columns : ndarray of int, optional
+        The columns allowed to carry the ``+1`` of an unforced law.
+    physical : PhysicalStructure, optional
+        What the columns stand for physically.
+    noise_draws : ndarray, shape (D, n_coordinates * N, F), optional
+        Monte Carlo draws of the rows' errors: a part of the rows gets its own moments.
+    row_noise : WeakNoise, optional
+        Where the moments and draws come from (dropped by derived problems).
+    catalog_map : CatalogMap, optional
+        The map back to the catalog (dropped by sub-problems and subsamples).
 
     Examples
     --------
@@ -84,11 +55,6 @@ class CatalogProblem:
     >>> problem = CatalogProblem.from_arrays(theta, 2, [])
     >>> problem.n_samples, problem.n_features
     (2, 2)
-    >>> problem.balanced().theta.round(6)
-    array([[0.001, 0.002],
-           [0.003, 0.001],
-           [0.001, 0.002],
-           [0.003, 0.001]])
     >>> problem.subproblem(np.array([False, True]), np.array([1])).theta
     array([[2.],
            [1.]])
@@ -116,9 +82,8 @@ class CatalogProblem:
         ----------
         theta, n_coordinates, force_columns, noise_moments, mass_matrices, balance, \
 reference_columns, physical, noise_draws, row_noise, catalog_map
-            The fields, as the class and module docstrings describe them; a ``ValueError``
-            or ``TypeError`` names a wrong one. ``noise_moments`` default to the second
-            moments of ``noise_draws`` (:func:`~pysindy_xl.weak.noise.draw_moments`).
+            The fields (class docstring); ``noise_moments`` default to the second moments of
+            ``noise_draws``.
 
         Returns
         -------
@@ -176,15 +141,15 @@ reference_columns, physical, noise_draws, row_noise, catalog_map
 
     @functools.cached_property
     def block_weights(self) -> np.ndarray:
-        """Weights of the coordinate blocks, shape (n_coordinates,): those of
-        :func:`coordinate_weights` with ``balance``, ones without."""
+        """Weights (n_coordinates,) of the blocks: :func:`coordinate_weights` with ``balance``,
+        else 1.
+        """
         if not self.balance:
             return np.ones(self.n_coordinates)
         return coordinate_weights(self.theta, self.n_coordinates, self.force_columns)
 
     def balanced(self) -> CatalogProblem:
-        """The same problem with each coordinate block's rows (and noise moments and draws)
-        scaled by :attr:`block_weights`; ``balance`` is then False (the blocks are weighed)."""
+        """The problem with each block's rows, moments and draws scaled by :attr:`block_weights`."""
         if not self.balance:
             return self
         weights = self.block_weights
@@ -215,8 +180,7 @@ reference_columns, physical, noise_draws, row_noise, catalog_map
         columns : array of int
             Catalog columns kept, in this order.
         force_columns : array of int, optional
-            Force columns of the sub-problem, as indices into ``columns``; default: those of
-            this problem that are among ``columns``.
+            Indices into ``columns``; default: this problem's force columns among ``columns``.
 
         Returns
         -------
@@ -246,11 +210,8 @@ reference_columns, physical, noise_draws, row_noise, catalog_map
                                    noise_draws=draws, row_noise=None, catalog_map=None)
 
     def subsample(self, samples) -> CatalogProblem:
-        """The rows of ``samples`` (indices within a block) in every coordinate block.
-
-        The noise moments are sums over rows: the subsample gets its rows' own (given the
-        draws) or their share. The mass matrices are properties of the columns at sample
-        states, not of rows: kept whole.
+        """The rows ``samples`` (indices within a block) of every block, with their own noise
+        moments (given the draws) or their share; the mass matrices are kept whole.
         """
         samples = np.asarray(samples, dtype=int)
         rows = (np.arange(self.n_coordinates)[:, None] * self.n_samples + samples).ravel()
@@ -265,8 +226,7 @@ reference_columns, physical, noise_draws, row_noise, catalog_map
 
 
 def check_noise_moments(noise_moments, n_coordinates: int, n_features: int) -> np.ndarray:
-    """Validate noise moments: finite, shape (n, F, F), symmetric blocks (sums of outer
-    products of column errors)."""
+    """Validate noise moments: finite, shape (n, F, F), symmetric blocks."""
     moments = check_numeric_array(noise_moments, "noise_moments", min_samples=0)
     if moments.shape != (n_coordinates, n_features, n_features):
         raise ValueError(f"noise_moments: expected shape {(n_coordinates, n_features, n_features)}"
@@ -307,36 +267,26 @@ def _block_rms(theta, n_blocks: int) -> np.ndarray:
 def coordinate_weights(theta, n_coordinates: int, force_columns=None) -> np.ndarray:
     r"""Row weights of the coordinate blocks of ``theta`` that balance their scales.
 
-    With :math:`M_{ij}` the RMS of column :math:`j` within block :math:`i` (rows
-    coordinate-major) and :math:`P = \{(i, j) : M_{ij} > 0\}` the entries that are not
-    exactly zero, solve the small least-squares problem
+    With :math:`M_{ij}` the RMS of column :math:`j` in block :math:`i` and :math:`P` its non-zero
+    entries, solve
 
     .. math::
 
         \min_{u, v} \sum_{(i, j) \in P} \left(\log M_{ij} + u_i + v_j\right)^2
         \quad\text{s.t.}\quad v_j = 0 \text{ for the force columns } j
 
-    (minimum-norm solution where it is not unique) and return
-    :math:`w_i = \exp(u_i - \bar u)`, :math:`\bar u` the mean of :math:`u` over the blocks
-    with an entry in :math:`P` (geometric mean 1; a block that is exactly zero gets 1).
-    :math:`\exp(u_i)` and :math:`\exp(v_j)` are row and column scalings that bring every
-    block of every column as close as possible to 1 in the log sense.
-
-    Force columns carry the coefficient -1 (the units of their equation), so they are not
-    rescaled (:math:`v_j = 0`): a change of units that multiplies block :math:`i` by
-    :math:`a_i` and column :math:`j` by :math:`b_j` (coefficient :math:`c_j \to c_j / b_j`,
-    forces kept at -1) changes :math:`u_i` by exactly :math:`-\log a_i` (up to a common
-    constant that the normalization removes), so the weighted matrix is the same up to column
-    scales: the regression is unit free. The pinned columns also fix the otherwise free common
-    shift of :math:`u` against :math:`v`. Balancing a balanced matrix returns ones.
+    (minimum norm) and return :math:`w_i = \exp(u_i - \bar u)` (geometric mean 1; a zero block
+    gets 1). Force columns keep their scale (coefficient -1), so a change of units of block
+    :math:`i` changes :math:`u_i` by exactly its log: the regression is unit free.
 
     Parameters
     ----------
     theta : array, shape (n_coordinates * N, F)
         Stacked regression matrix, rows coordinate-major.
     n_coordinates : int
+        Number of coordinate blocks.
     force_columns : sequence of int, optional
-        Columns whose scale is not free (their coefficient is fixed).
+        Columns whose scale is not free.
 
     Returns
     -------
@@ -344,18 +294,14 @@ def coordinate_weights(theta, n_coordinates: int, force_columns=None) -> np.ndar
 
     Examples
     --------
-    The first coordinate in micrometres: its block, force included, is 1e6 times too small.
+    The first coordinate in micrometres:
 
     >>> import numpy as np
-    >>> rng = np.random.default_rng(0)
-    >>> block = rng.normal(size=(50, 3))
+    >>> block = np.random.default_rng(0).normal(size=(50, 3))
     >>> theta = np.vstack([block * 1e-6, block])
     >>> w = coordinate_weights(theta, 2, force_columns=[2])
     >>> np.round(w[0] / w[1])
     np.float64(1000000.0)
-    >>> balanced = balance_coordinates(theta, 2, [2])
-    >>> np.allclose(coordinate_weights(balanced, 2, [2]), 1.0)
-    True
     """
     theta = np.asarray(theta, dtype=float)
     n = int(n_coordinates)
@@ -386,8 +332,7 @@ def coordinate_weights(theta, n_coordinates: int, force_columns=None) -> np.ndar
 
 
 def balance_coordinates(theta, n_coordinates: int, force_columns=None) -> np.ndarray:
-    """``theta`` with the rows of each coordinate block multiplied by its
-    :func:`coordinate_weights` (a new array; ``theta`` itself for a single block).
+    """``theta`` with each block's rows multiplied by its :func:`coordinate_weights`.
 
     Parameters
     ----------
@@ -415,11 +360,8 @@ def balance_coordinates(theta, n_coordinates: int, force_columns=None) -> np.nda
 
 
 def scale_blocks(theta, weights) -> np.ndarray:
-    """``theta`` with the rows of block ``i`` (rows coordinate-major) multiplied by
-    ``weights[i]``.
+    """``theta`` with the rows of block ``i`` multiplied by ``weights[i]``.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> scale_blocks(np.ones((4, 1)), [1.0, 3.0]).ravel().tolist()
     [1.0, 1.0, 3.0, 3.0]

@@ -1,40 +1,12 @@
-"""Noise-aware choice of the sparsity: a nested path of supports scored by cross-validation.
+"""Noise-aware choice of the sparsity (:func:`select_support`): nested paths of supports scored by
+cross-validation.
 
-A fixed relative threshold cannot serve both clean and noisy data: on clean data it prunes
-small true terms (a 0.5 % joint damping), on noisy data it keeps terms that only fit the
-noise. Instead:
-
-1. **Paths.** Backward elimination on all candidate columns: refit by least squares, drop
-   the column whose removal raises the residual least (``beta_j^2 / [(X^T X)^-1]_jj``, the
-   squared t-statistic, which unlike the raw coefficient size accounts for correlated
-   columns), repeat; and forward stepwise selection, which adds the column that lowers the
-   residual most. Each orders the columns from most to least needed and gives one nested
-   model of every size; the two greedy directions fail on different correlated patterns, so
-   both are scored.
-2. **Score.** Each model size is scored by ``n_folds``-fold cross-validation over contiguous
-   blocks of rows (blocks in time within each coordinate, so overlapping test functions or
-   smoothing windows hardly leak across folds). Each fold's training rows are reduced once
-   to their triangular system ``(R, Q^T y)``; a path's column order re-triangularizes that
-   square system, and all the nested models along the order follow from it.
-3. **Swaps.** Greedy paths miss supports where one true term is imitated by a pair of
-   correlated candidates (``qd1 qd2 cos q`` by ``qd1 qd2`` and ``qd1 qd2 sin^2 q`` on
-   small-angle stretches): at their sizes the path models are far worse than the true
-   support. Path models are therefore refined by a local best-subset search of the same
-   size (:func:`refine_by_swaps`: exchange one selected column for an unselected one while
-   the least-squares residual drops, the 1-swap search of L0Learn), and the refined models
-   are scored like the path models. Only path models no larger than the one the paths alone
-   would choose (step 4) are refined: a larger refinement can never be chosen.
-4. **Choice.** The smallest model (of either path or its refinement) whose cross-validated
-   error is within one standard error of the best path model (the one-standard-error rule):
-   on clean data the error of a model missing a true term is far above the best, however
-   small the term; on noisy data the extra terms do not lower the held-out error beyond its
-   own spread, so they are cut. The best is taken over the path models only: the minimum
-   over their many refinements as well would be optimistically low (the winner's curse of a
-   larger search) and let noise-fitting terms back in.
-
-Throughout, ``x`` (n_rows, F) and ``y`` (n_rows,) are the regression's columns and target, and
-the ``n_folds`` folds are contiguous inside each of ``n_blocks`` equal row blocks (the
-coordinates). Held-out errors are mean squares relative to the mean square of ``y``.
+A fixed threshold prunes small true terms on clean data and keeps noise terms on noisy data.
+Backward elimination (smallest squared t-statistic) and forward selection give one nested
+model per size, refined by single swaps (:func:`refine_by_swaps`); each is scored by
+cross-validation over contiguous blocks of rows of each of ``n_blocks`` coordinates (errors
+relative to the mean square of ``y``), and the smallest within one standard error of the best
+*path* model is chosen. ``x`` (n_rows, F) and ``y`` (n_rows,) are the columns and target.
 """
 
 from __future__ import annotations
@@ -57,9 +29,9 @@ def _scaled(x):
 
 
 def _reduced(x, y):
-    """Unit-RMS columns and their rows reduced once to ``(R, Q^T y)``: every least-squares
-    fit on a subset of the columns is the same on the reduced system. Returns
-    ``(non_zero_columns, reduced_x, reduced_y)``."""
+    """``(non_zero_columns, R, Q^T y)`` of the unit-RMS columns: least squares on any subset of the
+    columns is the same on the reduced system.
+    """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     active, scale = _scaled(x)
@@ -70,32 +42,26 @@ def _reduced(x, y):
 
 
 def _triangular_system(x, y):
-    """``(R, Q^T y)`` of ``x = Q R`` from one QR of ``[x | y]`` (Q is never formed); the
-    last row carries the residual norm, so least-squares residuals are preserved."""
+    """``(R, Q^T y)`` from one QR of ``[x | y]``; the last row keeps the residual norm."""
     stacked = np.column_stack([x, y])
-    # mode="r" returns R with all the rows of x; below the first F + 1 they are zero
     r_factor = scipy.linalg.qr(stacked, mode="r", check_finite=False)[0][: stacked.shape[1]]
     return r_factor[:, :-1], r_factor[:, -1]
 
 
 def elimination_path(x, y) -> np.ndarray:
-    """Column order (F,) from most to least needed, by backward elimination: ``order[:k]`` is
-    the path's model of size ``k``; zero columns come last.
+    """Column order (F,) from most to least needed, by backward elimination (zero columns last).
 
-    Examples
-    --------
     >>> import numpy as np
     >>> rng = np.random.default_rng(0)
     >>> x = rng.normal(size=(300, 6))
-    >>> y = x @ [0.0, 3.0, 0.0, 0.01, 0.0, -1.0]
-    >>> elimination_path(x, y)[:3].tolist()
+    >>> elimination_path(x, x @ [0.0, 3.0, 0.0, 0.01, 0.0, -1.0])[:3].tolist()
     [1, 5, 3]
     """
     return _elimination_order(*_reduced(x, y))
 
 
 def _elimination_order(active_mask, xs, y) -> np.ndarray:
-    """:func:`elimination_path` on a reduced system (:func:`_reduced`)."""
+    """:func:`elimination_path` on a reduced system."""
     active = list(np.flatnonzero(active_mask))
     removed = list(np.flatnonzero(~active_mask))
     while len(active) > xs.shape[0]:
@@ -124,15 +90,9 @@ def _elimination_order(active_mask, xs, y) -> np.ndarray:
 
 
 def forward_path(x, y) -> np.ndarray:
-    """Column order from most to least needed, by forward stepwise selection.
+    """Column order from most to least needed, by forward stepwise selection (orthogonal least
+    squares): finds a true term a correlated pair imitates, where elimination may keep the pair.
 
-    At each step the column that lowers the least-squares residual most, given the columns
-    already chosen, is added (orthogonal least squares). Greedy in the other direction from
-    :func:`elimination_path`: it finds one true term that a pair of correlated candidates
-    imitates, where backward elimination may keep the pair.
-
-    Examples
-    --------
     >>> import numpy as np
     >>> rng = np.random.default_rng(0)
     >>> x = rng.normal(size=(300, 6))
@@ -143,7 +103,7 @@ def forward_path(x, y) -> np.ndarray:
 
 
 def _forward_order(active_mask, xs, residual) -> np.ndarray:
-    """:func:`forward_path` on a reduced system (:func:`_reduced`)."""
+    """:func:`forward_path` on a reduced system."""
     orthogonal = xs.copy()
     chosen = []
     candidates = active_mask.copy()
@@ -167,12 +127,9 @@ def _forward_order(active_mask, xs, residual) -> np.ndarray:
 def refine_by_swaps(x, y, support, max_swaps: int = 50) -> np.ndarray:
     """Local best subset of a fixed size, by single swaps.
 
-    Starting from ``support``, the exchange of one selected column for one unselected column
-    that lowers the least-squares residual ``||y - x_S beta_S||^2`` most is made, as long as
-    it lowers it (at most ``max_swaps`` exchanges). The result is a support of the same
-    size that no single exchange improves: the local optimality of the best-subset
-    heuristics of L0Learn (Hazimeh and Mazumder, 2020), which greedy forward or backward
-    paths lack.
+    Makes the exchange of a selected for an unselected column that lowers
+    ``||y - x_S beta_S||^2`` most, while it does (at most ``max_swaps``): the local optimality of
+    L0Learn's heuristics (Hazimeh and Mazumder, 2020), which greedy paths lack.
 
     Parameters
     ----------
@@ -189,8 +146,7 @@ def refine_by_swaps(x, y, support, max_swaps: int = 50) -> np.ndarray:
 
     Examples
     --------
-    One true column imitated by a correlated pair: the greedy forward path takes the pair,
-    a swap recovers the true column.
+    A true column imitated by a correlated pair, recovered by a swap:
 
     >>> import numpy as np
     >>> rng = np.random.default_rng(0)
@@ -214,19 +170,11 @@ def fold_labels(n_rows: int, n_blocks: int, n_folds: int) -> np.ndarray:
     return np.minimum(position * n_folds // per_block, n_folds - 1)
 
 
-def _fold_systems(x, y, n_blocks: int, n_folds: int) -> list:
-    """Per fold: ``(fold, x_test, y_test, R, Q^T y)`` of unit-RMS columns, the training rows
-    reduced to their triangular system and ``y`` divided by its RMS (so squared held-out
-    errors come out relative to the mean square of ``y``). Folds without test or training
-    rows are skipped."""
-    return _systems(x, y, n_blocks, n_folds)[1]
-
-
 def _systems(x, y, n_blocks: int, n_folds: int) -> tuple[tuple, list]:
-    """:func:`_reduced` and :func:`_fold_systems` of the same rows, from one triangular
-    system per fold: the training system of a fold is the triangular system of the other
-    folds' stacked triangular systems (a QR of a few square blocks instead of one of all
-    their rows), and the system of all the rows that of every fold's."""
+    """:func:`_reduced` of the rows and, per fold, ``(fold, x_test, y_test, R, Q^T y)``: unit-RMS
+    columns, the training rows reduced (the QR of the other folds' stacked systems), ``y``
+    divided by its RMS; folds without test or training rows skipped.
+    """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     active, scale = _scaled(x)
@@ -252,27 +200,24 @@ def _systems(x, y, n_blocks: int, n_folds: int) -> tuple[tuple, list]:
 
 
 def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
-    """Held-out error (n_folds, len(order)) of every nested model ``order[:k]`` (at index
-    ``k - 1``) of a column order (e.g. :func:`elimination_path`), per fold."""
-    return _nested_errors(_fold_systems(x, y, n_blocks, n_folds), order, n_folds)
+    """Held-out error (n_folds, len(order)) of every nested model ``order[:k]`` (index ``k - 1``).
+    """
+    return _nested_errors(_systems(x, y, n_blocks, n_folds)[1], order, n_folds)
 
 
 def _nested_errors(folds, order, n_folds: int) -> np.ndarray:
-    """:func:`cross_validated_size` on the fold systems of :func:`_fold_systems`."""
+    """:func:`cross_validated_size` on the fold systems."""
     order = np.asarray(order, dtype=int)
     size = len(order)
     errors = np.full((n_folds, size), np.inf)
     for fold, x_test, y_test, r_natural, rhs_natural in folds:
-        # the training rows in the path's column order: re-triangularizing their reduced
-        # system gives the R of x_train[:, order] at the cost of a square QR
+        # the R of x_train[:, order] from a square QR
         r_factor, rhs = _triangular_system(r_natural[:, order], rhs_natural)
         usable = min(size, r_factor.shape[0])
         diag = np.abs(np.diag(r_factor))[:usable]
         ok = diag > 1e-12 * max(diag.max(initial=0.0), 1e-300)
         usable = int(np.argmin(ok)) if not ok.all() else usable
-        # coefficients of all nested models at once, column k holding the model of size
-        # k + 1: the leading block of an upper-triangular inverse is the inverse of the
-        # leading block, so beta_k = inv(R)[:, :k+1] @ rhs[:k+1] (a cumulative sum)
+        # all nested models at once: beta_k = inv(R)[:, :k+1] @ rhs[:k+1] (cumulative sum)
         inverse = scipy.linalg.solve_triangular(r_factor[:usable, :usable], np.eye(usable),
                                              check_finite=False)
         coefficients = np.zeros((size, usable))
@@ -283,13 +228,12 @@ def _nested_errors(folds, order, n_folds: int) -> np.ndarray:
 
 
 def cross_validated_supports(x, y, supports, n_blocks: int = 1, n_folds: int = 5):
-    """Held-out error (n_folds, len(supports)) of arbitrary (not nested) supports, per fold
-    (inf where a fold's training rows cannot determine the model)."""
-    return _support_errors(_fold_systems(x, y, n_blocks, n_folds), supports, n_folds)
+    """Held-out error (n_folds, len(supports)) of arbitrary supports (inf where undetermined)."""
+    return _support_errors(_systems(x, y, n_blocks, n_folds)[1], supports, n_folds)
 
 
 def _support_errors(folds, supports, n_folds: int) -> np.ndarray:
-    """:func:`cross_validated_supports` on the fold systems of :func:`_fold_systems`."""
+    """:func:`cross_validated_supports` on the fold systems."""
     errors = np.full((n_folds, len(supports)), np.inf)
     for fold, x_test, y_test, r_factor, rhs in folds:
         for m, support in enumerate(supports):
@@ -320,15 +264,14 @@ class SelectionResult(ChosenSupport):
     Parameters
     ----------
     order : ndarray of int
-        Columns from most to least needed (elimination path).
-    cv_error : ndarray
-        Mean held-out relative squared error of each model size (index ``k - 1``).
-    cv_spread : ndarray
-        Its standard error over the folds.
+        Columns from most to least needed.
+    cv_error, cv_spread : ndarray
+        Mean held-out relative squared error of each model size (index ``k - 1``) and its
+        standard error over the folds.
     size : int
         Chosen number of terms.
     best_size : int
-        Size of the path model with the lowest held-out error (the reference of the rule).
+        Size of the best path model (the rule's reference).
     rule : str
         How ``size`` was chosen.
 
@@ -351,30 +294,21 @@ class SelectionResult(ChosenSupport):
 
 def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
                    resolution: float = 1e-8, swaps: bool = True, keep=None) -> SelectionResult:
-    """Sparsest model within one standard error of the best held-out error.
-
-    Candidates are the nested models of the backward and forward paths and, with ``swaps``,
-    their swap refinements (:func:`refine_by_swaps`) up to the size the paths alone would
-    choose; the reference error and its standard error are those of the best path model.
+    """Sparsest model within one standard error of the best path model's held-out error.
 
     Parameters
     ----------
     x, y, n_blocks, n_folds
-        See the module docstring.
+        Columns (n_rows, F), target (n_rows,), equal row blocks (coordinates) and folds.
     max_size : int, optional
-        Largest model considered (default: all columns, at most the rows of a fold's
-        training set).
+        Largest model considered (default: all columns).
     resolution : float, default 1e-8
-        Held-out errors (relative mean squares) closer than this to the best count as equal:
-        on clean data, extra terms fit quadrature and differentiation errors at the 1e-5
-        relative level and must not win on that alone. A true term of 0.1 % of the force
-        changes the error by 1e-6, far above it.
+        Held-out relative errors this close to the best count as equal (on clean data extra
+        terms fit quadrature errors).
     swaps : bool, default True
         Refine the path models by single swaps.
     keep : array of int, optional
-        Columns in every model: the paths order the other columns given these (least
-        squares with ``keep`` profiled out), and only models holding all of them are
-        candidates.
+        Columns in every model (profiled out of the paths).
 
     Returns
     -------
@@ -395,8 +329,6 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     """
     # candidate models: (size, held-out mean, its standard error, how found, column order)
     candidates, seen, paths = [], set(), []
-    # shared by both paths, their scoring and the swaps: one reduction of all the rows and
-    # one of each fold's training rows
     reduced, folds = _systems(x, y, n_blocks, n_folds)
     keep = np.unique(np.asarray([] if keep is None else keep, dtype=int))
     free, local = _profiled(reduced, keep)
@@ -415,14 +347,10 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
                 candidates.append((int(k) + 1, mean[k], spread[k], f"{path} path", order))
     if not candidates:
         raise ValueError("x: no model size can be cross-validated on these rows")
-    # The reference accuracy comes from the path models only: the minimum held-out error
-    # over many more (refined) candidates is optimistically low (the winner's curse) and
-    # would let noise-fitting terms in; refinements can only reach it with fewer terms.
+    # the reference is the best path model (the winner's curse of the refinements)
     best = min(candidates, key=lambda c: c[1])
     tolerance = max(best[2], resolution)
     if swaps:
-        # the choice is the smallest candidate within the tolerance, so only refinements no
-        # larger than the path models' own choice can change it
         path_choice = min(c[0] for c in candidates if c[1] <= best[1] + tolerance)
         candidates += _swap_candidates(local, folds, paths, seen, path_choice, n_folds,
                                        keep, free)
@@ -449,9 +377,7 @@ def fold_summary(errors):
 
 
 def _profiled(reduced, keep):
-    """The columns besides ``keep`` and the reduced system (:func:`_reduced`) of their
-    least squares with the ``keep`` columns profiled out (both sides projected off their
-    span): the paths and swaps of the other columns given ``keep``."""
+    """The columns besides ``keep`` and their reduced system with ``keep`` projected out."""
     active, xs, y = reduced
     free = np.setdiff1d(np.arange(xs.shape[1]), keep)
     if not len(keep):
@@ -464,10 +390,9 @@ def _profiled(reduced, keep):
 
 
 def _swap_candidates(reduced, folds, paths, seen, limit, n_folds, keep=(), free=None):
-    """Swap refinements of the path models of at most ``limit`` terms, scored by CV on the
-    ``folds`` (:func:`_fold_systems`); ``reduced``: the system of :func:`_reduced` (of the
-    ``free`` columns with ``keep`` profiled out, :func:`_profiled`: only free columns are
-    exchanged, the kept ones stay in every model)."""
+    """Swap refinements of the path models of at most ``limit`` terms, scored on ``folds``; only
+    the ``free`` columns are exchanged.
+    """
     active, xs, y_reduced = reduced
     n_keep = len(keep)
     if n_keep:

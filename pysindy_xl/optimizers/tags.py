@@ -1,10 +1,6 @@
-"""What a catalog optimizer can do and needs: one tags object, asked in one way.
-
-Like scikit-learn's estimator tags, the capabilities of a catalog optimizer are one frozen
-dataclass, :class:`CatalogTags`, returned by its ``catalog_tags()`` method; the fit stage and
-the composite optimizers read them with :func:`catalog_tags`, which also answers for
-objects that only have ``fit_catalog``. A wrapper (ensemble, physically consistent refit)
-returns the tags of the optimizer it wraps with what it changes itself.
+"""What a catalog optimizer can do and needs: one frozen :class:`CatalogTags`, like
+scikit-learn's estimator tags, returned by ``catalog_tags()`` and read with
+:func:`catalog_tags`. A wrapper returns its wrapped optimizer's tags with its own changes.
 """
 
 from __future__ import annotations
@@ -18,25 +14,21 @@ __all__ = ["CatalogTags", "catalog_tags", "TAG_NAMES"]
 class CatalogTags:
     """Capabilities and needs of a catalog optimizer.
 
-    Attributes
+    Parameters
     ----------
     requires_forces : bool, default False
-        Explicit regression: the problem must have force columns (the estimator refuses
-        unforced data).
+        Explicit regression: the problem must have force columns.
     uses_mass_matrices : bool, default False
-        The mass matrices of the columns improve the fit (computed only then).
+        The columns' mass matrices improve the fit (computed only then).
     uses_noise_draws : bool, default False
-        The draws of the rows' errors (``CatalogProblem.noise_draws``) improve the fit
-        (passed only then).
+        The draws of the rows' errors improve the fit (passed only then).
     derivative_estimate : {"smoothed", "unbiased"}, default "smoothed"
-        Derivatives the strong form should use: smoothed (bias small next to the noise) or
-        unbiased (a null-space search that the smoothing bias alone can hide the law from).
+        Derivatives the strong form should use (a null-space search can lose the law to the
+        smoothing bias).
     can_refit : bool, default False
-        It refits a given support: ``fit_problem(problem, support=...)`` (an ensemble's
-        last step).
+        It refits a given support: ``fit_problem(problem, support=...)``.
     balances_rows : bool, default True
-        ``fit_problem`` balances the coordinate blocks before solving; False for optimizers
-        that hand the problem on to others, which balance their own parts.
+        ``fit_problem`` balances the coordinate blocks; False for optimizers whose parts do.
 
     Examples
     --------
@@ -65,8 +57,8 @@ def catalog_tags(optimizer) -> CatalogTags:
     Parameters
     ----------
     optimizer : object
-        A catalog optimizer (its ``catalog_tags()``), or any object with ``fit_catalog``,
-        whose attributes of the tags' names are read (defaults otherwise).
+        A catalog optimizer, or any object with ``fit_catalog`` (its attributes of the tags'
+        names are read).
 
     Returns
     -------

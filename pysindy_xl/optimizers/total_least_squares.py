@@ -1,36 +1,5 @@
-r"""Errors-in-variables total least squares on every column of a complete catalog.
-
-Where the catalog has no spurious columns (a kinematic catalog: each Lagrangian column
-multiplies one base parameter, every one of them present in the true law), an unforced law
-needs no selection of terms: it is the direction ``xi`` that the noisy columns
-``Theta = Theta_0 + E`` (noise moments ``S = E[E^T E]``) contradict least,
-
-.. math:: \hat\xi = \arg\min_{\xi \ne 0} \rho(\xi), \qquad
-          \rho(\xi) = \frac{\lVert \Theta \xi \rVert^2}{\xi^T S \xi},
-
-the smallest generalized eigenvector of the pencil ``(Theta^T Theta, S)``
-(:func:`~pysindy_xl.optimizers.noise_ratio.noise_pencil`): the consistent errors-in-variables
-estimate (Fuller, *Measurement Error Models*, 1987, section 4.1), where least squares on a
-pivot column or the smallest singular vector of the raw columns are biased by the noise.
-
-**What the data determine.** The ascending pencil values ``rho_1 <= rho_2 <= ...`` are the
-noise ratios of the principal directions: about 1 for a law that holds to the noise. When
-``rho_k <= undetermined_ratio * max(rho_1, 1)`` for some ``k >= 2``, a second independent
-law holds as well (one energy level, too little excitation): every combination of those
-directions fits, so the combination is undetermined. They are reported in ``undetermined_``
-and a warning says so, rather than one of them being returned as if it were the law.
-
-**Normalization.** A law is defined up to a factor. ``normalization="dominant"`` follows the
-catalog's convention (:func:`~pysindy_xl.optimizers.laws.normalize_law`: a non-zero
-force column ``-1``, otherwise the dominant term ``+1``); ``"inertia"`` scales the law to a
-unit reference inertia, the mean over the sample states of the trace of its mass matrix
-``M(q) = sum_j xi_j M_j(q)`` equal to the number of coordinates,
-
-.. math:: \frac{1}{S} \sum_s \operatorname{tr} M(q_s) = n .
-
-In both, given the columns' mass matrices, the sign is the one of a positive kinetic energy
-(positive mean trace).
-"""
+"""Errors-in-variables total least squares on every column of a complete catalog
+(:class:`TotalLeastSquaresOptimizer`)."""
 
 from __future__ import annotations
 
@@ -53,30 +22,34 @@ _NORMALIZATIONS = ("dominant", "inertia")
 class TotalLeastSquaresOptimizer(CatalogOptimizer):
     r"""Unforced law of a complete catalog by errors-in-variables total least squares.
 
-    Every non-zero column is kept (no selection): the law minimizes the noise ratio
-    ``||Theta xi||^2 / xi^T S xi`` over all directions (module documentation). Without noise
-    moments, the smallest right singular vector of the unit-norm columns.
+    Where no column is spurious (a kinematic catalog), the unforced law needs no selection: it
+    is the direction the noisy columns (moments ``S = E[E^T E]``) contradict least,
+
+    .. math:: \hat\xi = \arg\min_{\xi \ne 0} \frac{\lVert \Theta \xi \rVert^2}{\xi^T S \xi},
+
+    the smallest generalized eigenvector of ``(Theta^T Theta, S)`` (Fuller, 1987, section
+    4.1); without noise moments, the smallest right singular vector of the unit-norm columns.
+    Further directions whose ratio ``rho_k <= undetermined_ratio * max(rho_1, 1)`` hold as
+    well: the law is then undetermined (``undetermined_``, with a warning).
 
     Parameters
     ----------
     undetermined_ratio : float, default 3.0
-        Further principal directions whose noise ratio is within this factor of
-        ``max(rho_1, 1)`` hold to the noise as well and are reported as undetermined.
+        Further directions with a noise ratio within this factor of ``max(rho_1, 1)`` are
+        reported as undetermined.
     normalization : {"dominant", "inertia"}, default "dominant"
-        Scale of the law (module documentation).
+        :func:`~pysindy_xl.optimizers.laws.normalize_law`, or a mean mass-matrix trace of ``n``
+        over the sample states; given mass matrices, the kinetic energy is made positive.
 
     Attributes
     ----------
     coef_ : ndarray, shape (F,)
     noise_ratio_ : float
-        The law's noise ratio on all rows (about 1 when it holds to the noise); nan without
-        noise moments.
+        The law's noise ratio (about 1 when it holds); nan without noise moments.
     pencil_ratios_ : ndarray
-        Noise ratios of the principal directions, ascending (relative squared residuals of
-        the unit-norm columns without noise moments).
+        Noise ratios of the principal directions, ascending.
     undetermined_ : ndarray, shape (k, F)
-        Further laws the data hold as well (normalized as ``coef_``); empty when the law is
-        determined.
+        Further laws the data hold as well (normalized as ``coef_``).
     column_norms_ : ndarray, shape (F,)
     selection_method_ : str
         ``"total least squares"``.
@@ -97,8 +70,7 @@ class TotalLeastSquaresOptimizer(CatalogOptimizer):
     spec_type = "TotalLeastSquaresOptimizer"
 
     def catalog_tags(self):
-        """Uses the mass matrices; wants unbiased derivatives (see
-        :class:`~pysindy_xl.optimizers.CatalogTags`)."""
+        """Uses the mass matrices; wants unbiased derivatives."""
         return dataclasses.replace(super().catalog_tags(), uses_mass_matrices=True,
                                    derivative_estimate="unbiased")
 
@@ -158,7 +130,7 @@ class TotalLeastSquaresOptimizer(CatalogOptimizer):
         return self
 
     def _normalize(self, law, norms, problem):
-        """Scale of the module documentation; sign of a positive kinetic energy."""
+        """Scale of ``normalization``; sign of a positive kinetic energy."""
         law = normalize_law(law, norms, problem.force_columns, problem.reference_columns)
         if problem.mass_matrices is None:
             return law

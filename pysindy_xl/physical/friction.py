@@ -1,18 +1,6 @@
-r"""Dry friction laws of a joint, and recognizing them in a catalog's terms.
-
-A catalog states a joint's dry friction ``F`` as ``F`` times a unit law of the joint velocity
-``v``:
-
-* the smooth sign ``tanh(v / eps)`` (or ``sign(v)``), the usual model of real joints;
-* MuJoCo's regularized ``frictionloss`` (:func:`regularized_dry_friction`): the simulator
-  applies dry friction as a soft constraint whose force ``-F sat((v + tau a) / s)`` saturates
-  only outside a sticking zone ``|v| < s`` and leads the velocity by ``tau``
-  (:func:`~pysindy_xl.mujoco.systems.friction.dry_friction_scales` derives ``s`` and ``tau``
-  from the model). Inside the zone it is a damping ``F / s`` plus an inertia ``F tau / s``,
-  which on light links can exceed the link's own.
-
-:func:`dry_friction_law` reads back which law a term is, so that the physical checks
-(``F >= 0``) and the MJCF export (``frictionloss``) treat every law alike.
+r"""Dry friction laws of a joint (``tanh(v / eps)`` or ``sign(v)``, and MuJoCo's regularized
+``frictionloss``, :func:`regularized_dry_friction`), and recognizing them in a catalog's terms
+(:func:`dry_friction_law`).
 """
 
 from __future__ import annotations
@@ -30,17 +18,14 @@ def regularized_dry_friction(velocity, acceleration, scale: float, lead: float) 
               + \tau \frac{d}{dt} \mathrm{sat}(v / s),
               \qquad \mathrm{sat}(x) = \frac{|x + 1| - |x - 1|}{2}.
 
-    Exact while the velocity stays inside the sticking zone ``|v| < s`` (damping and inertia)
-    or outside it (``sign(v)``); at a reversal, MuJoCo's switch ``tau`` early becomes an impulse
-    of the same area at the reversal, which test functions much wider than ``tau`` do not tell
-    apart. The lead is an exact time derivative, so the weak form integrates it by parts.
+    Exact inside or outside the sticking zone; the lead is a time derivative, integrated by
+    parts in the weak form.
 
     Parameters
     ----------
     velocity, acceleration : sympy.Expr
-        The joint's velocity and acceleration in the coordinates.
     scale, lead : float
-        ``s`` (velocity units, positive) and ``tau`` (s, non-negative).
+        ``s`` (positive) and ``tau`` (s, non-negative).
 
     Returns
     -------
@@ -60,20 +45,18 @@ def regularized_dry_friction(velocity, acceleration, scale: float, lead: float) 
 
 
 def dry_friction_law(term, velocity, acceleration=None) -> str | None:
-    """Which unit dry friction law ``term`` is in the velocity ``velocity``.
+    """Which unit dry friction law ``term`` is in ``velocity``.
 
     Parameters
     ----------
     term : sympy.Expr
     velocity, acceleration : sympy.Symbol
-        A coordinate's velocity and acceleration.
 
     Returns
     -------
     {"smooth", "regularized"} or None
-        ``"smooth"`` for ``tanh(k v)`` and ``sign(v)``, ``"regularized"`` for
-        :func:`regularized_dry_friction` of ``v`` (and ``acceleration``) at some scale and
-        lead, None for any other term.
+        ``tanh(k v)`` or ``sign(v)``; :func:`regularized_dry_friction` at some scale and lead;
+        any other term.
 
     Examples
     --------

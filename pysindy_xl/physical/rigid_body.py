@@ -1,48 +1,13 @@
 r"""Rigid-body dynamics of a kinematic tree from inertial parameters: ``M(q)`` and bias forces.
 
-A kinematic catalog's Lagrangian is :math:`L = \sum_p \pi_p \phi_p(q, \dot q)`, linear in the
-bodies' inertial parameters :math:`\pi` (per body, in its frame: mass, first moments
-:math:`h = m c`, inertia about the frame origin; per joint: armature). Its Euler-Lagrange
-equations are therefore those of the rigid bodies with parameters :math:`\pi`,
-
-.. math:: M(q)\,\ddot q + b(q, \dot q) = \sum_b J_b^T \left( I_b \dot V_b
-          + V_b \times^* I_b V_b - G_b \right),
-
-whatever :math:`\pi` is: the algebra below is linear in :math:`\pi` and never asks for
-positive masses. With :math:`J_b` the Jacobian of body :math:`b`'s spatial velocity
-:math:`V_b = J_b \dot q`, :math:`I_b` its spatial inertia and :math:`G_b` its weight, all in
-world coordinates at the world origin, the mass matrix is
-:math:`M = \sum_b J_b^T I_b J_b + \operatorname{diag}(\text{armature})` and the bias forces
-are the equations at :math:`\ddot q = 0`. The cost grows with the number of bodies, not with
-the tens of thousands of monomials the expanded Euler-Lagrange columns of an arm have.
-
-Spatial vectors are ``[angular; linear]``: a motion ``[w; v_O]`` (angular velocity, velocity of
-the body point at the world origin), a force ``[n_O; f]`` (moment about the origin, force). A
-hinge of world axis ``a`` through ``p`` has the screw ``[a; p x a]``, a slide ``[0; a]``.
-
-Every function takes a :class:`KinematicTree` ``tree``, its parameters ``pi`` (shape
-(len(tree.physical_names),): the inertial parameters of the moving bodies, then armatures; any
-real values) and the array module ``xp`` (NumPy or ``jax.numpy``), and works on a leading
-batch axis without in-place updates, so the same code serves the simulators and
+A kinematic catalog's Lagrangian is linear in the bodies' inertial parameters :math:`\pi`, so
+its Euler-Lagrange equations are those of rigid bodies with parameters :math:`\pi`, whatever
+their values; evaluated here by composite rigid bodies, at a cost that grows with the bodies,
+not with the expanded equations' monomials. Spatial vectors are ``[angular; linear]`` in world
+coordinates at the world origin. Every function takes a :class:`KinematicTree`, parameters
+``pi`` (``tree.physical_names``) and an array module ``xp`` (NumPy or ``jax.numpy``), batched
+and without in-place updates, so the same code serves the simulators and
 :meth:`XLSINDy.to_jax <pysindy_xl.XLSINDy.to_jax>`.
-
-Examples
---------
-A point mass ``m = 2`` at distance 0.5 on a hinge about ``y``, gravity along ``-z``:
-
->>> import numpy as np
->>> tree = KinematicTree(body_names=("link",), parents=np.array([-1]),
-...                      offsets=np.zeros((1, 3)), rotations=np.eye(3)[None],
-...                      joint_names=("hinge",), joint_bodies=np.array([0]),
-...                      joint_hinge=np.array([True]), joint_axes=np.array([[0.0, 1, 0]]),
-...                      joint_anchors=np.zeros((1, 3)), joint_references=np.zeros(1),
-...                      joint_to_coordinates=np.eye(1), gravity=np.array([0.0, 0, -9.81]))
->>> pi = np.zeros(11); pi[0], pi[3], pi[4], pi[5] = 2.0, -1.0, 0.5, 0.5  # m, m cz, Ixx, Iyy
->>> mass, bias = rigid_body_dynamics(tree, pi, np.array([[0.0]]), np.array([[0.0]]))
->>> mass.round(4), bias.round(4)  # m l^2, and no torque hanging straight down
-(array([[[0.5]]]), array([[0.]]))
->>> rigid_body_dynamics(tree, pi, np.array([[np.pi / 2]]), np.array([[0.0]]))[1].round(4)
-array([[9.81]])
 """
 
 from __future__ import annotations
@@ -62,32 +27,29 @@ __all__ = ["KinematicTree", "joint_screws", "physical_parameters_from_base",
 class KinematicTree:
     """The kinematics of a mechanism of hinge and slide joints, as MuJoCo places its frames.
 
-    Bodies are listed parents first; each is placed in its parent's frame by a fixed offset and
-    rotation, then moved by its joints in order (a hinge turns the frame about its axis through
-    its anchor by ``qpos - reference``, a slide translates it along its axis by
-    ``qpos - reference``), axes and anchors in the body's frame. The system's coordinates are
-    ``q = joint_to_coordinates @ qpos``.
+    Bodies are listed parents first, each placed in its parent's frame by a fixed offset and
+    rotation, then moved by its joints in order (about or along the axis by
+    ``qpos - reference``). The system's coordinates are ``q = joint_to_coordinates @ qpos``.
 
     Attributes
     ----------
     body_names : tuple of str, length B
     parents : ndarray of int, shape (B,)
-        Index of each body's parent in this list, ``-1`` for the world.
+        Each body's parent, ``-1`` for the world.
     offsets : ndarray, shape (B, 3)
     rotations : ndarray, shape (B, 3, 3)
-        Fixed placement of each body in its parent's frame (``x_parent = R x_body + offset``).
+        Fixed placement in the parent's frame (``x_parent = R x_body + offset``).
     joint_names : tuple of str, length J
     joint_bodies : ndarray of int, shape (J,)
     joint_hinge : ndarray of bool, shape (J,)
         Hinge (``True``) or slide.
     joint_axes, joint_anchors : ndarray, shape (J, 3)
-        Unit axis and anchor point of each joint in its body's frame.
+        Unit axis and anchor in the body's frame.
     joint_references : ndarray, shape (J,)
         ``qpos`` at which each joint leaves its body in the placement above.
     joint_to_coordinates : ndarray, shape (J, J)
-        ``T`` with ``q = T @ qpos`` (invertible).
+        Invertible ``T`` with ``q = T @ qpos``.
     gravity : ndarray, shape (3,)
-        Gravitational acceleration in world coordinates.
     """
 
     body_names: tuple
@@ -136,10 +98,9 @@ class KinematicTree:
         if abs(np.linalg.det(self.joint_to_coordinates)) < 1e-12:
             raise ValueError("KinematicTree.joint_to_coordinates: expected an invertible matrix")
 
-    # -- derived, cached ------------------------------------------------------------------
     @functools.cached_property
     def joint_support(self) -> np.ndarray:
-        """``(B, J)`` bool: joint ``k`` moves body ``b`` (its own joints and its ancestors')."""
+        """``(B, J)`` bool: joint ``k`` moves body ``b``."""
         support = np.zeros((len(self.body_names), len(self.joint_names)), dtype=bool)
         for b, parent in enumerate(self.parents):
             if parent >= 0:
@@ -149,22 +110,23 @@ class KinematicTree:
 
     @functools.cached_property
     def moving_bodies(self) -> np.ndarray:
-        """Indices of the bodies some joint moves: those whose parameters enter the dynamics."""
+        """Indices of the bodies some joint moves (whose parameters enter the dynamics)."""
         return np.flatnonzero(self.joint_support.any(axis=1))
 
     @functools.cached_property
     def physical_names(self) -> tuple:
-        """Names of the physical parameters ``pi``, in the order the functions here read them:
-        ``"<body>.<p>"`` for every moving body and ``p`` in :data:`INERTIAL_PARAMETERS`, then
-        ``"<joint>.armature"`` for every joint (the names of kinematic catalogs' maps)."""
+        """Names of ``pi``: ``"<body>.<p>"`` per moving body and :data:`INERTIAL_PARAMETERS`, then
+        ``"<joint>.armature"``.
+        """
         names = [f"{self.body_names[b]}.{p}" for b in self.moving_bodies
                  for p in INERTIAL_PARAMETERS]
         return tuple(names + [f"{joint}.armature" for joint in self.joint_names])
 
     @functools.cached_property
     def _frame_plan(self) -> dict:
-        """How :func:`joint_screws` composes frames: one per joint (its local placement at
-        index ``k``), one per jointless body (at ``J + i``), parents first."""
+        """How :func:`joint_screws` composes frames: one per joint, one per jointless body (at
+        ``J + i``), parents first.
+        """
         J = len(self.joint_names)
         prefix_rotation = np.broadcast_to(np.eye(3), (J, 3, 3)).copy()
         prefix_offset = np.zeros((J, 3))
@@ -208,7 +170,7 @@ class KinematicTree:
 
     @functools.cached_property
     def _preceding_joints(self) -> np.ndarray:
-        """``(J, J)``: 1 where joint ``k'`` moves the frame that carries joint ``k``'s axis."""
+        """``(J, J)``: 1 where joint ``k'`` moves the frame carrying joint ``k``'s axis."""
         J = len(self.joint_names)
         preceding = np.zeros((J, J), dtype=bool)
         for k, b in enumerate(self.joint_bodies):
@@ -218,12 +180,9 @@ class KinematicTree:
             preceding[k, :k] |= self.joint_bodies[:k] == b
         return preceding.astype(float)
 
-    # -- persistence ----------------------------------------------------------------------
     def to_dict(self) -> dict:
-        """JSON-ready description (lists and numbers); :meth:`from_dict` reads it back.
+        """JSON-ready description; :meth:`from_dict` reads it back.
 
-        Examples
-        --------
         >>> tree = KinematicTree.from_dict(KinematicTree.from_dict({
         ...     "body_names": ["b"], "parents": [-1], "offsets": [[0, 0, 0]],
         ...     "rotations": [[[1, 0, 0], [0, 1, 0], [0, 0, 1]]], "joint_names": ["j"],
@@ -252,15 +211,9 @@ class KinematicTree:
 
 
 def physical_parameters_from_base(tree: KinematicTree, maps, beta) -> np.ndarray:
-    r"""Physical parameters :math:`\pi` reproducing base parameters: the least-norm solution
-    of :math:`C \pi = \beta`, with ``C`` read from the ``{physical name: weight}`` maps.
-
-    Any solution gives the same equations (the dynamics depend on :math:`C \pi` only); the
-    least-norm one is well defined and needs no physical reference.
-
-    ``maps`` (K dicts) is a kinematic catalog's ``parameters``, the combination each base
-    parameter of ``beta`` (K,) stands for; a ``ValueError`` names a parameter the tree does
-    not have.
+    r"""Least-norm physical parameters :math:`\pi` with :math:`C \pi = \beta` (any solution gives
+    the same equations), ``C`` read from a kinematic catalog's ``parameters`` maps
+    (``{physical name: weight}`` per base parameter); ``ValueError`` on an unknown name.
     """
     index = {name: p for p, name in enumerate(tree.physical_names)}
     combination = np.zeros((len(maps), len(index)))
@@ -303,27 +256,9 @@ def _apply(matrix, vector):
 
 
 def joint_screws(tree: KinematicTree, qpos, xp=np):
-    """Forward kinematics: body placements and joint screws in world coordinates.
-
-    Every joint's placement relative to the frame before it (a turn about its axis through its
-    anchor, or a translation along its axis, prefixed by its body's fixed placement for a
-    body's first joint) is computed for all joints at once; the placements then compose down
-    the tree, one matrix product per frame. A turn leaves its own axis and anchor in place, so
-    each joint's screw follows from the frame after it.
-
-    Parameters
-    ----------
-    qpos : array, shape (N, J)
-        Joint positions (MuJoCo's ``qpos``).
-
-    Returns
-    -------
-    rotations : array, shape (N, B, 3, 3)
-        World orientation of every body frame.
-    positions : array, shape (N, B, 3)
-        World position of every body frame's origin.
-    screws : array, shape (N, J, 6)
-        Unit motion of each joint, ``[axis; anchor x axis]`` (hinge) or ``[0; axis]``.
+    """Forward kinematics at ``qpos`` (N, J): every body frame's world ``rotations`` (N, B, 3, 3)
+    and ``positions`` (N, B, 3), and each joint's unit screw (N, J, 6), ``[axis; anchor x axis]``
+    (hinge) or ``[0; axis]``. All local placements at once, then composed down the tree.
     """
     plan = tree._frame_plan
     hinge = tree.joint_hinge[:, None, None]
@@ -361,19 +296,9 @@ def joint_screws(tree: KinematicTree, qpos, xp=np):
 
 
 def world_inertias(tree: KinematicTree, pi, rotations, positions, xp=np):
-    """Inertial parameters of every moving body in world coordinates, about the world origin.
-
-    ``rotations`` and ``positions`` come from :func:`joint_screws`.
-
-    Returns
-    -------
-    mass : array, shape (Bm,)
-        Of each moving body ``Bm``.
-    moment : array, shape (N, Bm, 3)
-        First moment ``m c`` about the origin.
-    inertia : array, shape (N, Bm, 3, 3)
-        Rotational inertia about the origin. The spatial inertia is
-        ``[[inertia, [moment]x], [[moment]x^T, mass 1]]``; everything is linear in ``pi``.
+    """Moving bodies' inertial parameters in world coordinates, about the world origin, from
+    :func:`joint_screws`'s placements: ``mass`` (Bm,), first ``moment`` (N, Bm, 3) and
+    ``inertia`` (N, Bm, 3, 3), all linear in ``pi``.
     """
     moving = tree.moving_bodies
     body = xp.reshape(pi[: 10 * len(moving)], (len(moving), 10))
@@ -400,7 +325,7 @@ def _momentum(mass, moment, inertia, motion, xp):
 
 
 def _motion_cross(a, b, xp):
-    """``a x b`` of spatial motions (the derivative of a motion ``b`` carried by ``a``)."""
+    """``a x b`` of spatial motions."""
     return xp.concatenate([_cross(a[..., :3], b[..., :3]),
                            _cross(a[..., :3], b[..., 3:]) + _cross(a[..., 3:], b[..., :3])],
                           axis=-1)
@@ -415,20 +340,34 @@ def _force_cross(a, f, xp):
 def rigid_body_dynamics(tree: KinematicTree, pi, q, qd, xp=np):
     r"""Mass matrix and bias forces of the tree with physical parameters ``pi``.
 
-    The equations of motion read :math:`M(q) \ddot q + b(q, \dot q) = \tau` in the system's
-    coordinates ``q = T qpos`` (:math:`M = T^{-T} M_{qpos} T^{-1}`, :math:`b = T^{-T}
-    b_{qpos}`): the Euler-Lagrange operator applied to the Lagrangian of ``pi``. Joint ``k``
-    feels the bodies it moves: with their composite inertia :math:`I^c_k` (a sum, linear in
-    ``pi``), :math:`M_{kl} = s_k^T I^c_l s_l` when ``k`` moves ``l``'s axis, and
-    :math:`b_k = s_k^T \sum_b (I_b a_b + v_b \times^* I_b v_b - g_b)` over those bodies.
-
-    ``q``, ``qd`` (N, J) are positions and velocities in the system's coordinates.
+    In the system's coordinates (:math:`M = T^{-T} M_{qpos} T^{-1}`, :math:`b = T^{-T}
+    b_{qpos}`), from composite inertias: :math:`M_{kl} = s_k^T I^c_l s_l` where ``k`` moves
+    ``l``'s axis, :math:`b_k = s_k^T \sum_b (I_b a_b + v_b \times^* I_b v_b - g_b)` over the
+    bodies ``k`` moves. ``q``, ``qd`` (N, J).
 
     Returns
     -------
     mass : array, shape (N, J, J)
     bias : array, shape (N, J)
         Coriolis, centrifugal and gravity forces (the equations at ``qdd = 0``).
+
+    Examples
+    --------
+    A point mass ``m = 2`` at distance 0.5 on a hinge about ``y``, gravity along ``-z``:
+
+    >>> import numpy as np
+    >>> tree = KinematicTree(body_names=("link",), parents=np.array([-1]),
+    ...                      offsets=np.zeros((1, 3)), rotations=np.eye(3)[None],
+    ...                      joint_names=("hinge",), joint_bodies=np.array([0]),
+    ...                      joint_hinge=np.array([True]), joint_axes=np.array([[0.0, 1, 0]]),
+    ...                      joint_anchors=np.zeros((1, 3)), joint_references=np.zeros(1),
+    ...                      joint_to_coordinates=np.eye(1), gravity=np.array([0.0, 0, -9.81]))
+    >>> pi = np.zeros(11); pi[0], pi[3], pi[4], pi[5] = 2.0, -1.0, 0.5, 0.5  # m, m cz, Ixx, Iyy
+    >>> mass, bias = rigid_body_dynamics(tree, pi, np.array([[0.0]]), np.array([[0.0]]))
+    >>> mass.round(4), bias.round(4)  # m l^2, and no torque hanging straight down
+    (array([[[0.5]]]), array([[0.]]))
+    >>> rigid_body_dynamics(tree, pi, np.array([[np.pi / 2]]), np.array([[0.0]]))[1].round(4)
+    array([[9.81]])
     """
     inverse = tree._inverse_transform
     qpos, qvel = q @ inverse.T, qd @ inverse.T

@@ -1,14 +1,9 @@
 r"""Semidefinite programs of physical consistency (cvxpy, imported on first use).
 
-With a :class:`~pysindy_xl.physical.PhysicalStructure` (``beta = C pi`` for the base
-parameters, the bodies' parameters, armatures and friction columns), the rigid-body
-constraints on inertial parameters ``pi`` are linear matrix inequalities (Wensing, Kim and
-Slotine, 2017): every body's pseudo-inertia :math:`J_b(\pi) \succeq 0`
-(:func:`~pysindy_xl.physical.pseudo_inertia_matrix`) and every armature :math:`a_j \ge 0`.
-
-* :func:`realize` finds parameters ``pi`` that reproduce given base parameters (the MJCF
-  export places them in a template's bodies);
-* :func:`consistent_least_squares` fits a regression's coefficients under the constraints.
+Given a :class:`~pysindy_xl.physical.PhysicalStructure`, rigid bodies' constraints on ``pi``
+are linear matrix inequalities (Wensing, Kim and Slotine, 2017): :math:`J_b(\pi) \succeq 0`
+per body and :math:`a_j \ge 0` per armature. :func:`realize` finds ``pi`` reproducing base
+parameters (the MJCF export); :func:`consistent_least_squares` fits under the constraints.
 """
 
 from __future__ import annotations
@@ -31,13 +26,13 @@ def _cvxpy():
 
 
 def body_constraints(structure, pi) -> list:
-    r"""The constraints of rigid bodies on the cvxpy variable ``pi``: :math:`J_b(\pi) \succeq 0`
-    per body, armatures :math:`\ge 0`."""
+    r"""Rigid bodies' constraints on the cvxpy variable ``pi``: :math:`J_b(\pi) \succeq 0`,
+    armatures :math:`\ge 0`.
+    """
     from .structure import pseudo_inertia_matrix
 
     cp = _cvxpy()
-    # J is linear in the ten parameters: one affine map per body, not sixteen scalar
-    # expressions (which cvxpy canonicalizes one by one, most of the cost of a solve)
+    # J is linear in the ten parameters: one affine map per body (fast to canonicalize)
     basis = np.array([pseudo_inertia_matrix(unit) for unit in np.eye(10)]).reshape(10, 16)
     constraints = []
     for indices in structure.body_indices:
@@ -48,9 +43,8 @@ def body_constraints(structure, pi) -> list:
     return constraints
 
 
-#: Solvers tried in turn when none is named: an interior-point method, which reaches these
-#: small programs' optimum to high accuracy in a few dozen iterations, then a first-order
-#: one, which is slower and less accurate but proceeds where the former stalls.
+#: Solvers tried in turn when none is named: interior point, then first order (SCS), which
+#: proceeds where the former stalls.
 DEFAULT_SOLVERS = ("CLARABEL", "SCS")
 
 
@@ -76,22 +70,14 @@ def _solve(problem, solver, who):
 
 
 def realize(structure, beta, reference=None, closeness: float = 1e-6, solver=None):
-    r"""Physically consistent parameters ``pi`` reproducing base parameters ``beta``.
-
-    Solves
+    r"""Physically consistent parameters ``pi`` reproducing base parameters ``beta``:
 
     .. math:: \min_\pi \; \|C \pi - \beta\| / \|\beta\| + \epsilon \|\pi - \pi_0\|^2 /
-              \|\pi_0\|^2 \quad \text{s.t.} \quad J_b(\pi) \succeq 0, \; a_j \ge 0,
+              \|\pi_0\|^2 \quad \text{s.t.} \quad J_b(\pi) \succeq 0, \; a_j \ge 0
 
-    the consistent parameters that reproduce ``beta`` (exactly when it is realizable: the
-    residual's norm, not its square, is an exact penalty, and the solver's tolerance bounds
-    the norm itself), among them the closest to ``pi_0``.
-
-    Base parameter ``j`` is ``structure.combination[j] @ pi``; ``reference`` is ``pi_0``
-    (default zeros: ``epsilon = closeness`` then weighs ``|pi|^2``); ``solver`` a cvxpy solver
-    name (default: the first of :data:`DEFAULT_SOLVERS` that succeeds). Returns ``(pi,
-    residual)``, ``residual = |C pi - beta| / |beta|`` zero (to the solver's tolerance) when
-    ``beta`` is realizable by rigid bodies.
+    (the unsquared residual is an exact penalty), ``pi_0 = reference`` (default zeros),
+    ``epsilon = closeness``, ``solver`` as in :func:`consistent_least_squares`. Returns ``(pi,
+    residual)``, ``residual = |C pi - beta| / |beta|`` zero when ``beta`` is realizable.
     """
     cp = _cvxpy()
     beta = np.asarray(beta, dtype=float)
@@ -129,9 +115,9 @@ _PROGRAMS_LOCK = threading.Lock()
 
 
 def _least_squares_program(structure, n_columns: int) -> _Program:
-    """The program of :func:`consistent_least_squares` for one structure and width, with its
-    data as cvxpy parameters: built and canonicalized once, then solved for each new fit
-    (the fits of a cross-validation, of an ensemble's refits) at the cost of the solver."""
+    """The program of :func:`consistent_least_squares` for one structure and width, with its data
+    as cvxpy parameters: canonicalized once, then solved for each new fit (cached, at most 16).
+    """
     key = hashlib.sha1(b"".join(np.ascontiguousarray(a, dtype=float).tobytes() + str(
         np.shape(a)).encode() for a in (
             structure.combination, structure.base_columns, structure.friction_columns,
@@ -170,57 +156,47 @@ def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=
                              regularization: float = 1e-9):
     r"""Least squares under physical consistency, as the projection of an unconstrained fit.
 
-    With ``b_u`` the unconstrained least-squares coefficients of ``x b = y`` and ``A`` the
-    normal matrix (``x^T x``, or the errors-in-variables corrected ``x^T x - S``), the
-    residual of any ``b`` is ``|x b - y|^2 = |x b_u - y|^2 + (b - b_u)^T A (b - b_u)``, so the
-    constrained least squares is
+    With ``b_u`` the unconstrained fit and ``A`` its normal matrix,
+    ``|x b - y|^2 = |x b_u - y|^2 + (b - b_u)^T A (b - b_u)``, so the constrained fit is
 
     .. math:: \min_{b, \pi} \; (b - b_u)^T A (b - b_u) \quad \text{s.t.} \quad
               b_{\mathcal B} = C \pi, \; J_k(\pi) \succeq 0, \; a_j \ge 0, \;
-              b_{\mathcal F} \ge 0
+              b_{\mathcal F} \ge 0,
 
-    (:math:`\mathcal B` the base-parameter columns, :math:`\mathcal F` the friction columns),
-    solved on unit-RMS columns and a normal matrix scaled to ``b_u^T A b_u = 1``, as the
-    minimum of the norm :math:`\|A^{1/2} (b - b_u)\|` (the same minimizer; the solver's
-    tolerance then bounds the norm, not its square), plus ``regularization * |pi|^2 /
-    |pi_scale|^2`` so that parameters the data leave free stay bounded. When ``b_u`` is
-    consistent it is the solution, at zero cost.
+    solved as the norm of :math:`A^{1/2} (b - b_u)` on unit-RMS columns, plus
+    ``regularization * |pi|^2`` (relative) to bound what the data leave free. A consistent
+    ``b_u`` is its own solution.
 
     Parameters
     ----------
     x : array, shape (n_rows, F)
-        The regression's columns (``y`` enters only through ``b_u``).
+        The regression's columns.
     structure : PhysicalStructure
-        In the column indices of ``x``; base parameters whose column is not in ``x`` are
-        absent from it (:meth:`PhysicalStructure.select`): the data do not decide them.
+        In the column indices of ``x``.
     coef : array, shape (F,)
         ``b_u``.
     normal : array, shape (F, F), optional
         ``A``; default ``x^T x``.
     zero : array of bool, shape (F,), optional
-        Coefficients held at zero (the terms a sparse fit left out: their base parameters
-        are zero, and must be realizable as such too).
+        Coefficients held at zero.
     solver : str, optional
-        As in :func:`realize`.
+        cvxpy solver name; default the first of :data:`DEFAULT_SOLVERS` that succeeds.
+    regularization : float, default 1e-9
 
     Returns
     -------
     coef : ndarray, shape (F,)
-        Consistent coefficients: the base parameters are exactly ``C pi``.
+        Consistent coefficients (base parameters exactly ``C pi``).
     pi : ndarray, shape (len(structure.names),)
-        Inertial parameters that realize them (one realization of many), exactly consistent
-        (the solver's answer through :meth:`PhysicalStructure.nearest_consistent`).
+        One realization, exactly consistent.
     cost : float
-        ``(b - b_u)^T A (b - b_u) / b_u^T A b_u``: the share of the explained signal the
-        constraints cost (0 when ``b_u`` is consistent, to the solver's tolerance).
+        ``(b - b_u)^T A (b - b_u) / b_u^T A b_u``, the share of the explained signal lost.
     """
     x = np.asarray(x, dtype=float)
     coef = np.asarray(coef, dtype=float)
     scale = np.sqrt(np.mean(x**2, axis=0))
     scale[scale == 0] = 1.0
-    # relative column scales only: the scaled coefficients keep the magnitude of the
-    # coefficients, and the constraints tying them to pi stay of order one (whitened rows
-    # can be 1e9 in size, which the conic solvers cannot balance on their own)
+    # relative column scales only: the constraints tying b to pi stay of order one
     scale = scale / np.exp(np.mean(np.log(scale)))
     normal = x.T @ x if normal is None else np.asarray(normal, dtype=float)
     normal = normal / np.outer(scale, scale)

@@ -1,19 +1,10 @@
 r"""What makes a catalog's coefficients physical: the rigid bodies behind its base parameters.
 
-A kinematic catalog's Lagrange coefficients are *base parameters*, linear images of the bodies'
-inertial parameters :math:`\pi` (per body, in its frame: mass :math:`m`, first moment
-:math:`h = m c`, rotational inertia :math:`I` about the frame origin; per joint: armature):
-:math:`\beta = C \pi`. Its friction columns (``qd_c``, ``tanh(k qd_c)``) carry viscous and dry
-friction coefficients. Coefficients are *physically consistent* when some :math:`\pi` with
-:math:`C \pi = \beta` has every body's pseudo-inertia positive semidefinite and every armature
-non-negative, and when every friction coefficient is non-negative
-(:mod:`pysindy_xl.physical.sdp` states and solves these constraints).
-
-:class:`PhysicalStructure` holds that description in the column indices of a regression
-problem: which columns are base parameters and the combination :math:`C` of each, the bodies'
-parameter indices, the armatures, the friction columns. :func:`catalog_structure` reads it off a
-fitted catalog (the ``parameters`` maps of its Lagrange libraries, the classical terms that are
-friction); :meth:`PhysicalStructure.select` follows a catalog's columns into a problem's.
+A kinematic catalog's Lagrange coefficients are *base parameters* :math:`\beta = C \pi` of
+the bodies' inertial parameters :math:`\pi`; its friction columns carry friction. They are
+*physically consistent* when some :math:`\pi` with :math:`C \pi = \beta` has every
+pseudo-inertia positive semidefinite and every armature and friction non-negative
+(:mod:`pysindy_xl.physical.sdp`).
 """
 
 from __future__ import annotations
@@ -41,26 +32,22 @@ class PhysicalStructure:
     Attributes
     ----------
     names : tuple of str
-        Physical parameters ``pi``: ``"<body>.<p>"`` for ``p`` in :data:`INERTIAL_PARAMETERS`
-        (all ten of every body named), ``"<joint>.armature"``, and any other name a map uses
-        (unconstrained).
+        Physical parameters ``pi``: ``"<body>.<p>"`` for ``p`` in :data:`INERTIAL_PARAMETERS`,
+        ``"<joint>.armature"``, and any other name a map uses (unconstrained).
     base_columns : ndarray of int, shape (k,)
         Columns whose coefficients are base parameters.
     combination : ndarray, shape (k, len(names))
         ``coef[base_columns] = combination @ pi``.
     bodies : tuple of str
-        Body names, in the order of ``body_indices``.
     body_indices : ndarray of int, shape (len(bodies), 10)
-        Indices into ``names`` of each body's parameters, in :data:`INERTIAL_PARAMETERS` order.
+        Indices into ``names`` of each body's parameters.
     armature : ndarray of int
-        Indices into ``names`` of the armatures (non-negative).
+        Indices into ``names`` of the armatures.
     friction_columns : ndarray of int
-        Columns whose coefficients are viscous or dry friction (non-negative).
+        Columns of viscous or dry friction (non-negative).
     selectable_columns : ndarray of int
-        Columns of joint friction and sensor models (a
-        :class:`~pysindy_xl.feature_library.JointFrictionLibrary`'s) that a fit may leave out
-        (``ExplicitOptimizer(select="friction")``); the other columns stand for parameters
-        every rigid-body model has.
+        Joint friction and sensor model columns a fit may leave out
+        (``ExplicitOptimizer(select="friction")``).
 
     Examples
     --------
@@ -85,9 +72,9 @@ class PhysicalStructure:
     @classmethod
     def from_maps(cls, maps, base_columns, friction_columns=(),
                   selectable_columns=()) -> PhysicalStructure:
-        """The structure of base parameters given as ``{physical name: weight}`` maps, one per
-        base parameter (a kinematic catalog's ``parameters``), each in its ``base_columns``
-        entry (the other arguments are the fields)."""
+        """The structure of base parameters given as ``{physical name: weight}`` maps (a kinematic
+        catalog's ``parameters``) in ``base_columns``; the other arguments are the fields.
+        """
         used = list(dict.fromkeys(name for m in maps for name in m))
         bodies = list(dict.fromkeys(name.rsplit(".", 1)[0] for name in used
                                     if name.rsplit(".", 1)[-1] in INERTIAL_PARAMETERS))
@@ -108,8 +95,9 @@ class PhysicalStructure:
 
     @classmethod
     def from_combination(cls, names, combination) -> PhysicalStructure:
-        """The structure of ``beta = combination @ pi`` over ``names`` (base parameter ``j``
-        in column ``j``, no friction), as a kinematic catalog holds it."""
+        """The structure of ``beta = combination @ pi`` over ``names`` (base parameter ``j`` in
+        column ``j``, no friction).
+        """
         combination = np.asarray(combination, dtype=float)
         maps = [{names[p]: combination[j, p] for p in np.flatnonzero(combination[j])}
                 for j in range(combination.shape[0])]
@@ -130,14 +118,12 @@ class PhysicalStructure:
 
     @property
     def constrains(self) -> bool:
-        """Whether there is anything to constrain (a body, an armature or a friction)."""
+        """Whether there is a body, an armature or a friction to constrain."""
         return bool(len(self.bodies) or len(self.armature) or len(self.friction_columns))
 
     def select(self, columns) -> PhysicalStructure:
-        """The structure in the indices of a problem made of ``columns`` (in that order).
-
-        Base parameters whose column is left out are unconstrained (the data do not decide
-        them), so their rows of ``combination`` leave too.
+        """The structure in the indices of a problem made of ``columns``; base parameters left out
+        leave ``combination`` too (the data do not decide them).
         """
         columns = np.asarray(columns, dtype=int)
         position = {int(c): k for k, c in enumerate(columns)}
@@ -152,12 +138,9 @@ class PhysicalStructure:
                                          if int(c) in position], dtype=int))
 
     def nearest_consistent(self, pi) -> np.ndarray:
-        """``pi`` with every body's pseudo-inertia projected onto the positive semidefinite
-        cone (negative eigenvalues set to zero) and negative armatures set to zero: a
-        solver's answer made exactly consistent, at a change of the order of its tolerance.
+        """``pi`` with every pseudo-inertia projected onto the PSD cone and negative armatures
+        zeroed: a solver's answer made exactly consistent.
 
-        Examples
-        --------
         >>> s = PhysicalStructure.from_maps([{"b.m": 1.0}], base_columns=[0])
         >>> s.nearest_consistent([-1e-9, 0, 0, 0, 1, 1, 1, 0, 0, 0])[0]
         np.float64(0.0)
@@ -174,7 +157,7 @@ class PhysicalStructure:
         return pi
 
     def pseudo_inertias(self, pi) -> np.ndarray:
-        """Every body's 4x4 pseudo-inertia at parameters ``pi``, shape (len(bodies), 4, 4)."""
+        """Every body's pseudo-inertia at ``pi``, shape (len(bodies), 4, 4)."""
         pi = np.asarray(pi, dtype=float)
         return np.array([pseudo_inertia_matrix(pi[k]) for k in self.body_indices]
                         ).reshape(-1, 4, 4)
@@ -189,8 +172,8 @@ def pseudo_inertia_matrix(parameters):
     Parameters
     ----------
     parameters : sequence of 10
-        ``m, mcx, mcy, mcz, Ixx, Iyy, Izz, Ixy, Ixz, Iyz`` (inertia about the frame origin):
-        numbers, or cvxpy expressions (the result is then a cvxpy expression).
+        :data:`INERTIAL_PARAMETERS` values (inertia about the frame origin), numbers or cvxpy
+        expressions.
 
     Returns
     -------
@@ -199,7 +182,7 @@ def pseudo_inertia_matrix(parameters):
 
     Examples
     --------
-    A point mass of 2 at (0, 0, 1): ``I = diag(2, 2, 0)``.
+    A point mass of 2 at (0, 0, 1):
 
     >>> pseudo_inertia_matrix([2, 0, 0, 2, 2, 2, 0, 0, 0, 0]).tolist()
     [[0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 2.0, 2.0], [0.0, 0.0, 2.0, 2.0]]
@@ -216,20 +199,18 @@ def pseudo_inertia_matrix(parameters):
 
 
 def friction_kind(term, velocity, acceleration=None) -> str | None:
-    """``"viscous"`` for the term ``qd_c``, ``"dry"`` for a unit dry friction law of ``qd_c``
-    (``tanh(k qd_c)``, ``sign(qd_c)`` or MuJoCo's regularized law with the acceleration
-    ``qdd_c``, :func:`~pysindy_xl.physical.friction.dry_friction_law`), None for any other
-    term."""
+    """``"viscous"`` for ``qd_c``, ``"dry"`` for a unit dry friction law of ``qd_c``
+    (:func:`~pysindy_xl.physical.friction.dry_friction_law`), None otherwise.
+    """
     if term == velocity:
         return "viscous"
     return "dry" if dry_friction_law(term, velocity, acceleration) else None
 
 
 def catalog_structure(library) -> PhysicalStructure | None:
-    """The physical structure of a fitted catalog's columns, or None when no library maps its
-    terms to physical parameters: its Lagrange libraries with a ``parameters`` map (a
-    kinematic catalog's) give the base parameters, its classical columns ``qd_c`` and
-    ``tanh(k qd_c)`` (entering the equation of ``c``) the friction."""
+    """The physical structure of a fitted catalog's columns (base parameters from its Lagrange
+    libraries' ``parameters`` maps, friction from its classical columns), or None.
+    """
     maps, columns = [], []
     for lib, block in zip(library.libraries_, library.slices_, strict=True):
         parameters = getattr(lib, "parameters", None)
@@ -244,9 +225,8 @@ def catalog_structure(library) -> PhysicalStructure | None:
 
 
 def joint_model_columns(library, models=None) -> list:
-    """Columns of a fitted catalog's joint friction and sensor models
-    (:class:`~pysindy_xl.feature_library.JointFrictionLibrary`), of the given ``models``
-    only when given."""
+    """Columns of a fitted catalog's joint friction and sensor models, of ``models`` only if given.
+    """
     out = []
     for lib, block in zip(library.libraries_, library.slices_, strict=True):
         for k, (model, _) in enumerate(getattr(lib, "kinds_", None) or ()):
@@ -256,8 +236,7 @@ def joint_model_columns(library, models=None) -> list:
 
 
 def friction_columns(library) -> list:
-    """Columns of a fitted catalog that are viscous or dry friction: of one coordinate
-    (``qd_c``, ``tanh(k qd_c)``) or of a joint (a joint model's viscous or Coulomb column)."""
+    """Columns of a fitted catalog that are viscous or dry friction, of a coordinate or a joint."""
     joint_models = joint_model_columns(library)
     out = joint_model_columns(library, DISSIPATIVE)
     coords = library.coords

@@ -1,10 +1,4 @@
-"""What a fitted model says: its equations, Lagrangian, uncertainty and physical parameters.
-
-* :mod:`~pysindy_xl.report.equations`: pure functions of a fitted catalog and its
-  coefficients (equations, Lagrangian, physical parameters, their printed lines);
-* :mod:`~pysindy_xl.report.inspection`: the part of :class:`~pysindy_xl.XLSINDy` that reads
-  its fitted state and reports it.
-
-Nothing is imported here, so that the fit stage can read the equations' helpers without
-importing the estimator's mixin.
+"""What a fitted model says: :mod:`.equations` (pure functions of a catalog and its
+coefficients) and :mod:`.inspection` (the estimator's mixin). Nothing is imported here, so
+that the fit stage can use the former without the latter.
 """

@@ -1,8 +1,6 @@
-"""Readable forms of an identified coefficient vector: equations, Lagrangian, uncertainty.
-
-Pure functions of a fitted catalog ``library`` (:class:`~pysindy_xl.CatalogRepartition`)
-and its coefficients ``coef`` (shape (F,)); :class:`~pysindy_xl.XLSINDy` prints and returns
-them. ``precision`` is the number of significant digits printed.
+"""Readable forms of a fitted catalog ``library`` and its coefficients ``coef`` (F,):
+equations, Lagrangian, uncertainty, physical parameters; ``precision`` is the number of
+significant digits printed.
 """
 
 from __future__ import annotations
@@ -18,8 +16,6 @@ __all__ = ["significant", "equation_strings", "identified_lagrangian", "uncertai
 def significant(expr: sp.Expr, digits: int) -> sp.Expr:
     """``expr`` with every float rounded to ``digits`` significant digits.
 
-    Examples
-    --------
     >>> import sympy as sp
     >>> significant(sp.Float(3.14159) * sp.Symbol("x"), 3)
     3.14*x
@@ -51,11 +47,9 @@ def identified_lagrangian(coef: np.ndarray, library) -> sp.Expr:
 
 
 def uncertainty_lines(names, coef, interval, probability, precision: int) -> list[str]:
-    """``name  coefficient  [low, high]  P=p`` for every term any ensemble fit included,
-    most probable first (``interval`` (2, F) and ``probability`` (F,) of the ensemble).
+    """``name  coefficient  [low, high]  P=p`` for every term an ensemble fit included, most
+    probable first.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> uncertainty_lines(["a", "bb"], np.array([1.0, 0.0]), np.array([[0.9, 0], [1.1, 0.2]]),
     ...                   np.array([1.0, 0.3]), 2)
@@ -68,14 +62,14 @@ def uncertainty_lines(names, coef, interval, probability, precision: int) -> lis
             f"P={probability[j]:.2f}" for j in shown]
 
 
-#: Monomials of the identified equations above which a model with physical parameters is
-#: printed by its parameters alone (its equations would run for pages).
+#: Monomials above which a model with physical parameters prints only its parameters.
 SHORT_EQUATIONS = 200
 
 
 def prints_equations(model, equations=None) -> bool:
-    """Whether the model is printed with its equations: ``equations`` when given, otherwise
-    unless the catalog's terms stand for physical parameters and the equations are long."""
+    """Whether the model prints its equations: ``equations`` if given, else unless its terms stand
+    for physical parameters and the equations are long.
+    """
     if equations is not None:
         return bool(equations)
     dynamics = model.dynamics_
@@ -84,14 +78,14 @@ def prints_equations(model, equations=None) -> bool:
 
 
 def has_parameter_map(library) -> bool:
-    """Whether some library of the catalog says which physical parameters its terms stand
-    for (a kinematic catalog): the model is then read by its parameters, not its equations."""
+    """Whether some library says which physical parameters its terms stand for."""
     return any(getattr(lib, "parameters", None) is not None for lib in library.libraries_)
 
 
 def physical_parameters(coef: np.ndarray, library) -> dict:
-    """The identified model in physical terms (see :meth:`XLSINDy.physical_parameters
-    <pysindy_xl.XLSINDy.physical_parameters>`), a dict."""
+    """The identified model in physical terms (:meth:`XLSINDy.physical_parameters
+    <pysindy_xl.XLSINDy.physical_parameters>`).
+    """
     forces = [coef[j] for j in library.force_columns_ if coef[j] != 0]
     scale = -1.0 / forces[0] if forces else None
     factor = 1.0 if scale is None else scale
@@ -119,7 +113,6 @@ def physical_parameters(coef: np.ndarray, library) -> dict:
         else:
             other[library.feature_names_[j]] = float(coef[j] * factor)
     for values in joints.values():
-        # a joint that is one coordinate: its viscous and Coulomb friction are that one's
         if values["coordinate"] is not None:
             friction[values["coordinate"]]["viscous"] += values.get("viscous", 0.0)
             friction[values["coordinate"]]["dry"] += values.get("coulomb", 0.0)
@@ -130,11 +123,9 @@ def physical_parameters(coef: np.ndarray, library) -> dict:
 
 
 def joint_friction(coef, library) -> tuple[dict, set]:
-    """The joint models of a catalog's :class:`~pysindy_xl.feature_library.JointFrictionLibrary`
-    parts, ``{joint: {model: value}}`` (with ``coulomb_positive`` and ``coulomb_negative``,
-    the magnitudes ``f_c +- f_a`` of each direction, where the asymmetry is modelled, and
-    ``coordinate``: the coordinate the joint is, None when its torque reaches several), and
-    the set of their columns."""
+    """``({joint: {model: value}}, columns)`` of the catalog's joint models (with
+    ``coulomb_positive``/``coulomb_negative`` where asymmetric, and ``coordinate``).
+    """
     joints, columns = {}, set()
     for lib, block in zip(library.libraries_, library.slices_, strict=True):
         if getattr(lib, "kinds_", None) is None:
@@ -150,11 +141,8 @@ def joint_friction(coef, library) -> tuple[dict, set]:
 
 
 def consistency_line(report) -> str | None:
-    """The line that says whether a physically constrained fit had to constrain (its
-    ``physical_consistency_``), or None without such a report.
+    """The line saying whether a physically constrained fit had to constrain, or None.
 
-    Examples
-    --------
     >>> consistency_line({"consistent": False, "cost": 0.012, "negative_friction": ["C_a[a_dot]"],
     ...                   "min_pseudo_inertia_eigenvalue": 0.0})[:71]
     'physical consistency: the unconstrained estimate is not that of rigid b'
@@ -172,10 +160,9 @@ def consistency_line(report) -> str | None:
 
 
 def parameter_lines(parameters: dict, precision: int, reference: dict | None = None) -> list[str]:
-    """Printable lines of :func:`physical_parameters`: the base parameters (with the inertial
-    combinations they stand for) and each joint's viscous and dry friction; with a
-    ``reference`` (the same dictionary for known values, e.g. the MJCF's), those values
-    beside."""
+    """Printable lines of :func:`physical_parameters` (base parameters with what they stand for,
+    friction per coordinate), with a ``reference``'s values beside.
+    """
     known = ({entry["feature"]: entry["value"] for entry in reference["base_parameters"]}
              if reference is not None else None)
     lines = ["base parameters (value  |  stands for):" if known is None

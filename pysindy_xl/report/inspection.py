@@ -1,8 +1,5 @@
-"""What a fitted model says: its coefficients, equations, Lagrangian and physical parameters.
-
-:class:`InspectionMixin` is the part of :class:`~pysindy_xl.XLSINDy` that reads the fitted
-state ``coef_`` and ``feature_library_`` (and the settings that estimate derivatives) and
-reports it; it fits nothing.
+"""What a fitted model says: :class:`InspectionMixin`, the part of :class:`~pysindy_xl.XLSINDy`
+that reads ``coef_`` and ``feature_library_`` and reports them.
 """
 
 from __future__ import annotations
@@ -33,8 +30,7 @@ __all__ = ["InspectionMixin"]
 
 
 class InspectionMixin:
-    """Coefficients, feature names, equations, Lagrangian, physical parameters and printing
-    of a fitted model (mixed into :class:`~pysindy_xl.XLSINDy`)."""
+    """Coefficients, names, equations, Lagrangian, physical parameters and printing."""
 
     def coefficients(self) -> np.ndarray:
         """Identified coefficient vector.
@@ -42,7 +38,7 @@ class InspectionMixin:
         Returns
         -------
         ndarray, shape (F,)
-            One entry per feature, in the order of :meth:`get_feature_names`.
+            In the order of :meth:`get_feature_names`.
         """
         check_is_fitted(self, "coef_")
         return self.coef_.copy()
@@ -59,10 +55,8 @@ class InspectionMixin:
         return int(np.count_nonzero(self.coef_))
 
     def differentiate(self, x, t=None):
-        """Velocities of positions ``x`` as the model estimates them (as ``SINDy.differentiate``).
-
-        With a ``differentiation_method``, that method; otherwise the smoother of the weak
-        formulation (default :class:`~pysindy_xl.WhittakerSmoother`).
+        """Velocities of positions ``x`` as the model estimates them (as ``SINDy.differentiate``):
+        its ``differentiation_method``, else the weak form's smoother.
 
         Parameters
         ----------
@@ -112,8 +106,7 @@ class InspectionMixin:
         Returns
         -------
         list of str
-            A coordinate held still (``still_coordinates_``) reads ``<name>_ddot = 0 (held
-            still)``.
+            A coordinate held still reads ``<name>_ddot = 0 (held still)``.
         """
         check_is_fitted(self, "coef_")
         coords = self.feature_library_.coords
@@ -137,26 +130,19 @@ class InspectionMixin:
     def physical_parameters(self) -> dict:
         """The identified model in physical terms: base parameters, friction per coordinate.
 
-        For a kinematic catalog (:func:`~pysindy_xl.mujoco.kinematic_catalog`) each Lagrange
-        term stands for a combination of inertial parameters (masses, first and second
-        moments, armature) of the bodies and joints: its identified coefficient is that
-        combination's value. Classical terms ``qd_c`` and ``tanh(k qd_c)`` are the viscous
-        and dry friction of coordinate ``c``. Values are scaled so that the force coefficient
-        is -1 (the units of the forces); an unforced model has no scale.
+        A kinematic catalog's Lagrange terms stand for combinations of inertial parameters; the
+        classical terms ``qd_c`` and ``tanh(k qd_c)`` are the viscous and dry friction of ``c``.
+        Values are scaled to a force coefficient of -1 (unforced: no scale).
 
         Returns
         -------
         dict
-            ``base_parameters``: one ``{"feature", "stands_for" ({name: weight} or None),
-            "value"}`` per Lagrange term; ``friction``: ``{coordinate: {"viscous", "dry"}}``;
-            ``other``: the other classical terms by feature name; ``scale``: the factor
-            applied, None for an unforced model. A catalog with joint friction models
-            (``kinematic_catalog(..., friction=...)``) adds ``joint_friction``:
-            ``{joint: {model: value}}`` for its models (``viscous``, ``coulomb``,
-            ``asymmetric``, ``stribeck``, ``offset``; 0 where the fit found a joint does not
-            need one), with ``coulomb_positive`` / ``coulomb_negative`` (the Coulomb
-            magnitude in each direction) and ``coordinate`` (the coordinate the joint is, or
-            None); such a joint's viscous and Coulomb friction also count in ``friction``.
+            ``base_parameters``: ``{"feature", "stands_for", "value"}`` per Lagrange term;
+            ``friction``: ``{coordinate: {"viscous", "dry"}}``; ``other``: other classical terms;
+            ``scale``: the factor applied (None unforced). With joint friction models,
+            ``joint_friction``: ``{joint: {model: value}}`` (``viscous``, ``coulomb``,
+            ``asymmetric``, ``stribeck``, ``offset``, ``coulomb_positive``/``coulomb_negative``,
+            ``coordinate``).
 
         Examples
         --------
@@ -183,16 +169,11 @@ class InspectionMixin:
         precision : int
             Significant digits of the printed coefficients.
         uncertainty : bool, default False
-            After an ensemble fit (:class:`~pysindy_xl.EnsembleOptimizer`), also print each
-            term that any fit included with its coefficient, interval and inclusion
-            probability.
+            After an ensemble fit, also print each included term's interval and probability.
         equations : bool, optional
-            Print the Lagrangian and the equations of motion. Default: True, except for a
-            catalog whose terms stand for physical parameters (a robot's kinematic catalog)
-            and whose equations run for pages. Such a catalog's :meth:`physical_parameters`
-            are printed in any case, and so are the note on coordinates held still
-            (``still_coordinates_``) and, after a fit constrained to physically consistent
-            parameters, whether the constraints had to change the estimate.
+            Print the Lagrangian and equations; default True unless the terms stand for physical
+            parameters and the equations are long. Physical parameters, the held-still note and the
+            consistency line are printed in any case.
         """
         check_is_fitted(self, "coef_")
         note = held_note(getattr(self, "still_coordinates_", ()))
