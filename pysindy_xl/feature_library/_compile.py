@@ -1,21 +1,12 @@
 """Numeric evaluation of many symbolic entries at once, sharing every common product.
 
-Catalog entries are sums of ``coefficient * product of powers of atoms``, where the atoms are
-the data variables and a few functions of them (``sin(q)``, ``cos(q)``, ...). Instead of
-generating code for whole expressions (``lambdify`` costs more to build than to run on large
-catalogs, and the sum of a robot arm's thousands of terms overflows Python's compiler), the
-entries are decomposed once into :class:`Terms`: an atom list and, per entry, a list of
-``(coefficient, monomial)``. Evaluation computes each distinct atom once, then every distinct
-monomial degree by degree (a monomial is a monomial one degree lower times one atom: one gather
-and one product per degree, shared across all entries), and the entries as one sparse product
-of the coefficient matrix with the monomial values, or, for the polynomials of many angles of
-a robot arm, as polynomials in one angle's atoms of polynomials in the others, nested (see
-:func:`compile_terms`); samples are processed in blocks, so
-intermediate arrays stay small whatever the number of samples; the blocks are shared among
-:data:`THREADS` threads (the sparse products and array operations release the GIL; each
-block's arithmetic is the same in any thread).
-:func:`scalar_function` evaluates the same terms at one state with Python floats, from flat
-generated code (one short statement per monomial and term), for simulators.
+Entries are decomposed once into :class:`Terms` (atoms: data variables and functions of them
+such as ``sin(q)``; per entry, ``(coefficient, monomial)`` pairs), then evaluated by a plan
+(:mod:`._plans`): each distinct monomial built degree by degree, the entries as sparse
+products, nested angle by angle for a robot arm's polynomials. ``lambdify`` of a whole arm's
+catalog costs more to build than to run, and its sum overflows Python's compiler. Samples are
+processed in blocks shared among :data:`THREADS` threads (the sparse products release the
+GIL). :func:`scalar_function` evaluates the same terms at one state, for simulators.
 """
 
 from __future__ import annotations
@@ -258,22 +249,14 @@ def _keys(powers) -> tuple[list, np.ndarray]:
 def compile_terms(variables, terms: Terms):
     """The vectorized evaluator of :class:`Terms` (see :func:`compile_entries`).
 
-    With ``V`` the values of every monomial (one row per monomial, built degree by degree as
-    parent times atom) and ``C`` the sparse matrix of term coefficients (entries x
-    monomials), the entries are ``C @ V``: a handful of array operations per block of samples,
-    whatever the number of terms.
-
-    Entries of mechanical catalogs are polynomials in a few velocities (or forces) whose
-    coefficients are long trigonometric polynomials of the angles. When it saves work, the
-    monomials are factored as ``u * v`` with ``v`` a product of atoms of the angles only:
-    ``entry = sum_u u * p_u`` with each distinct polynomial ``p_u`` of the angles (up to a
-    factor) evaluated once. The same factoring applies again to the polynomials of the angles,
-    one angle after the other (the last variable's first: the distal joint of a chain), for
-    as long as it saves operations (:func:`_best_plan`): a catalog of a 7-joint arm with
-    joint frames not aligned with the axes has some 200,000 coefficients over 16,000
-    monomials of the angles, while as polynomials in ``sin q_7, cos q_7`` of polynomials in
-    ``sin q_6, cos q_6`` ... of a few hundred monomials of the first joints, a fraction of
-    the products remains.
+    With ``V`` the values of every monomial and ``C`` the sparse matrix of term coefficients
+    (entries x monomials), the entries are ``C @ V``. Entries of mechanical catalogs are
+    polynomials in a few velocities (or forces) whose coefficients are long trigonometric
+    polynomials of the angles: when it saves operations (:func:`._plans.best_plan`) they
+    are evaluated as ``sum_u u * p_u``, each distinct polynomial ``p_u`` of the angles once,
+    and the same factoring is applied to those polynomials one angle after the other (the
+    distal joint first). The plans of large catalogs are kept on disk
+    (:func:`._plans.stored_plan`).
 
     Examples
     --------

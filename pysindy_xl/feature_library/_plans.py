@@ -30,25 +30,11 @@ Monomial = tuple  # sorted tuple of (atom index, integer power)
 
 
 def _monomial_schedule(wanted) -> tuple[list, np.ndarray, np.ndarray, dict]:
-    """The monomials ``wanted`` and the sub-monomials that build them, ordered by degree.
-
-    Each monomial of degree ``d > 1`` is its *parent* (one power less of its last atom, degree
-    ``d - 1``) times one atom, so a whole degree is one gather and one product.
-
-    Parameters
-    ----------
-    wanted : set of Monomial
-
-    Returns
-    -------
-    monomials : list of Monomial
-        Ordered by degree, and by atom within a degree (a run of one atom is one product);
-        the constant monomial (if any) first.
-    parents, atoms : ndarray of int, shape (len(monomials),)
-        Position of the parent in ``monomials`` (-1 for the constant and the atoms themselves)
-        and the atom multiplied in (-1 for the constant).
-    position : dict
-        Monomial -> its position in ``monomials``.
+    """The monomials ``wanted`` (set of Monomial) and the sub-monomials that build them, as
+    ``(monomials, parents, atoms, position)``: ordered by degree and by last atom within a
+    degree (a run of one atom is one product), the constant first; each one's parent (one
+    power less of its last atom; -1 for atoms and the constant) and the atom multiplied in
+    (-1 for the constant); and each monomial's position.
     """
     closure = set()
     for key in wanted:
@@ -110,13 +96,10 @@ class MonomialValues:
 
 def best_plan(arrays, inner, peel) -> Plan:
     """The cheaper of the flat plan of the terms ``arrays`` (``(powers, coefficients,
-    owners, n_entries)``, see :meth:`~pysindy_xl.feature_library._compile.Terms.arrays`) and
-    the plan that factors the atoms ``peel[0]`` out of the ``inner`` ones (and so on,
-    recursively, with ``peel[1:]``).
-
-    The coefficient functions of an arm's catalog are polynomials in the sines and cosines of
-    all its joints; written as polynomials in the last joint's whose coefficients are
-    polynomials in the others (each distinct one once), and so on down the chain, they take
+    owners, n_entries)``, :meth:`~pysindy_xl.feature_library._compile.Terms.arrays`) and the
+    plan that factors the atoms ``peel[0]`` out of the ``inner`` ones (and so on, recursively,
+    with ``peel[1:]``): an arm's coefficient functions, written as polynomials in the last
+    joint's sines and cosines of polynomials in the others, each distinct one once, take
     fewer operations than as sums of products of all the joints' atoms.
 
     Examples
