@@ -1,8 +1,4 @@
-"""The ``pysindy-xl`` command: MuJoCo demo, identification of a dataset, data generation.
-
-Examples
---------
-::
+"""The ``pysindy-xl`` command: MuJoCo demo, identification of a dataset, data generation::
 
     pysindy-xl demo cart-pole                         # generate, identify, validate, plot
     pysindy-xl demo double-pendulum --forcing mixed --noise 0.01 --out results/

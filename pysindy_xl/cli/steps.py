@@ -10,10 +10,7 @@ import numpy as np
 
 
 class CLIError(Exception):
-    """An error reported to the user as ``pysindy-xl: error: ...`` with exit status 1.
-
-    Raised by the ``run_*`` functions for a bad input or a failed step; :func:`main` prints it
-    without a traceback.
+    """A bad input or failed step, printed as ``pysindy-xl: error: ...`` with exit status 1.
 
     Examples
     --------
@@ -27,7 +24,6 @@ class CLIError(Exception):
     """
 
 
-# -- pieces ------------------------------------------------------------------------------------
 def _optimizer(solver: str, threshold=None):
     import pysindy_xl as px
 
@@ -180,15 +176,8 @@ def dataset_for(system, dataset):
 
 
 def resolve_catalog(args, system):
-    """Replace ``--catalog auto`` by the catalog kind used for ``system``.
-
-    Any MuJoCo model (the shipped ones and users' MJCF files) gets the kinematic catalog: it
-    contains the true model whatever the mass distribution and, being compact, identifies
-    noisy positions where the paper's product catalogs swap near-collinear terms (measured in
-    ``benchmarks/results/kinematic_catalog.md``). Systems without a model (named
-    coordinates of a CSV file) get the paper's mixed catalog; ``--catalog mixed`` etc.
-    reproduce the paper's tables.
-    """
+    """Replace ``--catalog auto`` by ``kinematic`` for a MuJoCo model (compact, it holds the
+    true model), ``mixed`` (the paper's) for coordinates named without one."""
     from pysindy_xl.mujoco import MuJoCoSystem
 
     if args.catalog == "auto":
@@ -203,8 +192,7 @@ def log(quiet, *args):
 
 def check_solver(solver, forced, threshold, auto=False):
     """The optimizer of ``solver``, checked before any long computation; for ``auto`` without
-    a threshold, the name of the kind, which XLSINDy turns into its default optimizer of that
-    kind (:func:`~pysindy_xl.optimizers.default_optimizer`)."""
+    a threshold, the kind's name (XLSINDy's default optimizer of that kind)."""
     if solver == "explicit" and not forced:
         raise CLIError("--solver explicit needs forces; use --forcing explicit or mixed, or "
                        "--solver implicit")
@@ -214,9 +202,8 @@ def check_solver(solver, forced, threshold, auto=False):
 
 
 def coulomb_law(args, dataset=None) -> str:
-    """``--coulomb-law``, or the default of the data's source: ``mujoco`` for the demo and for
-    a dataset MuJoCo simulated (``generate_dataset`` records its ``integration``), ``smooth``
-    for any other log and where joint models replace the Coulomb candidate."""
+    """``--coulomb-law``, or the default of the data's source: ``mujoco`` for data MuJoCo
+    simulated, ``smooth`` for any other log and with joint models."""
     law = getattr(args, "coulomb_law", None)
     if law is not None:
         return law
@@ -244,7 +231,6 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
             raise CLIError(f"--coulomb-law: {str(error).split(': ', 1)[1]}") from None
         if not str(error).startswith(("friction:", "joint_models:")):
             raise
-        # unknown joint model names, or joint models asked of another catalog
         raise CLIError(f"--joint-models: {str(error).split(': ', 1)[1]}") from None
     model = px.XLSINDy(catalog, optimizer, formulation=getattr(args, "formulation", "auto"),
                        **({} if getattr(args, "hold_still", True) else {"hold_still": False}))
@@ -270,7 +256,7 @@ def summarize_coefficients(system, model):
     coef = model.coefficients()
     forces = model.feature_library_.force_columns_
     if not np.allclose(coef[forces], -1.0):
-        # an implicit law is defined up to a factor: scale the truth to the identified vector
+        # an implicit law is defined up to a factor
         rest = np.setdiff1d(np.arange(len(coef)), forces)
         norm = truth[rest] @ truth[rest]
         factor = (coef[rest] @ truth[rest]) / norm if norm > 0 else 1.0
@@ -311,9 +297,8 @@ def _rounded(expr, digits=4):
 
 
 def model_lines(model, truth=None):
-    """The identified model as printed: the physical parameters of a kinematic catalog (next
-    to the true ones when the coefficient vector ``truth`` is known), the Lagrangian and
-    equations unless they run for pages, the coordinates held still."""
+    """The identified model as printed: physical parameters (next to ``truth``'s), Lagrangian
+    and equations unless they run for pages, the coordinates held still."""
     from pysindy_xl.fit.still import held_note
     from pysindy_xl.report.equations import (
         has_parameter_map,
