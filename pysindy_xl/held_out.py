@@ -45,22 +45,18 @@ class ForceScore:
     ----------
     names : tuple of str
         Coordinate names.
-    rms : ndarray, shape (n,)
-        RMS of the prediction error per coordinate, in the units of the forces.
-    relative : ndarray, shape (n,)
-        ``rms`` over the RMS of the measured force (a fraction; 0.03 is 3 %).
+    rms, relative, measured_rms : ndarray, shape (n,)
+        Per coordinate: RMS of the prediction error (force units), ``rms`` over the measured
+        RMS (a fraction), RMS of the measured force.
     total : float
         Relative RMS over all coordinates: ``||predicted - measured|| / ||measured||``.
-    measured_rms : ndarray, shape (n,)
-        RMS of the measured force per coordinate.
     n_samples : int
-        Held-out samples scored.
     derivatives : str
         Where the velocities and accelerations came from.
     t, measured, predicted : list of ndarray
         Per run: times, measured and predicted forces (for :meth:`plot`).
     folds : list of float or None
-        Cross-validation: ``total`` of each fold (in fold order), else None.
+        Cross-validation: ``total`` of each fold, else None.
 
     Examples
     --------

@@ -1,27 +1,10 @@
 """Trajectories and datasets: NPZ arrays plus JSON metadata, never pickle.
 
-File layout (``Dataset.save``)
-------------------------------
-``DATA.npz`` holds the arrays, all samples of all trajectories concatenated:
-
-==============  ===========  =====================================================
-key             shape        content
-==============  ===========  =====================================================
-``t``           (N,)         sample times (increasing within each trajectory)
-``q``           (N, n)       generalized positions (required)
-``qd``          (N, n)       velocities (optional)
-``qdd``         (N, n)       accelerations (optional)
-``tau``         (N, n)       generalized forces on the coordinates (optional)
-``u``           (N, n)       joint forces, ``tau = u @ B.T`` (optional)
-``tau_constraint``  (N, n)   constraint forces (MuJoCo's ``qfrc_constraint``) mapped like ``u``
-``u_constraint``    (N, n)   the same in joint coordinates
-``constraint_active`` (N,)   bool: a limit, contact or equality constraint pushes (optional)
-``trajectory``  (N,)         trajectory id of each sample (optional; int or float)
-``metadata``    ()           JSON text (unicode array, optional)
-==============  ===========  =====================================================
-
-The metadata are also written to ``DATA.json`` for people; loading prefers the NPZ's copy.
-A user's own NPZ needs only ``t`` and ``q``.
+``Dataset.save`` writes ``DATA.npz``: the series of :class:`Trajectory` (``t``, ``q``, ``qd``,
+``qdd``, ``tau``, ``u``, ``tau_constraint``, ``u_constraint``, ``constraint_active``) of all
+trajectories concatenated, ``trajectory`` (each sample's id, int or float) and ``metadata``
+(JSON text, also written to ``DATA.json`` for people). A user's own NPZ needs only ``t`` and
+``q``.
 """
 
 from __future__ import annotations
