@@ -66,5 +66,4 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
     from .symbols import Coordinates, monomials, products
     from .weak import BumpTestFunctions, WhittakerSmoother
 
-
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY)

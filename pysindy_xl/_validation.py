@@ -211,7 +211,6 @@ def argument_type(kind: str, **bounds):
     argparse.ArgumentTypeError: expected a real number in (0, 1], got 2.0
     """
     import argparse
-
     parse = int if kind == "int" else float
 
     def convert(text):

@@ -127,7 +127,6 @@ class ForceScore:
     def plot(self, path, title=None):
         """Write measured against predicted forces to the PNG ``path``, a panel per coordinate."""
         from pysindy_xl.mujoco.evaluation.plots import new_figure
-
         n = len(self.names)
         figure = new_figure(8, 1.6 * n + 0.8)
         axes = figure.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
@@ -184,7 +183,6 @@ def scoring_derivatives(t, x, smoother=None, max_frequency: float = MAX_FREQUENC
     True
     """
     from .weak import WhittakerSmoother, whittaker_smooth
-
     t = np.asarray(t, dtype=float)
     if smoother is not None:
         return smoother.smooth(t, x)
@@ -324,7 +322,6 @@ def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: 
     (4, True)
     """
     from sklearn.base import clone
-
     check_option("n_blocks", n_blocks, "int", low=2)
     runs = _runs(None, x, t, u, x_dot, x_ddot)
     folds = _folds([len(run["t"]) for run in runs], n_blocks)

@@ -61,7 +61,6 @@ def save_model(model, path) -> None:
     [-1.0, 1.0, -0.5]
     """
     from sklearn.utils.validation import check_is_fitted
-
     check_is_fitted(model, "coef_")
     library = model.feature_library_
     optimizer = model.optimizer_
@@ -258,12 +257,10 @@ def _setting_types(name):
     """The classes a file may name for an object setting (documented ones only)."""
     if name == "differentiation_method":
         import pysindy.differentiation as differentiation
-
         base = differentiation.BaseDifferentiation
         return {k: v for k, v in vars(differentiation).items()
                 if isinstance(v, type) and issubclass(v, base) and v is not base}
     from .weak import BumpTestFunctions, WhittakerSmoother
-
     return {"test_functions": {"BumpTestFunctions": BumpTestFunctions},
             "smoother": {"WhittakerSmoother": WhittakerSmoother}}[name]
 
@@ -342,7 +339,6 @@ def _floats_from(values, path, where) -> np.ndarray:
 def _selection_types():
     from .optimizers.homogeneous import LawSelection
     from .optimizers.selection import SelectionResult
-
     return {"SelectionResult": SelectionResult, "LawSelection": LawSelection}
 
 

@@ -110,7 +110,6 @@ def force_prediction(model, x, t, u, x_dot=None, x_ddot=None) -> dict:
     """
     from ._inputs import check_array
     from .weak import WhittakerSmoother
-
     n = model.n_coordinates_
     x = check_array(x, "x", n_columns=n)
     u = check_array(u, "u", x.shape)
@@ -190,7 +189,6 @@ def quality_lines(quality) -> list:
                      f"1 when it leaves only the propagated noise): "
                      f"{quality['cv_noise_ratio']:.3g}")
     from .report.equations import consistency_line  # sympy: not imported by the CLI's --help
-
     consistency = consistency_line(quality.get("physical_consistency"))
     if consistency:
         lines.append(f"  {consistency}")
@@ -223,7 +221,6 @@ def plot_identification(model, trajectory, path, title=None, forced=True) -> dic
     """
     from pysindy_xl.dynamics import DynamicsError
     from pysindy_xl.mujoco.evaluation.plots import new_figure
-
     if model.dynamics_ is None:
         raise ValueError("model: the identified equations contain no acceleration; nothing "
                          "to simulate")

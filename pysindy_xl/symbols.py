@@ -105,7 +105,6 @@ def as_expr_list(exprs, name: str) -> list[sp.Expr]:
     except TypeError:
         raise TypeError(f"{name}: expected a sequence of sympy expressions") from None
     from .expressions import check_real_expression, check_term
-
     for e in exprs:
         if not isinstance(e, sp.Basic):
             raise TypeError(f"{name}: expected sympy expressions, got {type(e).__name__}")
@@ -147,7 +146,6 @@ def monomials(exprs, degree: int) -> list[sp.Expr]:
     """
     exprs = as_expr_list(exprs, "exprs")
     from ._validation import check_option
-
     degree = check_option("degree", degree, "int", low=1)
     out = []
     for d in range(1, degree + 1):

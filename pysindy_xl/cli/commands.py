@@ -108,7 +108,6 @@ def run_demo(args) -> dict:
     start = time.perf_counter()
     if not args.no_plots and result is not None:
         from pysindy_xl.mujoco.evaluation.plots import plot_validation
-
         path = os.path.join(args.out, "validation.png")
         plot_validation(result, path, model.get_feature_names(), model.coefficients(), truth,
                         title=f"{display_name(system)} ({args.catalog} catalog, {solver} solver)")
@@ -137,7 +136,6 @@ def run_demo(args) -> dict:
               f"{coefficient_summary['max_relative_error']:.2g} (relative to the largest)")
     timings["total"] = sum(timings.values())
     from ..report.equations import prints_equations  # sympy: not imported by --help
-
     short = prints_equations(model)
     report = {
         "system": system.name,
@@ -178,7 +176,6 @@ def _validate(model, system, args):
     """``(ValidationResult, None)`` against a fresh MuJoCo run, or ``(None, reason)``."""
     from pysindy_xl.dynamics import DynamicsError
     from pysindy_xl.mujoco.evaluation.validation import validate_model
-
     try:
         return validate_model(model, system, duration=args.validation_duration,
                               forcing=args.forcing, actuators=args.actuators,
@@ -213,7 +210,6 @@ def _physics(model, system, args):
     """The identified mass matrix and unforced dynamics against MuJoCo's, or None."""
     from pysindy_xl.dynamics import DynamicsError
     from pysindy_xl.mujoco.evaluation.physics import compare_physics
-
     try:
         return compare_physics(model, system, seed=args.seed)
     except (DynamicsError, ValueError, TypeError, np.linalg.LinAlgError):
@@ -289,7 +285,6 @@ def run_identify(args):
         if path:
             output_file(path, option)
     from ..fit import resolve_formulation
-
     measured = dataset.has("qd") and dataset.has("qdd")
     formulation = resolve_formulation(args.formulation, measured)
     if not measured:
@@ -389,7 +384,6 @@ def _load(args, path, system=None):
     bag's joints are the system's unless named."""
     from pysindy_xl.data import DatasetError, load_data
     from pysindy_xl.data.rosbag import is_rosbag
-
     columns = _column_map(getattr(args, "column", None))
     coordinates = _names(args.coordinates)
     if path.lower().endswith(".npz") and (columns or args.delimiter):
@@ -411,7 +405,6 @@ def _load(args, path, system=None):
 def _identify_inputs(args):
     """The dataset of ``identify`` (CSV or NPZ) and the system naming its coordinates."""
     from pysindy_xl.mujoco import coordinate_system
-
     coordinates, angles = _names(args.coordinates), _names(args.angles) or []
     if args.system and args.angles:
         raise CLIError("--angles: the system gives the angles; use --angles with "

@@ -131,11 +131,9 @@ def build_parser() -> argparse.ArgumentParser:
         description="Identify mechanical systems with XLSINDy: MuJoCo demos and your data.",
     )
     from .. import __version__
-
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     from ..benchmark import add_parser as add_benchmark_parser
-
     add_benchmark_parser(sub)
 
     demo = sub.add_parser(

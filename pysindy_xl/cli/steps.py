@@ -26,7 +26,6 @@ class CLIError(Exception):
 
 def _optimizer(solver: str, threshold=None):
     import pysindy_xl as px
-
     cls = {"explicit": px.ExplicitOptimizer, "implicit": px.ImplicitOptimizer,
            "mixed": px.MixedOptimizer}[solver]
     if threshold is not None:
@@ -43,7 +42,6 @@ def display_name(system) -> str:
 
 def system_by_name(name, joints=None):
     from pysindy_xl.mujoco import MuJoCoSystem, get_system
-
     try:
         if joints is None:
             return get_system(name)
@@ -81,7 +79,6 @@ def generate_data(system, args, progress=None):
     import warnings
 
     from pysindy_xl.mujoco import generate_dataset
-
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
@@ -107,7 +104,6 @@ def data_lines(system, dataset):
     integration = meta.get("integration")
     if integration and getattr(system, "mj_model", None) is not None:
         from pysindy_xl.mujoco.simulation.generate import INTEGRATORS
-
         authored = int(system.mj_model().opt.integrator)
         if INTEGRATORS.get(integration["integrator"]) != authored or integration["substeps"] > 1:
             lines.append(f"  integrated with {integration['reason']}")
@@ -135,7 +131,6 @@ def data_lines(system, dataset):
 def dataset_system(metadata):
     """The system a dataset was generated with (a user's MJCF from its path or embedded XML)."""
     from pysindy_xl.mujoco import system_from_metadata
-
     try:
         return system_from_metadata(metadata)
     except (ValueError, TypeError) as error:
@@ -146,7 +141,6 @@ def dataset_for(system, dataset):
     """Check the dataset's coordinates against the system's (adopting them when unnamed, and
     putting the columns in the system's order when they name its coordinates in another)."""
     from pysindy_xl.mujoco import Dataset
-
     names = dataset.coordinate_names
     if names == system.coordinate_names:
         return dataset
@@ -163,7 +157,6 @@ def dataset_for(system, dataset):
         import dataclasses
 
         from pysindy_xl.data.files import SERIES
-
         order = [list(names).index(name) for name in system.coordinate_names]
         trajectories = [dataclasses.replace(tr, **{key: getattr(tr, key)[:, order] for key in
                                                    SERIES if getattr(tr, key) is not None})
@@ -179,7 +172,6 @@ def resolve_catalog(args, system):
     """Replace ``--catalog auto`` by ``kinematic`` for a MuJoCo model (compact, it holds the
     true model), ``mixed`` (the paper's) for coordinates named without one."""
     from pysindy_xl.mujoco import MuJoCoSystem
-
     if args.catalog == "auto":
         has_model = type(system).xml is not MuJoCoSystem.xml  # an MJCF to read the tree from
         args.catalog = "kinematic" if has_model else "mixed"
@@ -217,7 +209,6 @@ def coulomb_law(args, dataset=None) -> str:
 def fit_model(system, dataset, args, solver, forced, return_arguments=False):
     import pysindy_xl as px
     from pysindy_xl.mujoco.catalogs.reference import reference_catalog
-
     optimizer = check_solver(solver, forced, args.threshold,
                              auto=getattr(args, "solver", "auto") == "auto")
     try:
@@ -248,7 +239,6 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
 def summarize_coefficients(system, model):
     """True coefficients and errors against them (None for systems without ground truth)."""
     from pysindy_xl.mujoco.catalogs.reference import true_coefficients
-
     try:  # known Lagrangians, and the MJCF's own values in its kinematic catalog
         truth, missing = true_coefficients(system, model.feature_library_)
     except ValueError:
@@ -292,7 +282,6 @@ def joint_parameters(system, model):
 
 def _rounded(expr, digits=4):
     import sympy as sp
-
     return expr.xreplace({f: sp.Float(f, digits) for f in expr.atoms(sp.Float)})
 
 

@@ -35,7 +35,6 @@ def _units(system, names) -> list:
 def validation_dataset(args, system, load):
     """The ``--validate`` files read like DATA, in the system's coordinates, as one dataset."""
     from pysindy_xl.data import Dataset
-
     trajectories, names = [], None
     for path in args.validate:
         dataset = load(path)
@@ -56,7 +55,6 @@ def held_out_verdict(args, model, system, arguments, load, progress):
     """Score the model on ``--validate`` data or by blocked cross-validation, print the lines
     and return the :class:`~pysindy_xl.held_out.ForceScore`."""
     from pysindy_xl.held_out import blocked_cross_validation
-
     if args.validate:
         data = validation_dataset(args, system, load)
         if tuple(data.coordinate_names) != tuple(model.feature_library_.coords.names):

@@ -229,7 +229,6 @@ class Dataset:
         [5, 5]
         """
         from .constraints import contiguous_segments, unconstrained_samples
-
         if forces not in ("tau", "u", None):
             raise ValueError(f"forces: expected 'tau', 'u' or None, got {forces!r}")
         if constraints not in CONSTRAINT_HANDLING:
@@ -350,7 +349,6 @@ class Dataset:
         ({'system': 'pendulum'}, True)
         """
         import pathlib
-
         path = pathlib.Path(path)
         if path.suffix != ".npz":
             path = path.with_name(path.name + ".npz")

@@ -54,7 +54,6 @@ def is_rosbag(path) -> bool:
 def _bag_path(path: str):
     """What ``rosbags`` opens: a ROS 1 file, or the directory of a ROS 2 bag."""
     import pathlib
-
     if not os.path.exists(path):
         raise DatasetError(f"path: ROS bag {path!r} does not exist")
     if path.lower().endswith((".db3", ".mcap")) and os.path.isfile(path):
@@ -114,7 +113,6 @@ def _messages(path: str, topic):
 def _run(path, rows, joints):
     """One trajectory's arrays from the messages of one bag."""
     from .dataset import Trajectory
-
     index_of: dict = {}
     kept, skipped = [], 0
     for row in rows:
@@ -200,7 +198,6 @@ def read_rosbag(paths, coordinates=None, columns=None, topic=None):
     [2.0, 1.0]
     """
     from .dataset import Dataset
-
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     try:
@@ -222,7 +219,6 @@ def read_rosbag(paths, coordinates=None, columns=None, topic=None):
             default = dict(zip(names, rows[0][2], strict=False)) if coordinates is None else {}
             joints = [columns.get(name, default.get(name, name)) for name in names]
             from ..symbols import Coordinates
-
             Coordinates(names)
         runs.append(_run(path, rows, joints))
     metadata = {"source": [os.path.basename(os.path.normpath(p)) for p in paths],

@@ -149,7 +149,6 @@ def _resolve(header, coordinates, columns, source):
     else:
         names = coordinate_names(coordinates)
     from ..symbols import Coordinates
-
     Coordinates(names)  # same name rules as the symbols (raises ValueError naming them)
     q = []
     for name in names:
@@ -176,7 +175,6 @@ def _resolve(header, coordinates, columns, source):
 
 def _build(raw, header, coordinates, columns, source, where, metadata=None):
     from .dataset import Dataset, Trajectory
-
     time, id_column, names, q_cols, series = _resolve(header, coordinates, columns, source)
     cache = {}
 
@@ -348,7 +346,6 @@ def load_data(source, coordinates=None, columns=None, delimiter=None, topic=None
         path = os.fspath(source)
         suffix = os.path.splitext(path)[1].lower()
         from .rosbag import is_rosbag, read_rosbag
-
         if is_rosbag(path):
             if delimiter is not None:
                 raise ValueError(f"delimiter: applies to text tables, not to the ROS bag "
@@ -374,7 +371,6 @@ def load_data(source, coordinates=None, columns=None, delimiter=None, topic=None
 
 def _load_npz(path, coordinates, columns):
     from .dataset import Dataset, load_dataset
-
     if columns:
         raise ValueError("columns: a column mapping applies to tables (CSV, DataFrame), not "
                          f"to the NPZ file {path!r}")
@@ -386,6 +382,5 @@ def _load_npz(path, coordinates, columns):
         raise DatasetError(f"coordinates: {len(names)} names {names} for the {dataset.n} "
                            f"columns of q in {path!r}")
     from ..symbols import Coordinates
-
     Coordinates(names)
     return Dataset(dataset.trajectories, names, dataset.metadata)
