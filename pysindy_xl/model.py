@@ -168,7 +168,6 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
                              half_width=None if info is None else info["half_width"],
                              still=self._held())
 
-    # -- fit ---------------------------------------------------------------------------------
     def fit(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None):
         """Identify the equations of motion.
 
@@ -261,7 +260,6 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         names = self.feature_library_.coords.names
         return np.isin(names, list(getattr(self, "still_coordinates_", ())))
 
-    # -- persistence ---------------------------------------------------------------------------
     @classmethod
     def load(cls, path) -> XLSINDy:
         """Load a fitted model written by :meth:`save`; parses only the restricted term grammar

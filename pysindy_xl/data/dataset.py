@@ -302,7 +302,6 @@ class Dataset:
                 "unconstrained_samples": n_samples - active,
                 "limit_hits": hits, "contact_samples": contacts, "equality_samples": equality}
 
-    # -- persistence ---------------------------------------------------------------------
     def to_arrays(self) -> dict:
         """The NPZ arrays of the module docstring: trajectories concatenated, with ids and metadata.
 

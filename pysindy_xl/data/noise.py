@@ -33,7 +33,7 @@ def _noise_levels(noise) -> dict:
 
 
 def noise_levels(noise, noise_model: str = "positions") -> dict:
-    """Per-channel relative noise levels of a noise specification under a noise model.
+    """Per-channel relative noise levels ``{"q", "qd", "qdd", "tau"}`` of a specification.
 
     Parameters
     ----------
@@ -43,11 +43,6 @@ def noise_levels(noise, noise_model: str = "positions") -> dict:
     noise_model : {"positions", "all"}, default "positions"
         ``positions``: a number perturbs the positions only (a dict may also name ``"tau"``;
         velocity or acceleration noise is refused); ``all``: every series alike.
-
-    Returns
-    -------
-    dict
-        ``{"q": ..., "qd": ..., "qdd": ..., "tau": ...}``, floats.
 
     Examples
     --------
