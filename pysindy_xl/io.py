@@ -182,7 +182,7 @@ def read_model_file(path) -> ModelFile:
     _expect(isinstance(forced, list) and len(forced) == coords.n
             and all(isinstance(f, bool) for f in forced), path,
             "'forced_coordinates' must have one flag (true or false) per coordinate")
-    still = document.get("still_coordinates", [])  # absent in files of older versions
+    still = document.get("still_coordinates", [])
     _expect(isinstance(still, list) and len(set(still)) == len(still)
             and all(isinstance(name, str) and name in coords.names for name in still), path,
             "'still_coordinates' must be a list of distinct coordinate names")
@@ -295,7 +295,7 @@ def _settings_spec(model) -> dict:
 
 
 def _settings_from_document(document, path) -> dict:
-    """The XLSINDy parameters a file names (empty for files written before they were saved)."""
+    """The XLSINDy parameters a file names, checked (empty when absent)."""
     spec = document.get("settings", {})
     _expect(isinstance(spec, dict) and set(spec) <= set(_PLAIN_SETTINGS + _OBJECT_SETTINGS),
             path, f"'settings' must be an object with keys among "
