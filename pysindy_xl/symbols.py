@@ -8,11 +8,12 @@ from collections.abc import Iterable, Sequence
 
 import sympy as sp
 
+from .expressions import FUNCTIONS, check_real_expression, check_term
+
 __all__ = ["Coordinates", "monomials", "products"]
 
 # names the expression grammar reads as constants or functions, and the time symbol
-_RESERVED = {"t", "E", "pi", "I", "oo", "nan", "zoo", "sin", "cos", "tan", "exp", "log", "sqrt",
-             "sinh", "cosh", "tanh", "asin", "acos", "atan", "Abs", "abs", "sign"}
+_RESERVED = {"t", "E", "pi", "I", "oo", "nan", "zoo", *FUNCTIONS}
 
 
 class Coordinates:
@@ -104,7 +105,6 @@ def as_expr_list(exprs, name: str) -> list[sp.Expr]:
         exprs = [sp.sympify(e) if isinstance(e, (int, float)) else e for e in exprs]
     except TypeError:
         raise TypeError(f"{name}: expected a sequence of sympy expressions") from None
-    from .expressions import check_real_expression, check_term
     for e in exprs:
         if not isinstance(e, sp.Basic):
             raise TypeError(f"{name}: expected sympy expressions, got {type(e).__name__}")
