@@ -93,9 +93,9 @@ def force_prediction(model, x, t, u, x_dot=None, x_ddot=None) -> dict:
     """How well the model predicts measured forces on a trajectory (inverse dynamics).
 
     The forces :meth:`~pysindy_xl.XLSINDy.predict_forces` needs to move as recorded against
-    the measured ``u``, arrays as in :func:`pysindy_xl.held_out.score_forces`; derivatives not
-    given come from the model's smoother. Returns ``relative_rms`` (per coordinate name),
-    ``worst`` (the largest) and ``predicted`` (N, n).
+    the measured ``u``; ``x``, ``u``, ``x_dot``, ``x_ddot`` are (N, n) arrays, ``t`` (N,) the
+    times; derivatives not given come from the model's smoother. Returns ``relative_rms`` (per
+    coordinate name), ``worst`` (the largest) and ``predicted`` (N, n).
 
     Examples
     --------
