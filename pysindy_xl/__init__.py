@@ -5,9 +5,8 @@ regression problem (:class:`CatalogRepartition`), solved by explicit, implicit o
 regression (:class:`ExplicitOptimizer`, :class:`ImplicitOptimizer`, :class:`MixedOptimizer`)
 inside the :class:`XLSINDy` estimator.
 
-The public names are loaded on first use (PEP 562): ``import pysindy_xl`` is fast and
-imports neither SymPy nor PySINDy until a name that needs them is touched, and the heavy
-optional back ends (cvxpy, JAX, MuJoCo, matplotlib) only where they are used.
+The public names are loaded on first use (PEP 562): ``import pysindy_xl`` imports neither
+SymPy nor PySINDy until a name that needs them is touched.
 """
 
 from __future__ import annotations
@@ -35,30 +34,12 @@ _LAZY = {
 }
 
 __all__ = [
-    "Coordinates",
-    "monomials",
-    "products",
-    "LagrangeLibrary",
-    "ClassicalLibrary",
-    "ExternalForces",
-    "CatalogRepartition",
-    "stack_variables",
-    "ExplicitOptimizer",
-    "ImplicitOptimizer",
-    "MixedOptimizer",
-    "EnsembleOptimizer",
-    "PhysicalOptimizer",
-    "NoLawFoundError",
-    "TotalLeastSquaresOptimizer",
-    "XLSINDy",
-    "IdentificationWarning",
-    "UnexplainedCoordinateWarning",
-    "MassMatrixDynamics",
-    "SimulationError",
-    "SingularMassMatrixError",
-    "BumpTestFunctions",
-    "WhittakerSmoother",
-    "kinematic_catalog",
+    "Coordinates", "monomials", "products", "LagrangeLibrary", "ClassicalLibrary",
+    "ExternalForces", "CatalogRepartition", "stack_variables", "ExplicitOptimizer",
+    "ImplicitOptimizer", "MixedOptimizer", "EnsembleOptimizer", "PhysicalOptimizer",
+    "NoLawFoundError", "TotalLeastSquaresOptimizer", "XLSINDy", "IdentificationWarning",
+    "UnexplainedCoordinateWarning", "MassMatrixDynamics", "SimulationError",
+    "SingularMassMatrixError", "BumpTestFunctions", "WhittakerSmoother", "kinematic_catalog",
 ]
 
 if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
@@ -84,6 +65,5 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
     )
     from .symbols import Coordinates, monomials, products
     from .weak import BumpTestFunctions, WhittakerSmoother
-
 
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY)

@@ -1,8 +1,7 @@
 """Validation of the arrays given to :class:`~pysindy_xl.XLSINDy` (trajectories, times, masks).
 
-One trajectory is an array ``(N, n)`` (1-D for one coordinate, as in PySINDy); several are a
-list, and every other argument then follows the same layout. Scalar checks of values and
-dtypes live in :mod:`pysindy_xl._validation`.
+One trajectory is an array ``(N, n)`` (1-D for one coordinate); several are a list, and every
+other argument then follows the same layout.
 """
 
 from __future__ import annotations
@@ -95,12 +94,8 @@ def sample_times(t, n_samples: int, name: str) -> np.ndarray:
 
 
 def trajectory_arrays(x, t, x_dot, x_ddot, u, sample_mask, n: int) -> list[dict]:
-    """Validated per-trajectory arrays of ``XLSINDy.fit`` / ``score`` inputs.
-
-    Returns a list of dicts with keys ``x``, ``t``, ``x_dot``, ``x_ddot``, ``u`` (None when not
-    given) and ``mask`` (bool, all True when no ``sample_mask``); a single trajectory or lists of
-    them, every argument in the same layout as ``x``.
-    """
+    """Validated per-trajectory dicts of ``XLSINDy.fit`` / ``score`` inputs: ``x``, ``t``,
+    ``x_dot``, ``x_ddot``, ``u`` (None when not given) and ``mask`` (all True by default)."""
     xs, is_list = as_list(x, "x")
     if isinstance(t, (list, tuple)):
         if not is_list or len(t) != len(xs):

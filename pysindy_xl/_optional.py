@@ -1,16 +1,5 @@
-"""Optional back ends: import on first use, with an error that names the extra to install.
-
-The core (catalogs, optimizers, :class:`~pysindy_xl.XLSINDy`) needs NumPy, SciPy, SymPy,
-scikit-learn, PySINDy and cvxpy (imported on first use: the physically consistent fit of
-kinematic catalogs, the admissible starts of unforced fits, ``ImplicitOptimizer(
-solver="cvxpy")``). Heavier back ends are optional and imported only where used:
-
-- ``jax``: :meth:`XLSINDy.to_jax`, :mod:`pysindy_xl.export.jax_dynamics`;
-  ``pip install "pysindy-xl[jax]"``
-- ``mujoco``: simulation in :mod:`pysindy_xl.mujoco`; ``pip install "pysindy-xl[mujoco]"``
-- ``gymnasium``: :meth:`XLSINDy.to_gymnasium`; ``pip install "pysindy-xl[gym]"``
-- ``dask``: the grid's Dask backend; ``pip install "pysindy-xl[dask]"``
-- ``pandas``: DataFrames in :mod:`pysindy_xl.data.tables`; ``pip install pandas``
+"""Optional back ends (jax, mujoco, gymnasium, dask, rosbags, pandas): imported on first use,
+with an error that names the ``pysindy-xl[...]`` extra to install.
 """
 
 from __future__ import annotations
@@ -21,58 +10,19 @@ import sys
 __all__ = ["EXTRAS", "MissingExtraError", "import_optional", "lazy_attributes"]
 
 #: extra of ``pyproject.toml`` that installs each optional top-level module
-EXTRAS = {
-    "cvxpy": "cvxpy",
-    "jax": "jax",
-    "jaxlib": "jax",
-    "mujoco": "mujoco",
-    "gymnasium": "gym",
-    "dask": "dask",
-    "distributed": "dask",
-    "rosbags": "ros",
-}
+EXTRAS = {"cvxpy": "cvxpy", "jax": "jax", "jaxlib": "jax", "mujoco": "mujoco",
+          "gymnasium": "gym", "dask": "dask", "distributed": "dask", "rosbags": "ros"}
 
 
 class MissingExtraError(ImportError):
-    """An optional dependency is not installed; the message names the pip extra.
-
-    A subclass of :class:`ImportError`, so ``except ImportError`` catches it.
-
-    Examples
-    --------
-    >>> issubclass(MissingExtraError, ImportError)
-    True
-    """
+    """An optional dependency is not installed (an ``ImportError`` naming the pip extra)."""
 
 
 def import_optional(name: str, purpose: str | None = None, extra: str | None = None):
-    """Import an optional module, or raise an ImportError naming the extra that installs it.
+    """Import module ``name``, or raise a :class:`MissingExtraError` saying what needs it
+    (``purpose``) and the ``extra`` that installs it (default: from :data:`EXTRAS` by the
+    top-level package; without one, ``pip install <package>``).
 
-    Parameters
-    ----------
-    name : str
-        Module to import (``"jax.numpy"``, ``"cvxpy"``...); its top-level package decides
-        the extra (see :data:`EXTRAS`).
-    purpose : str, optional
-        What needs it, for the message (default: ``name``).
-    extra : str, optional
-        The ``pysindy-xl[...]`` extra to name (default: from :data:`EXTRAS`; for a module
-        without an extra the message says ``pip install <package>``).
-
-    Returns
-    -------
-    module
-        The imported module.
-
-    Raises
-    ------
-    MissingExtraError
-        If the module (or one of its own dependencies) cannot be imported.
-
-    Examples
-    --------
-    >>> import_optional("json").__name__
-    'json'
     >>> import_optional("no_such_backend_xyz", purpose="the test", extra="all")
     Traceback (most recent call last):
     ...
@@ -97,8 +47,6 @@ def lazy_attributes(package: str, table: dict):
     first use: ``table`` maps each name to the submodule that defines it (relative to
     ``package``; a leading dot goes further up), and a loaded name is cached in the package.
 
-    Examples
-    --------
     >>> import pysindy_xl
     >>> getattr_, dir_ = lazy_attributes("pysindy_xl", {"monomials": "symbols"})
     >>> getattr_("monomials").__name__, "monomials" in dir_()

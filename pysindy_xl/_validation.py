@@ -1,11 +1,6 @@
-"""One validation layer per kind of input: options and numeric arrays.
-
-Every public entry point checks its options with :func:`check_option` and its arrays with
-:func:`check_numeric_array`, so that a mistake is answered by a ``ValueError`` or ``TypeError``
-that names the argument and says what was expected, whatever the entry point. (Symbolic
-catalog terms have their own layer, :func:`pysindy_xl.expressions.check_term`.) The warnings
-the package gives about what it identified (:class:`IdentificationWarning`) are defined here
-too, below every module that raises them.
+"""One validation layer per kind of input: options (:func:`check_option`) and numeric arrays
+(:func:`check_numeric_array`), answering a mistake with a ``ValueError`` or ``TypeError`` that
+names the argument and what was expected; and the warnings about what was identified.
 """
 
 from __future__ import annotations
@@ -45,49 +40,13 @@ def _describe_range(low, high, low_open, high_open) -> str:
 
 def check_option(name: str, value, kind: str, *, choices=(), low=None, high=None,
                  low_open=False, high_open=False, allow_none=False, allow_inf=False):
-    """Validate one scalar option; return it as the Python type of ``kind``.
+    """Validate one scalar option ``name`` and return it as the Python type of ``kind``.
 
-    Parameters
-    ----------
-    name : str
-        Name of the option, used in the error message.
-    value : object
-        The value given by the user.
-    kind : {"bool", "int", "real", "choice"}
-        ``"bool"``: ``True``/``False`` (NumPy booleans too; never strings or numbers);
-        ``"int"``: an integer (not a bool, not a string, not a float); ``"real"``: a real
-        number (not a bool, not a string), NaN refused, infinity only with ``allow_inf``;
-        ``"choice"``: one of ``choices``.
-    choices : sequence, optional
-        Accepted values for ``kind="choice"``.
-    low, high : float, optional
-        Bounds of ``"int"`` and ``"real"`` options.
-    low_open, high_open : bool
-        Whether the bounds are excluded.
-    allow_none : bool
-        Accept ``None`` (returned as is).
-    allow_inf : bool
-        Accept ``inf`` for ``"real"`` options (within the bounds).
+    ``kind``: ``"bool"`` (no strings or numbers), ``"int"`` (no bools or floats), ``"real"``
+    (NaN refused, inf only with ``allow_inf``) within ``low``/``high`` (excluded with
+    ``low_open``/``high_open``), or ``"choice"`` among ``choices``. A wrong type raises
+    ``TypeError``, a value out of range ``ValueError``.
 
-    Returns
-    -------
-    bool, int, float or the chosen value
-
-    Raises
-    ------
-    TypeError
-        When the value has the wrong type (a string for a number, a class for an instance...).
-    ValueError
-        When it has the right type but lies outside the accepted range or choices.
-
-    Examples
-    --------
-    >>> check_option("rtol", 1e-6, "real", low=0, low_open=True)
-    1e-06
-    >>> check_option("refit", "False", "bool")
-    Traceback (most recent call last):
-    ...
-    TypeError: refit: expected True or False, got the str 'False'
     >>> check_option("timeout", -1.0, "real", low=0, low_open=True, allow_none=True)
     Traceback (most recent call last):
     ...
@@ -130,31 +89,8 @@ def check_option(name: str, value, kind: str, *, choices=(), low=None, high=None
 
 
 def check_instance(name: str, value, what: str, method: str | None = None):
-    """Refuse a class where an instance is due, and objects without the needed ``method``.
-
-    Parameters
-    ----------
-    name : str
-        Name of the argument.
-    value : object
-    what : str
-        Description of what is expected, e.g. ``"a smoother"``.
-    method : str, optional
-        A method the object must have.
-
-    Returns
-    -------
-    object
-        ``value``.
-
-    Examples
-    --------
-    >>> from pysindy_xl.weak import WhittakerSmoother
-    >>> check_instance("smoother", WhittakerSmoother, "a smoother", "smooth")
-    Traceback (most recent call last):
-    ...
-    TypeError: smoother: expected an instance (a smoother), got the class WhittakerSmoother; ...
-    """
+    """Return ``value``, refusing a class where an instance (``what``, e.g. ``"a smoother"``)
+    is due and an object without the needed ``method``."""
     if isinstance(value, type):
         raise TypeError(f"{name}: expected an instance ({what}), got the class "
                         f"{value.__name__}; write {value.__name__}()")
@@ -166,39 +102,10 @@ def check_instance(name: str, value, what: str, method: str | None = None):
 
 def check_numeric_array(a, name: str, *, ndim=None, min_samples: int = 1,
                         finite: bool = True, max_abs: float | None = None) -> np.ndarray:
-    """A float array of real numbers, refusing everything that only looks like one.
+    """``a`` as a float array, refusing what NumPy would cast silently (complex, str, bool,
+    datetimes, objects), fewer than ``min_samples`` rows, dimensions not in ``ndim``, with
+    ``finite`` NaN or inf, and values beyond ``max_abs`` (products must not overflow).
 
-    Complex numbers, strings, booleans, datetimes/timedeltas and objects are refused (NumPy
-    would cast them to float silently or with a warning at most), as are arrays with fewer
-    than ``min_samples`` rows and, with ``finite``, NaN or inf.
-
-    Parameters
-    ----------
-    a : array_like
-    name : str
-        Name of the argument, used in the messages.
-    ndim : int or tuple of int, optional
-        Accepted numbers of dimensions.
-    min_samples : int
-        Minimal length of the first axis (0 accepts empty arrays).
-    finite : bool
-        Refuse NaN and inf.
-    max_abs : float, optional
-        Refuse values larger in magnitude (products and squares of the data must not
-        overflow).
-
-    Returns
-    -------
-    ndarray of float
-
-    Examples
-    --------
-    >>> check_numeric_array([[1, 2], [3, 4]], "x").dtype
-    dtype('float64')
-    >>> check_numeric_array(["0.1", "0.2"], "t")
-    Traceback (most recent call last):
-    ...
-    TypeError: t: expected real numbers, got an array of str (<U3)
     >>> check_numeric_array([1 + 2j], "x")
     Traceback (most recent call last):
     ...
@@ -261,28 +168,8 @@ def check_numeric_array(a, name: str, *, ndim=None, min_samples: int = 1,
 
 
 def check_indices(value, name: str, size: int) -> np.ndarray:
-    """Integer indices in ``[0, size)``; fractional numbers, booleans and strings refused.
-
-    Parameters
-    ----------
-    value : sequence of int or None
-    name : str
-    size : int
-        Exclusive upper bound.
-
-    Returns
-    -------
-    ndarray of int, 1-D
-
-    Examples
-    --------
-    >>> check_indices([0, 2], "force_columns", 3)
-    array([0, 2])
-    >>> check_indices([0.5], "force_columns", 3)
-    Traceback (most recent call last):
-    ...
-    TypeError: force_columns: expected integer indices, got 0.5
-    """
+    """``value`` (None: none) as a 1-D int array of indices in ``[0, size)``; fractional
+    numbers, booleans and strings refused."""
     raw = np.asarray([] if value is None else value, dtype=object).reshape(-1)
     for item in raw:
         if not isinstance(item, numbers.Integral) or isinstance(item, (bool, np.bool_)):
@@ -315,8 +202,6 @@ def argument_type(kind: str, **bounds):
     """An ``argparse`` type: the text as an ``"int"`` or ``"real"`` number checked by
     :func:`check_option` with ``bounds``, refused with ``argparse.ArgumentTypeError``.
 
-    Examples
-    --------
     >>> fraction = argument_type("real", low=0, low_open=True, high=1)
     >>> fraction("0.5")
     0.5
@@ -326,7 +211,6 @@ def argument_type(kind: str, **bounds):
     argparse.ArgumentTypeError: expected a real number in (0, 1], got 2.0
     """
     import argparse
-
     parse = int if kind == "int" else float
 
     def convert(text):

@@ -1,9 +1,7 @@
 """A restricted expression grammar: parse catalog terms without ``eval`` or ``sympify``.
 
-Saved models and pysindy feature names are turned back into sympy expressions by this parser,
-which only knows numbers, the symbols it is given, a whitelist of functions and the operators
-``+ - * / ** ^`` (and implicit multiplication by juxtaposition, as in pysindy's ``"x y^2"``).
-Nothing in a file can make it execute code.
+It knows numbers, the symbols it is given, the functions of :data:`FUNCTIONS` and ``+ - * /
+** ^`` (juxtaposition multiplies, as in pysindy's ``"x y^2"``): a file cannot make it run code.
 """
 
 from __future__ import annotations
@@ -20,21 +18,9 @@ __all__ = ["parse_expression", "format_expression", "check_real_expression", "ch
            "expression_size", "as_expression", "FUNCTIONS"]
 
 FUNCTIONS = {
-    "sin": sp.sin,
-    "cos": sp.cos,
-    "tan": sp.tan,
-    "exp": sp.exp,
-    "log": sp.log,
-    "sqrt": sp.sqrt,
-    "sinh": sp.sinh,
-    "cosh": sp.cosh,
-    "tanh": sp.tanh,
-    "asin": sp.asin,
-    "acos": sp.acos,
-    "atan": sp.atan,
-    "Abs": sp.Abs,
-    "abs": sp.Abs,
-    "sign": sp.sign,
+    "sin": sp.sin, "cos": sp.cos, "tan": sp.tan, "exp": sp.exp, "log": sp.log, "sqrt": sp.sqrt,
+    "sinh": sp.sinh, "cosh": sp.cosh, "tanh": sp.tanh, "asin": sp.asin, "acos": sp.acos,
+    "atan": sp.atan, "Abs": sp.Abs, "abs": sp.Abs, "sign": sp.sign,
 }
 _CONSTANTS = {"pi": sp.pi, "E": sp.E}
 _TOKEN = re.compile(
@@ -73,14 +59,6 @@ class _FullPrecisionPrinter(StrPrinter):
 
 def format_expression(expr: sp.Expr) -> str:
     """Text of ``expr`` that :func:`parse_expression` turns back into the same expression.
-
-    Parameters
-    ----------
-    expr : sympy.Expr
-
-    Returns
-    -------
-    str
 
     Examples
     --------
@@ -238,10 +216,6 @@ def parse_expression(text: str, symbols: dict[str, sp.Symbol]) -> sp.Expr:
     symbols : dict of str to sympy.Symbol
         The only names allowed besides the whitelisted functions and ``pi``, ``E``.
 
-    Returns
-    -------
-    sympy.Expr
-
     Examples
     --------
     >>> import sympy as sp
@@ -276,17 +250,9 @@ def parse_expression(text: str, symbols: dict[str, sp.Symbol]) -> sp.Expr:
 def expression_size(expr: sp.Expr) -> dict:
     """Cheap upper bounds on the work an expression causes, computed without expanding it.
 
-    Parameters
-    ----------
-    expr : sympy.Expr
-
-    Returns
-    -------
-    dict
-        ``terms``: an upper bound on the number of terms of ``sympy.expand(expr)`` (a power
-        ``(a + b + ...)**n`` of ``k`` terms counts ``C(n + k - 1, k - 1)``; a function call
-        counts the size of its argument); ``depth``: the nesting depth of function calls;
-        ``operations``: the number of nodes of the expression tree.
+    A dict of ``terms`` (bound on the terms of ``sympy.expand(expr)``: ``(a + b + ...)**n`` of
+    ``k`` terms counts ``C(n + k - 1, k - 1)``, a call the size of its argument), ``depth``
+    (nesting of function calls) and ``operations`` (nodes of the tree).
 
     Examples
     --------
@@ -330,34 +296,11 @@ def expression_size(expr: sp.Expr) -> dict:
 
 
 def check_term(expr, name: str) -> None:
-    """Raise if ``expr`` is not an evaluable catalog term (one layer for symbolic terms).
+    """Raise (naming ``name``) if ``expr`` is not an evaluable catalog term.
 
-    A catalog term is built from numbers, symbols, ``+ - * / **`` and the functions of
-    :data:`FUNCTIONS` only: derivatives, integrals, undefined functions, relations and other
-    sympy objects cannot be evaluated on data (nor saved and loaded).
-
-    Parameters
-    ----------
-    expr : sympy.Expr
-    name : str
-        Argument name used in the error message.
-
-    Raises
-    ------
-    TypeError
-        When ``expr`` is not a sympy expression.
-    ValueError
-        When it contains something other than the grammar's operations and functions.
-
-    Examples
-    --------
-    >>> import sympy as sp
-    >>> x = sp.Symbol("x")
-    >>> check_term(sp.cos(x) * x**2, "terms")
-    >>> check_term(sp.Derivative(sp.Function("f")(x), x), "terms")
-    Traceback (most recent call last):
-    ...
-    ValueError: terms: Derivative(f(x), x) contains Derivative, ...
+    A catalog term holds numbers, symbols, ``+ - * / **`` and :data:`FUNCTIONS` only:
+    derivatives, undefined functions, relations cannot be evaluated on data nor saved.
+    ``TypeError`` for a non-sympy ``expr``, ``ValueError`` for anything else outside the grammar.
     """
     if not isinstance(expr, sp.Expr):
         raise TypeError(f"{name}: expected a sympy expression, got {type(expr).__name__}")
@@ -377,16 +320,8 @@ def check_term(expr, name: str) -> None:
 
 
 def check_real_expression(expr: sp.Expr, name: str) -> None:
-    """Raise ``ValueError`` (naming ``name``) if ``expr`` holds a non-real or infinite number.
-
-    ``x/0`` (``zoo``), ``0/0`` (``nan``), ``sqrt(-1)`` or ``log(0)`` make no sense in a catalog
-    term, and NumPy would evaluate them to NaN or silently drop an imaginary part.
-
-    Parameters
-    ----------
-    expr : sympy.Expr
-    name : str
-        Argument name used in the error message.
+    """Raise ``ValueError`` (naming ``name``) if ``expr`` holds a non-real or infinite number
+    (``zoo``, ``nan``, ``I``), which NumPy would turn into NaN or silently drop.
 
     Examples
     --------
@@ -408,29 +343,11 @@ def check_real_expression(expr: sp.Expr, name: str) -> None:
 
 
 def as_expression(value, symbols: dict[str, sp.Symbol], name: str) -> sp.Expr:
-    """A sympy expression from a user's value: strings go through the restricted grammar.
+    """A sympy expression from a sympy expression, real number or string (parsed by the
+    restricted grammar over ``symbols``, never ``sympify``); errors name ``name``.
 
-    ``sympify`` evaluates Python; public helpers that accept strings use this instead.
-
-    Parameters
-    ----------
-    value : sympy.Expr, str or real number
-    symbols : dict of str to sympy.Symbol
-        The names a string may use (e.g. ``Coordinates.symbol_table()``).
-    name : str
-        Argument name used in the error messages.
-
-    Returns
-    -------
-    sympy.Expr
-
-    Examples
-    --------
     >>> import sympy as sp
-    >>> x = sp.Symbol("x", real=True)
-    >>> as_expression("2*x**2", {"x": x}, "lagrangian") == 2 * x**2
-    True
-    >>> as_expression("__import__('os')", {"x": x}, "lagrangian")
+    >>> as_expression("__import__('os')", {"x": sp.Symbol("x")}, "lagrangian")
     Traceback (most recent call last):
     ...
     ValueError: lagrangian: cannot parse expression "__import__('os')": unexpected "'os')"

@@ -1,34 +1,15 @@
 """Held-out validation of an identified model: the torques it predicts on data it never saw.
 
-A robot arm runs under feedback control, so simulating an identified model open loop from a
-logged state under the logged torques diverges within a second even for a good model (the
-controller that kept the real arm on its path is not in the loop). Robotics validates an
-identification by **inverse dynamics** instead: on a run (or a time block) the fit never saw,
-the torques ``tau_hat = M(q) qdd + c(q, qd) + friction`` that the model needs to move as
-recorded, against the measured ones (:meth:`XLSINDy.predict_forces
-<pysindy_xl.XLSINDy.predict_forces>`). No integration, no controller needed.
+An arm under feedback control diverges when simulated open loop even for a good model, so
+robotics validates by **inverse dynamics**: on data the fit never saw, the torques
+``tau_hat = M(q) qdd + c(q, qd) + friction`` the model needs to move as recorded
+(:meth:`XLSINDy.predict_forces <pysindy_xl.XLSINDy.predict_forces>`) against the measured ones.
+Per coordinate ``j`` over held-out samples ``s``: ``rms_j = sqrt(mean_s (tau_hat_sj - tau_sj)^2)``
+(force units), ``relative_j = rms_j / sqrt(mean_s tau_sj^2)``, and
+``total = ||tau_hat - tau||_F / ||tau||_F``.
 
-The figures, per coordinate ``j`` over every held-out sample ``s``:
-
-- ``rms_j = sqrt(mean_s (tau_hat_sj - tau_sj)^2)``, in the units of the forces (N m for a
-  hinge, N for a slide);
-- ``relative_j = rms_j / sqrt(mean_s tau_sj^2)``;
-- ``total = ||tau_hat - tau||_F / ||tau||_F`` over all coordinates and samples (the relative
-  RMS that robot identification papers report).
-
-**Derivatives.** The velocities and accelerations that enter ``tau_hat`` must be the same for
-every method compared, or the comparison measures the differentiation rather than the model.
-Measured ones are used when given; otherwise they come from :func:`scoring_derivatives`,
-whatever the model's own smoother: a quintic smoothing spline
-(:class:`~pysindy_xl.weak.WhittakerSmoother` with its defaults: the smoothness chosen per
-coordinate from the data by generalized cross-validation, for the velocity), on the actual time
-stamps, over each run as a whole (a time block is cut after differentiating, so its ends are
-as good as its middle). Pass ``x_dot`` and ``x_ddot`` to score other methods (e.g. IDIM-LS)
-on exactly the same numbers.
-
-:func:`blocked_cross_validation` scores a model class on one run: ``k`` contiguous time blocks,
-each predicted by the model refitted on the others (several runs are kept whole, one run or a
-group of runs per fold).
+Velocities and accelerations must be the same for every method compared: measured ones when
+given, else :func:`scoring_derivatives` over each whole run (whatever the model's smoother).
 """
 
 from __future__ import annotations
@@ -58,35 +39,24 @@ class ForceScore:
     """Held-out force prediction of a model, per coordinate and in total.
 
     Built by :func:`score_forces`, :func:`blocked_cross_validation` or
-    :meth:`from_predictions`; the parameters are the attributes below.
-
-    Parameters
-    ----------
-    names, rms, relative, total, measured_rms, n_samples, derivatives, t, measured, predicted
-        See Attributes.
-    folds : list of float, optional
-        See Attributes.
+    :meth:`from_predictions`; the parameters are the attributes.
 
     Attributes
     ----------
     names : tuple of str
         Coordinate names.
-    rms : ndarray, shape (n,)
-        RMS of the prediction error per coordinate, in the units of the forces.
-    relative : ndarray, shape (n,)
-        ``rms`` over the RMS of the measured force (a fraction; 0.03 is 3 %).
+    rms, relative, measured_rms : ndarray, shape (n,)
+        Per coordinate: RMS of the prediction error (force units), ``rms`` over the measured
+        RMS (a fraction), RMS of the measured force.
     total : float
         Relative RMS over all coordinates: ``||predicted - measured|| / ||measured||``.
-    measured_rms : ndarray, shape (n,)
-        RMS of the measured force per coordinate.
     n_samples : int
-        Held-out samples scored.
     derivatives : str
         Where the velocities and accelerations came from.
     t, measured, predicted : list of ndarray
         Per run: times, measured and predicted forces (for :meth:`plot`).
     folds : list of float or None
-        Cross-validation: ``total`` of each fold (in fold order), else None.
+        Cross-validation: ``total`` of each fold, else None.
 
     Examples
     --------
@@ -112,23 +82,8 @@ class ForceScore:
 
     @classmethod
     def from_predictions(cls, names, t, measured, predicted, derivatives, folds=None):
-        """The scores of predicted against measured forces.
-
-        Parameters
-        ----------
-        names : sequence of str
-            Coordinate names.
-        t, measured, predicted : list of ndarray
-            Per run: times (N,), measured and predicted forces (N, n).
-        derivatives : str
-            Where the velocities and accelerations came from.
-        folds : list of float, optional
-            Total relative error of each cross-validation fold.
-
-        Returns
-        -------
-        ForceScore
-        """
+        """The scores of ``predicted`` against ``measured`` forces (per run, (N, n)); the
+        other arguments are the attributes of the same names."""
         error = np.vstack([p - m for p, m in zip(predicted, measured, strict=True)])
         stacked = np.vstack(measured)
         rms = np.sqrt(np.mean(error**2, axis=0))
@@ -140,23 +95,8 @@ class ForceScore:
                    list(t), list(measured), list(predicted), folds)
 
     def to_dict(self) -> dict:
-        """JSON-ready figures (no series).
-
-        Returns
-        -------
-        dict
-            ``rms``, ``relative``, ``measured_rms`` (per coordinate name), ``total``,
-            ``n_samples``, ``derivatives``, ``folds``.
-
-        Examples
-        --------
-        >>> import numpy as np
-        >>> t = [np.linspace(0, 1, 3)]
-        >>> score = ForceScore.from_predictions(["a"], t, [np.ones((3, 1))],
-        ...                                     [np.full((3, 1), 1.1)], "measured")
-        >>> {k: round(v, 6) for k, v in score.to_dict()["relative"].items()}
-        {'a': 0.1}
-        """
+        """JSON-ready figures (no series): ``rms``, ``relative``, ``measured_rms`` (per
+        coordinate name), ``total``, ``n_samples``, ``derivatives``, ``folds``."""
         return {"rms": dict(zip(self.names, self.rms.tolist(), strict=True)),
                 "relative": dict(zip(self.names, self.relative.tolist(), strict=True)),
                 "measured_rms": dict(zip(self.names, self.measured_rms.tolist(), strict=True)),
@@ -164,16 +104,7 @@ class ForceScore:
                 "derivatives": self.derivatives, "folds": self.folds}
 
     def lines(self, units="N m") -> list:
-        """Per-coordinate lines (RMS in force units and %) and the total.
-
-        Parameters
-        ----------
-        units : str or sequence of str, default "N m"
-            Unit of the forces, one for all coordinates or one each.
-
-        Returns
-        -------
-        list of str
+        """Per-coordinate lines (RMS in ``units``, one or one per coordinate, and %), the total.
 
         Examples
         --------
@@ -194,27 +125,8 @@ class ForceScore:
         return out
 
     def plot(self, path, title=None):
-        """Measured against predicted forces, one panel per coordinate (Agg canvas).
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            PNG file to write.
-        title : str, optional
-
-        Examples
-        --------
-        >>> import numpy as np, pathlib, tempfile
-        >>> t = np.linspace(0, 1, 50)
-        >>> score = ForceScore.from_predictions(["a"], [t], [np.sin(t)[:, None]],
-        ...                                     [np.sin(t)[:, None] + 0.01], "measured")
-        >>> with tempfile.TemporaryDirectory() as tmp:
-        ...     score.plot(pathlib.Path(tmp) / "torques.png")
-        ...     (pathlib.Path(tmp) / "torques.png").stat().st_size > 0
-        True
-        """
+        """Write measured against predicted forces to the PNG ``path``, a panel per coordinate."""
         from pysindy_xl.mujoco.evaluation.plots import new_figure
-
         n = len(self.names)
         figure = new_figure(8, 1.6 * n + 0.8)
         axes = figure.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
@@ -240,15 +152,11 @@ class ForceScore:
 def scoring_derivatives(t, x, smoother=None, max_frequency: float = MAX_FREQUENCY):
     """Positions, velocities and accelerations for scoring, the same for every method.
 
-    A quintic smoothing spline of the positions (:class:`~pysindy_xl.weak.WhittakerSmoother`,
-    penalty of order 3) on the actual time stamps, with the smoothness chosen per coordinate
-    from the data, and at least that of a half-power bandwidth of ``max_frequency``: the
-    weight ``lambda`` (in sample units) is raised to ``(2 sin(pi f dt))^-6`` with ``f =
-    max_frequency`` and ``dt`` the mean step. The data-driven choice assumes white noise; the
-    positions of a real arm also carry correlated ripple (encoder quantization, clock jitter,
-    vibration), which it takes for motion and differentiates into accelerations many times
-    the true ones. Rigid-body joint motion (and the excitation of an identification
-    experiment) stays well below 10 Hz.
+    A quintic smoothing spline of the positions (:class:`~pysindy_xl.weak.WhittakerSmoother`)
+    on the actual stamps, smoothness chosen per coordinate by GCV and at least that of a
+    half-power bandwidth ``f = max_frequency``: ``lambda >= (2 sin(pi f dt))^-6`` (``dt`` the
+    mean step). GCV assumes white noise and would differentiate a real arm's correlated ripple
+    (quantization, jitter, vibration) into large accelerations; joint motion stays below 10 Hz.
 
     Parameters
     ----------
@@ -275,7 +183,6 @@ def scoring_derivatives(t, x, smoother=None, max_frequency: float = MAX_FREQUENC
     True
     """
     from .weak import WhittakerSmoother, whittaker_smooth
-
     t = np.asarray(t, dtype=float)
     if smoother is not None:
         return smoother.smooth(t, x)
@@ -294,8 +201,7 @@ def scoring_derivatives(t, x, smoother=None, max_frequency: float = MAX_FREQUENC
 
 
 def _runs(n, x, t, u, x_dot, x_ddot):
-    """Checked per-run arrays: lists of x, t, u, x_dot, x_ddot (None entries allowed); ``n``
-    coordinates, or None to take them from ``x``."""
+    """Checked per-run dicts of x, t, u, x_dot, x_ddot; ``n`` coordinates (None: from x)."""
     xs, is_list = as_list(x, "x")
     for name, value in (("t", t), ("u", u)):
         if value is None:
@@ -341,22 +247,12 @@ def score_forces(model, x, t, u, x_dot=None, x_ddot=None, smoother=None,
     ----------
     model : XLSINDy
         A fitted model with dynamics.
-    x : array (N, n) or list of arrays
-        Positions of the held-out run(s).
-    t : array (N,) or list
-        Their times (non-uniform stamps are used as recorded).
-    u : array (N, n) or list
-        Measured generalized forces (joint torques of an arm).
+    x, t, u : array (N, n), (N,), (N, n) or lists of them
+        Held-out positions, their times (as recorded) and measured generalized forces.
     x_dot, x_ddot : same layout, optional
         Velocities and accelerations; those not given come from :func:`scoring_derivatives`.
-    smoother : object with ``smooth(t, x)``, optional
-        Replaces the default smoother of :func:`scoring_derivatives`.
-    max_frequency : float, default 10.0
-        Bandwidth bound of the default smoother, in Hz (see :func:`scoring_derivatives`).
-
-    Returns
-    -------
-    ForceScore
+    smoother, max_frequency
+        As in :func:`scoring_derivatives`.
 
     Examples
     --------
@@ -397,14 +293,10 @@ def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: 
                              smoother=None, max_frequency: float = MAX_FREQUENCY) -> ForceScore:
     """Time-blocked cross-validation of the force prediction of a model class.
 
-    One run is cut into ``n_blocks`` contiguous time blocks; each block is predicted by a
-    copy of ``model`` (``sklearn.base.clone``: same settings, not fitted) fitted on the
-    other blocks, which enter the fit as separate runs (the samples before the block and
-    those after it). Several runs are kept whole: each fold is one run, or with more runs
-    than ``n_blocks``, one of ``n_blocks`` groups of consecutive runs. The scores pool the errors of
-    all folds; ``folds`` gives each fold's total. The scoring derivatives are computed once on
-    each whole run (see the module documentation); the fits get the data as ``fit`` would
-    (measured derivatives when given, else the model differentiates).
+    One run is cut into ``n_blocks`` contiguous time blocks, each predicted by a clone of
+    ``model`` fitted on the other blocks (as separate runs); several runs stay whole, one run
+    or group of runs per fold. The scores pool all folds; ``folds`` gives each fold's total.
+    Scoring derivatives are computed once per whole run; the fits get the data as ``fit`` would.
 
     Parameters
     ----------
@@ -414,11 +306,6 @@ def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: 
         As in :func:`score_forces`; the training data.
     n_blocks : int, default 5
         Contiguous blocks of a single run, or most groups of runs (at least 2).
-
-    Returns
-    -------
-    ForceScore
-        Out-of-fold predictions of every sample.
 
     Examples
     --------
@@ -435,7 +322,6 @@ def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: 
     (4, True)
     """
     from sklearn.base import clone
-
     check_option("n_blocks", n_blocks, "int", low=2)
     runs = _runs(None, x, t, u, x_dot, x_ddot)
     folds = _folds([len(run["t"]) for run in runs], n_blocks)

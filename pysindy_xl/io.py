@@ -1,22 +1,11 @@
 """JSON persistence of identified models.
 
-The file holds the coordinate names, the catalog specification (terms as strings of the
-restricted grammar of :mod:`pysindy_xl.expressions`, masks, interlink matrices), the
-coefficients, the optimizer's plain parameters and, after an ensemble fit, the inclusion
-probabilities and coefficient intervals. It also holds the model's settings (plain
-parameters; test functions, smoother and pysindy differentiation method as a type and plain
-parameters) and the fit's diagnostics (``formulation_``, ``n_samples_``, ``weak_info_``,
-``selection_``, ``mass_matrix_check_``), so that a loaded model reports how it was chosen and
-:func:`~pysindy_xl.quality.fit_quality` can rebuild its regression. Loading validates every
-field and parses terms with that grammar only: nothing in the file is executed (no pickle, no
-``eval``, no ``sympify``); the library and optimizer types it names are looked up among the
+The file holds the coordinate names, the catalog specification (terms in the grammar of
+:mod:`pysindy_xl.expressions`), the coefficients, the optimizer's and the model's plain
+parameters and the fit's diagnostics. Loading checks every field and executes nothing (no
+pickle, ``eval`` or ``sympify``); the library and optimizer types named are looked up among the
 registered ones (:data:`~pysindy_xl.feature_library.LIBRARY_TYPES`,
-:data:`~pysindy_xl.optimizers.OPTIMIZER_TYPES`), each of which reads its own part
-(``from_spec``). Non-finite diagnostics are written as the strings ``"inf"``, ``"-inf"`` and
-``"nan"`` (JSON has no such numbers).
-
-:func:`save_model` writes a fitted model; :func:`read_model_file` returns the checked parts of
-a file, from which :meth:`XLSINDy.load <pysindy_xl.XLSINDy.load>` rebuilds the model.
+:data:`~pysindy_xl.optimizers.OPTIMIZER_TYPES`). Non-finite numbers are written as strings.
 """
 
 from __future__ import annotations
@@ -45,18 +34,8 @@ _MAX_BYTES = 50_000_000
 
 @dataclasses.dataclass
 class ModelFile:
-    """The checked contents of a model file.
-
-    Attributes
-    ----------
-    settings : dict
-        The estimator's parameters besides the catalog and the optimizer.
-    feature_library : CatalogRepartition
-        Fitted (the columns derived).
-    optimizer : CatalogOptimizer or None
-    fitted : dict
-        The fitted attributes (``coef_``, ``dropped_features_``, ``n_coordinates_``, ...).
-    """
+    """The checked contents of a model file: the estimator's other ``settings``, the fitted
+    ``feature_library``, the ``optimizer`` (or None) and the ``fitted`` attributes."""
 
     settings: dict
     feature_library: CatalogRepartition
@@ -66,12 +45,6 @@ class ModelFile:
 
 def save_model(model, path) -> None:
     """Write a fitted :class:`~pysindy_xl.XLSINDy` to ``path`` as JSON.
-
-    Parameters
-    ----------
-    model : XLSINDy
-        A fitted model.
-    path : str or os.PathLike
 
     Examples
     --------
@@ -88,7 +61,6 @@ def save_model(model, path) -> None:
     [-1.0, 1.0, -0.5]
     """
     from sklearn.utils.validation import check_is_fitted
-
     check_is_fitted(model, "coef_")
     library = model.feature_library_
     optimizer = model.optimizer_
@@ -164,23 +136,7 @@ def _uncertainty_from_document(document, n_features, path):
 
 
 def invalid_model_file(path, what: str) -> ValueError:
-    """The error for a file that is not a valid model file, saying ``what`` is wrong.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-    what : str
-
-    Returns
-    -------
-    ValueError
-        To raise.
-
-    Examples
-    --------
-    >>> invalid_model_file("m.json", "'format' must be 'pysindy-xl-model'")
-    ValueError("path: 'm.json' is not a valid pysindy-xl model file: 'format' must be ...")
-    """
+    """The ``ValueError`` to raise for a file that is not a valid model file (``what``)."""
     return ValueError(f"path: {os.fspath(path)!r} is not a valid pysindy-xl model file: {what}")
 
 
@@ -193,20 +149,7 @@ def _expect(condition: bool, path, what: str):
 
 
 def read_model_file(path) -> ModelFile:
-    """Read and check a model written by :func:`save_model`.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-
-    Returns
-    -------
-    ModelFile
-
-    Raises
-    ------
-    ValueError
-        If the file is not a valid model file (the message says what is wrong).
+    """Read and check a model written by :func:`save_model` into a :class:`ModelFile`.
 
     Examples
     --------
@@ -239,7 +182,7 @@ def read_model_file(path) -> ModelFile:
     _expect(isinstance(forced, list) and len(forced) == coords.n
             and all(isinstance(f, bool) for f in forced), path,
             "'forced_coordinates' must have one flag (true or false) per coordinate")
-    still = document.get("still_coordinates", [])  # absent in files of older versions
+    still = document.get("still_coordinates", [])
     _expect(isinstance(still, list) and len(set(still)) == len(still)
             and all(isinstance(name, str) and name in coords.names for name in still), path,
             "'still_coordinates' must be a list of distinct coordinate names")
@@ -303,10 +246,6 @@ def _library_from_document(document, coords, path) -> CatalogRepartition:
     return library
 
 
-# --------------------------------------------------------------------------------------------
-# settings and diagnostics of the fit
-# --------------------------------------------------------------------------------------------
-
 #: XLSINDy parameters that are plain values, and the objects saved as a type and plain params
 _PLAIN_SETTINGS = ("drop_dependent", "formulation", "t_default", "blas_threads",
                    "residual_covariance", "hold_still")
@@ -318,12 +257,10 @@ def _setting_types(name):
     """The classes a file may name for an object setting (documented ones only)."""
     if name == "differentiation_method":
         import pysindy.differentiation as differentiation
-
         base = differentiation.BaseDifferentiation
         return {k: v for k, v in vars(differentiation).items()
                 if isinstance(v, type) and issubclass(v, base) and v is not base}
     from .weak import BumpTestFunctions, WhittakerSmoother
-
     return {"test_functions": {"BumpTestFunctions": BumpTestFunctions},
             "smoother": {"WhittakerSmoother": WhittakerSmoother}}[name]
 
@@ -338,10 +275,8 @@ def _init_params(value) -> dict:
 
 
 def _settings_spec(model) -> dict:
-    """The model's parameters: plain ones as they are, objects as ``{"type", "params"}``.
-
-    An object that cannot be written so (a type the loader does not know, a parameter that
-    is a function) is left out with a warning: the loaded model uses the default instead."""
+    """The model's parameters: plain ones as they are, objects as ``{"type", "params"}`` (or
+    left out with a warning when they cannot be: the loaded model uses the default)."""
     settings = {key: getattr(model, key) for key in _PLAIN_SETTINGS}
     for key in _OBJECT_SETTINGS:
         value = getattr(model, key)
@@ -360,7 +295,7 @@ def _settings_spec(model) -> dict:
 
 
 def _settings_from_document(document, path) -> dict:
-    """The XLSINDy parameters a file names (empty for files written before they were saved)."""
+    """The XLSINDy parameters a file names, checked (empty when absent)."""
     spec = document.get("settings", {})
     _expect(isinstance(spec, dict) and set(spec) <= set(_PLAIN_SETTINGS + _OBJECT_SETTINGS),
             path, f"'settings' must be an object with keys among "
@@ -404,13 +339,11 @@ def _floats_from(values, path, where) -> np.ndarray:
 def _selection_types():
     from .optimizers.homogeneous import LawSelection
     from .optimizers.selection import SelectionResult
-
     return {"SelectionResult": SelectionResult, "LawSelection": LawSelection}
 
 
 def _field_json(name, value):
-    """A selection field for JSON: the rule as text, sizes and column indices as integers,
-    the held-out scores as numbers (:func:`_floats`)."""
+    """A selection field for JSON: text, integers, or numbers (:func:`_floats`)."""
     if isinstance(value, str):
         return value
     if np.ndim(value) == 0:
@@ -419,8 +352,7 @@ def _field_json(name, value):
 
 
 def _training_spec(model) -> dict:
-    """The diagnostics of the fit: formulation, samples, weak-form info, the sparsity
-    selection and the mass-matrix check."""
+    """The fit's diagnostics for JSON."""
     info = getattr(model, "weak_info_", None)
     selection = getattr(model, "selection_", None)
     check = getattr(model, "mass_matrix_check_", None)
@@ -478,8 +410,7 @@ def _consistency_from_document(report, path):
 
 
 def _training_from_document(spec, n_features, path) -> dict:
-    """The fit's diagnostics in a file, as fitted attributes (absent in files written before
-    they were saved: ``formulation_`` unknown, the others None)."""
+    """The fit's diagnostics in a file, checked, as fitted attributes (None when absent)."""
     spec = {} if spec is None else spec
     _expect(isinstance(spec, dict), path, "'training' must be an object")
     formulation = spec.get("formulation")

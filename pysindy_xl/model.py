@@ -45,70 +45,47 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         force column).
     optimizer : catalog optimizer or {"explicit", "implicit", "mixed"}, optional
         :class:`~pysindy_xl.ExplicitOptimizer`, :class:`~pysindy_xl.ImplicitOptimizer`,
-        :class:`~pysindy_xl.MixedOptimizer` or anything with ``fit_catalog``; a pysindy
-        optimizer (``ps.STLSQ()``, ``ps.SR3()``, ...) or any regressor with ``fit(X, y)`` and
-        ``coef_`` runs as ``ExplicitOptimizer(method=...)``; the name of a kind of regression
-        gets the default optimizer of that kind. Default: chosen from the data by
-        :func:`~pysindy_xl.optimizers.default_optimizer`: explicit when every coordinate is
-        forced, implicit when none is, mixed otherwise; explicit fits (and explicit parts)
-        from positions only are bagged, ``EnsembleOptimizer(ExplicitOptimizer())``: the
-        model keeps the terms that most of 20 subsample fits select, and reports inclusion
-        probabilities and coefficient intervals (measured in the "Noisy data" guide). For
-        parameters that rigid bodies can have (a kinematic catalog), pass
-        :class:`~pysindy_xl.PhysicalOptimizer`.
+        :class:`~pysindy_xl.MixedOptimizer`, :class:`~pysindy_xl.PhysicalOptimizer` (rigid-body
+        parameters) or anything with ``fit_catalog``; a pysindy optimizer or any regressor with
+        ``fit(X, y)`` and ``coef_`` runs as ``ExplicitOptimizer(method=...)``; a kind's name
+        gets that kind's default. Default: :func:`~pysindy_xl.optimizers.default_optimizer`
+        (explicit when every coordinate is forced, implicit when none is, mixed otherwise;
+        explicit fits from positions only bagged by an :class:`~pysindy_xl.EnsembleOptimizer`).
     differentiation_method : pysindy differentiation method, optional
-        Used for velocities and accelerations that are not given (strong form). Default, by
-        the optimizer's ``derivative_estimate``: ``ps.SmoothedFiniteDifference()`` (finite
-        differences after a Savitzky-Golay smoothing, robust to moderate noise, which plain
-        finite differences amplify twice for accelerations) for explicit and mixed fits;
-        ``ps.FiniteDifference(order=4)`` for implicit fits of unforced data, whose null-space
-        search needs unbiased derivatives (the smoothing bias alone can hide the law).
+        For velocities and accelerations not given (strong form). Default, by the optimizer's
+        ``derivative_estimate``: ``ps.SmoothedFiniteDifference()`` for explicit and mixed fits,
+        ``ps.FiniteDifference(order=4)`` (unbiased, for the null-space search) for implicit.
     formulation : {"auto", "strong", "weak"}, default "auto"
-        ``"strong"``: the Euler-Lagrange columns evaluated pointwise, which needs
-        accelerations. ``"weak"``: each equation integrated against test functions, with the
-        accelerations removed by integration by parts (``int phi E dt = -int phi' P dt -
-        int phi Q dt``, see :meth:`SymbolicLibrary.weak_transform
-        <pysindy_xl.feature_library.SymbolicLibrary.weak_transform>`), fed by smoothed
-        positions and velocities: the robust choice for measured positions. ``"auto"``: strong
-        when a ``differentiation_method`` is set, or when ``x_dot`` and ``x_ddot`` are given
-        and no entry is an impulse (an acceleration with a switching coefficient, such as
-        MuJoCo's dry friction's lead; :func:`~pysindy_xl.fit.resolve_formulation`), weak
-        otherwise.
+        ``"strong"``: Euler-Lagrange columns evaluated pointwise (needs accelerations).
+        ``"weak"``: each equation integrated against test functions, accelerations removed by
+        parts (``int phi E dt = -int phi' P dt - int phi Q dt``), fed by smoothed positions and
+        velocities: robust on measured positions. ``"auto"``: strong with a
+        ``differentiation_method``, or with ``x_dot`` and ``x_ddot`` and no impulse entry
+        (:func:`~pysindy_xl.fit.resolve_formulation`), weak otherwise.
     test_functions : BumpTestFunctions, optional
-        Test functions of the weak formulation (default: bumps whose width comes from the
-        data's spectrum; on unforced data bumps of three widths,
-        :data:`~pysindy_xl.fit.UNFORCED_WIDTH_MULTIPLES`).
+        Weak-form test functions (default: width from the data's spectrum; unforced data:
+        three widths, :data:`~pysindy_xl.fit.UNFORCED_WIDTH_MULTIPLES`).
     smoother : WhittakerSmoother, optional
-        Estimates positions and velocities for the weak formulation from noisy positions
-        (default ``WhittakerSmoother()``: smoothness chosen from the data). Measured
-        ``x_dot`` is used as given.
+        Positions and velocities for the weak form from noisy positions (default
+        ``WhittakerSmoother()``, smoothness from the data). Measured ``x_dot`` is used as given.
     residual_covariance : bool or "auto", default "auto"
-        Weak formulation on positions only (the smoother estimated the noise, no ``x_dot``):
-        weigh the rows by the covariance of the residual, generalized least squares
-        iteratively reweighted from a pilot law (:func:`pysindy_xl.fit.solve`; the rows of
-        overlapping test functions are correlated). ``"auto"``: when some coordinate is
-        forced, where the weighting finds more exact laws (on unforced data it finds fewer:
-        the "Noisy data" guide has the figures). ``False``: one fit of the rows as they are.
+        Weak form on positions only: weigh the rows by the residual's covariance (overlapping
+        test functions correlate them), iteratively reweighted from a pilot law
+        (:func:`pysindy_xl.fit.solve`). ``"auto"``: when some coordinate is forced.
     blas_threads : int or None, default 1
-        BLAS threads during ``fit`` (threadpoolctl). The fit's linear algebra is many QR
-        factorizations of tall, narrow matrices, where threads mostly compete (measured in
-        ``benchmarks/blas_threads.py``). ``None`` keeps the library default.
+        BLAS threads during ``fit`` (threadpoolctl; the fit's many tall, narrow QR
+        factorizations gain little from threads). ``None`` keeps the library default.
     t_default : float, default 1.0
         Time step used when ``fit`` or ``score`` get no ``t`` (as in PySINDy).
     drop_dependent : bool, default True
-        Remove catalog columns that are zero or exact linear combinations of preferred columns
-        (see :func:`~pysindy_xl.optimizers.independent_columns`): a sparse regression on an
-        exactly rank-deficient matrix is a lottery. The test runs on random points of the
-        data's bounding box, so it finds identities of the catalog, not the physical law.
+        Remove catalog columns that are zero or exact linear combinations of preferred ones
+        (:func:`~pysindy_xl.optimizers.independent_columns`), tested on random points of the
+        data's bounding box: identities of the catalog, not the physical law.
     hold_still : float or False, default 2.0
-        Leave out of the regression the coordinates that hold still in the data: undriven,
-        and on every trajectory at rest or in uniform motion up to ``hold_still`` times the
-        noise level estimated from the positions (the standard deviation of their departure
-        from a straight line in time); see :mod:`pysindy_xl.fit.still` for the criterion.
-        Their equations and the catalog columns that involve their motion (or only their
-        positions) are removed, the other coordinates are identified as if they were
-        absent, and the model holds them (zero acceleration), saying so in :meth:`print`.
-        ``False``: every coordinate is fitted (a constant coordinate is then an error).
+        Coordinates that are undriven and at rest or in uniform motion up to ``hold_still``
+        times their estimated noise (:mod:`pysindy_xl.fit.still`) are left out with their
+        columns and held by the model (zero acceleration), as :meth:`print` says. ``False``:
+        fit every coordinate.
 
     Attributes
     ----------
@@ -118,39 +95,28 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
     dropped_features_ : dict of str to str
         Features removed before regression, with the reason.
     still_coordinates_ : list of str
-        Coordinates that held still in the data (``hold_still``): left out of the regression
-        and held by the model (zero acceleration).
+        Coordinates held still (``hold_still``).
     dynamics_ : CatalogDynamics
         The identified equations in mass-matrix form (``None`` if they contain no acceleration).
     n_coordinates_ : int
     n_samples_ : int
         Samples used in the fit, all trajectories together.
     formulation_ : {"strong", "weak"}
-        The formulation used.
     weak_info_ : dict or None
-        Weak formulation: test-function half-width (s), test functions per piece, the
-        smoother's noise estimate per coordinate (first piece), the time grid (``time_grid``:
-        uniform or not, median, smallest and largest step), the gaps the trajectories were
-        cut at (``gaps``: trajectory, time, length) and each piece's trajectory
-        (``segments``); see :func:`~pysindy_xl.weak.weak_regression`.
+        Weak form: half-width, test functions per piece, noise estimate, ``time_grid``,
+        ``gaps`` and ``segments`` (:func:`~pysindy_xl.weak.weak_regression`).
     selection_ : SelectionResult, LawSelection or None
-        How the sparsity was chosen, when the optimizer reports it (``threshold="auto"``;
-        an unforced law selected from noisy data by its noise ratio). None after a bagged
-        fit (the default for forced positions-only data), where no single selection made the
-        model: see ``inclusion_probability_``.
+        How the sparsity was chosen, when the optimizer reports it (None after a bagged fit:
+        see ``inclusion_probability_``).
     inclusion_probability_, coef_interval_ : ndarray or None
-        With an :class:`~pysindy_xl.EnsembleOptimizer`: per catalog feature, the fraction of
-        the ensemble's fits that include it and the interval of its coefficient,
-        shapes (F,) and (2, F); ``print(uncertainty=True)`` shows them.
+        With an :class:`~pysindy_xl.EnsembleOptimizer`: per feature, the fraction of fits that
+        include it and its coefficient's interval, shapes (F,) and (2, F).
     physical_consistency_ : dict or None
-        After a physically constrained fit (:class:`~pysindy_xl.PhysicalOptimizer`): whether
-        the unconstrained estimate was consistent, what the constraints cost, the features
-        whose friction came out negative (see ``PhysicalOptimizer.consistency_``).
+        After a :class:`~pysindy_xl.PhysicalOptimizer` fit: its ``consistency_``.
     mass_matrix_check_ : dict or None
-        The identified mass matrix on (up to 2,000 of) the training states: fraction where it
-        is positive definite and median condition number. Below 1, ``fit`` warns with an
-        :class:`IdentificationWarning` naming coordinates without positive inertia. A law that
-        no force scales (sign free) is flipped when its mass matrix is negative definite.
+        The identified mass matrix on (up to 2,000) training states: fraction positive
+        definite and median condition number; below 1, ``fit`` warns with an
+        :class:`IdentificationWarning`. A sign-free law is flipped when it is negative definite.
 
     Examples
     --------
@@ -184,25 +150,12 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
 
     def regression(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None,
                    formulation=None) -> CatalogProblem:
-        """The catalog problem of the fitted model on data, built as :meth:`fit` builds it
-        (:func:`~pysindy_xl.fit.build_problem`, every catalog column but those of the
-        coordinates held still).
+        """The :class:`CatalogProblem` of the fitted model on data, built as :meth:`fit` builds
+        it (:func:`~pysindy_xl.fit.build_problem`, without the columns of still coordinates).
 
         ``problem.theta @ coef_[problem.catalog_map.columns]`` is zero for data that obey the
-        identified equations exactly (the fit-quality report of
-        :func:`pysindy_xl.quality.fit_quality` is made of it).
-
-        Parameters
-        ----------
-        x, t, x_dot, x_ddot, u, sample_mask
-            As in :meth:`fit`.
-        formulation : {"strong", "weak"}, optional
-            Default: the fit's; the weak form uses the fit's test-function width.
-
-        Returns
-        -------
-        CatalogProblem
-            With its ``catalog_map`` (:class:`~pysindy_xl.fit.CatalogMap`).
+        identified equations exactly (:func:`pysindy_xl.quality.fit_quality` uses it). The
+        arguments are those of :meth:`fit`; ``formulation`` defaults to the fit's.
         """
         check_is_fitted(self, "coef_")
         formulation = formulation or self.formulation_ or "strong"
@@ -216,7 +169,6 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
                              half_width=None if info is None else info["half_width"],
                              still=self._held())
 
-    # -- fit ---------------------------------------------------------------------------------
     def fit(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None):
         """Identify the equations of motion.
 
@@ -225,31 +177,24 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         x : array (N, n) or list of arrays
             Positions, one trajectory or several.
         t : float, array (N,) or list of arrays, optional
-            Time step or sample times (strictly increasing), matching ``x``; default
-            ``t_default``. Stamps as a logger wrote them (jittered, with gaps) are used as
-            they are: the weak form smooths, integrates and propagates the noise on the
-            actual times and cuts a trajectory at a gap its test functions cannot span
-            (:mod:`~pysindy_xl.weak.timegrid`; recorded in ``weak_info_``); a repeated stamp
-            raises a ``ValueError`` naming it.
+            Time step or strictly increasing sample times, matching ``x``; default
+            ``t_default``. Jittered stamps are used as they are; the weak form cuts a
+            trajectory at a gap its test functions cannot span (:mod:`~pysindy_xl.weak.timegrid`).
         x_dot, x_ddot : same layout as ``x``, optional
             Measured velocities and accelerations; computed with ``differentiation_method``
             when absent.
         u : same layout as ``x``, optional
             Generalized forces (inputs); ``None`` means unforced (implicit identification).
         sample_mask : bool array (N,) or list of them, optional
-            Samples the equations must explain (``True``); ``False`` marks samples where
-            unmodelled forces act (contacts, joint limits, outliers). The strong form drops
-            their rows; the weak form drops every test function whose support touches one.
-            Differentiation and smoothing still use the whole trajectory.
+            ``False`` marks samples where unmodelled forces act (contacts, limits, outliers):
+            the strong form drops their rows, the weak form the test functions touching one.
 
         Returns
         -------
         self
         """
         self._check_options()
-        # The warnings of the fit come from several depths (libraries, smoother, optimizers,
-        # ensembles); recorded here and re-emitted, they all point at the caller's line. The
-        # caller's filters still apply inside ("error" raises where the warning arises).
+        # warnings from every depth of the fit, re-emitted to point at the caller's line
         caught = []
         try:
             threads = None if self.blas_threads is None else int(self.blas_threads)
@@ -309,8 +254,7 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
                 check_instance(name, value, name.replace("_", " "))
 
     def _build_dynamics(self):
-        """``dynamics_`` from the fitted coefficients
-        (:func:`~pysindy_xl.fit.wrap.catalog_dynamics`)."""
+        """``dynamics_`` from the fitted coefficients."""
         self.dynamics_ = catalog_dynamics(self.feature_library_, self.coef_, self._held())
 
     def _held(self) -> np.ndarray:
@@ -318,26 +262,11 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         names = self.feature_library_.coords.names
         return np.isin(names, list(getattr(self, "still_coordinates_", ())))
 
-    # -- persistence ---------------------------------------------------------------------------
     @classmethod
     def load(cls, path) -> XLSINDy:
-        """Load a model written by :meth:`save`; parses only the restricted term grammar and
-        the registered library and optimizer types (:mod:`pysindy_xl.io`).
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-
-        Returns
-        -------
-        XLSINDy
-            A fitted model that predicts and simulates like the saved one.
-
-        Raises
-        ------
-        ValueError
-            If the file is not a valid model file (the message says what is wrong).
-        """
+        """Load a fitted model written by :meth:`save`; parses only the restricted term grammar
+        and the registered library and optimizer types (:mod:`pysindy_xl.io`). An invalid file
+        raises a ``ValueError`` saying what is wrong."""
         contents = read_model_file(path)
         model = cls(feature_library=contents.feature_library, optimizer=contents.optimizer,
                     **contents.settings)

@@ -1,10 +1,8 @@
 """How well an identified model explains its own data, and how it simulates it.
 
-:func:`fit_quality` rebuilds the problem the model solved (strong or weak form, through
-:meth:`XLSINDy.regression <pysindy_xl.XLSINDy.regression>`, the fit stage's builder) and
-reports ``R^2`` per coordinate, the held-out score of its sparsity selection and, after a
-bagged fit, the stability of its terms; :func:`plot_identification` simulates the model
-from a recorded trajectory. The ``pysindy-xl identify`` command prints and plots both.
+:func:`fit_quality` rebuilds the problem the model solved (:meth:`XLSINDy.regression
+<pysindy_xl.XLSINDy.regression>`) and reports its ``R^2``; :func:`plot_identification`
+simulates the model from a recorded trajectory. ``pysindy-xl identify`` prints and plots both.
 """
 
 from __future__ import annotations
@@ -17,13 +15,9 @@ __all__ = ["fit_quality", "quality_lines", "plot_identification", "force_predict
 def fit_quality(model, arguments) -> dict:
     """R^2 of the identified equations' residual on the training data.
 
-    With ``Theta`` the regression matrix of the fit (weak: equations integrated against the
-    test functions; strong: the equations at every sample) and ``xi`` the identified
-    coefficients, the residual is ``r = Theta xi`` (zero for an exact model) and
-    ``R^2 = 1 - ||r||^2 / ||b||^2``, where ``b`` is the part that the rest of the equations
-    must explain: the generalized-force part ``Theta_F xi_F`` of forced data, or for
-    unforced (implicit) data the largest single term ``Theta_j xi_j``. R^2 = 1 is an exact
-    fit; 0 is no better than predicting zero force.
+    With ``Theta`` the fit's regression matrix and ``xi`` the coefficients, the residual is
+    ``r = Theta xi`` and ``R^2 = 1 - ||r||^2 / ||b||^2``, ``b`` being the force part
+    ``Theta_F xi_F`` of forced data, or the largest single term ``Theta_j xi_j`` of unforced.
 
     Parameters
     ----------
@@ -35,22 +29,12 @@ def fit_quality(model, arguments) -> dict:
     Returns
     -------
     dict
-        ``r2`` (float), ``r2_per_coordinate`` (dict name -> float), ``formulation``,
-        ``target`` (``"forces"`` or the name of the dominant term), ``rows`` (regression
-        rows), ``cv_error`` (held-out relative squared error of the chosen model size
-        when the optimizer selected the sparsity by cross-validation, else ``None``) and
-        ``cv_noise_ratio`` (held-out noise ratio of the chosen unforced law when it was
-        selected from noisy data, else ``None``: about 1 when the law leaves only noise) and
-        ``stability`` (after an ensemble fit, the default for noisy positions: the kept term
-        selected least often and the dropped term selected most often by the subsample fits,
-        each as ``[name, fraction]``, else ``None``) and ``held_still`` (the coordinates the
-        model holds still, ``still_coordinates_``: their equations were not identified, and
-        their rows are left out of the R^2).
-
-    Raises
-    ------
-    TypeError
-        If ``arguments`` is not a dict with ``x``.
+        ``r2``, ``r2_per_coordinate`` (name -> float), ``formulation``, ``target``
+        (``"forces"`` or the dominant term), ``rows``, ``cv_error`` and ``cv_noise_ratio``
+        (held-out scores of the sparsity selection, or ``None``), ``stability`` (after an
+        ensemble fit: the kept term selected least often and the dropped term selected most
+        often, each ``[name, fraction]``, else ``None``), ``held_still``,
+        ``physical_consistency``.
 
     Examples
     --------
@@ -108,18 +92,10 @@ def fit_quality(model, arguments) -> dict:
 def force_prediction(model, x, t, u, x_dot=None, x_ddot=None) -> dict:
     """How well the model predicts measured forces on a trajectory (inverse dynamics).
 
-    The robotics validation of an identified model: on a fresh trajectory, the forces
-    :meth:`~pysindy_xl.XLSINDy.predict_forces` needs to move as recorded against the
-    measured ones, per coordinate. Derivatives that are not given are estimated from the
-    positions by the model's smoother (noisy positions are the main case). ``x``, ``u``,
-    ``x_dot``, ``x_ddot`` are (N, n) arrays of positions, measured forces, velocities and
-    accelerations; ``t`` (N,) the sample times.
-
-    Returns
-    -------
-    dict
-        ``relative_rms`` (per coordinate name: RMS of the prediction error over RMS of the
-        measured force), ``worst`` (the largest of them) and ``predicted`` (N, n).
+    The forces :meth:`~pysindy_xl.XLSINDy.predict_forces` needs to move as recorded against
+    the measured ``u``; ``x``, ``u``, ``x_dot``, ``x_ddot`` are (N, n) arrays, ``t`` (N,) the
+    times; derivatives not given come from the model's smoother. Returns ``relative_rms`` (per
+    coordinate name), ``worst`` (the largest) and ``predicted`` (N, n).
 
     Examples
     --------
@@ -134,7 +110,6 @@ def force_prediction(model, x, t, u, x_dot=None, x_ddot=None) -> dict:
     """
     from ._inputs import check_array
     from .weak import WhittakerSmoother
-
     n = model.n_coordinates_
     x = check_array(x, "x", n_columns=n)
     u = check_array(u, "u", x.shape)
@@ -150,8 +125,7 @@ def force_prediction(model, x, t, u, x_dot=None, x_ddot=None) -> dict:
 
 
 def _stability(model):
-    """The kept term that the ensemble's fits selected least often and the dropped term they
-    selected most often (``[name, fraction]`` or None each), or None without an ensemble."""
+    """The ``stability`` entry of :func:`fit_quality`."""
     probability = getattr(model, "inclusion_probability_", None)
     if probability is None:
         return None
@@ -215,7 +189,6 @@ def quality_lines(quality) -> list:
                      f"1 when it leaves only the propagated noise): "
                      f"{quality['cv_noise_ratio']:.3g}")
     from .report.equations import consistency_line  # sympy: not imported by the CLI's --help
-
     consistency = consistency_line(quality.get("physical_consistency"))
     if consistency:
         lines.append(f"  {consistency}")
@@ -225,16 +198,9 @@ def quality_lines(quality) -> list:
 def plot_identification(model, trajectory, path, title=None, forced=True) -> dict:
     """Simulate the model from a recorded trajectory's initial state and plot both.
 
-    The model runs under the trajectory's recorded generalized forces (when ``forced``) from
-    its first sample (velocity: the recorded one, or the model's smoother estimate); the
-    figure has one panel per coordinate, recorded positions against simulated ones. Drawn on
-    matplotlib's Agg canvas (no display needed), written as PNG to ``path``.
-
-    Returns
-    -------
-    dict
-        ``rmse`` (position RMSE per coordinate over the simulated span), ``simulated_until``
-        (s; the end of the data unless the model diverged) and ``diverged`` (bool).
+    Under the recorded forces (when ``forced``), one panel per coordinate, written as PNG to
+    ``path``. Returns ``rmse`` (per coordinate over the simulated span), ``simulated_until``
+    (s) and ``diverged`` (bool).
 
     Examples
     --------
@@ -255,7 +221,6 @@ def plot_identification(model, trajectory, path, title=None, forced=True) -> dic
     """
     from pysindy_xl.dynamics import DynamicsError
     from pysindy_xl.mujoco.evaluation.plots import new_figure
-
     if model.dynamics_ is None:
         raise ValueError("model: the identified equations contain no acceleration; nothing "
                          "to simulate")

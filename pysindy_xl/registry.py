@@ -1,9 +1,7 @@
 """Named types for persistence: what a model file may name, and how a name is resolved.
 
-Catalog libraries (:data:`pysindy_xl.feature_library.LIBRARY_TYPES`) and catalog optimizers
-(:data:`pysindy_xl.optimizers.OPTIMIZER_TYPES`) register themselves when their class is
-defined, in this package or in a user's code; a model file names them by ``spec_type`` and
-loading looks the name up, so nothing in a file makes Python import or execute anything.
+Catalog libraries and optimizers register themselves when their class is defined (here or in
+a user's code); a model file names them by ``spec_type``, so loading imports nothing.
 """
 
 from __future__ import annotations
@@ -19,24 +17,8 @@ def register_type(registry: dict, cls: type) -> None:
     """Put ``cls`` in ``registry`` under its ``spec_type``.
 
     A class sets ``spec_type`` in its own body to choose the name; otherwise it is
-    ``module.QualifiedName`` (never inherited: a subclass is a type of its own). A name taken
-    by another class raises ``TypeError``; the same class defined again (a re-run notebook
-    cell) replaces itself.
-
-    Examples
-    --------
-    >>> registry = {}
-    >>> class Solver:
-    ...     spec_type = "Solver"
-    >>> register_type(registry, Solver)
-    >>> registry["Solver"] is Solver
-    True
-    >>> class Other:
-    ...     spec_type = "Solver"
-    >>> register_type(registry, Other)
-    Traceback (most recent call last):
-    ...
-    TypeError: spec_type: 'Solver' is already the name of ...Solver; give Other another spec_type
+    ``module.QualifiedName`` (never inherited). A name taken by another class raises
+    ``TypeError``; the same class defined again (a re-run notebook cell) replaces itself.
     """
     name = cls.__dict__.get("spec_type") or f"{cls.__module__}.{cls.__qualname__}"
     known = registry.get(name)
@@ -51,8 +33,6 @@ def register_type(registry: dict, cls: type) -> None:
 def is_plain(value) -> bool:
     """Whether JSON holds ``value`` as it is: None, a bool, an int, a str or a finite float.
 
-    Examples
-    --------
     >>> [is_plain(v) for v in (None, True, 3, 0.5, "a", float("nan"), [1])]
     [True, True, True, True, True, False, False]
     """
@@ -63,8 +43,6 @@ def is_plain(value) -> bool:
 def json_finite(value):
     """JSON-safe copy: non-finite floats become None, numpy scalars plain numbers.
 
-    Examples
-    --------
     >>> json_finite({"rmse": float("inf"), "n": np.int64(3), "x": [np.float64(0.5)]})
     {'rmse': None, 'n': 3, 'x': [0.5]}
     """

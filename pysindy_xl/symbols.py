@@ -8,11 +8,12 @@ from collections.abc import Iterable, Sequence
 
 import sympy as sp
 
+from .expressions import FUNCTIONS, check_real_expression, check_term
+
 __all__ = ["Coordinates", "monomials", "products"]
 
 # names the expression grammar reads as constants or functions, and the time symbol
-_RESERVED = {"t", "E", "pi", "I", "oo", "nan", "zoo", "sin", "cos", "tan", "exp", "log", "sqrt",
-             "sinh", "cosh", "tanh", "asin", "acos", "atan", "Abs", "abs", "sign"}
+_RESERVED = {"t", "E", "pi", "I", "oo", "nan", "zoo", *FUNCTIONS}
 
 
 class Coordinates:
@@ -24,17 +25,15 @@ class Coordinates:
     Parameters
     ----------
     names : sequence of str
-        Names of the coordinates, ASCII Python identifiers, unique.
+        Names of the coordinates, unique ASCII Python identifiers.
 
     Attributes
     ----------
     n : int
-        Number of coordinates.
     names : tuple of str
     q, qd, qdd, tau : tuple of sympy.Symbol
         Positions, velocities, accelerations and generalized forces, one per coordinate.
     t : sympy.Symbol
-        The time symbol.
 
     Examples
     --------
@@ -81,20 +80,12 @@ class Coordinates:
 
     @property
     def variables(self) -> tuple[sp.Symbol, ...]:
-        """All symbols a catalog column may use, in the order of the library input.
-
-        ``(q, qd, qdd, tau, t)``: the column layout of the data array that the
-        feature libraries transform (see :func:`pysindy_xl.feature_library.stack_variables`).
-        """
+        """``(q, qd, qdd, tau, t)``: the columns of the libraries' input
+        (:func:`pysindy_xl.feature_library.stack_variables`)."""
         return self.q + self.qd + self.qdd + self.tau + (self.t,)
 
     def symbol_table(self) -> dict[str, sp.Symbol]:
-        """Map from symbol name to symbol, used to parse saved expressions.
-
-        Returns
-        -------
-        dict of str to sympy.Symbol
-        """
+        """Map from symbol name to symbol, used to parse saved expressions."""
         return {str(s): s for s in self.variables}
 
     def __eq__(self, other) -> bool:
@@ -114,8 +105,6 @@ def as_expr_list(exprs, name: str) -> list[sp.Expr]:
         exprs = [sp.sympify(e) if isinstance(e, (int, float)) else e for e in exprs]
     except TypeError:
         raise TypeError(f"{name}: expected a sequence of sympy expressions") from None
-    from .expressions import check_real_expression, check_term
-
     for e in exprs:
         if not isinstance(e, sp.Basic):
             raise TypeError(f"{name}: expected sympy expressions, got {type(e).__name__}")
@@ -129,8 +118,7 @@ def as_expr_list(exprs, name: str) -> list[sp.Expr]:
     return exprs
 
 
-#: Terms that passed the checks of :func:`as_expr_list` (a check walks the whole expression
-#: tree: seconds for the terms of a spatial arm, whose catalog every fit clones), oldest first.
+#: Terms that passed the checks of :func:`as_expr_list` (each walks the whole tree), oldest first.
 _CHECKED: dict = {}
 _CACHED_CHECKS = 4096
 
@@ -147,17 +135,7 @@ def _unique(exprs: Iterable[sp.Expr]) -> list[sp.Expr]:
 def monomials(exprs, degree: int) -> list[sp.Expr]:
     """All products of ``exprs`` of total degree 1..``degree``, with repetition.
 
-    Parameters
-    ----------
-    exprs : sequence of sympy.Expr
-        Base functions, e.g. ``[sin(theta), cos(theta)]``.
-    degree : int
-        Maximal number of factors, at least 1.
-
-    Returns
-    -------
-    list of sympy.Expr
-        Distinct products, no constant, ordered by degree then by input order.
+    Returns the distinct products (no constant), by degree then by input order.
 
     Examples
     --------
@@ -168,7 +146,6 @@ def monomials(exprs, degree: int) -> list[sp.Expr]:
     """
     exprs = as_expr_list(exprs, "exprs")
     from ._validation import check_option
-
     degree = check_option("degree", degree, "int", low=1)
     out = []
     for d in range(1, degree + 1):
@@ -181,14 +158,6 @@ def products(terms_a, terms_b) -> list[sp.Expr]:
     """Every pairwise product ``a * b``, de-duplicated, in order of first appearance.
 
     Include ``1`` in either list to keep the terms of the other list alone.
-
-    Parameters
-    ----------
-    terms_a, terms_b : sequence of sympy.Expr
-
-    Returns
-    -------
-    list of sympy.Expr
 
     Examples
     --------

@@ -1,8 +1,6 @@
 """The ``pysindy-xl`` command: MuJoCo demo, identification of a dataset, data generation.
 
-Examples
---------
-::
+Examples::
 
     pysindy-xl demo cart-pole                         # generate, identify, validate, plot
     pysindy-xl demo double-pendulum --forcing mixed --noise 0.01 --out results/

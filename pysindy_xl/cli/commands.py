@@ -1,8 +1,5 @@
-"""The ``run_*`` functions behind the subcommands, and :func:`main`, which dispatches to them.
-
-Each raises :class:`~pysindy_xl.cli.steps.CLIError`, with the message the command prints, when
-its input or one of its steps fails.
-"""
+"""The ``run_*`` functions behind the subcommands, and :func:`main`, which dispatches to them
+and prints their :class:`~pysindy_xl.cli.steps.CLIError`."""
 
 from __future__ import annotations
 
@@ -36,31 +33,13 @@ from .steps import (
 )
 from .verdict import held_out_verdict, wants_verdict
 
-# fit_quality and plot_identification live in pysindy_xl.quality; imported here for the
-# commands and for code that imported them from here
 __all__ = ["main", "build_parser", "run_demo", "run_identify"]
 
 
-# -- commands ----------------------------------------------------------------------------------
 def run_demo(args) -> dict:
-    """Run ``pysindy-xl demo`` with parsed arguments; returns the JSON report.
-
-    Generates the training data, identifies the model, validates it against a fresh MuJoCo
-    trajectory, prints the equations and metrics, and writes ``report.json`` (and
-    ``validation.png`` unless ``--no-plots``) to ``args.out``.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        Parsed ``demo`` arguments (``build_parser().parse_args(["demo", ...])``).
-
-    Returns
-    -------
-    dict
-        The report also written to ``report.json``: options, features, coefficients (and
-        the true ones), physical parameters, the Lagrangian and equations (None for a
-        catalog of physical parameters whose equations run for pages), ``coefficient_summary``,
-        ``validation`` metrics, ``timings_s``, ``files``.
+    """Run ``pysindy-xl demo`` with parsed arguments: generate MuJoCo data, identify, validate
+    against a fresh trajectory, print; return the report written to ``args.out/report.json``
+    (beside ``validation.png`` unless ``--no-plots``).
 
     Examples
     --------
@@ -129,7 +108,6 @@ def run_demo(args) -> dict:
     start = time.perf_counter()
     if not args.no_plots and result is not None:
         from pysindy_xl.mujoco.evaluation.plots import plot_validation
-
         path = os.path.join(args.out, "validation.png")
         plot_validation(result, path, model.get_feature_names(), model.coefficients(), truth,
                         title=f"{display_name(system)} ({args.catalog} catalog, {solver} solver)")
@@ -158,7 +136,6 @@ def run_demo(args) -> dict:
               f"{coefficient_summary['max_relative_error']:.2g} (relative to the largest)")
     timings["total"] = sum(timings.values())
     from ..report.equations import prints_equations  # sympy: not imported by --help
-
     short = prints_equations(model)
     report = {
         "system": system.name,
@@ -199,14 +176,12 @@ def _validate(model, system, args):
     """``(ValidationResult, None)`` against a fresh MuJoCo run, or ``(None, reason)``."""
     from pysindy_xl.dynamics import DynamicsError
     from pysindy_xl.mujoco.evaluation.validation import validate_model
-
     try:
         return validate_model(model, system, duration=args.validation_duration,
                               forcing=args.forcing, actuators=args.actuators,
                               seed=args.seed + 10_000, initial_scale=args.initial_scale,
                               amplitude=args.amplitude, timeout=120.0), None
     except (DynamicsError, ValueError) as error:
-        # e.g. identified equations without accelerations: no dynamics to simulate
         return None, str(error)
 
 
@@ -235,7 +210,6 @@ def _physics(model, system, args):
     """The identified mass matrix and unforced dynamics against MuJoCo's, or None."""
     from pysindy_xl.dynamics import DynamicsError
     from pysindy_xl.mujoco.evaluation.physics import compare_physics
-
     try:
         return compare_physics(model, system, seed=args.seed)
     except (DynamicsError, ValueError, TypeError, np.linalg.LinAlgError):
@@ -263,21 +237,9 @@ def _physics_lines(physics, system) -> list:
 
 
 def run_identify(args):
-    """Run ``pysindy-xl identify`` with parsed arguments; returns the fitted model.
-
-    Loads the dataset, picks the solver from its forces (``--solver auto``), fits the
-    reference catalog, prints the model (and its error against the true one for a known
-    system) and saves it as JSON with ``--out``.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        Parsed ``identify`` arguments (``build_parser().parse_args(["identify", ...])``).
-
-    Returns
-    -------
-    XLSINDy
-        The fitted model.
+    """Run ``pysindy-xl identify`` with parsed arguments: fit the dataset's reference catalog
+    (solver from its forces with ``--solver auto``), print the model and its quality, score
+    held-out torques, save it with ``--out``; return the fitted model.
 
     Examples
     --------
@@ -323,7 +285,6 @@ def run_identify(args):
         if path:
             output_file(path, option)
     from ..fit import resolve_formulation
-
     measured = dataset.has("qd") and dataset.has("qdd")
     formulation = resolve_formulation(args.formulation, measured)
     if not measured:
@@ -419,11 +380,10 @@ def _names(text):
 
 
 def _load(args, path, system=None):
-    """A data file of ``identify`` (DATA or a --validate file) with the column options; the
-    joints of a ROS bag are the system's (its joint names, in its order) unless named."""
+    """A data file of ``identify`` (DATA or --validate) read with the column options; a ROS
+    bag's joints are the system's unless named."""
     from pysindy_xl.data import DatasetError, load_data
     from pysindy_xl.data.rosbag import is_rosbag
-
     columns = _column_map(getattr(args, "column", None))
     coordinates = _names(args.coordinates)
     if path.lower().endswith(".npz") and (columns or args.delimiter):
@@ -445,7 +405,6 @@ def _load(args, path, system=None):
 def _identify_inputs(args):
     """The dataset of ``identify`` (CSV or NPZ) and the system naming its coordinates."""
     from pysindy_xl.mujoco import coordinate_system
-
     coordinates, angles = _names(args.coordinates), _names(args.angles) or []
     if args.system and args.angles:
         raise CLIError("--angles: the system gives the angles; use --angles with "
@@ -457,7 +416,6 @@ def _identify_inputs(args):
         if args.angles:
             raise CLIError("--angles: the system gives the angles; use --angles with "
                            "--coordinates (no --system)")
-        # a dataset of a user's MJCF carries the model (path or XML) in its metadata
         system = given or dataset_system(dataset.metadata)
         if given is not None:
             system = _joints_of_the_log(system, dataset, args.system)
@@ -475,9 +433,8 @@ def _identify_inputs(args):
 
 
 def _joints_of_the_log(system, dataset, path):
-    """A robot description restricted to the joints its log records, the others locked at
-    their reference pose (e.g. a 7-joint arm's log with a URDF that also has its gripper's
-    fingers); the system as it is otherwise."""
+    """The system restricted to the joints its log records (a URDF with gripper fingers), the
+    others locked at their reference pose."""
     names = dataset.coordinate_names
     others = [c for c in system.coordinate_names if c not in names]
     if (not others or not set(names) < set(system.coordinate_names)
@@ -504,17 +461,7 @@ def _save_atomically(model, path):
 
 
 def run_generate(args):
-    """Run ``pysindy-xl generate``; returns the NPZ path written.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        Parsed ``generate`` arguments (``build_parser().parse_args(["generate", ...])``).
-
-    Returns
-    -------
-    pathlib.Path
-        The NPZ file (its JSON metadata lie beside it).
+    """Run ``pysindy-xl generate``; returns the NPZ path written (the JSON beside it).
 
     Examples
     --------
@@ -538,29 +485,9 @@ def run_generate(args):
 
 
 def main(argv=None) -> int:
-    """Entry point of the ``pysindy-xl`` command.
-
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments (default: ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        Exit status: 0 on success, 1 on an error, 2 on a usage error.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     status = main(["generate", "double-pendulum", f"{tmp}/data.npz", "--duration", "0.1",
-    ...                    "--trajectories", "1", "--forcing", "implicit"])
-    wrote ...
-    >>> status
-    0
-
-    Errors are printed on stderr, without a traceback:
+    """Entry point of the ``pysindy-xl`` command on ``argv`` (default ``sys.argv[1:]``);
+    returns the exit status: 0 on success, 1 on an error (printed on stderr, no traceback),
+    2 on a usage error.
 
     >>> import contextlib, sys
     >>> with contextlib.redirect_stderr(sys.stdout):

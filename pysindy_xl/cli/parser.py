@@ -40,25 +40,21 @@ def _add_generation_options(parser, duration=10.0, trajectories=2):
     parser.add_argument("--actuators", nargs="+", metavar="NAME",
                         help="joints driven with --forcing mixed (default: the system's choice)")
     parser.add_argument("--noise", type=_non_negative_float, default=0.0,
-                        help="relative Gaussian noise: std = NOISE x each coordinate's standard "
-                             "deviation over the trajectory (default: 0)")
+                        help="relative Gaussian noise: std = NOISE x each coordinate's std "
+                             "(default: 0)")
     parser.add_argument("--noise-model", choices=NOISE_MODELS, default="positions",
-                        help="positions: noisy recorded positions only, velocities and "
-                             "accelerations are not recorded and the package differentiates; "
-                             "all: the paper's model, noise on positions, velocities, "
-                             "accelerations and forces (default: positions)")
+                        help="positions: noisy positions only, not velocities or accelerations; "
+                             "all: the paper's model, noise on every series (default: positions)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     parser.add_argument("--duration", type=_positive_float, default=duration,
                         help=f"seconds per training trajectory (default: {duration:g})")
     parser.add_argument("--trajectories", type=_positive_int, default=trajectories,
                         help=f"number of training trajectories (default: {trajectories})")
     parser.add_argument("--sample-every", type=_positive_int, default=2,
-                        help="keep every k-th step of the model's timestep (1 ms for the "
-                             "shipped systems; the sampling period is printed) (default: 2)")
+                        help="keep every k-th step of the model's timestep (default: 2)")
     parser.add_argument("--amplitude", type=_fraction, default=None,
                         help="forcing peak as a fraction of each actuator's ctrlrange "
-                             "half-width, in (0, 1] (default: 0.5 of the range; the system's "
-                             "force amplitudes for actuators without ctrlrange)")
+                             "half-width, in (0, 1] (default: 0.5, or the system's amplitudes)")
     parser.add_argument("--initial-scale", type=_non_negative_float, default=1.0,
                         help="spread of the random initial states, as a fraction of the joint "
                              "ranges (default: 1)")
@@ -70,9 +66,8 @@ def _add_generation_options(parser, duration=10.0, trajectories=2):
 def _add_fit_options(parser, coulomb_law="smooth"):
     parser.add_argument("--catalog", choices=(*CATALOGS, "auto"), default="auto",
                         help="lagrange, classical, mixed (Lagrange + friction) or kinematic "
-                             "(derived from the MJCF kinematic tree); auto: kinematic for any "
-                             "MuJoCo model, mixed for coordinates named without one (default: "
-                             "auto)")
+                             "(from the kinematic tree); auto: kinematic for a MuJoCo model, "
+                             "else mixed (default: auto)")
     parser.add_argument("--solver", choices=SOLVERS, default="auto",
                         help="explicit, implicit or mixed regression; auto follows the forcing "
                              "and bags explicit fits of positions-only data (default: auto)")
@@ -81,44 +76,31 @@ def _add_fit_options(parser, coulomb_law="smooth"):
     parser.add_argument("--friction", choices=("auto", "diagonal", "full"), default="auto",
                         help="friction terms of the catalogs (default: auto)")
     parser.add_argument("--joint-models", type=_joint_models, default=None, metavar="MODELS",
-                        help="kinematic catalog: friction and sensor models of real joints "
-                             "offered for every joint, the fit selecting what each needs; "
+                        help="kinematic catalog: joint models offered to every joint, "
                              "comma-separated among viscous, coulomb, asymmetric, stribeck, "
                              "offset, or all (default: viscous and smooth Coulomb)")
     parser.add_argument("--coulomb-law", choices=("smooth", "mujoco"), default=None,
-                        help="kinematic catalog: law of the Coulomb candidates, smooth "
-                             "(tanh, real joints) or mujoco (MuJoCo's regularized frictionloss, "
-                             f"for data MuJoCo simulated from the model) (default: {coulomb_law}"
-                             ", mujoco for a dataset MuJoCo generated, smooth with "
-                             "--joint-models)")
+                        help="kinematic catalog: law of the Coulomb candidates, smooth (tanh) "
+                             f"or mujoco (MuJoCo's frictionloss) (default: {coulomb_law}, mujoco "
+                             "for a dataset MuJoCo generated, smooth with --joint-models)")
     parser.set_defaults(default_coulomb_law=coulomb_law)
     parser.add_argument("--velocity-degree", type=_positive_int, default=2,
                         help="degree of the velocity monomials of the catalog (default: 2)")
     parser.add_argument("--trig-degree", type=_positive_int, default=2,
                         help="degree of the sin/cos monomials of the catalog (default: 2)")
     parser.add_argument("--formulation", choices=FORMULATIONS, default="auto",
-                        help="strong: Euler-Lagrange equations at each sample (needs or "
-                             "differentiates velocities and accelerations); weak: equations "
-                             "integrated against test functions on smoothed positions, the "
-                             "robust choice for noisy positions; auto: strong when velocities "
-                             "and accelerations are in the data (unless the catalog has "
-                             "impulses, such as MuJoCo's dry friction), weak otherwise "
-                             "(default: auto)")
+                        help="strong: equations at each sample; weak: equations integrated "
+                             "against test functions on smoothed positions (robust to noise); "
+                             "auto: strong when the data have velocities and accelerations and "
+                             "the catalog no impulse, else weak (default: auto)")
     parser.add_argument("--no-hold-still", dest="hold_still", action="store_false",
                         help="fit every coordinate, also those that hold still in the data "
-                             "(undriven, at rest or in uniform motion within the noise; by "
-                             "default they leave the regression and the model holds them)")
+                             "(by default the model holds them)")
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``pysindy-xl`` command.
-
-    Sub-commands ``demo``, ``identify`` and ``generate`` (see :doc:`/cli` for every option).
-
-    Returns
-    -------
-    argparse.ArgumentParser
-        Its ``parse_args`` gives a namespace with ``command`` and the options of that command.
+    """The argument parser of the ``pysindy-xl`` command: ``demo``, ``identify``, ``generate``
+    and ``benchmark`` (:doc:`/cli` describes every option).
 
     Examples
     --------
@@ -131,11 +113,9 @@ def build_parser() -> argparse.ArgumentParser:
         description="Identify mechanical systems with XLSINDy: MuJoCo demos and your data.",
     )
     from .. import __version__
-
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     from ..benchmark import add_parser as add_benchmark_parser
-
     add_benchmark_parser(sub)
 
     demo = sub.add_parser(
@@ -150,10 +130,8 @@ def build_parser() -> argparse.ArgumentParser:
     _add_generation_options(demo)
     _add_fit_options(demo, coulomb_law="mujoco")  # the demo's data come from MuJoCo
     demo.add_argument("--constraints", choices=CONSTRAINTS, default="exclude",
-                      help="samples where a joint limit, contact or equality constraint acts: "
-                           "exclude them from the regression, pass the recorded constraint "
-                           "forces as known forces, or include them unchanged (default: "
-                           "exclude)")
+                      help="samples where a constraint acts: exclude them, pass the recorded "
+                           "constraint forces as known, or include them (default: exclude)")
     demo.add_argument("--validation-duration", type=_positive_float, default=4.0,
                       help="seconds of the validation trajectory (default: 4)")
     demo.add_argument("--out", default="pysindy-xl-demo", metavar="DIR",
@@ -166,13 +144,10 @@ def build_parser() -> argparse.ArgumentParser:
     identify = sub.add_parser(
         "identify", help="fit your data (CSV or NPZ) and print the model",
         description="Fit a dataset with a reference catalog and print the model. CSV (.csv, "
-                    ".txt; .tsv tab-separated): a header naming the columns t, the coordinates "
-                    "(NAME), optionally NAME_dot, NAME_ddot, tau_NAME and trajectory (ids, "
-                    "several trajectories in one file); --column maps other headers. NPZ: "
-                    "arrays t, q and optionally qd, qdd, tau, trajectory (see "
-                    "pysindy_xl.data.dataset). Coordinates come from --system (a known "
-                    "system, an MJCF .xml or a URDF .urdf), or from --coordinates/--angles, "
-                    "or the CSV header.",
+                    ".txt, .tsv): columns t, NAME, optionally NAME_dot, NAME_ddot, tau_NAME, "
+                    "trajectory; --column maps other headers. NPZ: arrays t, q, optionally qd, "
+                    "qdd, tau, trajectory. Coordinates come from --system, --coordinates/"
+                    "--angles, or the CSV header.",
     )
     identify.add_argument("data", metavar="DATA",
                           help="a .csv, .tsv, .txt or .npz file, or a ROS bag of "
@@ -181,15 +156,13 @@ def build_parser() -> argparse.ArgumentParser:
                           help="ROS bags: the JointState topic (default: the only one)")
     identify.add_argument("--coordinates", default=None, metavar="NAMES",
                           help="comma-separated coordinate names, e.g. x,theta (CSV: the "
-                               "position columns; NPZ: names of the columns of q); no MJCF "
-                               "needed")
+                               "position columns; NPZ: names of q's columns)")
     identify.add_argument("--angles", default=None, metavar="NAMES",
                           help="comma-separated coordinates that are angles (enter the catalog "
                                "through sin and cos), e.g. theta")
     identify.add_argument("--column", action="append", default=[], metavar="KEY=HEADER",
-                          help="CSV column of a role when its header differs: KEY is t, "
-                               "trajectory, a coordinate NAME, NAME_dot, NAME_ddot or tau_NAME "
-                               "(repeat the option), e.g. --column t=time_s --column x=cart")
+                          help="CSV header of a role KEY (t, trajectory, NAME, NAME_dot, "
+                               "NAME_ddot, tau_NAME), repeatable: --column t=time_s")
     identify.add_argument("--delimiter", default=None,
                           help="CSV field separator (default: tab for .tsv, comma otherwise)")
     identify.add_argument("--system", default=None,
@@ -202,27 +175,20 @@ def build_parser() -> argparse.ArgumentParser:
     identify.add_argument("--out", default=None, metavar="FILE.json",
                           help="write the fitted model (JSON) there")
     identify.add_argument("--validate", action="append", default=None, metavar="TEST",
-                          help="held-out data (same format as DATA, with forces; repeat for "
-                               "several files): print the torques the model predicts there "
-                               "against the measured ones, per coordinate (RMS in N m and %%)")
+                          help="held-out data (as DATA, with forces; repeatable): score the "
+                               "torques the model predicts there, per coordinate")
     identify.add_argument("--cv-blocks", type=int, default=5, metavar="K",
-                          help="without --validate, a log with forces and --system is scored "
-                               "by time-blocked cross-validation: K contiguous blocks of its "
-                               "one run (several runs: K groups of whole runs), each predicted by "
-                               "the model refitted on the rest; 0 skips it (default: 5)")
+                          help="without --validate, score a log with forces and --system by "
+                               "time-blocked cross-validation in K blocks; 0 skips it (default: 5)")
     identify.add_argument("--bandwidth", type=_bandwidth, default=10.0, metavar="HZ",
-                          help="held-out scoring of data without accelerations: the highest "
-                               "frequency kept by the smoothing spline that differentiates the "
-                               "positions (inf: chosen from the data alone) (default: 10)")
+                          help="held-out scoring without accelerations: highest frequency the "
+                               "differentiating spline keeps (inf: from the data) (default: 10)")
     identify.add_argument("--plot", default=None, metavar="FILE.png",
-                          help="write the plot of the verdict: measured against predicted "
-                               "held-out torques per coordinate (with --validate or the "
-                               "cross-validation), else the open-loop replay (--open-loop)")
+                          help="plot the verdict: measured against predicted held-out torques, "
+                               "else the open-loop replay")
     identify.add_argument("--open-loop", default=None, metavar="FILE.png",
-                          help="write an open-loop replay: the identified model simulated "
-                               "from the first trajectory's initial state under its recorded "
-                               "forces, against the recorded positions (an arm under feedback "
-                               "control diverges from its log whatever the model)")
+                          help="plot an open-loop replay of the first trajectory under its "
+                               "recorded forces (an arm under feedback diverges anyway)")
     identify.add_argument("--quiet", action="store_true",
                           help="no progress lines (on stderr) during the identification")
 

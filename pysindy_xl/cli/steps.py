@@ -10,10 +10,7 @@ import numpy as np
 
 
 class CLIError(Exception):
-    """An error reported to the user as ``pysindy-xl: error: ...`` with exit status 1.
-
-    Raised by the ``run_*`` functions for a bad input or a failed step; :func:`main` prints it
-    without a traceback.
+    """A bad input or failed step, printed as ``pysindy-xl: error: ...`` with exit status 1.
 
     Examples
     --------
@@ -27,10 +24,8 @@ class CLIError(Exception):
     """
 
 
-# -- pieces ------------------------------------------------------------------------------------
 def _optimizer(solver: str, threshold=None):
     import pysindy_xl as px
-
     cls = {"explicit": px.ExplicitOptimizer, "implicit": px.ImplicitOptimizer,
            "mixed": px.MixedOptimizer}[solver]
     if threshold is not None:
@@ -47,7 +42,6 @@ def display_name(system) -> str:
 
 def system_by_name(name, joints=None):
     from pysindy_xl.mujoco import MuJoCoSystem, get_system
-
     try:
         if joints is None:
             return get_system(name)
@@ -85,7 +79,6 @@ def generate_data(system, args, progress=None):
     import warnings
 
     from pysindy_xl.mujoco import generate_dataset
-
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
@@ -111,7 +104,6 @@ def data_lines(system, dataset):
     integration = meta.get("integration")
     if integration and getattr(system, "mj_model", None) is not None:
         from pysindy_xl.mujoco.simulation.generate import INTEGRATORS
-
         authored = int(system.mj_model().opt.integrator)
         if INTEGRATORS.get(integration["integrator"]) != authored or integration["substeps"] > 1:
             lines.append(f"  integrated with {integration['reason']}")
@@ -139,7 +131,6 @@ def data_lines(system, dataset):
 def dataset_system(metadata):
     """The system a dataset was generated with (a user's MJCF from its path or embedded XML)."""
     from pysindy_xl.mujoco import system_from_metadata
-
     try:
         return system_from_metadata(metadata)
     except (ValueError, TypeError) as error:
@@ -150,7 +141,6 @@ def dataset_for(system, dataset):
     """Check the dataset's coordinates against the system's (adopting them when unnamed, and
     putting the columns in the system's order when they name its coordinates in another)."""
     from pysindy_xl.mujoco import Dataset
-
     names = dataset.coordinate_names
     if names == system.coordinate_names:
         return dataset
@@ -167,7 +157,6 @@ def dataset_for(system, dataset):
         import dataclasses
 
         from pysindy_xl.data.files import SERIES
-
         order = [list(names).index(name) for name in system.coordinate_names]
         trajectories = [dataclasses.replace(tr, **{key: getattr(tr, key)[:, order] for key in
                                                    SERIES if getattr(tr, key) is not None})
@@ -180,17 +169,9 @@ def dataset_for(system, dataset):
 
 
 def resolve_catalog(args, system):
-    """Replace ``--catalog auto`` by the catalog kind used for ``system``.
-
-    Any MuJoCo model (the shipped ones and users' MJCF files) gets the kinematic catalog: it
-    contains the true model whatever the mass distribution and, being compact, identifies
-    noisy positions where the paper's product catalogs swap near-collinear terms (measured in
-    ``benchmarks/results/kinematic_catalog.md``). Systems without a model (named
-    coordinates of a CSV file) get the paper's mixed catalog; ``--catalog mixed`` etc.
-    reproduce the paper's tables.
-    """
+    """Replace ``--catalog auto`` by ``kinematic`` for a MuJoCo model (compact, it holds the
+    true model), ``mixed`` (the paper's) for coordinates named without one."""
     from pysindy_xl.mujoco import MuJoCoSystem
-
     if args.catalog == "auto":
         has_model = type(system).xml is not MuJoCoSystem.xml  # an MJCF to read the tree from
         args.catalog = "kinematic" if has_model else "mixed"
@@ -203,8 +184,7 @@ def log(quiet, *args):
 
 def check_solver(solver, forced, threshold, auto=False):
     """The optimizer of ``solver``, checked before any long computation; for ``auto`` without
-    a threshold, the name of the kind, which XLSINDy turns into its default optimizer of that
-    kind (:func:`~pysindy_xl.optimizers.default_optimizer`)."""
+    a threshold, the kind's name (XLSINDy's default optimizer of that kind)."""
     if solver == "explicit" and not forced:
         raise CLIError("--solver explicit needs forces; use --forcing explicit or mixed, or "
                        "--solver implicit")
@@ -214,9 +194,8 @@ def check_solver(solver, forced, threshold, auto=False):
 
 
 def coulomb_law(args, dataset=None) -> str:
-    """``--coulomb-law``, or the default of the data's source: ``mujoco`` for the demo and for
-    a dataset MuJoCo simulated (``generate_dataset`` records its ``integration``), ``smooth``
-    for any other log and where joint models replace the Coulomb candidate."""
+    """``--coulomb-law``, or the default of the data's source: ``mujoco`` for data MuJoCo
+    simulated, ``smooth`` for any other log and with joint models."""
     law = getattr(args, "coulomb_law", None)
     if law is not None:
         return law
@@ -230,7 +209,6 @@ def coulomb_law(args, dataset=None) -> str:
 def fit_model(system, dataset, args, solver, forced, return_arguments=False):
     import pysindy_xl as px
     from pysindy_xl.mujoco.catalogs.reference import reference_catalog
-
     optimizer = check_solver(solver, forced, args.threshold,
                              auto=getattr(args, "solver", "auto") == "auto")
     try:
@@ -244,7 +222,6 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
             raise CLIError(f"--coulomb-law: {str(error).split(': ', 1)[1]}") from None
         if not str(error).startswith(("friction:", "joint_models:")):
             raise
-        # unknown joint model names, or joint models asked of another catalog
         raise CLIError(f"--joint-models: {str(error).split(': ', 1)[1]}") from None
     model = px.XLSINDy(catalog, optimizer, formulation=getattr(args, "formulation", "auto"),
                        **({} if getattr(args, "hold_still", True) else {"hold_still": False}))
@@ -262,7 +239,6 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
 def summarize_coefficients(system, model):
     """True coefficients and errors against them (None for systems without ground truth)."""
     from pysindy_xl.mujoco.catalogs.reference import true_coefficients
-
     try:  # known Lagrangians, and the MJCF's own values in its kinematic catalog
         truth, missing = true_coefficients(system, model.feature_library_)
     except ValueError:
@@ -270,7 +246,7 @@ def summarize_coefficients(system, model):
     coef = model.coefficients()
     forces = model.feature_library_.force_columns_
     if not np.allclose(coef[forces], -1.0):
-        # an implicit law is defined up to a factor: scale the truth to the identified vector
+        # an implicit law is defined up to a factor
         rest = np.setdiff1d(np.arange(len(coef)), forces)
         norm = truth[rest] @ truth[rest]
         factor = (coef[rest] @ truth[rest]) / norm if norm > 0 else 1.0
@@ -306,14 +282,12 @@ def joint_parameters(system, model):
 
 def _rounded(expr, digits=4):
     import sympy as sp
-
     return expr.xreplace({f: sp.Float(f, digits) for f in expr.atoms(sp.Float)})
 
 
 def model_lines(model, truth=None):
-    """The identified model as printed: the physical parameters of a kinematic catalog (next
-    to the true ones when the coefficient vector ``truth`` is known), the Lagrangian and
-    equations unless they run for pages, the coordinates held still."""
+    """The identified model as printed: physical parameters (next to ``truth``'s), Lagrangian
+    and equations unless they run for pages, the coordinates held still."""
     from pysindy_xl.fit.still import held_note
     from pysindy_xl.report.equations import (
         has_parameter_map,

@@ -1,10 +1,8 @@
 """The verdict of ``pysindy-xl identify`` on a robot log: held-out torque prediction.
 
-A real arm runs under feedback control, so an open-loop replay of the identified model under
-the logged torques diverges whatever the model; the verdict on a log is how well the model
-predicts the torques of data it never saw (:mod:`pysindy_xl.held_out`): a validation file
-(``--validate TEST``), else time-blocked cross-validation of the training log (one run: ``k``
-contiguous blocks; several runs: at most ``k`` groups of whole runs).
+An arm under feedback control diverges in an open-loop replay whatever the model, so the
+verdict is the torques predicted on data the fit never saw (:mod:`pysindy_xl.held_out`):
+``--validate TEST`` files, else time-blocked cross-validation of the training log.
 """
 
 from __future__ import annotations
@@ -35,10 +33,8 @@ def _units(system, names) -> list:
 
 
 def validation_dataset(args, system, load):
-    """The ``--validate`` files read like DATA and mapped to the system's coordinates, as one
-    dataset (their runs side by side)."""
+    """The ``--validate`` files read like DATA, in the system's coordinates, as one dataset."""
     from pysindy_xl.data import Dataset
-
     trajectories, names = [], None
     for path in args.validate:
         dataset = load(path)
@@ -56,14 +52,9 @@ def validation_dataset(args, system, load):
 
 
 def held_out_verdict(args, model, system, arguments, load, progress):
-    """Score the model on ``--validate`` data or by blocked cross-validation; print the lines.
-
-    Returns
-    -------
-    ForceScore
-    """
+    """Score the model on ``--validate`` data or by blocked cross-validation, print the lines
+    and return the :class:`~pysindy_xl.held_out.ForceScore`."""
     from pysindy_xl.held_out import blocked_cross_validation
-
     if args.validate:
         data = validation_dataset(args, system, load)
         if tuple(data.coordinate_names) != tuple(model.feature_library_.coords.names):

@@ -12,21 +12,8 @@ from .rosbag import read_rosbag
 from .tables import CSV_SUFFIXES, from_columns, from_dataframe, load_data, read_csv
 
 __all__ = [
-    "Trajectory",
-    "Dataset",
-    "DatasetError",
-    "load_dataset",
-    "read_csv",
-    "read_rosbag",
-    "from_columns",
-    "from_dataframe",
-    "load_data",
-    "CSV_SUFFIXES",
-    "add_noise",
-    "noise_levels",
-    "NOISE_KEYS",
-    "NOISE_MODELS",
-    "contiguous_segments",
-    "unconstrained_samples",
+    "Trajectory", "Dataset", "DatasetError", "load_dataset", "read_csv", "read_rosbag",
+    "from_columns", "from_dataframe", "load_data", "CSV_SUFFIXES", "add_noise", "noise_levels",
+    "NOISE_KEYS", "NOISE_MODELS", "contiguous_segments", "unconstrained_samples",
     "unconstrained_windows",
 ]

@@ -1,15 +1,10 @@
 """Constraint-aware data: which samples and test-function windows a fit may use.
 
-When a joint limit, a contact or an equality constraint pushes, the recorded motion obeys
-``EL(L) + friction = tau + tau_constraint``, an equation the catalogs cannot express unless
-``tau_constraint`` is given as a known force. By default such samples are left out of the
-regression: the strong (pointwise) form drops the rows of those samples
-(:func:`unconstrained_samples`), the weak form drops the test-function windows whose support
-touches one (:func:`unconstrained_windows`).
-
-Frictionloss (dry joint friction) is a MuJoCo constraint too; it acts whenever a joint moves,
-so it does not mark samples: its force is recorded with the others (``tau_constraint``) and
-modelled by the catalogs' dry-friction candidates, or passed as a known force.
+While a joint limit, a contact or an equality constraint pushes, the motion obeys
+``EL(L) + friction = tau + tau_constraint``, which the catalogs cannot express unless
+``tau_constraint`` is given as a known force; by default the strong form drops those samples
+(:func:`unconstrained_samples`), the weak form the windows touching one
+(:func:`unconstrained_windows`). Frictionloss marks no sample: the catalogs model it.
 """
 
 from __future__ import annotations
@@ -35,19 +30,13 @@ def unconstrained_samples(constraint_active, margin: int = 0):
         The per-sample mask of a trajectory (:attr:`Trajectory.constraint_active`), or one per
         trajectory.
     margin : int, default 0
-        Also drop this many samples on each side of an active one (derivatives estimated by
-        differentiating positions smear a constraint impulse over the differentiation
-        window).
+        Also drop this many samples on each side of an active one (differentiated positions
+        smear a constraint impulse over the differentiation window).
 
     Returns
     -------
     ndarray of bool, shape (N,), or list of them
         ``True`` for the samples to keep; same structure as the input.
-
-    Raises
-    ------
-    ValueError
-        If the mask is not a 1-D boolean array or ``margin`` is not an integer >= 0.
 
     Examples
     --------
@@ -64,7 +53,7 @@ def unconstrained_samples(constraint_active, margin: int = 0):
         return [unconstrained_samples(a, margin) for a in constraint_active]
     active = _mask(constraint_active)
     if margin and active.any():
-        # dilation by a box of width 2 margin + 1: a cumulative count, no loop over samples
+        # dilation by a box of width 2 margin + 1
         counts = np.concatenate([[0], np.cumsum(active)])
         idx = np.arange(active.size)
         low = np.clip(idx - margin, 0, active.size)
@@ -76,23 +65,9 @@ def unconstrained_samples(constraint_active, margin: int = 0):
 def unconstrained_windows(support, constraint_active) -> np.ndarray:
     """Test-function windows a weak-form fit may keep: their support touches no active sample.
 
-    Parameters
-    ----------
-    support : array of bool, shape (W, N)
-        ``support[w, k]``: sample ``k`` lies in the support of test function ``w`` (e.g.
-        ``Phi != 0`` of the test-function matrix of one trajectory).
-    constraint_active : array of bool, shape (N,)
-        The per-sample mask of the same trajectory.
-
-    Returns
-    -------
-    ndarray of bool, shape (W,)
-        ``True`` for the windows to keep.
-
-    Raises
-    ------
-    ValueError
-        If the shapes do not match.
+    ``support[w, k]`` (shape (W, N)): sample ``k`` lies in the support of test function ``w``
+    (``Phi != 0`` of one trajectory); ``constraint_active`` (N,) is that trajectory's mask.
+    Returns a bool array (W,), ``True`` for the windows to keep.
 
     Examples
     --------
@@ -116,16 +91,7 @@ def unconstrained_windows(support, constraint_active) -> np.ndarray:
 def contiguous_segments(keep, min_length: int = 2) -> list[slice]:
     """Runs of consecutive kept samples, as slices, dropping runs shorter than ``min_length``.
 
-    Parameters
-    ----------
-    keep : array of bool, shape (N,)
-        Samples to keep (e.g. from :func:`unconstrained_samples`).
-    min_length : int, default 2
-        Shortest run returned.
-
-    Returns
-    -------
-    list of slice
+    ``keep`` (N,) marks the samples to keep (e.g. from :func:`unconstrained_samples`).
 
     Examples
     --------

@@ -1,28 +1,10 @@
 """Trajectories and datasets: NPZ arrays plus JSON metadata, never pickle.
 
-File layout (``Dataset.save``)
-------------------------------
-``DATA.npz`` holds the arrays, all samples of all trajectories concatenated:
-
-==============  ===========  =====================================================
-key             shape        content
-==============  ===========  =====================================================
-``t``           (N,)         sample times (increasing within each trajectory)
-``q``           (N, n)       generalized positions (required)
-``qd``          (N, n)       velocities (optional)
-``qdd``         (N, n)       accelerations (optional)
-``tau``         (N, n)       generalized forces on the coordinates (optional)
-``u``           (N, n)       joint forces, ``tau = u @ B.T`` (optional)
-``tau_constraint``  (N, n)   generalized constraint forces (limits, contacts, equality,
-                             frictionloss), MuJoCo's ``qfrc_constraint`` mapped like ``u``
-``u_constraint``    (N, n)   the same in joint coordinates (``qfrc_constraint``)
-``constraint_active`` (N,)   bool: a limit, contact or equality constraint pushes (optional)
-``trajectory``  (N,)         trajectory id of each sample (optional; int or float)
-``metadata``    ()           JSON text (unicode array, optional)
-==============  ===========  =====================================================
-
-The metadata are also written next to it as ``DATA.json`` for people to read; loading uses the
-copy inside the NPZ and falls back to the JSON file. A user's own NPZ needs only ``t`` and ``q``.
+``Dataset.save`` writes ``DATA.npz``: the series of :class:`Trajectory` (``t``, ``q``, ``qd``,
+``qdd``, ``tau``, ``u``, ``tau_constraint``, ``u_constraint``, ``constraint_active``) of all
+trajectories concatenated, ``trajectory`` (each sample's id, int or float) and ``metadata``
+(JSON text, also written to ``DATA.json`` for people). A user's own NPZ needs only ``t`` and
+``q``.
 """
 
 from __future__ import annotations
@@ -45,30 +27,26 @@ CONSTRAINT_HANDLING = ("exclude", "known", "include")
 class Trajectory:
     """One sampled trajectory in generalized coordinates.
 
-    The parameters are the attributes, converted to float (``constraint_active`` to bool)
-    and checked on construction (a :class:`DatasetError` names a wrong shape, NaN or inf, or
-    times that do not increase); a 1-D ``q`` is a single coordinate.
+    The parameters are the attributes, checked on construction (a :class:`DatasetError`
+    names a wrong shape, NaN or inf, or times that do not increase).
 
     Parameters
     ----------
     t : array, shape (N,)
         Sample times, strictly increasing, at least 2.
     q : array, shape (N, n) or (N,)
-        Generalized positions.
-    qd, qdd : array, shape (N, n), optional
-        Generalized velocities and accelerations.
-    tau : array, shape (N, n), optional
-        Generalized forces on the coordinates.
+        Generalized positions (1-D: one coordinate).
+    qd, qdd, tau : array, shape (N, n), optional
+        Velocities, accelerations, generalized forces on the coordinates.
     u : array, shape (N, n), optional
         Joint forces (one per MuJoCo degree of freedom); ``tau = u @ B.T``.
     info : dict, optional
         JSON-serializable description (initial state, forcing signals...).
     tau_constraint, u_constraint : array, shape (N, n), optional
-        Constraint forces (MuJoCo's ``qfrc_constraint``: joint limits, contacts, equality
-        constraints, frictionloss) on the coordinates and on the joints.
+        Constraint forces (MuJoCo's ``qfrc_constraint``) on the coordinates and on the joints.
     constraint_active : array of bool, shape (N,), optional
-        Samples where a limit, contact or equality constraint acts (frictionloss excluded:
-        it is part of the dynamics that the catalogs can model).
+        Samples where a limit, contact or equality constraint acts (not frictionloss, which
+        the catalogs can model).
 
     Examples
     --------
@@ -143,8 +121,7 @@ def _check_series(a, name: str, n_samples: int, n: int | None) -> np.ndarray:
 
 
 class Dataset:
-    """Several trajectories of one system plus JSON metadata (the parameters are the
-    attributes; ``coordinate_names`` becomes a tuple).
+    """Several trajectories of one system plus JSON metadata (parameters = attributes).
 
     Parameters
     ----------
@@ -156,8 +133,7 @@ class Dataset:
     Raises
     ------
     TypeError
-        If ``trajectories`` is not a non-empty list of :class:`Trajectory` or the metadata are
-        not JSON-serializable.
+        For a wrong type of argument or metadata that are not JSON-serializable.
     DatasetError
         If the trajectories do not match ``coordinate_names`` or each other.
 
@@ -165,9 +141,9 @@ class Dataset:
     --------
     >>> import numpy as np
     >>> t = np.linspace(0, 1, 11)
-    >>> data = Dataset([Trajectory(t, np.sin(t)[:, None])], ["theta"])
-    >>> data.n_trajectories, data.n
-    (1, 1)
+    >>> data = Dataset([Trajectory(t, np.sin(t), qd=np.cos(t))], ["theta"])
+    >>> data.n_trajectories, data.n, data.has("qd"), data.has("tau")
+    (1, 1, True, False)
     """
 
     def __init__(self, trajectories, coordinate_names, metadata=None):
@@ -212,25 +188,7 @@ class Dataset:
         return len(self.trajectories)
 
     def has(self, key: str) -> bool:
-        """Whether every trajectory holds the series ``key``.
-
-        Parameters
-        ----------
-        key : {"q", "qd", "qdd", "tau", "u"}
-            Name of a series of :class:`Trajectory`.
-
-        Returns
-        -------
-        bool
-
-        Examples
-        --------
-        >>> import numpy as np
-        >>> t = np.linspace(0, 1, 11)
-        >>> data = Dataset([Trajectory(t, np.sin(t), qd=np.cos(t))], ["theta"])
-        >>> data.has("qd"), data.has("tau")
-        (True, False)
-        """
+        """Whether the trajectories hold the series ``key`` (an attribute of Trajectory)."""
         return getattr(self.trajectories[0], key) is not None
 
     def fit_arguments(self, forces: str | None = "tau", constraints: str = "exclude",
@@ -243,40 +201,27 @@ class Dataset:
             Which forces to pass as ``u``: generalized forces (with the default interlink),
             joint forces (with ``interlink=B``), or none (implicit fit).
         constraints : {"exclude", "known", "include"}, default "exclude"
-            Samples where a limit, contact or equality constraint acts (``constraint_active``):
-            ``exclude`` leaves them out (each trajectory is split into its unconstrained runs,
-            the strong-form rule of :func:`~pysindy_xl.data.constraints.unconstrained_samples`);
-            ``known`` adds the recorded constraint forces to ``u`` (frictionloss included);
-            ``include`` passes the data unchanged. Without constraint data, all three pass
-            the data unchanged.
+            Samples where a constraint acts (``constraint_active``): ``exclude`` splits each
+            trajectory into its unconstrained runs (:func:`.constraints.unconstrained_samples`);
+            ``known`` adds the recorded constraint forces to ``u``; ``include`` passes the data
+            unchanged, as all three do without constraint data.
         margin : int, optional
             With ``exclude``: samples also dropped on each side of an active one. Default 0
             when velocities and accelerations are given, 10 when the fit differentiates.
         min_length : int, optional
-            With ``exclude``: shortest unconstrained run kept. Default 5 with derivatives,
-            25 when the fit differentiates.
+            With ``exclude``: shortest run kept. Default 5 with derivatives, 25 without.
 
         Returns
         -------
         dict
             Keys ``x``, ``t``, ``x_dot``, ``x_ddot``, ``u``; a missing series gives None.
 
-        Raises
-        ------
-        ValueError
-            If an argument is not one of the accepted values, or every sample is excluded.
-
         Examples
         --------
+        A sample where a constraint acts is left out, the trajectory split around it:
+
         >>> import numpy as np
         >>> t = np.linspace(0, 1, 11)
-        >>> data = Dataset([Trajectory(t, np.sin(t), tau=np.ones(11))], ["theta"])
-        >>> arguments = data.fit_arguments()
-        >>> arguments["x_dot"], arguments["u"][0].shape
-        (None, (11, 1))
-
-        Samples where a constraint acts are left out, the trajectory split around them:
-
         >>> active = np.zeros(11, dtype=bool); active[5] = True
         >>> data = Dataset([Trajectory(t, np.sin(t), qd=np.cos(t), qdd=-np.sin(t),
         ...                            constraint_active=active)], ["theta"])
@@ -284,7 +229,6 @@ class Dataset:
         [5, 5]
         """
         from .constraints import contiguous_segments, unconstrained_samples
-
         if forces not in ("tau", "u", None):
             raise ValueError(f"forces: expected 'tau', 'u' or None, got {forces!r}")
         if constraints not in CONSTRAINT_HANDLING:
@@ -330,14 +274,9 @@ class Dataset:
         return out
 
     def constraint_summary(self) -> dict:
-        """How much of the data a constraint touches, and which joint limits are hit.
-
-        Returns
-        -------
-        dict
-            ``active_fraction`` (of all samples; 0 without constraint data),
-            ``unconstrained_samples``, ``limit_hits`` (``{joint: samples}``, from the
-            trajectories' ``info``), ``contact_samples``, ``equality_samples``.
+        """How much of the data a constraint touches: a dict of ``active_fraction`` (0 without
+        constraint data), ``unconstrained_samples``, ``limit_hits`` (``{joint: samples}``, from
+        the trajectories' ``info``), ``contact_samples``, ``equality_samples``.
 
         Examples
         --------
@@ -363,14 +302,8 @@ class Dataset:
                 "unconstrained_samples": n_samples - active,
                 "limit_hits": hits, "contact_samples": contacts, "equality_samples": equality}
 
-    # -- persistence ---------------------------------------------------------------------
     def to_arrays(self) -> dict:
-        """The NPZ arrays (see the module docstring).
-
-        Returns
-        -------
-        dict of str to ndarray
-            All trajectories concatenated, with ``trajectory`` ids and the JSON ``metadata``.
+        """The NPZ arrays of the module docstring: trajectories concatenated, with ids and metadata.
 
         Examples
         --------
@@ -398,19 +331,8 @@ class Dataset:
         return arrays
 
     def save(self, path, write_json: bool = True):
-        """Write ``path`` (``.npz`` appended when missing) and the JSON metadata beside it.
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            The NPZ file; the JSON copy of the metadata goes to the same name with ``.json``.
-        write_json : bool, default True
-            Also write the JSON file (the metadata are inside the NPZ in any case).
-
-        Returns
-        -------
-        pathlib.Path
-            The NPZ path written.
+        """Write ``path`` (``.npz`` appended when missing) and return it; ``write_json`` also
+        writes the metadata to the same name with ``.json`` (they are inside the NPZ anyway).
 
         Examples
         --------
@@ -419,11 +341,13 @@ class Dataset:
         >>> data = Dataset([Trajectory(t, np.sin(t))], ["theta"], {"system": "pendulum"})
         >>> with tempfile.TemporaryDirectory() as tmp:
         ...     path = data.save(pathlib.Path(tmp) / "pendulum")
+        ...     copy = Dataset.load(path)
         ...     print(path.name, path.with_suffix(".json").exists())
         pendulum.npz True
+        >>> copy.metadata, bool(np.array_equal(copy.trajectories[0].q, data.trajectories[0].q))
+        ({'system': 'pendulum'}, True)
         """
         import pathlib
-
         path = pathlib.Path(path)
         if path.suffix != ".npz":
             path = path.with_name(path.name + ".npz")
@@ -436,26 +360,7 @@ class Dataset:
 
     @classmethod
     def load(cls, path) -> Dataset:
-        """Read a dataset written by :meth:`save` or a user's NPZ: :func:`load_dataset`.
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-
-        Returns
-        -------
-        Dataset
-
-        Examples
-        --------
-        >>> import tempfile, pathlib, numpy as np
-        >>> t = np.linspace(0, 1, 11)
-        >>> data = Dataset([Trajectory(t, np.sin(t))], ["theta"], {"system": "pendulum"})
-        >>> with tempfile.TemporaryDirectory() as tmp:
-        ...     copy = Dataset.load(data.save(pathlib.Path(tmp) / "pendulum.npz"))
-        >>> copy.metadata, bool(np.array_equal(copy.trajectories[0].q, data.trajectories[0].q))
-        ({'system': 'pendulum'}, True)
-        """
+        """Read a dataset written by :meth:`save` or a user's NPZ: :func:`load_dataset`."""
         return load_dataset(path)
 
     def __repr__(self) -> str:
@@ -467,19 +372,8 @@ class Dataset:
 def load_dataset(path) -> Dataset:
     """Read a dataset NPZ (with embedded or side-car JSON metadata, or none).
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        An ``.npz`` file holding at least ``t`` (N,) and ``q`` (N, n); see the module docstring.
-
-    Returns
-    -------
-    Dataset
-
-    Raises
-    ------
-    DatasetError
-        With a message naming the missing or malformed array.
+    ``path`` holds at least ``t`` (N,) and ``q`` (N, n) (the module docstring lists the
+    arrays); a :class:`DatasetError` names a missing or malformed array.
 
     Examples
     --------
@@ -494,17 +388,6 @@ def load_dataset(path) -> Dataset:
     ...     data = load_dataset(path)
     >>> data
     Dataset(coordinates=['q0'], trajectories=2, samples=32)
-
-    A missing array is named in the error:
-
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     path = pathlib.Path(tmp) / "bad.npz"
-    ...     np.savez(path, t=t)
-    ...     load_dataset(path)
-    Traceback (most recent call last):
-    ...
-    pysindy_xl.data.files.DatasetError: path: '...bad.npz' lacks the required array(s)
-    ['q']; ...
     """
     path = os.fspath(path)
     arrays, metadata, names, bounds = read_dataset_arrays(path)

@@ -37,7 +37,6 @@ class DatasetError(ValueError):
     """
 
 
-
 def _read_npz(path: str) -> dict:
     if not os.path.isfile(path):
         raise DatasetError(f"path: dataset file {path!r} does not exist")

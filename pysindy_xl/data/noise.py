@@ -1,6 +1,4 @@
-"""Noise models: relative Gaussian noise on the recorded positions, velocities, accelerations
-and forces of a trajectory.
-"""
+"""Noise models: relative Gaussian noise on the recorded series of a trajectory."""
 
 from __future__ import annotations
 
@@ -12,9 +10,8 @@ __all__ = ["add_noise", "noise_levels", "NOISE_KEYS", "NOISE_MODELS"]
 
 NOISE_KEYS = ("q", "qd", "qdd", "tau")
 
-#: ``positions``: noisy recorded positions only, velocities and accelerations are not given to
-#: the identification (the package differentiates); ``all``: the paper's model, the same
-#: relative noise on positions, velocities, accelerations and forces.
+#: ``positions``: noisy positions only, the fit differentiates; ``all``: the paper's model, the
+#: same relative noise on positions, velocities, accelerations and forces.
 NOISE_MODELS = ("positions", "all")
 
 
@@ -36,7 +33,7 @@ def _noise_levels(noise) -> dict:
 
 
 def noise_levels(noise, noise_model: str = "positions") -> dict:
-    """Per-channel relative noise levels of a noise specification under a noise model.
+    """Per-channel relative noise levels ``{"q", "qd", "qdd", "tau"}`` of a specification.
 
     Parameters
     ----------
@@ -44,15 +41,8 @@ def noise_levels(noise, noise_model: str = "positions") -> dict:
         One relative level (std = level x each coordinate's standard deviation over the
         trajectory), or a dict with some of the keys ``"q", "qd", "qdd", "tau"``.
     noise_model : {"positions", "all"}, default "positions"
-        ``positions``: a number perturbs the recorded positions only (a dict may also name
-        ``"tau"``, measured forces); ``all``: a number perturbs positions, velocities,
-        accelerations and forces alike (the paper's model).
-
-    Returns
-    -------
-    dict
-        ``{"q": ..., "qd": ..., "qdd": ..., "tau": ...}``, floats. A dict naming velocity or
-        acceleration noise under the ``positions`` model is refused.
+        ``positions``: a number perturbs the positions only (a dict may also name ``"tau"``;
+        velocity or acceleration noise is refused); ``all``: every series alike.
 
     Examples
     --------
@@ -63,15 +53,14 @@ def noise_levels(noise, noise_model: str = "positions") -> dict:
     """
     if noise_model not in NOISE_MODELS:
         raise ValueError(f"noise_model: expected one of {NOISE_MODELS}, got {noise_model!r}")
+    levels = _noise_levels(noise)
     if noise_model == "all" or isinstance(noise, dict):
-        levels = _noise_levels(noise)
         if noise_model == "positions" and (levels["qd"] or levels["qdd"]):
             raise ValueError(
                 "noise: velocity or acceleration noise is not part of noise_model='positions' "
                 "(they are not recorded); use noise_model='all'"
             )
         return levels
-    levels = _noise_levels(noise)
     return {"q": levels["q"], "qd": 0.0, "qdd": 0.0, "tau": 0.0}
 
 
@@ -82,25 +71,12 @@ def add_noise(trajectory: Trajectory, noise, rng: np.random.Generator,
     Parameters
     ----------
     trajectory : Trajectory
-        Clean data; not modified.
+        Clean data; not modified (a new trajectory is returned).
     noise : float or dict
-        One level for ``q``, ``qd``, ``qdd`` and the forces, or a dict with some of the keys
-        ``"q", "qd", "qdd", "tau"``. The force noise is added to the joint forces ``u`` (the
-        measured actuator signal) and ``tau`` recomputed as ``u @ force_matrix.T``.
+        One level for every series, or a dict with some of the keys ``"q", "qd", "qdd",
+        "tau"``. Force noise goes on the joint forces ``u`` (the measured actuator signal),
+        ``tau`` recomputed as ``u @ force_matrix.T`` (``B``; identity when absent).
     rng : numpy.random.Generator
-        Source of the noise.
-    force_matrix : array (n, n), optional
-        ``B``; identity when absent.
-
-    Returns
-    -------
-    Trajectory
-        A new trajectory (the input is not modified).
-
-    Raises
-    ------
-    ValueError
-        If a level is negative or not a number, or ``noise`` has an unknown key.
 
     Examples
     --------

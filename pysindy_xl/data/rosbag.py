@@ -1,11 +1,8 @@
 """ROS bags of ``sensor_msgs/JointState`` into a :class:`~pysindy_xl.data.Dataset`.
 
-A robot driver publishes its joints as ``sensor_msgs/JointState`` messages: joint names and,
-per joint, ``position``, ``velocity`` and ``effort`` (empty when not measured), with the time
-of the measurement in ``header.stamp``. :func:`read_rosbag` reads them from ROS 1 bags
-(``.bag`` files) and ROS 2 bags (the bag directory, or its ``.db3`` / ``.mcap`` file) through
-the pure-Python `rosbags <https://gitlab.com/ternaris/rosbags>`_ package (``pip install
-pysindy-xl[ros]``), one bag per run:
+:func:`read_rosbag` reads ROS 1 bags (``.bag``) and ROS 2 bags (the directory, or its
+``.db3`` / ``.mcap`` file) through the pure-Python `rosbags <https://gitlab.com/ternaris/rosbags>`_
+package (``pip install pysindy-xl[ros]``), one bag per run:
 
 ==================  ========================================================================
 message field       dataset
@@ -17,13 +14,10 @@ message field       dataset
 ``effort``          ``tau`` (N m / N), when every message carries it
 ==================  ========================================================================
 
-The coordinates are chosen like the columns of a CSV file (:mod:`pysindy_xl.data.tables`):
-``coordinates`` names them in order, ``columns`` maps a coordinate to the joint that carries
-it (``{"shoulder": "ur5/shoulder_pan_joint"}``), and a coordinate not in ``columns`` is the
-joint of the same name. By default every joint of the first message is a coordinate, in its
-order. Messages name their joints, so the order may change from message to message; messages
-without every chosen joint (another joint group published on the same topic) are skipped and
-counted in the trajectory's ``info``.
+As for a CSV file, ``coordinates`` names the coordinates in order and ``columns`` maps one to
+its joint (``{"shoulder": "ur5/shoulder_pan_joint"}``; default: the joint of the same name, or
+every joint of the first message). Messages without every chosen joint are skipped and counted
+in the trajectory's ``info``.
 """
 
 from __future__ import annotations
@@ -34,18 +28,12 @@ import re
 import numpy as np
 
 from .._optional import import_optional
-from .files import coordinate_names
+from .files import DatasetError, coordinate_names
 
 __all__ = ["read_rosbag", "is_rosbag", "JOINT_STATE"]
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
 _BAG_SUFFIXES = (".bag", ".db3", ".mcap")
-
-
-def _error(message):
-    from .files import DatasetError
-
-    return DatasetError(message)
 
 
 def is_rosbag(path) -> bool:
@@ -66,9 +54,8 @@ def is_rosbag(path) -> bool:
 def _bag_path(path: str):
     """What ``rosbags`` opens: a ROS 1 file, or the directory of a ROS 2 bag."""
     import pathlib
-
     if not os.path.exists(path):
-        raise _error(f"path: ROS bag {path!r} does not exist")
+        raise DatasetError(f"path: ROS bag {path!r} does not exist")
     if path.lower().endswith((".db3", ".mcap")) and os.path.isfile(path):
         parent = os.path.dirname(os.path.abspath(path))
         if os.path.isfile(os.path.join(parent, "metadata.yaml")):
@@ -96,19 +83,19 @@ def _messages(path: str, topic):
         reader = highlevel.AnyReader([_bag_path(path)], default_typestore=store)
         reader.open()
     except Exception as error:  # rosbags raises its own errors for unreadable bags
-        if isinstance(error, ValueError) and type(error).__name__ == "DatasetError":
+        if isinstance(error, DatasetError):
             raise
-        raise _error(f"path: {path!r} is not a readable ROS bag ({error})") from None
+        raise DatasetError(f"path: {path!r} is not a readable ROS bag ({error})") from None
     try:
         states = sorted({c.topic for c in reader.connections if c.msgtype == JOINT_STATE})
         if topic is None:
             if len(states) != 1:
-                raise _error(f"topic: {path!r} has {len(states)} sensor_msgs/JointState topics "
-                             f"{states}; name one (topic=..., --topic)")
+                raise DatasetError(f"topic: {path!r} has {len(states)} sensor_msgs/JointState "
+                                   f"topics {states}; name one (topic=..., --topic)")
             topic = states[0]
         elif topic not in states:
-            raise _error(f"topic: {path!r} has no sensor_msgs/JointState topic {topic!r}; it "
-                         f"has {states}")
+            raise DatasetError(f"topic: {path!r} has no sensor_msgs/JointState topic {topic!r}; it "
+                               f"has {states}")
         connections = [c for c in reader.connections if c.topic == topic]
         rows = []
         for connection, log_ns, raw in reader.messages(connections=connections):
@@ -119,14 +106,13 @@ def _messages(path: str, topic):
     finally:
         reader.close()
     if not rows:
-        raise _error(f"topic: {path!r} has no message on {topic!r}")
+        raise DatasetError(f"topic: {path!r} has no message on {topic!r}")
     return rows, topic
 
 
 def _run(path, rows, joints):
     """One trajectory's arrays from the messages of one bag."""
     from .dataset import Trajectory
-
     index_of: dict = {}
     kept, skipped = [], 0
     for row in rows:
@@ -140,8 +126,8 @@ def _run(path, rows, joints):
             continue
         kept.append(row)
     if len(kept) < 2:
-        raise _error(f"{path!r}: {len(kept)} message(s) carry every joint of {joints}; a run "
-                     "needs at least 2")
+        raise DatasetError(f"{path!r}: {len(kept)} message(s) carry every joint of {joints}; a run "
+                           "needs at least 2")
     stamps = np.array([row[0] for row in kept], dtype=np.int64)
     source = "header.stamp"
     if not stamps.any():
@@ -150,16 +136,16 @@ def _run(path, rows, joints):
     steps = np.diff(t)
     if np.any(steps <= 0):
         k = int(np.flatnonzero(steps <= 0)[0]) + 1
-        raise _error(f"{path!r}: message {k} is stamped {t[k]:.9g} s after the run's start, "
-                     f"not after the message before it ({t[k - 1]:.9g} s); times must be "
-                     "strictly increasing (stamps as recorded by the driver)")
+        raise DatasetError(f"{path!r}: message {k} is stamped {t[k]:.9g} s after the run's start, "
+                           f"not after the message before it ({t[k - 1]:.9g} s); times must be "
+                           "strictly increasing (stamps as recorded by the driver)")
     series = {}
     for key, field in (("q", 3), ("qd", 4), ("tau", 5)):
         if all(len(row[field]) == len(row[2]) for row in kept):
             series[key] = np.array([np.asarray(row[field], dtype=float)[index_of[row[2]]]
                                     for row in kept])
         elif key == "q":
-            raise _error(f"{path!r}: some messages have no position for every joint")
+            raise DatasetError(f"{path!r}: some messages have no position for every joint")
     info = {"bag": os.path.basename(os.path.normpath(path)), "t0_ns": int(stamps[0]),
             "stamps": source, "skipped_messages": skipped}
     return Trajectory(t=t, info=info, **series)
@@ -167,8 +153,6 @@ def _run(path, rows, joints):
 
 def read_rosbag(paths, coordinates=None, columns=None, topic=None):
     """Read ROS bags of ``sensor_msgs/JointState`` into a :class:`Dataset`, one run per bag.
-
-    See the module documentation for the fields read and how joints become coordinates.
 
     Parameters
     ----------
@@ -184,17 +168,8 @@ def read_rosbag(paths, coordinates=None, columns=None, topic=None):
     Returns
     -------
     Dataset
-        ``metadata`` records the bags, the topic and the joint of each coordinate; each
-        trajectory's ``info`` its bag, the absolute first stamp (``t0_ns``), where the times
-        come from and the skipped messages.
-
-    Raises
-    ------
-    DatasetError
-        Naming the bag: unreadable bag, no or several JointState topics, missing joints,
-        times that do not increase.
-    ImportError
-        Without the ``rosbags`` package (``pip install pysindy-xl[ros]``).
+        ``metadata`` records the bags, the topic and each coordinate's joint; each
+        trajectory's ``info`` its bag, first stamp (``t0_ns``), time source, skipped messages.
 
     Examples
     --------
@@ -223,7 +198,6 @@ def read_rosbag(paths, coordinates=None, columns=None, topic=None):
     [2.0, 1.0]
     """
     from .dataset import Dataset
-
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     try:
@@ -245,7 +219,6 @@ def read_rosbag(paths, coordinates=None, columns=None, topic=None):
             default = dict(zip(names, rows[0][2], strict=False)) if coordinates is None else {}
             joints = [columns.get(name, default.get(name, name)) for name in names]
             from ..symbols import Coordinates
-
             Coordinates(names)
         runs.append(_run(path, rows, joints))
     metadata = {"source": [os.path.basename(os.path.normpath(p)) for p in paths],

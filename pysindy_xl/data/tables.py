@@ -16,15 +16,9 @@ column             content
 =================  ============================================================
 
 ``columns`` maps these keys to other headers (``{"t": "time_s", "x": "cart"}``). Without
-``coordinates`` every column that is not time, id, velocity, acceleration or force is a
-coordinate, in header order. Several trajectories in one table are split by the id column
-(rows of one id keep their order; ids in order of first appearance).
-
-Every mistake raises :class:`~pysindy_xl.data.DatasetError` (a :class:`ValueError`) naming
-the file (or DataFrame) and the column, and the line (row number or label) of a bad cell: a
-missing column, a header that does not split with the delimiter, a non-numeric, empty, NaN or
-inf cell, times not strictly increasing within a trajectory, a trajectory of fewer than 2
-samples. A source of another type is a ``TypeError``.
+``coordinates`` every other column is a coordinate, in header order. The id column splits
+trajectories (in order of first appearance). A mistake raises
+:class:`~pysindy_xl.data.DatasetError` naming the file, the column and the line of a bad cell.
 """
 
 from __future__ import annotations
@@ -34,7 +28,7 @@ import os
 
 import numpy as np
 
-from .files import coordinate_names
+from .files import DatasetError, coordinate_names
 
 __all__ = ["read_csv", "from_dataframe", "from_columns", "load_data", "coordinate_names",
            "CSV_SUFFIXES"]
@@ -43,13 +37,6 @@ CSV_SUFFIXES = (".csv", ".tsv", ".txt")
 _TIME_NAMES = ("t", "time")
 
 
-def _error(message):
-    from .files import DatasetError
-
-    return DatasetError(message)
-
-
-# -- reading ------------------------------------------------------------------------------------
 def _sniff_delimiter(header_line: str, delimiter: str) -> str | None:
     """The delimiter the header seems to use when it is not ``delimiter``."""
     for candidate in (",", ";", "\t", "|", " "):
@@ -61,15 +48,15 @@ def _sniff_delimiter(header_line: str, delimiter: str) -> str | None:
 def _read_text_table(path: str, delimiter: str):
     """Header, raw string columns and the file line number of each row."""
     if not os.path.isfile(path):
-        raise _error(f"path: data file {path!r} does not exist")
+        raise DatasetError(f"path: data file {path!r} does not exist")
     try:
         with open(path, encoding="utf-8-sig", newline="") as handle:
             lines = list(enumerate(handle, start=1))
     except (OSError, UnicodeDecodeError) as error:
-        raise _error(f"path: cannot read {path!r} as text ({error})") from None
+        raise DatasetError(f"path: cannot read {path!r} as text ({error})") from None
     lines = [(k, line) for k, line in lines if line.strip() and not line.lstrip().startswith("#")]
     if not lines:
-        raise _error(f"{path!r}: the file is empty (expected a header line and data rows)")
+        raise DatasetError(f"{path!r}: the file is empty (expected a header line and data rows)")
     reader = csv.reader([line for _, line in lines], delimiter=delimiter, skipinitialspace=True)
     rows = list(reader)
     header = [name.strip() for name in rows[0]]
@@ -77,19 +64,19 @@ def _read_text_table(path: str, delimiter: str):
         other = _sniff_delimiter(lines[0][1], delimiter)
         hint = (f"; the file seems to use {other!r} as delimiter (delimiter={other!r}, "
                 f"--delimiter {other!r})" if other else "")
-        raise _error(f"{path!r}: the header has a single column {header[0]!r} with delimiter "
-                     f"{delimiter!r}{hint}")
+        raise DatasetError(f"{path!r}: the header has a single column {header[0]!r} with delimiter "
+                           f"{delimiter!r}{hint}")
     if len(set(header)) != len(header) or "" in header:
         dup = sorted({h for h in header if header.count(h) > 1 or h == ""})
-        raise _error(f"{path!r}: empty or duplicate column names in the header: {dup}")
+        raise DatasetError(f"{path!r}: empty or duplicate column names in the header: {dup}")
     numbers = []
     for (line_no, _), row in zip(lines[1:], rows[1:], strict=True):
         if len(row) != len(header):
-            raise _error(f"{path!r}, line {line_no}: {len(row)} fields, the header has "
-                         f"{len(header)} ({header}); check the delimiter ({delimiter!r})")
+            raise DatasetError(f"{path!r}, line {line_no}: {len(row)} fields, the header has "
+                               f"{len(header)} ({header}); check the delimiter ({delimiter!r})")
         numbers.append(line_no)
     if not numbers:
-        raise _error(f"{path!r}: no data rows after the header")
+        raise DatasetError(f"{path!r}: no data rows after the header")
     columns = {name: [row[j].strip() for row in rows[1:]] for j, name in enumerate(header)}
     return header, columns, np.asarray(numbers)
 
@@ -106,12 +93,12 @@ def _as_float(values, column: str, source: str, where) -> np.ndarray:
                 float(value)
             except (TypeError, ValueError):
                 what = "an empty cell" if str(value).strip() == "" else f"{value!r}"
-                raise _error(f"{source}, column {column!r}, {where(k)}: {what} is not a "
-                             "number") from None
+                raise DatasetError(f"{source}, column {column!r}, {where(k)}: {what} is not a "
+                                   "number") from None
     bad = np.flatnonzero(~np.isfinite(a))
     if len(bad):
-        raise _error(f"{source}, column {column!r}, {where(bad[0])}: NaN or inf "
-                     f"({values[bad[0]]!r})")
+        raise DatasetError(f"{source}, column {column!r}, {where(bad[0])}: NaN or inf "
+                           f"({values[bad[0]]!r})")
     return a
 
 
@@ -137,8 +124,8 @@ def _resolve(header, coordinates, columns, source):
         if not isinstance(key, str) or not isinstance(name, str):
             raise TypeError("columns: expected a mapping of str to str")
         if name not in header:
-            raise _error(f"{source}: column {name!r} (mapped from {key!r}) not found in the "
-                         f"header {header}")
+            raise DatasetError(f"{source}: column {name!r} (mapped from {key!r}) not found in the "
+                               f"header {header}")
     mapped = set(columns.values())
 
     def column_of(key):
@@ -148,8 +135,8 @@ def _resolve(header, coordinates, columns, source):
 
     time = column_of("t") or next((c for c in _TIME_NAMES[1:] if c in header), None)
     if time is None:
-        raise _error(f"{source}: no time column 't' in the header {header}; name it 't' or map "
-                     "it (columns={'t': NAME}, --column t=NAME)")
+        raise DatasetError(f"{source}: no time column 't' in the header {header}; name it 't' "
+                           "or map it (columns={'t': NAME}, --column t=NAME)")
     trajectory = column_of("trajectory")
     if coordinates is None:
         roles = {time, trajectory} | mapped
@@ -158,19 +145,18 @@ def _resolve(header, coordinates, columns, source):
         names += [k for k in columns if k not in ("t", "trajectory") and k not in names
                   and not k.endswith(("_dot", "_ddot")) and not k.startswith("tau_")]
         if not names:
-            raise _error(f"{source}: no coordinate column in the header {header}")
+            raise DatasetError(f"{source}: no coordinate column in the header {header}")
     else:
         names = coordinate_names(coordinates)
     from ..symbols import Coordinates
-
     Coordinates(names)  # same name rules as the symbols (raises ValueError naming them)
     q = []
     for name in names:
         col = column_of(name)
         if col is None:
-            raise _error(f"{source}: column {name!r} (position of coordinate {name!r}) not "
-                         f"found in the header {header}; map it with columns={{{name!r}: "
-                         f"NAME}} (--column {name}=NAME)")
+            raise DatasetError(f"{source}: column {name!r} (position of coordinate {name!r}) not "
+                               f"found in the header {header}; map it with columns={{{name!r}: "
+                               f"NAME}} (--column {name}=NAME)")
         q.append(col)
     series = {}
     for key, suffix in (("qd", "{}_dot"), ("qdd", "{}_ddot")):
@@ -178,8 +164,8 @@ def _resolve(header, coordinates, columns, source):
         if any(found):
             if not all(found):
                 lacking = [suffix.format(n) for n, c in zip(names, found, strict=True) if not c]
-                raise _error(f"{source}: column(s) {lacking} missing while "
-                             f"{[c for c in found if c]} are present (give all or none)")
+                raise DatasetError(f"{source}: column(s) {lacking} missing while "
+                                   f"{[c for c in found if c]} are present (give all or none)")
             series[key] = found
     forces = [column_of(f"tau_{n}") for n in names]
     if any(forces):
@@ -189,7 +175,6 @@ def _resolve(header, coordinates, columns, source):
 
 def _build(raw, header, coordinates, columns, source, where, metadata=None):
     from .dataset import Dataset, Trajectory
-
     time, id_column, names, q_cols, series = _resolve(header, coordinates, columns, source)
     cache = {}
 
@@ -210,13 +195,14 @@ def _build(raw, header, coordinates, columns, source, where, metadata=None):
     for key, rows in groups:
         label = "" if key is None else f" (trajectory {key!r} of column {id_column!r})"
         if len(rows) < 2:
-            raise _error(f"{source}: {len(rows)} sample{label}; a trajectory needs at least 2")
+            raise DatasetError(
+                f"{source}: {len(rows)} sample{label}; a trajectory needs at least 2")
         steps = np.diff(t[rows])
         bad = np.flatnonzero(steps <= 0)
         if len(bad):
             k = rows[bad[0] + 1]
-            raise _error(f"{source}, column {time!r}, {where(k)}: time {t[k]:g} after "
-                         f"{t[rows[bad[0]]]:g}; times must be strictly increasing{label}")
+            raise DatasetError(f"{source}, column {time!r}, {where(k)}: time {t[k]:g} after "
+                               f"{t[rows[bad[0]]]:g}; times must be strictly increasing{label}")
         trajectories.append(Trajectory(t=t[rows], info={} if key is None else {"id": key},
                                        **{k: a[rows] for k, a in arrays.items()}))
     info = dict(metadata or {})
@@ -236,8 +222,7 @@ def read_csv(path, coordinates=None, columns=None, delimiter=","):
         The file; lines starting with ``#`` and blank lines are skipped.
     coordinates : list of str or str, optional
         Coordinate names, in order (``["x", "theta"]`` or ``"x,theta"``). Default: every
-        column that is not time, id, velocity, acceleration or force (see the module
-        docstring).
+        column that has no other role (see the module docstring).
     columns : dict of str to str, optional
         Header of each role whose column is not named by default: keys ``"t"``,
         ``"trajectory"``, a coordinate name, ``NAME_dot``, ``NAME_ddot``, ``tau_NAME``.
@@ -247,8 +232,7 @@ def read_csv(path, coordinates=None, columns=None, delimiter=","):
     Returns
     -------
     Dataset
-        ``coordinate_names`` as resolved; ``metadata["columns"]`` records which columns
-        were read.
+        ``metadata["columns"]`` records which columns were read.
 
     Examples
     --------
@@ -260,17 +244,6 @@ def read_csv(path, coordinates=None, columns=None, delimiter=","):
     ...     data = read_csv(path)
     >>> data, data.trajectories[0].tau.ravel().tolist()
     (Dataset(coordinates=['theta'], trajectories=1, samples=3), [0.0, 0.5, 0.4])
-
-    A mistake names the file, the column and the line:
-
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     path = pathlib.Path(tmp) / "bad.csv"
-    ...     _ = path.write_text("t,theta\\n0.0,0.1\\n0.1,oops\\n")
-    ...     read_csv(path)
-    Traceback (most recent call last):
-    ...
-    pysindy_xl.data.files.DatasetError: '.../bad.csv', column 'theta', line 3: 'oops' is
-    not a number
     """
     path = os.fspath(path)
     if not isinstance(delimiter, str) or len(delimiter) != 1:
@@ -283,18 +256,8 @@ def read_csv(path, coordinates=None, columns=None, delimiter=","):
 def from_columns(data, coordinates=None, columns=None, name="data"):
     """A :class:`Dataset` from a mapping of column name to 1-D values (same rules as a CSV).
 
-    Parameters
-    ----------
-    data : dict of str to array-like
-        Columns of equal length.
-    coordinates, columns
-        As in :func:`read_csv`.
-    name : str, default "data"
-        How errors name the source.
-
-    Returns
-    -------
-    Dataset
+    ``data`` maps names to columns of equal length; ``coordinates`` and ``columns`` as in
+    :func:`read_csv`; errors name the source ``name``.
 
     Examples
     --------
@@ -313,32 +276,21 @@ def from_columns(data, coordinates=None, columns=None, name="data"):
     for key, values in data.items():
         values = np.asarray(values)
         if values.ndim != 1:
-            raise _error(f"{name}, column {key!r}: expected 1-D values, got shape "
-                         f"{values.shape}")
+            raise DatasetError(f"{name}, column {key!r}: expected 1-D values, got shape "
+                               f"{values.shape}")
         raw[str(key)] = values
     lengths = {len(v) for v in raw.values()}
     if len(lengths) > 1:
-        raise _error(f"{name}: columns of different lengths "
-                     f"{ {k: len(v) for k, v in raw.items()} }")
+        raise DatasetError(f"{name}: columns of different lengths "
+                           f"{ {k: len(v) for k, v in raw.items()} }")
     return _build(raw, list(raw), coordinates, columns, name, lambda k: f"row {k}")
 
 
 def from_dataframe(frame, coordinates=None, columns=None):
     """A :class:`Dataset` from a pandas DataFrame (same rules as a CSV file).
 
-    pandas is not a dependency of pysindy-xl; this accepts any object with ``columns`` and
-    ``__getitem__`` returning 1-D values (a pandas or polars DataFrame).
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        One row per sample; column labels as in a CSV header.
-    coordinates, columns
-        As in :func:`read_csv`.
-
-    Returns
-    -------
-    Dataset
+    ``frame`` is any object with ``columns`` and ``__getitem__`` returning 1-D values (pandas,
+    polars), one row per sample; ``coordinates`` and ``columns`` as in :func:`read_csv`.
 
     Examples
     --------
@@ -374,16 +326,11 @@ def load_data(source, coordinates=None, columns=None, delimiter=None, topic=None
     coordinates : list of str or str, optional
         Coordinate names; for an NPZ file they rename the columns of ``q``.
     columns : dict, optional
-        Column mapping of a table (see :func:`read_csv`), or ``{coordinate: joint name}`` of
-        a ROS bag; not used for NPZ.
+        Column mapping of a table (:func:`read_csv`) or ``{coordinate: joint}`` of a ROS bag.
     delimiter : str, optional
         Field separator of a text file (default: tab for ``.tsv``, comma otherwise).
     topic : str, optional
         The ``sensor_msgs/JointState`` topic of a ROS bag (default: its only one).
-
-    Returns
-    -------
-    Dataset
 
     Examples
     --------
@@ -399,7 +346,6 @@ def load_data(source, coordinates=None, columns=None, delimiter=None, topic=None
         path = os.fspath(source)
         suffix = os.path.splitext(path)[1].lower()
         from .rosbag import is_rosbag, read_rosbag
-
         if is_rosbag(path):
             if delimiter is not None:
                 raise ValueError(f"delimiter: applies to text tables, not to the ROS bag "
@@ -410,8 +356,8 @@ def load_data(source, coordinates=None, columns=None, delimiter=None, topic=None
         if suffix == ".npz":
             return _load_npz(path, coordinates, columns)
         if suffix not in CSV_SUFFIXES:
-            raise _error(f"path: {path!r} has an unknown format {suffix!r}; expected one of "
-                         f"{['.npz', *CSV_SUFFIXES]}")
+            raise DatasetError(f"path: {path!r} has an unknown format {suffix!r}; expected one of "
+                               f"{['.npz', *CSV_SUFFIXES]}")
         if delimiter is None:
             delimiter = "\t" if suffix == ".tsv" else ","
         return read_csv(path, coordinates, columns, delimiter)
@@ -425,7 +371,6 @@ def load_data(source, coordinates=None, columns=None, delimiter=None, topic=None
 
 def _load_npz(path, coordinates, columns):
     from .dataset import Dataset, load_dataset
-
     if columns:
         raise ValueError("columns: a column mapping applies to tables (CSV, DataFrame), not "
                          f"to the NPZ file {path!r}")
@@ -434,9 +379,8 @@ def _load_npz(path, coordinates, columns):
         return dataset
     names = coordinate_names(coordinates)
     if len(names) != dataset.n:
-        raise _error(f"coordinates: {len(names)} names {names} for the {dataset.n} columns of "
-                     f"q in {path!r}")
+        raise DatasetError(f"coordinates: {len(names)} names {names} for the {dataset.n} "
+                           f"columns of q in {path!r}")
     from ..symbols import Coordinates
-
     Coordinates(names)
     return Dataset(dataset.trajectories, names, dataset.metadata)
