@@ -1,34 +1,22 @@
 r"""The noise of the weak rows: Monte Carlo draws, their moments and the residual's covariance.
 
-The weak rows inherit the noise of the positions through the smoother. Fresh noise of the
-estimated level, added to the recorded positions and smoothed again, changes the rows by
-``Delta``, distributed (to first order) as their error due to the original noise
-(:func:`~pysindy_xl.weak.propagated_noise`). The draws of ``Delta`` serve twice:
+Fresh noise of the estimated level, added to the recorded positions and smoothed again,
+changes the rows by ``Delta``, distributed (to first order) as their error due to the original
+noise (:func:`~pysindy_xl.weak.propagated_noise`). The draws of ``Delta`` give:
 
-* **Moments** ``E[E_c^T E_c]`` of each coordinate's rows, for the errors-in-variables
-  correction of the optimizers (:meth:`WeakNoise.moments`).
-* **The covariance of a law's residual.** The rows are not independent: neighbouring test
-  functions overlap and the smoother spreads the noise of each sample over its neighbours, so
-  the residual ``r = Theta xi`` of a law is correlated over about one test-function support.
-  Least squares weighs these rows as if they were independent. Generalized least
-  squares whitens them first: with ``Sigma = C C^T`` the covariance of the residual of a pilot
-  law, it regresses ``C^{-1} Theta``. This is the reweighting of WENDy (Bortz, Messenger and
-  Dukic, *Bull. Math. Biol.* 85, 2023), with the covariance taken from the draws instead of a
-  linearization of the catalog.
+* the moments ``E[E_c^T E_c]`` of each coordinate's rows, for the errors-in-variables
+  correction of the optimizers (:meth:`WeakNoise.moments`);
+* the covariance ``Sigma = C C^T`` of a law's residual ``r = Theta xi``, correlated over about
+  one test-function support (overlapping test functions, the smoother's spread), for
+  generalized least squares on ``C^{-1} Theta``: the reweighting of WENDy (Bortz, Messenger
+  and Dukic, *Bull. Math. Biol.* 85, 2023) with the covariance taken from the draws.
 
-The covariance (:meth:`WeakNoise.whitener`) is estimated per run of consecutive test
-functions of one coordinate and trajectory, as stationary: the residual's spread varies too
-little within a trajectory to pay for estimating it row by row from a few draws. The
-autocovariance is pooled over the runs and draws of the coordinate and trajectory and tapered
-(Bartlett) to zero beyond twice the rows over which the test functions overlap. The taper
-keeps it positive definite (Schur product of two positive-definite sequences) and banded, so
-the factor is a banded Cholesky factor and whitening costs ``O(rows x bandwidth)`` per column.
-
-The whitening is partial: the residual's spectrum nearly vanishes at low frequencies (the
-test functions' derivatives) and high ones (their smoothness), which a tapered estimate
-fills in, so the whitened draws stay correlated whatever the taper length. A regularized
-generalized least squares, then: what it gains and costs is measured in
-``benchmarks/results/noise_sweep.md`` (``weak`` against ``weak_ols``).
+The covariance (:meth:`WeakNoise.whitener`) is stationary per run of consecutive test
+functions of one coordinate and trajectory: its autocovariance, pooled over the runs and
+draws, is tapered (Bartlett) to zero beyond twice the test functions' overlap, which keeps it
+positive definite and banded (whitening costs ``O(rows x bandwidth)`` per column). The
+whitening is partial (the tapered estimate fills in the residual's nearly empty low and high
+frequencies): a regularized generalized least squares.
 """
 
 from __future__ import annotations
