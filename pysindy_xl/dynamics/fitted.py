@@ -1,11 +1,6 @@
-"""What a fitted model does with its equations: accelerations, scores, simulations, exports.
-
-:class:`DynamicsMixin` is the second half of :class:`~pysindy_xl.XLSINDy` (the first,
-:mod:`pysindy_xl.model`, fits): everything here needs only the fitted state ``coef_``,
-``dynamics_`` (the :class:`~pysindy_xl.MassMatrixDynamics` of the identified equations),
-``n_coordinates_`` and the host's parameters (its input handling is the fit stage's,
-:func:`~pysindy_xl.fit.estimator_trajectories`).
-"""
+"""What a fitted :class:`~pysindy_xl.XLSINDy` does with its equations: predictions, scores,
+simulations, exports. Reads only ``coef_``, ``dynamics_``, ``n_coordinates_`` and the
+host's parameters."""
 
 from __future__ import annotations
 
@@ -21,8 +16,7 @@ __all__ = ["DynamicsMixin"]
 
 
 class DynamicsMixin:
-    """Prediction, scoring, simulation, JAX/Gymnasium export and saving of a fitted model
-    (mixed into :class:`~pysindy_xl.XLSINDy`, which loads)."""
+    """Prediction, scoring, simulation, export and saving (mixed into ``XLSINDy``)."""
 
     # -- prediction ----------------------------------------------------------------------------
     def _require_dynamics(self) -> MassMatrixDynamics:
@@ -72,12 +66,8 @@ class DynamicsMixin:
         return out if is_list else out[0]
 
     def predict_forces(self, x, x_dot, x_ddot):
-        """Generalized forces that move the identified system as given: inverse dynamics.
-
-        ``M(q, qd) qdd - f(q, qd, 0)``, the forces (through the catalog's interlink) under
-        which the identified equations hold with the given accelerations; for a robot arm, the
-        joint torques. Compared with measured torques on a fresh trajectory this is the
-        standard validation of robot identification: no integration, insensitive to feedback.
+        """Inverse dynamics ``M(q, qd) qdd - f(q, qd, 0)``: the forces (a robot's joint
+        torques) under which the identified equations hold with the given motion.
 
         Parameters
         ----------
@@ -111,18 +101,13 @@ class DynamicsMixin:
 
     def score_forces(self, x, t, u, x_dot=None, x_ddot=None, smoother=None,
                      max_frequency=10.0):
-        """Held-out force prediction: RMS per coordinate (in force units and relative), total.
-
-        The robotics validation of an identified arm on a run it never saw: the torques
-        :meth:`predict_forces` needs to move as recorded against the measured ones, with the
-        derivatives not given estimated the same way whatever the model
-        (:mod:`pysindy_xl.held_out`).
+        """Held-out force prediction error of :meth:`predict_forces` against measured forces:
+        RMS per coordinate (absolute and relative) and total.
 
         Parameters
         ----------
         x, t, u, x_dot, x_ddot, smoother, max_frequency
-            As in :func:`pysindy_xl.held_out.score_forces`: the held-out run(s), measured
-            forces and derivatives, and the default derivative estimate's settings.
+            As in :func:`pysindy_xl.held_out.score_forces`.
 
         Returns
         -------
@@ -148,19 +133,8 @@ class DynamicsMixin:
         return score_forces(self, x, t, u, x_dot, x_ddot, smoother, max_frequency)
 
     def score(self, x, t=None, x_dot=None, x_ddot=None, u=None, metric=r2_score):
-        """Score predicted accelerations against measured (or differentiated) ones.
-
-        Parameters
-        ----------
-        x, t, x_dot, x_ddot, u
-            As in :meth:`fit`.
-        metric : callable, default ``sklearn.metrics.r2_score``
-            ``metric(true, predicted)``.
-
-        Returns
-        -------
-        float
-        """
+        """``metric(true, predicted)`` of the accelerations (default R^2); ``x, t, x_dot,
+        x_ddot, u`` as in :meth:`fit`."""
         self._require_dynamics()
         check_instance("metric", metric, "a function metric(true, predicted)", "__call__")
         from ..fit import estimator_trajectories
@@ -177,22 +151,9 @@ class DynamicsMixin:
 
         Parameters
         ----------
-        x0 : array, shape (2n,)
-            Initial state ``[q_1..q_n, qd_1..qd_n]``.
-        t : array, shape (T,)
-            Output times, strictly increasing.
-        u : None, array (T, n) or callable ``u(t) -> (n,)``
-            Generalized forces as a function of time (arrays are interpolated by a cubic
-            spline by default).
-        feedback : callable, optional
-            A feedback law ``feedback(t, q, qd) -> (n,)`` evaluated at every step and added to
-            ``u``: a servo-driven system simulated the way it ran, its servos reacting to the
-            model's motion (:func:`pysindy_xl.mujoco.actuator_law` gives an MJCF's law).
-        **integrator_options
-            Passed to :meth:`MassMatrixDynamics.simulate` (``method``, ``rtol``, ``atol``,
-            ``divergence_bound``, ``max_evaluations``, ``timeout``, ``interpolation``), which
-            also says what it raises (:class:`SimulationError` holds the valid part of the
-            trajectory).
+        x0, t, u, feedback, **integrator_options
+            As in :meth:`MassMatrixDynamics.simulate <pysindy_xl.MassMatrixDynamics.simulate>`
+            (``u`` may also be 1-D for one coordinate), which also says what it raises.
 
         Returns
         -------
@@ -200,8 +161,7 @@ class DynamicsMixin:
 
         Examples
         --------
-        A unit mass on a spring (``x'' + 2 x = u``), identified, then brought to ``x = 0.5``
-        by a PD controller with the spring's force at 0.5 as feed-forward:
+        A spring ``x'' + 2 x = u``, identified, then brought to ``x = 0.5`` by a PD law:
 
         >>> import numpy as np, pysindy_xl as px
         >>> c = px.Coordinates(["x"])
@@ -224,54 +184,37 @@ class DynamicsMixin:
         return dynamics.simulate(x0, t, u, **integrator_options)
 
     def to_jax(self):
-        """Pure JAX function ``f(state, u) -> d(state)/dt`` of the identified dynamics.
-
-        Returns
-        -------
-        callable
-            jit-, vmap- and grad-compatible; see :mod:`pysindy_xl.export.jax_dynamics`.
-        """
+        """Pure JAX function ``f(state, u) -> d(state)/dt`` (jit-, vmap- and grad-compatible;
+        :func:`pysindy_xl.export.jax_dynamics.dynamics_function`)."""
         from ..export.jax_dynamics import dynamics_function
 
         return dynamics_function(self._require_dynamics())
 
     # -- persistence ---------------------------------------------------------------------------
     def save(self, path) -> None:
-        """Save the catalog specification and coefficients as JSON (see :mod:`pysindy_xl.io`).
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-        """
+        """Save the catalog specification and coefficients as JSON (:mod:`pysindy_xl.io`)."""
         from ..io import save_model
 
         save_model(self, path)
 
     def to_mjcf(self, path, template=None) -> dict:
-        """Write the identified robot as an MJCF model MuJoCo can simulate.
-
-        The identified base parameters become physically consistent body inertials (the
-        consistent set closest to the template's, :mod:`pysindy_xl.export.mjcf`), with each
-        joint's armature and the identified viscous and dry friction as ``damping`` and
-        ``frictionloss``; everything else (kinematics, actuators, options) is the
-        template's.
+        """Write the identified robot as an MJCF file: physically consistent body inertials,
+        joint armature, ``damping`` and ``frictionloss``; the rest is the template's
+        (:mod:`pysindy_xl.export.mjcf`).
 
         Parameters
         ----------
         path : str or os.PathLike
             The MJCF file to write.
         template : str, os.PathLike or MJCFSystem
-            The MJCF the model was identified on (a model fitted with
-            ``kinematic_catalog(template).library()``).
+            The MJCF the model was identified on (with ``kinematic_catalog(template)``).
 
         Returns
         -------
         dict
             ``physical_parameters`` (name -> value written), ``residual``
-            (``|C pi - beta| / |beta|``, zero when the identified parameters are realizable
-            by rigid bodies) and ``dropped``: ``{joint: {model: value}}``, the identified
-            joint models MJCF cannot state (asymmetric Coulomb, Stribeck, torque offset: a
-            catalog built with ``friction=``), left out of the file.
+            (``|C pi - beta| / |beta|``, zero when realizable by rigid bodies) and
+            ``dropped`` (``{joint: {model: value}}``, joint models MJCF cannot state).
         """
         from ..export.mjcf import to_mjcf
 
@@ -280,22 +223,8 @@ class DynamicsMixin:
 
     # -- reinforcement learning ----------------------------------------------------------------
     def to_gymnasium(self, dt, **options):
-        """A Gymnasium environment whose dynamics are the identified model.
-
-        Parameters
-        ----------
-        dt : float
-            Seconds per step.
-        **options
-            ``reward``, ``terminated``, ``initial_state``, ``actuated``, ``action_bounds``,
-            ``max_episode_steps``, ``substeps``, ``observation_bounds``: see
-            :class:`pysindy_xl.export.gym_env.IdentifiedDynamicsEnv`.
-
-        Returns
-        -------
-        pysindy_xl.export.gym_env.IdentifiedDynamicsEnv
-            Observation ``[q, qd]``, action the forces of the actuated coordinates.
-        """
+        """A Gymnasium environment stepping the identified model; ``dt`` and ``**options`` as in
+        :class:`pysindy_xl.export.gym_env.IdentifiedDynamicsEnv`."""
         from ..export.gym_env import make_env
 
         return make_env(self, dt, **options)

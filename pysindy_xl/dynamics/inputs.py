@@ -1,6 +1,5 @@
-"""What drives a simulation: forces as a function of time (``u``) and of the state
-(``feedback``), checked once at the boundary and turned into fast callables for the
-integrator's right-hand side, for ``n`` coordinates and simulation times ``t``."""
+"""Forces that drive a simulation, of time (``u``) and of the state (``feedback``), checked
+once and turned into fast callables for the integrator."""
 
 from __future__ import annotations
 
@@ -25,9 +24,8 @@ def force_function(u, t: np.ndarray, n: int, interpolation: str = "cubic"):
     n : int
         Number of coordinates.
     interpolation : {"cubic", "linear", "previous"}
-        How an array ``u`` is read between samples: a cubic spline (smooth forces: adaptive
-        integrators take far fewer steps than on the kinks of a linear interpolant), linear,
-        or zero-order hold (``"previous"``, for piecewise-constant actuator commands).
+        How an array ``u`` is read between samples: cubic spline (smooth: adaptive integrators
+        take fewer steps), linear, or zero-order hold (piecewise-constant commands).
 
     Returns
     -------
@@ -90,7 +88,7 @@ def feedback_function(feedback, x0: np.ndarray, t0: float, n: int):
     feedback : None or callable
         ``feedback(t, q, qd) -> (n,)``: generalized forces from the time and the state.
     x0 : ndarray, shape (2n,)
-        Initial state, at which the law is evaluated once to check its output.
+        Initial state, where the law is evaluated once to check it.
     t0 : float
         Initial time.
     n : int
@@ -99,15 +97,7 @@ def feedback_function(feedback, x0: np.ndarray, t0: float, n: int):
     Returns
     -------
     callable or None
-        ``f(t, state) -> ndarray (n,)`` (``q``, ``qd`` are passed as copies, so the law cannot
-        alter the integrator's state); None when ``feedback`` is None.
-
-    Raises
-    ------
-    TypeError
-        If ``feedback`` is not callable.
-    ValueError
-        If it does not return ``n`` values, or returns non-finite ones at the initial state.
+        ``f(t, state) -> ndarray (n,)`` (``q``, ``qd`` passed as copies); None without feedback.
 
     Examples
     --------
