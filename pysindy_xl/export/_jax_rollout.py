@@ -1,6 +1,5 @@
-"""Batched fixed-step rollouts of JAX dynamics inside ``jax.lax.scan`` (see
-:mod:`.jax_dynamics`, which exports them): floating dtype from ``jax_enable_x64``, divergence
-reported per trajectory."""
+"""Batched fixed-step rollouts of JAX dynamics inside ``jax.lax.scan`` (exported by
+:mod:`.jax_dynamics`)."""
 
 from __future__ import annotations
 
@@ -24,14 +23,12 @@ class BatchSimulation(NamedTuple):
     Parameters
     ----------
     states : jax.Array
-        ``(B, T, 2n)``, or ``(B, 2n)`` with ``final_only``; no ``B`` axis for
-        :func:`simulate`. A diverged trajectory is frozen at its last accepted state:
-        every sample from ``divergence_step`` on repeats it.
+        ``(B, T, 2n)``, or ``(B, 2n)`` with ``final_only``; no ``B`` axis for :func:`simulate`.
+        A diverged trajectory is frozen at its last accepted state.
     diverged : jax.Array of bool, shape (B,)
         Whether the trajectory left the finite / bounded region.
     divergence_step : jax.Array of int, shape (B,)
-        Index of the first sample that would have been non-finite or out of bound,
-        ``-1`` for trajectories that did not diverge.
+        Index of the first sample that would have been non-finite or out of bound, else ``-1``.
 
     Examples
     --------
@@ -115,7 +112,7 @@ def _is_concrete(x) -> bool:
 
 
 def _prepare(f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched):
-    """Validate and convert the inputs shared by simulate and simulate_batch."""
+    """Validate and convert the inputs of :func:`simulate` and :func:`simulate_batch`."""
     if hasattr(f, "to_jax") and not hasattr(f, "n_coordinates"):
         f = f.to_jax()
     if not callable(f):
@@ -177,37 +174,32 @@ def simulate(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation=
     Parameters
     ----------
     f : callable or model
-        ``f(state, u, t) -> d(state)/dt`` (see :func:`dynamics_function`), or any
-        object with a ``to_jax()`` method such as a fitted ``XLSINDy``.
-        Pass the same function object between calls to reuse the compiled code.
+        ``f(state, u, t) -> d(state)/dt`` (:func:`dynamics_function`), or an object with
+        ``to_jax()`` such as a fitted ``XLSINDy``; the same object reuses the compiled code.
     x0 : array (2n,)
         Initial state ``[q, qd]``.
     u : array (T, n) or None
-        Generalized forces sampled at ``t0 + k dt``; ``None`` means zero force and
-        needs ``n_steps``.
+        Generalized forces sampled at ``t0 + k dt``; ``None`` (zero) needs ``n_steps``.
     dt : float
         Time step.
     t0 : float, default 0.0
-        Time of the first sample (matters for time-dependent dynamics).
+        Time of the first sample.
     n_steps : int, optional
         Number of output samples ``T`` when ``u`` is None.
     method : {"rk4", "semi_implicit_euler", "euler"}
     interpolation : {"zoh", "linear"}
         Force inside a step: held at ``u[k]`` or linear between ``u[k]`` and ``u[k+1]``.
     bound : float, optional
-        A trajectory diverges when a state entry becomes NaN/inf or, if given, exceeds
-        ``bound`` in absolute value.
+        A trajectory diverges when a state entry becomes NaN/inf or exceeds ``bound``.
     final_only : bool, default False
-        Return only the final state (saves memory for long or large runs).
+        Return only the final state.
 
     Returns
     -------
     BatchSimulation
-        ``states`` (T, 2n) (or (2n,)), scalar ``diverged`` and ``divergence_step``.
-        Differentiable with respect to ``x0``, ``u``, ``dt`` and ``t0`` (gradients
-        through a trajectory that diverged are meaningless and may be NaN: exclude such
-        trajectories from a loss, e.g. with ``jnp.where(diverged, 0, loss)`` *and* a
-        ``bound`` low enough that no infinity is ever reached).
+        ``states`` (T, 2n) (or (2n,)), scalar ``diverged`` and ``divergence_step``;
+        differentiable in ``x0``, ``u``, ``dt`` and ``t0`` (mask diverged trajectories out of a
+        loss, with a ``bound`` low enough that no infinity is reached).
 
     Examples
     --------
@@ -225,20 +217,13 @@ def simulate(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation=
     >>> round(float(result.states[-1, 0]), 3)  # cos(3.14)
     -1.0
     """
-    f, x0, u, dt, t0, bound = _prepare(
-        f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched=False
-    )
-    return _simulate_compiled(
-        f, x0, u, dt, t0, bound, method, interpolation == "linear", bool(final_only)
-    )
+    return _run(f, x0, u, dt, t0, n_steps, method, interpolation, bound, final_only, False)
 
 
 def simulate_batch(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation="zoh",
                    bound=None, final_only=False):
-    """Integrate ``B`` trajectories at once (``vmap`` of :func:`simulate`).
-
-    Runs on the default JAX device (CPU, or GPU where present). Trajectories are
-    independent: one that diverges is frozen and reported, the others carry on.
+    """Integrate ``B`` independent trajectories at once (``vmap`` of :func:`simulate`); one that
+    diverges is frozen and reported, the others carry on.
 
     Parameters
     ----------
@@ -254,8 +239,7 @@ def simulate_batch(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpol
     Returns
     -------
     BatchSimulation
-        ``states`` (B, T, 2n) (or (B, 2n) with ``final_only``), ``diverged`` (B,),
-        ``divergence_step`` (B,).
+        ``states`` (B, T, 2n) (or (B, 2n)), ``diverged`` (B,), ``divergence_step`` (B,).
 
     Examples
     --------
@@ -272,9 +256,11 @@ def simulate_batch(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpol
     >>> out.diverged.tolist(), out.divergence_step.tolist()
     ([False, True], [-1, 2])
     """
-    f, x0, u, dt, t0, bound = _prepare(
-        f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched=True
-    )
-    return _simulate_compiled(
-        f, x0, u, dt, t0, bound, method, interpolation == "linear", bool(final_only)
-    )
+    return _run(f, x0, u, dt, t0, n_steps, method, interpolation, bound, final_only, True)
+
+
+def _run(f, x0, u, dt, t0, n_steps, method, interpolation, bound, final_only, batched):
+    f, x0, u, dt, t0, bound = _prepare(f, x0, u, dt, t0, n_steps, method, interpolation,
+                                       bound, batched)
+    return _simulate_compiled(f, x0, u, dt, t0, bound, method, interpolation == "linear",
+                              bool(final_only))
