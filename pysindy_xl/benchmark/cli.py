@@ -4,7 +4,7 @@ Examples
 --------
 ::
 
-    pysindy-xl benchmark --quick                       # ~125 runs, all cores, < 15 min on 2
+    pysindy-xl benchmark --quick                       # the small grid, all cores
     pysindy-xl benchmark --full --jobs 32 --out results/full
     pysindy-xl benchmark --quick --retry error timeout  # rerun the failed runs only
     pysindy-xl benchmark --quick --report-only          # rebuild the table from the records
@@ -37,11 +37,12 @@ from .grid import (
     all_configurations,
     config_label,
 )
+from .isolation import _ISOLATIONS
+from .records import STATUSES
 
 __all__ = ["add_parser", "build_parser", "main", "run_benchmark"]
 
 BACKENDS = ("loky", "multiprocessing", "dask", "ray")
-STATUSES = ("ok", "invalid", "timeout", "error")
 
 
 _positive_float = argument_type("real", low=0, low_open=True)
@@ -65,9 +66,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """Add the benchmark options to ``parser``; returns it."""
     preset = parser.add_mutually_exclusive_group()
     preset.add_argument("--quick", dest="preset", action="store_const", const="quick",
-                        help="small grid: ~125 runs, under 15 min on 2 cores (default)")
+                        help="small grid, short trajectories (default)")
     preset.add_argument("--full", dest="preset", action="store_const", const="full",
-                        help="the paper's scale: ~1100 runs, 1 h time limit per run")
+                        help="the paper's scale, 1 h time limit per run")
     parser.set_defaults(preset="quick")
     parser.add_argument("--out", metavar="DIR", default=None,
                         help="directory of records.jsonl and the table files (default: "
@@ -105,7 +106,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         help="run again the runs whose recorded status is one of these")
     parser.add_argument("--limit", type=int, default=None,
                         help="run at most this many pending runs, then stop")
-    parser.add_argument("--isolation", choices=("auto", "process", "signal", "none"),
+    parser.add_argument("--isolation", choices=_ISOLATIONS,
                         default="auto",
                         help="how the time limit is enforced (default: a forked process per "
                              "run)")
@@ -132,10 +133,8 @@ def _blas_threads(text):
 
 
 def add_parser(subparsers):
-    """Register ``benchmark`` on an argparse subparsers object (for the ``pysindy-xl`` command).
-
-    The parsed namespace's ``func`` runs it: ``args.func(args)`` returns the exit status.
-    """
+    """Register ``benchmark`` on argparse subparsers (the ``pysindy-xl`` command); the parsed
+    namespace's ``func(args)`` runs it and returns the exit status."""
     parser = subparsers.add_parser(
         "benchmark", help="reproduce the paper's Table 1 (parallel, resumable)",
         description="Run the grid of the paper's Table 1 (systems x friction x forcing x noise "
@@ -250,12 +249,6 @@ def _effective_jobs(n_jobs):
 
 
 def main(argv=None) -> int:
-    """Entry point of ``benchmarks/table1.py``; returns the exit status.
-
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments (default ``sys.argv[1:]``).
-    """
+    """Entry point of ``benchmarks/table1.py``; returns the exit status."""
     args = build_parser().parse_args(argv)
     return run_benchmark(args)

@@ -1,6 +1,5 @@
-"""Process isolation, time limit and BLAS threads of one run (see :mod:`.runner`, "Time limit"
-and "Threads"): a forked child, or an interval-timer signal, and a threadpoolctl limit.
-"""
+"""Process isolation, time limit and BLAS threads of one run (:mod:`.runner`): a forked child or
+an interval-timer signal, and a threadpoolctl limit."""
 
 from __future__ import annotations
 
@@ -128,9 +127,8 @@ def run_with_signal(function, task, settings, timeout):
 
 
 def blas_thread_limit(blas_threads: int | None):
-    """A context limiting the thread pools of every BLAS library loaded (OpenBLAS, MKL,
-    BLIS...) to ``blas_threads`` (an integer >= 1), via :func:`threadpoolctl.threadpool_limits`;
-    None leaves them as they are.
+    """A context limiting every loaded BLAS's threads to ``blas_threads`` (>= 1) through
+    :func:`threadpoolctl.threadpool_limits`; None leaves them alone.
 
     Examples
     --------

@@ -62,19 +62,7 @@ def _git_state() -> dict:
 
 
 def machine_description(n_jobs=None, backend=None) -> dict:
-    """The machine and software a grid ran on (JSON-serializable).
-
-    Parameters
-    ----------
-    n_jobs : int, optional
-        Parallel jobs used.
-    backend : str, optional
-        joblib backend used.
-
-    Returns
-    -------
-    dict
-    """
+    """The machine and software a grid ran on (JSON-serializable)."""
     from importlib import metadata
 
     versions = {}
@@ -107,14 +95,9 @@ def load_average():
 
 
 def grid_summary(records, configs=None, reference: str = "mixed x mixed") -> dict:
-    """Counts, run times and the acceptance targets of a set of records.
-
-    Returns
-    -------
-    dict
-        ``runs``, ``trajectories``, ``statuses``, ``run_time_s`` (median, p90, max, total),
-        ``reference`` (valid fraction of ``reference`` over its trajectories).
-    """
+    """Counts, run times and the acceptance targets of records: ``runs``, ``trajectories``,
+    ``statuses``, ``run_time_s`` (median, p90, max, total) and ``reference`` (valid fraction of
+    the ``reference`` configuration)."""
     records = latest_records(list(records))
     statuses = dict.fromkeys(("ok", "invalid", "timeout", "error"), 0)
     for r in records:
@@ -139,9 +122,8 @@ def grid_summary(records, configs=None, reference: str = "mixed x mixed") -> dic
 
 
 def plot_table(table, records, path) -> None:
-    """PNG figure at ``path``: outcome counts per configuration (the ``table`` of
-    :func:`~pysindy_xl.benchmark.ranking.ranking_table`) and the validation errors of the
-    valid runs among ``records``."""
+    """PNG at ``path``: outcome counts per configuration of ``table`` (:func:`ranking_table`) and
+    the validation errors of the valid runs among ``records``."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -204,24 +186,10 @@ def _settings_lines(settings) -> list[str]:
 
 
 def write_report(records, out_dir, settings=None, machine=None, configs=None) -> dict:
-    """Write ``table.md``, ``table.csv``, ``table.png`` and ``summary.json`` to ``out_dir``.
-
-    Parameters
-    ----------
-    records : list of dict
-    out_dir : str or os.PathLike
-    settings : GridSettings or dict, optional
-        Described in the Markdown file.
-    machine : dict, optional
-        From :func:`machine_description`; written to ``machine.json`` and summarized.
-    configs : sequence of str, optional
-        Configurations listed even without records.
-
-    Returns
-    -------
-    dict
-        ``{"table": rows, "summary": ..., "files": {...}}``.
-    """
+    """Write ``table.md``, ``table.csv``, ``table.png``, ``summary.json`` (and ``machine.json``
+    when ``machine``, from :func:`machine_description`, is given) to ``out_dir``; returns
+    ``{"table", "summary", "files", "text"}``. ``settings`` (a GridSettings or its dict) is
+    described in the Markdown, ``configs`` are listed even without records."""
     os.makedirs(out_dir, exist_ok=True)
     records = latest_records(list(records))
     if configs is None and settings is not None and not isinstance(settings, dict):
