@@ -15,31 +15,17 @@ __all__ = ["CatalogDynamics"]
 class CatalogDynamics(MassMatrixDynamics):
     r"""The equations ``sum_j xi_j E[c, j] = 0`` of a catalog in mass-matrix form.
 
-    Each column entry ``E[c, j]`` is decomposed once into monomials of a few atoms, which the
-    coefficients combine numerically into
+    The column entries ``E[c, j]``, decomposed once into monomials of a few atoms, are combined
+    numerically with the coefficients ``coef`` (F,) into
 
     .. math:: M_{ck} = \sum_j \xi_j \frac{\partial E_{cj}}{\partial \ddot q_k}, \qquad
               f_c = -\sum_j \xi_j E_{cj}\big|_{\ddot q = 0}.
 
-    Lagrange libraries that carry a kinematic tree are evaluated by the rigid-body kernel
-    instead (:mod:`pysindy_xl.physical.rigid_body`), their coefficients turned into physical
-    parameters ``pi``: an arm costs what its bodies cost, not its columns' monomials. The
-    symbolic forms (``equations``, ``mass_matrix_expr``, ``forcing_expr``, ``terms``) are built
-    on first use.
-
-    Parameters
-    ----------
-    library : fitted SymbolicLibrary
-        The catalog (``coords`` and ``symbolic_matrix_``).
-    coef : array, shape (F,)
-        One coefficient per feature; only the non-zero ones are read.
-    held : array of bool, shape (n,), optional
-        Coordinates held still (:mod:`pysindy_xl.fit.still`): their equation is ``qdd_c = 0``.
-
-    Attributes
-    ----------
-    rigid_parts : list of (KinematicTree, ndarray)
-        The trees evaluated by the rigid-body kernel, with their parameters ``pi``.
+    Lagrange libraries with a kinematic tree go through the rigid-body kernel instead
+    (:mod:`pysindy_xl.physical.rigid_body`; ``rigid_parts``: their ``(tree, pi)``), so an arm
+    costs what its bodies cost. The symbolic forms are built on first use. ``library`` is a
+    fitted catalog; ``held`` (n,) flags coordinates held still (:mod:`pysindy_xl.fit.still`),
+    whose equation becomes ``qdd_c = 0``.
 
     Examples
     --------

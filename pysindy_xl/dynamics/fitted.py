@@ -28,19 +28,8 @@ class DynamicsMixin:
         return self.dynamics_
 
     def predict(self, x, x_dot, u=None):
-        """Accelerations predicted by the identified equations.
-
-        Parameters
-        ----------
-        x, x_dot : array (N, n) or list of arrays
-            Positions and velocities.
-        u : same layout, optional
-            Generalized forces; zero when absent.
-
-        Returns
-        -------
-        ndarray (N, n), or a list of them when ``x`` is a list.
-        """
+        """Accelerations (N, n) of the identified equations at positions ``x`` and velocities
+        ``x_dot`` (N, n) under forces ``u`` (zero when absent); lists of arrays give a list."""
         dynamics = self._require_dynamics()
         n = self.n_coordinates_
         xs, is_list = as_list(x, "x")
@@ -66,17 +55,9 @@ class DynamicsMixin:
         return out if is_list else out[0]
 
     def predict_forces(self, x, x_dot, x_ddot):
-        """Inverse dynamics ``M(q, qd) qdd - f(q, qd, 0)``: the forces (a robot's joint
-        torques) under which the identified equations hold with the given motion.
-
-        Parameters
-        ----------
-        x, x_dot, x_ddot : array (N, n)
-            Positions, velocities and accelerations.
-
-        Returns
-        -------
-        ndarray, shape (N, n)
+        """Inverse dynamics ``M(q, qd) qdd - f(q, qd, 0)`` (N, n): the forces (a robot's joint
+        torques) under which the identified equations hold with the motion ``x``, ``x_dot``,
+        ``x_ddot`` (N, n).
 
         Examples
         --------
@@ -101,18 +82,9 @@ class DynamicsMixin:
 
     def score_forces(self, x, t, u, x_dot=None, x_ddot=None, smoother=None,
                      max_frequency=10.0):
-        """Held-out force prediction error of :meth:`predict_forces` against measured forces:
-        RMS per coordinate (absolute and relative) and total.
-
-        Parameters
-        ----------
-        x, t, u, x_dot, x_ddot, smoother, max_frequency
-            As in :func:`pysindy_xl.held_out.score_forces`.
-
-        Returns
-        -------
-        ForceScore
-            ``rms``, ``relative`` (per coordinate), ``total``, ``lines()``, ``plot(path)``.
+        """Held-out error of :meth:`predict_forces` against measured forces ``u``: a ``ForceScore``
+        with ``rms``, ``relative`` (per coordinate), ``total``, ``lines()`` and ``plot(path)``;
+        arguments as in :func:`pysindy_xl.held_out.score_forces`.
 
         Examples
         --------
@@ -147,17 +119,9 @@ class DynamicsMixin:
         return metric(true, predicted)
 
     def simulate(self, x0, t, u=None, feedback=None, **integrator_options) -> np.ndarray:
-        """Simulate the identified dynamics, open loop (``u``) or closed loop (``feedback``).
-
-        Parameters
-        ----------
-        x0, t, u, feedback, **integrator_options
-            As in :meth:`MassMatrixDynamics.simulate <pysindy_xl.MassMatrixDynamics.simulate>`
-            (``u`` may also be 1-D for one coordinate), which also says what it raises.
-
-        Returns
-        -------
-        ndarray, shape (T, 2n)
+        """Simulate the identified dynamics, open loop (``u``) or closed loop (``feedback``);
+        returns the states (T, 2n). Arguments and errors as in :meth:`MassMatrixDynamics.simulate
+        <pysindy_xl.MassMatrixDynamics.simulate>` (``u`` may be 1-D for one coordinate).
 
         Examples
         --------
@@ -198,24 +162,11 @@ class DynamicsMixin:
         save_model(self, path)
 
     def to_mjcf(self, path, template=None) -> dict:
-        """Write the identified robot as an MJCF file: physically consistent body inertials,
-        joint armature, ``damping`` and ``frictionloss``; the rest is the template's
-        (:mod:`pysindy_xl.export.mjcf`).
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            The MJCF file to write.
-        template : str, os.PathLike or MJCFSystem
-            The MJCF the model was identified on (with ``kinematic_catalog(template)``).
-
-        Returns
-        -------
-        dict
-            ``physical_parameters`` (name -> value written), ``residual``
-            (``|C pi - beta| / |beta|``, zero when realizable by rigid bodies) and
-            ``dropped`` (``{joint: {model: value}}``, joint models MJCF cannot state).
-        """
+        """Write the identified robot to ``path`` as MJCF: physically consistent body inertials,
+        joint armature, ``damping`` and ``frictionloss``, the rest from ``template``, the MJCF it
+        was identified on (:mod:`pysindy_xl.export.mjcf`). Returns ``physical_parameters`` (name
+        -> value written), ``residual`` (``|C pi - beta| / |beta|``, zero when realizable by rigid
+        bodies) and ``dropped`` (``{joint: {model: value}}``, joint models MJCF cannot state)."""
         from ..export.mjcf import to_mjcf
 
         check_is_fitted(self, "coef_")

@@ -13,24 +13,10 @@ _INTERPOLATIONS = ("cubic", "linear", "previous")
 
 
 def force_function(u, t: np.ndarray, n: int, interpolation: str = "cubic"):
-    """Turn the ``u`` argument of ``simulate`` into a function of time.
-
-    Parameters
-    ----------
-    u : None, array (len(t), n), or callable ``u(t) -> (n,)``
-        Generalized forces.
-    t : ndarray, shape (T,)
-        Simulation times.
-    n : int
-        Number of coordinates.
-    interpolation : {"cubic", "linear", "previous"}
-        How an array ``u`` is read between samples: cubic spline (smooth: adaptive integrators
-        take fewer steps), linear, or zero-order hold (piecewise-constant commands).
-
-    Returns
-    -------
-    callable
-        ``u(t) -> ndarray (n,)``.
+    """The ``u`` argument of ``simulate`` (None, an array (len(t), n) over the times ``t``, or a
+    callable ``u(t) -> (n,)``) as a checked function of time ``u(t) -> (n,)``; ``interpolation``
+    reads an array between samples by a cubic spline (smooth: adaptive integrators take fewer
+    steps), linearly, or by zero-order hold (``"previous"``, piecewise-constant commands).
 
     Examples
     --------
@@ -81,23 +67,9 @@ def force_function(u, t: np.ndarray, n: int, interpolation: str = "cubic"):
 
 
 def feedback_function(feedback, x0: np.ndarray, t0: float, n: int):
-    """Check the ``feedback`` argument of ``simulate`` and wrap it for the integrator.
-
-    Parameters
-    ----------
-    feedback : None or callable
-        ``feedback(t, q, qd) -> (n,)``: generalized forces from the time and the state.
-    x0 : ndarray, shape (2n,)
-        Initial state, where the law is evaluated once to check it.
-    t0 : float
-        Initial time.
-    n : int
-        Number of coordinates.
-
-    Returns
-    -------
-    callable or None
-        ``f(t, state) -> ndarray (n,)`` (``q``, ``qd`` passed as copies); None without feedback.
+    """The ``feedback`` argument of ``simulate``, ``feedback(t, q, qd) -> (n,)`` or None, checked
+    once at the initial state ``x0`` and time ``t0`` and wrapped as ``f(t, state) -> (n,)``
+    (``q``, ``qd`` passed as copies); None without feedback.
 
     Examples
     --------

@@ -55,17 +55,10 @@ class SingularMassMatrixError(DynamicsError):
 
 
 class SimulationError(DynamicsError):
-    """A simulation stopped before its end.
-
-    Attributes
-    ----------
-    t_failed : float
-        Time at which the simulation stopped.
-    t, states : ndarray, shapes (k,) and (k, 2n)
-        The requested times reached before the failure and the states there.
-    reason : str
-        ``"diverged"``, ``"singular mass matrix"``, ``"non-finite derivative"``,
-        ``"too many evaluations"``, ``"timeout"`` or ``"integrator failure (...)"``.
+    """A simulation stopped before its end, at time ``t_failed`` for ``reason`` (``"diverged"``,
+    ``"singular mass matrix"``, ``"non-finite derivative"``, ``"too many evaluations"``,
+    ``"timeout"`` or ``"integrator failure (...)"``); ``t`` (k,) and ``states`` (k, 2n) are
+    the valid part of the trajectory.
 
     Examples
     --------
@@ -88,20 +81,9 @@ class SimulationError(DynamicsError):
 
 
 class MassMatrixDynamics:
-    """Equations ``E(q, qd, qdd, tau, t) = 0``, linear in ``qdd``, in mass-matrix form.
-
-    Parameters
-    ----------
-    coords : Coordinates
-    equations : sequence of sympy.Expr, length n
-        One equation per coordinate (equal to zero), linear in ``coords.qdd``.
-
-    Attributes
-    ----------
-    mass_matrix_expr : sympy.Matrix, shape (n, n)
-        ``M(q, qd)``.
-    forcing_expr : sympy.Matrix, shape (n, 1)
-        ``f(q, qd, tau, t)``, so that ``M qdd = f``.
+    """Equations ``E(q, qd, qdd, tau, t) = 0``, one per coordinate of ``coords`` and linear in
+    ``coords.qdd``, in mass-matrix form: ``mass_matrix_expr`` ``M(q, qd)`` (n, n) and
+    ``forcing_expr`` ``f(q, qd, tau, t)`` (n, 1), ``M qdd = f``.
 
     Examples
     --------
@@ -198,26 +180,9 @@ class MassMatrixDynamics:
         return mass, force
 
     def accelerations(self, q, qd, tau=None, t=None, rcond: float = 1e-12) -> np.ndarray:
-        """Accelerations ``qdd = M^-1 f`` at many states at once.
-
-        Parameters
-        ----------
-        q, qd : array, shape (N, n)
-        tau : array, shape (N, n), optional
-            Generalized forces (inputs), zero when absent.
-        t : array, shape (N,), optional
-        rcond : float
-            Reciprocal condition number of ``M`` below which it counts as singular.
-
-        Returns
-        -------
-        ndarray, shape (N, n)
-
-        Raises
-        ------
-        SingularMassMatrixError
-            Where ``M`` is singular.
-        """
+        """Accelerations ``qdd = M^-1 f`` at many states: ``q``, ``qd``, forces ``tau`` (zero when
+        absent) of shape (N, n), times ``t`` (N,). Raises :class:`SingularMassMatrixError` where
+        ``M``'s reciprocal condition number is below ``rcond``."""
         arrays = {"q": q, "qd": qd, "tau": tau, "t": t}
         for name, value in arrays.items():
             if value is None:
@@ -291,18 +256,12 @@ class MassMatrixDynamics:
         u : None, array (T, n) or callable ``u(t) -> (n,)``
             Generalized forces, a function of time (open loop).
         method : {"DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA", "ROS2"}
-            scipy's solver (``"Radau"`` or ``"BDF"`` for stiff models), or ``"ROS2"``: the
-            L-stable Rosenbrock method of :mod:`pysindy_xl.dynamics.rosenbrock`, steps of at most
-            ``step`` under a local error bound ``1e-3 (1 + |y|)`` (``rtol``, ``atol`` unused), for
-            stiff closed loops.
-        rtol, atol : float
-            Tolerances of the solver.
-        divergence_bound : float
-            The run stops when any state component exceeds it in magnitude.
-        max_evaluations : int
-            Bound on right-hand-side evaluations.
-        timeout : float or None
-            Wall-clock bound in seconds.
+            scipy's solver (``"Radau"`` or ``"BDF"`` for stiff models), or the L-stable
+            Rosenbrock method of :mod:`pysindy_xl.dynamics.rosenbrock` for stiff closed loops
+            (steps of at most ``step``, local error bound ``1e-3 (1 + |y|)``, tolerances unused).
+        rtol, atol, divergence_bound, max_evaluations, timeout : float
+            Solver tolerances; the run stops when a state component exceeds ``divergence_bound``,
+            after ``max_evaluations`` right-hand sides or ``timeout`` seconds (None: no bound).
         interpolation : {"cubic", "linear", "previous"}
             How an array ``u`` is read between samples (:func:`force_function`).
         feedback : callable, optional
@@ -318,8 +277,7 @@ class MassMatrixDynamics:
         Raises
         ------
         SimulationError
-            On divergence, singular mass matrix, non-finite derivative, exhausted evaluations or
-            timeout; carries the valid part of the trajectory.
+            When the run stops early; carries the valid part of the trajectory.
 
         Examples
         --------

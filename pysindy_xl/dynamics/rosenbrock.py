@@ -64,19 +64,12 @@ def ros2(parts, x0, t, step, jacobian_every: int = 50, divergence_bound: float =
     ``parts(t, state) -> (M, g)`` gives the mass matrix (n, n) and the forces (n,) at
     ``[q, v]``; the run starts at ``x0`` (2n,), reports the times ``t`` (T,) and takes steps of
     at most ``step``, stopping beyond ``divergence_bound`` or after ``timeout`` seconds.
-
-    Parameters
-    ----------
-    jacobian_every : int, default 50
-        Steps between two evaluations of ``G_q``, ``G_v`` (``4n`` evaluations each).
-    dq, dv : float
-        Secant steps of the Jacobians (a secant over ``dv`` averages a smooth dry-friction sign).
-    tolerance : float or None, default 1e-5
-        Local error bound per step relative to ``1 + |y_i|`` (second-order step against the
-        embedded first-order one, ``h (k_1 + k_2) / 2``); None: fixed steps.
-
-    Returns the states (T, 2n); raises :class:`RosenbrockStop` (with the valid rows) on a
-    non-finite or singular step, divergence or timeout.
+    ``jacobian_every`` steps separate two secant Jacobians (``4n`` evaluations, steps ``dq``,
+    ``dv``: a secant over ``dv`` averages a smooth dry-friction sign). ``tolerance`` bounds the
+    local error relative to ``1 + |y_i|`` (against the embedded first-order step,
+    ``h (k_1 + k_2) / 2``); None: fixed steps. Returns the states (T, 2n); raises
+    :class:`RosenbrockStop` (with the valid rows) on a non-finite or singular step, divergence
+    or timeout.
 
     Examples
     --------
