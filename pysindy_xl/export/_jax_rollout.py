@@ -18,27 +18,10 @@ __all__ = ["BatchSimulation", "simulate", "simulate_batch"]
 
 
 class BatchSimulation(NamedTuple):
-    """Result of :func:`simulate` / :func:`simulate_batch` (a JAX pytree).
-
-    Parameters
-    ----------
-    states : jax.Array
-        ``(B, T, 2n)``, or ``(B, 2n)`` with ``final_only``; no ``B`` axis for :func:`simulate`.
-        A diverged trajectory is frozen at its last accepted state.
-    diverged : jax.Array of bool, shape (B,)
-        Whether the trajectory left the finite / bounded region.
-    divergence_step : jax.Array of int, shape (B,)
-        Index of the first sample that would have been non-finite or out of bound, else ``-1``.
-
-    Examples
-    --------
-    >>> import jax.numpy as jnp
-    >>> from pysindy_xl.export.jax_dynamics import simulate
-    >>> decay = lambda x, u, t: -x
-    >>> states, diverged, step = simulate(decay, jnp.ones(2), None, 0.1, n_steps=3)
-    >>> states.shape, bool(diverged), int(step)
-    ((3, 2), False, -1)
-    """
+    """Result of :func:`simulate` / :func:`simulate_batch` (a JAX pytree): ``states`` (B, T, 2n),
+    or (B, 2n) with ``final_only``, no ``B`` axis for :func:`simulate`, a diverged trajectory
+    frozen at its last accepted state; ``diverged`` (B,), whether it left the finite / bounded
+    region; ``divergence_step`` (B,), its first sample out of it, else ``-1``."""
 
     states: jax.Array
     diverged: jax.Array
@@ -180,10 +163,8 @@ def simulate(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation=
         Initial state ``[q, qd]``.
     u : array (T, n) or None
         Generalized forces sampled at ``t0 + k dt``; ``None`` (zero) needs ``n_steps``.
-    dt : float
-        Time step.
-    t0 : float, default 0.0
-        Time of the first sample.
+    dt, t0 : float
+        Time step and time of the first sample.
     n_steps : int, optional
         Number of output samples ``T`` when ``u`` is None.
     method : {"rk4", "semi_implicit_euler", "euler"}
@@ -197,8 +178,7 @@ def simulate(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation=
     Returns
     -------
     BatchSimulation
-        ``states`` (T, 2n) (or (2n,)), scalar ``diverged`` and ``divergence_step``;
-        differentiable in ``x0``, ``u``, ``dt`` and ``t0`` (mask diverged trajectories out of a
+        Differentiable in ``x0``, ``u``, ``dt`` and ``t0`` (mask diverged trajectories out of a
         loss, with a ``bound`` low enough that no infinity is reached).
 
     Examples
@@ -210,10 +190,10 @@ def simulate(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation=
     >>> c = px.Coordinates(["x"])
     >>> oscillator = SimpleNamespace(coords=c, mass_matrix_expr=sp.Matrix([[1]]),
     ...                              forcing_expr=sp.Matrix([-c.q[0]]))
-    >>> f = dynamics_function(oscillator)
-    >>> result = simulate(f, jnp.array([1.0, 0.0]), None, 0.01, n_steps=315)
-    >>> result.states.shape, bool(result.diverged)
-    ((315, 2), False)
+    >>> result = simulate(dynamics_function(oscillator), jnp.array([1.0, 0.0]), None, 0.01,
+    ...                   n_steps=315)
+    >>> result.states.shape, bool(result.diverged), int(result.divergence_step)
+    ((315, 2), False, -1)
     >>> round(float(result.states[-1, 0]), 3)  # cos(3.14)
     -1.0
     """
@@ -223,23 +203,8 @@ def simulate(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation=
 def simulate_batch(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation="zoh",
                    bound=None, final_only=False):
     """Integrate ``B`` independent trajectories at once (``vmap`` of :func:`simulate`); one that
-    diverges is frozen and reported, the others carry on.
-
-    Parameters
-    ----------
-    f : callable or model
-        As in :func:`simulate`.
-    x0 : array (B, 2n)
-        Initial states.
-    u : array (B, T, n) or None
-        Force signal of each trajectory (``None``: zero force, needs ``n_steps``).
-    dt, t0, n_steps, method, interpolation, bound, final_only
-        As in :func:`simulate`; shared by all trajectories.
-
-    Returns
-    -------
-    BatchSimulation
-        ``states`` (B, T, 2n) (or (B, 2n)), ``diverged`` (B,), ``divergence_step`` (B,).
+    diverges is frozen and reported, the others carry on. ``x0`` (B, 2n) and ``u`` (B, T, n)
+    per trajectory, the other arguments as in :func:`simulate`, shared.
 
     Examples
     --------
@@ -250,9 +215,8 @@ def simulate_batch(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpol
     >>> c = px.Coordinates(["x"])
     >>> unstable = SimpleNamespace(coords=c, mass_matrix_expr=sp.Matrix([[1]]),
     ...                            forcing_expr=sp.Matrix([c.q[0] ** 3]))
-    >>> f = dynamics_function(unstable)
-    >>> out = simulate_batch(f, jnp.array([[0.1, 0.0], [10.0, 0.0]]), None, 0.1,
-    ...                      n_steps=50, bound=1e3)
+    >>> out = simulate_batch(dynamics_function(unstable), jnp.array([[0.1, 0.0], [10.0, 0.0]]),
+    ...                      None, 0.1, n_steps=50, bound=1e3)
     >>> out.diverged.tolist(), out.divergence_step.tolist()
     ([False, True], [-1, 2])
     """

@@ -74,17 +74,9 @@ def _float_operand(x):
 
 @jax.custom_jvp
 def fast_sin(x):
-    """Sine through a vectorizable polynomial; its derivative is :func:`fast_cos`.
-
-    Parameters
-    ----------
-    x : array_like
-        Angles in radians; integers are promoted to the default float type.
-
-    Returns
-    -------
-    jax.Array
-        ``sin(x)``; NaN for infinite or NaN input.
+    """Sine of angles ``x`` through a vectorizable polynomial (module docstring); integers are
+    promoted to the default float type, infinite or NaN input gives NaN, and the derivative
+    is :func:`fast_cos`.
 
     Examples
     --------

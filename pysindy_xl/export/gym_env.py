@@ -40,28 +40,21 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
         A fitted model whose equations contain accelerations.
     dt : float
         Seconds per step.
-    reward : callable, optional
-        ``reward(state, action, next_state) -> float`` (default 0).
-    terminated : callable, optional
+    reward, terminated : callable, optional
+        ``reward(state, action, next_state) -> float`` (default 0) and
         ``terminated(next_state) -> bool`` (default: never).
     initial_state : array (2n,) or callable, optional
         Start of each episode, or ``initial_state(rng) -> array (2n,)`` with ``np_random``;
         default: uniform in ``[-0.05, 0.05]``.
     actuated : list of str or int, optional
         Coordinates (names or indices) whose forces are the action; default: all.
-    action_bounds : float or array, default 1.0
-        Actions lie in ``[-bound, bound]`` per actuated coordinate (clipped).
+    action_bounds, observation_bounds : float or array, default 1.0 and 1e6
+        Actions are clipped to ``[-bound, bound]``; a state leaving its bounds terminates the
+        episode with ``info["failure"]``.
     max_episode_steps : int or None, default 1000
         Truncation after this many steps (None: never).
     substeps : int, default 1
         Runge-Kutta 4 steps per ``dt``.
-    observation_bounds : float or array (2n,), default 1e6
-        Observations lie in ``[-bound, bound]``; leaving it terminates with ``info["failure"]``.
-
-    Attributes
-    ----------
-    observation_space, action_space : gymnasium.spaces.Box
-    state : ndarray, shape (2n,)
 
     Examples
     --------

@@ -160,25 +160,22 @@ def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True)
     Parameters
     ----------
     dynamics : MassMatrixDynamics
-        Or any object with ``coords``, ``mass_matrix_expr`` (n, n) and ``forcing_expr`` (n, 1)
-        such that ``M(q, qd) qdd = f(q, qd, tau, t)``.
+        Or any object with ``coords``, ``mass_matrix_expr`` (n, n) and ``forcing_expr`` (n, 1).
     solver : {"auto", "gauss", "pivoted", "lu"}
-        How ``qdd`` is solved for: ``"gauss"``, elimination written out without pivoting
-        (vectorizes; exact to rounding on SPD mass matrices); ``"pivoted"``, with partial
-        pivoting; ``"lu"``, :func:`jax.numpy.linalg.solve`. ``"auto"``: for ``n <= 4``,
-        ``"gauss"`` when ``M`` is SPD at random states, else ``"pivoted"``; ``"lu"`` above.
+        How ``qdd`` is solved for: elimination written out (vectorizes) without pivoting (exact
+        to rounding on SPD mass matrices) or with partial pivoting, or
+        :func:`jax.numpy.linalg.solve`. ``"auto"``: for ``n <= 4``, ``"gauss"`` when ``M`` is
+        SPD at random states, else ``"pivoted"``; ``"lu"`` above.
     fast_trig : bool, default True
-        ``sin``, ``cos`` by :func:`fast_sin`, :func:`fast_cos` (vectorizable, a few ulp from
-        libm); ``False`` uses ``jax.numpy``'s.
+        ``sin``, ``cos`` by :func:`fast_sin`, :func:`fast_cos`, else ``jax.numpy``'s.
 
     Returns
     -------
     callable
         ``f(state, u, t=0.0) -> [qd, qdd]``, ``state`` (..., 2n), ``u`` (..., n), batch
-        dimensions broadcast, in the inputs' floating dtype; a singular ``M`` gives non-finite
-        accelerations. Attributes ``n_coordinates``, ``depends_on_time``, ``solver`` and
-        ``componentwise`` (the same on tuples of per-component arrays, for the simulators). The
-        same object is returned for the same ``dynamics`` and options.
+        dimensions broadcast, a singular ``M`` giving non-finite accelerations. Attributes
+        ``n_coordinates``, ``depends_on_time``, ``solver`` and ``componentwise`` (the same on
+        tuples of per-component arrays). The same object is returned for the same arguments.
 
     Examples
     --------
