@@ -32,19 +32,9 @@ def baseline_terms(catalog) -> list[sp.Expr]:
 
 class SINDyBaseline:
     """Plain pysindy.SINDy on ``[q, qd]`` with classical-catalog ``terms`` (module docstring);
-    ``optimizer`` defaults to ``pysindy.STLSQ()``.
-
-    Attributes
-    ----------
-    model_ : pysindy.SINDy
-    forced_ : ndarray of bool, shape (n,)
-        Coordinates whose force entered the fit (non-zero in the data).
-    feature_exprs_ : list of sympy.Expr
-        ``terms`` then the forces used.
-    coef_ : ndarray, shape (n, n_features)
-        The acceleration rows of the SINDy coefficients.
-    dynamics_ : MassMatrixDynamics
-    """
+    ``optimizer`` defaults to ``pysindy.STLSQ()``. Fitted: ``model_`` (the SINDy model),
+    ``forced_`` (n,) (coordinates whose force entered the fit), ``feature_exprs_`` (``terms``
+    then those forces), ``coef_`` (n, n_features) (the acceleration rows) and ``dynamics_``."""
 
     def __init__(self, coords, terms, optimizer=None):
         self.coords = coords

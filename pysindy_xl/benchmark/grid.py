@@ -77,22 +77,10 @@ def _stable_hash(payload) -> str:
 
 @dataclass(frozen=True)
 class TrajectorySpec:
-    """One training dataset of the grid.
-
-    Attributes
-    ----------
-    system : str
-        Registry name (``"cart-pole"``, ``"double-pendulum"``, ``"cart-double-pendulum"``).
-    friction : float
-        Multiplier of the system's default joint damping (0: frictionless).
-    forcing : {"implicit", "explicit", "mixed"}
-    noise : float
-        Relative Gaussian noise level.
-    seed : int
-    noise_model : {"all", "positions"}, default "all"
-        The paper's noise on positions, velocities, accelerations and forces, or noisy
-        positions only (no derivative given, as with a real sensor).
-    """
+    """One training dataset of the grid: ``system`` (registry name), ``friction`` (multiplier of
+    the default joint damping), ``forcing``, ``noise`` (relative level), ``seed`` and
+    ``noise_model``: ``"all"`` (the paper's noise on every channel, all given to the fit) or
+    ``"positions"`` (noisy positions only, no derivative given, as from a real sensor)."""
 
     system: str
     friction: float
@@ -146,14 +134,10 @@ class GridSettings:
         Further noise levels on the positions only.
     configurations : tuple of (catalog, solver)
         Configurations to run (default: :func:`all_configurations`).
-    n_trajectories : int
-        Training trajectories per dataset (fitted together).
-    duration, validation_duration : float
-        Seconds per training trajectory and of the fresh noise-free validation trajectory.
-    sample_every : int
-        Keep every k-th MuJoCo step (1 ms).
-    timeout : float
-        Seconds allowed to one run (identification + validation).
+    n_trajectories, duration, sample_every : int, float, int
+        Training trajectories per dataset, seconds each, every k-th MuJoCo step (1 ms) kept.
+    validation_duration, timeout : float
+        Seconds of the fresh validation trajectory, and allowed to one run.
     name : str
         Preset name, recorded with the results.
     """

@@ -21,26 +21,25 @@ _PACKAGES = ("numpy", "scipy", "sympy", "scikit-learn", "pysindy", "cvxpy", "muj
              "jax", "pysindy-xl")
 
 
-def _cpu_model() -> str:
+def _proc_value(path: str, key: str) -> str | None:
+    """The value of the first ``key: value`` line of a /proc file, None if absent."""
     try:
-        with open("/proc/cpuinfo", encoding="utf-8") as handle:
+        with open(path, encoding="utf-8") as handle:
             for line in handle:
-                if line.startswith("model name"):
+                if line.startswith(key):
                     return line.split(":", 1)[1].strip()
     except OSError:
         pass
-    return platform.processor() or platform.machine()
+    return None
+
+
+def _cpu_model() -> str:
+    return _proc_value("/proc/cpuinfo", "model name") or platform.processor() or platform.machine()
 
 
 def _memory_gib() -> float | None:
-    try:
-        with open("/proc/meminfo", encoding="utf-8") as handle:
-            for line in handle:
-                if line.startswith("MemTotal"):
-                    return round(int(line.split()[1]) / 2**20, 1)
-    except OSError:
-        pass
-    return None
+    total = _proc_value("/proc/meminfo", "MemTotal")  # "131894260 kB"
+    return None if total is None else round(int(total.split()[0]) / 2**20, 1)
 
 
 def _git(*arguments) -> str | None:

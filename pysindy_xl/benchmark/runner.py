@@ -1,22 +1,14 @@
 """Running the grid: one task = data, identification, validation, one record.
 
-:func:`run_grid` sends the pending tasks to :class:`joblib.Parallel` (local processes, or Dask
-or Ray through :func:`backend_context`) and appends each record as its run finishes, so an
-interrupted grid resumes where it stopped.
-
-Time limit: each run goes to a forked child (``isolation="process"``) that is killed after
-``timeout`` seconds, so neither a hang in C code nor a crash can take the worker down; without
-fork, ``isolation="signal"`` uses ``signal.setitimer`` (between bytecodes only). The validation
-simulation also gets the remaining time as its ``timeout``.
-
-Killing the grid: no local process outlives it (:mod:`.lifetime`). Ctrl-C and SIGTERM stop it
-with the finished records kept; after SIGKILL the workers exit within half a second and
-their forked runs die with them. Rerunning resumes.
-
-Threads: with runs in parallel, BLAS is limited to one thread per run (``blas_threads="auto"``,
-:mod:`threadpoolctl`). Data: a trajectory's training and validation data are simulated once
-per process and cached; the clean motions' seed does not depend on the noise level, so the
-noise levels of a grid perturb the same motions."""
+:func:`run_grid` sends the pending tasks to :class:`joblib.Parallel` (local processes, Dask or
+Ray: :func:`backend_context`) and appends each record as its run finishes: an interrupted
+grid resumes where it stopped. Each run goes to a forked child killed after ``timeout``
+seconds (``isolation="process"``; without fork, ``"signal"`` uses ``signal.setitimer``), so
+neither a hang in C code nor a crash takes a worker down. No local process outlives the grid
+(:mod:`.lifetime`): Ctrl-C and SIGTERM stop it with the finished records kept. With runs in
+parallel, BLAS gets one thread per run (``blas_threads="auto"``). A trajectory's data are
+simulated once per process and cached; the clean motions' seed does not depend on the noise
+level, so a grid's noise levels perturb the same motions."""
 
 from __future__ import annotations
 
@@ -160,23 +152,10 @@ def _model_summary(task: Task, system, model) -> dict:
 
 def execute_task(task: Task, settings: GridSettings, deadline: float | None = None,
                  stage=None) -> dict:
-    """Run one task in this process and return its record (no time limit of its own).
-
-    Parameters
-    ----------
-    task : Task
-    settings : GridSettings
-        Data settings of the grid.
-    deadline : float, optional
-        ``time.perf_counter()`` value by which the run must end (the validation's timeout).
-    stage : callable, optional
-        Called with ``"generate"``, ``"fit"``, ``"validate"`` as the run advances.
-
-    Returns
-    -------
-    dict
-        The record (:mod:`~pysindy_xl.benchmark.records`), warnings collected in ``warnings``.
-    """
+    """Run one task in this process and return its record (no time limit of its own): the
+    validation simulation must end by ``deadline`` (a ``time.perf_counter()`` value), ``stage``
+    is called with ``"generate"``, ``"fit"``, ``"validate"``, and warnings go to the record's
+    ``warnings`` list."""
     stage = stage or (lambda name: None)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -259,25 +238,17 @@ def _prefetch(task: Task, settings: GridSettings) -> None:
 
 def run_task(task: Task, settings: GridSettings, timeout: float | None = None,
              isolation: str = "auto", function=None, blas_threads: int | None = None) -> dict:
-    """Run one task under its time limit; never raises for a failing run.
+    """Run one task under its time limit (``timeout``, default ``settings.timeout``); never raises
+    for a failing run and returns the record, with ``finished_at``.
 
     Parameters
     ----------
-    task : Task
-    settings : GridSettings
-    timeout : float, optional
-        Seconds (default ``settings.timeout``).
     isolation : {"auto", "process", "signal", "none"}
         Module docstring; ``auto`` picks ``process`` where fork exists.
     function : callable, optional
         ``function(task, settings, deadline, stage) -> record`` (default :func:`execute_task`).
     blas_threads : int, optional
         BLAS threads during the run (:func:`blas_thread_limit`); default: no limit.
-
-    Returns
-    -------
-    dict
-        The record, with ``finished_at``.
     """
     with blas_thread_limit(blas_threads):
         return _run_task(task, settings, timeout, isolation, function)
@@ -363,40 +334,32 @@ def _results(tasks, call, n_jobs):
 def run_grid(settings: GridSettings, records_path, n_jobs: int = -1, backend: str | None = None,
              address: str | None = None, retry=(), isolation: str = "auto", progress=None,
              limit: int | None = None, function=None, blas_threads="auto") -> dict:
-    """Run every pending task of a grid, appending one record per run.
+    """Run every pending task of a grid, appending one record per run to the JSONL file
+    ``records_path`` (runs recorded there are skipped).
 
     Parameters
     ----------
-    settings : GridSettings
-    records_path : str or os.PathLike
-        JSONL record file; runs already recorded there are skipped.
     n_jobs : int, default -1
         Parallel processes (joblib convention: -1 = all cores).
     backend, address : str, optional
         As in :func:`backend_context`.
     retry : iterable of str
         Statuses to run again (e.g. ``("error", "timeout")``).
-    isolation : str
+    isolation, function : optional
         As in :func:`run_task`.
     progress : bool, optional
         Show a tqdm progress bar (default: on a terminal).
     limit : int, optional
         Run at most this many pending tasks.
-    function : callable, optional
-        Replaces :func:`execute_task`.
     blas_threads : "auto", int or None, default "auto"
         BLAS threads per run: ``"auto"`` is 1 when runs go in parallel, no limit otherwise.
 
     Returns
     -------
     dict
-        ``{"total", "skipped", "ran", "statuses", "seconds"}``.
-
-    Notes
-    -----
-    Ctrl-C raises :class:`KeyboardInterrupt` after joblib has killed its workers; SIGTERM stops
-    the grid the same way, then ends the process by SIGTERM (module docstring, "Killing the
-    grid"). A Dask or Ray cluster's workers are the cluster's to manage.
+        ``{"total", "skipped", "ran", "statuses", "seconds"}``. Ctrl-C raises
+        :class:`KeyboardInterrupt` after joblib has killed its workers; SIGTERM stops the grid
+        the same way, then ends the process by SIGTERM.
     """
     from tqdm.auto import tqdm
 
