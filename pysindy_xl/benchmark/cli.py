@@ -180,7 +180,7 @@ def settings_from_args(args):
 def run_benchmark(args) -> int:
     """Run (or, with ``--report-only``, only report) the benchmark of parsed arguments."""
     from .records import GridBusyError, RecordStore
-    from .report import machine_description, write_report
+    from .report import load_average, machine_description, write_report
     from .runner import run_grid
 
     try:
@@ -208,8 +208,6 @@ def run_benchmark(args) -> int:
         print(f"benchmark {settings.name}: {len(tasks)} runs on "
               f"{len(settings.trajectories())} trajectories, {settings.timeout:g} s limit per "
               f"run, records in {records_path}", flush=True)
-        from .report import load_average
-
         load_at_start = load_average()
         try:
             outcome = run_grid(settings, records_path, n_jobs=args.jobs, backend=args.backend,

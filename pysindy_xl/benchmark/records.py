@@ -1,16 +1,13 @@
 """Result records: one JSON object per run, appended to a JSONL file as each run finishes.
 
-Each record is one ``write`` of one line, flushed and fsynced, so a run is recorded whole or
-not at all; a torn last line (a killed writer) is cut off by :class:`RecordStore` and skipped
-by :func:`read_records`, and its run is run again. For a run id recorded twice, the last
-record wins.
-
-Fields: what ran (``run_id``, ``trajectory_id``, ``config``, ``system``, ``friction``,
-``forcing``, ``noise``, ``seed``, ``catalog``, ``solver``); ``status``: ``"ok"`` (simulated
-over the whole validation horizon), ``"invalid"`` (diverged, failed, or no acceleration
-term), ``"timeout"`` or ``"error"`` (the identification raised: the paper's "uncompleted");
-``message`` (why, unless ok); ``metrics`` (``position_rmse``, the ranking metric,
-``divergence_time``...); ``time_s`` (``generate``, ``fit``, ``validate``, ``run``)."""
+Each record is one ``write`` of one line, flushed and fsynced: a torn last line (a killed
+writer) is cut off by :class:`RecordStore` and skipped by :func:`read_records`, and its run
+is run again; for a run id recorded twice the last record wins. Fields: what ran
+(``run_id``, ``trajectory_id``, ``config`` and the :class:`~.grid.Task` fields); ``status``
+``"ok"`` (simulated over the whole validation horizon), ``"invalid"`` (diverged, failed or
+no acceleration), ``"timeout"`` or ``"error"`` (the paper's "uncompleted"); ``message``
+(why, unless ok); ``metrics`` (``position_rmse`` ranks); ``time_s`` (``generate``,
+``fit``, ``validate``, ``run``)."""
 
 from __future__ import annotations
 

@@ -245,7 +245,9 @@ class MassMatrixDynamics:
                  max_evaluations: int = 1_000_000, timeout: float | None = 300.0,
                  interpolation: str = "cubic", feedback=None,
                  step: float | None = None) -> np.ndarray:
-        """Integrate the dynamics with one of scipy's adaptive ODE solvers, or ROS2.
+        """Integrate the dynamics with one of scipy's adaptive ODE solvers, or ROS2; returns the
+        states (T, 2n), or raises :class:`SimulationError` (with the valid part of the trajectory)
+        when the run stops early.
 
         Parameters
         ----------
@@ -269,15 +271,6 @@ class MassMatrixDynamics:
             controller; :func:`pysindy_xl.mujoco.actuator_law` gives an MJCF's).
         step : float, optional
             Largest step of ``"ROS2"`` (default: the smallest spacing of ``t``).
-
-        Returns
-        -------
-        ndarray, shape (T, 2n)
-
-        Raises
-        ------
-        SimulationError
-            When the run stops early; carries the valid part of the trajectory.
 
         Examples
         --------

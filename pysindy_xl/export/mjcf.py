@@ -42,27 +42,12 @@ def consistent_parameters(catalog, beta, closeness: float = 1e-6):
 
 
 def write_mjcf(catalog, pi, friction, path, joint_friction=None) -> str:
-    """Write the catalog's system with inertial parameters ``pi`` and joint friction.
-
-    Parameters
-    ----------
-    catalog : KinematicCatalog
-        Its ``system`` (an :class:`~pysindy_xl.mujoco.MJCFSystem`) is the template.
-    pi : array
-        In the order of ``catalog.physical_names``.
-    friction : dict
-        ``{coordinate: {"viscous": ..., "dry": ...}}`` (as
-        :meth:`XLSINDy.physical_parameters <pysindy_xl.XLSINDy.physical_parameters>` gives).
-    path : str or os.PathLike
-    joint_friction : dict, optional
-        ``{joint: {"viscous": ..., "coulomb": ...}}`` of a catalog built with ``friction=``;
-        where a joint has them they replace ``friction``.
-
-    Returns
-    -------
-    str
-        The MJCF text written.
-    """
+    """Write the catalog's system (its ``system``, an MJCF template) to ``path`` with inertial
+    parameters ``pi`` (in the order of ``catalog.physical_names``) and joint friction; returns
+    the MJCF text. ``friction`` is ``{coordinate: {"viscous", "dry"}}`` (as
+    :meth:`XLSINDy.physical_parameters <pysindy_xl.XLSINDy.physical_parameters>` gives);
+    ``joint_friction``, ``{joint: {"viscous", "coulomb"}}`` of a catalog built with
+    ``friction=``, replaces it where a joint has them."""
     from ..mujoco import import_mujoco
 
     mujoco = import_mujoco()
