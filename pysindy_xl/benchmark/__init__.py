@@ -17,23 +17,7 @@ from .records import RecordStore, read_records
 from .report import machine_description, write_report
 from .runner import execute_task, run_grid, run_task
 
-__all__ = [
-    "PRESETS",
-    "GridSettings",
-    "Task",
-    "TrajectorySpec",
-    "all_configurations",
-    "config_label",
-    "ranking_table",
-    "rank_trajectory",
-    "format_table",
-    "RecordStore",
-    "read_records",
-    "run_grid",
-    "run_task",
-    "execute_task",
-    "write_report",
-    "machine_description",
-    "add_parser",
-    "main",
-]
+__all__ = ["PRESETS", "GridSettings", "Task", "TrajectorySpec", "all_configurations",
+           "config_label", "ranking_table", "rank_trajectory", "format_table", "RecordStore",
+           "read_records", "run_grid", "run_task", "execute_task", "write_report",
+           "machine_description", "add_parser", "main"]

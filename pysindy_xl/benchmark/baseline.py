@@ -46,7 +46,6 @@ class SINDyBaseline:
         import pysindy as ps
 
         from ..dynamics import MassMatrixDynamics
-
         coords = self.coords
         n = coords.n
         if x_dot is None or x_ddot is None:

@@ -99,17 +99,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--configs", nargs="+", type=_configuration, default=None,
                         metavar="CATALOG:SOLVER",
                         help="configurations to run, e.g. mixed:mixed lagrange:explicit sindy "
-                             "(default: all 9 and the pysindy baseline)")
+                             "(default: all, and the pysindy baseline)")
     parser.add_argument("--no-baseline", action="store_true",
                         help="leave out the pysindy.SINDy row")
     parser.add_argument("--retry", nargs="+", choices=STATUSES, default=(),
                         help="run again the runs whose recorded status is one of these")
     parser.add_argument("--limit", type=int, default=None,
                         help="run at most this many pending runs, then stop")
-    parser.add_argument("--isolation", choices=_ISOLATIONS,
-                        default="auto",
-                        help="how the time limit is enforced (default: a forked process per "
-                             "run)")
+    parser.add_argument("--isolation", choices=_ISOLATIONS, default="auto",
+                        help="how the time limit is enforced (default: a forked process per run)")
     parser.add_argument("--fresh", action="store_true",
                         help="start over: existing records are renamed records.TIME.jsonl "
                              "(kept), then every run is done again")
@@ -182,7 +180,6 @@ def run_benchmark(args) -> int:
     from .records import GridBusyError, RecordStore
     from .report import load_average, machine_description, write_report
     from .runner import run_grid
-
     try:
         settings = settings_from_args(args)
     except (ValueError, TypeError) as error:
@@ -239,7 +236,6 @@ def run_benchmark(args) -> int:
 
 def _effective_jobs(n_jobs):
     import joblib
-
     try:
         return joblib.effective_n_jobs(n_jobs)
     except Exception:

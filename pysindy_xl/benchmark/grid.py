@@ -186,7 +186,6 @@ class GridSettings:
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
                 raise ValueError(f"{name}: expected a positive number of seconds, got {value!r}")
 
-    # -- derived ---------------------------------------------------------------------------
     def data_settings(self) -> dict:
         """The settings that change the data, hashed into every run id (not the timeout: rerunning
         with a longer one and ``retry`` reruns only the runs that timed out)."""

@@ -150,7 +150,6 @@ def table_to_csv(table) -> str:
     """The table as CSV text (full precision, empty cells for undefined values)."""
     import csv
     import io
-
     columns = TABLE_COLUMNS + EXTRA_COLUMNS
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")

@@ -177,10 +177,8 @@ class RecordStore:
             os.close(fd)
 
 
-# -- building a run's record (the runner and its isolation) ----------------------------------------
 def base_record(task: Task, settings: GridSettings) -> dict:
     import pysindy_xl
-
     return {**task.to_dict(), "grid": settings.name, "status": "error", "message": None,
             "metrics": {}, "time_s": {}, "pid": os.getpid(),
             "version": getattr(pysindy_xl, "__version__", "unknown")}

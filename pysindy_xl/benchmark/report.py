@@ -63,7 +63,6 @@ def _git_state() -> dict:
 def machine_description(n_jobs=None, backend=None) -> dict:
     """The machine and software a grid ran on (JSON-serializable)."""
     from importlib import metadata
-
     versions = {}
     for name in _PACKAGES:
         try:
@@ -124,10 +123,8 @@ def plot_table(table, records, path) -> None:
     """PNG at ``path``: outcome counts per configuration of ``table`` (:func:`ranking_table`) and
     the validation errors of the valid runs among ``records``."""
     import matplotlib
-
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
-
     configs = [row["combo type"] for row in table]
     parts = [("1st", "#1a9850"), ("2nd", "#91cf60"), ("2nd>", "#d9ef8b"),
              ("invalid", "#fc8d59"), ("timeout", "#d73027"), ("uncompleted", "#999999")]

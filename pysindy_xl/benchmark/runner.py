@@ -37,11 +37,9 @@ __all__ = ["run_task", "execute_task", "run_grid", "system_for", "trajectory_dat
            "backend_context", "blas_thread_limit", "RunTimeout"]
 
 
-# -- data ------------------------------------------------------------------------------------
 def system_for(spec: TrajectorySpec):
     """The MuJoCo system of a trajectory, joint damping scaled by its friction level."""
     from ..mujoco import get_system
-
     base = get_system(spec.system)
     damping = {k: v * spec.friction for k, v in base.parameters.items() if "damping" in k}
     if not damping and spec.friction != 1.0:
@@ -63,7 +61,6 @@ def trajectory_data(spec: TrajectorySpec, n_trajectories: int, duration: float,
     from ..data import Dataset, add_noise
     from ..mujoco import generate_dataset
     from ..mujoco.evaluation.validation import validation_trajectory
-
     start = time.perf_counter()
     system = system_for(spec)
     motion_seed = _seed(spec.system, spec.friction, spec.forcing, spec.seed)
@@ -89,10 +86,8 @@ def trajectory_data(spec: TrajectorySpec, n_trajectories: int, duration: float,
     return clean, validation, time.perf_counter() - start
 
 
-# -- one run ---------------------------------------------------------------------------------
 def _optimizer(solver: str):
     import pysindy_xl as px
-
     return {"explicit": px.ExplicitOptimizer, "implicit": px.ImplicitOptimizer,
             "mixed": px.MixedOptimizer}[solver]()
 
@@ -102,7 +97,6 @@ def _identify(task: Task, system, dataset):
     import pysindy_xl as px
 
     from ..mujoco.catalogs.reference import reference_catalog
-
     forced = task.trajectory.forcing != "implicit"
     arguments = dataset.fit_arguments(forces="tau" if forced else None)
     catalog = reference_catalog(system, task.catalog)
@@ -169,7 +163,6 @@ def execute_task(task: Task, settings: GridSettings, deadline: float | None = No
 def _execute(task, settings, deadline, stage) -> dict:
     from ..dynamics import DynamicsError
     from ..mujoco.evaluation.validation import validate_model
-
     record = base_record(task, settings)
     spec = task.trajectory
     stage("generate")
@@ -220,7 +213,6 @@ def _execute(task, settings, deadline, stage) -> dict:
     return json_finite(record)
 
 
-# -- isolation and time limit ------------------------------------------------------------------
 def _grid_call(task, grid_pid, **options):
     """One run of a grid in a worker: :func:`run_task` under the worker's watchdog."""
     watch_grid(grid_pid)
@@ -274,7 +266,6 @@ def _run_task(task, settings, timeout, isolation, function):
     return finish_record(json_finite(record))
 
 
-# -- the grid ----------------------------------------------------------------------------------
 @contextlib.contextmanager
 def backend_context(backend: str | None = None, address: str | None = None):
     """A :func:`joblib.parallel_config` context for ``backend``: ``None`` / ``"loky"`` /
@@ -282,7 +273,6 @@ def backend_context(backend: str | None = None, address: str | None = None):
     scheduler ``address``, a local cluster when None) or ``"ray"`` (``ray.init(address=address)``,
     ``"auto"`` joins a running cluster). Dask and Ray are imported only when asked for."""
     import joblib
-
     if backend in (None, "loky", "multiprocessing"):
         with joblib.parallel_config(backend=backend or "loky"):
             yield
@@ -317,7 +307,6 @@ def backend_context(backend: str | None = None, address: str | None = None):
 def _results(tasks, call, n_jobs):
     """Yield records as runs finish (unordered), or in chunks where the backend cannot."""
     import joblib
-
     try:
         parallel = joblib.Parallel(n_jobs=n_jobs, return_as="generator_unordered")
     except ValueError:  # backends without generator support (multiprocessing, Ray)
@@ -362,7 +351,6 @@ def run_grid(settings: GridSettings, records_path, n_jobs: int = -1, backend: st
         the same way, then ends the process by SIGTERM.
     """
     from tqdm.auto import tqdm
-
     if not isinstance(settings, GridSettings):
         raise TypeError(f"settings: expected a GridSettings, got {type(settings).__name__}")
     if limit is not None and (isinstance(limit, bool) or not isinstance(limit, int)

@@ -4,19 +4,7 @@
 
 from .catalog import CatalogDynamics
 from .inputs import feedback_function, force_function
-from .mass_matrix import (
-    DynamicsError,
-    MassMatrixDynamics,
-    SimulationError,
-    SingularMassMatrixError,
-)
+from .mass_matrix import DynamicsError, MassMatrixDynamics, SimulationError, SingularMassMatrixError
 
-__all__ = [
-    "MassMatrixDynamics",
-    "CatalogDynamics",
-    "DynamicsError",
-    "SingularMassMatrixError",
-    "SimulationError",
-    "force_function",
-    "feedback_function",
-]
+__all__ = ["MassMatrixDynamics", "CatalogDynamics", "DynamicsError", "SingularMassMatrixError",
+           "SimulationError", "force_function", "feedback_function"]

@@ -18,7 +18,6 @@ __all__ = ["DynamicsMixin"]
 class DynamicsMixin:
     """Prediction, scoring, simulation, export and saving (mixed into ``XLSINDy``)."""
 
-    # -- prediction ----------------------------------------------------------------------------
     def _require_dynamics(self) -> MassMatrixDynamics:
         check_is_fitted(self, "coef_")
         if self.dynamics_ is None:
@@ -76,7 +75,6 @@ class DynamicsMixin:
         x_dot = check_array(x_dot, "x_dot", x.shape)
         x_ddot = check_array(x_ddot, "x_ddot", x.shape)
         from ..feature_library import stack_variables
-
         mass, free = dynamics.mass_and_forcing(stack_variables(x, x_dot))
         return np.einsum("sij,sj->si", mass, x_ddot) - free
 
@@ -100,7 +98,6 @@ class DynamicsMixin:
         (0.02, 'measured')
         """
         from ..held_out import score_forces
-
         self._require_dynamics()
         return score_forces(self, x, t, u, x_dot, x_ddot, smoother, max_frequency)
 
@@ -110,7 +107,6 @@ class DynamicsMixin:
         self._require_dynamics()
         check_instance("metric", metric, "a function metric(true, predicted)", "__call__")
         from ..fit import estimator_trajectories
-
         data = estimator_trajectories(self, x, t, x_dot, x_ddot, u, self.n_coordinates_)
         true = np.vstack([d["x_ddot"] for d in data])
         predicted = np.vstack([
@@ -151,14 +147,11 @@ class DynamicsMixin:
         """Pure JAX function ``f(state, u) -> d(state)/dt`` (jit-, vmap- and grad-compatible;
         :func:`pysindy_xl.export.jax_dynamics.dynamics_function`)."""
         from ..export.jax_dynamics import dynamics_function
-
         return dynamics_function(self._require_dynamics())
 
-    # -- persistence ---------------------------------------------------------------------------
     def save(self, path) -> None:
         """Save the catalog specification and coefficients as JSON (:mod:`pysindy_xl.io`)."""
         from ..io import save_model
-
         save_model(self, path)
 
     def to_mjcf(self, path, template=None) -> dict:
@@ -168,14 +161,11 @@ class DynamicsMixin:
         -> value written), ``residual`` (``|C pi - beta| / |beta|``, zero when realizable by rigid
         bodies) and ``dropped`` (``{joint: {model: value}}``, joint models MJCF cannot state)."""
         from ..export.mjcf import to_mjcf
-
         check_is_fitted(self, "coef_")
         return to_mjcf(self, path, template)
 
-    # -- reinforcement learning ----------------------------------------------------------------
     def to_gymnasium(self, dt, **options):
         """A Gymnasium environment stepping the identified model; ``dt`` and ``**options`` as in
         :class:`pysindy_xl.export.gym_env.IdentifiedDynamicsEnv`."""
         from ..export.gym_env import make_env
-
         return make_env(self, dt, **options)

@@ -98,7 +98,6 @@ class MassMatrixDynamics:
         if not isinstance(coords, Coordinates):
             raise TypeError(f"coords: expected Coordinates, got {type(coords).__name__}")
         from ..expressions import as_expression
-
         if isinstance(equations, (str, sp.Basic)) or not hasattr(equations, "__iter__"):
             raise TypeError("equations: expected a list of expressions, one per coordinate")
         table = coords.symbol_table()
@@ -357,7 +356,6 @@ class MassMatrixDynamics:
     def _simulate_ros2(self, x0, t, force, law, step, divergence_bound, timeout):
         """:meth:`simulate` with :func:`pysindy_xl.dynamics.rosenbrock.ros2`."""
         from .rosenbrock import RosenbrockStop, ros2
-
         step = float(np.min(np.diff(t))) if step is None else check_option(
             "step", step, "real", low=0, low_open=True)
 

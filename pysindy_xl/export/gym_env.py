@@ -127,7 +127,6 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
         self.observation_history = []
         self._steps = 0
 
-    # -- gymnasium API --------------------------------------------------------------------
     def reset(self, *, seed=None, options=None):
         """Start an episode (``seed`` seeds ``np_random``; ``options={"state": x0}`` starts at
         ``x0``); returns ``(observation, info)``."""

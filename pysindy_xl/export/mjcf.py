@@ -35,7 +35,6 @@ def consistent_parameters(catalog, beta, closeness: float = 1e-6):
     residual)``, ``residual = |C pi - beta| / |beta|`` zero when ``beta`` is realizable.
     ``closeness`` weighs the distance to the template's ``pi_0``."""
     from ..physical import PhysicalStructure, realize
-
     structure = PhysicalStructure.from_combination(list(catalog.physical_names),
                                                    catalog.combination)
     return realize(structure, beta, reference=catalog.physical_values, closeness=closeness)
@@ -49,7 +48,6 @@ def write_mjcf(catalog, pi, friction, path, joint_friction=None) -> str:
     ``joint_friction``, ``{joint: {"viscous", "coulomb"}}`` of a catalog built with
     ``friction=``, replaces it where a joint has them."""
     from ..mujoco import import_mujoco
-
     mujoco = import_mujoco()
 
     system = catalog.system
@@ -107,7 +105,6 @@ def _principal_axes(inertia):
     template can take); moments are raised to a billionth of the largest, since MuJoCo refuses
     zero moments on a moving body."""
     from ..mujoco import import_mujoco
-
     mujoco = import_mujoco()
 
     moments, axes = np.linalg.eigh((inertia + inertia.T) / 2)
@@ -122,7 +119,6 @@ def _principal_axes(inertia):
 def to_mjcf(model, path, template) -> dict:
     """The body of :meth:`XLSINDy.to_mjcf <pysindy_xl.XLSINDy.to_mjcf>`."""
     from ..mujoco import MJCFSystem, kinematic_catalog
-
     if template is None:
         raise ValueError("template: the MJCF file (or MuJoCo system) whose kinematic tree "
                          "the model was identified on is needed to place the inertials")
@@ -172,7 +168,6 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     from ..feature_library import stack_variables
     from ..mujoco import import_mujoco, kinematic_catalog
     from ..mujoco.systems.friction import sliding_velocities
-
     mujoco = import_mujoco()
 
     try:
