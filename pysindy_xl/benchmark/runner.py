@@ -102,7 +102,6 @@ def _identify(task: Task, system, dataset):
     catalog = reference_catalog(system, task.catalog)
     if task.solver == "pysindy":
         from .baseline import SINDyBaseline, baseline_terms
-
         catalog.fit()
         if arguments["x_dot"] is None:  # positions only: derivatives of the smoothed data
             smoothed = [px.WhittakerSmoother().smooth(t, x)
@@ -129,7 +128,6 @@ def _model_summary(task: Task, system, model) -> dict:
                "dropped_features": len(getattr(model, "dropped_features_", {}) or {})}
     try:
         from ..mujoco.catalogs.reference import true_coefficients
-
         truth, missing = true_coefficients(system, model.feature_library_)
         # an implicit law is only defined up to a factor: compare at the best common scale
         # (1 for explicit fits, whose force coefficient is fixed to -1 like the truth's)
