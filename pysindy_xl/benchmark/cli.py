@@ -55,10 +55,8 @@ def _configuration(text):
         return ("classical", "pysindy")
     catalog, _, solver = text.partition(":")
     if catalog not in CATALOGS or solver not in SOLVERS:
-        raise argparse.ArgumentTypeError(
-            f"expected CATALOG:SOLVER with CATALOG in {CATALOGS} and SOLVER in {SOLVERS}, or "
-            f"'sindy', got {text!r}"
-        )
+        raise argparse.ArgumentTypeError(f"expected CATALOG:SOLVER with CATALOG in {CATALOGS} "
+                                         f"and SOLVER in {SOLVERS}, or 'sindy', got {text!r}")
     return (catalog, solver)
 
 

@@ -173,10 +173,8 @@ class GridSettings:
         known = set(all_configurations())
         for pair in self.configurations:
             if tuple(pair) not in known:
-                raise ValueError(
-                    f"configurations: unknown (catalog, solver) {pair!r}; expected among "
-                    f"{sorted(known)}"
-                )
+                raise ValueError(f"configurations: unknown (catalog, solver) {pair!r}; expected "
+                                 f"among {sorted(known)}")
         for name in ("n_trajectories", "sample_every"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:

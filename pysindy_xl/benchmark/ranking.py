@@ -43,10 +43,8 @@ def rank_trajectory(records) -> dict[str, int]:
     >>> rank_trajectory(recs)
     {'b': 1, 'c': 1, 'a': 3}
     """
-    valid = sorted(
-        ((float(r["metrics"]["position_rmse"]), r["config"]) for r in records
-         if r["status"] == "ok"),
-    )
+    valid = sorted((float(r["metrics"]["position_rmse"]), r["config"]) for r in records
+                   if r["status"] == "ok")
     configs = [c for _, c in valid]
     if len(set(configs)) != len(configs):
         raise ValueError(f"records: a configuration appears twice in one trajectory: {configs}")

@@ -41,10 +41,8 @@ def check_record(record) -> dict:
     if record["status"] == "ok":
         rmse = (record.get("metrics") or {}).get("position_rmse")
         if not isinstance(rmse, (int, float)) or not rmse == rmse or rmse < 0:
-            raise ValueError(
-                f"record {record['run_id']!r}: status 'ok' needs a finite metrics.position_rmse, "
-                f"got {rmse!r}"
-            )
+            raise ValueError(f"record {record['run_id']!r}: status 'ok' needs a finite "
+                             f"metrics.position_rmse, got {rmse!r}")
     return record
 
 

@@ -297,9 +297,8 @@ def backend_context(backend: str | None = None, address: str | None = None):
         with joblib.parallel_config(backend="ray"):
             yield
         return
-    raise ValueError(
-        f"backend: expected None, 'loky', 'multiprocessing', 'dask' or 'ray', got {backend!r}"
-    )
+    raise ValueError(f"backend: expected None, 'loky', 'multiprocessing', 'dask' or 'ray', "
+                     f"got {backend!r}")
 
 
 def _results(tasks, call, n_jobs):

@@ -21,9 +21,8 @@ class DynamicsMixin:
     def _require_dynamics(self) -> MassMatrixDynamics:
         check_is_fitted(self, "coef_")
         if self.dynamics_ is None:
-            raise ValueError(
-                "the identified equations contain no acceleration, so they define no dynamics"
-            )
+            raise ValueError("the identified equations contain no acceleration, so they define "
+                             "no dynamics")
         return self.dynamics_
 
     def predict(self, x, x_dot, u=None):
@@ -45,11 +44,10 @@ class DynamicsMixin:
                 acc = dynamics.accelerations(xk, xdk, uk)
             if not np.all(np.isfinite(acc)):
                 bad = np.flatnonzero(~np.all(np.isfinite(acc), axis=1))
-                raise ValueError(
-                    f"x{label}: the identified equations are not finite (overflow or outside "
-                    f"their domain) at {len(bad)} of {len(acc)} samples, first at sample "
-                    f"{bad[0]}; the values are too large for the model or outside its range"
-                )
+                raise ValueError(f"x{label}: the identified equations are not finite (overflow "
+                                 f"or outside their domain) at {len(bad)} of {len(acc)} "
+                                 f"samples, first at sample {bad[0]}; the values are too large "
+                                 "for the model or outside its range")
             out.append(acc)
         return out if is_list else out[0]
 

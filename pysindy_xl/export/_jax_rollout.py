@@ -74,9 +74,8 @@ def _simulate_compiled(f, x0, u, dt, t0, bound, method, linear, final_only):
 
     carry0 = (state0, bad0, jnp.where(bad0, 0, -1), jnp.asarray(0, dtype=jnp.int32))
     inputs = (u_seq[:-1], u_seq[1:] if linear else None)
-    (final, diverged, divergence_step, _), history = jax.lax.scan(
-        body, carry0, inputs, length=n_steps
-    )
+    (final, diverged, divergence_step, _), history = jax.lax.scan(body, carry0, inputs,
+                                                                  length=n_steps)
     if final_only:
         states = jnp.stack(final, axis=-1)
     else:
@@ -123,9 +122,8 @@ def _prepare(f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched):
         u = jnp.asarray(u, dtype=dtype)
         if u.ndim != 2 + lead or u.shape[:lead] != x0.shape[:lead] or u.shape[-1] != n:
             shape = "(B, T, n)" if batched else "(T, n)"
-            raise ValueError(
-                f"u: expected shape {shape} = {x0.shape[:lead] + ('T', n)}, got {u.shape}"
-            )
+            raise ValueError(f"u: expected shape {shape} = {x0.shape[:lead] + ('T', n)}, "
+                             f"got {u.shape}")
         if n_steps is not None and n_steps != u.shape[lead]:
             raise ValueError(f"n_steps: {n_steps} does not match u with {u.shape[lead]} samples")
         if u.shape[lead] < 1:

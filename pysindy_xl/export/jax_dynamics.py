@@ -52,15 +52,12 @@ def _check_symbols(matrix: sp.Matrix, name: str, coords) -> None:
     allowed = set(coords.q) | set(coords.qd) | set(coords.tau) | {coords.t}
     unknown = matrix.free_symbols - allowed
     if unknown & set(coords.qdd):
-        raise ValueError(
-            f"{name}: contains accelerations {sorted(map(str, unknown & set(coords.qdd)))}; "
-            "expected the mass-matrix form M(q, qd) qdd = f(q, qd, tau, t)"
-        )
+        raise ValueError(f"{name}: contains accelerations "
+                         f"{sorted(map(str, unknown & set(coords.qdd)))}; expected the "
+                         "mass-matrix form M(q, qd) qdd = f(q, qd, tau, t)")
     if unknown:
-        raise ValueError(
-            f"{name}: contains symbols {sorted(map(str, unknown))} that are not positions, "
-            "velocities, forces or time of the coordinates"
-        )
+        raise ValueError(f"{name}: contains symbols {sorted(map(str, unknown))} that are not "
+                         "positions, velocities, forces or time of the coordinates")
 
 
 def _unrolled_solve(a: list[list], b: list, pivoting: bool) -> list:
@@ -193,10 +190,8 @@ def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True)
     for attribute in ("coords", "mass_matrix_expr", "forcing_expr"):
         # statically: reading the expressions builds them (minutes for a robot arm's)
         if inspect.getattr_static(dynamics, attribute, _MISSING) is _MISSING:
-            raise TypeError(
-                f"dynamics: expected a MassMatrixDynamics-like object with attribute "
-                f"{attribute!r}, got {type(dynamics).__name__}"
-            )
+            raise TypeError(f"dynamics: expected a MassMatrixDynamics-like object with attribute "
+                            f"{attribute!r}, got {type(dynamics).__name__}")
     if solver not in _SOLVERS:
         raise ValueError(f"solver: expected one of {list(_SOLVERS)}, got {solver!r}")
     key = (solver, bool(fast_trig))
@@ -212,9 +207,8 @@ def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True)
 def _compile(dynamics, solver: str, fast_trig: bool):
     coords = dynamics.coords
     if not isinstance(coords, Coordinates):
-        raise TypeError(
-            f"dynamics.coords: expected pysindy_xl.Coordinates, got {type(coords).__name__}"
-        )
+        raise TypeError(f"dynamics.coords: expected pysindy_xl.Coordinates, got "
+                        f"{type(coords).__name__}")
     n = coords.n
     arguments = list(coords.q) + list(coords.qd) + list(coords.tau) + [coords.t]
     modules = [{"sin": fast_sin, "cos": fast_cos}, "jax"] if fast_trig else ["jax"]
@@ -255,19 +249,17 @@ def _compile(dynamics, solver: str, fast_trig: bool):
         batch = jnp.broadcast_shapes(state.shape[:-1], u.shape[:-1], t.shape)
         state = jnp.broadcast_to(state.astype(dtype), batch + (2 * n,))
         u = jnp.broadcast_to(u.astype(dtype), batch + (n,))
-        derivative = componentwise(
-            tuple(state[..., i] for i in range(2 * n)), tuple(u[..., i] for i in range(n)), t
-        )
+        derivative = componentwise(tuple(state[..., i] for i in range(2 * n)),
+                                   tuple(u[..., i] for i in range(n)), t)
         return jnp.stack(derivative, axis=-1)
 
     dynamics_fn.n_coordinates = n
     dynamics_fn.depends_on_time = depends_on_time
     dynamics_fn.componentwise = componentwise
     dynamics_fn.solver = solver
-    dynamics_fn.__doc__ = (
-        f"d(state)/dt of the identified {n}-coordinate system {list(coords.names)}: "
-        "f(state (..., 2n), u (..., n), t=0.0) -> [qd, qdd] (..., 2n)."
-    )
+    dynamics_fn.__doc__ = (f"d(state)/dt of the identified {n}-coordinate system "
+                           f"{list(coords.names)}: f(state (..., 2n), u (..., n), t=0.0) -> "
+                           "[qd, qdd] (..., 2n).")
     return dynamics_fn
 
 
