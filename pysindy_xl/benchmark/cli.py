@@ -43,6 +43,9 @@ from .records import STATUSES
 __all__ = ["add_parser", "build_parser", "main", "run_benchmark"]
 
 BACKENDS = ("loky", "multiprocessing", "dask", "ray")
+#: The help's layout: the module docstring's examples as its epilog.
+_LAYOUT = {"formatter_class": argparse.RawDescriptionHelpFormatter,
+           "epilog": __doc__.split("::", 1)[1]}
 
 
 _positive_float = argument_type("real", low=0, low_open=True)
@@ -135,10 +138,7 @@ def add_parser(subparsers):
         "benchmark", help="reproduce the paper's Table 1 (parallel, resumable)",
         description="Run the grid of the paper's Table 1 (systems x friction x forcing x noise "
                     "x seeds x configurations), rank the configurations per trajectory and "
-                    "write the table (Markdown, CSV, PNG). Interrupted grids resume.",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog=__doc__.split("::", 1)[1],
-    )
+                    "write the table (Markdown, CSV, PNG). Interrupted grids resume.", **_LAYOUT)
     add_arguments(parser)
     parser.set_defaults(func=run_benchmark)
     return parser
@@ -147,10 +147,7 @@ def add_parser(subparsers):
 def build_parser() -> argparse.ArgumentParser:
     """A standalone parser (``benchmarks/table1.py``)."""
     parser = argparse.ArgumentParser(
-        prog="table1.py", description="Reproduce the paper's Table 1 with pysindy-xl.",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog=__doc__.split("::", 1)[1],
-    )
+        prog="table1.py", description="Reproduce the paper's Table 1 with pysindy-xl.", **_LAYOUT)
     return add_arguments(parser)
 
 

@@ -99,8 +99,4 @@ def euler_step(f, state, t, dt, u_start, u_end=None):
     return _axpy(state, dt, f(state, u_start, t))
 
 
-STEPS = {
-    "rk4": rk4_step,
-    "semi_implicit_euler": semi_implicit_euler_step,
-    "euler": euler_step,
-}
+STEPS = {"rk4": rk4_step, "semi_implicit_euler": semi_implicit_euler_step, "euler": euler_step}
