@@ -11,7 +11,6 @@ import time as _time
 
 import numpy as np
 import scipy.integrate
-import scipy.interpolate
 import sympy as sp
 
 from .._validation import check_numeric_array, check_option, check_times
