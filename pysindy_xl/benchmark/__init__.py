@@ -1,22 +1,7 @@
-"""Benchmark suite reproducing the paper's Table 1: grid, parallel resumable runner, ranking.
-
-Modules
--------
-:mod:`.grid`
-    Trajectories (system x friction x forcing x noise x seed) x configurations (catalog x
-    solver, plus the plain ``pysindy.SINDy`` baseline); the ``quick`` and ``full`` presets.
-:mod:`.runner`
-    One run = MuJoCo data, identification, validation against a fresh MuJoCo trajectory, one
-    record; joblib parallelism (local processes, Dask or Ray), per-run time limit, resume.
-:mod:`.records`
-    The JSONL record store (atomic appends, torn-line repair, last record wins).
-:mod:`.ranking`
-    The paper's ranking and table (1st, 2nd, 2nd>, invalid, timeout, uncompleted, Wins WC,
-    success rate).
-:mod:`.report`
-    Markdown, CSV, PNG and machine description.
-:mod:`.cli`
-    ``pysindy-xl benchmark`` / ``benchmarks/table1.py``.
+"""Benchmark suite reproducing the paper's Table 1: the grid (:mod:`.grid`), a parallel,
+resumable runner with a time limit per run (:mod:`.runner`), the JSONL records
+(:mod:`.records`), the paper's ranking (:mod:`.ranking`), the report (:mod:`.report`) and
+the command line (:mod:`.cli`, ``pysindy-xl benchmark``).
 
 Examples
 --------
@@ -32,23 +17,7 @@ from .records import RecordStore, read_records
 from .report import machine_description, write_report
 from .runner import execute_task, run_grid, run_task
 
-__all__ = [
-    "PRESETS",
-    "GridSettings",
-    "Task",
-    "TrajectorySpec",
-    "all_configurations",
-    "config_label",
-    "ranking_table",
-    "rank_trajectory",
-    "format_table",
-    "RecordStore",
-    "read_records",
-    "run_grid",
-    "run_task",
-    "execute_task",
-    "write_report",
-    "machine_description",
-    "add_parser",
-    "main",
-]
+__all__ = ["PRESETS", "GridSettings", "Task", "TrajectorySpec", "all_configurations",
+           "config_label", "ranking_table", "rank_trajectory", "format_table", "RecordStore",
+           "read_records", "run_grid", "run_task", "execute_task", "write_report",
+           "machine_description", "add_parser", "main"]

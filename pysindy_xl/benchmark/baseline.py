@@ -1,20 +1,11 @@
 """The extra row of the table: plain :class:`pysindy.SINDy`, second order, classical catalog.
 
-SINDy fits a first-order system, so the state is ``x = [q, qd]`` with ``x_dot = [qd, qdd]``
-(measured, like every configuration) and the generalized forces as control input ``u``. Its
-library holds the terms of the same classical catalog as the ``classical`` rows (the smallest
-one containing the Euler-Lagrange expansion of the Lagrangian catalog, plus friction) that an
-explicit model ``qdd = f(q, qd, u)`` can use: the terms without acceleration (those with one
-belong to the left-hand side ``M(q) qdd``, which SINDy cannot express), and the forces
-linearly. Each term is a :class:`pysindy.CustomLibrary` function of all inputs, available to
-every equation (plain SINDy has no per-equation mask). The optimizer is pysindy's default
-:class:`pysindy.STLSQ`.
-
-For validation the fitted ``qdd`` rows become the equations ``qdd_i - f_i(q, qd, u) = 0`` and
-are simulated with the same integrator and divergence checks as the XL-SINDy models
-(:class:`~pysindy_xl.dynamics.MassMatrixDynamics` with ``M = I``), so every row of the table is
-validated the same way.
-"""
+SINDy fits the first-order state ``[q, qd]`` with ``x_dot = [qd, qdd]`` and the forces as
+control input. Its library holds the classical catalog's terms that an explicit model
+``qdd = f(q, qd, u)`` can use (none with an acceleration: ``M(q) qdd`` is beyond SINDy), each
+a :class:`pysindy.CustomLibrary` function of all inputs, and the forces linearly; optimizer
+:class:`pysindy.STLSQ`. The fitted rows become ``MassMatrixDynamics`` with ``M = I``, so the
+baseline is validated like every other row."""
 
 from __future__ import annotations
 
@@ -25,9 +16,8 @@ __all__ = ["SINDyBaseline", "baseline_terms"]
 
 
 def baseline_terms(catalog) -> list[sp.Expr]:
-    """Terms of a classical catalog (e.g. ``reference_catalog(system, "classical")``) that an
-    explicit model ``qdd = f(q, qd, u)`` can use: the distinct classical terms without any
-    acceleration symbol, in catalog order."""
+    """The distinct classical terms without acceleration of a classical catalog (e.g.
+    ``reference_catalog(system, "classical")``), in catalog order."""
     catalog.symbolic_matrix()  # the columns, derived on first use
     accelerations = set(catalog.coords.qdd)
     found = []
@@ -41,27 +31,10 @@ def baseline_terms(catalog) -> list[sp.Expr]:
 
 
 class SINDyBaseline:
-    """Plain pysindy.SINDy on ``[q, qd]`` with classical-catalog terms (see the module doc).
-
-    Parameters
-    ----------
-    coords : Coordinates
-    terms : list of sympy.Expr
-        Candidate terms in ``q`` and ``qd`` (see :func:`baseline_terms`).
-    optimizer : pysindy optimizer, optional
-        Default ``pysindy.STLSQ()``.
-
-    Attributes
-    ----------
-    model_ : pysindy.SINDy
-    forced_ : ndarray of bool, shape (n,)
-        Coordinates whose force entered the fit (non-zero in the data).
-    feature_exprs_ : list of sympy.Expr
-        The library features: ``terms`` then the forces used.
-    coef_ : ndarray, shape (n, n_features)
-        The acceleration rows of the SINDy coefficients.
-    dynamics_ : MassMatrixDynamics
-    """
+    """Plain pysindy.SINDy on ``[q, qd]`` with classical-catalog ``terms`` (module docstring);
+    ``optimizer`` defaults to ``pysindy.STLSQ()``. Fitted: ``model_`` (the SINDy model),
+    ``forced_`` (n,) (coordinates whose force entered the fit), ``feature_exprs_`` (``terms``
+    then those forces), ``coef_`` (n, n_features) (the acceleration rows) and ``dynamics_``."""
 
     def __init__(self, coords, terms, optimizer=None):
         self.coords = coords
@@ -73,7 +46,6 @@ class SINDyBaseline:
         import pysindy as ps
 
         from ..dynamics import MassMatrixDynamics
-
         coords = self.coords
         n = coords.n
         if x_dot is None or x_ddot is None:

@@ -4,7 +4,7 @@ Examples
 --------
 ::
 
-    pysindy-xl benchmark --quick                       # ~125 runs, all cores, < 15 min on 2
+    pysindy-xl benchmark --quick                       # the small grid, all cores
     pysindy-xl benchmark --full --jobs 32 --out results/full
     pysindy-xl benchmark --quick --retry error timeout  # rerun the failed runs only
     pysindy-xl benchmark --quick --report-only          # rebuild the table from the records
@@ -37,11 +37,15 @@ from .grid import (
     all_configurations,
     config_label,
 )
+from .isolation import _ISOLATIONS
+from .records import STATUSES
 
 __all__ = ["add_parser", "build_parser", "main", "run_benchmark"]
 
 BACKENDS = ("loky", "multiprocessing", "dask", "ray")
-STATUSES = ("ok", "invalid", "timeout", "error")
+#: The help's layout: the module docstring's examples as its epilog.
+_LAYOUT = {"formatter_class": argparse.RawDescriptionHelpFormatter,
+           "epilog": __doc__.split("::", 1)[1]}
 
 
 _positive_float = argument_type("real", low=0, low_open=True)
@@ -54,10 +58,8 @@ def _configuration(text):
         return ("classical", "pysindy")
     catalog, _, solver = text.partition(":")
     if catalog not in CATALOGS or solver not in SOLVERS:
-        raise argparse.ArgumentTypeError(
-            f"expected CATALOG:SOLVER with CATALOG in {CATALOGS} and SOLVER in {SOLVERS}, or "
-            f"'sindy', got {text!r}"
-        )
+        raise argparse.ArgumentTypeError(f"expected CATALOG:SOLVER with CATALOG in {CATALOGS} "
+                                         f"and SOLVER in {SOLVERS}, or 'sindy', got {text!r}")
     return (catalog, solver)
 
 
@@ -65,9 +67,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """Add the benchmark options to ``parser``; returns it."""
     preset = parser.add_mutually_exclusive_group()
     preset.add_argument("--quick", dest="preset", action="store_const", const="quick",
-                        help="small grid: ~125 runs, under 15 min on 2 cores (default)")
+                        help="small grid, short trajectories (default)")
     preset.add_argument("--full", dest="preset", action="store_const", const="full",
-                        help="the paper's scale: ~1100 runs, 1 h time limit per run")
+                        help="the paper's scale, 1 h time limit per run")
     parser.set_defaults(preset="quick")
     parser.add_argument("--out", metavar="DIR", default=None,
                         help="directory of records.jsonl and the table files (default: "
@@ -98,17 +100,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--configs", nargs="+", type=_configuration, default=None,
                         metavar="CATALOG:SOLVER",
                         help="configurations to run, e.g. mixed:mixed lagrange:explicit sindy "
-                             "(default: all 9 and the pysindy baseline)")
+                             "(default: all, and the pysindy baseline)")
     parser.add_argument("--no-baseline", action="store_true",
                         help="leave out the pysindy.SINDy row")
     parser.add_argument("--retry", nargs="+", choices=STATUSES, default=(),
                         help="run again the runs whose recorded status is one of these")
     parser.add_argument("--limit", type=int, default=None,
                         help="run at most this many pending runs, then stop")
-    parser.add_argument("--isolation", choices=("auto", "process", "signal", "none"),
-                        default="auto",
-                        help="how the time limit is enforced (default: a forked process per "
-                             "run)")
+    parser.add_argument("--isolation", choices=_ISOLATIONS, default="auto",
+                        help="how the time limit is enforced (default: a forked process per run)")
     parser.add_argument("--fresh", action="store_true",
                         help="start over: existing records are renamed records.TIME.jsonl "
                              "(kept), then every run is done again")
@@ -132,18 +132,13 @@ def _blas_threads(text):
 
 
 def add_parser(subparsers):
-    """Register ``benchmark`` on an argparse subparsers object (for the ``pysindy-xl`` command).
-
-    The parsed namespace's ``func`` runs it: ``args.func(args)`` returns the exit status.
-    """
+    """Register ``benchmark`` on argparse subparsers (the ``pysindy-xl`` command); the parsed
+    namespace's ``func(args)`` runs it and returns the exit status."""
     parser = subparsers.add_parser(
         "benchmark", help="reproduce the paper's Table 1 (parallel, resumable)",
         description="Run the grid of the paper's Table 1 (systems x friction x forcing x noise "
                     "x seeds x configurations), rank the configurations per trajectory and "
-                    "write the table (Markdown, CSV, PNG). Interrupted grids resume.",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog=__doc__.split("::", 1)[1],
-    )
+                    "write the table (Markdown, CSV, PNG). Interrupted grids resume.", **_LAYOUT)
     add_arguments(parser)
     parser.set_defaults(func=run_benchmark)
     return parser
@@ -152,10 +147,7 @@ def add_parser(subparsers):
 def build_parser() -> argparse.ArgumentParser:
     """A standalone parser (``benchmarks/table1.py``)."""
     parser = argparse.ArgumentParser(
-        prog="table1.py", description="Reproduce the paper's Table 1 with pysindy-xl.",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog=__doc__.split("::", 1)[1],
-    )
+        prog="table1.py", description="Reproduce the paper's Table 1 with pysindy-xl.", **_LAYOUT)
     return add_arguments(parser)
 
 
@@ -181,9 +173,8 @@ def settings_from_args(args):
 def run_benchmark(args) -> int:
     """Run (or, with ``--report-only``, only report) the benchmark of parsed arguments."""
     from .records import GridBusyError, RecordStore
-    from .report import machine_description, write_report
+    from .report import load_average, machine_description, write_report
     from .runner import run_grid
-
     try:
         settings = settings_from_args(args)
     except (ValueError, TypeError) as error:
@@ -209,8 +200,6 @@ def run_benchmark(args) -> int:
         print(f"benchmark {settings.name}: {len(tasks)} runs on "
               f"{len(settings.trajectories())} trajectories, {settings.timeout:g} s limit per "
               f"run, records in {records_path}", flush=True)
-        from .report import load_average
-
         load_at_start = load_average()
         try:
             outcome = run_grid(settings, records_path, n_jobs=args.jobs, backend=args.backend,
@@ -242,7 +231,6 @@ def run_benchmark(args) -> int:
 
 def _effective_jobs(n_jobs):
     import joblib
-
     try:
         return joblib.effective_n_jobs(n_jobs)
     except Exception:
@@ -250,12 +238,6 @@ def _effective_jobs(n_jobs):
 
 
 def main(argv=None) -> int:
-    """Entry point of ``benchmarks/table1.py``; returns the exit status.
-
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments (default ``sys.argv[1:]``).
-    """
+    """Entry point of ``benchmarks/table1.py``; returns the exit status."""
     args = build_parser().parse_args(argv)
     return run_benchmark(args)

@@ -1,17 +1,11 @@
 """The benchmark grid: trajectories x configurations, and the ``quick`` / ``full`` presets.
 
-A *trajectory* (the unit the paper ranks on) is one training dataset: a system with a friction
-level, a forcing mode, a noise level and a seed. A *configuration* is a catalog (``mixed``,
-``lagrange``, ``classical`` of the paper, and ``kinematic``: the catalog derived from the MJCF
-kinematic tree, :func:`~pysindy_xl.kinematic_catalog`) crossed with a solver (``mixed``,
-``explicit``, ``implicit``), plus the plain :class:`pysindy.SINDy` baseline (``classical``
-catalog, ``pysindy`` solver). A *task*
-is one configuration on one trajectory; it produces one result record.
-
-Which solvers apply to which data follows the paper: the explicit solver needs forces (forcing
-``explicit`` or ``mixed``), the implicit solver is for unforced data (forcing ``implicit``), the
-mixed solver and the SINDy baseline run on every forcing mode.
-"""
+A *trajectory* (what the paper ranks on) is one training dataset: system, friction level,
+forcing, noise level, seed. A *configuration* is a catalog (the paper's ``mixed``,
+``lagrange``, ``classical``, and ``kinematic`` from the MJCF tree) crossed with a solver
+(``mixed``, ``explicit``, ``implicit``), plus the plain :class:`pysindy.SINDy` baseline. A
+*task* is one configuration on one trajectory. As in the paper, the explicit solver needs
+forces, the implicit one is for unforced data, the others run on every forcing mode."""
 
 from __future__ import annotations
 
@@ -33,7 +27,7 @@ SYSTEM_NAMES = ("cart-pole", "double-pendulum", "cart-double-pendulum")
 
 
 def config_label(catalog: str, solver: str) -> str:
-    """Row name of a configuration in the table, e.g. ``"mixed x mixed"``.
+    """Row name of a configuration in the table.
 
     Examples
     --------
@@ -48,34 +42,21 @@ def config_label(catalog: str, solver: str) -> str:
 
 
 def all_configurations(include_baseline: bool = True) -> list[tuple[str, str]]:
-    """Catalog x solver configurations, then the SINDy baseline.
-
-    The 9 of the paper (3 catalogs x 3 solvers), the 3 of the kinematic catalog, then the
-    pysindy.SINDy baseline.
-
-    Parameters
-    ----------
-    include_baseline : bool, default True
-        Append the pysindy.SINDy baseline ``("classical", "pysindy")``.
-
-    Returns
-    -------
-    list of (str, str)
-        ``(catalog, solver)`` pairs in table order.
+    """``(catalog, solver)`` pairs in table order: the paper's 9, the kinematic catalog's 3, then
+    (``include_baseline``) the pysindy.SINDy baseline ``("classical", "pysindy")``.
 
     Examples
     --------
     >>> configurations = all_configurations()
-    >>> len(configurations), configurations[-4:]
-    (13, [('kinematic', 'mixed'), ('kinematic', 'explicit'), ('kinematic', 'implicit'), \
-('classical', 'pysindy')])
+    >>> len(configurations), configurations[-2:]
+    (13, [('kinematic', 'implicit'), ('classical', 'pysindy')])
     """
     out = [(c, s) for c in CATALOGS for s in SOLVERS]
     return out + [BASELINE] if include_baseline else out
 
 
 def solver_applies(solver: str, forcing: str) -> bool:
-    """Whether a solver runs on data of a forcing mode (see the module docstring).
+    """Whether a solver runs on data of a forcing mode (module docstring).
 
     Examples
     --------
@@ -96,23 +77,10 @@ def _stable_hash(payload) -> str:
 
 @dataclass(frozen=True)
 class TrajectorySpec:
-    """One training dataset of the grid.
-
-    Attributes
-    ----------
-    system : str
-        Registry name (``"cart-pole"``, ``"double-pendulum"``, ``"cart-double-pendulum"``).
-    friction : float
-        Multiplier of the system's default joint damping (0: frictionless).
-    forcing : {"implicit", "explicit", "mixed"}
-    noise : float
-        Relative Gaussian noise level.
-    seed : int
-    noise_model : {"all", "positions"}, default "all"
-        ``"all"``: the paper's noise on positions, velocities, accelerations and forces, all
-        given to the fit. ``"positions"``: noisy positions only, no velocity or acceleration
-        given (the package estimates what it needs, as with a real sensor).
-    """
+    """One training dataset of the grid: ``system`` (registry name), ``friction`` (multiplier of
+    the default joint damping), ``forcing``, ``noise`` (relative level), ``seed`` and
+    ``noise_model``: ``"all"`` (the paper's noise on every channel, all given to the fit) or
+    ``"positions"`` (noisy positions only, no derivative given, as from a real sensor)."""
 
     system: str
     friction: float
@@ -123,8 +91,7 @@ class TrajectorySpec:
 
     @property
     def key(self) -> str:
-        """Readable identifier, e.g. ``cart-pole/friction=1/explicit/noise=0.01/seed=0``
-        (``noise=0.01(positions)`` for positions-only noise)."""
+        """Readable identifier, e.g. ``cart-pole/friction=1/explicit/noise=0.01/seed=0``."""
         model = "(positions)" if self.noise_model == "positions" else ""
         return (f"{self.system}/friction={self.friction:g}/{self.forcing}/"
                 f"noise={self.noise:g}{model}/seed={self.seed}")
@@ -132,18 +99,8 @@ class TrajectorySpec:
 
 @dataclass(frozen=True)
 class Task:
-    """One configuration on one trajectory.
-
-    Attributes
-    ----------
-    trajectory : TrajectorySpec
-    catalog : str
-    solver : str
-        ``"mixed"``, ``"explicit"``, ``"implicit"`` or ``"pysindy"`` (the baseline).
-    settings_hash : str
-        Hash of the data settings (durations, sampling...) so that records
-        from a grid with other settings are never mistaken for finished runs of this one.
-    """
+    """One configuration on one trajectory; ``solver`` is ``"pysindy"`` for the baseline, and
+    ``settings_hash`` keeps records of a grid with other data settings from counting as done."""
 
     trajectory: TrajectorySpec
     catalog: str
@@ -174,20 +131,13 @@ class GridSettings:
     systems, friction_levels, forcings, noise_levels, seeds : tuples
         Axes of the trajectory grid (``noise_levels``: the paper's noise on every channel).
     position_noise_levels : tuple
-        Further noise levels on the positions only (no velocity or acceleration given).
+        Further noise levels on the positions only.
     configurations : tuple of (catalog, solver)
-        Configurations to run (default: the 9 of the paper, the 3 of the kinematic catalog
-        and the SINDy baseline).
-    n_trajectories : int
-        Training trajectories per dataset (fitted together).
-    duration : float
-        Seconds per training trajectory.
-    sample_every : int
-        Keep every k-th MuJoCo step (1 ms).
-    validation_duration : float
-        Seconds of the fresh noise-free validation trajectory.
-    timeout : float
-        Seconds allowed to one run (identification + validation simulation).
+        Configurations to run (default: :func:`all_configurations`).
+    n_trajectories, duration, sample_every : int, float, int
+        Training trajectories per dataset, seconds each, every k-th MuJoCo step (1 ms) kept.
+    validation_duration, timeout : float
+        Seconds of the fresh validation trajectory, and allowed to one run.
     name : str
         Preset name, recorded with the results.
     """
@@ -223,10 +173,8 @@ class GridSettings:
         known = set(all_configurations())
         for pair in self.configurations:
             if tuple(pair) not in known:
-                raise ValueError(
-                    f"configurations: unknown (catalog, solver) {pair!r}; expected among "
-                    f"{sorted(known)}"
-                )
+                raise ValueError(f"configurations: unknown (catalog, solver) {pair!r}; expected "
+                                 f"among {sorted(known)}")
         for name in ("n_trajectories", "sample_every"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
@@ -236,13 +184,9 @@ class GridSettings:
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
                 raise ValueError(f"{name}: expected a positive number of seconds, got {value!r}")
 
-    # -- derived ---------------------------------------------------------------------------
     def data_settings(self) -> dict:
-        """The settings that change the data (hashed into every run id).
-
-        The timeout is left out on purpose: rerunning with a longer one and ``retry`` only
-        reruns the runs that timed out.
-        """
+        """The settings that change the data, hashed into every run id (not the timeout: rerunning
+        with a longer one and ``retry`` reruns only the runs that timed out)."""
         return {"n_trajectories": self.n_trajectories, "duration": float(self.duration),
                 "sample_every": self.sample_every,
                 "validation_duration": float(self.validation_duration)}
@@ -265,7 +209,7 @@ class GridSettings:
         ]
 
     def tasks(self) -> list[Task]:
-        """Every run of the grid, grouped by trajectory (consecutive runs share their data)."""
+        """Every run of the grid, grouped by trajectory (consecutive runs share data)."""
         digest = self.settings_hash
         return [
             Task(spec, catalog, solver, digest)
@@ -305,11 +249,8 @@ def _check_axis(values, name, kind, non_negative=False):
         raise ValueError(f"{name}: duplicate entries in {values!r}")
 
 
-#: ``quick``: every system and forcing mode, default friction, two levels of the paper's noise
-#: and two of positions-only noise, one seed, short trajectories.
-#: ``full``: the paper's scale (three friction levels, three noise levels, two seeds: 162
-#: trajectories, plus 108 trajectories with positions-only noise; 9 runs per trajectory, 2430
-#: in all) with the paper's 1 h timeout per run.
+#: ``quick``: every system and forcing mode, one seed, short trajectories; ``full``: the
+#: paper's scale (three friction levels, three noise levels, two seeds, 1 h per run).
 PRESETS = {
     "quick": GridSettings(
         friction_levels=(1.0,), noise_levels=(0.0, 0.001), seeds=(0,),

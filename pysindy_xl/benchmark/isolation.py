@@ -1,6 +1,5 @@
-"""Process isolation, time limit and BLAS threads of one run (see :mod:`.runner`, "Time limit"
-and "Threads"): a forked child, or an interval-timer signal, and a threadpoolctl limit.
-"""
+"""Process isolation, time limit and BLAS threads of one run (:mod:`.runner`): a forked child or
+an interval-timer signal, and a threadpoolctl limit."""
 
 from __future__ import annotations
 
@@ -29,7 +28,6 @@ def resolve_isolation(isolation: str) -> str:
     if isolation != "auto":
         return isolation
     import multiprocessing
-
     if "fork" in multiprocessing.get_all_start_methods():
         return "process"
     if hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread():
@@ -62,7 +60,6 @@ def _child(connection, function, task, settings, deadline, parent_pid):
 
 def run_in_process(function, task, settings, timeout):
     import multiprocessing
-
     context = multiprocessing.get_context("fork")
     receiver, sender = context.Pipe(duplex=False)
     start = time.perf_counter()
@@ -128,9 +125,8 @@ def run_with_signal(function, task, settings, timeout):
 
 
 def blas_thread_limit(blas_threads: int | None):
-    """A context limiting the thread pools of every BLAS library loaded (OpenBLAS, MKL,
-    BLIS...) to ``blas_threads`` (an integer >= 1), via :func:`threadpoolctl.threadpool_limits`;
-    None leaves them as they are.
+    """A context limiting every loaded BLAS's threads to ``blas_threads`` (>= 1) through
+    :func:`threadpoolctl.threadpool_limits`; None leaves them alone.
 
     Examples
     --------
@@ -145,7 +141,6 @@ def blas_thread_limit(blas_threads: int | None):
     if isinstance(blas_threads, bool) or not isinstance(blas_threads, int) or blas_threads < 1:
         raise ValueError(f"blas_threads: expected None or an integer >= 1, got {blas_threads!r}")
     from threadpoolctl import threadpool_limits
-
     return threadpool_limits(limits=blas_threads, user_api="blas")
 
 
@@ -153,6 +148,5 @@ def resolve_blas_threads(blas_threads, n_jobs, backend):
     if blas_threads != "auto":
         return blas_threads
     import joblib
-
     parallel = backend in ("dask", "ray") or joblib.effective_n_jobs(n_jobs) > 1
     return 1 if parallel else None

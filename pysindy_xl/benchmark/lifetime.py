@@ -1,10 +1,6 @@
-"""Lifetime of a local grid's processes: none outlives the grid (see
-:mod:`pysindy_xl.benchmark.runner`, "Killing the grid").
-
-Three mechanisms, each where the process it guards runs: a forked run asks the kernel to be
-killed with its worker (:func:`die_with_parent`), a worker watches the grid process and exits
-when it is gone (:func:`watch_grid`), and the grid turns SIGTERM into the interruption that
-makes joblib stop its workers (:func:`sigterm_as_interrupt`).
+"""No process of a local grid outlives it: a forked run dies with its worker
+(:func:`die_with_parent`), a worker exits when the grid process is gone (:func:`watch_grid`),
+and the grid turns SIGTERM into the interruption that stops joblib (:func:`sigterm_as_interrupt`).
 """
 
 from __future__ import annotations
@@ -25,16 +21,12 @@ runs_in_flight = set()
 
 
 def die_with_parent() -> None:
-    """Ask the kernel to SIGKILL this process when its parent dies (Linux; no-op elsewhere).
-
-    The parent "dies" when the thread that forked this process ends; callers fork from a
-    thread that waits for the child, so the two coincide.
-    """
+    """Ask the kernel to SIGKILL this process when its parent (the thread that forked it) dies;
+    Linux only, a no-op elsewhere."""
     if not sys.platform.startswith("linux"):
         return
     try:
         import ctypes
-
         libc = ctypes.CDLL(None, use_errno=True)
         libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
     except (OSError, AttributeError):
@@ -42,13 +34,9 @@ def die_with_parent() -> None:
 
 
 def watch_grid(grid_pid: int) -> None:
-    """In a local worker of the grid process ``grid_pid``: exit as soon as it is gone.
-
-    Started once per worker (a daemon thread polling ``os.getppid()``). Nothing happens in
-    the grid process itself (``n_jobs=1``) or in a worker that is not its child (Dask, Ray).
-    A dying worker kills its forked runs (which also die with it through
-    :func:`die_with_parent`).
-    """
+    """In a local worker of the grid process ``grid_pid``, start a daemon thread that kills the
+    worker's forked runs and exits as soon as the grid is gone (nothing in the grid process or
+    in a Dask / Ray worker)."""
     global _watched
     pid = os.getpid()
     if pid == grid_pid or os.getppid() != grid_pid or _watched == (pid, grid_pid):
@@ -68,12 +56,8 @@ def watch_grid(grid_pid: int) -> None:
 
 @contextlib.contextmanager
 def sigterm_as_interrupt():
-    """Turn SIGTERM into KeyboardInterrupt during the grid, so that it stops like on Ctrl-C
-    (joblib kills the workers); afterwards the process still ends by SIGTERM.
-
-    Only in the main thread and where SIGTERM has its default action (a handler of the
-    application is left alone).
-    """
+    """Turn SIGTERM into KeyboardInterrupt during the grid (joblib then kills the workers), then
+    end the process by SIGTERM; only in the main thread where SIGTERM has its default action."""
     if (threading.current_thread() is not threading.main_thread()
             or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL):
         yield

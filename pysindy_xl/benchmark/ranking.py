@@ -1,30 +1,12 @@
 """The paper's ranking of configurations (Table 1).
 
-For each trajectory, the configurations whose model is valid are ranked by validation error
-(position RMSE against the fresh MuJoCo trajectory), best first; equal errors share a place
-(competition ranking: 1, 1, 3). Errors within :data:`RANK_TOLERANCE` (0.1 %, relative) of the
-best of a group are equal: the same law found through two catalogs or solvers is simulated
-with a different rounding path, so identical models differ at the integrator's tolerance
-(about 1e-6 relative), and such differences say nothing about which model is better. Per
-configuration the table counts
-
-``invalid``
-    runs whose model diverged or could not be simulated (status ``invalid``);
-``timeout``
-    runs stopped by the time limit;
-``uncompleted``
-    runs whose identification failed with an error (status ``error``);
-``1st``, ``2nd``, ``2nd>``
-    valid runs ranked first, second, worse than second;
-``Wins WC``
-    "wins without competition": the only valid model of its trajectory (also counted in
-    ``1st``);
-``success rate``
-    valid / (valid + invalid + uncompleted). Timeouts are left out of the denominator, as in
-    the paper (its Table 1 is reproduced exactly by this formula).
-
-Rows are sorted by number of 1st places, then success rate.
-"""
+Per trajectory, valid models are ranked by validation position RMSE, best first, equal
+errors sharing a place (1, 1, 3); errors within :data:`RANK_TOLERANCE` of a group's best are
+equal (the same law through two paths differs only at the integrator's tolerance). Per
+configuration: ``invalid``, ``timeout``, ``uncompleted`` (status ``error``), ``1st``, ``2nd``,
+``2nd>``, ``Wins WC`` (the only valid model of its trajectory, also a 1st) and ``success
+rate`` = valid / (valid + invalid + uncompleted), timeouts left out as in the paper. Rows
+are sorted by 1st places, then success rate."""
 
 from __future__ import annotations
 
@@ -51,17 +33,8 @@ def _same(a: float, b: float) -> bool:
 
 
 def rank_trajectory(records) -> dict[str, int]:
-    """Competition ranks of the valid records of one trajectory.
-
-    Parameters
-    ----------
-    records : list of dict
-        Records of one trajectory (any status).
-
-    Returns
-    -------
-    dict
-        ``{config: rank}`` for the records with status ``ok``; rank 1 is the best.
+    """``{config: rank}`` of the records with status ``ok`` among the records of one trajectory
+    (competition ranks, 1 the best).
 
     Examples
     --------
@@ -70,10 +43,8 @@ def rank_trajectory(records) -> dict[str, int]:
     >>> rank_trajectory(recs)
     {'b': 1, 'c': 1, 'a': 3}
     """
-    valid = sorted(
-        ((float(r["metrics"]["position_rmse"]), r["config"]) for r in records
-         if r["status"] == "ok"),
-    )
+    valid = sorted((float(r["metrics"]["position_rmse"]), r["config"]) for r in records
+                   if r["status"] == "ok")
     configs = [c for _, c in valid]
     if len(set(configs)) != len(configs):
         raise ValueError(f"records: a configuration appears twice in one trajectory: {configs}")
@@ -88,23 +59,10 @@ def rank_trajectory(records) -> dict[str, int]:
 
 
 def ranking_table(records, configs=None) -> list[dict]:
-    """Table 1 from result records.
-
-    Parameters
-    ----------
-    records : iterable of dict
-        Run records (see :mod:`~pysindy_xl.benchmark.records`); for a run id written more than
-        once the last record counts.
-    configs : sequence of str, optional
-        Configurations to list even when they have no record (zero rows).
-
-    Returns
-    -------
-    list of dict
-        One row per configuration with the keys of :data:`TABLE_COLUMNS` and
-        :data:`EXTRA_COLUMNS`, sorted by 1st places then success rate (descending).
-        ``success rate`` is ``nan`` for a configuration with no counted run.
-    """
+    """Table 1 from run records (the last record of a run id counts): one row per configuration
+    (also those of ``configs`` without records) with the keys of :data:`TABLE_COLUMNS` and
+    :data:`EXTRA_COLUMNS`, sorted as in the module docstring; ``success rate`` is ``nan``
+    without a counted run."""
     records = [check_record(r) for r in latest_records(list(records))]
     by_trajectory = defaultdict(list)
     for r in records:
@@ -163,19 +121,7 @@ def _cell(value, column) -> str:
 
 
 def format_table(table, extra: bool = False) -> str:
-    """The table as aligned text, in the paper's column order.
-
-    Parameters
-    ----------
-    table : list of dict
-        From :func:`ranking_table`.
-    extra : bool, default False
-        Also print the columns that are not in the paper.
-
-    Returns
-    -------
-    str
-    """
+    """The table as aligned text in the paper's columns (``extra``: also the others)."""
     columns = TABLE_COLUMNS + (EXTRA_COLUMNS if extra else ())
     rows = [[_cell(row[c], c) for c in columns] for row in table]
     widths = [max(len(c), *(len(r[k]) for r in rows)) if rows else len(c)
@@ -202,7 +148,6 @@ def table_to_csv(table) -> str:
     """The table as CSV text (full precision, empty cells for undefined values)."""
     import csv
     import io
-
     columns = TABLE_COLUMNS + EXTRA_COLUMNS
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")

@@ -1,29 +1,13 @@
 """Result records: one JSON object per run, appended to a JSONL file as each run finishes.
 
-Each record is written with a single ``write`` of one line followed by ``flush`` and
-``os.fsync``, so a run is either fully recorded or not at all. A process killed in the middle
-of a write can leave a torn last line: :class:`RecordStore` cuts it off when it opens the
-file (that run is simply run again), and :func:`read_records` skips it with a warning. When a
-run id appears more than once (a failed run retried), the last record wins.
-
-Record fields
--------------
-``run_id``, ``trajectory_id``, ``config``, ``system``, ``friction``, ``forcing``, ``noise``,
-``seed``, ``catalog``, ``solver``
-    What ran (see :class:`~pysindy_xl.benchmark.grid.Task`).
-``status``
-    ``"ok"`` (valid model: simulated over the whole validation horizon without diverging),
-    ``"invalid"`` (a model was identified but its simulation diverged or failed, or it has no
-    acceleration term), ``"timeout"`` (the run exceeded its time limit) or ``"error"`` (the
-    identification raised; the paper's "uncompleted").
-``message``
-    Why, for every status but ``ok`` (``None`` otherwise).
-``metrics``
-    ``position_rmse`` (ranking metric), ``divergence_time``, ``simulated_fraction``...
-``time_s``
-    Seconds spent: ``generate`` (data, shared by the runs of a trajectory), ``fit``,
-    ``validate``, ``run`` (fit + validation, what the timeout bounds).
-"""
+Each record is one ``write`` of one line, flushed and fsynced: a torn last line (a killed
+writer) is cut off by :class:`RecordStore` and skipped by :func:`read_records`, and its run
+is run again; for a run id recorded twice the last record wins. Fields: what ran
+(``run_id``, ``trajectory_id``, ``config`` and the :class:`~.grid.Task` fields); ``status``
+``"ok"`` (simulated over the whole validation horizon), ``"invalid"`` (diverged, failed or
+no acceleration), ``"timeout"`` or ``"error"`` (the paper's "uncompleted"); ``message``
+(why, unless ok); ``metrics`` (``position_rmse`` ranks); ``time_s`` (``generate``,
+``fit``, ``validate``, ``run``)."""
 
 from __future__ import annotations
 
@@ -57,10 +41,8 @@ def check_record(record) -> dict:
     if record["status"] == "ok":
         rmse = (record.get("metrics") or {}).get("position_rmse")
         if not isinstance(rmse, (int, float)) or not rmse == rmse or rmse < 0:
-            raise ValueError(
-                f"record {record['run_id']!r}: status 'ok' needs a finite metrics.position_rmse, "
-                f"got {rmse!r}"
-            )
+            raise ValueError(f"record {record['run_id']!r}: status 'ok' needs a finite "
+                             f"metrics.position_rmse, got {rmse!r}")
     return record
 
 
@@ -69,20 +51,8 @@ class GridBusyError(RuntimeError):
 
 
 def read_records(path) -> list[dict]:
-    """All complete records of a JSONL file, in file order (duplicates kept).
-
-    A torn last line (a writer killed mid-line) and any other unreadable line (a damaged
-    file) are skipped with a warning naming the line: their runs count as not done and are
-    run again.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-
-    Returns
-    -------
-    list of dict
-    """
+    """All complete records of a JSONL file, in file order (duplicates kept); unreadable lines
+    are skipped with a warning naming them, and their runs count as not done."""
     if not os.path.exists(path):
         return []
     with open(path, encoding="utf-8") as handle:
@@ -120,12 +90,7 @@ def latest_records(records) -> list[dict]:
 
 
 class RecordStore:
-    """Append-only JSONL file of run records (see the module docstring).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The ``.jsonl`` file; created with its directory when absent.
+    """Append-only JSONL file of run records (module docstring), created with its directory.
 
     Examples
     --------
@@ -160,12 +125,9 @@ class RecordStore:
 
     @contextlib.contextmanager
     def lock(self):
-        """Exclusive use of the records file for the duration of a grid.
-
-        A second grid on the same output refuses at once (:class:`GridBusyError` naming the
-        holder) instead of interleaving runs; the lock (``flock`` on ``PATH.lock``) dies with
-        its process, so a killed grid never leaves a stale lock behind.
-        """
+        """Exclusive use of the records file during a grid: a second grid refuses at once
+        (:class:`GridBusyError` naming the holder); the ``flock`` on ``PATH.lock`` dies with its
+        process, so no stale lock is left."""
         lock_path = self.path + ".lock"
         handle = open(lock_path, "a+")  # noqa: SIM115 - held for the whole context
         try:
@@ -213,10 +175,8 @@ class RecordStore:
             os.close(fd)
 
 
-# -- building a run's record (the runner and its isolation) ----------------------------------------
 def base_record(task: Task, settings: GridSettings) -> dict:
     import pysindy_xl
-
     return {**task.to_dict(), "grid": settings.name, "status": "error", "message": None,
             "metrics": {}, "time_s": {}, "pid": os.getpid(),
             "version": getattr(pysindy_xl, "__version__", "unknown")}

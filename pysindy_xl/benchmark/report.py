@@ -21,26 +21,25 @@ _PACKAGES = ("numpy", "scipy", "sympy", "scikit-learn", "pysindy", "cvxpy", "muj
              "jax", "pysindy-xl")
 
 
-def _cpu_model() -> str:
+def _proc_value(path: str, key: str) -> str | None:
+    """The value of the first ``key: value`` line of a /proc file, None if absent."""
     try:
-        with open("/proc/cpuinfo", encoding="utf-8") as handle:
+        with open(path, encoding="utf-8") as handle:
             for line in handle:
-                if line.startswith("model name"):
+                if line.startswith(key):
                     return line.split(":", 1)[1].strip()
     except OSError:
         pass
-    return platform.processor() or platform.machine()
+    return None
+
+
+def _cpu_model() -> str:
+    return _proc_value("/proc/cpuinfo", "model name") or platform.processor() or platform.machine()
 
 
 def _memory_gib() -> float | None:
-    try:
-        with open("/proc/meminfo", encoding="utf-8") as handle:
-            for line in handle:
-                if line.startswith("MemTotal"):
-                    return round(int(line.split()[1]) / 2**20, 1)
-    except OSError:
-        pass
-    return None
+    total = _proc_value("/proc/meminfo", "MemTotal")  # "131894260 kB"
+    return None if total is None else round(int(total.split()[0]) / 2**20, 1)
 
 
 def _git(*arguments) -> str | None:
@@ -62,21 +61,8 @@ def _git_state() -> dict:
 
 
 def machine_description(n_jobs=None, backend=None) -> dict:
-    """The machine and software a grid ran on (JSON-serializable).
-
-    Parameters
-    ----------
-    n_jobs : int, optional
-        Parallel jobs used.
-    backend : str, optional
-        joblib backend used.
-
-    Returns
-    -------
-    dict
-    """
+    """The machine and software a grid ran on (JSON-serializable)."""
     from importlib import metadata
-
     versions = {}
     for name in _PACKAGES:
         try:
@@ -107,14 +93,9 @@ def load_average():
 
 
 def grid_summary(records, configs=None, reference: str = "mixed x mixed") -> dict:
-    """Counts, run times and the acceptance targets of a set of records.
-
-    Returns
-    -------
-    dict
-        ``runs``, ``trajectories``, ``statuses``, ``run_time_s`` (median, p90, max, total),
-        ``reference`` (valid fraction of ``reference`` over its trajectories).
-    """
+    """Counts, run times and the acceptance targets of records: ``runs``, ``trajectories``,
+    ``statuses``, ``run_time_s`` (median, p90, max, total) and ``reference`` (valid fraction of
+    the ``reference`` configuration)."""
     records = latest_records(list(records))
     statuses = dict.fromkeys(("ok", "invalid", "timeout", "error"), 0)
     for r in records:
@@ -139,14 +120,11 @@ def grid_summary(records, configs=None, reference: str = "mixed x mixed") -> dic
 
 
 def plot_table(table, records, path) -> None:
-    """PNG figure at ``path``: outcome counts per configuration (the ``table`` of
-    :func:`~pysindy_xl.benchmark.ranking.ranking_table`) and the validation errors of the
-    valid runs among ``records``."""
+    """PNG at ``path``: outcome counts per configuration of ``table`` (:func:`ranking_table`) and
+    the validation errors of the valid runs among ``records``."""
     import matplotlib
-
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
-
     configs = [row["combo type"] for row in table]
     parts = [("1st", "#1a9850"), ("2nd", "#91cf60"), ("2nd>", "#d9ef8b"),
              ("invalid", "#fc8d59"), ("timeout", "#d73027"), ("uncompleted", "#999999")]
@@ -204,24 +182,10 @@ def _settings_lines(settings) -> list[str]:
 
 
 def write_report(records, out_dir, settings=None, machine=None, configs=None) -> dict:
-    """Write ``table.md``, ``table.csv``, ``table.png`` and ``summary.json`` to ``out_dir``.
-
-    Parameters
-    ----------
-    records : list of dict
-    out_dir : str or os.PathLike
-    settings : GridSettings or dict, optional
-        Described in the Markdown file.
-    machine : dict, optional
-        From :func:`machine_description`; written to ``machine.json`` and summarized.
-    configs : sequence of str, optional
-        Configurations listed even without records.
-
-    Returns
-    -------
-    dict
-        ``{"table": rows, "summary": ..., "files": {...}}``.
-    """
+    """Write ``table.md``, ``table.csv``, ``table.png``, ``summary.json`` (and ``machine.json``
+    when ``machine``, from :func:`machine_description`, is given) to ``out_dir``; returns
+    ``{"table", "summary", "files", "text"}``. ``settings`` (a GridSettings or its dict) is
+    described in the Markdown, ``configs`` are listed even without records."""
     os.makedirs(out_dir, exist_ok=True)
     records = latest_records(list(records))
     if configs is None and settings is not None and not isinstance(settings, dict):

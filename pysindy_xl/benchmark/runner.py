@@ -1,49 +1,14 @@
 """Running the grid: one task = data, identification, validation, one record.
 
-Execution
----------
-:func:`run_grid` sends the pending tasks to :class:`joblib.Parallel` (processes, all cores by
-default; any joblib backend through :func:`joblib.parallel_config`, e.g. Dask or Ray, see
-:func:`backend_context`) and appends each record to the store as soon as its run finishes, so
-an interrupted grid loses at most the runs in flight and resumes where it stopped.
-
-Time limit
-----------
-Each run is executed in a forked child process (``isolation="process"``, the default where
-``fork`` exists): the worker waits for its result at most ``timeout`` seconds and kills it
-otherwise, so nothing can hang, not even a solver stuck in C code, and a crash (segfault,
-out-of-memory kill) becomes an ``error`` record instead of taking the worker down. Where fork
-is unavailable, ``isolation="signal"`` runs the task in the worker under ``signal.setitimer``
-(effective between Python bytecodes only). In both cases the validation simulation also gets
-the remaining time as its own ``timeout``.
-
-Killing the grid
-----------------
-No process of a local grid (loky workers) outlives it. Ctrl-C (SIGINT) and SIGTERM stop the
-grid: the records already appended stay (each is flushed and fsynced), joblib kills its
-workers and their runs, and the process then ends as the signal asks (SIGTERM: killed by
-SIGTERM). If the grid process is killed outright (SIGKILL, out-of-memory killer), each worker
-notices within half a second that its parent is gone (a watchdog thread) and exits, and each
-forked run is killed by the kernel when its worker dies (Linux ``PR_SET_PDEATHSIG``;
-elsewhere the run's own alarm stops it 10 s after its time limit). Rerunning the grid resumes
-it.
-
-Threads
--------
-Each run solves small least-squares problems; with several runs in parallel, BLAS's own
-threads (one per core by default) oversubscribe the cores. :func:`run_grid` therefore limits
-BLAS to one thread inside each run when it runs in parallel (``blas_threads="auto"``) through
-:mod:`threadpoolctl`, whatever the backend (local processes, Dask, Ray); see
-``benchmarks/blas_threads.py`` for the effect.
-
-Data
-----
-A trajectory's training data and validation trajectory are simulated once per worker process
-and cached (the tasks of a grid are ordered by trajectory): MuJoCo with the system's joint
-damping scaled by the friction level, the clean trajectories drawn from a seed that does not
-depend on the noise level (so the noise levels of a grid perturb the same motions), then
-Gaussian noise from a separate seed.
-"""
+:func:`run_grid` sends the pending tasks to :class:`joblib.Parallel` (local processes, Dask or
+Ray: :func:`backend_context`) and appends each record as its run finishes: an interrupted
+grid resumes where it stopped. Each run goes to a forked child killed after ``timeout``
+seconds (``isolation="process"``; without fork, ``"signal"`` uses ``signal.setitimer``), so
+neither a hang in C code nor a crash takes a worker down. No local process outlives the grid
+(:mod:`.lifetime`): Ctrl-C and SIGTERM stop it with the finished records kept. With runs in
+parallel, BLAS gets one thread per run (``blas_threads="auto"``). A trajectory's data are
+simulated once per process and cached; the clean motions' seed does not depend on the noise
+level, so a grid's noise levels perturb the same motions."""
 
 from __future__ import annotations
 
@@ -72,11 +37,9 @@ __all__ = ["run_task", "execute_task", "run_grid", "system_for", "trajectory_dat
            "backend_context", "blas_thread_limit", "RunTimeout"]
 
 
-# -- data ------------------------------------------------------------------------------------
 def system_for(spec: TrajectorySpec):
     """The MuJoCo system of a trajectory, joint damping scaled by its friction level."""
     from ..mujoco import get_system
-
     base = get_system(spec.system)
     damping = {k: v * spec.friction for k, v in base.parameters.items() if "damping" in k}
     if not damping and spec.friction != 1.0:
@@ -92,21 +55,12 @@ def _seed(*parts) -> int:
 @functools.lru_cache(maxsize=4)
 def trajectory_data(spec: TrajectorySpec, n_trajectories: int, duration: float,
                     sample_every: int, validation_duration: float):
-    """Training dataset and validation trajectory of a grid trajectory (cached per process).
-
-    Returns
-    -------
-    dataset : Dataset
-        ``n_trajectories`` noisy training trajectories.
-    validation : Trajectory
-        A fresh noise-free trajectory with the same forcing mode.
-    seconds : float
-        Time spent simulating.
-    """
+    """``(dataset, validation, seconds)`` of a grid trajectory, cached per process: the noisy
+    training :class:`~pysindy_xl.data.Dataset`, a fresh noise-free validation trajectory with
+    the same forcing, and the time spent simulating."""
     from ..data import Dataset, add_noise
     from ..mujoco import generate_dataset
     from ..mujoco.evaluation.validation import validation_trajectory
-
     start = time.perf_counter()
     system = system_for(spec)
     motion_seed = _seed(spec.system, spec.friction, spec.forcing, spec.seed)
@@ -132,24 +86,10 @@ def trajectory_data(spec: TrajectorySpec, n_trajectories: int, duration: float,
     return clean, validation, time.perf_counter() - start
 
 
-# -- one run ---------------------------------------------------------------------------------
 def _optimizer(solver: str):
     import pysindy_xl as px
-    from pysindy_xl import optimizers
-
-    name = {"explicit": "ExplicitOptimizer", "implicit": "ImplicitOptimizer",
-            "mixed": "MixedOptimizer"}[solver]
-    cls = getattr(px, name, None) or getattr(optimizers, name, None)
-    if cls is None:
-        import importlib
-
-        try:  # the module exists before the package exports it
-            cls = getattr(importlib.import_module(f"pysindy_xl.optimizers.{solver}"), name)
-        except (ImportError, AttributeError):
-            cls = None
-    if cls is None:
-        raise NotImplementedError(f"solver {solver!r}: pysindy_xl.{name} is not available")
-    return cls()
+    return {"explicit": px.ExplicitOptimizer, "implicit": px.ImplicitOptimizer,
+            "mixed": px.MixedOptimizer}[solver]()
 
 
 def _identify(task: Task, system, dataset):
@@ -157,13 +97,11 @@ def _identify(task: Task, system, dataset):
     import pysindy_xl as px
 
     from ..mujoco.catalogs.reference import reference_catalog
-
     forced = task.trajectory.forcing != "implicit"
     arguments = dataset.fit_arguments(forces="tau" if forced else None)
     catalog = reference_catalog(system, task.catalog)
     if task.solver == "pysindy":
         from .baseline import SINDyBaseline, baseline_terms
-
         catalog.fit()
         if arguments["x_dot"] is None:  # positions only: derivatives of the smoothed data
             smoothed = [px.WhittakerSmoother().smooth(t, x)
@@ -176,7 +114,7 @@ def _identify(task: Task, system, dataset):
 
 
 def _model_summary(task: Task, system, model) -> dict:
-    """Size of the model and, for XL-SINDy models, its error against the true coefficients."""
+    """Size of the model and, for XL-SINDy models, its error against the truth."""
     if task.solver == "pysindy":
         coef = model.coef_
         names = model.get_feature_names()
@@ -190,7 +128,6 @@ def _model_summary(task: Task, system, model) -> dict:
                "dropped_features": len(getattr(model, "dropped_features_", {}) or {})}
     try:
         from ..mujoco.catalogs.reference import true_coefficients
-
         truth, missing = true_coefficients(system, model.feature_library_)
         # an implicit law is only defined up to a factor: compare at the best common scale
         # (1 for explicit fits, whose force coefficient is fixed to -1 like the truth's)
@@ -207,25 +144,10 @@ def _model_summary(task: Task, system, model) -> dict:
 
 def execute_task(task: Task, settings: GridSettings, deadline: float | None = None,
                  stage=None) -> dict:
-    """Run one task in this process and return its record (no time limit of its own).
-
-    Parameters
-    ----------
-    task : Task
-    settings : GridSettings
-        Data settings of the grid.
-    deadline : float, optional
-        ``time.perf_counter()`` value by which the run must end: the validation simulation
-        gets the remaining time as its own timeout.
-    stage : callable, optional
-        Called with ``"generate"``, ``"fit"``, ``"validate"`` as the run advances.
-
-    Returns
-    -------
-    dict
-        The record (see :mod:`~pysindy_xl.benchmark.records`); the warnings raised during the
-        run (convergence...) are collected in its ``warnings`` list instead of being printed.
-    """
+    """Run one task in this process and return its record (no time limit of its own): the
+    validation simulation must end by ``deadline`` (a ``time.perf_counter()`` value), ``stage``
+    is called with ``"generate"``, ``"fit"``, ``"validate"``, and warnings go to the record's
+    ``warnings`` list."""
     stage = stage or (lambda name: None)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -239,7 +161,6 @@ def execute_task(task: Task, settings: GridSettings, deadline: float | None = No
 def _execute(task, settings, deadline, stage) -> dict:
     from ..dynamics import DynamicsError
     from ..mujoco.evaluation.validation import validate_model
-
     record = base_record(task, settings)
     spec = task.trajectory
     stage("generate")
@@ -290,7 +211,6 @@ def _execute(task, settings, deadline, stage) -> dict:
     return json_finite(record)
 
 
-# -- isolation and time limit ------------------------------------------------------------------
 def _grid_call(task, grid_pid, **options):
     """One run of a grid in a worker: :func:`run_task` under the worker's watchdog."""
     watch_grid(grid_pid)
@@ -298,7 +218,7 @@ def _grid_call(task, grid_pid, **options):
 
 
 def _prefetch(task: Task, settings: GridSettings) -> None:
-    """Simulate the trajectory's data in this process, so that forked runs inherit the cache."""
+    """Simulate the trajectory's data here, so that forked runs inherit the cache."""
     try:
         trajectory_data(task.trajectory, settings.n_trajectories, float(settings.duration),
                         settings.sample_every, float(settings.validation_duration))
@@ -308,27 +228,17 @@ def _prefetch(task: Task, settings: GridSettings) -> None:
 
 def run_task(task: Task, settings: GridSettings, timeout: float | None = None,
              isolation: str = "auto", function=None, blas_threads: int | None = None) -> dict:
-    """Run one task under its time limit; never raises for a failing run.
+    """Run one task under its time limit (``timeout``, default ``settings.timeout``); never raises
+    for a failing run and returns the record, with ``finished_at``.
 
     Parameters
     ----------
-    task : Task
-    settings : GridSettings
-    timeout : float, optional
-        Seconds (default ``settings.timeout``).
     isolation : {"auto", "process", "signal", "none"}
-        See the module docstring; ``auto`` picks ``process`` where fork exists.
+        Module docstring; ``auto`` picks ``process`` where fork exists.
     function : callable, optional
-        ``function(task, settings, deadline, stage) -> record`` (default
-        :func:`execute_task`); for tests and custom benchmarks.
+        ``function(task, settings, deadline, stage) -> record`` (default :func:`execute_task`).
     blas_threads : int, optional
-        Limit BLAS to this many threads during the run (see :func:`blas_thread_limit`);
-        default: no limit.
-
-    Returns
-    -------
-    dict
-        The record, with ``finished_at``.
+        BLAS threads during the run (:func:`blas_thread_limit`); default: no limit.
     """
     with blas_thread_limit(blas_threads):
         return _run_task(task, settings, timeout, isolation, function)
@@ -354,23 +264,13 @@ def _run_task(task, settings, timeout, isolation, function):
     return finish_record(json_finite(record))
 
 
-# -- the grid ----------------------------------------------------------------------------------
 @contextlib.contextmanager
 def backend_context(backend: str | None = None, address: str | None = None):
-    """A :func:`joblib.parallel_config` context for ``backend``.
-
-    Parameters
-    ----------
-    backend : {None, "loky", "multiprocessing", "dask", "ray"}
-        ``None`` / ``"loky"``: local processes. ``"dask"``: connects a
-        ``dask.distributed.Client`` to ``address`` (a scheduler such as
-        ``tcp://host:8786``; a local cluster when None). ``"ray"``: registers Ray's joblib
-        backend and calls ``ray.init(address=address)`` (``"auto"`` joins a running cluster).
-        Dask and Ray are imported only here, only when asked for.
-    address : str, optional
-    """
+    """A :func:`joblib.parallel_config` context for ``backend``: ``None`` / ``"loky"`` /
+    ``"multiprocessing"`` (local processes), ``"dask"`` (a ``dask.distributed.Client`` on the
+    scheduler ``address``, a local cluster when None) or ``"ray"`` (``ray.init(address=address)``,
+    ``"auto"`` joins a running cluster). Dask and Ray are imported only when asked for."""
     import joblib
-
     if backend in (None, "loky", "multiprocessing"):
         with joblib.parallel_config(backend=backend or "loky"):
             yield
@@ -397,15 +297,13 @@ def backend_context(backend: str | None = None, address: str | None = None):
         with joblib.parallel_config(backend="ray"):
             yield
         return
-    raise ValueError(
-        f"backend: expected None, 'loky', 'multiprocessing', 'dask' or 'ray', got {backend!r}"
-    )
+    raise ValueError(f"backend: expected None, 'loky', 'multiprocessing', 'dask' or 'ray', "
+                     f"got {backend!r}")
 
 
 def _results(tasks, call, n_jobs):
     """Yield records as runs finish (unordered), or in chunks where the backend cannot."""
     import joblib
-
     try:
         parallel = joblib.Parallel(n_jobs=n_jobs, return_as="generator_unordered")
     except ValueError:  # backends without generator support (multiprocessing, Ray)
@@ -422,49 +320,34 @@ def _results(tasks, call, n_jobs):
 def run_grid(settings: GridSettings, records_path, n_jobs: int = -1, backend: str | None = None,
              address: str | None = None, retry=(), isolation: str = "auto", progress=None,
              limit: int | None = None, function=None, blas_threads="auto") -> dict:
-    """Run every pending task of a grid, appending one record per run.
+    """Run every pending task of a grid, appending one record per run to the JSONL file
+    ``records_path`` (runs recorded there are skipped).
 
     Parameters
     ----------
-    settings : GridSettings
-    records_path : str or os.PathLike
-        JSONL record file; runs already recorded there are skipped.
     n_jobs : int, default -1
         Parallel processes (joblib convention: -1 = all cores).
     backend, address : str, optional
-        See :func:`backend_context`.
+        As in :func:`backend_context`.
     retry : iterable of str
         Statuses to run again (e.g. ``("error", "timeout")``).
-    isolation : str
-        See :func:`run_task`.
+    isolation, function : optional
+        As in :func:`run_task`.
     progress : bool, optional
         Show a tqdm progress bar (default: on a terminal).
     limit : int, optional
-        Run at most this many pending tasks (then stop; rerun to continue).
-    function : callable, optional
-        Replaces :func:`execute_task` (see :func:`run_task`).
+        Run at most this many pending tasks.
     blas_threads : "auto", int or None, default "auto"
-        BLAS threads inside each run: ``"auto"`` is 1 when runs go in parallel (``n_jobs``
-        > 1, Dask, Ray) and no limit otherwise; an integer sets it; None leaves BLAS alone.
+        BLAS threads per run: ``"auto"`` is 1 when runs go in parallel, no limit otherwise.
 
     Returns
     -------
     dict
-        ``{"total", "skipped", "ran", "statuses", "seconds"}``.
-
-    Notes
-    -----
-    Killing the grid leaves no process behind and keeps every finished run (see
-    "Killing the grid" in the module docstring). Ctrl-C (SIGINT) raises
-    :class:`KeyboardInterrupt` after joblib has killed the workers and their runs; SIGTERM
-    (where the application has no handler of its own and the grid runs in the main thread)
-    stops the grid in the same way and then ends the process by SIGTERM; after SIGKILL of the
-    grid process its local workers exit within about a second and their forked runs with them
-    (Linux). This covers the local workers (``backend="loky"``, the default); the workers of
-    a Dask or Ray cluster are the cluster's to manage.
+        ``{"total", "skipped", "ran", "statuses", "seconds"}``. Ctrl-C raises
+        :class:`KeyboardInterrupt` after joblib has killed its workers; SIGTERM stops the grid
+        the same way, then ends the process by SIGTERM.
     """
     from tqdm.auto import tqdm
-
     if not isinstance(settings, GridSettings):
         raise TypeError(f"settings: expected a GridSettings, got {type(settings).__name__}")
     if limit is not None and (isinstance(limit, bool) or not isinstance(limit, int)

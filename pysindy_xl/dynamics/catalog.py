@@ -15,38 +15,17 @@ __all__ = ["CatalogDynamics"]
 class CatalogDynamics(MassMatrixDynamics):
     r"""The equations ``sum_j xi_j E[c, j] = 0`` of a catalog in mass-matrix form.
 
-    Each column entry ``E[c, j]`` is decomposed once into monomials of a few atoms; the
-    coefficients ``xi`` combine them numerically into the monomials of ``M`` (the terms
-    with ``qdd_k``, without it) and ``f`` (minus the terms without acceleration):
+    The column entries ``E[c, j]``, decomposed once into monomials of a few atoms, are combined
+    numerically with the coefficients ``coef`` (F,) into
 
     .. math:: M_{ck} = \sum_j \xi_j \frac{\partial E_{cj}}{\partial \ddot q_k}, \qquad
               f_c = -\sum_j \xi_j E_{cj}\big|_{\ddot q = 0}.
 
-    Nothing is expanded or lambdified as a whole. Lagrange libraries that carry a kinematic
-    tree (kinematic catalogs, :class:`~pysindy_xl.PolynomialLagrangeLibrary` with ``tree``)
-    are evaluated by the rigid-body kernel instead (:mod:`pysindy_xl.physical.rigid_body`):
-    their coefficients become physical parameters ``pi`` with the same Euler-Lagrange
-    equations, and a seven-joint arm costs what its bodies cost, not what the tens of
-    thousands of monomials of its columns would. The symbolic forms (``equations``,
-    ``mass_matrix_expr``, ``forcing_expr``, ``terms``) are built on first use from the
-    monomials of every column.
-
-    Parameters
-    ----------
-    library : fitted SymbolicLibrary
-        The catalog (``coords`` and ``symbolic_matrix_``).
-    coef : array, shape (F,)
-        One coefficient per feature; only the non-zero ones are read.
-    held : array of bool, shape (n,), optional
-        Coordinates held by the model (coordinates that stood still in the data, see
-        :mod:`pysindy_xl.fit.still`): their equation is replaced by ``qdd_c = 0`` (a unit row of
-        ``M``, zero ``f``), whatever the catalog's entries in it.
-
-    Attributes
-    ----------
-    rigid_parts : list of (KinematicTree, ndarray)
-        The kinematic trees evaluated by the rigid-body kernel, with their physical
-        parameters ``pi``.
+    Lagrange libraries with a kinematic tree go through the rigid-body kernel instead
+    (:mod:`pysindy_xl.physical.rigid_body`; ``rigid_parts``: their ``(tree, pi)``), so an arm
+    costs what its bodies cost. The symbolic forms are built on first use. ``library`` is a
+    fitted catalog; ``held`` (n,) flags coordinates held still (:mod:`pysindy_xl.fit.still`),
+    whose equation becomes ``qdd_c = 0``.
 
     Examples
     --------
@@ -75,8 +54,8 @@ class CatalogDynamics(MassMatrixDynamics):
         self._compile()
 
     def _rigid_body(self, z):
-        """``M`` and ``f`` contributions of :attr:`rigid_parts` at the rows of ``z``, zero in
-        the equations of held coordinates."""
+        """``M`` and ``f`` of :attr:`rigid_parts` at the rows of ``z``, zero for held coordinates.
+        """
         n = self._n
         q, qd = z[:, :n], z[:, n:2 * n]
         mass, bias = 0.0, 0.0
@@ -105,9 +84,7 @@ class CatalogDynamics(MassMatrixDynamics):
 
     @property
     def terms(self) -> Terms:
-        """``M`` and ``f`` as polynomials in atoms, the rigid-body parts written out (built on
-        first use: an arm's tens of thousands of monomials); the numeric evaluators read the
-        rigid parts through their kernel instead."""
+        """``M`` and ``f`` as polynomials, rigid-body parts written out (built on first use)."""
         if not self.rigid_parts:
             return self._terms
         full = self.__dict__.get("_full_terms")
@@ -140,9 +117,8 @@ class CatalogDynamics(MassMatrixDynamics):
 
 
 def _rigid_body_parts(library, coef) -> tuple[list, np.ndarray]:
-    """The Lagrange libraries of ``library`` that carry a kinematic tree, as ``(tree, pi)``
-    pairs (physical parameters reproducing their coefficients), and a mask of their
-    features, which the rigid-body kernel evaluates instead of their monomials."""
+    """``(tree, pi)`` of the Lagrange libraries of ``library`` that carry a kinematic tree, and the
+    mask of their features (evaluated by the rigid-body kernel instead of their monomials)."""
     parts = getattr(library, "libraries_", [library])
     slices = getattr(library, "slices_", [slice(0, len(coef))])
     mask = np.zeros(len(coef), dtype=bool)
@@ -157,8 +133,8 @@ def _rigid_body_parts(library, coef) -> tuple[list, np.ndarray]:
 
 
 def _catalog_terms(library, coef, held, features=None) -> Terms:
-    """:class:`Terms` of ``M`` and ``f`` from the catalog's column entries with a non-zero
-    coefficient (of the ``features`` mask only, when given), held coordinates' rows excepted."""
+    """:class:`Terms` of ``M`` and ``f`` from the entries with a non-zero coefficient (of the
+    ``features`` mask when given), held coordinates' rows excepted."""
     index = library.entry_index_
     keep = (coef[index[:, 1]] != 0) & ~held[index[:, 0]]
     if features is not None:
@@ -175,17 +151,15 @@ def _catalog_terms(library, coef, held, features=None) -> Terms:
 
 
 def _acceleration_in_a_factor(terms: Terms, coords) -> bool:
-    """Whether an atom other than an acceleration itself contains one (a factor such as
-    ``(qdd + q)``, which the split into ``M`` and ``f`` cannot read)."""
+    """Whether an atom other than an acceleration contains one (``(qdd + q)``: not splittable)."""
     accelerations = set(coords.qdd)
     return any(atom.free_symbols & accelerations for atom in terms.atoms
                if atom not in accelerations)
 
 
 def _mass_and_forcing_terms(coords, terms: Terms, rows, weights, held=None) -> Terms:
-    """The :class:`Terms` of ``M`` (n * n entries, row-major) and ``f`` (n entries) of the
-    equations ``sum_k weights[k] entry_k = 0``, ``entry_k`` in the equation of ``rows[k]``;
-    the equations of ``held`` coordinates (a mask, none of the ``rows``) are ``qdd_c = 0``."""
+    """:class:`Terms` of ``M`` (n * n, row-major) and ``f`` (n) of ``sum_k weights[k] entry_k = 0``
+    (``entry_k`` in the equation of ``rows[k]``); ``held`` coordinates get ``qdd_c = 0``."""
     n = coords.n
     if _acceleration_in_a_factor(terms, coords):
         raise ValueError("equations: not linear in the accelerations")

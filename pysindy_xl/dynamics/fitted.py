@@ -1,11 +1,6 @@
-"""What a fitted model does with its equations: accelerations, scores, simulations, exports.
-
-:class:`DynamicsMixin` is the second half of :class:`~pysindy_xl.XLSINDy` (the first,
-:mod:`pysindy_xl.model`, fits): everything here needs only the fitted state ``coef_``,
-``dynamics_`` (the :class:`~pysindy_xl.MassMatrixDynamics` of the identified equations),
-``n_coordinates_`` and the host's parameters (its input handling is the fit stage's,
-:func:`~pysindy_xl.fit.estimator_trajectories`).
-"""
+"""What a fitted :class:`~pysindy_xl.XLSINDy` does with its equations: predictions, scores,
+simulations, exports. Reads only ``coef_``, ``dynamics_``, ``n_coordinates_`` and the
+host's parameters."""
 
 from __future__ import annotations
 
@@ -21,32 +16,18 @@ __all__ = ["DynamicsMixin"]
 
 
 class DynamicsMixin:
-    """Prediction, scoring, simulation, JAX/Gymnasium export and saving of a fitted model
-    (mixed into :class:`~pysindy_xl.XLSINDy`, which loads)."""
+    """Prediction, scoring, simulation, export and saving (mixed into ``XLSINDy``)."""
 
-    # -- prediction ----------------------------------------------------------------------------
     def _require_dynamics(self) -> MassMatrixDynamics:
         check_is_fitted(self, "coef_")
         if self.dynamics_ is None:
-            raise ValueError(
-                "the identified equations contain no acceleration, so they define no dynamics"
-            )
+            raise ValueError("the identified equations contain no acceleration, so they define "
+                             "no dynamics")
         return self.dynamics_
 
     def predict(self, x, x_dot, u=None):
-        """Accelerations predicted by the identified equations.
-
-        Parameters
-        ----------
-        x, x_dot : array (N, n) or list of arrays
-            Positions and velocities.
-        u : same layout, optional
-            Generalized forces; zero when absent.
-
-        Returns
-        -------
-        ndarray (N, n), or a list of them when ``x`` is a list.
-        """
+        """Accelerations (N, n) of the identified equations at positions ``x`` and velocities
+        ``x_dot`` (N, n) under forces ``u`` (zero when absent); lists of arrays give a list."""
         dynamics = self._require_dynamics()
         n = self.n_coordinates_
         xs, is_list = as_list(x, "x")
@@ -63,30 +44,17 @@ class DynamicsMixin:
                 acc = dynamics.accelerations(xk, xdk, uk)
             if not np.all(np.isfinite(acc)):
                 bad = np.flatnonzero(~np.all(np.isfinite(acc), axis=1))
-                raise ValueError(
-                    f"x{label}: the identified equations are not finite (overflow or outside "
-                    f"their domain) at {len(bad)} of {len(acc)} samples, first at sample "
-                    f"{bad[0]}; the values are too large for the model or outside its range"
-                )
+                raise ValueError(f"x{label}: the identified equations are not finite (overflow "
+                                 f"or outside their domain) at {len(bad)} of {len(acc)} "
+                                 f"samples, first at sample {bad[0]}; the values are too large "
+                                 "for the model or outside its range")
             out.append(acc)
         return out if is_list else out[0]
 
     def predict_forces(self, x, x_dot, x_ddot):
-        """Generalized forces that move the identified system as given: inverse dynamics.
-
-        ``M(q, qd) qdd - f(q, qd, 0)``, the forces (through the catalog's interlink) under
-        which the identified equations hold with the given accelerations; for a robot arm, the
-        joint torques. Compared with measured torques on a fresh trajectory this is the
-        standard validation of robot identification: no integration, insensitive to feedback.
-
-        Parameters
-        ----------
-        x, x_dot, x_ddot : array (N, n)
-            Positions, velocities and accelerations.
-
-        Returns
-        -------
-        ndarray, shape (N, n)
+        """Inverse dynamics ``M(q, qd) qdd - f(q, qd, 0)`` (N, n): the forces (a robot's joint
+        torques) under which the identified equations hold with the motion ``x``, ``x_dot``,
+        ``x_ddot`` (N, n).
 
         Examples
         --------
@@ -105,29 +73,14 @@ class DynamicsMixin:
         x_dot = check_array(x_dot, "x_dot", x.shape)
         x_ddot = check_array(x_ddot, "x_ddot", x.shape)
         from ..feature_library import stack_variables
-
         mass, free = dynamics.mass_and_forcing(stack_variables(x, x_dot))
         return np.einsum("sij,sj->si", mass, x_ddot) - free
 
     def score_forces(self, x, t, u, x_dot=None, x_ddot=None, smoother=None,
                      max_frequency=10.0):
-        """Held-out force prediction: RMS per coordinate (in force units and relative), total.
-
-        The robotics validation of an identified arm on a run it never saw: the torques
-        :meth:`predict_forces` needs to move as recorded against the measured ones, with the
-        derivatives not given estimated the same way whatever the model
-        (:mod:`pysindy_xl.held_out`).
-
-        Parameters
-        ----------
-        x, t, u, x_dot, x_ddot, smoother, max_frequency
-            As in :func:`pysindy_xl.held_out.score_forces`: the held-out run(s), measured
-            forces and derivatives, and the default derivative estimate's settings.
-
-        Returns
-        -------
-        ForceScore
-            ``rms``, ``relative`` (per coordinate), ``total``, ``lines()``, ``plot(path)``.
+        """Held-out error of :meth:`predict_forces` against measured forces ``u``: a ``ForceScore``
+        with ``rms``, ``relative`` (per coordinate), ``total``, ``lines()`` and ``plot(path)``;
+        arguments as in :func:`pysindy_xl.held_out.score_forces`.
 
         Examples
         --------
@@ -143,28 +96,15 @@ class DynamicsMixin:
         (0.02, 'measured')
         """
         from ..held_out import score_forces
-
         self._require_dynamics()
         return score_forces(self, x, t, u, x_dot, x_ddot, smoother, max_frequency)
 
     def score(self, x, t=None, x_dot=None, x_ddot=None, u=None, metric=r2_score):
-        """Score predicted accelerations against measured (or differentiated) ones.
-
-        Parameters
-        ----------
-        x, t, x_dot, x_ddot, u
-            As in :meth:`fit`.
-        metric : callable, default ``sklearn.metrics.r2_score``
-            ``metric(true, predicted)``.
-
-        Returns
-        -------
-        float
-        """
+        """``metric(true, predicted)`` of the accelerations (default R^2); ``x, t, x_dot,
+        x_ddot, u`` as in :meth:`fit`."""
         self._require_dynamics()
         check_instance("metric", metric, "a function metric(true, predicted)", "__call__")
         from ..fit import estimator_trajectories
-
         data = estimator_trajectories(self, x, t, x_dot, x_ddot, u, self.n_coordinates_)
         true = np.vstack([d["x_ddot"] for d in data])
         predicted = np.vstack([
@@ -173,35 +113,13 @@ class DynamicsMixin:
         return metric(true, predicted)
 
     def simulate(self, x0, t, u=None, feedback=None, **integrator_options) -> np.ndarray:
-        """Simulate the identified dynamics, open loop (``u``) or closed loop (``feedback``).
-
-        Parameters
-        ----------
-        x0 : array, shape (2n,)
-            Initial state ``[q_1..q_n, qd_1..qd_n]``.
-        t : array, shape (T,)
-            Output times, strictly increasing.
-        u : None, array (T, n) or callable ``u(t) -> (n,)``
-            Generalized forces as a function of time (arrays are interpolated by a cubic
-            spline by default).
-        feedback : callable, optional
-            A feedback law ``feedback(t, q, qd) -> (n,)`` evaluated at every step and added to
-            ``u``: a servo-driven system simulated the way it ran, its servos reacting to the
-            model's motion (:func:`pysindy_xl.mujoco.actuator_law` gives an MJCF's law).
-        **integrator_options
-            Passed to :meth:`MassMatrixDynamics.simulate` (``method``, ``rtol``, ``atol``,
-            ``divergence_bound``, ``max_evaluations``, ``timeout``, ``interpolation``), which
-            also says what it raises (:class:`SimulationError` holds the valid part of the
-            trajectory).
-
-        Returns
-        -------
-        ndarray, shape (T, 2n)
+        """Simulate the identified dynamics, open loop (``u``) or closed loop (``feedback``);
+        returns the states (T, 2n). Arguments and errors as in :meth:`MassMatrixDynamics.simulate
+        <pysindy_xl.MassMatrixDynamics.simulate>` (``u`` may be 1-D for one coordinate).
 
         Examples
         --------
-        A unit mass on a spring (``x'' + 2 x = u``), identified, then brought to ``x = 0.5``
-        by a PD controller with the spring's force at 0.5 as feed-forward:
+        A spring ``x'' + 2 x = u``, identified, then brought to ``x = 0.5`` by a PD law:
 
         >>> import numpy as np, pysindy_xl as px
         >>> c = px.Coordinates(["x"])
@@ -224,78 +142,28 @@ class DynamicsMixin:
         return dynamics.simulate(x0, t, u, **integrator_options)
 
     def to_jax(self):
-        """Pure JAX function ``f(state, u) -> d(state)/dt`` of the identified dynamics.
-
-        Returns
-        -------
-        callable
-            jit-, vmap- and grad-compatible; see :mod:`pysindy_xl.export.jax_dynamics`.
-        """
+        """Pure JAX function ``f(state, u) -> d(state)/dt`` (jit-, vmap- and grad-compatible;
+        :func:`pysindy_xl.export.jax_dynamics.dynamics_function`)."""
         from ..export.jax_dynamics import dynamics_function
-
         return dynamics_function(self._require_dynamics())
 
-    # -- persistence ---------------------------------------------------------------------------
     def save(self, path) -> None:
-        """Save the catalog specification and coefficients as JSON (see :mod:`pysindy_xl.io`).
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-        """
+        """Save the catalog specification and coefficients as JSON (:mod:`pysindy_xl.io`)."""
         from ..io import save_model
-
         save_model(self, path)
 
     def to_mjcf(self, path, template=None) -> dict:
-        """Write the identified robot as an MJCF model MuJoCo can simulate.
-
-        The identified base parameters become physically consistent body inertials (the
-        consistent set closest to the template's, :mod:`pysindy_xl.export.mjcf`), with each
-        joint's armature and the identified viscous and dry friction as ``damping`` and
-        ``frictionloss``; everything else (kinematics, actuators, options) is the
-        template's.
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            The MJCF file to write.
-        template : str, os.PathLike or MJCFSystem
-            The MJCF the model was identified on (a model fitted with
-            ``kinematic_catalog(template).library()``).
-
-        Returns
-        -------
-        dict
-            ``physical_parameters`` (name -> value written), ``residual``
-            (``|C pi - beta| / |beta|``, zero when the identified parameters are realizable
-            by rigid bodies) and ``dropped``: ``{joint: {model: value}}``, the identified
-            joint models MJCF cannot state (asymmetric Coulomb, Stribeck, torque offset: a
-            catalog built with ``friction=``), left out of the file.
-        """
+        """Write the identified robot to ``path`` as MJCF: physically consistent body inertials,
+        joint armature, ``damping`` and ``frictionloss``, the rest from ``template``, the MJCF it
+        was identified on (:mod:`pysindy_xl.export.mjcf`). Returns ``physical_parameters`` (name
+        -> value written), ``residual`` (``|C pi - beta| / |beta|``, zero when realizable by rigid
+        bodies) and ``dropped`` (``{joint: {model: value}}``, joint models MJCF cannot state)."""
         from ..export.mjcf import to_mjcf
-
         check_is_fitted(self, "coef_")
         return to_mjcf(self, path, template)
 
-    # -- reinforcement learning ----------------------------------------------------------------
     def to_gymnasium(self, dt, **options):
-        """A Gymnasium environment whose dynamics are the identified model.
-
-        Parameters
-        ----------
-        dt : float
-            Seconds per step.
-        **options
-            ``reward``, ``terminated``, ``initial_state``, ``actuated``, ``action_bounds``,
-            ``max_episode_steps``, ``substeps``, ``observation_bounds``: see
-            :class:`pysindy_xl.export.gym_env.IdentifiedDynamicsEnv`.
-
-        Returns
-        -------
-        pysindy_xl.export.gym_env.IdentifiedDynamicsEnv
-            Observation ``[q, qd]``, action the forces of the actuated coordinates.
-        """
+        """A Gymnasium environment stepping the identified model; ``dt`` and ``**options`` as in
+        :class:`pysindy_xl.export.gym_env.IdentifiedDynamicsEnv`."""
         from ..export.gym_env import make_env
-
         return make_env(self, dt, **options)

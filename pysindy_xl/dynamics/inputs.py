@@ -1,6 +1,5 @@
-"""What drives a simulation: forces as a function of time (``u``) and of the state
-(``feedback``), checked once at the boundary and turned into fast callables for the
-integrator's right-hand side, for ``n`` coordinates and simulation times ``t``."""
+"""Forces that drive a simulation, of time (``u``) and of the state (``feedback``), checked
+once and turned into fast callables for the integrator."""
 
 from __future__ import annotations
 
@@ -14,25 +13,10 @@ _INTERPOLATIONS = ("cubic", "linear", "previous")
 
 
 def force_function(u, t: np.ndarray, n: int, interpolation: str = "cubic"):
-    """Turn the ``u`` argument of ``simulate`` into a function of time.
-
-    Parameters
-    ----------
-    u : None, array (len(t), n), or callable ``u(t) -> (n,)``
-        Generalized forces.
-    t : ndarray, shape (T,)
-        Simulation times.
-    n : int
-        Number of coordinates.
-    interpolation : {"cubic", "linear", "previous"}
-        How an array ``u`` is read between samples: a cubic spline (smooth forces: adaptive
-        integrators take far fewer steps than on the kinks of a linear interpolant), linear,
-        or zero-order hold (``"previous"``, for piecewise-constant actuator commands).
-
-    Returns
-    -------
-    callable
-        ``u(t) -> ndarray (n,)``.
+    """The ``u`` argument of ``simulate`` (None, an array (len(t), n) over the times ``t``, or a
+    callable ``u(t) -> (n,)``) as a checked function of time ``u(t) -> (n,)``; ``interpolation``
+    reads an array between samples by a cubic spline (smooth: adaptive integrators take fewer
+    steps), linearly, or by zero-order hold (``"previous"``, piecewise-constant commands).
 
     Examples
     --------
@@ -83,31 +67,9 @@ def force_function(u, t: np.ndarray, n: int, interpolation: str = "cubic"):
 
 
 def feedback_function(feedback, x0: np.ndarray, t0: float, n: int):
-    """Check the ``feedback`` argument of ``simulate`` and wrap it for the integrator.
-
-    Parameters
-    ----------
-    feedback : None or callable
-        ``feedback(t, q, qd) -> (n,)``: generalized forces from the time and the state.
-    x0 : ndarray, shape (2n,)
-        Initial state, at which the law is evaluated once to check its output.
-    t0 : float
-        Initial time.
-    n : int
-        Number of coordinates.
-
-    Returns
-    -------
-    callable or None
-        ``f(t, state) -> ndarray (n,)`` (``q``, ``qd`` are passed as copies, so the law cannot
-        alter the integrator's state); None when ``feedback`` is None.
-
-    Raises
-    ------
-    TypeError
-        If ``feedback`` is not callable.
-    ValueError
-        If it does not return ``n`` values, or returns non-finite ones at the initial state.
+    """The ``feedback`` argument of ``simulate``, ``feedback(t, q, qd) -> (n,)`` or None, checked
+    once at the initial state ``x0`` and time ``t0`` and wrapped as ``f(t, state) -> (n,)``
+    (``q``, ``qd`` passed as copies); None without feedback.
 
     Examples
     --------

@@ -1,13 +1,9 @@
 """Mass-matrix form of identified equations, ``M(q, qd) qdd = f(q, qd, tau, t)``, and simulation.
 
-The identified equations are linear in the accelerations. ``M`` holds their coefficients of
-``qdd`` and ``f`` minus their value at ``qdd = 0``; both are kept as polynomials in a few atoms
-(:class:`~pysindy_xl.feature_library._compile.Terms`), evaluated by one vectorized kernel on
-many states and by flat generated code at one state, and the accelerations follow from a
-batched linear solve. No symbolic solve is ever performed, and nothing is lambdified whole.
-:class:`MassMatrixDynamics` starts from equations, :class:`~pysindy_xl.dynamics.CatalogDynamics`
-from a catalog and its coefficients.
-"""
+``M`` holds the equations' coefficients of ``qdd`` and ``f`` minus their value at ``qdd = 0``,
+both kept as polynomials in a few atoms (:class:`~pysindy_xl.feature_library.Terms`): one
+vectorized kernel evaluates many states, flat generated code one state, and a batched linear
+solve gives the accelerations; nothing is solved symbolically or lambdified whole."""
 
 from __future__ import annotations
 
@@ -15,7 +11,6 @@ import time as _time
 
 import numpy as np
 import scipy.integrate
-import scipy.interpolate
 import sympy as sp
 
 from .._validation import check_numeric_array, check_option, check_times
@@ -39,17 +34,7 @@ class DynamicsError(RuntimeError):
 
 
 class SingularMassMatrixError(DynamicsError):
-    """The identified mass matrix is singular (or numerically so) at some states.
-
-    Parameters
-    ----------
-    message : str
-    indices : sequence of int
-        Samples where the mass matrix is singular.
-
-    Attributes
-    ----------
-    indices : ndarray of int
+    """The identified mass matrix is singular (or numerically so) at the samples ``indices``.
 
     Examples
     --------
@@ -69,25 +54,10 @@ class SingularMassMatrixError(DynamicsError):
 
 
 class SimulationError(DynamicsError):
-    """A simulation stopped before its end.
-
-    Parameters
-    ----------
-    message : str
-    t_failed, t, states, reason
-        Stored as the attributes below.
-
-    Attributes
-    ----------
-    t_failed : float
-        Time at which the simulation stopped.
-    t : ndarray, shape (k,)
-        Requested times reached before the failure.
-    states : ndarray, shape (k, 2n)
-        States at those times (the valid part of the trajectory).
-    reason : str
-        ``"diverged"``, ``"singular mass matrix"``, ``"non-finite derivative"``,
-        ``"too many evaluations"``, ``"timeout"`` or ``"integrator failure (...)"``.
+    """A simulation stopped before its end, at time ``t_failed`` for ``reason`` (``"diverged"``,
+    ``"singular mass matrix"``, ``"non-finite derivative"``, ``"too many evaluations"``,
+    ``"timeout"`` or ``"integrator failure (...)"``); ``t`` (k,) and ``states`` (k, 2n) are
+    the valid part of the trajectory.
 
     Examples
     --------
@@ -110,20 +80,9 @@ class SimulationError(DynamicsError):
 
 
 class MassMatrixDynamics:
-    """Equations ``E(q, qd, qdd, tau, t) = 0``, linear in ``qdd``, in mass-matrix form.
-
-    Parameters
-    ----------
-    coords : Coordinates
-    equations : sequence of sympy.Expr, length n
-        One equation per coordinate (equal to zero), linear in ``coords.qdd``.
-
-    Attributes
-    ----------
-    mass_matrix_expr : sympy.Matrix, shape (n, n)
-        ``M(q, qd)``.
-    forcing_expr : sympy.Matrix, shape (n, 1)
-        ``f(q, qd, tau, t)``, so that ``M qdd = f``.
+    """Equations ``E(q, qd, qdd, tau, t) = 0``, one per coordinate of ``coords`` and linear in
+    ``coords.qdd``, in mass-matrix form: ``mass_matrix_expr`` ``M(q, qd)`` (n, n) and
+    ``forcing_expr`` ``f(q, qd, tau, t)`` (n, 1), ``M qdd = f``.
 
     Examples
     --------
@@ -138,7 +97,6 @@ class MassMatrixDynamics:
         if not isinstance(coords, Coordinates):
             raise TypeError(f"coords: expected Coordinates, got {type(coords).__name__}")
         from ..expressions import as_expression
-
         if isinstance(equations, (str, sp.Basic)) or not hasattr(equations, "__iter__"):
             raise TypeError("equations: expected a list of expressions, one per coordinate")
         table = coords.symbol_table()
@@ -165,37 +123,31 @@ class MassMatrixDynamics:
         self._vectorized_at_one_state = sum(
             len(entry) for entry in self._terms.entries) > _SCALAR_TERMS
 
-    #: Parts of ``M`` and ``f`` evaluated by the rigid-body kernel, ``(tree, pi)`` pairs (see
-    #: :class:`~pysindy_xl.dynamics.catalog.CatalogDynamics`); none here.
+    #: ``(tree, pi)`` pairs evaluated by the rigid-body kernel (:class:`CatalogDynamics`).
     rigid_parts: tuple = ()
 
     @property
     def terms(self) -> Terms:
-        """``M`` (n * n entries, row-major) then ``f`` (n entries) as polynomials in atoms
-        (:class:`~pysindy_xl.feature_library._compile.Terms`)."""
+        """``M`` (n * n entries, row-major) then ``f`` (n entries) as polynomials in atoms."""
         return self._terms
 
     @property
     def numeric_terms(self) -> Terms:
-        """The part of :attr:`terms` that numeric evaluators read as polynomials; they add
-        :attr:`rigid_parts` with :func:`~pysindy_xl.physical.rigid_body.rigid_body_dynamics`."""
+        """The part of :attr:`terms` read as polynomials (evaluators add :attr:`rigid_parts`)."""
         return self._terms
 
     @property
     def n_terms(self) -> int:
-        """Monomials of ``M`` and ``f`` together (of :attr:`terms`): how long the written
-        equations are."""
+        """Monomials of ``M`` and ``f`` together: how long the written equations are."""
         count = self.__dict__.get("_n_terms")
         if count is None:
             count = self._n_terms = sum(len(entry) for entry in self.terms.entries)
         return count
 
     def _evaluate_scalar(self, *values):
-        """Entries at one state (simulation). Plain floats through the math module are an
-        order of magnitude faster than NumPy calls on length-1 arrays for a few hundred
-        terms; past :data:`_SCALAR_TERMS` (a robot arm's tens of thousands), the per-term
-        Python work dominates and the vectorized kernel on one row is faster. Generated on
-        first use (large models pay the code generation only when they simulate)."""
+        """Entries at one state: generated code on Python floats (far faster than NumPy on length-1
+        arrays), or the vectorized kernel past :data:`_SCALAR_TERMS` terms; generated on first use.
+        """
         if self._vectorized_at_one_state:
             return [float(v[0]) for v in self._evaluate(np.array([values], dtype=float))]
         function = self.__dict__.get("_scalar_function")
@@ -217,18 +169,8 @@ class MassMatrixDynamics:
         self._compile()
 
     def mass_and_forcing(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Evaluate the mass matrix and the forcing on many samples.
-
-        Parameters
-        ----------
-        z : ndarray, shape (N, 4n + 1)
-            Stacked variables (see :func:`~pysindy_xl.stack_variables`).
-
-        Returns
-        -------
-        mass : ndarray, shape (N, n, n)
-        forcing : ndarray, shape (N, n)
-        """
+        """``M`` (N, n, n) and ``f`` (N, n) at the rows of stacked variables ``z`` (N, 4n + 1)
+        (:func:`~pysindy_xl.stack_variables`)."""
         n, n_samples = self._n, z.shape[0]
         values = [np.broadcast_to(v, (n_samples,)) for v in self._evaluate(z)]
         mass = np.stack(values[: n * n], axis=-1).reshape(n_samples, n, n)
@@ -236,26 +178,9 @@ class MassMatrixDynamics:
         return mass, force
 
     def accelerations(self, q, qd, tau=None, t=None, rcond: float = 1e-12) -> np.ndarray:
-        """Accelerations ``qdd = M^-1 f`` at many states at once.
-
-        Parameters
-        ----------
-        q, qd : array, shape (N, n)
-        tau : array, shape (N, n), optional
-            Generalized forces (inputs), zero when absent.
-        t : array, shape (N,), optional
-        rcond : float
-            Reciprocal condition number of ``M`` below which it counts as singular.
-
-        Returns
-        -------
-        ndarray, shape (N, n)
-
-        Raises
-        ------
-        SingularMassMatrixError
-            Where ``M`` is singular.
-        """
+        """Accelerations ``qdd = M^-1 f`` at many states: ``q``, ``qd``, forces ``tau`` (zero when
+        absent) of shape (N, n), times ``t`` (N,). Raises :class:`SingularMassMatrixError` where
+        ``M``'s reciprocal condition number is below ``rcond``."""
         arrays = {"q": q, "qd": qd, "tau": tau, "t": t}
         for name, value in arrays.items():
             if value is None:
@@ -275,27 +200,9 @@ class MassMatrixDynamics:
         return np.linalg.solve(mass, force[..., None])[..., 0]
 
     def state_derivative(self, state, u=None, t: float = 0.0) -> np.ndarray:
-        """``d(state)/dt = [qd, M^-1 f]`` at one state: the fast path used by simulators.
-
-        Evaluates ``M`` and ``f`` with Python floats (no NumPy call per entry), which is an
-        order of magnitude faster than :meth:`accelerations` on a single sample.
-
-        Parameters
-        ----------
-        state : array, shape (2n,)
-            ``[q, qd]``.
-        u : array, shape (n,), optional
-            Generalized forces; zero when absent.
-        t : float
-
-        Returns
-        -------
-        ndarray, shape (2n,)
-
-        Raises
-        ------
-        SingularMassMatrixError
-            If ``M`` is singular there, or ``M`` or ``f`` is not finite.
+        """``d(state)/dt = [qd, M^-1 f]`` at one state ``[q, qd]`` with forces ``u`` (n,) (zero when
+        absent): the simulators' fast path. Raises :class:`SingularMassMatrixError` if ``M`` is
+        singular there or ``M``, ``f`` not finite.
 
         Examples
         --------
@@ -308,16 +215,21 @@ class MassMatrixDynamics:
         state = np.asarray(state, dtype=float)
         inputs = [0.0] * n if u is None else np.asarray(u, dtype=float).tolist()
         try:
-            values = self._evaluate_scalar(*state.tolist(), *([0.0] * n), *inputs, t)
+            mass, force = self._scalar_parts(state, inputs, t)
         except (OverflowError, ValueError, ZeroDivisionError) as err:
             raise SingularMassMatrixError(f"cannot evaluate the dynamics: {err}", [0]) from None
-        mass = np.array(values[: n * n], dtype=float).reshape(n, n)
-        force = np.array(values[n * n :], dtype=float)
         if not (np.all(np.isfinite(mass)) and np.all(np.isfinite(force))):
             raise SingularMassMatrixError("the dynamics are not finite at this state", [0])
         if not abs(np.linalg.det(mass)) > 1e-12 * np.prod(np.linalg.norm(mass, axis=1)):
             raise SingularMassMatrixError("the identified mass matrix is singular", [0])
         return np.concatenate([state[n:], np.linalg.solve(mass, force)])
+
+    def _scalar_parts(self, state, inputs, t):
+        """``M`` (n, n) and ``f`` (n,) at one state (n + n floats) and forces (n floats)."""
+        n = self._n
+        values = self._evaluate_scalar(*state.tolist(), *([0.0] * n), *inputs, t)
+        return (np.array(values[: n * n], dtype=float).reshape(n, n),
+                np.array(values[n * n:], dtype=float))
 
     @staticmethod
     def _singular(mass: np.ndarray, rcond: float) -> np.ndarray:
@@ -331,54 +243,32 @@ class MassMatrixDynamics:
                  max_evaluations: int = 1_000_000, timeout: float | None = 300.0,
                  interpolation: str = "cubic", feedback=None,
                  step: float | None = None) -> np.ndarray:
-        """Integrate the dynamics with one of scipy's adaptive ODE solvers, or ROS2.
+        """Integrate the dynamics with one of scipy's adaptive ODE solvers, or ROS2; returns the
+        states (T, 2n), or raises :class:`SimulationError` (with the valid part of the trajectory)
+        when the run stops early.
 
         Parameters
         ----------
         x0 : array, shape (2n,)
             Initial state ``[q_1..q_n, qd_1..qd_n]``.
         t : array, shape (T,)
-            Strictly increasing output times; integration runs from ``t[0]`` to ``t[-1]``.
+            Strictly increasing output times.
         u : None, array (T, n) or callable ``u(t) -> (n,)``
             Generalized forces, a function of time (open loop).
         method : {"DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA", "ROS2"}
-            scipy's solver. The default, an explicit Runge-Kutta method of order 8, takes
-            the fewest evaluations at the default tolerances (each evaluation of a many-joint
-            model costs far more than the solver's own work); ``"Radau"`` or ``"BDF"`` for
-            stiff models. ``"ROS2"``: an L-stable Rosenbrock method of order two
-            (:mod:`pysindy_xl.dynamics.rosenbrock`), steps of at most ``step`` under a
-            local error bound of ``1e-3 (1 + |y|)`` (``rtol`` and ``atol`` unused), two
-            evaluations per step however stiff the model (stiff servos in closed loop): fewer
-            evaluations than ``DOP853`` at a looser accuracy.
-        rtol, atol : float
-            Tolerances of the solver.
-        divergence_bound : float
-            The run stops when any state component exceeds it in magnitude.
-        max_evaluations : int
-            Bound on right-hand-side evaluations (a stiff or blowing-up model cannot hang).
-        timeout : float or None
-            Wall-clock bound in seconds.
+            scipy's solver (``"Radau"`` or ``"BDF"`` for stiff models), or the L-stable
+            Rosenbrock method of :mod:`pysindy_xl.dynamics.rosenbrock` for stiff closed loops
+            (steps of at most ``step``, local error bound ``1e-3 (1 + |y|)``, tolerances unused).
+        rtol, atol, divergence_bound, max_evaluations, timeout : float
+            Solver tolerances; the run stops when a state component exceeds ``divergence_bound``,
+            after ``max_evaluations`` right-hand sides or ``timeout`` seconds (None: no bound).
         interpolation : {"cubic", "linear", "previous"}
-            How an array ``u`` is read between samples (see :func:`force_function`).
+            How an array ``u`` is read between samples (:func:`force_function`).
         feedback : callable, optional
-            A feedback law ``feedback(t, q, qd) -> (n,)``: generalized forces from the time
-            and the simulated state (``q``, ``qd`` arrays of shape (n,)), evaluated at every
-            step of the integrator and added to ``u``: a closed-loop simulation (a servo, a
-            controller; see :func:`pysindy_xl.mujoco.actuator_law` for an MJCF's actuators).
+            ``feedback(t, q, qd) -> (n,)``, added to ``u`` at every step: a closed loop (servo,
+            controller; :func:`pysindy_xl.mujoco.actuator_law` gives an MJCF's).
         step : float, optional
             Largest step of ``"ROS2"`` (default: the smallest spacing of ``t``).
-
-        Returns
-        -------
-        ndarray, shape (T, 2n)
-
-        Raises
-        ------
-        SimulationError
-            On divergence, singular mass matrix, non-finite derivative, exhausted evaluations
-            or timeout; carries the valid part of the trajectory.
-        TypeError, ValueError
-            If ``feedback`` is not callable or does not return ``n`` finite values at ``x0``.
 
         Examples
         --------
@@ -465,20 +355,15 @@ class MassMatrixDynamics:
     def _simulate_ros2(self, x0, t, force, law, step, divergence_bound, timeout):
         """:meth:`simulate` with :func:`pysindy_xl.dynamics.rosenbrock.ros2`."""
         from .rosenbrock import RosenbrockStop, ros2
-
-        n = self._n
         step = float(np.min(np.diff(t))) if step is None else check_option(
             "step", step, "real", low=0, low_open=True)
 
         def parts(s, state):
             inputs = force(s) if law is None else force(s) + law(s, state)
             try:
-                values = self._evaluate_scalar(*state.tolist(), *([0.0] * n),
-                                               *np.asarray(inputs, dtype=float).tolist(), s)
+                return self._scalar_parts(state, np.asarray(inputs, dtype=float).tolist(), s)
             except (OverflowError, ValueError, ZeroDivisionError):
                 raise RosenbrockStop(s, "non-finite derivative") from None
-            return (np.array(values[: n * n], dtype=float).reshape(n, n),
-                    np.array(values[n * n:], dtype=float))
 
         try:
             return ros2(parts, x0, t, step, divergence_bound=divergence_bound,

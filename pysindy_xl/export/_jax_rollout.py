@@ -1,6 +1,5 @@
-"""Batched fixed-step rollouts of JAX dynamics inside ``jax.lax.scan`` (see
-:mod:`.jax_dynamics`, which exports them): floating dtype from ``jax_enable_x64``, divergence
-reported per trajectory."""
+"""Batched fixed-step rollouts of JAX dynamics inside ``jax.lax.scan`` (exported by
+:mod:`.jax_dynamics`)."""
 
 from __future__ import annotations
 
@@ -19,29 +18,10 @@ __all__ = ["BatchSimulation", "simulate", "simulate_batch"]
 
 
 class BatchSimulation(NamedTuple):
-    """Result of :func:`simulate` / :func:`simulate_batch` (a JAX pytree).
-
-    Parameters
-    ----------
-    states : jax.Array
-        ``(B, T, 2n)``, or ``(B, 2n)`` with ``final_only``; no ``B`` axis for
-        :func:`simulate`. A diverged trajectory is frozen at its last accepted state:
-        every sample from ``divergence_step`` on repeats it.
-    diverged : jax.Array of bool, shape (B,)
-        Whether the trajectory left the finite / bounded region.
-    divergence_step : jax.Array of int, shape (B,)
-        Index of the first sample that would have been non-finite or out of bound,
-        ``-1`` for trajectories that did not diverge.
-
-    Examples
-    --------
-    >>> import jax.numpy as jnp
-    >>> from pysindy_xl.export.jax_dynamics import simulate
-    >>> decay = lambda x, u, t: -x
-    >>> states, diverged, step = simulate(decay, jnp.ones(2), None, 0.1, n_steps=3)
-    >>> states.shape, bool(diverged), int(step)
-    ((3, 2), False, -1)
-    """
+    """Result of :func:`simulate` / :func:`simulate_batch` (a JAX pytree): ``states`` (B, T, 2n),
+    or (B, 2n) with ``final_only``, no ``B`` axis for :func:`simulate`, a diverged trajectory
+    frozen at its last accepted state; ``diverged`` (B,), whether it left the finite / bounded
+    region; ``divergence_step`` (B,), its first sample out of it, else ``-1``."""
 
     states: jax.Array
     diverged: jax.Array
@@ -94,9 +74,8 @@ def _simulate_compiled(f, x0, u, dt, t0, bound, method, linear, final_only):
 
     carry0 = (state0, bad0, jnp.where(bad0, 0, -1), jnp.asarray(0, dtype=jnp.int32))
     inputs = (u_seq[:-1], u_seq[1:] if linear else None)
-    (final, diverged, divergence_step, _), history = jax.lax.scan(
-        body, carry0, inputs, length=n_steps
-    )
+    (final, diverged, divergence_step, _), history = jax.lax.scan(body, carry0, inputs,
+                                                                  length=n_steps)
     if final_only:
         states = jnp.stack(final, axis=-1)
     else:
@@ -115,7 +94,7 @@ def _is_concrete(x) -> bool:
 
 
 def _prepare(f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched):
-    """Validate and convert the inputs shared by simulate and simulate_batch."""
+    """Validate and convert the inputs of :func:`simulate` and :func:`simulate_batch`."""
     if hasattr(f, "to_jax") and not hasattr(f, "n_coordinates"):
         f = f.to_jax()
     if not callable(f):
@@ -143,9 +122,8 @@ def _prepare(f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched):
         u = jnp.asarray(u, dtype=dtype)
         if u.ndim != 2 + lead or u.shape[:lead] != x0.shape[:lead] or u.shape[-1] != n:
             shape = "(B, T, n)" if batched else "(T, n)"
-            raise ValueError(
-                f"u: expected shape {shape} = {x0.shape[:lead] + ('T', n)}, got {u.shape}"
-            )
+            raise ValueError(f"u: expected shape {shape} = {x0.shape[:lead] + ('T', n)}, "
+                             f"got {u.shape}")
         if n_steps is not None and n_steps != u.shape[lead]:
             raise ValueError(f"n_steps: {n_steps} does not match u with {u.shape[lead]} samples")
         if u.shape[lead] < 1:
@@ -177,37 +155,29 @@ def simulate(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation=
     Parameters
     ----------
     f : callable or model
-        ``f(state, u, t) -> d(state)/dt`` (see :func:`dynamics_function`), or any
-        object with a ``to_jax()`` method such as a fitted ``XLSINDy``.
-        Pass the same function object between calls to reuse the compiled code.
+        ``f(state, u, t) -> d(state)/dt`` (:func:`dynamics_function`), or an object with
+        ``to_jax()`` such as a fitted ``XLSINDy``; the same object reuses the compiled code.
     x0 : array (2n,)
         Initial state ``[q, qd]``.
     u : array (T, n) or None
-        Generalized forces sampled at ``t0 + k dt``; ``None`` means zero force and
-        needs ``n_steps``.
-    dt : float
-        Time step.
-    t0 : float, default 0.0
-        Time of the first sample (matters for time-dependent dynamics).
+        Generalized forces sampled at ``t0 + k dt``; ``None`` (zero) needs ``n_steps``.
+    dt, t0 : float
+        Time step and time of the first sample.
     n_steps : int, optional
         Number of output samples ``T`` when ``u`` is None.
     method : {"rk4", "semi_implicit_euler", "euler"}
     interpolation : {"zoh", "linear"}
         Force inside a step: held at ``u[k]`` or linear between ``u[k]`` and ``u[k+1]``.
     bound : float, optional
-        A trajectory diverges when a state entry becomes NaN/inf or, if given, exceeds
-        ``bound`` in absolute value.
+        A trajectory diverges when a state entry becomes NaN/inf or exceeds ``bound``.
     final_only : bool, default False
-        Return only the final state (saves memory for long or large runs).
+        Return only the final state.
 
     Returns
     -------
     BatchSimulation
-        ``states`` (T, 2n) (or (2n,)), scalar ``diverged`` and ``divergence_step``.
-        Differentiable with respect to ``x0``, ``u``, ``dt`` and ``t0`` (gradients
-        through a trajectory that diverged are meaningless and may be NaN: exclude such
-        trajectories from a loss, e.g. with ``jnp.where(diverged, 0, loss)`` *and* a
-        ``bound`` low enough that no infinity is ever reached).
+        Differentiable in ``x0``, ``u``, ``dt`` and ``t0`` (mask diverged trajectories out of a
+        loss, with a ``bound`` low enough that no infinity is reached).
 
     Examples
     --------
@@ -218,44 +188,21 @@ def simulate(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation=
     >>> c = px.Coordinates(["x"])
     >>> oscillator = SimpleNamespace(coords=c, mass_matrix_expr=sp.Matrix([[1]]),
     ...                              forcing_expr=sp.Matrix([-c.q[0]]))
-    >>> f = dynamics_function(oscillator)
-    >>> result = simulate(f, jnp.array([1.0, 0.0]), None, 0.01, n_steps=315)
-    >>> result.states.shape, bool(result.diverged)
-    ((315, 2), False)
+    >>> result = simulate(dynamics_function(oscillator), jnp.array([1.0, 0.0]), None, 0.01,
+    ...                   n_steps=315)
+    >>> result.states.shape, bool(result.diverged), int(result.divergence_step)
+    ((315, 2), False, -1)
     >>> round(float(result.states[-1, 0]), 3)  # cos(3.14)
     -1.0
     """
-    f, x0, u, dt, t0, bound = _prepare(
-        f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched=False
-    )
-    return _simulate_compiled(
-        f, x0, u, dt, t0, bound, method, interpolation == "linear", bool(final_only)
-    )
+    return _run(f, x0, u, dt, t0, n_steps, method, interpolation, bound, final_only, False)
 
 
 def simulate_batch(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation="zoh",
                    bound=None, final_only=False):
-    """Integrate ``B`` trajectories at once (``vmap`` of :func:`simulate`).
-
-    Runs on the default JAX device (CPU, or GPU where present). Trajectories are
-    independent: one that diverges is frozen and reported, the others carry on.
-
-    Parameters
-    ----------
-    f : callable or model
-        As in :func:`simulate`.
-    x0 : array (B, 2n)
-        Initial states.
-    u : array (B, T, n) or None
-        Force signal of each trajectory (``None``: zero force, needs ``n_steps``).
-    dt, t0, n_steps, method, interpolation, bound, final_only
-        As in :func:`simulate`; shared by all trajectories.
-
-    Returns
-    -------
-    BatchSimulation
-        ``states`` (B, T, 2n) (or (B, 2n) with ``final_only``), ``diverged`` (B,),
-        ``divergence_step`` (B,).
+    """Integrate ``B`` independent trajectories at once (``vmap`` of :func:`simulate`); one that
+    diverges is frozen and reported, the others carry on. ``x0`` (B, 2n) and ``u`` (B, T, n)
+    per trajectory, the other arguments as in :func:`simulate`, shared.
 
     Examples
     --------
@@ -266,15 +213,16 @@ def simulate_batch(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpol
     >>> c = px.Coordinates(["x"])
     >>> unstable = SimpleNamespace(coords=c, mass_matrix_expr=sp.Matrix([[1]]),
     ...                            forcing_expr=sp.Matrix([c.q[0] ** 3]))
-    >>> f = dynamics_function(unstable)
-    >>> out = simulate_batch(f, jnp.array([[0.1, 0.0], [10.0, 0.0]]), None, 0.1,
-    ...                      n_steps=50, bound=1e3)
+    >>> out = simulate_batch(dynamics_function(unstable), jnp.array([[0.1, 0.0], [10.0, 0.0]]),
+    ...                      None, 0.1, n_steps=50, bound=1e3)
     >>> out.diverged.tolist(), out.divergence_step.tolist()
     ([False, True], [-1, 2])
     """
-    f, x0, u, dt, t0, bound = _prepare(
-        f, x0, u, dt, t0, n_steps, method, interpolation, bound, batched=True
-    )
-    return _simulate_compiled(
-        f, x0, u, dt, t0, bound, method, interpolation == "linear", bool(final_only)
-    )
+    return _run(f, x0, u, dt, t0, n_steps, method, interpolation, bound, final_only, True)
+
+
+def _run(f, x0, u, dt, t0, n_steps, method, interpolation, bound, final_only, batched):
+    f, x0, u, dt, t0, bound = _prepare(f, x0, u, dt, t0, n_steps, method, interpolation,
+                                       bound, batched)
+    return _simulate_compiled(f, x0, u, dt, t0, bound, method, interpolation == "linear",
+                              bool(final_only))

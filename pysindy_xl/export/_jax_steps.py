@@ -1,12 +1,9 @@
 """Fixed-step integrators of ``x' = f(x, u, t)`` for JAX (see :mod:`.jax_dynamics`).
 
-Every step is a pure function ``step(f, state, t, dt, u_start, u_end=None)`` returning the
-state at ``t + dt`` in the layout of ``state``: ``f(state, u, t) -> d(state)/dt`` (e.g. from
-:func:`.dynamics_function`); ``state`` an array (..., 2n) ``[q, qd]`` or a tuple of 2n
-per-component arrays, as ``f`` takes it; ``u_start`` the force at ``t`` (array (..., n) or
-tuple of n arrays); ``u_end`` the force at ``t + dt``, interpolated linearly inside the step
-by the schemes that sample the force more than once (otherwise ``u_start`` is held).
-"""
+Every step is pure, ``step(f, state, t, dt, u_start, u_end=None) -> state at t + dt`` in the
+layout of ``state`` (an array (..., 2n) or a tuple of 2n arrays, as ``f`` takes it);
+``u_start`` is the force at ``t``; ``u_end``, the force at ``t + dt``, is interpolated
+linearly by the schemes that sample the force more than once (otherwise ``u_start`` is held)."""
 
 from __future__ import annotations
 
@@ -31,16 +28,7 @@ def _axpy(x, a, y):
 
 
 def rk4_step(f, state, t, dt, u_start, u_end=None):
-    """One classical Runge-Kutta step of ``d(state)/dt = f(state, u, t)``.
-
-    Parameters
-    ----------
-    f, state, t, dt, u_start, u_end
-        See the module docstring.
-
-    Returns
-    -------
-    State at ``t + dt``, same layout as ``state``.
+    """One classical Runge-Kutta step (arguments in the module docstring).
 
     Examples
     --------
@@ -78,19 +66,8 @@ def _join_state(q, qd):
 
 
 def semi_implicit_euler_step(f, state, t, dt, u_start, u_end=None):
-    """One semi-implicit (symplectic) Euler step: velocities first, then positions.
-
-    ``qd' = qd + dt qdd(q, qd, u(t))``, ``q' = q + dt qd'``: first order, but it keeps the
-    energy of conservative systems bounded where explicit Euler pumps it up.
-
-    Parameters
-    ----------
-    f, state, t, dt, u_start, u_end
-        See the module docstring.
-
-    Returns
-    -------
-    State at ``t + dt``, same layout as ``state``.
+    """One semi-implicit (symplectic) Euler step, ``qd' = qd + dt qdd``, ``q' = q + dt qd'``:
+    first order, energy of conservative systems kept bounded.
 
     Examples
     --------
@@ -110,15 +87,6 @@ def semi_implicit_euler_step(f, state, t, dt, u_start, u_end=None):
 def euler_step(f, state, t, dt, u_start, u_end=None):
     """One explicit Euler step, ``state + dt f(state, u(t), t)``.
 
-    Parameters
-    ----------
-    f, state, t, dt, u_start, u_end
-        See the module docstring.
-
-    Returns
-    -------
-    State at ``t + dt``, same layout as ``state``.
-
     Examples
     --------
     >>> import jax.numpy as jnp
@@ -131,8 +99,4 @@ def euler_step(f, state, t, dt, u_start, u_end=None):
     return _axpy(state, dt, f(state, u_start, t))
 
 
-STEPS = {
-    "rk4": rk4_step,
-    "semi_implicit_euler": semi_implicit_euler_step,
-    "euler": euler_step,
-}
+STEPS = {"rk4": rk4_step, "semi_implicit_euler": semi_implicit_euler_step, "euler": euler_step}

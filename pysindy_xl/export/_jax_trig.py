@@ -1,4 +1,9 @@
-"""Vectorizable sine and cosine for JAX (see :mod:`pysindy_xl.export.jax_dynamics`)."""
+"""Vectorizable sine and cosine for JAX (XLA's CPU versions are scalar code).
+
+The argument is reduced by multiples of pi/2, split into pieces whose products with the
+multiple are exact (Cody-Waite), then Taylor polynomials run on [-pi/4, pi/4]: within a few
+ulp of libm for ``|x| < 1e5`` (float32) or ``1.6e6`` (float64), where the multiples of pi/2
+stay below 2**16 / 2**20; beyond, about one digit is lost per decade of ``|x|``."""
 
 from __future__ import annotations
 
@@ -14,30 +19,13 @@ jnp = import_optional("jax.numpy", purpose="pysindy_xl.export.jax_dynamics (XLSI
 __all__ = ["fast_sin", "fast_cos"]
 
 
-# --------------------------------------------------------------------------------------
-# Vectorizable sine and cosine
-# --------------------------------------------------------------------------------------
-# XLA on CPU evaluates sin/cos one element at a time (about 15 ns per float32 element,
-# 50 ns per float64 one, against about 1 ns for a vectorized polynomial): for a pendulum
-# that is most of the cost of a simulation step. The functions below use the textbook
-# scheme: reduce the argument by multiples of pi/2 with pi/2 split into pieces whose
-# products with the multiple are exact (Cody-Waite), then Taylor polynomials on
-# [-pi/4, pi/4]. They match libm to a few ulp while |x| < _FAST_TRIG_RANGE; beyond, the
-# reduction loses about one digit per decade of |x|.
-#
 # pi/2 = sum of the pieces (float64: two 33-bit pieces and a tail; float32: three 8-bit
 # pieces and a tail), computed with mpmath at 200 bits.
 _HALF_PI_PIECES = {
     np.dtype(np.float64): (1.5707963267341256, 6.077100506303966e-11, 2.0222662487959506e-21),
-    np.dtype(np.float32): (
-        1.5703125,
-        4.84466552734375e-04,
-        -6.407499313354492e-07,
-        9.92093629470503e-10,
-    ),
+    np.dtype(np.float32): (1.5703125, 4.84466552734375e-04, -6.407499313354492e-07,
+                           9.92093629470503e-10),
 }
-#: |x| below which the reduction is exact to rounding (multiples of pi/2 below 2**20 / 2**16).
-_FAST_TRIG_RANGE = {np.dtype(np.float64): 1.6e6, np.dtype(np.float32): 1.0e5}
 # Taylor coefficients, highest degree first: (-1)^k / (2k+1)! and (-1)^k / (2k)!. Degrees
 # 15 / 16 (float64) and 9 / 10 (float32) leave a truncation error below half an ulp on
 # [-pi/4, pi/4].
@@ -59,7 +47,7 @@ def _horner(coefficients, x):
 
 
 def _sincos(x):
-    """(sin x, cos x) of a floating array, vectorizable (see the note above)."""
+    """(sin x, cos x) of a floating array, vectorizable (module docstring)."""
     dtype = np.dtype(x.dtype)
     if dtype not in _HALF_PI_PIECES:  # float16, bfloat16: nothing to gain
         return jnp.sin(x), jnp.cos(x)
@@ -86,18 +74,9 @@ def _float_operand(x):
 
 @jax.custom_jvp
 def fast_sin(x):
-    """Sine through a vectorizable polynomial (XLA's CPU sine is scalar code).
-
-    Parameters
-    ----------
-    x : array_like
-        Angles in radians; integers are promoted to the default float type.
-
-    Returns
-    -------
-    jax.Array
-        ``sin(x)`` within a few ulp of libm for ``|x| < 1e5`` (float32) or ``1.6e6``
-        (float64); NaN for infinite or NaN input. Its derivative is :func:`fast_cos`.
+    """Sine of angles ``x`` through a vectorizable polynomial (module docstring); integers are
+    promoted to the default float type, infinite or NaN input gives NaN, and the derivative
+    is :func:`fast_cos`.
 
     Examples
     --------
@@ -111,17 +90,7 @@ def fast_sin(x):
 
 @jax.custom_jvp
 def fast_cos(x):
-    """Cosine through a vectorizable polynomial (see :func:`fast_sin`).
-
-    Parameters
-    ----------
-    x : array_like
-        Angles in radians.
-
-    Returns
-    -------
-    jax.Array
-        ``cos(x)``, same accuracy as :func:`fast_sin`.
+    """Cosine through a vectorizable polynomial, as :func:`fast_sin`.
 
     Examples
     --------

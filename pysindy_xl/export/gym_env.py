@@ -1,21 +1,10 @@
 """Gymnasium environments driven by identified dynamics (model-based reinforcement learning).
 
-:func:`make_env` (also :meth:`XLSINDy.to_gymnasium <pysindy_xl.XLSINDy.to_gymnasium>`) wraps a
-fitted model in a :class:`gymnasium.Env`:
-
-* **observation**: the state ``[q_1..q_n, qd_1..qd_n]`` (float64);
-* **action**: the generalized forces of the actuated coordinates (the model's ``u``, which the
-  catalog's :class:`~pysindy_xl.ExternalForces` interlink maps onto the equations), held
-  constant over a step of ``dt`` seconds (float32, bounded by ``action_bounds``);
-* **dynamics**: the identified ``M(q, qd) qdd = f(q, qd, u)``, integrated with fixed-step
-  Runge-Kutta 4 (``substeps`` per step);
-* **reward and termination**: functions you supply (default: reward 0, never terminated); an
-  episode is truncated after ``max_episode_steps`` steps, and terminated with
-  ``info["failure"]`` if the identified dynamics cannot be evaluated (singular mass matrix,
-  non-finite state).
-
-Needs the ``gym`` extra (``pip install "pysindy-xl[gym]"``).
-"""
+Observation: the state ``[q, qd]`` (float64); action: the forces of the actuated coordinates,
+held over a step of ``dt`` seconds (float32, within ``action_bounds``); dynamics: the
+identified ``M(q, qd) qdd = f(q, qd, u)`` by fixed-step Runge-Kutta 4; reward and
+termination: your functions. An episode ends with ``info["failure"]`` where the dynamics
+cannot be evaluated. Needs the ``gym`` extra (``pip install "pysindy-xl[gym]"``)."""
 
 from __future__ import annotations
 
@@ -42,10 +31,8 @@ def _bounds(value, size: int, name: str) -> np.ndarray:
 
 
 class IdentifiedDynamicsEnv(gymnasium.Env):
-    """A Gymnasium environment whose dynamics are an identified model (see the module docs).
-
-    Build it with :func:`make_env` or :meth:`XLSINDy.to_gymnasium`; the parameters are the
-    same.
+    """A Gymnasium environment whose dynamics are an identified model (module docstring); built by
+    :func:`make_env` or :meth:`XLSINDy.to_gymnasium <pysindy_xl.XLSINDy.to_gymnasium>`.
 
     Parameters
     ----------
@@ -53,32 +40,21 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
         A fitted model whose equations contain accelerations.
     dt : float
         Seconds per step.
-    reward : callable, optional
-        ``reward(state, action, next_state) -> float`` (default 0).
-    terminated : callable, optional
+    reward, terminated : callable, optional
+        ``reward(state, action, next_state) -> float`` (default 0) and
         ``terminated(next_state) -> bool`` (default: never).
     initial_state : array (2n,) or callable, optional
-        Start of each episode, or ``initial_state(rng) -> array (2n,)`` with the environment's
-        ``np_random`` generator; default: uniform in ``[-0.05, 0.05]`` on every entry.
+        Start of each episode, or ``initial_state(rng) -> array (2n,)`` with ``np_random``;
+        default: uniform in ``[-0.05, 0.05]``.
     actuated : list of str or int, optional
         Coordinates (names or indices) whose forces are the action; default: all.
-    action_bounds : float or array, default 1.0
-        The action space is ``[-bound, bound]`` per actuated coordinate; actions outside are
-        clipped.
+    action_bounds, observation_bounds : float or array, default 1.0 and 1e6
+        Actions are clipped to ``[-bound, bound]``; a state leaving its bounds terminates the
+        episode with ``info["failure"]``.
     max_episode_steps : int or None, default 1000
         Truncation after this many steps (None: never).
     substeps : int, default 1
         Runge-Kutta 4 steps per ``dt``.
-    observation_bounds : float or array (2n,), default 1e6
-        The observation space is ``[-bound, bound]`` per state entry; a state leaving it
-        terminates the episode (``info["failure"]``), as a diverging model would.
-
-    Attributes
-    ----------
-    observation_space : gymnasium.spaces.Box, shape (2n,)
-    action_space : gymnasium.spaces.Box, shape (len(actuated),)
-    state : ndarray, shape (2n,)
-        The current state.
 
     Examples
     --------
@@ -151,22 +127,9 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
         self.observation_history = []
         self._steps = 0
 
-    # -- gymnasium API --------------------------------------------------------------------
     def reset(self, *, seed=None, options=None):
-        """Start an episode.
-
-        Parameters
-        ----------
-        seed : int, optional
-            Seeds ``np_random`` (the initial state).
-        options : dict, optional
-            ``{"state": array (2n,)}`` starts from that state.
-
-        Returns
-        -------
-        observation : ndarray, shape (2n,)
-        info : dict
-        """
+        """Start an episode (``seed`` seeds ``np_random``; ``options={"state": x0}`` starts at
+        ``x0``); returns ``(observation, info)``."""
         super().reset(seed=seed)
         if options and "state" in options:
             state = np.asarray(options["state"], dtype=float)
@@ -185,22 +148,8 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
         return state.copy(), {}
 
     def step(self, action):
-        """Advance ``dt`` seconds with the action held constant.
-
-        Parameters
-        ----------
-        action : array, shape (len(actuated),)
-            Forces of the actuated coordinates (clipped to the action space).
-
-        Returns
-        -------
-        observation : ndarray, shape (2n,)
-        reward : float
-        terminated : bool
-        truncated : bool
-        info : dict
-            ``{"time": t}``, plus ``"failure"`` when the dynamics failed.
-        """
+        """Advance ``dt`` seconds with the action (clipped) held; returns ``(observation, reward,
+        terminated, truncated, info)``, ``info`` with ``"time"`` and, on failure, ``"failure"``."""
         action = np.asarray(action, dtype=float).reshape(-1)
         if action.shape != self.action_space.shape:
             raise ValueError(f"action: expected shape {self.action_space.shape}, got "
@@ -245,32 +194,12 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
 
 
 def make_env(model, dt, **options) -> IdentifiedDynamicsEnv:
-    """A Gymnasium environment driven by a fitted model (``dt`` alone is enough).
-
-    Parameters
-    ----------
-    model : XLSINDy
-        Fitted; its equations must contain accelerations.
-    dt : float
-        Seconds per step.
-    **options
-        ``reward``, ``terminated``, ``initial_state``, ``actuated``, ``action_bounds``,
-        ``max_episode_steps``, ``substeps``, ``observation_bounds``: see
-        :class:`IdentifiedDynamicsEnv`.
-
-    Returns
-    -------
-    IdentifiedDynamicsEnv
-
-    Raises
-    ------
-    ValueError
-        If the model defines no dynamics, or an option is out of range (named in the message).
+    """A Gymnasium environment driven by a fitted model; ``**options`` as in
+    :class:`IdentifiedDynamicsEnv`. Raises ValueError if the model defines no dynamics or an
+    option is out of range.
 
     Examples
     --------
-    See :class:`IdentifiedDynamicsEnv`; with ``gymnasium.utils.env_checker.check_env``:
-
     >>> import numpy as np, pysindy_xl as px
     >>> from gymnasium.utils.env_checker import check_env
     >>> coords = px.Coordinates(["x"])

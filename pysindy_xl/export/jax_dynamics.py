@@ -1,24 +1,13 @@
 """Identified dynamics as pure JAX functions, and batched fixed-step simulation.
 
-The identified equations of motion are linear in the accelerations,
-``M(q, qd) qdd = f(q, qd, tau, t)``. :func:`dynamics_function` compiles ``M`` and
-``f`` from their sympy expressions into one JAX function and solves for ``qdd``;
-the result is pure, so it can be ``jax.jit``-ed, ``jax.vmap``-ed and differentiated.
+:func:`dynamics_function` compiles ``M(q, qd) qdd = f(q, qd, tau, t)`` into one pure JAX
+function of the state (``jit``, ``vmap`` and ``grad`` apply); :func:`simulate` and
+:func:`simulate_batch` integrate it with a fixed step inside ``jax.lax.scan``, in ``float64``
+when ``jax_enable_x64`` is on (else ``float32``), reporting divergence per trajectory.
 
-:func:`simulate` (one trajectory) and :func:`simulate_batch` (many at once) integrate
-it with a fixed-step scheme inside ``jax.lax.scan``. They compute in ``float64`` when
-``jax_enable_x64`` is on and in ``float32`` otherwise, and report diverging
-trajectories (NaN, inf or a user bound) per trajectory instead of failing the batch.
-
-Conventions
------------
-- state: ``[q_1..q_n, qd_1..qd_n]`` (shape ``(2n,)``), forces ``u``: ``(n,)``.
-- A force signal of ``T`` samples, ``u[k]`` at ``t0 + k dt``, yields ``T`` states
-  (``T - 1`` steps), ``states[0] = x0``, like ``XLSINDy.simulate``.
-- ``interpolation="zoh"`` holds ``u[k]`` over ``[t_k, t_k+1)`` (what a digital
-  controller or ``mj_step`` does); ``"linear"`` interpolates between ``u[k]`` and
-  ``u[k+1]`` inside the step (what an ODE solver fed a sampled signal usually sees).
-"""
+State ``[q_1..q_n, qd_1..qd_n]`` (2n,), forces ``u`` (n,). ``T`` force samples, ``u[k]`` at
+``t0 + k dt``, give ``T`` states, ``states[0] = x0``. ``interpolation="zoh"`` holds ``u[k]``
+over a step (a digital controller, ``mj_step``); ``"linear"`` interpolates to ``u[k+1]``."""
 
 from __future__ import annotations
 
@@ -46,9 +35,6 @@ __all__ = ["BatchSimulation", "dynamics_function", "euler_step", "fast_cos", "fa
 _UNROLLED_MAX_N = 4
 
 
-# --------------------------------------------------------------------------------------
-# Export: sympy mass-matrix form -> JAX function
-# --------------------------------------------------------------------------------------
 def _as_matrix(expr, name: str, shape: tuple[int, int]) -> sp.Matrix:
     try:
         matrix = sp.Matrix(expr)
@@ -66,27 +52,18 @@ def _check_symbols(matrix: sp.Matrix, name: str, coords) -> None:
     allowed = set(coords.q) | set(coords.qd) | set(coords.tau) | {coords.t}
     unknown = matrix.free_symbols - allowed
     if unknown & set(coords.qdd):
-        raise ValueError(
-            f"{name}: contains accelerations {sorted(map(str, unknown & set(coords.qdd)))}; "
-            "expected the mass-matrix form M(q, qd) qdd = f(q, qd, tau, t)"
-        )
+        raise ValueError(f"{name}: contains accelerations "
+                         f"{sorted(map(str, unknown & set(coords.qdd)))}; expected the "
+                         "mass-matrix form M(q, qd) qdd = f(q, qd, tau, t)")
     if unknown:
-        raise ValueError(
-            f"{name}: contains symbols {sorted(map(str, unknown))} that are not positions, "
-            "velocities, forces or time of the coordinates"
-        )
+        raise ValueError(f"{name}: contains symbols {sorted(map(str, unknown))} that are not "
+                         "positions, velocities, forces or time of the coordinates")
 
 
 def _unrolled_solve(a: list[list], b: list, pivoting: bool) -> list:
-    """Solve ``a x = b`` for a small matrix given entry by entry (nested lists of arrays).
-
-    Gaussian elimination written out so that every operation is elementwise over the
-    batch: XLA turns it into vector code, where LAPACK's batched LU would run one tiny
-    factorization at a time. Partial pivoting, when asked for, is done by
-    compare-and-swap (``where``) to stay branch free; it costs about twice the time of
-    the whole simulation step, and symmetric positive-definite mass matrices (every
-    Lagrangian one) do not need it.
-    """
+    """Solve ``a x = b`` for a small matrix given entry by entry, by Gaussian elimination written
+    out elementwise over the batch (XLA vectorizes it; batched LAPACK LU does not). Optional
+    partial pivoting by branch-free compare-and-swap; SPD (Lagrangian) mass matrices need none."""
     n = len(b)
     a = [list(row) for row in a]
     b = list(b)
@@ -121,21 +98,13 @@ def _lu_solve(a: list[list], b: list) -> list:
 
 
 def _looks_positive_definite(mass: sp.Matrix, coords, n_samples: int = 64) -> bool:
-    """Whether ``M`` is symmetric positive definite at random states (Lagrangian ones are).
-
-    Decides whether elimination may skip pivoting; a wrong "yes" costs accuracy only on
-    unphysical (indefinite) mass matrices, and a zero pivot still shows as divergence.
-    """
+    """Whether ``M`` is symmetric positive definite at random states, i.e. whether elimination may
+    skip pivoting (a wrong "yes" costs accuracy only on unphysical mass matrices)."""
     arguments = list(coords.q) + list(coords.qd) + list(coords.tau) + [coords.t]
     rng = np.random.default_rng(0)
-    samples = np.concatenate(
-        [
-            rng.uniform(-np.pi, np.pi, (n_samples, coords.n)),
-            rng.uniform(-3.0, 3.0, (n_samples, 2 * coords.n)),
-            rng.uniform(0.0, 10.0, (n_samples, 1)),
-        ],
-        axis=1,
-    )
+    samples = np.concatenate([rng.uniform(-np.pi, np.pi, (n_samples, coords.n)),
+                              rng.uniform(-3.0, 3.0, (n_samples, 2 * coords.n)),
+                              rng.uniform(0.0, 10.0, (n_samples, 1))], axis=1)
     try:
         evaluate = sp.lambdify(arguments, mass, modules="numpy")
         with np.errstate(all="ignore"):
@@ -159,12 +128,8 @@ _SOLVERS = {
 
 
 def _componentwise_function(evaluate, n: int, solve):
-    """Build ``g(state, u, t) -> d(state)/dt`` on tuples of same-shaped arrays.
-
-    Working on one array per component (structure of arrays) instead of a stacked
-    ``(..., 2n)`` array matters on CPU: XLA vectorizes elementwise code, but not code
-    that assembles an output with ``concatenate``, which was 10x slower.
-    """
+    """``g(state, u, t) -> d(state)/dt`` on tuples of per-component arrays (XLA vectorizes these
+    on CPU, not code assembling a stacked output)."""
 
     def componentwise(state, u, t):
         shape = jnp.broadcast_shapes(*(jnp.shape(c) for c in (*state, *u)))
@@ -192,38 +157,22 @@ def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True)
     Parameters
     ----------
     dynamics : MassMatrixDynamics
-        Any object with attributes ``coords`` (:class:`pysindy_xl.Coordinates`),
-        ``mass_matrix_expr`` (sympy Matrix ``(n, n)`` in positions and velocities) and
-        ``forcing_expr`` (sympy Matrix ``(n, 1)`` in positions, velocities, forces and
-        time), such that ``M(q, qd) qdd = f(q, qd, tau, t)``.
+        Or any object with ``coords``, ``mass_matrix_expr`` (n, n) and ``forcing_expr`` (n, 1).
     solver : {"auto", "gauss", "pivoted", "lu"}
-        How ``qdd`` is solved for. ``"gauss"``: Gaussian elimination written out entry
-        by entry, without pivoting (vectorizes over a batch; exact to rounding for
-        symmetric positive-definite mass matrices, a zero leading minor gives
-        non-finite accelerations); ``"pivoted"``: the same with partial pivoting (about
-        twice slower); ``"lu"``: :func:`jax.numpy.linalg.solve`. ``"auto"``: for
-        ``n <= 4``, ``"gauss"`` when the mass matrix is symmetric positive definite at
-        random states (as every Lagrangian one is) and ``"pivoted"`` otherwise; ``"lu"``
-        above.
+        How ``qdd`` is solved for: elimination written out (vectorizes) without pivoting (exact
+        to rounding on SPD mass matrices) or with partial pivoting, or
+        :func:`jax.numpy.linalg.solve`. ``"auto"``: for ``n <= 4``, ``"gauss"`` when ``M`` is
+        SPD at random states, else ``"pivoted"``; ``"lu"`` above.
     fast_trig : bool, default True
-        Evaluate ``sin`` and ``cos`` with vectorizable polynomials (:func:`fast_sin`,
-        :func:`fast_cos`: within a few ulp of libm for ``|x| < 1e5``, several times
-        faster than XLA's CPU versions); ``False`` uses ``jax.numpy``'s.
+        ``sin``, ``cos`` by :func:`fast_sin`, :func:`fast_cos`, else ``jax.numpy``'s.
 
     Returns
     -------
     callable
-        ``f(state, u, t=0.0) -> d(state)/dt`` with ``state = [q, qd]`` of shape
-        ``(..., 2n)``, ``u`` of shape ``(..., n)`` and ``t`` a scalar or an array of
-        the batch shape; returns ``[qd, qdd]`` of shape ``(..., 2n)`` in the floating
-        dtype of the inputs. Leading batch dimensions broadcast. Attributes:
-        ``n_coordinates``, ``depends_on_time``, ``solver`` (the one chosen) and
-        ``componentwise``, the same
-        function on tuples of per-component arrays (``g(state_tuple, u_tuple, t) ->
-        derivative_tuple``) that the simulators use. A singular mass matrix gives
-        non-finite accelerations, which the simulators report as divergence. The same
-        object is returned again for the same ``dynamics`` and options (the expressions
-        are read once: do not modify them afterwards).
+        ``f(state, u, t=0.0) -> [qd, qdd]``, ``state`` (..., 2n), ``u`` (..., n), batch
+        dimensions broadcast, a singular ``M`` giving non-finite accelerations. Attributes
+        ``n_coordinates``, ``depends_on_time``, ``solver`` and ``componentwise`` (the same on
+        tuples of per-component arrays). The same object is returned for the same arguments.
 
     Examples
     --------
@@ -241,10 +190,8 @@ def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True)
     for attribute in ("coords", "mass_matrix_expr", "forcing_expr"):
         # statically: reading the expressions builds them (minutes for a robot arm's)
         if inspect.getattr_static(dynamics, attribute, _MISSING) is _MISSING:
-            raise TypeError(
-                f"dynamics: expected a MassMatrixDynamics-like object with attribute "
-                f"{attribute!r}, got {type(dynamics).__name__}"
-            )
+            raise TypeError(f"dynamics: expected a MassMatrixDynamics-like object with attribute "
+                            f"{attribute!r}, got {type(dynamics).__name__}")
     if solver not in _SOLVERS:
         raise ValueError(f"solver: expected one of {list(_SOLVERS)}, got {solver!r}")
     key = (solver, bool(fast_trig))
@@ -260,9 +207,8 @@ def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True)
 def _compile(dynamics, solver: str, fast_trig: bool):
     coords = dynamics.coords
     if not isinstance(coords, Coordinates):
-        raise TypeError(
-            f"dynamics.coords: expected pysindy_xl.Coordinates, got {type(coords).__name__}"
-        )
+        raise TypeError(f"dynamics.coords: expected pysindy_xl.Coordinates, got "
+                        f"{type(coords).__name__}")
     n = coords.n
     arguments = list(coords.q) + list(coords.qd) + list(coords.tau) + [coords.t]
     modules = [{"sin": fast_sin, "cos": fast_cos}, "jax"] if fast_trig else ["jax"]
@@ -303,30 +249,24 @@ def _compile(dynamics, solver: str, fast_trig: bool):
         batch = jnp.broadcast_shapes(state.shape[:-1], u.shape[:-1], t.shape)
         state = jnp.broadcast_to(state.astype(dtype), batch + (2 * n,))
         u = jnp.broadcast_to(u.astype(dtype), batch + (n,))
-        derivative = componentwise(
-            tuple(state[..., i] for i in range(2 * n)), tuple(u[..., i] for i in range(n)), t
-        )
+        derivative = componentwise(tuple(state[..., i] for i in range(2 * n)),
+                                   tuple(u[..., i] for i in range(n)), t)
         return jnp.stack(derivative, axis=-1)
 
     dynamics_fn.n_coordinates = n
     dynamics_fn.depends_on_time = depends_on_time
     dynamics_fn.componentwise = componentwise
     dynamics_fn.solver = solver
-    dynamics_fn.__doc__ = (
-        f"d(state)/dt of the identified {n}-coordinate system {list(coords.names)}: "
-        "f(state (..., 2n), u (..., n), t=0.0) -> [qd, qdd] (..., 2n)."
-    )
+    dynamics_fn.__doc__ = (f"d(state)/dt of the identified {n}-coordinate system "
+                           f"{list(coords.names)}: f(state (..., 2n), u (..., n), t=0.0) -> "
+                           "[qd, qdd] (..., 2n).")
     return dynamics_fn
 
 
 def _terms_function(terms, arguments, modules):
-    """``evaluate(*arguments) -> list of entries`` of polynomial :class:`Terms`, in JAX.
-
-    Each atom is computed once (a small lambdified function, or an argument itself), its
-    powers once, each monomial as a product of at most ``width`` gathered powers, and each
-    entry as a scatter-add of coefficient times monomial: a handful of array operations,
-    whatever the number of terms, so that seven-joint arms compile and differentiate.
-    """
+    """``evaluate(*arguments) -> entries`` of polynomial :class:`Terms` in JAX: each atom and its
+    powers once, monomials as products of gathered powers, entries as a scatter-add, so that a
+    handful of array operations serve any number of terms."""
     position = {symbol: k for k, symbol in enumerate(arguments)}
     used = sorted({a for entry in terms.entries for _, key in entry for a, _ in key})
     local = {a: k for k, a in enumerate(used)}
@@ -378,8 +318,7 @@ def _terms_function(terms, arguments, modules):
 
 
 def _with_rigid_bodies(evaluate, rigid_parts, dynamics, n: int):
-    """``evaluate`` plus the rigid-body kernel's ``M`` and ``-bias`` (see
-    :class:`~pysindy_xl.dynamics.CatalogDynamics`), zero in the rows of held coordinates."""
+    """``evaluate`` plus the rigid-body kernel's ``M`` and ``-bias``, zero for held coordinates."""
     moving = ~np.asarray(getattr(dynamics, "_held", np.zeros(n, dtype=bool)))
     parts = [(tree, np.asarray(pi, dtype=float)) for tree, pi in rigid_parts]
 

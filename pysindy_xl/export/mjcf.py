@@ -1,32 +1,23 @@
 r"""An identified robot model as a MuJoCo model: physically consistent inertials.
 
-A kinematic catalog's base parameters ``beta`` are linear images of the bodies' inertial
-parameters ``pi`` (per body: mass ``m``, first moment ``h = m c`` and inertia ``I`` about
-the body frame's origin; per joint: armature), ``beta = C pi``. Rigid bodies realize ``pi``
-exactly when each body's pseudo-inertia matrix is positive semidefinite (Wensing, Kim and
+A kinematic catalog's base parameters are linear images ``beta = C pi`` of the inertial
+parameters ``pi`` (per body: mass ``m``, first moment ``h = m c``, inertia ``I`` about the
+body frame's origin; per joint: armature). Rigid bodies realize ``pi`` exactly when each
+pseudo-inertia is positive semidefinite and the armatures non-negative (Wensing, Kim and
 Slotine, 2017),
 
 .. math:: J_b = \begin{pmatrix} \tfrac12 \operatorname{tr}(I_b) \mathbb 1 - I_b & h_b \\
-          h_b^T & m_b \end{pmatrix} \succeq 0,
+          h_b^T & m_b \end{pmatrix} \succeq 0.
 
-and armatures are non-negative. :func:`consistent_parameters` solves the semidefinite program
+:func:`consistent_parameters` solves the semidefinite program
 
 .. math:: \min_\pi \; \|C \pi - \beta\|^2 / \|\beta\|^2 + \epsilon \|\pi - \pi_0\|^2 /
           \|\pi_0\|^2 \quad \text{s.t.} \quad J_b(\pi) \succeq 0, \; a_j \ge 0
 
-(cvxpy, :func:`pysindy_xl.physical.realize`): the consistent parameters that reproduce
-``beta`` (exactly when it is realizable), among them the closest to the template's ``pi_0``.
-:func:`write_mjcf` writes them into the template's MJCF with the identified viscous and dry
-friction of each joint (``damping`` and ``frictionloss``; the asymmetric, Stribeck and
-torque-offset models of real joints have no MJCF attribute and are left out).
-
-:func:`identified_mj_model` puts the identified parameters straight into a compiled copy of
-the template (no semidefinite program: the parameters closest to the template's relative to
-their size, ``pi = pi_0 + W (C W)^+ (beta - C pi_0)`` with ``W = diag(|pi_0|)``, rigid or not:
-MuJoCo's algebra is linear in them) and accepts it only where MuJoCo then reproduces the
-identified equations, ``M(q)`` and ``f(q, qd)`` at random states, to a tight tolerance: the
-model MuJoCo can step in place of the identified equations (closed-loop validation in
-:func:`pysindy_xl.mujoco.validate_model`).
+and :func:`write_mjcf` writes the result into the template's MJCF with each joint's viscous
+and dry friction. :func:`identified_mj_model` instead puts the least relative change
+``pi = pi_0 + W (C W)^+ (beta - C pi_0)``, ``W = diag(|pi_0|)``, into a compiled copy of the
+template and accepts it only where MuJoCo reproduces the identified equations.
 """
 
 from __future__ import annotations
@@ -40,45 +31,23 @@ _NOT_IN_MJCF = ("asymmetric", "stribeck", "offset")
 
 
 def consistent_parameters(catalog, beta, closeness: float = 1e-6):
-    """Physically consistent inertial parameters reproducing base parameters ``beta``.
-
-    Uses the catalog's ``combination`` ``C`` and ``physical_values`` (the template's
-    ``pi_0``), ``closeness`` weighing the distance to ``pi_0``. Returns ``(pi, residual)``,
-    ``residual = |C pi - beta| / |beta|`` zero (to the solver's tolerance) when ``beta`` is
-    realizable by rigid bodies.
-    """
+    """Physically consistent ``pi`` reproducing ``beta`` (module docstring): returns ``(pi,
+    residual)``, ``residual = |C pi - beta| / |beta|`` zero when ``beta`` is realizable.
+    ``closeness`` weighs the distance to the template's ``pi_0``."""
     from ..physical import PhysicalStructure, realize
-
     structure = PhysicalStructure.from_combination(list(catalog.physical_names),
                                                    catalog.combination)
     return realize(structure, beta, reference=catalog.physical_values, closeness=closeness)
 
 
 def write_mjcf(catalog, pi, friction, path, joint_friction=None) -> str:
-    """Write the catalog's system with inertial parameters ``pi`` and joint friction.
-
-    Parameters
-    ----------
-    catalog : KinematicCatalog
-        Its ``system`` (an :class:`~pysindy_xl.mujoco.MJCFSystem`) is the template.
-    pi : array
-        In the order of ``catalog.physical_names``.
-    friction : dict
-        ``{coordinate name: {"viscous": ..., "dry": ...}}`` (as
-        :meth:`XLSINDy.physical_parameters <pysindy_xl.XLSINDy.physical_parameters>` gives).
-    path : str or os.PathLike
-    joint_friction : dict, optional
-        ``{joint name: {"viscous": ..., "coulomb": ...}}``, the joint models of a catalog
-        built with ``friction=``: where a joint has them they give its ``damping`` and
-        ``frictionloss`` instead of ``friction``.
-
-    Returns
-    -------
-    str
-        The MJCF text written.
-    """
+    """Write the catalog's system (its ``system``, an MJCF template) to ``path`` with inertial
+    parameters ``pi`` (in the order of ``catalog.physical_names``) and joint friction; returns
+    the MJCF text. ``friction`` is ``{coordinate: {"viscous", "dry"}}`` (as
+    :meth:`XLSINDy.physical_parameters <pysindy_xl.XLSINDy.physical_parameters>` gives);
+    ``joint_friction``, ``{joint: {"viscous", "coulomb"}}`` of a catalog built with
+    ``friction=``, replaces it where a joint has them."""
     from ..mujoco import import_mujoco
-
     mujoco = import_mujoco()
 
     system = catalog.system
@@ -90,14 +59,7 @@ def write_mjcf(catalog, pi, friction, path, joint_friction=None) -> str:
         mass = values[f"{body.name}.m"]
         moment = np.array([values[f"{body.name}.mc{axis}"] for axis in "xyz"])
         centre = moment / mass if mass > 0 else np.zeros(3)
-        about_origin = np.array([[values[f"{body.name}.Ixx"], values[f"{body.name}.Ixy"],
-                                  values[f"{body.name}.Ixz"]],
-                                 [values[f"{body.name}.Ixy"], values[f"{body.name}.Iyy"],
-                                  values[f"{body.name}.Iyz"]],
-                                 [values[f"{body.name}.Ixz"], values[f"{body.name}.Iyz"],
-                                  values[f"{body.name}.Izz"]]])
-        # parallel-axis theorem back to the centre of mass, where MJCF states the inertia
-        inertia = about_origin - mass * (centre @ centre * np.eye(3) - np.outer(centre, centre))
+        inertia = _inertia_at_centre(values, body.name, mass, centre)
         body.explicitinertial = True
         body.mass = max(mass, 1e-9)
         body.ipos = centre
@@ -107,9 +69,7 @@ def write_mjcf(catalog, pi, friction, path, joint_friction=None) -> str:
                                       strict=True):
         joint = spec.joint(joint_name)
         joint.armature = max(values.get(f"{joint_name}.armature", joint.armature), 0.0)
-        own = (joint_friction or {}).get(joint_name)
-        viscous, dry = ((own.get("viscous", 0.0), own.get("coulomb", 0.0)) if own is not None
-                        else (friction[coordinate]["viscous"], friction[coordinate]["dry"]))
+        viscous, dry = _joint_friction(joint_name, coordinate, joint_friction or {}, friction)
         damping = max(viscous, 0.0)
         if np.ndim(joint.damping):  # MuJoCo >= 4: a vector (its first entry: linear)
             joint.damping = [damping, *np.asarray(joint.damping)[1:]]
@@ -123,14 +83,28 @@ def write_mjcf(catalog, pi, friction, path, joint_friction=None) -> str:
     return text
 
 
+def _inertia_at_centre(values, body: str, mass, centre):
+    """Inertia (3, 3) about the centre of mass (where MJCF states it) from the ``{body}.Ixx``,
+    ``.Ixy``... of ``values`` about the body frame's origin (parallel-axis theorem)."""
+    about_origin = np.array([[values[f"{body}.I{a}{b}" if f"{body}.I{a}{b}" in values
+                                     else f"{body}.I{b}{a}"] for b in "xyz"] for a in "xyz"])
+    return about_origin - mass * (centre @ centre * np.eye(3) - np.outer(centre, centre))
+
+
+def _joint_friction(joint: str, coordinate: str, joint_friction: dict, friction: dict):
+    """``(viscous, dry)`` of a joint: its own joint models where it has them, else the
+    friction identified on its coordinate."""
+    own = joint_friction.get(joint)
+    if own is not None:
+        return own.get("viscous", 0.0), own.get("coulomb", 0.0)
+    return friction[coordinate]["viscous"], friction[coordinate]["dry"]
+
+
 def _principal_axes(inertia):
-    """``(quaternion, diagonal)`` of a symmetric inertia ``R diag(d) R^T`` (``R`` a proper
-    rotation): the form every MJCF template can take, whichever way it stated its inertia
-    (``diaginertia`` or ``fullinertia``, which MuJoCo refuses together). Moments below a
-    billionth of the largest, a point mass's or a rod's, are raised to it: MuJoCo refuses
+    """``(quaternion, diagonal)`` of a symmetric inertia ``R diag(d) R^T`` (the form every MJCF
+    template can take); moments are raised to a billionth of the largest, since MuJoCo refuses
     zero moments on a moving body."""
     from ..mujoco import import_mujoco
-
     mujoco = import_mujoco()
 
     moments, axes = np.linalg.eigh((inertia + inertia.T) / 2)
@@ -145,7 +119,6 @@ def _principal_axes(inertia):
 def to_mjcf(model, path, template) -> dict:
     """The body of :meth:`XLSINDy.to_mjcf <pysindy_xl.XLSINDy.to_mjcf>`."""
     from ..mujoco import MJCFSystem, kinematic_catalog
-
     if template is None:
         raise ValueError("template: the MJCF file (or MuJoCo system) whose kinematic tree "
                          "the model was identified on is needed to place the inertials")
@@ -167,23 +140,16 @@ def to_mjcf(model, path, template) -> dict:
 def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 6, seed=0):
     """The system's compiled MuJoCo model with a fitted model's parameters, or why not.
 
-    Bodies get the identified inertial parameters closest to the template's, each change
-    relative to the template value (``pi = pi_0 + W (C W)^+ (beta - C pi_0)``,
-    ``W = diag(|pi_0|)``; any solution of ``C pi = beta`` has the same equations),
-    joints their armature, stiffness, viscous damping and dry friction (``frictionloss``; MuJoCo's
-    constraint force of that magnitude, where the model has the smooth sign
-    ``tanh(qd / eps)`` or MuJoCo's own regularized law). The result is accepted only if
-    MuJoCo's ``mj_fullM`` and its passive minus bias forces (minus ``frictionloss sign(qd)``)
-    equal the model's ``M`` and ``f`` at ``n_states`` random states (every joint sliding:
-    velocities far from zero and outside every sticking zone) within ``tolerance`` of their
-    largest entries, and only with a positive definite ``M`` there (MuJoCo factors it):
-    models with terms MJCF cannot state (other catalogs, held coordinates, joint offsets,
-    asymmetric friction) are refused.
+    Bodies get the identified inertials of least relative change (module docstring), joints
+    their armature, stiffness, damping and ``frictionloss``. The result is accepted only if
+    MuJoCo's ``mj_fullM`` and passive minus bias forces (minus ``frictionloss sign(qd)``) equal
+    the model's ``M`` and ``f`` within ``tolerance`` at ``n_states`` random sliding states
+    (drawn from ``seed``), with ``M`` positive definite: terms MJCF cannot state (other
+    catalogs, held coordinates, asymmetric friction...) are refused.
 
-    ``model`` is fitted with ``kinematic_catalog(system).library()`` (or a catalog with its
-    terms) on the template ``system``, an :class:`~pysindy_xl.mujoco.MJCFSystem`; ``seed``
-    draws the states. Returns ``(mj_model, None)``, or ``(None, reason)``: why the model
-    cannot be stated in MuJoCo.
+    ``model`` is fitted with ``kinematic_catalog(system).library()`` on the
+    :class:`~pysindy_xl.mujoco.MJCFSystem` ``system``. Returns ``(mj_model, None)`` or
+    ``(None, reason)``.
 
     Examples
     --------
@@ -202,7 +168,6 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     from ..feature_library import stack_variables
     from ..mujoco import import_mujoco, kinematic_catalog
     from ..mujoco.systems.friction import sliding_velocities
-
     mujoco = import_mujoco()
 
     try:
@@ -232,9 +197,7 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
         if not abs(mass) > 1e-9 * max(abs(pi0).max(), 1.0):
             return None, f"body {name!r}: identified mass {mass:.3g} is zero"
         centre = np.array([values[f"{name}.mc{axis}"] for axis in "xyz"]) / mass
-        inertia = np.array([[values[f"{name}.I{a}{b}" if f"{name}.I{a}{b}" in values
-                                    else f"{name}.I{b}{a}"] for b in "xyz"] for a in "xyz"])
-        inertia = inertia - mass * (centre @ centre * np.eye(3) - np.outer(centre, centre))
+        inertia = _inertia_at_centre(values, name, mass, centre)
         moments, axes = np.linalg.eigh(inertia)  # a rotation: MuJoCo's principal axes
         if np.linalg.det(axes) < 0:
             axes[:, 0] = -axes[:, 0]
@@ -255,10 +218,7 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     for joint, coordinate in zip(system.joint_names, system.coordinate_names, strict=True):
         index = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_JOINT, joint)
         dof = mj.jnt_dofadr[index]
-        own = joints.get(joint)
-        viscous, dry = ((own.get("viscous", 0.0), own.get("coulomb", 0.0)) if own is not None
-                        else (parameters["friction"][coordinate]["viscous"],
-                              parameters["friction"][coordinate]["dry"]))
+        viscous, dry = _joint_friction(joint, coordinate, joints, parameters["friction"])
         mj.dof_armature[dof] = values.get(f"{joint}.armature", mj.dof_armature[dof])
         mj.dof_damping[dof], mj.dof_frictionloss[dof] = viscous, dry
         spring = f"C_{coordinate}[{coordinate}]"  # a classical stiffness column, -k q
