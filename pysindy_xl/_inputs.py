@@ -54,6 +54,9 @@ def check_array(a, name: str, shape=None, n_columns=None) -> np.ndarray:
         raise ValueError(f"{name}: expected shape {tuple(shape)}, got {a.shape}")
     if a.shape[0] == 0 or a.shape[1] == 0:
         raise ValueError(f"{name}: expected a non-empty array, got shape {a.shape}")
+    if n_columns is not None and a.shape[1] != n_columns:
+        raise ValueError(f"{name}: expected {n_columns} columns (one per coordinate), got "
+                         f"shape {a.shape}")
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name}: contains NaN or inf")
     return check_numeric_array(a, name, max_abs=MAX_ABS)
@@ -109,9 +112,6 @@ def trajectory_arrays(x, t, x_dot, x_ddot, u, sample_mask, n: int) -> list[dict]
     for k, (xk, tk) in enumerate(zip(xs, ts, strict=True)):
         label = f"[{k}]" if is_list else ""
         xk = check_array(xk, f"x{label}", n_columns=n)
-        if xk.shape[1] != n:
-            raise ValueError(f"x{label}: expected {n} columns (one per coordinate), got "
-                             f"{xk.shape[1]}")
         if xk.shape[0] < 5:
             raise ValueError(f"x{label}: expected at least 5 samples, got {xk.shape[0]}")
         arrays = {"x": xk, "t": sample_times(tk, xk.shape[0], f"t{label}"),

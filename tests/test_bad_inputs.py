@@ -426,3 +426,16 @@ def test_coordinate_names_of_a_dataset_file(tmp_path, names):
              metadata=json.dumps({"coordinate_names": names}))
     with pytest.raises(ValueError, match=r"metadata: coordinate_names: expected a list of str"):
         load_dataset(tmp_path / "run.npz")
+
+
+def test_predicted_forces_of_another_number_of_coordinates_are_refused():
+    c = px.Coordinates(["x", "y"])
+    library = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2, c.qd[1] ** 2, c.q[1] ** 2])
+    t = np.linspace(0, 5, 501)
+    x = np.column_stack([np.sin(t), np.cos(2 * t)])
+    xd = np.column_stack([np.cos(t), -2 * np.sin(2 * t)])
+    xdd = np.column_stack([-np.sin(t), -4 * np.cos(2 * t)])
+    model = px.XLSINDy(library).fit(x, t, x_dot=xd, x_ddot=xdd, u=2 * xdd + 3 * x)
+    for wrong in (x[:, :1], np.column_stack([x, x])):
+        with pytest.raises(ValueError, match="x: expected 2 columns"):
+            model.predict_forces(wrong, wrong, wrong)

@@ -36,8 +36,6 @@ class DynamicsMixin:
         for k, (xk, xdk, uk) in enumerate(zip(xs, xds, us, strict=True)):
             label = f"[{k}]" if is_list else ""
             xk = check_array(xk, f"x{label}", n_columns=n)
-            if xk.shape[1] != n:
-                raise ValueError(f"x{label}: expected {n} columns, got {xk.shape[1]}")
             xdk = check_array(xdk, f"x_dot{label}", xk.shape)
             uk = None if uk is None else check_array(uk, f"u{label}", xk.shape)
             with np.errstate(all="ignore"):
