@@ -53,8 +53,7 @@ def pysindy_library_terms(library: BaseFeatureLibrary, coords: Coordinates) -> l
     if expected.shape != got.shape or not np.allclose(expected, got, rtol=1e-9, atol=1e-12):
         raise ValueError(
             f"terms: the feature names of {type(library).__name__} do not describe its "
-            "features; pass sympy expressions instead"
-        )
+            "features; pass sympy expressions instead")
     return terms
 
 
@@ -105,8 +104,7 @@ class ClassicalLibrary(SymbolicLibrary):
             extra = term.free_symbols - allowed
             if extra:
                 raise ValueError(
-                    f"terms: classical term {term} uses unknown symbols {sorted(map(str, extra))}"
-                )
+                    f"terms: classical term {term} uses unknown symbols {sorted(map(str, extra))}")
         return terms
 
     def _resolved_mask(self, n_terms: int) -> np.ndarray:
@@ -115,8 +113,7 @@ class ClassicalLibrary(SymbolicLibrary):
         mask = np.asarray(self.mask)
         if mask.shape != (n_terms, self.coords.n):
             raise ValueError(
-                f"mask: expected shape (n_terms, n) = {(n_terms, self.coords.n)}, got {mask.shape}"
-            )
+                f"mask: expected shape (n_terms, n) = {(n_terms, self.coords.n)}, got {mask.shape}")
         if mask.dtype != bool and not np.isin(mask, (0, 1)).all():
             raise ValueError("mask: expected booleans (or 0/1)")
         if not mask.any():
@@ -153,8 +150,7 @@ class ClassicalLibrary(SymbolicLibrary):
         return {
             "type": self.spec_type,
             "terms": [format_expression(t) for t in self.terms_],
-            "mask": self.mask_.astype(int).tolist(),
-        }
+            "mask": self.mask_.astype(int).tolist()}
 
     @classmethod
     def from_spec(cls, spec, reader):

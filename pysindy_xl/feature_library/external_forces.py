@@ -25,8 +25,7 @@ def _interlink_matrix(interlink, n: int) -> np.ndarray:
     if matrix.shape != (n, n):
         raise ValueError(
             f"interlink: expected a matrix of shape (n, n) = {(n, n)} (generalized force = "
-            f"interlink @ u), got shape {matrix.shape}"
-        )
+            f"interlink @ u), got shape {matrix.shape}")
     if not np.all(np.isfinite(matrix)):
         raise ValueError("interlink: contains NaN or inf")
     if not matrix.any():
@@ -53,8 +52,7 @@ def signed_indices_to_interlink(indices, n: int) -> np.ndarray:
             if not isinstance(k, (int, np.integer)) or k == 0 or abs(k) > n:
                 raise ValueError(
                     f"indices: entry {k!r} for coordinate {c} is not a signed 1-based input "
-                    f"index in [-{n}, -1] or [1, {n}]"
-                )
+                    f"index in [-{n}, -1] or [1, {n}]")
             matrix[c, abs(k) - 1] += np.sign(k)
     return matrix
 
@@ -116,16 +114,14 @@ class ExternalForces(SymbolicLibrary):
         tau = sp.Matrix(self.coords.tau)
         column = sp.Matrix(
             [sum(_exact(matrix[c, k]) * tau[k] for k in range(self.coords.n) if matrix[c, k])
-             for c in range(self.coords.n)]
-        )
+             for c in range(self.coords.n)])
         return ["F[tau]"], column
 
     def to_spec(self) -> dict:
         """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
         return {
             "type": self.spec_type,
-            "interlink": _interlink_matrix(self.interlink, self.coords.n).tolist(),
-        }
+            "interlink": _interlink_matrix(self.interlink, self.coords.n).tolist()}
 
     @classmethod
     def from_spec(cls, spec, reader):

@@ -139,8 +139,7 @@ class CatalogRepartition(SymbolicLibrary):
                     "libraries: expected pysindy_xl feature libraries (SymbolicLibrary "
                     "subclasses such as LagrangeLibrary, ClassicalLibrary, ExternalForces), got "
                     f"{type(lib).__name__}; wrap pysindy libraries in "
-                    "ClassicalLibrary(coords, library)"
-                )
+                    "ClassicalLibrary(coords, library)")
         if not flat:
             raise ValueError("libraries: expected at least one library")
         coords = flat[0].coords
@@ -148,8 +147,7 @@ class CatalogRepartition(SymbolicLibrary):
             if lib.coords != coords:
                 raise ValueError(
                     f"libraries: all libraries must share the same coordinates, got {coords} "
-                    f"and {lib.coords}"
-                )
+                    f"and {lib.coords}")
         if not any(lib.category == "forces" for lib in flat):
             flat.insert(0, ExternalForces(coords))
         return flat
@@ -293,8 +291,7 @@ class CatalogRepartition(SymbolicLibrary):
         missing = [str(m) for m, r in zip(monomials, residual, strict=True) if abs(r) > 1e-9]
         if missing:
             raise ValueError(
-                f"lagrangian: terms {missing} are not representable by the Lagrange catalog"
-            )
+                f"lagrangian: terms {missing} are not representable by the Lagrange catalog")
         solution[np.abs(solution) < 1e-12] = 0.0
         xi[columns] += solution
 
@@ -324,15 +321,13 @@ class CatalogRepartition(SymbolicLibrary):
                 return j
         raise ValueError(
             f"classical: term {term} in the equation of {self.coords.names[coord]} is not in "
-            "the catalog"
-        )
+            "the catalog")
 
     def to_spec(self) -> dict:
         """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
         return {
             "type": self.spec_type,
-            "libraries": [lib.to_spec() for lib in self.flat_libraries()],
-        }
+            "libraries": [lib.to_spec() for lib in self.flat_libraries()]}
 
     @classmethod
     def from_spec(cls, spec, reader):

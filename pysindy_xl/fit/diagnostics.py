@@ -144,7 +144,6 @@ def mass_matrix_report(mass, eigenvalues, names, remedy: str = "") -> dict:
             + ": the model is wrong there (noise terms, an unidentifiable coordinate, or a "
             "catalog that cannot express the dynamics) and will not simulate faithfully"
             + remedy,
-            IdentificationWarning, stacklevel=2,
-        )
+            IdentificationWarning, stacklevel=2)
     return {"positive_definite_fraction": float(np.mean(definite)),
             "median_condition": float(np.median(condition))}

@@ -54,8 +54,7 @@ def resolve_optimizer(optimizer, problem, library):
         raise TypeError(
             "optimizer: expected a catalog optimizer with fit_catalog (ExplicitOptimizer, "
             "ImplicitOptimizer, MixedOptimizer) or a regressor with fit(X, y) such as "
-            f"pysindy's STLSQ, got {type(optimizer).__name__}"
-        )
+            f"pysindy's STLSQ, got {type(optimizer).__name__}")
     return clone(optimizer)
 
 

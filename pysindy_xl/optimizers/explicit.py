@@ -285,8 +285,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         if not np.any(y):
             raise ValueError(
                 "y: the force vector is identically zero; explicit regression needs a known "
-                "force (use ImplicitOptimizer or MixedOptimizer for unforced data)"
-            )
+                "force (use ImplicitOptimizer or MixedOptimizer for unforced data)")
         self.selection_ = None
         self.noise_share_ = None if noise_moments is None else 0.0
         self.n_features_in_ = X.shape[1]
@@ -337,8 +336,7 @@ class ExplicitOptimizer(CatalogOptimizer):
             sol = np.asarray(estimator.coef_, dtype=float).reshape(-1)
             if sol.shape != (xs.shape[1],):
                 raise ValueError(
-                    f"method: the estimator's coef_ has {sol.size} entries, expected {xs.shape[1]}"
-                )
+                    f"method: the estimator's coef_ has {sol.size} entries, expected {xs.shape[1]}")
         coef = np.zeros(X.shape[1])
         coef[active] = sol * y_scale / scale[active]
         if self.refit and np.any(coef):

@@ -202,8 +202,7 @@ class BumpTestFunctions:
         if 2 * h > duration:
             raise ValueError(
                 f"t: the trajectory ({duration:.4g} s) is shorter than one test function "
-                f"(support {2 * h:.4g} s); record longer trajectories or set a smaller width"
-            )
+                f"(support {2 * h:.4g} s); record longer trajectories or set a smaller width")
         return h
 
     def max_gap(self, half_width) -> float:

@@ -51,8 +51,7 @@ def shared_half_width(test_functions, trajectories, columns=None) -> float:
         raise ValueError(
             f"x: the trajectories ({durations.max():.3g} s at most) are shorter than one "
             "test function; record longer trajectories, set a smaller "
-            "BumpTestFunctions(width=...), or use formulation='strong'"
-        )
+            "BumpTestFunctions(width=...), or use formulation='strong'")
     return min(widths)
 
 
@@ -186,8 +185,7 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         warnings.warn(
             f"x: {what}trajectories {short} are shorter than one test function (support "
             f"{2 * half_width:.3g} s) and are left out of the weak regression",
-            UserWarning, stacklevel=4,
-        )
+            UserWarning, stacklevel=4)
     if usable.size == 0:
         raise ValueError(
             f"t: every piece of the trajectories between gaps longer than "

@@ -107,8 +107,7 @@ def _divided_difference_matrix(t: np.ndarray, order: int,
         weights *= np.sqrt((window[:, -1] - window[:, 0]) / (order * mean_step))[:, None]
     rows = np.repeat(np.arange(n_samples - order), order + 1)
     return scipy.sparse.csr_matrix(
-        (weights.ravel(), (rows, index.ravel())), shape=(n_samples - order, n_samples)
-    )
+        (weights.ravel(), (rows, index.ravel())), shape=(n_samples - order, n_samples))
 
 
 #: Relative spread of the time steps below which a grid counts as uniform.
