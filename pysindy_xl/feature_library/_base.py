@@ -314,8 +314,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
                 f"x: expected the stacked variables array of shape (n_samples, {width}) "
                 f"(see pysindy_xl.feature_library.stack_variables), got shape {x.shape}")
         if x.shape[0] == 0:
-            raise ValueError("x: expected at least one sample, got shape (0, "
-                             f"{width})")
+            raise ValueError(f"x: expected at least one sample, got shape (0, {width})")
         if not np.all(np.isfinite(x)):
             raise ValueError("x: contains NaN or inf")
         return x
@@ -425,9 +424,8 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         """
         x = self._check_input(x)
         if phi.shape != dphi.shape or phi.shape[1] != x.shape[0]:
-            raise ValueError(
-                f"phi, dphi: expected two matrices of shape (K, {x.shape[0]}), got "
-                f"{phi.shape} and {dphi.shape}")
+            raise ValueError(f"phi, dphi: expected two matrices of shape (K, {x.shape[0]}), got "
+                             f"{phi.shape} and {dphi.shape}")
         n, n_features, n_samples = self.coords.n, self.n_output_features_, x.shape[0]
         if not hasattr(self, "_weak_evaluate"):
             index, terms = self.weak_terms()

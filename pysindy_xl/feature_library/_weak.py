@@ -76,10 +76,9 @@ def integrate_by_parts(expr: sp.Expr, coords: Coordinates) -> tuple[sp.Expr, sp.
         elif coefficient.free_symbols <= positions | set(coords.qd):
             velocity_dependent[qd] = coefficient
         else:
-            raise ValueError(
-                f"terms: the acceleration {qdd} in {expr} has a coefficient that depends on "
-                "forces or accelerations, so the weak form cannot integrate it by parts; use "
-                "formulation='strong' or rewrite the term")
+            raise ValueError(f"terms: the acceleration {qdd} in {expr} has a coefficient that "
+                             "depends on forces or accelerations, so the weak form cannot "
+                             "integrate it by parts; use formulation='strong' or rewrite the term")
         rest = sp.expand(rest - coefficient * qdd)
     exact = sp.Integer(0)
     velocities = dict(zip(coords.qd, coords.q, strict=True))

@@ -23,9 +23,8 @@ def _interlink_matrix(interlink, n: int) -> np.ndarray:
             "indices use ExternalForces.from_signed_indices"
         ) from None
     if matrix.shape != (n, n):
-        raise ValueError(
-            f"interlink: expected a matrix of shape (n, n) = {(n, n)} (generalized force = "
-            f"interlink @ u), got shape {matrix.shape}")
+        raise ValueError(f"interlink: expected a matrix of shape (n, n) = {(n, n)} (generalized "
+                         f"force = interlink @ u), got shape {matrix.shape}")
     if not np.all(np.isfinite(matrix)):
         raise ValueError("interlink: contains NaN or inf")
     if not matrix.any():
@@ -50,9 +49,8 @@ def signed_indices_to_interlink(indices, n: int) -> np.ndarray:
     for c, row in enumerate(indices):
         for k in row:
             if not isinstance(k, (int, np.integer)) or k == 0 or abs(k) > n:
-                raise ValueError(
-                    f"indices: entry {k!r} for coordinate {c} is not a signed 1-based input "
-                    f"index in [-{n}, -1] or [1, {n}]")
+                raise ValueError(f"indices: entry {k!r} for coordinate {c} is not a signed 1-based "
+                                 f"input index in [-{n}, -1] or [1, {n}]")
             matrix[c, abs(k) - 1] += np.sign(k)
     return matrix
 

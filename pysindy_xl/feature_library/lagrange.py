@@ -129,9 +129,8 @@ class LagrangeLibrary(SymbolicLibrary):
         for term in terms:
             extra = term.free_symbols - allowed
             if extra:
-                raise ValueError(
-                    f"terms: Lagrangian term {term} uses {sorted(map(str, extra))}; "
-                    "only positions, velocities and t are allowed")
+                raise ValueError(f"terms: Lagrangian term {term} uses {sorted(map(str, extra))}; "
+                                 "only positions, velocities and t are allowed")
         self.terms_ = terms
         # equal catalogs (refits, resampled fits) derive their columns once
         names, columns = _derived(
@@ -172,11 +171,10 @@ class LagrangeLibrary(SymbolicLibrary):
         for term, value in zip(terms, values, strict=True):
             bad = ~np.isfinite(value)
             if bad.any():
-                raise ValueError(
-                    f"feature_library: the Lagrangian term {term} is NaN or inf on "
-                    f"{int(bad.sum())} of {len(value)} samples (first at sample "
-                    f"{int(np.flatnonzero(bad)[0])}): the data leave its domain (log, sqrt, 1/x "
-                    "of values <= 0) or overflow it")
+                raise ValueError(f"feature_library: the Lagrangian term {term} is NaN or inf on "
+                                 f"{int(bad.sum())} of {len(value)} samples (first at sample "
+                                 f"{int(np.flatnonzero(bad)[0])}): the data leave its domain (log, "
+                                 "sqrt, 1/x of values <= 0) or overflow it")
 
     def _domain_check(self):
         """The terms that may be undefined somewhere, and their compiled evaluation."""

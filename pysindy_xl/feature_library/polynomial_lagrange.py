@@ -141,8 +141,7 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         derivation = self._polynomial_columns
         if derivation.column_terms is None:  # shared by clones of this library
             derived = derivation.derived
-            derivation.column_terms = self._terms_of(
-                [derived[j][c] for c, j in self.entry_index_])
+            derivation.column_terms = self._terms_of([derived[j][c] for c, j in self.entry_index_])
         return derivation.column_terms
 
     def _derive_weak_terms(self):

@@ -145,9 +145,8 @@ class CatalogRepartition(SymbolicLibrary):
         coords = flat[0].coords
         for lib in flat[1:]:
             if lib.coords != coords:
-                raise ValueError(
-                    f"libraries: all libraries must share the same coordinates, got {coords} "
-                    f"and {lib.coords}")
+                raise ValueError("libraries: all libraries must share the same coordinates, got "
+                                 f"{coords} and {lib.coords}")
         if not any(lib.category == "forces" for lib in flat):
             flat.insert(0, ExternalForces(coords))
         return flat
@@ -319,9 +318,8 @@ class CatalogRepartition(SymbolicLibrary):
             if (category == "classical" and self.symbolic_matrix_[coord, j] != 0
                     and sp.simplify(self.feature_terms_[j] - term) == 0):
                 return j
-        raise ValueError(
-            f"classical: term {term} in the equation of {self.coords.names[coord]} is not in "
-            "the catalog")
+        raise ValueError(f"classical: term {term} in the equation of {self.coords.names[coord]} is "
+                         "not in the catalog")
 
     def to_spec(self) -> dict:
         """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""

@@ -51,10 +51,9 @@ def resolve_optimizer(optimizer, problem, library):
         if callable(getattr(optimizer, "fit", None)):
             # a pysindy (or scikit-learn) regressor: explicit regression through it
             return ExplicitOptimizer(method=clone(optimizer))
-        raise TypeError(
-            "optimizer: expected a catalog optimizer with fit_catalog (ExplicitOptimizer, "
-            "ImplicitOptimizer, MixedOptimizer) or a regressor with fit(X, y) such as "
-            f"pysindy's STLSQ, got {type(optimizer).__name__}")
+        raise TypeError("optimizer: expected a catalog optimizer with fit_catalog "
+                        "(ExplicitOptimizer, ImplicitOptimizer, MixedOptimizer) or a regressor "
+                        f"with fit(X, y) such as pysindy's STLSQ, got {type(optimizer).__name__}")
     return clone(optimizer)
 
 

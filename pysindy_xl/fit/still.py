@@ -12,11 +12,10 @@ residual :math:`r_i = q_i - a - b t` of the least-squares line through its posit
     \max_t r_i - \min_t r_i \le 10^{-9} \,(1 + \max_t |q_i|),
 
 with :math:`\hat\sigma = 1.4826 \, \operatorname{MAD}(\Delta^3 q) / \sqrt{20}` the noise
-level (:func:`noise_level`) and :math:`\kappa` the estimator's ``hold_still``. A sinusoid of
-amplitude :math:`A` gives a ratio :math:`\sqrt{1 + A^2 / (2 \sigma^2)}`, so with
-:math:`\kappa = 2` a motion above about 2.5 noise levels stays in the regression.
-:func:`still_columns` lists the catalog columns left out with them; the model holds still
-coordinates at zero acceleration (:class:`~pysindy_xl.dynamics.CatalogDynamics` ``held``).
+level (:func:`noise_level`) and :math:`\kappa` the estimator's ``hold_still`` (a sinusoid of
+amplitude :math:`A` gives :math:`\sqrt{1 + A^2 / (2 \sigma^2)}`). :func:`still_columns` lists
+the catalog columns left out with them; the model holds still coordinates at zero
+acceleration (:class:`~pysindy_xl.dynamics.CatalogDynamics` ``held``).
 A driven coordinate that does not move is never still: gravity against the recorded torque
 is information.
 """

@@ -112,10 +112,9 @@ def warn_unexplained(owner: str, theta, n_coordinates: int, coef, force_columns=
     unexplained = np.flatnonzero(~explained)
     if unexplained.size:
         besides = " besides the forces" if len(force_columns) else ""
-        warnings.warn(
-            f"{owner}: no identified term{besides} enters the equation of coordinate(s) "
-            f"{unexplained.tolist()}; the model cannot predict them",
-            UnexplainedCoordinateWarning, stacklevel=stacklevel + 1)
+        warnings.warn(f"{owner}: no identified term{besides} enters the equation of coordinate(s) "
+                      f"{unexplained.tolist()}; the model cannot predict them",
+                      UnexplainedCoordinateWarning, stacklevel=stacklevel + 1)
     return unexplained
 
 
@@ -307,8 +306,7 @@ reference_columns, physical
         raise NotImplementedError(f"{type(self).__name__}: _solve(problem) is not implemented")
 
     def _solve_support(self, problem: CatalogProblem, support):
-        raise TypeError(f"{type(self).__name__}: cannot refit a given support (no "
-                        "_solve_support)")
+        raise TypeError(f"{type(self).__name__}: cannot refit a given support (no _solve_support)")
 
     def _check_params(self):
         """Raise ``TypeError``/``ValueError`` naming a parameter with a bad value."""

@@ -246,7 +246,6 @@ def lasso_gram(gram, targets, alpha, mask=None, coef_init=None, tol: float = 1e-
             f"{int(max_iter)} iterations (largest optimality violation "
             f"{np.max(violation / alpha):.2e} x alpha); raise max_iter or alpha",
             ConvergenceWarning, stacklevel=2)
-
     return LassoResult(coef=coef, n_iter=n_iter, converged=converged, violation=violation)
 
 

@@ -140,9 +140,8 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
         check_option("aggregate", self.aggregate, "choice", choices=AGGREGATES)
         base = self._base()
         if self.aggregate == "refit" and not catalog_tags(base).can_refit:
-            raise ValueError(f"aggregate: 'refit' needs an optimizer that refits a support "
-                             f"(tag can_refit), {type(base).__name__} does not (use 'median' "
-                             "or 'auto')")
+            raise ValueError("aggregate: 'refit' needs an optimizer that refits a support (tag "
+                             f"can_refit), {type(base).__name__} does not (use 'median' or 'auto')")
         if self.sampling == "complementary_pairs" and self.n_models % 2:
             raise ValueError(f"n_models: complementary pairs need an even number of fits, got "
                              f"{self.n_models}")

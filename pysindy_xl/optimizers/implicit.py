@@ -153,8 +153,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         check_option("solver", self.solver, "choice", choices=_SOLVERS)
         if not (isinstance(self.alpha, str) and self.alpha == "auto"):
             if isinstance(self.alpha, str):
-                raise ValueError(f"alpha: expected a positive number or 'auto', got "
-                                 f"{self.alpha!r}")
+                raise ValueError(f"alpha: expected a positive number or 'auto', got {self.alpha!r}")
             check_option("alpha", self.alpha, "real", low=0, low_open=True)
         check_option("angle_tol", self.angle_tol, "real", low=0, high=90, low_open=True,
                      high_open=True)
@@ -268,7 +267,6 @@ class ImplicitOptimizer(CatalogOptimizer):
         self.law_selections_ = selections
         self.law_noise_ratios_ = np.asarray(ratios)
         self._set_selected_laws(theta, laws, norms, force_columns, reference_columns)
-
         self._report_rivals(theta, moments, selections[0], laws[0], norms,
                             force_columns, reference_columns)
         return self
@@ -287,11 +285,10 @@ class ImplicitOptimizer(CatalogOptimizer):
                       "unexplained" if not selection.admissible else
                       f"its held-out noise ratio is {ratio:.3g} +- {spread:.2g} (about 1 for a "
                       "law that holds)")
-            warnings.warn(
-                f"ImplicitOptimizer: no law that holds to the noise was found in the catalog "
-                f"({reason}); the returned law is the best found, not a determined one. Record "
-                "more trajectories, reduce the noise or force a coordinate.",
-                UndeterminedLawWarning, stacklevel=4)
+            warnings.warn("ImplicitOptimizer: no law that holds to the noise was found in the "
+                          f"catalog ({reason}); the returned law is the best found, not a "
+                          "determined one. Record more trajectories, reduce the noise or force a "
+                          "coordinate.", UndeterminedLawWarning, stacklevel=4)
         pooled = moments.sum(axis=0)
         found = []
         for support in selection.rivals:

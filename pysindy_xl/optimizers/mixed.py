@@ -103,7 +103,6 @@ class MixedOptimizer(CatalogOptimizer):
 
     def catalog_tags(self):
         """The parts balance their own sub-problems; mass matrices and draws used where one does."""
-
         parts = [catalog_tags(part) for part in self._sub_optimizers()]
         return dataclasses.replace(
             super().catalog_tags(), balances_rows=False,
