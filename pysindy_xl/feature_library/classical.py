@@ -43,10 +43,9 @@ def pysindy_library_terms(library: BaseFeatureLibrary, coords: Coordinates) -> l
         try:
             terms.append(parse_expression(name, table) if name != "1" else sp.Integer(1))
         except ValueError as err:
-            raise ValueError(
-                f"terms: cannot translate feature {name!r} of {type(library).__name__} "
-                f"into a symbolic term ({err}); pass sympy expressions instead"
-            ) from None
+            raise ValueError(f"terms: cannot translate feature {name!r} of "
+                             f"{type(library).__name__} into a symbolic term ({err}); pass sympy "
+                             "expressions instead") from None
     expected = np.asarray(fitted.transform(sample), dtype=float)
     evaluate = compile_entries(state, terms)
     got = np.column_stack([np.broadcast_to(v, (len(sample),)) for v in evaluate(sample)])
@@ -127,16 +126,11 @@ class ClassicalLibrary(SymbolicLibrary):
             raise ValueError("terms: expected at least one classical term")
         mask = self._resolved_mask(len(terms))
         self.terms_, self.mask_ = terms, mask
-        names, columns = [], []
-        for k, term in enumerate(terms):
-            for c in range(self.coords.n):
-                if mask[k, c]:
-                    names.append(f"C_{self.coords.names[c]}[{term}]")
-                    columns.append((c, term))
-        matrix = sp.zeros(self.coords.n, len(columns))
-        for j, (c, term) in enumerate(columns):
-            matrix[c, j] = term
-        return names, matrix
+        columns = [(c, term) for k, term in enumerate(terms) for c in range(self.coords.n)
+                   if mask[k, c]]
+        names = [f"C_{self.coords.names[c]}[{term}]" for c, term in columns]
+        return names, sp.Matrix(self.coords.n, len(columns),
+                                lambda i, j: columns[j][1] if columns[j][0] == i else 0)
 
     def _feature_terms(self):
         return [term for term, row in zip(self.terms_, self.mask_, strict=True)
@@ -147,10 +141,8 @@ class ClassicalLibrary(SymbolicLibrary):
         restricted grammar)."""
         if not hasattr(self, "terms_"):
             self.fit()
-        return {
-            "type": self.spec_type,
-            "terms": [format_expression(t) for t in self.terms_],
-            "mask": self.mask_.astype(int).tolist()}
+        return {"type": self.spec_type, "terms": [format_expression(t) for t in self.terms_],
+                "mask": self.mask_.astype(int).tolist()}
 
     @classmethod
     def from_spec(cls, spec, reader):

@@ -18,10 +18,8 @@ def _interlink_matrix(interlink, n: int) -> np.ndarray:
     try:
         matrix = np.asarray(interlink, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(
-            "interlink: expected a numeric matrix of shape (n, n); for lists of signed input "
-            "indices use ExternalForces.from_signed_indices"
-        ) from None
+        raise ValueError("interlink: expected a numeric matrix of shape (n, n); for lists of "
+                         "signed input indices use ExternalForces.from_signed_indices") from None
     if matrix.shape != (n, n):
         raise ValueError(f"interlink: expected a matrix of shape (n, n) = {(n, n)} (generalized "
                          f"force = interlink @ u), got shape {matrix.shape}")
@@ -109,17 +107,14 @@ class ExternalForces(SymbolicLibrary):
     def _build_symbolic(self):
         matrix = _interlink_matrix(self.interlink, self.coords.n)
         self.interlink_ = matrix
-        tau = sp.Matrix(self.coords.tau)
-        column = sp.Matrix(
-            [sum(_exact(matrix[c, k]) * tau[k] for k in range(self.coords.n) if matrix[c, k])
-             for c in range(self.coords.n)])
-        return ["F[tau]"], column
+        tau = self.coords.tau
+        return ["F[tau]"], sp.Matrix([sum(_exact(matrix[c, k]) * tau[k] for k in range(len(tau))
+                                          if matrix[c, k]) for c in range(len(tau))])
 
     def to_spec(self) -> dict:
         """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
-        return {
-            "type": self.spec_type,
-            "interlink": _interlink_matrix(self.interlink, self.coords.n).tolist()}
+        return {"type": self.spec_type,
+                "interlink": _interlink_matrix(self.interlink, self.coords.n).tolist()}
 
     @classmethod
     def from_spec(cls, spec, reader):

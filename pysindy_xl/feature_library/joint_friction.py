@@ -46,17 +46,12 @@ def friction_function(model: str, velocity, coulomb_scale: float, stribeck_scale
     exp(-100.0*v**2)*tanh(100.0*v)
     """
     sign = sp.tanh(velocity / sp.Float(coulomb_scale))
-    if model == "viscous":
-        return velocity
-    if model == "coulomb":
-        return sign
-    if model == "asymmetric":
-        return sign**2
-    if model == "stribeck":
-        return sign * sp.exp(-(velocity / sp.Float(stribeck_scale)) ** 2)
-    if model == "offset":
-        return sp.Integer(1)
-    raise ValueError(f"models: expected names among {FRICTION_MODELS}, got {model!r}")
+    functions = {"viscous": velocity, "coulomb": sign, "asymmetric": sign**2,
+                 "stribeck": sign * sp.exp(-(velocity / sp.Float(stribeck_scale)) ** 2),
+                 "offset": sp.Integer(1)}
+    if model not in functions:
+        raise ValueError(f"models: expected names among {FRICTION_MODELS}, got {model!r}")
+    return functions[model]
 
 
 def _positive(value, name) -> float:
@@ -160,11 +155,7 @@ class JointFrictionLibrary(SymbolicLibrary):
                 terms.append(term)
         self.kinds_, self._terms, self.weights_ = kinds, terms, weights
         self.joints_ = joints
-        matrix = sp.zeros(self.coords.n, len(names))
-        for j, column in enumerate(columns):
-            for i, entry in enumerate(column):
-                matrix[i, j] = entry
-        return names, matrix
+        return names, sp.Matrix(self.coords.n, len(names), lambda i, j: columns[j][i])
 
     def _feature_terms(self):
         return list(self._terms)

@@ -197,8 +197,7 @@ class CatalogRepartition(SymbolicLibrary):
 
     def _derive_weak_terms(self):
         """The libraries' weak terms, atoms merged (entries in library order)."""
-        return _merged(self.slices_,
-                       [lib.weak_terms() for lib in self.libraries_])
+        return _merged(self.slices_, [lib.weak_terms() for lib in self.libraries_])
 
     def _build_weak_symbolic(self):
         parts = [lib.weak_matrices() for lib in self.libraries_]
@@ -303,9 +302,8 @@ class CatalogRepartition(SymbolicLibrary):
         try:
             term, coord = key
         except (TypeError, ValueError):
-            raise ValueError(
-                f"classical: expected keys (term, coordinate) or feature names, got {key!r}"
-            ) from None
+            raise ValueError(f"classical: expected keys (term, coordinate) or feature names, got "
+                             f"{key!r}") from None
         if isinstance(coord, str):
             if coord not in self.coords.names:
                 raise ValueError(f"classical: unknown coordinate {coord!r}")
@@ -323,9 +321,8 @@ class CatalogRepartition(SymbolicLibrary):
 
     def to_spec(self) -> dict:
         """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
-        return {
-            "type": self.spec_type,
-            "libraries": [lib.to_spec() for lib in self.flat_libraries()]}
+        return {"type": self.spec_type,
+                "libraries": [lib.to_spec() for lib in self.flat_libraries()]}
 
     @classmethod
     def from_spec(cls, spec, reader):
