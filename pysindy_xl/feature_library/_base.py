@@ -295,8 +295,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
     def __getstate__(self):
         # compiled evaluators are closures: rebuilt on first use after unpickling
         state = self.__dict__.copy()
-        for key in ("_evaluate", "_weak_evaluate", "_weak_entry_index", "_weak_memo",
-                    "_structure"):
+        for key in ("_evaluate", "_weak_evaluate", "_weak_entry_index", "_weak_memo", "_structure"):
             state.pop(key, None)
         return state
 

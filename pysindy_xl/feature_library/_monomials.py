@@ -96,8 +96,7 @@ def _row_keys(rows, major=None):
     weights = (np.int64(1) << shifts).astype(dtype)
     keys = np.empty(n_rows, dtype=dtype)
     for start in range(0, n_rows, _CHUNK):
-        np.matmul(rows[start:start + _CHUNK].astype(dtype), weights,
-                  out=keys[start:start + _CHUNK])
+        np.matmul(rows[start:start + _CHUNK].astype(dtype), weights, out=keys[start:start + _CHUNK])
     if major_bits:
         keys += major.astype(dtype) * dtype(1 << (total - major_bits))
     return keys

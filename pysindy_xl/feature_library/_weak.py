@@ -137,8 +137,7 @@ def _velocity_potential(coefficients: dict, coords: Coordinates):
         residual = target - sp.diff(potential, qd)
         if not vanishes(residual, target):
             potential += sp.integrate(residual, qd)
-            if potential.has(sp.Integral) or not vanishes(
-                    target - sp.diff(potential, qd), target):
+            if potential.has(sp.Integral) or not vanishes(target - sp.diff(potential, qd), target):
                 return None
     if all(vanishes(c - sp.diff(potential, qd), c) for qd, c in coefficients.items()):
         return potential

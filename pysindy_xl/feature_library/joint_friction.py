@@ -149,8 +149,7 @@ class JointFrictionLibrary(SymbolicLibrary):
             for model in models:
                 term = friction_function(model, velocity, *scales)
                 names.append(f"J_{joint}.{model}[{term}]")
-                columns.append([sp.Float(w) * term if w != 1 else term
-                                for w in weights[:, k]])
+                columns.append([sp.Float(w) * term if w != 1 else term for w in weights[:, k]])
                 kinds.append((model, joint))
                 terms.append(term)
         self.kinds_, self._terms, self.weights_ = kinds, terms, weights
@@ -163,8 +162,7 @@ class JointFrictionLibrary(SymbolicLibrary):
     def coefficients_by_joint(self, coef) -> dict:
         """``{joint: {model: coefficient}}`` of ``coef``, this library's coefficients."""
         out = {}
-        for (model, joint), value in zip(self.kinds_, np.asarray(coef, dtype=float),
-                                         strict=True):
+        for (model, joint), value in zip(self.kinds_, np.asarray(coef, dtype=float), strict=True):
             out.setdefault(joint, {})[model] = float(value)
         return out
 

@@ -114,8 +114,7 @@ class CatalogRepartition(SymbolicLibrary):
         parameters, ``PolynomialLagrangeLibrary.complete_catalog``).
         """
         lagrange = [lib for lib in self.flat_libraries() if lib.category == "lagrange"]
-        return bool(lagrange) and all(getattr(lib, "complete_catalog", False)
-                                      for lib in lagrange)
+        return bool(lagrange) and all(getattr(lib, "complete_catalog", False) for lib in lagrange)
 
     def flat_libraries(self, _parents=()) -> list[SymbolicLibrary]:
         """The libraries, nested catalogs flattened, a force library first when none is given;
@@ -201,8 +200,7 @@ class CatalogRepartition(SymbolicLibrary):
 
     def _build_weak_symbolic(self):
         parts = [lib.weak_matrices() for lib in self.libraries_]
-        return (sp.Matrix.hstack(*(p for p, _ in parts)),
-                sp.Matrix.hstack(*(q for _, q in parts)))
+        return sp.Matrix.hstack(*(p for p, _ in parts)), sp.Matrix.hstack(*(q for _, q in parts))
 
     def check_domain(self, x) -> None:
         """Raise ``ValueError`` naming a candidate term undefined on ``x`` (by each library)."""

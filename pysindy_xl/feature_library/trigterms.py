@@ -179,8 +179,7 @@ class _Printer:
         base = int(ordered.max()) + 1
         codes, factor = np.unique(self.order[columns] * base + ordered[nonzero_rows, columns],
                                   return_inverse=True)
-        table = np.array([self._factor(c // base, c % base) for c in codes.tolist()],
-                         dtype=object)
+        table = np.array([self._factor(c // base, c % base) for c in codes.tolist()], dtype=object)
         texts = table[factor.ravel()].tolist()  # each factor's text, row by row
         bounds = np.searchsorted(nonzero_rows, np.arange(len(rows) + 1)).tolist()
         pieces = []

@@ -11,12 +11,7 @@ import numpy as np
 
 from .._validation import IdentificationWarning
 
-__all__ = [
-    "column_mass_matrices",
-    "mass_matrices",
-    "orient_free_laws",
-    "mass_matrix_report",
-]
+__all__ = ["column_mass_matrices", "mass_matrices", "orient_free_laws", "mass_matrix_report"]
 
 
 def mass_matrices(dynamics, states, max_states: int = 2000):

@@ -80,8 +80,7 @@ def solve(optimizer, problem, library=None, weigh=False):
     if isinstance(weigh, str) and weigh == "auto":
         origin = problem.catalog_map
         weigh = origin is not None and bool(origin.forced[origin.coordinates].any())
-    if noise is not None and library is not None \
-            and catalog_tags(optimizer).uses_mass_matrices:
+    if noise is not None and library is not None and catalog_tags(optimizer).uses_mass_matrices:
         problem = with_mass_matrices(problem, library)
 
     def unweighted(reason):  # said only of a fit that succeeds

@@ -64,8 +64,7 @@ def driven_coordinates(library, forces) -> np.ndarray:
     n = coords.n
     if forces is None or all(u is None for u in forces):
         return np.zeros(n, dtype=bool)
-    acting = np.any([np.any(np.asarray(u) != 0, axis=0) for u in forces if u is not None],
-                    axis=0)
+    acting = np.any([np.any(np.asarray(u) != 0, axis=0) for u in forces if u is not None], axis=0)
     driven = np.zeros(n, dtype=bool)
     for k, tau in enumerate(coords.tau):
         if acting[k]:

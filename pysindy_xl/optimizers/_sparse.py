@@ -232,8 +232,7 @@ def lasso_gram(gram, targets, alpha, mask=None, coef_init=None, tol: float = 1e-
         if budget <= 0:
             break
         used, converged = _fista(gram, masked_targets, stage_alpha, mask, coef, lipschitz,
-                                 stage_tol, budget, int(check_every), callback,
-                                 int(callback_every))
+                                 stage_tol, budget, int(check_every), callback, int(callback_every))
         n_iter += used
         if used < budget and not np.all(converged):
             break  # stopped by the callback

@@ -52,8 +52,7 @@ def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
         projected = xs - basis @ (basis.T @ xs)
         remaining2 = np.sum(projected**2, axis=0)[:, None] + along**2
         correlation = (projected.T @ residual)[:, None] + along * removed
-        c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss,
-                          y_norm2)
+        c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2)
         if c is None:
             break
         support = support.copy()
@@ -101,8 +100,7 @@ def _first_swaps(xs, y, usable, order, sizes):
         else:
             remaining2, correlation, rss = along**2, along * removed, 0.0
         support = np.asarray(order[:k], dtype=int)
-        c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss,
-                          y_norm2)
+        c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2)
         swapped = None
         if c is not None:
             swapped = support.copy()

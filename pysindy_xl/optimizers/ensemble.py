@@ -104,8 +104,7 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
 
     def catalog_tags(self):
         """The base optimizer's tags; every fit balances its own subsample."""
-        return dataclasses.replace(catalog_tags(self._base()), balances_rows=False,
-                                   can_refit=False)
+        return dataclasses.replace(catalog_tags(self._base()), balances_rows=False, can_refit=False)
 
     def __init__(self, optimizer=None, n_models=20, fraction=0.7, n_chunks=20, inclusion=0.5,
                  confidence=0.95, random_state=0, n_jobs=None, sampling="subsamples",
@@ -170,8 +169,7 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
         if self.progress:
             from tqdm.auto import tqdm
 
-            fits = tqdm(fits, total=len(problems), desc=f"{type(base).__name__} fits",
-                        unit="fit")
+            fits = tqdm(fits, total=len(problems), desc=f"{type(base).__name__} fits", unit="fit")
         outcomes = list(fits)
         fits = [coef for coef, _, _ in outcomes]
         failed = np.array([coef is None for coef in fits])

@@ -342,8 +342,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         if self.refit and np.any(coef):
             support = np.flatnonzero(coef)
             coef[:] = 0.0
-            moments = (None if noise_moments is None
-                       else noise_moments[np.ix_(support, support)])
+            moments = None if noise_moments is None else noise_moments[np.ix_(support, support)]
             coef[support] = self._prune(X[:, support], y, n_blocks, moments)
             if self.selection_ is not None:  # report indices of X, not of the support
                 self.selection_.order = support[self.selection_.order]
@@ -382,8 +381,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         coef = np.zeros(len(rest))
         if moments is not None:
             moments = moments[np.ix_(keep, keep)]
-        coef[keep], share = corrected_least_squares(problem.theta[:, rest[keep]], force,
-                                                    moments)
+        coef[keep], share = corrected_least_squares(problem.theta[:, rest[keep]], force, moments)
         self.selection_ = None
         self.noise_share_ = None if moments is None else share
         return self._as_catalog_vector(coef, rest, problem)

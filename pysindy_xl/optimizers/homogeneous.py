@@ -347,8 +347,7 @@ def _scored(theta, moments, supports, how, n_blocks, n_folds, row_moments=None) 
     """Candidates of the supports that can be cross-validated."""
     if not supports:
         return []
-    ratios, relative = _held_out_ratios(theta, moments, supports, n_blocks, n_folds,
-                                        row_moments)
+    ratios, relative = _held_out_ratios(theta, moments, supports, n_blocks, n_folds, row_moments)
     (mean, spread), (relative_mean, _) = fold_summary(ratios), fold_summary(relative)
     return [_Candidate(np.asarray(s), mean[m], spread[m], relative_mean[m], how)
             for m, s in enumerate(supports) if np.isfinite(mean[m])]

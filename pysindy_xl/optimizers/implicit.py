@@ -158,8 +158,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         check_option("angle_tol", self.angle_tol, "real", low=0, high=90, low_open=True,
                      high_open=True)
         check_option("min_membership", self.min_membership, "real", low=0, high=1)
-        check_option("max_residual_ratio", self.max_residual_ratio, "real", low=1,
-                     allow_inf=True)
+        check_option("max_residual_ratio", self.max_residual_ratio, "real", low=1, allow_inf=True)
         check_option("threshold", self.threshold, "real", low=0, high=1, high_open=True)
         check_option("tol", self.tol, "real", low=0, low_open=True)
         check_option("min_group_size", self.min_group_size, "int", low=1)
@@ -211,8 +210,7 @@ class ImplicitOptimizer(CatalogOptimizer):
             raise NoLawFoundError(f"support: {columns.size} non-zero column(s) given; a law "
                                   "needs at least two terms")
         touches = coordinates_touched(theta[:, columns], n_coordinates).astype(int)
-        _, labels = scipy.sparse.csgraph.connected_components(touches.T @ touches,
-                                                              directed=False)
+        _, labels = scipy.sparse.csgraph.connected_components(touches.T @ touches, directed=False)
         laws, ratios = [], []
         for label in np.unique(labels):
             group = columns[labels == label]
@@ -374,8 +372,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         x = np.abs(self.normalized_solution_matrix_)
         floor = max(x.max(initial=0.0) * 1e-8, 1e-300)
         image = axes[0].imshow(np.log10(np.maximum(x, floor)), cmap="viridis")
-        axes[0].set(title="A: |X| (SINDy-PI solution, log10)", xlabel="column j",
-                    ylabel="feature")
+        axes[0].set(title="A: |X| (SINDy-PI solution, log10)", xlabel="column j", ylabel="feature")
         plt.colorbar(image, ax=axes[0], shrink=0.8)
         directions = np.eye(x.shape[0]) - self.normalized_solution_matrix_
         for k, group in enumerate(self.law_groups_):
@@ -391,8 +388,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         axes[2].set(title="C: extracted law (coef_)", xlabel="feature", ylabel="coefficient")
         if feature_names is not None:
             for ax in axes[1:]:
-                ax.set_xticks(np.arange(len(feature_names)), feature_names, rotation=90,
-                              fontsize=6)
+                ax.set_xticks(np.arange(len(feature_names)), feature_names, rotation=90, fontsize=6)
         return list(axes)
 
     def _post_process(self, x_scaled, r_factor):

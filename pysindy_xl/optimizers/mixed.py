@@ -166,8 +166,7 @@ class MixedOptimizer(CatalogOptimizer):
 
         n_features = theta.shape[1]
         # balanced here only to decide which coordinates a column touches
-        touches = coordinates_touched(balance_coordinates(theta, n, force_columns), n,
-                                      self.rtol)
+        touches = coordinates_touched(balance_coordinates(theta, n, force_columns), n, self.rtol)
         forced = touches[:, force_columns].any(axis=1)
         activated, activated_columns = activation_closure(touches, forced)
         self.forced_coordinates_ = forced

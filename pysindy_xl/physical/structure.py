@@ -103,8 +103,7 @@ class PhysicalStructure:
                 for j in range(combination.shape[0])]
         structure = cls.from_maps(maps, np.arange(len(maps)))
         # keep the caller's order of the physical parameters
-        order = [structure.names.index(name) if name in structure.names else -1
-                 for name in names]
+        order = [structure.names.index(name) if name in structure.names else -1 for name in names]
         if sorted(order) != list(range(len(structure.names))):
             missing = set(structure.names) - set(names)
             raise ValueError(f"names: every body's ten parameters are needed, missing "
@@ -159,8 +158,7 @@ class PhysicalStructure:
     def pseudo_inertias(self, pi) -> np.ndarray:
         """Every body's pseudo-inertia at ``pi``, shape (len(bodies), 4, 4)."""
         pi = np.asarray(pi, dtype=float)
-        return np.array([pseudo_inertia_matrix(pi[k]) for k in self.body_indices]
-                        ).reshape(-1, 4, 4)
+        return np.array([pseudo_inertia_matrix(pi[k]) for k in self.body_indices]).reshape(-1, 4, 4)
 
 
 def pseudo_inertia_matrix(parameters):

@@ -180,9 +180,8 @@ class InspectionMixin:
         if uncertainty:
             if self.inclusion_probability_ is None:
                 raise ValueError("uncertainty: needs a fit with an EnsembleOptimizer")
-            for line in uncertainty_lines(self.get_feature_names(), self.coef_,
-                                          self.coef_interval_, self.inclusion_probability_,
-                                          precision):
+            for line in uncertainty_lines(self.get_feature_names(), self.coef_, self.coef_interval_,
+                                          self.inclusion_probability_, precision):
                 print(line)
         if has_parameter_map(self.feature_library_):
             for line in parameter_lines(self.physical_parameters(), precision):

@@ -215,8 +215,7 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
     first = next((k for k, (d, piece) in enumerate(zip(pieces, smoothing, strict=True))
                   if estimated(piece) and not is_uniform(d["t"])), None)
     if first is not None:  # are the stamps sampling times?
-        ratio = stamp_noise_ratio(pieces[first]["t"], pieces[first]["x"],
-                                  smoothing[first].noise_,
+        ratio = stamp_noise_ratio(pieces[first]["t"], pieces[first]["x"], smoothing[first].noise_,
                                   getattr(smoothing[first], "order", 3))
         summary["stamp_noise_ratio"] = ratio
         if ratio > STAMP_NOISE_RATIO:

@@ -70,8 +70,7 @@ def finite_difference_weights(t, derivative: int, stencil: int = 5, degree=None)
     return index, weights / scale**derivative
 
 
-def differentiate(t, values, derivative: int = 1, stencil: int = 5,
-                  degree=None) -> np.ndarray:
+def differentiate(t, values, derivative: int = 1, stencil: int = 5, degree=None) -> np.ndarray:
     """Derivative of smooth sampled ``values`` (N, ...) along axis 0; ``stencil`` and ``degree``
     as in :func:`finite_difference_weights`.
 
@@ -127,8 +126,7 @@ def is_uniform(t) -> bool:
     return bool(np.ptp(steps) <= _UNIFORM_TOLERANCE * np.mean(steps))
 
 
-def _choose_lambda(t: np.ndarray, y: np.ndarray, order: int,
-                   target: str) -> tuple[float, float]:
+def _choose_lambda(t: np.ndarray, y: np.ndarray, order: int, target: str) -> tuple[float, float]:
     """``(lambda, sigma)`` of one series on a uniform grid (cosine-transform domain), ``sigma``
     the GCV fit's noise level; ``target="velocity"`` minimizes the velocity's risk
     ``sum_k w_k^2 [(1 - H_k)^2 (P_k - sigma^2) + H_k^2 sigma^2]`` (mode ``k``: frequency ``w_k``,
@@ -200,16 +198,14 @@ def _choose_lambdas_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
         if k not in scores:
             system = _LAMBDA_GRID[k] * banded
             system[order] += 1.0
-            solved = scipy.linalg.solve_banded((order, order), system, rhs,
-                                               check_finite=False)
+            solved = scipy.linalg.solve_banded((order, order), system, rhs, check_finite=False)
             residual = y - solved[:, :n_columns]
             rss = np.sum(residual**2, axis=0)
             trace = float(np.sum(probes * solved[:, n_columns:n_columns + n_probes]))
             trace_velocity = float(np.sum(velocity_probes * solved[:, n_columns + n_probes:]))
             gcv = (n_samples * rss / (n_samples - trace) ** 2 if trace < n_samples - 1
                    else np.full(n_columns, np.inf))
-            scores[k] = (gcv, rss, trace, np.sum((first @ residual) ** 2, axis=0),
-                         trace_velocity)
+            scores[k] = (gcv, rss, trace, np.sum((first @ residual) ** 2, axis=0), trace_velocity)
         return scores[k]
 
     def minimize(criterion):

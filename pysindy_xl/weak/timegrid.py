@@ -71,9 +71,8 @@ def grid_summary(times) -> dict:
     {'uniform': False, 'median_step': 0.5, 'max_step': 2.0, 'min_step': 0.5}
     """
     steps = np.concatenate([np.diff(np.asarray(t, dtype=float)) for t in times])
-    return {"uniform": all(is_uniform(t) for t in times),
-            "median_step": float(np.median(steps)), "max_step": float(steps.max()),
-            "min_step": float(steps.min())}
+    return {"uniform": all(is_uniform(t) for t in times), "median_step": float(np.median(steps)),
+            "max_step": float(steps.max()), "min_step": float(steps.min())}
 
 
 def stamp_noise_ratio(t, x, noise, order: int = 3) -> float:
