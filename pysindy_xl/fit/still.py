@@ -11,13 +11,12 @@ residual :math:`r_i = q_i - a - b t` of the least-squares line through its posit
     \quad\text{or}\quad
     \max_t r_i - \min_t r_i \le 10^{-9} \,(1 + \max_t |q_i|),
 
-with :math:`\hat\sigma = 1.4826 \, \operatorname{MAD}(\Delta^3 q) / \sqrt{20}` the noise
-level (:func:`noise_level`) and :math:`\kappa` the estimator's ``hold_still`` (a sinusoid of
-amplitude :math:`A` gives :math:`\sqrt{1 + A^2 / (2 \sigma^2)}`). :func:`still_columns` lists
-the catalog columns left out with them; the model holds still coordinates at zero
-acceleration (:class:`~pysindy_xl.dynamics.CatalogDynamics` ``held``).
-A driven coordinate that does not move is never still: gravity against the recorded torque
-is information.
+with :math:`\hat\sigma = 1.4826 \, \operatorname{MAD}(\Delta^3 q) / \sqrt{20}` the noise level
+(:func:`noise_level`) and :math:`\kappa` the estimator's ``hold_still`` (a sinusoid of amplitude
+:math:`A` gives :math:`\sqrt{1 + A^2 / (2 \sigma^2)}`). :func:`still_columns` lists the catalog
+columns left out with them; the model holds still coordinates at zero acceleration
+(:class:`~pysindy_xl.dynamics.CatalogDynamics` ``held``). A driven coordinate that does not move is
+never still: gravity against the recorded torque is information.
 """
 
 from __future__ import annotations

@@ -1,10 +1,9 @@
 r"""What makes a catalog's coefficients physical: the rigid bodies behind its base parameters.
 
-A kinematic catalog's Lagrange coefficients are *base parameters* :math:`\beta = C \pi` of
-the bodies' inertial parameters :math:`\pi`; its friction columns carry friction. They are
-*physically consistent* when some :math:`\pi` with :math:`C \pi = \beta` has every
-pseudo-inertia positive semidefinite and every armature and friction non-negative
-(:mod:`pysindy_xl.physical.sdp`).
+A kinematic catalog's Lagrange coefficients are *base parameters* :math:`\beta = C \pi` of the
+bodies' inertial parameters :math:`\pi`; its friction columns carry friction. They are *physically
+consistent* when some :math:`\pi` with :math:`C \pi = \beta` has every pseudo-inertia positive
+semidefinite and every armature and friction non-negative (:mod:`pysindy_xl.physical.sdp`).
 """
 
 from __future__ import annotations

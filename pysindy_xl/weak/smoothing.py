@@ -5,15 +5,14 @@ coordinate,
 
 .. math:: \hat z = \arg\min_z \|y - z\|^2 + \lambda \|D_d z\|^2,
 
-with ``D_d`` the ``d``-th divided difference on the actual time grid, scaled by the mean
-step to the power ``d`` (``lambda`` in sample units) and each row weighted by the square root
-of the time it spans (the quadrature of the integral of the squared ``d``-th derivative); the
-system is banded. Generalized cross-validation, ``GCV(lambda) = N RSS / (N - tr H)^2``,
-estimates the noise level; the default weight minimizes Stein's risk of the smoothed
-*velocity*. On a uniform grid both are computed in the cosine-transform domain (gains
-``H_k = 1 / (1 + lambda (2 sin(pi k / 2N))^(2d))``); on a non-uniform grid, where that
-shortcut mistakes jitter for noise, by banded solves with Hutchinson trace estimates.
-Derivatives: five-point finite differences on the actual grid.
+with ``D_d`` the ``d``-th divided difference on the actual time grid, scaled by the mean step to the
+power ``d`` (``lambda`` in sample units) and each row weighted by the square root of the time it
+spans (the quadrature of the integral of the squared ``d``-th derivative); the system is banded.
+Generalized cross-validation, ``GCV(lambda) = N RSS / (N - tr H)^2``, estimates the noise level; the
+default weight minimizes Stein's risk of the smoothed *velocity*. On a uniform grid both are
+computed in the cosine-transform domain (gains ``H_k = 1 / (1 + lambda (2 sin(pi k / 2N))^(2d))``);
+on a non-uniform grid, where that shortcut mistakes jitter for noise, by banded solves with
+Hutchinson trace estimates. Derivatives: five-point finite differences on the actual grid.
 """
 
 from __future__ import annotations

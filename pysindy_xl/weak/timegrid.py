@@ -2,12 +2,11 @@
 
 The weak form works on the stamps as recorded (the smoother's divided differences, the test
 functions' quadrature, the noise drawn per sample). A step longer than ``h / min_samples``
-(:class:`~pysindy_xl.weak.BumpTestFunctions`) is a gap that no test function or smoother may
-span: the trajectory is cut there into segments handled on their own (:func:`split_at_gaps`;
-``weak_info_["gaps"]``). Stamps that are arrival times rather than sampling times make
-positions smooth in sample order look noisy at their stamps: :func:`stamp_noise_ratio`
-compares the two, and the fit warns above :data:`STAMP_NOISE_RATIO`. Repeated stamps are
-refused at the input.
+(:class:`~pysindy_xl.weak.BumpTestFunctions`) is a gap that no test function or smoother may span:
+the trajectory is cut there into segments handled on their own (:func:`split_at_gaps`;
+``weak_info_["gaps"]``). Stamps that are arrival times rather than sampling times make positions
+smooth in sample order look noisy at their stamps: :func:`stamp_noise_ratio` compares the two, and
+the fit warns above :data:`STAMP_NOISE_RATIO`. Repeated stamps are refused at the input.
 """
 
 from __future__ import annotations
