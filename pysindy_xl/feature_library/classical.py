@@ -32,8 +32,7 @@ def pysindy_library_terms(library: BaseFeatureLibrary, coords: Coordinates) -> l
     """
     state = coords.state
     names = [str(s) for s in state]
-    rng = np.random.default_rng(0)
-    sample = rng.uniform(-1.5, 1.5, size=(64, len(state)))
+    sample = np.random.default_rng(0).uniform(-1.5, 1.5, size=(64, len(state)))
     # deepcopy, not sklearn.clone: some pysindy libraries (CustomLibrary) are not clonable
     fitted = copy.deepcopy(library).fit(sample)
     feature_names = fitted.get_feature_names(input_features=names)

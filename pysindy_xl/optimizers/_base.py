@@ -186,8 +186,7 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
     candidates = order[nonzero]
     sub = sub[:, nonzero] / top[nonzero]  # max-scaled first: no overflow in the norms
     sub /= np.linalg.norm(sub, axis=0)
-    r = scipy.linalg.qr(sub, mode="r", check_finite=False)[0]
-    diag = np.abs(np.diag(r))
+    diag = np.abs(np.diag(scipy.linalg.qr(sub, mode="r", check_finite=False)[0]))
     if len(diag) < len(candidates):  # fewer rows than columns: the tail is dependent
         diag = np.concatenate([diag, np.zeros(len(candidates) - len(diag))])
     for j, d in zip(candidates, diag, strict=True):

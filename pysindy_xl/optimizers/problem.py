@@ -326,8 +326,7 @@ def coordinate_weights(theta, n_coordinates: int, force_columns=None) -> np.ndar
     solution = np.linalg.lstsq(design, -np.log(rms[blocks, columns]), rcond=None)[0]
     u = solution[:n]
     active = present.any(axis=1)
-    log_w = np.where(active, u - u[active].mean(), 0.0)
-    return np.exp(log_w)
+    return np.exp(np.where(active, u - u[active].mean(), 0.0))
 
 
 def balance_coordinates(theta, n_coordinates: int, force_columns=None) -> np.ndarray:

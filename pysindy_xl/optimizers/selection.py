@@ -119,8 +119,7 @@ def _forward_order(active_mask, xs, residual) -> np.ndarray:
         orthogonal -= np.outer(direction, direction @ orthogonal)
         chosen.append(j)
         candidates[j] = False
-    rest = [j for j in range(xs.shape[1]) if j not in set(chosen)]
-    return np.array(chosen + rest, dtype=int)
+    return np.array(chosen + [j for j in range(xs.shape[1]) if j not in set(chosen)], dtype=int)
 
 
 def refine_by_swaps(x, y, support, max_swaps: int = 50) -> np.ndarray:

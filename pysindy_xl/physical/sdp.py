@@ -228,5 +228,4 @@ def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=
         out[np.asarray(zero, dtype=bool)] = 0.0
     if len(structure.friction_columns):
         out[structure.friction_columns] = np.maximum(out[structure.friction_columns], 0.0)
-    cost = float(np.sum((factor @ (out * scale - scaled)) ** 2))
-    return out, pi_value, cost
+    return out, pi_value, float(np.sum((factor @ (out * scale - scaled)) ** 2))

@@ -80,8 +80,7 @@ class InspectionMixin:
         t = sample_times(self.t_default if t is None else t, x.shape[0], "t")
         if self.differentiation_method is not None:
             return differentiation_function(self.differentiation_method)(x, t)
-        smoother = copy.deepcopy(self.smoother) or WhittakerSmoother()
-        return smoother.smooth(t, x)[1]
+        return (copy.deepcopy(self.smoother) or WhittakerSmoother()).smooth(t, x)[1]
 
     def get_feature_names(self) -> list[str]:
         """Names of the catalog features.

@@ -240,8 +240,7 @@ class BumpTestFunctions:
                              f"inside the trajectory ({t[-1] - t[0]:.4g} s)")
         if n_functions is None:
             n_functions = self.n_functions
-        multiples = self._multiples()
-        widths = [m * h for m in multiples if 2 * m * h <= t[-1] - t[0]] or [h]
+        widths = [m * h for m in self._multiples() if 2 * m * h <= t[-1] - t[0]] or [h]
         if len(widths) == 1:
             phi, dphi, _ = self._bumps(t, widths[0], n_functions)
             return phi, dphi, h
