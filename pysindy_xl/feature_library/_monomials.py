@@ -22,10 +22,8 @@ def _angle_slots(angles):
 
 def _reduce_cosine_squares(exponents, coefficients, owners, angles):
     """Rewrite ``cos^2 = 1 - sin^2`` until no cosine power reaches 2 (``owners``, if not None,
-    follow their rows).
-
-    A row with ``p`` halves of cosine powers becomes ``2^p`` rows, in the order of rewriting one
-    half per pass: by ``p``, then by the choices of the last pass to the first, then by row.
+    follow their rows): a row with ``p`` halves of cosine powers becomes ``2^p`` rows, ordered by
+    ``p``, then by the choices of the last pass to the first, then by row.
     """
     angle, cosines = _angle_slots(angles)
     if not len(cosines) or not len(exponents) or (

@@ -113,11 +113,9 @@ def integrate_by_parts(expr: sp.Expr, coords: Coordinates) -> tuple[sp.Expr, sp.
 
 
 def _velocity_potential(coefficients: dict, coords: Coordinates):
-    """``G(q, qd, t)`` with ``dG/dqd_j = coefficients[qd_j]`` (zero where absent), or None.
-
-    Built one velocity at a time and accepted when its gradient matches every coefficient,
-    checked numerically at 30 digits on states spread over orders of magnitude (piecewise
-    coefficients have no identity sympy proves reliably).
+    """``G(q, qd, t)`` with ``dG/dqd_j = coefficients[qd_j]`` (zero where absent), or None: built
+    one velocity at a time, its gradient checked at 30 digits on states over orders of magnitude
+    (piecewise coefficients have no identity sympy proves reliably).
     """
     variables = [*coords.q, *coords.qd, coords.t]
     rng = np.random.default_rng(0)

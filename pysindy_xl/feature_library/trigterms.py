@@ -132,11 +132,10 @@ _NESTED = StrPrinter({"full_prec": False})
 
 
 class _Printer:
-    """sympy's ``str`` of ``TrigPolynomial.to_sympy(coords)``, from the exponent rows.
-
-    sympy prints a sum's monomials in decreasing lexicographic order of their exponents over
-    the generators sorted by ``default_sort_key`` (the constant last), and a product as its
-    sign, its coefficient unless one, then its factors by ``sort_key``.
+    """sympy's ``str`` of ``TrigPolynomial.to_sympy(coords)`` from the exponent rows: monomials in
+    decreasing lexicographic order of their exponents over the generators sorted by
+    ``default_sort_key`` (the constant last); a product as its sign, its coefficient unless one,
+    then its factors by ``sort_key``.
     """
 
     def __init__(self, coords, angles):
