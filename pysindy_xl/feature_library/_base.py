@@ -219,8 +219,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
     def _check_coords(self):
         if not isinstance(self.coords, Coordinates):
             raise TypeError(
-                f"coords: expected a pysindy_xl.Coordinates, got {type(self.coords).__name__}"
-            )
+                f"coords: expected a pysindy_xl.Coordinates, got {type(self.coords).__name__}")
 
     # -- pysindy / scikit-learn interface ------------------------------------------------
     def fit(self, x=None, y=None):
@@ -296,8 +295,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
     def __getstate__(self):
         # compiled evaluators are closures: rebuilt on first use after unpickling
         state = self.__dict__.copy()
-        for key in ("_evaluate", "_weak_evaluate", "_weak_entry_index", "_weak_memo",
-                    "_structure"):
+        for key in ("_evaluate", "_weak_evaluate", "_weak_entry_index", "_weak_memo", "_structure"):
             state.pop(key, None)
         return state
 
@@ -313,11 +311,9 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         if x.ndim != 2 or x.shape[1] != width:
             raise ValueError(
                 f"x: expected the stacked variables array of shape (n_samples, {width}) "
-                f"(see pysindy_xl.feature_library.stack_variables), got shape {x.shape}"
-            )
+                f"(see pysindy_xl.feature_library.stack_variables), got shape {x.shape}")
         if x.shape[0] == 0:
-            raise ValueError("x: expected at least one sample, got shape (0, "
-                             f"{width})")
+            raise ValueError(f"x: expected at least one sample, got shape (0, {width})")
         if not np.all(np.isfinite(x)):
             raise ValueError("x: contains NaN or inf")
         return x
@@ -335,8 +331,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
             f"{', '.join(names)}{' ...' if len(columns) > 5 else ''} "
             f"{'are' if len(columns) > 1 else 'is'} NaN or inf on {len(samples)} of {n_rows} "
             f"samples (first at sample {samples[0]}): the data leave the term's domain "
-            "(log, sqrt, 1/x of values <= 0) or the values are too large (overflow)"
-        )
+            "(log, sqrt, 1/x of values <= 0) or the values are too large (overflow)")
 
     def check_domain(self, x) -> None:
         """Raise ``ValueError`` when a candidate term is undefined on ``x`` (no-op here)."""
@@ -428,10 +423,8 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         """
         x = self._check_input(x)
         if phi.shape != dphi.shape or phi.shape[1] != x.shape[0]:
-            raise ValueError(
-                f"phi, dphi: expected two matrices of shape (K, {x.shape[0]}), got "
-                f"{phi.shape} and {dphi.shape}"
-            )
+            raise ValueError(f"phi, dphi: expected two matrices of shape (K, {x.shape[0]}), got "
+                             f"{phi.shape} and {dphi.shape}")
         n, n_features, n_samples = self.coords.n, self.n_output_features_, x.shape[0]
         if not hasattr(self, "_weak_evaluate"):
             index, terms = self.weak_terms()

@@ -22,10 +22,8 @@ def _angle_slots(angles):
 
 def _reduce_cosine_squares(exponents, coefficients, owners, angles):
     """Rewrite ``cos^2 = 1 - sin^2`` until no cosine power reaches 2 (``owners``, if not None,
-    follow their rows).
-
-    A row with ``p`` halves of cosine powers becomes ``2^p`` rows, in the order of rewriting one
-    half per pass: by ``p``, then by the choices of the last pass to the first, then by row.
+    follow their rows): a row with ``p`` halves of cosine powers becomes ``2^p`` rows, ordered by
+    ``p``, then by the choices of the last pass to the first, then by row.
     """
     angle, cosines = _angle_slots(angles)
     if not len(cosines) or not len(exponents) or (
@@ -96,8 +94,7 @@ def _row_keys(rows, major=None):
     weights = (np.int64(1) << shifts).astype(dtype)
     keys = np.empty(n_rows, dtype=dtype)
     for start in range(0, n_rows, _CHUNK):
-        np.matmul(rows[start:start + _CHUNK].astype(dtype), weights,
-                  out=keys[start:start + _CHUNK])
+        np.matmul(rows[start:start + _CHUNK].astype(dtype), weights, out=keys[start:start + _CHUNK])
     if major_bits:
         keys += major.astype(dtype) * dtype(1 << (total - major_bits))
     return keys

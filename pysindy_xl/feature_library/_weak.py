@@ -76,10 +76,9 @@ def integrate_by_parts(expr: sp.Expr, coords: Coordinates) -> tuple[sp.Expr, sp.
         elif coefficient.free_symbols <= positions | set(coords.qd):
             velocity_dependent[qd] = coefficient
         else:
-            raise ValueError(
-                f"terms: the acceleration {qdd} in {expr} has a coefficient that depends on "
-                "forces or accelerations, so the weak form cannot integrate it by parts; use "
-                "formulation='strong' or rewrite the term")
+            raise ValueError(f"terms: the acceleration {qdd} in {expr} has a coefficient that "
+                             "depends on forces or accelerations, so the weak form cannot "
+                             "integrate it by parts; use formulation='strong' or rewrite the term")
         rest = sp.expand(rest - coefficient * qdd)
     exact = sp.Integer(0)
     velocities = dict(zip(coords.qd, coords.q, strict=True))
@@ -114,11 +113,9 @@ def integrate_by_parts(expr: sp.Expr, coords: Coordinates) -> tuple[sp.Expr, sp.
 
 
 def _velocity_potential(coefficients: dict, coords: Coordinates):
-    """``G(q, qd, t)`` with ``dG/dqd_j = coefficients[qd_j]`` (zero where absent), or None.
-
-    Built one velocity at a time and accepted when its gradient matches every coefficient,
-    checked numerically at 30 digits on states spread over orders of magnitude (piecewise
-    coefficients have no identity sympy proves reliably).
+    """``G(q, qd, t)`` with ``dG/dqd_j = coefficients[qd_j]`` (zero where absent), or None: built
+    one velocity at a time, its gradient checked at 30 digits on states over orders of magnitude
+    (piecewise coefficients have no identity sympy proves reliably).
     """
     variables = [*coords.q, *coords.qd, coords.t]
     rng = np.random.default_rng(0)
@@ -138,8 +135,7 @@ def _velocity_potential(coefficients: dict, coords: Coordinates):
         residual = target - sp.diff(potential, qd)
         if not vanishes(residual, target):
             potential += sp.integrate(residual, qd)
-            if potential.has(sp.Integral) or not vanishes(
-                    target - sp.diff(potential, qd), target):
+            if potential.has(sp.Integral) or not vanishes(target - sp.diff(potential, qd), target):
                 return None
     if all(vanishes(c - sp.diff(potential, qd), c) for qd, c in coefficients.items()):
         return potential

@@ -32,8 +32,7 @@ def pysindy_library_terms(library: BaseFeatureLibrary, coords: Coordinates) -> l
     """
     state = coords.state
     names = [str(s) for s in state]
-    rng = np.random.default_rng(0)
-    sample = rng.uniform(-1.5, 1.5, size=(64, len(state)))
+    sample = np.random.default_rng(0).uniform(-1.5, 1.5, size=(64, len(state)))
     # deepcopy, not sklearn.clone: some pysindy libraries (CustomLibrary) are not clonable
     fitted = copy.deepcopy(library).fit(sample)
     feature_names = fitted.get_feature_names(input_features=names)
@@ -43,18 +42,16 @@ def pysindy_library_terms(library: BaseFeatureLibrary, coords: Coordinates) -> l
         try:
             terms.append(parse_expression(name, table) if name != "1" else sp.Integer(1))
         except ValueError as err:
-            raise ValueError(
-                f"terms: cannot translate feature {name!r} of {type(library).__name__} "
-                f"into a symbolic term ({err}); pass sympy expressions instead"
-            ) from None
+            raise ValueError(f"terms: cannot translate feature {name!r} of "
+                             f"{type(library).__name__} into a symbolic term ({err}); pass sympy "
+                             "expressions instead") from None
     expected = np.asarray(fitted.transform(sample), dtype=float)
     evaluate = compile_entries(state, terms)
     got = np.column_stack([np.broadcast_to(v, (len(sample),)) for v in evaluate(sample)])
     if expected.shape != got.shape or not np.allclose(expected, got, rtol=1e-9, atol=1e-12):
         raise ValueError(
             f"terms: the feature names of {type(library).__name__} do not describe its "
-            "features; pass sympy expressions instead"
-        )
+            "features; pass sympy expressions instead")
     return terms
 
 
@@ -105,8 +102,7 @@ class ClassicalLibrary(SymbolicLibrary):
             extra = term.free_symbols - allowed
             if extra:
                 raise ValueError(
-                    f"terms: classical term {term} uses unknown symbols {sorted(map(str, extra))}"
-                )
+                    f"terms: classical term {term} uses unknown symbols {sorted(map(str, extra))}")
         return terms
 
     def _resolved_mask(self, n_terms: int) -> np.ndarray:
@@ -115,8 +111,7 @@ class ClassicalLibrary(SymbolicLibrary):
         mask = np.asarray(self.mask)
         if mask.shape != (n_terms, self.coords.n):
             raise ValueError(
-                f"mask: expected shape (n_terms, n) = {(n_terms, self.coords.n)}, got {mask.shape}"
-            )
+                f"mask: expected shape (n_terms, n) = {(n_terms, self.coords.n)}, got {mask.shape}")
         if mask.dtype != bool and not np.isin(mask, (0, 1)).all():
             raise ValueError("mask: expected booleans (or 0/1)")
         if not mask.any():
@@ -130,16 +125,11 @@ class ClassicalLibrary(SymbolicLibrary):
             raise ValueError("terms: expected at least one classical term")
         mask = self._resolved_mask(len(terms))
         self.terms_, self.mask_ = terms, mask
-        names, columns = [], []
-        for k, term in enumerate(terms):
-            for c in range(self.coords.n):
-                if mask[k, c]:
-                    names.append(f"C_{self.coords.names[c]}[{term}]")
-                    columns.append((c, term))
-        matrix = sp.zeros(self.coords.n, len(columns))
-        for j, (c, term) in enumerate(columns):
-            matrix[c, j] = term
-        return names, matrix
+        columns = [(c, term) for k, term in enumerate(terms) for c in range(self.coords.n)
+                   if mask[k, c]]
+        names = [f"C_{self.coords.names[c]}[{term}]" for c, term in columns]
+        return names, sp.Matrix(self.coords.n, len(columns),
+                                lambda i, j: columns[j][1] if columns[j][0] == i else 0)
 
     def _feature_terms(self):
         return [term for term, row in zip(self.terms_, self.mask_, strict=True)
@@ -150,11 +140,8 @@ class ClassicalLibrary(SymbolicLibrary):
         restricted grammar)."""
         if not hasattr(self, "terms_"):
             self.fit()
-        return {
-            "type": self.spec_type,
-            "terms": [format_expression(t) for t in self.terms_],
-            "mask": self.mask_.astype(int).tolist(),
-        }
+        return {"type": self.spec_type, "terms": [format_expression(t) for t in self.terms_],
+                "mask": self.mask_.astype(int).tolist()}
 
     @classmethod
     def from_spec(cls, spec, reader):

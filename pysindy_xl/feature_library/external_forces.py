@@ -18,15 +18,11 @@ def _interlink_matrix(interlink, n: int) -> np.ndarray:
     try:
         matrix = np.asarray(interlink, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(
-            "interlink: expected a numeric matrix of shape (n, n); for lists of signed input "
-            "indices use ExternalForces.from_signed_indices"
-        ) from None
+        raise ValueError("interlink: expected a numeric matrix of shape (n, n); for lists of "
+                         "signed input indices use ExternalForces.from_signed_indices") from None
     if matrix.shape != (n, n):
-        raise ValueError(
-            f"interlink: expected a matrix of shape (n, n) = {(n, n)} (generalized force = "
-            f"interlink @ u), got shape {matrix.shape}"
-        )
+        raise ValueError(f"interlink: expected a matrix of shape (n, n) = {(n, n)} (generalized "
+                         f"force = interlink @ u), got shape {matrix.shape}")
     if not np.all(np.isfinite(matrix)):
         raise ValueError("interlink: contains NaN or inf")
     if not matrix.any():
@@ -51,10 +47,8 @@ def signed_indices_to_interlink(indices, n: int) -> np.ndarray:
     for c, row in enumerate(indices):
         for k in row:
             if not isinstance(k, (int, np.integer)) or k == 0 or abs(k) > n:
-                raise ValueError(
-                    f"indices: entry {k!r} for coordinate {c} is not a signed 1-based input "
-                    f"index in [-{n}, -1] or [1, {n}]"
-                )
+                raise ValueError(f"indices: entry {k!r} for coordinate {c} is not a signed 1-based "
+                                 f"input index in [-{n}, -1] or [1, {n}]")
             matrix[c, abs(k) - 1] += np.sign(k)
     return matrix
 
@@ -113,19 +107,14 @@ class ExternalForces(SymbolicLibrary):
     def _build_symbolic(self):
         matrix = _interlink_matrix(self.interlink, self.coords.n)
         self.interlink_ = matrix
-        tau = sp.Matrix(self.coords.tau)
-        column = sp.Matrix(
-            [sum(_exact(matrix[c, k]) * tau[k] for k in range(self.coords.n) if matrix[c, k])
-             for c in range(self.coords.n)]
-        )
-        return ["F[tau]"], column
+        tau = self.coords.tau
+        return ["F[tau]"], sp.Matrix([sum(_exact(matrix[c, k]) * tau[k] for k in range(len(tau))
+                                          if matrix[c, k]) for c in range(len(tau))])
 
     def to_spec(self) -> dict:
         """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
-        return {
-            "type": self.spec_type,
-            "interlink": _interlink_matrix(self.interlink, self.coords.n).tolist(),
-        }
+        return {"type": self.spec_type,
+                "interlink": _interlink_matrix(self.interlink, self.coords.n).tolist()}
 
     @classmethod
     def from_spec(cls, spec, reader):

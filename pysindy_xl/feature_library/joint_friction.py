@@ -46,17 +46,12 @@ def friction_function(model: str, velocity, coulomb_scale: float, stribeck_scale
     exp(-100.0*v**2)*tanh(100.0*v)
     """
     sign = sp.tanh(velocity / sp.Float(coulomb_scale))
-    if model == "viscous":
-        return velocity
-    if model == "coulomb":
-        return sign
-    if model == "asymmetric":
-        return sign**2
-    if model == "stribeck":
-        return sign * sp.exp(-(velocity / sp.Float(stribeck_scale)) ** 2)
-    if model == "offset":
-        return sp.Integer(1)
-    raise ValueError(f"models: expected names among {FRICTION_MODELS}, got {model!r}")
+    functions = {"viscous": velocity, "coulomb": sign, "asymmetric": sign**2,
+                 "stribeck": sign * sp.exp(-(velocity / sp.Float(stribeck_scale)) ** 2),
+                 "offset": sp.Integer(1)}
+    if model not in functions:
+        raise ValueError(f"models: expected names among {FRICTION_MODELS}, got {model!r}")
+    return functions[model]
 
 
 def _positive(value, name) -> float:
@@ -154,17 +149,12 @@ class JointFrictionLibrary(SymbolicLibrary):
             for model in models:
                 term = friction_function(model, velocity, *scales)
                 names.append(f"J_{joint}.{model}[{term}]")
-                columns.append([sp.Float(w) * term if w != 1 else term
-                                for w in weights[:, k]])
+                columns.append([sp.Float(w) * term if w != 1 else term for w in weights[:, k]])
                 kinds.append((model, joint))
                 terms.append(term)
         self.kinds_, self._terms, self.weights_ = kinds, terms, weights
         self.joints_ = joints
-        matrix = sp.zeros(self.coords.n, len(names))
-        for j, column in enumerate(columns):
-            for i, entry in enumerate(column):
-                matrix[i, j] = entry
-        return names, matrix
+        return names, sp.Matrix(self.coords.n, len(names), lambda i, j: columns[j][i])
 
     def _feature_terms(self):
         return list(self._terms)
@@ -172,8 +162,7 @@ class JointFrictionLibrary(SymbolicLibrary):
     def coefficients_by_joint(self, coef) -> dict:
         """``{joint: {model: coefficient}}`` of ``coef``, this library's coefficients."""
         out = {}
-        for (model, joint), value in zip(self.kinds_, np.asarray(coef, dtype=float),
-                                         strict=True):
+        for (model, joint), value in zip(self.kinds_, np.asarray(coef, dtype=float), strict=True):
             out.setdefault(joint, {})[model] = float(value)
         return out
 

@@ -27,8 +27,7 @@ def _diff(expr: sp.Expr, symbol: sp.Symbol) -> sp.Expr:
         args = expr.args
         return sp.Add(*(
             sp.Mul(*args[:i], _diff(a, symbol), *args[i + 1:])
-            for i, a in enumerate(args) if symbol in a.free_symbols
-        ))
+            for i, a in enumerate(args) if symbol in a.free_symbols))
     if isinstance(expr, sp.Pow) and symbol not in expr.exp.free_symbols:
         base, exp = expr.args
         return exp * base ** (exp - 1) * _diff(base, symbol)
@@ -130,10 +129,8 @@ class LagrangeLibrary(SymbolicLibrary):
         for term in terms:
             extra = term.free_symbols - allowed
             if extra:
-                raise ValueError(
-                    f"terms: Lagrangian term {term} uses {sorted(map(str, extra))}; "
-                    "only positions, velocities and t are allowed"
-                )
+                raise ValueError(f"terms: Lagrangian term {term} uses {sorted(map(str, extra))}; "
+                                 "only positions, velocities and t are allowed")
         self.terms_ = terms
         # equal catalogs (refits, resampled fits) derive their columns once
         names, columns = _derived(
@@ -174,12 +171,10 @@ class LagrangeLibrary(SymbolicLibrary):
         for term, value in zip(terms, values, strict=True):
             bad = ~np.isfinite(value)
             if bad.any():
-                raise ValueError(
-                    f"feature_library: the Lagrangian term {term} is NaN or inf on "
-                    f"{int(bad.sum())} of {len(value)} samples (first at sample "
-                    f"{int(np.flatnonzero(bad)[0])}): the data leave its domain (log, sqrt, 1/x "
-                    "of values <= 0) or overflow it"
-                )
+                raise ValueError(f"feature_library: the Lagrangian term {term} is NaN or inf on "
+                                 f"{int(bad.sum())} of {len(value)} samples (first at sample "
+                                 f"{int(np.flatnonzero(bad)[0])}): the data leave its domain (log, "
+                                 "sqrt, 1/x of values <= 0) or overflow it")
 
     def _domain_check(self):
         """The terms that may be undefined somewhere, and their compiled evaluation."""
@@ -193,8 +188,7 @@ class LagrangeLibrary(SymbolicLibrary):
         terms, coords = self.terms_, self.coords
         return (
             sp.Matrix(coords.n, len(terms), lambda i, k: sp.expand(_diff(terms[k], coords.qd[i]))),
-            sp.Matrix(coords.n, len(terms), lambda i, k: sp.expand(_diff(terms[k], coords.q[i]))),
-        )
+            sp.Matrix(coords.n, len(terms), lambda i, k: sp.expand(_diff(terms[k], coords.q[i]))))
 
     def to_spec(self) -> dict:
         """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""

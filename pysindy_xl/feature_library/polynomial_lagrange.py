@@ -112,8 +112,7 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         if derivation.matrix is None:  # shared by clones of this library
             columns = [[e.to_sympy(self.coords, evaluate=False) for e in column]
                        for column in derivation.derived]
-            derivation.matrix = sp.Matrix(self.coords.n, len(columns),
-                                          lambda i, j: columns[j][i])
+            derivation.matrix = sp.Matrix(self.coords.n, len(columns), lambda i, j: columns[j][i])
         return derivation.matrix
 
     def impulsive(self) -> bool:
@@ -141,8 +140,7 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         derivation = self._polynomial_columns
         if derivation.column_terms is None:  # shared by clones of this library
             derived = derivation.derived
-            derivation.column_terms = self._terms_of(
-                [derived[j][c] for c, j in self.entry_index_])
+            derivation.column_terms = self._terms_of([derived[j][c] for c, j in self.entry_index_])
         return derivation.column_terms
 
     def _derive_weak_terms(self):
@@ -211,8 +209,7 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
     def _spec(self, angles, items) -> dict:
         spec = {"type": self.spec_type, "angles": list(angles), "terms": items}
         if self.parameters is not None:
-            spec["parameters"] = [{str(k): float(v) for k, v in p.items()}
-                                  for p in self.parameters]
+            spec["parameters"] = [{str(k): float(v) for k, v in p.items()} for p in self.parameters]
         if self.tree is not None:
             spec["tree"] = self.tree.to_dict()
         return spec

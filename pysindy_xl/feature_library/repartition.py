@@ -114,8 +114,7 @@ class CatalogRepartition(SymbolicLibrary):
         parameters, ``PolynomialLagrangeLibrary.complete_catalog``).
         """
         lagrange = [lib for lib in self.flat_libraries() if lib.category == "lagrange"]
-        return bool(lagrange) and all(getattr(lib, "complete_catalog", False)
-                                      for lib in lagrange)
+        return bool(lagrange) and all(getattr(lib, "complete_catalog", False) for lib in lagrange)
 
     def flat_libraries(self, _parents=()) -> list[SymbolicLibrary]:
         """The libraries, nested catalogs flattened, a force library first when none is given;
@@ -139,17 +138,14 @@ class CatalogRepartition(SymbolicLibrary):
                     "libraries: expected pysindy_xl feature libraries (SymbolicLibrary "
                     "subclasses such as LagrangeLibrary, ClassicalLibrary, ExternalForces), got "
                     f"{type(lib).__name__}; wrap pysindy libraries in "
-                    "ClassicalLibrary(coords, library)"
-                )
+                    "ClassicalLibrary(coords, library)")
         if not flat:
             raise ValueError("libraries: expected at least one library")
         coords = flat[0].coords
         for lib in flat[1:]:
             if lib.coords != coords:
-                raise ValueError(
-                    f"libraries: all libraries must share the same coordinates, got {coords} "
-                    f"and {lib.coords}"
-                )
+                raise ValueError("libraries: all libraries must share the same coordinates, got "
+                                 f"{coords} and {lib.coords}")
         if not any(lib.category == "forces" for lib in flat):
             flat.insert(0, ExternalForces(coords))
         return flat
@@ -200,13 +196,11 @@ class CatalogRepartition(SymbolicLibrary):
 
     def _derive_weak_terms(self):
         """The libraries' weak terms, atoms merged (entries in library order)."""
-        return _merged(self.slices_,
-                       [lib.weak_terms() for lib in self.libraries_])
+        return _merged(self.slices_, [lib.weak_terms() for lib in self.libraries_])
 
     def _build_weak_symbolic(self):
         parts = [lib.weak_matrices() for lib in self.libraries_]
-        return (sp.Matrix.hstack(*(p for p, _ in parts)),
-                sp.Matrix.hstack(*(q for _, q in parts)))
+        return sp.Matrix.hstack(*(p for p, _ in parts)), sp.Matrix.hstack(*(q for _, q in parts))
 
     def check_domain(self, x) -> None:
         """Raise ``ValueError`` naming a candidate term undefined on ``x`` (by each library)."""
@@ -293,8 +287,7 @@ class CatalogRepartition(SymbolicLibrary):
         missing = [str(m) for m, r in zip(monomials, residual, strict=True) if abs(r) > 1e-9]
         if missing:
             raise ValueError(
-                f"lagrangian: terms {missing} are not representable by the Lagrange catalog"
-            )
+                f"lagrangian: terms {missing} are not representable by the Lagrange catalog")
         solution[np.abs(solution) < 1e-12] = 0.0
         xi[columns] += solution
 
@@ -307,9 +300,8 @@ class CatalogRepartition(SymbolicLibrary):
         try:
             term, coord = key
         except (TypeError, ValueError):
-            raise ValueError(
-                f"classical: expected keys (term, coordinate) or feature names, got {key!r}"
-            ) from None
+            raise ValueError(f"classical: expected keys (term, coordinate) or feature names, got "
+                             f"{key!r}") from None
         if isinstance(coord, str):
             if coord not in self.coords.names:
                 raise ValueError(f"classical: unknown coordinate {coord!r}")
@@ -322,17 +314,13 @@ class CatalogRepartition(SymbolicLibrary):
             if (category == "classical" and self.symbolic_matrix_[coord, j] != 0
                     and sp.simplify(self.feature_terms_[j] - term) == 0):
                 return j
-        raise ValueError(
-            f"classical: term {term} in the equation of {self.coords.names[coord]} is not in "
-            "the catalog"
-        )
+        raise ValueError(f"classical: term {term} in the equation of {self.coords.names[coord]} is "
+                         "not in the catalog")
 
     def to_spec(self) -> dict:
         """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
-        return {
-            "type": self.spec_type,
-            "libraries": [lib.to_spec() for lib in self.flat_libraries()],
-        }
+        return {"type": self.spec_type,
+                "libraries": [lib.to_spec() for lib in self.flat_libraries()]}
 
     @classmethod
     def from_spec(cls, spec, reader):

@@ -127,8 +127,7 @@ class TrigPolynomial:
         """The sum of many polynomials, normalized once."""
         n_slots = 4 * len(angles)
         return cls(np.vstack([p.exponents for p in polynomials] + [np.zeros((0, n_slots))]),
-                   np.concatenate([p.coefficients for p in polynomials] + [np.zeros(0)]),
-                   angles)
+                   np.concatenate([p.coefficients for p in polynomials] + [np.zeros(0)]), angles)
 
     # -- calculus --------------------------------------------------------------------------
     def diff_slot(self, index: int) -> TrigPolynomial:
@@ -231,8 +230,7 @@ class TrigPolynomial:
         # flat products and sum without canonicalization (sympy's own constructors)
         rows, slots = np.nonzero(self.exponents)  # row by row, slots increasing
         base = int(self.exponents.max(initial=1)) + 1
-        codes, factor = np.unique(slots * base + self.exponents[rows, slots],
-                                  return_inverse=True)
+        codes, factor = np.unique(slots * base + self.exponents[rows, slots], return_inverse=True)
         table = [atoms[k] if e == 1 else sp.Pow(atoms[k], e)  # each power built once
                  for k, e in zip((codes // base).tolist(), (codes % base).tolist(),
                                  strict=True)]

@@ -132,11 +132,10 @@ _NESTED = StrPrinter({"full_prec": False})
 
 
 class _Printer:
-    """sympy's ``str`` of ``TrigPolynomial.to_sympy(coords)``, from the exponent rows.
-
-    sympy prints a sum's monomials in decreasing lexicographic order of their exponents over
-    the generators sorted by ``default_sort_key`` (the constant last), and a product as its
-    sign, its coefficient unless one, then its factors by ``sort_key``.
+    """sympy's ``str`` of ``TrigPolynomial.to_sympy(coords)`` from the exponent rows: monomials in
+    decreasing lexicographic order of their exponents over the generators sorted by
+    ``default_sort_key`` (the constant last); a product as its sign, its coefficient unless one,
+    then its factors by ``sort_key``.
     """
 
     def __init__(self, coords, angles):
@@ -179,8 +178,7 @@ class _Printer:
         base = int(ordered.max()) + 1
         codes, factor = np.unique(self.order[columns] * base + ordered[nonzero_rows, columns],
                                   return_inverse=True)
-        table = np.array([self._factor(c // base, c % base) for c in codes.tolist()],
-                         dtype=object)
+        table = np.array([self._factor(c // base, c % base) for c in codes.tolist()], dtype=object)
         texts = table[factor.ravel()].tolist()  # each factor's text, row by row
         bounds = np.searchsorted(nonzero_rows, np.arange(len(rows) + 1)).tolist()
         pieces = []

@@ -26,8 +26,7 @@ from .trajectories import (
 )
 from .wrap import catalog_dynamics, fitted_state
 
-__all__ = ["CatalogMap", "build_problem", "probe_points", "resolve_optimizer",
-           "choose_noise_model", "fit_smoother", "RememberedSmoother", "solve", "fitted_state",
-           "catalog_dynamics", "check_fit", "estimator_trajectories", "trajectory_data",
-           "differentiation_function", "resolve_formulation", "FORMULATIONS",
-           "UNFORCED_WIDTH_MULTIPLES"]
+__all__ = ["CatalogMap", "build_problem", "probe_points", "resolve_optimizer", "choose_noise_model",
+           "fit_smoother", "RememberedSmoother", "solve", "fitted_state", "catalog_dynamics",
+           "check_fit", "estimator_trajectories", "trajectory_data", "differentiation_function",
+           "resolve_formulation", "FORMULATIONS", "UNFORCED_WIDTH_MULTIPLES"]

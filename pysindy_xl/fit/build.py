@@ -92,8 +92,7 @@ def probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndarr
     return rng.uniform(low, high, size=(n_points, z.shape[1]))
 
 
-def _rows(library, data, formulation, test_functions, smoother, half_width, moving,
-          propagate=True):
+def _rows(library, data, formulation, test_functions, smoother, half_width, moving, propagate=True):
     """Rows ``(n * R, F)`` of the whole catalog, the states and, for the weak form, the row
     noise and the weak-form information.
     """
@@ -217,8 +216,7 @@ def build_problem(library, data, formulation: str, *, test_functions=None, smoot
     else:
         keep, dropped = candidates, {}
     dropped.update(left_out)
-    force_columns = [int(np.flatnonzero(keep == j)[0]) for j in library.force_columns_
-                     if j in keep]
+    force_columns = [int(np.flatnonzero(keep == j)[0]) for j in library.force_columns_ if j in keep]
     if noise is not None:
         noise = noise.columns(keep)
         noise = noise.coordinates(moving) if still.any() else noise

@@ -11,12 +11,7 @@ import numpy as np
 
 from .._validation import IdentificationWarning
 
-__all__ = [
-    "column_mass_matrices",
-    "mass_matrices",
-    "orient_free_laws",
-    "mass_matrix_report",
-]
+__all__ = ["column_mass_matrices", "mass_matrices", "orient_free_laws", "mass_matrix_report"]
 
 
 def mass_matrices(dynamics, states, max_states: int = 2000):
@@ -144,7 +139,6 @@ def mass_matrix_report(mass, eigenvalues, names, remedy: str = "") -> dict:
             + ": the model is wrong there (noise terms, an unidentifiable coordinate, or a "
             "catalog that cannot express the dynamics) and will not simulate faithfully"
             + remedy,
-            IdentificationWarning, stacklevel=2,
-        )
+            IdentificationWarning, stacklevel=2)
     return {"positive_definite_fraction": float(np.mean(definite)),
             "median_condition": float(np.median(condition))}

@@ -51,11 +51,9 @@ def resolve_optimizer(optimizer, problem, library):
         if callable(getattr(optimizer, "fit", None)):
             # a pysindy (or scikit-learn) regressor: explicit regression through it
             return ExplicitOptimizer(method=clone(optimizer))
-        raise TypeError(
-            "optimizer: expected a catalog optimizer with fit_catalog (ExplicitOptimizer, "
-            "ImplicitOptimizer, MixedOptimizer) or a regressor with fit(X, y) such as "
-            f"pysindy's STLSQ, got {type(optimizer).__name__}"
-        )
+        raise TypeError("optimizer: expected a catalog optimizer with fit_catalog "
+                        "(ExplicitOptimizer, ImplicitOptimizer, MixedOptimizer) or a regressor "
+                        f"with fit(X, y) such as pysindy's STLSQ, got {type(optimizer).__name__}")
     return clone(optimizer)
 
 
@@ -82,8 +80,7 @@ def solve(optimizer, problem, library=None, weigh=False):
     if isinstance(weigh, str) and weigh == "auto":
         origin = problem.catalog_map
         weigh = origin is not None and bool(origin.forced[origin.coordinates].any())
-    if noise is not None and library is not None \
-            and catalog_tags(optimizer).uses_mass_matrices:
+    if noise is not None and library is not None and catalog_tags(optimizer).uses_mass_matrices:
         problem = with_mass_matrices(problem, library)
 
     def unweighted(reason):  # said only of a fit that succeeds

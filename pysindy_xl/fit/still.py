@@ -11,14 +11,12 @@ residual :math:`r_i = q_i - a - b t` of the least-squares line through its posit
     \quad\text{or}\quad
     \max_t r_i - \min_t r_i \le 10^{-9} \,(1 + \max_t |q_i|),
 
-with :math:`\hat\sigma = 1.4826 \, \operatorname{MAD}(\Delta^3 q) / \sqrt{20}` the noise
-level (:func:`noise_level`) and :math:`\kappa` the estimator's ``hold_still``. A sinusoid of
-amplitude :math:`A` gives a ratio :math:`\sqrt{1 + A^2 / (2 \sigma^2)}`, so with
-:math:`\kappa = 2` a motion above about 2.5 noise levels stays in the regression.
-:func:`still_columns` lists the catalog columns left out with them; the model holds still
-coordinates at zero acceleration (:class:`~pysindy_xl.dynamics.CatalogDynamics` ``held``).
-A driven coordinate that does not move is never still: gravity against the recorded torque
-is information.
+with :math:`\hat\sigma = 1.4826 \, \operatorname{MAD}(\Delta^3 q) / \sqrt{20}` the noise level
+(:func:`noise_level`) and :math:`\kappa` the estimator's ``hold_still`` (a sinusoid of amplitude
+:math:`A` gives :math:`\sqrt{1 + A^2 / (2 \sigma^2)}`). :func:`still_columns` lists the catalog
+columns left out with them; the model holds still coordinates at zero acceleration
+(:class:`~pysindy_xl.dynamics.CatalogDynamics` ``held``). A driven coordinate that does not move is
+never still: gravity against the recorded torque is information.
 """
 
 from __future__ import annotations
@@ -65,8 +63,7 @@ def driven_coordinates(library, forces) -> np.ndarray:
     n = coords.n
     if forces is None or all(u is None for u in forces):
         return np.zeros(n, dtype=bool)
-    acting = np.any([np.any(np.asarray(u) != 0, axis=0) for u in forces if u is not None],
-                    axis=0)
+    acting = np.any([np.any(np.asarray(u) != 0, axis=0) for u in forces if u is not None], axis=0)
     driven = np.zeros(n, dtype=bool)
     for k, tau in enumerate(coords.tau):
         if acting[k]:

@@ -110,8 +110,7 @@ def _catalog(feature_library) -> CatalogRepartition:
         return CatalogRepartition([feature_library])
     raise TypeError(
         "feature_library: expected a pysindy_xl library (LagrangeLibrary, ClassicalLibrary, "
-        f"ExternalForces, CatalogRepartition), got {type(feature_library).__name__}"
-    )
+        f"ExternalForces, CatalogRepartition), got {type(feature_library).__name__}")
 
 
 def estimator_trajectories(estimator, x, t, x_dot, x_ddot, u, n, differentiate=True,
@@ -176,14 +175,10 @@ def check_fit(estimator, x, t, x_dot, x_ddot, u, sample_mask):
     data = estimator_trajectories(estimator, x, t, x_dot, x_ddot, u, library.coords.n,
                                   formulation == "strong", sample_mask)
     if not library.involves(library.coords.qdd).any():
-        raise ValueError(
-            "feature_library: no term contains an acceleration; add Lagrangian terms with "
-            "velocities (e.g. q_dot**2) or classical terms in q_ddot"
-        )
+        raise ValueError("feature_library: no term contains an acceleration; add Lagrangian terms "
+                         "with velocities (e.g. q_dot**2) or classical terms in q_ddot")
     optimizer = estimator.optimizer
     if u is None and (optimizer == "explicit" or catalog_tags(optimizer).requires_forces):
-        raise ValueError(
-            "u: explicit regression needs the generalized forces; pass u, or use "
-            "ImplicitOptimizer / MixedOptimizer for unforced data"
-        )
+        raise ValueError("u: explicit regression needs the generalized forces; pass u, or use "
+                         "ImplicitOptimizer / MixedOptimizer for unforced data")
     return library, data, formulation

@@ -112,10 +112,9 @@ def warn_unexplained(owner: str, theta, n_coordinates: int, coef, force_columns=
     unexplained = np.flatnonzero(~explained)
     if unexplained.size:
         besides = " besides the forces" if len(force_columns) else ""
-        warnings.warn(
-            f"{owner}: no identified term{besides} enters the equation of coordinate(s) "
-            f"{unexplained.tolist()}; the model cannot predict them",
-            UnexplainedCoordinateWarning, stacklevel=stacklevel + 1)
+        warnings.warn(f"{owner}: no identified term{besides} enters the equation of coordinate(s) "
+                      f"{unexplained.tolist()}; the model cannot predict them",
+                      UnexplainedCoordinateWarning, stacklevel=stacklevel + 1)
     return unexplained
 
 
@@ -187,8 +186,7 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
     candidates = order[nonzero]
     sub = sub[:, nonzero] / top[nonzero]  # max-scaled first: no overflow in the norms
     sub /= np.linalg.norm(sub, axis=0)
-    r = scipy.linalg.qr(sub, mode="r", check_finite=False)[0]
-    diag = np.abs(np.diag(r))
+    diag = np.abs(np.diag(scipy.linalg.qr(sub, mode="r", check_finite=False)[0]))
     if len(diag) < len(candidates):  # fewer rows than columns: the tail is dependent
         diag = np.concatenate([diag, np.zeros(len(candidates) - len(diag))])
     for j, d in zip(candidates, diag, strict=True):
@@ -307,8 +305,7 @@ reference_columns, physical
         raise NotImplementedError(f"{type(self).__name__}: _solve(problem) is not implemented")
 
     def _solve_support(self, problem: CatalogProblem, support):
-        raise TypeError(f"{type(self).__name__}: cannot refit a given support (no "
-                        "_solve_support)")
+        raise TypeError(f"{type(self).__name__}: cannot refit a given support (no _solve_support)")
 
     def _check_params(self):
         """Raise ``TypeError``/``ValueError`` naming a parameter with a bad value."""

@@ -158,9 +158,8 @@ def solve_cvxpy(r_factor, alpha, solver=None):
         raise RuntimeError(f"ImplicitOptimizer: cvxpy returned no solution ({problem.status})")
     converged = problem.status == cp.OPTIMAL
     if not converged:
-        warnings.warn(
-            f"ImplicitOptimizer: cvxpy status {problem.status!r}", ConvergenceWarning, stacklevel=5
-        )
+        warnings.warn(f"ImplicitOptimizer: cvxpy status {problem.status!r}", ConvergenceWarning,
+                      stacklevel=5)
     solution = np.array(x.value)
     np.fill_diagonal(solution, 0.0)
     return solution, converged

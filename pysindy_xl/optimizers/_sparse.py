@@ -48,9 +48,8 @@ def kkt_violation(gram, targets, coef, alpha, mask=None) -> np.ndarray:
     """
     grad = gram @ coef - targets
     alpha = np.broadcast_to(np.asarray(alpha, dtype=float), (coef.shape[1],))
-    violation = np.where(
-        coef != 0, np.abs(grad + alpha * np.sign(coef)), np.maximum(np.abs(grad) - alpha, 0.0)
-    )
+    violation = np.where(coef != 0, np.abs(grad + alpha * np.sign(coef)),
+                         np.maximum(np.abs(grad) - alpha, 0.0))
     if mask is not None:
         violation = np.where(mask, violation, 0.0)
     return violation.max(axis=0, initial=0.0)
@@ -89,9 +88,8 @@ def _polish_support(gram, targets, coef, alpha, mask, columns, slack):
             continue
         signs = np.sign(coef[support, k])
         try:
-            x = np.linalg.solve(
-                gram[np.ix_(support, support)], targets[support, k] - alpha[k] * signs
-            )
+            x = np.linalg.solve(gram[np.ix_(support, support)],
+                                targets[support, k] - alpha[k] * signs)
         except np.linalg.LinAlgError:
             continue
         if not np.all(np.sign(x) == signs):
@@ -109,10 +107,8 @@ def _polish_support(gram, targets, coef, alpha, mask, columns, slack):
     return finished
 
 
-def _fista(
-    gram, targets, alpha, mask, coef, lipschitz, tol, max_iter, check_every, callback=None,
-    callback_every=100,
-):
+def _fista(gram, targets, alpha, mask, coef, lipschitz, tol, max_iter, check_every,
+           callback=None, callback_every=100):
     """Accelerated proximal gradient with per-column adaptive restart, updating ``coef``;
     ``callback(coef, converged)`` every ``callback_every`` iterations stops it by returning True.
     """
@@ -235,10 +231,8 @@ def lasso_gram(gram, targets, alpha, mask=None, coef_init=None, tol: float = 1e-
         budget = int(max_iter) - n_iter if last else max(1, min(500, int(max_iter) - n_iter))
         if budget <= 0:
             break
-        used, converged = _fista(
-            gram, masked_targets, stage_alpha, mask, coef, lipschitz, stage_tol, budget,
-            int(check_every), callback, int(callback_every),
-        )
+        used, converged = _fista(gram, masked_targets, stage_alpha, mask, coef, lipschitz,
+                                 stage_tol, budget, int(check_every), callback, int(callback_every))
         n_iter += used
         if used < budget and not np.all(converged):
             break  # stopped by the callback
@@ -250,9 +244,7 @@ def lasso_gram(gram, targets, alpha, mask=None, coef_init=None, tol: float = 1e-
             f"lasso_gram: {int(np.sum(~converged))} of {n_cols} problems did not converge in "
             f"{int(max_iter)} iterations (largest optimality violation "
             f"{np.max(violation / alpha):.2e} x alpha); raise max_iter or alpha",
-            ConvergenceWarning,
-            stacklevel=2,
-        )
+            ConvergenceWarning, stacklevel=2)
     return LassoResult(coef=coef, n_iter=n_iter, converged=converged, violation=violation)
 
 

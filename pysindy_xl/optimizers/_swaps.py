@@ -10,9 +10,7 @@ import scipy.linalg
 
 def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2):
     """The exchange ``(c, j)`` (column ``c`` in for the ``j``-th selected) lowering the residual
-    most, or ``(None, None)``. ``remaining2``, ``correlation`` (F, k): candidate ``c``'s squared
-    norm off the support without ``j`` and its product with that residual; ``removed`` (k,): what
-    dropping ``j`` adds back.
+    most, or ``(None, None)``; arrays as computed in :func:`_swap_search`.
     """
     allowed = usable.copy()
     allowed[support] = False
@@ -28,13 +26,10 @@ def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y
 
 
 def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
-    """Best-improvement 1-swap search on a reduced system.
-
-    With ``x_S = Q R``, column ``j``'s direction off the other selected columns is
-    ``u_j ~ Q R^-T e_j``: dropping it adds ``(u_j . y)^2`` to the residual and leaves candidate
-    ``c`` the component ``C_c + u_j (u_j . x_c)``, so all ``k x F`` gains take two matrix
-    products per swap. ``rss`` and ``previous`` continue from a first step of
-    :func:`_first_swaps`.
+    """Best-improvement 1-swap search on a reduced system: with ``x_S = Q R``, dropping column
+    ``j`` (direction ``u_j ~ Q R^-T e_j``) adds ``(u_j . y)^2`` to the residual and leaves
+    candidate ``c`` the component ``C_c + u_j (u_j . x_c)``: all ``k x F`` gains in two products.
+    ``rss`` and ``previous`` continue from a first step of :func:`_first_swaps`.
     """
     support = np.asarray(support, dtype=int)
     norms2 = np.sum(xs**2, axis=0)
@@ -57,8 +52,7 @@ def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
         projected = xs - basis @ (basis.T @ xs)
         remaining2 = np.sum(projected**2, axis=0)[:, None] + along**2
         correlation = (projected.T @ residual)[:, None] + along * removed
-        c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss,
-                          y_norm2)
+        c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2)
         if c is None:
             break
         support = support.copy()
@@ -68,9 +62,8 @@ def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
 
 def _first_swaps(xs, y, usable, order, sizes):
     """The first step of :func:`_swap_search` from every ``order[:k]``, ``k`` in ``sizes``:
-    ``{k: (rss, swapped support or None)}``, from one complete QR of ``x[:, order]`` (residuals
-    and projections are tail sums of ``Q^T x``, ``Q^T y``; the directions rows of the leading
-    block of ``inv(R)``). Sizes past a zero pivot are left out.
+    ``{k: (rss, swapped support or None)}``, from one complete QR of ``x[:, order]`` (sizes
+    past a zero pivot left out).
     """
     largest = max(sizes, default=0)
     q_factor, r_factor = np.linalg.qr(xs[:, order[:largest]], mode="complete")
@@ -107,8 +100,7 @@ def _first_swaps(xs, y, usable, order, sizes):
         else:
             remaining2, correlation, rss = along**2, along * removed, 0.0
         support = np.asarray(order[:k], dtype=int)
-        c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss,
-                          y_norm2)
+        c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2)
         swapped = None
         if c is not None:
             swapped = support.copy()

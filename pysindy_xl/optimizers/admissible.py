@@ -35,8 +35,7 @@ def reference_mass_matrices(mass_matrices) -> np.ndarray:
     return mean / np.sqrt(np.outer(reference, reference))[None]
 
 
-def admissible_supports(r_factor, mass_matrices, penalties=PENALTIES,
-                        n_reweight: int = 5) -> list:
+def admissible_supports(r_factor, mass_matrices, penalties=PENALTIES, n_reweight: int = 5) -> list:
     """Supports (sorted, one per penalty that gave a law) of sparse laws whose mean mass matrix is
     positive definite, by the admissible lasso on ``r_factor`` (``Theta`` or a factor with its
     Gram matrix) and the columns' ``mass_matrices`` (S, F, n, n) in the law's units;

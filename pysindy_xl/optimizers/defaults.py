@@ -20,8 +20,7 @@ SOLVER_KINDS = ("explicit", "implicit", "mixed")
 
 
 def default_optimizer(forced, estimated: bool = False, kind: str | None = None,
-                      complete: bool = False, physical: bool = False,
-                      selective: bool = False):
+                      complete: bool = False, physical: bool = False, selective: bool = False):
     """The default catalog optimizer for the data (or of a given kind).
 
     * every coordinate forced: ``ExplicitOptimizer()``, bagged by :class:`EnsembleOptimizer` on

@@ -104,8 +104,7 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
 
     def catalog_tags(self):
         """The base optimizer's tags; every fit balances its own subsample."""
-        return dataclasses.replace(catalog_tags(self._base()), balances_rows=False,
-                                   can_refit=False)
+        return dataclasses.replace(catalog_tags(self._base()), balances_rows=False, can_refit=False)
 
     def __init__(self, optimizer=None, n_models=20, fraction=0.7, n_chunks=20, inclusion=0.5,
                  confidence=0.95, random_state=0, n_jobs=None, sampling="subsamples",
@@ -140,9 +139,8 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
         check_option("aggregate", self.aggregate, "choice", choices=AGGREGATES)
         base = self._base()
         if self.aggregate == "refit" and not catalog_tags(base).can_refit:
-            raise ValueError(f"aggregate: 'refit' needs an optimizer that refits a support "
-                             f"(tag can_refit), {type(base).__name__} does not (use 'median' "
-                             "or 'auto')")
+            raise ValueError("aggregate: 'refit' needs an optimizer that refits a support (tag "
+                             f"can_refit), {type(base).__name__} does not (use 'median' or 'auto')")
         if self.sampling == "complementary_pairs" and self.n_models % 2:
             raise ValueError(f"n_models: complementary pairs need an even number of fits, got "
                              f"{self.n_models}")
@@ -171,8 +169,7 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
         if self.progress:
             from tqdm.auto import tqdm
 
-            fits = tqdm(fits, total=len(problems), desc=f"{type(base).__name__} fits",
-                        unit="fit")
+            fits = tqdm(fits, total=len(problems), desc=f"{type(base).__name__} fits", unit="fit")
         outcomes = list(fits)
         fits = [coef for coef, _, _ in outcomes]
         failed = np.array([coef is None for coef in fits])

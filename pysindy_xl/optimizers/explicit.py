@@ -285,8 +285,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         if not np.any(y):
             raise ValueError(
                 "y: the force vector is identically zero; explicit regression needs a known "
-                "force (use ImplicitOptimizer or MixedOptimizer for unforced data)"
-            )
+                "force (use ImplicitOptimizer or MixedOptimizer for unforced data)")
         self.selection_ = None
         self.noise_share_ = None if noise_moments is None else 0.0
         self.n_features_in_ = X.shape[1]
@@ -337,15 +336,13 @@ class ExplicitOptimizer(CatalogOptimizer):
             sol = np.asarray(estimator.coef_, dtype=float).reshape(-1)
             if sol.shape != (xs.shape[1],):
                 raise ValueError(
-                    f"method: the estimator's coef_ has {sol.size} entries, expected {xs.shape[1]}"
-                )
+                    f"method: the estimator's coef_ has {sol.size} entries, expected {xs.shape[1]}")
         coef = np.zeros(X.shape[1])
         coef[active] = sol * y_scale / scale[active]
         if self.refit and np.any(coef):
             support = np.flatnonzero(coef)
             coef[:] = 0.0
-            moments = (None if noise_moments is None
-                       else noise_moments[np.ix_(support, support)])
+            moments = None if noise_moments is None else noise_moments[np.ix_(support, support)]
             coef[support] = self._prune(X[:, support], y, n_blocks, moments)
             if self.selection_ is not None:  # report indices of X, not of the support
                 self.selection_.order = support[self.selection_.order]
@@ -384,8 +381,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         coef = np.zeros(len(rest))
         if moments is not None:
             moments = moments[np.ix_(keep, keep)]
-        coef[keep], share = corrected_least_squares(problem.theta[:, rest[keep]], force,
-                                                    moments)
+        coef[keep], share = corrected_least_squares(problem.theta[:, rest[keep]], force, moments)
         self.selection_ = None
         self.noise_share_ = None if moments is None else share
         return self._as_catalog_vector(coef, rest, problem)

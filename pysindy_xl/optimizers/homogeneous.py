@@ -52,8 +52,7 @@ class RowMoments:
     def __call__(self, rows) -> np.ndarray:
         """``E[E_rows^T E_rows]`` (F, F) of the rows selected by a mask or indices."""
         chosen = self.draws[:, rows]
-        return draw_moments(chosen, 1)[0] + self.floor * chosen.shape[1] * np.eye(
-            chosen.shape[-1])
+        return draw_moments(chosen, 1)[0] + self.floor * chosen.shape[1] * np.eye(chosen.shape[-1])
 
     def columns(self, keep) -> RowMoments:
         """The moments of the columns ``keep`` only."""
@@ -99,11 +98,8 @@ class LawSelection(ChosenSupport):
 
 def _held_out_ratios(theta, moments, supports, n_blocks, n_folds, row_moments=None):
     """Held-out noise ratios and relative squared residuals ``||Theta xi||^2 / sum_j ||Theta_j
-    xi_j||^2``, each (n_folds, len(supports)), inf where a support cannot be fitted.
-
-    Nested supports (a path) are leading blocks of one triangular factor per fold; the supports
-    of one size are decomposed as a stack. ``row_moments`` (:class:`RowMoments`) gives the rows'
-    own moments; without it each block's are spread evenly over its rows.
+    xi_j||^2``, each (n_folds, len(supports)), inf where a support cannot be fitted; the rows'
+    own moments from ``row_moments``, else each block's spread evenly over its rows.
     """
     ratios = np.full((n_folds, len(supports)), np.inf)
     relative = np.full((n_folds, len(supports)), np.inf)
@@ -351,8 +347,7 @@ def _scored(theta, moments, supports, how, n_blocks, n_folds, row_moments=None) 
     """Candidates of the supports that can be cross-validated."""
     if not supports:
         return []
-    ratios, relative = _held_out_ratios(theta, moments, supports, n_blocks, n_folds,
-                                        row_moments)
+    ratios, relative = _held_out_ratios(theta, moments, supports, n_blocks, n_folds, row_moments)
     (mean, spread), (relative_mean, _) = fold_summary(ratios), fold_summary(relative)
     return [_Candidate(np.asarray(s), mean[m], spread[m], relative_mean[m], how)
             for m, s in enumerate(supports) if np.isfinite(mean[m])]

@@ -153,14 +153,12 @@ class ImplicitOptimizer(CatalogOptimizer):
         check_option("solver", self.solver, "choice", choices=_SOLVERS)
         if not (isinstance(self.alpha, str) and self.alpha == "auto"):
             if isinstance(self.alpha, str):
-                raise ValueError(f"alpha: expected a positive number or 'auto', got "
-                                 f"{self.alpha!r}")
+                raise ValueError(f"alpha: expected a positive number or 'auto', got {self.alpha!r}")
             check_option("alpha", self.alpha, "real", low=0, low_open=True)
         check_option("angle_tol", self.angle_tol, "real", low=0, high=90, low_open=True,
                      high_open=True)
         check_option("min_membership", self.min_membership, "real", low=0, high=1)
-        check_option("max_residual_ratio", self.max_residual_ratio, "real", low=1,
-                     allow_inf=True)
+        check_option("max_residual_ratio", self.max_residual_ratio, "real", low=1, allow_inf=True)
         check_option("threshold", self.threshold, "real", low=0, high=1, high_open=True)
         check_option("tol", self.tol, "real", low=0, low_open=True)
         check_option("min_group_size", self.min_group_size, "int", low=1)
@@ -212,8 +210,7 @@ class ImplicitOptimizer(CatalogOptimizer):
             raise NoLawFoundError(f"support: {columns.size} non-zero column(s) given; a law "
                                   "needs at least two terms")
         touches = coordinates_touched(theta[:, columns], n_coordinates).astype(int)
-        _, labels = scipy.sparse.csgraph.connected_components(touches.T @ touches,
-                                                              directed=False)
+        _, labels = scipy.sparse.csgraph.connected_components(touches.T @ touches, directed=False)
         laws, ratios = [], []
         for label in np.unique(labels):
             group = columns[labels == label]
@@ -234,13 +231,17 @@ class ImplicitOptimizer(CatalogOptimizer):
         self.selection_method_ = "given support"
         self.selection_ = None
         self.column_norms_ = norms
-        self.law_residuals_ = np.array([  # as for problem (1): on unit-norm columns
-            np.linalg.norm(theta @ law) / np.linalg.norm(law * norms) for law in laws])
         self.law_noise_ratios_ = None if moments is None else np.asarray(ratios)
-        self.law_groups_ = [np.flatnonzero(law) for law in laws]
-        self._set_laws(laws, norms, force_columns, None)
+        self._set_selected_laws(theta, laws, norms, force_columns, None)
         warn_unexplained("ImplicitOptimizer", theta, n_coordinates, self.coef_, force_columns)
         return self
+
+    def _set_selected_laws(self, theta, laws, norms, force_columns, reference_columns):
+        """:meth:`_set_laws`, with the laws' residuals (as for problem (1)) and supports."""
+        self.law_residuals_ = np.array([
+            np.linalg.norm(theta @ law) / np.linalg.norm(law * norms) for law in laws])
+        self.law_groups_ = [np.flatnonzero(law) for law in laws]
+        self._set_laws(laws, norms, force_columns, reference_columns)
 
     def _set_laws(self, laws, norms, force_columns, reference_columns):
         """``laws_`` normalized and their disjoint sum ``coef_``."""
@@ -258,17 +259,12 @@ class ImplicitOptimizer(CatalogOptimizer):
         laws, ratios, selections = select_laws(theta, moments, n_coordinates, mass_matrices,
                                                self.max_residual_ratio, draws)
         if not laws:
-            raise NoLawFoundError(
-                "ImplicitOptimizer: no law could be selected from the noisy columns (too few "
-                "non-zero columns or rows for cross-validation)"
-            )
+            raise NoLawFoundError("ImplicitOptimizer: no law could be selected from the noisy "
+                                  "columns (too few non-zero columns or rows for cross-validation)")
         self.selection_ = selections[0]
         self.law_selections_ = selections
         self.law_noise_ratios_ = np.asarray(ratios)
-        self.law_residuals_ = np.array([  # as for problem (1): on unit-norm columns
-            np.linalg.norm(theta @ law) / np.linalg.norm(law * norms) for law in laws])
-        self.law_groups_ = [np.flatnonzero(law) for law in laws]
-        self._set_laws(laws, norms, force_columns, reference_columns)
+        self._set_selected_laws(theta, laws, norms, force_columns, reference_columns)
         self._report_rivals(theta, moments, selections[0], laws[0], norms,
                             force_columns, reference_columns)
         return self
@@ -287,11 +283,10 @@ class ImplicitOptimizer(CatalogOptimizer):
                       "unexplained" if not selection.admissible else
                       f"its held-out noise ratio is {ratio:.3g} +- {spread:.2g} (about 1 for a "
                       "law that holds)")
-            warnings.warn(
-                f"ImplicitOptimizer: no law that holds to the noise was found in the catalog "
-                f"({reason}); the returned law is the best found, not a determined one. Record "
-                "more trajectories, reduce the noise or force a coordinate.",
-                UndeterminedLawWarning, stacklevel=4)
+            warnings.warn("ImplicitOptimizer: no law that holds to the noise was found in the "
+                          f"catalog ({reason}); the returned law is the best found, not a "
+                          "determined one. Record more trajectories, reduce the noise or force a "
+                          "coordinate.", UndeterminedLawWarning, stacklevel=4)
         pooled = moments.sum(axis=0)
         found = []
         for support in selection.rivals:
@@ -317,9 +312,8 @@ class ImplicitOptimizer(CatalogOptimizer):
         norms, nonzero = column_norms(theta)
         active = np.flatnonzero(nonzero)
         if active.size < 2:
-            raise NoLawFoundError(
-                f"theta: {active.size} non-zero column(s); implicit regression needs at least 2"
-            )
+            raise NoLawFoundError(f"theta: {active.size} non-zero column(s); implicit regression "
+                                  "needs at least 2")
         scaled = (theta if active.size == n_features else theta[:, active]) / norms[active]
         r_factor = triangular_factor(scaled)
         x_scaled = self._sindy_pi_matrix(r_factor)
@@ -328,16 +322,13 @@ class ImplicitOptimizer(CatalogOptimizer):
         self.normalized_solution_matrix_ = np.zeros((n_features, n_features))
         self.normalized_solution_matrix_[np.ix_(active, active)] = x_scaled
         self.solution_matrix_ = np.zeros((n_features, n_features))
-        self.solution_matrix_[np.ix_(active, active)] = (
-            x_scaled * norms[active][None, :] / norms[active][:, None]
-        )
+        self.solution_matrix_[np.ix_(active, active)] = (x_scaled * norms[active][None, :]
+                                                         / norms[active][:, None])
         converged = np.zeros(n_features, dtype=bool)
         converged[active] = self._column_converged
         self.column_converged_ = converged
 
-        residuals, groups, laws, law_groups, law_residuals = self._post_process(
-            x_scaled, r_factor
-        )
+        residuals, groups, laws, law_groups, law_residuals = self._post_process(x_scaled, r_factor)
         self.column_residuals_ = np.full(n_features, np.inf)
         self.column_residuals_[active] = residuals
         self.groups_ = [active[g] for g in groups]
@@ -345,8 +336,7 @@ class ImplicitOptimizer(CatalogOptimizer):
             raise NoLawFoundError(
                 "ImplicitOptimizer: no group of homothetic columns qualifies as a law "
                 f"({len(groups)} group(s) of >= {self.min_group_size} columns). Try a smaller "
-                "alpha, a larger angle_tol, or check that the catalog can express the dynamics."
-            )
+                "alpha, a larger angle_tol, or check that the catalog can express the dynamics.")
         full_laws = np.zeros((len(laws), n_features))
         full_laws[:, active] = np.array(laws) / norms[active]
         self.law_groups_ = [active[g] for g in law_groups]
@@ -374,17 +364,15 @@ class ImplicitOptimizer(CatalogOptimizer):
 
         check_is_fitted(self, "coef_")
         if self.selection_method_ != "sindy-pi":
-            raise ValueError(
-                "plot: the laws were selected by noise ratio (noise moments were given), "
-                "there is no SINDy-PI solution matrix to draw; see selection_ instead"
-            )
+            raise ValueError("plot: the laws were selected by noise ratio (noise moments were "
+                             "given), there is no SINDy-PI solution matrix to draw; see selection_ "
+                             "instead")
         if axes is None:
             _, axes = plt.subplots(1, 3, figsize=(15, 4.5), constrained_layout=True)
         x = np.abs(self.normalized_solution_matrix_)
         floor = max(x.max(initial=0.0) * 1e-8, 1e-300)
         image = axes[0].imshow(np.log10(np.maximum(x, floor)), cmap="viridis")
-        axes[0].set(title="A: |X| (SINDy-PI solution, log10)", xlabel="column j",
-                    ylabel="feature")
+        axes[0].set(title="A: |X| (SINDy-PI solution, log10)", xlabel="column j", ylabel="feature")
         plt.colorbar(image, ax=axes[0], shrink=0.8)
         directions = np.eye(x.shape[0]) - self.normalized_solution_matrix_
         for k, group in enumerate(self.law_groups_):
@@ -400,16 +388,14 @@ class ImplicitOptimizer(CatalogOptimizer):
         axes[2].set(title="C: extracted law (coef_)", xlabel="feature", ylabel="coefficient")
         if feature_names is not None:
             for ax in axes[1:]:
-                ax.set_xticks(np.arange(len(feature_names)), feature_names, rotation=90,
-                              fontsize=6)
+                ax.set_xticks(np.arange(len(feature_names)), feature_names, rotation=90, fontsize=6)
         return list(axes)
 
     def _post_process(self, x_scaled, r_factor):
         """Column residuals, homothetic groups and laws (best first), in the normalized space."""
         directions = np.eye(x_scaled.shape[0]) - x_scaled
-        residuals = np.linalg.norm(r_factor @ directions, axis=0) / np.linalg.norm(
-            directions, axis=0
-        )
+        residuals = (np.linalg.norm(r_factor @ directions, axis=0)
+                     / np.linalg.norm(directions, axis=0))
         order = np.argsort(residuals, kind="stable")
         groups = homothetic_groups(directions, self.angle_tol, order)
         groups = [g for g in groups if g.size >= self.min_group_size]
@@ -471,10 +457,7 @@ class ImplicitOptimizer(CatalogOptimizer):
                 f"ImplicitOptimizer: the fast solver did not converge on "
                 f"{int(np.sum(~result.converged))} of {n} columns in {self.max_iter} iterations "
                 f"(largest optimality violation {np.max(result.violation) / self.alpha_:.2e} x "
-                "alpha); raise max_iter or alpha",
-                ConvergenceWarning,
-                stacklevel=4,
-            )
+                "alpha); raise max_iter or alpha", ConvergenceWarning, stacklevel=4)
         return result.coef
 
     def _resolve_alpha(self, r_factor):

@@ -102,9 +102,7 @@ class MixedOptimizer(CatalogOptimizer):
     spec_type = "MixedOptimizer"
 
     def catalog_tags(self):
-        """The parts balance their own sub-problems; mass matrices and draws used where a part
-        does.
-        """
+        """The parts balance their own sub-problems; mass matrices and draws used where one does."""
         parts = [catalog_tags(part) for part in self._sub_optimizers()]
         return dataclasses.replace(
             super().catalog_tags(), balances_rows=False,
@@ -166,14 +164,9 @@ class MixedOptimizer(CatalogOptimizer):
         explicit, implicit = self._sub_optimizers()
         theta, n, force_columns = problem.theta, problem.n_coordinates, problem.force_columns
 
-        def fit_part(optimizer, coordinates, columns, part_force_columns):
-            part = problem.subproblem(coordinates, columns, part_force_columns)
-            return solve_problem(optimizer, part)
-
         n_features = theta.shape[1]
         # balanced here only to decide which coordinates a column touches
-        touches = coordinates_touched(balance_coordinates(theta, n, force_columns), n,
-                                      self.rtol)
+        touches = coordinates_touched(balance_coordinates(theta, n, force_columns), n, self.rtol)
         forced = touches[:, force_columns].any(axis=1)
         activated, activated_columns = activation_closure(touches, forced)
         self.forced_coordinates_ = forced
@@ -185,8 +178,8 @@ class MixedOptimizer(CatalogOptimizer):
 
         if not forced.any():
             self._set_mode("implicit", np.zeros(n, bool), np.array([], int), np.arange(n_features))
-            self.implicit_optimizer_ = fit_part(implicit, np.ones(n, bool),
-                                                np.arange(n_features), force_columns)
+            self.implicit_optimizer_ = solve_problem(implicit, problem.subproblem(
+                np.ones(n, bool), np.arange(n_features), force_columns))
             self.coef_ = np.asarray(self.implicit_optimizer_.coef_, dtype=float).copy()
             return self
 
@@ -196,9 +189,8 @@ class MixedOptimizer(CatalogOptimizer):
         with warnings.catch_warnings():
             # coordinates the explicit part leaves unexplained are solved implicitly below
             warnings.simplefilter("ignore", UnexplainedCoordinateWarning)
-            self.explicit_optimizer_ = fit_part(
-                explicit, activated, explicit_cols,
-                np.flatnonzero(np.isin(explicit_cols, force_columns)))
+            self.explicit_optimizer_ = solve_problem(explicit, problem.subproblem(
+                activated, explicit_cols, np.flatnonzero(np.isin(explicit_cols, force_columns))))
         coef[explicit_cols] = self.explicit_optimizer_.coef_
         explained = touches[:, coef != 0].any(axis=1)
         if explained.all():
@@ -219,24 +211,19 @@ class MixedOptimizer(CatalogOptimizer):
         self._set_mode("mixed", explained, explicit_cols, implicit_cols)
         released = np.flatnonzero(activated & remaining)
         if released.size:
-            warnings.warn(
-                f"MixedOptimizer: no identified explicit term enters coordinate(s) "
-                f"{released.tolist()}; solving them implicitly",
-                stacklevel=2,
-            )
+            warnings.warn(f"MixedOptimizer: no identified explicit term enters coordinate(s) "
+                          f"{released.tolist()}; solving them implicitly", stacklevel=2)
         if implicit_cols.size == 0:
             raise ValueError(
                 f"theta: coordinate(s) {np.flatnonzero(remaining).tolist()} receive no force and "
                 "no catalog column is left for them (every column touching them also touches an "
-                "explicitly identified coordinate); nothing left to solve implicitly"
-            )
+                "explicitly identified coordinate); nothing left to solve implicitly")
         try:
-            self.implicit_optimizer_ = fit_part(implicit, remaining, implicit_cols, [])
+            self.implicit_optimizer_ = solve_problem(
+                implicit, problem.subproblem(remaining, implicit_cols, []))
         except NoLawFoundError as error:
-            raise NoLawFoundError(
-                f"MixedOptimizer: implicit part on coordinate(s) "
-                f"{np.flatnonzero(remaining).tolist()}: {error}"
-            ) from error
+            raise NoLawFoundError(f"MixedOptimizer: implicit part on coordinate(s) "
+                                  f"{np.flatnonzero(remaining).tolist()}: {error}") from error
         coef[implicit_cols] += self.implicit_optimizer_.coef_
         self.coef_ = coef
         return self

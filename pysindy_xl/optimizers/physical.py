@@ -102,8 +102,7 @@ class PhysicalOptimizer(WrappingOptimizer, CatalogOptimizer):
             if not catalog_tags(self.optimizer).requires_forces:
                 raise ValueError(f"optimizer: the terms must be selected by explicit "
                                  f"regression, {type(self.optimizer).__name__} is not")
-        check_option("base_parameters", self.base_parameters, "choice",
-                     choices=_BASE_PARAMETERS)
+        check_option("base_parameters", self.base_parameters, "choice", choices=_BASE_PARAMETERS)
         check_option("tolerance", self.tolerance, "real", low=0)
         if self.solver is not None and not isinstance(self.solver, str):
             raise TypeError(f"solver: expected a cvxpy solver name, got {self.solver!r}")

@@ -96,8 +96,7 @@ reference_columns, physical, noise_draws, row_noise, catalog_map
             raise ValueError("theta: contains NaN or inf")
         n = int(check_option("n_coordinates", n_coordinates, "int", low=1))
         if theta.shape[0] % n:
-            raise ValueError(
-                f"theta: {theta.shape[0]} rows is not a multiple of n_coordinates={n}")
+            raise ValueError(f"theta: {theta.shape[0]} rows is not a multiple of n_coordinates={n}")
         n_features = theta.shape[1]
         force_columns = check_indices(force_columns, "force_columns", n_features)
         check_option("balance", balance, "bool")
@@ -327,8 +326,7 @@ def coordinate_weights(theta, n_coordinates: int, force_columns=None) -> np.ndar
     solution = np.linalg.lstsq(design, -np.log(rms[blocks, columns]), rcond=None)[0]
     u = solution[:n]
     active = present.any(axis=1)
-    log_w = np.where(active, u - u[active].mean(), 0.0)
-    return np.exp(log_w)
+    return np.exp(np.where(active, u - u[active].mean(), 0.0))
 
 
 def balance_coordinates(theta, n_coordinates: int, force_columns=None) -> np.ndarray:

@@ -78,8 +78,7 @@ def _elimination_order(active_mask, xs, y) -> np.ndarray:
             drop_local = [int(np.argmin(diag))]
         else:
             beta = scipy.linalg.solve_triangular(r_sub, qty, check_finite=False)
-            inverse = scipy.linalg.solve_triangular(r_sub, np.eye(len(active)),
-                                                 check_finite=False)
+            inverse = scipy.linalg.solve_triangular(r_sub, np.eye(len(active)), check_finite=False)
             increase = beta**2 / np.sum(inverse**2, axis=1)
             # far from the interesting sizes, drop several columns per refit
             n_drop = max(1, len(active) // 10) if len(active) > 40 else 1
@@ -120,8 +119,7 @@ def _forward_order(active_mask, xs, residual) -> np.ndarray:
         orthogonal -= np.outer(direction, direction @ orthogonal)
         chosen.append(j)
         candidates[j] = False
-    rest = [j for j in range(xs.shape[1]) if j not in set(chosen)]
-    return np.array(chosen + rest, dtype=int)
+    return np.array(chosen + [j for j in range(xs.shape[1]) if j not in set(chosen)], dtype=int)
 
 
 def refine_by_swaps(x, y, support, max_swaps: int = 50) -> np.ndarray:
@@ -182,8 +180,7 @@ def _systems(x, y, n_blocks: int, n_folds: int) -> tuple[tuple, list]:
     y_rms = np.sqrt(max(float(np.mean(y**2)), 1e-300))
     labels = fold_labels(len(y), n_blocks, n_folds)
     rows = [labels == fold for fold in range(n_folds)]
-    parts = [np.column_stack(_triangular_system(xs[r], y[r])) if r.any() else None
-             for r in rows]
+    parts = [np.column_stack(_triangular_system(xs[r], y[r])) if r.any() else None for r in rows]
 
     def stacked(folds):
         system = np.vstack([parts[f] for f in folds if parts[f] is not None])
@@ -352,8 +349,7 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     tolerance = max(best[2], resolution)
     if swaps:
         path_choice = min(c[0] for c in candidates if c[1] <= best[1] + tolerance)
-        candidates += _swap_candidates(local, folds, paths, seen, path_choice, n_folds,
-                                       keep, free)
+        candidates += _swap_candidates(local, folds, paths, seen, path_choice, n_folds, keep, free)
     size, mean, _, how, order = min((c for c in candidates if c[1] <= best[1] + tolerance),
                                     key=lambda c: (c[0], c[1]))
     n_sizes = max(c[0] for c in candidates)
@@ -384,8 +380,7 @@ def _profiled(reduced, keep):
         return free, reduced
     basis = np.linalg.qr(xs[:, keep])[0]
     rest = xs[:, free] - basis @ (basis.T @ xs[:, free])
-    left = np.sum(rest**2, axis=0) > 1e-20 * np.maximum(np.sum(xs[:, free] ** 2, axis=0),
-                                                        1e-300)
+    left = np.sum(rest**2, axis=0) > 1e-20 * np.maximum(np.sum(xs[:, free] ** 2, axis=0), 1e-300)
     return free, (active[free] & left, rest, y - basis @ (basis.T @ y))
 
 

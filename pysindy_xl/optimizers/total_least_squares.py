@@ -125,8 +125,7 @@ class TotalLeastSquaresOptimizer(CatalogOptimizer):
                 "combination is undetermined, see undetermined_. Record trajectories at "
                 "several energy levels, or force a coordinate.",
                 UndeterminedLawWarning, stacklevel=4)
-        warn_unexplained("TotalLeastSquaresOptimizer", theta, n, self.coef_,
-                         problem.force_columns)
+        warn_unexplained("TotalLeastSquaresOptimizer", theta, n, self.coef_, problem.force_columns)
         return self
 
     def _normalize(self, law, norms, problem):

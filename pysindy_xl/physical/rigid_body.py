@@ -67,10 +67,9 @@ class KinematicTree:
 
     def __post_init__(self):
         B, J = len(self.body_names), len(self.joint_names)
-        shapes = {"parents": (B,), "offsets": (B, 3), "rotations": (B, 3, 3),
-                  "joint_bodies": (J,), "joint_hinge": (J,), "joint_axes": (J, 3),
-                  "joint_anchors": (J, 3), "joint_references": (J,),
-                  "joint_to_coordinates": (J, J), "gravity": (3,)}
+        shapes = {"parents": (B,), "offsets": (B, 3), "rotations": (B, 3, 3), "joint_bodies": (J,),
+                  "joint_hinge": (J,), "joint_axes": (J, 3), "joint_anchors": (J, 3),
+                  "joint_references": (J,), "joint_to_coordinates": (J, J), "gravity": (3,)}
         for name, shape in shapes.items():
             dtype = {"parents": int, "joint_bodies": int, "joint_hinge": bool}.get(name, float)
             try:
@@ -149,9 +148,8 @@ class KinematicTree:
             body_frames.append(frame)
         return {"prefix_rotation": prefix_rotation, "prefix_offset": prefix_offset,
                 "fixed_rotation": np.array(fixed_rotation).reshape(-1, 3, 3),
-                "fixed_offset": np.array(fixed_offset).reshape(-1, 3),
-                "frames": frames, "joint_frames": np.array(joint_frames),
-                "body_frames": np.array(body_frames),
+                "fixed_offset": np.array(fixed_offset).reshape(-1, 3), "frames": frames,
+                "joint_frames": np.array(joint_frames), "body_frames": np.array(body_frames),
                 "axis_skew": _skew(np.asarray(self.joint_axes), np)}
 
     @functools.cached_property

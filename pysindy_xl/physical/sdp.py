@@ -219,8 +219,7 @@ def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=
         _solve(program.problem, solver, "consistent_least_squares")
         b, pi = program.b.value, program.pi.value
     if b is None or pi is None:
-        raise RuntimeError("consistent_least_squares: the semidefinite program found no "
-                           "solution")
+        raise RuntimeError("consistent_least_squares: the semidefinite program found no solution")
     b, pi = np.array(b, dtype=float), np.array(pi, dtype=float)
     pi_value = structure.nearest_consistent(pi)
     out = b / scale
@@ -229,5 +228,4 @@ def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=
         out[np.asarray(zero, dtype=bool)] = 0.0
     if len(structure.friction_columns):
         out[structure.friction_columns] = np.maximum(out[structure.friction_columns], 0.0)
-    cost = float(np.sum((factor @ (out * scale - scaled)) ** 2))
-    return out, pi_value, cost
+    return out, pi_value, float(np.sum((factor @ (out * scale - scaled)) ** 2))

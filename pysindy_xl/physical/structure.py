@@ -1,10 +1,9 @@
 r"""What makes a catalog's coefficients physical: the rigid bodies behind its base parameters.
 
-A kinematic catalog's Lagrange coefficients are *base parameters* :math:`\beta = C \pi` of
-the bodies' inertial parameters :math:`\pi`; its friction columns carry friction. They are
-*physically consistent* when some :math:`\pi` with :math:`C \pi = \beta` has every
-pseudo-inertia positive semidefinite and every armature and friction non-negative
-(:mod:`pysindy_xl.physical.sdp`).
+A kinematic catalog's Lagrange coefficients are *base parameters* :math:`\beta = C \pi` of the
+bodies' inertial parameters :math:`\pi`; its friction columns carry friction. They are *physically
+consistent* when some :math:`\pi` with :math:`C \pi = \beta` has every pseudo-inertia positive
+semidefinite and every armature and friction non-negative (:mod:`pysindy_xl.physical.sdp`).
 """
 
 from __future__ import annotations
@@ -103,8 +102,7 @@ class PhysicalStructure:
                 for j in range(combination.shape[0])]
         structure = cls.from_maps(maps, np.arange(len(maps)))
         # keep the caller's order of the physical parameters
-        order = [structure.names.index(name) if name in structure.names else -1
-                 for name in names]
+        order = [structure.names.index(name) if name in structure.names else -1 for name in names]
         if sorted(order) != list(range(len(structure.names))):
             missing = set(structure.names) - set(names)
             raise ValueError(f"names: every body's ten parameters are needed, missing "
@@ -159,8 +157,7 @@ class PhysicalStructure:
     def pseudo_inertias(self, pi) -> np.ndarray:
         """Every body's pseudo-inertia at ``pi``, shape (len(bodies), 4, 4)."""
         pi = np.asarray(pi, dtype=float)
-        return np.array([pseudo_inertia_matrix(pi[k]) for k in self.body_indices]
-                        ).reshape(-1, 4, 4)
+        return np.array([pseudo_inertia_matrix(pi[k]) for k in self.body_indices]).reshape(-1, 4, 4)
 
 
 def pseudo_inertia_matrix(parameters):

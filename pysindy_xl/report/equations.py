@@ -106,8 +106,7 @@ def physical_parameters(coef: np.ndarray, library) -> dict:
             continue
         c = next(i for i in range(library.coords.n) if library.symbolic_matrix_[i, j] != 0)
         name = library.coords.names[c]
-        kind = friction_kind(library.feature_terms_[j], library.coords.qd[c],
-                             library.coords.qdd[c])
+        kind = friction_kind(library.feature_terms_[j], library.coords.qd[c], library.coords.qdd[c])
         if kind is not None:
             friction[name][kind] += float(coef[j] * factor)
         else:

@@ -80,8 +80,7 @@ class InspectionMixin:
         t = sample_times(self.t_default if t is None else t, x.shape[0], "t")
         if self.differentiation_method is not None:
             return differentiation_function(self.differentiation_method)(x, t)
-        smoother = copy.deepcopy(self.smoother) or WhittakerSmoother()
-        return smoother.smooth(t, x)[1]
+        return (copy.deepcopy(self.smoother) or WhittakerSmoother()).smooth(t, x)[1]
 
     def get_feature_names(self) -> list[str]:
         """Names of the catalog features.
@@ -180,9 +179,8 @@ class InspectionMixin:
         if uncertainty:
             if self.inclusion_probability_ is None:
                 raise ValueError("uncertainty: needs a fit with an EnsembleOptimizer")
-            for line in uncertainty_lines(self.get_feature_names(), self.coef_,
-                                          self.coef_interval_, self.inclusion_probability_,
-                                          precision):
+            for line in uncertainty_lines(self.get_feature_names(), self.coef_, self.coef_interval_,
+                                          self.inclusion_probability_, precision):
                 print(line)
         if has_parameter_map(self.feature_library_):
             for line in parameter_lines(self.physical_parameters(), precision):

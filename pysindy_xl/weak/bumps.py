@@ -1,15 +1,10 @@
 r"""Test functions of the weak formulation: smooth bumps with compact support in time.
 
 A bump ``phi(t) = (1 - s^2)^p``, ``s = (t - c) / h`` on ``[c - h, c + h]``, vanishes with its
-first ``p - 1`` derivatives at both ends, so integration by parts leaves no boundary term:
-
-.. math:: \int \phi \, \frac{d}{dt} P \, dt = -\int \dot\phi \, P \, dt.
-
+first ``p - 1`` derivatives at both ends, so integration by parts leaves no boundary term.
 :class:`BumpTestFunctions` returns the bumps as quadrature-weighted sparse matrices ``Phi``
-and ``dPhi`` (test functions x samples): ``int phi_k f dt ~ (Phi @ f)[k]``. The half-width
-``h`` comes from the corner frequency of the positions' spectrum (as in WSINDy). With
-``width_multiples`` the rows of several widths ``m h`` are stacked, ordered by their centres,
-so that a contiguous stretch of rows is a stretch of time at every width.
+and ``dPhi`` (test functions x samples): ``int phi_k f dt ~ (Phi @ f)[k]``; the half-width
+``h`` comes from the corner frequency of the positions' spectrum (as in WSINDy).
 """
 
 from __future__ import annotations
@@ -85,9 +80,9 @@ def corner_frequency(t, x, energy: float = 0.99) -> float:
 
     Each coordinate of ``x`` (N, n) is detrended, tapered and cosine-transformed (as if sampled
     uniformly at the mean step). The noise floor is the median power of the upper half of the
-    modes over 0.4549 (the median of a chi-square variable of one degree of freedom); the signal
-    power above it is accumulated without clipping, so the noise's fluctuations cancel and the
-    corner does not move with the noise level. Returns the largest corner over coordinates.
+    modes over the median of a chi-square variable of one degree of freedom; the signal power
+    above it is summed without clipping, so the corner does not move with the noise level.
+    Returns the largest corner over coordinates.
 
     Examples
     --------
@@ -202,8 +197,7 @@ class BumpTestFunctions:
         if 2 * h > duration:
             raise ValueError(
                 f"t: the trajectory ({duration:.4g} s) is shorter than one test function "
-                f"(support {2 * h:.4g} s); record longer trajectories or set a smaller width"
-            )
+                f"(support {2 * h:.4g} s); record longer trajectories or set a smaller width")
         return h
 
     def max_gap(self, half_width) -> float:
@@ -246,8 +240,7 @@ class BumpTestFunctions:
                              f"inside the trajectory ({t[-1] - t[0]:.4g} s)")
         if n_functions is None:
             n_functions = self.n_functions
-        multiples = self._multiples()
-        widths = [m * h for m in multiples if 2 * m * h <= t[-1] - t[0]] or [h]
+        widths = [m * h for m in self._multiples() if 2 * m * h <= t[-1] - t[0]] or [h]
         if len(widths) == 1:
             phi, dphi, _ = self._bumps(t, widths[0], n_functions)
             return phi, dphi, h

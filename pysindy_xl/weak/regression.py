@@ -48,11 +48,9 @@ def shared_half_width(test_functions, trajectories, columns=None) -> float:
             except ValueError:
                 continue  # shorter than the width it asks for
     if not widths:
-        raise ValueError(
-            f"x: the trajectories ({durations.max():.3g} s at most) are shorter than one "
-            "test function; record longer trajectories, set a smaller "
-            "BumpTestFunctions(width=...), or use formulation='strong'"
-        )
+        raise ValueError(f"x: the trajectories ({durations.max():.3g} s at most) are shorter than "
+                         "one test function; record longer trajectories, set a smaller "
+                         "BumpTestFunctions(width=...), or use formulation='strong'")
     return min(widths)
 
 
@@ -183,11 +181,9 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         short = sorted(set(source[durations < 2 * half_width].tolist()))
         what = (f"pieces (between {len(gaps)} gaps longer than {max_gap(half_width):.3g} s) "
                 "of " if gaps else "")
-        warnings.warn(
-            f"x: {what}trajectories {short} are shorter than one test function (support "
-            f"{2 * half_width:.3g} s) and are left out of the weak regression",
-            UserWarning, stacklevel=4,
-        )
+        warnings.warn(f"x: {what}trajectories {short} are shorter than one test function (support "
+                      f"{2 * half_width:.3g} s) and are left out of the weak regression",
+                      UserWarning, stacklevel=4)
     if usable.size == 0:
         raise ValueError(
             f"t: every piece of the trajectories between gaps longer than "
@@ -207,11 +203,10 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
             smoothing[-1] = None
         elif not propagates and not warned and noise != "none":
             warned = True
-            warnings.warn(
-                f"smoother: {type(smoother).__name__} has no resmooth method (and noise_ "
-                "attribute), so the noise of the positions is not propagated into the weak "
-                "columns and the fit is not corrected for it; see WhittakerSmoother.resmooth",
-                UserWarning, stacklevel=4)
+            warnings.warn(f"smoother: {type(smoother).__name__} has no resmooth method (and noise_ "
+                          "attribute), so the noise of the positions is not propagated into the "
+                          "weak columns and the fit is not corrected for it; see "
+                          "WhittakerSmoother.resmooth", UserWarning, stacklevel=4)
         states.append(stack_variables(q, qd, qdd, d["u"], d["t"]))
 
     def estimated(piece):  # a smoother copy that estimated its noise
@@ -220,16 +215,14 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
     first = next((k for k, (d, piece) in enumerate(zip(pieces, smoothing, strict=True))
                   if estimated(piece) and not is_uniform(d["t"])), None)
     if first is not None:  # are the stamps sampling times?
-        ratio = stamp_noise_ratio(pieces[first]["t"], pieces[first]["x"],
-                                  smoothing[first].noise_,
+        ratio = stamp_noise_ratio(pieces[first]["t"], pieces[first]["x"], smoothing[first].noise_,
                                   getattr(smoothing[first], "order", 3))
         summary["stamp_noise_ratio"] = ratio
         if ratio > STAMP_NOISE_RATIO:
-            warnings.warn(
-                f"t: the positions look {ratio:.3g} times noisier at their stamps than read at "
-                "uniform steps; the stamps may be arrival times of samples taken at a fixed "
-                "rate, whose delays pass for motion: if so, pass uniform times",
-                UserWarning, stacklevel=4)
+            warnings.warn(f"t: the positions look {ratio:.3g} times noisier at their stamps than "
+                          "read at uniform steps; the stamps may be arrival times of samples taken "
+                          "at a fixed rate, whose delays pass for motion: if so, pass uniform "
+                          "times", UserWarning, stacklevel=4)
     propagate = noise != "none" and all(estimated(piece) for piece in smoothing)
     n_samples = sum(len(d["t"]) for d in pieces)
     n_draws = int(np.clip(np.ceil(_PROPAGATION_SAMPLES / max(n_samples, 1)), 1, 16))

@@ -77,8 +77,7 @@ def time_folds(supports: np.ndarray, spans: np.ndarray, n_blocks: int):
     return fit, held
 
 
-def choose_noise_model(candidates, reference, spans, force_columns, solve,
-                       n_blocks=BLOCK_COUNTS):
+def choose_noise_model(candidates, reference, spans, force_columns, solve, n_blocks=BLOCK_COUNTS):
     """The candidate whose fits predict held-out time blocks best, if clearly better than the first.
 
     ``candidates`` are ``(NoiseModel, rows, supports, noise)``: weak rows (coordinate-major, the
@@ -127,8 +126,7 @@ def choose_noise_model(candidates, reference, spans, force_columns, solve,
                 with warnings.catch_warnings():  # a fold's fit speaks through its score
                     warnings.simplefilter("ignore")
                     coef = solve(rows[fit_rows[k]],
-                                 None if noise is None else noise.rows(fit_rows[k]),
-                                 model.weigh)
+                                 None if noise is None else noise.rows(fit_rows[k]), model.weigh)
             except (ValueError, RuntimeError, np.linalg.LinAlgError):
                 break
             scored = rows_ref[held_rows[k]]

@@ -5,15 +5,14 @@ coordinate,
 
 .. math:: \hat z = \arg\min_z \|y - z\|^2 + \lambda \|D_d z\|^2,
 
-with ``D_d`` the ``d``-th divided difference on the actual time grid, scaled by the mean
-step to the power ``d`` (``lambda`` in sample units) and each row weighted by the square root
-of the time it spans (the quadrature of the integral of the squared ``d``-th derivative); the
-system is banded. Generalized cross-validation, ``GCV(lambda) = N RSS / (N - tr H)^2``,
-estimates the noise level; the default weight minimizes Stein's risk of the smoothed
-*velocity*. On a uniform grid both are computed in the cosine-transform domain (gains
-``H_k = 1 / (1 + lambda (2 sin(pi k / 2N))^(2d))``); on a non-uniform grid, where that
-shortcut mistakes jitter for noise, by banded solves with Hutchinson trace estimates.
-Derivatives: five-point finite differences on the actual grid.
+with ``D_d`` the ``d``-th divided difference on the actual time grid, scaled by the mean step to the
+power ``d`` (``lambda`` in sample units) and each row weighted by the square root of the time it
+spans (the quadrature of the integral of the squared ``d``-th derivative); the system is banded.
+Generalized cross-validation, ``GCV(lambda) = N RSS / (N - tr H)^2``, estimates the noise level; the
+default weight minimizes Stein's risk of the smoothed *velocity*. On a uniform grid both are
+computed in the cosine-transform domain (gains ``H_k = 1 / (1 + lambda (2 sin(pi k / 2N))^(2d))``);
+on a non-uniform grid, where that shortcut mistakes jitter for noise, by banded solves with
+Hutchinson trace estimates. Derivatives: five-point finite differences on the actual grid.
 """
 
 from __future__ import annotations
@@ -70,8 +69,7 @@ def finite_difference_weights(t, derivative: int, stencil: int = 5, degree=None)
     return index, weights / scale**derivative
 
 
-def differentiate(t, values, derivative: int = 1, stencil: int = 5,
-                  degree=None) -> np.ndarray:
+def differentiate(t, values, derivative: int = 1, stencil: int = 5, degree=None) -> np.ndarray:
     """Derivative of smooth sampled ``values`` (N, ...) along axis 0; ``stencil`` and ``degree``
     as in :func:`finite_difference_weights`.
 
@@ -90,10 +88,8 @@ def differentiate(t, values, derivative: int = 1, stencil: int = 5,
 
 def _divided_difference_matrix(t: np.ndarray, order: int,
                                weighted: bool = False) -> scipy.sparse.csr_matrix:
-    """``D`` (N - order, N): ``order``-th divided differences times ``order! * mean_step^order``.
-
-    With ``weighted`` each row is multiplied by ``sqrt(span / (order * mean_step))`` so that
-    ``||D z||^2`` is the quadrature of the squared derivative's integral on the actual grid.
+    """``D`` (N - order, N): ``order``-th divided differences times ``order! * mean_step^order``;
+    ``weighted``: rows times ``sqrt(span / (order * mean_step))`` (the integral's quadrature).
     """
     n_samples = len(t)
     index = np.arange(n_samples - order)[:, None] + np.arange(order + 1)
@@ -106,9 +102,8 @@ def _divided_difference_matrix(t: np.ndarray, order: int,
     if weighted and not is_uniform(t):  # (factors 1 up to rounding on a uniform grid)
         weights *= np.sqrt((window[:, -1] - window[:, 0]) / (order * mean_step))[:, None]
     rows = np.repeat(np.arange(n_samples - order), order + 1)
-    return scipy.sparse.csr_matrix(
-        (weights.ravel(), (rows, index.ravel())), shape=(n_samples - order, n_samples)
-    )
+    return scipy.sparse.csr_matrix((weights.ravel(), (rows, index.ravel())),
+                                   shape=(n_samples - order, n_samples))
 
 
 #: Relative spread of the time steps below which a grid counts as uniform.
@@ -130,14 +125,11 @@ def is_uniform(t) -> bool:
     return bool(np.ptp(steps) <= _UNIFORM_TOLERANCE * np.mean(steps))
 
 
-def _choose_lambda(t: np.ndarray, y: np.ndarray, order: int,
-                   target: str) -> tuple[float, float]:
-    """``(lambda, sigma)`` of one series on a uniform grid, in the cosine-transform domain.
-
-    ``sigma`` is the GCV fit's noise level. ``target="gcv"`` returns the GCV weight;
-    ``"velocity"`` the one minimizing the velocity's risk
-    ``sum_k w_k^2 [(1 - H_k)^2 (P_k - sigma^2) + H_k^2 sigma^2]`` (``w_k`` the frequency,
-    ``P_k`` the power of mode ``k``).
+def _choose_lambda(t: np.ndarray, y: np.ndarray, order: int, target: str) -> tuple[float, float]:
+    """``(lambda, sigma)`` of one series on a uniform grid (cosine-transform domain), ``sigma``
+    the GCV fit's noise level; ``target="velocity"`` minimizes the velocity's risk
+    ``sum_k w_k^2 [(1 - H_k)^2 (P_k - sigma^2) + H_k^2 sigma^2]`` (mode ``k``: frequency ``w_k``,
+    power ``P_k``) instead of GCV.
     """
     n_samples = len(y)
     s = np.linspace(-1.0, 1.0, n_samples)
@@ -173,10 +165,9 @@ def _banded_penalty(t: np.ndarray, order: int) -> np.ndarray:
 
 
 def _colored_probes(n_samples: int, n_probes: int, rng) -> np.ndarray:
-    """Trace-estimate probes (N, n_probes): probe ``j`` holds random signs on the samples
-    ``i = j mod n_probes``, zero elsewhere (probing with colours, Tang and Saad 2012): the
-    estimate then sums only entries a multiple of ``n_probes`` apart, far less variance for a
-    smoother whose entries decay fast.
+    """Trace-estimate probes (N, n_probes): random signs on the samples ``i = j mod n_probes``
+    in probe ``j`` (probing with colours, Tang and Saad 2012): far less variance for a smoother
+    whose entries decay fast.
     """
     probes = np.zeros((n_samples, n_probes))
     probes[np.arange(n_samples), np.arange(n_samples) % n_probes] = rng.choice(
@@ -185,14 +176,10 @@ def _colored_probes(n_samples: int, n_probes: int, rng) -> np.ndarray:
 
 
 def _choose_lambdas_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
-    """``(lams, sigmas)`` (n,) by GCV or the velocity risk of the smoother on the actual grid, for
-    all columns of ``y`` (N, n) at once.
-
-    Per ``lambda``: one banded LU for all columns and the probes of :func:`_colored_probes`
-    (``tr H`` and ``tr(W D_1 H D_1^T W)``, with ``W`` the square root of the Tukey taper: the
-    smoother's ends, where test functions vanish, would otherwise choose too small a weight).
-    The velocity risk is ``||W D_1 (z - y)||^2 + sigma^2 (2 tr(W D_1 H D_1^T W) - ||W D_1||_F^2)``.
-    Weights are searched a decade apart, then finely around each column's best.
+    """``(lams, sigmas)`` (n,) of all columns of ``y`` (N, n) on the actual grid: per ``lambda``
+    one banded LU and the probes' traces ``tr H``, ``tr(W D_1 H D_1^T W)`` (``W``: root of a
+    Tukey taper, as test functions vanish at the ends); the velocity risk is
+    ``||W D_1 (z - y)||^2 + sigma^2 (2 tr(W D_1 H D_1^T W) - ||W D_1||_F^2)``.
     """
     n_samples, n_columns = y.shape
     # LU, not Cholesky: at the largest weights I + lambda D^T D is semi-definite in rounding
@@ -210,16 +197,14 @@ def _choose_lambdas_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
         if k not in scores:
             system = _LAMBDA_GRID[k] * banded
             system[order] += 1.0
-            solved = scipy.linalg.solve_banded((order, order), system, rhs,
-                                               check_finite=False)
+            solved = scipy.linalg.solve_banded((order, order), system, rhs, check_finite=False)
             residual = y - solved[:, :n_columns]
             rss = np.sum(residual**2, axis=0)
             trace = float(np.sum(probes * solved[:, n_columns:n_columns + n_probes]))
             trace_velocity = float(np.sum(velocity_probes * solved[:, n_columns + n_probes:]))
             gcv = (n_samples * rss / (n_samples - trace) ** 2 if trace < n_samples - 1
                    else np.full(n_columns, np.inf))
-            scores[k] = (gcv, rss, trace, np.sum((first @ residual) ** 2, axis=0),
-                         trace_velocity)
+            scores[k] = (gcv, rss, trace, np.sum((first @ residual) ** 2, axis=0), trace_velocity)
         return scores[k]
 
     def minimize(criterion):

@@ -2,12 +2,11 @@
 
 The weak form works on the stamps as recorded (the smoother's divided differences, the test
 functions' quadrature, the noise drawn per sample). A step longer than ``h / min_samples``
-(:class:`~pysindy_xl.weak.BumpTestFunctions`) is a gap that no test function or smoother may
-span: the trajectory is cut there into segments handled on their own (:func:`split_at_gaps`;
-``weak_info_["gaps"]``). Stamps that are arrival times rather than sampling times make
-positions smooth in sample order look noisy at their stamps: :func:`stamp_noise_ratio`
-compares the two, and the fit warns above :data:`STAMP_NOISE_RATIO`. Repeated stamps are
-refused at the input.
+(:class:`~pysindy_xl.weak.BumpTestFunctions`) is a gap that no test function or smoother may span:
+the trajectory is cut there into segments handled on their own (:func:`split_at_gaps`;
+``weak_info_["gaps"]``). Stamps that are arrival times rather than sampling times make positions
+smooth in sample order look noisy at their stamps: :func:`stamp_noise_ratio` compares the two, and
+the fit warns above :data:`STAMP_NOISE_RATIO`. Repeated stamps are refused at the input.
 """
 
 from __future__ import annotations
@@ -71,9 +70,8 @@ def grid_summary(times) -> dict:
     {'uniform': False, 'median_step': 0.5, 'max_step': 2.0, 'min_step': 0.5}
     """
     steps = np.concatenate([np.diff(np.asarray(t, dtype=float)) for t in times])
-    return {"uniform": all(is_uniform(t) for t in times),
-            "median_step": float(np.median(steps)), "max_step": float(steps.max()),
-            "min_step": float(steps.min())}
+    return {"uniform": all(is_uniform(t) for t in times), "median_step": float(np.median(steps)),
+            "max_step": float(steps.max()), "min_step": float(steps.min())}
 
 
 def stamp_noise_ratio(t, x, noise, order: int = 3) -> float:
