@@ -39,7 +39,6 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     True
     """
     mujoco = import_mujoco()
-
     from ... import stack_variables
 
     system = get_system(system)

@@ -97,7 +97,6 @@ def mujoco_closed_loop(model, system, trajectory, substeps, required):
     from .. import import_mujoco
 
     mujoco = import_mujoco()
-
     mj, reason = identified_mj_model(model, system)
     if mj is not None and trajectory.info.get("tracking") is not None:
         mj = tracked_model(mj, trajectory.info["tracking"])  # the reference's controller

@@ -263,7 +263,6 @@ def _mjcf_limits(system, position_limits, torque_limits):
     """Default position limits (joint ranges within the servos' reach, 5 % margin) and torque
     limits (actuator force ranges) of an MJCF whose coordinates are its joints."""
     mujoco = import_mujoco()
-
     model = system.mj_model()
     n = system.n
     identity = np.allclose(system.joint_to_coordinates, np.eye(n))

@@ -163,7 +163,6 @@ def within_servo_reach(signals: SumOfSinusoids, model) -> SumOfSinusoids:
     faster reference saturates the servo. ``signals`` itself when no driven actuator is one.
     """
     mujoco = import_mujoco()
-
     from ..systems.actuation import servo_bandwidths
 
     bandwidth = servo_bandwidths(model)

@@ -194,7 +194,6 @@ def _basis(t, w: float, L: int, order: int) -> np.ndarray:
 def _position_servos(system, argument: str):
     """``(G, c)`` with ``ctrl = c + G q`` putting every position servo on the positions ``q``."""
     mujoco = import_mujoco()
-
     model = system.mj_model()
     inverse = np.linalg.inv(system.joint_to_coordinates)  # qpos = T^-1 q
     gain_map, offset = np.zeros((model.nu, system.n)), np.zeros(model.nu)

@@ -101,7 +101,6 @@ class Integration:
 def _stiffness(model, data) -> tuple[np.ndarray, np.ndarray]:
     """``K``, ``D`` (nv x nv) of the servos, joint springs and damping at ``data``'s pose."""
     mujoco = import_mujoco()
-
     mujoco.mj_forward(model, data)
     moments = np.zeros((model.nu, model.nv))
     if model.nu:
@@ -119,7 +118,6 @@ def _stiffness(model, data) -> tuple[np.ndarray, np.ndarray]:
 def _poses(model, n_poses: int, seed) -> np.ndarray:
     """The reference pose and ``n_poses - 1`` random poses inside the joint ranges."""
     mujoco = import_mujoco()
-
     rng = np.random.default_rng(seed)
     poses = np.tile(model.qpos0, (n_poses, 1))
     for j in range(model.njnt):
@@ -261,7 +259,6 @@ def check_run(model, qpos, qvel, qacc, energy=None, bad_accelerations: int = 0,
     {'peak_velocity': {'j': 2.0}, 'velocity_bound': {'j': 100.0}}
     """
     mujoco = import_mujoco()
-
     qvel = np.asarray(qvel, dtype=float)
     names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
              for j in model.dof_jntid]

@@ -144,12 +144,14 @@ class CartPole(MuJoCoSystem):
                 + _footer(self.joint_names))
 
 
-def _pendulum_chain_xml(p: dict, indent: int) -> str:
-    """MJCF bodies of the two-link chain (link1 carrying link2), shared by both pendulums."""
-    inner = _link("link2", "hinge2", p["mass2"], p["length2"], p["damping2"],
-                  p["point_inertia"], f"0 0 {mjcf_float(-p['length1'])}", indent=indent + 2)
-    return _link("link1", "hinge1", p["mass1"], p["length1"], p["damping1"],
-                 p["point_inertia"], "0 0 0", inner=inner, indent=indent)
+def _chain_xml(p: dict, n_links: int, indent: int) -> str:
+    """MJCF bodies of a pendulum chain, link ``k`` carrying link ``k + 1``."""
+    inner = ""
+    for k in range(n_links, 0, -1):
+        pos = "0 0 0" if k == 1 else f"0 0 {mjcf_float(-p[f'length{k - 1}'])}"
+        inner = _link(f"link{k}", f"hinge{k}", p[f"mass{k}"], p[f"length{k}"], p[f"damping{k}"],
+                      p["point_inertia"], pos, inner=inner, indent=indent + 2 * (k - 1))
+    return inner
 
 
 class DoublePendulum(MuJoCoSystem):
@@ -204,7 +206,7 @@ class DoublePendulum(MuJoCoSystem):
         """MJCF text of the double pendulum (see :meth:`MuJoCoSystem.xml`)."""
         p = self._parameters
         return (_header("double_pendulum", p["timestep"], p["gravity"])
-                + _pendulum_chain_xml(p, indent=4) + _footer(self.joint_names))
+                + _chain_xml(p, 2, indent=4) + _footer(self.joint_names))
 
 
 def _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=None, cart_mass=0.0):
@@ -280,7 +282,7 @@ class CartDoublePendulum(MuJoCoSystem):
     def xml(self):
         """MJCF text of the double pendulum on a cart (see :meth:`MuJoCoSystem.xml`)."""
         p = self._parameters
-        link = _pendulum_chain_xml(p, indent=6)
+        link = _chain_xml(p, 2, indent=6)
         return (_header("cart_double_pendulum", p["timestep"], p["gravity"])
                 + _cart(p["cart_mass"], p["cart_damping"], link)
                 + _footer(self.joint_names))
@@ -350,12 +352,5 @@ class TriplePendulum(MuJoCoSystem):
     def xml(self):
         """MJCF text of the three-link pendulum (see :meth:`MuJoCoSystem.xml`)."""
         p = self._parameters
-        link3 = _link("link3", "hinge3", p["mass3"], p["length3"], p["damping3"],
-                      p["point_inertia"], f"0 0 {mjcf_float(-p['length2'])}", indent=8)
-        link2 = _link("link2", "hinge2", p["mass2"], p["length2"], p["damping2"],
-                      p["point_inertia"], f"0 0 {mjcf_float(-p['length1'])}", inner=link3,
-                      indent=6)
-        link1 = _link("link1", "hinge1", p["mass1"], p["length1"], p["damping1"],
-                      p["point_inertia"], "0 0 0", inner=link2, indent=4)
-        return (_header("triple_pendulum", p["timestep"], p["gravity"]) + link1
+        return (_header("triple_pendulum", p["timestep"], p["gravity"]) + _chain_xml(p, 3, 4)
                 + _footer(self.joint_names))

@@ -34,12 +34,7 @@ __all__ = ["MuJoCoSystem", "coordinate_system", "CartPole", "DoublePendulum",
            "default_xml_path", "equations_of_motion", "system_from_metadata"]
 
 
-SYSTEMS = {
-    CartPole.name: CartPole,
-    DoublePendulum.name: DoublePendulum,
-    CartDoublePendulum.name: CartDoublePendulum,
-    TriplePendulum.name: TriplePendulum,
-}
+SYSTEMS = {cls.name: cls for cls in (CartPole, DoublePendulum, CartDoublePendulum, TriplePendulum)}
 
 
 def get_system(name, **parameters) -> MuJoCoSystem:
@@ -74,10 +69,8 @@ def get_system(name, **parameters) -> MuJoCoSystem:
         return SYSTEMS[key](**parameters)
     if os.path.isfile(name):
         return MJCFSystem(name, **parameters)
-    raise ValueError(
-        f"name: unknown system {name!r}; expected one of {sorted(SYSTEMS)} or a path to an "
-        "MJCF .xml or URDF .urdf file"
-    )
+    raise ValueError(f"name: unknown system {name!r}; expected one of {sorted(SYSTEMS)} or a "
+                     "path to an MJCF .xml or URDF .urdf file")
 
 
 def system_from_metadata(metadata: dict, **parameters) -> MuJoCoSystem:
@@ -109,10 +102,9 @@ def system_from_metadata(metadata: dict, **parameters) -> MuJoCoSystem:
             return MJCFSystem(path, **options)
         if xml:
             return MJCFSystem(xml, **options)
-        raise ValueError(
-            "metadata: the dataset comes from a user's MJCF but records neither an existing "
-            f"model path ({path!r}) nor the model's XML; pass --system PATH.xml"
-        )
+        raise ValueError("metadata: the dataset comes from a user's MJCF but records neither an "
+                         f"existing model path ({path!r}) nor the model's XML; pass --system "
+                         "PATH.xml")
     recorded = dict(metadata.get("parameters") or {})
     if isinstance(name, str) and name.strip().lower().replace("_", "-") in SYSTEMS:
         recorded.update(parameters)
