@@ -1,22 +1,13 @@
 """Catalogs from the kinematic tree: candidate Lagrangians of any rigid-body MJCF model.
 
 A rigid body's Lagrangian is linear in its ten inertial parameters (mass ``m``, first moments
-``m c``, inertia ``I_o`` about the body origin, in the body frame). With ``v``, ``w`` the body
-origin's linear and angular velocity in body coordinates, ``g_b = R^T g`` and ``h = g.p_o``,
-
-    ``L_b = m (v.v / 2 + h) + m c . (v x w + g_b) + w . I_o w / 2``,
-
-so the functions multiplying the parameters come from the kinematics alone. With each joint's
-armature (``armature_k qvel_k^2 / 2``) they span the Lagrangian of every mass distribution.
-:func:`kinematic_catalog` keeps an independent subset (base parameters): the rank of the
-Euler-Lagrange columns at random states from a pivoted QR, columns kept in a fixed order of
-preference; dependent parameters fold into kept ones (:attr:`KinematicCatalog.parameters`).
-The derivation runs on sparse trigonometric polynomials
-(:mod:`pysindy_xl.feature_library.trigpoly`); sympy expressions are built only when read.
-
-Friction and springs are classical candidates per joint (viscous, smooth Coulomb, spring),
-entered in the equations the joint force reaches (``B = T^-T``); with ``friction=`` the
-models of real joints (:class:`~pysindy_xl.feature_library.JointFrictionLibrary`) instead.
+``m c``, inertia ``I_o`` about the body origin): with ``v``, ``w`` the origin's linear and
+angular velocity in body coordinates, ``g_b = R^T g`` and ``h = g.p_o``,
+``L_b = m (v.v / 2 + h) + m c . (v x w + g_b) + w . I_o w / 2``. With each joint's armature
+these functions span every mass distribution; :func:`kinematic_catalog` keeps an independent
+subset (base parameters, by a pivoted QR at random states), derived on sparse trigonometric
+polynomials (:mod:`pysindy_xl.feature_library.trigpoly`). Friction and springs are classical
+candidates per joint, or the joint models of ``friction=``.
 """
 
 from __future__ import annotations

@@ -1,17 +1,12 @@
 """Reference catalogs of the paper's comparison, built for any system.
 
-Kinds, all with the force column first (:class:`~pysindy_xl.ExternalForces`):
-``lagrange``, every product of a velocity monomial (degree <= ``velocity_degree``) and a
-monomial of the angles' ``sin`` and ``cos`` (degree <= ``trig_degree``), the constant
-excluded; ``classical``, each distinct monomial of the Euler-Lagrange expansion of those
-terms in its equations, plus viscous friction; ``mixed``, ``lagrange`` plus viscous friction;
-``kinematic``, :func:`~pysindy_xl.mujoco.kinematic_catalog`'s catalog (exact for any mass
-distribution).
-
-A model with ``frictionloss`` adds the smooth Coulomb ``tanh(qd_i / eps)`` to each such
-joint's equation. Friction terms are velocities ``qd_j`` in equation ``i``: ``"auto"``
-follows :meth:`~pysindy_xl.mujoco.MuJoCoSystem.friction_pattern` (the velocities a relative
-hinge's damping couples in), ``"diagonal"`` ``qd_i`` only, ``"full"`` every pair.
+Kinds, all with the force column first: ``lagrange`` (velocity monomials of degree <=
+``velocity_degree`` times monomials of the angles' ``sin``/``cos`` of degree <=
+``trig_degree``), ``classical`` (each monomial of their Euler-Lagrange expansion, plus viscous
+friction), ``mixed`` (``lagrange`` plus viscous friction) and ``kinematic``
+(:func:`~pysindy_xl.mujoco.kinematic_catalog`). A joint with ``frictionloss`` adds the smooth
+Coulomb ``tanh(qd_i / eps)``; viscous terms follow ``friction`` (``"auto"``:
+:meth:`~pysindy_xl.mujoco.MuJoCoSystem.friction_pattern`; ``"diagonal"``; ``"full"``).
 """
 
 from __future__ import annotations

@@ -1,29 +1,20 @@
 """Validation of an identified model against a fresh MuJoCo trajectory.
 
 The model is simulated from the initial state of a new, noise-free MuJoCo trajectory, driven
-the way MuJoCo was, and the two position histories are compared.
-
-Drive (``ValidationResult.drive``): ``open-loop``, the forces MuJoCo applied as a function
-of time (the exact signal for joint motors, else a cubic spline of the recorded forces);
-``closed-loop``, for servos, the MJCF's actuator law
-(:func:`~pysindy_xl.mujoco.actuation.actuator_law`) driven by the run's reference controls
-acts on the model's own state. Replaying a servo run's forces open loop would compare two
-different experiments (nothing corrects drift; servos on their limits hide errors).
-
-Simulator (``ValidationResult.simulator``), in closed loop: ``mujoco``, MuJoCo itself on a
-copy of the model carrying the identified parameters
-(:func:`~pysindy_xl.export.mjcf.identified_mj_model`, only where it reproduces ``M`` and ``f``
-exactly), limits and contacts off; ``model``, ``model.simulate`` with the law as feedback.
-The reference is integrated at ``timestep / substeps`` with controls read at each internal
-step's midpoint; the model sees the same continuous controls.
+the way MuJoCo was (``ValidationResult.drive``): ``open-loop``, the forces MuJoCo applied as a
+function of time (the exact signal of joint motors, else a cubic spline of the recorded
+forces); ``closed-loop``, for servos, the MJCF's actuator law
+(:func:`~pysindy_xl.mujoco.actuation.actuator_law`) under the run's reference controls, acting
+on the model's own state, stepped (``ValidationResult.simulator``) by MuJoCo on a copy of the
+model carrying the identified parameters (``mujoco``, where that reproduces ``M`` and ``f``
+exactly) or by ``model.simulate`` (``model``). :doc:`/robot_arms` explains why.
 
 Metrics: ``position_rmse``, the RMS position error over the whole horizon (inf when the model
 stopped early); ``simulated_rmse``, the same over the simulated part; ``divergence_time``,
 the first time some coordinate's error exceeds ``divergence_bound * max(1, ptp_i)`` (``ptp_i``
 its range in the reference) or the simulation failed; ``force_error`` (closed loop), the RMS
-of the actuator forces along the model's run minus MuJoCo's, relative to MuJoCo's (feedback
-hides model error in positions and shows it in forces); ``valid``, simulated to the end, never
-diverged and, in closed loop, ``force_error <= force_bound``.
+of the actuator forces along the model's run minus MuJoCo's, relative to MuJoCo's; ``valid``,
+simulated to the end, never diverged and, in closed loop, ``force_error <= force_bound``.
 """
 
 from __future__ import annotations

@@ -2,16 +2,10 @@
 
 A robot's torques are linear in its parameters, ``tau = W(q, qd, qdd) beta``; their
 least-squares estimate is as good as ``W`` is well conditioned. Following Swevers et al.
-(1997), each joint follows a :class:`~pysindy_xl.mujoco.FourierTrajectory` (``x = (q_0, a, b)``)
-and :func:`excitation_trajectory` minimizes ``log cond W`` over one period (``W``: the
-kinematic catalog's columns) by SLSQP from random feasible starts, under position, velocity
-and acceleration limits (linear in ``x``), torque limits of the nominal model ``W beta_MJCF``
-(nonlinear) and optionally a start at rest (``sum_l a_jl = 0``, ``sum_l l b_jl = 0``).
-
-A sample's rows depend on its own state only, so perturbing one state variable at every
-sample at once gives every row's derivative: ``6 n`` evaluations by central differences.
-With ``W = U S V^T``, ``d s_i = u_i^T dW v_i`` gives the gradient of ``log(s_max / s_min)``.
-Limits are checked on a grid five times finer than the optimization's.
+(1997), :func:`excitation_trajectory` minimizes ``log cond W`` over one period of a
+:class:`~pysindy_xl.mujoco.FourierTrajectory` by SLSQP under joint and torque limits
+(:doc:`/robot_arms`). A sample's rows depend on its own state only: ``6 n`` central
+differences give every row's derivative, and ``d s_i = u_i^T dW v_i`` the gradient.
 """
 
 from __future__ import annotations

@@ -1,25 +1,12 @@
-r"""A MuJoCo integration that is stable and faithful, chosen from the model; checks of every run.
+"""A MuJoCo integration that is stable and faithful, chosen from the model; checks of every run.
 
-Generated positions must follow the continuous flow; with a published arm's own settings:
-
-* **Implicit steps bias the inertia.** ``implicit`` and ``implicitfast`` (and ``Euler`` for
-  joint damping) apply velocity-dependent forces at the end of the step: the positions obey
-  ``(M + h D) qdd = f``, not ``M qdd = f``.
-* **RK4 has a stability region** (``|h lambda| < 2.785`` on the real axis). The modes are the
-  eigenvalues of
-
-  .. math:: A = \begin{pmatrix} 0 & \mathbb 1 \\ -M^{-1} K & -M^{-1} D \end{pmatrix},
-
-  ``K`` the servos' position gains and joint stiffness, ``D`` their velocity gains and joint
-  damping (through the actuator moments), ``M`` the joint-space inertia (``mj_fullM``).
-
-:func:`choose_integration` evaluates ``A`` at the reference pose and random poses and prices
-both remedies in substeps: RK4 with ``h |lambda| <= RK4_BOUND``, or the implicit step with its
-bias ``h max_i D_ii`` at most ``BIAS_TOLERANCE`` of ``max |M_ij|`` and a stable linearized
-step; an RK4 step costs ``RK4_COST`` implicit ones, the cheaper wins. :func:`check_run` raises
-:class:`UnstableSimulationError` on non-finite states, MuJoCo's bad-acceleration warning,
-velocities over ``MAX_HINGE_VELOCITY`` / ``MAX_SLIDE_VELOCITY`` or energy growth of an
-unforced run.
+Implicit steps (``implicit``, ``implicitfast``; ``Euler`` for joint damping) bias the inertia:
+the positions obey ``(M + h D) qdd = f``. RK4 is stable only while ``h |lambda|`` stays small,
+``lambda`` the eigenvalues of ``A = [[0, 1], [-M^-1 K, -M^-1 D]]`` (``K``, ``D``: the servos'
+gains, joint stiffness and damping; ``M``: ``mj_fullM``). :func:`choose_integration` prices
+both remedies in substeps (``RK4_BOUND``, ``BIAS_TOLERANCE``, ``RK4_COST``) and takes the
+cheaper; :func:`check_run` raises :class:`UnstableSimulationError` on a run that left the
+physics. :doc:`/robot_arms` explains the choice.
 """
 
 from __future__ import annotations

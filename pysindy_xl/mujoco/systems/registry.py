@@ -1,20 +1,11 @@
 """The registry of MuJoCo systems, and their conventions.
 
-Angles are absolute, from the downward vertical (``theta = 0`` hanging down, a bob at
-``(l sin theta, -l cos theta)``); cart positions ``x`` are horizontal. MuJoCo's hinge angles
-along a chain are relative (``phi2 = theta2 - theta1``): every system maps ``q = T @ qpos``
-(:attr:`MuJoCoSystem.joint_to_coordinates`), alike for velocities and accelerations.
-
-By virtual work a joint force ``u`` (one per MuJoCo degree of freedom) is the generalized
-force ``B @ u``, ``B = T^-T`` (:meth:`MuJoCoSystem.force_matrix`): a motor on a relative hinge
-pushes the outer link forward and the inner one back. Joint damping becomes the generalized
-friction ``-B C T^-1 qd``, coupling absolute coordinates; :meth:`MuJoCoSystem.friction` gives
-it with the library's sign (``EL(L) + friction = B @ u``).
-
-Point masses have explicit ``<inertial>`` elements (a tiny ``point_inertia``, exact in the
-Lagrangian); contacts are off and the integrator is RK4 with a small step. The base class is
-in :mod:`~pysindy_xl.mujoco.systems.base`, the paper's systems in
-:mod:`~pysindy_xl.mujoco.systems.paper`, MJCF files in :mod:`~pysindy_xl.mujoco.systems.mjcf`.
+Angles are absolute, from the downward vertical (``theta = 0`` hanging down); cart positions
+``x`` are horizontal. MuJoCo's hinge angles along a chain are relative: every system maps
+``q = T @ qpos`` (:attr:`MuJoCoSystem.joint_to_coordinates`); by virtual work a joint force
+``u`` is the generalized force ``B @ u``, ``B = T^-T`` (:meth:`MuJoCoSystem.force_matrix`),
+and joint damping the friction ``-B C T^-1 qd`` (:meth:`MuJoCoSystem.friction`). Point masses
+have explicit ``<inertial>`` elements (a tiny ``point_inertia``); contacts are off.
 """
 
 from __future__ import annotations
