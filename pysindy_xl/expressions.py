@@ -23,10 +23,8 @@ FUNCTIONS = {
     "atan": sp.atan, "Abs": sp.Abs, "abs": sp.Abs, "sign": sp.sign,
 }
 _CONSTANTS = {"pi": sp.pi, "E": sp.E}
-_TOKEN = re.compile(
-    r"\s*(?:(?P<num>\d+\.?\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)"
-    r"|(?P<name>[A-Za-z_][A-Za-z_0-9]*)|(?P<op>\*\*|[-+*/^(),]))"
-)
+_TOKEN = re.compile(r"\s*(?:(?P<num>\d+\.?\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)"
+                    r"|(?P<name>[A-Za-z_][A-Za-z_0-9]*)|(?P<op>\*\*|[-+*/^(),]))")
 _MAX_LENGTH = 20_000
 _MAX_DEPTH = 100
 _MAX_NUMBER_DIGITS = 40

@@ -194,18 +194,16 @@ def read_model_file(path) -> ModelFile:
     except ValueError as err:
         raise _fail(path, str(err)) from None
     probability, interval = _uncertainty_from_document(document, len(feature_names), path)
-    fitted = {
-        "feature_library_": library,
-        "optimizer_": optimizer,
-        "coef_": np.asarray(coef, dtype=float),
-        "dropped_features_": {str(k): str(v) for k, v in dropped.items()},
-        "n_coordinates_": coords.n,
-        "forced_coordinates_": np.asarray(forced, dtype=bool),
-        "still_coordinates_": list(still),
-        "inclusion_probability_": probability,
-        "coef_interval_": interval,
-        **_training_from_document(document.get("training"), len(feature_names), path),
-    }
+    fitted = {"feature_library_": library,
+              "optimizer_": optimizer,
+              "coef_": np.asarray(coef, dtype=float),
+              "dropped_features_": {str(k): str(v) for k, v in dropped.items()},
+              "n_coordinates_": coords.n,
+              "forced_coordinates_": np.asarray(forced, dtype=bool),
+              "still_coordinates_": list(still),
+              "inclusion_probability_": probability,
+              "coef_interval_": interval,
+              **_training_from_document(document.get("training"), len(feature_names), path)}
     return ModelFile(_settings_from_document(document, path), library, optimizer, fitted)
 
 
@@ -364,19 +362,17 @@ def _training_spec(model) -> dict:
                                 for field in dataclasses.fields(selection)}}
     else:
         selection = None
-    return {
-        "formulation": getattr(model, "formulation_", None),
-        "n_samples": int(getattr(model, "n_samples_", 0)),
-        "weak_info": None if info is None else {
-            "half_width": float(info["half_width"]),
-            "test_functions": [int(k) for k in info["test_functions"]],
-            "noise": None if info["noise"] is None else _floats(info["noise"])},
-        "selection": selection,
-        "mass_matrix_check": None if check is None else {
-            key: _floats([value])[0] for key, value in check.items()},
-        "physical_consistency": _consistency_json(getattr(model, "physical_consistency_",
-                                                          None)),
-    }
+    return {"formulation": getattr(model, "formulation_", None),
+            "n_samples": int(getattr(model, "n_samples_", 0)),
+            "weak_info": None if info is None else {
+                "half_width": float(info["half_width"]),
+                "test_functions": [int(k) for k in info["test_functions"]],
+                "noise": None if info["noise"] is None else _floats(info["noise"])},
+            "selection": selection,
+            "mass_matrix_check": None if check is None else {
+                key: _floats([value])[0] for key, value in check.items()},
+            "physical_consistency": _consistency_json(getattr(model, "physical_consistency_",
+                                                              None))}
 
 
 _CONSISTENCY_KEYS = ("consistent", "cost", "negative_friction", "min_pseudo_inertia_eigenvalue")

@@ -145,10 +145,8 @@ def dataset_for(system, dataset):
     if names == system.coordinate_names:
         return dataset
     if dataset.n != system.n:
-        raise CLIError(
-            f"DATA: the dataset has {dataset.n} coordinates {list(names)}, the system "
-            f"{display_name(system)} has {system.n} {list(system.coordinate_names)}"
-        )
+        raise CLIError(f"DATA: the dataset has {dataset.n} coordinates {list(names)}, the system "
+                       f"{display_name(system)} has {system.n} {list(system.coordinate_names)}")
     if names == tuple(f"q{k}" for k in range(dataset.n)):  # unnamed: adopt the system's
         return Dataset(dataset.trajectories, system.coordinate_names, dataset.metadata)
     joint_forces = any(getattr(tr, key) is not None for tr in dataset.trajectories
@@ -254,13 +252,11 @@ def summarize_coefficients(system, model):
         truth[forces] = coef[forces]
     scale = np.abs(truth).max()
     active = truth != 0
-    summary = {
-        "max_relative_error": float(np.abs(coef - truth).max() / scale),
-        "true_terms": int(active.sum()),
-        "identified_terms": int(np.count_nonzero(coef)),
-        "support_recovered": bool(np.array_equal(coef != 0, active)),
-        "true_model_missing_from_catalog": missing,
-    }
+    summary = {"max_relative_error": float(np.abs(coef - truth).max() / scale),
+               "true_terms": int(active.sum()),
+               "identified_terms": int(np.count_nonzero(coef)),
+               "support_recovered": bool(np.array_equal(coef != 0, active)),
+               "true_model_missing_from_catalog": missing}
     return truth, summary
 
 

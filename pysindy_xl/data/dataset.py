@@ -161,10 +161,8 @@ class Dataset:
                             f"{coordinate_names!r}")
         for k, tr in enumerate(trajectories):
             if tr.q.shape[1] != len(names):
-                raise DatasetError(
-                    f"trajectories: trajectory {k} has {tr.q.shape[1]} coordinates, "
-                    f"coordinate_names has {len(names)}"
-                )
+                raise DatasetError(f"trajectories: trajectory {k} has {tr.q.shape[1]} coordinates, "
+                                   f"coordinate_names has {len(names)}")
             for key in SERIES[1:] + MASKS:
                 if (getattr(tr, key) is None) != (getattr(trajectories[0], key) is None):
                     raise DatasetError(f"trajectories: {key!r} present in some trajectories only")
@@ -245,13 +243,11 @@ class Dataset:
             extra = [getattr(tr, key) for tr in trs]
             force_lists = extra if force_lists is None else [
                 f + c for f, c in zip(force_lists, extra, strict=True)]
-        arguments = {
-            "x": [tr.q for tr in trs],
-            "t": [tr.t for tr in trs],
-            "x_dot": [tr.qd for tr in trs] if self.has("qd") else None,
-            "x_ddot": [tr.qdd for tr in trs] if self.has("qdd") else None,
-            "u": force_lists,
-        }
+        arguments = {"x": [tr.q for tr in trs],
+                     "t": [tr.t for tr in trs],
+                     "x_dot": [tr.qd for tr in trs] if self.has("qd") else None,
+                     "x_ddot": [tr.qdd for tr in trs] if self.has("qdd") else None,
+                     "u": force_lists}
         if constraints != "exclude" or not self.has("constraint_active") or not any(
             tr.constraint_active.any() for tr in trs
         ):

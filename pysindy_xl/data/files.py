@@ -97,10 +97,8 @@ def read_dataset_arrays(path) -> tuple[dict, dict, list, list]:
     if t.shape != (n_samples,):
         raise DatasetError(f"t: expected shape ({n_samples},) like q's rows, got {t.shape}")
     if "constraint_active" in arrays and arrays["constraint_active"].shape != (n_samples,):
-        raise DatasetError(
-            f"constraint_active: expected shape ({n_samples},) like q's rows, got "
-            f"{arrays['constraint_active'].shape}"
-        )
+        raise DatasetError(f"constraint_active: expected shape ({n_samples},) like q's rows, got "
+                           f"{arrays['constraint_active'].shape}")
     for key in SERIES[1:]:
         if key in arrays:
             shape = arrays[key].shape
@@ -115,9 +113,7 @@ def read_dataset_arrays(path) -> tuple[dict, dict, list, list]:
     if not isinstance(names, list) or not all(isinstance(name, str) for name in names):
         raise DatasetError(f"metadata: coordinate_names: expected a list of str, got {names!r}")
     if len(names) != n:
-        raise DatasetError(
-            f"metadata: coordinate_names has {len(names)} names, q has {n} columns"
-        )
+        raise DatasetError(f"metadata: coordinate_names has {len(names)} names, q has {n} columns")
     starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
     ends = np.r_[starts[1:], n_samples]
     if len(set(ids[starts].tolist())) != len(starts):

@@ -149,13 +149,11 @@ def body_functions(system, model):
         parent = frames[parent_id]
         rot = _quat_matrix(model.body_quat[b])
         offset = _numeric(model.body_pos[b])
-        frame = _Frame(
-            v=_matTvec(rot, [x + y for x, y in zip(parent.v, _cross(parent.w, offset),
-                                                   strict=True)]),
-            w=_matTvec(rot, parent.w),
-            g=_matTvec(rot, parent.g),
-            h=parent.h + _dot(parent.g, offset),
-        )
+        frame = _Frame(v=_matTvec(rot, [x + y for x, y in zip(parent.v, _cross(parent.w, offset),
+                                                              strict=True)]),
+                       w=_matTvec(rot, parent.w),
+                       g=_matTvec(rot, parent.g),
+                       h=parent.h + _dot(parent.g, offset))
         moving[b] = moving[parent_id] or model.body_jntnum[b] > 0
         for k in range(model.body_jntadr[b], model.body_jntadr[b] + model.body_jntnum[b]):
             axis = _numeric(model.jnt_axis[k])
@@ -188,11 +186,9 @@ def body_functions(system, model):
             continue  # welded to the world: constant energy, no dynamics
         v, w = frame.v, frame.w
         first_moment = [a + g for a, g in zip(_cross(v, w), frame.g, strict=True)]
-        functions[b] = [
-            0.5 * _dot(v, v) + frame.h, *first_moment,
-            0.5 * (w[0] * w[0]), 0.5 * (w[1] * w[1]), 0.5 * (w[2] * w[2]),
-            w[0] * w[1], w[0] * w[2], w[1] * w[2],
-        ]
+        functions[b] = [0.5 * _dot(v, v) + frame.h, *first_moment,
+                        0.5 * (w[0] * w[0]), 0.5 * (w[1] * w[1]), 0.5 * (w[2] * w[2]),
+                        w[0] * w[1], w[0] * w[2], w[1] * w[2]]
     return functions, joints
 
 

@@ -95,17 +95,15 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     mass, force, gravity = mass * factor, force * factor, gravity * factor
     eigenvalues = np.linalg.eigvalsh((mass + np.swapaxes(mass, 1, 2)) / 2)
     empty = np.all(np.abs(mass) <= 1e-12 * max(np.abs(mass).max(), 1e-300), axis=(0, 2))
-    return {
-        "unidentified": [names[i] for i in np.flatnonzero(empty)],
-        "held": [name for name, h in zip(system.coordinate_names, held, strict=True) if h],
-        "contact_states_skipped": skipped,
-        "mass_error": float(np.abs(mass - mass_ref).max() / np.abs(mass_ref).max()),
-        "force_error": float(np.abs(force - force_ref).max()
-                             / max(np.abs(force_ref).max(), 1e-300)),
-        "gravity_error": float(np.abs(gravity - gravity_ref).max()
-                               / max(np.abs(gravity_ref).max(), 1e-300)),
-        "scale": factor,
-        "positive_definite": bool(np.all(eigenvalues > 0)),
-        "condition": float(np.max(np.abs(eigenvalues).max(axis=1)
-                                  / np.maximum(np.abs(eigenvalues).min(axis=1), 1e-300))),
-    }
+    return {"unidentified": [names[i] for i in np.flatnonzero(empty)],
+            "held": [name for name, h in zip(system.coordinate_names, held, strict=True) if h],
+            "contact_states_skipped": skipped,
+            "mass_error": float(np.abs(mass - mass_ref).max() / np.abs(mass_ref).max()),
+            "force_error": float(np.abs(force - force_ref).max()
+                                 / max(np.abs(force_ref).max(), 1e-300)),
+            "gravity_error": float(np.abs(gravity - gravity_ref).max()
+                                   / max(np.abs(gravity_ref).max(), 1e-300)),
+            "scale": factor,
+            "positive_definite": bool(np.all(eigenvalues > 0)),
+            "condition": float(np.max(np.abs(eigenvalues).max(axis=1)
+                                      / np.maximum(np.abs(eigenvalues).min(axis=1), 1e-300)))}

@@ -109,10 +109,8 @@ def plot_validation(result, path=None, feature_names=None, coefficients=None,
         plot_coefficients(ax, feature_names, coefficients, true_coefficients)
         ax.set_title("(C) coefficients")
     status = "valid" if result.valid else f"invalid ({result.failure or 'diverged'})"
-    figure.suptitle(
-        (f"{title}: " if title else "")
-        + f"position RMSE {result.position_rmse:.3g}, {status}", fontsize=11,
-    )
+    figure.suptitle((f"{title}: " if title else "")
+                    + f"position RMSE {result.position_rmse:.3g}, {status}", fontsize=11)
     if path is not None:
         figure.savefig(path, dpi=110)
     return figure

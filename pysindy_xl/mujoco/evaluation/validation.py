@@ -109,23 +109,21 @@ class ValidationResult:
          "constrained_at": null, "drive": "open-loop", "force_error": null,
          "simulator": "model"}
         """
-        return {
-            "position_rmse": float(self.position_rmse),
-            "position_rmse_per_coordinate": dict(zip(
-                self.coordinate_names, map(float, self.position_rmse_per_coordinate),
-                strict=True)),
-            "divergence_time": self.divergence_time,
-            "valid": bool(self.valid),
-            "failure": self.failure,
-            "divergence_bound": self.divergence_bound,
-            "horizon": float(self.t[-1] - self.t[0]),
-            "simulated_fraction": float(self.simulated_fraction),
-            "simulated_rmse": float(self.simulated_rmse),
-            "constrained_at": self.constrained_at,
-            "drive": self.drive,
-            "force_error": self.force_error,
-            "simulator": self.simulator,
-        }
+        return {"position_rmse": float(self.position_rmse),
+                "position_rmse_per_coordinate": dict(zip(
+                    self.coordinate_names, map(float, self.position_rmse_per_coordinate),
+                    strict=True)),
+                "divergence_time": self.divergence_time,
+                "valid": bool(self.valid),
+                "failure": self.failure,
+                "divergence_bound": self.divergence_bound,
+                "horizon": float(self.t[-1] - self.t[0]),
+                "simulated_fraction": float(self.simulated_fraction),
+                "simulated_rmse": float(self.simulated_rmse),
+                "constrained_at": self.constrained_at,
+                "drive": self.drive,
+                "force_error": self.force_error,
+                "simulator": self.simulator}
 
 
 def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVERGENCE_BOUND,
@@ -150,10 +148,8 @@ def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVE
     if prediction.ndim != 2 or prediction.shape[1] != reference.shape[1] or len(
         prediction
     ) > len(t):
-        raise ValueError(
-            f"prediction: expected shape (k <= {len(t)}, {reference.shape[1]}), got "
-            f"{prediction.shape}"
-        )
+        raise ValueError(f"prediction: expected shape (k <= {len(t)}, {reference.shape[1]}), got "
+                         f"{prediction.shape}")
     if not np.isfinite(divergence_bound) or divergence_bound <= 0:
         raise ValueError(f"divergence_bound: expected a positive number, got {divergence_bound!r}")
     n = reference.shape[1] // 2

@@ -43,10 +43,8 @@ class SumOfSinusoids:
                 raise ValueError(f"{name}: contains NaN or inf")
             arrays.append(a)
         if not arrays[0].shape == arrays[1].shape == arrays[2].shape:
-            raise ValueError(
-                "amplitudes, frequencies, phases: expected equal shapes, got "
-                f"{[a.shape for a in arrays]}"
-            )
+            raise ValueError("amplitudes, frequencies, phases: expected equal shapes, got "
+                             f"{[a.shape for a in arrays]}")
         self.amplitudes, self.frequencies, self.phases = arrays
         n_signals = self.amplitudes.shape[0]
         offsets = np.zeros(n_signals) if offsets is None else np.asarray(offsets, dtype=float)

@@ -386,9 +386,7 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                                             control_at="midpoint", integrator=integration,
                                             mj_model=model)
                 clean = settled(clean, settle)
-                if clean.constraint_active.mean() <= max_constrained or (
-                    attempt == attempts - 1
-                ):
+                if clean.constraint_active.mean() <= max_constrained or attempt == attempts - 1:
                     break
                 factor /= 2
             if factor < 1:
@@ -399,30 +397,28 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
             if not derivatives:
                 noisy.qd = noisy.qdd = None
             trajectories.append(noisy)
-    metadata = {
-        "system": system.name,
-        "parameters": system.parameters,
-        "forcing": forcing,
-        "actuators": None if actuators is None else list(np.atleast_1d(actuators).tolist()),
-        "noise": levels,
-        "noise_model": noise_model,
-        "derivatives": "mujoco" if derivatives else "none",
-        "seed": None if seed is None else int(seed),
-        "duration": float(duration),
-        "sample_every": int(sample_every),
-        "timestep": float(model.opt.timestep),
-        "integrator": integration.integrator,
-        "substeps": integration.substeps,
-        "integration": integration.to_dict(),
-        "peak_velocity": {joint: max(tr.info["peak_velocity"][joint] for tr in trajectories)
-                          for joint in trajectories[0].info["peak_velocity"]},
-        "amplitude": amplitude,
-        "initial_scale": initial_scale,
-        "force_matrix": system.force_matrix().tolist(),
-        "joint_names": list(system.joint_names),
-        "reference": None if reference is None else reference.to_dict(),
-        "tracking": controller,
-    }
+    metadata = {"system": system.name,
+                "parameters": system.parameters,
+                "forcing": forcing,
+                "actuators": None if actuators is None else list(np.atleast_1d(actuators).tolist()),
+                "noise": levels,
+                "noise_model": noise_model,
+                "derivatives": "mujoco" if derivatives else "none",
+                "seed": None if seed is None else int(seed),
+                "duration": float(duration),
+                "sample_every": int(sample_every),
+                "timestep": float(model.opt.timestep),
+                "integrator": integration.integrator,
+                "substeps": integration.substeps,
+                "integration": integration.to_dict(),
+                "peak_velocity": {joint: max(tr.info["peak_velocity"][joint] for tr in trajectories)
+                                  for joint in trajectories[0].info["peak_velocity"]},
+                "amplitude": amplitude,
+                "initial_scale": initial_scale,
+                "force_matrix": system.force_matrix().tolist(),
+                "joint_names": list(system.joint_names),
+                "reference": None if reference is None else reference.to_dict(),
+                "tracking": controller}
     metadata.update(getattr(system, "metadata", lambda: {})())
     dataset = Dataset(trajectories, system.coordinate_names, metadata)
     summary = dataset.constraint_summary()

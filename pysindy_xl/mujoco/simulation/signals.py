@@ -56,10 +56,8 @@ def _driven_mask(system: MuJoCoSystem, model, forcing: str, actuators) -> np.nda
     known = {name for pair in pairs for name in pair if name}
     unknown = [c for c in chosen if c not in known]
     if unknown or not chosen:
-        raise ValueError(
-            f"actuators: expected a non-empty list of actuator or joint names among "
-            f"{sorted(known)}, got {chosen!r}"
-        )
+        raise ValueError(f"actuators: expected a non-empty list of actuator or joint names among "
+                         f"{sorted(known)}, got {chosen!r}")
     return np.array([name in chosen or joint in chosen for name, joint in pairs])
 
 

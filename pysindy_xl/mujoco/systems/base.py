@@ -41,10 +41,8 @@ def equations_of_motion(lagrangian: sp.Expr, coords: Coordinates, friction=None)
     out = []
     for i, (qi, qdi) in enumerate(zip(coords.q, coords.qd, strict=True)):
         momentum = sp.diff(lagrangian, qdi)
-        d_dt = sum(
-            sp.diff(momentum, qk) * qdk + sp.diff(momentum, qdk) * qddk
-            for qk, qdk, qddk in zip(coords.q, coords.qd, coords.qdd, strict=True)
-        )
+        d_dt = sum(sp.diff(momentum, qk) * qdk + sp.diff(momentum, qdk) * qddk
+                   for qk, qdk, qddk in zip(coords.q, coords.qd, coords.qdd, strict=True))
         lhs = d_dt - sp.diff(lagrangian, qi)
         for (term, c), value in (friction or {}).items():
             if c == i:
