@@ -1,23 +1,12 @@
 """Your own data: CSV files, pandas DataFrames and column mappings into a :class:`Dataset`.
 
-A table has one row per sample and a header naming its columns. By default the columns follow
-the names of the symbols of :class:`~pysindy_xl.Coordinates`:
-
-=================  ============================================================
-column             content
-=================  ============================================================
-``t`` (or time)    sample times, strictly increasing within each trajectory
-``NAME``           position of coordinate ``NAME`` (``x``, ``theta``...)
-``NAME_dot``       its velocity (optional; all coordinates or none)
-``NAME_ddot``      its acceleration (optional; all coordinates or none)
-``tau_NAME``       generalized force on it (optional; a coordinate without one
-                   is unactuated, its force is zero)
-``trajectory``     trajectory id (optional; any numbers, ``1.0`` or labels)
-=================  ============================================================
-
-``columns`` maps these keys to other headers (``{"t": "time_s", "x": "cart"}``). Without
-``coordinates`` every other column is a coordinate, in header order. The id column splits
-trajectories (in order of first appearance). A mistake raises
+A table has one row per sample and a header naming its columns, by default ``t`` (or
+``time``: sample times, strictly increasing within each trajectory), ``NAME`` (the position of
+coordinate ``NAME``), optionally ``NAME_dot`` and ``NAME_ddot`` (velocities, accelerations: all
+coordinates or none), ``tau_NAME`` (the generalized force; a coordinate without one is
+unactuated) and ``trajectory`` (ids, numbers or labels, splitting the trajectories in order of
+first appearance). ``columns`` maps these keys to other headers (``{"t": "time_s"}``); without
+``coordinates`` every other column is a coordinate, in header order. A mistake raises
 :class:`~pysindy_xl.data.DatasetError` naming the file, the column and the line of a bad cell.
 """
 
