@@ -236,10 +236,9 @@ def parse_expression(text: str, symbols: dict[str, sp.Symbol]) -> sp.Expr:
         raise ValueError(f"text: {text[:60]!r} nests functions {size['depth']} deep (at most "
                          f"{_MAX_FUNCTION_DEPTH})")
     if size["terms"] > _MAX_EXPANDED_TERMS or size["operations"] > _MAX_OPERATIONS:
-        raise ValueError(
-            f"text: {text[:60]!r} is too large for a catalog term (about {size['terms']:.3g} "
-            f"terms once expanded, {size['operations']} operations; at most "
-            f"{_MAX_EXPANDED_TERMS} and {_MAX_OPERATIONS})")
+        raise ValueError(f"text: {text[:60]!r} is too large for a catalog term (about "
+                         f"{size['terms']:.3g} terms once expanded, {size['operations']} "
+                         f"operations; at most {_MAX_EXPANDED_TERMS} and {_MAX_OPERATIONS})")
     check_real_expression(expr, "text")
     check_term(expr, "text")
     return expr
@@ -333,8 +332,7 @@ def check_real_expression(expr: sp.Expr, name: str) -> None:
     try:
         for sub in sp.preorder_traversal(expr):
             if sub.is_number and (sub.is_real is not True or sub.is_finite is False):
-                raise ValueError(f"{name}: {expr} contains the non-real or infinite number "
-                                 f"{sub}")
+                raise ValueError(f"{name}: {expr} contains the non-real or infinite number {sub}")
     except (OverflowError, RecursionError):
         raise ValueError(f"{name}: a number in the expression is too large to evaluate") \
             from None
@@ -362,5 +360,4 @@ def as_expression(value, symbols: dict[str, sp.Symbol], name: str) -> sp.Expr:
             sp.Integer(int(value))
     if isinstance(value, sp.Expr):
         return value
-    raise TypeError(f"{name}: expected a sympy expression or a string, got "
-                    f"{type(value).__name__}")
+    raise TypeError(f"{name}: expected a sympy expression or a string, got {type(value).__name__}")

@@ -185,9 +185,8 @@ def quality_lines(quality) -> list:
         lines.append(f"  not identified, held still: {', '.join(quality['held_still'])} (no "
                      "force and no acceleration beyond the noise in the data)")
     if quality.get("cv_noise_ratio") is not None:
-        lines.append(f"  held-out noise ratio of the chosen law (5-fold cross-validation; about "
-                     f"1 when it leaves only the propagated noise): "
-                     f"{quality['cv_noise_ratio']:.3g}")
+        lines.append("  held-out noise ratio of the chosen law (5-fold cross-validation; about 1 "
+                     f"when it leaves only the propagated noise): {quality['cv_noise_ratio']:.3g}")
     from .report.equations import consistency_line  # sympy: not imported by the CLI's --help
     consistency = consistency_line(quality.get("physical_consistency"))
     if consistency:

@@ -53,16 +53,13 @@ class Coordinates:
             if not isinstance(name, str) or not name.isidentifier() or keyword.iskeyword(name):
                 raise ValueError(f"names: {name!r} is not a valid identifier")
             if not name.isascii():
-                raise ValueError(
-                    f"names: {name!r} is not ASCII; coordinate names must be ASCII identifiers "
-                    "(saved models spell them in the restricted term grammar), e.g. 'theta'"
-                )
+                raise ValueError(f"names: {name!r} is not ASCII; coordinate names must be ASCII "
+                                 "identifiers (saved models spell them in the restricted term "
+                                 "grammar), e.g. 'theta'")
             if (name in _RESERVED or name.startswith("tau_")
                     or name.endswith(("_dot", "_ddot"))):
-                raise ValueError(
-                    f"names: {name!r} is reserved (time 't', constants 'E', 'pi', 'I', "
-                    "function names, 'tau_*', '*_dot', '*_ddot')"
-                )
+                raise ValueError(f"names: {name!r} is reserved (time 't', constants 'E', 'pi', "
+                                 "'I', function names, 'tau_*', '*_dot', '*_ddot')")
         if len(set(names)) != len(names):
             raise ValueError(f"names: duplicate coordinate names in {names}")
         self.names = names

@@ -326,9 +326,8 @@ def run_identify(args):
             print(line)
     if system.has_ground_truth:
         _, summary = summarize_coefficients(system, model)
-        print(f"against the true model: max coefficient error "
-              f"{summary['max_relative_error']:.2g} (relative), support recovered: "
-              f"{summary['support_recovered']}")
+        print(f"against the true model: max coefficient error {summary['max_relative_error']:.2g} "
+              f"(relative), support recovered: {summary['support_recovered']}")
     score = None
     if verdict and model.dynamics_ is None:
         print("held-out torque prediction: not available (the identified equations contain "
@@ -342,8 +341,7 @@ def run_identify(args):
             print(f"torque plot: {args.plot} (measured against predicted torques)")
     replay = getattr(args, "open_loop", None) or (args.plot if score is None else None)
     if replay:  # open loop: a fair check of a free system, not of an arm under feedback
-        progress(f"simulating the model from the first trajectory's initial state for "
-                 f"{replay}")
+        progress(f"simulating the model from the first trajectory's initial state for {replay}")
         if model.dynamics_ is None:
             raise CLIError("--plot: the identified equations contain no acceleration; "
                            "nothing to simulate")

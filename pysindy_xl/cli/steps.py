@@ -48,9 +48,8 @@ def system_by_name(name, joints=None):
         system = get_system(name) if isinstance(name, MuJoCoSystem) else None
         if system is None and not (isinstance(name, str)
                                    and name.lower().endswith((".xml", ".urdf"))):
-            raise CLIError(f"--joints: only for MJCF .xml and URDF models; {name!r} is a "
-                           "shipped system "
-                           "whose joints are all identified")
+            raise CLIError(f"--joints: only for MJCF .xml and URDF models; {name!r} is a shipped "
+                           "system whose joints are all identified")
         return get_system(name, joints=joints)
     except (ValueError, TypeError) as error:
         raise CLIError(str(error).replace("joints: ", "--joints: ", 1)) from None
@@ -122,9 +121,8 @@ def data_lines(system, dataset):
     summary = meta.get("constraints", {})
     if summary.get("active_fraction"):
         hits = ", ".join(f"{j} {c}" for j, c in summary["limit_hits"].items()) or "none"
-        lines.append(f"  constraints act on {summary['active_fraction']:.1%} of the samples "
-                     f"(joint limit samples: {hits}; contact samples: "
-                     f"{summary['contact_samples']})")
+        lines.append(f"  constraints act on {summary['active_fraction']:.1%} of the samples (joint "
+                     f"limit samples: {hits}; contact samples: {summary['contact_samples']})")
     return lines
 
 
@@ -160,10 +158,8 @@ def dataset_for(system, dataset):
                                                    SERIES if getattr(tr, key) is not None})
                         for tr in dataset.trajectories]
         return Dataset(trajectories, system.coordinate_names, dataset.metadata)
-    raise CLIError(
-        f"DATA: coordinate names {list(names)} do not match the system {display_name(system)} "
-        f"{list(system.coordinate_names)}"
-    )
+    raise CLIError(f"DATA: coordinate names {list(names)} do not match the system "
+                   f"{display_name(system)} {list(system.coordinate_names)}")
 
 
 def resolve_catalog(args, system):

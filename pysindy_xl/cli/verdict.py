@@ -17,8 +17,7 @@ def wants_verdict(args, forced: bool) -> bool:
     forces identified against a ``--system`` (unless ``--cv-blocks 0``)."""
     blocks = getattr(args, "cv_blocks", 0)
     if blocks == 1 or blocks < 0:
-        raise CLIError(f"--cv-blocks: expected 0 (no cross-validation) or at least 2, got "
-                       f"{blocks}")
+        raise CLIError(f"--cv-blocks: expected 0 (no cross-validation) or at least 2, got {blocks}")
     if getattr(args, "validate", None):
         if not forced:
             raise CLIError("--validate: the training data have no forces; held-out torque "

@@ -81,10 +81,8 @@ def unconstrained_windows(support, constraint_active) -> np.ndarray:
     active = _mask(constraint_active)
     support = np.asarray(support)
     if support.ndim != 2 or support.shape[1] != active.size:
-        raise ValueError(
-            f"support: expected shape (n_windows, {active.size}) like constraint_active, got "
-            f"{support.shape}"
-        )
+        raise ValueError(f"support: expected shape (n_windows, {active.size}) like "
+                         f"constraint_active, got {support.shape}")
     return ~(support != 0)[:, active].any(axis=1)
 
 

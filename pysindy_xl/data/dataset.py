@@ -79,10 +79,8 @@ class Trajectory:
         if self.constraint_active is not None:
             mask = np.asarray(self.constraint_active)
             if mask.shape != (len(self.t),) or mask.dtype.kind not in "biu":
-                raise DatasetError(
-                    f"constraint_active: expected a boolean array of shape ({len(self.t)},), "
-                    f"got {mask.dtype} {mask.shape}"
-                )
+                raise DatasetError("constraint_active: expected a boolean array of shape "
+                                   f"({len(self.t)},), got {mask.dtype} {mask.shape}")
             self.constraint_active = mask.astype(bool)
 
     @property
@@ -262,11 +260,9 @@ class Dataset:
                     if value is not None:
                         out[key].append(value[k][part])
         if not out["x"]:
-            raise ValueError(
-                "constraints: every sample is constrained (limits, contacts or equality "
-                "constraints act throughout); lower the forcing amplitude or the initial "
-                "spread, or use constraints='known'"
-            )
+            raise ValueError("constraints: every sample is constrained (limits, contacts or "
+                             "equality constraints act throughout); lower the forcing amplitude or "
+                             "the initial spread, or use constraints='known'")
         return out
 
     def constraint_summary(self) -> dict:

@@ -49,10 +49,8 @@ def _read_npz(path: str) -> dict:
                 try:
                     arrays[key] = npz[key]
                 except ValueError as error:
-                    raise DatasetError(
-                        f"path: array {key!r} of {path!r} cannot be read without pickle "
-                        f"({error}); store plain numeric arrays"
-                    ) from None
+                    raise DatasetError(f"path: array {key!r} of {path!r} cannot be read without "
+                                       f"pickle ({error}); store plain numeric arrays") from None
             return arrays
     except DatasetError:
         raise
@@ -69,10 +67,9 @@ def read_dataset_arrays(path) -> tuple[dict, dict, list, list]:
     arrays = _read_npz(path)
     missing = [k for k in ("t", "q") if k not in arrays]
     if missing:
-        raise DatasetError(
-            f"path: {path!r} lacks the required array(s) {missing}; found {sorted(arrays)} "
-            "(expected t (N,), q (N, n), optionally qd, qdd, tau, u, trajectory)"
-        )
+        raise DatasetError(f"path: {path!r} lacks the required array(s) {missing}; found "
+                           f"{sorted(arrays)} (expected t (N,), q (N, n), optionally qd, qdd, tau, "
+                           "u, trajectory)")
     metadata = {}
     if "metadata" in arrays:
         raw = arrays.pop("metadata")

@@ -56,10 +56,9 @@ def noise_levels(noise, noise_model: str = "positions") -> dict:
     levels = _noise_levels(noise)
     if noise_model == "all" or isinstance(noise, dict):
         if noise_model == "positions" and (levels["qd"] or levels["qdd"]):
-            raise ValueError(
-                "noise: velocity or acceleration noise is not part of noise_model='positions' "
-                "(they are not recorded); use noise_model='all'"
-            )
+            raise ValueError("noise: velocity or acceleration noise is not part of "
+                             "noise_model='positions' (they are not recorded); use "
+                             "noise_model='all'")
         return levels
     return {"q": levels["q"], "qd": 0.0, "qdd": 0.0, "tau": 0.0}
 

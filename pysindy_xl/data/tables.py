@@ -337,8 +337,7 @@ def load_data(source, coordinates=None, columns=None, delimiter=None, topic=None
         from .rosbag import is_rosbag, read_rosbag
         if is_rosbag(path):
             if delimiter is not None:
-                raise ValueError(f"delimiter: applies to text tables, not to the ROS bag "
-                                 f"{path!r}")
+                raise ValueError(f"delimiter: applies to text tables, not to the ROS bag {path!r}")
             return read_rosbag(path, coordinates, columns, topic)
         if topic is not None:
             raise ValueError(f"topic: applies to ROS bags, not to {path!r}")

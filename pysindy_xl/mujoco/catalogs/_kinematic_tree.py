@@ -106,10 +106,8 @@ def _joint_variables(system: MuJoCoSystem, model):
         name = system.joint_names[k]
         if int(model.jnt_type[k]) == hinge:
             if not all(is_angle[j] and float(row[j]).is_integer() for j in used):
-                raise ValueError(
-                    f"system: the angle of hinge {name!r} must be an integer combination of "
-                    "angle coordinates (joint_to_coordinates)"
-                )
+                raise ValueError(f"system: the angle of hinge {name!r} must be an integer "
+                                 "combination of angle coordinates (joint_to_coordinates)")
             sine, cosine = TrigPolynomial.constant(0.0, is_angle), TrigPolynomial.constant(
                 1.0, is_angle)
             for j in used:  # angle-sum formulas, one unit of q_j at a time

@@ -192,8 +192,7 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
         raise ValueError(f"joint_models: only the 'kinematic' catalog offers joint models, not "
                          f"{kind!r}")
     if coulomb_law != "smooth":
-        raise ValueError(f"coulomb_law: only the 'kinematic' catalog has other laws, not "
-                         f"{kind!r}")
+        raise ValueError(f"coulomb_law: only the 'kinematic' catalog has other laws, not {kind!r}")
     coords = system.coords
     friction_mask = _friction_mask(system, friction)
     terms = lagrange_terms(system, velocity_degree, trig_degree)

@@ -285,10 +285,9 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     n = trajectory.q.shape[1]
     n_model = getattr(model, "n_coordinates_", n)  # any model with simulate: trusted
     if n_model != n:
-        raise ValueError(
-            f"model: identified on {n_model} coordinates, but the reference has {n}"
-            f"{'' if names is None else ' ' + str(list(names))}; validate a model on the "
-            "system it was identified on")
+        raise ValueError(f"model: identified on {n_model} coordinates, but the reference has {n}"
+                         f"{'' if names is None else ' ' + str(list(names))}; validate a model on "
+                         "the system it was identified on")
     if forces is None:
         forces = np.zeros((trajectory.n_samples, n))
     if drive not in DRIVES:

@@ -76,10 +76,8 @@ class SumOfSinusoids:
         if not isinstance(n_components, (int, np.integer)) or n_components < 1:
             raise ValueError(f"n_components: expected an integer >= 1, got {n_components!r}")
         if not 0 < min_frequency <= max_frequency:
-            raise ValueError(
-                "min_frequency, max_frequency: expected 0 < min_frequency <= max_frequency, got "
-                f"{min_frequency!r}, {max_frequency!r}"
-            )
+            raise ValueError("min_frequency, max_frequency: expected 0 < min_frequency <= "
+                             f"max_frequency, got {min_frequency!r}, {max_frequency!r}")
         shape = (scales.size, n_components)
         weights = rng.uniform(0.2, 1.0, shape)
         amplitudes = weights / weights.sum(axis=1, keepdims=True) * scales[:, None]

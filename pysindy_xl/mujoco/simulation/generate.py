@@ -147,10 +147,9 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     dt = model.opt.timestep
     n_steps = int(round(duration / dt))
     if n_steps < sample_every:
-        raise ValueError(
-            f"sample_every: recording every {sample_every} steps of {dt:g} s leaves fewer than "
-            f"two samples in a run of {duration:g} s ({n_steps} steps); lower sample_every or "
-            "lengthen the run")
+        raise ValueError(f"sample_every: recording every {sample_every} steps of {dt:g} s leaves "
+                         f"fewer than two samples in a run of {duration:g} s ({n_steps} steps); "
+                         "lower sample_every or lengthen the run")
     if isinstance(integrator, Integration):
         integration = integrator
     elif integrator is not None:

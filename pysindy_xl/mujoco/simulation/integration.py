@@ -200,10 +200,9 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
     step = timestep * 1e3
     if rk4 <= RK4_MAX_SUBSTEPS or RK4_COST * rk4 <= implicit_steps:
         reason = (f"RK4 at {step:g} ms / {rk4}: the stiffest mode (|lambda| = {rate:.3g} 1/s, "
-                  f"servo gains and damping over the inertia) keeps h |lambda| <= {RK4_BOUND:g}"
-                  f"; the {implicit} step would need {implicit_steps} substeps to keep its "
-                  f"inertia bias h (kv + damping) below {BIAS_TOLERANCE:.1%} of the mass "
-                  "matrix")
+                  f"servo gains and damping over the inertia) keeps h |lambda| <= {RK4_BOUND:g}; "
+                  f"the {implicit} step would need {implicit_steps} substeps to keep its inertia "
+                  f"bias h (kv + damping) below {BIAS_TOLERANCE:.1%} of the mass matrix")
         return Integration("RK4", rk4, reason, rate, damping_rate, timestep)
     reason = (f"{implicit} at {step:g} ms / {implicit_steps}: its inertia bias h (kv + damping)"
               f" stays below {BIAS_TOLERANCE:.1%} of the mass matrix; RK4 would need {rk4} "

@@ -44,10 +44,8 @@ def _driven_mask(system: MuJoCoSystem, model, forcing: str, actuators) -> np.nda
         if actuators:
             raise ValueError("actuators: not used with forcing='explicit' (every actuator driven)")
         if not pairs:
-            raise ValueError(
-                "forcing: the model has no actuator; add <motor> elements to the MJCF or use "
-                "forcing='implicit'"
-            )
+            raise ValueError("forcing: the model has no actuator; add <motor> elements to the MJCF "
+                             "or use forcing='implicit'")
         return np.ones(len(pairs), dtype=bool)
     chosen = system.mixed_actuators if actuators is None else actuators
     if isinstance(chosen, str):

@@ -44,17 +44,13 @@ def _cart(mass: float, damping: float, inner: str) -> str:
 def _link(body: str, joint: str, mass, length, damping, inertia, pos, inner="", indent=6):
     # axis 0 -1 0: a positive angle moves the bob towards +x (textbook convention).
     pad = " " * indent
-    return (f'{pad}<body name="{body}" pos="{pos}">\n'
-            f'{pad}  <joint name="{joint}" type="hinge" axis="0 -1 0" '
-            f'damping="{mjcf_float(damping)}"/>\n'
-            f'{pad}  <inertial pos="0 0 {mjcf_float(-length)}" mass="{mjcf_float(mass)}" '
-            f'diaginertia="{mjcf_float(inertia)} {mjcf_float(inertia)} {mjcf_float(inertia)}"/>\n'
-            f'{pad}  <geom type="capsule" fromto="0 0 0 0 0 {mjcf_float(-length)}" size="0.01" '
-            f'rgba="0.6 0.6 0.6 1"/>\n'
-            f'{pad}  <geom type="sphere" pos="0 0 {mjcf_float(-length)}" size="0.04" '
-            f'rgba="0.8 0.3 0.3 1"/>\n'
-            f"{inner}"
-            f"{pad}</body>\n")
+    return (f'{pad}<body name="{body}" pos="{pos}">\n{pad}  <joint name="{joint}" type="hinge" '
+            f'axis="0 -1 0" damping="{mjcf_float(damping)}"/>\n{pad}  <inertial pos="0 0 '
+            f'{mjcf_float(-length)}" mass="{mjcf_float(mass)}" diaginertia="{mjcf_float(inertia)} '
+            f'{mjcf_float(inertia)} {mjcf_float(inertia)}"/>\n{pad}  <geom type="capsule" '
+            f'fromto="0 0 0 0 0 {mjcf_float(-length)}" size="0.01" rgba="0.6 0.6 0.6 1"/>\n{pad}  '
+            f'<geom type="sphere" pos="0 0 {mjcf_float(-length)}" size="0.04" rgba="0.8 0.3 0.3 '
+            f'1"/>\n{inner}{pad}</body>\n')
 
 
 def _footer(joints) -> str:
