@@ -234,8 +234,7 @@ def _with_derivatives(run, smoother, max_frequency=MAX_FREQUENCY):
     if smoother is not None:
         source = source.replace(SCORING_DERIVATIVES, repr(smoother))
     elif max_frequency != MAX_FREQUENCY:
-        source = source.replace(f"at most {MAX_FREQUENCY:g} Hz",
-                                f"at most {max_frequency:g} Hz")
+        source = source.replace(f"at most {MAX_FREQUENCY:g} Hz", f"at most {max_frequency:g} Hz")
     return q, qd, qdd, source
 
 

@@ -357,8 +357,7 @@ def _training_spec(model) -> dict:
     names = {kind: name for name, kind in _selection_types().items()}
     if type(selection) in names:
         selection = {"type": names[type(selection)],
-                     "fields": {field.name: _field_json(field.name,
-                                                        getattr(selection, field.name))
+                     "fields": {field.name: _field_json(field.name, getattr(selection, field.name))
                                 for field in dataclasses.fields(selection)}}
     else:
         selection = None
@@ -384,8 +383,7 @@ def _consistency_json(report):
         return None
     return {"consistent": bool(report["consistent"]), "cost": _floats([report["cost"]])[0],
             "negative_friction": [str(name) for name in report["negative_friction"]],
-            "min_pseudo_inertia_eigenvalue": _floats(
-                [report["min_pseudo_inertia_eigenvalue"]])[0]}
+            "min_pseudo_inertia_eigenvalue": _floats([report["min_pseudo_inertia_eigenvalue"]])[0]}
 
 
 def _consistency_from_document(report, path):

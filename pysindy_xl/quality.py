@@ -242,8 +242,7 @@ def plot_identification(model, trajectory, path, title=None, forced=True) -> dic
     for i, (ax, name) in enumerate(zip(axes, names, strict=True)):
         ax.plot(t, q[:, i], color="black", linestyle="--", linewidth=1.2, label="recorded")
         if k:
-            ax.plot(t[:k], states[:, i], color="tab:blue", linewidth=1.2,
-                    label="identified model")
+            ax.plot(t[:k], states[:, i], color="tab:blue", linewidth=1.2, label="identified model")
         ax.set_ylabel(name)
     axes[0].legend(loc="upper right", fontsize="small")
     axes[-1].set_xlabel("t (s)")

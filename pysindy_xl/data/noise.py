@@ -101,11 +101,10 @@ def add_noise(trajectory: Trajectory, noise, rng: np.random.Generator,
         tau = u @ matrix.T
     else:
         tau = noisy(trajectory.tau, levels["tau"])
-    return Trajectory(
-        t=trajectory.t.copy(), q=noisy(trajectory.q, levels["q"]),
-        qd=noisy(trajectory.qd, levels["qd"]), qdd=noisy(trajectory.qdd, levels["qdd"]),
-        tau=tau, u=u, info=dict(trajectory.info),
-        tau_constraint=noisy(trajectory.tau_constraint, 0),
-        u_constraint=noisy(trajectory.u_constraint, 0),
-        constraint_active=noisy(trajectory.constraint_active, 0),
-    )
+    return Trajectory(t=trajectory.t.copy(), q=noisy(trajectory.q, levels["q"]),
+                      qd=noisy(trajectory.qd, levels["qd"]),
+                      qdd=noisy(trajectory.qdd, levels["qdd"]), tau=tau, u=u,
+                      info=dict(trajectory.info),
+                      tau_constraint=noisy(trajectory.tau_constraint, 0),
+                      u_constraint=noisy(trajectory.u_constraint, 0),
+                      constraint_active=noisy(trajectory.constraint_active, 0))

@@ -65,8 +65,7 @@ def _default_names(joints) -> list:
 def _messages(path: str, topic):
     """``(stamp_ns, log_ns, names, position, velocity, effort)`` of every JointState message
     of one bag, and the topic read."""
-    highlevel = import_optional("rosbags.highlevel", purpose="reading ROS bags",
-                                extra="ros")
+    highlevel = import_optional("rosbags.highlevel", purpose="reading ROS bags", extra="ros")
     typesys = import_optional("rosbags.typesys", purpose="reading ROS bags", extra="ros")
     store = typesys.get_typestore(typesys.Stores.LATEST)
     try:

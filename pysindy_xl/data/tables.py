@@ -298,8 +298,7 @@ def from_dataframe(frame, coordinates=None, columns=None):
     for key in frame.columns:
         column = frame[key]
         raw[str(key)] = np.asarray(column.to_numpy() if hasattr(column, "to_numpy") else column)
-    return _build(raw, list(raw), coordinates, columns, "DataFrame",
-                  lambda k: f"row {labels[k]!r}")
+    return _build(raw, list(raw), coordinates, columns, "DataFrame", lambda k: f"row {labels[k]!r}")
 
 
 def load_data(source, coordinates=None, columns=None, delimiter=None, topic=None):

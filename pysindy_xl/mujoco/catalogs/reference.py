@@ -295,10 +295,8 @@ def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.
     if missing and strict:
         raise ValueError(f"catalog: the true model needs terms it lacks: {missing}")
     try:
-        xi = catalog.ideal_coefficients(
-            lagrangian=system.lagrangian() if has_lagrange else None, classical=keyed,
-            forces=forces,
-        )
+        xi = catalog.ideal_coefficients(lagrangian=system.lagrangian() if has_lagrange else None,
+                                        classical=keyed, forces=forces)
     except ValueError as error:
         if strict:
             raise

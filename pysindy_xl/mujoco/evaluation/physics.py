@@ -78,9 +78,8 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
         gravity_ref[k] = matrix @ (data.qfrc_spring - data.qfrc_bias)
     z = stack_variables(q, qd, None, np.zeros_like(q), np.zeros(n_states))
     force = dynamics.mass_and_forcing(z)[1]
-    mass = dynamics.mass_and_forcing(stack_variables(
-        q, sliding_velocities(system, mj_model, q, qd), None, np.zeros_like(q),
-        np.zeros(n_states)))[0]
+    mass = dynamics.mass_and_forcing(stack_variables(q, sliding_velocities(system, mj_model, q, qd),
+                                                     None, np.zeros_like(q), np.zeros(n_states)))[0]
     gravity = dynamics.mass_and_forcing(stack_variables(
         q, np.zeros_like(qd), None, np.zeros_like(q), np.zeros(n_states)))[1]
     held = np.isin(system.coordinate_names, list(getattr(model, "still_coordinates_", ())))

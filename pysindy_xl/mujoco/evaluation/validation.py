@@ -259,9 +259,8 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
         if system is None:
             raise ValueError("system: give a system to simulate or a reference trajectory")
         options = {} if amplitude is None else {"amplitude": amplitude}
-        trajectory = validation_trajectory(system, duration, forcing, actuators, seed,
-                                           sample_every, initial_scale, substeps,
-                                           control=control, **options)
+        trajectory = validation_trajectory(system, duration, forcing, actuators, seed, sample_every,
+                                           initial_scale, substeps, control=control, **options)
         names = get_system(system).coordinate_names
     else:
         if not isinstance(trajectory, Trajectory):

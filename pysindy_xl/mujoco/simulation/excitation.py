@@ -210,8 +210,7 @@ class _Design:
             constraints.append({"type": "eq", "fun": lambda x: E @ x, "jac": lambda x: E})
         result = minimize(lambda x: self.evaluate(x, bases)[0], x,
                           jac=lambda x: self.evaluate(x, bases)[1], method="SLSQP",
-                          constraints=constraints, options={"maxiter": max_iter},
-                          callback=callback)
+                          constraints=constraints, options={"maxiter": max_iter}, callback=callback)
         return result.x, result
 
 

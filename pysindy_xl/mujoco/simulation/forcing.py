@@ -137,8 +137,7 @@ class SumOfSinusoids:
         True
         """
         try:
-            return cls(data["amplitudes"], data["frequencies"], data["phases"],
-                       data.get("offsets"))
+            return cls(data["amplitudes"], data["frequencies"], data["phases"], data.get("offsets"))
         except (KeyError, TypeError) as error:
             raise ValueError(f"data: not a SumOfSinusoids description ({error})") from None
 

@@ -217,8 +217,7 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     matrix = system.force_matrix()
     joint_names = list(system.joint_names)
     info = {"q0": q0.tolist(), "qd0": qd0.tolist(),
-            "limit_hits": {joint_names[j]: int(limit_hits[j]) for j in np.flatnonzero(
-                limit_hits)},
+            "limit_hits": {joint_names[j]: int(limit_hits[j]) for j in np.flatnonzero(limit_hits)},
             "contact_samples": int(contact_samples), "equality_samples": int(equality_samples)}
     if substeps > 1:
         info["substeps"] = int(substeps)

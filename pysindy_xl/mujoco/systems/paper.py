@@ -270,8 +270,7 @@ class CartDoublePendulum(MuJoCoSystem):
         p = self._parameters
         _, th1, th2 = self.coords.q
         xd, thd1, thd2 = self.coords.qd
-        return _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=xd,
-                                          cart_mass=p["cart_mass"])
+        return _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=xd, cart_mass=p["cart_mass"])
 
     def xml(self):
         """MJCF text of the double pendulum on a cart (see :meth:`MuJoCoSystem.xml`)."""

@@ -101,8 +101,7 @@ def urdf_spec(text: str, where: str = "source", warn: bool = True):
         raise ValueError(f"{where}: MuJoCo cannot read the URDF: {error}") from None
     for joint in spec.joints:
         if joint.type in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
-            spec.add_actuator(name=joint.name, target=joint.name,
-                              trntype=mujoco.mjtTrn.mjTRN_JOINT)
+            spec.add_actuator(name=joint.name, target=joint.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
     try:
         spec.compile()
     except ValueError as error:
