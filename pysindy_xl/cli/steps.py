@@ -287,7 +287,6 @@ def model_lines(model, truth=None):
         physical_parameters,
         prints_equations,
     )
-
     lines = []
     if has_parameter_map(model.feature_library_):
         reference = (None if truth is None

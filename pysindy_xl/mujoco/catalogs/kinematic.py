@@ -128,7 +128,6 @@ class KinematicCatalog:
             ExternalForces,
             JointFrictionLibrary,
         )
-
         libraries = [ExternalForces(self.coords, interlink=interlink),
                      PolynomialLagrangeLibrary(self.coords, _shared(self.lagrange_terms),
                                                parameters=[dict(p) for p in self.parameters],

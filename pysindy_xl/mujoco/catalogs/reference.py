@@ -179,7 +179,6 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
         ExternalForces,
         LagrangeLibrary,
     )
-
     system = get_system(system)
     if kind not in CATALOG_KINDS:
         raise ValueError(f"kind: expected one of {CATALOG_KINDS}, got {kind!r}")
@@ -226,7 +225,6 @@ def _kinematic_truth(system, catalog, names, forces):
     friction terms are joint velocities, which the generic matching would miss)."""
     from ._kinematic_build import COULOMB_LAWS
     from .kinematic import PolynomialLagrangeLibrary, kinematic_catalog
-
     if not any(isinstance(lib, PolynomialLagrangeLibrary) for lib in catalog.libraries_):
         return None
     forces_library = next(lib for lib in catalog.libraries_ if lib.category == "forces")

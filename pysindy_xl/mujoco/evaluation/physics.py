@@ -40,7 +40,6 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     """
     mujoco = import_mujoco()
     from ... import stack_variables
-
     system = get_system(system)
     dynamics = model._require_dynamics() if hasattr(model, "_require_dynamics") else None
     if dynamics is None:

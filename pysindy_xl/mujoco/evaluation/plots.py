@@ -14,7 +14,6 @@ _MODEL = {"color": "tab:blue", "linewidth": 1.2, "label": "identified model"}
 def new_figure(width, height):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
-
     figure = Figure(figsize=(width, height), layout="constrained")
     FigureCanvasAgg(figure)
     return figure

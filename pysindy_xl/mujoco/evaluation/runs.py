@@ -94,7 +94,6 @@ def mujoco_closed_loop(model, system, trajectory, substeps, required):
     MuJoCo cannot state the model (a ValueError when ``required``)."""
     from ...export.mjcf import identified_mj_model
     from .. import import_mujoco
-
     mujoco = import_mujoco()
     mj, reason = identified_mj_model(model, system)
     if mj is not None and trajectory.info.get("tracking") is not None:

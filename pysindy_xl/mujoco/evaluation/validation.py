@@ -254,7 +254,6 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     'open-loop'
     """
     from ...dynamics import SimulationError
-
     if trajectory is None:
         if system is None:
             raise ValueError("system: give a system to simulate or a reference trajectory")

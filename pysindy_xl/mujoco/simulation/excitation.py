@@ -54,7 +54,6 @@ class _Design:
     def regressor(self, states):
         """``W`` of stacked states (3, N, n): shape (n, N, p), coordinate-major rows."""
         from ...feature_library import stack_variables
-
         n_samples = states.shape[1]
         theta = self.library.transform(stack_variables(*states, np.zeros_like(states[0])))
         return theta[:, self.rest].reshape(self.n, n_samples, -1)
@@ -179,7 +178,6 @@ class _Design:
         """SLSQP from ``x``. Each limit enters through its margin at the lowest local minima
         along the period (``L + 1``; ``3 L`` for the torques), not one row per sample."""
         from scipy.optimize import minimize
-
         A, c = self.linear_constraints(bases)
         columns = np.arange(A.shape[1])
 
@@ -356,7 +354,6 @@ def excitation_trajectory(system, n_harmonics: int = 5, period: float = 10.0,
 
     from ..catalogs.kinematic import kinematic_catalog
     from ..systems.registry import get_system as resolve_system
-
     system = resolve_system(system)
     if isinstance(n_harmonics, bool) or not isinstance(n_harmonics, (int, np.integer)) \
             or n_harmonics < 1:

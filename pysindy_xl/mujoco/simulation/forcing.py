@@ -159,7 +159,6 @@ def within_servo_reach(signals: SumOfSinusoids, model) -> SumOfSinusoids:
     """
     mujoco = import_mujoco()
     from ..systems.actuation import servo_bandwidths
-
     bandwidth = servo_bandwidths(model)
     servo = np.isfinite(bandwidth) & np.any(signals.amplitudes != 0, axis=1)
     if not servo.any():

@@ -106,7 +106,6 @@ class FourierTrajectory:
         differ, an actuator is not such a servo or a coordinate has none.
         """
         from ..systems.registry import get_system
-
         system = get_system(system)
         servo = _position_servos(system, "reference")
         if len(self.q0) != system.n:

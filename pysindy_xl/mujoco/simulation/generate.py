@@ -325,7 +325,6 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     import warnings
 
     from tqdm.auto import tqdm
-
     duration = check_option("duration", duration, "real", low=0, low_open=True)
     sample_every = check_option("sample_every", sample_every, "int", low=1)
     system = get_system(system)

@@ -174,7 +174,6 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
     ('RK4', 2400, True)
     """
     from ..._validation import check_option
-
     check_option("integrator", integrator, "choice", choices=("auto", "model", *INTEGRATORS))
     if substeps is not None:
         substeps = check_option("substeps", substeps, "int", low=1)
@@ -287,7 +286,6 @@ def settling_time(model, forced: bool = True) -> float:
     zero without position servos or when the run is not ``forced``.
     """
     from ..systems.actuation import servo_bandwidths
-
     bandwidth = servo_bandwidths(model)
     if not forced or not np.any(np.isfinite(bandwidth)):
         return 0.0
@@ -299,7 +297,6 @@ def settled(trajectory, settle: float):
     """The trajectory from time ``settle`` (s) on, recorded in ``info["settle"]``; times kept
     (the controls are functions of time)."""
     from ...data.dataset import Trajectory
-
     if settle <= 0:
         return trajectory
     keep = trajectory.t >= trajectory.t[0] + settle - 1e-12

@@ -146,7 +146,6 @@ def tracked_model(model, controller: dict):
     (array([   0., -100.,  -10.]), array([-5.,  5.]))
     """
     import copy
-
     mujoco = import_mujoco()
     out = copy.deepcopy(model)
     for i, a in enumerate(controller["actuators"]):
