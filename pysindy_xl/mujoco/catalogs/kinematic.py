@@ -200,8 +200,9 @@ class KinematicCatalog:
             self._compiled[key] = rows
         return self._compiled[key]
 
-    def _evaluate(self, key, q, qd, coefficients):
-        c = self.coords
+    def _evaluate(self, key, q, qd, coefficients, shape=()):
+        """``key``'s quantity at the states, shaped ``shape`` per sample; one state: no axis."""
+        single, c = np.ndim(q) == 1, self.coords
         q = _states(q, "q", c.n)
         qd = np.zeros_like(q) if qd is None else _states(qd, "qd", c.n)
         if qd.shape != q.shape:
@@ -214,7 +215,8 @@ class KinematicCatalog:
         angles = [j in self.system.angle_coordinates for j in range(c.n)]
         values = evaluate_many([p for row in rows for p in row], state_values(q, qd, None, angles))
         values = values.reshape(q.shape[0], len(rows), -1)
-        return np.einsum("sfr,f->sr", values, beta)
+        out = np.einsum("sfr,f->sr", values, beta).reshape(-1, *shape)
+        return out[0] if single else out
 
     def mass_matrix(self, q, coefficients=None) -> np.ndarray:
         """Mass matrix ``M(q)`` in the system's coordinates, shape (N, n, n) or (n, n).
@@ -232,10 +234,7 @@ class KinematicCatalog:
         array([[1.5 , 0.4 ],
                [0.4 , 0.32]])
         """
-        single = np.ndim(q) == 1
-        n = self.coords.n
-        out = self._evaluate("mass", q, None, coefficients).reshape(-1, n, n)
-        return out[0] if single else out
+        return self._evaluate("mass", q, None, coefficients, (self.coords.n,) * 2)
 
     def gravity_torque(self, q, coefficients=None) -> np.ndarray:
         """Generalized gravity force ``dV/dq``, shape of ``q`` (``M qdd + c + dV/dq = tau``).
@@ -245,9 +244,7 @@ class KinematicCatalog:
         >>> kinematic_catalog("cart-pole").gravity_torque([0.0, np.pi / 2]).round(4)
         array([0.   , 3.924])
         """
-        single = np.ndim(q) == 1
-        out = self._evaluate("gravity", q, None, coefficients)
-        return out[0] if single else out
+        return self._evaluate("gravity", q, None, coefficients, (self.coords.n,))
 
     def bias_forces(self, q, qd, coefficients=None) -> np.ndarray:
         """Coriolis, centrifugal and gravity forces, shape of ``q``: the equations at ``qdd = 0``.
@@ -257,9 +254,7 @@ class KinematicCatalog:
         >>> kinematic_catalog("cart-pole").bias_forces([0.0, 0.0], [0.0, 2.0]).round(4)
         array([0., 0.])
         """
-        single = np.ndim(q) == 1
-        out = self._evaluate("bias", q, qd, coefficients)
-        return out[0] if single else out
+        return self._evaluate("bias", q, qd, coefficients, (self.coords.n,))
 
     def report(self, coefficients=None, digits: int = 4, terms: bool = True) -> str:
         """Table of the base parameters: term, combination, MJCF value, identified value.
@@ -336,14 +331,6 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
         ``"mujoco"``: MuJoCo's regularized ``frictionloss``
         (:func:`~pysindy_xl.physical.friction.regularized_dry_friction`), for data MuJoCo
         simulated from this model. Not with ``friction``.
-
-    Raises
-    ------
-    TypeError
-        If ``system`` is not a system, path or MJCF text.
-    ValueError
-        If a joint is not hinge or slide, a scale is not positive, or ``friction`` or
-        ``coulomb_law`` is unknown.
 
     Examples
     --------

@@ -332,12 +332,6 @@ def excitation_trajectory(system, n_harmonics: int = 5, period: float = 10.0,
         Named by the system's coordinates, with ``condition_number`` and ``info``
         (``restarts``: each start's condition number before and after; ``limits``).
 
-    Raises
-    ------
-    ValueError
-        If an argument is out of its range, a joint has no range and no ``position_limits``,
-        or the nominal arm needs more than ``torque_limits`` at rest.
-
     Examples
     --------
     >>> xml = '''<mujoco><option gravity="0 0 -9.81"/><worldbody><body>
