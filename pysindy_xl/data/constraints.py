@@ -98,9 +98,8 @@ def contiguous_segments(keep, min_length: int = 2) -> list[slice]:
     [slice(0, 2, None), slice(5, 8, None)]
     """
     keep = _mask(keep, "keep")
-    if isinstance(min_length, bool) or not isinstance(min_length, (int, np.integer)) or (
-        min_length < 1
-    ):
+    if (isinstance(min_length, bool) or not isinstance(min_length, (int, np.integer))
+            or min_length < 1):
         raise ValueError(f"min_length: expected an integer >= 1, got {min_length!r}")
     edges = np.diff(np.concatenate([[0], keep.astype(np.int8), [0]]))
     starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)

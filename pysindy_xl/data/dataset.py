@@ -247,8 +247,7 @@ class Dataset:
                      "x_ddot": [tr.qdd for tr in trs] if self.has("qdd") else None,
                      "u": force_lists}
         if constraints != "exclude" or not self.has("constraint_active") or not any(
-            tr.constraint_active.any() for tr in trs
-        ):
+                tr.constraint_active.any() for tr in trs):
             return arguments
         margin = (0 if derivatives else 10) if margin is None else margin
         min_length = (5 if derivatives else 25) if min_length is None else min_length

@@ -66,9 +66,8 @@ class MJCFSystem(MuJoCoSystem):
     def __init__(self, source, force_amplitude=1.0, joints=None):
         mujoco = import_mujoco()
         self._urdf = is_urdf(source)
-        if isinstance(source, os.PathLike) or (
-            isinstance(source, str) and not source.lstrip().startswith("<")
-        ):
+        if isinstance(source, os.PathLike) or (isinstance(source, str)
+                                               and not source.lstrip().startswith("<")):
             path = os.fspath(source)
             if not os.path.isfile(path):
                 raise ValueError(f"source: {'URDF' if self._urdf else 'MJCF'} file {path!r} "
