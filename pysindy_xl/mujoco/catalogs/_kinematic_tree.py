@@ -22,8 +22,6 @@ from ..systems.registry import MuJoCoSystem
 
 __all__ = ["INERTIAL_PARAMETERS", "body_functions", "kinematic_tree", "physical_values"]
 
-#: Names of the ten inertial parameters of a body, in the order of the catalog's preference.
-
 # Rotation entries and offsets below this magnitude are round-off of quaternion arithmetic.
 _CHOP = 1e-13
 
@@ -69,11 +67,8 @@ def _axis_rotation(axis, s, c):
 
 @dataclass
 class _Frame:
-    """A body frame during the recursion, everything in the frame's own coordinates.
-
-    ``v``: velocity of the origin, ``w``: angular velocity, ``g``: gravity vector, ``h``:
-    gravity times the world position of the origin (``g . p``, so that ``-V = m h``).
-    """
+    """A body frame during the recursion, in its own coordinates: origin velocity ``v``,
+    angular velocity ``w``, gravity ``g`` and ``h = g . p`` (``p`` the origin; ``-V = m h``)."""
 
     v: list
     w: list
@@ -82,12 +77,9 @@ class _Frame:
 
 
 def _joint_variables(system: MuJoCoSystem, model):
-    """Each joint's sine and cosine (hinge) or displacement (slide), and velocity, as polynomials.
-
-    MuJoCo measures ``qpos - qpos0`` (the joint's ``ref``); the coordinates are ``q = T qpos``,
-    so a joint's angle is the row of ``T^-1`` applied to ``q``, expanded with the angle-sum
-    formulas (which needs integer rows: relative hinges of a chain).
-    """
+    """Each joint's sine and cosine (hinge) or displacement (slide), and velocity, as polynomials:
+    ``qpos - qpos0`` is a row of ``T^-1`` applied to ``q``, expanded by the angle-sum formulas
+    (integer rows: relative hinges of a chain)."""
     n = system.n
     is_angle = tuple(j in system.angle_coordinates for j in range(n))
     inverse = np.linalg.inv(system.joint_to_coordinates)
