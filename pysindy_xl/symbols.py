@@ -121,12 +121,7 @@ _CACHED_CHECKS = 4096
 
 
 def _unique(exprs: Iterable[sp.Expr]) -> list[sp.Expr]:
-    seen, out = set(), []
-    for e in exprs:
-        if e not in seen and e != 0:
-            seen.add(e)
-            out.append(e)
-    return out
+    return list(dict.fromkeys(e for e in exprs if e != 0))
 
 
 def monomials(exprs, degree: int) -> list[sp.Expr]:
@@ -144,11 +139,8 @@ def monomials(exprs, degree: int) -> list[sp.Expr]:
     exprs = as_expr_list(exprs, "exprs")
     from ._validation import check_option
     degree = check_option("degree", degree, "int", low=1)
-    out = []
-    for d in range(1, degree + 1):
-        for combo in itertools.combinations_with_replacement(exprs, d):
-            out.append(sp.Mul(*combo))
-    return _unique(out)
+    return _unique(sp.Mul(*combo) for d in range(1, degree + 1)
+                   for combo in itertools.combinations_with_replacement(exprs, d))
 
 
 def products(terms_a, terms_b) -> list[sp.Expr]:
