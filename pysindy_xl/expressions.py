@@ -58,8 +58,6 @@ class _FullPrecisionPrinter(StrPrinter):
 def format_expression(expr: sp.Expr) -> str:
     """Text of ``expr`` that :func:`parse_expression` turns back into the same expression.
 
-    Examples
-    --------
     >>> import sympy as sp
     >>> x = sp.Symbol("x")
     >>> format_expression(sp.Float(1 / 3) * sp.cos(x))
@@ -251,8 +249,6 @@ def expression_size(expr: sp.Expr) -> dict:
     ``k`` terms counts ``C(n + k - 1, k - 1)``, a call the size of its argument), ``depth``
     (nesting of function calls) and ``operations`` (nodes of the tree).
 
-    Examples
-    --------
     >>> import sympy as sp
     >>> a, b = sp.symbols("a b")
     >>> expression_size((a + b) ** 3 * sp.sin(sp.cos(a)))
@@ -320,8 +316,6 @@ def check_real_expression(expr: sp.Expr, name: str) -> None:
     """Raise ``ValueError`` (naming ``name``) if ``expr`` holds a non-real or infinite number
     (``zoo``, ``nan``, ``I``), which NumPy would turn into NaN or silently drop.
 
-    Examples
-    --------
     >>> import sympy as sp
     >>> x = sp.Symbol("x")
     >>> check_real_expression(sp.sqrt(-1) * x, "terms")

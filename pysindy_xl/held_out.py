@@ -106,8 +106,6 @@ class ForceScore:
     def lines(self, units="N m") -> list:
         """Per-coordinate lines (RMS in ``units``, one or one per coordinate, and %), the total.
 
-        Examples
-        --------
         >>> import numpy as np
         >>> score = ForceScore.from_predictions(["joint_1"], [np.arange(4.0)],
         ...     [np.full((4, 1), 2.0)], [np.full((4, 1), 2.1)], "measured")

@@ -46,8 +46,6 @@ class ModelFile:
 def save_model(model, path) -> None:
     """Write a fitted :class:`~pysindy_xl.XLSINDy` to ``path`` as JSON.
 
-    Examples
-    --------
     >>> import json, os, tempfile
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
@@ -151,8 +149,6 @@ def _expect(condition: bool, path, what: str):
 def read_model_file(path) -> ModelFile:
     """Read and check a model written by :func:`save_model` into a :class:`ModelFile`.
 
-    Examples
-    --------
     >>> import os, tempfile
     >>> path = os.path.join(tempfile.mkdtemp(), "bad.json")
     >>> _ = open(path, "w").write('{"format": "something else"}')

@@ -97,8 +97,6 @@ def force_prediction(model, x, t, u, x_dot=None, x_ddot=None) -> dict:
     times; derivatives not given come from the model's smoother. Returns ``relative_rms`` (per
     coordinate name), ``worst`` (the largest) and ``predicted`` (N, n).
 
-    Examples
-    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
@@ -145,8 +143,6 @@ def _stability(model):
 def quality_lines(quality) -> list:
     """The lines ``pysindy-xl identify`` prints for a :func:`fit_quality` result.
 
-    Examples
-    --------
     >>> quality = {"r2": 0.999, "r2_per_coordinate": {"theta": 0.999}, "formulation": "weak",
     ...            "target": "forces", "rows": 120, "cv_error": 1e-3, "cv_noise_ratio": None,
     ...            "stability": {"kept_least": ["L[cos(theta)]", 0.95],
@@ -201,8 +197,6 @@ def plot_identification(model, trajectory, path, title=None, forced=True) -> dic
     ``path``. Returns ``rmse`` (per coordinate over the simulated span), ``simulated_until``
     (s) and ``diverged`` (bool).
 
-    Examples
-    --------
     >>> import numpy as np, pathlib, tempfile, pysindy_xl as px
     >>> from pysindy_xl.mujoco import Trajectory
     >>> c = px.Coordinates(["x"])

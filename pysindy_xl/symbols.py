@@ -129,8 +129,6 @@ def monomials(exprs, degree: int) -> list[sp.Expr]:
 
     Returns the distinct products (no constant), by degree then by input order.
 
-    Examples
-    --------
     >>> import sympy as sp
     >>> a, b = sp.symbols("a b")
     >>> monomials([a, b], 2)
@@ -148,8 +146,6 @@ def products(terms_a, terms_b) -> list[sp.Expr]:
 
     Include ``1`` in either list to keep the terms of the other list alone.
 
-    Examples
-    --------
     >>> import sympy as sp
     >>> a, b = sp.symbols("a b")
     >>> products([1, a], [b, a])

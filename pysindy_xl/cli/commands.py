@@ -41,8 +41,6 @@ def run_demo(args) -> dict:
     against a fresh trajectory, print; return the report written to ``args.out/report.json``
     (beside ``validation.png`` unless ``--no-plots``).
 
-    Examples
-    --------
     Half a second of cart-pole data and a short validation (the kinematic catalog):
 
     >>> import tempfile
@@ -241,8 +239,6 @@ def run_identify(args):
     (solver from its forces with ``--solver auto``), print the model and its quality, score
     held-out torques, save it with ``--out``; return the fitted model.
 
-    Examples
-    --------
     >>> import pathlib, tempfile
     >>> from pysindy_xl.mujoco import generate_dataset
     >>> data = generate_dataset("cart-pole", n_trajectories=1, duration=0.5, seed=0,
@@ -461,8 +457,6 @@ def _save_atomically(model, path):
 def run_generate(args):
     """Run ``pysindy-xl generate``; returns the NPZ path written (the JSON beside it).
 
-    Examples
-    --------
     >>> import pathlib, tempfile
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     args = build_parser().parse_args(["generate", "cart-pole", f"{tmp}/data.npz",

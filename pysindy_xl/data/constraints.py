@@ -69,8 +69,6 @@ def unconstrained_windows(support, constraint_active) -> np.ndarray:
     (``Phi != 0`` of one trajectory); ``constraint_active`` (N,) is that trajectory's mask.
     Returns a bool array (W,), ``True`` for the windows to keep.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> support = np.array([[1, 1, 1, 0, 0, 0],
     ...                     [0, 0, 1, 1, 1, 0],
@@ -91,8 +89,6 @@ def contiguous_segments(keep, min_length: int = 2) -> list[slice]:
 
     ``keep`` (N,) marks the samples to keep (e.g. from :func:`unconstrained_samples`).
 
-    Examples
-    --------
     >>> import numpy as np
     >>> contiguous_segments(np.array([1, 1, 0, 1, 0, 1, 1, 1], dtype=bool))
     [slice(0, 2, None), slice(5, 8, None)]

@@ -269,8 +269,6 @@ class Dataset:
         constraint data), ``unconstrained_samples``, ``limit_hits`` (``{joint: samples}``, from
         the trajectories' ``info``), ``contact_samples``, ``equality_samples``.
 
-        Examples
-        --------
         >>> import numpy as np
         >>> t = np.linspace(0, 1, 4)
         >>> tr = Trajectory(t, np.sin(t), constraint_active=[0, 1, 1, 0],
@@ -296,8 +294,6 @@ class Dataset:
     def to_arrays(self) -> dict:
         """The NPZ arrays of the module docstring: trajectories concatenated, with ids and metadata.
 
-        Examples
-        --------
         >>> import numpy as np
         >>> t = np.linspace(0, 1, 11)
         >>> trajectory = Trajectory(t, np.sin(t))
@@ -325,8 +321,6 @@ class Dataset:
         """Write ``path`` (``.npz`` appended when missing) and return it; ``write_json`` also
         writes the metadata to the same name with ``.json`` (they are inside the NPZ anyway).
 
-        Examples
-        --------
         >>> import tempfile, pathlib, numpy as np
         >>> t = np.linspace(0, 1, 11)
         >>> data = Dataset([Trajectory(t, np.sin(t))], ["theta"], {"system": "pendulum"})
@@ -366,8 +360,6 @@ def load_dataset(path) -> Dataset:
     ``path`` holds at least ``t`` (N,) and ``q`` (N, n) (the module docstring lists the
     arrays); a :class:`DatasetError` names a missing or malformed array.
 
-    Examples
-    --------
     A user's own NPZ needs only ``t`` and ``q``; ``trajectory`` ids split it:
 
     >>> import tempfile, pathlib, numpy as np

@@ -27,8 +27,6 @@ class DatasetError(ValueError):
 
     A :class:`ValueError`, so ``except ValueError`` catches it too.
 
-    Examples
-    --------
     >>> from pysindy_xl.data import Trajectory
     >>> Trajectory(t=[0.0, 1.0, 0.5], q=[[0.0], [1.0], [2.0]])
     Traceback (most recent call last):
@@ -133,8 +131,6 @@ def _parse_json(text: str, where: str) -> dict:
 def coordinate_names(coordinates) -> list[str]:
     """Coordinate names given as a list of str or one comma-separated str.
 
-    Examples
-    --------
     >>> coordinate_names("x, theta")
     ['x', 'theta']
     >>> coordinate_names(3)

@@ -30,8 +30,6 @@ def is_rosbag(path) -> bool:
     """Whether ``path`` names a ROS bag: a ``.bag``, ``.db3`` or ``.mcap`` file, or a ROS 2 bag
     directory (with its ``metadata.yaml``).
 
-    Examples
-    --------
     >>> is_rosbag("run1.bag"), is_rosbag("log.csv")
     (True, False)
     """

@@ -248,8 +248,6 @@ def from_columns(data, coordinates=None, columns=None, name="data"):
     ``data`` maps names to columns of equal length; ``coordinates`` and ``columns`` as in
     :func:`read_csv`; errors name the source ``name``.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> t = np.linspace(0.0, 1.0, 6)
     >>> data = from_columns({"time_s": np.r_[t, t], "x": np.r_[t, 2 * t],
@@ -281,8 +279,6 @@ def from_dataframe(frame, coordinates=None, columns=None):
     ``frame`` is any object with ``columns`` and ``__getitem__`` returning 1-D values (pandas,
     polars), one row per sample; ``coordinates`` and ``columns`` as in :func:`read_csv`.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> pd = __import__("pytest").importorskip("pandas")
     >>> t = np.linspace(0.0, 1.0, 5)

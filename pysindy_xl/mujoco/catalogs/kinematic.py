@@ -262,8 +262,6 @@ class KinematicCatalog:
         ``coefficients`` are identified Lagrange coefficients (:meth:`lagrange_coefficients`);
         ``terms=False`` leaves out the column of terms (long for spatial arms).
 
-        Examples
-        --------
         >>> print(kinematic_catalog("cart-pole").report(terms=False))
         stands for  |  MJCF
         1*cart.m + 1*pole.m + 1*slider.armature  |  1.5
