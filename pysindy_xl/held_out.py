@@ -3,10 +3,8 @@
 An arm under feedback control diverges when simulated open loop even for a good model, so
 robotics validates by **inverse dynamics**: on data the fit never saw, the torques
 ``tau_hat = M(q) qdd + c(q, qd) + friction`` the model needs to move as recorded
-(:meth:`XLSINDy.predict_forces <pysindy_xl.XLSINDy.predict_forces>`) against the measured ones.
-Per coordinate ``j`` over held-out samples ``s``: ``rms_j = sqrt(mean_s (tau_hat_sj - tau_sj)^2)``
-(force units), ``relative_j = rms_j / sqrt(mean_s tau_sj^2)``, and
-``total = ||tau_hat - tau||_F / ||tau||_F``.
+(:meth:`XLSINDy.predict_forces <pysindy_xl.XLSINDy.predict_forces>`) against the measured ones,
+scored per coordinate and in total (:class:`ForceScore`).
 
 Velocities and accelerations must be the same for every method compared: measured ones when
 given, else :func:`scoring_derivatives` over each whole run (whatever the model's smoother).

@@ -150,12 +150,8 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
         raise ValueError(f"sample_every: recording every {sample_every} steps of {dt:g} s leaves "
                          f"fewer than two samples in a run of {duration:g} s ({n_steps} steps); "
                          "lower sample_every or lengthen the run")
-    if isinstance(integrator, Integration):
-        integration = integrator
-    elif integrator is not None:
-        integration = choose_integration(model, integrator, substeps)
-    else:
-        integration = choose_integration(model, "model", substeps)
+    integration = integrator if isinstance(integrator, Integration) else choose_integration(
+        model, "model" if integrator is None else integrator, substeps)
     substeps = integration.substeps
     model.opt.timestep = dt / substeps
     model.opt.integrator = INTEGRATORS[integration.integrator]
@@ -167,10 +163,9 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
         raise ValueError(f"control_at: expected 'start' or 'midpoint', got {control_at!r}")
     record_every = sample_every * substeps
     recorded = np.arange(0, n_fine + 1, record_every)
-    recorded_ctrl = np.zeros((len(recorded), model.nu))
+    recorded_ctrl = (np.zeros((len(recorded), model.nu)) if signals is None
+                     else _controls(signals, fine_times[recorded], model.nu))
     shift = dt / substeps / 2 if control_at == "midpoint" else 0.0
-    if signals is not None:
-        recorded_ctrl = _controls(signals, fine_times[recorded], model.nu)
     chunk = max(record_every, (200_000 // record_every) * record_every)
     qpos, qvel, qacc, force, constraint = (np.empty((len(recorded), n)) for _ in range(5))
     energy = np.empty((len(recorded), 2))
