@@ -119,8 +119,7 @@ def run_demo(args) -> dict:
     metrics = result.to_dict() if result is not None else {"valid": False, "failure": failure}
     print(_validation_line(result, failure, args))
     print("data:")
-    for line in data_lines(system, dataset):
-        print(line)
+    print(*data_lines(system, dataset), sep="\n")
     joints = joint_parameters(system, model)
     for joint, entry in joints.items():
         print(f"  {joint}: " + ", ".join(f"{key} {found:.4g} (MJCF {given:.4g})"
@@ -318,8 +317,7 @@ def run_identify(args):
         quality = None
         print(f"fit quality: not available ({error})")
     if quality is not None:
-        for line in quality_lines(quality):
-            print(line)
+        print(*quality_lines(quality), sep="\n")
     if system.has_ground_truth:
         _, summary = summarize_coefficients(system, model)
         print(f"against the true model: max coefficient error {summary['max_relative_error']:.2g} "
@@ -471,8 +469,7 @@ def run_generate(args):
     dataset = generate_data(system, args)
     path = dataset.save(args.out)
     print(f"wrote {path} and {path.with_suffix('.json')}: {dataset}")
-    for line in data_lines(system, dataset):
-        print(line)
+    print(*data_lines(system, dataset), sep="\n")
     return path
 
 

@@ -294,8 +294,7 @@ def model_lines(model, truth=None):
         lagrangian = model.lagrangian()
         if lagrangian != 0:
             lines.append(f"L = {_rounded(lagrangian)}")
-        names = model.feature_library_.coords.names
-        for name, eq in zip(names, model.equations(), strict=True):
-            lines.append(f"({name}) {eq}")
+        lines += [f"({name}) {eq}" for name, eq in
+                  zip(model.feature_library_.coords.names, model.equations(), strict=True)]
     note = held_note(model.still_coordinates_)
     return lines + ([note] if note else [])

@@ -82,6 +82,5 @@ def held_out_verdict(args, model, system, arguments, load, progress):
                  f"by time-blocked cross-validation ({args.cv_blocks} contiguous blocks of the "
                  "run, each predicted by the model refitted on the others)")
     print(f"held-out torque prediction {where}; derivatives: {score.derivatives}:")
-    for line in score.lines(_units(system, score.names)):
-        print(line)
+    print(*score.lines(_units(system, score.names)), sep="\n")
     return score

@@ -24,14 +24,10 @@ TRACKED_AMPLITUDE = 0.9
 def _actuators(model) -> list[tuple[str, str | None]]:
     """(actuator name, driven joint name or None) for each actuator of the model."""
     mujoco = import_mujoco()
-    out = []
-    for a in range(model.nu):
-        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) or f"actuator{a}"
-        joint = None
-        if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT):
-            joint = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, model.actuator_trnid[a, 0])
-        out.append((name, joint))
-    return out
+    on_joint = int(mujoco.mjtTrn.mjTRN_JOINT)
+    return [(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) or f"actuator{a}",
+             mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, model.actuator_trnid[a, 0])
+             if int(model.actuator_trntype[a]) == on_joint else None) for a in range(model.nu)]
 
 
 def _driven_mask(system: MuJoCoSystem, model, forcing: str, actuators) -> np.ndarray:
@@ -48,9 +44,7 @@ def _driven_mask(system: MuJoCoSystem, model, forcing: str, actuators) -> np.nda
                              "or use forcing='implicit'")
         return np.ones(len(pairs), dtype=bool)
     chosen = system.mixed_actuators if actuators is None else actuators
-    if isinstance(chosen, str):
-        chosen = [chosen]
-    chosen = list(chosen)
+    chosen = [chosen] if isinstance(chosen, str) else list(chosen)
     known = {name for pair in pairs for name in pair if name}
     unknown = [c for c in chosen if c not in known]
     if unknown or not chosen:
