@@ -277,9 +277,8 @@ class Dataset:
         0.5
         """
         n_samples = sum(tr.n_samples for tr in self.trajectories)
-        active = 0
-        if self.has("constraint_active"):
-            active = int(sum(int(tr.constraint_active.sum()) for tr in self.trajectories))
+        active = (int(sum(int(tr.constraint_active.sum()) for tr in self.trajectories))
+                  if self.has("constraint_active") else 0)
         hits: dict = {}
         contacts = equality = 0
         for tr in self.trajectories:
@@ -379,10 +378,7 @@ def load_dataset(path) -> Dataset:
     trajectories = []
     ids = arrays["trajectory"]
     for k, (a, b) in enumerate(bounds):
-        series = {}
-        for key in SERIES + MASKS:
-            if key in arrays:
-                series[key] = arrays[key][a:b]
+        series = {key: arrays[key][a:b] for key in SERIES + MASKS if key in arrays}
         info = infos[k] if isinstance(infos, list) and len(infos) == len(bounds) else {}
         try:
             trajectories.append(Trajectory(t=t[a:b], info=info, **series))

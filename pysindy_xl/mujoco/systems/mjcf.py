@@ -126,10 +126,8 @@ class MJCFSystem(MuJoCoSystem):
             self._parameters["joints"] = list(self.joint_names)
 
     def _select_joints(self, model, joints):
-        if isinstance(joints, str):
-            joints = [joints]
         try:
-            joints = list(joints)
+            joints = [joints] if isinstance(joints, str) else list(joints)
         except TypeError:
             raise TypeError(f"joints: expected a list of joint names, got {joints!r}") from None
         mujoco = import_mujoco()
