@@ -28,10 +28,8 @@ _TIME_NAMES = ("t", "time")
 
 def _sniff_delimiter(header_line: str, delimiter: str) -> str | None:
     """The delimiter the header seems to use when it is not ``delimiter``."""
-    for candidate in (",", ";", "\t", "|", " "):
-        if candidate != delimiter and candidate in header_line.strip():
-            return candidate
-    return None
+    return next((candidate for candidate in (",", ";", "\t", "|", " ")
+                 if candidate != delimiter and candidate in header_line.strip()), None)
 
 
 def _read_text_table(path: str, delimiter: str):
@@ -46,8 +44,8 @@ def _read_text_table(path: str, delimiter: str):
     lines = [(k, line) for k, line in lines if line.strip() and not line.lstrip().startswith("#")]
     if not lines:
         raise DatasetError(f"{path!r}: the file is empty (expected a header line and data rows)")
-    reader = csv.reader([line for _, line in lines], delimiter=delimiter, skipinitialspace=True)
-    rows = list(reader)
+    rows = list(csv.reader([line for _, line in lines], delimiter=delimiter,
+                           skipinitialspace=True))
     header = [name.strip() for name in rows[0]]
     if len(header) == 1:
         other = _sniff_delimiter(lines[0][1], delimiter)
