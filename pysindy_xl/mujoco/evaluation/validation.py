@@ -163,11 +163,9 @@ def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVE
         failure = "incomplete prediction"
     error = prediction[:, :n] - reference[:k, :n]
     simulated = float(np.sqrt(np.mean(error**2))) if k else np.inf
-    if k == len(t):
-        per_coordinate = np.sqrt(np.mean(error**2, axis=0))
-        rmse = simulated
-    else:  # the model could not follow the whole horizon: no finite error over it
-        per_coordinate, rmse = np.full(n, np.inf), np.inf
+    # a model that could not follow the whole horizon has no finite error over it
+    per_coordinate, rmse = ((np.sqrt(np.mean(error**2, axis=0)), simulated) if k == len(t)
+                            else (np.full(n, np.inf), np.inf))
     scale = np.maximum(1.0, np.ptp(reference[:, :n], axis=0))
     exceeded = np.flatnonzero(np.any(np.abs(error) > divergence_bound * scale, axis=1))
     divergence_time = None
@@ -332,8 +330,7 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     elif np.any(forces != 0):
         # A C2 cubic spline of the force samples: the adaptive integrator rejects many steps at
         # the kinks of a piecewise-linear interpolant.
-        spline = CubicSpline(trajectory.t, forces, axis=0)
-        use_forces = spline
+        use_forces = CubicSpline(trajectory.t, forces, axis=0)
     failure = None
     try:
         prediction = model.simulate(reference[0], trajectory.t, use_forces, **options)
