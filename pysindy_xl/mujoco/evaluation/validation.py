@@ -175,15 +175,14 @@ def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVE
         divergence_time = float(t[k]) if k else float(t[0])
     names = tuple(coordinate_names) if coordinate_names is not None else tuple(
         f"q{i}" for i in range(n))
-    return ValidationResult(
-        t=t, reference=reference, prediction=prediction,
-        forces=np.zeros((len(t), n)) if forces is None else np.asarray(forces, dtype=float),
-        position_rmse=rmse, position_rmse_per_coordinate=per_coordinate,
-        divergence_time=divergence_time,
-        valid=divergence_time is None and failure is None,
-        failure=failure, divergence_bound=float(divergence_bound), coordinate_names=names,
-        simulated_rmse=simulated,
-    )
+    return ValidationResult(t=t, reference=reference, prediction=prediction,
+                            forces=np.zeros((len(t), n)) if forces is None
+                            else np.asarray(forces, dtype=float),
+                            position_rmse=rmse, position_rmse_per_coordinate=per_coordinate,
+                            divergence_time=divergence_time,
+                            valid=divergence_time is None and failure is None, failure=failure,
+                            divergence_bound=float(divergence_bound), coordinate_names=names,
+                            simulated_rmse=simulated)
 
 
 def validate_model(model, system=None, trajectory: Trajectory | None = None,

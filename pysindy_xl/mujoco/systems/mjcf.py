@@ -135,9 +135,8 @@ class MJCFSystem(MuJoCoSystem):
                  for j in range(model.njnt)]
         unknown = [j for j in joints if j not in names]
         if unknown or not joints or not all(isinstance(j, str) for j in joints):
-            raise ValueError(
-                f"joints: expected a non-empty list of joint names among {names}, got {joints!r}"
-            )
+            raise ValueError(f"joints: expected a non-empty list of joint names among {names}, "
+                             f"got {joints!r}")
         if not hasattr(mujoco, "MjSpec"):
             raise ValueError(f"joints: selecting joints needs MuJoCo >= 3.3 (MjSpec), found "
                              f"{mujoco.__version__}")

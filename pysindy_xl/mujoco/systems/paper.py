@@ -44,13 +44,16 @@ def _cart(mass: float, damping: float, inner: str) -> str:
 def _link(body: str, joint: str, mass, length, damping, inertia, pos, inner="", indent=6):
     # axis 0 -1 0: a positive angle moves the bob towards +x (textbook convention).
     pad = " " * indent
-    return (f'{pad}<body name="{body}" pos="{pos}">\n{pad}  <joint name="{joint}" type="hinge" '
-            f'axis="0 -1 0" damping="{mjcf_float(damping)}"/>\n{pad}  <inertial pos="0 0 '
-            f'{mjcf_float(-length)}" mass="{mjcf_float(mass)}" diaginertia="{mjcf_float(inertia)} '
-            f'{mjcf_float(inertia)} {mjcf_float(inertia)}"/>\n{pad}  <geom type="capsule" '
-            f'fromto="0 0 0 0 0 {mjcf_float(-length)}" size="0.01" rgba="0.6 0.6 0.6 1"/>\n{pad}  '
-            f'<geom type="sphere" pos="0 0 {mjcf_float(-length)}" size="0.04" rgba="0.8 0.3 0.3 '
-            f'1"/>\n{inner}{pad}</body>\n')
+    return (f'{pad}<body name="{body}" pos="{pos}">\n'
+            f'{pad}  <joint name="{joint}" type="hinge" axis="0 -1 0" '
+            f'damping="{mjcf_float(damping)}"/>\n'
+            f'{pad}  <inertial pos="0 0 {mjcf_float(-length)}" mass="{mjcf_float(mass)}" '
+            f'diaginertia="{mjcf_float(inertia)} {mjcf_float(inertia)} {mjcf_float(inertia)}"/>\n'
+            f'{pad}  <geom type="capsule" fromto="0 0 0 0 0 {mjcf_float(-length)}" size="0.01" '
+            f'rgba="0.6 0.6 0.6 1"/>\n'
+            f'{pad}  <geom type="sphere" pos="0 0 {mjcf_float(-length)}" size="0.04" '
+            f'rgba="0.8 0.3 0.3 1"/>\n'
+            f"{inner}{pad}</body>\n")
 
 
 def _footer(joints) -> str:
@@ -120,11 +123,8 @@ class CartPole(MuJoCoSystem):
         x, th = self.coords.q
         xd, thd = self.coords.qd
         big_m, m, l, g = p["cart_mass"], p["pole_mass"], p["length"], p["gravity"]
-        kinetic = (
-            (big_m + m) * xd**2 / 2
-            + m * l * xd * thd * sp.cos(th)
-            + (m * l**2 + p["point_inertia"]) * thd**2 / 2
-        )
+        kinetic = ((big_m + m) * xd**2 / 2 + m * l * xd * thd * sp.cos(th)
+                   + (m * l**2 + p["point_inertia"]) * thd**2 / 2)
         potential = -m * g * l * sp.cos(th)
         return kinetic - potential
 
@@ -214,11 +214,8 @@ def _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=None, cart_mass=0.0):
         + inertia * (thd1**2 + thd2**2) / 2
     )
     if xd is not None:
-        kinetic += (
-            (cart_mass + m1 + m2) * xd**2 / 2
-            + (m1 + m2) * l1 * xd * thd1 * sp.cos(th1)
-            + m2 * l2 * xd * thd2 * sp.cos(th2)
-        )
+        kinetic += ((cart_mass + m1 + m2) * xd**2 / 2 + (m1 + m2) * l1 * xd * thd1 * sp.cos(th1)
+                    + m2 * l2 * xd * thd2 * sp.cos(th2))
     potential = -(m1 + m2) * g * l1 * sp.cos(th1) - m2 * g * l2 * sp.cos(th2)
     return kinetic - potential
 
