@@ -48,10 +48,8 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     mj_model = system.mj_model()
     data = mujoco.MjData(mj_model)
     matrix = system.force_matrix()
-    q, qd = np.empty((n_states, system.n)), np.empty((n_states, system.n))
+    q, qd, force_ref, gravity_ref = np.empty((4, n_states, system.n))
     mass_ref = np.empty((n_states, system.n, system.n))
-    force_ref = np.empty((n_states, system.n))
-    gravity_ref = np.empty((n_states, system.n))
     full = np.empty((mj_model.nv, mj_model.nv))
     skipped = 0
     for k in range(n_states):

@@ -30,8 +30,8 @@ class _Design:
 
     def __init__(self, catalog, period, n_harmonics, limits):
         self.library = catalog.library().fit()
-        columns = np.arange(len(self.library.get_feature_names()))
-        self.rest = np.setdiff1d(columns, self.library.force_columns_)
+        self.rest = np.setdiff1d(np.arange(len(self.library.get_feature_names())),
+                                 self.library.force_columns_)
         self.beta = catalog.true_coefficients()[self.rest]
         self.n, self.L, self.w = catalog.coords.n, n_harmonics, 2 * np.pi / period
         self.period = period
@@ -54,9 +54,8 @@ class _Design:
     def regressor(self, states):
         """``W`` of stacked states (3, N, n): shape (n, N, p), coordinate-major rows."""
         from ...feature_library import stack_variables
-        n_samples = states.shape[1]
         theta = self.library.transform(stack_variables(*states, np.zeros_like(states[0])))
-        return theta[:, self.rest].reshape(self.n, n_samples, -1)
+        return theta[:, self.rest].reshape(self.n, states.shape[1], -1)
 
     def condition(self, x, bases):
         W = self.regressor(self.states(x, bases))
@@ -84,8 +83,7 @@ class _Design:
                     moved = states.copy()
                     moved[kind, :, j] += sign * steps[kind]
                     sets.append(moved)
-        W_all = self.regressor(np.concatenate(sets, axis=1))  # (n, N * (1 + 6n), p)
-        W_all = W_all.reshape(n, 1 + 6 * n, N, -1)
+        W_all = self.regressor(np.concatenate(sets, axis=1)).reshape(n, 1 + 6 * n, N, -1)
         W = W_all[:, 0]
         moved = W_all[:, 1:].reshape(n, 3, n, 2, N, -1)
         dW = (moved[:, :, :, 0] - moved[:, :, :, 1]) / (2 * steps[None, :, None, None, None])
