@@ -66,8 +66,7 @@ def fit_quality(model, arguments) -> dict:
     if forced:
         target, target_name = theta[:, forces] @ coef[forces], "forces"
     else:
-        norms = np.linalg.norm(theta * coef, axis=0)
-        j = int(np.argmax(norms))
+        j = int(np.argmax(np.linalg.norm(theta * coef, axis=0)))
         target = theta[:, j] * coef[j]
         target_name = model.get_feature_names()[origin.columns[j]]
 

@@ -291,12 +291,11 @@ def run_identify(args):
         np.any(tr.tau != 0) for tr in dataset.trajectories)
     verdict = wants_verdict(args, forced)  # held-out torques: the verdict on a robot log
     solver = args.solver
-    if solver == "auto":
-        if not forced:
-            solver = "implicit"
-        else:
-            active = np.any(np.vstack([tr.tau for tr in dataset.trajectories]) != 0, axis=0)
-            solver = "explicit" if active.all() else "mixed"
+    if solver == "auto" and not forced:
+        solver = "implicit"
+    elif solver == "auto":
+        active = np.any(np.vstack([tr.tau for tr in dataset.trajectories]) != 0, axis=0)
+        solver = "explicit" if active.all() else "mixed"
     n_samples = sum(tr.n_samples for tr in dataset.trajectories)
     form = ("weak form: smoothing positions, integrating against test functions"
             if formulation == "weak" else "strong form: catalog at every sample")

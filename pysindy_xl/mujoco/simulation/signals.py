@@ -159,8 +159,8 @@ def motor_tracking(system, model, forcing: str = "explicit", actuators=None,
         raise ValueError(f"control: expected one of {CONTROLS}, got {control!r}")
     if control == "open-loop" or forcing == "implicit":
         return None
-    driven = _driven_mask(system, model, forcing, actuators)
-    candidates = np.flatnonzero(driven & plain_motors(model))
+    candidates = np.flatnonzero(_driven_mask(system, model, forcing, actuators)
+                                & plain_motors(model))
     if control == "auto":
         if not len(candidates):
             return None
