@@ -327,12 +327,10 @@ def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: 
     predicted = [np.empty_like(run["u"]) for run in runs]
     totals, names = [], None
     for fold in folds:
-        held = {(k, a, b) for k, a, b in fold}
         pieces = []
         for k, run in enumerate(runs):
-            cuts = [(a, b) for kk, a, b in held if kk == k]
             keep = np.ones(len(run["t"]), dtype=bool)
-            for a, b in cuts:
+            for a, b in [(a, b) for kk, a, b in fold if kk == k]:
                 keep[a:b] = False
             edges = np.flatnonzero(np.diff(np.r_[0, keep.astype(int), 0]))
             pieces += [(k, a, b) for a, b in zip(edges[::2], edges[1::2], strict=True)]

@@ -43,9 +43,8 @@ def system_by_name(name, joints=None):
     try:
         if joints is None:
             return get_system(name)
-        system = get_system(name) if isinstance(name, MuJoCoSystem) else None
-        if system is None and not (isinstance(name, str)
-                                   and name.lower().endswith((".xml", ".urdf"))):
+        if not isinstance(name, MuJoCoSystem) and not (
+                isinstance(name, str) and name.lower().endswith((".xml", ".urdf"))):
             raise CLIError(f"--joints: only for MJCF .xml and URDF models; {name!r} is a shipped "
                            "system whose joints are all identified")
         return get_system(name, joints=joints)
@@ -223,9 +222,7 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
         model.fit(**arguments)
     except (RuntimeError, ValueError, np.linalg.LinAlgError) as error:
         raise CLIError(f"identification failed ({type(error).__name__}): {error}") from None
-    if return_arguments:
-        return model, arguments
-    return model
+    return (model, arguments) if return_arguments else model
 
 
 def summarize_coefficients(system, model):
