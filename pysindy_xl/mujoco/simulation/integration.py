@@ -80,9 +80,7 @@ class Integration:
 
     def to_dict(self) -> dict:
         """JSON-serializable description (the fields plus ``step``, ``stability``, ``bias``)."""
-        out = asdict(self)
-        out.update(step=self.step, stability=self.stability, bias=self.bias)
-        return out
+        return {**asdict(self), "step": self.step, "stability": self.stability, "bias": self.bias}
 
 
 def _stiffness(model, data) -> tuple[np.ndarray, np.ndarray]:
