@@ -108,12 +108,10 @@ def data_lines(system, dataset):
     if meta.get("derivatives") == "none":
         lines.append(f"  noise model {meta['noise_model']}: noisy positions only, no velocity "
                      "or acceleration given (weak formulation on smoothed states)")
-    excluded = getattr(system, "excluded_joints", ())
-    if excluded:
+    if excluded := getattr(system, "excluded_joints", ()):
         lines.append(f"  joints locked at their reference pose (not identified): "
                      f"{', '.join(excluded)}")
-    trimmed = getattr(system, "trimmed_keyframes", ())
-    if trimmed:
+    if trimmed := getattr(system, "trimmed_keyframes", ()):
         lines.append(f"  keyframes cut to the identified joints: {', '.join(trimmed)}")
     summary = meta.get("constraints", {})
     if summary.get("active_fraction"):
@@ -187,8 +185,7 @@ def check_solver(solver, forced, threshold, auto=False):
 def coulomb_law(args, dataset=None) -> str:
     """``--coulomb-law``, or the default of the data's source: ``mujoco`` for data MuJoCo
     simulated, ``smooth`` for any other log and with joint models."""
-    law = getattr(args, "coulomb_law", None)
-    if law is not None:
+    if (law := getattr(args, "coulomb_law", None)) is not None:
         return law
     if getattr(args, "joint_models", None) is not None:
         return "smooth"

@@ -12,10 +12,9 @@ a fixed or affine gain and no or an affine bias (``mj_fwdActuation``):
     \\mathrm{qfrc\\_actuator}_j = \\mathrm{clip}\\big(\\textstyle\\sum_a g_a F_a,
         \\mathrm{actuatorfrcrange}_j\\big)
 
-(``p``: ``gainprm``, ``b``: ``biasprm``; a ``position`` servo has ``p = (kp, 0, 0)``,
-``b = (0, -kp, -kv)``). Joint damping, armature, springs and dry friction are the physics the
-identified model contains, not part of it. Driving an identified model by this law is the
-closed-loop experiment MuJoCo ran (:func:`~pysindy_xl.mujoco.validate_model`).
+(``p``: ``gainprm``, ``b``: ``biasprm``; a ``position`` servo: ``p = (kp, 0, 0)``,
+``b = (0, -kp, -kv)``). Joint damping, armature, springs and dry friction belong to the
+identified model; :func:`~pysindy_xl.mujoco.validate_model` drives a model by this law.
 """
 
 from __future__ import annotations
