@@ -53,11 +53,8 @@ def _bag_path(path: str):
 
 def _default_names(joints) -> list:
     """Coordinate names for joint names: symbols need identifiers."""
-    names = []
-    for joint in joints:
-        name = re.sub(r"\W", "_", joint) or "q"
-        names.append(f"q_{name}" if name[0].isdigit() else name)
-    return names
+    names = [re.sub(r"\W", "_", joint) or "q" for joint in joints]
+    return [f"q_{name}" if name[0].isdigit() else name for name in names]
 
 
 def _messages(path: str, topic):
