@@ -33,14 +33,12 @@ _LAZY = {
     "kinematic_catalog": "mujoco.catalogs.kinematic",  # reads MJCF through mujoco: on first use
 }
 
-__all__ = [
-    "Coordinates", "monomials", "products", "LagrangeLibrary", "ClassicalLibrary",
-    "ExternalForces", "CatalogRepartition", "stack_variables", "ExplicitOptimizer",
-    "ImplicitOptimizer", "MixedOptimizer", "EnsembleOptimizer", "PhysicalOptimizer",
-    "NoLawFoundError", "TotalLeastSquaresOptimizer", "XLSINDy", "IdentificationWarning",
-    "UnexplainedCoordinateWarning", "MassMatrixDynamics", "SimulationError",
-    "SingularMassMatrixError", "BumpTestFunctions", "WhittakerSmoother", "kinematic_catalog",
-]
+__all__ = ["Coordinates", "monomials", "products", "LagrangeLibrary", "ClassicalLibrary",
+           "ExternalForces", "CatalogRepartition", "stack_variables", "ExplicitOptimizer",
+           "ImplicitOptimizer", "MixedOptimizer", "EnsembleOptimizer", "PhysicalOptimizer",
+           "NoLawFoundError", "TotalLeastSquaresOptimizer", "XLSINDy", "IdentificationWarning",
+           "UnexplainedCoordinateWarning", "MassMatrixDynamics", "SimulationError",
+           "SingularMassMatrixError", "BumpTestFunctions", "WhittakerSmoother", "kinematic_catalog"]
 
 if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
     from ._validation import IdentificationWarning, UnexplainedCoordinateWarning

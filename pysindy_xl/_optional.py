@@ -36,10 +36,8 @@ install it with: pip install "pysindy-xl[all]"
     except ImportError as error:
         extra = extra or EXTRAS.get(top)
         how = f'pip install "pysindy-xl[{extra}]"' if extra else f"pip install {top}"
-        raise MissingExtraError(
-            f"{purpose or name} needs the optional package {top!r}, which is not installed "
-            f"({error}); install it with: {how}"
-        ) from error
+        raise MissingExtraError(f"{purpose or name} needs the optional package {top!r}, which is "
+                                f"not installed ({error}); install it with: {how}") from error
 
 
 def lazy_attributes(package: str, table: dict):

@@ -76,8 +76,7 @@ def check_option(name: str, value, kind: str, *, choices=(), low=None, high=None
     if kind == "int" and real and not integral:  # a number, but not a whole one
         raise ValueError(f"{name}: expected {expected}, got {value!r}")
     if (kind == "int" and not integral) or (kind == "real" and not real):
-        raise TypeError(f"{name}: expected {expected}, got the {type(value).__name__} "
-                        f"{value!r}")
+        raise TypeError(f"{name}: expected {expected}, got the {type(value).__name__} {value!r}")
     value = int(value) if kind == "int" else float(value)
     if kind == "real" and (math.isnan(value) or (math.isinf(value) and not allow_inf)):
         raise ValueError(f"{name}: expected {expected}, got {value!r}")
@@ -116,8 +115,7 @@ def check_numeric_array(a, name: str, *, ndim=None, min_samples: int = 1,
     if isinstance(a, (str, bytes)):
         raise TypeError(f"{name}: expected an array of real numbers, got a {type(a).__name__}")
     if isinstance(a, type):
-        raise TypeError(f"{name}: expected an array of real numbers, got the class "
-                        f"{a.__name__}")
+        raise TypeError(f"{name}: expected an array of real numbers, got the class {a.__name__}")
     if hasattr(a, "tocsr") and hasattr(a, "nnz"):  # scipy.sparse, without importing it
         raise TypeError(f"{name}: sparse input is not supported; pass a dense array "
                         "(e.g. X.toarray())")

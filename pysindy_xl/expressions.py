@@ -23,10 +23,8 @@ FUNCTIONS = {
     "atan": sp.atan, "Abs": sp.Abs, "abs": sp.Abs, "sign": sp.sign,
 }
 _CONSTANTS = {"pi": sp.pi, "E": sp.E}
-_TOKEN = re.compile(
-    r"\s*(?:(?P<num>\d+\.?\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)"
-    r"|(?P<name>[A-Za-z_][A-Za-z_0-9]*)|(?P<op>\*\*|[-+*/^(),]))"
-)
+_TOKEN = re.compile(r"\s*(?:(?P<num>\d+\.?\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)"
+                    r"|(?P<name>[A-Za-z_][A-Za-z_0-9]*)|(?P<op>\*\*|[-+*/^(),]))")
 _MAX_LENGTH = 20_000
 _MAX_DEPTH = 100
 _MAX_NUMBER_DIGITS = 40
@@ -60,8 +58,6 @@ class _FullPrecisionPrinter(StrPrinter):
 def format_expression(expr: sp.Expr) -> str:
     """Text of ``expr`` that :func:`parse_expression` turns back into the same expression.
 
-    Examples
-    --------
     >>> import sympy as sp
     >>> x = sp.Symbol("x")
     >>> format_expression(sp.Float(1 / 3) * sp.cos(x))
@@ -238,10 +234,9 @@ def parse_expression(text: str, symbols: dict[str, sp.Symbol]) -> sp.Expr:
         raise ValueError(f"text: {text[:60]!r} nests functions {size['depth']} deep (at most "
                          f"{_MAX_FUNCTION_DEPTH})")
     if size["terms"] > _MAX_EXPANDED_TERMS or size["operations"] > _MAX_OPERATIONS:
-        raise ValueError(
-            f"text: {text[:60]!r} is too large for a catalog term (about {size['terms']:.3g} "
-            f"terms once expanded, {size['operations']} operations; at most "
-            f"{_MAX_EXPANDED_TERMS} and {_MAX_OPERATIONS})")
+        raise ValueError(f"text: {text[:60]!r} is too large for a catalog term (about "
+                         f"{size['terms']:.3g} terms once expanded, {size['operations']} "
+                         f"operations; at most {_MAX_EXPANDED_TERMS} and {_MAX_OPERATIONS})")
     check_real_expression(expr, "text")
     check_term(expr, "text")
     return expr
@@ -254,8 +249,6 @@ def expression_size(expr: sp.Expr) -> dict:
     ``k`` terms counts ``C(n + k - 1, k - 1)``, a call the size of its argument), ``depth``
     (nesting of function calls) and ``operations`` (nodes of the tree).
 
-    Examples
-    --------
     >>> import sympy as sp
     >>> a, b = sp.symbols("a b")
     >>> expression_size((a + b) ** 3 * sp.sin(sp.cos(a)))
@@ -323,8 +316,6 @@ def check_real_expression(expr: sp.Expr, name: str) -> None:
     """Raise ``ValueError`` (naming ``name``) if ``expr`` holds a non-real or infinite number
     (``zoo``, ``nan``, ``I``), which NumPy would turn into NaN or silently drop.
 
-    Examples
-    --------
     >>> import sympy as sp
     >>> x = sp.Symbol("x")
     >>> check_real_expression(sp.sqrt(-1) * x, "terms")
@@ -335,8 +326,7 @@ def check_real_expression(expr: sp.Expr, name: str) -> None:
     try:
         for sub in sp.preorder_traversal(expr):
             if sub.is_number and (sub.is_real is not True or sub.is_finite is False):
-                raise ValueError(f"{name}: {expr} contains the non-real or infinite number "
-                                 f"{sub}")
+                raise ValueError(f"{name}: {expr} contains the non-real or infinite number {sub}")
     except (OverflowError, RecursionError):
         raise ValueError(f"{name}: a number in the expression is too large to evaluate") \
             from None
@@ -364,5 +354,4 @@ def as_expression(value, symbols: dict[str, sp.Symbol], name: str) -> sp.Expr:
             sp.Integer(int(value))
     if isinstance(value, sp.Expr):
         return value
-    raise TypeError(f"{name}: expected a sympy expression or a string, got "
-                    f"{type(value).__name__}")
+    raise TypeError(f"{name}: expected a sympy expression or a string, got {type(value).__name__}")

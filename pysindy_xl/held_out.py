@@ -3,10 +3,8 @@
 An arm under feedback control diverges when simulated open loop even for a good model, so
 robotics validates by **inverse dynamics**: on data the fit never saw, the torques
 ``tau_hat = M(q) qdd + c(q, qd) + friction`` the model needs to move as recorded
-(:meth:`XLSINDy.predict_forces <pysindy_xl.XLSINDy.predict_forces>`) against the measured ones.
-Per coordinate ``j`` over held-out samples ``s``: ``rms_j = sqrt(mean_s (tau_hat_sj - tau_sj)^2)``
-(force units), ``relative_j = rms_j / sqrt(mean_s tau_sj^2)``, and
-``total = ||tau_hat - tau||_F / ||tau||_F``.
+(:meth:`XLSINDy.predict_forces <pysindy_xl.XLSINDy.predict_forces>`) against the measured ones,
+scored per coordinate and in total (:class:`ForceScore`).
 
 Velocities and accelerations must be the same for every method compared: measured ones when
 given, else :func:`scoring_derivatives` over each whole run (whatever the model's smoother).
@@ -106,8 +104,6 @@ class ForceScore:
     def lines(self, units="N m") -> list:
         """Per-coordinate lines (RMS in ``units``, one or one per coordinate, and %), the total.
 
-        Examples
-        --------
         >>> import numpy as np
         >>> score = ForceScore.from_predictions(["joint_1"], [np.arange(4.0)],
         ...     [np.full((4, 1), 2.0)], [np.full((4, 1), 2.1)], "measured")
@@ -234,8 +230,7 @@ def _with_derivatives(run, smoother, max_frequency=MAX_FREQUENCY):
     if smoother is not None:
         source = source.replace(SCORING_DERIVATIVES, repr(smoother))
     elif max_frequency != MAX_FREQUENCY:
-        source = source.replace(f"at most {MAX_FREQUENCY:g} Hz",
-                                f"at most {max_frequency:g} Hz")
+        source = source.replace(f"at most {MAX_FREQUENCY:g} Hz", f"at most {max_frequency:g} Hz")
     return q, qd, qdd, source
 
 
@@ -332,12 +327,10 @@ def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: 
     predicted = [np.empty_like(run["u"]) for run in runs]
     totals, names = [], None
     for fold in folds:
-        held = {(k, a, b) for k, a, b in fold}
         pieces = []
         for k, run in enumerate(runs):
-            cuts = [(a, b) for kk, a, b in held if kk == k]
             keep = np.ones(len(run["t"]), dtype=bool)
-            for a, b in cuts:
+            for a, b in [(a, b) for kk, a, b in fold if kk == k]:
                 keep[a:b] = False
             edges = np.flatnonzero(np.diff(np.r_[0, keep.astype(int), 0]))
             pieces += [(k, a, b) for a, b in zip(edges[::2], edges[1::2], strict=True)]

@@ -46,8 +46,6 @@ class ModelFile:
 def save_model(model, path) -> None:
     """Write a fitted :class:`~pysindy_xl.XLSINDy` to ``path`` as JSON.
 
-    Examples
-    --------
     >>> import json, os, tempfile
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
@@ -151,8 +149,6 @@ def _expect(condition: bool, path, what: str):
 def read_model_file(path) -> ModelFile:
     """Read and check a model written by :func:`save_model` into a :class:`ModelFile`.
 
-    Examples
-    --------
     >>> import os, tempfile
     >>> path = os.path.join(tempfile.mkdtemp(), "bad.json")
     >>> _ = open(path, "w").write('{"format": "something else"}')
@@ -194,18 +190,16 @@ def read_model_file(path) -> ModelFile:
     except ValueError as err:
         raise _fail(path, str(err)) from None
     probability, interval = _uncertainty_from_document(document, len(feature_names), path)
-    fitted = {
-        "feature_library_": library,
-        "optimizer_": optimizer,
-        "coef_": np.asarray(coef, dtype=float),
-        "dropped_features_": {str(k): str(v) for k, v in dropped.items()},
-        "n_coordinates_": coords.n,
-        "forced_coordinates_": np.asarray(forced, dtype=bool),
-        "still_coordinates_": list(still),
-        "inclusion_probability_": probability,
-        "coef_interval_": interval,
-        **_training_from_document(document.get("training"), len(feature_names), path),
-    }
+    fitted = {"feature_library_": library,
+              "optimizer_": optimizer,
+              "coef_": np.asarray(coef, dtype=float),
+              "dropped_features_": {str(k): str(v) for k, v in dropped.items()},
+              "n_coordinates_": coords.n,
+              "forced_coordinates_": np.asarray(forced, dtype=bool),
+              "still_coordinates_": list(still),
+              "inclusion_probability_": probability,
+              "coef_interval_": interval,
+              **_training_from_document(document.get("training"), len(feature_names), path)}
     return ModelFile(_settings_from_document(document, path), library, optimizer, fitted)
 
 
@@ -359,24 +353,21 @@ def _training_spec(model) -> dict:
     names = {kind: name for name, kind in _selection_types().items()}
     if type(selection) in names:
         selection = {"type": names[type(selection)],
-                     "fields": {field.name: _field_json(field.name,
-                                                        getattr(selection, field.name))
+                     "fields": {field.name: _field_json(field.name, getattr(selection, field.name))
                                 for field in dataclasses.fields(selection)}}
     else:
         selection = None
-    return {
-        "formulation": getattr(model, "formulation_", None),
-        "n_samples": int(getattr(model, "n_samples_", 0)),
-        "weak_info": None if info is None else {
-            "half_width": float(info["half_width"]),
-            "test_functions": [int(k) for k in info["test_functions"]],
-            "noise": None if info["noise"] is None else _floats(info["noise"])},
-        "selection": selection,
-        "mass_matrix_check": None if check is None else {
-            key: _floats([value])[0] for key, value in check.items()},
-        "physical_consistency": _consistency_json(getattr(model, "physical_consistency_",
-                                                          None)),
-    }
+    return {"formulation": getattr(model, "formulation_", None),
+            "n_samples": int(getattr(model, "n_samples_", 0)),
+            "weak_info": None if info is None else {
+                "half_width": float(info["half_width"]),
+                "test_functions": [int(k) for k in info["test_functions"]],
+                "noise": None if info["noise"] is None else _floats(info["noise"])},
+            "selection": selection,
+            "mass_matrix_check": None if check is None else {
+                key: _floats([value])[0] for key, value in check.items()},
+            "physical_consistency": _consistency_json(getattr(model, "physical_consistency_",
+                                                              None))}
 
 
 _CONSISTENCY_KEYS = ("consistent", "cost", "negative_friction", "min_pseudo_inertia_eigenvalue")
@@ -388,8 +379,7 @@ def _consistency_json(report):
         return None
     return {"consistent": bool(report["consistent"]), "cost": _floats([report["cost"]])[0],
             "negative_friction": [str(name) for name in report["negative_friction"]],
-            "min_pseudo_inertia_eigenvalue": _floats(
-                [report["min_pseudo_inertia_eigenvalue"]])[0]}
+            "min_pseudo_inertia_eigenvalue": _floats([report["min_pseudo_inertia_eigenvalue"]])[0]}
 
 
 def _consistency_from_document(report, path):

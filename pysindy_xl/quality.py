@@ -66,8 +66,7 @@ def fit_quality(model, arguments) -> dict:
     if forced:
         target, target_name = theta[:, forces] @ coef[forces], "forces"
     else:
-        norms = np.linalg.norm(theta * coef, axis=0)
-        j = int(np.argmax(norms))
+        j = int(np.argmax(np.linalg.norm(theta * coef, axis=0)))
         target = theta[:, j] * coef[j]
         target_name = model.get_feature_names()[origin.columns[j]]
 
@@ -97,8 +96,6 @@ def force_prediction(model, x, t, u, x_dot=None, x_ddot=None) -> dict:
     times; derivatives not given come from the model's smoother. Returns ``relative_rms`` (per
     coordinate name), ``worst`` (the largest) and ``predicted`` (N, n).
 
-    Examples
-    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
@@ -145,8 +142,6 @@ def _stability(model):
 def quality_lines(quality) -> list:
     """The lines ``pysindy-xl identify`` prints for a :func:`fit_quality` result.
 
-    Examples
-    --------
     >>> quality = {"r2": 0.999, "r2_per_coordinate": {"theta": 0.999}, "formulation": "weak",
     ...            "target": "forces", "rows": 120, "cv_error": 1e-3, "cv_noise_ratio": None,
     ...            "stability": {"kept_least": ["L[cos(theta)]", 0.95],
@@ -185,9 +180,8 @@ def quality_lines(quality) -> list:
         lines.append(f"  not identified, held still: {', '.join(quality['held_still'])} (no "
                      "force and no acceleration beyond the noise in the data)")
     if quality.get("cv_noise_ratio") is not None:
-        lines.append(f"  held-out noise ratio of the chosen law (5-fold cross-validation; about "
-                     f"1 when it leaves only the propagated noise): "
-                     f"{quality['cv_noise_ratio']:.3g}")
+        lines.append("  held-out noise ratio of the chosen law (5-fold cross-validation; about 1 "
+                     f"when it leaves only the propagated noise): {quality['cv_noise_ratio']:.3g}")
     from .report.equations import consistency_line  # sympy: not imported by the CLI's --help
     consistency = consistency_line(quality.get("physical_consistency"))
     if consistency:
@@ -202,8 +196,6 @@ def plot_identification(model, trajectory, path, title=None, forced=True) -> dic
     ``path``. Returns ``rmse`` (per coordinate over the simulated span), ``simulated_until``
     (s) and ``diverged`` (bool).
 
-    Examples
-    --------
     >>> import numpy as np, pathlib, tempfile, pysindy_xl as px
     >>> from pysindy_xl.mujoco import Trajectory
     >>> c = px.Coordinates(["x"])
@@ -243,8 +235,7 @@ def plot_identification(model, trajectory, path, title=None, forced=True) -> dic
     for i, (ax, name) in enumerate(zip(axes, names, strict=True)):
         ax.plot(t, q[:, i], color="black", linestyle="--", linewidth=1.2, label="recorded")
         if k:
-            ax.plot(t[:k], states[:, i], color="tab:blue", linewidth=1.2,
-                    label="identified model")
+            ax.plot(t[:k], states[:, i], color="tab:blue", linewidth=1.2, label="identified model")
         ax.set_ylabel(name)
     axes[0].legend(loc="upper right", fontsize="small")
     axes[-1].set_xlabel("t (s)")

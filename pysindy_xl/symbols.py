@@ -53,16 +53,13 @@ class Coordinates:
             if not isinstance(name, str) or not name.isidentifier() or keyword.iskeyword(name):
                 raise ValueError(f"names: {name!r} is not a valid identifier")
             if not name.isascii():
-                raise ValueError(
-                    f"names: {name!r} is not ASCII; coordinate names must be ASCII identifiers "
-                    "(saved models spell them in the restricted term grammar), e.g. 'theta'"
-                )
+                raise ValueError(f"names: {name!r} is not ASCII; coordinate names must be ASCII "
+                                 "identifiers (saved models spell them in the restricted term "
+                                 "grammar), e.g. 'theta'")
             if (name in _RESERVED or name.startswith("tau_")
                     or name.endswith(("_dot", "_ddot"))):
-                raise ValueError(
-                    f"names: {name!r} is reserved (time 't', constants 'E', 'pi', 'I', "
-                    "function names, 'tau_*', '*_dot', '*_ddot')"
-                )
+                raise ValueError(f"names: {name!r} is reserved (time 't', constants 'E', 'pi', "
+                                 "'I', function names, 'tau_*', '*_dot', '*_ddot')")
         if len(set(names)) != len(names):
             raise ValueError(f"names: duplicate coordinate names in {names}")
         self.names = names
@@ -124,12 +121,7 @@ _CACHED_CHECKS = 4096
 
 
 def _unique(exprs: Iterable[sp.Expr]) -> list[sp.Expr]:
-    seen, out = set(), []
-    for e in exprs:
-        if e not in seen and e != 0:
-            seen.add(e)
-            out.append(e)
-    return out
+    return list(dict.fromkeys(e for e in exprs if e != 0))
 
 
 def monomials(exprs, degree: int) -> list[sp.Expr]:
@@ -137,8 +129,6 @@ def monomials(exprs, degree: int) -> list[sp.Expr]:
 
     Returns the distinct products (no constant), by degree then by input order.
 
-    Examples
-    --------
     >>> import sympy as sp
     >>> a, b = sp.symbols("a b")
     >>> monomials([a, b], 2)
@@ -147,11 +137,8 @@ def monomials(exprs, degree: int) -> list[sp.Expr]:
     exprs = as_expr_list(exprs, "exprs")
     from ._validation import check_option
     degree = check_option("degree", degree, "int", low=1)
-    out = []
-    for d in range(1, degree + 1):
-        for combo in itertools.combinations_with_replacement(exprs, d):
-            out.append(sp.Mul(*combo))
-    return _unique(out)
+    return _unique(sp.Mul(*combo) for d in range(1, degree + 1)
+                   for combo in itertools.combinations_with_replacement(exprs, d))
 
 
 def products(terms_a, terms_b) -> list[sp.Expr]:
@@ -159,8 +146,6 @@ def products(terms_a, terms_b) -> list[sp.Expr]:
 
     Include ``1`` in either list to keep the terms of the other list alone.
 
-    Examples
-    --------
     >>> import sympy as sp
     >>> a, b = sp.symbols("a b")
     >>> products([1, a], [b, a])

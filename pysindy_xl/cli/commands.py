@@ -41,8 +41,6 @@ def run_demo(args) -> dict:
     against a fresh trajectory, print; return the report written to ``args.out/report.json``
     (beside ``validation.png`` unless ``--no-plots``).
 
-    Examples
-    --------
     Half a second of cart-pole data and a short validation (the kinematic catalog):
 
     >>> import tempfile
@@ -121,8 +119,7 @@ def run_demo(args) -> dict:
     metrics = result.to_dict() if result is not None else {"valid": False, "failure": failure}
     print(_validation_line(result, failure, args))
     print("data:")
-    for line in data_lines(system, dataset):
-        print(line)
+    print(*data_lines(system, dataset), sep="\n")
     joints = joint_parameters(system, model)
     for joint, entry in joints.items():
         print(f"  {joint}: " + ", ".join(f"{key} {found:.4g} (MJCF {given:.4g})"
@@ -241,8 +238,6 @@ def run_identify(args):
     (solver from its forces with ``--solver auto``), print the model and its quality, score
     held-out torques, save it with ``--out``; return the fitted model.
 
-    Examples
-    --------
     >>> import pathlib, tempfile
     >>> from pysindy_xl.mujoco import generate_dataset
     >>> data = generate_dataset("cart-pole", n_trajectories=1, duration=0.5, seed=0,
@@ -296,12 +291,11 @@ def run_identify(args):
         np.any(tr.tau != 0) for tr in dataset.trajectories)
     verdict = wants_verdict(args, forced)  # held-out torques: the verdict on a robot log
     solver = args.solver
-    if solver == "auto":
-        if not forced:
-            solver = "implicit"
-        else:
-            active = np.any(np.vstack([tr.tau for tr in dataset.trajectories]) != 0, axis=0)
-            solver = "explicit" if active.all() else "mixed"
+    if solver == "auto" and not forced:
+        solver = "implicit"
+    elif solver == "auto":
+        active = np.any(np.vstack([tr.tau for tr in dataset.trajectories]) != 0, axis=0)
+        solver = "explicit" if active.all() else "mixed"
     n_samples = sum(tr.n_samples for tr in dataset.trajectories)
     form = ("weak form: smoothing positions, integrating against test functions"
             if formulation == "weak" else "strong form: catalog at every sample")
@@ -322,13 +316,11 @@ def run_identify(args):
         quality = None
         print(f"fit quality: not available ({error})")
     if quality is not None:
-        for line in quality_lines(quality):
-            print(line)
+        print(*quality_lines(quality), sep="\n")
     if system.has_ground_truth:
         _, summary = summarize_coefficients(system, model)
-        print(f"against the true model: max coefficient error "
-              f"{summary['max_relative_error']:.2g} (relative), support recovered: "
-              f"{summary['support_recovered']}")
+        print(f"against the true model: max coefficient error {summary['max_relative_error']:.2g} "
+              f"(relative), support recovered: {summary['support_recovered']}")
     score = None
     if verdict and model.dynamics_ is None:
         print("held-out torque prediction: not available (the identified equations contain "
@@ -342,8 +334,7 @@ def run_identify(args):
             print(f"torque plot: {args.plot} (measured against predicted torques)")
     replay = getattr(args, "open_loop", None) or (args.plot if score is None else None)
     if replay:  # open loop: a fair check of a free system, not of an arm under feedback
-        progress(f"simulating the model from the first trajectory's initial state for "
-                 f"{replay}")
+        progress(f"simulating the model from the first trajectory's initial state for {replay}")
         if model.dynamics_ is None:
             raise CLIError("--plot: the identified equations contain no acceleration; "
                            "nothing to simulate")
@@ -463,8 +454,6 @@ def _save_atomically(model, path):
 def run_generate(args):
     """Run ``pysindy-xl generate``; returns the NPZ path written (the JSON beside it).
 
-    Examples
-    --------
     >>> import pathlib, tempfile
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     args = build_parser().parse_args(["generate", "cart-pole", f"{tmp}/data.npz",
@@ -479,8 +468,7 @@ def run_generate(args):
     dataset = generate_data(system, args)
     path = dataset.save(args.out)
     print(f"wrote {path} and {path.with_suffix('.json')}: {dataset}")
-    for line in data_lines(system, dataset):
-        print(line)
+    print(*data_lines(system, dataset), sep="\n")
     return path
 
 

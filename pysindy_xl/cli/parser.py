@@ -102,28 +102,23 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``pysindy-xl`` command: ``demo``, ``identify``, ``generate``
     and ``benchmark`` (:doc:`/cli` describes every option).
 
-    Examples
-    --------
     >>> args = build_parser().parse_args(["demo", "double-pendulum", "--noise", "0.01"])
     >>> args.command, args.system, args.noise, args.catalog, args.solver, args.forcing
     ('demo', 'double-pendulum', 0.01, 'auto', 'auto', 'explicit')
     """
-    parser = argparse.ArgumentParser(
-        prog="pysindy-xl",
-        description="Identify mechanical systems with XLSINDy: MuJoCo demos and your data.",
-    )
+    parser = argparse.ArgumentParser(prog="pysindy-xl", description="Identify mechanical "
+                                     "systems with XLSINDy: MuJoCo demos and your data.")
     from .. import __version__
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     from ..benchmark import add_parser as add_benchmark_parser
     add_benchmark_parser(sub)
 
-    demo = sub.add_parser(
-        "demo", help="generate MuJoCo data, identify, validate, plot",
-        description="Generate randomly forced MuJoCo trajectories of a system, identify its "
-                    "equations of motion, validate the model against a fresh trajectory, print "
-                    "the equations and metrics, and write plots and a JSON report.",
-    )
+    demo = sub.add_parser("demo", help="generate MuJoCo data, identify, validate, plot",
+                          description="Generate randomly forced MuJoCo trajectories of a system, "
+                          "identify its equations of motion, validate the model against a fresh "
+                          "trajectory, print the equations and metrics, and write plots and a "
+                          "JSON report.")
     demo.add_argument("system", metavar="SYSTEM",
                       help="cart-pole, double-pendulum, cart-double-pendulum, triple-pendulum, "
                            "an MJCF .xml or a URDF .urdf")
@@ -141,14 +136,13 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     demo.add_argument("--quiet", action="store_true", help="print only the final summary")
 
-    identify = sub.add_parser(
-        "identify", help="fit your data (CSV or NPZ) and print the model",
-        description="Fit a dataset with a reference catalog and print the model. CSV (.csv, "
-                    ".txt, .tsv): columns t, NAME, optionally NAME_dot, NAME_ddot, tau_NAME, "
-                    "trajectory; --column maps other headers. NPZ: arrays t, q, optionally qd, "
-                    "qdd, tau, trajectory. Coordinates come from --system, --coordinates/"
-                    "--angles, or the CSV header.",
-    )
+    identify = sub.add_parser("identify", help="fit your data (CSV or NPZ) and print the model",
+                              description="Fit a dataset with a reference catalog and print the "
+                              "model. CSV (.csv, .txt, .tsv): columns t, NAME, optionally "
+                              "NAME_dot, NAME_ddot, tau_NAME, trajectory; --column maps other "
+                              "headers. NPZ: arrays t, q, optionally qd, qdd, tau, trajectory. "
+                              "Coordinates come from --system, --coordinates/--angles, or the "
+                              "CSV header.")
     identify.add_argument("data", metavar="DATA",
                           help="a .csv, .tsv, .txt or .npz file, or a ROS bag of "
                                "sensor_msgs/JointState (.bag, or a ROS 2 bag directory)")

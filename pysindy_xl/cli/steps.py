@@ -12,8 +12,6 @@ import numpy as np
 class CLIError(Exception):
     """A bad input or failed step, printed as ``pysindy-xl: error: ...`` with exit status 1.
 
-    Examples
-    --------
     >>> from pysindy_xl.cli import build_parser, run_demo
     >>> args = build_parser().parse_args(["demo", "cart-pole", "--forcing", "implicit",
     ...                                   "--solver", "explicit"])
@@ -45,12 +43,10 @@ def system_by_name(name, joints=None):
     try:
         if joints is None:
             return get_system(name)
-        system = get_system(name) if isinstance(name, MuJoCoSystem) else None
-        if system is None and not (isinstance(name, str)
-                                   and name.lower().endswith((".xml", ".urdf"))):
-            raise CLIError(f"--joints: only for MJCF .xml and URDF models; {name!r} is a "
-                           "shipped system "
-                           "whose joints are all identified")
+        if not isinstance(name, MuJoCoSystem) and not (
+                isinstance(name, str) and name.lower().endswith((".xml", ".urdf"))):
+            raise CLIError(f"--joints: only for MJCF .xml and URDF models; {name!r} is a shipped "
+                           "system whose joints are all identified")
         return get_system(name, joints=joints)
     except (ValueError, TypeError) as error:
         raise CLIError(str(error).replace("joints: ", "--joints: ", 1)) from None
@@ -112,19 +108,16 @@ def data_lines(system, dataset):
     if meta.get("derivatives") == "none":
         lines.append(f"  noise model {meta['noise_model']}: noisy positions only, no velocity "
                      "or acceleration given (weak formulation on smoothed states)")
-    excluded = getattr(system, "excluded_joints", ())
-    if excluded:
+    if excluded := getattr(system, "excluded_joints", ()):
         lines.append(f"  joints locked at their reference pose (not identified): "
                      f"{', '.join(excluded)}")
-    trimmed = getattr(system, "trimmed_keyframes", ())
-    if trimmed:
+    if trimmed := getattr(system, "trimmed_keyframes", ()):
         lines.append(f"  keyframes cut to the identified joints: {', '.join(trimmed)}")
     summary = meta.get("constraints", {})
     if summary.get("active_fraction"):
         hits = ", ".join(f"{j} {c}" for j, c in summary["limit_hits"].items()) or "none"
-        lines.append(f"  constraints act on {summary['active_fraction']:.1%} of the samples "
-                     f"(joint limit samples: {hits}; contact samples: "
-                     f"{summary['contact_samples']})")
+        lines.append(f"  constraints act on {summary['active_fraction']:.1%} of the samples (joint "
+                     f"limit samples: {hits}; contact samples: {summary['contact_samples']})")
     return lines
 
 
@@ -145,10 +138,8 @@ def dataset_for(system, dataset):
     if names == system.coordinate_names:
         return dataset
     if dataset.n != system.n:
-        raise CLIError(
-            f"DATA: the dataset has {dataset.n} coordinates {list(names)}, the system "
-            f"{display_name(system)} has {system.n} {list(system.coordinate_names)}"
-        )
+        raise CLIError(f"DATA: the dataset has {dataset.n} coordinates {list(names)}, the system "
+                       f"{display_name(system)} has {system.n} {list(system.coordinate_names)}")
     if names == tuple(f"q{k}" for k in range(dataset.n)):  # unnamed: adopt the system's
         return Dataset(dataset.trajectories, system.coordinate_names, dataset.metadata)
     joint_forces = any(getattr(tr, key) is not None for tr in dataset.trajectories
@@ -162,10 +153,8 @@ def dataset_for(system, dataset):
                                                    SERIES if getattr(tr, key) is not None})
                         for tr in dataset.trajectories]
         return Dataset(trajectories, system.coordinate_names, dataset.metadata)
-    raise CLIError(
-        f"DATA: coordinate names {list(names)} do not match the system {display_name(system)} "
-        f"{list(system.coordinate_names)}"
-    )
+    raise CLIError(f"DATA: coordinate names {list(names)} do not match the system "
+                   f"{display_name(system)} {list(system.coordinate_names)}")
 
 
 def resolve_catalog(args, system):
@@ -196,8 +185,7 @@ def check_solver(solver, forced, threshold, auto=False):
 def coulomb_law(args, dataset=None) -> str:
     """``--coulomb-law``, or the default of the data's source: ``mujoco`` for data MuJoCo
     simulated, ``smooth`` for any other log and with joint models."""
-    law = getattr(args, "coulomb_law", None)
-    if law is not None:
+    if (law := getattr(args, "coulomb_law", None)) is not None:
         return law
     if getattr(args, "joint_models", None) is not None:
         return "smooth"
@@ -231,9 +219,7 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
         model.fit(**arguments)
     except (RuntimeError, ValueError, np.linalg.LinAlgError) as error:
         raise CLIError(f"identification failed ({type(error).__name__}): {error}") from None
-    if return_arguments:
-        return model, arguments
-    return model
+    return (model, arguments) if return_arguments else model
 
 
 def summarize_coefficients(system, model):
@@ -254,13 +240,11 @@ def summarize_coefficients(system, model):
         truth[forces] = coef[forces]
     scale = np.abs(truth).max()
     active = truth != 0
-    summary = {
-        "max_relative_error": float(np.abs(coef - truth).max() / scale),
-        "true_terms": int(active.sum()),
-        "identified_terms": int(np.count_nonzero(coef)),
-        "support_recovered": bool(np.array_equal(coef != 0, active)),
-        "true_model_missing_from_catalog": missing,
-    }
+    summary = {"max_relative_error": float(np.abs(coef - truth).max() / scale),
+               "true_terms": int(active.sum()),
+               "identified_terms": int(np.count_nonzero(coef)),
+               "support_recovered": bool(np.array_equal(coef != 0, active)),
+               "true_model_missing_from_catalog": missing}
     return truth, summary
 
 
@@ -295,7 +279,6 @@ def model_lines(model, truth=None):
         physical_parameters,
         prints_equations,
     )
-
     lines = []
     if has_parameter_map(model.feature_library_):
         reference = (None if truth is None
@@ -305,8 +288,7 @@ def model_lines(model, truth=None):
         lagrangian = model.lagrangian()
         if lagrangian != 0:
             lines.append(f"L = {_rounded(lagrangian)}")
-        names = model.feature_library_.coords.names
-        for name, eq in zip(names, model.equations(), strict=True):
-            lines.append(f"({name}) {eq}")
+        lines += [f"({name}) {eq}" for name, eq in
+                  zip(model.feature_library_.coords.names, model.equations(), strict=True)]
     note = held_note(model.still_coordinates_)
     return lines + ([note] if note else [])

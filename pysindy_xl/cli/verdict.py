@@ -17,8 +17,7 @@ def wants_verdict(args, forced: bool) -> bool:
     forces identified against a ``--system`` (unless ``--cv-blocks 0``)."""
     blocks = getattr(args, "cv_blocks", 0)
     if blocks == 1 or blocks < 0:
-        raise CLIError(f"--cv-blocks: expected 0 (no cross-validation) or at least 2, got "
-                       f"{blocks}")
+        raise CLIError(f"--cv-blocks: expected 0 (no cross-validation) or at least 2, got {blocks}")
     if getattr(args, "validate", None):
         if not forced:
             raise CLIError("--validate: the training data have no forces; held-out torque "
@@ -83,6 +82,5 @@ def held_out_verdict(args, model, system, arguments, load, progress):
                  f"by time-blocked cross-validation ({args.cv_blocks} contiguous blocks of the "
                  "run, each predicted by the model refitted on the others)")
     print(f"held-out torque prediction {where}; derivatives: {score.derivatives}:")
-    for line in score.lines(_units(system, score.names)):
-        print(line)
+    print(*score.lines(_units(system, score.names)), sep="\n")
     return score

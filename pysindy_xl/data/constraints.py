@@ -69,8 +69,6 @@ def unconstrained_windows(support, constraint_active) -> np.ndarray:
     (``Phi != 0`` of one trajectory); ``constraint_active`` (N,) is that trajectory's mask.
     Returns a bool array (W,), ``True`` for the windows to keep.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> support = np.array([[1, 1, 1, 0, 0, 0],
     ...                     [0, 0, 1, 1, 1, 0],
@@ -81,10 +79,8 @@ def unconstrained_windows(support, constraint_active) -> np.ndarray:
     active = _mask(constraint_active)
     support = np.asarray(support)
     if support.ndim != 2 or support.shape[1] != active.size:
-        raise ValueError(
-            f"support: expected shape (n_windows, {active.size}) like constraint_active, got "
-            f"{support.shape}"
-        )
+        raise ValueError(f"support: expected shape (n_windows, {active.size}) like "
+                         f"constraint_active, got {support.shape}")
     return ~(support != 0)[:, active].any(axis=1)
 
 
@@ -93,16 +89,13 @@ def contiguous_segments(keep, min_length: int = 2) -> list[slice]:
 
     ``keep`` (N,) marks the samples to keep (e.g. from :func:`unconstrained_samples`).
 
-    Examples
-    --------
     >>> import numpy as np
     >>> contiguous_segments(np.array([1, 1, 0, 1, 0, 1, 1, 1], dtype=bool))
     [slice(0, 2, None), slice(5, 8, None)]
     """
     keep = _mask(keep, "keep")
-    if isinstance(min_length, bool) or not isinstance(min_length, (int, np.integer)) or (
-        min_length < 1
-    ):
+    if (isinstance(min_length, bool) or not isinstance(min_length, (int, np.integer))
+            or min_length < 1):
         raise ValueError(f"min_length: expected an integer >= 1, got {min_length!r}")
     edges = np.diff(np.concatenate([[0], keep.astype(np.int8), [0]]))
     starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)

@@ -79,10 +79,8 @@ class Trajectory:
         if self.constraint_active is not None:
             mask = np.asarray(self.constraint_active)
             if mask.shape != (len(self.t),) or mask.dtype.kind not in "biu":
-                raise DatasetError(
-                    f"constraint_active: expected a boolean array of shape ({len(self.t)},), "
-                    f"got {mask.dtype} {mask.shape}"
-                )
+                raise DatasetError("constraint_active: expected a boolean array of shape "
+                                   f"({len(self.t)},), got {mask.dtype} {mask.shape}")
             self.constraint_active = mask.astype(bool)
 
     @property
@@ -161,10 +159,8 @@ class Dataset:
                             f"{coordinate_names!r}")
         for k, tr in enumerate(trajectories):
             if tr.q.shape[1] != len(names):
-                raise DatasetError(
-                    f"trajectories: trajectory {k} has {tr.q.shape[1]} coordinates, "
-                    f"coordinate_names has {len(names)}"
-                )
+                raise DatasetError(f"trajectories: trajectory {k} has {tr.q.shape[1]} coordinates, "
+                                   f"coordinate_names has {len(names)}")
             for key in SERIES[1:] + MASKS:
                 if (getattr(tr, key) is None) != (getattr(trajectories[0], key) is None):
                     raise DatasetError(f"trajectories: {key!r} present in some trajectories only")
@@ -245,16 +241,13 @@ class Dataset:
             extra = [getattr(tr, key) for tr in trs]
             force_lists = extra if force_lists is None else [
                 f + c for f, c in zip(force_lists, extra, strict=True)]
-        arguments = {
-            "x": [tr.q for tr in trs],
-            "t": [tr.t for tr in trs],
-            "x_dot": [tr.qd for tr in trs] if self.has("qd") else None,
-            "x_ddot": [tr.qdd for tr in trs] if self.has("qdd") else None,
-            "u": force_lists,
-        }
+        arguments = {"x": [tr.q for tr in trs],
+                     "t": [tr.t for tr in trs],
+                     "x_dot": [tr.qd for tr in trs] if self.has("qd") else None,
+                     "x_ddot": [tr.qdd for tr in trs] if self.has("qdd") else None,
+                     "u": force_lists}
         if constraints != "exclude" or not self.has("constraint_active") or not any(
-            tr.constraint_active.any() for tr in trs
-        ):
+                tr.constraint_active.any() for tr in trs):
             return arguments
         margin = (0 if derivatives else 10) if margin is None else margin
         min_length = (5 if derivatives else 25) if min_length is None else min_length
@@ -266,11 +259,9 @@ class Dataset:
                     if value is not None:
                         out[key].append(value[k][part])
         if not out["x"]:
-            raise ValueError(
-                "constraints: every sample is constrained (limits, contacts or equality "
-                "constraints act throughout); lower the forcing amplitude or the initial "
-                "spread, or use constraints='known'"
-            )
+            raise ValueError("constraints: every sample is constrained (limits, contacts or "
+                             "equality constraints act throughout); lower the forcing amplitude or "
+                             "the initial spread, or use constraints='known'")
         return out
 
     def constraint_summary(self) -> dict:
@@ -278,8 +269,6 @@ class Dataset:
         constraint data), ``unconstrained_samples``, ``limit_hits`` (``{joint: samples}``, from
         the trajectories' ``info``), ``contact_samples``, ``equality_samples``.
 
-        Examples
-        --------
         >>> import numpy as np
         >>> t = np.linspace(0, 1, 4)
         >>> tr = Trajectory(t, np.sin(t), constraint_active=[0, 1, 1, 0],
@@ -288,9 +277,8 @@ class Dataset:
         0.5
         """
         n_samples = sum(tr.n_samples for tr in self.trajectories)
-        active = 0
-        if self.has("constraint_active"):
-            active = int(sum(int(tr.constraint_active.sum()) for tr in self.trajectories))
+        active = (int(sum(int(tr.constraint_active.sum()) for tr in self.trajectories))
+                  if self.has("constraint_active") else 0)
         hits: dict = {}
         contacts = equality = 0
         for tr in self.trajectories:
@@ -305,8 +293,6 @@ class Dataset:
     def to_arrays(self) -> dict:
         """The NPZ arrays of the module docstring: trajectories concatenated, with ids and metadata.
 
-        Examples
-        --------
         >>> import numpy as np
         >>> t = np.linspace(0, 1, 11)
         >>> trajectory = Trajectory(t, np.sin(t))
@@ -334,8 +320,6 @@ class Dataset:
         """Write ``path`` (``.npz`` appended when missing) and return it; ``write_json`` also
         writes the metadata to the same name with ``.json`` (they are inside the NPZ anyway).
 
-        Examples
-        --------
         >>> import tempfile, pathlib, numpy as np
         >>> t = np.linspace(0, 1, 11)
         >>> data = Dataset([Trajectory(t, np.sin(t))], ["theta"], {"system": "pendulum"})
@@ -375,8 +359,6 @@ def load_dataset(path) -> Dataset:
     ``path`` holds at least ``t`` (N,) and ``q`` (N, n) (the module docstring lists the
     arrays); a :class:`DatasetError` names a missing or malformed array.
 
-    Examples
-    --------
     A user's own NPZ needs only ``t`` and ``q``; ``trajectory`` ids split it:
 
     >>> import tempfile, pathlib, numpy as np
@@ -396,10 +378,7 @@ def load_dataset(path) -> Dataset:
     trajectories = []
     ids = arrays["trajectory"]
     for k, (a, b) in enumerate(bounds):
-        series = {}
-        for key in SERIES + MASKS:
-            if key in arrays:
-                series[key] = arrays[key][a:b]
+        series = {key: arrays[key][a:b] for key in SERIES + MASKS if key in arrays}
         info = infos[k] if isinstance(infos, list) and len(infos) == len(bounds) else {}
         try:
             trajectories.append(Trajectory(t=t[a:b], info=info, **series))

@@ -27,8 +27,6 @@ class DatasetError(ValueError):
 
     A :class:`ValueError`, so ``except ValueError`` catches it too.
 
-    Examples
-    --------
     >>> from pysindy_xl.data import Trajectory
     >>> Trajectory(t=[0.0, 1.0, 0.5], q=[[0.0], [1.0], [2.0]])
     Traceback (most recent call last):
@@ -49,10 +47,8 @@ def _read_npz(path: str) -> dict:
                 try:
                     arrays[key] = npz[key]
                 except ValueError as error:
-                    raise DatasetError(
-                        f"path: array {key!r} of {path!r} cannot be read without pickle "
-                        f"({error}); store plain numeric arrays"
-                    ) from None
+                    raise DatasetError(f"path: array {key!r} of {path!r} cannot be read without "
+                                       f"pickle ({error}); store plain numeric arrays") from None
             return arrays
     except DatasetError:
         raise
@@ -69,10 +65,9 @@ def read_dataset_arrays(path) -> tuple[dict, dict, list, list]:
     arrays = _read_npz(path)
     missing = [k for k in ("t", "q") if k not in arrays]
     if missing:
-        raise DatasetError(
-            f"path: {path!r} lacks the required array(s) {missing}; found {sorted(arrays)} "
-            "(expected t (N,), q (N, n), optionally qd, qdd, tau, u, trajectory)"
-        )
+        raise DatasetError(f"path: {path!r} lacks the required array(s) {missing}; found "
+                           f"{sorted(arrays)} (expected t (N,), q (N, n), optionally qd, qdd, tau, "
+                           "u, trajectory)")
     metadata = {}
     if "metadata" in arrays:
         raw = arrays.pop("metadata")
@@ -97,10 +92,8 @@ def read_dataset_arrays(path) -> tuple[dict, dict, list, list]:
     if t.shape != (n_samples,):
         raise DatasetError(f"t: expected shape ({n_samples},) like q's rows, got {t.shape}")
     if "constraint_active" in arrays and arrays["constraint_active"].shape != (n_samples,):
-        raise DatasetError(
-            f"constraint_active: expected shape ({n_samples},) like q's rows, got "
-            f"{arrays['constraint_active'].shape}"
-        )
+        raise DatasetError(f"constraint_active: expected shape ({n_samples},) like q's rows, got "
+                           f"{arrays['constraint_active'].shape}")
     for key in SERIES[1:]:
         if key in arrays:
             shape = arrays[key].shape
@@ -115,9 +108,7 @@ def read_dataset_arrays(path) -> tuple[dict, dict, list, list]:
     if not isinstance(names, list) or not all(isinstance(name, str) for name in names):
         raise DatasetError(f"metadata: coordinate_names: expected a list of str, got {names!r}")
     if len(names) != n:
-        raise DatasetError(
-            f"metadata: coordinate_names has {len(names)} names, q has {n} columns"
-        )
+        raise DatasetError(f"metadata: coordinate_names has {len(names)} names, q has {n} columns")
     starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
     ends = np.r_[starts[1:], n_samples]
     if len(set(ids[starts].tolist())) != len(starts):
@@ -140,8 +131,6 @@ def _parse_json(text: str, where: str) -> dict:
 def coordinate_names(coordinates) -> list[str]:
     """Coordinate names given as a list of str or one comma-separated str.
 
-    Examples
-    --------
     >>> coordinate_names("x, theta")
     ['x', 'theta']
     >>> coordinate_names(3)

@@ -24,9 +24,8 @@ def _noise_levels(noise) -> dict:
     else:
         levels = dict.fromkeys(NOISE_KEYS, noise)
     for k, v in levels.items():
-        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) or not (
-            np.isfinite(v) and v >= 0
-        ):
+        if (isinstance(v, bool) or not isinstance(v, (int, float, np.floating))
+                or not (np.isfinite(v) and v >= 0)):
             raise ValueError(f"noise: level for {k!r} must be a non-negative number, got {v!r}")
         levels[k] = float(v)
     return levels
@@ -56,10 +55,9 @@ def noise_levels(noise, noise_model: str = "positions") -> dict:
     levels = _noise_levels(noise)
     if noise_model == "all" or isinstance(noise, dict):
         if noise_model == "positions" and (levels["qd"] or levels["qdd"]):
-            raise ValueError(
-                "noise: velocity or acceleration noise is not part of noise_model='positions' "
-                "(they are not recorded); use noise_model='all'"
-            )
+            raise ValueError("noise: velocity or acceleration noise is not part of "
+                             "noise_model='positions' (they are not recorded); use "
+                             "noise_model='all'")
         return levels
     return {"q": levels["q"], "qd": 0.0, "qdd": 0.0, "tau": 0.0}
 
@@ -98,15 +96,11 @@ def add_noise(trajectory: Trajectory, noise, rng: np.random.Generator,
     n = trajectory.q.shape[1]
     matrix = np.eye(n) if force_matrix is None else np.asarray(force_matrix, dtype=float)
     u = noisy(trajectory.u, levels["tau"])
-    if u is not None:
-        tau = u @ matrix.T
-    else:
-        tau = noisy(trajectory.tau, levels["tau"])
-    return Trajectory(
-        t=trajectory.t.copy(), q=noisy(trajectory.q, levels["q"]),
-        qd=noisy(trajectory.qd, levels["qd"]), qdd=noisy(trajectory.qdd, levels["qdd"]),
-        tau=tau, u=u, info=dict(trajectory.info),
-        tau_constraint=noisy(trajectory.tau_constraint, 0),
-        u_constraint=noisy(trajectory.u_constraint, 0),
-        constraint_active=noisy(trajectory.constraint_active, 0),
-    )
+    tau = u @ matrix.T if u is not None else noisy(trajectory.tau, levels["tau"])
+    return Trajectory(t=trajectory.t.copy(), q=noisy(trajectory.q, levels["q"]),
+                      qd=noisy(trajectory.qd, levels["qd"]),
+                      qdd=noisy(trajectory.qdd, levels["qdd"]), tau=tau, u=u,
+                      info=dict(trajectory.info),
+                      tau_constraint=noisy(trajectory.tau_constraint, 0),
+                      u_constraint=noisy(trajectory.u_constraint, 0),
+                      constraint_active=noisy(trajectory.constraint_active, 0))

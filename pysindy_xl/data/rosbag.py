@@ -1,23 +1,13 @@
 """ROS bags of ``sensor_msgs/JointState`` into a :class:`~pysindy_xl.data.Dataset`.
 
 :func:`read_rosbag` reads ROS 1 bags (``.bag``) and ROS 2 bags (the directory, or its
-``.db3`` / ``.mcap`` file) through the pure-Python `rosbags <https://gitlab.com/ternaris/rosbags>`_
-package (``pip install pysindy-xl[ros]``), one bag per run:
-
-==================  ========================================================================
-message field       dataset
-==================  ========================================================================
-``header.stamp``    ``t``: seconds from the run's first stamp, as recorded (jittered stamps
-                    stay jittered); the bag's receive times when no message has a stamp
-``position``        ``q`` (rad for revolute joints, m for prismatic ones)
-``velocity``        ``qd``, when every message carries it
-``effort``          ``tau`` (N m / N), when every message carries it
-==================  ========================================================================
-
-As for a CSV file, ``coordinates`` names the coordinates in order and ``columns`` maps one to
-its joint (``{"shoulder": "ur5/shoulder_pan_joint"}``; default: the joint of the same name, or
-every joint of the first message). Messages without every chosen joint are skipped and counted
-in the trajectory's ``info``.
+``.db3`` / ``.mcap`` file) through the pure-Python ``rosbags`` package
+(``pip install pysindy-xl[ros]``), one bag per run: ``header.stamp`` gives ``t`` (seconds from
+the run's first stamp, as recorded; the receive times when no message has a stamp),
+``position`` ``q``, ``velocity`` ``qd`` and ``effort`` ``tau`` (each when every message
+carries it). As for a CSV file, ``coordinates`` names the coordinates in order and ``columns``
+maps one to its joint; messages without every chosen joint are skipped and counted in the
+trajectory's ``info``.
 """
 
 from __future__ import annotations
@@ -40,8 +30,6 @@ def is_rosbag(path) -> bool:
     """Whether ``path`` names a ROS bag: a ``.bag``, ``.db3`` or ``.mcap`` file, or a ROS 2 bag
     directory (with its ``metadata.yaml``).
 
-    Examples
-    --------
     >>> is_rosbag("run1.bag"), is_rosbag("log.csv")
     (True, False)
     """
@@ -65,18 +53,14 @@ def _bag_path(path: str):
 
 def _default_names(joints) -> list:
     """Coordinate names for joint names: symbols need identifiers."""
-    names = []
-    for joint in joints:
-        name = re.sub(r"\W", "_", joint) or "q"
-        names.append(f"q_{name}" if name[0].isdigit() else name)
-    return names
+    names = [re.sub(r"\W", "_", joint) or "q" for joint in joints]
+    return [f"q_{name}" if name[0].isdigit() else name for name in names]
 
 
 def _messages(path: str, topic):
     """``(stamp_ns, log_ns, names, position, velocity, effort)`` of every JointState message
     of one bag, and the topic read."""
-    highlevel = import_optional("rosbags.highlevel", purpose="reading ROS bags",
-                                extra="ros")
+    highlevel = import_optional("rosbags.highlevel", purpose="reading ROS bags", extra="ros")
     typesys = import_optional("rosbags.typesys", purpose="reading ROS bags", extra="ros")
     store = typesys.get_typestore(typesys.Stores.LATEST)
     try:

@@ -1,23 +1,12 @@
 """Your own data: CSV files, pandas DataFrames and column mappings into a :class:`Dataset`.
 
-A table has one row per sample and a header naming its columns. By default the columns follow
-the names of the symbols of :class:`~pysindy_xl.Coordinates`:
-
-=================  ============================================================
-column             content
-=================  ============================================================
-``t`` (or time)    sample times, strictly increasing within each trajectory
-``NAME``           position of coordinate ``NAME`` (``x``, ``theta``...)
-``NAME_dot``       its velocity (optional; all coordinates or none)
-``NAME_ddot``      its acceleration (optional; all coordinates or none)
-``tau_NAME``       generalized force on it (optional; a coordinate without one
-                   is unactuated, its force is zero)
-``trajectory``     trajectory id (optional; any numbers, ``1.0`` or labels)
-=================  ============================================================
-
-``columns`` maps these keys to other headers (``{"t": "time_s", "x": "cart"}``). Without
-``coordinates`` every other column is a coordinate, in header order. The id column splits
-trajectories (in order of first appearance). A mistake raises
+A table has one row per sample and a header naming its columns, by default ``t`` (or
+``time``: sample times, strictly increasing within each trajectory), ``NAME`` (the position of
+coordinate ``NAME``), optionally ``NAME_dot`` and ``NAME_ddot`` (velocities, accelerations: all
+coordinates or none), ``tau_NAME`` (the generalized force; a coordinate without one is
+unactuated) and ``trajectory`` (ids, numbers or labels, splitting the trajectories in order of
+first appearance). ``columns`` maps these keys to other headers (``{"t": "time_s"}``); without
+``coordinates`` every other column is a coordinate, in header order. A mistake raises
 :class:`~pysindy_xl.data.DatasetError` naming the file, the column and the line of a bad cell.
 """
 
@@ -39,10 +28,8 @@ _TIME_NAMES = ("t", "time")
 
 def _sniff_delimiter(header_line: str, delimiter: str) -> str | None:
     """The delimiter the header seems to use when it is not ``delimiter``."""
-    for candidate in (",", ";", "\t", "|", " "):
-        if candidate != delimiter and candidate in header_line.strip():
-            return candidate
-    return None
+    return next((candidate for candidate in (",", ";", "\t", "|", " ")
+                 if candidate != delimiter and candidate in header_line.strip()), None)
 
 
 def _read_text_table(path: str, delimiter: str):
@@ -57,8 +44,8 @@ def _read_text_table(path: str, delimiter: str):
     lines = [(k, line) for k, line in lines if line.strip() and not line.lstrip().startswith("#")]
     if not lines:
         raise DatasetError(f"{path!r}: the file is empty (expected a header line and data rows)")
-    reader = csv.reader([line for _, line in lines], delimiter=delimiter, skipinitialspace=True)
-    rows = list(reader)
+    rows = list(csv.reader([line for _, line in lines], delimiter=delimiter,
+                           skipinitialspace=True))
     header = [name.strip() for name in rows[0]]
     if len(header) == 1:
         other = _sniff_delimiter(lines[0][1], delimiter)
@@ -259,8 +246,6 @@ def from_columns(data, coordinates=None, columns=None, name="data"):
     ``data`` maps names to columns of equal length; ``coordinates`` and ``columns`` as in
     :func:`read_csv`; errors name the source ``name``.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> t = np.linspace(0.0, 1.0, 6)
     >>> data = from_columns({"time_s": np.r_[t, t], "x": np.r_[t, 2 * t],
@@ -292,8 +277,6 @@ def from_dataframe(frame, coordinates=None, columns=None):
     ``frame`` is any object with ``columns`` and ``__getitem__`` returning 1-D values (pandas,
     polars), one row per sample; ``coordinates`` and ``columns`` as in :func:`read_csv`.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> pd = __import__("pytest").importorskip("pandas")
     >>> t = np.linspace(0.0, 1.0, 5)
@@ -309,8 +292,7 @@ def from_dataframe(frame, coordinates=None, columns=None):
     for key in frame.columns:
         column = frame[key]
         raw[str(key)] = np.asarray(column.to_numpy() if hasattr(column, "to_numpy") else column)
-    return _build(raw, list(raw), coordinates, columns, "DataFrame",
-                  lambda k: f"row {labels[k]!r}")
+    return _build(raw, list(raw), coordinates, columns, "DataFrame", lambda k: f"row {labels[k]!r}")
 
 
 def load_data(source, coordinates=None, columns=None, delimiter=None, topic=None):
@@ -348,8 +330,7 @@ def load_data(source, coordinates=None, columns=None, delimiter=None, topic=None
         from .rosbag import is_rosbag, read_rosbag
         if is_rosbag(path):
             if delimiter is not None:
-                raise ValueError(f"delimiter: applies to text tables, not to the ROS bag "
-                                 f"{path!r}")
+                raise ValueError(f"delimiter: applies to text tables, not to the ROS bag {path!r}")
             return read_rosbag(path, coordinates, columns, topic)
         if topic is not None:
             raise ValueError(f"topic: applies to ROS bags, not to {path!r}")

@@ -1,11 +1,8 @@
 """MuJoCo systems, data generation, reference catalogs and validation of identified models.
 
-One subpackage a concern: :mod:`.systems` (the paper's MJCF models, any MJCF or URDF model,
-the registry, the actuator law), :mod:`.simulation` (forced or designed trajectories,
-integrated stably and faithfully, with noise), :mod:`.catalogs` (reference and kinematic-tree
-catalogs, payloads) and :mod:`.evaluation` (validation, the physics check, figures). Public
-names load on first use (PEP 562): importing this package imports neither MuJoCo, SymPy,
-PySINDy nor matplotlib.
+Subpackages by concern: :mod:`.systems`, :mod:`.simulation`, :mod:`.catalogs` and
+:mod:`.evaluation`. Public names load on first use (PEP 562): importing this package imports
+neither MuJoCo, SymPy, PySINDy nor matplotlib.
 
 >>> import pysindy_xl.mujoco as pxm
 >>> pxm.get_system("cart-pole").coordinate_names

@@ -80,16 +80,14 @@ def random_joint_values(system: MuJoCoSystem, n_samples: int, rng) -> np.ndarray
 
 def joint_coordinates(system, model):
     """Each joint's position and velocity in the system's coordinates (``qpos = T^-1 q``)."""
-    coords = system.coords
     inverse = np.linalg.inv(system.joint_to_coordinates)
-    qpos = [sp.expand(sum(sp.Float(a) * qj for a, qj in zip(inverse[k], coords.q, strict=True)
-                          if a != 0)) for k in range(model.njnt)]
-    qvel = [sp.expand(sum(sp.Float(a) * qdj for a, qdj in zip(inverse[k], coords.qd, strict=True)
-                          if a != 0)) for k in range(model.njnt)]
-    if np.allclose(inverse, np.round(inverse)):  # keep integer maps readable: theta2 - theta1
-        qpos = [sp.nsimplify(e, rational=True) for e in qpos]
-        qvel = [sp.nsimplify(e, rational=True) for e in qvel]
-    return qpos, qvel
+    integer = np.allclose(inverse, np.round(inverse))  # keep integer maps readable: th2 - th1
+    out = []
+    for symbols in (system.coords.q, system.coords.qd):
+        rows = [sp.expand(sum(sp.Float(a) * s for a, s in zip(inverse[k], symbols, strict=True)
+                              if a != 0)) for k in range(model.njnt)]
+        out.append([sp.nsimplify(e, rational=True) for e in rows] if integer else rows)
+    return tuple(out)
 
 
 def _dry_friction_terms(system, model, qvel, coulomb_scale, coulomb_law):

@@ -22,8 +22,6 @@ from ..systems.registry import MuJoCoSystem
 
 __all__ = ["INERTIAL_PARAMETERS", "body_functions", "kinematic_tree", "physical_values"]
 
-#: Names of the ten inertial parameters of a body, in the order of the catalog's preference.
-
 # Rotation entries and offsets below this magnitude are round-off of quaternion arithmetic.
 _CHOP = 1e-13
 
@@ -69,11 +67,8 @@ def _axis_rotation(axis, s, c):
 
 @dataclass
 class _Frame:
-    """A body frame during the recursion, everything in the frame's own coordinates.
-
-    ``v``: velocity of the origin, ``w``: angular velocity, ``g``: gravity vector, ``h``:
-    gravity times the world position of the origin (``g . p``, so that ``-V = m h``).
-    """
+    """A body frame during the recursion, in its own coordinates: origin velocity ``v``,
+    angular velocity ``w``, gravity ``g`` and ``h = g . p`` (``p`` the origin; ``-V = m h``)."""
 
     v: list
     w: list
@@ -82,12 +77,9 @@ class _Frame:
 
 
 def _joint_variables(system: MuJoCoSystem, model):
-    """Each joint's sine and cosine (hinge) or displacement (slide), and velocity, as polynomials.
-
-    MuJoCo measures ``qpos - qpos0`` (the joint's ``ref``); the coordinates are ``q = T qpos``,
-    so a joint's angle is the row of ``T^-1`` applied to ``q``, expanded with the angle-sum
-    formulas (which needs integer rows: relative hinges of a chain).
-    """
+    """Each joint's sine and cosine (hinge) or displacement (slide), and velocity, as polynomials:
+    ``qpos - qpos0`` is a row of ``T^-1`` applied to ``q``, expanded by the angle-sum formulas
+    (integer rows: relative hinges of a chain)."""
     n = system.n
     is_angle = tuple(j in system.angle_coordinates for j in range(n))
     inverse = np.linalg.inv(system.joint_to_coordinates)
@@ -106,10 +98,8 @@ def _joint_variables(system: MuJoCoSystem, model):
         name = system.joint_names[k]
         if int(model.jnt_type[k]) == hinge:
             if not all(is_angle[j] and float(row[j]).is_integer() for j in used):
-                raise ValueError(
-                    f"system: the angle of hinge {name!r} must be an integer combination of "
-                    "angle coordinates (joint_to_coordinates)"
-                )
+                raise ValueError(f"system: the angle of hinge {name!r} must be an integer "
+                                 "combination of angle coordinates (joint_to_coordinates)")
             sine, cosine = TrigPolynomial.constant(0.0, is_angle), TrigPolynomial.constant(
                 1.0, is_angle)
             for j in used:  # angle-sum formulas, one unit of q_j at a time
@@ -149,13 +139,11 @@ def body_functions(system, model):
         parent = frames[parent_id]
         rot = _quat_matrix(model.body_quat[b])
         offset = _numeric(model.body_pos[b])
-        frame = _Frame(
-            v=_matTvec(rot, [x + y for x, y in zip(parent.v, _cross(parent.w, offset),
-                                                   strict=True)]),
-            w=_matTvec(rot, parent.w),
-            g=_matTvec(rot, parent.g),
-            h=parent.h + _dot(parent.g, offset),
-        )
+        frame = _Frame(v=_matTvec(rot, [x + y for x, y in zip(parent.v, _cross(parent.w, offset),
+                                                              strict=True)]),
+                       w=_matTvec(rot, parent.w),
+                       g=_matTvec(rot, parent.g),
+                       h=parent.h + _dot(parent.g, offset))
         moving[b] = moving[parent_id] or model.body_jntnum[b] > 0
         for k in range(model.body_jntadr[b], model.body_jntadr[b] + model.body_jntnum[b]):
             axis = _numeric(model.jnt_axis[k])
@@ -188,11 +176,9 @@ def body_functions(system, model):
             continue  # welded to the world: constant energy, no dynamics
         v, w = frame.v, frame.w
         first_moment = [a + g for a, g in zip(_cross(v, w), frame.g, strict=True)]
-        functions[b] = [
-            0.5 * _dot(v, v) + frame.h, *first_moment,
-            0.5 * (w[0] * w[0]), 0.5 * (w[1] * w[1]), 0.5 * (w[2] * w[2]),
-            w[0] * w[1], w[0] * w[2], w[1] * w[2],
-        ]
+        functions[b] = [0.5 * _dot(v, v) + frame.h, *first_moment,
+                        0.5 * (w[0] * w[0]), 0.5 * (w[1] * w[1]), 0.5 * (w[2] * w[2]),
+                        w[0] * w[1], w[0] * w[2], w[1] * w[2]]
     return functions, joints
 
 

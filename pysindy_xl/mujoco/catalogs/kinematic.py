@@ -1,22 +1,13 @@
 """Catalogs from the kinematic tree: candidate Lagrangians of any rigid-body MJCF model.
 
 A rigid body's Lagrangian is linear in its ten inertial parameters (mass ``m``, first moments
-``m c``, inertia ``I_o`` about the body origin, in the body frame). With ``v``, ``w`` the body
-origin's linear and angular velocity in body coordinates, ``g_b = R^T g`` and ``h = g.p_o``,
-
-    ``L_b = m (v.v / 2 + h) + m c . (v x w + g_b) + w . I_o w / 2``,
-
-so the functions multiplying the parameters come from the kinematics alone. With each joint's
-armature (``armature_k qvel_k^2 / 2``) they span the Lagrangian of every mass distribution.
-:func:`kinematic_catalog` keeps an independent subset (base parameters): the rank of the
-Euler-Lagrange columns at random states from a pivoted QR, columns kept in a fixed order of
-preference; dependent parameters fold into kept ones (:attr:`KinematicCatalog.parameters`).
-The derivation runs on sparse trigonometric polynomials
-(:mod:`pysindy_xl.feature_library.trigpoly`); sympy expressions are built only when read.
-
-Friction and springs are classical candidates per joint (viscous, smooth Coulomb, spring),
-entered in the equations the joint force reaches (``B = T^-T``); with ``friction=`` the
-models of real joints (:class:`~pysindy_xl.feature_library.JointFrictionLibrary`) instead.
+``m c``, inertia ``I_o`` about the body origin): with ``v``, ``w`` the origin's linear and
+angular velocity in body coordinates, ``g_b = R^T g`` and ``h = g.p_o``,
+``L_b = m (v.v / 2 + h) + m c . (v x w + g_b) + w . I_o w / 2``. With each joint's armature
+these functions span every mass distribution; :func:`kinematic_catalog` keeps an independent
+subset (base parameters, by a pivoted QR at random states), derived on sparse trigonometric
+polynomials (:mod:`pysindy_xl.feature_library.trigpoly`). Friction and springs are classical
+candidates per joint, or the joint models of ``friction=``.
 """
 
 from __future__ import annotations
@@ -137,7 +128,6 @@ class KinematicCatalog:
             ExternalForces,
             JointFrictionLibrary,
         )
-
         libraries = [ExternalForces(self.coords, interlink=interlink),
                      PolynomialLagrangeLibrary(self.coords, _shared(self.lagrange_terms),
                                                parameters=[dict(p) for p in self.parameters],
@@ -210,8 +200,9 @@ class KinematicCatalog:
             self._compiled[key] = rows
         return self._compiled[key]
 
-    def _evaluate(self, key, q, qd, coefficients):
-        c = self.coords
+    def _evaluate(self, key, q, qd, coefficients, shape=()):
+        """``key``'s quantity at the states, shaped ``shape`` per sample; one state: no axis."""
+        single, c = np.ndim(q) == 1, self.coords
         q = _states(q, "q", c.n)
         qd = np.zeros_like(q) if qd is None else _states(qd, "qd", c.n)
         if qd.shape != q.shape:
@@ -224,7 +215,8 @@ class KinematicCatalog:
         angles = [j in self.system.angle_coordinates for j in range(c.n)]
         values = evaluate_many([p for row in rows for p in row], state_values(q, qd, None, angles))
         values = values.reshape(q.shape[0], len(rows), -1)
-        return np.einsum("sfr,f->sr", values, beta)
+        out = np.einsum("sfr,f->sr", values, beta).reshape(-1, *shape)
+        return out[0] if single else out
 
     def mass_matrix(self, q, coefficients=None) -> np.ndarray:
         """Mass matrix ``M(q)`` in the system's coordinates, shape (N, n, n) or (n, n).
@@ -242,10 +234,7 @@ class KinematicCatalog:
         array([[1.5 , 0.4 ],
                [0.4 , 0.32]])
         """
-        single = np.ndim(q) == 1
-        n = self.coords.n
-        out = self._evaluate("mass", q, None, coefficients).reshape(-1, n, n)
-        return out[0] if single else out
+        return self._evaluate("mass", q, None, coefficients, (self.coords.n,) * 2)
 
     def gravity_torque(self, q, coefficients=None) -> np.ndarray:
         """Generalized gravity force ``dV/dq``, shape of ``q`` (``M qdd + c + dV/dq = tau``).
@@ -255,9 +244,7 @@ class KinematicCatalog:
         >>> kinematic_catalog("cart-pole").gravity_torque([0.0, np.pi / 2]).round(4)
         array([0.   , 3.924])
         """
-        single = np.ndim(q) == 1
-        out = self._evaluate("gravity", q, None, coefficients)
-        return out[0] if single else out
+        return self._evaluate("gravity", q, None, coefficients, (self.coords.n,))
 
     def bias_forces(self, q, qd, coefficients=None) -> np.ndarray:
         """Coriolis, centrifugal and gravity forces, shape of ``q``: the equations at ``qdd = 0``.
@@ -267,9 +254,7 @@ class KinematicCatalog:
         >>> kinematic_catalog("cart-pole").bias_forces([0.0, 0.0], [0.0, 2.0]).round(4)
         array([0., 0.])
         """
-        single = np.ndim(q) == 1
-        out = self._evaluate("bias", q, qd, coefficients)
-        return out[0] if single else out
+        return self._evaluate("bias", q, qd, coefficients, (self.coords.n,))
 
     def report(self, coefficients=None, digits: int = 4, terms: bool = True) -> str:
         """Table of the base parameters: term, combination, MJCF value, identified value.
@@ -277,8 +262,6 @@ class KinematicCatalog:
         ``coefficients`` are identified Lagrange coefficients (:meth:`lagrange_coefficients`);
         ``terms=False`` leaves out the column of terms (long for spatial arms).
 
-        Examples
-        --------
         >>> print(kinematic_catalog("cart-pole").report(terms=False))
         stands for  |  MJCF
         1*cart.m + 1*pole.m + 1*slider.armature  |  1.5
@@ -346,14 +329,6 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
         ``"mujoco"``: MuJoCo's regularized ``frictionloss``
         (:func:`~pysindy_xl.physical.friction.regularized_dry_friction`), for data MuJoCo
         simulated from this model. Not with ``friction``.
-
-    Raises
-    ------
-    TypeError
-        If ``system`` is not a system, path or MJCF text.
-    ValueError
-        If a joint is not hinge or slide, a scale is not positive, or ``friction`` or
-        ``coulomb_law`` is unknown.
 
     Examples
     --------

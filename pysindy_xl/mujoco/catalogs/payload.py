@@ -71,7 +71,6 @@ class Payload:
         """
         from ..._inputs import check_array
         from ...feature_library import stack_variables
-
         library = catalog.library().fit()
         q = check_array(q, "q", n_columns=catalog.coords.n)
         qd, qdd = check_array(qd, "qd", q.shape), check_array(qdd, "qdd", q.shape)
@@ -162,7 +161,6 @@ def identify_payload(catalog, q, t, tau, qd=None, qdd=None, arm=None, body=None)
     from ...feature_library import stack_variables
     from ...physical.sdp import consistent_least_squares
     from ...weak import BumpTestFunctions, WhittakerSmoother, weak_regression
-
     library = catalog.library().fit()
     n = catalog.coords.n
     q = check_array(q, "q", n_columns=n)

@@ -1,17 +1,12 @@
 """Reference catalogs of the paper's comparison, built for any system.
 
-Kinds, all with the force column first (:class:`~pysindy_xl.ExternalForces`):
-``lagrange``, every product of a velocity monomial (degree <= ``velocity_degree``) and a
-monomial of the angles' ``sin`` and ``cos`` (degree <= ``trig_degree``), the constant
-excluded; ``classical``, each distinct monomial of the Euler-Lagrange expansion of those
-terms in its equations, plus viscous friction; ``mixed``, ``lagrange`` plus viscous friction;
-``kinematic``, :func:`~pysindy_xl.mujoco.kinematic_catalog`'s catalog (exact for any mass
-distribution).
-
-A model with ``frictionloss`` adds the smooth Coulomb ``tanh(qd_i / eps)`` to each such
-joint's equation. Friction terms are velocities ``qd_j`` in equation ``i``: ``"auto"``
-follows :meth:`~pysindy_xl.mujoco.MuJoCoSystem.friction_pattern` (the velocities a relative
-hinge's damping couples in), ``"diagonal"`` ``qd_i`` only, ``"full"`` every pair.
+Kinds, all with the force column first: ``lagrange`` (velocity monomials of degree <=
+``velocity_degree`` times monomials of the angles' ``sin``/``cos`` of degree <=
+``trig_degree``), ``classical`` (each monomial of their Euler-Lagrange expansion, plus viscous
+friction), ``mixed`` (``lagrange`` plus viscous friction) and ``kinematic``
+(:func:`~pysindy_xl.mujoco.kinematic_catalog`). A joint with ``frictionloss`` adds the smooth
+Coulomb ``tanh(qd_i / eps)``; viscous terms follow ``friction`` (``"auto"``:
+:meth:`~pysindy_xl.mujoco.MuJoCoSystem.friction_pattern`; ``"diagonal"``; ``"full"``).
 """
 
 from __future__ import annotations
@@ -61,13 +56,8 @@ def lagrange_terms(system, velocity_degree: int = 2, trig_degree: int = 2) -> li
 
 def _monomials_of(expr: sp.Expr) -> list[tuple[sp.Expr, float]]:
     """``expr`` expanded, as (monomial without numeric factor, coefficient) pairs."""
-    out = []
-    for term in sp.Add.make_args(sp.expand(expr)):
-        if term == 0:
-            continue
-        coefficient, monomial = term.as_coeff_Mul()
-        out.append((monomial, float(coefficient)))
-    return out
+    pairs = (term.as_coeff_Mul() for term in sp.Add.make_args(sp.expand(expr)) if term != 0)
+    return [(monomial, float(coefficient)) for coefficient, monomial in pairs]
 
 
 def classical_terms(system, terms) -> tuple[list[sp.Expr], np.ndarray]:
@@ -104,15 +94,11 @@ def classical_terms(system, terms) -> tuple[list[sp.Expr], np.ndarray]:
 
 def _friction_mask(system: MuJoCoSystem, friction) -> np.ndarray:
     n = system.n
-    if friction == "auto":
-        pattern = system.friction_pattern()
-    elif friction == "diagonal":
-        pattern = np.eye(n, dtype=bool)
-    elif friction == "full":
-        pattern = np.ones((n, n), dtype=bool)
-    else:
+    patterns = {"auto": system.friction_pattern, "diagonal": lambda: np.eye(n, dtype=bool),
+                "full": lambda: np.ones((n, n), dtype=bool)}
+    if not isinstance(friction, str) or friction not in patterns:
         raise ValueError(f"friction: expected 'auto', 'diagonal' or 'full', got {friction!r}")
-    return pattern.T  # mask[k, i]: velocity k in the equation of i
+    return patterns[friction]().T  # mask[k, i]: velocity k in the equation of i
 
 
 def dry_friction_terms(system, eps: float = 1e-3) -> tuple[list[sp.Expr], np.ndarray]:
@@ -133,9 +119,8 @@ def dry_friction_terms(system, eps: float = 1e-3) -> tuple[list[sp.Expr], np.nda
     if not (np.isfinite(eps) and eps > 0):
         raise ValueError(f"eps: expected a positive number, got {eps!r}")
     loss = np.asarray(getattr(system, "frictionloss", np.zeros(system.n)), dtype=float)
-    coords = system.coords
     joints = np.flatnonzero(loss > 0)
-    terms = [sp.tanh(coords.qd[i] / eps) for i in joints]
+    terms = [sp.tanh(system.coords.qd[i] / eps) for i in joints]
     mask = np.zeros((len(terms), system.n), dtype=bool)
     mask[np.arange(len(terms)), joints] = True
     return terms, mask
@@ -184,21 +169,18 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
         ExternalForces,
         LagrangeLibrary,
     )
-
     system = get_system(system)
     if kind not in CATALOG_KINDS:
         raise ValueError(f"kind: expected one of {CATALOG_KINDS}, got {kind!r}")
     if kind == "kinematic":
         from .kinematic import kinematic_catalog
-
         return kinematic_catalog(system, friction=joint_models,
                                  coulomb_law=coulomb_law).library(interlink=interlink)
     if joint_models is not None:
         raise ValueError(f"joint_models: only the 'kinematic' catalog offers joint models, not "
                          f"{kind!r}")
     if coulomb_law != "smooth":
-        raise ValueError(f"coulomb_law: only the 'kinematic' catalog has other laws, not "
-                         f"{kind!r}")
+        raise ValueError(f"coulomb_law: only the 'kinematic' catalog has other laws, not {kind!r}")
     coords = system.coords
     friction_mask = _friction_mask(system, friction)
     terms = lagrange_terms(system, velocity_degree, trig_degree)
@@ -232,7 +214,6 @@ def _kinematic_truth(system, catalog, names, forces):
     friction terms are joint velocities, which the generic matching would miss)."""
     from ._kinematic_build import COULOMB_LAWS
     from .kinematic import PolynomialLagrangeLibrary, kinematic_catalog
-
     if not any(isinstance(lib, PolynomialLagrangeLibrary) for lib in catalog.libraries_):
         return None
     forces_library = next(lib for lib in catalog.libraries_ if lib.category == "forces")
@@ -242,10 +223,6 @@ def _kinematic_truth(system, catalog, names, forces):
         if reference.fit().get_feature_names() == names:
             return kinematic.true_coefficients(forces=forces)
     return None
-
-
-def _classical_name(coords, term, i) -> str:
-    return f"C_{coords.names[i]}[{term}]"
 
 
 def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.0):
@@ -269,7 +246,6 @@ def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.
     >>> missing
     ['+0.5*x_dot in the equation of x', '+0.1*theta_dot in the equation of theta']
     """
-
     system = get_system(system)
     if not hasattr(catalog, "ideal_coefficients"):
         raise TypeError("catalog: expected a CatalogRepartition")
@@ -284,16 +260,14 @@ def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.
     if not system.has_ground_truth:
         raise ValueError(f"system: {system!r} has no known true model")
     has_lagrange = any(lib.category == "lagrange" for lib in catalog.libraries_)
-    classical: dict = {}
-    for (term, i), value in system.friction().items():
-        classical[(term, i)] = classical.get((term, i), 0.0) + value
+    classical = dict(system.friction())
     if not has_lagrange:
         for i, lhs in enumerate(equations_of_motion(system.lagrangian(), coords)):
             for monomial, value in _monomials_of(sp.expand_trig(lhs)):
                 classical[(monomial, i)] = classical.get((monomial, i), 0.0) + value
     keyed, missing = {}, []
     for (term, i), value in classical.items():
-        name = _classical_name(coords, term, i)
+        name = f"C_{coords.names[i]}[{term}]"
         if name in names:
             keyed[name] = keyed.get(name, 0.0) + value
         elif abs(value) > 1e-14:
@@ -301,10 +275,8 @@ def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.
     if missing and strict:
         raise ValueError(f"catalog: the true model needs terms it lacks: {missing}")
     try:
-        xi = catalog.ideal_coefficients(
-            lagrangian=system.lagrangian() if has_lagrange else None, classical=keyed,
-            forces=forces,
-        )
+        xi = catalog.ideal_coefficients(lagrangian=system.lagrangian() if has_lagrange else None,
+                                        classical=keyed, forces=forces)
     except ValueError as error:
         if strict:
             raise

@@ -39,9 +39,7 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     True
     """
     mujoco = import_mujoco()
-
     from ... import stack_variables
-
     system = get_system(system)
     dynamics = model._require_dynamics() if hasattr(model, "_require_dynamics") else None
     if dynamics is None:
@@ -50,10 +48,8 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     mj_model = system.mj_model()
     data = mujoco.MjData(mj_model)
     matrix = system.force_matrix()
-    q, qd = np.empty((n_states, system.n)), np.empty((n_states, system.n))
+    q, qd, force_ref, gravity_ref = np.empty((4, n_states, system.n))
     mass_ref = np.empty((n_states, system.n, system.n))
-    force_ref = np.empty((n_states, system.n))
-    gravity_ref = np.empty((n_states, system.n))
     full = np.empty((mj_model.nv, mj_model.nv))
     skipped = 0
     for k in range(n_states):
@@ -79,9 +75,8 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
         gravity_ref[k] = matrix @ (data.qfrc_spring - data.qfrc_bias)
     z = stack_variables(q, qd, None, np.zeros_like(q), np.zeros(n_states))
     force = dynamics.mass_and_forcing(z)[1]
-    mass = dynamics.mass_and_forcing(stack_variables(
-        q, sliding_velocities(system, mj_model, q, qd), None, np.zeros_like(q),
-        np.zeros(n_states)))[0]
+    mass = dynamics.mass_and_forcing(stack_variables(q, sliding_velocities(system, mj_model, q, qd),
+                                                     None, np.zeros_like(q), np.zeros(n_states)))[0]
     gravity = dynamics.mass_and_forcing(stack_variables(
         q, np.zeros_like(qd), None, np.zeros_like(q), np.zeros(n_states)))[1]
     held = np.isin(system.coordinate_names, list(getattr(model, "still_coordinates_", ())))
@@ -96,17 +91,15 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     mass, force, gravity = mass * factor, force * factor, gravity * factor
     eigenvalues = np.linalg.eigvalsh((mass + np.swapaxes(mass, 1, 2)) / 2)
     empty = np.all(np.abs(mass) <= 1e-12 * max(np.abs(mass).max(), 1e-300), axis=(0, 2))
-    return {
-        "unidentified": [names[i] for i in np.flatnonzero(empty)],
-        "held": [name for name, h in zip(system.coordinate_names, held, strict=True) if h],
-        "contact_states_skipped": skipped,
-        "mass_error": float(np.abs(mass - mass_ref).max() / np.abs(mass_ref).max()),
-        "force_error": float(np.abs(force - force_ref).max()
-                             / max(np.abs(force_ref).max(), 1e-300)),
-        "gravity_error": float(np.abs(gravity - gravity_ref).max()
-                               / max(np.abs(gravity_ref).max(), 1e-300)),
-        "scale": factor,
-        "positive_definite": bool(np.all(eigenvalues > 0)),
-        "condition": float(np.max(np.abs(eigenvalues).max(axis=1)
-                                  / np.maximum(np.abs(eigenvalues).min(axis=1), 1e-300))),
-    }
+    return {"unidentified": [names[i] for i in np.flatnonzero(empty)],
+            "held": [name for name, h in zip(system.coordinate_names, held, strict=True) if h],
+            "contact_states_skipped": skipped,
+            "mass_error": float(np.abs(mass - mass_ref).max() / np.abs(mass_ref).max()),
+            "force_error": float(np.abs(force - force_ref).max()
+                                 / max(np.abs(force_ref).max(), 1e-300)),
+            "gravity_error": float(np.abs(gravity - gravity_ref).max()
+                                   / max(np.abs(gravity_ref).max(), 1e-300)),
+            "scale": factor,
+            "positive_definite": bool(np.all(eigenvalues > 0)),
+            "condition": float(np.max(np.abs(eigenvalues).max(axis=1)
+                                      / np.maximum(np.abs(eigenvalues).min(axis=1), 1e-300)))}

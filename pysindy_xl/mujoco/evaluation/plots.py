@@ -14,7 +14,6 @@ _MODEL = {"color": "tab:blue", "linewidth": 1.2, "label": "identified model"}
 def new_figure(width, height):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
-
     figure = Figure(figsize=(width, height), layout="constrained")
     FigureCanvasAgg(figure)
     return figure
@@ -34,9 +33,8 @@ def plot_coefficients(ax, feature_names, coefficients, true_coefficients=None, m
     """
     coefficients = np.asarray(coefficients, dtype=float)
     if len(feature_names) != len(coefficients):
-        raise ValueError(
-            f"feature_names: {len(feature_names)} names for {len(coefficients)} coefficients"
-        )
+        raise ValueError(f"feature_names: {len(feature_names)} names for {len(coefficients)} "
+                         "coefficients")
     truth = None if true_coefficients is None else np.asarray(true_coefficients, dtype=float)
     if truth is not None and truth.shape != coefficients.shape:
         raise ValueError(f"true_coefficients: expected shape {coefficients.shape}")
@@ -79,9 +77,8 @@ def plot_validation(result, path=None, feature_names=None, coefficients=None,
     """
     n = result.n
     with_coefficients = coefficients is not None
-    rows = n + (2 if with_coefficients else 0)
     figure = new_figure(11, 2.0 * n + (4.0 if with_coefficients else 0.0))
-    grid = figure.add_gridspec(rows, 2)
+    grid = figure.add_gridspec(n + (2 if with_coefficients else 0), 2)
     k = len(result.prediction)
     names = result.coordinate_names or tuple(f"q{i}" for i in range(n))
     for i in range(n):
@@ -109,10 +106,8 @@ def plot_validation(result, path=None, feature_names=None, coefficients=None,
         plot_coefficients(ax, feature_names, coefficients, true_coefficients)
         ax.set_title("(C) coefficients")
     status = "valid" if result.valid else f"invalid ({result.failure or 'diverged'})"
-    figure.suptitle(
-        (f"{title}: " if title else "")
-        + f"position RMSE {result.position_rmse:.3g}, {status}", fontsize=11,
-    )
+    figure.suptitle((f"{title}: " if title else "")
+                    + f"position RMSE {result.position_rmse:.3g}, {status}", fontsize=11)
     if path is not None:
         figure.savefig(path, dpi=110)
     return figure

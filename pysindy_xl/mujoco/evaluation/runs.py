@@ -67,8 +67,7 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
     for _ in range(4 if backoff else 1):
         q0, qd0 = system.random_initial_state(rng, scale=initial_scale * factor)
         signals = actuator_signals(system, model, forcing, rng, actuators, backoff=factor,
-                                   tracking=controller,
-                                   **signal_options)
+                                   tracking=controller, **signal_options)
         q0, qd0 = start_on_reference(system, signals, q0, qd0, model)
         trajectory = simulate_trajectory(system, duration, signals, q0, qd0, sample_every,
                                          control_at="midpoint", integrator=integration,
@@ -95,9 +94,7 @@ def mujoco_closed_loop(model, system, trajectory, substeps, required):
     MuJoCo cannot state the model (a ValueError when ``required``)."""
     from ...export.mjcf import identified_mj_model
     from .. import import_mujoco
-
     mujoco = import_mujoco()
-
     mj, reason = identified_mj_model(model, system)
     if mj is not None and trajectory.info.get("tracking") is not None:
         mj = tracked_model(mj, trajectory.info["tracking"])  # the reference's controller
@@ -117,9 +114,8 @@ def mujoco_closed_loop(model, system, trajectory, substeps, required):
         mujoco.mjtDisableBit.mjDSBL_CONTACT)
     integration = choose_integration(mj, "auto", substeps)
     try:
-        run = simulate_trajectory(system, t[-1], signals, trajectory.q[0], trajectory.qd[0],
-                                  every, control_at="midpoint", integrator=integration,
-                                  mj_model=mj)
+        run = simulate_trajectory(system, t[-1], signals, trajectory.q[0], trajectory.qd[0], every,
+                                  control_at="midpoint", integrator=integration, mj_model=mj)
     except UnstableSimulationError as error:
         return trajectory.state[:0], f"diverged ({error})"
     return run.state[:len(t)], None

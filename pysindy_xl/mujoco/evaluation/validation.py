@@ -1,29 +1,20 @@
 """Validation of an identified model against a fresh MuJoCo trajectory.
 
 The model is simulated from the initial state of a new, noise-free MuJoCo trajectory, driven
-the way MuJoCo was, and the two position histories are compared.
-
-Drive (``ValidationResult.drive``): ``open-loop``, the forces MuJoCo applied as a function
-of time (the exact signal for joint motors, else a cubic spline of the recorded forces);
-``closed-loop``, for servos, the MJCF's actuator law
-(:func:`~pysindy_xl.mujoco.actuation.actuator_law`) driven by the run's reference controls
-acts on the model's own state. Replaying a servo run's forces open loop would compare two
-different experiments (nothing corrects drift; servos on their limits hide errors).
-
-Simulator (``ValidationResult.simulator``), in closed loop: ``mujoco``, MuJoCo itself on a
-copy of the model carrying the identified parameters
-(:func:`~pysindy_xl.export.mjcf.identified_mj_model`, only where it reproduces ``M`` and ``f``
-exactly), limits and contacts off; ``model``, ``model.simulate`` with the law as feedback.
-The reference is integrated at ``timestep / substeps`` with controls read at each internal
-step's midpoint; the model sees the same continuous controls.
+the way MuJoCo was (``ValidationResult.drive``): ``open-loop``, the forces MuJoCo applied as a
+function of time (the exact signal of joint motors, else a cubic spline of the recorded
+forces); ``closed-loop``, for servos, the MJCF's actuator law
+(:func:`~pysindy_xl.mujoco.actuation.actuator_law`) under the run's reference controls, acting
+on the model's own state, stepped (``ValidationResult.simulator``) by MuJoCo on a copy of the
+model carrying the identified parameters (``mujoco``, where that reproduces ``M`` and ``f``
+exactly) or by ``model.simulate`` (``model``). :doc:`/robot_arms` explains why.
 
 Metrics: ``position_rmse``, the RMS position error over the whole horizon (inf when the model
 stopped early); ``simulated_rmse``, the same over the simulated part; ``divergence_time``,
 the first time some coordinate's error exceeds ``divergence_bound * max(1, ptp_i)`` (``ptp_i``
 its range in the reference) or the simulation failed; ``force_error`` (closed loop), the RMS
-of the actuator forces along the model's run minus MuJoCo's, relative to MuJoCo's (feedback
-hides model error in positions and shows it in forces); ``valid``, simulated to the end, never
-diverged and, in closed loop, ``force_error <= force_bound``.
+of the actuator forces along the model's run minus MuJoCo's, relative to MuJoCo's; ``valid``,
+simulated to the end, never diverged and, in closed loop, ``force_error <= force_bound``.
 """
 
 from __future__ import annotations
@@ -118,23 +109,21 @@ class ValidationResult:
          "constrained_at": null, "drive": "open-loop", "force_error": null,
          "simulator": "model"}
         """
-        return {
-            "position_rmse": float(self.position_rmse),
-            "position_rmse_per_coordinate": dict(zip(
-                self.coordinate_names, map(float, self.position_rmse_per_coordinate),
-                strict=True)),
-            "divergence_time": self.divergence_time,
-            "valid": bool(self.valid),
-            "failure": self.failure,
-            "divergence_bound": self.divergence_bound,
-            "horizon": float(self.t[-1] - self.t[0]),
-            "simulated_fraction": float(self.simulated_fraction),
-            "simulated_rmse": float(self.simulated_rmse),
-            "constrained_at": self.constrained_at,
-            "drive": self.drive,
-            "force_error": self.force_error,
-            "simulator": self.simulator,
-        }
+        return {"position_rmse": float(self.position_rmse),
+                "position_rmse_per_coordinate": dict(zip(
+                    self.coordinate_names, map(float, self.position_rmse_per_coordinate),
+                    strict=True)),
+                "divergence_time": self.divergence_time,
+                "valid": bool(self.valid),
+                "failure": self.failure,
+                "divergence_bound": self.divergence_bound,
+                "horizon": float(self.t[-1] - self.t[0]),
+                "simulated_fraction": float(self.simulated_fraction),
+                "simulated_rmse": float(self.simulated_rmse),
+                "constrained_at": self.constrained_at,
+                "drive": self.drive,
+                "force_error": self.force_error,
+                "simulator": self.simulator}
 
 
 def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVERGENCE_BOUND,
@@ -159,10 +148,8 @@ def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVE
     if prediction.ndim != 2 or prediction.shape[1] != reference.shape[1] or len(
         prediction
     ) > len(t):
-        raise ValueError(
-            f"prediction: expected shape (k <= {len(t)}, {reference.shape[1]}), got "
-            f"{prediction.shape}"
-        )
+        raise ValueError(f"prediction: expected shape (k <= {len(t)}, {reference.shape[1]}), got "
+                         f"{prediction.shape}")
     if not np.isfinite(divergence_bound) or divergence_bound <= 0:
         raise ValueError(f"divergence_bound: expected a positive number, got {divergence_bound!r}")
     n = reference.shape[1] // 2
@@ -176,11 +163,9 @@ def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVE
         failure = "incomplete prediction"
     error = prediction[:, :n] - reference[:k, :n]
     simulated = float(np.sqrt(np.mean(error**2))) if k else np.inf
-    if k == len(t):
-        per_coordinate = np.sqrt(np.mean(error**2, axis=0))
-        rmse = simulated
-    else:  # the model could not follow the whole horizon: no finite error over it
-        per_coordinate, rmse = np.full(n, np.inf), np.inf
+    # a model that could not follow the whole horizon has no finite error over it
+    per_coordinate, rmse = ((np.sqrt(np.mean(error**2, axis=0)), simulated) if k == len(t)
+                            else (np.full(n, np.inf), np.inf))
     scale = np.maximum(1.0, np.ptp(reference[:, :n], axis=0))
     exceeded = np.flatnonzero(np.any(np.abs(error) > divergence_bound * scale, axis=1))
     divergence_time = None
@@ -190,15 +175,14 @@ def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVE
         divergence_time = float(t[k]) if k else float(t[0])
     names = tuple(coordinate_names) if coordinate_names is not None else tuple(
         f"q{i}" for i in range(n))
-    return ValidationResult(
-        t=t, reference=reference, prediction=prediction,
-        forces=np.zeros((len(t), n)) if forces is None else np.asarray(forces, dtype=float),
-        position_rmse=rmse, position_rmse_per_coordinate=per_coordinate,
-        divergence_time=divergence_time,
-        valid=divergence_time is None and failure is None,
-        failure=failure, divergence_bound=float(divergence_bound), coordinate_names=names,
-        simulated_rmse=simulated,
-    )
+    return ValidationResult(t=t, reference=reference, prediction=prediction,
+                            forces=np.zeros((len(t), n)) if forces is None
+                            else np.asarray(forces, dtype=float),
+                            position_rmse=rmse, position_rmse_per_coordinate=per_coordinate,
+                            divergence_time=divergence_time,
+                            valid=divergence_time is None and failure is None, failure=failure,
+                            divergence_bound=float(divergence_bound), coordinate_names=names,
+                            simulated_rmse=simulated)
 
 
 def validate_model(model, system=None, trajectory: Trajectory | None = None,
@@ -267,14 +251,12 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     'open-loop'
     """
     from ...dynamics import SimulationError
-
     if trajectory is None:
         if system is None:
             raise ValueError("system: give a system to simulate or a reference trajectory")
         options = {} if amplitude is None else {"amplitude": amplitude}
-        trajectory = validation_trajectory(system, duration, forcing, actuators, seed,
-                                           sample_every, initial_scale, substeps,
-                                           control=control, **options)
+        trajectory = validation_trajectory(system, duration, forcing, actuators, seed, sample_every,
+                                           initial_scale, substeps, control=control, **options)
         names = get_system(system).coordinate_names
     else:
         if not isinstance(trajectory, Trajectory):
@@ -298,10 +280,9 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     n = trajectory.q.shape[1]
     n_model = getattr(model, "n_coordinates_", n)  # any model with simulate: trusted
     if n_model != n:
-        raise ValueError(
-            f"model: identified on {n_model} coordinates, but the reference has {n}"
-            f"{'' if names is None else ' ' + str(list(names))}; validate a model on the "
-            "system it was identified on")
+        raise ValueError(f"model: identified on {n_model} coordinates, but the reference has {n}"
+                         f"{'' if names is None else ' ' + str(list(names))}; validate a model on "
+                         "the system it was identified on")
     if forces is None:
         forces = np.zeros((trajectory.n_samples, n))
     if drive not in DRIVES:
@@ -348,8 +329,7 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     elif np.any(forces != 0):
         # A C2 cubic spline of the force samples: the adaptive integrator rejects many steps at
         # the kinks of a piecewise-linear interpolant.
-        spline = CubicSpline(trajectory.t, forces, axis=0)
-        use_forces = spline
+        use_forces = CubicSpline(trajectory.t, forces, axis=0)
     failure = None
     try:
         prediction = model.simulate(reference[0], trajectory.t, use_forces, **options)

@@ -2,16 +2,10 @@
 
 A robot's torques are linear in its parameters, ``tau = W(q, qd, qdd) beta``; their
 least-squares estimate is as good as ``W`` is well conditioned. Following Swevers et al.
-(1997), each joint follows a :class:`~pysindy_xl.mujoco.FourierTrajectory` (``x = (q_0, a, b)``)
-and :func:`excitation_trajectory` minimizes ``log cond W`` over one period (``W``: the
-kinematic catalog's columns) by SLSQP from random feasible starts, under position, velocity
-and acceleration limits (linear in ``x``), torque limits of the nominal model ``W beta_MJCF``
-(nonlinear) and optionally a start at rest (``sum_l a_jl = 0``, ``sum_l l b_jl = 0``).
-
-A sample's rows depend on its own state only, so perturbing one state variable at every
-sample at once gives every row's derivative: ``6 n`` evaluations by central differences.
-With ``W = U S V^T``, ``d s_i = u_i^T dW v_i`` gives the gradient of ``log(s_max / s_min)``.
-Limits are checked on a grid five times finer than the optimization's.
+(1997), :func:`excitation_trajectory` minimizes ``log cond W`` over one period of a
+:class:`~pysindy_xl.mujoco.FourierTrajectory` by SLSQP under joint and torque limits
+(:doc:`/robot_arms`). A sample's rows depend on its own state only: ``6 n`` central
+differences give every row's derivative, and ``d s_i = u_i^T dW v_i`` the gradient.
 """
 
 from __future__ import annotations
@@ -36,8 +30,8 @@ class _Design:
 
     def __init__(self, catalog, period, n_harmonics, limits):
         self.library = catalog.library().fit()
-        columns = np.arange(len(self.library.get_feature_names()))
-        self.rest = np.setdiff1d(columns, self.library.force_columns_)
+        self.rest = np.setdiff1d(np.arange(len(self.library.get_feature_names())),
+                                 self.library.force_columns_)
         self.beta = catalog.true_coefficients()[self.rest]
         self.n, self.L, self.w = catalog.coords.n, n_harmonics, 2 * np.pi / period
         self.period = period
@@ -60,10 +54,8 @@ class _Design:
     def regressor(self, states):
         """``W`` of stacked states (3, N, n): shape (n, N, p), coordinate-major rows."""
         from ...feature_library import stack_variables
-
-        n_samples = states.shape[1]
         theta = self.library.transform(stack_variables(*states, np.zeros_like(states[0])))
-        return theta[:, self.rest].reshape(self.n, n_samples, -1)
+        return theta[:, self.rest].reshape(self.n, states.shape[1], -1)
 
     def condition(self, x, bases):
         W = self.regressor(self.states(x, bases))
@@ -91,8 +83,7 @@ class _Design:
                     moved = states.copy()
                     moved[kind, :, j] += sign * steps[kind]
                     sets.append(moved)
-        W_all = self.regressor(np.concatenate(sets, axis=1))  # (n, N * (1 + 6n), p)
-        W_all = W_all.reshape(n, 1 + 6 * n, N, -1)
+        W_all = self.regressor(np.concatenate(sets, axis=1)).reshape(n, 1 + 6 * n, N, -1)
         W = W_all[:, 0]
         moved = W_all[:, 1:].reshape(n, 3, n, 2, N, -1)
         dW = (moved[:, :, :, 0] - moved[:, :, :, 1]) / (2 * steps[None, :, None, None, None])
@@ -185,7 +176,6 @@ class _Design:
         """SLSQP from ``x``. Each limit enters through its margin at the lowest local minima
         along the period (``L + 1``; ``3 L`` for the torques), not one row per sample."""
         from scipy.optimize import minimize
-
         A, c = self.linear_constraints(bases)
         columns = np.arange(A.shape[1])
 
@@ -216,8 +206,7 @@ class _Design:
             constraints.append({"type": "eq", "fun": lambda x: E @ x, "jac": lambda x: E})
         result = minimize(lambda x: self.evaluate(x, bases)[0], x,
                           jac=lambda x: self.evaluate(x, bases)[1], method="SLSQP",
-                          constraints=constraints, options={"maxiter": max_iter},
-                          callback=callback)
+                          constraints=constraints, options={"maxiter": max_iter}, callback=callback)
         return result.x, result
 
 
@@ -263,7 +252,6 @@ def _mjcf_limits(system, position_limits, torque_limits):
     """Default position limits (joint ranges within the servos' reach, 5 % margin) and torque
     limits (actuator force ranges) of an MJCF whose coordinates are its joints."""
     mujoco = import_mujoco()
-
     model = system.mj_model()
     n = system.n
     identity = np.allclose(system.joint_to_coordinates, np.eye(n))
@@ -342,12 +330,6 @@ def excitation_trajectory(system, n_harmonics: int = 5, period: float = 10.0,
         Named by the system's coordinates, with ``condition_number`` and ``info``
         (``restarts``: each start's condition number before and after; ``limits``).
 
-    Raises
-    ------
-    ValueError
-        If an argument is out of its range, a joint has no range and no ``position_limits``,
-        or the nominal arm needs more than ``torque_limits`` at rest.
-
     Examples
     --------
     >>> xml = '''<mujoco><option gravity="0 0 -9.81"/><worldbody><body>
@@ -364,7 +346,6 @@ def excitation_trajectory(system, n_harmonics: int = 5, period: float = 10.0,
 
     from ..catalogs.kinematic import kinematic_catalog
     from ..systems.registry import get_system as resolve_system
-
     system = resolve_system(system)
     if isinstance(n_harmonics, bool) or not isinstance(n_harmonics, (int, np.integer)) \
             or n_harmonics < 1:

@@ -43,10 +43,8 @@ class SumOfSinusoids:
                 raise ValueError(f"{name}: contains NaN or inf")
             arrays.append(a)
         if not arrays[0].shape == arrays[1].shape == arrays[2].shape:
-            raise ValueError(
-                "amplitudes, frequencies, phases: expected equal shapes, got "
-                f"{[a.shape for a in arrays]}"
-            )
+            raise ValueError("amplitudes, frequencies, phases: expected equal shapes, got "
+                             f"{[a.shape for a in arrays]}")
         self.amplitudes, self.frequencies, self.phases = arrays
         n_signals = self.amplitudes.shape[0]
         offsets = np.zeros(n_signals) if offsets is None else np.asarray(offsets, dtype=float)
@@ -78,10 +76,8 @@ class SumOfSinusoids:
         if not isinstance(n_components, (int, np.integer)) or n_components < 1:
             raise ValueError(f"n_components: expected an integer >= 1, got {n_components!r}")
         if not 0 < min_frequency <= max_frequency:
-            raise ValueError(
-                "min_frequency, max_frequency: expected 0 < min_frequency <= max_frequency, got "
-                f"{min_frequency!r}, {max_frequency!r}"
-            )
+            raise ValueError("min_frequency, max_frequency: expected 0 < min_frequency <= "
+                             f"max_frequency, got {min_frequency!r}, {max_frequency!r}")
         shape = (scales.size, n_components)
         weights = rng.uniform(0.2, 1.0, shape)
         amplitudes = weights / weights.sum(axis=1, keepdims=True) * scales[:, None]
@@ -141,8 +137,7 @@ class SumOfSinusoids:
         True
         """
         try:
-            return cls(data["amplitudes"], data["frequencies"], data["phases"],
-                       data.get("offsets"))
+            return cls(data["amplitudes"], data["frequencies"], data["phases"], data.get("offsets"))
         except (KeyError, TypeError) as error:
             raise ValueError(f"data: not a SumOfSinusoids description ({error})") from None
 
@@ -163,9 +158,7 @@ def within_servo_reach(signals: SumOfSinusoids, model) -> SumOfSinusoids:
     faster reference saturates the servo. ``signals`` itself when no driven actuator is one.
     """
     mujoco = import_mujoco()
-
     from ..systems.actuation import servo_bandwidths
-
     bandwidth = servo_bandwidths(model)
     servo = np.isfinite(bandwidth) & np.any(signals.amplitudes != 0, axis=1)
     if not servo.any():

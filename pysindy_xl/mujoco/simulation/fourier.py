@@ -106,16 +106,12 @@ class FourierTrajectory:
         differ, an actuator is not such a servo or a coordinate has none.
         """
         from ..systems.registry import get_system
-
         system = get_system(system)
-        servo = _position_servos(system, "reference")
+        gain_map, offset = _position_servos(system, "reference")  # ctrl = offset + gain_map @ q
         if len(self.q0) != system.n:
             raise ValueError(f"reference: a trajectory of {len(self.q0)} joints for a system "
                              f"of {system.n} coordinates")
-        # ctrl = offset + gain_map @ q, q in coordinates
-        gain_map, offset = servo
-        w, L = self.pulsation, self.n_harmonics
-        harmonics = w * np.arange(1, L + 1)
+        harmonics = self.pulsation * np.arange(1, self.n_harmonics + 1)
         radius = np.hypot(self.a, self.b) / harmonics  # (n, L)
         phase = np.arctan2(-self.b, self.a)
         amplitudes = (gain_map[:, :, None] * radius[None]).reshape(len(offset), -1)
@@ -140,9 +136,8 @@ class FourierTrajectory:
         if isinstance(periods, bool) or not isinstance(periods, (int, np.integer)) or periods < 1:
             raise ValueError(f"periods: expected an integer >= 1, got {periods!r}")
         t = np.arange(int(round(periods * self.period * rate)) + 1) / rate
-        columns = np.column_stack([t] + [np.column_stack([self.q(t)[:, j], self.qd(t)[:, j],
-                                                          self.qdd(t)[:, j]])
-                                         for j in range(len(self.q0))])
+        series = np.stack([self.q(t), self.qd(t), self.qdd(t)], axis=2)  # (N, joint, order)
+        columns = np.column_stack([t, series.reshape(len(t), -1)])
         header = ["t"] + [f"{s}{suffix}" for s in self.names for suffix in ("", "_dot", "_ddot")]
         with open(os.fspath(path), "w", newline="") as handle:
             writer = csv.writer(handle)
@@ -194,7 +189,6 @@ def _basis(t, w: float, L: int, order: int) -> np.ndarray:
 def _position_servos(system, argument: str):
     """``(G, c)`` with ``ctrl = c + G q`` putting every position servo on the positions ``q``."""
     mujoco = import_mujoco()
-
     model = system.mj_model()
     inverse = np.linalg.inv(system.joint_to_coordinates)  # qpos = T^-1 q
     gain_map, offset = np.zeros((model.nu, system.n)), np.zeros(model.nu)

@@ -147,16 +147,11 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     dt = model.opt.timestep
     n_steps = int(round(duration / dt))
     if n_steps < sample_every:
-        raise ValueError(
-            f"sample_every: recording every {sample_every} steps of {dt:g} s leaves fewer than "
-            f"two samples in a run of {duration:g} s ({n_steps} steps); lower sample_every or "
-            "lengthen the run")
-    if isinstance(integrator, Integration):
-        integration = integrator
-    elif integrator is not None:
-        integration = choose_integration(model, integrator, substeps)
-    else:
-        integration = choose_integration(model, "model", substeps)
+        raise ValueError(f"sample_every: recording every {sample_every} steps of {dt:g} s leaves "
+                         f"fewer than two samples in a run of {duration:g} s ({n_steps} steps); "
+                         "lower sample_every or lengthen the run")
+    integration = integrator if isinstance(integrator, Integration) else choose_integration(
+        model, "model" if integrator is None else integrator, substeps)
     substeps = integration.substeps
     model.opt.timestep = dt / substeps
     model.opt.integrator = INTEGRATORS[integration.integrator]
@@ -168,10 +163,9 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
         raise ValueError(f"control_at: expected 'start' or 'midpoint', got {control_at!r}")
     record_every = sample_every * substeps
     recorded = np.arange(0, n_fine + 1, record_every)
-    recorded_ctrl = np.zeros((len(recorded), model.nu))
+    recorded_ctrl = (np.zeros((len(recorded), model.nu)) if signals is None
+                     else _controls(signals, fine_times[recorded], model.nu))
     shift = dt / substeps / 2 if control_at == "midpoint" else 0.0
-    if signals is not None:
-        recorded_ctrl = _controls(signals, fine_times[recorded], model.nu)
     chunk = max(record_every, (200_000 // record_every) * record_every)
     qpos, qvel, qacc, force, constraint = (np.empty((len(recorded), n)) for _ in range(5))
     energy = np.empty((len(recorded), 2))
@@ -218,8 +212,7 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     matrix = system.force_matrix()
     joint_names = list(system.joint_names)
     info = {"q0": q0.tolist(), "qd0": qd0.tolist(),
-            "limit_hits": {joint_names[j]: int(limit_hits[j]) for j in np.flatnonzero(
-                limit_hits)},
+            "limit_hits": {joint_names[j]: int(limit_hits[j]) for j in np.flatnonzero(limit_hits)},
             "contact_samples": int(contact_samples), "equality_samples": int(equality_samples)}
     if substeps > 1:
         info["substeps"] = int(substeps)
@@ -327,7 +320,6 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     import warnings
 
     from tqdm.auto import tqdm
-
     duration = check_option("duration", duration, "real", low=0, low_open=True)
     sample_every = check_option("sample_every", sample_every, "int", low=1)
     system = get_system(system)
@@ -386,9 +378,7 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
                                             control_at="midpoint", integrator=integration,
                                             mj_model=model)
                 clean = settled(clean, settle)
-                if clean.constraint_active.mean() <= max_constrained or (
-                    attempt == attempts - 1
-                ):
+                if clean.constraint_active.mean() <= max_constrained or attempt == attempts - 1:
                     break
                 factor /= 2
             if factor < 1:
@@ -399,30 +389,28 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
             if not derivatives:
                 noisy.qd = noisy.qdd = None
             trajectories.append(noisy)
-    metadata = {
-        "system": system.name,
-        "parameters": system.parameters,
-        "forcing": forcing,
-        "actuators": None if actuators is None else list(np.atleast_1d(actuators).tolist()),
-        "noise": levels,
-        "noise_model": noise_model,
-        "derivatives": "mujoco" if derivatives else "none",
-        "seed": None if seed is None else int(seed),
-        "duration": float(duration),
-        "sample_every": int(sample_every),
-        "timestep": float(model.opt.timestep),
-        "integrator": integration.integrator,
-        "substeps": integration.substeps,
-        "integration": integration.to_dict(),
-        "peak_velocity": {joint: max(tr.info["peak_velocity"][joint] for tr in trajectories)
-                          for joint in trajectories[0].info["peak_velocity"]},
-        "amplitude": amplitude,
-        "initial_scale": initial_scale,
-        "force_matrix": system.force_matrix().tolist(),
-        "joint_names": list(system.joint_names),
-        "reference": None if reference is None else reference.to_dict(),
-        "tracking": controller,
-    }
+    metadata = {"system": system.name,
+                "parameters": system.parameters,
+                "forcing": forcing,
+                "actuators": None if actuators is None else list(np.atleast_1d(actuators).tolist()),
+                "noise": levels,
+                "noise_model": noise_model,
+                "derivatives": "mujoco" if derivatives else "none",
+                "seed": None if seed is None else int(seed),
+                "duration": float(duration),
+                "sample_every": int(sample_every),
+                "timestep": float(model.opt.timestep),
+                "integrator": integration.integrator,
+                "substeps": integration.substeps,
+                "integration": integration.to_dict(),
+                "peak_velocity": {joint: max(tr.info["peak_velocity"][joint] for tr in trajectories)
+                                  for joint in trajectories[0].info["peak_velocity"]},
+                "amplitude": amplitude,
+                "initial_scale": initial_scale,
+                "force_matrix": system.force_matrix().tolist(),
+                "joint_names": list(system.joint_names),
+                "reference": None if reference is None else reference.to_dict(),
+                "tracking": controller}
     metadata.update(getattr(system, "metadata", lambda: {})())
     dataset = Dataset(trajectories, system.coordinate_names, metadata)
     summary = dataset.constraint_summary()

@@ -1,25 +1,12 @@
-r"""A MuJoCo integration that is stable and faithful, chosen from the model; checks of every run.
+"""A MuJoCo integration that is stable and faithful, chosen from the model; checks of every run.
 
-Generated positions must follow the continuous flow; with a published arm's own settings:
-
-* **Implicit steps bias the inertia.** ``implicit`` and ``implicitfast`` (and ``Euler`` for
-  joint damping) apply velocity-dependent forces at the end of the step: the positions obey
-  ``(M + h D) qdd = f``, not ``M qdd = f``.
-* **RK4 has a stability region** (``|h lambda| < 2.785`` on the real axis). The modes are the
-  eigenvalues of
-
-  .. math:: A = \begin{pmatrix} 0 & \mathbb 1 \\ -M^{-1} K & -M^{-1} D \end{pmatrix},
-
-  ``K`` the servos' position gains and joint stiffness, ``D`` their velocity gains and joint
-  damping (through the actuator moments), ``M`` the joint-space inertia (``mj_fullM``).
-
-:func:`choose_integration` evaluates ``A`` at the reference pose and random poses and prices
-both remedies in substeps: RK4 with ``h |lambda| <= RK4_BOUND``, or the implicit step with its
-bias ``h max_i D_ii`` at most ``BIAS_TOLERANCE`` of ``max |M_ij|`` and a stable linearized
-step; an RK4 step costs ``RK4_COST`` implicit ones, the cheaper wins. :func:`check_run` raises
-:class:`UnstableSimulationError` on non-finite states, MuJoCo's bad-acceleration warning,
-velocities over ``MAX_HINGE_VELOCITY`` / ``MAX_SLIDE_VELOCITY`` or energy growth of an
-unforced run.
+Implicit steps (``implicit``, ``implicitfast``; ``Euler`` for joint damping) bias the inertia:
+the positions obey ``(M + h D) qdd = f``. RK4 is stable only while ``h |lambda|`` stays small,
+``lambda`` the eigenvalues of ``A = [[0, 1], [-M^-1 K, -M^-1 D]]`` (``K``, ``D``: the servos'
+gains, joint stiffness and damping; ``M``: ``mj_fullM``). :func:`choose_integration` prices
+both remedies in substeps (``RK4_BOUND``, ``BIAS_TOLERANCE``, ``RK4_COST``) and takes the
+cheaper; :func:`check_run` raises :class:`UnstableSimulationError` on a run that left the
+physics. :doc:`/robot_arms` explains the choice.
 """
 
 from __future__ import annotations
@@ -93,15 +80,12 @@ class Integration:
 
     def to_dict(self) -> dict:
         """JSON-serializable description (the fields plus ``step``, ``stability``, ``bias``)."""
-        out = asdict(self)
-        out.update(step=self.step, stability=self.stability, bias=self.bias)
-        return out
+        return {**asdict(self), "step": self.step, "stability": self.stability, "bias": self.bias}
 
 
 def _stiffness(model, data) -> tuple[np.ndarray, np.ndarray]:
     """``K``, ``D`` (nv x nv) of the servos, joint springs and damping at ``data``'s pose."""
     mujoco = import_mujoco()
-
     mujoco.mj_forward(model, data)
     moments = np.zeros((model.nu, model.nv))
     if model.nu:
@@ -119,7 +103,6 @@ def _stiffness(model, data) -> tuple[np.ndarray, np.ndarray]:
 def _poses(model, n_poses: int, seed) -> np.ndarray:
     """The reference pose and ``n_poses - 1`` random poses inside the joint ranges."""
     mujoco = import_mujoco()
-
     rng = np.random.default_rng(seed)
     poses = np.tile(model.qpos0, (n_poses, 1))
     for j in range(model.njnt):
@@ -189,7 +172,6 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
     ('RK4', 2400, True)
     """
     from ..._validation import check_option
-
     check_option("integrator", integrator, "choice", choices=("auto", "model", *INTEGRATORS))
     if substeps is not None:
         substeps = check_option("substeps", substeps, "int", low=1)
@@ -215,10 +197,9 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
     step = timestep * 1e3
     if rk4 <= RK4_MAX_SUBSTEPS or RK4_COST * rk4 <= implicit_steps:
         reason = (f"RK4 at {step:g} ms / {rk4}: the stiffest mode (|lambda| = {rate:.3g} 1/s, "
-                  f"servo gains and damping over the inertia) keeps h |lambda| <= {RK4_BOUND:g}"
-                  f"; the {implicit} step would need {implicit_steps} substeps to keep its "
-                  f"inertia bias h (kv + damping) below {BIAS_TOLERANCE:.1%} of the mass "
-                  "matrix")
+                  f"servo gains and damping over the inertia) keeps h |lambda| <= {RK4_BOUND:g}; "
+                  f"the {implicit} step would need {implicit_steps} substeps to keep its inertia "
+                  f"bias h (kv + damping) below {BIAS_TOLERANCE:.1%} of the mass matrix")
         return Integration("RK4", rk4, reason, rate, damping_rate, timestep)
     reason = (f"{implicit} at {step:g} ms / {implicit_steps}: its inertia bias h (kv + damping)"
               f" stays below {BIAS_TOLERANCE:.1%} of the mass matrix; RK4 would need {rk4} "
@@ -261,7 +242,6 @@ def check_run(model, qpos, qvel, qacc, energy=None, bad_accelerations: int = 0,
     {'peak_velocity': {'j': 2.0}, 'velocity_bound': {'j': 100.0}}
     """
     mujoco = import_mujoco()
-
     qvel = np.asarray(qvel, dtype=float)
     names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
              for j in model.dof_jntid]
@@ -304,7 +284,6 @@ def settling_time(model, forced: bool = True) -> float:
     zero without position servos or when the run is not ``forced``.
     """
     from ..systems.actuation import servo_bandwidths
-
     bandwidth = servo_bandwidths(model)
     if not forced or not np.any(np.isfinite(bandwidth)):
         return 0.0
@@ -316,7 +295,6 @@ def settled(trajectory, settle: float):
     """The trajectory from time ``settle`` (s) on, recorded in ``info["settle"]``; times kept
     (the controls are functions of time)."""
     from ...data.dataset import Trajectory
-
     if settle <= 0:
         return trajectory
     keep = trajectory.t >= trajectory.t[0] + settle - 1e-12

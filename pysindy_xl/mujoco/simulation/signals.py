@@ -24,14 +24,10 @@ TRACKED_AMPLITUDE = 0.9
 def _actuators(model) -> list[tuple[str, str | None]]:
     """(actuator name, driven joint name or None) for each actuator of the model."""
     mujoco = import_mujoco()
-    out = []
-    for a in range(model.nu):
-        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) or f"actuator{a}"
-        joint = None
-        if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT):
-            joint = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, model.actuator_trnid[a, 0])
-        out.append((name, joint))
-    return out
+    on_joint = int(mujoco.mjtTrn.mjTRN_JOINT)
+    return [(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) or f"actuator{a}",
+             mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, model.actuator_trnid[a, 0])
+             if int(model.actuator_trntype[a]) == on_joint else None) for a in range(model.nu)]
 
 
 def _driven_mask(system: MuJoCoSystem, model, forcing: str, actuators) -> np.ndarray:
@@ -44,22 +40,16 @@ def _driven_mask(system: MuJoCoSystem, model, forcing: str, actuators) -> np.nda
         if actuators:
             raise ValueError("actuators: not used with forcing='explicit' (every actuator driven)")
         if not pairs:
-            raise ValueError(
-                "forcing: the model has no actuator; add <motor> elements to the MJCF or use "
-                "forcing='implicit'"
-            )
+            raise ValueError("forcing: the model has no actuator; add <motor> elements to the MJCF "
+                             "or use forcing='implicit'")
         return np.ones(len(pairs), dtype=bool)
     chosen = system.mixed_actuators if actuators is None else actuators
-    if isinstance(chosen, str):
-        chosen = [chosen]
-    chosen = list(chosen)
+    chosen = [chosen] if isinstance(chosen, str) else list(chosen)
     known = {name for pair in pairs for name in pair if name}
     unknown = [c for c in chosen if c not in known]
     if unknown or not chosen:
-        raise ValueError(
-            f"actuators: expected a non-empty list of actuator or joint names among "
-            f"{sorted(known)}, got {chosen!r}"
-        )
+        raise ValueError(f"actuators: expected a non-empty list of actuator or joint names among "
+                         f"{sorted(known)}, got {chosen!r}")
     return np.array([name in chosen or joint in chosen for name, joint in pairs])
 
 
@@ -169,8 +159,8 @@ def motor_tracking(system, model, forcing: str = "explicit", actuators=None,
         raise ValueError(f"control: expected one of {CONTROLS}, got {control!r}")
     if control == "open-loop" or forcing == "implicit":
         return None
-    driven = _driven_mask(system, model, forcing, actuators)
-    candidates = np.flatnonzero(driven & plain_motors(model))
+    candidates = np.flatnonzero(_driven_mask(system, model, forcing, actuators)
+                                & plain_motors(model))
     if control == "auto":
         if not len(candidates):
             return None

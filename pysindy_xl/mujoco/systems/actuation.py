@@ -12,10 +12,9 @@ a fixed or affine gain and no or an affine bias (``mj_fwdActuation``):
     \\mathrm{qfrc\\_actuator}_j = \\mathrm{clip}\\big(\\textstyle\\sum_a g_a F_a,
         \\mathrm{actuatorfrcrange}_j\\big)
 
-(``p``: ``gainprm``, ``b``: ``biasprm``; a ``position`` servo has ``p = (kp, 0, 0)``,
-``b = (0, -kp, -kv)``). Joint damping, armature, springs and dry friction are the physics the
-identified model contains, not part of it. Driving an identified model by this law is the
-closed-loop experiment MuJoCo ran (:func:`~pysindy_xl.mujoco.validate_model`).
+(``p``: ``gainprm``, ``b``: ``biasprm``; a ``position`` servo: ``p = (kp, 0, 0)``,
+``b = (0, -kp, -kv)``). Joint damping, armature, springs and dry friction belong to the
+identified model; :func:`~pysindy_xl.mujoco.validate_model` drives a model by this law.
 """
 
 from __future__ import annotations
@@ -31,7 +30,6 @@ __all__ = ["ActuatorLaw", "actuator_law", "actuator_force_function", "servo_band
 def _supported(model, a: int) -> bool:
     """Whether actuator ``a`` follows the law of the module docstring."""
     mujoco = import_mujoco()
-
     return (int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)
             and int(model.actuator_dyntype[a]) == int(mujoco.mjtDyn.mjDYN_NONE)
             and int(model.actuator_gaintype[a]) in (int(mujoco.mjtGain.mjGAIN_FIXED),
@@ -60,7 +58,6 @@ class ActuatorLaw:
 
     def __init__(self, system, signals, force_input: str, mj_model=None):
         mujoco = import_mujoco()
-
         model = system.mj_model() if mj_model is None else mj_model
         self.n = int(system.n)
         self.signals = signals
@@ -82,9 +79,8 @@ class ActuatorLaw:
         forced = model.actuator_forcelimited.astype(bool)
         self._force_low = np.where(forced, model.actuator_forcerange[:, 0], -np.inf)
         self._force_high = np.where(forced, model.actuator_forcerange[:, 1], np.inf)
-        moment = np.zeros((model.nv, model.nu))  # qfrc_actuator = moment @ force
-        moment[dof, np.arange(model.nu)] = gear
-        self._moment = moment
+        self._moment = np.zeros((model.nv, model.nu))  # qfrc_actuator = moment @ force
+        self._moment[dof, np.arange(model.nu)] = gear
         joint_limited = model.jnt_actfrclimited.astype(bool)
         dof_joint = model.dof_jntid
         self._joint_low = np.where(joint_limited, model.jnt_actfrcrange[:, 0], -np.inf)[dof_joint]
@@ -112,8 +108,7 @@ class ActuatorLaw:
         ``state_dependent``; a ValueError names the one missing or misshapen.
         """
         ctrl = self.controls(t)
-        gain = self._gain[:, 0]
-        bias = self._bias[:, 0]
+        gain, bias = self._gain[:, 0], self._bias[:, 0]
         single = np.ndim(t) == 0
         if self.state_dependent or q is not None or qd is not None:
             if q is None or qd is None:
@@ -130,8 +125,7 @@ class ActuatorLaw:
             bias = bias + self._bias[:, 1] * length + self._bias[:, 2] * velocity
         force = np.clip(gain * ctrl + bias, self._force_low, self._force_high)
         joint = np.clip(force @ self._moment.T, self._joint_low, self._joint_high)
-        values = joint @ self._output.T
-        return values.reshape(self.n) if single else values
+        return (joint @ self._output.T).reshape(self.n) if single else joint @ self._output.T
 
     def rest_state(self, t: float, q, qd, dt: float = 1e-4):
         """The state nearest ``(q, qd)`` at which every position servo follows its reference
@@ -260,9 +254,7 @@ def actuator_force_function(system, signals, force_input: str = "tau"):
     array([1., 0.])
     """
     law = actuator_law(system, signals, force_input)
-    if law is None or law.state_dependent:
-        return None
-    return law
+    return None if law is None or law.state_dependent else law
 
 
 def servo_bandwidths(model) -> np.ndarray:
@@ -282,7 +274,6 @@ def servo_bandwidths(model) -> np.ndarray:
     array([5.013,   nan])
     """
     mujoco = import_mujoco()
-
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     mass = np.zeros((model.nv, model.nv))
@@ -294,9 +285,6 @@ def servo_bandwidths(model) -> np.ndarray:
             continue
         dof = model.jnt_dofadr[model.actuator_trnid[a, 0]]
         gear = model.actuator_gear[a, 0]
-        m = mass[dof, dof]
-        damping = gear**2 * kv + model.dof_damping[dof]
-        stiffness = gear**2 * kp
-        roots = np.roots([m, damping, stiffness])
+        roots = np.roots([mass[dof, dof], gear**2 * kv + model.dof_damping[dof], gear**2 * kp])
         out[a] = float(np.min(np.abs(roots)))
     return out

@@ -41,10 +41,8 @@ def equations_of_motion(lagrangian: sp.Expr, coords: Coordinates, friction=None)
     out = []
     for i, (qi, qdi) in enumerate(zip(coords.q, coords.qd, strict=True)):
         momentum = sp.diff(lagrangian, qdi)
-        d_dt = sum(
-            sp.diff(momentum, qk) * qdk + sp.diff(momentum, qdk) * qddk
-            for qk, qdk, qddk in zip(coords.q, coords.qd, coords.qdd, strict=True)
-        )
+        d_dt = sum(sp.diff(momentum, qk) * qdk + sp.diff(momentum, qdk) * qddk
+                   for qk, qdk, qddk in zip(coords.q, coords.qd, coords.qdd, strict=True))
         lhs = d_dt - sp.diff(lagrangian, qi)
         for (term, c), value in (friction or {}).items():
             if c == i:
@@ -231,14 +229,9 @@ class MuJoCoSystem:
         >>> CartPole(cart_damping=0.5, pole_damping=0.1).friction()
         {(x_dot, 0): 0.5, (theta_dot, 1): 0.1}
         """
-        coords = self.coords
         matrix = self.friction_matrix()
-        return {
-            (coords.qd[j], i): float(matrix[i, j])
-            for i in range(self.n)
-            for j in range(self.n)
-            if abs(matrix[i, j]) > 1e-15
-        }
+        return {(self.coords.qd[j], i): float(matrix[i, j]) for i in range(self.n)
+                for j in range(self.n) if abs(matrix[i, j]) > 1e-15}
 
     def equations_of_motion(self) -> list[sp.Expr]:
         """Left-hand sides ``EL_i(L) + friction_i``; the motion satisfies ``lhs = B @ u``.
@@ -259,17 +252,8 @@ class MuJoCoSystem:
         >>> DoublePendulum().to_generalized([0.1, 0.2], [1.0, 1.0])
         (array([0.1, 0.3]), array([1., 2.]), None)
         """
-        matrix = self.joint_to_coordinates
-        out = []
-        for name, a in (("qpos", qpos), ("qvel", qvel), ("qacc", qacc)):
-            if a is None:
-                out.append(None)
-                continue
-            a = np.asarray(a, dtype=float)
-            if a.shape[-1] != self.n:
-                raise ValueError(f"{name}: expected last dimension {self.n}, got shape {a.shape}")
-            out.append(a @ matrix.T)
-        return tuple(out)
+        return tuple(None if a is None else self._checked(name, a) @ self.joint_to_coordinates.T
+                     for name, a in (("qpos", qpos), ("qvel", qvel), ("qacc", qacc)))
 
     def from_generalized(self, q, qd=None):
         """Inverse of :meth:`to_generalized`: ``(qpos, qvel)`` (``qvel`` None when ``qd`` is).
@@ -279,16 +263,14 @@ class MuJoCoSystem:
         (array([0.1, 0.2]), array([1., 1.]))
         """
         inverse = np.linalg.inv(self.joint_to_coordinates)
-        q = np.asarray(q, dtype=float)
-        if q.shape[-1] != self.n:
-            raise ValueError(f"q: expected last dimension {self.n}, got shape {q.shape}")
-        qpos = q @ inverse.T
-        if qd is None:
-            return qpos, None
-        qd = np.asarray(qd, dtype=float)
-        if qd.shape[-1] != self.n:
-            raise ValueError(f"qd: expected last dimension {self.n}, got shape {qd.shape}")
-        return qpos, qd @ inverse.T
+        return (self._checked("q", q) @ inverse.T,
+                None if qd is None else self._checked("qd", qd) @ inverse.T)
+
+    def _checked(self, name, a) -> np.ndarray:
+        a = np.asarray(a, dtype=float)
+        if a.shape[-1] != self.n:
+            raise ValueError(f"{name}: expected last dimension {self.n}, got shape {a.shape}")
+        return a
 
     def random_initial_state(self, rng: np.random.Generator, scale: float = 1.0):
         """Random initial ``(q0, qd0)``, each shape (n,), in the generalized coordinates.
@@ -303,9 +285,8 @@ class MuJoCoSystem:
         """
         half_range = np.full(self.n, 0.5)
         half_range[list(self.angle_coordinates)] = 2.0
-        q0 = rng.uniform(-1.0, 1.0, self.n) * half_range * scale
-        qd0 = rng.uniform(-1.0, 1.0, self.n) * scale
-        return q0, qd0
+        return (rng.uniform(-1.0, 1.0, self.n) * half_range * scale,
+                rng.uniform(-1.0, 1.0, self.n) * scale)
 
     def __repr__(self) -> str:
         args = ", ".join(f"{k}={v!r}" for k, v in self._parameters.items())

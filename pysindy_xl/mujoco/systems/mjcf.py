@@ -66,9 +66,8 @@ class MJCFSystem(MuJoCoSystem):
     def __init__(self, source, force_amplitude=1.0, joints=None):
         mujoco = import_mujoco()
         self._urdf = is_urdf(source)
-        if isinstance(source, os.PathLike) or (
-            isinstance(source, str) and not source.lstrip().startswith("<")
-        ):
+        if isinstance(source, os.PathLike) or (isinstance(source, str)
+                                               and not source.lstrip().startswith("<")):
             path = os.fspath(source)
             if not os.path.isfile(path):
                 raise ValueError(f"source: {'URDF' if self._urdf else 'MJCF'} file {path!r} "
@@ -103,10 +102,8 @@ class MJCFSystem(MuJoCoSystem):
         for j in range(model.njnt):
             if int(model.jnt_type[j]) not in allowed:
                 jname = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"#{j}"
-                raise ValueError(
-                    f"source: joint {jname!r} is not a hinge or slide joint; only those are "
-                    "supported (one coordinate per joint)"
-                )
+                raise ValueError(f"source: joint {jname!r} is not a hinge or slide joint; only "
+                                 "those are supported (one coordinate per joint)")
         self._spec = None
         self.excluded_joints = ()
         self.trimmed_keyframes = ()
@@ -119,9 +116,8 @@ class MJCFSystem(MuJoCoSystem):
         self.joint_names = tuple(raw[j] or f"joint{j}" for j in range(model.njnt))
         self.coordinate_names = tuple(_identifier(raw[j], j, taken) for j in range(model.njnt))
         hinge = int(mujoco.mjtJoint.mjJNT_HINGE)
-        self.angle_coordinates = tuple(
-            j for j in range(model.njnt) if int(model.jnt_type[j]) == hinge
-        )
+        self.angle_coordinates = tuple(j for j in range(model.njnt)
+                                       if int(model.jnt_type[j]) == hinge)
         self.mixed_actuators = self.actuated_joints[:1]
         self._parameters = {"source": self.path or "<string>",
                             **checked_parameters(force_amplitude=force_amplitude),
@@ -130,10 +126,8 @@ class MJCFSystem(MuJoCoSystem):
             self._parameters["joints"] = list(self.joint_names)
 
     def _select_joints(self, model, joints):
-        if isinstance(joints, str):
-            joints = [joints]
         try:
-            joints = list(joints)
+            joints = [joints] if isinstance(joints, str) else list(joints)
         except TypeError:
             raise TypeError(f"joints: expected a list of joint names, got {joints!r}") from None
         mujoco = import_mujoco()
@@ -141,9 +135,8 @@ class MJCFSystem(MuJoCoSystem):
                  for j in range(model.njnt)]
         unknown = [j for j in joints if j not in names]
         if unknown or not joints or not all(isinstance(j, str) for j in joints):
-            raise ValueError(
-                f"joints: expected a non-empty list of joint names among {names}, got {joints!r}"
-            )
+            raise ValueError(f"joints: expected a non-empty list of joint names among {names}, "
+                             f"got {joints!r}")
         if not hasattr(mujoco, "MjSpec"):
             raise ValueError(f"joints: selecting joints needs MuJoCo >= 3.3 (MjSpec), found "
                              f"{mujoco.__version__}")
@@ -217,8 +210,7 @@ class MJCFSystem(MuJoCoSystem):
         margin = 0.05 * (high - low)
         q0 = np.where(limited, np.clip(q0, low + margin, high - margin), q0)
         speed = np.where(limited, np.minimum(1.0, (high - low) / 2), 1.0)
-        qd0 = rng.uniform(-1.0, 1.0, self.n) * speed * scale
-        return q0, qd0
+        return q0, rng.uniform(-1.0, 1.0, self.n) * speed * scale
 
     def metadata(self) -> dict:
         """What a dataset records to rebuild this system (:func:`system_from_metadata`).
@@ -234,12 +226,9 @@ class MJCFSystem(MuJoCoSystem):
 
     @property
     def actuated_joints(self):
-        model = self._model
-        names = []
-        for a in range(model.nu):
-            if int(model.actuator_trntype[a]) == int(import_mujoco().mjtTrn.mjTRN_JOINT):
-                names.append(self.joint_names[model.actuator_trnid[a, 0]])
-        return tuple(dict.fromkeys(names))
+        model, joint = self._model, int(import_mujoco().mjtTrn.mjTRN_JOINT)
+        return tuple(dict.fromkeys(self.joint_names[model.actuator_trnid[a, 0]] for a in
+                                   range(model.nu) if int(model.actuator_trntype[a]) == joint))
 
     @property
     def joint_damping(self):
@@ -253,16 +242,12 @@ class MJCFSystem(MuJoCoSystem):
     def lagrangian(self):
         """Not available: raises NotImplementedError (subclass :class:`MuJoCoSystem` to give a
         model a known Lagrangian)."""
-        raise NotImplementedError(
-            "MJCFSystem: the true Lagrangian of a user's model is unknown; subclass "
-            "MuJoCoSystem to provide one"
-        )
+        raise NotImplementedError("MJCFSystem: the true Lagrangian of a user's model is "
+                                  "unknown; subclass MuJoCoSystem to provide one")
 
     def xml(self):
         """The MJCF text given (or read from the file given); with ``joints``, the reduced model."""
-        if self._spec is not None:
-            return self._spec.to_xml()
-        return self._xml
+        return self._xml if self._spec is None else self._spec.to_xml()
 
     def mj_model(self):
         """Compiled MuJoCo model, from the file when one was given (relative assets resolve)."""

@@ -44,19 +44,16 @@ def _cart(mass: float, damping: float, inner: str) -> str:
 def _link(body: str, joint: str, mass, length, damping, inertia, pos, inner="", indent=6):
     # axis 0 -1 0: a positive angle moves the bob towards +x (textbook convention).
     pad = " " * indent
-    return (
-        f'{pad}<body name="{body}" pos="{pos}">\n'
-        f'{pad}  <joint name="{joint}" type="hinge" axis="0 -1 0" '
-        f'damping="{mjcf_float(damping)}"/>\n'
-        f'{pad}  <inertial pos="0 0 {mjcf_float(-length)}" mass="{mjcf_float(mass)}" '
-        f'diaginertia="{mjcf_float(inertia)} {mjcf_float(inertia)} {mjcf_float(inertia)}"/>\n'
-        f'{pad}  <geom type="capsule" fromto="0 0 0 0 0 {mjcf_float(-length)}" size="0.01" '
-        f'rgba="0.6 0.6 0.6 1"/>\n'
-        f'{pad}  <geom type="sphere" pos="0 0 {mjcf_float(-length)}" size="0.04" '
-        f'rgba="0.8 0.3 0.3 1"/>\n'
-        f"{inner}"
-        f"{pad}</body>\n"
-    )
+    return (f'{pad}<body name="{body}" pos="{pos}">\n'
+            f'{pad}  <joint name="{joint}" type="hinge" axis="0 -1 0" '
+            f'damping="{mjcf_float(damping)}"/>\n'
+            f'{pad}  <inertial pos="0 0 {mjcf_float(-length)}" mass="{mjcf_float(mass)}" '
+            f'diaginertia="{mjcf_float(inertia)} {mjcf_float(inertia)} {mjcf_float(inertia)}"/>\n'
+            f'{pad}  <geom type="capsule" fromto="0 0 0 0 0 {mjcf_float(-length)}" size="0.01" '
+            f'rgba="0.6 0.6 0.6 1"/>\n'
+            f'{pad}  <geom type="sphere" pos="0 0 {mjcf_float(-length)}" size="0.04" '
+            f'rgba="0.8 0.3 0.3 1"/>\n'
+            f"{inner}{pad}</body>\n")
 
 
 def _footer(joints) -> str:
@@ -126,11 +123,8 @@ class CartPole(MuJoCoSystem):
         x, th = self.coords.q
         xd, thd = self.coords.qd
         big_m, m, l, g = p["cart_mass"], p["pole_mass"], p["length"], p["gravity"]
-        kinetic = (
-            (big_m + m) * xd**2 / 2
-            + m * l * xd * thd * sp.cos(th)
-            + (m * l**2 + p["point_inertia"]) * thd**2 / 2
-        )
+        kinetic = ((big_m + m) * xd**2 / 2 + m * l * xd * thd * sp.cos(th)
+                   + (m * l**2 + p["point_inertia"]) * thd**2 / 2)
         potential = -m * g * l * sp.cos(th)
         return kinetic - potential
 
@@ -144,12 +138,14 @@ class CartPole(MuJoCoSystem):
                 + _footer(self.joint_names))
 
 
-def _pendulum_chain_xml(p: dict, indent: int) -> str:
-    """MJCF bodies of the two-link chain (link1 carrying link2), shared by both pendulums."""
-    inner = _link("link2", "hinge2", p["mass2"], p["length2"], p["damping2"],
-                  p["point_inertia"], f"0 0 {mjcf_float(-p['length1'])}", indent=indent + 2)
-    return _link("link1", "hinge1", p["mass1"], p["length1"], p["damping1"],
-                 p["point_inertia"], "0 0 0", inner=inner, indent=indent)
+def _chain_xml(p: dict, n_links: int, indent: int) -> str:
+    """MJCF bodies of a pendulum chain, link ``k`` carrying link ``k + 1``."""
+    inner = ""
+    for k in range(n_links, 0, -1):
+        pos = "0 0 0" if k == 1 else f"0 0 {mjcf_float(-p[f'length{k - 1}'])}"
+        inner = _link(f"link{k}", f"hinge{k}", p[f"mass{k}"], p[f"length{k}"], p[f"damping{k}"],
+                      p["point_inertia"], pos, inner=inner, indent=indent + 2 * (k - 1))
+    return inner
 
 
 class DoublePendulum(MuJoCoSystem):
@@ -204,7 +200,7 @@ class DoublePendulum(MuJoCoSystem):
         """MJCF text of the double pendulum (see :meth:`MuJoCoSystem.xml`)."""
         p = self._parameters
         return (_header("double_pendulum", p["timestep"], p["gravity"])
-                + _pendulum_chain_xml(p, indent=4) + _footer(self.joint_names))
+                + _chain_xml(p, 2, indent=4) + _footer(self.joint_names))
 
 
 def _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=None, cart_mass=0.0):
@@ -218,11 +214,8 @@ def _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=None, cart_mass=0.0):
         + inertia * (thd1**2 + thd2**2) / 2
     )
     if xd is not None:
-        kinetic += (
-            (cart_mass + m1 + m2) * xd**2 / 2
-            + (m1 + m2) * l1 * xd * thd1 * sp.cos(th1)
-            + m2 * l2 * xd * thd2 * sp.cos(th2)
-        )
+        kinetic += ((cart_mass + m1 + m2) * xd**2 / 2 + (m1 + m2) * l1 * xd * thd1 * sp.cos(th1)
+                    + m2 * l2 * xd * thd2 * sp.cos(th2))
     potential = -(m1 + m2) * g * l1 * sp.cos(th1) - m2 * g * l2 * sp.cos(th2)
     return kinetic - potential
 
@@ -274,13 +267,12 @@ class CartDoublePendulum(MuJoCoSystem):
         p = self._parameters
         _, th1, th2 = self.coords.q
         xd, thd1, thd2 = self.coords.qd
-        return _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=xd,
-                                          cart_mass=p["cart_mass"])
+        return _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=xd, cart_mass=p["cart_mass"])
 
     def xml(self):
         """MJCF text of the double pendulum on a cart (see :meth:`MuJoCoSystem.xml`)."""
         p = self._parameters
-        link = _pendulum_chain_xml(p, indent=6)
+        link = _chain_xml(p, 2, indent=6)
         return (_header("cart_double_pendulum", p["timestep"], p["gravity"])
                 + _cart(p["cart_mass"], p["cart_damping"], link)
                 + _footer(self.joint_names))
@@ -350,12 +342,5 @@ class TriplePendulum(MuJoCoSystem):
     def xml(self):
         """MJCF text of the three-link pendulum (see :meth:`MuJoCoSystem.xml`)."""
         p = self._parameters
-        link3 = _link("link3", "hinge3", p["mass3"], p["length3"], p["damping3"],
-                      p["point_inertia"], f"0 0 {mjcf_float(-p['length2'])}", indent=8)
-        link2 = _link("link2", "hinge2", p["mass2"], p["length2"], p["damping2"],
-                      p["point_inertia"], f"0 0 {mjcf_float(-p['length1'])}", inner=link3,
-                      indent=6)
-        link1 = _link("link1", "hinge1", p["mass1"], p["length1"], p["damping1"],
-                      p["point_inertia"], "0 0 0", inner=link2, indent=4)
-        return (_header("triple_pendulum", p["timestep"], p["gravity"]) + link1
+        return (_header("triple_pendulum", p["timestep"], p["gravity"]) + _chain_xml(p, 3, 4)
                 + _footer(self.joint_names))

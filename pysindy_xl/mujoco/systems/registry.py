@@ -1,20 +1,11 @@
 """The registry of MuJoCo systems, and their conventions.
 
-Angles are absolute, from the downward vertical (``theta = 0`` hanging down, a bob at
-``(l sin theta, -l cos theta)``); cart positions ``x`` are horizontal. MuJoCo's hinge angles
-along a chain are relative (``phi2 = theta2 - theta1``): every system maps ``q = T @ qpos``
-(:attr:`MuJoCoSystem.joint_to_coordinates`), alike for velocities and accelerations.
-
-By virtual work a joint force ``u`` (one per MuJoCo degree of freedom) is the generalized
-force ``B @ u``, ``B = T^-T`` (:meth:`MuJoCoSystem.force_matrix`): a motor on a relative hinge
-pushes the outer link forward and the inner one back. Joint damping becomes the generalized
-friction ``-B C T^-1 qd``, coupling absolute coordinates; :meth:`MuJoCoSystem.friction` gives
-it with the library's sign (``EL(L) + friction = B @ u``).
-
-Point masses have explicit ``<inertial>`` elements (a tiny ``point_inertia``, exact in the
-Lagrangian); contacts are off and the integrator is RK4 with a small step. The base class is
-in :mod:`~pysindy_xl.mujoco.systems.base`, the paper's systems in
-:mod:`~pysindy_xl.mujoco.systems.paper`, MJCF files in :mod:`~pysindy_xl.mujoco.systems.mjcf`.
+Angles are absolute, from the downward vertical (``theta = 0`` hanging down); cart positions
+``x`` are horizontal. MuJoCo's hinge angles along a chain are relative: every system maps
+``q = T @ qpos`` (:attr:`MuJoCoSystem.joint_to_coordinates`); by virtual work a joint force
+``u`` is the generalized force ``B @ u``, ``B = T^-T`` (:meth:`MuJoCoSystem.force_matrix`),
+and joint damping the friction ``-B C T^-1 qd`` (:meth:`MuJoCoSystem.friction`). Point masses
+have explicit ``<inertial>`` elements (a tiny ``point_inertia``); contacts are off.
 """
 
 from __future__ import annotations
@@ -34,12 +25,7 @@ __all__ = ["MuJoCoSystem", "coordinate_system", "CartPole", "DoublePendulum",
            "default_xml_path", "equations_of_motion", "system_from_metadata"]
 
 
-SYSTEMS = {
-    CartPole.name: CartPole,
-    DoublePendulum.name: DoublePendulum,
-    CartDoublePendulum.name: CartDoublePendulum,
-    TriplePendulum.name: TriplePendulum,
-}
+SYSTEMS = {cls.name: cls for cls in (CartPole, DoublePendulum, CartDoublePendulum, TriplePendulum)}
 
 
 def get_system(name, **parameters) -> MuJoCoSystem:
@@ -74,10 +60,8 @@ def get_system(name, **parameters) -> MuJoCoSystem:
         return SYSTEMS[key](**parameters)
     if os.path.isfile(name):
         return MJCFSystem(name, **parameters)
-    raise ValueError(
-        f"name: unknown system {name!r}; expected one of {sorted(SYSTEMS)} or a path to an "
-        "MJCF .xml or URDF .urdf file"
-    )
+    raise ValueError(f"name: unknown system {name!r}; expected one of {sorted(SYSTEMS)} or a "
+                     "path to an MJCF .xml or URDF .urdf file")
 
 
 def system_from_metadata(metadata: dict, **parameters) -> MuJoCoSystem:
@@ -109,10 +93,9 @@ def system_from_metadata(metadata: dict, **parameters) -> MuJoCoSystem:
             return MJCFSystem(path, **options)
         if xml:
             return MJCFSystem(xml, **options)
-        raise ValueError(
-            "metadata: the dataset comes from a user's MJCF but records neither an existing "
-            f"model path ({path!r}) nor the model's XML; pass --system PATH.xml"
-        )
+        raise ValueError("metadata: the dataset comes from a user's MJCF but records neither an "
+                         f"existing model path ({path!r}) nor the model's XML; pass --system "
+                         "PATH.xml")
     recorded = dict(metadata.get("parameters") or {})
     if isinstance(name, str) and name.strip().lower().replace("_", "-") in SYSTEMS:
         recorded.update(parameters)

@@ -30,7 +30,6 @@ def _plain_motor(model, a: int) -> bool:
     """Whether actuator ``a`` is a plain torque motor (fixed gain, no bias) on a limited
     hinge or slide joint."""
     mujoco = import_mujoco()
-
     joint = model.actuator_trnid[a, 0]
     return (_supported(model, a)
             and int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_FIXED)
@@ -61,7 +60,6 @@ def plain_motors(model) -> np.ndarray:
 def gravity_torques(model, poses) -> np.ndarray:
     """Gravity's generalized forces (``qfrc_bias`` at rest), shape (P, nv), at poses (P, nq)."""
     mujoco = import_mujoco()
-
     data = mujoco.MjData(model)
     out = np.empty((len(poses), model.nv))
     for k, pose in enumerate(poses):  # a handful of poses: one forward pass each
@@ -99,7 +97,6 @@ def tracking_controller(model, actuators=None, n_poses: int = 16, seed=0) -> dic
     (246.7, 15.71)
     """
     mujoco = import_mujoco()
-
     candidates = range(model.nu) if actuators is None else np.atleast_1d(actuators)
     tracked = [int(a) for a in candidates if _plain_motor(model, int(a))]
     if not tracked:
@@ -149,9 +146,7 @@ def tracked_model(model, controller: dict):
     (array([   0., -100.,  -10.]), array([-5.,  5.]))
     """
     import copy
-
     mujoco = import_mujoco()
-
     out = copy.deepcopy(model)
     for i, a in enumerate(controller["actuators"]):
         if not 0 <= int(a) < model.nu:

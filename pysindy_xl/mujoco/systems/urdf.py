@@ -1,17 +1,11 @@
 """URDF robot descriptions as MJCF: what :class:`~pysindy_xl.mujoco.MJCFSystem` reads.
 
-MuJoCo compiles URDF itself (inertials, joint axes, origins, limits, damping, friction);
-:func:`urdf_spec` settles what stands between a robot's URDF and a usable model:
-
-- **Meshes** (``package://`` files rarely shipped with the URDF): every ``<visual>`` and
-  ``<collision>`` is dropped; identification needs the inertials only.
-- **Fixed joints**: fused into the parent (MuJoCo's ``fusestatic``); a ``<mujoco><compiler/>``
-  element in the URDF still sets MuJoCo's options.
-- **Actuators**: URDF has none; each hinge and slide joint gets a motor (gear 1, named like
-  its joint; an effort limit becomes ``actuatorfrcrange``).
-
-Inertia tensors no rigid body has (``A + B < C``) are balanced by MuJoCo (``balanceinertia``)
-with a warning naming the links; the kinematic catalog does not depend on them.
+MuJoCo compiles URDF itself; :func:`urdf_spec` settles the rest: every ``<visual>`` and
+``<collision>`` is dropped (``package://`` meshes are rarely shipped; identification needs the
+inertials only), fixed joints are fused into their parents (a ``<mujoco><compiler/>`` element
+still sets MuJoCo's options), and each hinge and slide joint gets a motor (gear 1, named like
+its joint; an effort limit becomes ``actuatorfrcrange``). Inertia tensors no rigid body has are
+balanced by MuJoCo, with a warning naming the links.
 """
 
 from __future__ import annotations
@@ -107,8 +101,7 @@ def urdf_spec(text: str, where: str = "source", warn: bool = True):
         raise ValueError(f"{where}: MuJoCo cannot read the URDF: {error}") from None
     for joint in spec.joints:
         if joint.type in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
-            spec.add_actuator(name=joint.name, target=joint.name,
-                              trntype=mujoco.mjtTrn.mjTRN_JOINT)
+            spec.add_actuator(name=joint.name, target=joint.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
     try:
         spec.compile()
     except ValueError as error:
