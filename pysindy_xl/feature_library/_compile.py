@@ -11,6 +11,7 @@ GIL). :func:`scalar_function` evaluates the same terms at one state, for simulat
 
 from __future__ import annotations
 
+import functools
 import os
 from concurrent.futures import ThreadPoolExecutor
 
@@ -332,6 +333,13 @@ def _atom_function(atom, position, variables):
     if function is not None and atom.args[0] in position:  # sin(q), cos(q): most atoms
         index = position[atom.args[0]]
         return lambda *columns: function(columns[index])
+    return _lambdified(atom, variables)
+
+
+@functools.lru_cache(maxsize=1024)
+def _lambdified(atom, variables: tuple):
+    """``lambdify`` of an atom: the same atoms recur in a catalog's columns, weak entries and
+    dynamics, and printing them is most of a compile read from disk."""
     return sp.lambdify(variables, atom, modules="numpy")
 
 

@@ -31,6 +31,14 @@ def _merged(slices, parts) -> tuple[np.ndarray, Terms]:
     return index.copy(), terms
 
 
+def _as_slice(columns: list):
+    """``columns`` as a slice where they are a run: a fancy index costs some 40 times as much
+    on an arm's catalog."""
+    if columns and columns == list(range(columns[0], columns[0] + len(columns))):
+        return slice(columns[0], columns[0] + len(columns))
+    return columns
+
+
 def _merge(slices, parts) -> tuple[np.ndarray, Terms]:
     atoms: dict = {}
     indices, blocks = [], []
@@ -45,7 +53,7 @@ def _merge(slices, parts) -> tuple[np.ndarray, Terms]:
     start, entries = 0, 0
     coefficients, owners = [], []
     for remap, (block_powers, block_coefficients, block_owners, n_entries) in blocks:
-        powers[start:start + len(block_coefficients), remap] = block_powers
+        powers[start:start + len(block_coefficients), _as_slice(remap)] = block_powers
         start += len(block_coefficients)
         coefficients.append(block_coefficients)
         owners.append(block_owners + entries)
