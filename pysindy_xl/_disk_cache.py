@@ -1,15 +1,11 @@
 """An on-disk store of arrays that are slow to derive and cheap to read: NPZ files, no pickle.
 
-Used for kinematic-catalog derivations and for the evaluation plans of large catalogs; each
-user names its files by a digest of everything the arrays depend on, the deriving code
-included, so a stale file is never read (it is a miss, and the newest :data:`KEEP` files of
-each kind are kept).
-
-The directory is ``$PYSINDY_XL_CACHE`` if set, else ``$XDG_CACHE_HOME/pysindy_xl`` (default
-``~/.cache/pysindy_xl``); ``PYSINDY_XL_CACHE=off`` (or ``0``, ``false``, ``no``, empty) turns
-the store off. Files are written to a temporary name and renamed (readers never see half a
-file); a directory that cannot be created or written is skipped silently, and a file that is
-missing or unreadable is a miss.
+Kinematic-catalog derivations and large catalogs' evaluation plans, each file named by a
+digest of all its arrays depend on, the deriving code included (a stale file is never read;
+the newest :data:`KEEP` files of each kind are kept). The directory is ``$PYSINDY_XL_CACHE``,
+else ``$XDG_CACHE_HOME/pysindy_xl`` (default ``~/.cache/pysindy_xl``); ``PYSINDY_XL_CACHE=off``
+(or ``0``, ``false``, ``no``, empty) turns it off. Files are written under a temporary name
+and renamed; an unwritable directory is skipped and an unreadable file is a miss.
 """
 
 from __future__ import annotations
@@ -22,7 +18,7 @@ import zipfile
 
 import numpy as np
 
-__all__ = ["directory", "read_arrays", "source_digest", "write_arrays"]
+__all__ = ["add_arrays", "directory", "read_arrays", "source_digest", "write_arrays"]
 
 KEEP = 16
 _OFF = {"", "0", "off", "false", "no", "none"}
@@ -47,6 +43,14 @@ def source_digest(paths, *versions) -> hashlib.sha256 | None:
     except OSError:
         return None
     return digest
+
+
+def add_arrays(digest, arrays) -> None:
+    """Update ``digest`` with each array's dtype, shape and bytes (read in place)."""
+    for array in arrays:
+        array = np.ascontiguousarray(array)
+        digest.update(f"{array.dtype.str}{array.shape}".encode())
+        digest.update(array.reshape(-1).view(np.uint8))
 
 
 def write_arrays(kind: str, digest: str, arrays: dict) -> None:

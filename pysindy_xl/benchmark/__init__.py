@@ -3,8 +3,6 @@ resumable runner with a time limit per run (:mod:`.runner`), the JSONL records
 (:mod:`.records`), the paper's ranking (:mod:`.ranking`), the report (:mod:`.report`) and
 the command line (:mod:`.cli`, ``pysindy-xl benchmark``).
 
-Examples
---------
 >>> from pysindy_xl.benchmark import PRESETS
 >>> len(PRESETS["quick"].tasks())  # 36 trajectories x 9 configurations
 324

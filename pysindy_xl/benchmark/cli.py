@@ -1,7 +1,5 @@
 """Command line of the benchmark: ``pysindy-xl benchmark`` and ``benchmarks/table1.py``.
 
-Examples
---------
 ::
 
     pysindy-xl benchmark --quick                       # the small grid, all cores

@@ -29,8 +29,6 @@ SYSTEM_NAMES = ("cart-pole", "double-pendulum", "cart-double-pendulum")
 def config_label(catalog: str, solver: str) -> str:
     """Row name of a configuration in the table.
 
-    Examples
-    --------
     >>> config_label("lagrange", "explicit")
     'lagrange x explicit'
     >>> config_label("classical", "pysindy")
@@ -45,8 +43,6 @@ def all_configurations(include_baseline: bool = True) -> list[tuple[str, str]]:
     """``(catalog, solver)`` pairs in table order: the paper's 9, the kinematic catalog's 3, then
     (``include_baseline``) the pysindy.SINDy baseline ``("classical", "pysindy")``.
 
-    Examples
-    --------
     >>> configurations = all_configurations()
     >>> len(configurations), configurations[-2:]
     (13, [('kinematic', 'implicit'), ('classical', 'pysindy')])
@@ -58,8 +54,6 @@ def all_configurations(include_baseline: bool = True) -> list[tuple[str, str]]:
 def solver_applies(solver: str, forcing: str) -> bool:
     """Whether a solver runs on data of a forcing mode (module docstring).
 
-    Examples
-    --------
     >>> solver_applies("explicit", "implicit"), solver_applies("mixed", "implicit")
     (False, True)
     """

@@ -36,8 +36,6 @@ def rank_trajectory(records) -> dict[str, int]:
     """``{config: rank}`` of the records with status ``ok`` among the records of one trajectory
     (competition ranks, 1 the best).
 
-    Examples
-    --------
     >>> recs = [{"config": c, "status": "ok", "metrics": {"position_rmse": e}}
     ...         for c, e in [("a", 0.3), ("b", 0.1), ("c", 0.1)]]
     >>> rank_trajectory(recs)

@@ -92,8 +92,6 @@ def latest_records(records) -> list[dict]:
 class RecordStore:
     """Append-only JSONL file of run records (module docstring), created with its directory.
 
-    Examples
-    --------
     >>> import tempfile, os
     >>> path = os.path.join(tempfile.mkdtemp(), "records.jsonl")
     >>> store = RecordStore(path)

@@ -27,8 +27,6 @@ class CatalogDynamics(MassMatrixDynamics):
     fitted catalog; ``held`` (n,) flags coordinates held still (:mod:`pysindy_xl.fit.still`),
     whose equation becomes ``qdd_c = 0``.
 
-    Examples
-    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> library = px.CatalogRepartition([px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])])

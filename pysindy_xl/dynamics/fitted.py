@@ -54,8 +54,6 @@ class DynamicsMixin:
         torques) under which the identified equations hold with the motion ``x``, ``x_dot``,
         ``x_ddot`` (N, n).
 
-        Examples
-        --------
         >>> import numpy as np, pysindy_xl as px
         >>> c = px.Coordinates(["x"])
         >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
@@ -80,8 +78,6 @@ class DynamicsMixin:
         with ``rms``, ``relative`` (per coordinate), ``total``, ``lines()`` and ``plot(path)``;
         arguments as in :func:`pysindy_xl.held_out.score_forces`.
 
-        Examples
-        --------
         >>> import numpy as np, pysindy_xl as px
         >>> c = px.Coordinates(["x"])
         >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
@@ -115,8 +111,6 @@ class DynamicsMixin:
         returns the states (T, 2n). Arguments and errors as in :meth:`MassMatrixDynamics.simulate
         <pysindy_xl.MassMatrixDynamics.simulate>` (``u`` may be 1-D for one coordinate).
 
-        Examples
-        --------
         A spring ``x'' + 2 x = u``, identified, then brought to ``x = 0.5`` by a PD law:
 
         >>> import numpy as np, pysindy_xl as px

@@ -18,8 +18,6 @@ def force_function(u, t: np.ndarray, n: int, interpolation: str = "cubic"):
     reads an array between samples by a cubic spline (smooth: adaptive integrators take fewer
     steps), linearly, or by zero-order hold (``"previous"``, piecewise-constant commands).
 
-    Examples
-    --------
     >>> import numpy as np
     >>> u = force_function(np.array([[0.0], [2.0], [4.0]]), np.array([0.0, 1.0, 2.0]), 1,
     ...                    interpolation="linear")
@@ -71,8 +69,6 @@ def feedback_function(feedback, x0: np.ndarray, t0: float, n: int):
     once at the initial state ``x0`` and time ``t0`` and wrapped as ``f(t, state) -> (n,)``
     (``q``, ``qd`` passed as copies); None without feedback.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> pd = feedback_function(lambda t, q, qd: -4.0 * q - qd, np.array([1.0, 0.5]), 0.0, 1)
     >>> pd(0.0, np.array([1.0, 0.5]))

@@ -25,8 +25,6 @@ __all__ = ["MassMatrixDynamics", "DynamicsError", "SingularMassMatrixError", "Si
 class DynamicsError(RuntimeError):
     """Base class of the errors raised by identified dynamics.
 
-    Examples
-    --------
     >>> issubclass(SimulationError, DynamicsError), issubclass(SingularMassMatrixError,
     ...                                                        DynamicsError)
     (True, True)
@@ -36,8 +34,6 @@ class DynamicsError(RuntimeError):
 class SingularMassMatrixError(DynamicsError):
     """The identified mass matrix is singular (or numerically so) at the samples ``indices``.
 
-    Examples
-    --------
     >>> import pysindy_xl as px
     >>> c = px.Coordinates(["x", "y"])
     >>> dyn = px.MassMatrixDynamics(c, [c.qdd[0] - c.tau[0], c.qdd[0] + c.q[1]])
@@ -59,8 +55,6 @@ class SimulationError(DynamicsError):
     ``"timeout"`` or ``"integrator failure (...)"``); ``t`` (k,) and ``states`` (k, 2n) are
     the valid part of the trajectory.
 
-    Examples
-    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> unstable = px.MassMatrixDynamics(c, [c.qdd[0] - c.q[0] ** 3])
@@ -84,8 +78,6 @@ class MassMatrixDynamics:
     ``coords.qdd``, in mass-matrix form: ``mass_matrix_expr`` ``M(q, qd)`` (n, n) and
     ``forcing_expr`` ``f(q, qd, tau, t)`` (n, 1), ``M qdd = f``.
 
-    Examples
-    --------
     >>> import pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> dyn = px.MassMatrixDynamics(c, [2 * c.qdd[0] + 3 * c.q[0] - c.tau[0]])
@@ -204,8 +196,6 @@ class MassMatrixDynamics:
         absent): the simulators' fast path. Raises :class:`SingularMassMatrixError` if ``M`` is
         singular there or ``M``, ``f`` not finite.
 
-        Examples
-        --------
         >>> import pysindy_xl as px
         >>> c = px.Coordinates(["x"])
         >>> px.MassMatrixDynamics(c, [2 * c.qdd[0] + c.q[0]]).state_derivative([1.0, 3.0])

@@ -71,8 +71,6 @@ def ros2(parts, x0, t, step, jacobian_every: int = 50, divergence_bound: float =
     :class:`RosenbrockStop` (with the valid rows) on a non-finite or singular step, divergence
     or timeout.
 
-    Examples
-    --------
     A stiff oscillator ``1e-3 qdd = -100 q - 100 qd`` (modes near -1 and -1e5 1/s) at 10 ms:
 
     >>> import numpy as np

@@ -204,8 +204,6 @@ def simulate_batch(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpol
     diverges is frozen and reported, the others carry on. ``x0`` (B, 2n) and ``u`` (B, T, n)
     per trajectory, the other arguments as in :func:`simulate`, shared.
 
-    Examples
-    --------
     >>> import sympy as sp, jax.numpy as jnp
     >>> from types import SimpleNamespace
     >>> import pysindy_xl as px

@@ -30,8 +30,6 @@ def _axpy(x, a, y):
 def rk4_step(f, state, t, dt, u_start, u_end=None):
     """One classical Runge-Kutta step (arguments in the module docstring).
 
-    Examples
-    --------
     >>> import jax.numpy as jnp
     >>> from pysindy_xl.export.jax_dynamics import rk4_step
     >>> decay = lambda x, u, t: -x + u
@@ -69,8 +67,6 @@ def semi_implicit_euler_step(f, state, t, dt, u_start, u_end=None):
     """One semi-implicit (symplectic) Euler step, ``qd' = qd + dt qdd``, ``q' = q + dt qd'``:
     first order, energy of conservative systems kept bounded.
 
-    Examples
-    --------
     >>> import jax.numpy as jnp
     >>> from pysindy_xl.export.jax_dynamics import semi_implicit_euler_step
     >>> spring = lambda x, u, t: jnp.array([x[1], u[0] - x[0]])
@@ -87,8 +83,6 @@ def semi_implicit_euler_step(f, state, t, dt, u_start, u_end=None):
 def euler_step(f, state, t, dt, u_start, u_end=None):
     """One explicit Euler step, ``state + dt f(state, u(t), t)``.
 
-    Examples
-    --------
     >>> import jax.numpy as jnp
     >>> from pysindy_xl.export.jax_dynamics import euler_step
     >>> spring = lambda x, u, t: jnp.array([x[1], u[0] - x[0]])

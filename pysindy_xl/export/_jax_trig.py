@@ -78,8 +78,6 @@ def fast_sin(x):
     promoted to the default float type, infinite or NaN input gives NaN, and the derivative
     is :func:`fast_cos`.
 
-    Examples
-    --------
     >>> import jax.numpy as jnp
     >>> from pysindy_xl.export.jax_dynamics import fast_sin
     >>> fast_sin(jnp.array([0.0, jnp.pi / 6, jnp.pi / 2])).round(6)
@@ -92,8 +90,6 @@ def fast_sin(x):
 def fast_cos(x):
     """Cosine through a vectorizable polynomial, as :func:`fast_sin`.
 
-    Examples
-    --------
     >>> import jax.numpy as jnp
     >>> from pysindy_xl.export.jax_dynamics import fast_cos
     >>> fast_cos(jnp.array([0.0, jnp.pi / 3, jnp.pi])).round(6)

@@ -198,8 +198,6 @@ def make_env(model, dt, **options) -> IdentifiedDynamicsEnv:
     :class:`IdentifiedDynamicsEnv`. Raises ValueError if the model defines no dynamics or an
     option is out of range.
 
-    Examples
-    --------
     >>> import numpy as np, pysindy_xl as px
     >>> from gymnasium.utils.env_checker import check_env
     >>> coords = px.Coordinates(["x"])

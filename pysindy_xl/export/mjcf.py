@@ -151,8 +151,6 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     :class:`~pysindy_xl.mujoco.MJCFSystem` ``system``. Returns ``(mj_model, None)`` or
     ``(None, reason)``.
 
-    Examples
-    --------
     >>> import pysindy_xl as px
     >>> from pysindy_xl.mujoco import MJCFSystem, generate_dataset, kinematic_catalog
     >>> system = MJCFSystem('''<mujoco><worldbody><body><joint name="j" axis="0 1 0"

@@ -62,8 +62,6 @@ def remembered_weak_values(library):
     array once (at most ``_WEAK_MEMO_BYTES`` kept; re-entrant): weak rows of the same states
     under other test functions then cost only their contraction, bit for bit the same.
 
-    Examples
-    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> library = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit()

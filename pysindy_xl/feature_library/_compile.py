@@ -259,8 +259,6 @@ def compile_terms(variables, terms: Terms):
     distal joint first). The plans of large catalogs are kept on disk
     (:func:`._plans.stored_plan`).
 
-    Examples
-    --------
     >>> import numpy as np, sympy as sp
     >>> a, b, v = sp.symbols("a b v")
     >>> expr = sp.expand(v * (1 + sp.sin(a) + sp.cos(a) * sp.sin(b)) ** 2)

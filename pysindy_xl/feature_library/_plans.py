@@ -102,8 +102,6 @@ def best_plan(arrays, inner, peel) -> Plan:
     joint's sines and cosines of polynomials in the others, each distinct one once, take
     fewer operations than as sums of products of all the joints' atoms.
 
-    Examples
-    --------
     ``v s + 2 v`` in the atoms ``(v, s)``, ``v`` factored out: ``v (s + 2)``.
 
     >>> arrays = (np.array([[1, 1], [1, 0]], dtype=np.int16), np.array([1.0, 2.0]),
@@ -152,8 +150,6 @@ def _distinct_runs(bounds, *columns) -> np.ndarray:
     Runs are grouped by a hash of their rows, and each group is checked row by row against
     its first run (a collision, never seen, falls back to comparing the runs one by one).
 
-    Examples
-    --------
     >>> bounds = np.array([0, 2, 4, 4, 6, 7, 9])
     >>> a, b = np.array([1, 2, 1, 2, 3, 4, 1, 1, 2]), np.array([5, 6, 5, 6, 5, 6, 5, 5, 6])
     >>> _distinct_runs(bounds, a, b).tolist()
@@ -306,7 +302,6 @@ class Plan:
         return np.asarray(self.sum @ pairs)
 
 
-# -- plans kept on disk ----------------------------------------------------------------------
 #: Terms from which a plan is stored on disk: smaller ones are planned faster than read.
 STORED_TERMS = 50_000
 _PLAN_FORMAT = 1
@@ -365,8 +360,7 @@ def plan_arrays(plan: Plan, prefix="") -> dict:
 def plan_of(data, prefix="") -> Plan:
     """The plan stored by :func:`plan_arrays`."""
     plan = Plan.__new__(Plan)
-    plan.n_entries, plan.size, plan.cost, direct, factored = \
-        data[f"{prefix}header"].tolist()
+    plan.n_entries, plan.size, plan.cost, direct, factored = data[f"{prefix}header"].tolist()
     plan.direct = bool(direct)
     plan.index = data[f"{prefix}index"]
     plan.runs = [tuple(r) for r in data[f"{prefix}pair_runs"].tolist()]
@@ -391,20 +385,13 @@ def _code_digest() -> str | None:
 
 
 def stored_plan(arrays, inner, peel) -> Plan:
-    """:func:`best_plan`, read back from the disk cache (:mod:`pysindy_xl._disk_cache`) for
-    terms of :data:`STORED_TERMS` or more, and stored there when first made.
-
-    The file is named by a digest of the terms, the atom masks and the planning code, so a
-    plan is only ever read for the very terms it was made for.
-    """
+    """:func:`best_plan`, kept on disk (:mod:`pysindy_xl._disk_cache`) for terms of
+    :data:`STORED_TERMS` or more, named by a digest of the terms, masks and planning code."""
     code = _code_digest()
     if len(arrays[1]) < STORED_TERMS or code is None or _disk_cache.directory() is None:
         return best_plan(arrays, inner, peel)
     digest = hashlib.sha256(code.encode())
-    for array in (*arrays[:3], np.array(arrays[3]), inner, *peel):
-        array = np.ascontiguousarray(array)
-        digest.update(f"{array.dtype.str}{array.shape}".encode())
-        digest.update(array.reshape(-1).view(np.uint8))  # (the buffer itself: no copy)
+    _disk_cache.add_arrays(digest, (*arrays[:3], np.array(arrays[3]), inner, *peel))
     name = digest.hexdigest()
     stored = _disk_cache.read_arrays("plan", name)
     if stored is not None:

@@ -74,8 +74,6 @@ class ColumnStructure:
     def involves(self, symbols) -> np.ndarray:
         """Which entries (n, F) involve any of ``symbols`` (variables of ``coords``).
 
-        Examples
-        --------
         >>> import pysindy_xl as px
         >>> c = px.Coordinates(["x"])
         >>> px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit().involves(c.qdd).tolist()
@@ -96,8 +94,6 @@ class ColumnStructure:
         Such an entry is an impulse at each switch, which samples catch or miss by chance while
         integration by parts states it exactly: ``formulation="auto"`` then fits in the weak form.
 
-        Examples
-        --------
         >>> import sympy as sp, pysindy_xl as px
         >>> c = px.Coordinates(["x"])
         >>> px.ClassicalLibrary(c, [c.qd[0], sp.Abs(c.qd[0]) * c.qdd[0]]).fit().impulsive()

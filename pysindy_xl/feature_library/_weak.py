@@ -22,8 +22,6 @@ __all__ = ["integrate_by_parts", "time_derivative"]
 def time_derivative(expr: sp.Expr, coords: Coordinates) -> sp.Expr:
     """Total time derivative of ``expr(q, qd, t)`` by the chain rule (accelerations appear).
 
-    Examples
-    --------
     >>> import sympy as sp, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> time_derivative(c.qd[0] * sp.cos(c.q[0]), c)

@@ -23,8 +23,6 @@ def pysindy_library_terms(library: BaseFeatureLibrary, coords: Coordinates) -> l
     names do not describe its features (a ``CustomLibrary``) is refused, not mistranslated.
     Returns one expression per output feature.
 
-    Examples
-    --------
     >>> import pysindy as ps, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> pysindy_library_terms(ps.PolynomialLibrary(degree=2, include_bias=False), c)

@@ -94,8 +94,6 @@ class ExternalForces(SymbolicLibrary):
         """Build from per-coordinate lists of signed 1-based input indices
         (:func:`signed_indices_to_interlink`).
 
-        Examples
-        --------
         >>> import pysindy_xl as px
         >>> c = px.Coordinates(["a", "b"])
         >>> px.ExternalForces.from_signed_indices(c, [[1, -2], [2]]).interlink

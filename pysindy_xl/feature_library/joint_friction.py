@@ -38,8 +38,6 @@ def friction_function(model: str, velocity, coulomb_scale: float, stribeck_scale
     """The function of a joint ``velocity`` that ``model``'s coefficient multiplies (scales as in
     the module docstring).
 
-    Examples
-    --------
     >>> import sympy as sp
     >>> v = sp.Symbol("v")
     >>> friction_function("stribeck", v, 0.01, 0.1)

@@ -58,8 +58,6 @@ def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:
     The time derivative is the chain rule ``d/dt = sum_k qd_k d/dq_k + qdd_k d/dqd_k + d/dt``;
     the expanded expressions (length n) are linear in the accelerations.
 
-    Examples
-    --------
     >>> import pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> euler_lagrange(c.qd[0] ** 2 / 2 - c.q[0] ** 2 / 2, c)
@@ -150,8 +148,6 @@ class LagrangeLibrary(SymbolicLibrary):
         A term outside its domain (``log(x)`` at ``x <= 0``) has no meaning there, even where its
         column is finite; terms defined everywhere are not evaluated.
 
-        Examples
-        --------
         >>> import numpy as np, sympy as sp, pysindy_xl as px
         >>> c = px.Coordinates(["x"])
         >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, sp.log(c.q[0])]).fit()

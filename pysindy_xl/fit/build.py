@@ -62,8 +62,6 @@ class CatalogMap:
     def to_catalog(self, values) -> np.ndarray:
         """``values`` of the problem's columns (last axis) on the catalog's, zero elsewhere.
 
-        Examples
-        --------
         >>> import numpy as np
         >>> m = CatalogMap(np.array([0, 2]), 3, np.ones(1, bool), np.ones(1, bool), {},
         ...                np.zeros((1, 5)), "strong")
@@ -81,8 +79,6 @@ def probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndarr
     drawn independently: dependencies found on them are identities of the catalog (such as
     ``cos^2 + sin^2 = 1``), never the physical law the trajectories obey.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> probe_points(np.array([[0.0, 1.0], [1.0, 3.0]]), n_points=5).shape
     (5, 2)

@@ -18,8 +18,6 @@ def mass_matrices(dynamics, states, max_states: int = 2000):
     """Symmetrized mass matrices (S, n, n) and their eigenvalues (S, n) of ``dynamics`` on up to
     ``max_states`` of ``states`` (N, 4n + 1).
 
-    Examples
-    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> dyn = px.MassMatrixDynamics(c, [2 * c.qdd[0] + c.q[0]])
@@ -41,8 +39,6 @@ def column_mass_matrices(library, states, max_states: int = 200) -> np.ndarray:
     is the column at ``qdd = e_k`` minus the column at ``qdd = 0``: ``n + 1`` evaluations, no
     symbolic work. Coefficients ``xi`` have the mass matrix ``sum_j xi_j M_j``.
 
-    Examples
-    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> library = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit()
@@ -70,8 +66,6 @@ def orient_free_laws(coef, symbolic_matrix, force_columns, mass):
     its sign is arbitrary. ``symbolic_matrix`` (n, F) gives the non-zero entries of the
     columns, ``mass`` (S, n, n) the mass matrices. Returns a new ``coef`` and whether it flipped.
 
-    Examples
-    --------
     >>> import numpy as np, sympy as sp
     >>> coef, flipped = orient_free_laws(np.array([0.0, -0.5]), sp.Matrix([[0, 1]]), [0],
     ...                                  -np.ones((3, 1, 1)))
@@ -109,8 +103,6 @@ def mass_matrix_report(mass, eigenvalues, names, remedy: str = "") -> dict:
     Definiteness is judged unit free, on ``D M D`` with ``D = diag(max |M_ii|)^(-1/2)``; the
     condition number is that of ``M``.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> mass = np.array([[[2.0, 0.0], [0.0, 1.0]]] * 3)
     >>> mass_matrix_report(mass, np.linalg.eigvalsh(mass), ["a", "b"])

@@ -17,15 +17,7 @@ import numpy as np
 from sklearn.base import clone
 
 from ..optimizers import EnsembleOptimizer, catalog_tags
-from ..weak import BumpTestFunctions, WhittakerSmoother
-from ..weak.selection import (
-    SCORING_BANDWIDTH,
-    NoiseModel,
-    bandwidth_half_width,
-)
-from ..weak.selection import (
-    choose_noise_model as choose_candidate,
-)
+from ..weak import BumpTestFunctions, WhittakerSmoother, selection
 from .build import build_problem, with_mass_matrices
 from .solve import solve
 
@@ -33,16 +25,11 @@ __all__ = ["RememberedSmoother", "choose_noise_model", "fit_smoother"]
 
 
 class RememberedSmoother:
-    """A smoother that smooths each distinct input once, for the several problems of one fit.
-
-    The default rows, the candidates' rows and the scoring rows of :func:`choose_noise_model`
-    smooth the same trajectory pieces, and propagate the same noisy draws (their generator is
-    seeded); results are kept by the content of ``(t, x)`` and, for :meth:`resmooth`, of the
-    weights. Copies share what was smoothed (``deepcopy`` is the object itself), and a
-    shallow copy keeps the weights of its last :meth:`smooth`, as the weak regression's
-    propagation needs. For smoothers that propagate (with ``resmooth``): the others are
-    never asked twice.
-    """
+    """A smoother (with ``resmooth``) that smooths each distinct input once: the default,
+    candidates' and scoring rows of :func:`choose_noise_model` smooth the same pieces and the
+    same (seeded) noisy draws. Results are kept by the content of ``(t, x)`` (and weights);
+    ``deepcopy`` is the object itself, and a shallow copy keeps its last weights, as the weak
+    regression's propagation needs."""
 
     def __init__(self, smoother=None):
         self.smoother = smoother or WhittakerSmoother()
@@ -143,7 +130,7 @@ def choose_noise_model(problem, library, data, optimizer, smoother=None,
     remembered = (smoother if isinstance(smoother, RememberedSmoother)
                   else RememberedSmoother(smoother))
     steps = np.concatenate([np.diff(d["t"]) for d in data])
-    scoring = max(bandwidth_half_width(SCORING_BANDWIDTH, tests.power),
+    scoring = max(selection.bandwidth_half_width(selection.SCORING_BANDWIDTH, tests.power),
                   tests.min_samples * float(np.quantile(steps, 0.999)))
     width = min(scoring, info["half_width"])
 
@@ -163,8 +150,8 @@ def choose_noise_model(problem, library, data, optimizer, smoother=None,
     scored = built(scoring, propagate=True)
     forces = dataclasses.replace(scored, row_noise=None, noise_moments=None,
                                  noise_draws=None) if width == scoring else built(width)
-    candidates = [(NoiseModel("positions", info["half_width"], True), problem),
-                  (NoiseModel("forces", width, False), forces)]
+    candidates = [(selection.NoiseModel("positions", info["half_width"], True), problem),
+                  (selection.NoiseModel("forces", width, False), forces)]
 
     if catalog_tags(optimizer).uses_mass_matrices:  # once, for every fit on blocks
         problem = with_mass_matrices(problem, library)
@@ -177,7 +164,7 @@ def choose_noise_model(problem, library, data, optimizer, smoother=None,
         return solve(_unbagged(optimizer), part, weigh=weigh).coef_
 
     spans = np.array([[d["t"][0], d["t"][-1]] for d in data])
-    best, errors = choose_candidate(
+    best, errors = selection.choose_noise_model(
         [(model, p.theta, p.catalog_map.weak_info["supports"], p.row_noise)
          for model, p in candidates],
         (scored.theta, scored.catalog_map.weak_info["supports"], scored.row_noise),

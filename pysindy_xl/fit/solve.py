@@ -32,8 +32,6 @@ def resolve_optimizer(optimizer, problem, library):
     "mixed") or None gets :func:`~pysindy_xl.optimizers.default_optimizer` for the problem's data
     and the catalog ``library``.
 
-    Examples
-    --------
     >>> import numpy as np, pysindy as ps, pysindy_xl as px
     >>> problem = px.optimizers.CatalogProblem.from_arrays(np.eye(3), 1, [0])
     >>> resolve_optimizer(ps.STLSQ(), problem, None)
@@ -68,8 +66,6 @@ def solve(optimizer, problem, library=None, weigh=False):
     :data:`MAX_REWEIGHTS` fits). ``weigh="auto"``: when some coordinate of the problem is forced.
     Returns the fitted optimizer.
 
-    Examples
-    --------
     >>> import numpy as np, pysindy_xl as px
     >>> theta = np.column_stack([[1.0, 2.0, 3.0], [0.5, 1.0, 1.5]])
     >>> problem = px.optimizers.CatalogProblem.from_arrays(theta, 1, [0])

@@ -51,8 +51,6 @@ def driven_coordinates(library, forces) -> np.ndarray:
     and the recorded force ``k`` is not zero everywhere. ``library`` is a fitted
     :class:`~pysindy_xl.CatalogRepartition`; ``forces`` a list of arrays (N_k, n), or None.
 
-    Examples
-    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x", "y"])
     >>> lib = px.CatalogRepartition([px.LagrangeLibrary(c, [c.qd[0] ** 2])]).fit()
@@ -77,8 +75,6 @@ def still_coordinates(positions, times, forced, threshold: float) -> np.ndarray:
     ``positions`` and ``times`` are lists of arrays (N_k, n) and (N_k,); ``forced`` (n,) marks the
     coordinates that are never still; ``threshold`` is ``kappa``.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> t = np.linspace(0, 10, 1001)
     >>> x = np.column_stack([np.sin(t), np.full_like(t, 0.3), np.full_like(t, 0.3)])
@@ -108,8 +104,6 @@ def still_columns(library, still) -> dict:
     A column goes when, in the equations of the moving coordinates, it is zero, involves a
     velocity, acceleration or force of a still coordinate, or depends only on still positions.
 
-    Examples
-    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x", "y"])
     >>> lib = px.CatalogRepartition([px.LagrangeLibrary(
@@ -152,8 +146,6 @@ def still_columns(library, still) -> dict:
 def block_rows(n_blocks: int, n_rows: int, blocks) -> np.ndarray:
     """Row indices of ``blocks`` (a boolean mask) in a matrix stacked coordinate-major.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> block_rows(3, 6, np.array([True, False, True])).tolist()
     [0, 1, 4, 5]
@@ -166,8 +158,6 @@ def block_rows(n_blocks: int, n_rows: int, blocks) -> np.ndarray:
 def held_note(names) -> str:
     """The note that a model prints about its still coordinates (empty when none).
 
-    Examples
-    --------
     >>> held_note(["target_x"]).endswith("model): target_x"), held_note([])
     (True, '')
     """

@@ -27,8 +27,6 @@ def differentiation_function(method=None, unbiased: bool = False):
     unforced data cannot tell from the law), else ``ps.SmoothedFiniteDifference()`` (smoothing
     on the actual times off a uniform grid).
 
-    Examples
-    --------
     >>> import numpy as np
     >>> t = np.linspace(0, 1, 101)
     >>> d = differentiation_function(unbiased=True)(t[:, None] ** 2, t)
@@ -85,8 +83,6 @@ def resolve_formulation(formulation: str, measured: bool, differentiation_method
     and no catalog entry is ``impulsive`` (sampled pointwise an impulse is caught or missed by
     chance; integrated by parts it is exact); weak otherwise.
 
-    Examples
-    --------
     >>> resolve_formulation("auto", measured=False), resolve_formulation("auto", True)
     ('weak', 'strong')
     >>> resolve_formulation("auto", True, impulsive=True)

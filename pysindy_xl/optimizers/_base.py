@@ -207,8 +207,6 @@ class CatalogOptimizer(BaseEstimator):
     are declared by overriding :meth:`catalog_tags` or as class attributes; every subclass
     enters :data:`OPTIMIZER_TYPES` for :meth:`to_spec` and :func:`optimizer_from_spec`.
 
-    Examples
-    --------
     A least-squares solver with the force coefficient fixed to -1 implements ``_solve`` and
     declares its tags:
 

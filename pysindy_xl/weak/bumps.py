@@ -28,8 +28,6 @@ def quadrature_weights(t) -> np.ndarray:
     nearest samples, except where nearly coincident samples make that cubic's weights large and
     of both signs (those keep the trapezoid).
 
-    Examples
-    --------
     >>> quadrature_weights([0.0, 1.0, 2.0])
     array([0.5, 1. , 0.5])
     >>> t = np.array([0.0, 0.1, 0.3, 0.4, 0.7, 1.0])
@@ -84,8 +82,6 @@ def corner_frequency(t, x, energy: float = 0.99) -> float:
     above it is summed without clipping, so the corner does not move with the noise level.
     Returns the largest corner over coordinates.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> t = np.linspace(0, 20, 2001)
     >>> x = np.sin(2 * np.pi * 0.5 * t)[:, None]
@@ -204,8 +200,6 @@ class BumpTestFunctions:
         """Longest step a test function of ``half_width`` may span: ``half_width / min_samples``;
         trajectories are cut at longer steps (:mod:`~pysindy_xl.weak.timegrid`).
 
-        Examples
-        --------
         >>> BumpTestFunctions(min_samples=10).max_gap(0.5)
         0.05
         """

@@ -112,8 +112,6 @@ class WeakNoise:
         """The draws of the rows of the coordinates ``keep`` (a boolean mask) only, with
         their runs renumbered.
 
-        Examples
-        --------
         >>> import numpy as np
         >>> runs = np.array([[0, 5, 0, 1], [5, 10, 1, 1], [10, 15, 2, 1]])
         >>> part = WeakNoise(np.zeros((2, 15, 1)), 3, runs).coordinates([True, False, True])
@@ -135,8 +133,6 @@ class WeakNoise:
         """The draws of the rows ``keep`` (a boolean mask over the rows, the same test
         functions for every coordinate) only, with the runs cut where rows are left out.
 
-        Examples
-        --------
         >>> import numpy as np
         >>> noise = WeakNoise(np.zeros((2, 10, 1)), 2, np.array([[0, 5, 0, 1], [5, 10, 1, 1]]))
         >>> part = noise.rows(np.tile([True, True, False, True, True], 2))

@@ -30,8 +30,6 @@ def shared_half_width(test_functions, trajectories, columns=None) -> float:
     unreliable spectra). Only the coordinates in ``columns`` (bool (n,), default all) set it:
     still coordinates have only the noise's spectrum.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> from pysindy_xl.weak import BumpTestFunctions
     >>> t = np.linspace(0, 10, 1001)
@@ -64,8 +62,6 @@ def propagated_noise(library, d, smoothing, phi, dphi, block, n_draws, rng):
     is distributed (to first order) as the error ``E``: ``E[E^T E] ~ mean of Delta^T Delta`` over
     ``n_draws`` per coordinate block.
 
-    Examples
-    --------
     >>> import numpy as np, pysindy_xl as px
     >>> coords = px.Coordinates(["x"])
     >>> library = px.LagrangeLibrary(coords, [coords.qd[0] ** 2, coords.q[0] ** 2]).fit()

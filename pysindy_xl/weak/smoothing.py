@@ -41,8 +41,6 @@ def finite_difference_weights(t, derivative: int, stencil: int = 5, degree=None)
     ``degree < stencil - 1`` they are the least-squares polynomial's of that degree
     (Savitzky-Golay on the actual times).
 
-    Examples
-    --------
     >>> import numpy as np
     >>> t = np.sort(np.random.default_rng(0).uniform(0, 1, 40))
     >>> index, weights = finite_difference_weights(t, 1)
@@ -73,8 +71,6 @@ def differentiate(t, values, derivative: int = 1, stencil: int = 5, degree=None)
     """Derivative of smooth sampled ``values`` (N, ...) along axis 0; ``stencil`` and ``degree``
     as in :func:`finite_difference_weights`.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> t = np.linspace(0, 1, 50)
     >>> float(np.abs(differentiate(t, np.sin(t)) - np.cos(t)).max()) < 1e-6
@@ -115,8 +111,6 @@ _TRACE_PROBES = 16
 def is_uniform(t) -> bool:
     """Whether the steps of ``t`` are equal up to ``1e-3`` of their mean.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> is_uniform(np.arange(0, 1, 0.01)), is_uniform([0.0, 0.01, 0.03, 0.04])
     (True, False)
@@ -233,8 +227,6 @@ def whittaker_smooth(t, x, lams, order: int = 3):
     Columns of one weight share one factorization. ``order`` is that of the penalized divided
     difference; returns ``q, qd, qdd`` (N, n).
 
-    Examples
-    --------
     >>> import numpy as np
     >>> t = np.linspace(0, 1, 201)
     >>> q, qd, _ = whittaker_smooth(t, np.column_stack([t**2, t]), [1e3, 0.0])
@@ -329,8 +321,6 @@ class WhittakerSmoother:
         (:func:`~pysindy_xl.weak.propagated_draws`): with fixed weights the smoother is linear, so
         fresh noise of level ``noise_`` smoothed by it has the spread of the original noise's error.
 
-        Examples
-        --------
         >>> import numpy as np
         >>> t = np.linspace(0, 10, 1001)
         >>> y = np.sin(t)[:, None] + 0.01 * np.random.default_rng(0).normal(size=(1001, 1))

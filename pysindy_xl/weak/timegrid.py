@@ -29,8 +29,6 @@ def split_at_gaps(trajectories, max_gap: float):
     trajectory, and one dict per cut: ``trajectory``, ``time`` (the last stamp before the gap)
     and ``length``.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> t = np.array([0.0, 0.1, 0.2, 1.0, 1.1])
     >>> segments, source, gaps = split_at_gaps([{"t": t, "x": t[:, None], "u": None}], 0.5)
@@ -63,8 +61,6 @@ def grid_summary(times) -> dict:
     """Median, largest and smallest time step over ``times`` (one array per trajectory), and
     whether every grid is uniform.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> grid_summary([np.array([0.0, 0.5, 1.0, 3.0])])
     {'uniform': False, 'median_step': 0.5, 'max_step': 2.0, 'min_step': 0.5}
@@ -81,8 +77,6 @@ def stamp_noise_ratio(t, x, noise, order: int = 3) -> float:
     Below 1 for stamps that are the sampling times of a smooth motion; above
     :data:`STAMP_NOISE_RATIO`, the stamps look like arrival times.
 
-    Examples
-    --------
     Samples taken every 10 ms, stamped late by up to 3 ms:
 
     >>> import numpy as np

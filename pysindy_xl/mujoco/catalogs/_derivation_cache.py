@@ -1,12 +1,10 @@
 """An on-disk cache of kinematic-catalog derivations, keyed by the model's kinematic content.
 
-The derivation of a catalog (the trigonometric polynomials of every body, their
-Euler-Lagrange columns, the numerical reduction to base parameters) depends on the kinematic
-tree alone: bodies' offsets and orientations, joints' types, axes, anchors and references,
-gravity, the coordinates, the names and the seed; never on masses, inertias or armatures.
-It is stored by :mod:`pysindy_xl._disk_cache` (an NPZ file of arrays, read without pickle,
-named by a digest of that content, of the deriving code, of numpy's and MuJoCo's versions and
-of the file format; ``PYSINDY_XL_CACHE`` chooses the directory or turns it off).
+A catalog's derivation (every body's trigonometric polynomials, their Euler-Lagrange columns,
+the reduction to base parameters) depends on the kinematic tree alone: offsets, orientations,
+joints' types, axes, anchors and references, gravity, coordinates, names and seed; never on
+masses, inertias or armatures. Stored by :mod:`pysindy_xl._disk_cache`, named by a digest of
+that content, the deriving code, numpy's and MuJoCo's versions and the file format.
 """
 
 from __future__ import annotations
@@ -51,12 +49,10 @@ def key(system, model, names, seed) -> str | None:
     digest = hashlib.sha256(code.encode())
     digest.update(repr((tuple(names), tuple(system.joint_names), tuple(system.coordinate_names),
                         sorted(system.angle_coordinates), int(seed))).encode())
-    for array in (model.body_parentid, model.body_pos, model.body_quat, model.body_jntnum,
-                  model.body_jntadr, model.jnt_type, model.jnt_axis, model.jnt_pos,
-                  model.jnt_qposadr, model.jnt_dofadr, model.qpos0, model.opt.gravity,
-                  system.joint_to_coordinates):
-        array = np.ascontiguousarray(array)
-        digest.update(f"{array.dtype.str}{array.shape}".encode() + array.tobytes())
+    _disk_cache.add_arrays(digest, (
+        model.body_parentid, model.body_pos, model.body_quat, model.body_jntnum,
+        model.body_jntadr, model.jnt_type, model.jnt_axis, model.jnt_pos, model.jnt_qposadr,
+        model.jnt_dofadr, model.qpos0, model.opt.gravity, system.joint_to_coordinates))
     return digest.hexdigest()
 
 
