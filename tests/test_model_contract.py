@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 import pytest
 from ground_truth import random_force, random_initial_state
-from test_explicit_identification import paper_catalog
+from support.paper import paper_catalog
 
 import pysindy_xl as px
 

@@ -9,7 +9,7 @@ import pytest
 import scipy.integrate
 import sympy as sp
 from ground_truth import random_force, random_initial_state
-from test_explicit_identification import paper_catalog
+from support.paper import paper_catalog
 
 import pysindy_xl as px
 from pysindy_xl.io import FORMAT, VERSION, save_model

@@ -4,6 +4,7 @@ import json
 
 import numpy as np
 import pytest
+from support.files import MODELS
 
 from pysindy_xl.cli import CLIError, main
 from pysindy_xl.cli.steps import _optimizer
@@ -185,9 +186,6 @@ def test_demo_on_a_user_mjcf(tmp_path, capsys):
     assert report["validation"]["valid"] is True
     assert "true value" in printed and "swing: 0.2, 0 (true 0.2, 0)" in printed
     assert (out / "validation.png").exists()
-
-
-MODELS = __import__("pathlib").Path(__file__).parent / "models"
 
 
 def test_generate_then_identify_a_user_mjcf_with_include(tmp_path, capsys):

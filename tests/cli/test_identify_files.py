@@ -6,20 +6,13 @@ import sys
 
 import numpy as np
 import pytest
-from test_data_io import pendulum, write_csv
+from support.files import HEADER, two_trajectories, write_csv
 
 import pysindy_xl
 from pysindy_xl.cli import main
 
-HEADER = ["t", "theta", "theta_dot", "theta_ddot", "tau_theta", "trajectory"]
 TRUE = {"L[theta_dot**2]": 0.25, "L[cos(theta)]": 4.9, "C_theta[theta_dot]": 0.2,
         "F[tau]": -1.0}
-
-
-def two_trajectories():
-    a, b = pendulum(201), pendulum(201, phase=0.7)
-    columns = [np.r_[x, y] for x, y in zip(a, b, strict=True)]
-    return columns + [np.r_[np.full(201, 1.0), np.full(201, 2.0)]]
 
 
 def assert_true_model(model):

@@ -4,8 +4,7 @@ import re
 
 import numpy as np
 import pytest
-from test_cli_data import HEADER, two_trajectories
-from test_data_io import write_csv
+from support.files import HEADER, two_trajectories, write_csv
 
 from pysindy_xl.cli import build_parser, fit_quality, main, run_identify
 

@@ -2,26 +2,10 @@
 
 import numpy as np
 import pytest
+from support.files import pendulum, write_csv
 
 from pysindy_xl.data import DatasetError, from_columns, from_dataframe, load_data, read_csv
 from pysindy_xl.mujoco import coordinate_system
-
-
-def pendulum(n=101, phase=0.0):
-    """Exact damped pendulum data: 0.5 qdd + 0.2 qd + 4.9 sin q = tau."""
-    t = np.linspace(0.0, 2.0, n)
-    q = np.sin(1.3 * t + phase) + 0.3 * np.sin(3.1 * t)
-    qd = 1.3 * np.cos(1.3 * t + phase) + 0.93 * np.cos(3.1 * t)
-    qdd = -1.69 * np.sin(1.3 * t + phase) - 0.3 * 3.1**2 * np.sin(3.1 * t)
-    tau = 0.5 * qdd + 0.2 * qd + 4.9 * np.sin(q)
-    return t, q, qd, qdd, tau
-
-
-def write_csv(path, header, columns, delimiter=","):
-    rows = [delimiter.join(header)]
-    rows += [delimiter.join(repr(float(v)) for v in row) for row in zip(*columns, strict=True)]
-    path.write_text("\n".join(rows) + "\n")
-    return path
 
 
 def test_csv_with_header(tmp_path):

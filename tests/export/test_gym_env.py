@@ -6,7 +6,7 @@ import warnings
 
 import numpy as np
 import pytest
-from test_data_io import pendulum
+from support.files import pendulum
 
 import pysindy_xl as px
 from pysindy_xl._optional import MissingExtraError

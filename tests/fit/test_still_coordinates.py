@@ -5,12 +5,12 @@ two slide joints, decoupled from it. A target at rest stays at rest: its recorde
 are constant (plus sensor noise), which carries no information about its dynamics.
 """
 
-import pathlib
 import pickle
 import warnings
 
 import numpy as np
 import pytest
+from support.files import MODELS
 
 import pysindy_xl as px
 from pysindy_xl.fit.still import driven_coordinates, noise_level, still_coordinates
@@ -18,7 +18,6 @@ from pysindy_xl.mujoco import MJCFSystem, generate_dataset, reference_catalog
 from pysindy_xl.mujoco.evaluation.physics import compare_physics
 from pysindy_xl.quality import fit_quality, quality_lines
 
-MODELS = pathlib.Path(__file__).parent / "models"
 PATH = MODELS / "pendulum_and_target.xml"
 TARGET = ["target_x", "target_y"]
 REST = np.array([0.3, -0.2])  # where the target rests

@@ -97,7 +97,7 @@ def test_cart_double_pendulum_unforced_at_5_percent():
     """Paper catalog, three unforced 10 s runs, 5 % position noise, seed 0: the exact law
     (with one test-function width and no gap the selection returned an 11-term law missing
     the pendulums' friction and an inertia term)."""
-    from unforced_cells import fit_unforced_cell
+    from support.unforced_cells import fit_unforced_cell
 
     model, true = fit_unforced_cell("cart_double_pendulum", 0.05, seed=0)
     coef = model.coefficients()

@@ -5,11 +5,11 @@ pendulum with a joint stop, a block with frictionloss, a pendulum next to a pass
 two slide joints, an arm split over two files with ``<include>``.
 """
 
-import pathlib
 import warnings
 
 import numpy as np
 import pytest
+from support.files import MODELS
 
 import pysindy_xl as px
 from pysindy_xl.data import noise_levels, unconstrained_samples, unconstrained_windows
@@ -26,8 +26,6 @@ from pysindy_xl.mujoco import (
     validation_trajectory,
 )
 from pysindy_xl.mujoco.simulation.generate import actuator_force_function
-
-MODELS = pathlib.Path(__file__).parent / "models"
 
 # cart 1 kg, bob 0.5 kg at 0.8 m (inertia 1e-6), dampings 0.5 and 0.1
 RAIL_CART_TRUTH = {

@@ -14,13 +14,14 @@ import warnings
 
 import numpy as np
 import pytest
+from support.files import MODELS
 
 mujoco = pytest.importorskip("mujoco")
 
 from pysindy_xl.mujoco import MJCFSystem, get_system, kinematic_catalog  # noqa: E402
 from pysindy_xl.mujoco.systems.registry import system_from_metadata  # noqa: E402
 
-KINOVA = pathlib.Path(__file__).parent / "models" / "kinova_gen3.urdf"
+KINOVA = MODELS / "kinova_gen3.urdf"
 
 # a revolute shoulder, a tool fixed to the upper arm (fused into it), a revolute elbow with
 # damping, a prismatic slide; meshes that do not exist

@@ -65,7 +65,7 @@ def test_cart_double_pendulum_unforced_at_3_percent_paper_catalog():
     """The noise sweep's cell (three 10 s unforced runs, 3 % position noise, seed 2): before
     the admissible starts, a 6-term law of constant inertia (rank one on the data) with a
     held-out ratio of 4.4; now the true 12-term law (held-out ratio about 1.3)."""
-    from unforced_cells import fit_unforced_cell
+    from support.unforced_cells import fit_unforced_cell
 
     model, true = fit_unforced_cell("cart_double_pendulum", 0.03, seed=2)
     coef = model.coefficients()

@@ -9,7 +9,7 @@ import pysindy as ps
 import pytest
 import scipy.stats
 from ground_truth import random_force, random_initial_state
-from test_explicit_identification import _true_coefficients, paper_catalog
+from support.paper import paper_catalog, true_coefficients
 
 import pysindy_xl as px
 from pysindy_xl.optimizers import CatalogOptimizer, CatalogProblem
@@ -25,7 +25,7 @@ def _noisy(system, seed, level=0.01, duration=30.0, active=None):
 
 def _ensemble_outcome(system, angles, seed, **options):
     library = paper_catalog(system.coords, angles)
-    true = _true_coefficients(system, library.fit())
+    true = true_coefficients(system, library.fit())
     t, noisy, data = _noisy(system, seed)
     model = px.XLSINDy(library, optimizer=px.EnsembleOptimizer(**{"n_models": 12, **options})
                        ).fit(noisy, t, u=data["tau"])
@@ -150,7 +150,7 @@ def test_refit_coefficients_are_closer_to_the_truth_than_the_median(cart_pole_sy
     (On the rows as they are: whitened by the residual's covariance, the default, both are
     closer, 0.24 % against 0.28 %.)"""
     library = paper_catalog(cart_pole_system.coords, [1])
-    true = _true_coefficients(cart_pole_system, library.fit())
+    true = true_coefficients(cart_pole_system, library.fit())
     support = true != 0
     errors = {"refit": [], "median": []}
     for seed in range(5):
@@ -167,7 +167,7 @@ def test_refit_coefficients_are_closer_to_the_truth_than_the_median(cart_pole_sy
 def test_same_support_as_pysindys_ensemble_in_physical_units(cart_pole_system):
     system = cart_pole_system
     library = paper_catalog(system.coords, [1])
-    true = _true_coefficients(system, library.fit())
+    true = true_coefficients(system, library.fit())
     t, noisy, data = _noisy(system, 1, level=0.001, duration=20.0)
     # the rows as they are: at 0.1 % noise the residual-covariance weighting (the default)
     # moves the coefficients by up to 7e-5 relative, a bias of the smoother and quadrature
@@ -276,7 +276,7 @@ def test_partly_forced_noisy_positions_bag_the_explicit_part(double_pendulum_sys
     # data, keeps only the true ones.
     system = double_pendulum_system
     library = paper_catalog(system.coords, [0, 1])
-    true = _true_coefficients(system, library.fit())
+    true = true_coefficients(system, library.fit())
     t, noisy, data = _noisy(system, 1, level=0.05, active=[0])
     model = px.XLSINDy(library).fit(noisy, t, u=data["tau"])
     assert isinstance(model.optimizer_, px.MixedOptimizer)

@@ -8,21 +8,10 @@ simulating a fresh validation trajectory.
 
 import numpy as np
 import pytest
-import sympy as sp
 from ground_truth import random_force, random_initial_state
+from support.paper import paper_catalog, true_coefficients
 
 import pysindy_xl as px
-
-
-def paper_catalog(coords: px.Coordinates, angles) -> px.CatalogRepartition:
-    """Velocity monomials (degree 2) x trigonometric monomials of the angles (degree 2),
-    plus viscous friction on every coordinate."""
-    trig = [f(coords.q[i]) for i in angles for f in (sp.sin, sp.cos)]
-    terms = px.products([1, *px.monomials(trig, 2)], [1, *px.monomials(coords.qd, 2)])
-    terms = [t for t in terms if t.free_symbols]
-    friction = px.ClassicalLibrary(coords, coords.qd, mask=np.eye(coords.n, dtype=bool))
-    return px.CatalogRepartition([px.LagrangeLibrary(coords, terms), friction])
-
 
 SYSTEMS = {
     "cart_pole": ("cart_pole_system", [1]),
@@ -36,13 +25,8 @@ def _dataset(system, seed, duration=20.0, dt=0.005):
     return system.simulate(random_initial_state(system, seed), t, random_force(system, seed))
 
 
-def _true_coefficients(system, library):
-    friction = {(system.coords.qd[i], i): c for i, c in enumerate(system.friction)}
-    return library.ideal_coefficients(lagrangian=system.lagrangian, classical=friction)
-
-
 def _check_model(model, system, library, rel_tol):
-    true = _true_coefficients(system, library)
+    true = true_coefficients(system, library)
     coef = model.coefficients()
     names = np.array(model.get_feature_names())
     support = true != 0

@@ -9,10 +9,10 @@ import warnings
 
 import numpy as np
 import pytest
-import sympy as sp
 from ground_truth import random_initial_state
 from sklearn.base import clone
 from sklearn.exceptions import ConvergenceWarning
+from support.paper import paper_catalog
 
 import pysindy_xl as px
 from pysindy_xl.optimizers._sparse import kkt_violation, lasso_gram
@@ -236,16 +236,6 @@ def test_helpers():
 # ---------------------------------------------------------------------------------------------
 # Acceptance: unforced cart-pole and double pendulum with friction
 # ---------------------------------------------------------------------------------------------
-
-
-def paper_catalog(coords, angles):
-    """Velocity monomials (degree 2) x trigonometric monomials of the angles (degree 2), plus
-    viscous friction on every coordinate (as in the explicit acceptance tests)."""
-    trig = [f(coords.q[i]) for i in angles for f in (sp.sin, sp.cos)]
-    terms = px.products([1, *px.monomials(trig, 2)], [1, *px.monomials(coords.qd, 2)])
-    terms = [t for t in terms if t.free_symbols]
-    friction = px.ClassicalLibrary(coords, coords.qd, mask=np.eye(coords.n, dtype=bool))
-    return px.CatalogRepartition([px.LagrangeLibrary(coords, terms), friction])
 
 
 def unforced_runs(system, seeds, duration=15.0, dt=0.005):

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 from ground_truth import random_initial_state
-from test_implicit import paper_catalog
+from support.paper import paper_catalog
 
 import pysindy_xl as px
 from pysindy_xl.optimizers import CatalogProblem

@@ -99,7 +99,7 @@ def test_three_link_pendulum_from_five_percent_noisy_positions():
     """A chaotic three-link pendulum, unforced, 5 % noise on the positions: the true
     15-term law, its held-out ratio 1 in every fold (on even shares of the blocks' noise
     the folds of this cell spread from 0.2 to 3.4, and a 13-term law won)."""
-    from unforced_cells import fit_unforced_cell
+    from support.unforced_cells import fit_unforced_cell
 
     model, true = fit_unforced_cell("triple_pendulum", 0.05, seed=0)
     coef = model.coefficients()

@@ -155,7 +155,7 @@ def test_product_catalog_flags_an_undetermined_unforced_law():
     import pathlib
     import sys
 
-    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "benchmarks"))
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "benchmarks"))
     import noise_sweep
     from ground_truth import random_initial_state
 

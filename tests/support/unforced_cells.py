@@ -10,7 +10,7 @@ from ground_truth import random_initial_state
 
 import pysindy_xl as px
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "benchmarks"))
 import noise_sweep  # noqa: E402
 
 

@@ -5,8 +5,7 @@ truth integrated by scipy), and the corrected fit against the true coefficients.
 
 import numpy as np
 import pytest
-from test_explicit_identification import _true_coefficients, paper_catalog
-from test_weak import _noisy_run
+from support.paper import noisy_run, paper_catalog, true_coefficients
 
 import pysindy_xl as px
 from pysindy_xl.feature_library import stack_variables
@@ -26,8 +25,8 @@ def _trajectory(t, x, u):
 def test_propagated_moments_match_the_errors_of_many_noise_draws(cart_pole_system):
     system = cart_pole_system
     library = paper_catalog(system.coords, [1]).fit()
-    true = _true_coefficients(system, library)
-    t, noisy, data, _ = _noisy_run(system, 0, 0.03, duration=20.0)
+    true = true_coefficients(system, library)
+    t, noisy, data, _ = noisy_run(system, 0, 0.03, duration=20.0)
     functions = BumpTestFunctions(width=1.0)
     _, _, moments, _ = weak_regression(library, [_trajectory(t, noisy, data["tau"])],
                                        functions, WhittakerSmoother())
@@ -56,13 +55,13 @@ def test_propagated_moments_match_the_errors_of_many_noise_draws(cart_pole_syste
 def test_correction_removes_the_attenuation(cart_double_pendulum_system):
     system = cart_double_pendulum_system
     library = paper_catalog(system.coords, [1, 2]).fit()
-    true = _true_coefficients(system, library)
+    true = true_coefficients(system, library)
     support = true != 0
     kinetic = support & np.array([name.startswith("L[") and "_dot" in name
                                   for name in library.get_feature_names()])
     plain, corrected = [], []
     for seed in range(3):
-        t, noisy, data, _ = _noisy_run(system, seed, 0.03)
+        t, noisy, data, _ = noisy_run(system, seed, 0.03)
         theta, _, moments, _ = weak_regression(
             library, [_trajectory(t, noisy, data["tau"])], BumpTestFunctions(),
             WhittakerSmoother())
@@ -91,6 +90,6 @@ def test_moments_are_validated():
 def test_clean_data_is_not_changed_by_the_correction(cart_pole_system):
     system = cart_pole_system
     library = paper_catalog(system.coords, [1])
-    t, _, data, _ = _noisy_run(system, 3, 0.0, duration=20.0)
+    t, _, data, _ = noisy_run(system, 3, 0.0, duration=20.0)
     model = px.XLSINDy(library, px.ExplicitOptimizer()).fit(data["q"], t, u=data["tau"])
     assert model.optimizer_.noise_share_ < 1e-6

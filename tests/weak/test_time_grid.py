@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from ground_truth import random_force, random_initial_state
 from scipy.integrate import quad
-from test_explicit_identification import _true_coefficients, paper_catalog
+from support.paper import paper_catalog, true_coefficients
 
 import pysindy_xl as px
 from pysindy_xl.weak import (
@@ -128,7 +128,7 @@ def test_jittered_and_gapped_stamps_identify_as_well_as_uniform(double_pendulum_
     # 9 steps, and one gap long enough to cut the record): the same law, as accurately.
     system = double_pendulum_system
     library = paper_catalog(system.coords, [0, 1])
-    true = _true_coefficients(system, library)
+    true = true_coefficients(system, library)
     support = true != 0
     log = _log_stamps(24.0, 0.004, np.random.default_rng(5), gap_rate=0.01)
     log = np.concatenate([log[log < 12.0], log[log >= 12.5]])  # 0.5 s lost

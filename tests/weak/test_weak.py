@@ -7,7 +7,7 @@ import pytest
 import sympy as sp
 from ground_truth import random_force, random_initial_state
 from scipy.integrate import simpson
-from test_explicit_identification import _true_coefficients, paper_catalog
+from support.paper import noisy_run, paper_catalog, true_coefficients, validates
 
 import pysindy_xl as px
 from pysindy_xl.feature_library._weak import integrate_by_parts
@@ -215,7 +215,7 @@ def test_small_damping_survives_on_clean_data(cart_pole_system):
                                      ("weak", {})):
         model = px.XLSINDy(library, formulation=formulation).fit(
             data["q"], t, u=data["tau"], **derivatives)
-        true = _true_coefficients(system, library)
+        true = true_coefficients(system, library)
         coef = model.coefficients()
         assert np.array_equal(coef != 0, true != 0), formulation
         damping = model.get_feature_names().index("C_theta[theta_dot]")
@@ -229,41 +229,19 @@ def test_small_damping_survives_on_clean_data(cart_pole_system):
 # ------------------------------------------------------- identification from noisy positions
 
 
-def _noisy_run(system, seed, level, duration=30.0, dt=0.01, active=None):
-    t = np.arange(0.0, duration, dt)
-    force = random_force(system, seed, active=active)
-    data = system.simulate(random_initial_state(system, seed), t, force)
-    rng = np.random.default_rng(10_000 + seed)
-    noisy = data["q"] + level * data["q"].std(axis=0) * rng.normal(size=data["q"].shape)
-    return t, noisy, data, force
-
-
-def _validates(model, system, seed):
-    t = np.arange(0.0, 5.0, 0.01)
-    force = random_force(system, seed)
-    x0 = random_initial_state(system, seed)
-    truth = system.simulate(x0, t, force)
-    try:
-        sim = model.simulate(x0, t, u=lambda s: force(s))
-    except px.SimulationError:
-        return False
-    rmse = np.sqrt(np.mean((sim[:, : system.n] - truth["q"]) ** 2, axis=0))
-    return bool(np.all(rmse < 0.1 * np.ptp(truth["q"], axis=0)))
-
-
 def _success_rate(system, angles, level, seeds):
     library = paper_catalog(system.coords, angles)
-    true = _true_coefficients(system, library.fit())
+    true = true_coefficients(system, library.fit())
     exact, errors, valid = 0, [], 0
     for seed in seeds:
-        t, noisy, data, _ = _noisy_run(system, seed, level)
+        t, noisy, data, _ = noisy_run(system, seed, level)
         model = px.XLSINDy(library).fit(noisy, t, u=data["tau"])
         assert model.formulation_ == "weak"
         coef = model.coefficients()
         support = true != 0
         exact += np.array_equal(coef != 0, support)
         errors.append(np.median(np.abs(coef[support] - true[support]) / np.abs(true[support])))
-        valid += _validates(model, system, 500 + seed)
+        valid += validates(model, system, 500 + seed)
     return exact, float(np.median(errors)), valid
 
 
@@ -300,19 +278,19 @@ def test_noise_free_positions_are_recovered_exactly_by_the_weak_form(name, reque
     system = request.getfixturevalue(f"{name}_system")
     angles = [1] if name == "cart_pole" else [0, 1]
     library = paper_catalog(system.coords, angles)
-    t, _, data, _ = _noisy_run(system, 3, 0.0, duration=20.0)
+    t, _, data, _ = noisy_run(system, 3, 0.0, duration=20.0)
     model = px.XLSINDy(library).fit(data["q"], t, u=data["tau"])
-    true = _true_coefficients(system, library)
+    true = true_coefficients(system, library)
     coef = model.coefficients()
     assert np.array_equal(coef != 0, true != 0)
     support = true != 0
     assert np.max(np.abs(coef[support] - true[support]) / np.abs(true[support])) < 1e-4
-    assert _validates(model, system, 77)
+    assert validates(model, system, 77)
 
 
 def test_short_pieces_are_left_out_with_a_warning(cart_pole_system):
     system = cart_pole_system
-    t, noisy, data, _ = _noisy_run(system, 5, 0.01, duration=20.0)
+    t, noisy, data, _ = noisy_run(system, 5, 0.01, duration=20.0)
     library = paper_catalog(system.coords, [1])
     pieces = [slice(0, 1900), slice(1900, 1930)]  # e.g. what constraint exclusion leaves
     with pytest.warns(UserWarning, match=r"trajectories \[1\] are shorter than one test"):
@@ -340,7 +318,7 @@ def test_sample_mask_excludes_unmodelled_forces(cart_pole_system, formulation):
     data = system.simulate(random_initial_state(system, 11), t, actual)
     tau = recorded(t)
     library = paper_catalog(system.coords, [1])
-    true = _true_coefficients(system, library)
+    true = true_coefficients(system, library)
     kwargs = {"x_dot": data["qd"], "x_ddot": data["qdd"]} if formulation == "strong" else {}
     spoiled = px.XLSINDy(library, formulation=formulation).fit(data["q"], t, u=tau, **kwargs)
     mask = ~((7.9 < t) & (t < 9.1))
@@ -382,7 +360,7 @@ def test_positions_on_irregular_grids_are_recovered(grid, double_pendulum_system
     # chose its weight on the actual times), and 1 % noise costs about what it costs there.
     system = double_pendulum_system
     library = paper_catalog(system.coords, [0, 1])
-    true = _true_coefficients(system, library)
+    true = true_coefficients(system, library)
     support = true != 0
     t = _grid(grid, np.random.default_rng(7))
     data = system.simulate(random_initial_state(system, 3), t, random_force(system, 3))

@@ -5,8 +5,7 @@ Ground truth: a moving-average process of known covariance, and the residual of 
 
 import numpy as np
 import pytest
-from test_explicit_identification import _true_coefficients, paper_catalog
-from test_weak import _noisy_run, _validates
+from support.paper import noisy_run, paper_catalog, true_coefficients, validates
 
 import pysindy_xl as px
 from pysindy_xl.optimizers import CatalogOptimizer
@@ -55,10 +54,10 @@ def test_the_draws_describe_the_noise_of_the_recorded_rows(cart_pole_system):
     0.6, and lag correlations of 0.3-0.5 remain; see the module's notes.)"""
     system = cart_pole_system
     library = paper_catalog(system.coords, [1]).fit()
-    true = _true_coefficients(system, library)
+    true = true_coefficients(system, library)
     raw, ratios = [], []
     for seed in range(3):
-        t, noisy, data, _ = _noisy_run(system, seed, 0.05)
+        t, noisy, data, _ = noisy_run(system, seed, 0.05)
         trajectory = {"t": t, "x": noisy, "x_dot": None, "u": data["tau"],
                       "mask": np.ones(len(t), bool)}
         theta, _, noise, _ = weak_regression(library, [trajectory], px.BumpTestFunctions(),
@@ -79,7 +78,7 @@ def test_moments_are_those_of_the_draws(cart_pole_system):
     """``noise="moments"`` (the default) returns what the draws give, unchanged."""
     system = cart_pole_system
     library = paper_catalog(system.coords, [1]).fit()
-    t, noisy, data, _ = _noisy_run(system, 0, 0.02, duration=12.0)
+    t, noisy, data, _ = noisy_run(system, 0, 0.02, duration=12.0)
     trajectory = {"t": t, "x": noisy, "x_dot": None, "u": data["tau"],
                   "mask": np.ones(len(t), bool)}
     parts = [weak_regression(library, [trajectory], px.BumpTestFunctions(),
@@ -98,9 +97,9 @@ def test_double_pendulum_on_a_cart_at_five_percent(cart_double_pendulum_system, 
     term too; the fit weighted by its law does not, and reweighting by that law settles.)"""
     system = cart_double_pendulum_system
     library = paper_catalog(system.coords, [1, 2])
-    t, noisy, data, _ = _noisy_run(system, seed, 0.05)
+    t, noisy, data, _ = noisy_run(system, seed, 0.05)
     model = px.XLSINDy(library).fit(noisy, t, u=data["tau"])
-    true = _true_coefficients(system, library.fit())
+    true = true_coefficients(system, library.fit())
     coef, support = model.coefficients(), true != 0
     assert np.array_equal(coef != 0, support), model.equations()
     assert np.median(np.abs(coef[support] - true[support]) / np.abs(true[support])) < 0.03
@@ -137,7 +136,7 @@ def test_a_failing_pilot_leaves_the_rows_unweighted(cart_pole_system):
     fits the rows as they are (the same law as ``residual_covariance=False``)."""
     system = cart_pole_system
     library = paper_catalog(system.coords, [1])
-    t, noisy, data, _ = _noisy_run(system, 1, 0.01)
+    t, noisy, data, _ = noisy_run(system, 1, 0.01)
     with pytest.warns(UserWarning, match=r"residual_covariance: the pilot fit failed "
                       r"\(no law on these rows\); the rows are fitted unweighted"):
         model = px.XLSINDy(library, _FailingPilot(), residual_covariance=True).fit(
@@ -145,7 +144,7 @@ def test_a_failing_pilot_leaves_the_rows_unweighted(cart_pole_system):
     plain = px.XLSINDy(library, _FailingPilot(), residual_covariance=False).fit(
         noisy, t, u=data["tau"])
     np.testing.assert_array_equal(model.coefficients(), plain.coefficients())
-    true = _true_coefficients(system, library.fit())
+    true = true_coefficients(system, library.fit())
     assert np.array_equal(model.coefficients() != 0, true != 0)
 
 
@@ -158,14 +157,14 @@ def test_partly_forced_cart_pole_weighs_the_free_pendulums_rows(cart_pole_system
     weighed (0.68 / 1.48)^2 of the cart's, and the fit took the substitutes."""
     system = cart_pole_system
     library = paper_catalog(system.coords, [1])
-    t, noisy, data, _ = _noisy_run(system, 9, 0.03, active=[0])
+    t, noisy, data, _ = noisy_run(system, 9, 0.03, active=[0])
     model = px.XLSINDy(library).fit(noisy, t, u=data["tau"])
     assert model.optimizer_.mode_ == "explicit"
-    true = _true_coefficients(system, library.fit())
+    true = true_coefficients(system, library.fit())
     coef, support = model.coefficients(), true != 0
     assert np.array_equal(coef != 0, support), model.equations()
     assert np.max(np.abs(coef[support] - true[support]) / np.abs(true[support])) < 0.03
-    assert _validates(model, system, 509)
+    assert validates(model, system, 509)
 
 
 class _DelegatingSmoother:
