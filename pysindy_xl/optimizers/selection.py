@@ -16,6 +16,7 @@ import dataclasses
 import numpy as np
 import scipy.linalg
 
+from ._base import independent_columns
 from ._swaps import _first_swaps, _swap_search
 
 __all__ = ["elimination_path", "forward_path", "cross_validated_size", "cross_validated_supports",
@@ -328,6 +329,7 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     candidates, seen, paths = [], set(), []
     reduced, folds = _systems(x, y, n_blocks, n_folds)
     keep = np.unique(np.asarray([] if keep is None else keep, dtype=int))
+    reduced = _without_dependent_columns(reduced, keep)
     free, local = _profiled(reduced, keep)
     for path in ("backward", "forward"):
         order = np.concatenate([keep, free[(_elimination_order if path == "backward"
@@ -370,6 +372,27 @@ def fold_summary(errors):
     mean[finite] = errors[:, finite].mean(axis=0)
     spread[finite] = errors[:, finite].std(axis=0, ddof=1) / np.sqrt(n_folds)
     return mean, spread
+
+
+_DEPENDENCE_RTOL = 1e-6
+
+
+def _without_dependent_columns(reduced, keep):
+    """``reduced`` with the columns that are exact combinations of earlier ones (``keep``
+    first, then column order) made inactive.
+
+    Among exactly dependent columns (``qd^2 cos^2 q + qd^2 sin^2 q = qd^2``) every path and
+    swap would otherwise choose by rounding, so a perturbation of the columns by 1e-12 could
+    change the support (and did, with OpenBLAS's Haswell kernels). The tolerance lies far above
+    rounding: a column whose part off the others is under 1e-6 of its norm has a variance
+    inflation of 1e12 and cannot be told from them on data anyway.
+    """
+    active, xs, y = reduced
+    priority = np.concatenate([keep, np.setdiff1d(np.arange(xs.shape[1]), keep)]).astype(int)
+    independent = np.zeros(xs.shape[1], dtype=bool)
+    kept = independent_columns(np.where(active, xs, 0.0), priority, rtol=_DEPENDENCE_RTOL)[0]
+    independent[kept] = True
+    return active & independent, xs, y
 
 
 def _profiled(reduced, keep):
