@@ -102,12 +102,15 @@ def forward_path(x, y) -> np.ndarray:
     return _forward_order(*_reduced(x, y))
 
 
-def _forward_order(active_mask, xs, residual) -> np.ndarray:
-    """:func:`forward_path` on a reduced system."""
+def _forward_order(active_mask, xs, residual, max_steps=None) -> np.ndarray:
+    """:func:`forward_path` on a reduced system; after ``max_steps`` picks the remaining
+    columns follow in column order (unscored by the selection).
+    """
     orthogonal = xs.copy()
     chosen = []
     candidates = active_mask.copy()
-    while candidates.any():
+    steps = xs.shape[1] if max_steps is None else int(max_steps)
+    while candidates.any() and len(chosen) < steps:
         norms2 = np.sum(orthogonal**2, axis=0)
         usable = candidates & (norms2 > 1e-20 * np.sum(xs**2, axis=0))
         if not usable.any():
@@ -290,6 +293,12 @@ class SelectionResult(ChosenSupport):
     rule: str
 
 
+# the forward path and its scores stop at max(3 b, b + 40) terms, b the backward path's best size:
+# a forward model far larger than the best backward one is never the sparsest within one standard
+# error, and the greedy steps past it cost O(F^2) each on catalogs of a thousand columns
+_FORWARD_REACH, _FORWARD_MARGIN = 3, 40
+
+
 def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
                    resolution: float = 1e-8, swaps: bool = True, keep=None) -> SelectionResult:
     """Sparsest model within one standard error of the best path model's held-out error.
@@ -331,12 +340,18 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     keep = np.unique(np.asarray([] if keep is None else keep, dtype=int))
     reduced = _without_dependent_columns(reduced, keep)
     free, local = _profiled(reduced, keep)
+    scored = None  # the forward path is scored up to a few times the backward best size
     for path in ("backward", "forward"):
-        order = np.concatenate([keep, free[(_elimination_order if path == "backward"
-                                            else _forward_order)(*local)]]).astype(int)
+        if path == "backward":
+            order = _elimination_order(*local)
+        else:
+            order = _forward_order(*local, max_steps=scored)
+        order = np.concatenate([keep, free[order]]).astype(int)
         if max_size is not None:
             order = order[: max(int(max_size), len(keep))]
-        mean, spread = fold_summary(_nested_errors(folds, order, n_folds))
+        errors = _nested_errors(folds, order[:scored], n_folds)
+        mean, spread = fold_summary(errors)
+        mean = np.concatenate([mean, np.full(len(order) - len(mean), np.inf)])
         mean[: max(len(keep) - 1, 0)] = np.inf  # models without every kept column
         paths.append((path, order, mean))
         for k in np.flatnonzero(np.isfinite(mean)):
@@ -344,6 +359,9 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
             if key not in seen:
                 seen.add(key)
                 candidates.append((int(k) + 1, mean[k], spread[k], f"{path} path", order))
+        if path == "backward" and np.isfinite(mean).any():
+            best_size = int(np.argmin(mean)) + 1
+            scored = max(_FORWARD_REACH * best_size, best_size + _FORWARD_MARGIN)
     if not candidates:
         raise ValueError("x: no model size can be cross-validated on these rows")
     # the reference is the best path model (the winner's curse of the refinements)
