@@ -39,7 +39,22 @@ class FourierTrajectory:
     names : list of str, optional
         Joint (coordinate) names; default ``q0``, ``q1``...
 
-    ``condition_number`` and ``info`` are set by :func:`excitation_trajectory`.
+    Attributes
+    ----------
+    condition_number, info
+        Set by :func:`excitation_trajectory`: the condition number of the identification
+        matrix the trajectory excites, and how it was designed.
+
+    Notes
+    -----
+    Joint ``j`` follows
+
+    .. math::
+
+        q_j(t) = q_{0j} + \\sum_{l=1}^{L} \\frac{a_{jl}}{l\\omega} \\sin(l\\omega t)
+        - \\frac{b_{jl}}{l\\omega} \\cos(l\\omega t), \\qquad \\omega = 2\\pi / T ,
+
+    whose velocity and acceleration are exact.
 
     Examples
     --------
