@@ -12,6 +12,8 @@ import numpy as np
 class CLIError(Exception):
     """A bad input or failed step, printed as ``pysindy-xl: error: ...`` with exit status 1.
 
+    Examples
+    --------
     >>> from pysindy_xl.cli import build_parser, run_demo
     >>> args = build_parser().parse_args(["demo", "cart-pole", "--forcing", "implicit",
     ...                                   "--solver", "explicit"])
