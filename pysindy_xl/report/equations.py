@@ -16,6 +16,20 @@ __all__ = ["significant", "equation_strings", "identified_lagrangian", "uncertai
 def significant(expr: sp.Expr, digits: int) -> sp.Expr:
     """``expr`` with every float rounded to ``digits`` significant digits.
 
+    Parameters
+    ----------
+    expr : sympy.Expr
+        An expression.
+    digits : int
+        Significant digits kept.
+
+    Returns
+    -------
+    sympy.Expr
+        The expression with its floats rounded.
+
+    Examples
+    --------
     >>> import sympy as sp
     >>> significant(sp.Float(3.14159) * sp.Symbol("x"), 3)
     3.14*x
@@ -25,7 +39,32 @@ def significant(expr: sp.Expr, digits: int) -> sp.Expr:
 
 
 def equation_strings(coef: np.ndarray, library, precision: int) -> list[str]:
-    """One ``lhs = forces`` string per coordinate."""
+    """One ``lhs = forces`` string per coordinate.
+
+    Parameters
+    ----------
+    coef : numpy.ndarray of shape (F,)
+        Coefficients, one per feature of ``library``.
+    library : pysindy_xl.CatalogRepartition
+        The fitted catalog.
+    precision : int
+        Significant digits printed.
+
+    Returns
+    -------
+    list of str
+        ``"lhs = forces"``, one per coordinate: the identified terms on the left, the force
+        columns on the right.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> lib = px.CatalogRepartition([px.ExternalForces(c),
+    ...                              px.LagrangeLibrary(c, [c.qd[0] ** 2])]).fit()
+    >>> equation_strings(np.array([-1.0, 0.5]), lib, 3)
+    ['1.0*x_ddot = tau_x']
+    """
     matrix = library.symbolic_matrix_
     forces = set(library.force_columns_)
     active = np.flatnonzero(coef)
@@ -40,7 +79,29 @@ def equation_strings(coef: np.ndarray, library, precision: int) -> list[str]:
 
 
 def identified_lagrangian(coef: np.ndarray, library) -> sp.Expr:
-    """The Lagrange terms of ``library`` weighted by ``coef`` (0 without Lagrange terms)."""
+    """The Lagrange terms of ``library`` weighted by ``coef`` (0 without Lagrange terms).
+
+    Parameters
+    ----------
+    coef : numpy.ndarray of shape (F,)
+        Coefficients, one per feature of ``library``.
+    library : pysindy_xl.CatalogRepartition
+        The fitted catalog.
+
+    Returns
+    -------
+    sympy.Expr
+        ``sum_j coef_j L_j`` over the Lagrange terms ``L_j`` of the catalog.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> lib = px.CatalogRepartition([px.ExternalForces(c),
+    ...                              px.LagrangeLibrary(c, [c.qd[0] ** 2])]).fit()
+    >>> identified_lagrangian(np.array([-1.0, 0.5]), lib)
+    0.5*x_dot**2
+    """
     return sp.Add(*(sp.Float(coef[j]) * library.feature_terms_[j]
                     for j, category in enumerate(library.categories_)
                     if category == "lagrange" and coef[j] != 0))
@@ -50,6 +111,26 @@ def uncertainty_lines(names, coef, interval, probability, precision: int) -> lis
     """``name  coefficient  [low, high]  P=p`` for every term an ensemble fit included, most
     probable first.
 
+    Parameters
+    ----------
+    names : sequence of str
+        Feature names.
+    coef : numpy.ndarray of shape (F,)
+        Coefficients.
+    interval : numpy.ndarray of shape (2, F)
+        Lower and upper bounds of each coefficient.
+    probability : numpy.ndarray of shape (F,)
+        Inclusion probability of each feature.
+    precision : int
+        Significant digits printed.
+
+    Returns
+    -------
+    list of str
+        One line per feature with a non-zero inclusion probability.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> uncertainty_lines(["a", "bb"], np.array([1.0, 0.0]), np.array([[0.9, 0], [1.1, 0.2]]),
     ...                   np.array([1.0, 0.3]), 2)
