@@ -128,6 +128,18 @@ def blas_thread_limit(blas_threads: int | None):
     """A context limiting every loaded BLAS's threads to ``blas_threads`` (>= 1) through
     :func:`threadpoolctl.threadpool_limits`; None leaves them alone.
 
+    Parameters
+    ----------
+    blas_threads : int or None
+        Threads allowed (>= 1); None leaves them alone.
+
+    Returns
+    -------
+    contextlib.AbstractContextManager
+        The context.
+
+    Examples
+    --------
     >>> from threadpoolctl import threadpool_info
     >>> with blas_thread_limit(1):
     ...     print({pool["num_threads"] for pool in threadpool_info()
