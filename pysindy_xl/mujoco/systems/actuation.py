@@ -131,6 +131,25 @@ class ActuatorLaw:
 
         ``q``, ``qd`` (shape (n,) or (N, n)) may be left out when the law is not
         ``state_dependent``; a ValueError names the one missing or misshapen.
+
+        Parameters
+        ----------
+        t : float or array_like of shape (N,)
+            Time(s).
+        q : array_like of shape (n,) or (N, n), default=None
+            Generalized positions; needed when the law is ``state_dependent``.
+        qd : array_like of shape (n,) or (N, n), default=None
+            Generalized velocities; needed when the law is ``state_dependent``.
+
+        Returns
+        -------
+        numpy.ndarray of shape (n,) or (N, n)
+            The generalized forces (``force_input="tau"``) or joint forces (``"u"``).
+
+        Raises
+        ------
+        ValueError
+            When a needed state is missing or misshapen.
         """
         ctrl = self.controls(t)
         gain, bias = self._gain[:, 0], self._bias[:, 0]
