@@ -260,6 +260,20 @@ class RecordStore:
 
 
 def base_record(task: Task, settings: GridSettings) -> dict:
+    """The record a run starts with: the task, the grid's name, status ``error`` until it ends.
+
+    Parameters
+    ----------
+    task : Task
+        The run.
+    settings : GridSettings
+        The grid's settings.
+
+    Returns
+    -------
+    dict
+        The record.
+    """
     import pysindy_xl
     return {**task.to_dict(), "grid": settings.name, "status": "error", "message": None,
             "metrics": {}, "time_s": {}, "pid": os.getpid(),
@@ -267,6 +281,24 @@ def base_record(task: Task, settings: GridSettings) -> dict:
 
 
 def failed_record(record: dict, status: str, error: BaseException, with_traceback=False) -> dict:
+    """Mark ``record`` as failed with ``status`` and the error's message.
+
+    Parameters
+    ----------
+    record : dict
+        The run's record, changed in place.
+    status : {"error", "timeout", "invalid"}
+        The status.
+    error : BaseException
+        What went wrong.
+    with_traceback : bool, default=False
+        Add the last three frames of the traceback to the message.
+
+    Returns
+    -------
+    dict
+        The record, JSON-safe (non-finite numbers as None).
+    """
     record["status"] = status
     message = f"{type(error).__name__}: {error}"
     if with_traceback:
@@ -278,5 +310,17 @@ def failed_record(record: dict, status: str, error: BaseException, with_tracebac
 
 
 def finish_record(record: dict) -> dict:
+    """Stamp ``record`` with ``finished_at`` (local time, ISO 8601).
+
+    Parameters
+    ----------
+    record : dict
+        The run's record, changed in place.
+
+    Returns
+    -------
+    dict
+        The record.
+    """
     record["finished_at"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
     return record

@@ -99,6 +99,13 @@ def machine_description(n_jobs=None, backend=None) -> dict:
 
 
 def load_average():
+    """The 1, 5 and 15 minute load averages, or None where the system has none.
+
+    Returns
+    -------
+    list of float or None
+        The load averages.
+    """
     try:
         return [round(x, 2) for x in os.getloadavg()]
     except (OSError, AttributeError):

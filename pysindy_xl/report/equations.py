@@ -150,6 +150,18 @@ SHORT_EQUATIONS = 200
 def prints_equations(model, equations=None) -> bool:
     """Whether the model prints its equations: ``equations`` if given, else unless its terms stand
     for physical parameters and the equations are long.
+
+    Parameters
+    ----------
+    model : pysindy_xl.XLSINDy
+        A fitted model.
+    equations : bool or None, default=None
+        An explicit choice; None decides from the model.
+
+    Returns
+    -------
+    bool
+        Whether the equations are printed.
     """
     if equations is not None:
         return bool(equations)
@@ -159,13 +171,39 @@ def prints_equations(model, equations=None) -> bool:
 
 
 def has_parameter_map(library) -> bool:
-    """Whether some library says which physical parameters its terms stand for."""
+    """Whether some library says which physical parameters its terms stand for.
+
+    Parameters
+    ----------
+    library : pysindy_xl.CatalogRepartition
+        The fitted catalog.
+
+    Returns
+    -------
+    bool
+        True when a library of the catalog has ``parameters``.
+    """
     return any(getattr(lib, "parameters", None) is not None for lib in library.libraries_)
 
 
 def physical_parameters(coef: np.ndarray, library) -> dict:
     """The identified model in physical terms (:meth:`XLSINDy.physical_parameters
     <pysindy_xl.XLSINDy.physical_parameters>`).
+
+    Parameters
+    ----------
+    coef : numpy.ndarray of shape (F,)
+        Coefficients, one per feature of ``library``.
+    library : pysindy_xl.CatalogRepartition
+        The fitted catalog.
+
+    Returns
+    -------
+    dict
+        ``scale`` (the factor making the force coefficient -1, None without forces),
+        ``base_parameters`` (``feature``, ``stands_for``, ``value`` each), ``friction``
+        (``{coordinate: {"viscous", "dry"}}``), ``other`` (the remaining classical terms) and,
+        with joint models, ``joint_friction``.
     """
     forces = [coef[j] for j in library.force_columns_ if coef[j] != 0]
     scale = -1.0 / forces[0] if forces else None
@@ -205,6 +243,20 @@ def physical_parameters(coef: np.ndarray, library) -> dict:
 def joint_friction(coef, library) -> tuple[dict, set]:
     """``({joint: {model: value}}, columns)`` of the catalog's joint models (with
     ``coulomb_positive``/``coulomb_negative`` where asymmetric, and ``coordinate``).
+
+    Parameters
+    ----------
+    coef : numpy.ndarray of shape (F,)
+        Coefficients, one per feature of ``library``.
+    library : pysindy_xl.CatalogRepartition
+        The fitted catalog.
+
+    Returns
+    -------
+    joints : dict
+        ``{joint: {model: value, "coordinate": name}}``.
+    columns : set of int
+        The columns of the joint models.
     """
     joints, columns = {}, set()
     for lib, block in zip(library.libraries_, library.slices_, strict=True):
@@ -223,6 +275,18 @@ def joint_friction(coef, library) -> tuple[dict, set]:
 def consistency_line(report) -> str | None:
     """The line saying whether a physically constrained fit had to constrain, or None.
 
+    Parameters
+    ----------
+    report : dict or None
+        The ``physical_consistency_`` report of a fit.
+
+    Returns
+    -------
+    str or None
+        The line, None without report.
+
+    Examples
+    --------
     >>> consistency_line({"consistent": False, "cost": 0.012, "negative_friction": ["C_a[a_dot]"],
     ...                   "min_pseudo_inertia_eigenvalue": 0.0})[:71]
     'physical consistency: the unconstrained estimate is not that of rigid b'
@@ -242,6 +306,20 @@ def consistency_line(report) -> str | None:
 def parameter_lines(parameters: dict, precision: int, reference: dict | None = None) -> list[str]:
     """Printable lines of :func:`physical_parameters` (base parameters with what they stand for,
     friction per coordinate), with a ``reference``'s values beside.
+
+    Parameters
+    ----------
+    parameters : dict
+        Of :func:`physical_parameters`.
+    precision : int
+        Significant digits printed.
+    reference : dict, default=None
+        Another :func:`physical_parameters` (the truth), shown beside.
+
+    Returns
+    -------
+    list of str
+        The lines.
     """
     known = ({entry["feature"]: entry["value"] for entry in reference["base_parameters"]}
              if reference is not None else None)

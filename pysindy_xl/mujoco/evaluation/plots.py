@@ -12,6 +12,18 @@ _MODEL = {"color": "tab:blue", "linewidth": 1.2, "label": "identified model"}
 
 
 def new_figure(width, height):
+    """A constrained-layout figure on an Agg canvas, not registered with pyplot.
+
+    Parameters
+    ----------
+    width, height : float
+        Size (inches).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
     figure = Figure(figsize=(width, height), layout="constrained")

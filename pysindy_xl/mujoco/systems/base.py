@@ -15,14 +15,43 @@ __all__ = ["MuJoCoSystem", "equations_of_motion"]
 
 def checked_parameters(**values) -> dict:
     """Physical parameters checked by name: numbers (never a string or a bool), positive but
-    for gravity and dampings, which may be zero."""
+    for gravity and dampings, which may be zero.
+
+    Parameters
+    ----------
+    **values
+        Parameter values by name.
+
+    Returns
+    -------
+    dict
+        The same values.
+
+    Raises
+    ------
+    TypeError
+        When a value is not a real number (a string, a bool...).
+    ValueError
+        When a value is negative (zero is refused except for gravity and dampings).
+    """
     return {name: check_option(name, value, "real", low=0,
                                low_open=name != "gravity" and "damping" not in name)
             for name, value in values.items()}
 
 
 def mjcf_float(value: float) -> str:
-    """Format a float for MJCF without losing precision."""
+    """Format a float for MJCF without losing precision.
+
+    Parameters
+    ----------
+    value : float
+        The number.
+
+    Returns
+    -------
+    str
+        Its shortest exact representation.
+    """
     return repr(float(value))
 
 

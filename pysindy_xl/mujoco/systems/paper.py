@@ -95,9 +95,10 @@ class CartPole(MuJoCoSystem):
 
     Raises
     ------
+    TypeError
+        When a parameter is not a real number.
     ValueError
-        When a parameter is not a real number, or is negative (zero allowed for gravity and
-        dampings only).
+        When a parameter is negative (zero allowed for gravity and dampings only).
 
     See Also
     --------
@@ -220,9 +221,10 @@ class DoublePendulum(MuJoCoSystem):
 
     Raises
     ------
+    TypeError
+        When a parameter is not a real number.
     ValueError
-        When a parameter is not a real number, or is negative (zero allowed for gravity and
-        dampings only).
+        When a parameter is negative (zero allowed for gravity and dampings only).
 
     Examples
     --------
@@ -331,9 +333,10 @@ class CartDoublePendulum(MuJoCoSystem):
 
     Raises
     ------
+    TypeError
+        When a parameter is not a real number.
     ValueError
-        When a parameter is not a real number, or is negative (zero allowed for gravity and
-        dampings only).
+        When a parameter is negative (zero allowed for gravity and dampings only).
 
     Examples
     --------
@@ -424,9 +427,10 @@ class TriplePendulum(MuJoCoSystem):
 
     Raises
     ------
+    TypeError
+        When a parameter is not a real number.
     ValueError
-        When a parameter is not a real number, or is negative (zero allowed for gravity and
-        dampings only).
+        When a parameter is negative (zero allowed for gravity and dampings only).
 
     Examples
     --------
