@@ -199,8 +199,10 @@ class ActuatorLaw:
 
         Returns
         -------
-        q, qd : numpy.ndarray of shape (n,)
-            The nearest state at which every position servo exerts no force.
+        q : numpy.ndarray of shape (n,)
+            Positions of the nearest state at which every position servo exerts no force.
+        qd : numpy.ndarray of shape (n,)
+            Velocities of that state.
 
         Examples
         --------
@@ -258,8 +260,10 @@ def start_on_reference(system, signals, q0, qd0, mj_model=None):
 
     Returns
     -------
-    q0, qd0 : numpy.ndarray of shape (n,)
-        The initial state on the servos' reference.
+    q0 : numpy.ndarray of shape (n,)
+        Initial positions on the servos' reference.
+    qd0 : numpy.ndarray of shape (n,)
+        Initial velocities on the servos' reference.
 
     Examples
     --------

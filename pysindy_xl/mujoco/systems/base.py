@@ -369,8 +369,10 @@ class MuJoCoSystem:
 
         Returns
         -------
-        q, qd : numpy.ndarray
-            Generalized positions and velocities, shaped as the input.
+        q : numpy.ndarray
+            Generalized positions, shaped as the input.
+        qd : numpy.ndarray
+            Generalized velocities, shaped as the input.
         qdd : numpy.ndarray or None
             Generalized accelerations, or None when ``qacc`` is None.
 
@@ -439,8 +441,10 @@ class MuJoCoSystem:
 
         Returns
         -------
-        q0, qd0 : numpy.ndarray of shape (n,)
-            Initial generalized positions and velocities.
+        q0 : numpy.ndarray of shape (n,)
+            Initial generalized positions.
+        qd0 : numpy.ndarray of shape (n,)
+            Initial generalized velocities.
 
         Examples
         --------

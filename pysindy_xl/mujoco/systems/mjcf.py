@@ -198,8 +198,10 @@ class MJCFSystem(MuJoCoSystem):
 
         Returns
         -------
-        q0, qd0 : numpy.ndarray of shape (n,)
-            Initial joint positions and velocities.
+        q0 : numpy.ndarray of shape (n,)
+            Initial joint positions.
+        qd0 : numpy.ndarray of shape (n,)
+            Initial joint velocities.
 
         Examples
         --------
