@@ -11,7 +11,7 @@ neither MuJoCo, SymPy, PySINDy nor matplotlib.
 
 from __future__ import annotations
 
-from .._optional import import_optional, lazy_attributes
+from .._optional import import_mujoco, lazy_attributes
 
 # public name -> submodule that defines it (imported on first attribute access)
 _LAZY = {
@@ -41,18 +41,5 @@ _LAZY = {
 }
 
 __all__ = ["import_mujoco", *_LAZY]
-
-def import_mujoco():
-    """The ``mujoco`` module, imported on first use: the one way this package imports MuJoCo.
-
-    Raises :class:`pysindy_xl._optional.MissingExtraError` (an ImportError naming the
-    ``pysindy-xl[mujoco]`` extra) when MuJoCo is not installed.
-
-    >>> from pysindy_xl.mujoco import import_mujoco
-    >>> hasattr(import_mujoco(), "MjModel")
-    True
-    """
-    return import_optional("mujoco", purpose="MuJoCo simulation (pysindy_xl.mujoco)")
-
 
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY)

@@ -92,8 +92,8 @@ def mujoco_closed_loop(model, system, trajectory, substeps, required):
     actuators (and the reference's tracking controller) and the reference's controls (the
     ``mujoco`` simulator of :mod:`~pysindy_xl.mujoco.evaluation.validation`), or None where
     MuJoCo cannot state the model (a ValueError when ``required``)."""
+    from ..._optional import import_mujoco
     from ...export.mjcf import identified_mj_model
-    from .. import import_mujoco
     mujoco = import_mujoco()
     mj, reason = identified_mj_model(model, system)
     if mj is not None and trajectory.info.get("tracking") is not None:

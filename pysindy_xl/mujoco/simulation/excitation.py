@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import threadpoolctl
 
-from .. import import_mujoco
+from ..._optional import import_mujoco
 from .fourier import FourierTrajectory, _basis, _positive
 
 __all__ = ["excitation_trajectory"]

@@ -20,7 +20,7 @@ import os
 
 import numpy as np
 
-from .. import import_mujoco
+from ..._optional import import_mujoco
 from .forcing import SumOfSinusoids
 
 __all__ = ["FourierTrajectory"]

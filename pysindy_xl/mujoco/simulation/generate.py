@@ -13,10 +13,10 @@ import os
 
 import numpy as np
 
+from ..._optional import import_mujoco
 from ..._validation import check_option
 from ...data.dataset import Dataset, Trajectory
 from ...data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
-from .. import import_mujoco
 from ..systems.actuation import actuator_force_function, start_on_reference
 from ..systems.registry import get_system
 from ..systems.tracking import tracked_model

@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .. import import_mujoco
+from ..._optional import import_mujoco
 
 __all__ = ["Integration", "choose_integration", "linear_modes", "check_run",
            "UnstableSimulationError", "INTEGRATORS", "RK4_BOUND", "BIAS_TOLERANCE",

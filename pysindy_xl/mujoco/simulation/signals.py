@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
+from ..._optional import import_mujoco
 from ..systems.registry import MuJoCoSystem
 from ..systems.tracking import gravity_torques, plain_motors, tracking_controller
 from .forcing import FORCING_MODES, SumOfSinusoids, within_servo_reach

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
+from ..._optional import import_mujoco
 from .registry import get_system
 
 __all__ = ["ActuatorLaw", "actuator_law", "actuator_force_function", "servo_bandwidths"]

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
+from ..._optional import import_mujoco
 from .actuation import _supported
 
 __all__ = ["tracking_controller", "tracked_model", "plain_motors", "gravity_torques",
