@@ -99,7 +99,7 @@ def data_lines(system, dataset):
              f"= {period * 1e3:g} ms"]
     integration = meta.get("integration")
     if integration and getattr(system, "mj_model", None) is not None:
-        from pysindy_xl.mujoco.simulation.generate import INTEGRATORS
+        from pysindy_xl.simulation.generate import INTEGRATORS
         authored = int(system.mj_model().opt.integrator)
         if INTEGRATORS.get(integration["integrator"]) != authored or integration["substeps"] > 1:
             lines.append(f"  integrated with {integration['reason']}")

@@ -53,7 +53,7 @@ def validation_dataset(args, system, load):
 def held_out_verdict(args, model, system, arguments, load, progress):
     """Score the model on ``--validate`` data or by blocked cross-validation, print the lines
     and return the :class:`~pysindy_xl.held_out.ForceScore`."""
-    from pysindy_xl.held_out import blocked_cross_validation
+    from pysindy_xl.evaluation.held_out import blocked_cross_validation
     if args.validate:
         data = validation_dataset(args, system, load)
         if tuple(data.coordinate_names) != tuple(model.feature_library_.coords.names):

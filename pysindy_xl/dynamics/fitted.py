@@ -89,7 +89,7 @@ class DynamicsMixin:
         >>> round(float(score.rms[0]), 6), score.derivatives
         (0.02, 'measured')
         """
-        from ..held_out import score_forces
+        from ..evaluation.held_out import score_forces
         self._require_dynamics()
         return score_forces(self, x, t, u, x_dot, x_ddot, smoother, max_frequency)
 

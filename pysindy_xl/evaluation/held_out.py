@@ -16,8 +16,8 @@ import dataclasses
 
 import numpy as np
 
-from ._inputs import aligned, as_list, check_array
-from ._validation import check_option
+from .._inputs import aligned, as_list, check_array
+from .._validation import check_option
 
 __all__ = ["ForceScore", "score_forces", "blocked_cross_validation", "scoring_derivatives",
            "SCORING_DERIVATIVES"]
@@ -122,7 +122,7 @@ class ForceScore:
 
     def plot(self, path, title=None):
         """Write measured against predicted forces to the PNG ``path``, a panel per coordinate."""
-        from pysindy_xl.mujoco.evaluation.plots import new_figure
+        from .plots import new_figure
         n = len(self.names)
         figure = new_figure(8, 1.6 * n + 0.8)
         axes = figure.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
@@ -178,7 +178,7 @@ def scoring_derivatives(t, x, smoother=None, max_frequency: float = MAX_FREQUENC
     >>> bool(np.abs(qdd[200:-200, 0] + np.sin(t[200:-200])).max() < 0.05)
     True
     """
-    from .weak import WhittakerSmoother, whittaker_smooth
+    from ..weak import WhittakerSmoother, whittaker_smooth
     t = np.asarray(t, dtype=float)
     if smoother is not None:
         return smoother.smooth(t, x)

@@ -105,8 +105,8 @@ def force_prediction(model, x, t, u, x_dot=None, x_ddot=None) -> dict:
     >>> force_prediction(model, x, t, 2 * xdd + 3 * x, xd, xdd)["worst"] < 1e-9
     True
     """
-    from ._inputs import check_array
-    from .weak import WhittakerSmoother
+    from .._inputs import check_array
+    from ..weak import WhittakerSmoother
     n = model.n_coordinates_
     x = check_array(x, "x", n_columns=n)
     u = check_array(u, "u", x.shape)
@@ -182,7 +182,7 @@ def quality_lines(quality) -> list:
     if quality.get("cv_noise_ratio") is not None:
         lines.append("  held-out noise ratio of the chosen law (5-fold cross-validation; about 1 "
                      f"when it leaves only the propagated noise): {quality['cv_noise_ratio']:.3g}")
-    from .report.equations import consistency_line  # sympy: not imported by the CLI's --help
+    from ..report.equations import consistency_line  # sympy: not imported by the CLI's --help
     consistency = consistency_line(quality.get("physical_consistency"))
     if consistency:
         lines.append(f"  {consistency}")
@@ -211,8 +211,8 @@ def plot_identification(model, trajectory, path, title=None, forced=True) -> dic
     >>> written, result["diverged"], bool(result["rmse"][0] < 1e-3)
     (True, False, True)
     """
-    from pysindy_xl.dynamics import DynamicsError
-    from pysindy_xl.mujoco.evaluation.plots import new_figure
+    from ..dynamics import DynamicsError
+    from .plots import new_figure
     if model.dynamics_ is None:
         raise ValueError("model: the identified equations contain no acceleration; nothing "
                          "to simulate")

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import threadpoolctl
 
-from ..._optional import import_mujoco
+from .._optional import import_mujoco
 from .fourier import FourierTrajectory, _basis, _positive
 
 __all__ = ["excitation_trajectory"]
@@ -53,7 +53,7 @@ class _Design:
 
     def regressor(self, states):
         """``W`` of stacked states (3, N, n): shape (n, N, p), coordinate-major rows."""
-        from ...feature_library import stack_variables
+        from ..feature_library import stack_variables
         theta = self.library.transform(stack_variables(*states, np.zeros_like(states[0])))
         return theta[:, self.rest].reshape(self.n, states.shape[1], -1)
 
@@ -344,8 +344,8 @@ def excitation_trajectory(system, n_harmonics: int = 5, period: float = 10.0,
     """
     from tqdm.auto import tqdm
 
-    from ..catalogs.kinematic import kinematic_catalog
-    from ..systems.registry import get_system as resolve_system
+    from ..mujoco.catalogs.kinematic import kinematic_catalog
+    from ..mujoco.systems.registry import get_system as resolve_system
     system = resolve_system(system)
     if isinstance(n_harmonics, bool) or not isinstance(n_harmonics, (int, np.integer)) \
             or n_harmonics < 1:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._optional import import_mujoco
+from .._optional import import_mujoco
 
 __all__ = ["SumOfSinusoids", "FORCING_MODES", "within_servo_reach", "REFERENCE_SPEED",
            "SERVO_BANDWIDTH_FRACTION"]
@@ -158,7 +158,7 @@ def within_servo_reach(signals: SumOfSinusoids, model) -> SumOfSinusoids:
     faster reference saturates the servo. ``signals`` itself when no driven actuator is one.
     """
     mujoco = import_mujoco()
-    from ..systems.actuation import servo_bandwidths
+    from ..mujoco.systems.actuation import servo_bandwidths
     bandwidth = servo_bandwidths(model)
     servo = np.isfinite(bandwidth) & np.any(signals.amplitudes != 0, axis=1)
     if not servo.any():

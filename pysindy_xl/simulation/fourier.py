@@ -20,7 +20,7 @@ import os
 
 import numpy as np
 
-from ..._optional import import_mujoco
+from .._optional import import_mujoco
 from .forcing import SumOfSinusoids
 
 __all__ = ["FourierTrajectory"]
@@ -105,7 +105,7 @@ class FourierTrajectory:
         ``ctrl = -(b_0 + b_1 g qpos_ref) / p`` (gear ``g``). A ValueError says when the sizes
         differ, an actuator is not such a servo or a coordinate has none.
         """
-        from ..systems.registry import get_system
+        from ..mujoco.systems.registry import get_system
         system = get_system(system)
         gain_map, offset = _position_servos(system, "reference")  # ctrl = offset + gain_map @ q
         if len(self.q0) != system.n:

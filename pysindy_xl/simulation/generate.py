@@ -13,13 +13,13 @@ import os
 
 import numpy as np
 
-from ..._optional import import_mujoco
-from ..._validation import check_option
-from ...data.dataset import Dataset, Trajectory
-from ...data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
-from ..systems.actuation import actuator_force_function, start_on_reference
-from ..systems.registry import get_system
-from ..systems.tracking import tracked_model
+from .._optional import import_mujoco
+from .._validation import check_option
+from ..data.dataset import Dataset, Trajectory
+from ..data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
+from ..mujoco.systems.actuation import actuator_force_function, start_on_reference
+from ..mujoco.systems.registry import get_system
+from ..mujoco.systems.tracking import tracked_model
 from .forcing import FORCING_MODES, SumOfSinusoids
 from .integration import (
     INTEGRATORS,

@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..._optional import import_mujoco
+from .._optional import import_mujoco
 
 __all__ = ["Integration", "choose_integration", "linear_modes", "check_run",
            "UnstableSimulationError", "INTEGRATORS", "RK4_BOUND", "BIAS_TOLERANCE",
@@ -171,7 +171,7 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
     >>> choice.integrator, choice.substeps, choice.stability <= RK4_BOUND
     ('RK4', 2400, True)
     """
-    from ..._validation import check_option
+    from .._validation import check_option
     check_option("integrator", integrator, "choice", choices=("auto", "model", *INTEGRATORS))
     if substeps is not None:
         substeps = check_option("substeps", substeps, "int", low=1)
@@ -283,7 +283,7 @@ def settling_time(model, forced: bool = True) -> float:
     20 time constants of the fastest servo's bandwidth, at most 0.1 s, in whole model steps;
     zero without position servos or when the run is not ``forced``.
     """
-    from ..systems.actuation import servo_bandwidths
+    from ..mujoco.systems.actuation import servo_bandwidths
     bandwidth = servo_bandwidths(model)
     if not forced or not np.any(np.isfinite(bandwidth)):
         return 0.0
@@ -294,7 +294,7 @@ def settling_time(model, forced: bool = True) -> float:
 def settled(trajectory, settle: float):
     """The trajectory from time ``settle`` (s) on, recorded in ``info["settle"]``; times kept
     (the controls are functions of time)."""
-    from ...data.dataset import Trajectory
+    from ..data.dataset import Trajectory
     if settle <= 0:
         return trajectory
     keep = trajectory.t >= trajectory.t[0] + settle - 1e-12

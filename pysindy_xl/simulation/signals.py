@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._optional import import_mujoco
-from ..systems.registry import MuJoCoSystem
-from ..systems.tracking import gravity_torques, plain_motors, tracking_controller
+from .._optional import import_mujoco
+from ..mujoco.systems.registry import MuJoCoSystem
+from ..mujoco.systems.tracking import gravity_torques, plain_motors, tracking_controller
 from .forcing import FORCING_MODES, SumOfSinusoids, within_servo_reach
 
 __all__ = ["actuator_signals", "motor_tracking", "CONTROLS"]
