@@ -68,7 +68,7 @@ class DynamicsMixin:
         x = check_array(x, "x", n_columns=n)
         x_dot = check_array(x_dot, "x_dot", x.shape)
         x_ddot = check_array(x_ddot, "x_ddot", x.shape)
-        from ..feature_library import stack_variables
+        from ..symbols import stack_variables
         mass, free = dynamics.mass_and_forcing(stack_variables(x, x_dot))
         return np.einsum("sij,sj->si", mass, x_ddot) - free
 

@@ -39,7 +39,7 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     True
     """
     mujoco = import_mujoco()
-    from ..feature_library import stack_variables
+    from ..symbols import stack_variables
     system = get_system(system)
     dynamics = model._require_dynamics() if hasattr(model, "_require_dynamics") else None
     if dynamics is None:

@@ -165,9 +165,9 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     (None, 0.1, 0.5)
     """
     from .._optional import import_mujoco
-    from ..feature_library import stack_variables
     from ..mujoco.catalogs.kinematic import kinematic_catalog
     from ..mujoco.systems.friction import sliding_velocities
+    from ..symbols import stack_variables
     mujoco = import_mujoco()
 
     try:

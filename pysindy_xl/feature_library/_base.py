@@ -28,7 +28,7 @@ from ._compile import Terms, compile_entries, compile_terms, decompose
 from ._structure import ColumnStructure, DeferredMatrix
 from ._weak import integrate_by_parts
 
-__all__ = ["SymbolicLibrary", "stack_variables", "compile_entries", "LIBRARY_TYPES",
+__all__ = ["SymbolicLibrary", "compile_entries", "LIBRARY_TYPES",
            "remembered_weak_values"]
 
 #: Every catalog category by its ``spec_type``: what a model file may name. Subclasses
@@ -118,45 +118,6 @@ def _clone_parameter(value):
     if isinstance(value, (list, tuple)) and all(isinstance(v, sp.Basic) for v in value):
         return type(value)(value)
     return clone(value, safe=False)
-
-
-def stack_variables(q, qd, qdd=None, tau=None, t=None) -> np.ndarray:
-    """Stack the data into the library input ``Z`` of shape ``(N, 4n + 1)``.
-
-    Parameters
-    ----------
-    q, qd : array, shape (N, n)
-        Positions and velocities.
-    qdd, tau : array, shape (N, n), optional
-        Accelerations and generalized forces; zeros when absent.
-    t : array, shape (N,), optional
-        Sample times; zeros when absent.
-
-    Returns
-    -------
-    Z : ndarray, shape (N, 4n + 1)
-        Columns in the order of :attr:`Coordinates.variables`.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> stack_variables(np.zeros((5, 2)), np.ones((5, 2))).shape
-    (5, 9)
-    """
-    q = np.asarray(q, dtype=float)
-    if q.ndim != 2:
-        raise ValueError(f"q: expected a 2-D array (n_samples, n), got shape {q.shape}")
-    n_samples, n = q.shape
-    parts = []
-    for name, a in (("q", q), ("qd", qd), ("qdd", qdd), ("tau", tau)):
-        a = np.zeros((n_samples, n)) if a is None else np.asarray(a, dtype=float)
-        if a.shape != (n_samples, n):
-            raise ValueError(f"{name}: expected shape {(n_samples, n)}, got {a.shape}")
-        parts.append(a)
-    t = np.zeros(n_samples) if t is None else np.asarray(t, dtype=float).reshape(-1)
-    if t.shape != (n_samples,):
-        raise ValueError(f"t: expected shape {(n_samples,)}, got {t.shape}")
-    return np.column_stack(parts + [t])
 
 
 class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):

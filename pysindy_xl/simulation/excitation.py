@@ -53,7 +53,7 @@ class _Design:
 
     def regressor(self, states):
         """``W`` of stacked states (3, N, n): shape (n, N, p), coordinate-major rows."""
-        from ..feature_library import stack_variables
+        from ..symbols import stack_variables
         theta = self.library.transform(stack_variables(*states, np.zeros_like(states[0])))
         return theta[:, self.rest].reshape(self.n, states.shape[1], -1)
 
