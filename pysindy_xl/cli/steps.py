@@ -273,8 +273,8 @@ def model_lines(model, truth=None):
     """The identified model as printed: physical parameters (next to ``truth``'s), Lagrangian
     and equations unless they run for pages, the coordinates held still."""
     from pysindy_xl.fit.still import held_note
+    from pysindy_xl.physical.structure import has_parameter_map
     from pysindy_xl.report.equations import (
-        has_parameter_map,
         parameter_lines,
         physical_parameters,
         prints_equations,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..dynamics import CatalogDynamics
-from ..report.equations import has_parameter_map
+from ..physical.structure import has_parameter_map
 from .diagnostics import mass_matrices, mass_matrix_report, orient_free_laws
 
 __all__ = ["fitted_state", "catalog_dynamics", "checked_dynamics"]
