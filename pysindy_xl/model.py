@@ -20,10 +20,10 @@ from .fit import (
     choose_noise_model,
     estimator_trajectories,
     fit_smoother,
-    fitted_state,
     resolve_optimizer,
     solve,
 )
+from .fit.wrap import checked_dynamics
 from .io import invalid_model_file, read_model_file
 from .optimizers import SOLVER_KINDS, CatalogProblem
 from .report.inspection import InspectionMixin
@@ -96,6 +96,8 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         Features removed before regression, with the reason.
     still_coordinates_ : list of str
         Coordinates held still (``hold_still``).
+    forced_coordinates_ : ndarray of bool, shape (n,)
+        Coordinates that a non-zero force drives in the data.
     dynamics_ : CatalogDynamics
         The identified equations in mass-matrix form (``None`` if they contain no acceleration).
     n_coordinates_ : int
@@ -220,9 +222,32 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
                                                 smoother, self.residual_covariance,
                                                 self.test_functions)
         optimizer = solve(optimizer, problem, library, weigh=weigh)
-        for name, value in fitted_state(library, problem, optimizer).items():  # wrap
-            setattr(self, name, value)
+        self._wrap(library, problem, optimizer)
         return self
+
+    def _wrap(self, library, problem, optimizer):
+        """The fitted attributes (see Attributes) from the solved ``problem``, in the catalog's
+        columns (``problem.catalog_map``)."""
+        origin, names = problem.catalog_map, library.get_feature_names()
+        held = ~origin.coordinates
+        self.feature_library_, self.optimizer_ = library, optimizer
+        self.coef_, self.dynamics_, self.mass_matrix_check_ = checked_dynamics(
+            library, origin.to_catalog(optimizer.coef_), held, origin.states)
+        self.dropped_features_ = {names[j]: why for j, why in origin.dropped.items()}
+        self.still_coordinates_ = [name for name, h in zip(library.coords.names, held,
+                                                           strict=True) if h]
+        self.forced_coordinates_ = origin.forced
+        self.n_coordinates_, self.n_samples_ = library.coords.n, origin.states.shape[0]
+        self.formulation_, self.weak_info_ = origin.formulation, origin.weak_info
+        self.selection_ = getattr(optimizer, "selection_", None)
+        bagged = hasattr(optimizer, "inclusion_probability_")  # an ensemble: to the catalog
+        self.inclusion_probability_ = (origin.to_catalog(optimizer.inclusion_probability_)
+                                       if bagged else None)
+        self.coef_interval_ = origin.to_catalog(optimizer.coef_interval_) if bagged else None
+        report = getattr(optimizer, "consistency_", None)  # a physically constrained fit
+        self.physical_consistency_ = None if report is None else {
+            **report, "negative_friction": [names[origin.columns[j]]
+                                            for j in report["negative_friction"]]}
 
     def _check_options(self):
         """Options of the estimator, checked at the start of fit (one layer: _validation)."""

@@ -8,7 +8,7 @@ from ..dynamics import CatalogDynamics
 from ..physical.structure import has_parameter_map
 from .diagnostics import mass_matrices, mass_matrix_report, orient_free_laws
 
-__all__ = ["fitted_state", "catalog_dynamics", "checked_dynamics"]
+__all__ = ["catalog_dynamics", "checked_dynamics"]
 
 
 def catalog_dynamics(library, coef, held):
@@ -43,31 +43,3 @@ def checked_dynamics(library, coef, held, states):
               if has_parameter_map(library) else "")
     return coef, dynamics, mass_matrix_report(mass, eig, library.coords.names, remedy)
 
-
-def fitted_state(library, problem, optimizer) -> dict:
-    """The fitted attributes of :class:`~pysindy_xl.XLSINDy` (name -> value) from a solved
-    ``problem`` (built by :func:`~pysindy_xl.fit.build_problem`), its fitted ``library`` and
-    ``optimizer``.
-    """
-    origin = problem.catalog_map
-    names = library.get_feature_names()
-    state = {"feature_library_": library, "optimizer_": optimizer,
-             "inclusion_probability_": None, "coef_interval_": None}
-    if hasattr(optimizer, "inclusion_probability_"):  # an ensemble: map to the catalog
-        state["inclusion_probability_"] = origin.to_catalog(optimizer.inclusion_probability_)
-        state["coef_interval_"] = origin.to_catalog(optimizer.coef_interval_)
-    report = getattr(optimizer, "consistency_", None)  # a physically constrained fit
-    held = ~origin.coordinates
-    coef, dynamics, check = checked_dynamics(library, origin.to_catalog(optimizer.coef_), held,
-                                             origin.states)
-    return {**state, "coef_": coef, "dynamics_": dynamics, "mass_matrix_check_": check,
-            "dropped_features_": {names[j]: why for j, why in origin.dropped.items()},
-            "physical_consistency_": None if report is None else {
-                **report, "negative_friction": [names[origin.columns[j]]
-                                                for j in report["negative_friction"]]},
-            "n_coordinates_": library.coords.n, "n_samples_": origin.states.shape[0],
-            "forced_coordinates_": origin.forced,
-            "still_coordinates_": [name for name, h in zip(library.coords.names, held,
-                                                           strict=True) if h],
-            "formulation_": origin.formulation, "weak_info_": origin.weak_info,
-            "selection_": getattr(optimizer, "selection_", None)}
