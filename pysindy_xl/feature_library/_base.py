@@ -44,7 +44,7 @@ _DERIVED: dict = {}
 _CACHED_DERIVED = 16
 
 
-def _derived(key, derive, cache=_DERIVED, size=_CACHED_DERIVED):
+def shared_derivation(key, derive, cache=_DERIVED, size=_CACHED_DERIVED):
     """``derive()``, shared by every call with the same ``key`` in ``cache`` (at most ``size``
     entries, the least recently used dropped first)."""
     found = cache.pop(key, None)
@@ -249,7 +249,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
 
     def _derive_column_terms(self) -> Terms:
         entries = tuple(self.symbolic_matrix_[c, j] for c, j in self.entry_index_)
-        return _derived(("column terms", entries), lambda: decompose(entries))
+        return shared_derivation(("column terms", entries), lambda: decompose(entries))
 
     def __getstate__(self):
         # compiled evaluators are closures: rebuilt on first use after unpickling
@@ -351,7 +351,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         # integration by parts of the entries: a function of the entries and coordinates
         key = ("weak terms", self.coords.variables, self.symbolic_matrix_.shape,
                tuple(self.symbolic_matrix_))
-        return _derived(key, self._split_weak_terms)
+        return shared_derivation(key, self._split_weak_terms)
 
     def _split_weak_terms(self) -> tuple[np.ndarray, Terms]:
         matrices = self.weak_matrices()

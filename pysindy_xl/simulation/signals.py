@@ -53,7 +53,7 @@ def _driven_mask(system: MuJoCoSystem, model, forcing: str, actuators) -> np.nda
     return np.array([name in chosen or joint in chosen for name, joint in pairs])
 
 
-def _fraction(value, name: str) -> float:
+def checked_fraction(value, name: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise TypeError(f"{name}: expected a number in (0, 1], got {value!r}")
     value = float(value)
@@ -117,7 +117,7 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
 def _scales(system, model, amplitude_scale, amplitude, tracking=None):
     """Peak and offset of each actuator's random signal (see :func:`actuator_signals`)."""
     if amplitude is not None:
-        amplitude = _fraction(amplitude, "amplitude")
+        amplitude = checked_fraction(amplitude, "amplitude")
     amplitudes = system.force_amplitudes
     tracked = set() if tracking is None else set(tracking["actuators"])
     scales, offsets = np.zeros(model.nu), np.zeros(model.nu)
