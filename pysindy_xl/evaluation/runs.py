@@ -1,5 +1,5 @@
 """The MuJoCo runs of a validation: the fresh reference trajectory, and the identified model
-stepped by MuJoCo in closed loop (:mod:`~pysindy_xl.mujoco.evaluation.validation`)."""
+stepped by MuJoCo in closed loop (:mod:`~pysindy_xl.evaluation.validation`)."""
 
 from __future__ import annotations
 
@@ -90,7 +90,7 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
 def mujoco_closed_loop(model, system, trajectory, substeps, required):
     """``(states, failure)`` of the identified model stepped by MuJoCo under the MJCF's
     actuators (and the reference's tracking controller) and the reference's controls (the
-    ``mujoco`` simulator of :mod:`~pysindy_xl.mujoco.evaluation.validation`), or None where
+    ``mujoco`` simulator of :mod:`~pysindy_xl.evaluation.validation`), or None where
     MuJoCo cannot state the model (a ValueError when ``required``)."""
     from .._optional import import_mujoco
     from ..export.mjcf import identified_mj_model

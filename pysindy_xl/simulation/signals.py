@@ -71,7 +71,7 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
     Undriven actuators get zero; an actuator with a ``ctrlrange`` oscillates around its
     middle, the others with ``system.force_amplitudes`` (by joint) times ``amplitude_scale``;
     a position servo's reference is kept within its reach
-    (:func:`~pysindy_xl.mujoco.simulation.forcing.within_servo_reach`). None with implicit
+    (:func:`~pysindy_xl.simulation.forcing.within_servo_reach`). None with implicit
     forcing.
 
     Parameters
