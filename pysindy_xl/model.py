@@ -23,7 +23,7 @@ from .fit import (
     resolve_optimizer,
     solve,
 )
-from .fit.wrap import checked_dynamics
+from .fit.wrap import wrap
 from .io import invalid_model_file, read_model_file
 from .optimizers import SOLVER_KINDS, CatalogProblem
 from .report.inspection import InspectionMixin
@@ -226,28 +226,20 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         return self
 
     def _wrap(self, library, problem, optimizer):
-        """The fitted attributes (see Attributes) from the solved ``problem``, in the catalog's
-        columns (``problem.catalog_map``)."""
-        origin, names = problem.catalog_map, library.get_feature_names()
-        held = ~origin.coordinates
+        """The fitted attributes (see Attributes) from the solved ``problem``."""
+        fitted = wrap(library, problem, optimizer)  # the solution in the catalog's terms
         self.feature_library_, self.optimizer_ = library, optimizer
-        self.coef_, self.dynamics_, self.mass_matrix_check_ = checked_dynamics(
-            library, origin.to_catalog(optimizer.coef_), held, origin.states)
-        self.dropped_features_ = {names[j]: why for j, why in origin.dropped.items()}
-        self.still_coordinates_ = [name for name, h in zip(library.coords.names, held,
-                                                           strict=True) if h]
-        self.forced_coordinates_ = origin.forced
-        self.n_coordinates_, self.n_samples_ = library.coords.n, origin.states.shape[0]
-        self.formulation_, self.weak_info_ = origin.formulation, origin.weak_info
-        self.selection_ = getattr(optimizer, "selection_", None)
-        bagged = hasattr(optimizer, "inclusion_probability_")  # an ensemble: to the catalog
-        self.inclusion_probability_ = (origin.to_catalog(optimizer.inclusion_probability_)
-                                       if bagged else None)
-        self.coef_interval_ = origin.to_catalog(optimizer.coef_interval_) if bagged else None
-        report = getattr(optimizer, "consistency_", None)  # a physically constrained fit
-        self.physical_consistency_ = None if report is None else {
-            **report, "negative_friction": [names[origin.columns[j]]
-                                            for j in report["negative_friction"]]}
+        self.coef_, self.dynamics_ = fitted.coef, fitted.dynamics
+        self.mass_matrix_check_ = fitted.mass_matrix_check
+        self.dropped_features_ = fitted.dropped_features
+        self.still_coordinates_ = fitted.still_coordinates
+        self.forced_coordinates_ = fitted.forced_coordinates
+        self.n_coordinates_, self.n_samples_ = fitted.n_coordinates, fitted.n_samples
+        self.formulation_, self.weak_info_ = fitted.formulation, fitted.weak_info
+        self.selection_ = fitted.selection
+        self.inclusion_probability_ = fitted.inclusion_probability
+        self.coef_interval_ = fitted.coef_interval
+        self.physical_consistency_ = fitted.physical_consistency
 
     def _check_options(self):
         """Options of the estimator, checked at the start of fit (one layer: _validation)."""
