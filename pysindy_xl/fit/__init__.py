@@ -2,7 +2,7 @@
 
 One fit of :class:`~pysindy_xl.XLSINDy` goes one way through here::
 
-    check_fit   ->  build_problem  ->  choose_noise_model  ->  solve      ->  checked_dynamics
+    check_fit   ->  build_problem  ->  choose_noise_model  ->  solve      ->  wrap
     arrays          CatalogProblem     problem, weighting      optimizer      attributes
 
 (:mod:`~pysindy_xl.fit.trajectories`, :mod:`~pysindy_xl.fit.build` with
