@@ -10,7 +10,6 @@ from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from ._validation import IdentificationWarning, check_instance, check_option
-from .dynamics.fitted import DynamicsMixin
 from .feature_library import remembered_weak_values
 from .fit import (
     FORMULATIONS,
@@ -24,9 +23,10 @@ from .fit import (
     solve,
 )
 from .fit.wrap import wrap
+from .fitted.dynamics import DynamicsMixin
+from .fitted.inspection import InspectionMixin
 from .io import invalid_model_file, read_model_file
 from .optimizers import SOLVER_KINDS, CatalogProblem
-from .report.inspection import InspectionMixin
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
 

@@ -15,7 +15,7 @@ OUTER = ("simulation", "evaluation", "export", "control", "cli", "benchmark", "q
          "held_out")
 FACES = {"pysindy_xl", "pysindy_xl.mujoco"}  # fronts that hand on names of both wings
 # the estimator's methods that hand a fitted model to the outer wing when called
-DELEGATIONS = {"pysindy_xl.dynamics.fitted"}
+DELEGATIONS = {"pysindy_xl.fitted.dynamics"}
 
 
 def _name(path):

@@ -132,7 +132,7 @@ def run_demo(args) -> dict:
               f"{coefficient_summary['true_terms']} true, max error "
               f"{coefficient_summary['max_relative_error']:.2g} (relative to the largest)")
     timings["total"] = sum(timings.values())
-    from ..report.equations import prints_equations  # sympy: not imported by --help
+    from ..fitted.equations import prints_equations  # sympy: not imported by --help
     short = prints_equations(model)
     report = {
         "system": system.name,

@@ -273,12 +273,12 @@ def model_lines(model, truth=None):
     """The identified model as printed: physical parameters (next to ``truth``'s), Lagrangian
     and equations unless they run for pages, the coordinates held still."""
     from pysindy_xl.fit.still import held_note
-    from pysindy_xl.physical.structure import has_parameter_map
-    from pysindy_xl.report.equations import (
+    from pysindy_xl.fitted.equations import (
         parameter_lines,
         physical_parameters,
         prints_equations,
     )
+    from pysindy_xl.physical.structure import has_parameter_map
     lines = []
     if has_parameter_map(model.feature_library_):
         reference = (None if truth is None

@@ -182,7 +182,7 @@ def quality_lines(quality) -> list:
     if quality.get("cv_noise_ratio") is not None:
         lines.append("  held-out noise ratio of the chosen law (5-fold cross-validation; about 1 "
                      f"when it leaves only the propagated noise): {quality['cv_noise_ratio']:.3g}")
-    from ..report.equations import consistency_line  # sympy: not imported by the CLI's --help
+    from ..fitted.equations import consistency_line  # sympy: not imported by the CLI's --help
     consistency = consistency_line(quality.get("physical_consistency"))
     if consistency:
         lines.append(f"  {consistency}")

@@ -1,4 +1,5 @@
-"""What a fitted model says: :mod:`.equations` (pure functions of a catalog and its
-coefficients) and :mod:`.inspection` (the estimator's mixin). Nothing is imported here, so
-that the fit stage can use the former without the latter.
+"""What a fitted :class:`~pysindy_xl.XLSINDy` says and does: :mod:`.equations` (pure functions of
+a catalog and its coefficients), :mod:`.inspection` and :mod:`.dynamics` (the estimator's mixins:
+equations and parameters; predictions, scores, simulations, exports). Nothing is imported here,
+so that other modules can use the first without the others.
 """

@@ -10,7 +10,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from .._inputs import aligned, as_list, check_array
 from .._validation import check_instance
-from .mass_matrix import MassMatrixDynamics
+from ..dynamics.mass_matrix import MassMatrixDynamics
 
 __all__ = ["DynamicsMixin"]
 
