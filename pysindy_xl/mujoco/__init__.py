@@ -1,4 +1,4 @@
-"""MuJoCo systems, data generation, reference catalogs and validation of identified models.
+"""MuJoCo systems and their catalogs; the names of data generation and validation handed on.
 
 Subpackages by concern: :mod:`.systems` and :mod:`.catalogs` (no simulation); the names of
 :mod:`pysindy_xl.simulation` and :mod:`pysindy_xl.evaluation` are handed on here. Public names
