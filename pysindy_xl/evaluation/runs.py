@@ -14,7 +14,7 @@ from ..simulation.generate import actuator_signals, simulate_trajectory
 from ..simulation.integration import UnstableSimulationError, choose_integration
 from ..simulation.signals import motor_tracking
 
-__all__ = ["validation_trajectory", "mujoco_closed_loop"]
+__all__ = ["validation_trajectory"]
 
 
 def validation_trajectory(system, duration: float = 10.0, forcing: str = "explicit",
@@ -91,7 +91,27 @@ def mujoco_closed_loop(model, system, trajectory, substeps, required):
     """``(states, failure)`` of the identified model stepped by MuJoCo under the MJCF's
     actuators (and the reference's tracking controller) and the reference's controls (the
     ``mujoco`` simulator of :mod:`~pysindy_xl.evaluation.validation`), or None where
-    MuJoCo cannot state the model (a ValueError when ``required``)."""
+    MuJoCo cannot state the model (a ValueError when ``required``).
+
+    Parameters
+    ----------
+    model : pysindy_xl.XLSINDy
+        The identified model.
+    system : MuJoCoSystem
+        The system whose MJCF actuators drive the model.
+    trajectory : Trajectory
+        The reference, with its controls in ``info["signals"]``.
+    substeps : int
+        MuJoCo steps per sample.
+    required : bool
+        Raise a ValueError where MuJoCo cannot state the model, instead of returning None.
+
+    Returns
+    -------
+    tuple or None
+        ``(states, failure)``: states (k, 2n) and why the run stopped early (or None); None
+        where MuJoCo cannot state the model.
+    """
     from .._optional import import_mujoco
     from ..export.mjcf import identified_mj_model
     mujoco = import_mujoco()

@@ -205,7 +205,18 @@ def friction_kind(term, velocity, acceleration=None) -> str | None:
 
 
 def has_parameter_map(library) -> bool:
-    """Whether some library says which physical parameters its terms stand for."""
+    """Whether some library says which physical parameters its terms stand for.
+
+    Parameters
+    ----------
+    library : pysindy_xl.CatalogRepartition
+        The fitted catalog.
+
+    Returns
+    -------
+    bool
+        True when a library of the catalog has ``parameters``.
+    """
     return any(getattr(lib, "parameters", None) is not None for lib in library.libraries_)
 
 
