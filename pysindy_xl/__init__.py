@@ -19,9 +19,9 @@ __version__ = "0.1.0"
 
 # public name -> submodule that defines it (imported on first attribute access)
 _LAZY = {
-    **dict.fromkeys(("Coordinates", "monomials", "products"), "symbols"),
+    **dict.fromkeys(("Coordinates", "monomials", "products", "stack_variables"), "symbols"),
     **dict.fromkeys(("LagrangeLibrary", "ClassicalLibrary", "ExternalForces",
-                     "CatalogRepartition", "stack_variables"), "feature_library"),
+                     "CatalogRepartition"), "feature_library"),
     **dict.fromkeys(("ExplicitOptimizer", "ImplicitOptimizer", "MixedOptimizer",
                      "EnsembleOptimizer", "PhysicalOptimizer", "NoLawFoundError",
                      "TotalLeastSquaresOptimizer"), "optimizers"),
@@ -48,7 +48,6 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         ClassicalLibrary,
         ExternalForces,
         LagrangeLibrary,
-        stack_variables,
     )
     from .model import XLSINDy
     from .mujoco.catalogs.kinematic import kinematic_catalog
@@ -61,7 +60,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         PhysicalOptimizer,
         TotalLeastSquaresOptimizer,
     )
-    from .symbols import Coordinates, monomials, products
+    from .symbols import Coordinates, monomials, products, stack_variables
     from .weak import BumpTestFunctions, WhittakerSmoother
 
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY)
