@@ -21,7 +21,8 @@ __version__ = "0.1.0"
 _LAZY = {
     **dict.fromkeys(("Coordinates", "monomials", "products", "stack_variables"), "symbols"),
     **dict.fromkeys(("LagrangeLibrary", "ClassicalLibrary", "ExternalForces",
-                     "CatalogRepartition"), "feature_library"),
+                     "CatalogRepartition", "JointFrictionLibrary", "FRICTION_MODELS"),
+                    "feature_library"),
     **dict.fromkeys(("ExplicitOptimizer", "ImplicitOptimizer", "MixedOptimizer",
                      "EnsembleOptimizer", "PhysicalOptimizer", "NoLawFoundError",
                      "TotalLeastSquaresOptimizer"), "optimizers"),
@@ -34,7 +35,8 @@ _LAZY = {
 }
 
 __all__ = ["Coordinates", "monomials", "products", "LagrangeLibrary", "ClassicalLibrary",
-           "ExternalForces", "CatalogRepartition", "stack_variables", "ExplicitOptimizer",
+           "ExternalForces", "CatalogRepartition", "JointFrictionLibrary", "FRICTION_MODELS",
+           "stack_variables", "ExplicitOptimizer",
            "ImplicitOptimizer", "MixedOptimizer", "EnsembleOptimizer", "PhysicalOptimizer",
            "NoLawFoundError", "TotalLeastSquaresOptimizer", "XLSINDy", "IdentificationWarning",
            "UnexplainedCoordinateWarning", "MassMatrixDynamics", "SimulationError",
@@ -44,9 +46,11 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
     from ._validation import IdentificationWarning, UnexplainedCoordinateWarning
     from .dynamics import MassMatrixDynamics, SimulationError, SingularMassMatrixError
     from .feature_library import (
+        FRICTION_MODELS,
         CatalogRepartition,
         ClassicalLibrary,
         ExternalForces,
+        JointFrictionLibrary,
         LagrangeLibrary,
     )
     from .model import XLSINDy
