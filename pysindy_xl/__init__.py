@@ -21,8 +21,8 @@ __version__ = "0.1.0"
 _LAZY = {
     **dict.fromkeys(("Coordinates", "monomials", "products", "stack_variables"), "symbols"),
     **dict.fromkeys(("LagrangeLibrary", "ClassicalLibrary", "ExternalForces",
-                     "CatalogRepartition", "JointFrictionLibrary", "FRICTION_MODELS"),
-                    "feature_library"),
+                     "CatalogRepartition", "JointFrictionLibrary"), "feature_library"),
+    "FRICTION_MODELS": "feature_library.joint_friction",
     **dict.fromkeys(("ExplicitOptimizer", "ImplicitOptimizer", "MixedOptimizer",
                      "EnsembleOptimizer", "PhysicalOptimizer", "NoLawFoundError",
                      "TotalLeastSquaresOptimizer"), "optimizers"),
@@ -46,13 +46,13 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
     from ._validation import IdentificationWarning, UnexplainedCoordinateWarning
     from .dynamics import MassMatrixDynamics, SimulationError, SingularMassMatrixError
     from .feature_library import (
-        FRICTION_MODELS,
         CatalogRepartition,
         ClassicalLibrary,
         ExternalForces,
         JointFrictionLibrary,
         LagrangeLibrary,
     )
+    from .feature_library.joint_friction import FRICTION_MODELS
     from .model import XLSINDy
     from .mujoco.catalogs.kinematic import kinematic_catalog
     from .optimizers import (
