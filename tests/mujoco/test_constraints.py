@@ -25,7 +25,7 @@ from pysindy_xl.mujoco import (
     validate_model,
     validation_trajectory,
 )
-from pysindy_xl.mujoco.simulation.generate import actuator_force_function
+from pysindy_xl.simulation.generate import actuator_force_function
 
 # cart 1 kg, bob 0.5 kg at 0.8 m (inertia 1e-6), dampings 0.5 and 0.1
 RAIL_CART_TRUTH = {
