@@ -13,9 +13,14 @@ squares. The choices a careful roboticist makes, and this module makes:
 * **decimation** to about ten samples per period of the cutoff (the rows beyond carry no
   new information and correlated errors);
 * **the cutoff chosen by the data**: the one of a grid with the smallest held-out torque
-  error over time-blocked folds of the training data itself;
-* **friction and offsets**: viscous ``qd``, Coulomb ``sign(qd)`` and a constant torque
-  offset per joint, beside the rigid-body columns;
+  error over time-blocked folds of the training data itself (:func:`choose_cutoff`; the
+  data it is given, never a held-out run);
+* **friction and offsets**: viscous ``qd``, smooth Coulomb ``tanh(qd / eps)`` and a constant
+  torque offset per joint, beside the rigid-body columns. ``eps`` is
+  :data:`COULOMB_SCALE`, the velocity scale of the package's own smooth Coulomb law
+  (``JointFrictionLibrary(coulomb_scale=0.01)``), so both methods offer the same friction
+  law. A hard ``sign(qd)`` of the filtered velocity would flip at random during the rests of
+  a log, where the filtered velocity is noise around zero, and inject a spurious ``+-f_c``;
 * **weighted least squares**: ordinary least squares, then each joint's rows weighted by the
   inverse of its residual standard deviation and solved again (Gautier's WLS).
 
@@ -33,6 +38,10 @@ import scipy.signal
 
 #: Cutoff frequencies (Hz) among which :func:`choose_cutoff` picks.
 CUTOFFS = (1.0, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0, 24.0)
+
+#: Velocity scale (rad/s) of the smooth Coulomb column ``tanh(qd / COULOMB_SCALE)``: the
+#: default ``coulomb_scale`` of the package's ``JointFrictionLibrary``.
+COULOMB_SCALE = 0.01
 
 
 def uniform_grid(t, *signals):
@@ -64,13 +73,14 @@ def filtered_states(t, q, cutoff, tau=None):
     return grid[keep], q[keep], qd[keep], qdd[keep], tau
 
 
-def friction_columns(qd):
-    """Viscous, Coulomb and offset columns per joint: (N, n, 3 n)."""
+def friction_columns(qd, coulomb_scale=COULOMB_SCALE):
+    """Viscous ``qd``, smooth Coulomb ``tanh(qd / coulomb_scale)`` and offset ``1`` columns
+    per joint: (N, n, 3 n)."""
     n_samples, n = qd.shape
     columns = np.zeros((n_samples, n, 3 * n))
     joints = np.arange(n)
     columns[:, joints, 3 * joints] = qd
-    columns[:, joints, 3 * joints + 1] = np.sign(qd)
+    columns[:, joints, 3 * joints + 1] = np.tanh(qd / coulomb_scale)
     columns[:, joints, 3 * joints + 2] = 1.0
     return columns
 
