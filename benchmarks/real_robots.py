@@ -77,7 +77,8 @@ NOTES = {
         "training data cannot separate Coulomb friction from the sensor offset. The tables "
         "say how far a model identified on one stretch carries along the path. IDIM-LS's "
         "cross-validation within the training sweep is itself extrapolation, and picks a "
-        "truncated rank (plain least squares, tolerance 1e-10, does far worse here). A "
+        "truncated rank (plain least squares, tolerance 1e-10, does far worse in that "
+        "cross-validation: `idim_cv` in the JSON). A "
         "physically consistent fit that carries further is a sign of robustness, not a "
         "measure of how accurate its parameters are. Joint 7's torque is below 4e-4 N m "
         "(its sensor barely sees link 7): its relative errors mean nothing."),
