@@ -12,7 +12,8 @@ import numpy as np
 
 __all__ = ["IdentificationWarning", "UnexplainedCoordinateWarning", "check_option",
            "check_numeric_array", "check_instance", "check_indices", "check_times",
-           "argument_type"]
+           "argument_type", "Interval", "Options", "Boolean", "HasMethods", "InstanceOf",
+           "check_parameter", "validate_params"]
 
 _KINDS = ("bool", "int", "real", "choice")
 
@@ -225,3 +226,235 @@ def argument_type(kind: str, **bounds):
 
     convert.__name__ = f"{kind}_argument"
     return convert
+
+
+# -- declarative parameter constraints --------------------------------------------------------
+# An estimator states what each of its parameters accepts in a class attribute
+# ``_parameter_constraints = {name: [constraint, ...]}`` (as scikit-learn's estimators do) and
+# its fit calls :func:`validate_params`. A constraint is ``None`` (the value None), a literal
+# (``"auto"``, ``False``: that very value), or one of the classes below.
+
+
+class Interval:
+    """A number of ``kind`` ``"int"`` or ``"real"`` within bounds, as :func:`check_option` checks
+    it (NaN refused, inf only with ``allow_inf``).
+
+    >>> Interval("real", 0, 1, high_open=True).describe()
+    'a real number in [0, 1)'
+    """
+
+    def __init__(self, kind, low=None, high=None, *, low_open=False, high_open=False,
+                 allow_inf=False):
+        if kind not in ("int", "real"):
+            raise ValueError(f"kind: expected 'int' or 'real', got {kind!r}")
+        self.kind, self.low, self.high = kind, low, high
+        self.low_open, self.high_open, self.allow_inf = low_open, high_open, allow_inf
+
+    def describe(self) -> str:
+        """What the constraint accepts, in words."""
+        return (("an integer" if self.kind == "int" else "a real number")
+                + _describe_range(self.low, self.high, self.low_open, self.high_open))
+
+    def check(self, name: str, value, allow_none: bool = False):
+        """Raise the ``TypeError``/``ValueError`` of :func:`check_option` for a bad ``value``."""
+        return check_option(name, value, self.kind, low=self.low, high=self.high,
+                            low_open=self.low_open, high_open=self.high_open,
+                            allow_none=allow_none, allow_inf=self.allow_inf)
+
+    def claims(self, value) -> bool:
+        """Whether a refused ``value`` is this constraint's to explain (any non-string)."""
+        return not isinstance(value, str)
+
+
+class Options:
+    """One of the strings ``choices``.
+
+    >>> Options(("lasso", "threshold")).describe()
+    "one of ('lasso', 'threshold')"
+    """
+
+    def __init__(self, choices):
+        self.choices = tuple(choices)
+
+    def describe(self) -> str:
+        """What the constraint accepts, in words."""
+        return f"one of {self.choices}"
+
+    def check(self, name: str, value, allow_none: bool = False):
+        """Raise the ``ValueError`` (a string) or ``TypeError`` of :func:`check_option`."""
+        return check_option(name, value, "choice", choices=self.choices, allow_none=allow_none)
+
+    def claims(self, value) -> bool:
+        """Whether a refused ``value`` is this constraint's to explain (a string)."""
+        return isinstance(value, str)
+
+
+class Boolean:
+    """``True`` or ``False`` (NumPy's booleans too, no numbers or strings)."""
+
+    def describe(self) -> str:
+        """What the constraint accepts, in words."""
+        return "True, False"
+
+    def check(self, name: str, value, allow_none: bool = False):
+        """Raise the ``TypeError`` of :func:`check_option` for a non-boolean ``value``."""
+        return check_option(name, value, "bool", allow_none=allow_none)
+
+    def claims(self, value) -> bool:
+        """Whether a refused ``value`` is this constraint's to explain (never: its words are
+        part of the combined message)."""
+        return False
+
+
+class HasMethods:
+    """An instance (not a class, not a string) with the callable ``method``, described as
+    ``what``.
+
+    >>> HasMethods("a smoother", "smooth").describe()
+    'a smoother with a smooth method'
+    """
+
+    def __init__(self, what: str, method: str | None = None):
+        self.what, self.method = what, method
+
+    def describe(self) -> str:
+        """What the constraint accepts, in words."""
+        return self.what + (f" with a {self.method} method" if self.method else "")
+
+    def check(self, name: str, value, allow_none: bool = False):
+        """Raise the ``TypeError`` of :func:`check_instance` for a bad ``value``."""
+        if value is None and allow_none:
+            return None
+        if isinstance(value, str):
+            raise TypeError(f"{name}: expected {self.describe()}, got the str {value!r}")
+        return check_instance(name, value, self.what, self.method)
+
+    def claims(self, value) -> bool:
+        """Whether a refused ``value`` is this constraint's to explain (a class or an object
+        that is neither a string nor a number)."""
+        return isinstance(value, type) or not isinstance(value, (str, numbers.Number))
+
+
+class InstanceOf:
+    """An instance of ``types``, described as ``what``.
+
+    >>> InstanceOf(str, "a cvxpy solver name").describe()
+    'a cvxpy solver name'
+    """
+
+    def __init__(self, types, what: str):
+        self.types, self.what = types, what
+
+    def describe(self) -> str:
+        """What the constraint accepts, in words."""
+        return self.what
+
+    def check(self, name: str, value, allow_none: bool = False):
+        """Raise a ``TypeError`` naming ``name`` for a ``value`` of another type."""
+        if (value is None and allow_none) or isinstance(value, self.types):
+            return value
+        raise TypeError(f"{name}: expected {self.what}{' or None' if allow_none else ''}, got "
+                        f"{value!r}")
+
+    def claims(self, value) -> bool:
+        """Whether a refused ``value`` is this constraint's to explain (never: its words are
+        part of the combined message)."""
+        return False
+
+
+def _accepts(rule, name, value) -> bool:
+    try:
+        rule.check(name, value)
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
+def _is_literal(value, literal) -> bool:
+    return type(value) is type(literal) and value == literal
+
+
+def check_parameter(name: str, value, constraints):
+    """Check the parameter ``name`` against its list of ``constraints``.
+
+    The value is accepted when it is None and ``None`` is listed, when it is one of the listed
+    literals (``"auto"``, ``False``) or when a constraint object accepts it. A refused value is
+    explained by the one constraint object listed alone, else by the first that claims it (its
+    own message), else by a ``TypeError`` listing what is accepted (a ``ValueError`` for a
+    string where an :class:`Options` is listed).
+
+    Parameters
+    ----------
+    name : str
+        The parameter's name, which the error names.
+    value : object
+        Its value.
+    constraints : list
+        ``None``, literals and constraint objects (:class:`Interval`, :class:`Options`,
+        :class:`Boolean`, :class:`HasMethods`, :class:`InstanceOf`).
+
+    Returns
+    -------
+    object
+        ``value``, unchanged.
+
+    Examples
+    --------
+    >>> check_parameter("threshold", "auto", ["auto", Interval("real", 0, 1, high_open=True)])
+    'auto'
+    >>> check_parameter("threshold", 1.5, ["auto", Interval("real", 0, 1, high_open=True)])
+    Traceback (most recent call last):
+    ...
+    ValueError: threshold: expected a real number in [0, 1), got 1.5
+    >>> check_parameter("residual_covariance", "yes", ["auto", Boolean()])
+    Traceback (most recent call last):
+    ...
+    TypeError: residual_covariance: expected True, False or 'auto', got the str 'yes'
+    """
+    allow_none = any(c is None for c in constraints)
+    literals = [c for c in constraints if c is not None and isinstance(c, (str, bool, int))]
+    rules = [c for c in constraints if c is not None and not isinstance(c, (str, bool, int))]
+    if (value is None and allow_none) or any(_is_literal(value, lit) for lit in literals):
+        return value
+    if any(_accepts(rule, name, value) for rule in rules):
+        return value
+    if len(rules) == 1 and not literals:
+        rules[0].check(name, value, allow_none)
+    for rule in rules:
+        if rule.claims(value):
+            rule.check(name, value)
+    words = [rule.describe() for rule in rules] + [repr(lit) for lit in literals]
+    words += ["None"] if allow_none else []
+    expected = words[0] if len(words) == 1 else ", ".join(words[:-1]) + " or " + words[-1]
+    misspelled = isinstance(value, str) and any(isinstance(r, Options) for r in rules)
+    raise (ValueError if misspelled else TypeError)(
+        f"{name}: expected {expected}, got the {type(value).__name__} {value!r}")
+
+
+def validate_params(estimator):
+    """Check every parameter of ``estimator`` against the class attribute
+    ``_parameter_constraints`` (``{name: [constraint, ...]}``) with :func:`check_parameter`;
+    called at the start of ``fit``.
+
+    Parameters
+    ----------
+    estimator : object
+        An estimator whose class declares ``_parameter_constraints``.
+
+    Returns
+    -------
+    None
+
+    Examples
+    --------
+    >>> class Smoother:
+    ...     _parameter_constraints = {"lam": [Interval("real", 0, low_open=True)]}
+    ...     def __init__(self, lam=1.0):
+    ...         self.lam = lam
+    >>> validate_params(Smoother(lam=-1.0))
+    Traceback (most recent call last):
+    ...
+    ValueError: lam: expected a real number > 0, got -1.0
+    """
+    for name, constraints in type(estimator)._parameter_constraints.items():
+        check_parameter(name, getattr(estimator, name), constraints)

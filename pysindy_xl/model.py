@@ -9,7 +9,15 @@ import threadpoolctl
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-from ._validation import IdentificationWarning, check_instance, check_option
+from ._validation import (
+    Boolean,
+    HasMethods,
+    IdentificationWarning,
+    InstanceOf,
+    Interval,
+    Options,
+    validate_params,
+)
 from .feature_library import remembered_weak_values
 from .fit import (
     FORMULATIONS,
@@ -135,6 +143,22 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
     (x) 3.0*x + 1.0*x_ddot = tau_x
     """
 
+    _parameter_constraints = {
+        "feature_library": [None, HasMethods("feature library")],
+        "optimizer": [None, Options(SOLVER_KINDS), HasMethods("optimizer")],
+        "differentiation_method": [None, HasMethods("a pysindy differentiation method",
+                                                    "__call__")],
+        "drop_dependent": [Boolean()],
+        "formulation": [Options(FORMULATIONS)],
+        "test_functions": [None, HasMethods("test functions", "matrices")],
+        "smoother": [None, HasMethods("a smoother", "smooth")],
+        "t_default": [Interval("real", 0, low_open=True),
+                      InstanceOf((np.ndarray, list, tuple), "an array of sample times")],
+        "blas_threads": [None, Interval("int", 1)],
+        "residual_covariance": ["auto", Boolean()],
+        "hold_still": [False, Interval("real", 0)],
+    }
+
     def __init__(self, feature_library=None, optimizer=None, differentiation_method=None,
                  drop_dependent=True, formulation="auto", test_functions=None, smoother=None,
                  t_default=1.0, blas_threads=1, residual_covariance="auto", hold_still=2.0):
@@ -242,33 +266,8 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         self.physical_consistency_ = fitted.physical_consistency
 
     def _check_options(self):
-        """Options of the estimator, checked at the start of fit (one layer: _validation)."""
-        check_option("drop_dependent", self.drop_dependent, "bool")
-        if self.hold_still is not False:  # a threshold; True is refused (not a number)
-            check_option("hold_still", self.hold_still, "real", low=0)
-        value = self.residual_covariance
-        if not (isinstance(value, (bool, np.bool_)) or (isinstance(value, str)
-                                                          and value == "auto")):
-            raise TypeError("residual_covariance: expected True, False or 'auto', got the "
-                            f"{type(value).__name__} {value!r}")
-        if self.blas_threads is not None:
-            check_option("blas_threads", self.blas_threads, "int", low=1)
-        check_option("formulation", self.formulation, "choice", choices=FORMULATIONS)
-        if np.ndim(self.t_default) == 0:
-            check_option("t_default", self.t_default, "real", low=0, low_open=True)
-        for name, what, method in (("differentiation_method", "a pysindy differentiation "
-                                    "method", "__call__"),
-                                   ("smoother", "a smoother", "smooth"),
-                                   ("test_functions", "test functions", "matrices")):
-            value = getattr(self, name)
-            if value is not None:
-                check_instance(name, value, what, method)
-        if isinstance(self.optimizer, str):
-            check_option("optimizer", self.optimizer, "choice", choices=SOLVER_KINDS)
-        for name in ("feature_library", "optimizer"):
-            value = getattr(self, name)
-            if isinstance(value, type):
-                check_instance(name, value, name.replace("_", " "))
+        """Options of the estimator (``_parameter_constraints``), checked at the start of fit."""
+        validate_params(self)
 
     def _build_dynamics(self):
         """``dynamics_`` from the fitted coefficients."""

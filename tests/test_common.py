@@ -24,15 +24,24 @@ kinds:
   validation layer (:mod:`pysindy_xl._validation`), with a ``TypeError`` or ``ValueError`` that
   names the argument, where some checks want scikit-learn's own wording or error class. The
   package's answer to the same input is asserted by :func:`test_the_answer_names_the_argument`.
+
+The optimizers and ``XLSINDy`` declare what each parameter accepts in a table,
+``_parameter_constraints`` (as scikit-learn's estimators do), checked at ``fit`` by
+:func:`pysindy_xl._validation.validate_params`: the table covers every parameter of
+``__init__``, a value outside it is refused at ``fit`` (not before) with an error naming the
+parameter, values inside it fit, and the documented types name what the table accepts.
 """
 
+import inspect
 import pickle
+import re
 import warnings
 
 import joblib
 import numpy as np
 import pytest
 import sympy as sp
+from numpydoc.docscrape import ClassDoc
 from sklearn.base import clone
 from sklearn.exceptions import NotFittedError
 from sklearn.utils.estimator_checks import check_estimator, parametrize_with_checks
@@ -40,6 +49,7 @@ from sklearn.utils.validation import check_is_fitted
 from support.files import pendulum
 
 import pysindy_xl as px
+from pysindy_xl._validation import Boolean, HasMethods, Interval, Options
 from pysindy_xl.feature_library import (
     JointFrictionLibrary,
     PolynomialLagrangeLibrary,
@@ -134,7 +144,7 @@ _CATALOG = {**dict.fromkeys(set(_DATA_CHECKS) - {"check_fit_score_takes_y"}, _CA
 _NO_LAW = ("random data hold no sparse law X @ xi = 0: fit raises NoLawFoundError, its answer "
            "to data without a law")
 _IMPLICIT = {**dict.fromkeys(set(_DATA_CHECKS) - {"check_fit_check_is_fitted",
-                                                  "check_fit_idempotent",
+                                                  "check_fit_idempotent", "check_n_features_in",
                                                   "check_positive_only_tag_during_fit"}, _NO_LAW),
              "check_complex_data": _WORDING["check_complex_data"],
              "check_estimators_empty_data_messages":
@@ -150,9 +160,7 @@ EXPECTED_FAILED_CHECKS = {
                     _LIBRARY),
     "ExplicitOptimizer": _WORDING,
     "ImplicitOptimizer": _IMPLICIT,
-    "MixedOptimizer": {**_WORDING,
-                       "check_n_features_in": "fit does not set n_features_in_",
-                       "check_n_features_in_after_fitting": "fit does not set n_features_in_"},
+    "MixedOptimizer": _WORDING,
     **dict.fromkeys(("EnsembleOptimizer", "PhysicalOptimizer", "TotalLeastSquaresOptimizer"),
                     _CATALOG),
     "XLSINDy": _MODEL,
@@ -338,6 +346,8 @@ def test_contract_on_accepted_data(name):
             np.testing.assert_array_equal(new, old)
         first = np.array(output(estimator), copy=True)
         assert np.all(np.isfinite(first))
+        if isinstance(estimator, CatalogOptimizer):
+            assert estimator.n_features_in_ == args[0].shape[1]
 
         loaded = pickle.loads(pickle.dumps(estimator))
         np.testing.assert_array_equal(output(loaded), first)
@@ -367,3 +377,91 @@ def test_the_model_of_the_contract_is_the_true_pendulum():
     estimator, args, kwargs, _ = _model_case()
     coef = estimator.fit(*args, **kwargs).coefficients()
     np.testing.assert_allclose(coef, [0.25, 4.9, 0.2, -1.0], rtol=1e-6)
+
+
+# -------------------------------------------------------- the declared parameter constraints
+
+_CONSTRAINED = [*_optimizers(), px.XLSINDy(_pendulum_catalog())]
+
+
+class _NotAnInstance:
+    """A class where an instance or a value is due: refused by every constraint."""
+
+
+def _invalid_values(constraints):
+    """Values that no constraint of the list accepts: a class, and a complex number where no
+    constraint takes any instance."""
+    takes_any_instance = any(isinstance(c, HasMethods) and c.method is None for c in constraints)
+    return [_NotAnInstance] + ([] if takes_any_instance else [1j])
+
+
+@pytest.mark.parametrize("estimator", _CONSTRAINED, ids=lambda e: type(e).__name__)
+def test_every_parameter_is_constrained(estimator):
+    """The table declares every parameter of ``__init__``, as scikit-learn's estimators do."""
+    params = set(inspect.signature(type(estimator).__init__).parameters) - {"self"}
+    assert set(type(estimator)._parameter_constraints) == params
+
+
+@pytest.mark.parametrize("name, param", [
+    (type(e).__name__, p) for e in _CONSTRAINED for p in sorted(type(e)._parameter_constraints)])
+def test_a_refused_parameter_is_named_at_fit(name, param):
+    """``__init__`` and ``set_params`` store any value; ``fit`` refuses one outside the table
+    with a TypeError or ValueError naming the parameter."""
+    make, prototype = _CASES[name]
+    constraints = type(make(prototype)[0])._parameter_constraints[param]
+    for value in _invalid_values(constraints):
+        estimator, args, kwargs, _ = make(clone(prototype) if prototype is not None else None)
+        estimator.set_params(**{param: value})
+        assert estimator.get_params()[param] is value
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            with pytest.raises((TypeError, ValueError), match=rf"^{re.escape(param)}: expected"):
+                _fit(estimator, args, kwargs)
+
+
+@pytest.mark.parametrize("name, param, value", [
+    ("ExplicitOptimizer", "threshold", 0.05), ("ExplicitOptimizer", "method", "lasso"),
+    ("ImplicitOptimizer", "alpha", 1e-3), ("EnsembleOptimizer", "random_state", 7),
+    ("EnsembleOptimizer", "random_state", np.random.default_rng(7)),
+    ("PhysicalOptimizer", "base_parameters", "all"), ("XLSINDy", "hold_still", False),
+    ("XLSINDy", "residual_covariance", False), ("XLSINDy", "optimizer", "explicit"),
+])
+def test_an_accepted_parameter_fits(name, param, value):
+    """Values inside the table fit: the constraints refuse nothing they list."""
+    make, prototype = _CASES[name]
+    estimator, args, kwargs, output = make(clone(prototype) if prototype is not None else None)
+    estimator.set_params(**{param: value})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert np.all(np.isfinite(output(_fit(estimator, args, kwargs))))
+
+
+def _documented_words(constraint) -> list[str]:
+    """What the numpydoc type (or description) of a parameter shows for one constraint."""
+    if isinstance(constraint, Options):
+        return list(constraint.choices)
+    if isinstance(constraint, Boolean):
+        return ["bool"]
+    if isinstance(constraint, Interval):
+        return ["int" if constraint.kind == "int" else "float"]
+    if isinstance(constraint, (str, bool)):
+        return [str(constraint)]
+    return []  # None (see below), instances: described in words of their own
+
+
+@pytest.mark.parametrize("estimator", _CONSTRAINED, ids=lambda e: type(e).__name__)
+def test_the_documented_types_follow_the_table(estimator):
+    """Each constrained parameter is documented, and its documented type names what the table
+    accepts: the options, 'bool', 'int', 'float', the literals, None ('optional')."""
+    cls = type(estimator)
+    documented = {name.strip(): p for p in ClassDoc(cls)["Parameters"]
+                  for name in p.name.split(",")}
+    defaults = inspect.signature(cls.__init__).parameters
+    for name, constraints in cls._parameter_constraints.items():
+        assert name in documented, f"{cls.__name__}: {name} is not documented"
+        text = documented[name].type + " " + " ".join(documented[name].desc)
+        missing = [w for c in constraints for w in _documented_words(c) if w not in text]
+        assert not missing, f"{cls.__name__}.{name}: {documented[name].type!r} lacks {missing}"
+        if any(c is None for c in constraints):
+            assert ("optional" in text or "None" in text
+                    or defaults[name].default is None), f"{cls.__name__}.{name}: None"

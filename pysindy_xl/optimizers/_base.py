@@ -296,8 +296,11 @@ reference_columns, physical
         self._check_params()
         problem = problem.balanced() if self.catalog_tags().balances_rows else problem
         if support is None:
-            return self._solve(problem)
-        return self._solve_support(problem, check_support(support, problem.n_features))
+            fitted = self._solve(problem)
+        else:
+            fitted = self._solve_support(problem, check_support(support, problem.n_features))
+        self.n_features_in_ = problem.n_features
+        return fitted
 
     def _solve(self, problem: CatalogProblem):  # pragma: no cover - abstract
         raise NotImplementedError(f"{type(self).__name__}: _solve(problem) is not implemented")

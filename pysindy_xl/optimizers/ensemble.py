@@ -12,7 +12,7 @@ import numpy as np
 import scipy.stats
 from sklearn.base import clone
 
-from .._validation import check_instance, check_option
+from .._validation import Boolean, HasMethods, InstanceOf, Interval, Options, validate_params
 from ._base import CatalogOptimizer, solve_problem, warn_unexplained
 from ._wrapping import WrappingOptimizer
 from .tags import catalog_tags
@@ -106,6 +106,23 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
         """The base optimizer's tags; every fit balances its own subsample."""
         return dataclasses.replace(catalog_tags(self._base()), balances_rows=False, can_refit=False)
 
+    _parameter_constraints = {
+        "optimizer": [None, HasMethods("a catalog optimizer", "fit_catalog")],
+        "n_models": [Interval("int", 2)],
+        "fraction": [Interval("real", 0, 1, low_open=True)],
+        "n_chunks": [Interval("int", 2)],
+        "inclusion": [Interval("real", 0, 1, low_open=True)],
+        "confidence": [Interval("real", 0, 1, low_open=True)],
+        "random_state": [None, Interval("int", 0),
+                         InstanceOf((np.random.Generator, np.random.BitGenerator,
+                                     np.random.SeedSequence, list, tuple, np.ndarray),
+                                    "a numpy Generator or seed")],
+        "n_jobs": [None, Interval("int")],
+        "sampling": [Options(SAMPLINGS)],
+        "aggregate": [Options(AGGREGATES)],
+        "progress": [Boolean()],
+    }
+
     def __init__(self, optimizer=None, n_models=20, fraction=0.7, n_chunks=20, inclusion=0.5,
                  confidence=0.95, random_state=0, n_jobs=None, sampling="subsamples",
                  aggregate="auto", progress=False):
@@ -122,21 +139,11 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
         self.progress = progress
 
     def _check_params(self):
-        for name in ("n_models", "n_chunks"):
-            check_option(name, getattr(self, name), "int", low=2)
-        for name in ("fraction", "inclusion", "confidence"):
-            check_option(name, getattr(self, name), "real", low=0, low_open=True, high=1)
-        if self.optimizer is not None:
-            check_instance("optimizer", self.optimizer, "a catalog optimizer", "fit_catalog")
-            if isinstance(self.optimizer, EnsembleOptimizer):
-                raise ValueError("optimizer: an EnsembleOptimizer cannot bag another "
-                                 "EnsembleOptimizer (n_models squared fits); bag its base "
-                                 "optimizer")
-        if self.n_jobs is not None:
-            check_option("n_jobs", self.n_jobs, "int")
-        check_option("progress", self.progress, "bool")
-        check_option("sampling", self.sampling, "choice", choices=SAMPLINGS)
-        check_option("aggregate", self.aggregate, "choice", choices=AGGREGATES)
+        validate_params(self)
+        if isinstance(self.optimizer, EnsembleOptimizer):
+            raise ValueError("optimizer: an EnsembleOptimizer cannot bag another "
+                             "EnsembleOptimizer (n_models squared fits); bag its base "
+                             "optimizer")
         base = self._base()
         if self.aggregate == "refit" and not catalog_tags(base).can_refit:
             raise ValueError("aggregate: 'refit' needs an optimizer that refits a support (tag "

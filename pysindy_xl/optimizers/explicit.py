@@ -10,7 +10,14 @@ import scipy.linalg
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.linear_model import Lasso, LassoCV
 
-from .._validation import check_instance, check_numeric_array, check_option
+from .._validation import (
+    Boolean,
+    HasMethods,
+    Interval,
+    Options,
+    check_numeric_array,
+    validate_params,
+)
 from ._base import CatalogOptimizer, warn_unexplained
 from .selection import select_support
 
@@ -230,6 +237,15 @@ class ExplicitOptimizer(CatalogOptimizer):
         """Explicit regression needs force columns."""
         return dataclasses.replace(super().catalog_tags(), requires_forces=True)
 
+    _parameter_constraints = {
+        "method": [Options(_METHODS), HasMethods("a method name or an estimator", "fit")],
+        "threshold": ["auto", Interval("real", 0, 1, high_open=True)],
+        "alpha": [Interval("real", 0)],
+        "refit": [Boolean()],
+        "max_iter": [Interval("int", 1)],
+        "select": [Options(("all", "friction"))],
+    }
+
     def __init__(self, method="threshold", threshold="auto", alpha=1e-4, refit=True,
                  max_iter=1000, select="all"):
         self.method = method
@@ -240,19 +256,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         self.select = select
 
     def _check_params(self):
-        if isinstance(self.method, str):
-            check_option("method", self.method, "choice", choices=_METHODS)
-        else:
-            check_instance("method", self.method, "a method name or an estimator", "fit")
-        if not (isinstance(self.threshold, str) and self.threshold == "auto"):
-            if isinstance(self.threshold, str):
-                raise ValueError(f"threshold: expected 'auto' or a number in [0, 1), got "
-                                 f"{self.threshold!r}")
-            check_option("threshold", self.threshold, "real", low=0, high=1, high_open=True)
-        check_option("alpha", self.alpha, "real", low=0)
-        check_option("refit", self.refit, "bool")
-        check_option("max_iter", self.max_iter, "int", low=1)
-        check_option("select", self.select, "choice", choices=("all", "friction"))
+        validate_params(self)
         if self.select == "friction" and not (isinstance(self.method, str)
                                               and self.method == "threshold"):
             raise ValueError(f"select: 'friction' needs method='threshold', got method="

@@ -11,7 +11,7 @@ import numpy as np
 import scipy.sparse.csgraph
 from sklearn.exceptions import ConvergenceWarning
 
-from .._validation import check_option
+from .._validation import Boolean, InstanceOf, Interval, Options, validate_params
 from ._base import CatalogOptimizer, coordinates_touched, warn_unexplained
 from ._sindy_pi import extract_laws, homothetic_groups, null_space_start, solve_cvxpy
 from ._sparse import column_norms, lasso_gram, null_vector, triangular_factor
@@ -133,6 +133,21 @@ class ImplicitOptimizer(CatalogOptimizer):
         return dataclasses.replace(super().catalog_tags(), uses_mass_matrices=True,
                                    uses_noise_draws=True, derivative_estimate="unbiased")
 
+    _parameter_constraints = {
+        "alpha": ["auto", Interval("real", 0, low_open=True)],
+        "solver": [Options(_SOLVERS)],
+        "cvxpy_solver": [None, InstanceOf(str, "a cvxpy solver name")],
+        "angle_tol": [Interval("real", 0, 90, low_open=True, high_open=True)],
+        "min_group_size": [Interval("int", 1)],
+        "min_membership": [Interval("real", 0, 1)],
+        "max_residual_ratio": [Interval("real", 1, allow_inf=True)],
+        "threshold": [Interval("real", 0, 1, high_open=True)],
+        "refit": [Boolean()],
+        "tol": [Interval("real", 0, low_open=True)],
+        "max_iter": [Interval("int", 1)],
+        "early_stopping": [Boolean()],
+    }
+
     def __init__(self, alpha="auto", solver="fista", cvxpy_solver=None, angle_tol=5.0,
                  min_group_size=2, min_membership=0.1, max_residual_ratio=10.0, threshold=1e-3,
                  refit=True, tol=1e-4, max_iter=20_000, early_stopping=True):
@@ -150,21 +165,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         self.early_stopping = early_stopping
 
     def _check_params(self):
-        check_option("solver", self.solver, "choice", choices=_SOLVERS)
-        if not (isinstance(self.alpha, str) and self.alpha == "auto"):
-            if isinstance(self.alpha, str):
-                raise ValueError(f"alpha: expected a positive number or 'auto', got {self.alpha!r}")
-            check_option("alpha", self.alpha, "real", low=0, low_open=True)
-        check_option("angle_tol", self.angle_tol, "real", low=0, high=90, low_open=True,
-                     high_open=True)
-        check_option("min_membership", self.min_membership, "real", low=0, high=1)
-        check_option("max_residual_ratio", self.max_residual_ratio, "real", low=1, allow_inf=True)
-        check_option("threshold", self.threshold, "real", low=0, high=1, high_open=True)
-        check_option("tol", self.tol, "real", low=0, low_open=True)
-        check_option("min_group_size", self.min_group_size, "int", low=1)
-        check_option("max_iter", self.max_iter, "int", low=1)
-        check_option("refit", self.refit, "bool")
-        check_option("early_stopping", self.early_stopping, "bool")
+        validate_params(self)
 
     def fit(self, X, y=None):
         """Find the sparse laws ``X @ xi = 0`` of a regression matrix.
@@ -181,7 +182,9 @@ class ImplicitOptimizer(CatalogOptimizer):
         self
         """
         problem = CatalogProblem.from_arrays(X, 1, [])
-        return self._fit(problem.theta, 1, problem.force_columns, None)
+        self._fit(problem.theta, 1, problem.force_columns, None)
+        self.n_features_in_ = problem.n_features
+        return self
 
     def _solve(self, problem):
         """Problem (1), or with noise moments the noise-ratio selection (laws with a mass matrix

@@ -9,7 +9,13 @@ import warnings
 import numpy as np
 from sklearn.base import clone
 
-from .._validation import UnexplainedCoordinateWarning, check_instance, check_option
+from .._validation import (
+    HasMethods,
+    Interval,
+    UnexplainedCoordinateWarning,
+    check_instance,
+    validate_params,
+)
 from ._base import CatalogOptimizer, pilot_optimizer, solve_problem
 from .implicit import ImplicitOptimizer, NoLawFoundError, coordinates_touched
 from .problem import balance_coordinates
@@ -109,13 +115,19 @@ class MixedOptimizer(CatalogOptimizer):
             uses_mass_matrices=any(tags.uses_mass_matrices for tags in parts),
             uses_noise_draws=any(tags.uses_noise_draws for tags in parts))
 
+    _parameter_constraints = {
+        "explicit_optimizer": [None, HasMethods("an optimizer", "fit_catalog")],
+        "implicit_optimizer": [None, HasMethods("an optimizer", "fit_catalog")],
+        "rtol": [Interval("real", 0, 1, high_open=True)],
+    }
+
     def __init__(self, explicit_optimizer=None, implicit_optimizer=None, rtol=1e-10):
         self.explicit_optimizer = explicit_optimizer
         self.implicit_optimizer = implicit_optimizer
         self.rtol = rtol
 
     def _check_params(self):
-        check_option("rtol", self.rtol, "real", low=0, high=1, high_open=True)
+        validate_params(self)
 
     def _sub_optimizers(self):
         from .explicit import ExplicitOptimizer
@@ -157,6 +169,7 @@ class MixedOptimizer(CatalogOptimizer):
         fitted = part.fit(X) if y is None else part.fit(X, y)
         self.mode_ = "implicit" if y is None else "explicit"
         self.coef_ = np.asarray(fitted.coef_, dtype=float).copy()
+        self.n_features_in_ = fitted.n_features_in_
         return self
 
     def _solve(self, problem):

@@ -8,7 +8,7 @@ import dataclasses
 import numpy as np
 from sklearn.base import clone
 
-from .._validation import check_instance, check_option
+from .._validation import HasMethods, InstanceOf, Interval, Options, validate_params
 from ..physical.sdp import consistent_least_squares
 from ._base import CatalogOptimizer, solve_problem, warn_unexplained
 from ._wrapping import WrappingOptimizer
@@ -90,6 +90,13 @@ class PhysicalOptimizer(WrappingOptimizer, CatalogOptimizer):
         return dataclasses.replace(catalog_tags(self._base()), requires_forces=True,
                                    can_refit=True, balances_rows=False)
 
+    _parameter_constraints = {
+        "optimizer": [None, HasMethods("a catalog optimizer", "fit_catalog")],
+        "base_parameters": [Options(_BASE_PARAMETERS)],
+        "tolerance": [Interval("real", 0)],
+        "solver": [None, InstanceOf(str, "a cvxpy solver name")],
+    }
+
     def __init__(self, optimizer=None, base_parameters="selected", tolerance=1e-8, solver=None):
         self.optimizer = optimizer
         self.base_parameters = base_parameters
@@ -97,15 +104,10 @@ class PhysicalOptimizer(WrappingOptimizer, CatalogOptimizer):
         self.solver = solver
 
     def _check_params(self):
-        if self.optimizer is not None:
-            check_instance("optimizer", self.optimizer, "a catalog optimizer", "fit_catalog")
-            if not catalog_tags(self.optimizer).requires_forces:
-                raise ValueError(f"optimizer: the terms must be selected by explicit "
-                                 f"regression, {type(self.optimizer).__name__} is not")
-        check_option("base_parameters", self.base_parameters, "choice", choices=_BASE_PARAMETERS)
-        check_option("tolerance", self.tolerance, "real", low=0)
-        if self.solver is not None and not isinstance(self.solver, str):
-            raise TypeError(f"solver: expected a cvxpy solver name, got {self.solver!r}")
+        validate_params(self)
+        if self.optimizer is not None and not catalog_tags(self.optimizer).requires_forces:
+            raise ValueError(f"optimizer: the terms must be selected by explicit "
+                             f"regression, {type(self.optimizer).__name__} is not")
 
     def _solve(self, problem):
         """Select with the base optimizer, then refit its terms under the constraints."""

@@ -8,7 +8,7 @@ import warnings
 
 import numpy as np
 
-from .._validation import check_option
+from .._validation import Interval, Options, validate_params
 from ._base import CatalogOptimizer, warn_unexplained
 from ._sparse import column_norms, null_vector, triangular_factor
 from .laws import UndeterminedLawWarning, normalize_law
@@ -74,13 +74,17 @@ class TotalLeastSquaresOptimizer(CatalogOptimizer):
         return dataclasses.replace(super().catalog_tags(), uses_mass_matrices=True,
                                    derivative_estimate="unbiased")
 
+    _parameter_constraints = {
+        "undetermined_ratio": [Interval("real", 1)],
+        "normalization": [Options(_NORMALIZATIONS)],
+    }
+
     def __init__(self, undetermined_ratio=3.0, normalization="dominant"):
         self.undetermined_ratio = undetermined_ratio
         self.normalization = normalization
 
     def _check_params(self):
-        check_option("undetermined_ratio", self.undetermined_ratio, "real", low=1)
-        check_option("normalization", self.normalization, "choice", choices=_NORMALIZATIONS)
+        validate_params(self)
 
     def _solve(self, problem):
         return self._solve_support(problem, np.ones(problem.n_features, dtype=bool))
