@@ -110,13 +110,34 @@ class ExternalForces(SymbolicLibrary):
                                           if matrix[c, k]) for c in range(len(tau))])
 
     def to_spec(self) -> dict:
-        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
+        """JSON-serializable description of this library, read back by :meth:`from_spec`.
+
+        Returns
+        -------
+        dict
+            ``{"type": spec_type, ...}``: the parameters as plain JSON values, terms in the
+            restricted grammar (:func:`~pysindy_xl.expressions.format_expression`).
+        """
         return {"type": self.spec_type,
                 "interlink": _interlink_matrix(self.interlink, self.coords.n).tolist()}
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
+        """The library a specification describes (the inverse of :meth:`to_spec`).
+
+        Parameters
+        ----------
+        spec : dict
+            The description; untrusted (from a file).
+        reader : SpecReader
+            Parses its parts within the loader's budget
+            (:class:`~pysindy_xl.feature_library.SpecReader`).
+
+        Returns
+        -------
+        ExternalForces
+            The library, not fitted.
+        """
         n = reader.coords.n
         return cls(reader.coords,
                    interlink=reader.matrix(spec, "interlink", (n, n), shape_name="(n, n)"))
