@@ -12,9 +12,22 @@ __all__ = ["fitted_state", "catalog_dynamics", "checked_dynamics"]
 
 
 def catalog_dynamics(library, coef, held):
-    """The identified equations in mass-matrix form (:class:`~pysindy_xl.dynamics.CatalogDynamics`
-    of ``library``, ``coef`` (F,) and the ``held`` coordinates); None when no identified term
-    contains an acceleration.
+    """The identified equations in mass-matrix form, or None.
+
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+        The catalog.
+    coef : array, shape (F,)
+        Its coefficients.
+    held : bool array, shape (n,)
+        Coordinates held still (their equation becomes ``qdd_c = 0``).
+
+    Returns
+    -------
+    CatalogDynamics or None
+        :class:`~pysindy_xl.dynamics.CatalogDynamics`; None when no identified term contains
+        an acceleration.
     """
     if not library.involves(library.coords.qdd)[:, np.flatnonzero(coef)].any():
         return None
@@ -22,11 +35,28 @@ def catalog_dynamics(library, coef, held):
 
 
 def checked_dynamics(library, coef, held, states):
-    """Orient the laws no force scales, then measure ``M(q)`` on the training ``states``.
+    """Orient the laws no force scales, then measure ``M(q)`` on the training states.
 
-    Returns ``(coef, dynamics, check)``: ``coef`` with the laws of negative definite mass matrix
-    flipped (:func:`~pysindy_xl.fit.diagnostics.orient_free_laws`), the dynamics (or None) and
-    :func:`~pysindy_xl.fit.diagnostics.mass_matrix_report` (None without dynamics).
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+        The catalog.
+    coef : array, shape (F,)
+        Its coefficients.
+    held : bool array, shape (n,)
+        Coordinates held still.
+    states : ndarray, shape (S, 4n + 1)
+        The training states.
+
+    Returns
+    -------
+    coef : ndarray, shape (F,)
+        With the laws of negative definite mass matrix flipped
+        (:func:`~pysindy_xl.fit.diagnostics.orient_free_laws`).
+    dynamics : CatalogDynamics or None
+        The identified dynamics.
+    check : dict or None
+        :func:`~pysindy_xl.fit.diagnostics.mass_matrix_report` (None without dynamics).
     """
     dynamics = catalog_dynamics(library, coef, held)
     if dynamics is None:
@@ -45,9 +75,22 @@ def checked_dynamics(library, coef, held, states):
 
 
 def fitted_state(library, problem, optimizer) -> dict:
-    """The fitted attributes of :class:`~pysindy_xl.XLSINDy` (name -> value) from a solved
-    ``problem`` (built by :func:`~pysindy_xl.fit.build_problem`), its fitted ``library`` and
-    ``optimizer``.
+    """The fitted attributes of :class:`~pysindy_xl.XLSINDy` from a solved problem.
+
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+        The catalog.
+    problem : CatalogProblem
+        The problem (built by :func:`~pysindy_xl.fit.build_problem`).
+    optimizer : catalog optimizer
+        Fitted on ``problem``.
+
+    Returns
+    -------
+    dict of str to object
+        Attribute name (``coef_``, ``dynamics_``, ``feature_library_``...) to value, as
+        documented by :class:`~pysindy_xl.XLSINDy`.
     """
     origin = problem.catalog_map
     names = library.get_feature_names()
