@@ -90,8 +90,12 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
     Attributes
     ----------
     feature_library_ : CatalogRepartition
+        The fitted catalog (a clone of ``feature_library``, a force column added when absent).
     optimizer_ : fitted catalog optimizer
+        The optimizer that solved the regression (a clone of ``optimizer`` or the default).
     coef_ : ndarray, shape (F,)
+        One coefficient per catalog feature (:meth:`get_feature_names`), zero for the
+        features left out; the identified equations are ``Theta(q, qd, qdd, tau) @ coef_ = 0``.
     dropped_features_ : dict of str to str
         Features removed before regression, with the reason.
     still_coordinates_ : list of str
@@ -99,9 +103,11 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
     dynamics_ : CatalogDynamics
         The identified equations in mass-matrix form (``None`` if they contain no acceleration).
     n_coordinates_ : int
+        Number of coordinates ``n``.
     n_samples_ : int
         Samples used in the fit, all trajectories together.
     formulation_ : {"strong", "weak"}
+        The formulation used (``formulation`` resolved).
     weak_info_ : dict or None
         Weak form: half-width, test functions per piece, noise estimate, ``time_grid``,
         ``gaps`` and ``segments`` (:func:`~pysindy_xl.weak.weak_regression`).

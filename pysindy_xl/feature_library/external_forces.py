@@ -38,8 +38,28 @@ def _exact(value: float) -> sp.Expr:
 
 
 def signed_indices_to_interlink(indices, n: int) -> np.ndarray:
-    """Interlink matrix from per-coordinate lists of signed 1-based input indices:
-    ``[[1], [-1, 2]]`` gives coordinate 0 ``u_1`` and coordinate 1 ``u_2 - u_1`` (xlsindy's).
+    """Interlink matrix from per-coordinate lists of signed 1-based input indices.
+
+    ``[[1], [-1, 2]]`` gives coordinate 0 ``u_1`` and coordinate 1 ``u_2 - u_1`` (xlsindy's
+    convention).
+
+    Parameters
+    ----------
+    indices : sequence of sequence of int
+        Per coordinate, the signed 1-based indices of the inputs acting on it.
+    n : int
+        Number of coordinates (and inputs).
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        ``interlink[c, k] = sign`` for each signed index ``k + 1`` of coordinate ``c``.
+
+    Examples
+    --------
+    >>> signed_indices_to_interlink([[1], [-1, 2]], 2)
+    array([[ 1.,  0.],
+           [-1.,  1.]])
     """
     if not isinstance(indices, (list, tuple)) or len(indices) != n:
         raise ValueError(f"indices: expected one list of signed input indices per coordinate ({n})")
@@ -91,9 +111,25 @@ class ExternalForces(SymbolicLibrary):
 
     @classmethod
     def from_signed_indices(cls, coords: Coordinates, indices) -> ExternalForces:
-        """Build from per-coordinate lists of signed 1-based input indices
+        """Build from per-coordinate lists of signed 1-based input indices (xlsindy's convention).
+
+        ``[[1], [-1, 2]]`` gives coordinate 0 the force ``u_1`` and coordinate 1 ``u_2 - u_1``
         (:func:`signed_indices_to_interlink`).
 
+        Parameters
+        ----------
+        coords : Coordinates
+            The generalized coordinates.
+        indices : sequence of sequence of int
+            Per coordinate, the signed 1-based indices of the inputs acting on it.
+
+        Returns
+        -------
+        ExternalForces
+            The library with the corresponding ``interlink``.
+
+        Examples
+        --------
         >>> import pysindy_xl as px
         >>> c = px.Coordinates(["a", "b"])
         >>> px.ExternalForces.from_signed_indices(c, [[1, -2], [2]]).interlink

@@ -117,6 +117,7 @@ class CatalogRepartition(SymbolicLibrary):
 
     @property
     def coords(self):
+        """The coordinates shared by all the libraries (those of the first)."""
         return self.flat_libraries()[0].coords
 
     @property
