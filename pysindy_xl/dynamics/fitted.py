@@ -342,14 +342,20 @@ class DynamicsMixin:
         save_model(self, path)
 
     def to_mjcf(self, path, *, template) -> dict:
-        """Write the identified robot as an MJCF file that MuJoCo simulates.
+        r"""Write the identified robot as an MJCF file that MuJoCo simulates.
 
         For a model fitted with the kinematic catalog of an MJCF (or URDF) system
         (:func:`~pysindy_xl.kinematic_catalog`): the identified base parameters ``beta`` are
-        realized by the physically consistent rigid-body parameters ``pi`` nearest to them
-        (each body's pseudo-inertia matrix positive semidefinite), solving
-        ``min |C pi - beta|`` with ``C`` the catalog's combination matrix
-        (:mod:`pysindy_xl.export.mjcf`). Bodies get these inertials, joints their armature,
+        realized by physically consistent rigid-body parameters ``pi``
+        (:mod:`pysindy_xl.export.mjcf`),
+
+        .. math:: \min_\pi \; \frac{\|C \pi - \beta\|}{\|\beta\|}
+                  + \epsilon \frac{\|\pi - \pi_0\|^2}{\|\pi_0\|^2}
+                  \quad \text{s.t.} \quad J_b(\pi) \succeq 0, \; a_j \ge 0,
+
+        with ``C`` the catalog's combination matrix, ``J_b`` each body's pseudo-inertia,
+        ``a_j`` the armatures, ``pi_0`` the template's parameters and ``epsilon = 1e-6``.
+        Bodies get these inertials, joints their armature,
         ``damping`` (viscous friction) and ``frictionloss`` (Coulomb friction); everything else
         (geometry, kinematic tree, actuators) is copied from ``template``.
 
