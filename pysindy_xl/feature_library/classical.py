@@ -80,6 +80,7 @@ class ClassicalLibrary(SymbolicLibrary):
     Parameters
     ----------
     coords : Coordinates
+        The generalized coordinates.
     terms : sequence of sympy.Expr or pysindy.BaseFeatureLibrary
         Terms in ``coords.variables``; a pysindy library is evaluated on ``(q, qd)``
         (:func:`pysindy_library_terms`).
@@ -89,7 +90,9 @@ class ClassicalLibrary(SymbolicLibrary):
     Attributes
     ----------
     terms_ : list of sympy.Expr
+        The terms, checked (a pysindy library translated).
     mask_ : ndarray of bool, shape (n_terms, n)
+        The equations each term enters.
 
     Examples
     --------

@@ -82,6 +82,7 @@ class ExternalForces(SymbolicLibrary):
     Parameters
     ----------
     coords : Coordinates
+        The generalized coordinates.
     interlink : array, shape (n, n), optional
         Generalized force ``= interlink @ u`` for the measured inputs ``u`` (several signed
         inputs may act on one coordinate, e.g. a motor between two links). Default: identity.
@@ -90,6 +91,7 @@ class ExternalForces(SymbolicLibrary):
     Attributes
     ----------
     interlink_ : ndarray, shape (n, n)
+        The interlink matrix used.
 
     Examples
     --------

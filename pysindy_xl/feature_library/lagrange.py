@@ -98,14 +98,21 @@ def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:
 
 
 class LagrangeLibrary(SymbolicLibrary):
-    """Candidate Lagrangian terms, each turned into its Euler-Lagrange column.
+    r"""Candidate Lagrangian terms, each turned into its Euler-Lagrange column.
 
-    Term ``L_k`` contributes ``d/dt dL_k/dqd_i - dL_k/dq_i`` to the equation of every coordinate
-    ``i``: one coefficient per term, shared by all equations.
+    Term ``L_k`` contributes its Euler-Lagrange expression to the equation of every coordinate
+    ``i``, one coefficient ``xi_k`` per term shared by all equations:
+
+    .. math:: E_{ik} = \frac{d}{dt}\frac{\partial L_k}{\partial \dot q_i}
+              - \frac{\partial L_k}{\partial q_i}, \qquad
+              \sum_k \xi_k E_{ik} = \tau_i \;\text{ for } L = \sum_k \xi_k L_k
+
+    (:func:`euler_lagrange`; with the force column's coefficient -1).
 
     Parameters
     ----------
     coords : Coordinates
+        The generalized coordinates.
     terms : sequence of sympy.Expr
         Candidate terms in ``coords.q``, ``coords.qd`` and ``coords.t`` (e.g. from
         :func:`pysindy_xl.products`).
@@ -113,6 +120,7 @@ class LagrangeLibrary(SymbolicLibrary):
     Attributes
     ----------
     terms_ : list of sympy.Expr
+        The candidate terms, checked.
     zero_terms_ : list of int
         Terms whose column is identically zero (constants, total time derivatives): never
         identifiable.
