@@ -221,6 +221,7 @@ def scoring_derivatives(t, x, smoother=None, max_frequency: float = MAX_FREQUENC
     Returns
     -------
     q, qd, qdd : ndarray, shape (N, n)
+        Smoothed positions and their first two derivatives.
 
     Examples
     --------

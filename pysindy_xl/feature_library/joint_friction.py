@@ -110,6 +110,7 @@ class JointFrictionLibrary(SymbolicLibrary):
     joints_ : list of str
         The joint names.
     weights_ : ndarray, shape (n, n_joints)
+        The generalized force of a unit torque of each joint.
 
     Examples
     --------
