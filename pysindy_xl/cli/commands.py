@@ -41,6 +41,26 @@ def run_demo(args) -> dict:
     against a fresh trajectory, print; return the report written to ``args.out/report.json``
     (beside ``validation.png`` unless ``--no-plots``).
 
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of ``pysindy-xl demo`` (:func:`build_parser`).
+
+    Returns
+    -------
+    dict
+        The report written to ``args.out/report.json``: the system and options, the data,
+        the features and coefficients (``true_coefficients`` where known), the physical
+        parameters, the equations, the ``validation`` metrics, the ``physics`` check and
+        the timings.
+
+    Raises
+    ------
+    CLIError
+        On a bad input or a failed step.
+
+    Examples
+    --------
     Half a second of cart-pole data and a short validation (the kinematic catalog):
 
     >>> import tempfile
@@ -238,6 +258,23 @@ def run_identify(args):
     (solver from its forces with ``--solver auto``), print the model and its quality, score
     held-out torques, save it with ``--out``; return the fitted model.
 
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of ``pysindy-xl identify`` (:func:`build_parser`).
+
+    Returns
+    -------
+    pysindy_xl.XLSINDy
+        The fitted model.
+
+    Raises
+    ------
+    CLIError
+        On a bad input or a failed step.
+
+    Examples
+    --------
     >>> import pathlib, tempfile
     >>> from pysindy_xl.mujoco import generate_dataset
     >>> data = generate_dataset("cart-pole", n_trajectories=1, duration=0.5, seed=0,
@@ -454,6 +491,23 @@ def _save_atomically(model, path):
 def run_generate(args):
     """Run ``pysindy-xl generate``; returns the NPZ path written (the JSON beside it).
 
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of ``pysindy-xl generate`` (:func:`build_parser`).
+
+    Returns
+    -------
+    pathlib.Path
+        The NPZ file written.
+
+    Raises
+    ------
+    CLIError
+        On a bad input.
+
+    Examples
+    --------
     >>> import pathlib, tempfile
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     args = build_parser().parse_args(["generate", "cart-pole", f"{tmp}/data.npz",
@@ -477,6 +531,18 @@ def main(argv=None) -> int:
     returns the exit status: 0 on success, 1 on an error (printed on stderr, no traceback),
     2 on a usage error.
 
+    Parameters
+    ----------
+    argv : list of str, default=None
+        The arguments; None: ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        The exit status: 0 on success, 1 on an error, 2 on a usage error.
+
+    Examples
+    --------
     >>> import contextlib, sys
     >>> with contextlib.redirect_stderr(sys.stdout):
     ...     status = main(["identify", "missing.npz", "--system", "cart-pole"])

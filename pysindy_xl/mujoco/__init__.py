@@ -45,9 +45,19 @@ __all__ = ["import_mujoco", *_LAZY]
 def import_mujoco():
     """The ``mujoco`` module, imported on first use: the one way this package imports MuJoCo.
 
-    Raises :class:`pysindy_xl._optional.MissingExtraError` (an ImportError naming the
-    ``pysindy-xl[mujoco]`` extra) when MuJoCo is not installed.
+    Returns
+    -------
+    module
+        The ``mujoco`` package.
 
+    Raises
+    ------
+    ImportError
+        ``pysindy_xl._optional.MissingExtraError``, naming the ``pysindy-xl[mujoco]`` extra,
+        when MuJoCo is not installed.
+
+    Examples
+    --------
     >>> from pysindy_xl.mujoco import import_mujoco
     >>> hasattr(import_mujoco(), "MjModel")
     True

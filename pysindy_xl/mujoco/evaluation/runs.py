@@ -14,7 +14,7 @@ from ..systems.actuation import start_on_reference
 from ..systems.registry import get_system
 from ..systems.tracking import tracked_model
 
-__all__ = ["validation_trajectory", "mujoco_closed_loop"]
+__all__ = ["validation_trajectory"]
 
 
 def validation_trajectory(system, duration: float = 10.0, forcing: str = "explicit",
@@ -91,7 +91,27 @@ def mujoco_closed_loop(model, system, trajectory, substeps, required):
     """``(states, failure)`` of the identified model stepped by MuJoCo under the MJCF's
     actuators (and the reference's tracking controller) and the reference's controls (the
     ``mujoco`` simulator of :mod:`~pysindy_xl.mujoco.evaluation.validation`), or None where
-    MuJoCo cannot state the model (a ValueError when ``required``)."""
+    MuJoCo cannot state the model (a ValueError when ``required``).
+
+    Parameters
+    ----------
+    model : pysindy_xl.XLSINDy
+        The identified model.
+    system : MuJoCoSystem
+        The system whose MJCF actuators drive the model.
+    trajectory : Trajectory
+        The reference, with its controls in ``info["signals"]``.
+    substeps : int
+        MuJoCo steps per sample.
+    required : bool
+        Raise a ValueError where MuJoCo cannot state the model, instead of returning None.
+
+    Returns
+    -------
+    tuple or None
+        ``(states, failure)``: states (k, 2n) and why the run stopped early (or None); None
+        where MuJoCo cannot state the model.
+    """
     from ...export.mjcf import identified_mj_model
     from .. import import_mujoco
     mujoco = import_mujoco()

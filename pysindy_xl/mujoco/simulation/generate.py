@@ -32,10 +32,9 @@ from .integration import (
 )
 from .signals import CONTROLS, _fraction, actuator_signals, motor_tracking
 
-__all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "actuator_signals",
-           "noise_levels", "NOISE_KEYS", "NOISE_MODELS",
-           "ConstraintWarning", "actuator_force_function", "faithful_integrator", "INTEGRATORS",
-           "UnstableSimulationError", "choose_integration", "CONTROLS"]
+__all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "noise_levels", "NOISE_KEYS",
+           "NOISE_MODELS", "ConstraintWarning", "INTEGRATORS", "UnstableSimulationError",
+           "choose_integration", "CONTROLS", "actuator_force_function"]
 
 
 #: Kinds of constraint rows (:func:`_constraint_kinds`).
@@ -231,6 +230,18 @@ def faithful_integrator(model) -> str | None:
 
     None to keep the model's.
 
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model.
+
+    Returns
+    -------
+    str or None
+        The integrator name, or None to keep the model's.
+
+    Examples
+    --------
     >>> from pysindy_xl.mujoco import get_system
     >>> print(faithful_integrator(get_system("cart-pole").mj_model()))  # already RK4
     None
@@ -240,7 +251,17 @@ def faithful_integrator(model) -> str | None:
 
 
 class ConstraintWarning(UserWarning):
-    """Joint limits, contacts or equality constraints act on much of the generated data."""
+    """Joint limits, contacts or equality constraints act on much of the generated data.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     warnings.warn("joint limits act on 40 % of the samples", ConstraintWarning)
+    >>> issubclass(caught[0].category, UserWarning)
+    True
+    """
 
 
 def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,

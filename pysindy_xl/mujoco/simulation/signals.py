@@ -80,18 +80,30 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
         Gives the force amplitudes and the default actuators of the ``mixed`` mode.
     model : mujoco.MjModel
         The compiled model, whose actuators get the signals.
-    forcing, actuators
-        As in :func:`generate_dataset`.
+    forcing : {"implicit", "explicit", "mixed"}
+        As in :func:`~pysindy_xl.mujoco.generate_dataset`.
     rng : numpy.random.Generator
-    n_components, max_frequency
-        Sinusoids per signal and the highest frequency (Hz).
+        The random generator.
+    actuators : sequence of str, default=None
+        As in :func:`~pysindy_xl.mujoco.generate_dataset`.
+    n_components : int, default=6
+        Sinusoids per signal.
+    max_frequency : float, default=1.5
+        The highest frequency (Hz).
+    amplitude_scale : float, default=1.0
+        Multiplies ``system.force_amplitudes`` for actuators without ``ctrlrange``.
     amplitude : float, optional
         Peak as a fraction of the ``ctrlrange`` half-width, in (0, 1]; also multiplies the
         others. Default: 0.5 of the range (``TRACKED_AMPLITUDE`` for tracked motors), 1 else.
-    backoff : float, default 1.0
+    backoff : float, default=1.0
         Multiplies every amplitude.
     tracking : dict, optional
         The controller of :func:`motor_tracking` when ``model`` is the tracked model.
+
+    Returns
+    -------
+    SumOfSinusoids or None
+        One signal per actuator, or None with implicit forcing.
 
     Examples
     --------
@@ -150,6 +162,31 @@ def motor_tracking(system, model, forcing: str = "explicit", actuators=None,
 
     The paper's pendulums have no joint limits: their motors are driven open loop.
 
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        The system.
+    model : mujoco.MjModel
+        The compiled model.
+    forcing : str, default="explicit"
+        As in :func:`~pysindy_xl.mujoco.generate_dataset`.
+    actuators : sequence of str, default=None
+        As in :func:`~pysindy_xl.mujoco.generate_dataset`.
+    amplitude_scale : float, default=1.0
+        As in :func:`actuator_signals`.
+    amplitude : float, default=None
+        As in :func:`actuator_signals`.
+    control : {"auto", "open-loop", "tracking"}, default="auto"
+        How plain torque motors are driven (see above).
+
+    Returns
+    -------
+    dict or None
+        The controller of :func:`~pysindy_xl.mujoco.systems.tracking.tracking_controller`, or
+        None when the motors are driven open loop.
+
+    Examples
+    --------
     >>> from pysindy_xl.mujoco import get_system
     >>> system = get_system("double-pendulum")
     >>> print(motor_tracking(system, system.mj_model()))
