@@ -9,7 +9,7 @@ Arms and logs (``benchmarks/data/real/``; sources, licences and columns in its R
   UR5, see the data README) at about 100 Hz with jittered stamps (2-13 ms): one 56 s run
   identifies, a second 56 s run with other harmonics is predicted. Torque is
   ``K_j * current_j`` with the controller's own constants, read off the identification run's
-  target torque and target current (``real_payload.controller_constants``); every method sees
+  target torque and target current (:func:`controller_constants`); every method sees
   the same torques. Robot description: ``ur10e.urdf`` (ros-industrial, meshes removed).
 
 Methods, each on the same training samples:
@@ -56,25 +56,40 @@ DATA = pathlib.Path(__file__).parent / "data" / "real"
 RESULTS = pathlib.Path(__file__).parent / "results"
 
 
-def _load(name):
+def load_log(name):
+    """The arrays of the log ``name`` (an NPZ of ``benchmarks/data/real``)."""
     with np.load(DATA / f"{name}.npz") as f:
         return {k: f[k] for k in f.files}
 
 
 def kinova():
     """Training and held-out ``(t, q, tau)`` of the Kinova Gen3 log, and its URDF."""
-    run = _load("kinova_gen3_quadratic")
+    run = load_log("kinova_gen3_quadratic")
     cut = int(len(run["t"]) * 2 / 3)
     train = tuple(run[k][:cut] for k in ("t", "q", "tau"))
     test = tuple(run[k][cut:] for k in ("t", "q", "tau"))
     return train, test, DATA / "gen3.urdf"
 
 
+def controller_constants(run):
+    """Per joint, the factor from current to torque that the robot's controller uses.
+
+    The log holds the controller's target torque and the target current it commands for it;
+    least squares of the target current on the target torque plus viscous, Coulomb and offset
+    columns (the controller's friction compensation) gives ``1 / K_j``.
+    """
+    qd, torque, current = run["qd"], run["target_torque"], run["target_current"]
+    constants = []
+    for j in range(qd.shape[1]):
+        columns = np.column_stack([torque[:, j], qd[:, j], np.sign(qd[:, j]),
+                                   np.ones(len(qd))])
+        constants.append(1.0 / np.linalg.lstsq(columns, current[:, j], rcond=None)[0][0])
+    return np.array(constants)
+
+
 def ur10e():
     """Training and held-out ``(t, q, tau)`` of the UR10e logs, and its URDF."""
-    from real_payload import controller_constants
-
-    train, test = _load("ur5_14harm50sec"), _load("ur5_15harm50sec")
+    train, test = load_log("ur5_14harm50sec"), load_log("ur5_15harm50sec")
     constants = controller_constants(train)
     return ((train["t"], train["q"], train["current"] * constants),
             (test["t"], test["q"], test["current"] * constants), DATA / "ur10e.urdf")

@@ -386,8 +386,8 @@ def _mjcf_metrics(model, truth, fresh, limits, rng_seed=0):
 
 def run(arm, level, seed, method):
     import pysindy_xl as px
+    from pysindy_xl.fitted.equations import physical_parameters
     from pysindy_xl.mujoco import MJCFSystem, kinematic_catalog
-    from pysindy_xl.report.equations import physical_parameters
 
     system = MJCFSystem(arm_mjcf(arm))
     data = _data(system, level, seed)

@@ -35,7 +35,7 @@ from .grid import (
     all_configurations,
     config_label,
 )
-from .isolation import _ISOLATIONS
+from .isolation import ISOLATIONS
 from .records import STATUSES
 
 __all__ = ["add_parser", "build_parser", "main", "run_benchmark"]
@@ -116,7 +116,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         help="run again the runs whose recorded status is one of these")
     parser.add_argument("--limit", type=int, default=None,
                         help="run at most this many pending runs, then stop")
-    parser.add_argument("--isolation", choices=_ISOLATIONS, default="auto",
+    parser.add_argument("--isolation", choices=ISOLATIONS, default="auto",
                         help="how the time limit is enforced (default: a forked process per run)")
     parser.add_argument("--fresh", action="store_true",
                         help="start over: existing records are renamed records.TIME.jsonl "

@@ -15,7 +15,7 @@ from .records import base_record, failed_record, json_finite
 
 __all__ = ["RunTimeout", "blas_thread_limit"]
 
-_ISOLATIONS = ("auto", "process", "signal", "none")
+ISOLATIONS = ("auto", "process", "signal", "none")
 
 
 class RunTimeout(Exception):
@@ -41,8 +41,8 @@ def resolve_isolation(isolation: str) -> str:
     ValueError
         When ``isolation`` is unknown.
     """
-    if isolation not in _ISOLATIONS:
-        raise ValueError(f"isolation: expected one of {_ISOLATIONS}, got {isolation!r}")
+    if isolation not in ISOLATIONS:
+        raise ValueError(f"isolation: expected one of {ISOLATIONS}, got {isolation!r}")
     if isolation != "auto":
         return isolation
     import multiprocessing

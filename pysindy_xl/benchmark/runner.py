@@ -93,8 +93,8 @@ def trajectory_data(spec: TrajectorySpec, n_trajectories: int, duration: float,
         Time spent simulating.
     """
     from ..data import Dataset, add_noise
+    from ..evaluation.validation import validation_trajectory
     from ..mujoco import generate_dataset
-    from ..mujoco.evaluation.validation import validation_trajectory
     start = time.perf_counter()
     system = system_for(spec)
     motion_seed = _seed(spec.system, spec.friction, spec.forcing, spec.seed)
@@ -212,7 +212,7 @@ def execute_task(task: Task, settings: GridSettings, deadline: float | None = No
 
 def _execute(task, settings, deadline, stage) -> dict:
     from ..dynamics import DynamicsError
-    from ..mujoco.evaluation.validation import validate_model
+    from ..evaluation.validation import validate_model
     record = base_record(task, settings)
     spec = task.trajectory
     stage("generate")

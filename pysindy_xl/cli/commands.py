@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from ..quality import fit_quality, plot_identification, quality_lines
+from ..evaluation.quality import fit_quality, plot_identification, quality_lines
 from ..registry import json_finite
 from .parser import build_parser
 from .steps import (
@@ -125,7 +125,7 @@ def run_demo(args) -> dict:
     files = {}
     start = time.perf_counter()
     if not args.no_plots and result is not None:
-        from pysindy_xl.mujoco.evaluation.plots import plot_validation
+        from pysindy_xl.evaluation.plots import plot_validation
         path = os.path.join(args.out, "validation.png")
         plot_validation(result, path, model.get_feature_names(), model.coefficients(), truth,
                         title=f"{display_name(system)} ({args.catalog} catalog, {solver} solver)")
@@ -152,7 +152,7 @@ def run_demo(args) -> dict:
               f"{coefficient_summary['true_terms']} true, max error "
               f"{coefficient_summary['max_relative_error']:.2g} (relative to the largest)")
     timings["total"] = sum(timings.values())
-    from ..report.equations import prints_equations  # sympy: not imported by --help
+    from ..fitted.equations import prints_equations  # sympy: not imported by --help
     short = prints_equations(model)
     report = {
         "system": system.name,
@@ -192,7 +192,7 @@ def run_demo(args) -> dict:
 def _validate(model, system, args):
     """``(ValidationResult, None)`` against a fresh MuJoCo run, or ``(None, reason)``."""
     from pysindy_xl.dynamics import DynamicsError
-    from pysindy_xl.mujoco.evaluation.validation import validate_model
+    from pysindy_xl.evaluation.validation import validate_model
     try:
         return validate_model(model, system, duration=args.validation_duration,
                               forcing=args.forcing, actuators=args.actuators,
@@ -226,7 +226,7 @@ def _validation_line(result, failure, args) -> str:
 def _physics(model, system, args):
     """The identified mass matrix and unforced dynamics against MuJoCo's, or None."""
     from pysindy_xl.dynamics import DynamicsError
-    from pysindy_xl.mujoco.evaluation.physics import compare_physics
+    from pysindy_xl.evaluation.physics import compare_physics
     try:
         return compare_physics(model, system, seed=args.seed)
     except (DynamicsError, ValueError, TypeError, np.linalg.LinAlgError):

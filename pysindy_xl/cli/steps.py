@@ -189,7 +189,7 @@ def data_lines(system, dataset):
              f"= {period * 1e3:g} ms"]
     integration = meta.get("integration")
     if integration and getattr(system, "mj_model", None) is not None:
-        from pysindy_xl.mujoco.simulation.generate import INTEGRATORS
+        from pysindy_xl.simulation.generate import INTEGRATORS
         authored = int(system.mj_model().opt.integrator)
         if INTEGRATORS.get(integration["integrator"]) != authored or integration["substeps"] > 1:
             lines.append(f"  integrated with {integration['reason']}")
@@ -519,12 +519,12 @@ def model_lines(model, truth=None):
         The lines printed.
     """
     from pysindy_xl.fit.still import held_note
-    from pysindy_xl.report.equations import (
-        has_parameter_map,
+    from pysindy_xl.fitted.equations import (
         parameter_lines,
         physical_parameters,
         prints_equations,
     )
+    from pysindy_xl.physical.structure import has_parameter_map
     lines = []
     if has_parameter_map(model.feature_library_):
         reference = (None if truth is None

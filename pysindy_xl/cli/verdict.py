@@ -117,7 +117,7 @@ def held_out_verdict(args, model, system, arguments, load, progress):
     CLIError
         When the held-out data do not match or the cross-validation fails.
     """
-    from pysindy_xl.held_out import blocked_cross_validation
+    from pysindy_xl.evaluation.held_out import blocked_cross_validation
     if args.validate:
         data = validation_dataset(args, system, load)
         if tuple(data.coordinate_names) != tuple(model.feature_library_.coords.names):

@@ -87,7 +87,7 @@ def write_mjcf(catalog, pi, friction, path, joint_friction=None) -> str:
     str
         The MJCF text written.
     """
-    from ..mujoco import import_mujoco
+    from .._optional import import_mujoco
     mujoco = import_mujoco()
 
     system = catalog.system
@@ -144,7 +144,7 @@ def _principal_axes(inertia):
     """``(quaternion, diagonal)`` of a symmetric inertia ``R diag(d) R^T`` (the form every MJCF
     template can take); moments are raised to a billionth of the largest, since MuJoCo refuses
     zero moments on a moving body."""
-    from ..mujoco import import_mujoco
+    from .._optional import import_mujoco
     mujoco = import_mujoco()
 
     moments, axes = np.linalg.eigh((inertia + inertia.T) / 2)
@@ -181,7 +181,8 @@ def to_mjcf(model, path, template) -> dict:
     ValueError
         When ``template`` is None or does not match the model's catalog.
     """
-    from ..mujoco import MJCFSystem, kinematic_catalog
+    from ..mujoco.catalogs.kinematic import kinematic_catalog
+    from ..mujoco.systems.mjcf import MJCFSystem
     if template is None:
         raise ValueError("template: the MJCF file (or MuJoCo system) whose kinematic tree "
                          "the model was identified on is needed to place the inertials")
@@ -248,9 +249,10 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     >>> reason, round(float(mj_model.dof_damping[0]), 3), round(float(mj_model.jnt_stiffness[0]), 3)
     (None, 0.1, 0.5)
     """
-    from ..feature_library import stack_variables
-    from ..mujoco import import_mujoco, kinematic_catalog
+    from .._optional import import_mujoco
+    from ..mujoco.catalogs.kinematic import kinematic_catalog
     from ..mujoco.systems.friction import sliding_velocities
+    from ..symbols import stack_variables
     mujoco = import_mujoco()
 
     try:

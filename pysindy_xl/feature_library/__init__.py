@@ -3,7 +3,8 @@
 See :mod:`pysindy_xl.feature_library._base` for the layout of the stacked regression matrix.
 """
 
-from ._base import LIBRARY_TYPES, SymbolicLibrary, stack_variables
+from ..symbols import stack_variables
+from ._base import LIBRARY_TYPES, SymbolicLibrary
 
 # used across the package, importable from here, not in __all__ (internals)
 from ._base import compile_entries as compile_entries

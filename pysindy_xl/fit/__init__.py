@@ -2,7 +2,7 @@
 
 One fit of :class:`~pysindy_xl.XLSINDy` goes one way through here::
 
-    check_fit   ->  build_problem  ->  choose_noise_model  ->  solve      ->  fitted_state
+    check_fit   ->  build_problem  ->  choose_noise_model  ->  solve      ->  wrap
     arrays          CatalogProblem     problem, weighting      optimizer      attributes
 
 (:mod:`~pysindy_xl.fit.trajectories`, :mod:`~pysindy_xl.fit.build` with
@@ -26,7 +26,6 @@ from .trajectories import differentiation_function as differentiation_function
 from .trajectories import estimator_trajectories as estimator_trajectories
 from .trajectories import trajectory_data as trajectory_data
 from .wrap import catalog_dynamics as catalog_dynamics
-from .wrap import fitted_state as fitted_state
 
 # the other stages of XLSINDy.fit above are importable from here, not public (not in __all__)
 __all__ = ["build_problem", "solve", "check_fit", "resolve_formulation", "CatalogMap",

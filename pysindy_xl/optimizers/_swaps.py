@@ -10,7 +10,7 @@ import scipy.linalg
 
 def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2):
     """The exchange ``(c, j)`` (column ``c`` in for the ``j``-th selected) lowering the residual
-    most, or ``(None, None)``; arrays as computed in :func:`_swap_search`.
+    most, or ``(None, None)``; arrays as computed in :func:`swap_search`.
     """
     allowed = usable.copy()
     allowed[support] = False
@@ -25,12 +25,12 @@ def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y
     return c, j
 
 
-def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
+def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
     """Best-improvement 1-swap search on a reduced system: with ``x_S = Q R``, dropping column
     ``j`` (direction ``u_j ~ Q R^-T e_j``) adds ``(u_j . y)^2`` to the residual and leaves
     candidate ``c`` the component ``C_c + u_j (u_j . x_c)``: all ``k x F`` gains from the one
     product ``Q^T x`` (cost ``O(n k F)`` a step).
-    ``rss`` and ``previous`` continue from a first step of :func:`_first_swaps`.
+    ``rss`` and ``previous`` continue from a first step of :func:`first_swaps`.
     """
     support = np.asarray(support, dtype=int)
     norms2 = np.sum(xs**2, axis=0)
@@ -63,8 +63,8 @@ def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
     return np.sort(support)
 
 
-def _first_swaps(xs, y, usable, order, sizes):
-    """The first step of :func:`_swap_search` from every ``order[:k]``, ``k`` in ``sizes``:
+def first_swaps(xs, y, usable, order, sizes):
+    """The first step of :func:`swap_search` from every ``order[:k]``, ``k`` in ``sizes``:
     ``{k: (rss, swapped support or None)}``, from one complete QR of ``x[:, order]`` (sizes
     past a zero pivot left out).
     """

@@ -17,7 +17,7 @@ import numpy as np
 import scipy.linalg
 
 from ._base import independent_columns
-from ._swaps import _first_swaps, _swap_search
+from ._swaps import first_swaps, swap_search
 
 __all__ = ["elimination_path", "forward_path", "cross_validated_size", "cross_validated_supports",
            "refine_by_swaps", "select_support", "SelectionResult"]
@@ -162,7 +162,7 @@ def refine_by_swaps(x, y, support, max_swaps: int = 50) -> np.ndarray:
     support = np.asarray(support, dtype=int)
     if len(support) == 0:
         return support
-    return _swap_search(xs, y, active, support, int(max_swaps))
+    return swap_search(xs, y, active, support, int(max_swaps))
 
 
 def fold_labels(n_rows: int, n_blocks: int, n_folds: int) -> np.ndarray:
@@ -439,18 +439,18 @@ def _swap_candidates(reduced, folds, paths, seen, limit, n_folds, keep=(), free=
     refined, visited = [], set()  # starts already refined and local optima reached
     for path, order, mean in paths:
         sizes = [k for k in range(1, min(limit, len(order)) + 1) if np.isfinite(mean[k - 1])]
-        first = _first_swaps(xs, y_reduced, active, order, sizes)
+        first = first_swaps(xs, y_reduced, active, order, sizes)
         for k in sizes:
             start = frozenset(order[:k].tolist())
             if start in visited:
                 continue
             if k not in first:
-                support = _swap_search(xs, y_reduced, active, order[:k], max_swaps=50)
+                support = swap_search(xs, y_reduced, active, order[:k], max_swaps=50)
             elif first[k][1] is None:  # no exchange improves the start
                 support = np.sort(order[:k])
             else:
                 rss, swapped = first[k]
-                support = _swap_search(xs, y_reduced, active, swapped, max_swaps=49, rss=rss,
+                support = swap_search(xs, y_reduced, active, swapped, max_swaps=49, rss=rss,
                                        previous=order[:k])
             visited.update((start, frozenset(support.tolist())))
             rest = order[~np.isin(order, support)]

@@ -19,7 +19,13 @@ OWNERS = (
     "pysindy_xl.export",
     "pysindy_xl.benchmark",
     "pysindy_xl.cli",
-    "pysindy_xl.report",
+    "pysindy_xl.simulation",
+    "pysindy_xl.evaluation.validation",  # held_out and quality join with the core
+    "pysindy_xl.evaluation.runs",
+    "pysindy_xl.evaluation.physics",
+    "pysindy_xl.evaluation.plots",
+    "pysindy_xl.fitted.equations",
+    "pysindy_xl.fitted.inspection",
 )
 
 

@@ -18,12 +18,12 @@ import time
 
 import numpy as np
 
+from ..._optional import import_mujoco
 from ...feature_library import PolynomialLagrangeLibrary
 from ...feature_library.trigpoly import evaluate_many, state_values
 from ...feature_library.trigterms import TrigTerms
 from ...physical.rigid_body import KinematicTree
 from ...symbols import Coordinates
-from .. import import_mujoco
 from ..systems.registry import MuJoCoSystem, get_system
 from . import _derivation_cache
 from ._kinematic_build import (

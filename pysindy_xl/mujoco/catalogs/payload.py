@@ -103,7 +103,7 @@ class Payload:
         9.81
         """
         from ..._inputs import check_array
-        from ...feature_library import stack_variables
+        from ...symbols import stack_variables
         library = catalog.library().fit()
         q = check_array(q, "q", n_columns=catalog.coords.n)
         qd, qdd = check_array(qd, "qd", q.shape), check_array(qdd, "qdd", q.shape)
@@ -196,8 +196,8 @@ def identify_payload(catalog, q, t, tau, qd=None, qdd=None, arm=None, body=None)
     ('hand', 0.3, array([0.1, 0. ]))
     """
     from ..._inputs import check_array
-    from ...feature_library import stack_variables
     from ...physical.sdp import consistent_least_squares
+    from ...symbols import stack_variables
     from ...weak import BumpTestFunctions, WhittakerSmoother, weak_regression
     library = catalog.library().fit()
     n = catalog.coords.n

@@ -21,13 +21,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
+from ..._optional import import_mujoco
 from .registry import get_system
 
 __all__ = ["ActuatorLaw", "actuator_law", "start_on_reference"]
 
 
-def _supported(model, a: int) -> bool:
+def supported_actuator(model, a: int) -> bool:
     """Whether actuator ``a`` follows the law of the module docstring."""
     mujoco = import_mujoco()
     return (int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)
@@ -317,7 +317,7 @@ def actuator_law(system, signals=None, force_input: str = "tau",
         raise TypeError(f"signals: expected a function of time or None, got "
                         f"{type(signals).__name__}")
     model = system.mj_model() if mj_model is None else mj_model
-    if not all(_supported(model, a) for a in range(model.nu)):
+    if not all(supported_actuator(model, a) for a in range(model.nu)):
         return None
     if np.any(getattr(model, "jnt_actgravcomp", 0)):
         return None  # gravity compensation routed through the actuators
@@ -392,7 +392,7 @@ def servo_bandwidths(model) -> np.ndarray:
     out = np.full(model.nu, np.nan)
     for a in range(model.nu):
         kp, kv = -model.actuator_biasprm[a, 1], -model.actuator_biasprm[a, 2]
-        if not (_supported(model, a) and kp > 0):
+        if not (supported_actuator(model, a) and kp > 0):
             continue
         dof = model.jnt_dofadr[model.actuator_trnid[a, 0]]
         gear = model.actuator_gear[a, 0]

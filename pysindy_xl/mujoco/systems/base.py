@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
+from ..._optional import import_mujoco
 from ..._validation import check_option
 from ...symbols import Coordinates
-from .. import import_mujoco
 
 __all__ = ["MuJoCoSystem", "equations_of_motion"]
 

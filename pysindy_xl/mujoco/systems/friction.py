@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
+from ..._optional import import_mujoco
 
 __all__ = ["dry_friction_scales", "sliding_velocities"]
 

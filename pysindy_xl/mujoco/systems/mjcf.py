@@ -8,7 +8,7 @@ import re
 
 import numpy as np
 
-from .. import import_mujoco
+from ..._optional import import_mujoco
 from .base import MuJoCoSystem, checked_parameters
 from .urdf import is_urdf, urdf_spec
 

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
-from .actuation import _supported
+from ..._optional import import_mujoco
+from .actuation import supported_actuator
 
 __all__ = ["tracking_controller", "tracked_model", "TRACKING_BANDWIDTH", "TRACKING_ERROR"]
 
@@ -30,7 +30,7 @@ def _plain_motor(model, a: int) -> bool:
     hinge or slide joint."""
     mujoco = import_mujoco()
     joint = model.actuator_trnid[a, 0]
-    return (_supported(model, a)
+    return (supported_actuator(model, a)
             and int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_FIXED)
             and int(model.actuator_biastype[a]) == int(mujoco.mjtBias.mjBIAS_NONE)
             and bool(model.jnt_limited[joint])

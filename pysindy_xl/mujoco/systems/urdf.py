@@ -16,7 +16,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from .. import import_mujoco
+from ..._optional import import_mujoco
 
 __all__ = ["urdf_spec", "urdf_to_mjcf", "is_urdf"]
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
+from .._optional import import_mujoco
 
 __all__ = ["SumOfSinusoids", "FORCING_MODES", "REFERENCE_SPEED", "SERVO_BANDWIDTH_FRACTION"]
 
@@ -234,7 +234,7 @@ def within_servo_reach(signals: SumOfSinusoids, model) -> SumOfSinusoids:
         The slowed references (``signals`` itself when no driven actuator is a servo).
     """
     mujoco = import_mujoco()
-    from ..systems.actuation import servo_bandwidths
+    from ..mujoco.systems.actuation import servo_bandwidths
     bandwidth = servo_bandwidths(model)
     servo = np.isfinite(bandwidth) & np.any(signals.amplitudes != 0, axis=1)
     if not servo.any():

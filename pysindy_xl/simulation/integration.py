@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .. import import_mujoco
+from .._optional import import_mujoco
 
 __all__ = ["Integration", "choose_integration", "linear_modes", "UnstableSimulationError",
            "INTEGRATORS", "RK4_BOUND", "BIAS_TOLERANCE", "RK4_COST", "RK4_MAX_SUBSTEPS",
@@ -237,7 +237,7 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
     >>> choice.integrator, choice.substeps, choice.stability <= RK4_BOUND
     ('RK4', 2400, True)
     """
-    from ..._validation import check_option
+    from .._validation import check_option
     check_option("integrator", integrator, "choice", choices=("auto", "model", *INTEGRATORS))
     if substeps is not None:
         substeps = check_option("substeps", substeps, "int", low=1)
@@ -390,7 +390,7 @@ def settling_time(model, forced: bool = True) -> float:
     float
         The settling time (s), a whole number of model steps.
     """
-    from ..systems.actuation import servo_bandwidths
+    from ..mujoco.systems.actuation import servo_bandwidths
     bandwidth = servo_bandwidths(model)
     if not forced or not np.any(np.isfinite(bandwidth)):
         return 0.0
@@ -414,7 +414,7 @@ def settled(trajectory, settle: float):
     Trajectory
         The trajectory without its first ``settle`` seconds.
     """
-    from ...data.dataset import Trajectory
+    from ..data.dataset import Trajectory
     if settle <= 0:
         return trajectory
     keep = trajectory.t >= trajectory.t[0] + settle - 1e-12

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
-from ..systems.friction import sliding_velocities
-from ..systems.registry import get_system
+from .._optional import import_mujoco
+from ..mujoco.systems.friction import sliding_velocities
+from ..mujoco.systems.registry import get_system
 
 __all__ = ["compare_physics"]
 
@@ -65,7 +65,7 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     True
     """
     mujoco = import_mujoco()
-    from ... import stack_variables
+    from ..symbols import stack_variables
     system = get_system(system)
     dynamics = model._require_dynamics() if hasattr(model, "_require_dynamics") else None
     if dynamics is None:

@@ -20,7 +20,7 @@ import os
 
 import numpy as np
 
-from .. import import_mujoco
+from .._optional import import_mujoco
 from .forcing import SumOfSinusoids
 
 __all__ = ["FourierTrajectory"]
@@ -73,7 +73,7 @@ class FourierTrajectory:
             raise ValueError(f"a, b: expected two arrays of shape (n={q0.size}, n_harmonics), "
                              f"got {a.shape} and {b.shape}")
         self.q0, self.a, self.b = q0, a, b
-        self.period = _positive(period, "period")
+        self.period = checked_positive(period, "period")
         names = [f"q{j}" for j in range(q0.size)] if names is None else [str(s) for s in names]
         if len(names) != q0.size or len(set(names)) != len(names):
             raise ValueError(f"names: expected {q0.size} distinct names, got {names!r}")
@@ -95,7 +95,7 @@ class FourierTrajectory:
         t = np.asarray(t, dtype=float)
         if not np.all(np.isfinite(t)):
             raise ValueError("t: contains NaN or inf")
-        basis = _basis(t.reshape(-1), self.pulsation, self.n_harmonics, order)
+        basis = fourier_basis(t.reshape(-1), self.pulsation, self.n_harmonics, order)
         values = basis @ np.hstack([self.a, self.b]).T + (self.q0 if order == 0 else 0.0)
         return values[0] if t.ndim == 0 else values
 
@@ -169,7 +169,7 @@ class FourierTrajectory:
             When the sizes differ, an actuator is not a position servo on a joint, or a coordinate
             has none.
         """
-        from ..systems.registry import get_system
+        from ..mujoco.systems.registry import get_system
         system = get_system(system)
         gain_map, offset = _position_servos(system, "reference")  # ctrl = offset + gain_map @ q
         if len(self.q0) != system.n:
@@ -207,7 +207,7 @@ class FourierTrajectory:
         >>> open(path).readline().strip()
         't,j0,j0_dot,j0_ddot'
         """
-        rate = _positive(rate, "rate")
+        rate = checked_positive(rate, "rate")
         if isinstance(periods, bool) or not isinstance(periods, (int, np.integer)) or periods < 1:
             raise ValueError(f"periods: expected an integer >= 1, got {periods!r}")
         t = np.arange(int(round(periods * self.period * rate)) + 1) / rate
@@ -259,14 +259,14 @@ class FourierTrajectory:
                 f"period={self.period:g}{cond})")
 
 
-def _positive(value, name: str) -> float:
+def checked_positive(value, name: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
             or not (np.isfinite(value) and value > 0):
         raise ValueError(f"{name}: expected a positive number, got {value!r}")
     return float(value)
 
 
-def _basis(t, w: float, L: int, order: int) -> np.ndarray:
+def fourier_basis(t, w: float, L: int, order: int) -> np.ndarray:
     """Matrix (N, 2L) mapping ``[a_j, b_j]`` to the ``order``-th derivative of ``q_j - q0_j``."""
     harmonics = w * np.arange(1, L + 1)
     angle = np.outer(t, harmonics)

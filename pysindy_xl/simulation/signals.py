@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
-from ..systems.registry import MuJoCoSystem
-from ..systems.tracking import gravity_torques, plain_motors, tracking_controller
+from .._optional import import_mujoco
+from ..mujoco.systems.registry import MuJoCoSystem
+from ..mujoco.systems.tracking import gravity_torques, plain_motors, tracking_controller
 from .forcing import FORCING_MODES, SumOfSinusoids, within_servo_reach
 
 __all__ = ["actuator_signals", "motor_tracking", "CONTROLS"]
@@ -53,7 +53,7 @@ def _driven_mask(system: MuJoCoSystem, model, forcing: str, actuators) -> np.nda
     return np.array([name in chosen or joint in chosen for name, joint in pairs])
 
 
-def _fraction(value, name: str) -> float:
+def checked_fraction(value, name: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise TypeError(f"{name}: expected a number in (0, 1], got {value!r}")
     value = float(value)
@@ -71,7 +71,7 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
     Undriven actuators get zero; an actuator with a ``ctrlrange`` oscillates around its
     middle, the others with ``system.force_amplitudes`` (by joint) times ``amplitude_scale``;
     a position servo's reference is kept within its reach
-    (:func:`~pysindy_xl.mujoco.simulation.forcing.within_servo_reach`). None with implicit
+    (:func:`~pysindy_xl.simulation.forcing.within_servo_reach`). None with implicit
     forcing.
 
     Parameters
@@ -129,7 +129,7 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
 def _scales(system, model, amplitude_scale, amplitude, tracking=None):
     """Peak and offset of each actuator's random signal (see :func:`actuator_signals`)."""
     if amplitude is not None:
-        amplitude = _fraction(amplitude, "amplitude")
+        amplitude = checked_fraction(amplitude, "amplitude")
     amplitudes = system.force_amplitudes
     tracked = set() if tracking is None else set(tracking["actuators"])
     scales, offsets = np.zeros(model.nu), np.zeros(model.nu)

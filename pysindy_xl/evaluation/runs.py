@@ -1,18 +1,18 @@
 """The MuJoCo runs of a validation: the fresh reference trajectory, and the identified model
-stepped by MuJoCo in closed loop (:mod:`~pysindy_xl.mujoco.evaluation.validation`)."""
+stepped by MuJoCo in closed loop (:mod:`~pysindy_xl.evaluation.validation`)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ...data.dataset import Trajectory
+from ..data.dataset import Trajectory
+from ..mujoco.systems.actuation import start_on_reference
+from ..mujoco.systems.registry import get_system
+from ..mujoco.systems.tracking import tracked_model
 from ..simulation.forcing import FORCING_MODES, SumOfSinusoids
 from ..simulation.generate import actuator_signals, simulate_trajectory
 from ..simulation.integration import UnstableSimulationError, choose_integration
 from ..simulation.signals import motor_tracking
-from ..systems.actuation import start_on_reference
-from ..systems.registry import get_system
-from ..systems.tracking import tracked_model
 
 __all__ = ["validation_trajectory"]
 
@@ -90,7 +90,7 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
 def mujoco_closed_loop(model, system, trajectory, substeps, required):
     """``(states, failure)`` of the identified model stepped by MuJoCo under the MJCF's
     actuators (and the reference's tracking controller) and the reference's controls (the
-    ``mujoco`` simulator of :mod:`~pysindy_xl.mujoco.evaluation.validation`), or None where
+    ``mujoco`` simulator of :mod:`~pysindy_xl.evaluation.validation`), or None where
     MuJoCo cannot state the model (a ValueError when ``required``).
 
     Parameters
@@ -112,8 +112,8 @@ def mujoco_closed_loop(model, system, trajectory, substeps, required):
         ``(states, failure)``: states (k, 2n) and why the run stopped early (or None); None
         where MuJoCo cannot state the model.
     """
-    from ...export.mjcf import identified_mj_model
-    from .. import import_mujoco
+    from .._optional import import_mujoco
+    from ..export.mjcf import identified_mj_model
     mujoco = import_mujoco()
     mj, reason = identified_mj_model(model, system)
     if mj is not None and trajectory.info.get("tracking") is not None:

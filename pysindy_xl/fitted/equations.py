@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from ..physical.structure import friction_kind
+from ..physical.structure import friction_kind, has_parameter_map
 
 __all__ = ["significant", "equation_strings", "identified_lagrangian", "uncertainty_lines"]
 
@@ -168,22 +168,6 @@ def prints_equations(model, equations=None) -> bool:
     dynamics = model.dynamics_
     return not has_parameter_map(model.feature_library_) or (
         dynamics is not None and dynamics.n_terms <= SHORT_EQUATIONS)
-
-
-def has_parameter_map(library) -> bool:
-    """Whether some library says which physical parameters its terms stand for.
-
-    Parameters
-    ----------
-    library : pysindy_xl.CatalogRepartition
-        The fitted catalog.
-
-    Returns
-    -------
-    bool
-        True when a library of the catalog has ``parameters``.
-    """
-    return any(getattr(lib, "parameters", None) is not None for lib in library.libraries_)
 
 
 def physical_parameters(coef: np.ndarray, library) -> dict:

@@ -24,11 +24,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from ...data.dataset import Trajectory
+from ..data.dataset import Trajectory
+from ..mujoco.systems.actuation import actuator_law
+from ..mujoco.systems.registry import get_system
+from ..mujoco.systems.tracking import tracked_model
 from ..simulation.forcing import SumOfSinusoids
-from ..systems.actuation import actuator_law
-from ..systems.registry import get_system
-from ..systems.tracking import tracked_model
 from .physics import compare_physics
 from .runs import mujoco_closed_loop, validation_trajectory
 
@@ -316,7 +316,7 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     >>> result.drive  # a motor on the cart: its force is a function of time
     'open-loop'
     """
-    from ...dynamics import SimulationError
+    from ..dynamics import SimulationError
     if trajectory is None:
         if system is None:
             raise ValueError("system: give a system to simulate or a reference trajectory")
