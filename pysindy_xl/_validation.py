@@ -19,14 +19,43 @@ _KINDS = ("bool", "int", "real", "choice")
 
 
 class IdentificationWarning(UserWarning):
-    """The identified model looks wrong on its own training data (e.g. an indefinite mass
-    matrix): it will not simulate faithfully there."""
+    """The identified model looks wrong on its own training data.
+
+    For instance, an identified mass matrix that is not positive definite on the training
+    states: the model will not simulate faithfully there. Turn it into an error with
+    ``warnings.simplefilter("error", px.IdentificationWarning)``.
+
+    Examples
+    --------
+    On a single sine ``x'' = -x``: the columns of ``x''`` and ``x`` are proportional, the fit
+    cannot tell the mass from the stiffness and warns.
+
+    >>> import warnings
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+    >>> t = np.linspace(0, 5, 501)
+    >>> x, xd, xdd = np.sin(t)[:, None], np.cos(t)[:, None], -np.sin(t)[:, None]
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     model = px.XLSINDy(lib).fit(x, t, x_dot=xd, x_ddot=xdd, u=xdd + 3 * x)
+    >>> any(issubclass(w.category, px.IdentificationWarning) for w in caught)
+    True
+    """
 
 
 class UnexplainedCoordinateWarning(IdentificationWarning):
-    """No identified term (besides the forces) enters some coordinate's equation: the model
-    cannot predict that coordinate. :class:`~pysindy_xl.MixedOptimizer` expects it of its
-    explicit part (it then solves those coordinates implicitly) and silences it there."""
+    """No identified term (besides the forces) enters some coordinate's equation.
+
+    The model cannot predict that coordinate. :class:`~pysindy_xl.MixedOptimizer` expects it of
+    its explicit part (it then solves those coordinates implicitly) and silences it there.
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> issubclass(px.UnexplainedCoordinateWarning, px.IdentificationWarning)
+    True
+    """
 
 
 def _describe_range(low, high, low_open, high_open) -> str:

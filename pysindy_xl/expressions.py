@@ -14,8 +14,7 @@ import numpy as np
 import sympy as sp
 from sympy.printing.str import StrPrinter
 
-__all__ = ["parse_expression", "format_expression", "check_real_expression", "check_term",
-           "expression_size", "as_expression", "FUNCTIONS"]
+__all__ = ["parse_expression", "format_expression", "FUNCTIONS"]
 
 FUNCTIONS = {
     "sin": sp.sin, "cos": sp.cos, "tan": sp.tan, "exp": sp.exp, "log": sp.log, "sqrt": sp.sqrt,
@@ -58,6 +57,21 @@ class _FullPrecisionPrinter(StrPrinter):
 def format_expression(expr: sp.Expr) -> str:
     """Text of ``expr`` that :func:`parse_expression` turns back into the same expression.
 
+    Floats are written with all their digits (17 significant), so that a saved model reads
+    back bit for bit.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+        An expression of the restricted grammar.
+
+    Returns
+    -------
+    str
+        The expression as text.
+
+    Examples
+    --------
     >>> import sympy as sp
     >>> x = sp.Symbol("x")
     >>> format_expression(sp.Float(1 / 3) * sp.cos(x))
@@ -205,12 +219,30 @@ class _Parser:
 def parse_expression(text: str, symbols: dict[str, sp.Symbol]) -> sp.Expr:
     """Parse ``text`` into a sympy expression over the given ``symbols`` only.
 
+    A restricted grammar, safe on untrusted text (``sympify`` would ``eval`` it): numbers, the
+    given symbols, ``pi``, ``E``, ``+ - * / ** ^``, implicit products (``"2 x"``) and the
+    functions of :data:`FUNCTIONS`. The size of the result is bounded (nesting of functions,
+    terms once expanded, operations).
+
     Parameters
     ----------
     text : str
         Expression such as ``"x_dot**2*cos(theta)"`` or pysindy's ``"x theta_dot^2"``.
     symbols : dict of str to sympy.Symbol
-        The only names allowed besides the whitelisted functions and ``pi``, ``E``.
+        The only names allowed besides the whitelisted functions and ``pi``, ``E``
+        (:meth:`Coordinates.symbol_table <pysindy_xl.Coordinates.symbol_table>`).
+
+    Returns
+    -------
+    sympy.Expr
+        The parsed expression, real and evaluable.
+
+    Raises
+    ------
+    TypeError
+        When ``text`` is not a str.
+    ValueError
+        When ``text`` is empty, outside the grammar, too large or not real.
 
     Examples
     --------
@@ -245,10 +277,20 @@ def parse_expression(text: str, symbols: dict[str, sp.Symbol]) -> sp.Expr:
 def expression_size(expr: sp.Expr) -> dict:
     """Cheap upper bounds on the work an expression causes, computed without expanding it.
 
-    A dict of ``terms`` (bound on the terms of ``sympy.expand(expr)``: ``(a + b + ...)**n`` of
-    ``k`` terms counts ``C(n + k - 1, k - 1)``, a call the size of its argument), ``depth``
-    (nesting of function calls) and ``operations`` (nodes of the tree).
+    Parameters
+    ----------
+    expr : sympy.Expr
+        The expression.
 
+    Returns
+    -------
+    dict
+        ``terms``: bound on the terms of ``sympy.expand(expr)`` (``(a + b + ...)**n`` of ``k``
+        terms counts ``C(n + k - 1, k - 1)``, a call the size of its argument); ``depth``:
+        nesting of function calls; ``operations``: nodes of the tree.
+
+    Examples
+    --------
     >>> import sympy as sp
     >>> a, b = sp.symbols("a b")
     >>> expression_size((a + b) ** 3 * sp.sin(sp.cos(a)))
@@ -293,7 +335,20 @@ def check_term(expr, name: str) -> None:
 
     A catalog term holds numbers, symbols, ``+ - * / **`` and :data:`FUNCTIONS` only:
     derivatives, undefined functions, relations cannot be evaluated on data nor saved.
-    ``TypeError`` for a non-sympy ``expr``, ``ValueError`` for anything else outside the grammar.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+        The term.
+    name : str
+        The argument named in the error message.
+
+    Raises
+    ------
+    TypeError
+        When ``expr`` is not a sympy expression.
+    ValueError
+        When it holds anything else outside the grammar.
     """
     if not isinstance(expr, sp.Expr):
         raise TypeError(f"{name}: expected a sympy expression, got {type(expr).__name__}")
@@ -313,9 +368,19 @@ def check_term(expr, name: str) -> None:
 
 
 def check_real_expression(expr: sp.Expr, name: str) -> None:
-    """Raise ``ValueError`` (naming ``name``) if ``expr`` holds a non-real or infinite number
-    (``zoo``, ``nan``, ``I``), which NumPy would turn into NaN or silently drop.
+    """Raise ``ValueError`` (naming ``name``) if ``expr`` holds a non-real or infinite number.
 
+    ``zoo``, ``nan``, ``I``: NumPy would turn them into NaN or silently drop them.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+        The expression.
+    name : str
+        The argument named in the error message.
+
+    Examples
+    --------
     >>> import sympy as sp
     >>> x = sp.Symbol("x")
     >>> check_real_expression(sp.sqrt(-1) * x, "terms")
@@ -333,9 +398,27 @@ def check_real_expression(expr: sp.Expr, name: str) -> None:
 
 
 def as_expression(value, symbols: dict[str, sp.Symbol], name: str) -> sp.Expr:
-    """A sympy expression from a sympy expression, real number or string (parsed by the
-    restricted grammar over ``symbols``, never ``sympify``); errors name ``name``.
+    """A sympy expression from a sympy expression, a real number or a string.
 
+    Strings are parsed by the restricted grammar (:func:`parse_expression`), never by
+    ``sympify``.
+
+    Parameters
+    ----------
+    value : sympy.Expr, int, float or str
+        The expression.
+    symbols : dict of str to sympy.Symbol
+        The names a string may use.
+    name : str
+        The argument named in error messages.
+
+    Returns
+    -------
+    sympy.Expr
+        The expression, checked to be real.
+
+    Examples
+    --------
     >>> import sympy as sp
     >>> as_expression("__import__('os')", {"x": sp.Symbol("x")}, "lagrangian")
     Traceback (most recent call last):

@@ -24,8 +24,8 @@ from .optimizers import OPTIMIZER_TYPES, optimizer_from_spec
 from .registry import is_plain
 from .symbols import Coordinates
 
-__all__ = ["save_model", "read_model_file", "ModelFile", "invalid_model_file", "FORMAT",
-           "VERSION", "OPTIMIZER_TYPES"]
+__all__ = ["save_model", "read_model_file", "ModelFile", "FORMAT", "VERSION",
+           "OPTIMIZER_TYPES"]
 
 FORMAT = "pysindy-xl-model"
 VERSION = 1
@@ -34,8 +34,23 @@ _MAX_BYTES = 50_000_000
 
 @dataclasses.dataclass
 class ModelFile:
-    """The checked contents of a model file: the estimator's other ``settings``, the fitted
-    ``feature_library``, the ``optimizer`` (or None) and the ``fitted`` attributes."""
+    """The checked contents of a model file, as :func:`read_model_file` returns them.
+
+    Parameters
+    ----------
+    settings : dict
+        The estimator's parameters other than the library and the optimizer.
+    feature_library : CatalogRepartition
+        The fitted catalog.
+    optimizer : object or None
+        The optimizer (its parameters), or None when the estimator had none.
+    fitted : dict
+        The fitted attributes (``coef_``, ``n_coordinates_``...) by name.
+
+    Examples
+    --------
+    See :func:`read_model_file`.
+    """
 
     settings: dict
     feature_library: CatalogRepartition
@@ -46,6 +61,24 @@ class ModelFile:
 def save_model(model, path) -> None:
     """Write a fitted :class:`~pysindy_xl.XLSINDy` to ``path`` as JSON.
 
+    The body of :meth:`XLSINDy.save <pysindy_xl.XLSINDy.save>`: the catalog's specification
+    (coordinates and terms in the restricted term grammar), the optimizer's type and
+    parameters, the estimator's settings and the fitted state; no pickle.
+
+    Parameters
+    ----------
+    model : XLSINDy
+        A fitted model.
+    path : str or path-like
+        The file to write; its folder must exist.
+
+    Raises
+    ------
+    sklearn.exceptions.NotFittedError
+        When ``model`` is not fitted.
+
+    Examples
+    --------
     >>> import json, os, tempfile
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
@@ -134,7 +167,20 @@ def _uncertainty_from_document(document, n_features, path):
 
 
 def invalid_model_file(path, what: str) -> ValueError:
-    """The ``ValueError`` to raise for a file that is not a valid model file (``what``)."""
+    """The ``ValueError`` to raise for a file that is not a valid model file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file.
+    what : str
+        What is wrong with it.
+
+    Returns
+    -------
+    ValueError
+        The error, naming the argument ``path`` and the file.
+    """
     return ValueError(f"path: {os.fspath(path)!r} is not a valid pysindy-xl model file: {what}")
 
 
@@ -147,8 +193,29 @@ def _expect(condition: bool, path, what: str):
 
 
 def read_model_file(path) -> ModelFile:
-    """Read and check a model written by :func:`save_model` into a :class:`ModelFile`.
+    """Read and check a model written by :func:`save_model`.
 
+    The body of :meth:`XLSINDy.load <pysindy_xl.XLSINDy.load>`: the file's size is bounded,
+    terms are parsed by the restricted grammar (:func:`~pysindy_xl.expressions.parse_expression`)
+    and only registered library and optimizer types are built.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The JSON file.
+
+    Returns
+    -------
+    ModelFile
+        The checked settings, library, optimizer and fitted attributes.
+
+    Raises
+    ------
+    ValueError
+        When the file is not a valid model file, saying what is wrong.
+
+    Examples
+    --------
     >>> import os, tempfile
     >>> path = os.path.join(tempfile.mkdtemp(), "bad.json")
     >>> _ = open(path, "w").write('{"format": "something else"}')

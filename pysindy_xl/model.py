@@ -98,8 +98,12 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
     Attributes
     ----------
     feature_library_ : CatalogRepartition
+        The fitted catalog (a clone of ``feature_library``, a force column added when absent).
     optimizer_ : fitted catalog optimizer
+        The optimizer that solved the regression (a clone of ``optimizer`` or the default).
     coef_ : ndarray, shape (F,)
+        One coefficient per catalog feature (:meth:`get_feature_names`), zero for the
+        features left out; the identified equations are ``Theta(q, qd, qdd, tau) @ coef_ = 0``.
     dropped_features_ : dict of str to str
         Features removed before regression, with the reason.
     still_coordinates_ : list of str
@@ -109,9 +113,11 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
     dynamics_ : CatalogDynamics
         The identified equations in mass-matrix form (``None`` if they contain no acceleration).
     n_coordinates_ : int
+        Number of coordinates ``n``.
     n_samples_ : int
         Samples used in the fit, all trajectories together.
     formulation_ : {"strong", "weak"}
+        The formulation used (``formulation`` resolved).
     weak_info_ : dict or None
         Weak form: half-width, test functions per piece, noise estimate, ``time_grid``,
         ``gaps`` and ``segments`` (:func:`~pysindy_xl.weak.weak_regression`).
@@ -176,12 +182,48 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
 
     def regression(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None,
                    formulation=None) -> CatalogProblem:
-        """The :class:`CatalogProblem` of the fitted model on data, built as :meth:`fit` builds
-        it (:func:`~pysindy_xl.fit.build_problem`, without the columns of still coordinates).
+        """The regression problem of the fitted model's catalog on data, built as :meth:`fit`
+        builds it.
 
-        ``problem.theta @ coef_[problem.catalog_map.columns]`` is zero for data that obey the
-        identified equations exactly (:func:`pysindy_xl.quality.fit_quality` uses it). The
-        arguments are those of :meth:`fit`; ``formulation`` defaults to the fit's.
+        Stacks the catalog's columns ``Theta`` on the data (:func:`~pysindy_xl.fit.build_problem`,
+        without the columns of still coordinates): ``problem.theta @
+        coef_[problem.catalog_map.columns]`` is zero for data that obey the identified
+        equations exactly (:func:`pysindy_xl.quality.fit_quality` measures its residual).
+
+        Parameters
+        ----------
+        x : array (N, n) or list of arrays
+            Positions, one trajectory or several.
+        t : float, array (N,) or list of arrays, optional
+            Time step or sample times; default None: ``t_default``.
+        x_dot, x_ddot : same layout as ``x``, optional
+            Measured velocities and accelerations; default None: estimated as in :meth:`fit`.
+        u : same layout as ``x``, optional
+            Generalized forces; default None (unforced).
+        sample_mask : bool array (N,) or list of them, optional
+            ``False`` marks samples to leave out, as in :meth:`fit`; default None (all).
+        formulation : {"strong", "weak"}, optional
+            Default None: the fit's ``formulation_``.
+
+        Returns
+        -------
+        CatalogProblem
+            ``theta`` (rows by catalog columns), ``catalog_map`` and the row layout
+            (:class:`~pysindy_xl.optimizers.CatalogProblem`).
+
+        Examples
+        --------
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+        >>> t = np.linspace(0, 5, 501)[:, None]
+        >>> x = np.sin(t) + np.sin(2.3 * t) / 2
+        >>> xd, xdd = np.cos(t) + 1.15 * np.cos(2.3 * t), -np.sin(t) - 2.645 * np.sin(2.3 * t)
+        >>> model = px.XLSINDy(lib).fit(x, t[:, 0], x_dot=xd, x_ddot=xdd, u=xdd + 3 * x)
+        >>> problem = model.regression(x, t[:, 0], x_dot=xd, x_ddot=xdd, u=xdd + 3 * x)
+        >>> residual = problem.theta @ model.coef_[problem.catalog_map.columns]
+        >>> bool(np.abs(residual).max() < 1e-8)
+        True
         """
         check_is_fitted(self, "coef_")
         formulation = formulation or self.formulation_ or "strong"
@@ -217,7 +259,9 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
 
         Returns
         -------
-        self
+        self : XLSINDy
+            The fitted estimator (fitted attributes end in ``_``; the parameters are not
+            changed).
         """
         self._check_options()
         # warnings from every depth of the fit, re-emitted to point at the caller's line
@@ -280,9 +324,30 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
 
     @classmethod
     def load(cls, path) -> XLSINDy:
-        """Load a fitted model written by :meth:`save`; parses only the restricted term grammar
-        and the registered library and optimizer types (:mod:`pysindy_xl.io`). An invalid file
-        raises a ``ValueError`` saying what is wrong."""
+        """Load a fitted model written by :meth:`save`.
+
+        Parses only the restricted term grammar and the registered library and optimizer types
+        (:mod:`pysindy_xl.io`): no code in the file is executed, and its size is bounded.
+
+        Parameters
+        ----------
+        path : str or path-like
+            A JSON file written by :meth:`save`.
+
+        Returns
+        -------
+        XLSINDy
+            The fitted model, with the same coefficients and equations.
+
+        Raises
+        ------
+        ValueError
+            When the file is invalid, saying what is wrong.
+
+        Examples
+        --------
+        See :meth:`save`.
+        """
         contents = read_model_file(path)
         model = cls(feature_library=contents.feature_library, optimizer=contents.optimizer,
                     **contents.settings)

@@ -17,8 +17,30 @@ def register_type(registry: dict, cls: type) -> None:
     """Put ``cls`` in ``registry`` under its ``spec_type``.
 
     A class sets ``spec_type`` in its own body to choose the name; otherwise it is
-    ``module.QualifiedName`` (never inherited). A name taken by another class raises
-    ``TypeError``; the same class defined again (a re-run notebook cell) replaces itself.
+    ``module.QualifiedName`` (never inherited). The same class defined again (a re-run notebook
+    cell) replaces itself.
+
+    Parameters
+    ----------
+    registry : dict of str to type
+        The registry (the library or the optimizer types a model file may name); updated in
+        place.
+    cls : type
+        The class to register; its ``spec_type`` attribute is set to the name used.
+
+    Raises
+    ------
+    TypeError
+        When the name is already taken by another class.
+
+    Examples
+    --------
+    >>> registry = {}
+    >>> class Solver:
+    ...     spec_type = "my_solver"
+    >>> register_type(registry, Solver)
+    >>> registry["my_solver"] is Solver
+    True
     """
     name = cls.__dict__.get("spec_type") or f"{cls.__module__}.{cls.__qualname__}"
     known = registry.get(name)
@@ -33,6 +55,18 @@ def register_type(registry: dict, cls: type) -> None:
 def is_plain(value) -> bool:
     """Whether JSON holds ``value`` as it is: None, a bool, an int, a str or a finite float.
 
+    Parameters
+    ----------
+    value : object
+        Any value.
+
+    Returns
+    -------
+    bool
+        True for None, bool, int, str and finite float; False otherwise (containers included).
+
+    Examples
+    --------
     >>> [is_plain(v) for v in (None, True, 3, 0.5, "a", float("nan"), [1])]
     [True, True, True, True, True, False, False]
     """
@@ -43,6 +77,18 @@ def is_plain(value) -> bool:
 def json_finite(value):
     """JSON-safe copy: non-finite floats become None, numpy scalars plain numbers.
 
+    Parameters
+    ----------
+    value : object
+        A value, dict, list or tuple (nested); dict keys become str, tuples lists.
+
+    Returns
+    -------
+    object
+        The copy, with every float finite or None.
+
+    Examples
+    --------
     >>> json_finite({"rmse": float("inf"), "n": np.int64(3), "x": [np.float64(0.5)]})
     {'rmse': None, 'n': 3, 'x': [0.5]}
     """

@@ -21,20 +21,32 @@ class Coordinates:
     """Generalized coordinates of a mechanical system and their sympy symbols.
 
     For a coordinate named ``x`` the symbols are ``x`` (position), ``x_dot``
-    (velocity), ``x_ddot`` (acceleration) and ``tau_x`` (generalized force).
+    (velocity), ``x_ddot`` (acceleration) and ``tau_x`` (generalized force); all are real.
 
     Parameters
     ----------
     names : sequence of str
-        Names of the coordinates, unique ASCII Python identifiers.
+        Names of the coordinates: unique ASCII Python identifiers, not reserved by the
+        expression grammar (``t``, ``E``, ``pi``, ``I``, function names, ``tau_*``, ``*_dot``,
+        ``*_ddot``).
 
     Attributes
     ----------
     n : int
+        Number of coordinates.
     names : tuple of str
+        The coordinate names, in order.
     q, qd, qdd, tau : tuple of sympy.Symbol
         Positions, velocities, accelerations and generalized forces, one per coordinate.
     t : sympy.Symbol
+        The time symbol ``t``.
+
+    Raises
+    ------
+    TypeError
+        When ``names`` is not a sequence of str.
+    ValueError
+        When a name is not a valid, unreserved ASCII identifier, or names repeat.
 
     Examples
     --------
@@ -42,6 +54,8 @@ class Coordinates:
     >>> coords = px.Coordinates(["x", "theta"])
     >>> coords.n, coords.qd
     (2, (x_dot, theta_dot))
+    >>> coords.tau[1], coords.variables[-1]
+    (tau_theta, t)
     """
 
     def __init__(self, names: Sequence[str]):
@@ -83,7 +97,20 @@ class Coordinates:
         return self.q + self.qd + self.qdd + self.tau + (self.t,)
 
     def symbol_table(self) -> dict[str, sp.Symbol]:
-        """Map from symbol name to symbol, used to parse saved expressions."""
+        """Map from symbol name to symbol, used to parse saved expressions.
+
+        Returns
+        -------
+        dict of str to sympy.Symbol
+            Every symbol of :attr:`variables` (positions, velocities, accelerations, forces, time)
+            by its name.
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> sorted(px.Coordinates(["x"]).symbol_table())
+        ['t', 'tau_x', 'x', 'x_ddot', 'x_dot']
+        """
         return {str(s): s for s in self.variables}
 
     def __eq__(self, other) -> bool:
@@ -126,10 +153,25 @@ def _unique(exprs: Iterable[sp.Expr]) -> list[sp.Expr]:
 
 
 def monomials(exprs, degree: int) -> list[sp.Expr]:
-    """All products of ``exprs`` of total degree 1..``degree``, with repetition.
+    """All products of ``exprs`` of total degree 1 to ``degree``, with repetition.
 
-    Returns the distinct products (no constant), by degree then by input order.
+    The candidate terms of a polynomial catalog: for ``exprs = [a, b]`` and ``degree = 2``,
+    ``a, b, a^2, a b, b^2``.
 
+    Parameters
+    ----------
+    exprs : sequence of sympy.Expr
+        The factors (symbols or expressions; numbers are accepted).
+    degree : int
+        Highest total degree, at least 1.
+
+    Returns
+    -------
+    list of sympy.Expr
+        The distinct nonzero products (no constant), by degree then by input order.
+
+    Examples
+    --------
     >>> import sympy as sp
     >>> a, b = sp.symbols("a b")
     >>> monomials([a, b], 2)
@@ -147,6 +189,20 @@ def products(terms_a, terms_b) -> list[sp.Expr]:
 
     Include ``1`` in either list to keep the terms of the other list alone.
 
+    Parameters
+    ----------
+    terms_a : sequence of sympy.Expr
+        The first factors.
+    terms_b : sequence of sympy.Expr
+        The second factors.
+
+    Returns
+    -------
+    list of sympy.Expr
+        The distinct nonzero products, ``terms_a`` in the outer loop.
+
+    Examples
+    --------
     >>> import sympy as sp
     >>> a, b = sp.symbols("a b")
     >>> products([1, a], [b, a])

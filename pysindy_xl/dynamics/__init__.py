@@ -3,8 +3,9 @@
 (:mod:`.inputs`); what a fitted model does with them is :mod:`pysindy_xl.fitted.dynamics`."""
 
 from .catalog import CatalogDynamics
-from .inputs import feedback_function, force_function
+from .inputs import feedback_function as feedback_function  # importable here, not in __all__
+from .inputs import force_function as force_function
 from .mass_matrix import DynamicsError, MassMatrixDynamics, SimulationError, SingularMassMatrixError
 
 __all__ = ["MassMatrixDynamics", "CatalogDynamics", "DynamicsError", "SingularMassMatrixError",
-           "SimulationError", "force_function", "feedback_function"]
+           "SimulationError"]

@@ -23,10 +23,20 @@ class CatalogDynamics(MassMatrixDynamics):
 
     Lagrange libraries with a kinematic tree go through the rigid-body kernel instead
     (:mod:`pysindy_xl.physical.rigid_body`; ``rigid_parts``: their ``(tree, pi)``), so an arm
-    costs what its bodies cost. The symbolic forms are built on first use. ``library`` is a
-    fitted catalog; ``held`` (n,) flags coordinates held still (:mod:`pysindy_xl.fit.still`),
-    whose equation becomes ``qdd_c = 0``.
+    costs what its bodies cost. The symbolic forms are built on first use.
 
+    Parameters
+    ----------
+    library : CatalogRepartition
+        A fitted catalog.
+    coef : array, shape (F,)
+        Its coefficients ``xi``, one per feature.
+    held : bool array, shape (n,), optional
+        Coordinates held still (:mod:`pysindy_xl.fit.still`), whose equation becomes
+        ``qdd_c = 0``; default None (none).
+
+    Examples
+    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> library = px.CatalogRepartition([px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])])

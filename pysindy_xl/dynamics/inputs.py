@@ -13,11 +13,32 @@ _INTERPOLATIONS = ("cubic", "linear", "previous")
 
 
 def force_function(u, t: np.ndarray, n: int, interpolation: str = "cubic"):
-    """The ``u`` argument of ``simulate`` (None, an array (len(t), n) over the times ``t``, or a
-    callable ``u(t) -> (n,)``) as a checked function of time ``u(t) -> (n,)``; ``interpolation``
-    reads an array between samples by a cubic spline (smooth: adaptive integrators take fewer
-    steps), linearly, or by zero-order hold (``"previous"``, piecewise-constant commands).
+    """The ``u`` argument of ``simulate`` as a checked function of time.
 
+    Parameters
+    ----------
+    u : None, array (len(t), n) or callable ``u(t) -> (n,)``
+        The forces: zero, samples over the times ``t``, or a function of time.
+    t : ndarray, shape (T,)
+        The simulation's output times.
+    n : int
+        Number of coordinates.
+    interpolation : {"cubic", "linear", "previous"}, default "cubic"
+        How an array is read between samples: cubic spline (smooth: adaptive integrators take
+        fewer steps), linearly, or zero-order hold (``"previous"``, piecewise-constant commands).
+
+    Returns
+    -------
+    callable
+        ``u(t) -> ndarray (n,)``; an array is held at its first and last value outside ``t``.
+
+    Raises
+    ------
+    TypeError, ValueError
+        When ``u`` has the wrong type, shape or non-finite values.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> u = force_function(np.array([[0.0], [2.0], [4.0]]), np.array([0.0, 1.0, 2.0]), 1,
     ...                    interpolation="linear")
@@ -65,10 +86,31 @@ def force_function(u, t: np.ndarray, n: int, interpolation: str = "cubic"):
 
 
 def feedback_function(feedback, x0: np.ndarray, t0: float, n: int):
-    """The ``feedback`` argument of ``simulate``, ``feedback(t, q, qd) -> (n,)`` or None, checked
-    once at the initial state ``x0`` and time ``t0`` and wrapped as ``f(t, state) -> (n,)``
-    (``q``, ``qd`` passed as copies); None without feedback.
+    """The ``feedback`` argument of ``simulate``, checked once and wrapped for the integrator.
 
+    Parameters
+    ----------
+    feedback : callable or None
+        ``feedback(t, q, qd) -> (n,)``.
+    x0 : ndarray, shape (2n,)
+        Initial state, at which ``feedback`` is checked.
+    t0 : float
+        Initial time.
+    n : int
+        Number of coordinates.
+
+    Returns
+    -------
+    callable or None
+        ``f(t, state) -> ndarray (n,)`` (``q``, ``qd`` passed as copies); None without feedback.
+
+    Raises
+    ------
+    TypeError, ValueError
+        When ``feedback`` is not callable or returns the wrong shape or non-finite values.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> pd = feedback_function(lambda t, q, qd: -4.0 * q - qd, np.array([1.0, 0.5]), 0.0, 1)
     >>> pd(0.0, np.array([1.0, 0.5]))

@@ -18,13 +18,14 @@ from ..feature_library import Terms, compile_terms, decompose, scalar_function
 from ..symbols import Coordinates, stack_variables
 from .inputs import feedback_function, force_function
 
-__all__ = ["MassMatrixDynamics", "DynamicsError", "SingularMassMatrixError", "SimulationError",
-           "force_function"]
+__all__ = ["MassMatrixDynamics", "DynamicsError", "SingularMassMatrixError", "SimulationError"]
 
 
 class DynamicsError(RuntimeError):
     """Base class of the errors raised by identified dynamics.
 
+    Examples
+    --------
     >>> issubclass(SimulationError, DynamicsError), issubclass(SingularMassMatrixError,
     ...                                                        DynamicsError)
     (True, True)
@@ -32,8 +33,18 @@ class DynamicsError(RuntimeError):
 
 
 class SingularMassMatrixError(DynamicsError):
-    """The identified mass matrix is singular (or numerically so) at the samples ``indices``.
+    """The identified mass matrix is singular (or numerically so) at some samples.
 
+    Parameters
+    ----------
+    message : str
+        The error message.
+    indices : sequence of int, default ()
+        The samples where the mass matrix is singular, stored as the attribute ``indices``
+        (ndarray of int).
+
+    Examples
+    --------
     >>> import pysindy_xl as px
     >>> c = px.Coordinates(["x", "y"])
     >>> dyn = px.MassMatrixDynamics(c, [c.qdd[0] - c.tau[0], c.qdd[0] + c.q[1]])
@@ -50,11 +61,25 @@ class SingularMassMatrixError(DynamicsError):
 
 
 class SimulationError(DynamicsError):
-    """A simulation stopped before its end, at time ``t_failed`` for ``reason`` (``"diverged"``,
-    ``"singular mass matrix"``, ``"non-finite derivative"``, ``"too many evaluations"``,
-    ``"timeout"`` or ``"integrator failure (...)"``); ``t`` (k,) and ``states`` (k, 2n) are
-    the valid part of the trajectory.
+    """A simulation stopped before its end.
 
+    Parameters
+    ----------
+    message : str
+        The error message.
+    t_failed : float
+        Time at which the run stopped (attribute ``t_failed``).
+    t : array, shape (k,)
+        Times of the valid part of the trajectory (attribute ``t``).
+    states : array, shape (k, 2n)
+        Its states ``[q, qd]`` (attribute ``states``).
+    reason : str
+        Why (attribute ``reason``): ``"diverged"``, ``"singular mass matrix"``,
+        ``"non-finite derivative"``, ``"too many evaluations"``, ``"timeout"`` or
+        ``"integrator failure (...)"``.
+
+    Examples
+    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> unstable = px.MassMatrixDynamics(c, [c.qdd[0] - c.q[0] ** 3])
@@ -74,15 +99,53 @@ class SimulationError(DynamicsError):
 
 
 class MassMatrixDynamics:
-    """Equations ``E(q, qd, qdd, tau, t) = 0``, one per coordinate of ``coords`` and linear in
-    ``coords.qdd``, in mass-matrix form: ``mass_matrix_expr`` ``M(q, qd)`` (n, n) and
-    ``forcing_expr`` ``f(q, qd, tau, t)`` (n, 1), ``M qdd = f``.
+    r"""Equations of motion in mass-matrix form, ``M(q, qd) qdd = f(q, qd, tau, t)``.
 
-    >>> import pysindy_xl as px
+    The equations ``E_c(q, qd, qdd, tau, t) = 0``, one per coordinate and linear in the
+    accelerations, give
+
+    .. math:: M_{ck} = \frac{\partial E_c}{\partial \ddot q_k}, \qquad
+              f_c = -E_c\big|_{\ddot q = 0}.
+
+    ``M`` and ``f`` are kept as polynomials in a few atoms: one vectorized kernel evaluates
+    many states, generated code one state, and a batched linear solve gives the accelerations.
+
+    Parameters
+    ----------
+    coords : Coordinates
+        The generalized coordinates.
+    equations : sequence of sympy.Expr or str
+        One expression ``E_c`` per coordinate (strings are parsed by the restricted grammar,
+        :func:`~pysindy_xl.expressions.parse_expression`), each linear in ``coords.qdd``.
+
+    Attributes
+    ----------
+    coords : Coordinates
+        The coordinates.
+    equations : list of sympy.Expr
+        The equations as given.
+    mass_matrix_expr : sympy.Matrix, shape (n, n)
+        ``M(q, qd)``.
+    forcing_expr : sympy.Matrix, shape (n, 1)
+        ``f(q, qd, tau, t)``.
+
+    Raises
+    ------
+    TypeError
+        When ``coords`` is not a :class:`~pysindy_xl.Coordinates` or ``equations`` not a list.
+    ValueError
+        When the number of equations differs from ``coords.n`` or an equation is not linear
+        in the accelerations.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> dyn = px.MassMatrixDynamics(c, [2 * c.qdd[0] + 3 * c.q[0] - c.tau[0]])
     >>> dyn.mass_matrix_expr, dyn.forcing_expr
     (Matrix([[2]]), Matrix([[tau_x - 3*x]]))
+    >>> dyn.accelerations(np.array([[1.0]]), np.array([[0.0]]), np.array([[7.0]]))
+    array([[2.]])
     """
 
     def __init__(self, coords: Coordinates, equations):
@@ -161,8 +224,21 @@ class MassMatrixDynamics:
         self._compile()
 
     def mass_and_forcing(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``M`` (N, n, n) and ``f`` (N, n) at the rows of stacked variables ``z`` (N, 4n + 1)
-        (:func:`~pysindy_xl.stack_variables`)."""
+        """``M`` and ``f`` at many states.
+
+        Parameters
+        ----------
+        z : ndarray, shape (N, 4n + 1)
+            Rows of stacked variables ``[q, qd, qdd, tau, t]``
+            (:func:`~pysindy_xl.feature_library.stack_variables`; ``qdd`` is not used).
+
+        Returns
+        -------
+        mass : ndarray, shape (N, n, n)
+            The mass matrices ``M(q, qd)``.
+        force : ndarray, shape (N, n)
+            The forcing ``f(q, qd, tau, t)``.
+        """
         n, n_samples = self._n, z.shape[0]
         values = [np.broadcast_to(v, (n_samples,)) for v in self._evaluate(z)]
         mass = np.stack(values[: n * n], axis=-1).reshape(n_samples, n, n)
@@ -170,9 +246,38 @@ class MassMatrixDynamics:
         return mass, force
 
     def accelerations(self, q, qd, tau=None, t=None, rcond: float = 1e-12) -> np.ndarray:
-        """Accelerations ``qdd = M^-1 f`` at many states: ``q``, ``qd``, forces ``tau`` (zero when
-        absent) of shape (N, n), times ``t`` (N,). Raises :class:`SingularMassMatrixError` where
-        ``M``'s reciprocal condition number is below ``rcond``."""
+        """Accelerations ``qdd = M^-1 f`` at many states.
+
+        Parameters
+        ----------
+        q, qd : array, shape (N, n)
+            Positions and velocities.
+        tau : array, shape (N, n), optional
+            Generalized forces; default None (zero).
+        t : array, shape (N,), optional
+            Times, for equations that depend on time; default None (zero).
+        rcond : float, default 1e-12
+            Smallest reciprocal condition number of ``M`` accepted.
+
+        Returns
+        -------
+        ndarray, shape (N, n)
+            The accelerations.
+
+        Raises
+        ------
+        SingularMassMatrixError
+            Where ``M``'s reciprocal condition number is below ``rcond``.
+
+        Examples
+        --------
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> dyn = px.MassMatrixDynamics(c, [2 * c.qdd[0] + c.q[0] - c.tau[0]])
+        >>> dyn.accelerations(np.array([[1.0], [3.0]]), np.zeros((2, 1)), np.ones((2, 1)))
+        array([[ 0.],
+               [-1.]])
+        """
         arrays = {"q": q, "qd": qd, "tau": tau, "t": t}
         for name, value in arrays.items():
             if value is None:
@@ -192,10 +297,29 @@ class MassMatrixDynamics:
         return np.linalg.solve(mass, force[..., None])[..., 0]
 
     def state_derivative(self, state, u=None, t: float = 0.0) -> np.ndarray:
-        """``d(state)/dt = [qd, M^-1 f]`` at one state ``[q, qd]`` with forces ``u`` (n,) (zero when
-        absent): the simulators' fast path. Raises :class:`SingularMassMatrixError` if ``M`` is
-        singular there or ``M``, ``f`` not finite.
+        """``d(state)/dt = [qd, M^-1 f]`` at one state: the simulators' fast path.
 
+        Parameters
+        ----------
+        state : array, shape (2n,)
+            ``[q, qd]``.
+        u : array, shape (n,), optional
+            Generalized forces; default None (zero).
+        t : float, default 0.0
+            Time.
+
+        Returns
+        -------
+        ndarray, shape (2n,)
+            ``[qd, qdd]``.
+
+        Raises
+        ------
+        SingularMassMatrixError
+            If ``M`` is singular at the state, or ``M``, ``f`` are not finite.
+
+        Examples
+        --------
         >>> import pysindy_xl as px
         >>> c = px.Coordinates(["x"])
         >>> px.MassMatrixDynamics(c, [2 * c.qdd[0] + c.q[0]]).state_derivative([1.0, 3.0])
@@ -233,9 +357,10 @@ class MassMatrixDynamics:
                  max_evaluations: int = 1_000_000, timeout: float | None = 300.0,
                  interpolation: str = "cubic", feedback=None,
                  step: float | None = None) -> np.ndarray:
-        """Integrate the dynamics with one of scipy's adaptive ODE solvers, or ROS2; returns the
-        states (T, 2n), or raises :class:`SimulationError` (with the valid part of the trajectory)
-        when the run stops early.
+        """Integrate the dynamics with one of scipy's adaptive ODE solvers, or ROS2.
+
+        The state ``[q, qd]`` follows ``d/dt [q, qd] = [qd, M^-1 f(q, qd, tau, t)]`` with
+        ``tau = u(t) + feedback(t, q, qd)``.
 
         Parameters
         ----------
@@ -243,22 +368,38 @@ class MassMatrixDynamics:
             Initial state ``[q_1..q_n, qd_1..qd_n]``.
         t : array, shape (T,)
             Strictly increasing output times.
-        u : None, array (T, n) or callable ``u(t) -> (n,)``
-            Generalized forces, a function of time (open loop).
-        method : {"DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA", "ROS2"}
+        u : None, array (T, n) or callable ``u(t) -> (n,)``, optional
+            Generalized forces, a function of time (open loop); default None (zero).
+        method : {"DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA", "ROS2"}, default "DOP853"
             scipy's solver (``"Radau"`` or ``"BDF"`` for stiff models), or the L-stable
             Rosenbrock method of :mod:`pysindy_xl.dynamics.rosenbrock` for stiff closed loops
             (steps of at most ``step``, local error bound ``1e-3 (1 + |y|)``, tolerances unused).
-        rtol, atol, divergence_bound, max_evaluations, timeout : float
-            Solver tolerances; the run stops when a state component exceeds ``divergence_bound``,
-            after ``max_evaluations`` right-hand sides or ``timeout`` seconds (None: no bound).
-        interpolation : {"cubic", "linear", "previous"}
-            How an array ``u`` is read between samples (:func:`force_function`).
+        rtol, atol : float, default 1e-8 and 1e-10
+            Relative and absolute tolerances of the solver.
+        divergence_bound : float, default 1e6
+            The run stops when a state component exceeds it.
+        max_evaluations : int, default 1000000
+            The run stops after this many right-hand sides.
+        timeout : float or None, default 300.0
+            The run stops after this many seconds (None: no bound).
+        interpolation : {"cubic", "linear", "previous"}, default "cubic"
+            How an array ``u`` is read between samples: cubic spline (smooth, fewer steps),
+            linear, or zero-order hold (:func:`~pysindy_xl.dynamics.inputs.force_function`).
         feedback : callable, optional
             ``feedback(t, q, qd) -> (n,)``, added to ``u`` at every step: a closed loop (servo,
-            controller; :func:`pysindy_xl.mujoco.actuator_law` gives an MJCF's).
+            controller; :func:`pysindy_xl.mujoco.actuator_law` gives an MJCF's). Default None.
         step : float, optional
-            Largest step of ``"ROS2"`` (default: the smallest spacing of ``t``).
+            Largest step of ``"ROS2"``; default None: the smallest spacing of ``t``.
+
+        Returns
+        -------
+        ndarray, shape (T, 2n)
+            The states at ``t``, laid out like ``x0``.
+
+        Raises
+        ------
+        SimulationError
+            When the run stops early, with the valid part of the trajectory.
 
         Examples
         --------

@@ -59,18 +59,47 @@ def _jacobians(parts, s, state, n, dq, dv):
 def ros2(parts, x0, t, step, jacobian_every: int = 50, divergence_bound: float = np.inf,
          timeout: float | None = None, dq: float = 1e-4, dv: float = 1e-2,
          tolerance: float | None = 1e-5):
-    """Integrate ``M(q, v) qdd = g(t, q, v)`` with ROS2 (module docstring).
+    """Integrate ``M(q, v) qdd = g(t, q, v)`` with the two-stage Rosenbrock method ROS2.
 
-    ``parts(t, state) -> (M, g)`` gives the mass matrix (n, n) and the forces (n,) at
-    ``[q, v]``; the run starts at ``x0`` (2n,), reports the times ``t`` (T,) and takes steps of
-    at most ``step``, stopping beyond ``divergence_bound`` or after ``timeout`` seconds.
-    ``jacobian_every`` steps separate two secant Jacobians (``4n`` evaluations, steps ``dq``,
-    ``dv``: a secant over ``dv`` averages a smooth dry-friction sign). ``tolerance`` bounds the
-    local error relative to ``1 + |y_i|`` (against the embedded first-order step,
-    ``h (k_1 + k_2) / 2``); None: fixed steps. Returns the states (T, 2n); raises
-    :class:`RosenbrockStop` (with the valid rows) on a non-finite or singular step, divergence
-    or timeout.
+    L-stable and linearly implicit (module docstring): one linear solve per stage, with a
+    secant Jacobian refreshed every ``jacobian_every`` steps; for stiff closed loops.
 
+    Parameters
+    ----------
+    parts : callable
+        ``parts(t, state) -> (M, g)``: the mass matrix (n, n) and the forces (n,) at
+        ``state = [q, v]``.
+    x0 : array, shape (2n,)
+        Initial state.
+    t : array, shape (T,)
+        Output times, strictly increasing.
+    step : float
+        Largest step.
+    jacobian_every : int, default 50
+        Steps between two secant Jacobians (``4n`` evaluations each).
+    divergence_bound : float, default inf
+        The run stops when a state component exceeds it.
+    timeout : float or None, default None
+        The run stops after this many seconds (None: no bound).
+    dq, dv : float, default 1e-4 and 1e-2
+        Secant steps in positions and velocities (a secant over ``dv`` averages a smooth
+        dry-friction sign).
+    tolerance : float or None, default 1e-5
+        Bound on the local error relative to ``1 + |y_i|`` (against the embedded first-order
+        step ``h (k_1 + k_2) / 2``); None: fixed steps.
+
+    Returns
+    -------
+    ndarray, shape (T, 2n)
+        The states at ``t``.
+
+    Raises
+    ------
+    RosenbrockStop
+        With the valid rows, on a non-finite or singular step, divergence or timeout.
+
+    Examples
+    --------
     A stiff oscillator ``1e-3 qdd = -100 q - 100 qd`` (modes near -1 and -1e5 1/s) at 10 ms:
 
     >>> import numpy as np

@@ -37,9 +37,9 @@ class ForceScore:
     """Held-out force prediction of a model, per coordinate and in total.
 
     Built by :func:`score_forces`, :func:`blocked_cross_validation` or
-    :meth:`from_predictions`; the parameters are the attributes.
+    :meth:`from_predictions`; each parameter is stored as the attribute of the same name.
 
-    Attributes
+    Parameters
     ----------
     names : tuple of str
         Coordinate names.
@@ -49,11 +49,12 @@ class ForceScore:
     total : float
         Relative RMS over all coordinates: ``||predicted - measured|| / ||measured||``.
     n_samples : int
+        Samples scored, all runs together.
     derivatives : str
         Where the velocities and accelerations came from.
     t, measured, predicted : list of ndarray
         Per run: times, measured and predicted forces (for :meth:`plot`).
-    folds : list of float or None
+    folds : list of float or None, default None
         Cross-validation: ``total`` of each fold, else None.
 
     Examples
@@ -80,8 +81,26 @@ class ForceScore:
 
     @classmethod
     def from_predictions(cls, names, t, measured, predicted, derivatives, folds=None):
-        """The scores of ``predicted`` against ``measured`` forces (per run, (N, n)); the
-        other arguments are the attributes of the same names."""
+        """The scores of predicted against measured forces.
+
+        Parameters
+        ----------
+        names : sequence of str
+            Coordinate names.
+        t : list of ndarray
+            Per run: the times (N,).
+        measured, predicted : list of ndarray
+            Per run: measured and predicted forces (N, n).
+        derivatives : str
+            Where the velocities and accelerations came from.
+        folds : list of float, optional
+            Cross-validation: ``total`` of each fold; default None.
+
+        Returns
+        -------
+        ForceScore
+            RMS and relative RMS per coordinate, total relative RMS.
+        """
         error = np.vstack([p - m for p, m in zip(predicted, measured, strict=True)])
         stacked = np.vstack(measured)
         rms = np.sqrt(np.mean(error**2, axis=0))
@@ -93,8 +112,22 @@ class ForceScore:
                    list(t), list(measured), list(predicted), folds)
 
     def to_dict(self) -> dict:
-        """JSON-ready figures (no series): ``rms``, ``relative``, ``measured_rms`` (per
-        coordinate name), ``total``, ``n_samples``, ``derivatives``, ``folds``."""
+        """JSON-ready figures (no series).
+
+        Returns
+        -------
+        dict
+            ``rms``, ``relative``, ``measured_rms`` (each by coordinate name), ``total``,
+            ``n_samples``, ``derivatives``, ``folds``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> score = ForceScore.from_predictions(["a"], [np.arange(4.0)], [np.full((4, 1), 2.0)],
+        ...                                     [np.full((4, 1), 2.1)], "measured")
+        >>> {key: round(value, 6) for key, value in score.to_dict()["relative"].items()}
+        {'a': 0.05}
+        """
         return {"rms": dict(zip(self.names, self.rms.tolist(), strict=True)),
                 "relative": dict(zip(self.names, self.relative.tolist(), strict=True)),
                 "measured_rms": dict(zip(self.names, self.measured_rms.tolist(), strict=True)),
@@ -102,8 +135,20 @@ class ForceScore:
                 "derivatives": self.derivatives, "folds": self.folds}
 
     def lines(self, units="N m") -> list:
-        """Per-coordinate lines (RMS in ``units``, one or one per coordinate, and %), the total.
+        """Per-coordinate lines (RMS and relative RMS), then the total.
 
+        Parameters
+        ----------
+        units : str or sequence of str, default "N m"
+            Units of the forces: one for all coordinates, or one per coordinate.
+
+        Returns
+        -------
+        list of str
+            One line per coordinate, the total, and the per-fold totals after cross-validation.
+
+        Examples
+        --------
         >>> import numpy as np
         >>> score = ForceScore.from_predictions(["joint_1"], [np.arange(4.0)],
         ...     [np.full((4, 1), 2.0)], [np.full((4, 1), 2.1)], "measured")
@@ -121,7 +166,15 @@ class ForceScore:
         return out
 
     def plot(self, path, title=None):
-        """Write measured against predicted forces to the PNG ``path``, a panel per coordinate."""
+        """Write measured against predicted forces as a PNG, a panel per coordinate.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The PNG file to write.
+        title : str, optional
+            Figure title; default None: the total relative RMS.
+        """
         from .plots import new_figure
         n = len(self.names)
         figure = new_figure(8, 1.6 * n + 0.8)
@@ -168,6 +221,7 @@ def scoring_derivatives(t, x, smoother=None, max_frequency: float = MAX_FREQUENC
     Returns
     -------
     q, qd, qdd : ndarray, shape (N, n)
+        Smoothed positions and their first two derivatives.
 
     Examples
     --------
@@ -246,8 +300,17 @@ def score_forces(model, x, t, u, x_dot=None, x_ddot=None, smoother=None,
         Held-out positions, their times (as recorded) and measured generalized forces.
     x_dot, x_ddot : same layout, optional
         Velocities and accelerations; those not given come from :func:`scoring_derivatives`.
-    smoother, max_frequency
-        As in :func:`scoring_derivatives`.
+    smoother : object with ``smooth(t, x)``, optional
+        Replaces the default smoothing spline; default None (:func:`scoring_derivatives`).
+    max_frequency : float, default 10.0
+        Highest bandwidth (Hz) kept by the default smoothing spline.
+
+    Returns
+    -------
+    ForceScore
+        Per coordinate: RMS of ``tau_hat - u`` and its ratio to the measured RMS; in total:
+        ``||tau_hat - u|| / ||u||``, with ``tau_hat`` the forces predicted by
+        :meth:`~pysindy_xl.XLSINDy.predict_forces`.
 
     Examples
     --------
@@ -297,10 +360,21 @@ def blocked_cross_validation(model, x, t, u, x_dot=None, x_ddot=None, n_blocks: 
     ----------
     model : XLSINDy
         The model to cross-validate (fitted or not; its parameters are used).
-    x, t, u, x_dot, x_ddot, smoother, max_frequency
-        As in :func:`score_forces`; the training data.
+    x, t, u : array (N, n), (N,), (N, n) or lists of them
+        The training data: positions, times and measured generalized forces.
+    x_dot, x_ddot : same layout, optional
+        Velocities and accelerations; default None: as in :func:`score_forces`.
     n_blocks : int, default 5
         Contiguous blocks of a single run, or most groups of runs (at least 2).
+    smoother : object with ``smooth(t, x)``, optional
+        As in :func:`score_forces`; default None.
+    max_frequency : float, default 10.0
+        As in :func:`score_forces`.
+
+    Returns
+    -------
+    ForceScore
+        The scores of all folds pooled; ``folds`` holds each fold's total relative RMS.
 
     Examples
     --------

@@ -91,11 +91,31 @@ def fit_quality(model, arguments) -> dict:
 def force_prediction(model, x, t, u, x_dot=None, x_ddot=None) -> dict:
     """How well the model predicts measured forces on a trajectory (inverse dynamics).
 
-    The forces :meth:`~pysindy_xl.XLSINDy.predict_forces` needs to move as recorded against
-    the measured ``u``; ``x``, ``u``, ``x_dot``, ``x_ddot`` are (N, n) arrays, ``t`` (N,) the
-    times; derivatives not given come from the model's smoother. Returns ``relative_rms`` (per
-    coordinate name), ``worst`` (the largest) and ``predicted`` (N, n).
+    The forces ``tau_hat`` that :meth:`~pysindy_xl.XLSINDy.predict_forces` needs to move as
+    recorded, against the measured ``u``: per coordinate ``rms(tau_hat - u) / rms(u)``.
 
+    Parameters
+    ----------
+    model : XLSINDy
+        A fitted model with dynamics.
+    x : array, shape (N, n)
+        Positions.
+    t : array, shape (N,)
+        Their times.
+    u : array, shape (N, n)
+        Measured generalized forces.
+    x_dot, x_ddot : array, shape (N, n), optional
+        Velocities and accelerations; default None: from the model's smoother (or a default
+        :class:`~pysindy_xl.WhittakerSmoother`).
+
+    Returns
+    -------
+    dict
+        ``relative_rms`` (coordinate name -> float), ``worst`` (the largest) and
+        ``predicted`` (ndarray (N, n)).
+
+    Examples
+    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
@@ -142,6 +162,19 @@ def _stability(model):
 def quality_lines(quality) -> list:
     """The lines ``pysindy-xl identify`` prints for a :func:`fit_quality` result.
 
+    Parameters
+    ----------
+    quality : dict
+        A result of :func:`fit_quality`.
+
+    Returns
+    -------
+    list of str
+        R^2 overall and per coordinate, then the selection's held-out scores and the stability
+        over subsample fits when known.
+
+    Examples
+    --------
     >>> quality = {"r2": 0.999, "r2_per_coordinate": {"theta": 0.999}, "formulation": "weak",
     ...            "target": "forces", "rows": 120, "cv_error": 1e-3, "cv_noise_ratio": None,
     ...            "stability": {"kept_least": ["L[cos(theta)]", 0.95],
@@ -192,10 +225,30 @@ def quality_lines(quality) -> list:
 def plot_identification(model, trajectory, path, title=None, forced=True) -> dict:
     """Simulate the model from a recorded trajectory's initial state and plot both.
 
-    Under the recorded forces (when ``forced``), one panel per coordinate, written as PNG to
-    ``path``. Returns ``rmse`` (per coordinate over the simulated span), ``simulated_until``
-    (s) and ``diverged`` (bool).
+    Under the recorded forces (when ``forced``), one panel per coordinate, written as PNG.
 
+    Parameters
+    ----------
+    model : XLSINDy
+        A fitted model with dynamics.
+    trajectory : Trajectory
+        The recorded run (:class:`~pysindy_xl.mujoco.Trajectory`: ``t``, ``q``, ``qd``,
+        ``tau``).
+    path : str or path-like
+        The PNG file to write.
+    title : str, optional
+        Figure title; default None: "identified model against the data".
+    forced : bool, default True
+        Simulate under the recorded forces ``tau`` (False: unforced).
+
+    Returns
+    -------
+    dict
+        ``rmse`` (per coordinate over the simulated span), ``simulated_until`` (s) and
+        ``diverged`` (bool).
+
+    Examples
+    --------
     >>> import numpy as np, pathlib, tempfile, pysindy_xl as px
     >>> from pysindy_xl.mujoco import Trajectory
     >>> c = px.Coordinates(["x"])

@@ -4,7 +4,11 @@ See :mod:`pysindy_xl.feature_library._base` for the layout of the stacked regres
 """
 
 from ..symbols import stack_variables
-from ._base import LIBRARY_TYPES, SymbolicLibrary, compile_entries, remembered_weak_values
+from ._base import LIBRARY_TYPES, SymbolicLibrary
+
+# used across the package, importable from here, not in __all__ (internals)
+from ._base import compile_entries as compile_entries
+from ._base import remembered_weak_values as remembered_weak_values
 
 # the compiled evaluation of symbolic terms is re-exported for the simulators of the package
 # (``dynamics``), so that no module outside this folder imports the private ``_compile``
@@ -23,5 +27,5 @@ from .spec import SpecError, SpecReader
 
 __all__ = ["SymbolicLibrary", "LagrangeLibrary", "PolynomialLagrangeLibrary", "ClassicalLibrary",
            "ExternalForces", "JointFrictionLibrary", "CatalogRepartition", "stack_variables",
-           "remembered_weak_values", "compile_entries", "euler_lagrange", "pysindy_library_terms",
-           "integrate_by_parts", "LIBRARY_TYPES", "SpecReader", "SpecError"]
+           "euler_lagrange", "pysindy_library_terms", "integrate_by_parts", "LIBRARY_TYPES",
+           "SpecReader", "SpecError"]

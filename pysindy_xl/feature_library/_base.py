@@ -58,10 +58,23 @@ def shared_derivation(key, derive, cache=_DERIVED, size=_CACHED_DERIVED):
 
 @contextlib.contextmanager
 def remembered_weak_values(library):
-    """Within the block, ``library.weak_transform`` evaluates the entries of each distinct state
-    array once (at most ``_WEAK_MEMO_BYTES`` kept; re-entrant): weak rows of the same states
+    """Within the block, ``library.weak_transform`` evaluates each distinct state array once.
+
+    At most ``_WEAK_MEMO_BYTES`` of values are kept; re-entrant. Weak rows of the same states
     under other test functions then cost only their contraction, bit for bit the same.
 
+    Parameters
+    ----------
+    library : SymbolicLibrary
+        A fitted library.
+
+    Yields
+    ------
+    SymbolicLibrary
+        ``library``, remembering its weak values until the block ends.
+
+    Examples
+    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> library = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit()
@@ -182,8 +195,20 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
 
     # -- pysindy / scikit-learn interface ------------------------------------------------
     def fit(self, x=None, y=None):
-        """Derive the symbolic columns (their evaluator is compiled on first use); ``x``
-        (N, 4n + 1), optional, has only its width checked. Returns self.
+        """Derive the symbolic columns (their evaluator is compiled on first use).
+
+        Parameters
+        ----------
+        x : array, shape (N, 4n + 1), optional
+            Library input; only its width is checked. Default None.
+        y : None
+            Ignored (scikit-learn's signature).
+
+        Returns
+        -------
+        self : SymbolicLibrary
+            The fitted library (``feature_names_``, ``symbolic_matrix_``, ``entry_index_``,
+            ``n_output_features_``).
         """
         self._fit_symbolic()
         if x is not None:
@@ -237,9 +262,15 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         self._evaluate = compile_terms(self.coords.variables, self.column_terms())
 
     def column_terms(self) -> Terms:
-        """The non-zero entries of the columns, one per row of ``entry_index_``, decomposed on
-        first use (:class:`~pysindy_xl.feature_library._compile.Terms`): the kernel of
-        :meth:`transform` and of :class:`~pysindy_xl.dynamics.CatalogDynamics`.
+        """The non-zero entries of the columns as polynomials in a few atoms, derived on first use.
+
+        The kernel of :meth:`transform` and of :class:`~pysindy_xl.dynamics.CatalogDynamics`.
+
+        Returns
+        -------
+        Terms
+            One entry per row of ``entry_index_`` (``(coordinate, feature)`` pairs), decomposed
+            into monomials (:class:`~pysindy_xl.feature_library.Terms`).
         """
         check_is_fitted(self, "entry_index_")
         terms = self.__dict__.get("_column_terms")
@@ -293,11 +324,48 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
             "(log, sqrt, 1/x of values <= 0) or the values are too large (overflow)")
 
     def check_domain(self, x) -> None:
-        """Raise ``ValueError`` when a candidate term is undefined on ``x`` (no-op here)."""
+        """Raise ``ValueError`` when a candidate term is undefined on ``x``.
+
+        The base class accepts every input; libraries with terms that have a domain
+        (``log``, ``sqrt``...) override it.
+
+        Parameters
+        ----------
+        x : array, shape (N, 4n + 1)
+            Library input (:func:`stack_variables`).
+        """
 
     def transform(self, x) -> np.ndarray:
-        """The stacked regression matrix (n * N, F), rows coordinate-major, of ``x`` (N, 4n + 1)
-        (:func:`stack_variables`).
+        """The stacked regression matrix ``Theta`` of the data.
+
+        Entry ``(c * N + k, j)`` is the symbolic entry ``E[c, j]`` (feature ``j`` in the
+        equation of coordinate ``c``) at sample ``k``; the model is ``Theta @ xi = 0``.
+
+        Parameters
+        ----------
+        x : array, shape (N, 4n + 1)
+            Library input: positions, velocities, accelerations, forces and times
+            (:func:`stack_variables`).
+
+        Returns
+        -------
+        ndarray, shape (n * N, F)
+            Rows coordinate-major: rows ``c * N`` to ``(c + 1) * N - 1`` hold the equation of
+            coordinate ``c``.
+
+        Raises
+        ------
+        ValueError
+            When ``x`` has the wrong width, or a column is NaN or inf on it.
+
+        Examples
+        --------
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit()
+        >>> z = px.stack_variables(np.array([[2.0]]), np.array([[1.0]]), np.array([[3.0]]))
+        >>> lib.transform(z)  # d/dt d(qd^2)/dqd = 2 qdd, -d(q^2)/dq = -2 q
+        array([[ 6., -4.]])
         """
         check_is_fitted(self, "entry_index_")
         if not hasattr(self, "_evaluate"):  # compiled on first use: weak fits need none
@@ -324,10 +392,27 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
                 sp.Matrix(*shape, lambda c, j: split[c][j][1]))
 
     def weak_matrices(self) -> tuple[sp.Matrix, sp.Matrix]:
-        """Symbolic split ``E = d/dt P - Q`` of every entry, derived on first use.
+        r"""Symbolic split ``E = d/dt P - Q`` of every entry, derived on first use.
 
-        ``P`` and ``Q`` (n, F) are free of accelerations; for a Lagrange term ``L_k``:
-        ``P[i, k] = dL_k/dqd_i`` and ``Q[i, k] = dL_k/dq_i``.
+        ``P`` and ``Q`` (n, F) are free of accelerations
+        (:func:`~pysindy_xl.feature_library.integrate_by_parts`); for a Lagrange term ``L_k``:
+        ``P[i, k] = dL_k/dqd_i`` and ``Q[i, k] = dL_k/dq_i``. Integrated against a test function
+        ``phi`` that vanishes at both ends,
+
+        .. math:: \int \phi E \, dt = -\int \dot\phi P \, dt - \int \phi Q \, dt.
+
+        Returns
+        -------
+        P, Q : sympy.Matrix, shape (n, F)
+            The two parts.
+
+        Examples
+        --------
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit()
+        >>> lib.weak_matrices()
+        (Matrix([[2*x_dot, 0]]), Matrix([[0, 2*x]]))
         """
         check_is_fitted(self, "entry_index_")
         if not hasattr(self, "weak_P_"):
@@ -335,9 +420,16 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         return self.weak_P_, self.weak_Q_
 
     def weak_terms(self) -> tuple[np.ndarray, Terms]:
-        """The non-zero entries of ``P`` and ``Q`` (:meth:`weak_matrices`) as polynomial terms,
-        derived on first use: ``index`` (E, 3), ``(part, coordinate, feature)`` with part 0 for
-        ``P``, and the ``Terms``, one per row of ``index``.
+        """The non-zero entries of ``P`` and ``Q`` (:meth:`weak_matrices`) as polynomial terms.
+
+        Derived on first use.
+
+        Returns
+        -------
+        index : ndarray of int, shape (E, 3)
+            ``(part, coordinate, feature)`` of each entry, part 0 for ``P`` and 1 for ``Q``.
+        terms : Terms
+            The entries, one per row of ``index``.
         """
         check_is_fitted(self, "entry_index_")
         found = self.__dict__.get("_weak_terms")
@@ -430,13 +522,45 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         return iter(memo[key])
 
     def get_feature_names(self, input_features=None) -> list[str]:
-        """Names of the features, in column order (``input_features``: pysindy's, ignored)."""
+        """Names of the features, in column order.
+
+        Parameters
+        ----------
+        input_features : list of str, optional
+            pysindy's argument, ignored. Default None.
+
+        Returns
+        -------
+        list of str
+            ``L[term]`` for Lagrangian terms, ``C_<coordinate>[term]`` for classical ones,
+            ``F[tau]`` for the forces.
+
+        Examples
+        --------
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit()
+        >>> lib.get_feature_names()
+        ['L[x_dot**2]', 'L[x**2]']
+        """
         check_is_fitted(self, "feature_names_")
         return list(self.feature_names_)
 
     def symbolic_matrix(self) -> sp.Matrix:
-        """The symbolic columns (n, F), derived on first use: ``[c, j]`` is feature ``j`` in the
-        equation of coordinate ``c``.
+        """The symbolic columns, derived on first use.
+
+        Returns
+        -------
+        sympy.Matrix, shape (n, F)
+            Entry ``[c, j]`` is feature ``j`` in the equation of coordinate ``c``.
+
+        Examples
+        --------
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit()
+        >>> lib.symbolic_matrix()
+        Matrix([[2*x_ddot, -2*x]])
         """
         if not hasattr(self, "entry_index_"):
             self.fit()
@@ -447,8 +571,15 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
 
     # -- persistence ----------------------------------------------------------------------
     def to_spec(self) -> dict:
-        """JSON-serializable description ``{"type": spec_type, ...}`` of this library
-        (:mod:`pysindy_xl.io`), read back by :meth:`from_spec`.
+        """JSON-serializable description of this library, read back by :meth:`from_spec`.
+
+        Used by :meth:`XLSINDy.save <pysindy_xl.XLSINDy.save>` (:mod:`pysindy_xl.io`); a library
+        that can be saved implements it.
+
+        Returns
+        -------
+        dict
+            ``{"type": spec_type, ...}``: plain JSON values, terms in the restricted grammar.
         """
         raise NotImplementedError(f"{type(self).__name__}: to_spec is not implemented; a "
                                   "library that can be saved describes itself in plain JSON")
@@ -457,9 +588,19 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
     def from_spec(cls, spec: dict, reader):
         """The library a specification describes (the inverse of :meth:`to_spec`).
 
-        ``spec`` is untrusted (from a file); ``reader`` (a
-        :class:`~pysindy_xl.feature_library.SpecReader`) parses its parts within the loader's
-        budget: ``reader.coords``, ``reader.terms(spec)``, ``reader.matrix(spec, key, shape)``,
-        ``reader.library(spec)``, ``reader.expect(condition, what)``.
+        Parameters
+        ----------
+        spec : dict
+            The description; untrusted (from a file).
+        reader : SpecReader
+            Parses the parts of ``spec`` within the loader's budget
+            (:class:`~pysindy_xl.feature_library.SpecReader`): ``reader.coords``,
+            ``reader.terms(spec)``, ``reader.matrix(spec, key, shape)``, ``reader.library(spec)``,
+            ``reader.expect(condition, what)``.
+
+        Returns
+        -------
+        SymbolicLibrary
+            The library, not fitted.
         """
         raise NotImplementedError(f"{cls.__name__}: from_spec is not implemented")

@@ -72,8 +72,20 @@ class ColumnStructure:
         return found
 
     def involves(self, symbols) -> np.ndarray:
-        """Which entries (n, F) involve any of ``symbols`` (variables of ``coords``).
+        """Which entries involve any of ``symbols``.
 
+        Parameters
+        ----------
+        symbols : sequence of sympy.Symbol
+            Variables of ``coords`` (e.g. ``coords.qdd``).
+
+        Returns
+        -------
+        ndarray of bool, shape (n, F)
+            True where entry ``[c, j]`` depends on one of them.
+
+        Examples
+        --------
         >>> import pysindy_xl as px
         >>> c = px.Coordinates(["x"])
         >>> px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit().involves(c.qdd).tolist()
@@ -84,7 +96,13 @@ class ColumnStructure:
         return self._entry_structure()[0][:, :, wanted].any(axis=2)
 
     def entry_sizes(self) -> np.ndarray:
-        """Terms of each entry of the columns (0 where the entry is zero), shape (n, F)."""
+        """Number of terms of each entry of the columns.
+
+        Returns
+        -------
+        ndarray of int, shape (n, F)
+            Terms of entry ``[c, j]`` once expanded, 0 where the entry is zero.
+        """
         return self._entry_structure()[1]
 
     def impulsive(self) -> bool:
@@ -94,6 +112,13 @@ class ColumnStructure:
         Such an entry is an impulse at each switch, which samples catch or miss by chance while
         integration by parts states it exactly: ``formulation="auto"`` then fits in the weak form.
 
+        Returns
+        -------
+        bool
+            True when some acceleration's coefficient switches with the state.
+
+        Examples
+        --------
         >>> import sympy as sp, pysindy_xl as px
         >>> c = px.Coordinates(["x"])
         >>> px.ClassicalLibrary(c, [c.qd[0], sp.Abs(c.qd[0]) * c.qdd[0]]).fit().impulsive()

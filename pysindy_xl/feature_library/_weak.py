@@ -34,14 +34,32 @@ def time_derivative(expr: sp.Expr, coords: Coordinates) -> sp.Expr:
 
 
 def integrate_by_parts(expr: sp.Expr, coords: Coordinates) -> tuple[sp.Expr, sp.Expr]:
-    """Split a catalog entry ``expr`` (in ``coords.variables``) into ``E = d/dt P - Q`` with ``P``,
-    ``Q`` free of accelerations.
+    r"""Split a catalog entry ``E`` into ``E = d/dt P - Q`` with ``P``, ``Q`` free of accelerations.
+
+    The weak form integrates each entry against a test function ``phi`` that vanishes at the
+    ends of its support, moving the time derivative onto ``phi``:
+
+    .. math:: \int \phi E \, dt = -\int \dot\phi P \, dt - \int \phi Q \, dt,
+
+    so no acceleration is needed. Rules:
 
     * ``a(q, t) * qdd_j`` gives ``P = a qd_j``, the rest of its time derivative going to ``Q``;
     * ``g(q_j) * qd_j`` with ``g`` a polynomial is exact: ``P = int g dq_j``;
     * ``sum_j c_j(q, qd) qdd_j`` with ``c_j = dG/dqd_j`` for one ``G(q, qd)`` (a dry friction's
       lead) gives ``P = G`` and ``Q = dG/dq . qd + dG/dt``;
     * everything else goes to ``Q = -E``.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+        The entry, in ``coords.variables``.
+    coords : Coordinates
+        The generalized coordinates.
+
+    Returns
+    -------
+    P, Q : sympy.Expr
+        The two parts.
 
     Raises
     ------

@@ -21,8 +21,26 @@ def pysindy_library_terms(library: BaseFeatureLibrary, coords: Coordinates) -> l
     The feature names are parsed by the restricted grammar of :mod:`pysindy_xl.expressions`,
     then checked numerically against ``library.transform`` on random states, so a library whose
     names do not describe its features (a ``CustomLibrary``) is refused, not mistranslated.
-    Returns one expression per output feature.
 
+    Parameters
+    ----------
+    library : pysindy.BaseFeatureLibrary
+        The pysindy library, fitted on the inputs ``[q, qd]`` here.
+    coords : Coordinates
+        The generalized coordinates.
+
+    Returns
+    -------
+    list of sympy.Expr
+        One expression per output feature of ``library``.
+
+    Raises
+    ------
+    ValueError
+        When a feature name cannot be parsed or does not match its feature's values.
+
+    Examples
+    --------
     >>> import pysindy as ps, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> pysindy_library_terms(ps.PolynomialLibrary(degree=2, include_bias=False), c)
@@ -62,6 +80,7 @@ class ClassicalLibrary(SymbolicLibrary):
     Parameters
     ----------
     coords : Coordinates
+        The generalized coordinates.
     terms : sequence of sympy.Expr or pysindy.BaseFeatureLibrary
         Terms in ``coords.variables``; a pysindy library is evaluated on ``(q, qd)``
         (:func:`pysindy_library_terms`).
@@ -71,7 +90,9 @@ class ClassicalLibrary(SymbolicLibrary):
     Attributes
     ----------
     terms_ : list of sympy.Expr
+        The terms, checked (a pysindy library translated).
     mask_ : ndarray of bool, shape (n_terms, n)
+        The equations each term enters.
 
     Examples
     --------
@@ -134,8 +155,14 @@ class ClassicalLibrary(SymbolicLibrary):
                 for used in row if used]
 
     def to_spec(self) -> dict:
-        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec` (terms in the
-        restricted grammar)."""
+        """JSON-serializable description of this library, read back by :meth:`from_spec`.
+
+        Returns
+        -------
+        dict
+            ``{"type": spec_type, ...}``: the parameters as plain JSON values, terms in the
+            restricted grammar (:func:`~pysindy_xl.expressions.format_expression`).
+        """
         if not hasattr(self, "terms_"):
             self.fit()
         return {"type": self.spec_type, "terms": [format_expression(t) for t in self.terms_],
@@ -143,7 +170,21 @@ class ClassicalLibrary(SymbolicLibrary):
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
+        """The library a specification describes (the inverse of :meth:`to_spec`).
+
+        Parameters
+        ----------
+        spec : dict
+            The description; untrusted (from a file).
+        reader : SpecReader
+            Parses its parts within the loader's budget
+            (:class:`~pysindy_xl.feature_library.SpecReader`).
+
+        Returns
+        -------
+        ClassicalLibrary
+            The library, not fitted.
+        """
         terms = reader.terms(spec)
         mask = reader.matrix(spec, "mask", (len(terms), reader.coords.n), binary=True,
                              shape_name="(n_terms, n)")

@@ -38,8 +38,28 @@ def _exact(value: float) -> sp.Expr:
 
 
 def signed_indices_to_interlink(indices, n: int) -> np.ndarray:
-    """Interlink matrix from per-coordinate lists of signed 1-based input indices:
-    ``[[1], [-1, 2]]`` gives coordinate 0 ``u_1`` and coordinate 1 ``u_2 - u_1`` (xlsindy's).
+    """Interlink matrix from per-coordinate lists of signed 1-based input indices.
+
+    ``[[1], [-1, 2]]`` gives coordinate 0 ``u_1`` and coordinate 1 ``u_2 - u_1`` (xlsindy's
+    convention).
+
+    Parameters
+    ----------
+    indices : sequence of sequence of int
+        Per coordinate, the signed 1-based indices of the inputs acting on it.
+    n : int
+        Number of coordinates (and inputs).
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        ``interlink[c, k] = sign`` for each signed index ``k + 1`` of coordinate ``c``.
+
+    Examples
+    --------
+    >>> signed_indices_to_interlink([[1], [-1, 2]], 2)
+    array([[ 1.,  0.],
+           [-1.,  1.]])
     """
     if not isinstance(indices, (list, tuple)) or len(indices) != n:
         raise ValueError(f"indices: expected one list of signed input indices per coordinate ({n})")
@@ -62,6 +82,7 @@ class ExternalForces(SymbolicLibrary):
     Parameters
     ----------
     coords : Coordinates
+        The generalized coordinates.
     interlink : array, shape (n, n), optional
         Generalized force ``= interlink @ u`` for the measured inputs ``u`` (several signed
         inputs may act on one coordinate, e.g. a motor between two links). Default: identity.
@@ -70,6 +91,7 @@ class ExternalForces(SymbolicLibrary):
     Attributes
     ----------
     interlink_ : ndarray, shape (n, n)
+        The interlink matrix used.
 
     Examples
     --------
@@ -91,9 +113,25 @@ class ExternalForces(SymbolicLibrary):
 
     @classmethod
     def from_signed_indices(cls, coords: Coordinates, indices) -> ExternalForces:
-        """Build from per-coordinate lists of signed 1-based input indices
+        """Build from per-coordinate lists of signed 1-based input indices (xlsindy's convention).
+
+        ``[[1], [-1, 2]]`` gives coordinate 0 the force ``u_1`` and coordinate 1 ``u_2 - u_1``
         (:func:`signed_indices_to_interlink`).
 
+        Parameters
+        ----------
+        coords : Coordinates
+            The generalized coordinates.
+        indices : sequence of sequence of int
+            Per coordinate, the signed 1-based indices of the inputs acting on it.
+
+        Returns
+        -------
+        ExternalForces
+            The library with the corresponding ``interlink``.
+
+        Examples
+        --------
         >>> import pysindy_xl as px
         >>> c = px.Coordinates(["a", "b"])
         >>> px.ExternalForces.from_signed_indices(c, [[1, -2], [2]]).interlink
@@ -110,13 +148,34 @@ class ExternalForces(SymbolicLibrary):
                                           if matrix[c, k]) for c in range(len(tau))])
 
     def to_spec(self) -> dict:
-        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
+        """JSON-serializable description of this library, read back by :meth:`from_spec`.
+
+        Returns
+        -------
+        dict
+            ``{"type": spec_type, ...}``: the parameters as plain JSON values, terms in the
+            restricted grammar (:func:`~pysindy_xl.expressions.format_expression`).
+        """
         return {"type": self.spec_type,
                 "interlink": _interlink_matrix(self.interlink, self.coords.n).tolist()}
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
+        """The library a specification describes (the inverse of :meth:`to_spec`).
+
+        Parameters
+        ----------
+        spec : dict
+            The description; untrusted (from a file).
+        reader : SpecReader
+            Parses its parts within the loader's budget
+            (:class:`~pysindy_xl.feature_library.SpecReader`).
+
+        Returns
+        -------
+        ExternalForces
+            The library, not fitted.
+        """
         n = reader.coords.n
         return cls(reader.coords,
                    interlink=reader.matrix(spec, "interlink", (n, n), shape_name="(n, n)"))

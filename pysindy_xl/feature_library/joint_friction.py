@@ -35,9 +35,30 @@ FRICTION_MODELS = ("viscous", "coulomb", "asymmetric", "stribeck", "offset")
 
 
 def friction_function(model: str, velocity, coulomb_scale: float, stribeck_scale: float):
-    """The function of a joint ``velocity`` that ``model``'s coefficient multiplies (scales as in
-    the module docstring).
+    """The function of a joint velocity that a friction model's coefficient multiplies.
 
+    With ``eps`` = ``coulomb_scale`` and ``v_s`` = ``stribeck_scale`` (module docstring):
+    viscous ``v``, coulomb ``tanh(v / eps)``, asymmetric ``tanh(v / eps)^2``, stribeck
+    ``tanh(v / eps) exp(-(v / v_s)^2)``, offset ``1``.
+
+    Parameters
+    ----------
+    model : str
+        One of :data:`FRICTION_MODELS`.
+    velocity : sympy.Expr
+        The joint velocity.
+    coulomb_scale : float
+        ``eps``, velocity scale of the smooth sign.
+    stribeck_scale : float
+        ``v_s``, velocity scale of the Stribeck decay.
+
+    Returns
+    -------
+    sympy.Expr
+        The candidate term.
+
+    Examples
+    --------
     >>> import sympy as sp
     >>> v = sp.Symbol("v")
     >>> friction_function("stribeck", v, 0.01, 0.1)
@@ -68,6 +89,7 @@ class JointFrictionLibrary(SymbolicLibrary):
     Parameters
     ----------
     coords : Coordinates
+        The generalized coordinates.
     joints : sequence of str
         Joint names.
     velocities : sequence of sympy.Expr, optional
@@ -75,6 +97,7 @@ class JointFrictionLibrary(SymbolicLibrary):
     weights : array (n, len(joints)), optional
         The generalized force of a unit joint torque; default the identity.
     models : sequence of str, default :data:`FRICTION_MODELS`
+        The candidate models of every joint.
     coulomb_scale : float, default 0.01
         ``eps``: velocity scale of the smooth sign.
     stribeck_scale : float, default 0.1
@@ -85,7 +108,9 @@ class JointFrictionLibrary(SymbolicLibrary):
     kinds_ : list of (str, str)
         ``(model, joint)`` of each feature.
     joints_ : list of str
+        The joint names.
     weights_ : ndarray, shape (n, n_joints)
+        The generalized force of a unit torque of each joint.
 
     Examples
     --------
@@ -158,14 +183,45 @@ class JointFrictionLibrary(SymbolicLibrary):
         return list(self._terms)
 
     def coefficients_by_joint(self, coef) -> dict:
-        """``{joint: {model: coefficient}}`` of ``coef``, this library's coefficients."""
+        """This library's coefficients by joint and model.
+
+        Parameters
+        ----------
+        coef : array, shape (F,)
+            The coefficients of this library's features, in feature order.
+
+        Returns
+        -------
+        dict
+            ``{joint: {model: coefficient}}``.
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> c = px.Coordinates(["a"])
+        >>> lib = JointFrictionLibrary(c, ["hinge"], models=("viscous", "coulomb")).fit()
+        >>> lib.coefficients_by_joint([0.5, 0.2])
+        {'hinge': {'viscous': 0.5, 'coulomb': 0.2}}
+        """
         out = {}
         for (model, joint), value in zip(self.kinds_, np.asarray(coef, dtype=float), strict=True):
             out.setdefault(joint, {})[model] = float(value)
         return out
 
     def coordinate_of(self, joint: str) -> str | None:
-        """The coordinate whose force is ``joint``'s torque (weight 1), else None."""
+        """The coordinate whose force is ``joint``'s torque.
+
+        Parameters
+        ----------
+        joint : str
+            A joint name of this library.
+
+        Returns
+        -------
+        str or None
+            The coordinate's name when the joint's torque enters exactly one coordinate, with
+            weight 1; else None.
+        """
         column = self.weights_[:, self.joints_.index(joint)]
         reached = np.flatnonzero(column)
         if len(reached) == 1 and column[reached[0]] == 1:
@@ -173,7 +229,14 @@ class JointFrictionLibrary(SymbolicLibrary):
         return None
 
     def to_spec(self) -> dict:
-        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
+        """JSON-serializable description of this library, read back by :meth:`from_spec`.
+
+        Returns
+        -------
+        dict
+            ``{"type": spec_type, ...}``: the parameters as plain JSON values, terms in the
+            restricted grammar (:func:`~pysindy_xl.expressions.format_expression`).
+        """
         joints, velocities, weights, models, scales = self._resolved()
         return {"type": self.spec_type, "joints": joints,
                 "velocities": [format_expression(v) for v in velocities],
@@ -182,7 +245,21 @@ class JointFrictionLibrary(SymbolicLibrary):
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
+        """The library a specification describes (the inverse of :meth:`to_spec`).
+
+        Parameters
+        ----------
+        spec : dict
+            The description; untrusted (from a file).
+        reader : SpecReader
+            Parses its parts within the loader's budget
+            (:class:`~pysindy_xl.feature_library.SpecReader`).
+
+        Returns
+        -------
+        JointFrictionLibrary
+            The library, not fitted.
+        """
         joints = spec.get("joints")
         reader.expect(isinstance(joints, list) and all(isinstance(j, str) for j in joints),
                       "JointFrictionLibrary: 'joints' must be a list of names")

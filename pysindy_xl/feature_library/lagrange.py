@@ -53,11 +53,28 @@ def _defined_everywhere(expr: sp.Expr) -> bool:
 
 
 def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:
-    """Euler-Lagrange expressions ``d/dt dL/dqd_i - dL/dq_i`` for every coordinate.
+    r"""Euler-Lagrange expressions ``d/dt dL/dqd_i - dL/dq_i`` for every coordinate.
 
-    The time derivative is the chain rule ``d/dt = sum_k qd_k d/dq_k + qdd_k d/dqd_k + d/dt``;
-    the expanded expressions (length n) are linear in the accelerations.
+    .. math:: E_i = \frac{d}{dt}\frac{\partial L}{\partial \dot q_i}
+              - \frac{\partial L}{\partial q_i}, \qquad
+              \frac{d}{dt} = \sum_k \Big(\dot q_k \frac{\partial}{\partial q_k}
+              + \ddot q_k \frac{\partial}{\partial \dot q_k}\Big) + \frac{\partial}{\partial t}.
 
+    Parameters
+    ----------
+    lagrangian : sympy.Expr
+        A Lagrangian in ``coords.q``, ``coords.qd`` and ``coords.t``.
+    coords : Coordinates
+        The generalized coordinates.
+
+    Returns
+    -------
+    list of sympy.Expr
+        One expanded expression per coordinate, linear in the accelerations (the equation of
+        motion of an unforced system is ``E_i = 0``).
+
+    Examples
+    --------
     >>> import pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> euler_lagrange(c.qd[0] ** 2 / 2 - c.q[0] ** 2 / 2, c)
@@ -81,14 +98,21 @@ def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:
 
 
 class LagrangeLibrary(SymbolicLibrary):
-    """Candidate Lagrangian terms, each turned into its Euler-Lagrange column.
+    r"""Candidate Lagrangian terms, each turned into its Euler-Lagrange column.
 
-    Term ``L_k`` contributes ``d/dt dL_k/dqd_i - dL_k/dq_i`` to the equation of every coordinate
-    ``i``: one coefficient per term, shared by all equations.
+    Term ``L_k`` contributes its Euler-Lagrange expression to the equation of every coordinate
+    ``i``, one coefficient ``xi_k`` per term shared by all equations:
+
+    .. math:: E_{ik} = \frac{d}{dt}\frac{\partial L_k}{\partial \dot q_i}
+              - \frac{\partial L_k}{\partial q_i}, \qquad
+              \sum_k \xi_k E_{ik} = \tau_i \;\text{ for } L = \sum_k \xi_k L_k
+
+    (:func:`euler_lagrange`; with the force column's coefficient -1).
 
     Parameters
     ----------
     coords : Coordinates
+        The generalized coordinates.
     terms : sequence of sympy.Expr
         Candidate terms in ``coords.q``, ``coords.qd`` and ``coords.t`` (e.g. from
         :func:`pysindy_xl.products`).
@@ -96,6 +120,7 @@ class LagrangeLibrary(SymbolicLibrary):
     Attributes
     ----------
     terms_ : list of sympy.Expr
+        The candidate terms, checked.
     zero_terms_ : list of int
         Terms whose column is identically zero (constants, total time derivatives): never
         identifiable.
@@ -148,6 +173,18 @@ class LagrangeLibrary(SymbolicLibrary):
         A term outside its domain (``log(x)`` at ``x <= 0``) has no meaning there, even where its
         column is finite; terms defined everywhere are not evaluated.
 
+        Parameters
+        ----------
+        x : array, shape (N, 4n + 1)
+            Library input (:func:`~pysindy_xl.feature_library.stack_variables`).
+
+        Raises
+        ------
+        ValueError
+            Naming the terms that are NaN or inf on ``x`` and on how many samples.
+
+        Examples
+        --------
         >>> import numpy as np, sympy as sp, pysindy_xl as px
         >>> c = px.Coordinates(["x"])
         >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, sp.log(c.q[0])]).fit()
@@ -188,11 +225,32 @@ class LagrangeLibrary(SymbolicLibrary):
             sp.Matrix(coords.n, len(terms), lambda i, k: sp.expand(_diff(terms[k], coords.q[i]))))
 
     def to_spec(self) -> dict:
-        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
+        """JSON-serializable description of this library, read back by :meth:`from_spec`.
+
+        Returns
+        -------
+        dict
+            ``{"type": spec_type, ...}``: the parameters as plain JSON values, terms in the
+            restricted grammar (:func:`~pysindy_xl.expressions.format_expression`).
+        """
         terms = as_expr_list(self.terms, "terms")
         return {"type": self.spec_type, "terms": [format_expression(t) for t in terms]}
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
+        """The library a specification describes (the inverse of :meth:`to_spec`).
+
+        Parameters
+        ----------
+        spec : dict
+            The description; untrusted (from a file).
+        reader : SpecReader
+            Parses its parts within the loader's budget
+            (:class:`~pysindy_xl.feature_library.SpecReader`).
+
+        Returns
+        -------
+        LagrangeLibrary
+            The library, not fitted.
+        """
         return cls(reader.coords, reader.terms(spec))

@@ -32,9 +32,12 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
 
     Parameters
     ----------
-    coords, terms
-        As in :class:`~pysindy_xl.LagrangeLibrary`.
+    coords : Coordinates
+        The generalized coordinates.
+    terms : sequence of sympy.Expr or TrigTerms
+        Candidate Lagrangian terms, as in :class:`~pysindy_xl.LagrangeLibrary`.
     parameters : sequence of dict, optional
+        Default None.
         One per term: the physical parameters it stands for, ``{name: weight}`` (a kinematic
         catalog's base parameters); read by :meth:`XLSINDy.physical_parameters
         <pysindy_xl.XLSINDy.physical_parameters>`.
@@ -62,9 +65,21 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         self.tree = tree
 
     def rigid_body_parameters(self, coefficients):
-        """Physical parameters of :attr:`tree` whose Lagrangian is ``sum_j coefficients[j] *
-        terms[j]`` (least norm,
-        :func:`~pysindy_xl.physical.rigid_body.physical_parameters_from_base`); None without a tree.
+        """Physical parameters of :attr:`tree` for given coefficients of the terms.
+
+        The parameters whose Lagrangian is ``sum_j coefficients[j] terms[j]``, least-norm
+        (:func:`~pysindy_xl.physical.rigid_body.physical_parameters_from_base`).
+
+        Parameters
+        ----------
+        coefficients : array, shape (n_terms,)
+            Coefficients of this library's terms.
+
+        Returns
+        -------
+        ndarray or None
+            The physical parameters of the tree, in the order of ``tree.physical_names``; None
+            without a tree.
         """
         if self.tree is None:
             return None
@@ -117,14 +132,29 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
         return derivation.matrix
 
     def impulsive(self) -> bool:
-        """Polynomial columns have smooth coefficients."""
+        """Whether an acceleration enters a column with a switching coefficient.
+
+        Returns
+        -------
+        bool
+            False for columns derived as trigonometric polynomials (smooth coefficients); as
+            :class:`~pysindy_xl.LagrangeLibrary` for terms derived symbolically.
+        """
         if self.__dict__.get("_polynomial_columns") is not None:
             return False
         return super().impulsive()
 
     def check_domain(self, x) -> None:
-        """Only symbolically derived terms need :meth:`LagrangeLibrary.check_domain`: trigonometric
-        polynomials are defined everywhere.
+        """Raise ``ValueError`` naming the terms undefined on ``x``.
+
+        Only symbolically derived terms need :meth:`LagrangeLibrary.check_domain
+        <pysindy_xl.LagrangeLibrary.check_domain>`: trigonometric polynomials are defined
+        everywhere.
+
+        Parameters
+        ----------
+        x : array, shape (N, 4n + 1)
+            Library input (:func:`~pysindy_xl.feature_library.stack_variables`).
         """
         if "_polynomial_columns" not in self.__dict__:
             super().check_domain(x)
@@ -176,9 +206,16 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
             np.repeat(np.arange(len(polynomials)), sizes), len(polynomials))
 
     def to_spec(self) -> dict:
-        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`, a trigonometric
-        polynomial term as its exponent rows and coefficients (exact and compact), any other
-        term in the restricted grammar.
+        """JSON-serializable description of this library, read back by :meth:`from_spec`.
+
+        A trigonometric polynomial term is written as its exponent rows and coefficients (exact
+        and compact), any other term in the restricted grammar.
+
+        Returns
+        -------
+        dict
+            ``{"type": spec_type, ...}``: the parameters as plain JSON values, terms in the
+            restricted grammar (:func:`~pysindy_xl.expressions.format_expression`).
         """
         coords = self.coords
         if isinstance(self.terms, TrigTerms) and self.terms.coords == coords and len(self.terms):
@@ -217,7 +254,21 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec`."""
+        """The library a specification describes (the inverse of :meth:`to_spec`).
+
+        Parameters
+        ----------
+        spec : dict
+            The description; untrusted (from a file).
+        reader : SpecReader
+            Parses its parts within the loader's budget
+            (:class:`~pysindy_xl.feature_library.SpecReader`).
+
+        Returns
+        -------
+        PolynomialLagrangeLibrary
+            The library, not fitted.
+        """
         coords = reader.coords
         angles, items = spec.get("angles"), spec.get("terms")
         reader.expect(isinstance(angles, list) and len(angles) == coords.n

@@ -80,7 +80,9 @@ class CatalogRepartition(SymbolicLibrary):
     Parameters
     ----------
     libraries : list of SymbolicLibrary
-        Nested ``CatalogRepartition`` are flattened.
+        The categories (:class:`~pysindy_xl.LagrangeLibrary`,
+        :class:`~pysindy_xl.ClassicalLibrary`, :class:`~pysindy_xl.ExternalForces`...); nested
+        ``CatalogRepartition`` are flattened. ``lag + cls`` builds the same catalog.
 
     Attributes
     ----------
@@ -93,6 +95,7 @@ class CatalogRepartition(SymbolicLibrary):
     feature_terms_ : list
         The term each feature stands for.
     force_columns_ : list of int
+        Indices of the force columns.
 
     Examples
     --------
@@ -114,6 +117,7 @@ class CatalogRepartition(SymbolicLibrary):
 
     @property
     def coords(self):
+        """The coordinates shared by all the libraries (those of the first)."""
         return self.flat_libraries()[0].coords
 
     @property
@@ -125,9 +129,33 @@ class CatalogRepartition(SymbolicLibrary):
         return bool(lagrange) and all(getattr(lib, "complete_catalog", False) for lib in lagrange)
 
     def flat_libraries(self, _parents=()) -> list[SymbolicLibrary]:
-        """The libraries, nested catalogs flattened, a force library first when none is given;
-        ``TypeError`` for a non-library, ``ValueError`` for a catalog nested in itself or mixed
-        coordinates.
+        """The libraries, nested catalogs flattened, a force library first when none is given.
+
+        Parameters
+        ----------
+        _parents : tuple of int, default ()
+            Internal: ids of the enclosing catalogs, to refuse a catalog nested in itself.
+
+        Returns
+        -------
+        list of SymbolicLibrary
+            The flattened libraries, an :class:`~pysindy_xl.ExternalForces` first when none is
+            given.
+
+        Raises
+        ------
+        TypeError
+            For an entry that is not a catalog library.
+        ValueError
+            For a catalog nested in itself, no library, or libraries of different coordinates.
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> catalog = px.CatalogRepartition([px.LagrangeLibrary(c, [c.qd[0] ** 2])])
+        >>> [type(lib).__name__ for lib in catalog.flat_libraries()]
+        ['ExternalForces', 'LagrangeLibrary']
         """
         if isinstance(self.libraries, SymbolicLibrary) or not hasattr(self.libraries, "__iter__"):
             raise TypeError("libraries: expected a list of pysindy_xl feature libraries")
@@ -182,6 +210,15 @@ class CatalogRepartition(SymbolicLibrary):
         return sp.Matrix.hstack(*(lib.symbolic_matrix_ for lib in self.libraries_))
 
     def impulsive(self) -> bool:
+        """Whether an acceleration enters some library's column with a switching coefficient.
+
+        Returns
+        -------
+        bool
+            True when one of the libraries is impulsive
+            (:meth:`SymbolicLibrary.impulsive
+            <pysindy_xl.feature_library.SymbolicLibrary.impulsive>`).
+        """
         return any(lib.impulsive() for lib in self.libraries_)
 
     def _feature_terms(self):
@@ -211,7 +248,13 @@ class CatalogRepartition(SymbolicLibrary):
         return sp.Matrix.hstack(*(p for p, _ in parts)), sp.Matrix.hstack(*(q for _, q in parts))
 
     def check_domain(self, x) -> None:
-        """Raise ``ValueError`` naming a candidate term undefined on ``x`` (by each library)."""
+        """Raise ``ValueError`` naming a candidate term undefined on ``x`` (by each library).
+
+        Parameters
+        ----------
+        x : array, shape (N, 4n + 1)
+            Library input (:func:`~pysindy_xl.feature_library.stack_variables`).
+        """
         check_is_fitted(self, "libraries_")
         for lib in self.libraries_:
             lib.check_domain(x)
@@ -224,9 +267,15 @@ class CatalogRepartition(SymbolicLibrary):
 
     # -- helpers on the coefficient vector ----------------------------------------------------
     def physical_structure(self):
-        """What the columns stand for physically (rigid-body base parameters from the Lagrange
-        libraries' ``parameters`` maps, friction), in column indices (:mod:`pysindy_xl.physical`);
-        None when no library maps its terms to physical parameters.
+        """What the columns stand for physically, in column indices.
+
+        Rigid-body base parameters from the Lagrange libraries' ``parameters`` maps, and friction
+        (:mod:`pysindy_xl.physical`).
+
+        Returns
+        -------
+        PhysicalStructure or None
+            None when no library maps its terms to physical parameters.
         """
         from ..physical.structure import catalog_structure
 
@@ -234,10 +283,23 @@ class CatalogRepartition(SymbolicLibrary):
         return catalog_structure(self)
 
     def column_priority(self) -> np.ndarray:
-        """Feature indices (F,) from most to least preferred among linearly dependent columns.
+        """Feature indices from most to least preferred among linearly dependent columns.
 
         By the libraries' ``column_rank`` (forces, Lagrange, classical, others), then fewer terms in
         the column's entries, then catalog order.
+
+        Returns
+        -------
+        ndarray of int, shape (F,)
+            A permutation of the feature indices.
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = (px.ClassicalLibrary(c, [c.q[0]]) + px.LagrangeLibrary(c, [c.q[0] ** 2])).fit()
+        >>> lib.get_feature_names(), lib.column_priority().tolist()
+        (['F[tau]', 'C_x[x]', 'L[x**2]'], [0, 2, 1])
         """
         check_is_fitted(self, "entry_index_")
         complexity = self.entry_sizes().sum(axis=0).tolist()
@@ -259,10 +321,23 @@ class CatalogRepartition(SymbolicLibrary):
         forces : float, default -1.0
             Coefficient of the force column.
 
+        Returns
+        -------
+        ndarray, shape (F,)
+            The coefficients, in feature order (zero for the terms the model does not contain).
+
         Raises
         ------
         ValueError
             If a part of the model is not representable in the catalog.
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.CatalogRepartition([px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])]).fit()
+        >>> lib.ideal_coefficients(lagrangian=c.qd[0] ** 2 / 2 - c.q[0] ** 2)
+        array([-1. ,  0.5, -1. ])
         """
         if not hasattr(self, "entry_index_"):
             self.fit()
@@ -326,14 +401,36 @@ class CatalogRepartition(SymbolicLibrary):
                          "not in the catalog")
 
     def to_spec(self) -> dict:
-        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.to_spec`."""
+        """JSON-serializable description of this library, read back by :meth:`from_spec`.
+
+        The libraries are described one after the other, nested catalogs flattened.
+
+        Returns
+        -------
+        dict
+            ``{"type": spec_type, ...}``: the parameters as plain JSON values, terms in the
+            restricted grammar (:func:`~pysindy_xl.expressions.format_expression`).
+        """
         return {"type": self.spec_type,
                 "libraries": [lib.to_spec() for lib in self.flat_libraries()]}
 
     @classmethod
     def from_spec(cls, spec, reader):
-        """As :meth:`~pysindy_xl.feature_library.SymbolicLibrary.from_spec` (each library
-        through ``reader``)."""
+        """The library a specification describes (the inverse of :meth:`to_spec`).
+
+        Parameters
+        ----------
+        spec : dict
+            The description; untrusted (from a file).
+        reader : SpecReader
+            Parses its parts within the loader's budget
+            (:class:`~pysindy_xl.feature_library.SpecReader`).
+
+        Returns
+        -------
+        CatalogRepartition
+            The library, not fitted.
+        """
         libraries = spec.get("libraries")
         reader.expect(isinstance(libraries, list) and libraries,
                       "libraries must be a non-empty list")

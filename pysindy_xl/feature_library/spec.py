@@ -21,7 +21,19 @@ _MAX_POWER = 64
 
 
 class SpecError(ValueError):
-    """A library specification that cannot be read (the message says which part)."""
+    """A library specification that cannot be read (the message says which part).
+
+    A ``ValueError``; :meth:`XLSINDy.load <pysindy_xl.XLSINDy.load>` reports it as an invalid
+    model file.
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> SpecReader(px.Coordinates(["x"])).terms({"type": "lagrange", "terms": []})
+    Traceback (most recent call last):
+    ...
+    pysindy_xl.feature_library.spec.SpecError: lagrange.terms must be a non-empty list of strings
+    """
 
 
 class SpecReader:
@@ -30,6 +42,7 @@ class SpecReader:
     Parameters
     ----------
     coords : Coordinates
+        The coordinates of the model file.
     max_terms : int, default 5000
         Catalog terms in all the specification.
     max_size : int, default 20000
@@ -64,12 +77,37 @@ class SpecReader:
 
     @staticmethod
     def expect(condition: bool, what: str) -> None:
-        """Raise :class:`SpecError` saying ``what`` unless ``condition``."""
+        """Raise :class:`SpecError` saying ``what`` unless ``condition``.
+
+        Parameters
+        ----------
+        condition : bool
+            What must hold.
+        what : str
+            The message otherwise.
+        """
         if not condition:
             raise SpecError(what)
 
     def library(self, spec):
-        """The library ``spec`` describes (nested ones through this same reader)."""
+        """The library ``spec`` describes (nested ones through this same reader).
+
+        Parameters
+        ----------
+        spec : dict
+            ``{"type": spec_type, ...}``, the type one of
+            :data:`~pysindy_xl.feature_library.LIBRARY_TYPES`.
+
+        Returns
+        -------
+        SymbolicLibrary
+            The library, not fitted.
+
+        Raises
+        ------
+        SpecError
+            For an unknown type, libraries nested too deep or a part that cannot be read.
+        """
         self.expect(isinstance(spec, dict) and isinstance(spec.get("type"), str),
                     "library spec must be an object with a 'type'")
         cls = LIBRARY_TYPES.get(spec["type"])
@@ -83,7 +121,27 @@ class SpecReader:
             self._depth -= 1
 
     def terms(self, spec, key: str = "terms") -> list:
-        """``spec[key]``: a non-empty list of terms in the restricted grammar, parsed."""
+        """``spec[key]``: a non-empty list of terms in the restricted grammar, parsed.
+
+        Parameters
+        ----------
+        spec : dict
+            The library's description.
+        key : str, default "terms"
+            The entry holding the terms.
+
+        Returns
+        -------
+        list of sympy.Expr
+            The terms, taken from the budget.
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> reader = SpecReader(px.Coordinates(["x"]))
+        >>> reader.terms({"terms": ["x_dot**2", "cos(x)"]})
+        [x_dot**2, cos(x)]
+        """
         raw = spec.get(key)
         where = f"{spec.get('type')}.{key}"
         self.expect(isinstance(raw, list) and raw and all(isinstance(t, str) for t in raw),
@@ -92,13 +150,35 @@ class SpecReader:
         return [self.term(text) for text in raw]
 
     def count_terms(self, count: int) -> None:
-        """Take ``count`` catalog terms from the budget."""
+        """Take ``count`` catalog terms from the budget.
+
+        Parameters
+        ----------
+        count : int
+            Terms read.
+
+        Raises
+        ------
+        SpecError
+            When the specification holds more than ``max_terms`` terms in all.
+        """
         self.expect(count <= self.max_terms - self._terms,
                     f"more than {self.max_terms} catalog terms")
         self._terms += count
 
     def term(self, text: str):
-        """One term in the restricted grammar, its expanded size taken from the budget."""
+        """One term in the restricted grammar, its expanded size taken from the budget.
+
+        Parameters
+        ----------
+        text : str
+            The term.
+
+        Returns
+        -------
+        sympy.Expr
+            The parsed term (:func:`~pysindy_xl.expressions.parse_expression`).
+        """
         try:
             expr = parse_expression(text, self._symbols)
         except (TypeError, ValueError) as err:
@@ -109,8 +189,22 @@ class SpecReader:
         return expr
 
     def polynomial(self, item, width: int, where: str) -> tuple[np.ndarray, np.ndarray]:
-        """``{"exponents": (T, width) integers in [0, 64], "coefficients": (T,) finite numbers}``,
-        checked, ``T`` taken from the monomial budget.
+        """A polynomial term: integer exponent rows and their coefficients, checked.
+
+        Parameters
+        ----------
+        item : dict
+            ``{"exponents": (T, width) integers in [0, 64], "coefficients": (T,) finite numbers}``.
+        width : int
+            Exponents per row.
+        where : str
+            The part of the specification, named in error messages.
+
+        Returns
+        -------
+        exponents : ndarray of int, shape (T, width)
+        coefficients : ndarray, shape (T,)
+            ``T`` is taken from the monomial budget.
         """
         self.expect(isinstance(item, dict) and set(item) == {"exponents", "coefficients"},
                     f"{where} must be an object with exponents and coefficients")
@@ -134,8 +228,32 @@ class SpecReader:
 
     def matrix(self, spec, key: str, shape: tuple, binary: bool = False,
                shape_name: str | None = None) -> np.ndarray:
-        """``spec[key]``: a finite numeric matrix of ``shape`` (0/1 with ``binary``); ``shape_name``
-        names the shape in the messages, e.g. ``"(n, n)"``.
+        """``spec[key]``: a finite numeric matrix of a given shape.
+
+        Parameters
+        ----------
+        spec : dict
+            The library's description.
+        key : str
+            The entry holding the matrix.
+        shape : tuple of int
+            The expected shape.
+        binary : bool, default False
+            Only 0 and 1 allowed (a mask).
+        shape_name : str, optional
+            The shape as written in error messages, e.g. ``"(n, n)"``; default None: ``shape``.
+
+        Returns
+        -------
+        ndarray
+            The matrix, of dtype bool when ``binary``, float otherwise.
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> reader = SpecReader(px.Coordinates(["x"]))
+        >>> reader.matrix({"interlink": [[2.0]]}, "interlink", (1, 1))
+        array([[2.]])
         """
         where = f"{spec.get('type')}.{key}"
         label = f"{shape_name} = {tuple(shape)}" if shape_name else str(tuple(shape))

@@ -29,7 +29,9 @@ class TrigPolynomial:
     Parameters
     ----------
     exponents : ndarray of int, shape (T, 4n)
+        Exponents of the slots in each of the ``T`` monomials.
     coefficients : ndarray of float, shape (T,)
+        Coefficient of each monomial.
     angles : tuple of bool, length n
         Which coordinates are angles (their ``cos`` slot reduced modulo ``s^2 + c^2 = 1``).
     normalize : bool, default True
@@ -131,7 +133,18 @@ class TrigPolynomial:
 
     # -- calculus --------------------------------------------------------------------------
     def diff_slot(self, index: int) -> TrigPolynomial:
-        """Partial derivative with respect to one slot (a monomial variable)."""
+        """Partial derivative with respect to one slot (a monomial variable).
+
+        Parameters
+        ----------
+        index : int
+            The slot, in ``[0, 4n)`` (module docstring).
+
+        Returns
+        -------
+        TrigPolynomial
+            The derivative (``cos q`` not yet reduced: the chain rule is :meth:`diff_position`'s).
+        """
         powers = self.exponents[:, index]
         rows = powers > 0
         exponents = self.exponents[rows].copy()
@@ -141,7 +154,29 @@ class TrigPolynomial:
                               normalize=False)
 
     def diff_position(self, j: int) -> TrigPolynomial:
-        """Partial derivative with respect to the coordinate ``q_j``."""
+        """Partial derivative with respect to the coordinate ``q_j``.
+
+        For an angle, by the chain rule through ``sin q_j`` and ``cos q_j``
+        (``d sin = cos``, ``d cos = -sin``).
+
+        Parameters
+        ----------
+        j : int
+            The coordinate.
+
+        Returns
+        -------
+        TrigPolynomial
+            ``dP/dq_j``.
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> c = px.Coordinates(["a"])
+        >>> L = TrigPolynomial.from_sympy(c.qd[0] ** 2 / 2 + sp.cos(c.q[0]), c, (True,))
+        >>> L.diff_position(0).to_sympy(c)
+        -sin(a)
+        """
         n = len(self.angles)
         if not self.angles[j]:
             return self.diff_slot(j)
@@ -149,11 +184,36 @@ class TrigPolynomial:
                                     -self.diff_slot(n + j)._times_slot(j)], self.angles)
 
     def diff_velocity(self, j: int) -> TrigPolynomial:
-        """Partial derivative with respect to ``qd_j``."""
+        """Partial derivative with respect to ``qd_j``.
+
+        Parameters
+        ----------
+        j : int
+            The coordinate.
+
+        Returns
+        -------
+        TrigPolynomial
+            ``dP/dqd_j``.
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> c = px.Coordinates(["a"])
+        >>> L = TrigPolynomial.from_sympy(c.qd[0] ** 2 / 2 + sp.cos(c.q[0]), c, (True,))
+        >>> L.diff_velocity(0).to_sympy(c)
+        a_dot
+        """
         return self.diff_slot(2 * len(self.angles) + j)
 
     def time_derivative(self) -> TrigPolynomial:
-        """Total time derivative ``sum_j qd_j d/dq_j + qdd_j d/dqd_j``."""
+        """Total time derivative ``sum_j qd_j d/dq_j + qdd_j d/dqd_j``.
+
+        Returns
+        -------
+        TrigPolynomial
+            ``dP/dt`` along a motion (accelerations appear).
+        """
         n = len(self.angles)
         pieces = []
         for j in range(n):
@@ -162,12 +222,41 @@ class TrigPolynomial:
         return TrigPolynomial._sum(pieces, self.angles)
 
     def euler_lagrange(self) -> list[TrigPolynomial]:
-        """``d/dt dL/dqd_i - dL/dq_i`` for every coordinate, this polynomial being ``L``."""
+        """The Euler-Lagrange column of this polynomial as Lagrangian ``L``.
+
+        ``E_i = d/dt dL/dqd_i - dL/dq_i`` for every coordinate ``i``.
+
+        Returns
+        -------
+        list of TrigPolynomial
+            One polynomial per coordinate.
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> c = px.Coordinates(["a"])
+        >>> L = TrigPolynomial.from_sympy(c.qd[0] ** 2 / 2 + sp.cos(c.q[0]), c, (True,))
+        >>> [e.to_sympy(c) for e in L.euler_lagrange()]
+        [a_ddot + sin(a)]
+        """
         return [self.diff_velocity(i).time_derivative() - self.diff_position(i)
                 for i in range(len(self.angles))]
 
     def at_rest(self, velocities=True, accelerations=True) -> TrigPolynomial:
-        """The polynomial with the velocities and / or accelerations set to zero."""
+        """The polynomial with the velocities and / or accelerations set to zero.
+
+        Parameters
+        ----------
+        velocities : bool, default True
+            Set the velocities to zero.
+        accelerations : bool, default True
+            Set the accelerations to zero.
+
+        Returns
+        -------
+        TrigPolynomial
+            The monomials free of the zeroed slots.
+        """
         n = len(self.angles)
         keep = np.ones(len(self.coefficients), dtype=bool)
         if velocities:
@@ -215,8 +304,20 @@ class TrigPolynomial:
         return cls(exponents, coefficients, angles)
 
     def to_sympy(self, coords, evaluate: bool = True) -> sp.Expr:
-        """The polynomial as a sympy expression in ``coords``' symbols; ``evaluate=False`` skips
-        sympy's canonicalization (a flat sum of flat products, which the compiler reads as is).
+        """The polynomial as a sympy expression in ``coords``' symbols.
+
+        Parameters
+        ----------
+        coords : Coordinates
+            The coordinates whose symbols fill the slots.
+        evaluate : bool, default True
+            False skips sympy's canonicalization: a flat sum of flat products, which the compiler
+            reads as is.
+
+        Returns
+        -------
+        sympy.Expr
+            The expression.
         """
         n = len(self.angles)
         atoms = []
@@ -276,10 +377,20 @@ class _NotPolynomial(ValueError):
 
 
 def euler_lagrange_many(polynomials) -> list[list[TrigPolynomial]]:
-    """:meth:`TrigPolynomial.euler_lagrange` of many polynomials (same ``angles``) at once, bit for
-    bit: the polynomials are stacked with an owner index and every step runs once on the stack,
-    merging within each owner exactly as for one polynomial. Returns per polynomial its column
-    (one polynomial per coordinate).
+    """:meth:`TrigPolynomial.euler_lagrange` of many polynomials at once, bit for bit.
+
+    The polynomials are stacked with an owner index and every step runs once on the stack,
+    merging within each owner exactly as for one polynomial.
+
+    Parameters
+    ----------
+    polynomials : sequence of TrigPolynomial
+        Lagrangian terms, all with the same ``angles``.
+
+    Returns
+    -------
+    list of list of TrigPolynomial
+        Per polynomial, its Euler-Lagrange column (one polynomial per coordinate).
     """
     polynomials = list(polynomials)
     if not polynomials:
@@ -299,8 +410,19 @@ def euler_lagrange_many(polynomials) -> list[list[TrigPolynomial]]:
 
 
 def partial_derivatives_many(polynomials) -> list:
-    """``[[dL/dqd_c], [dL/dq_c]]`` (per coordinate ``c``, a list over the polynomials ``L``) at
-    once, bit for bit as :meth:`TrigPolynomial.diff_velocity` and ``diff_position``.
+    """The partial derivatives of many polynomials at once.
+
+    Bit for bit as :meth:`TrigPolynomial.diff_velocity` and :meth:`TrigPolynomial.diff_position`.
+
+    Parameters
+    ----------
+    polynomials : sequence of TrigPolynomial
+        Lagrangian terms ``L``, all with the same ``angles``.
+
+    Returns
+    -------
+    list
+        ``[[dL/dqd_c], [dL/dq_c]]``: per coordinate ``c``, a list over the polynomials.
     """
     stack, n = _Stack.of(polynomials), len(polynomials[0].angles)
     return [[derivative.parts()
@@ -372,7 +494,22 @@ class _Stack:
 
 
 def state_values(q, qd=None, qdd=None, angles=()) -> np.ndarray:
-    """Slot values of the states: array (N, 4n) (see the module docstring)."""
+    """Slot values of the states (module docstring).
+
+    Parameters
+    ----------
+    q : array, shape (N, n)
+        Positions.
+    qd, qdd : array, shape (N, n), optional
+        Velocities and accelerations; default None (zero).
+    angles : sequence of bool, default ()
+        Which coordinates are angles (slots ``sin q``, ``cos q``; else ``q``, 1).
+
+    Returns
+    -------
+    ndarray, shape (N, 4n)
+        The slot values, input of :func:`evaluate_many`.
+    """
     q = np.atleast_2d(np.asarray(q, dtype=float))
     angles = np.asarray(angles, dtype=bool)
     zeros = np.zeros_like(q)
@@ -383,8 +520,26 @@ def state_values(q, qd=None, qdd=None, angles=()) -> np.ndarray:
 
 
 def evaluate_many(polynomials, values: np.ndarray) -> np.ndarray:
-    """Evaluate ``polynomials`` on all states ``values`` (N, 4n) (:func:`state_values`) at once:
-    (N, len(polynomials)).
+    """Evaluate polynomials on many states at once.
+
+    Parameters
+    ----------
+    polynomials : sequence of TrigPolynomial
+        The polynomials, all with the same number of slots.
+    values : ndarray, shape (N, 4n)
+        Slot values of the states (:func:`state_values`).
+
+    Returns
+    -------
+    ndarray, shape (N, len(polynomials))
+        The values.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> s = TrigPolynomial.slot(1, 0, (True,))
+    >>> evaluate_many([s, s * s], state_values(np.array([[np.pi / 2]]), angles=(True,)))
+    array([[1., 1.]])
     """
     width = values.shape[1]
     exponents = np.vstack([p.exponents for p in polynomials]  # int16, not upcast

@@ -27,6 +27,7 @@ class TrigTerms(Sequence):
     polynomials : sequence of TrigPolynomial
         All with the same ``angles``.
     coords : Coordinates
+        The coordinates of the polynomials' slots.
     columns : sequence of list of TrigPolynomial, optional
         The Euler-Lagrange column of each polynomial, when already derived.
     names : sequence of str, optional
@@ -121,7 +122,13 @@ class TrigTerms(Sequence):
         return self._key
 
     def names(self) -> list[str]:
-        """``str`` of every item, formatted from the polynomials (without building them)."""
+        """``str`` of every item, formatted from the polynomials (without building them).
+
+        Returns
+        -------
+        list of str
+            As ``str(polynomial.to_sympy(coords))`` would print each term.
+        """
         if self._names is None:
             printer = _Printer(self.coords, self.angles)
             self._names = [printer(p) for p in self.polynomials]

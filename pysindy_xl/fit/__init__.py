@@ -13,20 +13,20 @@ One fit of :class:`~pysindy_xl.XLSINDy` goes one way through here::
 build their rows with the same :func:`build_problem`.
 """
 
-from .build import UNFORCED_WIDTH_MULTIPLES, CatalogMap, build_problem, probe_points
-from .noise_model import RememberedSmoother, choose_noise_model, fit_smoother
-from .solve import resolve_optimizer, solve
-from .trajectories import (
-    FORMULATIONS,
-    check_fit,
-    differentiation_function,
-    estimator_trajectories,
-    resolve_formulation,
-    trajectory_data,
-)
-from .wrap import catalog_dynamics
+from .build import UNFORCED_WIDTH_MULTIPLES, CatalogMap, build_problem
+from .build import probe_points as probe_points
+from .noise_model import RememberedSmoother as RememberedSmoother
+from .noise_model import choose_noise_model as choose_noise_model
+from .noise_model import fit_smoother as fit_smoother
+from .solve import resolve_optimizer as resolve_optimizer
+from .solve import solve
+from .trajectories import FORMULATIONS as FORMULATIONS
+from .trajectories import check_fit, resolve_formulation
+from .trajectories import differentiation_function as differentiation_function
+from .trajectories import estimator_trajectories as estimator_trajectories
+from .trajectories import trajectory_data as trajectory_data
+from .wrap import catalog_dynamics as catalog_dynamics
 
-__all__ = ["CatalogMap", "build_problem", "probe_points", "resolve_optimizer", "choose_noise_model",
-           "fit_smoother", "RememberedSmoother", "solve", "catalog_dynamics",
-           "check_fit", "estimator_trajectories", "trajectory_data", "differentiation_function",
-           "resolve_formulation", "FORMULATIONS", "UNFORCED_WIDTH_MULTIPLES"]
+# the other stages of XLSINDy.fit above are importable from here, not public (not in __all__)
+__all__ = ["build_problem", "solve", "check_fit", "resolve_formulation", "CatalogMap",
+           "UNFORCED_WIDTH_MULTIPLES"]

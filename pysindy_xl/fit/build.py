@@ -34,10 +34,12 @@ UNFORCED_WIDTH_MULTIPLES = (1.0, 1.5, 2.0)
 class CatalogMap:
     """The map from a catalog problem's columns and blocks back to the catalog, and its states.
 
-    Attributes
+    Parameters
     ----------
     columns : ndarray of int, shape (k,)
-        The catalog column of each problem column (of ``n_features``).
+        The catalog column of each problem column.
+    n_features : int
+        Number of catalog columns ``F``.
     coordinates, forced : ndarray of bool, shape (n,)
         The coordinates whose equations are the problem's blocks (the others hold still); those
         a recorded force acts on.
@@ -46,8 +48,17 @@ class CatalogMap:
     states : ndarray, shape (S, 4n + 1)
         The rows' library inputs (smoothed for the weak form).
     formulation : {"strong", "weak"}
+        How the rows were built.
     weak_info : dict or None
         :func:`~pysindy_xl.weak.weak_regression`'s information.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> m = CatalogMap(np.array([0, 2]), 3, np.ones(1, bool), np.ones(1, bool), {},
+    ...                np.zeros((1, 5)), "strong")
+    >>> m.to_catalog([4.0, 5.0]).tolist()
+    [4.0, 0.0, 5.0]
     """
 
     columns: np.ndarray
@@ -60,8 +71,20 @@ class CatalogMap:
     weak_info: dict | None = None
 
     def to_catalog(self, values) -> np.ndarray:
-        """``values`` of the problem's columns (last axis) on the catalog's, zero elsewhere.
+        """Values of the problem's columns placed on the catalog's, zero elsewhere.
 
+        Parameters
+        ----------
+        values : array, shape (..., k)
+            Values per problem column on the last axis (coefficients, for instance).
+
+        Returns
+        -------
+        ndarray, shape (..., F)
+            The same values at the catalog columns ``columns``, zero at the dropped ones.
+
+        Examples
+        --------
         >>> import numpy as np
         >>> m = CatalogMap(np.array([0, 2]), 3, np.ones(1, bool), np.ones(1, bool), {},
         ...                np.zeros((1, 5)), "strong")
@@ -75,10 +98,27 @@ class CatalogMap:
 
 
 def probe_points(z: np.ndarray, n_points: int = 4000, seed: int = 0) -> np.ndarray:
-    """``n_points`` random points in the bounding box of the states ``z`` (S, V), each variable
-    drawn independently: dependencies found on them are identities of the catalog (such as
+    """Random points in the bounding box of the states, each variable drawn independently.
+
+    Dependencies among columns found on these points are identities of the catalog (such as
     ``cos^2 + sin^2 = 1``), never the physical law the trajectories obey.
 
+    Parameters
+    ----------
+    z : ndarray, shape (S, V)
+        The states (library inputs).
+    n_points : int, default 4000
+        Points drawn.
+    seed : int, default 0
+        Seed of the generator.
+
+    Returns
+    -------
+    ndarray, shape (n_points, V)
+        Uniform draws within ``[min, max]`` of each column of ``z``.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> probe_points(np.array([[0.0, 1.0], [1.0, 3.0]]), n_points=5).shape
     (5, 2)
@@ -141,20 +181,24 @@ def build_problem(library, data, formulation: str, *, test_functions=None, smoot
     Parameters
     ----------
     library : fitted CatalogRepartition
+        The catalog.
     data : list of dict
         From :func:`~pysindy_xl.fit.trajectory_data`; the strong form needs ``x_dot`` and
         ``x_ddot``.
     formulation : {"strong", "weak"}
-    test_functions, smoother : optional
-        Weak form: default ``BumpTestFunctions()`` (of the widths
-        :data:`UNFORCED_WIDTH_MULTIPLES` without forces) and ``WhittakerSmoother()`` (copied).
+        Pointwise Euler-Lagrange rows, or rows integrated against test functions.
+    test_functions : BumpTestFunctions, optional
+        Weak form; default None: ``BumpTestFunctions()`` (of the widths
+        :data:`UNFORCED_WIDTH_MULTIPLES` without forces).
+    smoother : WhittakerSmoother, optional
+        Weak form; default None: ``WhittakerSmoother()`` (copied).
     half_width : float, optional
-        Weak form: the test functions' half-width (default: chosen from the data).
+        Weak form: the test functions' half-width; default None: chosen from the data.
     hold_still : float or False, default False
         Leave out the coordinates that hold still, with this threshold
         (:func:`~pysindy_xl.fit.still.still_coordinates`).
     still : array of bool, shape (n,), optional
-        The coordinates to leave out, when known; overrides ``hold_still``.
+        The coordinates to leave out, when known; overrides ``hold_still``. Default None.
     drop_dependent : bool, default False
         Leave out columns that are zero or exact linear combinations of preferred ones
         (:func:`~pysindy_xl.optimizers.independent_columns`).
@@ -227,8 +271,23 @@ def build_problem(library, data, formulation: str, *, test_functions=None, smoot
 
 
 def with_mass_matrices(problem: CatalogProblem, library) -> CatalogProblem:
-    """``problem`` (from :func:`build_problem`) with the mass matrices of its columns at up to 200
-    of its states (:func:`~pysindy_xl.fit.diagnostics.column_mass_matrices`).
+    """``problem`` with the mass matrices of its columns at up to 200 of its states.
+
+    For optimizers whose tags ask for them
+    (:func:`~pysindy_xl.fit.diagnostics.column_mass_matrices`).
+
+    Parameters
+    ----------
+    problem : CatalogProblem
+        From :func:`build_problem`.
+    library : fitted CatalogRepartition
+        The catalog the problem was built from.
+
+    Returns
+    -------
+    CatalogProblem
+        A copy with ``mass_matrices`` (S, k, m, m) set: per state and problem column, the
+        mass matrix over the ``m`` moving coordinates.
     """
     origin = problem.catalog_map
     moving = origin.coordinates

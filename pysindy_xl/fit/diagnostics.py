@@ -15,9 +15,26 @@ __all__ = ["column_mass_matrices", "mass_matrices", "orient_free_laws", "mass_ma
 
 
 def mass_matrices(dynamics, states, max_states: int = 2000):
-    """Symmetrized mass matrices (S, n, n) and their eigenvalues (S, n) of ``dynamics`` on up to
-    ``max_states`` of ``states`` (N, 4n + 1).
+    """Symmetrized mass matrices of identified dynamics and their eigenvalues.
 
+    Parameters
+    ----------
+    dynamics : MassMatrixDynamics
+        The identified dynamics.
+    states : ndarray, shape (N, 4n + 1)
+        Library inputs (:func:`~pysindy_xl.feature_library.stack_variables`).
+    max_states : int, default 2000
+        At most this many states, evenly spaced, are used.
+
+    Returns
+    -------
+    mass : ndarray, shape (S, n, n)
+        ``(M + M^T) / 2`` at each state used.
+    eigenvalues : ndarray, shape (S, n)
+        Their eigenvalues, ascending.
+
+    Examples
+    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> dyn = px.MassMatrixDynamics(c, [2 * c.qdd[0] + c.q[0]])
@@ -33,12 +50,28 @@ def mass_matrices(dynamics, states, max_states: int = 2000):
 
 
 def column_mass_matrices(library, states, max_states: int = 200) -> np.ndarray:
-    """Each catalog column's mass matrix, (S, F, n, n), on up to ``max_states`` states.
+    """Each catalog column's mass matrix on up to ``max_states`` states.
 
     A column is affine in the accelerations, ``E_j = M_j(q, qd) qdd + rest``, so ``M_j[:, k]``
     is the column at ``qdd = e_k`` minus the column at ``qdd = 0``: ``n + 1`` evaluations, no
     symbolic work. Coefficients ``xi`` have the mass matrix ``sum_j xi_j M_j``.
 
+    Parameters
+    ----------
+    library : fitted SymbolicLibrary
+        The catalog.
+    states : ndarray, shape (N, 4n + 1)
+        Library inputs.
+    max_states : int, default 200
+        At most this many states, evenly spaced, are used.
+
+    Returns
+    -------
+    ndarray, shape (S, F, n, n)
+        ``M_j`` of every column ``j`` at each state used.
+
+    Examples
+    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> library = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2]).fit()
@@ -63,9 +96,28 @@ def orient_free_laws(coef, symbolic_matrix, force_columns, mass):
     """Flip the laws that no force scales and whose mass matrix is negative definite.
 
     Coordinates coupled by identified terms form one law; without a non-zero force coefficient
-    its sign is arbitrary. ``symbolic_matrix`` (n, F) gives the non-zero entries of the
-    columns, ``mass`` (S, n, n) the mass matrices. Returns a new ``coef`` and whether it flipped.
+    its sign is arbitrary, and the sign of a positive definite mass matrix is chosen.
 
+    Parameters
+    ----------
+    coef : ndarray, shape (F,)
+        The coefficients.
+    symbolic_matrix : sympy.Matrix, shape (n, F)
+        The catalog's columns (their non-zero entries couple coordinates).
+    force_columns : sequence of int
+        The force columns.
+    mass : ndarray, shape (S, n, n)
+        The identified mass matrices on the training states.
+
+    Returns
+    -------
+    coef : ndarray, shape (F,)
+        A new coefficient vector.
+    flipped : bool
+        Whether some law was flipped.
+
+    Examples
+    --------
     >>> import numpy as np, sympy as sp
     >>> coef, flipped = orient_free_laws(np.array([0.0, -0.5]), sp.Matrix([[0, 1]]), [0],
     ...                                  -np.ones((3, 1, 1)))
@@ -96,13 +148,30 @@ def orient_free_laws(coef, symbolic_matrix, force_columns, mass):
 
 
 def mass_matrix_report(mass, eigenvalues, names, remedy: str = "") -> dict:
-    """Fraction of states with a positive definite mass matrix, its median condition number;
-    warns (:class:`IdentificationWarning`, ending with ``remedy``) naming coordinates without
-    positive inertia.
+    """How positive definite the identified mass matrix is on the training states.
 
-    Definiteness is judged unit free, on ``D M D`` with ``D = diag(max |M_ii|)^(-1/2)``; the
-    condition number is that of ``M``.
+    Warns (:class:`~pysindy_xl.IdentificationWarning`, ending with ``remedy``) naming the
+    coordinates without positive inertia. Definiteness is judged unit free, on ``D M D`` with
+    ``D = diag(max |M_ii|)^(-1/2)``; the condition number is that of ``M``.
 
+    Parameters
+    ----------
+    mass : ndarray, shape (S, n, n)
+        Symmetrized mass matrices (:func:`mass_matrices`).
+    eigenvalues : ndarray, shape (S, n)
+        Their eigenvalues.
+    names : sequence of str
+        Coordinate names.
+    remedy : str, default ""
+        Appended to the warning.
+
+    Returns
+    -------
+    dict
+        ``positive_definite_fraction`` (fraction of states) and ``median_condition``.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> mass = np.array([[[2.0, 0.0], [0.0, 1.0]]] * 3)
     >>> mass_matrix_report(mass, np.linalg.eigvalsh(mass), ["a", "b"])

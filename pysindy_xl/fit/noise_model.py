@@ -25,11 +25,27 @@ __all__ = ["RememberedSmoother", "choose_noise_model", "fit_smoother"]
 
 
 class RememberedSmoother:
-    """A smoother (with ``resmooth``) that smooths each distinct input once: the default,
-    candidates' and scoring rows of :func:`choose_noise_model` smooth the same pieces and the
-    same (seeded) noisy draws. Results are kept by the content of ``(t, x)`` (and weights);
-    ``deepcopy`` is the object itself, and a shallow copy keeps its last weights, as the weak
-    regression's propagation needs."""
+    """A smoother that smooths each distinct input once.
+
+    The default, candidates' and scoring rows of :func:`choose_noise_model` smooth the same
+    pieces and the same (seeded) noisy draws. Results are kept by the content of ``(t, x)``
+    (and weights); ``deepcopy`` is the object itself, and a shallow copy keeps its last weights,
+    as the weak regression's propagation needs.
+
+    Parameters
+    ----------
+    smoother : WhittakerSmoother, optional
+        The smoother remembered; default None: ``WhittakerSmoother()``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 1, 101)
+    >>> remembered = RememberedSmoother()
+    >>> first = remembered.smooth(t, np.sin(t)[:, None])
+    >>> remembered.smooth(t, np.sin(t)[:, None]) is first
+    True
+    """
 
     def __init__(self, smoother=None):
         self.smoother = smoother or WhittakerSmoother()
@@ -46,6 +62,20 @@ class RememberedSmoother:
         return digest.hexdigest()
 
     def smooth(self, t, x):
+        """``smoother.smooth(t, x)``, computed once per distinct ``(t, x)``.
+
+        Parameters
+        ----------
+        t : array, shape (N,)
+            Times.
+        x : array, shape (N, n)
+            Positions.
+
+        Returns
+        -------
+        q, qd, qdd : ndarray, shape (N, n)
+            Smoothed positions and their derivatives (the remembered result).
+        """
         key = ("smooth", self._key(t, x))
         if key not in self._results:
             fitted = copy.deepcopy(self.smoother)
@@ -57,6 +87,20 @@ class RememberedSmoother:
         return result
 
     def resmooth(self, t, x):
+        """The last :meth:`smooth`'s ``resmooth(t, x)``, computed once per distinct input.
+
+        Parameters
+        ----------
+        t : array, shape (N,)
+            Times.
+        x : array, shape (N, n)
+            Positions (a noisy draw), smoothed with the weights the last :meth:`smooth` chose.
+
+        Returns
+        -------
+        q, qd, qdd : ndarray, shape (N, n)
+            Smoothed positions and their derivatives.
+        """
         weights = getattr(self._fitted, "lam_", ())
         key = ("resmooth", self._key(t, x, weights))
         if key not in self._results:
@@ -65,9 +109,22 @@ class RememberedSmoother:
 
 
 def fit_smoother(smoother=None):
-    """The smoother of one fit: ``smoother`` (default :class:`WhittakerSmoother`) remembered
-    (:class:`RememberedSmoother`) where it propagates the noise of the positions, the case in
-    which :func:`choose_noise_model` builds the rows again."""
+    """The smoother of one fit.
+
+    ``smoother`` remembered (:class:`RememberedSmoother`) where it propagates the noise of the
+    positions, the case in which :func:`choose_noise_model` builds the rows again.
+
+    Parameters
+    ----------
+    smoother : WhittakerSmoother or other smoother, optional
+        The estimator's smoother; default None: ``WhittakerSmoother()``.
+
+    Returns
+    -------
+    smoother
+        A :class:`RememberedSmoother` around it, or ``smoother`` itself when it has no
+        ``resmooth`` (does not propagate noise).
+    """
     smoother = smoother or WhittakerSmoother()
     return (RememberedSmoother(smoother) if callable(getattr(smoother, "resmooth", None))
             else smoother)
@@ -109,16 +166,23 @@ def choose_noise_model(problem, library, data, optimizer, smoother=None,
     problem : CatalogProblem
         From :func:`~pysindy_xl.fit.build_problem` (weak form, with its row noise).
     library : fitted CatalogRepartition
+        The catalog.
     data : list of dict
         The trajectories the problem was built from.
     optimizer : catalog optimizer
         Cloned for each fit on time blocks, without bagging (an ensemble's base optimizer).
-    smoother, residual_covariance, test_functions
-        The estimator's settings.
+    smoother : smoother, optional
+        The fit's smoother (:func:`fit_smoother`); default None.
+    residual_covariance : bool or "auto", default "auto"
+        The estimator's setting; only ``"auto"`` lets the noise model be chosen.
+    test_functions : BumpTestFunctions, optional
+        The estimator's setting; default None (the default test functions, which the choice
+        needs).
 
     Returns
     -------
     problem : CatalogProblem
+        The problem to solve.
     weigh : bool or "auto"
         For :func:`~pysindy_xl.fit.solve`.
     """

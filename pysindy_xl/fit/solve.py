@@ -25,13 +25,26 @@ MAX_REWEIGHTS = 3
 
 
 def resolve_optimizer(optimizer, problem, library):
-    """The unfitted optimizer that fits ``problem`` (from :func:`~pysindy_xl.fit.build_problem`).
+    """The unfitted optimizer that fits a problem.
 
-    ``optimizer``: a catalog optimizer is cloned; a regressor with ``fit(X, y)`` (a pysindy
-    optimizer) runs as ``ExplicitOptimizer(method=...)``; a kind ("explicit", "implicit",
-    "mixed") or None gets :func:`~pysindy_xl.optimizers.default_optimizer` for the problem's data
-    and the catalog ``library``.
+    Parameters
+    ----------
+    optimizer : catalog optimizer, regressor, str or None
+        A catalog optimizer is cloned; a regressor with ``fit(X, y)`` (a pysindy optimizer)
+        runs as ``ExplicitOptimizer(method=...)``; a kind ("explicit", "implicit", "mixed")
+        or None gets :func:`~pysindy_xl.optimizers.default_optimizer` for the problem's data.
+    problem : CatalogProblem
+        From :func:`~pysindy_xl.fit.build_problem`.
+    library : fitted CatalogRepartition or None
+        The catalog, read by the default optimizer.
 
+    Returns
+    -------
+    catalog optimizer
+        Unfitted.
+
+    Examples
+    --------
     >>> import numpy as np, pysindy as ps, pysindy_xl as px
     >>> problem = px.optimizers.CatalogProblem.from_arrays(np.eye(3), 1, [0])
     >>> resolve_optimizer(ps.STLSQ(), problem, None)
@@ -56,16 +69,37 @@ def resolve_optimizer(optimizer, problem, library):
 
 
 def solve(optimizer, problem, library=None, weigh=False):
-    """Fit ``optimizer`` on ``problem``, reweighting rows that carry estimated noise.
+    r"""Fit ``optimizer`` on ``problem``, reweighting rows that carry estimated noise.
 
     Given ``library``, the problem gets the mass matrices of its columns when the optimizer's
-    tags ask for them. With ``weigh`` and ``problem.row_noise`` the fit is iteratively reweighted
-    (the reweighting of WENDy): the rows are whitened by the covariance of the residual of the
-    latest law (:meth:`~pysindy_xl.weak.WeakNoise.whitener`, starting from the pilot law) and
-    refitted unbalanced, until the support is the one that set the weights (at most
-    :data:`MAX_REWEIGHTS` fits). ``weigh="auto"``: when some coordinate of the problem is forced.
-    Returns the fitted optimizer.
+    tags ask for them. With ``weigh`` and ``problem.row_noise`` the fit is iteratively
+    reweighted (the reweighting of WENDy): the rows are whitened by the covariance ``S`` of the
+    residual of the latest law ``xi``,
 
+    .. math:: \min_\xi \; \| S(\xi)^{-1/2} \, \Theta \xi \|^2,
+
+    starting from the pilot law (:meth:`~pysindy_xl.weak.WeakNoise.whitener`), and refitted
+    unbalanced, until the support is the one that set the weights (at most
+    :data:`MAX_REWEIGHTS` fits).
+
+    Parameters
+    ----------
+    optimizer : catalog optimizer
+        Unfitted (:func:`resolve_optimizer`).
+    problem : CatalogProblem
+        From :func:`~pysindy_xl.fit.build_problem`.
+    library : fitted CatalogRepartition, optional
+        The catalog; default None (no mass matrices).
+    weigh : bool or "auto", default False
+        Reweight by the rows' noise; ``"auto"``: when some coordinate of the problem is forced.
+
+    Returns
+    -------
+    catalog optimizer
+        The fitted optimizer (``coef_`` on the problem's columns).
+
+    Examples
+    --------
     >>> import numpy as np, pysindy_xl as px
     >>> theta = np.column_stack([[1.0, 2.0, 3.0], [0.5, 1.0, 1.5]])
     >>> problem = px.optimizers.CatalogProblem.from_arrays(theta, 1, [0])

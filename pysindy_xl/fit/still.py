@@ -31,10 +31,27 @@ _UNIFORM = 1e-9
 
 
 def noise_level(x) -> np.ndarray:
-    r"""Robust noise level of each column of ``x`` (N, n): ``1.4826 * MAD(diff(x, 3)) / sqrt(20)``.
+    """Robust noise level of each column: ``1.4826 * MAD(diff(x, 3)) / sqrt(20)``.
 
-    The standard deviation of white noise on a signal smooth at the sampling rate, insensitive
-    to a few outliers; shape (n,), zeros when ``N < 4``.
+    The standard deviation of white noise on a signal smooth at the sampling rate (its third
+    differences are the noise's, of variance ``20 sigma^2``), insensitive to a few outliers.
+
+    Parameters
+    ----------
+    x : array, shape (N, n)
+        Samples.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The noise levels; zeros when ``N < 4``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> noise = np.random.default_rng(0).normal(scale=0.01, size=(20000, 1))
+    >>> bool(abs(noise_level(np.linspace(0, 1, 20000)[:, None] + noise)[0] - 0.01) < 5e-4)
+    True
     """
     x = np.asarray(x, dtype=float)
     if x.shape[0] < 4:
@@ -45,12 +62,25 @@ def noise_level(x) -> np.ndarray:
 
 
 def driven_coordinates(library, forces) -> np.ndarray:
-    """Bool (n,): the coordinates on which a recorded force acts through the force columns.
+    """The coordinates on which a recorded force acts through the force columns.
 
     Coordinate ``c`` is driven when a force column's entry in its equation contains ``tau_k``
-    and the recorded force ``k`` is not zero everywhere. ``library`` is a fitted
-    :class:`~pysindy_xl.CatalogRepartition`; ``forces`` a list of arrays (N_k, n), or None.
+    and the recorded force ``k`` is not zero everywhere.
 
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+        The catalog.
+    forces : list of ndarray (N_k, n) or None
+        The recorded forces of each trajectory.
+
+    Returns
+    -------
+    ndarray of bool, shape (n,)
+        True for driven coordinates.
+
+    Examples
+    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x", "y"])
     >>> lib = px.CatalogRepartition([px.LagrangeLibrary(c, [c.qd[0] ** 2])]).fit()
@@ -70,11 +100,29 @@ def driven_coordinates(library, forces) -> np.ndarray:
 
 
 def still_coordinates(positions, times, forced, threshold: float) -> np.ndarray:
-    """Bool (n,): the coordinates that hold still in the data (see the module docstring).
+    """The coordinates that hold still in the data (module docstring).
 
-    ``positions`` and ``times`` are lists of arrays (N_k, n) and (N_k,); ``forced`` (n,) marks the
-    coordinates that are never still; ``threshold`` is ``kappa``.
+    A coordinate holds still when, in every trajectory, its departure from uniform motion stays
+    within ``threshold`` times its estimated noise (:func:`noise_level`).
 
+    Parameters
+    ----------
+    positions : list of ndarray, shape (N_k, n)
+        Positions of each trajectory.
+    times : list of ndarray, shape (N_k,)
+        Their times.
+    forced : ndarray of bool, shape (n,)
+        Coordinates that are never still (driven by a recorded force).
+    threshold : float
+        ``kappa``, in multiples of the noise level.
+
+    Returns
+    -------
+    ndarray of bool, shape (n,)
+        True for still coordinates.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> t = np.linspace(0, 10, 1001)
     >>> x = np.column_stack([np.sin(t), np.full_like(t, 0.3), np.full_like(t, 0.3)])
@@ -104,6 +152,20 @@ def still_columns(library, still) -> dict:
     A column goes when, in the equations of the moving coordinates, it is zero, involves a
     velocity, acceleration or force of a still coordinate, or depends only on still positions.
 
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+        The catalog.
+    still : ndarray of bool, shape (n,)
+        The still coordinates.
+
+    Returns
+    -------
+    dict of int to str
+        ``{column index: reason}``.
+
+    Examples
+    --------
     >>> import numpy as np, pysindy_xl as px
     >>> c = px.Coordinates(["x", "y"])
     >>> lib = px.CatalogRepartition([px.LagrangeLibrary(
@@ -144,8 +206,24 @@ def still_columns(library, still) -> dict:
 
 
 def block_rows(n_blocks: int, n_rows: int, blocks) -> np.ndarray:
-    """Row indices of ``blocks`` (a boolean mask) in a matrix stacked coordinate-major.
+    """Row indices of chosen blocks of a matrix stacked coordinate-major.
 
+    Parameters
+    ----------
+    n_blocks : int
+        Number of blocks (coordinates).
+    n_rows : int
+        Rows of the matrix (``n_blocks`` equal blocks).
+    blocks : ndarray of bool, shape (n_blocks,)
+        The blocks to keep.
+
+    Returns
+    -------
+    ndarray of int
+        The rows of the kept blocks, in order.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> block_rows(3, 6, np.array([True, False, True])).tolist()
     [0, 1, 4, 5]
@@ -156,8 +234,20 @@ def block_rows(n_blocks: int, n_rows: int, blocks) -> np.ndarray:
 
 
 def held_note(names) -> str:
-    """The note that a model prints about its still coordinates (empty when none).
+    """The note that a model prints about its still coordinates.
 
+    Parameters
+    ----------
+    names : sequence of str
+        Names of the still coordinates.
+
+    Returns
+    -------
+    str
+        The note; empty when there are none.
+
+    Examples
+    --------
     >>> held_note(["target_x"]).endswith("model): target_x"), held_note([])
     (True, '')
     """

@@ -19,14 +19,24 @@ FORMULATIONS = ("auto", "strong", "weak")
 
 
 def differentiation_function(method=None, unbiased: bool = False):
-    """The function ``derivative(values, t)`` that estimates missing derivatives, checking that
-    its result has the input's shape and is finite.
+    """The function that estimates missing derivatives, checking its result.
 
-    ``method`` (a pysindy differentiation method) is used as it is; without it, ``unbiased``
-    gives fourth-order finite differences (no smoothing bias, which a null-space search of
-    unforced data cannot tell from the law), else ``ps.SmoothedFiniteDifference()`` (smoothing
-    on the actual times off a uniform grid).
+    Parameters
+    ----------
+    method : pysindy differentiation method, optional
+        Used as it is; default None: ``unbiased`` decides.
+    unbiased : bool, default False
+        Without ``method``: fourth-order finite differences (no smoothing bias, which a
+        null-space search of unforced data cannot tell from the law), else
+        ``ps.SmoothedFiniteDifference()`` (smoothing on the actual times off a uniform grid).
 
+    Returns
+    -------
+    callable
+        ``derivative(values, t) -> ndarray`` of the shape of ``values``, checked finite.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> t = np.linspace(0, 1, 101)
     >>> d = differentiation_function(unbiased=True)(t[:, None] ** 2, t)
@@ -60,10 +70,42 @@ def trajectory_data(x, t, x_dot, x_ddot, u, n: int, sample_mask=None,
                     derivative=None) -> list[dict]:
     """The validated trajectories of ``fit``: one dict of arrays per trajectory.
 
-    ``x, t, x_dot, x_ddot, u, sample_mask`` as :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes
-    them (``t`` defaulted); ``n`` coordinates; ``derivative(values, t)``
-    (:func:`differentiation_function`) fills missing velocities and accelerations, which
-    otherwise stay None. Keys: ``"x"``, ``"t"``, ``"x_dot"``, ``"x_ddot"``, ``"u"``, ``"mask"``.
+    Parameters
+    ----------
+    x : array (N, n) or list of arrays
+        Positions, as :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes them.
+    t : float, array (N,) or list of arrays
+        Time step or sample times (not None).
+    x_dot, x_ddot : same layout as ``x`` or None
+        Measured velocities and accelerations.
+    u : same layout as ``x`` or None
+        Generalized forces.
+    n : int
+        Number of coordinates.
+    sample_mask : bool array (N,) or list of them, optional
+        Samples to leave out; default None.
+    derivative : callable, optional
+        ``derivative(values, t)`` (:func:`differentiation_function`) fills missing velocities
+        and accelerations; default None: they stay None.
+
+    Returns
+    -------
+    list of dict
+        Per trajectory: ``"x"``, ``"t"``, ``"x_dot"``, ``"x_ddot"``, ``"u"``, ``"mask"``.
+
+    Raises
+    ------
+    ValueError
+        Naming the argument, for wrong shapes, mismatched lengths, NaN or inf, or times not
+        strictly increasing.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 1, 11)
+    >>> data = trajectory_data(np.sin(t), t, None, None, None, 1)
+    >>> data[0]["x"].shape, data[0]["x_dot"]
+    ((11, 1), None)
     """
     data = trajectory_arrays(x, t, x_dot, x_ddot, u, sample_mask, n)
     if derivative is not None:
@@ -83,6 +125,25 @@ def resolve_formulation(formulation: str, measured: bool, differentiation_method
     and no catalog entry is ``impulsive`` (sampled pointwise an impulse is caught or missed by
     chance; integrated by parts it is exact); weak otherwise.
 
+    Parameters
+    ----------
+    formulation : {"auto", "strong", "weak"}
+        The estimator's setting; ``"strong"`` and ``"weak"`` come back as they are.
+    measured : bool
+        Whether velocities and accelerations are given for every trajectory.
+    differentiation_method : pysindy differentiation method, optional
+        The estimator's setting; default None.
+    impulsive : bool, default False
+        Whether an acceleration enters a column with a switching coefficient
+        (:meth:`~pysindy_xl.feature_library.SymbolicLibrary.impulsive`).
+
+    Returns
+    -------
+    str
+        ``"strong"`` or ``"weak"``.
+
+    Examples
+    --------
     >>> resolve_formulation("auto", measured=False), resolve_formulation("auto", True)
     ('weak', 'strong')
     >>> resolve_formulation("auto", True, impulsive=True)
@@ -111,12 +172,28 @@ def _catalog(feature_library) -> CatalogRepartition:
 
 def estimator_trajectories(estimator, x, t, x_dot, x_ddot, u, n, differentiate=True,
                            sample_mask=None) -> list[dict]:
-    """The checked trajectories of a call of ``estimator`` (an :class:`~pysindy_xl.XLSINDy`).
+    """The checked trajectories of a call of an :class:`~pysindy_xl.XLSINDy`.
 
-    ``t`` defaults to ``estimator.t_default``; missing derivatives are estimated with its
-    ``differentiation_method`` or the estimate its optimizer's tags prefer
-    (``derivative_estimate``; unforced data: unbiased), or stay None with
-    ``differentiate=False``. Returns :func:`trajectory_data`'s list.
+    Parameters
+    ----------
+    estimator : XLSINDy
+        The estimator (its ``t_default``, ``differentiation_method`` and optimizer's tags).
+    x, t, x_dot, x_ddot, u
+        As :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes them; ``t`` None defaults to
+        ``estimator.t_default``.
+    n : int
+        Number of coordinates.
+    differentiate : bool, default True
+        Estimate missing derivatives with the estimator's ``differentiation_method`` or the
+        estimate its optimizer's tags prefer (``derivative_estimate``; unforced data:
+        unbiased); False: they stay None.
+    sample_mask : bool array (N,) or list of them, optional
+        Samples to leave out; default None.
+
+    Returns
+    -------
+    list of dict
+        As :func:`trajectory_data`.
     """
     derivative = None
     if differentiate:
@@ -138,7 +215,7 @@ def check_fit(estimator, x, t, x_dot, x_ddot, u, sample_mask):
     estimator : XLSINDy
         Read, never changed (the catalog is cloned before it is fitted).
     x, t, x_dot, x_ddot, u, sample_mask
-        As :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes them.
+        As :meth:`XLSINDy.fit <pysindy_xl.XLSINDy.fit>` takes them (None where absent).
 
     Returns
     -------

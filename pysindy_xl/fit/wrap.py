@@ -14,9 +14,22 @@ __all__ = ["WrappedFit", "wrap", "catalog_dynamics", "checked_dynamics"]
 
 
 def catalog_dynamics(library, coef, held):
-    """The identified equations in mass-matrix form (:class:`~pysindy_xl.dynamics.CatalogDynamics`
-    of ``library``, ``coef`` (F,) and the ``held`` coordinates); None when no identified term
-    contains an acceleration.
+    """The identified equations in mass-matrix form, or None.
+
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+        The catalog.
+    coef : array, shape (F,)
+        Its coefficients.
+    held : bool array, shape (n,)
+        Coordinates held still (their equation becomes ``qdd_c = 0``).
+
+    Returns
+    -------
+    CatalogDynamics or None
+        :class:`~pysindy_xl.dynamics.CatalogDynamics`; None when no identified term contains
+        an acceleration.
     """
     if not library.involves(library.coords.qdd)[:, np.flatnonzero(coef)].any():
         return None
@@ -24,11 +37,28 @@ def catalog_dynamics(library, coef, held):
 
 
 def checked_dynamics(library, coef, held, states):
-    """Orient the laws no force scales, then measure ``M(q)`` on the training ``states``.
+    """Orient the laws no force scales, then measure ``M(q)`` on the training states.
 
-    Returns ``(coef, dynamics, check)``: ``coef`` with the laws of negative definite mass matrix
-    flipped (:func:`~pysindy_xl.fit.diagnostics.orient_free_laws`), the dynamics (or None) and
-    :func:`~pysindy_xl.fit.diagnostics.mass_matrix_report` (None without dynamics).
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+        The catalog.
+    coef : array, shape (F,)
+        Its coefficients.
+    held : bool array, shape (n,)
+        Coordinates held still.
+    states : ndarray, shape (S, 4n + 1)
+        The training states.
+
+    Returns
+    -------
+    coef : ndarray, shape (F,)
+        With the laws of negative definite mass matrix flipped
+        (:func:`~pysindy_xl.fit.diagnostics.orient_free_laws`).
+    dynamics : CatalogDynamics or None
+        The identified dynamics.
+    check : dict or None
+        :func:`~pysindy_xl.fit.diagnostics.mass_matrix_report` (None without dynamics).
     """
     dynamics = catalog_dynamics(library, coef, held)
     if dynamics is None:
@@ -48,9 +78,40 @@ def checked_dynamics(library, coef, held, states):
 
 @dataclasses.dataclass(frozen=True)
 class WrappedFit:
-    """A solved problem in the catalog's terms (:func:`wrap`). Each field is the fitted attribute
-    of :class:`~pysindy_xl.XLSINDy` of the same name with a trailing underscore, which sets and
-    documents it."""
+    """A solved problem in the catalog's terms (:func:`wrap`).
+
+    Each field is the fitted attribute of :class:`~pysindy_xl.XLSINDy` of the same name with a
+    trailing underscore, which sets and documents it (``coef`` is ``coef_``, ...).
+
+    Parameters
+    ----------
+    coef : ndarray, shape (F,)
+        The coefficients on every catalog column.
+    dynamics : CatalogDynamics or None
+        The identified equations in mass-matrix form.
+    mass_matrix_check : dict or None
+        :func:`~pysindy_xl.fit.diagnostics.mass_matrix_report` on the training states.
+    dropped_features : dict of str to str
+        Features left out before the regression, with the reason.
+    still_coordinates : list of str
+        Coordinates held still.
+    forced_coordinates : ndarray of bool, shape (n,)
+        Coordinates a recorded force acts on.
+    n_coordinates : int
+        Number of coordinates.
+    n_samples : int
+        Samples (states) of the fit.
+    formulation : {"strong", "weak"}
+        The formulation used.
+    weak_info : dict or None
+        The weak regression's information.
+    selection : object
+        How the sparsity was chosen (the optimizer's ``selection_``), or None.
+    inclusion_probability, coef_interval : ndarray or None
+        An ensemble's, on the catalog's columns.
+    physical_consistency : dict or None
+        A physically constrained fit's report.
+    """
 
     coef: np.ndarray
     dynamics: CatalogDynamics | None
@@ -69,8 +130,24 @@ class WrappedFit:
 
 
 def wrap(library, problem, optimizer) -> WrappedFit:
-    """The solved ``problem`` (built by :func:`~pysindy_xl.fit.build_problem`, solved by the
-    fitted ``optimizer``) in the columns of the fitted ``library`` (``problem.catalog_map``)."""
+    """A solved problem in the columns of the fitted catalog.
+
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+        The catalog.
+    problem : CatalogProblem
+        Built by :func:`~pysindy_xl.fit.build_problem` (its ``catalog_map`` maps the problem's
+        columns back to the catalog's).
+    optimizer : catalog optimizer
+        Fitted on ``problem``.
+
+    Returns
+    -------
+    WrappedFit
+        The coefficients on every catalog column (laws no force scales oriented to a positive
+        definite mass matrix), the dynamics and the rest of the estimator's fitted state.
+    """
     origin, names = problem.catalog_map, library.get_feature_names()
     held = ~origin.coordinates
     coef, dynamics, check = checked_dynamics(library, origin.to_catalog(optimizer.coef_), held,

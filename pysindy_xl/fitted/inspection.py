@@ -38,7 +38,22 @@ class InspectionMixin:
         Returns
         -------
         ndarray, shape (F,)
-            In the order of :meth:`get_feature_names`.
+            A copy of ``coef_``, in the order of :meth:`get_feature_names`; the force column's
+            coefficient is -1 in explicit and mixed fits.
+
+        Examples
+        --------
+        A spring ``2 x'' + 3 x = u``:
+
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+        >>> t = np.linspace(0, 5, 501)[:, None]
+        >>> x = np.sin(t) + np.sin(2.3 * t) / 2
+        >>> xd, xdd = np.cos(t) + 1.15 * np.cos(2.3 * t), -np.sin(t) - 2.645 * np.sin(2.3 * t)
+        >>> model = px.XLSINDy(lib).fit(x, t[:, 0], x_dot=xd, x_ddot=xdd, u=2 * xdd + 3 * x)
+        >>> model.coefficients().round(6)
+        array([-1. ,  1. , -1.5])
         """
         check_is_fitted(self, "coef_")
         return self.coef_.copy()
@@ -90,6 +105,20 @@ class InspectionMixin:
         list of str
             In coefficient order: ``F[...]`` forces, ``L[...]`` Lagrangian terms,
             ``C_<coordinate>[...]`` classical terms.
+
+        Examples
+        --------
+        A spring ``2 x'' + 3 x = u``:
+
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+        >>> t = np.linspace(0, 5, 501)[:, None]
+        >>> x = np.sin(t) + np.sin(2.3 * t) / 2
+        >>> xd, xdd = np.cos(t) + 1.15 * np.cos(2.3 * t), -np.sin(t) - 2.645 * np.sin(2.3 * t)
+        >>> model = px.XLSINDy(lib).fit(x, t[:, 0], x_dot=xd, x_ddot=xdd, u=2 * xdd + 3 * x)
+        >>> model.get_feature_names()
+        ['F[tau]', 'L[x_dot**2]', 'L[x**2]']
         """
         check_is_fitted(self, "coef_")
         return self.feature_library_.get_feature_names()
@@ -99,13 +128,28 @@ class InspectionMixin:
 
         Parameters
         ----------
-        precision : int
+        precision : int, default 4
             Significant digits of the printed coefficients.
 
         Returns
         -------
         list of str
-            A coordinate held still reads ``<name>_ddot = 0 (held still)``.
+            One equation per coordinate; a coordinate held still reads
+            ``<name>_ddot = 0 (held still)``.
+
+        Examples
+        --------
+        A spring ``2 x'' + 3 x = u``:
+
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+        >>> t = np.linspace(0, 5, 501)[:, None]
+        >>> x = np.sin(t) + np.sin(2.3 * t) / 2
+        >>> xd, xdd = np.cos(t) + 1.15 * np.cos(2.3 * t), -np.sin(t) - 2.645 * np.sin(2.3 * t)
+        >>> model = px.XLSINDy(lib).fit(x, t[:, 0], x_dot=xd, x_ddot=xdd, u=2 * xdd + 3 * x)
+        >>> model.equations()
+        ['3.0*x + 2.0*x_ddot = tau_x']
         """
         check_is_fitted(self, "coef_")
         coords = self.feature_library_.coords
@@ -121,7 +165,22 @@ class InspectionMixin:
         Returns
         -------
         sympy.Expr
-            The Lagrange terms weighted by their coefficients (0 without Lagrange terms).
+            ``sum_k coef_k L_k`` over the Lagrange terms (0 without Lagrange terms), scaled as the
+            coefficients are (force coefficient -1).
+
+        Examples
+        --------
+        A spring ``2 x'' + 3 x = u``:
+
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+        >>> t = np.linspace(0, 5, 501)[:, None]
+        >>> x = np.sin(t) + np.sin(2.3 * t) / 2
+        >>> xd, xdd = np.cos(t) + 1.15 * np.cos(2.3 * t), -np.sin(t) - 2.645 * np.sin(2.3 * t)
+        >>> model = px.XLSINDy(lib).fit(x, t[:, 0], x_dot=xd, x_ddot=xdd, u=2 * xdd + 3 * x)
+        >>> model.lagrangian()
+        -1.5*x**2 + 1.0*x_dot**2
         """
         check_is_fitted(self, "coef_")
         return identified_lagrangian(self.coef_, self.feature_library_)
@@ -165,7 +224,7 @@ class InspectionMixin:
 
         Parameters
         ----------
-        precision : int
+        precision : int, default 4
             Significant digits of the printed coefficients.
         uncertainty : bool, default False
             After an ensemble fit, also print each included term's interval and probability.
@@ -173,6 +232,27 @@ class InspectionMixin:
             Print the Lagrangian and equations; default True unless the terms stand for physical
             parameters and the equations are long. Physical parameters, the held-still note and the
             consistency line are printed in any case.
+
+        Returns
+        -------
+        None
+            The model is written to standard output: the Lagrangian ``L = ...``, then one
+            ``(coordinate) equation`` line per coordinate.
+
+        Examples
+        --------
+        A spring ``2 x'' + 3 x = u``:
+
+        >>> import numpy as np, pysindy_xl as px
+        >>> c = px.Coordinates(["x"])
+        >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
+        >>> t = np.linspace(0, 5, 501)[:, None]
+        >>> x = np.sin(t) + np.sin(2.3 * t) / 2
+        >>> xd, xdd = np.cos(t) + 1.15 * np.cos(2.3 * t), -np.sin(t) - 2.645 * np.sin(2.3 * t)
+        >>> model = px.XLSINDy(lib).fit(x, t[:, 0], x_dot=xd, x_ddot=xdd, u=2 * xdd + 3 * x)
+        >>> model.print()
+        L = -1.5*x**2 + 1.0*x_dot**2
+        (x) 3.0*x + 2.0*x_ddot = tau_x
         """
         check_is_fitted(self, "coef_")
         note = held_note(getattr(self, "still_coordinates_", ()))

@@ -37,11 +37,14 @@ def solve_problem(optimizer, problem: CatalogProblem):
     Parameters
     ----------
     optimizer : CatalogOptimizer or object with ``fit_catalog``
+        The optimizer, fitted in place.
     problem : CatalogProblem
+        The regression problem.
 
     Returns
     -------
-    The fitted optimizer.
+    CatalogOptimizer or object
+        The fitted optimizer (what its ``fit_problem`` or ``fit_catalog`` returns).
 
     Examples
     --------
@@ -83,8 +86,27 @@ def pilot_optimizer(optimizer):
 
 
 def coordinates_touched(theta, n_coordinates: int, rtol: float = 1e-10) -> np.ndarray:
-    """Boolean (n_coordinates, F): which coordinate equations each column of ``theta`` enters
-    (rows coordinate-major; a block is zero at most ``rtol`` times the column's largest block).
+    """Which coordinate equations each column enters.
+
+    Parameters
+    ----------
+    theta : array, shape (n_coordinates * N, F)
+        Regression matrix, rows coordinate-major.
+    n_coordinates : int
+        Number of blocks.
+    rtol : float, default 1e-10
+        A block is zero when its norm is at most ``rtol`` times the column's largest block's.
+
+    Returns
+    -------
+    ndarray of bool, shape (n_coordinates, F)
+        True where column ``j`` is non-zero in the block of coordinate ``c``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> coordinates_touched(np.array([[1.0, 0.0], [0.0, 2.0]]), 2).tolist()
+    [[True, False], [False, True]]
     """
     theta = np.asarray(theta, dtype=float)
     blocks = theta.reshape(n_coordinates, -1, theta.shape[1])
@@ -131,6 +153,7 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
     Parameters
     ----------
     theta : array, shape (n_rows, F)
+        Regression matrix.
     priority : array of int, shape (F,), optional
         Visiting order, most preferred first. Default: column order.
     rtol : float
@@ -207,6 +230,8 @@ class CatalogOptimizer(BaseEstimator):
     are declared by overriding :meth:`catalog_tags` or as class attributes; every subclass
     enters :data:`OPTIMIZER_TYPES` for :meth:`to_spec` and :func:`optimizer_from_spec`.
 
+    Examples
+    --------
     A least-squares solver with the force coefficient fixed to -1 implements ``_solve`` and
     declares its tags:
 
@@ -250,12 +275,22 @@ class CatalogOptimizer(BaseEstimator):
             cls.catalog_tags = tags
 
     def catalog_tags(self) -> CatalogTags:
-        """What this optimizer can do and needs; a subclass extends its parent's with
+        """What this optimizer can do and needs.
+
+        A subclass extends its parent's with
         ``dataclasses.replace(super().catalog_tags(), ...)``.
 
         Returns
         -------
         CatalogTags
+            The tags (:class:`~pysindy_xl.optimizers.tags.CatalogTags`): ``requires_forces``,
+            ``can_refit``, ``balances_rows``, ``derivative_estimate``, ...
+
+        Examples
+        --------
+        >>> import pysindy_xl as px
+        >>> px.ExplicitOptimizer().catalog_tags().requires_forces
+        True
         """
         return CatalogTags(
             can_refit=type(self)._solve_support is not CatalogOptimizer._solve_support)
@@ -286,6 +321,7 @@ reference_columns, physical
         Parameters
         ----------
         problem : CatalogProblem
+            The regression problem.
         support : array of bool, shape (F,), optional
             Fit only these terms on every row, selecting nothing (needs the tag ``can_refit``).
 
@@ -312,7 +348,16 @@ reference_columns, physical
         """Raise ``TypeError``/``ValueError`` naming a parameter with a bad value."""
 
     def pilot(self):
-        """Unfitted optimizer for a first estimate of the law (see :func:`pilot_optimizer`)."""
+        """Unfitted optimizer for a first estimate of the law (see :func:`pilot_optimizer`).
+
+        The reweighted weak fit (:func:`~pysindy_xl.fit.solve`) whitens the rows by the residual
+        of this pilot's law before the final fit.
+
+        Returns
+        -------
+        CatalogOptimizer
+            By default a clone of this optimizer.
+        """
         return clone(self)
 
     def to_spec(self) -> dict:

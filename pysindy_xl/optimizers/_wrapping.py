@@ -17,5 +17,11 @@ class WrappingOptimizer:
         return ExplicitOptimizer() if self.optimizer is None else self.optimizer
 
     def pilot(self):
-        """The wrapped optimizer's pilot (:func:`~pysindy_xl.optimizers._base.pilot_optimizer`)."""
+        """The wrapped optimizer's pilot (:func:`~pysindy_xl.optimizers._base.pilot_optimizer`).
+
+        Returns
+        -------
+        CatalogOptimizer
+            Unfitted: the pilot of ``optimizer`` (default ``ExplicitOptimizer()``).
+        """
         return pilot_optimizer(self._base())

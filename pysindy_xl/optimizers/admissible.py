@@ -23,8 +23,19 @@ PENALTIES = (0.03, 0.1, 0.3, 1.0, 3.0)
 
 
 def reference_mass_matrices(mass_matrices) -> np.ndarray:
-    """Each column's mass matrix (S, F, n, n) averaged over the states, symmetric, per coordinate
-    in units of the median non-zero diagonal magnitude (1 where none). Shape (F, n, n).
+    """Each column's mass matrix averaged over the states, symmetric and unit free.
+
+    Per coordinate, in units of the median non-zero diagonal magnitude (1 where none).
+
+    Parameters
+    ----------
+    mass_matrices : array, shape (S, F, n, n)
+        The columns' mass matrices at ``S`` states.
+
+    Returns
+    -------
+    ndarray, shape (F, n, n)
+        The reference mass matrices.
     """
     mean = np.mean(np.asarray(mass_matrices, dtype=float), axis=0)
     mean = (mean + np.swapaxes(mean, 1, 2)) / 2
@@ -36,11 +47,24 @@ def reference_mass_matrices(mass_matrices) -> np.ndarray:
 
 
 def admissible_supports(r_factor, mass_matrices, penalties=PENALTIES, n_reweight: int = 5) -> list:
-    """Supports (sorted, one per penalty that gave a law) of sparse laws whose mean mass matrix is
-    positive definite, by the admissible lasso on ``r_factor`` (``Theta`` or a factor with its
-    Gram matrix) and the columns' ``mass_matrices`` (S, F, n, n) in the law's units;
-    ``penalties`` relative to the densest admissible law's squared residual, ``n_reweight``
-    solves each. Empty without cvxpy or when no combination has a definite mass matrix.
+    """Supports of sparse laws whose mean mass matrix is positive definite (admissible lasso).
+
+    Parameters
+    ----------
+    r_factor : array, shape (m, F)
+        ``Theta`` or a factor with its Gram matrix.
+    mass_matrices : array, shape (S, F, n, n)
+        The columns' mass matrices, in the law's units.
+    penalties : sequence of float, default PENALTIES
+        Lasso weights, relative to the densest admissible law's squared residual.
+    n_reweight : int, default 5
+        Reweighted solves per penalty.
+
+    Returns
+    -------
+    list of ndarray of int
+        One support (sorted) per penalty that gave a law; empty without cvxpy or when no
+        combination has a definite mass matrix.
     """
     cp = import_optional("cvxpy", "admissible starts")
     r_factor = np.asarray(r_factor, dtype=float)

@@ -63,6 +63,7 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
     confidence : float, default 0.95
         Coverage of the coefficient intervals.
     random_state : int or None, default 0
+        Seed of the subsamples.
     n_jobs : int or None, default None
         joblib workers (``None``: as ``joblib.parallel_config`` says; the result does not
         depend on it).
@@ -103,7 +104,16 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
     spec_type = "EnsembleOptimizer"
 
     def catalog_tags(self):
-        """The base optimizer's tags; every fit balances its own subsample."""
+        """What this optimizer can do and needs.
+
+        The base optimizer's tags; every fit balances its own subsample.
+
+        Returns
+        -------
+        CatalogTags
+            The tags (:class:`~pysindy_xl.optimizers.tags.CatalogTags`): ``requires_forces``,
+            ``can_refit``, ``balances_rows``, ``derivative_estimate``, ...
+        """
         return dataclasses.replace(catalog_tags(self._base()), balances_rows=False, can_refit=False)
 
     _parameter_constraints = {
@@ -238,7 +248,9 @@ class EnsembleOptimizer(WrappingOptimizer, CatalogOptimizer):
         Parameters
         ----------
         feature_names : list of str, optional
+            Names of the features; default None: their indices.
         axes : pair of matplotlib Axes, optional
+            Where to draw; default None: a new figure.
 
         Returns
         -------

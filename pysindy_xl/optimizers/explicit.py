@@ -36,10 +36,12 @@ def hard_threshold_regression(x, y, threshold: float = 0.01, max_iter: int = 100
     Parameters
     ----------
     x : array, shape (n_rows, F)
+        Columns.
     y : array, shape (n_rows,)
-    threshold : float
+        Target.
+    threshold : float, default 0.01
         Relative condition value below which a term is pruned, in [0, 1).
-    max_iter : int
+    max_iter : int, default 100
         Maximal number of prune-and-refit rounds.
     keep : array of bool, shape (F,), optional
         Columns never pruned.
@@ -47,6 +49,7 @@ def hard_threshold_regression(x, y, threshold: float = 0.01, max_iter: int = 100
     Returns
     -------
     coef : ndarray, shape (F,)
+        The coefficients.
 
     Examples
     --------
@@ -85,16 +88,20 @@ def proximal_gradient_lasso(x, y, alpha: float, max_iter: int = 10_000, tol: flo
     x : array, shape (n_rows, F)
         Normalized columns (the step is set by the largest singular value).
     y : array, shape (n_rows,)
+        Target.
     alpha : float
         Regularization weight, >= 0.
-    max_iter : int
-    tol : float
+    max_iter : int, default 10000
+        Iteration budget.
+    tol : float, default 1e-10
         Stop when the relative change of the iterate falls below ``tol``.
 
     Returns
     -------
     coef : ndarray, shape (F,)
+        The coefficients.
     converged : bool
+        Whether the iteration converged.
 
     Examples
     --------
@@ -138,14 +145,18 @@ def corrected_least_squares(x, y, noise_moments=None, max_noise_share: float = 0
     Parameters
     ----------
     x : array, shape (n_rows, k)
+        Columns.
     y : array, shape (n_rows,)
+        Target.
     noise_moments : array, shape (k, k), optional
         ``S``; None gives plain least squares.
     max_noise_share : float, default 0.5
+        Largest eigenvalue of ``(x^T x)^-1 S`` for which the correction applies.
 
     Returns
     -------
     coef : ndarray, shape (k,)
+        The coefficients.
     noise_share : float
         Largest eigenvalue of ``(x^T x)^{-1} S`` (0 without ``S``).
 
@@ -185,10 +196,21 @@ def corrected_least_squares(x, y, noise_moments=None, max_noise_share: float = 0
 
 
 class ExplicitOptimizer(CatalogOptimizer):
-    """Sparse regression when the generalized forces are known on the coordinates.
+    r"""Sparse regression when the generalized forces are known on the coordinates.
 
     With the force column's coefficient fixed to ``-1`` (the paper's convention),
-    ``Theta @ xi = 0`` becomes ``Theta_rest @ xi_rest = force``, solved on unit-RMS columns.
+    ``Theta @ xi = 0`` becomes ``Theta_rest @ xi_rest = f``, ``f`` the summed force columns,
+    solved on unit-RMS columns. Hard thresholding (the default) solves least squares on a
+    support ``A`` pruned by the condition value ``|xi_j| rms(Theta_j)``,
+
+    .. math:: \min_{\xi_A} \|\Theta_A \xi_A - f\|_2^2,
+
+    the L1 methods the Lasso
+
+    .. math:: \min_\xi \frac{1}{2N} \|\Theta_{rest} \xi - f\|_2^2 + \alpha \|\xi\|_1,
+
+    then (``refit``) least squares on its support. With noise moments ``S = E[E^T E]`` of the
+    columns the refit is corrected for errors in variables (:func:`corrected_least_squares`).
 
     Parameters
     ----------
@@ -207,6 +229,7 @@ class ExplicitOptimizer(CatalogOptimizer):
         After an L1 method or an estimator, refit by least squares on the support, pruned with
         ``threshold``.
     max_iter : int, default 1000
+        Prune-and-refit rounds of ``"threshold"``; ten times as many L1 iterations.
     select : {"all", "friction"}, default "all"
         Which columns the pruning may drop: any, or only the friction and sensor-offset columns
         of the problem's physical structure (``selectable_columns``); needs ``"threshold"``.
@@ -216,6 +239,7 @@ class ExplicitOptimizer(CatalogOptimizer):
     coef_ : ndarray, shape (F,)
         Coefficients of ``fit``'s columns, or the full catalog vector after ``fit_catalog``.
     support_ : ndarray of bool, shape (F,)
+        The non-zero coefficients.
     noise_share_ : float or None
         With noise moments: the largest eigenvalue of ``(X^T X)^-1 S`` on the support (the
         correction applies below 0.5).
@@ -234,7 +258,17 @@ class ExplicitOptimizer(CatalogOptimizer):
     spec_type = "ExplicitOptimizer"
 
     def catalog_tags(self):
-        """Explicit regression needs force columns."""
+        """What this optimizer can do and needs.
+
+        Explicit regression needs force columns (``requires_forces``) and can refit a given
+        support (``can_refit``).
+
+        Returns
+        -------
+        CatalogTags
+            The tags (:class:`~pysindy_xl.optimizers.tags.CatalogTags`): ``requires_forces``,
+            ``can_refit``, ``balances_rows``, ``derivative_estimate``, ...
+        """
         return dataclasses.replace(super().catalog_tags(), requires_forces=True)
 
     _parameter_constraints = {
@@ -268,7 +302,9 @@ class ExplicitOptimizer(CatalogOptimizer):
         Parameters
         ----------
         X : array, shape (n_rows, F)
+            Regression matrix.
         y : array, shape (n_rows,)
+            Target.
 
         Returns
         -------
@@ -402,8 +438,24 @@ class ExplicitOptimizer(CatalogOptimizer):
 
 
 def explicit_regression(problem):
-    """``(rest, force, moments)``: the non-force columns, the summed force (right-hand side) and the
-    pooled noise moments restricted to ``rest`` (None without).
+    """The explicit regression of a catalog problem: columns, right-hand side and noise.
+
+    With the force coefficients fixed to -1, ``Theta @ xi = 0`` reads
+    ``Theta_rest @ xi_rest = sum of the force columns``.
+
+    Parameters
+    ----------
+    problem : CatalogProblem
+        The problem, with force columns.
+
+    Returns
+    -------
+    rest : ndarray of int
+        The non-force columns.
+    force : ndarray, shape (n_rows,)
+        The summed force columns (the right-hand side).
+    moments : ndarray, shape (len(rest), len(rest)) or None
+        The pooled noise moments restricted to ``rest`` (None without).
     """
     if len(problem.force_columns) == 0:
         raise ValueError("force_columns: explicit regression needs a force column")
@@ -414,7 +466,22 @@ def explicit_regression(problem):
 
 
 def catalog_vector(coef_rest, rest, problem) -> np.ndarray:
-    """The catalog vector (F,) of ``coef_rest`` on the columns ``rest``, forces at -1."""
+    """The catalog vector of coefficients found on the non-force columns, forces at -1.
+
+    Parameters
+    ----------
+    coef_rest : array, shape (len(rest),)
+        Coefficients of the columns ``rest``.
+    rest : array of int
+        The non-force columns.
+    problem : CatalogProblem
+        The problem (its number of features and force columns).
+
+    Returns
+    -------
+    ndarray, shape (F,)
+        ``coef_rest`` placed on ``rest``, -1 on the force columns, zero elsewhere.
+    """
     coef = np.zeros(problem.n_features)
     coef[rest] = coef_rest
     coef[problem.force_columns] = -1.0

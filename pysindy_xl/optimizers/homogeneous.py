@@ -41,9 +41,25 @@ STARTS_PER_SIZE = 3
 
 @dataclasses.dataclass(frozen=True)
 class RowMoments:
-    """Noise moments of any set of rows, from Monte Carlo draws ``draws`` (D, n_rows, F) of the
-    rows' errors (``floor`` added to the diagonal per row): the propagated noise varies along a
-    trajectory, so a held-out ratio divides by the held-out rows' own moments.
+    """Noise moments of any set of rows, from Monte Carlo draws of the rows' errors.
+
+    The propagated noise varies along a trajectory, so a held-out ratio divides by the held-out
+    rows' own moments. Called with a row mask or indices, returns ``E[E_rows^T E_rows]``
+    (F, F).
+
+    Parameters
+    ----------
+    draws : ndarray, shape (D, n_rows, F)
+        Draws of the rows' errors.
+    floor : float, default 0.0
+        Added to the diagonal per row.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> moments = RowMoments(np.ones((2, 4, 1)))
+    >>> moments(np.array([0, 1])).tolist()
+    [[2.0]]
     """
 
     draws: np.ndarray
@@ -55,7 +71,18 @@ class RowMoments:
         return draw_moments(chosen, 1)[0] + self.floor * chosen.shape[1] * np.eye(chosen.shape[-1])
 
     def columns(self, keep) -> RowMoments:
-        """The moments of the columns ``keep`` only."""
+        """The moments of some columns only.
+
+        Parameters
+        ----------
+        keep : array of int or bool
+            The columns kept.
+
+        Returns
+        -------
+        RowMoments
+            The draws of those columns.
+        """
         return dataclasses.replace(self, draws=self.draws[:, :, keep])
 
 
@@ -83,6 +110,16 @@ class LawSelection(ChosenSupport):
         Whether the chosen law is admissible (False when no candidate was).
     cv_relative : float
         The chosen law's mean held-out relative squared residual.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> a, b = rng.normal(size=(2, 2000))
+    >>> theta = np.column_stack([a, b, a - 2 * b]) + 0.05 * rng.normal(size=(2000, 3))
+    >>> law, ratio, selection = select_law(theta, 0.0025 * 2000 * np.eye(3)[None])
+    >>> selection.size, len(selection.order)
+    (3, 3)
     """
 
     order: np.ndarray
@@ -169,7 +206,9 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     noise_moments : array, shape (n_blocks, F, F)
         ``E[E_b^T E_b]`` of each block's errors.
     n_blocks : int, default 1
+        Number of coordinate blocks of the rows.
     n_folds : int, default 5
+        Contiguous held-out folds per block.
     resolution : float, default 1e-8
         Held-out relative squared residuals this close to the best count as equal (clean data).
     swaps : bool, default True
@@ -188,6 +227,7 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     ratio : float
         Its noise ratio on all the rows.
     selection : LawSelection
+        What was chosen and why.
 
     Examples
     --------
@@ -381,12 +421,38 @@ def _refined_path(r_factor, moments, start, memo=None) -> list:
 
 def select_laws(theta, noise_moments, n_blocks: int, mass_matrices=None,
                 max_ratio_factor: float = 10.0, noise_draws=None) -> tuple[list, list, list]:
-    """Laws ``(laws, ratios, selections)`` for all the coordinates: :func:`select_law`, then again
-    on the coordinates left unexplained with the columns that leave the explained ones alone
-    (uncoupled subsystems), a further law kept when its ratio is within ``max_ratio_factor`` of
-    the first's. ``theta`` (n_blocks * N, F) has balanced blocks; the other arguments as in
-    :func:`select_law`.
+    """Laws for all the coordinates, uncoupled subsystems included.
 
+    :func:`select_law`, then again on the coordinates left unexplained with the columns that
+    leave the explained ones alone (uncoupled subsystems), a further law kept when its ratio is
+    within ``max_ratio_factor`` of the first's.
+
+    Parameters
+    ----------
+    theta : array, shape (n_blocks * N, F)
+        Regression matrix with balanced blocks.
+    noise_moments : array, shape (n_blocks, F, F)
+        As in :func:`select_law`.
+    n_blocks : int
+        Number of coordinate blocks.
+    mass_matrices : array, shape (S, F, n_blocks, n_blocks), optional
+        As in :func:`select_law`; default None.
+    max_ratio_factor : float, default 10.0
+        A further law is kept when its noise ratio is within this factor of the first's.
+    noise_draws : array, shape (D, n_rows, F), optional
+        As in :func:`select_law`; default None.
+
+    Returns
+    -------
+    laws : list of ndarray, shape (F,)
+        The laws, the first one first.
+    ratios : list of float
+        Their noise ratios.
+    selections : list of LawSelection
+        How each was chosen.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> rng = np.random.default_rng(0)
     >>> a, b = rng.normal(size=(2, 1000))

@@ -32,7 +32,17 @@ _LAW_CHECK_EVERY_LONG = 100
 
 
 class NoLawFoundError(RuntimeError):
-    """Implicit regression found no sparse law in the regression matrix."""
+    """Implicit regression found no sparse law in the regression matrix.
+
+    A ``RuntimeError``: the data do not single out a law (too short, too noisy, or a catalog
+    that cannot express the dynamics).
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> issubclass(px.NoLawFoundError, RuntimeError)
+    True
+    """
 
 
 class ImplicitOptimizer(CatalogOptimizer):
@@ -59,6 +69,7 @@ class ImplicitOptimizer(CatalogOptimizer):
         values of the normalized matrix, between the law's and the next-best residual),
         clipped to ``[1e-12, 1e-3]``; stored in ``alpha_``.
     solver : {"fista", "cvxpy"}, default "fista"
+        The solver of (1): the fast per-column Lassos or cvxpy.
     cvxpy_solver : str, optional
         Passed to ``cvxpy.Problem.solve``; default: cvxpy's choice.
     angle_tol : float, default 5.0
@@ -96,15 +107,21 @@ class ImplicitOptimizer(CatalogOptimizer):
     laws_ : ndarray, shape (n_laws, F)
         Accepted laws, normalized, best first.
     law_groups_ : list of ndarray of int
+        The columns of each homothetic group that became a law.
     law_residuals_ : ndarray, shape (n_laws,)
+        Relative residual of each law.
     combined_laws_ : list of int
         Indices of the laws summed into ``coef_``.
     alpha_ : float
+        The L1 weight used.
     n_iter_ : int
         Iterations of the fast solver (0 for cvxpy).
     converged_ : bool
+        Whether the fast solver converged.
     column_converged_ : ndarray of bool, shape (F,)
+        Per column, whether its Lasso converged.
     selection_method_ : {"sindy-pi", "noise ratio", "given support"}
+        How the law was chosen.
     selection_, law_selections_ : LawSelection, list of LawSelection
         Noise-ratio mode: how the first law's (every law's) support was chosen.
     law_noise_ratios_ : ndarray, shape (n_laws,)
@@ -129,7 +146,17 @@ class ImplicitOptimizer(CatalogOptimizer):
     spec_type = "ImplicitOptimizer"
 
     def catalog_tags(self):
-        """Uses the mass matrices and noise draws; wants unbiased derivatives."""
+        """What this optimizer can do and needs.
+
+        It uses the columns' mass matrices and noise draws and wants unbiased derivatives
+        (``derivative_estimate``).
+
+        Returns
+        -------
+        CatalogTags
+            The tags (:class:`~pysindy_xl.optimizers.tags.CatalogTags`): ``requires_forces``,
+            ``can_refit``, ``balances_rows``, ``derivative_estimate``, ...
+        """
         return dataclasses.replace(super().catalog_tags(), uses_mass_matrices=True,
                                    uses_noise_draws=True, derivative_estimate="unbiased")
 

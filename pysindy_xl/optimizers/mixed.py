@@ -37,6 +37,7 @@ def activation_closure(touches, seed) -> tuple[np.ndarray, np.ndarray]:
     Returns
     -------
     coordinates : ndarray of bool, shape (n_coordinates,)
+        The coordinates activated at the start (the forced ones).
     columns : ndarray of bool, shape (F,)
         Columns touching an activated coordinate.
 
@@ -80,12 +81,15 @@ class MixedOptimizer(CatalogOptimizer):
     Attributes
     ----------
     coef_ : ndarray, shape (F,)
+        The explicit and implicit coefficients summed (disjoint columns).
     mode_ : {"explicit", "implicit", "mixed"}
+        Which parts were used.
     forced_coordinates_, activated_coordinates_ : ndarray of bool, shape (n_coordinates,)
         Coordinates with a non-zero force, and their activation closure.
     explicit_coordinates_, implicit_coordinates_ : ndarray of bool, shape (n_coordinates,)
         After the update from the explicit solution.
     explicit_columns_, implicit_columns_ : ndarray of int
+        The columns of each part.
     explicit_optimizer_, implicit_optimizer_ : estimator or None
         The fitted parts (None when unused).
     inclusion_probability_, coef_interval_ : ndarray, shape (F,) and (2, F)
@@ -108,7 +112,17 @@ class MixedOptimizer(CatalogOptimizer):
     spec_type = "MixedOptimizer"
 
     def catalog_tags(self):
-        """The parts balance their own sub-problems; mass matrices and draws used where one does."""
+        """What this optimizer can do and needs.
+
+        The parts balance their own sub-problems; mass matrices and draws are used where one
+        does.
+
+        Returns
+        -------
+        CatalogTags
+            The tags (:class:`~pysindy_xl.optimizers.tags.CatalogTags`): ``requires_forces``,
+            ``can_refit``, ``balances_rows``, ``derivative_estimate``, ...
+        """
         parts = [catalog_tags(part) for part in self._sub_optimizers()]
         return dataclasses.replace(
             super().catalog_tags(), balances_rows=False,
@@ -142,7 +156,13 @@ class MixedOptimizer(CatalogOptimizer):
         return clone(explicit), clone(implicit)
 
     def pilot(self):
-        """The same mixed regression with the pilots of both parts."""
+        """The same mixed regression with the pilots of both parts.
+
+        Returns
+        -------
+        MixedOptimizer
+            Unfitted, with ``explicit_optimizer.pilot()`` and ``implicit_optimizer.pilot()``.
+        """
         explicit, implicit = self._sub_optimizers()  # validated clones
         return clone(self).set_params(explicit_optimizer=pilot_optimizer(explicit),
                                       implicit_optimizer=pilot_optimizer(implicit))
@@ -154,7 +174,9 @@ class MixedOptimizer(CatalogOptimizer):
         Parameters
         ----------
         X : array, shape (n_rows, F)
+            Regression matrix.
         y : array, shape (n_rows,), optional
+            Right-hand side of the explicit part; default None: the implicit part ``X @ coef_ = 0``.
 
         Returns
         -------

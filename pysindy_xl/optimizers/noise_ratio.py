@@ -59,9 +59,29 @@ def noise_pencil(r_factor, moments):
 
 
 def noise_ratio_law(r_factor, moments) -> tuple[float, np.ndarray]:
-    """Smallest noise ratio on all the columns and its law: ``(ratio, law)``, the law of unit norm
-    with its largest entry positive.
+    r"""Smallest noise ratio on all the columns and its law.
 
+    .. math:: \rho = \min_{\xi \ne 0} \frac{\lVert \Theta \xi \rVert^2}{\xi^T S \xi},
+
+    the smallest generalized eigenvalue of ``(Theta^T Theta, S)``: about 1 for a law that holds
+    to the noise.
+
+    Parameters
+    ----------
+    r_factor : array, shape (m, F)
+        ``Theta``, or a factor ``R`` with ``R^T R = Theta^T Theta``.
+    moments : array, shape (F, F)
+        Noise moments ``S = E[E^T E]`` of the columns.
+
+    Returns
+    -------
+    ratio : float
+        ``rho``.
+    law : ndarray, shape (F,)
+        The minimizer, of unit norm with its largest entry positive.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> rng = np.random.default_rng(0)
     >>> signal = rng.normal(size=5000)
@@ -96,7 +116,20 @@ def _constrained_minima(values, vectors, n_bisections: int = 48) -> np.ndarray:
 
 
 def law_elimination_path(r_factor, moments) -> np.ndarray:
-    """Columns ordered from most to least needed by backward elimination of the noise ratio."""
+    """Columns ordered from most to least needed, by backward elimination of the noise ratio.
+
+    Parameters
+    ----------
+    r_factor : array, shape (m, F)
+        ``Theta``, or a factor ``R`` with ``R^T R = Theta^T Theta``.
+    moments : array, shape (F, F)
+        Noise moments ``S = E[E^T E]`` of the columns.
+
+    Returns
+    -------
+    ndarray of int, shape (F,)
+        The column order (the last eliminated first).
+    """
     support = np.arange(r_factor.shape[1])
     removed = []
     while len(support) > 2:
@@ -114,8 +147,23 @@ def eliminate_one(r_factor, moments, support) -> np.ndarray:
 
 
 def law_forward_path(r_factor, moments, max_size=None) -> np.ndarray:
-    """Columns in the order forward selection adds them (the best pair first, then the column
-    lowering the ratio most), up to ``max_size`` columns.
+    """Columns in the order forward selection adds them.
+
+    The best pair first, then the column lowering the noise ratio most.
+
+    Parameters
+    ----------
+    r_factor : array, shape (m, F)
+        ``Theta``, or a factor ``R`` with ``R^T R = Theta^T Theta``.
+    moments : array, shape (F, F)
+        Noise moments ``S = E[E^T E]`` of the columns.
+    max_size : int, optional
+        Stop after this many columns; default None: all.
+
+    Returns
+    -------
+    ndarray of int
+        The column order.
     """
     n_features = r_factor.shape[1]
     max_size = n_features if max_size is None else min(int(max_size), n_features)
@@ -201,9 +249,26 @@ def refine_law_by_swaps(r_factor, moments, support, max_swaps: int = 50,
     """Best-improvement single swaps of a law's support, lowering its smallest noise ratio.
 
     Recovers a true column that a correlated pair imitated on the greedy path (L0Learn's 1-swap
-    search); swaps are screened from the support's own pencil and confirmed exactly. At most
-    ``max_swaps``; returns the support, sorted. ``memo`` (shared between calls on the same
-    arguments) maps visited supports to where their search ended.
+    search); swaps are screened from the support's own pencil and confirmed exactly.
+
+    Parameters
+    ----------
+    r_factor : array, shape (m, F)
+        ``Theta``, or a factor ``R`` with ``R^T R = Theta^T Theta``.
+    moments : array, shape (F, F)
+        Noise moments ``S = E[E^T E]`` of the columns.
+    support : array of int
+        The starting support.
+    max_swaps : int, default 50
+        At most this many swaps.
+    memo : dict, optional
+        Shared between calls on the same arguments: visited supports to where their search
+        ended. Default None.
+
+    Returns
+    -------
+    ndarray of int
+        The refined support, sorted.
     """
     memo = {} if memo is None else memo
     gram = r_factor.T @ r_factor

@@ -54,9 +54,11 @@ class PhysicalOptimizer(WrappingOptimizer, CatalogOptimizer):
     Attributes
     ----------
     coef_ : ndarray, shape (F,)
+        Consistent coefficients (base parameters exactly ``C pi``).
     optimizer_ : fitted catalog optimizer
         The one that selected the terms.
     unconstrained_coef_ : ndarray, shape (F,)
+        The selecting optimizer's coefficients.
     consistency_ : dict or None
         ``consistent``, ``cost`` (share of the explained signal), ``negative_friction``
         (columns), ``min_pseudo_inertia_eigenvalue`` (relative). None without a structure.
@@ -85,7 +87,15 @@ class PhysicalOptimizer(WrappingOptimizer, CatalogOptimizer):
     spec_type = "PhysicalOptimizer"
 
     def catalog_tags(self):
-        """The selecting optimizer's tags; explicit, refits a support, balances its problem itself.
+        """What this optimizer can do and needs.
+
+        The selecting optimizer's tags; explicit, refits a support, balances its problem itself.
+
+        Returns
+        -------
+        CatalogTags
+            The tags (:class:`~pysindy_xl.optimizers.tags.CatalogTags`): ``requires_forces``,
+            ``can_refit``, ``balances_rows``, ``derivative_estimate``, ...
         """
         return dataclasses.replace(catalog_tags(self._base()), requires_forces=True,
                                    can_refit=True, balances_rows=False)

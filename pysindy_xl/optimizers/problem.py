@@ -148,7 +148,13 @@ reference_columns, physical, noise_draws, row_noise, catalog_map
         return coordinate_weights(self.theta, self.n_coordinates, self.force_columns)
 
     def balanced(self) -> CatalogProblem:
-        """The problem with each block's rows, moments and draws scaled by :attr:`block_weights`."""
+        """The problem with each block's rows, moments and draws scaled by :attr:`block_weights`.
+
+        Returns
+        -------
+        CatalogProblem
+            The balanced problem (``balance=False``), or this one when it is not to be balanced.
+        """
         if not self.balance:
             return self
         weights = self.block_weights
@@ -162,11 +168,35 @@ reference_columns, physical, noise_draws, row_noise, catalog_map
                                    row_noise=None)
 
     def pooled_moments(self) -> np.ndarray | None:
-        """The noise moments of all rows together, shape (F, F), or None."""
+        """The noise moments of all rows together.
+
+        Returns
+        -------
+        ndarray, shape (F, F) or None
+            ``sum_c E[E_c^T E_c]``; None without noise moments.
+        """
         return None if self.noise_moments is None else self.noise_moments.sum(axis=0)
 
     def rows(self, coordinates) -> np.ndarray:
-        """Row indices of the blocks of ``coordinates`` (a boolean mask or indices)."""
+        """Row indices of the blocks of some coordinates.
+
+        Parameters
+        ----------
+        coordinates : array of bool, shape (n_coordinates,), or array of int
+            The coordinates, as a mask or indices.
+
+        Returns
+        -------
+        ndarray of int
+            Their rows, block after block.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> problem = CatalogProblem.from_arrays(np.zeros((6, 2)), 2, [])
+        >>> problem.rows([1]).tolist()
+        [3, 4, 5]
+        """
         blocks = np.arange(self.n_coordinates)[coordinates]
         return (blocks[:, None] * self.n_samples + np.arange(self.n_samples)).ravel()
 
@@ -176,6 +206,7 @@ reference_columns, physical, noise_draws, row_noise, catalog_map
         Parameters
         ----------
         coordinates : array of bool, shape (n_coordinates,)
+            The coordinates kept.
         columns : array of int
             Catalog columns kept, in this order.
         force_columns : array of int, optional
@@ -209,8 +240,18 @@ reference_columns, physical, noise_draws, row_noise, catalog_map
                                    noise_draws=draws, row_noise=None, catalog_map=None)
 
     def subsample(self, samples) -> CatalogProblem:
-        """The rows ``samples`` (indices within a block) of every block, with their own noise
-        moments (given the draws) or their share; the mass matrices are kept whole.
+        """The same samples of every block, with their own noise moments.
+
+        Parameters
+        ----------
+        samples : array of int
+            Row indices within a block.
+
+        Returns
+        -------
+        CatalogProblem
+            The rows ``samples`` of every block, with their own noise moments (given the draws)
+            or their share of the moments; the mass matrices are kept whole.
         """
         samples = np.asarray(samples, dtype=int)
         rows = (np.arange(self.n_coordinates)[:, None] * self.n_samples + samples).ravel()
@@ -225,7 +266,27 @@ reference_columns, physical, noise_draws, row_noise, catalog_map
 
 
 def check_noise_moments(noise_moments, n_coordinates: int, n_features: int) -> np.ndarray:
-    """Validate noise moments: finite, shape (n, F, F), symmetric blocks."""
+    """Validate noise moments.
+
+    Parameters
+    ----------
+    noise_moments : array, shape (n, F, F)
+        ``E[E_c^T E_c]`` of each coordinate's block.
+    n_coordinates : int
+        ``n``.
+    n_features : int
+        ``F``.
+
+    Returns
+    -------
+    ndarray, shape (n, F, F)
+        The moments as floats.
+
+    Raises
+    ------
+    ValueError
+        When not finite, of the wrong shape, or with asymmetric blocks.
+    """
     moments = check_numeric_array(noise_moments, "noise_moments", min_samples=0)
     if moments.shape != (n_coordinates, n_features, n_features):
         raise ValueError(f"noise_moments: expected shape {(n_coordinates, n_features, n_features)}"
@@ -237,7 +298,27 @@ def check_noise_moments(noise_moments, n_coordinates: int, n_features: int) -> n
 
 
 def check_mass_matrices(mass_matrices, n_coordinates: int, n_features: int) -> np.ndarray:
-    """Validate column mass matrices: finite, shape (S, F, n, n) with S >= 1."""
+    """Validate column mass matrices.
+
+    Parameters
+    ----------
+    mass_matrices : array, shape (S, F, n, n)
+        Each column's mass matrix at ``S >= 1`` states.
+    n_coordinates : int
+        ``n``.
+    n_features : int
+        ``F``.
+
+    Returns
+    -------
+    ndarray, shape (S, F, n, n)
+        The mass matrices as floats.
+
+    Raises
+    ------
+    ValueError
+        When not finite or of the wrong shape.
+    """
     mass = check_numeric_array(mass_matrices, "mass_matrices", min_samples=0)
     if mass.ndim != 4 or mass.shape[1:] != (n_features, n_coordinates, n_coordinates) \
             or mass.shape[0] == 0:
@@ -247,7 +328,25 @@ def check_mass_matrices(mass_matrices, n_coordinates: int, n_features: int) -> n
 
 
 def check_support(support, n_features: int) -> np.ndarray:
-    """Validate the ``support`` of a refit: a boolean array of shape (F,)."""
+    """Validate the ``support`` of a refit.
+
+    Parameters
+    ----------
+    support : array of bool, shape (F,)
+        The columns to refit.
+    n_features : int
+        ``F``.
+
+    Returns
+    -------
+    ndarray of bool, shape (F,)
+        The support.
+
+    Raises
+    ------
+    TypeError, ValueError
+        When not a boolean array of shape (F,).
+    """
     support = np.asarray(support)
     if support.dtype != bool or support.shape != (n_features,):
         raise ValueError(f"support: expected a boolean array of shape ({n_features},), got "
@@ -358,8 +457,22 @@ def balance_coordinates(theta, n_coordinates: int, force_columns=None) -> np.nda
 
 
 def scale_blocks(theta, weights) -> np.ndarray:
-    """``theta`` with the rows of block ``i`` multiplied by ``weights[i]``.
+    """Multiply the rows of each coordinate block by a weight.
 
+    Parameters
+    ----------
+    theta : array, shape (n * N, F)
+        Rows in ``n`` equal blocks.
+    weights : array, shape (n,)
+        Weight of each block.
+
+    Returns
+    -------
+    ndarray, shape (n * N, F)
+        The rows of block ``i`` times ``weights[i]``.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> scale_blocks(np.ones((4, 1)), [1.0, 3.0]).ravel().tolist()
     [1.0, 1.0, 3.0, 3.0]

@@ -50,8 +50,25 @@ def _triangular_system(x, y):
 
 
 def elimination_path(x, y) -> np.ndarray:
-    """Column order (F,) from most to least needed, by backward elimination (zero columns last).
+    """Column order from most to least needed, by backward elimination.
 
+    The column whose removal raises the least-squares residual least goes first; zero columns
+    last.
+
+    Parameters
+    ----------
+    x : array, shape (n_rows, F)
+        Columns.
+    y : array, shape (n_rows,)
+        Target.
+
+    Returns
+    -------
+    ndarray of int, shape (F,)
+        The column order.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> rng = np.random.default_rng(0)
     >>> x = rng.normal(size=(300, 6))
@@ -90,9 +107,25 @@ def _elimination_order(active_mask, xs, y) -> np.ndarray:
 
 
 def forward_path(x, y) -> np.ndarray:
-    """Column order from most to least needed, by forward stepwise selection (orthogonal least
-    squares): finds a true term a correlated pair imitates, where elimination may keep the pair.
+    """Column order from most to least needed, by forward stepwise selection.
 
+    Orthogonal least squares: finds a true term that a correlated pair imitates, where
+    elimination may keep the pair.
+
+    Parameters
+    ----------
+    x : array, shape (n_rows, F)
+        Columns.
+    y : array, shape (n_rows,)
+        Target.
+
+    Returns
+    -------
+    ndarray of int
+        The column order.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> rng = np.random.default_rng(0)
     >>> x = rng.normal(size=(300, 6))
@@ -136,10 +169,13 @@ def refine_by_swaps(x, y, support, max_swaps: int = 50) -> np.ndarray:
     Parameters
     ----------
     x : array, shape (n_rows, F)
+        Columns.
     y : array, shape (n_rows,)
+        Target.
     support : array of int
         Starting columns.
     max_swaps : int, default 50
+        At most this many swaps.
 
     Returns
     -------
@@ -201,7 +237,25 @@ def _systems(x, y, n_blocks: int, n_folds: int) -> tuple[tuple, list]:
 
 
 def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
-    """Held-out error (n_folds, len(order)) of every nested model ``order[:k]`` (index ``k - 1``).
+    """Held-out error of every nested model ``order[:k]``.
+
+    Parameters
+    ----------
+    x : array, shape (n_rows, F)
+        Columns.
+    y : array, shape (n_rows,)
+        Target.
+    order : array of int
+        Columns from most to least needed.
+    n_blocks : int, default 1
+        Coordinate blocks of the rows (folds are contiguous within each).
+    n_folds : int, default 5
+        Folds.
+
+    Returns
+    -------
+    ndarray, shape (n_folds, len(order))
+        Held-out error of the model of the first ``k`` columns at index ``k - 1``.
     """
     return _nested_errors(_systems(x, y, n_blocks, n_folds)[1], order, n_folds)
 
@@ -229,7 +283,26 @@ def _nested_errors(folds, order, n_folds: int) -> np.ndarray:
 
 
 def cross_validated_supports(x, y, supports, n_blocks: int = 1, n_folds: int = 5):
-    """Held-out error (n_folds, len(supports)) of arbitrary supports (inf where undetermined)."""
+    """Held-out error of arbitrary supports.
+
+    Parameters
+    ----------
+    x : array, shape (n_rows, F)
+        Columns.
+    y : array, shape (n_rows,)
+        Target.
+    supports : list of array of int
+        The supports.
+    n_blocks : int, default 1
+        Coordinate blocks of the rows.
+    n_folds : int, default 5
+        Folds.
+
+    Returns
+    -------
+    ndarray, shape (n_folds, len(supports))
+        Held-out errors (inf where a support is undetermined).
+    """
     return _support_errors(_systems(x, y, n_blocks, n_folds)[1], supports, n_folds)
 
 

@@ -44,6 +44,7 @@ class TotalLeastSquaresOptimizer(CatalogOptimizer):
     Attributes
     ----------
     coef_ : ndarray, shape (F,)
+        The law, normalized (``normalization``).
     noise_ratio_ : float
         The law's noise ratio (about 1 when it holds); nan without noise moments.
     pencil_ratios_ : ndarray
@@ -51,6 +52,7 @@ class TotalLeastSquaresOptimizer(CatalogOptimizer):
     undetermined_ : ndarray, shape (k, F)
         Further laws the data hold as well (normalized as ``coef_``).
     column_norms_ : ndarray, shape (F,)
+        Norms of the columns.
     selection_method_ : str
         ``"total least squares"``.
 
@@ -70,7 +72,16 @@ class TotalLeastSquaresOptimizer(CatalogOptimizer):
     spec_type = "TotalLeastSquaresOptimizer"
 
     def catalog_tags(self):
-        """Uses the mass matrices; wants unbiased derivatives."""
+        """What this optimizer can do and needs.
+
+        It uses the mass matrices and wants unbiased derivatives.
+
+        Returns
+        -------
+        CatalogTags
+            The tags (:class:`~pysindy_xl.optimizers.tags.CatalogTags`): ``requires_forces``,
+            ``can_refit``, ``balances_rows``, ``derivative_estimate``, ...
+        """
         return dataclasses.replace(super().catalog_tags(), uses_mass_matrices=True,
                                    derivative_estimate="unbiased")
 

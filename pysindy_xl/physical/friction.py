@@ -24,12 +24,14 @@ def regularized_dry_friction(velocity, acceleration, scale: float, lead: float) 
     Parameters
     ----------
     velocity, acceleration : sympy.Expr
+        ``v`` and ``a``.
     scale, lead : float
         ``s`` (positive) and ``tau`` (s, non-negative).
 
     Returns
     -------
     sympy.Expr
+        The term.
 
     Examples
     --------
@@ -50,7 +52,11 @@ def dry_friction_law(term, velocity, acceleration=None) -> str | None:
     Parameters
     ----------
     term : sympy.Expr
-    velocity, acceleration : sympy.Symbol
+        The term.
+    velocity : sympy.Symbol
+        The velocity.
+    acceleration : sympy.Symbol, optional
+        The acceleration (for a regularized law); default None.
 
     Returns
     -------

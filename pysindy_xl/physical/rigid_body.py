@@ -27,20 +27,26 @@ __all__ = ["KinematicTree", "joint_screws", "physical_parameters_from_base",
 class KinematicTree:
     """The kinematics of a mechanism of hinge and slide joints, as MuJoCo places its frames.
 
+    Each parameter is stored as the attribute of the same name.
+
     Bodies are listed parents first, each placed in its parent's frame by a fixed offset and
     rotation, then moved by its joints in order (about or along the axis by
     ``qpos - reference``). The system's coordinates are ``q = joint_to_coordinates @ qpos``.
 
-    Attributes
+    Parameters
     ----------
     body_names : tuple of str, length B
+        Body names, parents first.
     parents : ndarray of int, shape (B,)
         Each body's parent, ``-1`` for the world.
     offsets : ndarray, shape (B, 3)
+        Fixed offset of each body in its parent's frame.
     rotations : ndarray, shape (B, 3, 3)
         Fixed placement in the parent's frame (``x_parent = R x_body + offset``).
     joint_names : tuple of str, length J
+        Joint names.
     joint_bodies : ndarray of int, shape (J,)
+        The body each joint moves.
     joint_hinge : ndarray of bool, shape (J,)
         Hinge (``True``) or slide.
     joint_axes, joint_anchors : ndarray, shape (J, 3)
@@ -50,6 +56,7 @@ class KinematicTree:
     joint_to_coordinates : ndarray, shape (J, J)
         Invertible ``T`` with ``q = T @ qpos``.
     gravity : ndarray, shape (3,)
+        Gravitational acceleration in the world frame.
     """
 
     body_names: tuple
@@ -181,6 +188,13 @@ class KinematicTree:
     def to_dict(self) -> dict:
         """JSON-ready description; :meth:`from_dict` reads it back.
 
+        Returns
+        -------
+        dict
+            Every field as plain lists and numbers.
+
+        Examples
+        --------
         >>> tree = KinematicTree.from_dict(KinematicTree.from_dict({
         ...     "body_names": ["b"], "parents": [-1], "offsets": [[0, 0, 0]],
         ...     "rotations": [[[1, 0, 0], [0, 1, 0], [0, 0, 1]]], "joint_names": ["j"],
@@ -209,9 +223,29 @@ class KinematicTree:
 
 
 def physical_parameters_from_base(tree: KinematicTree, maps, beta) -> np.ndarray:
-    r"""Least-norm physical parameters :math:`\pi` with :math:`C \pi = \beta` (any solution gives
-    the same equations), ``C`` read from a kinematic catalog's ``parameters`` maps
-    (``{physical name: weight}`` per base parameter); ``ValueError`` on an unknown name.
+    r"""Least-norm physical parameters :math:`\pi` with :math:`C \pi = \beta`.
+
+    Any solution gives the same equations of motion; ``C`` is read from a kinematic catalog's
+    ``parameters`` maps (``{physical name: weight}`` per base parameter).
+
+    Parameters
+    ----------
+    tree : KinematicTree
+        The mechanism (its ``physical_names``).
+    maps : sequence of dict
+        Per base parameter, ``{physical name: weight}``.
+    beta : array, shape (len(maps),)
+        The base parameters.
+
+    Returns
+    -------
+    ndarray, shape (len(tree.physical_names),)
+        :math:`\pi = C^+ \beta`.
+
+    Raises
+    ------
+    ValueError
+        On a name that is not a parameter of the tree.
     """
     index = {name: p for p, name in enumerate(tree.physical_names)}
     combination = np.zeros((len(maps), len(index)))
@@ -254,9 +288,27 @@ def _apply(matrix, vector):
 
 
 def joint_screws(tree: KinematicTree, qpos, xp=np):
-    """Forward kinematics at ``qpos`` (N, J): every body frame's world ``rotations`` (N, B, 3, 3)
-    and ``positions`` (N, B, 3), and each joint's unit screw (N, J, 6), ``[axis; anchor x axis]``
-    (hinge) or ``[0; axis]``. All local placements at once, then composed down the tree.
+    """Forward kinematics: world placements of the body frames and the joints' unit screws.
+
+    All local placements at once, then composed down the tree.
+
+    Parameters
+    ----------
+    tree : KinematicTree
+        The mechanism.
+    qpos : array, shape (N, J)
+        Joint positions.
+    xp : module, default numpy
+        Array namespace (``numpy`` or ``jax.numpy``).
+
+    Returns
+    -------
+    rotations : array, shape (N, B, 3, 3)
+        World rotation of every body frame.
+    positions : array, shape (N, B, 3)
+        World position of every body frame.
+    screws : array, shape (N, J, 6)
+        Each joint's unit screw, ``[axis; anchor x axis]`` (hinge) or ``[0; axis]`` (slide).
     """
     plan = tree._frame_plan
     hinge = tree.joint_hinge[:, None, None]
@@ -294,9 +346,31 @@ def joint_screws(tree: KinematicTree, qpos, xp=np):
 
 
 def world_inertias(tree: KinematicTree, pi, rotations, positions, xp=np):
-    """Moving bodies' inertial parameters in world coordinates, about the world origin, from
-    :func:`joint_screws`'s placements: ``mass`` (Bm,), first ``moment`` (N, Bm, 3) and
-    ``inertia`` (N, Bm, 3, 3), all linear in ``pi``.
+    """Moving bodies' inertial parameters in world coordinates, about the world origin.
+
+    From :func:`joint_screws`'s placements; all linear in ``pi``.
+
+    Parameters
+    ----------
+    tree : KinematicTree
+        The mechanism.
+    pi : array, shape (len(tree.physical_names),)
+        Physical parameters.
+    rotations : array, shape (N, B, 3, 3)
+        World rotations of the body frames.
+    positions : array, shape (N, B, 3)
+        World positions of the body frames.
+    xp : module, default numpy
+        Array namespace.
+
+    Returns
+    -------
+    mass : array, shape (Bm,)
+        Mass of each moving body.
+    moment : array, shape (N, Bm, 3)
+        First moments ``m c``.
+    inertia : array, shape (N, Bm, 3, 3)
+        Inertia matrices about the world origin.
     """
     moving = tree.moving_bodies
     body = xp.reshape(pi[: 10 * len(moving)], (len(moving), 10))
@@ -341,11 +415,23 @@ def rigid_body_dynamics(tree: KinematicTree, pi, q, qd, xp=np):
     In the system's coordinates (:math:`M = T^{-T} M_{qpos} T^{-1}`, :math:`b = T^{-T}
     b_{qpos}`), from composite inertias: :math:`M_{kl} = s_k^T I^c_l s_l` where ``k`` moves
     ``l``'s axis, :math:`b_k = s_k^T \sum_b (I_b a_b + v_b \times^* I_b v_b - g_b)` over the
-    bodies ``k`` moves. ``q``, ``qd`` (N, J).
+    bodies ``k`` moves.
+
+    Parameters
+    ----------
+    tree : KinematicTree
+        The mechanism.
+    pi : array, shape (len(tree.physical_names),)
+        Physical parameters (:attr:`KinematicTree.physical_names`).
+    q, qd : array, shape (N, J)
+        Positions and velocities, in the system's coordinates.
+    xp : module, default numpy
+        Array namespace (``numpy`` or ``jax.numpy``).
 
     Returns
     -------
     mass : array, shape (N, J, J)
+        Mass matrices.
     bias : array, shape (N, J)
         Coriolis, centrifugal and gravity forces (the equations at ``qdd = 0``).
 

@@ -26,8 +26,21 @@ def _cvxpy():
 
 
 def body_constraints(structure, pi) -> list:
-    r"""Rigid bodies' constraints on the cvxpy variable ``pi``: :math:`J_b(\pi) \succeq 0`,
-    armatures :math:`\ge 0`.
+    r"""Rigid bodies' constraints on a cvxpy variable: :math:`J_b(\pi) \succeq 0`, armatures
+    :math:`\ge 0`.
+
+    Parameters
+    ----------
+    structure : PhysicalStructure
+        Which entries of ``pi`` are each body's parameters and the armatures.
+    pi : cvxpy.Variable
+        The physical parameters.
+
+    Returns
+    -------
+    list of cvxpy constraints
+        One semidefinite constraint per body (:func:`~pysindy_xl.physical.pseudo_inertia_matrix`)
+        and the armatures' signs.
     """
     from .structure import pseudo_inertia_matrix
 
@@ -75,9 +88,27 @@ def realize(structure, beta, reference=None, closeness: float = 1e-6, solver=Non
     .. math:: \min_\pi \; \|C \pi - \beta\| / \|\beta\| + \epsilon \|\pi - \pi_0\|^2 /
               \|\pi_0\|^2 \quad \text{s.t.} \quad J_b(\pi) \succeq 0, \; a_j \ge 0
 
-    (the unsquared residual is an exact penalty), ``pi_0 = reference`` (default zeros),
-    ``epsilon = closeness``, ``solver`` as in :func:`consistent_least_squares`. Returns ``(pi,
-    residual)``, ``residual = |C pi - beta| / |beta|`` zero when ``beta`` is realizable.
+    (the unsquared residual is an exact penalty).
+
+    Parameters
+    ----------
+    structure : PhysicalStructure
+        The meaning of ``beta`` (``combination`` ``C``, bodies, armatures).
+    beta : array, shape (k,)
+        Base parameters.
+    reference : array, shape (len(structure.names),), optional
+        ``pi_0``, the parameters to stay close to; default None: zeros.
+    closeness : float, default 1e-6
+        ``epsilon``.
+    solver : str, optional
+        cvxpy solver name; default None: as in :func:`consistent_least_squares`.
+
+    Returns
+    -------
+    pi : ndarray, shape (len(structure.names),)
+        Physically consistent parameters.
+    residual : float
+        ``|C pi - beta| / |beta|``, zero when ``beta`` is realizable by rigid bodies.
     """
     cp = _cvxpy()
     beta = np.asarray(beta, dtype=float)
@@ -178,10 +209,11 @@ def consistent_least_squares(x, structure, coef, normal=None, zero=None, solver=
     normal : array, shape (F, F), optional
         ``A``; default ``x^T x``.
     zero : array of bool, shape (F,), optional
-        Coefficients held at zero.
+        Coefficients held at zero; default None.
     solver : str, optional
         cvxpy solver name; default the first of :data:`DEFAULT_SOLVERS` that succeeds.
     regularization : float, default 1e-9
+        Weight of the relative ``|pi|^2`` term.
 
     Returns
     -------

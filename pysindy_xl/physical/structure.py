@@ -28,7 +28,10 @@ DISSIPATIVE = ("viscous", "coulomb")
 class PhysicalStructure:
     """The physical meaning of a problem's columns (see the module docstring).
 
-    Attributes
+    Usually built by :meth:`from_maps`, :meth:`from_combination` or :func:`catalog_structure`;
+    each parameter is stored as the attribute of the same name.
+
+    Parameters
     ----------
     names : tuple of str
         Physical parameters ``pi``: ``"<body>.<p>"`` for ``p`` in :data:`INERTIAL_PARAMETERS`,
@@ -38,6 +41,7 @@ class PhysicalStructure:
     combination : ndarray, shape (k, len(names))
         ``coef[base_columns] = combination @ pi``.
     bodies : tuple of str
+        The bodies whose parameters appear.
     body_indices : ndarray of int, shape (len(bodies), 10)
         Indices into ``names`` of each body's parameters.
     armature : ndarray of int
@@ -120,8 +124,19 @@ class PhysicalStructure:
         return bool(len(self.bodies) or len(self.armature) or len(self.friction_columns))
 
     def select(self, columns) -> PhysicalStructure:
-        """The structure in the indices of a problem made of ``columns``; base parameters left out
-        leave ``combination`` too (the data do not decide them).
+        """The structure in the indices of a problem made of some columns.
+
+        Base parameters left out leave ``combination`` too (the data do not decide them).
+
+        Parameters
+        ----------
+        columns : ndarray of int
+            The catalog columns the problem keeps, in its order.
+
+        Returns
+        -------
+        PhysicalStructure
+            Column indices renumbered into the problem's.
         """
         columns = np.asarray(columns, dtype=int)
         position = {int(c): k for k, c in enumerate(columns)}
@@ -136,9 +151,23 @@ class PhysicalStructure:
                                          if int(c) in position], dtype=int))
 
     def nearest_consistent(self, pi) -> np.ndarray:
-        """``pi`` with every pseudo-inertia projected onto the PSD cone and negative armatures
-        zeroed: a solver's answer made exactly consistent.
+        """Parameters made exactly consistent: a solver's answer, projected.
 
+        Every pseudo-inertia is projected onto the positive semidefinite cone (negative
+        eigenvalues set to zero) and negative armatures are zeroed.
+
+        Parameters
+        ----------
+        pi : array, shape (len(names),)
+            Physical parameters, nearly consistent.
+
+        Returns
+        -------
+        ndarray, shape (len(names),)
+            Consistent parameters.
+
+        Examples
+        --------
         >>> s = PhysicalStructure.from_maps([{"b.m": 1.0}], base_columns=[0])
         >>> s.nearest_consistent([-1e-9, 0, 0, 0, 1, 1, 1, 0, 0, 0])[0]
         np.float64(0.0)
@@ -155,7 +184,18 @@ class PhysicalStructure:
         return pi
 
     def pseudo_inertias(self, pi) -> np.ndarray:
-        """Every body's pseudo-inertia at ``pi``, shape (len(bodies), 4, 4)."""
+        """Every body's pseudo-inertia matrix at given parameters.
+
+        Parameters
+        ----------
+        pi : array, shape (len(names),)
+            Physical parameters.
+
+        Returns
+        -------
+        ndarray, shape (len(bodies), 4, 4)
+            :func:`pseudo_inertia_matrix` of each body.
+        """
         pi = np.asarray(pi, dtype=float)
         return np.array([pseudo_inertia_matrix(pi[k]) for k in self.body_indices]).reshape(-1, 4, 4)
 
@@ -196,8 +236,29 @@ def pseudo_inertia_matrix(parameters):
 
 
 def friction_kind(term, velocity, acceleration=None) -> str | None:
-    """``"viscous"`` for ``qd_c``, ``"dry"`` for a unit dry friction law of ``qd_c``
-    (:func:`~pysindy_xl.physical.friction.dry_friction_law`), None otherwise.
+    """Whether a classical term is viscous or dry friction of a coordinate.
+
+    Parameters
+    ----------
+    term : sympy.Expr
+        The term.
+    velocity : sympy.Symbol
+        The coordinate's velocity ``qd_c``.
+    acceleration : sympy.Symbol, optional
+        Its acceleration (for a regularized dry friction law); default None.
+
+    Returns
+    -------
+    {"viscous", "dry"} or None
+        ``"viscous"`` for ``qd_c``, ``"dry"`` for a unit dry friction law of ``qd_c``
+        (:func:`~pysindy_xl.physical.friction.dry_friction_law`), None otherwise.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> v = sp.Symbol("v", real=True)
+    >>> friction_kind(v, v), friction_kind(sp.tanh(100 * v), v), friction_kind(v ** 2, v)
+    ('viscous', 'dry', None)
     """
     if term == velocity:
         return "viscous"
@@ -221,8 +282,20 @@ def has_parameter_map(library) -> bool:
 
 
 def catalog_structure(library) -> PhysicalStructure | None:
-    """The physical structure of a fitted catalog's columns (base parameters from its Lagrange
-    libraries' ``parameters`` maps, friction from its classical columns), or None.
+    """The physical structure of a fitted catalog's columns, or None.
+
+    Base parameters from its Lagrange libraries' ``parameters`` maps, friction from its
+    classical and joint friction columns.
+
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+        The catalog.
+
+    Returns
+    -------
+    PhysicalStructure or None
+        None when no library maps its terms to physical parameters.
     """
     maps, columns = [], []
     for lib, block in zip(library.libraries_, library.slices_, strict=True):
@@ -238,7 +311,20 @@ def catalog_structure(library) -> PhysicalStructure | None:
 
 
 def joint_model_columns(library, models=None) -> list:
-    """Columns of a fitted catalog's joint friction and sensor models, of ``models`` only if given.
+    """Columns of a fitted catalog's joint friction and sensor models.
+
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+        The catalog.
+    models : sequence of str, optional
+        Only these models (of :data:`~pysindy_xl.feature_library.joint_friction.FRICTION_MODELS`);
+        default None: all.
+
+    Returns
+    -------
+    list of int
+        The column indices.
     """
     out = []
     for lib, block in zip(library.libraries_, library.slices_, strict=True):
@@ -249,7 +335,26 @@ def joint_model_columns(library, models=None) -> list:
 
 
 def friction_columns(library) -> list:
-    """Columns of a fitted catalog that are viscous or dry friction, of a coordinate or a joint."""
+    """Columns of a fitted catalog that are viscous or dry friction, of a coordinate or a joint.
+
+    Parameters
+    ----------
+    library : fitted CatalogRepartition
+        The catalog.
+
+    Returns
+    -------
+    list of int
+        The column indices (their coefficients are non-negative in a consistent model).
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> lib = (px.LagrangeLibrary(c, [c.qd[0] ** 2]) + px.ClassicalLibrary(c, [c.qd[0]])).fit()
+    >>> friction_columns(lib)
+    [2]
+    """
     joint_models = joint_model_columns(library)
     out = joint_model_columns(library, DISSIPATIVE)
     coords = library.coords

@@ -21,13 +21,25 @@ __all__ = ["BumpTestFunctions", "corner_frequency", "quadrature_weights"]
 
 
 def quadrature_weights(t) -> np.ndarray:
-    """Quadrature weights of a strictly increasing grid ``t`` (N,): ``int f dt ~ weights @ f``.
+    """Quadrature weights of a strictly increasing grid: ``int f dt ~ weights @ f``.
 
     The trapezoidal rule on a uniform grid (of very high order for integrands vanishing smoothly
     at both ends); otherwise each interval is integrated exactly on the cubic through the four
     nearest samples, except where nearly coincident samples make that cubic's weights large and
     of both signs (those keep the trapezoid).
 
+    Parameters
+    ----------
+    t : array, shape (N,)
+        Strictly increasing sample times.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        The weights.
+
+    Examples
+    --------
     >>> quadrature_weights([0.0, 1.0, 2.0])
     array([0.5, 1. , 0.5])
     >>> t = np.array([0.0, 0.1, 0.3, 0.4, 0.7, 1.0])
@@ -74,14 +86,29 @@ _CHI2_1_MEDIAN = 0.454936423119572
 
 
 def corner_frequency(t, x, energy: float = 0.99) -> float:
-    """Frequency (Hz) below which ``energy`` of the signal part of the positions' spectrum lies.
+    """Frequency (Hz) below which a share ``energy`` of the signal part of the spectrum lies.
 
-    Each coordinate of ``x`` (N, n) is detrended, tapered and cosine-transformed (as if sampled
-    uniformly at the mean step). The noise floor is the median power of the upper half of the
-    modes over the median of a chi-square variable of one degree of freedom; the signal power
-    above it is summed without clipping, so the corner does not move with the noise level.
-    Returns the largest corner over coordinates.
+    Each coordinate is detrended, tapered and cosine-transformed (as if sampled uniformly at
+    the mean step). The noise floor is the median power of the upper half of the modes over the
+    median of a chi-square variable of one degree of freedom; the signal power above it is
+    summed without clipping, so the corner does not move with the noise level.
 
+    Parameters
+    ----------
+    t : array, shape (N,)
+        Sample times.
+    x : array, shape (N, n)
+        Positions.
+    energy : float, default 0.99
+        Share of the signal power below the corner.
+
+    Returns
+    -------
+    float
+        The largest corner over the coordinates, in Hz.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> t = np.linspace(0, 20, 2001)
     >>> x = np.sin(2 * np.pi * 0.5 * t)[:, None]
@@ -109,7 +136,13 @@ def corner_frequency(t, x, energy: float = 0.99) -> float:
 
 
 class BumpTestFunctions:
-    """Bumps ``(1 - s^2)^p`` placed along each trajectory, width chosen from the data.
+    r"""Bumps ``(1 - s^2)^p`` placed along each trajectory, width chosen from the data.
+
+    Test function ``k``, centred at ``c_k`` with half-width ``h``, is
+    ``phi_k(t) = (1 - s^2)^p`` for ``s = (t - c_k) / h`` in ``[-1, 1]``, zero outside. Its
+    integral against an Euler-Lagrange column ``E = d/dt P - Q`` needs no acceleration:
+
+    .. math:: \int \phi_k E \, dt = -\int \dot\phi_k P \, dt - \int \phi_k Q \, dt.
 
     Parameters
     ----------
@@ -175,8 +208,34 @@ class BumpTestFunctions:
                              f"{self.width_multiples!r}")
 
     def half_width(self, t, x=None) -> float:
-        """Half-width ``h`` (time units) for a trajectory ``t`` (N,); positions ``x`` (N, n) are
-        needed when ``width="auto"``.
+        """Half-width ``h`` of the test functions for one trajectory.
+
+        ``width`` when given, else ``width_factor`` periods of the corner frequency
+        (:func:`corner_frequency`); at least ``min_samples`` mean steps.
+
+        Parameters
+        ----------
+        t : array, shape (N,)
+            Sample times.
+        x : array, shape (N, n), optional
+            Positions, needed when ``width="auto"``; default None.
+
+        Returns
+        -------
+        float
+            ``h``, in time units.
+
+        Raises
+        ------
+        ValueError
+            When the trajectory is shorter than one test function, or ``x`` is missing for an
+            automatic width.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> BumpTestFunctions(width=0.5).half_width(np.linspace(0, 10, 1001))
+        0.5
         """
         self._check_params()
         t = np.asarray(t, dtype=float)
@@ -197,9 +256,23 @@ class BumpTestFunctions:
         return h
 
     def max_gap(self, half_width) -> float:
-        """Longest step a test function of ``half_width`` may span: ``half_width / min_samples``;
-        trajectories are cut at longer steps (:mod:`~pysindy_xl.weak.timegrid`).
+        """Longest step a test function of a given half-width may span.
 
+        ``half_width / min_samples``: trajectories are cut at longer steps
+        (:mod:`~pysindy_xl.weak.timegrid`).
+
+        Parameters
+        ----------
+        half_width : float
+            The test functions' half-width.
+
+        Returns
+        -------
+        float
+            The longest step, in time units.
+
+        Examples
+        --------
         >>> BumpTestFunctions(min_samples=10).max_gap(0.5)
         0.05
         """
@@ -214,9 +287,11 @@ class BumpTestFunctions:
         t : array, shape (N,)
             Strictly increasing sample times.
         x : array, shape (N, n), optional
-            Positions, for the automatic width.
-        half_width, n_functions : optional
-            Override the width and count rules (one width shared across trajectories).
+            Positions, for the automatic width; default None.
+        half_width : float, optional
+            Overrides the width rule (one width shared across trajectories); default None.
+        n_functions : int, optional
+            Overrides the count rule; default None.
 
         Returns
         -------

@@ -36,7 +36,10 @@ _TAPER_OVERLAPS = 2
 class RowWhitener:
     """``C^{-1}`` of a block-diagonal banded covariance ``Sigma = C C^T`` of the weak rows.
 
-    Attributes
+    Called on rows (R, ...), returns ``C^{-1} rows``: rows of identity covariance. Each
+    parameter is stored as the attribute of the same name.
+
+    Parameters
     ----------
     runs : ndarray, shape (S, 2)
         ``(start, stop)`` of the row runs; every row belongs to one run.
@@ -75,12 +78,15 @@ class RowWhitener:
 class WeakNoise:
     """Monte Carlo draws of the errors of the weak rows, with the structure of the rows.
 
-    Attributes
+    Each parameter is stored as the attribute of the same name.
+
+    Parameters
     ----------
     draws : ndarray, shape (D, R, F)
         ``D`` draws of the change of the weak matrix (R rows, coordinate-major as the weak
         matrix) under fresh position noise of the estimated level.
     n_coordinates : int
+        Number of coordinate blocks of the rows.
     runs : ndarray, shape (S, 4)
         Runs of consecutive test functions: ``(start, stop, group, overlap)``, rows
         ``start:stop`` of one coordinate and trajectory (the ``group``) between masked
@@ -101,17 +107,45 @@ class WeakNoise:
     runs: np.ndarray
 
     def moments(self) -> np.ndarray:
-        """``E[E_c^T E_c]`` of each coordinate's rows, shape (n_coordinates, F, F)."""
+        """``E[E_c^T E_c]`` of each coordinate's rows.
+
+        Returns
+        -------
+        ndarray, shape (n_coordinates, F, F)
+            The second moments (:func:`draw_moments`).
+        """
         return draw_moments(self.draws, self.n_coordinates)
 
     def columns(self, keep) -> WeakNoise:
-        """The draws of the columns ``keep`` only."""
+        """The draws of some columns only.
+
+        Parameters
+        ----------
+        keep : array of int or bool, shape (F,)
+            The columns kept.
+
+        Returns
+        -------
+        WeakNoise
+            The same rows and runs.
+        """
         return dataclasses.replace(self, draws=self.draws[:, :, keep])
 
     def coordinates(self, keep) -> WeakNoise:
-        """The draws of the rows of the coordinates ``keep`` (a boolean mask) only, with
-        their runs renumbered.
+        """The draws of the rows of some coordinates only, with their runs renumbered.
 
+        Parameters
+        ----------
+        keep : array of bool, shape (n_coordinates,)
+            The coordinates kept.
+
+        Returns
+        -------
+        WeakNoise
+            The rows of those coordinates.
+
+        Examples
+        --------
         >>> import numpy as np
         >>> runs = np.array([[0, 5, 0, 1], [5, 10, 1, 1], [10, 15, 2, 1]])
         >>> part = WeakNoise(np.zeros((2, 15, 1)), 3, runs).coordinates([True, False, True])
@@ -130,9 +164,20 @@ class WeakNoise:
                                    n_coordinates=int(chosen.size), runs=runs)
 
     def rows(self, keep) -> WeakNoise:
-        """The draws of the rows ``keep`` (a boolean mask over the rows, the same test
-        functions for every coordinate) only, with the runs cut where rows are left out.
+        """The draws of some rows only, with the runs cut where rows are left out.
 
+        Parameters
+        ----------
+        keep : array of bool, shape (R,)
+            The rows kept (the same test functions for every coordinate).
+
+        Returns
+        -------
+        WeakNoise
+            The kept rows.
+
+        Examples
+        --------
         >>> import numpy as np
         >>> noise = WeakNoise(np.zeros((2, 10, 1)), 2, np.array([[0, 5, 0, 1], [5, 10, 1, 1]]))
         >>> part = noise.rows(np.tile([True, True, False, True, True], 2))
@@ -151,7 +196,18 @@ class WeakNoise:
                                    runs=np.array(runs, dtype=int).reshape(-1, 4))
 
     def whitened(self, whiten: RowWhitener) -> WeakNoise:
-        """The draws of the whitened rows."""
+        """The draws of the whitened rows.
+
+        Parameters
+        ----------
+        whiten : RowWhitener
+            The whitening (:meth:`whitener`).
+
+        Returns
+        -------
+        WeakNoise
+            Draws of ``C^{-1} E``.
+        """
         moved = whiten(np.moveaxis(self.draws, 1, 0))
         return dataclasses.replace(self, draws=np.moveaxis(moved, 0, 1))
 
@@ -200,10 +256,12 @@ def draw_moments(draws, n_coordinates: int) -> np.ndarray:
     draws : array, shape (D, n_coordinates * K, F)
         Rows coordinate-major.
     n_coordinates : int
+        Number of coordinate blocks.
 
     Returns
     -------
     ndarray, shape (n_coordinates, F, F)
+        The mean of ``E_c^T E_c`` over the draws.
 
     Examples
     --------

@@ -25,11 +25,28 @@ _PROPAGATION_SAMPLES = 24_000
 
 
 def shared_half_width(test_functions, trajectories, columns=None) -> float:
-    """One test-function half-width for all ``trajectories`` (dicts with ``"t"`` and ``"x"``): the
-    narrowest asked for by those at least half as long as the longest (short pieces have
-    unreliable spectra). Only the coordinates in ``columns`` (bool (n,), default all) set it:
-    still coordinates have only the noise's spectrum.
+    """One test-function half-width for all trajectories.
 
+    The narrowest asked for by the trajectories at least half as long as the longest (short
+    pieces have unreliable spectra). Only the coordinates in ``columns`` set it: still
+    coordinates have only the noise's spectrum.
+
+    Parameters
+    ----------
+    test_functions : BumpTestFunctions
+        The test functions (:meth:`~BumpTestFunctions.half_width`).
+    trajectories : list of dict
+        With ``"t"`` and ``"x"``.
+    columns : ndarray of bool, shape (n,), optional
+        The coordinates that choose; default None: all.
+
+    Returns
+    -------
+    float
+        The half-width.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> from pysindy_xl.weak import BumpTestFunctions
     >>> t = np.linspace(0, 10, 1001)
@@ -53,15 +70,41 @@ def shared_half_width(test_functions, trajectories, columns=None) -> float:
 
 
 def propagated_noise(library, d, smoothing, phi, dphi, block, n_draws, rng):
-    """Second moments (n, F, F) of the weak columns' errors caused by the noise of the positions.
+    r"""Second moments of the weak columns' errors caused by the noise of the positions.
 
-    Fresh noise of the estimated level is added to the positions of trajectory ``d``, which are
-    smoothed again with the same weights (``smoothing``: the smoother as it smoothed ``d``, with
-    ``noise_`` and ``resmooth``, or ``(lam, noise, order)`` of a :class:`WhittakerSmoother`) and
-    turned into weak columns with ``phi, dphi``; the change ``Delta`` from ``block`` (n * K, F)
-    is distributed (to first order) as the error ``E``: ``E[E^T E] ~ mean of Delta^T Delta`` over
-    ``n_draws`` per coordinate block.
+    Fresh noise of the estimated level is added to the positions, which are smoothed again
+    with the same weights and turned into weak columns; the change ``Delta`` from ``block`` is
+    distributed (to first order) as the error ``E``:
 
+    .. math:: \mathrm{E}[E_c^T E_c] \approx \frac{1}{D} \sum_{d=1}^{D} \Delta_{c,d}^T \Delta_{c,d}
+
+    over ``D = n_draws`` draws, per coordinate block ``c``.
+
+    Parameters
+    ----------
+    library : fitted SymbolicLibrary
+        The catalog.
+    d : dict
+        The trajectory: ``"t"``, ``"x"`` (noisy positions), ``"u"``.
+    smoothing : smoother or tuple
+        The smoother as it smoothed ``d`` (with ``noise_`` and ``resmooth``), or
+        ``(lam, noise, order)`` of a :class:`WhittakerSmoother`.
+    phi, dphi : sparse matrix, shape (K, N)
+        The test-function matrices of ``d``.
+    block : ndarray, shape (n * K, F)
+        The weak columns of ``d``.
+    n_draws : int
+        Draws of fresh noise.
+    rng : numpy.random.Generator
+        Source of the draws.
+
+    Returns
+    -------
+    ndarray, shape (n, F, F)
+        The moments of each coordinate's rows.
+
+    Examples
+    --------
     >>> import numpy as np, pysindy_xl as px
     >>> coords = px.Coordinates(["x"])
     >>> library = px.LagrangeLibrary(coords, [coords.qd[0] ** 2, coords.q[0] ** 2]).fit()
@@ -82,8 +125,32 @@ def propagated_noise(library, d, smoothing, phi, dphi, block, n_draws, rng):
 
 
 def propagated_draws(library, d, smoothing, phi, dphi, block, n_draws, rng):
-    """Draws (n_draws, n * K, F) of the change of the weak columns under fresh noise of the
-    estimated level; arguments as in :func:`propagated_noise`.
+    """Draws of the change of the weak columns under fresh noise of the estimated level.
+
+    As :func:`propagated_noise`, without averaging.
+
+    Parameters
+    ----------
+    library : fitted SymbolicLibrary
+        The catalog.
+    d : dict
+        The trajectory: ``"t"``, ``"x"`` (noisy positions), ``"u"``.
+    smoothing : smoother or tuple
+        The smoother as it smoothed ``d`` (with ``noise_`` and ``resmooth``), or
+        ``(lam, noise, order)`` of a :class:`WhittakerSmoother`.
+    phi, dphi : sparse matrix, shape (K, N)
+        The test-function matrices of ``d``.
+    block : ndarray, shape (n * K, F)
+        The weak columns of ``d``.
+    n_draws : int
+        Draws of fresh noise.
+    rng : numpy.random.Generator
+        Source of the draws.
+
+    Returns
+    -------
+    ndarray, shape (n_draws, n * K, F)
+        The changes ``Delta``, rows coordinate-major.
     """
     if isinstance(smoothing, tuple):  # (lam, noise, order) of a WhittakerSmoother
         lam, noise, order = smoothing
@@ -117,6 +184,7 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         Keys ``"t"``, ``"x"``, ``"x_dot"`` (measured velocities or None), ``"u"`` (forces or
         None) and ``"mask"`` (bool (N,), samples to explain).
     test_functions : BumpTestFunctions
+        The test functions.
     smoother : WhittakerSmoother
         Anything with ``smooth(t, x) -> (q, qd, qdd)``; it propagates the positions' noise when
         it also has ``noise_`` and ``resmooth``.
@@ -124,13 +192,14 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
         Return the propagated noise's moments, or its draws as a
         :class:`~pysindy_xl.weak.noise.WeakNoise`; ``"none"``: not propagated.
     half_width : float, optional
-        Default: :func:`shared_half_width`.
+        Default None: :func:`shared_half_width`.
     width_columns : array of bool, shape (n,), optional
-        The coordinates whose spectra choose the default half-width.
+        The coordinates whose spectra choose the default half-width; default None: all.
 
     Returns
     -------
     theta : ndarray, shape (n * K, F)
+        The weak rows, coordinate-major.
     states : ndarray, shape (N_total, 4n + 1)
         The smoothed states of the pieces used.
     noise_moments : ndarray (n, F, F), WeakNoise or None

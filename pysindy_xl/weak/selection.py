@@ -44,16 +44,44 @@ BLOCK_COUNTS = (5, 3)
 
 
 def bandwidth_half_width(bandwidth: float, power: int = 6) -> float:
-    """Half-width (s) of the bump ``(1 - s^2)^power`` whose response falls by 3 dB at
-    ``bandwidth`` (Hz): the bump is close to a Gaussian of standard deviation
-    ``h / sqrt(2 power + 3)``, whose response is ``1/sqrt(2)`` at ``sqrt(ln 2) / (2 pi sigma)``.
+    """Half-width (s) of the bump ``(1 - s^2)^power`` whose response falls by 3 dB at ``bandwidth``.
+
+    The bump is close to a Gaussian of standard deviation ``sigma = h / sqrt(2 power + 3)``,
+    whose response is ``1/sqrt(2)`` at ``sqrt(ln 2) / (2 pi sigma)``.
+
+    Parameters
+    ----------
+    bandwidth : float
+        The 3 dB frequency, in Hz.
+    power : int, default 6
+        Exponent of the bump.
+
+    Returns
+    -------
+    float
+        ``h = sqrt(ln 2 (2 power + 3)) / (2 pi bandwidth)``.
+
+    Examples
+    --------
+    >>> round(bandwidth_half_width(10.0), 4)
+    0.0513
     """
     return math.sqrt(math.log(2.0) * (2 * power + 3)) / (2 * math.pi * bandwidth)
 
 
 @dataclass(frozen=True)
 class NoiseModel:
-    """One way to read the data: test-function half-width and whether rows are weighted."""
+    """One way to read the data: test-function half-width and whether rows are weighted.
+
+    Parameters
+    ----------
+    name : str
+        Label in reports.
+    half_width : float
+        Test-function half-width, in seconds.
+    weigh : bool
+        Whether the rows are weighted by their propagated noise.
+    """
 
     name: str
     half_width: float
@@ -61,11 +89,23 @@ class NoiseModel:
 
 
 def time_folds(supports: np.ndarray, spans: np.ndarray, n_blocks: int):
-    """Contiguous time blocks of every trajectory, as masks ``fit, held`` (n_blocks, K) over test
-    functions: those whose support misses block ``k``, and those inside it.
+    """Contiguous time blocks of every trajectory, as masks over the test functions.
 
-    ``supports`` (K, 3) holds each test function's trajectory and first and last time
-    (``weak_info_["supports"]``), ``spans`` (T, 2) each trajectory's first and last time.
+    Parameters
+    ----------
+    supports : ndarray, shape (K, 3)
+        Each test function's trajectory and first and last time (``weak_info_["supports"]``).
+    spans : ndarray, shape (T, 2)
+        Each trajectory's first and last time.
+    n_blocks : int
+        Blocks per trajectory.
+
+    Returns
+    -------
+    fit : ndarray of bool, shape (n_blocks, K)
+        The test functions whose support misses block ``k``.
+    held : ndarray of bool, shape (n_blocks, K)
+        Those inside it.
     """
     trajectory = supports[:, 0].astype(int)
     start, stop = spans[trajectory, 0], spans[trajectory, 1]
@@ -80,19 +120,35 @@ def time_folds(supports: np.ndarray, spans: np.ndarray, n_blocks: int):
 def choose_noise_model(candidates, reference, spans, force_columns, solve, n_blocks=BLOCK_COUNTS):
     """The candidate whose fits predict held-out time blocks best, if clearly better than the first.
 
-    ``candidates`` are ``(NoiseModel, rows, supports, noise)``: weak rows (coordinate-major, the
-    same columns for all), test-function supports (:func:`time_folds`) and propagated row noise
-    (:class:`~pysindy_xl.weak.WeakNoise` or None); ``reference`` the common scoring
-    ``(rows, supports, noise)``; ``spans`` (T, 2) each trajectory's first and last time;
-    ``solve(rows, noise, weigh) -> coef`` one candidate's fit. Of several ``n_blocks``, the first
-    at which every candidate can be fitted outside each block (and every block holds scoring
-    rows) is used, else the first at which some candidate can.
+    Of several ``n_blocks``, the first at which every candidate can be fitted outside each block
+    (and every block holds scoring rows) is used, else the first at which some candidate can.
 
-    Returns ``(best, errors)``: the candidate of smallest held-out error among those that beat
-    the first by :data:`MARGIN` in total and on most blocks, while the positions' noise makes up
-    less than :data:`NOISE_SHARE` of the first's residual, else 0 (None when the data are too
-    short to hold out blocks); and each candidate's held-out relative error (``inf`` where a
-    fold's fit failed).
+    Parameters
+    ----------
+    candidates : list of tuple
+        ``(NoiseModel, rows, supports, noise)``: weak rows (coordinate-major, the same columns
+        for all), test-function supports (:func:`time_folds`) and propagated row noise
+        (:class:`~pysindy_xl.weak.WeakNoise` or None).
+    reference : tuple
+        The common scoring ``(rows, supports, noise)``.
+    spans : ndarray, shape (T, 2)
+        Each trajectory's first and last time.
+    force_columns : sequence of int
+        The force columns (the held-out error is relative to the forces).
+    solve : callable
+        ``solve(rows, noise, weigh) -> coef``: one candidate's fit.
+    n_blocks : tuple of int, default BLOCK_COUNTS
+        Block counts tried in turn.
+
+    Returns
+    -------
+    best : int or None
+        The candidate of smallest held-out error among those that beat the first by
+        :data:`MARGIN` in total and on most blocks, while the positions' noise makes up less
+        than :data:`NOISE_SHARE` of the first's residual, else 0; None when the data are too
+        short to hold out blocks.
+    errors : list of float
+        Each candidate's held-out relative error (``inf`` where a fold's fit failed).
     """
     rows_ref, supports_ref, noise_ref = reference
     n_coordinates = rows_ref.shape[0] // len(supports_ref)

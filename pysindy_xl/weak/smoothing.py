@@ -33,14 +33,33 @@ _LAMBDA_GRID = 10.0 ** np.arange(-4.0, 16.01, 0.25)
 
 
 def finite_difference_weights(t, derivative: int, stencil: int = 5, degree=None):
-    """Per-sample finite-difference stencils ``index, weights`` (N, stencil) of the
-    ``derivative``-th derivative: ``f^(derivative)(t[i]) ~ sum_j weights[i, j] f[index[i, j]]``.
+    """Per-sample finite-difference stencils on an arbitrary grid.
 
-    Each sample uses the ``stencil`` nearest samples of the strictly increasing ``t`` (shifted at
-    the grid's ends); the weights solve the Taylor conditions on the actual offsets. With
-    ``degree < stencil - 1`` they are the least-squares polynomial's of that degree
-    (Savitzky-Golay on the actual times).
+    ``f^(derivative)(t[i]) ~ sum_j weights[i, j] f[index[i, j]]``. Each sample uses the
+    ``stencil`` nearest samples (shifted at the grid's ends); the weights solve the Taylor
+    conditions on the actual offsets. With ``degree < stencil - 1`` they are those of the
+    least-squares polynomial of that degree (Savitzky-Golay on the actual times).
 
+    Parameters
+    ----------
+    t : array, shape (N,)
+        Strictly increasing times.
+    derivative : int
+        Order of the derivative.
+    stencil : int, default 5
+        Samples per stencil.
+    degree : int, optional
+        Degree of the local polynomial; default None: ``stencil - 1`` (interpolation).
+
+    Returns
+    -------
+    index : ndarray of int, shape (N, stencil)
+        The samples of each stencil.
+    weights : ndarray, shape (N, stencil)
+        Their weights.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> t = np.sort(np.random.default_rng(0).uniform(0, 1, 40))
     >>> index, weights = finite_difference_weights(t, 1)
@@ -68,9 +87,28 @@ def finite_difference_weights(t, derivative: int, stencil: int = 5, degree=None)
 
 
 def differentiate(t, values, derivative: int = 1, stencil: int = 5, degree=None) -> np.ndarray:
-    """Derivative of smooth sampled ``values`` (N, ...) along axis 0; ``stencil`` and ``degree``
-    as in :func:`finite_difference_weights`.
+    """Derivative of smooth sampled values along axis 0, on an arbitrary grid.
 
+    Parameters
+    ----------
+    t : array, shape (N,)
+        Strictly increasing times.
+    values : array, shape (N, ...)
+        Samples.
+    derivative : int, default 1
+        Order of the derivative.
+    stencil : int, default 5
+        Samples per stencil (:func:`finite_difference_weights`).
+    degree : int, optional
+        Degree of the local polynomial; default None (interpolation).
+
+    Returns
+    -------
+    ndarray, shape (N, ...)
+        The derivative at each sample.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> t = np.linspace(0, 1, 50)
     >>> float(np.abs(differentiate(t, np.sin(t)) - np.cos(t)).max()) < 1e-6
@@ -111,6 +149,18 @@ _TRACE_PROBES = 16
 def is_uniform(t) -> bool:
     """Whether the steps of ``t`` are equal up to ``1e-3`` of their mean.
 
+    Parameters
+    ----------
+    t : array, shape (N,)
+        Times.
+
+    Returns
+    -------
+    bool
+        True for a uniform grid.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> is_uniform(np.arange(0, 1, 0.01)), is_uniform([0.0, 0.01, 0.03, 0.04])
     (True, False)
@@ -221,12 +271,33 @@ def _choose_lambdas_on_grid(t, y, order, target, n_probes=_TRACE_PROBES):
 
 
 def whittaker_smooth(t, x, lams, order: int = 3):
-    """Whittaker-Henderson smoothing of each column of ``x`` (N, n) with weights ``lams`` (n,)
-    (sample units; 0: used as is), and the first two derivatives (five-point stencils).
+    r"""Whittaker-Henderson smoothing of each column, and the first two derivatives.
 
-    Columns of one weight share one factorization. ``order`` is that of the penalized divided
-    difference; returns ``q, qd, qdd`` (N, n).
+    Column ``x_c`` is smoothed to the ``q`` that minimizes
 
+    .. math:: \|x_c - q\|^2 + \lambda_c \|D_d q\|^2,
+
+    ``D_d`` the ``d``-th divided difference on the actual times (in sample units); the
+    derivatives follow by five-point stencils. Columns of one weight share one factorization.
+
+    Parameters
+    ----------
+    t : array, shape (N,)
+        Strictly increasing times.
+    x : array, shape (N, n)
+        Samples.
+    lams : array, shape (n,)
+        Weight ``lambda`` of each column (0: used as is).
+    order : int, default 3
+        Order ``d`` of the penalized divided difference.
+
+    Returns
+    -------
+    q, qd, qdd : ndarray, shape (N, n)
+        Smoothed values and their first two derivatives.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> t = np.linspace(0, 1, 201)
     >>> q, qd, _ = whittaker_smooth(t, np.column_stack([t**2, t]), [1e3, 0.0])
@@ -248,7 +319,10 @@ def whittaker_smooth(t, x, lams, order: int = 3):
 
 
 class WhittakerSmoother:
-    """Discrete smoothing spline with its smoothness chosen by generalized cross-validation.
+    """Discrete smoothing spline with its smoothness chosen from the data.
+
+    Each coordinate is smoothed by :func:`whittaker_smooth`,
+    ``min_q |x - q|^2 + lambda |D_d q|^2``, with ``lambda`` chosen per coordinate.
 
     Used by :class:`~pysindy_xl.XLSINDy` for ``q`` and ``qd`` from noisy positions (weak form)
     and, given as ``smoother``, for ``qd`` and ``qdd`` (strong form); see the module docstring.
@@ -259,7 +333,8 @@ class WhittakerSmoother:
         Order ``d`` of the penalized divided difference (3: a quintic smoothing spline).
     lam : float, "velocity" or "gcv", default "velocity"
         Weight in sample units, or how to choose it per coordinate: ``"velocity"`` minimizes
-        the estimated error of the smoothed velocity, ``"gcv"`` that of the positions.
+        the estimated error of the smoothed velocity, ``"gcv"`` that of the positions
+        (generalized cross-validation).
 
     Attributes
     ----------
@@ -291,8 +366,22 @@ class WhittakerSmoother:
             check_option("lam", self.lam, "real", low=0)
 
     def smooth(self, t, x):
-        """Smoothed positions, velocities and accelerations (N, n) of noisy positions ``x``
-        (N, n) at strictly increasing times ``t`` (N >= 5).
+        """Smoothed positions, velocities and accelerations of noisy positions.
+
+        Chooses the weight of each coordinate (``lam``), sets ``lam_`` and ``noise_``, and smooths
+        (:func:`whittaker_smooth`).
+
+        Parameters
+        ----------
+        t : array, shape (N,)
+            Strictly increasing times.
+        x : array, shape (N, n)
+            Noisy positions, at least 5 samples.
+
+        Returns
+        -------
+        q, qd, qdd : ndarray, shape (N, n)
+            Smoothed positions, velocities and accelerations.
         """
         self._check_params()
         t = np.asarray(t, dtype=float)
@@ -314,13 +403,26 @@ class WhittakerSmoother:
         return whittaker_smooth(t, x, lams, self.order)
 
     def resmooth(self, t, x):
-        """Smooth ``x`` (N, k * n: ``k`` copies of the coordinates side by side) with the
-        weights the last :meth:`smooth` chose.
+        """Smooth with the weights the last :meth:`smooth` chose.
 
         The protocol of a smoother that propagates the positions' noise
         (:func:`~pysindy_xl.weak.propagated_draws`): with fixed weights the smoother is linear, so
         fresh noise of level ``noise_`` smoothed by it has the spread of the original noise's error.
 
+        Parameters
+        ----------
+        t : array, shape (N,)
+            The times of the last :meth:`smooth`.
+        x : array, shape (N, k * n)
+            ``k`` copies of the coordinates side by side.
+
+        Returns
+        -------
+        q, qd, qdd : ndarray, shape (N, k * n)
+            Smoothed values and their derivatives.
+
+        Examples
+        --------
         >>> import numpy as np
         >>> t = np.linspace(0, 10, 1001)
         >>> y = np.sin(t)[:, None] + 0.01 * np.random.default_rng(0).normal(size=(1001, 1))

@@ -22,13 +22,26 @@ STAMP_NOISE_RATIO = 2.0
 
 
 def split_at_gaps(trajectories, max_gap: float):
-    """Cut ``trajectories`` (dicts with ``"t"`` (N,) and arrays of N samples, or None) where a time
-    step exceeds ``max_gap``.
+    """Cut trajectories where a time step exceeds ``max_gap``.
 
-    Returns the segments (a trajectory without a gap passed as is), the index of each segment's
-    trajectory, and one dict per cut: ``trajectory``, ``time`` (the last stamp before the gap)
-    and ``length``.
+    Parameters
+    ----------
+    trajectories : list of dict
+        With ``"t"`` (N,) and arrays of N samples (or None).
+    max_gap : float
+        The longest step kept inside a segment.
 
+    Returns
+    -------
+    segments : list of dict
+        The pieces (a trajectory without a gap passed as is).
+    source : ndarray of int
+        The trajectory of each segment.
+    gaps : list of dict
+        One per cut: ``trajectory``, ``time`` (the last stamp before the gap) and ``length``.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> t = np.array([0.0, 0.1, 0.2, 1.0, 1.1])
     >>> segments, source, gaps = split_at_gaps([{"t": t, "x": t[:, None], "u": None}], 0.5)
@@ -58,9 +71,20 @@ def _per_sample(value, n_samples: int) -> bool:
 
 
 def grid_summary(times) -> dict:
-    """Median, largest and smallest time step over ``times`` (one array per trajectory), and
-    whether every grid is uniform.
+    """Median, largest and smallest time step, and whether every grid is uniform.
 
+    Parameters
+    ----------
+    times : list of ndarray
+        One array of times per trajectory.
+
+    Returns
+    -------
+    dict
+        ``uniform``, ``median_step``, ``max_step``, ``min_step``.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> grid_summary([np.array([0.0, 0.5, 1.0, 3.0])])
     {'uniform': False, 'median_step': 0.5, 'max_step': 2.0, 'min_step': 0.5}
@@ -71,12 +95,31 @@ def grid_summary(times) -> dict:
 
 
 def stamp_noise_ratio(t, x, noise, order: int = 3) -> float:
-    """Median over coordinates of the positions' ``noise`` (n,) at their stamps ``t`` over their
-    noise read at uniform steps (smoother penalty of ``order``).
+    """How much noisier the positions look at their stamps than at uniform steps.
 
-    Below 1 for stamps that are the sampling times of a smooth motion; above
-    :data:`STAMP_NOISE_RATIO`, the stamps look like arrival times.
+    The median over coordinates of the positions' ``noise`` at their stamps over their noise
+    read at uniform steps (smoother penalty of ``order``). Below 1 for stamps that are the
+    sampling times of a smooth motion; above :data:`STAMP_NOISE_RATIO`, the stamps look like
+    arrival times.
 
+    Parameters
+    ----------
+    t : array, shape (N,)
+        The stamps.
+    x : array, shape (N, n)
+        Positions.
+    noise : array, shape (n,)
+        Their noise estimated at the stamps (``WhittakerSmoother.noise_``).
+    order : int, default 3
+        Penalty order of the smoother.
+
+    Returns
+    -------
+    float
+        The ratio.
+
+    Examples
+    --------
     Samples taken every 10 ms, stamped late by up to 3 ms:
 
     >>> import numpy as np
