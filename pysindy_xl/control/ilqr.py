@@ -183,7 +183,9 @@ def _compiled(step, cost, iterations, tolerance, regularization):
 
         carry = (xs, us, total, zero_fb, jnp.asarray(regularization, x0.dtype),
                  jnp.asarray(0), jnp.asarray(False))
-        xs, us, total, k_fb, _, it, _ = jax.lax.while_loop(cond, body, carry)
+        xs, us, total, _, mu, it, _ = jax.lax.while_loop(cond, body, carry)
+        # the feedback gains of the final trajectory (not of the one before the last step)
+        _, k_fb = _backward(step, cost, xs, us, jnp.minimum(mu, regularization))
         return ILQRSolution(xs, us, k_fb, total, it)
 
     return run

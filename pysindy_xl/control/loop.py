@@ -59,7 +59,7 @@ class LearningResult:
     max_abs_force, max_abs_x, upright_s : float
         Of the final attempt (:meth:`SwingUpTask.evaluate`).
     mpc_step_ms : float
-        Median wall time of a sampling-planner step over all attempts (ms).
+        Median wall time of a sampling-planner step over all attempts (ms; None without one).
     equations : list of str
         The final model's equations.
     history : list of dict
@@ -75,7 +75,7 @@ class LearningResult:
     track_limit: float
     max_abs_x: float
     upright_s: float
-    mpc_step_ms: float
+    mpc_step_ms: float | None
     equations: list = field(default_factory=list)
     history: list = field(default_factory=list)
     system: str = ""
@@ -307,7 +307,7 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
         episodes=n_episodes, catalog=catalog_name, force_limit=float(the_task.force_limit),
         max_abs_force=scores["max_abs_force"], track_limit=float(the_task.track_limit),
         max_abs_x=scores["max_abs_x"], upright_s=scores["upright_s"],
-        mpc_step_ms=float(np.median(planning_ms)) if planning_ms else float("nan"),
+        mpc_step_ms=float(np.median(planning_ms)) if planning_ms else None,
         equations=_equations(current) if current is not None else [], history=history,
         system=system, task=task, noise=float(noise), seed=int(seed),
         lqr_fraction=float(np.mean([m == "lqr" for m in modes])) if modes else 0.0)
