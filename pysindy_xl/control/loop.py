@@ -1,7 +1,8 @@
 """The learning loop: explore the plant, identify, control on the model, run, repeat.
 
-1. **Explore**: a random sum of sinusoids on the actuated coordinate, with a proportional-derivative
-   term that keeps the cart near the centre, clipped to the force limit.
+1. **Explore**: a random sum of sinusoids on the actuated coordinate plus a model-free
+   energy-pumping term, with a proportional-derivative term that keeps the cart near the
+   centre, clipped to the force limit (:func:`exploration_policy`).
 2. **Identify**: fit :class:`~pysindy_xl.XLSINDy` with the catalog on every episode so far, from
    positions only (relative Gaussian noise ``noise`` added: std = ``noise`` x each coordinate's
    standard deviation over the episode) and the applied forces.
@@ -90,12 +91,19 @@ class LearningResult:
 
 
 def exploration_policy(force_limit: float, rng: np.random.Generator, n_components: int = 6,
-                       frequencies=(0.3, 2.5), centering=(8.0, 3.0), linear: int = 0):
-    """``policy(state, t) -> u`` (1,) exciting the cart within the limits.
+                       frequencies=(0.3, 2.5), centering=(4.0, 2.0), linear: int = 0,
+                       pump: float = 0.6, angle: int | None = 1):
+    r"""``policy(state, t) -> u`` (1,) exciting the cart within the limits, model-free.
 
-    A random sum of ``n_components`` sinusoids with amplitude ``1.2 force_limit`` in total, minus
-    a PD term ``kp p + kd pd`` on the linear coordinate ``linear`` that keeps it near the
-    centre; the plant clips the sum to the force limit.
+    .. math:: u = s(t) + \rho\, u_{max} \tanh(-2 \dot\theta \cos\theta)
+              - k_p p - k_d \dot p
+
+    ``s``: a random sum of ``n_components`` sinusoids (amplitude ``0.6 force_limit`` in total,
+    frequencies uniform in ``frequencies``); the second term pumps energy into the pendulum of
+    angle ``angle`` (the cart accelerates against ``theta_dot cos(theta)``, which raises the
+    energy of any pendulum on a cart, whatever its length and mass; ``pump`` = ``rho``, 0 to
+    switch off); the last keeps the linear coordinate ``linear`` near the centre. The plant
+    clips the sum to the force limit.
 
     >>> policy = exploration_policy(10.0, np.random.default_rng(0))
     >>> policy(np.zeros(4), 0.0).shape
@@ -104,12 +112,15 @@ def exploration_policy(force_limit: float, rng: np.random.Generator, n_component
     freq = rng.uniform(*frequencies, n_components)
     phase = rng.uniform(0.0, 2 * np.pi, n_components)
     weight = rng.uniform(0.5, 1.0, n_components)
-    weight = 1.2 * force_limit * weight / weight.sum()
+    weight = 0.6 * force_limit * weight / weight.sum()
     kp, kd = centering
 
     def policy(state, t):
         n = len(state) // 2
         signal = float(weight @ np.sin(2 * np.pi * freq * t + phase))
+        if angle is not None and pump:
+            signal += pump * force_limit * np.tanh(-2.0 * state[n + angle]
+                                                   * np.cos(state[angle]))
         return np.array([signal - kp * state[linear] - kd * state[n + linear]])
 
     return policy

@@ -1,0 +1,206 @@
+"""Control with identified models: swing-ups on MuJoCo plants (issue 52's acceptance).
+
+Every case runs the learning loop (``pysindy_xl.control.learn_to_control``): explore, identify
+from positions with relative noise, swing up with sampling MPC + LQR on the model, run on the
+MuJoCo plant, add the data, re-identify, until success. Methods, side by side on the same
+plant, seeds and controller:
+
+- ``generic``: XLSINDy with the catalog from the coordinates and their kinds only;
+- ``kinematic``: XLSINDy with the MJCF's kinematic catalog (structure given);
+- ``pysindy``: PySINDy ``SINDy`` with control inputs on ``[q, qd]`` (velocities by its
+  smoothed finite differences), its own libraries (polynomials of the velocities, linear
+  positions and force, tensored with ``sin``/``cos`` of the angles), STLSQ;
+- ``true``: the true equations (the upper bound: the planner's own limit).
+
+Success: every angle within 0.2 rad of upright for 2 s, forces within the limit (clipped by
+the plant), the cart within |x| <= 1.5 m. Results: one JSON line per finished case in
+``benchmarks/results/control.jsonl`` (a rerun skips them), the summary in
+``benchmarks/results/control.md``.
+
+Usage::
+
+    python benchmarks/control.py --seeds 5 --tasks cartpole-10N --methods generic true
+    python benchmarks/control.py --summary
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+RESULTS = Path(__file__).resolve().parent / "results"
+JSONL = RESULTS / "control.jsonl"
+SUMMARY = RESULTS / "control.md"
+
+#: task name -> (system, force limit (N), noise)
+TASKS = {
+    "cartpole-10N": ("cart-pole", 10.0, 0.01),
+    "cdp-20N": ("cart-double-pendulum", 20.0, 0.01),
+    "cdp-10N": ("cart-double-pendulum", 10.0, 0.01),
+    "cartpole-10N-noise5": ("cart-pole", 10.0, 0.05),
+    "cdp-20N-noise5": ("cart-double-pendulum", 20.0, 0.05),
+}
+METHODS = ("generic", "kinematic", "pysindy", "true")
+TARGETS = {"cartpole-10N": "success >= 95 %, interaction <= 8 s, planning <= 5 ms",
+           "cdp-20N": "success >= 90 %, interaction <= 15 s, planning <= 20 ms",
+           "cdp-10N": "report", "cartpole-10N-noise5": "report", "cdp-20N-noise5": "report"}
+
+
+def true_model(name):
+    """The system's true equations ``M qdd = f(q, qd, tau)``."""
+    import pysindy_xl as px
+    from pysindy_xl.mujoco import get_system
+    system = get_system(name)
+    equations = [e - tau for e, tau in zip(system.equations_of_motion(), system.coords.tau,
+                                           strict=True)]
+    return px.MassMatrixDynamics(system.coords, equations)
+
+
+def pysindy_identify(system, data):
+    """PySINDy with control from noisy positions: a JAX ``f(state, tau)`` of the fitted model."""
+    import jax.numpy as jnp
+    import pysindy as ps
+    import sympy as sp
+    n = system.n
+    angles = list(system.angle_coordinates)
+    others = [i for i in range(n) if i not in angles]
+    names = [f"q{i}" for i in range(n)] + [f"v{i}" for i in range(n)] + ["u"]
+    smoother = ps.SmoothedFiniteDifference(smoother_kws={"window_length": 41, "polyorder": 3})
+    states, forces, times = [], [], []
+    for q, t, tau in data:
+        step = 10  # 100 Hz: the smoother's window spans 0.4 s of the 1 kHz record
+        qd = np.asarray(smoother(q, t))
+        states.append(np.c_[q, qd][::step])
+        forces.append(tau[::step, :1])
+        times.append(t[::step])
+    polynomial_inputs = others + [n + i for i in range(n)] + [2 * n]
+    library = ps.GeneralizedLibrary(
+        [ps.PolynomialLibrary(degree=2), ps.FourierLibrary(n_frequencies=1)],
+        tensor_array=[[1, 1]],
+        inputs_per_library=[polynomial_inputs, angles])
+    model = ps.SINDy(optimizer=ps.STLSQ(threshold=0.05, alpha=1e-3, normalize_columns=True),
+                     feature_library=library,
+                     differentiation_method=ps.SmoothedFiniteDifference(
+                         smoother_kws={"window_length": 9, "polyorder": 3}))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model.fit(states, t=times, u=forces, feature_names=names)
+    symbols = sp.symbols(names)
+    features = [sp.sympify(name.replace(" ", "*").replace("^", "**"),
+                           locals={s.name: s for s in symbols})
+                for name in model.get_feature_names()]
+    coefficients = model.coefficients()  # (2n, F)
+    rows = [sp.Add(*(float(c) * feat for c, feat in zip(row, features, strict=True) if c))
+            for row in coefficients]
+    evaluate = sp.lambdify(symbols, rows, modules="jax")
+
+    def f(state, tau):
+        values = [state[..., i] for i in range(2 * n)] + [tau[..., 0]]
+        out = [jnp.broadcast_to(jnp.asarray(v, dtype=state.dtype), state.shape[:-1])
+               for v in evaluate(*values)]
+        return jnp.stack(out, axis=-1)
+
+    f.n_coordinates = n
+    f.equations = [f"d{names[i]}/dt = {sp.N(r, 4)}" for i, r in enumerate(rows)]
+    return f
+
+
+def run_case(task, method, seed):
+    """One case: the loop's JSON report, with the wall time."""
+    from pysindy_xl.control.loop import learn_to_control
+    system, force_limit, noise = TASKS[task]
+    options = {"seed": seed, "force_limit": force_limit, "noise": noise,
+               "log": lambda m: print(f"    {m}", file=sys.stderr, flush=True)}
+    if method == "true":
+        options.update(model=true_model(system), max_episodes=1)
+    elif method == "pysindy":
+        from pysindy_xl.mujoco import get_system
+        options.update(identify=lambda s, d: pysindy_identify(get_system(system), d))
+    else:
+        options.update(catalog=method)
+    start = time.perf_counter()
+    result = learn_to_control(system, **options).to_dict()
+    result["wall_s"] = time.perf_counter() - start
+    result.update(task_name=task, method=method)
+    if method == "pysindy" and not result["equations"]:
+        result["equations"] = []
+    return result
+
+
+def finished():
+    if not JSONL.exists():
+        return set()
+    done = set()
+    for line in JSONL.read_text().splitlines():
+        if line.strip():
+            record = json.loads(line)
+            done.add((record["task_name"], record["method"], record["seed"]))
+    return done
+
+
+def summarize():
+    """Markdown table of every finished case (``control.md``)."""
+    if not JSONL.exists():
+        return "no results yet\n"
+    records = [json.loads(line) for line in JSONL.read_text().splitlines() if line.strip()]
+    lines = ["| task | method | cases | success | interaction s (median, max) | episodes "
+             "(median) | planning ms (median) | target |", "|---|---|---|---|---|---|---|---|"]
+    for task in TASKS:
+        for method in METHODS:
+            group = [r for r in records if r["task_name"] == task and r["method"] == method]
+            if not group:
+                continue
+            success = np.mean([r["success"] for r in group])
+            interaction = [r["interaction_s"] for r in group if r["success"]]
+            inter = (f"{np.median(interaction):.1f}, {np.max(interaction):.1f}" if interaction
+                     else "-")
+            steps = [r["mpc_step_ms"] for r in group if r["mpc_step_ms"] is not None]
+            lines.append(f"| {task} | {method} | {len(group)} | {100 * success:.0f} % | {inter} "
+                         f"| {np.median([r['episodes'] for r in group]):.0f} | "
+                         f"{np.median(steps):.1f} | {TARGETS[task]} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--tasks", nargs="+", choices=list(TASKS), default=list(TASKS))
+    parser.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS))
+    parser.add_argument("--seeds", type=int, default=20, help="seeds 0..N-1 (default 20)")
+    parser.add_argument("--first-seed", type=int, default=0)
+    parser.add_argument("--summary", action="store_true", help="only print the summary")
+    args = parser.parse_args(argv)
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    if not args.summary:
+        done = finished()
+        cases = [(task, method, seed) for task in args.tasks for method in args.methods
+                 for seed in range(args.first_seed, args.first_seed + args.seeds)
+                 if (task, method, seed) not in done]
+        print(f"{len(cases)} cases to run ({len(done)} finished before)", file=sys.stderr)
+        for k, (task, method, seed) in enumerate(cases, 1):
+            print(f"[{k}/{len(cases)}] {task} {method} seed {seed}", file=sys.stderr,
+                  flush=True)
+            try:
+                record = run_case(task, method, seed)
+            except Exception as error:  # a failed identification is a failed case, recorded
+                record = {"task_name": task, "method": method, "seed": seed, "success": False,
+                          "interaction_s": None, "episodes": 0, "mpc_step_ms": None,
+                          "error": f"{type(error).__name__}: {error}"}
+            with JSONL.open("a") as handle:
+                handle.write(json.dumps(record, default=float) + "\n")
+            print(f"    -> success {record['success']}, interaction "
+                  f"{record['interaction_s']}", file=sys.stderr, flush=True)
+    table = summarize()
+    print(table)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
