@@ -189,7 +189,7 @@ def main(argv=None):
                   flush=True)
             try:
                 record = run_case(task, method, seed)
-            except Exception as error:  # a failed identification is a failed case, recorded
+            except (ValueError, TypeError, ArithmeticError, RuntimeError) as error:  # recorded
                 record = {"task_name": task, "method": method, "seed": seed, "success": False,
                           "interaction_s": None, "episodes": 0, "mpc_step_ms": None,
                           "error": f"{type(error).__name__}: {error}"}
