@@ -70,10 +70,10 @@ def resolve_catalog(catalog):
 
     >>> resolve_catalog("generic")[0]
     'generic'
-    >>> resolve_catalog("mjcf")
+    >>> resolve_catalog("mjcf")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    ValueError: catalog: expected one of ['generic', 'kinematic'] or a callable system -> library, got 'mjcf'
+    ValueError: catalog: expected one of ['generic', 'kinematic'] or a callable ..., got 'mjcf'
     """
     if isinstance(catalog, str):
         if catalog not in CATALOGS:

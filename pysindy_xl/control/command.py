@@ -5,7 +5,6 @@ Progress goes to stderr; the report (:meth:`~.loop.LearningResult.to_dict`) to `
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 
@@ -23,6 +22,7 @@ def add_parser(subparsers):
     """Register ``control`` on argparse subparsers; the namespace's ``func(args)`` runs it and
     returns the exit status.
 
+    >>> import argparse
     >>> parser = argparse.ArgumentParser()
     >>> _ = add_parser(parser.add_subparsers(dest="command"))
     >>> args = parser.parse_args(["control", "cart-pole", "--force-limit", "8"])

@@ -10,7 +10,8 @@ Any pair of JAX functions of one state (and control) is a cost; :func:`quadratic
 
 from __future__ import annotations
 
-from typing import Callable, NamedTuple
+from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 

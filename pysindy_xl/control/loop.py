@@ -65,6 +65,14 @@ class LearningResult:
         The final model's equations.
     history : list of dict
         Per episode: kind, duration, and the task's scores for attempts.
+    system, task, noise, seed
+        The case.
+    lqr_fraction : float
+        Share of the attempts' control periods under the LQR.
+    final_episode : Episode or None
+        The last attempt on the plant (its true states).
+    model : object
+        The model of the last attempt.
     """
 
     success: bool
@@ -84,10 +92,15 @@ class LearningResult:
     noise: float = 0.0
     seed: int = 0
     lqr_fraction: float = 0.0
+    final_episode: object = field(default=None, repr=False)
+    model: object = field(default=None, repr=False)
 
     def to_dict(self) -> dict:
-        """The result as JSON-ready data."""
-        return asdict(self)
+        """The result as JSON-ready data (without ``final_episode`` and ``model``)."""
+        data = asdict(self)
+        data.pop("final_episode")
+        data.pop("model")
+        return data
 
 
 def exploration_policy(force_limit: float, rng: np.random.Generator, n_components: int = 6,
@@ -254,6 +267,7 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
     scores = {"success": False, "upright_s": 0.0, "max_abs_x": 0.0, "max_abs_force": 0.0}
     current = model
     n_episodes = 0
+    episode = None
 
     def record(episode):
         q = noisy_positions(episode, noise, rng)
@@ -321,4 +335,6 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
         mpc_step_ms=float(np.median(planning_ms)) if planning_ms else None,
         equations=_equations(current) if current is not None else [], history=history,
         system=system, task=task, noise=float(noise), seed=int(seed),
-        lqr_fraction=float(np.mean([m == "lqr" for m in modes])) if modes else 0.0)
+        lqr_fraction=float(np.mean([m == "lqr" for m in modes])) if modes else 0.0,
+        final_episode=episode if history and history[-1]["kind"] == "attempt" else None,
+        model=current)

@@ -13,7 +13,8 @@ one shifted by a period (warm start). A sample whose rollout leaves the finite n
 
 from __future__ import annotations
 
-from typing import Callable, NamedTuple
+from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 
