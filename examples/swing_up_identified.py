@@ -31,7 +31,7 @@ print(f"median planning step: {result.mpc_step_ms:.1f} ms, largest force "
       f"{result.max_abs_force:.1f} N, largest |x| {result.max_abs_x:.2f} m")
 print("identified equations:")
 for equation in result.equations:
-    print("  ", equation, "= 0")
+    print("  ", equation)
 
 # %%
 # The final attempt on MuJoCo: frames every 0.4 s, then the angle, the cart and the force.

@@ -193,7 +193,8 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
                      noise: float = 0.01, seed: int = 0, force_limit: float | None = None,
                      track_limit: float = 1.5, explore_s: float = 2.0, max_episodes: int = 6,
                      max_interaction_s: float = 30.0, model=None, identify=None,
-                     planner: dict | None = None, log=None) -> LearningResult:
+                     planner: dict | None = None, check_model: bool = True,
+                     log=None) -> LearningResult:
     """Learn to perform ``task`` on the MuJoCo ``system`` from its data alone (module docstring).
 
     Parameters
@@ -227,6 +228,10 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
     planner : dict, optional
         Overrides of the planner settings (``control_dt``, ``substeps``, ``horizon``,
         ``n_samples``, ``knots``, ``noise``, ``temperature``, ``iterations``, ``lqr_region``).
+    check_model : bool, default True
+        Refuse an identified model whose push on the cart does not accelerate it forward at
+        the start, the goal and random states (then explore again); False lets every model
+        try.
     log : callable, optional
         ``log(message)`` for progress (for instance to stderr).
 
@@ -293,7 +298,7 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
                 current = (identify(plant_system, data) if identify is not None
                            else _identify(factory, plant_system, data))
                 f = continuous_dynamics(current)
-                usable = _usable(f, plant_system, goal)
+                usable = _usable(f, plant_system, goal) if check_model else True
             except (ValueError, TypeError, ArithmeticError, np.linalg.LinAlgError) as error:
                 say(f"identification failed ({error})")
                 usable = False
