@@ -49,6 +49,10 @@ class ComputedTorque:
     mode : {"feedforward", "computed-torque"}, default "feedforward"
     force_limit : float or array (n,), optional
         Clip the output.
+    feedforward_times : array (T,), optional
+        In ``"feedforward"`` mode: evaluate the model along the reference at these times once,
+        vectorized, and interpolate linearly in between (the per-period cost drops to a
+        lookup).
 
     Examples
     --------
@@ -66,7 +70,7 @@ class ComputedTorque:
     """
 
     def __init__(self, model, reference, kp, kd, n: int, mode: str = "feedforward",
-                 force_limit=None):
+                 force_limit=None, feedforward_times=None):
         if mode not in _MODES:
             raise ValueError(f"mode: expected one of {_MODES}, got {mode!r}")
         if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
@@ -87,6 +91,15 @@ class ComputedTorque:
         self.mode = mode
         self.force_limit = None if force_limit is None else _gains(force_limit, self.n,
                                                                    "force_limit")
+        self._table = None
+        if feedforward_times is not None and mode == "feedforward":
+            times = np.asarray(feedforward_times, dtype=float).reshape(-1)
+            if times.size < 2 or np.any(np.diff(times) <= 0):
+                raise ValueError("feedforward_times: expected increasing times (at least two)")
+            q_r, qd_r, qdd_r = (np.stack([np.asarray(part, dtype=float).reshape(self.n)
+                                          for part in parts])
+                                for parts in zip(*(reference(t) for t in times), strict=True))
+            self._table = (times, self.inverse_dynamics(q_r, qd_r, qdd_r))
 
     def inverse_dynamics(self, q, qd, qdd) -> np.ndarray:
         """``M(q, qd) qdd - f(q, qd, 0)`` of the model at states (N, n) (zeros without one)."""
@@ -109,7 +122,12 @@ class ComputedTorque:
                             for a in self.reference(t))
         e, ed = q_r - q, qd_r - qd
         if self.mode == "feedforward":
-            tau = self.inverse_dynamics(q_r, qd_r, qdd_r)[0] + self.kp * e + self.kd * ed
+            if self._table is not None:
+                times, forces = self._table
+                model = np.array([np.interp(t, times, forces[:, j]) for j in range(self.n)])
+            else:
+                model = self.inverse_dynamics(q_r, qd_r, qdd_r)[0]
+            tau = model + self.kp * e + self.kd * ed
         else:
             tau = self.inverse_dynamics(q, qd, qdd_r + self.kp * e + self.kd * ed)[0]
         if self.force_limit is not None:

@@ -43,6 +43,16 @@ def test_identified_feedforward_beats_pd_alone(true_model, mode):
     assert model < pd / 5
 
 
+def test_tabulated_feedforward_matches_the_model_along_the_reference(true_model):
+    times = np.linspace(0.0, 1.0, 501)
+    tabulated = ComputedTorque(true_model, _reference, kp=5.0, kd=1.0, n=2,
+                               feedforward_times=times)
+    direct = ComputedTorque(true_model, _reference, kp=5.0, kd=1.0, n=2)
+    state = np.array([0.1, -0.2, 0.3, 0.0])
+    for t in (0.0, 0.5, 0.998):  # on the grid
+        np.testing.assert_allclose(tabulated(state, t), direct(state, t), rtol=1e-9)
+
+
 def test_bad_gains_and_modes_are_refused(true_model):
     with pytest.raises(ValueError, match="kp: expected a gain >= 0 or 2"):
         ComputedTorque(true_model, _reference, kp=[1.0, 2.0, 3.0], kd=1.0, n=2)
