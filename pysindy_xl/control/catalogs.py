@@ -54,6 +54,16 @@ def generic_catalog(system, velocity_degree: int = 2, trig_degree: int = 2):
 def kinematic_catalog_of(system):
     """The kinematic catalog of the system's MJCF (its structure given).
 
+    Parameters
+    ----------
+    system : MuJoCoSystem or str
+
+    Returns
+    -------
+    CatalogRepartition
+
+    Examples
+    --------
     >>> kinematic_catalog_of("cart-pole").fit().n_output_features_
     9
     """
@@ -66,8 +76,20 @@ CATALOGS = {"generic": generic_catalog, "kinematic": kinematic_catalog_of}
 
 
 def resolve_catalog(catalog):
-    """``(name, factory)`` of a catalog given by name (:data:`CATALOGS`) or as a callable.
+    """A catalog given by name (:data:`CATALOGS`) or as a callable.
 
+    Parameters
+    ----------
+    catalog : str or callable
+        ``"generic"``, ``"kinematic"`` or ``f(system) -> library``.
+
+    Returns
+    -------
+    tuple
+        ``(name, factory)``.
+
+    Examples
+    --------
     >>> resolve_catalog("generic")[0]
     'generic'
     >>> resolve_catalog("mjcf")  # doctest: +ELLIPSIS

@@ -23,7 +23,21 @@ __all__ = ["Cost", "angle_error", "quadratic_cost", "swing_up_cost"]
 
 
 class Cost(NamedTuple):
-    """``running(x (2n,), u (m,)) -> scalar`` and ``terminal(x (2n,)) -> scalar``, pure JAX."""
+    """A trajectory cost: two pure JAX functions.
+
+    Parameters
+    ----------
+    running : callable
+        ``running(x (2n,), u (m,)) -> scalar``, the cost of one control period.
+    terminal : callable
+        ``terminal(x (2n,)) -> scalar``, the cost of the final state.
+
+    Examples
+    --------
+    >>> cost = Cost(lambda x, u: jnp.sum(x ** 2) + jnp.sum(u ** 2), lambda x: jnp.sum(x ** 2))
+    >>> float(cost.terminal(jnp.array([1.0, 2.0])))
+    5.0
+    """
 
     running: Callable
     terminal: Callable
@@ -41,6 +55,20 @@ def _angle_mask(n: int, angles) -> np.ndarray:
 def angle_error(x, goal, angle_mask):
     """``x - goal`` with the entries flagged in ``angle_mask`` wrapped to ``(-pi, pi]``.
 
+    Parameters
+    ----------
+    x, goal : array (..., 2n)
+        States.
+    angle_mask : bool array (2n,)
+        Entries compared on the circle.
+
+    Returns
+    -------
+    jax.Array
+        The difference, shape of ``x``.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> err = angle_error(jnp.array([0.0, -3.0]), jnp.array([0.0, np.pi]), np.array([False, True]))
     >>> round(float(err[1]), 4)  # -3 - pi + 2 pi

@@ -37,6 +37,14 @@ def continuous_dynamics(model):
     TypeError
         If ``model`` gives no accelerations (neither ``to_jax``, mass-matrix expressions nor an
         ``n_coordinates`` attribute), or is not fitted.
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> f = continuous_dynamics(px.MassMatrixDynamics(c, [2 * c.qdd[0] - c.tau[0]]))
+    >>> [float(v) for v in f(jnp.array([0.0, 1.0]), jnp.array([4.0]))]
+    [1.0, 2.0]
     """
     if callable(model) and hasattr(model, "n_coordinates") and not hasattr(model, "to_jax"):
         return model
@@ -57,6 +65,20 @@ def continuous_dynamics(model):
 def actuation_matrix(coordinate_names, actuated) -> np.ndarray:
     """``B`` (n, m): actuator ``j`` pushes coordinate ``actuated[j]`` with unit gain.
 
+    Parameters
+    ----------
+    coordinate_names : sequence of str
+        The ``n`` coordinates.
+    actuated : str or sequence of str
+        The ``m`` pushed coordinates.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``B`` (n, m), generalized forces ``tau = B u``.
+
+    Examples
+    --------
     >>> actuation_matrix(["x", "theta"], ["x"])
     array([[1.],
            [0.]])

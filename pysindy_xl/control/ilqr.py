@@ -25,8 +25,23 @@ _ALPHAS = (1.0, 0.5, 0.25, 0.1, 0.03, 0.01)
 
 
 class ILQRSolution(NamedTuple):
-    """``states`` (H+1, 2n), ``controls`` (H, m), feedback ``gains`` (H, m, 2n), final ``cost``
-    and ``iterations`` done."""
+    """Result of :func:`ilqr`.
+
+    Parameters
+    ----------
+    states : jax.Array (H + 1, 2n)
+    controls : jax.Array (H, m)
+    gains : jax.Array (H, m, 2n)
+        Feedback ``K_k`` of the final trajectory: ``u = u_k + K_k (x - x_k)``.
+    cost : jax.Array
+        Final cost.
+    iterations : jax.Array
+        Iterations done.
+
+    Examples
+    --------
+    See :func:`ilqr`.
+    """
 
     states: object
     controls: object

@@ -46,7 +46,7 @@ PLANNER_SETTINGS = {
 class LearningResult:
     """Outcome of :func:`learn_to_control` (``to_dict`` gives the JSON report).
 
-    Attributes
+    Parameters
     ----------
     success : bool
         The last attempt met the task.
@@ -73,6 +73,12 @@ class LearningResult:
         The last attempt on the plant (its true states).
     model : object
         The model of the last attempt.
+
+    Examples
+    --------
+    >>> result = LearningResult(True, 6.7, 2, "generic", 10.0, 10.0, 1.5, 1.2, 2.0, 1.8)
+    >>> result.to_dict()["interaction_s"]
+    6.7
     """
 
     success: bool
@@ -118,6 +124,30 @@ def exploration_policy(force_limit: float, rng: np.random.Generator, n_component
     switch off); the last keeps the linear coordinate ``linear`` near the centre. The plant
     clips the sum to the force limit.
 
+    Parameters
+    ----------
+    force_limit : float
+        Largest force (N).
+    rng : numpy.random.Generator
+        Draws the sinusoids.
+    n_components : int, default 6
+    frequencies : tuple of float, default (0.3, 2.5)
+        Range of the sinusoids' frequencies (Hz).
+    centering : tuple of float, default (4.0, 2.0)
+        ``k_p``, ``k_d``.
+    linear : int, default 0
+        Index of the pushed linear coordinate.
+    pump : float, default 0.6
+    angle : int or None, default 1
+        Index of the pumped angle (None: no pumping).
+
+    Returns
+    -------
+    callable
+        ``policy(state (2n,), t) -> u (1,)``.
+
+    Examples
+    --------
     >>> policy = exploration_policy(10.0, np.random.default_rng(0))
     >>> policy(np.zeros(4), 0.0).shape
     (1,)
@@ -140,8 +170,23 @@ def exploration_policy(force_limit: float, rng: np.random.Generator, n_component
 
 
 def noisy_positions(episode, noise: float, rng: np.random.Generator) -> np.ndarray:
-    """Positions (N, n) with Gaussian noise of std ``noise`` x each column's standard deviation.
+    """Positions with relative Gaussian noise, as a position sensor records them.
 
+    Parameters
+    ----------
+    episode : Episode
+        Its ``q`` (N, n).
+    noise : float
+        Std of the noise as a fraction of each column's standard deviation.
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    numpy.ndarray
+        Noisy positions (N, n).
+
+    Examples
+    --------
     >>> from types import SimpleNamespace
     >>> episode = SimpleNamespace(q=np.c_[np.linspace(0, 1, 5), np.zeros(5)])
     >>> noisy_positions(episode, 0.0, np.random.default_rng(0))[:, 0].tolist()

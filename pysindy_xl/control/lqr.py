@@ -25,16 +25,41 @@ __all__ = ["LQRGain", "discrete_lqr", "linearize"]
 
 
 class LQRGain(NamedTuple):
-    """``gain`` K (m, 2n) and ``cost_to_go`` P (2n, 2n) of :func:`discrete_lqr`."""
+    """Result of :func:`discrete_lqr`.
+
+    Parameters
+    ----------
+    gain : numpy.ndarray (m, N)
+        ``K`` of ``u = -K e``.
+    cost_to_go : numpy.ndarray (N, N)
+        ``P`` of the cost-to-go ``e^T P e``.
+
+    Examples
+    --------
+    See :func:`discrete_lqr`.
+    """
 
     gain: np.ndarray
     cost_to_go: np.ndarray
 
 
 def linearize(step, x, u) -> tuple[np.ndarray, np.ndarray]:
-    """Jacobians ``A = dF/dx`` (2n, 2n) and ``B = dF/du`` (2n, m) at ``(x, u)``, by forward-mode
-    automatic differentiation.
+    """Jacobians of a discrete model by forward-mode automatic differentiation.
 
+    Parameters
+    ----------
+    step : callable
+        ``F(x (2n,), u (m,)) -> x (2n,)``, pure JAX.
+    x : array (2n,)
+    u : array (m,)
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``A = dF/dx`` (2n, 2n) and ``B = dF/du`` (2n, m) at ``(x, u)``.
+
+    Examples
+    --------
     >>> import jax.numpy as jnp
     >>> a, b = linearize(lambda x, u: jnp.array([x[0] + x[1], x[1] + u[0]]),
     ...                  [0.0, 0.0], [0.0])

@@ -16,9 +16,9 @@ __all__ = ["Episode", "MuJoCoPlant"]
 
 @dataclass
 class Episode:
-    """One run on the plant.
+    """One run on the plant (:meth:`MuJoCoPlant.run`).
 
-    Attributes
+    Parameters
     ----------
     t : array (N,)
         Times of the MuJoCo steps (s), from 0.
@@ -32,6 +32,13 @@ class Episode:
         Plant seconds the episode took.
     stopped : str
         Why it ended: ``"duration"`` or the reason returned by the stop rule.
+
+    Examples
+    --------
+    >>> episode = Episode(np.zeros(1), np.zeros((1, 2)), np.zeros((1, 2)), np.zeros((1, 2)),
+    ...                   np.zeros((0, 1)), 0.0, "duration")
+    >>> episode.states.shape
+    (1, 4)
     """
 
     t: np.ndarray

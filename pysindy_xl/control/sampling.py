@@ -32,9 +32,24 @@ _DIVERGED_COST = 1e10
 class SamplingPlanner(NamedTuple):
     """Pure functions of a sampling planner (:func:`sampling_planner`).
 
-    ``init() -> plan`` (H, m) of zeros; ``plan(x (2n,), plan (H, m), key) -> (u (m,), plan,
-    cost)``: the control to apply now, the optimized plan (not shifted) and its predicted cost;
-    ``shift(plan) -> plan``: the warm start of the next period; ``horizon``, ``n_controls``."""
+    Parameters
+    ----------
+    init : callable
+        ``init() -> plan`` (H, m) of zeros.
+    plan : callable
+        ``plan(x (2n,), plan (H, m), key) -> (u (m,), plan, cost)``: the control to apply now,
+        the optimized plan (not shifted) and the lowest sampled cost; compiled.
+    shift : callable
+        ``shift(plan) -> plan``: the warm start of the next period.
+    horizon : int
+        ``H``, control periods planned.
+    n_controls : int
+        ``m``.
+
+    Examples
+    --------
+    See :func:`sampling_planner`.
+    """
 
     init: Callable
     plan: Callable
@@ -44,9 +59,22 @@ class SamplingPlanner(NamedTuple):
 
 
 def rollout(step, x0, controls):
-    """States ``x_1..x_H`` (H, 2n) of ``x_{k+1} = step(x_k, u_k)`` from ``x0`` under ``controls``
-    (H, m), one ``jax.lax.scan``.
+    """States of ``x_{k+1} = step(x_k, u_k)`` from ``x0``, one ``jax.lax.scan``.
 
+    Parameters
+    ----------
+    step : callable
+        ``step(x (2n,), u (m,)) -> x (2n,)``.
+    x0 : array (2n,)
+    controls : array (H, m)
+
+    Returns
+    -------
+    jax.Array
+        ``x_1..x_H`` (H, 2n).
+
+    Examples
+    --------
     >>> import jax.numpy as jnp
     >>> step = lambda x, u: x + u
     >>> rollout(step, jnp.zeros(1), jnp.ones((3, 1)))[:, 0].tolist()
@@ -61,9 +89,23 @@ def rollout(step, x0, controls):
 
 
 def trajectory_cost(step, cost, x0, controls):
-    r"""``J = sum_k running(x_k, u_k) + terminal(x_H)`` of the rollout from ``x0``; ``1e10`` when
-    it is not finite.
+    r"""``J = sum_k running(x_k, u_k) + terminal(x_H)`` of the rollout from ``x0``.
 
+    Parameters
+    ----------
+    step : callable
+        ``step(x, u) -> x``.
+    cost : Cost
+    x0 : array (2n,)
+    controls : array (H, m)
+
+    Returns
+    -------
+    jax.Array
+        The scalar cost, ``1e10`` when it is not finite.
+
+    Examples
+    --------
     >>> import jax.numpy as jnp
     >>> from pysindy_xl.control.costs import Cost
     >>> cost = Cost(lambda x, u: jnp.sum(x ** 2), lambda x: 0.0)
@@ -79,8 +121,22 @@ def trajectory_cost(step, cost, x0, controls):
 
 
 def interpolation_matrix(horizon: int, knots: int) -> np.ndarray:
-    """``P`` (horizon, knots): linear interpolation from ``knots`` equally spaced values.
+    """Linear interpolation from ``knots`` equally spaced values to ``horizon`` samples.
 
+    Parameters
+    ----------
+    horizon : int
+        Samples ``H`` (>= 1).
+    knots : int
+        Values (>= 2).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``P`` (horizon, knots), rows summing to one.
+
+    Examples
+    --------
     >>> interpolation_matrix(3, 2).tolist()
     [[1.0, 0.0], [0.5, 0.5], [0.0, 1.0]]
     """

@@ -41,6 +41,13 @@ class SwingUpTask:
         Longest attempt (s).
     actuated : tuple of str, default ("x",)
         The pushed coordinate.
+
+    Examples
+    --------
+    >>> from pysindy_xl.mujoco import get_system
+    >>> task = SwingUpTask("cart-pole", force_limit=10.0)
+    >>> task.upright(np.array([[0.0, np.pi - 0.1, 0.0, 0.0]]), get_system("cart-pole"))
+    array([ True])
     """
 
     system: str
