@@ -50,8 +50,9 @@ def add_parser(subparsers):
     parser.add_argument("--catalog", default="generic", choices=("generic", "kinematic"),
                         help="generic: from the coordinates and their kinds only; kinematic: "
                              "from the MJCF's kinematic tree (default: generic)")
-    parser.add_argument("--explore", type=_positive_float, default=2.0, metavar="SECONDS",
-                        help="seconds of the first exploration (default: 2)")
+    parser.add_argument("--explore", type=_positive_float, default=None, metavar="SECONDS",
+                        help="seconds of the first exploration (default: 2.5 for the "
+                             "cart-pole, 2 for the cart double pendulum)")
     parser.add_argument("--max-episodes", type=_positive_int, default=6,
                         help="most episodes on the plant (default: 6)")
     parser.add_argument("--out", default=None, metavar="FILE.json",

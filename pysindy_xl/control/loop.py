@@ -32,6 +32,10 @@ from .tasks import get_task
 
 __all__ = ["LearningResult", "exploration_policy", "learn_to_control", "noisy_positions"]
 
+#: Seconds of the first exploration per system (the cart-pole's generic catalog needs 2.5 s of
+#: pumped motion for a model that swings up at the first attempt).
+EXPLORE_S = {"cart-pole": 2.5, "cart-double-pendulum": 2.0}
+
 #: Planner settings per system: control period (s), RK4 steps per period, horizon (periods),
 #: samples, knots.
 PLANNER_SETTINGS = {
@@ -236,7 +240,8 @@ def _equations(model) -> list[str]:
 
 def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog="generic",
                      noise: float = 0.01, seed: int = 0, force_limit: float | None = None,
-                     track_limit: float = 1.5, explore_s: float = 2.0, max_episodes: int = 6,
+                     track_limit: float = 1.5, explore_s: float | None = None,
+                     max_episodes: int = 6,
                      max_interaction_s: float = 30.0, model=None, identify=None,
                      planner: dict | None = None, check_model: bool = True,
                      log=None) -> LearningResult:
@@ -257,8 +262,9 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
     force_limit : float, optional
         Default from :func:`~pysindy_xl.control.tasks.get_task`.
     track_limit : float, default 1.5
-    explore_s : float, default 2.0
-        Seconds of the first exploration (and of each further one when a fit is unusable).
+    explore_s : float, optional
+        Seconds of the first exploration (and of each further one when a fit is unusable);
+        default 2.5 for the cart-pole, 2.0 for the cart double pendulum.
     max_episodes : int, default 6
         Most episodes on the plant.
     max_interaction_s : float, default 30.0
@@ -296,6 +302,8 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
     plant_system = get_system(system)
     if not (np.isfinite(noise) and noise >= 0):
         raise ValueError(f"noise: expected a relative level >= 0, got {noise!r}")
+    if explore_s is None:
+        explore_s = EXPLORE_S.get(system, 2.0)
     if not (np.isfinite(explore_s) and explore_s > 0):
         raise ValueError(f"explore_s: expected a positive number of seconds, got {explore_s!r}")
     catalog_name, factory = ("given model", None) if model is not None else \
