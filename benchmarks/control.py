@@ -237,6 +237,53 @@ def arm_summary():
     return "\n".join(lines) + "\n"
 
 
+def planning_timing(system_name: str, catalog: str, seed: int = 0, calls: int = 200) -> dict:
+    """Planning time of one control period (ms) on a model identified from one exploration:
+    the compiled sampling planner called ``calls`` times from states along a swing-up."""
+    import jax
+
+    import pysindy_xl as px
+    from pysindy_xl.control import (
+        MuJoCoPlant,
+        PredictiveController,
+        continuous_dynamics,
+        discrete_dynamics,
+        exploration_policy,
+        get_task,
+        noisy_positions,
+        resolve_catalog,
+        swing_up_cost,
+    )
+    from pysindy_xl.control.loop import EXPLORE_S, PLANNER_SETTINGS
+    from pysindy_xl.mujoco import get_system
+    system = get_system(system_name)
+    task = get_task(system_name)
+    settings = dict(PLANNER_SETTINGS[system_name])
+    plant = MuJoCoPlant(system, task.actuated, task.force_limit, settings.pop("control_dt"))
+    rng = np.random.default_rng(seed)
+    plant.reset()
+    episode = plant.run(exploration_policy(task.force_limit, rng), EXPLORE_S[system_name])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = px.XLSINDy(resolve_catalog(catalog)[1](system)).fit(
+            noisy_positions(episode, 0.01, rng), t=episode.t, u=episode.tau)
+    step = discrete_dynamics(continuous_dynamics(model), plant.control_dt, plant.actuation,
+                             settings.pop("substeps"))
+    cost = swing_up_cost(system.n, task.angles(system), track_limit=task.track_limit,
+                         force_limit=task.force_limit)
+    controller = PredictiveController(step, cost, task.force_limit, settings.pop("horizon"),
+                                      goal=None, angles=task.angles(system), **settings)
+    states = episode.states[:: max(1, len(episode.states) // calls)][:calls]
+    for state in states:
+        controller(state)
+    jax.block_until_ready(controller._plan)
+    times = np.array(controller.planning_ms)
+    return {"system": system_name, "catalog": catalog, "median_ms": float(np.median(times)),
+            "p10_ms": float(np.percentile(times, 10)), "p90_ms": float(np.percentile(times, 90)),
+            "load_average": os.getloadavg()[0], "terms": int(np.count_nonzero(
+                model.coefficients()))}
+
+
 def finished():
     if not JSONL.exists():
         return set()
@@ -285,9 +332,19 @@ def main(argv=None):
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--summary", action="store_true", help="only print the summary")
     parser.add_argument("--arm", action="store_true", help="run the arm-tracking cases")
+    parser.add_argument("--timing", action="store_true",
+                        help="time the planning step on identified models")
     args = parser.parse_args(argv)
     os.environ.setdefault("OMP_NUM_THREADS", "1")
     RESULTS.mkdir(parents=True, exist_ok=True)
+    if args.timing:
+        for system_name in ("cart-pole", "cart-double-pendulum"):
+            for catalog in ("kinematic", "generic"):
+                record = planning_timing(system_name, catalog)
+                print(json.dumps(record), flush=True)
+                with (RESULTS / "control_timing.jsonl").open("a") as handle:
+                    handle.write(json.dumps(record) + "\n")
+        return 0
     if args.arm and not args.summary:
         done = set()
         if ARM_JSONL.exists():
