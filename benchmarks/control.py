@@ -153,6 +153,7 @@ def run_case(task, method, seed):
 
 
 ARM_JSONL = RESULTS / "control_arm.jsonl"
+NOTES_PATH = RESULTS / "control_notes.md"
 ARM_XML = Path(__file__).resolve().parent / "models" / "menagerie" / "fr3.xml"
 
 
@@ -284,6 +285,49 @@ def planning_timing(system_name: str, catalog: str, seed: int = 0, calls: int = 
                 model.coefficients()))}
 
 
+def timing_summary():
+    path = RESULTS / "control_timing.jsonl"
+    if not path.exists():
+        return ""
+    records = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    lines = ["| system | catalog | model terms | planning ms: median (p10, p90) | target | "
+             "load average |", "|---|---|---|---|---|---|"]
+    for r in records:
+        target = "5" if r["system"] == "cart-pole" else "20"
+        lines.append(f"| {r['system']} | {r['catalog']} | {r['terms']} | {r['median_ms']:.1f} "
+                     f"({r['p10_ms']:.1f}, {r['p90_ms']:.1f}) | <= {target} ms | "
+                     f"{r['load_average']:.1f} |")
+    return "\n".join(lines) + "\n"
+
+
+HEADER = """# Control with identified models (benchmarks/control.py)
+
+Learning loop on MuJoCo plants: explore within the force limit, identify from positions only
+(relative noise as in the task name: 1 %, or 5 % for `-noise5`), swing up with sampling MPC
+(MPPI, 60 periods of 20 ms) + LQR near the top planned on the identified model, run on MuJoCo,
+add the data, re-identify until success. Success: every angle within 0.2 rad of upright for 2 s
+in a row, force within the limit (clipped by the plant), cart within |x| <= 1.5 m; attempts last
+at most 6 s, at most 6 episodes. "within budget": success with at most 8 s (cart-pole) / 15 s
+(cart double pendulum) of plant interaction in total, the successful attempt included.
+
+Methods: `generic` = XLSINDy with the catalog from the coordinates and their kinds only (no
+MJCF structure; the automatic catalog of the issue was not merged yet, this stands in for it);
+`kinematic` = XLSINDy with the MJCF's kinematic catalog (structure given); `pysindy` = PySINDy
+SINDy with control from the same data; `true` = the true equations (upper bound, no
+exploration). Same controller, plant and seeds for all.
+
+Machine: 2 cores shared with ~5 other jobs (load average 9-11 during the runs): every planning
+time below is inflated by the load; the `--timing` table measures the planning step alone.
+"""
+
+
+def write_summary(notes: str = "") -> str:
+    text = (HEADER + "\n## Swing-up\n\n" + summarize() + "\n## Arm tracking\n\n"
+            + arm_summary() + "\n## Planning step\n\n" + timing_summary() + "\n" + notes)
+    SUMMARY.write_text(text, encoding="utf-8")
+    return text
+
+
 def finished():
     if not JSONL.exists():
         return set()
@@ -356,7 +400,7 @@ def main(argv=None):
             print(f"arm tracking seed {seed}", file=sys.stderr, flush=True)
             with ARM_JSONL.open("a") as handle:
                 handle.write(json.dumps(arm_tracking(seed)) + "\n")
-        print(arm_summary())
+        print(write_summary(NOTES_PATH.read_text() if NOTES_PATH.exists() else ""))
         return 0
     if not args.summary:
         done = finished()
@@ -377,9 +421,7 @@ def main(argv=None):
                 handle.write(json.dumps(record, default=float) + "\n")
             print(f"    -> success {record['success']}, interaction "
                   f"{record['interaction_s']}", file=sys.stderr, flush=True)
-    table = summarize()
-    print(table)
-    print(arm_summary())
+    print(write_summary(NOTES_PATH.read_text() if NOTES_PATH.exists() else ""))
     return 0
 
 
