@@ -33,6 +33,9 @@ __all__ = ["BatchSimulation", "dynamics_function", "euler_step", "fast_cos", "fa
 
 #: Largest system solved by unrolled Gaussian elimination; larger ones call LAPACK.
 _UNROLLED_MAX_N = 4
+#: Largest arm (rigid-body kernel) whose SPD mass matrix is solved by unrolled elimination
+#: (about 1.6x faster than batched LU for 7 joints, equal to rounding).
+_UNROLLED_RIGID_MAX_N = 8
 
 
 def _as_matrix(expr, name: str, shape: tuple[int, int]) -> sp.Matrix:
@@ -185,7 +188,9 @@ def dynamics_function(dynamics, *, solver: str = "auto", fast_trig: bool = True)
         How ``qdd`` is solved for: elimination written out (vectorizes) without pivoting (exact
         to rounding on SPD mass matrices) or with partial pivoting, or
         :func:`jax.numpy.linalg.solve`. ``"auto"``: for ``n <= 4``, ``"gauss"`` when ``M`` is
-        SPD at random states, else ``"pivoted"``; ``"lu"`` above.
+        SPD at random states, else ``"pivoted"``, a kinematic-catalog model evaluated through
+        its written-out polynomials rather than the rigid-body kernel; above, ``"lu"``, except
+        ``"gauss"`` for a kinematic-catalog arm of up to 8 joints with an SPD ``M``.
     fast_trig : bool, default True
         ``sin``, ``cos`` by :func:`fast_sin`, :func:`fast_cos`, else ``jax.numpy``'s.
 
@@ -247,7 +252,9 @@ def _compile(dynamics, solver: str, fast_trig: bool):
     elif terms is not None and (solver != "auto" or n > _UNROLLED_MAX_N or rigid_parts):
         # polynomial terms: any size, nothing symbolic built, nothing lambdified whole
         evaluate = _terms_function(terms, arguments, modules)
-        solver = "lu" if solver == "auto" else solver
+        if solver == "auto":
+            solver = ("gauss" if rigid_parts and n <= _UNROLLED_RIGID_MAX_N
+                      and _numerically_positive_definite(dynamics) else "lu")
         depends_on_time = any(coords.t in atom.free_symbols for atom in terms.atoms)
     else:
         mass = _as_matrix(dynamics.mass_matrix_expr, "dynamics.mass_matrix_expr", (n, n))
