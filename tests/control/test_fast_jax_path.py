@@ -41,3 +41,31 @@ def test_to_jax_takes_the_expression_path_and_agrees_with_the_kernel(kinematic_m
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-10 * np.abs(expected).max())
     numpy_accelerations = dynamics.accelerations(states[:, :n], states[:, n:], forces)
     np.testing.assert_allclose(got[:, n:], numpy_accelerations, rtol=1e-9, atol=1e-9)
+
+
+def test_to_jax_of_an_arm_solves_by_elimination_and_agrees_with_lu():
+    """Five joints (past the written-out path): the rigid-body kernel with unrolled elimination
+    gives what LU gives, and what the model's NumPy code gives."""
+    from kinematic_models import robot_arm
+
+    from pysindy_xl.mujoco import MJCFSystem
+    system = MJCFSystem(robot_arm(5))
+    data = generate_dataset(system, n_trajectories=1, duration=1.0, seed=0, progress=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = px.XLSINDy(reference_catalog(system, "kinematic"))
+        model.fit(**data.fit_arguments(forces="tau"))
+    dynamics = model.dynamics_
+    assert dynamics.rigid_parts
+    rng = np.random.default_rng(2)
+    states = np.c_[rng.uniform(-np.pi, np.pi, (100, 5)), rng.uniform(-2, 2, (100, 5))]
+    forces = rng.uniform(-5, 5, (100, 5))
+    with jax.enable_x64(True):
+        fast = model.to_jax()
+        lu = dynamics_function(dynamics, solver="lu")
+        assert fast.solver == "gauss"
+        got = np.asarray(fast(jnp.asarray(states), jnp.asarray(forces)))
+        expected = np.asarray(lu(jnp.asarray(states), jnp.asarray(forces)))
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-10 * np.abs(expected).max())
+    numpy_accelerations = dynamics.accelerations(states[:, :5], states[:, 5:], forces)
+    np.testing.assert_allclose(got[:, 5:], numpy_accelerations, rtol=1e-8, atol=1e-8)
