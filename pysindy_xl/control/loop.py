@@ -42,7 +42,7 @@ PLANNER_SETTINGS = {
     "cart-pole": {"control_dt": 0.02, "substeps": 1, "horizon": 60, "n_samples": 256,
                   "knots": 8},
     "cart-double-pendulum": {"control_dt": 0.02, "substeps": 2, "horizon": 60,
-                             "n_samples": 512, "knots": 10},
+                             "n_samples": 256, "knots": 10},
 }
 
 
