@@ -285,6 +285,61 @@ def planning_timing(system_name: str, catalog: str, seed: int = 0, calls: int = 
                 model.coefficients()))}
 
 
+def to_jax_speed(system_name: str, repeats: int = 5) -> dict:
+    """512 rollouts of 60 RK4 steps (float64) of a kinematic-catalog model: ``to_jax()``, the
+    rigid-body kernel with LU (the path ``to_jax()`` took before), and the model's own
+    mass-matrix and forcing expressions (``MassMatrixDynamics`` of its equations)."""
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    import jax.numpy as jnp
+
+    import pysindy_xl as px
+    from pysindy_xl.export.jax_dynamics import dynamics_function, simulate_batch
+    from pysindy_xl.mujoco import generate_dataset, get_system, reference_catalog
+    system = get_system(system_name)
+    data = generate_dataset(system, n_trajectories=2, duration=4.0, seed=0, noise=0.01,
+                            progress=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = px.XLSINDy(reference_catalog(system, "kinematic"))
+        model.fit(**data.fit_arguments(forces="tau"))
+    dynamics = model.dynamics_
+    n = dynamics.coords.n
+    rng = np.random.default_rng(0)
+    x0 = jnp.asarray(np.c_[rng.uniform(-1, 1, (512, n)), rng.uniform(-1, 1, (512, n))])
+    u = jnp.asarray(rng.uniform(-1, 1, (512, 60, n)))
+    paths = {"to_jax": model.to_jax(), "kernel_lu": dynamics_function(dynamics, solver="lu"),
+             "expressions": dynamics_function(px.MassMatrixDynamics(dynamics.coords,
+                                                                    dynamics.equations))}
+    record, states = {"system": system_name}, {}
+    for name, f in paths.items():
+        states[name] = np.asarray(simulate_batch(f, x0, u, 0.01).states)
+        times = []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            jax.block_until_ready(simulate_batch(f, x0, u, 0.01).states)
+            times.append(time.perf_counter() - start)
+        record[f"{name}_ms"] = 1e3 * min(times)
+    record["max_difference"] = float(np.nanmax(np.abs(states["to_jax"] - states["kernel_lu"])))
+    record["load_average"] = os.getloadavg()[0]
+    return record
+
+
+def to_jax_summary():
+    path = RESULTS / "control_to_jax.jsonl"
+    if not path.exists():
+        return ""
+    records = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    lines = ["| system | to_jax() ms | rigid kernel + LU ms (before) | own expressions ms | "
+             "max difference to the kernel | load average |", "|---|---|---|---|---|---|"]
+    for r in records:
+        lines.append(f"| {r['system']} | {r['to_jax_ms']:.1f} | {r['kernel_lu_ms']:.1f} | "
+                     f"{r['expressions_ms']:.1f} | {r['max_difference']:.1e} | "
+                     f"{r['load_average']:.1f} |")
+    return "\n".join(lines) + "\n"
+
+
 def timing_summary():
     path = RESULTS / "control_timing.jsonl"
     if not path.exists():
@@ -323,7 +378,9 @@ time below is inflated by the load; the `--timing` table measures the planning s
 
 def write_summary(notes: str = "") -> str:
     text = (HEADER + "\n## Swing-up\n\n" + summarize() + "\n## Arm tracking\n\n"
-            + arm_summary() + "\n## Planning step\n\n" + timing_summary() + "\n" + notes)
+            + arm_summary() + "\n## Planning step\n\n" + timing_summary()
+            + "\n## to_jax() of kinematic-catalog models (512 rollouts x 60 RK4 steps, float64)"
+            "\n\n" + to_jax_summary() + "\n" + notes)
     SUMMARY.write_text(text, encoding="utf-8")
     return text
 
@@ -376,11 +433,20 @@ def main(argv=None):
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--summary", action="store_true", help="only print the summary")
     parser.add_argument("--arm", action="store_true", help="run the arm-tracking cases")
+    parser.add_argument("--to-jax", action="store_true",
+                        help="time to_jax() against the rigid-body kernel and the expressions")
     parser.add_argument("--timing", action="store_true",
                         help="time the planning step on identified models")
     args = parser.parse_args(argv)
     os.environ.setdefault("OMP_NUM_THREADS", "1")
     RESULTS.mkdir(parents=True, exist_ok=True)
+    if args.to_jax:
+        for system_name in ("cart-pole", "cart-double-pendulum"):
+            record = to_jax_speed(system_name)
+            print(json.dumps(record), flush=True)
+            with (RESULTS / "control_to_jax.jsonl").open("a") as handle:
+                handle.write(json.dumps(record) + "\n")
+        return 0
     if args.timing:
         for system_name in ("cart-pole", "cart-double-pendulum"):
             for catalog in ("kinematic", "generic"):

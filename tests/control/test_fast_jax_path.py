@@ -43,6 +43,7 @@ def test_to_jax_takes_the_expression_path_and_agrees_with_the_kernel(kinematic_m
     np.testing.assert_allclose(got[:, n:], numpy_accelerations, rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_to_jax_of_an_arm_solves_by_elimination_and_agrees_with_lu():
     """Five joints (past the written-out path): the rigid-body kernel with unrolled elimination
     gives what LU gives, and what the model's NumPy code gives."""
