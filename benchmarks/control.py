@@ -351,7 +351,12 @@ def timing_summary():
     path = RESULTS / "control_timing.jsonl"
     if not path.exists():
         return ""
-    records = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    latest = {}
+    for line in path.read_text().splitlines():
+        if line.strip():
+            record = json.loads(line)
+            latest[(record["system"], record["catalog"])] = record  # the last run of each
+    records = list(latest.values())
     lines = ["| system | catalog | model terms | planning ms: median (p10, p90) | target | "
              "load average |", "|---|---|---|---|---|---|"]
     for r in records:
