@@ -57,6 +57,7 @@ API_MODULES = [
     "pysindy_xl.io",
     "pysindy_xl.data",
     "pysindy_xl.export.gym_env",
+    "pysindy_xl.control",
     "pysindy_xl.expressions",
     "pysindy_xl.mujoco",
     "pysindy_xl.benchmark",

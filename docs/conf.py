@@ -59,6 +59,7 @@ API_MODULES = [
     "pysindy_xl.io",
     "pysindy_xl.data",
     "pysindy_xl.export.gym_env",
+    "pysindy_xl.control",
     "pysindy_xl.expressions",
     "pysindy_xl.mujoco",
     "pysindy_xl.benchmark",
@@ -90,6 +91,7 @@ GALLERY_REQUIREMENTS = {
     "jax_batched.py": ("pysindy_xl.export.jax_dynamics", "simulate_batch"),
     "jax_gradient.py": ("pysindy_xl.export.jax_dynamics", "simulate"),
     "identified_cartpole_controller.py": ("pysindy_xl.export.gym_env", "make_env"),
+    "swing_up_identified.py": ("pysindy_xl.control", "learn_to_control"),
 }
 
 

@@ -552,7 +552,7 @@ def main(argv=None) -> int:
     """
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.command == "benchmark":
+    if args.command in ("benchmark", "control"):
         return args.func(args)
     commands = {"demo": run_demo, "identify": run_identify, "generate": run_generate}
     try:

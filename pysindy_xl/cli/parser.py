@@ -99,8 +99,8 @@ def _add_fit_options(parser, coulomb_law="smooth"):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``pysindy-xl`` command: ``demo``, ``identify``, ``generate``
-    and ``benchmark`` (:doc:`/cli` describes every option).
+    """The argument parser of the ``pysindy-xl`` command: ``demo``, ``identify``, ``generate``,
+    ``benchmark`` and ``control`` (:doc:`/cli` describes every option).
 
     Returns
     -------
@@ -120,6 +120,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     from ..benchmark import add_parser as add_benchmark_parser
     add_benchmark_parser(sub)
+    from ..control.command import add_parser as add_control_parser
+    add_control_parser(sub)
 
     demo = sub.add_parser("demo", help="generate MuJoCo data, identify, validate, plot",
                           description="Generate randomly forced MuJoCo trajectories of a system, "

@@ -1,0 +1,399 @@
+"""The learning loop: explore the plant, identify, control on the model, run, repeat.
+
+1. **Explore**: a random sum of sinusoids on the actuated coordinate plus a model-free
+   energy-pumping term, with a proportional-derivative term that keeps the cart near the
+   centre, clipped to the force limit (:func:`exploration_policy`).
+2. **Identify**: fit :class:`~pysindy_xl.XLSINDy` with the catalog on every episode so far, from
+   positions only (relative Gaussian noise ``noise`` added: std = ``noise`` x each coordinate's
+   standard deviation over the episode) and the applied forces.
+3. **Control**: the receding-horizon controller (:class:`~.mpc.PredictiveController`) plans on
+   the identified model only and acts on the plant from hanging at rest.
+4. Until the task succeeds: the attempt's recording joins the data, and the model is identified
+   again.
+
+MuJoCo is the plant only; every plant second (exploration and attempts) is counted in
+``interaction_s``. The controller reads the plant's state ``[q, qd]`` (full-state feedback,
+without noise); the identification sees only noisy positions and the forces."""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from .catalogs import resolve_catalog
+from .costs import swing_up_cost
+from .discrete import continuous_dynamics, discrete_dynamics
+from .mpc import PredictiveController
+from .plant import MuJoCoPlant
+from .tasks import get_task
+
+__all__ = ["LearningResult", "exploration_policy", "learn_to_control", "noisy_positions"]
+
+#: Seconds of the first exploration per system: with the generic catalog, enough pumped motion
+#: for a model that swings up at the first attempt (cart-pole) or the second (cart double
+#: pendulum, whose catalog has ~150 candidates).
+EXPLORE_S = {"cart-pole": 2.5, "cart-double-pendulum": 4.0}
+
+#: Planner settings per system: control period (s), RK4 steps per period, horizon (periods),
+#: samples, knots.
+PLANNER_SETTINGS = {
+    "cart-pole": {"control_dt": 0.02, "substeps": 1, "horizon": 60, "n_samples": 256,
+                  "knots": 8},
+    "cart-double-pendulum": {"control_dt": 0.02, "substeps": 2, "horizon": 60,
+                             "n_samples": 256, "knots": 10},
+}
+
+
+@dataclass
+class LearningResult:
+    """Outcome of :func:`learn_to_control` (``to_dict`` gives the JSON report).
+
+    Parameters
+    ----------
+    success : bool
+        The last attempt met the task.
+    interaction_s : float
+        Plant seconds in total, every exploration and attempt included.
+    episodes : int
+        Episodes on the plant (explorations and attempts).
+    catalog : str
+        Name of the catalog (or ``"given model"``).
+    force_limit, track_limit : float
+    max_abs_force, max_abs_x, upright_s : float
+        Of the final attempt (:meth:`SwingUpTask.evaluate`).
+    mpc_step_ms : float
+        Median wall time of a sampling-planner step over all attempts (ms; None without one).
+    equations : list of str
+        The final model's equations.
+    history : list of dict
+        Per episode: kind, duration, and the task's scores for attempts.
+    system, task, noise, seed
+        The case.
+    lqr_fraction : float
+        Share of the attempts' control periods under the LQR.
+    final_episode : Episode or None
+        The last attempt on the plant (its true states).
+    model : object
+        The model of the last attempt.
+
+    Examples
+    --------
+    >>> result = LearningResult(True, 6.7, 2, "generic", 10.0, 10.0, 1.5, 1.2, 2.0, 1.8)
+    >>> result.to_dict()["interaction_s"]
+    6.7
+    """
+
+    success: bool
+    interaction_s: float
+    episodes: int
+    catalog: str
+    force_limit: float
+    max_abs_force: float
+    track_limit: float
+    max_abs_x: float
+    upright_s: float
+    mpc_step_ms: float | None
+    equations: list = field(default_factory=list)
+    history: list = field(default_factory=list)
+    system: str = ""
+    task: str = ""
+    noise: float = 0.0
+    seed: int = 0
+    lqr_fraction: float = 0.0
+    final_episode: object = field(default=None, repr=False)
+    model: object = field(default=None, repr=False)
+
+    def to_dict(self) -> dict:
+        """The result as JSON-ready data (without ``final_episode`` and ``model``)."""
+        data = asdict(self)
+        data.pop("final_episode")
+        data.pop("model")
+        return data
+
+
+def exploration_policy(force_limit: float, rng: np.random.Generator, n_components: int = 6,
+                       frequencies=(0.3, 2.5), centering=(4.0, 2.0), linear: int = 0,
+                       pump: float = 0.6, angle: int | None = 1):
+    r"""``policy(state, t) -> u`` (1,) exciting the cart within the limits, model-free.
+
+    .. math:: u = s(t) + \rho\, u_{max} \tanh(-2 \dot\theta \cos\theta)
+              - k_p p - k_d \dot p
+
+    ``s``: a random sum of ``n_components`` sinusoids (amplitude ``0.6 force_limit`` in total,
+    frequencies uniform in ``frequencies``); the second term pumps energy into the pendulum of
+    angle ``angle`` (the cart accelerates against ``theta_dot cos(theta)``, which raises the
+    energy of any pendulum on a cart, whatever its length and mass; ``pump`` = ``rho``, 0 to
+    switch off); the last keeps the linear coordinate ``linear`` near the centre. The plant
+    clips the sum to the force limit.
+
+    Parameters
+    ----------
+    force_limit : float
+        Largest force (N).
+    rng : numpy.random.Generator
+        Draws the sinusoids.
+    n_components : int, default 6
+    frequencies : tuple of float, default (0.3, 2.5)
+        Range of the sinusoids' frequencies (Hz).
+    centering : tuple of float, default (4.0, 2.0)
+        ``k_p``, ``k_d``.
+    linear : int, default 0
+        Index of the pushed linear coordinate.
+    pump : float, default 0.6
+    angle : int or None, default 1
+        Index of the pumped angle (None: no pumping).
+
+    Returns
+    -------
+    callable
+        ``policy(state (2n,), t) -> u (1,)``.
+
+    Examples
+    --------
+    >>> policy = exploration_policy(10.0, np.random.default_rng(0))
+    >>> policy(np.zeros(4), 0.0).shape
+    (1,)
+    """
+    freq = rng.uniform(*frequencies, n_components)
+    phase = rng.uniform(0.0, 2 * np.pi, n_components)
+    weight = rng.uniform(0.5, 1.0, n_components)
+    weight = 0.6 * force_limit * weight / weight.sum()
+    kp, kd = centering
+
+    def policy(state, t):
+        n = len(state) // 2
+        signal = float(weight @ np.sin(2 * np.pi * freq * t + phase))
+        if angle is not None and pump:
+            signal += pump * force_limit * np.tanh(-2.0 * state[n + angle]
+                                                   * np.cos(state[angle]))
+        return np.array([signal - kp * state[linear] - kd * state[n + linear]])
+
+    return policy
+
+
+def noisy_positions(episode, noise: float, rng: np.random.Generator) -> np.ndarray:
+    """Positions with relative Gaussian noise, as a position sensor records them.
+
+    Parameters
+    ----------
+    episode : Episode
+        Its ``q`` (N, n).
+    noise : float
+        Std of the noise as a fraction of each column's standard deviation.
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    numpy.ndarray
+        Noisy positions (N, n).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> episode = SimpleNamespace(q=np.c_[np.linspace(0, 1, 5), np.zeros(5)])
+    >>> noisy_positions(episode, 0.0, np.random.default_rng(0))[:, 0].tolist()
+    [0.0, 0.25, 0.5, 0.75, 1.0]
+    """
+    q = episode.q
+    return q + noise * q.std(axis=0) * rng.standard_normal(q.shape)
+
+
+def _identify(library_factory, system, data):
+    import pysindy_xl as px
+    q, t, u = zip(*data, strict=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = px.XLSINDy(library_factory(system)).fit(list(q), t=list(t), u=list(u))
+    return model
+
+
+def _usable(f, system, goal) -> bool:
+    """Whether the model's accelerations are finite and its mass matrix acts as positive at the
+    start, the goal and random states (a non-physical fit fails here)."""
+    import jax.numpy as jnp
+    rng = np.random.default_rng(0)
+    n = system.n
+    states = np.concatenate([np.zeros((1, 2 * n)), goal[None],
+                             np.c_[rng.uniform(-1, 1, (32, n)) * 2,
+                                   rng.uniform(-2, 2, (32, n))]])
+    probe = np.zeros((len(states), n))
+    probe[:, 0] = 1.0
+    base = np.asarray(f(jnp.asarray(states), jnp.zeros((len(states), n))))
+    pushed = np.asarray(f(jnp.asarray(states), jnp.asarray(probe)))
+    if not (np.all(np.isfinite(base)) and np.all(np.isfinite(pushed))):
+        return False
+    # a push on the cart must accelerate it forward (M^-1 positive definite => (M^-1)_00 > 0)
+    return bool(np.all(pushed[:, n] - base[:, n] > 0))
+
+
+def _equations(model) -> list[str]:
+    try:
+        return [str(e) for e in model.equations()]
+    except (AttributeError, TypeError, ValueError):
+        try:
+            return [str(e) for e in model.equations]
+        except (AttributeError, TypeError):
+            return []
+
+
+def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog="generic",
+                     noise: float = 0.01, seed: int = 0, force_limit: float | None = None,
+                     track_limit: float = 1.5, explore_s: float | None = None,
+                     max_episodes: int = 6,
+                     max_interaction_s: float = 30.0, model=None, identify=None,
+                     planner: dict | None = None, check_model: bool = True,
+                     log=None) -> LearningResult:
+    """Learn to perform ``task`` on the MuJoCo ``system`` from its data alone (module docstring).
+
+    Parameters
+    ----------
+    system : str, default "cart-pole"
+        ``"cart-pole"`` or ``"cart-double-pendulum"``.
+    task : {"swing-up"}
+    catalog : str or callable, default "generic"
+        ``"generic"`` (coordinates and kinds only), ``"kinematic"`` (from the MJCF) or a factory
+        ``catalog(system) -> library`` (:mod:`pysindy_xl.control.catalogs`).
+    noise : float, default 0.01
+        Relative noise on the recorded positions.
+    seed : int, default 0
+        Seed of the exploration signal, the noise, the start perturbation and the planner.
+    force_limit : float, optional
+        Default from :func:`~pysindy_xl.control.tasks.get_task`.
+    track_limit : float, default 1.5
+    explore_s : float, optional
+        Seconds of the first exploration (and of each further one when a fit is unusable);
+        default 2.5 for the cart-pole, 4.0 for the cart double pendulum.
+    max_episodes : int, default 6
+        Most episodes on the plant.
+    max_interaction_s : float, default 30.0
+        Most plant seconds.
+    model : object, optional
+        A fixed model to control with (for instance the true equations as a
+        :class:`~pysindy_xl.MassMatrixDynamics`): no exploration, no identification.
+    identify : callable, optional
+        ``identify(system, data) -> model`` replacing the XLSINDy fit, ``data`` a list of
+        ``(q_noisy (N, n), t (N,), tau (N, n))``; the model gives ``to_jax()`` or is a JAX
+        function ``f(state, tau)`` with ``n_coordinates``.
+    planner : dict, optional
+        Overrides of the planner settings (``control_dt``, ``substeps``, ``horizon``,
+        ``n_samples``, ``knots``, ``noise``, ``temperature``, ``iterations``, ``lqr_region``).
+    check_model : bool, default True
+        Refuse an identified model whose push on the cart does not accelerate it forward at
+        the start, the goal and random states (then explore again); False lets every model
+        try.
+    log : callable, optional
+        ``log(message)`` for progress (for instance to stderr).
+
+    Returns
+    -------
+    LearningResult
+
+    Raises
+    ------
+    ValueError
+        For an unknown system, task or catalog, or limits that are not positive numbers.
+    TypeError
+        For a ``model`` that gives no accelerations.
+    """
+    from ..mujoco import get_system
+    the_task = get_task(system, task, force_limit=force_limit, track_limit=track_limit)
+    plant_system = get_system(system)
+    if not (np.isfinite(noise) and noise >= 0):
+        raise ValueError(f"noise: expected a relative level >= 0, got {noise!r}")
+    if explore_s is None:
+        explore_s = EXPLORE_S.get(system, 2.0)
+    if not (np.isfinite(explore_s) and explore_s > 0):
+        raise ValueError(f"explore_s: expected a positive number of seconds, got {explore_s!r}")
+    catalog_name, factory = ("given model", None) if model is not None else \
+        ("custom identification", None) if identify is not None else resolve_catalog(catalog)
+    settings = dict(PLANNER_SETTINGS.get(system, PLANNER_SETTINGS["cart-pole"]))
+    settings.update(planner or {})
+    control_dt = settings.pop("control_dt")
+    substeps = settings.pop("substeps")
+    horizon = settings.pop("horizon")
+    lqr_region = settings.pop("lqr_region", 0.25)
+    say = log or (lambda message: None)
+    rng = np.random.default_rng(seed)
+    plant = MuJoCoPlant(plant_system, the_task.actuated, the_task.force_limit, control_dt)
+    angles = the_task.angles(plant_system)
+    goal = the_task.goal(plant_system)
+    cost = swing_up_cost(plant_system.n, angles, track_limit=the_task.track_limit,
+                         force_limit=the_task.force_limit)
+    data, history, planning_ms, modes = [], [], [], []
+    scores = {"success": False, "upright_s": 0.0, "max_abs_x": 0.0, "max_abs_force": 0.0}
+    current = model
+    n_episodes = 0
+    episode = None
+
+    def record(episode):
+        q = noisy_positions(episode, noise, rng)
+        data.append((q, episode.t, episode.tau))
+
+    def explore():
+        plant.reset(np.r_[0.0, rng.uniform(-0.05, 0.05, plant.n - 1)])
+        episode = plant.run(exploration_policy(the_task.force_limit, rng), explore_s,
+                            stop=lambda s, t: "track" if the_task.outside_track(
+                                s, plant_system)[0] else None)
+        record(episode)
+        history.append({"kind": "explore", "duration_s": episode.duration})
+        say(f"explore: {episode.duration:.2f} s on the plant (total {plant.interaction_s:.2f} s)")
+
+    while n_episodes < max_episodes and plant.interaction_s < max_interaction_s:
+        if model is None:
+            if not data:
+                explore()
+                n_episodes += 1
+                continue
+            start = time.perf_counter()
+            try:
+                current = (identify(plant_system, data) if identify is not None
+                           else _identify(factory, plant_system, data))
+                f = continuous_dynamics(current)
+                usable = _usable(f, plant_system, goal) if check_model else True
+            except (ValueError, TypeError, ArithmeticError, np.linalg.LinAlgError) as error:
+                say(f"identification failed ({error})")
+                usable = False
+            say(f"identify: {sum(len(d[1]) for d in data)} samples, "
+                f"{time.perf_counter() - start:.1f} s, usable: {usable}")
+            if not usable:
+                explore()
+                n_episodes += 1
+                continue
+        else:
+            f = continuous_dynamics(current)
+        step = discrete_dynamics(f, control_dt, plant.actuation, substeps)
+        controller = PredictiveController(step, cost, the_task.force_limit, horizon, goal=goal,
+                                          angles=angles, lqr_region=lqr_region,
+                                          seed=seed + n_episodes, **settings)
+        plant.reset(np.r_[0.0, rng.uniform(-0.05, 0.05, plant.n - 1)])
+        episode = plant.run(controller, the_task.max_duration,
+                            stop=the_task.stop_rule(plant_system, control_dt))
+        n_episodes += 1
+        scores = the_task.evaluate(episode, plant_system)
+        planning_ms += controller.planning_ms
+        modes += controller.modes
+        history.append({"kind": "attempt", "duration_s": episode.duration,
+                        "stopped": episode.stopped, **scores,
+                        "lqr": controller.lqr is not None})
+        say(f"attempt: {episode.duration:.2f} s, {episode.stopped}, upright "
+            f"{scores['upright_s']:.2f} s, |x| <= {scores['max_abs_x']:.2f} m (total "
+            f"{plant.interaction_s:.2f} s)")
+        if scores["success"]:
+            break
+        if model is not None:
+            continue
+        record(episode)
+    return LearningResult(
+        success=bool(scores["success"]), interaction_s=float(plant.interaction_s),
+        episodes=n_episodes, catalog=catalog_name, force_limit=float(the_task.force_limit),
+        max_abs_force=scores["max_abs_force"], track_limit=float(the_task.track_limit),
+        max_abs_x=scores["max_abs_x"], upright_s=scores["upright_s"],
+        mpc_step_ms=float(np.median(planning_ms)) if planning_ms else None,
+        equations=_equations(current) if current is not None else [], history=history,
+        system=system, task=task, noise=float(noise), seed=int(seed),
+        lqr_fraction=float(np.mean([m == "lqr" for m in modes])) if modes else 0.0,
+        final_episode=episode if history and history[-1]["kind"] == "attempt" else None,
+        model=current)
