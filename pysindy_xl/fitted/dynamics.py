@@ -341,7 +341,7 @@ class DynamicsMixin:
         from ..io import save_model
         save_model(self, path)
 
-    def to_mjcf(self, path, *, template) -> dict:
+    def to_mjcf(self, path, template) -> dict:
         r"""Write the identified robot as an MJCF file that MuJoCo simulates.
 
         For a model fitted with the kinematic catalog of an MJCF (or URDF) system
@@ -364,7 +364,7 @@ class DynamicsMixin:
         path : str or path-like
             The MJCF file to write.
         template : str, path-like or MJCFSystem
-            Required, keyword only: the MJCF (path, XML text or
+            Required (positional or keyword): the MJCF (path, XML text or
             :class:`~pysindy_xl.mujoco.MJCFSystem`) whose kinematic tree the model was
             identified on; it places the inertials and supplies the rest of the file.
 
