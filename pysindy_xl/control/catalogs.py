@@ -57,6 +57,7 @@ def kinematic_catalog_of(system):
     Parameters
     ----------
     system : MuJoCoSystem or str
+        The system or its registry name (:func:`pysindy_xl.mujoco.get_system`).
 
     Returns
     -------

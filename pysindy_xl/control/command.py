@@ -19,9 +19,21 @@ _SYSTEMS = ("cart-pole", "cart-double-pendulum")
 
 
 def add_parser(subparsers):
-    """Register ``control`` on argparse subparsers; the namespace's ``func(args)`` runs it and
-    returns the exit status.
+    """Register the ``control`` sub-command on argparse subparsers.
 
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        What ``ArgumentParser.add_subparsers`` returns.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The ``control`` parser; the parsed namespace's ``func(args)`` (:func:`run_control`)
+        runs it and returns the exit status.
+
+    Examples
+    --------
     >>> import argparse
     >>> parser = argparse.ArgumentParser()
     >>> _ = add_parser(parser.add_subparsers(dest="command"))
@@ -63,8 +75,36 @@ def add_parser(subparsers):
 
 
 def run_control(args) -> int:
-    """Run ``pysindy-xl control`` with parsed arguments; 0 when the task succeeded, 3 when it
-    did not, 1 on an error (printed on stderr)."""
+    """Run ``pysindy-xl control`` with parsed arguments.
+
+    The JSON report (:meth:`~pysindy_xl.control.loop.LearningResult.to_dict`) goes to
+    ``args.out`` (stdout without it), progress to stderr unless ``args.quiet``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed by the parser of :func:`add_parser`: ``system``, ``task``, ``seed``,
+        ``force_limit``, ``track_limit``, ``noise``, ``catalog``, ``explore``,
+        ``max_episodes``, ``out`` and ``quiet``.
+
+    Returns
+    -------
+    int
+        Exit status: 0 when the task succeeded, 3 when it did not, 1 on an error in the
+        arguments (printed on stderr).
+
+    Examples
+    --------
+    >>> import argparse
+    >>> parser = argparse.ArgumentParser()
+    >>> _ = add_parser(parser.add_subparsers(dest="command"))
+    >>> args = parser.parse_args(["control", "cart-pole", "--force-limit", "8", "--quiet"])
+    >>> args.func is run_control
+    True
+    >>> args.task = "balance"  # an unknown task: status 1
+    >>> run_control(args)  # the message goes to stderr
+    1
+    """
     from .loop import learn_to_control
 
     def log(message):

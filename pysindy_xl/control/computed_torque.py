@@ -102,7 +102,18 @@ class ComputedTorque:
             self._table = (times, self.inverse_dynamics(q_r, qd_r, qdd_r))
 
     def inverse_dynamics(self, q, qd, qdd) -> np.ndarray:
-        """``M(q, qd) qdd - f(q, qd, 0)`` of the model at states (N, n) (zeros without one)."""
+        """The model's forces of a motion, ``M(q, qd) qdd - f(q, qd, 0)``.
+
+        Parameters
+        ----------
+        q, qd, qdd : array (N, n) or (n,)
+            Positions, velocities and accelerations.
+
+        Returns
+        -------
+        numpy.ndarray
+            Generalized forces (N, n); zeros without a model.
+        """
         q, qd, qdd = (np.atleast_2d(np.asarray(a, dtype=float)) for a in (q, qd, qdd))
         if self.model is None:
             return np.zeros_like(q)
@@ -113,7 +124,20 @@ class ComputedTorque:
         return np.einsum("sij,sj->si", mass, qdd) - free
 
     def __call__(self, state, t) -> np.ndarray:
-        """The forces (n,) at the measured ``state`` ``[q, qd]`` and time ``t``."""
+        """The forces at the measured state and time (module docstring for the law).
+
+        Parameters
+        ----------
+        state : array (2n,)
+            The measured ``[q, qd]``.
+        t : float
+            Time (s) at which the reference is read.
+
+        Returns
+        -------
+        numpy.ndarray
+            Generalized forces (n,), clipped to ``force_limit`` when it is given.
+        """
         state = np.asarray(state, dtype=float)
         if state.shape != (2 * self.n,):
             raise ValueError(f"state: expected shape ({2 * self.n},), got {state.shape}")

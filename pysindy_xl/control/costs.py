@@ -167,8 +167,20 @@ def swing_up_cost(n: int, angles, upright=None, track_limit: float | None = None
         ``p_max`` of the other positions (no wall when None).
     force_limit : float or array (m,), optional
         Scale of the controls in the control term (default 1).
-    angle_weight, position_weight, velocity_weight, control_weight, terminal_factor : float
-    wall_weight, wall_margin : float
+    angle_weight : float, default 10.0
+        ``w_theta``, weight of the angles' distance from upright.
+    position_weight : float, default 1.0
+        ``w_x``, weight of the other positions.
+    velocity_weight : float, default 0.1
+        ``w_v``, weight of the velocities.
+    control_weight : float, default 1e-3
+        ``w_u``, weight of the scaled controls.
+    terminal_factor : float, default 10.0
+        Factor of the state part in the terminal cost.
+    wall_weight : float, default 1e3
+        ``w_wall``, weight of the track's walls.
+    wall_margin : float, default 0.2
+        ``delta``: the walls start this far inside the track (m).
 
     Returns
     -------

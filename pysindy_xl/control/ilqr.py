@@ -30,7 +30,9 @@ class ILQRSolution(NamedTuple):
     Parameters
     ----------
     states : jax.Array (H + 1, 2n)
+        States of the final trajectory, ``x_0`` included.
     controls : jax.Array (H, m)
+        Controls of the final trajectory (within ``control_limit`` when given).
     gains : jax.Array (H, m, 2n)
         Feedback ``K_k`` of the final trajectory: ``u = u_k + K_k (x - x_k)``.
     cost : jax.Array

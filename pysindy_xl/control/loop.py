@@ -61,22 +61,34 @@ class LearningResult:
         Episodes on the plant (explorations and attempts).
     catalog : str
         Name of the catalog (or ``"given model"``).
-    force_limit, track_limit : float
-    max_abs_force, max_abs_x, upright_s : float
-        Of the final attempt (:meth:`SwingUpTask.evaluate`).
-    mpc_step_ms : float
+    force_limit : float
+        Largest force on the cart (N).
+    max_abs_force : float
+        Largest force of the final attempt (N; :meth:`SwingUpTask.evaluate`).
+    track_limit : float
+        Half length of the track (m).
+    max_abs_x, upright_s : float
+        Of the final attempt (:meth:`SwingUpTask.evaluate`): largest distance of the cart from
+        the centre (m), longest time upright in a row (s).
+    mpc_step_ms : float or None
         Median wall time of a sampling-planner step over all attempts (ms; None without one).
-    equations : list of str
+    equations : list of str, default []
         The final model's equations.
-    history : list of dict
+    history : list of dict, default []
         Per episode: kind, duration, and the task's scores for attempts.
-    system, task, noise, seed
-        The case.
-    lqr_fraction : float
+    system : str, default ""
+        Registry name of the system.
+    task : str, default ""
+        Name of the task.
+    noise : float, default 0.0
+        Relative noise on the recorded positions.
+    seed : int, default 0
+        Seed of the run.
+    lqr_fraction : float, default 0.0
         Share of the attempts' control periods under the LQR.
-    final_episode : Episode or None
+    final_episode : Episode or None, default None
         The last attempt on the plant (its true states).
-    model : object
+    model : object, default None
         The model of the last attempt.
 
     Examples
@@ -107,7 +119,21 @@ class LearningResult:
     model: object = field(default=None, repr=False)
 
     def to_dict(self) -> dict:
-        """The result as JSON-ready data (without ``final_episode`` and ``model``)."""
+        """The result as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            Every field by name except ``final_episode`` and ``model``; ``history`` as a
+            list of dicts.
+
+        Examples
+        --------
+        >>> result = LearningResult(False, 2.5, 1, "generic", 10.0, 0.0, 1.5, 0.0, 0.0, None)
+        >>> data = result.to_dict()
+        >>> data["episodes"], "model" in data, "final_episode" in data
+        (1, False, False)
+        """
         data = asdict(self)
         data.pop("final_episode")
         data.pop("model")
@@ -136,6 +162,7 @@ def exploration_policy(force_limit: float, rng: np.random.Generator, n_component
     rng : numpy.random.Generator
         Draws the sinusoids.
     n_components : int, default 6
+        Number of sinusoids.
     frequencies : tuple of float, default (0.3, 2.5)
         Range of the sinusoids' frequencies (Hz).
     centering : tuple of float, default (4.0, 2.0)
@@ -143,6 +170,7 @@ def exploration_policy(force_limit: float, rng: np.random.Generator, n_component
     linear : int, default 0
         Index of the pushed linear coordinate.
     pump : float, default 0.6
+        Weight ``rho`` of the energy pumping, as a fraction of the force limit (0: none).
     angle : int or None, default 1
         Index of the pumped angle (None: no pumping).
 
@@ -184,6 +212,7 @@ def noisy_positions(episode, noise: float, rng: np.random.Generator) -> np.ndarr
     noise : float
         Std of the noise as a fraction of each column's standard deviation.
     rng : numpy.random.Generator
+        Draws the noise.
 
     Returns
     -------
@@ -252,7 +281,8 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
     ----------
     system : str, default "cart-pole"
         ``"cart-pole"`` or ``"cart-double-pendulum"``.
-    task : {"swing-up"}
+    task : {"swing-up"}, default "swing-up"
+        Name of the task (:func:`~pysindy_xl.control.tasks.get_task`).
     catalog : str or callable, default "generic"
         ``"generic"`` (coordinates and kinds only), ``"kinematic"`` (from the MJCF) or a factory
         ``catalog(system) -> library`` (:mod:`pysindy_xl.control.catalogs`).
@@ -263,6 +293,7 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
     force_limit : float, optional
         Default from :func:`~pysindy_xl.control.tasks.get_task`.
     track_limit : float, default 1.5
+        Half length of the track (m).
     explore_s : float, optional
         Seconds of the first exploration (and of each further one when a fit is unusable);
         default 2.5 for the cart-pole, 4.0 for the cart double pendulum.
@@ -297,6 +328,26 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
         For an unknown system, task or catalog, or limits that are not positive numbers.
     TypeError
         For a ``model`` that gives no accelerations.
+
+    Examples
+    --------
+    One episode, the first exploration, counted on the plant: 0.5 s of excitation within the
+    force limit, nothing identified yet, no attempt.
+
+    >>> result = learn_to_control("cart-pole", explore_s=0.5, max_episodes=1, seed=0)
+    >>> [h["kind"] for h in result.history], result.episodes, round(result.interaction_s, 3)
+    (['explore'], 1, 0.5)
+    >>> result.success, result.final_episode is None
+    (False, True)
+
+    The whole loop (explore, identify with the generic catalog, swing up on the identified
+    model) takes several seconds to minutes, not run here: an identification, the compilation
+    of the planner, and up to 300 planned control periods per attempt. On the cart-pole it
+    succeeds at the first attempt, after 2.5 s of exploration:
+
+    >>> result = learn_to_control("cart-pole", noise=0.01, seed=0)  # doctest: +SKIP
+    >>> result.success, result.episodes, result.max_abs_force <= 10.0  # doctest: +SKIP
+    (True, 2, True)
     """
     from ..mujoco import get_system
     the_task = get_task(system, task, force_limit=force_limit, track_limit=track_limit)

@@ -51,7 +51,9 @@ def linearize(step, x, u) -> tuple[np.ndarray, np.ndarray]:
     step : callable
         ``F(x (2n,), u (m,)) -> x (2n,)``, pure JAX.
     x : array (2n,)
+        State of the linearization.
     u : array (m,)
+        Control of the linearization.
 
     Returns
     -------
@@ -78,7 +80,9 @@ def discrete_lqr(a, b, state_weights, control_weights) -> LQRGain:
     Parameters
     ----------
     a : array (N, N)
+        State matrix ``A``.
     b : array (N, m)
+        Input matrix ``B``.
     state_weights : array (N, N) or (N,)
         ``Q`` or its diagonal.
     control_weights : array (m, m) or (m,)

@@ -119,13 +119,38 @@ class PredictiveController:
         self._in_lqr = False
 
     def error(self, state) -> np.ndarray:
-        """``state - goal`` with the angles wrapped."""
+        """The error to the goal, ``state - goal`` with the angles wrapped to ``[-pi, pi)``.
+
+        Parameters
+        ----------
+        state : array (2n,)
+            The plant's state ``[q, qd]``.
+
+        Returns
+        -------
+        numpy.ndarray
+            The error (2n,).
+        """
         mask = np.zeros(self.goal.size, dtype=bool)
         mask[list(self.angles)] = True
         return np.asarray(angle_error(np.asarray(state, float), self.goal, mask))
 
     def __call__(self, state, t=None) -> np.ndarray:
-        """The command (m,) for the plant's state ``state`` (2n,) (``t`` unused)."""
+        """The command for the plant's state: the LQR law inside its region, else the first
+        command of a new plan.
+
+        Parameters
+        ----------
+        state : array (2n,)
+            The plant's state ``[q, qd]``.
+        t : float, optional
+            Time (s); unused (the signature of a policy of :meth:`MuJoCoPlant.run`).
+
+        Returns
+        -------
+        numpy.ndarray
+            The command (m,), within ``control_limit``.
+        """
         state = np.asarray(state, dtype=float)
         if self.lqr is not None:
             e = self.error(state)

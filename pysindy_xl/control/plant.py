@@ -113,12 +113,26 @@ class MuJoCoPlant:
         return self.system.n
 
     def state(self) -> np.ndarray:
-        """Current ``[q, qd]`` (2n,) in the generalized coordinates."""
+        """The plant's current state.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``[q, qd]`` (2n,) in the generalized coordinates.
+        """
         q, qd, _ = self.system.to_generalized(self.data.qpos, self.data.qvel)
         return np.concatenate([q, qd])
 
     def reset(self, q=None, qd=None) -> None:
-        """Put the plant at ``q``, ``qd`` (default zero: hanging at rest)."""
+        """Put the plant at a state (MuJoCo's data reset, then set).
+
+        Parameters
+        ----------
+        q : array (n,), optional
+            Positions in the generalized coordinates; default zero (hanging).
+        qd : array (n,), optional
+            Velocities; default zero (at rest).
+        """
         self._mujoco.mj_resetData(self.model, self.data)
         n = self.n
         q = np.zeros(n) if q is None else np.asarray(q, dtype=float)

@@ -66,7 +66,9 @@ def rollout(step, x0, controls):
     step : callable
         ``step(x (2n,), u (m,)) -> x (2n,)``.
     x0 : array (2n,)
+        Initial state.
     controls : array (H, m)
+        Controls of the ``H`` steps.
 
     Returns
     -------
@@ -96,8 +98,11 @@ def trajectory_cost(step, cost, x0, controls):
     step : callable
         ``step(x, u) -> x``.
     cost : Cost
+        Running and terminal cost (:mod:`pysindy_xl.control.costs`).
     x0 : array (2n,)
+        Initial state.
     controls : array (H, m)
+        Controls of the ``H`` steps.
 
     Returns
     -------

@@ -66,31 +66,104 @@ class SwingUpTask:
                 raise ValueError(f"{attribute}: expected a positive number, got {value!r}")
 
     def angles(self, system) -> list[int]:
-        """Indices of the pendulum angles of ``system`` (a :class:`MuJoCoSystem`)."""
+        """Indices of the pendulum angles of ``system``.
+
+        Parameters
+        ----------
+        system : MuJoCoSystem
+            The plant's system (:func:`pysindy_xl.mujoco.get_system`).
+
+        Returns
+        -------
+        list of int
+            Indices of its angle coordinates.
+        """
         return list(system.angle_coordinates)
 
     def goal(self, system) -> np.ndarray:
-        """Goal state (2n,): angles at ``pi`` (upright), the rest zero."""
+        """Goal state: every angle at ``pi`` (upright), the rest zero.
+
+        Parameters
+        ----------
+        system : MuJoCoSystem
+            The plant's system, with ``n`` coordinates.
+
+        Returns
+        -------
+        numpy.ndarray
+            The goal ``[q, qd]`` (2n,).
+        """
         goal = np.zeros(2 * system.n)
         goal[self.angles(system)] = np.pi
         return goal
 
     def upright(self, states, system) -> np.ndarray:
-        """Whether each state (N, 2n) has every angle within ``tolerance`` of upright."""
+        """Whether each state has every angle within ``tolerance`` of upright.
+
+        Parameters
+        ----------
+        states : array (N, 2n) or (2n,)
+            States ``[q, qd]``.
+        system : MuJoCoSystem
+            The plant's system.
+
+        Returns
+        -------
+        numpy.ndarray
+            Booleans (N,): the wrapped distance of every angle from ``pi`` is at most
+            ``tolerance``.
+        """
         states = np.atleast_2d(states)
         theta = states[:, self.angles(system)]
         error = np.abs((theta - np.pi + np.pi) % (2 * np.pi) - np.pi)
         return np.all(error <= self.tolerance, axis=1)
 
     def outside_track(self, states, system) -> np.ndarray:
-        """Whether each state (N, 2n) has a linear coordinate beyond ``track_limit``."""
+        """Whether each state has a linear coordinate beyond ``track_limit``.
+
+        Parameters
+        ----------
+        states : array (N, 2n) or (2n,)
+            States ``[q, qd]``.
+        system : MuJoCoSystem
+            The plant's system.
+
+        Returns
+        -------
+        numpy.ndarray
+            Booleans (N,): some non-angle coordinate has ``|q_i| > track_limit``.
+        """
         states = np.atleast_2d(states)
         linear = [i for i in range(system.n) if i not in self.angles(system)]
         return np.any(np.abs(states[:, linear]) > self.track_limit, axis=1)
 
     def stop_rule(self, system, control_dt: float):
-        """``stop(state, t)`` for :meth:`MuJoCoPlant.run`: ``"success"`` after ``hold_s``
-        upright in a row, ``"track"`` when the cart leaves the track."""
+        """The stop rule of an attempt, for :meth:`MuJoCoPlant.run`.
+
+        Parameters
+        ----------
+        system : MuJoCoSystem
+            The plant's system.
+        control_dt : float
+            Control period (s) of the plant; unused by the swing-up rule, which reads the
+            time ``t`` it is called with.
+
+        Returns
+        -------
+        callable
+            ``stop(state (2n,), t) -> str or None``: ``"success"`` after ``hold_s`` seconds
+            upright in a row, ``"track"`` when the cart leaves the track, None otherwise. It
+            keeps the start of the current upright run, so use a new one per episode.
+
+        Examples
+        --------
+        >>> from pysindy_xl.mujoco import get_system
+        >>> system = get_system("cart-pole")
+        >>> stop = SwingUpTask("cart-pole", force_limit=10.0, hold_s=0.5).stop_rule(system, 0.1)
+        >>> up = np.array([0.0, np.pi, 0.0, 0.0])
+        >>> [stop(up, t) for t in (0.0, 0.3, 0.5)], stop(np.array([2.0, 0.0, 0.0, 0.0]), 0.6)
+        ([None, None, 'success'], 'track')
+        """
         held = {"since": None}
 
         def stop(state, t):
@@ -109,6 +182,13 @@ class SwingUpTask:
 
     def evaluate(self, episode, system) -> dict:
         """Score an episode from its true states at every MuJoCo step.
+
+        Parameters
+        ----------
+        episode : Episode
+            A run on the plant (:meth:`MuJoCoPlant.run`).
+        system : MuJoCoSystem
+            The plant's system.
 
         Returns
         -------
@@ -142,10 +222,13 @@ def get_task(system: str, task: str = "swing-up", force_limit: float | None = No
     ----------
     system : str
         ``"cart-pole"`` or ``"cart-double-pendulum"``.
-    task : {"swing-up"}
+    task : {"swing-up"}, default "swing-up"
+        Name of the task (:data:`TASKS`).
     force_limit : float, optional
-        Default 10 N for the cart-pole, 20 N for the cart double pendulum.
+        Largest force on the cart (N); default 10 N for the cart-pole, 20 N for the cart
+        double pendulum.
     track_limit : float, default 1.5
+        Half length of the track (m).
     **options
         Further fields of :class:`SwingUpTask`.
 
