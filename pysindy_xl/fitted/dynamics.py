@@ -120,7 +120,9 @@ class DynamicsMixin:
         >>> c = px.Coordinates(["x"])
         >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
         >>> t = np.linspace(0, 5, 501)
-        >>> x, xd, xdd = np.sin(t)[:, None], np.cos(t)[:, None], -np.sin(t)[:, None]
+        >>> x = (np.sin(t) + 0.5 * np.sin(3 * t))[:, None]  # two frequencies: mass and stiffness apart
+        >>> xd = (np.cos(t) + 1.5 * np.cos(3 * t))[:, None]
+        >>> xdd = (-np.sin(t) - 4.5 * np.sin(3 * t))[:, None]
         >>> model = px.XLSINDy(lib).fit(x, t, x_dot=xd, x_ddot=xdd, u=2 * xdd + 3 * x)
         >>> bool(np.allclose(model.predict_forces(x, xd, xdd), 2 * xdd + 3 * x))
         True
