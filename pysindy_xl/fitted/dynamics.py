@@ -120,7 +120,7 @@ class DynamicsMixin:
         >>> c = px.Coordinates(["x"])
         >>> lib = px.LagrangeLibrary(c, [c.qd[0] ** 2, c.q[0] ** 2])
         >>> t = np.linspace(0, 5, 501)
-        >>> x = (np.sin(t) + 0.5 * np.sin(3 * t))[:, None]  # two frequencies: mass and stiffness apart
+        >>> x = (np.sin(t) + 0.5 * np.sin(3 * t))[:, None]  # two frequencies
         >>> xd = (np.cos(t) + 1.5 * np.cos(3 * t))[:, None]
         >>> xdd = (-np.sin(t) - 4.5 * np.sin(3 * t))[:, None]
         >>> model = px.XLSINDy(lib).fit(x, t, x_dot=xd, x_ddot=xdd, u=2 * xdd + 3 * x)
