@@ -1,0 +1,407 @@
+"""Growing an automatic catalog on data: start small, grow while a held-out criterion improves.
+
+The criterion is the relative RMS error, on samples the fit never saw, of the generalized
+forces the model needs to move as recorded (inverse dynamics; data with forces), or of the
+accelerations it predicts (unforced data). Velocities and accelerations for scoring come from
+one smoothing of each whole run (:func:`~pysindy_xl.held_out.scoring_derivatives`), the same for
+every candidate. Two blocks of each run are held out:
+
+- the last of ``n_blocks`` contiguous time blocks (**time**: how the model predicts later);
+- the other block reaching farthest from the run's median state (**region**: how it
+  extrapolates to states it did not see). An approximation fitted along the trajectories (a
+  cosine standing in for ``theta^2``) fails there, where the right structure does not.
+
+The criterion is the RMS of the two errors. From the smallest catalog (constant kinetic
+coefficients, quadratic potentials of the linear coordinates, sines and cosines of the angles,
+viscous friction), each move of :data:`MOVES` is tried in turn; a move is kept when it lowers
+the criterion by the fraction ``tolerance`` at least, the degree moves repeat while they do, and
+the growth stops when a whole pass keeps nothing. Catalogs over ``max_terms`` are not tried
+(reported as the ceiling). The chosen catalog is then fitted on all the data.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+import warnings
+
+import numpy as np
+
+from .._inputs import aligned, as_list
+from .._validation import check_option
+from .automatic import AutomaticCatalog, coordinate_kinds
+
+__all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "check_growth_data"]
+
+#: The moves of the growth, in the order they are tried.
+MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
+         "coulomb", "splines")
+
+_START = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
+          "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
+          "splines": None}
+_LIMITS = {"degree": 4, "trig_degree": 3, "angle_degree": 4}
+_SPLINES = 8  # B-splines per coordinate when the family is added
+
+
+@dataclasses.dataclass
+class GrowthStep:
+    """One tried catalog: the move, its size, its held-out errors and the verdict.
+
+    Attributes
+    ----------
+    move : str
+        ``"start"`` or one of :data:`MOVES`.
+    description : str
+        :meth:`AutomaticCatalog.describe` of the catalog.
+    terms : int
+        Candidate terms (forces left out).
+    active : int
+        Terms the fit kept.
+    time_error, region_error, criterion : float
+        Held-out relative errors on the time and region blocks, and their RMS (inf when the
+        fit failed or exceeded the ceiling).
+    chosen : bool
+        Whether the growth kept this catalog (the last one kept is the result).
+    note : str
+        Why a step was not evaluated or failed.
+    seconds : float
+    """
+
+    move: str
+    description: str
+    terms: int
+    active: int
+    time_error: float
+    region_error: float
+    criterion: float
+    chosen: bool
+    note: str = ""
+    seconds: float = 0.0
+
+
+@dataclasses.dataclass
+class GrowthResult:
+    """What :func:`grow_catalog` found.
+
+    Attributes
+    ----------
+    model : XLSINDy
+        The chosen catalog fitted on all the data.
+    catalog : AutomaticCatalog
+    steps : list of GrowthStep
+    criterion : str
+        ``"forces"`` or ``"accelerations"``: what the held-out errors measure.
+    held_out_error : float
+        The chosen catalog's criterion.
+    """
+
+    model: object
+    catalog: AutomaticCatalog
+    steps: list
+    criterion: str
+    held_out_error: float
+
+    def table(self) -> str:
+        """The growth path as a plain-text table (one row per tried catalog)."""
+        header = (f"{'step':>4}  {'move':<13}{'terms':>6}{'kept':>6}{'time err':>10}"
+                  f"{'region err':>12}{'criterion':>11}  chosen")
+        lines = [header, "-" * len(header)]
+        for k, step in enumerate(self.steps):
+            def pct(value):
+                return f"{100 * value:9.2f}%" if np.isfinite(value) else f"{'-':>10}"
+            verdict = "yes" if step.chosen else "no"
+            if step.note:
+                verdict += f" ({step.note})"
+            lines.append(f"{k:>4}  {step.move:<13}{step.terms:>6}{step.active:>6}"
+                         f"{pct(step.time_error)}{pct(step.region_error):>12}"
+                         f"{pct(step.criterion):>11}  {verdict}")
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """JSON-ready figures of the growth."""
+        return {"criterion": self.criterion, "held_out_error": self.held_out_error,
+                "catalog": self.catalog.describe(),
+                "steps": [dataclasses.asdict(s) for s in self.steps]}
+
+
+def check_growth_data(xs, names, n_terms: int) -> None:
+    """``ValueError`` for a constant coordinate or data too short for ``n_terms`` terms."""
+    stacked = np.vstack(xs)
+    spread = stacked.max(axis=0) - stacked.min(axis=0)
+    scale = np.maximum(np.abs(stacked).max(axis=0), 1.0)
+    for name, s, sc in zip(names, spread, scale, strict=True):
+        if not s > 1e-9 * sc:
+            raise ValueError(f"x: coordinate {name!r} is constant in the data; nothing about its "
+                             "dynamics can be identified (leave it out, or excite it)")
+    rows = len(stacked) * len(names)
+    if rows < 10 * n_terms:
+        raise ValueError(f"x: {len(stacked)} samples of {len(names)} coordinates are too short "
+                         f"for a catalog of {n_terms} terms (at least {10 * n_terms} equations "
+                         "needed); record longer, or lower max_terms")
+
+
+def _blocks(t, x, n_blocks):
+    """Per run: ``(train mask, time block slice, region block slice)``."""
+    n = len(t)
+    edges = np.linspace(0, n, n_blocks + 1).round().astype(int)
+    spans = [slice(a, b) for a, b in zip(edges[:-1], edges[1:], strict=True)]
+    scale = np.subtract(*np.percentile(x, [75, 25], axis=0))
+    scale = np.where(scale > 0, scale, 1.0)
+    reach = np.abs(x - np.median(x, axis=0)) / scale
+    extreme = [float(np.percentile(reach[s].max(axis=1), 90)) for s in spans[:-1]]
+    region = spans[int(np.argmax(extreme))]
+    train = np.ones(n, dtype=bool)
+    train[spans[-1]] = False
+    train[region] = False
+    return train, spans[-1], region
+
+
+def _pieces(mask):
+    edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(int), 0]))
+    return list(zip(edges[::2], edges[1::2], strict=True))
+
+
+def _relative(predicted, measured):
+    norm = np.linalg.norm(measured)
+    return float(np.linalg.norm(predicted - measured) / norm) if norm > 0 else float("inf")
+
+
+def _parameters(state, move, kinds, n, skip=0):
+    """The catalog parameters after ``move`` from ``state``, or None when it does not apply."""
+    new = dict(state)
+    angles = "angle" in kinds
+    if move == "kinetic":
+        if state["kinetic"] == "configuration":
+            return None
+        new["kinetic"] = "configuration"
+    elif move == "interaction":
+        if state["interaction"] >= n:
+            return None
+        new["interaction"] += 1
+    elif move in _LIMITS:
+        relevant = {"degree": "linear" in kinds or state["angle_degree"] > 0,
+                    "trig_degree": angles, "angle_degree": angles}[move]
+        step = (2 if move == "angle_degree" and not state[move] else 1) + skip
+        if not relevant or state[move] + step > _LIMITS[move]:
+            return None
+        new[move] = state[move] + step
+        if move == "angle_degree":
+            new["degree"] = max(new["degree"], new["angle_degree"])
+    elif move == "gyroscopic":
+        if state["gyroscopic"] or n < 2:
+            return None
+        new["gyroscopic"] = True
+    elif move == "coulomb":
+        if "coulomb" in state["dissipation"]:
+            return None
+        new["dissipation"] = (*state["dissipation"], "coulomb")
+    elif move == "splines":
+        if state["splines"]:
+            return None
+        new["splines"] = _SPLINES
+    return new
+
+
+def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
+                 max_terms: int = 400, optimizer=None, formulation: str = "auto",
+                 n_blocks: int = 5, tolerance: float = 0.05, moves=MOVES,
+                 search_samples: int | None = 6000, progress=None):
+    """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
+
+    Parameters
+    ----------
+    x : array (N, n) or list of arrays
+        Positions, one run or several.
+    t : array (N,) or list of arrays
+        Strictly increasing times, matching ``x``.
+    u : same layout as ``x``, optional
+        Generalized forces (zero columns: unforced coordinates); None: unforced data.
+    x_dot, x_ddot : same layout as ``x``, optional
+        Measured velocities and accelerations.
+    coordinates : list of str
+        The coordinates' names.
+    kinds : None, str, sequence or mapping
+        ``"linear"`` or ``"angle"`` per coordinate (:func:`coordinate_kinds`).
+    max_terms : int, default 400
+        Ceiling of the catalog's size: larger catalogs are not tried.
+    optimizer : optional
+        Of :class:`~pysindy_xl.XLSINDy` (default: chosen from the forces).
+    formulation : {"auto", "strong", "weak"}, default "auto"
+    n_blocks : int, default 5
+        Blocks per run (two are held out).
+    tolerance : float, default 0.05
+        Relative decrease of the criterion that keeps a move.
+    moves : sequence of str, default MOVES
+        The moves tried (a subset of :data:`MOVES`).
+    search_samples : int or None, default 6000
+        The search fits runs thinned to about this many samples in all (every k-th sample); the
+        final fit uses all. None: no thinning.
+    progress : callable, optional
+        Called with a line of text after each step.
+
+    Returns
+    -------
+    GrowthResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 20, 2001)
+    >>> x = np.c_[np.sin(t) + 0.5 * np.sin(2.7 * t)]
+    >>> xdd = -np.sin(t) - 3.645 * np.sin(2.7 * t)
+    >>> u = 2 * xdd[:, None] + 3 * x + x ** 3      # m = 2, a hardening spring
+    >>> found = grow_catalog(x, t, u, coordinates=["x"], moves=("degree",))
+    >>> found.model.print(precision=3)
+    L = -0.25*x**4 - 1.5*x**2 + 1.0*x_dot**2
+    (x) 1.0*x**3 + 3.0*x + 2.0*x_ddot = tau_x
+    >>> [(step.move, step.terms, step.chosen) for step in found.steps]
+    [('start', 4, True), ('degree', 5, False), ('degree', 6, True)]
+    """
+    from sklearn.base import clone
+
+    from ..held_out import scoring_derivatives
+    from ..model import XLSINDy
+
+    xs, is_list = as_list(x, "x")
+    ts, us, xds, xdds = (aligned(value, name, xs, is_list) for value, name in
+                         ((t, "t"), (u, "u"), (x_dot, "x_dot"), (x_ddot, "x_ddot")))
+    us, xds, xdds = (None if value is None else value for value in
+                     (None if u is None else us, None if x_dot is None else xds,
+                      None if x_ddot is None else xdds))
+    xs = [np.asarray(xk, dtype=float).reshape(len(xk), -1) for xk in xs]
+    ts = [np.asarray(tk, dtype=float) for tk in ts]
+    if len(ts) != len(xs) or any(tk.shape != (len(xk),) for tk, xk in zip(ts, xs, strict=True)):
+        raise ValueError("t: expected one time array per run of x, of its length")
+    names = list(coordinates.split(",") if isinstance(coordinates, str) else coordinates)
+    n = xs[0].shape[1]
+    if len(names) != n:
+        raise ValueError(f"coordinates: expected {n} names (the columns of x), got {names}")
+    kinds = coordinate_kinds(names, kinds)
+    check_option("max_terms", max_terms, "int", low=1)
+    check_option("n_blocks", n_blocks, "int", low=3)
+    check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
+    unknown = [m for m in moves if m not in MOVES]
+    if unknown:
+        raise ValueError(f"moves: unknown {unknown}; expected some of {MOVES}")
+    forced = us is not None and any(np.any(np.asarray(uk) != 0) for uk in us)
+    criterion = "forces" if forced else "accelerations"
+    stacked = np.vstack(xs)
+    velocity_scale = [float(np.std(np.gradient(xk, tk, axis=0), axis=0).mean())
+                      for xk, tk in zip(xs, ts, strict=True)]
+    low, high = stacked.min(axis=0), stacked.max(axis=0)
+    margin = 0.1 * (high - low)
+    fixed = {"coordinates": names, "kinds": list(kinds), "max_terms": max_terms,
+             "bounds": [(float(a - m), float(b + m)) for a, b, m in zip(low, high, margin,
+                                                                            strict=True)],
+             "coulomb_scale": max(1e-3, 0.02 * float(np.mean(velocity_scale)))}
+    first = AutomaticCatalog(**fixed, **_START)
+    check_growth_data(xs, names, first.n_terms)
+
+    # scoring derivatives per whole run, and the folds
+    scoring = [scoring_derivatives(tk, xk) for tk, xk in zip(ts, xs, strict=True)]
+    folds = [_blocks(tk, xk, n_blocks) for tk, xk in zip(ts, xs, strict=True)]
+    total = sum(len(tk) for tk in ts)
+    stride = 1 if search_samples is None else max(1, int(np.ceil(total / search_samples)))
+    train = {key: [] for key in ("x", "t", "u", "x_dot", "x_ddot")}
+    for k, (mask, _, _) in enumerate(folds):
+        for a, b in _pieces(mask):
+            part = slice(a, b, stride)
+            train["x"].append(xs[k][part])
+            train["t"].append(ts[k][part])
+            train["u"].append(None if us is None else np.asarray(us[k])[part])
+            train["x_dot"].append(None if xds is None else np.asarray(xds[k])[part])
+            train["x_ddot"].append(None if xdds is None else np.asarray(xdds[k])[part])
+    for key in ("u", "x_dot", "x_ddot"):
+        if any(v is None for v in train[key]):
+            train[key] = None
+    if not forced:
+        train["u"] = None
+    template = XLSINDy(optimizer=optimizer, formulation=formulation)
+
+    def evaluate(parameters, move):
+        catalog = AutomaticCatalog(**fixed, **parameters)
+        started = time.perf_counter()
+        try:
+            size = catalog.n_terms
+        except ValueError as error:
+            return catalog, GrowthStep(move, "", 0, 0, np.inf, np.inf, np.inf, False, str(error))
+        description = catalog.describe() if size <= max_terms else ""
+        if size > max_terms:
+            return catalog, GrowthStep(move, description, size, 0, np.inf, np.inf, np.inf, False,
+                                       f"ceiling: {size} > max_terms {max_terms}")
+        rows = sum(len(p) for p in train["x"]) * n
+        if rows < 10 * size:
+            return catalog, GrowthStep(move, description, size, 0, np.inf, np.inf, np.inf, False,
+                                       "too few samples for this size")
+        model = clone(template).set_params(feature_library=catalog)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                model.fit(**train)
+            if model.dynamics_ is None:
+                raise ValueError("no acceleration in the identified equations")
+            errors = []
+            for which in (1, 2):
+                predicted, measured = [], []
+                for k, fold in enumerate(folds):
+                    block = fold[which]
+                    q, qd, qdd = (s[block] for s in scoring[k])
+                    if forced:
+                        predicted.append(model.predict_forces(q, qd, qdd))
+                        measured.append(np.asarray(us[k])[block])
+                    else:
+                        predicted.append(model.predict(q, qd))
+                        measured.append(qdd)
+                errors.append(_relative(np.vstack(predicted), np.vstack(measured)))
+        except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
+            return catalog, GrowthStep(move, description, size, 0, np.inf, np.inf, np.inf, False,
+                                       f"fit failed: {type(error).__name__}")
+        value = float(np.sqrt(np.mean(np.square(errors))))
+        if not np.isfinite(value):
+            value = np.inf
+        return catalog, GrowthStep(move, description, size,
+                                   int(np.count_nonzero(model.coefficients())), errors[0],
+                                   errors[1], value, False,
+                                   seconds=time.perf_counter() - started)
+
+    def report(step):
+        if progress is not None:
+            progress(f"{step.move:<13} {step.terms:>5} terms  held-out {criterion} error "
+                     + (f"{100 * step.criterion:.2f} %" if np.isfinite(step.criterion) else "-")
+                     + ("  kept" if step.chosen else "") + (f"  ({step.note})" if step.note
+                                                            else ""))
+
+    state = dict(_START)
+    best_catalog, best = evaluate(state, "start")
+    if best.note.startswith("ceiling"):
+        raise ValueError(f"max_terms: the smallest catalog has {best.terms} terms, more than "
+                         f"max_terms={max_terms}; raise max_terms")
+    best.chosen = True
+    steps = [best]
+    report(best)
+    improved = True
+    while improved:
+        improved = False
+        for move in moves:
+            skip = 0  # a degree move looks one degree further before it stops
+            while True:
+                parameters = _parameters(state, move, kinds, n, skip)
+                if parameters is None:
+                    break
+                catalog, step = evaluate(parameters, move)
+                steps.append(step)
+                keep = step.criterion < best.criterion * (1 - tolerance)
+                if keep:
+                    step.chosen = True
+                    state, best, best_catalog, improved = parameters, step, catalog, True
+                report(step)
+                if move not in _LIMITS or (not keep and skip):
+                    break
+                skip = 0 if keep else 1
+    model = clone(template).set_params(feature_library=best_catalog)
+    full = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
+    if not is_list:
+        full = {key: None if value is None else value[0] for key, value in full.items()}
+    model.fit(**full)
+    return GrowthResult(model, best_catalog, steps, criterion, best.criterion)
