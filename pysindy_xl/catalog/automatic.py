@@ -233,21 +233,27 @@ class AutomaticCatalog(CatalogRepartition):
                                 all(c[2] for c in choice)))
         return out
 
-    def _factors(self, options, degree, trig_degree, angle_degree, splines=True) -> list:
+    def _factors(self, options, degree, trig_degree, angle_degree) -> list:
         """Per coordinate: (function, polynomial degree, trigonometric polynomial) triples."""
         coords, kinds = options["coords"], options["kinds"]
         factors = []
-        for i, (q, kind) in enumerate(zip(coords.q, kinds, strict=True)):
+        for q, kind in zip(coords.q, kinds, strict=True):
             own = []
             for f in factor_functions(q, kind, degree, trig_degree, angle_degree):
                 polynomial_degree = sp.degree(f, q) if (kind == "linear" or f.is_Pow
                                                         and f.base == q) else 0
                 own.append((f, int(polynomial_degree), kind == "linear" or polynomial_degree == 0))
-            if splines and options["splines"][i] is not None:
-                centers, width = options["splines"][i]
-                own += [(bspline(q, c, width), 0, False) for c in centers]
             factors.append(own)
         return factors
+
+    def _splines(self, options) -> list[sp.Expr]:
+        """The B-splines of single coordinates (never multiplied by other functions)."""
+        out = []
+        for q, spline in zip(options["coords"].q, options["splines"], strict=True):
+            if spline is not None:
+                centers, width = spline
+                out += [bspline(q, c, width) for c in centers]
+        return out
 
     def _terms(self, options) -> tuple[list[sp.Expr], list[bool]]:
         coords = options["coords"]
@@ -257,7 +263,7 @@ class AutomaticCatalog(CatalogRepartition):
         kappas = [(sp.Integer(1), 0, True)]
         if options["kinetic"] == "configuration":
             factors = self._factors(options, min(options["degree"], 2),
-                                    min(options["trig_degree"], 1), 0, splines=False)
+                                    min(options["trig_degree"], 1), 0)
             kappas += self._products(options, factors)
         for kappa, _, trig in kappas:
             for i, j in itertools.combinations_with_replacement(range(n), 2):
@@ -265,7 +271,7 @@ class AutomaticCatalog(CatalogRepartition):
                 fast.append(trig)
         # gyroscopic: f(q_k) qd_i, k != i (f(q_i) qd_i is a total time derivative)
         if options["gyroscopic"]:
-            firsts = self._factors(options, 1, 1, 0, splines=False)
+            firsts = self._factors(options, 1, 1, 0)
             for i in range(n):
                 for k in range(n):
                     if k != i:
@@ -278,7 +284,8 @@ class AutomaticCatalog(CatalogRepartition):
         for phi, _, trig in self._products(options, factors):
             terms.append(phi)
             fast.append(trig)
-        return terms, fast
+        splines = self._splines(options)
+        return terms + splines, fast + [False] * len(splines)
 
     def _dissipation(self, options) -> tuple[list[sp.Expr], np.ndarray]:
         coords = options["coords"]

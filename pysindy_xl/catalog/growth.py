@@ -1,10 +1,9 @@
 """Growing an automatic catalog on data: start small, grow while a held-out criterion improves.
 
-The criterion is the relative RMS error, on samples the fit never saw, of the generalized
-forces the model needs to move as recorded (inverse dynamics; data with forces), or of the
-accelerations it predicts (unforced data). Velocities and accelerations for scoring come from
-one smoothing of each whole run (:func:`~pysindy_xl.held_out.scoring_derivatives`), the same for
-every candidate. Two blocks of each run are held out:
+The criterion is the relative residual of the fitted model's equations in the weak form
+(integrated against test functions on smoothed positions, so that no acceleration is estimated)
+on samples the fit never saw: over the generalized forces' part for data with forces, over the
+largest term's for unforced data. Two blocks of each run are held out:
 
 - the last of ``n_blocks`` contiguous time blocks (**time**: how the model predicts later);
 - the other block reaching farthest from the run's median state (**region**: how it
@@ -14,9 +13,10 @@ every candidate. Two blocks of each run are held out:
 The criterion is the RMS of the two errors. From the smallest catalog (constant kinetic
 coefficients, quadratic potentials of the linear coordinates, sines and cosines of the angles,
 viscous friction), each move of :data:`MOVES` is tried in turn; a move is kept when it lowers
-the criterion by the fraction ``tolerance`` at least, the degree moves repeat while they do, and
-the growth stops when a whole pass keeps nothing. Catalogs over ``max_terms`` are not tried
-(reported as the ceiling). The chosen catalog is then fitted on all the data.
+the criterion by the fraction ``tolerance`` at least, the degree moves repeat while they do (and
+look one degree further before they stop), and the growth stops when a whole pass keeps nothing
+or the criterion is below ``good_enough``. Catalogs over ``max_terms`` are not tried (reported
+as the ceiling). The chosen catalog is then fitted on all the data.
 """
 
 from __future__ import annotations
@@ -162,9 +162,21 @@ def _pieces(mask):
     return list(zip(edges[::2], edges[1::2], strict=True))
 
 
-def _relative(predicted, measured):
-    norm = np.linalg.norm(measured)
-    return float(np.linalg.norm(predicted - measured) / norm) if norm > 0 else float("inf")
+def _held_out_error(model, held, forced) -> float:
+    """Relative residual of the fitted model's weak-form equations on held-out runs: the
+    residual over the forces' part (forced data) or over the largest term's (unforced)."""
+    problem = model.regression(held["x"], held["t"], u=held["u"], formulation="weak")
+    theta, columns = problem.theta, problem.catalog_map.columns
+    coef = model.coef_[columns]
+    residual = theta @ coef
+    forces = problem.force_columns
+    if forced and len(forces):
+        target = theta[:, forces] @ coef[forces]
+    else:
+        target = theta * coef
+        target = target[:, int(np.argmax(np.linalg.norm(target, axis=0)))]
+    norm = float(np.linalg.norm(target))
+    return float(np.linalg.norm(residual) / norm) if norm > 0 else float("inf")
 
 
 def _parameters(state, move, kinds, n, skip=0):
@@ -205,7 +217,8 @@ def _parameters(state, move, kinds, n, skip=0):
 
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
                  max_terms: int = 400, optimizer=None, formulation: str = "auto",
-                 n_blocks: int = 5, tolerance: float = 0.05, moves=MOVES,
+                 n_blocks: int = 5, tolerance: float = 0.05, good_enough: float = 0.002,
+                 moves=MOVES,
                  search_samples: int | None = 6000, progress=None):
     """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
 
@@ -232,6 +245,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         Blocks per run (two are held out).
     tolerance : float, default 0.05
         Relative decrease of the criterion that keeps a move.
+    good_enough : float, default 0.002
+        The growth stops once the criterion is below this relative error.
     moves : sequence of str, default MOVES
         The moves tried (a subset of :data:`MOVES`).
     search_samples : int or None, default 6000
@@ -260,7 +275,6 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     """
     from sklearn.base import clone
 
-    from ..held_out import scoring_derivatives
     from ..model import XLSINDy
 
     xs, is_list = as_list(x, "x")
@@ -281,6 +295,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     check_option("max_terms", max_terms, "int", low=1)
     check_option("n_blocks", n_blocks, "int", low=3)
     check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
+    check_option("good_enough", good_enough, "real", low=0)
     unknown = [m for m in moves if m not in MOVES]
     if unknown:
         raise ValueError(f"moves: unknown {unknown}; expected some of {MOVES}")
@@ -298,9 +313,17 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     first = AutomaticCatalog(**fixed, **_START)
     check_growth_data(xs, names, first.n_terms)
 
-    # scoring derivatives per whole run, and the folds
-    scoring = [scoring_derivatives(tk, xk) for tk, xk in zip(ts, xs, strict=True)]
+    # the folds, and the held-out blocks as runs of their own
     folds = [_blocks(tk, xk, n_blocks) for tk, xk in zip(ts, xs, strict=True)]
+    blocks = []
+    for which in (1, 2):
+        held = {"x": [], "t": [], "u": [] if forced else None}
+        for k, fold in enumerate(folds):
+            held["x"].append(xs[k][fold[which]])
+            held["t"].append(ts[k][fold[which]])
+            if forced:
+                held["u"].append(np.asarray(us[k], dtype=float)[fold[which]])
+        blocks.append(held)
     total = sum(len(tk) for tk in ts)
     stride = 1 if search_samples is None else max(1, int(np.ceil(total / search_samples)))
     train = {key: [] for key in ("x", "t", "u", "x_dot", "x_ddot")}
@@ -341,19 +364,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                 model.fit(**train)
             if model.dynamics_ is None:
                 raise ValueError("no acceleration in the identified equations")
-            errors = []
-            for which in (1, 2):
-                predicted, measured = [], []
-                for k, fold in enumerate(folds):
-                    block = fold[which]
-                    q, qd, qdd = (s[block] for s in scoring[k])
-                    if forced:
-                        predicted.append(model.predict_forces(q, qd, qdd))
-                        measured.append(np.asarray(us[k])[block])
-                    else:
-                        predicted.append(model.predict(q, qd))
-                        measured.append(qdd)
-                errors.append(_relative(np.vstack(predicted), np.vstack(measured)))
+            errors = [_held_out_error(model, held, forced) for held in blocks]
         except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
             return catalog, GrowthStep(move, description, size, 0, np.inf, np.inf, np.inf, False,
                                        f"fit failed: {type(error).__name__}")
@@ -380,15 +391,17 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     best.chosen = True
     steps = [best]
     report(best)
-    improved = True
+    tried = {repr(sorted(state.items()))}
+    improved = best.criterion > good_enough
     while improved:
         improved = False
         for move in moves:
             skip = 0  # a degree move looks one degree further before it stops
-            while True:
+            while best.criterion > good_enough:
                 parameters = _parameters(state, move, kinds, n, skip)
-                if parameters is None:
+                if parameters is None or repr(sorted(parameters.items())) in tried:
                     break
+                tried.add(repr(sorted(parameters.items())))
                 catalog, step = evaluate(parameters, move)
                 steps.append(step)
                 keep = step.criterion < best.criterion * (1 - tolerance)
