@@ -240,9 +240,9 @@ class AutomaticCatalog(CatalogRepartition):
         for q, kind in zip(coords.q, kinds, strict=True):
             own = []
             for f in factor_functions(q, kind, degree, trig_degree, angle_degree):
-                polynomial_degree = sp.degree(f, q) if (kind == "linear" or f.is_Pow
-                                                        and f.base == q) else 0
-                own.append((f, int(polynomial_degree), kind == "linear" or polynomial_degree == 0))
+                trigonometric = f.has(sp.sin(q)) or f.has(sp.cos(q))
+                power = 0 if trigonometric else int(sp.degree(f, q))
+                own.append((f, power, kind == "linear" or trigonometric))
             factors.append(own)
         return factors
 
