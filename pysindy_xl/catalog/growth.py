@@ -3,7 +3,8 @@
 The criterion is the relative residual of the fitted model's equations in the weak form
 (integrated against test functions on smoothed positions, so that no acceleration is estimated)
 on samples the fit never saw: over the generalized forces' part for data with forces, over the
-largest term's for unforced data. Two blocks of each run are held out:
+largest term's for unforced data (the strong form where a block is shorter than a test
+function). Two blocks of each run are held out:
 
 - the last of ``n_blocks`` contiguous time blocks (**time**: how the model predicts later);
 - the other block reaching farthest from the run's median state (**region**: how it
@@ -13,7 +14,9 @@ largest term's for unforced data. Two blocks of each run are held out:
 The criterion is the RMS of the two errors. From the smallest catalog (constant kinetic
 coefficients, quadratic potentials of the linear coordinates, sines and cosines of the angles,
 viscous friction), each move of :data:`MOVES` is tried in turn; a move is kept when it lowers
-the criterion by the fraction ``tolerance`` at least, the degree moves repeat while they do (and
+the criterion by the fraction ``tolerance`` at least, or keeps it within that fraction with
+fewer terms in the fitted model (a sine series imitating ``theta^2`` needs more terms than
+``theta^2``), the degree moves repeat while they do (and
 look one degree further before they stop), and the growth stops when a whole pass keeps nothing
 or the criterion is below ``good_enough``. Catalogs over ``max_terms`` are not tried (reported
 as the ceiling). The chosen catalog is then fitted on all the data.
@@ -165,7 +168,11 @@ def _pieces(mask):
 def _held_out_error(model, held, forced) -> float:
     """Relative residual of the fitted model's weak-form equations on held-out runs: the
     residual over the forces' part (forced data) or over the largest term's (unforced)."""
-    problem = model.regression(held["x"], held["t"], u=held["u"], formulation="weak")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # blocks shorter than a test function: strong form
+        problem = model.regression(held["x"], held["t"], u=held["u"], formulation="weak")
+        if not len(problem.theta):
+            problem = model.regression(held["x"], held["t"], u=held["u"], formulation="strong")
     theta, columns = problem.theta, problem.catalog_map.columns
     coef = model.coef_[columns]
     residual = theta @ coef
@@ -244,7 +251,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     n_blocks : int, default 5
         Blocks per run (two are held out).
     tolerance : float, default 0.05
-        Relative decrease of the criterion that keeps a move.
+        Relative decrease of the criterion that keeps a move (or relative increase within
+        which a move that fits fewer terms is kept).
     good_enough : float, default 0.002
         The growth stops once the criterion is below this relative error.
     moves : sequence of str, default MOVES
@@ -340,7 +348,14 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             train[key] = None
     if not forced:
         train["u"] = None
-    template = XLSINDy(optimizer=optimizer, formulation=formulation)
+    # test functions short enough for the held-out blocks and the training pieces
+    from ..weak import BumpTestFunctions
+    block = min(len(tk) for tk in ts) // n_blocks
+    longest = int(np.argmax([len(tk) for tk in ts]))
+    width = min(BumpTestFunctions().half_width(ts[longest], xs[longest]),
+                min(tk[block - 1] - tk[0] for tk in ts) / 3)
+    template = XLSINDy(optimizer=optimizer, formulation=formulation,
+                       test_functions=BumpTestFunctions(width=width))
 
     def evaluate(parameters, move):
         catalog = AutomaticCatalog(**fixed, **parameters)
@@ -367,7 +382,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             errors = [_held_out_error(model, held, forced) for held in blocks]
         except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
             return catalog, GrowthStep(move, description, size, 0, np.inf, np.inf, np.inf, False,
-                                       f"fit failed: {type(error).__name__}")
+                                       f"fit failed: {type(error).__name__}: {error}"[:200])
         value = float(np.sqrt(np.mean(np.square(errors))))
         if not np.isfinite(value):
             value = np.inf
@@ -404,7 +419,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                 tried.add(repr(sorted(parameters.items())))
                 catalog, step = evaluate(parameters, move)
                 steps.append(step)
-                keep = step.criterion < best.criterion * (1 - tolerance)
+                keep = (step.criterion < best.criterion * (1 - tolerance)  # better, or as good
+                        or (step.criterion <= best.criterion * (1 + tolerance)  # and simpler
+                            and step.active < best.active))
                 if keep:
                     step.chosen = True
                     state, best, best_catalog, improved = parameters, step, catalog, True
@@ -412,7 +429,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                 if move not in _LIMITS or (not keep and skip):
                     break
                 skip = 0 if keep else 1
-    model = clone(template).set_params(feature_library=best_catalog)
+    model = clone(template).set_params(feature_library=best_catalog, test_functions=None)
     full = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
     if not is_list:
         full = {key: None if value is None else value[0] for key, value in full.items()}

@@ -87,7 +87,7 @@ def run_automatic(args, dataset, system, forced, progress):
           + " on the last block of each run and on the block reaching farthest):")
     print(result.table())
     if model.dynamics_ is None:
-        raise CLIError("the identified equations contain no acceleration: nothing to simulate; "
-                       + _ADVICE.format(max_terms=args.max_terms))
+        raise CLIError("the identified model explains nothing (its equations contain no "
+                       "acceleration); " + _ADVICE.format(max_terms=args.max_terms))
     sys.stdout.flush()
     return model, result, arguments
