@@ -105,7 +105,8 @@ class AutomaticCatalog(CatalogRepartition):
     bounds : mapping or sequence of (low, high), optional
         Range of each coordinate; required for its B-splines.
     degree : int, default 2
-        Highest total power of the linear coordinates (and angles) in a product.
+        Highest power of a linear coordinate, and highest total power (of linear coordinates
+        and angles) in a product of several coordinates' functions.
     trig_degree : int, default 1
         Degree of the trigonometric monomials of the angles.
     angle_degree : int, default 0
@@ -227,7 +228,7 @@ class AutomaticCatalog(CatalogRepartition):
             for subset in itertools.combinations(range(n), size):
                 for choice in itertools.product(*(factors[i] for i in subset)):
                     degree = sum(c[1] for c in choice)
-                    if degree > options["degree"]:
+                    if size > 1 and degree > options["degree"]:
                         continue
                     out.append((sp.Mul(*(c[0] for c in choice)), degree,
                                 all(c[2] for c in choice)))

@@ -44,7 +44,8 @@ _START = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
           "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
           "splines": None}
 _LIMITS = {"degree": 4, "trig_degree": 3, "angle_degree": 4}
-_SPLINES = 8  # B-splines per coordinate when the family is added
+_SPLINES = (8, 16)  # B-splines per coordinate when the family is added, then refined
+_REPEATED = ("degree", "trig_degree", "angle_degree", "splines")  # moves that go on
 
 
 @dataclasses.dataclass
@@ -199,14 +200,13 @@ def _parameters(state, move, kinds, n, skip=0):
             return None
         new["interaction"] += 1
     elif move in _LIMITS:
-        relevant = {"degree": "linear" in kinds or state["angle_degree"] > 0,
+        relevant = {"degree": "linear" in kinds or (state["angle_degree"] > 0
+                                                    and state["interaction"] > 1),
                     "trig_degree": angles, "angle_degree": angles}[move]
         step = (2 if move == "angle_degree" and not state[move] else 1) + skip
         if not relevant or state[move] + step > _LIMITS[move]:
             return None
         new[move] = state[move] + step
-        if move == "angle_degree":
-            new["degree"] = max(new["degree"], new["angle_degree"])
     elif move == "gyroscopic":
         if state["gyroscopic"] or n < 2:
             return None
@@ -216,9 +216,9 @@ def _parameters(state, move, kinds, n, skip=0):
             return None
         new["dissipation"] = (*state["dissipation"], "coulomb")
     elif move == "splines":
-        if state["splines"]:
+        if state["splines"] is not None and state["splines"] >= _SPLINES[-1]:
             return None
-        new["splines"] = _SPLINES
+        new["splines"] = next(k for k in _SPLINES if k > (state["splines"] or 0))
     return new
 
 
@@ -426,7 +426,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                     step.chosen = True
                     state, best, best_catalog, improved = parameters, step, catalog, True
                 report(step)
-                if move not in _LIMITS or (not keep and skip):
+                if move not in _REPEATED or (not keep and skip):
                     break
                 skip = 0 if keep else 1
     model = clone(template).set_params(feature_library=best_catalog, test_functions=None)
