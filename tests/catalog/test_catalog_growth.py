@@ -124,3 +124,43 @@ def test_ceiling_is_reported_in_the_path():
     assert any(step.note.startswith("ceiling") for step in found.steps)
     assert found.catalog.n_terms <= 5
     assert isinstance(found.catalog, px.AutomaticCatalog)
+
+
+def test_mixed_forcing_grows_coupled_oscillators():
+    """Force on x1 only: 0.5 x1'' + ... = tau, x2 free; the coupling spring needs x1 x2."""
+    c = px.Coordinates(["x1", "x2"])
+    (x1, x2), (v1, v2) = c.q, c.qd
+    lagrangian = (v1 ** 2 / 2 + 0.75 * v2 ** 2 - x1 ** 2 - 1.5 * x2 ** 2
+                  - 0.8 * (x1 - x2) ** 2)
+    method = me.LagrangesMethod(lagrangian.subs({x1: me.dynamicsymbols("a"),
+                                                 x2: me.dynamicsymbols("b"),
+                                                 v1: me.dynamicsymbols("a", 1),
+                                                 v2: me.dynamicsymbols("b", 1)}),
+                                [me.dynamicsymbols("a"), me.dynamicsymbols("b")])
+    method.form_lagranges_equations()
+    mass = np.array(method.mass_matrix, dtype=float)
+    a, b = me.dynamicsymbols("a"), me.dynamicsymbols("b")
+    stiffness = -np.array(method.forcing.jacobian([a, b]), dtype=float)
+    t = np.arange(0.0, 10.0, 0.005)
+    xs, us = [], []
+    for seed in (0, 1):
+        rng = np.random.default_rng(seed)
+        frequencies, phases = rng.uniform(0.1, 0.8, 4), rng.uniform(0, 2 * np.pi, 4)
+
+        def force(time, frequencies=frequencies, phases=phases):
+            return np.array([np.sin(2 * np.pi * frequencies * time + phases).sum(), 0.0])
+
+        solution = solve_ivp(
+            lambda time, y: np.r_[y[2:], np.linalg.solve(mass, force(time) - stiffness @ y[:2])],
+            (t[0], t[-1]), np.r_[rng.uniform(-0.5, 0.5, 2), 0, 0], t_eval=t, method="DOP853",
+            rtol=1e-10, atol=1e-10)
+        xs.append(solution.y[:2].T)
+        us.append(np.array([force(time) for time in t]))
+    found = grow_catalog(xs, [t, t], us, coordinates=["x1", "x2"], moves=("interaction",))
+    assert found.criterion == "forces"
+    q = np.random.default_rng(5).uniform(-1, 1, (50, 2))
+    qd = np.random.default_rng(6).uniform(-1, 1, (50, 2))
+    u = np.c_[np.random.default_rng(7).uniform(-1, 1, 50), np.zeros(50)]
+    truth = np.linalg.solve(mass, (u - q @ stiffness.T).T).T
+    predicted = found.model.predict(q, qd, u)
+    assert np.linalg.norm(predicted - truth) / np.linalg.norm(truth) < 0.02
