@@ -11,7 +11,8 @@ function). Two blocks of each run are held out:
   extrapolates to states it did not see). An approximation fitted along the trajectories (a
   cosine standing in for ``theta^2``) fails there, where the right structure does not.
 
-The criterion is the RMS of the two errors. From the smallest catalog (constant kinetic
+The criterion is the RMS of the two errors (the time error alone for catalogs with B-splines,
+which are local and cannot extrapolate). From the smallest catalog (constant kinetic
 coefficients, quadratic potentials of the linear coordinates, sines and cosines of the angles,
 viscous friction), each move of :data:`MOVES` is tried in turn; a move is kept when it lowers
 the criterion by the fraction ``tolerance`` at least, or keeps it within that fraction with
@@ -113,7 +114,9 @@ class GrowthResult:
         lines = [header, "-" * len(header)]
         for k, step in enumerate(self.steps):
             def pct(value):
-                return f"{100 * value:9.2f}%" if np.isfinite(value) else f"{'-':>10}"
+                if not np.isfinite(value):
+                    return f"{'-':>10}"
+                return f"{100 * value:9.2f}%" if value < 100 else f"{'>1e4%':>10}"
             verdict = "yes" if step.chosen else "no"
             if step.note:
                 verdict += f" ({step.note})"
@@ -121,6 +124,26 @@ class GrowthResult:
                          f"{pct(step.time_error)}{pct(step.region_error):>12}"
                          f"{pct(step.criterion):>11}  {verdict}")
         return "\n".join(lines)
+
+    def spline_potentials(self, n_points: int = 9) -> dict:
+        """The identified B-spline part of the potential of each coordinate that keeps one:
+        ``{name: (grid, values)}``, ``V_spline(q) = -sum_k c_k B_k(q)`` on ``n_points`` points
+        of the coordinate's range (the Lagrangian holds ``-V``)."""
+        import sympy as sp
+        library, coef = self.model.feature_library_, self.model.coef_
+        out = {}
+        for i, (q, name) in enumerate(zip(library.coords.q, library.coords.names,
+                                          strict=True)):
+            parts = [coef[j] * term for j, (term, category) in enumerate(
+                zip(library.feature_terms_, library.categories_, strict=True))
+                if category == "lagrange" and coef[j] != 0 and term.has(sp.Abs)
+                and term.free_symbols == {q}]
+            if parts:
+                low, high = self.catalog.bounds[i]
+                grid = np.linspace(low, high, n_points)
+                values = -sp.lambdify(q, sp.Add(*parts), "numpy")(grid)
+                out[name] = (grid, np.broadcast_to(values, grid.shape).astype(float))
+        return out
 
     def to_dict(self) -> dict:
         """JSON-ready figures of the growth."""
@@ -216,9 +239,10 @@ def _parameters(state, move, kinds, n, skip=0):
             return None
         new["dissipation"] = (*state["dissipation"], "coulomb")
     elif move == "splines":
-        if state["splines"] is not None and state["splines"] >= _SPLINES[-1]:
+        larger = [k for k in _SPLINES if k > (state["splines"] or 0)]
+        if skip >= len(larger):
             return None
-        new["splines"] = next(k for k in _SPLINES if k > (state["splines"] or 0))
+        new["splines"] = larger[skip]
     return new
 
 
@@ -383,7 +407,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
             return catalog, GrowthStep(move, description, size, 0, np.inf, np.inf, np.inf, False,
                                        f"fit failed: {type(error).__name__}: {error}"[:200])
-        value = float(np.sqrt(np.mean(np.square(errors))))
+        # local functions (B-splines) cannot extrapolate: the time block alone judges them
+        value = float(errors[0] if parameters["splines"] else np.sqrt(np.mean(np.square(errors))))
         if not np.isfinite(value):
             value = np.inf
         return catalog, GrowthStep(move, description, size,
@@ -419,8 +444,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                 tried.add(repr(sorted(parameters.items())))
                 catalog, step = evaluate(parameters, move)
                 steps.append(step)
-                keep = (step.criterion < best.criterion * (1 - tolerance)  # better, or as good
-                        or (step.criterion <= best.criterion * (1 + tolerance)  # and simpler
+                reference = best.time_error if parameters["splines"] and not state["splines"] \
+                    else best.criterion
+                keep = (step.criterion < reference * (1 - tolerance)  # better, or as good
+                        or (step.criterion <= reference * (1 + tolerance)  # and simpler
                             and step.active < best.active))
                 if keep:
                     step.chosen = True

@@ -86,6 +86,9 @@ def run_automatic(args, dataset, system, forced, progress):
           + ("generalized forces" if result.criterion == "forces" else "accelerations")
           + " on the last block of each run and on the block reaching farthest):")
     print(result.table())
+    for name, (grid, values) in result.spline_potentials().items():
+        print(f"B-spline potential of {name} (no family states it), V({name}) at "
+              + ", ".join(f"{g:.3g}: {v:.4g}" for g, v in zip(grid, values, strict=True)))
     if model.dynamics_ is None:
         raise CLIError("the identified model explains nothing (its equations contain no "
                        "acceleration); " + _ADVICE.format(max_terms=args.max_terms))
