@@ -45,9 +45,22 @@ DISSIPATION = ("viscous", "coulomb")
 
 
 def coordinate_kinds(names, kinds) -> tuple[str, ...]:
-    """One kind per coordinate from ``kinds``: None (all linear), a kind for all, a sequence
-    or a mapping ``{name: kind}`` (coordinates not named are linear).
+    """One kind per coordinate from ``kinds``.
 
+    Parameters
+    ----------
+    names : sequence of str
+        The coordinates' names.
+    kinds : None, str, sequence or mapping
+        None (all linear), one kind for all, one per coordinate, or ``{name: kind}``
+        (coordinates not named are linear); kinds from :data:`~pysindy_xl.catalog.KINDS`.
+
+    Returns
+    -------
+    tuple of str
+
+    Examples
+    --------
     >>> coordinate_kinds(["r", "theta"], {"theta": "angle"})
     ('linear', 'angle')
     """

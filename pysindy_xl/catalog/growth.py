@@ -53,7 +53,7 @@ _REPEATED = ("degree", "trig_degree", "angle_degree", "splines")  # moves that g
 class GrowthStep:
     """One tried catalog: the move, its size, its held-out errors and the verdict.
 
-    Attributes
+    Parameters
     ----------
     move : str
         ``"start"`` or one of :data:`MOVES`.
@@ -68,9 +68,16 @@ class GrowthStep:
         fit failed or exceeded the ceiling).
     chosen : bool
         Whether the growth kept this catalog (the last one kept is the result).
-    note : str
+    note : str, default ""
         Why a step was not evaluated or failed.
-    seconds : float
+    seconds : float, default 0.0
+        Time of the step's fit and scoring.
+
+    Examples
+    --------
+    >>> step = GrowthStep("degree", "x: x..x^3", 5, 3, 0.02, 0.04, 0.0316, False)
+    >>> step.move, step.chosen
+    ('degree', False)
     """
 
     move: str
@@ -89,7 +96,7 @@ class GrowthStep:
 class GrowthResult:
     """What :func:`grow_catalog` found.
 
-    Attributes
+    Parameters
     ----------
     model : XLSINDy
         The chosen catalog fitted on all the data.
@@ -99,6 +106,16 @@ class GrowthResult:
         ``"forces"`` or ``"accelerations"``: what the held-out errors measure.
     held_out_error : float
         The chosen catalog's criterion.
+
+    Examples
+    --------
+    >>> steps = [GrowthStep("start", "", 4, 3, 0.5, 0.7, 0.61, True),
+    ...          GrowthStep("degree", "", 5, 4, 0.01, 0.02, 0.016, True)]
+    >>> print(GrowthResult(None, None, steps, "forces", 0.016).table())
+    step  move          terms  kept  time err  region err  criterion  chosen
+    ------------------------------------------------------------------------
+       0  start             4     3    50.00%      70.00%     61.00%  yes
+       1  degree            5     4     1.00%       2.00%      1.60%  yes
     """
 
     model: object
