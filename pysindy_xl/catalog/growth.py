@@ -266,8 +266,8 @@ def _parameters(state, move, kinds, n, skip=0):
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
                  max_terms: int = 400, optimizer=None, formulation: str = "auto",
                  n_blocks: int = 5, tolerance: float = 0.05, good_enough: float = 0.002,
-                 moves=MOVES,
-                 search_samples: int | None = 6000, progress=None):
+                 moves=MOVES, search_optimizer="auto", search_samples: int | None = 6000,
+                 progress=None):
     """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
 
     Parameters
@@ -298,6 +298,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         The growth stops once the criterion is below this relative error.
     moves : sequence of str, default MOVES
         The moves tried (a subset of :data:`MOVES`).
+    search_optimizer : "auto" or optimizer, default "auto"
+        Optimizer of the search's fits; ``"auto"``: ``optimizer`` when given, else one
+        selection per fit (``ExplicitOptimizer()``, ``MixedOptimizer()``, or XLSINDy's default
+        for unforced data) where the final fit bags selections on noisy positions.
     search_samples : int or None, default 6000
         The search fits runs thinned to about this many samples in all (every k-th sample); the
         final fit uses all. None: no thinning.
@@ -395,7 +399,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     longest = int(np.argmax([len(tk) for tk in ts]))
     width = min(BumpTestFunctions().half_width(ts[longest], xs[longest]),
                 min(tk[block - 1] - tk[0] for tk in ts) / 3)
-    template = XLSINDy(optimizer=optimizer, formulation=formulation,
+    if search_optimizer == "auto":  # one selection per step, not a bag of them
+        from ..optimizers import ExplicitOptimizer, MixedOptimizer
+        active = np.any(np.vstack(us) != 0, axis=0) if forced else np.zeros(n, dtype=bool)
+        search_optimizer = (optimizer if optimizer is not None or not forced else
+                            ExplicitOptimizer() if active.all() else MixedOptimizer())
+    template = XLSINDy(optimizer=search_optimizer, formulation=formulation,
                        test_functions=BumpTestFunctions(width=width))
 
     def evaluate(parameters, move):
@@ -473,7 +482,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                 if move not in _REPEATED or (not keep and skip):
                     break
                 skip = 0 if keep else 1
-    model = clone(template).set_params(feature_library=best_catalog, test_functions=None)
+    model = clone(template).set_params(feature_library=best_catalog, test_functions=None,
+                                       optimizer=optimizer)
     full = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
     if not is_list:
         full = {key: None if value is None else value[0] for key, value in full.items()}
