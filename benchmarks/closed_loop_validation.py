@@ -30,8 +30,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 
 def main(argv=None):
     import pysindy_xl as px
+    from pysindy_xl.evaluation.validation import validate_model, validation_trajectory
     from pysindy_xl.mujoco import MJCFSystem, generate_dataset, kinematic_catalog
-    from pysindy_xl.mujoco.evaluation.validation import validate_model, validation_trajectory
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--horizon", type=float, default=2.0)

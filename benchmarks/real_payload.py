@@ -52,7 +52,13 @@ import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 import idim  # noqa: E402
-from real_robots import _load, fit_package, mjcf_system, scores  # noqa: E402
+from real_robots import (  # noqa: E402
+    controller_constants,
+    fit_package,
+    load_log,
+    mjcf_system,
+    scores,
+)
 
 DATA = pathlib.Path(__file__).parent / "data" / "real"
 RESULTS = pathlib.Path(__file__).parent / "results"
@@ -75,30 +81,14 @@ def _torque_constants(urdf, t, q, current, cutoff=4.0):
     return np.array(constants)
 
 
-def controller_constants(run):
-    """Per joint, the factor from current to torque that the robot's controller uses.
-
-    The log holds the controller's target torque and the target current it commands for it;
-    least squares of the target current on the target torque plus viscous, Coulomb and offset
-    columns (the controller's friction compensation) gives ``1 / K_j``.
-    """
-    qd, torque, current = run["qd"], run["target_torque"], run["target_current"]
-    constants = []
-    for j in range(qd.shape[1]):
-        columns = np.column_stack([torque[:, j], qd[:, j], np.sign(qd[:, j]),
-                                   np.ones(len(qd))])
-        constants.append(1.0 / np.linalg.lstsq(columns, current[:, j], rcond=None)[0][0])
-    return np.array(constants)
-
-
 def runs():
     """``(t, q, tau)`` of every run, torques from the unloaded run's constants."""
-    unloaded = _load("ur5_14harm50sec")
+    unloaded = load_log("ur5_14harm50sec")
     constants = controller_constants(unloaded)
     nominal = _torque_constants(URDF, unloaded["t"], unloaded["q"], unloaded["current"])
     out = {}
     for name in ("ur5_14harm50sec", "ur5_15harm50sec", *LOADED):
-        run = unloaded if name == "ur5_14harm50sec" else _load(name)
+        run = unloaded if name == "ur5_14harm50sec" else load_log(name)
         out[name] = (run["t"], run["q"], run["current"] * constants)
     return out, constants, nominal
 

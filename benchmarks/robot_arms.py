@@ -25,9 +25,10 @@ smooth-Coulomb friction per joint):
 * ``pysindy-xl-lmi-support`` and ``pysindy-xl-lmi-all``: the constrained fit of the
   selection with ``base_parameters="support"`` (its zeros stay zero) and ``"all"``;
 * ``idim-ls``: the robotics baseline of :mod:`idim` on the catalog's rigid-body columns (the
-  base-parameter regressor) with its own viscous, Coulomb ``sign`` and offset columns:
-  positions and torques low-pass filtered forwards and backwards (4th-order Butterworth at
-  the cutoff with the smallest time-blocked held-out torque error on the training runs),
+  base-parameter regressor) with its own viscous, smooth Coulomb ``tanh(qd / 0.01)`` and
+  offset columns: positions and torques low-pass filtered forwards and backwards
+  (4th-order Butterworth; the cutoff and the least squares' rank tolerance with the
+  smallest time-blocked held-out torque error on the training runs),
   central differences, decimation, ordinary then weighted least squares;
 * ``truth``: the MJCF's own parameters (no fit): smooth dry friction against MuJoCo's
   constraint friction is the only model error left.
@@ -135,10 +136,11 @@ def _data(system, level, seed, duration=10.0, n_trajectories=2):
 
 def idim_ls(library, data):
     """The honest IDIM-LS of :mod:`idim` on the catalog's rigid-body columns (its own
-    viscous, Coulomb ``sign`` and offset columns; cutoff by time-blocked held-out torque
-    error on the training runs; decimation; WLS), as a coefficient vector over the catalog
-    (force coefficient -1; the viscous and smooth-Coulomb columns take IDIM's viscous and
-    Coulomb estimates, its offsets are left out: the arms have none)."""
+    viscous, smooth Coulomb ``tanh(qd / 0.01)`` and offset columns; cutoff and rank
+    tolerance by time-blocked held-out torque error on the training runs; decimation; WLS),
+    as a coefficient vector over the catalog (force coefficient -1; the viscous and
+    smooth-Coulomb columns take IDIM's viscous and Coulomb estimates, its offsets are left
+    out: the arms have none)."""
     regressor, lagrange = idim.catalog_regressor(library)
     fit = idim.choose_cutoff(regressor, [(tr.t, tr.q, tr.tau) for tr in data.trajectories])
     names = library.get_feature_names()
@@ -386,8 +388,8 @@ def _mjcf_metrics(model, truth, fresh, limits, rng_seed=0):
 
 def run(arm, level, seed, method):
     import pysindy_xl as px
+    from pysindy_xl.fitted.equations import physical_parameters
     from pysindy_xl.mujoco import MJCFSystem, kinematic_catalog
-    from pysindy_xl.report.equations import physical_parameters
 
     system = MJCFSystem(arm_mjcf(arm))
     data = _data(system, level, seed)

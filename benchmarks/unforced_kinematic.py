@@ -34,9 +34,9 @@ HERE = pathlib.Path(__file__).resolve().parent
 
 def run(name, level, seed, method):
     import pysindy_xl as px
+    from pysindy_xl.evaluation.validation import validate_model
     from pysindy_xl.mujoco import generate_dataset, get_system
     from pysindy_xl.mujoco.catalogs.kinematic import kinematic_catalog
-    from pysindy_xl.mujoco.evaluation.validation import validate_model
 
     system = get_system(name)
     catalog = kinematic_catalog(system, coulomb=False)

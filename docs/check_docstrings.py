@@ -144,6 +144,60 @@ def failing_examples(path: str, obj) -> str | None:
     return None
 
 
+def find_problems(modules=API_MODULES, methods: bool = False, method_examples: bool = False,
+                  run_examples: bool = False) -> dict:
+    """Check the public API of ``modules``; what each object lacks, and the examples that fail.
+
+    Parameters
+    ----------
+    modules : sequence of str, default=API_MODULES
+        Modules whose ``__all__`` is checked (an object re-exported by several is checked
+        once, under the first).
+    methods : bool, default=False
+        Also check public methods (Parameters, Returns).
+    method_examples : bool, default=False
+        With ``methods``, also require Examples in methods.
+    run_examples : bool, default=False
+        Run the Examples sections as doctests.
+
+    Returns
+    -------
+    dict
+        ``problems`` (``{path: [code, ...]}``, the codes of the module docstring),
+        ``failures`` (``{path: message}`` of failing examples), ``illustrated``
+        (``{path: [gallery script, ...]}`` for objects without Examples that the gallery
+        calls) and ``checked`` (the number of objects checked).
+    """
+    targets = []
+    for path, obj in api_objects(modules):
+        targets.append((path, obj, CHECKED))
+        if methods and inspect.isclass(obj):
+            codes = CHECKED if method_examples else CHECKED[:-1]
+            targets += [(p, m, codes) for p, m in public_methods(path, obj)]
+
+    problems, failures, illustrated = {}, {}, {}
+    seen_functions = set()
+    for path, obj, codes in targets:
+        if id(obj) in seen_functions:
+            continue
+        seen_functions.add(id(obj))
+        found = missing_sections(path, codes)
+        if run_examples and (inspect.getdoc(obj) or "").find(">>>") >= 0:
+            message = failing_examples(path, obj)
+            if message:
+                found.append("DT")
+                failures[path] = message
+        if "EX01" in found:
+            users = gallery_users(path.rsplit(".", 1)[-1])
+            if users:
+                found.remove("EX01")
+                illustrated[path] = users
+        if found:
+            problems[path] = found
+    return {"problems": problems, "failures": failures, "illustrated": illustrated,
+            "checked": len(seen_functions)}
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--methods", action="store_true",
@@ -154,40 +208,18 @@ def main(argv=None) -> int:
                         help="run the Examples sections as doctests")
     args = parser.parse_args(argv)
 
-    targets = []
-    for path, obj in api_objects(API_MODULES):
-        targets.append((path, obj, CHECKED))
-        if args.methods and inspect.isclass(obj):
-            codes = CHECKED if args.method_examples else CHECKED[:-1]
-            targets += [(p, m, codes) for p, m in public_methods(path, obj)]
-
-    problems, illustrated = {}, {}
-    seen_functions = set()
-    for path, obj, codes in targets:
-        if id(obj) in seen_functions:
-            continue
-        seen_functions.add(id(obj))
-        found = missing_sections(path, codes)
-        if args.run_examples and (inspect.getdoc(obj) or "").find(">>>") >= 0:
-            message = failing_examples(path, obj)
-            if message:
-                found.append("DT")
-                print(f"{path}: example fails: {message}", file=sys.stderr)
-        if "EX01" in found:
-            users = gallery_users(path.rsplit(".", 1)[-1])
-            if users:
-                found.remove("EX01")
-                illustrated[path] = users
-        if found:
-            problems[path] = found
-
-    checked = len(seen_functions)
+    found = find_problems(API_MODULES, methods=args.methods,
+                          method_examples=args.method_examples, run_examples=args.run_examples)
+    problems = found["problems"]
+    for path, message in found["failures"].items():
+        print(f"{path}: example fails: {message}", file=sys.stderr)
     for path, codes in problems.items():
         print(f"{path}: " + ", ".join(SECTION_NAMES[c] for c in codes))
-    for path, users in illustrated.items():
+    for path, users in found["illustrated"].items():
         print(f"(info) {path}: no Examples section, called in " + ", ".join(users),
               file=sys.stderr)
-    print(f"{len(problems)} of {checked} public objects need docstring work", file=sys.stderr)
+    print(f"{len(problems)} of {found['checked']} public objects need docstring work",
+          file=sys.stderr)
     return 1 if problems else 0
 
 

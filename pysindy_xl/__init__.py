@@ -19,9 +19,10 @@ __version__ = "0.1.0"
 
 # public name -> submodule that defines it (imported on first attribute access)
 _LAZY = {
-    **dict.fromkeys(("Coordinates", "monomials", "products"), "symbols"),
+    **dict.fromkeys(("Coordinates", "monomials", "products", "stack_variables"), "symbols"),
     **dict.fromkeys(("LagrangeLibrary", "ClassicalLibrary", "ExternalForces",
-                     "CatalogRepartition", "stack_variables"), "feature_library"),
+                     "CatalogRepartition", "JointFrictionLibrary"), "feature_library"),
+    "FRICTION_MODELS": "feature_library.joint_friction",
     **dict.fromkeys(("ExplicitOptimizer", "ImplicitOptimizer", "MixedOptimizer",
                      "EnsembleOptimizer", "PhysicalOptimizer", "NoLawFoundError",
                      "TotalLeastSquaresOptimizer"), "optimizers"),
@@ -35,7 +36,8 @@ _LAZY = {
 }
 
 __all__ = ["Coordinates", "monomials", "products", "LagrangeLibrary", "ClassicalLibrary",
-           "ExternalForces", "CatalogRepartition", "stack_variables", "ExplicitOptimizer",
+           "ExternalForces", "CatalogRepartition", "JointFrictionLibrary", "FRICTION_MODELS",
+           "stack_variables", "ExplicitOptimizer",
            "ImplicitOptimizer", "MixedOptimizer", "EnsembleOptimizer", "PhysicalOptimizer",
            "NoLawFoundError", "TotalLeastSquaresOptimizer", "XLSINDy", "IdentificationWarning",
            "UnexplainedCoordinateWarning", "MassMatrixDynamics", "SimulationError",
@@ -50,9 +52,10 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         CatalogRepartition,
         ClassicalLibrary,
         ExternalForces,
+        JointFrictionLibrary,
         LagrangeLibrary,
-        stack_variables,
     )
+    from .feature_library.joint_friction import FRICTION_MODELS
     from .model import XLSINDy
     from .mujoco.catalogs.kinematic import kinematic_catalog
     from .optimizers import (
@@ -64,7 +67,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         PhysicalOptimizer,
         TotalLeastSquaresOptimizer,
     )
-    from .symbols import Coordinates, monomials, products
+    from .symbols import Coordinates, monomials, products, stack_variables
     from .weak import BumpTestFunctions, WhittakerSmoother
 
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY)

@@ -7,7 +7,8 @@ from __future__ import annotations
 import importlib
 import sys
 
-__all__ = ["EXTRAS", "MissingExtraError", "import_optional", "lazy_attributes"]
+__all__ = ["EXTRAS", "MissingExtraError", "import_optional", "import_mujoco",
+           "lazy_attributes"]
 
 #: extra of ``pyproject.toml`` that installs each optional top-level module
 EXTRAS = {"cvxpy": "cvxpy", "jax": "jax", "jaxlib": "jax", "mujoco": "mujoco",
@@ -38,6 +39,28 @@ install it with: pip install "pysindy-xl[all]"
         how = f'pip install "pysindy-xl[{extra}]"' if extra else f"pip install {top}"
         raise MissingExtraError(f"{purpose or name} needs the optional package {top!r}, which is "
                                 f"not installed ({error}); install it with: {how}") from error
+
+
+def import_mujoco():
+    """The ``mujoco`` module, imported on first use: the one way this package imports MuJoCo.
+
+    Returns
+    -------
+    module
+        The ``mujoco`` package.
+
+    Raises
+    ------
+    ImportError
+        ``pysindy_xl._optional.MissingExtraError``, naming the ``pysindy-xl[mujoco]`` extra,
+        when MuJoCo is not installed.
+
+    Examples
+    --------
+    >>> hasattr(import_mujoco(), "MjModel")
+    True
+    """
+    return import_optional("mujoco", purpose="MuJoCo simulation (pysindy_xl.mujoco)")
 
 
 def lazy_attributes(package: str, table: dict):

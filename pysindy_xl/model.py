@@ -10,7 +10,6 @@ from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from ._validation import IdentificationWarning, check_instance, check_option
-from .dynamics.fitted import DynamicsMixin
 from .feature_library import remembered_weak_values
 from .fit import (
     FORMULATIONS,
@@ -20,13 +19,14 @@ from .fit import (
     choose_noise_model,
     estimator_trajectories,
     fit_smoother,
-    fitted_state,
     resolve_optimizer,
     solve,
 )
+from .fit.wrap import wrap
+from .fitted.dynamics import DynamicsMixin
+from .fitted.inspection import InspectionMixin
 from .io import invalid_model_file, read_model_file
 from .optimizers import SOLVER_KINDS, CatalogProblem
-from .report.inspection import InspectionMixin
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
 
@@ -96,6 +96,8 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         Features removed before regression, with the reason.
     still_coordinates_ : list of str
         Coordinates held still (``hold_still``).
+    forced_coordinates_ : ndarray of bool, shape (n,)
+        Coordinates that a non-zero force drives in the data.
     dynamics_ : CatalogDynamics
         The identified equations in mass-matrix form (``None`` if they contain no acceleration).
     n_coordinates_ : int
@@ -220,9 +222,24 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
                                                 smoother, self.residual_covariance,
                                                 self.test_functions)
         optimizer = solve(optimizer, problem, library, weigh=weigh)
-        for name, value in fitted_state(library, problem, optimizer).items():  # wrap
-            setattr(self, name, value)
+        self._wrap(library, problem, optimizer)
         return self
+
+    def _wrap(self, library, problem, optimizer):
+        """The fitted attributes (see Attributes) from the solved ``problem``."""
+        fitted = wrap(library, problem, optimizer)  # the solution in the catalog's terms
+        self.feature_library_, self.optimizer_ = library, optimizer
+        self.coef_, self.dynamics_ = fitted.coef, fitted.dynamics
+        self.mass_matrix_check_ = fitted.mass_matrix_check
+        self.dropped_features_ = fitted.dropped_features
+        self.still_coordinates_ = fitted.still_coordinates
+        self.forced_coordinates_ = fitted.forced_coordinates
+        self.n_coordinates_, self.n_samples_ = fitted.n_coordinates, fitted.n_samples
+        self.formulation_, self.weak_info_ = fitted.formulation, fitted.weak_info
+        self.selection_ = fitted.selection
+        self.inclusion_probability_ = fitted.inclusion_probability
+        self.coef_interval_ = fitted.coef_interval
+        self.physical_consistency_ = fitted.physical_consistency
 
     def _check_options(self):
         """Options of the estimator, checked at the start of fit (one layer: _validation)."""

@@ -6,11 +6,12 @@ import itertools
 import keyword
 from collections.abc import Iterable, Sequence
 
+import numpy as np
 import sympy as sp
 
 from .expressions import FUNCTIONS, check_real_expression, check_term
 
-__all__ = ["Coordinates", "monomials", "products"]
+__all__ = ["Coordinates", "monomials", "products", "stack_variables"]
 
 # names the expression grammar reads as constants or functions, and the time symbol
 _RESERVED = {"t", "E", "pi", "I", "oo", "nan", "zoo", *FUNCTIONS}
@@ -154,3 +155,42 @@ def products(terms_a, terms_b) -> list[sp.Expr]:
     terms_a = as_expr_list(terms_a, "terms_a")
     terms_b = as_expr_list(terms_b, "terms_b")
     return _unique(sp.Mul(x, y) for x in terms_a for y in terms_b)
+
+
+def stack_variables(q, qd, qdd=None, tau=None, t=None) -> np.ndarray:
+    """Stack the data into the library input ``Z`` of shape ``(N, 4n + 1)``.
+
+    Parameters
+    ----------
+    q, qd : array, shape (N, n)
+        Positions and velocities.
+    qdd, tau : array, shape (N, n), optional
+        Accelerations and generalized forces; zeros when absent.
+    t : array, shape (N,), optional
+        Sample times; zeros when absent.
+
+    Returns
+    -------
+    Z : ndarray, shape (N, 4n + 1)
+        Columns in the order of :attr:`Coordinates.variables`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> stack_variables(np.zeros((5, 2)), np.ones((5, 2))).shape
+    (5, 9)
+    """
+    q = np.asarray(q, dtype=float)
+    if q.ndim != 2:
+        raise ValueError(f"q: expected a 2-D array (n_samples, n), got shape {q.shape}")
+    n_samples, n = q.shape
+    parts = []
+    for name, a in (("q", q), ("qd", qd), ("qdd", qdd), ("tau", tau)):
+        a = np.zeros((n_samples, n)) if a is None else np.asarray(a, dtype=float)
+        if a.shape != (n_samples, n):
+            raise ValueError(f"{name}: expected shape {(n_samples, n)}, got {a.shape}")
+        parts.append(a)
+    t = np.zeros(n_samples) if t is None else np.asarray(t, dtype=float).reshape(-1)
+    if t.shape != (n_samples,):
+        raise ValueError(f"t: expected shape {(n_samples,)}, got {t.shape}")
+    return np.column_stack(parts + [t])

@@ -20,7 +20,7 @@ from pysindy_xl.mujoco import (
     validate_model,
     validation_trajectory,
 )
-from pysindy_xl.mujoco.simulation.generate import actuator_force_function
+from pysindy_xl.simulation.generate import actuator_force_function
 
 # Every supported kind of actuator, two on one joint, clamps on controls, forces and the joint.
 ACTUATED = """

@@ -23,9 +23,9 @@ import pytest
 from kinematic_models import PLANAR_ARM
 
 import pysindy_xl as px
+from pysindy_xl.evaluation.validation import validate_model
 from pysindy_xl.mujoco import MJCFSystem, generate_dataset
 from pysindy_xl.mujoco.catalogs.kinematic import kinematic_catalog
-from pysindy_xl.mujoco.evaluation.validation import validate_model
 
 
 def _mujoco_mass_and_gravity(system, qpos):

@@ -22,8 +22,8 @@ from pysindy_xl.mujoco import (
     validate_model,
     validation_trajectory,
 )
-from pysindy_xl.mujoco.simulation.generate import ConstraintWarning
-from pysindy_xl.mujoco.simulation.signals import motor_tracking
+from pysindy_xl.simulation.generate import ConstraintWarning
+from pysindy_xl.simulation.signals import motor_tracking
 
 # a wrist of a published arm: kp 800, kv 80 and a 20 N m force limit on 1.4e-4 kg m^2
 WRIST = """

@@ -25,7 +25,7 @@ from pysindy_xl.mujoco import (
     validate_model,
     validation_trajectory,
 )
-from pysindy_xl.mujoco.simulation.generate import actuator_force_function
+from pysindy_xl.simulation.generate import actuator_force_function
 
 MODELS = pathlib.Path(__file__).parent / "models"
 

@@ -117,9 +117,9 @@ def test_mujoco_law_model_reads_its_rigid_mass_and_exports_its_frictionloss():
     does); the mass matrix compared with mj_fullM is the rigid body's, read where the joints
     slide; the law counts as dry friction, and the MJCF export states it as frictionloss."""
     import pysindy_xl as px
+    from pysindy_xl.evaluation.physics import compare_physics
     from pysindy_xl.export.mjcf import identified_mj_model
     from pysindy_xl.mujoco import MJCFSystem, generate_dataset, kinematic_catalog
-    from pysindy_xl.mujoco.evaluation.physics import compare_physics
     from pysindy_xl.physical import friction_columns
 
     # a stiff friction regularization on the wrist: its sticking inertia 1/R is ~100 times
@@ -176,8 +176,8 @@ def test_auto_formulation_fits_the_mujoco_law_in_the_weak_form():
     sticking zone into the inertia; MuJoCo's law recovers the mass matrix (mj_fullM) and the
     MJCF's friction."""
     import pysindy_xl as px
+    from pysindy_xl.evaluation.physics import compare_physics
     from pysindy_xl.mujoco import MJCFSystem, generate_dataset, kinematic_catalog
-    from pysindy_xl.mujoco.evaluation.physics import compare_physics
 
     # dry friction the default forcing overcomes (the shoulder's 1.5 N m would hold it)
     system = MJCFSystem(ARM.format(step=1e-3).replace('frictionloss="1.5"', 'frictionloss="0.2"')

@@ -167,7 +167,7 @@ def _position_bias(trajectory):
 
 def test_implicit_steps_are_replaced_where_they_bias_the_positions():
     from pysindy_xl.mujoco import MJCFSystem
-    from pysindy_xl.mujoco.simulation.generate import faithful_integrator
+    from pysindy_xl.simulation.generate import faithful_integrator
 
     system = MJCFSystem(SERVO_ARM)
     assert faithful_integrator(system.mj_model()) == "RK4"

@@ -6,7 +6,7 @@ import pytest
 mujoco = pytest.importorskip("mujoco")
 
 from pysindy_xl.mujoco import MJCFSystem, generate_dataset  # noqa: E402
-from pysindy_xl.mujoco.simulation.integration import (  # noqa: E402
+from pysindy_xl.simulation.integration import (  # noqa: E402
     BIAS_TOLERANCE,
     RK4_BOUND,
     UnstableSimulationError,

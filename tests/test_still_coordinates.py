@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 import pysindy_xl as px
+from pysindy_xl.evaluation.physics import compare_physics
 from pysindy_xl.fit.still import driven_coordinates, noise_level, still_coordinates
 from pysindy_xl.mujoco import MJCFSystem, generate_dataset, reference_catalog
-from pysindy_xl.mujoco.evaluation.physics import compare_physics
 from pysindy_xl.quality import fit_quality, quality_lines
 
 MODELS = pathlib.Path(__file__).parent / "models"

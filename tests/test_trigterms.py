@@ -119,7 +119,7 @@ def test_euler_lagrange_many_is_each_polynomials_bit_for_bit(angles):
 def test_unique_rows_is_numpys_unique_of_the_row_bytes():
     """One int64 key per row sorts and groups rows as their bytes do, including entries a
     key cannot hold (negative or past one byte, compared as bytes)."""
-    from pysindy_xl.feature_library._monomials import _unique_rows
+    from pysindy_xl.feature_library._monomials import unique_rows
 
     rng = np.random.default_rng(3)
     for high in (1, 3, 300, 40_000):
@@ -128,7 +128,7 @@ def test_unique_rows_is_numpys_unique_of_the_row_bytes():
             rows = np.vstack([rows, rows[: len(rows) // 2]]).astype(np.int16)
             keys = rows.view(np.dtype((np.void, rows.shape[1] * 2))).ravel()
             _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
-            found = _unique_rows(rows)
+            found = unique_rows(rows)
             np.testing.assert_array_equal(found[0], first)
             np.testing.assert_array_equal(found[1], inverse.ravel())
 

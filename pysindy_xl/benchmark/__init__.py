@@ -8,14 +8,14 @@ the command line (:mod:`.cli`, ``pysindy-xl benchmark``).
 324
 """
 
-from .cli import add_parser, main
+from .cli import add_parser as add_parser  # the `pysindy-xl benchmark` subcommand
+from .cli import main
 from .grid import PRESETS, GridSettings, Task, TrajectorySpec, all_configurations, config_label
 from .ranking import format_table, rank_trajectory, ranking_table
 from .records import RecordStore, read_records
-from .report import machine_description, write_report
-from .runner import execute_task, run_grid, run_task
+from .report import write_report
+from .runner import run_grid
 
 __all__ = ["PRESETS", "GridSettings", "Task", "TrajectorySpec", "all_configurations",
            "config_label", "ranking_table", "rank_trajectory", "format_table", "RecordStore",
-           "read_records", "run_grid", "run_task", "execute_task", "write_report",
-           "machine_description", "add_parser", "main"]
+           "read_records", "run_grid", "write_report", "main"]

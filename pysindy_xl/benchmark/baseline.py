@@ -17,7 +17,23 @@ __all__ = ["SINDyBaseline", "baseline_terms"]
 
 def baseline_terms(catalog) -> list[sp.Expr]:
     """The distinct classical terms without acceleration of a classical catalog (e.g.
-    ``reference_catalog(system, "classical")``), in catalog order."""
+    ``reference_catalog(system, "classical")``), in catalog order.
+
+    Parameters
+    ----------
+    catalog : pysindy_xl.CatalogRepartition
+        A classical catalog.
+
+    Returns
+    -------
+    list of sympy.Expr
+        The terms.
+
+    Raises
+    ------
+    ValueError
+        When the catalog has no classical term without acceleration.
+    """
     catalog.symbolic_matrix()  # the columns, derived on first use
     accelerations = set(catalog.coords.qdd)
     found = []
@@ -34,7 +50,17 @@ class SINDyBaseline:
     """Plain pysindy.SINDy on ``[q, qd]`` with classical-catalog ``terms`` (module docstring);
     ``optimizer`` defaults to ``pysindy.STLSQ()``. Fitted: ``model_`` (the SINDy model),
     ``forced_`` (n,) (coordinates whose force entered the fit), ``feature_exprs_`` (``terms``
-    then those forces), ``coef_`` (n, n_features) (the acceleration rows) and ``dynamics_``."""
+    then those forces), ``coef_`` (n, n_features) (the acceleration rows) and ``dynamics_``.
+
+    Parameters
+    ----------
+    coords : pysindy_xl.Coordinates
+        The generalized coordinates.
+    terms : sequence of sympy.Expr
+        Library terms in ``q`` and ``qd`` (:func:`baseline_terms`).
+    optimizer : pysindy optimizer, default=None
+        None: ``pysindy.STLSQ()``.
+    """
 
     def __init__(self, coords, terms, optimizer=None):
         self.coords = coords
@@ -42,7 +68,24 @@ class SINDyBaseline:
         self.optimizer = optimizer
 
     def fit(self, x, t, x_dot, x_ddot, u=None):
-        """Fit on lists of per-trajectory arrays (the layout of ``Dataset.fit_arguments``)."""
+        """Fit on lists of per-trajectory arrays (the layout of ``Dataset.fit_arguments``).
+
+        Parameters
+        ----------
+        x : list of numpy.ndarray of shape (N, n)
+            Positions of each trajectory.
+        t : list of numpy.ndarray of shape (N,) or float
+            Times or time step.
+        x_dot, x_ddot : list of numpy.ndarray of shape (N, n)
+            Velocities and accelerations.
+        u : list of numpy.ndarray of shape (N, n), default=None
+            Generalized forces; None: unforced.
+
+        Returns
+        -------
+        SINDyBaseline
+            The fitted baseline.
+        """
         import pysindy as ps
 
         from ..dynamics import MassMatrixDynamics
@@ -84,8 +127,32 @@ class SINDyBaseline:
         return self
 
     def get_feature_names(self) -> list[str]:
+        """Names of the features: the terms, then the forces.
+
+        Returns
+        -------
+        list of str
+            One name per feature.
+        """
         return [str(f) for f in self.feature_exprs_]
 
     def simulate(self, x0, t, u=None, **integrator_options) -> np.ndarray:
-        """Simulate like :meth:`pysindy_xl.XLSINDy.simulate` (same integrator and checks)."""
+        """Simulate like :meth:`pysindy_xl.XLSINDy.simulate` (same integrator and checks).
+
+        Parameters
+        ----------
+        x0 : array_like of shape (2n,)
+            Initial state ``[q, qd]``.
+        t : array_like of shape (T,)
+            Output times.
+        u : array_like of shape (T, n) or callable, default=None
+            Generalized forces.
+        **integrator_options
+            Passed to the integrator.
+
+        Returns
+        -------
+        numpy.ndarray of shape (T, 2n)
+            The simulated states.
+        """
         return self.dynamics_.simulate(x0, t, u, **integrator_options)

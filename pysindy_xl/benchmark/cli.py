@@ -35,7 +35,7 @@ from .grid import (
     all_configurations,
     config_label,
 )
-from .isolation import _ISOLATIONS
+from .isolation import ISOLATIONS
 from .records import STATUSES
 
 __all__ = ["add_parser", "build_parser", "main", "run_benchmark"]
@@ -62,7 +62,18 @@ def _configuration(text):
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    """Add the benchmark options to ``parser``; returns it."""
+    """Add the benchmark options to ``parser``; returns it.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The parser to extend.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The same parser.
+    """
     preset = parser.add_mutually_exclusive_group()
     preset.add_argument("--quick", dest="preset", action="store_const", const="quick",
                         help="small grid, short trajectories (default)")
@@ -105,7 +116,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         help="run again the runs whose recorded status is one of these")
     parser.add_argument("--limit", type=int, default=None,
                         help="run at most this many pending runs, then stop")
-    parser.add_argument("--isolation", choices=_ISOLATIONS, default="auto",
+    parser.add_argument("--isolation", choices=ISOLATIONS, default="auto",
                         help="how the time limit is enforced (default: a forked process per run)")
     parser.add_argument("--fresh", action="store_true",
                         help="start over: existing records are renamed records.TIME.jsonl "
@@ -131,7 +142,18 @@ def _blas_threads(text):
 
 def add_parser(subparsers):
     """Register ``benchmark`` on argparse subparsers (the ``pysindy-xl`` command); the parsed
-    namespace's ``func(args)`` runs it and returns the exit status."""
+    namespace's ``func(args)`` runs it and returns the exit status.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The subparsers of the ``pysindy-xl`` parser.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The ``benchmark`` subparser.
+    """
     parser = subparsers.add_parser(
         "benchmark", help="reproduce the paper's Table 1 (parallel, resumable)",
         description="Run the grid of the paper's Table 1 (systems x friction x forcing x noise "
@@ -143,14 +165,31 @@ def add_parser(subparsers):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """A standalone parser (``benchmarks/table1.py``)."""
+    """A standalone parser (``benchmarks/table1.py``).
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The parser of the benchmark options.
+    """
     parser = argparse.ArgumentParser(
         prog="table1.py", description="Reproduce the paper's Table 1 with pysindy-xl.", **_LAYOUT)
     return add_arguments(parser)
 
 
 def settings_from_args(args):
-    """The :class:`GridSettings` described by parsed arguments."""
+    """The :class:`GridSettings` described by parsed arguments.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments of the benchmark options.
+
+    Returns
+    -------
+    GridSettings
+        The preset with the options' changes.
+    """
     settings = PRESETS[args.preset]
     configurations = args.configs or all_configurations(include_baseline=True)
     if args.no_baseline:
@@ -169,7 +208,19 @@ def settings_from_args(args):
 
 
 def run_benchmark(args) -> int:
-    """Run (or, with ``--report-only``, only report) the benchmark of parsed arguments."""
+    """Run (or, with ``--report-only``, only report) the benchmark of parsed arguments.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments of the benchmark options.
+
+    Returns
+    -------
+    int
+        The exit status: 0 on success (failed runs are recorded, not errors), 1 when the grid
+        cannot run or, with ``--report-only``, has no records, 2 on invalid options.
+    """
     from .records import GridBusyError, RecordStore
     from .report import load_average, machine_description, write_report
     from .runner import run_grid
@@ -236,6 +287,28 @@ def _effective_jobs(n_jobs):
 
 
 def main(argv=None) -> int:
-    """Entry point of ``benchmarks/table1.py``; returns the exit status."""
+    """Entry point of ``benchmarks/table1.py``; returns the exit status.
+
+    Parameters
+    ----------
+    argv : list of str, default=None
+        The arguments; None: ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        The exit status.
+
+    Examples
+    --------
+    Reporting a grid that never ran is an error (exit status 1):
+
+    >>> import contextlib, os, sys, tempfile
+    >>> with contextlib.redirect_stderr(sys.stdout):
+    ...     status = main(["--report-only", "--out", os.path.join(tempfile.mkdtemp(), "none")])
+    benchmark: error: no records at .../none/records.jsonl
+    >>> status
+    1
+    """
     args = build_parser().parse_args(argv)
     return run_benchmark(args)

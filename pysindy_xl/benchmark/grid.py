@@ -29,6 +29,20 @@ SYSTEM_NAMES = ("cart-pole", "double-pendulum", "cart-double-pendulum")
 def config_label(catalog: str, solver: str) -> str:
     """Row name of a configuration in the table.
 
+    Parameters
+    ----------
+    catalog : str
+        The catalog.
+    solver : str
+        The solver, ``"pysindy"`` for the baseline.
+
+    Returns
+    -------
+    str
+        ``"CATALOG x SOLVER"``, or ``"pysindy.SINDy (CATALOG)"``.
+
+    Examples
+    --------
     >>> config_label("lagrange", "explicit")
     'lagrange x explicit'
     >>> config_label("classical", "pysindy")
@@ -43,6 +57,18 @@ def all_configurations(include_baseline: bool = True) -> list[tuple[str, str]]:
     """``(catalog, solver)`` pairs in table order: the paper's 9, the kinematic catalog's 3, then
     (``include_baseline``) the pysindy.SINDy baseline ``("classical", "pysindy")``.
 
+    Parameters
+    ----------
+    include_baseline : bool, default=True
+        Append the pysindy.SINDy baseline.
+
+    Returns
+    -------
+    list of tuple of str
+        ``(catalog, solver)`` pairs.
+
+    Examples
+    --------
     >>> configurations = all_configurations()
     >>> len(configurations), configurations[-2:]
     (13, [('kinematic', 'implicit'), ('classical', 'pysindy')])
@@ -54,6 +80,20 @@ def all_configurations(include_baseline: bool = True) -> list[tuple[str, str]]:
 def solver_applies(solver: str, forcing: str) -> bool:
     """Whether a solver runs on data of a forcing mode (module docstring).
 
+    Parameters
+    ----------
+    solver : str
+        The solver.
+    forcing : str
+        The forcing mode of the data.
+
+    Returns
+    -------
+    bool
+        Whether the configuration runs on that data.
+
+    Examples
+    --------
     >>> solver_applies("explicit", "implicit"), solver_applies("mixed", "implicit")
     (False, True)
     """
@@ -71,10 +111,29 @@ def _stable_hash(payload) -> str:
 
 @dataclass(frozen=True)
 class TrajectorySpec:
-    """One training dataset of the grid: ``system`` (registry name), ``friction`` (multiplier of
-    the default joint damping), ``forcing``, ``noise`` (relative level), ``seed`` and
-    ``noise_model``: ``"all"`` (the paper's noise on every channel, all given to the fit) or
-    ``"positions"`` (noisy positions only, no derivative given, as from a real sensor)."""
+    """One training dataset of the grid.
+
+    Parameters
+    ----------
+    system : str
+        Registry name of the system.
+    friction : float
+        Multiplier of the default joint damping.
+    forcing : {"implicit", "explicit", "mixed"}
+        The forcing mode.
+    noise : float
+        Relative noise level.
+    seed : int
+        Seed of the data.
+    noise_model : {"all", "positions"}, default="all"
+        ``"all"``: the paper's noise on every channel, all given to the fit; ``"positions"``:
+        noisy positions only, no derivative given, as from a real sensor.
+
+    Examples
+    --------
+    >>> TrajectorySpec("cart-pole", 1.0, "explicit", 0.01, 0).key
+    'cart-pole/friction=1/explicit/noise=0.01/seed=0'
+    """
 
     system: str
     friction: float
@@ -93,8 +152,27 @@ class TrajectorySpec:
 
 @dataclass(frozen=True)
 class Task:
-    """One configuration on one trajectory; ``solver`` is ``"pysindy"`` for the baseline, and
-    ``settings_hash`` keeps records of a grid with other data settings from counting as done."""
+    """One configuration on one trajectory.
+
+    Parameters
+    ----------
+    trajectory : TrajectorySpec
+        The training data.
+    catalog : str
+        The catalog (``"lagrange"``, ``"classical"``, ``"mixed"``, ``"kinematic"``).
+    solver : str
+        The solver (``"explicit"``, ``"implicit"``, ``"mixed"``), or ``"pysindy"`` for the
+        baseline.
+    settings_hash : str, default=""
+        Hash of the grid's data settings: records of a grid with other settings do not count
+        as done.
+
+    Examples
+    --------
+    >>> task = Task(TrajectorySpec("cart-pole", 1.0, "explicit", 0.0, 0), "mixed", "explicit")
+    >>> task.config, task.run_id == Task(task.trajectory, "mixed", "explicit").run_id
+    ('mixed x explicit', True)
+    """
 
     trajectory: TrajectorySpec
     catalog: str
@@ -111,6 +189,14 @@ class Task:
         return f"{self.trajectory.key}/{self.catalog}x{self.solver}/{self.settings_hash}"
 
     def to_dict(self) -> dict:
+        """The task as a JSON-serializable dict (the start of its record).
+
+        Returns
+        -------
+        dict
+            The trajectory's fields, ``catalog``, ``solver``, ``config``, ``trajectory_id`` and
+            ``run_id``.
+        """
         return {**asdict(self.trajectory), "catalog": self.catalog, "solver": self.solver,
                 "config": self.config, "trajectory_id": self.trajectory.key,
                 "run_id": self.run_id}
@@ -122,18 +208,45 @@ class GridSettings:
 
     Parameters
     ----------
-    systems, friction_levels, forcings, noise_levels, seeds : tuples
-        Axes of the trajectory grid (``noise_levels``: the paper's noise on every channel).
-    position_noise_levels : tuple
+    systems : tuple of str, default=SYSTEM_NAMES
+        Systems of the grid (registry names).
+    friction_levels : tuple of float, default=(1.0,)
+        Multipliers of the default joint damping.
+    forcings : tuple of str, default=FORCINGS
+        Forcing modes.
+    noise_levels : tuple of float, default=(0.0,)
+        The paper's noise on every channel.
+    seeds : tuple of int, default=(0,)
+        Seeds of the data.
+    position_noise_levels : tuple of float, default=()
         Further noise levels on the positions only.
-    configurations : tuple of (catalog, solver)
-        Configurations to run (default: :func:`all_configurations`).
-    n_trajectories, duration, sample_every : int, float, int
-        Training trajectories per dataset, seconds each, every k-th MuJoCo step (1 ms) kept.
-    validation_duration, timeout : float
-        Seconds of the fresh validation trajectory, and allowed to one run.
-    name : str
+    configurations : tuple of (catalog, solver), default=all_configurations()
+        Configurations to run.
+    n_trajectories : int, default=2
+        Training trajectories per dataset.
+    duration : float, default=10.0
+        Seconds of each training trajectory.
+    sample_every : int, default=2
+        Every k-th MuJoCo step (1 ms) kept.
+    validation_duration : float, default=10.0
+        Seconds of the fresh validation trajectory.
+    timeout : float, default=3600.0
+        Seconds allowed to one run.
+    name : str, default="custom"
         Preset name, recorded with the results.
+
+    Raises
+    ------
+    ValueError
+        When an axis is empty or holds an unknown or out-of-range value.
+
+    Examples
+    --------
+    >>> grid = GridSettings(systems=("cart-pole",), forcings=("explicit",))
+    >>> len(grid.trajectories()), len(grid.configurations), len(grid.tasks())
+    (1, 13, 9)
+
+    The four implicit-solver configurations skip forced data (:func:`solver_applies`).
     """
 
     systems: tuple = SYSTEM_NAMES
@@ -180,7 +293,13 @@ class GridSettings:
 
     def data_settings(self) -> dict:
         """The settings that change the data, hashed into every run id (not the timeout: rerunning
-        with a longer one and ``retry`` reruns only the runs that timed out)."""
+        with a longer one and ``retry`` reruns only the runs that timed out).
+
+        Returns
+        -------
+        dict
+            The axes and data settings (JSON-serializable).
+        """
         return {"n_trajectories": self.n_trajectories, "duration": float(self.duration),
                 "sample_every": self.sample_every,
                 "validation_duration": float(self.validation_duration)}
@@ -190,7 +309,13 @@ class GridSettings:
         return _stable_hash(self.data_settings())
 
     def trajectories(self) -> list[TrajectorySpec]:
-        """Every trajectory of the grid, in a stable order."""
+        """Every trajectory of the grid, in a stable order.
+
+        Returns
+        -------
+        list of TrajectorySpec
+            The training datasets.
+        """
         noises = [(float(v), "all") for v in self.noise_levels] + [
             (float(v), "positions") for v in self.position_noise_levels]
         return [
@@ -203,7 +328,13 @@ class GridSettings:
         ]
 
     def tasks(self) -> list[Task]:
-        """Every run of the grid, grouped by trajectory (consecutive runs share data)."""
+        """Every run of the grid, grouped by trajectory (consecutive runs share data).
+
+        Returns
+        -------
+        list of Task
+            The runs, where the configuration applies to the forcing (:func:`solver_applies`).
+        """
         digest = self.settings_hash
         return [
             Task(spec, catalog, solver, digest)
@@ -213,7 +344,18 @@ class GridSettings:
         ]
 
     def with_options(self, **changes) -> GridSettings:
-        """A copy with some fields replaced (None values are ignored)."""
+        """A copy with some fields replaced (None values are ignored).
+
+        Parameters
+        ----------
+        **changes
+            Field values; None leaves a field as it is.
+
+        Returns
+        -------
+        GridSettings
+            The new settings.
+        """
         changes = {k: v for k, v in changes.items() if v is not None}
         unknown = set(changes) - {f.name for f in fields(self)}
         if unknown:
@@ -221,6 +363,13 @@ class GridSettings:
         return replace(self, **changes)
 
     def to_dict(self) -> dict:
+        """The settings as a JSON-serializable dict, with the number of runs.
+
+        Returns
+        -------
+        dict
+            The fields (tuples as lists) and ``n_runs``.
+        """
         out = asdict(self)
         out["configurations"] = [list(c) for c in self.configurations]
         for key in ("systems", "friction_levels", "forcings", "noise_levels", "seeds",

@@ -15,7 +15,7 @@ from .records import base_record, failed_record, json_finite
 
 __all__ = ["RunTimeout", "blas_thread_limit"]
 
-_ISOLATIONS = ("auto", "process", "signal", "none")
+ISOLATIONS = ("auto", "process", "signal", "none")
 
 
 class RunTimeout(Exception):
@@ -23,8 +23,26 @@ class RunTimeout(Exception):
 
 
 def resolve_isolation(isolation: str) -> str:
-    if isolation not in _ISOLATIONS:
-        raise ValueError(f"isolation: expected one of {_ISOLATIONS}, got {isolation!r}")
+    """The isolation a run gets: ``auto`` resolved to ``process`` where fork exists, else
+    ``signal`` in the main thread, else ``none``.
+
+    Parameters
+    ----------
+    isolation : {"auto", "process", "signal", "none"}
+        The requested isolation.
+
+    Returns
+    -------
+    str
+        ``"process"``, ``"signal"`` or ``"none"``.
+
+    Raises
+    ------
+    ValueError
+        When ``isolation`` is unknown.
+    """
+    if isolation not in ISOLATIONS:
+        raise ValueError(f"isolation: expected one of {ISOLATIONS}, got {isolation!r}")
     if isolation != "auto":
         return isolation
     import multiprocessing
@@ -59,6 +77,24 @@ def _child(connection, function, task, settings, deadline, parent_pid):
 
 
 def run_in_process(function, task, settings, timeout):
+    """Run ``function`` in a forked child, killed at the time limit.
+
+    Parameters
+    ----------
+    function : callable
+        ``function(task, settings, deadline, stage) -> record``.
+    task : Task
+        The run.
+    settings : GridSettings
+        The grid's settings.
+    timeout : float
+        Seconds allowed.
+
+    Returns
+    -------
+    dict
+        The run's record; ``timeout`` or ``error`` when it did not finish.
+    """
     import multiprocessing
     context = multiprocessing.get_context("fork")
     receiver, sender = context.Pipe(duplex=False)
@@ -104,6 +140,24 @@ def run_in_process(function, task, settings, timeout):
 
 
 def run_with_signal(function, task, settings, timeout):
+    """Run ``function`` in this process, interrupted at the time limit by an interval timer.
+
+    Parameters
+    ----------
+    function : callable
+        ``function(task, settings, deadline, stage) -> record``.
+    task : Task
+        The run.
+    settings : GridSettings
+        The grid's settings.
+    timeout : float
+        Seconds allowed.
+
+    Returns
+    -------
+    dict
+        The run's record; ``timeout`` or ``error`` when it did not finish.
+    """
     def alarm(signum, frame):
         raise RunTimeout()
 
@@ -128,6 +182,18 @@ def blas_thread_limit(blas_threads: int | None):
     """A context limiting every loaded BLAS's threads to ``blas_threads`` (>= 1) through
     :func:`threadpoolctl.threadpool_limits`; None leaves them alone.
 
+    Parameters
+    ----------
+    blas_threads : int or None
+        Threads allowed (>= 1); None leaves them alone.
+
+    Returns
+    -------
+    contextlib.AbstractContextManager
+        The context.
+
+    Examples
+    --------
     >>> from threadpoolctl import threadpool_info
     >>> with blas_thread_limit(1):
     ...     print({pool["num_threads"] for pool in threadpool_info()
@@ -143,6 +209,22 @@ def blas_thread_limit(blas_threads: int | None):
 
 
 def resolve_blas_threads(blas_threads, n_jobs, backend):
+    """The BLAS threads per run: ``"auto"`` is 1 when runs go in parallel, no limit otherwise.
+
+    Parameters
+    ----------
+    blas_threads : "auto", int or None
+        The requested limit.
+    n_jobs : int
+        Parallel processes (joblib convention).
+    backend : str or None
+        The joblib backend (Dask and Ray count as parallel).
+
+    Returns
+    -------
+    int or None
+        The limit, None for none.
+    """
     if blas_threads != "auto":
         return blas_threads
     import joblib

@@ -36,7 +36,13 @@ def die_with_parent() -> None:
 def watch_grid(grid_pid: int) -> None:
     """In a local worker of the grid process ``grid_pid``, start a daemon thread that kills the
     worker's forked runs and exits as soon as the grid is gone (nothing in the grid process or
-    in a Dask / Ray worker)."""
+    in a Dask / Ray worker).
+
+    Parameters
+    ----------
+    grid_pid : int
+        Process id of the grid.
+    """
     global _watched
     pid = os.getpid()
     if pid == grid_pid or os.getppid() != grid_pid or _watched == (pid, grid_pid):

@@ -36,6 +36,18 @@ def rank_trajectory(records) -> dict[str, int]:
     """``{config: rank}`` of the records with status ``ok`` among the records of one trajectory
     (competition ranks, 1 the best).
 
+    Parameters
+    ----------
+    records : iterable of dict
+        The records of one trajectory.
+
+    Returns
+    -------
+    dict of str to int
+        Competition rank of each configuration whose run succeeded (equal errors share a rank).
+
+    Examples
+    --------
     >>> recs = [{"config": c, "status": "ok", "metrics": {"position_rmse": e}}
     ...         for c, e in [("a", 0.3), ("b", 0.1), ("c", 0.1)]]
     >>> rank_trajectory(recs)
@@ -60,7 +72,30 @@ def ranking_table(records, configs=None) -> list[dict]:
     """Table 1 from run records (the last record of a run id counts): one row per configuration
     (also those of ``configs`` without records) with the keys of :data:`TABLE_COLUMNS` and
     :data:`EXTRA_COLUMNS`, sorted as in the module docstring; ``success rate`` is ``nan``
-    without a counted run."""
+    without a counted run.
+
+    Parameters
+    ----------
+    records : iterable of dict
+        Run records.
+    configs : sequence of str, default=None
+        Configurations listed even without records.
+
+    Returns
+    -------
+    list of dict
+        One row per configuration.
+
+    Examples
+    --------
+    >>> records = [{"run_id": f"{c}/{t}", "trajectory_id": t, "config": c, "status": s,
+    ...             "metrics": {"position_rmse": e}}
+    ...            for t, c, s, e in [("t0", "A", "ok", 0.01), ("t0", "B", "ok", 0.02),
+    ...                               ("t1", "A", "ok", 0.03), ("t1", "B", "invalid", None)]]
+    >>> [(row["combo type"], row["1st"], row["Wins WC"], row["success rate"])
+    ...  for row in ranking_table(records)]
+    [('A', 2, 1, 1.0), ('B', 0, 0, 0.5)]
+    """
     records = [check_record(r) for r in latest_records(list(records))]
     by_trajectory = defaultdict(list)
     for r in records:
@@ -119,7 +154,31 @@ def _cell(value, column) -> str:
 
 
 def format_table(table, extra: bool = False) -> str:
-    """The table as aligned text in the paper's columns (``extra``: also the others)."""
+    """The table as aligned text in the paper's columns (``extra``: also the others).
+
+    Parameters
+    ----------
+    table : list of dict
+        Rows of :func:`ranking_table`.
+    extra : bool, default=False
+        Also the extra columns.
+
+    Returns
+    -------
+    str
+        The aligned text.
+
+    Examples
+    --------
+    >>> records = [{"run_id": f"{c}/{t}", "trajectory_id": t, "config": c, "status": s,
+    ...             "metrics": {"position_rmse": e}}
+    ...            for t, c, s, e in [("t0", "A", "ok", 0.01), ("t0", "B", "ok", 0.02),
+    ...                               ("t1", "A", "ok", 0.03), ("t1", "B", "invalid", None)]]
+    >>> print(format_table(ranking_table(records)))
+    combo type  invalid  timeout  uncompleted  1st  2nd  2nd>  Wins WC  success rate
+    A                 0        0            0    2    0     0        1      1.000000
+    B                 1        0            0    0    1     0        0      0.500000
+    """
     columns = TABLE_COLUMNS + (EXTRA_COLUMNS if extra else ())
     rows = [[_cell(row[c], c) for c in columns] for row in table]
     widths = [max(len(c), *(len(r[k]) for r in rows)) if rows else len(c)
@@ -133,7 +192,18 @@ def format_table(table, extra: bool = False) -> str:
 
 
 def table_to_markdown(table) -> str:
-    """The table (paper columns, then the extra ones) as a Markdown table."""
+    """The table (paper columns, then the extra ones) as a Markdown table.
+
+    Parameters
+    ----------
+    table : list of dict
+        Rows of :func:`ranking_table`.
+
+    Returns
+    -------
+    str
+        The Markdown table.
+    """
     columns = TABLE_COLUMNS + EXTRA_COLUMNS
     lines = ["| " + " | ".join(columns) + " |",
              "|" + "|".join([":---"] + ["---:"] * (len(columns) - 1)) + "|"]
@@ -143,7 +213,18 @@ def table_to_markdown(table) -> str:
 
 
 def table_to_csv(table) -> str:
-    """The table as CSV text (full precision, empty cells for undefined values)."""
+    """The table as CSV text (full precision, empty cells for undefined values).
+
+    Parameters
+    ----------
+    table : list of dict
+        Rows of :func:`ranking_table`.
+
+    Returns
+    -------
+    str
+        The CSV text.
+    """
     import csv
     import io
     columns = TABLE_COLUMNS + EXTRA_COLUMNS

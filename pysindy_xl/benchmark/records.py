@@ -23,14 +23,33 @@ from ..registry import json_finite
 from .grid import GridSettings, Task
 
 __all__ = ["STATUSES", "RecordStore", "GridBusyError", "read_records", "latest_records",
-           "check_record", "json_finite"]
+           "check_record"]
 
 STATUSES = ("ok", "invalid", "timeout", "error")
 _REQUIRED = ("run_id", "trajectory_id", "config", "status")
 
 
 def check_record(record) -> dict:
-    """Validate a record's required fields and status; returns it."""
+    """Validate a record's required fields and status; returns it.
+
+    Parameters
+    ----------
+    record : dict
+        A run record.
+
+    Returns
+    -------
+    dict
+        The same record.
+
+    Raises
+    ------
+    TypeError
+        When ``record`` is not a dict.
+    ValueError
+        When a required field is missing, the status is unknown, or an ``ok`` record lacks
+        a finite ``metrics.position_rmse``.
+    """
     if not isinstance(record, dict):
         raise TypeError(f"record: expected a dict, got {type(record).__name__}")
     missing = [k for k in _REQUIRED if k not in record]
@@ -52,7 +71,33 @@ class GridBusyError(RuntimeError):
 
 def read_records(path) -> list[dict]:
     """All complete records of a JSONL file, in file order (duplicates kept); unreadable lines
-    are skipped with a warning naming them, and their runs count as not done."""
+    are skipped with a warning naming them, and their runs count as not done.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The JSONL file.
+
+    Returns
+    -------
+    list of dict
+        The records (empty when the file does not exist).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> path = os.path.join(tempfile.mkdtemp(), "records.jsonl")
+    >>> RecordStore(path).append({"run_id": "a", "trajectory_id": "t", "config": "c",
+    ...                           "status": "timeout"})
+    >>> with open(path, "a") as handle:  # a torn line, as a killed writer leaves
+    ...     _ = handle.write('{"run_id": "b", "traj')
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     ids = [record["run_id"] for record in read_records(path)]
+    >>> ids, caught[0].category.__name__
+    (['a'], 'RuntimeWarning')
+    """
     if not os.path.exists(path):
         return []
     with open(path, encoding="utf-8") as handle:
@@ -82,7 +127,18 @@ def read_records(path) -> list[dict]:
 
 
 def latest_records(records) -> list[dict]:
-    """One record per run id, the last one written, in order of first appearance."""
+    """One record per run id, the last one written, in order of first appearance.
+
+    Parameters
+    ----------
+    records : iterable of dict
+        Run records.
+
+    Returns
+    -------
+    list of dict
+        The last record of every run id.
+    """
     by_id: dict = {}
     for record in records:
         by_id[record["run_id"]] = record  # dict keeps the first insertion position
@@ -92,6 +148,13 @@ def latest_records(records) -> list[dict]:
 class RecordStore:
     """Append-only JSONL file of run records (module docstring), created with its directory.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The JSONL file (created with its directory; a torn last line is cut).
+
+    Examples
+    --------
     >>> import tempfile, os
     >>> path = os.path.join(tempfile.mkdtemp(), "records.jsonl")
     >>> store = RecordStore(path)
@@ -147,11 +210,28 @@ class RecordStore:
             handle.close()
 
     def records(self) -> list[dict]:
-        """Latest record of every run id (see :func:`latest_records`)."""
+        """Latest record of every run id (see :func:`latest_records`).
+
+        Returns
+        -------
+        list of dict
+            The latest record of every run id.
+        """
         return latest_records(read_records(self.path))
 
     def finished_ids(self, retry=()) -> set[str]:
-        """Run ids with a record, except those whose latest status is in ``retry``."""
+        """Run ids with a record, except those whose latest status is in ``retry``.
+
+        Parameters
+        ----------
+        retry : iterable of str, default=()
+            Statuses that do not count as finished.
+
+        Returns
+        -------
+        set of str
+            The finished run ids.
+        """
         retry = set(retry)
         unknown = retry - set(STATUSES)
         if unknown:
@@ -159,7 +239,13 @@ class RecordStore:
         return {r["run_id"] for r in self.records() if r["status"] not in retry}
 
     def append(self, record: dict) -> None:
-        """Append one record durably (one write, flush, fsync)."""
+        """Append one record durably (one write, flush, fsync).
+
+        Parameters
+        ----------
+        record : dict
+            A run record (JSON-serializable).
+        """
         check_record(record)
         line = json.dumps(record, sort_keys=True, allow_nan=False) + "\n"
         data = line.encode("utf-8")
@@ -174,6 +260,20 @@ class RecordStore:
 
 
 def base_record(task: Task, settings: GridSettings) -> dict:
+    """The record a run starts with: the task, the grid's name, status ``error`` until it ends.
+
+    Parameters
+    ----------
+    task : Task
+        The run.
+    settings : GridSettings
+        The grid's settings.
+
+    Returns
+    -------
+    dict
+        The record.
+    """
     import pysindy_xl
     return {**task.to_dict(), "grid": settings.name, "status": "error", "message": None,
             "metrics": {}, "time_s": {}, "pid": os.getpid(),
@@ -181,6 +281,24 @@ def base_record(task: Task, settings: GridSettings) -> dict:
 
 
 def failed_record(record: dict, status: str, error: BaseException, with_traceback=False) -> dict:
+    """Mark ``record`` as failed with ``status`` and the error's message.
+
+    Parameters
+    ----------
+    record : dict
+        The run's record, changed in place.
+    status : {"error", "timeout", "invalid"}
+        The status.
+    error : BaseException
+        What went wrong.
+    with_traceback : bool, default=False
+        Add the last three frames of the traceback to the message.
+
+    Returns
+    -------
+    dict
+        The record, JSON-safe (non-finite numbers as None).
+    """
     record["status"] = status
     message = f"{type(error).__name__}: {error}"
     if with_traceback:
@@ -192,5 +310,17 @@ def failed_record(record: dict, status: str, error: BaseException, with_tracebac
 
 
 def finish_record(record: dict) -> dict:
+    """Stamp ``record`` with ``finished_at`` (local time, ISO 8601).
+
+    Parameters
+    ----------
+    record : dict
+        The run's record, changed in place.
+
+    Returns
+    -------
+    dict
+        The record.
+    """
     record["finished_at"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
     return record

@@ -61,7 +61,20 @@ def _git_state() -> dict:
 
 
 def machine_description(n_jobs=None, backend=None) -> dict:
-    """The machine and software a grid ran on (JSON-serializable)."""
+    """The machine and software a grid ran on (JSON-serializable).
+
+    Parameters
+    ----------
+    n_jobs : int, default=None
+        Parallel processes of the grid, recorded.
+    backend : str, default=None
+        Joblib backend of the grid, recorded.
+
+    Returns
+    -------
+    dict
+        CPU, memory, Python and package versions, the git commit and the options.
+    """
     from importlib import metadata
     versions = {}
     for name in _PACKAGES:
@@ -86,6 +99,13 @@ def machine_description(n_jobs=None, backend=None) -> dict:
 
 
 def load_average():
+    """The 1, 5 and 15 minute load averages, or None where the system has none.
+
+    Returns
+    -------
+    list of float or None
+        The load averages.
+    """
     try:
         return [round(x, 2) for x in os.getloadavg()]
     except (OSError, AttributeError):
@@ -95,7 +115,22 @@ def load_average():
 def grid_summary(records, configs=None, reference: str = "mixed x mixed") -> dict:
     """Counts, run times and the acceptance targets of records: ``runs``, ``trajectories``,
     ``statuses``, ``run_time_s`` (median, p90, max, total) and ``reference`` (valid fraction of
-    the ``reference`` configuration)."""
+    the ``reference`` configuration).
+
+    Parameters
+    ----------
+    records : iterable of dict
+        Run records.
+    configs : sequence of str, default=None
+        Configurations counted even without records.
+    reference : str, default="mixed x mixed"
+        The configuration whose valid fraction is reported.
+
+    Returns
+    -------
+    dict
+        ``runs``, ``trajectories``, ``statuses``, ``run_time_s`` and ``reference``.
+    """
     records = latest_records(list(records))
     statuses = dict.fromkeys(("ok", "invalid", "timeout", "error"), 0)
     for r in records:
@@ -121,7 +156,17 @@ def grid_summary(records, configs=None, reference: str = "mixed x mixed") -> dic
 
 def plot_table(table, records, path) -> None:
     """PNG at ``path``: outcome counts per configuration of ``table`` (:func:`ranking_table`) and
-    the validation errors of the valid runs among ``records``."""
+    the validation errors of the valid runs among ``records``.
+
+    Parameters
+    ----------
+    table : list of dict
+        Rows of :func:`~pysindy_xl.benchmark.ranking.ranking_table`.
+    records : iterable of dict
+        Run records.
+    path : str or os.PathLike
+        The PNG file to write.
+    """
     import matplotlib
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
@@ -185,7 +230,37 @@ def write_report(records, out_dir, settings=None, machine=None, configs=None) ->
     """Write ``table.md``, ``table.csv``, ``table.png``, ``summary.json`` (and ``machine.json``
     when ``machine``, from :func:`machine_description`, is given) to ``out_dir``; returns
     ``{"table", "summary", "files", "text"}``. ``settings`` (a GridSettings or its dict) is
-    described in the Markdown, ``configs`` are listed even without records."""
+    described in the Markdown, ``configs`` are listed even without records.
+
+    Parameters
+    ----------
+    records : iterable of dict
+        Run records.
+    out_dir : str or os.PathLike
+        The directory written to.
+    settings : GridSettings or dict, default=None
+        Described in the Markdown.
+    machine : dict, default=None
+        From :func:`machine_description`; written to ``machine.json``.
+    configs : sequence of str, default=None
+        Configurations listed even without records.
+
+    Returns
+    -------
+    dict
+        ``{"table", "summary", "files", "text"}``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> records = [{"run_id": c, "trajectory_id": "t0", "config": c, "status": "ok",
+    ...             "metrics": {"position_rmse": e}, "time_s": {"run": 1.0}}
+    ...            for c, e in [("A", 0.01), ("B", 0.02)]]
+    >>> out = tempfile.mkdtemp()
+    >>> report = write_report(records, out)
+    >>> sorted(os.listdir(out)), report["summary"]["runs"]
+    (['summary.json', 'table.csv', 'table.md', 'table.png'], 2)
+    """
     os.makedirs(out_dir, exist_ok=True)
     records = latest_records(list(records))
     if configs is None and settings is not None and not isinstance(settings, dict):

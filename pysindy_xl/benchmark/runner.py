@@ -38,7 +38,18 @@ __all__ = ["run_task", "execute_task", "run_grid", "system_for", "trajectory_dat
 
 
 def system_for(spec: TrajectorySpec):
-    """The MuJoCo system of a trajectory, joint damping scaled by its friction level."""
+    """The MuJoCo system of a trajectory, joint damping scaled by its friction level.
+
+    Parameters
+    ----------
+    spec : TrajectorySpec
+        The trajectory.
+
+    Returns
+    -------
+    MuJoCoSystem
+        The registry system with its joint damping multiplied by ``spec.friction``.
+    """
     from ..mujoco import get_system
     base = get_system(spec.system)
     damping = {k: v * spec.friction for k, v in base.parameters.items() if "damping" in k}
@@ -57,10 +68,33 @@ def trajectory_data(spec: TrajectorySpec, n_trajectories: int, duration: float,
                     sample_every: int, validation_duration: float):
     """``(dataset, validation, seconds)`` of a grid trajectory, cached per process: the noisy
     training :class:`~pysindy_xl.data.Dataset`, a fresh noise-free validation trajectory with
-    the same forcing, and the time spent simulating."""
+    the same forcing, and the time spent simulating.
+
+    Parameters
+    ----------
+    spec : TrajectorySpec
+        The trajectory.
+    n_trajectories : int
+        Training trajectories.
+    duration : float
+        Seconds of each.
+    sample_every : int
+        Every k-th MuJoCo step kept.
+    validation_duration : float
+        Seconds of the validation trajectory.
+
+    Returns
+    -------
+    dataset : pysindy_xl.data.Dataset
+        The noisy training data.
+    validation : pysindy_xl.data.Trajectory
+        The noise-free validation trajectory.
+    seconds : float
+        Time spent simulating.
+    """
     from ..data import Dataset, add_noise
+    from ..evaluation.validation import validation_trajectory
     from ..mujoco import generate_dataset
-    from ..mujoco.evaluation.validation import validation_trajectory
     start = time.perf_counter()
     system = system_for(spec)
     motion_seed = _seed(spec.system, spec.friction, spec.forcing, spec.seed)
@@ -147,7 +181,25 @@ def execute_task(task: Task, settings: GridSettings, deadline: float | None = No
     """Run one task in this process and return its record (no time limit of its own): the
     validation simulation must end by ``deadline`` (a ``time.perf_counter()`` value), ``stage``
     is called with ``"generate"``, ``"fit"``, ``"validate"``, and warnings go to the record's
-    ``warnings`` list."""
+    ``warnings`` list.
+
+    Parameters
+    ----------
+    task : Task
+        The run.
+    settings : GridSettings
+        The grid's settings.
+    deadline : float, default=None
+        ``time.perf_counter()`` value by which the validation simulation must end; None: no
+        deadline.
+    stage : callable, default=None
+        Called with ``"generate"``, ``"fit"``, ``"validate"`` as the run goes.
+
+    Returns
+    -------
+    dict
+        The run's record (status, metrics, model summary, times, warnings).
+    """
     stage = stage or (lambda name: None)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -160,7 +212,7 @@ def execute_task(task: Task, settings: GridSettings, deadline: float | None = No
 
 def _execute(task, settings, deadline, stage) -> dict:
     from ..dynamics import DynamicsError
-    from ..mujoco.evaluation.validation import validate_model
+    from ..evaluation.validation import validate_model
     record = base_record(task, settings)
     spec = task.trajectory
     stage("generate")
@@ -233,12 +285,24 @@ def run_task(task: Task, settings: GridSettings, timeout: float | None = None,
 
     Parameters
     ----------
-    isolation : {"auto", "process", "signal", "none"}
+    task : Task
+        The run.
+    settings : GridSettings
+        The grid's settings.
+    timeout : float, default=None
+        Seconds allowed; None: ``settings.timeout``.
+    isolation : {"auto", "process", "signal", "none"}, default="auto"
         Module docstring; ``auto`` picks ``process`` where fork exists.
     function : callable, optional
         ``function(task, settings, deadline, stage) -> record`` (default :func:`execute_task`).
     blas_threads : int, optional
         BLAS threads during the run (:func:`blas_thread_limit`); default: no limit.
+
+    Returns
+    -------
+    dict
+        The run's record, with ``finished_at``; a failing run gives a record with status
+        ``error`` or ``timeout``.
     """
     with blas_thread_limit(blas_threads):
         return _run_task(task, settings, timeout, isolation, function)
@@ -269,7 +333,20 @@ def backend_context(backend: str | None = None, address: str | None = None):
     """A :func:`joblib.parallel_config` context for ``backend``: ``None`` / ``"loky"`` /
     ``"multiprocessing"`` (local processes), ``"dask"`` (a ``dask.distributed.Client`` on the
     scheduler ``address``, a local cluster when None) or ``"ray"`` (``ray.init(address=address)``,
-    ``"auto"`` joins a running cluster). Dask and Ray are imported only when asked for."""
+    ``"auto"`` joins a running cluster). Dask and Ray are imported only when asked for.
+
+    Parameters
+    ----------
+    backend : {None, "loky", "multiprocessing", "dask", "ray"}, default=None
+        The joblib backend.
+    address : str, default=None
+        The Dask scheduler or Ray cluster address.
+
+    Yields
+    ------
+    None
+        Inside the context, joblib runs on the backend.
+    """
     import joblib
     if backend in (None, "loky", "multiprocessing"):
         with joblib.parallel_config(backend=backend or "loky"):
@@ -325,19 +402,25 @@ def run_grid(settings: GridSettings, records_path, n_jobs: int = -1, backend: st
 
     Parameters
     ----------
-    n_jobs : int, default -1
+    settings : GridSettings
+        The grid.
+    records_path : str or os.PathLike
+        The JSONL file of records.
+    n_jobs : int, default=-1
         Parallel processes (joblib convention: -1 = all cores).
     backend, address : str, optional
         As in :func:`backend_context`.
-    retry : iterable of str
+    retry : iterable of str, default=()
         Statuses to run again (e.g. ``("error", "timeout")``).
-    isolation, function : optional
+    isolation : {"auto", "process", "signal", "none"}, default="auto"
+        As in :func:`run_task`.
+    function : callable, optional
         As in :func:`run_task`.
     progress : bool, optional
         Show a tqdm progress bar (default: on a terminal).
     limit : int, optional
         Run at most this many pending tasks.
-    blas_threads : "auto", int or None, default "auto"
+    blas_threads : "auto", int or None, default="auto"
         BLAS threads per run: ``"auto"`` is 1 when runs go in parallel, no limit otherwise.
 
     Returns
@@ -346,6 +429,26 @@ def run_grid(settings: GridSettings, records_path, n_jobs: int = -1, backend: st
         ``{"total", "skipped", "ran", "statuses", "seconds"}``. Ctrl-C raises
         :class:`KeyboardInterrupt` after joblib has killed its workers; SIGTERM stops the grid
         the same way, then ends the process by SIGTERM.
+
+    Examples
+    --------
+    A grid of two configurations on one trajectory, each run replaced by a stand-in that only
+    writes its record (a real run simulates, fits and validates):
+
+    >>> import os, tempfile
+    >>> def fake_run(task, settings, deadline, stage):
+    ...     error = 0.01 if task.solver == "mixed" else 0.02
+    ...     return {**task.to_dict(), "status": "ok", "metrics": {"position_rmse": error},
+    ...             "time_s": {"run": 0.0}, "message": None}
+    >>> grid = GridSettings(systems=("cart-pole",), forcings=("mixed",),
+    ...                     configurations=(("mixed", "mixed"), ("mixed", "explicit")))
+    >>> path = os.path.join(tempfile.mkdtemp(), "records.jsonl")
+    >>> first = run_grid(grid, path, n_jobs=1, isolation="none", function=fake_run,
+    ...                  progress=False)
+    >>> again = run_grid(grid, path, n_jobs=1, isolation="none", function=fake_run,
+    ...                  progress=False)  # resumes: nothing left to run
+    >>> first["ran"], first["statuses"]["ok"], again["ran"], again["skipped"]
+    (2, 2, 0, 2)
     """
     from tqdm.auto import tqdm
     if not isinstance(settings, GridSettings):

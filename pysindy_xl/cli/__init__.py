@@ -8,7 +8,7 @@ Examples::
     pysindy-xl identify data.npz --system cart-pole --catalog mixed
 """
 
-from ..quality import fit_quality
+from ..evaluation.quality import fit_quality
 from .commands import main, run_demo, run_generate, run_identify
 from .parser import build_parser
 from .steps import CLIError

@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from ..quality import fit_quality, plot_identification, quality_lines
+from ..evaluation.quality import fit_quality, plot_identification, quality_lines
 from ..registry import json_finite
 from .automatic import honest_exit, run_automatic
 from .parser import AUTOMATIC, build_parser
@@ -42,6 +42,26 @@ def run_demo(args) -> dict:
     against a fresh trajectory, print; return the report written to ``args.out/report.json``
     (beside ``validation.png`` unless ``--no-plots``).
 
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of ``pysindy-xl demo`` (:func:`build_parser`).
+
+    Returns
+    -------
+    dict
+        The report written to ``args.out/report.json``: the system and options, the data,
+        the features and coefficients (``true_coefficients`` where known), the physical
+        parameters, the equations, the ``validation`` metrics, the ``physics`` check and
+        the timings.
+
+    Raises
+    ------
+    CLIError
+        On a bad input or a failed step.
+
+    Examples
+    --------
     Half a second of cart-pole data and a short validation (the kinematic catalog):
 
     >>> import tempfile
@@ -106,7 +126,7 @@ def run_demo(args) -> dict:
     files = {}
     start = time.perf_counter()
     if not args.no_plots and result is not None:
-        from pysindy_xl.mujoco.evaluation.plots import plot_validation
+        from pysindy_xl.evaluation.plots import plot_validation
         path = os.path.join(args.out, "validation.png")
         plot_validation(result, path, model.get_feature_names(), model.coefficients(), truth,
                         title=f"{display_name(system)} ({args.catalog} catalog, {solver} solver)")
@@ -133,7 +153,7 @@ def run_demo(args) -> dict:
               f"{coefficient_summary['true_terms']} true, max error "
               f"{coefficient_summary['max_relative_error']:.2g} (relative to the largest)")
     timings["total"] = sum(timings.values())
-    from ..report.equations import prints_equations  # sympy: not imported by --help
+    from ..fitted.equations import prints_equations  # sympy: not imported by --help
     short = prints_equations(model)
     report = {
         "system": system.name,
@@ -173,7 +193,7 @@ def run_demo(args) -> dict:
 def _validate(model, system, args):
     """``(ValidationResult, None)`` against a fresh MuJoCo run, or ``(None, reason)``."""
     from pysindy_xl.dynamics import DynamicsError
-    from pysindy_xl.mujoco.evaluation.validation import validate_model
+    from pysindy_xl.evaluation.validation import validate_model
     try:
         return validate_model(model, system, duration=args.validation_duration,
                               forcing=args.forcing, actuators=args.actuators,
@@ -207,7 +227,7 @@ def _validation_line(result, failure, args) -> str:
 def _physics(model, system, args):
     """The identified mass matrix and unforced dynamics against MuJoCo's, or None."""
     from pysindy_xl.dynamics import DynamicsError
-    from pysindy_xl.mujoco.evaluation.physics import compare_physics
+    from pysindy_xl.evaluation.physics import compare_physics
     try:
         return compare_physics(model, system, seed=args.seed)
     except (DynamicsError, ValueError, TypeError, np.linalg.LinAlgError):
@@ -239,6 +259,23 @@ def run_identify(args):
     (solver from its forces with ``--solver auto``), print the model and its quality, score
     held-out torques, save it with ``--out``; return the fitted model.
 
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of ``pysindy-xl identify`` (:func:`build_parser`).
+
+    Returns
+    -------
+    pysindy_xl.XLSINDy
+        The fitted model.
+
+    Raises
+    ------
+    CLIError
+        On a bad input or a failed step.
+
+    Examples
+    --------
     >>> import pathlib, tempfile
     >>> from pysindy_xl.mujoco import generate_dataset
     >>> data = generate_dataset("cart-pole", n_trajectories=1, duration=0.5, seed=0,
@@ -463,6 +500,23 @@ def _save_atomically(model, path):
 def run_generate(args):
     """Run ``pysindy-xl generate``; returns the NPZ path written (the JSON beside it).
 
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of ``pysindy-xl generate`` (:func:`build_parser`).
+
+    Returns
+    -------
+    pathlib.Path
+        The NPZ file written.
+
+    Raises
+    ------
+    CLIError
+        On a bad input.
+
+    Examples
+    --------
     >>> import pathlib, tempfile
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     args = build_parser().parse_args(["generate", "cart-pole", f"{tmp}/data.npz",
@@ -486,6 +540,18 @@ def main(argv=None) -> int:
     returns the exit status: 0 on success, 1 on an error (printed on stderr, no traceback),
     2 on a usage error.
 
+    Parameters
+    ----------
+    argv : list of str, default=None
+        The arguments; None: ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        The exit status: 0 on success, 1 on an error, 2 on a usage error.
+
+    Examples
+    --------
     >>> import contextlib, sys
     >>> with contextlib.redirect_stderr(sys.stdout):
     ...     status = main(["identify", "missing.npz", "--system", "cart-pole"])

@@ -117,6 +117,13 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``pysindy-xl`` command: ``demo``, ``identify``, ``generate``
     and ``benchmark`` (:doc:`/cli` describes every option).
 
+    Returns
+    -------
+    argparse.ArgumentParser
+        The parser, one subcommand each.
+
+    Examples
+    --------
     >>> args = build_parser().parse_args(["demo", "double-pendulum", "--noise", "0.01"])
     >>> args.command, args.system, args.noise, args.catalog, args.solver, args.forcing
     ('demo', 'double-pendulum', 0.01, 'auto', 'auto', 'explicit')

@@ -12,6 +12,8 @@ import numpy as np
 class CLIError(Exception):
     """A bad input or failed step, printed as ``pysindy-xl: error: ...`` with exit status 1.
 
+    Examples
+    --------
     >>> from pysindy_xl.cli import build_parser, run_demo
     >>> args = build_parser().parse_args(["demo", "cart-pole", "--forcing", "implicit",
     ...                                   "--solver", "explicit"])
@@ -34,11 +36,41 @@ def _optimizer(solver: str, threshold=None):
 
 
 def display_name(system) -> str:
-    """The name to show for ``system``: a model file's name (``ur10e.urdf``), else its own."""
+    """The name to show for ``system``: a model file's name (``ur10e.urdf``), else its own.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        The system.
+
+    Returns
+    -------
+    str
+        The model file's base name, or the system's registry name.
+    """
     return os.path.basename(getattr(system, "path", None) or "") or system.name
 
 
 def system_by_name(name, joints=None):
+    """The system of a command line's SYSTEM argument, restricted to ``--joints``.
+
+    Parameters
+    ----------
+    name : str or MuJoCoSystem
+        A registry name, an MJCF or URDF path, or a system.
+    joints : list of str, default=None
+        Joints identified (MJCF and URDF models only); None: every joint.
+
+    Returns
+    -------
+    MuJoCoSystem
+        The system.
+
+    Raises
+    ------
+    CLIError
+        When the name is unknown or ``--joints`` does not apply.
+    """
     from pysindy_xl.mujoco import MuJoCoSystem, get_system
     try:
         if joints is None:
@@ -53,7 +85,20 @@ def system_by_name(name, joints=None):
 
 
 def output_file(path, option):
-    """Check an output file's directory before any long computation."""
+    """Check an output file's directory before any long computation.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to be written.
+    option : str
+        The option named in the error.
+
+    Raises
+    ------
+    CLIError
+        When the directory does not exist or ``path`` is a directory.
+    """
     directory = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(directory):
         raise CLIError(f"{option}: directory {directory!r} does not exist")
@@ -62,6 +107,18 @@ def output_file(path, option):
 
 
 def output_directory(path):
+    """Create the ``--out`` directory (a CLIError when that cannot be done).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The directory.
+
+    Raises
+    ------
+    CLIError
+        When ``path`` is a file or cannot be created.
+    """
     if os.path.exists(path) and not os.path.isdir(path):
         raise CLIError(f"--out: {path!r} exists and is not a directory; give a directory")
     try:
@@ -71,7 +128,27 @@ def output_directory(path):
 
 
 def generate_data(system, args, progress=None):
-    """generate_dataset with the shared options; warnings of the generation are printed."""
+    """generate_dataset with the shared options; warnings of the generation are printed.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        The system.
+    args : argparse.Namespace
+        The parsed arguments.
+    progress : bool or None, default=None
+        As in :func:`~pysindy_xl.mujoco.generate_dataset`.
+
+    Returns
+    -------
+    pysindy_xl.data.Dataset
+        The generated data.
+
+    Raises
+    ------
+    CLIError
+        When an option is invalid.
+    """
     import warnings
 
     from pysindy_xl.mujoco import generate_dataset
@@ -92,14 +169,27 @@ def generate_data(system, args, progress=None):
 
 
 def data_lines(system, dataset):
-    """What the data hold: sampling, what the fit receives, constraints."""
+    """What the data hold: sampling, what the fit receives, constraints.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        The system.
+    dataset : pysindy_xl.data.Dataset
+        The data.
+
+    Returns
+    -------
+    list of str
+        The lines printed.
+    """
     meta = dataset.metadata
     period = meta["timestep"] * meta["sample_every"]
     lines = [f"  sampling every {meta['sample_every']} step(s) of {meta['timestep'] * 1e3:g} ms "
              f"= {period * 1e3:g} ms"]
     integration = meta.get("integration")
     if integration and getattr(system, "mj_model", None) is not None:
-        from pysindy_xl.mujoco.simulation.generate import INTEGRATORS
+        from pysindy_xl.simulation.generate import INTEGRATORS
         authored = int(system.mj_model().opt.integrator)
         if INTEGRATORS.get(integration["integrator"]) != authored or integration["substeps"] > 1:
             lines.append(f"  integrated with {integration['reason']}")
@@ -122,7 +212,23 @@ def data_lines(system, dataset):
 
 
 def dataset_system(metadata):
-    """The system a dataset was generated with (a user's MJCF from its path or embedded XML)."""
+    """The system a dataset was generated with (a user's MJCF from its path or embedded XML).
+
+    Parameters
+    ----------
+    metadata : dict
+        A dataset's metadata.
+
+    Returns
+    -------
+    MuJoCoSystem
+        The system (:func:`~pysindy_xl.mujoco.system_from_metadata`).
+
+    Raises
+    ------
+    CLIError
+        When the metadata name no system.
+    """
     from pysindy_xl.mujoco import system_from_metadata
     try:
         return system_from_metadata(metadata)
@@ -132,7 +238,25 @@ def dataset_system(metadata):
 
 def dataset_for(system, dataset):
     """Check the dataset's coordinates against the system's (adopting them when unnamed, and
-    putting the columns in the system's order when they name its coordinates in another)."""
+    putting the columns in the system's order when they name its coordinates in another).
+
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        The system.
+    dataset : pysindy_xl.data.Dataset
+        The data.
+
+    Returns
+    -------
+    pysindy_xl.data.Dataset
+        The data in the system's coordinates and order.
+
+    Raises
+    ------
+    CLIError
+        When the coordinates do not match.
+    """
     from pysindy_xl.mujoco import Dataset
     names = dataset.coordinate_names
     if names == system.coordinate_names:
@@ -160,7 +284,16 @@ def dataset_for(system, dataset):
 def resolve_catalog(args, system):
     """Replace ``--catalog auto`` by ``kinematic`` for a MuJoCo model (compact, it holds the
     true model); for coordinates named without one, ``mixed`` (the paper's) when a degree of it
-    is given, else ``automatic`` (``identify``: grown on the data); default degrees 2."""
+    is given, else ``automatic`` (``identify``: grown on the data); default degrees 2.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments. ``args.catalog``, ``args.velocity_degree`` and
+        ``args.trig_degree`` are set in place.
+    system : MuJoCoSystem
+        The system.
+    """
     from pysindy_xl.mujoco import MuJoCoSystem
     degrees = (getattr(args, "velocity_degree", None), getattr(args, "trig_degree", None))
     if args.catalog == "auto":
@@ -175,13 +308,44 @@ def resolve_catalog(args, system):
 
 
 def log(quiet, *args):
+    """Print ``args`` unless ``quiet``.
+
+    Parameters
+    ----------
+    quiet : bool
+        Print nothing.
+    *args
+        What :func:`print` prints.
+    """
     if not quiet:
         print(*args, flush=True)
 
 
 def check_solver(solver, forced, threshold, auto=False):
     """The optimizer of ``solver``, checked before any long computation; for ``auto`` without
-    a threshold, the kind's name (XLSINDy's default optimizer of that kind)."""
+    a threshold, the kind's name (XLSINDy's default optimizer of that kind).
+
+    Parameters
+    ----------
+    solver : {"explicit", "implicit", "mixed", "auto"}
+        The ``--solver`` option (resolved).
+    forced : bool
+        Whether the data have forces.
+    threshold : float or None
+        The ``--threshold`` option.
+    auto : bool, default=False
+        Whether ``--solver auto`` chose ``solver``.
+
+    Returns
+    -------
+    optimizer or str
+        The optimizer, or the kind's name for XLSINDy's default optimizer.
+
+    Raises
+    ------
+    CLIError
+        When the explicit solver is asked for without forces.
+    """
     if solver == "explicit" and not forced:
         raise CLIError("--solver explicit needs forces; use --forcing explicit or mixed, or "
                        "--solver implicit")
@@ -192,7 +356,20 @@ def check_solver(solver, forced, threshold, auto=False):
 
 def coulomb_law(args, dataset=None) -> str:
     """``--coulomb-law``, or the default of the data's source: ``mujoco`` for data MuJoCo
-    simulated, ``smooth`` for any other log and with joint models."""
+    simulated, ``smooth`` for any other log and with joint models.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments.
+    dataset : pysindy_xl.data.Dataset, default=None
+        The data, whose metadata say whether MuJoCo simulated them.
+
+    Returns
+    -------
+    str
+        ``"mujoco"`` or ``"smooth"``.
+    """
     if (law := getattr(args, "coulomb_law", None)) is not None:
         return law
     if getattr(args, "joint_models", None) is not None:
@@ -203,6 +380,33 @@ def coulomb_law(args, dataset=None) -> str:
 
 
 def fit_model(system, dataset, args, solver, forced, return_arguments=False):
+    """Fit the reference catalog of the options to a dataset.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        The system.
+    dataset : pysindy_xl.data.Dataset
+        The training data.
+    args : argparse.Namespace
+        The parsed arguments.
+    solver : str
+        The resolved solver.
+    forced : bool
+        Whether the data have forces.
+    return_arguments : bool, default=False
+        Also return the arguments given to ``fit``.
+
+    Returns
+    -------
+    pysindy_xl.XLSINDy or tuple
+        The fitted model, or ``(model, arguments)``.
+
+    Raises
+    ------
+    CLIError
+        When an option is invalid or the identification fails.
+    """
     import pysindy_xl as px
     from pysindy_xl.mujoco.catalogs.reference import reference_catalog
     optimizer = check_solver(solver, forced, args.threshold,
@@ -231,7 +435,23 @@ def fit_model(system, dataset, args, solver, forced, return_arguments=False):
 
 
 def summarize_coefficients(system, model):
-    """True coefficients and errors against them (None for systems without ground truth)."""
+    """True coefficients and errors against them (None for systems without ground truth).
+
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        The system.
+    model : pysindy_xl.XLSINDy
+        The fitted model.
+
+    Returns
+    -------
+    truth : numpy.ndarray or None
+        The true coefficients (scaled like an implicit law), None without ground truth.
+    summary : dict
+        ``max_relative_error``, ``true_terms``, ``identified_terms``, ``support_recovered`` and
+        ``true_model_missing_from_catalog`` (empty without ground truth).
+    """
     from pysindy_xl.mujoco.catalogs.reference import true_coefficients
     try:  # known Lagrangians, and the MJCF's own values in its kinematic catalog
         truth, missing = true_coefficients(system, model.feature_library_)
@@ -257,7 +477,21 @@ def summarize_coefficients(system, model):
 
 
 def joint_parameters(system, model):
-    """Identified joint damping and dry friction next to the MJCF's (user models only)."""
+    """Identified joint damping and dry friction next to the MJCF's (user models only).
+
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        The system.
+    model : pysindy_xl.XLSINDy
+        The fitted model.
+
+    Returns
+    -------
+    dict
+        Per joint, the identified and the MJCF's damping and dry friction (empty for the
+        shipped systems).
+    """
     if system.has_ground_truth or not hasattr(system, "frictionloss"):
         return {}
     friction = model.physical_parameters()["friction"]
@@ -279,14 +513,27 @@ def _rounded(expr, digits=4):
 
 def model_lines(model, truth=None):
     """The identified model as printed: physical parameters (next to ``truth``'s), Lagrangian
-    and equations unless they run for pages, the coordinates held still."""
+    and equations unless they run for pages, the coordinates held still.
+
+    Parameters
+    ----------
+    model : pysindy_xl.XLSINDy
+        The fitted model.
+    truth : array_like, default=None
+        True coefficients, whose physical parameters are shown beside.
+
+    Returns
+    -------
+    list of str
+        The lines printed.
+    """
     from pysindy_xl.fit.still import held_note
-    from pysindy_xl.report.equations import (
-        has_parameter_map,
+    from pysindy_xl.fitted.equations import (
         parameter_lines,
         physical_parameters,
         prints_equations,
     )
+    from pysindy_xl.physical.structure import has_parameter_map
     lines = []
     if has_parameter_map(model.feature_library_):
         reference = (None if truth is None

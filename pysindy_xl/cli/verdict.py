@@ -14,7 +14,25 @@ from .steps import CLIError, dataset_for
 
 def wants_verdict(args, forced: bool) -> bool:
     """Whether ``identify`` scores held-out torques: with ``--validate``, or on a log with
-    forces identified against a ``--system`` (unless ``--cv-blocks 0``)."""
+    forces identified against a ``--system`` (unless ``--cv-blocks 0``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of ``identify``.
+    forced : bool
+        Whether the training data have forces.
+
+    Returns
+    -------
+    bool
+        Whether held-out torques are scored.
+
+    Raises
+    ------
+    CLIError
+        When ``--cv-blocks`` is 1 or ``--validate`` is given for data without forces.
+    """
     blocks = getattr(args, "cv_blocks", 0)
     if blocks == 1 or blocks < 0:
         raise CLIError(f"--cv-blocks: expected 0 (no cross-validation) or at least 2, got {blocks}")
@@ -32,7 +50,27 @@ def _units(system, names) -> list:
 
 
 def validation_dataset(args, system, load):
-    """The ``--validate`` files read like DATA, in the system's coordinates, as one dataset."""
+    """The ``--validate`` files read like DATA, in the system's coordinates, as one dataset.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of ``identify``.
+    system : MuJoCoSystem
+        The system.
+    load : callable
+        ``load(args, path, system) -> Dataset``, the reader of DATA.
+
+    Returns
+    -------
+    pysindy_xl.data.Dataset
+        The held-out runs.
+
+    Raises
+    ------
+    CLIError
+        When a file's coordinates do not match or it has no forces.
+    """
     from pysindy_xl.data import Dataset
     trajectories, names = [], None
     for path in args.validate:
@@ -52,8 +90,34 @@ def validation_dataset(args, system, load):
 
 def held_out_verdict(args, model, system, arguments, load, progress):
     """Score the model on ``--validate`` data or by blocked cross-validation, print the lines
-    and return the :class:`~pysindy_xl.held_out.ForceScore`."""
-    from pysindy_xl.held_out import blocked_cross_validation
+    and return the :class:`~pysindy_xl.held_out.ForceScore`.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of ``identify``.
+    model : pysindy_xl.XLSINDy
+        The fitted model.
+    system : MuJoCoSystem
+        The system.
+    arguments : dict
+        The arguments the model was fitted with (for cross-validation).
+    load : callable
+        The reader of DATA (:func:`validation_dataset`).
+    progress : callable
+        Called with a line saying what runs.
+
+    Returns
+    -------
+    pysindy_xl.held_out.ForceScore
+        The held-out score.
+
+    Raises
+    ------
+    CLIError
+        When the held-out data do not match or the cross-validation fails.
+    """
+    from pysindy_xl.evaluation.held_out import blocked_cross_validation
     if args.validate:
         data = validation_dataset(args, system, load)
         if tuple(data.coordinate_names) != tuple(model.feature_library_.coords.names):

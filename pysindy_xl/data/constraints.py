@@ -69,6 +69,20 @@ def unconstrained_windows(support, constraint_active) -> np.ndarray:
     (``Phi != 0`` of one trajectory); ``constraint_active`` (N,) is that trajectory's mask.
     Returns a bool array (W,), ``True`` for the windows to keep.
 
+    Parameters
+    ----------
+    support : array_like of bool, shape (W, N)
+        ``support[w, k]``: sample ``k`` lies in the support of test function ``w``.
+    constraint_active : array_like of bool, shape (N,)
+        The trajectory's mask.
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (W,)
+        True for the windows to keep.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> support = np.array([[1, 1, 1, 0, 0, 0],
     ...                     [0, 0, 1, 1, 1, 0],
@@ -89,6 +103,20 @@ def contiguous_segments(keep, min_length: int = 2) -> list[slice]:
 
     ``keep`` (N,) marks the samples to keep (e.g. from :func:`unconstrained_samples`).
 
+    Parameters
+    ----------
+    keep : array_like of bool, shape (N,)
+        The samples to keep (e.g. from :func:`unconstrained_samples`).
+    min_length : int, default=2
+        Shortest run kept.
+
+    Returns
+    -------
+    list of slice
+        The runs, in order.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> contiguous_segments(np.array([1, 1, 0, 1, 0, 1, 1, 1], dtype=bool))
     [slice(0, 2, None), slice(5, 8, None)]

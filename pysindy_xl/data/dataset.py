@@ -184,7 +184,18 @@ class Dataset:
         return len(self.trajectories)
 
     def has(self, key: str) -> bool:
-        """Whether the trajectories hold the series ``key`` (an attribute of Trajectory)."""
+        """Whether the trajectories hold the series ``key`` (an attribute of Trajectory).
+
+        Parameters
+        ----------
+        key : str
+            A series of :class:`Trajectory` (``"qd"``, ``"tau"``, ``"constraint_active"``...).
+
+        Returns
+        -------
+        bool
+            True when every trajectory holds it.
+        """
         return getattr(self.trajectories[0], key) is not None
 
     def fit_arguments(self, forces: str | None = "tau", constraints: str = "exclude",
@@ -269,6 +280,14 @@ class Dataset:
         constraint data), ``unconstrained_samples``, ``limit_hits`` (``{joint: samples}``, from
         the trajectories' ``info``), ``contact_samples``, ``equality_samples``.
 
+        Returns
+        -------
+        dict
+            ``active_fraction``, ``unconstrained_samples``, ``limit_hits``, ``contact_samples`` and
+            ``equality_samples``.
+
+        Examples
+        --------
         >>> import numpy as np
         >>> t = np.linspace(0, 1, 4)
         >>> tr = Trajectory(t, np.sin(t), constraint_active=[0, 1, 1, 0],
@@ -293,6 +312,13 @@ class Dataset:
     def to_arrays(self) -> dict:
         """The NPZ arrays of the module docstring: trajectories concatenated, with ids and metadata.
 
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            ``t``, ``q``... concatenated, ``trajectory`` ids and the JSON ``metadata``.
+
+        Examples
+        --------
         >>> import numpy as np
         >>> t = np.linspace(0, 1, 11)
         >>> trajectory = Trajectory(t, np.sin(t))
@@ -320,6 +346,20 @@ class Dataset:
         """Write ``path`` (``.npz`` appended when missing) and return it; ``write_json`` also
         writes the metadata to the same name with ``.json`` (they are inside the NPZ anyway).
 
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file (``.npz`` appended when missing).
+        write_json : bool, default=True
+            Also write the metadata beside it, with ``.json``.
+
+        Returns
+        -------
+        pathlib.Path
+            The NPZ file written.
+
+        Examples
+        --------
         >>> import tempfile, pathlib, numpy as np
         >>> t = np.linspace(0, 1, 11)
         >>> data = Dataset([Trajectory(t, np.sin(t))], ["theta"], {"system": "pendulum"})
@@ -344,7 +384,18 @@ class Dataset:
 
     @classmethod
     def load(cls, path) -> Dataset:
-        """Read a dataset written by :meth:`save` or a user's NPZ: :func:`load_dataset`."""
+        """Read a dataset written by :meth:`save` or a user's NPZ: :func:`load_dataset`.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The NPZ file.
+
+        Returns
+        -------
+        Dataset
+            The dataset (see :func:`load_dataset`).
+        """
         return load_dataset(path)
 
     def __repr__(self) -> str:
@@ -359,6 +410,23 @@ def load_dataset(path) -> Dataset:
     ``path`` holds at least ``t`` (N,) and ``q`` (N, n) (the module docstring lists the
     arrays); a :class:`DatasetError` names a missing or malformed array.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The NPZ file.
+
+    Returns
+    -------
+    Dataset
+        The trajectories, coordinate names and metadata of the file.
+
+    Raises
+    ------
+    DatasetError
+        When the file is missing, not an NPZ, or an array is missing or malformed.
+
+    Examples
+    --------
     A user's own NPZ needs only ``t`` and ``q``; ``trajectory`` ids split it:
 
     >>> import tempfile, pathlib, numpy as np

@@ -27,6 +27,8 @@ class DatasetError(ValueError):
 
     A :class:`ValueError`, so ``except ValueError`` catches it too.
 
+    Examples
+    --------
     >>> from pysindy_xl.data import Trajectory
     >>> Trajectory(t=[0.0, 1.0, 0.5], q=[[0.0], [1.0], [2.0]])
     Traceback (most recent call last):
@@ -60,7 +62,29 @@ def read_dataset_arrays(path) -> tuple[dict, dict, list, list]:
     """The checked contents of a dataset NPZ: ``(arrays, metadata, coordinate_names,
     bounds)``, every numeric array by name (``q`` as (N, n)), the metadata (embedded, side-car
     JSON or none) and the contiguous sample range ``(start, stop)`` of each trajectory. A
-    :class:`DatasetError` says what is wrong with a missing, non-NPZ or malformed file."""
+    :class:`DatasetError` says what is wrong with a missing, non-NPZ or malformed file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The NPZ file.
+
+    Returns
+    -------
+    arrays : dict of str to numpy.ndarray
+        Every numeric array by name (``q`` as (N, n)).
+    metadata : dict
+        Embedded, side-car JSON, or empty.
+    coordinate_names : list of str
+        The coordinates.
+    bounds : list of tuple of int
+        The contiguous sample range ``(start, stop)`` of each trajectory.
+
+    Raises
+    ------
+    DatasetError
+        When the file is missing, not an NPZ, or malformed.
+    """
     path = os.fspath(path)
     arrays = _read_npz(path)
     missing = [k for k in ("t", "q") if k not in arrays]
@@ -131,6 +155,23 @@ def _parse_json(text: str, where: str) -> dict:
 def coordinate_names(coordinates) -> list[str]:
     """Coordinate names given as a list of str or one comma-separated str.
 
+    Parameters
+    ----------
+    coordinates : str or sequence of str
+        Names, a sequence or one comma-separated string.
+
+    Returns
+    -------
+    list of str
+        The names, stripped.
+
+    Raises
+    ------
+    TypeError
+        When ``coordinates`` is neither.
+
+    Examples
+    --------
     >>> coordinate_names("x, theta")
     ['x', 'theta']
     >>> coordinate_names(3)

@@ -43,6 +43,11 @@ def noise_levels(noise, noise_model: str = "positions") -> dict:
         ``positions``: a number perturbs the positions only (a dict may also name ``"tau"``;
         velocity or acceleration noise is refused); ``all``: every series alike.
 
+    Returns
+    -------
+    dict
+        ``{"q": float, "qd": float, "qdd": float, "tau": float}``.
+
     Examples
     --------
     >>> noise_levels(0.01)
@@ -73,8 +78,16 @@ def add_noise(trajectory: Trajectory, noise, rng: np.random.Generator,
     noise : float or dict
         One level for every series, or a dict with some of the keys ``"q", "qd", "qdd",
         "tau"``. Force noise goes on the joint forces ``u`` (the measured actuator signal),
-        ``tau`` recomputed as ``u @ force_matrix.T`` (``B``; identity when absent).
+        ``tau`` recomputed as ``u @ force_matrix.T``.
     rng : numpy.random.Generator
+        The random generator.
+    force_matrix : array_like of shape (n, n), default=None
+        The matrix ``B`` mapping joint forces to generalized forces; None: identity.
+
+    Returns
+    -------
+    Trajectory
+        A new trajectory with the noisy series.
 
     Examples
     --------

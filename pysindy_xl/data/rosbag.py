@@ -30,6 +30,18 @@ def is_rosbag(path) -> bool:
     """Whether ``path`` names a ROS bag: a ``.bag``, ``.db3`` or ``.mcap`` file, or a ROS 2 bag
     directory (with its ``metadata.yaml``).
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A file or directory.
+
+    Returns
+    -------
+    bool
+        True for a ``.bag``, ``.db3`` or ``.mcap`` file or a ROS 2 bag directory.
+
+    Examples
+    --------
     >>> is_rosbag("run1.bag"), is_rosbag("log.csv")
     (True, False)
     """

@@ -246,6 +246,24 @@ def from_columns(data, coordinates=None, columns=None, name="data"):
     ``data`` maps names to columns of equal length; ``coordinates`` and ``columns`` as in
     :func:`read_csv`; errors name the source ``name``.
 
+    Parameters
+    ----------
+    data : mapping of str to array_like
+        Column name to 1-D values, all of equal length.
+    coordinates : list of str or str, optional
+        Coordinate names, as in :func:`read_csv`.
+    columns : dict of str to str, optional
+        Header of each role not named by default, as in :func:`read_csv`.
+    name : str, default="data"
+        The source named in errors.
+
+    Returns
+    -------
+    Dataset
+        One trajectory per ``trajectory`` id (or one in all).
+
+    Examples
+    --------
     >>> import numpy as np
     >>> t = np.linspace(0.0, 1.0, 6)
     >>> data = from_columns({"time_s": np.r_[t, t], "x": np.r_[t, 2 * t],
@@ -277,6 +295,23 @@ def from_dataframe(frame, coordinates=None, columns=None):
     ``frame`` is any object with ``columns`` and ``__getitem__`` returning 1-D values (pandas,
     polars), one row per sample; ``coordinates`` and ``columns`` as in :func:`read_csv`.
 
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Or any object with ``columns`` and ``__getitem__`` returning 1-D values (polars), one row
+        per sample.
+    coordinates : list of str or str, optional
+        Coordinate names, as in :func:`read_csv`.
+    columns : dict of str to str, optional
+        Header of each role not named by default, as in :func:`read_csv`.
+
+    Returns
+    -------
+    Dataset
+        One trajectory per ``trajectory`` id (or one in all).
+
+    Examples
+    --------
     >>> import numpy as np
     >>> pd = __import__("pytest").importorskip("pandas")
     >>> t = np.linspace(0.0, 1.0, 5)
@@ -313,6 +348,18 @@ def load_data(source, coordinates=None, columns=None, delimiter=None, topic=None
         Field separator of a text file (default: tab for ``.tsv``, comma otherwise).
     topic : str, optional
         The ``sensor_msgs/JointState`` topic of a ROS bag (default: its only one).
+
+    Returns
+    -------
+    Dataset
+        The data, whatever the source.
+
+    Raises
+    ------
+    DatasetError
+        When the source cannot be read (unknown suffix, malformed file, missing column).
+    ValueError
+        When ``delimiter`` or ``topic`` does not apply to the source.
 
     Examples
     --------

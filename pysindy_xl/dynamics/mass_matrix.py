@@ -14,8 +14,8 @@ import scipy.integrate
 import sympy as sp
 
 from .._validation import check_numeric_array, check_option, check_times
-from ..feature_library import Terms, compile_terms, decompose, scalar_function, stack_variables
-from ..symbols import Coordinates
+from ..feature_library import Terms, compile_terms, decompose, scalar_function
+from ..symbols import Coordinates, stack_variables
 from .inputs import feedback_function, force_function
 
 __all__ = ["MassMatrixDynamics", "DynamicsError", "SingularMassMatrixError", "SimulationError",

@@ -18,10 +18,26 @@ __all__ = ["BatchSimulation", "simulate", "simulate_batch"]
 
 
 class BatchSimulation(NamedTuple):
-    """Result of :func:`simulate` / :func:`simulate_batch` (a JAX pytree): ``states`` (B, T, 2n),
-    or (B, 2n) with ``final_only``, no ``B`` axis for :func:`simulate`, a diverged trajectory
-    frozen at its last accepted state; ``diverged`` (B,), whether it left the finite / bounded
-    region; ``divergence_step`` (B,), its first sample out of it, else ``-1``."""
+    """Result of :func:`simulate` / :func:`simulate_batch` (a JAX pytree).
+
+    Parameters
+    ----------
+    states : jax.Array of shape (B, T, 2n)
+        The trajectories, or (B, 2n) with ``final_only``; no ``B`` axis for :func:`simulate`.
+        A diverged trajectory is frozen at its last accepted state.
+    diverged : jax.Array of bool, shape (B,)
+        Whether each trajectory left the finite / bounded region.
+    divergence_step : jax.Array of int, shape (B,)
+        Its first sample out of the region, else ``-1``.
+
+    Examples
+    --------
+    >>> import jax.numpy as jnp
+    >>> from pysindy_xl.export.jax_dynamics import simulate
+    >>> result = simulate(lambda x, u, t: -x, jnp.array([1.0, 0.0]), None, 0.1, n_steps=3)
+    >>> result.states.shape, bool(result.diverged), int(result.divergence_step)
+    ((3, 2), False, -1)
+    """
 
     states: jax.Array
     diverged: jax.Array
@@ -161,16 +177,19 @@ def simulate(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation=
         Initial state ``[q, qd]``.
     u : array (T, n) or None
         Generalized forces sampled at ``t0 + k dt``; ``None`` (zero) needs ``n_steps``.
-    dt, t0 : float
-        Time step and time of the first sample.
-    n_steps : int, optional
+    dt : float
+        Time step.
+    t0 : float, default=0.0
+        Time of the first sample.
+    n_steps : int, default=None
         Number of output samples ``T`` when ``u`` is None.
-    method : {"rk4", "semi_implicit_euler", "euler"}
-    interpolation : {"zoh", "linear"}
+    method : {"rk4", "semi_implicit_euler", "euler"}, default="rk4"
+        The fixed-step scheme.
+    interpolation : {"zoh", "linear"}, default="zoh"
         Force inside a step: held at ``u[k]`` or linear between ``u[k]`` and ``u[k+1]``.
-    bound : float, optional
+    bound : float, default=None
         A trajectory diverges when a state entry becomes NaN/inf or exceeds ``bound``.
-    final_only : bool, default False
+    final_only : bool, default=False
         Return only the final state.
 
     Returns
@@ -200,9 +219,42 @@ def simulate(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation=
 
 def simulate_batch(f, x0, u, dt, *, t0=0.0, n_steps=None, method="rk4", interpolation="zoh",
                    bound=None, final_only=False):
-    """Integrate ``B`` independent trajectories at once (``vmap`` of :func:`simulate`); one that
-    diverges is frozen and reported, the others carry on. ``x0`` (B, 2n) and ``u`` (B, T, n)
-    per trajectory, the other arguments as in :func:`simulate`, shared.
+    """Integrate ``B`` independent trajectories at once (``vmap`` of :func:`simulate`).
+
+    One that diverges is frozen and reported, the others carry on.
+
+    Parameters
+    ----------
+    f : callable or model
+        ``f(state, u, t) -> d(state)/dt`` (:func:`dynamics_function`), or an object with
+        ``to_jax()`` such as a fitted ``XLSINDy``.
+    x0 : array_like of shape (B, 2n)
+        Initial states ``[q, qd]``.
+    u : array_like of shape (B, T, n) or None
+        Generalized forces of each trajectory at ``t0 + k dt``; None (zero) needs
+        ``n_steps``.
+    dt : float
+        Time step, shared.
+    t0 : float, default=0.0
+        Time of the first sample, shared.
+    n_steps : int, default=None
+        Number of output samples ``T`` when ``u`` is None.
+    method : {"rk4", "semi_implicit_euler", "euler"}, default="rk4"
+        The fixed-step scheme.
+    interpolation : {"zoh", "linear"}, default="zoh"
+        Force inside a step: held at ``u[k]`` or linear between ``u[k]`` and ``u[k+1]``.
+    bound : float, default=None
+        A trajectory diverges when a state entry becomes NaN/inf or exceeds ``bound``.
+    final_only : bool, default=False
+        Return only the final states.
+
+    Returns
+    -------
+    BatchSimulation
+        ``states`` (B, T, 2n) (or (B, 2n)), ``diverged`` (B,), ``divergence_step`` (B,).
+
+    Examples
+    --------
 
     >>> import sympy as sp, jax.numpy as jnp
     >>> from types import SimpleNamespace

@@ -30,6 +30,29 @@ def _axpy(x, a, y):
 def rk4_step(f, state, t, dt, u_start, u_end=None):
     """One classical Runge-Kutta step (arguments in the module docstring).
 
+    Parameters
+    ----------
+    f : callable
+        ``f(state, u, t) -> d(state)/dt``.
+    state : jax.Array of shape (..., 2n) or tuple of 2n arrays
+        The state ``[q, qd]`` at ``t``, in the layout ``f`` takes.
+    t : float
+        The time at the start of the step.
+    dt : float
+        The step.
+    u_start : jax.Array of shape (..., n)
+        The force at ``t``.
+    u_end : jax.Array of shape (..., n), default=None
+        The force at ``t + dt``, interpolated linearly by schemes that sample the force inside
+        the step; None holds ``u_start``.
+
+    Returns
+    -------
+    jax.Array or tuple
+        The state at ``t + dt``, in the layout of ``state``.
+
+    Examples
+    --------
     >>> import jax.numpy as jnp
     >>> from pysindy_xl.export.jax_dynamics import rk4_step
     >>> decay = lambda x, u, t: -x + u
@@ -67,6 +90,29 @@ def semi_implicit_euler_step(f, state, t, dt, u_start, u_end=None):
     """One semi-implicit (symplectic) Euler step, ``qd' = qd + dt qdd``, ``q' = q + dt qd'``:
     first order, energy of conservative systems kept bounded.
 
+    Parameters
+    ----------
+    f : callable
+        ``f(state, u, t) -> d(state)/dt``.
+    state : jax.Array of shape (..., 2n) or tuple of 2n arrays
+        The state ``[q, qd]`` at ``t``, in the layout ``f`` takes.
+    t : float
+        The time at the start of the step.
+    dt : float
+        The step.
+    u_start : jax.Array of shape (..., n)
+        The force at ``t``.
+    u_end : jax.Array of shape (..., n), default=None
+        The force at ``t + dt``, interpolated linearly by schemes that sample the force inside
+        the step; None holds ``u_start``.
+
+    Returns
+    -------
+    jax.Array or tuple
+        The state at ``t + dt``, in the layout of ``state``.
+
+    Examples
+    --------
     >>> import jax.numpy as jnp
     >>> from pysindy_xl.export.jax_dynamics import semi_implicit_euler_step
     >>> spring = lambda x, u, t: jnp.array([x[1], u[0] - x[0]])
@@ -83,6 +129,29 @@ def semi_implicit_euler_step(f, state, t, dt, u_start, u_end=None):
 def euler_step(f, state, t, dt, u_start, u_end=None):
     """One explicit Euler step, ``state + dt f(state, u(t), t)``.
 
+    Parameters
+    ----------
+    f : callable
+        ``f(state, u, t) -> d(state)/dt``.
+    state : jax.Array of shape (..., 2n) or tuple of 2n arrays
+        The state ``[q, qd]`` at ``t``, in the layout ``f`` takes.
+    t : float
+        The time at the start of the step.
+    dt : float
+        The step.
+    u_start : jax.Array of shape (..., n)
+        The force at ``t``.
+    u_end : jax.Array of shape (..., n), default=None
+        The force at ``t + dt``, interpolated linearly by schemes that sample the force inside
+        the step; None holds ``u_start``.
+
+    Returns
+    -------
+    jax.Array or tuple
+        The state at ``t + dt``, in the layout of ``state``.
+
+    Examples
+    --------
     >>> import jax.numpy as jnp
     >>> from pysindy_xl.export.jax_dynamics import euler_step
     >>> spring = lambda x, u, t: jnp.array([x[1], u[0] - x[0]])

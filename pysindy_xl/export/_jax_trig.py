@@ -78,6 +78,18 @@ def fast_sin(x):
     promoted to the default float type, infinite or NaN input gives NaN, and the derivative
     is :func:`fast_cos`.
 
+    Parameters
+    ----------
+    x : jax.Array or array_like
+        Angles (rad); integers are promoted to the default float type.
+
+    Returns
+    -------
+    jax.Array
+        ``sin(x)``, NaN where ``x`` is infinite or NaN.
+
+    Examples
+    --------
     >>> import jax.numpy as jnp
     >>> from pysindy_xl.export.jax_dynamics import fast_sin
     >>> fast_sin(jnp.array([0.0, jnp.pi / 6, jnp.pi / 2])).round(6)
@@ -90,6 +102,18 @@ def fast_sin(x):
 def fast_cos(x):
     """Cosine through a vectorizable polynomial, as :func:`fast_sin`.
 
+    Parameters
+    ----------
+    x : jax.Array or array_like
+        Angles (rad); integers are promoted to the default float type.
+
+    Returns
+    -------
+    jax.Array
+        ``cos(x)``, NaN where ``x`` is infinite or NaN.
+
+    Examples
+    --------
     >>> import jax.numpy as jnp
     >>> from pysindy_xl.export.jax_dynamics import fast_cos
     >>> fast_cos(jnp.array([0.0, jnp.pi / 3, jnp.pi])).round(6)

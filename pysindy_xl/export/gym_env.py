@@ -129,7 +129,22 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
 
     def reset(self, *, seed=None, options=None):
         """Start an episode (``seed`` seeds ``np_random``; ``options={"state": x0}`` starts at
-        ``x0``); returns ``(observation, info)``."""
+        ``x0``); returns ``(observation, info)``.
+
+        Parameters
+        ----------
+        seed : int, default=None
+            Seeds ``np_random``.
+        options : dict, default=None
+            ``{"state": x0}`` starts the episode at ``x0`` (2n,).
+
+        Returns
+        -------
+        observation : numpy.ndarray of shape (2n,)
+            The initial state ``[q, qd]``.
+        info : dict
+            Empty.
+        """
         super().reset(seed=seed)
         if options and "state" in options:
             state = np.asarray(options["state"], dtype=float)
@@ -149,7 +164,26 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
 
     def step(self, action):
         """Advance ``dt`` seconds with the action (clipped) held; returns ``(observation, reward,
-        terminated, truncated, info)``, ``info`` with ``"time"`` and, on failure, ``"failure"``."""
+        terminated, truncated, info)``, ``info`` with ``"time"`` and, on failure, ``"failure"``.
+
+        Parameters
+        ----------
+        action : array_like of shape (n_actuated,)
+            Forces on the actuated coordinates, clipped to the action bounds.
+
+        Returns
+        -------
+        observation : numpy.ndarray of shape (2n,)
+            The state after ``dt`` seconds.
+        reward : float
+            ``reward(state, action, next_state)``.
+        terminated : bool
+            ``terminated(next_state)``, or the state left its bounds.
+        truncated : bool
+            The episode reached ``max_episode_steps``.
+        info : dict
+            ``"time"`` and, on failure, ``"failure"``.
+        """
         action = np.asarray(action, dtype=float).reshape(-1)
         if action.shape != self.action_space.shape:
             raise ValueError(f"action: expected shape {self.action_space.shape}, got "
@@ -198,6 +232,29 @@ def make_env(model, dt, **options) -> IdentifiedDynamicsEnv:
     :class:`IdentifiedDynamicsEnv`. Raises ValueError if the model defines no dynamics or an
     option is out of range.
 
+    Parameters
+    ----------
+    model : pysindy_xl.XLSINDy
+        A fitted model whose equations contain accelerations.
+    dt : float
+        Seconds per step.
+    **options
+        ``reward``, ``terminated``, ``initial_state``, ``actuated``, ``action_bounds``,
+        ``max_episode_steps``, ``substeps``, ``observation_bounds``, as in
+        :class:`IdentifiedDynamicsEnv`.
+
+    Returns
+    -------
+    IdentifiedDynamicsEnv
+        The environment.
+
+    Raises
+    ------
+    ValueError
+        When the model defines no dynamics or an option is out of range.
+
+    Examples
+    --------
     >>> import numpy as np, pysindy_xl as px
     >>> from gymnasium.utils.env_checker import check_env
     >>> coords = px.Coordinates(["x"])

@@ -33,7 +33,25 @@ _NOT_IN_MJCF = ("asymmetric", "stribeck", "offset")
 def consistent_parameters(catalog, beta, closeness: float = 1e-6):
     """Physically consistent ``pi`` reproducing ``beta`` (module docstring): returns ``(pi,
     residual)``, ``residual = |C pi - beta| / |beta|`` zero when ``beta`` is realizable.
-    ``closeness`` weighs the distance to the template's ``pi_0``."""
+    ``closeness`` weighs the distance to the template's ``pi_0``.
+
+    Parameters
+    ----------
+    catalog : KinematicCatalog
+        The kinematic catalog of the template system
+        (:func:`~pysindy_xl.mujoco.kinematic_catalog`).
+    beta : array_like of shape (len(catalog.lagrange_terms),)
+        Identified base parameters (:meth:`KinematicCatalog.lagrange_coefficients`).
+    closeness : float, default=1e-6
+        Weight of the distance to the template's physical parameters ``pi_0``.
+
+    Returns
+    -------
+    pi : numpy.ndarray of shape (len(catalog.physical_names),)
+        Physically consistent inertial parameters and armatures.
+    residual : float
+        ``|C pi - beta| / |beta|``, zero when ``beta`` is realizable.
+    """
     from ..physical import PhysicalStructure, realize
     structure = PhysicalStructure.from_combination(list(catalog.physical_names),
                                                    catalog.combination)
@@ -46,8 +64,30 @@ def write_mjcf(catalog, pi, friction, path, joint_friction=None) -> str:
     the MJCF text. ``friction`` is ``{coordinate: {"viscous", "dry"}}`` (as
     :meth:`XLSINDy.physical_parameters <pysindy_xl.XLSINDy.physical_parameters>` gives);
     ``joint_friction``, ``{joint: {"viscous", "coulomb"}}`` of a catalog built with
-    ``friction=``, replaces it where a joint has them."""
-    from ..mujoco import import_mujoco
+    ``friction=``, replaces it where a joint has them.
+
+    Parameters
+    ----------
+    catalog : KinematicCatalog
+        The kinematic catalog of the template system
+        (:func:`~pysindy_xl.mujoco.kinematic_catalog`).
+    pi : array_like of shape (len(catalog.physical_names),)
+        Inertial parameters and armatures, in the order of ``catalog.physical_names``.
+    friction : dict
+        ``{coordinate: {"viscous": float, "dry": float}}`` (as
+        :meth:`XLSINDy.physical_parameters <pysindy_xl.XLSINDy.physical_parameters>` gives).
+    path : str or os.PathLike
+        The file to write.
+    joint_friction : dict, default=None
+        ``{joint: {"viscous": float, "coulomb": float}}`` of a catalog built with ``friction=``;
+        replaces ``friction`` where a joint has them.
+
+    Returns
+    -------
+    str
+        The MJCF text written.
+    """
+    from .._optional import import_mujoco
     mujoco = import_mujoco()
 
     system = catalog.system
@@ -104,7 +144,7 @@ def _principal_axes(inertia):
     """``(quaternion, diagonal)`` of a symmetric inertia ``R diag(d) R^T`` (the form every MJCF
     template can take); moments are raised to a billionth of the largest, since MuJoCo refuses
     zero moments on a moving body."""
-    from ..mujoco import import_mujoco
+    from .._optional import import_mujoco
     mujoco = import_mujoco()
 
     moments, axes = np.linalg.eigh((inertia + inertia.T) / 2)
@@ -117,8 +157,32 @@ def _principal_axes(inertia):
 
 
 def to_mjcf(model, path, template) -> dict:
-    """The body of :meth:`XLSINDy.to_mjcf <pysindy_xl.XLSINDy.to_mjcf>`."""
-    from ..mujoco import MJCFSystem, kinematic_catalog
+    """The body of :meth:`XLSINDy.to_mjcf <pysindy_xl.XLSINDy.to_mjcf>`.
+
+    Parameters
+    ----------
+    model : pysindy_xl.XLSINDy
+        A model fitted with ``kinematic_catalog(template).library()``.
+    path : str or os.PathLike
+        The MJCF file to write.
+    template : str, os.PathLike or MuJoCoSystem
+        The MJCF file (or system) whose kinematic tree the model was identified on; required
+        (None raises a ValueError).
+
+    Returns
+    -------
+    dict
+        ``physical_parameters`` (``{name: value}``), ``residual`` (of
+        :func:`consistent_parameters`) and ``dropped`` (joint friction models MJCF cannot
+        state, by joint).
+
+    Raises
+    ------
+    ValueError
+        When ``template`` is None or does not match the model's catalog.
+    """
+    from ..mujoco.catalogs.kinematic import kinematic_catalog
+    from ..mujoco.systems.mjcf import MJCFSystem
     if template is None:
         raise ValueError("template: the MJCF file (or MuJoCo system) whose kinematic tree "
                          "the model was identified on is needed to place the inertials")
@@ -151,6 +215,28 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     :class:`~pysindy_xl.mujoco.MJCFSystem` ``system``. Returns ``(mj_model, None)`` or
     ``(None, reason)``.
 
+    Parameters
+    ----------
+    model : pysindy_xl.XLSINDy
+        A model fitted with ``kinematic_catalog(system).library()``.
+    system : MJCFSystem
+        The system the model was identified on.
+    tolerance : float, default=1e-6
+        Largest relative difference accepted between MuJoCo's and the model's ``M`` and ``f``.
+    n_states : int, default=6
+        Random sliding states at which they are compared.
+    seed : int, default=0
+        Seed of the states.
+
+    Returns
+    -------
+    mj_model : mujoco.MjModel or None
+        The model with the identified parameters, or None.
+    reason : str or None
+        None when accepted, else why MJCF cannot state the model.
+
+    Examples
+    --------
     >>> import pysindy_xl as px
     >>> from pysindy_xl.mujoco import MJCFSystem, generate_dataset, kinematic_catalog
     >>> system = MJCFSystem('''<mujoco><worldbody><body><joint name="j" axis="0 1 0"
@@ -163,9 +249,10 @@ def identified_mj_model(model, system, tolerance: float = 1e-6, n_states: int = 
     >>> reason, round(float(mj_model.dof_damping[0]), 3), round(float(mj_model.jnt_stiffness[0]), 3)
     (None, 0.1, 0.5)
     """
-    from ..feature_library import stack_variables
-    from ..mujoco import import_mujoco, kinematic_catalog
+    from .._optional import import_mujoco
+    from ..mujoco.catalogs.kinematic import kinematic_catalog
     from ..mujoco.systems.friction import sliding_velocities
+    from ..symbols import stack_variables
     mujoco = import_mujoco()
 
     try:

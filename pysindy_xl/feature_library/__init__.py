@@ -3,13 +3,8 @@
 See :mod:`pysindy_xl.feature_library._base` for the layout of the stacked regression matrix.
 """
 
-from ._base import (
-    LIBRARY_TYPES,
-    SymbolicLibrary,
-    compile_entries,
-    remembered_weak_values,
-    stack_variables,
-)
+from ..symbols import stack_variables
+from ._base import LIBRARY_TYPES, SymbolicLibrary, compile_entries, remembered_weak_values
 
 # the compiled evaluation of symbolic terms is re-exported for the simulators of the package
 # (``dynamics``), so that no module outside this folder imports the private ``_compile``

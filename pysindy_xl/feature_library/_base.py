@@ -28,7 +28,7 @@ from ._compile import Terms, compile_entries, compile_terms, decompose
 from ._structure import ColumnStructure, DeferredMatrix
 from ._weak import integrate_by_parts
 
-__all__ = ["SymbolicLibrary", "stack_variables", "compile_entries", "LIBRARY_TYPES",
+__all__ = ["SymbolicLibrary", "compile_entries", "LIBRARY_TYPES",
            "remembered_weak_values"]
 
 #: Every catalog category by its ``spec_type``: what a model file may name. Subclasses
@@ -44,7 +44,7 @@ _DERIVED: dict = {}
 _CACHED_DERIVED = 16
 
 
-def _derived(key, derive, cache=_DERIVED, size=_CACHED_DERIVED):
+def shared_derivation(key, derive, cache=_DERIVED, size=_CACHED_DERIVED):
     """``derive()``, shared by every call with the same ``key`` in ``cache`` (at most ``size``
     entries, the least recently used dropped first)."""
     found = cache.pop(key, None)
@@ -118,45 +118,6 @@ def _clone_parameter(value):
     if isinstance(value, (list, tuple)) and all(isinstance(v, sp.Basic) for v in value):
         return type(value)(value)
     return clone(value, safe=False)
-
-
-def stack_variables(q, qd, qdd=None, tau=None, t=None) -> np.ndarray:
-    """Stack the data into the library input ``Z`` of shape ``(N, 4n + 1)``.
-
-    Parameters
-    ----------
-    q, qd : array, shape (N, n)
-        Positions and velocities.
-    qdd, tau : array, shape (N, n), optional
-        Accelerations and generalized forces; zeros when absent.
-    t : array, shape (N,), optional
-        Sample times; zeros when absent.
-
-    Returns
-    -------
-    Z : ndarray, shape (N, 4n + 1)
-        Columns in the order of :attr:`Coordinates.variables`.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> stack_variables(np.zeros((5, 2)), np.ones((5, 2))).shape
-    (5, 9)
-    """
-    q = np.asarray(q, dtype=float)
-    if q.ndim != 2:
-        raise ValueError(f"q: expected a 2-D array (n_samples, n), got shape {q.shape}")
-    n_samples, n = q.shape
-    parts = []
-    for name, a in (("q", q), ("qd", qd), ("qdd", qdd), ("tau", tau)):
-        a = np.zeros((n_samples, n)) if a is None else np.asarray(a, dtype=float)
-        if a.shape != (n_samples, n):
-            raise ValueError(f"{name}: expected shape {(n_samples, n)}, got {a.shape}")
-        parts.append(a)
-    t = np.zeros(n_samples) if t is None else np.asarray(t, dtype=float).reshape(-1)
-    if t.shape != (n_samples,):
-        raise ValueError(f"t: expected shape {(n_samples,)}, got {t.shape}")
-    return np.column_stack(parts + [t])
 
 
 class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
@@ -288,7 +249,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
 
     def _derive_column_terms(self) -> Terms:
         entries = tuple(self.symbolic_matrix_[c, j] for c, j in self.entry_index_)
-        return _derived(("column terms", entries), lambda: decompose(entries))
+        return shared_derivation(("column terms", entries), lambda: decompose(entries))
 
     def __getstate__(self):
         # compiled evaluators are closures: rebuilt on first use after unpickling
@@ -390,7 +351,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
         # integration by parts of the entries: a function of the entries and coordinates
         key = ("weak terms", self.coords.variables, self.symbolic_matrix_.shape,
                tuple(self.symbolic_matrix_))
-        return _derived(key, self._split_weak_terms)
+        return shared_derivation(key, self._split_weak_terms)
 
     def _split_weak_terms(self) -> tuple[np.ndarray, Terms]:
         matrices = self.weak_matrices()

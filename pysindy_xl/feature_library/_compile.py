@@ -18,8 +18,8 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import sympy as sp
 
-from ._monomials import _unique_rows
-from ._plans import _monomials, stored_plan
+from ._monomials import unique_rows
+from ._plans import monomial_tuples, stored_plan
 
 __all__ = ["compile_entries", "Terms", "decompose", "compile_terms", "scalar_function"]
 
@@ -243,8 +243,8 @@ def _angle_groups(atom_list, variables) -> list:
 def _keys(powers) -> tuple[list, np.ndarray]:
     """The distinct rows of ``powers`` as monomials (sorted tuples of ``(atom, power)``), and
     each row's position among them."""
-    first, inverse = _unique_rows(powers)
-    return _monomials(powers[first]), inverse
+    first, inverse = unique_rows(powers)
+    return monomial_tuples(powers[first]), inverse
 
 
 def compile_terms(variables, terms: Terms):

@@ -10,7 +10,7 @@ import functools
 import numpy as np
 
 # Coefficients below this fraction of the largest one are round-off of float arithmetic.
-_ROUND_OFF = 1e-13
+ROUND_OFF = 1e-13
 
 
 @functools.lru_cache(maxsize=64)
@@ -100,7 +100,7 @@ def _row_keys(rows, major=None):
     return keys
 
 
-def _unique_rows(rows, major=None) -> tuple[np.ndarray, np.ndarray]:
+def unique_rows(rows, major=None) -> tuple[np.ndarray, np.ndarray]:
     """``(index, inverse)`` of ``numpy.unique`` on int16 rows read as bytes (``major``, small
     non-negative integers, sorting before the first column), by :func:`_row_keys` when it can.
     """
@@ -125,31 +125,31 @@ def _unique_rows(rows, major=None) -> tuple[np.ndarray, np.ndarray]:
     return np.minimum.reduceat(order, starts), inverse
 
 
-def _normalize(exponents, coefficients, angles):
+def normalize_terms(exponents, coefficients, angles):
     """Rewrite cos^2 = 1 - sin^2, merge equal monomials, drop zero and round-off terms."""
     exponents, coefficients, _ = _reduce_cosine_squares(exponents, coefficients, None, angles)
     if len(coefficients) <= 1:  # the rule below for one term, without arrays
         value = float(coefficients[0]) if len(coefficients) else 0.0
-        keep = abs(value) > _ROUND_OFF * max(abs(value), 1.0)
+        keep = abs(value) > ROUND_OFF * max(abs(value), 1.0)
         return exponents[:int(keep)].copy(), coefficients[:int(keep)].copy()
-    first, inverse = _unique_rows(exponents)
+    first, inverse = unique_rows(exponents)
     merged = np.bincount(inverse, weights=coefficients, minlength=len(first))
     scale = np.abs(coefficients).max()
-    keep = np.abs(merged) > _ROUND_OFF * max(scale, 1.0)
+    keep = np.abs(merged) > ROUND_OFF * max(scale, 1.0)
     return exponents[first[keep]], merged[keep]
 
 
-def _normalize_owned(exponents, coefficients, owners, angles, count):
-    """:func:`_normalize` of each owner's rows (the same operations, per owner)."""
+def normalize_owned(exponents, coefficients, owners, angles, count):
+    """:func:`normalize_terms` of each owner's rows (the same operations, per owner)."""
     exponents, coefficients, owners = _reduce_cosine_squares(exponents, coefficients, owners,
                                                              angles)
     if len(coefficients) == 0:
         return exponents, coefficients, owners
     # the owner first in each key: rows group by owner, and within an owner sort as alone
-    first, inverse = _unique_rows(exponents, major=owners)
+    first, inverse = unique_rows(exponents, major=owners)
     merged = np.bincount(inverse, weights=coefficients, minlength=len(first))
     scale = np.zeros(count)
     np.maximum.at(scale, owners, np.abs(coefficients))
     kept_owners = owners[first]
-    keep = np.abs(merged) > _ROUND_OFF * np.maximum(scale[kept_owners], 1.0)
+    keep = np.abs(merged) > ROUND_OFF * np.maximum(scale[kept_owners], 1.0)
     return exponents[first[keep]], merged[keep], kept_owners[keep]

@@ -22,7 +22,7 @@ import scipy
 import scipy.sparse
 
 from .. import _disk_cache
-from ._monomials import _unique_rows
+from ._monomials import unique_rows
 
 __all__ = ["Plan", "best_plan", "MonomialValues", "plan_arrays", "plan_of", "stored_plan"]
 
@@ -119,13 +119,13 @@ def best_plan(arrays, inner, peel) -> Plan:
     # the flat plan's cost when it shares no polynomial (the entries of a factored plan's
     # polynomials are distinct): a product per monomial, one per term
     if factored.cost < len(powers) or factored.cost < len(powers) + len(
-            _unique_rows(powers)[0]):
+            unique_rows(powers)[0]):
         return factored
     flat = Plan(arrays, np.zeros(len(inner), dtype=bool))
     return factored if factored.cost < flat.cost else flat
 
 
-def _monomials(powers) -> list:
+def monomial_tuples(powers) -> list:
     """The rows of ``powers`` as monomials (sorted tuples of ``(atom, power)``)."""
     rows, atoms = np.nonzero(powers)
     pairs = list(zip(atoms.tolist(), powers[rows, atoms].tolist(), strict=True))
@@ -211,7 +211,7 @@ class Plan:
         # pairs (outer monomial, entry), in order, and each term's pair
         if factor:
             outer_powers = powers.compress(~inner, axis=1)  # (faster than a fancy index)
-            outer_first, outer_of = _unique_rows(outer_powers)
+            outer_first, outer_of = unique_rows(outer_powers)
             outer_rank = np.empty(len(outer_first), dtype=np.intp)  # by degree (1 first)
             outer_rank[np.argsort(outer_powers[outer_first].sum(axis=1), kind="stable")] = \
                 np.arange(len(outer_first))
@@ -221,7 +221,7 @@ class Plan:
             pair_entry = pair_codes % entries
             distinct_outer = np.zeros((len(outer_first), len(inner)), dtype=np.int16)
             distinct_outer[:, ~inner] = outer_powers[outer_first]
-            outer_keys = _monomials(distinct_outer)
+            outer_keys = monomial_tuples(distinct_outer)
         else:  # one pair per entry, even without terms
             pair_of, pair_entry = owners, np.arange(self.n_entries)
             pair_outer, outer_keys = np.zeros(self.n_entries, dtype=np.intp), [()]
@@ -231,7 +231,7 @@ class Plan:
         # (the inner atoms only: the factored polynomials are evaluated on their rows)
         self.inner = np.flatnonzero(inner) if factor else None
         inner_powers = powers.compress(inner, axis=1) if factor else powers
-        inner_first, inner_of = _unique_rows(inner_powers)
+        inner_first, inner_of = unique_rows(inner_powers)
         order = np.argsort(pair_of.astype(np.int64) * max(len(inner_first), 1) + inner_of,
                            kind="stable")
         pair_sorted, inner_sorted = pair_of[order], inner_of[order]
@@ -260,7 +260,7 @@ class Plan:
                 np.ones(len(self.inner), dtype=bool), [group[self.inner] for group in peel])
         else:
             used, position = np.unique(wanted_ids, return_inverse=True)
-            keys = _monomials(inner_powers[inner_first[used]])
+            keys = monomial_tuples(inner_powers[inner_first[used]])
             self.polynomials = MonomialValues(keys)
             columns = np.array([self.polynomials.position[key] for key in keys], dtype=np.intp)
             self.coefficients = scipy.sparse.csr_matrix(

@@ -8,7 +8,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..expressions import format_expression
 from ..symbols import Coordinates, as_expr_list
-from ._base import SymbolicLibrary, _derived
+from ._base import SymbolicLibrary, shared_derivation
 
 __all__ = ["LagrangeLibrary", "euler_lagrange"]
 
@@ -131,7 +131,7 @@ class LagrangeLibrary(SymbolicLibrary):
                                  "only positions, velocities and t are allowed")
         self.terms_ = terms
         # equal catalogs (refits, resampled fits) derive their columns once
-        names, columns = _derived(
+        names, columns = shared_derivation(
             ("euler-lagrange", self.coords.variables, tuple(terms)),
             lambda: (tuple(f"L[{term}]" for term in terms),
                      tuple(tuple(euler_lagrange(term, self.coords)) for term in terms)))
@@ -158,8 +158,9 @@ class LagrangeLibrary(SymbolicLibrary):
         """
         check_is_fitted(self, "terms_")
         x = self._check_input(x)
-        terms, evaluate = _derived(("domain check", self.coords.variables, tuple(self.terms_)),
-                                   lambda: self._domain_check())
+        terms, evaluate = shared_derivation(
+            ("domain check", self.coords.variables, tuple(self.terms_)),
+            lambda: self._domain_check())
         if not terms:
             return
         with np.errstate(all="ignore"):

@@ -14,7 +14,7 @@ import sympy as sp
 from ..expressions import format_expression
 from ..physical.rigid_body import KinematicTree, physical_parameters_from_base
 from ..symbols import as_expr_list
-from ._base import _derived
+from ._base import shared_derivation
 from ._compile import Terms
 from ._structure import DeferredMatrix
 from .lagrange import LagrangeLibrary
@@ -99,8 +99,9 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
             return super()._build_symbolic()  # raises the ValueError of LagrangeLibrary
         coords = self.coords
         key = ("polynomials", terms.key) if trig else (tuple(coords.variables), tuple(terms))
-        derivation = _derived(key, lambda: _derive_trig(terms) if trig else _derive(coords, terms),
-                              _DERIVATIONS, _CACHED_DERIVATIONS)
+        derivation = shared_derivation(
+            key, lambda: _derive_trig(terms) if trig else _derive(coords, terms),
+            _DERIVATIONS, _CACHED_DERIVATIONS)
         if derivation is _NOT_POLYNOMIAL:
             mixed = _mixed_angles(terms, coords)
             if mixed:

@@ -6,7 +6,7 @@ import numpy as np
 import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
-from ._base import SymbolicLibrary, TermChain, _derived
+from ._base import SymbolicLibrary, TermChain, shared_derivation
 from ._compile import Terms
 from ._structure import DeferredMatrix
 from .external_forces import ExternalForces
@@ -26,7 +26,7 @@ def _merged(slices, parts) -> tuple[np.ndarray, Terms]:
     key = (tuple(id(terms) for _, terms in parts), tuple(c.start for c in slices),
            tuple(np.asarray(index).tobytes() for index, _ in parts))
     # the parts, kept with their merge, keep the ids valid
-    found = _derived(key, lambda: (parts, _merge(slices, parts)), _MERGED, _CACHED_MERGES)
+    found = shared_derivation(key, lambda: (parts, _merge(slices, parts)), _MERGED, _CACHED_MERGES)
     index, terms = found[1]
     return index.copy(), terms
 

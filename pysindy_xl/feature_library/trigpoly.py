@@ -15,7 +15,7 @@ import scipy.sparse
 import sympy as sp
 from mpmath import libmp as mlib
 
-from ._monomials import _ROUND_OFF, _normalize, _normalize_owned, _unique_rows
+from ._monomials import ROUND_OFF, normalize_owned, normalize_terms, unique_rows
 
 _BLOCK_VALUES = 1 << 17  # monomial values multiplied at once by evaluate_many
 
@@ -50,7 +50,7 @@ class TrigPolynomial:
         exponents = np.asarray(exponents, dtype=np.int16).reshape(-1, 4 * len(self.angles))
         coefficients = np.asarray(coefficients, dtype=float).reshape(-1)
         if normalize:
-            exponents, coefficients = _normalize(exponents, coefficients, self.angles)
+            exponents, coefficients = normalize_terms(exponents, coefficients, self.angles)
         self.exponents, self.coefficients = exponents, coefficients
 
     # -- construction ----------------------------------------------------------------------
@@ -58,7 +58,7 @@ class TrigPolynomial:
     def constant(cls, value: float, angles) -> TrigPolynomial:
         """The constant polynomial ``value``."""
         value = float(value)
-        keep = abs(value) > _ROUND_OFF * max(abs(value), 1.0)  # as normalized
+        keep = abs(value) > ROUND_OFF * max(abs(value), 1.0)  # as normalized
         return cls(np.zeros((int(keep), 4 * len(angles)), dtype=np.int16), [value] * keep,
                    angles, normalize=False)
 
@@ -224,7 +224,8 @@ class TrigPolynomial:
             atoms.append(sp.sin(coords.q[j]) if self.angles[j] else coords.q[j])
         atoms += [sp.cos(q) for q in coords.q] + list(coords.qd) + list(coords.qdd)
         if evaluate:
-            terms = [sp.Mul(_number(value), *[atoms[k] ** int(e) for k, e in enumerate(row) if e])
+            terms = [sp.Mul(sympy_number(value),
+                            *[atoms[k] ** int(e) for k, e in enumerate(row) if e])
                      for row, value in zip(self.exponents, self.coefficients, strict=True)]
             return sp.Add(*terms)
         # flat products and sum without canonicalization (sympy's own constructors)
@@ -236,7 +237,7 @@ class TrigPolynomial:
                                  strict=True)]
         factors = [table[f] for f in factor.ravel().tolist()]
         values, number = np.unique(self.coefficients, return_inverse=True)
-        numbers = [_fast_number(v) for v in values.tolist()]
+        numbers = [fast_sympy_number(v) for v in values.tolist()]
         bounds = np.searchsorted(rows, np.arange(len(self.coefficients) + 1)).tolist()
         mul = sp.Mul._from_args
         terms = []
@@ -254,8 +255,8 @@ class TrigPolynomial:
 _NUMBERS: dict = {}  # float -> sympy number, bounded
 
 
-def _fast_number(value: float) -> sp.Number:
-    """:func:`_number` without the parsing of ``sympy.Float`` (an equal object), cached."""
+def fast_sympy_number(value: float) -> sp.Number:
+    """:func:`sympy_number` without the parsing of ``sympy.Float`` (an equal object), cached."""
     found = _NUMBERS.get(value)
     if found is None:
         if len(_NUMBERS) > 100_000:
@@ -266,7 +267,7 @@ def _fast_number(value: float) -> sp.Number:
     return found
 
 
-def _number(value: float) -> sp.Number:
+def sympy_number(value: float) -> sp.Number:
     return sp.Integer(int(value)) if value == int(value) else sp.Float(float(value))
 
 
@@ -323,7 +324,7 @@ class _Stack:
 
     def __init__(self, exponents, coefficients, owners, angles, count, normalize=False):
         if normalize:
-            exponents, coefficients, owners = _normalize_owned(exponents, coefficients,
+            exponents, coefficients, owners = normalize_owned(exponents, coefficients,
                                                                owners, angles, count)
         self.exponents, self.coefficients, self.owners = exponents, coefficients, owners
         self.angles, self.count = angles, count
@@ -390,7 +391,7 @@ def evaluate_many(polynomials, values: np.ndarray) -> np.ndarray:
                           + [np.zeros((0, width), dtype=np.int16)])
     owner = np.repeat(np.arange(len(polynomials)), [len(p.coefficients) for p in polynomials])
     coefficients = np.concatenate([p.coefficients for p in polynomials] + [np.zeros(0)])
-    first, inverse = _unique_rows(exponents)
+    first, inverse = unique_rows(exponents)
     distinct = exponents[first]
     # each monomial: its factors' powers (each computed once) multiplied in slot order, all
     # monomials of the same number of factors at once

@@ -9,7 +9,7 @@ import numpy as np
 import sympy as sp
 from sympy.printing.str import StrPrinter
 
-from .trigpoly import _fast_number, _number
+from .trigpoly import fast_sympy_number, sympy_number
 
 __all__ = ["TrigTerms"]
 
@@ -160,7 +160,7 @@ class _Printer:
         if found is None:
             # inside a sum or product sympy strips a float's trailing zeros
             found = self.numbers[value] = (str(int(value)) if value == int(value)
-                                           else _NESTED._print_Float(_fast_number(value)))
+                                           else _NESTED._print_Float(fast_sympy_number(value)))
         return found
 
     def __call__(self, polynomial) -> str:
@@ -168,7 +168,7 @@ class _Printer:
         if len(coefficients) == 0:
             return "0"
         if len(coefficients) == 1 and not exponents.any():
-            return str(_number(float(coefficients[0])))
+            return str(sympy_number(float(coefficients[0])))
         # a product's factors sort by their bases (distinct in a monomial): columns in the
         # generators' order give each row's factors in printing order
         ordered = exponents[:, self.order]

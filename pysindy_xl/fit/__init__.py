@@ -2,7 +2,7 @@
 
 One fit of :class:`~pysindy_xl.XLSINDy` goes one way through here::
 
-    check_fit   ->  build_problem  ->  choose_noise_model  ->  solve      ->  fitted_state
+    check_fit   ->  build_problem  ->  choose_noise_model  ->  solve      ->  wrap
     arrays          CatalogProblem     problem, weighting      optimizer      attributes
 
 (:mod:`~pysindy_xl.fit.trajectories`, :mod:`~pysindy_xl.fit.build` with
@@ -24,9 +24,9 @@ from .trajectories import (
     resolve_formulation,
     trajectory_data,
 )
-from .wrap import catalog_dynamics, fitted_state
+from .wrap import catalog_dynamics
 
 __all__ = ["CatalogMap", "build_problem", "probe_points", "resolve_optimizer", "choose_noise_model",
-           "fit_smoother", "RememberedSmoother", "solve", "fitted_state", "catalog_dynamics",
+           "fit_smoother", "RememberedSmoother", "solve", "catalog_dynamics",
            "check_fit", "estimator_trajectories", "trajectory_data", "differentiation_function",
            "resolve_formulation", "FORMULATIONS", "UNFORCED_WIDTH_MULTIPLES"]

@@ -16,8 +16,8 @@ import dataclasses
 
 import numpy as np
 
-from ..feature_library import stack_variables
 from ..optimizers import CatalogProblem, independent_columns
+from ..symbols import stack_variables
 from ..weak import BumpTestFunctions, WhittakerSmoother, weak_regression
 from .diagnostics import column_mass_matrices
 from .still import block_rows, driven_coordinates, still_columns, still_coordinates

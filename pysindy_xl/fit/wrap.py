@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from ..dynamics import CatalogDynamics
-from ..report.equations import has_parameter_map
+from ..physical.structure import has_parameter_map
 from .diagnostics import mass_matrices, mass_matrix_report, orient_free_laws
 
-__all__ = ["fitted_state", "catalog_dynamics", "checked_dynamics"]
+__all__ = ["WrappedFit", "wrap", "catalog_dynamics", "checked_dynamics"]
 
 
 def catalog_dynamics(library, coef, held):
@@ -44,30 +46,48 @@ def checked_dynamics(library, coef, held, states):
     return coef, dynamics, mass_matrix_report(mass, eig, library.coords.names, remedy)
 
 
-def fitted_state(library, problem, optimizer) -> dict:
-    """The fitted attributes of :class:`~pysindy_xl.XLSINDy` (name -> value) from a solved
-    ``problem`` (built by :func:`~pysindy_xl.fit.build_problem`), its fitted ``library`` and
-    ``optimizer``.
-    """
-    origin = problem.catalog_map
-    names = library.get_feature_names()
-    state = {"feature_library_": library, "optimizer_": optimizer,
-             "inclusion_probability_": None, "coef_interval_": None}
-    if hasattr(optimizer, "inclusion_probability_"):  # an ensemble: map to the catalog
-        state["inclusion_probability_"] = origin.to_catalog(optimizer.inclusion_probability_)
-        state["coef_interval_"] = origin.to_catalog(optimizer.coef_interval_)
-    report = getattr(optimizer, "consistency_", None)  # a physically constrained fit
+@dataclasses.dataclass(frozen=True)
+class WrappedFit:
+    """A solved problem in the catalog's terms (:func:`wrap`). Each field is the fitted attribute
+    of :class:`~pysindy_xl.XLSINDy` of the same name with a trailing underscore, which sets and
+    documents it."""
+
+    coef: np.ndarray
+    dynamics: CatalogDynamics | None
+    mass_matrix_check: dict | None
+    dropped_features: dict
+    still_coordinates: list
+    forced_coordinates: np.ndarray
+    n_coordinates: int
+    n_samples: int
+    formulation: str
+    weak_info: dict | None
+    selection: object
+    inclusion_probability: np.ndarray | None
+    coef_interval: np.ndarray | None
+    physical_consistency: dict | None
+
+
+def wrap(library, problem, optimizer) -> WrappedFit:
+    """The solved ``problem`` (built by :func:`~pysindy_xl.fit.build_problem`, solved by the
+    fitted ``optimizer``) in the columns of the fitted ``library`` (``problem.catalog_map``)."""
+    origin, names = problem.catalog_map, library.get_feature_names()
     held = ~origin.coordinates
     coef, dynamics, check = checked_dynamics(library, origin.to_catalog(optimizer.coef_), held,
                                              origin.states)
-    return {**state, "coef_": coef, "dynamics_": dynamics, "mass_matrix_check_": check,
-            "dropped_features_": {names[j]: why for j, why in origin.dropped.items()},
-            "physical_consistency_": None if report is None else {
-                **report, "negative_friction": [names[origin.columns[j]]
-                                                for j in report["negative_friction"]]},
-            "n_coordinates_": library.coords.n, "n_samples_": origin.states.shape[0],
-            "forced_coordinates_": origin.forced,
-            "still_coordinates_": [name for name, h in zip(library.coords.names, held,
-                                                           strict=True) if h],
-            "formulation_": origin.formulation, "weak_info_": origin.weak_info,
-            "selection_": getattr(optimizer, "selection_", None)}
+    bagged = hasattr(optimizer, "inclusion_probability_")  # an ensemble: to the catalog
+    report = getattr(optimizer, "consistency_", None)  # a physically constrained fit
+    return WrappedFit(
+        coef=coef, dynamics=dynamics, mass_matrix_check=check,
+        dropped_features={names[j]: why for j, why in origin.dropped.items()},
+        still_coordinates=[name for name, h in zip(library.coords.names, held, strict=True)
+                           if h],
+        forced_coordinates=origin.forced, n_coordinates=library.coords.n,
+        n_samples=origin.states.shape[0], formulation=origin.formulation,
+        weak_info=origin.weak_info, selection=getattr(optimizer, "selection_", None),
+        inclusion_probability=(origin.to_catalog(optimizer.inclusion_probability_)
+                               if bagged else None),
+        coef_interval=origin.to_catalog(optimizer.coef_interval_) if bagged else None,
+        physical_consistency=None if report is None else {
+            **report, "negative_friction": [names[origin.columns[j]]
+                                            for j in report["negative_friction"]]})

@@ -1,8 +1,9 @@
-"""MuJoCo systems, data generation, reference catalogs and validation of identified models.
+"""MuJoCo systems and their catalogs; the names of data generation and validation handed on.
 
-Subpackages by concern: :mod:`.systems`, :mod:`.simulation`, :mod:`.catalogs` and
-:mod:`.evaluation`. Public names load on first use (PEP 562): importing this package imports
-neither MuJoCo, SymPy, PySINDy nor matplotlib.
+Subpackages by concern: :mod:`.systems` and :mod:`.catalogs` (no simulation); the names of
+:mod:`pysindy_xl.simulation` and :mod:`pysindy_xl.evaluation` are handed on here. Public names
+load on first use (PEP 562): importing this package imports neither MuJoCo, SymPy, PySINDy nor
+matplotlib.
 
 >>> import pysindy_xl.mujoco as pxm
 >>> pxm.get_system("cart-pole").coordinate_names
@@ -11,7 +12,7 @@ neither MuJoCo, SymPy, PySINDy nor matplotlib.
 
 from __future__ import annotations
 
-from .._optional import import_optional, lazy_attributes
+from .._optional import import_mujoco, lazy_attributes
 
 # public name -> submodule that defines it (imported on first attribute access)
 _LAZY = {
@@ -21,38 +22,25 @@ _LAZY = {
                      "default_xml_path", "equations_of_motion", "get_system",
                      "system_from_metadata"), "systems.registry"),
     **dict.fromkeys(("ConstraintWarning", "generate_dataset", "simulate_trajectory"),
-                    "simulation.generate"),
+                    "..simulation.generate"),
     **dict.fromkeys(("Integration", "UnstableSimulationError", "choose_integration"),
-                    "simulation.integration"),
-    **dict.fromkeys(("FORCING_MODES", "SumOfSinusoids"), "simulation.forcing"),
-    "FourierTrajectory": "simulation.fourier",
-    "excitation_trajectory": "simulation.excitation",
+                    "..simulation.integration"),
+    **dict.fromkeys(("FORCING_MODES", "SumOfSinusoids"), "..simulation.forcing"),
+    "FourierTrajectory": "..simulation.fourier",
+    "excitation_trajectory": "..simulation.excitation",
     **dict.fromkeys(("CATALOG_KINDS", "classical_terms", "lagrange_terms", "reference_catalog",
                      "true_coefficients"), "catalogs.reference"),
     **dict.fromkeys(("KinematicCatalog", "PolynomialLagrangeLibrary", "kinematic_catalog"),
                     "catalogs.kinematic"),
     **dict.fromkeys(("Payload", "identify_payload"), "catalogs.payload"),
     **dict.fromkeys(("DEFAULT_DIVERGENCE_BOUND", "ValidationResult", "compare_trajectories",
-                     "validate_model", "validation_trajectory"), "evaluation.validation"),
-    "compare_physics": "evaluation.physics",
-    **dict.fromkeys(("plot_validation", "plot_coefficients"), "evaluation.plots"),
+                     "validate_model", "validation_trajectory"), "..evaluation.validation"),
+    "compare_physics": "..evaluation.physics",
+    **dict.fromkeys(("plot_validation", "plot_coefficients"), "..evaluation.plots"),
     # the data of a generated run (kept here by the public API; defined in pysindy_xl.data)
     **dict.fromkeys(("Dataset", "Trajectory", "load_dataset"), "..data.dataset"),
 }
 
 __all__ = ["import_mujoco", *_LAZY]
-
-def import_mujoco():
-    """The ``mujoco`` module, imported on first use: the one way this package imports MuJoCo.
-
-    Raises :class:`pysindy_xl._optional.MissingExtraError` (an ImportError naming the
-    ``pysindy-xl[mujoco]`` extra) when MuJoCo is not installed.
-
-    >>> from pysindy_xl.mujoco import import_mujoco
-    >>> hasattr(import_mujoco(), "MjModel")
-    True
-    """
-    return import_optional("mujoco", purpose="MuJoCo simulation (pysindy_xl.mujoco)")
-
 
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY)

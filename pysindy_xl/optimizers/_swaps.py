@@ -10,7 +10,7 @@ import scipy.linalg
 
 def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2):
     """The exchange ``(c, j)`` (column ``c`` in for the ``j``-th selected) lowering the residual
-    most, or ``(None, None)``; arrays as computed in :func:`_swap_search`.
+    most, or ``(None, None)``; arrays as computed in :func:`swap_search`.
     """
     allowed = usable.copy()
     allowed[support] = False
@@ -25,11 +25,12 @@ def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y
     return c, j
 
 
-def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
+def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
     """Best-improvement 1-swap search on a reduced system: with ``x_S = Q R``, dropping column
     ``j`` (direction ``u_j ~ Q R^-T e_j``) adds ``(u_j . y)^2`` to the residual and leaves
-    candidate ``c`` the component ``C_c + u_j (u_j . x_c)``: all ``k x F`` gains in two products.
-    ``rss`` and ``previous`` continue from a first step of :func:`_first_swaps`.
+    candidate ``c`` the component ``C_c + u_j (u_j . x_c)``: all ``k x F`` gains from the one
+    product ``Q^T x`` (cost ``O(n k F)`` a step).
+    ``rss`` and ``previous`` continue from a first step of :func:`first_swaps`.
     """
     support = np.asarray(support, dtype=int)
     norms2 = np.sum(xs**2, axis=0)
@@ -47,11 +48,13 @@ def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
         except (np.linalg.LinAlgError, ValueError):
             break
         directions /= np.linalg.norm(directions, axis=0)
-        along = xs.T @ directions                        # (F, k): u_j . x_c
+        # everything from one (k, F) product: P = Q^T x, so u_j . x_c = (Q^T u_j) . P_c and the
+        # part of x_c off the support has the squared norm |x_c|^2 - |P_c|^2
+        in_span = basis.T @ xs                           # (k, F)
+        along = in_span.T @ (basis.T @ directions)       # (F, k): u_j . x_c
         removed = directions.T @ y                       # (k,): u_j . y
-        projected = xs - basis @ (basis.T @ xs)
-        remaining2 = np.sum(projected**2, axis=0)[:, None] + along**2
-        correlation = (projected.T @ residual)[:, None] + along * removed
+        remaining2 = np.maximum(norms2 - np.sum(in_span**2, axis=0), 0.0)[:, None] + along**2
+        correlation = (xs.T @ residual)[:, None] + along * removed
         c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2)
         if c is None:
             break
@@ -60,8 +63,8 @@ def _swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
     return np.sort(support)
 
 
-def _first_swaps(xs, y, usable, order, sizes):
-    """The first step of :func:`_swap_search` from every ``order[:k]``, ``k`` in ``sizes``:
+def first_swaps(xs, y, usable, order, sizes):
+    """The first step of :func:`swap_search` from every ``order[:k]``, ``k`` in ``sizes``:
     ``{k: (rss, swapped support or None)}``, from one complete QR of ``x[:, order]`` (sizes
     past a zero pivot left out).
     """

@@ -16,7 +16,8 @@ import dataclasses
 import numpy as np
 import scipy.linalg
 
-from ._swaps import _first_swaps, _swap_search
+from ._base import independent_columns
+from ._swaps import first_swaps, swap_search
 
 __all__ = ["elimination_path", "forward_path", "cross_validated_size", "cross_validated_supports",
            "refine_by_swaps", "select_support", "SelectionResult"]
@@ -101,12 +102,15 @@ def forward_path(x, y) -> np.ndarray:
     return _forward_order(*_reduced(x, y))
 
 
-def _forward_order(active_mask, xs, residual) -> np.ndarray:
-    """:func:`forward_path` on a reduced system."""
+def _forward_order(active_mask, xs, residual, max_steps=None) -> np.ndarray:
+    """:func:`forward_path` on a reduced system; after ``max_steps`` picks the remaining
+    columns follow in column order (unscored by the selection).
+    """
     orthogonal = xs.copy()
     chosen = []
     candidates = active_mask.copy()
-    while candidates.any():
+    steps = xs.shape[1] if max_steps is None else int(max_steps)
+    while candidates.any() and len(chosen) < steps:
         norms2 = np.sum(orthogonal**2, axis=0)
         usable = candidates & (norms2 > 1e-20 * np.sum(xs**2, axis=0))
         if not usable.any():
@@ -158,7 +162,7 @@ def refine_by_swaps(x, y, support, max_swaps: int = 50) -> np.ndarray:
     support = np.asarray(support, dtype=int)
     if len(support) == 0:
         return support
-    return _swap_search(xs, y, active, support, int(max_swaps))
+    return swap_search(xs, y, active, support, int(max_swaps))
 
 
 def fold_labels(n_rows: int, n_blocks: int, n_folds: int) -> np.ndarray:
@@ -289,6 +293,12 @@ class SelectionResult(ChosenSupport):
     rule: str
 
 
+# the forward path and its scores stop at max(3 b, b + 40) terms, b the backward path's best size:
+# a forward model far larger than the best backward one is never the sparsest within one standard
+# error, and the greedy steps past it cost O(F^2) each on catalogs of a thousand columns
+_FORWARD_REACH, _FORWARD_MARGIN = 3, 40
+
+
 def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
                    resolution: float = 1e-8, swaps: bool = True, keep=None) -> SelectionResult:
     """Sparsest model within one standard error of the best path model's held-out error.
@@ -328,13 +338,20 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     candidates, seen, paths = [], set(), []
     reduced, folds = _systems(x, y, n_blocks, n_folds)
     keep = np.unique(np.asarray([] if keep is None else keep, dtype=int))
+    reduced = _without_dependent_columns(reduced, keep)
     free, local = _profiled(reduced, keep)
+    scored = None  # the forward path is scored up to a few times the backward best size
     for path in ("backward", "forward"):
-        order = np.concatenate([keep, free[(_elimination_order if path == "backward"
-                                            else _forward_order)(*local)]]).astype(int)
+        if path == "backward":
+            order = _elimination_order(*local)
+        else:
+            order = _forward_order(*local, max_steps=scored)
+        order = np.concatenate([keep, free[order]]).astype(int)
         if max_size is not None:
             order = order[: max(int(max_size), len(keep))]
-        mean, spread = fold_summary(_nested_errors(folds, order, n_folds))
+        errors = _nested_errors(folds, order[:scored], n_folds)
+        mean, spread = fold_summary(errors)
+        mean = np.concatenate([mean, np.full(len(order) - len(mean), np.inf)])
         mean[: max(len(keep) - 1, 0)] = np.inf  # models without every kept column
         paths.append((path, order, mean))
         for k in np.flatnonzero(np.isfinite(mean)):
@@ -342,6 +359,9 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
             if key not in seen:
                 seen.add(key)
                 candidates.append((int(k) + 1, mean[k], spread[k], f"{path} path", order))
+        if path == "backward" and np.isfinite(mean).any():
+            best_size = int(np.argmin(mean)) + 1
+            scored = max(_FORWARD_REACH * best_size, best_size + _FORWARD_MARGIN)
     if not candidates:
         raise ValueError("x: no model size can be cross-validated on these rows")
     # the reference is the best path model (the winner's curse of the refinements)
@@ -372,6 +392,27 @@ def fold_summary(errors):
     return mean, spread
 
 
+_DEPENDENCE_RTOL = 1e-6
+
+
+def _without_dependent_columns(reduced, keep):
+    """``reduced`` with the columns that are exact combinations of earlier ones (``keep``
+    first, then column order) made inactive.
+
+    Among exactly dependent columns (``qd^2 cos^2 q + qd^2 sin^2 q = qd^2``) every path and
+    swap would otherwise choose by rounding, so a perturbation of the columns by 1e-12 could
+    change the support (and did, with OpenBLAS's Haswell kernels). The tolerance lies far above
+    rounding: a column whose part off the others is under 1e-6 of its norm has a variance
+    inflation of 1e12 and cannot be told from them on data anyway.
+    """
+    active, xs, y = reduced
+    priority = np.concatenate([keep, np.setdiff1d(np.arange(xs.shape[1]), keep)]).astype(int)
+    independent = np.zeros(xs.shape[1], dtype=bool)
+    kept = independent_columns(np.where(active, xs, 0.0), priority, rtol=_DEPENDENCE_RTOL)[0]
+    independent[kept] = True
+    return active & independent, xs, y
+
+
 def _profiled(reduced, keep):
     """The columns besides ``keep`` and their reduced system with ``keep`` projected out."""
     active, xs, y = reduced
@@ -398,18 +439,18 @@ def _swap_candidates(reduced, folds, paths, seen, limit, n_folds, keep=(), free=
     refined, visited = [], set()  # starts already refined and local optima reached
     for path, order, mean in paths:
         sizes = [k for k in range(1, min(limit, len(order)) + 1) if np.isfinite(mean[k - 1])]
-        first = _first_swaps(xs, y_reduced, active, order, sizes)
+        first = first_swaps(xs, y_reduced, active, order, sizes)
         for k in sizes:
             start = frozenset(order[:k].tolist())
             if start in visited:
                 continue
             if k not in first:
-                support = _swap_search(xs, y_reduced, active, order[:k], max_swaps=50)
+                support = swap_search(xs, y_reduced, active, order[:k], max_swaps=50)
             elif first[k][1] is None:  # no exchange improves the start
                 support = np.sort(order[:k])
             else:
                 rss, swapped = first[k]
-                support = _swap_search(xs, y_reduced, active, swapped, max_swaps=49, rss=rss,
+                support = swap_search(xs, y_reduced, active, swapped, max_swaps=49, rss=rss,
                                        previous=order[:k])
             visited.update((start, frozenset(support.tolist())))
             rest = order[~np.isin(order, support)]

@@ -15,7 +15,7 @@ import numpy as np
 from .friction import dry_friction_law
 
 __all__ = ["INERTIAL_PARAMETERS", "PhysicalStructure", "catalog_structure", "friction_kind",
-           "pseudo_inertia_matrix"]
+           "has_parameter_map", "pseudo_inertia_matrix"]
 
 #: The inertial parameters of one body, in this order: mass, first moments ``m c``, inertia
 #: about the body frame's origin (diagonal, then products).
@@ -202,6 +202,22 @@ def friction_kind(term, velocity, acceleration=None) -> str | None:
     if term == velocity:
         return "viscous"
     return "dry" if dry_friction_law(term, velocity, acceleration) else None
+
+
+def has_parameter_map(library) -> bool:
+    """Whether some library says which physical parameters its terms stand for.
+
+    Parameters
+    ----------
+    library : pysindy_xl.CatalogRepartition
+        The fitted catalog.
+
+    Returns
+    -------
+    bool
+        True when a library of the catalog has ``parameters``.
+    """
+    return any(getattr(lib, "parameters", None) is not None for lib in library.libraries_)
 
 
 def catalog_structure(library) -> PhysicalStructure | None:

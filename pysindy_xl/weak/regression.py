@@ -13,7 +13,7 @@ import warnings
 import numpy as np
 import scipy.sparse
 
-from ..feature_library import stack_variables
+from ..symbols import stack_variables
 from .noise import WeakNoise, draw_moments
 from .smoothing import WhittakerSmoother, is_uniform
 from .timegrid import STAMP_NOISE_RATIO, grid_summary, split_at_gaps, stamp_noise_ratio

@@ -119,7 +119,7 @@ def is_uniform(t) -> bool:
     return bool(np.ptp(steps) <= _UNIFORM_TOLERANCE * np.mean(steps))
 
 
-def _choose_lambda(t: np.ndarray, y: np.ndarray, order: int, target: str) -> tuple[float, float]:
+def choose_lambda(t: np.ndarray, y: np.ndarray, order: int, target: str) -> tuple[float, float]:
     """``(lambda, sigma)`` of one series on a uniform grid (cosine-transform domain), ``sigma``
     the GCV fit's noise level; ``target="velocity"`` minimizes the velocity's risk
     ``sum_k w_k^2 [(1 - H_k)^2 (P_k - sigma^2) + H_k^2 sigma^2]`` (mode ``k``: frequency ``w_k``,
@@ -307,7 +307,7 @@ class WhittakerSmoother:
             lams[:] = float(self.lam)
         elif is_uniform(t):
             for c in range(x.shape[1]):  # a few coordinates, each with its own lambda
-                lams[c], noise[c] = _choose_lambda(t, x[:, c], self.order, self.lam)
+                lams[c], noise[c] = choose_lambda(t, x[:, c], self.order, self.lam)
         else:  # one banded solve per weight for all coordinates
             lams, noise = _choose_lambdas_on_grid(t, x, self.order, self.lam)
         self.lam_, self.noise_ = lams, noise

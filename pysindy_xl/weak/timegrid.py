@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .smoothing import _choose_lambda, is_uniform
+from .smoothing import choose_lambda, is_uniform
 
 __all__ = ["split_at_gaps", "grid_summary", "stamp_noise_ratio", "STAMP_NOISE_RATIO"]
 
@@ -90,6 +90,6 @@ def stamp_noise_ratio(t, x, noise, order: int = 3) -> float:
     True
     """
     steps = np.arange(len(t), dtype=float)
-    in_order = np.array([_choose_lambda(steps, column, order, "gcv")[1]
+    in_order = np.array([choose_lambda(steps, column, order, "gcv")[1]
                          for column in np.asarray(x, dtype=float).T])
     return float(np.median(np.asarray(noise, dtype=float) / np.maximum(in_order, 1e-300)))

@@ -17,9 +17,9 @@ import numpy as np
 
 from ... import _disk_cache
 from ..._disk_cache import directory
+from ..._optional import import_mujoco
 from ...feature_library import trigpoly
 from ...feature_library.trigpoly import TrigPolynomial
-from .. import import_mujoco
 
 __all__ = ["directory", "key", "load", "save"]
 

@@ -14,10 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._optional import import_mujoco
 from ...feature_library.trigpoly import TrigPolynomial
 from ...physical.rigid_body import KinematicTree
 from ...physical.structure import INERTIAL_PARAMETERS
-from .. import import_mujoco
 from ..systems.registry import MuJoCoSystem
 
 __all__ = ["INERTIAL_PARAMETERS", "body_functions", "kinematic_tree", "physical_values"]

@@ -18,12 +18,12 @@ import time
 
 import numpy as np
 
+from ..._optional import import_mujoco
 from ...feature_library import PolynomialLagrangeLibrary
 from ...feature_library.trigpoly import evaluate_many, state_values
 from ...feature_library.trigterms import TrigTerms
 from ...physical.rigid_body import KinematicTree
 from ...symbols import Coordinates
-from .. import import_mujoco
 from ..systems.registry import MuJoCoSystem, get_system
 from . import _derivation_cache
 from ._kinematic_build import (
@@ -47,10 +47,15 @@ _CACHE_SIZE = 16
 class KinematicCatalog:
     """Candidate terms of a rigid-body mechanism, derived from its kinematic tree.
 
-    Built by :func:`kinematic_catalog`; :meth:`library` is its feature library.
+    Built by :func:`kinematic_catalog` (the fields below are its results, stored as given);
+    :meth:`library` is its feature library.
 
-    Attributes
+    Parameters
     ----------
+    system : MuJoCoSystem
+        The system the catalog describes.
+    coords : pysindy_xl.Coordinates
+        Its generalized coordinates.
     lagrange_terms : list of sympy.Expr
         Minimal independent candidate Lagrangian terms (one per base parameter).
     parameters : list of dict
@@ -65,11 +70,23 @@ class KinematicCatalog:
         enters (bool, (n_terms, n)), their ``(kind, joint)`` and MJCF values.
     n_candidates : int
         Lagrangian functions before the reduction.
-    tree : KinematicTree
+    build_seconds : float, default=0.0
+        Time the derivation took (s).
+    tree : KinematicTree or None, default=None
         The numeric kinematic tree (:mod:`pysindy_xl.physical.rigid_body`).
-    friction_models, friction_scales, joint_velocities
-        The joint models of ``friction=`` (empty: friction as ``classical_terms``), their
-        ``(coulomb_scale, stribeck_scale)`` and each joint's velocity in the coordinates.
+    friction_models : tuple of str, default=()
+        The joint models of ``friction=`` (empty: friction as ``classical_terms``).
+    friction_scales : tuple of float, default=(0.01, 0.1)
+        ``(coulomb_scale, stribeck_scale)``.
+    joint_velocities : list of sympy.Expr, default=[]
+        Each joint's velocity in the coordinates.
+
+    Other Parameters
+    ----------------
+    _polynomials : list, default=[]
+        Internal: the terms as polynomials, filled by :func:`kinematic_catalog`.
+    _compiled : dict, default={}
+        Internal: compiled numerical functions, filled on first use.
 
     Examples
     --------
@@ -116,6 +133,21 @@ class KinematicCatalog:
         ``interlink`` goes to :class:`~pysindy_xl.ExternalForces` (``system.force_matrix()``
         to fit with MuJoCo joint forces); ``classical=False`` leaves out friction and springs.
 
+        Parameters
+        ----------
+        interlink : array_like of shape (n, n), default=None
+            Passed to :class:`~pysindy_xl.ExternalForces`: ``system.force_matrix()`` to fit with
+            MuJoCo joint forces; None: force ``i`` acts on coordinate ``i``.
+        classical : bool, default=True
+            Include the Newtonian candidates (friction, springs).
+
+        Returns
+        -------
+        pysindy_xl.CatalogRepartition
+            The library (not yet fitted).
+
+        Examples
+        --------
         >>> lib = kinematic_catalog("cart-pole").library().fit()
         >>> lib.get_feature_names()[:2]
         ['F[tau]', 'L[0.5*x_dot**2]']
@@ -149,6 +181,18 @@ class KinematicCatalog:
         models MJCF lacks (asymmetric, Stribeck, offset) zero. ``forces`` is the coefficient
         of the force column.
 
+        Parameters
+        ----------
+        forces : float, default=-1.0
+            Coefficient of the force column.
+
+        Returns
+        -------
+        numpy.ndarray of shape (n_features,)
+            One coefficient per feature of :meth:`library`.
+
+        Examples
+        --------
         >>> kinematic_catalog("cart-pole").true_coefficients().round(4)
         array([-1.  ,  1.5 ,  0.  , -0.4 ,  0.32,  0.5 ,  0.  ,  0.1 ,  0.  ])
         """
@@ -163,6 +207,16 @@ class KinematicCatalog:
         """Coefficients of :attr:`lagrange_terms` in a model fitted with :meth:`library`.
 
         Features are matched by name and scaled so that the force coefficient is -1.
+
+        Parameters
+        ----------
+        model : pysindy_xl.XLSINDy
+            A model fitted with this catalog's :meth:`library`.
+
+        Returns
+        -------
+        numpy.ndarray of shape (len(lagrange_terms),)
+            The identified base parameters, in the scale where the force coefficient is -1.
 
         Raises
         ------
@@ -223,10 +277,16 @@ class KinematicCatalog:
 
         Parameters
         ----------
-        q : array, shape (N, n) or (n,)
-        coefficients : array, shape (len(lagrange_terms),), optional
-            Lagrange coefficients (e.g. :meth:`lagrange_coefficients`); default
-            :attr:`base_parameters`.
+        q : array_like of shape (N, n) or (n,)
+            Generalized positions.
+        coefficients : array_like of shape (len(lagrange_terms),), default=None
+            Lagrange coefficients (e.g. :meth:`lagrange_coefficients`); None:
+            :attr:`base_parameters` of the MJCF model.
+
+        Returns
+        -------
+        numpy.ndarray of shape (N, n, n) or (n, n)
+            The symmetric mass matrix at each configuration.
 
         Examples
         --------
@@ -241,6 +301,21 @@ class KinematicCatalog:
 
         ``coefficients`` as in :meth:`mass_matrix`.
 
+        Parameters
+        ----------
+        q : array_like of shape (N, n) or (n,)
+            Generalized positions.
+        coefficients : array_like of shape (len(lagrange_terms),), default=None
+            Lagrange coefficients (e.g. :meth:`lagrange_coefficients`); None:
+            :attr:`base_parameters` of the MJCF model.
+
+        Returns
+        -------
+        numpy.ndarray of shape (N, n) or (n,)
+            ``dV/dq`` at each configuration.
+
+        Examples
+        --------
         >>> kinematic_catalog("cart-pole").gravity_torque([0.0, np.pi / 2]).round(4)
         array([0.   , 3.924])
         """
@@ -251,6 +326,23 @@ class KinematicCatalog:
 
         ``coefficients`` as in :meth:`mass_matrix`.
 
+        Parameters
+        ----------
+        q : array_like of shape (N, n) or (n,)
+            Generalized positions.
+        qd : array_like, same shape as q
+            Generalized velocities.
+        coefficients : array_like of shape (len(lagrange_terms),), default=None
+            Lagrange coefficients (e.g. :meth:`lagrange_coefficients`); None:
+            :attr:`base_parameters` of the MJCF model.
+
+        Returns
+        -------
+        numpy.ndarray, same shape as q
+            ``c(q, qd) + dV/dq``.
+
+        Examples
+        --------
         >>> kinematic_catalog("cart-pole").bias_forces([0.0, 0.0], [0.0, 2.0]).round(4)
         array([0., 0.])
         """
@@ -262,6 +354,23 @@ class KinematicCatalog:
         ``coefficients`` are identified Lagrange coefficients (:meth:`lagrange_coefficients`);
         ``terms=False`` leaves out the column of terms (long for spatial arms).
 
+        Parameters
+        ----------
+        coefficients : array_like of shape (len(lagrange_terms),), default=None
+            Lagrange coefficients (e.g. :meth:`lagrange_coefficients`); None: the column of
+            identified values is left out.
+        digits : int, default=4
+            Significant digits of the values.
+        terms : bool, default=True
+            Include the column of terms.
+
+        Returns
+        -------
+        str
+            The table, one line per base parameter.
+
+        Examples
+        --------
         >>> print(kinematic_catalog("cart-pole").report(terms=False))
         stands for  |  MJCF
         1*cart.m + 1*pole.m + 1*slider.armature  |  1.5
@@ -316,19 +425,33 @@ def kinematic_catalog(system, coulomb: bool = True, coulomb_scale: float = 0.01,
     system : MuJoCoSystem, str or os.PathLike
         A system (coordinates ``q = T @ qpos``), a registry name, an MJCF path or MJCF text
         (MuJoCo's joint coordinates). Hinge and slide joints only.
-    coulomb, coulomb_scale : bool, float
+    coulomb : bool, default=True
         Add a smooth Coulomb candidate ``tanh(qvel / coulomb_scale)`` per joint.
-    seed : int, default 0
+    coulomb_scale : float, default=0.01
+        Velocity scale of the smooth Coulomb candidate.
+    seed : int, default=0
         Seed of the random states of the numerical reduction.
-    friction : sequence of str or "all", optional
+    friction : sequence of str or "all", default=None
         Models of real joints offered for every joint (``"viscous"``, ``"coulomb"``,
         ``"asymmetric"``, ``"stribeck"``, ``"offset"``;
         :class:`~pysindy_xl.feature_library.JointFrictionLibrary`), replacing the viscous and
-        Coulomb candidates; ``stribeck_scale`` is the Stribeck model's ``v_s``.
-    coulomb_law : {"smooth", "mujoco"}, default "smooth"
+        Coulomb candidates; None: viscous (and, with ``coulomb``, smooth Coulomb) candidates.
+    stribeck_scale : float, default=0.1
+        The Stribeck model's velocity scale ``v_s`` (with ``friction``).
+    coulomb_law : {"smooth", "mujoco"}, default="smooth"
         ``"mujoco"``: MuJoCo's regularized ``frictionloss``
         (:func:`~pysindy_xl.physical.friction.regularized_dry_friction`), for data MuJoCo
         simulated from this model. Not with ``friction``.
+
+    Returns
+    -------
+    KinematicCatalog
+        The catalog; :meth:`KinematicCatalog.library` is its feature library.
+
+    Raises
+    ------
+    ValueError
+        When the model has a joint other than hinge or slide, or an option is invalid.
 
     Examples
     --------

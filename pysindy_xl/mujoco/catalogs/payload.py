@@ -26,12 +26,25 @@ __all__ = ["Payload", "identify_payload"]
 class Payload:
     """Inertial parameters of a payload identified by :func:`identify_payload`.
 
-    ``body`` carries it (its frame is the parameters' reference); ``parameters`` (10,) are
-    ``m, mcx, mcy, mcz, Ixx, Iyy, Izz, Ixy, Ixz, Iyz`` (about the body frame origin);
-    ``com`` (3,) and ``inertia`` (3, 3) are about the centre of mass, in the body frame;
-    ``identifiable`` counts the independent combinations of the ten the run determines;
-    ``residual`` is the relative RMS of the torques (or weak-form projections) unexplained.
+    Parameters
+    ----------
+    body : str
+        The body that carries the payload (its frame is the parameters' reference).
+    parameters : numpy.ndarray of shape (10,)
+        ``m, mcx, mcy, mcz, Ixx, Iyy, Izz, Ixy, Ixz, Iyz`` about the body frame origin.
+    mass : float
+        The payload's mass (kg).
+    com : numpy.ndarray of shape (3,)
+        Its centre of mass in the body frame (m).
+    inertia : numpy.ndarray of shape (3, 3)
+        Its inertia tensor about the centre of mass, in the body frame (kg m^2).
+    identifiable : int
+        How many independent combinations of the ten parameters the run determines.
+    residual : float
+        Relative RMS of the torques (or weak-form projections) left unexplained.
 
+    Examples
+    --------
     >>> payload = Payload("hand", np.r_[2.0, 0.2, 0, 0, np.zeros(6)], 2.0,
     ...                   np.array([0.1, 0, 0]), np.zeros((3, 3)), 10, 0.0)
     >>> payload.to_dict()["com"]
@@ -47,7 +60,13 @@ class Payload:
     residual: float
 
     def to_dict(self) -> dict:
-        """JSON-serializable description (arrays as nested lists)."""
+        """JSON-serializable description (arrays as nested lists).
+
+        Returns
+        -------
+        dict
+            The fields, arrays as nested lists.
+        """
         return {"body": self.body, "parameters": self.parameters.tolist(), "mass": self.mass,
                 "com": self.com.tolist(), "inertia": self.inertia.tolist(),
                 "identifiable": self.identifiable, "residual": self.residual}
@@ -58,6 +77,20 @@ class Payload:
         Added to the arm's :meth:`~pysindy_xl.XLSINDy.predict_forces` it predicts the loaded
         arm; ``catalog`` is the one the payload was identified with, ``q, qd, qdd`` (N, n).
 
+        Parameters
+        ----------
+        catalog : KinematicCatalog
+            The catalog the payload was identified with.
+        q, qd, qdd : array_like of shape (N, n)
+            Generalized positions, velocities and accelerations.
+
+        Returns
+        -------
+        numpy.ndarray of shape (N, n)
+            The joint torques the payload adds.
+
+        Examples
+        --------
         >>> from pysindy_xl.mujoco import kinematic_catalog
         >>> arm = kinematic_catalog('''<mujoco><option gravity="0 0 -9.81"/><worldbody>
         ...   <body name="hand"><joint name="a" axis="0 1 0"/>
@@ -70,7 +103,7 @@ class Payload:
         9.81
         """
         from ..._inputs import check_array
-        from ...feature_library import stack_variables
+        from ...symbols import stack_variables
         library = catalog.library().fit()
         q = check_array(q, "q", n_columns=catalog.coords.n)
         qd, qdd = check_array(qd, "qd", q.shape), check_array(qdd, "qdd", q.shape)
@@ -131,6 +164,11 @@ def identify_payload(catalog, q, t, tau, qd=None, qdd=None, arm=None, body=None)
     body : str, optional
         The body carrying the payload; default the last body of the chain.
 
+    Returns
+    -------
+    Payload
+        The identified inertial parameters.
+
     Raises
     ------
     ValueError
@@ -158,8 +196,8 @@ def identify_payload(catalog, q, t, tau, qd=None, qdd=None, arm=None, body=None)
     ('hand', 0.3, array([0.1, 0. ]))
     """
     from ..._inputs import check_array
-    from ...feature_library import stack_variables
     from ...physical.sdp import consistent_least_squares
+    from ...symbols import stack_variables
     from ...weak import BumpTestFunctions, WhittakerSmoother, weak_regression
     library = catalog.library().fit()
     n = catalog.coords.n

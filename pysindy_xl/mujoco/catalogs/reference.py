@@ -18,7 +18,7 @@ from ...symbols import monomials, products
 from ..systems.registry import MuJoCoSystem, equations_of_motion, get_system
 
 __all__ = ["CATALOG_KINDS", "lagrange_terms", "classical_terms", "reference_catalog",
-           "true_coefficients", "dry_friction_terms"]
+           "true_coefficients"]
 
 CATALOG_KINDS = ("lagrange", "classical", "mixed", "kinematic")
 
@@ -34,6 +34,23 @@ def lagrange_terms(system, velocity_degree: int = 2, trig_degree: int = 2) -> li
 
     ``velocity_degree`` and ``trig_degree`` are the monomials' maximal degrees.
 
+    Parameters
+    ----------
+    system : MuJoCoSystem or str
+        A system or a registry name.
+    velocity_degree : int, default=2
+        Maximal degree of the velocity monomials.
+    trig_degree : int, default=2
+        Maximal degree of the monomials in ``sin`` and ``cos`` of the angles (the other
+        positions do not enter).
+
+    Returns
+    -------
+    list of sympy.Expr
+        The candidate terms (no constant).
+
+    Examples
+    --------
     >>> len(lagrange_terms("cart-pole"))
     35
     """
@@ -63,6 +80,22 @@ def _monomials_of(expr: sp.Expr) -> list[tuple[sp.Expr, float]]:
 def classical_terms(system, terms) -> tuple[list[sp.Expr], np.ndarray]:
     """Distinct monomials of the Euler-Lagrange expansion of ``terms``, per equation.
 
+    Parameters
+    ----------
+    system : MuJoCoSystem or str
+        A system or a registry name.
+    terms : sequence of sympy.Expr
+        Lagrangian terms in the system's coordinates.
+
+    Returns
+    -------
+    monomials : list of sympy.Expr
+        The distinct monomials, without numeric factor, in order of first appearance.
+    mask : numpy.ndarray of bool, shape (n_monomials, n)
+        ``mask[k, i]``: monomial ``k`` appears in equation ``i``.
+
+    Examples
+    --------
     Returns the monomials (no numeric factors, in order of first appearance) and ``mask``
     (n_monomials, n): ``mask[k, i]``, monomial ``k`` appears in equation ``i``. The coupling
     term of the cart-pole expands into three classical monomials:
@@ -108,6 +141,22 @@ def dry_friction_terms(system, eps: float = 1e-3) -> tuple[list[sp.Expr], np.nda
     equation. ``eps`` is much smaller than typical velocities: MuJoCo's frictionloss is
     close to an exact sign, and a wider smoothing leaks friction into the damping.
 
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        The system; joints with ``frictionloss`` get a term.
+    eps : float, default=1e-3
+        Velocity scale of the smoothing.
+
+    Returns
+    -------
+    terms : list of sympy.Expr
+        One ``tanh(qd_i / eps)`` per joint with dry friction.
+    mask : numpy.ndarray of bool, shape (n_terms, n)
+        Each term in its own coordinate's equation.
+
+    Examples
+    --------
     >>> from pysindy_xl.mujoco import MJCFSystem
     >>> xml = ('<mujoco><worldbody><body><joint name="x" type="slide" frictionloss="0.3"/>'
     ...        '<geom size="0.1"/></body></worldbody></mujoco>')
@@ -136,25 +185,40 @@ def reference_catalog(system, kind: str = "mixed", velocity_degree: int = 2,
     ----------
     system : MuJoCoSystem or str
         A system, a registry name or an MJCF path.
-    kind : {"lagrange", "classical", "mixed", "kinematic"}, default "mixed"
-    velocity_degree, trig_degree : int, default 2
-        Degrees of the candidate Lagrangian terms (:func:`lagrange_terms`).
-    friction : {"auto", "diagonal", "full"}, default "auto"
-        Which velocities enter which equation as friction terms.
-    interlink : array (n, n), optional
+    kind : {"lagrange", "classical", "mixed", "kinematic"}, default="mixed"
+        Candidate Lagrangian terms, their Newtonian expansion, both, or the kinematic
+        catalog (:func:`~pysindy_xl.mujoco.kinematic_catalog`).
+    velocity_degree : int, default=2
+        Maximal degree of the velocity monomials of the candidate Lagrangian terms
+        (:func:`lagrange_terms`).
+    trig_degree : int, default=2
+        Maximal degree of their trigonometric monomials.
+    friction : {"auto", "diagonal", "full"}, default="auto"
+        Which velocities enter which equation as friction terms: "auto" follows the
+        system's :meth:`~MuJoCoSystem.friction_pattern`.
+    interlink : array_like of shape (n, n), default=None
         Passed to :class:`~pysindy_xl.ExternalForces` (``system.force_matrix()`` to fit with
         MuJoCo joint forces ``u``).
-    dry_friction, dry_friction_eps : bool, float
-        Add :func:`dry_friction_terms` with this scale (default: when the model has
-        ``frictionloss``).
-    joint_models, coulomb_law
-        ``"kinematic"`` only (which takes no degree or friction option): ``friction`` and
-        ``coulomb_law`` of :func:`~pysindy_xl.mujoco.kinematic_catalog`.
+    dry_friction : bool or None, default=None
+        Add :func:`dry_friction_terms`; None: when the model has ``frictionloss``.
+    dry_friction_eps : float, default=1e-3
+        Velocity scale of the dry friction terms.
+    joint_models : sequence of str or "all", default=None
+        ``"kinematic"`` only (which takes no degree or friction option): the ``friction``
+        joint models of :func:`~pysindy_xl.mujoco.kinematic_catalog`.
+    coulomb_law : {"smooth", "mujoco"}, default="smooth"
+        ``"kinematic"`` only: the ``coulomb_law`` of
+        :func:`~pysindy_xl.mujoco.kinematic_catalog`.
 
     Returns
     -------
     CatalogRepartition
         Libraries in the order forces, Lagrange, classical.
+
+    Raises
+    ------
+    ValueError
+        When ``kind`` or ``friction`` is unknown, or an option does not apply to ``kind``.
 
     Examples
     --------
@@ -236,6 +300,31 @@ def true_coefficients(system, catalog, strict: bool = False, forces: float = -1.
     hold; with ``strict`` they raise a ValueError instead, as does a system with no known
     model.
 
+    Parameters
+    ----------
+    system : MuJoCoSystem or str
+        A system or a registry name.
+    catalog : pysindy_xl.CatalogRepartition
+        The catalog (e.g. :func:`reference_catalog`); fitted here when needed.
+    strict : bool, default=False
+        Raise a ValueError when the catalog cannot hold the whole true model.
+    forces : float, default=-1.0
+        Coefficient of the force column.
+
+    Returns
+    -------
+    xi : numpy.ndarray of shape (n_features,)
+        The true coefficient of each feature of the catalog.
+    missing : list of str
+        The parts of the true model the catalog cannot hold (empty with ``strict``).
+
+    Raises
+    ------
+    ValueError
+        When the system has no known model, or with ``strict`` when something is missing.
+
+    Examples
+    --------
     >>> catalog = reference_catalog("cart-pole", "mixed", trig_degree=1)
     >>> xi, missing = true_coefficients("cart-pole", catalog)
     >>> {name: round(float(v), 4) for name, v in zip(catalog.get_feature_names(), xi) if v}

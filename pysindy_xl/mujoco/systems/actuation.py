@@ -21,13 +21,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
+from ..._optional import import_mujoco
 from .registry import get_system
 
-__all__ = ["ActuatorLaw", "actuator_law", "actuator_force_function", "servo_bandwidths"]
+__all__ = ["ActuatorLaw", "actuator_law", "start_on_reference"]
 
 
-def _supported(model, a: int) -> bool:
+def supported_actuator(model, a: int) -> bool:
     """Whether actuator ``a`` follows the law of the module docstring."""
     mujoco = import_mujoco()
     return (int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)
@@ -45,6 +45,20 @@ class ActuatorLaw:
     one state or many at once. ``state_dependent``: some force depends on the state (servo,
     affine gain or bias), so the law must run in closed loop; False for motors.
 
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        The system whose coordinates ``q``, ``qd`` the law takes.
+    signals : callable or None
+        ``signals(times) -> (len(times), nu)`` controls (e.g. a :class:`SumOfSinusoids`); None:
+        zero controls.
+    force_input : {"tau", "u"}
+        Generalized forces on the coordinates (``B @ qfrc_actuator``) or joint forces.
+    mj_model : mujoco.MjModel, default=None
+        Whose actuators act (default ``system.mj_model()``).
+
+    Examples
+    --------
     A position servo (``kp = 10``, ``kv = 1``) on a hinge, its reference fixed at 0.5 rad:
 
     >>> from pysindy_xl.mujoco import MJCFSystem, SumOfSinusoids
@@ -92,7 +106,18 @@ class ActuatorLaw:
                                     or np.any(self._bias[:, 1:] != 0))
 
     def controls(self, t) -> np.ndarray:
-        """Clamped controls at times ``t``: shape (nu,) for a scalar, (len(t), nu) else."""
+        """Clamped controls at times ``t``: shape (nu,) for a scalar, (len(t), nu) else.
+
+        Parameters
+        ----------
+        t : float or array_like of shape (N,)
+            Time(s).
+
+        Returns
+        -------
+        numpy.ndarray of shape (nu,) or (N, nu)
+            The controls, clamped to each actuator's ``ctrlrange``.
+        """
         times = np.atleast_1d(np.asarray(t, dtype=float))
         if self.signals is None:
             ctrl = np.zeros((len(times), self._nu))
@@ -106,6 +131,25 @@ class ActuatorLaw:
 
         ``q``, ``qd`` (shape (n,) or (N, n)) may be left out when the law is not
         ``state_dependent``; a ValueError names the one missing or misshapen.
+
+        Parameters
+        ----------
+        t : float or array_like of shape (N,)
+            Time(s).
+        q : array_like of shape (n,) or (N, n), default=None
+            Generalized positions; needed when the law is ``state_dependent``.
+        qd : array_like of shape (n,) or (N, n), default=None
+            Generalized velocities; needed when the law is ``state_dependent``.
+
+        Returns
+        -------
+        numpy.ndarray of shape (n,) or (N, n)
+            The generalized forces (``force_input="tau"``) or joint forces (``"u"``).
+
+        Raises
+        ------
+        ValueError
+            When a needed state is missing or misshapen.
         """
         ctrl = self.controls(t)
         gain, bias = self._gain[:, 0], self._bias[:, 0]
@@ -144,6 +188,24 @@ class ActuatorLaw:
         that saturates a stiff servo and makes a time-stepping integrator chatter. ``dt`` is
         the central-difference step of ``v*``; returns ``(q, qd)``, shape (n,) each.
 
+        Parameters
+        ----------
+        t : float
+            The time.
+        q, qd : array_like of shape (n,)
+            Generalized positions and velocities to start from.
+        dt : float, default=1e-4
+            Central-difference step of ``v*``.
+
+        Returns
+        -------
+        q : numpy.ndarray of shape (n,)
+            Positions of the nearest state at which every position servo exerts no force.
+        qd : numpy.ndarray of shape (n,)
+            Velocities of that state.
+
+        Examples
+        --------
         A servo ``kp = 100``, ``kv = 10`` whose reference moves at 1 rad/s starts 0.1 rad
         behind it, where its force ``100 * 0.1 - 10 * 1`` vanishes:
 
@@ -184,6 +246,27 @@ def start_on_reference(system, signals, q0, qd0, mj_model=None):
 
     A servo (``kp = 100``, ``kv = 10``) whose reference holds 0.5 rad: the run starts there.
 
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        The driven system.
+    signals : callable or None
+        ``signals(times) -> (len(times), nu)`` controls (e.g. a :class:`SumOfSinusoids`); None: an
+        undriven run (the state is returned unchanged).
+    q0, qd0 : array_like of shape (n,)
+        Initial generalized positions and velocities.
+    mj_model : mujoco.MjModel, default=None
+        Whose actuators act (default ``system.mj_model()``).
+
+    Returns
+    -------
+    q0 : numpy.ndarray of shape (n,)
+        Initial positions on the servos' reference.
+    qd0 : numpy.ndarray of shape (n,)
+        Initial velocities on the servos' reference.
+
+    Examples
+    --------
     >>> from pysindy_xl.mujoco import MJCFSystem, SumOfSinusoids
     >>> servo = MJCFSystem('''<mujoco><worldbody><body><joint name="j"/>
     ...   <geom size="0.1" mass="1"/></body></worldbody>
@@ -234,7 +317,7 @@ def actuator_law(system, signals=None, force_input: str = "tau",
         raise TypeError(f"signals: expected a function of time or None, got "
                         f"{type(signals).__name__}")
     model = system.mj_model() if mj_model is None else mj_model
-    if not all(_supported(model, a) for a in range(model.nu)):
+    if not all(supported_actuator(model, a) for a in range(model.nu)):
         return None
     if np.any(getattr(model, "jnt_actgravcomp", 0)):
         return None  # gravity compensation routed through the actuators
@@ -248,6 +331,22 @@ def actuator_force_function(system, signals, force_input: str = "tau"):
     on joints. None when the forces depend on the state (servos; see :func:`actuator_law`) or
     an actuator is outside its law. Parameters as in :func:`actuator_law`.
 
+    Parameters
+    ----------
+    system : MuJoCoSystem or str
+        The system (or its registry name).
+    signals : callable
+        ``signals(times) -> (len(times), nu)`` controls.
+    force_input : {"tau", "u"}, default="tau"
+        Generalized forces on the coordinates or joint forces.
+
+    Returns
+    -------
+    callable or None
+        ``f(t)``; None when the forces depend on the state or an actuator is outside the law.
+
+    Examples
+    --------
     >>> from pysindy_xl.mujoco import SumOfSinusoids
     >>> force = SumOfSinusoids([[1.0], [0.0]], [[1.0], [1.0]], [[0.0], [0.0]])
     >>> actuator_force_function("cart-pole", force)(0.25)
@@ -264,6 +363,18 @@ def servo_bandwidths(model) -> np.ndarray:
     inertia ``m`` (``mj_fullM``'s diagonal, armature included) and damping ``d`` closes the loop
     ``m s^2 + (kv + d) s + kp``; its slower pole is how fast it can follow its reference.
 
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model.
+
+    Returns
+    -------
+    numpy.ndarray of shape (nu,)
+        The slower closed-loop pole (rad/s) of each position servo; NaN for other actuators.
+
+    Examples
+    --------
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string('''<mujoco><worldbody><body>
     ...   <joint name="j" axis="0 0 1"/>
@@ -281,7 +392,7 @@ def servo_bandwidths(model) -> np.ndarray:
     out = np.full(model.nu, np.nan)
     for a in range(model.nu):
         kp, kv = -model.actuator_biasprm[a, 1], -model.actuator_biasprm[a, 2]
-        if not (_supported(model, a) and kp > 0):
+        if not (supported_actuator(model, a) and kp > 0):
             continue
         dof = model.jnt_dofadr[model.actuator_trnid[a, 0]]
         gear = model.actuator_gear[a, 0]

@@ -6,23 +6,52 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
+from ..._optional import import_mujoco
 from ..._validation import check_option
 from ...symbols import Coordinates
-from .. import import_mujoco
 
 __all__ = ["MuJoCoSystem", "equations_of_motion"]
 
 
 def checked_parameters(**values) -> dict:
     """Physical parameters checked by name: numbers (never a string or a bool), positive but
-    for gravity and dampings, which may be zero."""
+    for gravity and dampings, which may be zero.
+
+    Parameters
+    ----------
+    **values
+        Parameter values by name.
+
+    Returns
+    -------
+    dict
+        The same values.
+
+    Raises
+    ------
+    TypeError
+        When a value is not a real number (a string, a bool...).
+    ValueError
+        When a value is negative (zero is refused except for gravity and dampings).
+    """
     return {name: check_option(name, value, "real", low=0,
                                low_open=name != "gravity" and "damping" not in name)
             for name, value in values.items()}
 
 
 def mjcf_float(value: float) -> str:
-    """Format a float for MJCF without losing precision."""
+    """Format a float for MJCF without losing precision.
+
+    Parameters
+    ----------
+    value : float
+        The number.
+
+    Returns
+    -------
+    str
+        Its shortest exact representation.
+    """
     return repr(float(value))
 
 
@@ -32,6 +61,34 @@ def equations_of_motion(lagrangian: sp.Expr, coords: Coordinates, friction=None)
     The equations read ``lhs_i = Q_i`` (generalized external forces); ``friction`` is
     ``{(term, i): c}``, adding ``c * term`` to equation ``i``.
 
+    Parameters
+    ----------
+    lagrangian : sympy.Expr
+        The Lagrangian ``L(q, qd)`` in the symbols of ``coords``.
+    coords : pysindy_xl.Coordinates
+        The generalized coordinates; their ``q``, ``qd`` and ``qdd`` symbols are used.
+    friction : dict or None, default=None
+        Classical friction terms ``{(term, i): c}``: ``c * term`` is added to equation ``i``.
+        None adds none.
+
+    Returns
+    -------
+    list of sympy.Expr
+        One expanded left-hand side per coordinate, in the order of ``coords``.
+
+    Notes
+    -----
+    Equation ``i`` is the Euler-Lagrange equation
+
+    .. math::
+
+        \\frac{d}{dt}\\frac{\\partial L}{\\partial \\dot q_i}
+        - \\frac{\\partial L}{\\partial q_i} + \\sum_j c_{ij}\\,\\mathrm{term}_j = Q_i ,
+
+    with the total time derivative expanded by the chain rule over every coordinate.
+
+    Examples
+    --------
     >>> import pysindy_xl as px
     >>> c = px.Coordinates(["x"])
     >>> lhs = equations_of_motion(c.qd[0] ** 2 / 2, c, {(c.qd[0], 0): 0.5})
@@ -148,6 +205,13 @@ class MuJoCoSystem:
     def lagrangian(self) -> sp.Expr:
         """True Lagrangian ``T - V`` in ``coords.q`` and ``coords.qd`` (subclasses define it).
 
+        Returns
+        -------
+        sympy.Expr
+            The Lagrangian in the symbols of :attr:`coords`.
+
+        Examples
+        --------
         The cart position is cyclic (absent from the Lagrangian of the cart-pole):
 
         >>> from pysindy_xl.mujoco import CartPole
@@ -159,6 +223,13 @@ class MuJoCoSystem:
     def xml(self) -> str:
         """MJCF text (a complete ``<mujoco>`` document) of the model with current parameters.
 
+        Returns
+        -------
+        str
+            The MJCF document.
+
+        Examples
+        --------
         >>> from pysindy_xl.mujoco import CartPole
         >>> CartPole().xml().splitlines()[0]
         '<mujoco model="cart_pole">'
@@ -168,6 +239,13 @@ class MuJoCoSystem:
     def mj_model(self):
         """A new compiled MuJoCo model of :meth:`xml`.
 
+        Returns
+        -------
+        mujoco.MjModel
+            The compiled model (a new object at each call).
+
+        Examples
+        --------
         >>> from pysindy_xl.mujoco import DoublePendulum
         >>> model = DoublePendulum().mj_model()
         >>> model.nq, model.nu, model.opt.timestep
@@ -179,6 +257,13 @@ class MuJoCoSystem:
     def force_matrix(self) -> np.ndarray:
         """Matrix ``B`` (n, n): generalized force on the coordinates ``= B @ u``.
 
+        Returns
+        -------
+        numpy.ndarray of shape (n, n)
+            The matrix ``B = T^-T``.
+
+        Examples
+        --------
         ``u`` holds one force per MuJoCo degree of freedom (``qfrc_actuator``); ``B = T^-T``
         by virtual work. ``ExternalForces(coords, interlink=B)`` fits with ``u``. A motor on
         the second (relative) hinge of a double pendulum pushes the outer link forward and
@@ -195,6 +280,13 @@ class MuJoCoSystem:
 
         ``F = B C T^-1`` with ``C`` the diagonal of joint damping coefficients.
 
+        Returns
+        -------
+        numpy.ndarray of shape (n, n)
+            The symmetric matrix ``F = T^-T C T^-1``.
+
+        Examples
+        --------
         >>> from pysindy_xl.mujoco import DoublePendulum
         >>> DoublePendulum(damping1=0.3, damping2=0.15).friction_matrix()
         array([[ 0.45, -0.15],
@@ -209,6 +301,13 @@ class MuJoCoSystem:
         The structure of :meth:`friction_matrix` with every joint damped (used by the
         reference catalogs' friction terms).
 
+        Returns
+        -------
+        numpy.ndarray of bool, shape (n, n)
+            True where velocity ``j`` may enter equation ``i`` through joint damping.
+
+        Examples
+        --------
         >>> from pysindy_xl.mujoco import CartDoublePendulum
         >>> CartDoublePendulum().friction_pattern()
         array([[ True, False, False],
@@ -225,6 +324,13 @@ class MuJoCoSystem:
         ``c`` in equation ``i`` stands for the force ``-c * qd_j`` (``classical=`` of
         ``ideal_coefficients``).
 
+        Returns
+        -------
+        dict
+            ``{(qd_j, i): c}`` for the non-zero entries ``c = F[i, j]``.
+
+        Examples
+        --------
         >>> from pysindy_xl.mujoco import CartPole
         >>> CartPole(cart_damping=0.5, pole_damping=0.1).friction()
         {(x_dot, 0): 0.5, (theta_dot, 1): 0.1}
@@ -236,6 +342,13 @@ class MuJoCoSystem:
     def equations_of_motion(self) -> list[sp.Expr]:
         """Left-hand sides ``EL_i(L) + friction_i``; the motion satisfies ``lhs = B @ u``.
 
+        Returns
+        -------
+        list of sympy.Expr
+            One left-hand side per coordinate (see :func:`equations_of_motion`).
+
+        Examples
+        --------
         >>> from pysindy_xl.mujoco import CartPole
         >>> CartPole().equations_of_motion()[1]
         0.320001*theta_ddot + 0.1*theta_dot + 0.4*x_ddot*cos(theta) + 3.924*sin(theta)
@@ -245,6 +358,31 @@ class MuJoCoSystem:
     def to_generalized(self, qpos, qvel, qacc=None):
         """Map MuJoCo ``qpos``, ``qvel`` (and ``qacc``), shape (N, n) or (n,), to ``q, qd, qdd``.
 
+        Parameters
+        ----------
+        qpos : array_like of shape (N, n) or (n,)
+            MuJoCo joint positions.
+        qvel : array_like of shape (N, n) or (n,)
+            MuJoCo joint velocities.
+        qacc : array_like of shape (N, n) or (n,), default=None
+            MuJoCo joint accelerations, or None.
+
+        Returns
+        -------
+        q : numpy.ndarray
+            Generalized positions, shaped as the input.
+        qd : numpy.ndarray
+            Generalized velocities, shaped as the input.
+        qdd : numpy.ndarray or None
+            Generalized accelerations, or None when ``qacc`` is None.
+
+        Raises
+        ------
+        ValueError
+            When an input's last dimension is not ``n``.
+
+        Examples
+        --------
         ``qdd`` is None when ``qacc`` is. The second hinge of a double pendulum measures the
         relative angle:
 
@@ -258,6 +396,22 @@ class MuJoCoSystem:
     def from_generalized(self, q, qd=None):
         """Inverse of :meth:`to_generalized`: ``(qpos, qvel)`` (``qvel`` None when ``qd`` is).
 
+        Parameters
+        ----------
+        q : array_like of shape (N, n) or (n,)
+            Generalized positions.
+        qd : array_like of shape (N, n) or (n,), default=None
+            Generalized velocities, or None.
+
+        Returns
+        -------
+        qpos : numpy.ndarray
+            MuJoCo joint positions, shaped as ``q``.
+        qvel : numpy.ndarray or None
+            MuJoCo joint velocities, or None when ``qd`` is None.
+
+        Examples
+        --------
         >>> from pysindy_xl.mujoco import DoublePendulum
         >>> DoublePendulum().from_generalized([0.1, 0.3], [1.0, 2.0])
         (array([0.1, 0.2]), array([1., 1.]))
@@ -278,6 +432,22 @@ class MuJoCoSystem:
         Angles uniform in ``[-2, 2] * scale`` rad, linear positions in ``[-0.5, 0.5] * scale``
         m, velocities in ``[-1, 1] * scale``.
 
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            The random generator.
+        scale : float, default=1.0
+            Factor on every range.
+
+        Returns
+        -------
+        q0 : numpy.ndarray of shape (n,)
+            Initial generalized positions.
+        qd0 : numpy.ndarray of shape (n,)
+            Initial generalized velocities.
+
+        Examples
+        --------
         >>> from pysindy_xl.mujoco import CartPole
         >>> q0, qd0 = CartPole().random_initial_state(np.random.default_rng(0), scale=0.1)
         >>> bool(abs(q0[0]) <= 0.05 and abs(q0[1]) <= 0.2 and np.all(abs(qd0) <= 0.1))

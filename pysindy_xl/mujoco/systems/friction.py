@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
+from ..._optional import import_mujoco
 
 __all__ = ["dry_friction_scales", "sliding_velocities"]
 
@@ -24,6 +24,20 @@ def dry_friction_scales(model) -> tuple[np.ndarray, np.ndarray]:
     ``d_min`` and ``dof_invweight0``: ``tau = 1 / b``, ``s = R F / b`` (shape (nv,) each).
     Below saturation it acts as a damping ``b / R`` plus an inertia ``1 / R``.
 
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model.
+
+    Returns
+    -------
+    scale : numpy.ndarray of shape (nv,)
+        The velocity scale ``s`` of each degree of freedom.
+    lead : numpy.ndarray of shape (nv,)
+        The lead time ``tau`` of each degree of freedom (s).
+
+    Examples
+    --------
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string(
     ...     '<mujoco><worldbody><body><joint frictionloss="2"/><geom size=".1" mass="1"/>'
@@ -47,7 +61,24 @@ def dry_friction_scales(model) -> tuple[np.ndarray, np.ndarray]:
 def sliding_velocities(system, model, q, qd, margin: float = 2.0) -> np.ndarray:
     """``qd`` (N, n) with every joint speed raised to at least ``margin`` times its sticking
     scale (:func:`dry_friction_scales` of ``model``): where every joint slides, MuJoCo's dry
-    friction is ``-F sign(v)`` and its mass matrix the rigid body's."""
+    friction is ``-F sign(v)`` and its mass matrix the rigid body's.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        The system (maps generalized velocities to joint velocities).
+    model : mujoco.MjModel
+        The compiled model whose ``frictionloss`` acts.
+    q, qd : array_like of shape (N, n)
+        Generalized positions and velocities.
+    margin : float, default=2.0
+        Least joint speed, in multiples of the sticking scale.
+
+    Returns
+    -------
+    numpy.ndarray of shape (N, n)
+        The generalized velocities, each joint speed raised where it was below the margin.
+    """
     qpos, qvel = system.from_generalized(q, qd)
     least = margin * dry_friction_scales(model)[0]
     qvel = np.where(qvel < 0, -1.0, 1.0) * np.maximum(np.abs(qvel), least)

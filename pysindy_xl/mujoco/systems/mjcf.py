@@ -8,7 +8,7 @@ import re
 
 import numpy as np
 
-from .. import import_mujoco
+from ..._optional import import_mujoco
 from .base import MuJoCoSystem, checked_parameters
 from .urdf import is_urdf, urdf_spec
 
@@ -189,6 +189,22 @@ class MJCFSystem(MuJoCoSystem):
         min(1, half the range width) per second; a joint without range as in
         :meth:`MuJoCoSystem.random_initial_state`, around ``ref``.
 
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            The random generator.
+        scale : float, default=1.0
+            Fraction of the range (or of the default spread) used.
+
+        Returns
+        -------
+        q0 : numpy.ndarray of shape (n,)
+            Initial joint positions.
+        qd0 : numpy.ndarray of shape (n,)
+            Initial joint velocities.
+
+        Examples
+        --------
         >>> xml = ('<mujoco><compiler angle="radian"/><worldbody><body>'
         ...        '<joint type="slide" range="0 0.2" ref="0.05"/><geom size="0.1"/>'
         ...        '</body></worldbody></mujoco>')
@@ -217,6 +233,11 @@ class MJCFSystem(MuJoCoSystem):
 
         ``model_path`` (absolute, or None), ``model_xml`` (the MJCF text, flattened when it
         uses ``<include>``) and ``joints`` (None for every joint).
+
+        Returns
+        -------
+        dict
+            ``{"model_path": ..., "model_xml": ..., "joints": ...}``.
         """
         text = self._xml
         if "<include " in text and self.path is not None and not self._urdf:
@@ -246,11 +267,23 @@ class MJCFSystem(MuJoCoSystem):
                                   "unknown; subclass MuJoCoSystem to provide one")
 
     def xml(self):
-        """The MJCF text given (or read from the file given); with ``joints``, the reduced model."""
+        """The MJCF text given (or read from the file given); with ``joints``, the reduced model.
+
+        Returns
+        -------
+        str
+            The MJCF document.
+        """
         return self._xml if self._spec is None else self._spec.to_xml()
 
     def mj_model(self):
-        """Compiled MuJoCo model, from the file when one was given (relative assets resolve)."""
+        """Compiled MuJoCo model, from the file when one was given (relative assets resolve).
+
+        Returns
+        -------
+        mujoco.MjModel
+            The compiled model (a new object at each call).
+        """
         mujoco = import_mujoco()
         if self._spec is not None:
             return self._spec.compile()

@@ -75,18 +75,55 @@ class CartPole(MuJoCoSystem):
 
     Parameters
     ----------
-    cart_mass, pole_mass, length : float
-        Cart mass (kg), bob mass (kg), rod length (m).
-    cart_damping, pole_damping : float
-        Viscous friction of the slider (N s/m) and of the hinge (N m s/rad).
-    gravity : float
-    point_inertia : float
-        Rotational inertia of the bob about its center (tiny; exact in the Lagrangian).
-    timestep : float
-        MuJoCo time step (RK4).
+    cart_mass : float, default=1.0
+        Cart mass (kg).
+    pole_mass : float, default=0.5
+        Bob mass (kg).
+    length : float, default=0.8
+        Rod length (m).
+    cart_damping : float, default=0.5
+        Viscous friction of the slider (N s/m).
+    pole_damping : float, default=0.1
+        Viscous friction of the hinge (N m s/rad).
+    gravity : float, default=9.81
+        Gravitational acceleration (m/s^2), along -z.
+    point_inertia : float, default=1e-6
+        Rotational inertia of the bob about its center (kg m^2; tiny, exact in the
+        Lagrangian).
+    timestep : float, default=1e-3
+        MuJoCo time step (s), RK4 integrator.
 
-    >>> CartPole(pole_mass=0.2).coords
+    Raises
+    ------
+    TypeError
+        When a parameter is not a real number.
+    ValueError
+        When a parameter is negative (zero allowed for gravity and dampings only).
+
+    See Also
+    --------
+    get_system : The same system by its registry name, ``"cart-pole"``.
+
+    Notes
+    -----
+    With cart mass :math:`M`, bob mass :math:`m`, rod length :math:`l` and point inertia
+    :math:`I`, the Lagrangian is
+
+    .. math::
+
+        L = \\tfrac12 (M + m)\\dot x^2 + m l \\dot x \\dot\\theta \\cos\\theta
+        + \\tfrac12 (m l^2 + I)\\dot\\theta^2 + m g l \\cos\\theta ,
+
+    with viscous friction ``-cart_damping * x_dot`` on the cart and
+    ``-pole_damping * theta_dot`` on the pole.
+
+    Examples
+    --------
+    >>> system = CartPole(pole_mass=0.2)
+    >>> system.coords
     Coordinates(['x', 'theta'])
+    >>> system.mj_model().nv
+    2
     """
 
     name = "cart-pole"
@@ -116,6 +153,13 @@ class CartPole(MuJoCoSystem):
     def lagrangian(self):
         """True Lagrangian of the cart-pole (cart, point mass with its tiny inertia, gravity).
 
+        Returns
+        -------
+        sympy.Expr
+            The Lagrangian ``T - V`` of the cart-pole.
+
+        Examples
+        --------
         >>> CartPole(cart_mass=1.0, pole_mass=0.5, length=0.8).lagrangian()
         0.1600005*theta_dot**2 + 0.4*theta_dot*x_dot*cos(theta) + 0.75*x_dot**2 + 3.924*cos(theta)
         """
@@ -129,7 +173,13 @@ class CartPole(MuJoCoSystem):
         return kinetic - potential
 
     def xml(self):
-        """MJCF text of the cart-pole (see :meth:`MuJoCoSystem.xml`)."""
+        """MJCF text of the cart-pole (see :meth:`MuJoCoSystem.xml`).
+
+        Returns
+        -------
+        str
+            The MJCF document of the cart-pole with the current parameters.
+        """
         p = self._parameters
         link = _link("pole", "hinge", p["pole_mass"], p["length"], p["pole_damping"],
                      p["point_inertia"], "0 0 0")
@@ -152,9 +202,33 @@ class DoublePendulum(MuJoCoSystem):
     """Double pendulum with point masses on massless rods, hanging from a fixed pivot.
 
     Coordinates ``theta1``, ``theta2``: absolute angles from the downward vertical; hinges
-    ``hinge1`` and ``hinge2`` measure ``theta1`` and ``theta2 - theta1``. ``mass<k>``,
-    ``length<k>``, ``damping<k>`` are each link's bob mass, rod length and hinge damping
-    (relative angle); the others as in :class:`CartPole`.
+    ``hinge1`` and ``hinge2`` measure ``theta1`` and ``theta2 - theta1``.
+
+    Parameters
+    ----------
+    mass1, mass2 : float, default=1.0, 0.8
+        Bob mass of each link (kg).
+    length1, length2 : float, default=1.0, 0.7
+        Rod length of each link (m).
+    damping1, damping2 : float, default=0.3, 0.15
+        Viscous damping of each hinge (N m s/rad), on the relative angle.
+    gravity : float, default=9.81
+        Gravitational acceleration (m/s^2).
+    point_inertia : float, default=1e-6
+        Rotational inertia of each bob about its center (kg m^2).
+    timestep : float, default=1e-3
+        MuJoCo time step (s), RK4 integrator.
+
+    Raises
+    ------
+    TypeError
+        When a parameter is not a real number.
+    ValueError
+        When a parameter is negative (zero allowed for gravity and dampings only).
+
+    Examples
+    --------
+    A motor on the second hinge acts on both absolute angles:
 
     >>> DoublePendulum().force_matrix()
     array([[ 1., -1.],
@@ -190,14 +264,26 @@ class DoublePendulum(MuJoCoSystem):
                 "hinge2": 0.3 * p["mass2"] * g * p["length2"]}
 
     def lagrangian(self):
-        """True Lagrangian of the double pendulum in absolute angles."""
+        """True Lagrangian of the double pendulum in absolute angles.
+
+        Returns
+        -------
+        sympy.Expr
+            The Lagrangian ``T - V`` of the double pendulum.
+        """
         p = self._parameters
         th1, th2 = self.coords.q
         thd1, thd2 = self.coords.qd
         return _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=None)
 
     def xml(self):
-        """MJCF text of the double pendulum (see :meth:`MuJoCoSystem.xml`)."""
+        """MJCF text of the double pendulum (see :meth:`MuJoCoSystem.xml`).
+
+        Returns
+        -------
+        str
+            The MJCF document of the double pendulum with the current parameters.
+        """
         p = self._parameters
         return (_header("double_pendulum", p["timestep"], p["gravity"])
                 + _chain_xml(p, 2, indent=4) + _footer(self.joint_names))
@@ -224,9 +310,36 @@ class CartDoublePendulum(MuJoCoSystem):
     """Double pendulum (point masses) hanging from a cart on a horizontal rail.
 
     Coordinates ``x``, ``theta1``, ``theta2`` (absolute angles); MuJoCo joints ``slider``,
-    ``hinge1``, ``hinge2`` (the last relative to the first link). Parameters as in
-    :class:`CartPole` and :class:`DoublePendulum`.
+    ``hinge1``, ``hinge2`` (the last relative to the first link).
 
+    Parameters
+    ----------
+    cart_mass : float, default=1.0
+        Cart mass (kg).
+    mass1, mass2 : float, default=0.5, 0.4
+        Bob mass of each link (kg).
+    length1, length2 : float, default=0.7, 0.5
+        Rod length of each link (m).
+    cart_damping : float, default=0.5
+        Viscous friction of the slider (N s/m).
+    damping1, damping2 : float, default=0.1, 0.05
+        Viscous damping of each hinge (N m s/rad), on the relative angle.
+    gravity : float, default=9.81
+        Gravitational acceleration (m/s^2).
+    point_inertia : float, default=1e-6
+        Rotational inertia of each bob about its center (kg m^2).
+    timestep : float, default=1e-3
+        MuJoCo time step (s), RK4 integrator.
+
+    Raises
+    ------
+    TypeError
+        When a parameter is not a real number.
+    ValueError
+        When a parameter is negative (zero allowed for gravity and dampings only).
+
+    Examples
+    --------
     >>> CartDoublePendulum().coords.names
     ('x', 'theta1', 'theta2')
     """
@@ -263,14 +376,26 @@ class CartDoublePendulum(MuJoCoSystem):
                 "hinge2": 0.3 * p["mass2"] * g * p["length2"]}
 
     def lagrangian(self):
-        """True Lagrangian of the double pendulum on a cart."""
+        """True Lagrangian of the double pendulum on a cart.
+
+        Returns
+        -------
+        sympy.Expr
+            The Lagrangian ``T - V`` of the double pendulum on a cart.
+        """
         p = self._parameters
         _, th1, th2 = self.coords.q
         xd, thd1, thd2 = self.coords.qd
         return _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=xd, cart_mass=p["cart_mass"])
 
     def xml(self):
-        """MJCF text of the double pendulum on a cart (see :meth:`MuJoCoSystem.xml`)."""
+        """MJCF text of the double pendulum on a cart (see :meth:`MuJoCoSystem.xml`).
+
+        Returns
+        -------
+        str
+            The MJCF document of the double pendulum on a cart with the current parameters.
+        """
         p = self._parameters
         link = _chain_xml(p, 2, indent=6)
         return (_header("cart_double_pendulum", p["timestep"], p["gravity"])
@@ -283,8 +408,32 @@ class TriplePendulum(MuJoCoSystem):
 
     Coordinates ``theta1``, ``theta2``, ``theta3``: absolute angles from the downward
     vertical; hinges ``hinge1``, ``hinge2``, ``hinge3`` measure each link's angle relative to
-    the previous one. Chaotic at moderate energies. Parameters as in :class:`DoublePendulum`.
+    the previous one. Chaotic at moderate energies.
 
+    Parameters
+    ----------
+    mass1, mass2, mass3 : float, default=1.0, 0.8, 0.6
+        Bob mass of each link (kg).
+    length1, length2, length3 : float, default=0.8, 0.6, 0.5
+        Rod length of each link (m).
+    damping1, damping2, damping3 : float, default=0.2, 0.1, 0.05
+        Viscous damping of each hinge (N m s/rad), on the relative angle.
+    gravity : float, default=9.81
+        Gravitational acceleration (m/s^2).
+    point_inertia : float, default=1e-6
+        Rotational inertia of each bob about its center (kg m^2).
+    timestep : float, default=1e-3
+        MuJoCo time step (s), RK4 integrator.
+
+    Raises
+    ------
+    TypeError
+        When a parameter is not a real number.
+    ValueError
+        When a parameter is negative (zero allowed for gravity and dampings only).
+
+    Examples
+    --------
     >>> TriplePendulum().coords.names
     ('theta1', 'theta2', 'theta3')
     """
@@ -325,6 +474,11 @@ class TriplePendulum(MuJoCoSystem):
         ``T = 1/2 sum_ij mu_ij l_i l_j thd_i thd_j cos(th_i - th_j)`` with ``mu_ij`` the mass
         at or beyond link ``max(i, j)``, ``V = -g sum_i mu_ii l_i cos th_i``, plus each bob's
         tiny rotational inertia.
+
+        Returns
+        -------
+        sympy.Expr
+            The Lagrangian ``T - V`` of the three-link pendulum.
         """
         p = self._parameters
         th, thd = self.coords.q, self.coords.qd
@@ -340,7 +494,13 @@ class TriplePendulum(MuJoCoSystem):
         return kinetic - potential
 
     def xml(self):
-        """MJCF text of the three-link pendulum (see :meth:`MuJoCoSystem.xml`)."""
+        """MJCF text of the three-link pendulum (see :meth:`MuJoCoSystem.xml`).
+
+        Returns
+        -------
+        str
+            The MJCF document of the three-link pendulum with the current parameters.
+        """
         p = self._parameters
         return (_header("triple_pendulum", p["timestep"], p["gravity"]) + _chain_xml(p, 3, 4)
                 + _footer(self.joint_names))

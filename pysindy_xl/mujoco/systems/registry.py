@@ -41,6 +41,17 @@ def get_system(name, **parameters) -> MuJoCoSystem:
     **parameters
         Passed to the system's constructor.
 
+    Returns
+    -------
+    MuJoCoSystem
+        A new system: :class:`CartPole`, :class:`DoublePendulum`, :class:`CartDoublePendulum`,
+        :class:`TriplePendulum` or :class:`MJCFSystem` (``name`` itself when it is a system).
+
+    Raises
+    ------
+    ValueError
+        When ``name`` is neither a registry name, an existing file nor MJCF text.
+
     Examples
     --------
     >>> get_system("cart_pole", pole_mass=0.3).parameters["pole_mass"]
@@ -72,6 +83,28 @@ def system_from_metadata(metadata: dict, **parameters) -> MuJoCoSystem:
     the embedded ``model_xml``, with the same ``joints``. ValueError when the metadata name
     no system, or an MJCF dataset records neither path nor XML.
 
+    Parameters
+    ----------
+    metadata : dict
+        A dataset's metadata (:attr:`pysindy_xl.data.Dataset.metadata`): ``"system"`` and
+        ``"parameters"``, and for an MJCF system ``"model_path"``, ``"model_xml"`` and
+        ``"joints"``.
+    **parameters
+        Override the recorded parameters of a registry system.
+
+    Returns
+    -------
+    MuJoCoSystem
+        The system the dataset was generated with.
+
+    Raises
+    ------
+    ValueError
+        When the metadata names no known system, or an MJCF dataset records neither path nor
+        XML.
+
+    Examples
+    --------
     >>> xml = ('<mujoco><worldbody><body><joint name="a" type="slide"/>'
     ...        '<geom size="0.1"/></body></worldbody></mujoco>')
     >>> system_from_metadata({"system": "mjcf", "model_xml": xml}).coords
@@ -109,6 +142,18 @@ def system_from_metadata(metadata: dict, **parameters) -> MuJoCoSystem:
 def default_xml_path(name: str):
     """Path (a Traversable inside the package) of a registry system's packaged MJCF file.
 
+    Parameters
+    ----------
+    name : str
+        Registry name (``"cart-pole"``...; underscores accepted).
+
+    Returns
+    -------
+    importlib.resources.abc.Traversable
+        The packaged ``.xml`` file.
+
+    Examples
+    --------
     >>> default_xml_path("cart-pole").name
     'cart_pole.xml'
     """
@@ -127,6 +172,25 @@ def coordinate_system(names, angles=()):
     ``angles`` (through ``sin`` and ``cos``) and friction ``qd_i`` in equation ``i``. No true
     model (``has_ground_truth`` False), no simulation.
 
+    Parameters
+    ----------
+    names : str or sequence of str
+        Coordinate names, a sequence or one comma-separated string.
+    angles : str or sequence of str, default=()
+        The coordinates that are angles, by name (a sequence or one comma-separated string).
+
+    Returns
+    -------
+    MuJoCoSystem
+        A description without MJCF model (``has_ground_truth`` False): it cannot be simulated.
+
+    Raises
+    ------
+    ValueError
+        When a name is not a valid coordinate name, or an angle is not among the coordinates.
+
+    Examples
+    --------
     >>> from pysindy_xl.mujoco import reference_catalog
     >>> system = coordinate_system("x,theta", angles="theta")
     >>> system.coordinate_names, system.angle_coordinates

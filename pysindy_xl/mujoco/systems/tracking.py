@@ -11,11 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
-from .actuation import _supported
+from ..._optional import import_mujoco
+from .actuation import supported_actuator
 
-__all__ = ["tracking_controller", "tracked_model", "plain_motors", "gravity_torques",
-           "TRACKING_BANDWIDTH", "TRACKING_ERROR"]
+__all__ = ["tracking_controller", "tracked_model", "TRACKING_BANDWIDTH", "TRACKING_ERROR"]
 
 #: Closed-loop bandwidth (rad/s) of the tracking controller of plain torque motors
 #: (:func:`tracking_controller`): twice the top of the random references' band (1.5 Hz by
@@ -31,7 +30,7 @@ def _plain_motor(model, a: int) -> bool:
     hinge or slide joint."""
     mujoco = import_mujoco()
     joint = model.actuator_trnid[a, 0]
-    return (_supported(model, a)
+    return (supported_actuator(model, a)
             and int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_FIXED)
             and int(model.actuator_biastype[a]) == int(mujoco.mjtBias.mjBIAS_NONE)
             and bool(model.jnt_limited[joint])
@@ -53,12 +52,36 @@ def _torque_range(model, a: int) -> tuple[float, float]:
 
 def plain_motors(model) -> np.ndarray:
     """Boolean (nu,): the actuators :func:`tracking_controller` can make track a reference
-    (plain torque motors on limited hinge or slide joints)."""
+    (plain torque motors on limited hinge or slide joints).
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model.
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (nu,)
+        True for the actuators that can be made to track.
+    """
     return np.array([_plain_motor(model, a) for a in range(model.nu)], dtype=bool)
 
 
 def gravity_torques(model, poses) -> np.ndarray:
-    """Gravity's generalized forces (``qfrc_bias`` at rest), shape (P, nv), at poses (P, nq)."""
+    """Gravity's generalized forces (``qfrc_bias`` at rest), shape (P, nv), at poses (P, nq).
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model.
+    poses : array_like of shape (P, nq)
+        Joint positions.
+
+    Returns
+    -------
+    numpy.ndarray of shape (P, nv)
+        Gravity's generalized force at each pose.
+    """
     mujoco = import_mujoco()
     data = mujoco.MjData(model)
     out = np.empty((len(poses), model.nv))
@@ -87,6 +110,25 @@ def tracking_controller(model, actuators=None, n_poses: int = 16, seed=0) -> dic
     ``e = TRACKING_ERROR``). Returns the JSON description :func:`tracked_model` reads, or
     None when none of ``actuators`` (default all) is a plain motor on a limited joint.
 
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model.
+    actuators : sequence of int, default=None
+        Indices of the actuators to make track; None: every actuator.
+    n_poses : int, default=16
+        Random poses at which gravity's torque is sampled.
+    seed : int, default=0
+        Seed of the random poses.
+
+    Returns
+    -------
+    dict or None
+        ``{"actuators", "kp", "kv", "ctrlrange", "forcerange"}`` (JSON-serializable), or None
+        when no selected actuator is a plain motor on a limited joint.
+
+    Examples
+    --------
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string('''<mujoco><worldbody><body>
     ...   <joint name="j" axis="0 1 0" range="-2 2"/>
@@ -135,6 +177,20 @@ def tracked_model(model, controller: dict):
     ``position`` servos (gain ``kp``, bias ``(0, -kp, -kv)``), controls limited to
     ``ctrlrange``, forces to ``forcerange``.
 
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model.
+    controller : dict
+        The description returned by :func:`tracking_controller`.
+
+    Returns
+    -------
+    mujoco.MjModel
+        A copy of ``model`` with the tracked motors turned into position servos.
+
+    Examples
+    --------
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string('''<mujoco><worldbody><body>
     ...   <joint name="j" axis="0 1 0" range="-2 2"/>

@@ -16,7 +16,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from .. import import_mujoco
+from ..._optional import import_mujoco
 
 __all__ = ["urdf_spec", "urdf_to_mjcf", "is_urdf"]
 
@@ -24,6 +24,18 @@ __all__ = ["urdf_spec", "urdf_to_mjcf", "is_urdf"]
 def is_urdf(source) -> bool:
     """Whether ``source`` (a path or XML text) is a URDF robot description.
 
+    Parameters
+    ----------
+    source : str or os.PathLike
+        A path or XML text.
+
+    Returns
+    -------
+    bool
+        True for a ``.urdf`` path or text whose root element is ``<robot>``.
+
+    Examples
+    --------
     >>> is_urdf("arm.urdf"), is_urdf('<robot name="r"><link name="a"/></robot>')
     (True, True)
     >>> is_urdf("<mujoco/>"), is_urdf("arm.xml")
@@ -70,6 +82,27 @@ def urdf_spec(text: str, where: str = "source", warn: bool = True):
     numbers exactly. ``where`` names the argument or file in errors; ``warn``: warn when
     inertias had to be balanced. ValueError when the text is not a URDF or does not compile.
 
+    Parameters
+    ----------
+    text : str
+        The URDF document.
+    where : str, default="source"
+        The argument or file named in error messages.
+    warn : bool, default=True
+        Warn when inertias had to be balanced.
+
+    Returns
+    -------
+    mujoco.MjSpec
+        The spec; ``.compile()`` gives the model.
+
+    Raises
+    ------
+    ValueError
+        When the text is not a URDF or does not compile.
+
+    Examples
+    --------
     >>> urdf = '''<robot name="arm">
     ...   <link name="base"/>
     ...   <link name="upper"><inertial><origin xyz="0 0 -0.5"/><mass value="1"/>
@@ -123,5 +156,18 @@ def urdf_spec(text: str, where: str = "source", warn: bool = True):
 
 
 def urdf_to_mjcf(text: str, where: str = "source") -> str:
-    """The MJCF text of a URDF robot: :func:`urdf_spec` written out (six significant digits)."""
+    """The MJCF text of a URDF robot: :func:`urdf_spec` written out (six significant digits).
+
+    Parameters
+    ----------
+    text : str
+        The URDF document.
+    where : str, default="source"
+        The argument or file named in error messages.
+
+    Returns
+    -------
+    str
+        The MJCF document.
+    """
     return urdf_spec(text, where).to_xml()

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
+from .._optional import import_mujoco
 
-__all__ = ["SumOfSinusoids", "FORCING_MODES", "within_servo_reach", "REFERENCE_SPEED",
-           "SERVO_BANDWIDTH_FRACTION"]
+__all__ = ["SumOfSinusoids", "FORCING_MODES", "REFERENCE_SPEED", "SERVO_BANDWIDTH_FRACTION"]
 
 #: implicit: no force (random initial condition only); explicit: every actuator driven;
 #: mixed: a chosen subset of the actuators driven.
@@ -65,6 +64,26 @@ class SumOfSinusoids:
         ``n_components`` sinusoids per signal, frequencies log-uniform in
         ``[min_frequency, max_frequency]`` (Hz), phases uniform; a zero scale gives a zero signal.
 
+        Parameters
+        ----------
+        scales : array_like of shape (n_signals,)
+            Sum of the component amplitudes of each signal.
+        rng : numpy.random.Generator
+            The random generator.
+        n_components : int, default=6
+            Sinusoids per signal.
+        min_frequency, max_frequency : float, default=0.05, 1.5
+            Frequency band (Hz).
+        offsets : array_like of shape (n_signals,), default=None
+            Constant part of each signal (None: zero).
+
+        Returns
+        -------
+        SumOfSinusoids
+            The random signals.
+
+        Examples
+        --------
         >>> force = SumOfSinusoids.random([2.0, 0.0], np.random.default_rng(0), n_components=3)
         >>> values = force(np.linspace(0.0, 10.0, 1001))
         >>> values.shape, bool(np.abs(values[:, 0]).max() <= 2.0), bool(np.all(values[:, 1] == 0))
@@ -88,6 +107,18 @@ class SumOfSinusoids:
     def __call__(self, t):
         """The signals at times ``t``: shape (n_signals,) for a scalar, (N, n_signals) else.
 
+        Parameters
+        ----------
+        t : float or array_like of shape (N,)
+            Time(s) (s).
+
+        Returns
+        -------
+        numpy.ndarray of shape (n_signals,) or (N, n_signals)
+            The signals.
+
+        Examples
+        --------
         >>> SumOfSinusoids([[1.0]], [[0.25]], [[0.0]], offsets=[0.5])(1.0)
         array([1.5])
         """
@@ -103,6 +134,20 @@ class SumOfSinusoids:
         addition ``sin(w (T + s) + p) = sin(w T + p) cos(w s) + cos(w T + p) sin(w s)``: sines
         at the starts and offsets only, then one batched product.
 
+        Parameters
+        ----------
+        starts : array_like of shape (B,)
+            Block start times (s).
+        offsets : array_like of shape (J,)
+            Offsets within a block (s).
+
+        Returns
+        -------
+        numpy.ndarray of shape (B * J, n_signals)
+            The signals, ``starts`` major.
+
+        Examples
+        --------
         >>> force = SumOfSinusoids.random([1.0, 2.0], np.random.default_rng(0))
         >>> starts, offsets = np.arange(5) * 0.002, np.arange(4) * 0.0005
         >>> bool(np.allclose(force.on_grid(starts, offsets),
@@ -122,6 +167,13 @@ class SumOfSinusoids:
     def to_dict(self) -> dict:
         """JSON-serializable description (nested lists).
 
+        Returns
+        -------
+        dict
+            ``amplitudes``, ``frequencies``, ``phases`` and ``offsets``.
+
+        Examples
+        --------
         >>> SumOfSinusoids([[1.0]], [[0.25]], [[0.0]]).to_dict()
         {'amplitudes': [[1.0]], 'frequencies': [[0.25]], 'phases': [[0.0]], 'offsets': [0.0]}
         """
@@ -132,6 +184,18 @@ class SumOfSinusoids:
     def from_dict(cls, data: dict) -> SumOfSinusoids:
         """Inverse of :meth:`to_dict` (``offsets`` optional); ValueError on a malformed dict.
 
+        Parameters
+        ----------
+        data : dict
+            A dict of :meth:`to_dict`.
+
+        Returns
+        -------
+        SumOfSinusoids
+            The signals.
+
+        Examples
+        --------
         >>> force = SumOfSinusoids([[1.0, 0.5]], [[0.25, 1.0]], [[0.0, 1.0]])
         >>> bool((SumOfSinusoids.from_dict(force.to_dict())(0.3) == force(0.3)).all())
         True
@@ -156,9 +220,21 @@ def within_servo_reach(signals: SumOfSinusoids, model) -> SumOfSinusoids:
     (:func:`~pysindy_xl.mujoco.systems.actuation.servo_bandwidths`) and its amplitudes so that
     the speed bound ``sum_k 2 pi f_k A_k`` (joint units) stays below ``REFERENCE_SPEED``: a
     faster reference saturates the servo. ``signals`` itself when no driven actuator is one.
+
+    Parameters
+    ----------
+    signals : SumOfSinusoids
+        One reference per actuator.
+    model : mujoco.MjModel
+        The compiled model whose actuators receive them.
+
+    Returns
+    -------
+    SumOfSinusoids
+        The slowed references (``signals`` itself when no driven actuator is a servo).
     """
     mujoco = import_mujoco()
-    from ..systems.actuation import servo_bandwidths
+    from ..mujoco.systems.actuation import servo_bandwidths
     bandwidth = servo_bandwidths(model)
     servo = np.isfinite(bandwidth) & np.any(signals.amplitudes != 0, axis=1)
     if not servo.any():

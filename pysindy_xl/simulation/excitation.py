@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 import threadpoolctl
 
-from .. import import_mujoco
-from .fourier import FourierTrajectory, _basis, _positive
+from .._optional import import_mujoco
+from .fourier import FourierTrajectory, checked_positive, fourier_basis
 
 __all__ = ["excitation_trajectory"]
 
@@ -40,7 +40,7 @@ class _Design:
 
     def grid(self, density):
         t = np.arange(density * self.L) * self.period / (density * self.L)
-        return np.stack([_basis(t, self.w, self.L, k) for k in range(3)])  # (3, N, 2L)
+        return np.stack([fourier_basis(t, self.w, self.L, k) for k in range(3)])  # (3, N, 2L)
 
     def split(self, x):
         return x[:self.n], x[self.n:].reshape(self.n, 2 * self.L)
@@ -53,7 +53,7 @@ class _Design:
 
     def regressor(self, states):
         """``W`` of stacked states (3, N, n): shape (n, N, p), coordinate-major rows."""
-        from ...feature_library import stack_variables
+        from ..symbols import stack_variables
         theta = self.library.transform(stack_variables(*states, np.zeros_like(states[0])))
         return theta[:, self.rest].reshape(self.n, states.shape[1], -1)
 
@@ -344,8 +344,8 @@ def excitation_trajectory(system, n_harmonics: int = 5, period: float = 10.0,
     """
     from tqdm.auto import tqdm
 
-    from ..catalogs.kinematic import kinematic_catalog
-    from ..systems.registry import get_system as resolve_system
+    from ..mujoco.catalogs.kinematic import kinematic_catalog
+    from ..mujoco.systems.registry import get_system as resolve_system
     system = resolve_system(system)
     if isinstance(n_harmonics, bool) or not isinstance(n_harmonics, (int, np.integer)) \
             or n_harmonics < 1:
@@ -355,7 +355,7 @@ def excitation_trajectory(system, n_harmonics: int = 5, period: float = 10.0,
             raise ValueError(f"{name}: expected an integer >= 1, got {value!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise TypeError(f"seed: expected an integer, got {type(seed).__name__}")
-    period = _positive(period, "period")
+    period = checked_positive(period, "period")
     n = system.n
     position, torque = _mjcf_limits(system, position_limits, torque_limits)
     limits = (position, _per_joint(velocity_limits, "velocity_limits", n, np.inf),

@@ -16,12 +16,11 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .. import import_mujoco
+from .._optional import import_mujoco
 
-__all__ = ["Integration", "choose_integration", "linear_modes", "check_run",
-           "UnstableSimulationError", "INTEGRATORS", "RK4_BOUND", "BIAS_TOLERANCE",
-           "RK4_COST", "RK4_MAX_SUBSTEPS", "settling_time", "settled", "MAX_HINGE_VELOCITY",
-           "MAX_SLIDE_VELOCITY"]
+__all__ = ["Integration", "choose_integration", "linear_modes", "UnstableSimulationError",
+           "INTEGRATORS", "RK4_BOUND", "BIAS_TOLERANCE", "RK4_COST", "RK4_MAX_SUBSTEPS",
+           "MAX_HINGE_VELOCITY", "MAX_SLIDE_VELOCITY"]
 
 #: MuJoCo's integrators by name.
 INTEGRATORS = {"Euler": 0, "RK4": 1, "implicit": 2, "implicitfast": 3}
@@ -41,7 +40,15 @@ MAX_SLIDE_VELOCITY = 20.0
 
 
 class UnstableSimulationError(RuntimeError):
-    """A MuJoCo run that left the physics (NaN, huge accelerations or velocities, energy growth)."""
+    """A MuJoCo run that left the physics (NaN, huge accelerations or velocities, energy growth).
+
+    Examples
+    --------
+    A run that leaves the physics raises it; it is a :class:`RuntimeError`:
+
+    >>> issubclass(UnstableSimulationError, RuntimeError)
+    True
+    """
 
 
 @dataclass
@@ -52,6 +59,23 @@ class Integration:
     metadata; ``rate`` and ``damping_rate`` are those of :func:`linear_modes`; ``timestep``
     the model's (s).
 
+    Parameters
+    ----------
+    integrator : str
+        A key of :data:`INTEGRATORS` (``"RK4"``, ``"implicit"``...).
+    substeps : int
+        Internal steps per model step.
+    reason : str
+        Why this integration was chosen (kept in the dataset metadata).
+    rate : float
+        Largest ``|lambda|`` of the linearized joint dynamics (1/s; :func:`linear_modes`).
+    damping_rate : float
+        Largest ``max_i D_ii / max |M_ij|`` (1/s; :func:`linear_modes`).
+    timestep : float
+        The model's time step (s).
+
+    Examples
+    --------
     >>> Integration("RK4", 3, "example", 2.7e3, 150.0, 0.002).step
     0.0006666666666666666
     """
@@ -79,7 +103,13 @@ class Integration:
         return self.step * self.damping_rate
 
     def to_dict(self) -> dict:
-        """JSON-serializable description (the fields plus ``step``, ``stability``, ``bias``)."""
+        """JSON-serializable description (the fields plus ``step``, ``stability``, ``bias``).
+
+        Returns
+        -------
+        dict
+            The fields plus ``step``, ``stability`` and ``bias``.
+        """
         return {**asdict(self), "step": self.step, "stability": self.stability, "bias": self.bias}
 
 
@@ -129,6 +159,24 @@ def _linearized(model, n_poses: int, seed):
 def linear_modes(model, n_poses: int = 8, seed=0) -> tuple[float, float]:
     """Stiffness of a model's linearized joint dynamics over ``qpos0`` and random poses.
 
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model.
+    n_poses : int, default=8
+        Poses examined: ``qpos0`` and ``n_poses - 1`` random poses inside the joint ranges.
+    seed : int, default=0
+        Seed of the random poses.
+
+    Returns
+    -------
+    rate : float
+        The largest ``|lambda|`` (1/s).
+    damping_rate : float
+        The largest ``max_i D_ii / max |M_ij|`` (1/s).
+
+    Examples
+    --------
     Returns ``rate``, the largest ``|lambda|`` (1/s) of ``A`` (module docstring), and
     ``damping_rate``, the largest ``max_i D_ii / max |M_ij|`` (1/s), over ``n_poses`` poses.
     A 1e-3 kg m^2 link under a servo with kp = 100, kv = 10 (lambda = -1e4 and -10 1/s):
@@ -156,6 +204,24 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
                        n_poses: int = 8) -> Integration:
     """The integration of a MuJoCo model: stable and faithful to the continuous equations.
 
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model.
+    integrator : str, default="auto"
+        ``"auto"``, ``"model"`` or an integrator name.
+    substeps : int or None, default=None
+        With ``"auto"`` a lower bound, otherwise the number (None: 1).
+    n_poses : int, default=8
+        Poses of :func:`linear_modes`.
+
+    Returns
+    -------
+    Integration
+        The integrator, substeps and the reason for them.
+
+    Examples
+    --------
     ``integrator``: ``"auto"``, the cheaper of RK4 and the model's implicit step that is
     stable and faithful (module docstring); ``"model"``, as authored; a name, that integrator.
     ``substeps``: with ``"auto"`` a lower bound, otherwise the number (default 1).
@@ -171,7 +237,7 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
     >>> choice.integrator, choice.substeps, choice.stability <= RK4_BOUND
     ('RK4', 2400, True)
     """
-    from ..._validation import check_option
+    from .._validation import check_option
     check_option("integrator", integrator, "choice", choices=("auto", "model", *INTEGRATORS))
     if substeps is not None:
         substeps = check_option("substeps", substeps, "int", low=1)
@@ -234,6 +300,35 @@ def check_run(model, qpos, qvel, qacc, energy=None, bad_accelerations: int = 0,
     are named in the :class:`UnstableSimulationError`, with the option to change.
     Returns ``peak_velocity`` (the largest ``|qvel|``) and ``velocity_bound`` by joint.
 
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model.
+    qpos : numpy.ndarray of shape (T, nq)
+        Recorded positions.
+    qvel, qacc : numpy.ndarray of shape (T, nv)
+        Recorded velocities and accelerations.
+    energy : numpy.ndarray of shape (T, 2), default=None
+        Potential and kinetic energy of an unforced run; None skips the energy check.
+    bad_accelerations : int, default=0
+        MuJoCo's ``mjWARN_BADQACC`` count.
+    integration : Integration or None, default=None
+        Named in the error, with the option to change.
+    label : str, default="MuJoCo run"
+        Names the run in the error.
+
+    Returns
+    -------
+    dict
+        ``{"peak_velocity": {joint: float}, "velocity_bound": {joint: float}}``.
+
+    Raises
+    ------
+    UnstableSimulationError
+        On NaN, huge accelerations or velocities, or energy growth.
+
+    Examples
+    --------
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string(
     ...     '<mujoco><worldbody><body><joint name="j"/><geom size="0.1"/></body></worldbody>'
@@ -282,8 +377,20 @@ def settling_time(model, forced: bool = True) -> float:
 
     20 time constants of the fastest servo's bandwidth, at most 0.1 s, in whole model steps;
     zero without position servos or when the run is not ``forced``.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model.
+    forced : bool, default=True
+        Whether the run is driven (an undriven run needs no settling).
+
+    Returns
+    -------
+    float
+        The settling time (s), a whole number of model steps.
     """
-    from ..systems.actuation import servo_bandwidths
+    from ..mujoco.systems.actuation import servo_bandwidths
     bandwidth = servo_bandwidths(model)
     if not forced or not np.any(np.isfinite(bandwidth)):
         return 0.0
@@ -293,8 +400,21 @@ def settling_time(model, forced: bool = True) -> float:
 
 def settled(trajectory, settle: float):
     """The trajectory from time ``settle`` (s) on, recorded in ``info["settle"]``; times kept
-    (the controls are functions of time)."""
-    from ...data.dataset import Trajectory
+    (the controls are functions of time).
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        A simulated trajectory.
+    settle : float
+        Time (s) from which the trajectory is kept.
+
+    Returns
+    -------
+    Trajectory
+        The trajectory without its first ``settle`` seconds.
+    """
+    from ..data.dataset import Trajectory
     if settle <= 0:
         return trajectory
     keep = trajectory.t >= trajectory.t[0] + settle - 1e-12

@@ -13,11 +13,11 @@ from sklearn.utils.validation import check_is_fitted
 from .._inputs import check_array, sample_times
 from ..fit import differentiation_function
 from ..fit.still import held_note
+from ..physical.structure import has_parameter_map
 from ..weak import WhittakerSmoother
 from .equations import (
     consistency_line,
     equation_strings,
-    has_parameter_map,
     identified_lagrangian,
     parameter_lines,
     physical_parameters,

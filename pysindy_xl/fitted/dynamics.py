@@ -10,7 +10,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from .._inputs import aligned, as_list, check_array
 from .._validation import check_instance
-from .mass_matrix import MassMatrixDynamics
+from ..dynamics.mass_matrix import MassMatrixDynamics
 
 __all__ = ["DynamicsMixin"]
 
@@ -68,7 +68,7 @@ class DynamicsMixin:
         x = check_array(x, "x", n_columns=n)
         x_dot = check_array(x_dot, "x_dot", x.shape)
         x_ddot = check_array(x_ddot, "x_ddot", x.shape)
-        from ..feature_library import stack_variables
+        from ..symbols import stack_variables
         mass, free = dynamics.mass_and_forcing(stack_variables(x, x_dot))
         return np.einsum("sij,sj->si", mass, x_ddot) - free
 
@@ -89,7 +89,7 @@ class DynamicsMixin:
         >>> round(float(score.rms[0]), 6), score.derivatives
         (0.02, 'measured')
         """
-        from ..held_out import score_forces
+        from ..evaluation.held_out import score_forces
         self._require_dynamics()
         return score_forces(self, x, t, u, x_dot, x_ddot, smoother, max_frequency)
 

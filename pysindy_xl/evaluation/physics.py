@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
-from ..systems.friction import sliding_velocities
-from ..systems.registry import get_system
+from .._optional import import_mujoco
+from ..mujoco.systems.friction import sliding_velocities
+from ..mujoco.systems.registry import get_system
 
 __all__ = ["compare_physics"]
 
@@ -28,6 +28,32 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     is zero); ``held`` (``still_coordinates_``, left out); ``contact_states_skipped``.
     ValueError when contacts act at all of ``20 * n_states`` draws.
 
+    Parameters
+    ----------
+    model : pysindy_xl.XLSINDy
+        A fitted model.
+    system : MuJoCoSystem or str
+        The system that generated its data.
+    n_states : int, default=5
+        Number of random states compared.
+    seed : int, default=0
+        Seed of the random states.
+    scale : float, default=0.8
+        The ``scale`` of :meth:`~MuJoCoSystem.random_initial_state`.
+
+    Returns
+    -------
+    dict
+        ``mass_error``, ``force_error``, ``gravity_error``, ``scale``, ``positive_definite``,
+        ``condition``, ``unidentified``, ``held`` and ``contact_states_skipped`` (see above).
+
+    Raises
+    ------
+    ValueError
+        When contacts act at all of ``20 * n_states`` draws.
+
+    Examples
+    --------
     >>> import pysindy_xl as px
     >>> from pysindy_xl.mujoco import generate_dataset, reference_catalog
     >>> data = generate_dataset("cart-pole", n_trajectories=1, duration=1.0, seed=0,
@@ -39,7 +65,7 @@ def compare_physics(model, system, n_states: int = 5, seed=0, scale: float = 0.8
     True
     """
     mujoco = import_mujoco()
-    from ... import stack_variables
+    from ..symbols import stack_variables
     system = get_system(system)
     dynamics = model._require_dynamics() if hasattr(model, "_require_dynamics") else None
     if dynamics is None:

@@ -20,7 +20,7 @@ import os
 
 import numpy as np
 
-from .. import import_mujoco
+from .._optional import import_mujoco
 from .forcing import SumOfSinusoids
 
 __all__ = ["FourierTrajectory"]
@@ -39,7 +39,22 @@ class FourierTrajectory:
     names : list of str, optional
         Joint (coordinate) names; default ``q0``, ``q1``...
 
-    ``condition_number`` and ``info`` are set by :func:`excitation_trajectory`.
+    Attributes
+    ----------
+    condition_number, info
+        Set by :func:`excitation_trajectory`: the condition number of the identification
+        matrix the trajectory excites, and how it was designed.
+
+    Notes
+    -----
+    Joint ``j`` follows
+
+    .. math::
+
+        q_j(t) = q_{0j} + \\sum_{l=1}^{L} \\frac{a_{jl}}{l\\omega} \\sin(l\\omega t)
+        - \\frac{b_{jl}}{l\\omega} \\cos(l\\omega t), \\qquad \\omega = 2\\pi / T ,
+
+    whose velocity and acceleration are exact.
 
     Examples
     --------
@@ -58,7 +73,7 @@ class FourierTrajectory:
             raise ValueError(f"a, b: expected two arrays of shape (n={q0.size}, n_harmonics), "
                              f"got {a.shape} and {b.shape}")
         self.q0, self.a, self.b = q0, a, b
-        self.period = _positive(period, "period")
+        self.period = checked_positive(period, "period")
         names = [f"q{j}" for j in range(q0.size)] if names is None else [str(s) for s in names]
         if len(names) != q0.size or len(set(names)) != len(names):
             raise ValueError(f"names: expected {q0.size} distinct names, got {names!r}")
@@ -80,20 +95,53 @@ class FourierTrajectory:
         t = np.asarray(t, dtype=float)
         if not np.all(np.isfinite(t)):
             raise ValueError("t: contains NaN or inf")
-        basis = _basis(t.reshape(-1), self.pulsation, self.n_harmonics, order)
+        basis = fourier_basis(t.reshape(-1), self.pulsation, self.n_harmonics, order)
         values = basis @ np.hstack([self.a, self.b]).T + (self.q0 if order == 0 else 0.0)
         return values[0] if t.ndim == 0 else values
 
     def q(self, t) -> np.ndarray:
-        """Positions at times ``t``: shape (n,) for a scalar ``t``, (N, n) for an array."""
+        """Positions at times ``t``: shape (n,) for a scalar ``t``, (N, n) for an array.
+
+        Parameters
+        ----------
+        t : float or array_like of shape (N,)
+            Time(s) (s).
+
+        Returns
+        -------
+        numpy.ndarray of shape (n,) or (N, n)
+            Positions.
+        """
         return self._evaluate(t, 0)
 
     def qd(self, t) -> np.ndarray:
-        """Velocities at times ``t`` (exact), shaped as :meth:`q`."""
+        """Velocities at times ``t`` (exact), shaped as :meth:`q`.
+
+        Parameters
+        ----------
+        t : float or array_like of shape (N,)
+            Time(s) (s).
+
+        Returns
+        -------
+        numpy.ndarray of shape (n,) or (N, n)
+            Velocities.
+        """
         return self._evaluate(t, 1)
 
     def qdd(self, t) -> np.ndarray:
-        """Accelerations at times ``t`` (exact), shaped as :meth:`q`."""
+        """Accelerations at times ``t`` (exact), shaped as :meth:`q`.
+
+        Parameters
+        ----------
+        t : float or array_like of shape (N,)
+            Time(s) (s).
+
+        Returns
+        -------
+        numpy.ndarray of shape (n,) or (N, n)
+            Accelerations.
+        """
         return self._evaluate(t, 2)
 
     def controls(self, system) -> SumOfSinusoids:
@@ -104,8 +152,24 @@ class FourierTrajectory:
         ``b_1 < 0``); its control puts the target length on the reference,
         ``ctrl = -(b_0 + b_1 g qpos_ref) / p`` (gear ``g``). A ValueError says when the sizes
         differ, an actuator is not such a servo or a coordinate has none.
+
+        Parameters
+        ----------
+        system : MuJoCoSystem or str
+            The system whose position servos follow the trajectory.
+
+        Returns
+        -------
+        SumOfSinusoids
+            One control signal per actuator.
+
+        Raises
+        ------
+        ValueError
+            When the sizes differ, an actuator is not a position servo on a joint, or a coordinate
+            has none.
         """
-        from ..systems.registry import get_system
+        from ..mujoco.systems.registry import get_system
         system = get_system(system)
         gain_map, offset = _position_servos(system, "reference")  # ctrl = offset + gain_map @ q
         if len(self.q0) != system.n:
@@ -126,13 +190,24 @@ class FourierTrajectory:
         table format, :func:`~pysindy_xl.read_csv`), ``rate`` rows per second from 0 to
         ``periods * period`` inclusive.
 
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file to write.
+        rate : float, default=1000.0
+            Rows per second.
+        periods : int, default=1
+            Number of periods written.
+
+        Examples
+        --------
         >>> import os, tempfile
         >>> path = os.path.join(tempfile.mkdtemp(), "excitation.csv")
         >>> FourierTrajectory([0.0], [[1.0]], [[0.0]], 1.0, names=["j0"]).to_csv(path, rate=4)
         >>> open(path).readline().strip()
         't,j0,j0_dot,j0_ddot'
         """
-        rate = _positive(rate, "rate")
+        rate = checked_positive(rate, "rate")
         if isinstance(periods, bool) or not isinstance(periods, (int, np.integer)) or periods < 1:
             raise ValueError(f"periods: expected an integer >= 1, got {periods!r}")
         t = np.arange(int(round(periods * self.period * rate)) + 1) / rate
@@ -145,7 +220,13 @@ class FourierTrajectory:
             writer.writerows([[repr(float(v)) for v in row] for row in columns])
 
     def to_dict(self) -> dict:
-        """JSON-serializable description (:meth:`from_dict` reads it back)."""
+        """JSON-serializable description (:meth:`from_dict` reads it back).
+
+        Returns
+        -------
+        dict
+            ``q0``, ``a``, ``b``, ``period``, ``names`` and ``condition_number``.
+        """
         return {"q0": self.q0.tolist(), "a": self.a.tolist(), "b": self.b.tolist(),
                 "period": self.period, "names": list(self.names),
                 "condition_number": self.condition_number}
@@ -153,7 +234,18 @@ class FourierTrajectory:
     @classmethod
     def from_dict(cls, data: dict) -> FourierTrajectory:
         """Inverse of :meth:`to_dict` (``names``, ``condition_number`` optional); ValueError on
-        a malformed dict."""
+        a malformed dict.
+
+        Parameters
+        ----------
+        data : dict
+            A dict of :meth:`to_dict`.
+
+        Returns
+        -------
+        FourierTrajectory
+            The trajectory.
+        """
         try:
             out = cls(data["q0"], data["a"], data["b"], data["period"], data.get("names"))
         except (KeyError, TypeError) as error:
@@ -167,14 +259,14 @@ class FourierTrajectory:
                 f"period={self.period:g}{cond})")
 
 
-def _positive(value, name: str) -> float:
+def checked_positive(value, name: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
             or not (np.isfinite(value) and value > 0):
         raise ValueError(f"{name}: expected a positive number, got {value!r}")
     return float(value)
 
 
-def _basis(t, w: float, L: int, order: int) -> np.ndarray:
+def fourier_basis(t, w: float, L: int, order: int) -> np.ndarray:
     """Matrix (N, 2L) mapping ``[a_j, b_j]`` to the ``order``-th derivative of ``q_j - q0_j``."""
     harmonics = w * np.arange(1, L + 1)
     angle = np.outer(t, harmonics)

@@ -12,6 +12,18 @@ _MODEL = {"color": "tab:blue", "linewidth": 1.2, "label": "identified model"}
 
 
 def new_figure(width, height):
+    """A constrained-layout figure on an Agg canvas, not registered with pyplot.
+
+    Parameters
+    ----------
+    width, height : float
+        Size (inches).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
     figure = Figure(figsize=(width, height), layout="constrained")
@@ -25,6 +37,25 @@ def plot_coefficients(ax, feature_names, coefficients, true_coefficients=None, m
     Only features non-zero in either vector are drawn (the ``max_features`` largest); a
     ValueError says when the lengths differ.
 
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes to draw on.
+    feature_names : sequence of str
+        One name per coefficient.
+    coefficients : array_like of shape (F,)
+        Identified coefficients.
+    true_coefficients : array_like of shape (F,), default=None
+        True coefficients, drawn beside them.
+    max_features : int, default=40
+        Most features drawn (the largest).
+
+    Returns
+    -------
+    None
+
+    Examples
+    --------
     >>> from matplotlib.figure import Figure
     >>> ax = Figure().add_subplot()
     >>> plot_coefficients(ax, ["a", "b", "c"], [1.0, 0.0, -0.5], [1.0, 0.0, -0.4])
@@ -65,6 +96,28 @@ def plot_validation(result, path=None, feature_names=None, coefficients=None,
     :func:`plot_coefficients`; ``title`` prefixes the figure title. Returns the
     :class:`~matplotlib.figure.Figure` on an Agg canvas, not registered with pyplot.
 
+    Parameters
+    ----------
+    result : ValidationResult
+        The validation to draw.
+    path : str or os.PathLike, default=None
+        Where to save the PNG; None: not saved.
+    feature_names : sequence of str, default=None
+        With ``coefficients``, draw the coefficient panel.
+    coefficients : array_like of shape (F,), default=None
+        Identified coefficients.
+    true_coefficients : array_like of shape (F,), default=None
+        True coefficients.
+    title : str, default=None
+        Prefix of the figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure, on an Agg canvas, not registered with pyplot.
+
+    Examples
+    --------
     >>> import pathlib, tempfile
     >>> from pysindy_xl.mujoco import compare_trajectories
     >>> t = np.linspace(0.0, 1.0, 51)

@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import import_mujoco
-from ..systems.registry import MuJoCoSystem
-from ..systems.tracking import gravity_torques, plain_motors, tracking_controller
+from .._optional import import_mujoco
+from ..mujoco.systems.registry import MuJoCoSystem
+from ..mujoco.systems.tracking import gravity_torques, plain_motors, tracking_controller
 from .forcing import FORCING_MODES, SumOfSinusoids, within_servo_reach
 
 __all__ = ["actuator_signals", "motor_tracking", "CONTROLS"]
@@ -53,7 +53,7 @@ def _driven_mask(system: MuJoCoSystem, model, forcing: str, actuators) -> np.nda
     return np.array([name in chosen or joint in chosen for name, joint in pairs])
 
 
-def _fraction(value, name: str) -> float:
+def checked_fraction(value, name: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise TypeError(f"{name}: expected a number in (0, 1], got {value!r}")
     value = float(value)
@@ -71,7 +71,7 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
     Undriven actuators get zero; an actuator with a ``ctrlrange`` oscillates around its
     middle, the others with ``system.force_amplitudes`` (by joint) times ``amplitude_scale``;
     a position servo's reference is kept within its reach
-    (:func:`~pysindy_xl.mujoco.simulation.forcing.within_servo_reach`). None with implicit
+    (:func:`~pysindy_xl.simulation.forcing.within_servo_reach`). None with implicit
     forcing.
 
     Parameters
@@ -80,18 +80,30 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
         Gives the force amplitudes and the default actuators of the ``mixed`` mode.
     model : mujoco.MjModel
         The compiled model, whose actuators get the signals.
-    forcing, actuators
-        As in :func:`generate_dataset`.
+    forcing : {"implicit", "explicit", "mixed"}
+        As in :func:`~pysindy_xl.mujoco.generate_dataset`.
     rng : numpy.random.Generator
-    n_components, max_frequency
-        Sinusoids per signal and the highest frequency (Hz).
+        The random generator.
+    actuators : sequence of str, default=None
+        As in :func:`~pysindy_xl.mujoco.generate_dataset`.
+    n_components : int, default=6
+        Sinusoids per signal.
+    max_frequency : float, default=1.5
+        The highest frequency (Hz).
+    amplitude_scale : float, default=1.0
+        Multiplies ``system.force_amplitudes`` for actuators without ``ctrlrange``.
     amplitude : float, optional
         Peak as a fraction of the ``ctrlrange`` half-width, in (0, 1]; also multiplies the
         others. Default: 0.5 of the range (``TRACKED_AMPLITUDE`` for tracked motors), 1 else.
-    backoff : float, default 1.0
+    backoff : float, default=1.0
         Multiplies every amplitude.
     tracking : dict, optional
         The controller of :func:`motor_tracking` when ``model`` is the tracked model.
+
+    Returns
+    -------
+    SumOfSinusoids or None
+        One signal per actuator, or None with implicit forcing.
 
     Examples
     --------
@@ -117,7 +129,7 @@ def actuator_signals(system: MuJoCoSystem, model, forcing: str, rng: np.random.G
 def _scales(system, model, amplitude_scale, amplitude, tracking=None):
     """Peak and offset of each actuator's random signal (see :func:`actuator_signals`)."""
     if amplitude is not None:
-        amplitude = _fraction(amplitude, "amplitude")
+        amplitude = checked_fraction(amplitude, "amplitude")
     amplitudes = system.force_amplitudes
     tracked = set() if tracking is None else set(tracking["actuators"])
     scales, offsets = np.zeros(model.nu), np.zeros(model.nu)
@@ -150,6 +162,31 @@ def motor_tracking(system, model, forcing: str = "explicit", actuators=None,
 
     The paper's pendulums have no joint limits: their motors are driven open loop.
 
+    Parameters
+    ----------
+    system : MuJoCoSystem
+        The system.
+    model : mujoco.MjModel
+        The compiled model.
+    forcing : str, default="explicit"
+        As in :func:`~pysindy_xl.mujoco.generate_dataset`.
+    actuators : sequence of str, default=None
+        As in :func:`~pysindy_xl.mujoco.generate_dataset`.
+    amplitude_scale : float, default=1.0
+        As in :func:`actuator_signals`.
+    amplitude : float, default=None
+        As in :func:`actuator_signals`.
+    control : {"auto", "open-loop", "tracking"}, default="auto"
+        How plain torque motors are driven (see above).
+
+    Returns
+    -------
+    dict or None
+        The controller of :func:`~pysindy_xl.mujoco.systems.tracking.tracking_controller`, or
+        None when the motors are driven open loop.
+
+    Examples
+    --------
     >>> from pysindy_xl.mujoco import get_system
     >>> system = get_system("double-pendulum")
     >>> print(motor_tracking(system, system.mj_model()))

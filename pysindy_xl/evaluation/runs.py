@@ -1,20 +1,20 @@
 """The MuJoCo runs of a validation: the fresh reference trajectory, and the identified model
-stepped by MuJoCo in closed loop (:mod:`~pysindy_xl.mujoco.evaluation.validation`)."""
+stepped by MuJoCo in closed loop (:mod:`~pysindy_xl.evaluation.validation`)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ...data.dataset import Trajectory
+from ..data.dataset import Trajectory
+from ..mujoco.systems.actuation import start_on_reference
+from ..mujoco.systems.registry import get_system
+from ..mujoco.systems.tracking import tracked_model
 from ..simulation.forcing import FORCING_MODES, SumOfSinusoids
 from ..simulation.generate import actuator_signals, simulate_trajectory
 from ..simulation.integration import UnstableSimulationError, choose_integration
 from ..simulation.signals import motor_tracking
-from ..systems.actuation import start_on_reference
-from ..systems.registry import get_system
-from ..systems.tracking import tracked_model
 
-__all__ = ["validation_trajectory", "mujoco_closed_loop"]
+__all__ = ["validation_trajectory"]
 
 
 def validation_trajectory(system, duration: float = 10.0, forcing: str = "explicit",
@@ -90,10 +90,30 @@ def validation_trajectory(system, duration: float = 10.0, forcing: str = "explic
 def mujoco_closed_loop(model, system, trajectory, substeps, required):
     """``(states, failure)`` of the identified model stepped by MuJoCo under the MJCF's
     actuators (and the reference's tracking controller) and the reference's controls (the
-    ``mujoco`` simulator of :mod:`~pysindy_xl.mujoco.evaluation.validation`), or None where
-    MuJoCo cannot state the model (a ValueError when ``required``)."""
-    from ...export.mjcf import identified_mj_model
-    from .. import import_mujoco
+    ``mujoco`` simulator of :mod:`~pysindy_xl.evaluation.validation`), or None where
+    MuJoCo cannot state the model (a ValueError when ``required``).
+
+    Parameters
+    ----------
+    model : pysindy_xl.XLSINDy
+        The identified model.
+    system : MuJoCoSystem
+        The system whose MJCF actuators drive the model.
+    trajectory : Trajectory
+        The reference, with its controls in ``info["signals"]``.
+    substeps : int
+        MuJoCo steps per sample.
+    required : bool
+        Raise a ValueError where MuJoCo cannot state the model, instead of returning None.
+
+    Returns
+    -------
+    tuple or None
+        ``(states, failure)``: states (k, 2n) and why the run stopped early (or None); None
+        where MuJoCo cannot state the model.
+    """
+    from .._optional import import_mujoco
+    from ..export.mjcf import identified_mj_model
     mujoco = import_mujoco()
     mj, reason = identified_mj_model(model, system)
     if mj is not None and trajectory.info.get("tracking") is not None:

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from ..physical.structure import friction_kind
+from ..physical.structure import friction_kind, has_parameter_map
 
 __all__ = ["significant", "equation_strings", "identified_lagrangian", "uncertainty_lines"]
 
@@ -16,6 +16,20 @@ __all__ = ["significant", "equation_strings", "identified_lagrangian", "uncertai
 def significant(expr: sp.Expr, digits: int) -> sp.Expr:
     """``expr`` with every float rounded to ``digits`` significant digits.
 
+    Parameters
+    ----------
+    expr : sympy.Expr
+        An expression.
+    digits : int
+        Significant digits kept.
+
+    Returns
+    -------
+    sympy.Expr
+        The expression with its floats rounded.
+
+    Examples
+    --------
     >>> import sympy as sp
     >>> significant(sp.Float(3.14159) * sp.Symbol("x"), 3)
     3.14*x
@@ -25,7 +39,32 @@ def significant(expr: sp.Expr, digits: int) -> sp.Expr:
 
 
 def equation_strings(coef: np.ndarray, library, precision: int) -> list[str]:
-    """One ``lhs = forces`` string per coordinate."""
+    """One ``lhs = forces`` string per coordinate.
+
+    Parameters
+    ----------
+    coef : numpy.ndarray of shape (F,)
+        Coefficients, one per feature of ``library``.
+    library : pysindy_xl.CatalogRepartition
+        The fitted catalog.
+    precision : int
+        Significant digits printed.
+
+    Returns
+    -------
+    list of str
+        ``"lhs = forces"``, one per coordinate: the identified terms on the left, the force
+        columns on the right.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> lib = px.CatalogRepartition([px.ExternalForces(c),
+    ...                              px.LagrangeLibrary(c, [c.qd[0] ** 2])]).fit()
+    >>> equation_strings(np.array([-1.0, 0.5]), lib, 3)
+    ['1.0*x_ddot = tau_x']
+    """
     matrix = library.symbolic_matrix_
     forces = set(library.force_columns_)
     active = np.flatnonzero(coef)
@@ -40,7 +79,29 @@ def equation_strings(coef: np.ndarray, library, precision: int) -> list[str]:
 
 
 def identified_lagrangian(coef: np.ndarray, library) -> sp.Expr:
-    """The Lagrange terms of ``library`` weighted by ``coef`` (0 without Lagrange terms)."""
+    """The Lagrange terms of ``library`` weighted by ``coef`` (0 without Lagrange terms).
+
+    Parameters
+    ----------
+    coef : numpy.ndarray of shape (F,)
+        Coefficients, one per feature of ``library``.
+    library : pysindy_xl.CatalogRepartition
+        The fitted catalog.
+
+    Returns
+    -------
+    sympy.Expr
+        ``sum_j coef_j L_j`` over the Lagrange terms ``L_j`` of the catalog.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> c = px.Coordinates(["x"])
+    >>> lib = px.CatalogRepartition([px.ExternalForces(c),
+    ...                              px.LagrangeLibrary(c, [c.qd[0] ** 2])]).fit()
+    >>> identified_lagrangian(np.array([-1.0, 0.5]), lib)
+    0.5*x_dot**2
+    """
     return sp.Add(*(sp.Float(coef[j]) * library.feature_terms_[j]
                     for j, category in enumerate(library.categories_)
                     if category == "lagrange" and coef[j] != 0))
@@ -50,6 +111,26 @@ def uncertainty_lines(names, coef, interval, probability, precision: int) -> lis
     """``name  coefficient  [low, high]  P=p`` for every term an ensemble fit included, most
     probable first.
 
+    Parameters
+    ----------
+    names : sequence of str
+        Feature names.
+    coef : numpy.ndarray of shape (F,)
+        Coefficients.
+    interval : numpy.ndarray of shape (2, F)
+        Lower and upper bounds of each coefficient.
+    probability : numpy.ndarray of shape (F,)
+        Inclusion probability of each feature.
+    precision : int
+        Significant digits printed.
+
+    Returns
+    -------
+    list of str
+        One line per feature with a non-zero inclusion probability.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> uncertainty_lines(["a", "bb"], np.array([1.0, 0.0]), np.array([[0.9, 0], [1.1, 0.2]]),
     ...                   np.array([1.0, 0.3]), 2)
@@ -69,6 +150,18 @@ SHORT_EQUATIONS = 200
 def prints_equations(model, equations=None) -> bool:
     """Whether the model prints its equations: ``equations`` if given, else unless its terms stand
     for physical parameters and the equations are long.
+
+    Parameters
+    ----------
+    model : pysindy_xl.XLSINDy
+        A fitted model.
+    equations : bool or None, default=None
+        An explicit choice; None decides from the model.
+
+    Returns
+    -------
+    bool
+        Whether the equations are printed.
     """
     if equations is not None:
         return bool(equations)
@@ -77,14 +170,24 @@ def prints_equations(model, equations=None) -> bool:
         dynamics is not None and dynamics.n_terms <= SHORT_EQUATIONS)
 
 
-def has_parameter_map(library) -> bool:
-    """Whether some library says which physical parameters its terms stand for."""
-    return any(getattr(lib, "parameters", None) is not None for lib in library.libraries_)
-
-
 def physical_parameters(coef: np.ndarray, library) -> dict:
     """The identified model in physical terms (:meth:`XLSINDy.physical_parameters
     <pysindy_xl.XLSINDy.physical_parameters>`).
+
+    Parameters
+    ----------
+    coef : numpy.ndarray of shape (F,)
+        Coefficients, one per feature of ``library``.
+    library : pysindy_xl.CatalogRepartition
+        The fitted catalog.
+
+    Returns
+    -------
+    dict
+        ``scale`` (the factor making the force coefficient -1, None without forces),
+        ``base_parameters`` (``feature``, ``stands_for``, ``value`` each), ``friction``
+        (``{coordinate: {"viscous", "dry"}}``), ``other`` (the remaining classical terms) and,
+        with joint models, ``joint_friction``.
     """
     forces = [coef[j] for j in library.force_columns_ if coef[j] != 0]
     scale = -1.0 / forces[0] if forces else None
@@ -124,6 +227,20 @@ def physical_parameters(coef: np.ndarray, library) -> dict:
 def joint_friction(coef, library) -> tuple[dict, set]:
     """``({joint: {model: value}}, columns)`` of the catalog's joint models (with
     ``coulomb_positive``/``coulomb_negative`` where asymmetric, and ``coordinate``).
+
+    Parameters
+    ----------
+    coef : numpy.ndarray of shape (F,)
+        Coefficients, one per feature of ``library``.
+    library : pysindy_xl.CatalogRepartition
+        The fitted catalog.
+
+    Returns
+    -------
+    joints : dict
+        ``{joint: {model: value, "coordinate": name}}``.
+    columns : set of int
+        The columns of the joint models.
     """
     joints, columns = {}, set()
     for lib, block in zip(library.libraries_, library.slices_, strict=True):
@@ -142,6 +259,18 @@ def joint_friction(coef, library) -> tuple[dict, set]:
 def consistency_line(report) -> str | None:
     """The line saying whether a physically constrained fit had to constrain, or None.
 
+    Parameters
+    ----------
+    report : dict or None
+        The ``physical_consistency_`` report of a fit.
+
+    Returns
+    -------
+    str or None
+        The line, None without report.
+
+    Examples
+    --------
     >>> consistency_line({"consistent": False, "cost": 0.012, "negative_friction": ["C_a[a_dot]"],
     ...                   "min_pseudo_inertia_eigenvalue": 0.0})[:71]
     'physical consistency: the unconstrained estimate is not that of rigid b'
@@ -161,6 +290,20 @@ def consistency_line(report) -> str | None:
 def parameter_lines(parameters: dict, precision: int, reference: dict | None = None) -> list[str]:
     """Printable lines of :func:`physical_parameters` (base parameters with what they stand for,
     friction per coordinate), with a ``reference``'s values beside.
+
+    Parameters
+    ----------
+    parameters : dict
+        Of :func:`physical_parameters`.
+    precision : int
+        Significant digits printed.
+    reference : dict, default=None
+        Another :func:`physical_parameters` (the truth), shown beside.
+
+    Returns
+    -------
+    list of str
+        The lines.
     """
     known = ({entry["feature"]: entry["value"] for entry in reference["base_parameters"]}
              if reference is not None else None)

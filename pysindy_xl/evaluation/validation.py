@@ -24,11 +24,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from ...data.dataset import Trajectory
+from ..data.dataset import Trajectory
+from ..mujoco.systems.actuation import actuator_law
+from ..mujoco.systems.registry import get_system
+from ..mujoco.systems.tracking import tracked_model
 from ..simulation.forcing import SumOfSinusoids
-from ..systems.actuation import actuator_law
-from ..systems.registry import get_system
-from ..systems.tracking import tracked_model
 from .physics import compare_physics
 from .runs import mujoco_closed_loop, validation_trajectory
 
@@ -52,13 +52,47 @@ class ValidationResult:
     """Comparison of a model's simulation with a MuJoCo trajectory.
 
     Made by :func:`compare_trajectories` or :func:`validate_model`; the metrics are those of
-    the module docstring. ``t`` (T,) sample times; ``reference`` (T, 2n) MuJoCo's states
-    ``[q, qd]``; ``prediction`` (k, 2n) the model's at ``t[:k]`` (``k < T`` when its
-    simulation failed, ``failure`` saying why); ``forces`` (T, n) those given to the model
-    (closed loop: MuJoCo's actuator forces); ``constrained_at`` when a constraint started to
-    act in the reference, where the comparison stopped; ``drive`` and ``simulator`` how the
-    model was driven and what stepped it.
+    the module docstring.
 
+    Parameters
+    ----------
+    t : numpy.ndarray of shape (T,)
+        Sample times (s).
+    reference : numpy.ndarray of shape (T, 2n)
+        MuJoCo's states ``[q, qd]``.
+    prediction : numpy.ndarray of shape (k, 2n)
+        The model's states at ``t[:k]`` (``k < T`` when its simulation failed).
+    forces : numpy.ndarray of shape (T, n)
+        The forces given to the model (closed loop: MuJoCo's actuator forces).
+    position_rmse : float
+        RMS position error over the whole horizon (inf when the model stopped early).
+    position_rmse_per_coordinate : numpy.ndarray of shape (n,)
+        The same per coordinate.
+    divergence_time : float or None
+        The first time some coordinate's error exceeds ``divergence_bound * max(1, ptp_i)``
+        (``ptp_i`` its range in the reference) or the simulation failed (s); None if never.
+    valid : bool
+        The verdict: simulated to the end, never diverged and, in closed loop,
+        ``force_error <= force_bound``.
+    failure : str or None
+        Why the simulation stopped early, or None.
+    divergence_bound : float
+        The bound of the divergence test.
+    coordinate_names : tuple of str, default=()
+        Names of the coordinates.
+    simulated_rmse : float, default=nan
+        Position RMSE over the part the model simulated.
+    constrained_at : float or None, default=None
+        When a constraint started to act in the reference, where the comparison stopped.
+    drive : {"open-loop", "closed-loop"}, default="open-loop"
+        How the model was driven.
+    force_error : float or None, default=None
+        Closed loop: relative RMS difference of the actuator forces along the two runs.
+    simulator : {"model", "mujoco"}, default="model"
+        What stepped the model.
+
+    Examples
+    --------
     A prediction that stops half-way:
 
     >>> t = np.linspace(0.0, 0.9, 10)
@@ -98,6 +132,13 @@ class ValidationResult:
     def to_dict(self) -> dict:
         """JSON-serializable summary: the metrics and fields, ``horizon`` (s), no arrays.
 
+        Returns
+        -------
+        dict
+            The metrics and scalar fields, ``horizon`` (s) and ``simulated_fraction``.
+
+        Examples
+        --------
         >>> import json
         >>> t = np.linspace(0.0, 1.0, 11)
         >>> reference = np.column_stack([t, np.ones_like(t)])
@@ -130,10 +171,35 @@ def compare_trajectories(t, reference, prediction, divergence_bound=DEFAULT_DIVE
                          failure=None, coordinate_names=None, forces=None) -> ValidationResult:
     """Metrics of a predicted trajectory against a reference (see the module docstring).
 
-    ``t`` (T,) sample times, ``reference`` (T, 2n) states ``[q, qd]``, ``prediction``
-    (k <= T, 2n) states at ``t[:k]`` (shorter when it stopped early, ``failure`` saying why),
-    ``coordinate_names`` default ``q0, q1, ...``, ``forces`` (T, n) kept for the plots.
+    Parameters
+    ----------
+    t : array_like of shape (T,)
+        Sample times (s).
+    reference : array_like of shape (T, 2n)
+        Reference states ``[q, qd]``.
+    prediction : array_like of shape (k, 2n), k <= T
+        Predicted states at ``t[:k]`` (shorter when the prediction stopped early).
+    divergence_bound : float, default=DEFAULT_DIVERGENCE_BOUND
+        Position error beyond which the prediction has diverged.
+    failure : str or None, default=None
+        Why the prediction stopped early.
+    coordinate_names : sequence of str, default=None
+        Names of the coordinates; None: ``q0, q1, ...``.
+    forces : array_like of shape (T, n), default=None
+        The forces that drove the run, kept for the plots.
 
+    Returns
+    -------
+    ValidationResult
+        The metrics and the trajectories.
+
+    Raises
+    ------
+    ValueError
+        When the shapes do not match.
+
+    Examples
+    --------
     >>> t = np.linspace(0, 1, 11)
     >>> ref = np.column_stack([t, np.ones_like(t)])
     >>> r = compare_trajectories(t, ref, ref + [0.01, 0.0])
@@ -250,7 +316,7 @@ def validate_model(model, system=None, trajectory: Trajectory | None = None,
     >>> result.drive  # a motor on the cart: its force is a function of time
     'open-loop'
     """
-    from ...dynamics import SimulationError
+    from ..dynamics import SimulationError
     if trajectory is None:
         if system is None:
             raise ValueError("system: give a system to simulate or a reference trajectory")

@@ -13,13 +13,13 @@ import os
 
 import numpy as np
 
-from ..._validation import check_option
-from ...data.dataset import Dataset, Trajectory
-from ...data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
-from .. import import_mujoco
-from ..systems.actuation import actuator_force_function, start_on_reference
-from ..systems.registry import get_system
-from ..systems.tracking import tracked_model
+from .._optional import import_mujoco
+from .._validation import check_option
+from ..data.dataset import Dataset, Trajectory
+from ..data.noise import NOISE_KEYS, NOISE_MODELS, add_noise, noise_levels
+from ..mujoco.systems.actuation import actuator_force_function, start_on_reference
+from ..mujoco.systems.registry import get_system
+from ..mujoco.systems.tracking import tracked_model
 from .forcing import FORCING_MODES, SumOfSinusoids
 from .integration import (
     INTEGRATORS,
@@ -30,12 +30,11 @@ from .integration import (
     settled,
     settling_time,
 )
-from .signals import CONTROLS, _fraction, actuator_signals, motor_tracking
+from .signals import CONTROLS, actuator_signals, checked_fraction, motor_tracking
 
-__all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "actuator_signals",
-           "noise_levels", "NOISE_KEYS", "NOISE_MODELS",
-           "ConstraintWarning", "actuator_force_function", "faithful_integrator", "INTEGRATORS",
-           "UnstableSimulationError", "choose_integration", "CONTROLS"]
+__all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "noise_levels", "NOISE_KEYS",
+           "NOISE_MODELS", "ConstraintWarning", "INTEGRATORS", "UnstableSimulationError",
+           "choose_integration", "CONTROLS", "actuator_force_function"]
 
 
 #: Kinds of constraint rows (:func:`_constraint_kinds`).
@@ -231,6 +230,18 @@ def faithful_integrator(model) -> str | None:
 
     None to keep the model's.
 
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The compiled model.
+
+    Returns
+    -------
+    str or None
+        The integrator name, or None to keep the model's.
+
+    Examples
+    --------
     >>> from pysindy_xl.mujoco import get_system
     >>> print(faithful_integrator(get_system("cart-pole").mj_model()))  # already RK4
     None
@@ -240,7 +251,17 @@ def faithful_integrator(model) -> str | None:
 
 
 class ConstraintWarning(UserWarning):
-    """Joint limits, contacts or equality constraints act on much of the generated data."""
+    """Joint limits, contacts or equality constraints act on much of the generated data.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     warnings.warn("joint limits act on 40 % of the samples", ConstraintWarning)
+    >>> issubclass(caught[0].category, UserWarning)
+    True
+    """
 
 
 def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
@@ -335,7 +356,7 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     elif not isinstance(derivatives, (bool, np.bool_)):
         raise TypeError(f"derivatives: expected True, False or None, got {derivatives!r}")
     if amplitude is not None:
-        amplitude = _fraction(amplitude, "amplitude")
+        amplitude = checked_fraction(amplitude, "amplitude")
     initial_scale = float(initial_scale)
     if not (np.isfinite(initial_scale) and initial_scale >= 0):
         raise ValueError(f"initial_scale: expected a non-negative number, got {initial_scale!r}")
