@@ -47,12 +47,13 @@ G = 9.81
 
 
 def _system(name, names, kinds, lagrangian, damping, amplitude, frequency, q0, hand,
-            unforced=False):
+            unforced=False, center=None):
     coords = px.Coordinates(names)
     return {"name": name, "coords": coords, "kinds": kinds,
             "L": lagrangian(coords.q, coords.qd), "damping": np.asarray(damping, float),
             "amplitude": np.asarray(amplitude, float), "frequency": frequency,
-            "q0": np.asarray(q0, float), "hand": hand, "unforced": unforced}
+            "q0": np.asarray(q0, float), "hand": hand, "unforced": unforced,
+            "center": np.zeros(len(names)) if center is None else np.asarray(center, float)}
 
 
 def systems():
@@ -79,8 +80,8 @@ def systems():
                 (0.1, 1.0), [1.0], {"splines": 8, "kinetic": "constant"}),
         _system("spring_pendulum", ["r", "theta"], ["linear", "angle"],
                 lambda q, v: 0.5 * (v[0] ** 2 + q[0] ** 2 * v[1] ** 2) + G * q[0] * sp.cos(q[1])
-                - 10 * (q[0] - 1) ** 2, [0.1, 0.05], [3, 2], (0.2, 1.5), [1.2, 0.5],
-                {"interaction": 2}, unforced=True),
+                - 10 * (q[0] - 1) ** 2, [0.1, 0.05], [3, 2], (0.2, 1.5), [0.3, 0.5],
+                {"interaction": 2}, unforced=True, center=[1.5, 0.0]),
         _system("coupled_oscillators", ["x1", "x2"], ["linear", "linear"],
                 lambda q, v: 0.5 * v[0] ** 2 + 0.75 * v[1] ** 2 - q[0] ** 2 - 1.5 * q[1] ** 2
                 - 0.8 * (q[0] - q[1]) ** 2, [0.1, 0.1], [2, 2], (0.1, 1.0), [0.5, 0.5],
@@ -129,6 +130,9 @@ class Truth:
         self.n = n
         self._mass = [[sp.lambdify(args, mass[i, j]) for j in range(n)] for i in range(n)]
         self._rest = [sp.lambdify(args, rest[i]) for i in range(n)]
+        # one call per step for the integrator
+        self._mass_matrix = sp.lambdify(args, mass, "numpy")
+        self._rest_vector = sp.lambdify(args, list(rest), "numpy")
 
     def _parts(self, q, qd):
         args = (*np.atleast_2d(q).T, *np.atleast_2d(qd).T)
@@ -149,8 +153,9 @@ class Truth:
         n = self.n
 
         def rhs(time, y):
-            return np.r_[y[n:], self.accelerations(y[:n][None], y[n:][None],
-                                                   force(time)[None])[0]]
+            mass = np.asarray(self._mass_matrix(*y), dtype=float)
+            rest = np.asarray(self._rest_vector(*y), dtype=float)
+            return np.concatenate([y[n:], np.linalg.solve(mass, force(time) - rest)])
 
         solution = solve_ivp(rhs, (t[0], t[-1]), x0, t_eval=t, method="DOP853", rtol=1e-10,
                              atol=1e-10)
@@ -179,7 +184,8 @@ def make_runs(system, truth, seed, forced, n_runs=2, duration=10.0, rate=1000.0)
     runs = []
     for _ in range(n_runs):
         force = _forcing(system, rng, forced)
-        q0 = system["q0"] * rng.uniform(-1, 1, truth.n) * (1 if forced else 1.5)
+        q0 = system["center"] + system["q0"] * rng.uniform(-1, 1, truth.n) * (1 if forced
+                                                                                else 1.5)
         qd0 = rng.uniform(-0.5, 0.5, truth.n) * (1 if forced else 2)
         y = truth.simulate(np.r_[q0, qd0], t, force)
         u = np.array([force(time) for time in t])
@@ -301,6 +307,28 @@ def _derivatives(xs, ts):
     return [scoring_derivatives(t, x) for x, t in zip(xs, ts, strict=True)]
 
 
+def _bounded_simulation(rhs, x0, t, max_evaluations=20000):
+    """RK45 of ``rhs`` over ``t``; stops (RuntimeError) on blow-up or after too many steps."""
+    count = [0]
+    scale = 1e3 * (1 + np.abs(x0).max())
+
+    def guarded(time, x):
+        count[0] += 1
+        if count[0] > max_evaluations:
+            raise RuntimeError("simulation: too many steps (stiff or diverging)")
+        return rhs(time, x)
+
+    def blow_up(time, x):
+        return scale - np.abs(x).max()
+
+    blow_up.terminal = True
+    solution = solve_ivp(guarded, (t[0], t[-1]), x0, t_eval=t, rtol=1e-6, atol=1e-8,
+                         events=blow_up)
+    if solution.y.shape[1] != len(t):
+        raise RuntimeError("simulation: diverged")
+    return solution.y.T
+
+
 def _sindy_baseline(system, truth, xs, ts, us, test, runs, forced):
     """PySINDy SINDy on [q, qd] with polynomial (+ Fourier of the angles) library."""
     import pysindy as ps
@@ -321,9 +349,9 @@ def _sindy_baseline(system, truth, xs, ts, us, test, runs, forced):
             return model.predict(np.c_[q, qd], u=u if forced else None)[:, n:]
 
         def simulate(x0, t, force):
-            if forced:
-                return model.simulate(x0, t, u=lambda time: force(time))
-            return model.simulate(x0, t)
+            return _bounded_simulation(
+                lambda time, x: model.predict(x[None], u=force(time)[None] if forced
+                                              else None)[0], x0, t)
 
         scores = {"held_out_accelerations": _relative(accelerations(test["q"], test["qd"],
                                                                     test["u"]), test["qdd"])}
