@@ -460,8 +460,9 @@ def write_report(path, out):
               "--- |"]
     for r in records:
         a, h = r["auto"], r["hand"]
+        mark = " (*)" if r.get("early") else ""
         lines.append(
-            f"| {r['system']} | {r['n']} | {r['forcing']} | {r['noise']:g} | "
+            f"| {r['system']}{mark} | {r['n']} | {r['forcing']} | {r['noise']:g} | "
             f"{'yes' if a.get('right') else 'no'} | {_pct(a.get('held_out'))} | "
             f"{_pct(a.get('simulation'))} | {_pct(a.get('off_box'))} | {_pct(h.get('held_out'))} | "
             f"{'-' if r.get('ratio') is None else format(r['ratio'], '.2f')} | "

@@ -295,7 +295,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         Relative decrease of the criterion that keeps a move (or relative increase within
         which a move that fits fewer terms is kept).
     good_enough : float, default 0.002
-        The growth stops once the criterion is below this relative error.
+        With forces, the growth stops once the criterion is below this relative error
+        (unforced data: every move is tried).
     moves : sequence of str, default MOVES
         The moves tried (a subset of :data:`MOVES`).
     search_optimizer : "auto" or optimizer, default "auto"
@@ -457,6 +458,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     best.chosen = True
     steps = [best]
     report(best)
+    if not forced:  # relative to the largest term, an approximation looks small already
+        good_enough = 0.0
     tried = {repr(sorted(state.items()))}
     improved = best.criterion > good_enough
     while improved:
