@@ -49,6 +49,7 @@ from pxl_docs import GALLERY_EXCLUDED, object_kind, public_objects  # noqa: E402
 API_MODULES = [
     "pysindy_xl",
     "pysindy_xl.feature_library",
+    "pysindy_xl.catalog",
     "pysindy_xl.optimizers",
     "pysindy_xl.fit",
     "pysindy_xl.weak",

@@ -51,6 +51,7 @@ toc_object_entries = False
 API_MODULES = [
     "pysindy_xl",
     "pysindy_xl.feature_library",
+    "pysindy_xl.catalog",
     "pysindy_xl.optimizers",
     "pysindy_xl.fit",
     "pysindy_xl.weak",

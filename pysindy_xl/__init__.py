@@ -32,6 +32,7 @@ _LAZY = {
                     "dynamics"),
     **dict.fromkeys(("BumpTestFunctions", "WhittakerSmoother"), "weak"),
     "kinematic_catalog": "mujoco.catalogs.kinematic",  # reads MJCF through mujoco: on first use
+    **dict.fromkeys(("AutomaticCatalog", "grow_catalog"), "catalog"),
 }
 
 __all__ = ["Coordinates", "monomials", "products", "LagrangeLibrary", "ClassicalLibrary",
@@ -40,10 +41,12 @@ __all__ = ["Coordinates", "monomials", "products", "LagrangeLibrary", "Classical
            "ImplicitOptimizer", "MixedOptimizer", "EnsembleOptimizer", "PhysicalOptimizer",
            "NoLawFoundError", "TotalLeastSquaresOptimizer", "XLSINDy", "IdentificationWarning",
            "UnexplainedCoordinateWarning", "MassMatrixDynamics", "SimulationError",
-           "SingularMassMatrixError", "BumpTestFunctions", "WhittakerSmoother", "kinematic_catalog"]
+           "SingularMassMatrixError", "BumpTestFunctions", "WhittakerSmoother", "kinematic_catalog",
+           "AutomaticCatalog", "grow_catalog"]
 
 if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
     from ._validation import IdentificationWarning, UnexplainedCoordinateWarning
+    from .catalog import AutomaticCatalog, grow_catalog
     from .dynamics import MassMatrixDynamics, SimulationError, SingularMassMatrixError
     from .feature_library import (
         CatalogRepartition,

@@ -12,7 +12,8 @@ import numpy as np
 
 from ..evaluation.quality import fit_quality, plot_identification, quality_lines
 from ..registry import json_finite
-from .parser import build_parser
+from .automatic import honest_exit, run_automatic
+from .parser import AUTOMATIC, build_parser
 from .steps import (
     CLIError,
     check_solver,
@@ -340,7 +341,12 @@ def run_identify(args):
         form += " (weak if the catalog has impulses)"
     progress(f"building the {args.catalog} catalog of {display_name(system)} and fitting "
              f"({form}, {solver} regression with sparsity selection) on {n_samples} samples")
-    model, arguments = fit_model(system, dataset, args, solver, forced, return_arguments=True)
+    growth = None
+    if args.catalog == AUTOMATIC:
+        model, growth, arguments = run_automatic(args, dataset, system, forced, progress)
+    else:
+        model, arguments = fit_model(system, dataset, args, solver, forced,
+                                     return_arguments=True)
     progress(f"fitted: {int(np.count_nonzero(model.coefficients()))} terms of "
              f"{len(model.get_feature_names())}; computing the fit quality")
     print(f"{display_name(system)}: {dataset.n_trajectories} trajectories, {n_samples} samples, "
@@ -354,6 +360,9 @@ def run_identify(args):
         print(f"fit quality: not available ({error})")
     if quality is not None:
         print(*quality_lines(quality), sep="\n")
+    honest_exit(None if quality is None else quality["r2"],
+                None if growth is None else growth.held_out_error,
+                getattr(args, "max_terms", 400))
     if system.has_ground_truth:
         _, summary = summarize_coefficients(system, model)
         print(f"against the true model: max coefficient error {summary['max_relative_error']:.2g} "

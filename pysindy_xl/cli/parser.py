@@ -8,6 +8,8 @@ from .._validation import argument_type
 
 SOLVERS = ("auto", "explicit", "implicit", "mixed")
 CATALOGS = ("lagrange", "classical", "mixed", "kinematic")
+#: ``identify`` only: the catalog grown on the data (:mod:`pysindy_xl.cli.automatic`)
+AUTOMATIC = "automatic"
 FORCINGS = ("explicit", "implicit", "mixed")
 NOISE_MODELS = ("positions", "all")
 CONSTRAINTS = ("exclude", "known", "include")
@@ -63,11 +65,22 @@ def _add_generation_options(parser, duration=10.0, trajectories=2):
                              "at their reference pose (removed with their actuators)")
 
 
-def _add_fit_options(parser, coulomb_law="smooth"):
-    parser.add_argument("--catalog", choices=(*CATALOGS, "auto"), default="auto",
-                        help="lagrange, classical, mixed (Lagrange + friction) or kinematic "
-                             "(from the kinematic tree); auto: kinematic for a MuJoCo model, "
-                             "else mixed (default: auto)")
+def _add_fit_options(parser, coulomb_law="smooth", automatic=False):
+    if automatic:
+        from .automatic import WHAT_IS_TRIED
+        parser.add_argument("--catalog", choices=(*CATALOGS, AUTOMATIC, "auto"), default="auto",
+                            help="lagrange, classical, mixed (Lagrange + friction), kinematic "
+                                 "(from the kinematic tree) or " + WHAT_IS_TRIED + "; auto: "
+                                 "kinematic for a MuJoCo model, mixed with --velocity-degree "
+                                 "or --trig-degree, else automatic (default: auto)")
+        parser.add_argument("--max-terms", type=_positive_int, default=400,
+                            help="automatic catalog: ceiling on its size; larger catalogs are "
+                                 "not tried (default: 400)")
+    else:
+        parser.add_argument("--catalog", choices=(*CATALOGS, "auto"), default="auto",
+                            help="lagrange, classical, mixed (Lagrange + friction) or kinematic "
+                                 "(from the kinematic tree); auto: kinematic for a MuJoCo model, "
+                                 "else mixed (default: auto)")
     parser.add_argument("--solver", choices=SOLVERS, default="auto",
                         help="explicit, implicit or mixed regression; auto follows the forcing "
                              "and bags explicit fits of positions-only data (default: auto)")
@@ -84,10 +97,12 @@ def _add_fit_options(parser, coulomb_law="smooth"):
                              f"or mujoco (MuJoCo's frictionloss) (default: {coulomb_law}, mujoco "
                              "for a dataset MuJoCo generated, smooth with --joint-models)")
     parser.set_defaults(default_coulomb_law=coulomb_law)
-    parser.add_argument("--velocity-degree", type=_positive_int, default=2,
-                        help="degree of the velocity monomials of the catalog (default: 2)")
-    parser.add_argument("--trig-degree", type=_positive_int, default=2,
-                        help="degree of the sin/cos monomials of the catalog (default: 2)")
+    parser.add_argument("--velocity-degree", type=_positive_int, default=None,
+                        help="degree of the velocity monomials of the reference catalogs "
+                             "(default: 2)")
+    parser.add_argument("--trig-degree", type=_positive_int, default=None,
+                        help="degree of the sin/cos monomials of the reference catalogs "
+                             "(default: 2)")
     parser.add_argument("--formulation", choices=FORMULATIONS, default="auto",
                         help="strong: equations at each sample; weak: equations integrated "
                              "against test functions on smoothed positions (robust to noise); "
@@ -146,8 +161,11 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--quiet", action="store_true", help="print only the final summary")
 
     identify = sub.add_parser("identify", help="fit your data (CSV or NPZ) and print the model",
-                              description="Fit a dataset with a reference catalog and print the "
-                              "model. CSV (.csv, .txt, .tsv): columns t, NAME, optionally "
+                              description="Fit a dataset and print the model: with a MuJoCo "
+                              "model, its kinematic catalog; given only coordinates, a catalog "
+                              "grown on the data (--catalog automatic). A fit that explains "
+                              "nothing exits with status 1 and says what to try. CSV (.csv, "
+                              ".txt, .tsv): columns t, NAME, optionally "
                               "NAME_dot, NAME_ddot, tau_NAME, trajectory; --column maps other "
                               "headers. NPZ: arrays t, q, optionally qd, qdd, tau, trajectory. "
                               "Coordinates come from --system, --coordinates/--angles, or the "
@@ -171,7 +189,7 @@ def build_parser() -> argparse.ArgumentParser:
     identify.add_argument("--system", default=None,
                           help="system name, MJCF .xml or URDF .urdf giving coordinates and "
                                "catalog (default: the dataset's metadata)")
-    _add_fit_options(identify)
+    _add_fit_options(identify, automatic=True)
     identify.add_argument("--forces", choices=("tau", "none"), default="tau",
                           help="use the dataset's generalized forces or fit unforced "
                                "(default: tau when present)")

@@ -283,19 +283,28 @@ def dataset_for(system, dataset):
 
 def resolve_catalog(args, system):
     """Replace ``--catalog auto`` by ``kinematic`` for a MuJoCo model (compact, it holds the
-    true model), ``mixed`` (the paper's) for coordinates named without one.
+    true model); for coordinates named without one, ``mixed`` (the paper's) when a degree of it
+    is given, else ``automatic`` (``identify``: grown on the data); default degrees 2.
 
     Parameters
     ----------
     args : argparse.Namespace
-        The parsed arguments. ``args.catalog`` is set in place.
+        The parsed arguments. ``args.catalog``, ``args.velocity_degree`` and
+        ``args.trig_degree`` are set in place.
     system : MuJoCoSystem
         The system.
     """
     from pysindy_xl.mujoco import MuJoCoSystem
+    degrees = (getattr(args, "velocity_degree", None), getattr(args, "trig_degree", None))
     if args.catalog == "auto":
         has_model = type(system).xml is not MuJoCoSystem.xml  # an MJCF to read the tree from
-        args.catalog = "kinematic" if has_model else "mixed"
+        automatic = hasattr(args, "max_terms") and degrees == (None, None)
+        args.catalog = ("kinematic" if has_model else
+                        "automatic" if automatic else "mixed")
+    if hasattr(args, "velocity_degree") and args.velocity_degree is None:
+        args.velocity_degree = 2
+    if hasattr(args, "trig_degree") and args.trig_degree is None:
+        args.trig_degree = 2
 
 
 def log(quiet, *args):

@@ -6,6 +6,7 @@ chains (the kinematic catalogs of :mod:`pysindy_xl.mujoco`).
 from __future__ import annotations
 
 import dataclasses
+import warnings
 
 import numpy as np
 import sympy as sp
@@ -28,7 +29,8 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
 
     Same columns and names as ``LagrangeLibrary``. When every term is a polynomial in
     ``sin q_j``, ``cos q_j`` (angles), ``q_j`` (other coordinates) and ``qd_j``, the columns are
-    derived on sparse arrays (:mod:`.trigpoly`); otherwise symbolically.
+    derived on sparse arrays (:mod:`.trigpoly`); otherwise symbolically (with a warning when an
+    angle enters both bare and through its sine or cosine).
 
     Parameters
     ----------
@@ -116,6 +118,15 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
             key, lambda: _derive_trig(terms) if trig else _derive(coords, terms),
             _DERIVATIONS, _CACHED_DERIVATIONS)
         if derivation is _NOT_POLYNOMIAL:
+            mixed = _mixed_angles(terms, coords)
+            if mixed:
+                warnings.warn(
+                    f"terms: the angle{'s' * (len(mixed) > 1)} {', '.join(mixed)} enter"
+                    f"{'s' * (len(mixed) == 1)} both through sin/cos and bare "
+                    "(e.g. theta and sin(theta)); PolynomialLagrangeLibrary derives such terms "
+                    "symbolically, which is slower: put the terms with the bare angles in a "
+                    "LagrangeLibrary of their own (pysindy_xl.AutomaticCatalog does)",
+                    stacklevel=2)
             return super()._build_symbolic()
         self.terms_ = terms
         # the exact terms and columns, for column_terms and weak_terms
@@ -378,6 +389,18 @@ def _derivation(coords, polynomials, derived, names):
 def _angles(terms, coords) -> tuple:
     """Which coordinates the terms use as angles (through their sine or cosine)."""
     return tuple(any(t.has(sp.sin(q)) or t.has(sp.cos(q)) for t in terms) for q in coords.q)
+
+
+def _mixed_angles(terms, coords) -> list[str]:
+    """The angles (coordinates in some sin/cos) that some term also uses bare."""
+    out = []
+    for q, angle in zip(coords.q, _angles(terms, coords), strict=True):
+        if angle:
+            bare = sp.Dummy()
+            hidden = {sp.sin(q): bare, sp.cos(q): bare}
+            if any(t.xreplace(hidden).has(q) for t in terms):
+                out.append(str(q))
+    return out
 
 
 def _feature_name(term: sp.Expr) -> str:

@@ -1,0 +1,10 @@
+"""Catalogs that build themselves: candidate Lagrangian terms from the coordinates' names and
+kinds (:class:`AutomaticCatalog`), grown on data while a held-out criterion improves
+(:func:`grow_catalog`)."""
+
+from .automatic import DISSIPATION, AutomaticCatalog, coordinate_kinds
+from .bases import KINDS, bspline
+from .growth import MOVES, GrowthResult, GrowthStep, grow_catalog
+
+__all__ = ["AutomaticCatalog", "grow_catalog", "GrowthResult", "GrowthStep", "MOVES",
+           "coordinate_kinds", "DISSIPATION", "KINDS", "bspline"]

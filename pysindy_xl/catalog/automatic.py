@@ -1,0 +1,388 @@
+"""The automatic catalog: candidate Lagrangian terms from the coordinates' names and kinds.
+
+A Lagrangian has a shape: a kinetic part quadratic in the velocities with coefficients that
+depend on the configuration, terms linear in the velocities (gyroscopic forces, moving frames)
+and a potential of the positions. :class:`AutomaticCatalog` writes the candidates in that
+shape,
+
+.. math::
+
+    \\{\\,\\phi(q)\\,\\} \\times \\{1\\} \\;\\cup\\; \\{\\,\\kappa(q)\\,\\dot q_i \\dot q_j\\,\\}
+    \\;\\cup\\; \\{\\,\\gamma(q_k)\\,\\dot q_i,\\ k \\ne i\\,\\},
+
+with ``phi`` the products of single-coordinate functions (:mod:`.bases`) over at most
+``interaction`` coordinates, ``kappa`` a constant or (``kinetic="configuration"``) such a
+product of low degree, and ``gamma`` the first-degree functions of another coordinate. Per
+coordinate it adds dissipation (viscous ``qd_i``, smooth Coulomb ``tanh(qd_i / eps_i)``) as
+classical terms, and the force columns. Terms that are trigonometric polynomials go to a
+:class:`~pysindy_xl.feature_library.PolynomialLagrangeLibrary` (derived on arrays); the others
+(powers of angles, B-splines) to a :class:`~pysindy_xl.LagrangeLibrary`.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Mapping
+
+import numpy as np
+import sympy as sp
+
+from .._validation import check_option
+from ..feature_library import (
+    CatalogRepartition,
+    ClassicalLibrary,
+    ExternalForces,
+    LagrangeLibrary,
+    PolynomialLagrangeLibrary,
+)
+from ..symbols import Coordinates
+from .bases import KINDS, bspline, bspline_centers, factor_functions
+
+__all__ = ["AutomaticCatalog", "DISSIPATION", "coordinate_kinds"]
+
+#: Dissipation models an automatic catalog offers per coordinate.
+DISSIPATION = ("viscous", "coulomb")
+
+
+def coordinate_kinds(names, kinds) -> tuple[str, ...]:
+    """One kind per coordinate from ``kinds``.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The coordinates' names.
+    kinds : None, str, sequence or mapping
+        None (all linear), one kind for all, one per coordinate, or ``{name: kind}``
+        (coordinates not named are linear); kinds from :data:`~pysindy_xl.catalog.KINDS`.
+
+    Returns
+    -------
+    tuple of str
+
+    Examples
+    --------
+    >>> coordinate_kinds(["r", "theta"], {"theta": "angle"})
+    ('linear', 'angle')
+    """
+    names = list(names)
+    if kinds is None:
+        out = ["linear"] * len(names)
+    elif isinstance(kinds, str):
+        out = [kinds] * len(names)
+    elif isinstance(kinds, Mapping):
+        unknown = [k for k in kinds if k not in names]
+        if unknown:
+            raise ValueError(f"kinds: {unknown} are not among the coordinates {names}")
+        out = [kinds.get(name, "linear") for name in names]
+    else:
+        out = list(kinds)
+        if len(out) != len(names):
+            raise ValueError(f"kinds: expected one kind per coordinate ({len(names)}), got "
+                             f"{len(out)}")
+    for name, kind in zip(names, out, strict=True):
+        if kind not in KINDS:
+            raise ValueError(f"kinds: coordinate {name!r} has the unknown kind {kind!r}; "
+                             f"expected one of {KINDS}")
+    return tuple(out)
+
+
+def _per_coordinate(value, names, name, default=None) -> list:
+    """``value`` spread over the coordinates: a mapping by name, a sequence, or one value."""
+    if value is None:
+        return [default] * len(names)
+    if isinstance(value, Mapping):
+        unknown = [k for k in value if k not in names]
+        if unknown:
+            raise ValueError(f"{name}: {unknown} are not among the coordinates {list(names)}")
+        return [value.get(n, default) for n in names]
+    if isinstance(value, (list, tuple, np.ndarray)) and len(value) == len(names) and (
+            name != "bounds" or all(v is None or np.ndim(v) == 1 for v in value)):
+        return list(value)
+    return [value] * len(names)
+
+
+class AutomaticCatalog(CatalogRepartition):
+    """Candidate terms of a Lagrangian from the coordinates alone (see the module docstring).
+
+    A :class:`~pysindy_xl.CatalogRepartition` whose libraries follow from its parameters: pass
+    it to :class:`~pysindy_xl.XLSINDy` like any catalog. :func:`~pysindy_xl.grow_catalog`
+    chooses its sizes from data.
+
+    Parameters
+    ----------
+    coordinates : list of str, str or Coordinates
+        The coordinates' names (``"r,theta"`` also works).
+    kinds : None, str, sequence or mapping, default None
+        ``"linear"`` or ``"angle"`` per coordinate (a mapping ``{name: kind}`` leaves the
+        others linear; None: all linear).
+    bounds : mapping or sequence of (low, high), optional
+        Range of each coordinate; required for its B-splines.
+    degree : int, default 2
+        Highest power of a linear coordinate, and highest total power (of linear coordinates
+        and angles) in a product of several coordinates' functions.
+    trig_degree : int, default 1
+        Degree of the trigonometric monomials of the angles.
+    angle_degree : int, default 0
+        Highest power of an angle itself (``theta^2``: torsion springs).
+    interaction : int, default 1
+        Most coordinates in one product of functions.
+    kinetic : {"constant", "configuration"}, default "configuration"
+        Coefficients of the velocity products ``qd_i qd_j``: constants, or also products (over
+        ``interaction`` coordinates) of linear coordinates up to degree 2 and of sines and
+        cosines of degree 1.
+    gyroscopic : bool, default False
+        Add ``f(q_k) qd_i`` (``k != i``; ``f`` a linear coordinate, a sine or a cosine).
+    dissipation : sequence of {"viscous", "coulomb"}, default ("viscous",)
+        Dissipation terms in each coordinate's equation.
+    coulomb_scale : float or sequence of float, default 0.01
+        ``eps_i`` of the smooth Coulomb law ``tanh(qd_i / eps_i)``.
+    splines : int or mapping {name: int}, optional
+        Number of cubic B-splines (:func:`~pysindy_xl.catalog.bases.bspline`) in the potential
+        of each coordinate, on its ``bounds``.
+    interlink : array (n, n), optional
+        Of :class:`~pysindy_xl.ExternalForces`.
+    max_terms : int, default 2000
+        Ceiling on the number of candidate terms; a larger catalog raises ``ValueError``.
+
+    Attributes
+    ----------
+    libraries : list of SymbolicLibrary
+        Forces, Lagrange terms (trigonometric polynomials, then others), dissipation.
+
+    Examples
+    --------
+    >>> import pysindy_xl as px
+    >>> cat = px.AutomaticCatalog(["r", "theta"], kinds={"theta": "angle"}, interaction=2)
+    >>> cat.n_terms
+    37
+    >>> cat.fit().get_feature_names()[:4]
+    ['F[tau]', 'L[r_dot**2]', 'L[r_dot*theta_dot]', 'L[theta_dot**2]']
+    """
+
+    def __init__(self, coordinates, kinds=None, bounds=None, degree=2, trig_degree=1,
+                 angle_degree=0, interaction=1, kinetic="configuration", gyroscopic=False,
+                 dissipation=("viscous",), coulomb_scale=0.01, splines=None, interlink=None,
+                 max_terms=2000):
+        self.coordinates = coordinates
+        self.kinds = kinds
+        self.bounds = bounds
+        self.degree = degree
+        self.trig_degree = trig_degree
+        self.angle_degree = angle_degree
+        self.interaction = interaction
+        self.kinetic = kinetic
+        self.gyroscopic = gyroscopic
+        self.dissipation = dissipation
+        self.coulomb_scale = coulomb_scale
+        self.splines = splines
+        self.interlink = interlink
+        self.max_terms = max_terms
+
+    # -- the parameters, checked ---------------------------------------------------------------
+    def _coordinates(self) -> Coordinates:
+        if isinstance(self.coordinates, Coordinates):
+            return self.coordinates
+        names = self.coordinates
+        if isinstance(names, str):
+            names = [c.strip() for c in names.split(",") if c.strip()]
+        if not isinstance(names, (list, tuple)) or not names:
+            raise ValueError(f"coordinates: expected a non-empty list of names, got "
+                             f"{self.coordinates!r}")
+        return Coordinates(list(names))
+
+    def _options(self) -> dict:
+        coords = self._coordinates()
+        names = list(coords.names)
+        options = {"coords": coords, "kinds": coordinate_kinds(names, self.kinds)}
+        for name, low in (("degree", 0), ("trig_degree", 0), ("angle_degree", 0),
+                          ("interaction", 1), ("max_terms", 1)):
+            options[name] = check_option(name, getattr(self, name), "int", low=low)
+        options["kinetic"] = check_option("kinetic", self.kinetic, "choice",
+                                          choices=("constant", "configuration"))
+        options["gyroscopic"] = check_option("gyroscopic", self.gyroscopic, "bool")
+        dissipation = (self.dissipation,) if isinstance(self.dissipation, str) else \
+            tuple(self.dissipation or ())
+        for model in dissipation:
+            if model not in DISSIPATION:
+                raise ValueError(f"dissipation: unknown model {model!r}; expected some of "
+                                 f"{DISSIPATION}")
+        options["dissipation"] = dissipation
+        scales = _per_coordinate(self.coulomb_scale, names, "coulomb_scale")
+        for scale in scales:
+            check_option("coulomb_scale", scale, "real", low=0, low_open=True)
+        options["coulomb_scale"] = [float(s) for s in scales]
+        splines = _per_coordinate(self.splines, names, "splines", default=0)
+        bounds = _per_coordinate(self.bounds, names, "bounds")
+        options["splines"] = []
+        for name, count, bound in zip(names, splines, bounds, strict=True):
+            count = check_option("splines", count or 0, "int", low=0)
+            if count and bound is None:
+                raise ValueError(f"bounds: B-splines of {name!r} need its range (low, high)")
+            options["splines"].append(bspline_centers(*bound, count) if count else None)
+        return options
+
+    # -- the terms -----------------------------------------------------------------------------
+    def lagrange_terms(self) -> list[sp.Expr]:
+        """The candidate Lagrangian terms: kinetic, gyroscopic, then potential ones."""
+        return self._terms(self._options())[0]
+
+    @property
+    def n_terms(self) -> int:
+        """Number of candidate terms (Lagrangian and dissipation), forces left out."""
+        options = self._options()
+        return len(self._terms(options)[0]) + len(self._dissipation(options)[0])
+
+    def _products(self, options, factors) -> list[tuple[sp.Expr, int, bool]]:
+        """Products over at most ``interaction`` coordinates of one factor each, as
+        (expression, polynomial degree, whether it is a trigonometric polynomial)."""
+        out = []
+        n = len(factors)
+        for size in range(1, min(options["interaction"], n) + 1):
+            for subset in itertools.combinations(range(n), size):
+                for choice in itertools.product(*(factors[i] for i in subset)):
+                    degree = sum(c[1] for c in choice)
+                    if size > 1 and degree > options["degree"]:
+                        continue
+                    out.append((sp.Mul(*(c[0] for c in choice)), degree,
+                                all(c[2] for c in choice)))
+        return out
+
+    def _factors(self, options, degree, trig_degree, angle_degree) -> list:
+        """Per coordinate: (function, polynomial degree, trigonometric polynomial) triples."""
+        coords, kinds = options["coords"], options["kinds"]
+        factors = []
+        for q, kind in zip(coords.q, kinds, strict=True):
+            own = []
+            for f in factor_functions(q, kind, degree, trig_degree, angle_degree):
+                trigonometric = f.has(sp.sin(q)) or f.has(sp.cos(q))
+                power = 0 if trigonometric else int(sp.degree(f, q))
+                own.append((f, power, kind == "linear" or trigonometric))
+            factors.append(own)
+        return factors
+
+    def _splines(self, options) -> list[sp.Expr]:
+        """The B-splines of single coordinates (never multiplied by other functions)."""
+        out = []
+        for q, spline in zip(options["coords"].q, options["splines"], strict=True):
+            if spline is not None:
+                centers, width = spline
+                out += [bspline(q, c, width) for c in centers]
+        return out
+
+    def _terms(self, options) -> tuple[list[sp.Expr], list[bool]]:
+        coords = options["coords"]
+        n = coords.n
+        terms, fast = [], []
+        # kinetic: kappa(q) qd_i qd_j
+        kappas = [(sp.Integer(1), 0, True)]
+        if options["kinetic"] == "configuration":
+            factors = self._factors(options, min(options["degree"], 2),
+                                    min(options["trig_degree"], 1), 0)
+            kappas += self._products(options, factors)
+        for kappa, _, trig in kappas:
+            for i, j in itertools.combinations_with_replacement(range(n), 2):
+                terms.append(kappa * coords.qd[i] * coords.qd[j])
+                fast.append(trig)
+        # gyroscopic: f(q_k) qd_i, k != i (f(q_i) qd_i is a total time derivative)
+        if options["gyroscopic"]:
+            firsts = self._factors(options, 1, 1, 0)
+            for i in range(n):
+                for k in range(n):
+                    if k != i:
+                        for f, _, trig in firsts[k]:
+                            terms.append(f * coords.qd[i])
+                            fast.append(trig)
+        # potential: phi(q)
+        factors = self._factors(options, options["degree"], options["trig_degree"],
+                                options["angle_degree"])
+        for phi, _, trig in self._products(options, factors):
+            terms.append(phi)
+            fast.append(trig)
+        splines = self._splines(options)
+        return terms + splines, fast + [False] * len(splines)
+
+    def _dissipation(self, options) -> tuple[list[sp.Expr], np.ndarray]:
+        coords = options["coords"]
+        terms, rows = [], []
+        for model in options["dissipation"]:
+            for i, qd in enumerate(coords.qd):
+                terms.append(qd if model == "viscous"
+                             else sp.tanh(qd / sp.Float(options["coulomb_scale"][i])))
+                rows.append(np.arange(coords.n) == i)
+        return terms, np.array(rows, dtype=bool).reshape(len(terms), coords.n)
+
+    # -- the catalog ---------------------------------------------------------------------------
+    @property
+    def libraries(self) -> list:
+        """The catalog's libraries (built from the parameters; see the class docstring)."""
+        options = self._options()
+        key = repr(sorted(self.get_params(deep=False).items(), key=lambda item: item[0]))
+        cached = self.__dict__.get("_built")
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        coords = options["coords"]
+        terms, fast = self._terms(options)
+        dissipation, mask = self._dissipation(options)
+        total = len(terms) + len(dissipation)
+        if total > options["max_terms"]:
+            raise ValueError(f"max_terms: the catalog would have {total} terms, more than "
+                             f"max_terms={options['max_terms']}; lower degree, trig_degree, "
+                             "angle_degree, interaction or splines, or raise max_terms")
+        libraries = [ExternalForces(coords, interlink=self.interlink)]
+        polynomial = [t for t, f in zip(terms, fast, strict=True) if f]
+        other = [t for t, f in zip(terms, fast, strict=True) if not f]
+        if polynomial:
+            libraries.append(PolynomialLagrangeLibrary(coords, polynomial))
+        if other:
+            libraries.append(LagrangeLibrary(coords, other))
+        if dissipation:
+            libraries.append(ClassicalLibrary(coords, dissipation, mask=mask))
+        self.__dict__["_built"] = (key, libraries)
+        return libraries
+
+    @libraries.setter
+    def libraries(self, value):  # the parameters define the libraries
+        raise AttributeError("libraries: an AutomaticCatalog builds its libraries from its "
+                             "parameters; use CatalogRepartition for a list of libraries")
+
+    def describe(self) -> str:
+        """A one-line summary of the catalog's families and sizes.
+
+        >>> AutomaticCatalog("x,theta", kinds=["linear", "angle"]).describe().split("; ")
+        ['x: x..x^2', 'theta: sin/cos degree 1',
+         'interaction 1, kinetic configuration, dissipation viscous (21 terms)']
+        """
+        options = self._options()
+        parts = []
+        for i, (name, kind) in enumerate(zip(options["coords"].names, options["kinds"],
+                                             strict=True)):
+            if kind == "linear":
+                text = f"{name}: {name}..{name}^{options['degree']}"
+            else:
+                text = f"{name}: sin/cos degree {options['trig_degree']}"
+                if options["angle_degree"]:
+                    text += f", {name}..{name}^{options['angle_degree']}"
+            if options["splines"][i] is not None:
+                text += f", {len(options['splines'][i][0])} B-splines"
+            parts.append(text)
+        extras = [f"interaction {options['interaction']}", f"kinetic {options['kinetic']}"]
+        if options["gyroscopic"]:
+            extras.append("gyroscopic")
+        extras.append("dissipation " + ("+".join(options["dissipation"]) or "none"))
+        return "; ".join(parts) + "; " + ", ".join(extras) + f" ({self.n_terms} terms)"
+
+    def to_spec(self) -> dict:
+        """The spec of the equivalent :class:`~pysindy_xl.CatalogRepartition` (a saved model
+        loads with the concrete libraries)."""
+        return CatalogRepartition(self.libraries).to_spec()
+
+    def __repr__(self) -> str:
+        changed = {k: v for k, v in self.get_params(deep=False).items()
+                   if k == "coordinates" or v != _DEFAULTS.get(k)}
+        return "AutomaticCatalog(" + ", ".join(f"{k}={v!r}" for k, v in changed.items()) + ")"
+
+
+_DEFAULTS = {"kinds": None, "bounds": None, "degree": 2, "trig_degree": 1, "angle_degree": 0,
+             "interaction": 1, "kinetic": "configuration", "gyroscopic": False,
+             "dissipation": ("viscous",), "coulomb_scale": 0.01, "splines": None,
+             "interlink": None, "max_terms": 2000}

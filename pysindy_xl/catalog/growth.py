@@ -1,0 +1,494 @@
+"""Growing an automatic catalog on data: start small, grow while a held-out criterion improves.
+
+The criterion is the relative residual of the fitted model's equations in the weak form
+(integrated against test functions on smoothed positions, so that no acceleration is estimated)
+on samples the fit never saw: over the generalized forces' part for data with forces, over the
+largest term's for unforced data (the strong form where a block is shorter than a test
+function). Two blocks of each run are held out:
+
+- the last of ``n_blocks`` contiguous time blocks (**time**: how the model predicts later);
+- the other block reaching farthest from the run's median state (**region**: how it
+  extrapolates to states it did not see). An approximation fitted along the trajectories (a
+  cosine standing in for ``theta^2``) fails there, where the right structure does not.
+
+The criterion is the RMS of the two errors (the time error alone for catalogs with B-splines,
+which are local and cannot extrapolate). From the smallest catalog (constant kinetic
+coefficients, quadratic potentials of the linear coordinates, sines and cosines of the angles,
+viscous friction), each move of :data:`MOVES` is tried in turn; a move is kept when it lowers
+the criterion by the fraction ``tolerance`` at least, or keeps it within that fraction with
+fewer terms in the fitted model (a sine series imitating ``theta^2`` needs more terms than
+``theta^2``), the degree moves repeat while they do (and
+look one degree further before they stop), and the growth stops when a whole pass keeps nothing
+or the criterion is below ``good_enough``. Catalogs over ``max_terms`` are not tried (reported
+as the ceiling). The chosen catalog is then fitted on all the data.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+import warnings
+
+import numpy as np
+
+from .._inputs import aligned, as_list
+from .._validation import check_option
+from .automatic import AutomaticCatalog, coordinate_kinds
+
+__all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "check_growth_data"]
+
+#: The moves of the growth, in the order they are tried.
+MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
+         "coulomb", "splines")
+
+_START = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
+          "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
+          "splines": None}
+_LIMITS = {"degree": 4, "trig_degree": 3, "angle_degree": 4}
+_SPLINES = (8, 16)  # B-splines per coordinate when the family is added, then refined
+_REPEATED = ("degree", "trig_degree", "angle_degree", "splines")  # moves that go on
+
+
+@dataclasses.dataclass
+class GrowthStep:
+    """One tried catalog: the move, its size, its held-out errors and the verdict.
+
+    Parameters
+    ----------
+    move : str
+        ``"start"`` or one of :data:`MOVES`.
+    description : str
+        :meth:`AutomaticCatalog.describe` of the catalog.
+    terms : int
+        Candidate terms (forces left out).
+    active : int
+        Terms the fit kept.
+    time_error, region_error, criterion : float
+        Held-out relative errors on the time and region blocks, and their RMS (inf when the
+        fit failed or exceeded the ceiling).
+    chosen : bool
+        Whether the growth kept this catalog (the last one kept is the result).
+    note : str, default ""
+        Why a step was not evaluated or failed.
+    seconds : float, default 0.0
+        Time of the step's fit and scoring.
+
+    Examples
+    --------
+    >>> step = GrowthStep("degree", "x: x..x^3", 5, 3, 0.02, 0.04, 0.0316, False)
+    >>> step.move, step.chosen
+    ('degree', False)
+    """
+
+    move: str
+    description: str
+    terms: int
+    active: int
+    time_error: float
+    region_error: float
+    criterion: float
+    chosen: bool
+    note: str = ""
+    seconds: float = 0.0
+
+
+@dataclasses.dataclass
+class GrowthResult:
+    """What :func:`grow_catalog` found.
+
+    Parameters
+    ----------
+    model : XLSINDy
+        The chosen catalog fitted on all the data.
+    catalog : AutomaticCatalog
+    steps : list of GrowthStep
+    criterion : str
+        ``"forces"`` or ``"accelerations"``: what the held-out errors measure.
+    held_out_error : float
+        The chosen catalog's criterion.
+
+    Examples
+    --------
+    >>> steps = [GrowthStep("start", "", 4, 3, 0.5, 0.7, 0.61, True),
+    ...          GrowthStep("degree", "", 5, 4, 0.01, 0.02, 0.016, True)]
+    >>> print(GrowthResult(None, None, steps, "forces", 0.016).table())
+    step  move          terms  kept  time err  region err  criterion  chosen
+    ------------------------------------------------------------------------
+       0  start             4     3    50.00%      70.00%     61.00%  yes
+       1  degree            5     4     1.00%       2.00%      1.60%  yes
+    """
+
+    model: object
+    catalog: AutomaticCatalog
+    steps: list
+    criterion: str
+    held_out_error: float
+
+    def table(self) -> str:
+        """The growth path as a plain-text table (one row per tried catalog)."""
+        header = (f"{'step':>4}  {'move':<13}{'terms':>6}{'kept':>6}{'time err':>10}"
+                  f"{'region err':>12}{'criterion':>11}  chosen")
+        lines = [header, "-" * len(header)]
+        for k, step in enumerate(self.steps):
+            def pct(value):
+                if not np.isfinite(value):
+                    return f"{'-':>10}"
+                return f"{100 * value:9.2f}%" if value < 100 else f"{'>1e4%':>10}"
+            verdict = "yes" if step.chosen else "no"
+            if step.note:
+                verdict += f" ({step.note})"
+            lines.append(f"{k:>4}  {step.move:<13}{step.terms:>6}{step.active:>6}"
+                         f"{pct(step.time_error)}{pct(step.region_error):>12}"
+                         f"{pct(step.criterion):>11}  {verdict}")
+        return "\n".join(lines)
+
+    def spline_potentials(self, n_points: int = 9) -> dict:
+        """The identified B-spline part of the potential of each coordinate that keeps one:
+        ``{name: (grid, values)}``, ``V_spline(q) = -sum_k c_k B_k(q)`` on ``n_points`` points
+        of the coordinate's range (the Lagrangian holds ``-V``)."""
+        import sympy as sp
+        library, coef = self.model.feature_library_, self.model.coef_
+        out = {}
+        for i, (q, name) in enumerate(zip(library.coords.q, library.coords.names,
+                                          strict=True)):
+            parts = [coef[j] * term for j, (term, category) in enumerate(
+                zip(library.feature_terms_, library.categories_, strict=True))
+                if category == "lagrange" and coef[j] != 0 and term.has(sp.Abs)
+                and term.free_symbols == {q}]
+            if parts:
+                low, high = self.catalog.bounds[i]
+                grid = np.linspace(low, high, n_points)
+                values = -sp.lambdify(q, sp.Add(*parts), "numpy")(grid)
+                out[name] = (grid, np.broadcast_to(values, grid.shape).astype(float))
+        return out
+
+    def to_dict(self) -> dict:
+        """JSON-ready figures of the growth."""
+        return {"criterion": self.criterion, "held_out_error": self.held_out_error,
+                "catalog": self.catalog.describe(),
+                "steps": [dataclasses.asdict(s) for s in self.steps]}
+
+
+def check_growth_data(xs, names, n_terms: int) -> None:
+    """``ValueError`` for a constant coordinate or data too short for ``n_terms`` terms."""
+    stacked = np.vstack(xs)
+    spread = stacked.max(axis=0) - stacked.min(axis=0)
+    scale = np.maximum(np.abs(stacked).max(axis=0), 1.0)
+    for name, s, sc in zip(names, spread, scale, strict=True):
+        if not s > 1e-9 * sc:
+            raise ValueError(f"x: coordinate {name!r} is constant in the data; nothing about its "
+                             "dynamics can be identified (leave it out, or excite it)")
+    rows = len(stacked) * len(names)
+    if rows < 10 * n_terms:
+        raise ValueError(f"x: {len(stacked)} samples of {len(names)} coordinates are too short "
+                         f"for a catalog of {n_terms} terms (at least {10 * n_terms} equations "
+                         "needed); record longer, or lower max_terms")
+
+
+def _blocks(t, x, n_blocks):
+    """Per run: ``(train mask, time block slice, region block slice)``."""
+    n = len(t)
+    edges = np.linspace(0, n, n_blocks + 1).round().astype(int)
+    spans = [slice(a, b) for a, b in zip(edges[:-1], edges[1:], strict=True)]
+    scale = np.subtract(*np.percentile(x, [75, 25], axis=0))
+    scale = np.where(scale > 0, scale, 1.0)
+    reach = np.abs(x - np.median(x, axis=0)) / scale
+    extreme = [float(np.percentile(reach[s].max(axis=1), 90)) for s in spans[:-1]]
+    region = spans[int(np.argmax(extreme))]
+    train = np.ones(n, dtype=bool)
+    train[spans[-1]] = False
+    train[region] = False
+    return train, spans[-1], region
+
+
+def _pieces(mask):
+    edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(int), 0]))
+    return list(zip(edges[::2], edges[1::2], strict=True))
+
+
+def _held_out_error(model, held, forced) -> float:
+    """Relative residual of the fitted model's weak-form equations on held-out runs: the
+    residual over the forces' part (forced data) or over the largest term's (unforced)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # blocks shorter than a test function: strong form
+        problem = model.regression(held["x"], held["t"], u=held["u"], formulation="weak")
+        if not len(problem.theta):
+            problem = model.regression(held["x"], held["t"], u=held["u"], formulation="strong")
+    theta, columns = problem.theta, problem.catalog_map.columns
+    coef = model.coef_[columns]
+    residual = theta @ coef
+    forces = problem.force_columns
+    if forced and len(forces):
+        target = theta[:, forces] @ coef[forces]
+    else:
+        target = theta * coef
+        target = target[:, int(np.argmax(np.linalg.norm(target, axis=0)))]
+    norm = float(np.linalg.norm(target))
+    return float(np.linalg.norm(residual) / norm) if norm > 0 else float("inf")
+
+
+def _parameters(state, move, kinds, n, skip=0):
+    """The catalog parameters after ``move`` from ``state``, or None when it does not apply."""
+    new = dict(state)
+    angles = "angle" in kinds
+    if move == "kinetic":
+        if state["kinetic"] == "configuration":
+            return None
+        new["kinetic"] = "configuration"
+    elif move == "interaction":
+        if state["interaction"] >= n:
+            return None
+        new["interaction"] += 1
+    elif move in _LIMITS:
+        relevant = {"degree": "linear" in kinds or (state["angle_degree"] > 0
+                                                    and state["interaction"] > 1),
+                    "trig_degree": angles, "angle_degree": angles}[move]
+        step = (2 if move == "angle_degree" and not state[move] else 1) + skip
+        if not relevant or state[move] + step > _LIMITS[move]:
+            return None
+        new[move] = state[move] + step
+    elif move == "gyroscopic":
+        if state["gyroscopic"] or n < 2:
+            return None
+        new["gyroscopic"] = True
+    elif move == "coulomb":
+        if "coulomb" in state["dissipation"]:
+            return None
+        new["dissipation"] = (*state["dissipation"], "coulomb")
+    elif move == "splines":
+        larger = [k for k in _SPLINES if k > (state["splines"] or 0)]
+        if skip >= len(larger):
+            return None
+        new["splines"] = larger[skip]
+    return new
+
+
+def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
+                 max_terms: int = 400, optimizer=None, formulation: str = "auto",
+                 n_blocks: int = 5, tolerance: float = 0.05, good_enough: float = 0.002,
+                 moves=MOVES, search_optimizer="auto", search_samples: int | None = 6000,
+                 progress=None):
+    """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
+
+    Parameters
+    ----------
+    x : array (N, n) or list of arrays
+        Positions, one run or several.
+    t : array (N,) or list of arrays
+        Strictly increasing times, matching ``x``.
+    u : same layout as ``x``, optional
+        Generalized forces (zero columns: unforced coordinates); None: unforced data.
+    x_dot, x_ddot : same layout as ``x``, optional
+        Measured velocities and accelerations.
+    coordinates : list of str
+        The coordinates' names.
+    kinds : None, str, sequence or mapping
+        ``"linear"`` or ``"angle"`` per coordinate (:func:`coordinate_kinds`).
+    max_terms : int, default 400
+        Ceiling of the catalog's size: larger catalogs are not tried.
+    optimizer : optional
+        Of :class:`~pysindy_xl.XLSINDy` (default: chosen from the forces).
+    formulation : {"auto", "strong", "weak"}, default "auto"
+    n_blocks : int, default 5
+        Blocks per run (two are held out).
+    tolerance : float, default 0.05
+        Relative decrease of the criterion that keeps a move (or relative increase within
+        which a move that fits fewer terms is kept).
+    good_enough : float, default 0.002
+        With forces, the growth stops once the criterion is below this relative error
+        (unforced data: every move is tried).
+    moves : sequence of str, default MOVES
+        The moves tried (a subset of :data:`MOVES`).
+    search_optimizer : "auto" or optimizer, default "auto"
+        Optimizer of the search's fits; ``"auto"``: ``optimizer`` when given, else one
+        selection per fit (``ExplicitOptimizer()``, ``MixedOptimizer()``, or XLSINDy's default
+        for unforced data) where the final fit bags selections on noisy positions.
+    search_samples : int or None, default 6000
+        The search fits runs thinned to about this many samples in all (every k-th sample); the
+        final fit uses all. None: no thinning.
+    progress : callable, optional
+        Called with a line of text after each step.
+
+    Returns
+    -------
+    GrowthResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 20, 2001)
+    >>> x = np.c_[np.sin(t) + 0.5 * np.sin(2.7 * t)]
+    >>> xdd = -np.sin(t) - 3.645 * np.sin(2.7 * t)
+    >>> u = 2 * xdd[:, None] + 3 * x + x ** 3      # m = 2, a hardening spring
+    >>> found = grow_catalog(x, t, u, coordinates=["x"], moves=("degree",))
+    >>> found.model.print(precision=3)
+    L = -0.25*x**4 - 1.5*x**2 + 1.0*x_dot**2
+    (x) 1.0*x**3 + 3.0*x + 2.0*x_ddot = tau_x
+    >>> [(step.move, step.terms, step.chosen) for step in found.steps]
+    [('start', 4, True), ('degree', 5, False), ('degree', 6, True)]
+    """
+    from sklearn.base import clone
+
+    from ..model import XLSINDy
+
+    xs, is_list = as_list(x, "x")
+    ts, us, xds, xdds = (aligned(value, name, xs, is_list) for value, name in
+                         ((t, "t"), (u, "u"), (x_dot, "x_dot"), (x_ddot, "x_ddot")))
+    us, xds, xdds = (None if value is None else value for value in
+                     (None if u is None else us, None if x_dot is None else xds,
+                      None if x_ddot is None else xdds))
+    xs = [np.asarray(xk, dtype=float).reshape(len(xk), -1) for xk in xs]
+    ts = [np.asarray(tk, dtype=float) for tk in ts]
+    if len(ts) != len(xs) or any(tk.shape != (len(xk),) for tk, xk in zip(ts, xs, strict=True)):
+        raise ValueError("t: expected one time array per run of x, of its length")
+    names = list(coordinates.split(",") if isinstance(coordinates, str) else coordinates)
+    n = xs[0].shape[1]
+    if len(names) != n:
+        raise ValueError(f"coordinates: expected {n} names (the columns of x), got {names}")
+    kinds = coordinate_kinds(names, kinds)
+    check_option("max_terms", max_terms, "int", low=1)
+    check_option("n_blocks", n_blocks, "int", low=3)
+    check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
+    check_option("good_enough", good_enough, "real", low=0)
+    unknown = [m for m in moves if m not in MOVES]
+    if unknown:
+        raise ValueError(f"moves: unknown {unknown}; expected some of {MOVES}")
+    forced = us is not None and any(np.any(np.asarray(uk) != 0) for uk in us)
+    criterion = "forces" if forced else "accelerations"
+    stacked = np.vstack(xs)
+    velocity_scale = [float(np.std(np.gradient(xk, tk, axis=0), axis=0).mean())
+                      for xk, tk in zip(xs, ts, strict=True)]
+    low, high = stacked.min(axis=0), stacked.max(axis=0)
+    margin = 0.1 * (high - low)
+    fixed = {"coordinates": names, "kinds": list(kinds), "max_terms": max_terms,
+             "bounds": [(float(a - m), float(b + m)) for a, b, m in zip(low, high, margin,
+                                                                            strict=True)],
+             "coulomb_scale": max(1e-3, 0.02 * float(np.mean(velocity_scale)))}
+    first = AutomaticCatalog(**fixed, **_START)
+    check_growth_data(xs, names, first.n_terms)
+
+    # the folds, and the held-out blocks as runs of their own
+    folds = [_blocks(tk, xk, n_blocks) for tk, xk in zip(ts, xs, strict=True)]
+    blocks = []
+    for which in (1, 2):
+        held = {"x": [], "t": [], "u": [] if forced else None}
+        for k, fold in enumerate(folds):
+            held["x"].append(xs[k][fold[which]])
+            held["t"].append(ts[k][fold[which]])
+            if forced:
+                held["u"].append(np.asarray(us[k], dtype=float)[fold[which]])
+        blocks.append(held)
+    total = sum(len(tk) for tk in ts)
+    stride = 1 if search_samples is None else max(1, int(np.ceil(total / search_samples)))
+    train = {key: [] for key in ("x", "t", "u", "x_dot", "x_ddot")}
+    for k, (mask, _, _) in enumerate(folds):
+        for a, b in _pieces(mask):
+            part = slice(a, b, stride)
+            train["x"].append(xs[k][part])
+            train["t"].append(ts[k][part])
+            train["u"].append(None if us is None else np.asarray(us[k])[part])
+            train["x_dot"].append(None if xds is None else np.asarray(xds[k])[part])
+            train["x_ddot"].append(None if xdds is None else np.asarray(xdds[k])[part])
+    for key in ("u", "x_dot", "x_ddot"):
+        if any(v is None for v in train[key]):
+            train[key] = None
+    if not forced:
+        train["u"] = None
+    # test functions short enough for the held-out blocks and the training pieces
+    from ..weak import BumpTestFunctions
+    block = min(len(tk) for tk in ts) // n_blocks
+    longest = int(np.argmax([len(tk) for tk in ts]))
+    width = min(BumpTestFunctions().half_width(ts[longest], xs[longest]),
+                min(tk[block - 1] - tk[0] for tk in ts) / 3)
+    if search_optimizer == "auto":  # one selection per step, not a bag of them
+        from ..optimizers import ExplicitOptimizer, MixedOptimizer
+        active = np.any(np.vstack(us) != 0, axis=0) if forced else np.zeros(n, dtype=bool)
+        search_optimizer = (optimizer if optimizer is not None or not forced else
+                            ExplicitOptimizer() if active.all() else MixedOptimizer())
+    template = XLSINDy(optimizer=search_optimizer, formulation=formulation,
+                       test_functions=BumpTestFunctions(width=width))
+
+    def evaluate(parameters, move):
+        catalog = AutomaticCatalog(**fixed, **parameters)
+        started = time.perf_counter()
+        try:
+            size = catalog.n_terms
+        except ValueError as error:
+            return catalog, GrowthStep(move, "", 0, 0, np.inf, np.inf, np.inf, False, str(error))
+        description = catalog.describe() if size <= max_terms else ""
+        if size > max_terms:
+            return catalog, GrowthStep(move, description, size, 0, np.inf, np.inf, np.inf, False,
+                                       f"ceiling: {size} > max_terms {max_terms}")
+        rows = sum(len(p) for p in train["x"]) * n
+        if rows < 10 * size:
+            return catalog, GrowthStep(move, description, size, 0, np.inf, np.inf, np.inf, False,
+                                       "too few samples for this size")
+        model = clone(template).set_params(feature_library=catalog)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                model.fit(**train)
+            if model.dynamics_ is None:
+                raise ValueError("no acceleration in the identified equations")
+            errors = [_held_out_error(model, held, forced) for held in blocks]
+        except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
+            return catalog, GrowthStep(move, description, size, 0, np.inf, np.inf, np.inf, False,
+                                       f"fit failed: {type(error).__name__}: {error}"[:200])
+        # local functions (B-splines) cannot extrapolate: the time block alone judges them
+        value = float(errors[0] if parameters["splines"] else np.sqrt(np.mean(np.square(errors))))
+        if not np.isfinite(value):
+            value = np.inf
+        return catalog, GrowthStep(move, description, size,
+                                   int(np.count_nonzero(model.coefficients())), errors[0],
+                                   errors[1], value, False,
+                                   seconds=time.perf_counter() - started)
+
+    def report(step):
+        if progress is not None:
+            progress(f"{step.move:<13} {step.terms:>5} terms  held-out {criterion} error "
+                     + (f"{100 * step.criterion:.2f} %" if np.isfinite(step.criterion) else "-")
+                     + ("  kept" if step.chosen else "") + (f"  ({step.note})" if step.note
+                                                            else ""))
+
+    state = dict(_START)
+    best_catalog, best = evaluate(state, "start")
+    if best.note.startswith("ceiling"):
+        raise ValueError(f"max_terms: the smallest catalog has {best.terms} terms, more than "
+                         f"max_terms={max_terms}; raise max_terms")
+    best.chosen = True
+    steps = [best]
+    report(best)
+    if not forced:  # relative to the largest term, an approximation looks small already
+        good_enough = 0.0
+    tried = {repr(sorted(state.items()))}
+    improved = best.criterion > good_enough
+    while improved:
+        improved = False
+        for move in moves:
+            skip = 0  # a degree move looks one degree further before it stops
+            while best.criterion > good_enough:
+                parameters = _parameters(state, move, kinds, n, skip)
+                if parameters is None or repr(sorted(parameters.items())) in tried:
+                    break
+                tried.add(repr(sorted(parameters.items())))
+                catalog, step = evaluate(parameters, move)
+                steps.append(step)
+                reference = best.time_error if parameters["splines"] and not state["splines"] \
+                    else best.criterion
+                keep = (step.criterion < reference * (1 - tolerance)  # better, or as good
+                        or (step.criterion <= reference * (1 + tolerance)  # and simpler
+                            and step.active < best.active))
+                if keep:
+                    step.chosen = True
+                    state, best, best_catalog, improved = parameters, step, catalog, True
+                report(step)
+                if move not in _REPEATED or (not keep and skip):
+                    break
+                skip = 0 if keep else 1
+    model = clone(template).set_params(feature_library=best_catalog, test_functions=None,
+                                       optimizer=optimizer)
+    full = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
+    if not is_list:
+        full = {key: None if value is None else value[0] for key, value in full.items()}
+    model.fit(**full)
+    return GrowthResult(model, best_catalog, steps, criterion, best.criterion)

@@ -1,0 +1,96 @@
+"""``pysindy-xl identify`` with the automatic catalog, and the honest verdict of any fit.
+
+For data given coordinates (no model file), ``--catalog auto`` grows an
+:class:`~pysindy_xl.AutomaticCatalog` on the data (:func:`~pysindy_xl.grow_catalog`), prints the
+growth path, the discovered Lagrangian and forces, and the held-out error. A fit that explains
+nothing ends with a non-zero exit and a message naming what to try (:func:`honest_exit`).
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+from .steps import CLIError
+
+__all__ = ["WHAT_IS_TRIED", "run_automatic", "honest_exit", "POOR_R2", "POOR_HELD_OUT"]
+
+#: What ``--catalog automatic`` tries (the ``--help`` text).
+WHAT_IS_TRIED = (
+    "automatic (the default for data given --coordinates/--angles): candidate Lagrangian terms "
+    "in a Lagrangian's shape (kinetic terms quadratic in the velocities with configuration-"
+    "dependent coefficients, terms linear in the velocities, potentials), grown from the "
+    "smallest catalog (quadratic potentials of linear coordinates, sin/cos of --angles, viscous "
+    "friction) by trying in turn: configuration-dependent kinetic coefficients, products across "
+    "coordinates, higher powers, higher sin/cos degrees, powers of angles (torsion springs), "
+    "gyroscopic terms, smooth Coulomb friction and cubic B-splines of single coordinates; a "
+    "step is kept when the error on two held-out blocks of each run (the last one, and the one "
+    "reaching farthest from the median state) drops by 5 %% or more")
+
+#: Below this R^2 (on the training data) a fit explains nothing.
+POOR_R2 = 0.5
+#: Above this held-out relative error a fit explains nothing.
+POOR_HELD_OUT = 0.5
+
+_ADVICE = ("try: --angles for coordinates that are angles; check that the tau_NAME columns are "
+           "the generalized forces on the named coordinates (units, signs); record longer or "
+           "better excited runs; --max-terms above {max_terms} for a richer catalog; "
+           "--forces none if the forces are not those acting on the coordinates")
+
+
+def honest_exit(r2=None, held_out=None, max_terms=400) -> None:
+    """``CLIError`` when the fit's R^2 or held-out error says the model explains nothing.
+
+    >>> honest_exit(r2=0.04)
+    Traceback (most recent call last):
+    ...
+    pysindy_xl.cli.steps.CLIError: the identified model explains nothing (R^2 = 0.04 ...
+    """
+    reasons = []
+    if r2 is not None and not (r2 >= POOR_R2):
+        reasons.append(f"R^2 = {r2:.2g} below {POOR_R2:g}")
+    if held_out is not None and not np.isfinite(held_out):
+        reasons.append("no catalog predicted the held-out blocks")
+    elif held_out is not None and not (held_out <= POOR_HELD_OUT):
+        reasons.append(f"held-out error {100 * held_out:.3g} % above {100 * POOR_HELD_OUT:g} %")
+    if reasons:
+        raise CLIError(f"the identified model explains nothing ({'; '.join(reasons)}); "
+                       + _ADVICE.format(max_terms=max_terms))
+
+
+def run_automatic(args, dataset, system, forced, progress):
+    """Grow, fit and print the automatic catalog for ``identify``; return ``(model, result,
+    arguments)`` with :class:`~pysindy_xl.catalog.GrowthResult` ``result``."""
+    from ..catalog import grow_catalog
+    arguments = dataset.fit_arguments(forces="tau" if forced else None,
+                                      constraints=getattr(args, "constraints", "exclude"))
+    names = list(system.coordinate_names)
+    kinds = ["angle" if k in system.angle_coordinates else "linear" for k in range(len(names))]
+    solver = None if args.solver == "auto" else args.solver
+    xs = arguments["x"] if isinstance(arguments["x"], list) else [arguments["x"]]
+    listed = ", ".join(f"{n} ({k})" for n, k in zip(names, kinds, strict=True))
+    progress(f"growing the automatic catalog of {listed} "
+             f"on {sum(len(x) for x in xs)} samples (at most {args.max_terms} terms)")
+    try:
+        result = grow_catalog(arguments["x"], arguments["t"], arguments.get("u") if forced
+                              else None, arguments.get("x_dot"), arguments.get("x_ddot"),
+                              coordinates=names, kinds=kinds, max_terms=args.max_terms,
+                              optimizer=solver, formulation=args.formulation,
+                              progress=progress)
+    except (RuntimeError, ValueError, np.linalg.LinAlgError) as error:
+        raise CLIError(f"identification failed ({type(error).__name__}): {error}") from None
+    model = result.model
+    print(f"automatic catalog: {result.catalog.describe()}")
+    print("growth (held-out relative error of the "
+          + ("generalized forces" if result.criterion == "forces" else "accelerations")
+          + " on the last block of each run and on the block reaching farthest):")
+    print(result.table())
+    for name, (grid, values) in result.spline_potentials().items():
+        print(f"B-spline potential of {name} (no family states it), V({name}) at "
+              + ", ".join(f"{g:.3g}: {v:.4g}" for g, v in zip(grid, values, strict=True)))
+    if model.dynamics_ is None:
+        raise CLIError("the identified model explains nothing (its equations contain no "
+                       "acceleration); " + _ADVICE.format(max_terms=args.max_terms))
+    sys.stdout.flush()
+    return model, result, arguments

@@ -1,0 +1,166 @@
+"""grow_catalog against systems derived independently with sympy.physics.mechanics."""
+
+import numpy as np
+import pytest
+import sympy as sp
+from scipy.integrate import solve_ivp
+from sympy.physics import mechanics as me
+
+import pysindy_xl as px
+from pysindy_xl.catalog import grow_catalog
+
+G = 9.81
+
+
+def _torsion_pendulum(m=0.5, length=0.8, k=3.0, c=0.05):
+    """Point mass on a rod with a torsion spring ``k q^2 / 2`` at the pivot, viscous damping and
+    a torque, by LagrangesMethod; returns (accelerations(q, qd, tau), true forces(q, qd, qdd))."""
+    q = me.dynamicsymbols("q")
+    qd = me.dynamicsymbols("q", 1)
+    tau = sp.Symbol("tau")
+    frame = me.ReferenceFrame("N")
+    rod = frame.orientnew("A", "Axis", (q, frame.z))
+    pivot = me.Point("O")
+    pivot.set_vel(frame, 0)
+    bob = pivot.locatenew("P", length * rod.y * -1)
+    bob.v2pt_theory(pivot, frame, rod)
+    particle = me.Particle("p", bob, m)
+    particle.potential_energy = -m * G * length * sp.cos(q) + k * q ** 2 / 2
+    lagrangian = me.Lagrangian(frame, particle)
+    method = me.LagrangesMethod(lagrangian, [q], forcelist=[(rod, (tau - c * qd) * frame.z)],
+                                frame=frame)
+    method.form_lagranges_equations()
+    mass = sp.lambdify((q, qd, tau), method.mass_matrix[0, 0])
+    forcing = sp.lambdify((q, qd, tau), method.forcing[0])
+
+    def accelerations(qv, qdv, tv):
+        return forcing(qv, qdv, tv) / mass(qv, qdv, tv)
+
+    def forces(qv, qdv, qddv):  # M qdd - forcing(tau = 0) = tau
+        return mass(qv, qdv, 0.0) * qddv - forcing(qv, qdv, 0.0)
+
+    return accelerations, forces
+
+
+def _runs(accelerations, seeds, duration=8.0, rate=200.0, amplitude=2.5, forced=True):
+    t = np.arange(0.0, duration, 1.0 / rate)
+    xs, us = [], []
+    for seed in seeds:
+        rng = np.random.default_rng(seed)
+        frequencies, phases = rng.uniform(0.2, 1.5, 4), rng.uniform(0, 2 * np.pi, 4)
+
+        def torque(time, frequencies=frequencies, phases=phases):
+            return amplitude * np.sin(2 * np.pi * frequencies * time + phases).sum() / 2 \
+                if forced else 0.0
+
+        solution = solve_ivp(lambda time, y: [y[1], accelerations(y[0], y[1], torque(time))],
+                             (t[0], t[-1]), [rng.uniform(-1, 1), rng.uniform(-2, 2)],
+                             t_eval=t, method="DOP853", rtol=1e-10, atol=1e-10)
+        xs.append(solution.y[0][:, None])
+        us.append(np.array([[torque(time)] for time in t]))
+    return t, xs, us
+
+
+def test_growth_finds_a_torsion_spring_that_sines_only_imitate():
+    accelerations, forces = _torsion_pendulum()
+    t, xs, us = _runs(accelerations, seeds=(0, 1))
+    noisy = [x + 0.01 * x.std() * np.random.default_rng(7).normal(size=x.shape) for x in xs]
+    found = grow_catalog(noisy, [t, t], us, coordinates=["theta"], kinds="angle",
+                         moves=("trig_degree", "angle_degree"))
+    kept = [step.move for step in found.steps if step.chosen]
+    assert "angle_degree" in kept
+    # the right structure: the forces off the trajectories, in a box twice as wide
+    span = np.abs(np.vstack(xs)).max()
+    rng = np.random.default_rng(3)
+    q = rng.uniform(-2 * span, 2 * span, 400)
+    qd, qdd = rng.uniform(-4, 4, 400), rng.uniform(-10, 10, 400)
+    truth = forces(q, qd, qdd)
+    predicted = found.model.predict_forces(q[:, None], qd[:, None], qdd[:, None])[:, 0]
+    assert np.linalg.norm(predicted - truth) / np.linalg.norm(truth) < 0.05
+    assert found.held_out_error < 0.05
+    table = found.table()
+    assert "angle_degree" in table and "criterion" in table.splitlines()[0]
+
+
+def test_unforced_growth_predicts_accelerations():
+    accelerations, _ = _torsion_pendulum()
+    t, xs, _ = _runs(accelerations, seeds=(4, 5, 6), duration=10.0, forced=False)
+    found = grow_catalog(xs, [t, t, t], None, coordinates=["theta"], kinds="angle",
+                         moves=("angle_degree",))
+    assert found.criterion == "accelerations"
+    q = np.linspace(-1.5, 1.5, 50)
+    qd = np.linspace(-2, 2, 50)
+    predicted = found.model.predict(q[:, None], qd[:, None])[:, 0]
+    truth = accelerations(q, qd, 0.0)
+    assert np.linalg.norm(predicted - truth) / np.linalg.norm(truth) < 0.05
+
+
+def test_growth_refuses_bad_data():
+    t = np.linspace(0, 10, 1001)
+    x = np.c_[np.sin(t), np.full_like(t, 0.3)]
+    with pytest.raises(ValueError, match="x: coordinate 'y' is constant"):
+        grow_catalog(x, t, np.c_[np.cos(t), np.cos(t)], coordinates=["x", "y"])
+    short = np.sin(t[:12])[:, None]
+    with pytest.raises(ValueError, match="x: 12 samples of 1 coordinates are too short"):
+        grow_catalog(short, t[:12], np.cos(t[:12])[:, None], coordinates=["x"])
+    with pytest.raises(ValueError, match="max_terms: the smallest catalog has"):
+        grow_catalog(np.sin(t)[:, None], t, np.cos(t)[:, None], coordinates=["x"], max_terms=2)
+    with pytest.raises(ValueError, match="kinds: coordinate 'x' has the unknown kind 'rotary'"):
+        grow_catalog(np.sin(t)[:, None], t, np.cos(t)[:, None], coordinates=["x"],
+                     kinds="rotary")
+    with pytest.raises(ValueError, match="moves: unknown"):
+        grow_catalog(np.sin(t)[:, None], t, np.cos(t)[:, None], coordinates=["x"],
+                     moves=("everything",))
+    with pytest.raises(ValueError, match="coordinates: expected 1 names"):
+        grow_catalog(np.sin(t)[:, None], t, np.cos(t)[:, None], coordinates=["x", "y"])
+
+
+def test_ceiling_is_reported_in_the_path():
+    t = np.linspace(0, 20, 2001)
+    x = (np.sin(t) + 0.5 * np.sin(2.7 * t))[:, None]
+    xdd = (-np.sin(t) - 3.645 * np.sin(2.7 * t))[:, None]
+    found = grow_catalog(x, t, 2 * xdd + 3 * x + x ** 3, coordinates=["x"], max_terms=5,
+                         moves=("degree",))
+    assert any(step.note.startswith("ceiling") for step in found.steps)
+    assert found.catalog.n_terms <= 5
+    assert isinstance(found.catalog, px.AutomaticCatalog)
+
+
+def test_mixed_forcing_grows_coupled_oscillators():
+    """Force on x1 only: 0.5 x1'' + ... = tau, x2 free; the coupling spring needs x1 x2."""
+    c = px.Coordinates(["x1", "x2"])
+    (x1, x2), (v1, v2) = c.q, c.qd
+    lagrangian = (v1 ** 2 / 2 + 0.75 * v2 ** 2 - x1 ** 2 - 1.5 * x2 ** 2
+                  - 0.8 * (x1 - x2) ** 2)
+    method = me.LagrangesMethod(lagrangian.subs({x1: me.dynamicsymbols("a"),
+                                                 x2: me.dynamicsymbols("b"),
+                                                 v1: me.dynamicsymbols("a", 1),
+                                                 v2: me.dynamicsymbols("b", 1)}),
+                                [me.dynamicsymbols("a"), me.dynamicsymbols("b")])
+    method.form_lagranges_equations()
+    mass = np.array(method.mass_matrix, dtype=float)
+    a, b = me.dynamicsymbols("a"), me.dynamicsymbols("b")
+    stiffness = -np.array(method.forcing.jacobian([a, b]), dtype=float)
+    t = np.arange(0.0, 10.0, 0.005)
+    xs, us = [], []
+    for seed in (0, 1):
+        rng = np.random.default_rng(seed)
+        frequencies, phases = rng.uniform(0.1, 0.8, 4), rng.uniform(0, 2 * np.pi, 4)
+
+        def force(time, frequencies=frequencies, phases=phases):
+            return np.array([np.sin(2 * np.pi * frequencies * time + phases).sum(), 0.0])
+
+        solution = solve_ivp(
+            lambda time, y: np.r_[y[2:], np.linalg.solve(mass, force(time) - stiffness @ y[:2])],
+            (t[0], t[-1]), np.r_[rng.uniform(-0.5, 0.5, 2), 0, 0], t_eval=t, method="DOP853",
+            rtol=1e-10, atol=1e-10)
+        xs.append(solution.y[:2].T)
+        us.append(np.array([force(time) for time in t]))
+    found = grow_catalog(xs, [t, t], us, coordinates=["x1", "x2"], moves=("interaction",))
+    assert found.criterion == "forces"
+    q = np.random.default_rng(5).uniform(-1, 1, (50, 2))
+    qd = np.random.default_rng(6).uniform(-1, 1, (50, 2))
+    u = np.c_[np.random.default_rng(7).uniform(-1, 1, 50), np.zeros(50)]
+    truth = np.linalg.solve(mass, (u - q @ stiffness.T).T).T
+    predicted = found.model.predict(q, qd, u)
+    assert np.linalg.norm(predicted - truth) / np.linalg.norm(truth) < 0.02

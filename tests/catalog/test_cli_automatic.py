@@ -1,0 +1,59 @@
+"""``pysindy-xl identify`` on data given coordinates: the automatic catalog and the honest exit."""
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from pysindy_xl.cli import main
+
+
+def _hardening_spring_csv(path, forces=None, noise=0.01):
+    """A forced mass on a hardening spring: 2 xdd + 0.3 xd + 3 x + x^3 = tau (positions only)."""
+    t = np.arange(0.0, 12.0, 0.005)
+    rows = []
+    for run in range(2):
+        rng = np.random.default_rng(run)
+        frequencies, phases = rng.uniform(0.2, 1.2, 4), rng.uniform(0, 2 * np.pi, 4)
+
+        def tau(time, frequencies=frequencies, phases=phases):
+            return 3.0 * np.sin(2 * np.pi * frequencies * time + phases).sum() / 2
+
+        solution = solve_ivp(lambda time, y: [y[1], (tau(time) - 0.3 * y[1] - 3 * y[0]
+                                                     - y[0] ** 3) / 2],
+                             (t[0], t[-1]), [0.5, 0.0], t_eval=t, method="DOP853",
+                             rtol=1e-10, atol=1e-10)
+        x = solution.y[0] + noise * solution.y[0].std() * rng.normal(size=len(t))
+        u = np.array([tau(time) for time in t]) if forces is None else forces(rng, len(t))
+        rows.append(np.c_[t, x, u, np.full(len(t), run)])
+    np.savetxt(path, np.vstack(rows), delimiter=",", header="t,x,tau_x,trajectory",
+               comments="")
+    return path
+
+
+def test_identify_grows_a_catalog_and_prints_the_lagrangian(tmp_path, capsys):
+    path = _hardening_spring_csv(tmp_path / "spring.csv")
+    assert main(["identify", str(path), "--coordinates", "x", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "automatic catalog: x: x..x^4" in out
+    assert "step  move" in out and "degree" in out
+    lagrangian = next(line for line in out.splitlines() if line.startswith("L = "))
+    assert "x**4" in lagrangian and "x_dot**2" in lagrangian
+    assert "automatic catalog, explicit solver" in out
+
+
+def test_identify_exits_non_zero_when_the_model_explains_nothing(tmp_path, capsys):
+    path = _hardening_spring_csv(tmp_path / "garbage.csv",
+                                 forces=lambda rng, n: rng.normal(size=n))
+    assert main(["identify", str(path), "--coordinates", "x", "--quiet"]) == 1
+    captured = capsys.readouterr()
+    assert "fitted" not in captured.out
+    assert "the identified model explains nothing" in captured.err
+    assert "try: --angles" in captured.err
+
+
+def test_help_says_what_is_tried(capsys):
+    with pytest.raises(SystemExit):
+        main(["identify", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for phrase in ("automatic", "B-splines", "Coulomb", "held-out", "--max-terms"):
+        assert phrase in text
