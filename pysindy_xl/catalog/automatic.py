@@ -223,7 +223,13 @@ class AutomaticCatalog(CatalogRepartition):
 
     # -- the terms -----------------------------------------------------------------------------
     def lagrange_terms(self) -> list[sp.Expr]:
-        """The candidate Lagrangian terms: kinetic, gyroscopic, then potential ones."""
+        """The candidate Lagrangian terms: kinetic, gyroscopic, then potential ones.
+
+        Returns
+        -------
+        list of sympy.Expr
+            The terms in catalog order (the Euler-Lagrange operator turns each into a column).
+        """
         return self._terms(self._options())[0]
 
     @property
@@ -348,6 +354,14 @@ class AutomaticCatalog(CatalogRepartition):
     def describe(self) -> str:
         """A one-line summary of the catalog's families and sizes.
 
+        Returns
+        -------
+        str
+            The families per coordinate, the interaction order, the kinetic and dissipation
+            choices and the number of terms, separated by ``"; "``.
+
+        Examples
+        --------
         >>> AutomaticCatalog("x,theta", kinds=["linear", "angle"]).describe().split("; ")
         ['x: x..x^2', 'theta: sin/cos degree 1',
          'interaction 1, kinetic configuration, dissipation viscous (21 terms)']
@@ -373,7 +387,13 @@ class AutomaticCatalog(CatalogRepartition):
 
     def to_spec(self) -> dict:
         """The spec of the equivalent :class:`~pysindy_xl.CatalogRepartition` (a saved model
-        loads with the concrete libraries)."""
+        loads with the concrete libraries).
+
+        Returns
+        -------
+        dict
+            JSON-ready specification of the concrete libraries.
+        """
         return CatalogRepartition(self.libraries).to_spec()
 
     def __repr__(self) -> str:

@@ -74,6 +74,21 @@ def bspline_centers(low: float, high: float, n_functions: int) -> tuple[np.ndarr
     The centres run from ``low`` to ``high`` in equal steps ``h``; the splines of the two end
     centres reach ``2 h`` beyond the interval.
 
+    Parameters
+    ----------
+    low, high : float
+        The interval to cover, ``low < high``.
+    n_functions : int
+        Number of splines, at least 2.
+
+    Returns
+    -------
+    centers : ndarray, shape (n_functions,)
+    spacing : float
+        ``h = (high - low) / (n_functions - 1)``.
+
+    Examples
+    --------
     >>> bspline_centers(-1.0, 1.0, 5)
     (array([-1. , -0.5,  0. ,  0.5,  1. ]), 0.5)
     """

@@ -125,7 +125,14 @@ class GrowthResult:
     held_out_error: float
 
     def table(self) -> str:
-        """The growth path as a plain-text table (one row per tried catalog)."""
+        """The growth path as a plain-text table (one row per tried catalog).
+
+        Returns
+        -------
+        str
+            Header and one line per step: move, terms, kept terms, the held-out errors on the
+            time block and on the region block, the criterion and whether it was chosen.
+        """
         header = (f"{'step':>4}  {'move':<13}{'terms':>6}{'kept':>6}{'time err':>10}"
                   f"{'region err':>12}{'criterion':>11}  chosen")
         lines = [header, "-" * len(header)]
@@ -143,9 +150,22 @@ class GrowthResult:
         return "\n".join(lines)
 
     def spline_potentials(self, n_points: int = 9) -> dict:
-        """The identified B-spline part of the potential of each coordinate that keeps one:
-        ``{name: (grid, values)}``, ``V_spline(q) = -sum_k c_k B_k(q)`` on ``n_points`` points
-        of the coordinate's range (the Lagrangian holds ``-V``)."""
+        """The identified B-spline part of the potential of each coordinate that keeps one.
+
+        ``V_spline(q) = -sum_k c_k B_k(q)`` (the Lagrangian holds ``-V``), sampled on the
+        coordinate's range.
+
+        Parameters
+        ----------
+        n_points : int, default 9
+            Number of evenly spaced points of the coordinate's range.
+
+        Returns
+        -------
+        dict of str to (ndarray, ndarray)
+            ``{name: (grid, values)}``, each of shape (n_points,), for the coordinates whose
+            model keeps a spline term.
+        """
         import sympy as sp
         library, coef = self.model.feature_library_, self.model.coef_
         out = {}
@@ -163,14 +183,35 @@ class GrowthResult:
         return out
 
     def to_dict(self) -> dict:
-        """JSON-ready figures of the growth."""
+        """JSON-ready figures of the growth.
+
+        Returns
+        -------
+        dict
+            ``criterion``, ``held_out_error``, ``catalog`` (its description) and ``steps``
+            (one dict per :class:`GrowthStep`).
+        """
         return {"criterion": self.criterion, "held_out_error": self.held_out_error,
                 "catalog": self.catalog.describe(),
                 "steps": [dataclasses.asdict(s) for s in self.steps]}
 
 
 def check_growth_data(xs, names, n_terms: int) -> None:
-    """``ValueError`` for a constant coordinate or data too short for ``n_terms`` terms."""
+    """``ValueError`` for a constant coordinate or data too short for ``n_terms`` terms.
+
+    Parameters
+    ----------
+    xs : list of ndarray, each of shape (n_samples, n)
+        Positions of each trajectory.
+    names : list of str
+        Coordinate names, for the messages.
+    n_terms : int
+        Size of the catalog to fit (at least 10 equations per term are needed).
+
+    Returns
+    -------
+    None
+    """
     stacked = np.vstack(xs)
     spread = stacked.max(axis=0) - stacked.min(axis=0)
     scale = np.maximum(np.abs(stacked).max(axis=0), 1.0)

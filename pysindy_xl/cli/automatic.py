@@ -42,6 +42,23 @@ _ADVICE = ("try: --angles for coordinates that are angles; check that the tau_NA
 def honest_exit(r2=None, held_out=None, max_terms=400) -> None:
     """``CLIError`` when the fit's R^2 or held-out error says the model explains nothing.
 
+    Parameters
+    ----------
+    r2 : float, optional
+        Coefficient of determination of the fit on its own data.
+    held_out : float, optional
+        Relative held-out error (a fraction; ``inf`` when no catalog predicted the blocks).
+    max_terms : int, default 400
+        The catalog ceiling, named in the advice.
+
+    Returns
+    -------
+    None
+        Returns when the figures say the model explains the data; raises ``CLIError`` naming
+        what to try otherwise.
+
+    Examples
+    --------
     >>> honest_exit(r2=0.04)
     Traceback (most recent call last):
     ...
@@ -60,8 +77,29 @@ def honest_exit(r2=None, held_out=None, max_terms=400) -> None:
 
 
 def run_automatic(args, dataset, system, forced, progress):
-    """Grow, fit and print the automatic catalog for ``identify``; return ``(model, result,
-    arguments)`` with :class:`~pysindy_xl.catalog.GrowthResult` ``result``."""
+    """Grow, fit and print the automatic catalog for ``identify``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed ``identify`` options (``solver``, ``max_terms``, ``constraints``, ...).
+    dataset : Dataset
+        The recorded trajectories.
+    system : object
+        Names the coordinates (``coordinate_names``) and which are angles
+        (``angle_coordinates``).
+    forced : bool
+        Whether the data carry forces (``tau``).
+    progress : callable
+        ``progress(message)`` prints a progress line.
+
+    Returns
+    -------
+    model : XLSINDy
+    result : GrowthResult
+    arguments : dict
+        The fit arguments (``x``, ``t``, ``u``, ...).
+    """
     from ..catalog import grow_catalog
     arguments = dataset.fit_arguments(forces="tau" if forced else None,
                                       constraints=getattr(args, "constraints", "exclude"))
