@@ -78,11 +78,11 @@ FORCED = {"mixed": [0], "implicit": [], "implicit_gls": [], "bagged_implicit": [
 
 def _setup(name):
     import ground_truth
-    from test_explicit_identification import _true_coefficients, paper_catalog
+    from support.paper import paper_catalog, true_coefficients
 
     system = getattr(ground_truth, name)()
     library = paper_catalog(system.coords, SYSTEMS[name])
-    return system, library, _true_coefficients(system, library.fit())
+    return system, library, true_coefficients(system, library.fit())
 
 
 def _force(system, seed, method):

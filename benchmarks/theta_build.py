@@ -149,7 +149,7 @@ def weak_fits(n_samples: int, level: float = 0.01) -> list[dict]:
     cart (1 kHz), defaults and unweighted rows; support checked against the true law."""
     sys.path.insert(0, str(HERE.parent / "tests"))
     from ground_truth import cart_double_pendulum, random_force, random_initial_state
-    from test_explicit_identification import _true_coefficients
+    from support.paper import true_coefficients
 
     system = cart_double_pendulum()
     t = np.arange(n_samples) * 1e-3
@@ -157,7 +157,7 @@ def weak_fits(n_samples: int, level: float = 0.01) -> list[dict]:
     rng = np.random.default_rng(1)
     noisy = data["q"] + level * data["q"].std(axis=0) * rng.normal(size=data["q"].shape)
     library = mixed_catalog()
-    true = _true_coefficients(system, library.fit())
+    true = true_coefficients(system, library.fit())
     print(f"weak fit: {n_samples} samples ({t[-1]:.0f} s at 1 kHz), {level:.0%} noise on the "
           f"positions, {library.n_output_features_} columns")
     fits = []

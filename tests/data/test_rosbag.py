@@ -138,13 +138,13 @@ def test_bad_bags_are_refused_naming_the_bag(tmp_path):
 def test_identify_reads_a_bag_with_the_urdf_joints(tmp_path, capsys):
     """A bag whose joints come in another order than the URDF's: the CLI maps them."""
     pytest.importorskip("mujoco")
-    from test_held_out import ARM
+    from support.files import TWO_LINK_URDF
 
     from pysindy_xl.cli import main
     from pysindy_xl.mujoco import MJCFSystem, generate_dataset
 
     urdf = tmp_path / "arm.urdf"
-    urdf.write_text(ARM)
+    urdf.write_text(TWO_LINK_URDF)
     data = generate_dataset(MJCFSystem(urdf), n_trajectories=2, duration=2.0, seed=1,
                             sample_every=4, derivatives=True, progress=False)
     bags = []

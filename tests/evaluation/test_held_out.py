@@ -7,6 +7,7 @@ import re
 
 import numpy as np
 import pytest
+from support.files import TWO_LINK_URDF
 
 import pysindy_xl as px
 from pysindy_xl.held_out import (
@@ -127,18 +128,6 @@ def test_lines_and_plot(tmp_path):
 
 
 # -- command line ---------------------------------------------------------------------------
-ARM = """<robot name="arm">
-  <link name="base"/>
-  <link name="upper"><inertial><origin xyz="0 0 -0.25"/><mass value="1.0"/>
-    <inertia ixx="0.01" iyy="0.01" izz="0.002" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <link name="fore"><inertial><origin xyz="0 0 -0.2"/><mass value="0.6"/>
-    <inertia ixx="0.005" iyy="0.005" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <joint name="shoulder" type="continuous"><parent link="base"/><child link="upper"/>
-    <axis xyz="0 1 0"/><dynamics damping="0.05"/></joint>
-  <joint name="elbow" type="continuous"><parent link="upper"/><child link="fore"/>
-    <origin xyz="0 0 -0.5"/><axis xyz="0 1 0"/><dynamics damping="0.03"/></joint>
-</robot>
-"""
 
 
 def _csv(path, trajectory, names):
@@ -161,7 +150,7 @@ def arm_files(tmp_path_factory):
 
     folder = tmp_path_factory.mktemp("arm")
     urdf = folder / "arm.urdf"
-    urdf.write_text(ARM)
+    urdf.write_text(TWO_LINK_URDF)
     system = MJCFSystem(urdf)
     data = generate_dataset(system, n_trajectories=2, duration=3.0, seed=0, sample_every=4,
                             derivatives=True, progress=False)

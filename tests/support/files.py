@@ -34,3 +34,18 @@ def two_trajectories():
     a, b = pendulum(201), pendulum(201, phase=0.7)
     columns = [np.r_[x, y] for x, y in zip(a, b, strict=True)]
     return columns + [np.r_[np.full(201, 1.0), np.full(201, 2.0)]]
+
+
+#: A two-link URDF arm (continuous joints about y, joint damping) for URDF and ROS-bag tests.
+TWO_LINK_URDF = """<robot name="arm">
+  <link name="base"/>
+  <link name="upper"><inertial><origin xyz="0 0 -0.25"/><mass value="1.0"/>
+    <inertia ixx="0.01" iyy="0.01" izz="0.002" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="fore"><inertial><origin xyz="0 0 -0.2"/><mass value="0.6"/>
+    <inertia ixx="0.005" iyy="0.005" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="shoulder" type="continuous"><parent link="base"/><child link="upper"/>
+    <axis xyz="0 1 0"/><dynamics damping="0.05"/></joint>
+  <joint name="elbow" type="continuous"><parent link="upper"/><child link="fore"/>
+    <origin xyz="0 0 -0.5"/><axis xyz="0 1 0"/><dynamics damping="0.03"/></joint>
+</robot>
+"""
