@@ -5,7 +5,9 @@ from positions with relative noise, swing up with sampling MPC + LQR on the mode
 MuJoCo plant, add the data, re-identify, until success. Methods, side by side on the same
 plant, seeds and controller:
 
-- ``generic``: XLSINDy with the catalog from the coordinates and their kinds only;
+- ``automatic``: the automatic catalog (``px.grow_catalog``) grown on the loop's data from the
+  coordinates and their kinds only (``pysindy_xl.control.AutomaticGrowth``);
+- ``generic``: XLSINDy with a fixed catalog from the coordinates and their kinds;
 - ``kinematic``: XLSINDy with the MJCF's kinematic catalog (structure given);
 - ``pysindy``: PySINDy ``SINDy`` with control inputs on ``[q, qd]`` (velocities by its
   smoothed finite differences), its own libraries (polynomials of degree 2 of the velocities
@@ -25,7 +27,7 @@ identified ``predict_forces``. Records in ``benchmarks/results/control_arm.jsonl
 
 Usage::
 
-    python benchmarks/control.py --seeds 5 --tasks cartpole-10N --methods generic true
+    python benchmarks/control.py --seeds 20 --tasks cartpole-10N --methods automatic true
     python benchmarks/control.py --arm --seeds 2
     python benchmarks/control.py --summary
 """
@@ -54,7 +56,7 @@ TASKS = {
     "cartpole-10N-noise5": ("cart-pole", 10.0, 0.05),
     "cdp-20N-noise5": ("cart-double-pendulum", 20.0, 0.05),
 }
-METHODS = ("generic", "kinematic", "pysindy", "true")
+METHODS = ("automatic", "generic", "kinematic", "pysindy", "true")
 #: STLSQ settings of the PySINDy baseline, chosen on the acceleration error of a cart-pole fit
 #: from the loop's exploration data (the tuning is in the summary's notes).
 PYSINDY_THRESHOLD = 2.0
@@ -243,16 +245,15 @@ def planning_timing(system_name: str, catalog: str, seed: int = 0, calls: int = 
     the compiled sampling planner called ``calls`` times from states along a swing-up."""
     import jax
 
-    import pysindy_xl as px
     from pysindy_xl.control import (
         MuJoCoPlant,
         PredictiveController,
+        catalog_identifier,
         continuous_dynamics,
         discrete_dynamics,
         exploration_policy,
         get_task,
         noisy_positions,
-        resolve_catalog,
         swing_up_cost,
     )
     from pysindy_xl.control.loop import EXPLORE_S, PLANNER_SETTINGS
@@ -264,10 +265,8 @@ def planning_timing(system_name: str, catalog: str, seed: int = 0, calls: int = 
     rng = np.random.default_rng(seed)
     plant.reset()
     episode = plant.run(exploration_policy(task.force_limit, rng), EXPLORE_S[system_name])
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model = px.XLSINDy(resolve_catalog(catalog)[1](system)).fit(
-            noisy_positions(episode, 0.01, rng), t=episode.t, u=episode.tau)
+    model, _ = catalog_identifier(catalog)[1](
+        system, [(noisy_positions(episode, 0.01, rng), episode.t, episode.tau)])
     step = discrete_dynamics(continuous_dynamics(model), plant.control_dt, plant.actuation,
                              settings.pop("substeps"))
     cost = swing_up_cost(system.n, task.angles(system), track_limit=task.track_limit,
@@ -377,11 +376,13 @@ in a row, force within the limit (clipped by the plant), cart within |x| <= 1.5 
 at most 6 s, at most 6 episodes. "within budget": success with at most 8 s (cart-pole) / 15 s
 (cart double pendulum) of plant interaction in total, the successful attempt included.
 
-Methods: `generic` = XLSINDy with the catalog from the coordinates and their kinds only (no
-MJCF structure; the automatic catalog of the issue was not merged yet, this stands in for it);
-`kinematic` = XLSINDy with the MJCF's kinematic catalog (structure given); `pysindy` = PySINDy
-SINDy with control from the same data; `true` = the true equations (upper bound, no
-exploration). Same controller, plant and seeds for all.
+Methods: `automatic` = the automatic catalog (`px.grow_catalog`) grown on the loop's data from
+the coordinates' names and kinds only (hinges angles, slides linear; no MJCF structure), the
+catalog's size capped by the data (`AutomaticGrowth`: 150 equations per candidate);
+`generic` = XLSINDy with a fixed catalog from the coordinates and their kinds (the stand-in
+used before the automatic catalog); `kinematic` = XLSINDy with the MJCF's kinematic catalog
+(structure given); `pysindy` = PySINDy SINDy with control from the same data; `true` = the
+true equations (upper bound, no exploration). Same controller, plant and seeds for all.
 
 Machine: 2 cores shared with ~5 other jobs (load average 9-11 during the runs): every planning
 time below is inflated by the load; the `--timing` table measures the planning step alone.
@@ -414,8 +415,9 @@ def summarize():
         return "no results yet\n"
     records = [json.loads(line) for line in JSONL.read_text().splitlines() if line.strip()]
     lines = ["| task | method | cases | success | within budget | interaction s (median, max) "
-             "| episodes (median) | planning ms (median) | target |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "| episodes (median) | identification s (median, max) | planning ms (median) "
+             "| target |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for task in TASKS:
         for method in METHODS:
             group = [r for r in records if r["task_name"] == task and r["method"] == method]
@@ -430,9 +432,11 @@ def summarize():
             within = np.mean([bool(r["success"]) and r["interaction_s"] <= budget
                               for r in group])
             step = f"{np.median(steps):.1f}" if steps else "-"
+            fits = [s for r in group for s in r.get("identify_s") or []]
+            fit = f"{np.median(fits):.0f}, {np.max(fits):.0f}" if fits else "-"
             lines.append(f"| {task} | {method} | {len(group)} | {100 * success:.0f} % | "
                          f"{100 * within:.0f} % | {inter} "
-                         f"| {np.median([r['episodes'] for r in group]):.0f} | "
+                         f"| {np.median([r['episodes'] for r in group]):.0f} | {fit} | "
                          f"{step} | {TARGETS[task]} |")
     return "\n".join(lines) + "\n"
 
@@ -461,7 +465,7 @@ def main(argv=None):
         return 0
     if args.timing:
         for system_name in ("cart-pole", "cart-double-pendulum"):
-            for catalog in ("kinematic", "generic"):
+            for catalog in ("kinematic", "automatic"):
                 record = planning_timing(system_name, catalog)
                 print(json.dumps(record), flush=True)
                 with (RESULTS / "control_timing.jsonl").open("a") as handle:

@@ -1,17 +1,27 @@
-"""Catalogs for the learning loop: a catalog is a factory ``catalog(system) -> library``.
+"""Catalogs for the learning loop: a library factory ``catalog(system) -> library`` or a
+data-driven identifier.
 
-``"generic"`` is built from the coordinates and their kinds only (which are angles), as for a
-rig without a model file: Lagrangian candidates ``qd^a * trig(theta)^b`` (degrees <= 2) plus
+``"automatic"`` (the default of the loop) is :class:`AutomaticGrowth`: the automatic catalog
+(:class:`~pysindy_xl.AutomaticCatalog`) grown on the loop's data by
+:func:`~pysindy_xl.grow_catalog`, from the coordinates' names and kinds only (hinges are angles,
+slides linear; the ranges come from the data), no MJCF structure. It is *data-driven*: it is
+called as ``catalog(system, data)`` and returns the growth's
+:class:`~pysindy_xl.catalog.GrowthResult`, whose ``model`` the loop controls with.
+``"generic"`` is a fixed catalog from the coordinates and their kinds, as for a rig without a
+model file: Lagrangian candidates ``qd^a * trig(theta)^b`` (degrees <= 2) plus
 the potentials ``p`` and ``p^2`` of the linear coordinates, viscous friction of every velocity
 in every equation, and the forces. ``"kinematic"`` is the catalog the MJCF's kinematic tree
 gives (:func:`~pysindy_xl.mujoco.kinematic_catalog`), nearly the true structure. Any callable
-``f(system) -> library`` (for example an automatic catalog) can stand in for both."""
+``f(system) -> library`` can stand in for them, and any object with ``data_driven = True``
+called as ``f(system, data) -> model or GrowthResult`` for :class:`AutomaticGrowth`.
+:func:`catalog_identifier` turns either kind into ``identify(system, data) -> (model, text)``."""
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["CATALOGS", "generic_catalog", "kinematic_catalog_of", "resolve_catalog"]
+__all__ = ["AutomaticGrowth", "CATALOGS", "catalog_identifier", "generic_catalog",
+           "kinematic_catalog_of", "resolve_catalog", "system_kinds"]
 
 
 def generic_catalog(system, velocity_degree: int = 2, trig_degree: int = 2):
@@ -72,8 +82,139 @@ def kinematic_catalog_of(system):
     return reference_catalog(get_system(system), "kinematic")
 
 
-#: Catalogs by name.
-CATALOGS = {"generic": generic_catalog, "kinematic": kinematic_catalog_of}
+def system_kinds(system) -> list[str]:
+    """The kind of each coordinate of a system: ``"angle"`` for a hinge, else ``"linear"``.
+
+    Parameters
+    ----------
+    system : MuJoCoSystem or str
+        Only its ``n`` and ``angle_coordinates`` are read.
+
+    Returns
+    -------
+    list of str
+        One kind per coordinate (:data:`~pysindy_xl.catalog.KINDS`).
+
+    Examples
+    --------
+    >>> system_kinds("cart-double-pendulum")
+    ['linear', 'angle', 'angle']
+    """
+    from ..mujoco import get_system
+    system = get_system(system)
+    return ["angle" if i in system.angle_coordinates else "linear" for i in range(system.n)]
+
+
+class AutomaticGrowth:
+    """The automatic catalog grown on the loop's data: coordinates and their kinds only.
+
+    Called as ``growth(system, data)``, it runs :func:`~pysindy_xl.grow_catalog` on the noisy
+    positions and forces of every episode so far, with the system's coordinate names and kinds
+    (:func:`system_kinds`; ranges from the data), and returns its
+    :class:`~pysindy_xl.catalog.GrowthResult`. No structure of the MJCF is read, and nothing
+    is kept between calls.
+
+    The catalog is sized for the data. A recording of ``N`` samples of ``n`` coordinates gives
+    ``N n`` equations; catalogs over
+
+    .. math:: \\text{max\\_terms} = \\min\\big(\\text{ceiling},\\
+              \\lfloor N n / \\text{rows\\_per\\_term} \\rfloor\\big)
+
+    terms are not tried: at 1 % position noise a fit of a few seconds of data finds the law
+    with about 20 candidates and loses it with 40 (the surplus columns, products with the
+    cart's position over its short range, are nearly collinear). The growth holds out
+    ``2 / n_blocks`` of each recording (the last block and the one reaching farthest), so
+    that short recordings keep most samples for the search's fits. B-splines are not among
+    the default moves: they are local to the explored range, which a swing-up leaves.
+
+    Parameters
+    ----------
+    rows_per_term : int, default 150
+        Equations (samples x coordinates) per candidate term.
+    ceiling : int, default 400
+        Largest catalog, whatever the data.
+    n_blocks : int, default 10
+        Time blocks per recording (:func:`~pysindy_xl.grow_catalog`).
+    moves : sequence of str, default all of :data:`~pysindy_xl.catalog.MOVES` but "splines"
+        Moves of the growth.
+    progress : callable, optional
+        ``progress(line)`` after each step of the growth.
+
+    Examples
+    --------
+    >>> growth = AutomaticGrowth()
+    >>> growth.data_driven, growth.name, growth.max_terms(2500, 2)
+    (True, 'automatic', 33)
+    """
+
+    data_driven = True
+    name = "automatic"
+
+    def __init__(self, rows_per_term: int = 150, ceiling: int = 400, n_blocks: int = 10,
+                 moves=None, progress=None):
+        self.rows_per_term = rows_per_term
+        self.ceiling = ceiling
+        self.n_blocks = n_blocks
+        self.moves = moves
+        self.progress = progress
+
+    def max_terms(self, n_samples: int, n_coordinates: int) -> int:
+        """The ceiling of the catalog for ``n_samples`` samples of ``n_coordinates``.
+
+        Parameters
+        ----------
+        n_samples : int
+            Samples in all recordings.
+        n_coordinates : int
+            Coordinates of the system.
+
+        Returns
+        -------
+        int
+            ``min(ceiling, n_samples * n_coordinates // rows_per_term)``.
+        """
+        from .._validation import check_option
+        rows = check_option("rows_per_term", self.rows_per_term, "int", low=1)
+        ceiling = check_option("ceiling", self.ceiling, "int", low=1)
+        return int(min(ceiling, n_samples * n_coordinates // rows))
+
+    def __call__(self, system, data):
+        """Grow the automatic catalog on ``data`` (class docstring).
+
+        Parameters
+        ----------
+        system : MuJoCoSystem or str
+            Only its coordinate names and kinds are read.
+        data : list of tuple
+            ``(q (N, n), t (N,), tau (N, n))`` per recording.
+
+        Returns
+        -------
+        GrowthResult
+            Its ``model`` is the chosen catalog fitted on all the data.
+        """
+        from ..catalog import MOVES, grow_catalog
+        from ..mujoco import get_system
+        system = get_system(system)
+        if not data:
+            raise ValueError("data: expected at least one recording (q, t, tau)")
+        q, t, u = (list(part) for part in zip(*data, strict=True))
+        moves = tuple(m for m in MOVES if m != "splines") if self.moves is None \
+            else tuple(self.moves)
+        return grow_catalog(q, t, u, coordinates=list(system.coords.names),
+                            kinds=system_kinds(system),
+                            max_terms=self.max_terms(sum(len(tk) for tk in t), system.n),
+                            n_blocks=self.n_blocks, moves=moves, progress=self.progress)
+
+    def __repr__(self) -> str:
+        return (f"AutomaticGrowth(rows_per_term={self.rows_per_term}, ceiling={self.ceiling}, "
+                f"n_blocks={self.n_blocks}, moves={self.moves})")
+
+
+#: Catalogs by name: ``"automatic"`` is data-driven (:class:`AutomaticGrowth`), the others
+#: library factories.
+CATALOGS = {"automatic": AutomaticGrowth(), "generic": generic_catalog,
+            "kinematic": kinematic_catalog_of}
 
 
 def resolve_catalog(catalog):
@@ -82,28 +223,84 @@ def resolve_catalog(catalog):
     Parameters
     ----------
     catalog : str or callable
-        ``"generic"``, ``"kinematic"`` or ``f(system) -> library``.
+        ``"automatic"``, ``"generic"``, ``"kinematic"``, a library factory
+        ``f(system) -> library``, or a data-driven identifier (``data_driven = True``,
+        ``f(system, data) -> model or GrowthResult``, such as :class:`AutomaticGrowth`).
 
     Returns
     -------
     tuple
-        ``(name, factory)``.
+        ``(name, catalog)``: the name, and the factory or identifier. ``"automatic"`` gives a
+        new :class:`AutomaticGrowth`.
 
     Examples
     --------
     >>> resolve_catalog("generic")[0]
     'generic'
+    >>> resolve_catalog("automatic")
+    ('automatic', AutomaticGrowth(rows_per_term=150, ceiling=400, n_blocks=10, moves=None))
     >>> resolve_catalog("mjcf")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    ValueError: catalog: expected one of ['generic', 'kinematic'] or a callable ..., got 'mjcf'
+    ValueError: catalog: expected one of ['automatic', 'generic', ...] or a callable ..., got 'mjcf'
     """
     if isinstance(catalog, str):
         if catalog not in CATALOGS:
             raise ValueError(f"catalog: expected one of {sorted(CATALOGS)} or a callable system "
                              f"-> library, got {catalog!r}")
+        if catalog == "automatic":
+            return catalog, AutomaticGrowth()
         return catalog, CATALOGS[catalog]
     if callable(catalog):
-        return getattr(catalog, "__name__", type(catalog).__name__), catalog
+        name = getattr(catalog, "name", None) if getattr(catalog, "data_driven", False) \
+            else None
+        return name or getattr(catalog, "__name__", type(catalog).__name__), catalog
     raise TypeError(f"catalog: expected a name or a callable system -> library, got "
                     f"{type(catalog).__name__}")
+
+
+def catalog_identifier(catalog):
+    """``identify(system, data) -> (model, description)`` for a catalog of any kind.
+
+    A library factory is fitted by :class:`~pysindy_xl.XLSINDy` on the data; a data-driven
+    identifier is called with the data. The description names the catalog the model came
+    from (the grown catalog's :meth:`~pysindy_xl.AutomaticCatalog.describe`, or the number of
+    candidate columns).
+
+    Parameters
+    ----------
+    catalog : str or callable
+        As for :func:`resolve_catalog`.
+
+    Returns
+    -------
+    tuple
+        ``(name, identify)``; ``data`` is a list of ``(q (N, n), t (N,), tau (N, n))``.
+
+    Examples
+    --------
+    >>> name, identify = catalog_identifier("automatic")
+    >>> name, callable(identify)
+    ('automatic', True)
+    """
+    import warnings
+    name, spec = resolve_catalog(catalog)
+
+    def identify(system, data):
+        from ..model import XLSINDy
+        from ..mujoco import get_system
+        system = get_system(system)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            if getattr(spec, "data_driven", False):
+                found = spec(system, data)
+                model = getattr(found, "model", found)
+                catalog_ = getattr(found, "catalog", None)
+                return model, (catalog_.describe() if hasattr(catalog_, "describe")
+                               else name)
+            q, t, u = (list(part) for part in zip(*data, strict=True))
+            library = spec(system)
+            model = XLSINDy(library).fit(q, t=t, u=u)
+            return model, f"{model.feature_library_.n_output_features_} columns"
+
+    return name, identify

@@ -39,7 +39,7 @@ def add_parser(subparsers):
     >>> _ = add_parser(parser.add_subparsers(dest="command"))
     >>> args = parser.parse_args(["control", "cart-pole", "--force-limit", "8"])
     >>> args.task, args.force_limit, args.noise, args.catalog
-    ('swing-up', 8.0, 0.01, 'generic')
+    ('swing-up', 8.0, 0.01, 'automatic')
     """
     parser = subparsers.add_parser(
         "control", help="learn to control a MuJoCo system: explore, identify, swing up",
@@ -59,9 +59,13 @@ def add_parser(subparsers):
                         help="half length of the track (default: 1.5)")
     parser.add_argument("--noise", type=_non_negative_float, default=0.01, metavar="LEVEL",
                         help="relative noise on the recorded positions (default: 0.01)")
-    parser.add_argument("--catalog", default="generic", choices=("generic", "kinematic"),
-                        help="generic: from the coordinates and their kinds only; kinematic: "
-                             "from the MJCF's kinematic tree (default: generic)")
+    parser.add_argument("--catalog", default="automatic",
+                        choices=("automatic", "generic", "kinematic"),
+                        help="automatic: the automatic catalog grown on the data from the "
+                             "coordinates and their kinds only (hinges angles, slides linear), "
+                             "sized for the data; generic: a fixed catalog from the coordinates "
+                             "and their kinds; kinematic: from the MJCF's kinematic tree "
+                             "(default: automatic)")
     parser.add_argument("--explore", type=_positive_float, default=None, metavar="SECONDS",
                         help="seconds of the first exploration (default: 2.5 for the "
                              "cart-pole, 4 for the cart double pendulum)")

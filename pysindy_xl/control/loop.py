@@ -3,9 +3,11 @@
 1. **Explore**: a random sum of sinusoids on the actuated coordinate plus a model-free
    energy-pumping term, with a proportional-derivative term that keeps the cart near the
    centre, clipped to the force limit (:func:`exploration_policy`).
-2. **Identify**: fit :class:`~pysindy_xl.XLSINDy` with the catalog on every episode so far, from
-   positions only (relative Gaussian noise ``noise`` added: std = ``noise`` x each coordinate's
-   standard deviation over the episode) and the applied forces.
+2. **Identify**: on every episode so far, from positions only (relative Gaussian noise
+   ``noise`` added: std = ``noise`` x each coordinate's standard deviation over the episode)
+   and the applied forces: by default the automatic catalog grown on the data from the
+   coordinates and their kinds (:class:`~.catalogs.AutomaticGrowth`), or
+   :class:`~pysindy_xl.XLSINDy` with a fixed catalog.
 3. **Control**: the receding-horizon controller (:class:`~.mpc.PredictiveController`) plans on
    the identified model only and acts on the plant from hanging at rest.
 4. Until the task succeeds: the attempt's recording joins the data, and the model is identified
@@ -18,12 +20,11 @@ without noise); the identification sees only noisy positions and the forces."""
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .catalogs import resolve_catalog
+from .catalogs import catalog_identifier
 from .costs import swing_up_cost
 from .discrete import continuous_dynamics, discrete_dynamics
 from .mpc import PredictiveController
@@ -32,9 +33,9 @@ from .tasks import get_task
 
 __all__ = ["LearningResult", "exploration_policy", "learn_to_control", "noisy_positions"]
 
-#: Seconds of the first exploration per system: with the generic catalog, enough pumped motion
-#: for a model that swings up at the first attempt (cart-pole) or the second (cart double
-#: pendulum, whose catalog has ~150 candidates).
+#: Seconds of the first exploration per system: enough pumped motion for a model that swings
+#: up at the first attempt (cart-pole) or after a further exploration (cart double pendulum,
+#: whose law needs products of two angles' functions, a catalog of over 100 candidates).
 EXPLORE_S = {"cart-pole": 2.5, "cart-double-pendulum": 4.0}
 
 #: Planner settings per system: control period (s), RK4 steps per period, horizon (periods),
@@ -90,6 +91,11 @@ class LearningResult:
         The last attempt on the plant (its true states).
     model : object, default None
         The model of the last attempt.
+    identify_s : list of float, default []
+        Wall time of each identification (s).
+    catalog_description : str, default ""
+        The catalog of the final model (for the automatic catalog, the grown catalog's
+        description).
 
     Examples
     --------
@@ -117,6 +123,8 @@ class LearningResult:
     lqr_fraction: float = 0.0
     final_episode: object = field(default=None, repr=False)
     model: object = field(default=None, repr=False)
+    identify_s: list = field(default_factory=list)
+    catalog_description: str = ""
 
     def to_dict(self) -> dict:
         """The result as JSON-ready data.
@@ -230,15 +238,6 @@ def noisy_positions(episode, noise: float, rng: np.random.Generator) -> np.ndarr
     return q + noise * q.std(axis=0) * rng.standard_normal(q.shape)
 
 
-def _identify(library_factory, system, data):
-    import pysindy_xl as px
-    q, t, u = zip(*data, strict=True)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model = px.XLSINDy(library_factory(system)).fit(list(q), t=list(t), u=list(u))
-    return model
-
-
 def _usable(f, system, goal) -> bool:
     """Whether the model's accelerations are finite and its mass matrix acts as positive at the
     start, the goal and random states (a non-physical fit fails here)."""
@@ -268,7 +267,7 @@ def _equations(model) -> list[str]:
             return []
 
 
-def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog="generic",
+def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog="automatic",
                      noise: float = 0.01, seed: int = 0, force_limit: float | None = None,
                      track_limit: float = 1.5, explore_s: float | None = None,
                      max_episodes: int = 6,
@@ -283,9 +282,12 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
         ``"cart-pole"`` or ``"cart-double-pendulum"``.
     task : {"swing-up"}, default "swing-up"
         Name of the task (:func:`~pysindy_xl.control.tasks.get_task`).
-    catalog : str or callable, default "generic"
-        ``"generic"`` (coordinates and kinds only), ``"kinematic"`` (from the MJCF) or a factory
-        ``catalog(system) -> library`` (:mod:`pysindy_xl.control.catalogs`).
+    catalog : str or callable, default "automatic"
+        ``"automatic"`` (the automatic catalog grown on the data from the coordinates and
+        their kinds, :class:`~pysindy_xl.control.catalogs.AutomaticGrowth`), ``"generic"`` (a
+        fixed catalog from the coordinates and kinds), ``"kinematic"`` (from the MJCF), a
+        factory ``catalog(system) -> library``, or a data-driven identifier
+        (:mod:`pysindy_xl.control.catalogs`).
     noise : float, default 0.01
         Relative noise on the recorded positions.
     seed : int, default 0
@@ -340,10 +342,10 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
     >>> result.success, result.final_episode is None
     (False, True)
 
-    The whole loop (explore, identify with the generic catalog, swing up on the identified
-    model) takes several seconds to minutes, not run here: an identification, the compilation
-    of the planner, and up to 300 planned control periods per attempt. On the cart-pole it
-    succeeds at the first attempt, after 2.5 s of exploration:
+    The whole loop (explore, grow the automatic catalog on the data, swing up on the
+    identified model) takes tens of seconds to minutes, not run here: the growth, the
+    compilation of the planner, and up to 300 planned control periods per attempt. On the
+    cart-pole it succeeds at the first attempt, after 2.5 s of exploration:
 
     >>> result = learn_to_control("cart-pole", noise=0.01, seed=0)  # doctest: +SKIP
     >>> result.success, result.episodes, result.max_abs_force <= 10.0  # doctest: +SKIP
@@ -358,8 +360,9 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
         explore_s = EXPLORE_S.get(system, 2.0)
     if not (np.isfinite(explore_s) and explore_s > 0):
         raise ValueError(f"explore_s: expected a positive number of seconds, got {explore_s!r}")
-    catalog_name, factory = ("given model", None) if model is not None else \
-        ("custom identification", None) if identify is not None else resolve_catalog(catalog)
+    catalog_name, identifier = ("given model", None) if model is not None else \
+        ("custom identification", None) if identify is not None else \
+        catalog_identifier(catalog)
     settings = dict(PLANNER_SETTINGS.get(system, PLANNER_SETTINGS["cart-pole"]))
     settings.update(planner or {})
     control_dt = settings.pop("control_dt")
@@ -376,6 +379,7 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
     data, history, planning_ms, modes = [], [], [], []
     scores = {"success": False, "upright_s": 0.0, "max_abs_x": 0.0, "max_abs_force": 0.0}
     current = model
+    identify_s, description = [], "given model" if model is not None else ""
     n_episodes = 0
     episode = None
 
@@ -400,15 +404,19 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
                 continue
             start = time.perf_counter()
             try:
-                current = (identify(plant_system, data) if identify is not None
-                           else _identify(factory, plant_system, data))
+                if identify is not None:
+                    current, description = identify(plant_system, data), catalog_name
+                else:
+                    current, description = identifier(plant_system, data)
                 f = continuous_dynamics(current)
                 usable = _usable(f, plant_system, goal) if check_model else True
-            except (ValueError, TypeError, ArithmeticError, np.linalg.LinAlgError) as error:
+            except (ValueError, TypeError, ArithmeticError, RuntimeError,
+                    np.linalg.LinAlgError) as error:
                 say(f"identification failed ({error})")
                 usable = False
-            say(f"identify: {sum(len(d[1]) for d in data)} samples, "
-                f"{time.perf_counter() - start:.1f} s, usable: {usable}")
+            identify_s.append(time.perf_counter() - start)
+            say(f"identify: {sum(len(d[1]) for d in data)} samples, {identify_s[-1]:.1f} s, "
+                f"usable: {usable}" + (f" ({description})" if description else ""))
             if not usable:
                 explore()
                 n_episodes += 1
@@ -447,4 +455,5 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
         system=system, task=task, noise=float(noise), seed=int(seed),
         lqr_fraction=float(np.mean([m == "lqr" for m in modes])) if modes else 0.0,
         final_episode=episode if history and history[-1]["kind"] == "attempt" else None,
-        model=current)
+        model=current, identify_s=[float(s) for s in identify_s],
+        catalog_description=description)
