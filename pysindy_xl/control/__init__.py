@@ -28,8 +28,8 @@ _LAZY = {
     "ComputedTorque": "computed_torque",
     **dict.fromkeys(("Episode", "MuJoCoPlant"), "plant"),
     **dict.fromkeys(("TASKS", "SwingUpTask", "get_task"), "tasks"),
-    **dict.fromkeys(("CATALOGS", "generic_catalog", "kinematic_catalog_of", "resolve_catalog"),
-                    "catalogs"),
+    **dict.fromkeys(("AutomaticGrowth", "CATALOGS", "catalog_identifier", "generic_catalog",
+                     "kinematic_catalog_of", "resolve_catalog", "system_kinds"), "catalogs"),
     **dict.fromkeys(("LearningResult", "exploration_policy", "learn_to_control",
                      "noisy_positions"), "loop"),
 }

@@ -18,6 +18,8 @@ called as ``f(system, data) -> model or GrowthResult`` for :class:`AutomaticGrow
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 __all__ = ["AutomaticGrowth", "CATALOGS", "catalog_identifier", "generic_catalog",
@@ -125,7 +127,10 @@ class AutomaticGrowth:
     cart's position over its short range, are nearly collinear). The growth holds out
     ``2 / n_blocks`` of each recording (the last block and the one reaching farthest), so
     that short recordings keep most samples for the search's fits. B-splines are not among
-    the default moves: they are local to the explored range, which a swing-up leaves.
+    the default moves: they are local to the explored range, which a swing-up leaves. The
+    chosen catalog is fitted on all the data with the weak-form test functions its held-out
+    error was measured with (on a few seconds of a fast, chaotic motion the default, wider
+    test functions lose terms: the cart double pendulum's gravity, for one).
 
     Parameters
     ----------
@@ -194,21 +199,40 @@ class AutomaticGrowth:
             Its ``model`` is the chosen catalog fitted on all the data.
         """
         from ..catalog import MOVES, grow_catalog
+        from ..model import XLSINDy
         from ..mujoco import get_system
+        from ..weak import BumpTestFunctions
         system = get_system(system)
         if not data:
             raise ValueError("data: expected at least one recording (q, t, tau)")
         q, t, u = (list(part) for part in zip(*data, strict=True))
         moves = tuple(m for m in MOVES if m != "splines") if self.moves is None \
             else tuple(self.moves)
-        return grow_catalog(q, t, u, coordinates=list(system.coords.names),
-                            kinds=system_kinds(system),
-                            max_terms=self.max_terms(sum(len(tk) for tk in t), system.n),
-                            n_blocks=self.n_blocks, moves=moves, progress=self.progress)
+        found = grow_catalog(q, t, u, coordinates=list(system.coords.names),
+                             kinds=system_kinds(system),
+                             max_terms=self.max_terms(sum(len(tk) for tk in t), system.n),
+                             n_blocks=self.n_blocks, moves=moves, progress=self.progress)
+        # the chosen catalog fitted on all the data with the test functions its held-out
+        # error was measured with (grow_catalog's own final fit takes the default width)
+        model = XLSINDy(found.catalog, test_functions=BumpTestFunctions(
+            width=_search_width(t, q, self.n_blocks)))
+        model.fit(q, t=t, u=u)
+        return dataclasses.replace(found, model=model)
 
     def __repr__(self) -> str:
         return (f"AutomaticGrowth(rows_per_term={self.rows_per_term}, ceiling={self.ceiling}, "
                 f"n_blocks={self.n_blocks}, moves={self.moves})")
+
+
+def _search_width(t, q, n_blocks: int) -> float:
+    """Width of the weak-form test functions of :func:`~pysindy_xl.grow_catalog`'s scored
+    fits: the default width of the longest recording, at most a third of the shortest
+    recording's time block."""
+    from ..weak import BumpTestFunctions
+    block = min(len(tk) for tk in t) // n_blocks
+    longest = int(np.argmax([len(tk) for tk in t]))
+    return float(min(BumpTestFunctions().half_width(t[longest], q[longest]),
+                     min(tk[block - 1] - tk[0] for tk in t) / 3))
 
 
 #: Catalogs by name: ``"automatic"`` is data-driven (:class:`AutomaticGrowth`), the others

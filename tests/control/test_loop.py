@@ -132,7 +132,7 @@ def test_cli_reports_an_error_without_a_traceback(capsys):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("catalog", ["kinematic", "generic"])
+@pytest.mark.parametrize("catalog", ["automatic", "kinematic", "generic"])
 def test_cli_learns_the_cart_pole_swing_up(tmp_path, catalog):
     """The whole loop, identified from noisy positions, through the command line."""
     from pysindy_xl.cli import main
