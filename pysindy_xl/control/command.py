@@ -68,7 +68,7 @@ def add_parser(subparsers):
                              "(default: automatic)")
     parser.add_argument("--explore", type=_positive_float, default=None, metavar="SECONDS",
                         help="seconds of the first exploration (default: 2.5 for the "
-                             "cart-pole, 4 for the cart double pendulum)")
+                             "cart-pole, 8 for the cart double pendulum)")
     parser.add_argument("--max-episodes", type=_positive_int, default=6,
                         help="most episodes on the plant (default: 6)")
     parser.add_argument("--out", default=None, metavar="FILE.json",
