@@ -130,8 +130,9 @@ def pysindy_identify(system, data, threshold=PYSINDY_THRESHOLD, normalize=PYSIND
     return f
 
 
-def run_case(task, method, seed):
-    """One case: the loop's JSON report, with the wall time."""
+def run_case(task, method, seed, max_episodes=None):
+    """One case: the loop's JSON report, with the wall time (``max_episodes``: the loop's cap
+    on episodes, default its own)."""
     from pysindy_xl.control.loop import learn_to_control
     system, force_limit, noise = TASKS[task]
     options = {"seed": seed, "force_limit": force_limit, "noise": noise,
@@ -145,10 +146,13 @@ def run_case(task, method, seed):
                        check_model=False)
     else:
         options.update(catalog=method)
+    if max_episodes is not None and method != "true":
+        options.update(max_episodes=max_episodes)
     start = time.perf_counter()
     result = learn_to_control(system, **options).to_dict()
     result["wall_s"] = time.perf_counter() - start
-    result.update(task_name=task, method=method)
+    result.update(task_name=task, method=method if max_episodes is None
+                  else f"{method}-max{max_episodes}ep")
     if method == "pysindy" and not result["equations"]:
         result["equations"] = []
     return result
@@ -419,7 +423,8 @@ def summarize():
              "| target |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for task in TASKS:
-        for method in METHODS:
+        labels = list(METHODS) + sorted({r["method"] for r in records} - set(METHODS))
+        for method in labels:
             group = [r for r in records if r["task_name"] == task and r["method"] == method]
             if not group:
                 continue
@@ -448,6 +453,10 @@ def main(argv=None):
     parser.add_argument("--seeds", type=int, default=20, help="seeds 0..N-1 (default 20)")
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--summary", action="store_true", help="only print the summary")
+    parser.add_argument("--max-episodes", type=int, default=None,
+                        help="cap the loop's episodes (recorded as METHOD-maxNep); 2 = one "
+                             "exploration and one attempt: enough to tell success within the "
+                             "cart double pendulum's 15 s budget after an 8 s exploration")
     parser.add_argument("--arm", action="store_true", help="run the arm-tracking cases")
     parser.add_argument("--to-jax", action="store_true",
                         help="time to_jax() against the rigid-body kernel and the expressions")
@@ -486,17 +495,20 @@ def main(argv=None):
         return 0
     if not args.summary:
         done = finished()
+        label = (lambda m: m) if args.max_episodes is None else \
+            (lambda m: f"{m}-max{args.max_episodes}ep")
         cases = [(task, method, seed) for task in args.tasks for method in args.methods
                  for seed in range(args.first_seed, args.first_seed + args.seeds)
-                 if (task, method, seed) not in done]
+                 if (task, label(method), seed) not in done]
         print(f"{len(cases)} cases to run ({len(done)} finished before)", file=sys.stderr)
         for k, (task, method, seed) in enumerate(cases, 1):
             print(f"[{k}/{len(cases)}] {task} {method} seed {seed}", file=sys.stderr,
                   flush=True)
             try:
-                record = run_case(task, method, seed)
+                record = run_case(task, method, seed, args.max_episodes)
             except (ValueError, TypeError, ArithmeticError, RuntimeError) as error:  # recorded
-                record = {"task_name": task, "method": method, "seed": seed, "success": False,
+                record = {"task_name": task, "method": label(method), "seed": seed,
+                          "success": False,
                           "interaction_s": None, "episodes": 0, "mpc_step_ms": None,
                           "error": f"{type(error).__name__}: {error}"}
             with JSONL.open("a") as handle:
