@@ -383,6 +383,8 @@ at most 6 s, at most 6 episodes. "within budget": success with at most 8 s (cart
 Methods: `automatic` = the automatic catalog (`px.grow_catalog`) grown on the loop's data from
 the coordinates' names and kinds only (hinges angles, slides linear; no MJCF structure), the
 catalog's size capped by the data (`AutomaticGrowth`: 150 equations per candidate);
+`automatic-max2ep` = the same loop capped at two episodes (one exploration, one attempt: on the
+cart double pendulum, whose first exploration is 8 s, this decides success within 15 s);
 `generic` = XLSINDy with a fixed catalog from the coordinates and their kinds (the stand-in
 used before the automatic catalog); `kinematic` = XLSINDy with the MJCF's kinematic catalog
 (structure given); `pysindy` = PySINDy SINDy with control from the same data; `true` = the
