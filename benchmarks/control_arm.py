@@ -15,7 +15,9 @@ feedforward along the reference:
 - ``regularized``: the identified ``predict_forces``, the catalog's dry friction MuJoCo's
   regularized law with its acceleration lead (``coulomb_law="mujoco"``), the feedforward
   evaluated on the sliding side (``ComputedTorque(min_speed=2 s)``, ``s`` the law's sticking
-  scale).
+  scale) at the joints whose sticking zone the sampled reference cannot resolve
+  (``s < max |qdd_r| dt``: the reference crosses it within one period, where the first-order
+  lead is an inertia spike ``F tau / s``).
 
 Target: RMS tracking error with identified feedforward <= 1.2x that with the true model's,
 and >= 5x better than PD alone. Records: ``benchmarks/results/control_arm.jsonl`` (one line per
@@ -109,13 +111,16 @@ def arm_tracking(arm: str, seed: int, noise: float = 0.01, trajectories: int = 2
                                         coulomb_law="mujoco" if law == "regularized" else law)
             models[law] = px.XLSINDy(catalog).fit(**data.fit_arguments(forces="tau"))
         identify_s[law] = time.perf_counter() - start
-    # joints are the coordinates of an MJCF system: the dof scales apply one to one
-    sticking = dry_friction_scales(mj_model)[0][mj_model.jnt_dofadr]
     reference = multisine(mj_model, seed)
     times = np.arange(0.0, DURATION + 0.01, CONTROL_DT)
+    # joints are the coordinates of an MJCF system: the dof scales apply one to one
+    sticking = dry_friction_scales(mj_model)[0][mj_model.jnt_dofadr]
+    peak_acceleration = np.abs(np.stack([reference(t)[2] for t in times])).max(axis=0)
+    unresolved = sticking < peak_acceleration * CONTROL_DT
     feedforwards = {"pd": (None, None), "true": (MuJoCoInverse(mujoco, mj_model), None),
                     "smooth": (models["smooth"], None),
-                    "regularized": (models["regularized"], 2 * sticking)}
+                    "regularized": (models["regularized"],
+                                    np.where(unresolved, 2 * sticking, 0.0))}
     errors, peak = {}, {}
     for name, (feedforward, min_speed) in feedforwards.items():
         plant = MuJoCoPlant(system, list(system.coordinate_names), force_limit=FORCE_LIMIT,
