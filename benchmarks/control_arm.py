@@ -158,13 +158,20 @@ def arm_summary() -> str:
                      f"{r['rms_smooth']:.5f} | {r['rms_regularized']:.5f} | "
                      f"{r['smooth_over_true']:.2f} | {r['regularized_over_true']:.2f} | "
                      f"{r['pd_over_regularized']:.0f} |")
+    lines += ["", "| arm | seeds | identified / true, smooth law: median (worst), within 1.2 | "
+              "regularized law: median (worst), within 1.2 | PD / regularized: worst |",
+              "|---|---|---|---|---|"]
     for arm in ARMS:
         mine = [r for r in records if r["arm"] == arm]
-        if mine:
-            worst = max(r["regularized_over_true"] for r in mine)
-            lines.append(f"| {arm} | worst of {len(mine)} | | | | | "
-                         f"{max(r['smooth_over_true'] for r in mine):.2f} | {worst:.2f} | "
-                         f"{min(r['pd_over_regularized'] for r in mine):.0f} |")
+        if not mine:
+            continue
+        cells = []
+        for law in ("smooth", "regularized"):
+            ratios = np.array([r[f"{law}_over_true"] for r in mine])
+            cells.append(f"{np.median(ratios):.2f} ({ratios.max():.2f}), "
+                         f"{int(np.sum(ratios <= 1.2))} / {len(ratios)}")
+        lines.append(f"| {arm} | {len(mine)} | {cells[0]} | {cells[1]} | "
+                     f"{min(r['pd_over_regularized'] for r in mine):.0f} |")
     return "\n".join(lines) + "\n"
 
 
