@@ -23,9 +23,16 @@ Target: RMS tracking error with identified feedforward <= 1.2x that with the tru
 and >= 5x better than PD alone. Records: ``benchmarks/results/control_arm.jsonl`` (one line per
 arm and seed; a rerun skips them).
 
+``--parts`` prints where an identified feedforward's excess error comes from: the true
+feedforward with one part replaced by the identified model's (gravity ``tau(q, 0, 0)``,
+velocity ``tau(q, qd, 0) - tau(q, 0, 0)``, acceleration ``tau(q, qd, qdd) - tau(q, qd, 0)``),
+as a ratio to the true feedforward's error, and the mean error of the identified mass
+matrix's diagonal against ``mj_fullM`` along the reference.
+
 Usage::
 
     python benchmarks/control_arm.py --arms fr3 xarm7 sawyer --seeds 3
+    python benchmarks/control_arm.py --arms fr3 --seeds 1 --parts
     python benchmarks/control_arm.py --summary
 """
 
@@ -90,16 +97,13 @@ class MuJoCoInverse:
         return out
 
 
-def arm_tracking(arm: str, seed: int, noise: float = 0.01, trajectories: int = 2) -> dict:
-    """RMS tracking errors (rad) of one arm and seed for every feedforward of the module."""
+def _setup(arm: str, seed: int, noise: float, trajectories: int):
+    """The system, its identified models (both laws), the reference and the sliding floors."""
     import pysindy_xl as px
-    from pysindy_xl.control import ComputedTorque, MuJoCoPlant
-    from pysindy_xl.mujoco import MJCFSystem, generate_dataset, import_mujoco, reference_catalog
+    from pysindy_xl.mujoco import MJCFSystem, generate_dataset, reference_catalog
     from pysindy_xl.mujoco.systems.friction import dry_friction_scales
-    mujoco = import_mujoco()
     system = MJCFSystem(torque_driven((MODELS / ARMS[arm]).read_text()))
     mj_model = system.mj_model()
-    n = system.n
     data = generate_dataset(system, n_trajectories=trajectories, duration=5.0, seed=seed,
                             noise=noise, progress=False)
     models, identify_s = {}, {}
@@ -117,28 +121,94 @@ def arm_tracking(arm: str, seed: int, noise: float = 0.01, trajectories: int = 2
     sticking = dry_friction_scales(mj_model)[0][mj_model.jnt_dofadr]
     peak_acceleration = np.abs(np.stack([reference(t)[2] for t in times])).max(axis=0)
     unresolved = sticking < peak_acceleration * CONTROL_DT
-    feedforwards = {"pd": (None, None), "true": (MuJoCoInverse(mujoco, mj_model), None),
-                    "smooth": (models["smooth"], None),
-                    "regularized": (models["regularized"],
-                                    np.where(unresolved, 2 * sticking, 0.0))}
+    floors = {"smooth": None, "regularized": np.where(unresolved, 2 * sticking, 0.0)}
+    return system, models, identify_s, reference, times, floors
+
+
+def _track(system, feedforward, reference, times, min_speed=None):
+    """RMS tracking error (rad) and largest force of PD + ``feedforward`` on the plant."""
+    from pysindy_xl.control import ComputedTorque, MuJoCoPlant
+    plant = MuJoCoPlant(system, list(system.coordinate_names), force_limit=FORCE_LIMIT,
+                        control_dt=CONTROL_DT)
+    q0, qd0, _ = reference(0.0)
+    plant.reset(q0, qd0)
+    controller = ComputedTorque(feedforward, reference, kp=KP, kd=KD, n=system.n,
+                                feedforward_times=times, min_speed=min_speed)
+    episode = plant.run(controller, DURATION)
+    q_ref = np.stack([reference(t)[0] for t in episode.t])
+    return float(np.sqrt(np.mean((episode.q - q_ref) ** 2))), float(np.abs(episode.tau).max())
+
+
+def arm_tracking(arm: str, seed: int, noise: float = 0.01, trajectories: int = 2) -> dict:
+    """RMS tracking errors (rad) of one arm and seed for every feedforward of the module."""
+    from pysindy_xl.mujoco import import_mujoco
+    system, models, identify_s, reference, times, floors = _setup(arm, seed, noise,
+                                                                  trajectories)
+    feedforwards = {"pd": (None, None),
+                    "true": (MuJoCoInverse(import_mujoco(), system.mj_model()), None),
+                    **{law: (models[law], floors[law]) for law in models}}
     errors, peak = {}, {}
     for name, (feedforward, min_speed) in feedforwards.items():
-        plant = MuJoCoPlant(system, list(system.coordinate_names), force_limit=FORCE_LIMIT,
-                            control_dt=CONTROL_DT)
-        q0, qd0, _ = reference(0.0)
-        plant.reset(q0, qd0)
-        controller = ComputedTorque(feedforward, reference, kp=KP, kd=KD, n=n,
-                                    feedforward_times=times, min_speed=min_speed)
-        episode = plant.run(controller, DURATION)
-        q_ref = np.stack([reference(t)[0] for t in episode.t])
-        errors[name] = float(np.sqrt(np.mean((episode.q - q_ref) ** 2)))
-        peak[name] = float(np.abs(episode.tau).max())
+        errors[name], peak[name] = _track(system, feedforward, reference, times, min_speed)
     return {"arm": arm, "seed": seed, "noise": noise, "training_s": 5.0 * trajectories,
             **{f"rms_{k}": v for k, v in errors.items()},
             **{f"{law}_over_true": errors[law] / errors["true"]
                for law in ("smooth", "regularized")},
             **{f"pd_over_{law}": errors["pd"] / errors[law] for law in ("smooth", "regularized")},
             "max_abs_tau": peak, "identify_s": identify_s}
+
+
+class _Swapped:
+    """The true inverse dynamics with one part (0 gravity, 1 velocity, 2 acceleration)
+    replaced by the identified model's (evaluated at speeds raised to ``floor``)."""
+
+    def __init__(self, true, model, part, floor):
+        self.true, self.model, self.part, self.floor = true, model, part, floor
+
+    @staticmethod
+    def _parts(forces, q, qd, qdd):
+        zero = np.zeros_like(q)
+        gravity, moving = forces(q, zero, zero), forces(q, qd, zero)
+        return gravity, moving - gravity, forces(q, qd, qdd) - moving
+
+    def predict_forces(self, q, qd, qdd):
+        sliding = qd if self.floor is None else np.where(
+            np.abs(qd) < self.floor, np.where(qd < 0, -self.floor, self.floor), qd)
+        true = self._parts(self.true.predict_forces, q, qd, qdd)[self.part]
+        mine = self._parts(self.model.predict_forces, q, sliding, qdd)[self.part]
+        return self.true.predict_forces(q, qd, qdd) + mine - true
+
+
+def arm_parts(arm: str, seed: int, noise: float = 0.01, trajectories: int = 2) -> dict:
+    """Ratios to the true feedforward's error with one part swapped, per law (``--parts``)."""
+    from pysindy_xl.mujoco import import_mujoco
+    mujoco = import_mujoco()
+    system, models, _, reference, times, floors = _setup(arm, seed, noise, trajectories)
+    mj_model = system.mj_model()
+    true = MuJoCoInverse(mujoco, mj_model)
+    base, _ = _track(system, true, reference, times)
+    q = np.stack([reference(t)[0] for t in times[::25]])
+    data, full = mujoco.MjData(mj_model), np.zeros((system.n, system.n))
+    diagonal = []
+    for position in q:
+        data.qpos[:] = position
+        mujoco.mj_forward(mj_model, data)
+        mujoco.mj_fullM(mj_model, data, full)
+        diagonal.append(np.diag(full).copy())
+    out = {"arm": arm, "seed": seed}
+    for law, model in models.items():
+        floor = floors[law]
+        speeds = np.full_like(q, 1.0)  # sliding everywhere: the lead's zone stays out
+        rest = model.predict_forces(q, speeds, np.zeros_like(q))
+        identified = np.stack([model.predict_forces(q, speeds, np.tile(np.eye(system.n)[j],
+                                                                       (len(q), 1)))[:, j]
+                               - rest[:, j] for j in range(system.n)], axis=1)
+        out[law] = {"ratio": _track(system, model, reference, times, floor)[0] / base,
+                    **{name: _track(system, _Swapped(true, model, part, floor), reference,
+                                    times)[0] / base
+                       for part, name in enumerate(("gravity", "velocity", "acceleration"))},
+                    "mass_diagonal_error": (identified - np.array(diagonal)).mean(0).tolist()}
+    return out
 
 
 def arm_summary() -> str:
@@ -181,7 +251,14 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, default=3, help="seeds 0..N-1 (default 3)")
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--summary", action="store_true", help="only print the summary")
+    parser.add_argument("--parts", action="store_true",
+                        help="print where the identified feedforwards' error comes from")
     args = parser.parse_args(argv)
+    if args.parts:
+        for arm in args.arms:
+            for seed in range(args.first_seed, args.first_seed + args.seeds):
+                print(json.dumps(arm_parts(arm, seed)), flush=True)
+        return 0
     if not args.summary:
         RESULTS.mkdir(parents=True, exist_ok=True)
         done = set()
