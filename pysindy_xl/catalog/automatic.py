@@ -27,7 +27,15 @@ from collections.abc import Mapping
 import numpy as np
 import sympy as sp
 
-from .._validation import check_option
+from .._validation import (
+    Boolean,
+    Collection,
+    InstanceOf,
+    Interval,
+    Options,
+    check_option,
+    validate_params,
+)
 from ..feature_library import (
     CatalogRepartition,
     ClassicalLibrary,
@@ -132,8 +140,8 @@ class AutomaticCatalog(CatalogRepartition):
         cosines of degree 1.
     gyroscopic : bool, default False
         Add ``f(q_k) qd_i`` (``k != i``; ``f`` a linear coordinate, a sine or a cosine).
-    dissipation : sequence of {"viscous", "coulomb"}, default ("viscous",)
-        Dissipation terms in each coordinate's equation.
+    dissipation : str, sequence of {"viscous", "coulomb"} or None, default ("viscous",)
+        Dissipation terms in each coordinate's equation (None or ``()``: none).
     coulomb_scale : float or sequence of float, default 0.01
         ``eps_i`` of the smooth Coulomb law ``tanh(qd_i / eps_i)``.
     splines : int or mapping {name: int}, optional
@@ -158,6 +166,25 @@ class AutomaticCatalog(CatalogRepartition):
     >>> cat.fit().get_feature_names()[:4]
     ['F[tau]', 'L[r_dot**2]', 'L[r_dot*theta_dot]', 'L[theta_dot**2]']
     """
+
+    _parameter_constraints = {
+        "coordinates": [InstanceOf((str, Coordinates), "a Coordinates or comma-separated names"),
+                        Collection("a list of names")],
+        "kinds": [None, Options(KINDS), Collection("a sequence or mapping of kinds")],
+        "bounds": [None, Collection("a mapping or sequence of (low, high)")],
+        "degree": [Interval("int", 0)],
+        "trig_degree": [Interval("int", 0)],
+        "angle_degree": [Interval("int", 0)],
+        "interaction": [Interval("int", 1)],
+        "kinetic": [Options(("constant", "configuration"))],
+        "gyroscopic": [Boolean()],
+        "dissipation": [None, Options(DISSIPATION), Collection("a sequence of dissipation models")],
+        "coulomb_scale": [Interval("real", 0, low_open=True),
+                          Collection("a sequence or mapping of float")],
+        "splines": [None, Interval("int", 0), Collection("a mapping {name: int}")],
+        "interlink": [None, Collection("an array of shape (n, n)")],
+        "max_terms": [Interval("int", 1)],
+    }
 
     def __init__(self, coordinates, kinds=None, bounds=None, degree=2, trig_degree=1,
                  angle_degree=0, interaction=1, kinetic="configuration", gyroscopic=False,
@@ -191,6 +218,7 @@ class AutomaticCatalog(CatalogRepartition):
         return Coordinates(list(names))
 
     def _options(self) -> dict:
+        validate_params(self)
         coords = self._coordinates()
         names = list(coords.names)
         options = {"coords": coords, "kinds": coordinate_kinds(names, self.kinds)}

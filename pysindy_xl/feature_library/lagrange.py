@@ -6,6 +6,7 @@ import numpy as np
 import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
+from .._validation import Collection, InstanceOf
 from ..expressions import format_expression
 from ..symbols import Coordinates, as_expr_list
 from ._base import SymbolicLibrary, shared_derivation
@@ -139,6 +140,11 @@ class LagrangeLibrary(SymbolicLibrary):
     category = "lagrange"
     column_rank = 1
     spec_type = "LagrangeLibrary"
+    _parameter_constraints = {
+        "coords": [InstanceOf(Coordinates, "a pysindy_xl.Coordinates")],
+        "terms": [InstanceOf(sp.Basic, "a sympy expression"),
+                  Collection("a sequence of sympy expressions")],
+    }
 
     def __init__(self, coords: Coordinates, terms):
         self.coords = coords
