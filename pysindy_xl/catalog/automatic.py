@@ -43,6 +43,11 @@ __all__ = ["AutomaticCatalog", "DISSIPATION", "coordinate_kinds"]
 #: Dissipation models an automatic catalog offers per coordinate.
 DISSIPATION = ("viscous", "coulomb")
 
+#: Terms of recent catalogs by their parameters, most recently used last (sympy expressions
+#: are immutable): the clones that every fit makes, and equal catalogs, build them once.
+_TERMS: dict = {}
+_CACHED_TERMS = 32
+
 
 def coordinate_kinds(names, kinds) -> tuple[str, ...]:
     """One kind per coordinate from ``kinds``.
@@ -321,14 +326,20 @@ class AutomaticCatalog(CatalogRepartition):
     @property
     def libraries(self) -> list:
         """The catalog's libraries (built from the parameters; see the class docstring)."""
-        options = self._options()
         key = repr(sorted(self.get_params(deep=False).items(), key=lambda item: item[0]))
         cached = self.__dict__.get("_built")
-        if cached is not None and cached[0] == key:
+        if cached is not None and cached[0] == key:  # checked when built
             return cached[1]
+        options = self._options()
         coords = options["coords"]
-        terms, fast = self._terms(options)
-        dissipation, mask = self._dissipation(options)
+        # clones (every fit clones its catalog) and equal catalogs share the terms
+        found = _TERMS.pop(key, None)
+        if found is None:
+            found = (*self._terms(options), *self._dissipation(options))
+        _TERMS[key] = found
+        while len(_TERMS) > _CACHED_TERMS:
+            del _TERMS[next(iter(_TERMS))]
+        terms, fast, dissipation, mask = found
         total = len(terms) + len(dissipation)
         if total > options["max_terms"]:
             raise ValueError(f"max_terms: the catalog would have {total} terms, more than "
@@ -342,7 +353,7 @@ class AutomaticCatalog(CatalogRepartition):
         if other:
             libraries.append(LagrangeLibrary(coords, other))
         if dissipation:
-            libraries.append(ClassicalLibrary(coords, dissipation, mask=mask))
+            libraries.append(ClassicalLibrary(coords, list(dissipation), mask=mask.copy()))
         self.__dict__["_built"] = (key, libraries)
         return libraries
 

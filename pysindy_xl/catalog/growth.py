@@ -446,8 +446,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         active = np.any(np.vstack(us) != 0, axis=0) if forced else np.zeros(n, dtype=bool)
         search_optimizer = (optimizer if optimizer is not None or not forced else
                             ExplicitOptimizer() if active.all() else MixedOptimizer())
+    # the search's fits smooth the same pieces (and noise draws) at every step: once
+    from ..fit import RememberedSmoother
     template = XLSINDy(optimizer=search_optimizer, formulation=formulation,
-                       test_functions=BumpTestFunctions(width=width))
+                       test_functions=BumpTestFunctions(width=width),
+                       smoother=RememberedSmoother())
 
     def evaluate(parameters, move):
         catalog = AutomaticCatalog(**fixed, **parameters)
@@ -527,7 +530,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                     break
                 skip = 0 if keep else 1
     model = clone(template).set_params(feature_library=best_catalog, test_functions=None,
-                                       optimizer=optimizer)
+                                       optimizer=optimizer, smoother=None)
     full = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
     if not is_list:
         full = {key: None if value is None else value[0] for key, value in full.items()}
