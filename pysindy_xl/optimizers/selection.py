@@ -317,13 +317,14 @@ def _nested_errors(folds, order, n_folds: int) -> np.ndarray:
         diag = np.abs(np.diag(r_factor))[:usable]
         ok = diag > 1e-12 * max(diag.max(initial=0.0), 1e-300)
         usable = int(np.argmin(ok)) if not ok.all() else usable
-        # all nested models at once: beta_k = inv(R)[:, :k+1] @ rhs[:k+1] (cumulative sum)
-        inverse = scipy.linalg.solve_triangular(r_factor[:usable, :usable], np.eye(usable),
-                                             check_finite=False)
-        coefficients = np.zeros((size, usable))
-        coefficients[:usable] = np.cumsum(inverse * rhs[:usable], axis=1)
-        residual = x_test[:, order] @ coefficients - y_test[:, None]
-        errors[fold, :usable] = np.mean(residual**2, axis=0)
+        # all nested models at once: beta_k = inv(R)[:, :k+1] @ rhs[:k+1], so the predictions
+        # are cumulative sums of the columns of W = x_test inv(R) times rhs (one triangular
+        # solve with the test rows, no inverse and no product with it)
+        weights = scipy.linalg.solve_triangular(
+            r_factor[:usable, :usable], x_test[:, order[:usable]].T, trans="T",
+            check_finite=False)
+        residual = np.cumsum(weights * rhs[:usable, None], axis=0) - y_test
+        errors[fold, :usable] = np.mean(residual**2, axis=1)
     return errors
 
 
