@@ -21,6 +21,7 @@ classical terms, and the force columns. Terms that are trigonometric polynomials
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections.abc import Mapping
 
@@ -42,6 +43,13 @@ __all__ = ["AutomaticCatalog", "DISSIPATION", "coordinate_kinds"]
 
 #: Dissipation models an automatic catalog offers per coordinate.
 DISSIPATION = ("viscous", "coulomb")
+
+
+@functools.cache
+def _param_names(cls) -> tuple:
+    """``cls._get_param_names()``, read from the signature once per class."""
+    return tuple(cls._get_param_names())
+
 
 #: Terms of recent catalogs by their parameters, most recently used last (sympy expressions
 #: are immutable): the clones that every fit makes, and equal catalogs, build them once.
@@ -326,7 +334,7 @@ class AutomaticCatalog(CatalogRepartition):
     @property
     def libraries(self) -> list:
         """The catalog's libraries (built from the parameters; see the class docstring)."""
-        key = repr(sorted(self.get_params(deep=False).items(), key=lambda item: item[0]))
+        key = repr([(name, getattr(self, name)) for name in _param_names(type(self))])
         cached = self.__dict__.get("_built")
         if cached is not None and cached[0] == key:  # checked when built
             return cached[1]

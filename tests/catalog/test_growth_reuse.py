@@ -66,3 +66,17 @@ def test_catalog_terms_are_shared_by_clones_and_follow_the_parameters():
     assert px.AutomaticCatalog(**catalog.get_params()).lagrange_terms() == \
         catalog.lagrange_terms()
     pickle.loads(pickle.dumps(copy.fit()))
+
+
+def test_held_out_rows_without_noise_propagation_are_the_same_rows():
+    x, t, u = _duffing()
+    model = px.XLSINDy(_catalog(4), formulation="weak").fit(x[:3000], t[:3000], u=u[:3000])
+    full = model.regression(x[3000:], t[3000:], u=u[3000:], formulation="weak")
+    light = model.regression(x[3000:], t[3000:], u=u[3000:], formulation="weak",
+                             propagate_noise=False)
+    np.testing.assert_array_equal(light.theta, full.theta)
+    assert full.row_noise is not None and light.row_noise is None
+    # the held-out rows obey the fitted law: residual small against the forces' part
+    coef = model.coef_[light.catalog_map.columns]
+    forces = light.theta[:, light.force_columns] @ coef[light.force_columns]
+    assert np.linalg.norm(light.theta @ coef) < 0.05 * np.linalg.norm(forces)
