@@ -40,7 +40,8 @@ def _diff(expr: sp.Expr, symbol: sp.Symbol) -> sp.Expr:
 
 def _defined_everywhere(expr: sp.Expr) -> bool:
     """Whether ``expr`` is finite at every finite value of its symbols (sums, products,
-    nonnegative integer powers, ``sin`` and ``cos`` of finite numbers and symbols).
+    nonnegative integer powers, ``sin``, ``cos``, ``Abs``, ``sign`` and ``tanh`` of finite
+    numbers and symbols).
     """
     if expr.is_Symbol or isinstance(expr, sp.NumberSymbol):
         return True
@@ -48,7 +49,7 @@ def _defined_everywhere(expr: sp.Expr) -> bool:
         return bool(expr.is_finite)
     if isinstance(expr, sp.Pow):
         return bool(expr.exp.is_Integer and expr.exp >= 0) and _defined_everywhere(expr.base)
-    return (isinstance(expr, (sp.Add, sp.Mul, sp.sin, sp.cos))
+    return (isinstance(expr, (sp.Add, sp.Mul, sp.sin, sp.cos, sp.Abs, sp.sign, sp.tanh))
             and all(_defined_everywhere(a) for a in expr.args))
 
 

@@ -1,6 +1,8 @@
 """Lagrange terms derived once per term: catalogs that share terms get the columns and weak
 parts that sympy's own differentiation gives, whatever was derived before."""
 
+import numpy as np
+import pytest
 import sympy as sp
 
 import pysindy_xl as px
@@ -54,3 +56,16 @@ def test_a_repeated_term_is_the_same_expression_as_a_fresh_derivation():
     assert again.weak_matrices()[1][0, 0] == alone.weak_matrices()[1][0, 0]
     assert euler_lagrange(spline, coords)[0] == alone.symbolic_matrix()[0, 0]
     assert _same(alone.symbolic_matrix()[0, 0], -sp.diff(spline, coords.q[0]))
+
+
+def test_terms_finite_everywhere_skip_the_domain_check():
+    coords = px.Coordinates(["x"])
+    x = coords.q[0]
+    spline, log = bspline(x, 0.0, 0.5), sp.log(x)
+    library = px.LagrangeLibrary(coords, [spline, sp.tanh(x) * coords.qd[0] ** 2, log]).fit()
+    checked, _ = library._domain_check()
+    assert checked == [log]  # only the term with a domain is evaluated
+    z = np.zeros((3, 5))
+    z[:, 0] = [-1.0, 0.5, 2.0]
+    with pytest.raises(ValueError, match="log"):
+        library.check_domain(z)
