@@ -243,13 +243,14 @@ class AutomaticCatalog(CatalogRepartition):
         list of sympy.Expr
             The terms in catalog order (the Euler-Lagrange operator turns each into a column).
         """
-        return self._terms(self._options())[0]
+        return list(self._built_terms(self._options())[0])
 
     @property
     def n_terms(self) -> int:
         """Number of candidate terms (Lagrangian and dissipation), forces left out."""
         options = self._options()
-        return len(self._terms(options)[0]) + len(self._dissipation(options)[0])
+        terms, _, dissipation, _ = self._built_terms(options)
+        return len(terms) + len(dissipation)
 
     def _products(self, options, factors) -> list[tuple[sp.Expr, int, bool]]:
         """Products over at most ``interaction`` coordinates of one factor each, as
@@ -320,6 +321,19 @@ class AutomaticCatalog(CatalogRepartition):
         splines = self._splines(options)
         return terms + splines, fast + [False] * len(splines)
 
+    def _built_terms(self, options, key=None) -> tuple:
+        """``(*_terms, *_dissipation)``, built once per parameters (clones, which every fit
+        makes, and equal catalogs share them; sympy expressions are immutable)."""
+        if key is None:
+            key = repr([(name, getattr(self, name)) for name in _param_names(type(self))])
+        found = _TERMS.pop(key, None)
+        if found is None:
+            found = (*self._terms(options), *self._dissipation(options))
+        _TERMS[key] = found
+        while len(_TERMS) > _CACHED_TERMS:
+            del _TERMS[next(iter(_TERMS))]
+        return found
+
     def _dissipation(self, options) -> tuple[list[sp.Expr], np.ndarray]:
         coords = options["coords"]
         terms, rows = [], []
@@ -341,13 +355,7 @@ class AutomaticCatalog(CatalogRepartition):
         options = self._options()
         coords = options["coords"]
         # clones (every fit clones its catalog) and equal catalogs share the terms
-        found = _TERMS.pop(key, None)
-        if found is None:
-            found = (*self._terms(options), *self._dissipation(options))
-        _TERMS[key] = found
-        while len(_TERMS) > _CACHED_TERMS:
-            del _TERMS[next(iter(_TERMS))]
-        terms, fast, dissipation, mask = found
+        terms, fast, dissipation, mask = self._built_terms(options, key)
         total = len(terms) + len(dissipation)
         if total > options["max_terms"]:
             raise ValueError(f"max_terms: the catalog would have {total} terms, more than "
