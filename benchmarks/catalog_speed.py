@@ -10,9 +10,10 @@ compared for speed and for identical results::
         python benchmarks/catalog_speed.py [--systems duffing spring_pendulum ...] \\
         [--json out.json] [--profile 30]
 
-``--profile N`` prints the N most expensive functions (cumulative) of a cProfile run. The
-package's catalog modules are imported before the clocks start (a one-time cost of a few
-seconds that would fall on the first system).
+``--report BEFORE.json AFTER.json`` prints a markdown table of two such runs (seconds, and
+whether catalogs, supports and coefficients are the same). ``--profile N`` prints the N most
+expensive functions (cumulative) of a cProfile run. The package's catalog modules are imported
+before the clocks start (a one-time cost of a few seconds that would fall on the first system).
 """
 
 from __future__ import annotations
@@ -66,6 +67,26 @@ def time_system(name, noise=0.01, seed=0, profile=0):
             "support": support, "coefficients": [float(c) for c in coef if c != 0]}
 
 
+def report(before_path, after_path) -> str:
+    """Markdown table comparing two ``--json`` runs system by system."""
+    with open(before_path) as handle:
+        before = {r["system"]: r for r in json.load(handle)}
+    with open(after_path) as handle:
+        after = {r["system"]: r for r in json.load(handle)}
+    lines = ["| system | coordinates | before: wall s (CPU s) | after: wall s (CPU s) | CPU "
+             "speed-up | catalog, support, coefficients |", "|---|---|---|---|---|---|"]
+    for name, old in before.items():
+        new = after.get(name)
+        if new is None:
+            continue
+        same = all(old[k] == new[k] for k in ("catalog", "support", "coefficients"))
+        lines.append(f"| {name} | {old['n']} | {old['wall_s']:.1f} ({old['cpu_s']:.1f}) | "
+                     f"{new['wall_s']:.1f} ({new['cpu_s']:.1f}) | "
+                     f"{old['cpu_s'] / new['cpu_s']:.2f}x | "
+                     f"{'identical' if same else 'DIFFERENT'} |")
+    return "\n".join(lines)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--systems", nargs="+", default=list(DEFAULT))
@@ -73,7 +94,12 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", default=None, help="write the records to this file")
     parser.add_argument("--profile", type=int, default=0)
+    parser.add_argument("--report", nargs=2, metavar=("BEFORE", "AFTER"), default=None,
+                        help="print a markdown comparison of two --json files and exit")
     args = parser.parse_args(argv)
+    if args.report:
+        print(report(*args.report))
+        return None
     records = []
     for name in args.systems:
         record = time_system(name, args.noise, args.seed, args.profile)
