@@ -108,6 +108,10 @@ def _term_parts(term: sp.Expr, coords: Coordinates, weak: bool = False) -> tuple
     """The Euler-Lagrange expressions ``E_i`` of one Lagrangian term (:func:`euler_lagrange`),
     or with ``weak`` its ``(P, Q)``: ``P_i = dL/dqd_i`` and ``Q_i = dL/dq_i`` expanded, one
     expression per coordinate; derived once per term and coordinates.
+
+    A potential ``V(q)`` (no velocity) has ``P = 0`` and ``Q_i = -E_i``: the same expression
+    as expanding ``dV/dq_i`` where the coefficients are exact (rationals), and equal to it up
+    to rounding of float coefficients (a B-spline's), at half the cost of its derivation.
     """
     if not weak:
         return shared_derivation(("E", coords.variables, term),
@@ -116,6 +120,9 @@ def _term_parts(term: sp.Expr, coords: Coordinates, weak: bool = False) -> tuple
 
     def derive():
         used = term.free_symbols
+        if not used & set(coords.qd):  # a potential: P = 0 and Q = -E, no second expansion
+            columns = _term_parts(term, coords)
+            return tuple(sp.Integer(0) for _ in coords.qd), tuple(-e for e in columns)
         return tuple(tuple(sp.expand(_diff(term, v)) if v in used else sp.Integer(0)
                            for v in variables) for variables in (coords.qd, coords.q))
 

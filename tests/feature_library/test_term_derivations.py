@@ -69,3 +69,19 @@ def test_terms_finite_everywhere_skip_the_domain_check():
     z[:, 0] = [-1.0, 0.5, 2.0]
     with pytest.raises(ValueError, match="log"):
         library.check_domain(z)
+
+
+def test_a_potential_with_float_coefficients_gets_its_gradient():
+    # Q = -E for a potential: a B-spline's Q equals its derivative up to rounding
+    coords = px.Coordinates(["x"])
+    x = coords.q[0]
+    spline = bspline(x, 0.3, 0.2)
+    library = px.LagrangeLibrary(coords, [spline, x**2 * coords.qd[0] ** 2]).fit()
+    momenta, forces = library.weak_matrices()
+    assert momenta[0, 0] == 0
+    z = np.linspace(-0.2, 0.8, 41)
+    expected = sp.lambdify(x, sp.diff(spline, x))(z)
+    found = sp.lambdify(x, forces[0, 0])(z)
+    np.testing.assert_allclose(found, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+    np.testing.assert_allclose(sp.lambdify(x, -library.symbolic_matrix()[0, 0])(z), found,
+                               rtol=0, atol=0)
