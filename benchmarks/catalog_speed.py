@@ -27,6 +27,8 @@ import sys
 import time
 import warnings
 
+import numpy as np
+
 sys.path.insert(0, os.path.dirname(__file__))
 import generic_systems as gs  # noqa: E402 - the benchmark's systems and data
 
@@ -79,11 +81,17 @@ def report(before_path, after_path) -> str:
         new = after.get(name)
         if new is None:
             continue
-        same = all(old[k] == new[k] for k in ("catalog", "support", "coefficients"))
+        if old["catalog"] != new["catalog"] or old["support"] != new["support"]:
+            verdict = "DIFFERENT catalog or support"
+        elif old["coefficients"] == new["coefficients"]:
+            verdict = "identical"
+        else:
+            a, b = np.asarray(old["coefficients"]), np.asarray(new["coefficients"])
+            verdict = (f"same catalog and support, coefficients within "
+                       f"{np.max(np.abs(a - b) / np.abs(a)):.1e} (relative)")
         lines.append(f"| {name} | {old['n']} | {old['wall_s']:.1f} ({old['cpu_s']:.1f}) | "
                      f"{new['wall_s']:.1f} ({new['cpu_s']:.1f}) | "
-                     f"{old['cpu_s'] / new['cpu_s']:.2f}x | "
-                     f"{'identical' if same else 'DIFFERENT'} |")
+                     f"{old['cpu_s'] / new['cpu_s']:.2f}x | {verdict} |")
     return "\n".join(lines)
 
 
