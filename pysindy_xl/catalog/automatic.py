@@ -21,6 +21,7 @@ classical terms, and the force columns. Terms that are trigonometric polynomials
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections.abc import Mapping
 
@@ -50,6 +51,18 @@ __all__ = ["AutomaticCatalog", "DISSIPATION", "coordinate_kinds"]
 
 #: Dissipation models an automatic catalog offers per coordinate.
 DISSIPATION = ("viscous", "coulomb")
+
+
+@functools.cache
+def _param_names(cls) -> tuple:
+    """``cls._get_param_names()``, read from the signature once per class."""
+    return tuple(cls._get_param_names())
+
+
+#: Terms of recent catalogs by their parameters, most recently used last (sympy expressions
+#: are immutable): the clones that every fit makes, and equal catalogs, build them once.
+_TERMS: dict = {}
+_CACHED_TERMS = 32
 
 
 def coordinate_kinds(names, kinds) -> tuple[str, ...]:
@@ -258,13 +271,14 @@ class AutomaticCatalog(CatalogRepartition):
         list of sympy.Expr
             The terms in catalog order (the Euler-Lagrange operator turns each into a column).
         """
-        return self._terms(self._options())[0]
+        return list(self._built_terms(self._options())[0])
 
     @property
     def n_terms(self) -> int:
         """Number of candidate terms (Lagrangian and dissipation), forces left out."""
         options = self._options()
-        return len(self._terms(options)[0]) + len(self._dissipation(options)[0])
+        terms, _, dissipation, _ = self._built_terms(options)
+        return len(terms) + len(dissipation)
 
     def _products(self, options, factors) -> list[tuple[sp.Expr, int, bool]]:
         """Products over at most ``interaction`` coordinates of one factor each, as
@@ -335,6 +349,19 @@ class AutomaticCatalog(CatalogRepartition):
         splines = self._splines(options)
         return terms + splines, fast + [False] * len(splines)
 
+    def _built_terms(self, options, key=None) -> tuple:
+        """``(*_terms, *_dissipation)``, built once per parameters (clones, which every fit
+        makes, and equal catalogs share them; sympy expressions are immutable)."""
+        if key is None:
+            key = repr([(name, getattr(self, name)) for name in _param_names(type(self))])
+        found = _TERMS.pop(key, None)
+        if found is None:
+            found = (*self._terms(options), *self._dissipation(options))
+        _TERMS[key] = found
+        while len(_TERMS) > _CACHED_TERMS:
+            del _TERMS[next(iter(_TERMS))]
+        return found
+
     def _dissipation(self, options) -> tuple[list[sp.Expr], np.ndarray]:
         coords = options["coords"]
         terms, rows = [], []
@@ -349,14 +376,14 @@ class AutomaticCatalog(CatalogRepartition):
     @property
     def libraries(self) -> list:
         """The catalog's libraries (built from the parameters; see the class docstring)."""
-        options = self._options()
-        key = repr(sorted(self.get_params(deep=False).items(), key=lambda item: item[0]))
+        key = repr([(name, getattr(self, name)) for name in _param_names(type(self))])
         cached = self.__dict__.get("_built")
-        if cached is not None and cached[0] == key:
+        if cached is not None and cached[0] == key:  # checked when built
             return cached[1]
+        options = self._options()
         coords = options["coords"]
-        terms, fast = self._terms(options)
-        dissipation, mask = self._dissipation(options)
+        # clones (every fit clones its catalog) and equal catalogs share the terms
+        terms, fast, dissipation, mask = self._built_terms(options, key)
         total = len(terms) + len(dissipation)
         if total > options["max_terms"]:
             raise ValueError(f"max_terms: the catalog would have {total} terms, more than "
@@ -370,7 +397,7 @@ class AutomaticCatalog(CatalogRepartition):
         if other:
             libraries.append(LagrangeLibrary(coords, other))
         if dissipation:
-            libraries.append(ClassicalLibrary(coords, dissipation, mask=mask))
+            libraries.append(ClassicalLibrary(coords, list(dissipation), mask=mask.copy()))
         self.__dict__["_built"] = (key, libraries)
         return libraries
 
