@@ -16,6 +16,7 @@ from ._validation import (
     InstanceOf,
     Interval,
     Options,
+    check_option,
     validate_params,
 )
 from .feature_library import remembered_weak_values
@@ -239,7 +240,8 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         return build_problem(self.feature_library_, data, formulation,
                              test_functions=self.test_functions, smoother=self.smoother,
                              half_width=None if info is None else info["half_width"],
-                             still=self._held(), propagate=bool(propagate_noise))
+                             still=self._held(),
+                             propagate=check_option("propagate_noise", propagate_noise, "bool"))
 
     def fit(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None):
         """Identify the equations of motion.

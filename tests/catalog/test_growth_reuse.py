@@ -5,6 +5,7 @@ are the same to the bit; the ground truth is a Duffing oscillator integrated by 
 import pickle
 
 import numpy as np
+import pytest
 from scipy.integrate import solve_ivp
 from sklearn.base import clone
 
@@ -80,3 +81,5 @@ def test_held_out_rows_without_noise_propagation_are_the_same_rows():
     coef = model.coef_[light.catalog_map.columns]
     forces = light.theta[:, light.force_columns] @ coef[light.force_columns]
     assert np.linalg.norm(light.theta @ coef) < 0.05 * np.linalg.norm(forces)
+    with pytest.raises(TypeError, match="propagate_noise"):
+        model.regression(x[3000:], t[3000:], u=u[3000:], propagate_noise="no")
