@@ -19,16 +19,13 @@ the plant), the cart within |x| <= 1.5 m. Results: one JSON line per finished ca
 ``benchmarks/results/control.jsonl`` (a rerun skips them), the summary in
 ``benchmarks/results/control.md``.
 
-Arm tracking (``--arm``): the Franka FR3 of MuJoCo Menagerie with its position servos replaced
-by torque motors, identified with the kinematic catalog from 2 x 5 s of randomly excited motion
-(1 % position noise), tracks a fast multi-sine (0.4 rad, 0.5-1.1 Hz per joint) for 4 s with PD
-(kp 100, kd 10) plus feedforward: none (PD alone), MuJoCo's inverse dynamics (true model), the
-identified ``predict_forces``. Records in ``benchmarks/results/control_arm.jsonl``.
+Arm tracking (``--arm``): ``benchmarks/control_arm.py`` (published 7-joint arms with torque
+motors, computed-torque tracking with identified feedforward); its table is part of the summary.
 
 Usage::
 
     python benchmarks/control.py --seeds 20 --tasks cartpole-10N --methods automatic true
-    python benchmarks/control.py --arm --seeds 2
+    python benchmarks/control.py --arm --seeds 3
     python benchmarks/control.py --summary
 """
 
@@ -158,90 +155,9 @@ def run_case(task, method, seed, max_episodes=None):
     return result
 
 
-ARM_JSONL = RESULTS / "control_arm.jsonl"
 NOTES_PATH = RESULTS / "control_notes.md"
-ARM_XML = Path(__file__).resolve().parent / "models" / "menagerie" / "fr3.xml"
-
-
-def torque_driven(xml: str) -> str:
-    """The MJCF text with every position servo replaced by a torque motor on its joint."""
-    import re
-    joints = re.findall(r'<position [^>]*joint="([^"]+)"', xml)
-    motors = "".join(f'    <motor name="{j}_motor" joint="{j}"/>\n' for j in joints)
-    return re.sub(r"<actuator>.*?</actuator>", "<actuator>\n" + motors + "  </actuator>", xml,
-                  flags=re.S)
-
-
-def arm_tracking(seed: int, duration: float = 4.0, kp: float = 100.0, kd: float = 10.0,
-                 trajectories: int = 2) -> dict:
-    """RMS tracking errors (rad) of the torque-driven FR3: PD alone, PD + true feedforward,
-    PD + identified feedforward."""
-    import pysindy_xl as px
-    from pysindy_xl.control import ComputedTorque, MuJoCoPlant
-    from pysindy_xl.mujoco import MJCFSystem, generate_dataset, import_mujoco, reference_catalog
-    mujoco = import_mujoco()
-    system = MJCFSystem(torque_driven(ARM_XML.read_text()))
-    start = time.perf_counter()
-    data = generate_dataset(system, n_trajectories=trajectories, duration=5.0, seed=seed,
-                            noise=0.01, progress=False)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model = px.XLSINDy(reference_catalog(system, "kinematic"))
-        model.fit(**data.fit_arguments(forces="tau"))
-    identify_s = time.perf_counter() - start
-    mj_model = system.mj_model()
-    mj_data = mujoco.MjData(mj_model)
-    home = np.array([0.0, 0.0, 0.0, -1.57079, 0.0, 1.57079, -0.7853])
-    rng = np.random.default_rng(seed)
-    amplitude = np.full(7, 0.4)
-    omega = 2 * np.pi * rng.uniform(0.5, 1.1, 7)
-
-    def reference(t):
-        return (home + amplitude * np.sin(omega * t), amplitude * omega * np.cos(omega * t),
-                -amplitude * omega ** 2 * np.sin(omega * t))
-
-    class MuJoCoInverse:
-        """The true model's inverse dynamics (``mj_inverse``)."""
-
-        def predict_forces(self, q, qd, qdd):
-            out = []
-            for position, velocity, acceleration in zip(q, qd, qdd, strict=True):
-                mj_data.qpos[:], mj_data.qvel[:] = position, velocity
-                mj_data.qacc[:] = acceleration
-                mujoco.mj_inverse(mj_model, mj_data)
-                out.append(mj_data.qfrc_inverse.copy())
-            return np.array(out)
-
-    times = np.arange(0.0, duration + 0.01, 0.002)
-    errors = {}
-    for name, feedforward in (("pd", None), ("true", MuJoCoInverse()), ("identified", model)):
-        plant = MuJoCoPlant(system, list(system.coordinate_names), force_limit=200.0,
-                            control_dt=0.002)
-        q0, qd0, _ = reference(0.0)
-        plant.reset(q0, qd0)
-        controller = ComputedTorque(feedforward, reference, kp=kp, kd=kd, n=7,
-                                    feedforward_times=times)
-        episode = plant.run(controller, duration)
-        q_ref = np.stack([reference(t)[0] for t in episode.t])
-        errors[name] = float(np.sqrt(np.mean((episode.q - q_ref) ** 2)))
-    return {"seed": seed, "arm": "fr3 (torque motors)", "rms_pd": errors["pd"],
-            "rms_true_ff": errors["true"], "rms_identified_ff": errors["identified"],
-            "identified_over_true": errors["identified"] / errors["true"],
-            "pd_over_identified": errors["pd"] / errors["identified"],
-            "identify_s": identify_s, "training_s": 5.0 * trajectories}
-
-
-def arm_summary():
-    if not ARM_JSONL.exists():
-        return ""
-    records = [json.loads(line) for line in ARM_JSONL.read_text().splitlines() if line.strip()]
-    lines = ["| seed | RMS PD alone (rad) | RMS true FF | RMS identified FF | identified / true "
-             "(target <= 1.2) | PD / identified (target >= 5) |", "|---|---|---|---|---|---|"]
-    for r in records:
-        lines.append(f"| {r['seed']} | {r['rms_pd']:.4f} | {r['rms_true_ff']:.5f} | "
-                     f"{r['rms_identified_ff']:.5f} | {r['identified_over_true']:.2f} | "
-                     f"{r['pd_over_identified']:.0f} |")
-    return "\n".join(lines) + "\n"
+# the arm-tracking benchmark lives in its own script (benchmarks/control_arm.py)
+from control_arm import arm_summary  # noqa: E402  (a sibling script, not a package)
 
 
 def planning_timing(system_name: str, catalog: str, seed: int = 0, calls: int = 200) -> dict:
@@ -483,16 +399,8 @@ def main(argv=None):
                     handle.write(json.dumps(record) + "\n")
         return 0
     if args.arm and not args.summary:
-        done = set()
-        if ARM_JSONL.exists():
-            done = {json.loads(line)["seed"] for line in ARM_JSONL.read_text().splitlines()
-                    if line.strip()}
-        for seed in range(args.first_seed, args.first_seed + args.seeds):
-            if seed in done:
-                continue
-            print(f"arm tracking seed {seed}", file=sys.stderr, flush=True)
-            with ARM_JSONL.open("a") as handle:
-                handle.write(json.dumps(arm_tracking(seed)) + "\n")
+        import control_arm
+        control_arm.main(["--seeds", str(args.seeds), "--first-seed", str(args.first_seed)])
         print(write_summary(NOTES_PATH.read_text() if NOTES_PATH.exists() else ""))
         return 0
     if not args.summary:

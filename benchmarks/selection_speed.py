@@ -4,7 +4,8 @@ columns, the size of automatic catalogs.
 The columns are products of a few smooth signals plus 1 % noise (strongly correlated, as the
 columns of a product catalog are), ``n_blocks=3`` coordinates of 1,000 rows each, a law of 10
 terms with 1 % noise on the target. Prints, per catalog size, the median of ``--repeats`` wall
-times and whether every true column was selected. Compare two checkouts by running it under
+times and of this process's CPU times (on a shared, loaded machine the CPU time moves less), the
+support and whether every true column was selected. Compare two checkouts by running it under
 each (``PYTHONPATH=/path/to/other/checkout python benchmarks/selection_speed.py``).
 
 Usage: ``python benchmarks/selection_speed.py [--sizes 250 500 1000] [--repeats 3]``.
@@ -43,13 +44,15 @@ def main(argv=None):
     rows = []
     for n_columns in args.sizes:
         x, y, true = catalog_like(args.rows, n_columns)
-        times = []
+        times, cpu_times = [], []
         for _ in range(args.repeats):
-            start = time.perf_counter()
+            start, cpu = time.perf_counter(), time.process_time()
             support = select_support(x, y, n_blocks=3).support
             times.append(time.perf_counter() - start)
+            cpu_times.append(time.process_time() - cpu)
         row = {"columns": n_columns, "rows": args.rows, "median_s": float(np.median(times)),
-               "best_s": float(np.min(times)), "terms": int(len(support)),
+               "best_s": float(np.min(times)), "median_cpu_s": float(np.median(cpu_times)),
+               "support": [int(c) for c in support], "terms": int(len(support)),
                "true_found": int(np.isin(true, support).sum())}
         rows.append(row)
         print(json.dumps(row), flush=True)

@@ -13,7 +13,7 @@ import numpy as np
 __all__ = ["IdentificationWarning", "UnexplainedCoordinateWarning", "check_option",
            "check_numeric_array", "check_instance", "check_indices", "check_times",
            "argument_type", "Interval", "Options", "Boolean", "HasMethods", "InstanceOf",
-           "check_parameter", "validate_params"]
+           "Collection", "check_parameter", "validate_params"]
 
 _KINDS = ("bool", "int", "real", "choice")
 
@@ -378,6 +378,10 @@ class InstanceOf:
         """What the constraint accepts, in words."""
         return self.what
 
+    def accepts(self, value) -> bool:
+        """Whether ``value`` is an instance of ``types`` (no message built, no ``repr``)."""
+        return isinstance(value, self.types)
+
     def check(self, name: str, value, allow_none: bool = False):
         """Raise a ``TypeError`` naming ``name`` for a ``value`` of another type."""
         if (value is None and allow_none) or isinstance(value, self.types):
@@ -391,7 +395,51 @@ class InstanceOf:
         return False
 
 
+class Collection:
+    """An iterable instance that is not a string (a list, tuple, array, mapping or sequence
+    object), described as ``what``; its entries are checked where they are used.
+
+    >>> Collection("a sequence of joint names").describe()
+    'a sequence of joint names'
+    >>> Collection("a sequence of joint names").check("joints", "hinge")
+    Traceback (most recent call last):
+    ...
+    TypeError: joints: expected a sequence of joint names, got the str 'hinge'
+    """
+
+    def __init__(self, what: str):
+        self.what = what
+
+    def describe(self) -> str:
+        """What the constraint accepts, in words."""
+        return self.what
+
+    def accepts(self, value) -> bool:
+        """Whether ``value`` is an iterable instance other than a string (no message built)."""
+        return not isinstance(value, (str, bytes, type)) and callable(
+            getattr(value, "__iter__", None))
+
+    def check(self, name: str, value, allow_none: bool = False):
+        """Raise a ``TypeError`` naming ``name`` for a string, a class or a non-iterable."""
+        if value is None and allow_none:
+            return value
+        if not self.accepts(value):
+            kind = "class" if isinstance(value, type) else type(value).__name__
+            shown = value.__name__ if isinstance(value, type) else repr(value)
+            raise TypeError(f"{name}: expected {self.what}{' or None' if allow_none else ''}, "
+                            f"got the {kind} {shown}")
+        return value
+
+    def claims(self, value) -> bool:
+        """Whether a refused ``value`` is this constraint's to explain (never: its words are
+        part of the combined message)."""
+        return False
+
+
 def _accepts(rule, name, value) -> bool:
+    quick = getattr(rule, "accepts", None)  # a test that formats no message (no repr)
+    if quick is not None:
+        return quick(value)
     try:
         rule.check(name, value)
     except (TypeError, ValueError):
@@ -420,7 +468,7 @@ def check_parameter(name: str, value, constraints):
         Its value.
     constraints : list
         ``None``, literals and constraint objects (:class:`Interval`, :class:`Options`,
-        :class:`Boolean`, :class:`HasMethods`, :class:`InstanceOf`).
+        :class:`Boolean`, :class:`HasMethods`, :class:`InstanceOf`, :class:`Collection`).
 
     Returns
     -------

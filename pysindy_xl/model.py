@@ -16,6 +16,7 @@ from ._validation import (
     InstanceOf,
     Interval,
     Options,
+    check_option,
     validate_params,
 )
 from .feature_library import remembered_weak_values
@@ -181,7 +182,7 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         self.hold_still = hold_still
 
     def regression(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None,
-                   formulation=None) -> CatalogProblem:
+                   formulation=None, propagate_noise=True) -> CatalogProblem:
         """The regression problem of the fitted model's catalog on data, built as :meth:`fit`
         builds it.
 
@@ -204,6 +205,10 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
             ``False`` marks samples to leave out, as in :meth:`fit`; default None (all).
         formulation : {"strong", "weak"}, optional
             Default None: the fit's ``formulation_``.
+        propagate_noise : bool, default True
+            Weak form: propagate the noise of the positions into the rows (``row_noise``), as
+            :meth:`fit` does; False leaves ``row_noise`` out (the rows are the same, built at a
+            fraction of the cost).
 
         Returns
         -------
@@ -235,7 +240,8 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         return build_problem(self.feature_library_, data, formulation,
                              test_functions=self.test_functions, smoother=self.smoother,
                              half_width=None if info is None else info["half_width"],
-                             still=self._held())
+                             still=self._held(),
+                             propagate=check_option("propagate_noise", propagate_noise, "bool"))
 
     def fit(self, x, t=None, x_dot=None, x_ddot=None, u=None, sample_mask=None):
         """Identify the equations of motion.

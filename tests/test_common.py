@@ -25,13 +25,16 @@ kinds:
   names the argument, where some checks want scikit-learn's own wording or error class. The
   package's answer to the same input is asserted by :func:`test_the_answer_names_the_argument`.
 
-The optimizers and ``XLSINDy`` declare what each parameter accepts in a table,
-``_parameter_constraints`` (as scikit-learn's estimators do), checked at ``fit`` by
+The feature libraries, the optimizers and ``XLSINDy`` declare what each parameter accepts in a
+table, ``_parameter_constraints`` (as scikit-learn's estimators do), checked at ``fit`` by
 :func:`pysindy_xl._validation.validate_params`: the table covers every parameter of
 ``__init__``, a value outside it is refused at ``fit`` (not before) with an error naming the
-parameter, values inside it fit, and the documented types name what the table accepts.
+parameter, values inside it fit, and the documented types name what the table accepts. The
+weak-form helpers (``BumpTestFunctions``, ``WhittakerSmoother``) have no ``fit``: their table
+is checked where they are used (``matrices``, ``smooth``).
 """
 
+import copy
 import inspect
 import pickle
 import re
@@ -66,6 +69,7 @@ _ONE = px.Coordinates(["theta"])
 def _libraries():
     c = _TWO
     return [
+        px.AutomaticCatalog(["x", "th"], kinds={"th": "angle"}),
         px.LagrangeLibrary(c, px.products([1, sp.cos(c.q[1])], px.monomials(c.qd, 2))),
         px.ClassicalLibrary(c, c.qd),
         px.ExternalForces(c),
@@ -156,7 +160,8 @@ _IMPLICIT = {**dict.fromkeys(set(_DATA_CHECKS) - {"check_fit_check_is_fitted",
 #: per estimator class, the sklearn checks that cannot apply and why
 EXPECTED_FAILED_CHECKS = {
     **dict.fromkeys(("LagrangeLibrary", "ClassicalLibrary", "ExternalForces",
-                     "CatalogRepartition", "JointFrictionLibrary", "PolynomialLagrangeLibrary"),
+                     "CatalogRepartition", "JointFrictionLibrary", "PolynomialLagrangeLibrary",
+                     "AutomaticCatalog"),
                     _LIBRARY),
     "ExplicitOptimizer": _WORDING,
     "ImplicitOptimizer": _IMPLICIT,
@@ -383,7 +388,15 @@ def test_the_model_of_the_contract_is_the_true_pendulum():
 
 # -------------------------------------------------------- the declared parameter constraints
 
-_CONSTRAINED = [*_optimizers(), px.XLSINDy(_pendulum_catalog())]
+_CONSTRAINED = [*_libraries(), *_optimizers(), px.XLSINDy(_pendulum_catalog())]
+_T = np.linspace(0.0, 10.0, 1001)
+#: the weak-form helpers: no fit, the table checked at use (their call on valid data)
+_AT_USE = {"BumpTestFunctions": (px.BumpTestFunctions(),
+                                 lambda e: e.matrices(_T, np.sin(_T)[:, None])[0].toarray()),
+           "WhittakerSmoother": (px.WhittakerSmoother(),
+                                 lambda e: e.smooth(np.linspace(0.0, 1.0, 101),
+                                                    np.sin(np.linspace(0, 1, 101))[:, None])[0])}
+_TABLES = [*_CONSTRAINED, *(e for e, _ in _AT_USE.values())]
 
 
 class _NotAnInstance:
@@ -397,7 +410,7 @@ def _invalid_values(constraints):
     return [_NotAnInstance] + ([] if takes_any_instance else [1j])
 
 
-@pytest.mark.parametrize("estimator", _CONSTRAINED, ids=lambda e: type(e).__name__)
+@pytest.mark.parametrize("estimator", _TABLES, ids=lambda e: type(e).__name__)
 def test_every_parameter_is_constrained(estimator):
     """The table declares every parameter of ``__init__``, as scikit-learn's estimators do."""
     params = set(inspect.signature(type(estimator).__init__).parameters) - {"self"}
@@ -421,7 +434,51 @@ def test_a_refused_parameter_is_named_at_fit(name, param):
                 _fit(estimator, args, kwargs)
 
 
+@pytest.mark.parametrize("name, param", [
+    (name, p) for name, (e, _) in _AT_USE.items() for p in sorted(type(e)._parameter_constraints)])
+def test_a_refused_parameter_is_named_at_use(name, param):
+    """The weak-form helpers store any value and refuse one outside the table where they are
+    used, naming the parameter."""
+    prototype, use = _AT_USE[name]
+    assert np.all(np.isfinite(use(copy.copy(prototype))))  # the defaults are used
+    for value in _invalid_values(type(prototype)._parameter_constraints[param]):
+        helper = type(prototype)(**{param: value})
+        assert getattr(helper, param) is value
+        with pytest.raises((TypeError, ValueError), match=rf"^{re.escape(param)}: expected"):
+            use(helper)
+
+
+@pytest.mark.parametrize("name, param, value, error, match", [
+    ("LagrangeLibrary", "terms", "x_dot**2", TypeError,
+     r"^terms: expected a sympy expression or a sequence of sympy expressions, got the str"),
+    ("ClassicalLibrary", "mask", "diagonal", TypeError, r"^mask: expected an array of bool"),
+    ("ExternalForces", "interlink", 2.0, TypeError, r"^interlink: expected an array of shape"),
+    ("JointFrictionLibrary", "joints", "x", TypeError,
+     r"^joints: expected a sequence of joint names, got the str 'x'"),
+    ("JointFrictionLibrary", "models", "dry", ValueError, r"^models: expected one of \('viscous'"),
+    ("JointFrictionLibrary", "coulomb_scale", 0.0, ValueError,
+     r"^coulomb_scale: expected a real number > 0, got 0.0"),
+    ("CatalogRepartition", "libraries", px.ExternalForces(_TWO), TypeError,
+     r"^libraries: expected a list of pysindy_xl feature libraries"),
+    ("AutomaticCatalog", "degree", 1.5, ValueError, r"^degree: expected an integer >= 0"),
+    ("AutomaticCatalog", "kinetic", "quadratic", ValueError, r"^kinetic: expected one of"),
+    ("PolynomialLagrangeLibrary", "tree", "arm.xml", TypeError,
+     r"^tree: expected a KinematicTree or None, got 'arm.xml'"),
+])
+def test_a_wrong_library_option_names_the_parameter(name, param, value, error, match):
+    """Wrong-typed options of the feature libraries: the error of fit names the parameter and
+    what it accepts."""
+    make, prototype = _CASES[name]
+    library, args, kwargs, _ = make(clone(prototype).set_params(**{param: value}))
+    with pytest.raises(error, match=match):
+        library.fit(*args, **kwargs)
+
+
 @pytest.mark.parametrize("name, param, value", [
+    ("LagrangeLibrary", "terms", _TWO.qd[0] ** 2), ("ClassicalLibrary", "mask", np.ones((2, 2))),
+    ("JointFrictionLibrary", "models", "viscous"), ("JointFrictionLibrary", "joints", ("a", "b")),
+    ("AutomaticCatalog", "coordinates", "x, th"), ("AutomaticCatalog", "dissipation", None),
+    ("AutomaticCatalog", "coulomb_scale", {"x": 0.1, "th": 0.2}),
     ("ExplicitOptimizer", "threshold", 0.05), ("ExplicitOptimizer", "method", "lasso"),
     ("ImplicitOptimizer", "alpha", 1e-3), ("EnsembleOptimizer", "random_state", 7),
     ("EnsembleOptimizer", "random_state", np.random.default_rng(7)),
@@ -451,7 +508,7 @@ def _documented_words(constraint) -> list[str]:
     return []  # None (see below), instances: described in words of their own
 
 
-@pytest.mark.parametrize("estimator", _CONSTRAINED, ids=lambda e: type(e).__name__)
+@pytest.mark.parametrize("estimator", _TABLES, ids=lambda e: type(e).__name__)
 def test_the_documented_types_follow_the_table(estimator):
     """Each constrained parameter is documented, and its documented type names what the table
     accepts: the options, 'bool', 'int', 'float', the literals, None ('optional')."""

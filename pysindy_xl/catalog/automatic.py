@@ -21,13 +21,22 @@ classical terms, and the force columns. Terms that are trigonometric polynomials
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections.abc import Mapping
 
 import numpy as np
 import sympy as sp
 
-from .._validation import check_option
+from .._validation import (
+    Boolean,
+    Collection,
+    InstanceOf,
+    Interval,
+    Options,
+    check_option,
+    validate_params,
+)
 from ..feature_library import (
     CatalogRepartition,
     ClassicalLibrary,
@@ -42,6 +51,18 @@ __all__ = ["AutomaticCatalog", "DISSIPATION", "coordinate_kinds"]
 
 #: Dissipation models an automatic catalog offers per coordinate.
 DISSIPATION = ("viscous", "coulomb")
+
+
+@functools.cache
+def _param_names(cls) -> tuple:
+    """``cls._get_param_names()``, read from the signature once per class."""
+    return tuple(cls._get_param_names())
+
+
+#: Terms of recent catalogs by their parameters, most recently used last (sympy expressions
+#: are immutable): the clones that every fit makes, and equal catalogs, build them once.
+_TERMS: dict = {}
+_CACHED_TERMS = 32
 
 
 def coordinate_kinds(names, kinds) -> tuple[str, ...]:
@@ -132,8 +153,8 @@ class AutomaticCatalog(CatalogRepartition):
         cosines of degree 1.
     gyroscopic : bool, default False
         Add ``f(q_k) qd_i`` (``k != i``; ``f`` a linear coordinate, a sine or a cosine).
-    dissipation : sequence of {"viscous", "coulomb"}, default ("viscous",)
-        Dissipation terms in each coordinate's equation.
+    dissipation : str, sequence of {"viscous", "coulomb"} or None, default ("viscous",)
+        Dissipation terms in each coordinate's equation (None or ``()``: none).
     coulomb_scale : float or sequence of float, default 0.01
         ``eps_i`` of the smooth Coulomb law ``tanh(qd_i / eps_i)``.
     splines : int or mapping {name: int}, optional
@@ -158,6 +179,25 @@ class AutomaticCatalog(CatalogRepartition):
     >>> cat.fit().get_feature_names()[:4]
     ['F[tau]', 'L[r_dot**2]', 'L[r_dot*theta_dot]', 'L[theta_dot**2]']
     """
+
+    _parameter_constraints = {
+        "coordinates": [InstanceOf((str, Coordinates), "a Coordinates or comma-separated names"),
+                        Collection("a list of names")],
+        "kinds": [None, Options(KINDS), Collection("a sequence or mapping of kinds")],
+        "bounds": [None, Collection("a mapping or sequence of (low, high)")],
+        "degree": [Interval("int", 0)],
+        "trig_degree": [Interval("int", 0)],
+        "angle_degree": [Interval("int", 0)],
+        "interaction": [Interval("int", 1)],
+        "kinetic": [Options(("constant", "configuration"))],
+        "gyroscopic": [Boolean()],
+        "dissipation": [None, Options(DISSIPATION), Collection("a sequence of dissipation models")],
+        "coulomb_scale": [Interval("real", 0, low_open=True),
+                          Collection("a sequence or mapping of float")],
+        "splines": [None, Interval("int", 0), Collection("a mapping {name: int}")],
+        "interlink": [None, Collection("an array of shape (n, n)")],
+        "max_terms": [Interval("int", 1)],
+    }
 
     def __init__(self, coordinates, kinds=None, bounds=None, degree=2, trig_degree=1,
                  angle_degree=0, interaction=1, kinetic="configuration", gyroscopic=False,
@@ -191,6 +231,7 @@ class AutomaticCatalog(CatalogRepartition):
         return Coordinates(list(names))
 
     def _options(self) -> dict:
+        validate_params(self)
         coords = self._coordinates()
         names = list(coords.names)
         options = {"coords": coords, "kinds": coordinate_kinds(names, self.kinds)}
@@ -230,13 +271,14 @@ class AutomaticCatalog(CatalogRepartition):
         list of sympy.Expr
             The terms in catalog order (the Euler-Lagrange operator turns each into a column).
         """
-        return self._terms(self._options())[0]
+        return list(self._built_terms(self._options())[0])
 
     @property
     def n_terms(self) -> int:
         """Number of candidate terms (Lagrangian and dissipation), forces left out."""
         options = self._options()
-        return len(self._terms(options)[0]) + len(self._dissipation(options)[0])
+        terms, _, dissipation, _ = self._built_terms(options)
+        return len(terms) + len(dissipation)
 
     def _products(self, options, factors) -> list[tuple[sp.Expr, int, bool]]:
         """Products over at most ``interaction`` coordinates of one factor each, as
@@ -307,6 +349,19 @@ class AutomaticCatalog(CatalogRepartition):
         splines = self._splines(options)
         return terms + splines, fast + [False] * len(splines)
 
+    def _built_terms(self, options, key=None) -> tuple:
+        """``(*_terms, *_dissipation)``, built once per parameters (clones, which every fit
+        makes, and equal catalogs share them; sympy expressions are immutable)."""
+        if key is None:
+            key = repr([(name, getattr(self, name)) for name in _param_names(type(self))])
+        found = _TERMS.pop(key, None)
+        if found is None:
+            found = (*self._terms(options), *self._dissipation(options))
+        _TERMS[key] = found
+        while len(_TERMS) > _CACHED_TERMS:
+            del _TERMS[next(iter(_TERMS))]
+        return found
+
     def _dissipation(self, options) -> tuple[list[sp.Expr], np.ndarray]:
         coords = options["coords"]
         terms, rows = [], []
@@ -321,14 +376,14 @@ class AutomaticCatalog(CatalogRepartition):
     @property
     def libraries(self) -> list:
         """The catalog's libraries (built from the parameters; see the class docstring)."""
-        options = self._options()
-        key = repr(sorted(self.get_params(deep=False).items(), key=lambda item: item[0]))
+        key = repr([(name, getattr(self, name)) for name in _param_names(type(self))])
         cached = self.__dict__.get("_built")
-        if cached is not None and cached[0] == key:
+        if cached is not None and cached[0] == key:  # checked when built
             return cached[1]
+        options = self._options()
         coords = options["coords"]
-        terms, fast = self._terms(options)
-        dissipation, mask = self._dissipation(options)
+        # clones (every fit clones its catalog) and equal catalogs share the terms
+        terms, fast, dissipation, mask = self._built_terms(options, key)
         total = len(terms) + len(dissipation)
         if total > options["max_terms"]:
             raise ValueError(f"max_terms: the catalog would have {total} terms, more than "
@@ -342,7 +397,7 @@ class AutomaticCatalog(CatalogRepartition):
         if other:
             libraries.append(LagrangeLibrary(coords, other))
         if dissipation:
-            libraries.append(ClassicalLibrary(coords, dissipation, mask=mask))
+            libraries.append(ClassicalLibrary(coords, list(dissipation), mask=mask.copy()))
         self.__dict__["_built"] = (key, libraries)
         return libraries
 

@@ -252,7 +252,8 @@ def _held_out_error(model, held, forced) -> float:
     residual over the forces' part (forced data) or over the largest term's (unforced)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # blocks shorter than a test function: strong form
-        problem = model.regression(held["x"], held["t"], u=held["u"], formulation="weak")
+        problem = model.regression(held["x"], held["t"], u=held["u"], formulation="weak",
+                                   propagate_noise=False)
         if not len(problem.theta):
             problem = model.regression(held["x"], held["t"], u=held["u"], formulation="strong")
     theta, columns = problem.theta, problem.catalog_map.columns
@@ -446,8 +447,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         active = np.any(np.vstack(us) != 0, axis=0) if forced else np.zeros(n, dtype=bool)
         search_optimizer = (optimizer if optimizer is not None or not forced else
                             ExplicitOptimizer() if active.all() else MixedOptimizer())
+    # the search's fits smooth the same pieces (and noise draws) at every step: once
+    from ..fit import RememberedSmoother
     template = XLSINDy(optimizer=search_optimizer, formulation=formulation,
-                       test_functions=BumpTestFunctions(width=width))
+                       test_functions=BumpTestFunctions(width=width),
+                       smoother=RememberedSmoother())
 
     def evaluate(parameters, move):
         catalog = AutomaticCatalog(**fixed, **parameters)
@@ -527,7 +531,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                     break
                 skip = 0 if keep else 1
     model = clone(template).set_params(feature_library=best_catalog, test_functions=None,
-                                       optimizer=optimizer)
+                                       optimizer=optimizer, smoother=None)
     full = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
     if not is_list:
         full = {key: None if value is None else value[0] for key, value in full.items()}

@@ -9,7 +9,15 @@ forces of the motion, and a PD law corrects what the model misses:
 - ``"computed-torque"``: :math:`\tau = M(q, \dot q)(\ddot q_r + K_p e + K_d \dot e)
   - f(q, \dot q, 0)` (the model at the measured state, every period);
 
-with ``e = q_r - q``. ``model=None`` leaves the PD law alone."""
+with ``e = q_r - q``. ``model=None`` leaves the PD law alone.
+
+A model whose dry friction has a lead in the acceleration (MuJoCo's regularized
+``frictionloss``, :func:`~pysindy_xl.physical.friction.regularized_dry_friction`) carries,
+to first order, a large inertia ``F tau / s`` inside the sticking zone ``|qd| < s``: the
+impulse of the early switch. Evaluated pointwise along a sampled reference it gives a spike
+whenever a sample falls inside that zone. ``min_speed`` evaluates the feedforward with each
+reference speed raised to at least that value (its sign kept), i.e. with the sliding law
+``F sign(qd)``."""
 
 from __future__ import annotations
 
@@ -53,6 +61,10 @@ class ComputedTorque:
         In ``"feedforward"`` mode: evaluate the model along the reference at these times once,
         vectorized, and interpolate linearly in between (the per-period cost drops to a
         lookup).
+    min_speed : float or array (n,), optional
+        In ``"feedforward"`` mode: evaluate the model with each reference speed raised to at
+        least this value, its sign kept (zero counts as positive): the sliding side of a dry
+        friction law (module docstring). Default None: the reference speeds as they are.
 
     Examples
     --------
@@ -70,7 +82,7 @@ class ComputedTorque:
     """
 
     def __init__(self, model, reference, kp, kd, n: int, mode: str = "feedforward",
-                 force_limit=None, feedforward_times=None):
+                 force_limit=None, feedforward_times=None, min_speed=None):
         if mode not in _MODES:
             raise ValueError(f"mode: expected one of {_MODES}, got {mode!r}")
         if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
@@ -91,6 +103,7 @@ class ComputedTorque:
         self.mode = mode
         self.force_limit = None if force_limit is None else _gains(force_limit, self.n,
                                                                    "force_limit")
+        self.min_speed = None if min_speed is None else _gains(min_speed, self.n, "min_speed")
         self._table = None
         if feedforward_times is not None and mode == "feedforward":
             times = np.asarray(feedforward_times, dtype=float).reshape(-1)
@@ -99,7 +112,15 @@ class ComputedTorque:
             q_r, qd_r, qdd_r = (np.stack([np.asarray(part, dtype=float).reshape(self.n)
                                           for part in parts])
                                 for parts in zip(*(reference(t) for t in times), strict=True))
-            self._table = (times, self.inverse_dynamics(q_r, qd_r, qdd_r))
+            self._table = (times, self.inverse_dynamics(q_r, self._sliding(qd_r), qdd_r))
+
+    def _sliding(self, qd) -> np.ndarray:
+        """``qd`` with each speed raised to at least ``min_speed`` (sign kept)."""
+        if self.min_speed is None:
+            return qd
+        qd = np.asarray(qd, dtype=float)
+        floor = np.where(qd < 0, -self.min_speed, self.min_speed)
+        return np.where(np.abs(qd) < self.min_speed, floor, qd)
 
     def inverse_dynamics(self, q, qd, qdd) -> np.ndarray:
         """The model's forces of a motion, ``M(q, qd) qdd - f(q, qd, 0)``.
@@ -150,7 +171,7 @@ class ComputedTorque:
                 times, forces = self._table
                 model = np.array([np.interp(t, times, forces[:, j]) for j in range(self.n)])
             else:
-                model = self.inverse_dynamics(q_r, qd_r, qdd_r)[0]
+                model = self.inverse_dynamics(q_r, self._sliding(qd_r), qdd_r)[0]
             tau = model + self.kp * e + self.kd * ed
         else:
             tau = self.inverse_dynamics(q, qd, qdd_r + self.kp * e + self.kd * ed)[0]

@@ -21,7 +21,7 @@ from pysindy.feature_library.base import BaseFeatureLibrary
 from sklearn.base import clone
 from sklearn.utils.validation import check_is_fitted
 
-from .._validation import check_numeric_array
+from .._validation import InstanceOf, check_numeric_array, validate_params
 from ..registry import register_type
 from ..symbols import Coordinates
 from ._compile import Terms, compile_entries, compile_terms, decompose
@@ -168,6 +168,10 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
     #: the name a model file gives this class (default: ``module.QualifiedName``)
     spec_type: str
 
+    #: what each parameter accepts (:func:`~pysindy_xl._validation.validate_params`), checked
+    #: at the start of ``fit``; the entries themselves (terms, shapes) by the library
+    _parameter_constraints = {"coords": [InstanceOf(Coordinates, "a pysindy_xl.Coordinates")]}
+
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
         register_type(LIBRARY_TYPES, cls)
@@ -217,6 +221,7 @@ class SymbolicLibrary(ColumnStructure, BaseFeatureLibrary):
 
     def _fit_symbolic(self):
         """Derive the symbolic columns and set the attributes that describe them."""
+        validate_params(self)
         self._check_coords()
         names, matrix = self._build_symbolic()
         n = self.coords.n

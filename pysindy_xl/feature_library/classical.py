@@ -8,6 +8,7 @@ import numpy as np
 import sympy as sp
 from pysindy.feature_library.base import BaseFeatureLibrary
 
+from .._validation import Collection, InstanceOf
 from ..expressions import format_expression, parse_expression
 from ..symbols import Coordinates, as_expr_list
 from ._base import SymbolicLibrary, compile_entries
@@ -106,6 +107,13 @@ class ClassicalLibrary(SymbolicLibrary):
     category = "classical"
     column_rank = 2
     spec_type = "ClassicalLibrary"
+    _parameter_constraints = {
+        "coords": [InstanceOf(Coordinates, "a pysindy_xl.Coordinates")],
+        "terms": [InstanceOf(sp.Basic, "a sympy expression"),
+                  InstanceOf(BaseFeatureLibrary, "a pysindy feature library"),
+                  Collection("a sequence of sympy expressions")],
+        "mask": [None, Collection("an array of bool of shape (n_terms, n)")],
+    }
 
     def __init__(self, coords: Coordinates, terms, mask=None):
         self.coords = coords

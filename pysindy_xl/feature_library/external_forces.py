@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
+from .._validation import Collection, InstanceOf
 from ..symbols import Coordinates
 from ._base import SymbolicLibrary
 
@@ -106,6 +107,10 @@ class ExternalForces(SymbolicLibrary):
     category = "forces"
     column_rank = 0
     spec_type = "ExternalForces"
+    _parameter_constraints = {
+        "coords": [InstanceOf(Coordinates, "a pysindy_xl.Coordinates")],
+        "interlink": [None, Collection("an array of shape (n, n)")],
+    }
 
     def __init__(self, coords: Coordinates, interlink=None):
         self.coords = coords

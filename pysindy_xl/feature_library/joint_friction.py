@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
+from .._validation import Collection, InstanceOf, Interval, Options
 from ..expressions import format_expression
 from ..symbols import Coordinates
 from ._base import SymbolicLibrary
@@ -96,8 +97,9 @@ class JointFrictionLibrary(SymbolicLibrary):
         Each joint's velocity in the coordinates; default ``coords.qd``.
     weights : array (n, len(joints)), optional
         The generalized force of a unit joint torque; default the identity.
-    models : sequence of str, default :data:`FRICTION_MODELS`
-        The candidate models of every joint.
+    models : str or sequence of str, default :data:`FRICTION_MODELS`
+        The candidate models of every joint, among ``"viscous"``, ``"coulomb"``,
+        ``"asymmetric"``, ``"stribeck"`` and ``"offset"``.
     coulomb_scale : float, default 0.01
         ``eps``: velocity scale of the smooth sign.
     stribeck_scale : float, default 0.1
@@ -124,6 +126,15 @@ class JointFrictionLibrary(SymbolicLibrary):
     category = "classical"
     column_rank = 2
     spec_type = "JointFrictionLibrary"
+    _parameter_constraints = {
+        "coords": [InstanceOf(Coordinates, "a pysindy_xl.Coordinates")],
+        "joints": [Collection("a sequence of joint names")],
+        "velocities": [None, Collection("a sequence of sympy expressions")],
+        "weights": [None, Collection("an array of shape (n, n_joints)")],
+        "models": [Options(FRICTION_MODELS), Collection("a sequence of friction model names")],
+        "coulomb_scale": [Interval("real", 0, low_open=True)],
+        "stribeck_scale": [Interval("real", 0, low_open=True)],
+    }
 
     def __init__(self, coords: Coordinates, joints, velocities=None, weights=None,
                  models=FRICTION_MODELS, coulomb_scale=0.01, stribeck_scale=0.1):

@@ -6,6 +6,7 @@ import numpy as np
 import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
+from .._validation import Collection, InstanceOf
 from ..expressions import format_expression
 from ..symbols import Coordinates, as_expr_list
 from ._base import SymbolicLibrary, shared_derivation
@@ -40,7 +41,8 @@ def _diff(expr: sp.Expr, symbol: sp.Symbol) -> sp.Expr:
 
 def _defined_everywhere(expr: sp.Expr) -> bool:
     """Whether ``expr`` is finite at every finite value of its symbols (sums, products,
-    nonnegative integer powers, ``sin`` and ``cos`` of finite numbers and symbols).
+    nonnegative integer powers, ``sin``, ``cos``, ``Abs``, ``sign`` and ``tanh`` of finite
+    numbers and symbols).
     """
     if expr.is_Symbol or isinstance(expr, sp.NumberSymbol):
         return True
@@ -48,7 +50,7 @@ def _defined_everywhere(expr: sp.Expr) -> bool:
         return bool(expr.is_finite)
     if isinstance(expr, sp.Pow):
         return bool(expr.exp.is_Integer and expr.exp >= 0) and _defined_everywhere(expr.base)
-    return (isinstance(expr, (sp.Add, sp.Mul, sp.sin, sp.cos))
+    return (isinstance(expr, (sp.Add, sp.Mul, sp.sin, sp.cos, sp.Abs, sp.sign, sp.tanh))
             and all(_defined_everywhere(a) for a in expr.args))
 
 
@@ -97,6 +99,37 @@ def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:
     return out
 
 
+#: Derived parts of single terms by content (:func:`_term_parts`): catalogs tried one after
+#: another (a growing automatic catalog) share most of their terms.
+_PARTS: dict = {}
+_CACHED_PARTS = 8192
+
+
+def _term_parts(term: sp.Expr, coords: Coordinates, weak: bool = False) -> tuple:
+    """The Euler-Lagrange expressions ``E_i`` of one Lagrangian term (:func:`euler_lagrange`),
+    or with ``weak`` its ``(P, Q)``: ``P_i = dL/dqd_i`` and ``Q_i = dL/dq_i`` expanded, one
+    expression per coordinate; derived once per term and coordinates.
+
+    A potential ``V(q)`` (no velocity) has ``P = 0`` and ``Q_i = -E_i``: the same expression
+    as expanding ``dV/dq_i`` where the coefficients are exact (rationals), and equal to it up
+    to rounding of float coefficients (a B-spline's), at half the cost of its derivation.
+    """
+    if not weak:
+        return shared_derivation(("E", coords.variables, term),
+                                 lambda: tuple(euler_lagrange(term, coords)),
+                                 _PARTS, _CACHED_PARTS)
+
+    def derive():
+        used = term.free_symbols
+        if not used & set(coords.qd):  # a potential: P = 0 and Q = -E, no second expansion
+            columns = _term_parts(term, coords)
+            return tuple(sp.Integer(0) for _ in coords.qd), tuple(-e for e in columns)
+        return tuple(tuple(sp.expand(_diff(term, v)) if v in used else sp.Integer(0)
+                           for v in variables) for variables in (coords.qd, coords.q))
+
+    return shared_derivation(("PQ", coords.variables, term), derive, _PARTS, _CACHED_PARTS)
+
+
 class LagrangeLibrary(SymbolicLibrary):
     r"""Candidate Lagrangian terms, each turned into its Euler-Lagrange column.
 
@@ -139,6 +172,11 @@ class LagrangeLibrary(SymbolicLibrary):
     category = "lagrange"
     column_rank = 1
     spec_type = "LagrangeLibrary"
+    _parameter_constraints = {
+        "coords": [InstanceOf(Coordinates, "a pysindy_xl.Coordinates")],
+        "terms": [InstanceOf(sp.Basic, "a sympy expression"),
+                  Collection("a sequence of sympy expressions")],
+    }
 
     def __init__(self, coords: Coordinates, terms):
         self.coords = coords
@@ -159,7 +197,7 @@ class LagrangeLibrary(SymbolicLibrary):
         names, columns = shared_derivation(
             ("euler-lagrange", self.coords.variables, tuple(terms)),
             lambda: (tuple(f"L[{term}]" for term in terms),
-                     tuple(tuple(euler_lagrange(term, self.coords)) for term in terms)))
+                     tuple(_term_parts(term, self.coords) for term in terms)))
         matrix = sp.Matrix(self.coords.n, len(terms), lambda i, j: columns[j][i])
         self.zero_terms_ = [j for j, col in enumerate(columns) if all(e == 0 for e in col)]
         return list(names), matrix
@@ -220,9 +258,9 @@ class LagrangeLibrary(SymbolicLibrary):
     def _build_weak_symbolic(self):
         # P = dL/dqd and Q = dL/dq: the Euler-Lagrange column before its time derivative
         terms, coords = self.terms_, self.coords
-        return (
-            sp.Matrix(coords.n, len(terms), lambda i, k: sp.expand(_diff(terms[k], coords.qd[i]))),
-            sp.Matrix(coords.n, len(terms), lambda i, k: sp.expand(_diff(terms[k], coords.q[i]))))
+        parts = [_term_parts(term, coords, weak=True) for term in terms]
+        return (sp.Matrix(coords.n, len(terms), lambda i, k: parts[k][0][i]),
+                sp.Matrix(coords.n, len(terms), lambda i, k: parts[k][1][i]))
 
     def to_spec(self) -> dict:
         """JSON-serializable description of this library, read back by :meth:`from_spec`.

@@ -11,6 +11,7 @@ import warnings
 import numpy as np
 import sympy as sp
 
+from .._validation import Collection, InstanceOf
 from ..expressions import format_expression
 from ..physical.rigid_body import KinematicTree, physical_parameters_from_base
 from ..symbols import as_expr_list
@@ -60,6 +61,11 @@ class PolynomialLagrangeLibrary(LagrangeLibrary):
     """
 
     spec_type = "PolynomialLagrangeLibrary"
+    _parameter_constraints = {
+        **LagrangeLibrary._parameter_constraints,
+        "parameters": [None, Collection("a sequence of dict (one per term)")],
+        "tree": [None, InstanceOf(KinematicTree, "a KinematicTree")],
+    }
 
     def __init__(self, coords, terms, parameters=None, tree=None):
         super().__init__(coords, terms)

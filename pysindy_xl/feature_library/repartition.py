@@ -6,6 +6,7 @@ import numpy as np
 import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
+from .._validation import Collection
 from ._base import SymbolicLibrary, TermChain, shared_derivation
 from ._compile import Terms
 from ._structure import DeferredMatrix
@@ -111,6 +112,9 @@ class CatalogRepartition(SymbolicLibrary):
 
     category = "repartition"
     spec_type = "CatalogRepartition"
+    _parameter_constraints = {
+        "libraries": [Collection("a list of pysindy_xl feature libraries")],
+    }
 
     def __init__(self, libraries):
         self.libraries = libraries

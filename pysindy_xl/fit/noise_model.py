@@ -123,9 +123,12 @@ def fit_smoother(smoother=None):
     -------
     smoother
         A :class:`RememberedSmoother` around it, or ``smoother`` itself when it has no
-        ``resmooth`` (does not propagate noise).
+        ``resmooth`` (does not propagate noise) or is a :class:`RememberedSmoother` already
+        (shared by several fits of the same data, as :func:`~pysindy_xl.grow_catalog` does).
     """
     smoother = smoother or WhittakerSmoother()
+    if isinstance(smoother, RememberedSmoother):  # shared by several fits: remembers already
+        return smoother
     return (RememberedSmoother(smoother) if callable(getattr(smoother, "resmooth", None))
             else smoother)
 

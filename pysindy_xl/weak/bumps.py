@@ -14,7 +14,7 @@ import scipy.fft
 import scipy.signal
 import scipy.sparse
 
-from .._validation import check_option
+from .._validation import Collection, Interval, validate_params
 from .smoothing import is_uniform
 
 __all__ = ["BumpTestFunctions", "corner_frequency", "quadrature_weights"]
@@ -160,7 +160,7 @@ class BumpTestFunctions:
         Average number of test functions covering each sample when ``n_functions="auto"``.
     min_samples : int, default 12
         Smallest half-width in samples (quadrature needs a resolved bump).
-    width_multiples : sequence of float, optional
+    width_multiples : float or sequence of float, optional
         Stack the rows of half-width ``m h`` for each multiple ``m``; a width that does not
         fit inside the trajectory is left out. Default: ``h`` alone.
 
@@ -182,6 +182,17 @@ class BumpTestFunctions:
     ((10, 1001), [199, 399])
     """
 
+    _parameter_constraints = {
+        "width": ["auto", Interval("real", 0, low_open=True)],
+        "n_functions": ["auto", Interval("int", 1)],
+        "power": [Interval("int", 1)],
+        "width_factor": [Interval("real", 0, low_open=True)],
+        "overlap": [Interval("real", 0, low_open=True)],
+        "min_samples": [Interval("int", 1)],
+        "width_multiples": [None, Interval("real", 0, low_open=True),
+                            Collection("a sequence of positive numbers")],
+    }
+
     def __init__(self, width="auto", n_functions="auto", power=6, width_factor=1.0,
                  overlap=8.0, min_samples=12, width_multiples=None):
         self.width = width
@@ -193,15 +204,7 @@ class BumpTestFunctions:
         self.width_multiples = width_multiples
 
     def _check_params(self):
-        positive = {"low": 0, "low_open": True}
-        if self.width != "auto":
-            check_option("width", self.width, "real", **positive)
-        if self.n_functions != "auto":
-            check_option("n_functions", self.n_functions, "int", low=1)
-        check_option("power", self.power, "int", low=1)
-        check_option("width_factor", self.width_factor, "real", **positive)
-        check_option("overlap", self.overlap, "real", **positive)
-        check_option("min_samples", self.min_samples, "int", low=1)
+        validate_params(self)
         multiples = self._multiples()
         if multiples.size == 0 or not np.all(np.isfinite(multiples) & (multiples > 0)):
             raise ValueError("width_multiples: expected positive numbers, got "

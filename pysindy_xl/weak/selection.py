@@ -146,7 +146,9 @@ def choose_noise_model(candidates, reference, spans, force_columns, solve, n_blo
         The candidate of smallest held-out error among those that beat the first by
         :data:`MARGIN` in total and on most blocks, while the positions' noise makes up less
         than :data:`NOISE_SHARE` of the first's residual, else 0; None when the data are too
-        short to hold out blocks.
+        short to hold out blocks. A first candidate too wide to be fitted outside the blocks
+        is judged as the zero law (error 1, each block's residual its forces): another
+        replaces it only by predicting the held-out forces.
     errors : list of float
         Each candidate's held-out relative error (``inf`` where a fold's fit failed).
     """
@@ -198,8 +200,16 @@ def choose_noise_model(candidates, reference, spans, force_columns, solve, n_blo
         # first could not be fitted on the blocks
         base = 0 if np.isfinite(errors[0]) else int(np.argmin(errors))
         audible = noisy[base].sum() < NOISE_SHARE * residuals[base].sum()
-    wins = (clean < clean[:1]).sum(axis=1)
-    better = np.flatnonzero(np.isfinite(errors) & (errors < (1 - MARGIN) * errors[0])
+    # a first candidate that could not be fitted on the blocks is judged as the zero law
+    # (no evidence against it, no prediction either): relative error 1, block residuals the
+    # blocks' forces. Another replaces it only by predicting the held-out forces: a narrow fit
+    # of noisy positions, shrunk by the errors in its variables, does not
+    if fits[0]:
+        first, first_blocks = errors[0], clean[:1]
+    else:
+        first, first_blocks = 1.0, forces
+    wins = (clean < first_blocks).sum(axis=1)
+    better = np.flatnonzero(np.isfinite(errors) & (errors < (1 - MARGIN) * first)
                             & (wins > n_blocks / 2) & audible)
     best = int(better[np.argmin(errors[better])]) if better.size else 0
     return best, errors.tolist()

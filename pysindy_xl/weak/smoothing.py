@@ -24,7 +24,7 @@ import scipy.signal
 import scipy.sparse
 import scipy.sparse.linalg
 
-from .._validation import check_option
+from .._validation import Interval, Options, validate_params
 
 __all__ = ["WhittakerSmoother", "whittaker_smooth", "finite_difference_weights", "differentiate",
            "is_uniform"]
@@ -354,16 +354,17 @@ class WhittakerSmoother:
     True
     """
 
+    _parameter_constraints = {
+        "order": [Interval("int", 1, 4)],
+        "lam": [Options(("velocity", "gcv")), Interval("real", 0)],
+    }
+
     def __init__(self, order=3, lam="velocity"):
         self.order = order
         self.lam = lam
 
     def _check_params(self):
-        check_option("order", self.order, "int", low=1, high=4)
-        if isinstance(self.lam, str):
-            check_option("lam", self.lam, "choice", choices=("velocity", "gcv"))
-        else:
-            check_option("lam", self.lam, "real", low=0)
+        validate_params(self)
 
     def smooth(self, t, x):
         """Smoothed positions, velocities and accelerations of noisy positions.

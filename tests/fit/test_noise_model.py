@@ -12,6 +12,7 @@ from scipy.integrate import solve_ivp
 import pysindy_xl as px
 from pysindy_xl.weak import WeakNoise
 from pysindy_xl.weak.selection import (
+    MARGIN,
     NoiseModel,
     bandwidth_half_width,
     choose_noise_model,
@@ -144,6 +145,32 @@ def test_a_candidate_too_wide_for_the_blocks_yields_to_one_that_fits():
         (rows, narrow, None), spans, [0], solve)
     assert best == 1
     assert errors[0] == np.inf and errors[1] < 0.01
+
+
+@pytest.mark.parametrize("shrink", [0.45, 0.0])
+def test_an_unscored_first_candidate_stays_against_one_that_predicts_nothing(shrink):
+    """Short data again, but the narrow candidate's law is shrunk (as errors in its variables
+    shrink a narrow fit of noisy positions: here by 45 %, or its law is the zero one) and
+    its rows hold what it cannot explain. Its held-out force error is then no better than the
+    zero law's (1): the first, which could not be scored, is judged as the zero law and
+    stays."""
+    rng = np.random.default_rng(1)
+    spans = np.array([[0.0, 10.0]])
+    wide = np.array([[0, 0.0, 6.0], [0, 2.0, 8.0], [0, 4.0, 10.0]])
+    start = np.linspace(0.0, 9.8, 200)
+    narrow = np.column_stack([np.zeros(200), start, start + 0.2])
+    x = rng.normal(size=200)
+    rows = np.column_stack([2.0 * x, -x + 2.0 * rng.normal(size=200)])
+
+    def solve(theta, noise, weigh):  # the force column's coefficient fixed at 1
+        return np.array([1.0, 2.0 * (1.0 - shrink)])
+
+    best, errors = choose_noise_model(
+        [(NoiseModel("positions", 3.0, True), rows[:3], wide, None),
+         (NoiseModel("forces", 0.1, False), rows, narrow, None)],
+        (rows, narrow, None), spans, [0], solve)
+    assert errors[0] == np.inf and errors[1] > 1.0 - MARGIN
+    assert best == 0
 
 
 @pytest.mark.parametrize(("position_noise", "chosen"), [(0.1, 0), (0.01, 1)])

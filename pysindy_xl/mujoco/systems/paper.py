@@ -198,6 +198,54 @@ def _chain_xml(p: dict, n_links: int, indent: int) -> str:
     return inner
 
 
+# -- pendulum chains (``mass{k}``, ``length{k}``, ``damping{k}`` for links k = 1..n) ----------
+def _chain_masses(p: dict, n_links: int) -> list:
+    """``mu_k``: the mass at or beyond link ``k`` (what link ``k``'s angle carries)."""
+    masses = [p[f"mass{k}"] for k in range(1, n_links + 1)]
+    return [sum(masses[k:]) for k in range(n_links)]
+
+
+def _chain_amplitudes(p: dict, n_links: int) -> dict:
+    """Random-force amplitude of each hinge: 0.3 of the gravity torque of what it carries."""
+    return {f"hinge{k + 1}": 0.3 * mu * p["gravity"] * p[f"length{k + 1}"]
+            for k, mu in enumerate(_chain_masses(p, n_links))}
+
+
+def _chain_dampings(p: dict, n_links: int) -> list:
+    """The hinges' viscous dampings, in joint order."""
+    return [p[f"damping{k}"] for k in range(1, n_links + 1)]
+
+
+def _chain_lagrangian(p: dict, th, thd, xd=None):
+    r"""Lagrangian of a chain of point masses in absolute angles ``th``, on a cart moving at
+    ``xd`` (None: a fixed pivot):
+
+    .. math:: T = \sum_i \frac{\mu_i l_i^2 \dot\theta_i^2}{2}
+              + \sum_{i<j} \mu_j l_i l_j \dot\theta_i \dot\theta_j \cos(\theta_i - \theta_j)
+              + \frac{I}{2} \sum_i \dot\theta_i^2, \qquad
+              V = -g \sum_i \mu_i l_i \cos\theta_i
+
+    (``mu_i``: the mass at or beyond link ``i``; ``I``: each bob's tiny rotational inertia), and
+    with a cart ``(M + sum m) xd^2 / 2 + sum_i mu_i l_i xd thd_i cos(th_i)``.
+    """
+    n = len(th)
+    mu, g = _chain_masses(p, n), p["gravity"]
+    lengths = [p[f"length{k}"] for k in range(1, n + 1)]
+    kinetic = sum(mu[i] * lengths[i] ** 2 * thd[i] ** 2 / 2 for i in range(n))
+    for i in range(n):
+        for j in range(i + 1, n):
+            kinetic += mu[j] * lengths[i] * lengths[j] * thd[i] * thd[j] * sp.cos(th[i] - th[j])
+    # each bob's body rotates with its absolute angle
+    kinetic += p["point_inertia"] * sum(w**2 for w in thd) / 2
+    if xd is not None:
+        masses = [p[f"mass{k}"] for k in range(1, n + 1)]
+        kinetic += sum(masses, p["cart_mass"]) * xd**2 / 2
+        for i in range(n):
+            kinetic += mu[i] * lengths[i] * xd * thd[i] * sp.cos(th[i])
+    potential = -sum(mu[i] * g * lengths[i] * sp.cos(th[i]) for i in range(n))
+    return kinetic - potential
+
+
 class DoublePendulum(MuJoCoSystem):
     """Double pendulum with point masses on massless rods, hanging from a fixed pivot.
 
@@ -249,19 +297,15 @@ class DoublePendulum(MuJoCoSystem):
 
     @property
     def joint_to_coordinates(self):
-        return np.array([[1.0, 0.0], [1.0, 1.0]])
+        return np.tril(np.ones((2, 2)))
 
     @property
     def joint_damping(self):
-        p = self._parameters
-        return np.array([p["damping1"], p["damping2"]])
+        return np.array(_chain_dampings(self._parameters, 2))
 
     @property
     def force_amplitudes(self):
-        p = self._parameters
-        g = p["gravity"]
-        return {"hinge1": 0.3 * (p["mass1"] + p["mass2"]) * g * p["length1"],
-                "hinge2": 0.3 * p["mass2"] * g * p["length2"]}
+        return _chain_amplitudes(self._parameters, 2)
 
     def lagrangian(self):
         """True Lagrangian of the double pendulum in absolute angles.
@@ -271,10 +315,7 @@ class DoublePendulum(MuJoCoSystem):
         sympy.Expr
             The Lagrangian ``T - V`` of the double pendulum.
         """
-        p = self._parameters
-        th1, th2 = self.coords.q
-        thd1, thd2 = self.coords.qd
-        return _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=None)
+        return _chain_lagrangian(self._parameters, self.coords.q, self.coords.qd)
 
     def xml(self):
         """MJCF text of the double pendulum (see :meth:`MuJoCoSystem.xml`).
@@ -287,23 +328,6 @@ class DoublePendulum(MuJoCoSystem):
         p = self._parameters
         return (_header("double_pendulum", p["timestep"], p["gravity"])
                 + _chain_xml(p, 2, indent=4) + _footer(self.joint_names))
-
-
-def _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=None, cart_mass=0.0):
-    m1, m2, l1, l2, g = p["mass1"], p["mass2"], p["length1"], p["length2"], p["gravity"]
-    inertia = p["point_inertia"]
-    kinetic = (
-        (m1 + m2) * l1**2 * thd1**2 / 2
-        + m2 * l2**2 * thd2**2 / 2
-        + m2 * l1 * l2 * thd1 * thd2 * sp.cos(th1 - th2)
-        # each bob's body rotates with its absolute angle
-        + inertia * (thd1**2 + thd2**2) / 2
-    )
-    if xd is not None:
-        kinetic += ((cart_mass + m1 + m2) * xd**2 / 2 + (m1 + m2) * l1 * xd * thd1 * sp.cos(th1)
-                    + m2 * l2 * xd * thd2 * sp.cos(th2))
-    potential = -(m1 + m2) * g * l1 * sp.cos(th1) - m2 * g * l2 * sp.cos(th2)
-    return kinetic - potential
 
 
 class CartDoublePendulum(MuJoCoSystem):
@@ -365,15 +389,13 @@ class CartDoublePendulum(MuJoCoSystem):
     @property
     def joint_damping(self):
         p = self._parameters
-        return np.array([p["cart_damping"], p["damping1"], p["damping2"]])
+        return np.array([p["cart_damping"], *_chain_dampings(p, 2)])
 
     @property
     def force_amplitudes(self):
         p = self._parameters
-        g = p["gravity"]
         return {"slider": 2.0 * (p["cart_mass"] + p["mass1"] + p["mass2"]),
-                "hinge1": 0.3 * (p["mass1"] + p["mass2"]) * g * p["length1"],
-                "hinge2": 0.3 * p["mass2"] * g * p["length2"]}
+                **_chain_amplitudes(p, 2)}
 
     def lagrangian(self):
         """True Lagrangian of the double pendulum on a cart.
@@ -383,10 +405,8 @@ class CartDoublePendulum(MuJoCoSystem):
         sympy.Expr
             The Lagrangian ``T - V`` of the double pendulum on a cart.
         """
-        p = self._parameters
-        _, th1, th2 = self.coords.q
-        xd, thd1, thd2 = self.coords.qd
-        return _pendulum_chain_lagrangian(p, th1, th2, thd1, thd2, xd=xd, cart_mass=p["cart_mass"])
+        xd, *thd = self.coords.qd
+        return _chain_lagrangian(self._parameters, self.coords.q[1:], thd, xd=xd)
 
     def xml(self):
         """MJCF text of the double pendulum on a cart (see :meth:`MuJoCoSystem.xml`).
@@ -458,15 +478,11 @@ class TriplePendulum(MuJoCoSystem):
 
     @property
     def joint_damping(self):
-        p = self._parameters
-        return np.array([p["damping1"], p["damping2"], p["damping3"]])
+        return np.array(_chain_dampings(self._parameters, 3))
 
     @property
     def force_amplitudes(self):
-        p = self._parameters
-        g, masses = p["gravity"], [p["mass1"], p["mass2"], p["mass3"]]
-        return {f"hinge{k}": 0.3 * sum(masses[k - 1:]) * g * p[f"length{k}"]
-                for k in (1, 2, 3)}
+        return _chain_amplitudes(self._parameters, 3)
 
     def lagrangian(self):
         """True Lagrangian of the three-link pendulum in absolute angles.
@@ -480,18 +496,7 @@ class TriplePendulum(MuJoCoSystem):
         sympy.Expr
             The Lagrangian ``T - V`` of the three-link pendulum.
         """
-        p = self._parameters
-        th, thd = self.coords.q, self.coords.qd
-        masses = [p["mass1"], p["mass2"], p["mass3"]]
-        lengths = [p["length1"], p["length2"], p["length3"]]
-        kinetic = p["point_inertia"] * sum(w**2 for w in thd) / 2
-        potential = 0
-        for i in range(3):
-            potential -= sum(masses[i:]) * p["gravity"] * lengths[i] * sp.cos(th[i])
-            for j in range(3):
-                kinetic += (sum(masses[max(i, j):]) * lengths[i] * lengths[j] * thd[i] * thd[j]
-                            * sp.cos(th[i] - th[j]) / 2)
-        return kinetic - potential
+        return _chain_lagrangian(self._parameters, self.coords.q, self.coords.qd)
 
     def xml(self):
         """MJCF text of the three-link pendulum (see :meth:`MuJoCoSystem.xml`).
