@@ -11,15 +11,18 @@ function). Two blocks of each run are held out:
   extrapolates to states it did not see). An approximation fitted along the trajectories (a
   cosine standing in for ``theta^2``) fails there, where the right structure does not.
 
-The criterion is the RMS of the two errors (the time error alone for catalogs with B-splines,
-which are local and cannot extrapolate). From the smallest catalog (constant kinetic
-coefficients, quadratic potentials of the linear coordinates, sines and cosines of the angles,
-viscous friction), each move of :data:`MOVES` is tried in turn; a move is kept when it lowers
-the criterion by the fraction ``tolerance`` at least, or keeps it within that fraction with
-fewer terms in the fitted model (a sine series imitating ``theta^2`` needs more terms than
-``theta^2``), the degree moves repeat while they do (and
-look one degree further before they stop), and the growth stops when a whole pass keeps nothing
-or the criterion is below ``good_enough``. Catalogs over ``max_terms`` are not tried (reported
+The criterion is the RMS of the two errors. Splines end at the extreme percentiles of the
+training data (:data:`END_PERCENTILE`) and continue linearly (:func:`~.bases.natural_splines`),
+so the region block judges their continuation as it judges any family's. From the smallest
+catalog (constant kinetic coefficients, quadratic potentials of the linear coordinates, sines
+and cosines of the angles, viscous friction), each move of :data:`MOVES` is first tried alone;
+the moves are then tried in turn in the order of what they achieved alone (the family that
+explains most goes in first: no fixed order decides between a stand-in and the right family).
+A move is kept when it lowers the criterion by the fraction ``tolerance`` at least, or keeps it
+within that fraction with fewer terms in the fitted model (a sine series imitating ``theta^2``
+needs more terms than ``theta^2``), the degree moves repeat while they do (and look one degree
+further before they stop), and the growth stops when a whole pass keeps nothing or the
+criterion is below ``good_enough``. Catalogs over ``max_terms`` are not tried (reported
 as the ceiling). The chosen catalog is then fitted on all the data.
 """
 
@@ -45,7 +48,7 @@ _START = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
           "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
           "splines": None}
 _LIMITS = {"degree": 4, "trig_degree": 3, "angle_degree": 4}
-_SPLINES = (8, 16)  # B-splines per coordinate when the family is added, then refined
+_SPLINES = (8, 12, 16)  # natural splines per coordinate when the family is added, refined
 _REPEATED = ("degree", "trig_degree", "angle_degree", "splines")  # moves that go on
 
 
@@ -268,6 +271,26 @@ def _held_out_error(model, held, forced) -> float:
     return float(np.linalg.norm(residual) / norm) if norm > 0 else float("inf")
 
 
+#: Percentile of the data at which splines end (and ``100 -`` it): beyond, the potential's
+#: slope is fitted to the extreme samples instead of following a cubic piece that a few
+#: samples constrain.
+END_PERCENTILE = 1.0
+
+
+def _span(xs) -> list:
+    """The splines' end knots per coordinate: :data:`END_PERCENTILE` of the runs ``xs``."""
+    low, high = np.percentile(np.vstack(xs), [END_PERCENTILE, 100 - END_PERCENTILE], axis=0)
+    return [(float(a), float(b)) for a, b in zip(low, high, strict=True)]
+
+
+def _keeps(step, best, tolerance) -> bool:
+    """Whether ``step`` improves on ``best``: a criterion lower by the fraction ``tolerance``,
+    or within that fraction with fewer terms in the fitted model."""
+    return (step.criterion < best.criterion * (1 - tolerance)
+            or (step.criterion <= best.criterion * (1 + tolerance)
+                and step.active < best.active))
+
+
 def _parameters(state, move, kinds, n, skip=0):
     """The catalog parameters after ``move`` from ``state``, or None when it does not apply."""
     new = dict(state)
@@ -396,14 +419,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         raise ValueError(f"moves: unknown {unknown}; expected some of {MOVES}")
     forced = us is not None and any(np.any(np.asarray(uk) != 0) for uk in us)
     criterion = "forces" if forced else "accelerations"
-    stacked = np.vstack(xs)
     velocity_scale = [float(np.std(np.gradient(xk, tk, axis=0), axis=0).mean())
                       for xk, tk in zip(xs, ts, strict=True)]
-    low, high = stacked.min(axis=0), stacked.max(axis=0)
-    margin = 0.1 * (high - low)
     fixed = {"coordinates": names, "kinds": list(kinds), "max_terms": max_terms,
-             "bounds": [(float(a - m), float(b + m)) for a, b, m in zip(low, high, margin,
-                                                                            strict=True)],
+             "bounds": _span(xs),  # the splines' end knots
              "coulomb_scale": max(1e-3, 0.02 * float(np.mean(velocity_scale)))}
     first = AutomaticCatalog(**fixed, **_START)
     check_growth_data(xs, names, first.n_terms)
@@ -435,6 +454,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             train[key] = None
     if not forced:
         train["u"] = None
+    # the search's splines end where its training data do: the region blocks test their
+    # continuation as the chosen model's is used beyond the data
+    searched = dict(fixed, bounds=_span(train["x"]))
     # test functions short enough for the held-out blocks and the training pieces
     from ..weak import BumpTestFunctions
     block = min(len(tk) for tk in ts) // n_blocks
@@ -450,7 +472,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                        test_functions=BumpTestFunctions(width=width))
 
     def evaluate(parameters, move):
-        catalog = AutomaticCatalog(**fixed, **parameters)
+        catalog = AutomaticCatalog(**searched, **parameters)
         started = time.perf_counter()
         try:
             size = catalog.n_terms
@@ -475,8 +497,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
             return catalog, GrowthStep(move, description, size, 0, np.inf, np.inf, np.inf, False,
                                        f"fit failed: {type(error).__name__}: {error}"[:200])
-        # local functions (B-splines) cannot extrapolate: the time block alone judges them
-        value = float(errors[0] if parameters["splines"] else np.sqrt(np.mean(np.square(errors))))
+        value = float(np.sqrt(np.mean(np.square(errors))))
         if not np.isfinite(value):
             value = np.inf
         return catalog, GrowthStep(move, description, size,
@@ -502,23 +523,34 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     if not forced:  # relative to the largest term, an approximation looks small already
         good_enough = 0.0
     tried = {repr(sorted(state.items()))}
+    # rank the moves by what each achieves alone from the first catalog, so that the family
+    # that explains most goes in first and no fixed order of MOVES decides (a cos(theta)
+    # inertia kept before theta^2 is tried makes a stand-in for the torsion spring)
+    ranked = {}
+    for move in moves:
+        parameters = _parameters(state, move, kinds, n)
+        if parameters is not None and best.criterion > good_enough:
+            ranked[repr(sorted(parameters.items()))] = evaluate(parameters, move)
+            steps.append(ranked[repr(sorted(parameters.items()))][1])
+    alone = {step.move: step.criterion for _, step in ranked.values()}
+    order = sorted(moves, key=lambda m: alone.get(m, np.inf))
     improved = best.criterion > good_enough
     while improved:
         improved = False
-        for move in moves:
+        for move in order:
             skip = 0  # a degree move looks one degree further before it stops
             while best.criterion > good_enough:
                 parameters = _parameters(state, move, kinds, n, skip)
-                if parameters is None or repr(sorted(parameters.items())) in tried:
+                key = None if parameters is None else repr(sorted(parameters.items()))
+                if key in ranked:
+                    catalog, step = ranked.pop(key)
+                elif key is None or key in tried:
                     break
-                tried.add(repr(sorted(parameters.items())))
-                catalog, step = evaluate(parameters, move)
-                steps.append(step)
-                reference = best.time_error if parameters["splines"] and not state["splines"] \
-                    else best.criterion
-                keep = (step.criterion < reference * (1 - tolerance)  # better, or as good
-                        or (step.criterion <= reference * (1 + tolerance)  # and simpler
-                            and step.active < best.active))
+                else:
+                    catalog, step = evaluate(parameters, move)
+                    steps.append(step)
+                tried.add(key)
+                keep = _keeps(step, best, tolerance)
                 if keep:
                     step.chosen = True
                     state, best, best_catalog, improved = parameters, step, catalog, True
@@ -526,6 +558,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                 if move not in _REPEATED or (not keep and skip):
                     break
                 skip = 0 if keep else 1
+    best_catalog = AutomaticCatalog(**fixed, **state)
     model = clone(template).set_params(feature_library=best_catalog, test_functions=None,
                                        optimizer=optimizer)
     full = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
