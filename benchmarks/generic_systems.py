@@ -286,10 +286,11 @@ def run_case(system, truth, noise, seed, forced, baselines=True):
             record["auto"] = {"right": False, "held_out": float("inf"), "simulation": float("inf"),
                               "off_box": float("inf"), "error": repr(error)[:300]}
         try:  # the correct hand-built catalog, same data
-            span = np.vstack(xs)
-            margin = 0.0 * (span.max(axis=0) - span.min(axis=0))  # as grow_catalog
-            bounds = [(float(a - m), float(b + m)) for a, b, m in
-                      zip(span.min(axis=0), span.max(axis=0), margin, strict=True)]
+            # the splines' end knots where grow_catalog puts them
+            from pysindy_xl.catalog.growth import END_PERCENTILE
+            low, high = np.percentile(np.vstack(xs), [END_PERCENTILE, 100 - END_PERCENTILE],
+                                      axis=0)
+            bounds = [(float(a), float(b)) for a, b in zip(low, high, strict=True)]
             catalog = px.AutomaticCatalog(names, kinds=system["kinds"], bounds=bounds,
                                           **system["hand"])
             hand = px.XLSINDy(catalog).fit(xs, ts, u=us)
