@@ -15,9 +15,10 @@ The criterion is the RMS of the two errors. Splines end at the extreme percentil
 training data (:data:`END_PERCENTILE`) and continue linearly (:func:`~.bases.natural_splines`),
 so the region block judges their continuation as it judges any family's. From the smallest
 catalog (constant kinetic coefficients, quadratic potentials of the linear coordinates, sines
-and cosines of the angles, viscous friction), each move of :data:`MOVES` is first tried alone;
-the moves are then tried in turn in the order of what they achieved alone (the family that
-explains most goes in first: no fixed order decides between a stand-in and the right family).
+and cosines of the angles, viscous friction), each move of :data:`MOVES` but the splines is first
+tried alone; the moves are then tried in turn in the order of what they achieved alone (the
+family that explains most goes in first: no fixed order decides between a stand-in and the
+right family), the splines last (the flexible basis is for what the families leave).
 A move is kept when it lowers the criterion by the fraction ``tolerance`` at least, or keeps it
 within that fraction with fewer terms in the fitted model (a sine series imitating ``theta^2``
 needs more terms than ``theta^2``), the degree moves repeat while they do (and look one degree
@@ -153,7 +154,7 @@ class GrowthResult:
         return "\n".join(lines)
 
     def spline_potentials(self, n_points: int = 9) -> dict:
-        """The identified B-spline part of the potential of each coordinate that keeps one.
+        """The identified spline part of the potential of each coordinate that keeps one.
 
         ``V_spline(q) = -sum_k c_k B_k(q)`` (the Lagrangian holds ``-V``), sampled on the
         coordinate's range.
@@ -523,17 +524,24 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     if not forced:  # relative to the largest term, an approximation looks small already
         good_enough = 0.0
     tried = {repr(sorted(state.items()))}
-    # rank the moves by what each achieves alone from the first catalog, so that the family
-    # that explains most goes in first and no fixed order of MOVES decides (a cos(theta)
-    # inertia kept before theta^2 is tried makes a stand-in for the torsion spring)
-    ranked = {}
+    # rank the family moves by what each achieves alone from the first catalog (a degree move
+    # looking one degree further), so that the family that explains most goes in first and no
+    # fixed order decides (a cos(theta) inertia kept before theta^2 is tried makes a stand-in for
+    # a torsion spring); the flexible basis comes last, for what the families leave
+    ranked, alone = {}, {}
     for move in moves:
-        parameters = _parameters(state, move, kinds, n)
-        if parameters is not None and best.criterion > good_enough:
-            ranked[repr(sorted(parameters.items()))] = evaluate(parameters, move)
-            steps.append(ranked[repr(sorted(parameters.items()))][1])
-    alone = {step.move: step.criterion for _, step in ranked.values()}
-    order = sorted(moves, key=lambda m: alone.get(m, np.inf))
+        for skip in (0, 1) if move in _REPEATED else (0,):
+            parameters = _parameters(state, move, kinds, n, skip)
+            if move == "splines" or parameters is None or best.criterion <= good_enough:
+                break
+            key = repr(sorted(parameters.items()))
+            ranked[key] = evaluate(parameters, move)
+            steps.append(ranked[key][1])
+            alone[move] = min(alone.get(move, np.inf), ranked[key][1].criterion)
+            if _keeps(ranked[key][1], best, tolerance):
+                break
+    order = sorted((m for m in moves if m != "splines"), key=lambda m: alone.get(m, np.inf))
+    order += [m for m in moves if m == "splines"]
     improved = best.criterion > good_enough
     while improved:
         improved = False
