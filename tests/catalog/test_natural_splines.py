@@ -61,10 +61,11 @@ def _log_cosh_runs():
     for seed in (0, 1):
         rng = np.random.default_rng(seed)
         frequencies, phases = rng.uniform(0.1, 1.0, 5), rng.uniform(0, 2 * np.pi, 5)
-        solution = solve_ivp(
-            lambda time, y: [y[1], force(time, frequencies, phases) - 4 * np.tanh(2 * y[0])
-                             - 0.1 * y[1]], (t[0], t[-1]), [rng.uniform(-1, 1), 0.0], t_eval=t,
-            method="DOP853", rtol=1e-10, atol=1e-10)
+        def rhs(time, y, frequencies=frequencies, phases=phases):
+            return [y[1], force(time, frequencies, phases) - 4 * np.tanh(2 * y[0]) - 0.1 * y[1]]
+
+        solution = solve_ivp(rhs, (t[0], t[-1]), [rng.uniform(-1, 1), 0.0], t_eval=t,
+                             method="DOP853", rtol=1e-10, atol=1e-10)
         x, v = solution.y
         u = np.array([force(time, frequencies, phases) for time in t])
         xs.append(x[:, None])
