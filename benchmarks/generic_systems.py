@@ -45,7 +45,7 @@ from scipy.integrate import solve_ivp
 
 import pysindy_xl as px
 
-RESULTS = os.path.join(os.path.dirname(__file__), "results", "generic_systems.jsonl")
+RESULTS = os.path.join(os.path.dirname(__file__), "results", "generic_systems_grid.jsonl")
 G = 9.81
 
 
