@@ -515,9 +515,15 @@ def write_report(path, out):
              "| --- | --- | --- | --- |",
              f"| right at 0-1 % noise | {_rate(low)} | {_rate(low, 'hand')} | >= 95 % |",
              f"| right at 5 % noise | {_rate(high)} | {_rate(high, 'hand')} | >= 85 % |"]
+    for level in sorted({r["noise"] for r in records}):
+        group = [r for r in records if r["noise"] == level]
+        lines.append(f"| (right at {100 * level:g} % noise) | {_rate(group)} | "
+                     f"{_rate(group, 'hand')} | |")
     if ratios:
-        lines.append(f"| held-out error / hand-built's (median, max) | {np.median(ratios):.2f}, "
-                     f"{np.max(ratios):.2f} | 1 | <= 1.5 |")
+        within = sum(ratio <= 1.5 for ratio in ratios)
+        lines.append(f"| held-out error / hand-built's (median, max; cases <= 1.5) | "
+                     f"{np.median(ratios):.2f}, {np.max(ratios):.2f}; {within}/{len(ratios)} "
+                     f"({100 * within / len(ratios):.0f} %) | 1 | <= 1.5 |")
     for n in sorted({r["n"] for r in records}):
         group = [r for r in records if r["n"] == n]
         lines.append(f"| catalog + fit, {n} coordinate(s), 20,000 samples: wall s (CPU s), "
@@ -548,10 +554,27 @@ def write_report(path, out):
               "accelerations: its figure is the held-out relative error of the "
               "accelerations (forced runs: under the recorded forces). The MLP predicts forces "
               "from smoothed (q, qd, qdd).", "",
-              "| system | forcing | noise | seed | XLSINDy auto held-out % | SINDy acc. % | "
+              ]
+    header = ["| system | forcing | noise | seed | XLSINDy auto held-out % | SINDy acc. % | "
               "SINDy sim % | weak SINDy acc. % | weak SINDy sim % | MLP held-out % | "
               "MLP off-box % |",
               "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    lines += ["", "Medians over the cases (held-out relative error; SINDy: of the accelerations, "
+              "XLSINDy unforced: of the accelerations, forced: of the forces):", "",
+              "| noise | XLSINDy auto | SINDy | weak SINDy | MLP (forced) |",
+              "| --- | --- | --- | --- | --- |"]
+    for level in sorted({r["noise"] for r in records}):
+        group = [r for r in records if r["noise"] == level]
+
+        def median(values):
+            values = [v if v is not None else float("inf") for v in values]
+            return _pct(float(np.median(values))) if values else "-"
+        lines.append(
+            f"| {100 * level:g} % | {median([r['auto'].get('held_out') for r in group])} | "
+            f"{median([r.get('sindy', {}).get('held_out_accelerations') for r in group])} | "
+            f"{median([r.get('weak_sindy', {}).get('held_out_accelerations') for r in group])} | "
+            f"{median([r['mlp'].get('held_out') for r in group if 'mlp' in r])} |")
+    lines += ["", "Per case:", "", *header]
     for r in records:
         sindy, weak, mlp = r.get("sindy", {}), r.get("weak_sindy", {}), r.get("mlp", {})
         lines.append(
