@@ -184,3 +184,39 @@ def test_mixed_forcing_grows_coupled_oscillators():
     truth = np.linalg.solve(mass, (u - q @ stiffness.T).T).T
     predicted = found.model.predict(q, qd, u)
     assert np.linalg.norm(predicted - truth) / np.linalg.norm(truth) < 0.02
+
+
+@pytest.mark.slow
+def test_unforced_growth_finds_a_coupling_that_takes_two_moves():
+    """Unforced spring pendulum: the coupling needs r^2 theta_dot^2 (kinetic move) and
+    r cos(theta) (interaction move), each coordinate's equation judged on its own scale."""
+    r, th = me.dynamicsymbols("r theta")
+    rd, thd = me.dynamicsymbols("r theta", 1)
+    lagrangian = (rd ** 2 + r ** 2 * thd ** 2) / 2 + G * r * sp.cos(th) - 10 * (r - 1) ** 2
+    method = me.LagrangesMethod(lagrangian, [r, th])
+    method.form_lagranges_equations()
+    symbols = [r, th, rd, thd]
+    mass = sp.lambdify(symbols, method.mass_matrix)
+    forcing = sp.lambdify(symbols, method.forcing)
+
+    def accelerations(y):
+        return np.linalg.solve(np.asarray(mass(*y), float), np.asarray(forcing(*y), float)[:, 0])
+
+    t = np.arange(0.0, 10.0, 0.001)
+    xs = []
+    for seed in (2, 3):
+        rng = np.random.default_rng(seed)
+        y0 = np.r_[1.5 + 0.45 * rng.uniform(-1, 1), 0.75 * rng.uniform(-1, 1),
+                   rng.uniform(-1, 1, 2)]
+        solution = solve_ivp(lambda time, y: np.r_[y[2:], accelerations(y)], (t[0], t[-1]), y0,
+                             t_eval=t, method="DOP853", rtol=1e-10, atol=1e-10)
+        xs.append(solution.y[:2].T)
+    found = grow_catalog(xs, [t, t], None, coordinates=["r", "theta"], kinds={"theta": "angle"},
+                         moves=("kinetic", "interaction", "angle_degree"))
+    assert found.catalog.interaction == 2 and found.catalog.kinetic == "configuration"
+    rng = np.random.default_rng(9)
+    states = np.c_[rng.uniform(1.2, 1.8, 40), rng.uniform(-0.8, 0.8, 40),
+                   rng.uniform(-1, 1, (40, 2))]
+    truth = np.array([accelerations(y) for y in states])
+    predicted = found.model.predict(states[:, :2], states[:, 2:])
+    assert np.linalg.norm(predicted - truth) / np.linalg.norm(truth) < 0.01
