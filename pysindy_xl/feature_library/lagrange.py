@@ -84,6 +84,15 @@ def _sympy_number(number) -> sp.Expr:
     return sp.Float(number) if isinstance(number, float) else sp.Integer(number)
 
 
+def _scaled(number: sp.Expr, monomial: sp.Expr) -> sp.Expr:
+    """``number * monomial`` for a monomial without a numeric factor, built without sympy's
+    flattening (its arguments are already in canonical order: the number first)."""
+    if monomial is sp.S.One or number is sp.S.One:
+        return number * monomial
+    args = monomial.args if isinstance(monomial, sp.Mul) else (monomial,)
+    return sp.Mul._from_args((number, *args))
+
+
 def _times(left: dict, right: dict) -> dict:
     """The product of two sums of monomials ``{((atom, power), ...): coefficient}``."""
     out: dict = {}
@@ -203,7 +212,7 @@ def expanded_derivative(expr: sp.Expr, symbol: sp.Symbol, scale=1) -> sp.Expr:
         factor = scale * _python_number(coefficient)
         for monomial, weight in _piece_derivative(piece, symbol):
             collected[monomial] = collected.get(monomial, 0) + factor * weight
-    return sp.Add(*(_sympy_number(c) * m for m, c in collected.items() if c != 0))
+    return sp.Add(*(_scaled(_sympy_number(c), m) for m, c in collected.items() if c != 0))
 
 
 def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:
