@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from fractions import Fraction
+from functools import cmp_to_key
 
 import numpy as np
 import sympy as sp
@@ -61,6 +62,9 @@ def _defined_everywhere(expr: sp.Expr) -> bool:
 _PIECE_DERIVATIVES: dict = {}
 _CACHED_PIECES = 16384
 
+
+#: The order of the terms of a sympy sum.
+_CANONICAL = cmp_to_key(sp.Basic.compare)
 
 #: ``sympy.expand(atom)`` by atom (:func:`_expanded_products`).
 _ATOMS: dict = {}
@@ -212,7 +216,14 @@ def expanded_derivative(expr: sp.Expr, symbol: sp.Symbol, scale=1) -> sp.Expr:
         factor = scale * _python_number(coefficient)
         for monomial, weight in _piece_derivative(piece, symbol):
             collected[monomial] = collected.get(monomial, 0) + factor * weight
-    return sp.Add(*(_scaled(_sympy_number(c), m) for m, c in collected.items() if c != 0))
+    terms = [_scaled(_sympy_number(c), m) for m, c in collected.items() if c != 0]
+    if len(terms) < 2:
+        return sp.Add(*terms)
+    # the canonical sum of distinct monomials without sympy's collection: the number first,
+    # the other terms in sympy's order
+    numbers = [t for t in terms if t.is_Number]
+    others = sorted((t for t in terms if not t.is_Number), key=_CANONICAL)
+    return sp.Add._from_args(numbers + others)
 
 
 def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:

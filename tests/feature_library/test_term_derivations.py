@@ -149,3 +149,15 @@ def test_expanded_derivative_is_sympys_expansion():
         for monomial, value in truth.items():
             assert found[monomial] == pytest.approx(value, rel=1e-14, abs=1e-15)
     assert expanded_derivative(expr, sp.Symbol("w")) == 0
+
+
+def test_potential_columns_are_canonical_sympy_sums():
+    # built without sympy's flattening: the same objects (arguments in the same order) as
+    # sympy.Add of the same terms, so they compare, hash and print as sympy's own
+    coords = px.Coordinates(["x", "y"])
+    x, y = coords.q
+    for term in [*natural_splines(x, -1.0, 2.0, 6), x**3 * y - 2 * sp.cos(y) + y / 3]:
+        for column in euler_lagrange(term, coords) + [expanded_derivative(term, y)]:
+            rebuilt = sp.Add(*reversed(sp.Add.make_args(column)))
+            assert column == rebuilt and column.args == rebuilt.args
+            assert hash(column) == hash(rebuilt)
