@@ -278,6 +278,8 @@ def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:
 #: another (a growing automatic catalog) share most of their terms.
 _PARTS: dict = {}
 _CACHED_PARTS = 8192
+#: Feature names by term (printing a spline costs about a millisecond).
+_NAMES: dict = {}
 
 
 def _term_parts(term: sp.Expr, coords: Coordinates, weak: bool = False) -> tuple:
@@ -371,7 +373,8 @@ class LagrangeLibrary(SymbolicLibrary):
         # equal catalogs (refits, resampled fits) derive their columns once
         names, columns = shared_derivation(
             ("euler-lagrange", self.coords.variables, tuple(terms)),
-            lambda: (tuple(f"L[{term}]" for term in terms),
+            lambda: (tuple(shared_derivation(term, lambda t=term: f"L[{t}]", _NAMES,
+                                             _CACHED_PARTS) for term in terms),
                      tuple(_term_parts(term, self.coords) for term in terms)))
         matrix = sp.Matrix(self.coords.n, len(terms), lambda i, j: columns[j][i])
         self.zero_terms_ = [j for j, col in enumerate(columns) if all(e == 0 for e in col)]
