@@ -3,8 +3,8 @@ kinds (:class:`AutomaticCatalog`), grown on data while a held-out criterion impr
 (:func:`grow_catalog`)."""
 
 from .automatic import DISSIPATION, AutomaticCatalog, coordinate_kinds
-from .bases import KINDS, bspline
+from .bases import KINDS, bspline, natural_splines
 from .growth import MOVES, GrowthResult, GrowthStep, grow_catalog
 
 __all__ = ["AutomaticCatalog", "grow_catalog", "GrowthResult", "GrowthStep", "MOVES",
-           "coordinate_kinds", "DISSIPATION", "KINDS", "bspline"]
+           "coordinate_kinds", "DISSIPATION", "KINDS", "bspline", "natural_splines"]

@@ -16,7 +16,7 @@ product of low degree, and ``gamma`` the first-degree functions of another coord
 coordinate it adds dissipation (viscous ``qd_i``, smooth Coulomb ``tanh(qd_i / eps_i)``) as
 classical terms, and the force columns. Terms that are trigonometric polynomials go to a
 :class:`~pysindy_xl.feature_library.PolynomialLagrangeLibrary` (derived on arrays); the others
-(powers of angles, B-splines) to a :class:`~pysindy_xl.LagrangeLibrary`.
+(powers of angles, splines) to a :class:`~pysindy_xl.LagrangeLibrary`.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ from ..feature_library import (
     PolynomialLagrangeLibrary,
 )
 from ..symbols import Coordinates
-from .bases import KINDS, bspline, bspline_centers, factor_functions
+from .bases import KINDS, bspline_centers, factor_functions, natural_splines
 
 __all__ = ["AutomaticCatalog", "DISSIPATION", "coordinate_kinds"]
 
@@ -137,7 +137,7 @@ class AutomaticCatalog(CatalogRepartition):
         ``"linear"`` or ``"angle"`` per coordinate (a mapping ``{name: kind}`` leaves the
         others linear; None: all linear).
     bounds : mapping or sequence of (low, high), optional
-        Range of each coordinate; required for its B-splines.
+        Range of each coordinate (the end knots of its splines); required for its splines.
     degree : int, default 2
         Highest power of a linear coordinate, and highest total power (of linear coordinates
         and angles) in a product of several coordinates' functions.
@@ -158,8 +158,11 @@ class AutomaticCatalog(CatalogRepartition):
     coulomb_scale : float or sequence of float, default 0.01
         ``eps_i`` of the smooth Coulomb law ``tanh(qd_i / eps_i)``.
     splines : int or mapping {name: int}, optional
-        Number of cubic B-splines (:func:`~pysindy_xl.catalog.bases.bspline`) in the potential
-        of each coordinate, on its ``bounds``.
+        Number of natural cubic splines (:func:`~pysindy_xl.catalog.bases.natural_splines`, at
+        least 4) in the potential of each coordinate: knots evenly spread over its ``bounds``,
+        continued linearly beyond them (a constant force outside the range). They take the
+        place of the coordinate's own powers in the potential (``x, x^2, ...``; their span
+        holds the line), not of its products with other coordinates.
     interlink : array (n, n), optional
         Of :class:`~pysindy_xl.ExternalForces`.
     max_terms : int, default 2000
@@ -259,7 +262,12 @@ class AutomaticCatalog(CatalogRepartition):
             count = check_option("splines", count or 0, "int", low=0)
             if count and bound is None:
                 raise ValueError(f"bounds: B-splines of {name!r} need its range (low, high)")
-            options["splines"].append(bspline_centers(*bound, count) if count else None)
+            if count and count < 4:
+                raise ValueError(f"splines: expected at least 4 natural splines of {name!r} "
+                                 f"(or 0), got {count}")
+            if count:
+                bspline_centers(*bound, count)  # checks the bounds
+            options["splines"].append((tuple(map(float, bound)), count) if count else None)
         return options
 
     # -- the terms -----------------------------------------------------------------------------
@@ -309,12 +317,12 @@ class AutomaticCatalog(CatalogRepartition):
         return factors
 
     def _splines(self, options) -> list[sp.Expr]:
-        """The B-splines of single coordinates (never multiplied by other functions)."""
+        """The natural splines of single coordinates (never multiplied by other functions)."""
         out = []
         for q, spline in zip(options["coords"].q, options["splines"], strict=True):
             if spline is not None:
-                centers, width = spline
-                out += [bspline(q, c, width) for c in centers]
+                (low, high), count = spline
+                out += natural_splines(q, low, high, count)
         return out
 
     def _terms(self, options) -> tuple[list[sp.Expr], list[bool]]:
@@ -343,7 +351,14 @@ class AutomaticCatalog(CatalogRepartition):
         # potential: phi(q)
         factors = self._factors(options, options["degree"], options["trig_degree"],
                                 options["angle_degree"])
+        # a coordinate's splines take the place of its own powers: their span holds the
+        # line, and a higher power would set the law beyond the data
+        splined = {q for q, spline in zip(coords.q, options["splines"], strict=True)
+                   if spline is not None}
         for phi, _, trig in self._products(options, factors):
+            if (phi.is_Symbol or (phi.is_Pow and phi.exp.is_Integer)) \
+                    and phi.free_symbols <= splined:
+                continue
             terms.append(phi)
             fast.append(trig)
         splines = self._splines(options)
@@ -425,14 +440,15 @@ class AutomaticCatalog(CatalogRepartition):
         parts = []
         for i, (name, kind) in enumerate(zip(options["coords"].names, options["kinds"],
                                              strict=True)):
+            splines = options["splines"][i]
             if kind == "linear":
-                text = f"{name}: {name}..{name}^{options['degree']}"
+                text = f"{name}: " + ("" if splines else f"{name}..{name}^{options['degree']}")
             else:
                 text = f"{name}: sin/cos degree {options['trig_degree']}"
-                if options["angle_degree"]:
+                if options["angle_degree"] and not splines:
                     text += f", {name}..{name}^{options['angle_degree']}"
-            if options["splines"][i] is not None:
-                text += f", {len(options['splines'][i][0])} B-splines"
+            if splines is not None:
+                text += (", " if kind != "linear" else "") + f"{splines[1]} natural splines"
             parts.append(text)
         extras = [f"interaction {options['interaction']}", f"kinetic {options['kinetic']}"]
         if options["gyroscopic"]:

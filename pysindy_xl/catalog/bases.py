@@ -6,10 +6,13 @@ Per coordinate kind:
 - ``"angle"``: the trigonometric monomials ``sin^a cos^b`` with ``b <= 1`` and
   ``1 <= a + b <= d`` (``cos^2 = 1 - sin^2`` would be an exact dependency), and optionally the
   polynomials ``theta, ..., theta^p`` (torsion springs, which no sine or cosine states);
-- any kind: cubic B-splines of the coordinate on uniform knots (:func:`bspline`), for laws that
-  no family states.
+- any kind: natural cubic splines of the coordinate on uniform knots (:func:`natural_splines`),
+  for laws that no family states: cubic B-splines (:func:`bspline`) inside the knots, combined
+  at each end so that the curvature vanishes there, and continued linearly beyond (a potential
+  with a constant slope, i.e. a constant force, outside the data: the least committal
+  extrapolation).
 
-A B-spline is written with ``Abs`` (truncated powers ``z_+ = (z + |z|) / 2``), which the
+Splines are written with ``Abs`` (truncated powers ``z_+ = (z + |z|) / 2``), which the
 package's grammar, its NumPy and JAX back ends and :meth:`XLSINDy.simulate
 <pysindy_xl.XLSINDy.simulate>` handle like any term.
 """
@@ -19,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-__all__ = ["KINDS", "bspline", "bspline_centers", "factor_functions"]
+__all__ = ["KINDS", "bspline", "bspline_centers", "factor_functions", "natural_splines"]
 
 #: The coordinate kinds an automatic catalog knows.
 KINDS = ("linear", "angle")
@@ -101,6 +104,72 @@ def bspline_centers(low: float, high: float, n_functions: int) -> tuple[np.ndarr
         raise ValueError(f"bounds: expected finite low < high, got ({low!r}, {high!r})")
     centers = np.linspace(low, high, int(n_functions))
     return centers, float(centers[1] - centers[0])
+
+
+def natural_splines(q: sp.Symbol, low: float, high: float, n_functions: int) -> list[sp.Expr]:
+    """A basis of the natural cubic splines of ``q`` on ``n_functions`` uniform knots of
+    ``[low, high]``, continued linearly beyond.
+
+    With knots ``xi_1 = low, ..., xi_K = high`` (spacing ``h``) and the cubic B-splines
+    ``B_j`` centred at ``xi_j`` (:func:`bspline`), the basis is
+
+    - ``B_j`` for ``3 <= j <= K - 2`` (zero outside ``[low, high]``);
+    - at each end the combinations ``B_1 + 2 B_0`` and ``B_2 - B_0`` (and their mirror images at
+      ``high``), whose second derivative vanishes at the end knot, continued beyond it by their
+      tangent there.
+
+    Each function is written in truncated powers of ``s = (q - low) / h`` (knot ``j`` at
+    ``s = j``), e.g. ``B_1 + 2 B_0 = 1 - s + [s_+^3 - 2 (s - 1)_+^3 + (s - 2)_+^3] / 6``.
+
+    The span is the ``K``-dimensional space of natural cubic splines (twice continuously
+    differentiable, cubic between knots, linear outside ``[low, high]``); it contains the
+    constants and ``q`` itself, and the functions sum to 1.
+
+    Parameters
+    ----------
+    q : sympy.Symbol
+        The coordinate.
+    low, high : float
+        The end knots, ``low < high``.
+    n_functions : int
+        ``K``, the number of knots and of functions, at least 4.
+
+    Returns
+    -------
+    list of sympy.Expr
+        ``K`` functions, the left end's pair first.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> x = sp.Symbol("x", real=True)
+    >>> basis = natural_splines(x, 0.0, 3.0, 4)
+    >>> [round(float(sum(basis).subs(x, v)), 6) for v in (-1.0, 1.3, 4.0)]
+    [1.0, 1.0, 1.0]
+    >>> [round(float(basis[0].subs(x, v)), 6) for v in (-2.0, -1.0, 0.0)]  # slope -1 below 0
+    [3.0, 2.0, 1.0]
+    """
+    if isinstance(n_functions, bool) or not isinstance(n_functions, (int, np.integer)) \
+            or n_functions < 4:
+        raise ValueError(f"splines: expected at least 4 natural splines per coordinate, got "
+                         f"{n_functions!r}")
+    centers, h = bspline_centers(low, high, int(n_functions))
+    k = int(n_functions)
+    s = (q - sp.Float(float(centers[0]))) / sp.Float(h)  # knot j at s = j
+
+    def cubes(*pairs):
+        """``sum(w (s - j)_+^3) / 6`` over ``(w, j)``."""
+        return sum(w * _plus_cubed(s - j) for w, j in pairs) / 6
+
+    # the end pairs in truncated powers (exact: the B-splines' combinations, continued by
+    # their tangent at the end knot, which their vanishing curvature makes a line)
+    out = [1 - s + cubes((1, 0), (-2, 1), (1, 2)),
+           s + cubes((-2, 0), (5, 1), (-4, 2), (1, 3))]
+    out += [cubes((1, j - 2), (-4, j - 1), (6, j), (-4, j + 1), (1, j + 2))
+            for j in range(2, k - 2)]
+    out += [cubes((1, k - 4), (-4, k - 3), (5, k - 2), (-2, k - 1)),
+            cubes((1, k - 3), (-2, k - 2), (1, k - 1))]
+    return out
 
 
 def factor_functions(q: sp.Symbol, kind: str, degree: int, trig_degree: int,

@@ -2,24 +2,33 @@
 
 The criterion is the relative residual of the fitted model's equations in the weak form
 (integrated against test functions on smoothed positions, so that no acceleration is estimated)
-on samples the fit never saw: over the generalized forces' part for data with forces, over the
-largest term's for unforced data (the strong form where a block is shorter than a test
-function). Two blocks of each run are held out:
+on samples the fit never saw: over the generalized forces' part for data with forces; for
+unforced data each coordinate's equation over its own largest term, combined as an RMS over the
+coordinates (an implicit law fixes each equation only up to a factor: judged over all rows, a
+law that shrank one equation would hide its residual; the strong form where a block is shorter
+than a test function). Two blocks of each run are held out:
 
 - the last of ``n_blocks`` contiguous time blocks (**time**: how the model predicts later);
 - the other block reaching farthest from the run's median state (**region**: how it
   extrapolates to states it did not see). An approximation fitted along the trajectories (a
   cosine standing in for ``theta^2``) fails there, where the right structure does not.
 
-The criterion is the RMS of the two errors (the time error alone for catalogs with B-splines,
-which are local and cannot extrapolate). From the smallest catalog (constant kinetic
-coefficients, quadratic potentials of the linear coordinates, sines and cosines of the angles,
-viscous friction), each move of :data:`MOVES` is tried in turn; a move is kept when it lowers
-the criterion by the fraction ``tolerance`` at least, or keeps it within that fraction with
-fewer terms in the fitted model (a sine series imitating ``theta^2`` needs more terms than
-``theta^2``), the degree moves repeat while they do (and
-look one degree further before they stop), and the growth stops when a whole pass keeps nothing
-or the criterion is below ``good_enough``. Catalogs over ``max_terms`` are not tried (reported
+The criterion is the RMS of the two errors. Splines end at the extreme percentiles of the
+training data (:data:`END_PERCENTILE`) and continue linearly (:func:`~.bases.natural_splines`),
+so the region block judges their continuation as it judges any family's. From the smallest
+catalog (constant kinetic coefficients, quadratic potentials of the linear coordinates, sines
+and cosines of the angles, viscous friction), each move of :data:`MOVES` but the splines is first
+tried alone; the moves are then tried in turn in the order of what they achieved alone (the
+family that explains most goes in first: no fixed order decides between a stand-in and the
+right family), the splines last (the flexible basis is for what the families leave). The
+growth climbs twice, from the best and from the second-best first move, and keeps the better
+end: the first move is where a stand-in wins (a ``cos(theta)`` inertia for a torsion spring,
+or a power of an angle for a coupling that takes two moves to state).
+A move is kept when it lowers the criterion by the fraction ``tolerance`` at least, or keeps it
+within that fraction with fewer terms in the fitted model (a sine series imitating ``theta^2``
+needs more terms than ``theta^2``), the degree moves repeat while they do (and look one degree
+further before they stop), and the growth stops when a whole pass keeps nothing or the
+criterion is below ``good_enough``. Catalogs over ``max_terms`` are not tried (reported
 as the ceiling). The chosen catalog is then fitted on all the data.
 """
 
@@ -45,7 +54,7 @@ _START = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
           "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
           "splines": None}
 _LIMITS = {"degree": 4, "trig_degree": 3, "angle_degree": 4}
-_SPLINES = (8, 16)  # B-splines per coordinate when the family is added, then refined
+_SPLINES = (8, 12, 16)  # natural splines per coordinate when the family is added, refined
 _REPEATED = ("degree", "trig_degree", "angle_degree", "splines")  # moves that go on
 
 
@@ -150,7 +159,7 @@ class GrowthResult:
         return "\n".join(lines)
 
     def spline_potentials(self, n_points: int = 9) -> dict:
-        """The identified B-spline part of the potential of each coordinate that keeps one.
+        """The identified spline part of the potential of each coordinate that keeps one.
 
         ``V_spline(q) = -sum_k c_k B_k(q)`` (the Lagrangian holds ``-V``), sampled on the
         coordinate's range.
@@ -249,7 +258,8 @@ def _pieces(mask):
 
 def _held_out_error(model, held, forced) -> float:
     """Relative residual of the fitted model's weak-form equations on held-out runs: the
-    residual over the forces' part (forced data) or over the largest term's (unforced)."""
+    residual over the forces' part (forced data) or, unforced, each coordinate's over its
+    largest term's (RMS over the coordinates)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # blocks shorter than a test function: strong form
         problem = model.regression(held["x"], held["t"], u=held["u"], formulation="weak",
@@ -262,11 +272,37 @@ def _held_out_error(model, held, forced) -> float:
     forces = problem.force_columns
     if forced and len(forces):
         target = theta[:, forces] @ coef[forces]
-    else:
-        target = theta * coef
-        target = target[:, int(np.argmax(np.linalg.norm(target, axis=0)))]
-    norm = float(np.linalg.norm(target))
-    return float(np.linalg.norm(residual) / norm) if norm > 0 else float("inf")
+        norm = float(np.linalg.norm(target))
+        return float(np.linalg.norm(residual) / norm) if norm > 0 else float("inf")
+    # unforced, each equation is defined up to its own factor when no term joins it to the
+    # others: judged over all rows, a law could shrink one coordinate's equation until its
+    # residual vanished next to the others' terms; so each coordinate's block of rows is
+    # judged over its own largest term, and the blocks' errors are combined (RMS)
+    errors = []
+    for rows in np.array_split(np.arange(len(theta)), problem.n_coordinates):
+        norm = float(np.linalg.norm(theta[rows] * coef, axis=0).max(initial=0.0))
+        errors.append(np.linalg.norm(residual[rows]) / norm if norm > 0 else np.inf)
+    return float(np.sqrt(np.mean(np.square(errors))))
+
+
+#: Percentile of the data at which splines end (and ``100 -`` it): beyond, the potential's
+#: slope is fitted to the extreme samples instead of following a cubic piece that a few
+#: samples constrain.
+END_PERCENTILE = 1.0
+
+
+def _span(xs) -> list:
+    """The splines' end knots per coordinate: :data:`END_PERCENTILE` of the runs ``xs``."""
+    low, high = np.percentile(np.vstack(xs), [END_PERCENTILE, 100 - END_PERCENTILE], axis=0)
+    return [(float(a), float(b)) for a, b in zip(low, high, strict=True)]
+
+
+def _keeps(step, best, tolerance) -> bool:
+    """Whether ``step`` improves on ``best``: a criterion lower by the fraction ``tolerance``,
+    or within that fraction with fewer terms in the fitted model."""
+    return (step.criterion < best.criterion * (1 - tolerance)
+            or (step.criterion <= best.criterion * (1 + tolerance)
+                and step.active < best.active))
 
 
 def _parameters(state, move, kinds, n, skip=0):
@@ -397,14 +433,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         raise ValueError(f"moves: unknown {unknown}; expected some of {MOVES}")
     forced = us is not None and any(np.any(np.asarray(uk) != 0) for uk in us)
     criterion = "forces" if forced else "accelerations"
-    stacked = np.vstack(xs)
     velocity_scale = [float(np.std(np.gradient(xk, tk, axis=0), axis=0).mean())
                       for xk, tk in zip(xs, ts, strict=True)]
-    low, high = stacked.min(axis=0), stacked.max(axis=0)
-    margin = 0.1 * (high - low)
     fixed = {"coordinates": names, "kinds": list(kinds), "max_terms": max_terms,
-             "bounds": [(float(a - m), float(b + m)) for a, b, m in zip(low, high, margin,
-                                                                            strict=True)],
+             "bounds": _span(xs),  # the splines' end knots
              "coulomb_scale": max(1e-3, 0.02 * float(np.mean(velocity_scale)))}
     first = AutomaticCatalog(**fixed, **_START)
     check_growth_data(xs, names, first.n_terms)
@@ -436,6 +468,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             train[key] = None
     if not forced:
         train["u"] = None
+    # the search's splines end where its training data do: the region blocks test their
+    # continuation as the chosen model's is used beyond the data
+    searched = dict(fixed, bounds=_span(train["x"]))
     # test functions short enough for the held-out blocks and the training pieces
     from ..weak import BumpTestFunctions
     block = min(len(tk) for tk in ts) // n_blocks
@@ -454,7 +489,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                        smoother=RememberedSmoother())
 
     def evaluate(parameters, move):
-        catalog = AutomaticCatalog(**fixed, **parameters)
+        catalog = AutomaticCatalog(**searched, **parameters)
         started = time.perf_counter()
         try:
             size = catalog.n_terms
@@ -479,8 +514,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
             return catalog, GrowthStep(move, description, size, 0, np.inf, np.inf, np.inf, False,
                                        f"fit failed: {type(error).__name__}: {error}"[:200])
-        # local functions (B-splines) cannot extrapolate: the time block alone judges them
-        value = float(errors[0] if parameters["splines"] else np.sqrt(np.mean(np.square(errors))))
+        value = float(np.sqrt(np.mean(np.square(errors))))
         if not np.isfinite(value):
             value = np.inf
         return catalog, GrowthStep(move, description, size,
@@ -495,41 +529,77 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                      + ("  kept" if step.chosen else "") + (f"  ({step.note})" if step.note
                                                             else ""))
 
-    state = dict(_START)
-    best_catalog, best = evaluate(state, "start")
-    if best.note.startswith("ceiling"):
-        raise ValueError(f"max_terms: the smallest catalog has {best.terms} terms, more than "
+    first_catalog, first = evaluate(dict(_START), "start")
+    if first.note.startswith("ceiling"):
+        raise ValueError(f"max_terms: the smallest catalog has {first.terms} terms, more than "
                          f"max_terms={max_terms}; raise max_terms")
-    best.chosen = True
-    steps = [best]
-    report(best)
+    first.chosen = True
+    steps = [first]
+    report(first)
     if not forced:  # relative to the largest term, an approximation looks small already
         good_enough = 0.0
-    tried = {repr(sorted(state.items()))}
-    improved = best.criterion > good_enough
-    while improved:
-        improved = False
-        for move in moves:
-            skip = 0  # a degree move looks one degree further before it stops
-            while best.criterion > good_enough:
-                parameters = _parameters(state, move, kinds, n, skip)
-                if parameters is None or repr(sorted(parameters.items())) in tried:
-                    break
-                tried.add(repr(sorted(parameters.items())))
-                catalog, step = evaluate(parameters, move)
-                steps.append(step)
-                reference = best.time_error if parameters["splines"] and not state["splines"] \
-                    else best.criterion
-                keep = (step.criterion < reference * (1 - tolerance)  # better, or as good
-                        or (step.criterion <= reference * (1 + tolerance)  # and simpler
-                            and step.active < best.active))
-                if keep:
-                    step.chosen = True
-                    state, best, best_catalog, improved = parameters, step, catalog, True
-                report(step)
-                if move not in _REPEATED or (not keep and skip):
-                    break
-                skip = 0 if keep else 1
+    cache = {}  # every catalog is fitted once, whichever path tries it
+
+    def attempt(parameters, move):
+        key = repr(sorted(parameters.items()))
+        if key not in cache:
+            cache[key] = evaluate(parameters, move)
+            steps.append(cache[key][1])
+            report(cache[key][1])
+        return cache[key]
+
+    def climb(order):
+        """Try the moves in turn from the first catalog; (state, step, catalog, kept steps)."""
+        state, best, catalog_, path = dict(_START), first, first_catalog, []
+        tried = {repr(sorted(state.items()))}
+        improved = best.criterion > good_enough
+        while improved:
+            improved = False
+            for move in order:
+                skip = 0  # a degree move looks one degree further before it stops
+                while best.criterion > good_enough:
+                    parameters = _parameters(state, move, kinds, n, skip)
+                    if parameters is None or repr(sorted(parameters.items())) in tried:
+                        break
+                    tried.add(repr(sorted(parameters.items())))
+                    catalog, step = attempt(parameters, move)
+                    keep = _keeps(step, best, tolerance)
+                    if keep:
+                        state, best, catalog_, improved = parameters, step, catalog, True
+                        path.append(step)
+                    if move not in _REPEATED or (not keep and skip):
+                        break
+                    skip = 0 if keep else 1
+        return state, best, catalog_, path
+
+    # rank the family moves by what each achieves alone from the first catalog (a degree move
+    # looking one degree further); the flexible basis comes last, for what the families leave
+    alone = {}
+    for move in moves:
+        for skip in (0, 1) if move in _REPEATED else (0,):
+            parameters = _parameters(dict(_START), move, kinds, n, skip)
+            if move == "splines" or parameters is None or first.criterion <= good_enough:
+                break
+            step = attempt(parameters, move)[1]
+            alone[move] = min(alone.get(move, np.inf), step.criterion)
+            if _keeps(step, first, tolerance):
+                break
+    order = sorted((m for m in moves if m != "splines"), key=lambda m: alone.get(m, np.inf))
+    order += [m for m in moves if m == "splines"]
+    # climb from the best and from the second-best first move: which family goes in first is
+    # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
+    # a coupling that needs two moves), so the better of the two ends is kept
+    state, best, best_catalog, path = climb(order)
+    promising = [m for m in order if m != "splines" and alone.get(m, np.inf)
+                 < first.criterion * (1 - tolerance)]
+    if best.criterion > good_enough and len(promising) > 1:
+        second = [promising[1]] + [m for m in order if m != promising[1]]
+        other = climb(second)
+        if _keeps(other[1], best, tolerance):
+            state, best, best_catalog, path = other
+    for step in path:
+        step.chosen = True
+    best_catalog = AutomaticCatalog(**fixed, **state)
     model = clone(template).set_params(feature_library=best_catalog, test_functions=None,
                                        optimizer=optimizer, smoother=None)
     full = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}

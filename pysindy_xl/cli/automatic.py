@@ -24,9 +24,11 @@ WHAT_IS_TRIED = (
     "smallest catalog (quadratic potentials of linear coordinates, sin/cos of --angles, viscous "
     "friction) by trying in turn: configuration-dependent kinetic coefficients, products across "
     "coordinates, higher powers, higher sin/cos degrees, powers of angles (torsion springs), "
-    "gyroscopic terms, smooth Coulomb friction and cubic B-splines of single coordinates; a "
-    "step is kept when the error on two held-out blocks of each run (the last one, and the one "
-    "reaching farthest from the median state) drops by 5 %% or more")
+    "gyroscopic terms, smooth Coulomb friction and natural cubic splines of single "
+    "coordinates (B-splines inside the data, continued linearly beyond it), each first alone, "
+    "then in the order of what it achieved alone; a step is kept when the error on two "
+    "held-out blocks of each run (the last one, and the one reaching farthest from the median "
+    "state) drops by 5 %% or more")
 
 #: Below this R^2 (on the training data) a fit explains nothing.
 POOR_R2 = 0.5
@@ -125,7 +127,7 @@ def run_automatic(args, dataset, system, forced, progress):
           + " on the last block of each run and on the block reaching farthest):")
     print(result.table())
     for name, (grid, values) in result.spline_potentials().items():
-        print(f"B-spline potential of {name} (no family states it), V({name}) at "
+        print(f"spline potential of {name} (no family states it), V({name}) at "
               + ", ".join(f"{g:.3g}: {v:.4g}" for g, v in zip(grid, values, strict=True)))
     if model.dynamics_ is None:
         raise CLIError("the identified model explains nothing (its equations contain no "

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from fractions import Fraction
+from functools import cmp_to_key
+
 import numpy as np
 import sympy as sp
 from sklearn.utils.validation import check_is_fitted
@@ -54,6 +57,175 @@ def _defined_everywhere(expr: sp.Expr) -> bool:
             and all(_defined_everywhere(a) for a in expr.args))
 
 
+#: ``expand(d piece / d symbol)`` as ``((monomial, coefficient), ...)`` by ``(piece, symbol)``
+#: (:func:`expanded_derivative`): the pieces of splines recur in several terms.
+_PIECE_DERIVATIVES: dict = {}
+_CACHED_PIECES = 16384
+
+
+#: The order of the terms of a sympy sum.
+_CANONICAL = cmp_to_key(sp.Basic.compare)
+
+#: ``sympy.expand(atom)`` by atom (:func:`_expanded_products`).
+_ATOMS: dict = {}
+
+
+def _python_number(number):
+    """A sympy number as ``int``, ``Fraction`` (exact) or ``float``: the same value, the same
+    rounding of products and sums of floats (IEEE double, like a 15-digit sympy ``Float``), at
+    a fraction of sympy's cost."""
+    if number.is_Integer:
+        return int(number)
+    if number.is_Rational:
+        return Fraction(int(number.p), int(number.q))
+    return float(number)
+
+
+def _sympy_number(number) -> sp.Expr:
+    """The inverse of :func:`_python_number`."""
+    if isinstance(number, Fraction):
+        return sp.Rational(number.numerator, number.denominator)
+    return sp.Float(number) if isinstance(number, float) else sp.Integer(number)
+
+
+def _scaled(number: sp.Expr, monomial: sp.Expr) -> sp.Expr:
+    """``number * monomial`` for a monomial without a numeric factor, built without sympy's
+    flattening (its arguments are already in canonical order: the number first)."""
+    if monomial is sp.S.One or number is sp.S.One:
+        return number * monomial
+    args = monomial.args if isinstance(monomial, sp.Mul) else (monomial,)
+    return sp.Mul._from_args((number, *args))
+
+
+def _times(left: dict, right: dict) -> dict:
+    """The product of two sums of monomials ``{((atom, power), ...): coefficient}``."""
+    out: dict = {}
+    for key_a, coef_a in left.items():
+        for key_b, coef_b in right.items():
+            powers = dict(key_a)
+            for atom, power in key_b:
+                powers[atom] = powers.get(atom, 0) + power
+            key = frozenset(powers.items())
+            out[key] = out.get(key, 0) + coef_a * coef_b
+    return out
+
+
+def _expanded_products(expr: sp.Expr, depth: int = 0) -> dict:
+    """``expr`` multiplied out as ``{monomial: coefficient}``, a monomial being a frozenset of
+    ``(atom, power)``: sums, products and positive integer powers distributed by dictionary
+    arithmetic instead of :func:`sympy.expand`'s rewriting (the atoms, e.g. ``Abs(z)``, are
+    expanded by sympy once each).
+    """
+    if expr.is_Number:
+        return {frozenset(): _python_number(expr)}
+    if isinstance(expr, sp.Add):
+        out: dict = {}
+        for arg in expr.args:
+            for key, coef in _expanded_products(arg, depth).items():
+                out[key] = out.get(key, 0) + coef
+        return out
+    if isinstance(expr, sp.Mul):
+        out = {frozenset(): 1}
+        for arg in expr.args:
+            out = _times(out, _expanded_products(arg, depth))
+        return out
+    base, exp = expr.as_base_exp()
+    if exp.is_Integer and exp > 0 and isinstance(base, (sp.Add, sp.Mul)):
+        factor, out = _expanded_products(base, depth), {frozenset(): 1}
+        for _ in range(int(exp)):
+            out = _times(out, factor)
+        return out
+    if not (exp.is_Integer and exp > 0):
+        base, exp = expr, sp.Integer(1)
+    expanded = shared_derivation(base, lambda: sp.expand(base), _ATOMS, _CACHED_PIECES)
+    if expanded != base and depth < 4:
+        return _expanded_products(expanded ** exp, depth + 1)
+    return {frozenset({(base, int(exp))}): 1}
+
+
+def _monomials(expr: sp.Expr, depth: int = 0) -> dict:
+    """``sympy.expand(expr)`` as ``{monomial: coefficient}`` with sympy monomials (up to the
+    rounding of float coefficients): :func:`_expanded_products`, each monomial then built by
+    sympy, whose automatic rewriting (``Abs(z)**2 = z**2`` for real ``z``) is expanded again.
+    """
+    out: dict = {}
+    for key, coef in _expanded_products(expr, depth).items():
+        monomial = sp.Mul(*(atom ** power for atom, power in key))
+        c, rest = monomial.as_coeff_Mul()
+        c = _python_number(c)
+        factors = sp.Mul.make_args(rest)
+        if depth < 4 and any(isinstance(f.as_base_exp()[0], (sp.Add, sp.Mul)) for f in factors):
+            parts = _monomials(monomial, depth + 1)  # rewritten into a product of sums
+        else:
+            parts = {rest: c}
+        for m, k in parts.items():
+            out[m] = out.get(m, 0) + coef * k
+    return out
+
+
+def _piece_derivative(piece: sp.Expr, symbol: sp.Symbol) -> tuple:
+    """``expand(d piece / d symbol)`` as pairs ``(monomial, coefficient)``, derived once."""
+    def derive():
+        return tuple((m, c) for m, c in _monomials(_diff(piece, symbol)).items() if c != 0)
+
+    return shared_derivation((piece, symbol), derive, _PIECE_DERIVATIVES, _CACHED_PIECES)
+
+
+def expanded_derivative(expr: sp.Expr, symbol: sp.Symbol, scale=1) -> sp.Expr:
+    r"""``scale * expand(d expr / d symbol)``, derived term by term of ``expr``.
+
+    With ``expr = sum_k c_k f_k`` (numbers ``c_k``, the terms' pieces ``f_k``),
+
+    .. math:: \text{scale} \cdot \frac{\partial\, \text{expr}}{\partial\, \text{symbol}}
+              = \sum_k (\text{scale}\, c_k)\, \operatorname{expand}
+              \Big(\frac{\partial f_k}{\partial\, \text{symbol}}\Big),
+
+    each piece's expanded derivative computed once (and kept for every expression that shares
+    the piece: the cubic pieces of splines on the same knots) and the sum collected by
+    monomial. The result equals ``sympy.expand(scale * sympy.diff(expr, symbol))``: exactly
+    where the coefficients are exact (rationals), up to rounding where they are floats (the
+    sums are added in another order).
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+        The expression to differentiate.
+    symbol : sympy.Symbol
+        The variable.
+    scale : number, default 1
+        A factor of the result (``-1``: the Euler-Lagrange part ``-dL/dq`` of a potential).
+
+    Returns
+    -------
+    sympy.Expr
+        An expanded sum of products.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> x = sp.Symbol("x")
+    >>> expanded_derivative(3 * (x + 1) ** 2 + (x + 1) ** 2 / 2 - sp.sin(x), x, -1)
+    -7*x + cos(x) - 7
+    """
+    scale = _python_number(sp.sympify(scale))
+    collected: dict = {}
+    for term in sp.Add.make_args(expr):
+        coefficient, piece = term.as_coeff_Mul()
+        if symbol not in piece.free_symbols:
+            continue
+        factor = scale * _python_number(coefficient)
+        for monomial, weight in _piece_derivative(piece, symbol):
+            collected[monomial] = collected.get(monomial, 0) + factor * weight
+    terms = [_scaled(_sympy_number(c), m) for m, c in collected.items() if c != 0]
+    if len(terms) < 2:
+        return sp.Add(*terms)
+    # the canonical sum of distinct monomials without sympy's collection: the number first,
+    # the other terms in sympy's order
+    numbers = [t for t in terms if t.is_Number]
+    others = sorted((t for t in terms if not t.is_Number), key=_CANONICAL)
+    return sp.Add._from_args(numbers + others)
+
+
 def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:
     r"""Euler-Lagrange expressions ``d/dt dL/dqd_i - dL/dq_i`` for every coordinate.
 
@@ -82,8 +254,11 @@ def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:
     >>> euler_lagrange(c.qd[0] ** 2 / 2 - c.q[0] ** 2 / 2, c)
     [x + x_ddot]
     """
-    out = []
     used = lagrangian.free_symbols
+    if not used & set(coords.qd + (coords.t,)):  # a potential V(q): E_i = -dV/dq_i
+        return [expanded_derivative(lagrangian, qi, -1) if qi in used else sp.Integer(0)
+                for qi in coords.q]
+    out = []
     for qi, qdi in zip(coords.q, coords.qd, strict=True):
         # differentiate only with respect to symbols that occur: most catalog terms use few
         momentum = _diff(lagrangian, qdi) if qdi in used else sp.Integer(0)
@@ -103,6 +278,8 @@ def euler_lagrange(lagrangian: sp.Expr, coords: Coordinates) -> list[sp.Expr]:
 #: another (a growing automatic catalog) share most of their terms.
 _PARTS: dict = {}
 _CACHED_PARTS = 8192
+#: Feature names by term (printing a spline costs about a millisecond).
+_NAMES: dict = {}
 
 
 def _term_parts(term: sp.Expr, coords: Coordinates, weak: bool = False) -> tuple:
@@ -110,9 +287,8 @@ def _term_parts(term: sp.Expr, coords: Coordinates, weak: bool = False) -> tuple
     or with ``weak`` its ``(P, Q)``: ``P_i = dL/dqd_i`` and ``Q_i = dL/dq_i`` expanded, one
     expression per coordinate; derived once per term and coordinates.
 
-    A potential ``V(q)`` (no velocity) has ``P = 0`` and ``Q_i = -E_i``: the same expression
-    as expanding ``dV/dq_i`` where the coefficients are exact (rationals), and equal to it up
-    to rounding of float coefficients (a B-spline's), at half the cost of its derivation.
+    A potential ``V(q)`` (no velocity) has ``P = 0`` and ``Q_i = dV/dq_i = -E_i``, both
+    from the pieces' derivatives that :func:`expanded_derivative` keeps.
     """
     if not weak:
         return shared_derivation(("E", coords.variables, term),
@@ -121,9 +297,10 @@ def _term_parts(term: sp.Expr, coords: Coordinates, weak: bool = False) -> tuple
 
     def derive():
         used = term.free_symbols
-        if not used & set(coords.qd):  # a potential: P = 0 and Q = -E, no second expansion
-            columns = _term_parts(term, coords)
-            return tuple(sp.Integer(0) for _ in coords.qd), tuple(-e for e in columns)
+        if not used & set(coords.qd + (coords.t,)):  # a potential: P = 0 and Q = -E
+            return (tuple(sp.Integer(0) for _ in coords.qd),
+                    tuple(expanded_derivative(term, q) if q in used else sp.Integer(0)
+                          for q in coords.q))
         return tuple(tuple(sp.expand(_diff(term, v)) if v in used else sp.Integer(0)
                            for v in variables) for variables in (coords.qd, coords.q))
 
@@ -196,7 +373,8 @@ class LagrangeLibrary(SymbolicLibrary):
         # equal catalogs (refits, resampled fits) derive their columns once
         names, columns = shared_derivation(
             ("euler-lagrange", self.coords.variables, tuple(terms)),
-            lambda: (tuple(f"L[{term}]" for term in terms),
+            lambda: (tuple(shared_derivation(term, lambda t=term: f"L[{t}]", _NAMES,
+                                             _CACHED_PARTS) for term in terms),
                      tuple(_term_parts(term, self.coords) for term in terms)))
         matrix = sp.Matrix(self.coords.n, len(terms), lambda i, j: columns[j][i])
         self.zero_terms_ = [j for j, col in enumerate(columns) if all(e == 0 for e in col)]

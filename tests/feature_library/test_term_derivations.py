@@ -6,8 +6,8 @@ import pytest
 import sympy as sp
 
 import pysindy_xl as px
-from pysindy_xl.catalog.bases import bspline
-from pysindy_xl.feature_library.lagrange import euler_lagrange
+from pysindy_xl.catalog.bases import bspline, natural_splines
+from pysindy_xl.feature_library.lagrange import euler_lagrange, expanded_derivative
 
 
 def _truth(term, coords):
@@ -85,3 +85,79 @@ def test_a_potential_with_float_coefficients_gets_its_gradient():
     np.testing.assert_allclose(found, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
     np.testing.assert_allclose(sp.lambdify(x, -library.symbolic_matrix()[0, 0])(z), found,
                                rtol=0, atol=0)
+
+
+def _coefficients(expr):
+    """``expr`` (an expanded sum) as ``{monomial: float coefficient}``."""
+    out = {}
+    for term in sp.Add.make_args(expr):
+        coefficient, monomial = term.as_coeff_Mul()
+        out[monomial] = out.get(monomial, 0.0) + float(coefficient)
+    return out
+
+
+@pytest.mark.parametrize("n_splines", [4, 8, 16])
+def test_spline_potentials_get_sympys_euler_lagrange_expressions(n_splines):
+    # the potentials' fast path (pieces derived once, products multiplied out by dictionary)
+    # against sympy.diff and sympy.expand: the same monomials, the same coefficients up to
+    # rounding (terms of rounding size may appear on one side only)
+    coords = px.Coordinates(["x", "y"])
+    x, y = coords.q
+    basis = natural_splines(x, -1.3, 1.7, n_splines) + natural_splines(y, -0.4, 0.9, 5)
+    library = px.LagrangeLibrary(coords, [*basis, x * y, y**2 * coords.qd[0] ** 2]).fit()
+    matrix = library.symbolic_matrix()
+    momenta, forces = library.weak_matrices()
+    for k, term in enumerate(library.terms):
+        columns, p_true, q_true = _truth(term, coords)
+        for i in range(coords.n):
+            for found, truth in ((matrix[i, k], columns[i]), (forces[i, k], q_true[i])):
+                a, b = _coefficients(found), _coefficients(truth)
+                scale = max([abs(v) for v in b.values()] + [1.0])
+                for monomial in set(a) | set(b):
+                    assert abs(a.get(monomial, 0.0) - b.get(monomial, 0.0)) <= 1e-13 * scale, \
+                        (term, i, monomial)
+            assert _same(momenta[i, k], p_true[i])
+    z = np.linspace(-2.0, 2.5, 37)
+    for k, term in enumerate(basis[:n_splines]):  # the values too, inside and beyond the knots
+        expected = sp.lambdify(x, -sp.diff(term, x))(z)
+        found = sp.lambdify(x, matrix[0, k])(z)
+        # an expanded spline cancels terms of size ~ coefficient * |x|^2: rounding of ~1e-12
+        np.testing.assert_allclose(found, expected, rtol=1e-10, atol=1e-10)
+
+
+def test_exact_potentials_get_sympys_expressions_exactly():
+    # exact coefficients: the fast path is sympy's expansion, expression for expression
+    coords = px.Coordinates(["a", "b", "r"])
+    a, b, r = coords.q
+    potentials = [sp.cos(a), sp.cos(a) * sp.cos(b) - sp.sin(a) * sp.sin(b), r**4 / 4,
+                  (r + 1) ** 3 * sp.sin(a) ** 2, sp.Rational(3, 7) * r**2 * sp.cos(b),
+                  a**2 * b - 2 * r * sp.sin(a) * sp.cos(a), (sp.cos(a) + r) ** 2 / 3]
+    for term in potentials:
+        columns, _, forces = _truth(term, coords)
+        assert euler_lagrange(term, coords) == columns, term
+        assert [expanded_derivative(term, q) for q in coords.q] == forces, term
+
+
+def test_expanded_derivative_is_sympys_expansion():
+    x, y = sp.symbols("x y", real=True)
+    z = 0.7 * x - 0.2
+    expr = 2 * (x + sp.Abs(z) / 2) ** 3 - 0.5 * (x + sp.Abs(z) / 2) ** 3 * y + sp.sin(x) * y
+    for symbol, scale in ((x, 1), (y, -1), (x, sp.Rational(-1, 3))):
+        found = _coefficients(expanded_derivative(expr, symbol, scale))
+        truth = _coefficients(sp.expand(scale * sp.diff(expr, symbol)))
+        assert set(found) == set(truth)
+        for monomial, value in truth.items():
+            assert found[monomial] == pytest.approx(value, rel=1e-14, abs=1e-15)
+    assert expanded_derivative(expr, sp.Symbol("w")) == 0
+
+
+def test_potential_columns_are_canonical_sympy_sums():
+    # built without sympy's flattening: the same objects (arguments in the same order) as
+    # sympy.Add of the same terms, so they compare, hash and print as sympy's own
+    coords = px.Coordinates(["x", "y"])
+    x, y = coords.q
+    for term in [*natural_splines(x, -1.0, 2.0, 6), x**3 * y - 2 * sp.cos(y) + y / 3]:
+        for column in euler_lagrange(term, coords) + [expanded_derivative(term, y)]:
+            rebuilt = sp.Add(*reversed(sp.Add.make_args(column)))
+            assert column == rebuilt and column.args == rebuilt.args
+            assert hash(column) == hash(rebuilt)
