@@ -162,7 +162,10 @@ class AutomaticCatalog(CatalogRepartition):
         least 4) in the potential of each coordinate: knots evenly spread over its ``bounds``,
         continued linearly beyond them (a constant force outside the range). They take the
         place of the coordinate's own powers in the potential (``x, x^2, ...``; their span
-        holds the line), not of its products with other coordinates.
+        holds the line), not of its products with other coordinates. The last of the ``K``
+        functions is left out: they sum to 1, and a potential matters up to a constant, so
+        ``K - 1`` of them give every such potential with no exact dependency among the
+        columns.
     interlink : array (n, n), optional
         Of :class:`~pysindy_xl.ExternalForces`.
     max_terms : int, default 2000
@@ -317,12 +320,15 @@ class AutomaticCatalog(CatalogRepartition):
         return factors
 
     def _splines(self, options) -> list[sp.Expr]:
-        """The natural splines of single coordinates (never multiplied by other functions)."""
+        """The natural splines of single coordinates (never multiplied by other functions),
+        the last of each coordinate's left out: they sum to 1, and a constant potential has no
+        Euler-Lagrange column, so all of them would be an exact dependency (which rounding
+        would settle); the others span the same potentials up to a constant."""
         out = []
         for q, spline in zip(options["coords"].q, options["splines"], strict=True):
             if spline is not None:
                 (low, high), count = spline
-                out += natural_splines(q, low, high, count)
+                out += natural_splines(q, low, high, count)[:-1]
         return out
 
     def _terms(self, options) -> tuple[list[sp.Expr], list[bool]]:
