@@ -5,22 +5,12 @@ the system's Lagrangian equations (sympy, :class:`~pysindy_xl.MassMatrixDynamics
 
 import numpy as np
 import pytest
+from support.control import FAST_PLANNER, true_model
 
-import pysindy_xl as px
 from pysindy_xl.control import AutomaticGrowth, catalog_identifier, resolve_catalog, system_kinds
 from pysindy_xl.control.discrete import continuous_dynamics
 from pysindy_xl.control.loop import exploration_policy, learn_to_control, noisy_positions
 from pysindy_xl.control.plant import MuJoCoPlant
-from pysindy_xl.mujoco import get_system
-
-FAST_PLANNER = {"horizon": 50, "n_samples": 128}
-
-
-def _true_model(name):
-    system = get_system(name)
-    equations = [e - tau for e, tau in zip(system.equations_of_motion(), system.coords.tau,
-                                           strict=True)]
-    return px.MassMatrixDynamics(system.coords, equations)
 
 
 def _exploration(name, seconds, seed=0, noise=0.01):
@@ -44,7 +34,7 @@ def test_the_automatic_catalog_grows_the_cart_pole_law_from_an_exploration():
     states = np.c_[episode.q, episode.qd][::50]
     tau = episode.tau[::50]
     identified = np.asarray(continuous_dynamics(found.model)(states, tau))[:, 2:]
-    true = np.asarray(continuous_dynamics(_true_model("cart-pole"))(states, tau))[:, 2:]
+    true = np.asarray(continuous_dynamics(true_model("cart-pole"))(states, tau))[:, 2:]
     error = np.linalg.norm(identified - true, axis=0) / np.linalg.norm(true, axis=0)
     assert np.all(error < 0.1), error
 
@@ -77,7 +67,7 @@ def test_a_fixed_catalog_is_fitted_through_the_same_seam():
     assert description.endswith("columns")
     states = np.c_[episode.q, episode.qd][::50]
     identified = np.asarray(continuous_dynamics(model)(states, episode.tau[::50]))[:, 2:]
-    true = np.asarray(continuous_dynamics(_true_model("cart-pole"))(states,
+    true = np.asarray(continuous_dynamics(true_model("cart-pole"))(states,
                                                                   episode.tau[::50]))[:, 2:]
     assert np.allclose(identified, true, rtol=0.05, atol=0.05 * np.abs(true).max())
 
@@ -94,7 +84,7 @@ def test_the_loop_hands_a_data_driven_catalog_its_data():
 
         def __call__(self, system, data):
             seen.append([(q.shape, t.shape, tau.shape) for q, t, tau in data])
-            return _true_model("cart-pole")
+            return true_model("cart-pole")
 
     result = learn_to_control("cart-pole", catalog=Recorder(), explore_s=0.5, seed=1,
                               planner=FAST_PLANNER)

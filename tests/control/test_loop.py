@@ -7,6 +7,7 @@ import json
 
 import numpy as np
 import pytest
+from support.control import FAST_PLANNER, true_model
 
 import pysindy_xl as px
 from pysindy_xl.control import discrete_dynamics, sampling_planner, swing_up_cost
@@ -17,15 +18,6 @@ from pysindy_xl.control.plant import Episode, MuJoCoPlant
 from pysindy_xl.control.tasks import get_task
 from pysindy_xl.mujoco import get_system
 
-FAST_PLANNER = {"horizon": 50, "n_samples": 128}
-
-
-def _true_model(name):
-    system = get_system(name)
-    equations = [e - tau for e, tau in zip(system.equations_of_motion(), system.coords.tau,
-                                           strict=True)]
-    return px.MassMatrixDynamics(system.coords, equations)
-
 
 def test_loop_explores_identifies_and_swings_up_the_cart_pole():
     """The loop's cycle on the plant, its identification step given the true equations."""
@@ -33,7 +25,7 @@ def test_loop_explores_identifies_and_swings_up_the_cart_pole():
 
     def identify(system, data):
         seen.append([(q.shape, t.shape, tau.shape) for q, t, tau in data])
-        return _true_model("cart-pole")
+        return true_model("cart-pole")
 
     messages = []
     result = learn_to_control("cart-pole", identify=identify, explore_s=0.5, seed=1,
@@ -56,7 +48,7 @@ def test_noise_reaches_the_identification_but_not_the_plant():
 
     def identify(system, data):
         data_seen.extend(data)
-        return _true_model("cart-pole")
+        return true_model("cart-pole")
 
     learn_to_control("cart-pole", identify=identify, explore_s=0.3, noise=0.05, seed=0,
                      max_episodes=2, planner=FAST_PLANNER)
@@ -111,7 +103,7 @@ def test_a_model_without_accelerations_is_refused():
 
 
 def test_limits_of_the_wrong_shape_are_refused():
-    f = continuous_dynamics(_true_model("cart-pole"))
+    f = continuous_dynamics(true_model("cart-pole"))
     step = discrete_dynamics(f, 0.02, [[1.0], [0.0]])
     cost = swing_up_cost(2, [1])
     with pytest.raises(ValueError, match="control_limit: expected a positive number or 1"):
