@@ -28,13 +28,17 @@ A move is kept when it lowers the criterion by the fraction ``tolerance`` at lea
 within that fraction with fewer terms in the fitted model (a sine series imitating ``theta^2``
 needs more terms than ``theta^2``), the degree moves repeat while they do (and look one degree
 further before they stop), and the growth stops when a whole pass keeps nothing or the
-criterion is below ``good_enough``. Catalogs over ``max_terms`` are not tried (reported
-as the ceiling). The chosen catalog is then fitted on all the data.
+criterion is below ``good_enough``. Before it stops, pairs of the moves that are not repeated
+(kinetic, interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither
+alone (a coupling ``cos(a - b) a_dot b_dot`` needs both the products of two angles' functions
+and configuration-dependent kinetic coefficients). Catalogs over ``max_terms`` are not tried
+(reported as the ceiling). The chosen catalog is then fitted on all the data.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import time
 import warnings
 
@@ -570,6 +574,23 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                     if move not in _REPEATED or (not keep and skip):
                         break
                     skip = 0 if keep else 1
+            if not improved and best.criterion > good_enough:
+                # a law that needs two structural moves at once (a coupling cos(a - b) a_dot
+                # b_dot needs products of two angles' functions and configuration-dependent
+                # kinetic coefficients) gains from neither alone: look two moves ahead
+                single = [m for m in order if m not in _REPEATED]
+                for first_move, second_move in itertools.combinations(single, 2):
+                    once = _parameters(state, first_move, kinds, n, 0)
+                    twice = None if once is None else _parameters(once, second_move, kinds,
+                                                                  n, 0)
+                    if twice is None or repr(sorted(twice.items())) in tried:
+                        continue
+                    tried.add(repr(sorted(twice.items())))
+                    catalog, step = attempt(twice, f"{first_move}+{second_move}")
+                    if _keeps(step, best, tolerance):
+                        state, best, catalog_, improved = twice, step, catalog, True
+                        path.append(step)
+                        break
         return state, best, catalog_, path
 
     # rank the family moves by what each achieves alone from the first catalog (a degree move
