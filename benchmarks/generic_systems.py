@@ -203,6 +203,18 @@ def _relative(a, b):
     return float(np.linalg.norm(a - b) / norm) if norm > 0 else float("inf")
 
 
+def _widened_box(runs, n, samples=2000, widen=1.2):
+    """States drawn uniformly from the runs' box of (q, qd, qdd), widened by ``widen``."""
+    rng = np.random.default_rng(99)
+    box = {}
+    for key in ("q", "qd", "qdd"):
+        values = np.vstack([r[key] for r in runs])
+        low, high = values.min(axis=0), values.max(axis=0)
+        middle, half = (low + high) / 2, (high - low) / 2 * widen
+        box[key] = rng.uniform(middle - half, middle + half, (samples, n))
+    return box
+
+
 def score(predict_forces, predict_accelerations, simulate, system, truth, test, train_runs,
           forced):
     """held_out, simulation, off_box of a model given as functions."""
@@ -223,13 +235,7 @@ def score(predict_forces, predict_accelerations, simulate, system, truth, test, 
         out["simulation"] = float(np.max(err / test["q"].std(axis=0)))
     except Exception as error:  # noqa: BLE001
         out["simulation"], out["simulation_error"] = float("inf"), repr(error)[:200]
-    stacked = {key: np.vstack([r[key] for r in train_runs]) for key in ("q", "qd", "qdd")}
-    rng = np.random.default_rng(99)
-    box = {}
-    for key, values in stacked.items():
-        low, high = values.min(axis=0), values.max(axis=0)
-        middle, half = (low + high) / 2, (high - low) / 2 * 1.2
-        box[key] = rng.uniform(middle - half, middle + half, (2000, truth.n))
+    box = _widened_box(train_runs, truth.n)
     try:
         if forced:
             out["off_box"] = _relative(predict_forces(box["q"], box["qd"], box["qdd"]),
@@ -454,13 +460,7 @@ def _mlp_baseline(truth, xs, ts, us, test, runs):
         return model.predict(np.c_[q, qd, qdd]).reshape(len(q), -1)
 
     held = _relative(forces(test["q"], test["qd"], test["qdd"]), test["u"])
-    stacked = {key: np.vstack([r[key] for r in runs]) for key in ("q", "qd", "qdd")}
-    rng = np.random.default_rng(99)
-    box = {}
-    for key, values in stacked.items():
-        low, high = values.min(axis=0), values.max(axis=0)
-        middle, half = (low + high) / 2, (high - low) / 2 * 1.2
-        box[key] = rng.uniform(middle - half, middle + half, (2000, truth.n))
+    box = _widened_box(runs, truth.n)
     off = _relative(forces(box["q"], box["qd"], box["qdd"]),
                     truth.forces(box["q"], box["qd"], box["qdd"]))
     return {"held_out": held, "off_box": off, "seconds": time.perf_counter() - started}
