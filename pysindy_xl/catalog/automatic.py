@@ -291,6 +291,44 @@ class AutomaticCatalog(CatalogRepartition):
         terms, _, dissipation, _ = self._built_terms(options)
         return len(terms) + len(dissipation)
 
+    def spline_columns(self) -> list[list[int]]:
+        """The columns of each coordinate's natural splines in the fitted catalog.
+
+        A coordinate's splines are one basis of its unknown potential, meaningful only whole:
+        :class:`~pysindy_xl.optimizers.GroupedOptimizer` keeps each of these groups whole or
+        leaves it out.
+
+        Returns
+        -------
+        list of list of int
+            One group of catalog column indices (the columns of ``XLSINDy.coef_``) per
+            coordinate with splines, in coordinate order; empty without splines.
+
+        Examples
+        --------
+        >>> catalog = AutomaticCatalog("x", bounds=[(-1.0, 1.0)], splines=5, kinetic="constant")
+        >>> catalog.spline_columns()
+        [[2, 3, 4, 5]]
+        """
+        from sklearn.base import clone
+
+        options = self._options()
+        owners = {}
+        for i, (q, spline) in enumerate(zip(options["coords"].q, options["splines"],
+                                            strict=True)):
+            if spline is not None:
+                (low, high), count = spline
+                owners.update({term: i for term in natural_splines(q, low, high, count)[:-1]})
+        if not owners:
+            return []
+        fitted = clone(self).fit()
+        groups = {}
+        for j, (term, category) in enumerate(zip(fitted.feature_terms_, fitted.categories_,
+                                                 strict=True)):
+            if category == "lagrange" and term in owners:
+                groups.setdefault(owners[term], []).append(j)
+        return [groups[i] for i in sorted(groups)]
+
     def _products(self, options, factors) -> list[tuple[sp.Expr, int, bool]]:
         """Products over at most ``interaction`` coordinates of one factor each, as
         (expression, polynomial degree, whether it is a trigonometric polynomial)."""

@@ -301,6 +301,21 @@ def _span(xs) -> list:
     return [(float(a), float(b)) for a, b in zip(low, high, strict=True)]
 
 
+def _grouped(optimizer, catalog, forced, estimated):
+    """``optimizer`` keeping each coordinate's splines whole or leaving them out (a spline
+    basis is one potential: a selection of single functions bends its shape and its
+    continuation), or ``optimizer`` itself for a catalog without splines. None or a kind is
+    the default optimizer for the data (``forced``: the forced coordinates; ``estimated``:
+    columns from noisy positions, the weak form)."""
+    groups = catalog.spline_columns()
+    if not groups:
+        return optimizer
+    from ..optimizers import GroupedOptimizer, default_optimizer
+    if optimizer is None or isinstance(optimizer, str):
+        optimizer = default_optimizer(forced, estimated, kind=optimizer)
+    return GroupedOptimizer(optimizer, groups=groups)
+
+
 def _keeps(step, best, tolerance) -> bool:
     """Whether ``step`` improves on ``best``: a criterion lower by the fraction ``tolerance``,
     or within that fraction with fewer terms in the fitted model."""
@@ -481,9 +496,13 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     longest = int(np.argmax([len(tk) for tk in ts]))
     width = min(BumpTestFunctions().half_width(ts[longest], xs[longest]),
                 min(tk[block - 1] - tk[0] for tk in ts) / 3)
+    active = np.any(np.vstack(us) != 0, axis=0) if forced else np.zeros(n, dtype=bool)
+    # the default optimizers bag selections on columns estimated from noisy positions (the
+    # weak form, where no derivatives are measured)
+    from ..fit import resolve_formulation
+    final_weak = resolve_formulation(formulation, xds is not None and xdds is not None) == "weak"
     if search_optimizer == "auto":  # one selection per step, not a bag of them
         from ..optimizers import ExplicitOptimizer, MixedOptimizer
-        active = np.any(np.vstack(us) != 0, axis=0) if forced else np.zeros(n, dtype=bool)
         search_optimizer = (optimizer if optimizer is not None or not forced else
                             ExplicitOptimizer() if active.all() else MixedOptimizer())
     # the search's fits smooth the same pieces (and noise draws) at every step: once
@@ -622,7 +641,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         step.chosen = True
     best_catalog = AutomaticCatalog(**fixed, **state)
     model = clone(template).set_params(feature_library=best_catalog, test_functions=None,
-                                       optimizer=optimizer, smoother=None)
+                                       optimizer=_grouped(optimizer, best_catalog, active,
+                                                          final_weak),
+                                       smoother=None)
     full = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
     if not is_list:
         full = {key: None if value is None else value[0] for key, value in full.items()}

@@ -1,5 +1,5 @@
 """Catalog optimizers: explicit, implicit (SINDy-PI; total least squares on complete catalogs),
-mixed, ensemble and physically consistent regression.
+mixed, ensemble, grouped and physically consistent regression.
 
 Each solves a :class:`~pysindy_xl.optimizers.problem.CatalogProblem` through one entry
 point, ``fit_problem``, and says what it can do and needs in one
@@ -19,6 +19,7 @@ from .explicit import (
     hard_threshold_regression,
     proximal_gradient_lasso,
 )
+from .grouped import GroupedOptimizer, close_groups
 from .homogeneous import LawSelection, select_law
 from .implicit import ImplicitOptimizer, NoLawFoundError
 from .implicit import homothetic_groups as homothetic_groups
@@ -35,7 +36,8 @@ from .total_least_squares import TotalLeastSquaresOptimizer
 # solver entry, the block balancing, SINDy-PI's grouping): importable from here, not in __all__
 __all__ = ["CatalogOptimizer", "CatalogProblem", "CatalogTags", "catalog_tags", "OPTIMIZER_TYPES",
            "default_optimizer", "SOLVER_KINDS", "ExplicitOptimizer", "ImplicitOptimizer",
-           "MixedOptimizer", "EnsembleOptimizer", "PhysicalOptimizer", "NoLawFoundError",
+           "MixedOptimizer", "EnsembleOptimizer", "GroupedOptimizer", "close_groups",
+           "PhysicalOptimizer", "NoLawFoundError",
            "TotalLeastSquaresOptimizer", "UndeterminedLawWarning", "independent_columns",
            "coordinate_weights", "hard_threshold_regression", "proximal_gradient_lasso",
            "corrected_least_squares", "activation_closure", "select_support", "refine_by_swaps",
