@@ -32,7 +32,8 @@ criterion is below ``good_enough``. Before it stops, pairs of the moves that are
 (kinetic, interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither
 alone (a coupling ``cos(a - b) a_dot b_dot`` needs both the products of two angles' functions
 and configuration-dependent kinetic coefficients). Catalogs over ``max_terms`` are not tried
-(reported as the ceiling). The chosen catalog is then fitted on all the data.
+(reported as the ceiling). The chosen catalog is then fitted on all the data, each
+coordinate's splines kept whole or left out (:class:`~pysindy_xl.optimizers.GroupedOptimizer`).
 """
 
 from __future__ import annotations
