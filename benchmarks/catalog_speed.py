@@ -38,14 +38,14 @@ import pysindy_xl.catalog  # noqa: E402, F401 - imported before the clocks start
 DEFAULT = ("duffing", "spring_pendulum", "double_pendulum", "three_masses", "four_chain")
 
 
-def time_system(name, noise=0.01, seed=0, profile=0):
-    """Wall and CPU seconds of ``grow_catalog`` on one system's forced data, and what it chose."""
+def time_system(name, noise=0.01, seed=0, profile=0, forced=True):
+    """Wall and CPU seconds of ``grow_catalog`` on one system's data, and what it chose."""
     system = gs.systems()[name]
     truth = gs.Truth(system)
-    runs = gs.make_runs(system, truth, seed, True)
+    runs = gs.make_runs(system, truth, seed, forced)
     xs = gs._noisy(runs, noise, seed)
     ts = [r["t"] for r in runs]
-    us = [r["u"] for r in runs]
+    us = [r["u"] for r in runs] if forced else None
     profiler = cProfile.Profile() if profile else None
     started, cpu = time.perf_counter(), time.process_time()
     with warnings.catch_warnings():
@@ -62,10 +62,12 @@ def time_system(name, noise=0.01, seed=0, profile=0):
     coef = found.model.coefficients()
     features = found.model.get_feature_names()
     support = [f for f, c in zip(features, coef, strict=True) if c != 0]
-    return {"system": name, "n": truth.n, "samples": int(sum(len(t) for t in ts)),
+    return {"system": name, "n": truth.n, "forcing": "forced" if forced else "unforced",
+            "noise": noise, "seed": seed, "samples": int(sum(len(t) for t in ts)),
             "wall_s": round(wall, 2), "cpu_s": round(cpu, 2),
             "catalog": found.catalog.describe(), "terms": found.catalog.n_terms,
             "steps": len(found.steps), "criterion": found.held_out_error,
+            "path": [[s.move, s.terms, round(s.seconds, 2)] for s in found.steps],
             "support": support, "coefficients": [float(c) for c in coef if c != 0]}
 
 
@@ -100,6 +102,9 @@ def main(argv=None):
     parser.add_argument("--systems", nargs="+", default=list(DEFAULT))
     parser.add_argument("--noise", type=float, default=0.01)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--forcing", nargs="+", default=["forced"],
+                        choices=["forced", "unforced"],
+                        help="forced and/or unforced data (unforced: the systems that have it)")
     parser.add_argument("--json", default=None, help="write the records to this file")
     parser.add_argument("--profile", type=int, default=0)
     parser.add_argument("--report", nargs=2, metavar=("BEFORE", "AFTER"), default=None,
@@ -109,11 +114,17 @@ def main(argv=None):
         print(report(*args.report))
         return None
     records = []
-    for name in args.systems:
-        record = time_system(name, args.noise, args.seed, args.profile)
-        records.append(record)
-        print(json.dumps({k: record[k] for k in ("system", "n", "wall_s", "cpu_s", "terms",
-                                                 "steps", "catalog")}), flush=True)
+    table = gs.systems()
+    for forcing in args.forcing:
+        for name in args.systems:
+            if forcing == "unforced" and not table[name]["unforced"]:
+                continue
+            record = time_system(name, args.noise, args.seed, args.profile,
+                                 forcing == "forced")
+            records.append(record)
+            print(json.dumps({k: record[k] for k in ("system", "n", "forcing", "wall_s",
+                                                     "cpu_s", "terms", "steps", "catalog")}),
+                  flush=True)
     if args.json:
         with open(args.json, "w") as handle:
             json.dump(records, handle, indent=1)
