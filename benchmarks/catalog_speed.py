@@ -38,7 +38,23 @@ import pysindy_xl.catalog  # noqa: E402, F401 - imported before the clocks start
 DEFAULT = ("duffing", "spring_pendulum", "double_pendulum", "three_masses", "four_chain")
 
 
-def time_system(name, noise=0.01, seed=0, profile=0, forced=True):
+def _workers_cpu() -> float:
+    """CPU seconds of this process's child processes so far (the growth's joblib workers)."""
+    try:
+        import psutil
+    except ImportError:
+        return 0.0
+    total = 0.0
+    for child in psutil.Process().children(recursive=True):
+        try:
+            times = child.cpu_times()
+        except psutil.Error:
+            continue
+        total += times.user + times.system
+    return total
+
+
+def time_system(name, noise=0.01, seed=0, profile=0, forced=True, n_jobs=None):
     """Wall and CPU seconds of ``grow_catalog`` on one system's data, and what it chose."""
     system = gs.systems()[name]
     truth = gs.Truth(system)
@@ -47,16 +63,19 @@ def time_system(name, noise=0.01, seed=0, profile=0, forced=True):
     ts = [r["t"] for r in runs]
     us = [r["u"] for r in runs] if forced else None
     profiler = cProfile.Profile() if profile else None
+    workers = _workers_cpu()
     started, cpu = time.perf_counter(), time.process_time()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         if profiler:
             profiler.enable()
         found = px.grow_catalog(xs, ts, us, coordinates=list(system["coords"].names),
-                                kinds=system["kinds"])
+                                kinds=system["kinds"], **({} if n_jobs is None
+                                                          else {"n_jobs": n_jobs}))
         if profiler:
             profiler.disable()
     wall, cpu = time.perf_counter() - started, time.process_time() - cpu
+    workers = _workers_cpu() - workers
     if profiler:
         pstats.Stats(profiler).sort_stats("cumulative").print_stats(profile)
     coef = found.model.coefficients()
@@ -65,9 +84,11 @@ def time_system(name, noise=0.01, seed=0, profile=0, forced=True):
     return {"system": name, "n": truth.n, "forcing": "forced" if forced else "unforced",
             "noise": noise, "seed": seed, "samples": int(sum(len(t) for t in ts)),
             "wall_s": round(wall, 2), "cpu_s": round(cpu, 2),
+            "workers_cpu_s": round(workers, 2), "load": round(os.getloadavg()[0], 2),
             "catalog": found.catalog.describe(), "terms": found.catalog.n_terms,
             "steps": len(found.steps), "criterion": found.held_out_error,
-            "path": [[s.move, s.terms, round(s.seconds, 2)] for s in found.steps],
+            "path": [[s.move, s.terms, s.active, s.criterion, s.chosen, round(s.seconds, 2)]
+                     for s in found.steps],
             "support": support, "coefficients": [float(c) for c in coef if c != 0]}
 
 
@@ -105,6 +126,8 @@ def main(argv=None):
     parser.add_argument("--forcing", nargs="+", default=["forced"],
                         choices=["forced", "unforced"],
                         help="forced and/or unforced data (unforced: the systems that have it)")
+    parser.add_argument("--n-jobs", type=int, default=None,
+                        help="grow_catalog's n_jobs (default: its own default)")
     parser.add_argument("--json", default=None, help="write the records to this file")
     parser.add_argument("--profile", type=int, default=0)
     parser.add_argument("--report", nargs=2, metavar=("BEFORE", "AFTER"), default=None,
@@ -120,10 +143,11 @@ def main(argv=None):
             if forcing == "unforced" and not table[name]["unforced"]:
                 continue
             record = time_system(name, args.noise, args.seed, args.profile,
-                                 forcing == "forced")
+                                 forcing == "forced", args.n_jobs)
             records.append(record)
             print(json.dumps({k: record[k] for k in ("system", "n", "forcing", "wall_s",
-                                                     "cpu_s", "terms", "steps", "catalog")}),
+                                                     "cpu_s", "workers_cpu_s", "load", "terms",
+                                                     "steps", "catalog")}),
                   flush=True)
     if args.json:
         with open(args.json, "w") as handle:
