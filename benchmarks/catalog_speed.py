@@ -1,19 +1,24 @@
 """Time of the automatic catalog (``px.grow_catalog``: growth plus the final fit) per system.
 
-The data are those of ``benchmarks/generic_systems.py``: 2 forced runs of 10 s at 1 kHz (20,000
-samples), positions only with 1 % noise. Per system it prints the wall and CPU seconds of
-``grow_catalog`` (growth and the final bagged fit on all samples), the chosen catalog, its
-size and the fitted support (the names of the non-zero terms), so that two checkouts can be
-compared for speed and for identical results::
+The data are those of ``benchmarks/generic_systems.py``: 2 runs of 10 s at 1 kHz (20,000
+samples), positions only with 1 % noise (``--noise``), forced (``--forcing forced unforced``
+adds the unforced data of the systems that have them). Per case it prints the wall and CPU
+seconds of ``grow_catalog`` (growth and the final bagged fit on all samples), the chosen
+catalog, its size and the fitted support (the names of the non-zero terms), so that two
+checkouts can be compared for speed and for identical results::
 
     PYTHONPATH=$PWD OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 \\
         python benchmarks/catalog_speed.py [--systems duffing spring_pendulum ...] \\
-        [--json out.json] [--profile 30]
+        [--forcing forced unforced] [--noise 0.05] [--n-jobs 2] [--json out.json] \\
+        [--profile 30]
 
-``--report BEFORE.json AFTER.json`` prints a markdown table of two such runs (seconds, and
-whether catalogs, supports and coefficients are the same). ``--profile N`` prints the N most
-expensive functions (cumulative) of a cProfile run. The package's catalog modules are imported
-before the clocks start (a one-time cost of a few seconds that would fall on the first system).
+``--n-jobs`` sets ``grow_catalog``'s processes; the workers' CPU seconds are recorded apart
+(``workers_cpu_s``, with ``psutil``), and so is the 1-minute load average. ``--report
+BEFORE.json AFTER.json`` (or ``--report B1.json B2.json vs A1.json A2.json``) prints a
+markdown table of such runs case by case (seconds, and whether catalogs, supports and
+coefficients are the same). ``--profile N`` prints the N most expensive functions
+(cumulative) of a cProfile run. The package's catalog modules are imported before the clocks
+start (a one-time cost of a few seconds that would fall on the first system).
 """
 
 from __future__ import annotations
@@ -92,16 +97,28 @@ def time_system(name, noise=0.01, seed=0, profile=0, forced=True, n_jobs=None):
             "support": support, "coefficients": [float(c) for c in coef if c != 0]}
 
 
-def report(before_path, after_path) -> str:
-    """Markdown table comparing two ``--json`` runs system by system."""
-    with open(before_path) as handle:
-        before = {r["system"]: r for r in json.load(handle)}
-    with open(after_path) as handle:
-        after = {r["system"]: r for r in json.load(handle)}
-    lines = ["| system | coordinates | before: wall s (CPU s) | after: wall s (CPU s) | CPU "
-             "speed-up | catalog, support, coefficients |", "|---|---|---|---|---|---|"]
-    for name, old in before.items():
-        new = after.get(name)
+def _records(paths) -> dict:
+    """Records of ``--json`` files by (system, forcing, noise); older files: forced, 1 %."""
+    out = {}
+    for path in paths:
+        with open(path) as handle:
+            for r in json.load(handle):
+                out[(r["system"], r.get("forcing", "forced"), r.get("noise", 0.01))] = r
+    return out
+
+
+def report(before_paths, after_paths) -> str:
+    """Markdown table comparing ``--json`` runs case by case (several files per side).
+
+    CPU s: the calling process's; the workers' CPU seconds (``--n-jobs``) are added after a
+    ``+``. The load is the 1-minute load average at the end of the case.
+    """
+    before, after = _records(before_paths), _records(after_paths)
+    lines = ["| system | n | forcing | noise | steps | before: wall s (CPU s) | after: wall s "
+             "(CPU s + workers') | load before / after | catalog, support, coefficients |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for key, old in before.items():
+        new = after.get(key)
         if new is None:
             continue
         if old["catalog"] != new["catalog"] or old["support"] != new["support"]:
@@ -112,9 +129,13 @@ def report(before_path, after_path) -> str:
             a, b = np.asarray(old["coefficients"]), np.asarray(new["coefficients"])
             verdict = (f"same catalog and support, coefficients within "
                        f"{np.max(np.abs(a - b) / np.abs(a)):.1e} (relative)")
-        lines.append(f"| {name} | {old['n']} | {old['wall_s']:.1f} ({old['cpu_s']:.1f}) | "
-                     f"{new['wall_s']:.1f} ({new['cpu_s']:.1f}) | "
-                     f"{old['cpu_s'] / new['cpu_s']:.2f}x | {verdict} |")
+        workers = new.get("workers_cpu_s", 0.0)
+        lines.append(f"| {key[0]} | {old['n']} | {key[1]} | {100 * key[2]:g} % | "
+                     f"{new['steps']} | {old['wall_s']:.1f} ({old['cpu_s']:.1f}) | "
+                     f"{new['wall_s']:.1f} ({new['cpu_s']:.1f}"
+                     + (f" + {workers:.1f}" if workers else "") + ") | "
+                     f"{old.get('load', float('nan')):.1f} / {new.get('load', float('nan')):.1f}"
+                     f" | {verdict} |")
     return "\n".join(lines)
 
 
@@ -130,11 +151,17 @@ def main(argv=None):
                         help="grow_catalog's n_jobs (default: its own default)")
     parser.add_argument("--json", default=None, help="write the records to this file")
     parser.add_argument("--profile", type=int, default=0)
-    parser.add_argument("--report", nargs=2, metavar=("BEFORE", "AFTER"), default=None,
-                        help="print a markdown comparison of two --json files and exit")
+    parser.add_argument("--report", nargs="+", default=None, metavar="JSON",
+                        help="BEFORE... vs AFTER... (or BEFORE AFTER): print a markdown "
+                             "comparison of --json files and exit")
     args = parser.parse_args(argv)
     if args.report:
-        print(report(*args.report))
+        if "vs" in args.report:
+            split = args.report.index("vs")
+            before, after = args.report[:split], args.report[split + 1:]
+        else:
+            before, after = args.report[:1], args.report[1:]
+        print(report(before, after))
         return None
     records = []
     table = gs.systems()
