@@ -43,20 +43,46 @@ import pysindy_xl.catalog  # noqa: E402, F401 - imported before the clocks start
 DEFAULT = ("duffing", "spring_pendulum", "double_pendulum", "three_masses", "four_chain")
 
 
-def _workers_cpu() -> float:
-    """CPU seconds of this process's child processes so far (the growth's joblib workers)."""
-    try:
-        import psutil
-    except ImportError:
-        return 0.0
-    total = 0.0
-    for child in psutil.Process().children(recursive=True):
+class _WorkersClock:
+    """CPU seconds of this process's child processes (the growth's joblib workers) while it
+    runs, sampled every 0.2 s so that a worker that exits (loky restarts a worker whose
+    memory grew) still counts up to its last sample; ``restarts``: workers that exited."""
+
+    def __enter__(self):
+        import threading
+        self.start, self.last, self._stop = self._sample(), {}, threading.Event()
+        self.last.update(self.start)
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+        return self
+
+    @staticmethod
+    def _sample() -> dict:
         try:
-            times = child.cpu_times()
-        except psutil.Error:
-            continue
-        total += times.user + times.system
-    return total
+            import psutil
+        except ImportError:
+            return {}
+        out = {}
+        for child in psutil.Process().children(recursive=True):
+            try:
+                times = child.cpu_times()
+            except psutil.Error:
+                continue
+            out[child.pid] = times.user + times.system
+        return out
+
+    def _run(self):
+        while not self._stop.wait(0.2):
+            self.last.update(self._sample())
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._thread.join()
+        now = self._sample()
+        self.last.update(now)
+        self.seconds = sum(v - self.start.get(pid, 0.0) for pid, v in self.last.items())
+        self.restarts = sum(pid not in now for pid in self.last)
+        return False
 
 
 def time_system(name, noise=0.01, seed=0, profile=0, forced=True, n_jobs=None):
@@ -68,10 +94,9 @@ def time_system(name, noise=0.01, seed=0, profile=0, forced=True, n_jobs=None):
     ts = [r["t"] for r in runs]
     us = [r["u"] for r in runs] if forced else None
     profiler = cProfile.Profile() if profile else None
-    workers = _workers_cpu()
-    started, cpu = time.perf_counter(), time.process_time()
-    with warnings.catch_warnings():
+    with _WorkersClock() as clock, warnings.catch_warnings():
         warnings.simplefilter("ignore")
+        started, cpu = time.perf_counter(), time.process_time()
         if profiler:
             profiler.enable()
         found = px.grow_catalog(xs, ts, us, coordinates=list(system["coords"].names),
@@ -79,8 +104,7 @@ def time_system(name, noise=0.01, seed=0, profile=0, forced=True, n_jobs=None):
                                                           else {"n_jobs": n_jobs}))
         if profiler:
             profiler.disable()
-    wall, cpu = time.perf_counter() - started, time.process_time() - cpu
-    workers = _workers_cpu() - workers
+        wall, cpu = time.perf_counter() - started, time.process_time() - cpu
     if profiler:
         pstats.Stats(profiler).sort_stats("cumulative").print_stats(profile)
     coef = found.model.coefficients()
@@ -89,7 +113,8 @@ def time_system(name, noise=0.01, seed=0, profile=0, forced=True, n_jobs=None):
     return {"system": name, "n": truth.n, "forcing": "forced" if forced else "unforced",
             "noise": noise, "seed": seed, "samples": int(sum(len(t) for t in ts)),
             "wall_s": round(wall, 2), "cpu_s": round(cpu, 2),
-            "workers_cpu_s": round(workers, 2), "load": round(os.getloadavg()[0], 2),
+            "workers_cpu_s": round(clock.seconds, 2), "workers_exited": clock.restarts,
+            "load": round(os.getloadavg()[0], 2),
             "catalog": found.catalog.describe(), "terms": found.catalog.n_terms,
             "steps": len(found.steps), "criterion": found.held_out_error,
             "path": [[s.move, s.terms, s.active, s.criterion, s.chosen, round(s.seconds, 2)]
