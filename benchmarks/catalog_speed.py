@@ -39,6 +39,7 @@ import generic_systems as gs  # noqa: E402 - the benchmark's systems and data
 
 import pysindy_xl as px  # noqa: E402
 import pysindy_xl.catalog  # noqa: E402, F401 - imported before the clocks start
+from pysindy_xl.catalog import candidates, growth  # noqa: E402
 
 DEFAULT = ("duffing", "spring_pendulum", "double_pendulum", "three_masses", "four_chain")
 
@@ -85,6 +86,40 @@ class _WorkersClock:
         return False
 
 
+class _Recorded(candidates.CandidateFits):
+    """``CandidateFits`` that keeps its last instance (for :func:`idle_estimate`)."""
+
+    last = None
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        type(self).last = self
+
+
+growth.CandidateFits = _Recorded
+
+
+def idle_estimate(fits, main_cpu) -> float:
+    """Wall seconds of the growth on idle cores (warm workers): the recorded schedule of
+    ``fits`` replayed with each fit's CPU seconds (a worker's fit starts when it is submitted
+    or when its worker is free; a result is waited for when it is needed), plus the calling
+    process's CPU seconds outside its own fits (the final fit, the data's preparation)."""
+    if fits is None:
+        return float("nan")
+    cpu = {key: fields["cpu_seconds"] for key, fields in fits.results.items()}
+    clock, workers, finish, own = 0.0, [0.0] * max(1, fits.n_jobs - 1), {}, 0.0
+    for kind, key in fits.events:
+        if kind == "submit":
+            free = int(np.argmin(workers))
+            finish[key] = workers[free] = max(clock, workers[free]) + cpu.get(key, 0.0)
+        elif kind == "local":
+            clock += cpu[key]
+            own += cpu[key]
+        else:
+            clock = max(clock, finish[key])
+    return clock + max(0.0, main_cpu - own)
+
+
 def time_system(name, noise=0.01, seed=0, profile=0, forced=True, n_jobs=None):
     """Wall and CPU seconds of ``grow_catalog`` on one system's data, and what it chose."""
     system = gs.systems()[name]
@@ -94,6 +129,7 @@ def time_system(name, noise=0.01, seed=0, profile=0, forced=True, n_jobs=None):
     ts = [r["t"] for r in runs]
     us = [r["u"] for r in runs] if forced else None
     profiler = cProfile.Profile() if profile else None
+    _Recorded.last = None
     with _WorkersClock() as clock, warnings.catch_warnings():
         warnings.simplefilter("ignore")
         started, cpu = time.perf_counter(), time.process_time()
@@ -114,6 +150,7 @@ def time_system(name, noise=0.01, seed=0, profile=0, forced=True, n_jobs=None):
             "noise": noise, "seed": seed, "samples": int(sum(len(t) for t in ts)),
             "wall_s": round(wall, 2), "cpu_s": round(cpu, 2),
             "workers_cpu_s": round(clock.seconds, 2), "workers_exited": clock.restarts,
+            "idle_wall_estimate_s": round(idle_estimate(_Recorded.last, cpu), 2),
             "load": round(os.getloadavg()[0], 2),
             "catalog": found.catalog.describe(), "terms": found.catalog.n_terms,
             "steps": len(found.steps), "criterion": found.held_out_error,
@@ -197,9 +234,9 @@ def main(argv=None):
             record = time_system(name, args.noise, args.seed, args.profile,
                                  forcing == "forced", args.n_jobs)
             records.append(record)
-            print(json.dumps({k: record[k] for k in ("system", "n", "forcing", "wall_s",
-                                                     "cpu_s", "workers_cpu_s", "load", "terms",
-                                                     "steps", "catalog")}),
+            print(json.dumps({k: record[k] for k in (
+                "system", "n", "forcing", "wall_s", "cpu_s", "workers_cpu_s",
+                "idle_wall_estimate_s", "load", "terms", "steps", "catalog")}),
                   flush=True)
     if args.json:
         with open(args.json, "w") as handle:

@@ -133,17 +133,18 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     dict
         ``description``, ``terms``, ``active``, ``time_error``, ``region_error``,
         ``criterion`` (the RMS of the two errors; inf when the catalog was not fitted),
-        ``note`` (why not) and ``seconds``: the fields of a
+        ``note`` (why not), ``seconds`` and ``cpu_seconds``: the fields of a
         :class:`~.growth.GrowthStep` but its move and verdict.
     """
     from sklearn.base import clone
 
     catalog = AutomaticCatalog(**search.fixed, **parameters)
-    started = time.perf_counter()
+    started, cpu = time.perf_counter(), time.process_time()
 
     def failed(note, size=0, description=""):
         return {"description": description, "terms": size, "active": 0, "time_error": np.inf,
-                "region_error": np.inf, "criterion": np.inf, "note": note, "seconds": 0.0}
+                "region_error": np.inf, "criterion": np.inf, "note": note, "seconds": 0.0,
+                "cpu_seconds": 0.0}
 
     try:
         size = catalog.n_terms
@@ -169,7 +170,8 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     return {"description": description, "terms": size,
             "active": int(np.count_nonzero(model.coefficients())), "time_error": errors[0],
             "region_error": errors[1], "criterion": value if np.isfinite(value) else np.inf,
-            "note": "", "seconds": time.perf_counter() - started}
+            "note": "", "seconds": time.perf_counter() - started,
+            "cpu_seconds": time.process_time() - cpu}
 
 
 def _warm_up() -> None:
@@ -193,6 +195,15 @@ class CandidateFits:
     n_jobs : int or None, default None
         Processes: the calling one and ``n_jobs - 1`` workers (joblib's convention: None is
         1, -1 all cores).
+
+    Attributes
+    ----------
+    results : dict
+        The fields of each computed candidate, by :func:`parameters_key`.
+    events : list of (str, str)
+        What happened, in order: ``("submit", key)`` (sent to a worker), ``("local", key)``
+        (fitted here) and ``("worker", key)`` (a worker's result first needed here); with
+        the steps' ``cpu_seconds`` they let a benchmark replay the schedule on idle cores.
     """
 
     def __init__(self, search: SearchData, n_jobs=None):
@@ -200,6 +211,8 @@ class CandidateFits:
         self.search = search
         self.n_jobs = joblib.effective_n_jobs(n_jobs)
         self.results = {}
+        self.events = []
+        self._workers_results = set()  # computed by a worker, not yet needed here
         self._running = {}  # key -> future of a worker's fit
         self._executor = None
 
@@ -222,6 +235,7 @@ class CandidateFits:
         del self._running[key]
         try:
             self.results[key] = future.result()
+            self._workers_results.add(key)
         except Exception:  # noqa: BLE001 - the workers cannot fit (e.g. an optimizer that
             self.n_jobs = 1  # does not pickle): the caller fits every candidate itself
 
@@ -245,6 +259,9 @@ class CandidateFits:
         for other in list(self._running):
             self._collect(other)
         self._collect(key, wait=True)
+        if key in self._workers_results:
+            self._workers_results.discard(key)
+            self.events.append(("worker", key))
         if key in self.results:
             return self.results[key]
         if self.n_jobs > 1:
@@ -255,6 +272,8 @@ class CandidateFits:
                 if other != key and other not in self.results and other not in self._running:
                     self._running[other] = self._workers().submit(evaluate_candidate,
                                                                   self.search, candidate)
+                    self.events.append(("submit", other))
+        self.events.append(("local", key))
         self.results[key] = evaluate_candidate(self.search, parameters)
         return self.results[key]
 

@@ -84,6 +84,8 @@ class GrowthStep:
         Why a step was not evaluated or failed.
     seconds : float, default 0.0
         Time of the step's fit and scoring.
+    cpu_seconds : float, default 0.0
+        CPU time of the step's fit and scoring (in the process that ran it).
 
     Examples
     --------
@@ -102,6 +104,7 @@ class GrowthStep:
     chosen: bool
     note: str = ""
     seconds: float = 0.0
+    cpu_seconds: float = 0.0
 
 
 @dataclasses.dataclass
