@@ -247,8 +247,9 @@ class CandidateFits:
         parameters : dict
             The candidate.
         ahead : iterable of dict, default ()
-            Candidates probably needed next, best guess first: while this one is fitted, the
-            idle workers fit the first of them that are neither done nor running.
+            Candidates probably needed next, best guess first: the idle workers fit the
+            first of them that are neither done nor running, and while a worker still fits
+            the one needed now, this process fits the next of them.
 
         Returns
         -------
@@ -256,26 +257,42 @@ class CandidateFits:
             As :func:`evaluate_candidate` (the same object on each call).
         """
         key = parameters_key(parameters)
+        ahead = [(parameters_key(c), c) for c in ahead]
         for other in list(self._running):
             self._collect(other)
+        if key not in self.results and key not in self._running:
+            self._submit(ahead, key)
+            self._local(key, parameters)
+            return self.results[key]
+        while key in self._running and not self._running[key].done():
+            # a worker fits it: fit the next guess here meanwhile (most moves are rejected)
+            guess = next(((k, c) for k, c in ahead if k != key and k not in self.results
+                          and k not in self._running), None)
+            if guess is None:
+                break
+            self._local(*guess)
         self._collect(key, wait=True)
         if key in self._workers_results:
             self._workers_results.discard(key)
             self.events.append(("worker", key))
-        if key in self.results:
-            return self.results[key]
-        if self.n_jobs > 1:
-            for candidate in ahead:
-                if len(self._running) >= self.n_jobs - 1:
-                    break
-                other = parameters_key(candidate)
-                if other != key and other not in self.results and other not in self._running:
-                    self._running[other] = self._workers().submit(evaluate_candidate,
-                                                                  self.search, candidate)
-                    self.events.append(("submit", other))
+        if key not in self.results:  # (a worker failed)
+            self._local(key, parameters)
+        self._submit(ahead, key)
+        return self.results[key]
+
+    def _submit(self, ahead, key) -> None:
+        """Give the idle workers the first guesses of ``ahead`` neither done nor running."""
+        for other, candidate in ahead:
+            if len(self._running) >= self.n_jobs - 1:
+                break
+            if other != key and other not in self.results and other not in self._running:
+                self._running[other] = self._workers().submit(evaluate_candidate, self.search,
+                                                              candidate)
+                self.events.append(("submit", other))
+
+    def _local(self, key, parameters) -> None:
         self.events.append(("local", key))
         self.results[key] = evaluate_candidate(self.search, parameters)
-        return self.results[key]
 
     def close(self) -> None:
         """Forget the workers' guesses (those not started are cancelled)."""
