@@ -5,7 +5,8 @@ search's training pieces) and its held-out errors depend on nothing else, so a g
 the candidates it will probably need next while it fits the one it needs now: the climb
 rejects most moves, so the next candidates are those that follow if the current one is
 rejected. :class:`CandidateFits` fits the needed candidate in the calling process and up to
-``n_jobs - 1`` of the next ones in joblib's worker processes at the same time; a result is
+``n_jobs - 1`` of the next ones in joblib's worker processes at the same time (and, while a
+worker still fits the one needed now, the next guess in the calling process); a result is
 the same whichever process computed it (the fits are deterministic), and the growth consumes
 results in its own order, so the path, the choice and the fitted model do not depend on
 ``n_jobs``.
