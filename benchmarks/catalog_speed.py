@@ -173,12 +173,13 @@ def report(before_paths, after_paths) -> str:
     """Markdown table comparing ``--json`` runs case by case (several files per side).
 
     CPU s: the calling process's; the workers' CPU seconds (``--n-jobs``) are added after a
-    ``+``. The load is the 1-minute load average at the end of the case.
+    ``+``. The idle-core estimate is :func:`idle_estimate` (the CPU seconds where no workers
+    ran). The load is the 1-minute load average at the end of the case.
     """
     before, after = _records(before_paths), _records(after_paths)
     lines = ["| system | n | forcing | noise | steps | before: wall s (CPU s) | after: wall s "
-             "(CPU s + workers') | load before / after | catalog, support, coefficients |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "(CPU s + workers') | after: idle-core estimate s | load after | catalog, "
+             "support, coefficients |", "|---|---|---|---|---|---|---|---|---|---|"]
     for key, old in before.items():
         new = after.get(key)
         if new is None:
@@ -196,8 +197,8 @@ def report(before_paths, after_paths) -> str:
                      f"{new['steps']} | {old['wall_s']:.1f} ({old['cpu_s']:.1f}) | "
                      f"{new['wall_s']:.1f} ({new['cpu_s']:.1f}"
                      + (f" + {workers:.1f}" if workers else "") + ") | "
-                     f"{old.get('load', float('nan')):.1f} / {new.get('load', float('nan')):.1f}"
-                     f" | {verdict} |")
+                     f"{new.get('idle_wall_estimate_s', new['cpu_s']):.1f} | "
+                     f"{new.get('load', float('nan')):.1f} | {verdict} |")
     return "\n".join(lines)
 
 
