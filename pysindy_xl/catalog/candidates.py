@@ -181,11 +181,35 @@ def _warm_up() -> None:
     from ..weak import regression  # noqa: F401
 
 
+_POOL = {}  # the workers, kept between growths: {"size": int, "executor": executor}
+
+
+def _pool(size: int):
+    """A loky process pool of ``size`` workers of its own (kept between calls; idle workers
+    exit after 300 s). Not joblib's shared executor: joblib restarts that one whenever its
+    arguments change and expects its own subclass of it, so sharing it would break, or
+    restart, the user's other ``joblib.Parallel`` calls."""
+    from joblib.externals.loky import ProcessPoolExecutor
+    if _POOL.get("size") != size:
+        if _POOL.get("executor") is not None:
+            _POOL["executor"].shutdown(wait=False, kill_workers=True)
+        _POOL.update(size=size, executor=ProcessPoolExecutor(max_workers=size, timeout=300))
+    return _POOL["executor"]
+
+
+def _forget_pool() -> None:
+    """Drop a pool that failed (a lost worker breaks it): the next growth starts another."""
+    executor = _POOL.pop("executor", None)
+    _POOL.pop("size", None)
+    if executor is not None:
+        executor.shutdown(wait=False, kill_workers=True)
+
+
 class CandidateFits:
     """The candidates' fits and scores, each computed once, the next ones in parallel.
 
     The candidate needed now is fitted in the calling process; meanwhile up to ``n_jobs - 1``
-    worker processes (joblib's reusable loky executor) fit the first candidates of ``ahead``
+    worker processes (a loky process pool, joblib's) fit the first candidates of ``ahead``
     that are neither done nor running. A guess that the growth never needs costs a worker's
     time, not the caller's.
 
@@ -219,8 +243,7 @@ class CandidateFits:
 
     def _workers(self):
         if self._executor is None:
-            from joblib.externals.loky import get_reusable_executor
-            self._executor = get_reusable_executor(max_workers=self.n_jobs - 1)
+            self._executor = _pool(self.n_jobs - 1)
         return self._executor
 
     def warm_up(self) -> None:
@@ -237,8 +260,8 @@ class CandidateFits:
         try:
             self.results[key] = future.result()
             self._workers_results.add(key)
-        except Exception:  # noqa: BLE001 - the workers cannot fit (e.g. an optimizer that
-            self.n_jobs = 1  # does not pickle): the caller fits every candidate itself
+        except Exception:  # noqa: BLE001 - the workers cannot fit (a lost worker, an
+            self._disable()  # optimizer that does not pickle): the caller fits them all
 
     def get(self, parameters, ahead=()) -> dict:
         """The fields of a candidate's step (:func:`evaluate_candidate`), computed once.
@@ -287,13 +310,24 @@ class CandidateFits:
             if len(self._running) >= self.n_jobs - 1:
                 break
             if other != key and other not in self.results and other not in self._running:
-                self._running[other] = self._workers().submit(evaluate_candidate, self.search,
-                                                              candidate)
+                try:
+                    self._running[other] = self._workers().submit(evaluate_candidate,
+                                                                  self.search, candidate)
+                except Exception:  # noqa: BLE001 - a broken pool: the caller fits them all
+                    self._disable()
+                    return
                 self.events.append(("submit", other))
 
     def _local(self, key, parameters) -> None:
         self.events.append(("local", key))
         self.results[key] = evaluate_candidate(self.search, parameters)
+
+    def _disable(self) -> None:
+        self.n_jobs = 1
+        for future in self._running.values():
+            future.cancel()
+        self._running = {}
+        _forget_pool()
 
     def close(self) -> None:
         """Forget the workers' guesses (those not started are cancelled)."""

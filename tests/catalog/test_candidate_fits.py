@@ -50,6 +50,9 @@ def test_growth_in_two_processes_takes_the_same_path_to_the_same_law():
     np.testing.assert_allclose(2 * coef["L[x_dot**2]"], MASS, rtol=0.05)
     np.testing.assert_allclose(-2 * coef["L[x**2]"], STIFFNESS, rtol=0.05)
     np.testing.assert_allclose(-4 * coef["L[x**4]"], HARDENING, rtol=0.1)
+    # the workers are a pool of their own: joblib's shared one still works afterwards
+    import joblib
+    assert joblib.Parallel(n_jobs=2)(joblib.delayed(abs)(-k) for k in range(3)) == [0, 1, 2]
 
 
 def _search(x, t, u):
