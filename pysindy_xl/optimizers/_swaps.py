@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg
+import scipy.linalg.lapack
 
 
 def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2):
@@ -25,51 +26,89 @@ def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y
     return c, j
 
 
-def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
-    """Best-improvement 1-swap search on a reduced system: with ``x_S = Q R``, dropping column
-    ``j`` (direction ``u_j ~ Q R^-T e_j``) adds ``(u_j . y)^2`` to the residual and leaves
-    candidate ``c`` the component ``C_c + u_j (u_j . x_c)``: all ``k x F`` gains from the one
-    product ``Q^T x`` (cost ``O(n k F)`` a step).
-    ``rss`` and ``previous`` continue from a first step of :func:`first_swaps`.
+def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None, norms2=None):
+    """Best-improvement 1-swap search on a reduced system.
+
+    With an orthonormal basis ``Q`` of the support's span and ``P = Q^T x`` (``k x F``), the
+    direction that only column ``j`` adds to the span is ``u_j ~ Q w_j``, ``w_j = P_S^-T e_j``;
+    dropping ``j`` adds ``(u_j . y)^2`` to the residual and leaves candidate ``c`` the component
+    ``C_c + u_j (u_j . x_c)``, with ``u_j . x_c = w_j . P_c`` and ``|C_c|^2 = |x_c|^2 - |P_c|^2``.
+    After a swap, ``Q`` and ``P`` are updated instead of recomputed: the basis loses ``u_j``
+    (a rotation within the span) and gains the normalized part of ``x_c`` off the rest, whose
+    products with the columns are one new row of ``P``. A step costs ``O(n F)``, one pass over
+    the columns (that row and ``x^T r`` together), instead of the ``O(n k F)`` of a new
+    ``Q^T x``.
+    ``rss`` and ``previous`` continue from a first step of :func:`first_swaps`; ``norms2``, the
+    squared column norms, may be given (computed once for many searches).
     """
-    support = np.asarray(support, dtype=int)
-    norms2 = np.sum(xs**2, axis=0)
+    support = np.array(support, dtype=int)
+    norms2 = column_norms2(xs) if norms2 is None else norms2
     y_norm2 = float(y @ y)
+    basis = np.linalg.qr(xs[:, support])[0]
+    residual = y - basis @ (basis.T @ y)
+    products = np.column_stack([basis, residual]).T @ xs       # one pass over the columns
+    in_span, x_residual = products[:-1], products[-1]          # (k, F) and x^T r
     for _ in range(max_swaps + 1):
-        basis, r_factor = np.linalg.qr(xs[:, support])
-        residual = y - basis @ (basis.T @ y)
         new_rss = float(residual @ residual)
         if rss is not None and not new_rss < rss:  # the predicted gain did not materialize
             return np.sort(previous)
         rss, previous = new_rss, support.copy()
         try:
-            directions = basis @ scipy.linalg.solve_triangular(
-                r_factor, np.eye(len(support)), trans="T", check_finite=False)
-        except (np.linalg.LinAlgError, ValueError):
+            weights = np.linalg.inv(in_span[:, support]).T     # column j: w_j
+        except np.linalg.LinAlgError:
             break
-        directions /= np.linalg.norm(directions, axis=0)
-        # everything from one (k, F) product: P = Q^T x, so u_j . x_c = (Q^T u_j) . P_c and the
-        # part of x_c off the support has the squared norm |x_c|^2 - |P_c|^2
-        in_span = basis.T @ xs                           # (k, F)
-        along = in_span.T @ (basis.T @ directions)       # (F, k): u_j . x_c
-        removed = directions.T @ y                       # (k,): u_j . y
+        weights /= np.linalg.norm(weights, axis=0)
+        along = in_span.T @ weights                            # (F, k): u_j . x_c
+        removed = weights.T @ (basis.T @ y)                    # (k,): u_j . y
         remaining2 = np.maximum(norms2 - np.sum(in_span**2, axis=0), 0.0)[:, None] + along**2
-        correlation = (xs.T @ residual)[:, None] + along * removed
+        correlation = x_residual[:, None] + along * removed
         c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2)
         if c is None:
             break
-        support = support.copy()
         support[j] = c
+        # the direction of column j leaves the span (a rotation within it), the part of x_c off
+        # the rest (Gram-Schmidt twice) enters as the last basis vector
+        rotation = np.linalg.qr(weights[:, [j]], mode="complete")[0][:, 1:]
+        basis, in_span = basis @ rotation, rotation.T @ in_span
+        part = xs[:, c] - basis @ in_span[:, c]
+        part -= basis @ (basis.T @ part)
+        basis = np.column_stack([basis, part / np.linalg.norm(part)])
+        residual = y - basis @ (basis.T @ y)
+        products = np.column_stack([basis[:, -1], residual]).T @ xs   # one pass
+        in_span, x_residual = np.vstack([in_span, products[0]]), products[1]
     return np.sort(support)
 
 
-def first_swaps(xs, y, usable, order, sizes):
+def column_norms2(xs):
+    """Squared norms of the columns of ``xs``."""
+    return np.einsum("ij,ij->j", xs, xs)
+
+
+def _reflected(xs, y, columns):
+    """``(Q^T xs, Q^T y, R)`` for the complete ``Q`` of the QR of ``columns`` (its Householder
+    reflectors applied to ``xs`` and ``y``, ``O(n k F)``, without forming ``Q``).
+    """
+    packed, tau, work, info = scipy.linalg.lapack.dgeqrf(columns)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgeqrf failed (info {info})")
+    both = np.asfortranarray(np.column_stack([xs, y]))
+    lwork = max(1, 64 * both.shape[1])
+    both, work, info = scipy.linalg.lapack.dormqr("L", "T", packed, tau, both, lwork,
+                                                  overwrite_c=1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dormqr failed (info {info})")
+    return both[:, :-1], both[:, -1], np.triu(packed[: columns.shape[1]])
+
+
+def first_swaps(xs, y, usable, order, sizes, norms2=None):
     """The first step of :func:`swap_search` from every ``order[:k]``, ``k`` in ``sizes``:
-    ``{k: (rss, swapped support or None)}``, from one complete QR of ``x[:, order]`` (sizes
-    past a zero pivot left out).
+    ``{k: (rss, swapped support or None)}``, from one QR of ``x[:, order]`` whose reflectors
+    give ``Q^T x`` for its complete ``Q`` (sizes past a zero pivot left out).
     """
     largest = max(sizes, default=0)
-    q_factor, r_factor = np.linalg.qr(xs[:, order[:largest]], mode="complete")
+    if largest == 0:
+        return {}
+    big_b, small_b, r_factor = _reflected(xs, y, xs[:, order[:largest]])
     diag = np.abs(np.diag(r_factor))
     if np.any(diag == 0):
         largest = int(np.argmax(diag == 0))
@@ -78,8 +117,7 @@ def first_swaps(xs, y, usable, order, sizes):
         return {}
     head = r_factor[:largest, :largest]
     inverse = scipy.linalg.solve_triangular(head, np.eye(largest), check_finite=False)
-    big_b, small_b = q_factor.T @ xs, q_factor.T @ y
-    norms2 = np.sum(xs**2, axis=0)
+    norms2 = column_norms2(xs) if norms2 is None else norms2
     y_norm2 = float(y @ y)
     # tail sums: what lies off the span of the first k columns
     remaining_base = np.cumsum((big_b**2)[::-1], axis=0)[::-1]          # (m, F) from row k

@@ -1,0 +1,89 @@
+"""Held-out errors of nested and arbitrary supports over contiguous folds of rows (the scores of
+:func:`~pysindy_xl.optimizers.selection.select_support`).
+
+Each fold's training rows are reduced to the triangular system of only the columns the scored
+models use (a QR of ``n_train x k`` for ``k`` columns), so the cost follows the models scored,
+not the catalog's width.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+
+from ._triangular import triangular_system
+
+
+def fold_labels(n_rows: int, n_blocks: int, n_folds: int) -> np.ndarray:
+    """Fold of each row: contiguous stretches within each of ``n_blocks`` equal row blocks."""
+    per_block = n_rows // n_blocks
+    position = np.arange(n_rows) % per_block
+    return np.minimum(position * n_folds // per_block, n_folds - 1)
+
+
+class HeldOutRows:
+    """Unit-RMS columns ``xs`` and target split into folds: the rows each fold holds out and
+    trains on (folds without test or training rows skipped), ``y`` divided by its RMS.
+
+    Parameters
+    ----------
+    xs : ndarray, shape (n_rows, F)
+        Columns (already scaled).
+    y : ndarray, shape (n_rows,)
+        Target.
+    n_blocks, n_folds : int
+        Equal row blocks (coordinates) and folds within each.
+    """
+
+    def __init__(self, xs, y, n_blocks: int, n_folds: int):
+        self.xs = xs
+        self.y = y / np.sqrt(max(float(np.mean(y**2)), 1e-300))
+        self.n_folds = n_folds
+        labels = fold_labels(len(y), n_blocks, n_folds)
+        self.folds = [(fold, np.flatnonzero(labels == fold), np.flatnonzero(labels != fold))
+                      for fold in range(n_folds) if 0 < np.sum(labels == fold) < len(y)]
+
+    def nested_errors(self, order) -> np.ndarray:
+        """Held-out error (fold, k - 1) of every nested model ``order[:k]`` (inf where a model
+        is undetermined on a fold's training rows)."""
+        order = np.asarray(order, dtype=int)
+        size = len(order)
+        errors = np.full((self.n_folds, size), np.inf)
+        for fold, test, train in self.folds:
+            r_factor, rhs = triangular_system(self.xs[np.ix_(train, order)], self.y[train])
+            usable = min(size, r_factor.shape[0])
+            diag = np.abs(np.diag(r_factor))[:usable]
+            ok = diag > 1e-12 * max(diag.max(initial=0.0), 1e-300)
+            usable = int(np.argmin(ok)) if not ok.all() else usable
+            # all nested models at once: beta_k = inv(R)[:, :k+1] @ rhs[:k+1], so the
+            # predictions are cumulative sums of the columns of W = x_test inv(R) times rhs
+            # (one triangular solve with the test rows, no inverse and no product with it)
+            weights = scipy.linalg.solve_triangular(
+                r_factor[:usable, :usable], self.xs[np.ix_(test, order[:usable])].T, trans="T",
+                check_finite=False)
+            residual = np.cumsum(weights * rhs[:usable, None], axis=0) - self.y[test]
+            errors[fold, :usable] = np.mean(residual**2, axis=1)
+        return errors
+
+    def support_errors(self, supports) -> np.ndarray:
+        """Held-out error (fold, m) of each support (inf where it is undetermined), from each
+        fold's training rows reduced on the union of the supports' columns."""
+        supports = [np.asarray(support, dtype=int) for support in supports]
+        errors = np.full((self.n_folds, len(supports)), np.inf)
+        if not supports:
+            return errors
+        columns = np.unique(np.concatenate(supports))
+        local = [np.searchsorted(columns, support) for support in supports]
+        for fold, test, train in self.folds:
+            r_factor, rhs = triangular_system(self.xs[np.ix_(train, columns)], self.y[train])
+            x_test, y_test = self.xs[np.ix_(test, columns)], self.y[test]
+            # the rank cut of a least-squares solve on the reduction of all F columns
+            height = min(len(train), self.xs.shape[1] + 1)
+            for m, support in enumerate(local):
+                coef, _, rank, _ = np.linalg.lstsq(
+                    r_factor[:, support], rhs,
+                    rcond=np.finfo(float).eps * max(height, len(support)))
+                if rank < len(support):
+                    continue
+                errors[fold, m] = np.mean((x_test[:, support] @ coef - y_test) ** 2)
+        return errors

@@ -1,0 +1,54 @@
+"""Triangular least-squares systems: the reduction of rows to ``[R | Q^T y]`` and its update
+after removing columns (the refits of backward elimination).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+
+
+def triangular_system(x, y):
+    """``(R, Q^T y)`` from one QR of ``[x | y]``; the last row keeps the residual norm."""
+    stacked = np.column_stack([x, y])
+    r_factor = scipy.linalg.qr(stacked, mode="r", check_finite=False)[0][: stacked.shape[1]]
+    return r_factor[:, :-1], r_factor[:, -1]
+
+
+def without_columns(r_factor, columns, block: int = 32) -> np.ndarray:
+    """The R factor of ``r_factor[:, columns]`` for an upper triangular ``r_factor``.
+
+    Column ``i`` of ``r_factor[:, columns]`` has non-zeros in rows ``0..columns[i]`` only (a
+    staircase below the diagonal, one step per removed column). Panels of ``block`` columns are
+    triangularized by a QR of just their rows from the diagonal to the lowest non-zero, whose
+    ``Q^T`` is applied to the same rows of the later columns (which keeps their staircase):
+    ``O(n^2 (b + d))`` for ``d`` removed columns instead of the ``O(n^3)`` of a new QR.
+
+    Parameters
+    ----------
+    r_factor : ndarray, shape (m, n)
+        Upper triangular (trapezoidal) matrix.
+    columns : array of int
+        The columns kept, increasing.
+    block : int, default 32
+        Panel width.
+
+    Returns
+    -------
+    ndarray, shape (min(m, len(columns)), len(columns))
+        Upper triangular ``R`` with ``R^T R = A^T A`` for ``A = r_factor[:, columns]`` (the signs
+        of its rows may differ from a Householder QR of ``A``).
+    """
+    columns = np.asarray(columns, dtype=int)
+    matrix = np.array(r_factor[:, columns], dtype=float)
+    m, n = matrix.shape
+    bottom = np.minimum(columns + 1, m)  # rows below hold zeros
+    for start in range(0, min(m, n), block):
+        stop = min(start + block, n)
+        end = max(int(bottom[stop - 1]), min(stop, m))
+        if end <= start + 1 or np.all(bottom[start:stop] <= np.arange(start, stop) + 1):
+            continue  # already triangular
+        q_factor, r_panel = np.linalg.qr(matrix[start:end, start:stop], mode="complete")
+        matrix[start:end, start:stop] = r_panel
+        matrix[start:end, stop:] = q_factor.T @ matrix[start:end, stop:]
+    return np.triu(matrix[: min(m, n)])
