@@ -35,19 +35,19 @@ def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None, norm
     ``C_c + u_j (u_j . x_c)``, with ``u_j . x_c = w_j . P_c`` and ``|C_c|^2 = |x_c|^2 - |P_c|^2``.
     After a swap, ``Q`` and ``P`` are updated instead of recomputed: the basis loses ``u_j``
     (a rotation within the span) and gains the normalized part of ``x_c`` off the rest, whose
-    products with the columns are one new row of ``P``. A step costs ``O(n F)``, one pass over
-    the columns (that row and ``x^T r`` together), instead of the ``O(n k F)`` of a new
-    ``Q^T x``.
+    products with the columns are one new row of ``P``. A step costs ``O(n F)`` (that row and
+    ``x^T r``) instead of the ``O(n k F)`` of a new ``Q^T x``.
     ``rss`` and ``previous`` continue from a first step of :func:`first_swaps`; ``norms2``, the
     squared column norms, may be given (computed once for many searches).
     """
     support = np.array(support, dtype=int)
+    xs = np.ascontiguousarray(xs)
     norms2 = column_norms2(xs) if norms2 is None else norms2
     y_norm2 = float(y @ y)
     basis = np.linalg.qr(xs[:, support])[0]
     residual = y - basis @ (basis.T @ y)
-    products = np.column_stack([basis, residual]).T @ xs       # one pass over the columns
-    in_span, x_residual = products[:-1], products[-1]          # (k, F) and x^T r
+    in_span = np.ascontiguousarray(basis.T) @ xs               # (k, F)
+    x_residual = xs.T @ residual
     for _ in range(max_swaps + 1):
         new_rss = float(residual @ residual)
         if rss is not None and not new_rss < rss:  # the predicted gain did not materialize
@@ -74,8 +74,8 @@ def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None, norm
         part -= basis @ (basis.T @ part)
         basis = np.column_stack([basis, part / np.linalg.norm(part)])
         residual = y - basis @ (basis.T @ y)
-        products = np.column_stack([basis[:, -1], residual]).T @ xs   # one pass
-        in_span, x_residual = np.vstack([in_span, products[0]]), products[1]
+        in_span = np.vstack([in_span, xs.T @ basis[:, -1]])
+        x_residual = xs.T @ residual
     return np.sort(support)
 
 

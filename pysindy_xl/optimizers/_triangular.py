@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg
+import scipy.linalg.lapack
 
 
 def triangular_system(x, y):
@@ -40,7 +41,7 @@ def without_columns(r_factor, columns, block: int = 32) -> np.ndarray:
         of its rows may differ from a Householder QR of ``A``).
     """
     columns = np.asarray(columns, dtype=int)
-    matrix = np.array(r_factor[:, columns], dtype=float)
+    matrix = np.array(r_factor[:, columns], dtype=float, order="F")
     m, n = matrix.shape
     bottom = np.minimum(columns + 1, m)  # rows below hold zeros
     for start in range(0, min(m, n), block):
@@ -48,7 +49,15 @@ def without_columns(r_factor, columns, block: int = 32) -> np.ndarray:
         end = max(int(bottom[stop - 1]), min(stop, m))
         if end <= start + 1 or np.all(bottom[start:stop] <= np.arange(start, stop) + 1):
             continue  # already triangular
-        q_factor, r_panel = np.linalg.qr(matrix[start:end, start:stop], mode="complete")
-        matrix[start:end, start:stop] = r_panel
-        matrix[start:end, stop:] = q_factor.T @ matrix[start:end, stop:]
-    return np.triu(matrix[: min(m, n)])
+        packed, tau, _, info = scipy.linalg.lapack.dgeqrf(matrix[start:end, start:stop])
+        if info != 0:
+            raise np.linalg.LinAlgError(f"dgeqrf failed (info {info})")
+        matrix[start:end, start:stop] = np.triu(packed)
+        if stop < n:  # the panel's reflectors on the same rows of the later columns
+            trailing = matrix[start:end, stop:]
+            trailing, _, info = scipy.linalg.lapack.dormqr(
+                "L", "T", packed[:, : len(tau)], tau, trailing, max(1, 64 * trailing.shape[1]))
+            if info != 0:
+                raise np.linalg.LinAlgError(f"dormqr failed (info {info})")
+            matrix[start:end, stop:] = trailing
+    return matrix[: min(m, n)]

@@ -44,7 +44,8 @@ def _reduced(x, y, with_rows=False):
     xs = x / scale
     reduced = (active, xs, y)
     if xs.shape[0] > xs.shape[1] + 1:
-        reduced = (active, *triangular_system(xs, y))
+        r_factor, rhs = triangular_system(xs, y)
+        reduced = (active, np.ascontiguousarray(r_factor), rhs)
     return (reduced, (xs, y)) if with_rows else reduced
 
 
@@ -87,7 +88,11 @@ def _elimination_order(active_mask, xs, y) -> np.ndarray:
         for j in sorted(pivots[xs.shape[0]:], reverse=True):
             removed.append(active.pop(j))
     # [R | Q^T y] of the active columns, re-triangularized after each refit's removals
-    system = np.column_stack(triangular_system(xs[:, active], y))
+    system = np.column_stack([xs, y])
+    if np.tril(system, -1).any():
+        system = np.column_stack(triangular_system(xs[:, active], y))
+    else:  # already reduced: only the inactive columns' steps to remove
+        system = without_columns(system, active + [xs.shape[1]])
     while active:
         n_active = len(active)
         r_sub, qty = system[:n_active, :n_active], system[:n_active, n_active]
@@ -318,7 +323,7 @@ def _within_reach(held_out, order, n_keep: int) -> np.ndarray:
         wanted = _reach(int(np.argmin(mean)) + 1)
         if wanted <= reach:
             return errors
-        reach = min(len(order), max(wanted, 2 * reach))
+        reach = min(len(order), wanted)
 
 
 def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
