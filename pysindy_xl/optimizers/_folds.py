@@ -40,8 +40,22 @@ class HeldOutRows:
         self.y = y / np.sqrt(max(float(np.mean(y**2)), 1e-300))
         self.n_folds = n_folds
         labels = fold_labels(len(y), n_blocks, n_folds)
-        self.folds = [(fold, np.flatnonzero(labels == fold), np.flatnonzero(labels != fold))
-                      for fold in range(n_folds) if 0 < np.sum(labels == fold) < len(y)]
+        self.parts = [np.flatnonzero(labels == fold) for fold in range(n_folds)]
+        self.folds = [(fold, rows) for fold, rows in enumerate(self.parts)
+                      if 0 < len(rows) < len(y)]
+
+    def _systems(self, columns):
+        """Per fold ``(fold, R, Q^T y, x_test, y_test)`` on ``columns``: each fold's rows are
+        reduced once, and the training system of a fold is the QR of the other folds' stacked
+        reductions (``n_folds`` small QRs instead of one of the training rows per fold)."""
+        xs = self.xs[:, columns]
+        parts = [np.column_stack(triangular_system(xs[rows], self.y[rows])) if len(rows)
+                 else None for rows in self.parts]
+        for fold, test in self.folds:
+            others = np.vstack([part for g, part in enumerate(parts)
+                                if g != fold and part is not None])
+            r_factor, rhs = triangular_system(others[:, :-1], others[:, -1])
+            yield fold, r_factor, rhs, xs[test], self.y[test]
 
     def nested_errors(self, order) -> np.ndarray:
         """Held-out error (fold, k - 1) of every nested model ``order[:k]`` (inf where a model
@@ -49,8 +63,7 @@ class HeldOutRows:
         order = np.asarray(order, dtype=int)
         size = len(order)
         errors = np.full((self.n_folds, size), np.inf)
-        for fold, test, train in self.folds:
-            r_factor, rhs = triangular_system(self.xs[np.ix_(train, order)], self.y[train])
+        for fold, r_factor, rhs, x_test, y_test in self._systems(order):
             usable = min(size, r_factor.shape[0])
             diag = np.abs(np.diag(r_factor))[:usable]
             ok = diag > 1e-12 * max(diag.max(initial=0.0), 1e-300)
@@ -59,9 +72,8 @@ class HeldOutRows:
             # predictions are cumulative sums of the columns of W = x_test inv(R) times rhs
             # (one triangular solve with the test rows, no inverse and no product with it)
             weights = scipy.linalg.solve_triangular(
-                r_factor[:usable, :usable], self.xs[np.ix_(test, order[:usable])].T, trans="T",
-                check_finite=False)
-            residual = np.cumsum(weights * rhs[:usable, None], axis=0) - self.y[test]
+                r_factor[:usable, :usable], x_test[:, :usable].T, trans="T", check_finite=False)
+            residual = np.cumsum(weights * rhs[:usable, None], axis=0) - y_test
             errors[fold, :usable] = np.mean(residual**2, axis=1)
         return errors
 
@@ -74,11 +86,9 @@ class HeldOutRows:
             return errors
         columns = np.unique(np.concatenate(supports))
         local = [np.searchsorted(columns, support) for support in supports]
-        for fold, test, train in self.folds:
-            r_factor, rhs = triangular_system(self.xs[np.ix_(train, columns)], self.y[train])
-            x_test, y_test = self.xs[np.ix_(test, columns)], self.y[test]
+        for fold, r_factor, rhs, x_test, y_test in self._systems(columns):
             # the rank cut of a least-squares solve on the reduction of all F columns
-            height = min(len(train), self.xs.shape[1] + 1)
+            height = min(len(self.y) - len(x_test), self.xs.shape[1] + 1)
             for m, support in enumerate(local):
                 coef, _, rank, _ = np.linalg.lstsq(
                     r_factor[:, support], rhs,

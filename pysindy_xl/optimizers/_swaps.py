@@ -100,6 +100,12 @@ def _reflected(xs, y, columns):
     return both[:, :-1], both[:, -1], np.triu(packed[: columns.shape[1]])
 
 
+def _tail_sums(head, rest):
+    """``out[k] = rest + sum(head[k:], axis=0)``: sums from row ``k`` of ``head`` stacked on
+    rows whose sum is ``rest``."""
+    return np.cumsum(head[::-1], axis=0)[::-1] + rest
+
+
 def first_swaps(xs, y, usable, order, sizes, norms2=None):
     """The first step of :func:`swap_search` from every ``order[:k]``, ``k`` in ``sizes``:
     ``{k: (rss, swapped support or None)}``, from one QR of ``x[:, order]`` whose reflectors
@@ -115,14 +121,16 @@ def first_swaps(xs, y, usable, order, sizes, norms2=None):
         r_factor = r_factor[:largest]
     if largest == 0:
         return {}
-    head = r_factor[:largest, :largest]
-    inverse = scipy.linalg.solve_triangular(head, np.eye(largest), check_finite=False)
+    inverse = scipy.linalg.solve_triangular(r_factor[:largest, :largest], np.eye(largest),
+                                            check_finite=False)
     norms2 = column_norms2(xs) if norms2 is None else norms2
     y_norm2 = float(y @ y)
-    # tail sums: what lies off the span of the first k columns
-    remaining_base = np.cumsum((big_b**2)[::-1], axis=0)[::-1]          # (m, F) from row k
-    correlation_base = np.cumsum((big_b * small_b[:, None])[::-1], axis=0)[::-1]
-    rss_tail = np.cumsum((small_b**2)[::-1])[::-1]
+    # tail sums from row k (k <= largest): what lies off the span of the first k columns
+    head, tail = big_b[: largest + 1], big_b[largest + 1:]
+    y_head, y_tail = small_b[: largest + 1], small_b[largest + 1:]
+    remaining_base = _tail_sums(head**2, np.einsum("ij,ij->j", tail, tail))      # (k, F)
+    correlation_base = _tail_sums(head * y_head[:, None], y_tail @ tail)
+    rss_tail = _tail_sums(y_head**2, y_tail @ y_tail)
     # along[k - 1][j, c] = inv(R)[j, :k] @ B[:k, c] (rows j < k), as cumulative sums over i
     along_all = np.cumsum(inverse[:, :, None] * big_b[None, :largest, :], axis=1)
     removed_all = np.cumsum(inverse * small_b[None, :largest], axis=1)  # (j, k - 1)
