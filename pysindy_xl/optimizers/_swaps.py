@@ -60,7 +60,8 @@ def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None, norm
         weights /= np.linalg.norm(weights, axis=0)
         along = in_span.T @ weights                            # (F, k): u_j . x_c
         removed = weights.T @ (basis.T @ y)                    # (k,): u_j . y
-        remaining2 = np.maximum(norms2 - np.sum(in_span**2, axis=0), 0.0)[:, None] + along**2
+        in_span2 = np.einsum("ij,ij->j", in_span, in_span)
+        remaining2 = np.maximum(norms2 - in_span2, 0.0)[:, None] + along**2
         correlation = x_residual[:, None] + along * removed
         c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2)
         if c is None:

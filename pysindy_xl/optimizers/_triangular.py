@@ -11,8 +11,11 @@ import scipy.linalg.lapack
 
 def triangular_system(x, y):
     """``(R, Q^T y)`` from one QR of ``[x | y]``; the last row keeps the residual norm."""
-    stacked = np.column_stack([x, y])
-    r_factor = scipy.linalg.qr(stacked, mode="r", check_finite=False)[0][: stacked.shape[1]]
+    x = np.asarray(x, dtype=float)
+    stacked = np.empty((x.shape[0], x.shape[1] + 1), order="F")  # LAPACK's layout: no copy
+    stacked[:, :-1], stacked[:, -1] = x, y
+    r_factor = scipy.linalg.qr(stacked, mode="r", overwrite_a=True,
+                               check_finite=False)[0][: stacked.shape[1]]
     return r_factor[:, :-1], r_factor[:, -1]
 
 
