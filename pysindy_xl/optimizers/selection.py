@@ -7,6 +7,11 @@ model per size, refined by single swaps (:func:`refine_by_swaps`); each is score
 cross-validation over contiguous blocks of rows of each of ``n_blocks`` coordinates (errors
 relative to the mean square of ``y``), and the smallest within one standard error of the best
 *path* model is chosen. ``x`` (n_rows, F) and ``y`` (n_rows,) are the columns and target.
+
+Each path is scored up to the reach ``max(3 b, b + 40)`` of the best backward size ``b`` (the
+backward path's window grows until it holds the reach of its own best size): a model that much
+larger than the best is never the sparsest within one standard error, and the cost of the scores
+then follows the models scored instead of the catalog's width.
 """
 
 from __future__ import annotations
@@ -264,7 +269,7 @@ class SelectionResult(ChosenSupport):
         Columns from most to least needed.
     cv_error, cv_spread : ndarray
         Mean held-out relative squared error of each model size (index ``k - 1``) and its
-        standard error over the folds.
+        standard error over the folds (inf for the sizes past every path's reach).
     size : int
         Chosen number of terms.
     best_size : int
