@@ -26,27 +26,31 @@ def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y
     return c, j
 
 
-def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None, norms2=None):
+def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None, norms2=None,
+                start=None):
     """Best-improvement 1-swap search on a reduced system.
 
     With an orthonormal basis ``Q`` of the support's span and ``P = Q^T x`` (``k x F``), the
     direction that only column ``j`` adds to the span is ``u_j ~ Q w_j``, ``w_j = P_S^-T e_j``;
     dropping ``j`` adds ``(u_j . y)^2`` to the residual and leaves candidate ``c`` the component
     ``C_c + u_j (u_j . x_c)``, with ``u_j . x_c = w_j . P_c`` and ``|C_c|^2 = |x_c|^2 - |P_c|^2``.
-    After a swap, ``Q`` and ``P`` are updated instead of recomputed: the basis loses ``u_j``
-    (a rotation within the span) and gains the normalized part of ``x_c`` off the rest, whose
-    products with the columns are one new row of ``P``. A step costs ``O(n F)`` (that row and
-    ``x^T r``) instead of the ``O(n k F)`` of a new ``Q^T x``.
-    ``rss`` and ``previous`` continue from a first step of :func:`first_swaps`; ``norms2``, the
-    squared column norms, may be given (computed once for many searches).
+    After a swap, ``Q`` and ``P`` are updated instead of recomputed (:func:`_exchanged`): a
+    step costs ``O(n F)`` (a new row of ``P`` and ``x^T r``) instead of the ``O(n k F)`` of a
+    new ``Q^T x``.
+    ``rss`` and ``previous`` continue from a first step of :func:`first_swaps`, ``start`` is
+    its ``(Q, P)`` of ``support``; ``norms2``, the squared column norms, may be given (computed
+    once for many searches).
     """
     support = np.array(support, dtype=int)
     xs = np.ascontiguousarray(xs)
     norms2 = column_norms2(xs) if norms2 is None else norms2
     y_norm2 = float(y @ y)
-    basis = np.linalg.qr(xs[:, support])[0]
+    if start is None:
+        basis = np.linalg.qr(xs[:, support])[0]
+        in_span = np.ascontiguousarray(basis.T) @ xs           # (k, F)
+    else:
+        basis, in_span = start
     residual = y - basis @ (basis.T @ y)
-    in_span = np.ascontiguousarray(basis.T) @ xs               # (k, F)
     x_residual = xs.T @ residual
     for _ in range(max_swaps + 1):
         new_rss = float(residual @ residual)
@@ -67,17 +71,22 @@ def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None, norm
         if c is None:
             break
         support[j] = c
-        # the direction of column j leaves the span (a rotation within it), the part of x_c off
-        # the rest (Gram-Schmidt twice) enters as the last basis vector
-        rotation = np.linalg.qr(weights[:, [j]], mode="complete")[0][:, 1:]
-        basis, in_span = basis @ rotation, rotation.T @ in_span
-        part = xs[:, c] - basis @ in_span[:, c]
-        part -= basis @ (basis.T @ part)
-        basis = np.column_stack([basis, part / np.linalg.norm(part)])
+        basis, in_span = _exchanged(xs, basis, in_span, weights[:, j], c)
         residual = y - basis @ (basis.T @ y)
-        in_span = np.vstack([in_span, xs.T @ basis[:, -1]])
         x_residual = xs.T @ residual
     return np.sort(support)
+
+
+def _exchanged(xs, basis, in_span, weight, column):
+    """``(Q, Q^T x)`` after the direction ``Q weight`` leaves the span (a rotation within it)
+    and the part of ``x[:, column]`` off the rest (Gram-Schmidt twice) enters as the last basis
+    vector: its products with the columns are the new last row."""
+    rotation = np.linalg.qr(weight[:, None], mode="complete")[0][:, 1:]
+    basis, in_span = basis @ rotation, rotation.T @ in_span
+    part = xs[:, column] - basis @ in_span[:, column]
+    part -= basis @ (basis.T @ part)
+    part /= np.linalg.norm(part)
+    return np.column_stack([basis, part]), np.vstack([in_span, xs.T @ part])
 
 
 def column_norms2(xs):
@@ -98,7 +107,7 @@ def _reflected(xs, y, columns):
                                                   overwrite_c=1)
     if info != 0:
         raise np.linalg.LinAlgError(f"dormqr failed (info {info})")
-    return both[:, :-1], both[:, -1], np.triu(packed[: columns.shape[1]])
+    return both[:, :-1], both[:, -1], np.triu(packed[: columns.shape[1]]), (packed, tau)
 
 
 def _tail_sums(head, rest):
@@ -109,13 +118,15 @@ def _tail_sums(head, rest):
 
 def first_swaps(xs, y, usable, order, sizes, norms2=None):
     """The first step of :func:`swap_search` from every ``order[:k]``, ``k`` in ``sizes``:
-    ``{k: (rss, swapped support or None)}``, from one QR of ``x[:, order]`` whose reflectors
-    give ``Q^T x`` for its complete ``Q`` (sizes past a zero pivot left out).
+    ``{k: (rss, swapped support or None, its (Q, Q^T x) or None)}``, from one QR of
+    ``x[:, order]`` whose reflectors give ``Q^T x`` for its complete ``Q`` (sizes past a zero
+    pivot left out).
     """
     largest = max(sizes, default=0)
     if largest == 0:
         return {}
-    big_b, small_b, r_factor = _reflected(xs, y, xs[:, order[:largest]])
+    xs = np.ascontiguousarray(xs)
+    big_b, small_b, r_factor, (packed, tau) = _reflected(xs, y, xs[:, order[:largest]])
     diag = np.abs(np.diag(r_factor))
     if np.any(diag == 0):
         largest = int(np.argmax(diag == 0))
@@ -136,7 +147,7 @@ def first_swaps(xs, y, usable, order, sizes, norms2=None):
     along_all = np.cumsum(inverse[:, :, None] * big_b[None, :largest, :], axis=1)
     removed_all = np.cumsum(inverse * small_b[None, :largest], axis=1)  # (j, k - 1)
     row_norms = np.sqrt(np.cumsum(inverse**2, axis=1))                  # (j, k - 1)
-    out = {}
+    out, basis = {}, None
     for k in sizes:
         if k > largest:
             continue
@@ -151,9 +162,16 @@ def first_swaps(xs, y, usable, order, sizes, norms2=None):
             remaining2, correlation, rss = along**2, along * removed, 0.0
         support = np.asarray(order[:k], dtype=int)
         c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2)
-        swapped = None
+        swapped = start = None
         if c is not None:
             swapped = support.copy()
             swapped[j] = c
-        out[k] = (rss, swapped)
+            # (Q, Q^T x) of the swapped support from those of order[:k]: R_k^-T e_j is row j
+            # of inv(R)[:k, :k]
+            if basis is None:
+                basis, _, info = scipy.linalg.lapack.dorgqr(packed, tau)
+                if info != 0:
+                    raise np.linalg.LinAlgError(f"dorgqr failed (info {info})")
+            start = _exchanged(xs, basis[:, :k], big_b[:k], inverse[j, :k], c)
+        out[k] = (rss, swapped, start)
     return out

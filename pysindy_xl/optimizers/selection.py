@@ -484,9 +484,9 @@ def _swap_candidates(reduced, held_out, paths, seen, limit, keep=(), free=None):
             elif first[k][1] is None:  # no exchange improves the start
                 support = np.sort(order[:k])
             else:
-                rss, swapped = first[k]
+                rss, swapped, state = first[k]
                 support = swap_search(xs, y_reduced, active, swapped, max_swaps=49, rss=rss,
-                                      previous=order[:k], norms2=norms2)
+                                      previous=order[:k], norms2=norms2, start=state)
             visited.update((start, frozenset(support.tolist())))
             rest = order[~np.isin(order, support)]
             if n_keep:  # back to the columns of the folds

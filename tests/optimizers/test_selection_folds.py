@@ -8,7 +8,7 @@ import scipy.linalg
 
 from pysindy_xl.optimizers._folds import HeldOutRows, fold_labels
 from pysindy_xl.optimizers._forward import forward_order
-from pysindy_xl.optimizers._swaps import swap_search
+from pysindy_xl.optimizers._swaps import first_swaps, swap_search
 from pysindy_xl.optimizers._triangular import without_columns
 
 
@@ -190,3 +190,26 @@ def test_swap_search_matches_refitting(seed):
     start = rng.choice(18, 4, replace=False)
     found = swap_search(x, y, np.ones(18, dtype=bool), start, max_swaps=50)
     assert found.tolist() == _swaps_by_refitting(x, y, start)
+
+
+def test_first_swaps_hand_over_the_basis_of_the_swapped_support():
+    """The (Q, Q^T x) that the first step hands to the search span the swapped support, are
+    orthonormal, and the search from it ends where a search from scratch does."""
+    rng = np.random.default_rng(4)
+    x, _ = _columns(200, 30, seed=4)
+    y = x[:, [3, 8, 20, 27]] @ rng.normal(size=4) + 0.01 * rng.normal(size=200)
+    usable = np.ones(30, dtype=bool)
+    order = rng.permutation(30)
+    first = first_swaps(x, y, usable, order, list(range(1, 9)))
+    swapped_sizes = [k for k, (_, swapped, _) in first.items() if swapped is not None]
+    assert swapped_sizes
+    for k in swapped_sizes:
+        rss, swapped, (basis, in_span) = first[k]
+        np.testing.assert_allclose(basis.T @ basis, np.eye(k), atol=1e-12)
+        np.testing.assert_allclose(in_span, basis.T @ x, atol=1e-10 * np.abs(x).max())
+        projected = basis @ (basis.T @ x[:, swapped])
+        np.testing.assert_allclose(projected, x[:, swapped], atol=1e-10 * np.abs(x).max())
+        handed = swap_search(x, y, usable, swapped, 49, rss=rss, previous=order[:k],
+                             start=(basis, in_span))
+        fresh = swap_search(x, y, usable, swapped, 49, rss=rss, previous=order[:k])
+        assert handed.tolist() == fresh.tolist()
