@@ -47,7 +47,7 @@ class HeldOutRows:
     def _systems(self, columns):
         """Per fold ``(fold, R, Q^T y, x_test, y_test)`` on ``columns``: each fold's rows are
         reduced once, and the training system of a fold is the QR of the other folds' stacked
-        reductions (``n_folds`` small QRs instead of one of the training rows per fold)."""
+        reductions (at most ``(n_folds - 1)(k + 1)`` rows instead of all its training rows)."""
         xs = self.xs[:, columns]
         parts = [np.column_stack(triangular_system(xs[rows], self.y[rows])) if len(rows)
                  else None for rows in self.parts]

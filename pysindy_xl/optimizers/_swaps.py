@@ -103,7 +103,7 @@ def _reflected(xs, y, columns):
         raise np.linalg.LinAlgError(f"dgeqrf failed (info {info})")
     both = np.asfortranarray(np.column_stack([xs, y]))
     lwork = max(1, 64 * both.shape[1])
-    both, work, info = scipy.linalg.lapack.dormqr("L", "T", packed, tau, both, lwork,
+    both, work, info = scipy.linalg.lapack.dormqr("L", "T", packed[:, : len(tau)], tau, both, lwork,
                                                   overwrite_c=1)
     if info != 0:
         raise np.linalg.LinAlgError(f"dormqr failed (info {info})")
@@ -168,10 +168,11 @@ def first_swaps(xs, y, usable, order, sizes, norms2=None):
             swapped[j] = c
             # (Q, Q^T x) of the swapped support from those of order[:k]: R_k^-T e_j is row j
             # of inv(R)[:k, :k]
-            if basis is None:
+            if basis is None and packed.shape[0] >= packed.shape[1]:
                 basis, _, info = scipy.linalg.lapack.dorgqr(packed, tau)
                 if info != 0:
                     raise np.linalg.LinAlgError(f"dorgqr failed (info {info})")
-            start = _exchanged(xs, basis[:, :k], big_b[:k], inverse[j, :k], c)
+            if basis is not None:
+                start = _exchanged(xs, basis[:, :k], big_b[:k], inverse[j, :k], c)
         out[k] = (rss, swapped, start)
     return out
