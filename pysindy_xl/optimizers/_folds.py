@@ -2,8 +2,8 @@
 :func:`~pysindy_xl.optimizers.selection.select_support`).
 
 Each fold's training rows are reduced to the triangular system of only the columns the scored
-models use (a QR of ``n_train x k`` for ``k`` columns), so the cost follows the models scored,
-not the catalog's width.
+models use, so the cost follows the models scored, not the catalog's width (or, when the scores
+use most columns, once on all of them).
 """
 
 from __future__ import annotations
@@ -23,7 +23,15 @@ def fold_labels(n_rows: int, n_blocks: int, n_folds: int) -> np.ndarray:
 
 class HeldOutRows:
     """Unit-RMS columns ``xs`` and target split into folds: the rows each fold holds out and
-    trains on (folds without test or training rows skipped), ``y`` divided by its RMS.
+    trains on (folds without test or training rows skipped), errors relative to the mean
+    square of ``y``.
+
+    Each fold's rows are reduced to ``[R | Q^T y]``, and the training system of a fold is the
+    QR of the other folds' stacked reductions (at most ``(n_folds - 1)(k + 1)`` rows instead of
+    all its training rows). With ``whole``, this is done once on all columns and every score
+    re-triangularizes the columns it needs (a QR of ``(F + 1) x k`` per fold: the cheaper way
+    when the scores use about half the columns or more); otherwise each score reduces the
+    rows on just its columns.
 
     Parameters
     ----------
@@ -33,29 +41,58 @@ class HeldOutRows:
         Target.
     n_blocks, n_folds : int
         Equal row blocks (coordinates) and folds within each.
+    whole : bool, default False
+        Reduce the folds on all columns once.
     """
 
-    def __init__(self, xs, y, n_blocks: int, n_folds: int):
-        self.xs = xs
-        self.y = y / np.sqrt(max(float(np.mean(y**2)), 1e-300))
+    def __init__(self, xs, y, n_blocks: int, n_folds: int, whole: bool = False):
+        self.xs, self.y = xs, y
+        self.y_rms = np.sqrt(max(float(np.mean(y**2)), 1e-300))
         self.n_folds = n_folds
         labels = fold_labels(len(y), n_blocks, n_folds)
         self.parts = [np.flatnonzero(labels == fold) for fold in range(n_folds)]
         self.folds = [(fold, rows) for fold, rows in enumerate(self.parts)
                       if 0 < len(rows) < len(y)]
+        self._whole = None
+        if whole:
+            parts = self._reduced_parts(np.arange(xs.shape[1]))
+            self._whole = (parts, list(self._training_systems(np.arange(xs.shape[1]), parts)))
 
-    def _systems(self, columns):
-        """Per fold ``(fold, R, Q^T y, x_test, y_test)`` on ``columns``: each fold's rows are
-        reduced once, and the training system of a fold is the QR of the other folds' stacked
-        reductions (at most ``(n_folds - 1)(k + 1)`` rows instead of all its training rows)."""
+    @property
+    def whole(self) -> bool:
+        """Whether the folds are reduced on all columns."""
+        return self._whole is not None
+
+    def reduction(self):
+        """``(R, Q^T y)`` of all rows from the folds' reductions on all columns (``whole``)."""
+        stacked = np.vstack([part for part in self._whole[0] if part is not None])
+        return triangular_system(stacked[:, :-1], stacked[:, -1])
+
+    def _reduced_parts(self, columns):
+        """``[R | Q^T y]`` of each fold's rows on ``columns`` (None for a fold without rows)."""
         xs = self.xs[:, columns]
-        parts = [np.column_stack(triangular_system(xs[rows], self.y[rows])) if len(rows)
-                 else None for rows in self.parts]
+        return [np.column_stack(triangular_system(xs[rows], self.y[rows])) if len(rows)
+                else None for rows in self.parts]
+
+    def _training_systems(self, columns, parts):
+        """Per fold ``(fold, R, Q^T y, x_test, y_test)`` on ``columns`` from the reductions
+        ``parts`` of the folds' rows, ``y`` divided by its RMS."""
         for fold, test in self.folds:
             others = np.vstack([part for g, part in enumerate(parts)
                                 if g != fold and part is not None])
             r_factor, rhs = triangular_system(others[:, :-1], others[:, -1])
-            yield fold, r_factor, rhs, xs[test], self.y[test]
+            yield (fold, r_factor, rhs / self.y_rms, self.xs[np.ix_(test, columns)],
+                   self.y[test] / self.y_rms)
+
+    def _systems(self, columns):
+        """:meth:`_training_systems` on ``columns``."""
+        columns = np.asarray(columns, dtype=int)
+        if self._whole is None:
+            yield from self._training_systems(columns, self._reduced_parts(columns))
+            return
+        for fold, r_factor, rhs, x_test, y_test in self._whole[1]:
+            yield (fold, *triangular_system(r_factor[:, columns], rhs), x_test[:, columns],
+                   y_test)
 
     def nested_errors(self, order) -> np.ndarray:
         """Held-out error (fold, k - 1) of every nested model ``order[:k]`` (inf where a model
@@ -88,7 +125,7 @@ class HeldOutRows:
         local = [np.searchsorted(columns, support) for support in supports]
         for fold, r_factor, rhs, x_test, y_test in self._systems(columns):
             # the rank cut of a least-squares solve on the reduction of all F columns
-            height = min(len(self.y) - len(x_test), self.xs.shape[1] + 1)
+            height = min(len(self.y) - len(y_test), self.xs.shape[1] + 1)
             for m, support in enumerate(local):
                 coef, _, rank, _ = np.linalg.lstsq(
                     r_factor[:, support], rhs,

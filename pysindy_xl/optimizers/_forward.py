@@ -19,6 +19,9 @@ import numpy as np
 # rounding bound per accumulated step, relative to |x_c|^2 (for |o_c|^2) and |x_c| |r_0| (for the
 # correlation): generous against n = 1000s of rows (eps sqrt(n) ~ 1e-14)
 _ROUNDING = 1e-13
+# exact gains of all candidates when their explicit parts take fewer multiplications than this
+# (then they cost less than the passes of the bounds)
+_EXACT_WORK = 200_000
 
 
 def forward_order(active_mask, xs, residual, max_steps=None) -> np.ndarray:
@@ -78,24 +81,33 @@ def _orthogonal_part(columns, basis, projections):
     return part - basis @ (basis.T @ part)
 
 
+def _contenders(candidates, norms2, norms, remaining2, correlation, steps, start_norm):
+    """The candidates whose gain's upper bound reaches the largest lower bound of a usable
+    candidate's gain (bounds from the cheap values and their rounding after ``steps``)."""
+    error2 = (_ROUNDING * steps) * norms2                    # on |o_c|^2
+    error = (_ROUNDING * steps * start_norm) * norms         # on o_c . r
+    size = np.abs(correlation)
+    low = np.maximum(size - error, 0.0) ** 2 / (np.maximum(remaining2, 0.0) + error2)
+    # certainly usable: the part off the chosen columns is above the threshold
+    sure = candidates & (remaining2 - error2 > 1e-20 * norms2)
+    floor = low[sure].max(initial=0.0)
+    # the upper bound (size + error)^2 / (remaining2 - error2) reaches the floor
+    reach = (size + error) ** 2 >= floor * np.maximum(remaining2 - error2, 0.0)
+    maybe = remaining2 + error2 > 1e-20 * norms2
+    return np.flatnonzero(candidates & reach & maybe)
+
+
 def _best_column(xs, residual, basis, projections, candidates, norms2, norms, remaining2,
                  correlation, start_norm):
     """The candidate of the largest gain ``(o_c . r)^2 / |o_c|^2`` (None if no candidate has a
     part off the chosen columns above ``1e-20 |x_c|^2``): bounds from the cheap values, exact
     gains for the columns whose upper bound reaches the best lower bound.
     """
-    steps = basis.shape[1] + 1
-    error2 = _ROUNDING * steps * norms2                      # on |o_c|^2
-    error = _ROUNDING * steps * norms * start_norm           # on o_c . r
-    size = np.abs(correlation)
-    low = np.maximum(size - error, 0.0) ** 2 / (np.maximum(remaining2, 0.0) + error2)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        high = (size + error) ** 2 / np.maximum(remaining2 - error2, 0.0)
-    # certainly usable: the part off the chosen columns is above the threshold
-    sure = candidates & (remaining2 - error2 > 1e-20 * norms2)
-    floor = low[sure].max(initial=0.0)
-    maybe = remaining2 + error2 > 1e-20 * norms2
-    contenders = np.flatnonzero(candidates & (high >= floor) & maybe)
+    if np.count_nonzero(candidates) * basis.size <= _EXACT_WORK:
+        contenders = np.flatnonzero(candidates)
+    else:
+        contenders = _contenders(candidates, norms2, norms, remaining2, correlation,
+                                 basis.shape[1] + 1, start_norm)
     if not len(contenders):
         return None
     parts = _orthogonal_part(xs[:, contenders], basis, projections[:, contenders])

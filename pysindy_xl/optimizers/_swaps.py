@@ -81,12 +81,22 @@ def _exchanged(xs, basis, in_span, weight, column):
     """``(Q, Q^T x)`` after the direction ``Q weight`` leaves the span (a rotation within it)
     and the part of ``x[:, column]`` off the rest (Gram-Schmidt twice) enters as the last basis
     vector: its products with the columns are the new last row."""
-    rotation = np.linalg.qr(weight[:, None], mode="complete")[0][:, 1:]
+    rotation = _complement(weight)
     basis, in_span = basis @ rotation, rotation.T @ in_span
     part = xs[:, column] - basis @ in_span[:, column]
     part -= basis @ (basis.T @ part)
     part /= np.linalg.norm(part)
     return np.column_stack([basis, part]), np.vstack([in_span, xs.T @ part])
+
+
+def _complement(vector):
+    """An orthonormal basis ``(k, k - 1)`` of the complement of ``vector``: the last columns of
+    the Householder reflection that maps ``vector`` onto the first axis."""
+    head = vector / np.linalg.norm(vector)
+    reflector = head.copy()
+    reflector[0] += 1.0 if head[0] >= 0 else -1.0
+    # H = I - 2 v v^T / (v^T v) = I - v v^T / |v_0| for v = head + sign(head_0) e_0
+    return np.eye(len(vector))[:, 1:] - np.outer(reflector, reflector[1:]) / abs(reflector[0])
 
 
 def column_norms2(xs):

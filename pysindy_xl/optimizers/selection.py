@@ -38,20 +38,23 @@ def _scaled(x):
     return active, np.where(active, scale, 1.0)
 
 
-def _reduced(x, y, with_rows=False):
+def _reduced(x, y, held_out=None):
     """``(non_zero_columns, R, Q^T y)`` of the unit-RMS columns: least squares on any subset of the
-    columns is the same on the reduced system (and the unit-RMS rows ``(xs, y)`` if
-    ``with_rows``).
+    columns is the same on the reduced system. ``held_out`` (a function of the unit-RMS rows
+    returning :class:`HeldOutRows`) also returns the folds, whose reductions of all columns
+    give ``R`` if they have them.
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     active, scale = _scaled(x)
     xs = x / scale
+    folds = None if held_out is None else held_out(xs, y)
     reduced = (active, xs, y)
     if xs.shape[0] > xs.shape[1] + 1:
-        r_factor, rhs = triangular_system(xs, y)
+        whole = folds is not None and folds.whole
+        r_factor, rhs = folds.reduction() if whole else triangular_system(xs, y)
         reduced = (active, np.ascontiguousarray(r_factor), rhs)
-    return (reduced, (xs, y)) if with_rows else reduced
+    return reduced if held_out is None else (reduced, folds)
 
 
 def elimination_path(x, y) -> np.ndarray:
@@ -117,8 +120,9 @@ def _elimination_order(active_mask, xs, y) -> np.ndarray:
         for j in sorted(drop_local, reverse=True):
             removed.append(active.pop(j))
         if active:
-            left = np.setdiff1d(np.arange(n_active + 1), drop_local)
-            system = without_columns(system, left)
+            left = np.ones(n_active + 1, dtype=bool)
+            left[drop_local] = False
+            system = without_columns(system, np.flatnonzero(left))
     return np.array(removed[::-1], dtype=int)
 
 
@@ -319,7 +323,7 @@ def _within_reach(held_out, order, n_keep: int) -> np.ndarray:
     """Held-out errors of the nested models ``order[:k]`` up to the reach of the best of them:
     the window of scored sizes grows until it holds the reach of its best size (or the path).
     """
-    reach = min(len(order), _reach(_REACH_MARGIN + n_keep))
+    reach = min(len(order), _reach(_REACH_MARGIN + n_keep))  # the first window
     while True:
         errors = held_out.nested_errors(order[:reach])
         mean = _path_summary(errors, reach, n_keep)[0]
@@ -368,9 +372,12 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     """
     # candidate models: (size, held-out mean, its standard error, how found, column order)
     candidates, seen, paths = [], set(), []
-    reduced, rows = _reduced(x, y, with_rows=True)
-    held_out = HeldOutRows(*rows, n_blocks, n_folds)
     keep = np.unique(np.asarray([] if keep is None else keep, dtype=int))
+    # the folds are reduced on all columns once when the first backward window holds half
+    # of them or more
+    first_window = _reach(_REACH_MARGIN + len(keep))
+    reduced, held_out = _reduced(x, y, lambda xs, ys: HeldOutRows(
+        xs, ys, n_blocks, n_folds, whole=2 * min(xs.shape[1], first_window) >= xs.shape[1]))
     reduced = _without_dependent_columns(reduced, keep)
     free, local = _profiled(reduced, keep)
     scored = None  # the forward path is scored up to the reach of the backward best size
