@@ -64,7 +64,20 @@ class HeldOutRows:
         return self._whole is not None
 
     def reduction(self):
-        """``(R, Q^T y)`` of all rows from the folds' reductions on all columns (``whole``)."""
+        """The reduction of all rows from the folds' reductions on all columns.
+
+        Returns
+        -------
+        r_factor, rhs : ndarray
+            ``(R, Q^T y)`` of ``[xs | y]`` as :func:`triangular_system` gives them.
+
+        Raises
+        ------
+        ValueError
+            Without ``whole``.
+        """
+        if self._whole is None:
+            raise ValueError("whole: the folds were not reduced on all columns")
         stacked = np.vstack([part for part in self._whole[0] if part is not None])
         return triangular_system(stacked[:, :-1], stacked[:, -1])
 
@@ -95,8 +108,20 @@ class HeldOutRows:
                    y_test)
 
     def nested_errors(self, order) -> np.ndarray:
-        """Held-out error (fold, k - 1) of every nested model ``order[:k]`` (inf where a model
-        is undetermined on a fold's training rows)."""
+        """Held-out errors of every nested model ``order[:k]``.
+
+        Parameters
+        ----------
+        order : array of int
+            Columns, most needed first.
+
+        Returns
+        -------
+        ndarray, shape (n_folds, len(order))
+            Mean squared held-out error relative to the mean square of ``y``, of the model of
+            the first ``k`` columns at ``[fold, k - 1]`` (inf where a model is undetermined on
+            a fold's training rows, and for folds skipped).
+        """
         order = np.asarray(order, dtype=int)
         size = len(order)
         errors = np.full((self.n_folds, size), np.inf)
@@ -115,8 +140,20 @@ class HeldOutRows:
         return errors
 
     def support_errors(self, supports) -> np.ndarray:
-        """Held-out error (fold, m) of each support (inf where it is undetermined), from each
-        fold's training rows reduced on the union of the supports' columns."""
+        """Held-out errors of arbitrary supports, from each fold's training rows reduced on
+        the union of the supports' columns.
+
+        Parameters
+        ----------
+        supports : list of array of int
+            The supports.
+
+        Returns
+        -------
+        ndarray, shape (n_folds, len(supports))
+            Relative mean squared held-out error of each support (inf where it is
+            undetermined, and for folds skipped).
+        """
         supports = [np.asarray(support, dtype=int) for support in supports]
         errors = np.full((self.n_folds, len(supports)), np.inf)
         if not supports:

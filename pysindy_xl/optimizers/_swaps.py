@@ -100,7 +100,18 @@ def _complement(vector):
 
 
 def column_norms2(xs):
-    """Squared norms of the columns of ``xs``."""
+    """Squared norms of the columns.
+
+    Parameters
+    ----------
+    xs : ndarray, shape (n_rows, F)
+        Columns.
+
+    Returns
+    -------
+    ndarray, shape (F,)
+        ``sum_i xs[i, c]^2`` per column ``c``.
+    """
     return np.einsum("ij,ij->j", xs, xs)
 
 

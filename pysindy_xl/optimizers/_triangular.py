@@ -10,7 +10,23 @@ import scipy.linalg.lapack
 
 
 def triangular_system(x, y):
-    """``(R, Q^T y)`` from one QR of ``[x | y]``; the last row keeps the residual norm."""
+    """``(R, Q^T y)`` from one QR of ``[x | y]``; the last row keeps the residual norm.
+
+    Parameters
+    ----------
+    x : array, shape (n_rows, k)
+        Columns.
+    y : array, shape (n_rows,)
+        Target.
+
+    Returns
+    -------
+    r_factor : ndarray, shape (min(n_rows, k + 1), k)
+        Upper triangular: ``R^T R = x^T x``.
+    rhs : ndarray, shape (min(n_rows, k + 1),)
+        ``Q^T y``: ``R^T rhs = x^T y``, and its last entry (row ``k``) is the residual norm of
+        the least-squares fit when ``n_rows > k``.
+    """
     x = np.asarray(x, dtype=float)
     stacked = np.empty((x.shape[0], x.shape[1] + 1), order="F")  # LAPACK's layout: no copy
     stacked[:, :-1], stacked[:, -1] = x, y

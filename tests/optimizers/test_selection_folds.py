@@ -231,3 +231,9 @@ def test_first_swaps_hand_over_the_basis_of_the_swapped_support():
                              start=(basis, in_span))
         fresh = swap_search(x, y, usable, swapped, 49, rss=rss, previous=order[:k])
         assert handed.tolist() == fresh.tolist()
+
+
+def test_reduction_needs_the_folds_on_all_columns():
+    x, y = _columns(60, 4)
+    with pytest.raises(ValueError, match="whole"):
+        _held_out(x, y, 1, 5).reduction()
