@@ -209,7 +209,10 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
     candidates = order[nonzero]
     sub = sub[:, nonzero] / top[nonzero]  # max-scaled first: no overflow in the norms
     sub /= np.linalg.norm(sub, axis=0)
-    diag = np.abs(np.diag(scipy.linalg.qr(sub, mode="r", check_finite=False)[0]))
+    if np.tril(sub, -1).any():
+        diag = np.abs(np.diag(scipy.linalg.qr(sub, mode="r", check_finite=False)[0]))
+    else:  # already upper triangular (a reduced system visited in order): its own R
+        diag = np.abs(np.diag(sub))
     if len(diag) < len(candidates):  # fewer rows than columns: the tail is dependent
         diag = np.concatenate([diag, np.zeros(len(candidates) - len(diag))])
     for j, d in zip(candidates, diag, strict=True):

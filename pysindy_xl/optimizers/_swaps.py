@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg
+import scipy.linalg.lapack
 
 
 def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2):
@@ -25,71 +26,149 @@ def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y
     return c, j
 
 
-def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None):
-    """Best-improvement 1-swap search on a reduced system: with ``x_S = Q R``, dropping column
-    ``j`` (direction ``u_j ~ Q R^-T e_j``) adds ``(u_j . y)^2`` to the residual and leaves
-    candidate ``c`` the component ``C_c + u_j (u_j . x_c)``: all ``k x F`` gains from the one
-    product ``Q^T x`` (cost ``O(n k F)`` a step).
-    ``rss`` and ``previous`` continue from a first step of :func:`first_swaps`.
+def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None, norms2=None,
+                start=None):
+    """Best-improvement 1-swap search on a reduced system.
+
+    With an orthonormal basis ``Q`` of the support's span and ``P = Q^T x`` (``k x F``), the
+    direction that only column ``j`` adds to the span is ``u_j ~ Q w_j``, ``w_j = P_S^-T e_j``;
+    dropping ``j`` adds ``(u_j . y)^2`` to the residual and leaves candidate ``c`` the component
+    ``C_c + u_j (u_j . x_c)``, with ``u_j . x_c = w_j . P_c`` and ``|C_c|^2 = |x_c|^2 - |P_c|^2``.
+    After a swap, ``Q`` and ``P`` are updated instead of recomputed (:func:`_exchanged`): a
+    step costs ``O(n F)`` (a new row of ``P`` and ``x^T r``) instead of the ``O(n k F)`` of a
+    new ``Q^T x``.
+    ``rss`` and ``previous`` continue from a first step of :func:`first_swaps`, ``start`` is
+    its ``(Q, P)`` of ``support``; ``norms2``, the squared column norms, may be given (computed
+    once for many searches).
     """
-    support = np.asarray(support, dtype=int)
-    norms2 = np.sum(xs**2, axis=0)
+    support = np.array(support, dtype=int)
+    xs = np.ascontiguousarray(xs)
+    norms2 = column_norms2(xs) if norms2 is None else norms2
     y_norm2 = float(y @ y)
+    if start is None:
+        basis = np.linalg.qr(xs[:, support])[0]
+        in_span = np.ascontiguousarray(basis.T) @ xs           # (k, F)
+    else:
+        basis, in_span = start
+    residual = y - basis @ (basis.T @ y)
+    x_residual = xs.T @ residual
     for _ in range(max_swaps + 1):
-        basis, r_factor = np.linalg.qr(xs[:, support])
-        residual = y - basis @ (basis.T @ y)
         new_rss = float(residual @ residual)
         if rss is not None and not new_rss < rss:  # the predicted gain did not materialize
             return np.sort(previous)
         rss, previous = new_rss, support.copy()
         try:
-            directions = basis @ scipy.linalg.solve_triangular(
-                r_factor, np.eye(len(support)), trans="T", check_finite=False)
-        except (np.linalg.LinAlgError, ValueError):
+            weights = np.linalg.inv(in_span[:, support]).T     # column j: w_j
+        except np.linalg.LinAlgError:
             break
-        directions /= np.linalg.norm(directions, axis=0)
-        # everything from one (k, F) product: P = Q^T x, so u_j . x_c = (Q^T u_j) . P_c and the
-        # part of x_c off the support has the squared norm |x_c|^2 - |P_c|^2
-        in_span = basis.T @ xs                           # (k, F)
-        along = in_span.T @ (basis.T @ directions)       # (F, k): u_j . x_c
-        removed = directions.T @ y                       # (k,): u_j . y
-        remaining2 = np.maximum(norms2 - np.sum(in_span**2, axis=0), 0.0)[:, None] + along**2
-        correlation = (xs.T @ residual)[:, None] + along * removed
+        weights /= np.linalg.norm(weights, axis=0)
+        along = in_span.T @ weights                            # (F, k): u_j . x_c
+        removed = weights.T @ (basis.T @ y)                    # (k,): u_j . y
+        in_span2 = np.einsum("ij,ij->j", in_span, in_span)
+        remaining2 = np.maximum(norms2 - in_span2, 0.0)[:, None] + along**2
+        correlation = x_residual[:, None] + along * removed
         c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2)
         if c is None:
             break
-        support = support.copy()
         support[j] = c
+        basis, in_span = _exchanged(xs, basis, in_span, weights[:, j], c)
+        residual = y - basis @ (basis.T @ y)
+        x_residual = xs.T @ residual
     return np.sort(support)
 
 
-def first_swaps(xs, y, usable, order, sizes):
+def _exchanged(xs, basis, in_span, weight, column):
+    """``(Q, Q^T x)`` after the direction ``Q weight`` leaves the span (a rotation within it)
+    and the part of ``x[:, column]`` off the rest (Gram-Schmidt twice) enters as the last basis
+    vector: its products with the columns are the new last row."""
+    rotation = _complement(weight)
+    basis, in_span = basis @ rotation, rotation.T @ in_span
+    part = xs[:, column] - basis @ in_span[:, column]
+    part -= basis @ (basis.T @ part)
+    part /= np.linalg.norm(part)
+    return np.column_stack([basis, part]), np.vstack([in_span, xs.T @ part])
+
+
+def _complement(vector):
+    """An orthonormal basis ``(k, k - 1)`` of the complement of ``vector``: the last columns of
+    the Householder reflection that maps ``vector`` onto the first axis."""
+    head = vector / np.linalg.norm(vector)
+    reflector = head.copy()
+    reflector[0] += 1.0 if head[0] >= 0 else -1.0
+    # H = I - 2 v v^T / (v^T v) = I - v v^T / |v_0| for v = head + sign(head_0) e_0
+    return np.eye(len(vector))[:, 1:] - np.outer(reflector, reflector[1:]) / abs(reflector[0])
+
+
+def column_norms2(xs):
+    """Squared norms of the columns.
+
+    Parameters
+    ----------
+    xs : ndarray, shape (n_rows, F)
+        Columns.
+
+    Returns
+    -------
+    ndarray, shape (F,)
+        ``sum_i xs[i, c]^2`` per column ``c``.
+    """
+    return np.einsum("ij,ij->j", xs, xs)
+
+
+def _reflected(xs, y, columns):
+    """``(Q^T xs, Q^T y, R)`` for the complete ``Q`` of the QR of ``columns`` (its Householder
+    reflectors applied to ``xs`` and ``y``, ``O(n k F)``, without forming ``Q``).
+    """
+    packed, tau, work, info = scipy.linalg.lapack.dgeqrf(columns)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgeqrf failed (info {info})")
+    both = np.asfortranarray(np.column_stack([xs, y]))
+    lwork = max(1, 64 * both.shape[1])
+    both, work, info = scipy.linalg.lapack.dormqr("L", "T", packed[:, : len(tau)], tau, both, lwork,
+                                                  overwrite_c=1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dormqr failed (info {info})")
+    return both[:, :-1], both[:, -1], np.triu(packed[: columns.shape[1]]), (packed, tau)
+
+
+def _tail_sums(head, rest):
+    """``out[k] = rest + sum(head[k:], axis=0)``: sums from row ``k`` of ``head`` stacked on
+    rows whose sum is ``rest``."""
+    return np.cumsum(head[::-1], axis=0)[::-1] + rest
+
+
+def first_swaps(xs, y, usable, order, sizes, norms2=None):
     """The first step of :func:`swap_search` from every ``order[:k]``, ``k`` in ``sizes``:
-    ``{k: (rss, swapped support or None)}``, from one complete QR of ``x[:, order]`` (sizes
-    past a zero pivot left out).
+    ``{k: (rss, swapped support or None, its (Q, Q^T x) or None)}``, from one QR of
+    ``x[:, order]`` whose reflectors give ``Q^T x`` for its complete ``Q`` (sizes past a zero
+    pivot left out).
     """
     largest = max(sizes, default=0)
-    q_factor, r_factor = np.linalg.qr(xs[:, order[:largest]], mode="complete")
+    if largest == 0:
+        return {}
+    xs = np.ascontiguousarray(xs)
+    big_b, small_b, r_factor, (packed, tau) = _reflected(xs, y, xs[:, order[:largest]])
     diag = np.abs(np.diag(r_factor))
     if np.any(diag == 0):
         largest = int(np.argmax(diag == 0))
         r_factor = r_factor[:largest]
     if largest == 0:
         return {}
-    head = r_factor[:largest, :largest]
-    inverse = scipy.linalg.solve_triangular(head, np.eye(largest), check_finite=False)
-    big_b, small_b = q_factor.T @ xs, q_factor.T @ y
-    norms2 = np.sum(xs**2, axis=0)
+    inverse = scipy.linalg.solve_triangular(r_factor[:largest, :largest], np.eye(largest),
+                                            check_finite=False)
+    norms2 = column_norms2(xs) if norms2 is None else norms2
     y_norm2 = float(y @ y)
-    # tail sums: what lies off the span of the first k columns
-    remaining_base = np.cumsum((big_b**2)[::-1], axis=0)[::-1]          # (m, F) from row k
-    correlation_base = np.cumsum((big_b * small_b[:, None])[::-1], axis=0)[::-1]
-    rss_tail = np.cumsum((small_b**2)[::-1])[::-1]
+    # tail sums from row k (k <= largest): what lies off the span of the first k columns
+    head, tail = big_b[: largest + 1], big_b[largest + 1:]
+    y_head, y_tail = small_b[: largest + 1], small_b[largest + 1:]
+    remaining_base = _tail_sums(head**2, np.einsum("ij,ij->j", tail, tail))      # (k, F)
+    correlation_base = _tail_sums(head * y_head[:, None], y_tail @ tail)
+    rss_tail = _tail_sums(y_head**2, y_tail @ y_tail)
     # along[k - 1][j, c] = inv(R)[j, :k] @ B[:k, c] (rows j < k), as cumulative sums over i
     along_all = np.cumsum(inverse[:, :, None] * big_b[None, :largest, :], axis=1)
     removed_all = np.cumsum(inverse * small_b[None, :largest], axis=1)  # (j, k - 1)
     row_norms = np.sqrt(np.cumsum(inverse**2, axis=1))                  # (j, k - 1)
-    out = {}
+    out, basis = {}, None
     for k in sizes:
         if k > largest:
             continue
@@ -104,9 +183,17 @@ def first_swaps(xs, y, usable, order, sizes):
             remaining2, correlation, rss = along**2, along * removed, 0.0
         support = np.asarray(order[:k], dtype=int)
         c, j = _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2)
-        swapped = None
+        swapped = start = None
         if c is not None:
             swapped = support.copy()
             swapped[j] = c
-        out[k] = (rss, swapped)
+            # (Q, Q^T x) of the swapped support from those of order[:k]: R_k^-T e_j is row j
+            # of inv(R)[:k, :k]
+            if basis is None and packed.shape[0] >= packed.shape[1]:
+                basis, _, info = scipy.linalg.lapack.dorgqr(packed, tau)
+                if info != 0:
+                    raise np.linalg.LinAlgError(f"dorgqr failed (info {info})")
+            if basis is not None:
+                start = _exchanged(xs, basis[:, :k], big_b[:k], inverse[j, :k], c)
+        out[k] = (rss, swapped, start)
     return out

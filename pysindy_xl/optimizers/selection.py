@@ -7,6 +7,11 @@ model per size, refined by single swaps (:func:`refine_by_swaps`); each is score
 cross-validation over contiguous blocks of rows of each of ``n_blocks`` coordinates (errors
 relative to the mean square of ``y``), and the smallest within one standard error of the best
 *path* model is chosen. ``x`` (n_rows, F) and ``y`` (n_rows,) are the columns and target.
+
+Each path is scored up to the reach ``max(3 b, b + 40)`` of the best backward size ``b`` (the
+backward path's window grows until it holds the reach of its own best size): a model that much
+larger than the best is never the sparsest within one standard error, and the cost of the scores
+then follows the models scored instead of the catalog's width.
 """
 
 from __future__ import annotations
@@ -18,7 +23,10 @@ import scipy.linalg
 import scipy.linalg.lapack
 
 from ._base import independent_columns
-from ._swaps import first_swaps, swap_search
+from ._folds import HeldOutRows, fold_labels  # noqa: F401 (fold_labels kept)
+from ._forward import forward_order
+from ._swaps import column_norms2, first_swaps, swap_search
+from ._triangular import triangular_system, without_columns
 
 __all__ = ["elimination_path", "forward_path", "cross_validated_size", "cross_validated_supports",
            "refine_by_swaps", "select_support", "SelectionResult"]
@@ -30,24 +38,23 @@ def _scaled(x):
     return active, np.where(active, scale, 1.0)
 
 
-def _reduced(x, y):
+def _reduced(x, y, held_out=None):
     """``(non_zero_columns, R, Q^T y)`` of the unit-RMS columns: least squares on any subset of the
-    columns is the same on the reduced system.
+    columns is the same on the reduced system. ``held_out`` (a function of the unit-RMS rows
+    returning :class:`HeldOutRows`) also returns the folds, whose reductions of all columns
+    give ``R`` if they have them.
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     active, scale = _scaled(x)
     xs = x / scale
+    folds = None if held_out is None else held_out(xs, y)
+    reduced = (active, xs, y)
     if xs.shape[0] > xs.shape[1] + 1:
-        xs, y = _triangular_system(xs, y)
-    return active, xs, y
-
-
-def _triangular_system(x, y):
-    """``(R, Q^T y)`` from one QR of ``[x | y]``; the last row keeps the residual norm."""
-    stacked = np.column_stack([x, y])
-    r_factor = scipy.linalg.qr(stacked, mode="r", check_finite=False)[0][: stacked.shape[1]]
-    return r_factor[:, :-1], r_factor[:, -1]
+        whole = folds is not None and folds.whole
+        r_factor, rhs = folds.reduction() if whole else triangular_system(xs, y)
+        reduced = (active, np.ascontiguousarray(r_factor), rhs)
+    return reduced if held_out is None else (reduced, folds)
 
 
 def elimination_path(x, y) -> np.ndarray:
@@ -88,22 +95,34 @@ def _elimination_order(active_mask, xs, y) -> np.ndarray:
         pivots = scipy.linalg.qr(xs[:, active], mode="r", pivoting=True, check_finite=False)[1]
         for j in sorted(pivots[xs.shape[0]:], reverse=True):
             removed.append(active.pop(j))
+    # [R | Q^T y] of the active columns, re-triangularized after each refit's removals
+    system = np.column_stack([xs, y])
+    if np.tril(system, -1).any():
+        system = np.column_stack(triangular_system(xs[:, active], y))
+    else:  # already reduced: only the inactive columns' steps to remove
+        system = without_columns(system, active + [xs.shape[1]])
     while active:
-        r_sub, qty = _triangular_system(xs[:, active], y)
-        r_sub, qty = r_sub[: len(active)], qty[: len(active)]
+        n_active = len(active)
+        r_sub, qty = system[:n_active, :n_active], system[:n_active, n_active]
         diag = np.abs(np.diag(r_sub))
         if diag.min(initial=np.inf) <= 1e-12 * diag.max(initial=0.0):
             # an (almost) dependent column: drop the one that the others explain best
             drop_local = [int(np.argmin(diag))]
         else:
             beta = scipy.linalg.solve_triangular(r_sub, qty, check_finite=False)
-            inverse = scipy.linalg.solve_triangular(r_sub, np.eye(len(active)), check_finite=False)
+            inverse, info = scipy.linalg.lapack.dtrtri(r_sub)
+            if info != 0:
+                raise np.linalg.LinAlgError(f"dtrtri failed (info {info})")
             increase = beta**2 / np.sum(inverse**2, axis=1)
             # far from the interesting sizes, drop several columns per refit
-            n_drop = max(1, len(active) // 10) if len(active) > 40 else 1
+            n_drop = max(1, n_active // 10) if n_active > 40 else 1
             drop_local = list(np.argsort(increase, kind="stable")[:n_drop])
         for j in sorted(drop_local, reverse=True):
             removed.append(active.pop(j))
+        if active:
+            left = np.ones(n_active + 1, dtype=bool)
+            left[drop_local] = False
+            system = without_columns(system, np.flatnonzero(left))
     return np.array(removed[::-1], dtype=int)
 
 
@@ -133,31 +152,7 @@ def forward_path(x, y) -> np.ndarray:
     >>> forward_path(x, x @ [0.0, 3.0, 0.0, 0.01, 0.0, -1.0])[:3].tolist()
     [1, 5, 3]
     """
-    return _forward_order(*_reduced(x, y))
-
-
-def _forward_order(active_mask, xs, residual, max_steps=None) -> np.ndarray:
-    """:func:`forward_path` on a reduced system; after ``max_steps`` picks the remaining
-    columns follow in column order (unscored by the selection).
-    """
-    orthogonal = xs.copy()
-    chosen = []
-    candidates = active_mask.copy()
-    steps = xs.shape[1] if max_steps is None else int(max_steps)
-    while candidates.any() and len(chosen) < steps:
-        norms2 = np.sum(orthogonal**2, axis=0)
-        usable = candidates & (norms2 > 1e-20 * np.sum(xs**2, axis=0))
-        if not usable.any():
-            break
-        gain = np.where(usable, (orthogonal.T @ residual) ** 2 / np.where(usable, norms2, 1),
-                        -np.inf)
-        j = int(np.argmax(gain))
-        direction = orthogonal[:, j] / np.sqrt(norms2[j])
-        residual = residual - direction * (direction @ residual)
-        orthogonal -= np.outer(direction, direction @ orthogonal)
-        chosen.append(j)
-        candidates[j] = False
-    return np.array(chosen + [j for j in range(xs.shape[1]) if j not in set(chosen)], dtype=int)
+    return forward_order(*_reduced(x, y))
 
 
 def refine_by_swaps(x, y, support, max_swaps: int = 50) -> np.ndarray:
@@ -202,85 +197,6 @@ def refine_by_swaps(x, y, support, max_swaps: int = 50) -> np.ndarray:
     return swap_search(xs, y, active, support, int(max_swaps))
 
 
-def fold_labels(n_rows: int, n_blocks: int, n_folds: int) -> np.ndarray:
-    """Fold of each row: contiguous stretches within each of ``n_blocks`` equal row blocks."""
-    per_block = n_rows // n_blocks
-    position = np.arange(n_rows) % per_block
-    return np.minimum(position * n_folds // per_block, n_folds - 1)
-
-
-def _systems(x, y, n_blocks: int, n_folds: int) -> tuple[tuple, list]:
-    """:func:`_reduced` of the rows and, per fold, ``(fold, x_test, y_test, R, Q^T y)``: unit-RMS
-    columns, the training rows reduced (the QR of the other folds' stacked systems), ``y``
-    divided by its RMS; folds without test or training rows skipped.
-    """
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
-    active, scale = _scaled(x)
-    xs = x / scale
-    y_rms = np.sqrt(max(float(np.mean(y**2)), 1e-300))
-    labels = fold_labels(len(y), n_blocks, n_folds)
-    rows = [labels == fold for fold in range(n_folds)]
-    parts = [_StackedR.of(np.column_stack(_triangular_system(xs[r], y[r]))) for r in rows
-             if r.any()]
-    present = [fold for fold in range(n_folds) if rows[fold].any()]
-    # the systems of all folds but one, from prefix and suffix combinations (2 n_folds
-    # triangular-pentagonal QRs instead of a QR of n_folds - 1 stacked systems per fold)
-    prefix, suffix = [None], [None]
-    for part in parts:
-        prefix.append(part if prefix[-1] is None else prefix[-1].plus(part))
-    for part in parts[::-1]:
-        suffix.append(part if suffix[-1] is None else suffix[-1].plus(part))
-    suffix = suffix[::-1]  # suffix[k]: parts k and later
-    reduced = ((active, *prefix[-1].system()) if xs.shape[0] > xs.shape[1] + 1
-               else (active, xs, y))
-    folds = []
-    for k, fold in enumerate(present):
-        if not rows[fold].all():
-            before, after = prefix[k], suffix[k + 1]
-            others = before if after is None else after if before is None else before.plus(after)
-            r_factor, rhs = others.system()
-            folds.append((fold, xs[rows[fold]], y[rows[fold]] / y_rms, r_factor, rhs / y_rms))
-    return reduced, folds
-
-
-class _StackedR:
-    """The R factor of stacked rows, ``(m, m)`` upper triangular, and how many rows it stands
-    for; :meth:`plus` stacks two by LAPACK's triangular-pentagonal QR (``dtpqrt``), which uses
-    their shape (a fifth of the work of a QR of the stacked rows).
-    """
-
-    def __init__(self, r_factor, n_rows):
-        self.r_factor, self.n_rows = r_factor, n_rows
-
-    @classmethod
-    def of(cls, part):
-        """From an upper trapezoidal ``(rows, m)`` part (the R of some rows)."""
-        m = part.shape[1]
-        r_factor = np.zeros((m, m), order="F")
-        r_factor[: part.shape[0]] = part
-        return cls(r_factor, part.shape[0])
-
-    def plus(self, other):
-        """The R factor of both stacks of rows."""
-        m = self.r_factor.shape[0]
-        height = min(other.n_rows, m)  # other's non-zero rows: upper trapezoidal
-        if height == 0:
-            return self
-        top, _, _, info = scipy.linalg.lapack.dtpqrt(
-            height, min(32, m), self.r_factor, other.r_factor[:height], overwrite_a=False,
-            overwrite_b=False)
-        if info != 0:
-            raise np.linalg.LinAlgError(f"dtpqrt failed (info {info})")
-        return _StackedR(np.asfortranarray(np.triu(top)), self.n_rows + other.n_rows)
-
-    def system(self):
-        """``(R, Q^T y)`` of the columns and target (the last column), as
-        :func:`_triangular_system` gives them."""
-        r_factor = self.r_factor[: min(self.n_rows, self.r_factor.shape[0])]
-        return r_factor[:, :-1], r_factor[:, -1]
-
-
 def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
     """Held-out error of every nested model ``order[:k]``.
 
@@ -302,30 +218,7 @@ def cross_validated_size(x, y, order, n_blocks: int = 1, n_folds: int = 5):
     ndarray, shape (n_folds, len(order))
         Held-out error of the model of the first ``k`` columns at index ``k - 1``.
     """
-    return _nested_errors(_systems(x, y, n_blocks, n_folds)[1], order, n_folds)
-
-
-def _nested_errors(folds, order, n_folds: int) -> np.ndarray:
-    """:func:`cross_validated_size` on the fold systems."""
-    order = np.asarray(order, dtype=int)
-    size = len(order)
-    errors = np.full((n_folds, size), np.inf)
-    for fold, x_test, y_test, r_natural, rhs_natural in folds:
-        # the R of x_train[:, order] from a square QR
-        r_factor, rhs = _triangular_system(r_natural[:, order], rhs_natural)
-        usable = min(size, r_factor.shape[0])
-        diag = np.abs(np.diag(r_factor))[:usable]
-        ok = diag > 1e-12 * max(diag.max(initial=0.0), 1e-300)
-        usable = int(np.argmin(ok)) if not ok.all() else usable
-        # all nested models at once: beta_k = inv(R)[:, :k+1] @ rhs[:k+1], so the predictions
-        # are cumulative sums of the columns of W = x_test inv(R) times rhs (one triangular
-        # solve with the test rows, no inverse and no product with it)
-        weights = scipy.linalg.solve_triangular(
-            r_factor[:usable, :usable], x_test[:, order[:usable]].T, trans="T",
-            check_finite=False)
-        residual = np.cumsum(weights * rhs[:usable, None], axis=0) - y_test
-        errors[fold, :usable] = np.mean(residual**2, axis=1)
-    return errors
+    return _held_out(x, y, n_blocks, n_folds).nested_errors(order)
 
 
 def cross_validated_supports(x, y, supports, n_blocks: int = 1, n_folds: int = 5):
@@ -349,20 +242,13 @@ def cross_validated_supports(x, y, supports, n_blocks: int = 1, n_folds: int = 5
     ndarray, shape (n_folds, len(supports))
         Held-out errors (inf where a support is undetermined).
     """
-    return _support_errors(_systems(x, y, n_blocks, n_folds)[1], supports, n_folds)
+    return _held_out(x, y, n_blocks, n_folds).support_errors(supports)
 
 
-def _support_errors(folds, supports, n_folds: int) -> np.ndarray:
-    """:func:`cross_validated_supports` on the fold systems."""
-    errors = np.full((n_folds, len(supports)), np.inf)
-    for fold, x_test, y_test, r_factor, rhs in folds:
-        for m, support in enumerate(supports):
-            support = np.asarray(support, dtype=int)
-            coef, _, rank, _ = np.linalg.lstsq(r_factor[:, support], rhs, rcond=None)
-            if rank < len(support):
-                continue
-            errors[fold, m] = np.mean((x_test[:, support] @ coef - y_test) ** 2)
-    return errors
+def _held_out(x, y, n_blocks, n_folds):
+    """The folds of the unit-RMS columns."""
+    x = np.asarray(x, dtype=float)
+    return HeldOutRows(x / _scaled(x)[1], np.asarray(y, dtype=float), n_blocks, n_folds)
 
 
 class ChosenSupport:
@@ -387,7 +273,7 @@ class SelectionResult(ChosenSupport):
         Columns from most to least needed.
     cv_error, cv_spread : ndarray
         Mean held-out relative squared error of each model size (index ``k - 1``) and its
-        standard error over the folds.
+        standard error over the folds (inf for the sizes past every path's reach).
     size : int
         Chosen number of terms.
     best_size : int
@@ -412,10 +298,41 @@ class SelectionResult(ChosenSupport):
     rule: str
 
 
-# the forward path and its scores stop at max(3 b, b + 40) terms, b the backward path's best size:
-# a forward model far larger than the best backward one is never the sparsest within one standard
-# error, and the greedy steps past it cost O(F^2) each on catalogs of a thousand columns
-_FORWARD_REACH, _FORWARD_MARGIN = 3, 40
+# the paths are scored up to the reach max(3 b, b + 40) of the best backward size b: a model far
+# larger than the best one is never the sparsest within one standard error, and the steps and
+# scores past it cost O(F^2) to O(F^3) each on catalogs of a thousand columns
+_REACH_FACTOR, _REACH_MARGIN = 3, 40
+
+
+def _reach(best_size: int) -> int:
+    """How many terms of a path are scored when its best size is ``best_size``."""
+    return max(_REACH_FACTOR * best_size, best_size + _REACH_MARGIN)
+
+
+def _path_summary(errors, length: int, n_keep: int):
+    """Mean and spread over the folds of a path's nested models, inf past the scored ones and
+    for the models without every kept column."""
+    mean, spread = fold_summary(errors)
+    mean = np.concatenate([mean, np.full(length - len(mean), np.inf)])
+    spread = np.concatenate([spread, np.full(length - len(spread), np.inf)])
+    mean[: max(n_keep - 1, 0)] = np.inf
+    return mean, spread
+
+
+def _within_reach(held_out, order, n_keep: int) -> np.ndarray:
+    """Held-out errors of the nested models ``order[:k]`` up to the reach of the best of them:
+    the window of scored sizes grows until it holds the reach of its best size (or the path).
+    """
+    reach = min(len(order), _reach(_REACH_MARGIN + n_keep))  # the first window
+    while True:
+        errors = held_out.nested_errors(order[:reach])
+        mean = _path_summary(errors, reach, n_keep)[0]
+        if reach == len(order) or not np.isfinite(mean).any():
+            return errors
+        wanted = _reach(int(np.argmin(mean)) + 1)
+        if wanted <= reach:
+            return errors
+        reach = min(len(order), wanted)
 
 
 def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
@@ -455,23 +372,28 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     """
     # candidate models: (size, held-out mean, its standard error, how found, column order)
     candidates, seen, paths = [], set(), []
-    reduced, folds = _systems(x, y, n_blocks, n_folds)
     keep = np.unique(np.asarray([] if keep is None else keep, dtype=int))
+    # the folds are reduced on all columns once when the first backward window holds half
+    # of them or more
+    first_window = _reach(_REACH_MARGIN + len(keep))
+    reduced, held_out = _reduced(x, y, lambda xs, ys: HeldOutRows(
+        xs, ys, n_blocks, n_folds, whole=2 * min(xs.shape[1], first_window) >= xs.shape[1]))
     reduced = _without_dependent_columns(reduced, keep)
     free, local = _profiled(reduced, keep)
-    scored = None  # the forward path is scored up to a few times the backward best size
+    scored = None  # the forward path is scored up to the reach of the backward best size
     for path in ("backward", "forward"):
         if path == "backward":
             order = _elimination_order(*local)
         else:
-            order = _forward_order(*local, max_steps=scored)
+            order = forward_order(*local, max_steps=scored)
         order = np.concatenate([keep, free[order]]).astype(int)
         if max_size is not None:
             order = order[: max(int(max_size), len(keep))]
-        errors = _nested_errors(folds, order[:scored], n_folds)
-        mean, spread = fold_summary(errors)
-        mean = np.concatenate([mean, np.full(len(order) - len(mean), np.inf)])
-        mean[: max(len(keep) - 1, 0)] = np.inf  # models without every kept column
+        if path == "backward":
+            errors = _within_reach(held_out, order, len(keep))
+        else:
+            errors = held_out.nested_errors(order[:scored])
+        mean, spread = _path_summary(errors, len(order), len(keep))
         paths.append((path, order, mean))
         for k in np.flatnonzero(np.isfinite(mean)):
             key = frozenset(order[: k + 1].tolist())
@@ -479,8 +401,7 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
                 seen.add(key)
                 candidates.append((int(k) + 1, mean[k], spread[k], f"{path} path", order))
         if path == "backward" and np.isfinite(mean).any():
-            best_size = int(np.argmin(mean)) + 1
-            scored = max(_FORWARD_REACH * best_size, best_size + _FORWARD_MARGIN)
+            scored = _reach(int(np.argmin(mean)) + 1)
     if not candidates:
         raise ValueError("x: no model size can be cross-validated on these rows")
     # the reference is the best path model (the winner's curse of the refinements)
@@ -488,7 +409,7 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     tolerance = max(best[2], resolution)
     if swaps:
         path_choice = min(c[0] for c in candidates if c[1] <= best[1] + tolerance)
-        candidates += _swap_candidates(local, folds, paths, seen, path_choice, n_folds, keep, free)
+        candidates += _swap_candidates(local, held_out, paths, seen, path_choice, keep, free)
     size, mean, _, how, order = min((c for c in candidates if c[1] <= best[1] + tolerance),
                                     key=lambda c: (c[0], c[1]))
     n_sizes = max(c[0] for c in candidates)
@@ -544,9 +465,9 @@ def _profiled(reduced, keep):
     return free, (active[free] & left, rest, y - basis @ (basis.T @ y))
 
 
-def _swap_candidates(reduced, folds, paths, seen, limit, n_folds, keep=(), free=None):
-    """Swap refinements of the path models of at most ``limit`` terms, scored on ``folds``; only
-    the ``free`` columns are exchanged.
+def _swap_candidates(reduced, held_out, paths, seen, limit, keep=(), free=None):
+    """Swap refinements of the path models of at most ``limit`` terms, scored on ``held_out``
+    (:class:`HeldOutRows`); only the ``free`` columns are exchanged.
     """
     active, xs, y_reduced = reduced
     n_keep = len(keep)
@@ -556,21 +477,23 @@ def _swap_candidates(reduced, folds, paths, seen, limit, n_folds, keep=(), free=
                   mean[n_keep:]) for path, order, mean in paths]
         limit -= n_keep
     refined, visited = [], set()  # starts already refined and local optima reached
+    norms2 = column_norms2(xs)
     for path, order, mean in paths:
         sizes = [k for k in range(1, min(limit, len(order)) + 1) if np.isfinite(mean[k - 1])]
-        first = first_swaps(xs, y_reduced, active, order, sizes)
+        first = first_swaps(xs, y_reduced, active, order, sizes, norms2)
         for k in sizes:
             start = frozenset(order[:k].tolist())
             if start in visited:
                 continue
             if k not in first:
-                support = swap_search(xs, y_reduced, active, order[:k], max_swaps=50)
+                support = swap_search(xs, y_reduced, active, order[:k], max_swaps=50,
+                                      norms2=norms2)
             elif first[k][1] is None:  # no exchange improves the start
                 support = np.sort(order[:k])
             else:
-                rss, swapped = first[k]
+                rss, swapped, state = first[k]
                 support = swap_search(xs, y_reduced, active, swapped, max_swaps=49, rss=rss,
-                                       previous=order[:k])
+                                      previous=order[:k], norms2=norms2, start=state)
             visited.update((start, frozenset(support.tolist())))
             rest = order[~np.isin(order, support)]
             if n_keep:  # back to the columns of the folds
@@ -581,7 +504,6 @@ def _swap_candidates(reduced, folds, paths, seen, limit, n_folds, keep=(), free=
                 refined.append((path, support, np.concatenate([support, rest])))
     if not refined:
         return []
-    mean, spread = fold_summary(_support_errors(
-        folds, [support for _, support, _ in refined], n_folds))
+    mean, spread = fold_summary(held_out.support_errors([support for _, support, _ in refined]))
     return [(len(support), mean[m], spread[m], f"{path} path, swap-refined", order)
             for m, (path, support, order) in enumerate(refined) if np.isfinite(mean[m])]
