@@ -54,6 +54,13 @@ __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "check_growth_
 #: The moves of the growth, in the order they are tried.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
          "coulomb", "splines")
+#: The backward phase's removals (of the move named, or ``"trig"``: an angle's sines and
+#: cosines beside its powers), and the families a removal is exchanged with when it is not kept
+#: alone (the potential's families that can stand in for each other).
+_REMOVALS = ("splines", "trig", "trig_degree", "angle_degree", "degree", "interaction",
+             "kinetic", "gyroscopic", "coulomb")
+_EXCHANGES = {"splines": ("degree", "angle_degree"), "trig": ("angle_degree",),
+              "angle_degree": ("trig_degree",)}
 
 _START = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
           "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
@@ -361,6 +368,44 @@ def _parameters(state, move, kinds, n, skip=0):
     return new
 
 
+def _removed(state, move, kinds):
+    """The catalog parameters with ``move``'s family, or its last degree step, taken out of
+    ``state`` (the backward phase), or None when there is nothing of it to drop.
+
+    An angle keeps a function of its own: its sines and cosines go entirely only beside its
+    powers, and its powers only beside its sines and cosines."""
+    new = dict(state)
+    if move == "splines":
+        if state["splines"] is None:
+            return None
+        new["splines"] = None
+    elif move == "trig_degree":
+        if "angle" not in kinds or state["trig_degree"] <= 1:
+            return None
+        new["trig_degree"] = state["trig_degree"] - 1
+    elif move == "trig":
+        if "angle" not in kinds or not state["trig_degree"] or not state["angle_degree"]:
+            return None
+        new["trig_degree"] = 0
+    elif move == "angle_degree":
+        if "angle" not in kinds or not state["angle_degree"] or not state["trig_degree"]:
+            return None
+        new["angle_degree"] = 0 if state["angle_degree"] <= 2 else state["angle_degree"] - 1
+    elif move in ("degree", "interaction"):
+        if state[move] <= _START[move]:
+            return None
+        new[move] = state[move] - 1
+    elif move in ("kinetic", "gyroscopic"):
+        if state[move] == _START[move]:
+            return None
+        new[move] = _START[move]
+    elif move == "coulomb":
+        if "coulomb" not in state["dissipation"]:
+            return None
+        new["dissipation"] = tuple(d for d in state["dissipation"] if d != "coulomb")
+    return new
+
+
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
                  max_terms: int = 400, optimizer=None, formulation: str = "auto",
                  n_blocks: int = 5, tolerance: float = 0.05, good_enough: float = 0.002,
@@ -546,6 +591,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                                    errors[1], value, False,
                                    seconds=time.perf_counter() - started)
 
+    def _size(parameters):
+        try:
+            return AutomaticCatalog(**searched, **parameters).n_terms
+        except ValueError:
+            return -1
+
     def report(step):
         if progress is not None:
             progress(f"{step.move:<13} {step.terms:>5} terms  held-out {criterion} error "
@@ -572,10 +623,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             report(cache[key][1])
         return cache[key]
 
-    def climb(order):
-        """Try the moves in turn from the first catalog; (state, step, catalog, kept steps)."""
-        state, best, catalog_, path = dict(_START), first, first_catalog, []
-        tried = {repr(sorted(state.items()))}
+    def climb(order, start=None, visited=()):
+        """Try the moves in turn from ``start`` (the first catalog), never back to a catalog of
+        ``visited``; (state, step, catalog, kept steps)."""
+        state, best, catalog_, path = start or (dict(_START), first, first_catalog, [])
+        path = list(path)
+        tried = {repr(sorted(state.items())), *visited}
         improved = best.criterion > good_enough
         while improved:
             improved = False
@@ -638,6 +691,44 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         other = climb(second)
         if _keeps(other[1], best, tolerance):
             state, best, best_catalog, path = other
+    # backward: drop the family whose removal the keep rule accepts best (a smaller catalog
+    # within the tolerance at an equal fitted size is kept too: the stand-in that a family
+    # offers next to the right one goes with it), climb again from there, until nothing goes
+    visited = {repr(sorted(state.items()))}
+    while True:  # below good_enough too: a stand-in can be good enough
+        dropped, rejected = [], []
+        for move in _REMOVALS:
+            parameters = _removed(state, move, kinds)
+            if (parameters is None or {"trig": "trig_degree"}.get(move, move) not in moves
+                    or repr(sorted(parameters.items())) in visited
+                    or _size(parameters) == best.terms):
+                continue
+            catalog, step = attempt(parameters, f"-{move}")
+            if _keeps(step, best, tolerance) or (
+                    step.criterion <= best.criterion * (1 + tolerance)
+                    and step.active == best.active and step.terms < best.terms):
+                dropped.append((step.criterion, step.active, parameters, step, catalog))
+            else:
+                rejected.append((move, parameters))
+        # a family that stands in for another is not given up alone: exchange it for the other
+        for move, removed in rejected if not dropped else ():
+            for other in _EXCHANGES.get(move, ()):
+                for skip in (0, 1) if other in moves else ():
+                    parameters = _parameters(removed, other, kinds, n, skip)
+                    if (parameters is None or repr(sorted(parameters.items())) in visited
+                            or _size(parameters) == _size(removed)):
+                        continue
+                    catalog, step = attempt(parameters, f"-{move}+{other}")
+                    if _keeps(step, best, tolerance):
+                        dropped.append((step.criterion, step.active, parameters, step,
+                                        catalog))
+        if not dropped:
+            break
+        _, _, state, best, catalog = min(dropped, key=lambda d: d[:2])
+        visited.add(repr(sorted(state.items())))
+        state, best, catalog, path = climb(order, (state, best, catalog, [*path, best]),
+                                           visited)
+        visited.add(repr(sorted(state.items())))
     for step in path:
         step.chosen = True
     best_catalog = AutomaticCatalog(**fixed, **state)
