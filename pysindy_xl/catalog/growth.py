@@ -32,8 +32,24 @@ criterion is below ``good_enough``. Before it stops, pairs of the moves that are
 (kinetic, interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither
 alone (a coupling ``cos(a - b) a_dot b_dot`` needs both the products of two angles' functions
 and configuration-dependent kinetic coefficients). Catalogs over ``max_terms`` are not tried
-(reported as the ceiling). The chosen catalog is then fitted on all the data, each
-coordinate's splines kept whole or left out (:class:`~pysindy_xl.optimizers.GroupedOptimizer`).
+(reported as the ceiling).
+
+The climb only adds, and the start always holds an angle's sines and cosines: where families
+are nearly dependent on the data's range (``cos(phi) = 1 - phi^2/2 + phi^4/24 - ...``), the
+fit keeps a stand-in (``2 cos(phi) - 0.58 phi^4`` for ``-phi^2 - 0.5 phi^4``) that the right
+family beside it cannot displace. So a backward phase follows (a stepwise forward-backward
+search over the families): each family the start or the climb put in is dropped in turn (the
+moves ``"-splines"``, ``"-trig"``: an angle's sines and cosines beside its powers,
+``"-trig_degree"``, ``"-angle_degree"``: its powers beside sines and cosines, ``"-degree"``,
+``"-interaction"``, ``"-kinetic"``, ``"-gyroscopic"``, ``"-coulomb"``; one degree step at a
+time), and the best drop that the keep rule accepts is kept; at an equal number of fitted
+terms the smaller catalog is kept within the tolerance too (the stand-in family goes). A
+family whose drop is not kept alone is exchanged for the one it stands in for (sines and
+cosines for one or two more powers of the angle, powers for a sine degree, splines for
+powers: ``"-trig+angle_degree"``). After each drop the climb resumes from the new catalog,
+never back to a catalog already kept, and the phase ends when nothing is dropped
+(:mod:`.backward`). The chosen catalog is then fitted on all the data, each coordinate's
+splines kept whole or left out (:class:`~pysindy_xl.optimizers.GroupedOptimizer`).
 """
 
 from __future__ import annotations
@@ -48,19 +64,13 @@ import numpy as np
 from .._inputs import aligned, as_list
 from .._validation import check_option
 from .automatic import AutomaticCatalog, coordinate_kinds
+from .backward import EXCHANGES, REMOVALS, removed
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "check_growth_data"]
 
 #: The moves of the growth, in the order they are tried.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
          "coulomb", "splines")
-#: The backward phase's removals (of the move named, or ``"trig"``: an angle's sines and
-#: cosines beside its powers), and the families a removal is exchanged with when it is not kept
-#: alone (the potential's families that can stand in for each other).
-_REMOVALS = ("splines", "trig", "trig_degree", "angle_degree", "degree", "interaction",
-             "kinetic", "gyroscopic", "coulomb")
-_EXCHANGES = {"splines": ("degree", "angle_degree"), "trig": ("angle_degree",),
-              "angle_degree": ("trig_degree",)}
 
 _START = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
           "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
@@ -77,7 +87,9 @@ class GrowthStep:
     Parameters
     ----------
     move : str
-        ``"start"`` or one of :data:`MOVES`.
+        ``"start"``, one of :data:`MOVES`, two of them joined by ``"+"`` (tried together), or a
+        removal of the backward phase (``"-"`` and the family dropped, possibly followed by
+        ``"+"`` and the move it is exchanged for).
     description : str
         :meth:`AutomaticCatalog.describe` of the catalog.
     terms : int
@@ -368,44 +380,6 @@ def _parameters(state, move, kinds, n, skip=0):
     return new
 
 
-def _removed(state, move, kinds):
-    """The catalog parameters with ``move``'s family, or its last degree step, taken out of
-    ``state`` (the backward phase), or None when there is nothing of it to drop.
-
-    An angle keeps a function of its own: its sines and cosines go entirely only beside its
-    powers, and its powers only beside its sines and cosines."""
-    new = dict(state)
-    if move == "splines":
-        if state["splines"] is None:
-            return None
-        new["splines"] = None
-    elif move == "trig_degree":
-        if "angle" not in kinds or state["trig_degree"] <= 1:
-            return None
-        new["trig_degree"] = state["trig_degree"] - 1
-    elif move == "trig":
-        if "angle" not in kinds or not state["trig_degree"] or not state["angle_degree"]:
-            return None
-        new["trig_degree"] = 0
-    elif move == "angle_degree":
-        if "angle" not in kinds or not state["angle_degree"] or not state["trig_degree"]:
-            return None
-        new["angle_degree"] = 0 if state["angle_degree"] <= 2 else state["angle_degree"] - 1
-    elif move in ("degree", "interaction"):
-        if state[move] <= _START[move]:
-            return None
-        new[move] = state[move] - 1
-    elif move in ("kinetic", "gyroscopic"):
-        if state[move] == _START[move]:
-            return None
-        new[move] = _START[move]
-    elif move == "coulomb":
-        if "coulomb" not in state["dissipation"]:
-            return None
-        new["dissipation"] = tuple(d for d in state["dissipation"] if d != "coulomb")
-    return new
-
-
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
                  max_terms: int = 400, optimizer=None, formulation: str = "auto",
                  n_blocks: int = 5, tolerance: float = 0.05, good_enough: float = 0.002,
@@ -441,7 +415,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         With forces, the growth stops once the criterion is below this relative error
         (unforced data: every move is tried).
     moves : sequence of str, default MOVES
-        The moves tried (a subset of :data:`MOVES`).
+        The moves tried (a subset of :data:`MOVES`); the backward phase drops the families of
+        these moves only (``"trig_degree"``: the sines and cosines too).
     search_optimizer : "auto" or optimizer, default "auto"
         Optimizer of the search's fits; ``"auto"``: ``optimizer`` when given, else one
         selection per fit (``ExplicitOptimizer()``, ``MixedOptimizer()``, or XLSINDy's default
@@ -697,8 +672,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     visited = {repr(sorted(state.items()))}
     while True:  # below good_enough too: a stand-in can be good enough
         dropped, rejected = [], []
-        for move in _REMOVALS:
-            parameters = _removed(state, move, kinds)
+        for move in REMOVALS:
+            parameters = removed(state, move, kinds, _START)
             if (parameters is None or {"trig": "trig_degree"}.get(move, move) not in moves
                     or repr(sorted(parameters.items())) in visited
                     or _size(parameters) == best.terms):
@@ -711,12 +686,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             else:
                 rejected.append((move, parameters))
         # a family that stands in for another is not given up alone: exchange it for the other
-        for move, removed in rejected if not dropped else ():
-            for other in _EXCHANGES.get(move, ()):
+        for move, smaller in rejected if not dropped else ():
+            for other in EXCHANGES.get(move, ()):
                 for skip in (0, 1) if other in moves else ():
-                    parameters = _parameters(removed, other, kinds, n, skip)
+                    parameters = _parameters(smaller, other, kinds, n, skip)
                     if (parameters is None or repr(sorted(parameters.items())) in visited
-                            or _size(parameters) == _size(removed)):
+                            or _size(parameters) == _size(smaller)):
                         continue
                     catalog, step = attempt(parameters, f"-{move}+{other}")
                     if _keeps(step, best, tolerance):
