@@ -18,10 +18,10 @@ REMOVALS = ("splines", "trig", "trig_degree", "angle_degree", "degree", "interac
             "kinetic", "gyroscopic", "coulomb")
 
 #: The moves a removal is exchanged for when it is not kept alone: the potential's families
-#: that stand in for each other (sines and cosines for powers of the angle, powers for a sine
-#: degree, splines for powers).
+#: that stand in for each other (sines and cosines, or a degree of them, for powers of the
+#: angle, powers for a sine degree, splines for powers).
 EXCHANGES = {"splines": ("degree", "angle_degree"), "trig": ("angle_degree",),
-             "angle_degree": ("trig_degree",)}
+             "trig_degree": ("angle_degree",), "angle_degree": ("trig_degree",)}
 
 
 def removed(state: dict, move: str, kinds, start: dict) -> dict | None:

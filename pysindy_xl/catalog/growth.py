@@ -45,11 +45,11 @@ moves ``"-splines"``, ``"-trig"``: an angle's sines and cosines beside its power
 time), and the best drop that the keep rule accepts is kept; at an equal number of fitted
 terms the smaller catalog is kept within the tolerance too (the stand-in family goes). A
 family whose drop is not kept alone is exchanged for the one it stands in for (sines and
-cosines for one or two more powers of the angle, powers for a sine degree, splines for
-powers: ``"-trig+angle_degree"``). After each drop the climb resumes from the new catalog,
-never back to a catalog already kept, and the phase ends when nothing is dropped
-(:mod:`.backward`). The chosen catalog is then fitted on all the data, each coordinate's
-splines kept whole or left out (:class:`~pysindy_xl.optimizers.GroupedOptimizer`).
+cosines, or a degree of them, for one or two more powers of the angle, powers for a sine
+degree, splines for powers: ``"-trig+angle_degree"``, the forward step of the search, taken
+where a stand-in leaves). The phase repeats, never back to a catalog already kept, until
+nothing is dropped (:mod:`.backward`). The chosen catalog is then fitted on all the data, each
+coordinate's splines kept whole or left out (:class:`~pysindy_xl.optimizers.GroupedOptimizer`).
 """
 
 from __future__ import annotations
@@ -598,12 +598,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             report(cache[key][1])
         return cache[key]
 
-    def climb(order, start=None, visited=()):
-        """Try the moves in turn from ``start`` (the first catalog), never back to a catalog of
-        ``visited``; (state, step, catalog, kept steps)."""
-        state, best, catalog_, path = start or (dict(_START), first, first_catalog, [])
-        path = list(path)
-        tried = {repr(sorted(state.items())), *visited}
+    def climb(order):
+        """Try the moves in turn from the first catalog; (state, step, catalog, kept steps)."""
+        state, best, catalog_, path = dict(_START), first, first_catalog, []
+        tried = {repr(sorted(state.items()))}
         improved = best.criterion > good_enough
         while improved:
             improved = False
@@ -668,7 +666,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             state, best, best_catalog, path = other
     # backward: drop the family whose removal the keep rule accepts best (a smaller catalog
     # within the tolerance at an equal fitted size is kept too: the stand-in that a family
-    # offers next to the right one goes with it), climb again from there, until nothing goes
+    # offers next to the right one goes with it), until nothing goes
     visited = {repr(sorted(state.items()))}
     while True:  # below good_enough too: a stand-in can be good enough
         dropped, rejected = [], []
@@ -701,9 +699,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             break
         _, _, state, best, catalog = min(dropped, key=lambda d: d[:2])
         visited.add(repr(sorted(state.items())))
-        state, best, catalog, path = climb(order, (state, best, catalog, [*path, best]),
-                                           visited)
-        visited.add(repr(sorted(state.items())))
+        path.append(best)
     for step in path:
         step.chosen = True
     best_catalog = AutomaticCatalog(**fixed, **state)
