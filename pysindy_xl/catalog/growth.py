@@ -47,9 +47,10 @@ terms the smaller catalog is kept within the tolerance too (the stand-in family 
 family whose drop is not kept alone is exchanged for the one it stands in for (sines and
 cosines, or a degree of them, for one or two more powers of the angle, powers for a sine
 degree, splines for powers: ``"-trig+angle_degree"``, the forward step of the search, taken
-where a stand-in leaves). The phase repeats, never back to a catalog already kept, until
-nothing is dropped (:mod:`.backward`). The chosen catalog is then fitted on all the data, each
-coordinate's splines kept whole or left out (:class:`~pysindy_xl.optimizers.GroupedOptimizer`).
+where a stand-in leaves, while the criterion is above ``good_enough``). The phase repeats,
+never back to a catalog already kept, until nothing is dropped (:mod:`.backward`). The chosen
+catalog is then fitted on all the data, each coordinate's splines kept whole or left out
+(:class:`~pysindy_xl.optimizers.GroupedOptimizer`).
 """
 
 from __future__ import annotations
@@ -684,7 +685,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             else:
                 rejected.append((move, parameters))
         # a family that stands in for another is not given up alone: exchange it for the other
-        for move, smaller in rejected if not dropped else ():
+        # (while the criterion is not good enough, as for the pairs of moves)
+        exchange = not dropped and best.criterion > good_enough
+        for move, smaller in rejected if exchange else ():
             for other in EXCHANGES.get(move, ()):
                 for skip in (0, 1) if other in moves else ():
                     parameters = _parameters(smaller, other, kinds, n, skip)
