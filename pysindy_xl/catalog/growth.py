@@ -677,11 +677,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                     or repr(sorted(parameters.items())) in visited
                     or _size(parameters) == best.terms):
                 continue
-            catalog, step = attempt(parameters, f"-{move}")
+            step = attempt(parameters, f"-{move}")[1]
             if _keeps(step, best, tolerance) or (
                     step.criterion <= best.criterion * (1 + tolerance)
                     and step.active == best.active and step.terms < best.terms):
-                dropped.append((step.criterion, step.active, parameters, step, catalog))
+                dropped.append((step.criterion, step.active, parameters, step))
             else:
                 rejected.append((move, parameters))
         # a family that stands in for another is not given up alone: exchange it for the other
@@ -694,13 +694,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                     if (parameters is None or repr(sorted(parameters.items())) in visited
                             or _size(parameters) == _size(smaller)):
                         continue
-                    catalog, step = attempt(parameters, f"-{move}+{other}")
+                    step = attempt(parameters, f"-{move}+{other}")[1]
                     if _keeps(step, best, tolerance):
-                        dropped.append((step.criterion, step.active, parameters, step,
-                                        catalog))
+                        dropped.append((step.criterion, step.active, parameters, step))
         if not dropped:
             break
-        _, _, state, best, catalog = min(dropped, key=lambda d: d[:2])
+        _, _, state, best = min(dropped, key=lambda d: d[:2])
         visited.add(repr(sorted(state.items())))
         path.append(best)
     for step in path:
