@@ -8,11 +8,13 @@ up (exchanged for the angle's powers) and finds the law.
 """
 
 import numpy as np
+import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
 from sympy.physics import mechanics as me
 
 from pysindy_xl.catalog import grow_catalog
+from pysindy_xl.catalog.backward import REMOVALS, removed
 
 INERTIA, K2, K4, DAMPING = 0.2, 2.0, 2.0, 0.05
 
@@ -92,3 +94,24 @@ def test_backward_phase_gives_up_the_cosine_that_stands_in_for_a_quartic_spring(
     kept = [step.move for step in found.steps if step.chosen]
     assert any(move.startswith("-") for move in kept), found.table()
     assert "-trig" in found.table()
+
+
+def test_removals_keep_each_angle_a_function_and_refuse_unknown_moves():
+    start = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
+             "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
+             "splines": None}
+    # the starting catalog has nothing to drop
+    assert all(removed(start, move, ["angle", "linear"], start) is None for move in REMOVALS)
+    grown = dict(start, trig_degree=2, angle_degree=2, interaction=2, kinetic="configuration",
+                 dissipation=("viscous", "coulomb"), splines=8)
+    assert removed(grown, "trig", ["angle"], start)["trig_degree"] == 0
+    assert removed(grown, "trig_degree", ["angle"], start)["trig_degree"] == 1
+    assert removed(grown, "angle_degree", ["angle"], start)["angle_degree"] == 0
+    assert removed(dict(grown, trig_degree=0), "angle_degree", ["angle"], start) is None
+    assert removed(grown, "trig", ["linear"], start) is None
+    assert removed(grown, "splines", ["linear"], start)["splines"] is None
+    assert removed(grown, "interaction", ["linear"], start)["interaction"] == 1
+    assert removed(grown, "kinetic", ["linear"], start)["kinetic"] == "constant"
+    assert removed(grown, "coulomb", ["linear"], start)["dissipation"] == ("viscous",)
+    with pytest.raises(ValueError, match="move"):
+        removed(grown, "sines", ["angle"], start)
