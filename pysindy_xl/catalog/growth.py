@@ -57,8 +57,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import time
-import warnings
 
 import numpy as np
 
@@ -66,6 +64,7 @@ from .._inputs import aligned, as_list
 from .._validation import check_option
 from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import EXCHANGES, REMOVALS, removed
+from .candidates import CandidateFits, SearchData, parameters_key
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "check_growth_data"]
 
@@ -106,6 +105,8 @@ class GrowthStep:
         Why a step was not evaluated or failed.
     seconds : float, default 0.0
         Time of the step's fit and scoring.
+    cpu_seconds : float, default 0.0
+        CPU time of the step's fit and scoring (in the process that ran it).
 
     Examples
     --------
@@ -124,6 +125,7 @@ class GrowthStep:
     chosen: bool
     note: str = ""
     seconds: float = 0.0
+    cpu_seconds: float = 0.0
 
 
 @dataclasses.dataclass
@@ -281,35 +283,6 @@ def _pieces(mask):
     return list(zip(edges[::2], edges[1::2], strict=True))
 
 
-def _held_out_error(model, held, forced) -> float:
-    """Relative residual of the fitted model's weak-form equations on held-out runs: the
-    residual over the forces' part (forced data) or, unforced, each coordinate's over its
-    largest term's (RMS over the coordinates)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # blocks shorter than a test function: strong form
-        problem = model.regression(held["x"], held["t"], u=held["u"], formulation="weak",
-                                   propagate_noise=False)
-        if not len(problem.theta):
-            problem = model.regression(held["x"], held["t"], u=held["u"], formulation="strong")
-    theta, columns = problem.theta, problem.catalog_map.columns
-    coef = model.coef_[columns]
-    residual = theta @ coef
-    forces = problem.force_columns
-    if forced and len(forces):
-        target = theta[:, forces] @ coef[forces]
-        norm = float(np.linalg.norm(target))
-        return float(np.linalg.norm(residual) / norm) if norm > 0 else float("inf")
-    # unforced, each equation is defined up to its own factor when no term joins it to the
-    # others: judged over all rows, a law could shrink one coordinate's equation until its
-    # residual vanished next to the others' terms; so each coordinate's block of rows is
-    # judged over its own largest term, and the blocks' errors are combined (RMS)
-    errors = []
-    for rows in np.array_split(np.arange(len(theta)), problem.n_coordinates):
-        norm = float(np.linalg.norm(theta[rows] * coef, axis=0).max(initial=0.0))
-        errors.append(np.linalg.norm(residual[rows]) / norm if norm > 0 else np.inf)
-    return float(np.sqrt(np.mean(np.square(errors))))
-
-
 #: Percentile of the data at which splines end (and ``100 -`` it): beyond, the potential's
 #: slope is fitted to the extreme samples instead of following a cubic piece that a few
 #: samples constrain.
@@ -385,7 +358,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                  max_terms: int = 400, optimizer=None, formulation: str = "auto",
                  n_blocks: int = 5, tolerance: float = 0.05, good_enough: float = 0.002,
                  moves=MOVES, search_optimizer="auto", search_samples: int | None = 6000,
-                 progress=None):
+                 progress=None, n_jobs=None):
     """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
 
     Parameters
@@ -427,6 +400,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         final fit uses all. None: no thinning.
     progress : callable, optional
         Called with a line of text after each step.
+    n_jobs : int or None, default None
+        Processes of the search: while one candidate is fitted, ``n_jobs - 1`` joblib
+        workers fit the ones the growth will probably try next (those that follow if the
+        current one is not kept). The path and the result do not depend on it. None: 1
+        (joblib's convention; -1: all cores).
 
     Returns
     -------
@@ -533,39 +511,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                        test_functions=BumpTestFunctions(width=width),
                        smoother=RememberedSmoother())
 
-    def evaluate(parameters, move):
-        catalog = AutomaticCatalog(**searched, **parameters)
-        started = time.perf_counter()
-        try:
-            size = catalog.n_terms
-        except ValueError as error:
-            return catalog, GrowthStep(move, "", 0, 0, np.inf, np.inf, np.inf, False, str(error))
-        description = catalog.describe() if size <= max_terms else ""
-        if size > max_terms:
-            return catalog, GrowthStep(move, description, size, 0, np.inf, np.inf, np.inf, False,
-                                       f"ceiling: {size} > max_terms {max_terms}")
-        rows = sum(len(p) for p in train["x"]) * n
-        if rows < 10 * size:
-            return catalog, GrowthStep(move, description, size, 0, np.inf, np.inf, np.inf, False,
-                                       "too few samples for this size")
-        model = clone(template).set_params(feature_library=catalog)
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                model.fit(**train)
-            if model.dynamics_ is None:
-                raise ValueError("no acceleration in the identified equations")
-            errors = [_held_out_error(model, held, forced) for held in blocks]
-        except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
-            return catalog, GrowthStep(move, description, size, 0, np.inf, np.inf, np.inf, False,
-                                       f"fit failed: {type(error).__name__}: {error}"[:200])
-        value = float(np.sqrt(np.mean(np.square(errors))))
-        if not np.isfinite(value):
-            value = np.inf
-        return catalog, GrowthStep(move, description, size,
-                                   int(np.count_nonzero(model.coefficients())), errors[0],
-                                   errors[1], value, False,
-                                   seconds=time.perf_counter() - started)
+    search = SearchData(searched, train, blocks, template, max_terms, forced)
+    fits = CandidateFits(search, n_jobs)
+    fits.warm_up()  # the workers start while the first catalog is fitted here
+
+    def evaluate(parameters, move, ahead=()):
+        return GrowthStep(move=move, chosen=False, **fits.get(parameters, ahead))
 
     def _size(parameters):
         try:
@@ -580,7 +531,15 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                      + ("  kept" if step.chosen else "") + (f"  ({step.note})" if step.note
                                                             else ""))
 
-    first_catalog, first = evaluate(dict(_START), "start")
+    # the moves from the first catalog, each alone (a degree move also one degree further)
+    queue = []
+    for move in moves:
+        for skip in (0, 1) if move in _REPEATED else (0,):
+            parameters = _parameters(dict(_START), move, kinds, n, skip)
+            if move == "splines" or parameters is None:
+                break
+            queue.append((move, parameters))
+    first = evaluate(dict(_START), "start", [p for _, p in queue])
     if first.note.startswith("ceiling"):
         raise ValueError(f"max_terms: the smallest catalog has {first.terms} terms, more than "
                          f"max_terms={max_terms}; raise max_terms")
@@ -591,32 +550,63 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         good_enough = 0.0
     cache = {}  # every catalog is fitted once, whichever path tries it
 
-    def attempt(parameters, move):
-        key = repr(sorted(parameters.items()))
+    def attempt(parameters, move, ahead=()):
+        key = parameters_key(parameters)
         if key not in cache:
-            cache[key] = evaluate(parameters, move)
-            steps.append(cache[key][1])
-            report(cache[key][1])
+            cache[key] = evaluate(parameters, move, ahead)
+            steps.append(cache[key])
+            report(cache[key])
         return cache[key]
 
+    def pairs(state, order, tried):
+        """The pairs of non-repeated moves from ``state`` not tried yet: (parameters, name)."""
+        out = []
+        single = [m for m in order if m not in _REPEATED]
+        for first_move, second_move in itertools.combinations(single, 2):
+            once = _parameters(state, first_move, kinds, n, 0)
+            twice = None if once is None else _parameters(once, second_move, kinds, n, 0)
+            if twice is not None and parameters_key(twice) not in tried:
+                out.append((twice, f"{first_move}+{second_move}"))
+        return out
+
+    def rejected(state, order, index, skip, tried, improved):
+        """The candidates a climb tries after ``order[index]`` (at ``skip``) if it keeps
+        none of them: the guess of what to fit meanwhile."""
+        out, seen = [], set(tried)
+        for k in range(index, len(order)):
+            move = order[k]
+            skips = [skip] if k == index else [0]
+            if move in _REPEATED and skips[0] == 0:
+                skips.append(1)
+            for s in skips:
+                parameters = _parameters(state, move, kinds, n, s)
+                if parameters is None or parameters_key(parameters) in seen:
+                    break
+                seen.add(parameters_key(parameters))
+                out.append(parameters)
+        if not improved:
+            out += [p for p, _ in pairs(state, order, seen)]
+        return out[1:]  # (the first is the current one)
+
     def climb(order):
-        """Try the moves in turn from the first catalog; (state, step, catalog, kept steps)."""
-        state, best, catalog_, path = dict(_START), first, first_catalog, []
-        tried = {repr(sorted(state.items()))}
+        """Try the moves in turn from the first catalog; (state, step, kept steps)."""
+        state, best, path = dict(_START), first, []
+        tried = {parameters_key(state)}
         improved = best.criterion > good_enough
         while improved:
             improved = False
-            for move in order:
+            for index, move in enumerate(order):
                 skip = 0  # a degree move looks one degree further before it stops
                 while best.criterion > good_enough:
                     parameters = _parameters(state, move, kinds, n, skip)
-                    if parameters is None or repr(sorted(parameters.items())) in tried:
+                    if parameters is None or parameters_key(parameters) in tried:
                         break
-                    tried.add(repr(sorted(parameters.items())))
-                    catalog, step = attempt(parameters, move)
+                    ahead = rejected(state, order, index, skip, tried, improved)
+                    tried.add(parameters_key(parameters))
+                    step = attempt(parameters, move, ahead)
                     keep = _keeps(step, best, tolerance)
                     if keep:
-                        state, best, catalog_, improved = parameters, step, catalog, True
+                        state, best, improved = parameters, step, True
                         path.append(step)
                     if move not in _REPEATED or (not keep and skip):
                         break
@@ -625,83 +615,82 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                 # a law that needs two structural moves at once (a coupling cos(a - b) a_dot
                 # b_dot needs products of two angles' functions and configuration-dependent
                 # kinetic coefficients) gains from neither alone: look two moves ahead
-                single = [m for m in order if m not in _REPEATED]
-                for first_move, second_move in itertools.combinations(single, 2):
-                    once = _parameters(state, first_move, kinds, n, 0)
-                    twice = None if once is None else _parameters(once, second_move, kinds,
-                                                                  n, 0)
-                    if twice is None or repr(sorted(twice.items())) in tried:
+                candidates = pairs(state, order, tried)
+                for k, (twice, name) in enumerate(candidates):
+                    if parameters_key(twice) in tried:
                         continue
-                    tried.add(repr(sorted(twice.items())))
-                    catalog, step = attempt(twice, f"{first_move}+{second_move}")
+                    tried.add(parameters_key(twice))
+                    step = attempt(twice, name, [p for p, _ in candidates[k + 1:]])
                     if _keeps(step, best, tolerance):
-                        state, best, catalog_, improved = twice, step, catalog, True
+                        state, best, improved = twice, step, True
                         path.append(step)
                         break
-        return state, best, catalog_, path
+        return state, best, path
 
     # rank the family moves by what each achieves alone from the first catalog (a degree move
     # looking one degree further); the flexible basis comes last, for what the families leave
-    alone = {}
-    for move in moves:
-        for skip in (0, 1) if move in _REPEATED else (0,):
-            parameters = _parameters(dict(_START), move, kinds, n, skip)
-            if move == "splines" or parameters is None or first.criterion <= good_enough:
-                break
-            step = attempt(parameters, move)[1]
-            alone[move] = min(alone.get(move, np.inf), step.criterion)
-            if _keeps(step, first, tolerance):
-                break
+    alone, stopped = {}, set()
+    if first.criterion <= good_enough:
+        queue = []
+    for index, (move, parameters) in enumerate(queue):
+        if move in stopped:
+            continue  # (its first degree was kept: no look further)
+        step = attempt(parameters, move, [p for _, p in queue[index + 1:]])
+        alone[move] = min(alone.get(move, np.inf), step.criterion)
+        if _keeps(step, first, tolerance):
+            stopped.add(move)
     order = sorted((m for m in moves if m != "splines"), key=lambda m: alone.get(m, np.inf))
     order += [m for m in moves if m == "splines"]
     # climb from the best and from the second-best first move: which family goes in first is
     # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
     # a coupling that needs two moves), so the better of the two ends is kept
-    state, best, best_catalog, path = climb(order)
+    state, best, path = climb(order)
     promising = [m for m in order if m != "splines" and alone.get(m, np.inf)
                  < first.criterion * (1 - tolerance)]
     if best.criterion > good_enough and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]
         other = climb(second)
         if _keeps(other[1], best, tolerance):
-            state, best, best_catalog, path = other
+            state, best, path = other
     # backward: drop the family whose removal the keep rule accepts best (a smaller catalog
     # within the tolerance at an equal fitted size is kept too: the stand-in that a family
     # offers next to the right one goes with it), until nothing goes
-    visited = {repr(sorted(state.items()))}
+    visited = {parameters_key(state)}
     while True:  # below good_enough too: a stand-in can be good enough
-        dropped, rejected = [], []
-        for move in REMOVALS:
-            parameters = removed(state, move, kinds, _START)
-            if (parameters is None or {"trig": "trig_degree"}.get(move, move) not in moves
-                    or repr(sorted(parameters.items())) in visited
-                    or _size(parameters) == best.terms):
-                continue
-            step = attempt(parameters, f"-{move}")[1]
+        dropped, refused = [], []
+        candidates = [(move, parameters) for move in REMOVALS
+                      if (parameters := removed(state, move, kinds, _START)) is not None
+                      and {"trig": "trig_degree"}.get(move, move) in moves
+                      and parameters_key(parameters) not in visited
+                      and _size(parameters) != best.terms]
+        for k, (move, parameters) in enumerate(candidates):
+            step = attempt(parameters, f"-{move}", [p for _, p in candidates[k + 1:]])
             if _keeps(step, best, tolerance) or (
                     step.criterion <= best.criterion * (1 + tolerance)
                     and step.active == best.active and step.terms < best.terms):
                 dropped.append((step.criterion, step.active, parameters, step))
             else:
-                rejected.append((move, parameters))
+                refused.append((move, parameters))
         # a family that stands in for another is not given up alone: exchange it for the other
         # (while the criterion is not good enough, as for the pairs of moves)
-        exchange = not dropped and best.criterion > good_enough
-        for move, smaller in rejected if exchange else ():
+        exchanges = []
+        for move, smaller in refused if not dropped and best.criterion > good_enough else ():
             for other in EXCHANGES.get(move, ()):
                 for skip in (0, 1) if other in moves else ():
                     parameters = _parameters(smaller, other, kinds, n, skip)
-                    if (parameters is None or repr(sorted(parameters.items())) in visited
-                            or _size(parameters) == _size(smaller)):
-                        continue
-                    step = attempt(parameters, f"-{move}+{other}")[1]
-                    if _keeps(step, best, tolerance):
-                        dropped.append((step.criterion, step.active, parameters, step))
+                    if (parameters is not None and parameters_key(parameters) not in visited
+                            and _size(parameters) != _size(smaller)):
+                        exchanges.append((f"-{move}+{other}", parameters))
+        for k, (name, parameters) in enumerate(exchanges):
+            step = attempt(parameters, name, [p for _, p in exchanges[k + 1:]])
+            if _keeps(step, best, tolerance):
+                dropped.append((step.criterion, step.active, parameters, step))
         if not dropped:
             break
         _, _, state, best = min(dropped, key=lambda d: d[:2])
-        visited.add(repr(sorted(state.items())))
+        visited.add(parameters_key(state))
         path.append(best)
+    fits.close()  # (a worker's last guess may still run: it ends during the final fit)
     for step in path:
         step.chosen = True
     best_catalog = AutomaticCatalog(**fixed, **state)

@@ -12,6 +12,8 @@ excludes them; its supports are starts that the caller refines by noise ratio.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from .._optional import import_optional
@@ -44,6 +46,14 @@ def reference_mass_matrices(mass_matrices) -> np.ndarray:
     reference = np.array([np.median(diagonal[carried[:, i], i]) if carried[:, i].any()
                           else 1.0 for i in range(mean.shape[-1])])
     return mean / np.sqrt(np.outer(reference, reference))[None]
+
+
+@functools.cache
+def _solver():
+    """Clarabel when installed, else cvxpy's choice (looked up once: ``installed_solvers``
+    probes every solver's import on each call)."""
+    cp = import_optional("cvxpy", "admissible starts")
+    return cp.CLARABEL if "CLARABEL" in cp.installed_solvers() else None
 
 
 def admissible_supports(r_factor, mass_matrices, penalties=PENALTIES, n_reweight: int = 5) -> list:
@@ -81,10 +91,12 @@ def admissible_supports(r_factor, mass_matrices, penalties=PENALTIES, n_reweight
     problem = cp.Problem(cp.Minimize(cp.sum_squares(r_factor @ xi) + weights @ cp.abs(xi)),
                          [(mass + mass.T) / 2 >> np.eye(n)])
 
+    solver = _solver()
+
     def solve(values):
         weights.value = values
         try:
-            problem.solve(solver=cp.CLARABEL if "CLARABEL" in cp.installed_solvers() else None)
+            problem.solve(solver=solver)
         except cp.error.SolverError:
             return None
         if problem.status not in ("optimal", "optimal_inaccurate") or xi.value is None:

@@ -1,0 +1,336 @@
+"""Fitting and scoring the candidate catalogs of a growth, each once, several at a time.
+
+A candidate is the parameters of an :class:`~.automatic.AutomaticCatalog`. Its fit (on the
+search's training pieces) and its held-out errors depend on nothing else, so a growth can fit
+the candidates it will probably need next while it fits the one it needs now: the climb
+rejects most moves, so the next candidates are those that follow if the current one is
+rejected. :class:`CandidateFits` fits the needed candidate in the calling process and up to
+``n_jobs - 1`` of the next ones in joblib's worker processes at the same time (and, while a
+worker still fits the one needed now, the next guess in the calling process); a result is
+the same whichever process computed it (the fits are deterministic), and the growth consumes
+results in its own order, so the path, the choice and the fitted model do not depend on
+``n_jobs``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+import warnings
+
+import numpy as np
+
+from .automatic import AutomaticCatalog
+
+__all__ = ["SearchData", "CandidateFits", "evaluate_candidate", "held_out_error",
+           "parameters_key"]
+
+
+def parameters_key(parameters) -> str:
+    """A hashable, order-free key of catalog parameters.
+
+    Parameters
+    ----------
+    parameters : dict
+        Catalog parameters (of :class:`~.automatic.AutomaticCatalog`).
+
+    Returns
+    -------
+    str
+        The same string for equal parameters, whatever their order.
+    """
+    return repr(sorted(parameters.items()))
+
+
+@dataclasses.dataclass
+class SearchData:
+    """What a candidate's fit and scoring need (the same for every candidate of a growth).
+
+    Parameters
+    ----------
+    fixed : dict
+        The catalog parameters that do not grow (coordinates, kinds, bounds, ...).
+    train : dict
+        Keyword arguments of the fit (``x``, ``t``, ``u``, ``x_dot``, ``x_ddot``): the
+        training pieces.
+    blocks : list of dict
+        The held-out blocks (``x``, ``t``, ``u``), each scored on its own.
+    template : XLSINDy
+        Unfitted model; each candidate fits a clone with its catalog.
+    max_terms : int
+        Ceiling of the catalog's size.
+    forced : bool
+        Whether the data have forces (the criterion's kind, :func:`held_out_error`).
+    """
+
+    fixed: dict
+    train: dict
+    blocks: list
+    template: object
+    max_terms: int
+    forced: bool
+
+
+def held_out_error(model, held, forced) -> float:
+    """Relative residual of a fitted model's weak-form equations on held-out runs.
+
+    With forces, ``||Theta xi|| / ||Theta_F xi_F||`` (the residual over the forces' part);
+    unforced, each coordinate's block of rows over its largest term's
+    ``max_j ||Theta_j xi_j||``, combined as the RMS over the coordinates (an implicit law
+    fixes each equation only up to its own factor). The strong form where the blocks are
+    shorter than a test function.
+
+    Parameters
+    ----------
+    model : XLSINDy
+        Fitted model.
+    held : dict
+        ``x``, ``t`` and ``u`` (None when unforced) of the held-out runs.
+    forced : bool
+        Whether the data have forces.
+
+    Returns
+    -------
+    float
+        The relative error (inf where the norm is zero).
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # blocks shorter than a test function: strong form
+        problem = model.regression(held["x"], held["t"], u=held["u"], formulation="weak",
+                                   propagate_noise=False)
+        if not len(problem.theta):
+            problem = model.regression(held["x"], held["t"], u=held["u"], formulation="strong")
+    theta, columns = problem.theta, problem.catalog_map.columns
+    coef = model.coef_[columns]
+    residual = theta @ coef
+    forces = problem.force_columns
+    if forced and len(forces):
+        target = theta[:, forces] @ coef[forces]
+        norm = float(np.linalg.norm(target))
+        return float(np.linalg.norm(residual) / norm) if norm > 0 else float("inf")
+    # unforced, each equation is defined up to its own factor when no term joins it to the
+    # others: judged over all rows, a law could shrink one coordinate's equation until its
+    # residual vanished next to the others' terms; so each coordinate's block of rows is
+    # judged over its own largest term, and the blocks' errors are combined (RMS)
+    errors = []
+    for rows in np.array_split(np.arange(len(theta)), problem.n_coordinates):
+        norm = float(np.linalg.norm(theta[rows] * coef, axis=0).max(initial=0.0))
+        errors.append(np.linalg.norm(residual[rows]) / norm if norm > 0 else np.inf)
+    return float(np.sqrt(np.mean(np.square(errors))))
+
+
+def evaluate_candidate(search: SearchData, parameters) -> dict:
+    """Fit one candidate catalog on the training pieces and score it on the held-out blocks.
+
+    Parameters
+    ----------
+    search : SearchData
+        The growth's data and template.
+    parameters : dict
+        The growing catalog parameters.
+
+    Returns
+    -------
+    dict
+        ``description``, ``terms``, ``active``, ``time_error``, ``region_error``,
+        ``criterion`` (the RMS of the two errors; inf when the catalog was not fitted),
+        ``note`` (why not), ``seconds`` and ``cpu_seconds``: the fields of a
+        :class:`~.growth.GrowthStep` but its move and verdict.
+    """
+    from sklearn.base import clone
+
+    catalog = AutomaticCatalog(**search.fixed, **parameters)
+    started, cpu = time.perf_counter(), time.process_time()
+
+    def failed(note, size=0, description=""):
+        return {"description": description, "terms": size, "active": 0, "time_error": np.inf,
+                "region_error": np.inf, "criterion": np.inf, "note": note, "seconds": 0.0,
+                "cpu_seconds": 0.0}
+
+    try:
+        size = catalog.n_terms
+    except ValueError as error:
+        return failed(str(error))
+    if size > search.max_terms:
+        return failed(f"ceiling: {size} > max_terms {search.max_terms}", size)
+    description = catalog.describe()
+    n = search.train["x"][0].shape[1]
+    if sum(len(p) for p in search.train["x"]) * n < 10 * size:
+        return failed("too few samples for this size", size, description)
+    model = clone(search.template).set_params(feature_library=catalog)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model.fit(**search.train)
+        if model.dynamics_ is None:
+            raise ValueError("no acceleration in the identified equations")
+        errors = [held_out_error(model, held, search.forced) for held in search.blocks]
+    except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
+        return failed(f"fit failed: {type(error).__name__}: {error}"[:200], size, description)
+    value = float(np.sqrt(np.mean(np.square(errors))))
+    return {"description": description, "terms": size,
+            "active": int(np.count_nonzero(model.coefficients())), "time_error": errors[0],
+            "region_error": errors[1], "criterion": value if np.isfinite(value) else np.inf,
+            "note": "", "seconds": time.perf_counter() - started,
+            "cpu_seconds": time.process_time() - cpu}
+
+
+def _warm_up() -> None:
+    """Import what a candidate's fit needs (a worker's first task)."""
+    from .. import model  # noqa: F401
+    from ..weak import regression  # noqa: F401
+
+
+_POOL = {}  # the workers, kept between growths: {"size": int, "executor": executor}
+
+
+def _pool(size: int):
+    """A loky process pool of ``size`` workers of its own (kept between calls; idle workers
+    exit after 300 s). Not joblib's shared executor: joblib restarts that one whenever its
+    arguments change and expects its own subclass of it, so sharing it would break, or
+    restart, the user's other ``joblib.Parallel`` calls."""
+    from joblib.externals.loky import ProcessPoolExecutor
+    if _POOL.get("size") != size:
+        if _POOL.get("executor") is not None:
+            _POOL["executor"].shutdown(wait=False, kill_workers=True)
+        _POOL.update(size=size, executor=ProcessPoolExecutor(max_workers=size, timeout=300))
+    return _POOL["executor"]
+
+
+def _forget_pool() -> None:
+    """Drop a pool that failed (a lost worker breaks it): the next growth starts another."""
+    executor = _POOL.pop("executor", None)
+    _POOL.pop("size", None)
+    if executor is not None:
+        executor.shutdown(wait=False, kill_workers=True)
+
+
+class CandidateFits:
+    """The candidates' fits and scores, each computed once, the next ones in parallel.
+
+    The candidate needed now is fitted in the calling process; meanwhile up to ``n_jobs - 1``
+    worker processes (a loky process pool, joblib's) fit the first candidates of ``ahead``
+    that are neither done nor running. A guess that the growth never needs costs a worker's
+    time, not the caller's.
+
+    Parameters
+    ----------
+    search : SearchData
+        The growth's data and template.
+    n_jobs : int or None, default None
+        Processes: the calling one and ``n_jobs - 1`` workers (joblib's convention: None is
+        1, -1 all cores).
+
+    Attributes
+    ----------
+    results : dict
+        The fields of each computed candidate, by :func:`parameters_key`.
+    events : list of (str, str)
+        What happened, in order: ``("submit", key)`` (sent to a worker), ``("local", key)``
+        (fitted here) and ``("worker", key)`` (a worker's result first needed here); with
+        the steps' ``cpu_seconds`` they let a benchmark replay the schedule on idle cores.
+    """
+
+    def __init__(self, search: SearchData, n_jobs=None):
+        import joblib
+        self.search = search
+        self.n_jobs = joblib.effective_n_jobs(n_jobs)
+        self.results = {}
+        self.events = []
+        self._workers_results = set()  # computed by a worker, not yet needed here
+        self._running = {}  # key -> future of a worker's fit
+        self._executor = None
+
+    def _workers(self):
+        if self._executor is None:
+            self._executor = _pool(self.n_jobs - 1)
+        return self._executor
+
+    def warm_up(self) -> None:
+        """Start the workers (their imports) while the calling process works."""
+        if self.n_jobs > 1:
+            for _ in range(self.n_jobs - 1):
+                self._workers().submit(_warm_up)
+
+    def _collect(self, key, wait=False):
+        future = self._running.get(key)
+        if future is None or not (wait or future.done()):
+            return
+        del self._running[key]
+        try:
+            self.results[key] = future.result()
+            self._workers_results.add(key)
+        except Exception:  # noqa: BLE001 - the workers cannot fit (a lost worker, an
+            self._disable()  # optimizer that does not pickle): the caller fits them all
+
+    def get(self, parameters, ahead=()) -> dict:
+        """The fields of a candidate's step (:func:`evaluate_candidate`), computed once.
+
+        Parameters
+        ----------
+        parameters : dict
+            The candidate.
+        ahead : iterable of dict, default ()
+            Candidates probably needed next, best guess first: the idle workers fit the
+            first of them that are neither done nor running, and while a worker still fits
+            the one needed now, this process fits the next of them.
+
+        Returns
+        -------
+        dict
+            As :func:`evaluate_candidate` (the same object on each call).
+        """
+        key = parameters_key(parameters)
+        ahead = [(parameters_key(c), c) for c in ahead]
+        for other in list(self._running):
+            self._collect(other)
+        if key not in self.results and key not in self._running:
+            self._submit(ahead, key)
+            self._local(key, parameters)
+            return self.results[key]
+        while key in self._running and not self._running[key].done():
+            # a worker fits it: fit the next guess here meanwhile (most moves are rejected)
+            guess = next(((k, c) for k, c in ahead if k != key and k not in self.results
+                          and k not in self._running), None)
+            if guess is None:
+                break
+            self._local(*guess)
+        self._collect(key, wait=True)
+        if key in self._workers_results:
+            self._workers_results.discard(key)
+            self.events.append(("worker", key))
+        if key not in self.results:  # (a worker failed)
+            self._local(key, parameters)
+        self._submit(ahead, key)
+        return self.results[key]
+
+    def _submit(self, ahead, key) -> None:
+        """Give the idle workers the first guesses of ``ahead`` neither done nor running."""
+        for other, candidate in ahead:
+            if len(self._running) >= self.n_jobs - 1:
+                break
+            if other != key and other not in self.results and other not in self._running:
+                try:
+                    self._running[other] = self._workers().submit(evaluate_candidate,
+                                                                  self.search, candidate)
+                except Exception:  # noqa: BLE001 - a broken pool: the caller fits them all
+                    self._disable()
+                    return
+                self.events.append(("submit", other))
+
+    def _local(self, key, parameters) -> None:
+        self.events.append(("local", key))
+        self.results[key] = evaluate_candidate(self.search, parameters)
+
+    def _disable(self) -> None:
+        self.n_jobs = 1
+        for future in self._running.values():
+            future.cancel()
+        self._running = {}
+        _forget_pool()
+
+    def close(self) -> None:
+        """Forget the workers' guesses (those not started are cancelled)."""
+        for future in self._running.values():
+            future.cancel()
+        self._running = {}

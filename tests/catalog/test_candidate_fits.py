@@ -1,0 +1,109 @@
+"""The growth's candidate fits in worker processes: each candidate is fitted once, a worker's
+result is the calling process's to the bit, and the growth's path and model do not depend on
+``n_jobs``. The ground truth is a forced Duffing oscillator integrated by scipy."""
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from pysindy_xl.catalog import grow_catalog
+from pysindy_xl.catalog.candidates import (
+    CandidateFits,
+    SearchData,
+    evaluate_candidate,
+    parameters_key,
+)
+
+MASS, STIFFNESS, HARDENING, DAMPING = 1.5, 2.0, 1.0, 0.1
+
+
+def _duffing(noise=0.01, seed=0):
+    t = np.arange(0.0, 8.0, 2e-3)
+
+    def force(s):
+        return 2.0 * np.sin(1.3 * s) + 1.0 * np.sin(2.9 * s + 1.0)
+
+    def rhs(s, y):
+        return [y[1], (force(s) - DAMPING * y[1] - STIFFNESS * y[0] - HARDENING * y[0] ** 3)
+                / MASS]
+
+    y = solve_ivp(rhs, (0, t[-1]), [0.5, 0.0], t_eval=t, rtol=1e-10, atol=1e-10).y
+    rng = np.random.default_rng(seed)
+    x = y[0] + noise * np.std(y[0]) * rng.normal(size=len(t))
+    return x[:, None], t, force(t)[:, None]
+
+
+def _path(result):
+    return [(s.move, s.description, s.terms, s.active, s.time_error, s.region_error,
+             s.criterion, s.chosen, s.note) for s in result.steps]
+
+
+def test_growth_in_two_processes_takes_the_same_path_to_the_same_law():
+    x, t, u = _duffing()
+    moves = ("degree", "coulomb")
+    alone = grow_catalog(x, t, u, coordinates=["x"], kinds="linear", moves=moves)
+    shared = grow_catalog(x, t, u, coordinates=["x"], kinds="linear", moves=moves, n_jobs=2)
+    assert _path(shared) == _path(alone)
+    assert shared.catalog.describe() == alone.catalog.describe()
+    np.testing.assert_array_equal(shared.model.coefficients(), alone.model.coefficients())
+    # and it is the Duffing law (forces: m xdd + c xd + k x + h x^3), up to the noise
+    coef = dict(zip(shared.model.get_feature_names(), shared.model.coefficients(), strict=True))
+    np.testing.assert_allclose(2 * coef["L[x_dot**2]"], MASS, rtol=0.05)
+    np.testing.assert_allclose(-2 * coef["L[x**2]"], STIFFNESS, rtol=0.05)
+    np.testing.assert_allclose(-4 * coef["L[x**4]"], HARDENING, rtol=0.1)
+    # the workers are a pool of their own: joblib's shared one still works afterwards
+    import joblib
+    assert joblib.Parallel(n_jobs=2)(joblib.delayed(abs)(-k) for k in range(3)) == [0, 1, 2]
+
+
+def _search(x, t, u):
+    from pysindy_xl import XLSINDy
+    from pysindy_xl.fit import RememberedSmoother
+    from pysindy_xl.optimizers import ExplicitOptimizer
+    from pysindy_xl.weak import BumpTestFunctions
+    fixed = {"coordinates": ["x"], "kinds": ["linear"], "bounds": [(-2.0, 2.0)],
+             "kinetic": "constant"}
+    train = {"x": [x[:2500]], "t": [t[:2500]], "u": [u[:2500]], "x_dot": None, "x_ddot": None}
+    blocks = [{"x": [x[2500:3250]], "t": [t[2500:3250]], "u": [u[2500:3250]]},
+              {"x": [x[3250:]], "t": [t[3250:]], "u": [u[3250:]]}]
+    template = XLSINDy(optimizer=ExplicitOptimizer(), formulation="weak",
+                       test_functions=BumpTestFunctions(width=0.5),
+                       smoother=RememberedSmoother())
+    return SearchData(fixed, train, blocks, template, max_terms=50, forced=True)
+
+
+def test_a_workers_candidate_is_the_callers_to_the_bit():
+    x, t, u = _duffing()
+    search = _search(x, t, u)
+    fits = CandidateFits(search, n_jobs=2)
+    fits.warm_up()
+    quartic = {"degree": 4}
+    coulomb = {"degree": 4, "dissipation": ("viscous", "coulomb"), "coulomb_scale": 0.01}
+    first = fits.get(quartic, ahead=[quartic, coulomb])  # the Coulomb one goes to the worker
+    assert fits.get(quartic) is first  # fitted once
+    assert list(fits._running) == [parameters_key(coulomb)]
+    from_worker = fits.get(coulomb)
+    fits.close()
+    here = evaluate_candidate(search, coulomb)
+    for fields in (first, from_worker, here):
+        assert fields["note"] == "" and np.isfinite(fields["criterion"])
+    clocks = ("seconds", "cpu_seconds")
+    assert {k: v for k, v in from_worker.items() if k not in clocks} == \
+        {k: v for k, v in here.items() if k not in clocks}
+    assert [kind for kind, _ in fits.events] == ["submit", "local", "worker"]
+    # the quartic catalog states the Duffing law: a few per cent held out at 1 % noise, and
+    # a Coulomb column the law does not have gains nothing
+    assert first["criterion"] < 0.1 and here["terms"] == first["terms"] + 1
+    assert here["criterion"] > 0.95 * first["criterion"]
+
+
+def test_the_ceiling_and_the_sample_count_are_reported_not_fitted():
+    x, t, u = _duffing()
+    search = _search(x, t, u)
+    search.max_terms = 4
+    fields = CandidateFits(search).get({"degree": 4})
+    assert fields["note"].startswith("ceiling") and fields["criterion"] == np.inf
+    search.max_terms = 50
+    search.train = {key: None if value is None else [v[:40] for v in value]
+                    for key, value in search.train.items()}
+    fields = evaluate_candidate(search, {"degree": 4})
+    assert fields["note"] == "too few samples for this size" and fields["terms"] == 6
