@@ -32,8 +32,25 @@ criterion is below ``good_enough``. Before it stops, pairs of the moves that are
 (kinetic, interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither
 alone (a coupling ``cos(a - b) a_dot b_dot`` needs both the products of two angles' functions
 and configuration-dependent kinetic coefficients). Catalogs over ``max_terms`` are not tried
-(reported as the ceiling). The chosen catalog is then fitted on all the data, each
-coordinate's splines kept whole or left out (:class:`~pysindy_xl.optimizers.GroupedOptimizer`).
+(reported as the ceiling).
+
+The climb only adds, and the start always holds an angle's sines and cosines: where families
+are nearly dependent on the data's range (``cos(phi) = 1 - phi^2/2 + phi^4/24 - ...``), the
+fit keeps a stand-in (``2 cos(phi) - 0.58 phi^4`` for ``-phi^2 - 0.5 phi^4``) that the right
+family beside it cannot displace. So a backward phase follows (a stepwise forward-backward
+search over the families): each family the start or the climb put in is dropped in turn (the
+moves ``"-splines"``, ``"-trig"``: an angle's sines and cosines beside its powers,
+``"-trig_degree"``, ``"-angle_degree"``: its powers beside sines and cosines, ``"-degree"``,
+``"-interaction"``, ``"-kinetic"``, ``"-gyroscopic"``, ``"-coulomb"``; one degree step at a
+time), and the best drop that the keep rule accepts is kept; at an equal number of fitted
+terms the smaller catalog is kept within the tolerance too (the stand-in family goes). A
+family whose drop is not kept alone is exchanged for the one it stands in for (sines and
+cosines, or a degree of them, for one or two more powers of the angle, powers for a sine
+degree, splines for powers: ``"-trig+angle_degree"``, the forward step of the search, taken
+where a stand-in leaves, while the criterion is above ``good_enough``). The phase repeats,
+never back to a catalog already kept, until nothing is dropped (:mod:`.backward`). The chosen
+catalog is then fitted on all the data, each coordinate's splines kept whole or left out
+(:class:`~pysindy_xl.optimizers.GroupedOptimizer`).
 """
 
 from __future__ import annotations
@@ -46,6 +63,7 @@ import numpy as np
 from .._inputs import aligned, as_list
 from .._validation import check_option
 from .automatic import AutomaticCatalog, coordinate_kinds
+from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import CandidateFits, SearchData, parameters_key
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "check_growth_data"]
@@ -69,7 +87,9 @@ class GrowthStep:
     Parameters
     ----------
     move : str
-        ``"start"`` or one of :data:`MOVES`.
+        ``"start"``, one of :data:`MOVES`, two of them joined by ``"+"`` (tried together), or a
+        removal of the backward phase (``"-"`` and the family dropped, possibly followed by
+        ``"+"`` and the move it is exchanged for).
     description : str
         :meth:`AutomaticCatalog.describe` of the catalog.
     terms : int
@@ -369,7 +389,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         With forces, the growth stops once the criterion is below this relative error
         (unforced data: every move is tried).
     moves : sequence of str, default MOVES
-        The moves tried (a subset of :data:`MOVES`).
+        The moves tried (a subset of :data:`MOVES`); the backward phase drops the families of
+        these moves only (``"trig_degree"``: the sines and cosines too).
     search_optimizer : "auto" or optimizer, default "auto"
         Optimizer of the search's fits; ``"auto"``: ``optimizer`` when given, else one
         selection per fit (``ExplicitOptimizer()``, ``MixedOptimizer()``, or XLSINDy's default
@@ -496,6 +517,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
 
     def evaluate(parameters, move, ahead=()):
         return GrowthStep(move=move, chosen=False, **fits.get(parameters, ahead))
+
+    def _size(parameters):
+        try:
+            return AutomaticCatalog(**searched, **parameters).n_terms
+        except ValueError:
+            return -1
 
     def report(step):
         if progress is not None:
@@ -625,6 +652,44 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         other = climb(second)
         if _keeps(other[1], best, tolerance):
             state, best, path = other
+    # backward: drop the family whose removal the keep rule accepts best (a smaller catalog
+    # within the tolerance at an equal fitted size is kept too: the stand-in that a family
+    # offers next to the right one goes with it), until nothing goes
+    visited = {parameters_key(state)}
+    while True:  # below good_enough too: a stand-in can be good enough
+        dropped, refused = [], []
+        candidates = [(move, parameters) for move in REMOVALS
+                      if (parameters := removed(state, move, kinds, _START)) is not None
+                      and {"trig": "trig_degree"}.get(move, move) in moves
+                      and parameters_key(parameters) not in visited
+                      and _size(parameters) != best.terms]
+        for k, (move, parameters) in enumerate(candidates):
+            step = attempt(parameters, f"-{move}", [p for _, p in candidates[k + 1:]])
+            if _keeps(step, best, tolerance) or (
+                    step.criterion <= best.criterion * (1 + tolerance)
+                    and step.active == best.active and step.terms < best.terms):
+                dropped.append((step.criterion, step.active, parameters, step))
+            else:
+                refused.append((move, parameters))
+        # a family that stands in for another is not given up alone: exchange it for the other
+        # (while the criterion is not good enough, as for the pairs of moves)
+        exchanges = []
+        for move, smaller in refused if not dropped and best.criterion > good_enough else ():
+            for other in EXCHANGES.get(move, ()):
+                for skip in (0, 1) if other in moves else ():
+                    parameters = _parameters(smaller, other, kinds, n, skip)
+                    if (parameters is not None and parameters_key(parameters) not in visited
+                            and _size(parameters) != _size(smaller)):
+                        exchanges.append((f"-{move}+{other}", parameters))
+        for k, (name, parameters) in enumerate(exchanges):
+            step = attempt(parameters, name, [p for _, p in exchanges[k + 1:]])
+            if _keeps(step, best, tolerance):
+                dropped.append((step.criterion, step.active, parameters, step))
+        if not dropped:
+            break
+        _, _, state, best = min(dropped, key=lambda d: d[:2])
+        visited.add(parameters_key(state))
+        path.append(best)
     fits.close()  # (a worker's last guess may still run: it ends during the final fit)
     for step in path:
         step.chosen = True

@@ -1,0 +1,99 @@
+"""The removals of :func:`~pysindy_xl.grow_catalog`'s backward phase.
+
+The climb adds families while the held-out criterion improves; it never takes one out. Where
+families are nearly dependent on the data's range (``cos(phi) = 1 - phi^2/2 + phi^4/24``), the
+one that went in first (the starting catalog's sines and cosines) stays as a stand-in beside
+the right one. A removal takes a family, or its last degree step, out of a catalog's
+parameters; an exchange follows a removal with a move of the family it may stand in for.
+"""
+
+from __future__ import annotations
+
+__all__ = ["REMOVALS", "EXCHANGES", "removed"]
+
+#: The removals, by the family they drop: a move of :data:`~pysindy_xl.catalog.MOVES` (its
+#: family, or its last degree step), or ``"trig"`` (an angle's sines and cosines, beside its
+#: powers).
+REMOVALS = ("splines", "trig", "trig_degree", "angle_degree", "degree", "interaction",
+            "kinetic", "gyroscopic", "coulomb")
+
+#: The moves a removal is exchanged for when it is not kept alone: the potential's families
+#: that stand in for each other (sines and cosines, or a degree of them, for powers of the
+#: angle, powers for a sine degree, splines for powers).
+EXCHANGES = {"splines": ("degree", "angle_degree"), "trig": ("angle_degree",),
+             "trig_degree": ("angle_degree",), "angle_degree": ("trig_degree",)}
+
+
+def removed(state: dict, move: str, kinds, start: dict) -> dict | None:
+    """The catalog parameters ``state`` with the family of ``move``, or its last degree step,
+    taken out.
+
+    An angle keeps a function of its own: its sines and cosines go entirely only beside its
+    powers (``"trig"``; ``"trig_degree"`` steps down to degree 1), and its powers only beside
+    sines and cosines. The degree, the interaction order, the kinetic and gyroscopic choices
+    step back no further than ``start``.
+
+    Parameters
+    ----------
+    state : dict
+        Parameters of an :class:`~pysindy_xl.AutomaticCatalog` (``degree``, ``trig_degree``,
+        ``angle_degree``, ``interaction``, ``kinetic``, ``gyroscopic``, ``dissipation``,
+        ``splines``).
+    move : str
+        One of :data:`REMOVALS`.
+    kinds : sequence of str
+        The coordinates' kinds.
+    start : dict
+        The smallest catalog's parameters (the floor of the steps back).
+
+    Returns
+    -------
+    dict or None
+        The new parameters, or None when there is nothing of the family to drop.
+
+    Examples
+    --------
+    >>> start = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
+    ...          "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
+    ...          "splines": None}
+    >>> state = dict(start, angle_degree=4)
+    >>> removed(state, "trig", ["angle"], start)["trig_degree"]
+    0
+    >>> removed(state, "angle_degree", ["angle"], start)["angle_degree"]
+    3
+    >>> removed(start, "trig", ["angle"], start) is None    # no powers beside the cosine
+    True
+    """
+    if move not in REMOVALS:
+        raise ValueError(f"move: expected one of {REMOVALS}, got {move!r}")
+    new = dict(state)
+    angles = "angle" in kinds
+    if move == "splines":
+        if state["splines"] is None:
+            return None
+        new["splines"] = None
+    elif move == "trig_degree":
+        if not angles or state["trig_degree"] <= 1:
+            return None
+        new["trig_degree"] = state["trig_degree"] - 1
+    elif move == "trig":
+        if not angles or not state["trig_degree"] or not state["angle_degree"]:
+            return None
+        new["trig_degree"] = 0
+    elif move == "angle_degree":
+        if not angles or not state["angle_degree"] or not state["trig_degree"]:
+            return None
+        new["angle_degree"] = 0 if state["angle_degree"] <= 2 else state["angle_degree"] - 1
+    elif move in ("degree", "interaction"):
+        if state[move] <= start[move]:
+            return None
+        new[move] = state[move] - 1
+    elif move in ("kinetic", "gyroscopic"):
+        if state[move] == start[move]:
+            return None
+        new[move] = start[move]
+    else:  # coulomb
+        if "coulomb" not in state["dissipation"]:
+            return None
+        new["dissipation"] = tuple(d for d in state["dissipation"] if d != "coulomb")
+    return new
