@@ -120,7 +120,7 @@ def run_automatic(args, dataset, system, forced, progress):
                               else None, arguments.get("x_dot"), arguments.get("x_ddot"),
                               coordinates=names, kinds=kinds, max_terms=args.max_terms,
                               optimizer=solver, formulation=args.formulation,
-                              progress=progress)
+                              progress=progress, n_jobs=getattr(args, "n_jobs", 1))
     except (RuntimeError, ValueError, np.linalg.LinAlgError) as error:
         raise CLIError(f"identification failed ({type(error).__name__}): {error}") from None
     model = result.model

@@ -76,6 +76,10 @@ def _add_fit_options(parser, coulomb_law="smooth", automatic=False):
         parser.add_argument("--max-terms", type=_positive_int, default=400,
                             help="automatic catalog: ceiling on its size; larger catalogs are "
                                  "not tried (default: 400)")
+        parser.add_argument("--n-jobs", type=_positive_int, default=1, metavar="N",
+                            help="automatic catalog: processes of the search (while one "
+                                 "candidate catalog is fitted, N - 1 workers fit the next ones; "
+                                 "the result does not depend on N) (default: 1)")
     else:
         parser.add_argument("--catalog", choices=(*CATALOGS, "auto"), default="auto",
                             help="lagrange, classical, mixed (Lagrange + friction) or kinematic "

@@ -57,3 +57,21 @@ def test_help_says_what_is_tried(capsys):
     text = " ".join(capsys.readouterr().out.split())
     for phrase in ("automatic", "B-splines", "Coulomb", "held-out", "--max-terms"):
         assert phrase in text
+
+
+def test_identify_n_jobs_gives_the_same_model(tmp_path, capsys):
+    path = _hardening_spring_csv(tmp_path / "spring.csv")
+    lagrangians = []
+    for n_jobs in ("1", "2"):
+        assert main(["identify", str(path), "--coordinates", "x", "--quiet",
+                     "--n-jobs", n_jobs]) == 0
+        out = capsys.readouterr().out
+        lagrangians.append(next(line for line in out.splitlines() if line.startswith("L = ")))
+    assert lagrangians[0] == lagrangians[1]
+    assert "x**4" in lagrangians[0]
+
+
+def test_n_jobs_must_be_a_positive_integer(tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        main(["identify", str(tmp_path / "absent.csv"), "--coordinates", "x", "--n-jobs", "0"])
+    assert "--n-jobs" in capsys.readouterr().err
