@@ -3,7 +3,7 @@ result is the calling process's to the bit, and the growth's path and model do n
 ``n_jobs``. The ground truth is a forced Duffing oscillator integrated by scipy."""
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from support.growth import HARDENING, MASS, STIFFNESS, noisy_duffing
 
 from pysindy_xl.catalog import grow_catalog
 from pysindy_xl.catalog.candidates import (
@@ -13,24 +13,6 @@ from pysindy_xl.catalog.candidates import (
     parameters_key,
 )
 
-MASS, STIFFNESS, HARDENING, DAMPING = 1.5, 2.0, 1.0, 0.1
-
-
-def _duffing(noise=0.01, seed=0):
-    t = np.arange(0.0, 8.0, 2e-3)
-
-    def force(s):
-        return 2.0 * np.sin(1.3 * s) + 1.0 * np.sin(2.9 * s + 1.0)
-
-    def rhs(s, y):
-        return [y[1], (force(s) - DAMPING * y[1] - STIFFNESS * y[0] - HARDENING * y[0] ** 3)
-                / MASS]
-
-    y = solve_ivp(rhs, (0, t[-1]), [0.5, 0.0], t_eval=t, rtol=1e-10, atol=1e-10).y
-    rng = np.random.default_rng(seed)
-    x = y[0] + noise * np.std(y[0]) * rng.normal(size=len(t))
-    return x[:, None], t, force(t)[:, None]
-
 
 def _path(result):
     return [(s.move, s.description, s.terms, s.active, s.time_error, s.region_error,
@@ -38,7 +20,7 @@ def _path(result):
 
 
 def test_growth_in_two_processes_takes_the_same_path_to_the_same_law():
-    x, t, u = _duffing()
+    x, t, u = noisy_duffing()
     moves = ("degree", "coulomb")
     alone = grow_catalog(x, t, u, coordinates=["x"], kinds="linear", moves=moves)
     shared = grow_catalog(x, t, u, coordinates=["x"], kinds="linear", moves=moves, n_jobs=2)
@@ -72,7 +54,7 @@ def _search(x, t, u):
 
 
 def test_a_workers_candidate_is_the_callers_to_the_bit():
-    x, t, u = _duffing()
+    x, t, u = noisy_duffing()
     search = _search(x, t, u)
     fits = CandidateFits(search, n_jobs=2)
     fits.warm_up()
@@ -97,7 +79,7 @@ def test_a_workers_candidate_is_the_callers_to_the_bit():
 
 
 def test_the_ceiling_and_the_sample_count_are_reported_not_fitted():
-    x, t, u = _duffing()
+    x, t, u = noisy_duffing()
     search = _search(x, t, u)
     search.max_terms = 4
     fields = CandidateFits(search).get({"degree": 4})

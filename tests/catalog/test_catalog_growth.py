@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
+from support.growth import scalar_laws
 from sympy.physics import mechanics as me
 
 import pysindy_xl as px
@@ -30,16 +31,7 @@ def _torsion_pendulum(m=0.5, length=0.8, k=3.0, c=0.05):
     method = me.LagrangesMethod(lagrangian, [q], forcelist=[(rod, (tau - c * qd) * frame.z)],
                                 frame=frame)
     method.form_lagranges_equations()
-    mass = sp.lambdify((q, qd, tau), method.mass_matrix[0, 0])
-    forcing = sp.lambdify((q, qd, tau), method.forcing[0])
-
-    def accelerations(qv, qdv, tv):
-        return forcing(qv, qdv, tv) / mass(qv, qdv, tv)
-
-    def forces(qv, qdv, qddv):  # M qdd - forcing(tau = 0) = tau
-        return mass(qv, qdv, 0.0) * qddv - forcing(qv, qdv, 0.0)
-
-    return accelerations, forces
+    return scalar_laws(method, q, qd, tau)
 
 
 def _runs(accelerations, seeds, duration=8.0, rate=200.0, amplitude=2.5, forced=True):

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
+from support.growth import scalar_laws
 from sympy.physics import mechanics as me
 
 from pysindy_xl.catalog import grow_catalog
@@ -34,16 +35,7 @@ def _quartic_rotor():
     method = me.LagrangesMethod(me.Lagrangian(frame, body), [q],
                                 forcelist=[(rotor, (tau - DAMPING * qd) * frame.z)], frame=frame)
     method.form_lagranges_equations()
-    mass = sp.lambdify((q, qd, tau), method.mass_matrix[0, 0])
-    forcing = sp.lambdify((q, qd, tau), method.forcing[0])
-
-    def accelerations(qv, qdv, tv):
-        return forcing(qv, qdv, tv) / mass(qv, qdv, tv)
-
-    def forces(qv, qdv, qddv):  # M qdd - forcing(tau = 0) = tau
-        return mass(qv, qdv, 0.0) * qddv - forcing(qv, qdv, 0.0)
-
-    return accelerations, forces
+    return scalar_laws(method, q, qd, tau)
 
 
 def _noisy_runs(accelerations, noise=0.03, duration=8.0, rate=200.0, amplitude=1.2):

@@ -6,29 +6,11 @@ import pickle
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 from sklearn.base import clone
+from support.growth import HARDENING, MASS, STIFFNESS, noisy_duffing
 
 import pysindy_xl as px
 from pysindy_xl.fit import RememberedSmoother, fit_smoother
-
-MASS, STIFFNESS, HARDENING, DAMPING = 1.5, 2.0, 1.0, 0.1
-
-
-def _duffing(noise=0.01, seed=0):
-    t = np.arange(0.0, 8.0, 2e-3)
-
-    def force(s):
-        return 2.0 * np.sin(1.3 * s) + 1.0 * np.sin(2.9 * s + 1.0)
-
-    def rhs(s, y):
-        return [y[1], (force(s) - DAMPING * y[1] - STIFFNESS * y[0] - HARDENING * y[0] ** 3)
-                / MASS]
-
-    y = solve_ivp(rhs, (0, t[-1]), [0.5, 0.0], t_eval=t, rtol=1e-10, atol=1e-10).y
-    rng = np.random.default_rng(seed)
-    x = y[0] + noise * np.std(y[0]) * rng.normal(size=len(t))
-    return x[:, None], t, force(t)[:, None]
 
 
 def _catalog(degree):
@@ -37,7 +19,7 @@ def _catalog(degree):
 
 
 def test_fits_sharing_a_remembered_smoother_are_bit_identical():
-    x, t, u = _duffing()
+    x, t, u = noisy_duffing()
     shared = RememberedSmoother()
     assert fit_smoother(shared) is shared  # kept, not wrapped again
     template = px.XLSINDy(formulation="weak", smoother=shared)
@@ -70,7 +52,7 @@ def test_catalog_terms_are_shared_by_clones_and_follow_the_parameters():
 
 
 def test_held_out_rows_without_noise_propagation_are_the_same_rows():
-    x, t, u = _duffing()
+    x, t, u = noisy_duffing()
     model = px.XLSINDy(_catalog(4), formulation="weak").fit(x[:3000], t[:3000], u=u[:3000])
     full = model.regression(x[3000:], t[3000:], u=u[3000:], formulation="weak")
     light = model.regression(x[3000:], t[3000:], u=u[3000:], formulation="weak",

@@ -6,6 +6,8 @@
 * :mod:`support.paper`: the paper-style catalog of the acceptance systems, its true
   coefficients, noisy runs and the validation by simulation.
 * :mod:`support.control`: the true model of a registered system and a fast planner.
+* :mod:`support.growth`: a forced Duffing oscillator and the numeric laws of a one-coordinate
+  ``LagrangesMethod``, for the automatic catalog's tests.
 * :mod:`support.unforced_cells`: one cell of the unforced noise sweep fitted with the defaults.
 
 The reference systems themselves live in ``tests/ground_truth.py`` (sympy.physics.mechanics)
