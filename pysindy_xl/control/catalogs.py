@@ -155,11 +155,12 @@ class AutomaticGrowth:
     data_driven = True
     name = "automatic"
 
-    def __init__(self, rows_per_term: int = 150, ceiling: int = 400, n_blocks: int = 10,
-                 moves=None, progress=None):
+    def __init__(self, rows_per_term: int = 150, ceiling: int = 400, n_blocks: int = 5,
+                 cross_validate: bool = True, moves=None, progress=None):
         self.rows_per_term = rows_per_term
         self.ceiling = ceiling
         self.n_blocks = n_blocks
+        self.cross_validate = cross_validate
         self.moves = moves
         self.progress = progress
 
@@ -211,7 +212,8 @@ class AutomaticGrowth:
         found = grow_catalog(q, t, u, coordinates=list(system.coords.names),
                              kinds=system_kinds(system),
                              max_terms=self.max_terms(sum(len(tk) for tk in t), system.n),
-                             n_blocks=self.n_blocks, moves=moves, progress=self.progress)
+                             n_blocks=self.n_blocks, cross_validate=self.cross_validate,
+                             moves=moves, progress=self.progress)
         # the chosen catalog fitted on all the data with the test functions its held-out
         # error was measured with (grow_catalog's own final fit takes the default width)
         model = XLSINDy(found.catalog, test_functions=BumpTestFunctions(
@@ -221,7 +223,8 @@ class AutomaticGrowth:
 
     def __repr__(self) -> str:
         return (f"AutomaticGrowth(rows_per_term={self.rows_per_term}, ceiling={self.ceiling}, "
-                f"n_blocks={self.n_blocks}, moves={self.moves})")
+                f"n_blocks={self.n_blocks}, cross_validate={self.cross_validate}, "
+                f"moves={self.moves})")
 
 
 def _search_width(t, q, n_blocks: int) -> float:
@@ -262,7 +265,7 @@ def resolve_catalog(catalog):
     >>> resolve_catalog("generic")[0]
     'generic'
     >>> resolve_catalog("automatic")
-    ('automatic', AutomaticGrowth(rows_per_term=150, ceiling=400, n_blocks=10, moves=None))
+    ('automatic', AutomaticGrowth(rows_per_term=150, ceiling=400, n_blocks=5, cross_validate=True, moves=None))
     >>> resolve_catalog("mjcf")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
