@@ -264,8 +264,9 @@ def resolve_catalog(catalog):
     --------
     >>> resolve_catalog("generic")[0]
     'generic'
-    >>> resolve_catalog("automatic")
-    ('automatic', AutomaticGrowth(rows_per_term=150, ceiling=400, n_blocks=5, cross_validate=True, moves=None))
+    >>> resolve_catalog("automatic")  # doctest: +NORMALIZE_WHITESPACE
+    ('automatic', AutomaticGrowth(rows_per_term=150, ceiling=400, n_blocks=5,
+                                  cross_validate=True, moves=None))
     >>> resolve_catalog("mjcf")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
