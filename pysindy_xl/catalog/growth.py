@@ -13,12 +13,14 @@ than a test function). Two blocks of each run are held out:
   extrapolates to states it did not see). An approximation fitted along the trajectories (a
   cosine standing in for ``theta^2``) fails there, where the right structure does not.
 
-The criterion is the RMS of the two errors. With ``cross_validate``, every block is held out
-in turn instead (one fit per block on the others, the RMS of all the blocks' errors): on a
-recording of a few seconds, the region block holds most of what identifies
-configuration-dependent terms, and a fit without it fails for the right catalog too.
-Splines end at the extreme percentiles of the training data (:data:`END_PERCENTILE`) and
-continue linearly (:func:`~.bases.natural_splines`), so the region block judges their continuation as it judges any family's. From the smallest
+With ``cross_validate``, every block is held out in turn instead (one fit per block on the
+others; the criterion is the RMS of all the blocks' errors): on a recording of a few
+seconds the region block holds most of what identifies configuration-dependent terms, and a
+fit without it fails for the right catalog too.
+
+The criterion is the RMS of the two errors. Splines end at the extreme percentiles of the
+training data (:data:`END_PERCENTILE`) and continue linearly (:func:`~.bases.natural_splines`),
+so the region block judges their continuation as it judges any family's. From the smallest
 catalog (constant kinetic coefficients, quadratic potentials of the linear coordinates, sines
 and cosines of the angles, viscous friction), each move of :data:`MOVES` but the splines is first
 tried alone; the moves are then tried in turn in the order of what they achieved alone (the
