@@ -53,11 +53,16 @@ from .._inputs import aligned, as_list
 from .._validation import check_option
 from .automatic import AutomaticCatalog, coordinate_kinds
 
-__all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "check_growth_data"]
+__all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
+           "check_growth_data"]
 
 #: The moves of the growth, in the order they are tried.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
          "coulomb", "splines")
+#: Moves a growth may be given beyond the default :data:`MOVES`: ``"coupled_damping"`` lets
+#: every velocity's viscous force enter every equation (``dissipation`` ``"coupled"`` of
+#: :class:`AutomaticCatalog`: the damping of a joint whose angle is a difference of coordinates).
+MORE_MOVES = ("coupled_damping",)
 
 _START = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
           "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
@@ -373,6 +378,10 @@ def _parameters(state, move, kinds, n, skip=0):
         if "coulomb" in state["dissipation"]:
             return None
         new["dissipation"] = (*state["dissipation"], "coulomb")
+    elif move == "coupled_damping":
+        if "coupled" in state["dissipation"] or n < 2:
+            return None
+        new["dissipation"] = (*state["dissipation"], "coupled")
     elif move == "splines":
         larger = [k for k in _SPLINES if k > (state["splines"] or 0)]
         if skip >= len(larger):
@@ -416,7 +425,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         With forces, the growth stops once the criterion is below this relative error
         (unforced data: every move is tried).
     moves : sequence of str, default MOVES
-        The moves tried (a subset of :data:`MOVES`).
+        The moves tried (some of :data:`MOVES` and :data:`MORE_MOVES`).
     search_optimizer : "auto" or optimizer, default "auto"
         Optimizer of the search's fits; ``"auto"``: ``optimizer`` when given, else one
         selection per fit (``ExplicitOptimizer()``, ``MixedOptimizer()``, or XLSINDy's default
@@ -476,9 +485,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     check_option("cross_validate", cross_validate, "bool")
     check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
     check_option("good_enough", good_enough, "real", low=0)
-    unknown = [m for m in moves if m not in MOVES]
+    unknown = [m for m in moves if m not in MOVES + MORE_MOVES]
     if unknown:
-        raise ValueError(f"moves: unknown {unknown}; expected some of {MOVES}")
+        raise ValueError(f"moves: unknown {unknown}; expected some of {MOVES + MORE_MOVES}")
     forced = us is not None and any(np.any(np.asarray(uk) != 0) for uk in us)
     criterion = "forces" if forced else "accelerations"
     velocity_scale = [float(np.std(np.gradient(xk, tk, axis=0), axis=0).mean())

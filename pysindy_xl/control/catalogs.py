@@ -140,8 +140,9 @@ class AutomaticGrowth:
         Largest catalog, whatever the data.
     n_blocks : int, default 10
         Time blocks per recording (:func:`~pysindy_xl.grow_catalog`).
-    moves : sequence of str, default all of :data:`~pysindy_xl.catalog.MOVES` but "splines"
-        Moves of the growth.
+    moves : sequence of str, optional
+        Moves of the growth; default all of :data:`~pysindy_xl.catalog.MOVES` but "splines",
+        and :data:`~pysindy_xl.catalog.MORE_MOVES` (coupled damping).
     progress : callable, optional
         ``progress(line)`` after each step of the growth.
 
@@ -199,7 +200,7 @@ class AutomaticGrowth:
         GrowthResult
             Its ``model`` is the chosen catalog fitted on all the data.
         """
-        from ..catalog import MOVES, grow_catalog
+        from ..catalog import MORE_MOVES, MOVES, grow_catalog
         from ..model import XLSINDy
         from ..mujoco import get_system
         from ..weak import BumpTestFunctions
@@ -207,7 +208,7 @@ class AutomaticGrowth:
         if not data:
             raise ValueError("data: expected at least one recording (q, t, tau)")
         q, t, u = (list(part) for part in zip(*data, strict=True))
-        moves = tuple(m for m in MOVES if m != "splines") if self.moves is None \
+        moves = tuple(m for m in MOVES + MORE_MOVES if m != "splines") if self.moves is None \
             else tuple(self.moves)
         found = grow_catalog(q, t, u, coordinates=list(system.coords.names),
                              kinds=system_kinds(system),
