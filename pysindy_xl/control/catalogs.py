@@ -130,8 +130,8 @@ class AutomaticGrowth:
     configuration-dependent terms, and with it held out of the only fit the right catalog
     loses to the constant start. B-splines are not among
     the default moves: they are local to the explored range, which a swing-up leaves. The
-    chosen catalog is fitted on all the data with weak-form test functions of at most a third
-    of a tenth of the shortest recording (on a few seconds of a fast, chaotic motion the
+    chosen catalog is fitted on all the data with the weak-form test functions of the search,
+    at most a third of the default width (on a few seconds of a fast, chaotic motion the
     default, wider test functions lose terms or blur them: the cart double pendulum's gravity,
     for one, and its catalog of the law's shape is 7-25 % off with test functions of 0.53 s,
     within 1 % with 0.1-0.27 s).
@@ -222,12 +222,12 @@ class AutomaticGrowth:
                              max_terms=self.max_terms(sum(len(tk) for tk in t), system.n),
                              n_blocks=self.n_blocks, cross_validate=self.cross_validate,
                              moves=moves, progress=self.progress)
-        # the chosen catalog fitted on all the data with narrow test functions (at most a
-        # third of a tenth of the shortest recording): grow_catalog's own final fit takes the
-        # default width, and a third of a fifth of 8 s (0.53 s) already blurs the cart double
-        # pendulum's fast motion (its law's catalog 7-25 % off, within 1 % at 0.1-0.27 s)
+        # the chosen catalog fitted on all the data with the search's test functions, at most
+        # a third of the default width: grow_catalog's own final fit takes the default width,
+        # and a third of a fifth of 8 s (0.53 s) blurs the cart double pendulum's fast motion
+        # (its law's catalog 7-25 % off, within 1 % at 0.1-0.27 s)
         model = XLSINDy(found.catalog, test_functions=BumpTestFunctions(
-            width=_search_width(t, q, _FIT_BLOCKS)))
+            width=_fit_width(t, q, self.n_blocks)))
         model.fit(q, t=t, u=u)
         return dataclasses.replace(found, model=model)
 
@@ -235,11 +235,6 @@ class AutomaticGrowth:
         return (f"AutomaticGrowth(rows_per_term={self.rows_per_term}, ceiling={self.ceiling}, "
                 f"n_blocks={self.n_blocks}, cross_validate={self.cross_validate}, "
                 f"moves={self.moves})")
-
-
-#: The final fit's test functions are at most a third of ``1 / _FIT_BLOCKS`` of the shortest
-#: recording (:class:`AutomaticGrowth`).
-_FIT_BLOCKS = 10
 
 
 def _search_width(t, q, n_blocks: int) -> float:
@@ -251,6 +246,17 @@ def _search_width(t, q, n_blocks: int) -> float:
     longest = int(np.argmax([len(tk) for tk in t]))
     return float(min(BumpTestFunctions().half_width(t[longest], q[longest]),
                      min(tk[block - 1] - tk[0] for tk in t) / 3))
+
+
+def _fit_width(t, q, n_blocks: int) -> float:
+    """Width of the final fit's test functions (:class:`AutomaticGrowth`): the search's, at
+    most a third of the default width of the longest recording (which resolves the motion's
+    corner frequency: 0.17 s on 2.5 s of the cart-pole, 0.2 s on 8 s of the cart double
+    pendulum)."""
+    from ..weak import BumpTestFunctions
+    longest = int(np.argmax([len(tk) for tk in t]))
+    return float(min(_search_width(t, q, n_blocks),
+                     BumpTestFunctions().half_width(t[longest], q[longest]) / 3))
 
 
 #: Catalogs by name: ``"automatic"`` is data-driven (:class:`AutomaticGrowth`), the others
