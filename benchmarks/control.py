@@ -19,6 +19,9 @@ the plant), the cart within |x| <= 1.5 m. Results: one JSON line per finished ca
 ``benchmarks/results/control.jsonl`` (a rerun skips them), the summary in
 ``benchmarks/results/control.md``.
 
+A case run again (``--rerun``, for instance after a change of the code) is appended; the
+summary takes each case's latest record.
+
 Arm tracking (``--arm``): ``benchmarks/control_arm.py`` (published 7-joint arms with torque
 motors, computed-torque tracking with identified feedforward); its table is part of the summary.
 
@@ -336,6 +339,9 @@ def summarize():
     if not JSONL.exists():
         return "no results yet\n"
     records = [json.loads(line) for line in JSONL.read_text().splitlines() if line.strip()]
+    # a case run again (--rerun) is summarized by its latest record; the earlier stay on file
+    latest = {(r["task_name"], r["method"], r["seed"]): r for r in records}
+    records = list(latest.values())
     lines = ["| task | method | cases | success | within budget | interaction s (median, max) "
              "| episodes (median) | identification s (median, max) | planning ms (median) "
              "| target |",
@@ -375,6 +381,9 @@ def main(argv=None):
                         help="cap the loop's episodes (recorded as METHOD-maxNep); 2 = one "
                              "exploration and one attempt: enough to tell success within the "
                              "cart double pendulum's 15 s budget after an 8 s exploration")
+    parser.add_argument("--rerun", action="store_true",
+                        help="run finished cases again (the summary takes each case's latest "
+                             "record)")
     parser.add_argument("--arm", action="store_true", help="run the arm-tracking cases")
     parser.add_argument("--to-jax", action="store_true",
                         help="time to_jax() against the rigid-body kernel and the expressions")
@@ -404,7 +413,7 @@ def main(argv=None):
         print(write_summary(NOTES_PATH.read_text() if NOTES_PATH.exists() else ""))
         return 0
     if not args.summary:
-        done = finished()
+        done = set() if args.rerun else finished()
         label = (lambda m: m) if args.max_episodes is None else \
             (lambda m: f"{m}-max{args.max_episodes}ep")
         cases = [(task, method, seed) for task in args.tasks for method in args.methods

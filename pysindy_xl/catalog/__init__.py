@@ -4,7 +4,7 @@ kinds (:class:`AutomaticCatalog`), grown on data while a held-out criterion impr
 
 from .automatic import DISSIPATION, AutomaticCatalog, coordinate_kinds
 from .bases import KINDS, bspline, natural_splines
-from .growth import MOVES, GrowthResult, GrowthStep, grow_catalog
+from .growth import MORE_MOVES, MOVES, GrowthResult, GrowthStep, grow_catalog
 
-__all__ = ["AutomaticCatalog", "grow_catalog", "GrowthResult", "GrowthStep", "MOVES",
+__all__ = ["AutomaticCatalog", "grow_catalog", "GrowthResult", "GrowthStep", "MOVES", "MORE_MOVES",
            "coordinate_kinds", "DISSIPATION", "KINDS", "bspline", "natural_splines"]

@@ -13,10 +13,11 @@ shape,
 with ``phi`` the products of single-coordinate functions (:mod:`.bases`) over at most
 ``interaction`` coordinates, ``kappa`` a constant or (``kinetic="configuration"``) such a
 product of low degree, and ``gamma`` the first-degree functions of another coordinate. Per
-coordinate it adds dissipation (viscous ``qd_i``, smooth Coulomb ``tanh(qd_i / eps_i)``) as
-classical terms, and the force columns. Terms that are trigonometric polynomials go to a
-:class:`~pysindy_xl.feature_library.PolynomialLagrangeLibrary` (derived on arrays); the others
-(powers of angles, splines) to a :class:`~pysindy_xl.LagrangeLibrary`.
+coordinate it adds dissipation (viscous ``qd_i``, smooth Coulomb ``tanh(qd_i / eps_i)``; with
+``"coupled"`` each velocity's viscous force in every equation, a Rayleigh function with
+cross terms) as classical terms, and the force columns. Terms that are trigonometric
+polynomials go to a :class:`~pysindy_xl.feature_library.PolynomialLagrangeLibrary` (derived
+on arrays); the others (powers of angles, splines) to a :class:`~pysindy_xl.LagrangeLibrary`.
 """
 
 from __future__ import annotations
@@ -49,8 +50,9 @@ from .bases import KINDS, bspline_centers, factor_functions, natural_splines
 
 __all__ = ["AutomaticCatalog", "DISSIPATION", "coordinate_kinds"]
 
-#: Dissipation models an automatic catalog offers per coordinate.
-DISSIPATION = ("viscous", "coulomb")
+#: Dissipation models an automatic catalog offers per coordinate (``"coupled"``: viscous forces
+#: of each velocity in the other coordinates' equations too).
+DISSIPATION = ("viscous", "coulomb", "coupled")
 
 
 @functools.cache
@@ -153,8 +155,11 @@ class AutomaticCatalog(CatalogRepartition):
         cosines of degree 1.
     gyroscopic : bool, default False
         Add ``f(q_k) qd_i`` (``k != i``; ``f`` a linear coordinate, a sine or a cosine).
-    dissipation : str, sequence of {"viscous", "coulomb"} or None, default ("viscous",)
-        Dissipation terms in each coordinate's equation (None or ``()``: none).
+    dissipation : str, sequence of {"viscous", "coulomb", "coupled"} or None, default ("viscous",)
+        Dissipation terms in each coordinate's equation (None or ``()``: none). ``"coupled"``:
+        the viscous force ``qd_j`` of every velocity in every equation (a Rayleigh function
+        ``sum_ij c_ij qd_i qd_j / 2`` with cross terms: damping of a joint whose angle is the
+        difference of two coordinates, as for links measured from the vertical).
     coulomb_scale : float or sequence of float, default 0.01
         ``eps_i`` of the smooth Coulomb law ``tanh(qd_i / eps_i)``.
     splines : int or mapping {name: int}, optional
@@ -288,8 +293,8 @@ class AutomaticCatalog(CatalogRepartition):
     def n_terms(self) -> int:
         """Number of candidate terms (Lagrangian and dissipation), forces left out."""
         options = self._options()
-        terms, _, dissipation, _ = self._built_terms(options)
-        return len(terms) + len(dissipation)
+        terms, _, _, mask = self._built_terms(options)
+        return len(terms) + int(mask.sum())
 
     def spline_columns(self) -> list[list[int]]:
         """The columns of each coordinate's natural splines in the fitted catalog.
@@ -424,11 +429,16 @@ class AutomaticCatalog(CatalogRepartition):
     def _dissipation(self, options) -> tuple[list[sp.Expr], np.ndarray]:
         coords = options["coords"]
         terms, rows = [], []
-        for model in options["dissipation"]:
+        models = options["dissipation"]
+        for model in models:
+            if model == "coupled" and "viscous" in models:
+                continue  # the viscous terms enter every equation
             for i, qd in enumerate(coords.qd):
-                terms.append(qd if model == "viscous"
-                             else sp.tanh(qd / sp.Float(options["coulomb_scale"][i])))
-                rows.append(np.arange(coords.n) == i)
+                terms.append(sp.tanh(qd / sp.Float(options["coulomb_scale"][i]))
+                             if model == "coulomb" else qd)
+                own = np.arange(coords.n) == i
+                rows.append(own if model == "coulomb" or "coupled" not in models
+                            else ~own if model == "coupled" else np.ones(coords.n, dtype=bool))
         return terms, np.array(rows, dtype=bool).reshape(len(terms), coords.n)
 
     # -- the catalog ---------------------------------------------------------------------------
@@ -443,7 +453,7 @@ class AutomaticCatalog(CatalogRepartition):
         coords = options["coords"]
         # clones (every fit clones its catalog) and equal catalogs share the terms
         terms, fast, dissipation, mask = self._built_terms(options, key)
-        total = len(terms) + len(dissipation)
+        total = len(terms) + int(mask.sum())
         if total > options["max_terms"]:
             raise ValueError(f"max_terms: the catalog would have {total} terms, more than "
                              f"max_terms={options['max_terms']}; lower degree, trig_degree, "

@@ -22,7 +22,7 @@ import numpy as np
 
 from .automatic import AutomaticCatalog
 
-__all__ = ["SearchData", "CandidateFits", "evaluate_candidate", "held_out_error",
+__all__ = ["SearchSplit", "SearchData", "CandidateFits", "evaluate_candidate", "held_out_error",
            "parameters_key"]
 
 
@@ -43,32 +43,52 @@ def parameters_key(parameters) -> str:
 
 
 @dataclasses.dataclass
-class SearchData:
-    """What a candidate's fit and scoring need (the same for every candidate of a growth).
+class SearchSplit:
+    """One split of the search's data: a catalog is fitted on ``train`` and scored on each of
+    ``blocks``.
 
     Parameters
     ----------
     fixed : dict
-        The catalog parameters that do not grow (coordinates, kinds, bounds, ...).
+        The catalog parameters that do not grow (coordinates, kinds, bounds, ...): the
+        splines end where this split's training data do.
     train : dict
         Keyword arguments of the fit (``x``, ``t``, ``u``, ``x_dot``, ``x_ddot``): the
         training pieces.
     blocks : list of dict
         The held-out blocks (``x``, ``t``, ``u``), each scored on its own.
+    """
+
+    fixed: dict
+    train: dict
+    blocks: list
+
+
+@dataclasses.dataclass
+class SearchData:
+    """What a candidate's fit and scoring need (the same for every candidate of a growth).
+
+    Parameters
+    ----------
+    splits : list of SearchSplit
+        The splits a candidate is fitted and scored on (one fit per split); its criterion is
+        the RMS of all the splits' block errors, in order.
     template : XLSINDy
         Unfitted model; each candidate fits a clone with its catalog.
     max_terms : int
         Ceiling of the catalog's size.
     forced : bool
         Whether the data have forces (the criterion's kind, :func:`held_out_error`).
+    reported : tuple of int, default (0, 1)
+        Which of the block errors (in order over the splits) a step reports as its time and
+        region errors.
     """
 
-    fixed: dict
-    train: dict
-    blocks: list
+    splits: list
     template: object
     max_terms: int
     forced: bool
+    reported: tuple = (0, 1)
 
 
 def held_out_error(model, held, forced) -> float:
@@ -120,7 +140,8 @@ def held_out_error(model, held, forced) -> float:
 
 
 def evaluate_candidate(search: SearchData, parameters) -> dict:
-    """Fit one candidate catalog on the training pieces and score it on the held-out blocks.
+    """Fit one candidate catalog on each split's training pieces and score it on the split's
+    held-out blocks.
 
     Parameters
     ----------
@@ -133,13 +154,13 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     -------
     dict
         ``description``, ``terms``, ``active``, ``time_error``, ``region_error``,
-        ``criterion`` (the RMS of the two errors; inf when the catalog was not fitted),
+        ``criterion`` (the RMS of all the blocks' errors; inf when the catalog was not fitted),
         ``note`` (why not), ``seconds`` and ``cpu_seconds``: the fields of a
         :class:`~.growth.GrowthStep` but its move and verdict.
     """
     from sklearn.base import clone
 
-    catalog = AutomaticCatalog(**search.fixed, **parameters)
+    catalog = AutomaticCatalog(**search.splits[0].fixed, **parameters)
     started, cpu = time.perf_counter(), time.process_time()
 
     def failed(note, size=0, description=""):
@@ -154,25 +175,29 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     if size > search.max_terms:
         return failed(f"ceiling: {size} > max_terms {search.max_terms}", size)
     description = catalog.describe()
-    n = search.train["x"][0].shape[1]
-    if sum(len(p) for p in search.train["x"]) * n < 10 * size:
+    n = search.splits[0].train["x"][0].shape[1]
+    if min(sum(len(p) for p in split.train["x"]) for split in search.splits) * n < 10 * size:
         return failed("too few samples for this size", size, description)
-    model = clone(search.template).set_params(feature_library=catalog)
+    errors, active = [], []
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            model.fit(**search.train)
-        if model.dynamics_ is None:
-            raise ValueError("no acceleration in the identified equations")
-        errors = [held_out_error(model, held, search.forced) for held in search.blocks]
+        for split in search.splits:
+            model = clone(search.template).set_params(
+                feature_library=AutomaticCatalog(**split.fixed, **parameters))
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                model.fit(**split.train)
+            if model.dynamics_ is None:
+                raise ValueError("no acceleration in the identified equations")
+            errors += [held_out_error(model, held, search.forced) for held in split.blocks]
+            active.append(int(np.count_nonzero(model.coefficients())))
     except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
         return failed(f"fit failed: {type(error).__name__}: {error}"[:200], size, description)
     value = float(np.sqrt(np.mean(np.square(errors))))
-    return {"description": description, "terms": size,
-            "active": int(np.count_nonzero(model.coefficients())), "time_error": errors[0],
-            "region_error": errors[1], "criterion": value if np.isfinite(value) else np.inf,
-            "note": "", "seconds": time.perf_counter() - started,
-            "cpu_seconds": time.process_time() - cpu}
+    time_block, region_block = search.reported
+    return {"description": description, "terms": size, "active": int(np.median(active)),
+            "time_error": errors[time_block], "region_error": errors[region_block],
+            "criterion": value if np.isfinite(value) else np.inf, "note": "",
+            "seconds": time.perf_counter() - started, "cpu_seconds": time.process_time() - cpu}
 
 
 def _warm_up() -> None:

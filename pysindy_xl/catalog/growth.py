@@ -13,6 +13,11 @@ than a test function). Two blocks of each run are held out:
   extrapolates to states it did not see). An approximation fitted along the trajectories (a
   cosine standing in for ``theta^2``) fails there, where the right structure does not.
 
+With ``cross_validate``, every block is held out in turn instead (one fit per block on the
+others; the criterion is the RMS of all the blocks' errors): on a recording of a few
+seconds the region block holds most of what identifies configuration-dependent terms, and a
+fit without it fails for the right catalog too.
+
 The criterion is the RMS of the two errors. Splines end at the extreme percentiles of the
 training data (:data:`END_PERCENTILE`) and continue linearly (:func:`~.bases.natural_splines`),
 so the region block judges their continuation as it judges any family's. From the smallest
@@ -64,13 +69,18 @@ from .._inputs import aligned, as_list
 from .._validation import check_option
 from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import EXCHANGES, REMOVALS, removed
-from .candidates import CandidateFits, SearchData, parameters_key
+from .candidates import CandidateFits, SearchData, SearchSplit, parameters_key
 
-__all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "check_growth_data"]
+__all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
+           "check_growth_data"]
 
 #: The moves of the growth, in the order they are tried.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
          "coulomb", "splines")
+#: Moves a growth may be given beyond the default :data:`MOVES`: ``"coupled_damping"`` lets
+#: every velocity's viscous force enter every equation (``dissipation`` ``"coupled"`` of
+#: :class:`AutomaticCatalog`: the damping of a joint whose angle is a difference of coordinates).
+MORE_MOVES = ("coupled_damping",)
 
 _START = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
           "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
@@ -283,6 +293,37 @@ def _pieces(mask):
     return list(zip(edges[::2], edges[1::2], strict=True))
 
 
+def _outside(n, span):
+    """Mask of ``n`` samples without ``span``."""
+    mask = np.ones(n, dtype=bool)
+    mask[span] = False
+    return mask
+
+
+def _split(arrays, masks, held_spans, stride):
+    """One split of the runs: ``(train, held)``, ``train`` the pieces of each run's mask
+    (every ``stride``-th sample) and ``held`` one run-list per held-out span of each run."""
+    train = {key: [] for key in arrays}
+    for k, mask in enumerate(masks):
+        for a, b in _pieces(mask):
+            for key, values in arrays.items():
+                train[key].append(None if values is None or values[k] is None
+                                  else np.asarray(values[k], dtype=float)[a:b:stride])
+    for key in ("u", "x_dot", "x_ddot"):
+        if any(v is None for v in train[key]):
+            train[key] = None
+    held = []
+    for which in range(len(held_spans[0])):
+        held.append({"x": [np.asarray(arrays["x"][k])[spans[which]]
+                           for k, spans in enumerate(held_spans)],
+                     "t": [np.asarray(arrays["t"][k])[spans[which]]
+                           for k, spans in enumerate(held_spans)],
+                     "u": None if arrays["u"] is None else
+                     [np.asarray(arrays["u"][k], dtype=float)[spans[which]]
+                      for k, spans in enumerate(held_spans)]})
+    return train, held
+
+
 #: Percentile of the data at which splines end (and ``100 -`` it): beyond, the potential's
 #: slope is fitted to the extreme samples instead of following a cubic piece that a few
 #: samples constrain.
@@ -346,6 +387,10 @@ def _parameters(state, move, kinds, n, skip=0):
         if "coulomb" in state["dissipation"]:
             return None
         new["dissipation"] = (*state["dissipation"], "coulomb")
+    elif move == "coupled_damping":
+        if "coupled" in state["dissipation"] or n < 2:
+            return None
+        new["dissipation"] = (*state["dissipation"], "coupled")
     elif move == "splines":
         larger = [k for k in _SPLINES if k > (state["splines"] or 0)]
         if skip >= len(larger):
@@ -358,7 +403,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                  max_terms: int = 400, optimizer=None, formulation: str = "auto",
                  n_blocks: int = 5, tolerance: float = 0.05, good_enough: float = 0.002,
                  moves=MOVES, search_optimizer="auto", search_samples: int | None = 6000,
-                 progress=None, n_jobs=None):
+                 cross_validate: bool = False, progress=None, n_jobs=None):
     """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
 
     Parameters
@@ -389,8 +434,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         With forces, the growth stops once the criterion is below this relative error
         (unforced data: every move is tried).
     moves : sequence of str, default MOVES
-        The moves tried (a subset of :data:`MOVES`); the backward phase drops the families of
-        these moves only (``"trig_degree"``: the sines and cosines too).
+        The moves tried (some of :data:`MOVES` and :data:`MORE_MOVES`); the backward phase
+        drops the families of these moves only (``"trig_degree"``: the sines and cosines too).
     search_optimizer : "auto" or optimizer, default "auto"
         Optimizer of the search's fits; ``"auto"``: ``optimizer`` when given, else one
         selection per fit (``ExplicitOptimizer()``, ``MixedOptimizer()``, or XLSINDy's default
@@ -398,6 +443,13 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     search_samples : int or None, default 6000
         The search fits runs thinned to about this many samples in all (every k-th sample); the
         final fit uses all. None: no thinning.
+    cross_validate : bool, default False
+        Hold out every block in turn (``n_blocks`` fits per catalog, each on the other
+        blocks; the criterion is the RMS of the ``n_blocks`` errors, the steps report the last
+        block's and the region block's) instead of the time and region blocks at once. On
+        recordings of a few seconds the region block holds most of what identifies
+        configuration-dependent terms (the largest swings): fitted without it, the right
+        catalog's fit fails and the growth keeps a smaller one.
     progress : callable, optional
         Called with a line of text after each step.
     n_jobs : int or None, default None
@@ -445,11 +497,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     kinds = coordinate_kinds(names, kinds)
     check_option("max_terms", max_terms, "int", low=1)
     check_option("n_blocks", n_blocks, "int", low=3)
+    check_option("cross_validate", cross_validate, "bool")
     check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
     check_option("good_enough", good_enough, "real", low=0)
-    unknown = [m for m in moves if m not in MOVES]
+    unknown = [m for m in moves if m not in MOVES + MORE_MOVES]
     if unknown:
-        raise ValueError(f"moves: unknown {unknown}; expected some of {MOVES}")
+        raise ValueError(f"moves: unknown {unknown}; expected some of {MOVES + MORE_MOVES}")
     forced = us is not None and any(np.any(np.asarray(uk) != 0) for uk in us)
     criterion = "forces" if forced else "accelerations"
     velocity_scale = [float(np.std(np.gradient(xk, tk, axis=0), axis=0).mean())
@@ -460,36 +513,26 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     first = AutomaticCatalog(**fixed, **_START)
     check_growth_data(xs, names, first.n_terms)
 
-    # the folds, and the held-out blocks as runs of their own
+    # the folds: per split, the training pieces and the held-out blocks as runs of their own
     folds = [_blocks(tk, xk, n_blocks) for tk, xk in zip(ts, xs, strict=True)]
-    blocks = []
-    for which in (1, 2):
-        held = {"x": [], "t": [], "u": [] if forced else None}
-        for k, fold in enumerate(folds):
-            held["x"].append(xs[k][fold[which]])
-            held["t"].append(ts[k][fold[which]])
-            if forced:
-                held["u"].append(np.asarray(us[k], dtype=float)[fold[which]])
-        blocks.append(held)
     total = sum(len(tk) for tk in ts)
     stride = 1 if search_samples is None else max(1, int(np.ceil(total / search_samples)))
-    train = {key: [] for key in ("x", "t", "u", "x_dot", "x_ddot")}
-    for k, (mask, _, _) in enumerate(folds):
-        for a, b in _pieces(mask):
-            part = slice(a, b, stride)
-            train["x"].append(xs[k][part])
-            train["t"].append(ts[k][part])
-            train["u"].append(None if us is None else np.asarray(us[k])[part])
-            train["x_dot"].append(None if xds is None else np.asarray(xds[k])[part])
-            train["x_ddot"].append(None if xdds is None else np.asarray(xdds[k])[part])
-    for key in ("u", "x_dot", "x_ddot"):
-        if any(v is None for v in train[key]):
-            train[key] = None
-    if not forced:
-        train["u"] = None
+    arrays = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
+    if cross_validate:  # every block held out in turn, the others fitted
+        edges = [np.linspace(0, len(tk), n_blocks + 1).round().astype(int) for tk in ts]
+        spans = [[slice(a, b) for a, b in zip(e[:-1], e[1:], strict=True)] for e in edges]
+        splits = [_split(arrays, [_outside(len(tk), run[j]) for tk, run in
+                                  zip(ts, spans, strict=True)],
+                         [[run[j]] for run in spans], stride) for j in range(n_blocks)]
+        # the steps report the last block's error and the first run's region block's
+        reported = (n_blocks - 1, int(np.searchsorted(edges[0], folds[0][2].start)))
+    else:
+        splits = [_split(arrays, [fold[0] for fold in folds],
+                         [[fold[1], fold[2]] for fold in folds], stride)]
+        reported = (0, 1)
     # the search's splines end where its training data do: the region blocks test their
     # continuation as the chosen model's is used beyond the data
-    searched = dict(fixed, bounds=_span(train["x"]))
+    searched = [dict(fixed, bounds=_span(train["x"])) for train, _ in splits]
     # test functions short enough for the held-out blocks and the training pieces
     from ..weak import BumpTestFunctions
     block = min(len(tk) for tk in ts) // n_blocks
@@ -511,7 +554,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                        test_functions=BumpTestFunctions(width=width),
                        smoother=RememberedSmoother())
 
-    search = SearchData(searched, train, blocks, template, max_terms, forced)
+    search = SearchData([SearchSplit(bounds, train, held)
+                         for bounds, (train, held) in zip(searched, splits, strict=True)],
+                        template, max_terms, forced, reported)
     fits = CandidateFits(search, n_jobs)
     fits.warm_up()  # the workers start while the first catalog is fitted here
 
@@ -520,7 +565,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
 
     def _size(parameters):
         try:
-            return AutomaticCatalog(**searched, **parameters).n_terms
+            return AutomaticCatalog(**searched[0], **parameters).n_terms
         except ValueError:
             return -1
 

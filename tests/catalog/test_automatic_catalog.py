@@ -128,3 +128,20 @@ def test_polynomial_library_warns_when_an_angle_is_also_bare():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         PolynomialLagrangeLibrary(c, [thd ** 2, sp.cos(th)]).fit()
+
+
+def test_coupled_damping_puts_every_velocity_in_every_equation():
+    """``"coupled"``: each velocity's viscous force in every equation (with ``"viscous"``) or
+    in the others' only (alone); ``n_terms`` counts the columns."""
+    names, kinds = ["x", "a"], ["linear", "angle"]
+    plain = AutomaticCatalog(names, kinds=kinds, kinetic="constant")
+    coupled = AutomaticCatalog(names, kinds=kinds, kinetic="constant",
+                               dissipation=("viscous", "coupled"))
+    alone = AutomaticCatalog(names, kinds=kinds, kinetic="constant", dissipation="coupled")
+    assert coupled.n_terms == plain.n_terms + 2 and alone.n_terms == plain.n_terms
+    assert "dissipation viscous+coupled" in coupled.describe()
+    assert coupled.libraries[-1].fit().get_feature_names() == \
+        ["C_x[x_dot]", "C_a[x_dot]", "C_x[a_dot]", "C_a[a_dot]"]
+    assert alone.libraries[-1].fit().get_feature_names() == ["C_a[x_dot]", "C_x[a_dot]"]
+    with pytest.raises(ValueError, match="dissipation: expected one of"):
+        _ = AutomaticCatalog(names, kinds=kinds, dissipation="rayleigh").n_terms

@@ -9,6 +9,7 @@ from pysindy_xl.catalog import grow_catalog
 from pysindy_xl.catalog.candidates import (
     CandidateFits,
     SearchData,
+    SearchSplit,
     evaluate_candidate,
     parameters_key,
 )
@@ -50,7 +51,7 @@ def _search(x, t, u):
     template = XLSINDy(optimizer=ExplicitOptimizer(), formulation="weak",
                        test_functions=BumpTestFunctions(width=0.5),
                        smoother=RememberedSmoother())
-    return SearchData(fixed, train, blocks, template, max_terms=50, forced=True)
+    return SearchData([SearchSplit(fixed, train, blocks)], template, max_terms=50, forced=True)
 
 
 def test_a_workers_candidate_is_the_callers_to_the_bit():

@@ -239,3 +239,21 @@ def test_growth_looks_two_moves_ahead_when_no_single_move_helps():
     predicted = found.model.predict(test["q"], test["qd"], test["u"])
     error = np.linalg.norm(predicted - test["qdd"]) / np.linalg.norm(test["qdd"])
     assert error < 0.02
+
+
+def test_cross_validated_growth_holds_out_every_block():
+    """``cross_validate``: one fit per held-out block; the hardening spring's law is found
+    as with the two blocks at once, and a non-boolean is refused."""
+    t = np.linspace(0, 20, 2001)
+    x = np.c_[np.sin(t) + 0.5 * np.sin(2.7 * t)]
+    xdd = -np.sin(t) - 3.645 * np.sin(2.7 * t)
+    u = 2 * xdd[:, None] + 3 * x + x ** 3
+    found = grow_catalog(x, t, u, coordinates=["x"], moves=("degree",), cross_validate=True)
+    assert [(step.move, step.terms, step.chosen) for step in found.steps] == \
+        [("start", 4, True), ("degree", 5, False), ("degree", 6, True)]
+    coef = dict(zip(map(str, found.model.feature_library_.feature_terms_),
+                    found.model.coef_, strict=False))
+    assert coef["x**4"] == pytest.approx(-0.25, rel=1e-3)
+    assert found.held_out_error < 1e-3
+    with pytest.raises(TypeError, match="cross_validate"):
+        grow_catalog(x, t, u, coordinates=["x"], cross_validate="yes")
