@@ -60,7 +60,6 @@ catalog is then fitted on all the data, each coordinate's splines kept whole or 
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 
 import numpy as np
@@ -70,6 +69,8 @@ from .._validation import check_option
 from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import CandidateFits, SearchData, SearchSplit, parameters_key
+from .folds import held_out_splits
+from .path import GrowthResult, GrowthStep
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
            "check_growth_data"]
@@ -88,158 +89,6 @@ _START = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
 _LIMITS = {"degree": 4, "trig_degree": 3, "angle_degree": 4}
 _SPLINES = (8, 12, 16)  # natural splines per coordinate when the family is added, refined
 _REPEATED = ("degree", "trig_degree", "angle_degree", "splines")  # moves that go on
-
-
-@dataclasses.dataclass
-class GrowthStep:
-    """One tried catalog: the move, its size, its held-out errors and the verdict.
-
-    Parameters
-    ----------
-    move : str
-        ``"start"``, one of :data:`MOVES`, two of them joined by ``"+"`` (tried together), or a
-        removal of the backward phase (``"-"`` and the family dropped, possibly followed by
-        ``"+"`` and the move it is exchanged for).
-    description : str
-        :meth:`AutomaticCatalog.describe` of the catalog.
-    terms : int
-        Candidate terms (forces left out).
-    active : int
-        Terms the fit kept.
-    time_error, region_error, criterion : float
-        Held-out relative errors on the time and region blocks, and their RMS (inf when the
-        fit failed or exceeded the ceiling).
-    chosen : bool
-        Whether the growth kept this catalog (the last one kept is the result).
-    note : str, default ""
-        Why a step was not evaluated or failed.
-    seconds : float, default 0.0
-        Time of the step's fit and scoring.
-    cpu_seconds : float, default 0.0
-        CPU time of the step's fit and scoring (in the process that ran it).
-
-    Examples
-    --------
-    >>> step = GrowthStep("degree", "x: x..x^3", 5, 3, 0.02, 0.04, 0.0316, False)
-    >>> step.move, step.chosen
-    ('degree', False)
-    """
-
-    move: str
-    description: str
-    terms: int
-    active: int
-    time_error: float
-    region_error: float
-    criterion: float
-    chosen: bool
-    note: str = ""
-    seconds: float = 0.0
-    cpu_seconds: float = 0.0
-
-
-@dataclasses.dataclass
-class GrowthResult:
-    """What :func:`grow_catalog` found.
-
-    Parameters
-    ----------
-    model : XLSINDy
-        The chosen catalog fitted on all the data.
-    catalog : AutomaticCatalog
-    steps : list of GrowthStep
-    criterion : str
-        ``"forces"`` or ``"accelerations"``: what the held-out errors measure.
-    held_out_error : float
-        The chosen catalog's criterion.
-
-    Examples
-    --------
-    >>> steps = [GrowthStep("start", "", 4, 3, 0.5, 0.7, 0.61, True),
-    ...          GrowthStep("degree", "", 5, 4, 0.01, 0.02, 0.016, True)]
-    >>> print(GrowthResult(None, None, steps, "forces", 0.016).table())
-    step  move          terms  kept  time err  region err  criterion  chosen
-    ------------------------------------------------------------------------
-       0  start             4     3    50.00%      70.00%     61.00%  yes
-       1  degree            5     4     1.00%       2.00%      1.60%  yes
-    """
-
-    model: object
-    catalog: AutomaticCatalog
-    steps: list
-    criterion: str
-    held_out_error: float
-
-    def table(self) -> str:
-        """The growth path as a plain-text table (one row per tried catalog).
-
-        Returns
-        -------
-        str
-            Header and one line per step: move, terms, kept terms, the held-out errors on the
-            time block and on the region block, the criterion and whether it was chosen.
-        """
-        header = (f"{'step':>4}  {'move':<13}{'terms':>6}{'kept':>6}{'time err':>10}"
-                  f"{'region err':>12}{'criterion':>11}  chosen")
-        lines = [header, "-" * len(header)]
-        for k, step in enumerate(self.steps):
-            def pct(value):
-                if not np.isfinite(value):
-                    return f"{'-':>10}"
-                return f"{100 * value:9.2f}%" if value < 100 else f"{'>1e4%':>10}"
-            verdict = "yes" if step.chosen else "no"
-            if step.note:
-                verdict += f" ({step.note})"
-            lines.append(f"{k:>4}  {step.move:<13}{step.terms:>6}{step.active:>6}"
-                         f"{pct(step.time_error)}{pct(step.region_error):>12}"
-                         f"{pct(step.criterion):>11}  {verdict}")
-        return "\n".join(lines)
-
-    def spline_potentials(self, n_points: int = 9) -> dict:
-        """The identified spline part of the potential of each coordinate that keeps one.
-
-        ``V_spline(q) = -sum_k c_k B_k(q)`` (the Lagrangian holds ``-V``), sampled on the
-        coordinate's range.
-
-        Parameters
-        ----------
-        n_points : int, default 9
-            Number of evenly spaced points of the coordinate's range.
-
-        Returns
-        -------
-        dict of str to (ndarray, ndarray)
-            ``{name: (grid, values)}``, each of shape (n_points,), for the coordinates whose
-            model keeps a spline term.
-        """
-        import sympy as sp
-        library, coef = self.model.feature_library_, self.model.coef_
-        out = {}
-        for i, (q, name) in enumerate(zip(library.coords.q, library.coords.names,
-                                          strict=True)):
-            parts = [coef[j] * term for j, (term, category) in enumerate(
-                zip(library.feature_terms_, library.categories_, strict=True))
-                if category == "lagrange" and coef[j] != 0 and term.has(sp.Abs)
-                and term.free_symbols == {q}]
-            if parts:
-                low, high = self.catalog.bounds[i]
-                grid = np.linspace(low, high, n_points)
-                values = -sp.lambdify(q, sp.Add(*parts), "numpy")(grid)
-                out[name] = (grid, np.broadcast_to(values, grid.shape).astype(float))
-        return out
-
-    def to_dict(self) -> dict:
-        """JSON-ready figures of the growth.
-
-        Returns
-        -------
-        dict
-            ``criterion``, ``held_out_error``, ``catalog`` (its description) and ``steps``
-            (one dict per :class:`GrowthStep`).
-        """
-        return {"criterion": self.criterion, "held_out_error": self.held_out_error,
-                "catalog": self.catalog.describe(),
-                "steps": [dataclasses.asdict(s) for s in self.steps]}
 
 
 def check_growth_data(xs, names, n_terms: int) -> None:
@@ -270,58 +119,6 @@ def check_growth_data(xs, names, n_terms: int) -> None:
         raise ValueError(f"x: {len(stacked)} samples of {len(names)} coordinates are too short "
                          f"for a catalog of {n_terms} terms (at least {10 * n_terms} equations "
                          "needed); record longer, or lower max_terms")
-
-
-def _blocks(t, x, n_blocks):
-    """Per run: ``(train mask, time block slice, region block slice)``."""
-    n = len(t)
-    edges = np.linspace(0, n, n_blocks + 1).round().astype(int)
-    spans = [slice(a, b) for a, b in zip(edges[:-1], edges[1:], strict=True)]
-    scale = np.subtract(*np.percentile(x, [75, 25], axis=0))
-    scale = np.where(scale > 0, scale, 1.0)
-    reach = np.abs(x - np.median(x, axis=0)) / scale
-    extreme = [float(np.percentile(reach[s].max(axis=1), 90)) for s in spans[:-1]]
-    region = spans[int(np.argmax(extreme))]
-    train = np.ones(n, dtype=bool)
-    train[spans[-1]] = False
-    train[region] = False
-    return train, spans[-1], region
-
-
-def _pieces(mask):
-    edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(int), 0]))
-    return list(zip(edges[::2], edges[1::2], strict=True))
-
-
-def _outside(n, span):
-    """Mask of ``n`` samples without ``span``."""
-    mask = np.ones(n, dtype=bool)
-    mask[span] = False
-    return mask
-
-
-def _split(arrays, masks, held_spans, stride):
-    """One split of the runs: ``(train, held)``, ``train`` the pieces of each run's mask
-    (every ``stride``-th sample) and ``held`` one run-list per held-out span of each run."""
-    train = {key: [] for key in arrays}
-    for k, mask in enumerate(masks):
-        for a, b in _pieces(mask):
-            for key, values in arrays.items():
-                train[key].append(None if values is None or values[k] is None
-                                  else np.asarray(values[k], dtype=float)[a:b:stride])
-    for key in ("u", "x_dot", "x_ddot"):
-        if any(v is None for v in train[key]):
-            train[key] = None
-    held = []
-    for which in range(len(held_spans[0])):
-        held.append({"x": [np.asarray(arrays["x"][k])[spans[which]]
-                           for k, spans in enumerate(held_spans)],
-                     "t": [np.asarray(arrays["t"][k])[spans[which]]
-                           for k, spans in enumerate(held_spans)],
-                     "u": None if arrays["u"] is None else
-                     [np.asarray(arrays["u"][k], dtype=float)[spans[which]]
-                      for k, spans in enumerate(held_spans)]})
-    return train, held
 
 
 #: Percentile of the data at which splines end (and ``100 -`` it): beyond, the potential's
@@ -513,23 +310,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     first = AutomaticCatalog(**fixed, **_START)
     check_growth_data(xs, names, first.n_terms)
 
-    # the folds: per split, the training pieces and the held-out blocks as runs of their own
-    folds = [_blocks(tk, xk, n_blocks) for tk, xk in zip(ts, xs, strict=True)]
     total = sum(len(tk) for tk in ts)
     stride = 1 if search_samples is None else max(1, int(np.ceil(total / search_samples)))
     arrays = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
-    if cross_validate:  # every block held out in turn, the others fitted
-        edges = [np.linspace(0, len(tk), n_blocks + 1).round().astype(int) for tk in ts]
-        spans = [[slice(a, b) for a, b in zip(e[:-1], e[1:], strict=True)] for e in edges]
-        splits = [_split(arrays, [_outside(len(tk), run[j]) for tk, run in
-                                  zip(ts, spans, strict=True)],
-                         [[run[j]] for run in spans], stride) for j in range(n_blocks)]
-        # the steps report the last block's error and the first run's region block's
-        reported = (n_blocks - 1, int(np.searchsorted(edges[0], folds[0][2].start)))
-    else:
-        splits = [_split(arrays, [fold[0] for fold in folds],
-                         [[fold[1], fold[2]] for fold in folds], stride)]
-        reported = (0, 1)
+    splits, reported = held_out_splits(arrays, n_blocks, stride, cross_validate)
     # the search's splines end where its training data do: the region blocks test their
     # continuation as the chosen model's is used beyond the data
     searched = [dict(fixed, bounds=_span(train["x"])) for train, _ in splits]

@@ -86,7 +86,8 @@ def test_the_ceiling_and_the_sample_count_are_reported_not_fitted():
     fields = CandidateFits(search).get({"degree": 4})
     assert fields["note"].startswith("ceiling") and fields["criterion"] == np.inf
     search.max_terms = 50
-    search.train = {key: None if value is None else [v[:40] for v in value]
-                    for key, value in search.train.items()}
+    split = search.splits[0]
+    split.train = {key: None if value is None else [v[:40] for v in value]
+                   for key, value in split.train.items()}
     fields = evaluate_candidate(search, {"degree": 4})
     assert fields["note"] == "too few samples for this size" and fields["terms"] == 6

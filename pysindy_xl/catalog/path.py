@@ -1,0 +1,164 @@
+"""The path of a catalog growth: each tried catalog (:class:`GrowthStep`) and the outcome
+(:class:`GrowthResult`: the chosen catalog, its fitted model and the table of the steps)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .automatic import AutomaticCatalog
+
+__all__ = ["GrowthStep", "GrowthResult"]
+
+
+@dataclasses.dataclass
+class GrowthStep:
+    """One tried catalog: the move, its size, its held-out errors and the verdict.
+
+    Parameters
+    ----------
+    move : str
+        ``"start"``, one of :data:`~.growth.MOVES`, two of them joined by ``"+"`` (tried
+        together), or a removal of the backward phase (``"-"`` and the family dropped,
+        possibly followed by ``"+"`` and the move it is exchanged for).
+    description : str
+        :meth:`AutomaticCatalog.describe` of the catalog.
+    terms : int
+        Candidate terms (forces left out).
+    active : int
+        Terms the fit kept.
+    time_error, region_error, criterion : float
+        Held-out relative errors on the time and region blocks, and their RMS (inf when the
+        fit failed or exceeded the ceiling).
+    chosen : bool
+        Whether the growth kept this catalog (the last one kept is the result).
+    note : str, default ""
+        Why a step was not evaluated or failed.
+    seconds : float, default 0.0
+        Time of the step's fit and scoring.
+    cpu_seconds : float, default 0.0
+        CPU time of the step's fit and scoring (in the process that ran it).
+
+    Examples
+    --------
+    >>> step = GrowthStep("degree", "x: x..x^3", 5, 3, 0.02, 0.04, 0.0316, False)
+    >>> step.move, step.chosen
+    ('degree', False)
+    """
+
+    move: str
+    description: str
+    terms: int
+    active: int
+    time_error: float
+    region_error: float
+    criterion: float
+    chosen: bool
+    note: str = ""
+    seconds: float = 0.0
+    cpu_seconds: float = 0.0
+
+
+@dataclasses.dataclass
+class GrowthResult:
+    """What :func:`~.growth.grow_catalog` found.
+
+    Parameters
+    ----------
+    model : XLSINDy
+        The chosen catalog fitted on all the data.
+    catalog : AutomaticCatalog
+    steps : list of GrowthStep
+    criterion : str
+        ``"forces"`` or ``"accelerations"``: what the held-out errors measure.
+    held_out_error : float
+        The chosen catalog's criterion.
+
+    Examples
+    --------
+    >>> steps = [GrowthStep("start", "", 4, 3, 0.5, 0.7, 0.61, True),
+    ...          GrowthStep("degree", "", 5, 4, 0.01, 0.02, 0.016, True)]
+    >>> print(GrowthResult(None, None, steps, "forces", 0.016).table())
+    step  move          terms  kept  time err  region err  criterion  chosen
+    ------------------------------------------------------------------------
+       0  start             4     3    50.00%      70.00%     61.00%  yes
+       1  degree            5     4     1.00%       2.00%      1.60%  yes
+    """
+
+    model: object
+    catalog: AutomaticCatalog
+    steps: list
+    criterion: str
+    held_out_error: float
+
+    def table(self) -> str:
+        """The growth path as a plain-text table (one row per tried catalog).
+
+        Returns
+        -------
+        str
+            Header and one line per step: move, terms, kept terms, the held-out errors on the
+            time block and on the region block, the criterion and whether it was chosen.
+        """
+        header = (f"{'step':>4}  {'move':<13}{'terms':>6}{'kept':>6}{'time err':>10}"
+                  f"{'region err':>12}{'criterion':>11}  chosen")
+        lines = [header, "-" * len(header)]
+        for k, step in enumerate(self.steps):
+            def pct(value):
+                if not np.isfinite(value):
+                    return f"{'-':>10}"
+                return f"{100 * value:9.2f}%" if value < 100 else f"{'>1e4%':>10}"
+            verdict = "yes" if step.chosen else "no"
+            if step.note:
+                verdict += f" ({step.note})"
+            lines.append(f"{k:>4}  {step.move:<13}{step.terms:>6}{step.active:>6}"
+                         f"{pct(step.time_error)}{pct(step.region_error):>12}"
+                         f"{pct(step.criterion):>11}  {verdict}")
+        return "\n".join(lines)
+
+    def spline_potentials(self, n_points: int = 9) -> dict:
+        """The identified spline part of the potential of each coordinate that keeps one.
+
+        ``V_spline(q) = -sum_k c_k B_k(q)`` (the Lagrangian holds ``-V``), sampled on the
+        coordinate's range.
+
+        Parameters
+        ----------
+        n_points : int, default 9
+            Number of evenly spaced points of the coordinate's range.
+
+        Returns
+        -------
+        dict of str to (ndarray, ndarray)
+            ``{name: (grid, values)}``, each of shape (n_points,), for the coordinates whose
+            model keeps a spline term.
+        """
+        import sympy as sp
+        library, coef = self.model.feature_library_, self.model.coef_
+        out = {}
+        for i, (q, name) in enumerate(zip(library.coords.q, library.coords.names,
+                                          strict=True)):
+            parts = [coef[j] * term for j, (term, category) in enumerate(
+                zip(library.feature_terms_, library.categories_, strict=True))
+                if category == "lagrange" and coef[j] != 0 and term.has(sp.Abs)
+                and term.free_symbols == {q}]
+            if parts:
+                low, high = self.catalog.bounds[i]
+                grid = np.linspace(low, high, n_points)
+                values = -sp.lambdify(q, sp.Add(*parts), "numpy")(grid)
+                out[name] = (grid, np.broadcast_to(values, grid.shape).astype(float))
+        return out
+
+    def to_dict(self) -> dict:
+        """JSON-ready figures of the growth.
+
+        Returns
+        -------
+        dict
+            ``criterion``, ``held_out_error``, ``catalog`` (its description) and ``steps``
+            (one dict per :class:`GrowthStep`).
+        """
+        return {"criterion": self.criterion, "held_out_error": self.held_out_error,
+                "catalog": self.catalog.describe(),
+                "steps": [dataclasses.asdict(s) for s in self.steps]}
