@@ -81,17 +81,20 @@ def _clarabel_solves(problem, xi, weights):
         weights.value = np.zeros(n_features)
         data, _, _ = problem.get_problem_data(cp.CLARABEL)
         base = np.array(data[cp.settings.C], dtype=float)
-        # distinct probes: each weight's single entry of the linear objective
-        weights.value = np.arange(1.0, n_features + 1.0)
-        probe = np.asarray(problem.get_problem_data(cp.CLARABEL)[0][cp.settings.C], dtype=float)
-        start = data["param_prob"].var_id_to_col[xi.id]
+        program = data["param_prob"]
+        start = program.var_id_to_col[xi.id]
+        # the linear objective's map of the parameters: weight j's column
+        column = program.param_id_to_col[weights.id]
+        block = scipy.sparse.csc_array(program.q)[:, column:column + n_features].toarray()
     except Exception:  # noqa: BLE001 - any surprise: cvxpy solves as usual
         return None
-    changed = np.flatnonzero(probe != base)
-    if changed.size != n_features or not np.array_equal(
-            np.sort(probe[changed] - base[changed]), weights.value) or np.any(base[changed] != 0):
+    # each weight the coefficient (exactly 1) of its own entry, which is 0 without it
+    entries = np.argmax(block != 0, axis=0)
+    expected = np.zeros_like(block)
+    expected[entries, np.arange(n_features)] = 1.0
+    if block.shape[0] != base.size + 1 or not np.array_equal(block, expected) \
+            or np.unique(entries).size != n_features or np.any(base[entries] != 0):
         return None
-    entries = changed[np.argsort(probe[changed])]  # entry of weight j
     matrix, offset = data[cp.settings.A], data[cp.settings.B]
     quadratic = data.get(cp.settings.P)
     quadratic = (scipy.sparse.csc_array((base.size, base.size)) if quadratic is None
