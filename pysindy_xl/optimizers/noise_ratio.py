@@ -130,21 +130,25 @@ def _bisected_argmin(above, low, high, n_bisections: int = 48) -> int:
     alive = np.arange(low.size)
     # finite brackets stay finite (their middles): only then are they compared
     finite = bool(np.isfinite(low).all() and np.isfinite(high).all())
-    for _ in range(n_bisections):
+    for step in range(n_bisections):
         if alive.size == 1:
             return int(alive[0])
         middle = 0.5 * (low + high)
         up = above(middle, alive)
-        low = np.where(up, middle, low)
-        high = np.where(up, high, middle)
-        if finite:
+        np.copyto(low, middle, where=up)
+        np.copyto(high, middle, where=~up)
+        if finite and step % _PRUNE_EVERY == _PRUNE_EVERY - 1:
             first = int(np.argmin(high))  # ends at or below high[first]
             bound = high[first]
-            drop = (low > bound) | ((low == bound) & (alive > alive[first]))
-            if drop.any():
-                keep = ~drop
+            keep = (low < bound) | ((low == bound) & (alive <= alive[first]))
+            if not keep.all():
                 alive, low, high = alive[keep], low[keep], high[keep]
     return int(alive[np.argmin(0.5 * (low + high))])
+
+
+#: Bisections between two looks for candidates that cannot win (each look costs about as
+#: much as a bisection of few candidates).
+_PRUNE_EVERY = 4
 
 
 def _least_constrained(values, vectors) -> int:
