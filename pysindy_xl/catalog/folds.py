@@ -1,12 +1,16 @@
 """The held-out folds of a catalog growth: which samples fit a candidate catalog and which
 judge it.
 
-Each run is cut into ``n_blocks`` contiguous time blocks. By default one split holds out two
-blocks of every run: the last (**time**: how the model predicts later) and the one whose
-states reach farthest from the run's median (**region**: how it extrapolates). Cross-validated,
-every block is held out in turn, one split per block. The training pieces are thinned to
-every ``stride``-th sample; the held-out blocks are kept whole (the weak form integrates over
-them).
+Each run is cut into ``n_blocks`` contiguous time blocks. One split holds out the last block of
+every run (**time**: how the model predicts later) and a region (how it extrapolates): the
+block of each run whose states reach farthest from the run's median (``"block"``,
+:func:`run_blocks`), or the stretches around the most extreme states of all the runs
+(``"extremes"``, :func:`extreme_masks`: the training states all lie inside a threshold that the
+held-out ones cross, so a stand-in fitted along the trajectories must extrapolate), or both.
+Cross-validated, every block is held out in turn, one split per block (and with the extremes,
+one more split judged on them). The training pieces are thinned to every ``stride``-th sample;
+the held-out pieces are kept whole (the weak form integrates over them), and no test function
+straddles the fold: each piece is fitted or judged on its own.
 """
 
 from __future__ import annotations
