@@ -13,7 +13,7 @@ than a test function). Two parts of the data are held out (:mod:`.folds`):
 - the stretches around the most extreme states of all the runs (**region**: how it
   extrapolates to states it did not see): every state beyond a threshold of the scaled
   distance from the median, with a test function's half-width of time on either side, a
-  ``1 / n_blocks`` share of the other samples. The training states all lie inside the
+  share :data:`~.folds.EXTREME_SHARE` of the other samples. The training states all lie inside the
   threshold, so an approximation fitted along the trajectories (a cosine standing in for
   ``theta^2``) must extrapolate, and fails there where the right structure does not. The
   stretches are cut whole, so that no test function straddles the fold. ``region="block"``

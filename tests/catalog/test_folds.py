@@ -94,7 +94,7 @@ def test_the_extreme_states_fold_refuses_the_stand_in_that_the_time_blocks_keep(
     assert np.abs(np.vstack(xs)).max() < 1.6  # the check below reaches 2.5
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        blocks = grow_catalog(xs, ts, us, coordinates=["theta"], kinds="angle")
+        blocks = grow_catalog(xs, ts, us, coordinates=["theta"], kinds="angle", region="block")
         extremes = grow_catalog(xs, ts, us, coordinates=["theta"], kinds="angle",
                                 region="extremes")
     # the region block keeps sines and cosines of 2 theta for the spring: wrong beyond the data
