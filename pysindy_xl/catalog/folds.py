@@ -174,6 +174,24 @@ def _split(arrays, masks, held, stride):
     return train, blocks
 
 
+def _without_short(mask, length: int):
+    """``mask`` without its runs of True shorter than ``length`` samples."""
+    edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(int), 0]))
+    starts, stops = edges[::2], edges[1::2]
+    short = stops - starts < length
+    marks = np.zeros(len(mask) + 1, dtype=int)
+    np.add.at(marks, starts[short], 1)
+    np.add.at(marks, stops[short], -1)
+    return mask & ~(np.cumsum(marks)[:-1] > 0)
+
+
+def _trained(ts, masks, margin):
+    """Training masks without the pieces shorter than a test function of half-width
+    ``margin`` (the gaps between extreme stretches: they give the weak form no row)."""
+    return [_without_short(m, 2 * int(np.ceil(margin / float(np.median(np.diff(tk))))) + 1)
+            for tk, m in zip(ts, masks, strict=True)]
+
+
 def _extremes(arrays, spans, margin):
     """The held-out mask of the extreme states of each run outside its last block
     (:func:`extreme_masks`, a share :data:`EXTREME_SHARE` of those samples) and its pieces."""
@@ -258,14 +276,14 @@ def held_out_splits(arrays: dict, n_blocks: int, stride: int = 1,
             masks = [m & fold[0] for m, fold in zip(masks, folds, strict=True)]
         if region != "block":
             held.append(pieces)
-            masks = [m & ~e for m, e in zip(masks, extreme, strict=True)]
+            masks = _trained(ts, [m & ~e for m, e in zip(masks, extreme, strict=True)], margin)
         return [_split(arrays, masks, held, stride)], (0, 1)
     splits = [_split(arrays, [_outside(len(tk), run[j]) for tk, run in zip(ts, spans, strict=True)],
                      [[(k, run[j]) for k, run in enumerate(spans)]], stride)
               for j in range(n_blocks)]
     if region == "block":
         return splits, (n_blocks - 1, int(np.searchsorted(edges[0], folds[0][2].start)))
-    masks = [_outside(len(tk), run[-1]) & ~e for tk, run, e in zip(ts, spans, extreme,
-                                                                  strict=True)]
+    masks = _trained(ts, [_outside(len(tk), run[-1]) & ~e for tk, run, e in
+                          zip(ts, spans, extreme, strict=True)], margin)
     splits.append(_split(arrays, masks, [pieces], stride))
     return splits, (n_blocks - 1, n_blocks)

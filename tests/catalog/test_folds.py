@@ -60,6 +60,8 @@ def test_held_out_splits_of_the_extremes_train_inside_and_judge_beyond():
     arrays = _arrays([t], [x])
     (train, blocks), = held_out_splits(arrays, 5, region="extremes", margin=0.2)[0]
     assert len(blocks) == 2  # the time block and the extreme stretches
+    # every training piece holds a test function of half-width margin (no empty gaps)
+    assert min(piece[-1] - piece[0] for piece in train["t"]) >= 2 * 0.2 - 1e-9
     assert np.all(blocks[0]["t"][0] >= 8.0 - 1e-9)
     trained = np.abs(np.vstack(train["x"])).max()
     assert trained < np.abs(np.vstack(blocks[1]["x"])).max()
