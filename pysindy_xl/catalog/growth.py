@@ -6,26 +6,28 @@ on samples the fit never saw: over the generalized forces' part for data with fo
 unforced data each coordinate's equation over its own largest term, combined as an RMS over the
 coordinates (an implicit law fixes each equation only up to a factor: judged over all rows, a
 law that shrank one equation would hide its residual; the strong form where a block is shorter
-than a test function). Two parts of the data are held out (:mod:`.folds`):
+than a test function). Two blocks of each run are held out (:mod:`.folds`):
 
-- the last of ``n_blocks`` contiguous time blocks of each run (**time**: how the model
-  predicts later);
-- the stretches around the most extreme states of all the runs (**region**: how it
-  extrapolates to states it did not see): every state beyond a threshold of the scaled
-  distance from the median, with a test function's half-width of time on either side, a
-  share :data:`~.folds.EXTREME_SHARE` of the other samples. The training states all lie inside the
-  threshold, so an approximation fitted along the trajectories (a cosine standing in for
-  ``theta^2``) must extrapolate, and fails there where the right structure does not. The
-  stretches are cut whole, so that no test function straddles the fold. ``region="block"``
-  holds out instead the one time block of each run reaching farthest from its median
-  (inside the range the other blocks cover, it told the stand-ins from the law less often),
-  ``"both"`` both.
+- the last of ``n_blocks`` contiguous time blocks (**time**: how the model predicts later);
+- the other block reaching farthest from the run's median state (**region**: how it
+  extrapolates to states it did not see). An approximation fitted along the trajectories (a
+  cosine standing in for ``theta^2``) fails there, where the right structure does not.
+
+The region block lies inside the range the other blocks cover, so at high noise it may not
+tell a stand-in from the law. ``region="extremes"`` holds out instead the stretches around
+the most extreme states of all the runs: every state beyond a threshold of the scaled
+distance from the median, with a test function's half-width of time on either side, a share
+:data:`~.folds.EXTREME_SHARE` of the other samples, cut whole so that no test function
+straddles the fold. The training states then all lie inside the threshold, and a stand-in must
+extrapolate. It is not the default: where a law's nonlinearity shows only in the extreme
+states (a hardening spring on a short recording), the fit inside the threshold cannot find it
+and the growth stops at the start. ``"both"`` holds out both.
 
 With ``cross_validate``, every block is held out in turn instead (one fit per block on the
 others; the criterion is the RMS of all the blocks' errors): on a recording of a few
-seconds the extreme states hold most of what identifies configuration-dependent terms, and a
-fit without them fails for the right catalog too (``region="extremes"`` adds the extreme
-stretches' split to the blocks').
+seconds the region block holds most of what identifies configuration-dependent terms, and a
+fit without it fails for the right catalog too (``region="extremes"`` adds a split judged on
+the extreme stretches).
 
 The criterion is the RMS of the two errors. Splines end at the extreme percentiles of the
 training data (:data:`END_PERCENTILE`) and continue linearly (:func:`~.bases.natural_splines`),
@@ -209,7 +211,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                  max_terms: int = 400, optimizer=None, formulation: str = "auto",
                  n_blocks: int = 5, tolerance: float = 0.05, good_enough: float = 0.002,
                  moves=MOVES, search_optimizer="auto", search_samples: int | None = 6000,
-                 cross_validate: bool = False, region: str | None = None, progress=None,
+                 cross_validate: bool = False, region: str = "block", progress=None,
                  n_jobs=None):
     """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
 
@@ -257,14 +259,14 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         recordings of a few seconds the region block holds most of what identifies
         configuration-dependent terms (the largest swings): fitted without it, the right
         catalog's fit fails and the growth keeps a smaller one.
-    region : {None, "block", "extremes", "both"}, default None
+    region : {"block", "extremes", "both"}, default "block"
         What the region fold holds out besides the last block of each run
-        (:func:`~.folds.held_out_splits`): the block reaching farthest from the run's median,
+        (:func:`~.folds.held_out_splits`): the block reaching farthest from the run's median;
         the stretches around the most extreme states of all the runs (the training states
-        then all lie inside a threshold that the held-out ones cross), or both. Cross-validated,
-        ``"extremes"`` and ``"both"`` add a fit outside the extreme stretches, judged on them.
-        None: ``"extremes"``, and with ``cross_validate`` ``"block"`` (the blocks in turn
-        only).
+        then all lie inside a threshold that the held-out ones cross: a stand-in fitted along
+        the trajectories must extrapolate, but so must the law, whose nonlinear terms may show
+        only beyond the threshold); or both. Cross-validated, ``"extremes"`` and ``"both"``
+        add a fit outside the extreme stretches, judged on them.
     progress : callable, optional
         Called with a line of text after each step.
     n_jobs : int or None, default None
@@ -313,10 +315,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     check_option("max_terms", max_terms, "int", low=1)
     check_option("n_blocks", n_blocks, "int", low=3)
     check_option("cross_validate", cross_validate, "bool")
-    if region is None:
-        region = "block" if cross_validate else "extremes"
     if region not in REGIONS:
-        raise ValueError(f"region: expected None or one of {REGIONS}, got {region!r}")
+        raise ValueError(f"region: expected one of {REGIONS}, got {region!r}")
     check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
     check_option("good_enough", good_enough, "real", low=0)
     unknown = [m for m in moves if m not in MOVES + MORE_MOVES]

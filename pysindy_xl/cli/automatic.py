@@ -26,9 +26,9 @@ WHAT_IS_TRIED = (
     "coordinates, higher powers, higher sin/cos degrees, powers of angles (torsion springs), "
     "gyroscopic terms, smooth Coulomb friction and natural cubic splines of single "
     "coordinates (B-splines inside the data, continued linearly beyond it), each first alone, "
-    "then in the order of what it achieved alone; a step is kept when the error on held-out "
-    "data (the last time block of each run, and the stretches around the most extreme states, "
-    "fitted on the states inside them) drops by 5 %% or more; then families are dropped again "
+    "then in the order of what it achieved alone; a step is kept when the error on two "
+    "held-out blocks of each run (the last one, and the one reaching farthest from the median "
+    "state) drops by 5 %% or more; then families are dropped again "
     "(sin/cos of an angle beside its powers, powers beside sin/cos, splines, degrees, "
     "products, kinetic, gyroscopic and Coulomb terms), or exchanged for the family they stand "
     "in for, while the error stays within 5 %% with fewer terms")
