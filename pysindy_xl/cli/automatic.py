@@ -28,10 +28,10 @@ WHAT_IS_TRIED = (
     "coordinates (B-splines inside the data, continued linearly beyond it), each first alone, "
     "then in the order of what it achieved alone; a step is kept when the error on two "
     "held-out blocks of each run (the last one, and the one reaching farthest from the median "
-    "state) drops by 5 %% or more; then families are dropped again "
-    "(sin/cos of an angle beside its powers, powers beside sin/cos, splines, degrees, "
-    "products, kinetic, gyroscopic and Coulomb terms), or exchanged for the family they stand "
-    "in for, while the error stays within 5 %% with fewer terms")
+    "state) drops by 5 %% or more; then families are dropped again (sin/cos of an angle beside "
+    "its powers, powers beside sin/cos, splines, degrees, products, kinetic, gyroscopic and "
+    "Coulomb terms), or exchanged for the family they stand in for, while the error stays "
+    "within 5 %% with fewer terms")
 
 #: Below this R^2 (on the training data) a fit explains nothing.
 POOR_R2 = 0.5
