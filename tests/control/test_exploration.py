@@ -134,3 +134,26 @@ def test_the_growth_gives_the_same_model_with_one_or_two_processes():
     assert one.catalog.describe() == two.catalog.describe()
     np.testing.assert_array_equal(one.model.coefficients(), two.model.coefficients())
     assert "n_jobs=2" in repr(AutomaticGrowth(n_jobs=2))
+
+
+def test_the_command_line_hands_n_jobs_to_the_growth(monkeypatch):
+    """``pysindy-xl control --n-jobs 2`` runs the loop with ``AutomaticGrowth(n_jobs=2)``;
+    without it, with the catalog's name."""
+    import argparse
+
+    import pysindy_xl.control.loop as loop
+    from pysindy_xl.control.command import add_parser, run_control
+
+    seen = []
+
+    def fake(system, task, catalog, **kwargs):
+        seen.append(catalog)
+        raise ValueError("stop here")
+
+    monkeypatch.setattr(loop, "learn_to_control", fake)
+    parser = argparse.ArgumentParser()
+    add_parser(parser.add_subparsers(dest="command"))
+    for extra in (["--n-jobs", "2"], []):
+        assert run_control(parser.parse_args(["control", "cart-pole", "--quiet", *extra])) == 1
+    assert isinstance(seen[0], AutomaticGrowth) and seen[0].n_jobs == 2
+    assert seen[1] == "automatic"
