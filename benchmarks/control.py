@@ -130,9 +130,10 @@ def pysindy_identify(system, data, threshold=PYSINDY_THRESHOLD, normalize=PYSIND
     return f
 
 
-def run_case(task, method, seed, max_episodes=None):
+def run_case(task, method, seed, max_episodes=None, n_jobs=None):
     """One case: the loop's JSON report, with the wall time (``max_episodes``: the loop's cap
-    on episodes, default its own)."""
+    on episodes, default its own; ``n_jobs``: processes of the automatic catalog's growth,
+    which do not change the result)."""
     from pysindy_xl.control.loop import learn_to_control
     system, force_limit, noise = TASKS[task]
     options = {"seed": seed, "force_limit": force_limit, "noise": noise,
@@ -144,6 +145,9 @@ def run_case(task, method, seed, max_episodes=None):
         # no physical check: a first-order SINDy model gets every attempt
         options.update(identify=lambda s, d: pysindy_identify(get_system(system), d),
                        check_model=False)
+    elif method == "automatic" and n_jobs is not None:
+        from pysindy_xl.control import AutomaticGrowth
+        options.update(catalog=AutomaticGrowth(n_jobs=n_jobs))
     else:
         options.update(catalog=method)
     if max_episodes is not None and method != "true":
@@ -314,6 +318,15 @@ time below is inflated by the load; the `--timing` table measures the planning s
 """
 
 
+def _append(path, line: str) -> None:
+    """Append ``line`` to ``path`` in one write (runs in parallel append whole lines)."""
+    fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+    try:
+        os.write(fd, line.encode("utf-8"))
+    finally:
+        os.close(fd)
+
+
 def write_summary(notes: str = "") -> str:
     text = (HEADER + "\n## Swing-up\n\n" + summarize() + "\n## Arm tracking\n\n"
             + arm_summary() + "\n## Planning step\n\n" + timing_summary()
@@ -384,6 +397,9 @@ def main(argv=None):
     parser.add_argument("--rerun", action="store_true",
                         help="run finished cases again (the summary takes each case's latest "
                              "record)")
+    parser.add_argument("--n-jobs", type=int, default=None,
+                        help="processes of the automatic catalog's growth (the result does "
+                             "not depend on it)")
     parser.add_argument("--arm", action="store_true", help="run the arm-tracking cases")
     parser.add_argument("--to-jax", action="store_true",
                         help="time to_jax() against the rigid-body kernel and the expressions")
@@ -424,14 +440,13 @@ def main(argv=None):
             print(f"[{k}/{len(cases)}] {task} {method} seed {seed}", file=sys.stderr,
                   flush=True)
             try:
-                record = run_case(task, method, seed, args.max_episodes)
+                record = run_case(task, method, seed, args.max_episodes, args.n_jobs)
             except (ValueError, TypeError, ArithmeticError, RuntimeError) as error:  # recorded
                 record = {"task_name": task, "method": label(method), "seed": seed,
                           "success": False,
                           "interaction_s": None, "episodes": 0, "mpc_step_ms": None,
                           "error": f"{type(error).__name__}: {error}"}
-            with JSONL.open("a") as handle:
-                handle.write(json.dumps(record, default=float) + "\n")
+            _append(JSONL, json.dumps(record, default=float) + "\n")
             print(f"    -> success {record['success']}, interaction "
                   f"{record['interaction_s']}", file=sys.stderr, flush=True)
     print(write_summary(NOTES_PATH.read_text() if NOTES_PATH.exists() else ""))

@@ -4,7 +4,8 @@ torque, and the loop that explores a plant, identifies it and controls it.
 One concept per module: :mod:`.discrete` (the model as ``x_{k+1} = F(x_k, u_k)``),
 :mod:`.costs`, :mod:`.sampling` (MPPI), :mod:`.ilqr`, :mod:`.lqr`, :mod:`.mpc` (the
 receding-horizon controller), :mod:`.computed_torque`, :mod:`.plant` (MuJoCo as the plant),
-:mod:`.tasks`, :mod:`.catalogs` and :mod:`.loop` (explore, identify, control, repeat). Public
+:mod:`.tasks`, :mod:`.catalogs`, :mod:`.exploration` (excitation kept on the track) and
+:mod:`.loop` (explore, identify, control, repeat). Public
 names load on first use: importing this package imports neither JAX nor MuJoCo.
 
 >>> from pysindy_xl.control import get_task
@@ -30,8 +31,8 @@ _LAZY = {
     **dict.fromkeys(("TASKS", "SwingUpTask", "get_task"), "tasks"),
     **dict.fromkeys(("AutomaticGrowth", "CATALOGS", "catalog_identifier", "generic_catalog",
                      "kinematic_catalog_of", "resolve_catalog", "system_kinds"), "catalogs"),
-    **dict.fromkeys(("LearningResult", "exploration_policy", "learn_to_control",
-                     "noisy_positions"), "loop"),
+    **dict.fromkeys(("TrackGuard", "exploration_policy"), "exploration"),
+    **dict.fromkeys(("LearningResult", "learn_to_control", "noisy_positions"), "loop"),
 }
 
 __all__ = list(_LAZY)

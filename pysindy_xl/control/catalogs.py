@@ -152,6 +152,11 @@ class AutomaticGrowth:
         and :data:`~pysindy_xl.catalog.MORE_MOVES` (coupled damping).
     progress : callable, optional
         ``progress(line)`` after each step of the growth.
+    n_jobs : int or None, default None
+        Processes of the growth's search (:func:`~pysindy_xl.grow_catalog`): while one
+        candidate is fitted, ``n_jobs - 1`` workers fit the ones it will probably try next.
+        The path, the chosen catalog and the model do not depend on it. None: 1 (joblib's
+        convention; -1: all cores).
 
     Examples
     --------
@@ -164,13 +169,14 @@ class AutomaticGrowth:
     name = "automatic"
 
     def __init__(self, rows_per_term: int = 150, ceiling: int = 400, n_blocks: int = 5,
-                 cross_validate: bool = True, moves=None, progress=None):
+                 cross_validate: bool = True, moves=None, progress=None, n_jobs=None):
         self.rows_per_term = rows_per_term
         self.ceiling = ceiling
         self.n_blocks = n_blocks
         self.cross_validate = cross_validate
         self.moves = moves
         self.progress = progress
+        self.n_jobs = n_jobs
 
     def max_terms(self, n_samples: int, n_coordinates: int) -> int:
         """The ceiling of the catalog for ``n_samples`` samples of ``n_coordinates``.
@@ -221,7 +227,7 @@ class AutomaticGrowth:
                              kinds=system_kinds(system),
                              max_terms=self.max_terms(sum(len(tk) for tk in t), system.n),
                              n_blocks=self.n_blocks, cross_validate=self.cross_validate,
-                             moves=moves, progress=self.progress)
+                             moves=moves, progress=self.progress, n_jobs=self.n_jobs)
         # the chosen catalog fitted on all the data with the search's test functions, at most
         # a third of the default width: grow_catalog's own final fit takes the default width,
         # and a third of a fifth of 8 s (0.53 s) blurs the cart double pendulum's fast motion
@@ -234,7 +240,8 @@ class AutomaticGrowth:
     def __repr__(self) -> str:
         return (f"AutomaticGrowth(rows_per_term={self.rows_per_term}, ceiling={self.ceiling}, "
                 f"n_blocks={self.n_blocks}, cross_validate={self.cross_validate}, "
-                f"moves={self.moves})")
+                f"moves={self.moves}" + ("" if self.n_jobs is None
+                                         else f", n_jobs={self.n_jobs}") + ")")
 
 
 def _search_width(t, q, n_blocks: int) -> float:

@@ -71,6 +71,9 @@ def add_parser(subparsers):
                              "cart-pole, 8 for the cart double pendulum)")
     parser.add_argument("--max-episodes", type=_positive_int, default=6,
                         help="most episodes on the plant (default: 6)")
+    parser.add_argument("--n-jobs", type=int, default=None, metavar="N",
+                        help="processes of the automatic catalog's growth (-1: all cores; "
+                             "the result does not depend on it; default: 1)")
     parser.add_argument("--out", default=None, metavar="FILE.json",
                         help="write the JSON report there (default: stdout)")
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
@@ -89,7 +92,7 @@ def run_control(args) -> int:
     args : argparse.Namespace
         Parsed by the parser of :func:`add_parser`: ``system``, ``task``, ``seed``,
         ``force_limit``, ``track_limit``, ``noise``, ``catalog``, ``explore``,
-        ``max_episodes``, ``out`` and ``quiet``.
+        ``max_episodes``, ``n_jobs`` (optional), ``out`` and ``quiet``.
 
     Returns
     -------
@@ -109,6 +112,7 @@ def run_control(args) -> int:
     >>> run_control(args)  # the message goes to stderr
     1
     """
+    from .catalogs import AutomaticGrowth
     from .loop import learn_to_control
 
     def log(message):
@@ -116,7 +120,10 @@ def run_control(args) -> int:
             print(f"[control] {message}", file=sys.stderr, flush=True)
 
     try:
-        result = learn_to_control(args.system, args.task, catalog=args.catalog,
+        n_jobs = getattr(args, "n_jobs", None)
+        catalog = AutomaticGrowth(n_jobs=n_jobs) \
+            if args.catalog == "automatic" and n_jobs is not None else args.catalog
+        result = learn_to_control(args.system, args.task, catalog=catalog,
                                   noise=args.noise, seed=args.seed,
                                   force_limit=args.force_limit, track_limit=args.track_limit,
                                   explore_s=args.explore, max_episodes=args.max_episodes,

@@ -2,7 +2,11 @@
 
 1. **Explore**: a random sum of sinusoids on the actuated coordinate plus a model-free
    energy-pumping term, with a proportional-derivative term that keeps the cart near the
-   centre, clipped to the force limit (:func:`exploration_policy`).
+   centre, clipped to the force limit (:func:`~.exploration.exploration_policy`). A
+   :class:`~.exploration.TrackGuard` brings the cart back towards the centre whenever it is
+   about to reach the end of the track, so the exploration records the seconds asked for;
+   should the cart reach the end all the same, the plant is reset at the centre and the
+   exploration goes on for the remaining seconds (a restart: a new recording).
 2. **Identify**: on every episode so far, from positions only (relative Gaussian noise
    ``noise`` added: std = ``noise`` x each coordinate's standard deviation over the episode)
    and the applied forces: by default the automatic catalog grown on the data from the
@@ -13,9 +17,13 @@
 4. Until the task succeeds: the attempt's recording joins the data, and the model is identified
    again.
 
-MuJoCo is the plant only; every plant second (exploration and attempts) is counted in
-``interaction_s``. The controller reads the plant's state ``[q, qd]`` (full-state feedback,
-without noise); the identification sees only noisy positions and the forces."""
+MuJoCo is the plant only; every plant second (exploration, the guard's returns to the
+centre, and attempts) is counted in ``interaction_s``. A restart of the exploration after
+the end of the track is a new plant episode: its seconds are counted, the number of restarts
+is reported (``restarts``), and the reset itself takes no plant time (the simulated plant is
+put back at the centre at once; on a rig, carrying the cart back would add to this).
+The controller reads the plant's state ``[q, qd]`` (full-state feedback, without noise); the
+identification sees only noisy positions and the forces."""
 
 from __future__ import annotations
 
@@ -27,10 +35,12 @@ import numpy as np
 from .catalogs import catalog_identifier
 from .costs import swing_up_cost
 from .discrete import continuous_dynamics, discrete_dynamics
+from .exploration import TrackGuard, exploration_policy
 from .mpc import PredictiveController
 from .plant import MuJoCoPlant
 from .tasks import get_task
 
+# exploration_policy: defined in .exploration, importable from here as well
 __all__ = ["LearningResult", "exploration_policy", "learn_to_control", "noisy_positions"]
 
 #: Seconds of the first exploration per system: enough pumped motion for a model that swings
@@ -39,6 +49,13 @@ __all__ = ["LearningResult", "exploration_policy", "learn_to_control", "noisy_po
 #: (:class:`~.catalogs.AutomaticGrowth`: 150 equations per candidate, 3 coordinates at 1 kHz)
 #: admits from 7 s of data on.
 EXPLORE_S = {"cart-pole": 2.5, "cart-double-pendulum": 8.0}
+
+#: Most restarts of one exploration at the centre after the cart reached the end of the track.
+_MAX_RESTARTS = 5
+#: Shortest piece (s) of a restarted exploration that joins the data (the longest piece does
+#: in any case): the identification's test functions are sized on the shortest recording,
+#: which a short piece would narrow. Its seconds count all the same.
+_MIN_SEGMENT_S = 1.0
 
 #: Planner settings per system: control period (s), RK4 steps per period, horizon (periods),
 #: samples, knots.
@@ -59,9 +76,11 @@ class LearningResult:
     success : bool
         The last attempt met the task.
     interaction_s : float
-        Plant seconds in total, every exploration and attempt included.
+        Plant seconds in total, every exploration (with its returns to the centre and
+        restarts) and attempt included.
     episodes : int
-        Episodes on the plant (explorations and attempts).
+        Explorations and attempts on the plant (an exploration's restarts are counted in
+        ``restarts``).
     catalog : str
         Name of the catalog (or ``"given model"``).
     force_limit : float
@@ -98,6 +117,9 @@ class LearningResult:
     catalog_description : str, default ""
         The catalog of the final model (for the automatic catalog, the grown catalog's
         description).
+    restarts : int, default 0
+        Explorations restarted at the centre after the cart reached the end of the track
+        (each a new plant episode, its seconds in ``interaction_s``; not in ``episodes``).
 
     Examples
     --------
@@ -127,6 +149,7 @@ class LearningResult:
     model: object = field(default=None, repr=False)
     identify_s: list = field(default_factory=list)
     catalog_description: str = ""
+    restarts: int = 0
 
     def to_dict(self) -> dict:
         """The result as JSON-ready data.
@@ -148,68 +171,6 @@ class LearningResult:
         data.pop("final_episode")
         data.pop("model")
         return data
-
-
-def exploration_policy(force_limit: float, rng: np.random.Generator, n_components: int = 6,
-                       frequencies=(0.3, 2.5), centering=(4.0, 2.0), linear: int = 0,
-                       pump: float = 0.6, angle: int | None = 1):
-    r"""``policy(state, t) -> u`` (1,) exciting the cart within the limits, model-free.
-
-    .. math:: u = s(t) + \rho\, u_{max} \tanh(-2 \dot\theta \cos\theta)
-              - k_p p - k_d \dot p
-
-    ``s``: a random sum of ``n_components`` sinusoids (amplitude ``0.6 force_limit`` in total,
-    frequencies uniform in ``frequencies``); the second term pumps energy into the pendulum of
-    angle ``angle`` (the cart accelerates against ``theta_dot cos(theta)``, which raises the
-    energy of any pendulum on a cart, whatever its length and mass; ``pump`` = ``rho``, 0 to
-    switch off); the last keeps the linear coordinate ``linear`` near the centre. The plant
-    clips the sum to the force limit.
-
-    Parameters
-    ----------
-    force_limit : float
-        Largest force (N).
-    rng : numpy.random.Generator
-        Draws the sinusoids.
-    n_components : int, default 6
-        Number of sinusoids.
-    frequencies : tuple of float, default (0.3, 2.5)
-        Range of the sinusoids' frequencies (Hz).
-    centering : tuple of float, default (4.0, 2.0)
-        ``k_p``, ``k_d``.
-    linear : int, default 0
-        Index of the pushed linear coordinate.
-    pump : float, default 0.6
-        Weight ``rho`` of the energy pumping, as a fraction of the force limit (0: none).
-    angle : int or None, default 1
-        Index of the pumped angle (None: no pumping).
-
-    Returns
-    -------
-    callable
-        ``policy(state (2n,), t) -> u (1,)``.
-
-    Examples
-    --------
-    >>> policy = exploration_policy(10.0, np.random.default_rng(0))
-    >>> policy(np.zeros(4), 0.0).shape
-    (1,)
-    """
-    freq = rng.uniform(*frequencies, n_components)
-    phase = rng.uniform(0.0, 2 * np.pi, n_components)
-    weight = rng.uniform(0.5, 1.0, n_components)
-    weight = 0.6 * force_limit * weight / weight.sum()
-    kp, kd = centering
-
-    def policy(state, t):
-        n = len(state) // 2
-        signal = float(weight @ np.sin(2 * np.pi * freq * t + phase))
-        if angle is not None and pump:
-            signal += pump * force_limit * np.tanh(-2.0 * state[n + angle]
-                                                   * np.cos(state[angle]))
-        return np.array([signal - kp * state[linear] - kd * state[n + linear]])
-
-    return policy
 
 
 def noisy_positions(episode, noise: float, rng: np.random.Generator) -> np.ndarray:
@@ -275,7 +236,7 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
                      max_episodes: int = 6,
                      max_interaction_s: float = 30.0, model=None, identify=None,
                      planner: dict | None = None, check_model: bool = True,
-                     log=None) -> LearningResult:
+                     log=None, keep_on_track: bool = True) -> LearningResult:
     """Learn to perform ``task`` on the MuJoCo ``system`` from its data alone (module docstring).
 
     Parameters
@@ -321,6 +282,12 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
         try.
     log : callable, optional
         ``log(message)`` for progress (for instance to stderr).
+    keep_on_track : bool, default True
+        Guard the explorations with a :class:`~.exploration.TrackGuard` (returns to the
+        centre before the end of the track). With or without it, an exploration that
+        reaches the end of the track restarts at the centre until it has recorded
+        ``explore_s`` seconds (at most 5 restarts, within ``max_interaction_s``; a piece
+        shorter than 1 s is counted but not identified from, unless it is the longest).
 
     Returns
     -------
@@ -382,21 +349,49 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
     scores = {"success": False, "upright_s": 0.0, "max_abs_x": 0.0, "max_abs_force": 0.0}
     current = model
     identify_s, description = [], "given model" if model is not None else ""
-    n_episodes = 0
+    n_episodes = restarts = 0
     episode = None
 
     def record(episode):
         q = noisy_positions(episode, noise, rng)
         data.append((q, episode.t, episode.tau))
 
+    def off_track(state, t):
+        return "track" if the_task.outside_track(state, plant_system)[0] else None
+
     def explore():
+        nonlocal restarts
         plant.reset(np.r_[0.0, rng.uniform(-0.05, 0.05, plant.n - 1)])
-        episode = plant.run(exploration_policy(the_task.force_limit, rng), explore_s,
-                            stop=lambda s, t: "track" if the_task.outside_track(
-                                s, plant_system)[0] else None)
-        record(episode)
-        history.append({"kind": "explore", "duration_s": episode.duration})
-        say(f"explore: {episode.duration:.2f} s on the plant (total {plant.interaction_s:.2f} s)")
+        excitation = exploration_policy(the_task.force_limit, rng)
+        guard = TrackGuard(excitation, the_task.track_limit, the_task.force_limit) \
+            if keep_on_track else None
+        policy = guard or excitation
+        done, pieces = 0.0, []
+        while True:
+            # a restart goes on with the excitation where it stopped
+            pieces.append(plant.run(lambda s, t, t0=done: policy(s, t + t0),
+                                    explore_s - done, stop=off_track))
+            done += pieces[-1].duration
+            if (pieces[-1].stopped != "track" or explore_s - done < plant.control_dt / 2
+                    or len(pieces) > _MAX_RESTARTS
+                    or plant.interaction_s >= max_interaction_s):
+                break
+            restarts += 1
+            plant.reset(np.r_[0.0, rng.uniform(-0.05, 0.05, plant.n - 1)])
+        # pieces under _MIN_SEGMENT_S are left out of the data (unless all are)
+        kept = [p for p in pieces if p.duration >= _MIN_SEGMENT_S] or \
+            [max(pieces, key=lambda p: p.duration)]
+        for piece in kept:
+            record(piece)
+        unused = done - sum(piece.duration for piece in kept)
+        segments = len(pieces)
+        returned = float(np.sum(guard.guarded)) * plant.control_dt if guard else 0.0
+        history.append({"kind": "explore", "duration_s": done, "segments": segments,
+                        "returns": guard.returns if guard else 0, "return_s": returned,
+                        "unused_s": unused})
+        say(f"explore: {done:.2f} s on the plant in {segments} segment(s), "
+            f"{guard.returns if guard else 0} return(s) to the centre ({returned:.2f} s; "
+            f"total {plant.interaction_s:.2f} s)")
 
     while n_episodes < max_episodes and plant.interaction_s < max_interaction_s:
         if model is None:
@@ -458,4 +453,4 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
         lqr_fraction=float(np.mean([m == "lqr" for m in modes])) if modes else 0.0,
         final_episode=episode if history and history[-1]["kind"] == "attempt" else None,
         model=current, identify_s=[float(s) for s in identify_s],
-        catalog_description=description)
+        catalog_description=description, restarts=restarts)
