@@ -157,7 +157,12 @@ def _keeps(step, best, tolerance) -> bool:
 
 
 def _parameters(state, move, kinds, n, skip=0):
-    """The catalog parameters after ``move`` from ``state``, or None when it does not apply."""
+    """The catalog parameters after ``move`` from ``state``, or None when it does not apply
+    (``"a+b"``: the move ``a``, then ``b``)."""
+    if "+" in move:
+        for part in move.split("+"):
+            state = None if state is None else _parameters(state, part, kinds, n, skip)
+        return state
     new = dict(state)
     angles = "angle" in kinds
     if move == "kinetic":
@@ -196,11 +201,30 @@ def _parameters(state, move, kinds, n, skip=0):
     return new
 
 
+def _joint_moves(moves, kinds, n, size) -> list:
+    """The pairs ``"a+b"`` of non-repeated moves from the first catalog whose joint catalog
+    has more terms than the two moves add alone: the second move multiplies the first's
+    family (``"kinetic+interaction"``: configuration-dependent kinetic coefficients over
+    products of two coordinates' functions, as ``cos(a - b)`` in ``cos(a - b) a_dot b_dot``).
+    ``size(parameters)`` is a catalog's number of terms."""
+    single = [m for m in moves if m not in _REPEATED]
+    base = size(_START)
+    out = []
+    for a, b in itertools.combinations(single, 2):
+        once, other = (_parameters(dict(_START), m, kinds, n) for m in (a, b))
+        both = None if once is None or other is None else _parameters(once, b, kinds, n)
+        if both is not None and (size(both) - base
+                                 > size(once) - base + size(other) - base):
+            out.append(f"{a}+{b}")
+    return out
+
+
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
                  max_terms: int = 400, optimizer=None, formulation: str = "auto",
                  n_blocks: int = 5, tolerance: float = 0.05, good_enough: float = 0.002,
                  moves=MOVES, search_optimizer="auto", search_samples: int | None = 6000,
-                 cross_validate: bool = False, progress=None, n_jobs=None):
+                 cross_validate: bool = False, physical: bool = False, progress=None,
+                 n_jobs=None):
     """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
 
     Parameters
@@ -295,6 +319,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     check_option("max_terms", max_terms, "int", low=1)
     check_option("n_blocks", n_blocks, "int", low=3)
     check_option("cross_validate", cross_validate, "bool")
+    check_option("physical", physical, "bool")
     check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
     check_option("good_enough", good_enough, "real", low=0)
     unknown = [m for m in moves if m not in MOVES + MORE_MOVES]
@@ -345,7 +370,15 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     fits.warm_up()  # the workers start while the first catalog is fitted here
 
     def evaluate(parameters, move, ahead=()):
-        return GrowthStep(move=move, chosen=False, **fits.get(parameters, ahead))
+        step = GrowthStep(move=move, chosen=False, **fits.get(parameters, ahead))
+        if physical and step.definite < 1 and not step.note:
+            step.note = (f"mass matrix not positive definite on {1 - step.definite:.0%} of "
+                         "the training states")
+        return step
+
+    def keeps(step, best):
+        """The keep rule (:func:`_keeps`); with ``physical``, for a physical fit only."""
+        return _keeps(step, best, tolerance) and (not physical or step.definite >= 1)
 
     def _size(parameters):
         try:
@@ -368,6 +401,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             if move == "splines" or parameters is None:
                 break
             queue.append((move, parameters))
+    # pairs of moves whose joint catalog holds terms that neither adds alone (kinetic
+    # coefficients over products of two coordinates' functions): tried as one move too
+    joint = _joint_moves(moves, kinds, n, _size)
+    queue += [(name, _parameters(dict(_START), name, kinds, n)) for name in joint]
     first = evaluate(dict(_START), "start", [p for _, p in queue])
     if first.note.startswith("ceiling"):
         raise ValueError(f"max_terms: the smallest catalog has {first.terms} terms, more than "
@@ -390,7 +427,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     def pairs(state, order, tried):
         """The pairs of non-repeated moves from ``state`` not tried yet: (parameters, name)."""
         out = []
-        single = [m for m in order if m not in _REPEATED]
+        single = [m for m in order if m not in _REPEATED and "+" not in m]
         for first_move, second_move in itertools.combinations(single, 2):
             once = _parameters(state, first_move, kinds, n, 0)
             twice = None if once is None else _parameters(once, second_move, kinds, n, 0)
@@ -433,7 +470,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                     ahead = rejected(state, order, index, skip, tried, improved)
                     tried.add(parameters_key(parameters))
                     step = attempt(parameters, move, ahead)
-                    keep = _keeps(step, best, tolerance)
+                    keep = keeps(step, best)
                     if keep:
                         state, best, improved = parameters, step, True
                         path.append(step)
@@ -450,7 +487,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                         continue
                     tried.add(parameters_key(twice))
                     step = attempt(twice, name, [p for p, _ in candidates[k + 1:]])
-                    if _keeps(step, best, tolerance):
+                    if keeps(step, best):
                         state, best, improved = twice, step, True
                         path.append(step)
                         break
@@ -466,9 +503,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             continue  # (its first degree was kept: no look further)
         step = attempt(parameters, move, [p for _, p in queue[index + 1:]])
         alone[move] = min(alone.get(move, np.inf), step.criterion)
-        if _keeps(step, first, tolerance):
+        if keeps(step, first):
             stopped.add(move)
-    order = sorted((m for m in moves if m != "splines"), key=lambda m: alone.get(m, np.inf))
+    order = sorted([m for m in moves if m != "splines"] + joint,
+                   key=lambda m: alone.get(m, np.inf))
     order += [m for m in moves if m == "splines"]
     # climb from the best and from the second-best first move: which family goes in first is
     # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
@@ -479,7 +517,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     if best.criterion > good_enough and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]
         other = climb(second)
-        if _keeps(other[1], best, tolerance):
+        if keeps(other[1], best):
             state, best, path = other
     # backward: drop the family whose removal the keep rule accepts best (a smaller catalog
     # within the tolerance at an equal fitted size is kept too: the stand-in that a family
@@ -494,9 +532,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                       and _size(parameters) != best.terms]
         for k, (move, parameters) in enumerate(candidates):
             step = attempt(parameters, f"-{move}", [p for _, p in candidates[k + 1:]])
-            if _keeps(step, best, tolerance) or (
+            if keeps(step, best) or (
                     step.criterion <= best.criterion * (1 + tolerance)
-                    and step.active == best.active and step.terms < best.terms):
+                    and step.active == best.active and step.terms < best.terms
+                    and (not physical or step.definite >= 1)):
                 dropped.append((step.criterion, step.active, parameters, step))
             else:
                 refused.append((move, parameters))
@@ -512,7 +551,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                         exchanges.append((f"-{move}+{other}", parameters))
         for k, (name, parameters) in enumerate(exchanges):
             step = attempt(parameters, name, [p for _, p in exchanges[k + 1:]])
-            if _keeps(step, best, tolerance):
+            if keeps(step, best):
                 dropped.append((step.criterion, step.active, parameters, step))
         if not dropped:
             break

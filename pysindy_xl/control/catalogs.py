@@ -150,6 +150,10 @@ class AutomaticGrowth:
     moves : sequence of str, optional
         Moves of the growth; default all of :data:`~pysindy_xl.catalog.MOVES` but "splines",
         and :data:`~pysindy_xl.catalog.MORE_MOVES` (coupled damping).
+    physical : bool, default True
+        Keep only catalogs whose fits have a positive definite mass matrix on all their
+        training states (``physical`` of :func:`~pysindy_xl.grow_catalog`): a model that is
+        not cannot be simulated, and the loop would refuse it.
     progress : callable, optional
         ``progress(line)`` after each step of the growth.
 
@@ -164,12 +168,14 @@ class AutomaticGrowth:
     name = "automatic"
 
     def __init__(self, rows_per_term: int = 150, ceiling: int = 400, n_blocks: int = 5,
-                 cross_validate: bool = True, moves=None, progress=None):
+                 cross_validate: bool = True, moves=None, physical: bool = True,
+                 progress=None):
         self.rows_per_term = rows_per_term
         self.ceiling = ceiling
         self.n_blocks = n_blocks
         self.cross_validate = cross_validate
         self.moves = moves
+        self.physical = physical
         self.progress = progress
 
     def max_terms(self, n_samples: int, n_coordinates: int) -> int:
@@ -221,7 +227,7 @@ class AutomaticGrowth:
                              kinds=system_kinds(system),
                              max_terms=self.max_terms(sum(len(tk) for tk in t), system.n),
                              n_blocks=self.n_blocks, cross_validate=self.cross_validate,
-                             moves=moves, progress=self.progress)
+                             moves=moves, physical=self.physical, progress=self.progress)
         # the chosen catalog fitted on all the data with the search's test functions, at most
         # a third of the default width: grow_catalog's own final fit takes the default width,
         # and a third of a fifth of 8 s (0.53 s) blurs the cart double pendulum's fast motion
@@ -234,7 +240,7 @@ class AutomaticGrowth:
     def __repr__(self) -> str:
         return (f"AutomaticGrowth(rows_per_term={self.rows_per_term}, ceiling={self.ceiling}, "
                 f"n_blocks={self.n_blocks}, cross_validate={self.cross_validate}, "
-                f"moves={self.moves})")
+                f"moves={self.moves}, physical={self.physical})")
 
 
 def _search_width(t, q, n_blocks: int) -> float:
@@ -287,7 +293,7 @@ def resolve_catalog(catalog):
     'generic'
     >>> resolve_catalog("automatic")  # doctest: +NORMALIZE_WHITESPACE
     ('automatic', AutomaticGrowth(rows_per_term=150, ceiling=400, n_blocks=5,
-                                  cross_validate=True, moves=None))
+                                  cross_validate=True, moves=None, physical=True))
     >>> resolve_catalog("mjcf")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
