@@ -23,7 +23,11 @@ training data (:data:`END_PERCENTILE`) and continue linearly (:func:`~.bases.nat
 so the region block judges their continuation as it judges any family's. From the smallest
 catalog (constant kinetic coefficients, quadratic potentials of the linear coordinates, sines
 and cosines of the angles, viscous friction), each move of :data:`MOVES` but the splines is first
-tried alone; the moves are then tried in turn in the order of what they achieved alone (the
+tried alone, and so is each pair of moves whose joint catalog holds terms that neither adds
+alone (``"kinetic+interaction"``: configuration-dependent kinetic coefficients over products of
+two coordinates' functions, the ``cos(a - b)`` of a coupling ``cos(a - b) a_dot b_dot``; a
+climb through single moves reaches it only after the stand-ins that each move alone favours);
+the moves are then tried in turn in the order of what they achieved alone (the
 family that explains most goes in first: no fixed order decides between a stand-in and the
 right family), the splines last (the flexible basis is for what the families leave). The
 growth climbs twice, from the best and from the second-best first move, and keeps the better
@@ -31,7 +35,9 @@ end: the first move is where a stand-in wins (a ``cos(theta)`` inertia for a tor
 or a power of an angle for a coupling that takes two moves to state).
 A move is kept when it lowers the criterion by the fraction ``tolerance`` at least, or keeps it
 within that fraction with fewer terms in the fitted model (a sine series imitating ``theta^2``
-needs more terms than ``theta^2``), the degree moves repeat while they do (and look one degree
+needs more terms than ``theta^2``); with ``physical``, only when every fit of the catalog has a
+positive definite mass matrix on all its training states (a model that has not cannot be
+simulated there). The degree moves repeat while they do (and look one degree
 further before they stop), and the growth stops when a whole pass keeps nothing or the
 criterion is below ``good_enough``. Before it stops, pairs of the moves that are not repeated
 (kinetic, interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither
@@ -271,6 +277,13 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         recordings of a few seconds the region block holds most of what identifies
         configuration-dependent terms (the largest swings): fitted without it, the right
         catalog's fit fails and the growth keeps a smaller one.
+    physical : bool, default False
+        Keep a catalog (in the climb and in the backward phase) only when the mass matrix
+        of each of its fits is positive definite on all the fit's training states
+        (:attr:`GrowthStep.definite` is 1; the first catalog is kept whatever it is).
+        A stand-in that lowers the criterion with an indefinite mass matrix (a sine
+        harmonic of one angle for a coupling of two) gives a model whose accelerations
+        are not defined where the matrix is singular.
     progress : callable, optional
         Called with a line of text after each step.
     n_jobs : int or None, default None
