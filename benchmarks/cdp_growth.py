@@ -115,7 +115,8 @@ def errors(model, states, tau, truth):
     bad = ~np.all(np.isfinite(predicted), axis=1)
     predicted = np.where(np.isfinite(predicted), predicted, 0.0)
     error = np.linalg.norm(predicted - truth, axis=0) / np.linalg.norm(truth, axis=0)
-    mass = np.asarray(model.dynamics_.mass_and_forcing(states)[0]).reshape(len(states), n, n)
+    z = np.c_[states, np.zeros((len(states), n)), tau, np.zeros(len(states))]
+    mass = np.asarray(model.dynamics_.mass_and_forcing(z)[0]).reshape(len(states), n, n)
     definite = np.linalg.eigvalsh(0.5 * (mass + np.swapaxes(mass, 1, 2))).min(axis=1) > 0
     return float(np.max(error)) if not bad.any() else float("inf"), float(np.mean(definite))
 
@@ -133,8 +134,95 @@ def coupling(model) -> bool:
     return False
 
 
-def run_seed(seed: int, growth) -> dict:
-    from pysindy_xl.control import AutomaticGrowth  # noqa: F401
+def cached_candidates(label: str, seed: int) -> None:
+    """Keep every candidate's fit and score (:func:`~pysindy_xl.catalog.candidates.
+    evaluate_candidate`) in a JSON-lines file of ``label`` and ``seed``: a run that stops
+    replays them."""
+    from pysindy_xl.catalog import candidates
+    path = os.path.join(CACHE, f"candidates_{label}_{seed}.jsonl")
+    known = {}
+    if os.path.exists(path):
+        for line in open(path):
+            key, value = json.loads(line)
+            known[key] = value
+    original = getattr(candidates, "_original_evaluate", candidates.evaluate_candidate)
+    candidates._original_evaluate = original
+
+    def evaluate(search, parameters):
+        key = candidates.parameters_key(parameters)
+        if key not in known:
+            known[key] = original(search, parameters)
+            with open(path, "a") as f:
+                f.write(json.dumps([key, known[key]], default=float) + "\n")
+        return dict(known[key])
+
+    candidates.evaluate_candidate = evaluate
+
+
+def catalog_of(description: str, q, t) -> object:
+    """The :class:`~pysindy_xl.AutomaticCatalog` a growth on ``q, t`` would build from its
+    ``describe()`` text."""
+    import re
+
+    from pysindy_xl.catalog import AutomaticCatalog
+    from pysindy_xl.catalog.growth import _span
+    found = {"degree": 2, "trig_degree": 1, "angle_degree": 0}
+    if m := re.search(r"x\.\.x\^(\d)", description):
+        found["degree"] = int(m.group(1))
+    if m := re.search(r"sin/cos degree (\d)", description):
+        found["trig_degree"] = int(m.group(1))
+    if m := re.search(r"theta1\.\.theta1\^(\d)", description):
+        found["angle_degree"] = int(m.group(1))
+    found["interaction"] = int(re.search(r"interaction (\d)", description).group(1))
+    found["kinetic"] = re.search(r"kinetic (\w+)", description).group(1)
+    found["gyroscopic"] = "gyroscopic" in description
+    found["dissipation"] = tuple(re.search(r"dissipation ([\w+]+)", description)
+                                 .group(1).split("+"))
+    scale = float(np.std(np.gradient(q, t, axis=0), axis=0).mean())
+    return AutomaticCatalog(["x", "theta1", "theta2"], kinds=["linear", "angle", "angle"],
+                            bounds=_span([q]), coulomb_scale=max(1e-3, 0.02 * scale),
+                            max_terms=400, **found)
+
+
+def refit(seed: int, description: str) -> dict:
+    """The final fit of :class:`~pysindy_xl.control.AutomaticGrowth` of the catalog
+    ``description`` (a recorded growth's choice) on the seed's exploration, evaluated."""
+    from types import SimpleNamespace
+
+    from pysindy_xl import XLSINDy
+    from pysindy_xl.control.catalogs import _fit_width
+    from pysindy_xl.weak import BumpTestFunctions
+    q, t, u, _, _ = exploration(seed)
+    catalog = catalog_of(description, q, t)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = XLSINDy(catalog, test_functions=BumpTestFunctions(
+            width=_fit_width([t], [q], 5))).fit([q], t=[t], u=[u])
+    found = SimpleNamespace(model=model, catalog=catalog, held_out_error=float("nan"),
+                            steps=[], table=lambda: "")
+    return evaluated(seed, found, float("nan"), float("nan"), t)
+
+
+def evaluated(seed, found, cpu_s, wall_s, t) -> dict:
+    box_states, box_tau, traj_states, traj_tau = held_out_states(seed)
+    try:
+        box = errors(found.model, box_states, box_tau, mujoco_accelerations(box_states, box_tau))
+        traj = errors(found.model, traj_states, traj_tau,
+                      mujoco_accelerations(traj_states, traj_tau))
+    except Exception as error:  # noqa: BLE001 - the row is kept with the growth's figures
+        print(f"evaluation failed: {error!r}", file=sys.stderr)
+        box = traj = (float("nan"), float("nan"))
+    steps_cpu = sum(s.cpu_seconds for s in found.steps)
+    return {"seed": seed, "duration_s": float(t[-1] - t[0]), "catalog": found.catalog.describe(),
+            "coupling": coupling(found.model), "criterion": found.held_out_error,
+            "box_error": box[0], "box_definite": box[1], "traj_error": traj[0],
+            "traj_definite": traj[1], "cpu_s": cpu_s, "steps_cpu_s": steps_cpu,
+            "wall_s": wall_s, "steps": len(found.steps), "table": found.table()}
+
+
+def run_seed(seed: int, growth, label: str = "") -> dict:
+    if label:
+        cached_candidates(label, seed)
     q, t, u, q_true, _ = exploration(seed)
     started, cpu = time.perf_counter(), time.process_time()
     lines = []
@@ -148,16 +236,7 @@ def run_seed(seed: int, growth) -> dict:
         warnings.simplefilter("ignore")
         found = growth(NAME, [(q, t, u)])
     cpu_s, wall_s = time.process_time() - cpu, time.perf_counter() - started
-    box_states, box_tau, traj_states, traj_tau = held_out_states(seed)
-    box = errors(found.model, box_states, box_tau, mujoco_accelerations(box_states, box_tau))
-    traj = errors(found.model, traj_states, traj_tau,
-                  mujoco_accelerations(traj_states, traj_tau))
-    steps_cpu = sum(s.cpu_seconds for s in found.steps)
-    return {"seed": seed, "duration_s": float(t[-1] - t[0]), "catalog": found.catalog.describe(),
-            "coupling": coupling(found.model), "criterion": found.held_out_error,
-            "box_error": box[0], "box_definite": box[1], "traj_error": traj[0],
-            "traj_definite": traj[1], "cpu_s": cpu_s, "steps_cpu_s": steps_cpu,
-            "wall_s": wall_s, "steps": len(found.steps), "table": found.table()}
+    return evaluated(seed, found, cpu_s, wall_s, t)
 
 
 def main(argv=None):
@@ -166,15 +245,27 @@ def main(argv=None):
     parser.add_argument("--label", default="")
     parser.add_argument("--out", default=None)
     parser.add_argument("--data-only", action="store_true")
+    parser.add_argument("--refit", nargs="+", default=None, metavar="SEED=DESCRIPTION",
+                        help="fit a recorded growth's catalog instead of growing one")
     args = parser.parse_args(argv)
     from pysindy_xl.control import AutomaticGrowth
+    if args.refit:
+        for item in args.refit:
+            seed, description = item.split("=", 1)
+            row = refit(int(seed), description)
+            row["label"] = args.label
+            print(json.dumps({k: v for k, v in row.items() if k != "table"}), flush=True)
+            if args.out:
+                with open(args.out, "a") as f:
+                    f.write(json.dumps(row) + "\n")
+        return
     for seed in args.seeds:
         if args.data_only:
             q, t, *_ = exploration(seed)
             exploration(seed + 100)
             print(seed, round(float(t[-1]), 2), flush=True)
             continue
-        row = run_seed(seed, AutomaticGrowth())
+        row = run_seed(seed, AutomaticGrowth(), args.label)
         row["label"] = args.label
         print(json.dumps({k: v for k, v in row.items() if k != "table"}), flush=True)
         print(row["table"], flush=True)
