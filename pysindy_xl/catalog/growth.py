@@ -390,8 +390,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         return step
 
     def keeps(step, best):
-        """The keep rule (:func:`_keeps`); with ``physical``, for a physical fit only."""
-        return _keeps(step, best, tolerance) and (not physical or step.definite >= 1)
+        """The keep rule (:func:`_keeps`); with ``physical``, a catalog whose fits have a
+        positive definite mass matrix is not given up for one whose fits have not."""
+        return _keeps(step, best, tolerance) and (not physical or step.definite >= 1
+                                                  or best.definite < 1)
 
     def _size(parameters):
         try:
@@ -530,7 +532,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     if best.criterion > good_enough and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]
         other = climb(second)
-        if keeps(other[1], best):
+        if (keeps(other[1], best) if not physical or (other[1].definite >= 1)
+                == (best.definite >= 1) else other[1].definite >= 1):
             state, best, path = other
     # backward: drop the family whose removal the keep rule accepts best (a smaller catalog
     # within the tolerance at an equal fitted size is kept too: the stand-in that a family
@@ -548,7 +551,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             if keeps(step, best) or (
                     step.criterion <= best.criterion * (1 + tolerance)
                     and step.active == best.active and step.terms < best.terms
-                    and (not physical or step.definite >= 1)):
+                    and (not physical or step.definite >= 1 or best.definite < 1)):
                 dropped.append((step.criterion, step.active, parameters, step))
             else:
                 refused.append((move, parameters))
