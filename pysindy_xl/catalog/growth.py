@@ -35,9 +35,11 @@ end: the first move is where a stand-in wins (a ``cos(theta)`` inertia for a tor
 or a power of an angle for a coupling that takes two moves to state).
 A move is kept when it lowers the criterion by the fraction ``tolerance`` at least, or keeps it
 within that fraction with fewer terms in the fitted model (a sine series imitating ``theta^2``
-needs more terms than ``theta^2``); with ``physical``, only when every fit of the catalog has a
-positive definite mass matrix on all its training states (a model that has not cannot be
-simulated there). The degree moves repeat while they do (and look one degree
+needs more terms than ``theta^2``); with ``physical``, a catalog whose fits all have a
+positive definite mass matrix on their training states is never given up for one whose fits
+have not (a model whose mass matrix is not positive definite cannot be simulated there; the
+climb may pass through such stand-ins only while it holds no physical catalog). The degree
+moves repeat while they do (and look one degree
 further before they stop), and the growth stops when a whole pass keeps nothing or the
 criterion is below ``good_enough``. Before it stops, pairs of the moves that are not repeated
 (kinetic, interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither
@@ -278,12 +280,14 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         configuration-dependent terms (the largest swings): fitted without it, the right
         catalog's fit fails and the growth keeps a smaller one.
     physical : bool, default False
-        Keep a catalog (in the climb and in the backward phase) only when the mass matrix
-        of each of its fits is positive definite on all the fit's training states
-        (:attr:`GrowthStep.definite` is 1; the first catalog is kept whatever it is).
-        A stand-in that lowers the criterion with an indefinite mass matrix (a sine
-        harmonic of one angle for a coupling of two) gives a model whose accelerations
-        are not defined where the matrix is singular.
+        Never give up a catalog whose fits are physical (the mass matrix of each fit
+        positive definite on all its training states: :attr:`GrowthStep.definite` is 1)
+        for one whose fits are not, in the climb and in the backward phase, and prefer a
+        physical end of the two climbs. Until a physical catalog is kept (the first
+        catalog may not be), the climb keeps any better one. A stand-in that lowers the
+        criterion with an indefinite mass matrix (sine harmonics of each angle for the
+        coupling of two) gives a model that cannot be simulated where the matrix is
+        singular.
     progress : callable, optional
         Called with a line of text after each step.
     n_jobs : int or None, default None

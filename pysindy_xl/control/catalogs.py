@@ -151,9 +151,10 @@ class AutomaticGrowth:
         Moves of the growth; default all of :data:`~pysindy_xl.catalog.MOVES` but "splines",
         and :data:`~pysindy_xl.catalog.MORE_MOVES` (coupled damping).
     physical : bool, default True
-        Keep only catalogs whose fits have a positive definite mass matrix on all their
-        training states (``physical`` of :func:`~pysindy_xl.grow_catalog`): a model that is
-        not cannot be simulated, and the loop would refuse it.
+        Never give up a catalog whose fits have a positive definite mass matrix on all
+        their training states for one whose fits have not (``physical`` of
+        :func:`~pysindy_xl.grow_catalog`): such a model cannot be simulated, and the loop
+        would refuse it.
     progress : callable, optional
         ``progress(line)`` after each step of the growth.
 
