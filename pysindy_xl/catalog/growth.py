@@ -231,8 +231,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                  max_terms: int = 400, optimizer=None, formulation: str = "auto",
                  n_blocks: int = 5, tolerance: float = 0.05, good_enough: float = 0.002,
                  moves=MOVES, search_optimizer="auto", search_samples: int | None = 6000,
-                 cross_validate: bool = False, physical: bool = False, progress=None,
-                 n_jobs=None):
+                 cross_validate: bool = False, physical: bool = False, steepest: bool = False,
+                 progress=None, n_jobs=None):
     """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
 
     Parameters
@@ -288,6 +288,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         criterion with an indefinite mass matrix (sine harmonics of each angle for the
         coupling of two) gives a model that cannot be simulated where the matrix is
         singular.
+    steepest : bool, default False
+        Climb by the best move instead of the first that improves: from each kept catalog
+        every move (a degree move also one degree further) is tried and the best kept, the
+        pairs of moves where none is. A move that helps only once another is in (the
+        coupled damping of a coupling's links) then goes in before a stand-in that the
+        order of the moves alone would try first and that leaves it over ``max_terms``.
     progress : callable, optional
         Called with a line of text after each step.
     n_jobs : int or None, default None
@@ -337,6 +343,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     check_option("n_blocks", n_blocks, "int", low=3)
     check_option("cross_validate", cross_validate, "bool")
     check_option("physical", physical, "bool")
+    check_option("steepest", steepest, "bool")
     check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
     check_option("good_enough", good_enough, "real", low=0)
     unknown = [m for m in moves if m not in MOVES + MORE_MOVES]
@@ -473,6 +480,42 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             out += [p for p, _ in pairs(state, order, seen)]
         return out[1:]  # (the first is the current one)
 
+    def steepest_climb(order, forced=None):
+        """From the first catalog (after the move ``forced``), try every move from the
+        current catalog and keep the best; (state, step, kept steps)."""
+        state, best, path = dict(_START), first, []
+        if forced is not None:
+            parameters = _parameters(state, forced, kinds, n)
+            step = attempt(parameters, forced)
+            if keeps(step, best):
+                state, best = parameters, step
+                path.append(step)
+        while best.criterion > good_enough:
+            options = []
+            for move in order:
+                for skip in (0, 1) if move in _REPEATED else (0,):
+                    parameters = _parameters(state, move, kinds, n, skip)
+                    if parameters is None:
+                        break
+                    options.append((parameters, move))
+            kept = []
+            for k, (parameters, move) in enumerate(options):
+                step = attempt(parameters, move, [p for p, _ in options[k + 1:]])
+                if keeps(step, best):
+                    kept.append((step.criterion, step.active, k, parameters, step))
+            if not kept:  # two moves at once, as the climb looks ahead
+                candidates = pairs(state, order, set())
+                for k, (twice, name) in enumerate(candidates):
+                    step = attempt(twice, name, [p for p, _ in candidates[k + 1:]])
+                    if keeps(step, best):
+                        kept.append((step.criterion, step.active, k, twice, step))
+                        break
+            if not kept:
+                break
+            _, _, _, state, best = min(kept, key=lambda item: item[:3])
+            path.append(best)
+        return state, best, path
+
     def climb(order):
         """Try the moves in turn from the first catalog; (state, step, kept steps)."""
         state, best, path = dict(_START), first, []
@@ -530,12 +573,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # climb from the best and from the second-best first move: which family goes in first is
     # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
     # a coupling that needs two moves), so the better of the two ends is kept
-    state, best, path = climb(order)
+    state, best, path = steepest_climb(order) if steepest else climb(order)
     promising = [m for m in order if m != "splines" and alone.get(m, np.inf)
                  < first.criterion * (1 - tolerance)]
     if best.criterion > good_enough and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]
-        other = climb(second)
+        other = steepest_climb(order, promising[1]) if steepest else climb(second)
         if (keeps(other[1], best) if not physical or (other[1].definite >= 1)
                 == (best.definite >= 1) else other[1].definite >= 1):
             state, best, path = other

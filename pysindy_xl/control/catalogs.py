@@ -155,6 +155,9 @@ class AutomaticGrowth:
         their training states for one whose fits have not (``physical`` of
         :func:`~pysindy_xl.grow_catalog`): such a model cannot be simulated, and the loop
         would refuse it.
+    steepest : bool, default True
+        Climb by the best move from each kept catalog (``steepest`` of
+        :func:`~pysindy_xl.grow_catalog`).
     progress : callable, optional
         ``progress(line)`` after each step of the growth.
 
@@ -170,13 +173,14 @@ class AutomaticGrowth:
 
     def __init__(self, rows_per_term: int = 150, ceiling: int = 400, n_blocks: int = 5,
                  cross_validate: bool = True, moves=None, physical: bool = True,
-                 progress=None):
+                 steepest: bool = True, progress=None):
         self.rows_per_term = rows_per_term
         self.ceiling = ceiling
         self.n_blocks = n_blocks
         self.cross_validate = cross_validate
         self.moves = moves
         self.physical = physical
+        self.steepest = steepest
         self.progress = progress
 
     def max_terms(self, n_samples: int, n_coordinates: int) -> int:
@@ -228,7 +232,8 @@ class AutomaticGrowth:
                              kinds=system_kinds(system),
                              max_terms=self.max_terms(sum(len(tk) for tk in t), system.n),
                              n_blocks=self.n_blocks, cross_validate=self.cross_validate,
-                             moves=moves, physical=self.physical, progress=self.progress)
+                             moves=moves, physical=self.physical, steepest=self.steepest,
+                             progress=self.progress)
         # the chosen catalog fitted on all the data with the search's test functions, at most
         # a third of the default width: grow_catalog's own final fit takes the default width,
         # and a third of a fifth of 8 s (0.53 s) blurs the cart double pendulum's fast motion
@@ -241,7 +246,7 @@ class AutomaticGrowth:
     def __repr__(self) -> str:
         return (f"AutomaticGrowth(rows_per_term={self.rows_per_term}, ceiling={self.ceiling}, "
                 f"n_blocks={self.n_blocks}, cross_validate={self.cross_validate}, "
-                f"moves={self.moves}, physical={self.physical})")
+                f"moves={self.moves}, physical={self.physical}, steepest={self.steepest})")
 
 
 def _search_width(t, q, n_blocks: int) -> float:
@@ -294,7 +299,8 @@ def resolve_catalog(catalog):
     'generic'
     >>> resolve_catalog("automatic")  # doctest: +NORMALIZE_WHITESPACE
     ('automatic', AutomaticGrowth(rows_per_term=150, ceiling=400, n_blocks=5,
-                                  cross_validate=True, moves=None, physical=True))
+                                  cross_validate=True, moves=None, physical=True,
+                                  steepest=True))
     >>> resolve_catalog("mjcf")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
