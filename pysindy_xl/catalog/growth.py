@@ -44,8 +44,11 @@ further before they stop), and the growth stops when a whole pass keeps nothing 
 criterion is below ``good_enough``. Before it stops, pairs of the moves that are not repeated
 (kinetic, interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither
 alone (a coupling ``cos(a - b) a_dot b_dot`` needs both the products of two angles' functions
-and configuration-dependent kinetic coefficients). Catalogs over ``max_terms`` are not tried
-(reported as the ceiling).
+and configuration-dependent kinetic coefficients). With ``steepest``, each step of a climb
+tries every move from the kept catalog and keeps the best instead of the first that improves
+(the pairs where none does): a move that helps only once another is in (the coupled damping
+of a coupling's links, poor alone) is not passed over for a stand-in that the order of the
+moves alone tries first. Catalogs over ``max_terms`` are not tried (reported as the ceiling).
 
 The climb only adds, and the start always holds an angle's sines and cosines: where families
 are nearly dependent on the data's range (``cos(phi) = 1 - phi^2/2 + phi^4/24 - ...``), the

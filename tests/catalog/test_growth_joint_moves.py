@@ -92,16 +92,18 @@ def test_the_coupling_is_a_first_move_of_its_own(pendulum):
     assert np.linalg.norm(predicted - truth) / np.linalg.norm(truth) < 0.01
 
 
-def test_the_physical_keep_rule_keeps_only_positive_definite_fits(pendulum):
+def test_the_physical_steepest_climb_keeps_only_positive_definite_fits(pendulum):
     """With ``physical``, once a kept catalog's fits have a positive definite mass matrix on
     all their training states, every catalog kept after it has too, and so has the chosen
     model on the data, as the sympy mass matrix is; a catalog whose fits have not is
-    reported."""
-    _, mass, t, xs, us = pendulum
+    reported. The steepest climb (the best move from each kept catalog) keeps the coupling
+    and no sine harmonic, and the model's accelerations match the sympy truth."""
+    accelerations, mass, t, xs, us = pendulum
     noisy = [x + 0.01 * x.std(axis=0) * np.random.default_rng(k).normal(size=x.shape)
              for k, x in enumerate(xs)]
     found = grow_catalog(noisy, [t, t], us, coordinates=["a", "b"], kinds="angle",
-                         moves=("kinetic", "interaction"), physical=True)
+                         moves=("kinetic", "interaction", "trig_degree"), physical=True,
+                         steepest=True)
     table = found.table()
     kept = [step.definite for step in found.steps if step.chosen]
     assert kept[-1] == 1.0 and all(later == 1.0 for k, value in enumerate(kept)
@@ -113,6 +115,17 @@ def test_the_physical_keep_rule_keeps_only_positive_definite_fits(pendulum):
     assert found.model.mass_matrix_check_["positive_definite_fraction"] == 1.0
     true_mass = np.array([np.asarray(mass(*q), float) for q in xs[0][::50]])
     assert np.all(np.linalg.eigvalsh(true_mass) > 0)
+    assert (found.catalog.interaction, found.catalog.kinetic, found.catalog.trig_degree) == \
+        (2, "configuration", 1)
+    rng = np.random.default_rng(4)
+    states = np.c_[rng.uniform(-1, 1, (40, 2)), rng.uniform(-2, 2, (40, 2))]
+    tau = rng.uniform(-1.5, 1.5, (40, 2))
+    truth = np.array([accelerations(y, u) for y, u in zip(states, tau, strict=True)])
+    predicted = found.model.predict(states[:, :2], states[:, 2:], tau)
+    assert np.linalg.norm(predicted - truth) / np.linalg.norm(truth) < 0.02
+    with pytest.raises(TypeError, match="steepest"):
+        grow_catalog(noisy, [t, t], us, coordinates=["a", "b"], kinds="angle",
+                     moves=("kinetic",), steepest=1)
     with pytest.raises(TypeError, match="physical"):
         grow_catalog(noisy, [t, t], us, coordinates=["a", "b"], kinds="angle",
                      moves=("kinetic",), physical="yes")
