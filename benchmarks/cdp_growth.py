@@ -245,6 +245,8 @@ def main(argv=None):
     parser.add_argument("--label", default="")
     parser.add_argument("--out", default=None)
     parser.add_argument("--data-only", action="store_true")
+    parser.add_argument("--physical", choices=("default", "on", "off"), default="default",
+                        help="AutomaticGrowth's physical keep rule")
     parser.add_argument("--refit", nargs="+", default=None, metavar="SEED=DESCRIPTION",
                         help="fit a recorded growth's catalog instead of growing one")
     args = parser.parse_args(argv)
@@ -265,7 +267,8 @@ def main(argv=None):
             exploration(seed + 100)
             print(seed, round(float(t[-1]), 2), flush=True)
             continue
-        row = run_seed(seed, AutomaticGrowth(), args.label)
+        options = {} if args.physical == "default" else {"physical": args.physical == "on"}
+        row = run_seed(seed, AutomaticGrowth(**options), args.label)
         row["label"] = args.label
         print(json.dumps({k: v for k, v in row.items() if k != "table"}), flush=True)
         print(row["table"], flush=True)
