@@ -6,21 +6,32 @@ on samples the fit never saw: over the generalized forces' part for data with fo
 unforced data each coordinate's equation over its own largest term, combined as an RMS over the
 coordinates (an implicit law fixes each equation only up to a factor: judged over all rows, a
 law that shrank one equation would hide its residual; the strong form where a block is shorter
-than a test function). Two blocks of each run are held out:
+than a test function). Two blocks of each run are held out (:mod:`.folds`):
 
 - the last of ``n_blocks`` contiguous time blocks (**time**: how the model predicts later);
 - the other block reaching farthest from the run's median state (**region**: how it
   extrapolates to states it did not see). An approximation fitted along the trajectories (a
   cosine standing in for ``theta^2``) fails there, where the right structure does not.
 
+The region block lies inside the range the other blocks cover, so at high noise it may not
+tell a stand-in from the law. ``region="extremes"`` holds out instead the stretches around
+the most extreme states of all the runs: every state beyond a threshold of the scaled
+distance from the median, with a test function's half-width of time on either side, a share
+:data:`~.folds.EXTREME_SHARE` of the other samples, cut whole so that no test function
+straddles the fold. The training states then all lie inside the threshold, and a stand-in must
+extrapolate. It is not the default: where a law's nonlinearity shows only in the extreme
+states (a hardening spring on a short recording), the fit inside the threshold cannot find it
+and the growth stops at the start. ``"both"`` holds out both.
+
 With ``cross_validate``, every block is held out in turn instead (one fit per block on the
 others; the criterion is the RMS of all the blocks' errors): on a recording of a few
 seconds the region block holds most of what identifies configuration-dependent terms, and a
-fit without it fails for the right catalog too.
+fit without it fails for the right catalog too (``region="extremes"`` adds a split judged on
+the extreme stretches).
 
 The criterion is the RMS of the two errors. Splines end at the extreme percentiles of the
 training data (:data:`END_PERCENTILE`) and continue linearly (:func:`~.bases.natural_splines`),
-so the region block judges their continuation as it judges any family's. From the smallest
+so the region fold judges their continuation as it judges any family's. From the smallest
 catalog (constant kinetic coefficients, quadratic potentials of the linear coordinates, sines
 and cosines of the angles, viscous friction), each move of :data:`MOVES` but the splines is first
 tried alone, and so is each pair of moves whose joint catalog holds terms that neither adds
@@ -80,7 +91,7 @@ from .._validation import check_option
 from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import CandidateFits, SearchData, SearchSplit, parameters_key
-from .folds import held_out_splits
+from .folds import REGIONS, held_out_splits
 from .path import GrowthResult, GrowthStep
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
@@ -234,8 +245,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                  max_terms: int = 400, optimizer=None, formulation: str = "auto",
                  n_blocks: int = 5, tolerance: float = 0.05, good_enough: float = 0.002,
                  moves=MOVES, search_optimizer="auto", search_samples: int | None = 6000,
-                 cross_validate: bool = False, physical: bool = False, steepest: bool = False,
-                 progress=None, n_jobs=None):
+                 cross_validate: bool = False, region: str = "block",
+                 physical: bool = False, steepest: bool = False, progress=None,
+                 n_jobs=None):
     """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
 
     Parameters
@@ -282,6 +294,14 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         recordings of a few seconds the region block holds most of what identifies
         configuration-dependent terms (the largest swings): fitted without it, the right
         catalog's fit fails and the growth keeps a smaller one.
+    region : {"block", "extremes", "both"}, default "block"
+        What the region fold holds out besides the last block of each run
+        (:func:`~.folds.held_out_splits`): the block reaching farthest from the run's median;
+        the stretches around the most extreme states of all the runs (the training states
+        then all lie inside a threshold that the held-out ones cross: a stand-in fitted along
+        the trajectories must extrapolate, but so must the law, whose nonlinear terms may show
+        only beyond the threshold); or both. Cross-validated, ``"extremes"`` and ``"both"``
+        add a fit outside the extreme stretches, judged on them.
     physical : bool, default False
         Never give up a catalog whose fits are physical (the mass matrix of each fit
         positive definite on all its training states: :attr:`GrowthStep.definite` is 1)
@@ -345,6 +365,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     check_option("max_terms", max_terms, "int", low=1)
     check_option("n_blocks", n_blocks, "int", low=3)
     check_option("cross_validate", cross_validate, "bool")
+    if region not in REGIONS:
+        raise ValueError(f"region: expected one of {REGIONS}, got {region!r}")
     check_option("physical", physical, "bool")
     check_option("steepest", steepest, "bool")
     check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
@@ -365,16 +387,17 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     total = sum(len(tk) for tk in ts)
     stride = 1 if search_samples is None else max(1, int(np.ceil(total / search_samples)))
     arrays = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
-    splits, reported = held_out_splits(arrays, n_blocks, stride, cross_validate)
-    # the search's splines end where its training data do: the region blocks test their
-    # continuation as the chosen model's is used beyond the data
-    searched = [dict(fixed, bounds=_span(train["x"])) for train, _ in splits]
     # test functions short enough for the held-out blocks and the training pieces
     from ..weak import BumpTestFunctions
     block = min(len(tk) for tk in ts) // n_blocks
     longest = int(np.argmax([len(tk) for tk in ts]))
     width = min(BumpTestFunctions().half_width(ts[longest], xs[longest]),
                 min(tk[block - 1] - tk[0] for tk in ts) / 3)
+    splits, reported = held_out_splits(arrays, n_blocks, stride, cross_validate, region,
+                                       margin=width)
+    # the search's splines end where its training data do: the region blocks test their
+    # continuation as the chosen model's is used beyond the data
+    searched = [dict(fixed, bounds=_span(train["x"])) for train, _ in splits]
     active = np.any(np.vstack(us) != 0, axis=0) if forced else np.zeros(n, dtype=bool)
     # the default optimizers bag selections on columns estimated from noisy positions (the
     # weak form, where no derivatives are measured)

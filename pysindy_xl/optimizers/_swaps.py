@@ -27,7 +27,7 @@ def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y
 
 
 def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None, norms2=None,
-                start=None):
+                start=None, memo=None):
     """Best-improvement 1-swap search on a reduced system.
 
     With an orthonormal basis ``Q`` of the support's span and ``P = Q^T x`` (``k x F``), the
@@ -39,7 +39,9 @@ def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None, norm
     new ``Q^T x``.
     ``rss`` and ``previous`` continue from a first step of :func:`first_swaps`, ``start`` is
     its ``(Q, P)`` of ``support``; ``norms2``, the squared column norms, may be given (computed
-    once for many searches).
+    once for many searches). ``memo`` (a dict shared by searches on the same system) maps the
+    supports a search went through to where it ended: a search reaching one of them ends there
+    too.
     """
     support = np.array(support, dtype=int)
     xs = np.ascontiguousarray(xs)
@@ -52,11 +54,16 @@ def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None, norm
         basis, in_span = start
     residual = y - basis @ (basis.T @ y)
     x_residual = xs.T @ residual
+    passed = []  # the supports this search went through
     for _ in range(max_swaps + 1):
         new_rss = float(residual @ residual)
         if rss is not None and not new_rss < rss:  # the predicted gain did not materialize
-            return np.sort(previous)
+            return _remembered(memo, passed, np.sort(previous))
         rss, previous = new_rss, support.copy()
+        key = frozenset(support.tolist())
+        if memo is not None and key in memo:  # the rest of the way is known
+            return _remembered(memo, passed, memo[key])
+        passed.append(key)
         try:
             weights = np.linalg.inv(in_span[:, support]).T     # column j: w_j
         except np.linalg.LinAlgError:
@@ -74,7 +81,14 @@ def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None, norm
         basis, in_span = _exchanged(xs, basis, in_span, weights[:, j], c)
         residual = y - basis @ (basis.T @ y)
         x_residual = xs.T @ residual
-    return np.sort(support)
+    return _remembered(memo, passed, np.sort(support))
+
+
+def _remembered(memo, passed, end):
+    """``end``, recorded in ``memo`` (if any) as the end of every support in ``passed``."""
+    if memo is not None:
+        memo.update(dict.fromkeys(passed, end))
+    return end
 
 
 def _exchanged(xs, basis, in_span, weight, column):

@@ -15,6 +15,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
+import scipy.sparse
 
 from .._optional import import_optional
 
@@ -56,6 +57,81 @@ def _solver():
     return cp.CLARABEL if "CLARABEL" in cp.installed_solvers() else None
 
 
+def _clarabel_solves(problem, xi, weights):
+    """A function ``weights -> law or None`` solving ``problem`` with Clarabel on cvxpy's own
+    data, canonicalized once; None where the data are not as expected (cvxpy then solves).
+
+    The weights enter only the linear objective, each as the coefficient of one variable
+    (``|xi_j|``'s epigraph), so the data Clarabel gets are cvxpy's with that entry replaced.
+    As ``problem.solve`` (warm start, its default), the solver of the previous solve is
+    updated with the new data: every solve is the one ``problem.solve`` makes, without
+    canonicalizing again.
+    """
+    cp = import_optional("cvxpy", "admissible starts")
+    try:
+        import clarabel
+        from cvxpy.reductions.solvers.conic_solvers.clarabel_conif import (
+            CLARABEL,
+            dims_to_solver_cones,
+        )
+    except ImportError:  # pragma: no cover - Clarabel is looked up before
+        return None
+    n_features = xi.size
+    try:
+        weights.value = np.zeros(n_features)
+        data, _, _ = problem.get_problem_data(cp.CLARABEL)
+        base = np.array(data[cp.settings.C], dtype=float)
+        program = data["param_prob"]
+        start = program.var_id_to_col[xi.id]
+        # the linear objective's map of the parameters: weight j's column
+        column = program.param_id_to_col[weights.id]
+        block = scipy.sparse.csc_array(program.q)[:, column:column + n_features].toarray()
+    except Exception:  # noqa: BLE001 - any surprise: cvxpy solves as usual
+        return None
+    # each weight the coefficient (exactly 1) of its own entry, which is 0 without it
+    entries = np.argmax(block != 0, axis=0)
+    expected = np.zeros_like(block)
+    expected[entries, np.arange(n_features)] = 1.0
+    if block.shape[0] != base.size + 1 or not np.array_equal(block, expected) \
+            or np.unique(entries).size != n_features or np.any(base[entries] != 0):
+        return None
+    matrix, offset = data[cp.settings.A], data[cp.settings.B]
+    quadratic = data.get(cp.settings.P)
+    quadratic = (scipy.sparse.csc_array((base.size, base.size)) if quadratic is None
+                 else quadratic)
+    quadratic = scipy.sparse.triu(quadratic).tocsc()
+    cones = dims_to_solver_cones(data[cp.reductions.solvers.conic_solvers.conic_solver
+                                      .ConicSolver.DIMS])
+    accepted = {"Solved", "AlmostSolved"}  # cvxpy's optimal and optimal_inaccurate
+    cache = []  # as cvxpy's warm start: one solver, its data updated in place
+
+    def solve(values):
+        linear = base.copy()
+        linear[entries] = values
+        solver = None
+        try:
+            if cache and hasattr(cache[0], "update") and cache[0].is_data_update_allowed():
+                solver = cache[0]
+                try:
+                    solver.update(P=quadratic, q=linear, A=matrix, b=offset,
+                                  settings=CLARABEL.parse_solver_opts(False, {},
+                                                                      solver.get_settings()))
+                except Exception:  # noqa: BLE001 - as cvxpy: a new solver
+                    solver = None
+            if solver is None:
+                solver = clarabel.DefaultSolver(quadratic, linear, matrix, offset, cones,
+                                                CLARABEL.parse_solver_opts(False, {}))
+            solution = solver.solve()
+        except Exception:  # noqa: BLE001 - as cvxpy's SolverError
+            return None
+        cache[:] = [solver]
+        if str(solution.status) not in accepted or solution.x is None:
+            return None
+        return np.asarray(solution.x, dtype=float)[start:start + n_features]
+
+    return solve
+
+
 def admissible_supports(r_factor, mass_matrices, penalties=PENALTIES, n_reweight: int = 5) -> list:
     """Supports of sparse laws whose mean mass matrix is positive definite (admissible lasso).
 
@@ -93,7 +169,7 @@ def admissible_supports(r_factor, mass_matrices, penalties=PENALTIES, n_reweight
 
     solver = _solver()
 
-    def solve(values):
+    def solve_with_cvxpy(values):
         weights.value = values
         try:
             problem.solve(solver=solver)
@@ -102,6 +178,9 @@ def admissible_supports(r_factor, mass_matrices, penalties=PENALTIES, n_reweight
         if problem.status not in ("optimal", "optimal_inaccurate") or xi.value is None:
             return None
         return np.asarray(xi.value, dtype=float)
+
+    solve = (_clarabel_solves(problem, xi, weights) if solver is not None else None) \
+        or solve_with_cvxpy
 
     dense = solve(np.zeros(n_features))
     if dense is None:

@@ -155,6 +155,7 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds, row_moments=No
     blocks = np.arange(theta.shape[0]) // per_block
     position = np.arange(theta.shape[0]) % per_block
     gap = int(FOLD_GAP * per_block / n_folds)
+    folds = []  # (fold, train factor, test factor, train moments, test moments)
     for fold in range(n_folds):
         test = labels == fold
         if not test.any() or test.all():
@@ -170,17 +171,30 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds, row_moments=No
                 blocks[test], minlength=n_blocks) / count, moments)
             train_moments = np.einsum("b,bfg->fg", np.bincount(
                 blocks[training], minlength=n_blocks) / count, moments)
-        r_train = triangular_factor(theta[training])
-        r_test = triangular_factor(theta[test])
-        for size in {len(support) for support in supports}:
-            if size < 2 or size > r_train.shape[0]:
-                continue
-            members = [m for m, support in enumerate(supports) if len(support) == size]
-            columns = np.array([supports[m] for m in members])  # (g, size)
-            # leading columns of a triangular factor: its leading rows are all that is needed
-            train = r_train[:size] if nested else r_train
-            _, vectors = noise_pencil(np.swapaxes(train[:, columns], 0, 1),
-                                 train_moments[columns[:, :, None], columns[:, None, :]])
+        folds.append((fold, triangular_factor(theta[training]), triangular_factor(theta[test]),
+                      train_moments, test_moments))
+    for size in {len(support) for support in supports}:
+        members = [m for m, support in enumerate(supports) if len(support) == size]
+        columns = np.array([supports[m] for m in members])  # (g, size)
+        fitted_folds = [f for f in folds if 2 <= size <= f[1].shape[0]]
+        if not fitted_folds:
+            continue
+        # every fold's pencils in one stack (per matrix, the same as one stack per fold);
+        # leading columns of a triangular factor: its leading rows are all that is needed
+        trains = [r_train[:size] if nested else r_train for _, r_train, *_ in fitted_folds]
+        heights = {train.shape[0] for train in trains}
+        if len(heights) == 1:
+            stacked = noise_pencil(
+                np.concatenate([np.swapaxes(train[:, columns], 0, 1) for train in trains]),
+                np.concatenate([f[3][columns[:, :, None], columns[:, None, :]]
+                                for f in fitted_folds]))[1]
+            fold_vectors = np.split(stacked, len(fitted_folds))
+        else:  # factors of different heights (a fold of fewer rows than columns)
+            fold_vectors = [noise_pencil(np.swapaxes(train[:, columns], 0, 1),
+                                         f[3][columns[:, :, None], columns[:, None, :]])[1]
+                            for train, f in zip(trains, fitted_folds, strict=True)]
+        for (fold, _, r_test, _, test_moments), vectors in zip(fitted_folds, fold_vectors,
+                                                                strict=True):
             laws = vectors[:, :, 0]  # (g, size): each support's smallest-ratio law
             noise = np.einsum("gi,gij,gj->g", laws,
                               test_moments[columns[:, :, None], columns[:, None, :]], laws)
@@ -397,8 +411,12 @@ def _admissible_starts(r_factor, moments, mass_matrices, seen) -> list:
     """The admissible lasso's supports, each with the backward path inside it (one list per start),
     less the supports in ``seen``.
     """
-    paths = []
+    paths, starts = [], set()
     for start in admissible_supports(r_factor, mass_matrices):
+        if tuple(start.tolist()) in starts:  # its path's supports are all seen
+            paths.append([])
+            continue
+        starts.add(tuple(start.tolist()))
         inside = start[law_elimination_path(r_factor[:, start], moments[np.ix_(start, start)])]
         path = [inside[:k] for k in range(2, len(start) + 1)
                 if frozenset(inside[:k].tolist()) not in seen]

@@ -115,6 +115,58 @@ def _constrained_minima(values, vectors, n_bisections: int = 48) -> np.ndarray:
     return 0.5 * (low + high)
 
 
+def _bisected_argmin(above, low, high, n_bisections: int = 48) -> int:
+    """``argmin`` of the roots that ``n_bisections`` bisections of each candidate's bracket
+    ``[low, high]`` give, ``above(middle, alive)`` telling where each alive candidate's root lies
+    above its middle: the same index as bisecting all of them and taking the argmin, without
+    bisecting the candidates that cannot win.
+
+    A candidate whose bracket starts above the lowest bracket's end ends above that candidate,
+    and one starting at it ends there at best: both are dropped (the latter only after the
+    candidate it would tie with, as ``argmin`` keeps the first). A single one left is the
+    answer.
+    """
+    low, high = np.array(low, dtype=float), np.array(high, dtype=float)
+    alive = np.arange(low.size)
+    # finite brackets stay finite (their middles): only then are they compared
+    finite = bool(np.isfinite(low).all() and np.isfinite(high).all())
+    for step in range(n_bisections):
+        if alive.size == 1:
+            return int(alive[0])
+        middle = 0.5 * (low + high)
+        up = above(middle, alive)
+        np.copyto(low, middle, where=up)
+        np.copyto(high, middle, where=~up)
+        if finite and step % _PRUNE_EVERY == _PRUNE_EVERY - 1:
+            first = int(np.argmin(high))  # ends at or below high[first]
+            bound = high[first]
+            keep = (low < bound) | ((low == bound) & (alive <= alive[first]))
+            if not keep.all():
+                alive, low, high = alive[keep], low[keep], high[keep]
+    return int(alive[np.argmin(0.5 * (low + high))])
+
+
+#: Bisections between two looks for candidates that cannot win (each look costs about as
+#: much as a bisection of few candidates).
+_PRUNE_EVERY = 4
+
+
+def _least_constrained(values, vectors) -> int:
+    """``argmin`` of :func:`_constrained_minima` (the same bisections, only where they can win).
+    """
+    weights = [np.arange(values.size), vectors**2]  # the alive candidates' rows
+
+    def above(middle, alive):
+        if alive.size != weights[0].size:
+            weights[:] = [alive, vectors[alive] ** 2]
+        secular = np.sum(weights[1] / (values[None, :] - middle[:, None]), axis=1)
+        return secular < 0
+
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return _bisected_argmin(above, np.full(values.size, values[0]),
+                                np.full(values.size, values[1]))
+
+
 def law_elimination_path(r_factor, moments) -> np.ndarray:
     """Columns ordered from most to least needed, by backward elimination of the noise ratio.
 
@@ -143,7 +195,7 @@ def eliminate_one(r_factor, moments, support) -> np.ndarray:
     """The support without the column whose removal raises the smallest ratio least."""
     support = np.asarray(support, dtype=int)
     values, vectors = noise_pencil(r_factor[:, support], moments[np.ix_(support, support)])
-    return np.delete(support, int(np.argmin(_constrained_minima(values, vectors))))
+    return np.delete(support, _least_constrained(values, vectors))
 
 
 def law_forward_path(r_factor, moments, max_size=None) -> np.ndarray:
@@ -172,20 +224,20 @@ def law_forward_path(r_factor, moments, max_size=None) -> np.ndarray:
     # the best pair, from every column's 1 x 1 pencil bordered by every other column
     values, vectors = noise_pencil(r_factor.T[:, :, None], diag_moments[:, None, None])
     scale = vectors[:, 0, 0][:, None]  # (F, 1): the pencils' single eigenvectors
-    minima = _bordered_minima(
+    pairs = np.flatnonzero(~np.eye(n_features, dtype=bool))  # not a column with itself
+    pair = _least_bordered(
         np.repeat(values[:, 0], n_features)[None], (scale * gram).reshape(1, -1),
         (scale * moments).reshape(1, -1), np.tile(diag_gram, n_features),
-        np.tile(diag_moments, n_features)).reshape(n_features, n_features)
-    np.fill_diagonal(minima, np.inf)
-    first, second = np.unravel_index(int(np.argmin(minima)), minima.shape)
+        np.tile(diag_moments, n_features), pairs)
+    first, second = np.unravel_index(pair, (n_features, n_features))
     support = [int(first), int(second)]
     while len(support) < max_size:
         outside = np.setdiff1d(np.arange(n_features), support)
         values, vectors = noise_pencil(r_factor[:, support], moments[np.ix_(support, support)])
-        minima = _bordered_minima(values, vectors.T @ gram[np.ix_(support, outside)],
-                                  vectors.T @ moments[np.ix_(support, outside)],
-                                  diag_gram[outside], diag_moments[outside])
-        support.append(int(outside[np.argmin(minima)]))
+        best = _least_bordered(values, vectors.T @ gram[np.ix_(support, outside)],
+                               vectors.T @ moments[np.ix_(support, outside)],
+                               diag_gram[outside], diag_moments[outside])
+        support.append(int(outside[best]))
     return np.array(support, dtype=int)
 
 
@@ -214,6 +266,27 @@ def _bordered_minima(values, cross_gram, cross_moments, gram_diag, moments_diag,
         low = np.where(positive, middle, low)
         high = np.where(positive, high, middle)
     return 0.5 * (low + high)
+
+
+def _least_bordered(values, cross_gram, cross_moments, gram_diag, moments_diag,
+                    candidates=None) -> int:
+    """``argmin`` of :func:`_bordered_minima` over ``candidates`` (default all; an index of all
+    the candidates), by the same bisections, only where they can win."""
+    values = values[:, None] if values.ndim == 1 else values
+    candidates = (np.arange(cross_gram.shape[1]) if candidates is None
+                  else np.asarray(candidates, dtype=int))
+    parts = [None]  # the alive candidates' arrays
+
+    def above(middle, alive):
+        if parts[0] is None or alive.size != parts[0].size:
+            chosen = candidates[alive]
+            parts[:] = [alive, values if values.shape[1] == 1 else values[:, chosen],
+                        cross_gram[:, chosen], cross_moments[:, chosen], gram_diag[chosen],
+                        moments_diag[chosen]]
+        return _bordered_secular(middle, *parts[1:]) > 0  # the root lies above
+
+    high = np.broadcast_to(values[0], (cross_gram.shape[1],))[candidates]
+    return int(candidates[_bisected_argmin(above, np.zeros(candidates.size), high)])
 
 
 def _smallest_bordered_root(ceiling, values, cross_gram, cross_moments, gram_diag,

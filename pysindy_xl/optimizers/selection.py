@@ -477,6 +477,7 @@ def _swap_candidates(reduced, held_out, paths, seen, limit, keep=(), free=None):
                   mean[n_keep:]) for path, order, mean in paths]
         limit -= n_keep
     refined, visited = [], set()  # starts already refined and local optima reached
+    memo = {}  # supports the searches went through, to where they ended
     norms2 = column_norms2(xs)
     for path, order, mean in paths:
         sizes = [k for k in range(1, min(limit, len(order)) + 1) if np.isfinite(mean[k - 1])]
@@ -487,13 +488,13 @@ def _swap_candidates(reduced, held_out, paths, seen, limit, keep=(), free=None):
                 continue
             if k not in first:
                 support = swap_search(xs, y_reduced, active, order[:k], max_swaps=50,
-                                      norms2=norms2)
+                                      norms2=norms2, memo=memo)
             elif first[k][1] is None:  # no exchange improves the start
                 support = np.sort(order[:k])
             else:
                 rss, swapped, state = first[k]
                 support = swap_search(xs, y_reduced, active, swapped, max_swaps=49, rss=rss,
-                                      previous=order[:k], norms2=norms2, start=state)
+                                      previous=order[:k], norms2=norms2, start=state, memo=memo)
             visited.update((start, frozenset(support.tolist())))
             rest = order[~np.isin(order, support)]
             if n_keep:  # back to the columns of the folds

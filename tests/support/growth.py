@@ -57,3 +57,71 @@ def scalar_laws(method, q, qd, tau):
         return mass(qv, qdv, 0.0) * qddv - forcing(qv, qdv, 0.0)
 
     return accelerations, forces
+
+
+#: A pendulum on a torsion spring: ``INERTIA_T theta_dd + DAMPING_T theta_dot + WEIGHT sin(theta)
+#: + TORSION theta = tau`` (``L = INERTIA_T theta_dot^2 / 2 + WEIGHT cos(theta) - TORSION
+#: theta^2 / 2``).
+INERTIA_T, WEIGHT, TORSION, DAMPING_T = 0.32, 3.924, 3.0, 0.05
+
+
+def torsion_pendulum():
+    """The pendulum on a torsion spring by ``LagrangesMethod``: a point mass ``WEIGHT / g`` at
+    1 m from the pivot, whose rod's own inertia makes up ``INERTIA_T``, with a torque.
+
+    Returns
+    -------
+    accelerations, forces : callable
+        As :func:`scalar_laws`.
+    """
+    from sympy.physics import mechanics as me
+    q = me.dynamicsymbols("q")
+    qd = me.dynamicsymbols("q", 1)
+    tau = sp.Symbol("tau")
+    g = 9.81
+    frame = me.ReferenceFrame("N")
+    rod = frame.orientnew("A", "Axis", (q, frame.z))
+    pivot = me.Point("O")
+    pivot.set_vel(frame, 0)
+    bob = pivot.locatenew("P", -1.0 * rod.y)
+    bob.v2pt_theory(pivot, frame, rod)
+    mass = WEIGHT / g
+    particle = me.Particle("bob", bob, mass)
+    particle.potential_energy = -WEIGHT * sp.cos(q) + TORSION * q ** 2 / 2
+    body = me.RigidBody("rod", pivot, rod, 0.0,
+                        (me.inertia(rod, 0, 0, INERTIA_T - mass), pivot))
+    method = me.LagrangesMethod(me.Lagrangian(frame, particle, body), [q],
+                                forcelist=[(rod, (tau - DAMPING_T * qd) * frame.z)], frame=frame)
+    method.form_lagranges_equations()
+    return scalar_laws(method, q, qd, tau)
+
+
+def forced_runs(accelerations, seed: int, noise: float, n_runs: int = 2, duration: float = 10.0,
+                rate: float = 200.0, amplitude: float = 2.0, frequencies=(0.1, 1.0)):
+    """Runs of a one-coordinate law driven by sums of five sines (scipy DOP853, 1e-10
+    tolerances), positions with Gaussian noise of ``noise`` times their standard deviation.
+
+    Returns
+    -------
+    ts, xs, us : list of ndarray
+        Times (N,), noisy positions (N, 1) and torques (N, 1) of each run.
+    """
+    from scipy.integrate import solve_ivp
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, duration, 1.0 / rate)
+    ts, xs, us = [], [], []
+    for _ in range(n_runs):
+        f, phase = rng.uniform(*frequencies, 5), rng.uniform(0, 2 * np.pi, 5)
+
+        def torque(time, f=f, phase=phase):
+            return amplitude * np.sin(2 * np.pi * f * time + phase).sum() / 2.5
+
+        y0 = [rng.uniform(-1, 1), rng.uniform(-0.5, 0.5)]
+        solution = solve_ivp(lambda time, y: [y[1], accelerations(y[0], y[1], torque(time))],
+                             (t[0], t[-1]), y0, t_eval=t, method="DOP853", rtol=1e-10,
+                             atol=1e-10)
+        x = solution.y[0][:, None]
+        xs.append(x + noise * x.std() * rng.normal(size=x.shape))
+        ts.append(t)
+        us.append(np.array([[torque(time)] for time in t]))
+    return ts, xs, us
