@@ -155,8 +155,10 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     dict
         ``description``, ``terms``, ``active``, ``time_error``, ``region_error``,
         ``criterion`` (the RMS of all the blocks' errors; inf when the catalog was not fitted),
-        ``note`` (why not), ``seconds`` and ``cpu_seconds``: the fields of a
-        :class:`~.growth.GrowthStep` but its move and verdict.
+        ``note`` (why not), ``seconds``, ``cpu_seconds`` and ``definite`` (the smallest
+        fraction, over the splits' fits, of the training states at which the fitted mass
+        matrix is positive definite: ``XLSINDy.mass_matrix_check_``; 0 when not fitted): the
+        fields of a :class:`~.growth.GrowthStep` but its move and verdict.
     """
     from sklearn.base import clone
 
@@ -166,7 +168,7 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     def failed(note, size=0, description=""):
         return {"description": description, "terms": size, "active": 0, "time_error": np.inf,
                 "region_error": np.inf, "criterion": np.inf, "note": note, "seconds": 0.0,
-                "cpu_seconds": 0.0}
+                "cpu_seconds": 0.0, "definite": 0.0}
 
     try:
         size = catalog.n_terms
@@ -178,7 +180,7 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     n = search.splits[0].train["x"][0].shape[1]
     if min(sum(len(p) for p in split.train["x"]) for split in search.splits) * n < 10 * size:
         return failed("too few samples for this size", size, description)
-    errors, active = [], []
+    errors, active, definite = [], [], []
     try:
         for split in search.splits:
             model = clone(search.template).set_params(
@@ -190,6 +192,8 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
                 raise ValueError("no acceleration in the identified equations")
             errors += [held_out_error(model, held, search.forced) for held in split.blocks]
             active.append(int(np.count_nonzero(model.coefficients())))
+            check = model.mass_matrix_check_ or {}
+            definite.append(float(check.get("positive_definite_fraction", 0.0)))
     except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
         return failed(f"fit failed: {type(error).__name__}: {error}"[:200], size, description)
     value = float(np.sqrt(np.mean(np.square(errors))))
@@ -197,7 +201,8 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     return {"description": description, "terms": size, "active": int(np.median(active)),
             "time_error": errors[time_block], "region_error": errors[region_block],
             "criterion": value if np.isfinite(value) else np.inf, "note": "",
-            "seconds": time.perf_counter() - started, "cpu_seconds": time.process_time() - cpu}
+            "seconds": time.perf_counter() - started, "cpu_seconds": time.process_time() - cpu,
+            "definite": min(definite)}
 
 
 def _warm_up() -> None:

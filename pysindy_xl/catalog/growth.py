@@ -34,7 +34,11 @@ training data (:data:`END_PERCENTILE`) and continue linearly (:func:`~.bases.nat
 so the region fold judges their continuation as it judges any family's. From the smallest
 catalog (constant kinetic coefficients, quadratic potentials of the linear coordinates, sines
 and cosines of the angles, viscous friction), each move of :data:`MOVES` but the splines is first
-tried alone; the moves are then tried in turn in the order of what they achieved alone (the
+tried alone, and so is each pair of moves whose joint catalog holds terms that neither adds
+alone (``"kinetic+interaction"``: configuration-dependent kinetic coefficients over products of
+two coordinates' functions, the ``cos(a - b)`` of a coupling ``cos(a - b) a_dot b_dot``; a
+climb through single moves reaches it only after the stand-ins that each move alone favours);
+the moves are then tried in turn in the order of what they achieved alone (the
 family that explains most goes in first: no fixed order decides between a stand-in and the
 right family), the splines last (the flexible basis is for what the families leave). The
 growth climbs twice, from the best and from the second-best first move, and keeps the better
@@ -42,13 +46,20 @@ end: the first move is where a stand-in wins (a ``cos(theta)`` inertia for a tor
 or a power of an angle for a coupling that takes two moves to state).
 A move is kept when it lowers the criterion by the fraction ``tolerance`` at least, or keeps it
 within that fraction with fewer terms in the fitted model (a sine series imitating ``theta^2``
-needs more terms than ``theta^2``), the degree moves repeat while they do (and look one degree
+needs more terms than ``theta^2``); with ``physical``, a catalog whose fits all have a
+positive definite mass matrix on their training states is never given up for one whose fits
+have not (a model whose mass matrix is not positive definite cannot be simulated there; the
+climb may pass through such stand-ins only while it holds no physical catalog). The degree
+moves repeat while they do (and look one degree
 further before they stop), and the growth stops when a whole pass keeps nothing or the
 criterion is below ``good_enough``. Before it stops, pairs of the moves that are not repeated
 (kinetic, interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither
 alone (a coupling ``cos(a - b) a_dot b_dot`` needs both the products of two angles' functions
-and configuration-dependent kinetic coefficients). Catalogs over ``max_terms`` are not tried
-(reported as the ceiling).
+and configuration-dependent kinetic coefficients). With ``steepest``, each step of a climb
+tries every move from the kept catalog and keeps the best instead of the first that improves
+(the pairs where none does): a move that helps only once another is in (the coupled damping
+of a coupling's links, poor alone) is not passed over for a stand-in that the order of the
+moves alone tries first. Catalogs over ``max_terms`` are not tried (reported as the ceiling).
 
 The climb only adds, and the start always holds an angle's sines and cosines: where families
 are nearly dependent on the data's range (``cos(phi) = 1 - phi^2/2 + phi^4/24 - ...``), the
@@ -168,7 +179,12 @@ def _keeps(step, best, tolerance) -> bool:
 
 
 def _parameters(state, move, kinds, n, skip=0):
-    """The catalog parameters after ``move`` from ``state``, or None when it does not apply."""
+    """The catalog parameters after ``move`` from ``state``, or None when it does not apply
+    (``"a+b"``: the move ``a``, then ``b``)."""
+    if "+" in move:
+        for part in move.split("+"):
+            state = None if state is None else _parameters(state, part, kinds, n, skip)
+        return state
     new = dict(state)
     angles = "angle" in kinds
     if move == "kinetic":
@@ -207,11 +223,30 @@ def _parameters(state, move, kinds, n, skip=0):
     return new
 
 
+def _joint_moves(moves, kinds, n, size) -> list:
+    """The pairs ``"a+b"`` of non-repeated moves from the first catalog whose joint catalog
+    has more terms than the two moves add alone: the second move multiplies the first's
+    family (``"kinetic+interaction"``: configuration-dependent kinetic coefficients over
+    products of two coordinates' functions, as ``cos(a - b)`` in ``cos(a - b) a_dot b_dot``).
+    ``size(parameters)`` is a catalog's number of terms."""
+    single = [m for m in moves if m not in _REPEATED]
+    base = size(_START)
+    out = []
+    for a, b in itertools.combinations(single, 2):
+        once, other = (_parameters(dict(_START), m, kinds, n) for m in (a, b))
+        both = None if once is None or other is None else _parameters(once, b, kinds, n)
+        if both is not None and (size(both) - base
+                                 > size(once) - base + size(other) - base):
+            out.append(f"{a}+{b}")
+    return out
+
+
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
                  max_terms: int = 400, optimizer=None, formulation: str = "auto",
                  n_blocks: int = 5, tolerance: float = 0.05, good_enough: float = 0.002,
                  moves=MOVES, search_optimizer="auto", search_samples: int | None = 6000,
-                 cross_validate: bool = False, region: str = "block", progress=None,
+                 cross_validate: bool = False, region: str = "block",
+                 physical: bool = False, steepest: bool = False, progress=None,
                  n_jobs=None):
     """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
 
@@ -267,6 +302,21 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         the trajectories must extrapolate, but so must the law, whose nonlinear terms may show
         only beyond the threshold); or both. Cross-validated, ``"extremes"`` and ``"both"``
         add a fit outside the extreme stretches, judged on them.
+    physical : bool, default False
+        Never give up a catalog whose fits are physical (the mass matrix of each fit
+        positive definite on all its training states: :attr:`GrowthStep.definite` is 1)
+        for one whose fits are not, in the climb and in the backward phase, and prefer a
+        physical end of the two climbs. Until a physical catalog is kept (the first
+        catalog may not be), the climb keeps any better one. A stand-in that lowers the
+        criterion with an indefinite mass matrix (sine harmonics of each angle for the
+        coupling of two) gives a model that cannot be simulated where the matrix is
+        singular.
+    steepest : bool, default False
+        Climb by the best move instead of the first that improves: from each kept catalog
+        every move (a degree move also one degree further) is tried and the best kept, the
+        pairs of moves where none is. A move that helps only once another is in (the
+        coupled damping of a coupling's links) then goes in before a stand-in that the
+        order of the moves alone would try first and that leaves it over ``max_terms``.
     progress : callable, optional
         Called with a line of text after each step.
     n_jobs : int or None, default None
@@ -317,6 +367,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     check_option("cross_validate", cross_validate, "bool")
     if region not in REGIONS:
         raise ValueError(f"region: expected one of {REGIONS}, got {region!r}")
+    check_option("physical", physical, "bool")
+    check_option("steepest", steepest, "bool")
     check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
     check_option("good_enough", good_enough, "real", low=0)
     unknown = [m for m in moves if m not in MOVES + MORE_MOVES]
@@ -368,7 +420,17 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     fits.warm_up()  # the workers start while the first catalog is fitted here
 
     def evaluate(parameters, move, ahead=()):
-        return GrowthStep(move=move, chosen=False, **fits.get(parameters, ahead))
+        step = GrowthStep(move=move, chosen=False, **fits.get(parameters, ahead))
+        if physical and step.definite < 1 and not step.note:
+            step.note = (f"mass matrix not positive definite on {1 - step.definite:.0%} of "
+                         "the training states")
+        return step
+
+    def keeps(step, best):
+        """The keep rule (:func:`_keeps`); with ``physical``, a catalog whose fits have a
+        positive definite mass matrix is not given up for one whose fits have not."""
+        return _keeps(step, best, tolerance) and (not physical or step.definite >= 1
+                                                  or best.definite < 1)
 
     def _size(parameters):
         try:
@@ -391,6 +453,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             if move == "splines" or parameters is None:
                 break
             queue.append((move, parameters))
+    # pairs of moves whose joint catalog holds terms that neither adds alone (kinetic
+    # coefficients over products of two coordinates' functions): tried as one move too
+    joint = _joint_moves(moves, kinds, n, _size)
+    queue += [(name, _parameters(dict(_START), name, kinds, n)) for name in joint]
     first = evaluate(dict(_START), "start", [p for _, p in queue])
     if first.note.startswith("ceiling"):
         raise ValueError(f"max_terms: the smallest catalog has {first.terms} terms, more than "
@@ -413,7 +479,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     def pairs(state, order, tried):
         """The pairs of non-repeated moves from ``state`` not tried yet: (parameters, name)."""
         out = []
-        single = [m for m in order if m not in _REPEATED]
+        single = [m for m in order if m not in _REPEATED and "+" not in m]
         for first_move, second_move in itertools.combinations(single, 2):
             once = _parameters(state, first_move, kinds, n, 0)
             twice = None if once is None else _parameters(once, second_move, kinds, n, 0)
@@ -440,6 +506,42 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             out += [p for p, _ in pairs(state, order, seen)]
         return out[1:]  # (the first is the current one)
 
+    def steepest_climb(order, forced=None):
+        """From the first catalog (after the move ``forced``), try every move from the
+        current catalog and keep the best; (state, step, kept steps)."""
+        state, best, path = dict(_START), first, []
+        if forced is not None:
+            parameters = _parameters(state, forced, kinds, n)
+            step = attempt(parameters, forced)
+            if keeps(step, best):
+                state, best = parameters, step
+                path.append(step)
+        while best.criterion > good_enough:
+            options = []
+            for move in order:
+                for skip in (0, 1) if move in _REPEATED else (0,):
+                    parameters = _parameters(state, move, kinds, n, skip)
+                    if parameters is None:
+                        break
+                    options.append((parameters, move))
+            kept = []
+            for k, (parameters, move) in enumerate(options):
+                step = attempt(parameters, move, [p for p, _ in options[k + 1:]])
+                if keeps(step, best):
+                    kept.append((step.criterion, step.active, k, parameters, step))
+            if not kept:  # two moves at once, as the climb looks ahead
+                candidates = pairs(state, order, set())
+                for k, (twice, name) in enumerate(candidates):
+                    step = attempt(twice, name, [p for p, _ in candidates[k + 1:]])
+                    if keeps(step, best):
+                        kept.append((step.criterion, step.active, k, twice, step))
+                        break
+            if not kept:
+                break
+            _, _, _, state, best = min(kept, key=lambda item: item[:3])
+            path.append(best)
+        return state, best, path
+
     def climb(order):
         """Try the moves in turn from the first catalog; (state, step, kept steps)."""
         state, best, path = dict(_START), first, []
@@ -456,7 +558,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                     ahead = rejected(state, order, index, skip, tried, improved)
                     tried.add(parameters_key(parameters))
                     step = attempt(parameters, move, ahead)
-                    keep = _keeps(step, best, tolerance)
+                    keep = keeps(step, best)
                     if keep:
                         state, best, improved = parameters, step, True
                         path.append(step)
@@ -473,7 +575,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                         continue
                     tried.add(parameters_key(twice))
                     step = attempt(twice, name, [p for p, _ in candidates[k + 1:]])
-                    if _keeps(step, best, tolerance):
+                    if keeps(step, best):
                         state, best, improved = twice, step, True
                         path.append(step)
                         break
@@ -489,20 +591,22 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             continue  # (its first degree was kept: no look further)
         step = attempt(parameters, move, [p for _, p in queue[index + 1:]])
         alone[move] = min(alone.get(move, np.inf), step.criterion)
-        if _keeps(step, first, tolerance):
+        if keeps(step, first):
             stopped.add(move)
-    order = sorted((m for m in moves if m != "splines"), key=lambda m: alone.get(m, np.inf))
+    order = sorted([m for m in moves if m != "splines"] + joint,
+                   key=lambda m: alone.get(m, np.inf))
     order += [m for m in moves if m == "splines"]
     # climb from the best and from the second-best first move: which family goes in first is
     # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
     # a coupling that needs two moves), so the better of the two ends is kept
-    state, best, path = climb(order)
+    state, best, path = steepest_climb(order) if steepest else climb(order)
     promising = [m for m in order if m != "splines" and alone.get(m, np.inf)
                  < first.criterion * (1 - tolerance)]
     if best.criterion > good_enough and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]
-        other = climb(second)
-        if _keeps(other[1], best, tolerance):
+        other = steepest_climb(order, promising[1]) if steepest else climb(second)
+        if (keeps(other[1], best) if not physical or (other[1].definite >= 1)
+                == (best.definite >= 1) else other[1].definite >= 1):
             state, best, path = other
     # backward: drop the family whose removal the keep rule accepts best (a smaller catalog
     # within the tolerance at an equal fitted size is kept too: the stand-in that a family
@@ -517,9 +621,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                       and _size(parameters) != best.terms]
         for k, (move, parameters) in enumerate(candidates):
             step = attempt(parameters, f"-{move}", [p for _, p in candidates[k + 1:]])
-            if _keeps(step, best, tolerance) or (
+            if keeps(step, best) or (
                     step.criterion <= best.criterion * (1 + tolerance)
-                    and step.active == best.active and step.terms < best.terms):
+                    and step.active == best.active and step.terms < best.terms
+                    and (not physical or step.definite >= 1 or best.definite < 1)):
                 dropped.append((step.criterion, step.active, parameters, step))
             else:
                 refused.append((move, parameters))
@@ -535,7 +640,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                         exchanges.append((f"-{move}+{other}", parameters))
         for k, (name, parameters) in enumerate(exchanges):
             step = attempt(parameters, name, [p for _, p in exchanges[k + 1:]])
-            if _keeps(step, best, tolerance):
+            if keeps(step, best):
                 dropped.append((step.criterion, step.active, parameters, step))
         if not dropped:
             break

@@ -39,6 +39,9 @@ class GrowthStep:
         Time of the step's fit and scoring.
     cpu_seconds : float, default 0.0
         CPU time of the step's fit and scoring (in the process that ran it).
+    definite : float, default 1.0
+        Smallest fraction, over the step's fits, of the training states at which the fitted
+        mass matrix is positive definite (0 when the catalog was not fitted).
 
     Examples
     --------
@@ -58,6 +61,7 @@ class GrowthStep:
     note: str = ""
     seconds: float = 0.0
     cpu_seconds: float = 0.0
+    definite: float = 1.0
 
 
 @dataclasses.dataclass

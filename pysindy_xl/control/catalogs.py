@@ -150,6 +150,15 @@ class AutomaticGrowth:
     moves : sequence of str, optional
         Moves of the growth; default all of :data:`~pysindy_xl.catalog.MOVES` but "splines",
         and :data:`~pysindy_xl.catalog.MORE_MOVES` (coupled damping).
+    physical : bool, default False
+        Never give up a catalog whose fits have a positive definite mass matrix on all
+        their training states for one whose fits have not (``physical`` of
+        :func:`~pysindy_xl.grow_catalog`). Off by default: on 2 s of the cart-pole a
+        cross-validation fit of the right catalog can be indefinite on some training
+        states, and the rule then keeps the constant start.
+    steepest : bool, default True
+        Climb by the best move from each kept catalog (``steepest`` of
+        :func:`~pysindy_xl.grow_catalog`).
     progress : callable, optional
         ``progress(line)`` after each step of the growth.
     n_jobs : int or None, default None
@@ -169,12 +178,15 @@ class AutomaticGrowth:
     name = "automatic"
 
     def __init__(self, rows_per_term: int = 150, ceiling: int = 400, n_blocks: int = 5,
-                 cross_validate: bool = True, moves=None, progress=None, n_jobs=None):
+                 cross_validate: bool = True, moves=None, physical: bool = False,
+                 steepest: bool = True, progress=None, n_jobs=None):
         self.rows_per_term = rows_per_term
         self.ceiling = ceiling
         self.n_blocks = n_blocks
         self.cross_validate = cross_validate
         self.moves = moves
+        self.physical = physical
+        self.steepest = steepest
         self.progress = progress
         self.n_jobs = n_jobs
 
@@ -227,7 +239,8 @@ class AutomaticGrowth:
                              kinds=system_kinds(system),
                              max_terms=self.max_terms(sum(len(tk) for tk in t), system.n),
                              n_blocks=self.n_blocks, cross_validate=self.cross_validate,
-                             moves=moves, progress=self.progress, n_jobs=self.n_jobs)
+                             moves=moves, physical=self.physical, steepest=self.steepest,
+                             progress=self.progress, n_jobs=self.n_jobs)
         # the chosen catalog fitted on all the data with the search's test functions, at most
         # a third of the default width: grow_catalog's own final fit takes the default width,
         # and a third of a fifth of 8 s (0.53 s) blurs the cart double pendulum's fast motion
@@ -240,8 +253,8 @@ class AutomaticGrowth:
     def __repr__(self) -> str:
         return (f"AutomaticGrowth(rows_per_term={self.rows_per_term}, ceiling={self.ceiling}, "
                 f"n_blocks={self.n_blocks}, cross_validate={self.cross_validate}, "
-                f"moves={self.moves}" + ("" if self.n_jobs is None
-                                         else f", n_jobs={self.n_jobs}") + ")")
+                f"moves={self.moves}, physical={self.physical}, steepest={self.steepest}"
+                + ("" if self.n_jobs is None else f", n_jobs={self.n_jobs}") + ")")
 
 
 def _search_width(t, q, n_blocks: int) -> float:
@@ -294,7 +307,8 @@ def resolve_catalog(catalog):
     'generic'
     >>> resolve_catalog("automatic")  # doctest: +NORMALIZE_WHITESPACE
     ('automatic', AutomaticGrowth(rows_per_term=150, ceiling=400, n_blocks=5,
-                                  cross_validate=True, moves=None))
+                                  cross_validate=True, moves=None, physical=False,
+                                  steepest=True))
     >>> resolve_catalog("mjcf")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
