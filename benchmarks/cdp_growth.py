@@ -165,7 +165,7 @@ def catalog_of(description: str, q, t) -> object:
     import re
 
     from pysindy_xl.catalog import AutomaticCatalog
-    from pysindy_xl.catalog.growth import _span
+    from pysindy_xl.catalog.growth import END_PERCENTILE
     found = {"degree": 2, "trig_degree": 1, "angle_degree": 0}
     if m := re.search(r"x\.\.x\^(\d)", description):
         found["degree"] = int(m.group(1))
@@ -179,8 +179,10 @@ def catalog_of(description: str, q, t) -> object:
     found["dissipation"] = tuple(re.search(r"dissipation ([\w+]+)", description)
                                  .group(1).split("+"))
     scale = float(np.std(np.gradient(q, t, axis=0), axis=0).mean())
+    low, high = np.percentile(q, [END_PERCENTILE, 100 - END_PERCENTILE], axis=0)
+    bounds = [(float(a), float(b)) for a, b in zip(low, high, strict=True)]
     return AutomaticCatalog(["x", "theta1", "theta2"], kinds=["linear", "angle", "angle"],
-                            bounds=_span([q]), coulomb_scale=max(1e-3, 0.02 * scale),
+                            bounds=bounds, coulomb_scale=max(1e-3, 0.02 * scale),
                             max_terms=400, **found)
 
 
@@ -190,14 +192,14 @@ def refit(seed: int, description: str) -> dict:
     from types import SimpleNamespace
 
     from pysindy_xl import XLSINDy
-    from pysindy_xl.control.catalogs import _fit_width
+    from pysindy_xl.control.catalogs import final_fit_width
     from pysindy_xl.weak import BumpTestFunctions
     q, t, u, _, _ = exploration(seed)
     catalog = catalog_of(description, q, t)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         model = XLSINDy(catalog, test_functions=BumpTestFunctions(
-            width=_fit_width([t], [q], 5))).fit([q], t=[t], u=[u])
+            width=final_fit_width([t], [q], 5))).fit([q], t=[t], u=[u])
     found = SimpleNamespace(model=model, catalog=catalog, held_out_error=float("nan"),
                             steps=[], table=lambda: "")
     return evaluated(seed, found, float("nan"), float("nan"), t)

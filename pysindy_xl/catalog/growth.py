@@ -92,26 +92,11 @@ from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import CandidateFits, SearchData, SearchSplit, parameters_key
 from .folds import REGIONS, held_out_splits
+from .moves import MORE_MOVES, MOVES, REPEATED, START, joint_moves, moved
 from .path import GrowthResult, GrowthStep
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
            "check_growth_data"]
-
-#: The moves of the growth, in the order they are tried.
-MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
-         "coulomb", "splines")
-#: Moves a growth may be given beyond the default :data:`MOVES`: ``"coupled_damping"`` lets
-#: every velocity's viscous force enter every equation (``dissipation`` ``"coupled"`` of
-#: :class:`AutomaticCatalog`: the damping of a joint whose angle is a difference of coordinates).
-MORE_MOVES = ("coupled_damping",)
-
-_START = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
-          "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
-          "splines": None}
-_LIMITS = {"degree": 4, "trig_degree": 3, "angle_degree": 4}
-_SPLINES = (8, 12, 16)  # natural splines per coordinate when the family is added, refined
-_REPEATED = ("degree", "trig_degree", "angle_degree", "splines")  # moves that go on
-
 
 def check_growth_data(xs, names, n_terms: int) -> None:
     """``ValueError`` for a constant coordinate or data too short for ``n_terms`` terms.
@@ -176,69 +161,6 @@ def _keeps(step, best, tolerance) -> bool:
     return (step.criterion < best.criterion * (1 - tolerance)
             or (step.criterion <= best.criterion * (1 + tolerance)
                 and step.active < best.active))
-
-
-def _parameters(state, move, kinds, n, skip=0):
-    """The catalog parameters after ``move`` from ``state``, or None when it does not apply
-    (``"a+b"``: the move ``a``, then ``b``)."""
-    if "+" in move:
-        for part in move.split("+"):
-            state = None if state is None else _parameters(state, part, kinds, n, skip)
-        return state
-    new = dict(state)
-    angles = "angle" in kinds
-    if move == "kinetic":
-        if state["kinetic"] == "configuration":
-            return None
-        new["kinetic"] = "configuration"
-    elif move == "interaction":
-        if state["interaction"] >= n:
-            return None
-        new["interaction"] += 1
-    elif move in _LIMITS:
-        relevant = {"degree": "linear" in kinds or (state["angle_degree"] > 0
-                                                    and state["interaction"] > 1),
-                    "trig_degree": angles, "angle_degree": angles}[move]
-        step = (2 if move == "angle_degree" and not state[move] else 1) + skip
-        if not relevant or state[move] + step > _LIMITS[move]:
-            return None
-        new[move] = state[move] + step
-    elif move == "gyroscopic":
-        if state["gyroscopic"] or n < 2:
-            return None
-        new["gyroscopic"] = True
-    elif move == "coulomb":
-        if "coulomb" in state["dissipation"]:
-            return None
-        new["dissipation"] = (*state["dissipation"], "coulomb")
-    elif move == "coupled_damping":
-        if "coupled" in state["dissipation"] or n < 2:
-            return None
-        new["dissipation"] = (*state["dissipation"], "coupled")
-    elif move == "splines":
-        larger = [k for k in _SPLINES if k > (state["splines"] or 0)]
-        if skip >= len(larger):
-            return None
-        new["splines"] = larger[skip]
-    return new
-
-
-def _joint_moves(moves, kinds, n, size) -> list:
-    """The pairs ``"a+b"`` of non-repeated moves from the first catalog whose joint catalog
-    has more terms than the two moves add alone: the second move multiplies the first's
-    family (``"kinetic+interaction"``: configuration-dependent kinetic coefficients over
-    products of two coordinates' functions, as ``cos(a - b)`` in ``cos(a - b) a_dot b_dot``).
-    ``size(parameters)`` is a catalog's number of terms."""
-    single = [m for m in moves if m not in _REPEATED]
-    base = size(_START)
-    out = []
-    for a, b in itertools.combinations(single, 2):
-        once, other = (_parameters(dict(_START), m, kinds, n) for m in (a, b))
-        both = None if once is None or other is None else _parameters(once, b, kinds, n)
-        if both is not None and (size(both) - base
-                                 > size(once) - base + size(other) - base):
-            out.append(f"{a}+{b}")
-    return out
 
 
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
@@ -381,7 +303,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     fixed = {"coordinates": names, "kinds": list(kinds), "max_terms": max_terms,
              "bounds": _span(xs),  # the splines' end knots
              "coulomb_scale": max(1e-3, 0.02 * float(np.mean(velocity_scale)))}
-    first = AutomaticCatalog(**fixed, **_START)
+    first = AutomaticCatalog(**fixed, **START)
     check_growth_data(xs, names, first.n_terms)
 
     total = sum(len(tk) for tk in ts)
@@ -448,16 +370,16 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # the moves from the first catalog, each alone (a degree move also one degree further)
     queue = []
     for move in moves:
-        for skip in (0, 1) if move in _REPEATED else (0,):
-            parameters = _parameters(dict(_START), move, kinds, n, skip)
+        for skip in (0, 1) if move in REPEATED else (0,):
+            parameters = moved(dict(START), move, kinds, n, skip)
             if move == "splines" or parameters is None:
                 break
             queue.append((move, parameters))
     # pairs of moves whose joint catalog holds terms that neither adds alone (kinetic
     # coefficients over products of two coordinates' functions): tried as one move too
-    joint = _joint_moves(moves, kinds, n, _size)
-    queue += [(name, _parameters(dict(_START), name, kinds, n)) for name in joint]
-    first = evaluate(dict(_START), "start", [p for _, p in queue])
+    joint = joint_moves(moves, kinds, n, _size)
+    queue += [(name, moved(dict(START), name, kinds, n)) for name in joint]
+    first = evaluate(dict(START), "start", [p for _, p in queue])
     if first.note.startswith("ceiling"):
         raise ValueError(f"max_terms: the smallest catalog has {first.terms} terms, more than "
                          f"max_terms={max_terms}; raise max_terms")
@@ -479,10 +401,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     def pairs(state, order, tried):
         """The pairs of non-repeated moves from ``state`` not tried yet: (parameters, name)."""
         out = []
-        single = [m for m in order if m not in _REPEATED and "+" not in m]
+        single = [m for m in order if m not in REPEATED and "+" not in m]
         for first_move, second_move in itertools.combinations(single, 2):
-            once = _parameters(state, first_move, kinds, n, 0)
-            twice = None if once is None else _parameters(once, second_move, kinds, n, 0)
+            once = moved(state, first_move, kinds, n, 0)
+            twice = None if once is None else moved(once, second_move, kinds, n, 0)
             if twice is not None and parameters_key(twice) not in tried:
                 out.append((twice, f"{first_move}+{second_move}"))
         return out
@@ -494,10 +416,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         for k in range(index, len(order)):
             move = order[k]
             skips = [skip] if k == index else [0]
-            if move in _REPEATED and skips[0] == 0:
+            if move in REPEATED and skips[0] == 0:
                 skips.append(1)
             for s in skips:
-                parameters = _parameters(state, move, kinds, n, s)
+                parameters = moved(state, move, kinds, n, s)
                 if parameters is None or parameters_key(parameters) in seen:
                     break
                 seen.add(parameters_key(parameters))
@@ -509,9 +431,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     def steepest_climb(order, forced=None):
         """From the first catalog (after the move ``forced``), try every move from the
         current catalog and keep the best; (state, step, kept steps)."""
-        state, best, path = dict(_START), first, []
+        state, best, path = dict(START), first, []
         if forced is not None:
-            parameters = _parameters(state, forced, kinds, n)
+            parameters = moved(state, forced, kinds, n)
             step = attempt(parameters, forced)
             if keeps(step, best):
                 state, best = parameters, step
@@ -519,8 +441,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         while best.criterion > good_enough:
             options = []
             for move in order:
-                for skip in (0, 1) if move in _REPEATED else (0,):
-                    parameters = _parameters(state, move, kinds, n, skip)
+                for skip in (0, 1) if move in REPEATED else (0,):
+                    parameters = moved(state, move, kinds, n, skip)
                     if parameters is None:
                         break
                     options.append((parameters, move))
@@ -544,7 +466,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
 
     def climb(order):
         """Try the moves in turn from the first catalog; (state, step, kept steps)."""
-        state, best, path = dict(_START), first, []
+        state, best, path = dict(START), first, []
         tried = {parameters_key(state)}
         improved = best.criterion > good_enough
         while improved:
@@ -552,7 +474,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             for index, move in enumerate(order):
                 skip = 0  # a degree move looks one degree further before it stops
                 while best.criterion > good_enough:
-                    parameters = _parameters(state, move, kinds, n, skip)
+                    parameters = moved(state, move, kinds, n, skip)
                     if parameters is None or parameters_key(parameters) in tried:
                         break
                     ahead = rejected(state, order, index, skip, tried, improved)
@@ -562,7 +484,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                     if keep:
                         state, best, improved = parameters, step, True
                         path.append(step)
-                    if move not in _REPEATED or (not keep and skip):
+                    if move not in REPEATED or (not keep and skip):
                         break
                     skip = 0 if keep else 1
             if not improved and best.criterion > good_enough:
@@ -615,7 +537,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     while True:  # below good_enough too: a stand-in can be good enough
         dropped, refused = [], []
         candidates = [(move, parameters) for move in REMOVALS
-                      if (parameters := removed(state, move, kinds, _START)) is not None
+                      if (parameters := removed(state, move, kinds, START)) is not None
                       and {"trig": "trig_degree"}.get(move, move) in moves
                       and parameters_key(parameters) not in visited
                       and _size(parameters) != best.terms]
@@ -634,7 +556,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         for move, smaller in refused if not dropped and best.criterion > good_enough else ():
             for other in EXCHANGES.get(move, ()):
                 for skip in (0, 1) if other in moves else ():
-                    parameters = _parameters(smaller, other, kinds, n, skip)
+                    parameters = moved(smaller, other, kinds, n, skip)
                     if (parameters is not None and parameters_key(parameters) not in visited
                             and _size(parameters) != _size(smaller)):
                         exchanges.append((f"-{move}+{other}", parameters))

@@ -246,7 +246,7 @@ class AutomaticGrowth:
         # and a third of a fifth of 8 s (0.53 s) blurs the cart double pendulum's fast motion
         # (its law's catalog 7-25 % off, within 1 % at 0.1-0.27 s)
         model = XLSINDy(found.catalog, test_functions=BumpTestFunctions(
-            width=_fit_width(t, q, self.n_blocks)))
+            width=final_fit_width(t, q, self.n_blocks)))
         model.fit(q, t=t, u=u)
         return dataclasses.replace(found, model=model)
 
@@ -268,11 +268,29 @@ def _search_width(t, q, n_blocks: int) -> float:
                      min(tk[block - 1] - tk[0] for tk in t) / 3))
 
 
-def _fit_width(t, q, n_blocks: int) -> float:
-    """Width of the final fit's test functions (:class:`AutomaticGrowth`): the search's, at
-    most a third of the default width of the longest recording (which resolves the motion's
-    corner frequency: 0.17 s on 2.5 s of the cart-pole, 0.2 s on 8 s of the cart double
-    pendulum)."""
+def final_fit_width(t, q, n_blocks: int) -> float:
+    """Width of the final fit's test functions of :class:`AutomaticGrowth`.
+
+    The search's width (the default width of the longest recording, at most a third of the
+    shortest recording's time block), at most a third of the default width of the longest
+    recording, which resolves the motion's corner frequency: 0.17 s on 2.5 s of the
+    cart-pole, 0.2 s on 8 s of the cart double pendulum.
+
+    Parameters
+    ----------
+    t : list of ndarray, each of shape (n_samples_k,)
+        Sample times of each recording.
+    q : list of ndarray, each of shape (n_samples_k, n)
+        Positions of each recording.
+    n_blocks : int
+        Time blocks of each recording in the growth's search.
+
+    Returns
+    -------
+    float
+        The test functions' half-width in seconds
+        (:class:`~pysindy_xl.weak.BumpTestFunctions`'s ``width``).
+    """
     from ..weak import BumpTestFunctions
     longest = int(np.argmax([len(tk) for tk in t]))
     return float(min(_search_width(t, q, n_blocks),

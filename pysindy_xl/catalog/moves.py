@@ -1,0 +1,145 @@
+"""The moves of the automatic catalog's growth: from which catalog to which.
+
+A catalog of :class:`~.automatic.AutomaticCatalog` is a set of parameters (degrees, the
+interaction order, the kinetic coefficients, the dissipation, the splines); a move changes one
+of them by one step (:func:`moved`), and a joint move two at once (:func:`joint_moves`).
+:func:`~.growth.grow_catalog` climbs by these moves from :data:`START`; the backward phase
+(:mod:`.backward`) undoes them.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+__all__ = ["MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS", "REPEATED", "moved",
+           "joint_moves"]
+
+#: The moves of the growth, in the order they are tried.
+MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
+         "coulomb", "splines")
+#: Moves a growth may be given beyond the default :data:`MOVES`: ``"coupled_damping"`` lets
+#: every velocity's viscous force enter every equation (``dissipation`` ``"coupled"`` of
+#: :class:`AutomaticCatalog`: the damping of a joint whose angle is a difference of coordinates).
+MORE_MOVES = ("coupled_damping",)
+
+#: The parameters of the first catalog (:class:`~.automatic.AutomaticCatalog`'s options):
+#: constant kinetic coefficients, quadratic potentials of the linear coordinates, sines and
+#: cosines of the angles, viscous friction.
+START = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
+         "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
+         "splines": None}
+#: The largest degree each degree move reaches.
+LIMITS = {"degree": 4, "trig_degree": 3, "angle_degree": 4}
+#: Natural splines per coordinate when the family is added, then refined.
+SPLINE_COUNTS = (8, 12, 16)
+#: The moves that go on while they improve (one step of a degree or of the splines each).
+REPEATED = ("degree", "trig_degree", "angle_degree", "splines")
+
+
+def moved(state, move, kinds, n, skip=0):
+    """The catalog parameters after ``move`` from ``state``, or None when it does not apply.
+
+    Parameters
+    ----------
+    state : dict
+        Catalog parameters (the keys of :data:`START`).
+    move : str
+        One of :data:`MOVES` or :data:`MORE_MOVES`, or ``"a+b"``: the move ``a``, then ``b``.
+    kinds : sequence of str
+        The coordinates' kinds (``"linear"``, ``"angle"``).
+    n : int
+        The number of coordinates.
+    skip : int, default 0
+        Further steps of a repeated move (:data:`REPEATED`): ``skip=1`` looks one degree,
+        or one spline count, further.
+
+    Returns
+    -------
+    dict or None
+        The new parameters; None where the move does not apply (a family already in, a
+        degree at its :data:`LIMITS`, a move without the coordinates it needs).
+
+    Examples
+    --------
+    >>> moved(START, "trig_degree", ["angle"], 1)["trig_degree"]
+    2
+    >>> moved(START, "interaction", ["angle"], 1) is None
+    True
+    """
+    if "+" in move:
+        for part in move.split("+"):
+            state = None if state is None else moved(state, part, kinds, n, skip)
+        return state
+    new = dict(state)
+    angles = "angle" in kinds
+    if move == "kinetic":
+        if state["kinetic"] == "configuration":
+            return None
+        new["kinetic"] = "configuration"
+    elif move == "interaction":
+        if state["interaction"] >= n:
+            return None
+        new["interaction"] += 1
+    elif move in LIMITS:
+        relevant = {"degree": "linear" in kinds or (state["angle_degree"] > 0
+                                                    and state["interaction"] > 1),
+                    "trig_degree": angles, "angle_degree": angles}[move]
+        step = (2 if move == "angle_degree" and not state[move] else 1) + skip
+        if not relevant or state[move] + step > LIMITS[move]:
+            return None
+        new[move] = state[move] + step
+    elif move == "gyroscopic":
+        if state["gyroscopic"] or n < 2:
+            return None
+        new["gyroscopic"] = True
+    elif move == "coulomb":
+        if "coulomb" in state["dissipation"]:
+            return None
+        new["dissipation"] = (*state["dissipation"], "coulomb")
+    elif move == "coupled_damping":
+        if "coupled" in state["dissipation"] or n < 2:
+            return None
+        new["dissipation"] = (*state["dissipation"], "coupled")
+    elif move == "splines":
+        larger = [k for k in SPLINE_COUNTS if k > (state["splines"] or 0)]
+        if skip >= len(larger):
+            return None
+        new["splines"] = larger[skip]
+    return new
+
+
+def joint_moves(moves, kinds, n, size) -> list:
+    """The pairs of moves that are first moves of their own.
+
+    A pair ``"a+b"`` of moves that are not repeated qualifies when, from :data:`START`, its
+    joint catalog has more terms than the two moves add alone: the second move multiplies
+    the first's family (``"kinetic+interaction"``: configuration-dependent kinetic
+    coefficients over products of two coordinates' functions, as ``cos(a - b)`` in
+    ``cos(a - b) a_dot b_dot``), so neither alone shows what the pair can.
+
+    Parameters
+    ----------
+    moves : sequence of str
+        The growth's moves.
+    kinds : sequence of str
+        The coordinates' kinds.
+    n : int
+        The number of coordinates.
+    size : callable
+        ``size(parameters) -> int``: a catalog's number of terms.
+
+    Returns
+    -------
+    list of str
+        The qualifying pairs, ``"a+b"`` in the order of ``moves``.
+    """
+    single = [m for m in moves if m not in REPEATED]
+    base = size(START)
+    out = []
+    for a, b in itertools.combinations(single, 2):
+        once, other = (moved(dict(START), m, kinds, n) for m in (a, b))
+        both = None if once is None or other is None else moved(once, b, kinds, n)
+        if both is not None and (size(both) - base
+                                 > size(once) - base + size(other) - base):
+            out.append(f"{a}+{b}")
+    return out
