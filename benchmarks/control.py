@@ -327,6 +327,16 @@ def _append(path, line: str) -> None:
         os.close(fd)
 
 
+def _commit() -> str | None:
+    """The checkout's commit (recorded with each case), or None outside a git checkout."""
+    import subprocess
+    try:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=Path(__file__).parent,
+                              capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return None
+
+
 def write_summary(notes: str = "") -> str:
     text = (HEADER + "\n## Swing-up\n\n" + summarize() + "\n## Arm tracking\n\n"
             + arm_summary() + "\n## Planning step\n\n" + timing_summary()
@@ -446,6 +456,7 @@ def main(argv=None):
                           "success": False,
                           "interaction_s": None, "episodes": 0, "mpc_step_ms": None,
                           "error": f"{type(error).__name__}: {error}"}
+            record["code"] = _commit()
             _append(JSONL, json.dumps(record, default=float) + "\n")
             print(f"    -> success {record['success']}, interaction "
                   f"{record['interaction_s']}", file=sys.stderr, flush=True)
