@@ -35,6 +35,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import os
 import sys
@@ -327,8 +328,10 @@ def _append(path, line: str) -> None:
         os.close(fd)
 
 
+@functools.cache
 def _commit() -> str | None:
-    """The checkout's commit (recorded with each case), or None outside a git checkout."""
+    """The checkout's commit when the first case ends (recorded with each case), or None
+    outside a git checkout."""
     import subprocess
     try:
         return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=Path(__file__).parent,
