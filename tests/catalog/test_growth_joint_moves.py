@@ -68,6 +68,17 @@ def pendulum():
     return accelerations, mass, t, xs, us
 
 
+def _fresh_error(model, accelerations, seed: int) -> float:
+    """Relative error of ``model``'s accelerations against the sympy truth on 40 random
+    states and torques."""
+    rng = np.random.default_rng(seed)
+    states = np.c_[rng.uniform(-1, 1, (40, 2)), rng.uniform(-2, 2, (40, 2))]
+    tau = rng.uniform(-1.5, 1.5, (40, 2))
+    truth = np.array([accelerations(y, u) for y, u in zip(states, tau, strict=True)])
+    predicted = model.predict(states[:, :2], states[:, 2:], tau)
+    return float(np.linalg.norm(predicted - truth) / np.linalg.norm(truth))
+
+
 def test_the_coupling_is_a_first_move_of_its_own(pendulum):
     """``cos(a - b) a_dot b_dot`` needs configuration-dependent kinetic coefficients over
     products of both angles' functions: the pair of moves is tried from the first catalog,
@@ -84,12 +95,7 @@ def test_the_coupling_is_a_first_move_of_its_own(pendulum):
     terms = set(found.catalog.lagrange_terms())
     (a, b), (ad, bd) = found.model.feature_library_.coords.q, found.model.feature_library_.coords.qd
     assert {sp.cos(a) * sp.cos(b) * ad * bd, sp.sin(a) * sp.sin(b) * ad * bd} <= terms
-    rng = np.random.default_rng(3)
-    states = np.c_[rng.uniform(-1, 1, (40, 2)), rng.uniform(-2, 2, (40, 2))]
-    tau = rng.uniform(-1.5, 1.5, (40, 2))
-    truth = np.array([accelerations(y, u) for y, u in zip(states, tau, strict=True)])
-    predicted = found.model.predict(states[:, :2], states[:, 2:], tau)
-    assert np.linalg.norm(predicted - truth) / np.linalg.norm(truth) < 0.01
+    assert _fresh_error(found.model, accelerations, seed=3) < 0.01
 
 
 def test_the_physical_steepest_climb_keeps_only_positive_definite_fits(pendulum):
@@ -116,12 +122,7 @@ def test_the_physical_steepest_climb_keeps_only_positive_definite_fits(pendulum)
     true_mass = np.array([np.asarray(mass(*q), float) for q in xs[0][::50]])
     assert np.all(np.linalg.eigvalsh(true_mass) > 0)
     assert (found.catalog.interaction, found.catalog.kinetic) == (2, "configuration")
-    rng = np.random.default_rng(4)
-    states = np.c_[rng.uniform(-1, 1, (40, 2)), rng.uniform(-2, 2, (40, 2))]
-    tau = rng.uniform(-1.5, 1.5, (40, 2))
-    truth = np.array([accelerations(y, u) for y, u in zip(states, tau, strict=True)])
-    predicted = found.model.predict(states[:, :2], states[:, 2:], tau)
-    assert np.linalg.norm(predicted - truth) / np.linalg.norm(truth) < 0.02
+    assert _fresh_error(found.model, accelerations, seed=4) < 0.02
     with pytest.raises(TypeError, match="steepest"):
         grow_catalog(noisy, [t, t], us, coordinates=["a", "b"], kinds="angle",
                      moves=("kinetic",), steepest=1)
