@@ -376,7 +376,8 @@ def generate_dataset(system, n_trajectories: int = 4, duration: float = 10.0,
     if n_steps > 100_000_000:
         raise ValueError(f"duration: {duration} s is {n_steps:.3g} MuJoCo steps per trajectory "
                          "(at most 1e8); record shorter trajectories")
-    integration = choose_integration(model, integrator)
+    # a time-varying control is held over each step: accurate, not only stable, substeps
+    integration = choose_integration(model, integrator, held_control=forcing != "implicit")
     # a servo started on its reference is not at rest there (gravity, the reference's
     # acceleration): its stiff modes ring for a few time constants, faster than the samples
     # resolve; the recorded part starts once they have died out

@@ -6,9 +6,11 @@ import pytest
 mujoco = pytest.importorskip("mujoco")
 
 from pysindy_xl.mujoco import MJCFSystem, generate_dataset  # noqa: E402
+from pysindy_xl.simulation import integration  # noqa: E402
 from pysindy_xl.simulation.integration import (  # noqa: E402
     BIAS_TOLERANCE,
     RK4_BOUND,
+    RK4_HELD_BOUND,
     UnstableSimulationError,
     choose_integration,
     linear_modes,
@@ -61,7 +63,7 @@ def test_stiff_servo_on_a_light_link_gets_a_stable_faithful_integration():
     model = system.mj_model()
     rate, _ = linear_modes(model)
     assert model.opt.timestep * rate > 100  # RK4 at the model's step: far outside its region
-    choice = choose_integration(model)
+    choice = choose_integration(model, held_control=True)  # a forced run's
     assert choice.stability <= RK4_BOUND or choice.bias <= BIAS_TOLERANCE
     data = generate_dataset(system, n_trajectories=1, duration=0.1, seed=0, progress=False)
     meta = data.metadata
@@ -85,3 +87,68 @@ def test_unstable_run_is_refused_naming_the_option():
     with pytest.raises(UnstableSimulationError, match="integrator='auto'"):
         generate_dataset(system, n_trajectories=1, duration=0.1, seed=0, integrator="RK4",
                          progress=False)
+
+
+# Two links driven by torque motors, which generate_dataset drives through a tracking servo
+# (its stiffest mode about 250 1/s: h |lambda| = 0.5 at the 2 ms step).
+MOTOR_ARM = """
+<mujoco model="motor_arm">
+  <option timestep="0.002" gravity="0 0 -9.81"><flag contact="disable"/></option>
+  <worldbody>
+    <body name="upper" pos="0 0 0.5">
+      <joint name="shoulder" axis="0 1 0" damping="0.1" armature="0.05" range="-2.5 2.5"/>
+      <inertial pos="0.15 0 0" mass="1.0" diaginertia="0.01 0.02 0.02"/>
+      <body name="fore" pos="0.3 0 0">
+        <joint name="elbow" axis="0 1 0" damping="0.1" armature="0.02" range="-2.5 2.5"/>
+        <inertial pos="0.1 0 0" mass="0.5" diaginertia="2e-3 4e-3 4e-3"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator><motor joint="shoulder"/><motor joint="elbow"/></actuator>
+</mujoco>
+"""
+
+
+def _velocity_gain(trajectory):
+    """Per coordinate, the recorded velocities' change over bumps (``-int phi' qd``) in units
+    of the recorded accelerations' (``int phi qdd``, MuJoCo's ``mj_forward`` at each sample):
+    1 where the positions follow the continuous equations under the recorded forces."""
+    t = trajectory.t
+    h, half = t[1] - t[0], 0.3
+    centres = np.arange(t[0] + half, t[-1] - half, 0.1)
+    s = (t[None, :] - centres[:, None]) / half
+    inside = np.abs(s) < 1
+    phi = np.where(inside, (1 - s**2) ** 6, 0.0) * h
+    dphi = np.where(inside, -12 * s * (1 - s**2) ** 5 / half, 0.0) * h
+    accelerations, changes = phi @ trajectory.qdd, -(dphi @ trajectory.qd)
+    return (accelerations * changes).sum(0) / (accelerations**2).sum(0)
+
+
+def test_tracked_motors_follow_the_continuous_equations(monkeypatch):
+    system = MJCFSystem(MOTOR_ARM)
+    data = generate_dataset(system, n_trajectories=1, duration=3.0, seed=0, progress=False,
+                            control="tracking")
+    meta = data.metadata
+    assert meta["tracking"] is not None and meta["integrator"] == "RK4"
+    assert meta["integration"]["stability"] <= RK4_HELD_BOUND
+    assert np.abs(_velocity_gain(data.trajectories[0]) - 1).max() < 5e-4
+    # bounded for stability only, the servo's held control leaves the positions 1 % off
+    monkeypatch.setattr(integration, "RK4_HELD_BOUND", RK4_BOUND)
+    coarse = generate_dataset(system, n_trajectories=1, duration=3.0, seed=0, progress=False,
+                              control="tracking")
+    assert coarse.metadata["substeps"] < meta["substeps"]
+    assert np.abs(_velocity_gain(coarse.trajectories[0]) - 1).max() > 5e-3
+
+
+def test_held_control_tightens_only_the_rk4_bound():
+    model = MJCFSystem(MOTOR_ARM).mj_model()
+    free, held = choose_integration(model), choose_integration(model, held_control=True)
+    # motors alone: no stiff mode to resolve, the same step
+    assert (free.integrator, free.substeps) == (held.integrator, held.substeps) == ("RK4", 1)
+    stiff = MJCFSystem(STIFF_ARM).mj_model()
+    stiff.actuator_gainprm[:, 0] /= 1000  # kp 0.3 and 3, kv 0.03 and 0.3
+    stiff.actuator_biasprm[:, 1:3] /= 1000
+    free, held = choose_integration(stiff), choose_integration(stiff, held_control=True)
+    assert free.integrator == held.integrator == "RK4"
+    assert held.substeps > free.substeps
+    assert held.stability <= RK4_HELD_BOUND < free.stability <= RK4_BOUND
