@@ -8,8 +8,9 @@ both remedies in substeps (``RK4_BOUND``, ``BIAS_TOLERANCE``, ``RK4_COST``) and 
 cheaper. A run driven by a time-varying control holds it over each step, which a stiff servo
 turns into an error of order ``(h |lambda|)^2`` in the positions: there RK4 keeps the tighter
 ``RK4_HELD_BOUND`` (``choose_integration(held_control=True)``, as
-:func:`~pysindy_xl.mujoco.generate_dataset` asks for forced runs). :func:`check_run` raises :class:`UnstableSimulationError` on a run that left the
-physics. :doc:`/robot_arms` explains the choice.
+:func:`~pysindy_xl.mujoco.generate_dataset` asks for forced runs). :func:`check_run` raises
+:class:`UnstableSimulationError` on a run that left the physics. :doc:`/robot_arms` explains
+the choice.
 """
 
 from __future__ import annotations
