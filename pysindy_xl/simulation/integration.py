@@ -34,8 +34,9 @@ INTEGRATORS = {"Euler": 0, "RK4": 1, "implicit": 2, "implicitfast": 3}
 RK4_BOUND = 0.25
 #: Largest ``h |lambda|`` of an RK4 step under a time-varying control (``held_control``): the
 #: control is held over each step, and the positions a stiff servo drives then depart from
-#: the continuous equations under the recorded forces by about ``(h |lambda|)^2 / 30`` of the
-#: inertial force (0.1 % at ``RK4_BOUND``, which a fitted arm's inertias absorb).
+#: the continuous equations under the recorded forces by 0.1-1 % of the
+#: inertial force at ``RK4_BOUND``, falling as ``(h |lambda|)^2``; a fitted arm's inertias
+#: absorb it.
 RK4_HELD_BOUND = 0.05
 #: Largest inertia bias ``h max_i D_ii`` of an implicit step, relative to ``max |M_ij|``.
 BIAS_TOLERANCE = 5e-3
