@@ -3,7 +3,9 @@
 Published 7-joint arms of MuJoCo Menagerie (``benchmarks/models/menagerie/``: Franka FR3,
 UFactory xArm7, Rethink Sawyer) with their position servos replaced by torque motors. Each is
 identified with its kinematic catalog from 2 x 5 s of randomly excited motion (positions only,
-1 % noise), then tracks a fast multi-sine for 4 s (every joint: 0.4 rad or 40 % of its half
+1 % noise, samples every 2 ms; ``generate_dataset`` drives the motors through a tracking servo
+and integrates the forced runs finely enough to follow the continuous equations,
+``RK4_HELD_BOUND``), then tracks a fast multi-sine for 4 s (every joint: 0.4 rad or 40 % of its half
 range, 0.5-1.1 Hz, about the middle of its range) with PD (kp 100, kd 10, 2 ms period) plus a
 feedforward along the reference:
 
