@@ -115,7 +115,7 @@ def idle_estimate(fits, main_cpu) -> float:
         elif kind == "local":
             clock += cpu[key]
             own += cpu[key]
-        else:
+        elif kind == "worker":
             clock = max(clock, finish[key])
     return clock + max(0.0, main_cpu - own)
 

@@ -296,6 +296,35 @@ class AutomaticCatalog(CatalogRepartition):
         terms, _, _, mask = self._built_terms(options)
         return len(terms) + int(mask.sum())
 
+    def content_key(self) -> tuple:
+        """A hashable key of what the catalog holds: its coordinates, its terms (each with the
+        library it goes to), its dissipation terms and their equations, and the forces'
+        interlink.
+
+        Two catalogs with equal keys build the same libraries, whatever their parameters (an
+        interaction order that the degrees leave without a product adds nothing), so a fit
+        depends on the catalog only through this key.
+
+        Returns
+        -------
+        tuple
+            Of strings, sympy expressions, booleans and bytes.
+
+        Examples
+        --------
+        >>> two = AutomaticCatalog("x,y", degree=2, interaction=2, kinetic="constant")
+        >>> three = AutomaticCatalog("x,y", degree=2, interaction=3, kinetic="constant")
+        >>> two.content_key() == three.content_key(), two.content_key() == AutomaticCatalog(
+        ...     "x,y", degree=3, interaction=2, kinetic="constant").content_key()
+        (True, False)
+        """
+        options = self._options()
+        terms, fast, dissipation, mask = self._built_terms(options)
+        interlink = None if self.interlink is None else np.asarray(self.interlink, float)
+        return (tuple(options["coords"].names), tuple(terms), tuple(fast), tuple(dissipation),
+                mask.shape, mask.tobytes(),
+                None if interlink is None else (interlink.shape, interlink.tobytes()))
+
     def spline_columns(self) -> list[list[int]]:
         """The columns of each coordinate's natural splines in the fitted catalog.
 

@@ -22,8 +22,8 @@ import numpy as np
 
 from .automatic import AutomaticCatalog
 
-__all__ = ["SearchSplit", "SearchData", "CandidateFits", "evaluate_candidate", "held_out_error",
-           "parameters_key"]
+__all__ = ["SearchSplit", "SearchData", "CandidateFits", "candidate_content", "evaluate_candidate",
+           "held_out_error", "parameters_key"]
 
 
 def parameters_key(parameters) -> str:
@@ -205,6 +205,30 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
             "definite": min(definite)}
 
 
+def candidate_content(search: SearchData, parameters):
+    """What a candidate's catalogs hold, on every split of the search: a hashable key, equal
+    for parameters whose fits are the same (:meth:`~.automatic.AutomaticCatalog.content_key`).
+
+    Parameters
+    ----------
+    search : SearchData
+        The growth's data (the splits' fixed catalog parameters).
+    parameters : dict
+        The growing catalog parameters.
+
+    Returns
+    -------
+    tuple or None
+        One :meth:`~.automatic.AutomaticCatalog.content_key` per split; None where the
+        parameters do not make a catalog (its fit reports why).
+    """
+    try:
+        return tuple(AutomaticCatalog(**split.fixed, **parameters).content_key()
+                     for split in search.splits)
+    except (ValueError, TypeError):
+        return None
+
+
 def _warm_up() -> None:
     """Import what a candidate's fit needs (a worker's first task)."""
     from .. import model  # noqa: F401
@@ -257,8 +281,10 @@ class CandidateFits:
         The fields of each computed candidate, by :func:`parameters_key`.
     events : list of (str, str)
         What happened, in order: ``("submit", key)`` (sent to a worker), ``("local", key)``
-        (fitted here) and ``("worker", key)`` (a worker's result first needed here); with
-        the steps' ``cpu_seconds`` they let a benchmark replay the schedule on idle cores.
+        (fitted here), ``("worker", key)`` (a worker's result first needed here) and
+        ``("same", key)`` (parameters whose catalogs hold what an earlier candidate's hold,
+        :func:`candidate_content`: that candidate's fit, not fitted again); with the steps'
+        ``cpu_seconds`` they let a benchmark replay the schedule on idle cores.
     """
 
     def __init__(self, search: SearchData, n_jobs=None):
@@ -267,6 +293,10 @@ class CandidateFits:
         self.n_jobs = joblib.effective_n_jobs(n_jobs)
         self.results = {}
         self.events = []
+        self._canonical = {}  # parameters_key -> key of the first parameters of equal content
+        self._contents = {}  # candidate_content -> that first key
+        self._first = {}  # that first key -> its parameters
+        self._aliases = {}  # key of a catalog met before -> its fields (the first's, copied)
         self._workers_results = set()  # computed by a worker, not yet needed here
         self._running = {}  # key -> future of a worker's fit
         self._executor = None
@@ -310,8 +340,20 @@ class CandidateFits:
         dict
             As :func:`evaluate_candidate` (the same object on each call).
         """
-        key = parameters_key(parameters)
-        ahead = [(parameters_key(c), c) for c in ahead]
+        own = parameters_key(parameters)
+        key = self._key(parameters, own)
+        if key != own:  # a catalog met before under other parameters: its fit, once
+            if own not in self._aliases:
+                started, cpu = time.perf_counter(), time.process_time()
+                fields = dict(self.get(self._first[key], ahead))
+                if fields["description"]:
+                    fields["description"] = AutomaticCatalog(**self.search.splits[0].fixed,
+                                                             **parameters).describe()
+                fields.update(seconds=time.perf_counter() - started,
+                              cpu_seconds=time.process_time() - cpu)
+                self._aliases[own] = fields
+                self.events.append(("same", own))
+            return self._aliases[own]
         for other in list(self._running):
             self._collect(other)
         if key not in self.results and key not in self._running:
@@ -320,8 +362,8 @@ class CandidateFits:
             return self.results[key]
         while key in self._running and not self._running[key].done():
             # a worker fits it: fit the next guess here meanwhile (most moves are rejected)
-            guess = next(((k, c) for k, c in ahead if k != key and k not in self.results
-                          and k not in self._running), None)
+            guess = next(((k, c) for k, c in self._guesses(ahead, key)
+                          if k not in self.results and k not in self._running), None)
             if guess is None:
                 break
             self._local(*guess)
@@ -334,9 +376,33 @@ class CandidateFits:
         self._submit(ahead, key)
         return self.results[key]
 
+    def _key(self, parameters, own=None) -> str:
+        """The :func:`parameters_key` of the first parameters met whose catalogs hold what
+        those of ``parameters`` hold (:func:`candidate_content`): equal catalogs give equal
+        fits, so one fit serves all their parameters."""
+        own = parameters_key(parameters) if own is None else own
+        if own not in self._canonical:
+            content = candidate_content(self.search, parameters)
+            first = own if content is None else self._contents.setdefault(content, own)
+            self._canonical[own] = first
+            self._first.setdefault(first, parameters)
+        return self._canonical[own]
+
+    def _guesses(self, ahead, key):
+        """``(key, parameters)`` of the distinct catalogs of ``ahead`` but ``key``'s, in order,
+        each read when asked for (only as many as the workers take are compared)."""
+        seen = {key}
+        for parameters in ahead:
+            other = self._key(parameters)
+            if other not in seen:
+                seen.add(other)
+                yield other, self._first[other]
+
     def _submit(self, ahead, key) -> None:
         """Give the idle workers the first guesses of ``ahead`` neither done nor running."""
-        for other, candidate in ahead:
+        if len(self._running) >= self.n_jobs - 1:
+            return
+        for other, candidate in self._guesses(ahead, key):
             if len(self._running) >= self.n_jobs - 1:
                 break
             if other != key and other not in self.results and other not in self._running:

@@ -91,3 +91,39 @@ def test_the_ceiling_and_the_sample_count_are_reported_not_fitted():
                    for key, value in split.train.items()}
     fields = evaluate_candidate(search, {"degree": 4})
     assert fields["note"] == "too few samples for this size" and fields["terms"] == 6
+
+
+def test_parameters_of_a_catalog_met_before_get_its_fit_equal_to_their_own():
+    x, t, u = noisy_duffing()
+    search = _search(x, t, u)
+    fits = CandidateFits(search)
+    quartic = {"degree": 4}
+    same = {"degree": 4, "interaction": 2}  # one coordinate: no product of two
+    other = {"degree": 3}
+    first = fits.get(quartic)
+    again = fits.get(same)
+    assert fits.get(same) is again
+    assert [kind for kind, _ in fits.events] == ["local", "same"]
+    # the long way: the second parameters fitted on their own
+    alone = evaluate_candidate(search, same)
+    clocks = ("seconds", "cpu_seconds")
+    assert {k: v for k, v in again.items() if k not in clocks} == \
+        {k: v for k, v in alone.items() if k not in clocks}
+    assert "interaction 2" in again["description"] and "interaction 1" in first["description"]
+    assert {k: v for k, v in first.items() if k not in clocks + ("description",)} == \
+        {k: v for k, v in again.items() if k not in clocks + ("description",)}
+    # a catalog that differs is fitted
+    cubic = fits.get(other)
+    assert cubic["terms"] == first["terms"] - 1
+    assert [kind for kind, _ in fits.events] == ["local", "same", "local"]
+
+
+def test_candidate_content_tells_equal_catalogs_from_different_ones():
+    from pysindy_xl.catalog.candidates import candidate_content
+    x, t, u = noisy_duffing()
+    search = _search(x, t, u)
+    quartic = candidate_content(search, {"degree": 4})
+    assert quartic == candidate_content(search, {"degree": 4, "interaction": 2})
+    assert quartic != candidate_content(search, {"degree": 4, "dissipation": ("coulomb",)})
+    assert quartic != candidate_content(search, {"degree": 4, "kinetic": "configuration"})
+    assert candidate_content(search, {"degree": -1}) is None  # not a catalog
