@@ -96,7 +96,13 @@ from .moves import MORE_MOVES, MOVES, REPEATED, START, joint_moves, moved
 from .path import GrowthResult, GrowthStep
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
-           "check_growth_data"]
+           "check_growth_data", "GROWTH_REGIONS"]
+
+#: The values of ``region`` of :func:`grow_catalog`: the folds of
+#: :func:`~.folds.held_out_splits` (:data:`~.folds.REGIONS`), or ``"consensus"``: the
+#: ``"block"`` fold and the ``"extremes"`` fold as two judges, a change kept when one accepts
+#: it and the other does not find it worse (:func:`consensus_keeps`).
+GROWTH_REGIONS = (*REGIONS, "consensus")
 
 def check_growth_data(xs, names, n_terms: int) -> None:
     """``ValueError`` for a constant coordinate or data too short for ``n_terms`` terms.
@@ -161,6 +167,91 @@ def _keeps(step, best, tolerance) -> bool:
     return (step.criterion < best.criterion * (1 - tolerance)
             or (step.criterion <= best.criterion * (1 + tolerance)
                 and step.active < best.active))
+
+
+#: With ``region="consensus"``, a candidate more than this factor worse than the kept catalog
+#: on the first fold is refused without fitting it on the second (it would need to be better
+#: there by more than the factor): most candidates of a growth are, so the second fold costs
+#: a fit only for those that could be kept.
+CONSENSUS_REACH = 2.0
+
+
+def consensus_criteria(step, best, second_step, second_best):
+    """The criteria of two folds that the keep rule of ``region="consensus"`` compares.
+
+    With :math:`c_1, b_1` the first fold's criteria of the candidate and of the kept catalog
+    and :math:`c_2, b_2` the second fold's, the candidate's and the kept catalog's combined
+    criteria are the geometric means :math:`\\sqrt{c_1 c_2}` and :math:`\\sqrt{b_1 b_2}`:
+    a relative change counts the same on either fold, so a change is kept where what it
+    gains on one fold outweighs what it loses on the other (a stand-in fitted along the
+    trajectories gains a little on the time blocks and loses much beyond the recorded
+    states). Where both catalogs fail the second fold (:math:`\\min(c_2, b_2) \\ge 1`: a
+    residual as large as what the equations should explain, as for a hardening spring fitted
+    only inside the threshold), the fold cannot tell them apart and the first fold's
+    criteria are compared alone.
+
+    Parameters
+    ----------
+    step, best : GrowthStep
+        The candidate and the kept catalog, judged by the first fold.
+    second_step, second_best : GrowthStep
+        The same catalogs judged by the second fold.
+
+    Returns
+    -------
+    (float, float)
+        The candidate's and the kept catalog's criteria.
+
+    Examples
+    --------
+    >>> stand_in = GrowthStep("trig_degree", "", 6, 5, 0.03, 0.03, 0.03, False)
+    >>> law = GrowthStep("angle_degree", "", 6, 5, 0.04, 0.04, 0.04, False)
+    >>> beyond = GrowthStep("trig_degree", "", 6, 5, 0.1, 0.1, 0.10, False)
+    >>> law_beyond = GrowthStep("angle_degree", "", 6, 5, 0.05, 0.05, 0.05, False)
+    >>> [round(c, 4) for c in consensus_criteria(law, stand_in, law_beyond, beyond)]
+    [0.0447, 0.0548]
+    """
+    c_2, b_2 = second_step.criterion, second_best.criterion
+    if not min(c_2, b_2) < 1:
+        return step.criterion, best.criterion
+    return float(np.sqrt(step.criterion * c_2)), float(np.sqrt(best.criterion * b_2))
+
+
+def consensus_keeps(step, best, second_step, second_best, tolerance) -> bool:
+    """The keep rule of two folds (``region="consensus"`` of :func:`grow_catalog`).
+
+    The keep rule of one fold (a criterion lower by the fraction ``tolerance``, or within it
+    with fewer fitted terms) applied to the combined criteria of
+    :func:`consensus_criteria`, and the fitted terms of the first fold.
+
+    Parameters
+    ----------
+    step, best : GrowthStep
+        The candidate and the kept catalog, judged by the first fold.
+    second_step, second_best : GrowthStep or None
+        The same catalogs judged by the second fold; None: the first fold alone.
+    tolerance : float
+        Relative decrease of the criterion that keeps a change.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> stand_in = GrowthStep("trig_degree", "", 6, 5, 0.03, 0.03, 0.03, False)
+    >>> law = GrowthStep("angle_degree", "", 6, 5, 0.04, 0.04, 0.04, False)
+    >>> beyond = GrowthStep("trig_degree", "", 6, 5, 0.1, 0.1, 0.10, False)
+    >>> law_beyond = GrowthStep("angle_degree", "", 6, 5, 0.05, 0.05, 0.05, False)
+    >>> consensus_keeps(law, stand_in, law_beyond, beyond, 0.05)
+    True
+    >>> consensus_keeps(law, stand_in, None, None, 0.05)     # the first fold alone
+    False
+    """
+    if second_step is None or second_best is None:
+        return _keeps(step, best, tolerance)
+    c, b = consensus_criteria(step, best, second_step, second_best)
+    return c < b * (1 - tolerance) or (c <= b * (1 + tolerance) and step.active < best.active)
 
 
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
@@ -287,8 +378,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     check_option("max_terms", max_terms, "int", low=1)
     check_option("n_blocks", n_blocks, "int", low=3)
     check_option("cross_validate", cross_validate, "bool")
-    if region not in REGIONS:
-        raise ValueError(f"region: expected one of {REGIONS}, got {region!r}")
+    if not isinstance(region, str) or region not in GROWTH_REGIONS:
+        raise ValueError(f"region: expected one of {GROWTH_REGIONS}, got {region!r}")
     check_option("physical", physical, "bool")
     check_option("steepest", steepest, "bool")
     check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
@@ -315,11 +406,15 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     longest = int(np.argmax([len(tk) for tk in ts]))
     width = min(BumpTestFunctions().half_width(ts[longest], xs[longest]),
                 min(tk[block - 1] - tk[0] for tk in ts) / 3)
-    splits, reported = held_out_splits(arrays, n_blocks, stride, cross_validate, region,
-                                       margin=width)
+    consensus = region == "consensus"
+    splits, reported = held_out_splits(arrays, n_blocks, stride, cross_validate,
+                                       "block" if consensus else region, margin=width)
     # the search's splines end where its training data do: the region blocks test their
     # continuation as the chosen model's is used beyond the data
     searched = [dict(fixed, bounds=_span(train["x"])) for train, _ in splits]
+    # the second judge of "consensus": fitted inside the extreme states, judged on them
+    second_splits = (held_out_splits(arrays, n_blocks, stride, False, "extremes",
+                                     margin=width)[0] if consensus else [])
     active = np.any(np.vstack(us) != 0, axis=0) if forced else np.zeros(n, dtype=bool)
     # the default optimizers bag selections on columns estimated from noisy positions (the
     # weak form, where no derivatives are measured)
@@ -340,6 +435,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                         template, max_terms, forced, reported)
     fits = CandidateFits(search, n_jobs)
     fits.warm_up()  # the workers start while the first catalog is fitted here
+    # the second judge is asked only about candidates the first does not refuse: no guesses
+    second_fits = CandidateFits(SearchData(
+        [SearchSplit(dict(fixed, bounds=_span(train["x"])), train, held)
+         for train, held in second_splits], template, max_terms, forced)) if consensus else None
 
     def evaluate(parameters, move, ahead=()):
         step = GrowthStep(move=move, chosen=False, **fits.get(parameters, ahead))
@@ -348,11 +447,39 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                          "the training states")
         return step
 
+    seconds = {}  # the second judge's steps, by the first's (of "consensus")
+
+    def second_step(step):
+        """``step``'s catalog judged by the second fold (fitted once), recorded in the step's
+        ``second_error``."""
+        if id(step) not in seconds:
+            fields = second_fits.get(step_parameters[id(step)])
+            seconds[id(step)] = GrowthStep(move=step.move, chosen=False, **fields)
+            step.second_error = seconds[id(step)].criterion
+        return seconds[id(step)]
+
+    def compared(step, best):
+        """The criteria the keep rules compare: the first fold's, or with ``"consensus"``
+        the combined ones (:func:`consensus_criteria`; the candidate is not fitted on the
+        second fold where it is more than :data:`CONSENSUS_REACH` times worse on the first,
+        and then compares as infinite)."""
+        if not consensus:
+            return step.criterion, best.criterion
+        if not step.criterion <= best.criterion * CONSENSUS_REACH:
+            return np.inf, best.criterion
+        return consensus_criteria(step, best, second_step(step), second_step(best))
+
+    def judged(step, best):
+        """The keep rule of one fold (:func:`_keeps`) or, with ``"consensus"``, of two
+        (:func:`consensus_keeps`)."""
+        c, b = compared(step, best)
+        return c < b * (1 - tolerance) or (c <= b * (1 + tolerance) and step.active < best.active)
+
     def keeps(step, best):
-        """The keep rule (:func:`_keeps`); with ``physical``, a catalog whose fits have a
+        """The keep rule (:func:`judged`); with ``physical``, a catalog whose fits have a
         positive definite mass matrix is not given up for one whose fits have not."""
-        return _keeps(step, best, tolerance) and (not physical or step.definite >= 1
-                                                  or best.definite < 1)
+        return judged(step, best) and (not physical or step.definite >= 1
+                                       or best.definite < 1)
 
     def _size(parameters):
         try:
@@ -379,7 +506,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # coefficients over products of two coordinates' functions): tried as one move too
     joint = joint_moves(moves, kinds, n, _size)
     queue += [(name, moved(dict(START), name, kinds, n)) for name in joint]
+    step_parameters = {}  # the parameters of each step, by the step's id
     first = evaluate(dict(START), "start", [p for _, p in queue])
+    step_parameters[id(first)] = dict(START)
     if first.note.startswith("ceiling"):
         raise ValueError(f"max_terms: the smallest catalog has {first.terms} terms, more than "
                          f"max_terms={max_terms}; raise max_terms")
@@ -394,6 +523,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         key = parameters_key(parameters)
         if key not in cache:
             cache[key] = evaluate(parameters, move, ahead)
+            step_parameters[id(cache[key])] = parameters
             steps.append(cache[key])
             report(cache[key])
         return cache[key]
@@ -513,7 +643,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             continue  # (its first degree was kept: no look further)
         step = attempt(parameters, move, [p for _, p in queue[index + 1:]])
         alone[move] = min(alone.get(move, np.inf), step.criterion)
-        if keeps(step, first):
+        if _keeps(step, first, tolerance):  # (the first fold's rule: no second fit here)
             stopped.add(move)
     order = sorted([m for m in moves if m != "splines"] + joint,
                    key=lambda m: alone.get(m, np.inf))
@@ -544,9 +674,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         for k, (move, parameters) in enumerate(candidates):
             step = attempt(parameters, f"-{move}", [p for _, p in candidates[k + 1:]])
             if keeps(step, best) or (
-                    step.criterion <= best.criterion * (1 + tolerance)
-                    and step.active == best.active and step.terms < best.terms
-                    and (not physical or step.definite >= 1 or best.definite < 1)):
+                    step.active == best.active and step.terms < best.terms
+                    and (not physical or step.definite >= 1 or best.definite < 1)
+                    and (lambda c, b: c <= b * (1 + tolerance))(*compared(step, best))):
                 dropped.append((step.criterion, step.active, parameters, step))
             else:
                 refused.append((move, parameters))
@@ -570,6 +700,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         visited.add(parameters_key(state))
         path.append(best)
     fits.close()  # (a worker's last guess may still run: it ends during the final fit)
+    if consensus:
+        for step in path:
+            second_step(step)  # (each kept step reports both folds)
     for step in path:
         step.chosen = True
     best_catalog = AutomaticCatalog(**fixed, **state)

@@ -42,6 +42,10 @@ class GrowthStep:
     definite : float, default 1.0
         Smallest fraction, over the step's fits, of the training states at which the fitted
         mass matrix is positive definite (0 when the catalog was not fitted).
+    second_error : float, default nan
+        The criterion of the second fold (``region="consensus"`` of
+        :func:`~.growth.grow_catalog`: fitted outside, judged on the extreme states); NaN
+        where the second fold was not asked.
 
     Examples
     --------
@@ -62,6 +66,7 @@ class GrowthStep:
     seconds: float = 0.0
     cpu_seconds: float = 0.0
     definite: float = 1.0
+    second_error: float = float("nan")
 
 
 @dataclasses.dataclass
