@@ -23,6 +23,21 @@ extrapolate. It is not the default: where a law's nonlinearity shows only in the
 states (a hardening spring on a short recording), the fit inside the threshold cannot find it
 and the growth stops at the start. ``"both"`` holds out both.
 
+``region="consensus"`` keeps the two folds apart and lets both judge: each candidate is
+fitted on the block fold (its criterion :math:`c_1`) and, where it is within a factor
+:data:`CONSENSUS_REACH` of the kept catalog there, on the extremes fold too (:math:`c_2`);
+the keep rule below compares the geometric means :math:`\\sqrt{c_1 c_2}`
+(:func:`consensus_criteria`). A relative change then counts the same on either fold: a
+stand-in that gains a little on the time blocks (fitted along the trajectories) and loses
+much beyond the recorded states is refused, and so is a change that only the fit inside the
+threshold prefers. Where both catalogs compared fail the extremes fold (criterion of 1 or
+more: the residual as large as what the equations should explain), that fold cannot tell them
+apart and the block fold decides alone: the hardening spring that the extremes fold hides
+is found as by the default. The first moves are ranked by the combined criterion too (those
+within reach of the best; the others after them), so that of two first moves the block fold
+finds nearly equal, the one that extrapolates is climbed from first. The second fit is paid
+only for the candidates within reach, which most candidates of a growth are not.
+
 With ``cross_validate``, every block is held out in turn instead (one fit per block on the
 others; the criterion is the RMS of all the blocks' errors): on a recording of a few
 seconds the region block holds most of what identifies configuration-dependent terms, and a
@@ -314,7 +329,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         then all lie inside a threshold that the held-out ones cross: a stand-in fitted along
         the trajectories must extrapolate, but so must the law, whose nonlinear terms may show
         only beyond the threshold); or both. Cross-validated, ``"extremes"`` and ``"both"``
-        add a fit outside the extreme stretches, judged on them.
+        add a fit outside the extreme stretches, judged on them. ``"consensus"``: the
+        ``"block"`` fold and the ``"extremes"`` fold judge each change together, by the
+        geometric mean of their criteria (:func:`consensus_keeps`); a candidate is fitted on
+        the second only when it is within :data:`CONSENSUS_REACH` of the kept catalog on the
+        first, and :attr:`GrowthStep.second_error` reports it. Cross-validated, the first
+        fold is the cross-validation's.
     physical : bool, default False
         Never give up a catalog whose fits are physical (the mass matrix of each fit
         positive definite on all its training states: :attr:`GrowthStep.definite` is 1)
@@ -635,18 +655,28 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
 
     # rank the family moves by what each achieves alone from the first catalog (a degree move
     # looking one degree further); the flexible basis comes last, for what the families leave
-    alone, stopped = {}, set()
+    alone, alone_steps, stopped = {}, {}, set()
     if first.criterion <= good_enough:
         queue = []
     for index, (move, parameters) in enumerate(queue):
         if move in stopped:
             continue  # (its first degree was kept: no look further)
         step = attempt(parameters, move, [p for _, p in queue[index + 1:]])
-        alone[move] = min(alone.get(move, np.inf), step.criterion)
+        if step.criterion < alone.get(move, np.inf):
+            alone[move], alone_steps[move] = step.criterion, step
         if _keeps(step, first, tolerance):  # (the first fold's rule: no second fit here)
             stopped.add(move)
+    rank = {m: (1, c) for m, c in alone.items()}
+    if consensus and alone:
+        # ranked as they are kept: by the combined criterion, the moves within reach of the
+        # best first move (the others after them)
+        low = min(alone.values())
+        near = [m for m, c in alone.items() if np.isfinite(c) and c <= low * CONSENSUS_REACH]
+        beyond = {m: second_step(alone_steps[m]).criterion for m in near}
+        if beyond and min(beyond.values()) < 1:
+            rank.update({m: (0, float(np.sqrt(alone[m] * beyond[m]))) for m in near})
     order = sorted([m for m in moves if m != "splines"] + joint,
-                   key=lambda m: alone.get(m, np.inf))
+                   key=lambda m: rank.get(m, (2, np.inf)))
     order += [m for m in moves if m == "splines"]
     # climb from the best and from the second-best first move: which family goes in first is
     # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
