@@ -676,7 +676,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         if beyond and min(beyond.values()) < 1:
             rank.update({m: (0, float(np.sqrt(alone[m] * beyond[m]))) for m in near})
     order = sorted([m for m in moves if m != "splines"] + joint,
-                   key=lambda m: rank.get(m, (2, np.inf)))
+                   key=lambda m: rank.get(m, (1, np.inf)))
     order += [m for m in moves if m == "splines"]
     # climb from the best and from the second-best first move: which family goes in first is
     # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
