@@ -235,18 +235,34 @@ def consensus_criteria(step, best, second_step, second_best):
 def consensus_keeps(step, best, second_step, second_best, tolerance) -> bool:
     """The keep rule of two folds (``region="consensus"`` of :func:`grow_catalog`).
 
-    The keep rule of one fold (a criterion lower by the fraction ``tolerance``, or within it
-    with fewer fitted terms) applied to the combined criteria of
-    :func:`consensus_criteria`, and the fitted terms of the first fold.
+    With :math:`c_1, b_1` the first fold's criteria of the candidate and of the kept
+    catalog, :math:`c_2, b_2` the second fold's and :math:`\\tau` the tolerance:
+
+    - a candidate with more terms than the kept catalog is kept when the first fold's rule
+      keeps it (:math:`c_1 < (1 - \\tau) b_1`, or within :math:`(1 + \\tau) b_1` with fewer
+      fitted terms) and the second fold does not find it worse,
+      :math:`c_2 \\le (1 + \\tau) b_2`;
+    - any other candidate (a family dropped, exchanged for another, the smaller of two
+      catalogs) is kept when the same rule keeps it on the combined criteria of
+      :func:`consensus_criteria`, the geometric means :math:`\\sqrt{c_1 c_2}` and
+      :math:`\\sqrt{b_1 b_2}`.
+
+    Where both catalogs fail the second fold (:math:`\\min(c_2, b_2) \\ge 1`), the first
+    fold's rule decides alone. The asymmetry is the folds': the second is fitted inside a
+    threshold of the states and judged beyond it, on fewer states. It shows that a family
+    extrapolates wrongly (a stand-in fitted along the trajectories), a reason to refuse it
+    or to drop it for a smaller catalog; its own preference for more terms is not evidence of
+    a law (a fit inside the threshold compensates its bias with them).
 
     Parameters
     ----------
     step, best : GrowthStep
-        The candidate and the kept catalog, judged by the first fold.
+        The candidate and the kept catalog, judged by the first fold (``criterion``,
+        ``active``, ``terms``).
     second_step, second_best : GrowthStep or None
         The same catalogs judged by the second fold; None: the first fold alone.
     tolerance : float
-        Relative decrease of the criterion that keeps a change.
+        The fraction :math:`\\tau`.
 
     Returns
     -------
@@ -255,16 +271,25 @@ def consensus_keeps(step, best, second_step, second_best, tolerance) -> bool:
     Examples
     --------
     >>> stand_in = GrowthStep("trig_degree", "", 6, 5, 0.03, 0.03, 0.03, False)
-    >>> law = GrowthStep("angle_degree", "", 6, 5, 0.04, 0.04, 0.04, False)
+    >>> law = GrowthStep("-trig+angle_degree", "", 6, 5, 0.04, 0.04, 0.04, False)
     >>> beyond = GrowthStep("trig_degree", "", 6, 5, 0.1, 0.1, 0.10, False)
-    >>> law_beyond = GrowthStep("angle_degree", "", 6, 5, 0.05, 0.05, 0.05, False)
+    >>> law_beyond = GrowthStep("-trig+angle_degree", "", 6, 5, 0.05, 0.05, 0.05, False)
     >>> consensus_keeps(law, stand_in, law_beyond, beyond, 0.05)
     True
     >>> consensus_keeps(law, stand_in, None, None, 0.05)     # the first fold alone
     False
+    >>> start = GrowthStep("start", "", 4, 4, 0.04, 0.04, 0.04, True)
+    >>> start_beyond = GrowthStep("start", "", 4, 4, 0.06, 0.06, 0.06, True)
+    >>> consensus_keeps(stand_in, start, beyond, start_beyond, 0.05)   # worse beyond
+    False
     """
     if second_step is None or second_best is None:
         return _keeps(step, best, tolerance)
+    if not min(second_step.criterion, second_best.criterion) < 1:
+        return _keeps(step, best, tolerance)  # (the second fold fails both: no verdict)
+    if step.terms > best.terms:
+        return (_keeps(step, best, tolerance)
+                and second_step.criterion <= second_best.criterion * (1 + tolerance))
     c, b = consensus_criteria(step, best, second_step, second_best)
     return c < b * (1 - tolerance) or (c <= b * (1 + tolerance) and step.active < best.active)
 
@@ -491,9 +516,14 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
 
     def judged(step, best):
         """The keep rule of one fold (:func:`_keeps`) or, with ``"consensus"``, of two
-        (:func:`consensus_keeps`)."""
-        c, b = compared(step, best)
-        return c < b * (1 - tolerance) or (c <= b * (1 + tolerance) and step.active < best.active)
+        (:func:`consensus_keeps`: the second fold is asked only about a larger candidate
+        that the first keeps, or another within :data:`CONSENSUS_REACH`)."""
+        if not consensus:
+            return _keeps(step, best, tolerance)
+        if (not _keeps(step, best, tolerance) if step.terms > best.terms
+                else not step.criterion <= best.criterion * CONSENSUS_REACH):
+            return False
+        return consensus_keeps(step, best, second_step(step), second_step(best), tolerance)
 
     def keeps(step, best):
         """The keep rule (:func:`judged`); with ``physical``, a catalog whose fits have a
@@ -668,10 +698,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             stopped.add(move)
     rank = {m: (1, c) for m, c in alone.items()}
     if consensus and alone:
-        # ranked as they are kept: by the combined criterion, the moves within reach of the
+        # ranked by the combined criterion: the moves the first fold keeps within reach of the
         # best first move (the others after them)
         low = min(alone.values())
-        near = [m for m, c in alone.items() if np.isfinite(c) and c <= low * CONSENSUS_REACH]
+        near = [m for m, c in alone.items() if c <= low * CONSENSUS_REACH
+                and _keeps(alone_steps[m], first, tolerance)]
         beyond = {m: second_step(alone_steps[m]).criterion for m in near}
         if beyond and min(beyond.values()) < 1:
             rank.update({m: (0, float(np.sqrt(alone[m] * beyond[m]))) for m in near})
