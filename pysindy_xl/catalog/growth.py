@@ -23,20 +23,24 @@ extrapolate. It is not the default: where a law's nonlinearity shows only in the
 states (a hardening spring on a short recording), the fit inside the threshold cannot find it
 and the growth stops at the start. ``"both"`` holds out both.
 
-``region="consensus"`` keeps the two folds apart and lets both judge: each candidate is
-fitted on the block fold (its criterion :math:`c_1`) and, where it is within a factor
-:data:`CONSENSUS_REACH` of the kept catalog there, on the extremes fold too (:math:`c_2`);
-the keep rule below compares the geometric means :math:`\\sqrt{c_1 c_2}`
-(:func:`consensus_criteria`). A relative change then counts the same on either fold: a
-stand-in that gains a little on the time blocks (fitted along the trajectories) and loses
-much beyond the recorded states is refused, and so is a change that only the fit inside the
-threshold prefers. Where both catalogs compared fail the extremes fold (criterion of 1 or
-more: the residual as large as what the equations should explain), that fold cannot tell them
-apart and the block fold decides alone: the hardening spring that the extremes fold hides
-is found as by the default. The first moves are ranked by the combined criterion too (those
-within reach of the best; the others after them), so that of two first moves the block fold
-finds nearly equal, the one that extrapolates is climbed from first. The second fit is paid
-only for the candidates within reach, which most candidates of a growth are not.
+``region="consensus"`` keeps the two folds apart and lets both judge
+(:func:`consensus_keeps`). A change that adds terms is kept when the block fold keeps it and
+the extremes fold does not find it worse beyond the tolerance: a stand-in that gains a little
+on the time blocks (fitted along the trajectories) and loses beyond the recorded states is
+refused. Any other change (a family dropped or exchanged for another, the smaller of the two
+climbs' ends) is judged by the geometric mean :math:`\\sqrt{c_1 c_2}` of the two folds'
+criteria (:func:`consensus_criteria`), where a relative change counts the same on either
+fold: the law that a stand-in displaced comes back when what it loses on the time blocks is
+less than what it gains beyond the recorded states. The extremes fold never adds terms on its
+own: fitted inside the threshold on fewer states, it may prefer a larger catalog that
+compensates its own bias. Where both catalogs compared fail the extremes fold (criterion of 1
+or more: the residual as large as what the equations should explain), that fold cannot tell
+them apart and the block fold decides alone: the hardening spring that the extremes fold
+hides is found as by the default. The first moves the block fold keeps are ranked by the
+geometric mean (those within :data:`CONSENSUS_REACH` of the best), so that of two first moves
+the block fold finds nearly equal, the one that extrapolates is climbed from first. The second
+fit is paid only for a larger candidate that the block fold keeps, and for a smaller one
+within :data:`CONSENSUS_REACH` of the kept catalog on the block fold.
 
 With ``cross_validate``, every block is held out in turn instead (one fit per block on the
 others; the criterion is the RMS of all the blocks' errors): on a recording of a few
@@ -107,6 +111,7 @@ from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import CandidateFits, SearchData, SearchSplit, parameters_key
 from .folds import REGIONS, held_out_splits
+from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
 from .moves import MORE_MOVES, MOVES, REPEATED, START, joint_moves, moved
 from .path import GrowthResult, GrowthStep
 
@@ -176,124 +181,6 @@ def _grouped(optimizer, catalog, forced, estimated):
     return GroupedOptimizer(optimizer, groups=groups)
 
 
-def _keeps(step, best, tolerance) -> bool:
-    """Whether ``step`` improves on ``best``: a criterion lower by the fraction ``tolerance``,
-    or within that fraction with fewer terms in the fitted model."""
-    return (step.criterion < best.criterion * (1 - tolerance)
-            or (step.criterion <= best.criterion * (1 + tolerance)
-                and step.active < best.active))
-
-
-#: With ``region="consensus"``, a candidate more than this factor worse than the kept catalog
-#: on the first fold is refused without fitting it on the second (it would need to be better
-#: there by more than the factor): most candidates of a growth are, so the second fold costs
-#: a fit only for those that could be kept.
-CONSENSUS_REACH = 2.0
-
-
-def consensus_criteria(step, best, second_step, second_best):
-    """The criteria of two folds that the keep rule of ``region="consensus"`` compares.
-
-    With :math:`c_1, b_1` the first fold's criteria of the candidate and of the kept catalog
-    and :math:`c_2, b_2` the second fold's, the candidate's and the kept catalog's combined
-    criteria are the geometric means :math:`\\sqrt{c_1 c_2}` and :math:`\\sqrt{b_1 b_2}`:
-    a relative change counts the same on either fold, so a change is kept where what it
-    gains on one fold outweighs what it loses on the other (a stand-in fitted along the
-    trajectories gains a little on the time blocks and loses much beyond the recorded
-    states). Where both catalogs fail the second fold (:math:`\\min(c_2, b_2) \\ge 1`: a
-    residual as large as what the equations should explain, as for a hardening spring fitted
-    only inside the threshold), the fold cannot tell them apart and the first fold's
-    criteria are compared alone.
-
-    Parameters
-    ----------
-    step, best : GrowthStep
-        The candidate and the kept catalog, judged by the first fold.
-    second_step, second_best : GrowthStep
-        The same catalogs judged by the second fold.
-
-    Returns
-    -------
-    (float, float)
-        The candidate's and the kept catalog's criteria.
-
-    Examples
-    --------
-    >>> stand_in = GrowthStep("trig_degree", "", 6, 5, 0.03, 0.03, 0.03, False)
-    >>> law = GrowthStep("angle_degree", "", 6, 5, 0.04, 0.04, 0.04, False)
-    >>> beyond = GrowthStep("trig_degree", "", 6, 5, 0.1, 0.1, 0.10, False)
-    >>> law_beyond = GrowthStep("angle_degree", "", 6, 5, 0.05, 0.05, 0.05, False)
-    >>> [round(c, 4) for c in consensus_criteria(law, stand_in, law_beyond, beyond)]
-    [0.0447, 0.0548]
-    """
-    c_2, b_2 = second_step.criterion, second_best.criterion
-    if not min(c_2, b_2) < 1:
-        return step.criterion, best.criterion
-    return float(np.sqrt(step.criterion * c_2)), float(np.sqrt(best.criterion * b_2))
-
-
-def consensus_keeps(step, best, second_step, second_best, tolerance) -> bool:
-    """The keep rule of two folds (``region="consensus"`` of :func:`grow_catalog`).
-
-    With :math:`c_1, b_1` the first fold's criteria of the candidate and of the kept
-    catalog, :math:`c_2, b_2` the second fold's and :math:`\\tau` the tolerance:
-
-    - a candidate with more terms than the kept catalog is kept when the first fold's rule
-      keeps it (:math:`c_1 < (1 - \\tau) b_1`, or within :math:`(1 + \\tau) b_1` with fewer
-      fitted terms) and the second fold does not find it worse,
-      :math:`c_2 \\le (1 + \\tau) b_2`;
-    - any other candidate (a family dropped, exchanged for another, the smaller of two
-      catalogs) is kept when the same rule keeps it on the combined criteria of
-      :func:`consensus_criteria`, the geometric means :math:`\\sqrt{c_1 c_2}` and
-      :math:`\\sqrt{b_1 b_2}`.
-
-    Where both catalogs fail the second fold (:math:`\\min(c_2, b_2) \\ge 1`), the first
-    fold's rule decides alone. The asymmetry is the folds': the second is fitted inside a
-    threshold of the states and judged beyond it, on fewer states. It shows that a family
-    extrapolates wrongly (a stand-in fitted along the trajectories), a reason to refuse it
-    or to drop it for a smaller catalog; its own preference for more terms is not evidence of
-    a law (a fit inside the threshold compensates its bias with them).
-
-    Parameters
-    ----------
-    step, best : GrowthStep
-        The candidate and the kept catalog, judged by the first fold (``criterion``,
-        ``active``, ``terms``).
-    second_step, second_best : GrowthStep or None
-        The same catalogs judged by the second fold; None: the first fold alone.
-    tolerance : float
-        The fraction :math:`\\tau`.
-
-    Returns
-    -------
-    bool
-
-    Examples
-    --------
-    >>> stand_in = GrowthStep("trig_degree", "", 6, 5, 0.03, 0.03, 0.03, False)
-    >>> law = GrowthStep("-trig+angle_degree", "", 6, 5, 0.04, 0.04, 0.04, False)
-    >>> beyond = GrowthStep("trig_degree", "", 6, 5, 0.1, 0.1, 0.10, False)
-    >>> law_beyond = GrowthStep("-trig+angle_degree", "", 6, 5, 0.05, 0.05, 0.05, False)
-    >>> consensus_keeps(law, stand_in, law_beyond, beyond, 0.05)
-    True
-    >>> consensus_keeps(law, stand_in, None, None, 0.05)     # the first fold alone
-    False
-    >>> start = GrowthStep("start", "", 4, 4, 0.04, 0.04, 0.04, True)
-    >>> start_beyond = GrowthStep("start", "", 4, 4, 0.06, 0.06, 0.06, True)
-    >>> consensus_keeps(stand_in, start, beyond, start_beyond, 0.05)   # worse beyond
-    False
-    """
-    if second_step is None or second_best is None:
-        return _keeps(step, best, tolerance)
-    if not min(second_step.criterion, second_best.criterion) < 1:
-        return _keeps(step, best, tolerance)  # (the second fold fails both: no verdict)
-    if step.terms > best.terms:
-        return (_keeps(step, best, tolerance)
-                and second_step.criterion <= second_best.criterion * (1 + tolerance))
-    c, b = consensus_criteria(step, best, second_step, second_best)
-    return c < b * (1 - tolerance) or (c <= b * (1 + tolerance) and step.active < best.active)
-
-
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
                  max_terms: int = 400, optimizer=None, formulation: str = "auto",
                  n_blocks: int = 5, tolerance: float = 0.05, good_enough: float = 0.002,
@@ -355,11 +242,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         the trajectories must extrapolate, but so must the law, whose nonlinear terms may show
         only beyond the threshold); or both. Cross-validated, ``"extremes"`` and ``"both"``
         add a fit outside the extreme stretches, judged on them. ``"consensus"``: the
-        ``"block"`` fold and the ``"extremes"`` fold judge each change together, by the
-        geometric mean of their criteria (:func:`consensus_keeps`); a candidate is fitted on
-        the second only when it is within :data:`CONSENSUS_REACH` of the kept catalog on the
-        first, and :attr:`GrowthStep.second_error` reports it. Cross-validated, the first
-        fold is the cross-validation's.
+        ``"block"`` fold and the ``"extremes"`` fold judge each change together
+        (:func:`consensus_keeps`: a larger catalog must be kept by the first and not be
+        worse on the second, the others are judged by the geometric mean of the two
+        criteria); :attr:`GrowthStep.second_error` reports the second where it was asked.
+        Cross-validated, the first fold is the cross-validation's.
     physical : bool, default False
         Never give up a catalog whose fits are physical (the mass matrix of each fit
         positive definite on all its training states: :attr:`GrowthStep.definite` is 1)
@@ -519,8 +406,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         (:func:`consensus_keeps`: the second fold is asked only about a larger candidate
         that the first keeps, or another within :data:`CONSENSUS_REACH`)."""
         if not consensus:
-            return _keeps(step, best, tolerance)
-        if (not _keeps(step, best, tolerance) if step.terms > best.terms
+            return single_keeps(step, best, tolerance)
+        if (not single_keeps(step, best, tolerance) if step.terms > best.terms
                 else not step.criterion <= best.criterion * CONSENSUS_REACH):
             return False
         return consensus_keeps(step, best, second_step(step), second_step(best), tolerance)
@@ -694,7 +581,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         step = attempt(parameters, move, [p for _, p in queue[index + 1:]])
         if step.criterion < alone.get(move, np.inf):
             alone[move], alone_steps[move] = step.criterion, step
-        if _keeps(step, first, tolerance):  # (the first fold's rule: no second fit here)
+        if single_keeps(step, first, tolerance):  # (the first fold's rule: no second fit here)
             stopped.add(move)
     rank = {m: (1, c) for m, c in alone.items()}
     if consensus and alone:
@@ -702,7 +589,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         # best first move (the others after them)
         low = min(alone.values())
         near = [m for m, c in alone.items() if c <= low * CONSENSUS_REACH
-                and _keeps(alone_steps[m], first, tolerance)]
+                and single_keeps(alone_steps[m], first, tolerance)]
         beyond = {m: second_step(alone_steps[m]).criterion for m in near}
         if beyond and min(beyond.values()) < 1:
             rank.update({m: (0, float(np.sqrt(alone[m] * beyond[m]))) for m in near})

@@ -24,7 +24,8 @@ from support.growth import (
 )
 
 from pysindy_xl.catalog import grow_catalog
-from pysindy_xl.catalog.growth import GROWTH_REGIONS, consensus_criteria, consensus_keeps
+from pysindy_xl.catalog.growth import GROWTH_REGIONS
+from pysindy_xl.catalog.keep_rules import consensus_criteria, consensus_keeps
 from pysindy_xl.catalog.path import GrowthStep
 
 
