@@ -36,11 +36,11 @@ own: fitted inside the threshold on fewer states, it may prefer a larger catalog
 compensates its own bias. Where both catalogs compared fail the extremes fold (criterion of 1
 or more: the residual as large as what the equations should explain), that fold cannot tell
 them apart and the block fold decides alone: the hardening spring that the extremes fold
-hides is found as by the default. The first moves the block fold keeps are ranked by the
-geometric mean (those within :data:`CONSENSUS_REACH` of the best), so that of two first moves
-the block fold finds nearly equal, the one that extrapolates is climbed from first. The second
-fit is paid only for a larger candidate that the block fold keeps, and for a smaller one
-within :data:`CONSENSUS_REACH` of the kept catalog on the block fold.
+hides is found as by the default. The first moves that the block fold cannot tell apart
+(kept, within the tolerance of the best first move) are ranked by the geometric mean, so
+that the one that extrapolates is climbed from first. The second fit is paid only for these,
+for a larger candidate that the block fold keeps, and for a smaller one within
+:data:`CONSENSUS_REACH` of the kept catalog on the block fold.
 
 With ``cross_validate``, every block is held out in turn instead (one fit per block on the
 others; the criterion is the RMS of all the blocks' errors): on a recording of a few
@@ -585,10 +585,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             stopped.add(move)
     rank = {m: (1, c) for m, c in alone.items()}
     if consensus and alone:
-        # ranked by the combined criterion: the moves the first fold keeps within reach of the
-        # best first move (the others after them)
+        # the first fold's near ties (the moves it keeps within the tolerance of the best
+        # first move) ranked by the combined criterion, before the others
         low = min(alone.values())
-        near = [m for m, c in alone.items() if c <= low * CONSENSUS_REACH
+        near = [m for m, c in alone.items() if c <= low * (1 + tolerance)
                 and single_keeps(alone_steps[m], first, tolerance)]
         beyond = {m: second_step(alone_steps[m]).criterion for m in near}
         if beyond and min(beyond.values()) < 1:
