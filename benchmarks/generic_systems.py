@@ -288,6 +288,8 @@ def run_case(system, truth, noise, seed, forced, baselines=True, region="block")
                 record["region"] = region
                 record["path"] = [[s.move, s.terms, s.criterion, s.second_error, s.chosen]
                                   for s in found.steps]
+                record["second_cpu_seconds"] = sum(s.second_cpu_seconds for s in found.steps)
+                record["steps_cpu_seconds"] = sum(s.cpu_seconds for s in found.steps)
             record["auto"] = score(*_xlsindy_functions(found.model), system, truth, test, runs,
                                    forced)
             record["lagrangian"] = str(found.model.lagrangian())[:400]

@@ -388,6 +388,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             fields = second_fits.get(step_parameters[id(step)])
             seconds[id(step)] = GrowthStep(move=step.move, chosen=False, **fields)
             step.second_error = seconds[id(step)].criterion
+            step.second_cpu_seconds = seconds[id(step)].cpu_seconds
         return seconds[id(step)]
 
     def compared(step, best):

@@ -46,6 +46,8 @@ class GrowthStep:
         The criterion of the second fold (``region="consensus"`` of
         :func:`~.growth.grow_catalog`: fitted outside, judged on the extreme states); NaN
         where the second fold was not asked.
+    second_cpu_seconds : float, default 0.0
+        CPU time of the step's fit and scoring on the second fold (0 where it was not asked).
 
     Examples
     --------
@@ -67,6 +69,7 @@ class GrowthStep:
     cpu_seconds: float = 0.0
     definite: float = 1.0
     second_error: float = float("nan")
+    second_cpu_seconds: float = 0.0
 
 
 @dataclasses.dataclass
