@@ -262,7 +262,7 @@ def _noisy(runs, noise, seed):
     return [r["q"] + noise * r["q"].std(axis=0) * rng.normal(size=r["q"].shape) for r in runs]
 
 
-def run_case(system, truth, noise, seed, forced, baselines=True):
+def run_case(system, truth, noise, seed, forced, baselines=True, region="block"):
     runs = make_runs(system, truth, seed, forced)
     test = make_runs(system, truth, seed + 500, forced, n_runs=1)[0]
     xs = _noisy(runs, noise, seed)
@@ -275,7 +275,8 @@ def run_case(system, truth, noise, seed, forced, baselines=True):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
-            found = px.grow_catalog(xs, ts, us, coordinates=names, kinds=system["kinds"])
+            found = px.grow_catalog(xs, ts, us, coordinates=names, kinds=system["kinds"],
+                                    region=region)
             record["seconds"] = time.perf_counter() - started
             record["cpu_seconds"] = time.process_time() - cpu
             record["catalog"] = found.catalog.describe()
@@ -283,6 +284,12 @@ def run_case(system, truth, noise, seed, forced, baselines=True):
             record["kept"] = int(np.count_nonzero(found.model.coefficients()))
             record["steps"] = len(found.steps)
             record["criterion"] = found.held_out_error
+            if region != "block":  # the path, with the second fold's verdicts
+                record["region"] = region
+                record["path"] = [[s.move, s.terms, s.criterion, s.second_error, s.chosen]
+                                  for s in found.steps]
+                record["second_cpu_seconds"] = sum(s.second_cpu_seconds for s in found.steps)
+                record["steps_cpu_seconds"] = sum(s.cpu_seconds for s in found.steps)
             record["auto"] = score(*_xlsindy_functions(found.model), system, truth, test, runs,
                                    forced)
             record["lagrangian"] = str(found.model.lagrangian())[:400]
@@ -596,6 +603,8 @@ def main(argv=None):
     parser.add_argument("--out", default=RESULTS)
     parser.add_argument("--no-baselines", action="store_true")
     parser.add_argument("--report", default=None, metavar="FILE.md")
+    parser.add_argument("--region", default="block",
+                        help="grow_catalog's region (default: block)")
     args = parser.parse_args(argv)
     if args.report:
         write_report(args.out, args.report)
@@ -614,7 +623,7 @@ def main(argv=None):
         truth = truths.setdefault(name, Truth(system))
         started = time.perf_counter()
         record = run_case(system, truth, noise, seed, forcing == "forced",
-                          baselines=not args.no_baselines)
+                          baselines=not args.no_baselines, region=args.region)
         with open(args.out, "a", encoding="utf-8") as handle:
             handle.write(json.dumps(_finite(record)) + "\n")
         auto = record["auto"]

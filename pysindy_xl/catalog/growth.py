@@ -23,6 +23,25 @@ extrapolate. It is not the default: where a law's nonlinearity shows only in the
 states (a hardening spring on a short recording), the fit inside the threshold cannot find it
 and the growth stops at the start. ``"both"`` holds out both.
 
+``region="consensus"`` keeps the two folds apart and lets both judge
+(:func:`consensus_keeps`). A change that adds terms is kept when the block fold keeps it and
+the extremes fold does not find it worse beyond the tolerance: a stand-in that gains a little
+on the time blocks (fitted along the trajectories) and loses beyond the recorded states is
+refused. Any other change (a family dropped or exchanged for another, the smaller of the two
+climbs' ends) is judged by the geometric mean :math:`\\sqrt{c_1 c_2}` of the two folds'
+criteria (:func:`consensus_criteria`), where a relative change counts the same on either
+fold: the law that a stand-in displaced comes back when what it loses on the time blocks is
+less than what it gains beyond the recorded states. The extremes fold never adds terms on its
+own: fitted inside the threshold on fewer states, it may prefer a larger catalog that
+compensates its own bias. Where both catalogs compared fail the extremes fold (criterion of 1
+or more: the residual as large as what the equations should explain), that fold cannot tell
+them apart and the block fold decides alone: the hardening spring that the extremes fold
+hides is found as by the default. The first moves that the block fold cannot tell apart
+(kept, within the tolerance of the best first move) are ranked by the geometric mean, so
+that the one that extrapolates is climbed from first. The second fit is paid only for these,
+for a larger candidate that the block fold keeps, and for a smaller one within
+:data:`CONSENSUS_REACH` of the kept catalog on the block fold.
+
 With ``cross_validate``, every block is held out in turn instead (one fit per block on the
 others; the criterion is the RMS of all the blocks' errors): on a recording of a few
 seconds the region block holds most of what identifies configuration-dependent terms, and a
@@ -92,11 +111,18 @@ from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import CandidateFits, SearchData, SearchSplit, parameters_key
 from .folds import REGIONS, held_out_splits
+from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
 from .moves import MORE_MOVES, MOVES, REPEATED, START, joint_moves, moved
 from .path import GrowthResult, GrowthStep
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
-           "check_growth_data"]
+           "check_growth_data", "GROWTH_REGIONS"]
+
+#: The values of ``region`` of :func:`grow_catalog`: the folds of
+#: :func:`~.folds.held_out_splits` (:data:`~.folds.REGIONS`), or ``"consensus"``: the
+#: ``"block"`` fold and the ``"extremes"`` fold as two judges, a change kept when one accepts
+#: it and the other does not find it worse (:func:`consensus_keeps`).
+GROWTH_REGIONS = (*REGIONS, "consensus")
 
 def check_growth_data(xs, names, n_terms: int) -> None:
     """``ValueError`` for a constant coordinate or data too short for ``n_terms`` terms.
@@ -153,14 +179,6 @@ def _grouped(optimizer, catalog, forced, estimated):
     if optimizer is None or isinstance(optimizer, str):
         optimizer = default_optimizer(forced, estimated, kind=optimizer)
     return GroupedOptimizer(optimizer, groups=groups)
-
-
-def _keeps(step, best, tolerance) -> bool:
-    """Whether ``step`` improves on ``best``: a criterion lower by the fraction ``tolerance``,
-    or within that fraction with fewer terms in the fitted model."""
-    return (step.criterion < best.criterion * (1 - tolerance)
-            or (step.criterion <= best.criterion * (1 + tolerance)
-                and step.active < best.active))
 
 
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
@@ -223,7 +241,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         then all lie inside a threshold that the held-out ones cross: a stand-in fitted along
         the trajectories must extrapolate, but so must the law, whose nonlinear terms may show
         only beyond the threshold); or both. Cross-validated, ``"extremes"`` and ``"both"``
-        add a fit outside the extreme stretches, judged on them.
+        add a fit outside the extreme stretches, judged on them. ``"consensus"``: the
+        ``"block"`` fold and the ``"extremes"`` fold judge each change together
+        (:func:`consensus_keeps`: a larger catalog must be kept by the first and not be
+        worse on the second, the others are judged by the geometric mean of the two
+        criteria); :attr:`GrowthStep.second_error` reports the second where it was asked.
+        Cross-validated, the first fold is the cross-validation's.
     physical : bool, default False
         Never give up a catalog whose fits are physical (the mass matrix of each fit
         positive definite on all its training states: :attr:`GrowthStep.definite` is 1)
@@ -287,8 +310,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     check_option("max_terms", max_terms, "int", low=1)
     check_option("n_blocks", n_blocks, "int", low=3)
     check_option("cross_validate", cross_validate, "bool")
-    if region not in REGIONS:
-        raise ValueError(f"region: expected one of {REGIONS}, got {region!r}")
+    if not isinstance(region, str) or region not in GROWTH_REGIONS:
+        raise ValueError(f"region: expected one of {GROWTH_REGIONS}, got {region!r}")
     check_option("physical", physical, "bool")
     check_option("steepest", steepest, "bool")
     check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
@@ -315,11 +338,15 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     longest = int(np.argmax([len(tk) for tk in ts]))
     width = min(BumpTestFunctions().half_width(ts[longest], xs[longest]),
                 min(tk[block - 1] - tk[0] for tk in ts) / 3)
-    splits, reported = held_out_splits(arrays, n_blocks, stride, cross_validate, region,
-                                       margin=width)
+    consensus = region == "consensus"
+    splits, reported = held_out_splits(arrays, n_blocks, stride, cross_validate,
+                                       "block" if consensus else region, margin=width)
     # the search's splines end where its training data do: the region blocks test their
     # continuation as the chosen model's is used beyond the data
     searched = [dict(fixed, bounds=_span(train["x"])) for train, _ in splits]
+    # the second judge of "consensus": fitted inside the extreme states, judged on them
+    second_splits = (held_out_splits(arrays, n_blocks, stride, False, "extremes",
+                                     margin=width)[0] if consensus else [])
     active = np.any(np.vstack(us) != 0, axis=0) if forced else np.zeros(n, dtype=bool)
     # the default optimizers bag selections on columns estimated from noisy positions (the
     # weak form, where no derivatives are measured)
@@ -340,6 +367,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                         template, max_terms, forced, reported)
     fits = CandidateFits(search, n_jobs)
     fits.warm_up()  # the workers start while the first catalog is fitted here
+    # the second judge is asked only about candidates the first does not refuse: no guesses
+    second_fits = CandidateFits(SearchData(
+        [SearchSplit(dict(fixed, bounds=_span(train["x"])), train, held)
+         for train, held in second_splits], template, max_terms, forced)) if consensus else None
 
     def evaluate(parameters, move, ahead=()):
         step = GrowthStep(move=move, chosen=False, **fits.get(parameters, ahead))
@@ -348,11 +379,45 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                          "the training states")
         return step
 
+    seconds = {}  # the second judge's steps, by the first's (of "consensus")
+
+    def second_step(step):
+        """``step``'s catalog judged by the second fold (fitted once), recorded in the step's
+        ``second_error``."""
+        if id(step) not in seconds:
+            fields = second_fits.get(step_parameters[id(step)])
+            seconds[id(step)] = GrowthStep(move=step.move, chosen=False, **fields)
+            step.second_error = seconds[id(step)].criterion
+            step.second_cpu_seconds = seconds[id(step)].cpu_seconds
+        return seconds[id(step)]
+
+    def compared(step, best):
+        """The criteria the keep rules compare: the first fold's, or with ``"consensus"``
+        the combined ones (:func:`consensus_criteria`; the candidate is not fitted on the
+        second fold where it is more than :data:`CONSENSUS_REACH` times worse on the first,
+        and then compares as infinite)."""
+        if not consensus:
+            return step.criterion, best.criterion
+        if not step.criterion <= best.criterion * CONSENSUS_REACH:
+            return np.inf, best.criterion
+        return consensus_criteria(step, best, second_step(step), second_step(best))
+
+    def judged(step, best):
+        """The keep rule of one fold (:func:`_keeps`) or, with ``"consensus"``, of two
+        (:func:`consensus_keeps`: the second fold is asked only about a larger candidate
+        that the first keeps, or another within :data:`CONSENSUS_REACH`)."""
+        if not consensus:
+            return single_keeps(step, best, tolerance)
+        if (not single_keeps(step, best, tolerance) if step.terms > best.terms
+                else not step.criterion <= best.criterion * CONSENSUS_REACH):
+            return False
+        return consensus_keeps(step, best, second_step(step), second_step(best), tolerance)
+
     def keeps(step, best):
-        """The keep rule (:func:`_keeps`); with ``physical``, a catalog whose fits have a
+        """The keep rule (:func:`judged`); with ``physical``, a catalog whose fits have a
         positive definite mass matrix is not given up for one whose fits have not."""
-        return _keeps(step, best, tolerance) and (not physical or step.definite >= 1
-                                                  or best.definite < 1)
+        return judged(step, best) and (not physical or step.definite >= 1
+                                       or best.definite < 1)
 
     def _size(parameters):
         try:
@@ -379,7 +444,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # coefficients over products of two coordinates' functions): tried as one move too
     joint = joint_moves(moves, kinds, n, _size)
     queue += [(name, moved(dict(START), name, kinds, n)) for name in joint]
+    step_parameters = {}  # the parameters of each step, by the step's id
     first = evaluate(dict(START), "start", [p for _, p in queue])
+    step_parameters[id(first)] = dict(START)
     if first.note.startswith("ceiling"):
         raise ValueError(f"max_terms: the smallest catalog has {first.terms} terms, more than "
                          f"max_terms={max_terms}; raise max_terms")
@@ -394,6 +461,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         key = parameters_key(parameters)
         if key not in cache:
             cache[key] = evaluate(parameters, move, ahead)
+            step_parameters[id(cache[key])] = parameters
             steps.append(cache[key])
             report(cache[key])
         return cache[key]
@@ -505,18 +573,29 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
 
     # rank the family moves by what each achieves alone from the first catalog (a degree move
     # looking one degree further); the flexible basis comes last, for what the families leave
-    alone, stopped = {}, set()
+    alone, alone_steps, stopped = {}, {}, set()
     if first.criterion <= good_enough:
         queue = []
     for index, (move, parameters) in enumerate(queue):
         if move in stopped:
             continue  # (its first degree was kept: no look further)
         step = attempt(parameters, move, [p for _, p in queue[index + 1:]])
-        alone[move] = min(alone.get(move, np.inf), step.criterion)
-        if keeps(step, first):
+        if step.criterion < alone.get(move, np.inf):
+            alone[move], alone_steps[move] = step.criterion, step
+        if single_keeps(step, first, tolerance):  # (the first fold's rule: no second fit here)
             stopped.add(move)
+    rank = {m: (1, c) for m, c in alone.items()}
+    if consensus and alone:
+        # the first fold's near ties (the moves it keeps within the tolerance of the best
+        # first move) ranked by the combined criterion, before the others
+        low = min(alone.values())
+        near = [m for m, c in alone.items() if c <= low * (1 + tolerance)
+                and single_keeps(alone_steps[m], first, tolerance)]
+        beyond = {m: second_step(alone_steps[m]).criterion for m in near}
+        if beyond and min(beyond.values()) < 1:
+            rank.update({m: (0, float(np.sqrt(alone[m] * beyond[m]))) for m in near})
     order = sorted([m for m in moves if m != "splines"] + joint,
-                   key=lambda m: alone.get(m, np.inf))
+                   key=lambda m: rank.get(m, (1, np.inf)))
     order += [m for m in moves if m == "splines"]
     # climb from the best and from the second-best first move: which family goes in first is
     # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
@@ -544,9 +623,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         for k, (move, parameters) in enumerate(candidates):
             step = attempt(parameters, f"-{move}", [p for _, p in candidates[k + 1:]])
             if keeps(step, best) or (
-                    step.criterion <= best.criterion * (1 + tolerance)
-                    and step.active == best.active and step.terms < best.terms
-                    and (not physical or step.definite >= 1 or best.definite < 1)):
+                    step.active == best.active and step.terms < best.terms
+                    and (not physical or step.definite >= 1 or best.definite < 1)
+                    and (lambda c, b: c <= b * (1 + tolerance))(*compared(step, best))):
                 dropped.append((step.criterion, step.active, parameters, step))
             else:
                 refused.append((move, parameters))
@@ -570,6 +649,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         visited.add(parameters_key(state))
         path.append(best)
     fits.close()  # (a worker's last guess may still run: it ends during the final fit)
+    if consensus:
+        for step in path:
+            second_step(step)  # (each kept step reports both folds)
     for step in path:
         step.chosen = True
     best_catalog = AutomaticCatalog(**fixed, **state)

@@ -42,6 +42,12 @@ class GrowthStep:
     definite : float, default 1.0
         Smallest fraction, over the step's fits, of the training states at which the fitted
         mass matrix is positive definite (0 when the catalog was not fitted).
+    second_error : float, default nan
+        The criterion of the second fold (``region="consensus"`` of
+        :func:`~.growth.grow_catalog`: fitted outside, judged on the extreme states); NaN
+        where the second fold was not asked.
+    second_cpu_seconds : float, default 0.0
+        CPU time of the step's fit and scoring on the second fold (0 where it was not asked).
 
     Examples
     --------
@@ -62,6 +68,8 @@ class GrowthStep:
     seconds: float = 0.0
     cpu_seconds: float = 0.0
     definite: float = 1.0
+    second_error: float = float("nan")
+    second_cpu_seconds: float = 0.0
 
 
 @dataclasses.dataclass
