@@ -59,7 +59,10 @@ and configuration-dependent kinetic coefficients). With ``steepest``, each step 
 tries every move from the kept catalog and keeps the best instead of the first that improves
 (the pairs where none does): a move that helps only once another is in (the coupled damping
 of a coupling's links, poor alone) is not passed over for a stand-in that the order of the
-moves alone tries first. Catalogs over ``max_terms`` are not tried (reported as the ceiling).
+moves alone tries first. Catalogs over ``max_terms`` are not tried (reported as the ceiling);
+by default the ceiling follows the data: at most ``1 / ROWS_PER_TERM`` of the rows of the
+search's fits (a selection over more columns than half its equations is ill-posed at noise),
+and at most :data:`MAX_TERMS`.
 
 The climb only adds, and the start always holds an angle's sines and cosines: where families
 are nearly dependent on the data's range (``cos(phi) = 1 - phi^2/2 + phi^4/24 - ...``), the
@@ -90,13 +93,21 @@ from .._inputs import aligned, as_list
 from .._validation import check_option
 from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import EXCHANGES, REMOVALS, removed
-from .candidates import CandidateFits, SearchData, SearchSplit, parameters_key
+from .candidates import CandidateFits, SearchData, SearchSplit, parameters_key, search_rows
 from .folds import REGIONS, held_out_splits
 from .moves import MORE_MOVES, MOVES, REPEATED, START, joint_moves, moved
 from .path import GrowthResult, GrowthStep
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
            "check_growth_data"]
+
+#: Ceiling of the catalog's size with ``max_terms="auto"``, whatever the data.
+MAX_TERMS = 400
+
+#: With ``max_terms="auto"``, rows of the search's fits per catalog term at least: catalogs
+#: over ``rows // ROWS_PER_TERM`` terms are not tried.
+ROWS_PER_TERM = 2
+
 
 def check_growth_data(xs, names, n_terms: int) -> None:
     """``ValueError`` for a constant coordinate or data too short for ``n_terms`` terms.
@@ -164,7 +175,7 @@ def _keeps(step, best, tolerance) -> bool:
 
 
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
-                 max_terms: int = 400, optimizer=None, formulation: str = "auto",
+                 max_terms: int | str = "auto", optimizer=None, formulation: str = "auto",
                  n_blocks: int = 5, tolerance: float = 0.05, good_enough: float = 0.002,
                  moves=MOVES, search_optimizer="auto", search_samples: int | None = 6000,
                  cross_validate: bool = False, region: str = "block",
@@ -186,8 +197,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         The coordinates' names.
     kinds : None, str, sequence or mapping
         ``"linear"`` or ``"angle"`` per coordinate (:func:`coordinate_kinds`).
-    max_terms : int, default 400
-        Ceiling of the catalog's size: larger catalogs are not tried.
+    max_terms : int or "auto", default "auto"
+        Ceiling of the catalog's size: larger catalogs are not tried. ``"auto"``:
+        ``min(MAX_TERMS, R // ROWS_PER_TERM)``, with ``R`` the fewest rows (equations) of
+        the search's fits over its splits (in the weak form, the coordinates times the test
+        functions on the training pieces; :func:`~.candidates.search_rows`), reported as
+        :attr:`GrowthResult.max_terms`.
     optimizer : optional
         Of :class:`~pysindy_xl.XLSINDy` (default: chosen from the forces).
     formulation : {"auto", "strong", "weak"}, default "auto"
@@ -284,7 +299,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     if len(names) != n:
         raise ValueError(f"coordinates: expected {n} names (the columns of x), got {names}")
     kinds = coordinate_kinds(names, kinds)
-    check_option("max_terms", max_terms, "int", low=1)
+    if isinstance(max_terms, str) and max_terms != "auto":
+        raise ValueError(f"max_terms: expected a positive int or 'auto', got {max_terms!r}")
+    if max_terms != "auto":
+        check_option("max_terms", max_terms, "int", low=1)
     check_option("n_blocks", n_blocks, "int", low=3)
     check_option("cross_validate", cross_validate, "bool")
     if region not in REGIONS:
@@ -300,7 +318,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     criterion = "forces" if forced else "accelerations"
     velocity_scale = [float(np.std(np.gradient(xk, tk, axis=0), axis=0).mean())
                       for xk, tk in zip(xs, ts, strict=True)]
-    fixed = {"coordinates": names, "kinds": list(kinds), "max_terms": max_terms,
+    fixed = {"coordinates": names, "kinds": list(kinds),
+             "max_terms": MAX_TERMS if max_terms == "auto" else max_terms,
              "bounds": _span(xs),  # the splines' end knots
              "coulomb_scale": max(1e-3, 0.02 * float(np.mean(velocity_scale)))}
     first = AutomaticCatalog(**fixed, **START)
@@ -337,7 +356,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
 
     search = SearchData([SearchSplit(bounds, train, held)
                          for bounds, (train, held) in zip(searched, splits, strict=True)],
-                        template, max_terms, forced, reported)
+                        template, fixed["max_terms"], forced, reported)
+    rows = search_rows(search, final_weak)
+    if max_terms == "auto":  # a selection over more columns than half its rows is ill-posed
+        search.max_terms = min(MAX_TERMS, rows // ROWS_PER_TERM)
     fits = CandidateFits(search, n_jobs)
     fits.warm_up()  # the workers start while the first catalog is fitted here
 
@@ -382,9 +404,14 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     first = evaluate(dict(START), "start", [p for _, p in queue])
     if first.note.startswith("ceiling"):
         raise ValueError(f"max_terms: the smallest catalog has {first.terms} terms, more than "
-                         f"max_terms={max_terms}; raise max_terms")
+                         f"max_terms={search.max_terms}" + (
+                             f" ('auto': {rows} rows of the search's fits / {ROWS_PER_TERM}; "
+                             "record longer, or pass an int" if max_terms == "auto" else "; raise")
+                         + " max_terms")
     first.chosen = True
     steps = [first]
+    if progress is not None:
+        progress(f"ceiling       {search.max_terms:>5} terms  ({rows} rows per fit)")
     report(first)
     if not forced:  # relative to the largest term, an approximation looks small already
         good_enough = 0.0
@@ -581,4 +608,4 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     if not is_list:
         full = {key: None if value is None else value[0] for key, value in full.items()}
     model.fit(**full)
-    return GrowthResult(model, best_catalog, steps, criterion, best.criterion)
+    return GrowthResult(model, best_catalog, steps, criterion, best.criterion, search.max_terms)
