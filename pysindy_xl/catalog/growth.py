@@ -62,7 +62,10 @@ of a coupling's links, poor alone) is not passed over for a stand-in that the or
 moves alone tries first. Catalogs over ``max_terms`` are not tried (reported as the ceiling);
 by default the ceiling follows the data: at most ``1 / ROWS_PER_TERM`` of the rows of the
 search's fits (a selection over more columns than half its equations is ill-posed at noise),
-and at most :data:`MAX_TERMS`.
+and at most :data:`MAX_TERMS`; a move of the climb that this ceiling refuses is then tried
+with constant kinetic coefficients (``"degree-kinetic"``): configuration-dependent ones
+multiply the catalog by the velocity monomials, and a law that needs a higher degree of the
+potential with constant masses (three masses on quartic springs) is reached only so.
 
 The climb only adds, and the start always holds an angle's sines and cosines: where families
 are nearly dependent on the data's range (``cos(phi) = 1 - phi^2/2 + phi^4/24 - ...``), the
@@ -507,6 +510,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                     ahead = rejected(state, order, index, skip, tried, improved)
                     tried.add(parameters_key(parameters))
                     step = attempt(parameters, move, ahead)
+                    smaller = dict(parameters, kinetic=START["kinetic"])
+                    if (step.note.startswith("ceiling") and parameters_key(smaller) not in tried
+                            and max_terms == "auto"):  # the kinetic coefficients give way
+                        tried.add(parameters_key(smaller))
+                        parameters, step = smaller, attempt(smaller, f"{move}-kinetic")
                     keep = keeps(step, best)
                     if keep:
                         state, best, improved = parameters, step, True
