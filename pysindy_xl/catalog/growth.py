@@ -50,10 +50,10 @@ needs more terms than ``theta^2``); with ``physical``, a catalog whose fits all 
 positive definite mass matrix on their training states is never given up for one whose fits
 have not (a model whose mass matrix is not positive definite cannot be simulated there; the
 climb may pass through such stand-ins only while it holds no physical catalog). The degree
-moves repeat while they do (and look one degree
-further before they stop), and the growth stops when a whole pass keeps nothing or the
-criterion is below ``good_enough``. Before it stops, pairs of the moves that are not repeated
-(kinetic, interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither
+moves repeat while they do (and look one degree further before they stop), and the growth
+stops when a whole pass keeps nothing or the criterion is below ``good_enough`` (unforced
+data: :data:`EXACT`). Before it stops, pairs of the moves that are not repeated (kinetic,
+interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither
 alone (a coupling ``cos(a - b) a_dot b_dot`` needs both the products of two angles' functions
 and configuration-dependent kinetic coefficients). With ``steepest``, each step of a climb
 tries every move from the kept catalog and keeps the best instead of the first that improves
@@ -106,6 +106,10 @@ __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
 
 #: Ceiling of the catalog's size with ``max_terms="auto"``, whatever the data.
 MAX_TERMS = 400
+
+#: Unforced data: the criterion below which the growth stops (a law exact to about the
+#: precision of noise-free data; differences below it are round-off, not structure).
+EXACT = 1e-6
 
 #: With ``max_terms="auto"``, rows of the search's fits per catalog term at least: catalogs
 #: over ``rows // ROWS_PER_TERM`` terms are not tried.
@@ -216,7 +220,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         which a move that fits fewer terms is kept).
     good_enough : float, default 0.002
         With forces, the growth stops once the criterion is below this relative error
-        (unforced data: every move is tried).
+        (unforced data: below :data:`EXACT`, a law exact to the data's precision; every move
+        is tried otherwise).
     moves : sequence of str, default MOVES
         The moves tried (some of :data:`MOVES` and :data:`MORE_MOVES`); the backward phase
         drops the families of these moves only (``"trig_degree"``: the sines and cosines too).
@@ -416,8 +421,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     if progress is not None:
         progress(f"ceiling       {search.max_terms:>5} terms  ({rows} rows per fit)")
     report(first)
-    if not forced:  # relative to the largest term, an approximation looks small already
-        good_enough = 0.0
+    if not forced:  # relative to the largest term, an approximation looks small already: only
+        good_enough = EXACT  # a law exact to the data's precision stops the growth
     cache = {}  # every catalog is fitted once, whichever path tries it
 
     def attempt(parameters, move, ahead=()):
