@@ -43,7 +43,9 @@ family that explains most goes in first: no fixed order decides between a stand-
 right family), the splines last (the flexible basis is for what the families leave). The
 growth climbs twice, from the best and from the second-best first move, and keeps the better
 end: the first move is where a stand-in wins (a ``cos(theta)`` inertia for a torsion spring,
-or a power of an angle for a coupling that takes two moves to state).
+or a power of an angle for a coupling that takes two moves to state). The second climb stops
+once it holds the first one's end: the moves on from there, the first climb tried from that
+end and did not keep.
 A move is kept when it lowers the criterion by the fraction ``tolerance`` at least, or keeps it
 within that fraction with fewer terms in the fitted model (a sine series imitating ``theta^2``
 needs more terms than ``theta^2``); with ``physical``, a catalog whose fits all have a
@@ -98,7 +100,7 @@ from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import CandidateFits, SearchData, SearchSplit, parameters_key, search_rows
 from .folds import REGIONS, held_out_splits
-from .moves import MORE_MOVES, MOVES, REPEATED, START, joint_moves, moved
+from .moves import MORE_MOVES, MOVES, REPEATED, START, holds, joint_moves, moved
 from .path import GrowthResult, GrowthStep
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
@@ -499,16 +501,21 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             path.append(best)
         return state, best, path
 
-    def climb(order):
-        """Try the moves in turn from the first catalog; (state, step, kept steps)."""
+    def climb(order, end=None):
+        """Try the moves in turn from the first catalog; (state, step, kept steps). It stops
+        once it holds the catalog ``end`` (the first climb's): the moves on from there, the
+        first climb tried from ``end`` and did not keep."""
         state, best, path = dict(START), first, []
         tried = {parameters_key(state)}
         improved = best.criterion > good_enough
-        while improved:
+
+        def going():
+            return best.criterion > good_enough and (end is None or not holds(state, end))
+        while improved and going():
             improved = False
             for index, move in enumerate(order):
                 skip = 0  # a degree move looks one degree further before it stops
-                while best.criterion > good_enough:
+                while going():
                     parameters = moved(state, move, kinds, n, skip)
                     if parameters is None or parameters_key(parameters) in tried:
                         break
@@ -527,7 +534,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                     if move not in REPEATED or (not keep and skip):
                         break
                     skip = 0 if keep else 1
-            if not improved and best.criterion > good_enough:
+            if not improved and going():
                 # a law that needs two structural moves at once (a coupling cos(a - b) a_dot
                 # b_dot needs products of two angles' functions and configuration-dependent
                 # kinetic coefficients) gains from neither alone: look two moves ahead
@@ -566,7 +573,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                  < first.criterion * (1 - tolerance)]
     if best.criterion > good_enough and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]
-        other = steepest_climb(order, promising[1]) if steepest else climb(second)
+        other = steepest_climb(order, promising[1]) if steepest else climb(second, state)
         if (keeps(other[1], best) if not physical or (other[1].definite >= 1)
                 == (best.definite >= 1) else other[1].definite >= 1):
             state, best, path = other
