@@ -115,3 +115,26 @@ def test_bad_ceilings_are_refused(value, error, message):
     x, t, u = noisy_duffing()
     with pytest.raises(error, match=message):
         grow_catalog(x, t, u, coordinates=["x"], max_terms=value)
+
+
+def test_unforced_exact_data_stop_the_growth_at_the_law():
+    """Noise-free, unforced Duffing oscillator: once the quartic catalog states the law to
+    round-off (criterion below EXACT), no larger catalog is tried."""
+    from scipy.integrate import solve_ivp
+    from support.growth import DAMPING, HARDENING, MASS, STIFFNESS
+    t = np.arange(0.0, 8.0, 2e-3)
+
+    def rhs(_, y):
+        return [y[1], -(DAMPING * y[1] + STIFFNESS * y[0] + HARDENING * y[0] ** 3) / MASS]
+
+    x = solve_ivp(rhs, (0, t[-1]), [1.5, 0.0], t_eval=t, rtol=1e-11, atol=1e-11).y[0][:, None]
+    found = grow_catalog(x, t, coordinates=["x"], kinds="linear", moves=("degree", "coulomb"))
+    assert found.held_out_error < growth_module.EXACT
+    assert found.catalog.describe().startswith("x: x..x^4")
+    # the moves alone from the first catalog, and nothing on top of the law
+    assert [(s.move, s.terms) for s in found.steps] == [
+        ("start", 4), ("degree", 5), ("degree", 6), ("coulomb", 5)]
+    coef = dict(zip(found.model.get_feature_names(), found.model.coefficients(), strict=True))
+    scale = 2 * coef["L[x_dot**2]"] / MASS  # an implicit law is fixed up to a factor
+    np.testing.assert_allclose(-2 * coef["L[x**2]"] / scale, STIFFNESS, rtol=1e-4)
+    np.testing.assert_allclose(-4 * coef["L[x**4]"] / scale, HARDENING, rtol=1e-4)
