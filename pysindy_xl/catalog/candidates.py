@@ -23,7 +23,7 @@ import numpy as np
 from .automatic import AutomaticCatalog
 
 __all__ = ["SearchSplit", "SearchData", "CandidateFits", "candidate_content", "evaluate_candidate",
-           "held_out_error", "parameters_key"]
+           "held_out_error", "parameters_key", "search_rows"]
 
 
 def parameters_key(parameters) -> str:
@@ -89,6 +89,50 @@ class SearchData:
     max_terms: int
     forced: bool
     reported: tuple = (0, 1)
+
+
+def search_rows(search: SearchData, weak: bool) -> int:
+    r"""Fewest equations (rows) a candidate's fit has, over the search's splits.
+
+    In the weak form each coordinate gives one row per test function: ``n * sum_p K_p`` over
+    the training pieces ``p`` of a split, with ``K_p`` the test functions that
+    ``search.template.test_functions`` places on piece ``p`` at the split's shared half-width
+    (pieces cut at gaps, those shorter than one test function left out, as the fit does);
+    in the strong form one row per sample and coordinate.
+
+    Parameters
+    ----------
+    search : SearchData
+        The growth's splits and template (whose ``test_functions`` the weak form uses).
+    weak : bool
+        Whether the search's fits use the weak form.
+
+    Returns
+    -------
+    int
+        The smallest row count over the splits.
+    """
+    from ..weak.regression import shared_half_width
+    from ..weak.timegrid import split_at_gaps
+    counts = []
+    for split in search.splits:
+        xs, ts = split.train["x"], split.train["t"]
+        n = xs[0].shape[1]
+        if not weak:
+            counts.append(n * sum(len(tk) for tk in ts))
+            continue
+        functions = search.template.test_functions
+        pieces = [{"t": np.asarray(tk, dtype=float), "x": xk}
+                  for tk, xk in zip(ts, xs, strict=True)]
+        try:
+            h = shared_half_width(functions, pieces)
+        except ValueError:
+            counts.append(0)  # no piece holds a test function
+            continue
+        segments, _, _ = split_at_gaps(pieces, functions.max_gap(h))
+        counts.append(n * sum(functions.matrices(d["t"], half_width=h)[0].shape[0]
+                              for d in segments if d["t"][-1] - d["t"][0] >= 2 * h))
+    return int(min(counts))
 
 
 def held_out_error(model, held, forced) -> float:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import itertools
 
 __all__ = ["MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS", "REPEATED", "moved",
-           "joint_moves"]
+           "joint_moves", "holds"]
 
 #: The moves of the growth, in the order they are tried.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
@@ -143,3 +143,31 @@ def joint_moves(moves, kinds, n, size) -> list:
                                  > size(once) - base + size(other) - base):
             out.append(f"{a}+{b}")
     return out
+
+
+def holds(state, other) -> bool:
+    """Whether the catalog ``state`` holds every family of ``other``, each at least as far
+    grown (degrees, interaction order, spline count; configuration-dependent kinetic
+    coefficients, gyroscopic terms, each dissipation model).
+
+    Parameters
+    ----------
+    state, other : dict
+        Catalog parameters (the keys of :data:`START`).
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> holds(moved(START, "degree", ["linear"], 1), START)
+    True
+    >>> holds(START, moved(START, "kinetic", ["linear"], 1))
+    False
+    """
+    return (all(state[key] >= other[key] for key in (*LIMITS, "interaction"))
+            and (state["kinetic"] == "configuration" or other["kinetic"] == "constant")
+            and (state["gyroscopic"] or not other["gyroscopic"])
+            and set(other["dissipation"]) <= set(state["dissipation"])
+            and (state["splines"] or 0) >= (other["splines"] or 0))

@@ -86,6 +86,8 @@ class GrowthResult:
         ``"forces"`` or ``"accelerations"``: what the held-out errors measure.
     held_out_error : float
         The chosen catalog's criterion.
+    max_terms : int or None, default None
+        The ceiling of the growth: catalogs over it were not tried.
 
     Examples
     --------
@@ -103,6 +105,7 @@ class GrowthResult:
     steps: list
     criterion: str
     held_out_error: float
+    max_terms: int | None = None
 
     def table(self) -> str:
         """The growth path as a plain-text table (one row per tried catalog).
@@ -168,9 +171,10 @@ class GrowthResult:
         Returns
         -------
         dict
-            ``criterion``, ``held_out_error``, ``catalog`` (its description) and ``steps``
-            (one dict per :class:`GrowthStep`).
+            ``criterion``, ``held_out_error``, ``max_terms`` (the ceiling), ``catalog`` (its
+            description) and ``steps`` (one dict per :class:`GrowthStep`).
         """
         return {"criterion": self.criterion, "held_out_error": self.held_out_error,
+                "max_terms": self.max_terms,
                 "catalog": self.catalog.describe(),
                 "steps": [dataclasses.asdict(s) for s in self.steps]}
