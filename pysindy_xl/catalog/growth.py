@@ -406,7 +406,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # the second judge is asked only about candidates the first does not refuse: no guesses
     second_fits = CandidateFits(SearchData(
         [SearchSplit(dict(fixed, bounds=_span(train["x"])), train, held)
-         for train, held in second_splits], template, max_terms, forced)) if consensus else None
+         for train, held in second_splits], template, search.max_terms, forced)) if consensus else None
 
     def evaluate(parameters, move, ahead=()):
         step = GrowthStep(move=move, chosen=False, **fits.get(parameters, ahead))
