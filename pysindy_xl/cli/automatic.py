@@ -114,7 +114,9 @@ def run_automatic(args, dataset, system, forced, progress):
     xs = arguments["x"] if isinstance(arguments["x"], list) else [arguments["x"]]
     listed = ", ".join(f"{n} ({k})" for n, k in zip(names, kinds, strict=True))
     progress(f"growing the automatic catalog of {listed} "
-             f"on {sum(len(x) for x in xs)} samples (at most {args.max_terms} terms)")
+             f"on {sum(len(x) for x in xs)} samples (at most "
+             + ("as many terms as the data carry" if args.max_terms == "auto"
+                else f"{args.max_terms} terms") + ")")
     try:
         result = grow_catalog(arguments["x"], arguments["t"], arguments.get("u") if forced
                               else None, arguments.get("x_dot"), arguments.get("x_ddot"),
@@ -134,6 +136,6 @@ def run_automatic(args, dataset, system, forced, progress):
               + ", ".join(f"{g:.3g}: {v:.4g}" for g, v in zip(grid, values, strict=True)))
     if model.dynamics_ is None:
         raise CLIError("the identified model explains nothing (its equations contain no "
-                       "acceleration); " + _ADVICE.format(max_terms=args.max_terms))
+                       "acceleration); " + _ADVICE.format(max_terms=result.max_terms))
     sys.stdout.flush()
     return model, result, arguments

@@ -27,6 +27,11 @@ def _bandwidth(text):
     return float("inf") if text.strip().lower() == "inf" else _positive_float(text)
 
 
+def _max_terms(text):
+    """A positive integer, or ``auto`` (the ceiling follows the data)."""
+    return "auto" if text.strip().lower() == "auto" else _positive_int(text)
+
+
 def _joint_models(text):
     """``all`` or comma-separated joint model names (checked by the kinematic catalog)."""
     names = tuple(name.strip() for name in text.split(",") if name.strip())
@@ -73,9 +78,10 @@ def _add_fit_options(parser, coulomb_law="smooth", automatic=False):
                                  "(from the kinematic tree) or " + WHAT_IS_TRIED + "; auto: "
                                  "kinematic for a MuJoCo model, mixed with --velocity-degree "
                                  "or --trig-degree, else automatic (default: auto)")
-        parser.add_argument("--max-terms", type=_positive_int, default=400,
+        parser.add_argument("--max-terms", type=_max_terms, default="auto",
                             help="automatic catalog: ceiling on its size; larger catalogs are "
-                                 "not tried (default: 400)")
+                                 "not tried; auto: half the equations of the search's fits, "
+                                 "at most 400 (default: auto)")
         parser.add_argument("--n-jobs", type=_positive_int, default=1, metavar="N",
                             help="automatic catalog: processes of the search (while one "
                                  "candidate catalog is fitted, N - 1 workers fit the next ones; "

@@ -75,3 +75,24 @@ def test_n_jobs_must_be_a_positive_integer(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["identify", str(tmp_path / "absent.csv"), "--coordinates", "x", "--n-jobs", "0"])
     assert "--n-jobs" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("value", ["0", "ten", "2.5"])
+def test_max_terms_must_be_a_positive_integer_or_auto(tmp_path, capsys, value):
+    with pytest.raises(SystemExit):
+        main(["identify", str(tmp_path / "absent.csv"), "--coordinates", "x",
+              "--max-terms", value])
+    assert "--max-terms" in capsys.readouterr().err
+
+
+def test_the_default_ceiling_follows_the_data_and_an_int_still_binds(tmp_path, capsys):
+    path = _hardening_spring_csv(tmp_path / "garbage.csv",
+                                 forces=lambda rng, n: rng.normal(size=n))
+    assert main(["identify", str(path), "--coordinates", "x"]) == 1
+    captured = capsys.readouterr()
+    ceiling = int(next(line for line in captured.err.splitlines()
+                       if "] ceiling" in line).split("] ceiling")[1].split()[0])
+    assert 1 <= ceiling <= 400
+    assert f"--max-terms above {ceiling}" in captured.err  # the advice names the data's ceiling
+    assert main(["identify", str(path), "--coordinates", "x", "--max-terms", "2"]) == 1
+    assert "max_terms=2" in capsys.readouterr().err  # the smallest catalog is over it
