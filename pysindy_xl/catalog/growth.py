@@ -113,18 +113,16 @@ catalog is then fitted on all the data, each coordinate's splines kept whole or 
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 
 from .._inputs import aligned, as_list
 from .._validation import check_option
 from .automatic import AutomaticCatalog, coordinate_kinds
-from .backward import EXCHANGES, REMOVALS, removed
-from .candidates import CandidateFits, SearchData, SearchSplit, parameters_key, search_rows
+from .candidates import CandidateFits, SearchData, SearchSplit, search_rows
+from .climbs import Climber
 from .folds import REGIONS, held_out_splits
-from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
-from .moves import MORE_MOVES, MOVES, REPEATED, START, holds, joint_moves, moved
+from .keep_rules import single_keeps
+from .moves import MORE_MOVES, MOVES, REPEATED, START, joint_moves, moved
 from .path import GrowthResult, GrowthStep
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
@@ -406,67 +404,15 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # the second judge is asked only about candidates the first does not refuse: no guesses
     second_fits = CandidateFits(SearchData(
         [SearchSplit(dict(fixed, bounds=_span(train["x"])), train, held)
-         for train, held in second_splits], template, search.max_terms, forced)) if consensus else None
+         for train, held in second_splits], template, search.max_terms,
+        forced)) if consensus else None
 
-    def evaluate(parameters, move, ahead=()):
-        step = GrowthStep(move=move, chosen=False, **fits.get(parameters, ahead))
-        if physical and step.definite < 1 and not step.note:
-            step.note = (f"mass matrix not positive definite on {1 - step.definite:.0%} of "
-                         "the training states")
-        return step
-
-    seconds = {}  # the second judge's steps, by the first's (of "consensus")
-
-    def second_step(step):
-        """``step``'s catalog judged by the second fold (fitted once), recorded in the step's
-        ``second_error``."""
-        if id(step) not in seconds:
-            fields = second_fits.get(step_parameters[id(step)])
-            seconds[id(step)] = GrowthStep(move=step.move, chosen=False, **fields)
-            step.second_error = seconds[id(step)].criterion
-            step.second_cpu_seconds = seconds[id(step)].cpu_seconds
-        return seconds[id(step)]
-
-    def compared(step, best):
-        """The criteria the keep rules compare: the first fold's, or with ``"consensus"``
-        the combined ones (:func:`consensus_criteria`; the candidate is not fitted on the
-        second fold where it is more than :data:`CONSENSUS_REACH` times worse on the first,
-        and then compares as infinite)."""
-        if not consensus:
-            return step.criterion, best.criterion
-        if not step.criterion <= best.criterion * CONSENSUS_REACH:
-            return np.inf, best.criterion
-        return consensus_criteria(step, best, second_step(step), second_step(best))
-
-    def judged(step, best):
-        """The keep rule of one fold (:func:`_keeps`) or, with ``"consensus"``, of two
-        (:func:`consensus_keeps`: the second fold is asked only about a larger candidate
-        that the first keeps, or another within :data:`CONSENSUS_REACH`)."""
-        if not consensus:
-            return single_keeps(step, best, tolerance)
-        if (not single_keeps(step, best, tolerance) if step.terms > best.terms
-                else not step.criterion <= best.criterion * CONSENSUS_REACH):
-            return False
-        return consensus_keeps(step, best, second_step(step), second_step(best), tolerance)
-
-    def keeps(step, best):
-        """The keep rule (:func:`judged`); with ``physical``, a catalog whose fits have a
-        positive definite mass matrix is not given up for one whose fits have not."""
-        return judged(step, best) and (not physical or step.definite >= 1
-                                       or best.definite < 1)
-
-    def _size(parameters):
-        try:
-            return AutomaticCatalog(**searched[0], **parameters).n_terms
-        except ValueError:
-            return -1
-
-    def report(step):
-        if progress is not None:
-            progress(f"{step.move:<13} {step.terms:>5} terms  held-out {criterion} error "
-                     + (f"{100 * step.criterion:.2f} %" if np.isfinite(step.criterion) else "-")
-                     + ("  kept" if step.chosen else "") + (f"  ({step.note})" if step.note
-                                                            else ""))
+    if not forced:  # relative to the largest term, an approximation looks small already: only
+        good_enough = EXACT  # a law exact to the data's precision stops the growth
+    climber = Climber(fits, second_fits, searched[0], kinds, tolerance=tolerance,
+                      good_enough=good_enough, physical=physical,
+                      retry_kinetic=max_terms == "auto", criterion=criterion,
+                      progress=progress)
 
     # the moves from the first catalog, each alone (a degree move also one degree further)
     queue = []
@@ -478,162 +424,22 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             queue.append((move, parameters))
     # pairs of moves whose joint catalog holds terms that neither adds alone (kinetic
     # coefficients over products of two coordinates' functions): tried as one move too
-    joint = joint_moves(moves, kinds, n, _size)
+    joint = joint_moves(moves, kinds, n, climber.size)
     queue += [(name, moved(dict(START), name, kinds, n)) for name in joint]
-    step_parameters = {}  # the parameters of each step, by the step's id
-    first = evaluate(dict(START), "start", [p for _, p in queue])
-    step_parameters[id(first)] = dict(START)
+    first = climber.start([p for _, p in queue])
     if first.note.startswith("ceiling"):
         raise ValueError(f"max_terms: the smallest catalog has {first.terms} terms, more than "
                          f"max_terms={search.max_terms}" + (
                              f" ('auto': {rows} rows of the search's fits / {ROWS_PER_TERM}; "
                              "record longer, or pass an int" if max_terms == "auto" else "; raise")
                          + " max_terms")
-    first.chosen = True
-    steps = [first]
     if progress is not None:
         progress(f"ceiling       {search.max_terms:>5} terms  ({rows} rows per fit)")
-    report(first)
-    if not forced:  # relative to the largest term, an approximation looks small already: only
-        good_enough = EXACT  # a law exact to the data's precision stops the growth
-    cache = {}  # every catalog is fitted once, whichever path tries it
-
-    def attempt(parameters, move, ahead=()):
-        key = parameters_key(parameters)
-        if key not in cache:
-            cache[key] = evaluate(parameters, move, ahead)
-            step_parameters[id(cache[key])] = parameters
-            steps.append(cache[key])
-            report(cache[key])
-        return cache[key]
-
-    def pairs(state, order, tried):
-        """The pairs of non-repeated moves from ``state`` not tried yet: (parameters, name)."""
-        out = []
-        single = [m for m in order if m not in REPEATED and "+" not in m]
-        for first_move, second_move in itertools.combinations(single, 2):
-            once = moved(state, first_move, kinds, n, 0)
-            twice = None if once is None else moved(once, second_move, kinds, n, 0)
-            if twice is not None and parameters_key(twice) not in tried:
-                out.append((twice, f"{first_move}+{second_move}"))
-        return out
-
-    def rejected(state, order, index, skip, tried, improved):
-        """The candidates a climb tries after ``order[index]`` (at ``skip``) if it keeps
-        none of them: the guess of what to fit meanwhile."""
-        out, seen = [], set(tried)
-        for k in range(index, len(order)):
-            move = order[k]
-            skips = [skip] if k == index else [0]
-            if move in REPEATED and skips[0] == 0:
-                skips.append(1)
-            for s in skips:
-                parameters = moved(state, move, kinds, n, s)
-                if parameters is None or parameters_key(parameters) in seen:
-                    break
-                seen.add(parameters_key(parameters))
-                out.append(parameters)
-        if not improved:
-            out += [p for p, _ in pairs(state, order, seen)]
-        return out[1:]  # (the first is the current one)
-
-    def steepest_climb(order, forced=None):
-        """From the first catalog (after the move ``forced``), try every move from the
-        current catalog and keep the best; (state, step, kept steps)."""
-        state, best, path = dict(START), first, []
-        if forced is not None:
-            parameters = moved(state, forced, kinds, n)
-            step = attempt(parameters, forced)
-            if keeps(step, best):
-                state, best = parameters, step
-                path.append(step)
-        while best.criterion > good_enough:
-            options = []
-            for move in order:
-                for skip in (0, 1) if move in REPEATED else (0,):
-                    parameters = moved(state, move, kinds, n, skip)
-                    if parameters is None:
-                        break
-                    options.append((parameters, move))
-            kept = []
-            for k, (parameters, move) in enumerate(options):
-                step = attempt(parameters, move, [p for p, _ in options[k + 1:]])
-                if keeps(step, best):
-                    kept.append((step.criterion, step.active, k, parameters, step))
-            if not kept:  # two moves at once, as the climb looks ahead
-                candidates = pairs(state, order, set())
-                for k, (twice, name) in enumerate(candidates):
-                    step = attempt(twice, name, [p for p, _ in candidates[k + 1:]])
-                    if keeps(step, best):
-                        kept.append((step.criterion, step.active, k, twice, step))
-                        break
-            if not kept:
-                break
-            _, _, _, state, best = min(kept, key=lambda item: item[:3])
-            path.append(best)
-        return state, best, path
-
-    def climb(order, end=None):
-        """Try the moves in turn from the first catalog; (state, step, kept steps). It stops
-        once it holds the catalog ``end`` (the first climb's end)."""
-        state, best, path = dict(START), first, []
-        tried = {parameters_key(state)}
-        improved = best.criterion > good_enough
-
-        def going():
-            return best.criterion > good_enough and (end is None or not holds(state, end))
-        while improved and going():
-            improved = False
-            for index, move in enumerate(order):
-                skip = 0  # a degree move looks one degree further before it stops
-                while going():
-                    parameters = moved(state, move, kinds, n, skip)
-                    if parameters is None or parameters_key(parameters) in tried:
-                        break
-                    ahead = rejected(state, order, index, skip, tried, improved)
-                    tried.add(parameters_key(parameters))
-                    step = attempt(parameters, move, ahead)
-                    smaller = dict(parameters, kinetic=START["kinetic"])
-                    if (step.note.startswith("ceiling") and parameters_key(smaller) not in tried
-                            and max_terms == "auto"):  # the kinetic coefficients give way
-                        tried.add(parameters_key(smaller))
-                        parameters, step = smaller, attempt(smaller, f"{move}-kinetic")
-                    keep = keeps(step, best)
-                    if keep:
-                        state, best, improved = parameters, step, True
-                        path.append(step)
-                    if move not in REPEATED or (not keep and skip):
-                        break
-                    skip = 0 if keep else 1
-            if not improved and going():
-                # a law that needs two structural moves at once (a coupling cos(a - b) a_dot
-                # b_dot needs products of two angles' functions and configuration-dependent
-                # kinetic coefficients) gains from neither alone: look two moves ahead
-                candidates = pairs(state, order, tried)
-                for k, (twice, name) in enumerate(candidates):
-                    if parameters_key(twice) in tried:
-                        continue
-                    tried.add(parameters_key(twice))
-                    step = attempt(twice, name, [p for p, _ in candidates[k + 1:]])
-                    if keeps(step, best):
-                        state, best, improved = twice, step, True
-                        path.append(step)
-                        break
-        return state, best, path
+    climber.report(first)
 
     # rank the family moves by what each achieves alone from the first catalog (a degree move
     # looking one degree further); the flexible basis comes last, for what the families leave
-    alone, alone_steps, stopped = {}, {}, set()
-    if first.criterion <= good_enough:
-        queue = []
-    for index, (move, parameters) in enumerate(queue):
-        if move in stopped:
-            continue  # (its first degree was kept: no look further)
-        step = attempt(parameters, move, [p for _, p in queue[index + 1:]])
-        if step.criterion < alone.get(move, np.inf):
-            alone[move], alone_steps[move] = step.criterion, step
-        if single_keeps(step, first, tolerance):  # (the first fold's rule: no second fit here)
-            stopped.add(move)
+    alone, alone_steps = climber.first_moves(queue if first.criterion > good_enough else [])
     rank = {m: (1, c) for m, c in alone.items()}
     if consensus and alone:
         # the first fold's near ties (the moves it keeps within the tolerance of the best
@@ -641,7 +447,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         low = min(alone.values())
         near = [m for m, c in alone.items() if c <= low * (1 + tolerance)
                 and single_keeps(alone_steps[m], first, tolerance)]
-        beyond = {m: second_step(alone_steps[m]).criterion for m in near}
+        beyond = {m: climber.second_step(alone_steps[m]).criterion for m in near}
         if beyond and min(beyond.values()) < 1:
             rank.update({m: (0, float(np.sqrt(alone[m] * beyond[m]))) for m in near})
     order = sorted([m for m in moves if m != "splines"] + joint,
@@ -650,58 +456,21 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # climb from the best and from the second-best first move: which family goes in first is
     # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
     # a coupling that needs two moves), so the better of the two ends is kept
-    state, best, path = steepest_climb(order) if steepest else climb(order)
+    state, best, path = climber.steepest_climb(order) if steepest else climber.climb(order)
     promising = [m for m in order if m != "splines" and alone.get(m, np.inf)
                  < first.criterion * (1 - tolerance)]
     if best.criterion > good_enough and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]
-        other = steepest_climb(order, promising[1]) if steepest else climb(second, state)
-        if (keeps(other[1], best) if not physical or (other[1].definite >= 1)
+        other = (climber.steepest_climb(order, promising[1]) if steepest
+                 else climber.climb(second, state))
+        if (climber.keeps(other[1], best) if not physical or (other[1].definite >= 1)
                 == (best.definite >= 1) else other[1].definite >= 1):
             state, best, path = other
-    # backward: drop the family whose removal the keep rule accepts best (a smaller catalog
-    # within the tolerance at an equal fitted size is kept too: the stand-in that a family
-    # offers next to the right one goes with it), until nothing goes
-    visited = {parameters_key(state)}
-    while True:  # below good_enough too: a stand-in can be good enough
-        dropped, refused = [], []
-        candidates = [(move, parameters) for move in REMOVALS
-                      if (parameters := removed(state, move, kinds, START)) is not None
-                      and {"trig": "trig_degree"}.get(move, move) in moves
-                      and parameters_key(parameters) not in visited
-                      and _size(parameters) != best.terms]
-        for k, (move, parameters) in enumerate(candidates):
-            step = attempt(parameters, f"-{move}", [p for _, p in candidates[k + 1:]])
-            if keeps(step, best) or (
-                    step.active == best.active and step.terms < best.terms
-                    and (not physical or step.definite >= 1 or best.definite < 1)
-                    and (lambda c, b: c <= b * (1 + tolerance))(*compared(step, best))):
-                dropped.append((step.criterion, step.active, parameters, step))
-            else:
-                refused.append((move, parameters))
-        # a family that stands in for another is not given up alone: exchange it for the other
-        # (while the criterion is not good enough, as for the pairs of moves)
-        exchanges = []
-        for move, smaller in refused if not dropped and best.criterion > good_enough else ():
-            for other in EXCHANGES.get(move, ()):
-                for skip in (0, 1) if other in moves else ():
-                    parameters = moved(smaller, other, kinds, n, skip)
-                    if (parameters is not None and parameters_key(parameters) not in visited
-                            and _size(parameters) != _size(smaller)):
-                        exchanges.append((f"-{move}+{other}", parameters))
-        for k, (name, parameters) in enumerate(exchanges):
-            step = attempt(parameters, name, [p for _, p in exchanges[k + 1:]])
-            if keeps(step, best):
-                dropped.append((step.criterion, step.active, parameters, step))
-        if not dropped:
-            break
-        _, _, state, best = min(dropped, key=lambda d: d[:2])
-        visited.add(parameters_key(state))
-        path.append(best)
+    state, best, path = climber.backward(state, best, path, moves)
     fits.close()  # (a worker's last guess may still run: it ends during the final fit)
     if consensus:
         for step in path:
-            second_step(step)  # (each kept step reports both folds)
+            climber.second_step(step)  # (each kept step reports both folds)
     for step in path:
         step.chosen = True
     best_catalog = AutomaticCatalog(**fixed, **state)
@@ -713,4 +482,5 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     if not is_list:
         full = {key: None if value is None else value[0] for key, value in full.items()}
     model.fit(**full)
-    return GrowthResult(model, best_catalog, steps, criterion, best.criterion, search.max_terms)
+    return GrowthResult(model, best_catalog, climber.steps, criterion, best.criterion,
+                        search.max_terms)

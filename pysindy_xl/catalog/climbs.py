@@ -1,0 +1,406 @@
+"""The search of a catalog growth: the candidate catalogs tried, the keep rules, the climbs.
+
+:class:`Climber` holds what one growth has tried (each catalog fitted once, whichever path
+tries it) and walks from the smallest catalog: each move alone (:meth:`Climber.first_moves`),
+a climb through the moves in turn or by the best move (:meth:`Climber.climb`,
+:meth:`Climber.steepest_climb`), and the backward phase dropping families
+(:meth:`Climber.backward`). :func:`~.growth.grow_catalog` sets up the data and the folds,
+orders the moves and fits the chosen catalog; the module docstring of :mod:`.growth` states
+the method.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from .automatic import AutomaticCatalog
+from .backward import EXCHANGES, REMOVALS, removed
+from .candidates import parameters_key
+from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
+from .moves import REPEATED, START, holds, moved
+from .path import GrowthStep
+
+__all__ = ["Climber"]
+
+
+class Climber:
+    """The catalogs one growth tries, its keep rules and its climbs.
+
+    Parameters
+    ----------
+    fits : CandidateFits
+        The search's fits of candidate catalogs (:class:`~.candidates.CandidateFits`).
+    second_fits : CandidateFits or None
+        The second fold's fits (``region="consensus"``), None for one fold.
+    fixed : dict
+        The :class:`AutomaticCatalog` parameters common to every candidate (coordinates,
+        kinds, bounds of a search split, ...).
+    kinds : list of str
+        ``"linear"`` or ``"angle"`` per coordinate.
+    tolerance : float
+        The keep rules' fraction (:func:`~.keep_rules.single_keeps`).
+    good_enough : float
+        The criterion below which a climb stops.
+    physical : bool
+        Never give up a catalog whose fits are physical for one whose fits are not.
+    retry_kinetic : bool
+        Retry a move that the ceiling refuses with constant kinetic coefficients.
+    criterion : str
+        The criterion's name in the progress lines (``"forces"``, ``"accelerations"``).
+    progress : callable or None
+        Called with a line of text after each step.
+
+    Attributes
+    ----------
+    steps : list of GrowthStep
+        Every catalog tried, in order.
+    first : GrowthStep
+        The smallest catalog's step (after :meth:`start`).
+
+    Examples
+    --------
+    >>> Climber.__name__
+    'Climber'
+    """
+
+    def __init__(self, fits, second_fits, fixed, kinds, *, tolerance, good_enough, physical,
+                 retry_kinetic, criterion, progress=None):
+        self.fits, self.second_fits, self.fixed = fits, second_fits, fixed
+        self.kinds, self.n = list(kinds), len(kinds)
+        self.tolerance, self.good_enough, self.physical = tolerance, good_enough, physical
+        self.retry_kinetic, self.criterion, self.progress = retry_kinetic, criterion, progress
+        self.consensus = second_fits is not None
+        self.steps, self.first = [], None
+        self._cache = {}  # every catalog is fitted once, whichever path tries it
+        self._parameters = {}  # the parameters of each step, by the step's id
+        self._seconds = {}  # the second judge's steps, by the first's (of "consensus")
+
+    # -- fitting and judging ---------------------------------------------------------------
+    def evaluate(self, parameters, move, ahead=()) -> GrowthStep:
+        """The step of the catalog ``parameters`` (fitted by the search; ``ahead``: the
+        candidates the workers may fit meanwhile).
+
+        Returns
+        -------
+        GrowthStep
+        """
+        step = GrowthStep(move=move, chosen=False, **self.fits.get(parameters, ahead))
+        if self.physical and step.definite < 1 and not step.note:
+            step.note = (f"mass matrix not positive definite on {1 - step.definite:.0%} of "
+                         "the training states")
+        self._parameters[id(step)] = parameters
+        return step
+
+    def start(self, ahead=()) -> GrowthStep:
+        """Fit the smallest catalog (:data:`~.moves.START`); it is chosen.
+
+        Returns
+        -------
+        GrowthStep
+        """
+        self.first = self.evaluate(dict(START), "start", ahead)
+        self.first.chosen = True
+        self.steps.append(self.first)
+        return self.first
+
+    def attempt(self, parameters, move, ahead=()) -> GrowthStep:
+        """The step of ``parameters``, fitted and reported the first time it is tried.
+
+        Returns
+        -------
+        GrowthStep
+        """
+        key = parameters_key(parameters)
+        if key not in self._cache:
+            self._cache[key] = self.evaluate(parameters, move, ahead)
+            self.steps.append(self._cache[key])
+            self.report(self._cache[key])
+        return self._cache[key]
+
+    def second_step(self, step) -> GrowthStep:
+        """``step``'s catalog judged by the second fold (fitted once), recorded in the step's
+        ``second_error``.
+
+        Returns
+        -------
+        GrowthStep
+        """
+        if id(step) not in self._seconds:
+            fields = self.second_fits.get(self._parameters[id(step)])
+            self._seconds[id(step)] = GrowthStep(move=step.move, chosen=False, **fields)
+            step.second_error = self._seconds[id(step)].criterion
+            step.second_cpu_seconds = self._seconds[id(step)].cpu_seconds
+        return self._seconds[id(step)]
+
+    def compared(self, step, best) -> tuple:
+        """The criteria the keep rules compare: the first fold's, or with ``"consensus"``
+        the combined ones (:func:`~.keep_rules.consensus_criteria`; the candidate is not
+        fitted on the second fold where it is more than :data:`CONSENSUS_REACH` times worse
+        on the first, and then compares as infinite).
+
+        Returns
+        -------
+        tuple of float
+            The candidate's and the kept catalog's criteria.
+        """
+        if not self.consensus:
+            return step.criterion, best.criterion
+        if not step.criterion <= best.criterion * CONSENSUS_REACH:
+            return np.inf, best.criterion
+        return consensus_criteria(step, best, self.second_step(step), self.second_step(best))
+
+    def keeps(self, step, best) -> bool:
+        """Whether ``step`` replaces ``best``: the keep rule of one fold
+        (:func:`~.keep_rules.single_keeps`) or, with ``"consensus"``, of two
+        (:func:`~.keep_rules.consensus_keeps`: the second fold is asked only about a larger
+        candidate that the first keeps, or another within :data:`CONSENSUS_REACH`); with
+        ``physical``, a catalog whose fits have a positive definite mass matrix is not given
+        up for one whose fits have not.
+
+        Returns
+        -------
+        bool
+        """
+        if not self.consensus:
+            judged = single_keeps(step, best, self.tolerance)
+        elif (not single_keeps(step, best, self.tolerance) if step.terms > best.terms
+              else not step.criterion <= best.criterion * CONSENSUS_REACH):
+            judged = False
+        else:
+            judged = consensus_keeps(step, best, self.second_step(step),
+                                     self.second_step(best), self.tolerance)
+        return judged and (not self.physical or step.definite >= 1 or best.definite < 1)
+
+    def size(self, parameters) -> int:
+        """The terms of the catalog ``parameters`` (-1 where it cannot be built).
+
+        Returns
+        -------
+        int
+        """
+        try:
+            return AutomaticCatalog(**self.fixed, **parameters).n_terms
+        except ValueError:
+            return -1
+
+    def report(self, step) -> None:
+        """Pass ``step``'s progress line to ``progress``."""
+        if self.progress is not None:
+            self.progress(
+                f"{step.move:<13} {step.terms:>5} terms  held-out {self.criterion} error "
+                + (f"{100 * step.criterion:.2f} %" if np.isfinite(step.criterion) else "-")
+                + ("  kept" if step.chosen else "") + (f"  ({step.note})" if step.note else ""))
+
+    # -- the paths ---------------------------------------------------------------------------
+    def moved(self, state, move, skip=0):
+        """:func:`~.moves.moved` with the growth's coordinates."""
+        return moved(state, move, self.kinds, self.n, skip)
+
+    def first_moves(self, queue) -> tuple:
+        """Each move of ``queue`` (``(move, parameters)`` pairs) alone from the first catalog:
+        a degree move looks one degree further unless its first degree is kept.
+
+        Returns
+        -------
+        alone : dict
+            The best criterion of each move, by move.
+        steps : dict
+            The step of that criterion, by move.
+        """
+        alone, alone_steps, stopped = {}, {}, set()
+        for index, (move, parameters) in enumerate(queue):
+            if move in stopped:
+                continue  # (its first degree was kept: no look further)
+            step = self.attempt(parameters, move, [p for _, p in queue[index + 1:]])
+            if step.criterion < alone.get(move, np.inf):
+                alone[move], alone_steps[move] = step.criterion, step
+            if single_keeps(step, self.first, self.tolerance):  # (the first fold's rule)
+                stopped.add(move)
+        return alone, alone_steps
+
+    def pairs(self, state, order, tried) -> list:
+        """The pairs of non-repeated moves from ``state`` not tried yet.
+
+        Returns
+        -------
+        list of (dict, str)
+            The parameters and the name (``"a+b"``) of each pair.
+        """
+        out = []
+        single = [m for m in order if m not in REPEATED and "+" not in m]
+        for first_move, second_move in itertools.combinations(single, 2):
+            once = self.moved(state, first_move)
+            twice = None if once is None else self.moved(once, second_move)
+            if twice is not None and parameters_key(twice) not in tried:
+                out.append((twice, f"{first_move}+{second_move}"))
+        return out
+
+    def _rejected(self, state, order, index, skip, tried, improved) -> list:
+        """The candidates a climb tries after ``order[index]`` (at ``skip``) if it keeps
+        none of them: the guess of what to fit meanwhile."""
+        out, seen = [], set(tried)
+        for k in range(index, len(order)):
+            move = order[k]
+            skips = [skip] if k == index else [0]
+            if move in REPEATED and skips[0] == 0:
+                skips.append(1)
+            for s in skips:
+                parameters = self.moved(state, move, s)
+                if parameters is None or parameters_key(parameters) in seen:
+                    break
+                seen.add(parameters_key(parameters))
+                out.append(parameters)
+        if not improved:
+            out += [p for p, _ in self.pairs(state, order, seen)]
+        return out[1:]  # (the first is the current one)
+
+    def steepest_climb(self, order, forced=None) -> tuple:
+        """From the first catalog (after the move ``forced``), try every move of ``order``
+        from the current catalog and keep the best; two moves at once where none is kept.
+
+        Returns
+        -------
+        tuple
+            The end's parameters, its step, and the kept steps.
+        """
+        state, best, path = dict(START), self.first, []
+        if forced is not None:
+            parameters = self.moved(state, forced)
+            step = self.attempt(parameters, forced)
+            if self.keeps(step, best):
+                state, best = parameters, step
+                path.append(step)
+        while best.criterion > self.good_enough:
+            options = []
+            for move in order:
+                for skip in (0, 1) if move in REPEATED else (0,):
+                    parameters = self.moved(state, move, skip)
+                    if parameters is None:
+                        break
+                    options.append((parameters, move))
+            kept = []
+            for k, (parameters, move) in enumerate(options):
+                step = self.attempt(parameters, move, [p for p, _ in options[k + 1:]])
+                if self.keeps(step, best):
+                    kept.append((step.criterion, step.active, k, parameters, step))
+            if not kept:  # two moves at once, as the climb looks ahead
+                candidates = self.pairs(state, order, set())
+                for k, (twice, name) in enumerate(candidates):
+                    step = self.attempt(twice, name, [p for p, _ in candidates[k + 1:]])
+                    if self.keeps(step, best):
+                        kept.append((step.criterion, step.active, k, twice, step))
+                        break
+            if not kept:
+                break
+            _, _, _, state, best = min(kept, key=lambda item: item[:3])
+            path.append(best)
+        return state, best, path
+
+    def climb(self, order, end=None) -> tuple:
+        """Try the moves of ``order`` in turn from the first catalog (a degree move repeated
+        while it is kept, looking one degree further before it stops), two at once where a
+        pass keeps none; stop once the catalog holds ``end`` (the first climb's end).
+
+        Returns
+        -------
+        tuple
+            The end's parameters, its step, and the kept steps.
+        """
+        state, best, path = dict(START), self.first, []
+        tried = {parameters_key(state)}
+        improved = best.criterion > self.good_enough
+
+        def going():
+            return best.criterion > self.good_enough and (end is None or not holds(state, end))
+        while improved and going():
+            improved = False
+            for index, move in enumerate(order):
+                skip = 0  # a degree move looks one degree further before it stops
+                while going():
+                    parameters = self.moved(state, move, skip)
+                    if parameters is None or parameters_key(parameters) in tried:
+                        break
+                    ahead = self._rejected(state, order, index, skip, tried, improved)
+                    tried.add(parameters_key(parameters))
+                    step = self.attempt(parameters, move, ahead)
+                    smaller = dict(parameters, kinetic=START["kinetic"])
+                    if (step.note.startswith("ceiling") and parameters_key(smaller) not in tried
+                            and self.retry_kinetic):  # the kinetic coefficients give way
+                        tried.add(parameters_key(smaller))
+                        parameters, step = smaller, self.attempt(smaller, f"{move}-kinetic")
+                    keep = self.keeps(step, best)
+                    if keep:
+                        state, best, improved = parameters, step, True
+                        path.append(step)
+                    if move not in REPEATED or (not keep and skip):
+                        break
+                    skip = 0 if keep else 1
+            if not improved and going():
+                # a law that needs two structural moves at once (a coupling cos(a - b) a_dot
+                # b_dot needs products of two angles' functions and configuration-dependent
+                # kinetic coefficients) gains from neither alone: look two moves ahead
+                candidates = self.pairs(state, order, tried)
+                for k, (twice, name) in enumerate(candidates):
+                    if parameters_key(twice) in tried:
+                        continue
+                    tried.add(parameters_key(twice))
+                    step = self.attempt(twice, name, [p for p, _ in candidates[k + 1:]])
+                    if self.keeps(step, best):
+                        state, best, improved = twice, step, True
+                        path.append(step)
+                        break
+        return state, best, path
+
+    def backward(self, state, best, path, moves) -> tuple:
+        """Drop the family whose removal the keep rule accepts best (a smaller catalog within
+        the tolerance at an equal fitted size is kept too: the stand-in that a family offers
+        next to the right one goes with it), until nothing goes; a family refused alone is
+        exchanged for another (:data:`~.backward.EXCHANGES`) while the criterion is not good
+        enough.
+
+        Returns
+        -------
+        tuple
+            The end's parameters, its step, and the kept steps (``path`` extended).
+        """
+        visited = {parameters_key(state)}
+        tolerance = self.tolerance
+        while True:  # below good_enough too: a stand-in can be good enough
+            dropped, refused = [], []
+            candidates = [(move, parameters) for move in REMOVALS
+                          if (parameters := removed(state, move, self.kinds, START)) is not None
+                          and {"trig": "trig_degree"}.get(move, move) in moves
+                          and parameters_key(parameters) not in visited
+                          and self.size(parameters) != best.terms]
+            for k, (move, parameters) in enumerate(candidates):
+                step = self.attempt(parameters, f"-{move}", [p for _, p in candidates[k + 1:]])
+                if self.keeps(step, best) or (
+                        step.active == best.active and step.terms < best.terms
+                        and (not self.physical or step.definite >= 1 or best.definite < 1)
+                        and (lambda c, b: c <= b * (1 + tolerance))(*self.compared(step, best))):
+                    dropped.append((step.criterion, step.active, parameters, step))
+                else:
+                    refused.append((move, parameters))
+            # a family that stands in for another is not given up alone: exchange it for the
+            # other (while the criterion is not good enough, as for the pairs of moves)
+            exchanges = []
+            for move, smaller in (refused if not dropped and best.criterion > self.good_enough
+                                  else ()):
+                for other in EXCHANGES.get(move, ()):
+                    for skip in (0, 1) if other in moves else ():
+                        parameters = self.moved(smaller, other, skip)
+                        if (parameters is not None and parameters_key(parameters) not in visited
+                                and self.size(parameters) != self.size(smaller)):
+                            exchanges.append((f"-{move}+{other}", parameters))
+            for k, (name, parameters) in enumerate(exchanges):
+                step = self.attempt(parameters, name, [p for _, p in exchanges[k + 1:]])
+                if self.keeps(step, best):
+                    dropped.append((step.criterion, step.active, parameters, step))
+            if not dropped:
+                break
+            _, _, state, best = min(dropped, key=lambda d: d[:2])
+            visited.add(parameters_key(state))
+            path.append(best)
+        return state, best, path
