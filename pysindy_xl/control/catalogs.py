@@ -128,7 +128,9 @@ class AutomaticGrowth:
     of the ``n_blocks`` time blocks of every recording in turn (``cross_validate``): on a
     few seconds the block with the largest swings holds most of what identifies
     configuration-dependent terms, and with it held out of the only fit the right catalog
-    loses to the constant start. B-splines are not among
+    loses to the constant start. The criterion leaves the worst of the blocks' errors out of
+    their RMS (``combine="trimmed"``): the fit without that block can fail for the right
+    catalog as well (the cart double pendulum's coupled damping). B-splines are not among
     the default moves: they are local to the explored range, which a swing-up leaves. The
     chosen catalog is fitted on all the data with the weak-form test functions of the search,
     at most a third of the default width (on a few seconds of a fast, chaotic motion the
