@@ -19,6 +19,7 @@ from the coordinates and their kinds only. Per seed:
 Usage::
 
     python benchmarks/cdp_growth.py --seeds 4 5 6 --label before --out results.jsonl
+    python benchmarks/cdp_growth.py --seeds 4 5 6 --label before --combine rms
 """
 
 from __future__ import annotations
@@ -137,7 +138,9 @@ def coupling(model) -> bool:
 def cached_candidates(label: str, seed: int) -> None:
     """Keep every candidate's fit and score (:func:`~pysindy_xl.catalog.candidates.
     evaluate_candidate`) in a JSON-lines file of ``label`` and ``seed``: a run that stops
-    replays them."""
+    replays them. A replayed candidate's criterion is recombined from its block errors with
+    the search's ``combine`` (a cache serves both criteria; entries without block errors
+    are replayed as they are)."""
     from pysindy_xl.catalog import candidates
     path = os.path.join(CACHE, f"candidates_{label}_{seed}.jsonl")
     known = {}
@@ -154,7 +157,12 @@ def cached_candidates(label: str, seed: int) -> None:
             known[key] = original(search, parameters)
             with open(path, "a") as f:
                 f.write(json.dumps([key, known[key]], default=float) + "\n")
-        return dict(known[key])
+        found = dict(known[key])
+        if found.get("block_errors"):
+            found["block_errors"] = tuple(found["block_errors"])
+            found["criterion"] = candidates.combine_errors(found["block_errors"],
+                                                           search.combine)
+        return found
 
     candidates.evaluate_candidate = evaluate
 
@@ -249,6 +257,8 @@ def main(argv=None):
     parser.add_argument("--data-only", action="store_true")
     parser.add_argument("--physical", choices=("default", "on", "off"), default="default",
                         help="AutomaticGrowth's physical keep rule")
+    parser.add_argument("--combine", choices=("auto", "rms", "trimmed"), default="auto",
+                        help="AutomaticGrowth's criterion over the held-out blocks")
     parser.add_argument("--refit", nargs="+", default=None, metavar="SEED=DESCRIPTION",
                         help="fit a recorded growth's catalog instead of growing one")
     args = parser.parse_args(argv)
@@ -270,8 +280,9 @@ def main(argv=None):
             print(seed, round(float(t[-1]), 2), flush=True)
             continue
         options = {} if args.physical == "default" else {"physical": args.physical == "on"}
+        options["combine"] = args.combine
         row = run_seed(seed, AutomaticGrowth(**options), args.label)
-        row["label"] = args.label
+        row["label"], row["combine"] = args.label, args.combine
         print(json.dumps({k: v for k, v in row.items() if k != "table"}), flush=True)
         print(row["table"], flush=True)
         if args.out:

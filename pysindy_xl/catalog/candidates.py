@@ -23,7 +23,65 @@ import numpy as np
 from .automatic import AutomaticCatalog
 
 __all__ = ["SearchSplit", "SearchData", "CandidateFits", "candidate_content", "evaluate_candidate",
-           "held_out_error", "parameters_key", "search_rows"]
+           "held_out_error", "parameters_key", "search_rows", "combine_errors", "COMBINES",
+           "MIN_TRIMMED_BLOCKS"]
+
+#: How a candidate's held-out block errors make its criterion (:func:`combine_errors`):
+#: ``"rms"`` (all of them) or ``"trimmed"`` (all but the largest).
+COMBINES = ("rms", "trimmed")
+#: Fewest held-out blocks from which ``"trimmed"`` may leave the worst one out.
+MIN_TRIMMED_BLOCKS = 4
+
+
+def combine_errors(errors, combine: str = "rms") -> float:
+    r"""The criterion of a candidate catalog from its held-out block errors.
+
+    With ``"rms"``, the root mean square of the ``n`` errors :math:`e_1, \dots, e_n`;
+    with ``"trimmed"``, that of all but the largest: for the sorted errors
+    :math:`e_{(1)} \le \dots \le e_{(n)}`,
+
+    .. math:: c_\text{rms} = \sqrt{\frac{1}{n} \sum_{i=1}^{n} e_i^2}, \qquad
+              c_\text{trimmed} = \sqrt{\frac{1}{n - 1} \sum_{i=1}^{n-1} e_{(i)}^2}.
+
+    Cross-validated on a recording of a few seconds, one block (the largest swings) can
+    hold most of what identifies the configuration-dependent terms: the fit without it fails
+    for the right catalog too, and that one error (tens of percent where the others are
+    below one) decides the RMS, so the growth refuses the right move. The trimmed criterion
+    tolerates one failing fit out of ``n``. It needs :data:`MIN_TRIMMED_BLOCKS` (4) blocks
+    at least: a catalog is then still judged on ``n - 1 >= 3`` blocks, each by a fit on
+    other data, so a stand-in that holds along the trajectories but fails wherever it
+    extrapolates must fail on one block only to pass; with two or three blocks, the one
+    left out would be half or a third of the evidence (and the time and region blocks of
+    the default split would be one judgment).
+
+    Parameters
+    ----------
+    errors : sequence of float
+        The held-out relative errors, one per block (inf for a failed fit).
+    combine : {"rms", "trimmed"}, default "rms"
+        How they are combined (:data:`COMBINES`).
+
+    Returns
+    -------
+    float
+        The criterion (inf when a retained error is not finite).
+
+    Examples
+    --------
+    >>> errors = [0.005, 0.004, 0.9, 0.006, 0.005]   # one fit of five fails
+    >>> round(combine_errors(errors), 3), round(combine_errors(errors, "trimmed"), 4)
+    (0.403, 0.005)
+    """
+    if combine not in COMBINES:
+        raise ValueError(f"combine: expected one of {COMBINES}, got {combine!r}")
+    errors = np.asarray(errors, dtype=float).ravel()
+    if combine == "trimmed":
+        if len(errors) < MIN_TRIMMED_BLOCKS:
+            raise ValueError(f"combine='trimmed' needs at least {MIN_TRIMMED_BLOCKS} held-out "
+                             f"blocks, got {len(errors)}")
+        errors = np.sort(errors)[:-1]
+    value = float(np.sqrt(np.mean(np.square(errors))))
+    return value if np.isfinite(value) else float("inf")
 
 
 def parameters_key(parameters) -> str:
@@ -82,6 +140,10 @@ class SearchData:
     reported : tuple of int, default (0, 1)
         Which of the block errors (in order over the splits) a step reports as its time and
         region errors.
+    combine : {"rms", "trimmed"}, default "rms"
+        How the block errors make the criterion (:func:`combine_errors`). With
+        ``"trimmed"``, a split whose fit raises scores inf on its blocks instead of failing
+        the candidate (the trimmed criterion may leave it out).
     """
 
     splits: list
@@ -89,6 +151,7 @@ class SearchData:
     max_terms: int
     forced: bool
     reported: tuple = (0, 1)
+    combine: str = "rms"
 
 
 def search_rows(search: SearchData, weak: bool) -> int:
@@ -198,7 +261,9 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     -------
     dict
         ``description``, ``terms``, ``active``, ``time_error``, ``region_error``,
-        ``criterion`` (the RMS of all the blocks' errors; inf when the catalog was not fitted),
+        ``criterion`` (the blocks' errors combined by :func:`combine_errors` with
+        ``search.combine``; inf when the catalog was not fitted), ``block_errors`` (the
+        held-out error of each block, in order over the splits; empty when not fitted),
         ``note`` (why not), ``seconds``, ``cpu_seconds`` and ``definite`` (the smallest
         fraction, over the splits' fits, of the training states at which the fitted mass
         matrix is positive definite: ``XLSINDy.mass_matrix_check_``; 0 when not fitted): the
@@ -212,7 +277,7 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     def failed(note, size=0, description=""):
         return {"description": description, "terms": size, "active": 0, "time_error": np.inf,
                 "region_error": np.inf, "criterion": np.inf, "note": note, "seconds": 0.0,
-                "cpu_seconds": 0.0, "definite": 0.0}
+                "cpu_seconds": 0.0, "definite": 0.0, "block_errors": ()}
 
     try:
         size = catalog.n_terms
@@ -224,9 +289,9 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     n = search.splits[0].train["x"][0].shape[1]
     if min(sum(len(p) for p in split.train["x"]) for split in search.splits) * n < 10 * size:
         return failed("too few samples for this size", size, description)
-    errors, active, definite = [], [], []
-    try:
-        for split in search.splits:
+    errors, active, definite, notes = [], [], [], []
+    for split in search.splits:
+        try:
             model = clone(search.template).set_params(
                 feature_library=AutomaticCatalog(**split.fixed, **parameters))
             with warnings.catch_warnings():
@@ -235,18 +300,27 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
             if model.dynamics_ is None:
                 raise ValueError("no acceleration in the identified equations")
             errors += [held_out_error(model, held, search.forced) for held in split.blocks]
-            active.append(int(np.count_nonzero(model.coefficients())))
-            check = model.mass_matrix_check_ or {}
-            definite.append(float(check.get("positive_definite_fraction", 0.0)))
-    except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
-        return failed(f"fit failed: {type(error).__name__}: {error}"[:200], size, description)
-    value = float(np.sqrt(np.mean(np.square(errors))))
+        except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
+            note = f"fit failed: {type(error).__name__}: {error}"[:200]
+            if search.combine == "rms":
+                return failed(note, size, description)
+            errors += [np.inf] * len(split.blocks)  # the trimmed criterion may leave it out
+            notes.append(note)
+            continue
+        active.append(int(np.count_nonzero(model.coefficients())))
+        check = model.mass_matrix_check_ or {}
+        definite.append(float(check.get("positive_definite_fraction", 0.0)))
+    if not active:
+        return failed(notes[0], size, description)
+    value = combine_errors(errors, search.combine)
     time_block, region_block = search.reported
     return {"description": description, "terms": size, "active": int(np.median(active)),
             "time_error": errors[time_block], "region_error": errors[region_block],
-            "criterion": value if np.isfinite(value) else np.inf, "note": "",
+            "criterion": value, "note": (f"{len(notes)} of {len(search.splits)} fits failed"
+                                         if notes else ""),
             "seconds": time.perf_counter() - started, "cpu_seconds": time.process_time() - cpu,
-            "definite": min(definite)}
+            "definite": min(definite) if not notes else 0.0,
+            "block_errors": tuple(float(e) for e in errors)}
 
 
 def candidate_content(search: SearchData, parameters):

@@ -29,8 +29,9 @@ class GrowthStep:
     active : int
         Terms the fit kept.
     time_error, region_error, criterion : float
-        Held-out relative errors on the time and region blocks, and their RMS (inf when the
-        fit failed or exceeded the ceiling).
+        Held-out relative errors on the time and region blocks, and the criterion: the RMS
+        of all the held-out blocks' errors, or of all but the largest with
+        ``combine="trimmed"`` (inf when the fit failed or exceeded the ceiling).
     chosen : bool
         Whether the growth kept this catalog (the last one kept is the result).
     note : str, default ""
@@ -41,13 +42,17 @@ class GrowthStep:
         CPU time of the step's fit and scoring (in the process that ran it).
     definite : float, default 1.0
         Smallest fraction, over the step's fits, of the training states at which the fitted
-        mass matrix is positive definite (0 when the catalog was not fitted).
+        mass matrix is positive definite (0 when the catalog was not fitted, or one of its
+        fits failed).
     second_error : float, default nan
         The criterion of the second fold (``region="consensus"`` of
         :func:`~.growth.grow_catalog`: fitted outside, judged on the extreme states); NaN
         where the second fold was not asked.
     second_cpu_seconds : float, default 0.0
         CPU time of the step's fit and scoring on the second fold (0 where it was not asked).
+    block_errors : tuple of float, default ()
+        The held-out error of each block, in order over the splits, that the criterion
+        combines (:func:`~.candidates.combine_errors`; empty when not fitted).
 
     Examples
     --------
@@ -70,6 +75,7 @@ class GrowthStep:
     definite: float = 1.0
     second_error: float = float("nan")
     second_cpu_seconds: float = 0.0
+    block_errors: tuple = ()
 
 
 @dataclasses.dataclass

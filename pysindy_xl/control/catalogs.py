@@ -128,7 +128,9 @@ class AutomaticGrowth:
     of the ``n_blocks`` time blocks of every recording in turn (``cross_validate``): on a
     few seconds the block with the largest swings holds most of what identifies
     configuration-dependent terms, and with it held out of the only fit the right catalog
-    loses to the constant start. B-splines are not among
+    loses to the constant start. The criterion leaves the worst of the blocks' errors out of
+    their RMS (``combine="trimmed"``): the fit without that block can fail for the right
+    catalog as well (the cart double pendulum's coupled damping). B-splines are not among
     the default moves: they are local to the explored range, which a swing-up leaves. The
     chosen catalog is fitted on all the data with the weak-form test functions of the search,
     at most a third of the default width (on a few seconds of a fast, chaotic motion the
@@ -166,6 +168,15 @@ class AutomaticGrowth:
         candidate is fitted, ``n_jobs - 1`` workers fit the ones it will probably try next.
         The path, the chosen catalog and the model do not depend on it. None: 1 (joblib's
         convention; -1: all cores).
+    combine : {"auto", "rms", "trimmed"}, default "auto"
+        How the held-out blocks' errors make the growth's criterion (``combine`` of
+        :func:`~pysindy_xl.grow_catalog`). ``"trimmed"`` leaves the largest out of their
+        RMS, so one failing fit out of ``n_blocks`` does not refuse a catalog: on 8 s of the
+        cart double pendulum the fit without the block of the largest swings fails for the
+        catalog with the coupled damping (the second joint's friction on
+        ``theta2_dot - theta1_dot``), which the RMS over all five blocks then refuses. It
+        needs ``cross_validate`` and ``n_blocks >= 4``. ``"rms"``: every block counts.
+        ``"auto"``: ``"trimmed"`` where it applies, else ``"rms"``.
 
     Examples
     --------
@@ -179,7 +190,7 @@ class AutomaticGrowth:
 
     def __init__(self, rows_per_term: int = 150, ceiling: int = 400, n_blocks: int = 5,
                  cross_validate: bool = True, moves=None, physical: bool = False,
-                 steepest: bool = True, progress=None, n_jobs=None):
+                 steepest: bool = True, progress=None, n_jobs=None, combine: str = "auto"):
         self.rows_per_term = rows_per_term
         self.ceiling = ceiling
         self.n_blocks = n_blocks
@@ -189,6 +200,7 @@ class AutomaticGrowth:
         self.steepest = steepest
         self.progress = progress
         self.n_jobs = n_jobs
+        self.combine = combine
 
     def max_terms(self, n_samples: int, n_coordinates: int) -> int:
         """The ceiling of the catalog for ``n_samples`` samples of ``n_coordinates``.
@@ -226,6 +238,7 @@ class AutomaticGrowth:
             Its ``model`` is the chosen catalog fitted on all the data.
         """
         from ..catalog import MORE_MOVES, MOVES, grow_catalog
+        from ..catalog.candidates import MIN_TRIMMED_BLOCKS
         from ..model import XLSINDy
         from ..mujoco import get_system
         from ..weak import BumpTestFunctions
@@ -235,12 +248,17 @@ class AutomaticGrowth:
         q, t, u = (list(part) for part in zip(*data, strict=True))
         moves = tuple(m for m in MOVES + MORE_MOVES if m != "splines") if self.moves is None \
             else tuple(self.moves)
+        combine = self.combine
+        if combine == "auto":
+            combine = ("trimmed" if self.cross_validate is True and isinstance(self.n_blocks, int)
+                       and self.n_blocks >= MIN_TRIMMED_BLOCKS else "rms")
         found = grow_catalog(q, t, u, coordinates=list(system.coords.names),
                              kinds=system_kinds(system),
                              max_terms=self.max_terms(sum(len(tk) for tk in t), system.n),
                              n_blocks=self.n_blocks, cross_validate=self.cross_validate,
                              moves=moves, physical=self.physical, steepest=self.steepest,
-                             progress=self.progress, n_jobs=self.n_jobs)
+                             progress=self.progress, n_jobs=self.n_jobs,
+                             combine=combine)
         # the chosen catalog fitted on all the data with the search's test functions, at most
         # a third of the default width: grow_catalog's own final fit takes the default width,
         # and a third of a fifth of 8 s (0.53 s) blurs the cart double pendulum's fast motion
@@ -253,7 +271,8 @@ class AutomaticGrowth:
     def __repr__(self) -> str:
         return (f"AutomaticGrowth(rows_per_term={self.rows_per_term}, ceiling={self.ceiling}, "
                 f"n_blocks={self.n_blocks}, cross_validate={self.cross_validate}, "
-                f"moves={self.moves}, physical={self.physical}, steepest={self.steepest}"
+                f"moves={self.moves}, physical={self.physical}, steepest={self.steepest}, "
+                f"combine={self.combine!r}"
                 + ("" if self.n_jobs is None else f", n_jobs={self.n_jobs}") + ")")
 
 
@@ -326,7 +345,7 @@ def resolve_catalog(catalog):
     >>> resolve_catalog("automatic")  # doctest: +NORMALIZE_WHITESPACE
     ('automatic', AutomaticGrowth(rows_per_term=150, ceiling=400, n_blocks=5,
                                   cross_validate=True, moves=None, physical=False,
-                                  steepest=True))
+                                  steepest=True, combine='auto'))
     >>> resolve_catalog("mjcf")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
