@@ -79,8 +79,16 @@ class Climber:
 
     # -- fitting and judging ---------------------------------------------------------------
     def evaluate(self, parameters, move, ahead=()) -> GrowthStep:
-        """The step of the catalog ``parameters`` (fitted by the search; ``ahead``: the
-        candidates the workers may fit meanwhile).
+        """The step of the catalog ``parameters``, fitted by the search.
+
+        Parameters
+        ----------
+        parameters : dict
+            The candidate's :class:`AutomaticCatalog` parameters (beyond ``fixed``).
+        move : str
+            The move's name in the path.
+        ahead : sequence of dict, default ()
+            The candidates the workers may fit meanwhile (the growth's guess).
 
         Returns
         -------
@@ -96,6 +104,11 @@ class Climber:
     def start(self, ahead=()) -> GrowthStep:
         """Fit the smallest catalog (:data:`~.moves.START`); it is chosen.
 
+        Parameters
+        ----------
+        ahead : sequence of dict, default ()
+            The candidates the workers may fit meanwhile.
+
         Returns
         -------
         GrowthStep
@@ -107,6 +120,15 @@ class Climber:
 
     def attempt(self, parameters, move, ahead=()) -> GrowthStep:
         """The step of ``parameters``, fitted and reported the first time it is tried.
+
+        Parameters
+        ----------
+        parameters : dict
+            The candidate's :class:`AutomaticCatalog` parameters (beyond ``fixed``).
+        move : str
+            The move's name in the path (of the first path that tries it).
+        ahead : sequence of dict, default ()
+            The candidates the workers may fit meanwhile.
 
         Returns
         -------
@@ -122,6 +144,11 @@ class Climber:
     def second_step(self, step) -> GrowthStep:
         """``step``'s catalog judged by the second fold (fitted once), recorded in the step's
         ``second_error``.
+
+        Parameters
+        ----------
+        step : GrowthStep
+            A step this climber fitted.
 
         Returns
         -------
@@ -139,6 +166,11 @@ class Climber:
         the combined ones (:func:`~.keep_rules.consensus_criteria`; the candidate is not
         fitted on the second fold where it is more than :data:`CONSENSUS_REACH` times worse
         on the first, and then compares as infinite).
+
+        Parameters
+        ----------
+        step, best : GrowthStep
+            The candidate and the kept catalog.
 
         Returns
         -------
@@ -159,6 +191,11 @@ class Climber:
         ``physical``, a catalog whose fits have a positive definite mass matrix is not given
         up for one whose fits have not.
 
+        Parameters
+        ----------
+        step, best : GrowthStep
+            The candidate and the kept catalog.
+
         Returns
         -------
         bool
@@ -176,6 +213,11 @@ class Climber:
     def size(self, parameters) -> int:
         """The terms of the catalog ``parameters`` (-1 where it cannot be built).
 
+        Parameters
+        ----------
+        parameters : dict
+            The candidate's :class:`AutomaticCatalog` parameters (beyond ``fixed``).
+
         Returns
         -------
         int
@@ -186,7 +228,13 @@ class Climber:
             return -1
 
     def report(self, step) -> None:
-        """Pass ``step``'s progress line to ``progress``."""
+        """Pass ``step``'s progress line to ``progress``.
+
+        Parameters
+        ----------
+        step : GrowthStep
+            The step reported.
+        """
         if self.progress is not None:
             self.progress(
                 f"{step.move:<13} {step.terms:>5} terms  held-out {self.criterion} error "
@@ -195,12 +243,32 @@ class Climber:
 
     # -- the paths ---------------------------------------------------------------------------
     def moved(self, state, move, skip=0):
-        """:func:`~.moves.moved` with the growth's coordinates."""
+        """:func:`~.moves.moved` with the growth's coordinates.
+
+        Parameters
+        ----------
+        state : dict
+            The catalog's parameters.
+        move : str
+            The move (:data:`~.moves.MOVES`, :data:`~.moves.MORE_MOVES`, or a joint move).
+        skip : int, default 0
+            Degrees skipped (a degree move looking one degree further).
+
+        Returns
+        -------
+        dict or None
+            The moved parameters, None where the move does not apply.
+        """
         return moved(state, move, self.kinds, self.n, skip)
 
     def first_moves(self, queue) -> tuple:
         """Each move of ``queue`` (``(move, parameters)`` pairs) alone from the first catalog:
         a degree move looks one degree further unless its first degree is kept.
+
+        Parameters
+        ----------
+        queue : list of (str, dict)
+            The moves and their parameters from the first catalog.
 
         Returns
         -------
@@ -222,6 +290,15 @@ class Climber:
 
     def pairs(self, state, order, tried) -> list:
         """The pairs of non-repeated moves from ``state`` not tried yet.
+
+        Parameters
+        ----------
+        state : dict
+            The kept catalog's parameters.
+        order : list of str
+            The moves, in the climb's order.
+        tried : set of str
+            The keys (:func:`~.candidates.parameters_key`) already tried.
 
         Returns
         -------
@@ -259,6 +336,13 @@ class Climber:
     def steepest_climb(self, order, forced=None) -> tuple:
         """From the first catalog (after the move ``forced``), try every move of ``order``
         from the current catalog and keep the best; two moves at once where none is kept.
+
+        Parameters
+        ----------
+        order : list of str
+            The moves, in the order of what each achieved alone.
+        forced : str, optional
+            A move made first (kept if the keep rule keeps it).
 
         Returns
         -------
@@ -302,6 +386,13 @@ class Climber:
         """Try the moves of ``order`` in turn from the first catalog (a degree move repeated
         while it is kept, looking one degree further before it stops), two at once where a
         pass keeps none; stop once the catalog holds ``end`` (the first climb's end).
+
+        Parameters
+        ----------
+        order : list of str
+            The moves, in the order of what each achieved alone.
+        end : dict, optional
+            The first climb's end (:func:`~.moves.holds`).
 
         Returns
         -------
@@ -359,6 +450,17 @@ class Climber:
         next to the right one goes with it), until nothing goes; a family refused alone is
         exchanged for another (:data:`~.backward.EXCHANGES`) while the criterion is not good
         enough.
+
+        Parameters
+        ----------
+        state : dict
+            The climb's end.
+        best : GrowthStep
+            Its step.
+        path : list of GrowthStep
+            The kept steps so far.
+        moves : sequence of str
+            The growth's moves (only their families are dropped).
 
         Returns
         -------
