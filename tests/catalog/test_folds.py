@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 import pytest
 import sympy as sp
-from support.growth import forced_runs, torsion_pendulum
+from support.growth import forced_runs, torsion_pendulum, wide_force_error
 
 from pysindy_xl.catalog import grow_catalog
 from pysindy_xl.catalog.folds import extreme_masks, held_out_splits
@@ -81,15 +81,6 @@ def test_held_out_splits_of_the_extremes_train_inside_and_judge_beyond():
         held_out_splits(arrays, 5, region="extremes")
 
 
-def _force_error(found, forces):
-    """Relative force error on a range wider than the recording's."""
-    q = np.linspace(-2.5, 2.5, 51)[:, None]
-    qd, qdd = np.full_like(q, 0.5), np.full_like(q, 1.0)
-    true = forces(q, qd, qdd)
-    return float(np.linalg.norm(found.model.predict_forces(q, qd, qdd) - true)
-                 / np.linalg.norm(true))
-
-
 def test_the_extreme_states_fold_refuses_the_stand_in_that_the_time_blocks_keep():
     accelerations, forces = torsion_pendulum()
     ts, xs, us = forced_runs(accelerations, seed=1, noise=0.05)
@@ -101,10 +92,10 @@ def test_the_extreme_states_fold_refuses_the_stand_in_that_the_time_blocks_keep(
                                 region="extremes")
     # the region block keeps sines and cosines of 2 theta for the spring: wrong beyond the data
     assert blocks.catalog.angle_degree == 0 and blocks.catalog.trig_degree == 2
-    assert _force_error(blocks, forces) > 0.05
+    assert wide_force_error(blocks, forces) > 0.05
     # the extreme states keep the law: cos(theta) and theta^2, right beyond the data
     assert extremes.catalog.angle_degree == 2 and extremes.catalog.trig_degree == 1
-    assert _force_error(extremes, forces) < 0.01
+    assert wide_force_error(extremes, forces) < 0.01
     lagrangian = extremes.model.lagrangian()
     theta = {str(s): s for s in lagrangian.free_symbols}["theta"]
     assert abs(float(lagrangian.coeff(theta ** 2)) + 1.5) < 0.05 * 1.5, lagrangian

@@ -21,6 +21,7 @@ from support.growth import (
     forced_runs,
     noisy_duffing,
     torsion_pendulum,
+    wide_force_error,
 )
 
 from pysindy_xl.catalog import grow_catalog
@@ -35,15 +36,6 @@ def _grow(*args, **kwargs):
         return grow_catalog(*args, **kwargs)
 
 
-def _force_error(found, forces):
-    """Relative force error on a range wider than the recording's."""
-    q = np.linspace(-2.5, 2.5, 51)[:, None]
-    qd, qdd = np.full_like(q, 0.5), np.full_like(q, 1.0)
-    true = forces(q, qd, qdd)
-    return float(np.linalg.norm(found.model.predict_forces(q, qd, qdd) - true)
-                 / np.linalg.norm(true))
-
-
 def test_the_consensus_refuses_the_stand_in_that_the_time_blocks_keep():
     accelerations, forces = torsion_pendulum()
     ts, xs, us = forced_runs(accelerations, seed=1, noise=0.05)
@@ -52,14 +44,14 @@ def test_the_consensus_refuses_the_stand_in_that_the_time_blocks_keep():
     both = _grow(xs, ts, us, coordinates=["theta"], kinds="angle", region="consensus")
     # the default keeps sines and cosines of 2 theta for the spring: wrong beyond the data
     assert blocks.catalog.angle_degree == 0 and blocks.catalog.trig_degree == 2
-    assert _force_error(blocks, forces) > 0.05
+    assert wide_force_error(blocks, forces) > 0.05
     # the stand-in is better on the time blocks, the law on the extreme states
     stand_in = next(s for s in both.steps if s.move == "trig_degree" and s.terms == 6)
     law = next(s for s in both.steps if s.move == "angle_degree" and s.terms == 6)
     assert stand_in.criterion < law.criterion and law.second_error < stand_in.second_error
     # the consensus keeps the law: cos(theta) and theta^2, right beyond the data
     assert both.catalog.angle_degree == 2 and both.catalog.trig_degree == 1
-    assert _force_error(both, forces) < 0.01
+    assert wide_force_error(both, forces) < 0.01
     lagrangian = both.model.lagrangian()
     theta = {str(s): s for s in lagrangian.free_symbols}["theta"]
     assert abs(float(lagrangian.coeff(theta ** 2)) + TORSION / 2) < 0.05 * TORSION / 2

@@ -125,3 +125,14 @@ def forced_runs(accelerations, seed: int, noise: float, n_runs: int = 2, duratio
         ts.append(t)
         us.append(np.array([[torque(time)] for time in t]))
     return ts, xs, us
+
+
+def wide_force_error(found, forces):
+    """Relative force error of a grown model (``found``: a ``GrowthResult``) against the
+    one-angle law ``forces(q, qd, qdd)`` on angles to 2.5 rad, wider than the recordings of
+    :func:`forced_runs` on :func:`torsion_pendulum` (within 1.6 rad)."""
+    q = np.linspace(-2.5, 2.5, 51)[:, None]
+    qd, qdd = np.full_like(q, 0.5), np.full_like(q, 1.0)
+    true = forces(q, qd, qdd)
+    return float(np.linalg.norm(found.model.predict_forces(q, qd, qdd) - true)
+                 / np.linalg.norm(true))
