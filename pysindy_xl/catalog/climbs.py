@@ -333,9 +333,32 @@ class Climber:
             out += [p for p, _ in self.pairs(state, order, seen)]
         return out[1:]  # (the first is the current one)
 
-    def steepest_climb(self, order, forced=None) -> tuple:
+    def _going(self, state, best, end) -> bool:
+        """Whether a climb at ``state`` (its step ``best``) goes on: the criterion is above
+        ``good_enough`` and the catalog does not hold ``end`` (:func:`~.moves.holds`; None:
+        no end)."""
+        return best.criterion > self.good_enough and (end is None or not holds(state, end))
+
+    def _attempt_within_ceiling(self, parameters, move, tried, ahead=()) -> tuple:
+        """The parameters and the step of a climb's move (:meth:`attempt`), recorded in
+        ``tried``; a move that the ceiling refuses is tried again with constant kinetic
+        coefficients (``f"{move}-kinetic"``) where ``retry_kinetic`` and that catalog is not
+        in ``tried``: configuration-dependent ones multiply the catalog by the velocity
+        monomials."""
+        tried.add(parameters_key(parameters))
+        step = self.attempt(parameters, move, ahead)
+        smaller = dict(parameters, kinetic=START["kinetic"])
+        if (step.note.startswith("ceiling") and parameters_key(smaller) not in tried
+                and self.retry_kinetic):  # the kinetic coefficients give way
+            tried.add(parameters_key(smaller))
+            parameters, step = smaller, self.attempt(smaller, f"{move}-kinetic")
+        return parameters, step
+
+    def steepest_climb(self, order, forced=None, end=None) -> tuple:
         """From the first catalog (after the move ``forced``), try every move of ``order``
-        from the current catalog and keep the best; two moves at once where none is kept.
+        from the current catalog and keep the best; two moves at once where none is kept;
+        stop once the catalog holds ``end`` (the first climb's end). A move that the ceiling
+        refuses is tried with constant kinetic coefficients, as in :meth:`climb`.
 
         Parameters
         ----------
@@ -343,6 +366,8 @@ class Climber:
             The moves, in the order of what each achieved alone.
         forced : str, optional
             A move made first (kept if the keep rule keeps it).
+        end : dict, optional
+            The first climb's end (:func:`~.moves.holds`).
 
         Returns
         -------
@@ -350,13 +375,14 @@ class Climber:
             The end's parameters, its step, and the kept steps.
         """
         state, best, path = dict(START), self.first, []
+        tried = {parameters_key(state)}
         if forced is not None:
-            parameters = self.moved(state, forced)
-            step = self.attempt(parameters, forced)
+            parameters, step = self._attempt_within_ceiling(self.moved(state, forced), forced,
+                                                            tried)
             if self.keeps(step, best):
                 state, best = parameters, step
                 path.append(step)
-        while best.criterion > self.good_enough:
+        while self._going(state, best, end):
             options = []
             for move in order:
                 for skip in (0, 1) if move in REPEATED else (0,):
@@ -366,9 +392,10 @@ class Climber:
                     options.append((parameters, move))
             kept = []
             for k, (parameters, move) in enumerate(options):
-                step = self.attempt(parameters, move, [p for p, _ in options[k + 1:]])
+                moved_to, step = self._attempt_within_ceiling(
+                    parameters, move, tried, [p for p, _ in options[k + 1:]])
                 if self.keeps(step, best):
-                    kept.append((step.criterion, step.active, k, parameters, step))
+                    kept.append((step.criterion, step.active, k, moved_to, step))
             if not kept:  # two moves at once, as the climb looks ahead
                 candidates = self.pairs(state, order, set())
                 for k, (twice, name) in enumerate(candidates):
@@ -402,25 +429,17 @@ class Climber:
         state, best, path = dict(START), self.first, []
         tried = {parameters_key(state)}
         improved = best.criterion > self.good_enough
-
-        def going():
-            return best.criterion > self.good_enough and (end is None or not holds(state, end))
-        while improved and going():
+        while improved and self._going(state, best, end):
             improved = False
             for index, move in enumerate(order):
                 skip = 0  # a degree move looks one degree further before it stops
-                while going():
+                while self._going(state, best, end):
                     parameters = self.moved(state, move, skip)
                     if parameters is None or parameters_key(parameters) in tried:
                         break
                     ahead = self._rejected(state, order, index, skip, tried, improved)
-                    tried.add(parameters_key(parameters))
-                    step = self.attempt(parameters, move, ahead)
-                    smaller = dict(parameters, kinetic=START["kinetic"])
-                    if (step.note.startswith("ceiling") and parameters_key(smaller) not in tried
-                            and self.retry_kinetic):  # the kinetic coefficients give way
-                        tried.add(parameters_key(smaller))
-                        parameters, step = smaller, self.attempt(smaller, f"{move}-kinetic")
+                    parameters, step = self._attempt_within_ceiling(parameters, move, tried,
+                                                                    ahead)
                     keep = self.keeps(step, best)
                     if keep:
                         state, best, improved = parameters, step, True
@@ -428,7 +447,7 @@ class Climber:
                     if move not in REPEATED or (not keep and skip):
                         break
                     skip = 0 if keep else 1
-            if not improved and going():
+            if not improved and self._going(state, best, end):
                 # a law that needs two structural moves at once (a coupling cos(a - b) a_dot
                 # b_dot needs products of two angles' functions and configuration-dependent
                 # kinetic coefficients) gains from neither alone: look two moves ahead

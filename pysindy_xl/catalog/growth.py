@@ -298,6 +298,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         pairs of moves where none is. A move that helps only once another is in (the
         coupled damping of a coupling's links) then goes in before a stand-in that the
         order of the moves alone would try first and that leaves it over ``max_terms``.
+        As in the default climb, a move that the data-sized ceiling refuses is tried with
+        constant kinetic coefficients, and the second climb stops once it holds the first
+        one's end.
     progress : callable, optional
         Called with a line of text after each step.
     n_jobs : int or None, default None
@@ -492,7 +495,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                  < first.criterion * (1 - tolerance)]
     if best.criterion > good_enough and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]
-        other = (climber.steepest_climb(order, promising[1]) if steepest
+        other = (climber.steepest_climb(order, promising[1], state) if steepest
                  else climber.climb(second, state))
         if (climber.keeps(other[1], best) if not physical or (other[1].definite >= 1)
                 == (best.definite >= 1) else other[1].definite >= 1):
