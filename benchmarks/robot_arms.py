@@ -82,8 +82,9 @@ RESULTS = pathlib.Path(__file__).resolve().parent / "results"
 #: step's midpoint, forces recorded under the continuous signal, servo runs starting on
 #: their reference; 3 = integration chosen from the model's stiffness, references within the
 #: servos' reach, recording after the settle time; 4 = servo runs starting where the servos
-#: push nothing while moving with their reference.
-DATA_VERSION = 4
+#: push nothing while moving with their reference; 5 = forced runs integrated by RK4 at
+#: ``h |lambda| <= RK4_HELD_BOUND`` (the control held over each step stays faithful).
+DATA_VERSION = 5
 
 #: (axis, offset of the joint from its parent, centre of mass, mass, inertia diagonal, range)
 ARMS = {
