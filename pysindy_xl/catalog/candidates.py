@@ -23,8 +23,8 @@ import numpy as np
 from .automatic import AutomaticCatalog
 
 __all__ = ["SearchSplit", "SearchData", "CandidateFits", "candidate_content", "evaluate_candidate",
-           "held_out_error", "parameters_key", "search_rows", "combine_errors", "COMBINES",
-           "MIN_TRIMMED_BLOCKS"]
+           "held_out_error", "inertial_columns", "INERTIA_STATES", "parameters_key",
+           "search_rows", "combine_errors", "COMBINES", "MIN_TRIMMED_BLOCKS"]
 
 #: How a candidate's held-out block errors make its criterion (:func:`combine_errors`):
 #: ``"rms"`` (all of them) or ``"trimmed"`` (all but the largest).
@@ -199,13 +199,27 @@ def search_rows(search: SearchData, weak: bool) -> int:
 
 
 def held_out_error(model, held, forced) -> float:
-    """Relative residual of a fitted model's weak-form equations on held-out runs.
+    r"""Relative residual of a fitted model's weak-form equations on held-out runs.
 
-    With forces, ``||Theta xi|| / ||Theta_F xi_F||`` (the residual over the forces' part);
-    unforced, each coordinate's block of rows over its largest term's
-    ``max_j ||Theta_j xi_j||``, combined as the RMS over the coordinates (an implicit law
-    fixes each equation only up to its own factor). The strong form where the blocks are
-    shorter than a test function.
+    With forces, ``||Theta xi|| / ||Theta_F xi_F||`` (the residual over the forces' part).
+    Unforced, each coordinate's block of rows ``i`` over the kinetic part of its equation:
+
+    .. math:: e_i = \frac{\|\Theta_i \xi\|}{\|\sum_{j \in K} \Theta_{ij} \xi_j\|},
+              \qquad e = \sqrt{\tfrac1n \textstyle\sum_i e_i^2},
+
+    with ``K`` the columns that carry inertia (a nonzero mass matrix,
+    :func:`~pysindy_xl.fit.diagnostics.column_mass_matrices`: the terms quadratic in the
+    velocities). An implicit law fixes each equation only up to its own factor, so each
+    block needs its own scale; its kinetic part, ``d/dt dT/dqd - dT/dq``, is the one that
+    states the accelerations, and the ratio is about the relative error of the accelerations
+    the law predicts. A scale taken from single terms (the largest ``||Theta_j xi_j||``)
+    is not one of the law: a law can keep a large potential term that its other terms
+    nearly cancel (``r cos(theta) - 0.25 r^2 cos(theta) - 0.58 cos(theta)`` for
+    ``0.25 r cos(theta)``, a flexible family of ``r`` absorbing the rest) and shrink the
+    kinetic part, whose columns carry most of the noise of positions, to a quarter: its
+    residual shrinks with it against an unchanged largest term. Judged over the kinetic
+    part, a law whose inertia cancels, or that has none in an equation, scores inf. The
+    strong form where the blocks are shorter than a test function.
 
     Parameters
     ----------
@@ -235,15 +249,44 @@ def held_out_error(model, held, forced) -> float:
         target = theta[:, forces] @ coef[forces]
         norm = float(np.linalg.norm(target))
         return float(np.linalg.norm(residual) / norm) if norm > 0 else float("inf")
-    # unforced, each equation is defined up to its own factor when no term joins it to the
-    # others: judged over all rows, a law could shrink one coordinate's equation until its
-    # residual vanished next to the others' terms; so each coordinate's block of rows is
-    # judged over its own largest term, and the blocks' errors are combined (RMS)
+    kinetic = inertial_columns(model, problem)
     errors = []
     for rows in np.array_split(np.arange(len(theta)), problem.n_coordinates):
-        norm = float(np.linalg.norm(theta[rows] * coef, axis=0).max(initial=0.0))
+        norm = float(np.linalg.norm(theta[np.ix_(rows, kinetic)] @ coef[kinetic]))
         errors.append(np.linalg.norm(residual[rows]) / norm if norm > 0 else np.inf)
     return float(np.sqrt(np.mean(np.square(errors))))
+
+
+#: States at which :func:`inertial_columns` evaluates the columns' mass matrices.
+INERTIA_STATES = 20
+
+
+def inertial_columns(model, problem) -> np.ndarray:
+    """The columns of a fitted model's regression problem that carry inertia.
+
+    A column carries inertia where its mass matrix (the derivative of its Euler-Lagrange
+    expression in the accelerations, :func:`~pysindy_xl.fit.diagnostics.column_mass_matrices`)
+    is nonzero at one of :data:`INERTIA_STATES` of the problem's states: the terms of the
+    Lagrangian quadratic in the velocities; not the potential, the gyroscopic (velocity-linear)
+    terms, dissipation or forces.
+
+    Parameters
+    ----------
+    model : XLSINDy
+        Fitted model (its ``feature_library_`` built ``problem``).
+    problem : CatalogProblem
+        A regression problem of ``model`` with its catalog map.
+
+    Returns
+    -------
+    ndarray of int
+        Indices of the problem's columns.
+    """
+    from ..fit.diagnostics import column_mass_matrices
+    origin = problem.catalog_map
+    mass = column_mass_matrices(model.feature_library_, origin.states, INERTIA_STATES)
+    size = np.abs(mass[:, origin.columns]).max(axis=(0, 2, 3))
+    return np.flatnonzero(size > 1e-12 * max(float(size.max(initial=0.0)), 1e-300))
 
 
 def evaluate_candidate(search: SearchData, parameters) -> dict:

@@ -3,10 +3,13 @@
 The criterion is the relative residual of the fitted model's equations in the weak form
 (integrated against test functions on smoothed positions, so that no acceleration is estimated)
 on samples the fit never saw: over the generalized forces' part for data with forces; for
-unforced data each coordinate's equation over its own largest term, combined as an RMS over the
-coordinates (an implicit law fixes each equation only up to a factor: judged over all rows, a
-law that shrank one equation would hide its residual; the strong form where a block is shorter
-than a test function). Two blocks of each run are held out (:mod:`.folds`):
+unforced data each coordinate's equation over its own kinetic part (the terms that carry
+inertia: about the relative error of the accelerations the law predicts), combined as an RMS
+over the coordinates (:func:`~.candidates.held_out_error`; an implicit law fixes each equation
+only up to a factor: judged over all rows, a law that shrank one equation would hide its
+residual; judged over its largest term, a law that shrank its kinetic part behind large
+potential terms that nearly cancel would; the strong form where a block is shorter than a
+test function). Two blocks of each run are held out (:mod:`.folds`):
 
 - the last of ``n_blocks`` contiguous time blocks (**time**: how the model predicts later);
 - the other block reaching farthest from the run's median state (**region**: how it
@@ -441,7 +444,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
          for train, held in second_splits], template, search.max_terms,
         forced)) if consensus else None
 
-    if not forced:  # relative to the largest term, an approximation looks small already: only
+    if not forced:  # no force sets the scale, an approximation can look small already: only
         good_enough = EXACT  # a law exact to the data's precision stops the growth
     climber = Climber(fits, second_fits, searched[0], kinds, tolerance=tolerance,
                       good_enough=good_enough, physical=physical,
