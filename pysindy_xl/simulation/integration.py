@@ -5,10 +5,14 @@ the positions obey ``(M + h D) qdd = f``. RK4 is stable only while ``h |lambda|`
 ``lambda`` the eigenvalues of ``A = [[0, 1], [-M^-1 K, -M^-1 D]]`` (``K``, ``D``: the servos'
 gains, joint stiffness and damping; ``M``: ``mj_fullM``). :func:`choose_integration` prices
 both remedies in substeps (``RK4_BOUND``, ``BIAS_TOLERANCE``, ``RK4_COST``) and takes the
-cheaper. A run driven by a time-varying control holds it over each step, which a stiff servo
-turns into an error of order ``(h |lambda|)^2`` in the positions: there RK4 keeps the tighter
+cheaper, but keeps RK4 (no inertia bias) up to ``RK4_MAX_SUBSTEPS`` even where it costs more.
+A run driven by a time-varying control holds it over each step, which a stiff servo turns
+into an error of order ``(h |lambda|)^2`` in the positions: there RK4 keeps the tighter
 ``RK4_HELD_BOUND`` (``choose_integration(held_control=True)``, as
-:func:`~pysindy_xl.mujoco.generate_dataset` asks for forced runs). :func:`check_run` raises
+:func:`~pysindy_xl.mujoco.generate_dataset` asks for forced runs), and with it the larger
+ceiling ``RK4_HELD_MAX_SUBSTEPS``: the same model stiffness ``timestep |lambda|`` as the
+ceiling of an unforced run, so a tighter bound does not hand a model to the biased implicit
+step. :func:`check_run` raises
 :class:`UnstableSimulationError` on a run that left the physics. :doc:`/robot_arms` explains
 the choice.
 """
@@ -24,7 +28,8 @@ from .._optional import import_mujoco
 
 __all__ = ["Integration", "choose_integration", "linear_modes", "UnstableSimulationError",
            "INTEGRATORS", "RK4_BOUND", "RK4_HELD_BOUND", "BIAS_TOLERANCE", "RK4_COST",
-           "RK4_MAX_SUBSTEPS", "MAX_HINGE_VELOCITY", "MAX_SLIDE_VELOCITY"]
+           "RK4_MAX_SUBSTEPS", "RK4_HELD_MAX_SUBSTEPS", "MAX_HINGE_VELOCITY",
+           "MAX_SLIDE_VELOCITY"]
 
 #: MuJoCo's integrators by name.
 INTEGRATORS = {"Euler": 0, "RK4": 1, "implicit": 2, "implicitfast": 3}
@@ -40,10 +45,20 @@ RK4_BOUND = 0.25
 RK4_HELD_BOUND = 0.05
 #: Largest inertia bias ``h max_i D_ii`` of an implicit step, relative to ``max |M_ij|``.
 BIAS_TOLERANCE = 5e-3
-#: Cost of an RK4 step in implicit steps (four evaluations against one and a factorization).
-RK4_COST = 4.0
+#: Cost of an RK4 step in implicit steps (four evaluations against one and a factorization),
+#: measured in :func:`~pysindy_xl.simulation.generate.simulate_trajectory`'s loop (``mj_step``
+#: and the control's update): 2.8-3.8, median 3.25, on nine published 6-7 joint arms
+#: (``benchmarks/integration_cost.py``). A constant, not a timing at run time, so that the
+#: choice, and with it the data, do not depend on the machine's load.
+RK4_COST = 3.3
 #: RK4 (no inertia bias at all) is kept up to this many substeps even where it costs more.
 RK4_MAX_SUBSTEPS = 64
+#: The same under a held control (``held_control``): the ceiling of the same model stiffness
+#: ``timestep |lambda| <= RK4_MAX_SUBSTEPS RK4_BOUND`` as without one (320 = 64 x 0.25 / 0.05).
+#: There the implicit step's inertia bias (up to ``BIAS_TOLERANCE``) is the larger error: on
+#: published arms whose stiffest servo mode needs 80-243 RK4 substeps it raises the identified
+#: mass matrix's error by up to 0.3 points, at 1 % noise (``benchmarks/published_arms.py``).
+RK4_HELD_MAX_SUBSTEPS = round(RK4_MAX_SUBSTEPS * RK4_BOUND / RK4_HELD_BOUND)
 #: Velocity bound of a sane run: hinge joints (rad/s) and slide joints (m/s).
 MAX_HINGE_VELOCITY = 100.0
 MAX_SLIDE_VELOCITY = 20.0
@@ -227,7 +242,8 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
     held_control : bool, default=False
         With ``"auto"``: the run is driven by a time-varying control, held over each step.
         RK4 then also keeps ``h |lambda| <= RK4_HELD_BOUND`` (accuracy, not only stability:
-        module constants).
+        module constants) and is kept up to ``RK4_HELD_MAX_SUBSTEPS`` substeps instead of
+        ``RK4_MAX_SUBSTEPS``.
 
     Returns
     -------
@@ -264,7 +280,8 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
         return Integration(name, substeps or 1, f"{name} as requested", rate, damping_rate,
                            timestep)
     floor = substeps or 1
-    bound = RK4_HELD_BOUND if held_control else RK4_BOUND
+    bound, ceiling = ((RK4_HELD_BOUND, RK4_HELD_MAX_SUBSTEPS) if held_control
+                      else (RK4_BOUND, RK4_MAX_SUBSTEPS))
     rk4 = max(floor, math.ceil(timestep * rate / bound))
     if damping_rate == 0 and authored in ("RK4", "Euler"):
         if authored == "RK4" or timestep * rate / floor < 1.0:
@@ -276,7 +293,7 @@ def choose_integration(model, integrator: str = "auto", substeps: int | None = N
     while not _implicit_stable(model, timestep / implicit_steps, n_poses):
         implicit_steps *= 2
     step = timestep * 1e3
-    if rk4 <= RK4_MAX_SUBSTEPS or RK4_COST * rk4 <= implicit_steps:
+    if rk4 <= ceiling or RK4_COST * rk4 <= implicit_steps:
         reason = (f"RK4 at {step:g} ms / {rk4}: the stiffest mode (|lambda| = {rate:.3g} 1/s, "
                   f"servo gains and damping over the inertia) keeps h |lambda| <= {bound:g}; "
                   f"the {implicit} step would need {implicit_steps} substeps to keep its inertia "
