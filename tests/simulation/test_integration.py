@@ -11,6 +11,8 @@ from pysindy_xl.simulation.integration import (  # noqa: E402
     BIAS_TOLERANCE,
     RK4_BOUND,
     RK4_HELD_BOUND,
+    RK4_HELD_MAX_SUBSTEPS,
+    RK4_MAX_SUBSTEPS,
     UnstableSimulationError,
     choose_integration,
     linear_modes,
@@ -152,3 +154,29 @@ def test_held_control_tightens_only_the_rk4_bound():
     assert free.integrator == held.integrator == "RK4"
     assert held.substeps > free.substeps
     assert held.stability <= RK4_HELD_BOUND < free.stability <= RK4_BOUND
+
+
+# STIFF_ARM with a softer wrist servo (kp 30, kv 3 on 1e-3 kg m^2, |lambda| ~ 3e3 1/s): a
+# held control needs 124 RK4 substeps, over the unforced ceiling, where the cost alone picks
+# implicitfast (199 substeps, inertia bias h (kv + damping) 3 % of the wrist's inertia).
+HELD_ARM = STIFF_ARM.replace('kp="3000" kv="300"', 'kp="30" kv="3"')
+
+
+def test_held_control_keeps_rk4_past_the_unforced_ceiling(monkeypatch):
+    system = MJCFSystem(HELD_ARM)
+    model = system.mj_model()
+    choice = choose_integration(model, held_control=True)
+    assert choice.integrator == "RK4" and choice.stability <= RK4_HELD_BOUND
+    assert RK4_MAX_SUBSTEPS < choice.substeps <= RK4_HELD_MAX_SUBSTEPS
+    assert choose_integration(model).substeps <= RK4_MAX_SUBSTEPS  # the same stiffness
+    data = generate_dataset(system, n_trajectories=1, duration=1.5, seed=0, progress=False)
+    assert (data.metadata["integrator"], data.metadata["substeps"]) == ("RK4", choice.substeps)
+    # the recorded velocities change as MuJoCo's continuous accelerations say
+    faithful = np.abs(_velocity_gain(data.trajectories[0]) - 1).max()
+    assert faithful < 1e-3
+    # at the unforced ceiling the cheaper implicit step is taken; its inertia bias
+    # h (kv + damping) slows the light wrist's velocity changes by about 1 %
+    monkeypatch.setattr(integration, "RK4_HELD_MAX_SUBSTEPS", RK4_MAX_SUBSTEPS)
+    biased = generate_dataset(system, n_trajectories=1, duration=1.5, seed=0, progress=False)
+    assert biased.metadata["integrator"] == "implicitfast"
+    assert np.abs(_velocity_gain(biased.trajectories[0]) - 1).max() > max(5e-3, 10 * faithful)
