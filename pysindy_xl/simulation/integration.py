@@ -12,9 +12,8 @@ into an error of order ``(h |lambda|)^2`` in the positions: there RK4 keeps the 
 :func:`~pysindy_xl.mujoco.generate_dataset` asks for forced runs), and with it the larger
 ceiling ``RK4_HELD_MAX_SUBSTEPS``: the same model stiffness ``timestep |lambda|`` as the
 ceiling of an unforced run, so a tighter bound does not hand a model to the biased implicit
-step. :func:`check_run` raises
-:class:`UnstableSimulationError` on a run that left the physics. :doc:`/robot_arms` explains
-the choice.
+step. :func:`check_run` raises :class:`UnstableSimulationError` on a run that left the
+physics. :doc:`/robot_arms` explains the choice.
 """
 
 from __future__ import annotations
