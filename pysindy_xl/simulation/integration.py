@@ -46,9 +46,9 @@ RK4_HELD_BOUND = 0.05
 BIAS_TOLERANCE = 5e-3
 #: Cost of an RK4 step in implicit steps (four evaluations against one and a factorization),
 #: measured in :func:`~pysindy_xl.simulation.generate.simulate_trajectory`'s loop (``mj_step``
-#: and the control's update): 2.8-3.8, median 3.2, on nine published 6-7 joint arms
-#: (``benchmarks/integration_cost.py``). A constant, not a timing at run time, so that the
-#: choice, and with it the data, do not depend on the machine or its load.
+#: and the control's update): 2.8-3.8 over two runs, median 3.2, on nine published 6-7 joint
+#: arms (``benchmarks/integration_cost.py``). A constant, not a timing at run time, so that
+#: the choice, and with it the data, do not depend on the machine or its load.
 RK4_COST = 3.3
 #: RK4 (no inertia bias at all) is kept up to this many substeps even where it costs more.
 RK4_MAX_SUBSTEPS = 64
