@@ -20,6 +20,9 @@ import warnings
 
 import numpy as np
 
+from ..fit.kinetic_scale import INERTIA_STATES as INERTIA_STATES
+from ..fit.kinetic_scale import inertial_columns as inertial_columns
+from ..fit.kinetic_scale import kinetic_relative_residuals
 from .automatic import AutomaticCatalog
 
 __all__ = ["SearchSplit", "SearchData", "CandidateFits", "candidate_content", "evaluate_candidate",
@@ -208,8 +211,10 @@ def held_out_error(model, held, forced) -> float:
               \qquad e = \sqrt{\tfrac1n \textstyle\sum_i e_i^2},
 
     with ``K`` the columns that carry inertia (a nonzero mass matrix,
-    :func:`~pysindy_xl.fit.diagnostics.column_mass_matrices`: the terms quadratic in the
-    velocities). An implicit law fixes each equation only up to its own factor, so each
+    :func:`~pysindy_xl.fit.kinetic_scale.inertial_columns`: the terms quadratic in the
+    velocities; ``e_i`` is :func:`~pysindy_xl.fit.kinetic_scale.kinetic_relative_residuals`,
+    which also makes the ``R^2`` of unforced fits, :func:`~pysindy_xl.quality.fit_quality`).
+    An implicit law fixes each equation only up to its own factor, so each
     block needs its own scale; its kinetic part, ``d/dt dT/dqd - dT/dq``, is the one that
     states the accelerations, and the ratio is about the relative error of the accelerations
     the law predicts. A scale taken from single terms (the largest ``||Theta_j xi_j||``)
@@ -241,52 +246,13 @@ def held_out_error(model, held, forced) -> float:
                                    propagate_noise=False)
         if not len(problem.theta):
             problem = model.regression(held["x"], held["t"], u=held["u"], formulation="strong")
-    theta, columns = problem.theta, problem.catalog_map.columns
-    coef = model.coef_[columns]
-    residual = theta @ coef
     forces = problem.force_columns
     if forced and len(forces):
+        theta, coef = problem.theta, model.coef_[problem.catalog_map.columns]
         target = theta[:, forces] @ coef[forces]
         norm = float(np.linalg.norm(target))
-        return float(np.linalg.norm(residual) / norm) if norm > 0 else float("inf")
-    kinetic = inertial_columns(model, problem)
-    errors = []
-    for rows in np.array_split(np.arange(len(theta)), problem.n_coordinates):
-        norm = float(np.linalg.norm(theta[np.ix_(rows, kinetic)] @ coef[kinetic]))
-        errors.append(np.linalg.norm(residual[rows]) / norm if norm > 0 else np.inf)
-    return float(np.sqrt(np.mean(np.square(errors))))
-
-
-#: States at which :func:`inertial_columns` evaluates the columns' mass matrices.
-INERTIA_STATES = 20
-
-
-def inertial_columns(model, problem) -> np.ndarray:
-    """The columns of a fitted model's regression problem that carry inertia.
-
-    A column carries inertia where its mass matrix (the derivative of its Euler-Lagrange
-    expression in the accelerations, :func:`~pysindy_xl.fit.diagnostics.column_mass_matrices`)
-    is nonzero at one of :data:`INERTIA_STATES` of the problem's states: the terms of the
-    Lagrangian quadratic in the velocities; not the potential, the gyroscopic (velocity-linear)
-    terms, dissipation or forces.
-
-    Parameters
-    ----------
-    model : XLSINDy
-        Fitted model (its ``feature_library_`` built ``problem``).
-    problem : CatalogProblem
-        A regression problem of ``model`` with its catalog map.
-
-    Returns
-    -------
-    ndarray of int
-        Indices of the problem's columns.
-    """
-    from ..fit.diagnostics import column_mass_matrices
-    origin = problem.catalog_map
-    mass = column_mass_matrices(model.feature_library_, origin.states, INERTIA_STATES)
-    size = np.abs(mass[:, origin.columns]).max(axis=(0, 2, 3))
-    return np.flatnonzero(size > 1e-12 * max(float(size.max(initial=0.0)), 1e-300))
+        return float(np.linalg.norm(theta @ coef) / norm) if norm > 0 else float("inf")
+    return float(np.sqrt(np.mean(np.square(kinetic_relative_residuals(model, problem)))))
 
 
 def evaluate_candidate(search: SearchData, parameters) -> dict:

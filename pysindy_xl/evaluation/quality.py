@@ -13,11 +13,27 @@ __all__ = ["fit_quality", "quality_lines", "plot_identification", "force_predict
 
 
 def fit_quality(model, arguments) -> dict:
-    """R^2 of the identified equations' residual on the training data.
+    r"""R^2 of the identified equations' residual on the training data.
 
-    With ``Theta`` the fit's regression matrix and ``xi`` the coefficients, the residual is
-    ``r = Theta xi`` and ``R^2 = 1 - ||r||^2 / ||b||^2``, ``b`` being the force part
-    ``Theta_F xi_F`` of forced data, or the largest single term ``Theta_j xi_j`` of unforced.
+    With ``Theta`` the fit's regression matrix, ``xi`` the coefficients and ``r = Theta xi``
+    the residual, on forced data (some force column in the law)
+
+    .. math:: R^2 = 1 - \frac{\|r\|^2}{\|\Theta_F \xi_F\|^2},
+
+    ``Theta_F xi_F`` the force part; per coordinate the same on its block of rows. Unforced
+    (an implicit law, each equation fixed only up to its own factor), each equation ``i`` is
+    judged over its kinetic part, the part that states the accelerations:
+
+    .. math:: R^2_i = 1 - e_i^2, \qquad
+              e_i = \frac{\|\Theta_i \xi\|}{\|\sum_{j \in K} \Theta_{ij} \xi_j\|},
+              \qquad R^2 = 1 - \tfrac1n \textstyle\sum_i e_i^2,
+
+    ``K`` the columns that carry inertia (the Lagrangian's terms quadratic in the velocities;
+    :func:`~pysindy_xl.fit.kinetic_scale.kinetic_relative_residuals`, the scale of the
+    catalog growth's held-out criterion). ``e_i`` is about the relative error of the
+    accelerations the law predicts; ``R^2`` is ``-inf`` for a law with no inertia in an
+    equation. A single term's size is no scale of a law: a large term that the others
+    nearly cancel would make a law that explains little look exact.
 
     Parameters
     ----------
@@ -30,11 +46,11 @@ def fit_quality(model, arguments) -> dict:
     -------
     dict
         ``r2``, ``r2_per_coordinate`` (name -> float), ``formulation``, ``target``
-        (``"forces"`` or the dominant term), ``rows``, ``cv_error`` and ``cv_noise_ratio``
-        (held-out scores of the sparsity selection, or ``None``), ``stability`` (after an
-        ensemble fit: the kept term selected least often and the dropped term selected most
-        often, each ``[name, fraction]``, else ``None``), ``held_still``,
-        ``physical_consistency``.
+        (``"forces"``, or ``"kinetic"`` for unforced data), ``rows``, ``cv_error`` and
+        ``cv_noise_ratio`` (held-out scores of the sparsity selection, or ``None``),
+        ``stability`` (after an ensemble fit: the kept term selected least often and the
+        dropped term selected most often, each ``[name, fraction]``, else ``None``),
+        ``held_still``, ``physical_consistency``.
 
     Examples
     --------
@@ -61,27 +77,28 @@ def fit_quality(model, arguments) -> dict:
                                           origin.coordinates, strict=True) if moving]
     n = len(names)
     forces = problem.force_columns
-    residual = theta @ coef
     forced = bool(len(forces)) and np.any(coef[forces] != 0) and np.any(theta[:, forces] != 0)
     if forced:
-        target, target_name = theta[:, forces] @ coef[forces], "forces"
+        residual, target = theta @ coef, theta[:, forces] @ coef[forces]
+
+        def r2(r, b):
+            denominator = float(b @ b)
+            return float(1 - (r @ r) / denominator) if denominator > 0 else float("nan")
+
+        overall, target_name = r2(residual, target), "forces"
+        per = {name: r2(r, b) for name, r, b in zip(names, residual.reshape(n, -1),
+                                                    target.reshape(n, -1), strict=True)}
     else:
-        j = int(np.argmax(np.linalg.norm(theta * coef, axis=0)))
-        target = theta[:, j] * coef[j]
-        target_name = model.get_feature_names()[origin.columns[j]]
-
-    def r2(r, b):
-        denominator = float(b @ b)
-        return float(1 - (r @ r) / denominator) if denominator > 0 else float("nan")
-
-    per = {name: r2(r, b) for name, r, b in zip(names, residual.reshape(n, -1),
-                                                target.reshape(n, -1), strict=True)}
+        from ..fit.kinetic_scale import kinetic_relative_residuals  # not at the CLI's --help
+        squared = np.square(kinetic_relative_residuals(model, problem))
+        overall, target_name = float(1 - np.mean(squared)), "kinetic"
+        per = dict(zip(names, (1 - squared).tolist(), strict=True))
     selection = getattr(model, "selection_", None)
     held_out = {"cv_error": None, "cv_noise_ratio": None}
     for key, attribute in (("cv_error", "cv_error"), ("cv_noise_ratio", "cv_ratio")):
         if hasattr(selection, attribute):
             held_out[key] = float(getattr(selection, attribute)[selection.size - 1])
-    return {"r2": r2(residual, target), "r2_per_coordinate": per,
+    return {"r2": overall, "r2_per_coordinate": per,
             "formulation": model.formulation_, "target": target_name,
             "rows": int(theta.shape[0]), **held_out, "stability": _stability(model),
             "held_still": list(getattr(model, "still_coordinates_", ())),
@@ -189,15 +206,18 @@ def quality_lines(quality) -> list:
     """
     kind = ("weak form: equations integrated against test functions on smoothed positions"
             if quality["formulation"] == "weak" else "strong form: equations at each sample")
-    target = ("the generalized forces" if quality["target"] == "forces"
-              else f"the largest term {quality['target']} (unforced data)")
     per = ", ".join(f"{k} {v:.4f}" for k, v in quality["r2_per_coordinate"].items())
-    denominator = "forces" if quality["target"] == "forces" else "largest term"
-    lines = [f"fit quality: R^2 = {quality['r2']:.4f} ({per})",
-             f"  R^2 = 1 - |residual|^2 / |{denominator}|^2 over {quality['rows']} rows of the "
-             f"{kind};",
-             f"  1 is exact; the residual is what the identified equations leave unexplained "
-             f"of {target}"]
+    lines = [f"fit quality: R^2 = {quality['r2']:.4f} ({per})"]
+    if quality["target"] == "forces":
+        lines += [f"  R^2 = 1 - |residual|^2 / |forces|^2 over {quality['rows']} rows of the "
+                  f"{kind};",
+                  "  1 is exact; the residual is what the identified equations leave "
+                  "unexplained of the generalized forces"]
+    else:
+        lines += [f"  R^2 = 1 - |residual|^2 / |kinetic part|^2, averaged over the equations, on "
+                  f"{quality['rows']} rows of the {kind};",
+                  "  1 is exact; unforced data: each equation's residual against its terms "
+                  "quadratic in the velocities (about the relative error of the accelerations)"]
     if quality["cv_error"] is not None:
         lines.append(f"  held-out relative squared error of the chosen sparsity (5-fold "
                      f"cross-validation): {quality['cv_error']:.3g}")

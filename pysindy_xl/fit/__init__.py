@@ -10,7 +10,9 @@ One fit of :class:`~pysindy_xl.XLSINDy` goes one way through here::
 :mod:`~pysindy_xl.fit.solve`, :mod:`~pysindy_xl.fit.wrap` with
 :mod:`~pysindy_xl.fit.diagnostics`). :meth:`XLSINDy.regression
 <pysindy_xl.XLSINDy.regression>` and the fit-quality report (:mod:`pysindy_xl.quality`)
-build their rows with the same :func:`build_problem`.
+build their rows with the same :func:`build_problem`; the fit-quality report and the catalog
+growth's held-out criterion judge an unforced law's equations over their kinetic part
+(:mod:`~pysindy_xl.fit.kinetic_scale`).
 """
 
 from .build import UNFORCED_WIDTH_MULTIPLES, CatalogMap, build_problem
