@@ -101,6 +101,20 @@ class Climber:
         self._parameters[id(step)] = parameters
         return step
 
+    def parameters_of(self, step) -> dict:
+        """The catalog parameters (beyond ``fixed``) of a step this climber evaluated.
+
+        Parameters
+        ----------
+        step : GrowthStep
+            One of :attr:`steps`.
+
+        Returns
+        -------
+        dict
+        """
+        return self._parameters[id(step)]
+
     def start(self, ahead=()) -> GrowthStep:
         """Fit the smallest catalog (:data:`~.moves.START`); it is chosen.
 

@@ -136,6 +136,7 @@ from .folds import REGIONS, held_out_splits
 from .keep_rules import single_keeps
 from .moves import MORE_MOVES, MOVES, REPEATED, START, joint_moves, moved
 from .path import GrowthResult, GrowthStep
+from .ties import break_ties, near_ties
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
            "check_growth_data", "GROWTH_REGIONS"]
@@ -221,7 +222,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                  moves=MOVES, search_optimizer="auto", search_samples: int | None = 6000,
                  cross_validate: bool = False, region: str = "block",
                  physical: bool = False, steepest: bool = False, progress=None,
-                 n_jobs=None, combine: str = "rms"):
+                 n_jobs=None, combine: str = "rms", tie_break: bool = True):
     """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
 
     Parameters
@@ -374,6 +375,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         raise ValueError(f"region: expected one of {GROWTH_REGIONS}, got {region!r}")
     check_option("physical", physical, "bool")
     check_option("steepest", steepest, "bool")
+    check_option("tie_break", tie_break, "bool")
     if combine not in COMBINES:
         raise ValueError(f"combine: expected one of {COMBINES}, got {combine!r}")
     if combine == "trimmed" and not (cross_validate and n_blocks >= MIN_TRIMMED_BLOCKS):
@@ -505,6 +507,20 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             state, best, path = other
     state, best, path = climber.backward(state, best, path, moves)
     fits.close()  # (a worker's last guess may still run: it ends during the final fit)
+    if tie_break and not cross_validate and np.isfinite(best.criterion):
+        # the near ties of the criterion judged again on every block, each by a fit without it
+        ties = near_ties(climber.steps, best, physical)
+        if len(ties) > 1:
+            folds, _ = held_out_splits(arrays, n_blocks, stride, True,
+                                       "block" if consensus else region, margin=width)
+            judge = CandidateFits(SearchData(
+                [SearchSplit(dict(fixed, bounds=_span(train["x"])), train, held)
+                 for train, held in folds], template, search.max_terms, forced), n_jobs)
+            chosen = break_ties(ties, climber.parameters_of, judge, progress)
+            judge.close()
+            if chosen is not best:
+                state, best = dict(climber.parameters_of(chosen)), chosen
+                path.append(chosen)
     if consensus:
         for step in path:
             climber.second_step(step)  # (each kept step reports both folds)

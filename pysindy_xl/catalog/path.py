@@ -53,6 +53,9 @@ class GrowthStep:
     block_errors : tuple of float, default ()
         The held-out error of each block, in order over the splits, that the criterion
         combines (:func:`~.candidates.combine_errors`; empty when not fitted).
+    tie_error : float, default nan
+        The step's criterion cross-validated on every block, where the step was one of the
+        near ties judged again (:func:`~.ties.break_ties`); NaN elsewhere.
 
     Examples
     --------
@@ -76,6 +79,7 @@ class GrowthStep:
     second_error: float = float("nan")
     second_cpu_seconds: float = 0.0
     block_errors: tuple = ()
+    tie_error: float = float("nan")
 
 
 @dataclasses.dataclass
