@@ -111,7 +111,12 @@ family whose drop is not kept alone is exchanged for the one it stands in for (s
 cosines, or a degree of them, for one or two more powers of the angle, powers for a sine
 degree, splines for powers: ``"-trig+angle_degree"``, the forward step of the search, taken
 where a stand-in leaves, while the criterion is above ``good_enough``). The phase repeats,
-never back to a catalog already kept, until nothing is dropped (:mod:`.backward`). The chosen
+never back to a catalog already kept, until nothing is dropped (:mod:`.backward`). The two
+held-out blocks of each run judge cheaply (one fit per catalog) but on two fifths of the data:
+where a stand-in and the law differ by little on the recorded states, that judgment's noise
+decides between them. So, last, the near ties of the criterion are judged again on every block
+(``tie_break``, :mod:`.ties`): each by ``n_blocks`` fits, every block held out in turn, and the
+lowest RMS of all the blocks' errors wins. The chosen
 catalog is then fitted on all the data, each coordinate's splines kept whole or left out
 (:class:`~pysindy_xl.optimizers.GroupedOptimizer`).
 """
@@ -327,6 +332,16 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         fit without the block of the largest swings can fail for the right catalog (the
         cart double pendulum's coupled damping: below 1 % on four blocks, 30-95 % on the
         fifth), and the RMS then refuses it.
+
+    tie_break : bool, default True
+        Judge the near ties again: the catalogs whose criterion is within
+        :data:`~.ties.TIE_REACH` of the chosen one's (at most :data:`~.ties.TIE_CANDIDATES`,
+        one per fitted law) are each cross-validated on every block, one fit per block on the
+        others, and the one with the lowest RMS of the blocks' errors is chosen
+        (:func:`~.ties.break_ties`; :attr:`GrowthStep.tie_error`). The two held-out blocks
+        of each run make a noisy judgment where a stand-in and the law differ by little on
+        the recorded states; all the blocks make a sharper one. Unused with
+        ``cross_validate`` (the criterion already holds out every block).
 
     Returns
     -------

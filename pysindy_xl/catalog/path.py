@@ -124,22 +124,28 @@ class GrowthResult:
         -------
         str
             Header and one line per step: move, terms, kept terms, the held-out errors on the
-            time block and on the region block, the criterion and whether it was chosen.
+            time block and on the region block, the criterion, where near ties were judged
+            again its cross-validation on all the blocks (:func:`~.ties.break_ties`; ``-``
+            for the other steps), and whether it was chosen.
         """
+        ties = any(np.isfinite(step.tie_error) for step in self.steps)
         header = (f"{'step':>4}  {'move':<13}{'terms':>6}{'kept':>6}{'time err':>10}"
-                  f"{'region err':>12}{'criterion':>11}  chosen")
+                  f"{'region err':>12}{'criterion':>11}" + (f"{'all blocks':>12}" if ties else "")
+                  + "  chosen")
         lines = [header, "-" * len(header)]
+
+        def pct(value):
+            if not np.isfinite(value):
+                return f"{'-':>10}"
+            return f"{100 * value:9.2f}%" if value < 100 else f"{'>1e4%':>10}"
         for k, step in enumerate(self.steps):
-            def pct(value):
-                if not np.isfinite(value):
-                    return f"{'-':>10}"
-                return f"{100 * value:9.2f}%" if value < 100 else f"{'>1e4%':>10}"
             verdict = "yes" if step.chosen else "no"
             if step.note:
                 verdict += f" ({step.note})"
             lines.append(f"{k:>4}  {step.move:<13}{step.terms:>6}{step.active:>6}"
                          f"{pct(step.time_error)}{pct(step.region_error):>12}"
-                         f"{pct(step.criterion):>11}  {verdict}")
+                         f"{pct(step.criterion):>11}"
+                         + (f"{pct(step.tie_error):>12}" if ties else "") + f"  {verdict}")
         return "\n".join(lines)
 
     def spline_potentials(self, n_points: int = 9) -> dict:
