@@ -284,6 +284,10 @@ def run_case(system, truth, noise, seed, forced, baselines=True, region="block")
             record["kept"] = int(np.count_nonzero(found.model.coefficients()))
             record["steps"] = len(found.steps)
             record["criterion"] = found.held_out_error
+            # the near ties judged again on every block (move, terms, criterion, that
+            # cross-validation, chosen)
+            record["ties"] = [[s.move, s.terms, s.criterion, s.tie_error, s.chosen]
+                              for s in found.steps if np.isfinite(s.tie_error)]
             if region != "block":  # the path, with the second fold's verdicts
                 record["region"] = region
                 record["path"] = [[s.move, s.terms, s.criterion, s.second_error, s.chosen]
