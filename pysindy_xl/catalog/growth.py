@@ -116,7 +116,7 @@ held-out blocks of each run judge cheaply (one fit per catalog) but on two fifth
 where a stand-in and the law differ by little on the recorded states, that judgment's noise
 decides between them. So, last, the near ties of the criterion are judged again on every block
 (``tie_break``, :mod:`.ties`): each by ``n_blocks`` fits, every block held out in turn, and the
-lowest RMS of all the blocks' errors wins. The chosen
+keep rule chooses on the RMS of all the blocks' errors. The chosen
 catalog is then fitted on all the data, each coordinate's splines kept whole or left out
 (:class:`~pysindy_xl.optimizers.GroupedOptimizer`).
 """
@@ -337,7 +337,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         Judge the near ties again: the catalogs whose criterion is within
         :data:`~.ties.TIE_REACH` of the chosen one's (at most :data:`~.ties.TIE_CANDIDATES`,
         one per fitted law) are each cross-validated on every block, one fit per block on the
-        others, and the one with the lowest RMS of the blocks' errors is chosen
+        others, and the keep rule chooses among them on the RMS of the blocks' errors
         (:func:`~.ties.break_ties`; :attr:`GrowthStep.tie_error`). The two held-out blocks
         of each run make a noisy judgment where a stand-in and the law differ by little on
         the recorded states; all the blocks make a sharper one. Unused with
@@ -531,7 +531,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             judge = CandidateFits(SearchData(
                 [SearchSplit(dict(fixed, bounds=_span(train["x"])), train, held)
                  for train, held in folds], template, search.max_terms, forced), n_jobs)
-            chosen = break_ties(ties, climber.parameters_of, judge, progress)
+            chosen = break_ties(ties, climber.parameters_of, judge, tolerance, progress)
             judge.close()
             if chosen is not best:
                 state, best = dict(climber.parameters_of(chosen)), chosen

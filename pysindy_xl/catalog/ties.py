@@ -10,31 +10,38 @@ most :data:`TIE_CANDIDATES` of them, the growth's choice first, one per fitted l
 again by cross-validation: every block of every run held out in turn, each by a fit on the
 others (:func:`~.folds.held_out_splits` with ``cross_validate``), and the criterion the RMS of
 all the blocks' errors (:func:`~.candidates.combine_errors`). All the data then judge, each
-block by a fit that did not see it; the lowest is chosen (the growth's choice unless another
-is lower by the fraction :data:`TIE_MARGIN`).
+block by a fit that did not see it, with the growth's keep rule
+(:func:`~.keep_rules.single_keeps`): another tie replaces the growth's choice where its
+cross-validated criterion is lower by the tolerance, or within it with fewer terms in the
+fitted model. A difference of a few percent is noise on either criterion; the stand-ins that
+the two blocks let through are worse by more on all of them, or need more terms.
 """
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
-__all__ = ["near_ties", "break_ties", "TIE_REACH", "TIE_CANDIDATES", "TIE_MARGIN"]
+from .keep_rules import single_keeps
+
+__all__ = ["near_ties", "break_ties", "TIE_REACH", "TIE_CANDIDATES", "SAME_LAW"]
 
 #: Near ties: catalogs whose criterion is at most ``1 + TIE_REACH`` times the best one's.
 TIE_REACH = 0.3
 #: Most catalogs judged again (the growth's choice and the next best by the criterion).
 TIE_CANDIDATES = 4
-#: Another catalog replaces the growth's choice when its cross-validated criterion is lower
-#: by this fraction.
-TIE_MARGIN = 1e-3
+#: Two catalogs whose criteria differ by less than this fraction hold the same law.
+SAME_LAW = 1e-3
 
 
 def near_ties(steps, best, physical: bool = False) -> list:
     """The catalogs whose criterion is within :data:`TIE_REACH` of the best one's.
 
-    One per fitted law: a catalog whose fit kept as many terms as another's at the same
-    criterion (to nine digits) holds the same law with a family the fit left out, and is
-    skipped.
+    One per fitted law: a catalog whose criterion equals that of one listed before it to
+    the fraction :data:`SAME_LAW` holds the same law on the search's split (a family the fit
+    left out, or kept at a negligible coefficient) and is skipped; what such a family does on
+    other folds is the selection's noise, not structure.
 
     Parameters
     ----------
@@ -62,21 +69,20 @@ def near_ties(steps, best, physical: bool = False) -> list:
     """
     reach = best.criterion * (1 + TIE_REACH)
     ties = [best]
-    for step in sorted(steps, key=lambda s: s.criterion):
+    for step in sorted(steps, key=lambda s: (s.criterion, s.terms)):
         if len(ties) >= TIE_CANDIDATES or not step.criterion <= reach:
             break
         if (step is best or step.note.startswith(("fit failed", "ceiling"))
                 or (physical and step.definite < best.definite)):
             continue
-        if not any(step.active == other.active
-                   and np.isclose(step.criterion, other.criterion, rtol=1e-9, atol=0.0)
+        if not any(abs(step.criterion - other.criterion) <= SAME_LAW * other.criterion
                    for other in ties):
             ties.append(step)
     return ties
 
 
-def break_ties(ties, parameters_of, judge, progress=None):
-    """The near tie with the lowest cross-validated criterion.
+def break_ties(ties, parameters_of, judge, tolerance: float = 0.05, progress=None):
+    """The near tie that the keep rule prefers on the cross-validated criterion.
 
     Parameters
     ----------
@@ -86,14 +92,19 @@ def break_ties(ties, parameters_of, judge, progress=None):
         ``parameters_of(step) -> dict``: a step's catalog parameters.
     judge : CandidateFits
         Fits of the cross-validated splits (:class:`~.candidates.CandidateFits`).
+    tolerance : float, default 0.05
+        The keep rule's fraction (:func:`~.keep_rules.single_keeps`).
     progress : callable, optional
         Called with a line of text per catalog judged.
 
     Returns
     -------
     GrowthStep
-        The chosen step: the growth's choice unless another's cross-validated criterion is
-        lower by :data:`TIE_MARGIN`. Each tie's :attr:`~.path.GrowthStep.tie_error` is set.
+        The chosen step: starting from the growth's choice, each other tie in the order of
+        its cross-validated criterion replaces the one chosen so far where the keep rule
+        keeps it on that criterion (lower by the fraction ``tolerance``, or within it with
+        fewer terms in the fitted model). Each tie's :attr:`~.path.GrowthStep.tie_error` is
+        set.
     """
     candidates = [parameters_of(step) for step in ties]
     for k, step in enumerate(ties):
@@ -102,8 +113,13 @@ def break_ties(ties, parameters_of, judge, progress=None):
             progress(f"{step.move:<13} {step.terms:>5} terms  cross-validated near tie "
                      + (f"{100 * step.tie_error:.2f} %" if np.isfinite(step.tie_error)
                         else "-"))
-    best = ties[0]
-    chosen = min(ties, key=lambda s: s.tie_error)
-    if chosen is not best and chosen.tie_error < best.tie_error * (1 - TIE_MARGIN):
-        return chosen
-    return best
+    chosen = ties[0]
+    for step in sorted(ties[1:], key=lambda s: s.tie_error):
+        if single_keeps(_judged(step), _judged(chosen), tolerance):
+            chosen = step
+    return chosen
+
+
+def _judged(step):
+    """``step`` with its cross-validated criterion as the criterion (for the keep rule)."""
+    return dataclasses.replace(step, criterion=step.tie_error)

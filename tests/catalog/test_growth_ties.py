@@ -15,7 +15,7 @@ from support.growth import TORSION, WEIGHT, forced_runs, torsion_pendulum, wide_
 
 from pysindy_xl.catalog import grow_catalog
 from pysindy_xl.catalog.path import GrowthStep
-from pysindy_xl.catalog.ties import TIE_CANDIDATES, TIE_REACH, break_ties, near_ties
+from pysindy_xl.catalog.ties import SAME_LAW, TIE_CANDIDATES, TIE_REACH, break_ties, near_ties
 
 
 def _grow(*args, **kwargs):
@@ -65,15 +65,16 @@ def _step(move, criterion, active=3, definite=1.0, note=""):
 
 def test_near_ties_keep_one_step_per_law_within_reach():
     best = _step("degree", 0.010)
-    same_law = _step("coulomb", 0.010 * (1 + 1e-12))  # a family the fit left out
+    same_law = _step("coulomb", 0.010 * (1 + SAME_LAW / 2), active=4)  # a family left out
     other = _step("trig", 0.011, active=4)
+    twin = _step("gyroscopic", 0.011 * (1 - SAME_LAW / 2))  # the same law as ``other``
     far = _step("kinetic", 0.010 * (1 + TIE_REACH) * 1.01)
     failed = _step("splines", 0.0105, note="fit failed: ValueError")
     indefinite = _step("interaction", 0.0102, definite=0.5)
-    steps = [far, other, same_law, best, failed, indefinite]
-    assert near_ties(steps, best) == [best, indefinite, other]
-    assert near_ties(steps, best, physical=True) == [best, other]
-    many = [best] + [_step(f"m{k}", 0.010 + 1e-4 * k, active=k + 4) for k in range(1, 9)]
+    steps = [far, other, same_law, best, failed, indefinite, twin]
+    assert near_ties(steps, best) == [best, indefinite, twin]
+    assert near_ties(steps, best, physical=True) == [best, twin]
+    many = [best] + [_step(f"m{k}", 0.010 + 2e-4 * k, active=k + 4) for k in range(1, 9)]
     assert len(near_ties(many, best)) == TIE_CANDIDATES
     assert near_ties([best, far], best) == [best]
 
@@ -89,15 +90,19 @@ class _TableJudge:
         return {"criterion": self.table[parameters["name"]]}
 
 
-def test_break_ties_keeps_the_growths_choice_unless_another_is_lower():
+def test_break_ties_applies_the_keep_rule_on_the_cross_validated_criterion():
     ties = [_step("a", 0.010), _step("b", 0.011), _step("c", 0.012)]
     names = {id(step): {"name": step.move} for step in ties}
     judge = _TableJudge({"a": 0.02, "b": 0.015, "c": 0.03})
     assert break_ties(ties, lambda step: names[id(step)], judge).move == "b"
     assert judge.asked == ["a", "b", "c"]
     assert [step.tie_error for step in ties] == [0.02, 0.015, 0.03]
-    level = _TableJudge({"a": 0.02, "b": 0.02 * (1 - 1e-5), "c": np.inf})
+    # within the tolerance, the catalog whose fit keeps fewer terms; otherwise the choice
+    level = _TableJudge({"a": 0.02, "b": 0.02 * 0.97, "c": np.inf})
     assert break_ties(ties, lambda step: names[id(step)], level).move == "a"
+    ties[2].active = 2
+    fewer = _TableJudge({"a": 0.02, "b": 0.02 * 0.97, "c": 0.02 * 1.04})
+    assert break_ties(ties, lambda step: names[id(step)], fewer).move == "c"
 
 
 @pytest.mark.parametrize("value", ["yes", 1, None])
