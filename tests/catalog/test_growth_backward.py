@@ -11,31 +11,11 @@ import numpy as np
 import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
-from support.growth import scalar_laws
-from sympy.physics import mechanics as me
+from support.growth import K2, K4, quartic_rotor
+from support.growth import ROTOR_INERTIA as INERTIA
 
 from pysindy_xl.catalog import grow_catalog
 from pysindy_xl.catalog.backward import REMOVALS, removed
-
-INERTIA, K2, K4, DAMPING = 0.2, 2.0, 2.0, 0.05
-
-
-def _quartic_rotor():
-    """A rigid rotor on a torsion spring ``K2 q^2 / 2 + K4 q^4 / 4`` with viscous damping and a
-    torque, by LagrangesMethod; returns (accelerations(q, qd, tau), forces(q, qd, qdd))."""
-    q = me.dynamicsymbols("q")
-    qd = me.dynamicsymbols("q", 1)
-    tau = sp.Symbol("tau")
-    frame = me.ReferenceFrame("N")
-    rotor = frame.orientnew("A", "Axis", (q, frame.z))
-    pivot = me.Point("O")
-    pivot.set_vel(frame, 0)
-    body = me.RigidBody("rotor", pivot, rotor, 1.0, (me.inertia(rotor, 0, 0, INERTIA), pivot))
-    body.potential_energy = K2 * q ** 2 / 2 + K4 * q ** 4 / 4
-    method = me.LagrangesMethod(me.Lagrangian(frame, body), [q],
-                                forcelist=[(rotor, (tau - DAMPING * qd) * frame.z)], frame=frame)
-    method.form_lagranges_equations()
-    return scalar_laws(method, q, qd, tau)
 
 
 def _noisy_runs(accelerations, noise=0.03, duration=8.0, rate=200.0, amplitude=1.2):
@@ -61,7 +41,7 @@ def _noisy_runs(accelerations, noise=0.03, duration=8.0, rate=200.0, amplitude=1
 
 
 def test_backward_phase_gives_up_the_cosine_that_stands_in_for_a_quartic_spring():
-    accelerations, forces = _quartic_rotor()
+    accelerations, forces = quartic_rotor()
     ts, xs, us = _noisy_runs(accelerations)
     found = grow_catalog(xs, ts, us, coordinates=["phi"], kinds="angle")
     # the law, not a stand-in: no trigonometric term, the coefficients of the truth

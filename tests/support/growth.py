@@ -96,6 +96,38 @@ def torsion_pendulum():
     return scalar_laws(method, q, qd, tau)
 
 
+#: A rigid rotor on a quartic torsion spring: ``ROTOR_INERTIA q_dd + ROTOR_DAMPING q_dot + K2 q
+#: + K4 q^3 = tau`` (``L = ROTOR_INERTIA q_dot^2 / 2 - K2 q^2 / 2 - K4 q^4 / 4``).
+ROTOR_INERTIA, K2, K4, ROTOR_DAMPING = 0.2, 2.0, 2.0, 0.05
+
+
+def quartic_rotor():
+    """The rotor on a quartic torsion spring by ``LagrangesMethod``, with viscous damping and a
+    torque.
+
+    Returns
+    -------
+    accelerations, forces : callable
+        As :func:`scalar_laws`.
+    """
+    from sympy.physics import mechanics as me
+    q = me.dynamicsymbols("q")
+    qd = me.dynamicsymbols("q", 1)
+    tau = sp.Symbol("tau")
+    frame = me.ReferenceFrame("N")
+    rotor = frame.orientnew("A", "Axis", (q, frame.z))
+    pivot = me.Point("O")
+    pivot.set_vel(frame, 0)
+    body = me.RigidBody("rotor", pivot, rotor, 1.0,
+                        (me.inertia(rotor, 0, 0, ROTOR_INERTIA), pivot))
+    body.potential_energy = K2 * q ** 2 / 2 + K4 * q ** 4 / 4
+    method = me.LagrangesMethod(me.Lagrangian(frame, body), [q],
+                                forcelist=[(rotor, (tau - ROTOR_DAMPING * qd) * frame.z)],
+                                frame=frame)
+    method.form_lagranges_equations()
+    return scalar_laws(method, q, qd, tau)
+
+
 def forced_runs(accelerations, seed: int, noise: float, n_runs: int = 2, duration: float = 10.0,
                 rate: float = 200.0, amplitude: float = 2.0, frequencies=(0.1, 1.0)):
     """Runs of a one-coordinate law driven by sums of five sines (scipy DOP853, 1e-10
