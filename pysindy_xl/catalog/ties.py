@@ -31,8 +31,9 @@ __all__ = ["near_ties", "break_ties", "TIE_REACH", "TIE_CANDIDATES", "SAME_LAW"]
 TIE_REACH = 0.3
 #: Most catalogs judged again (the growth's choice and the next best by the criterion).
 TIE_CANDIDATES = 4
-#: Two catalogs whose criteria differ by less than this fraction hold the same law.
-SAME_LAW = 1e-3
+#: Two catalogs whose criteria differ by less than this fraction hold the same law on the
+#: search's split (a tenth of the keep rule's default tolerance: no choice rests on it).
+SAME_LAW = 5e-3
 
 
 def near_ties(steps, best, physical: bool = False) -> list:
