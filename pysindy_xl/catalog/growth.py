@@ -340,8 +340,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         others, and the keep rule chooses among them on the RMS of the blocks' errors
         (:func:`~.ties.break_ties`; :attr:`GrowthStep.tie_error`). The two held-out blocks
         of each run make a noisy judgment where a stand-in and the law differ by little on
-        the recorded states; all the blocks make a sharper one. Unused with
-        ``cross_validate`` (the criterion already holds out every block).
+        the recorded states; all the blocks make a sharper one (with ``region="extremes"``
+        or ``"both"``, and a split judged on the extreme stretches). Unused with
+        ``cross_validate`` (the criterion already holds out every block) and with
+        ``region="consensus"`` (whose second fold judges what the blocks cannot tell apart:
+        the blocks alone would undo its choice).
 
     Returns
     -------
@@ -522,12 +525,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             state, best, path = other
     state, best, path = climber.backward(state, best, path, moves)
     fits.close()  # (a worker's last guess may still run: it ends during the final fit)
-    if tie_break and not cross_validate and np.isfinite(best.criterion):
+    if tie_break and not cross_validate and not consensus and np.isfinite(best.criterion):
         # the near ties of the criterion judged again on every block, each by a fit without it
         ties = near_ties(climber.steps, best, physical)
         if len(ties) > 1:
-            folds, _ = held_out_splits(arrays, n_blocks, stride, True,
-                                       "block" if consensus else region, margin=width)
+            folds, _ = held_out_splits(arrays, n_blocks, stride, True, region, margin=width)
             judge = CandidateFits(SearchData(
                 [SearchSplit(dict(fixed, bounds=_span(train["x"])), train, held)
                  for train, held in folds], template, search.max_terms, forced), n_jobs)

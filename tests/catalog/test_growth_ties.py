@@ -69,14 +69,15 @@ def _wide_error(found, forces):
                  / np.linalg.norm(true))
 
 
-def test_no_second_judgment_where_the_criterion_is_cross_validated():
+def test_no_second_judgment_where_the_criterion_is_cross_validated_or_two_folds_judge():
     accelerations, _ = quartic_rotor()
     ts, xs, us = forced_runs(accelerations, seed=6, noise=0.05, amplitude=1.5, n_runs=1,
                              duration=6.0)
     plain = _grow(xs, ts, us, coordinates=["phi"], kinds="angle")
     cross = _grow(xs, ts, us, coordinates=["phi"], kinds="angle", cross_validate=True)
+    both = _grow(xs, ts, us, coordinates=["phi"], kinds="angle", region="consensus")
     assert any(np.isfinite(step.tie_error) for step in plain.steps)
-    assert all(np.isnan(step.tie_error) for step in cross.steps)
+    assert all(np.isnan(step.tie_error) for step in cross.steps + both.steps)
 
 
 def _step(move, criterion, active=3, definite=1.0, note=""):
