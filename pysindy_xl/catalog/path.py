@@ -188,9 +188,21 @@ class GrowthResult:
         -------
         dict
             ``criterion``, ``held_out_error``, ``max_terms`` (the ceiling), ``catalog`` (its
-            description) and ``steps`` (one dict per :class:`GrowthStep`).
+            description) and ``steps`` (one dict per :class:`GrowthStep`); a figure that is
+            not finite (a failed fit's inf, a fold not asked: NaN) is None, so that the dict
+            is strict JSON.
         """
-        return {"criterion": self.criterion, "held_out_error": self.held_out_error,
+        return {"criterion": self.criterion, "held_out_error": _finite(self.held_out_error),
                 "max_terms": self.max_terms,
                 "catalog": self.catalog.describe(),
-                "steps": [dataclasses.asdict(s) for s in self.steps]}
+                "steps": [{key: _finite(value) for key, value in dataclasses.asdict(s).items()}
+                          for s in self.steps]}
+
+
+def _finite(value):
+    """``value``, or None for a float that is not finite; a tuple as a list of such values."""
+    if isinstance(value, tuple):
+        return [_finite(item) for item in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value

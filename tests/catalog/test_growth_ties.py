@@ -6,6 +6,7 @@ scipy at 1e-10), whose ``phi^4`` a cosine beside ``phi^2`` imitates on the recor
 (``cos(phi) = 1 - phi^2/2 + phi^4/24 - ...``); beyond it the stand-in's force is wrong.
 """
 
+import json
 import warnings
 
 import numpy as np
@@ -58,6 +59,11 @@ def test_the_near_ties_judged_on_every_block_give_the_law_not_the_stand_in():
                         phi ** 4: -K4 / 4}.items():
         assert abs(float(lagrangian.coeff(term)) - value) < 0.05 * abs(value), lagrangian
     assert "all blocks" in found.table() and "all blocks" not in plain.table()
+    # the figures not asked (NaN) or failed (inf) are None in the strict-JSON dict
+    record = json.loads(json.dumps(found.to_dict(), allow_nan=False))
+    judged = [step["tie_error"] for step in record["steps"]]
+    assert judged.count(None) == len(found.steps) - len(ties)
+    assert sorted(e for e in judged if e is not None) == sorted(s.tie_error for s in ties)
 
 
 def _wide_error(found, forces):
