@@ -3,7 +3,8 @@
 For data given coordinates (no model file), ``--catalog auto`` grows an
 :class:`~pysindy_xl.AutomaticCatalog` on the data (:func:`~pysindy_xl.grow_catalog`), prints the
 growth path, the discovered Lagrangian and forces, and the held-out error. A fit that explains
-nothing ends with a non-zero exit and a message naming what to try (:func:`honest_exit`).
+nothing, or whose mass matrix is not positive definite on its own training states, ends with a
+non-zero exit and a message naming what to try (:func:`honest_exit`).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import sys
 
 import numpy as np
 
+from ..fit.diagnostics import mass_matrix_failure
 from .steps import CLIError
 
 __all__ = ["WHAT_IS_TRIED", "run_automatic", "honest_exit", "POOR_R2", "POOR_HELD_OUT"]
@@ -43,10 +45,32 @@ _ADVICE = ("try: --angles for coordinates that are angles; check that the tau_NA
            "the generalized forces on the named coordinates (units, signs); record longer or "
            "better excited runs; --max-terms above {max_terms} for a richer catalog; "
            "--forces none if the forces are not those acting on the coordinates")
+_NOT_PHYSICAL = ("a coordinate's inertia vanishes or turns negative there, where no mechanical "
+                 "system's does: the model cannot be simulated along its own data; the fit's "
+                 "IdentificationWarning names the coordinates")
+_PHYSICAL_ADVICE = ("for the mass matrix try: kinetic coefficients that cannot change sign "
+                    "(constants: in Python AutomaticCatalog(kinetic='constant'); lower "
+                    "--velocity-degree / --trig-degree of the reference catalogs; --catalog "
+                    "automatic, whose search prefers catalogs with a positive definite mass "
+                    "matrix); runs in which every coordinate moves, longer or better excited; "
+                    "--angles for coordinates that are angles; for a MuJoCo or URDF model, a fit "
+                    "with physical parameters (in Python px.PhysicalOptimizer)")
 
 
-def honest_exit(r2=None, held_out=None, max_terms=400) -> None:
-    """``CLIError`` when the fit's R^2 or held-out error says the model explains nothing.
+def honest_exit(r2=None, held_out=None, max_terms=400, mass_matrix_check=None) -> None:
+    """``CLIError`` when the fit explains nothing or its mass matrix is not physical.
+
+    Two judgments, both required of a model ``identify`` reports:
+
+    - **it explains the data:** R^2 (on the training data) at least :data:`POOR_R2`, and the
+      held-out relative error (of a grown catalog) at most :data:`POOR_HELD_OUT`;
+    - **it is a mechanical system on its own data:** the mass matrix ``M(q)`` positive
+      definite on every training state the fit checked, by the rule of the fit-time warning
+      (:func:`~pysindy_xl.fit.diagnostics.mass_matrix_failure` on the model's
+      ``mass_matrix_check_``). Where it is not, the kinetic energy is not positive, and a run
+      crossing from one to the other passes a singular ``M``: the model cannot be simulated
+      along its own data, whatever its R^2 (a kinetic coefficient that changes sign can fit the
+      weak form to R^2 = 0.9 with a law whose inertia vanishes at rest).
 
     Parameters
     ----------
@@ -56,12 +80,15 @@ def honest_exit(r2=None, held_out=None, max_terms=400) -> None:
         Relative held-out error (a fraction; ``inf`` when no catalog predicted the blocks).
     max_terms : int, default 400
         The catalog ceiling, named in the advice.
+    mass_matrix_check : dict, optional
+        The fitted model's ``mass_matrix_check_``
+        (:func:`~pysindy_xl.fit.diagnostics.mass_matrix_report`); None: not judged.
 
     Returns
     -------
     None
-        Returns when the figures say the model explains the data; raises ``CLIError`` naming
-        what to try otherwise.
+        Returns when the figures say the model explains the data and its mass matrix is
+        positive definite; raises ``CLIError`` naming what failed and what to try otherwise.
 
     Examples
     --------
@@ -69,6 +96,13 @@ def honest_exit(r2=None, held_out=None, max_terms=400) -> None:
     Traceback (most recent call last):
     ...
     pysindy_xl.cli.steps.CLIError: the identified model explains nothing (R^2 = 0.04 ...
+    >>> honest_exit(r2=0.91, mass_matrix_check={"positive_definite_fraction": 0.5,
+    ...                                         "median_condition": float("inf")})
+    Traceback (most recent call last):
+    ...
+    pysindy_xl.cli.steps.CLIError: the identified model is not physical (the identified mass ...
+    >>> honest_exit(r2=0.999, mass_matrix_check={"positive_definite_fraction": 1.0,
+    ...                                          "median_condition": 2.3})
     """
     reasons = []
     if r2 is not None and not (r2 >= POOR_R2):
@@ -77,9 +111,16 @@ def honest_exit(r2=None, held_out=None, max_terms=400) -> None:
         reasons.append("no catalog predicted the held-out blocks")
     elif held_out is not None and not (held_out <= POOR_HELD_OUT):
         reasons.append(f"held-out error {100 * held_out:.3g} % above {100 * POOR_HELD_OUT:g} %")
+    failure = mass_matrix_failure(mass_matrix_check)
+    verdicts, advice = [], []
     if reasons:
-        raise CLIError(f"the identified model explains nothing ({'; '.join(reasons)}); "
-                       + _ADVICE.format(max_terms=max_terms))
+        verdicts.append(f"explains nothing ({'; '.join(reasons)})")
+        advice.append(_ADVICE.format(max_terms=max_terms))
+    if failure is not None:
+        verdicts.append(f"is not physical ({failure}: {_NOT_PHYSICAL})")
+        advice.append(_PHYSICAL_ADVICE)
+    if verdicts:
+        raise CLIError(f"the identified model {' and '.join(verdicts)}; " + "; ".join(advice))
 
 
 def run_automatic(args, dataset, system, forced, progress):

@@ -1,6 +1,6 @@
 """Fit-time diagnostics of an identified model on its own training states: the sign of laws
 no force scales (:func:`orient_free_laws`), the definiteness of the mass matrix
-(:func:`mass_matrix_report`).
+(:func:`mass_matrix_report`) and what it found wrong (:func:`mass_matrix_failure`).
 """
 
 from __future__ import annotations
@@ -11,7 +11,8 @@ import numpy as np
 
 from .._validation import IdentificationWarning
 
-__all__ = ["column_mass_matrices", "mass_matrices", "orient_free_laws", "mass_matrix_report"]
+__all__ = ["column_mass_matrices", "mass_matrices", "orient_free_laws", "mass_matrix_report",
+           "mass_matrix_failure"]
 
 
 def mass_matrices(dynamics, states, max_states: int = 2000):
@@ -190,16 +191,59 @@ def mass_matrix_report(mass, eigenvalues, names, remedy: str = "") -> dict:
     with np.errstate(divide="ignore"):
         condition = np.where(definite,
                              eigenvalues.max(axis=1) / np.abs(eigenvalues.min(axis=1)), np.inf)
-    if not definite.all():
+    report = {"positive_definite_fraction": float(np.mean(definite)),
+              "median_condition": float(np.median(condition))}
+    failure = mass_matrix_failure(report)
+    if failure is not None:
         diagonal = diagonal * unit**2
         missing = [name for i, name in enumerate(names) if np.any(diagonal[:, i] <= 1e-9 * scale)]
         warnings.warn(
-            f"the identified mass matrix is not positive definite on {np.mean(~definite):.0%} "
-            "of the training states"
-            + (f"; no positive inertia on {missing}" if missing else "")
+            failure + (f"; no positive inertia on {missing}" if missing else "")
             + ": the model is wrong there (noise terms, an unidentifiable coordinate, or a "
             "catalog that cannot express the dynamics) and will not simulate faithfully"
             + remedy,
             IdentificationWarning, stacklevel=2)
-    return {"positive_definite_fraction": float(np.mean(definite)),
-            "median_condition": float(np.median(condition))}
+    return report
+
+
+def mass_matrix_failure(check) -> str | None:
+    """What the mass-matrix check of a fit found wrong, or None when it found nothing.
+
+    The one rule by which the fit warns (:func:`mass_matrix_report`) and by which
+    ``pysindy-xl identify`` fails a model (:func:`~pysindy_xl.cli.automatic.honest_exit`): the
+    identified mass matrix ``M(q)`` must be positive definite on every checked training state.
+    Where it is not, the kinetic energy ``qd^T M qd / 2`` is not positive: no mechanical
+    system has that law. And a run is continuous: where ``M`` is positive definite on some of
+    its states and not on others, it is singular between them, the equations give no
+    acceleration there, and the model cannot be simulated along its own data.
+
+    Parameters
+    ----------
+    check : dict or None
+        :func:`mass_matrix_report`'s figures (``XLSINDy.mass_matrix_check_``); None (a model
+        without accelerations, or not checked) finds nothing.
+
+    Returns
+    -------
+    str or None
+        ``"the identified mass matrix is not positive definite on P% of the training
+        states"`` when ``positive_definite_fraction`` is below 1 (``P`` its complement), else
+        None (also when the fraction is not a number).
+
+    Examples
+    --------
+    >>> mass_matrix_failure({"positive_definite_fraction": 1.0, "median_condition": 2.0}) is None
+    True
+    >>> mass_matrix_failure({"positive_definite_fraction": 0.4885, "median_condition": np.inf})
+    'the identified mass matrix is not positive definite on 51% of the training states'
+    >>> mass_matrix_failure({"positive_definite_fraction": 0.9995, "median_condition": 3.0})
+    'the identified mass matrix is not positive definite on 0.05% of the training states'
+    """
+    if check is None:
+        return None
+    fraction = float(check["positive_definite_fraction"])
+    if not fraction < 1.0:
+        return None
+    share = 100.0 * (1.0 - fraction)
+    share = f"{share:.0f}" if share >= 1 else f"{share:.2g}"
+    return f"the identified mass matrix is not positive definite on {share}% of the training states"

@@ -8,8 +8,8 @@ import warnings
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 from support.files import write_csv
+from support.springs import hanging_spring as hanging_spring_runs
 
 import pysindy_xl as px
 from pysindy_xl.cli import main
@@ -19,25 +19,11 @@ from pysindy_xl.fit.kinetic_scale import inertial_columns
 from pysindy_xl.fit.wrap import catalog_dynamics
 from pysindy_xl.quality import fit_quality, quality_lines
 
-MASS, STIFFNESS, G, DAMPING = 1.0, 4.0, 9.81, 0.1  # at rest at x = 2.45
-
-
-def _rhs(_, y):
-    return [y[1], G - (STIFFNESS * y[0] + DAMPING * y[1]) / MASS]
-
 
 @pytest.fixture(scope="module")
 def hanging_spring():
     """Two free 10 s runs at 200 Hz: times, positions, velocities, accelerations."""
-    t = np.arange(0.0, 10.0, 0.005)
-    x, xd, xdd = [], [], []
-    for y0 in ([2.0, 0.3], [2.9, -0.4]):
-        y = solve_ivp(_rhs, (0, t[-1]), y0, t_eval=t, method="DOP853", rtol=1e-10,
-                      atol=1e-10).y
-        x.append(y[0][:, None])
-        xd.append(y[1][:, None])
-        xdd.append(np.asarray(_rhs(0, y)[1])[:, None])
-    return t, x, xd, xdd
+    return hanging_spring_runs()
 
 
 def _arguments(data, formulation):

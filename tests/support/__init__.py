@@ -9,6 +9,7 @@
 * :mod:`support.growth`: a forced Duffing oscillator and the numeric laws of a one-coordinate
   ``LagrangesMethod``, for the automatic catalog's tests.
 * :mod:`support.unforced_cells`: one cell of the unforced noise sweep fitted with the defaults.
+* :mod:`support.springs`: free runs of a mass hanging on a spring under gravity (scipy).
 
 The reference systems themselves live in ``tests/ground_truth.py`` (sympy.physics.mechanics)
 and ``tests/kinematic_models.py`` (MJCF arms), which the benchmarks import too.
