@@ -13,7 +13,6 @@ import sys
 
 import numpy as np
 
-from ..fit.diagnostics import mass_matrix_failure
 from .steps import CLIError
 
 __all__ = ["WHAT_IS_TRIED", "run_automatic", "honest_exit", "POOR_R2", "POOR_HELD_OUT"]
@@ -111,6 +110,7 @@ def honest_exit(r2=None, held_out=None, max_terms=400, mass_matrix_check=None) -
         reasons.append("no catalog predicted the held-out blocks")
     elif held_out is not None and not (held_out <= POOR_HELD_OUT):
         reasons.append(f"held-out error {100 * held_out:.3g} % above {100 * POOR_HELD_OUT:g} %")
+    from ..fit.diagnostics import mass_matrix_failure  # the fit stage: not loaded by --help
     failure = mass_matrix_failure(mass_matrix_check)
     verdicts, advice = [], []
     if reasons:
