@@ -44,16 +44,16 @@ _ADVICE = ("try: --angles for coordinates that are angles; check that the tau_NA
            "the generalized forces on the named coordinates (units, signs); record longer or "
            "better excited runs; --max-terms above {max_terms} for a richer catalog; "
            "--forces none if the forces are not those acting on the coordinates")
-_NOT_PHYSICAL = ("a coordinate's inertia vanishes or turns negative there, where no mechanical "
-                 "system's does: the model cannot be simulated along its own data; the fit's "
-                 "IdentificationWarning names the coordinates")
-_PHYSICAL_ADVICE = ("for the mass matrix try: kinetic coefficients that cannot change sign "
-                    "(constants: in Python AutomaticCatalog(kinetic='constant'); lower "
-                    "--velocity-degree / --trig-degree of the reference catalogs; --catalog "
-                    "automatic, whose search prefers catalogs with a positive definite mass "
-                    "matrix); runs in which every coordinate moves, longer or better excited; "
-                    "--angles for coordinates that are angles; for a MuJoCo or URDF model, a fit "
-                    "with physical parameters (in Python px.PhysicalOptimizer)")
+_NOT_PHYSICAL = ("the kinetic energy is not positive there (a mechanical system's always is) "
+                 "and the model cannot be simulated along its own data; the fit's "
+                 "IdentificationWarning names the coordinates without positive inertia")
+_PHYSICAL_ADVICE = ("kinetic coefficients that cannot change sign (constants: in Python "
+                    "AutomaticCatalog(kinetic='constant'); lower --velocity-degree / "
+                    "--trig-degree of the reference catalogs; --catalog automatic, whose search "
+                    "prefers catalogs with a positive definite mass matrix); runs in which every "
+                    "coordinate moves, longer or better excited; --angles for coordinates that "
+                    "are angles; for a MuJoCo or URDF model, a fit with physical parameters (in "
+                    "Python px.PhysicalOptimizer)")
 
 
 def honest_exit(r2=None, held_out=None, max_terms=400, mass_matrix_check=None) -> None:
@@ -118,7 +118,7 @@ def honest_exit(r2=None, held_out=None, max_terms=400, mass_matrix_check=None) -
         advice.append(_ADVICE.format(max_terms=max_terms))
     if failure is not None:
         verdicts.append(f"is not physical ({failure}: {_NOT_PHYSICAL})")
-        advice.append(_PHYSICAL_ADVICE)
+        advice.append(("for the mass matrix: " if advice else "try: ") + _PHYSICAL_ADVICE)
     if verdicts:
         raise CLIError(f"the identified model {' and '.join(verdicts)}; " + "; ".join(advice))
 
