@@ -31,7 +31,7 @@ from .integration import (
     settling_time,
 )
 from .signals import CONTROLS, actuator_signals, checked_fraction, motor_tracking
-from .stepping import new_runner, step_controls
+from .stepping import ROLLOUT_MIN_STEPS, new_runner, step_controls
 
 __all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "noise_levels", "NOISE_KEYS",
            "NOISE_MODELS", "ConstraintWarning", "INTEGRATORS", "UnstableSimulationError",
@@ -175,7 +175,7 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     contact_samples = equality_samples = 0
     runner = new_runner()
     reported = 0  # model steps reported to the progress bar
-    for r, k in enumerate(recorded):
+    for r, k in enumerate(range(0, n_fine + 1, record_every)):
         # mj_step leaves an intermediate RK4 stage in qacc: recompute at this state, under
         # the control of this instant (the continuous law the samples should obey)
         data.ctrl[:] = recorded_ctrl[r]
@@ -199,10 +199,19 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
             ctrl = np.zeros((min(chunk, n_fine - k), model.nu)) if signals is None else \
                 _controls(signals, fine_times[k:k + chunk] + shift, model.nu, substeps)
         # the internal steps to the next sample (past the last one: to the end of the run)
-        block = ctrl[k % chunk:k % chunk + min(record_every, n_fine - k)]
-        step_controls(model, data, block, runner)
+        start = k % chunk
+        steps = record_every if k + record_every <= n_fine else n_fine - k
+        if steps == 1:  # a sample every internal step
+            data.ctrl[:] = ctrl[start]
+            mujoco.mj_step(model, data)
+        elif steps >= ROLLOUT_MIN_STEPS:
+            step_controls(model, data, ctrl[start:start + steps], runner)
+        else:  # a few steps: a call of rollout would cost more than they do
+            for j in range(start, start + steps):
+                data.ctrl[:] = ctrl[j]
+                mujoco.mj_step(model, data)
         if progress is not None:
-            done = (k + len(block)) // (1000 * substeps) * 1000
+            done = (k + steps) // (1000 * substeps) * 1000
             if done > reported:
                 progress.update(done - reported)
                 reported = done

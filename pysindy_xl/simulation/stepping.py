@@ -27,7 +27,7 @@ __all__ = ["step_controls", "ROLLOUT_MIN_STEPS"]
 #: Blocks of fewer steps are taken one ``mj_step`` at a time from Python: a call of
 #: ``rollout`` (reading and setting the state, the warning counters) costs as much as a few
 #: steps of a small model.
-ROLLOUT_MIN_STEPS = 8
+ROLLOUT_MIN_STEPS = 16
 
 
 def step_controls(model, data, controls, runner=None) -> None:
