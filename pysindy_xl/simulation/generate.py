@@ -74,6 +74,10 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
                         mj_model=None) -> Trajectory:
     """Simulate one MuJoCo trajectory and return it in generalized coordinates.
 
+    Each sample is recorded by ``mj_forward`` at its state, under the control of its instant;
+    the internal steps between two samples are taken in C (:func:`~.stepping.step_controls`,
+    the same data as ``mj_step`` called step by step).
+
     Parameters
     ----------
     system : MuJoCoSystem or str
