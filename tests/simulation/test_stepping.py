@@ -111,6 +111,31 @@ def test_short_blocks_and_bad_controls():
         step_controls(model, fast, np.ones((10, model.nu + 1)))
 
 
+def test_without_mujoco_rollout_the_steps_are_taken_in_python(monkeypatch):
+    import mujoco.rollout
+
+    monkeypatch.delattr(mujoco.rollout, "Rollout")
+    assert new_runner() is None
+    model = _model()
+    fast, slow = mujoco.MjData(model), mujoco.MjData(model)
+    controls = np.linspace(-1.0, 1.0, 2 * ROLLOUT_MIN_STEPS)[:, None].repeat(model.nu, axis=1)
+    step_controls(model, fast, controls)
+    _loop(model, slow, controls)
+    assert np.array_equal(_full_state(model, fast), _full_state(model, slow))
+
+
+def test_a_model_without_actuators():
+    model = mujoco.MjModel.from_xml_string(ARM.split("<actuator>")[0] + "</mujoco>")
+    assert model.nu == 0
+    fast, slow = mujoco.MjData(model), mujoco.MjData(model)
+    for data in (fast, slow):
+        data.qpos[:] = [1.0, 0.2]
+    step_controls(model, fast, np.zeros((300, 0)))
+    _loop(model, slow, np.zeros((300, 0)))
+    assert np.array_equal(_full_state(model, fast), _full_state(model, slow))
+    assert slow.qpos[0] != 1.0
+
+
 def _reference_run(system, duration, signals, q0, qd0, sample_every, substeps, forced):
     """The recording of :func:`simulate_trajectory`, written out with ``mj_step``."""
     model = system.mj_model()
