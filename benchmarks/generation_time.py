@@ -72,11 +72,13 @@ def main(argv=None) -> int:
         found = arrays(arm, dataset)
         saved.update(found)
         verdict = "-"
-        if reference is not None:
+        if reference is not None and any(key in reference for key in found):
             equal = all(key in reference and np.array_equal(value, reference[key])
                         for key, value in found.items())
             verdict = "bit-identical" if equal else "DIFFERENT"
             same &= equal
+        elif reference is not None:
+            verdict = "not in the reference"
         print(f"| {arm} | {meta['integrator']} | {meta['substeps']} | {steps:.3g} | {cpu:.1f} | "
               f"{wall:.1f} | {os.getloadavg()[0]:.1f} | {verdict} |", flush=True)
     if args.save:
