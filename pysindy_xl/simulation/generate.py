@@ -31,6 +31,7 @@ from .integration import (
     settling_time,
 )
 from .signals import CONTROLS, actuator_signals, checked_fraction, motor_tracking
+from .stepping import ROLLOUT_MIN_STEPS, new_runner, step_controls
 
 __all__ = ["simulate_trajectory", "generate_dataset", "add_noise", "noise_levels", "NOISE_KEYS",
            "NOISE_MODELS", "ConstraintWarning", "INTEGRATORS", "UnstableSimulationError",
@@ -72,6 +73,10 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
                         control_at: str = "start", integrator: str | None = None,
                         mj_model=None) -> Trajectory:
     """Simulate one MuJoCo trajectory and return it in generalized coordinates.
+
+    Each sample is recorded by ``mj_forward`` at its state, under the control of its instant;
+    the internal steps between two samples are taken in C (:func:`~.stepping.step_controls`,
+    the same data as ``mj_step`` called step by step).
 
     Parameters
     ----------
@@ -172,37 +177,50 @@ def simulate_trajectory(system, duration: float, signals=None, q0=None, qd0=None
     kind_of, joint_limit = _constraint_kinds()
     limit_hits = np.zeros(model.njnt, dtype=np.int64)
     contact_samples = equality_samples = 0
-    r = 0
-    for k in range(n_fine + 1):
-        if k % record_every == 0:
-            # mj_step leaves an intermediate RK4 stage in qacc: recompute at this state, under
-            # the control of this instant (the continuous law the samples should obey)
-            data.ctrl[:] = recorded_ctrl[r]
-            mujoco.mj_forward(model, data)
-            qpos[r], qvel[r], qacc[r], energy[r] = data.qpos, data.qvel, data.qacc, data.energy
-            force[r] = data.qfrc_actuator
-            constraint[r] = data.qfrc_constraint
-            if data.nefc:
-                types = data.efc_type[:data.nefc]
-                kinds = kind_of[types]
-                pushing = (np.abs(data.efc_force[:data.nefc]) > 0) & (kinds != _FRICTION)
-                if pushing.any():
-                    active[r] = True
-                    hit = pushing & (types == joint_limit)
-                    limit_hits[np.unique(data.efc_id[:data.nefc][hit])] += 1
-                    contact_samples += bool(np.any(pushing & (kinds == _CONTACT)))
-                    equality_samples += bool(np.any(pushing & (kinds == _EQUALITY)))
-            r += 1
-        if k < n_fine:
-            if k % chunk == 0:  # the controls of the next chunk of internal steps
-                ctrl = np.zeros((min(chunk, n_fine - k), model.nu)) if signals is None else \
-                    _controls(signals, fine_times[k:k + chunk] + shift, model.nu, substeps)
-            data.ctrl[:] = ctrl[k % chunk]
+    runner = new_runner()
+    reported = 0  # model steps reported to the progress bar
+    for r, k in enumerate(range(0, n_fine + 1, record_every)):
+        # mj_step leaves an intermediate RK4 stage in qacc: recompute at this state, under
+        # the control of this instant (the continuous law the samples should obey)
+        data.ctrl[:] = recorded_ctrl[r]
+        mujoco.mj_forward(model, data)
+        qpos[r], qvel[r], qacc[r], energy[r] = data.qpos, data.qvel, data.qacc, data.energy
+        force[r] = data.qfrc_actuator
+        constraint[r] = data.qfrc_constraint
+        if data.nefc:
+            types = data.efc_type[:data.nefc]
+            kinds = kind_of[types]
+            pushing = (np.abs(data.efc_force[:data.nefc]) > 0) & (kinds != _FRICTION)
+            if pushing.any():
+                active[r] = True
+                hit = pushing & (types == joint_limit)
+                limit_hits[np.unique(data.efc_id[:data.nefc][hit])] += 1
+                contact_samples += bool(np.any(pushing & (kinds == _CONTACT)))
+                equality_samples += bool(np.any(pushing & (kinds == _EQUALITY)))
+        if k == n_fine:
+            break
+        if k % chunk == 0:  # the controls of the next chunk of internal steps
+            ctrl = np.zeros((min(chunk, n_fine - k), model.nu)) if signals is None else \
+                _controls(signals, fine_times[k:k + chunk] + shift, model.nu, substeps)
+        # the internal steps to the next sample (past the last one: to the end of the run)
+        start = k % chunk
+        steps = record_every if k + record_every <= n_fine else n_fine - k
+        if steps == 1:  # a sample every internal step
+            data.ctrl[:] = ctrl[start]
             mujoco.mj_step(model, data)
-        if progress is not None and (k + 1) % (1000 * substeps) == 0:
-            progress.update(1000)
+        elif steps >= ROLLOUT_MIN_STEPS:
+            step_controls(model, data, ctrl[start:start + steps], runner)
+        else:  # a few steps: a call of rollout would cost more than they do
+            for j in range(start, start + steps):
+                data.ctrl[:] = ctrl[j]
+                mujoco.mj_step(model, data)
+        if progress is not None:
+            done = (k + steps) // (1000 * substeps) * 1000
+            if done > reported:
+                progress.update(done - reported)
+                reported = done
     if progress is not None:
-        progress.update((n_steps + 1) % 1000)
+        progress.update(n_steps + 1 - reported)
     bad = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
     passive = signals is None and not np.any(force)  # no actuator force: energy only decays
     checked = check_run(model, qpos, qvel, qacc, energy if passive else None, bad,
