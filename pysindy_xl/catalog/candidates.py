@@ -275,8 +275,9 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
         held-out error of each block, in order over the splits; empty when not fitted),
         ``note`` (why not), ``seconds``, ``cpu_seconds`` and ``definite`` (the smallest
         fraction, over the splits' fits, of the training states at which the fitted mass
-        matrix is positive definite: ``XLSINDy.mass_matrix_check_``; 0 when not fitted): the
-        fields of a :class:`~.growth.GrowthStep` but its move and verdict.
+        matrix is positive definite: ``XLSINDy.mass_matrix_check_``; 0 when not fitted) and
+        ``support`` (the names of the terms each split's fit kept; empty when a fit failed):
+        the fields of a :class:`~.growth.GrowthStep` but its move and verdict.
     """
     from sklearn.base import clone
 
@@ -286,7 +287,7 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     def failed(note, size=0, description=""):
         return {"description": description, "terms": size, "active": 0, "time_error": np.inf,
                 "region_error": np.inf, "criterion": np.inf, "note": note, "seconds": 0.0,
-                "cpu_seconds": 0.0, "definite": 0.0, "block_errors": ()}
+                "cpu_seconds": 0.0, "definite": 0.0, "block_errors": (), "support": ()}
 
     try:
         size = catalog.n_terms
@@ -298,7 +299,7 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     n = search.splits[0].train["x"][0].shape[1]
     if min(sum(len(p) for p in split.train["x"]) for split in search.splits) * n < 10 * size:
         return failed("too few samples for this size", size, description)
-    errors, active, definite, notes = [], [], [], []
+    errors, active, definite, notes, support = [], [], [], [], []
     for split in search.splits:
         try:
             model = clone(search.template).set_params(
@@ -316,7 +317,10 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
             errors += [np.inf] * len(split.blocks)  # the trimmed criterion may leave it out
             notes.append(note)
             continue
-        active.append(int(np.count_nonzero(model.coefficients())))
+        coefficients = model.coefficients()
+        active.append(int(np.count_nonzero(coefficients)))
+        support.append(tuple(name for name, value in zip(model.get_feature_names(), coefficients,
+                                                          strict=True) if value != 0))
         check = model.mass_matrix_check_ or {}
         definite.append(float(check.get("positive_definite_fraction", 0.0)))
     if not active:
@@ -329,7 +333,8 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
                                          if notes else ""),
             "seconds": time.perf_counter() - started, "cpu_seconds": time.process_time() - cpu,
             "definite": min(definite) if not notes else 0.0,
-            "block_errors": tuple(float(e) for e in errors)}
+            "block_errors": tuple(float(e) for e in errors),
+            "support": tuple(support) if not notes else ()}
 
 
 def candidate_content(search: SearchData, parameters):

@@ -116,7 +116,9 @@ held-out blocks of each run judge cheaply (one fit per catalog) but on two fifth
 where a stand-in and the law differ by little on the recorded states, that judgment's noise
 decides between them. So, last, the near ties of the criterion are judged again on every block
 (``tie_break``, :mod:`.ties`): each by ``n_blocks`` fits, every block held out in turn, and the
-keep rule chooses on the RMS of all the blocks' errors. The chosen
+keep rule chooses on the RMS of all the blocks' errors; each law is stated by the smallest
+catalog whose fit kept exactly its terms (a larger one only offers the final fit more columns
+to choose stand-ins from). The chosen
 catalog is then fitted on all the data, each coordinate's splines kept whole or left out
 (:class:`~pysindy_xl.optimizers.GroupedOptimizer`).
 """
@@ -336,8 +338,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     tie_break : bool, default True
         Judge the near ties again: the catalogs whose criterion is within
         :data:`~.ties.TIE_REACH` of the chosen one's (at most :data:`~.ties.TIE_CANDIDATES`,
-        one per fitted law) are each cross-validated on every block, one fit per block on the
-        others, and the keep rule chooses among them on the RMS of the blocks' errors
+        one per fitted law, each the smallest catalog whose fit kept exactly that law's terms)
+        are each cross-validated on every block, one fit per block on the others, and the
+        keep rule chooses among them on the RMS of the blocks' errors
         (:func:`~.ties.break_ties`; :attr:`GrowthStep.tie_error`). The two held-out blocks
         of each run make a noisy judgment where a stand-in and the law differ by little on
         the recorded states; all the blocks make a sharper one (with ``region="extremes"``
@@ -528,6 +531,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     if tie_break and not cross_validate and not consensus and np.isfinite(best.criterion):
         # the near ties of the criterion judged again on every block, each by a fit without it
         ties = near_ties(climber.steps, best, physical)
+        chosen = ties[0]  # (the smallest catalog of the chosen law)
         if len(ties) > 1:
             folds, _ = held_out_splits(arrays, n_blocks, stride, True, region, margin=width)
             judge = CandidateFits(SearchData(
@@ -535,9 +539,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                  for train, held in folds], template, search.max_terms, forced), n_jobs)
             chosen = break_ties(ties, climber.parameters_of, judge, tolerance, progress)
             judge.close()
-            if chosen is not best:
-                state, best = dict(climber.parameters_of(chosen)), chosen
-                path.append(chosen)
+        if chosen is not best:
+            state, best = dict(climber.parameters_of(chosen)), chosen
+            path.append(chosen)
     if consensus:
         for step in path:
             climber.second_step(step)  # (each kept step reports both folds)

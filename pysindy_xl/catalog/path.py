@@ -56,6 +56,10 @@ class GrowthStep:
     tie_error : float, default nan
         The step's criterion cross-validated on every block, where the step was one of the
         near ties judged again (:func:`~.ties.break_ties`); NaN elsewhere.
+    support : tuple of tuple of str, default ()
+        The names of the terms each split's fit kept (``XLSINDy.get_feature_names`` with a
+        nonzero coefficient), in order over the splits; empty when not fitted or when a fit
+        failed. Two catalogs with the same support hold the same law on the search's data.
 
     Examples
     --------
@@ -80,6 +84,7 @@ class GrowthStep:
     second_cpu_seconds: float = 0.0
     block_errors: tuple = ()
     tie_error: float = float("nan")
+    support: tuple = ()
 
 
 @dataclasses.dataclass

@@ -42,7 +42,10 @@ def near_ties(steps, best, physical: bool = False) -> list:
     One per fitted law: a catalog whose criterion equals that of one listed before it to
     the fraction :data:`SAME_LAW` holds the same law on the search's split (a family the fit
     left out, or kept at a negligible coefficient) and is skipped; what such a family does on
-    other folds is the selection's noise, not structure.
+    other folds is the selection's noise, not structure. Each listed law is then stated by
+    the smallest catalog whose fit kept exactly its terms (:attr:`~.path.GrowthStep.support`;
+    ``best`` too): the larger ones only offer the final fit on all the data more columns to
+    choose stand-ins from.
 
     Parameters
     ----------
@@ -57,7 +60,8 @@ def near_ties(steps, best, physical: bool = False) -> list:
     Returns
     -------
     list of GrowthStep
-        ``best`` first, then at most ``TIE_CANDIDATES - 1`` others by increasing criterion.
+        ``best`` (or the smallest catalog of its support) first, then at most
+        ``TIE_CANDIDATES - 1`` others by increasing criterion.
 
     Examples
     --------
@@ -67,6 +71,11 @@ def near_ties(steps, best, physical: bool = False) -> list:
     ...          GrowthStep("trig", "", 5, 3, 0.012, 0.012, 0.012, False)]
     >>> [step.move for step in near_ties(steps, steps[1])]
     ['degree', 'trig']
+    >>> law = (("L[x_dot**2]", "L[x**2]"),)
+    >>> steps = [GrowthStep("start", "", 4, 2, 0.02, 0.02, 0.02, True, support=law),
+    ...          GrowthStep("degree", "", 6, 2, 0.0199, 0.0199, 0.0199, True, support=law)]
+    >>> [step.move for step in near_ties(steps, steps[1])]   # the same law, fewer terms
+    ['start']
     """
     reach = best.criterion * (1 + TIE_REACH)
     ties = [best]
@@ -79,7 +88,22 @@ def near_ties(steps, best, physical: bool = False) -> list:
         if not any(abs(step.criterion - other.criterion) <= SAME_LAW * other.criterion
                    for other in ties):
             ties.append(step)
-    return ties
+    stated = []
+    for step in ties:
+        smallest = _smallest_stating(steps, step)
+        if not any(smallest is other for other in stated):
+            stated.append(smallest)
+    return stated
+
+
+def _smallest_stating(steps, step):
+    """The step of fewest terms whose fits kept exactly ``step``'s terms (``step`` itself
+    when none is smaller, or when its support is unknown)."""
+    if not step.support:
+        return step
+    same = [other for other in steps if other.support == step.support
+            and np.isfinite(other.criterion) and not other.note.startswith("fit failed")]
+    return min(same, key=lambda other: other.terms, default=step) if same else step
 
 
 def break_ties(ties, parameters_of, judge, tolerance: float = 0.05, progress=None):

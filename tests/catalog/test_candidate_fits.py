@@ -77,6 +77,9 @@ def test_a_workers_candidate_is_the_callers_to_the_bit():
     # the quartic catalog states the Duffing law: a few per cent held out at 1 % noise, and
     # a Coulomb column the law does not have gains nothing
     assert first["criterion"] < 0.1 and here["terms"] == first["terms"] + 1
+    # each split's support: the names of the terms its fit kept (the Duffing law's among them)
+    (support,) = first["support"]
+    assert {"L[x_dot**2]", "L[x**2]", "L[x**4]"} <= set(support)
     assert here["criterion"] > 0.95 * first["criterion"]
 
 

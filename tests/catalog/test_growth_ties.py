@@ -107,6 +107,27 @@ def test_near_ties_keep_one_step_per_law_within_reach():
     assert near_ties([best, far], best) == [best]
 
 
+def test_each_law_is_stated_by_the_smallest_catalog_whose_fit_kept_its_terms():
+    law, other_law = (("L[x_dot**2]", "L[x**2]"),), (("L[x_dot**2]", "L[x**4]"),)
+
+    def step(move, terms, criterion, support, note=""):
+        return GrowthStep(move, "", terms, 2, criterion, criterion, criterion, False,
+                          note=note, support=support)
+
+    best = step("degree", 21, 0.0100, law)  # the law found in a larger catalog
+    smallest = step("gyroscopic", 11, 0.0100 * (1 + 1e-12), law)
+    failed = step("start", 9, 0.0100, law, note="fit failed: ValueError")
+    other = step("interaction", 10, 0.0110, other_law)
+    larger_other = step("kinetic", 23, 0.0109, other_law)
+    unknown = step("coulomb", 12, 0.0120, ())  # (a failed split: no support)
+    steps = [failed, smallest, best, other, larger_other, unknown]
+    # best stated by its smallest catalog; the other law by its own smallest; no duplicates
+    assert near_ties(steps, best) == [smallest, other, unknown]
+    assert near_ties([best, unknown], best) == [best, unknown]
+    # a different law is never a stand-in for another, however small
+    assert near_ties([best, step("trig", 5, 0.03, other_law)], best) == [best]
+
+
 class _TableJudge:
     """Cross-validated criteria from a table, by the catalogs' parameters."""
 
