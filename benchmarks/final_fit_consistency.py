@@ -165,7 +165,7 @@ def main(argv=None):
     parser.add_argument("--report", metavar="JSONL")
     parser.add_argument("--hand-search", action="store_true",
                         help="also fit the hand-built catalog with the search's test functions")
-    args = parser.parse_args(argv)
+    args = parser.parse_intermixed_args(argv)
     if args.report:
         print(report(args.report))
         return
