@@ -35,7 +35,7 @@ def test_the_final_fit_is_the_judged_regression_and_gives_the_law():
     assert found.catalog.spline_columns()  # the flexible basis was kept
     # the accelerations of the fitted law against sympy's over the recorded range (with the
     # default test functions the final fit kept a combination of splines that nearly
-    # vanishes on the data: accelerations off by a factor of 100-900)
+    # vanishes on the data: accelerations off by a factor of about 900 here)
     low, high = np.percentile(np.vstack(xs), [5, 95])
     q = np.linspace(low, high, 41)[:, None]
     for speed in (-1.0, 0.0, 1.0):
