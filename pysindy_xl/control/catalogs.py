@@ -260,7 +260,7 @@ class AutomaticGrowth:
                              progress=self.progress, n_jobs=self.n_jobs,
                              combine=combine)
         # the chosen catalog fitted on all the data with the search's test functions, at most
-        # a third of the default width: grow_catalog's own final fit takes the default width,
+        # a third of the default width: grow_catalog's own final fit takes the search's width,
         # and a third of a fifth of 8 s (0.53 s) blurs the cart double pendulum's fast motion
         # (its law's catalog 7-25 % off, within 1 % at 0.1-0.27 s)
         model = XLSINDy(found.catalog, test_functions=BumpTestFunctions(

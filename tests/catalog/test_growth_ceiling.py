@@ -53,8 +53,9 @@ def test_rows_of_the_search_are_the_test_functions_on_the_training_pieces():
 
 
 def _training_rows(monkeypatch):
-    """Record the rows of every training fit of a growth's search (its test functions have a
-    set width; the scoring of held-out blocks does not propagate the noise)."""
+    """Record the rows of every training fit of a growth's search, and of its final fit on all
+    the data, last (their test functions have a set width; the scoring of held-out blocks does
+    not propagate the noise)."""
     rows = []
     original = build.weak_regression
 
@@ -72,8 +73,10 @@ def test_the_default_ceiling_is_half_the_rows_of_the_fits(monkeypatch):
     x, t, u = noisy_duffing()
     rows = _training_rows(monkeypatch)
     found = grow_catalog(x, t, u, coordinates=["x"], kinds="linear", moves=("degree",))
-    assert len(rows) == len(found.steps) and len(set(rows)) == 1
-    assert found.max_terms == min(400, rows[0] // 2) == rows[0] // 2
+    searched, final = rows[:-1], rows[-1]  # the final fit: the search's test functions
+    assert len(searched) == len(found.steps) and len(set(searched)) == 1
+    assert final > searched[0]  # on all the data
+    assert found.max_terms == min(400, searched[0] // 2) == searched[0] // 2
     assert found.to_dict()["max_terms"] == found.max_terms
     # the Duffing law is found under it: m xdd + c xd + k x + h x^3 = u
     assert found.catalog.n_terms <= found.max_terms

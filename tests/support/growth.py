@@ -168,3 +168,36 @@ def wide_force_error(found, forces):
     true = forces(q, qd, qdd)
     return float(np.linalg.norm(found.model.predict_forces(q, qd, qdd) - true)
                  / np.linalg.norm(true))
+
+
+#: A unit mass in the well ``V = WELL_DEPTH log cosh(WELL_RATE x)`` with viscous damping:
+#: ``x_dd + WELL_DAMPING x_dot + WELL_DEPTH WELL_RATE tanh(WELL_RATE x) = tau`` (no polynomial
+#: or trigonometric family states ``log cosh``: the flexible basis's system).
+WELL_DEPTH, WELL_RATE, WELL_DAMPING = 2.0, 2.0, 0.1
+
+
+def log_cosh_well():
+    """The log-cosh well by ``LagrangesMethod``: a particle of unit mass on a line, with
+    viscous damping and a force.
+
+    Returns
+    -------
+    accelerations, forces : callable
+        As :func:`scalar_laws`.
+    """
+    from sympy.physics import mechanics as me
+    q = me.dynamicsymbols("q")
+    qd = me.dynamicsymbols("q", 1)
+    tau = sp.Symbol("tau")
+    frame = me.ReferenceFrame("N")
+    origin = me.Point("O")
+    origin.set_vel(frame, 0)
+    point = origin.locatenew("P", q * frame.x)
+    point.set_vel(frame, qd * frame.x)
+    particle = me.Particle("particle", point, 1.0)
+    particle.potential_energy = WELL_DEPTH * sp.log(sp.cosh(WELL_RATE * q))
+    method = me.LagrangesMethod(me.Lagrangian(frame, particle), [q],
+                                forcelist=[(point, (tau - WELL_DAMPING * qd) * frame.x)],
+                                frame=frame)
+    method.form_lagranges_equations()
+    return scalar_laws(method, q, qd, tau)
