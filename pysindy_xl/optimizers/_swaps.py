@@ -19,7 +19,7 @@ def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y
     gain = np.where(allowed, correlation**2 / np.where(allowed, remaining2, 1.0), -np.inf)
     # swapping out j for c changes the residual by removed_j^2 - gain[c, j]
     change = removed**2 - gain
-    c, j = np.unravel_index(np.argmin(change), change.shape)
+    c, j = divmod(int(np.argmin(change)), change.shape[1])  # (row, column)
     # a strict, scale-aware improvement: rounding must not swap equivalent columns
     if not change[c, j] < -(1e-9 * rss + 1e-14 * y_norm2):
         return None, None
