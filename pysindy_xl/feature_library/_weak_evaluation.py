@@ -61,6 +61,7 @@ def remembered_weak_values(library):
     finally:
         if not outer:
             library.__dict__.pop("_weak_memo", None)
+            library.__dict__.pop("_weak_memo_tests", None)
 
 
 class WeakEvaluation:
@@ -170,27 +171,42 @@ class WeakEvaluation:
             self._weak_entry_index = index
             self._weak_evaluate = compile_terms(self.coords.variables, terms)
         index = self._weak_entry_index
-        # int phi E = -int phi' P - int phi Q: each non-zero entry meets its own test matrix
-        tests = [scipy.sparse.csc_matrix(-dphi), scipy.sparse.csc_matrix(-phi)]
         parts = [np.flatnonzero(index[:, 0] == part) for part in (0, 1)]
         n_windows = phi.shape[0]
         contributions = np.zeros((n_windows, len(index)))
         with np.errstate(all="ignore"):  # (kept values are evaluated here)
             blocks = self._weak_values(x)
-        for start in range(0, n_samples, _WEAK_BLOCK):  # blocks of samples bound the memory
-            stop = min(start + _WEAK_BLOCK, n_samples)
+        # blocks of samples bound the memory
+        for tests in self._weak_tests(phi, dphi, n_samples):
             with np.errstate(all="ignore"):
                 values = next(blocks)  # entries x samples
             for part, entries in enumerate(parts):
                 if len(entries):
                     # samples x entries in C order, as the sparse product reads them
-                    contributions[:, entries] += tests[part][:, start:stop] @ np.ascontiguousarray(
+                    contributions[:, entries] += tests[part] @ np.ascontiguousarray(
                         values[entries].T)
         weak = np.zeros((n, n_windows, n_features))
         np.add.at(weak, (index[:, 1], slice(None), index[:, 2]), contributions.T)
         weak = weak.reshape(n * n_windows, n_features)
         self._check_finite_output(weak, n_windows)
         return weak
+
+    def _weak_tests(self, phi, dphi, n_samples):
+        """``[(-dphi, -phi)]`` (CSC) on each block of ``_WEAK_BLOCK`` samples, the test matrix
+        that each part of the entries meets (``int phi E = -int phi' P - int phi Q``).
+
+        Within :func:`remembered_weak_values`, the blocks of the last ``(phi, dphi)`` (the same
+        objects) are kept: the noise propagation transforms many draws with the same ones.
+        """
+        kept = self.__dict__.get("_weak_memo_tests")
+        if kept is not None and kept[0] is phi and kept[1] is dphi and kept[2] == n_samples:
+            return kept[3]
+        tests = [scipy.sparse.csc_matrix(-dphi), scipy.sparse.csc_matrix(-phi)]
+        blocks = [[test[:, start:start + _WEAK_BLOCK] for test in tests]
+                  for start in range(0, n_samples, _WEAK_BLOCK)]
+        if "_weak_memo" in self.__dict__:  # (holding phi and dphi, their ids stay theirs)
+            self._weak_memo_tests = (phi, dphi, n_samples, blocks)
+        return blocks
 
     def _weak_values(self, x):
         """:meth:`weak_terms` on blocks of ``_WEAK_BLOCK`` samples of ``x`` (entries, samples),

@@ -161,11 +161,12 @@ class CatalogRepartition(SymbolicLibrary):
         >>> [type(lib).__name__ for lib in catalog.flat_libraries()]
         ['ExternalForces', 'LagrangeLibrary']
         """
-        if isinstance(self.libraries, SymbolicLibrary) or not hasattr(self.libraries, "__iter__"):
+        libraries = self.libraries  # (read once: a subclass may derive it on each read)
+        if isinstance(libraries, SymbolicLibrary) or not hasattr(libraries, "__iter__"):
             raise TypeError("libraries: expected a list of pysindy_xl feature libraries")
         parents = (*_parents, id(self))
         flat = []
-        for lib in self.libraries:
+        for lib in libraries:
             if isinstance(lib, CatalogRepartition):
                 if id(lib) in parents:
                     raise ValueError("libraries: the catalog contains itself (a "

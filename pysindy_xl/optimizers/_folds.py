@@ -169,5 +169,7 @@ class HeldOutRows:
                     rcond=np.finfo(float).eps * max(height, len(support)))
                 if rank < len(support):
                     continue
-                errors[fold, m] = np.mean((x_test[:, support] @ coef - y_test) ** 2)
+                # np.mean's sum and division, without its overhead (thousands of calls per fit)
+                squares = (x_test[:, support] @ coef - y_test) ** 2
+                errors[fold, m] = np.add.reduce(squares) / len(squares)
         return errors

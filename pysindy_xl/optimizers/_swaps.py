@@ -19,7 +19,7 @@ def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y
     gain = np.where(allowed, correlation**2 / np.where(allowed, remaining2, 1.0), -np.inf)
     # swapping out j for c changes the residual by removed_j^2 - gain[c, j]
     change = removed**2 - gain
-    c, j = np.unravel_index(np.argmin(change), change.shape)
+    c, j = divmod(int(np.argmin(change)), change.shape[1])  # (row, column)
     # a strict, scale-aware improvement: rounding must not swap equivalent columns
     if not change[c, j] < -(1e-9 * rss + 1e-14 * y_norm2):
         return None, None
@@ -68,7 +68,7 @@ def swap_search(xs, y, usable, support, max_swaps, rss=None, previous=None, norm
             weights = np.linalg.inv(in_span[:, support]).T     # column j: w_j
         except np.linalg.LinAlgError:
             break
-        weights /= np.linalg.norm(weights, axis=0)
+        weights /= _column_norms(weights)
         along = in_span.T @ weights                            # (F, k): u_j . x_c
         removed = weights.T @ (basis.T @ y)                    # (k,): u_j . y
         in_span2 = np.einsum("ij,ij->j", in_span, in_span)
@@ -99,18 +99,31 @@ def _exchanged(xs, basis, in_span, weight, column):
     basis, in_span = basis @ rotation, rotation.T @ in_span
     part = xs[:, column] - basis @ in_span[:, column]
     part -= basis @ (basis.T @ part)
-    part /= np.linalg.norm(part)
+    part /= _norm(part)
     return np.column_stack([basis, part]), np.vstack([in_span, xs.T @ part])
 
 
 def _complement(vector):
     """An orthonormal basis ``(k, k - 1)`` of the complement of ``vector``: the last columns of
     the Householder reflection that maps ``vector`` onto the first axis."""
-    head = vector / np.linalg.norm(vector)
+    head = vector / _norm(vector)
     reflector = head.copy()
     reflector[0] += 1.0 if head[0] >= 0 else -1.0
     # H = I - 2 v v^T / (v^T v) = I - v v^T / |v_0| for v = head + sign(head_0) e_0
     return np.eye(len(vector))[:, 1:] - np.outer(reflector, reflector[1:]) / abs(reflector[0])
+
+
+# np.linalg.norm's own arithmetic without its argument handling (the searches call it on small
+# vectors tens of thousands of times): the same numbers
+def _norm(vector):
+    """``np.linalg.norm(vector)`` of a real 1-D array."""
+    vector = vector.ravel(order="K")  # (contiguous, as norm makes it)
+    return np.sqrt(vector.dot(vector))
+
+
+def _column_norms(matrix):
+    """``np.linalg.norm(matrix, axis=0)`` of a real 2-D array."""
+    return np.sqrt(np.add.reduce(matrix * matrix, axis=0))
 
 
 def column_norms2(xs):
