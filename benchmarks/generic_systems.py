@@ -567,9 +567,10 @@ def write_report(path, out):
               "seconds are this process's own).", "",
               "## Every case", "",
               "| system | n | forcing | noise | seed | right | held-out % | sim % | off-box % | "
-              "hand held-out % | ratio | wall s | CPU s | kept / terms | catalog |",
+              "hand held-out % | ratio | ratio, same fit | wall s | CPU s | kept / terms | "
+              "catalog |",
               "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | "
-              "--- | --- |"]
+              "--- | --- | --- |"]
     for r in records:
         a, h = r["auto"], r["hand"]
         mark = " (*)" if r.get("early") else ""
@@ -578,6 +579,7 @@ def write_report(path, out):
             f"{'yes' if a.get('right') else 'no'} | {_pct(a.get('held_out'))} | "
             f"{_pct(a.get('simulation'))} | {_pct(a.get('off_box'))} | {_pct(h.get('held_out'))} | "
             f"{'-' if r.get('ratio') is None else format(r['ratio'], '.2f')} | "
+            f"{'-' if r.get('ratio_same') is None else format(r['ratio_same'], '.2f')} | "
             f"{r['seconds']:.1f} | {r['cpu_seconds']:.1f} | {r.get('kept', '-')} / "
             f"{r.get('terms', '-')} | {r.get('catalog', a.get('error', ''))} |")
     lines += ["", "## Baselines on the same data", "",

@@ -2,20 +2,21 @@
 
 Runs :func:`pysindy_xl.grow_catalog` on generic_systems cases (1 to 4 coordinates, forced and
 unforced, 0 to 5 % noise, a spline catalog) and writes (``--write PATH``) or compares with
-(``--compare PATH``) a pickle of every step's move, terms, active terms, criterion, block errors
+(``--compare PATH``) a JSON file of every step's move, terms, active terms, criterion, block errors
 and cross-validated tie error, and the final model's coefficients. The comparison is exact
-(``==``, NaN equal to NaN): a change of the arithmetic's order shows. Prints each growth's CPU
+(``==``, NaN equal to NaN; JSON writes floats exactly): a change of the arithmetic's order
+shows. Prints each growth's CPU
 seconds (``time.process_time``).
 
 Usage (the package imported is the first on ``PYTHONPATH``)::
 
-    PYTHONPATH=/path/to/before python benchmarks/growth_identity.py --write before.pkl
-    PYTHONPATH=$PWD python benchmarks/growth_identity.py --compare before.pkl
+    PYTHONPATH=/path/to/before python benchmarks/growth_identity.py --write before.json
+    PYTHONPATH=$PWD python benchmarks/growth_identity.py --compare before.json
 """
 
 import argparse
+import json
 import os
-import pickle
 import sys
 import time
 import warnings
@@ -50,7 +51,7 @@ def grow(name, forcing, noise, seed):
     cpu = time.process_time() - start
     steps = [(s.move, s.terms, s.active, s.criterion, s.block_errors, s.tie_error)
              for s in result.steps]
-    return (steps, np.asarray(result.model.coefficients())), cpu
+    return (steps, result.model.coefficients().tolist()), cpu
 
 
 def same(a, b) -> bool:
@@ -67,8 +68,8 @@ def same(a, b) -> bool:
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--write", help="write the growths' numbers to this pickle")
-    parser.add_argument("--compare", help="compare the growths with this pickle")
+    parser.add_argument("--write", help="write the growths' numbers to this JSON file")
+    parser.add_argument("--compare", help="compare the growths with this JSON file")
     parser.add_argument("--cases", default=None,
                         help="comma-separated indices into CASES (default: all)")
     args = parser.parse_args()
@@ -77,15 +78,17 @@ def main():
     print(f"package: {px.__file__}")
     found = {}
     for k in picked:
-        found[CASES[k]], cpu = grow(*CASES[k])
-        print(f"{' '.join(map(str, CASES[k])):38s} {len(found[CASES[k]][0]):3d} steps  "
-              f"CPU {cpu:6.2f} s", flush=True)
+        key = " ".join(map(str, CASES[k]))
+        found[key], cpu = grow(*CASES[k])
+        print(f"{key:38s} {len(found[key][0]):3d} steps  CPU {cpu:6.2f} s", flush=True)
+    # through JSON both ways, so that the two sides hold the same types (lists, floats)
+    found = json.loads(json.dumps(found))
     if args.write:
-        with open(args.write, "wb") as handle:
-            pickle.dump(found, handle)
+        with open(args.write, "w", encoding="utf-8") as handle:
+            json.dump(found, handle)
     if args.compare:
-        with open(args.compare, "rb") as handle:
-            before = pickle.load(handle)
+        with open(args.compare, encoding="utf-8") as handle:
+            before = json.load(handle)
         identical = True
         for case, (steps, coefficients) in found.items():
             old_steps, old_coefficients = before[case]
@@ -94,7 +97,7 @@ def main():
                 for a, b in zip(new, old, strict=True))
             coefficients_same = same(coefficients, old_coefficients)
             identical &= steps_same and coefficients_same
-            print(f"{' '.join(map(str, case)):38s} steps "
+            print(f"{case:38s} steps "
                   f"{'identical' if steps_same else 'DIFFERENT'}, coefficients "
                   f"{'identical' if coefficients_same else 'DIFFERENT'}")
         print("all growths bit-identical" if identical else "SOME GROWTHS DIFFER")
