@@ -265,12 +265,17 @@ def _noisy(runs, noise, seed):
     return [r["q"] + noise * r["q"].std(axis=0) * rng.normal(size=r["q"].shape) for r in runs]
 
 
-def run_case(system, truth, noise, seed, forced, baselines=True, region="block"):
+def case_data(system, truth, noise, seed, forced):
+    """One case's data: ``(runs, test, xs, ts, us)``, the training runs, the fresh test run
+    (seed + 500), the noisy positions, the times and the forces (None unforced)."""
     runs = make_runs(system, truth, seed, forced)
     test = make_runs(system, truth, seed + 500, forced, n_runs=1)[0]
-    xs = _noisy(runs, noise, seed)
-    ts = [r["t"] for r in runs]
-    us = [r["u"] for r in runs] if forced else None
+    return (runs, test, _noisy(runs, noise, seed), [r["t"] for r in runs],
+            [r["u"] for r in runs] if forced else None)
+
+
+def run_case(system, truth, noise, seed, forced, baselines=True, region="block"):
+    runs, test, xs, ts, us = case_data(system, truth, noise, seed, forced)
     names = list(system["coords"].names)
     record = {"system": system["name"], "n": truth.n, "noise": noise, "seed": seed,
               "forcing": "forced" if forced else "unforced", "samples": sum(len(t) for t in ts)}

@@ -37,11 +37,7 @@ def run_case(case: str) -> dict:
     system = gs.systems()[name]
     truth = gs.Truth(system)
     forced = forcing == "forced"
-    runs = gs.make_runs(system, truth, seed, forced)
-    test = gs.make_runs(system, truth, seed + 500, forced, n_runs=1)[0]
-    xs = gs._noisy(runs, noise, seed)
-    ts = [r["t"] for r in runs]
-    us = [r["u"] for r in runs] if forced else None
+    runs, test, xs, ts, us = gs.case_data(system, truth, noise, seed, forced)
     record = {"case": case}
     cpu = time.process_time()
     try:
