@@ -131,7 +131,9 @@ class GrowthResult:
             Header and one line per step: move, terms, kept terms, the held-out errors on the
             time block and on the region block, the criterion, where near ties were judged
             again its cross-validation on all the blocks (:func:`~.ties.break_ties`; ``-``
-            for the other steps), and whether it was chosen.
+            for the other steps), and whether it was chosen: ``yes`` for a catalog kept on
+            the way, ``result`` for the one the model was fitted with (the near ties may
+            choose a catalog kept before later ones, or a smaller one stating the same law).
         """
         ties = any(np.isfinite(step.tie_error) for step in self.steps)
         header = (f"{'step':>4}  {'move':<13}{'terms':>6}{'kept':>6}{'time err':>10}"
@@ -143,8 +145,12 @@ class GrowthResult:
             if not np.isfinite(value):
                 return f"{'-':>10}"
             return f"{100 * value:9.2f}%" if value < 100 else f"{'>1e4%':>10}"
+        final = (self.catalog.describe() if isinstance(self.catalog, AutomaticCatalog)
+                 else None)
+        result = max((k for k, step in enumerate(self.steps)
+                      if step.chosen and step.description == final), default=None)
         for k, step in enumerate(self.steps):
-            verdict = "yes" if step.chosen else "no"
+            verdict = "result" if k == result else "yes" if step.chosen else "no"
             if step.note:
                 verdict += f" ({step.note})"
             lines.append(f"{k:>4}  {step.move:<13}{step.terms:>6}{step.active:>6}"

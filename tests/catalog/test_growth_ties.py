@@ -59,6 +59,10 @@ def test_the_near_ties_judged_on_every_block_give_the_law_not_the_stand_in():
                         phi ** 4: -K4 / 4}.items():
         assert abs(float(lagrangian.coeff(term)) - value) < 0.05 * abs(value), lagrangian
     assert "all blocks" in found.table() and "all blocks" not in plain.table()
+    # the table marks the catalog the model was fitted with, once
+    rows = found.table().splitlines()[2:]
+    (result,) = [k for k, row in enumerate(rows) if row.endswith("result")]
+    assert found.steps[result].description == found.catalog.describe()
     # the figures not asked (NaN) or failed (inf) are None in the strict-JSON dict
     record = json.loads(json.dumps(found.to_dict(), allow_nan=False))
     judged = [step["tie_error"] for step in record["steps"]]
