@@ -165,10 +165,7 @@ def main(argv=None):
     if args.report:
         print(report(args.report))
         return
-    done = set()
-    if os.path.exists(args.out):
-        with open(args.out) as f:
-            done = {json.loads(line)["case"] for line in f}
+    done = gs.recorded(args.out, lambda record: record["case"])
     for case in args.cases:
         if case in done:
             continue

@@ -499,15 +499,17 @@ def _mlp_baseline(truth, xs, ts, us, test, runs):
     return {"held_out": held, "off_box": off, "seconds": time.perf_counter() - started}
 
 
+def recorded(path, key):
+    """``key(record)`` of every record already in the JSONL file ``path`` (the cases a rerun
+    skips; empty when the file does not exist)."""
+    if not path or not os.path.exists(path):
+        return set()
+    with open(path, encoding="utf-8") as handle:
+        return {key(json.loads(line)) for line in handle if line.strip()}
+
+
 def _done(path):
-    keys = set()
-    if os.path.exists(path):
-        with open(path, encoding="utf-8") as handle:
-            for line in handle:
-                if line.strip():
-                    r = json.loads(line)
-                    keys.add((r["system"], r["forcing"], r["noise"], r["seed"]))
-    return keys
+    return recorded(path, lambda r: (r["system"], r["forcing"], r["noise"], r["seed"]))
 
 
 def _finite(value):
