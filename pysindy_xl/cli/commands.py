@@ -58,7 +58,8 @@ def run_demo(args) -> dict:
     Raises
     ------
     CLIError
-        On a bad input or a failed step.
+        On a bad input or a failed step, and when the validation is INVALID (after the
+        report is written): the ``demo`` command then exits with status 1.
 
     Examples
     --------
@@ -187,6 +188,11 @@ def run_demo(args) -> dict:
         json.dump(json_finite(report), handle, indent=2, allow_nan=False)
     print(f"report: {path}" + (f", plot: {files['validation_plot']}" if files else "")
           + f" ({timings['total']:.1f} s)")
+    if not metrics["valid"]:  # the report stays, for a look at what went wrong
+        raise CLIError("validation: the identified model does not reproduce a fresh "
+                       f"trajectory ({metrics.get('failure') or 'INVALID'}); try longer or "
+                       "more trajectories (--duration, --trajectories), a larger catalog "
+                       "(--trig-degree) or another --solver")
     return report
 
 

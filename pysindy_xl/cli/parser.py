@@ -152,7 +152,8 @@ def build_parser() -> argparse.ArgumentParser:
                           description="Generate randomly forced MuJoCo trajectories of a system, "
                           "identify its equations of motion, validate the model against a fresh "
                           "trajectory, print the equations and metrics, and write plots and a "
-                          "JSON report.")
+                          "JSON report. Exits with status 1 when the model fails the "
+                          "validation (the report is still written).")
     demo.add_argument("system", metavar="SYSTEM",
                       help="cart-pole, double-pendulum, cart-double-pendulum, triple-pendulum, "
                            "an MJCF .xml or a URDF .urdf")
