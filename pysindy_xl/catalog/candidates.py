@@ -22,8 +22,8 @@ import numpy as np
 
 from ..fit.kinetic_scale import INERTIA_STATES as INERTIA_STATES
 from ..fit.kinetic_scale import inertial_columns as inertial_columns
-from ..fit.kinetic_scale import kinetic_relative_residuals
 from .automatic import AutomaticCatalog
+from .floor import combined_floor, held_out_scores
 
 __all__ = ["SearchSplit", "SearchData", "CandidateFits", "candidate_content", "evaluate_candidate",
            "held_out_error", "inertial_columns", "INERTIA_STATES", "parameters_key",
@@ -240,19 +240,7 @@ def held_out_error(model, held, forced) -> float:
     float
         The relative error (inf where the norm is zero).
     """
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # blocks shorter than a test function: strong form
-        problem = model.regression(held["x"], held["t"], u=held["u"], formulation="weak",
-                                   propagate_noise=False)
-        if not len(problem.theta):
-            problem = model.regression(held["x"], held["t"], u=held["u"], formulation="strong")
-    forces = problem.force_columns
-    if forced and len(forces):
-        theta, coef = problem.theta, model.coef_[problem.catalog_map.columns]
-        target = theta[:, forces] @ coef[forces]
-        norm = float(np.linalg.norm(target))
-        return float(np.linalg.norm(theta @ coef) / norm) if norm > 0 else float("inf")
-    return float(np.sqrt(np.mean(np.square(kinetic_relative_residuals(model, problem)))))
+    return held_out_scores(model, held, forced, floor=False)[0]
 
 
 def evaluate_candidate(search: SearchData, parameters) -> dict:
@@ -287,7 +275,8 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     def failed(note, size=0, description=""):
         return {"description": description, "terms": size, "active": 0, "time_error": np.inf,
                 "region_error": np.inf, "criterion": np.inf, "note": note, "seconds": 0.0,
-                "cpu_seconds": 0.0, "definite": 0.0, "block_errors": (), "support": ()}
+                "cpu_seconds": 0.0, "definite": 0.0, "block_errors": (), "support": (),
+                "noise_floor": float("nan")}
 
     try:
         size = catalog.n_terms
@@ -299,7 +288,7 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     n = search.splits[0].train["x"][0].shape[1]
     if min(sum(len(p) for p in split.train["x"]) for split in search.splits) * n < 10 * size:
         return failed("too few samples for this size", size, description)
-    errors, active, definite, notes, support = [], [], [], [], []
+    errors, floors, active, definite, notes, support = [], [], [], [], [], []
     for split in search.splits:
         try:
             model = clone(search.template).set_params(
@@ -309,12 +298,15 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
                 model.fit(**split.train)
             if model.dynamics_ is None:
                 raise ValueError("no acceleration in the identified equations")
-            errors += [held_out_error(model, held, search.forced) for held in split.blocks]
+            scores = [held_out_scores(model, held, search.forced) for held in split.blocks]
+            errors += [error for error, _ in scores]
+            floors += [floor for _, floor in scores]
         except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
             note = f"fit failed: {type(error).__name__}: {error}"[:200]
             if search.combine == "rms":
                 return failed(note, size, description)
             errors += [np.inf] * len(split.blocks)  # the trimmed criterion may leave it out
+            floors += [np.inf] * len(split.blocks)
             notes.append(note)
             continue
         coefficients = model.coefficients()
@@ -334,7 +326,8 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
             "seconds": time.perf_counter() - started, "cpu_seconds": time.process_time() - cpu,
             "definite": min(definite) if not notes else 0.0,
             "block_errors": tuple(float(e) for e in errors),
-            "support": tuple(support) if not notes else ()}
+            "support": tuple(support) if not notes else (),
+            "noise_floor": combined_floor(errors, floors, search.combine)}
 
 
 def candidate_content(search: SearchData, parameters):

@@ -18,6 +18,7 @@ import numpy as np
 from .automatic import AutomaticCatalog
 from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import parameters_key
+from .floor import floor_reached
 from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
 from .moves import REPEATED, START, holds, moved
 from .path import GrowthStep
@@ -347,11 +348,29 @@ class Climber:
             out += [p for p, _ in self.pairs(state, order, seen)]
         return out[1:]  # (the first is the current one)
 
+    def settled(self, step) -> bool:
+        """Whether ``step``'s criterion leaves nothing for a larger catalog to find: below
+        ``good_enough``, or at its noise floor (:func:`~.floor.floor_reached` with the keep
+        tolerance: the residual is what the positions' noise alone leaves to a right law, and
+        a move that lowers it by less than the tolerance is not kept).
+
+        Parameters
+        ----------
+        step : GrowthStep
+            A step this climber fitted.
+
+        Returns
+        -------
+        bool
+        """
+        return (not step.criterion > self.good_enough
+                or floor_reached(step.criterion, step.noise_floor, self.tolerance))
+
     def _going(self, state, best, end) -> bool:
-        """Whether a climb at ``state`` (its step ``best``) goes on: the criterion is above
-        ``good_enough`` and the catalog does not hold ``end`` (:func:`~.moves.holds`; None:
-        no end)."""
-        return best.criterion > self.good_enough and (end is None or not holds(state, end))
+        """Whether a climb at ``state`` (its step ``best``) goes on: the criterion is not
+        settled (:meth:`settled`) and the catalog does not hold ``end``
+        (:func:`~.moves.holds`; None: no end)."""
+        return not self.settled(best) and (end is None or not holds(state, end))
 
     def _attempt_within_ceiling(self, parameters, move, tried, ahead=()) -> tuple:
         """The parameters and the step of a climb's move (:meth:`attempt`), recorded in
@@ -442,7 +461,7 @@ class Climber:
         """
         state, best, path = dict(START), self.first, []
         tried = {parameters_key(state)}
-        improved = best.criterion > self.good_enough
+        improved = not self.settled(best)
         while improved and self._going(state, best, end):
             improved = False
             for index, move in enumerate(order):
@@ -519,9 +538,9 @@ class Climber:
                 else:
                     refused.append((move, parameters))
             # a family that stands in for another is not given up alone: exchange it for the
-            # other (while the criterion is not good enough, as for the pairs of moves)
+            # other (while the criterion is not settled, as for the pairs of moves)
             exchanges = []
-            for move, smaller in (refused if not dropped and best.criterion > self.good_enough
+            for move, smaller in (refused if not dropped and not self.settled(best)
                                   else ()):
                 for other in EXCHANGES.get(move, ()):
                     for skip in (0, 1) if other in moves else ():

@@ -507,7 +507,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
 
     # rank the family moves by what each achieves alone from the first catalog (a degree move
     # looking one degree further); the flexible basis comes last, for what the families leave
-    alone, alone_steps = climber.first_moves(queue if first.criterion > good_enough else [])
+    alone, alone_steps = climber.first_moves([] if climber.settled(first) else queue)
     rank = {m: (1, c) for m, c in alone.items()}
     if consensus and alone:
         # the first fold's near ties (the moves it keeps within the tolerance of the best
@@ -527,7 +527,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     state, best, path = climber.steepest_climb(order) if steepest else climber.climb(order)
     promising = [m for m in order if m != "splines" and alone.get(m, np.inf)
                  < first.criterion * (1 - tolerance)]
-    if best.criterion > good_enough and len(promising) > 1:
+    if not climber.settled(best) and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]
         other = (climber.steepest_climb(order, promising[1], state) if steepest
                  else climber.climb(second, state))

@@ -60,6 +60,12 @@ class GrowthStep:
         The names of the terms each split's fit kept (``XLSINDy.get_feature_names`` with a
         nonzero coefficient), in order over the splits; empty when not fitted or when a fit
         failed. Two catalogs with the same support hold the same law on the search's data.
+    noise_floor : float, default nan
+        The criterion's noise floor: its value for the residual that the positions' noise
+        alone leaves to the step's fitted laws on the held-out blocks, combined over the
+        blocks as the criterion is (:func:`~.floor.held_out_scores`); 0 where the noise is
+        not propagated, NaN where the catalog was not fitted. A criterion within the
+        tolerance of it stops the climb as ``good_enough`` does.
 
     Examples
     --------
@@ -85,6 +91,7 @@ class GrowthStep:
     block_errors: tuple = ()
     tie_error: float = float("nan")
     support: tuple = ()
+    noise_floor: float = float("nan")
 
 
 @dataclasses.dataclass
