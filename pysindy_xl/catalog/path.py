@@ -136,16 +136,20 @@ class GrowthResult:
         -------
         str
             Header and one line per step: move, terms, kept terms, the held-out errors on the
-            time block and on the region block, the criterion, where near ties were judged
+            time block and on the region block, the criterion, its noise floor
+            (:attr:`GrowthStep.noise_floor`; where a step reports one: a criterion within the
+            tolerance of it stopped the climb), where near ties were judged
             again its cross-validation on all the blocks (:func:`~.ties.break_ties`; ``-``
             for the other steps), and whether it was chosen: ``yes`` for a catalog kept on
             the way, ``result`` for the one the model was fitted with (the near ties may
             choose a catalog kept before later ones, or a smaller one stating the same law).
         """
         ties = any(np.isfinite(step.tie_error) for step in self.steps)
+        floors = any(np.isfinite(step.noise_floor) for step in self.steps)
         header = (f"{'step':>4}  {'move':<13}{'terms':>6}{'kept':>6}{'time err':>10}"
-                  f"{'region err':>12}{'criterion':>11}" + (f"{'all blocks':>12}" if ties else "")
-                  + "  chosen")
+                  f"{'region err':>12}{'criterion':>11}"
+                  + (f"{'noise floor':>13}" if floors else "")
+                  + (f"{'all blocks':>12}" if ties else "") + "  chosen")
         lines = [header, "-" * len(header)]
 
         def pct(value):
@@ -163,6 +167,7 @@ class GrowthResult:
             lines.append(f"{k:>4}  {step.move:<13}{step.terms:>6}{step.active:>6}"
                          f"{pct(step.time_error)}{pct(step.region_error):>12}"
                          f"{pct(step.criterion):>11}"
+                         + (f"{pct(step.noise_floor):>13}" if floors else "")
                          + (f"{pct(step.tie_error):>12}" if ties else "") + f"  {verdict}")
         return "\n".join(lines)
 
