@@ -80,16 +80,17 @@ needs more terms than ``theta^2``); with ``physical``, a catalog whose fits all 
 positive definite mass matrix on their training states is never given up for one whose fits
 have not (a model whose mass matrix is not positive definite cannot be simulated there; the
 climb may pass through such stand-ins only while it holds no physical catalog). The degree
-moves repeat while they do (and look one degree further before they stop), and the growth
-stops when a whole pass keeps nothing or the criterion is settled: below ``good_enough``
-(unforced data: :data:`EXACT`), or at its noise floor (``noise_floor``, below). Before it
-stops, pairs of the moves that are not repeated (kinetic, interaction, gyroscopic, Coulomb)
-are tried together: a law may gain from neither alone (a coupling ``cos(a - b) a_dot b_dot``
-needs both the products of two angles' functions and configuration-dependent kinetic
-coefficients). With ``steepest``, each step of a climb tries every move from the kept catalog and keeps the best instead of the first that improves
-(the pairs where none does): a move that helps only once another is in (the coupled damping
-of a coupling's links, poor alone) is not passed over for a stand-in that the order of the
-moves alone tries first. Catalogs over ``max_terms`` are not tried (reported as the ceiling);
+moves repeat while they do (and look one degree further before they stop), and the growth stops
+when a whole pass keeps nothing or the criterion is settled: below ``good_enough`` (unforced
+data: :data:`EXACT`), or at its noise floor (``noise_floor``, below). Before it stops, pairs of
+the moves that are not repeated (kinetic, interaction, gyroscopic, Coulomb) are tried together:
+a law may gain from neither alone (a coupling ``cos(a - b) a_dot b_dot`` needs both the
+products of two angles' functions and configuration-dependent kinetic coefficients). With
+``steepest``, each step of a climb tries every move from the kept catalog and keeps the best
+instead of the first that improves (the pairs where none does): a move that helps only once
+another is in (the coupled damping of a coupling's links, poor alone) is not passed over for a
+stand-in that the order of the moves alone tries first. Catalogs over ``max_terms`` are not
+tried (reported as the ceiling);
 by default the ceiling follows the data: at most ``1 / ROWS_PER_TERM`` of the rows of the
 search's fits (a selection over more columns than half its equations is ill-posed at noise),
 and at most :data:`MAX_TERMS`; a move of the climb that this ceiling refuses is then tried
