@@ -351,7 +351,7 @@ class Climber:
             out += [p for p, _ in self.pairs(state, order, seen)]
         return out[1:]  # (the first is the current one)
 
-    def settled(self, step) -> bool:
+    def settled(self, step, floor=True) -> bool:
         """Whether ``step``'s criterion leaves nothing for a larger catalog to find: below
         ``good_enough``, or (with ``noise_floor``) at its noise floor
         (:func:`~.floor.floor_reached` with the keep tolerance: the residual is what the
@@ -366,20 +366,22 @@ class Climber:
         ----------
         step : GrowthStep
             A step this climber fitted.
+        floor : bool, default True
+            Whether the noise floor counts (False: ``good_enough`` only).
 
         Returns
         -------
         bool
         """
         return not step.criterion > self.good_enough or (
-            self.noise_floor and step is not self.first
+            floor and self.noise_floor and step is not self.first
             and floor_reached(step.criterion, step.noise_floor, self.tolerance))
 
-    def _going(self, state, best, end) -> bool:
+    def _going(self, state, best, end, floor=True) -> bool:
         """Whether a climb at ``state`` (its step ``best``) goes on: the criterion is not
-        settled (:meth:`settled`) and the catalog does not hold ``end``
+        settled (:meth:`settled`, with ``floor``) and the catalog does not hold ``end``
         (:func:`~.moves.holds`; None: no end)."""
-        return not self.settled(best) and (end is None or not holds(state, end))
+        return not self.settled(best, floor) and (end is None or not holds(state, end))
 
     def _attempt_within_ceiling(self, parameters, move, tried, ahead=()) -> tuple:
         """The parameters and the step of a climb's move (:meth:`attempt`), recorded in
@@ -475,7 +477,13 @@ class Climber:
             improved = False
             for index, move in enumerate(order):
                 skip = 0  # a degree move looks one degree further before it stops
-                while self._going(state, best, end):
+                # the floor stops the climb before a move, not within one: a degree that
+                # stands in for the next (a cosine beside phi^2 for phi^4) may be at its floor
+                # on the recorded states, and the look one degree further puts the law
+                # among the near ties
+                repeated = False
+                while self._going(state, best, end, floor=not repeated):
+                    repeated = True
                     parameters = self.moved(state, move, skip)
                     if parameters is None or parameters_key(parameters) in tried:
                         break
@@ -547,9 +555,10 @@ class Climber:
                 else:
                     refused.append((move, parameters))
             # a family that stands in for another is not given up alone: exchange it for the
-            # other (while the criterion is not settled, as for the pairs of moves)
+            # other (while the criterion is not good enough: at its noise floor too, where a
+            # stand-in and the law it stands in for may both be)
             exchanges = []
-            for move, smaller in (refused if not dropped and not self.settled(best)
+            for move, smaller in (refused if not dropped and not self.settled(best, False)
                                   else ()):
                 for other in EXCHANGES.get(move, ()):
                     for skip in (0, 1) if other in moves else ():
