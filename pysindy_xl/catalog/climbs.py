@@ -18,7 +18,7 @@ import numpy as np
 from .automatic import AutomaticCatalog
 from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import parameters_key
-from .floor import floor_reached
+from .floor import floor_reached, models_floor
 from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
 from .moves import REPEATED, START, holds, moved
 from .path import GrowthStep
@@ -79,6 +79,7 @@ class Climber:
         self.steps, self.first = [], None
         self._cache = {}  # every catalog is fitted once, whichever path tries it
         self._parameters = {}  # the parameters of each step, by the step's id
+        self._models = {}  # the fitted models of each step (its floor asked later), by id
         self._seconds = {}  # the second judge's steps, by the first's (of "consensus")
 
     # -- fitting and judging ---------------------------------------------------------------
@@ -98,7 +99,10 @@ class Climber:
         -------
         GrowthStep
         """
-        step = GrowthStep(move=move, chosen=False, **self.fits.get(parameters, ahead))
+        fields = self.fits.get(parameters, ahead)
+        step = GrowthStep(move=move, chosen=False,
+                          **{key: value for key, value in fields.items() if key != "models"})
+        self._models[id(step)] = fields.get("models")
         if self.physical and step.definite < 1 and not step.note:
             step.note = (f"mass matrix not positive definite on {1 - step.definite:.0%} of "
                          "the training states")
@@ -373,9 +377,15 @@ class Climber:
         -------
         bool
         """
-        return not step.criterion > self.good_enough or (
-            floor and self.noise_floor and step is not self.first
-            and floor_reached(step.criterion, step.noise_floor, self.tolerance))
+        if not step.criterion > self.good_enough:
+            return True
+        if not (floor and self.noise_floor and step is not self.first):
+            return False
+        models = self._models.get(id(step))
+        if np.isnan(step.noise_floor) and models is not None and np.isfinite(step.criterion):
+            # the floor is computed only for the catalogs whose criterion decides a climb
+            step.noise_floor = models_floor(self.fits.search, models, step.block_errors)
+        return floor_reached(step.criterion, step.noise_floor, self.tolerance)
 
     def _going(self, state, best, end, floor=True) -> bool:
         """Whether a climb at ``state`` (its step ``best``) goes on: the criterion is not

@@ -31,7 +31,7 @@ import numpy as np
 
 from ..fit.kinetic_scale import inertial_columns
 
-__all__ = ["held_out_scores", "combined_floor", "floor_reached"]
+__all__ = ["held_out_scores", "combined_floor", "models_floor", "floor_reached"]
 
 
 def held_out_scores(model, held, forced, floor=True) -> tuple:
@@ -151,6 +151,32 @@ def combined_floor(errors, floors, combine="rms") -> float:
         floors = floors[np.argsort(np.asarray(errors, dtype=float).ravel(), kind="stable")[:-1]]
     value = float(np.sqrt(np.mean(np.square(floors))))
     return value if np.isfinite(value) else float("inf")
+
+
+def models_floor(search, models, errors) -> float:
+    """The noise floor of a candidate's criterion from its fitted models (asked after its fit).
+
+    Parameters
+    ----------
+    search : SearchData
+        The growth's data (:class:`~.candidates.SearchData`): the splits' held-out blocks,
+        the kind of criterion and how the blocks combine.
+    models : sequence of XLSINDy or None
+        The fitted model of each split, None where its fit failed.
+    errors : sequence of float
+        The blocks' held-out errors, in order over the splits (the step's ``block_errors``).
+
+    Returns
+    -------
+    float
+        :func:`combined_floor` of the blocks' floors (:func:`held_out_scores`; inf for the
+        blocks of a failed fit).
+    """
+    floors = []
+    for split, model in zip(search.splits, models, strict=True):
+        floors += [np.inf if model is None else held_out_scores(model, held, search.forced)[1]
+                   for held in split.blocks]
+    return combined_floor(errors, floors, search.combine)
 
 
 def floor_reached(criterion, floor, tolerance) -> bool:

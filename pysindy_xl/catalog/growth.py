@@ -501,7 +501,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
 
     search = SearchData([SearchSplit(bounds, train, held)
                          for bounds, (train, held) in zip(searched, splits, strict=True)],
-                        template, fixed["max_terms"], forced, reported, combine)
+                        template, fixed["max_terms"], forced, reported, combine,
+                        floor="later" if noise_floor else "off")
     rows = search_rows(search, final_weak)
     if max_terms == "auto":  # a selection over more columns than half its rows is ill-posed
         search.max_terms = min(MAX_TERMS, rows // ROWS_PER_TERM)
@@ -511,7 +512,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     second_fits = CandidateFits(SearchData(
         [SearchSplit(dict(fixed, bounds=_span(train["x"])), train, held)
          for train, held in second_splits], template, search.max_terms,
-        forced)) if consensus else None
+        forced, floor="off")) if consensus else None
 
     if not forced:  # no force sets the scale, an approximation can look small already: only
         good_enough = EXACT  # a law exact to the data's precision stops the growth
@@ -583,7 +584,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             folds, _ = held_out_splits(arrays, n_blocks, stride, True, region, margin=width)
             judge = CandidateFits(SearchData(
                 [SearchSplit(dict(fixed, bounds=_span(train["x"])), train, held)
-                 for train, held in folds], template, search.max_terms, forced), n_jobs)
+                 for train, held in folds], template, search.max_terms, forced, floor="off"),
+                n_jobs)
             chosen = break_ties(ties, climber.parameters_of, judge, tolerance, progress)
             judge.close()
         if chosen is not best:

@@ -64,8 +64,10 @@ class GrowthStep:
         The criterion's noise floor: its value for the residual that the positions' noise
         alone leaves to the step's fitted laws on the held-out blocks, combined over the
         blocks as the criterion is (:func:`~.floor.held_out_scores`); 0 where the noise is
-        not propagated, NaN where the catalog was not fitted. A criterion within the
-        tolerance of it stops the climb as ``good_enough`` does.
+        not propagated. :func:`~.growth.grow_catalog` computes it for the catalogs whose
+        criterion decides whether a climb goes on (the ones it keeps), NaN elsewhere and
+        where the catalog was not fitted. A criterion within the tolerance of it stops the
+        climb as ``good_enough`` does.
 
     Examples
     --------
