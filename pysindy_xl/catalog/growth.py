@@ -566,8 +566,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     state, best, path = climber.steepest_climb(order) if steepest else climber.climb(order)
     promising = [m for m in order if m != "splines" and alone.get(m, np.inf)
                  < first.criterion * (1 - tolerance)]
-    if not climber.settled(best, floor=False) and len(promising) > 1:
-        # (at its noise floor too: a stand-in first move may be at its own floor)
+    if not climber.settled(best) and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]
         other = (climber.steepest_climb(order, promising[1], state) if steepest
                  else climber.climb(second, state))
