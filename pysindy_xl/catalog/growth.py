@@ -122,33 +122,24 @@ catalog whose fit kept exactly its terms (a larger one only offers the final fit
 to choose stand-ins from).
 
 With noisy positions the criterion of a right law is not small: the held-out rows carry the
-noise, and no catalog explains it. So the growth also asks for the criterion's noise floor
-(``noise_floor``; :attr:`GrowthStep.noise_floor`, :mod:`.floor`): with ``Delta_d`` the draws
-of the held-out rows' change under fresh noise of the smoother's estimated level (the
-propagation the weak fits use), the floor is
-:math:`\\sqrt{\\tfrac1D \\sum_d \\|\\Delta_d \\xi\\|^2}` over the criterion's scale (the
-forces' part, or each coordinate's kinetic part), combined over the blocks as the criterion
-is: the criterion that the noise alone leaves to the step's fitted laws. It is computed for
-the catalogs whose criterion decides whether a climb goes on (those kept), from their fits.
-A kept catalog whose criterion is within ``tolerance`` of its floor (a discrepancy principle:
-its residual is what the noise explains, and a move must lower the criterion by the tolerance
-to be kept) settles the growth as ``good_enough`` does: the climbs try no further move and the
-second climb is not made; the backward phase and the near ties run as below ``good_enough``.
-Two exceptions keep a stand-in at its own floor from ending the search. The smallest catalog
-is not settled by its floor: a law that lacks a family makes up for it with large
-coefficients on noisy columns, whose noise raises its floor with its residual (two coupled
-carts at 2 % noise: the uncoupled catalog is 1.4 times its floor, the law 0.85 times its own,
-2.6 times lower); the first moves and the first pass of the climb compare it with the
-catalogs one move away. And the floor stops a climb before a move, not within one: a degree
-move that is kept still looks one degree further, and the backward phase still exchanges a
-family that stands in for another (on the quartic rotor at 5 % noise, the cosine beside
-``phi^2`` is at its floor on the recorded angles; ``phi^4`` is then tried, and the near ties
-choose it). Free of noise, the estimated level and the floor are round-off (about ``1e-9`` of
-the criterion's scale, far below :data:`EXACT` and ``good_enough``), and nothing changes. The
-floor leaves out what the fitted coefficients owe to the training rows' noise and the
-smoother's bias, so a right law's criterion can be above it (on the generic systems at 1 and 5
-% noise: 0.87 to 1.1 times it with two or more coordinates, where the stop applies; 1.2 to 1.7
-times with one, where the climb goes on as without it). The chosen
+noise, and no catalog explains it. So the growth asks, of each catalog it keeps, the
+criterion's noise floor (``noise_floor``; :attr:`GrowthStep.noise_floor`): the criterion that
+the noise of the positions alone leaves to its fitted laws, from the held-out rows' noise draws
+(:mod:`.floor`). A kept catalog within ``tolerance`` of its floor (a discrepancy principle: a
+move must lower the criterion by the tolerance to be kept) settles the growth as
+``good_enough`` does: the climbs try no further move and the second climb is not made; the
+backward phase and the near ties run as below ``good_enough``. Two exceptions keep a stand-in
+at its own floor from ending the search. The smallest catalog is not settled by its floor: a
+law that lacks a family makes up for it with large coefficients on noisy columns, which raise
+its floor with its residual (two coupled carts at 2 % noise: the uncoupled catalog is 1.4 times
+its floor, the law 0.85 times its own, 2.6 times lower). And the floor stops a climb before a
+move, not within one: a kept degree move still looks one degree further, and the backward phase
+still exchanges a family that stands in for another (on the quartic rotor at 5 % noise the
+cosine beside ``phi^2`` is at its floor on the recorded angles; ``phi^4`` is then tried, and
+the near ties choose it). Free of noise the floor is round-off, far below :data:`EXACT` and
+``good_enough``, and nothing changes. A right law sits at 0.87 to 1.13 times its floor on the
+generic systems with two or more coordinates (where the stop applies), 1.2 to 1.7 times with
+one (where the climb goes on as without it). The chosen
 catalog is then fitted on all the data, each coordinate's splines kept whole or left out
 (:class:`~pysindy_xl.optimizers.GroupedOptimizer`), with the weak-form test functions that
 the search's fits used (:class:`~pysindy_xl.weak.BumpTestFunctions` of one half-width: the
