@@ -22,8 +22,8 @@ import numpy as np
 
 from ..fit.kinetic_scale import INERTIA_STATES as INERTIA_STATES
 from ..fit.kinetic_scale import inertial_columns as inertial_columns
-from ..fit.kinetic_scale import kinetic_relative_residuals
 from .automatic import AutomaticCatalog
+from .floor import combined_floor, held_out_scores
 
 __all__ = ["SearchSplit", "SearchData", "CandidateFits", "candidate_content", "evaluate_candidate",
            "held_out_error", "inertial_columns", "INERTIA_STATES", "parameters_key",
@@ -147,6 +147,12 @@ class SearchData:
         How the block errors make the criterion (:func:`combine_errors`). With
         ``"trimmed"``, a split whose fit raises scores inf on its blocks instead of failing
         the candidate (the trimmed criterion may leave it out).
+    floor : {"now", "later", "off"}, default "now"
+        The criterion's noise floor (:func:`~.floor.held_out_scores`): computed with the
+        errors (``noise_floor``); ``"later"``: not computed, the fitted models returned
+        (``models``, one per split, None where a fit failed) for
+        :func:`~.floor.models_floor` to compute it where it is asked for (the growth asks
+        only of the catalogs it keeps); ``"off"``: not computed (NaN).
     """
 
     splits: list
@@ -155,6 +161,7 @@ class SearchData:
     forced: bool
     reported: tuple = (0, 1)
     combine: str = "rms"
+    floor: str = "now"
 
 
 def search_rows(search: SearchData, weak: bool) -> int:
@@ -240,19 +247,7 @@ def held_out_error(model, held, forced) -> float:
     float
         The relative error (inf where the norm is zero).
     """
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # blocks shorter than a test function: strong form
-        problem = model.regression(held["x"], held["t"], u=held["u"], formulation="weak",
-                                   propagate_noise=False)
-        if not len(problem.theta):
-            problem = model.regression(held["x"], held["t"], u=held["u"], formulation="strong")
-    forces = problem.force_columns
-    if forced and len(forces):
-        theta, coef = problem.theta, model.coef_[problem.catalog_map.columns]
-        target = theta[:, forces] @ coef[forces]
-        norm = float(np.linalg.norm(target))
-        return float(np.linalg.norm(theta @ coef) / norm) if norm > 0 else float("inf")
-    return float(np.sqrt(np.mean(np.square(kinetic_relative_residuals(model, problem)))))
+    return held_out_scores(model, held, forced, floor=False)[0]
 
 
 def evaluate_candidate(search: SearchData, parameters) -> dict:
@@ -275,9 +270,12 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
         held-out error of each block, in order over the splits; empty when not fitted),
         ``note`` (why not), ``seconds``, ``cpu_seconds`` and ``definite`` (the smallest
         fraction, over the splits' fits, of the training states at which the fitted mass
-        matrix is positive definite: ``XLSINDy.mass_matrix_check_``; 0 when not fitted) and
-        ``support`` (the names of the terms each split's fit kept; empty when a fit failed):
-        the fields of a :class:`~.growth.GrowthStep` but its move and verdict.
+        matrix is positive definite: ``XLSINDy.mass_matrix_check_``; 0 when not fitted),
+        ``support`` (the names of the terms each split's fit kept; empty when a fit failed)
+        and ``noise_floor`` (the criterion's noise floor, :data:`SearchData.floor`; NaN
+        where not computed): the fields of a :class:`~.growth.GrowthStep` but its move and
+        verdict; with ``search.floor == "later"`` and a fitted catalog, also ``models`` (the
+        fitted model of each split, None where its fit failed).
     """
     from sklearn.base import clone
 
@@ -287,7 +285,8 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     def failed(note, size=0, description=""):
         return {"description": description, "terms": size, "active": 0, "time_error": np.inf,
                 "region_error": np.inf, "criterion": np.inf, "note": note, "seconds": 0.0,
-                "cpu_seconds": 0.0, "definite": 0.0, "block_errors": (), "support": ()}
+                "cpu_seconds": 0.0, "definite": 0.0, "block_errors": (), "support": (),
+                "noise_floor": float("nan")}
 
     try:
         size = catalog.n_terms
@@ -299,7 +298,8 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     n = search.splits[0].train["x"][0].shape[1]
     if min(sum(len(p) for p in split.train["x"]) for split in search.splits) * n < 10 * size:
         return failed("too few samples for this size", size, description)
-    errors, active, definite, notes, support = [], [], [], [], []
+    errors, floors, active, definite, notes, support, models = [], [], [], [], [], [], []
+    now = search.floor == "now"
     for split in search.splits:
         try:
             model = clone(search.template).set_params(
@@ -309,14 +309,19 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
                 model.fit(**split.train)
             if model.dynamics_ is None:
                 raise ValueError("no acceleration in the identified equations")
-            errors += [held_out_error(model, held, search.forced) for held in split.blocks]
+            scores = [held_out_scores(model, held, search.forced, now) for held in split.blocks]
+            errors += [error for error, _ in scores]
+            floors += [floor for _, floor in scores]
         except Exception as error:  # noqa: BLE001 - a failed candidate loses, reported
             note = f"fit failed: {type(error).__name__}: {error}"[:200]
             if search.combine == "rms":
                 return failed(note, size, description)
             errors += [np.inf] * len(split.blocks)  # the trimmed criterion may leave it out
+            floors += [np.inf] * len(split.blocks)
             notes.append(note)
+            models.append(None)
             continue
+        models.append(model)
         coefficients = model.coefficients()
         active.append(int(np.count_nonzero(coefficients)))
         support.append(tuple(name for name, value in zip(model.get_feature_names(), coefficients,
@@ -327,14 +332,17 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
         return failed(notes[0], size, description)
     value = combine_errors(errors, search.combine)
     time_block, region_block = search.reported
-    return {"description": description, "terms": size, "active": int(np.median(active)),
+    extra = {"models": tuple(models)} if search.floor == "later" else {}
+    return {**extra, "description": description, "terms": size, "active": int(np.median(active)),
             "time_error": errors[time_block], "region_error": errors[region_block],
             "criterion": value, "note": (f"{len(notes)} of {len(search.splits)} fits failed"
                                          if notes else ""),
             "seconds": time.perf_counter() - started, "cpu_seconds": time.process_time() - cpu,
             "definite": min(definite) if not notes else 0.0,
             "block_errors": tuple(float(e) for e in errors),
-            "support": tuple(support) if not notes else ()}
+            "support": tuple(support) if not notes else (),
+            "noise_floor": (combined_floor(errors, floors, search.combine) if now
+                            else float("nan"))}
 
 
 def candidate_content(search: SearchData, parameters):

@@ -18,6 +18,7 @@ import numpy as np
 from .automatic import AutomaticCatalog
 from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import parameters_key
+from .floor import floor_reached, models_floor
 from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
 from .moves import REPEATED, START, holds, moved
 from .path import GrowthStep
@@ -51,6 +52,9 @@ class Climber:
         The criterion's name in the progress lines (``"forces"``, ``"accelerations"``).
     progress : callable or None
         Called with a line of text after each step.
+    noise_floor : bool, default True
+        A criterion at its noise floor stops a climb as one below ``good_enough`` does
+        (:meth:`settled`).
 
     Attributes
     ----------
@@ -66,15 +70,16 @@ class Climber:
     """
 
     def __init__(self, fits, second_fits, fixed, kinds, *, tolerance, good_enough, physical,
-                 retry_kinetic, criterion, progress=None):
+                 retry_kinetic, criterion, progress=None, noise_floor=True):
         self.fits, self.second_fits, self.fixed = fits, second_fits, fixed
         self.kinds, self.n = list(kinds), len(kinds)
         self.tolerance, self.good_enough, self.physical = tolerance, good_enough, physical
         self.retry_kinetic, self.criterion, self.progress = retry_kinetic, criterion, progress
-        self.consensus = second_fits is not None
+        self.consensus, self.noise_floor = second_fits is not None, noise_floor
         self.steps, self.first = [], None
         self._cache = {}  # every catalog is fitted once, whichever path tries it
         self._parameters = {}  # the parameters of each step, by the step's id
+        self._models = {}  # the fitted models of each step (its floor asked later), by id
         self._seconds = {}  # the second judge's steps, by the first's (of "consensus")
 
     # -- fitting and judging ---------------------------------------------------------------
@@ -94,7 +99,10 @@ class Climber:
         -------
         GrowthStep
         """
-        step = GrowthStep(move=move, chosen=False, **self.fits.get(parameters, ahead))
+        fields = self.fits.get(parameters, ahead)
+        step = GrowthStep(move=move, chosen=False,
+                          **{key: value for key, value in fields.items() if key != "models"})
+        self._models[id(step)] = fields.get("models")
         if self.physical and step.definite < 1 and not step.note:
             step.note = (f"mass matrix not positive definite on {1 - step.definite:.0%} of "
                          "the training states")
@@ -347,11 +355,43 @@ class Climber:
             out += [p for p, _ in self.pairs(state, order, seen)]
         return out[1:]  # (the first is the current one)
 
-    def _going(self, state, best, end) -> bool:
-        """Whether a climb at ``state`` (its step ``best``) goes on: the criterion is above
-        ``good_enough`` and the catalog does not hold ``end`` (:func:`~.moves.holds`; None:
-        no end)."""
-        return best.criterion > self.good_enough and (end is None or not holds(state, end))
+    def settled(self, step, floor=True) -> bool:
+        """Whether ``step``'s criterion leaves nothing for a larger catalog to find: below
+        ``good_enough``, or (with ``noise_floor``) at its noise floor
+        (:func:`~.floor.floor_reached` with the keep tolerance: the residual is what the
+        positions' noise alone leaves to a right law, and a move that lowers it by less than
+        the tolerance is not kept). The smallest catalog is not settled by its floor: a law
+        that lacks a family makes up for it with large coefficients on noisy columns, which
+        raise its floor with its residual (two coupled carts at 2 % noise: 1.42 times its
+        floor where the law is at 0.85 times its own, 2.6 times lower); the first moves and
+        the climb's first pass compare it with the catalogs one move away.
+
+        Parameters
+        ----------
+        step : GrowthStep
+            A step this climber fitted.
+        floor : bool, default True
+            Whether the noise floor counts (False: ``good_enough`` only).
+
+        Returns
+        -------
+        bool
+        """
+        if not step.criterion > self.good_enough:
+            return True
+        if not (floor and self.noise_floor and step is not self.first):
+            return False
+        models = self._models.get(id(step))
+        if np.isnan(step.noise_floor) and models is not None and np.isfinite(step.criterion):
+            # the floor is computed only for the catalogs whose criterion decides a climb
+            step.noise_floor = models_floor(self.fits.search, models, step.block_errors)
+        return floor_reached(step.criterion, step.noise_floor, self.tolerance)
+
+    def _going(self, state, best, end, floor=True) -> bool:
+        """Whether a climb at ``state`` (its step ``best``) goes on: the criterion is not
+        settled (:meth:`settled`, with ``floor``) and the catalog does not hold ``end``
+        (:func:`~.moves.holds`; None: no end)."""
+        return not self.settled(best, floor) and (end is None or not holds(state, end))
 
     def _attempt_within_ceiling(self, parameters, move, tried, ahead=()) -> tuple:
         """The parameters and the step of a climb's move (:meth:`attempt`), recorded in
@@ -442,12 +482,18 @@ class Climber:
         """
         state, best, path = dict(START), self.first, []
         tried = {parameters_key(state)}
-        improved = best.criterion > self.good_enough
+        improved = not self.settled(best)
         while improved and self._going(state, best, end):
             improved = False
             for index, move in enumerate(order):
                 skip = 0  # a degree move looks one degree further before it stops
-                while self._going(state, best, end):
+                # the floor stops the climb before a move, not within one: a degree that
+                # stands in for the next (a cosine beside phi^2 for phi^4) may be at its floor
+                # on the recorded states, and the look one degree further puts the law
+                # among the near ties
+                repeated = False
+                while self._going(state, best, end, floor=not repeated):
+                    repeated = True
                     parameters = self.moved(state, move, skip)
                     if parameters is None or parameters_key(parameters) in tried:
                         break
@@ -519,9 +565,10 @@ class Climber:
                 else:
                     refused.append((move, parameters))
             # a family that stands in for another is not given up alone: exchange it for the
-            # other (while the criterion is not good enough, as for the pairs of moves)
+            # other (while the criterion is not good enough: at its noise floor too, where a
+            # stand-in and the law it stands in for may both be)
             exchanges = []
-            for move, smaller in (refused if not dropped and best.criterion > self.good_enough
+            for move, smaller in (refused if not dropped and not self.settled(best, False)
                                   else ()):
                 for other in EXCHANGES.get(move, ()):
                     for skip in (0, 1) if other in moves else ():

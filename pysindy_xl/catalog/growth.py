@@ -80,16 +80,17 @@ needs more terms than ``theta^2``); with ``physical``, a catalog whose fits all 
 positive definite mass matrix on their training states is never given up for one whose fits
 have not (a model whose mass matrix is not positive definite cannot be simulated there; the
 climb may pass through such stand-ins only while it holds no physical catalog). The degree
-moves repeat while they do (and look one degree further before they stop), and the growth
-stops when a whole pass keeps nothing or the criterion is below ``good_enough`` (unforced
-data: :data:`EXACT`). Before it stops, pairs of the moves that are not repeated (kinetic,
-interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither
-alone (a coupling ``cos(a - b) a_dot b_dot`` needs both the products of two angles' functions
-and configuration-dependent kinetic coefficients). With ``steepest``, each step of a climb
-tries every move from the kept catalog and keeps the best instead of the first that improves
-(the pairs where none does): a move that helps only once another is in (the coupled damping
-of a coupling's links, poor alone) is not passed over for a stand-in that the order of the
-moves alone tries first. Catalogs over ``max_terms`` are not tried (reported as the ceiling);
+moves repeat while they do (and look one degree further before they stop), and the growth stops
+when a whole pass keeps nothing or the criterion is settled: below ``good_enough`` (unforced
+data: :data:`EXACT`), or at its noise floor (``noise_floor``, below). Before it stops, pairs of
+the moves that are not repeated (kinetic, interaction, gyroscopic, Coulomb) are tried together:
+a law may gain from neither alone (a coupling ``cos(a - b) a_dot b_dot`` needs both the
+products of two angles' functions and configuration-dependent kinetic coefficients). With
+``steepest``, each step of a climb tries every move from the kept catalog and keeps the best
+instead of the first that improves (the pairs where none does): a move that helps only once
+another is in (the coupled damping of a coupling's links, poor alone) is not passed over for a
+stand-in that the order of the moves alone tries first. Catalogs over ``max_terms`` are not
+tried (reported as the ceiling);
 by default the ceiling follows the data: at most ``1 / ROWS_PER_TERM`` of the rows of the
 search's fits (a selection over more columns than half its equations is ill-posed at noise),
 and at most :data:`MAX_TERMS`; a move of the climb that this ceiling refuses is then tried
@@ -110,7 +111,7 @@ terms the smaller catalog is kept within the tolerance too (the stand-in family 
 family whose drop is not kept alone is exchanged for the one it stands in for (sines and
 cosines, or a degree of them, for one or two more powers of the angle, powers for a sine
 degree, splines for powers: ``"-trig+angle_degree"``, the forward step of the search, taken
-where a stand-in leaves, while the criterion is above ``good_enough``). The phase repeats,
+where a stand-in leaves, while the criterion is not settled). The phase repeats,
 never back to a catalog already kept, until nothing is dropped (:mod:`.backward`). The two
 held-out blocks of each run judge cheaply (one fit per catalog) but on two fifths of the data:
 where a stand-in and the law differ by little on the recorded states, that judgment's noise
@@ -118,7 +119,27 @@ decides between them. So, last, the near ties of the criterion are judged again 
 (``tie_break``, :mod:`.ties`): each by ``n_blocks`` fits, every block held out in turn, and the
 keep rule chooses on the RMS of all the blocks' errors; each law is stated by the smallest
 catalog whose fit kept exactly its terms (a larger one only offers the final fit more columns
-to choose stand-ins from). The chosen
+to choose stand-ins from).
+
+With noisy positions the criterion of a right law is not small: the held-out rows carry the
+noise, and no catalog explains it. So the growth asks, of each catalog it keeps, the
+criterion's noise floor (``noise_floor``; :attr:`GrowthStep.noise_floor`): the criterion that
+the noise of the positions alone leaves to its fitted laws, from the held-out rows' noise draws
+(:mod:`.floor`). A kept catalog within ``tolerance`` of its floor (a discrepancy principle: a
+move must lower the criterion by the tolerance to be kept) settles the growth as
+``good_enough`` does: the climbs try no further move and the second climb is not made; the
+backward phase and the near ties run as below ``good_enough``. Two exceptions keep a stand-in
+at its own floor from ending the search. The smallest catalog is not settled by its floor: a
+law that lacks a family makes up for it with large coefficients on noisy columns, which raise
+its floor with its residual (two coupled carts at 2 % noise: the uncoupled catalog is 1.4 times
+its floor, the law 0.85 times its own, 2.6 times lower). And the floor stops a climb before a
+move, not within one: a kept degree move still looks one degree further, and the backward phase
+still exchanges a family that stands in for another (on the quartic rotor at 5 % noise the
+cosine beside ``phi^2`` is at its floor on the recorded angles; ``phi^4`` is then tried, and
+the near ties choose it). Free of noise the floor is round-off, far below :data:`EXACT` and
+``good_enough``, and nothing changes. A right law sits at 0.87 to 1.13 times its floor on the
+generic systems with two or more coordinates (where the stop applies), 1.2 to 1.7 times with
+one (where the climb goes on as without it). The chosen
 catalog is then fitted on all the data, each coordinate's splines kept whole or left out
 (:class:`~pysindy_xl.optimizers.GroupedOptimizer`), with the weak-form test functions that
 the search's fits used (:class:`~pysindy_xl.weak.BumpTestFunctions` of one half-width: the
@@ -237,7 +258,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                  moves=MOVES, search_optimizer="auto", search_samples: int | None = 6000,
                  cross_validate: bool = False, region: str = "block",
                  physical: bool = False, steepest: bool = False, progress=None,
-                 n_jobs=None, combine: str = "rms", tie_break: bool = True):
+                 n_jobs=None, combine: str = "rms", tie_break: bool = True,
+                 noise_floor: bool = True):
     """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
 
     Parameters
@@ -270,8 +292,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         which a move that fits fewer terms is kept).
     good_enough : float, default 0.002
         With forces, the growth stops once the criterion is below this relative error
-        (unforced data: below :data:`EXACT`, a law exact to the data's precision; every move
-        is tried otherwise).
+        (unforced data: below :data:`EXACT`, a law exact to the data's precision), or at its
+        noise floor (``noise_floor``); every move is tried otherwise.
     moves : sequence of str, default MOVES
         The moves tried (some of :data:`MOVES` and :data:`MORE_MOVES`); the backward phase
         drops the families of these moves only (``"trig_degree"``: the sines and cosines too).
@@ -357,6 +379,22 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         ``region="consensus"`` (whose second fold judges what the blocks cannot tell apart:
         the blocks alone would undo its choice).
 
+    noise_floor : bool, default True
+        Settle the growth, as ``good_enough`` does, once a kept catalog's criterion is within
+        ``tolerance`` of its noise floor (:attr:`GrowthStep.noise_floor`: the criterion
+        that the noise of the positions alone leaves to the step's fitted laws,
+        :func:`~.floor.held_out_scores`):
+
+        .. math:: c \\le (1 + \\text{tolerance})\\, f, \\qquad
+                  f = \\frac{\\sqrt{\\tfrac1D \\sum_d \\|\\Delta_d \\xi\\|^2}}{s},
+
+        with ``Delta_d`` the held-out rows' noise draws and ``s`` the criterion's scale
+        (computed for the kept catalogs; the smallest catalog is not settled by it). The
+        climbs try no further move (a kept degree move still looks one degree further) and
+        the second climb is not made; the backward phase (its exchanges too) and the near
+        ties run as below ``good_enough``. Free of noise the floor is round-off, and the
+        growth is the same either way. False: the floor is neither computed nor used.
+
     Returns
     -------
     GrowthResult
@@ -405,6 +443,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     check_option("physical", physical, "bool")
     check_option("steepest", steepest, "bool")
     check_option("tie_break", tie_break, "bool")
+    check_option("noise_floor", noise_floor, "bool")
     if combine not in COMBINES:
         raise ValueError(f"combine: expected one of {COMBINES}, got {combine!r}")
     if combine == "trimmed" and not (cross_validate and n_blocks >= MIN_TRIMMED_BLOCKS):
@@ -463,7 +502,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
 
     search = SearchData([SearchSplit(bounds, train, held)
                          for bounds, (train, held) in zip(searched, splits, strict=True)],
-                        template, fixed["max_terms"], forced, reported, combine)
+                        template, fixed["max_terms"], forced, reported, combine,
+                        floor="later" if noise_floor else "off")
     rows = search_rows(search, final_weak)
     if max_terms == "auto":  # a selection over more columns than half its rows is ill-posed
         search.max_terms = min(MAX_TERMS, rows // ROWS_PER_TERM)
@@ -473,14 +513,14 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     second_fits = CandidateFits(SearchData(
         [SearchSplit(dict(fixed, bounds=_span(train["x"])), train, held)
          for train, held in second_splits], template, search.max_terms,
-        forced)) if consensus else None
+        forced, floor="off")) if consensus else None
 
     if not forced:  # no force sets the scale, an approximation can look small already: only
         good_enough = EXACT  # a law exact to the data's precision stops the growth
     climber = Climber(fits, second_fits, searched[0], kinds, tolerance=tolerance,
                       good_enough=good_enough, physical=physical,
                       retry_kinetic=max_terms == "auto", criterion=criterion,
-                      progress=progress)
+                      progress=progress, noise_floor=noise_floor)
 
     # the moves from the first catalog, each alone (a degree move also one degree further)
     queue = []
@@ -507,7 +547,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
 
     # rank the family moves by what each achieves alone from the first catalog (a degree move
     # looking one degree further); the flexible basis comes last, for what the families leave
-    alone, alone_steps = climber.first_moves(queue if first.criterion > good_enough else [])
+    alone, alone_steps = climber.first_moves([] if climber.settled(first) else queue)
     rank = {m: (1, c) for m, c in alone.items()}
     if consensus and alone:
         # the first fold's near ties (the moves it keeps within the tolerance of the best
@@ -527,7 +567,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     state, best, path = climber.steepest_climb(order) if steepest else climber.climb(order)
     promising = [m for m in order if m != "splines" and alone.get(m, np.inf)
                  < first.criterion * (1 - tolerance)]
-    if best.criterion > good_enough and len(promising) > 1:
+    if not climber.settled(best) and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]
         other = (climber.steepest_climb(order, promising[1], state) if steepest
                  else climber.climb(second, state))
@@ -544,7 +584,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             folds, _ = held_out_splits(arrays, n_blocks, stride, True, region, margin=width)
             judge = CandidateFits(SearchData(
                 [SearchSplit(dict(fixed, bounds=_span(train["x"])), train, held)
-                 for train, held in folds], template, search.max_terms, forced), n_jobs)
+                 for train, held in folds], template, search.max_terms, forced, floor="off"),
+                n_jobs)
             chosen = break_ties(ties, climber.parameters_of, judge, tolerance, progress)
             judge.close()
         if chosen is not best:

@@ -60,6 +60,14 @@ class GrowthStep:
         The names of the terms each split's fit kept (``XLSINDy.get_feature_names`` with a
         nonzero coefficient), in order over the splits; empty when not fitted or when a fit
         failed. Two catalogs with the same support hold the same law on the search's data.
+    noise_floor : float, default nan
+        The criterion's noise floor: its value for the residual that the positions' noise
+        alone leaves to the step's fitted laws on the held-out blocks, combined over the
+        blocks as the criterion is (:func:`~.floor.held_out_scores`); 0 where the noise is
+        not propagated. :func:`~.growth.grow_catalog` computes it for the catalogs whose
+        criterion decides whether a climb goes on (the ones it keeps), NaN elsewhere and
+        where the catalog was not fitted. A criterion within the tolerance of it stops the
+        climb as ``good_enough`` does.
 
     Examples
     --------
@@ -85,6 +93,7 @@ class GrowthStep:
     block_errors: tuple = ()
     tie_error: float = float("nan")
     support: tuple = ()
+    noise_floor: float = float("nan")
 
 
 @dataclasses.dataclass
@@ -129,16 +138,20 @@ class GrowthResult:
         -------
         str
             Header and one line per step: move, terms, kept terms, the held-out errors on the
-            time block and on the region block, the criterion, where near ties were judged
+            time block and on the region block, the criterion, its noise floor
+            (:attr:`GrowthStep.noise_floor`; where a step reports one: a criterion within the
+            tolerance of it stopped the climb), where near ties were judged
             again its cross-validation on all the blocks (:func:`~.ties.break_ties`; ``-``
             for the other steps), and whether it was chosen: ``yes`` for a catalog kept on
             the way, ``result`` for the one the model was fitted with (the near ties may
             choose a catalog kept before later ones, or a smaller one stating the same law).
         """
         ties = any(np.isfinite(step.tie_error) for step in self.steps)
+        floors = any(np.isfinite(step.noise_floor) for step in self.steps)
         header = (f"{'step':>4}  {'move':<13}{'terms':>6}{'kept':>6}{'time err':>10}"
-                  f"{'region err':>12}{'criterion':>11}" + (f"{'all blocks':>12}" if ties else "")
-                  + "  chosen")
+                  f"{'region err':>12}{'criterion':>11}"
+                  + (f"{'noise floor':>13}" if floors else "")
+                  + (f"{'all blocks':>12}" if ties else "") + "  chosen")
         lines = [header, "-" * len(header)]
 
         def pct(value):
@@ -156,6 +169,7 @@ class GrowthResult:
             lines.append(f"{k:>4}  {step.move:<13}{step.terms:>6}{step.active:>6}"
                          f"{pct(step.time_error)}{pct(step.region_error):>12}"
                          f"{pct(step.criterion):>11}"
+                         + (f"{pct(step.noise_floor):>13}" if floors else "")
                          + (f"{pct(step.tie_error):>12}" if ties else "") + f"  {verdict}")
         return "\n".join(lines)
 

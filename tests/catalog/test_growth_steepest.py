@@ -109,8 +109,9 @@ def test_the_steepest_climb_retries_a_refused_move_with_constant_kinetic_coeffic
 
 
 def test_the_second_steepest_climb_is_given_the_first_ones_end(three_masses, monkeypatch):
-    """With ``good_enough=0`` the growth climbs twice: the second steepest climb, from the
-    second-best first move (the interaction), stops at the first climb's end, the law."""
+    """With ``good_enough=0`` (and no noise floor) the growth climbs twice: the second
+    steepest climb, from the second-best first move (the interaction), stops at the first
+    climb's end, the law."""
     _, t, xs, us = three_masses
     monkeypatch.setattr(growth_module, "MAX_TERMS", 100)
     calls, climb = [], Climber.steepest_climb
@@ -123,7 +124,7 @@ def test_the_second_steepest_climb_is_given_the_first_ones_end(three_masses, mon
     monkeypatch.setattr(Climber, "steepest_climb", recorded)
     found = grow_catalog(xs, [t, t], us, coordinates=["x1", "x2", "x3"], kinds="linear",
                          moves=("kinetic", "interaction", "degree"), steepest=True,
-                         good_enough=0.0)
+                         good_enough=0.0, noise_floor=False)
     law = dict(START, interaction=2, degree=4)
     assert [(forced, end) for forced, end, _ in calls] == [(None, None), ("interaction", law)]
     assert calls[0][2] == calls[1][2] == law

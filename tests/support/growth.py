@@ -201,3 +201,48 @@ def log_cosh_well():
                                 frame=frame)
     method.form_lagranges_equations()
     return scalar_laws(method, q, qd, tau)
+
+
+#: Two carts on springs, coupled by a third: ``L = CART_MASSES . x_dot^2 / 2 - CART_SPRINGS[0]
+#: x1^2 / 2 - CART_SPRINGS[1] x2^2 / 2 - COUPLING (x1 - x2)^2 / 2``, viscous damping
+#: ``CART_DAMPING`` on each.
+CART_MASSES, CART_SPRINGS, COUPLING, CART_DAMPING = (1.0, 1.5), (2.0, 3.0), 1.6, 0.1
+
+
+def coupled_carts():
+    """Two carts on springs coupled by a spring, by ``LagrangesMethod``, unforced.
+
+    Returns
+    -------
+    accelerations : callable
+        ``accelerations(q, qd)`` of arrays (N, 2): ``qdd`` (N, 2), from sympy's mass matrix and
+        forcing.
+    """
+    from sympy.physics import mechanics as me
+    q = me.dynamicsymbols("x1 x2")
+    qd = [me.dynamicsymbols(f"x{i + 1}", 1) for i in range(2)]
+    frame = me.ReferenceFrame("N")
+    origin = me.Point("O")
+    origin.set_vel(frame, 0)
+    carts = []
+    for i, mass in enumerate(CART_MASSES):
+        point = origin.locatenew(f"P{i}", q[i] * frame.x)
+        point.set_vel(frame, qd[i] * frame.x)
+        carts.append(me.Particle(f"cart{i}", point, mass))
+    carts[0].potential_energy = CART_SPRINGS[0] * q[0] ** 2 / 2 + COUPLING * (q[0] - q[1]) ** 2 / 2
+    carts[1].potential_energy = CART_SPRINGS[1] * q[1] ** 2 / 2
+    method = me.LagrangesMethod(me.Lagrangian(frame, *carts), q, forcelist=[
+        (cart.point, -CART_DAMPING * qd[i] * frame.x) for i, cart in enumerate(carts)],
+        frame=frame)
+    method.form_lagranges_equations()
+    states = list(q) + list(qd)
+    mass = sp.lambdify(states, method.mass_matrix)
+    forcing = sp.lambdify(states, method.forcing)
+
+    def accelerations(qv, qdv):
+        qv, qdv = np.atleast_2d(qv), np.atleast_2d(qdv)
+        return np.array([np.linalg.solve(np.asarray(mass(*a, *b), float),
+                                         np.asarray(forcing(*a, *b), float).ravel())
+                         for a, b in zip(qv, qdv, strict=True)])
+
+    return accelerations
