@@ -12,7 +12,8 @@ shape,
 
 with ``phi`` the products of single-coordinate functions (:mod:`.bases`) over at most
 ``interaction`` coordinates, ``kappa`` a constant or (``kinetic="configuration"``) such a
-product of low degree, and ``gamma`` the first-degree functions of another coordinate. Per
+product of low degree over at most ``kinetic_interaction`` coordinates (by default
+``interaction``), and ``gamma`` the first-degree functions of another coordinate. Per
 coordinate it adds dissipation (viscous ``qd_i``, smooth Coulomb ``tanh(qd_i / eps_i)``; with
 ``"coupled"`` each velocity's viscous force in every equation, a Rayleigh function with
 cross terms) as classical terms, and the force columns. Terms that are trigonometric
@@ -151,8 +152,18 @@ class AutomaticCatalog(CatalogRepartition):
         Most coordinates in one product of functions.
     kinetic : {"constant", "configuration"}, default "configuration"
         Coefficients of the velocity products ``qd_i qd_j``: constants, or also products (over
-        ``interaction`` coordinates) of linear coordinates up to degree 2 and of sines and
-        cosines of degree 1.
+        ``kinetic_interaction`` coordinates) of linear coordinates up to degree 2 and of sines
+        and cosines of degree 1.
+    kinetic_interaction : int or None, default None
+        Most coordinates in one configuration-dependent kinetic coefficient ``kappa(q)``
+        (None: ``interaction``). The potential's products keep ``interaction``: with
+        ``kinetic_interaction=1, interaction=2`` the catalog holds
+        ``kappa(q_k) qd_i qd_j`` (``cos(a) a_dot x_dot``) and ``phi(q_k) phi(q_l)``
+        (``x1 x2``) but no ``kappa(q_k, q_l) qd_i qd_j``: of the
+        ``(1 + K_1 + K_2 + ...) n (n + 1) / 2`` kinetic terms (``K_m``: the products of
+        ``m`` coordinates' low-degree functions) only ``1 + K_1`` per velocity product are
+        kept. Ignored with ``kinetic="constant"``; the gyroscopic terms are functions of one
+        other coordinate whatever the orders.
     gyroscopic : bool, default False
         Add ``f(q_k) qd_i`` (``k != i``; ``f`` a linear coordinate, a sine or a cosine).
     dissipation : str, sequence of {"viscous", "coulomb", "coupled"} or None, default ("viscous",)
@@ -200,6 +211,7 @@ class AutomaticCatalog(CatalogRepartition):
         "trig_degree": [Interval("int", 0)],
         "angle_degree": [Interval("int", 0)],
         "interaction": [Interval("int", 1)],
+        "kinetic_interaction": [None, Interval("int", 1)],
         "kinetic": [Options(("constant", "configuration"))],
         "gyroscopic": [Boolean()],
         "dissipation": [None, Options(DISSIPATION), Collection("a sequence of dissipation models")],
@@ -213,7 +225,7 @@ class AutomaticCatalog(CatalogRepartition):
     def __init__(self, coordinates, kinds=None, bounds=None, degree=2, trig_degree=1,
                  angle_degree=0, interaction=1, kinetic="configuration", gyroscopic=False,
                  dissipation=("viscous",), coulomb_scale=0.01, splines=None, interlink=None,
-                 max_terms=2000):
+                 max_terms=2000, kinetic_interaction=None):
         self.coordinates = coordinates
         self.kinds = kinds
         self.bounds = bounds
@@ -228,6 +240,7 @@ class AutomaticCatalog(CatalogRepartition):
         self.splines = splines
         self.interlink = interlink
         self.max_terms = max_terms
+        self.kinetic_interaction = kinetic_interaction
 
     # -- the parameters, checked ---------------------------------------------------------------
     def _coordinates(self) -> Coordinates:
@@ -249,6 +262,9 @@ class AutomaticCatalog(CatalogRepartition):
         for name, low in (("degree", 0), ("trig_degree", 0), ("angle_degree", 0),
                           ("interaction", 1), ("max_terms", 1)):
             options[name] = check_option(name, getattr(self, name), "int", low=low)
+        options["kinetic_interaction"] = (
+            options["interaction"] if self.kinetic_interaction is None else
+            check_option("kinetic_interaction", self.kinetic_interaction, "int", low=1))
         options["kinetic"] = check_option("kinetic", self.kinetic, "choice",
                                           choices=("constant", "configuration"))
         options["gyroscopic"] = check_option("gyroscopic", self.gyroscopic, "bool")
@@ -363,12 +379,12 @@ class AutomaticCatalog(CatalogRepartition):
                 groups.setdefault(owners[term], []).append(j)
         return [groups[i] for i in sorted(groups)]
 
-    def _products(self, options, factors) -> list[tuple[sp.Expr, int, bool]]:
-        """Products over at most ``interaction`` coordinates of one factor each, as
+    def _products(self, options, factors, order="interaction") -> list[tuple[sp.Expr, int, bool]]:
+        """Products over at most ``options[order]`` coordinates of one factor each, as
         (expression, polynomial degree, whether it is a trigonometric polynomial)."""
         out = []
         n = len(factors)
-        for size in range(1, min(options["interaction"], n) + 1):
+        for size in range(1, min(options[order], n) + 1):
             for subset in itertools.combinations(range(n), size):
                 for choice in itertools.product(*(factors[i] for i in subset)):
                     degree = sum(c[1] for c in choice)
@@ -412,7 +428,7 @@ class AutomaticCatalog(CatalogRepartition):
         if options["kinetic"] == "configuration":
             factors = self._factors(options, min(options["degree"], 2),
                                     min(options["trig_degree"], 1), 0)
-            kappas += self._products(options, factors)
+            kappas += self._products(options, factors, "kinetic_interaction")
         for kappa, _, trig in kappas:
             for i, j in itertools.combinations_with_replacement(range(n), 2):
                 terms.append(kappa * coords.qd[i] * coords.qd[j])
@@ -486,7 +502,8 @@ class AutomaticCatalog(CatalogRepartition):
         if total > options["max_terms"]:
             raise ValueError(f"max_terms: the catalog would have {total} terms, more than "
                              f"max_terms={options['max_terms']}; lower degree, trig_degree, "
-                             "angle_degree, interaction or splines, or raise max_terms")
+                             "angle_degree, interaction, kinetic_interaction or splines, or "
+                             "raise max_terms")
         libraries = [ExternalForces(coords, interlink=self.interlink)]
         polynomial = [t for t, f in zip(terms, fast, strict=True) if f]
         other = [t for t, f in zip(terms, fast, strict=True) if not f]
@@ -534,6 +551,9 @@ class AutomaticCatalog(CatalogRepartition):
                 text += (", " if kind != "linear" else "") + f"{splines[1]} natural splines"
             parts.append(text)
         extras = [f"interaction {options['interaction']}", f"kinetic {options['kinetic']}"]
+        if options["kinetic"] == "configuration" and self.kinetic_interaction is not None \
+                and options["kinetic_interaction"] != options["interaction"]:
+            extras[-1] += f" (interaction {options['kinetic_interaction']})"
         if options["gyroscopic"]:
             extras.append("gyroscopic")
         extras.append("dissipation " + ("+".join(options["dissipation"]) or "none"))
@@ -559,4 +579,4 @@ class AutomaticCatalog(CatalogRepartition):
 _DEFAULTS = {"kinds": None, "bounds": None, "degree": 2, "trig_degree": 1, "angle_degree": 0,
              "interaction": 1, "kinetic": "configuration", "gyroscopic": False,
              "dissipation": ("viscous",), "coulomb_scale": 0.01, "splines": None,
-             "interlink": None, "max_terms": 2000}
+             "interlink": None, "max_terms": 2000, "kinetic_interaction": None}
