@@ -88,10 +88,14 @@ def removed(state: dict, move: str, kinds, start: dict) -> dict | None:
         if state[move] <= start[move]:
             return None
         new[move] = state[move] - 1
+        if new.get("kinetic_interaction") == new["interaction"]:  # (the default order)
+            new.pop("kinetic_interaction")
     elif move in ("kinetic", "gyroscopic"):
         if state[move] == start[move]:
             return None
         new[move] = start[move]
+        if move == "kinetic":  # (the order of the kinetic coefficients goes with them)
+            new.pop("kinetic_interaction", None)
     else:  # coulomb
         if "coulomb" not in state["dissipation"]:
             return None

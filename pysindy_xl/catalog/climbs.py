@@ -20,7 +20,7 @@ from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import parameters_key
 from .floor import floor_reached, models_floor
 from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
-from .moves import REPEATED, START, holds, moved
+from .moves import REPEATED, START, holds, kinetic_order, moved
 from .path import GrowthStep
 
 __all__ = ["Climber"]
@@ -398,15 +398,29 @@ class Climber:
         ``tried``; a move that the ceiling refuses is tried again with constant kinetic
         coefficients (``f"{move}-kinetic"``) where ``retry_kinetic`` and that catalog is not
         in ``tried``: configuration-dependent ones multiply the catalog by the velocity
-        monomials."""
+        monomials. Where that retry is not made (the catalog is tried already) or the ceiling
+        refuses it too, configuration-dependent kinetic coefficients over products of several
+        coordinates' functions are tried over single coordinates' functions instead
+        (``kinetic_interaction=1``, ``f"{move}@k1"``), the potential's products kept: a cart's
+        pendulum ``cos(a) a_dot x1_dot`` beside the spring ``x1 x2`` that couples two carts."""
         tried.add(parameters_key(parameters))
         step = self.attempt(parameters, move, ahead)
+        if not (step.note.startswith("ceiling") and self.retry_kinetic):
+            return parameters, step
+        original = parameters
         smaller = dict(parameters, kinetic=START["kinetic"])
-        if (step.note.startswith("ceiling") and parameters_key(smaller) not in tried
-                and self.retry_kinetic):  # the kinetic coefficients give way
+        smaller.pop("kinetic_interaction", None)
+        if parameters_key(smaller) not in tried:  # the kinetic coefficients give way
             tried.add(parameters_key(smaller))
             parameters, step = smaller, self.attempt(smaller, f"{move}-kinetic")
-        return parameters, step
+            if not step.note.startswith("ceiling"):
+                return parameters, step
+        narrower = dict(original, kinetic_interaction=1)
+        if (original["kinetic"] != "configuration" or kinetic_order(original) <= 1
+                or parameters_key(narrower) in tried):
+            return parameters, step
+        tried.add(parameters_key(narrower))
+        return narrower, self.attempt(narrower, f"{move}@k1")
 
     def steepest_climb(self, order, forced=None, end=None) -> tuple:
         """From the first catalog (after the move ``forced``), try every move of ``order``

@@ -96,7 +96,13 @@ search's fits (a selection over more columns than half its equations is ill-pose
 and at most :data:`MAX_TERMS`; a move of the climb that this ceiling refuses is then tried
 with constant kinetic coefficients (``"degree-kinetic"``): configuration-dependent ones
 multiply the catalog by the velocity monomials, and a law that needs a higher degree of the
-potential with constant masses (three masses on quartic springs) is reached only so.
+potential with constant masses (three masses on quartic springs) is reached only so. Where
+that retry is the catalog already tried, or over the ceiling too, the move is tried with
+configuration-dependent kinetic coefficients of single coordinates' functions beside the
+potential's products of several (``kinetic_interaction=1`` of
+:class:`~.automatic.AutomaticCatalog`; ``"kinetic@k1"``): two carts coupled by a spring,
+each carrying a pendulum, need ``cos(a) a_dot x1_dot`` and ``x1 x2``, 123 terms so, where
+one interaction order for both makes 333.
 
 The climb only adds, and the start always holds an angle's sines and cosines: where families
 are nearly dependent on the data's range (``cos(phi) = 1 - phi^2/2 + phi^4/24 - ...``), the

@@ -2,7 +2,12 @@
 
 A catalog of :class:`~.automatic.AutomaticCatalog` is a set of parameters (degrees, the
 interaction order, the kinetic coefficients, the dissipation, the splines); a move changes one
-of them by one step (:func:`moved`), and a joint move two at once (:func:`joint_moves`).
+of them by one step (:func:`moved`), and a joint move two at once (:func:`joint_moves`). The
+kinetic coefficients share the potential's interaction order unless a state sets
+``kinetic_interaction`` (:func:`kinetic_order`): the climb does so where the ceiling refuses
+configuration-dependent kinetic coefficients over products of several coordinates'
+functions; the moves keep it as it is (an ``"interaction"`` move grows the potential's
+products alone).
 :func:`~.growth.grow_catalog` climbs by these moves from :data:`START`; the backward phase
 (:mod:`.backward`) undoes them.
 """
@@ -12,7 +17,7 @@ from __future__ import annotations
 import itertools
 
 __all__ = ["MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS", "REPEATED", "moved",
-           "joint_moves", "holds"]
+           "joint_moves", "holds", "kinetic_order"]
 
 #: The moves of the growth, in the order they are tried.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
@@ -148,7 +153,7 @@ def joint_moves(moves, kinds, n, size) -> list:
 def holds(state, other) -> bool:
     """Whether the catalog ``state`` holds every family of ``other``, each at least as far
     grown (degrees, interaction order, spline count; configuration-dependent kinetic
-    coefficients, gyroscopic terms, each dissipation model).
+    coefficients over as many coordinates, gyroscopic terms, each dissipation model).
 
     Parameters
     ----------
@@ -167,7 +172,34 @@ def holds(state, other) -> bool:
     False
     """
     return (all(state[key] >= other[key] for key in (*LIMITS, "interaction"))
-            and (state["kinetic"] == "configuration" or other["kinetic"] == "constant")
+            and (other["kinetic"] == "constant" or (state["kinetic"] == "configuration"
+                                                    and kinetic_order(state)
+                                                    >= kinetic_order(other)))
             and (state["gyroscopic"] or not other["gyroscopic"])
             and set(other["dissipation"]) <= set(state["dissipation"])
             and (state["splines"] or 0) >= (other["splines"] or 0))
+
+
+def kinetic_order(state) -> int:
+    """The most coordinates in one configuration-dependent kinetic coefficient of the catalog
+    ``state``: its ``kinetic_interaction`` where given (a climb's move that the ceiling
+    refuses may hold the kinetic coefficients to single coordinates' functions while the
+    potential's products grow), else its ``interaction``.
+
+    Parameters
+    ----------
+    state : dict
+        Catalog parameters (the keys of :data:`START`, optionally ``kinetic_interaction``).
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> kinetic_order(dict(START, interaction=2)), kinetic_order(
+    ...     dict(START, interaction=2, kinetic_interaction=1))
+    (2, 1)
+    """
+    order = state.get("kinetic_interaction")
+    return state["interaction"] if order is None else order
