@@ -20,7 +20,7 @@ from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import parameters_key
 from .floor import floor_reached, models_floor
 from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
-from .moves import REPEATED, START, holds, kinetic_order, moved
+from .moves import NARROW, REPEATED, START, holds, moved
 from .path import GrowthStep
 
 __all__ = ["Climber"]
@@ -415,12 +415,11 @@ class Climber:
             parameters, step = smaller, self.attempt(smaller, f"{move}-kinetic")
             if not step.note.startswith("ceiling"):
                 return parameters, step
-        narrower = dict(original, kinetic_interaction=1)
-        if (original["kinetic"] != "configuration" or kinetic_order(original) <= 1
-                or parameters_key(narrower) in tried):
+        narrower = moved(original, NARROW, self.kinds, self.n)
+        if narrower is None or parameters_key(narrower) in tried:
             return parameters, step
         tried.add(parameters_key(narrower))
-        return narrower, self.attempt(narrower, f"{move}@k1")
+        return narrower, self.attempt(narrower, f"{move}{NARROW}")
 
     def steepest_climb(self, order, forced=None, end=None) -> tuple:
         """From the first catalog (after the move ``forced``), try every move of ``order``

@@ -102,7 +102,8 @@ configuration-dependent kinetic coefficients of single coordinates' functions be
 potential's products of several (``kinetic_interaction=1`` of
 :class:`~.automatic.AutomaticCatalog`; ``"kinetic@k1"``): two carts coupled by a spring,
 each carrying a pendulum, need ``cos(a) a_dot x1_dot`` and ``x1 x2``, 123 terms so, where
-one interaction order for both makes 333.
+one interaction order for both makes 333. A joint first move over the ceiling is tried so too
+(``"kinetic+interaction@k1"``).
 
 The climb only adds, and the start always holds an angle's sines and cosines: where families
 are nearly dependent on the data's range (``cos(phi) = 1 - phi^2/2 + phi^4/24 - ...``), the
@@ -176,7 +177,7 @@ from .candidates import (
 from .climbs import Climber
 from .folds import REGIONS, held_out_splits
 from .keep_rules import single_keeps
-from .moves import MORE_MOVES, MOVES, REPEATED, START, joint_moves, moved
+from .moves import MORE_MOVES, MOVES, NARROW, REPEATED, START, joint_moves, moved
 from .path import GrowthResult, GrowthStep
 from .ties import break_ties, near_ties
 
@@ -539,6 +540,14 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # pairs of moves whose joint catalog holds terms that neither adds alone (kinetic
     # coefficients over products of two coordinates' functions): tried as one move too
     joint = joint_moves(moves, kinds, n, climber.size)
+    if max_terms == "auto":
+        # a joint catalog over the ceiling: with the kinetic coefficients of single
+        # coordinates' functions too (cos(a) a_dot x1_dot beside the spring x1 x2)
+        for name in list(joint):
+            narrower = moved(dict(START), name + NARROW, kinds, n)
+            if narrower is not None and climber.size(moved(dict(START), name, kinds, n)) \
+                    > search.max_terms >= climber.size(narrower) > 0:
+                joint.append(name + NARROW)
     queue += [(name, moved(dict(START), name, kinds, n)) for name in joint]
     first = climber.start([p for _, p in queue])
     if first.note.startswith("ceiling"):

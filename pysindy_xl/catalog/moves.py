@@ -17,7 +17,7 @@ from __future__ import annotations
 import itertools
 
 __all__ = ["MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS", "REPEATED", "moved",
-           "joint_moves", "holds", "kinetic_order"]
+           "joint_moves", "holds", "kinetic_order", "NARROW"]
 
 #: The moves of the growth, in the order they are tried.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
@@ -37,6 +37,10 @@ START = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
 LIMITS = {"degree": 4, "trig_degree": 3, "angle_degree": 4}
 #: Natural splines per coordinate when the family is added, then refined.
 SPLINE_COUNTS = (8, 12, 16)
+#: The suffix of a move after which the configuration-dependent kinetic coefficients are
+#: functions of single coordinates (``kinetic_interaction=1``) while the potential's products
+#: keep the interaction order: a joint catalog or a climb's move over the ceiling.
+NARROW = "@k1"
 #: The moves that go on while they improve (one step of a degree or of the splines each).
 REPEATED = ("degree", "trig_degree", "angle_degree", "splines")
 
@@ -49,7 +53,10 @@ def moved(state, move, kinds, n, skip=0):
     state : dict
         Catalog parameters (the keys of :data:`START`).
     move : str
-        One of :data:`MOVES` or :data:`MORE_MOVES`, or ``"a+b"``: the move ``a``, then ``b``.
+        One of :data:`MOVES` or :data:`MORE_MOVES`, or ``"a+b"``: the move ``a``, then ``b``;
+        with the suffix :data:`NARROW` (``"kinetic+interaction@k1"``), the kinetic
+        coefficients are then held to single coordinates' functions (``kinetic_interaction``
+        1; None where they are constant or already so).
     kinds : sequence of str
         The coordinates' kinds (``"linear"``, ``"angle"``).
     n : int
@@ -70,7 +77,14 @@ def moved(state, move, kinds, n, skip=0):
     2
     >>> moved(START, "interaction", ["angle"], 1) is None
     True
+    >>> moved(START, "kinetic+interaction@k1", ["linear", "angle"], 2)["kinetic_interaction"]
+    1
     """
+    if move.endswith(NARROW):  # then kinetic coefficients of single coordinates' functions
+        state = moved(state, move[:-len(NARROW)], kinds, n, skip)
+        if state is None or state["kinetic"] != "configuration" or kinetic_order(state) <= 1:
+            return None
+        return dict(state, kinetic_interaction=1)
     if "+" in move:
         for part in move.split("+"):
             state = None if state is None else moved(state, part, kinds, n, skip)

@@ -160,6 +160,7 @@ def _climber(ceiling):
     parameters and move are recorded."""
     climber = Climber.__new__(Climber)
     climber.retry_kinetic, climber.attempts = True, []
+    climber.kinds, climber.n = KINDS, len(KINDS)
 
     def attempt(parameters, move, ahead=()):
         climber.attempts.append((move, parameters))
@@ -197,3 +198,12 @@ def test_a_kinetic_move_over_the_ceiling_is_retried_with_single_coordinate_inert
     assert "kinetic_interaction" not in removed(parameters, "kinetic", KINDS, START)
     fewer = removed(parameters, "interaction", KINDS, START)
     assert fewer["interaction"] == 1 and "kinetic_interaction" not in fewer
+
+
+def test_the_narrow_suffix_of_a_move():
+    joint = moved(dict(START), "kinetic+interaction@k1", KINDS, 3)
+    assert joint == dict(START, kinetic="configuration", interaction=2, kinetic_interaction=1)
+    assert moved(dict(START), "kinetic@k1", KINDS, 3) is None  # already single coordinates
+    assert moved(dict(START), "interaction@k1", KINDS, 3) is None  # constant coefficients
+    # a later interaction move grows the potential's products alone
+    assert kinetic_order(moved(joint, "interaction", KINDS, 3)) == 1
