@@ -221,7 +221,11 @@ def test_a_move_the_ceiling_refuses_is_tried_with_constant_kinetic_coefficients(
     state, best, path = climber.steepest_climb(order) if steepest else climber.climb(order)
     assert [step.move for step in path] == ["kinetic+interaction", "degree-kinetic"]
     assert state == dict(START, interaction=2, degree=4) and best.criterion == 0.01
-    assert [(step.move, step.terms) for step in climber.steps][-4:] == [
+    # (a move whose constant-kinetic retry is the catalog itself is retried with kinetic
+    # coefficients of single coordinates, "kinetic@k1": over this ceiling too)
+    narrow = [step for step in climber.steps if step.move.endswith("@k1")]
+    assert all(step.note.startswith("ceiling") for step in narrow)
+    assert [(step.move, step.terms) for step in climber.steps if step not in narrow][-4:] == [
         ("degree", 35), ("degree-kinetic", 14), ("degree", 43), ("degree-kinetic", 19)]
     assert all(step.note.startswith("ceiling") == (step.terms > ceiling)
                for step in climber.steps)
