@@ -177,7 +177,7 @@ from .candidates import (
 from .climbs import Climber
 from .folds import REGIONS, held_out_splits
 from .keep_rules import single_keeps
-from .moves import MORE_MOVES, MOVES, NARROW, REPEATED, START, joint_moves, moved
+from .moves import MORE_MOVES, MOVES, REPEATED, START, joint_moves, moved, narrowed
 from .path import GrowthResult, GrowthStep
 from .ties import break_ties, near_ties
 
@@ -540,14 +540,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # pairs of moves whose joint catalog holds terms that neither adds alone (kinetic
     # coefficients over products of two coordinates' functions): tried as one move too
     joint = joint_moves(moves, kinds, n, climber.size)
-    if max_terms == "auto":
-        # a joint catalog over the ceiling: with the kinetic coefficients of single
-        # coordinates' functions too (cos(a) a_dot x1_dot beside the spring x1 x2)
-        for name in list(joint):
-            narrower = moved(dict(START), name + NARROW, kinds, n)
-            if narrower is not None and climber.size(moved(dict(START), name, kinds, n)) \
-                    > search.max_terms >= climber.size(narrower) > 0:
-                joint.append(name + NARROW)
+    if max_terms == "auto":  # (cos(a) a_dot x1_dot beside the spring x1 x2)
+        joint += narrowed(joint, kinds, n, climber.size, search.max_terms)
     queue += [(name, moved(dict(START), name, kinds, n)) for name in joint]
     first = climber.start([p for _, p in queue])
     if first.note.startswith("ceiling"):

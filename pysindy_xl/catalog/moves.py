@@ -17,7 +17,7 @@ from __future__ import annotations
 import itertools
 
 __all__ = ["MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS", "REPEATED", "moved",
-           "joint_moves", "holds", "kinetic_order", "NARROW"]
+           "joint_moves", "holds", "kinetic_order", "NARROW", "narrowed"]
 
 #: The moves of the growth, in the order they are tried.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
@@ -161,6 +161,52 @@ def joint_moves(moves, kinds, n, size) -> list:
         if both is not None and (size(both) - base
                                  > size(once) - base + size(other) - base):
             out.append(f"{a}+{b}")
+    return out
+
+
+def narrowed(names, kinds, n, size, ceiling) -> list:
+    """The moves of ``names`` whose catalog from :data:`START` is over ``ceiling``, each with
+    the suffix :data:`NARROW` where that catalog is within it.
+
+    Configuration-dependent kinetic coefficients over products of several coordinates'
+    functions multiply the velocity products by the potential's products; held to single
+    coordinates' functions (``cos(a) a_dot x1_dot``) beside the potential's products
+    (``x1 x2``), the joint catalog may fit under the ceiling that the full one is over.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Moves from :data:`START` (the growth's joint first moves).
+    kinds : sequence of str
+        The coordinates' kinds.
+    n : int
+        The number of coordinates.
+    size : callable
+        ``size(parameters) -> int``: a catalog's number of terms (negative where it cannot be
+        built).
+    ceiling : int
+        The most terms a catalog may have.
+
+    Returns
+    -------
+    list of str
+        The names ``f"{name}{NARROW}"``, in the order of ``names``.
+
+    Examples
+    --------
+    >>> from pysindy_xl.catalog import AutomaticCatalog
+    >>> def size(parameters):
+    ...     return AutomaticCatalog("x1,x2,a,b", kinds=["linear"] * 2 + ["angle"] * 2,
+    ...                             max_terms=10 ** 4, **parameters).n_terms
+    >>> narrowed(["kinetic+interaction"], ["linear"] * 2 + ["angle"] * 2, 4, size, 144)
+    ['kinetic+interaction@k1']
+    """
+    out = []
+    for name in names:
+        narrow = moved(dict(START), name + NARROW, kinds, n)
+        if narrow is not None and size(moved(dict(START), name, kinds, n)) > ceiling \
+                >= size(narrow) > 0:
+            out.append(name + NARROW)
     return out
 
 
