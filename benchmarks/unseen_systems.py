@@ -220,6 +220,7 @@ def write_report(path, out):
             text = handle.read()
         if MARKER in text:
             kept = text[:text.index(MARKER)] + MARKER + "\n\n"
+            lines[0] = "## The tables of " + os.path.basename(path)
     with open(out, "w", encoding="utf-8") as handle:
         handle.write(kept + "\n".join(lines) + "\n")
 
