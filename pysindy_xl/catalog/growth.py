@@ -542,7 +542,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     joint = joint_moves(moves, kinds, n, climber.size)
     if max_terms == "auto":  # (cos(a) a_dot x1_dot beside the spring x1 x2)
         joint += narrowed(joint, kinds, n, climber.size, search.max_terms)
-    queue += [(name, moved(dict(START), name, kinds, n)) for name in joint]
+    for name in joint:  # (a pair with a degree move also looks one degree further)
+        for skip in (0, 1) if set(name.split("+")) & set(REPEATED) else (0,):
+            parameters = moved(dict(START), name, kinds, n, skip)
+            if parameters is None:
+                break
+            queue.append((name, parameters))
     first = climber.start([p for _, p in queue])
     if first.note.startswith("ceiling"):
         raise ValueError(f"max_terms: the smallest catalog has {first.terms} terms, more than "
@@ -567,6 +572,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         beyond = {m: climber.second_step(alone_steps[m]).criterion for m in near}
         if beyond and min(beyond.values()) < 1:
             rank.update({m: (0, float(np.sqrt(alone[m] * beyond[m]))) for m in near})
+    # a pair with a degree move (a product of two coordinates' powers above the degree: the
+    # x^2 y of a cubic coupling) is climbed only where it is kept alone from the first
+    # catalog: from a larger catalog the degree and interaction moves are tried in turn
+    joint = [m for m in joint if not set(m.split("+")) & set(REPEATED)
+             or (m in alone_steps and single_keeps(alone_steps[m], first, tolerance))]
     order = sorted([m for m in moves if m != "splines"] + joint,
                    key=lambda m: rank.get(m, (1, np.inf)))
     order += [m for m in moves if m == "splines"]

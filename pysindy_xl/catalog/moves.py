@@ -130,11 +130,14 @@ def moved(state, move, kinds, n, skip=0):
 def joint_moves(moves, kinds, n, size) -> list:
     """The pairs of moves that are first moves of their own.
 
-    A pair ``"a+b"`` of moves that are not repeated qualifies when, from :data:`START`, its
-    joint catalog has more terms than the two moves add alone: the second move multiplies
-    the first's family (``"kinetic+interaction"``: configuration-dependent kinetic
-    coefficients over products of two coordinates' functions, as ``cos(a - b)`` in
-    ``cos(a - b) a_dot b_dot``), so neither alone shows what the pair can.
+    A pair ``"a+b"`` of moves, at most one of them repeated (:data:`REPEATED`, the splines
+    left out), qualifies when, from :data:`START`, its joint catalog has more terms than the
+    two moves add alone: the second move multiplies the first's family
+    (``"kinetic+interaction"``: configuration-dependent kinetic coefficients over products
+    of two coordinates' functions, as ``cos(a - b)`` in ``cos(a - b) a_dot b_dot``;
+    ``"interaction+degree"``: products of two coordinates' powers above the first degree, as
+    the ``x^2 y`` of a cubic coupling), so neither alone shows what the pair can. A pair with
+    a repeated move is tried one degree further too, as that move alone.
 
     Parameters
     ----------
@@ -152,10 +155,11 @@ def joint_moves(moves, kinds, n, size) -> list:
     list of str
         The qualifying pairs, ``"a+b"`` in the order of ``moves``.
     """
-    single = [m for m in moves if m not in REPEATED]
     base = size(START)
     out = []
-    for a, b in itertools.combinations(single, 2):
+    for a, b in itertools.combinations([m for m in moves if m != "splines"], 2):
+        if a in REPEATED and b in REPEATED:
+            continue  # (one degree with another: a product needs no second coordinate)
         once, other = (moved(dict(START), m, kinds, n) for m in (a, b))
         both = None if once is None or other is None else moved(once, b, kinds, n)
         if both is not None and (size(both) - base
