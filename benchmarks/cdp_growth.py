@@ -173,7 +173,7 @@ def catalog_of(description: str, q, t) -> object:
     import re
 
     from pysindy_xl.catalog import AutomaticCatalog
-    from pysindy_xl.catalog.growth import END_PERCENTILE
+    from pysindy_xl.catalog.growth_data import END_PERCENTILE
     found = {"degree": 2, "trig_degree": 1, "angle_degree": 0}
     if m := re.search(r"x\.\.x\^(\d)", description):
         found["degree"] = int(m.group(1))

@@ -45,7 +45,7 @@ def run_case(case: str, hand_search: bool = False) -> dict:
     """Grow once and score the models of one case (see the module docstring)."""
     from sklearn.base import clone
 
-    from pysindy_xl.catalog.growth import END_PERCENTILE
+    from pysindy_xl.catalog.growth_data import END_PERCENTILE
     name, forcing, noise, seed = case.split(":")
     noise, seed = float(noise), int(seed)
     system = gs.systems()[name]

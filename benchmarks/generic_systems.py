@@ -312,7 +312,7 @@ def run_case(system, truth, noise, seed, forced, baselines=True, region="block")
                               "off_box": float("inf"), "error": repr(error)[:300]}
         try:  # the correct hand-built catalog, same data
             # the splines' end knots where grow_catalog puts them
-            from pysindy_xl.catalog.growth import END_PERCENTILE
+            from pysindy_xl.catalog.growth_data import END_PERCENTILE
             low, high = np.percentile(np.vstack(xs), [END_PERCENTILE, 100 - END_PERCENTILE],
                                       axis=0)
             bounds = [(float(a), float(b)) for a, b in zip(low, high, strict=True)]

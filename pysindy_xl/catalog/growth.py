@@ -54,56 +54,54 @@ out of the RMS (:func:`~.candidates.combine_errors`): one failing fit out of at 
 is tolerated, and the catalog is still judged on the others.
 
 The criterion is the RMS of the two errors. Splines end at the extreme percentiles of the
-training data (:data:`END_PERCENTILE`) and continue linearly (:func:`~.bases.natural_splines`),
-so the region fold judges their continuation as it judges any family's. From the smallest
-catalog (constant kinetic coefficients, quadratic potentials of the linear coordinates, sines
-and cosines of the angles, viscous friction), each move of :data:`MOVES` but the splines is first
-tried alone, and so is each pair of moves whose joint catalog holds terms that neither adds
-alone (``"kinetic+interaction"``: configuration-dependent kinetic coefficients over products of
-two coordinates' functions, the ``cos(a - b)`` of a coupling ``cos(a - b) a_dot b_dot``; a
-climb through single moves reaches it only after the stand-ins that each move alone favours);
-the moves are then tried in turn in the order of what they achieved alone (the
-family that explains most goes in first: no fixed order decides between a stand-in and the
-right family), the splines last (the flexible basis is for what the families leave). The
-growth climbs twice, from the best and from the second-best first move, and keeps the better
-end: the first move is where a stand-in wins (a ``cos(theta)`` inertia for a torsion spring,
-or a power of an angle for a coupling that takes two moves to state). The second climb stops
-once it holds the first one's end (every family at least as far grown): it is there to leave
-a stand-in first move, and from there on it adds families to the first end, which the first
-climb tried alone from that end and did not keep (a combination of them that only a longer
-climb would find is given up: on the forced cart with a spring pendulum at 5 % noise the
-growth keeps the 21-term catalog, not a 43-term one holding ``theta^2`` and gyroscopic terms,
-10 % lower held out, with the same fitted law).
-A move is kept when it lowers the criterion by the fraction ``tolerance`` at least, or keeps it
-within that fraction with fewer terms in the fitted model (a sine series imitating ``theta^2``
-needs more terms than ``theta^2``); with ``physical``, a catalog whose fits all have a
-positive definite mass matrix on their training states is never given up for one whose fits
-have not (a model whose mass matrix is not positive definite cannot be simulated there; the
-climb may pass through such stand-ins only while it holds no physical catalog). The degree
-moves repeat while they do (and look one degree further before they stop), and the growth stops
-when a whole pass keeps nothing or the criterion is settled: below ``good_enough`` (unforced
-data: :data:`EXACT`), or at its noise floor (``noise_floor``, below). Before it stops, pairs of
-the moves that are not repeated (kinetic, interaction, gyroscopic, Coulomb) are tried together:
-a law may gain from neither alone (a coupling ``cos(a - b) a_dot b_dot`` needs both the
-products of two angles' functions and configuration-dependent kinetic coefficients). With
-``steepest``, each step of a climb tries every move from the kept catalog and keeps the best
-instead of the first that improves (the pairs where none does): a move that helps only once
-another is in (the coupled damping of a coupling's links, poor alone) is not passed over for a
-stand-in that the order of the moves alone tries first. Catalogs over ``max_terms`` are not
-tried (reported as the ceiling);
-by default the ceiling follows the data: at most ``1 / ROWS_PER_TERM`` of the rows of the
-search's fits (a selection over more columns than half its equations is ill-posed at noise),
-and at most :data:`MAX_TERMS`; a move of the climb that this ceiling refuses is then tried
-with constant kinetic coefficients (``"degree-kinetic"``): configuration-dependent ones
-multiply the catalog by the velocity monomials, and a law that needs a higher degree of the
-potential with constant masses (three masses on quartic springs) is reached only so. Where
-that retry is the catalog already tried, or over the ceiling too, the move is tried with
-configuration-dependent kinetic coefficients of single coordinates' functions beside the
-potential's products of several (``kinetic_interaction=1`` of
-:class:`~.automatic.AutomaticCatalog`; ``"kinetic@k1"``): two carts coupled by a spring,
-each carrying a pendulum, need ``cos(a) a_dot x1_dot`` and ``x1 x2``, 123 terms so, where
-one interaction order for both makes 333. A joint first move over the ceiling is tried so too
-(``"kinetic+interaction@k1"``).
+training data (:data:`~.growth_data.END_PERCENTILE`) and continue linearly
+(:func:`~.bases.natural_splines`), so the region fold judges their continuation as it judges any
+family's. From the smallest catalog (constant kinetic coefficients, quadratic potentials of the
+linear coordinates, sines and cosines of the angles, viscous friction), each move of
+:data:`MOVES` but the splines is first tried alone, and so is each pair of moves whose joint
+catalog holds terms that neither adds alone (``"kinetic+interaction"``: configuration-dependent
+kinetic coefficients over products of two coordinates' functions, the ``cos(a - b)`` of a
+coupling ``cos(a - b) a_dot b_dot``; a climb through single moves reaches it only after the
+stand-ins that each move alone favours); the moves are then tried in turn in the order of what
+they achieved alone (the family that explains most goes in first: no fixed order decides between
+a stand-in and the right family), the splines last (the flexible basis is for what the families
+leave). The growth climbs twice, from the best and from the second-best first move, and keeps
+the better end: the first move is where a stand-in wins (a ``cos(theta)`` inertia for a torsion
+spring, or a power of an angle for a coupling that takes two moves to state). The second climb
+stops once it holds the first one's end (every family at least as far grown): it is there to
+leave a stand-in first move, and from there on it adds families to the first end, which the
+first climb tried alone from that end and did not keep (a combination of them that only a longer
+climb would find is given up: on the forced cart with a spring pendulum at 5 % noise the growth
+keeps the 21-term catalog, not a 43-term one holding ``theta^2`` and gyroscopic terms, 10 %
+lower held out, with the same fitted law). A move is kept when it lowers the criterion by the
+fraction ``tolerance`` at least, or keeps it within that fraction with fewer terms in the fitted
+model (a sine series imitating ``theta^2`` needs more terms than ``theta^2``); with
+``physical``, a catalog whose fits all have a positive definite mass matrix on their training
+states is never given up for one whose fits have not (a model whose mass matrix is not positive
+definite cannot be simulated there; the climb may pass through such stand-ins only while it
+holds no physical catalog). The degree moves repeat while they do (and look one degree further
+before they stop), and the growth stops when a whole pass keeps nothing or the criterion is
+settled: below ``good_enough`` (unforced data: :data:`EXACT`), or at its noise floor
+(``noise_floor``, below). Before it stops, pairs of the moves that are not repeated (kinetic,
+interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither alone (a
+coupling ``cos(a - b) a_dot b_dot`` needs both the products of two angles' functions and
+configuration-dependent kinetic coefficients). With ``steepest``, each step of a climb tries
+every move from the kept catalog and keeps the best instead of the first that improves (the
+pairs where none does): a move that helps only once another is in (the coupled damping of a
+coupling's links, poor alone) is not passed over for a stand-in that the order of the moves
+alone tries first. Catalogs over ``max_terms`` are not tried (reported as the ceiling); by
+default the ceiling follows the data: at most ``1 / ROWS_PER_TERM`` of the rows of the search's
+fits (a selection over more columns than half its equations is ill-posed at noise), and at most
+:data:`MAX_TERMS`; a move of the climb that this ceiling refuses is then tried with constant
+kinetic coefficients (``"degree-kinetic"``): configuration-dependent ones multiply the catalog
+by the velocity monomials, and a law that needs a higher degree of the potential with constant
+masses (three masses on quartic springs) is reached only so. Where that retry is the catalog
+already tried, or over the ceiling too, the move is tried with configuration-dependent kinetic
+coefficients of single coordinates' functions beside the potential's products of several
+(``kinetic_interaction=1`` of :class:`~.automatic.AutomaticCatalog`; ``"kinetic@k1"``): two
+carts coupled by a spring, each carrying a pendulum, need ``cos(a) a_dot x1_dot`` and ``x1 x2``,
+123 terms so, where one interaction order for both makes 333. A joint first move over the
+ceiling is tried so too (``"kinetic+interaction@k1"``).
 
 The climb only adds, and the start always holds an angle's sines and cosines: where families
 are nearly dependent on the data's range (``cos(phi) = 1 - phi^2/2 + phi^4/24 - ...``), the
@@ -176,6 +174,7 @@ from .candidates import (
 )
 from .climbs import Climber
 from .folds import REGIONS, held_out_splits
+from .growth_data import check_growth_data, data_span
 from .keep_rules import single_keeps
 from .moves import MORE_MOVES, MOVES, REPEATED, START, joint_moves, moved, narrowed
 from .path import GrowthResult, GrowthStep
@@ -200,48 +199,6 @@ EXACT = 1e-6
 #: With ``max_terms="auto"``, rows of the search's fits per catalog term at least: catalogs
 #: over ``rows // ROWS_PER_TERM`` terms are not tried.
 ROWS_PER_TERM = 2
-
-
-def check_growth_data(xs, names, n_terms: int) -> None:
-    """``ValueError`` for a constant coordinate or data too short for ``n_terms`` terms.
-
-    Parameters
-    ----------
-    xs : list of ndarray, each of shape (n_samples, n)
-        Positions of each trajectory.
-    names : list of str
-        Coordinate names, for the messages.
-    n_terms : int
-        Size of the catalog to fit (at least 10 equations per term are needed).
-
-    Returns
-    -------
-    None
-    """
-    stacked = np.vstack(xs)
-    spread = stacked.max(axis=0) - stacked.min(axis=0)
-    scale = np.maximum(np.abs(stacked).max(axis=0), 1.0)
-    for name, s, sc in zip(names, spread, scale, strict=True):
-        if not s > 1e-9 * sc:
-            raise ValueError(f"x: coordinate {name!r} is constant in the data; nothing about its "
-                             "dynamics can be identified (leave it out, or excite it)")
-    rows = len(stacked) * len(names)
-    if rows < 10 * n_terms:
-        raise ValueError(f"x: {len(stacked)} samples of {len(names)} coordinates are too short "
-                         f"for a catalog of {n_terms} terms (at least {10 * n_terms} equations "
-                         "needed); record longer, or lower max_terms")
-
-
-#: Percentile of the data at which splines end (and ``100 -`` it): beyond, the potential's
-#: slope is fitted to the extreme samples instead of following a cubic piece that a few
-#: samples constrain.
-END_PERCENTILE = 1.0
-
-
-def _span(xs) -> list:
-    """The splines' end knots per coordinate: :data:`END_PERCENTILE` of the runs ``xs``."""
-    low, high = np.percentile(np.vstack(xs), [END_PERCENTILE, 100 - END_PERCENTILE], axis=0)
-    return [(float(a), float(b)) for a, b in zip(low, high, strict=True)]
 
 
 def _grouped(optimizer, catalog, forced, estimated):
@@ -469,7 +426,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                       for xk, tk in zip(xs, ts, strict=True)]
     fixed = {"coordinates": names, "kinds": list(kinds),
              "max_terms": MAX_TERMS if max_terms == "auto" else max_terms,
-             "bounds": _span(xs),  # the splines' end knots
+             "bounds": data_span(xs),  # the splines' end knots
              "coulomb_scale": max(1e-3, 0.02 * float(np.mean(velocity_scale)))}
     first = AutomaticCatalog(**fixed, **START)
     check_growth_data(xs, names, first.n_terms)
@@ -488,7 +445,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                                        "block" if consensus else region, margin=width)
     # the search's splines end where its training data do: the region blocks test their
     # continuation as the chosen model's is used beyond the data
-    searched = [dict(fixed, bounds=_span(train["x"])) for train, _ in splits]
+    searched = [dict(fixed, bounds=data_span(train["x"])) for train, _ in splits]
     # the second judge of "consensus": fitted inside the extreme states, judged on them
     second_splits = (held_out_splits(arrays, n_blocks, stride, False, "extremes",
                                      margin=width)[0] if consensus else [])
@@ -518,7 +475,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     fits.warm_up()  # the workers start while the first catalog is fitted here
     # the second judge is asked only about candidates the first does not refuse: no guesses
     second_fits = CandidateFits(SearchData(
-        [SearchSplit(dict(fixed, bounds=_span(train["x"])), train, held)
+        [SearchSplit(dict(fixed, bounds=data_span(train["x"])), train, held)
          for train, held in second_splits], template, search.max_terms,
         forced, floor="off")) if consensus else None
 
@@ -602,7 +559,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         if len(ties) > 1:
             folds, _ = held_out_splits(arrays, n_blocks, stride, True, region, margin=width)
             judge = CandidateFits(SearchData(
-                [SearchSplit(dict(fixed, bounds=_span(train["x"])), train, held)
+                [SearchSplit(dict(fixed, bounds=data_span(train["x"])), train, held)
                  for train, held in folds], template, search.max_terms, forced, floor="off"),
                 n_jobs)
             chosen = break_ties(ties, climber.parameters_of, judge, tolerance, progress)
