@@ -645,7 +645,13 @@ def main(argv=None):
     if args.report:
         write_report(args.out, args.report)
         return 0
-    table = systems()
+    return run_grid(systems(), args, region=args.region)
+
+
+def run_grid(table, args, region="block") -> int:
+    """Run the cases of ``args`` (``systems``, ``noise``, ``seeds``, ``forcing``) of the systems
+    ``table`` that ``args.out`` does not hold yet, each appended to it as one JSON line (a run
+    killed and restarted resumes), with a progress line per case; returns 0."""
     chosen = args.systems or list(table)
     cases = [(name, forcing, noise, seed) for seed in args.seeds for noise in args.noise
              for forcing in args.forcing for name in chosen
@@ -659,14 +665,14 @@ def main(argv=None):
         truth = truths.setdefault(name, Truth(system))
         started = time.perf_counter()
         record = run_case(system, truth, noise, seed, forcing == "forced",
-                          baselines=not args.no_baselines, region=args.region)
+                          baselines=not args.no_baselines, region=region)
         with open(args.out, "a", encoding="utf-8") as handle:
             handle.write(json.dumps(_finite(record)) + "\n")
         auto = record["auto"]
         print(f"[{k + 1}/{len(todo)}] {name} {forcing} noise {noise:g} seed {seed}: right "
               f"{auto['right']}, held-out {auto.get('held_out')}, sim {auto.get('simulation')}, "
-              f"off-box {auto.get('off_box')}, {record['seconds']:.1f} s "
-              f"({time.perf_counter() - started:.0f} s with baselines)", flush=True)
+              f"off-box {auto.get('off_box')}, cpu {record['cpu_seconds']:.1f} s "
+              f"({time.perf_counter() - started:.0f} s in all)", flush=True)
     return 0
 
 

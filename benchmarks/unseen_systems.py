@@ -31,7 +31,6 @@ import argparse
 import json
 import os
 import sys
-import time
 import warnings
 
 import numpy as np
@@ -110,10 +109,6 @@ def systems():
                {"interaction": 2}),
     ]
     return {s["name"]: s for s in out}
-
-
-def _done(path):
-    return gs.recorded(path, lambda r: (r["system"], r["forcing"], r["noise"], r["seed"]))
 
 
 def explain(case):
@@ -242,29 +237,7 @@ def main(argv=None):
     if args.explain:
         explain(args.explain)
         return 0
-    table = systems()
-    chosen = args.systems or list(table)
-    cases = [(name, forcing, noise, seed) for seed in args.seeds for noise in args.noise
-             for forcing in args.forcing for name in chosen
-             if forcing == "forced" or table[name]["unforced"]]
-    done = _done(args.out)
-    todo = [c for c in cases if c not in done]
-    print(f"{len(cases)} cases, {len(cases) - len(todo)} already in {args.out}", flush=True)
-    truths = {}
-    for k, (name, forcing, noise, seed) in enumerate(todo):
-        system = table[name]
-        truth = truths.setdefault(name, gs.Truth(system))
-        started = time.perf_counter()
-        record = gs.run_case(system, truth, noise, seed, forcing == "forced",
-                             baselines=not args.no_baselines)
-        with open(args.out, "a", encoding="utf-8") as handle:
-            handle.write(json.dumps(gs._finite(record)) + "\n")
-        auto = record["auto"]
-        print(f"[{k + 1}/{len(todo)}] {name} {forcing} noise {noise:g} seed {seed}: right "
-              f"{auto['right']}, held-out {auto.get('held_out')}, sim {auto.get('simulation')}, "
-              f"off-box {auto.get('off_box')}, cpu {record['cpu_seconds']:.1f} s "
-              f"({time.perf_counter() - started:.0f} s in all)", flush=True)
-    return 0
+    return gs.run_grid(systems(), args)
 
 
 if __name__ == "__main__":
