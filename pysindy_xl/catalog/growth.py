@@ -174,6 +174,7 @@ from .candidates import (
 )
 from .climbs import Climber
 from .folds import REGIONS, held_out_splits
+from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first)
 from .growth_data import check_growth_data, data_span
 from .keep_rules import single_keeps
 from .moves import MORE_MOVES, MOVES, REPEATED, START, joint_moves, moved, narrowed
