@@ -46,12 +46,7 @@ def run_case(case: str, hand_search: bool = False) -> dict:
     from sklearn.base import clone
 
     from pysindy_xl.catalog.growth_data import END_PERCENTILE
-    name, forcing, noise, seed = case.split(":")
-    noise, seed = float(noise), int(seed)
-    system = gs.systems()[name]
-    truth = gs.Truth(system)
-    forced = forcing == "forced"
-    runs, test, xs, ts, us = gs.case_data(system, truth, noise, seed, forced)
+    system, truth, forced, (runs, test, xs, ts, us) = gs.case_of(case)
     names = list(system["coords"].names)
     record = {"case": case}
     with warnings.catch_warnings():

@@ -274,6 +274,15 @@ def case_data(system, truth, noise, seed, forced):
             [r["u"] for r in runs] if forced else None)
 
 
+def case_of(key, table=None):
+    """The case ``"system:forcing:noise:seed"`` of the systems ``table`` (default
+    :func:`systems`): ``(system, truth, forced, data)``, ``data`` as :func:`case_data` gives."""
+    name, forcing, noise, seed = key.split(":")
+    system = (table or systems())[name]
+    truth, forced = Truth(system), forcing == "forced"
+    return system, truth, forced, case_data(system, truth, float(noise), int(seed), forced)
+
+
 def run_case(system, truth, noise, seed, forced, baselines=True, region="block"):
     runs, test, xs, ts, us = case_data(system, truth, noise, seed, forced)
     names = list(system["coords"].names)

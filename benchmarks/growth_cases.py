@@ -32,12 +32,7 @@ import pysindy_xl as px  # noqa: E402
 
 def run_case(case: str) -> dict:
     """The growth on one case: its record (see the module docstring)."""
-    name, forcing, noise, seed = case.split(":")
-    noise, seed = float(noise), int(seed)
-    system = gs.systems()[name]
-    truth = gs.Truth(system)
-    forced = forcing == "forced"
-    runs, test, xs, ts, us = gs.case_data(system, truth, noise, seed, forced)
+    system, truth, forced, (runs, test, xs, ts, us) = gs.case_of(case)
     record = {"case": case}
     cpu = time.process_time()
     try:

@@ -53,10 +53,7 @@ def _grow(system, xs, ts, us, noise_floor, every=False):
 
 def run(case: str) -> dict:
     """One case ``system:forcing:noise:seed``: the figures of both growths."""
-    name, forcing, noise, seed = case.split(":")
-    system = gs.systems()[name]
-    truth = gs.Truth(system)
-    _, _, xs, ts, us = gs.case_data(system, truth, float(noise), int(seed), forcing == "forced")
+    system, _, _, (_, _, xs, ts, us) = gs.case_of(case)
     plain, _ = _grow(system, xs, ts, us, False, every=True)
     _, plain_cpu = _grow(system, xs, ts, us, False)
     stopped, stopped_cpu = _grow(system, xs, ts, us, True)

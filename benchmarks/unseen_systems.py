@@ -114,11 +114,7 @@ def systems():
 def explain(case):
     """Print the growth path of one case ``system:forcing:noise:seed`` (its table, the fitted
     Lagrangian next to the truth, and the scores)."""
-    name, forcing, noise, seed = case.split(":")
-    system = systems()[name]
-    truth = gs.Truth(system)
-    forced = forcing == "forced"
-    runs, test, xs, ts, us = gs.case_data(system, truth, float(noise), int(seed), forced)
+    system, truth, forced, (runs, test, xs, ts, us) = gs.case_of(case, systems())
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         found = px.grow_catalog(xs, ts, us, coordinates=list(system["coords"].names),
