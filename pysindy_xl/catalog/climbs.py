@@ -20,16 +20,10 @@ from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import parameters_key
 from .floor import floor_reached, models_floor
 from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
-from .moves import NARROW, REPEATED, START, holds, moved
+from .moves import NARROW, REPEATED, START, holds, is_repeated, moved
 from .path import GrowthStep
 
 __all__ = ["Climber"]
-
-
-def _repeated(move) -> bool:
-    """Whether ``move`` (or a part of a joint move ``"a+b"``) is a repeated move
-    (:data:`~.moves.REPEATED`): it looks one degree further before it stops."""
-    return any(part in REPEATED for part in move.split("+"))
 
 
 class Climber:
@@ -349,7 +343,7 @@ class Climber:
         for k in range(index, len(order)):
             move = order[k]
             skips = [skip] if k == index else [0]
-            if _repeated(move) and skips[0] == 0:
+            if is_repeated(move) and skips[0] == 0:
                 skips.append(1)
             for s in skips:
                 parameters = self.moved(state, move, s)
@@ -458,7 +452,7 @@ class Climber:
         while self._going(state, best, end):
             options = []
             for move in order:
-                for skip in (0, 1) if _repeated(move) else (0,):
+                for skip in (0, 1) if is_repeated(move) else (0,):
                     parameters = self.moved(state, move, skip)
                     if parameters is None:
                         break
@@ -523,7 +517,7 @@ class Climber:
                     if keep:
                         state, best, improved = parameters, step, True
                         path.append(step)
-                    if not _repeated(move) or (not keep and skip):
+                    if not is_repeated(move) or (not keep and skip):
                         break
                     skip = 0 if keep else 1
             if not improved and self._going(state, best, end):

@@ -177,7 +177,7 @@ from .folds import REGIONS, held_out_splits
 from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first)
 from .growth_data import check_growth_data, data_span
 from .keep_rules import single_keeps
-from .moves import MORE_MOVES, MOVES, REPEATED, START, joint_moves, moved, narrowed
+from .moves import MORE_MOVES, MOVES, START, is_repeated, joint_moves, moved, narrowed
 from .path import GrowthResult, GrowthStep
 from .ties import break_ties, near_ties
 
@@ -487,25 +487,20 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                       retry_kinetic=max_terms == "auto", criterion=criterion,
                       progress=progress, noise_floor=noise_floor)
 
-    # the moves from the first catalog, each alone (a degree move also one degree further)
-    queue = []
-    for move in moves:
-        for skip in (0, 1) if move in REPEATED else (0,):
-            parameters = moved(dict(START), move, kinds, n, skip)
-            if move == "splines" or parameters is None:
-                break
-            queue.append((move, parameters))
     # pairs of moves whose joint catalog holds terms that neither adds alone (kinetic
     # coefficients over products of two coordinates' functions): tried as one move too
     joint = joint_moves(moves, kinds, n, climber.size)
     if max_terms == "auto":  # (cos(a) a_dot x1_dot beside the spring x1 x2)
         joint += narrowed(joint, kinds, n, climber.size, search.max_terms)
-    for name in joint:  # (a pair with a degree move also looks one degree further)
-        for skip in (0, 1) if set(name.split("+")) & set(REPEATED) else (0,):
-            parameters = moved(dict(START), name, kinds, n, skip)
+    # the moves from the first catalog, each alone, then the pairs (a degree move, or a pair
+    # with one, also one degree further)
+    queue = []
+    for move in [m for m in moves if m != "splines"] + joint:
+        for skip in (0, 1) if is_repeated(move) else (0,):
+            parameters = moved(dict(START), move, kinds, n, skip)
             if parameters is None:
                 break
-            queue.append((name, parameters))
+            queue.append((move, parameters))
     first = climber.start([p for _, p in queue])
     if first.note.startswith("ceiling"):
         raise ValueError(f"max_terms: the smallest catalog has {first.terms} terms, more than "
@@ -533,7 +528,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # a pair with a degree move (a product of two coordinates' powers above the degree: the
     # x^2 y of a cubic coupling) is climbed only where it is kept alone from the first
     # catalog: from a larger catalog the degree and interaction moves are tried in turn
-    joint = [m for m in joint if not set(m.split("+")) & set(REPEATED)
+    joint = [m for m in joint if not is_repeated(m)
              or (m in alone_steps and single_keeps(alone_steps[m], first, tolerance))]
     order = sorted([m for m in moves if m != "splines"] + joint,
                    key=lambda m: rank.get(m, (1, np.inf)))

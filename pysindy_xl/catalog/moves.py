@@ -17,7 +17,7 @@ from __future__ import annotations
 import itertools
 
 __all__ = ["MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS", "REPEATED", "moved",
-           "joint_moves", "holds", "kinetic_order", "NARROW", "narrowed"]
+           "joint_moves", "holds", "kinetic_order", "NARROW", "narrowed", "is_repeated"]
 
 #: The moves of the growth, in the order they are tried.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
@@ -125,6 +125,27 @@ def moved(state, move, kinds, n, skip=0):
             return None
         new["splines"] = larger[skip]
     return new
+
+
+def is_repeated(move) -> bool:
+    """Whether ``move``, or a part of a joint move ``"a+b"``, is one of :data:`REPEATED`: it
+    goes on while it improves, and looks one degree further before it stops.
+
+    Parameters
+    ----------
+    move : str
+        A move's name.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> is_repeated("degree"), is_repeated("interaction+degree"), is_repeated("kinetic")
+    (True, True, False)
+    """
+    return any(part in REPEATED for part in move.split("+"))
 
 
 def joint_moves(moves, kinds, n, size) -> list:
