@@ -47,7 +47,7 @@ from ..feature_library import (
     PolynomialLagrangeLibrary,
 )
 from ..symbols import Coordinates
-from .bases import KINDS, bspline_centers, factor_functions, natural_splines
+from .bases import KINDS, bspline_centers, factor_functions, natural_splines, quadratic_end_splines
 
 __all__ = ["AutomaticCatalog", "DISSIPATION", "coordinate_kinds"]
 
@@ -181,7 +181,15 @@ class AutomaticCatalog(CatalogRepartition):
         holds the line), not of its products with other coordinates. The last of the ``K``
         functions is left out: they sum to 1, and a potential matters up to a constant, so
         ``K - 1`` of them give every such potential with no exact dependency among the
-        columns.
+        columns. With ``spline_ends="quadratic"`` the count is of knots (``K + 2``
+        functions, ``K + 1`` kept).
+    spline_ends : {"linear", "quadratic"}, default "linear"
+        How the splines continue beyond their end knots. ``"linear"``: the natural splines
+        above (a constant force outside the range: a well that flattens, as ``log cosh x``).
+        ``"quadratic"``: every cubic spline on the knots, continued by its quadratic Taylor
+        polynomial (:func:`~pysindy_xl.catalog.bases.quadratic_end_splines`: a constant
+        stiffness outside the range, a wall that keeps rising, as a Morse well's repulsive
+        side; ``x^2`` is in the span exactly).
     interlink : array (n, n), optional
         Of :class:`~pysindy_xl.ExternalForces`.
     max_terms : int, default 2000
@@ -218,6 +226,7 @@ class AutomaticCatalog(CatalogRepartition):
         "coulomb_scale": [Interval("real", 0, low_open=True),
                           Collection("a sequence or mapping of float")],
         "splines": [None, Interval("int", 0), Collection("a mapping {name: int}")],
+        "spline_ends": [Options(("linear", "quadratic"))],
         "interlink": [None, Collection("an array of shape (n, n)")],
         "max_terms": [Interval("int", 1)],
     }
@@ -225,7 +234,7 @@ class AutomaticCatalog(CatalogRepartition):
     def __init__(self, coordinates, kinds=None, bounds=None, degree=2, trig_degree=1,
                  angle_degree=0, interaction=1, kinetic="configuration", gyroscopic=False,
                  dissipation=("viscous",), coulomb_scale=0.01, splines=None, interlink=None,
-                 max_terms=2000, kinetic_interaction=None):
+                 max_terms=2000, kinetic_interaction=None, spline_ends="linear"):
         self.coordinates = coordinates
         self.kinds = kinds
         self.bounds = bounds
@@ -241,6 +250,7 @@ class AutomaticCatalog(CatalogRepartition):
         self.interlink = interlink
         self.max_terms = max_terms
         self.kinetic_interaction = kinetic_interaction
+        self.spline_ends = spline_ends
 
     # -- the parameters, checked ---------------------------------------------------------------
     def _coordinates(self) -> Coordinates:
@@ -282,6 +292,8 @@ class AutomaticCatalog(CatalogRepartition):
         splines = _per_coordinate(self.splines, names, "splines", default=0)
         bounds = _per_coordinate(self.bounds, names, "bounds")
         options["splines"] = []
+        options["spline_ends"] = check_option("spline_ends", self.spline_ends, "choice",
+                                              choices=("linear", "quadratic"))
         for name, count, bound in zip(names, splines, bounds, strict=True):
             count = check_option("splines", count or 0, "int", low=0)
             if count and bound is None:
@@ -342,7 +354,7 @@ class AutomaticCatalog(CatalogRepartition):
                 None if interlink is None else (interlink.shape, interlink.tobytes()))
 
     def spline_columns(self) -> list[list[int]]:
-        """The columns of each coordinate's natural splines in the fitted catalog.
+        """The columns of each coordinate's splines in the fitted catalog.
 
         A coordinate's splines are one basis of its unknown potential, meaningful only whole:
         :class:`~pysindy_xl.optimizers.GroupedOptimizer` keeps each of these groups whole or
@@ -368,7 +380,8 @@ class AutomaticCatalog(CatalogRepartition):
                                             strict=True)):
             if spline is not None:
                 (low, high), count = spline
-                owners.update({term: i for term in natural_splines(q, low, high, count)[:-1]})
+                owners.update({term: i for term in _spline_basis(options, q, low, high,
+                                                                 count)})
         if not owners:
             return []
         fitted = clone(self).fit()
@@ -408,7 +421,7 @@ class AutomaticCatalog(CatalogRepartition):
         return factors
 
     def _splines(self, options) -> list[sp.Expr]:
-        """The natural splines of single coordinates (never multiplied by other functions),
+        """The splines of single coordinates (never multiplied by other functions),
         the last of each coordinate's left out: they sum to 1, and a constant potential has no
         Euler-Lagrange column, so all of them would be an exact dependency (which rounding
         would settle); the others span the same potentials up to a constant."""
@@ -416,7 +429,7 @@ class AutomaticCatalog(CatalogRepartition):
         for q, spline in zip(options["coords"].q, options["splines"], strict=True):
             if spline is not None:
                 (low, high), count = spline
-                out += natural_splines(q, low, high, count)[:-1]
+                out += _spline_basis(options, q, low, high, count)
         return out
 
     def _terms(self, options) -> tuple[list[sp.Expr], list[bool]]:
@@ -548,7 +561,9 @@ class AutomaticCatalog(CatalogRepartition):
                 if options["angle_degree"] and not splines:
                     text += f", {name}..{name}^{options['angle_degree']}"
             if splines is not None:
-                text += (", " if kind != "linear" else "") + f"{splines[1]} natural splines"
+                text += (", " if kind != "linear" else "") + (
+                    f"{splines[1]} natural splines" if options["spline_ends"] == "linear"
+                    else f"{splines[1]} cubic splines, quadratic ends")
             parts.append(text)
         extras = [f"interaction {options['interaction']}", f"kinetic {options['kinetic']}"]
         if options["kinetic"] == "configuration" and self.kinetic_interaction is not None \
@@ -579,4 +594,12 @@ class AutomaticCatalog(CatalogRepartition):
 _DEFAULTS = {"kinds": None, "bounds": None, "degree": 2, "trig_degree": 1, "angle_degree": 0,
              "interaction": 1, "kinetic": "configuration", "gyroscopic": False,
              "dissipation": ("viscous",), "coulomb_scale": 0.01, "splines": None,
-             "interlink": None, "max_terms": 2000, "kinetic_interaction": None}
+             "interlink": None, "max_terms": 2000, "kinetic_interaction": None,
+             "spline_ends": "linear"}
+
+
+def _spline_basis(options, q, low, high, count) -> list[sp.Expr]:
+    """The spline columns of one coordinate: its basis of ``options["spline_ends"]`` less its
+    last function (the basis sums to 1, and a constant potential has no column)."""
+    basis = natural_splines if options["spline_ends"] == "linear" else quadratic_end_splines
+    return basis(q, low, high, count)[:-1]

@@ -55,7 +55,7 @@ def removed(state: dict, move: str, kinds, start: dict) -> dict | None:
     --------
     >>> start = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
     ...          "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
-    ...          "splines": None}
+    ...          "splines": None, "spline_ends": "linear"}
     >>> state = dict(start, angle_degree=4)
     >>> removed(state, "trig", ["angle"], start)["trig_degree"]
     0
@@ -72,6 +72,7 @@ def removed(state: dict, move: str, kinds, start: dict) -> dict | None:
         if state["splines"] is None:
             return None
         new["splines"] = None
+        new["spline_ends"] = start.get("spline_ends", "linear")
     elif move == "trig_degree":
         if not angles or state["trig_degree"] <= 1:
             return None

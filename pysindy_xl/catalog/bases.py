@@ -6,11 +6,18 @@ Per coordinate kind:
 - ``"angle"``: the trigonometric monomials ``sin^a cos^b`` with ``b <= 1`` and
   ``1 <= a + b <= d`` (``cos^2 = 1 - sin^2`` would be an exact dependency), and optionally the
   polynomials ``theta, ..., theta^p`` (torsion springs, which no sine or cosine states);
-- any kind: natural cubic splines of the coordinate on uniform knots (:func:`natural_splines`),
-  for laws that no family states: cubic B-splines (:func:`bspline`) inside the knots, combined
-  at each end so that the curvature vanishes there, and continued linearly beyond (a potential
-  with a constant slope, i.e. a constant force, outside the data: the least committal
-  extrapolation).
+- any kind, for laws that no family states, cubic splines of the coordinate on uniform knots
+  built from cubic B-splines (:func:`bspline`), in two continuations beyond the end knots:
+
+  - :func:`natural_splines`: combined at each end so that the curvature vanishes there, and
+    continued linearly beyond (a potential with a constant slope, i.e. a constant force,
+    outside the data: a well that flattens, as ``log cosh x``);
+  - :func:`quadratic_end_splines`: every cubic spline on the knots, continued beyond by its
+    quadratic Taylor polynomial at the end knot (a constant stiffness outside the data: a
+    wall that keeps rising, as the repulsive side of a Morse well).
+
+  Which continuation the data support is for a held-out criterion to judge (the automatic
+  catalog's growth tries both).
 
 Splines are written with ``Abs`` (truncated powers ``z_+ = (z + |z|) / 2``), which the
 package's grammar, its NumPy and JAX back ends and :meth:`XLSINDy.simulate
@@ -22,7 +29,8 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-__all__ = ["KINDS", "bspline", "bspline_centers", "factor_functions", "natural_splines"]
+__all__ = ["KINDS", "bspline", "bspline_centers", "factor_functions", "natural_splines",
+           "quadratic_end_splines"]
 
 #: The coordinate kinds an automatic catalog knows.
 KINDS = ("linear", "angle")
@@ -169,6 +177,80 @@ def natural_splines(q: sp.Symbol, low: float, high: float, n_functions: int) -> 
             for j in range(2, k - 2)]
     out += [cubes((1, k - 4), (-4, k - 3), (5, k - 2), (-2, k - 1)),
             cubes((1, k - 3), (-2, k - 2), (1, k - 1))]
+    return out
+
+
+def quadratic_end_splines(q: sp.Symbol, low: float, high: float,
+                          n_knots: int) -> list[sp.Expr]:
+    r"""A basis of the cubic splines of ``q`` on ``n_knots`` uniform knots of ``[low, high]``,
+    each continued beyond the end knots by its quadratic Taylor polynomial there.
+
+    With knots ``xi_1 = low, ..., xi_K = high`` (spacing ``h``, ``s = (q - low) / h``), the
+    basis is the ``K + 2`` cubic B-splines ``B_j`` (:func:`bspline`) centred at
+    ``j = 0, ..., K + 1`` (knot ``j`` at ``s = j - 1``), restricted to ``[low, high]`` and
+    continued so that value, slope and curvature stay continuous at each end knot while the
+    third derivative vanishes beyond it:
+
+    .. math::
+
+        f(s) = P(s) + p_3\,(-s)_+^3 + \sum_{0 < c < K - 1} a_c (s - c)_+^3
+               - \Big(p_3 + \sum_c a_c\Big) (s - K + 1)_+^3
+
+    where ``P`` (cubic coefficient ``p_3``) is the function's polynomial on the first knot
+    interval and ``a_c`` its jumps of the cubic coefficient at the inner knots. The span holds
+    every cubic spline on the knots, the constants, ``q`` and ``q^2`` everywhere (a harmonic
+    potential is in the span exactly, beyond the knots too), and the functions sum to 1.
+
+    Beyond the data a potential in this span keeps its end stiffness (a force growing
+    linearly): the continuation of a wall. :func:`natural_splines` keeps the end slope (a
+    constant force): the continuation of a well that flattens.
+
+    Parameters
+    ----------
+    q : sympy.Symbol
+        The coordinate.
+    low, high : float
+        The end knots, ``low < high``.
+    n_knots : int
+        ``K``, the number of knots, at least 4 (``K + 2`` functions).
+
+    Returns
+    -------
+    list of sympy.Expr
+        ``K + 2`` functions, from the left end to the right.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import sympy as sp
+    >>> x = sp.Symbol("x", real=True)
+    >>> basis = quadratic_end_splines(x, 0.0, 3.0, 4)
+    >>> len(basis), [round(float(sum(basis).subs(x, v)), 6) for v in (-2.0, 1.3, 5.0)]
+    (6, [1.0, 1.0, 1.0])
+    >>> grid = np.linspace(-3.0, 6.0, 19)
+    >>> columns = np.array([[float(f.subs(x, v)) for f in basis] for v in grid])
+    >>> weights = np.linalg.lstsq(columns, grid ** 2, rcond=None)[0]
+    >>> bool(np.allclose(columns @ weights, grid ** 2))  # x^2, beyond the knots too
+    True
+    """
+    if isinstance(n_knots, bool) or not isinstance(n_knots, (int, np.integer)) or n_knots < 4:
+        raise ValueError(f"splines: expected at least 4 knots per coordinate, got {n_knots!r}")
+    centers, h = bspline_centers(low, high, int(n_knots))
+    last = int(n_knots) - 1  # the right end knot, at s = K - 1
+    s = (q - sp.Float(float(centers[0]))) / sp.Float(h)
+    out = []
+    for j in range(-1, last + 2):  # the B-spline centred at s = j: knots j - 2, ..., j + 2
+        knots = list(zip((1, -4, 6, -4, 1), range(j - 2, j + 3), strict=True))
+        # left of the first knot interval the truncated powers are whole cubes
+        whole = [(w, c) for w, c in knots if c <= 0]
+        inner = [(w, c) for w, c in knots if 0 < c < last]
+        cubic = sp.Rational(sum(w for w, _ in whole), 6)  # P's cubic coefficient p_3
+        end = cubic + sp.Rational(sum(w for w, _ in inner), 6)  # the last interval's
+        polynomial = sp.expand(sum((w * (s - c) ** 3 for w, c in whole), sp.Integer(0)) / 6)
+        out.append(polynomial + cubic * _plus_cubed(-s)
+                   + sum((sp.Rational(w, 6) * _plus_cubed(s - c) for w, c in inner),
+                         sp.Integer(0))
+                   - end * _plus_cubed(s - last))
     return out
 
 

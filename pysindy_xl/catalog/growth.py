@@ -55,37 +55,39 @@ is tolerated, and the catalog is still judged on the others.
 
 The criterion is the RMS of the two errors. Splines end at the extreme percentiles of the
 training data (:data:`~.growth_data.END_PERCENTILE`) and continue linearly
-(:func:`~.bases.natural_splines`), so the region fold judges their continuation as it judges any
-family's. From the smallest catalog (constant kinetic coefficients, quadratic potentials of the
-linear coordinates, sines and cosines of the angles, viscous friction), each move of
-:data:`MOVES` but the splines is first tried alone, and so is each pair of moves whose joint
-catalog holds terms that neither adds alone (``"kinetic+interaction"``: configuration-dependent
-kinetic coefficients over products of two coordinates' functions, the ``cos(a - b)`` of a
-coupling ``cos(a - b) a_dot b_dot``; a climb through single moves reaches it only after the
-stand-ins that each move alone favours); the moves are then tried in turn in the order of what
-they achieved alone (the family that explains most goes in first: no fixed order decides between
-a stand-in and the right family), the splines last (the flexible basis is for what the families
-leave). The growth climbs twice, from the best and from the second-best first move, and keeps
-the better end: the first move is where a stand-in wins (a ``cos(theta)`` inertia for a torsion
-spring, or a power of an angle for a coupling that takes two moves to state). The second climb
-stops once it holds the first one's end (every family at least as far grown): it is there to
-leave a stand-in first move, and from there on it adds families to the first end, which the
-first climb tried alone from that end and did not keep (a combination of them that only a longer
-climb would find is given up: on the forced cart with a spring pendulum at 5 % noise the growth
-keeps the 21-term catalog, not a 43-term one holding ``theta^2`` and gyroscopic terms, 10 %
-lower held out, with the same fitted law). A move is kept when it lowers the criterion by the
-fraction ``tolerance`` at least, or keeps it within that fraction with fewer terms in the fitted
-model (a sine series imitating ``theta^2`` needs more terms than ``theta^2``); with
-``physical``, a catalog whose fits all have a positive definite mass matrix on their training
-states is never given up for one whose fits have not (a model whose mass matrix is not positive
-definite cannot be simulated there; the climb may pass through such stand-ins only while it
-holds no physical catalog). The degree moves repeat while they do (and look one degree further
-before they stop), and the growth stops when a whole pass keeps nothing or the criterion is
-settled: below ``good_enough`` (unforced data: :data:`EXACT`), or at its noise floor
-(``noise_floor``, below). Before it stops, pairs of the moves that are not repeated (kinetic,
-interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither alone (a
-coupling ``cos(a - b) a_dot b_dot`` needs both the products of two angles' functions and
-configuration-dependent kinetic coefficients). With ``steepest``, each step of a climb tries
+(:func:`~.bases.natural_splines`: a constant force beyond) or, after the move
+``"quadratic_ends"``, quadratically (:func:`~.bases.quadratic_end_splines`: a constant
+stiffness beyond), so the region fold judges their continuation as it judges any family's.
+From the smallest catalog (constant kinetic coefficients, quadratic potentials of the linear
+coordinates, sines and cosines of the angles, viscous friction), each move of :data:`MOVES` but
+the splines' (:data:`~.moves.SPLINE_MOVES`) is first tried alone, and so is each pair of moves
+whose joint catalog holds terms that neither adds alone (``"kinetic+interaction"``:
+configuration-dependent kinetic coefficients over products of two coordinates' functions, the
+``cos(a - b)`` of a coupling ``cos(a - b) a_dot b_dot``; a climb through single moves reaches it
+only after the stand-ins that each move alone favours); the moves are then tried in turn in the
+order of what they achieved alone (the family that explains most goes in first: no fixed order
+decides between a stand-in and the right family), the splines last (the flexible basis is for
+what the families leave). The growth climbs twice, from the best and from the second-best first
+move, and keeps the better end: the first move is where a stand-in wins (a ``cos(theta)``
+inertia for a torsion spring, or a power of an angle for a coupling that takes two moves to
+state). The second climb stops once it holds the first one's end (every family at least as far
+grown): it is there to leave a stand-in first move, and from there on it adds families to the
+first end, which the first climb tried alone from that end and did not keep (a combination of
+them that only a longer climb would find is given up: on the forced cart with a spring pendulum
+at 5 % noise the growth keeps the 21-term catalog, not a 43-term one holding ``theta^2`` and
+gyroscopic terms, 10 % lower held out, with the same fitted law). A move is kept when it lowers
+the criterion by the fraction ``tolerance`` at least, or keeps it within that fraction with
+fewer terms in the fitted model (a sine series imitating ``theta^2`` needs more terms than
+``theta^2``); with ``physical``, a catalog whose fits all have a positive definite mass matrix
+on their training states is never given up for one whose fits have not (a model whose mass
+matrix is not positive definite cannot be simulated there; the climb may pass through such
+stand-ins only while it holds no physical catalog). The degree moves repeat while they do (and
+look one degree further before they stop), and the growth stops when a whole pass keeps nothing
+or the criterion is settled: below ``good_enough`` (unforced data: :data:`EXACT`), or at its
+noise floor (``noise_floor``, below). Before it stops, pairs of the moves that are not repeated
+(kinetic, interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither
+alone (a coupling ``cos(a - b) a_dot b_dot`` needs both the products of two angles' functions
+and configuration-dependent kinetic coefficients). With ``steepest``, each step of a climb tries
 every move from the kept catalog and keeps the best instead of the first that improves (the
 pairs where none does): a move that helps only once another is in (the coupled damping of a
 coupling's links, poor alone) is not passed over for a stand-in that the order of the moves
@@ -177,7 +179,7 @@ from .folds import REGIONS, held_out_splits
 from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first)
 from .growth_data import check_growth_data, data_span
 from .keep_rules import single_keeps
-from .moves import MORE_MOVES, MOVES, START, is_repeated, joint_moves, moved, narrowed
+from .moves import MORE_MOVES, MOVES, SPLINE_MOVES, START, is_repeated, joint_moves, moved, narrowed
 from .path import GrowthResult, GrowthStep
 from .ties import break_ties, near_ties
 
@@ -495,7 +497,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # the moves from the first catalog, each alone, then the pairs (a degree move, or a pair
     # with one, also one degree further)
     queue = []
-    for move in [m for m in moves if m != "splines"] + joint:
+    for move in [m for m in moves if m not in SPLINE_MOVES] + joint:
         for skip in (0, 1) if is_repeated(move) else (0,):
             parameters = moved(dict(START), move, kinds, n, skip)
             if parameters is None:
@@ -530,14 +532,14 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # catalog: from a larger catalog the degree and interaction moves are tried in turn
     joint = [m for m in joint if not is_repeated(m)
              or (m in alone_steps and single_keeps(alone_steps[m], first, tolerance))]
-    order = sorted([m for m in moves if m != "splines"] + joint,
+    order = sorted([m for m in moves if m not in SPLINE_MOVES] + joint,
                    key=lambda m: rank.get(m, (1, np.inf)))
-    order += [m for m in moves if m == "splines"]
+    order += [m for m in moves if m in SPLINE_MOVES]
     # climb from the best and from the second-best first move: which family goes in first is
     # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
     # a coupling that needs two moves), so the better of the two ends is kept
     state, best, path = climber.steepest_climb(order) if steepest else climber.climb(order)
-    promising = [m for m in order if m != "splines" and alone.get(m, np.inf)
+    promising = [m for m in order if m not in SPLINE_MOVES and alone.get(m, np.inf)
                  < first.criterion * (1 - tolerance)]
     if not climber.settled(best) and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]

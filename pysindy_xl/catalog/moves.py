@@ -16,12 +16,19 @@ from __future__ import annotations
 
 import itertools
 
-__all__ = ["MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS", "REPEATED", "moved",
+__all__ = ["MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS", "SPLINE_MOVES",
+           "REPEATED", "moved",
            "joint_moves", "holds", "kinetic_order", "NARROW", "narrowed", "is_repeated"]
 
 #: The moves of the growth, in the order they are tried.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
-         "coulomb", "splines")
+         "coulomb", "splines", "quadratic_ends")
+#: The moves of the flexible basis, tried after the families: ``"splines"`` adds a
+#: coordinate's splines (natural: a constant force beyond the data) or refines them;
+#: ``"quadratic_ends"`` gives them quadratic ends (a constant stiffness beyond the data), adding
+#: them first where there are none. Which continuation the data support, the held-out
+#: criterion judges.
+SPLINE_MOVES = ("splines", "quadratic_ends")
 #: Moves a growth may be given beyond the default :data:`MOVES`: ``"coupled_damping"`` lets
 #: every velocity's viscous force enter every equation (``dissipation`` ``"coupled"`` of
 #: :class:`AutomaticCatalog`: the damping of a joint whose angle is a difference of coordinates).
@@ -32,10 +39,10 @@ MORE_MOVES = ("coupled_damping",)
 #: cosines of the angles, viscous friction.
 START = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
          "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
-         "splines": None}
+         "splines": None, "spline_ends": "linear"}
 #: The largest degree each degree move reaches.
 LIMITS = {"degree": 4, "trig_degree": 3, "angle_degree": 4}
-#: Natural splines per coordinate when the family is added, then refined.
+#: Knots of each coordinate's splines when the family is added, then refined.
 SPLINE_COUNTS = (8, 12, 16)
 #: The suffix of a move after which the configuration-dependent kinetic coefficients are
 #: functions of single coordinates (``kinetic_interaction=1``) while the potential's products
@@ -119,6 +126,11 @@ def moved(state, move, kinds, n, skip=0):
         if "coupled" in state["dissipation"] or n < 2:
             return None
         new["dissipation"] = (*state["dissipation"], "coupled")
+    elif move == "quadratic_ends":
+        if state.get("spline_ends") == "quadratic":
+            return None
+        new["spline_ends"] = "quadratic"
+        new["splines"] = state["splines"] or SPLINE_COUNTS[0]
     elif move == "splines":
         larger = [k for k in SPLINE_COUNTS if k > (state["splines"] or 0)]
         if skip >= len(larger):
@@ -178,7 +190,7 @@ def joint_moves(moves, kinds, n, size) -> list:
     """
     base = size(START)
     out = []
-    for a, b in itertools.combinations([m for m in moves if m != "splines"], 2):
+    for a, b in itertools.combinations([m for m in moves if m not in SPLINE_MOVES], 2):
         if a in REPEATED and b in REPEATED:
             continue  # (one degree with another: a product needs no second coordinate)
         once, other = (moved(dict(START), m, kinds, n) for m in (a, b))
@@ -237,8 +249,8 @@ def narrowed(names, kinds, n, size, ceiling) -> list:
 
 def holds(state, other) -> bool:
     """Whether the catalog ``state`` holds every family of ``other``, each at least as far
-    grown (degrees, interaction order, spline count; configuration-dependent kinetic
-    coefficients over as many coordinates, gyroscopic terms, each dissipation model).
+    grown (degrees, interaction order, spline count with the same ends; configuration-dependent
+    kinetic coefficients over as many coordinates, gyroscopic terms, each dissipation model).
 
     Parameters
     ----------
@@ -262,7 +274,9 @@ def holds(state, other) -> bool:
                                                     >= kinetic_order(other)))
             and (state["gyroscopic"] or not other["gyroscopic"])
             and set(other["dissipation"]) <= set(state["dissipation"])
-            and (state["splines"] or 0) >= (other["splines"] or 0))
+            and (state["splines"] or 0) >= (other["splines"] or 0)
+            and (other["splines"] is None
+                 or state.get("spline_ends") == other.get("spline_ends")))
 
 
 def kinetic_order(state) -> int:
