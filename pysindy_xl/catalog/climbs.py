@@ -20,7 +20,7 @@ from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import parameters_key
 from .floor import floor_reached, models_floor
 from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
-from .moves import NARROW, REPEATED, START, holds, is_repeated, moved
+from .moves import NARROW, REPEATED, SPLINE_MOVES, START, holds, is_repeated, moved
 from .path import GrowthStep
 
 __all__ = ["Climber"]
@@ -311,7 +311,7 @@ class Climber:
         return alone, alone_steps
 
     def pairs(self, state, order, tried) -> list:
-        """The pairs of non-repeated moves from ``state`` not tried yet.
+        """The pairs of non-repeated moves (the splines' left out) from ``state`` not tried yet.
 
         Parameters
         ----------
@@ -328,7 +328,10 @@ class Climber:
             The parameters and the name (``"a+b"``) of each pair.
         """
         out = []
-        single = [m for m in order if m not in REPEATED and "+" not in m]
+        # (the splines' moves stay single: the flexible basis is for what the families leave,
+        # not a second move that lends a family's pair its gain)
+        single = [m for m in order if m not in REPEATED and m not in SPLINE_MOVES
+                  and "+" not in m]
         for first_move, second_move in itertools.combinations(single, 2):
             once = self.moved(state, first_move)
             twice = None if once is None else self.moved(once, second_move)
