@@ -60,6 +60,7 @@ def _percent(value) -> str:
 
 def _short(catalog: str) -> str:
     for long, short in (("dissipation viscous", "visc"), ("natural splines", "spl"),
+                        ("cubic splines, quadratic ends", "qspl"),
                         ("interaction", "int"), ("kinetic ", "kin ")):
         catalog = catalog.replace(long, short)
     return catalog
