@@ -195,7 +195,7 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
         finite = np.where(finite_columns, theta, 0.0)
         theta = scale_blocks(theta, coordinate_weights(finite, n_blocks, force_columns))
     rows = np.unique(np.linspace(0, n_rows - 1, min(n_rows, max_rows)).astype(int))
-    sub = theta[rows][:, order]
+    sub = theta[:, order] if len(rows) == n_rows else theta[np.ix_(rows, order)]
     top = np.max(np.abs(sub), axis=0, initial=0.0)
     finite = np.isfinite(top) & finite_columns[order]
     nonzero = finite & (top > 0)
@@ -209,8 +209,10 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
     candidates = order[nonzero]
     sub = sub[:, nonzero] / top[nonzero]  # max-scaled first: no overflow in the norms
     sub /= np.linalg.norm(sub, axis=0)
-    if np.tril(sub, -1).any():
-        diag = np.abs(np.diag(scipy.linalg.qr(sub, mode="r", check_finite=False)[0]))
+    if _below_diagonal(sub):
+        # (mode "raw": R's diagonal without the (rows, columns) copy that mode "r" makes)
+        diag = np.abs(np.diag(scipy.linalg.qr(sub, mode="raw", overwrite_a=True,
+                                              check_finite=False)[1]))
     else:  # already upper triangular (a reduced system visited in order): its own R
         diag = np.abs(np.diag(sub))
     if len(diag) < len(candidates):  # fewer rows than columns: the tail is dependent
@@ -220,6 +222,13 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
             dropped[int(j)] = "linear combination"
     keep = np.array(sorted(set(range(n_cols)) - set(dropped)), dtype=int)
     return keep, dict(sorted(dropped.items()))
+
+
+def _below_diagonal(matrix) -> bool:
+    """Whether ``matrix`` has a non-zero entry below its diagonal (``np.tril(matrix, -1)
+    .any()`` without the copy: the rows below the square part first, then its lower part)."""
+    k = matrix.shape[1]
+    return bool(matrix[k:].any() or np.tril(matrix[:k], -1).any())
 
 
 class CatalogOptimizer(BaseEstimator):
