@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import warnings
 
 import numpy as np
@@ -275,7 +276,9 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         try:
             threads = None if self.blas_threads is None else int(self.blas_threads)
             with warnings.catch_warnings(record=True) as caught:
-                with threadpoolctl.threadpool_limits(limits=threads, user_api="blas"):
+                # (None: no limit, and no scan of the loaded libraries, a few ms per fit)
+                with (contextlib.nullcontext() if threads is None else
+                      threadpoolctl.threadpool_limits(limits=threads, user_api="blas")):
                     self._fit(x, t, x_dot, x_ddot, u, sample_mask)
         finally:  # also when the fit fails: its warnings may say why
             for record in caught:
