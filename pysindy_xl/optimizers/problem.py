@@ -365,8 +365,30 @@ def _block_rms(theta, n_blocks: int) -> np.ndarray:
 
 
 def abs_max(values, axis: int) -> np.ndarray:
-    """``np.max(np.abs(values), axis=axis)``, without the array of absolute values: the
-    larger of the maximum and the negated minimum (exact; NaN where a NaN is met)."""
+    r"""``np.max(np.abs(values), axis=axis)`` without the array of absolute values.
+
+    .. math:: \max_k |v_k| = \max\left(\max_k v_k, \; -\min_k v_k\right),
+
+    exact (a negation rounds nothing); NaN where a NaN is met, as ``np.max``.
+
+    Parameters
+    ----------
+    values : ndarray of float
+        Non-empty along ``axis``.
+    axis : int
+        The axis reduced.
+
+    Returns
+    -------
+    ndarray
+        The largest absolute value along ``axis``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> abs_max(np.array([[1.0, -4.0], [-3.0, 2.0]]), axis=0).tolist()
+    [3.0, 4.0]
+    """
     return np.maximum(values.max(axis=axis), -values.min(axis=axis))
 
 
