@@ -353,8 +353,11 @@ def _test_matrices(test_functions, t, half_width) -> tuple:
         phi, dphi, _ = test_functions.matrices(t, half_width=half_width)
         return phi, dphi, _overlap_rows(phi)
     t = np.ascontiguousarray(t, dtype=float)
-    key = (repr(sorted(vars(test_functions).items())), float(half_width), t.shape,
-           hashlib.sha1(t).digest())
+    # (arrays by their bytes: their repr rounds and elides)
+    state = tuple(sorted((name, (value.dtype.str, value.shape, value.tobytes())
+                          if isinstance(value, np.ndarray) else repr(value))
+                         for name, value in vars(test_functions).items()))
+    key = (state, float(half_width), t.shape, hashlib.sha1(t).digest())
     found = _MATRICES.pop(key, None)
     if found is None:
         phi, dphi, _ = test_functions.matrices(t, half_width=half_width)
