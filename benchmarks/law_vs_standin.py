@@ -221,7 +221,8 @@ def main():
     print(f"\n== 4. fresh noise draws on the same runs ({args.draws}): mean criterion | "
           "mean noise-free blocks")
     sd = np.std(np.vstack(split.train["x"]) - np.vstack(clean_train["x"]), axis=0)
-    found = {label: [] for label in LIBRARIES}
+    found = {label: [] for label in [*LIBRARIES, "stand-in catalog, sparse",
+                                     "law's catalog, sparse"]}
     for draw in range(args.draws):
         rng = np.random.default_rng(100 + draw)
         train = dict(clean_train, x=[x + rng.normal(size=x.shape) * sd
@@ -230,18 +231,38 @@ def main():
             model = fitted(search, split, train, law_library(terms))
             found[label].append((rms(errors(model, split.blocks)),
                                  rms(errors(model, clean_blocks))))
+        for label, parameters in (("stand-in catalog, sparse", STAND_IN),
+                                  ("law's catalog, sparse", LAW)):
+            model = fitted(search, split, train, parameters=parameters)
+            found[label].append((rms(errors(model, split.blocks)),
+                                 rms(errors(model, clean_blocks))))
     for label, values in found.items():
         values = np.array(values)
         print(f"{label}: {pct(values[:, 0])} -> mean {100 * values[:, 0].mean():.3f} | "
               f"mean {100 * values[:, 1].mean():.3f}")
 
     print("\n== 5. other folds (block errors; criterion)")
-    for options in ({"cross_validate": True}, {"region": "extremes"}, {"region": "both"}):
+    for options in ({"cross_validate": True}, {"cross_validate": True, "n_blocks": 8},
+                    {"region": "extremes"}, {"region": "both"}):
         other = search_of(KEY, **options)[3]
         for label, parameters in (("stand-in catalog", STAND_IN), ("law's catalog", LAW)):
             step = evaluate_candidate(other, parameters)
             print(f"{options}: {label}: {pct(step['block_errors'])}; "
                   f"{100 * step['criterion']:.3f}")
+
+    print("\n== 6. the search fits on the benchmark's widened box, by |a - b| (force error)")
+    system, truth = gs.case_of(KEY, us.systems())[:2]
+    box = gs._widened_box(runs, 2)
+    apart = np.abs(box["q"][:, 0] - box["q"][:, 1])
+    recorded = float(max(np.abs(r["q"][:, 0] - r["q"][:, 1]).max() for r in runs))
+    true_forces = truth.forces(box["q"], box["qd"], box["qdd"])
+    print(f"recorded |a - b| <= {recorded:.2f} rad; box states beyond it: "
+          f"{100 * np.mean(apart > recorded):.0f} %, largest {apart.max():.1f} rad")
+    for label in ("stand-in catalog", "law's catalog"):
+        forces = models[label].predict_forces(box["q"], box["qd"], box["qdd"])
+        parts = [np.linalg.norm(forces[m] - true_forces[m]) / np.linalg.norm(true_forces[m])
+                 for m in (apart <= recorded, apart > recorded)]
+        print(f"{label}: within {100 * parts[0]:.2f}, beyond {100 * parts[1]:.2f}")
 
 
 if __name__ == "__main__":
