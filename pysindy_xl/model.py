@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import sys
 import warnings
 
 import numpy as np
@@ -38,6 +40,21 @@ from .io import invalid_model_file, read_model_file
 from .optimizers import SOLVER_KINDS, CatalogProblem
 
 __all__ = ["XLSINDy", "IdentificationWarning"]
+
+
+_CONTROLLER: list = []  # [(modules loaded, threadpoolctl.ThreadpoolController)]
+
+
+def _blas_limit(threads):
+    """``threadpoolctl.threadpool_limits(limits=threads, user_api="blas")`` (no limit for
+    None), by a controller kept while no module is imported: its scan of the loaded libraries
+    costs a few milliseconds, as much as a small fit (a growth makes hundreds)."""
+    if threads is None:
+        return contextlib.nullcontext()
+    loaded = len(sys.modules)
+    if not _CONTROLLER or _CONTROLLER[0][0] != loaded:
+        _CONTROLLER[:] = [(loaded, threadpoolctl.ThreadpoolController())]
+    return _CONTROLLER[0][1].limit(limits=threads, user_api="blas")
 
 
 class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
@@ -275,7 +292,7 @@ class XLSINDy(InspectionMixin, DynamicsMixin, BaseEstimator):
         try:
             threads = None if self.blas_threads is None else int(self.blas_threads)
             with warnings.catch_warnings(record=True) as caught:
-                with threadpoolctl.threadpool_limits(limits=threads, user_api="blas"):
+                with _blas_limit(threads):
                     self._fit(x, t, x_dot, x_ddot, u, sample_mask)
         finally:  # also when the fit fails: its warnings may say why
             for record in caught:

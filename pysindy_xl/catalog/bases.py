@@ -26,6 +26,8 @@ package's grammar, its NumPy and JAX back ends and :meth:`XLSINDy.simulate
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import sympy as sp
 
@@ -161,8 +163,14 @@ def natural_splines(q: sp.Symbol, low: float, high: float, n_functions: int) -> 
             or n_functions < 4:
         raise ValueError(f"splines: expected at least 4 natural splines per coordinate, got "
                          f"{n_functions!r}")
-    centers, h = bspline_centers(low, high, int(n_functions))
-    k = int(n_functions)
+    return list(_natural_splines(q, float(low), float(high), int(n_functions)))
+
+
+@functools.lru_cache(maxsize=1024)
+def _natural_splines(q: sp.Symbol, low: float, high: float, k: int) -> tuple:
+    """:func:`natural_splines`, built once per coordinate, end knots and count (the catalogs
+    a growth tries share their splines; sympy expressions are immutable)."""
+    centers, h = bspline_centers(low, high, k)
     s = (q - sp.Float(float(centers[0]))) / sp.Float(h)  # knot j at s = j
 
     def cubes(*pairs):
@@ -177,7 +185,7 @@ def natural_splines(q: sp.Symbol, low: float, high: float, n_functions: int) -> 
             for j in range(2, k - 2)]
     out += [cubes((1, k - 4), (-4, k - 3), (5, k - 2), (-2, k - 1)),
             cubes((1, k - 3), (-2, k - 2), (1, k - 1))]
-    return out
+    return tuple(out)
 
 
 def quadratic_end_splines(q: sp.Symbol, low: float, high: float,

@@ -25,6 +25,25 @@ _WEAK_BLOCK = 8192  # samples per block of the weak evaluation
 _WEAK_MEMO_BYTES = 1 << 28  # values kept by remembered_weak_values, at most
 
 
+#: The test matrices of :meth:`WeakEvaluation._weak_tests` by content, most recently used
+#: last (read, never modified).
+_TESTS: dict = {}
+_CACHED_TESTS = 16
+
+
+def _sparse_key(phi, dphi, n_samples):
+    """A key of the contents of two sparse matrices in CSR form (None for any other input)."""
+    if not all(scipy.sparse.issparse(m) and m.format == "csr" for m in (phi, dphi)):
+        return None
+    digest = hashlib.sha1()
+    for matrix in (phi, dphi):
+        digest.update(repr((matrix.shape, matrix.dtype.str, matrix.data.shape,
+                            matrix.indices.dtype.str, matrix.indptr.dtype.str)).encode())
+        for part in (matrix.data, matrix.indices, matrix.indptr):
+            digest.update(np.ascontiguousarray(part))
+    return n_samples, digest.digest()
+
+
 @contextlib.contextmanager
 def remembered_weak_values(library):
     """Within the block, ``library.weak_transform`` evaluates each distinct state array once.
@@ -201,9 +220,18 @@ class WeakEvaluation:
         kept = self.__dict__.get("_weak_memo_tests")
         if kept is not None and kept[0] is phi and kept[1] is dphi and kept[2] == n_samples:
             return kept[3]
-        tests = [scipy.sparse.csc_matrix(-dphi), scipy.sparse.csc_matrix(-phi)]
-        blocks = [[test[:, start:start + _WEAK_BLOCK] for test in tests]
-                  for start in range(0, n_samples, _WEAK_BLOCK)]
+        # sparse test matrices by content: the noise propagation transforms many draws with
+        # the same ones, and a growth fits many catalogs on the same pieces
+        key = _sparse_key(phi, dphi, n_samples)
+        blocks = None if key is None else _TESTS.pop(key, None)
+        if blocks is None:
+            tests = [scipy.sparse.csc_matrix(-dphi), scipy.sparse.csc_matrix(-phi)]
+            blocks = [[test[:, start:start + _WEAK_BLOCK] for test in tests]
+                      for start in range(0, n_samples, _WEAK_BLOCK)]
+        if key is not None:
+            _TESTS[key] = blocks
+            while len(_TESTS) > _CACHED_TESTS:
+                del _TESTS[next(iter(_TESTS))]
         if "_weak_memo" in self.__dict__:  # (holding phi and dphi, their ids stay theirs)
             self._weak_memo_tests = (phi, dphi, n_samples, blocks)
         return blocks

@@ -248,7 +248,8 @@ def build_problem(library, data, formulation: str, *, test_functions=None, smoot
         order = library.column_priority()
         order = order[np.isin(order, candidates)]
         local, dropped = independent_columns(
-            probe[block_rows(n, probe.shape[0], moving)][:, candidates],
+            probe if moving.all() and len(candidates) == probe.shape[1] else
+            probe[np.ix_(block_rows(n, probe.shape[0], moving), candidates)],
             np.searchsorted(candidates, order), n_blocks=int(moving.sum()),
             force_columns=np.flatnonzero(np.isin(candidates, library.force_columns_)))
         keep = candidates[local]

@@ -14,7 +14,7 @@ from sklearn.base import BaseEstimator, clone
 
 from .._validation import UnexplainedCoordinateWarning
 from ..registry import is_plain, register_type
-from .problem import CatalogProblem, check_support, coordinate_weights, scale_blocks
+from .problem import CatalogProblem, abs_max, check_support, coordinate_weights, scale_blocks
 from .tags import TAG_NAMES, CatalogTags, catalog_tags
 
 __all__ = ["CatalogOptimizer", "OPTIMIZER_TYPES", "coordinates_touched", "independent_columns",
@@ -192,11 +192,13 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
     finite_columns = np.all(np.isfinite(theta), axis=0)
     if n_blocks > 1:
         # balance on the finite columns; the others are dropped below anyway
-        finite = np.where(finite_columns, theta, 0.0)
+        finite = (theta if finite_columns.all() else np.where(finite_columns, theta, 0.0))
         theta = scale_blocks(theta, coordinate_weights(finite, n_blocks, force_columns))
     rows = np.unique(np.linspace(0, n_rows - 1, min(n_rows, max_rows)).astype(int))
-    sub = theta[rows][:, order]
-    top = np.max(np.abs(sub), axis=0, initial=0.0)
+    # (no copy where every row is used in column order: ``sub`` is only read until divided)
+    sub = (theta if len(rows) == n_rows and np.array_equal(order, np.arange(n_cols))
+           else theta[:, order] if len(rows) == n_rows else theta[np.ix_(rows, order)])
+    top = (abs_max(sub, axis=0) if n_rows else np.zeros(n_cols))
     finite = np.isfinite(top) & finite_columns[order]
     nonzero = finite & (top > 0)
     dropped = {}
@@ -207,10 +209,13 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
     if not np.any(nonzero):
         return np.array([], dtype=int), dict(sorted(dropped.items()))
     candidates = order[nonzero]
-    sub = sub[:, nonzero] / top[nonzero]  # max-scaled first: no overflow in the norms
+    # max-scaled first: no overflow in the norms
+    sub = sub / top if nonzero.all() else sub[:, nonzero] / top[nonzero]
     sub /= np.linalg.norm(sub, axis=0)
-    if np.tril(sub, -1).any():
-        diag = np.abs(np.diag(scipy.linalg.qr(sub, mode="r", check_finite=False)[0]))
+    if _below_diagonal(sub):
+        # (mode "raw": R's diagonal without the (rows, columns) copy that mode "r" makes)
+        diag = np.abs(np.diag(scipy.linalg.qr(sub, mode="raw", overwrite_a=True,
+                                              check_finite=False)[1]))
     else:  # already upper triangular (a reduced system visited in order): its own R
         diag = np.abs(np.diag(sub))
     if len(diag) < len(candidates):  # fewer rows than columns: the tail is dependent
@@ -220,6 +225,13 @@ def independent_columns(theta, priority=None, rtol: float = 1e-9, max_rows: int 
             dropped[int(j)] = "linear combination"
     keep = np.array(sorted(set(range(n_cols)) - set(dropped)), dtype=int)
     return keep, dict(sorted(dropped.items()))
+
+
+def _below_diagonal(matrix) -> bool:
+    """Whether ``matrix`` has a non-zero entry below its diagonal (``np.tril(matrix, -1)
+    .any()`` without the copy: the rows below the square part first, then its lower part)."""
+    k = matrix.shape[1]
+    return bool(matrix[k:].any() or np.tril(matrix[:k], -1).any())
 
 
 class CatalogOptimizer(BaseEstimator):

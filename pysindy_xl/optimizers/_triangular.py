@@ -30,8 +30,9 @@ def triangular_system(x, y):
     x = np.asarray(x, dtype=float)
     stacked = np.empty((x.shape[0], x.shape[1] + 1), order="F")  # LAPACK's layout: no copy
     stacked[:, :-1], stacked[:, -1] = x, y
-    r_factor = scipy.linalg.qr(stacked, mode="r", overwrite_a=True,
-                               check_finite=False)[0][: stacked.shape[1]]
+    # (mode "raw": R without the (rows, k + 1) upper-triangular copy that mode "r" makes)
+    r_factor = scipy.linalg.qr(stacked, mode="raw", overwrite_a=True,
+                               check_finite=False)[1][: stacked.shape[1]]
     return r_factor[:, :-1], r_factor[:, -1]
 
 

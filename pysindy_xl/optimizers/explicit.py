@@ -182,7 +182,9 @@ def corrected_least_squares(x, y, noise_moments=None, max_noise_share: float = 0
     coef = np.linalg.lstsq(x / scale, y, rcond=None)[0]
     if noise_moments is None or x.shape[1] == 0:
         return coef / scale, 0.0
-    r_factor = scipy.linalg.qr(x / scale, mode="r", check_finite=False)[0][: x.shape[1]]
+    # (mode "raw": R without the (rows, columns) upper-triangular copy that mode "r" makes)
+    r_factor = scipy.linalg.qr(x / scale, mode="raw", overwrite_a=True,
+                               check_finite=False)[1][: x.shape[1]]
     moments = np.asarray(noise_moments, dtype=float) / np.outer(scale, scale)
     try:
         ratio = scipy.linalg.solve_triangular(

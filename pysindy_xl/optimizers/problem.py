@@ -357,9 +357,39 @@ def check_support(support, n_features: int) -> np.ndarray:
 def _block_rms(theta, n_blocks: int) -> np.ndarray:
     """RMS of every column within every row block, shape (n_blocks, F), without overflow."""
     blocks = np.asarray(theta, dtype=float).reshape(n_blocks, -1, theta.shape[1])
-    top = np.max(np.abs(blocks), axis=1)
+    top = abs_max(blocks, axis=1)
     safe = np.where((top > 0) & np.isfinite(top), top, 1.0)
-    return top * np.sqrt(np.mean((blocks / safe[:, None, :]) ** 2, axis=1))
+    scaled = blocks / safe[:, None, :]
+    np.square(scaled, out=scaled)  # (in place: one array of theta's size, not two)
+    return top * np.sqrt(np.mean(scaled, axis=1))
+
+
+def abs_max(values, axis: int) -> np.ndarray:
+    r"""``np.max(np.abs(values), axis=axis)`` without the array of absolute values.
+
+    .. math:: \max_k |v_k| = \max\left(\max_k v_k, \; -\min_k v_k\right),
+
+    exact (a negation rounds nothing); NaN where a NaN is met, as ``np.max``.
+
+    Parameters
+    ----------
+    values : ndarray of float
+        Non-empty along ``axis``.
+    axis : int
+        The axis reduced.
+
+    Returns
+    -------
+    ndarray
+        The largest absolute value along ``axis``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> abs_max(np.array([[1.0, -4.0], [-3.0, 2.0]]), axis=0).tolist()
+    [3.0, 4.0]
+    """
+    return np.maximum(values.max(axis=axis), -values.min(axis=axis))
 
 
 def coordinate_weights(theta, n_coordinates: int, force_columns=None) -> np.ndarray:

@@ -8,12 +8,14 @@ functions, so rows stay coordinate-major over all trajectories.
 from __future__ import annotations
 
 import copy
+import hashlib
 import warnings
 
 import numpy as np
 import scipy.sparse
 
 from ..symbols import stack_variables
+from .bumps import BumpTestFunctions
 from .noise import WeakNoise, draw_moments
 from .smoothing import WhittakerSmoother, is_uniform
 from .timegrid import STAMP_NOISE_RATIO, grid_summary, split_at_gaps, stamp_noise_ratio
@@ -295,8 +297,8 @@ def weak_regression(library, trajectories, test_functions, smoother, noise="mome
     n = library.coords.n
     blocks, draws, runs, supports = [], [], [], []
     for k, (d, z) in enumerate(zip(pieces, states, strict=True)):
-        phi, dphi, _ = test_functions.matrices(d["t"], half_width=half_width)
-        overlap, kept = _overlap_rows(phi), np.arange(phi.shape[0])
+        phi, dphi, overlap = _test_matrices(test_functions, d["t"], half_width)
+        kept = np.arange(phi.shape[0])
         if not d["mask"].all():  # drop the test functions that see a masked sample
             kept = np.flatnonzero((abs(phi) @ (~d["mask"]).astype(float)) == 0)
             phi, dphi = phi[kept], dphi[kept]
@@ -334,6 +336,36 @@ def _supports(phi, t, trajectory) -> np.ndarray:
     first = np.minimum.reduceat(phi.indices, starts)
     last = np.maximum.reduceat(phi.indices, starts)
     return np.column_stack([np.full(len(first), float(trajectory)), t[first], t[last]])
+
+
+#: The test-function matrices of pieces met before (:func:`_test_matrices`), most recently
+#: used last: a growth fits many catalogs on the same pieces.
+_MATRICES: dict = {}
+_CACHED_MATRICES = 64
+
+
+def _test_matrices(test_functions, t, half_width) -> tuple:
+    """``(phi, dphi, overlap)`` of a piece: ``test_functions.matrices(t, half_width=...)``
+    and :func:`_overlap_rows`, computed once per test functions' parameters, times and
+    half-width (:class:`~pysindy_xl.weak.BumpTestFunctions`; other test functions each
+    time). The matrices are shared: read, never modified."""
+    if type(test_functions) is not BumpTestFunctions:
+        phi, dphi, _ = test_functions.matrices(t, half_width=half_width)
+        return phi, dphi, _overlap_rows(phi)
+    t = np.ascontiguousarray(t, dtype=float)
+    # (arrays by their bytes: their repr rounds and elides)
+    state = tuple(sorted((name, (value.dtype.str, value.shape, value.tobytes())
+                          if isinstance(value, np.ndarray) else repr(value))
+                         for name, value in vars(test_functions).items()))
+    key = (state, float(half_width), t.shape, hashlib.sha1(t).digest())
+    found = _MATRICES.pop(key, None)
+    if found is None:
+        phi, dphi, _ = test_functions.matrices(t, half_width=half_width)
+        found = (phi, dphi, _overlap_rows(phi))
+    _MATRICES[key] = found
+    while len(_MATRICES) > _CACHED_MATRICES:
+        del _MATRICES[next(iter(_MATRICES))]
+    return found
 
 
 def _overlap_rows(phi) -> int:

@@ -17,6 +17,8 @@ Hutchinson trace estimates. Derivatives: five-point finite differences on the ac
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 import scipy.fft
 import scipy.linalg
@@ -114,10 +116,37 @@ def differentiate(t, values, derivative: int = 1, stencil: int = 5, degree=None)
     >>> float(np.abs(differentiate(t, np.sin(t)) - np.cos(t)).max()) < 1e-6
     True
     """
-    index, weights = finite_difference_weights(t, derivative, stencil, degree)
+    t = np.ascontiguousarray(t, dtype=float)
+    index, weights = _remembered(_STENCILS, (_grid_key(t), derivative, stencil, degree),
+                                 lambda: finite_difference_weights(t, derivative, stencil, degree))
     values = np.asarray(values, dtype=float)
     gathered = values[index]  # (N, stencil, ...)
     return np.einsum("ij,ij...->i...", weights, gathered)
+
+
+#: Factorizations of the smoothing systems and finite-difference stencils of grids met before
+#: (:func:`whittaker_smooth`, :func:`differentiate`), most recently used last: the noise
+#: propagation smooths draws on the grids and with the weights of the positions.
+_FACTORS: dict = {}
+_STENCILS: dict = {}
+_REMEMBERED_GRIDS = 64
+
+
+def _grid_key(t: np.ndarray) -> tuple:
+    """A key of the times ``t`` (C-contiguous floats): their count and digest."""
+    return len(t), hashlib.sha1(t).digest()
+
+
+def _remembered(cache: dict, key, make):
+    """``make()``, kept in ``cache`` under ``key`` (at most :data:`_REMEMBERED_GRIDS`
+    entries, the least recently used dropped first)."""
+    found = cache.pop(key, None)
+    if found is None:
+        found = make()
+    cache[key] = found
+    while len(cache) > _REMEMBERED_GRIDS:
+        del cache[next(iter(cache))]
+    return found
 
 
 def _divided_difference_matrix(t: np.ndarray, order: int,
@@ -304,17 +333,27 @@ def whittaker_smooth(t, x, lams, order: int = 3):
     >>> bool(np.allclose(qd[:, 1], 1.0))
     True
     """
-    t = np.asarray(t, dtype=float)
+    t = np.ascontiguousarray(t, dtype=float)
     x = np.asarray(x, dtype=float)
-    penalty = _divided_difference_matrix(t, order, weighted=True)
-    penalty = (penalty.T @ penalty).tocsc()
-    identity = scipy.sparse.identity(len(t), format="csc")
+    built = []  # the penalty, built when a factorization is not remembered
+
+    def factorization(lam):
+        if not built:
+            penalty = _divided_difference_matrix(t, order, weighted=True)
+            built.append(((penalty.T @ penalty).tocsc(),
+                          scipy.sparse.identity(len(t), format="csc")))
+        penalty, identity = built[0]
+        return scipy.sparse.linalg.splu(identity + lam * penalty)
+
     smoothed = x.copy()
     lams = np.asarray(lams, dtype=float)
+    grid = _grid_key(t)
     for lam in np.unique(lams[lams > 0]):  # one factorization per weight, for its columns
         columns = np.flatnonzero(lams == lam)
-        smoothed[:, columns] = scipy.sparse.linalg.splu(identity + lam * penalty).solve(
-            np.ascontiguousarray(x[:, columns]))
+        # (remembered: the noise propagation smooths draws again with the same weights)
+        factor = _remembered(_FACTORS, (grid, order, float(lam)),
+                             lambda lam=lam: factorization(lam))
+        smoothed[:, columns] = factor.solve(np.ascontiguousarray(x[:, columns]))
     return smoothed, differentiate(t, smoothed, 1), differentiate(t, smoothed, 2)
 
 
