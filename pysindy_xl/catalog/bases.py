@@ -243,8 +243,14 @@ def quadratic_end_splines(q: sp.Symbol, low: float, high: float,
     """
     if isinstance(n_knots, bool) or not isinstance(n_knots, (int, np.integer)) or n_knots < 4:
         raise ValueError(f"splines: expected at least 4 knots per coordinate, got {n_knots!r}")
-    centers, h = bspline_centers(low, high, int(n_knots))
-    last = int(n_knots) - 1  # the right end knot, at s = K - 1
+    return list(_quadratic_end_splines(q, float(low), float(high), int(n_knots)))
+
+
+@functools.lru_cache(maxsize=1024)
+def _quadratic_end_splines(q: sp.Symbol, low: float, high: float, n_knots: int) -> tuple:
+    """:func:`quadratic_end_splines`, built once per coordinate, end knots and count."""
+    centers, h = bspline_centers(low, high, n_knots)
+    last = n_knots - 1  # the right end knot, at s = K - 1
     s = (q - sp.Float(float(centers[0]))) / sp.Float(h)
     out = []
     for j in range(-1, last + 2):  # the B-spline centred at s = j: knots j - 2, ..., j + 2
@@ -259,7 +265,7 @@ def quadratic_end_splines(q: sp.Symbol, low: float, high: float,
                    + sum((sp.Rational(w, 6) * _plus_cubed(s - c) for w, c in inner),
                          sp.Integer(0))
                    - end * _plus_cubed(s - last))
-    return out
+    return tuple(out)
 
 
 def factor_functions(q: sp.Symbol, kind: str, degree: int, trig_degree: int,
