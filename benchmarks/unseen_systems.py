@@ -17,10 +17,16 @@ truth (DOP853 at rtol = atol = 1e-10), the data (2 runs of 10 s at 1 kHz, positi
 or 5 % noise), the scores and the hand-built reference (``hand``: AutomaticCatalog parameters
 that contain the law). Results are appended to a JSONL file (finished cases are skipped);
 ``--report`` writes the markdown summary (below :data:`MARKER`, keeping what a reader wrote
-above it), ``--explain CASE`` prints one case's growth path.
+above it; with ``generic_systems.py``'s section "Baselines on the same data" where the results
+hold the baselines), ``--explain CASE`` prints one case's growth path. ``--reuse FILE``
+takes the catalogs' figures of the cases ``FILE`` holds and runs only the baselines on them
+(the same data: the case's seeds fix it).
 Usage::
 
     PYTHONPATH=$PWD python benchmarks/unseen_systems.py --seeds 0 1 --no-baselines
+    PYTHONPATH=$PWD python benchmarks/unseen_systems.py --seeds 0 1 2 \\
+        --out benchmarks/results/unseen_systems_baselines.jsonl \\
+        --reuse benchmarks/results/unseen_systems_1cdfe59.jsonl
     python benchmarks/unseen_systems.py --report benchmarks/results/unseen_systems.md
     PYTHONPATH=$PWD python benchmarks/unseen_systems.py --explain morse_well:forced:0.05:0
 """
@@ -205,6 +211,7 @@ def write_report(path, out):
                   f"{gs._pct(r['auto'].get('off_box'))} %; catalog `{r.get('catalog')}`)",
                   f"  - found: `{r.get('lagrangian', r['auto'].get('error'))}`",
                   f"  - truth: `{truth}`"]
+    lines += gs.baselines_section(records)
     kept = ""
     if os.path.exists(out):  # the hand-written part above the marker stays
         with open(out, encoding="utf-8") as handle:
@@ -224,6 +231,9 @@ def main(argv=None):
     parser.add_argument("--forcing", nargs="*", default=["forced", "unforced"])
     parser.add_argument("--out", default=RESULTS)
     parser.add_argument("--no-baselines", action="store_true")
+    parser.add_argument("--reuse", default=None, metavar="FILE.jsonl",
+                        help="take the catalogs' figures of the cases this file holds; run "
+                             "only the baselines on them")
     parser.add_argument("--report", default=None, metavar="FILE.md")
     parser.add_argument("--explain", default=None, metavar="SYSTEM:FORCING:NOISE:SEED")
     args = parser.parse_args(argv)
