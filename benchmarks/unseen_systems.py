@@ -117,10 +117,11 @@ def systems():
     return {s["name"]: s for s in out}
 
 
-def explain(case):
-    """Print the growth path of one case ``system:forcing:noise:seed`` (its table, the fitted
-    Lagrangian next to the truth, and the scores)."""
-    system, truth, forced, (runs, test, xs, ts, us) = gs.case_of(case, systems())
+def explain(case, table=None):
+    """Print the growth path of one case ``system:forcing:noise:seed`` of the systems ``table``
+    (a function returning them; default :func:`systems`): its table, the fitted Lagrangian next
+    to the truth, and the scores."""
+    system, truth, forced, (runs, test, xs, ts, us) = gs.case_of(case, (table or systems)())
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         found = px.grow_catalog(xs, ts, us, coordinates=list(system["coords"].names),
@@ -138,13 +139,17 @@ def _median_max(values):
     return f"{np.median(values):.1f} / {np.max(values):.1f}" if values else "-"
 
 
-def write_report(path, out):
-    """The markdown summary of the JSONL results ``path``, written to ``out``."""
+def write_report(path, out, table=None, script="unseen_systems.py",
+                 title="Systems the automatic catalog was never developed on"):
+    """The markdown summary of the JSONL results ``path`` of the systems ``table`` (a function
+    returning them; default :func:`systems`) run by ``script``, written to ``out`` under
+    ``title``."""
     with open(path, encoding="utf-8") as handle:
         records = [json.loads(line) for line in handle if line.strip()]
-    table = systems()
-    lines = ["# Systems the automatic catalog was never developed on", "",
-             "`python benchmarks/unseen_systems.py` (its docstring lists the systems; data, "
+    table = (table or systems)()
+    marker = MARKER.replace("unseen_systems.py", script)
+    lines = [f"# {title}", "",
+             f"`python benchmarks/{script}` (its docstring lists the systems; data, "
              "scores and the hand-built reference are those of `generic_systems.py`). "
              "\"right\" = held-out error <= 2 %, 2 s simulation within 5 %, error off the "
              "training box (widened 20 %) <= 5 %.", "",
@@ -216,20 +221,25 @@ def write_report(path, out):
     if os.path.exists(out):  # the hand-written part above the marker stays
         with open(out, encoding="utf-8") as handle:
             text = handle.read()
-        if MARKER in text:
-            kept = text[:text.index(MARKER)] + MARKER + "\n\n"
+        if marker in text:
+            kept = text[:text.index(marker)] + marker + "\n\n"
             lines[0] = "## The tables of " + os.path.basename(path)
     with open(out, "w", encoding="utf-8") as handle:
         handle.write(kept + "\n".join(lines) + "\n")
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def main(argv=None, table=None, results=RESULTS, script="unseen_systems.py",
+         title="Systems the automatic catalog was never developed on"):
+    """Run, report or explain the grid of the systems ``table`` (a function returning them;
+    default :func:`systems`), results in ``results``; ``script`` and ``title`` name them in the
+    report."""
+    table = table or systems
+    parser = argparse.ArgumentParser(description=title)
     parser.add_argument("--systems", nargs="*", default=None)
     parser.add_argument("--noise", nargs="*", type=float, default=[0.0, 0.01, 0.05])
     parser.add_argument("--seeds", nargs="*", type=int, default=[0, 1])
     parser.add_argument("--forcing", nargs="*", default=["forced", "unforced"])
-    parser.add_argument("--out", default=RESULTS)
+    parser.add_argument("--out", default=results)
     parser.add_argument("--no-baselines", action="store_true")
     parser.add_argument("--reuse", default=None, metavar="FILE.jsonl",
                         help="take the catalogs' figures of the cases this file holds; run "
@@ -238,12 +248,12 @@ def main(argv=None):
     parser.add_argument("--explain", default=None, metavar="SYSTEM:FORCING:NOISE:SEED")
     args = parser.parse_args(argv)
     if args.report:
-        write_report(args.out, args.report)
+        write_report(args.out, args.report, table, script, title)
         return 0
     if args.explain:
-        explain(args.explain)
+        explain(args.explain, table)
         return 0
-    return gs.run_grid(systems(), args)
+    return gs.run_grid(table(), args)
 
 
 if __name__ == "__main__":
