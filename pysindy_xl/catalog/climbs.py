@@ -18,7 +18,7 @@ import numpy as np
 from .automatic import AutomaticCatalog
 from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import parameters_key
-from .floor import floor_reached, models_floor
+from .floor import EXACT, floor_reached, models_floor, noise_explains
 from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
 from .moves import NARROW, REPEATED, SPLINE_MOVES, START, holds, is_repeated, moved
 from .path import GrowthStep
@@ -381,14 +381,23 @@ class Climber:
         bool
         """
         if not step.criterion > self.good_enough:
-            return True
+            # good enough where the positions' noise could account for it: free of noise
+            # (a floor of round-off) a stand-in at 0.1 % is not what the data allow, and the
+            # climb goes on (a cosine and a cos(theta) inertia for a torsion spring on a cart)
+            return (step.criterion <= EXACT or not self.noise_floor or step is self.first
+                    or noise_explains(step.criterion, self._floor(step)))
         if not (floor and self.noise_floor and step is not self.first):
             return False
+        return floor_reached(step.criterion, self._floor(step), self.tolerance)
+
+    def _floor(self, step) -> float:
+        """``step``'s noise floor, computed from its stored fits when first asked (the floor
+        is computed only for the catalogs whose criterion decides a climb); NaN where they
+        are not stored."""
         models = self._models.get(id(step))
         if np.isnan(step.noise_floor) and models is not None and np.isfinite(step.criterion):
-            # the floor is computed only for the catalogs whose criterion decides a climb
             step.noise_floor = models_floor(self.fits.search, models, step.block_errors)
-        return floor_reached(step.criterion, step.noise_floor, self.tolerance)
+        return step.noise_floor
 
     def _going(self, state, best, end, floor=True) -> bool:
         """Whether a climb at ``state`` (its step ``best``) goes on: the criterion is not

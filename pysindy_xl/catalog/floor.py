@@ -31,7 +31,16 @@ import numpy as np
 
 from ..fit.kinetic_scale import inertial_columns
 
-__all__ = ["held_out_scores", "combined_floor", "models_floor", "floor_reached"]
+__all__ = ["held_out_scores", "combined_floor", "models_floor", "floor_reached",
+           "noise_explains", "EXACT", "EXPLAINED"]
+
+#: The criterion below which a law is exact to about the precision of noise-free data
+#: (differences below it are round-off, not structure).
+EXACT = 1e-6
+#: A criterion within this factor of its noise floor is one the positions' noise could account
+#: for (right laws sit at 0.9 to 1.7 times their floor on noisy data; a stand-in on data free of
+#: noise, whose floor is round-off, at a million times or more).
+EXPLAINED = 10.0
 
 
 def held_out_scores(model, held, forced, floor=True) -> tuple:
@@ -207,3 +216,34 @@ def floor_reached(criterion, floor, tolerance) -> bool:
     """
     return bool(np.isfinite(criterion) and np.isfinite(floor) and floor > 0
                 and criterion <= floor * (1 + tolerance))
+
+
+def noise_explains(criterion, floor) -> bool:
+    """Whether the positions' noise could account for a criterion: ``criterion <= EXPLAINED *
+    floor``, or the floor unknown (not finite: nothing to tell).
+
+    On noisy data a small criterion (below the growth's ``good_enough``) is what the noise
+    leaves; free of noise the floor is round-off, and a criterion of 0.1 % is a stand-in's
+    error, not the data's precision.
+
+    Parameters
+    ----------
+    criterion : float
+        A step's held-out criterion.
+    floor : float
+        Its noise floor (:func:`models_floor`), NaN where not computed.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> noise_explains(0.001, 0.0008), noise_explains(0.001, 1e-12)
+    (True, False)
+    >>> noise_explains(0.001, float("nan"))
+    True
+    """
+    if not np.isfinite(floor):
+        return True
+    return bool(criterion <= EXPLAINED * floor)

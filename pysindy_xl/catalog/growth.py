@@ -175,6 +175,7 @@ from .candidates import (
     search_rows,
 )
 from .climbs import Climber
+from .floor import EXACT
 from .folds import REGIONS, held_out_splits
 from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first)
 from .growth_data import check_growth_data, data_span
@@ -194,10 +195,6 @@ GROWTH_REGIONS = (*REGIONS, "consensus")
 
 #: Ceiling of the catalog's size with ``max_terms="auto"``, whatever the data.
 MAX_TERMS = 400
-
-#: Unforced data: the criterion below which the growth stops (a law exact to about the
-#: precision of noise-free data; differences below it are round-off, not structure).
-EXACT = 1e-6
 
 #: With ``max_terms="auto"``, rows of the search's fits per catalog term at least: catalogs
 #: over ``rows // ROWS_PER_TERM`` terms are not tried.
