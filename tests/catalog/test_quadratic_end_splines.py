@@ -88,7 +88,7 @@ def _morse_runs():
     return t, xs, dxs, ddxs, us
 
 
-def test_quadratic_ends_continue_a_morse_wall_where_natural_splines_go_flat():
+def test_quadratic_ends_continue_a_morse_wall_where_natural_splines_go_flat(tmp_path):
     t, xs, dxs, ddxs, us = _morse_runs()
     stacked = np.vstack(xs)[:, 0]
     bounds = [tuple(np.percentile(stacked, [1, 99]))]
@@ -108,6 +108,13 @@ def test_quadratic_ends_continue_a_morse_wall_where_natural_splines_go_flat():
                   "wall": model.predict_forces(wall, zero, zero)}
         errors[ends] = {part: np.abs(fitted[part] - truth_part).max() / np.abs(truth_part).max()
                         for part, truth_part in (("inside", -_morse(inside)), ("wall", truth))}
+        if ends == "quadratic":  # simulate, save and load go through the restricted grammar
+            start = np.array([stacked.min() - 0.05, 0.0])
+            assert np.all(np.isfinite(model.simulate(start, t[:200], u=lambda _: np.zeros(1))))
+            model.save(tmp_path / "quadratic_ends.json")
+            loaded = px.XLSINDy.load(tmp_path / "quadratic_ends.json")
+            assert np.allclose(loaded.predict_forces(wall, zero, zero), fitted["wall"],
+                               rtol=1e-10, atol=1e-12)
     # inside the knots every cubic spline fits the well; natural splines, whose curvature
     # vanishes at the end knots, cannot bend with the wall there
     assert errors["quadratic"]["inside"] < 0.02 < errors["linear"]["inside"]
