@@ -129,35 +129,36 @@ catalog whose fit kept exactly its terms (a larger one only offers the final fit
 to choose stand-ins from).
 
 With noisy positions the criterion of a right law is not small: the held-out rows carry the
-noise, and no catalog explains it. So the growth asks, of each catalog it keeps, the
-criterion's noise floor (``noise_floor``; :attr:`GrowthStep.noise_floor`): the criterion that
-the noise of the positions alone leaves to its fitted laws, from the held-out rows' noise draws
+noise, and no catalog explains it. So the growth asks, of each catalog it keeps, the criterion's
+noise floor (``noise_floor``; :attr:`GrowthStep.noise_floor`): the criterion that the noise of
+the positions alone leaves to its fitted laws, from the held-out rows' noise draws
 (:mod:`.floor`). A kept catalog within ``tolerance`` of its floor (a discrepancy principle: a
-move must lower the criterion by the tolerance to be kept) settles the growth as
-``good_enough`` does: the climbs try no further move and the second climb is not made; the
-backward phase and the near ties run as below ``good_enough``. Two exceptions keep a stand-in
-at its own floor from ending the search. The smallest catalog is not settled by its floor: a
-law that lacks a family makes up for it with large coefficients on noisy columns, which raise
-its floor with its residual (two coupled carts at 2 % noise: the uncoupled catalog is 1.4 times
-its floor, the law 0.85 times its own, 2.6 times lower). And the floor stops a climb before a
-move, not within one: a kept degree move still looks one degree further, and the backward phase
-still exchanges a family that stands in for another (on the quartic rotor at 5 % noise the
-cosine beside ``phi^2`` is at its floor on the recorded angles; ``phi^4`` is then tried, and
-the near ties choose it). Free of noise the floor is round-off, far below :data:`EXACT` and
-``good_enough``, and nothing changes. A right law sits at 0.87 to 1.13 times its floor on the
-generic systems with two or more coordinates (where the stop applies), 1.2 to 1.7 times with
-one (where the climb goes on as without it). The chosen
-catalog is then fitted on all the data, each coordinate's splines kept whole or left out
-(:class:`~pysindy_xl.optimizers.GroupedOptimizer`), with the weak-form test functions that
-the search's fits used (:class:`~pysindy_xl.weak.BumpTestFunctions` of one half-width: the
-default width of the longest run, at most a third of the shortest run's time block). The
-criterion judged the catalog by fits with these test functions; the default ones of a fit
-on all the data (as wide or wider; for unforced data, three widths) make another
-regression, whose selection the growth never judged: on the log-cosh well, unforced and
-free of noise, that selection keeps a combination of the spline columns that nearly
-vanishes on the data, with almost no kinetic part (accelerations off by a factor of tens
-to hundreds), where the search's test functions give the law within 0.5 %.
-"""
+move must lower the criterion by the tolerance to be kept) settles the growth as ``good_enough``
+does: the climbs try no further move and the second climb is not made; the backward phase and
+the near ties run as below ``good_enough``. Two exceptions keep a stand-in at its own floor from
+ending the search. The smallest catalog is not settled by its floor: a law that lacks a family
+makes up for it with large coefficients on noisy columns, which raise its floor with its
+residual (two coupled carts at 2 % noise: the uncoupled catalog is 1.4 times its floor, the law
+0.85 times its own, 2.6 times lower). And the floor stops a climb before a move, not within one:
+a kept degree move still looks one degree further, and the backward phase still exchanges a
+family that stands in for another (on the quartic rotor at 5 % noise the cosine beside ``phi^2``
+is at its floor on the recorded angles; ``phi^4`` is then tried, and the near ties choose it).
+Free of noise the floor is round-off, far below :data:`EXACT` and ``good_enough``: the floor
+never stops the growth there, and neither does ``good_enough`` above :data:`EXACT` (a stand-in's
+error, not the data's precision: on a cart with a torsion-sprung pendulum, ``cos(theta)`` for
+``theta^2`` at 0.1 %); the climb goes on. A right law sits at 0.87 to 1.13 times its floor on
+the generic systems with two or more coordinates (where the stop applies), 1.2 to 1.7 times with
+one (where the climb goes on as without it). The chosen catalog is then fitted on all the data,
+each coordinate's splines kept whole or left out
+(:class:`~pysindy_xl.optimizers.GroupedOptimizer`), with the weak-form test functions that the
+search's fits used (:class:`~pysindy_xl.weak.BumpTestFunctions` of one half-width: the default
+width of the longest run, at most a third of the shortest run's time block). The criterion
+judged the catalog by fits with these test functions; the default ones of a fit on all the data
+(as wide or wider; for unforced data, three widths) make another regression, whose selection the
+growth never judged: on the log-cosh well, unforced and free of noise, that selection keeps a
+combination of the spline columns that nearly vanishes on the data, with almost no kinetic part
+(accelerations off by a factor of tens to hundreds), where the search's test functions give the
+law within 0.5 %. """
 
 from __future__ import annotations
 
@@ -257,7 +258,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     good_enough : float, default 0.002
         With forces, the growth stops once the criterion is below this relative error
         (unforced data: below :data:`EXACT`, a law exact to the data's precision), or at its
-        noise floor (``noise_floor``); every move is tried otherwise.
+        noise floor (``noise_floor``); every move is tried otherwise. With ``noise_floor``, a
+        criterion between :data:`EXACT` and ``good_enough`` stops the growth only where the
+        positions' noise could account for it (within
+        :data:`~pysindy_xl.catalog.floor.EXPLAINED` times its floor): free of noise, a
+        stand-in at 0.1 % is not what the data allow.
     moves : sequence of str, default MOVES
         The moves tried (some of :data:`MOVES` and :data:`MORE_MOVES`); the backward phase
         drops the families of these moves only (``"trig_degree"``: the sines and cosines too).
