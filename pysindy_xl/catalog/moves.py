@@ -17,8 +17,8 @@ from __future__ import annotations
 import itertools
 
 __all__ = ["MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS", "SPLINE_MOVES",
-           "REPEATED", "moved",
-           "joint_moves", "holds", "kinetic_order", "NARROW", "narrowed", "is_repeated"]
+           "REPEATED", "moved", "joint_moves", "holds", "kinetic_order", "NARROW", "narrowed",
+           "is_repeated"]
 
 #: The moves of the growth, in the order they are tried.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
