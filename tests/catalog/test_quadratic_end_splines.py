@@ -115,6 +115,11 @@ def test_quadratic_ends_continue_a_morse_wall_where_natural_splines_go_flat(tmp_
             loaded = px.XLSINDy.load(tmp_path / "quadratic_ends.json")
             assert np.allclose(loaded.predict_forces(wall, zero, zero), fitted["wall"],
                                rtol=1e-10, atol=1e-12)
+            # the JAX export (single precision) beyond the knots too
+            rhs = model.to_jax()
+            derivative = np.asarray(rhs(np.hstack([wall, zero]), np.zeros_like(wall)))
+            assert np.allclose(derivative[:, 1:], model.predict(wall, zero), rtol=1e-4,
+                               atol=1e-4)
     # inside the knots every cubic spline fits the well; natural splines, whose curvature
     # vanishes at the end knots, cannot bend with the wall there
     assert errors["quadratic"]["inside"] < 0.02 < errors["linear"]["inside"]
