@@ -58,7 +58,13 @@ from grid_report import (  # noqa: E402,F401
     baselines_section,
     write_report,
 )
-from grid_scores import _relative, _widened_box, _xlsindy_functions, score  # noqa: E402,F401
+from grid_scores import (  # noqa: E402,F401
+    _relative,
+    _widened_box,
+    _xlsindy_functions,
+    outside_share,
+    score,
+)
 from scipy.integrate import solve_ivp
 
 import pysindy_xl as px
@@ -243,7 +249,8 @@ def run_case(system, truth, noise, seed, forced, baselines=True, region="block")
     runs, test, xs, ts, us = case_data(system, truth, noise, seed, forced)
     names = list(system["coords"].names)
     record = {"system": system["name"], "n": truth.n, "noise": noise, "seed": seed,
-              "forcing": "forced" if forced else "unforced", "samples": sum(len(t) for t in ts)}
+              "forcing": "forced" if forced else "unforced", "samples": sum(len(t) for t in ts),
+              "test_outside": outside_share(test, runs)}
     started, cpu = time.perf_counter(), time.process_time()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -181,6 +181,14 @@ def write_report(path, out):
         lines.append(f"| catalog + fit, {n} coordinate(s), 20,000 samples: wall s (CPU s), "
                      f"median | {np.median([r['seconds'] for r in group]):.1f} "
                      f"({np.median([r['cpu_seconds'] for r in group]):.1f}) | - | <= 10 s |")
+    failed = [r for r in records if not r["auto"].get("right") and "test_outside" in r]
+    if failed:
+        outside = [r for r in failed if r["test_outside"] > 0]
+        lines.append(f"| wrong cases whose fresh test run leaves the training range (share of "
+                     f"its samples outside) | {len(outside)}/{len(failed)}: "
+                     + ", ".join(f"{r['system']} {r['forcing']} {r['noise']:g} seed "
+                                 f"{r['seed']} ({_pct(r['test_outside'])} %)"
+                                 for r in outside) + " | - | |")
     lines += ["", "Wall times are on a shared 2-core machine with other jobs running (CPU "
               "seconds are this process's own).", "",
               "## Every case", "",

@@ -64,3 +64,11 @@ def _xlsindy_functions(model):
     def simulate(x0, t, force):
         return model.simulate(x0, t, u=force)
     return (model.predict_forces, lambda q, qd, u: model.predict(q, qd, u), simulate)
+
+
+def outside_share(test, train_runs):
+    """The share of the fresh test run's samples with a coordinate outside the range the
+    training runs recorded (there the held-out error measures extrapolation)."""
+    q = np.vstack([r["q"] for r in train_runs])
+    low, high = q.min(axis=0), q.max(axis=0)
+    return float(np.mean(np.any((test["q"] < low) | (test["q"] > high), axis=1)))

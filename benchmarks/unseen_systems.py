@@ -208,12 +208,21 @@ def write_report(path, out, table=None, script="unseen_systems.py",
             f"{r.get('catalog', a.get('error', ''))} |")
     failed = [r for r in records if not r["auto"].get("right")]
     lines += ["", "## Failed cases: found Lagrangian against the truth", ""]
+    outside = [r for r in failed if r.get("test_outside")]
+    if any("test_outside" in r for r in failed):
+        lines += [f"{len(outside)} of the {len(failed)} failed cases have a fresh test run that "
+                  "leaves the range of the training runs' positions (the share of its samples "
+                  "outside is given as \"test outside\"): there the held-out error measures "
+                  "extrapolation.", ""]
     for r in failed:
         truth = sp.expand(table[r["system"]]["L"])
+        share = ("" if r.get("test_outside") is None
+                 else f"; test outside {gs._pct(r['test_outside'])} %")
         lines += [f"- **{r['system']} {r['forcing']} {r['noise']:g} seed {r['seed']}** "
                   f"(held-out {gs._pct(r['auto'].get('held_out'))} %, sim "
                   f"{gs._pct(r['auto'].get('simulation'))} %, off-box "
-                  f"{gs._pct(r['auto'].get('off_box'))} %; catalog `{r.get('catalog')}`)",
+                  f"{gs._pct(r['auto'].get('off_box'))} %{share}; catalog "
+                  f"`{r.get('catalog')}`)",
                   f"  - found: `{r.get('lagrangian', r['auto'].get('error'))}`",
                   f"  - truth: `{truth}`"]
     lines += gs.baselines_section(records)
