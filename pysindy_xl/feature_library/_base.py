@@ -18,6 +18,7 @@ from pysindy.feature_library.base import BaseFeatureLibrary
 from sklearn.base import clone
 from sklearn.utils.validation import check_is_fitted
 
+from .._memo import shared_derivation as _shared
 from .._validation import InstanceOf, check_numeric_array, validate_params
 from ..registry import register_type
 from ..symbols import Coordinates
@@ -40,14 +41,9 @@ _CACHED_DERIVED = 16
 
 def shared_derivation(key, derive, cache=_DERIVED, size=_CACHED_DERIVED):
     """``derive()``, shared by every call with the same ``key`` in ``cache`` (at most ``size``
-    entries, the least recently used dropped first)."""
-    found = cache.pop(key, None)
-    if found is None:
-        found = derive()
-    cache[key] = found
-    while len(cache) > size:
-        del cache[next(iter(cache))]
-    return found
+    entries, the least recently used dropped first; :func:`pysindy_xl._memo.shared_derivation`
+    with the derived terms' cache by default)."""
+    return _shared(key, derive, cache, size)
 
 
 class TermChain(Sequence):

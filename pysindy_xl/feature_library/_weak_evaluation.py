@@ -16,6 +16,7 @@ import scipy.sparse
 import sympy as sp
 from sklearn.utils.validation import check_is_fitted
 
+from .._memo import shared_derivation
 from ._compile import Terms, compile_terms, decompose
 from ._weak import integrate_by_parts
 
@@ -222,16 +223,14 @@ class WeakEvaluation:
             return kept[3]
         # sparse test matrices by content: the noise propagation transforms many draws with
         # the same ones, and a growth fits many catalogs on the same pieces
-        key = _sparse_key(phi, dphi, n_samples)
-        blocks = None if key is None else _TESTS.pop(key, None)
-        if blocks is None:
+        def derive():
             tests = [scipy.sparse.csc_matrix(-dphi), scipy.sparse.csc_matrix(-phi)]
-            blocks = [[test[:, start:start + _WEAK_BLOCK] for test in tests]
-                      for start in range(0, n_samples, _WEAK_BLOCK)]
-        if key is not None:
-            _TESTS[key] = blocks
-            while len(_TESTS) > _CACHED_TESTS:
-                del _TESTS[next(iter(_TESTS))]
+            return [[test[:, start:start + _WEAK_BLOCK] for test in tests]
+                    for start in range(0, n_samples, _WEAK_BLOCK)]
+
+        key = _sparse_key(phi, dphi, n_samples)
+        blocks = derive() if key is None else shared_derivation(key, derive, _TESTS,
+                                                                 _CACHED_TESTS)
         if "_weak_memo" in self.__dict__:  # (holding phi and dphi, their ids stay theirs)
             self._weak_memo_tests = (phi, dphi, n_samples, blocks)
         return blocks

@@ -14,6 +14,7 @@ import warnings
 import numpy as np
 import scipy.sparse
 
+from .._memo import shared_derivation
 from ..symbols import stack_variables
 from .bumps import BumpTestFunctions
 from .noise import WeakNoise, draw_moments
@@ -358,14 +359,12 @@ def _test_matrices(test_functions, t, half_width) -> tuple:
                           if isinstance(value, np.ndarray) else repr(value))
                          for name, value in vars(test_functions).items()))
     key = (state, float(half_width), t.shape, hashlib.sha1(t).digest())
-    found = _MATRICES.pop(key, None)
-    if found is None:
+
+    def derive():
         phi, dphi, _ = test_functions.matrices(t, half_width=half_width)
-        found = (phi, dphi, _overlap_rows(phi))
-    _MATRICES[key] = found
-    while len(_MATRICES) > _CACHED_MATRICES:
-        del _MATRICES[next(iter(_MATRICES))]
-    return found
+        return phi, dphi, _overlap_rows(phi)
+
+    return shared_derivation(key, derive, _MATRICES, _CACHED_MATRICES)
 
 
 def _overlap_rows(phi) -> int:

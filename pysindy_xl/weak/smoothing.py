@@ -26,6 +26,7 @@ import scipy.signal
 import scipy.sparse
 import scipy.sparse.linalg
 
+from .._memo import shared_derivation
 from .._validation import Interval, Options, validate_params
 
 __all__ = ["WhittakerSmoother", "whittaker_smooth", "finite_difference_weights", "differentiate",
@@ -117,8 +118,10 @@ def differentiate(t, values, derivative: int = 1, stencil: int = 5, degree=None)
     True
     """
     t = np.ascontiguousarray(t, dtype=float)
-    index, weights = _remembered(_STENCILS, (_grid_key(t), derivative, stencil, degree),
-                                 lambda: finite_difference_weights(t, derivative, stencil, degree))
+    index, weights = shared_derivation(
+        (_grid_key(t), derivative, stencil, degree),
+        lambda: finite_difference_weights(t, derivative, stencil, degree),
+        _STENCILS, _REMEMBERED_GRIDS)
     values = np.asarray(values, dtype=float)
     gathered = values[index]  # (N, stencil, ...)
     return np.einsum("ij,ij...->i...", weights, gathered)
@@ -135,18 +138,6 @@ _REMEMBERED_GRIDS = 64
 def _grid_key(t: np.ndarray) -> tuple:
     """A key of the times ``t`` (C-contiguous floats): their count and digest."""
     return len(t), hashlib.sha1(t).digest()
-
-
-def _remembered(cache: dict, key, make):
-    """``make()``, kept in ``cache`` under ``key`` (at most :data:`_REMEMBERED_GRIDS`
-    entries, the least recently used dropped first)."""
-    found = cache.pop(key, None)
-    if found is None:
-        found = make()
-    cache[key] = found
-    while len(cache) > _REMEMBERED_GRIDS:
-        del cache[next(iter(cache))]
-    return found
 
 
 def _divided_difference_matrix(t: np.ndarray, order: int,
@@ -351,8 +342,9 @@ def whittaker_smooth(t, x, lams, order: int = 3):
     for lam in np.unique(lams[lams > 0]):  # one factorization per weight, for its columns
         columns = np.flatnonzero(lams == lam)
         # (remembered: the noise propagation smooths draws again with the same weights)
-        factor = _remembered(_FACTORS, (grid, order, float(lam)),
-                             lambda lam=lam: factorization(lam))
+        factor = shared_derivation((grid, order, float(lam)),
+                                   lambda lam=lam: factorization(lam), _FACTORS,
+                                   _REMEMBERED_GRIDS)
         smoothed[:, columns] = factor.solve(np.ascontiguousarray(x[:, columns]))
     return smoothed, differentiate(t, smoothed, 1), differentiate(t, smoothed, 2)
 
