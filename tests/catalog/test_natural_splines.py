@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 import sympy as sp
-from scipy.integrate import solve_ivp
+from support.growth import damped_forced_runs
 
 import pysindy_xl as px
 from pysindy_xl.catalog.bases import natural_splines
@@ -53,26 +53,8 @@ def test_natural_splines_refuse_too_few_knots():
 
 def _log_cosh_runs():
     """x'' = u - 4 tanh(2 x) - 0.1 x' (V = 2 log cosh 2x, unit mass), by scipy at 1e-10."""
-    def force(time, frequencies, phases):
-        return 3.0 * np.sin(2 * np.pi * frequencies * time + phases).sum() / 2.5
-
-    t = np.arange(0.0, 10.0, 0.005)
-    xs, dxs, ddxs, us = [], [], [], []
-    for seed in (0, 1):
-        rng = np.random.default_rng(seed)
-        frequencies, phases = rng.uniform(0.1, 1.0, 5), rng.uniform(0, 2 * np.pi, 5)
-        def rhs(time, y, frequencies=frequencies, phases=phases):
-            return [y[1], force(time, frequencies, phases) - 4 * np.tanh(2 * y[0]) - 0.1 * y[1]]
-
-        solution = solve_ivp(rhs, (t[0], t[-1]), [rng.uniform(-1, 1), 0.0], t_eval=t,
-                             method="DOP853", rtol=1e-10, atol=1e-10)
-        x, v = solution.y
-        u = np.array([force(time, frequencies, phases) for time in t])
-        xs.append(x[:, None])
-        dxs.append(v[:, None])
-        ddxs.append((u - 4 * np.tanh(2 * x) - 0.1 * v)[:, None])
-        us.append(u[:, None])
-    return t, xs, dxs, ddxs, us
+    return damped_forced_runs(lambda x: -4 * np.tanh(2 * x), 3.0,
+                              lambda rng, seed: rng.uniform(-1, 1))
 
 
 def test_a_spline_potential_continues_with_a_constant_force_beyond_the_data(tmp_path):

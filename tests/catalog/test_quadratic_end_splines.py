@@ -4,8 +4,8 @@ the data, and the growth choosing between the two continuations."""
 import numpy as np
 import pytest
 import sympy as sp
-from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicSpline
+from support.growth import damped_forced_runs
 
 import pysindy_xl as px
 from pysindy_xl.catalog.bases import quadratic_end_splines
@@ -65,27 +65,7 @@ def _morse(q):
 
 def _morse_runs():
     """x'' = u + F_morse(x) - 0.1 x' (unit mass), two forced runs by scipy at 1e-10."""
-    def force(time, frequencies, phases):
-        return 1.5 * np.sin(2 * np.pi * frequencies * time + phases).sum() / 2.5
-
-    t = np.arange(0.0, 10.0, 0.005)
-    xs, dxs, ddxs, us = [], [], [], []
-    for seed in (0, 1):
-        rng = np.random.default_rng(seed)
-        frequencies, phases = rng.uniform(0.1, 1.0, 5), rng.uniform(0, 2 * np.pi, 5)
-
-        def rhs(time, y, frequencies=frequencies, phases=phases):
-            return [y[1], force(time, frequencies, phases) + _morse(y[0]) - 0.1 * y[1]]
-
-        solution = solve_ivp(rhs, (t[0], t[-1]), [0.3 * (seed - 0.5), 0.0], t_eval=t,
-                             method="DOP853", rtol=1e-10, atol=1e-10)
-        x, v = solution.y
-        u = np.array([force(time, frequencies, phases) for time in t])
-        xs.append(x[:, None])
-        dxs.append(v[:, None])
-        ddxs.append((u + _morse(x) - 0.1 * v)[:, None])
-        us.append(u[:, None])
-    return t, xs, dxs, ddxs, us
+    return damped_forced_runs(_morse, 1.5, lambda rng, seed: 0.3 * (seed - 0.5))
 
 
 def test_quadratic_ends_continue_a_morse_wall_where_natural_splines_go_flat(tmp_path):
