@@ -113,13 +113,15 @@ class RestrictedOptimizer(WrappingOptimizer, CatalogOptimizer):
         return self
 
 
-#: Fitted attributes of the wrapped optimizer, one row per column, that the wrapper answers too.
+#: Fitted attributes of the wrapped optimizer, by column (the last axis), that the wrapper
+#: answers too.
 _PER_COLUMN = ("inclusion_probability_", "coef_interval_")
 
 
 def _spread(values, allowed, n_features: int) -> np.ndarray:
-    """``values`` of the allowed columns on all ``n_features`` columns, zero elsewhere."""
+    """``values`` of the allowed columns (the last axis) on all ``n_features`` columns, zero
+    elsewhere."""
     values = np.asarray(values, dtype=float)
-    out = np.zeros((n_features, *values.shape[1:]))
-    out[allowed] = values
+    out = np.zeros((*values.shape[:-1], n_features))
+    out[..., allowed] = values
     return out
