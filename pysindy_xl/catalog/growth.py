@@ -158,7 +158,11 @@ judged the catalog by fits with these test functions; the default ones of a fit 
 growth never judged: on the log-cosh well, unforced and free of noise, that selection keeps a
 combination of the spline columns that nearly vanishes on the data, with almost no kinetic part
 (accelerations off by a factor of tens to hundreds), where the search's test functions give the
-law within 0.5 %. """
+law within 0.5 %. That fit selects again, on all the data, and keeps no term that the judged
+fits did not keep (:class:`~pysindy_xl.optimizers.RestrictedOptimizer`): it may leave out more
+(more data tell a stand-in from the law), but a term it would add was never judged (on a
+pendulum with a sprung vertical pivot, unforced and free of noise, it took 14 terms where the
+judged fits kept the law's 8, 9 % off on a fresh run). """
 
 from __future__ import annotations
 
