@@ -26,6 +26,7 @@ from .implicit import homothetic_groups as homothetic_groups
 from .laws import UndeterminedLawWarning
 from .mixed import MixedOptimizer, activation_closure
 from .physical import PhysicalOptimizer
+from .restricted import RestrictedOptimizer
 from .problem import CatalogProblem, coordinate_weights
 from .problem import balance_coordinates as balance_coordinates
 from .selection import SelectionResult, refine_by_swaps, select_support
@@ -37,7 +38,7 @@ from .total_least_squares import TotalLeastSquaresOptimizer
 __all__ = ["CatalogOptimizer", "CatalogProblem", "CatalogTags", "catalog_tags", "OPTIMIZER_TYPES",
            "default_optimizer", "SOLVER_KINDS", "ExplicitOptimizer", "ImplicitOptimizer",
            "MixedOptimizer", "EnsembleOptimizer", "GroupedOptimizer", "close_groups",
-           "PhysicalOptimizer", "NoLawFoundError",
+           "PhysicalOptimizer", "RestrictedOptimizer", "NoLawFoundError",
            "TotalLeastSquaresOptimizer", "UndeterminedLawWarning", "independent_columns",
            "coordinate_weights", "hard_threshold_regression", "proximal_gradient_lasso",
            "corrected_least_squares", "activation_closure", "select_support", "refine_by_swaps",
