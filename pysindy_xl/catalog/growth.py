@@ -224,7 +224,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                  cross_validate: bool = False, region: str = "block",
                  physical: bool = False, steepest: bool = False, progress=None,
                  n_jobs=None, combine: str = "rms", tie_break: bool = True,
-                 noise_floor: bool = True):
+                 noise_floor: bool = True, spline_basis: str = "truncated"):
     """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
 
     Parameters
@@ -363,6 +363,14 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         the second climb is not made; the backward phase (its exchanges too) and the near
         ties run as below ``good_enough``. Free of noise the floor is round-off, and the
         growth is the same either way. False: the floor is neither computed nor used.
+    spline_basis : {"truncated", "bspline"}, default "truncated"
+        How the splines' columns are written (:class:`AutomaticCatalog`'s ``spline_basis``;
+        the span is the same): one column per interior knot
+        (:func:`~.bases.truncated_power_splines`), so that the search's sparse selection
+        keeps the knots its data need, or local B-splines, which it keeps all or cuts dips
+        into. Fewer knots make a steadier end slope and curvature, and so a steadier
+        continuation beyond the data, which the region blocks judge. The final fit keeps each
+        coordinate's splines whole either way.
 
     Returns
     -------
@@ -413,6 +421,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     check_option("steepest", steepest, "bool")
     check_option("tie_break", tie_break, "bool")
     check_option("noise_floor", noise_floor, "bool")
+    spline_basis = check_option("spline_basis", spline_basis, "choice",
+                                choices=("truncated", "bspline"))
     if combine not in COMBINES:
         raise ValueError(f"combine: expected one of {COMBINES}, got {combine!r}")
     if combine == "trimmed" and not (cross_validate and n_blocks >= MIN_TRIMMED_BLOCKS):
@@ -432,6 +442,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     fixed = {"coordinates": names, "kinds": list(kinds),
              "max_terms": MAX_TERMS if max_terms == "auto" else max_terms,
              "bounds": data_span(xs),  # the splines' end knots
+             "spline_basis": spline_basis,
              "coulomb_scale": max(1e-3, 0.02 * float(np.mean(velocity_scale)))}
     first = AutomaticCatalog(**fixed, **START)
     check_growth_data(xs, names, first.n_terms)
