@@ -22,13 +22,15 @@ __all__ = ["MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS", "SPLINE_MO
 
 #: The moves of the growth, in the order they are tried.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
-         "coulomb", "splines", "quadratic_ends")
+         "coulomb", "splines", "quadratic_ends", "knots")
 #: The moves of the flexible basis, tried after the families: ``"splines"`` adds a
 #: coordinate's splines (natural: a constant force beyond the data) or refines them;
 #: ``"quadratic_ends"`` gives them quadratic ends (a constant stiffness beyond the data), adding
-#: them first where there are none. Which continuation the data support, the held-out
-#: criterion judges.
-SPLINE_MOVES = ("splines", "quadratic_ends")
+#: them first where there are none; ``"knots"`` writes them one column per interior knot
+#: (:func:`~.bases.truncated_power_splines`, the same span), adding them first where there are
+#: none, so that the search's sparse selection keeps the knots the data need. Which
+#: continuation and which writing the data support, the held-out criterion judges.
+SPLINE_MOVES = ("splines", "quadratic_ends", "knots")
 #: Moves a growth may be given beyond the default :data:`MOVES`: ``"coupled_damping"`` lets
 #: every velocity's viscous force enter every equation (``dissipation`` ``"coupled"`` of
 #: :class:`AutomaticCatalog`: the damping of a joint whose angle is a difference of coordinates).
@@ -130,6 +132,11 @@ def moved(state, move, kinds, n, skip=0):
         if state.get("spline_ends") == "quadratic":
             return None
         new["spline_ends"] = "quadratic"
+        new["splines"] = state["splines"] or SPLINE_COUNTS[0]
+    elif move == "knots":
+        if state.get("spline_basis", "bspline") == "truncated":
+            return None
+        new["spline_basis"] = "truncated"
         new["splines"] = state["splines"] or SPLINE_COUNTS[0]
     elif move == "splines":
         larger = [k for k in SPLINE_COUNTS if k > (state["splines"] or 0)]
@@ -249,7 +256,8 @@ def narrowed(names, kinds, n, size, ceiling) -> list:
 
 def holds(state, other) -> bool:
     """Whether the catalog ``state`` holds every family of ``other``, each at least as far
-    grown (degrees, interaction order, spline count with the same ends; configuration-dependent
+    grown (degrees, interaction order, spline count with the same ends and writing;
+    configuration-dependent
     kinetic coefficients over as many coordinates, gyroscopic terms, each dissipation model).
 
     Parameters
@@ -276,7 +284,9 @@ def holds(state, other) -> bool:
             and set(other["dissipation"]) <= set(state["dissipation"])
             and (state["splines"] or 0) >= (other["splines"] or 0)
             and (other["splines"] is None
-                 or state.get("spline_ends") == other.get("spline_ends")))
+                 or (state.get("spline_ends") == other.get("spline_ends")
+                     and state.get("spline_basis", "bspline")
+                     == other.get("spline_basis", "bspline"))))
 
 
 def kinetic_order(state) -> int:
