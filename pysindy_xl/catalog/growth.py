@@ -66,7 +66,10 @@ are written one column per interior knot (:func:`~.bases.truncated_power_splines
 span); the search's sparse selection then leaves out the knots its data do not need, and a
 spline with fewer knots has a steadier end slope and curvature. Which writing extrapolates,
 the held-out criterion judges (a steep wall needs the knots that the selection may leave
-out). The final fit keeps each coordinate's splines whole either way.
+out; the two moves are tried together too, as ``"quadratic_ends+knots"``: B-splines with
+quadratic ends may continue worse than natural ones and natural splines written by knots
+gain nothing, where quadratic ends written by knots extrapolate a stiffening spring). The
+final fit keeps each coordinate's splines whole either way.
 From the smallest catalog (constant kinetic coefficients, quadratic potentials of the linear
 coordinates, sines and cosines of the angles, viscous friction), each move of :data:`MOVES` but
 the splines' (:data:`~.moves.SPLINE_MOVES`) is first tried alone, and so is each pair of moves
@@ -545,6 +548,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     order = sorted([m for m in moves if m not in SPLINE_MOVES] + joint,
                    key=lambda m: rank.get(m, (1, np.inf)))
     order += [m for m in moves if m in SPLINE_MOVES]
+    if "quadratic_ends" in moves and "knots" in moves:  # both at once: neither may gain alone
+        order.append("quadratic_ends+knots")
     # climb from the best and from the second-best first move: which family goes in first is
     # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
     # a coupling that needs two moves), so the better of the two ends is kept

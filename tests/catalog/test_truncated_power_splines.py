@@ -14,6 +14,7 @@ from pysindy_xl.catalog.bases import (
     quadratic_end_splines,
     truncated_power_splines,
 )
+from pysindy_xl.catalog.moves import MOVES, SPLINE_COUNTS, SPLINE_MOVES, START, holds, moved
 
 
 def _values(basis, x, points):
@@ -104,10 +105,18 @@ def test_bad_bases_and_ends_are_refused_by_name():
     with pytest.raises(ValueError, match="spline_basis"):
         px.AutomaticCatalog(["x"], splines=6, bounds=[(0.0, 1.0)],
                             spline_basis="fourier").fit()
-    t = np.linspace(0.0, 10.0, 2001)
-    with pytest.raises(ValueError, match="spline_basis"):
-        px.grow_catalog(np.sin(t)[:, None], t, np.cos(t)[:, None], coordinates=["x"],
-                        spline_basis="fourier")
+
+
+def test_the_move_knots_writes_the_splines_one_column_per_knot_and_adds_them_where_none():
+    plain = moved(START, "knots", ["linear"], 1)
+    assert plain["spline_basis"] == "truncated" and plain["splines"] == SPLINE_COUNTS[0]
+    assert moved(plain, "knots", ["linear"], 1) is None
+    ends = moved(plain, "quadratic_ends", ["linear"], 1)
+    assert ends["spline_basis"] == "truncated" and ends["spline_ends"] == "quadratic"
+    assert moved(ends, "splines", ["linear"], 1)["splines"] == SPLINE_COUNTS[1]
+    written = moved(moved(START, "splines", ["linear"], 1), "knots", ["linear"], 1)
+    assert not holds(written, moved(START, "splines", ["linear"], 1))  # another writing
+    assert "knots" in MOVES and "knots" in SPLINE_MOVES
 
 
 def _oblique(q):
@@ -117,12 +126,12 @@ def _oblique(q):
 
 
 def test_the_growth_gives_an_oblique_spring_quadratic_ends_written_one_column_per_knot():
-    """At 1 % noise, written as B-splines, the search's fits of quadratic-end splines
-    continue so unsteadily beyond their training data that the region block prefers natural
-    splines (a constant force beyond the data, for a spring that keeps stiffening): 5 % off
-    over the data, 17 % up to 0.3 beyond. Written one column per knot, the search's
-    selection keeps the knots the data need and the growth keeps quadratic ends: within 1 %
-    and 3 %."""
+    """At 1 % noise, written as B-splines only (no move ``"knots"``), the search's fits of
+    quadratic-end splines continue so unsteadily beyond their training data that the region
+    block prefers natural splines (a constant force beyond the data, for a spring that keeps
+    stiffening): 5 % off over the data, 17 % up to 0.3 beyond. With the move, the search's
+    selection keeps the knots the data need and the growth keeps quadratic ends written so:
+    within 1 % and 3 %."""
     t, xs, _, _, us = damped_forced_runs(_oblique, 3.0, lambda rng, seed: 0.3 * (seed - 0.5))
     noisy = [x + np.random.default_rng(7 + k).normal(0.0, 0.01 * x.std(), x.shape)
              for k, x in enumerate(xs)]
@@ -131,16 +140,18 @@ def test_the_growth_gives_an_oblique_spring_quadratic_ends_written_one_column_pe
     beyond = np.r_[np.linspace(stacked.min() - 0.3, stacked.min(), 30),
                    np.linspace(stacked.max(), stacked.max() + 0.3, 30)][:, None]
     errors = {}
-    for basis in ("truncated", "bspline"):
+    for basis, moves in (("truncated", MOVES), ("bspline", [m for m in MOVES if m != "knots"])):
         found = px.grow_catalog(noisy, [t, t], us, coordinates=["x"], kinds=["linear"],
-                                spline_basis=basis)
-        errors[basis] = {"catalog": found.catalog.describe()}
+                                moves=moves)
+        errors[basis] = {"catalog": found.catalog.describe(),
+                         "basis": found.catalog.spline_basis}
         for name, q in (("inside", inside), ("beyond", beyond)):
             predicted = found.model.predict(q, np.zeros_like(q))  # unit mass: accelerations
             truth = _oblique(q)
             errors[basis][name] = float(np.sqrt(np.mean((predicted - truth) ** 2))
                                         / np.sqrt(np.mean(truth ** 2)))
     assert "quadratic ends" in errors["truncated"]["catalog"], errors
+    assert errors["truncated"]["basis"] == "truncated", errors
     assert errors["truncated"]["inside"] < 0.01 and errors["truncated"]["beyond"] < 0.03, errors
     # the test can fail: written as B-splines, the same growth keeps a worse continuation
     assert "quadratic ends" not in errors["bspline"]["catalog"], errors
