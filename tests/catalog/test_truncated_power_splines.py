@@ -1,6 +1,7 @@
 """Splines written one function per interior knot: the span against scipy's cubic splines,
-a column left out as a knot removed, and the growth keeping the splines of a potential no
-family states (a slider on an oblique spring) where a quartic stood in for them."""
+a column left out as a knot removed, the move "knots", and the growth giving a potential that
+no family states (a slider on an oblique spring) quadratic ends written so, where B-splines
+alone leave it natural ends that go flat beyond the data."""
 
 import numpy as np
 import pytest
