@@ -61,7 +61,9 @@ stiffness beyond), so the region fold judges their continuation as it judges any
 A spline's continuation is set by its slope and curvature at the end knot, which the few
 samples of the last knot intervals fix unsteadily: a cubic spline on 8 even knots fitted on
 the search's training pieces may continue 5 % or 30 % off over the region block, where the
-law of a slider on an oblique spring is off by 0.5 %. After the move ``"knots"`` the splines
+law of a slider on an oblique spring is off by 0.5 %. After the move ``"knots"`` (one of
+:data:`MORE_MOVES`, not tried by default: it may double the CPU of a growth that tries splines
+on several coordinates) the splines
 are written one column per interior knot (:func:`~.bases.truncated_power_splines`, the same
 span); the search's sparse selection then leaves out the knots its data do not need, and a
 spline with fewer knots has a steadier end slope and curvature. Which writing extrapolates,
