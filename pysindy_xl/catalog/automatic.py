@@ -47,7 +47,15 @@ from ..feature_library import (
     PolynomialLagrangeLibrary,
 )
 from ..symbols import Coordinates
-from .bases import KINDS, bspline_centers, factor_functions, natural_splines, quadratic_end_splines
+from .bases import (
+    KINDS,
+    SPLINE_BASES,
+    bspline_centers,
+    factor_functions,
+    natural_splines,
+    quadratic_end_splines,
+    truncated_power_splines,
+)
 
 __all__ = ["AutomaticCatalog", "DISSIPATION", "coordinate_kinds"]
 
@@ -190,6 +198,11 @@ class AutomaticCatalog(CatalogRepartition):
         polynomial (:func:`~pysindy_xl.catalog.bases.quadratic_end_splines`: a constant
         stiffness outside the range, a wall that keeps rising, as a Morse well's repulsive
         side; ``x^2`` is in the span exactly).
+    spline_basis : {"bspline", "truncated"}, default "bspline"
+        How the splines are written (the span is the same): local B-splines, or one function
+        per interior knot (:func:`~pysindy_xl.catalog.bases.truncated_power_splines`, the
+        constant left out), so that a sparse selection that leaves out a column removes a knot
+        rather than cutting a dip into the potential.
     interlink : array (n, n), optional
         Of :class:`~pysindy_xl.ExternalForces`.
     max_terms : int, default 2000
@@ -227,6 +240,7 @@ class AutomaticCatalog(CatalogRepartition):
                           Collection("a sequence or mapping of float")],
         "splines": [None, Interval("int", 0), Collection("a mapping {name: int}")],
         "spline_ends": [Options(("linear", "quadratic"))],
+        "spline_basis": [Options(SPLINE_BASES)],
         "interlink": [None, Collection("an array of shape (n, n)")],
         "max_terms": [Interval("int", 1)],
     }
@@ -234,7 +248,8 @@ class AutomaticCatalog(CatalogRepartition):
     def __init__(self, coordinates, kinds=None, bounds=None, degree=2, trig_degree=1,
                  angle_degree=0, interaction=1, kinetic="configuration", gyroscopic=False,
                  dissipation=("viscous",), coulomb_scale=0.01, splines=None, interlink=None,
-                 max_terms=2000, kinetic_interaction=None, spline_ends="linear"):
+                 max_terms=2000, kinetic_interaction=None, spline_ends="linear",
+                 spline_basis="bspline"):
         self.coordinates = coordinates
         self.kinds = kinds
         self.bounds = bounds
@@ -251,6 +266,7 @@ class AutomaticCatalog(CatalogRepartition):
         self.max_terms = max_terms
         self.kinetic_interaction = kinetic_interaction
         self.spline_ends = spline_ends
+        self.spline_basis = spline_basis
 
     # -- the parameters, checked ---------------------------------------------------------------
     def _coordinates(self) -> Coordinates:
@@ -294,6 +310,8 @@ class AutomaticCatalog(CatalogRepartition):
         options["splines"] = []
         options["spline_ends"] = check_option("spline_ends", self.spline_ends, "choice",
                                               choices=("linear", "quadratic"))
+        options["spline_basis"] = check_option("spline_basis", self.spline_basis, "choice",
+                                               choices=SPLINE_BASES)
         for name, count, bound in zip(names, splines, bounds, strict=True):
             count = check_option("splines", count or 0, "int", low=0)
             if count and bound is None:
@@ -595,11 +613,14 @@ _DEFAULTS = {"kinds": None, "bounds": None, "degree": 2, "trig_degree": 1, "angl
              "interaction": 1, "kinetic": "configuration", "gyroscopic": False,
              "dissipation": ("viscous",), "coulomb_scale": 0.01, "splines": None,
              "interlink": None, "max_terms": 2000, "kinetic_interaction": None,
-             "spline_ends": "linear"}
+             "spline_ends": "linear", "spline_basis": "bspline"}
 
 
 def _spline_basis(options, q, low, high, count) -> list[sp.Expr]:
-    """The spline columns of one coordinate: its basis of ``options["spline_ends"]`` less its
-    last function (the basis sums to 1, and a constant potential has no column)."""
+    """The spline columns of one coordinate: its basis of ``options["spline_ends"]`` and
+    ``options["spline_basis"]`` less the constant (a constant potential has no column; the
+    B-splines sum to 1, so the last of them is left out)."""
+    if options["spline_basis"] == "truncated":
+        return truncated_power_splines(q, low, high, count, options["spline_ends"])[1:]
     basis = natural_splines if options["spline_ends"] == "linear" else quadratic_end_splines
     return basis(q, low, high, count)[:-1]

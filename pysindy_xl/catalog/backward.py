@@ -73,6 +73,7 @@ def removed(state: dict, move: str, kinds, start: dict) -> dict | None:
             return None
         new["splines"] = None
         new["spline_ends"] = start.get("spline_ends", "linear")
+        new.pop("spline_basis", None)  # (the writing of splines that are gone)
     elif move == "trig_degree":
         if not angles or state["trig_degree"] <= 1:
             return None

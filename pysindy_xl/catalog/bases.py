@@ -19,6 +19,13 @@ Per coordinate kind:
   Which continuation the data support is for a held-out criterion to judge (the automatic
   catalog's growth tries both).
 
+  :func:`truncated_power_splines` writes either span in another basis: a few polynomials and,
+  per interior knot, the truncated cube ``(q - xi_j)_+^3`` made to respect the ends. Its
+  functions are not local, but leaving one out removes a knot (the spline stays cubic across
+  it), where leaving out a B-spline cuts a dip into the potential: a sparse selection over
+  these columns chooses the knots the data need, and the fewer knots, the steadier the
+  spline's end slope and curvature, which set its continuation beyond the data.
+
 Splines are written with ``Abs`` (truncated powers ``z_+ = (z + |z|) / 2``), which the
 package's grammar, its NumPy and JAX back ends and :meth:`XLSINDy.simulate
 <pysindy_xl.XLSINDy.simulate>` handle like any term.
@@ -32,7 +39,13 @@ import numpy as np
 import sympy as sp
 
 __all__ = ["KINDS", "bspline", "bspline_centers", "factor_functions", "natural_splines",
-           "quadratic_end_splines"]
+           "quadratic_end_splines", "truncated_power_splines", "SPLINE_BASES"]
+
+#: The two ways of writing a coordinate's splines: ``"bspline"`` (each function a local bump,
+#: :func:`natural_splines`, :func:`quadratic_end_splines`) or ``"truncated"`` (each function but
+#: a few polynomials one interior knot's jump of the third derivative,
+#: :func:`truncated_power_splines`). Both span the same functions.
+SPLINE_BASES = ("bspline", "truncated")
 
 #: The coordinate kinds an automatic catalog knows.
 KINDS = ("linear", "angle")
@@ -265,6 +278,87 @@ def _quadratic_end_splines(q: sp.Symbol, low: float, high: float, n_knots: int) 
                    + sum((sp.Rational(w, 6) * _plus_cubed(s - c) for w, c in inner),
                          sp.Integer(0))
                    - end * _plus_cubed(s - last))
+    return tuple(out)
+
+
+def truncated_power_splines(q: sp.Symbol, low: float, high: float, n_knots: int,
+                            ends: str = "linear") -> list[sp.Expr]:
+    r"""The splines of :func:`natural_splines` (``ends="linear"``) or of
+    :func:`quadratic_end_splines` (``ends="quadratic"``) on ``n_knots`` uniform knots of
+    ``[low, high]``, in a basis of one function per interior knot.
+
+    With ``s = (q - low) / h`` (knot ``j`` at ``s = j``, ``j = 0, ..., m``, ``m = K - 1``) and
+    ``z_+ = max(z, 0)``, the interior knot ``j`` (``0 < j < m``) has
+
+    .. math::
+
+        N_j(s) = (s - j)_+^3 - \Big(1 - \frac jm\Big) s_+^3 - \frac jm (s - m)_+^3,
+
+    a cubic spline whose third derivative jumps at knot ``j`` and at the two end knots only,
+    by amounts that make it linear outside ``[0, m]`` (both its cubic and its quadratic
+    coefficients cancel beyond ``m``). The basis is
+
+    - ``"linear"``: ``1, s, N_1, ..., N_{m-1}``: ``K`` functions spanning the natural cubic
+      splines on the knots;
+    - ``"quadratic"``: those, ``s^2`` and ``E(s) = s_+^3 - (s - m)_+^3`` (cubic on the knots'
+      span, quadratic beyond): ``K + 2`` functions spanning every cubic spline on the knots
+      continued by its quadratic Taylor polynomial at the end knots.
+
+    A spline in this basis has the interior knot ``j`` exactly where ``N_j``'s coefficient is
+    not zero: leaving out ``N_j`` removes the knot. With every ``N_j`` left out, what stays is
+    a line (``"linear"``), or a cubic on the span continued quadratically (``"quadratic"``).
+
+    Parameters
+    ----------
+    q : sympy.Symbol
+        The coordinate.
+    low, high : float
+        The end knots, ``low < high``.
+    n_knots : int
+        ``K``, the number of knots, at least 4.
+    ends : {"linear", "quadratic"}, default "linear"
+        The continuation beyond the end knots.
+
+    Returns
+    -------
+    list of sympy.Expr
+        The constant ``1`` first, then ``s`` (and ``s^2``, ``E``), then ``N_1, ..., N_{m-1}``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import sympy as sp
+    >>> x = sp.Symbol("x", real=True)
+    >>> basis = truncated_power_splines(x, 0.0, 3.0, 4, ends="quadratic")
+    >>> len(basis)
+    6
+    >>> grid = np.linspace(-3.0, 6.0, 19)
+    >>> columns = np.array([[float(f.subs(x, v)) for f in basis] for v in grid])
+    >>> reference = np.array([[float(f.subs(x, v)) for f in quadratic_end_splines(x, 0.0, 3.0, 4)]
+    ...                       for v in grid])
+    >>> weights = np.linalg.lstsq(columns, reference, rcond=None)[0]
+    >>> bool(np.allclose(columns @ weights, reference))  # the same span
+    True
+    """
+    if isinstance(n_knots, bool) or not isinstance(n_knots, (int, np.integer)) or n_knots < 4:
+        raise ValueError(f"splines: expected at least 4 knots per coordinate, got {n_knots!r}")
+    if ends not in ("linear", "quadratic"):
+        raise ValueError(f"ends: expected 'linear' or 'quadratic', got {ends!r}")
+    return list(_truncated_power_splines(q, float(low), float(high), int(n_knots), ends))
+
+
+@functools.lru_cache(maxsize=1024)
+def _truncated_power_splines(q: sp.Symbol, low: float, high: float, n_knots: int,
+                             ends: str) -> tuple:
+    """:func:`truncated_power_splines`, built once per coordinate, end knots, count and ends."""
+    centers, h = bspline_centers(low, high, n_knots)
+    m = n_knots - 1
+    s = (q - sp.Float(float(centers[0]))) / sp.Float(h)  # knot j at s = j
+    out = [sp.Integer(1), s]
+    if ends == "quadratic":
+        out += [s ** 2, _plus_cubed(s) - _plus_cubed(s - m)]
+    out += [_plus_cubed(s - j) - sp.Rational(m - j, m) * _plus_cubed(s)
+            - sp.Rational(j, m) * _plus_cubed(s - m) for j in range(1, m)]
     return tuple(out)
 
 

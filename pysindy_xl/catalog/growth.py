@@ -58,6 +58,20 @@ training data (:data:`~.growth_data.END_PERCENTILE`) and continue linearly
 (:func:`~.bases.natural_splines`: a constant force beyond) or, after the move
 ``"quadratic_ends"``, quadratically (:func:`~.bases.quadratic_end_splines`: a constant
 stiffness beyond), so the region fold judges their continuation as it judges any family's.
+A spline's continuation is set by its slope and curvature at the end knot, which the few
+samples of the last knot intervals fix unsteadily: a cubic spline on 8 even knots fitted on
+the search's training pieces may continue 5 % or 30 % off over the region block, where the
+law of a slider on an oblique spring is off by 0.5 %. After the move ``"knots"`` (one of
+:data:`MORE_MOVES`, not tried by default: it may double the CPU of a growth that tries splines
+on several coordinates) the splines
+are written one column per interior knot (:func:`~.bases.truncated_power_splines`, the same
+span); the search's sparse selection then leaves out the knots its data do not need, and a
+spline with fewer knots has a steadier end slope and curvature. Which writing extrapolates,
+the held-out criterion judges (a steep wall needs the knots that the selection may leave
+out; the two moves are tried together too, as ``"quadratic_ends+knots"``: B-splines with
+quadratic ends may continue worse than natural ones and natural splines written by knots
+gain nothing, where quadratic ends written by knots extrapolate a stiffening spring). The
+final fit keeps each coordinate's splines whole either way.
 From the smallest catalog (constant kinetic coefficients, quadratic potentials of the linear
 coordinates, sines and cosines of the angles, viscous friction), each move of :data:`MOVES` but
 the splines' (:data:`~.moves.SPLINE_MOVES`) is first tried alone, and so is each pair of moves
@@ -395,7 +409,6 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         the second climb is not made; the backward phase (its exchanges too) and the near
         ties run as below ``good_enough``. Free of noise the floor is round-off, and the
         growth is the same either way. False: the floor is neither computed nor used.
-
     Returns
     -------
     GrowthResult
@@ -569,6 +582,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     order = sorted([m for m in moves if m not in SPLINE_MOVES] + joint,
                    key=lambda m: rank.get(m, (1, np.inf)))
     order += [m for m in moves if m in SPLINE_MOVES]
+    if "quadratic_ends" in moves and "knots" in moves:  # both at once: neither may gain alone
+        order.append("quadratic_ends+knots")
     # climb from the best and from the second-best first move: which family goes in first is
     # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
     # a coupling that needs two moves), so the better of the two ends is kept
