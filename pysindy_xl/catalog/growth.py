@@ -181,8 +181,9 @@ from .folds import REGIONS, held_out_splits
 from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first)
 from .growth_data import check_growth_data, data_span
 from .keep_rules import single_keeps
-from .moves import MORE_MOVES, MOVES, SPLINE_MOVES, START, is_repeated, joint_moves, moved, narrowed
+from .moves import LATE_MOVES, MORE_MOVES, MOVES, START, is_repeated, joint_moves, moved, narrowed
 from .path import GrowthResult, GrowthStep
+from .rates import RateFits
 from .ties import break_ties, near_ties
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
@@ -489,7 +490,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     climber = Climber(fits, second_fits, searched[0], kinds, tolerance=tolerance,
                       good_enough=good_enough, physical=physical,
                       retry_kinetic=max_terms == "auto", criterion=criterion,
-                      progress=progress, noise_floor=noise_floor)
+                      progress=progress, noise_floor=noise_floor,
+                      rates=RateFits(searched[0], splits[0][0], template.test_functions,
+                                     template.smoother,
+                                     lambda parameters: fits.get(parameters)["criterion"])
+                      if "exponentials" in moves else None)
 
     # pairs of moves whose joint catalog holds terms that neither adds alone (kinetic
     # coefficients over products of two coordinates' functions): tried as one move too
@@ -499,7 +504,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # the moves from the first catalog, each alone, then the pairs (a degree move, or a pair
     # with one, also one degree further)
     queue = []
-    for move in [m for m in moves if m not in SPLINE_MOVES] + joint:
+    for move in [m for m in moves if m not in LATE_MOVES] + joint:
         for skip in (0, 1) if is_repeated(move) else (0,):
             parameters = moved(dict(START), move, kinds, n, skip)
             if parameters is None:
@@ -534,14 +539,14 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # catalog: from a larger catalog the degree and interaction moves are tried in turn
     joint = [m for m in joint if not is_repeated(m)
              or (m in alone_steps and single_keeps(alone_steps[m], first, tolerance))]
-    order = sorted([m for m in moves if m not in SPLINE_MOVES] + joint,
+    order = sorted([m for m in moves if m not in LATE_MOVES] + joint,
                    key=lambda m: rank.get(m, (1, np.inf)))
-    order += [m for m in moves if m in SPLINE_MOVES]
+    order += [m for m in moves if m in LATE_MOVES]
     # climb from the best and from the second-best first move: which family goes in first is
     # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
     # a coupling that needs two moves), so the better of the two ends is kept
     state, best, path = climber.steepest_climb(order) if steepest else climber.climb(order)
-    promising = [m for m in order if m not in SPLINE_MOVES and alone.get(m, np.inf)
+    promising = [m for m in order if m not in LATE_MOVES and alone.get(m, np.inf)
                  < first.criterion * (1 - tolerance)]
     if not climber.settled(best) and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]
