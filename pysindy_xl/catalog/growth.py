@@ -491,7 +491,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                       good_enough=good_enough, physical=physical,
                       retry_kinetic=max_terms == "auto", criterion=criterion,
                       progress=progress, noise_floor=noise_floor,
-                      rates=RateFits(searched[0], splits[0][0], template.test_functions,
+                      rates=RateFits(searched[0], _thinned(arrays, stride),
+                                     template.test_functions,
                                      template.smoother,
                                      lambda parameters: fits.get(parameters)["criterion"])
                       if "exponentials" in moves else None)
@@ -589,3 +590,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     model.fit(**full)
     return GrowthResult(model, best_catalog, climber.steps, criterion, best.criterion,
                         search.max_terms)
+
+
+def _thinned(arrays, stride) -> dict:
+    """``x``, ``t``, ``u`` and ``x_dot`` of every run, every ``stride``-th sample (the search's
+    samples, its held-out blocks too): the data on which the exponentials' rates are fitted."""
+    return {key: None if arrays[key] is None else
+            [np.asarray(value, dtype=float)[::stride] for value in arrays[key]]
+            for key in ("x", "t", "u", "x_dot")}

@@ -49,6 +49,8 @@ GRID = tuple(float(g) for g in np.geomspace(0.25, 16.0, 13))
 #: A second local minimum of the residual within this factor of the best one's is judged by
 #: the held-out criterion too (where a judge is given).
 SECOND_MINIMUM = 1.5
+#: The highest power of the coordinates in the catalog whose residual fits the rates.
+PROFILE_DEGREE = 2
 #: Relative tolerance on ``log |a|`` of the refinement of the residual's minima.
 LOG_TOLERANCE = 1e-3
 #: The exponentials at the residual's rates must lower the held-out criterion of the catalog
@@ -209,7 +211,10 @@ class RateFits:
         return self._pieces
 
     def _fit(self, parameters) -> dict:
-        catalog = AutomaticCatalog(**self.fixed, **parameters)
+        # the powers of the coordinates at most quadratic: higher powers beside the
+        # exponentials follow a wall over the recorded range with a rate of nearly any size
+        catalog = AutomaticCatalog(**self.fixed, **dict(
+            parameters, degree=min(parameters.get("degree", PROFILE_DEGREE), PROFILE_DEGREE)))
         library = catalog.fit()
         coords = library.coords
         pieces = self._prepared()
