@@ -14,8 +14,8 @@ __all__ = ["REMOVALS", "EXCHANGES", "removed"]
 #: The removals, by the family they drop: a move of :data:`~pysindy_xl.catalog.MOVES` (its
 #: family, or its last degree step), or ``"trig"`` (an angle's sines and cosines, beside its
 #: powers).
-REMOVALS = ("splines", "exponentials", "trig", "trig_degree", "angle_degree", "degree", "interaction",
-            "kinetic", "gyroscopic", "coulomb")
+REMOVALS = ("splines", "exponentials", "trig", "trig_degree", "angle_degree", "degree",
+            "interaction", "kinetic", "gyroscopic", "coulomb")
 
 #: The moves a removal is exchanged for when it is not kept alone: the potential's families
 #: that stand in for each other (sines and cosines, or a degree of them, for powers of the

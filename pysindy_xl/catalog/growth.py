@@ -67,7 +67,8 @@ configuration-dependent kinetic coefficients over products of two coordinates' f
 only after the stand-ins that each move alone favours); the moves are then tried in turn in the
 order of what they achieved alone (the family that explains most goes in first: no fixed order
 decides between a stand-in and the right family), the splines last (the flexible basis is for
-what the families leave). The growth climbs twice, from the best and from the second-best first
+what the families leave; before them the exponentials of the linear coordinates, with a fitted
+rate, :mod:`.rates`). The growth climbs twice, from the best and from the second-best first
 move, and keeps the better end: the first move is where a stand-in wins (a ``cos(theta)``
 inertia for a torsion spring, or a power of an angle for a coupling that takes two moves to
 state). The second climb stops once it holds the first one's end (every family at least as far
@@ -267,6 +268,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     moves : sequence of str, default MOVES
         The moves tried (some of :data:`MOVES` and :data:`MORE_MOVES`); the backward phase
         drops the families of these moves only (``"trig_degree"``: the sines and cosines too).
+        ``"exponentials"`` adds ``exp(a x)`` and ``exp(2 a x)`` of each linear coordinate,
+        with the rate ``a`` fitted for the catalog it moves from (:class:`~.rates.RateFits`:
+        by variable projection on the search's samples, then, where the exponentials lower
+        the criterion by :data:`~.rates.REFINE_GAIN`, on the criterion itself); it is tried
+        after the families, alone, as the splines' moves (:data:`~.moves.LATE_MOVES`).
     search_optimizer : "auto" or optimizer, default "auto"
         Optimizer of the search's fits; ``"auto"``: ``optimizer`` when given, else one
         selection per fit (``ExplicitOptimizer()``, ``MixedOptimizer()``, or XLSINDy's default

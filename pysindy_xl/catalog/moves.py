@@ -18,8 +18,8 @@ from __future__ import annotations
 import itertools
 
 __all__ = ["MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS", "SPLINE_MOVES",
-           "RATE_MOVES", "LATE_MOVES", "REPEATED", "moved", "joint_moves", "holds", "kinetic_order", "NARROW", "narrowed",
-           "is_repeated"]
+           "RATE_MOVES", "LATE_MOVES", "REPEATED", "moved", "joint_moves", "holds",
+           "kinetic_order", "NARROW", "narrowed", "is_repeated"]
 
 #: The moves of the growth, in the order they are tried.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
@@ -100,6 +100,9 @@ def moved(state, move, kinds, n, skip=0, rates=None):
     True
     >>> moved(START, "kinetic+interaction@k1", ["linear", "angle"], 2)["kinetic_interaction"]
     1
+    >>> moved(START, "exponentials", ["linear"], 1, rates=lambda state: {"x": -1.5})[
+    ...     "exponentials"]
+    {'x': -1.5}
     """
     if move.endswith(NARROW):  # then kinetic coefficients of single coordinates' functions
         state = moved(state, move[:-len(NARROW)], kinds, n, skip, rates)
@@ -185,8 +188,8 @@ def joint_moves(moves, kinds, n, size) -> list:
     """The pairs of moves that are first moves of their own.
 
     A pair ``"a+b"`` of moves, at most one of them repeated (:data:`REPEATED`; the
-    :data:`LATE_MOVES` left out), qualifies when, from :data:`START`, its joint catalog has more terms than the
-    two moves add alone: the second move multiplies the first's family
+    :data:`LATE_MOVES` left out), qualifies when, from :data:`START`, its joint catalog has
+    more terms than the two moves add alone: the second move multiplies the first's family
     (``"kinetic+interaction"``: configuration-dependent kinetic coefficients over products
     of two coordinates' functions, as ``cos(a - b)`` in ``cos(a - b) a_dot b_dot``;
     ``"interaction+degree"``: products of two coordinates' powers above the first degree, as

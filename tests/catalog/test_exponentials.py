@@ -52,7 +52,7 @@ def test_a_catalog_states_the_exponentials_of_a_rate():
 def test_bad_rates_are_refused_by_name(bad, error, words):
     catalog = px.AutomaticCatalog("x,theta", kinds={"theta": "angle"}, exponentials=bad)
     with pytest.raises(error, match="exponentials") as raised:
-        catalog.n_terms
+        _ = catalog.n_terms
     assert words in str(raised.value)
 
 
