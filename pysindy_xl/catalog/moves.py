@@ -33,7 +33,7 @@ SPLINE_MOVES = ("splines", "quadratic_ends")
 #: The moves whose family has a rate fitted on data: ``"exponentials"`` adds ``exp(a x)`` and
 #: ``exp(2 a x)`` to each linear coordinate's potential, with the rate ``a`` that the growth
 #: fits for the catalog it moves from (:mod:`.rates`; :func:`moved`'s ``rates``).
-RATE_MOVES = ("exponentials",)
+RATE_MOVES = ("exponentials",)  # (with the degree back to the first catalog's)
 #: The moves tried after the families, alone (never first moves, never in pairs of moves):
 #: the exponentials, then the flexible basis. A family with a fitted rate or a flexible basis
 #: fits what a missing family leaves; tried first, or lending a pair its gain, it would stand
@@ -146,7 +146,11 @@ def moved(state, move, kinds, n, skip=0, rates=None):
     elif move == "exponentials":
         if state.get("exponentials") or "linear" not in kinds or rates is None:
             return None
-        fitted = rates(state) if callable(rates) else rates
+        # they take the place of the powers above the first catalog's (as the splines take
+        # that of the powers): beside a quartic that stands in for a wall, the selection at
+        # noise mixes the two; a degree move may add the powers again
+        new["degree"] = min(state["degree"], START["degree"])
+        fitted = rates(new) if callable(rates) else rates
         if not fitted:
             return None
         new["exponentials"] = dict(fitted)

@@ -306,7 +306,9 @@ class RateFits:
     def _refined(self, parameters, rates, name, best) -> tuple:
         """``rates`` with ``rates[name]`` refined on the judge: the best of the offsets
         :data:`REFINE_GRID` of ``log |a|``, then a bounded scalar search between its
-        neighbours."""
+        neighbours; kept where it lowers the criterion by :data:`REFINE_GAIN` at least (a
+        smaller gain is the criterion's noise: at 5 % noise it moves the Morse rate from 1.50
+        to 1.62)."""
         from scipy.optimize import minimize_scalar
 
         sign, centre = np.sign(rates[name]), np.log(abs(rates[name]))
@@ -328,6 +330,8 @@ class RateFits:
             minimize_scalar(judged, bounds=(low, high), method="bounded",
                             options={"xatol": REFINE_TOLERANCE})
         offset = min(memo, key=lambda o: (memo[o], abs(o)))
+        if not memo[offset] < best * (1 - REFINE_GAIN):
+            offset = 0.0  # (within the criterion's noise: the residual's rate)
         rate = _rounded(sign * np.exp(centre + offset))
         return dict(rates, **{name: rate}), memo[offset]
         return rates
