@@ -50,6 +50,7 @@ import numpy as np
 from ..symbols import stack_variables
 from .automatic import AutomaticCatalog, coordinate_kinds
 from .candidates import parameters_key
+from .moves import exponential_base
 
 __all__ = ["RateFits", "GRID", "rate_residual"]
 
@@ -63,7 +64,7 @@ SECOND_MINIMUM = 1.5
 #: Relative tolerance on ``log |a|`` of the refinement of the residual's minima.
 LOG_TOLERANCE = 1e-3
 #: The exponentials at the residual's rates must lower the held-out criterion of the catalog
-#: they join by this fraction for the rates to be refined on it.
+#: the move starts from by this fraction for the rates to be refined on it.
 REFINE_GAIN = 0.1
 #: The offsets of ``log |a|`` from the residual's rate at which the held-out criterion is
 #: first evaluated (then refined between the best one's neighbours).
@@ -173,18 +174,18 @@ class RateFits:
         Parameters
         ----------
         parameters : dict
-            The catalog's growing parameters (its ``exponentials``, if any, are left out).
+            The growing parameters of the catalog the move starts from; the exponentials join
+            :func:`~.moves.exponential_base` of it.
 
         Returns
         -------
         dict
             ``{name: rate}`` per linear coordinate; empty where no rate could be fitted.
         """
-        base = {k: v for k, v in parameters.items() if k != "exponentials"}
-        key = parameters_key(base)
+        key = parameters_key(parameters)
         if key not in self._cache:
             try:
-                self._cache[key] = self._fit(base)
+                self._cache[key] = self._fit(parameters)
             except (ValueError, np.linalg.LinAlgError):
                 self._cache[key] = {}  # (the move does not apply)
         return dict(self._cache[key])
@@ -219,7 +220,8 @@ class RateFits:
             self._pieces = pieces
         return self._pieces
 
-    def _fit(self, parameters) -> dict:
+    def _fit(self, state) -> dict:
+        parameters = exponential_base(state)
         catalog = AutomaticCatalog(**self.fixed, **parameters)
         library = catalog.fit()
         coords = library.coords
@@ -286,8 +288,8 @@ class RateFits:
                 value = self.judge(dict(parameters, exponentials=other))
                 if value < best:
                     rates, best = other, value
-        if not best < self.judge(parameters) * (1 - REFINE_GAIN):
-            return rates
+        if not best < self.judge(state) * (1 - REFINE_GAIN):
+            return rates  # (no better than the catalog the move starts from)
         # the exponentials explain the law: each rate refined on the held-out criterion (the
         # region block holds the extreme states out of the training pieces, where a wall's
         # rate shows most)
@@ -349,8 +351,11 @@ def _minima(residual, span) -> list:
         if not np.any(np.isfinite(scores)):
             continue
         padded = np.r_[np.inf, scores, np.inf]
-        for k in np.flatnonzero((scores <= padded[:-2]) & (scores <= padded[2:])
-                                & np.isfinite(scores)):
+        # (a minimum at the grid's smallest rate is the residual falling towards a = 0,
+        # where the exponentials are powers: no rate of an exponential law)
+        minima = np.flatnonzero((scores <= padded[:-2]) & (scores <= padded[2:])
+                                & np.isfinite(scores))
+        for k in minima[minima > 0]:
             low = np.log(GRID[max(k - 1, 0)] / span)
             high = np.log(GRID[min(k + 1, len(GRID) - 1)] / span)
             found = minimize_scalar(lambda v, sign=sign: residual(sign * np.exp(v)),
