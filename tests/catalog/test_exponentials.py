@@ -73,6 +73,10 @@ def test_the_exact_law_simulates_saves_loads_and_exports(tmp_path):
     truth = solve_ivp(lambda _, y: [y[1], force(y[0]) - 0.1 * y[1]], (t[0], t[399]), start,
                       t_eval=t[:400], method="DOP853", rtol=1e-10, atol=1e-10).y.T
     assert np.abs(simulated[:, 0] - truth[:, 0]).max() < 1e-4
+    import pickle
+    assert np.array_equal(pickle.loads(pickle.dumps(model)).predict(q, zero),
+                          model.predict(q, zero))
+    assert model.feature_library.get_params()["exponentials"] == {"x": -RATE}  # (unchanged)
     model.save(tmp_path / "morse.json")
     loaded = px.XLSINDy.load(tmp_path / "morse.json")
     assert np.allclose(loaded.predict(q, zero), model.predict(q, zero), rtol=1e-12, atol=0)
