@@ -221,6 +221,7 @@ class RateFits:
         return self._pieces
 
     def _fit(self, state) -> dict:
+        """The rates for the move from ``state`` (see the class docstring)."""
         parameters = exponential_base(state)
         catalog = AutomaticCatalog(**self.fixed, **parameters)
         library = catalog.fit()
