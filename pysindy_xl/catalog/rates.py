@@ -140,9 +140,11 @@ class RateFits:
         The search's smoother (``smooth(t, x) -> (q, qd, qdd)``).
     judge : callable or None, default None
         ``judge(parameters) -> float``: the growth's held-out criterion of a catalog. Where
-        the residual has two local minima within :data:`SECOND_MINIMUM` of each other (on a
-        short range of states a few exponentials of other rates can follow one), it chooses
-        between them, one coordinate at a time; None: the lower residual does.
+        the residual of the only linear coordinate has two local minima within
+        :data:`SECOND_MINIMUM` of each other (on a short range of states a few exponentials
+        of other rates can follow one), it chooses between them (with several linear
+        coordinates the lower residual does: each judgment is a fit of a large catalog);
+        None: the lower residual does.
 
     Attributes
     ----------
@@ -281,9 +283,10 @@ class RateFits:
         if self.judge is None or not rates:
             return rates
         # two minima of the residual close to each other: the held-out criterion chooses
-        # (a few exponentials of other rates can follow one on a short range of states)
+        # (a few exponentials of other rates can follow one on a short range of states); with
+        # one linear coordinate only (one fit each: with several, of a large catalog each)
         best = self.judge(dict(parameters, exponentials=rates))
-        for name, found in candidates.items():
+        for name, found in candidates.items() if len(candidates) == 1 else ():
             for rate, _ in found[1:]:
                 other = dict(rates, **{name: rate})
                 value = self.judge(dict(parameters, exponentials=other))
