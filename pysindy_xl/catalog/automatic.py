@@ -13,7 +13,9 @@ shape,
 with ``phi`` the products of single-coordinate functions (:mod:`.bases`) over at most
 ``interaction`` coordinates, ``kappa`` a constant or (``kinetic="configuration"``) such a
 product of low degree over at most ``kinetic_interaction`` coordinates (by default
-``interaction``), and ``gamma`` the first-degree functions of another coordinate. Per
+``interaction``), and ``gamma`` the first-degree functions of another coordinate. The
+potential may hold, per linear coordinate, the exponentials ``exp(a x)`` and ``exp(2 a x)``
+of one given rate (``exponentials``; :func:`~.bases.exponential_pair`), beside its powers. Per
 coordinate it adds dissipation (viscous ``qd_i``, smooth Coulomb ``tanh(qd_i / eps_i)``; with
 ``"coupled"`` each velocity's viscous force in every equation, a Rayleigh function with
 cross terms) as classical terms, and the force columns. Terms that are trigonometric
@@ -51,6 +53,7 @@ from .bases import (
     KINDS,
     SPLINE_BASES,
     bspline_centers,
+    exponential_pair,
     factor_functions,
     natural_splines,
     quadratic_end_splines,
@@ -203,6 +206,17 @@ class AutomaticCatalog(CatalogRepartition):
         per interior knot (:func:`~pysindy_xl.catalog.bases.truncated_power_splines`, the
         constant left out), so that a sparse selection that leaves out a column removes a knot
         rather than cutting a dip into the potential.
+    exponentials : mapping {name: float}, optional
+        A rate ``a`` (finite, nonzero, signed) per linear coordinate: its potential gains
+        ``exp(a x)`` and ``exp(2 a x)`` (:func:`~pysindy_xl.catalog.bases.exponential_pair`)
+        beside its powers (and splines), for exponential laws that no power series states
+        beyond the data: a Morse well ``D (1 - exp(-a x))^2``, a Born-Mayer wall
+        ``A exp(-x / rho)``, an exponential spring. They are functions of single coordinates
+        and enter no product with other coordinates' functions (a product would multiply
+        the catalog for laws that mechanics rarely writes; a pair potential of a difference,
+        as the Toda lattice's ``exp(x_1 - x_2)``, is not stated). Coordinates not named get
+        none; an angle gets none (``ValueError``). :func:`~pysindy_xl.grow_catalog` fits the
+        rates (:mod:`~pysindy_xl.catalog.rates`).
     interlink : array (n, n), optional
         Of :class:`~pysindy_xl.ExternalForces`.
     max_terms : int, default 2000
@@ -241,6 +255,7 @@ class AutomaticCatalog(CatalogRepartition):
         "splines": [None, Interval("int", 0), Collection("a mapping {name: int}")],
         "spline_ends": [Options(("linear", "quadratic"))],
         "spline_basis": [Options(SPLINE_BASES)],
+        "exponentials": [None, Collection("a mapping {name: rate}")],
         "interlink": [None, Collection("an array of shape (n, n)")],
         "max_terms": [Interval("int", 1)],
     }
@@ -249,7 +264,7 @@ class AutomaticCatalog(CatalogRepartition):
                  angle_degree=0, interaction=1, kinetic="configuration", gyroscopic=False,
                  dissipation=("viscous",), coulomb_scale=0.01, splines=None, interlink=None,
                  max_terms=2000, kinetic_interaction=None, spline_ends="linear",
-                 spline_basis="bspline"):
+                 spline_basis="bspline", exponentials=None):
         self.coordinates = coordinates
         self.kinds = kinds
         self.bounds = bounds
@@ -267,6 +282,7 @@ class AutomaticCatalog(CatalogRepartition):
         self.kinetic_interaction = kinetic_interaction
         self.spline_ends = spline_ends
         self.spline_basis = spline_basis
+        self.exponentials = exponentials
 
     # -- the parameters, checked ---------------------------------------------------------------
     def _coordinates(self) -> Coordinates:
@@ -322,7 +338,27 @@ class AutomaticCatalog(CatalogRepartition):
             if count:
                 bspline_centers(*bound, count)  # checks the bounds
             options["splines"].append((tuple(map(float, bound)), count) if count else None)
+        options["exponentials"] = self._rates(names, options["kinds"])
         return options
+
+    def _rates(self, names, kinds) -> list:
+        """The checked ``exponentials``: a rate (float) or None per coordinate."""
+        if self.exponentials is None:
+            return [None] * len(names)
+        if not isinstance(self.exponentials, Mapping):
+            raise TypeError(f"exponentials: expected a mapping {{name: rate}}, got "
+                            f"{type(self.exponentials).__name__} {self.exponentials!r}")
+        rates = _per_coordinate(self.exponentials, names, "exponentials")
+        for name, kind, rate in zip(names, kinds, rates, strict=True):
+            if rate is not None and kind != "linear":
+                raise ValueError(f"exponentials: {name!r} is an angle; exponentials of a "
+                                 "coordinate are for linear coordinates only")
+            if rate is not None:
+                try:
+                    exponential_pair(sp.Symbol(name), rate)
+                except (TypeError, ValueError) as error:
+                    raise type(error)(f"{error} (coordinate {name!r})") from None
+        return [None if rate is None else float(rate) for rate in rates]
 
     # -- the terms -----------------------------------------------------------------------------
     def lagrange_terms(self) -> list[sp.Expr]:
@@ -486,8 +522,11 @@ class AutomaticCatalog(CatalogRepartition):
                 continue
             terms.append(phi)
             fast.append(trig)
+        exponentials = [f for q, rate in zip(coords.q, options["exponentials"], strict=True)
+                        if rate is not None for f in exponential_pair(q, rate)]
         splines = self._splines(options)
-        return terms + splines, fast + [False] * len(splines)
+        others = exponentials + splines
+        return terms + others, fast + [False] * len(others)
 
     def _built_terms(self, options, key=None) -> tuple:
         """``(*_terms, *_dissipation)``, built once per parameters (clones, which every fit
@@ -578,8 +617,12 @@ class AutomaticCatalog(CatalogRepartition):
                 text = f"{name}: sin/cos degree {options['trig_degree']}"
                 if options["angle_degree"] and not splines:
                     text += f", {name}..{name}^{options['angle_degree']}"
+            rate = options["exponentials"][i]
+            if rate is not None:
+                text += ("" if text.endswith(": ") else ", ") + (
+                    f"exp({rate:.4g} {name}), exp({2 * rate:.4g} {name})")
             if splines is not None:
-                text += (", " if kind != "linear" else "") + (
+                text += (", " if not text.endswith(": ") else "") + (
                     f"{splines[1]} natural splines" if options["spline_ends"] == "linear"
                     else f"{splines[1]} cubic splines, quadratic ends")
             parts.append(text)
@@ -613,7 +656,7 @@ _DEFAULTS = {"kinds": None, "bounds": None, "degree": 2, "trig_degree": 1, "angl
              "interaction": 1, "kinetic": "configuration", "gyroscopic": False,
              "dissipation": ("viscous",), "coulomb_scale": 0.01, "splines": None,
              "interlink": None, "max_terms": 2000, "kinetic_interaction": None,
-             "spline_ends": "linear", "spline_basis": "bspline"}
+             "spline_ends": "linear", "spline_basis": "bspline", "exponentials": None}
 
 
 def _spline_basis(options, q, low, high, count) -> list[sp.Expr]:

@@ -14,8 +14,8 @@ __all__ = ["REMOVALS", "EXCHANGES", "removed"]
 #: The removals, by the family they drop: a move of :data:`~pysindy_xl.catalog.MOVES` (its
 #: family, or its last degree step), or ``"trig"`` (an angle's sines and cosines, beside its
 #: powers).
-REMOVALS = ("splines", "trig", "trig_degree", "angle_degree", "degree", "interaction",
-            "kinetic", "gyroscopic", "coulomb")
+REMOVALS = ("splines", "exponentials", "trig", "trig_degree", "angle_degree", "degree",
+            "interaction", "kinetic", "gyroscopic", "coulomb")
 
 #: The moves a removal is exchanged for when it is not kept alone: the potential's families
 #: that stand in for each other (sines and cosines, or a degree of them, for powers of the
@@ -38,7 +38,7 @@ def removed(state: dict, move: str, kinds, start: dict) -> dict | None:
     state : dict
         Parameters of an :class:`~pysindy_xl.AutomaticCatalog` (``degree``, ``trig_degree``,
         ``angle_degree``, ``interaction``, ``kinetic``, ``gyroscopic``, ``dissipation``,
-        ``splines``).
+        ``splines``, optionally ``exponentials``).
     move : str
         One of :data:`REMOVALS`.
     kinds : sequence of str
@@ -68,7 +68,11 @@ def removed(state: dict, move: str, kinds, start: dict) -> dict | None:
         raise ValueError(f"move: expected one of {REMOVALS}, got {move!r}")
     new = dict(state)
     angles = "angle" in kinds
-    if move == "splines":
+    if move == "exponentials":
+        if not state.get("exponentials"):
+            return None
+        new.pop("exponentials")
+    elif move == "splines":
         if state["splines"] is None:
             return None
         new["splines"] = None

@@ -17,7 +17,10 @@ Per coordinate kind:
     wall that keeps rising, as the repulsive side of a Morse well).
 
   Which continuation the data support is for a held-out criterion to judge (the automatic
-  catalog's growth tries both).
+  catalog's growth tries both);
+- a linear coordinate, for exponential laws (Morse and Born-Mayer walls, exponential springs):
+  :func:`exponential_pair`, ``exp(a x)`` and ``exp(2 a x)`` with one signed rate ``a``
+  (fitted on data by :mod:`.rates`).
 
   :func:`truncated_power_splines` writes either span in another basis: a few polynomials and,
   per interior knot, the truncated cube ``(q - xi_j)_+^3`` made to respect the ends. Its
@@ -38,8 +41,8 @@ import functools
 import numpy as np
 import sympy as sp
 
-__all__ = ["KINDS", "bspline", "bspline_centers", "factor_functions", "natural_splines",
-           "quadratic_end_splines", "truncated_power_splines", "SPLINE_BASES"]
+__all__ = ["KINDS", "bspline", "bspline_centers", "exponential_pair", "factor_functions",
+           "natural_splines", "quadratic_end_splines", "truncated_power_splines", "SPLINE_BASES"]
 
 #: The two ways of writing a coordinate's splines: ``"bspline"`` (each function a local bump,
 #: :func:`natural_splines`, :func:`quadratic_end_splines`) or ``"truncated"`` (each function but
@@ -396,3 +399,44 @@ def factor_functions(q: sp.Symbol, kind: str, degree: int, trig_degree: int,
             if total - b >= 0:
                 out.append(sp.sin(q) ** (total - b) * sp.cos(q) ** b)
     return out + [q ** k for k in range(1, angle_degree + 1)]
+
+
+def exponential_pair(q: sp.Symbol, rate: float) -> list[sp.Expr]:
+    r"""The exponential functions ``exp(a q)`` and ``exp(2 a q)`` of one rate ``a``.
+
+    Together with the constant they span the exponential potentials of one rate that mechanics
+    writes down: a Morse well :math:`D (1 - e^{-a q})^2 = D (1 - 2 e^{-a q} + e^{-2 a q})`,
+    a Born-Mayer or exponential wall :math:`A e^{a q}`, and, with the powers of ``q``
+    beside them, a Buckingham-like mix of an exponential wall and a polynomial.
+
+    Parameters
+    ----------
+    q : sympy.Symbol
+        The coordinate.
+    rate : float
+        ``a``, finite and nonzero; its sign says on which side the wall rises.
+
+    Returns
+    -------
+    list of sympy.Expr
+        ``[exp(a q), exp(2 a q)]``.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> x = sp.Symbol("x", real=True)
+    >>> exponential_pair(x, -1.5)
+    [exp(-1.5*x), exp(-3.0*x)]
+    """
+    rate = _check_rate(rate, "exponentials")
+    return [sp.exp(sp.Float(rate) * q), sp.exp(sp.Float(2 * rate) * q)]
+
+
+def _check_rate(rate, name: str) -> float:
+    """``rate`` as a finite nonzero float, or a ValueError/TypeError naming ``name``."""
+    if isinstance(rate, bool) or not isinstance(rate, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name}: expected a real rate, got {type(rate).__name__} {rate!r}")
+    rate = float(rate)
+    if not (np.isfinite(rate) and rate != 0):
+        raise ValueError(f"{name}: expected a finite nonzero rate, got {rate!r}")
+    return rate

@@ -20,7 +20,7 @@ from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import parameters_key
 from .floor import EXACT, floor_reached, models_floor, noise_explains
 from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
-from .moves import NARROW, REPEATED, SPLINE_MOVES, START, holds, is_repeated, moved
+from .moves import LATE_MOVES, NARROW, REPEATED, START, holds, is_repeated, moved
 from .path import GrowthStep
 
 __all__ = ["Climber"]
@@ -55,6 +55,10 @@ class Climber:
     noise_floor : bool, default True
         A criterion at its noise floor stops a climb as one below ``good_enough`` does
         (:meth:`settled`).
+    rates : callable or None, default None
+        ``rates(parameters) -> {name: rate}``: the exponentials' rates fitted for a catalog
+        (:class:`~.rates.RateFits`), which the move ``"exponentials"`` adds; None: that move
+        does not apply.
 
     Attributes
     ----------
@@ -70,12 +74,13 @@ class Climber:
     """
 
     def __init__(self, fits, second_fits, fixed, kinds, *, tolerance, good_enough, physical,
-                 retry_kinetic, criterion, progress=None, noise_floor=True):
+                 retry_kinetic, criterion, progress=None, noise_floor=True, rates=None):
         self.fits, self.second_fits, self.fixed = fits, second_fits, fixed
         self.kinds, self.n = list(kinds), len(kinds)
         self.tolerance, self.good_enough, self.physical = tolerance, good_enough, physical
         self.retry_kinetic, self.criterion, self.progress = retry_kinetic, criterion, progress
         self.consensus, self.noise_floor = second_fits is not None, noise_floor
+        self.rates = rates
         self.steps, self.first = [], None
         self._cache = {}  # every catalog is fitted once, whichever path tries it
         self._parameters = {}  # the parameters of each step, by the step's id
@@ -281,7 +286,7 @@ class Climber:
         dict or None
             The moved parameters, None where the move does not apply.
         """
-        return moved(state, move, self.kinds, self.n, skip)
+        return moved(state, move, self.kinds, self.n, skip, self.rates)
 
     def first_moves(self, queue) -> tuple:
         """Each move of ``queue`` (``(move, parameters)`` pairs) alone from the first catalog:
@@ -328,9 +333,9 @@ class Climber:
             The parameters and the name (``"a+b"``) of each pair.
         """
         out = []
-        # (the splines' moves stay single: the flexible basis is for what the families leave,
-        # not a second move that lends a family's pair its gain)
-        single = [m for m in order if m not in REPEATED and m not in SPLINE_MOVES
+        # (the exponentials' and the splines' moves stay single: they are for what the families
+        # leave, not a second move that lends a family's pair its gain)
+        single = [m for m in order if m not in REPEATED and m not in LATE_MOVES
                   and "+" not in m]
         for first_move, second_move in itertools.combinations(single, 2):
             once = self.moved(state, first_move)
@@ -348,8 +353,8 @@ class Climber:
             skips = [skip] if k == index else [0]
             if is_repeated(move) and skips[0] == 0:
                 skips.append(1)
-            for s in skips:
-                parameters = self.moved(state, move, s)
+            for s in skips:  # (no rates fitted for a guess)
+                parameters = moved(state, move, self.kinds, self.n, s)
                 if parameters is None or parameters_key(parameters) in seen:
                     break
                 seen.add(parameters_key(parameters))

@@ -81,7 +81,8 @@ configuration-dependent kinetic coefficients over products of two coordinates' f
 only after the stand-ins that each move alone favours); the moves are then tried in turn in the
 order of what they achieved alone (the family that explains most goes in first: no fixed order
 decides between a stand-in and the right family), the splines last (the flexible basis is for
-what the families leave). The growth climbs twice, from the best and from the second-best first
+what the families leave; before them the exponentials of the linear coordinates, with a fitted
+rate, :mod:`.rates`). The growth climbs twice, from the best and from the second-best first
 move, and keeps the better end: the first move is where a stand-in wins (a ``cos(theta)``
 inertia for a torsion spring, or a power of an angle for a coupling that takes two moves to
 state). The second climb stops once it holds the first one's end (every family at least as far
@@ -199,8 +200,9 @@ from .folds import REGIONS, held_out_splits
 from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first)
 from .growth_data import check_growth_data, data_span
 from .keep_rules import single_keeps
-from .moves import MORE_MOVES, MOVES, SPLINE_MOVES, START, is_repeated, joint_moves, moved, narrowed
+from .moves import LATE_MOVES, MORE_MOVES, MOVES, START, is_repeated, joint_moves, moved, narrowed
 from .path import GrowthResult, GrowthStep
+from .rates import RateFits
 from .ties import break_ties, near_ties
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
@@ -312,6 +314,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     moves : sequence of str, default MOVES
         The moves tried (some of :data:`MOVES` and :data:`MORE_MOVES`); the backward phase
         drops the families of these moves only (``"trig_degree"``: the sines and cosines too).
+        ``"exponentials"`` adds ``exp(a x)`` and ``exp(2 a x)`` of each linear coordinate,
+        with the rate ``a`` fitted for the catalog it moves from (:class:`~.rates.RateFits`:
+        by variable projection on the search's samples, then, where the exponentials lower
+        the criterion by :data:`~.rates.REFINE_GAIN`, on the criterion itself); it is tried
+        after the families, alone, as the splines' moves (:data:`~.moves.LATE_MOVES`).
     search_optimizer : "auto" or optimizer, default "auto"
         Optimizer of the search's fits; ``"auto"``: ``optimizer`` when given, else one
         selection per fit (``ExplicitOptimizer()``, ``MixedOptimizer()``, or XLSINDy's default
@@ -534,7 +541,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     climber = Climber(fits, second_fits, searched[0], kinds, tolerance=tolerance,
                       good_enough=good_enough, physical=physical,
                       retry_kinetic=max_terms == "auto", criterion=criterion,
-                      progress=progress, noise_floor=noise_floor)
+                      progress=progress, noise_floor=noise_floor,
+                      rates=RateFits(searched[0], _thinned(arrays, stride),
+                                     template.test_functions,
+                                     template.smoother,
+                                     lambda parameters: fits.get(parameters)["criterion"])
+                      if "exponentials" in moves else None)
 
     # pairs of moves whose joint catalog holds terms that neither adds alone (kinetic
     # coefficients over products of two coordinates' functions): tried as one move too
@@ -544,7 +556,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # the moves from the first catalog, each alone, then the pairs (a degree move, or a pair
     # with one, also one degree further)
     queue = []
-    for move in [m for m in moves if m not in SPLINE_MOVES] + joint:
+    for move in [m for m in moves if m not in LATE_MOVES] + joint:
         for skip in (0, 1) if is_repeated(move) else (0,):
             parameters = moved(dict(START), move, kinds, n, skip)
             if parameters is None:
@@ -579,16 +591,16 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     # catalog: from a larger catalog the degree and interaction moves are tried in turn
     joint = [m for m in joint if not is_repeated(m)
              or (m in alone_steps and single_keeps(alone_steps[m], first, tolerance))]
-    order = sorted([m for m in moves if m not in SPLINE_MOVES] + joint,
+    order = sorted([m for m in moves if m not in LATE_MOVES] + joint,
                    key=lambda m: rank.get(m, (1, np.inf)))
-    order += [m for m in moves if m in SPLINE_MOVES]
+    order += [m for m in moves if m in LATE_MOVES]
     if "quadratic_ends" in moves and "knots" in moves:  # both at once: neither may gain alone
         order.append("quadratic_ends+knots")
     # climb from the best and from the second-best first move: which family goes in first is
     # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
     # a coupling that needs two moves), so the better of the two ends is kept
     state, best, path = climber.steepest_climb(order) if steepest else climber.climb(order)
-    promising = [m for m in order if m not in SPLINE_MOVES and alone.get(m, np.inf)
+    promising = [m for m in order if m not in LATE_MOVES and alone.get(m, np.inf)
                  < first.criterion * (1 - tolerance)]
     if not climber.settled(best) and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]
@@ -632,3 +644,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     model = _judged_terms_only(model, best.support, best_catalog, full)
     return GrowthResult(model, best_catalog, climber.steps, criterion, best.criterion,
                         search.max_terms)
+
+
+def _thinned(arrays, stride) -> dict:
+    """``x``, ``t``, ``u`` and ``x_dot`` of every run, every ``stride``-th sample (the search's
+    samples, its held-out blocks too): the data on which the exponentials' rates are fitted."""
+    return {key: None if arrays[key] is None else
+            [np.asarray(value, dtype=float)[::stride] for value in arrays[key]]
+            for key in ("x", "t", "u", "x_dot")}

@@ -26,9 +26,9 @@ from .implicit import homothetic_groups as homothetic_groups
 from .laws import UndeterminedLawWarning
 from .mixed import MixedOptimizer, activation_closure
 from .physical import PhysicalOptimizer
-from .restricted import RestrictedOptimizer
 from .problem import CatalogProblem, coordinate_weights
 from .problem import balance_coordinates as balance_coordinates
+from .restricted import RestrictedOptimizer
 from .selection import SelectionResult, refine_by_swaps, select_support
 from .tags import CatalogTags, catalog_tags
 from .total_least_squares import TotalLeastSquaresOptimizer
