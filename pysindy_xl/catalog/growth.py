@@ -173,11 +173,12 @@ judged the catalog by fits with these test functions; the default ones of a fit 
 growth never judged: on the log-cosh well, unforced and free of noise, that selection keeps a
 combination of the spline columns that nearly vanishes on the data, with almost no kinetic part
 (accelerations off by a factor of tens to hundreds), where the search's test functions give the
-law within 0.5 %. That fit selects again, on all the data, and keeps no term that the judged
-fits did not keep (:class:`~pysindy_xl.optimizers.RestrictedOptimizer`): it may leave out more
-(more data tell a stand-in from the law), but a term it would add was never judged (on a
-pendulum with a sprung vertical pivot, unforced and free of noise, it took 14 terms where the
-judged fits kept the law's 8, 9 % off on a fresh run). """
+law within 0.5 %. That fit selects again, on all the data; where it keeps more terms than the
+judged fits did, and some they did not hold, it is refitted among the judged terms only
+(:class:`~pysindy_xl.optimizers.RestrictedOptimizer`). It may exchange a term or leave one out
+(more data tell a stand-in from the law), but a larger model was never judged (on a pendulum
+with a sprung vertical pivot, unforced and free of noise, it took 14 terms where the judged
+fits kept the law's 8, 9 % off on a fresh run). """
 
 from __future__ import annotations
 
@@ -224,12 +225,15 @@ ROWS_PER_TERM = 2
 
 def _judged_terms_only(model, judged, catalog, data):
     """``model`` refitted on the terms that the judged fits kept (``judged``: the names of each
-    split's), where it keeps others; a coordinate's splines count as judged where one of
-    them was kept (their knots, and so their names, follow each fit's data).
+    split's), where it keeps more terms than any of them and some that none held; a
+    coordinate's splines count as judged (their knots, and so their names, follow each fit's
+    data).
 
-    The criterion judged the chosen catalog by its fits on the search's pieces, and so the
-    terms they kept. The fit on all the data is another selection: it may find fewer terms
-    (more data tell a stand-in from the law), but a term it adds no judged fit held.
+    The criterion judged the chosen catalog by its fits on the search's pieces: models of the
+    size those fits kept. The fit on all the data is another selection: it may exchange a
+    term (more data tell a stand-in from the law: ``a_dot x_dot cos(a)`` for the judged
+    ``a_dot x_dot`` on a cart with two pendulums) or find fewer, but terms it adds beyond
+    that size were never judged.
     """
     judged = [names for names in judged if names]
     if not judged:  # (a split's fit failed: nothing to restrict to)
@@ -240,7 +244,7 @@ def _judged_terms_only(model, judged, catalog, data):
     for group in catalog.spline_columns():
         allowed[list(group)] = True  # (kept whole or left out by the final fit's optimizer)
     kept = np.asarray(model.coefficients()) != 0
-    if not np.any(kept & ~allowed):
+    if not np.any(kept & ~allowed) or kept.sum() <= max(len(names) for names in judged):
         return model
     from sklearn.base import clone
 
