@@ -420,6 +420,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         the second climb is not made; the backward phase (its exchanges too) and the near
         ties run as below ``good_enough``. Free of noise the floor is round-off, and the
         growth is the same either way. False: the floor is neither computed nor used.
+
     Returns
     -------
     GrowthResult
