@@ -2,7 +2,8 @@
 
 A catalog growth judges a catalog by the terms its fits keep on parts of the data; the fit of
 the chosen catalog on all the data is another selection, over every column. Where that
-selection keeps a term no judged fit kept, the model holds a term nobody judged.
+selection keeps more terms than the judged fits, and terms none of them kept, the model is
+larger than any judged.
 :class:`RestrictedOptimizer` runs another optimizer on the given columns alone: it may leave
 more of them out, never take others in.
 """

@@ -1,4 +1,5 @@
-"""The growth's final fit keeps only terms that its judged fits held: on the blind set's
+"""The growth's final fit grows no larger than its judged fits with terms they did not hold
+(it is then refitted among the judged terms): on the blind set's
 pendulum with a sprung vertical pivot, unforced and free of noise (seed 2), the fit on all the
 data selected 14 terms where every judged fit kept the law's 8, and the model was 9 % off on a
 fresh run. Ground truth: the benchmark's sympy Lagrangian integrated by scipy at 1e-10, scored
