@@ -43,13 +43,14 @@ import unseen_systems as us  # noqa: E402
 
 import pysindy_xl as px  # noqa: E402
 import pysindy_xl.catalog.automatic as automatic  # noqa: E402
+import pysindy_xl.catalog.terms as terms  # noqa: E402
 from pysindy_xl.catalog.floor import held_out_scores  # noqa: E402
 from pysindy_xl.catalog.folds import held_out_splits  # noqa: E402
 from pysindy_xl.catalog.growth_data import data_span  # noqa: E402
 from pysindy_xl.catalog.moves import START  # noqa: E402
 from pysindy_xl.optimizers import GroupedOptimizer  # noqa: E402
 
-PACKAGE_WRITER = automatic._spline_basis
+PACKAGE_WRITER = terms.spline_basis
 TRUE = {"oblique_spring_slider": lambda q: [q ** 2, sp.sqrt(1 + q ** 2)],
         "morse_well": lambda q: [sp.exp(-3 * q), sp.exp(-1.5 * q)],
         "log_cosh_well": lambda q: [sp.log(sp.cosh(2 * q))]}
@@ -79,7 +80,7 @@ def _writer(options, q, low, high, count):
     return PACKAGE_WRITER(options, q, low, high, count)
 
 
-automatic._spline_basis = _writer
+terms.spline_basis = automatic.spline_basis = _writer  # (both callers)
 
 CANDIDATES = {
     "quartic": (None, {"degree": 4}),

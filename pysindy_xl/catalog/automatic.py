@@ -21,12 +21,13 @@ coordinate it adds dissipation (viscous ``qd_i``, smooth Coulomb ``tanh(qd_i / e
 cross terms) as classical terms, and the force columns. Terms that are trigonometric
 polynomials go to a :class:`~pysindy_xl.feature_library.PolynomialLagrangeLibrary` (derived
 on arrays); the others (powers of angles, splines) to a :class:`~pysindy_xl.LagrangeLibrary`.
+The terms are written by :mod:`.terms` from the checked parameters; this module checks them
+and builds the libraries.
 """
 
 from __future__ import annotations
 
 import functools
-import itertools
 from collections.abc import Mapping
 
 import numpy as np
@@ -49,16 +50,8 @@ from ..feature_library import (
     PolynomialLagrangeLibrary,
 )
 from ..symbols import Coordinates
-from .bases import (
-    KINDS,
-    SPLINE_BASES,
-    bspline_centers,
-    exponential_pair,
-    factor_functions,
-    natural_splines,
-    quadratic_end_splines,
-    truncated_power_splines,
-)
+from .bases import KINDS, SPLINE_BASES, bspline_centers, exponential_pair
+from .terms import dissipation_terms, lagrangian_candidates, spline_basis
 
 __all__ = ["AutomaticCatalog", "DISSIPATION", "coordinate_kinds"]
 
@@ -434,8 +427,7 @@ class AutomaticCatalog(CatalogRepartition):
                                             strict=True)):
             if spline is not None:
                 (low, high), count = spline
-                owners.update({term: i for term in _spline_basis(options, q, low, high,
-                                                                 count)})
+                owners.update({term: i for term in spline_basis(options, q, low, high, count)})
         if not owners:
             return []
         fitted = clone(self).fit()
@@ -446,88 +438,6 @@ class AutomaticCatalog(CatalogRepartition):
                 groups.setdefault(owners[term], []).append(j)
         return [groups[i] for i in sorted(groups)]
 
-    def _products(self, options, factors, order="interaction") -> list[tuple[sp.Expr, int, bool]]:
-        """Products over at most ``options[order]`` coordinates of one factor each, as
-        (expression, polynomial degree, whether it is a trigonometric polynomial)."""
-        out = []
-        n = len(factors)
-        for size in range(1, min(options[order], n) + 1):
-            for subset in itertools.combinations(range(n), size):
-                for choice in itertools.product(*(factors[i] for i in subset)):
-                    degree = sum(c[1] for c in choice)
-                    if size > 1 and degree > options["degree"]:
-                        continue
-                    out.append((sp.Mul(*(c[0] for c in choice)), degree,
-                                all(c[2] for c in choice)))
-        return out
-
-    def _factors(self, options, degree, trig_degree, angle_degree) -> list:
-        """Per coordinate: (function, polynomial degree, trigonometric polynomial) triples."""
-        coords, kinds = options["coords"], options["kinds"]
-        factors = []
-        for q, kind in zip(coords.q, kinds, strict=True):
-            own = []
-            for f in factor_functions(q, kind, degree, trig_degree, angle_degree):
-                trigonometric = f.has(sp.sin(q)) or f.has(sp.cos(q))
-                power = 0 if trigonometric else int(sp.degree(f, q))
-                own.append((f, power, kind == "linear" or trigonometric))
-            factors.append(own)
-        return factors
-
-    def _splines(self, options) -> list[sp.Expr]:
-        """The splines of single coordinates (never multiplied by other functions),
-        the last of each coordinate's left out: they sum to 1, and a constant potential has no
-        Euler-Lagrange column, so all of them would be an exact dependency (which rounding
-        would settle); the others span the same potentials up to a constant."""
-        out = []
-        for q, spline in zip(options["coords"].q, options["splines"], strict=True):
-            if spline is not None:
-                (low, high), count = spline
-                out += _spline_basis(options, q, low, high, count)
-        return out
-
-    def _terms(self, options) -> tuple[list[sp.Expr], list[bool]]:
-        coords = options["coords"]
-        n = coords.n
-        terms, fast = [], []
-        # kinetic: kappa(q) qd_i qd_j
-        kappas = [(sp.Integer(1), 0, True)]
-        if options["kinetic"] == "configuration":
-            factors = self._factors(options, min(options["degree"], 2),
-                                    min(options["trig_degree"], 1), 0)
-            kappas += self._products(options, factors, "kinetic_interaction")
-        for kappa, _, trig in kappas:
-            for i, j in itertools.combinations_with_replacement(range(n), 2):
-                terms.append(kappa * coords.qd[i] * coords.qd[j])
-                fast.append(trig)
-        # gyroscopic: f(q_k) qd_i, k != i (f(q_i) qd_i is a total time derivative)
-        if options["gyroscopic"]:
-            firsts = self._factors(options, 1, 1, 0)
-            for i in range(n):
-                for k in range(n):
-                    if k != i:
-                        for f, _, trig in firsts[k]:
-                            terms.append(f * coords.qd[i])
-                            fast.append(trig)
-        # potential: phi(q)
-        factors = self._factors(options, options["degree"], options["trig_degree"],
-                                options["angle_degree"])
-        # a coordinate's splines take the place of its own powers: their span holds the
-        # line, and a higher power would set the law beyond the data
-        splined = {q for q, spline in zip(coords.q, options["splines"], strict=True)
-                   if spline is not None}
-        for phi, _, trig in self._products(options, factors):
-            if (phi.is_Symbol or (phi.is_Pow and phi.exp.is_Integer)) \
-                    and phi.free_symbols <= splined:
-                continue
-            terms.append(phi)
-            fast.append(trig)
-        exponentials = [f for q, rate in zip(coords.q, options["exponentials"], strict=True)
-                        if rate is not None for f in exponential_pair(q, rate)]
-        splines = self._splines(options)
-        others = exponentials + splines
-        return terms + others, fast + [False] * len(others)
-
     def _built_terms(self, options, key=None) -> tuple:
         """``(*_terms, *_dissipation)``, built once per parameters (clones, which every fit
         makes, and equal catalogs share them; sympy expressions are immutable)."""
@@ -535,26 +445,11 @@ class AutomaticCatalog(CatalogRepartition):
             key = repr([(name, getattr(self, name)) for name in _param_names(type(self))])
         found = _TERMS.pop(key, None)
         if found is None:
-            found = (*self._terms(options), *self._dissipation(options))
+            found = (*lagrangian_candidates(options), *dissipation_terms(options))
         _TERMS[key] = found
         while len(_TERMS) > _CACHED_TERMS:
             del _TERMS[next(iter(_TERMS))]
         return found
-
-    def _dissipation(self, options) -> tuple[list[sp.Expr], np.ndarray]:
-        coords = options["coords"]
-        terms, rows = [], []
-        models = options["dissipation"]
-        for model in models:
-            if model == "coupled" and "viscous" in models:
-                continue  # the viscous terms enter every equation
-            for i, qd in enumerate(coords.qd):
-                terms.append(sp.tanh(qd / sp.Float(options["coulomb_scale"][i]))
-                             if model == "coulomb" else qd)
-                own = np.arange(coords.n) == i
-                rows.append(own if model == "coulomb" or "coupled" not in models
-                            else ~own if model == "coupled" else np.ones(coords.n, dtype=bool))
-        return terms, np.array(rows, dtype=bool).reshape(len(terms), coords.n)
 
     # -- the catalog ---------------------------------------------------------------------------
     @property
@@ -657,13 +552,3 @@ _DEFAULTS = {"kinds": None, "bounds": None, "degree": 2, "trig_degree": 1, "angl
              "dissipation": ("viscous",), "coulomb_scale": 0.01, "splines": None,
              "interlink": None, "max_terms": 2000, "kinetic_interaction": None,
              "spline_ends": "linear", "spline_basis": "bspline", "exponentials": None}
-
-
-def _spline_basis(options, q, low, high, count) -> list[sp.Expr]:
-    """The spline columns of one coordinate: its basis of ``options["spline_ends"]`` and
-    ``options["spline_basis"]`` less the constant (a constant potential has no column; the
-    B-splines sum to 1, so the last of them is left out)."""
-    if options["spline_basis"] == "truncated":
-        return truncated_power_splines(q, low, high, count, options["spline_ends"])[1:]
-    basis = natural_splines if options["spline_ends"] == "linear" else quadratic_end_splines
-    return basis(q, low, high, count)[:-1]

@@ -5,11 +5,15 @@ families are nearly dependent on the data's range (``cos(phi) = 1 - phi^2/2 + ph
 one that went in first (the starting catalog's sines and cosines) stays as a stand-in beside
 the right one. A removal takes a family, or its last degree step, out of a catalog's
 parameters; an exchange follows a removal with a move of the family it may stand in for.
+:func:`backward_phase` drops and exchanges families until nothing goes.
 """
 
 from __future__ import annotations
 
-__all__ = ["REMOVALS", "EXCHANGES", "removed"]
+from .candidates import parameters_key
+from .moves import START
+
+__all__ = ["REMOVALS", "EXCHANGES", "removed", "backward_phase"]
 
 #: The removals, by the family they drop: a move of :data:`~pysindy_xl.catalog.MOVES` (its
 #: family, or its last degree step), or ``"trig"`` (an angle's sines and cosines, beside its
@@ -107,3 +111,70 @@ def removed(state: dict, move: str, kinds, start: dict) -> dict | None:
             return None
         new["dissipation"] = tuple(d for d in state["dissipation"] if d != "coulomb")
     return new
+
+
+def backward_phase(climber, state, best, path, moves) -> tuple:
+    """Drop the family whose removal the keep rule accepts best (a smaller catalog within
+    the tolerance at an equal fitted size is kept too: the stand-in that a family offers
+    next to the right one goes with it), until nothing goes; a family refused alone is
+    exchanged for another (:data:`~.backward.EXCHANGES`) while the criterion is not good
+    enough.
+
+    Parameters
+    ----------
+    climber : Climber
+        The growth's search (:class:`~.climbs.Climber`): its fits, keep rules and moves.
+    state : dict
+        The climb's end.
+    best : GrowthStep
+        Its step.
+    path : list of GrowthStep
+        The kept steps so far.
+    moves : sequence of str
+        The growth's moves (only their families are dropped).
+
+    Returns
+    -------
+    tuple
+        The end's parameters, its step, and the kept steps (``path`` extended).
+    """
+    visited = {parameters_key(state)}
+    tolerance = climber.tolerance
+    while True:  # below good_enough too: a stand-in can be good enough
+        dropped, refused = [], []
+        candidates = [(move, parameters) for move in REMOVALS
+                      if (parameters := removed(state, move, climber.kinds, START)) is not None
+                      and {"trig": "trig_degree"}.get(move, move) in moves
+                      and parameters_key(parameters) not in visited
+                      and climber.size(parameters) != best.terms]
+        for k, (move, parameters) in enumerate(candidates):
+            step = climber.attempt(parameters, f"-{move}", [p for _, p in candidates[k + 1:]])
+            if climber.keeps(step, best) or (
+                    step.active == best.active and step.terms < best.terms
+                    and (not climber.physical or step.definite >= 1 or best.definite < 1)
+                    and (lambda c, b: c <= b * (1 + tolerance))(*climber.compared(step, best))):
+                dropped.append((step.criterion, step.active, parameters, step))
+            else:
+                refused.append((move, parameters))
+        # a family that stands in for another is not given up alone: exchange it for the
+        # other (while the criterion is not good enough: at its noise floor too, where a
+        # stand-in and the law it stands in for may both be)
+        exchanges = []
+        for move, smaller in (refused if not dropped and not climber.settled(best, False)
+                              else ()):
+            for other in EXCHANGES.get(move, ()):
+                for skip in (0, 1) if other in moves else ():
+                    parameters = climber.moved(smaller, other, skip)
+                    if (parameters is not None and parameters_key(parameters) not in visited
+                            and climber.size(parameters) != climber.size(smaller)):
+                        exchanges.append((f"-{move}+{other}", parameters))
+        for k, (name, parameters) in enumerate(exchanges):
+            step = climber.attempt(parameters, name, [p for _, p in exchanges[k + 1:]])
+            if climber.keeps(step, best):
+                dropped.append((step.criterion, step.active, parameters, step))
+        if not dropped:
+            break
+        _, _, state, best = min(dropped, key=lambda d: d[:2])
+        visited.add(parameters_key(state))
+        path.append(best)
+    return state, best, path

@@ -4,7 +4,7 @@
 tries it) and walks from the smallest catalog: each move alone (:meth:`Climber.first_moves`),
 a climb through the moves in turn or by the best move (:meth:`Climber.climb`,
 :meth:`Climber.steepest_climb`), and the backward phase dropping families
-(:meth:`Climber.backward`). :func:`~.growth.grow_catalog` sets up the data and the folds,
+(:func:`~.backward.backward_phase`). :func:`~.growth.grow_catalog` sets up the data and the folds,
 orders the moves and fits the chosen catalog; the module docstring of :mod:`.growth` states
 the method.
 """
@@ -16,7 +16,6 @@ import itertools
 import numpy as np
 
 from .automatic import AutomaticCatalog
-from .backward import EXCHANGES, REMOVALS, removed
 from .candidates import parameters_key
 from .floor import EXACT, floor_reached, models_floor, noise_explains
 from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
@@ -551,68 +550,4 @@ class Climber:
                         state, best, improved = twice, step, True
                         path.append(step)
                         break
-        return state, best, path
-
-    def backward(self, state, best, path, moves) -> tuple:
-        """Drop the family whose removal the keep rule accepts best (a smaller catalog within
-        the tolerance at an equal fitted size is kept too: the stand-in that a family offers
-        next to the right one goes with it), until nothing goes; a family refused alone is
-        exchanged for another (:data:`~.backward.EXCHANGES`) while the criterion is not good
-        enough.
-
-        Parameters
-        ----------
-        state : dict
-            The climb's end.
-        best : GrowthStep
-            Its step.
-        path : list of GrowthStep
-            The kept steps so far.
-        moves : sequence of str
-            The growth's moves (only their families are dropped).
-
-        Returns
-        -------
-        tuple
-            The end's parameters, its step, and the kept steps (``path`` extended).
-        """
-        visited = {parameters_key(state)}
-        tolerance = self.tolerance
-        while True:  # below good_enough too: a stand-in can be good enough
-            dropped, refused = [], []
-            candidates = [(move, parameters) for move in REMOVALS
-                          if (parameters := removed(state, move, self.kinds, START)) is not None
-                          and {"trig": "trig_degree"}.get(move, move) in moves
-                          and parameters_key(parameters) not in visited
-                          and self.size(parameters) != best.terms]
-            for k, (move, parameters) in enumerate(candidates):
-                step = self.attempt(parameters, f"-{move}", [p for _, p in candidates[k + 1:]])
-                if self.keeps(step, best) or (
-                        step.active == best.active and step.terms < best.terms
-                        and (not self.physical or step.definite >= 1 or best.definite < 1)
-                        and (lambda c, b: c <= b * (1 + tolerance))(*self.compared(step, best))):
-                    dropped.append((step.criterion, step.active, parameters, step))
-                else:
-                    refused.append((move, parameters))
-            # a family that stands in for another is not given up alone: exchange it for the
-            # other (while the criterion is not good enough: at its noise floor too, where a
-            # stand-in and the law it stands in for may both be)
-            exchanges = []
-            for move, smaller in (refused if not dropped and not self.settled(best, False)
-                                  else ()):
-                for other in EXCHANGES.get(move, ()):
-                    for skip in (0, 1) if other in moves else ():
-                        parameters = self.moved(smaller, other, skip)
-                        if (parameters is not None and parameters_key(parameters) not in visited
-                                and self.size(parameters) != self.size(smaller)):
-                            exchanges.append((f"-{move}+{other}", parameters))
-            for k, (name, parameters) in enumerate(exchanges):
-                step = self.attempt(parameters, name, [p for _, p in exchanges[k + 1:]])
-                if self.keeps(step, best):
-                    dropped.append((step.criterion, step.active, parameters, step))
-            if not dropped:
-                break
-            _, _, state, best = min(dropped, key=lambda d: d[:2])
-            visited.add(parameters_key(state))
-            path.append(best)
         return state, best, path

@@ -163,22 +163,8 @@ never stops the growth there, and neither does ``good_enough`` above :data:`EXAC
 error, not the data's precision: on a cart with a torsion-sprung pendulum, ``cos(theta)`` for
 ``theta^2`` at 0.1 %); the climb goes on. A right law sits at 0.87 to 1.13 times its floor on
 the generic systems with two or more coordinates (where the stop applies), 1.2 to 1.7 times with
-one (where the climb goes on as without it). The chosen catalog is then fitted on all the data,
-each coordinate's splines kept whole or left out
-(:class:`~pysindy_xl.optimizers.GroupedOptimizer`), with the weak-form test functions that the
-search's fits used (:class:`~pysindy_xl.weak.BumpTestFunctions` of one half-width: the default
-width of the longest run, at most a third of the shortest run's time block). The criterion
-judged the catalog by fits with these test functions; the default ones of a fit on all the data
-(as wide or wider; for unforced data, three widths) make another regression, whose selection the
-growth never judged: on the log-cosh well, unforced and free of noise, that selection keeps a
-combination of the spline columns that nearly vanishes on the data, with almost no kinetic part
-(accelerations off by a factor of tens to hundreds), where the search's test functions give the
-law within 0.5 %. That fit selects again, on all the data; where it keeps more terms than the
-judged fits did, and some they did not hold, it is refitted among the judged terms only
-(:class:`~pysindy_xl.optimizers.RestrictedOptimizer`). It may exchange a term or leave one out
-(more data tell a stand-in from the law), but a larger model was never judged (on a pendulum
-with a sprung vertical pivot, unforced and free of noise, it took 14 terms where the judged
-fits kept the law's 8, 9 % off on a fresh run). """
+one (where the climb goes on as without it). The chosen catalog is then fitted on all the data
+(:mod:`.final_fit`). """
 
 from __future__ import annotations
 
@@ -187,6 +173,7 @@ import numpy as np
 from .._inputs import aligned, as_list
 from .._validation import check_option
 from .automatic import AutomaticCatalog, coordinate_kinds
+from .backward import backward_phase
 from .candidates import (
     COMBINES,
     MIN_TRIMMED_BLOCKS,
@@ -196,6 +183,7 @@ from .candidates import (
     search_rows,
 )
 from .climbs import Climber
+from .final_fit import fit_chosen
 from .floor import EXACT
 from .folds import REGIONS, held_out_splits
 from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first)
@@ -221,52 +209,6 @@ MAX_TERMS = 400
 #: With ``max_terms="auto"``, rows of the search's fits per catalog term at least: catalogs
 #: over ``rows // ROWS_PER_TERM`` terms are not tried.
 ROWS_PER_TERM = 2
-
-
-def _judged_terms_only(model, judged, catalog, data):
-    """``model`` refitted on the terms that the judged fits kept (``judged``: the names of each
-    split's), where it keeps more terms than any of them and some that none held; a
-    coordinate's splines count as judged (their knots, and so their names, follow each fit's
-    data).
-
-    The criterion judged the chosen catalog by its fits on the search's pieces: models of the
-    size those fits kept. The fit on all the data is another selection: it may exchange a
-    term (more data tell a stand-in from the law: ``a_dot x_dot cos(a)`` for the judged
-    ``a_dot x_dot`` on a cart with two pendulums) or find fewer, but terms it adds beyond
-    that size were never judged.
-    """
-    judged = [names for names in judged if names]
-    if not judged:  # (a split's fit failed: nothing to restrict to)
-        return model
-    held = set().union(*judged)
-    names = model.get_feature_names()
-    allowed = np.array([name in held for name in names])
-    for group in catalog.spline_columns():
-        allowed[list(group)] = True  # (kept whole or left out by the final fit's optimizer)
-    kept = np.asarray(model.coefficients()) != 0
-    if not np.any(kept & ~allowed) or kept.sum() <= max(len(names) for names in judged):
-        return model
-    from sklearn.base import clone
-
-    from ..optimizers import RestrictedOptimizer
-    restricted = clone(model).set_params(optimizer=RestrictedOptimizer(
-        clone(model.optimizer_), columns=np.flatnonzero(allowed).tolist()))
-    return restricted.fit(**data)
-
-
-def _grouped(optimizer, catalog, forced, estimated):
-    """``optimizer`` keeping each coordinate's splines whole or leaving them out (a spline
-    basis is one potential: a selection of single functions bends its shape and its
-    continuation), or ``optimizer`` itself for a catalog without splines. None or a kind is
-    the default optimizer for the data (``forced``: the forced coordinates; ``estimated``:
-    columns from noisy positions, the weak form)."""
-    groups = catalog.spline_columns()
-    if not groups:
-        return optimizer
-    from ..optimizers import GroupedOptimizer, default_optimizer
-    if optimizer is None or isinstance(optimizer, str):
-        optimizer = default_optimizer(forced, estimated, kind=optimizer)
-    return GroupedOptimizer(optimizer, groups=groups)
 
 
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
@@ -439,8 +381,6 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     >>> [(step.move, step.terms, step.chosen) for step in found.steps]
     [('start', 4, True), ('degree', 5, False), ('degree', 6, True)]
     """
-    from sklearn.base import clone
-
     from ..model import XLSINDy
 
     xs, is_list = as_list(x, "x")
@@ -614,7 +554,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         if (climber.keeps(other[1], best) if not physical or (other[1].definite >= 1)
                 == (best.definite >= 1) else other[1].definite >= 1):
             state, best, path = other
-    state, best, path = climber.backward(state, best, path, moves)
+    state, best, path = backward_phase(climber, state, best, path, moves)
     fits.close()  # (a worker's last guess may still run: it ends during the final fit)
     if tie_break and not cross_validate and not consensus and np.isfinite(best.criterion):
         # the near ties of the criterion judged again on every block, each by a fit without it
@@ -637,16 +577,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     for step in path:
         step.chosen = True
     best_catalog = AutomaticCatalog(**fixed, **state)
-    # the search's test functions: the regression whose selection the criterion judged
-    model = clone(template).set_params(feature_library=best_catalog,
-                                       optimizer=_grouped(optimizer, best_catalog, active,
-                                                          final_weak),
-                                       smoother=None)
     full = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
     if not is_list:
         full = {key: None if value is None else value[0] for key, value in full.items()}
-    model.fit(**full)
-    model = _judged_terms_only(model, best.support, best_catalog, full)
+    model = fit_chosen(template, best_catalog, optimizer, full, best.support, active,
+                       final_weak)
     return GrowthResult(model, best_catalog, climber.steps, criterion, best.criterion,
                         search.max_terms)
 
