@@ -25,6 +25,8 @@ OPTIMIZER_TYPES: dict[str, type] = {}
 
 #: Optimizers nested in a file's optimizer (a mixed fit's parts, an ensemble's base) at most.
 _MAX_NESTING = 3
+#: Nesting of the lists a spec's parameter may be (the groups of columns: lists of lists).
+_MAX_LIST_NESTING = 2
 
 
 def solve_problem(optimizer, problem: CatalogProblem):
@@ -377,8 +379,8 @@ reference_columns, physical
 
     def to_spec(self) -> dict:
         """JSON description ``{"type": spec_type, "params": {...}}``: plain parameters as they are,
-        nested optimizers as specs; other objects are left out (the loaded optimizer uses their
-        default).
+        sequences of them (or of such sequences, two levels deep) as lists, nested optimizers as
+        specs; other objects are left out (the loaded optimizer uses their default).
 
         Returns
         -------
@@ -390,7 +392,29 @@ reference_columns, physical
                 params[key] = value.to_spec()
             elif is_plain(value):
                 params[key] = value
+            elif (listed := _plain_lists(value)) is not None:
+                params[key] = listed
         return {"type": self.spec_type, "params": params}
+
+
+def _plain_lists(value, depth: int = 0):
+    """``value`` as a JSON list where it is a sequence of plain values or of such sequences
+    (at most :data:`_MAX_LIST_NESTING` deep: the columns of a
+    :class:`~.restricted.RestrictedOptimizer`, the groups of a
+    :class:`~.grouped.GroupedOptimizer`), numpy scalars as Python ones; None otherwise."""
+    if depth >= _MAX_LIST_NESTING or isinstance(value, (str, bytes, dict)) or not isinstance(
+            value, (list, tuple, np.ndarray)):
+        return None
+    out = []
+    for item in value:
+        item = item.item() if isinstance(item, np.generic) else item
+        if is_plain(item):
+            out.append(item)
+        elif (nested := _plain_lists(item, depth + 1)) is not None:
+            out.append(nested)
+        else:
+            return None
+    return out
 
 
 def _tag_attribute(name: str) -> property:
@@ -450,10 +474,12 @@ def optimizer_from_spec(spec, where: str = "optimizer", depth: int = 0):
     for key, value in params.items():
         if isinstance(value, dict):
             values[key] = optimizer_from_spec(value, f"{where}.params.{key}", depth + 1)
-        elif is_plain(value):
+        elif is_plain(value) or (isinstance(value, list)
+                                 and _plain_lists(value) is not None):
             values[key] = value
         else:
-            raise ValueError(f"{where}.params.{key} must be a plain value or an optimizer")
+            raise ValueError(f"{where}.params.{key} must be a plain value, a list of them or "
+                             "an optimizer")
     optimizer = cls(**values)
     try:
         optimizer._check_params()

@@ -145,8 +145,10 @@ class GroupedOptimizer(WrappingOptimizer, CatalogOptimizer):
         validate_params(self)
         for group in self.groups:
             if np.ndim(group) != 1 or not all(isinstance(j, (int, np.integer))
-                                             and not isinstance(j, bool) for j in group):
-                raise ValueError(f"groups: expected sequences of column indices, got {group!r}")
+                                             and not isinstance(j, bool) and j >= 0
+                                             for j in group):
+                raise ValueError(f"groups: expected sequences of non-negative column indices, "
+                                 f"got {group!r}")
 
     def pilot(self):
         """The pilot of the wrapped optimizer, grouped alike.

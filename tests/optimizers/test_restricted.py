@@ -4,6 +4,7 @@ Ground truth: a linear regression with known coefficients, and the forced Duffin
 (scipy at 1e-10) whose law the restricted fit must recover from noisy positions.
 """
 
+import json
 import pickle
 import warnings
 
@@ -70,6 +71,12 @@ def test_a_restricted_catalog_fit_finds_duffing_and_saves(tmp_path):
     loaded = px.XLSINDy.load(path)
     assert type(loaded.optimizer).__name__ == "RestrictedOptimizer"
     np.testing.assert_array_equal(loaded.coefficients(), model.coefficients())
+    # the allowed columns are in the file: a refit of the loaded model is restricted too
+    assert loaded.optimizer.columns == allowed
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        np.testing.assert_array_equal(loaded.fit(x, t, u=u).coefficients(),
+                                      model.coefficients())
 
 
 @pytest.mark.parametrize("columns", [[-1], [0.5], ["a"], [[1, 2]], [True]])
@@ -77,3 +84,22 @@ def test_bad_columns_are_named(columns):
     with pytest.raises(ValueError, match="columns"):
         RestrictedOptimizer(px.ExplicitOptimizer(), columns=columns).fit_catalog(
             _regression(), 1, [0])
+
+
+def test_lists_of_columns_round_trip_through_a_spec_and_bad_ones_are_named():
+    from pysindy_xl.optimizers import GroupedOptimizer
+    from pysindy_xl.optimizers._base import optimizer_from_spec
+
+    restricted = RestrictedOptimizer(px.ExplicitOptimizer(), columns=np.array([3, 1, 4]))
+    grouped = GroupedOptimizer(restricted, groups=[[1, 2], (5, np.int64(6))])
+    spec = grouped.to_spec()
+    assert spec["params"]["groups"] == [[1, 2], [5, 6]]
+    assert spec["params"]["optimizer"]["params"]["columns"] == [3, 1, 4]
+    loaded = optimizer_from_spec(json.loads(json.dumps(spec)))
+    assert loaded.groups == [[1, 2], [5, 6]] and loaded.optimizer.columns == [3, 1, 4]
+    for columns, message in (([[[1]]], "list"), ([-1], "columns"), ([1.5], "columns"),
+                             ({"a": 1}, "optimizer")):
+        with pytest.raises(ValueError, match=message):
+            optimizer_from_spec({"type": "RestrictedOptimizer", "params": {"columns": columns}})
+    with pytest.raises(ValueError, match="groups"):
+        optimizer_from_spec({"type": "GroupedOptimizer", "params": {"groups": [[-1]]}})
