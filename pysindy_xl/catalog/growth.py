@@ -107,18 +107,23 @@ every move from the kept catalog and keeps the best instead of the first that im
 pairs where none does): a move that helps only once another is in (the coupled damping of a
 coupling's links, poor alone) is not passed over for a stand-in that the order of the moves
 alone tries first. Catalogs over ``max_terms`` are not tried (reported as the ceiling); by
-default the ceiling follows the data: at most ``1 / ROWS_PER_TERM`` of the rows of the search's
-fits (a selection over more columns than half its equations is ill-posed at noise), and at most
-:data:`MAX_TERMS`; a move of the climb that this ceiling refuses is then tried with constant
-kinetic coefficients (``"degree-kinetic"``): configuration-dependent ones multiply the catalog
-by the velocity monomials, and a law that needs a higher degree of the potential with constant
-masses (three masses on quartic springs) is reached only so. Where that retry is the catalog
-already tried, or over the ceiling too, the move is tried with configuration-dependent kinetic
-coefficients of single coordinates' functions beside the potential's products of several
-(``kinetic_interaction=1`` of :class:`~.automatic.AutomaticCatalog`; ``"kinetic@k1"``): two
-carts coupled by a spring, each carrying a pendulum, need ``cos(a) a_dot x1_dot`` and ``x1 x2``,
-123 terms so, where one interaction order for both makes 333. A joint first move over the
-ceiling is tried so too (``"kinetic+interaction@k1"``).
+default the ceiling follows the data: ``1 / ROWS_PER_TERM`` (two thirds) of the rows of the
+search's fits (a selection over more columns is ill-posed at noise), at most :data:`MAX_TERMS`.
+A refused move is tried again (:meth:`~.climbs.Climber._attempt_within_ceiling`): where it
+widened configuration-dependent kinetic coefficients (an ``"interaction"`` move widens them with
+the potential's products), first with the kinetic order of the catalog it moved from
+(``"interaction@k2"``: the inertia kept, the potential's products grown alone); then with
+constant kinetic coefficients (``"degree-kinetic"``: configuration-dependent ones multiply the
+catalog by the velocity monomials; three masses on quartic springs are reached only so); where
+that is the catalog already tried, or over the ceiling too, with kinetic coefficients over fewer
+coordinates' functions, the widest order within the ceiling (``kinetic_interaction`` of
+:class:`~.automatic.AutomaticCatalog`; ``"kinetic@k2"``, ``"kinetic@k1"``,
+:func:`~.moves.narrow`): two spring-coupled carts, each carrying a pendulum, need ``cos(a)
+a_dot x1_dot`` and ``x1 x2``, 123 terms so, 333 with one order for both. A joint first move
+over the ceiling is narrowed so too, and the move ``"kinetic"`` widens a narrowed order by
+one. A serial chain in relative joint angles needs the kinetic order one below the
+potential's: a three-link arm's inertia in ``cos(b + c)``, its gravity in ``cos(a + b + c)``,
+143 terms (191 with one order for both).
 
 The climb only adds, and the start always holds an angle's sines and cosines: where families
 are nearly dependent on the data's range (``cos(phi) = 1 - phi^2/2 + phi^4/24 - ...``), the
@@ -207,8 +212,9 @@ GROWTH_REGIONS = (*REGIONS, "consensus")
 MAX_TERMS = 400
 
 #: With ``max_terms="auto"``, rows of the search's fits per catalog term at least: catalogs
-#: over ``rows // ROWS_PER_TERM`` terms are not tried.
-ROWS_PER_TERM = 2
+#: over ``rows // ROWS_PER_TERM`` terms are not tried (least squares inflate the rows' noise
+#: ``p / (r - p)`` times on ``p`` columns, ``r`` rows: 2 here; 143 of 234 fit an arm, 191 not).
+ROWS_PER_TERM = 1.5
 
 
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
@@ -471,8 +477,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                         template, fixed["max_terms"], forced, reported, combine,
                         floor="later" if noise_floor else "off")
     rows = search_rows(search, final_weak)
-    if max_terms == "auto":  # a selection over more columns than half its rows is ill-posed
-        search.max_terms = min(MAX_TERMS, rows // ROWS_PER_TERM)
+    if max_terms == "auto":  # a selection over more columns is ill-posed at noise
+        search.max_terms = min(MAX_TERMS, int(rows // ROWS_PER_TERM))
     fits = CandidateFits(search, n_jobs)
     fits.warm_up()  # the workers start while the first catalog is fitted here
     # the second judge is asked only about candidates the first does not refuse: no guesses

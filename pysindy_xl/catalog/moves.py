@@ -7,8 +7,11 @@ of them by one step (:func:`moved`), and a joint move two at once (:func:`joint_
 kinetic coefficients share the potential's interaction order unless a state sets
 ``kinetic_interaction`` (:func:`kinetic_order`): the climb does so where the ceiling refuses
 configuration-dependent kinetic coefficients over products of several coordinates'
-functions; the moves keep it as it is (an ``"interaction"`` move grows the potential's
-products alone).
+functions (the suffix ``"@k<m>"`` of a move, :func:`narrow`); the moves keep it as it is (an
+``"interaction"`` move grows the potential's products alone), and the move ``"kinetic"``
+widens it by one coordinate while it is below the potential's order. A serial chain in
+relative joint angles needs the kinetic order one below the potential's: the inertia of a
+three-link arm holds ``cos(b + c)`` (two coordinates), its gravity ``cos(a + b + c)`` (three).
 :func:`~.growth.grow_catalog` climbs by these moves from :data:`START`; the backward phase
 (:mod:`.backward`) undoes them.
 """
@@ -16,10 +19,11 @@ products alone).
 from __future__ import annotations
 
 import itertools
+import re
 
 __all__ = ["exponential_base", "MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS",
            "SPLINE_MOVES", "RATE_MOVES", "LATE_MOVES", "REPEATED", "moved", "joint_moves", "holds",
-           "kinetic_order", "NARROW", "narrowed", "is_repeated"]
+           "kinetic_order", "NARROW", "narrow", "narrow_order", "narrowed", "is_repeated"]
 
 #: The moves of the growth, in the order they are tried.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
@@ -61,8 +65,10 @@ LIMITS = {"degree": 4, "trig_degree": 3, "angle_degree": 4}
 SPLINE_COUNTS = (8, 12, 16)
 #: The suffix of a move after which the configuration-dependent kinetic coefficients are
 #: functions of single coordinates (``kinetic_interaction=1``) while the potential's products
-#: keep the interaction order: a joint catalog or a climb's move over the ceiling.
+#: keep the interaction order: a joint catalog or a climb's move over the ceiling. The suffix
+#: ``"@k<m>"`` (:func:`narrow`) holds them to products over at most ``m`` coordinates.
 NARROW = "@k1"
+_NARROW_SUFFIX = re.compile(r"@k([1-9][0-9]*)$")
 #: The moves that go on while they improve (one step of a degree or of the splines each).
 REPEATED = ("degree", "trig_degree", "angle_degree", "splines")
 
@@ -78,7 +84,11 @@ def moved(state, move, kinds, n, skip=0, rates=None):
         One of :data:`MOVES` or :data:`MORE_MOVES`, or ``"a+b"``: the move ``a``, then ``b``;
         with the suffix :data:`NARROW` (``"kinetic+interaction@k1"``), the kinetic
         coefficients are then held to single coordinates' functions (``kinetic_interaction``
-        1; None where they are constant or already so).
+        1; None where they are constant or already so); with ``"@k<m>"`` (:func:`narrow`),
+        to products over at most ``m`` coordinates (None where they are constant or over at
+        most ``m`` already). ``"kinetic"`` makes constant kinetic coefficients
+        configuration-dependent, or widens a kinetic order below the potential's by one
+        coordinate.
     kinds : sequence of str
         The coordinates' kinds (``"linear"``, ``"angle"``).
     n : int
@@ -105,15 +115,23 @@ def moved(state, move, kinds, n, skip=0, rates=None):
     True
     >>> moved(START, "kinetic+interaction@k1", ["linear", "angle"], 2)["kinetic_interaction"]
     1
+    >>> arm = moved(START, "kinetic+interaction+interaction@k2", ["angle"] * 3, 3)
+    >>> arm["interaction"], arm["kinetic_interaction"]
+    (3, 2)
+    >>> kinetic_order(moved(dict(arm, kinetic_interaction=1), "kinetic", ["angle"] * 3, 3))
+    2
     >>> moved(START, "exponentials", ["linear"], 1, rates=lambda state: {"x": -1.5})[
     ...     "exponentials"]
     {'x': -1.5}
     """
-    if move.endswith(NARROW):  # then kinetic coefficients of single coordinates' functions
-        state = moved(state, move[:-len(NARROW)], kinds, n, skip, rates)
-        if state is None or state["kinetic"] != "configuration" or kinetic_order(state) <= 1:
+    suffix = _NARROW_SUFFIX.search(move)
+    if suffix:  # then kinetic coefficients over at most `order` coordinates' functions
+        order = int(suffix.group(1))
+        state = moved(state, move[:suffix.start()], kinds, n, skip, rates) if suffix.start() \
+            else dict(state)
+        if state is None or state["kinetic"] != "configuration" or kinetic_order(state) <= order:
             return None
-        return dict(state, kinetic_interaction=1)
+        return dict(state, kinetic_interaction=order)
     if "+" in move:
         for part in move.split("+"):
             state = None if state is None else moved(state, part, kinds, n, skip, rates)
@@ -121,8 +139,13 @@ def moved(state, move, kinds, n, skip=0, rates=None):
     new = dict(state)
     angles = "angle" in kinds
     if move == "kinetic":
-        if state["kinetic"] == "configuration":
-            return None
+        if state["kinetic"] == "configuration":  # a narrowed kinetic order widens by one
+            if kinetic_order(state) >= state["interaction"]:
+                return None
+            new["kinetic_interaction"] = kinetic_order(state) + 1
+            if new["kinetic_interaction"] == state["interaction"]:  # (the default order)
+                new.pop("kinetic_interaction")
+            return new
         new["kinetic"] = "configuration"
     elif move == "interaction":
         if state["interaction"] >= n:
@@ -263,12 +286,62 @@ def joint_moves(moves, kinds, n, size) -> list:
     return out
 
 
+def narrow(move, order) -> str:
+    """The name of ``move`` with its kinetic coefficients held to products over at most
+    ``order`` coordinates' functions (``kinetic_interaction=order``): ``f"{move}@k{order}"``,
+    :data:`NARROW` for ``order=1``.
+
+    Parameters
+    ----------
+    move : str
+        A move's name (without a narrowing suffix), or ``""``: the catalog itself.
+    order : int
+        The kinetic coefficients' interaction order, 1 or more.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> narrow("kinetic+interaction", 1), narrow("interaction", 2)
+    ('kinetic+interaction@k1', 'interaction@k2')
+    """
+    if not isinstance(order, int) or order < 1:
+        raise ValueError(f"order: expected an int >= 1, got {order!r}")
+    return f"{move}@k{order}"
+
+
+def narrow_order(move):
+    """The kinetic order of a move's narrowing suffix (:func:`narrow`), None without one.
+
+    Parameters
+    ----------
+    move : str
+        A move's name.
+
+    Returns
+    -------
+    int or None
+
+    Examples
+    --------
+    >>> narrow_order("kinetic+interaction@k1"), narrow_order("interaction@k2")
+    (1, 2)
+    >>> narrow_order("kinetic") is None
+    True
+    """
+    suffix = _NARROW_SUFFIX.search(move)
+    return int(suffix.group(1)) if suffix else None
+
+
 def narrowed(names, kinds, n, size, ceiling) -> list:
-    """The moves of ``names`` whose catalog from :data:`START` is over ``ceiling``, each with
-    the suffix :data:`NARROW` where that catalog is within it.
+    """The moves of ``names`` whose catalog from :data:`START` is over ``ceiling``, each
+    narrowed (:func:`narrow`) to the widest kinetic order below its own whose catalog is
+    within it.
 
     Configuration-dependent kinetic coefficients over products of several coordinates'
-    functions multiply the velocity products by the potential's products; held to single
+    functions multiply the velocity products by the potential's products; held to fewer
     coordinates' functions (``cos(a) a_dot x1_dot``) beside the potential's products
     (``x1 x2``), the joint catalog may fit under the ceiling that the full one is over.
 
@@ -289,7 +362,7 @@ def narrowed(names, kinds, n, size, ceiling) -> list:
     Returns
     -------
     list of str
-        The names ``f"{name}{NARROW}"``, in the order of ``names``.
+        The narrowed names (``f"{name}@k<m>"``), in the order of ``names``.
 
     Examples
     --------
@@ -302,10 +375,14 @@ def narrowed(names, kinds, n, size, ceiling) -> list:
     """
     out = []
     for name in names:
-        narrow = moved(dict(START), name + NARROW, kinds, n)
-        if narrow is not None and size(moved(dict(START), name, kinds, n)) > ceiling \
-                >= size(narrow) > 0:
-            out.append(name + NARROW)
+        full = moved(dict(START), name, kinds, n)
+        if full is None or full["kinetic"] != "configuration" or not size(full) > ceiling:
+            continue
+        for order in range(kinetic_order(full) - 1, 0, -1):
+            narrower = moved(dict(START), narrow(name, order), kinds, n)
+            if narrower is not None and 0 < size(narrower) <= ceiling:
+                out.append(narrow(name, order))
+                break
     return out
 
 

@@ -80,8 +80,8 @@ def _add_fit_options(parser, coulomb_law="smooth", automatic=False):
                                  "or --trig-degree, else automatic (default: auto)")
         parser.add_argument("--max-terms", type=_max_terms, default="auto",
                             help="automatic catalog: ceiling on its size; larger catalogs are "
-                                 "not tried; auto: half the equations of the search's fits, "
-                                 "at most 400 (default: auto)")
+                                 "not tried; auto: two thirds of the equations of the search's "
+                                 "fits, at most 400 (default: auto)")
         parser.add_argument("--n-jobs", type=_positive_int, default=1, metavar="N",
                             help="automatic catalog: processes of the search (while one "
                                  "candidate catalog is fitted, N - 1 workers fit the next ones; "

@@ -69,7 +69,7 @@ def _training_rows(monkeypatch):
     return rows
 
 
-def test_the_default_ceiling_is_half_the_rows_of_the_fits(monkeypatch):
+def test_the_default_ceiling_is_two_thirds_of_the_rows_of_the_fits(monkeypatch):
     x, t, u = noisy_duffing()
     rows = _training_rows(monkeypatch)
     # (without the noise floor: its held-out regressions propagate noise too)
@@ -78,7 +78,8 @@ def test_the_default_ceiling_is_half_the_rows_of_the_fits(monkeypatch):
     searched, final = rows[:-1], rows[-1]  # the final fit: the search's test functions
     assert len(searched) == len(found.steps) and len(set(searched)) == 1
     assert final > searched[0]  # on all the data
-    assert found.max_terms == min(400, searched[0] // 2) == searched[0] // 2
+    assert found.max_terms == min(400, int(searched[0] // growth_module.ROWS_PER_TERM))
+    assert found.max_terms == int(searched[0] // 1.5)  # two thirds of the rows
     assert found.to_dict()["max_terms"] == found.max_terms
     # the Duffing law is found under it: m xdd + c xd + k x + h x^3 = u
     assert found.catalog.n_terms <= found.max_terms
