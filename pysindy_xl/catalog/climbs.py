@@ -16,7 +16,8 @@ import itertools
 import numpy as np
 
 from .automatic import AutomaticCatalog
-from .candidates import parameters_key
+from .budget import OVER, REFUSED, budget_note, work_cost
+from .candidates import parameters_key, unfitted
 from .floor import EXACT, floor_reached, models_floor, noise_explains
 from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
 from .moves import LATE_MOVES, NARROW, REPEATED, START, holds, is_repeated, moved
@@ -58,6 +59,10 @@ class Climber:
         ``rates(parameters) -> {name: rate}``: the exponentials' rates fitted for a catalog
         (:class:`~.rates.RateFits`), which the move ``"exponentials"`` adds; None: that move
         does not apply.
+    budget : float or None, default None
+        The search's work budget (:mod:`.budget`): a candidate whose fit would take
+        :attr:`work` over it is not fitted (its step's note says ``"budget"``; the climbs
+        retry it smaller, as over the ceiling). None: no budget.
 
     Attributes
     ----------
@@ -65,6 +70,8 @@ class Climber:
         Every catalog tried, in order.
     first : GrowthStep
         The smallest catalog's step (after :meth:`start`).
+    work : float
+        The work of the catalogs fitted so far (:func:`~.budget.work_cost` summed).
 
     Examples
     --------
@@ -73,13 +80,14 @@ class Climber:
     """
 
     def __init__(self, fits, second_fits, fixed, kinds, *, tolerance, good_enough, physical,
-                 retry_kinetic, criterion, progress=None, noise_floor=True, rates=None):
+                 retry_kinetic, criterion, progress=None, noise_floor=True, rates=None,
+                 budget=None):
         self.fits, self.second_fits, self.fixed = fits, second_fits, fixed
         self.kinds, self.n = list(kinds), len(kinds)
         self.tolerance, self.good_enough, self.physical = tolerance, good_enough, physical
         self.retry_kinetic, self.criterion, self.progress = retry_kinetic, criterion, progress
         self.consensus, self.noise_floor = second_fits is not None, noise_floor
-        self.rates = rates
+        self.rates, self.budget, self.work = rates, budget, 0.0
         self.steps, self.first = [], None
         self._cache = {}  # every catalog is fitted once, whichever path tries it
         self._parameters = {}  # the parameters of each step, by the step's id
@@ -104,6 +112,8 @@ class Climber:
         GrowthStep
         """
         fields = self.fits.get(parameters, ahead)
+        if fields["terms"] > 0 and not fields["note"].startswith(REFUSED):
+            self.work += work_cost(fields["terms"])  # (a failed fit was paid too)
         step = GrowthStep(move=move, chosen=False,
                           **{key: value for key, value in fields.items() if key != "models"})
         self._models[id(step)] = fields.get("models")
@@ -162,10 +172,25 @@ class Climber:
         """
         key = parameters_key(parameters)
         if key not in self._cache:
-            self._cache[key] = self.evaluate(parameters, move, ahead)
+            refused = self._over_budget(parameters, move)
+            self._cache[key] = refused or self.evaluate(parameters, move, ahead)
             self.steps.append(self._cache[key])
             self.report(self._cache[key])
         return self._cache[key]
+
+    def _over_budget(self, parameters, move):
+        """The unfitted step of a candidate whose fit would take :attr:`work` over the budget
+        (None where it is within the budget, or over the ceiling: that refuses it first)."""
+        if self.budget is None:
+            return None
+        size = self.size(parameters)
+        note = budget_note(self.work, size, self.budget)
+        if size <= 0 or size > self.fits.search.max_terms or not note:
+            return None
+        step = GrowthStep(move=move, chosen=False, **unfitted(
+            note, size, AutomaticCatalog(**self.fixed, **parameters).describe()))
+        self._parameters[id(step)] = parameters
+        return step
 
     def second_step(self, step) -> GrowthStep:
         """``step``'s catalog judged by the second fold (fitted once), recorded in the step's
@@ -421,7 +446,7 @@ class Climber:
         pendulum ``cos(a) a_dot x1_dot`` beside the spring ``x1 x2`` that couples two carts."""
         tried.add(parameters_key(parameters))
         step = self.attempt(parameters, move, ahead)
-        if not (step.note.startswith("ceiling") and self.retry_kinetic):
+        if not (step.note.startswith(OVER) and self.retry_kinetic):
             return parameters, step
         original = parameters
         smaller = dict(parameters, kinetic=START["kinetic"])
@@ -429,7 +454,7 @@ class Climber:
         if parameters_key(smaller) not in tried:  # the kinetic coefficients give way
             tried.add(parameters_key(smaller))
             parameters, step = smaller, self.attempt(smaller, f"{move}-kinetic")
-            if not step.note.startswith("ceiling"):
+            if not step.note.startswith(OVER):
                 return parameters, step
         narrower = moved(original, NARROW, self.kinds, self.n)
         if narrower is None or parameters_key(narrower) in tried:
