@@ -113,7 +113,8 @@ class Climber:
         """
         fields = self.fits.get(parameters, ahead)
         if fields["terms"] > 0 and not fields["note"].startswith(REFUSED):
-            self.work += work_cost(fields["terms"])  # (a failed fit was paid too)
+            # (a failed fit was paid too)
+            self.work += work_cost(fields["terms"], not self.fits.search.forced)
         step = GrowthStep(move=move, chosen=False,
                           **{key: value for key, value in fields.items() if key != "models"})
         self._models[id(step)] = fields.get("models")
@@ -184,7 +185,7 @@ class Climber:
         if self.budget is None:
             return None
         size = self.size(parameters)
-        note = budget_note(self.work, size, self.budget)
+        note = budget_note(self.work, size, self.budget, not self.fits.search.forced)
         if size <= 0 or size > self.fits.search.max_terms or not note:
             return None
         step = GrowthStep(move=move, chosen=False, **unfitted(

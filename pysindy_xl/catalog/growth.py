@@ -365,7 +365,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         growth is the same either way. False: the floor is neither computed nor used.
     work_budget : float or None, default WORK_BUDGET
         Bound of the search's work, in fits of a 100-term catalog (:mod:`.budget`: a catalog
-        of ``k`` terms costs ``(k / 100)^3``): a candidate that would take it over is not
+        of ``k`` terms costs ``(k / 100)^3``, four times that unforced): one over it is not
         fitted and the climbs retry it smaller; :attr:`GrowthResult.work` reports the work.
         None: unbounded.
 
