@@ -182,11 +182,12 @@ class Climber:
     def _over_budget(self, parameters, move):
         """The unfitted step of a candidate whose fit would take :attr:`work` over the budget
         (None where it is within the budget, or over the ceiling: that refuses it first)."""
-        if self.budget is None:
-            return None
+        implicit, ceiling = not self.fits.search.forced, self.fits.search.max_terms
+        if self.budget is None or self.work + work_cost(ceiling, implicit) <= self.budget:
+            return None  # (nothing within the ceiling can exceed it: no catalog built)
         size = self.size(parameters)
-        note = budget_note(self.work, size, self.budget, not self.fits.search.forced)
-        if size <= 0 or size > self.fits.search.max_terms or not note:
+        note = budget_note(self.work, size, self.budget, implicit)
+        if size <= 0 or size > ceiling or not note:
             return None
         step = GrowthStep(move=move, chosen=False, **unfitted(
             note, size, AutomaticCatalog(**self.fixed, **parameters).describe()))
