@@ -112,9 +112,9 @@ class Climber:
         GrowthStep
         """
         fields = self.fits.get(parameters, ahead)
-        if fields["terms"] > 0 and not fields["note"].startswith(REFUSED):
-            # (a failed fit was paid too)
-            self.work += work_cost(fields["terms"], not self.fits.search.forced)
+        if fields.get("terms", 0) > 0 and not fields.get("note", "").startswith(REFUSED):
+            # (a failed fit was paid too; unforced data: the implicit fit's cost)
+            self.work += work_cost(fields["terms"], self.criterion != "forces")
         step = GrowthStep(move=move, chosen=False,
                           **{key: value for key, value in fields.items() if key != "models"})
         self._models[id(step)] = fields.get("models")
@@ -182,8 +182,10 @@ class Climber:
     def _over_budget(self, parameters, move):
         """The unfitted step of a candidate whose fit would take :attr:`work` over the budget
         (None where it is within the budget, or over the ceiling: that refuses it first)."""
-        implicit, ceiling = not self.fits.search.forced, self.fits.search.max_terms
-        if self.budget is None or self.work + work_cost(ceiling, implicit) <= self.budget:
+        if self.budget is None:
+            return None
+        implicit, ceiling = self.criterion != "forces", self.fits.search.max_terms
+        if self.work + work_cost(ceiling, implicit) <= self.budget:
             return None  # (nothing within the ceiling can exceed it: no catalog built)
         size = self.size(parameters)
         note = budget_note(self.work, size, self.budget, implicit)
