@@ -263,6 +263,7 @@ def run_case(system, truth, noise, seed, forced, baselines=True, region="block")
             record["terms"] = found.catalog.n_terms
             record["kept"] = int(np.count_nonzero(found.model.coefficients()))
             record["steps"] = len(found.steps)
+            record["work"] = found.work  # (the search's work, grow_catalog's work_budget)
             record["criterion"] = found.held_out_error
             # the near ties judged again on every block (move, terms, criterion, that
             # cross-validation, chosen)

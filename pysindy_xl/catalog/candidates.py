@@ -27,7 +27,7 @@ from .floor import combined_floor, held_out_scores
 
 __all__ = ["SearchSplit", "SearchData", "CandidateFits", "candidate_content", "evaluate_candidate",
            "held_out_error", "inertial_columns", "INERTIA_STATES", "parameters_key",
-           "search_rows", "combine_errors", "COMBINES", "MIN_TRIMMED_BLOCKS"]
+           "search_rows", "combine_errors", "COMBINES", "MIN_TRIMMED_BLOCKS", "unfitted"]
 
 #: How a candidate's held-out block errors make its criterion (:func:`combine_errors`):
 #: ``"rms"`` (all of them) or ``"trimmed"`` (all but the largest).
@@ -250,6 +250,34 @@ def held_out_error(model, held, forced) -> float:
     return held_out_scores(model, held, forced, floor=False)[0]
 
 
+def unfitted(note, size=0, description="") -> dict:
+    """The fields of a candidate that was not fitted (or whose fit failed), and why.
+
+    Parameters
+    ----------
+    note : str
+        Why (``"ceiling: ..."``, ``"budget: ..."``, ``"fit failed: ..."``, ...).
+    size : int, default 0
+        The catalog's terms.
+    description : str, default ""
+        The catalog's description.
+
+    Returns
+    -------
+    dict
+        The fields of :func:`evaluate_candidate`, with an infinite criterion.
+
+    Examples
+    --------
+    >>> unfitted("budget: spent", 12)["criterion"]
+    inf
+    """
+    return {"description": description, "terms": size, "active": 0, "time_error": np.inf,
+            "region_error": np.inf, "criterion": np.inf, "note": note, "seconds": 0.0,
+            "cpu_seconds": 0.0, "definite": 0.0, "block_errors": (), "support": (),
+            "noise_floor": float("nan")}
+
+
 def evaluate_candidate(search: SearchData, parameters) -> dict:
     """Fit one candidate catalog on each split's training pieces and score it on the split's
     held-out blocks.
@@ -282,12 +310,7 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
     catalog = AutomaticCatalog(**search.splits[0].fixed, **parameters)
     started, cpu = time.perf_counter(), time.process_time()
 
-    def failed(note, size=0, description=""):
-        return {"description": description, "terms": size, "active": 0, "time_error": np.inf,
-                "region_error": np.inf, "criterion": np.inf, "note": note, "seconds": 0.0,
-                "cpu_seconds": 0.0, "definite": 0.0, "block_errors": (), "support": (),
-                "noise_floor": float("nan")}
-
+    failed = unfitted
     try:
         size = catalog.n_terms
     except ValueError as error:

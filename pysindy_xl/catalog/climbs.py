@@ -16,7 +16,8 @@ import itertools
 import numpy as np
 
 from .automatic import AutomaticCatalog
-from .candidates import parameters_key
+from .budget import OVER, REFUSED, budget_note, work_cost
+from .candidates import parameters_key, unfitted
 from .floor import EXACT, floor_reached, models_floor, noise_explains
 from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
 from .moves import (
@@ -67,6 +68,10 @@ class Climber:
         ``rates(parameters) -> {name: rate}``: the exponentials' rates fitted for a catalog
         (:class:`~.rates.RateFits`), which the move ``"exponentials"`` adds; None: that move
         does not apply.
+    budget : float or None, default None
+        The search's work budget (:mod:`.budget`): a candidate whose fit would take
+        :attr:`work` over it is not fitted (its step's note says ``"budget"``; the climbs
+        retry it smaller, as over the ceiling). None: no budget.
 
     Attributes
     ----------
@@ -74,6 +79,8 @@ class Climber:
         Every catalog tried, in order.
     first : GrowthStep
         The smallest catalog's step (after :meth:`start`).
+    work : float
+        The work of the catalogs fitted so far (:func:`~.budget.work_cost` summed).
 
     Examples
     --------
@@ -82,13 +89,14 @@ class Climber:
     """
 
     def __init__(self, fits, second_fits, fixed, kinds, *, tolerance, good_enough, physical,
-                 retry_kinetic, criterion, progress=None, noise_floor=True, rates=None):
+                 retry_kinetic, criterion, progress=None, noise_floor=True, rates=None,
+                 budget=None):
         self.fits, self.second_fits, self.fixed = fits, second_fits, fixed
         self.kinds, self.n = list(kinds), len(kinds)
         self.tolerance, self.good_enough, self.physical = tolerance, good_enough, physical
         self.retry_kinetic, self.criterion, self.progress = retry_kinetic, criterion, progress
         self.consensus, self.noise_floor = second_fits is not None, noise_floor
-        self.rates = rates
+        self.rates, self.budget, self.work = rates, budget, 0.0
         self.steps, self.first = [], None
         self._cache = {}  # every catalog is fitted once, whichever path tries it
         self._parameters = {}  # the parameters of each step, by the step's id
@@ -113,6 +121,9 @@ class Climber:
         GrowthStep
         """
         fields = self.fits.get(parameters, ahead)
+        if fields.get("terms", 0) > 0 and not fields.get("note", "").startswith(REFUSED):
+            # (a failed fit was paid too; unforced data: the implicit fit's cost)
+            self.work += work_cost(fields["terms"], self.criterion != "forces")
         step = GrowthStep(move=move, chosen=False,
                           **{key: value for key, value in fields.items() if key != "models"})
         self._models[id(step)] = fields.get("models")
@@ -171,10 +182,28 @@ class Climber:
         """
         key = parameters_key(parameters)
         if key not in self._cache:
-            self._cache[key] = self.evaluate(parameters, move, ahead)
+            refused = self._over_budget(parameters, move)
+            self._cache[key] = refused or self.evaluate(parameters, move, ahead)
             self.steps.append(self._cache[key])
             self.report(self._cache[key])
         return self._cache[key]
+
+    def _over_budget(self, parameters, move):
+        """The unfitted step of a candidate whose fit would take :attr:`work` over the budget
+        (None where it is within the budget, or over the ceiling: that refuses it first)."""
+        if self.budget is None:
+            return None
+        implicit, ceiling = self.criterion != "forces", self.fits.search.max_terms
+        if self.work + work_cost(ceiling, implicit) <= self.budget:
+            return None  # (nothing within the ceiling can exceed it: no catalog built)
+        size = self.size(parameters)
+        note = budget_note(self.work, size, self.budget, implicit)
+        if size <= 0 or size > ceiling or not note:
+            return None
+        step = GrowthStep(move=move, chosen=False, **unfitted(
+            note, size, AutomaticCatalog(**self.fixed, **parameters).describe()))
+        self._parameters[id(step)] = parameters
+        return step
 
     def second_step(self, step) -> GrowthStep:
         """``step``'s catalog judged by the second fold (fitted once), recorded in the step's
@@ -440,7 +469,7 @@ class Climber:
         A retry whose catalog is in ``tried`` is not made; the last step made is returned."""
         tried.add(parameters_key(parameters))
         step = self.attempt(parameters, move, ahead)
-        if not (step.note.startswith("ceiling") and self.retry_kinetic):
+        if not (step.note.startswith(OVER) and self.retry_kinetic):
             return parameters, step
         original = parameters
         configuration = original["kinetic"] == "configuration"
@@ -458,7 +487,7 @@ class Climber:
         if parameters_key(smaller) not in tried and (state is None or not holds(state, smaller)):
             tried.add(parameters_key(smaller))  # the kinetic coefficients give way
             parameters, step = smaller, self.attempt(smaller, f"{move}-kinetic")
-            if not step.note.startswith("ceiling"):
+            if not step.note.startswith(OVER):
                 return parameters, step
         for order in range(kinetic_order(original) - 1, 0, -1) if configuration else ():
             narrower = moved(original, narrow("", order), self.kinds, self.n)

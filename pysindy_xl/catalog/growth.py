@@ -169,7 +169,7 @@ error, not the data's precision: on a cart with a torsion-sprung pendulum, ``cos
 ``theta^2`` at 0.1 %); the climb goes on. A right law sits at 0.87 to 1.13 times its floor on
 the generic systems with two or more coordinates (where the stop applies), 1.2 to 1.7 times with
 one (where the climb goes on as without it). The chosen catalog is then fitted on all the data
-(:mod:`.final_fit`). """
+(:mod:`.final_fit`); the search's work is bounded (``work_budget``, :mod:`.budget`). """
 
 from __future__ import annotations
 
@@ -179,6 +179,7 @@ from .._inputs import aligned, as_list
 from .._validation import check_option
 from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import backward_phase
+from .budget import WORK_BUDGET
 from .candidates import (
     COMBINES,
     MIN_TRIMMED_BLOCKS,
@@ -224,7 +225,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                  cross_validate: bool = False, region: str = "block",
                  physical: bool = False, steepest: bool = False, progress=None,
                  n_jobs=None, combine: str = "rms", tie_break: bool = True,
-                 noise_floor: bool = True):
+                 noise_floor: bool = True, work_budget: float | None = WORK_BUDGET):
     """Grow an :class:`AutomaticCatalog` on data (see the module docstring).
 
     Parameters
@@ -368,6 +369,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         the second climb is not made; the backward phase (its exchanges too) and the near
         ties run as below ``good_enough``. Free of noise the floor is round-off, and the
         growth is the same either way. False: the floor is neither computed nor used.
+    work_budget : float or None, default WORK_BUDGET
+        Bound of the search's work, in fits of a 100-term catalog (:mod:`.budget`: a catalog
+        of ``k`` terms costs ``(k / 100)^3``, four times that unforced): one over it is not
+        fitted and the climbs retry it smaller; :attr:`GrowthResult.work` reports the work.
+        None: unbounded.
 
     Returns
     -------
@@ -416,6 +422,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     check_option("steepest", steepest, "bool")
     check_option("tie_break", tie_break, "bool")
     check_option("noise_floor", noise_floor, "bool")
+    check_option("work_budget", work_budget, "real", low=0, allow_none=True, allow_inf=True)
     if combine not in COMBINES:
         raise ValueError(f"combine: expected one of {COMBINES}, got {combine!r}")
     if combine == "trimmed" and not (cross_validate and n_blocks >= MIN_TRIMMED_BLOCKS):
@@ -497,7 +504,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                                      template.test_functions,
                                      template.smoother,
                                      lambda parameters: fits.get(parameters)["criterion"])
-                      if "exponentials" in moves else None)
+                      if "exponentials" in moves else None, budget=work_budget)
 
     # pairs of moves whose joint catalog holds terms that neither adds alone (kinetic
     # coefficients over products of two coordinates' functions): tried as one move too
@@ -589,7 +596,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     model = fit_chosen(template, best_catalog, optimizer, full, best.support, active,
                        final_weak)
     return GrowthResult(model, best_catalog, climber.steps, criterion, best.criterion,
-                        search.max_terms)
+                        search.max_terms, climber.work)
 
 
 def _thinned(arrays, stride) -> dict:

@@ -112,6 +112,10 @@ class GrowthResult:
         The chosen catalog's criterion.
     max_terms : int or None, default None
         The ceiling of the growth: catalogs over it were not tried.
+    work : float, default nan
+        The work of the search's fits (the climbs and the backward phase): the sum of
+        :func:`~.budget.work_cost` over the catalogs fitted (``work_budget`` of
+        :func:`~.growth.grow_catalog` bounds it).
 
     Examples
     --------
@@ -130,6 +134,7 @@ class GrowthResult:
     criterion: str
     held_out_error: float
     max_terms: int | None = None
+    work: float = float("nan")
 
     def table(self) -> str:
         """The growth path as a plain-text table (one row per tried catalog).

@@ -82,7 +82,7 @@ def near_ties(steps, best, physical: bool = False) -> list:
     for step in sorted(steps, key=lambda s: (s.criterion, s.terms)):
         if len(ties) >= TIE_CANDIDATES or not step.criterion <= reach:
             break
-        if (step is best or step.note.startswith(("fit failed", "ceiling"))
+        if (step is best or step.note.startswith(("fit failed", "ceiling", "budget"))
                 or (physical and step.definite < best.definite)):
             continue
         if not any(abs(step.criterion - other.criterion) <= SAME_LAW * other.criterion
