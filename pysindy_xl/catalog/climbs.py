@@ -426,6 +426,7 @@ class Climber:
         original = parameters
         smaller = dict(parameters, kinetic=START["kinetic"])
         smaller.pop("kinetic_interaction", None)
+        smaller.pop("kinetic_trig_degree", None)
         if parameters_key(smaller) not in tried:  # the kinetic coefficients give way
             tried.add(parameters_key(smaller))
             parameters, step = smaller, self.attempt(smaller, f"{move}-kinetic")

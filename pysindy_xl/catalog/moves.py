@@ -19,11 +19,16 @@ import itertools
 
 __all__ = ["exponential_base", "MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS",
            "SPLINE_MOVES", "RATE_MOVES", "LATE_MOVES", "REPEATED", "moved", "joint_moves", "holds",
-           "kinetic_order", "NARROW", "narrowed", "is_repeated"]
+           "kinetic_order", "NARROW", "narrowed", "is_repeated", "kinetic_trig_degree",
+           "KINETIC_TRIG_DEGREE"]
 
-#: The moves of the growth, in the order they are tried.
+#: The moves of the growth, in the order they are tried. ``"kinetic_trig_degree"`` gives the
+#: configuration-dependent kinetic coefficients an angle's trigonometric monomials of degree
+#: 2 (``sin(b)^2 a_dot^2``: a spherical pendulum, a Furuta pendulum's arm, a gimbal), and
+#: makes them configuration-dependent where they are constant (a move of its own from
+#: :data:`START`, not only after ``"kinetic"``).
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
-         "coulomb", "exponentials", "splines", "quadratic_ends")
+         "coulomb", "kinetic_trig_degree", "exponentials", "splines", "quadratic_ends")
 #: The moves of the flexible basis, tried after the families: ``"splines"`` adds a
 #: coordinate's splines (natural: a constant force beyond the data) or refines them;
 #: ``"quadratic_ends"`` gives them quadratic ends (a constant stiffness beyond the data), adding
@@ -65,6 +70,9 @@ SPLINE_COUNTS = (8, 12, 16)
 NARROW = "@k1"
 #: The moves that go on while they improve (one step of a degree or of the splines each).
 REPEATED = ("degree", "trig_degree", "angle_degree", "splines")
+#: The degree of the angles' trigonometric monomials in the kinetic coefficients that the
+#: move ``"kinetic_trig_degree"`` sets (one step above the default 1).
+KINETIC_TRIG_DEGREE = 2
 
 
 def moved(state, move, kinds, n, skip=0, rates=None):
@@ -105,6 +113,8 @@ def moved(state, move, kinds, n, skip=0, rates=None):
     True
     >>> moved(START, "kinetic+interaction@k1", ["linear", "angle"], 2)["kinetic_interaction"]
     1
+    >>> moved(START, "kinetic_trig_degree", ["angle"], 1)["kinetic_trig_degree"]
+    2
     >>> moved(START, "exponentials", ["linear"], 1, rates=lambda state: {"x": -1.5})[
     ...     "exponentials"]
     {'x': -1.5}
@@ -124,6 +134,11 @@ def moved(state, move, kinds, n, skip=0, rates=None):
         if state["kinetic"] == "configuration":
             return None
         new["kinetic"] = "configuration"
+    elif move == "kinetic_trig_degree":
+        if not angles or kinetic_trig_degree(state) >= KINETIC_TRIG_DEGREE:
+            return None
+        new["kinetic"] = "configuration"
+        new["kinetic_trig_degree"] = KINETIC_TRIG_DEGREE
     elif move == "interaction":
         if state["interaction"] >= n:
             return None
@@ -312,7 +327,8 @@ def narrowed(names, kinds, n, size, ceiling) -> list:
 def holds(state, other) -> bool:
     """Whether the catalog ``state`` holds every family of ``other``, each at least as far
     grown (degrees, interaction order, spline count with the same ends and writing;
-    configuration-dependent kinetic coefficients over as many coordinates, gyroscopic terms,
+    configuration-dependent kinetic coefficients over as many coordinates and of as high a
+    trigonometric degree, gyroscopic terms,
     each dissipation model, exponentials, whatever their rates).
 
     Parameters
@@ -334,7 +350,9 @@ def holds(state, other) -> bool:
     return (all(state[key] >= other[key] for key in (*LIMITS, "interaction"))
             and (other["kinetic"] == "constant" or (state["kinetic"] == "configuration"
                                                     and kinetic_order(state)
-                                                    >= kinetic_order(other)))
+                                                    >= kinetic_order(other)
+                                                    and kinetic_trig_degree(state)
+                                                    >= kinetic_trig_degree(other)))
             and (state["gyroscopic"] or not other["gyroscopic"])
             and set(other["dissipation"]) <= set(state["dissipation"])
             and (state["splines"] or 0) >= (other["splines"] or 0)
@@ -368,3 +386,26 @@ def kinetic_order(state) -> int:
     """
     order = state.get("kinetic_interaction")
     return state["interaction"] if order is None else order
+
+
+def kinetic_trig_degree(state) -> int:
+    """The degree of the angles' trigonometric monomials in the configuration-dependent
+    kinetic coefficients of the catalog ``state``: its ``kinetic_trig_degree`` where given,
+    else ``min(trig_degree, 1)`` (:class:`~.automatic.AutomaticCatalog`'s default).
+
+    Parameters
+    ----------
+    state : dict
+        Catalog parameters (the keys of :data:`START`, optionally ``kinetic_trig_degree``).
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> kinetic_trig_degree(START), kinetic_trig_degree(dict(START, kinetic_trig_degree=2))
+    (1, 2)
+    """
+    degree = state.get("kinetic_trig_degree")
+    return min(state["trig_degree"], 1) if degree is None else degree
