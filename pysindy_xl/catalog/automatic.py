@@ -14,7 +14,8 @@ with ``phi`` the products of single-coordinate functions (:mod:`.bases`) over at
 ``interaction`` coordinates, ``kappa`` a constant or (``kinetic="configuration"``) such a
 product of low degree over at most ``kinetic_interaction`` coordinates (by default
 ``interaction``; an angle's sines and cosines in it of degree ``kinetic_trig_degree``, by
-default 1: with 2, ``sin(b)^2`` as in a spherical pendulum's ``sin(theta)^2 phi_dot^2``), and ``gamma`` the first-degree functions of another coordinate. The
+default 1: with 2, ``sin(b)^2`` as in a spherical pendulum's ``sin(theta)^2 phi_dot^2``), and
+``gamma`` the first-degree functions of another coordinate. The
 potential may hold, per linear coordinate, the exponentials ``exp(a x)`` and ``exp(2 a x)``
 of one given rate (``exponentials``; :func:`~.bases.exponential_pair`), beside its powers. Per
 coordinate it adds dissipation (viscous ``qd_i``, smooth Coulomb ``tanh(qd_i / eps_i)``; with

@@ -100,7 +100,8 @@ stand-ins only while it holds no physical catalog). The degree moves repeat whil
 look one degree further before they stop), and the growth stops when a whole pass keeps nothing
 or the criterion is settled: below ``good_enough`` (unforced data: :data:`EXACT`), or at its
 noise floor (``noise_floor``, below). Before it stops, pairs of the moves that are not repeated
-(kinetic, interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither
+(kinetic, interaction, gyroscopic, Coulomb, the kinetic coefficients' second trigonometric
+degree) are tried together: a law may gain from neither
 alone (a coupling ``cos(a - b) a_dot b_dot`` needs both the products of two angles' functions
 and configuration-dependent kinetic coefficients). With ``steepest``, each step of a climb tries
 every move from the kept catalog and keeps the best instead of the first that improves (the

@@ -126,7 +126,7 @@ def test_catalog_holds_sin_squared_kinetic_terms_when_asked():
 @pytest.mark.parametrize("value", [-1, 1.5, "2"])
 def test_bad_kinetic_trig_degree_is_named(value):
     with pytest.raises((ValueError, TypeError), match="kinetic_trig_degree"):
-        px.AutomaticCatalog(["a"], kinds="angle", kinetic_trig_degree=value).n_terms
+        _ = px.AutomaticCatalog(["a"], kinds="angle", kinetic_trig_degree=value).n_terms
 
 
 def test_the_move_sets_the_degree_and_the_backward_phase_undoes_it():
