@@ -26,7 +26,9 @@ __all__ = ["exponential_base", "MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE
 #: configuration-dependent kinetic coefficients an angle's trigonometric monomials of degree
 #: 2 (``sin(b)^2 a_dot^2``: a spherical pendulum, a Furuta pendulum's arm, a gimbal), and
 #: makes them configuration-dependent where they are constant (a move of its own from
-#: :data:`START`, not only after ``"kinetic"``).
+#: :data:`START`, not only after ``"kinetic"``); with two coordinates or more, as
+#: ``"gyroscopic"`` (a link pitched to another coordinate's axis: with one angle alone,
+#: ``sin(phi)^2 phi_dot^2`` beside ``cos(phi) phi_dot^2`` stands in for a quartic spring).
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
          "coulomb", "kinetic_trig_degree", "exponentials", "splines", "quadratic_ends")
 #: The moves of the flexible basis, tried after the families: ``"splines"`` adds a
@@ -113,7 +115,7 @@ def moved(state, move, kinds, n, skip=0, rates=None):
     True
     >>> moved(START, "kinetic+interaction@k1", ["linear", "angle"], 2)["kinetic_interaction"]
     1
-    >>> moved(START, "kinetic_trig_degree", ["angle"], 1)["kinetic_trig_degree"]
+    >>> moved(START, "kinetic_trig_degree", ["angle", "angle"], 2)["kinetic_trig_degree"]
     2
     >>> moved(START, "exponentials", ["linear"], 1, rates=lambda state: {"x": -1.5})[
     ...     "exponentials"]
@@ -135,7 +137,7 @@ def moved(state, move, kinds, n, skip=0, rates=None):
             return None
         new["kinetic"] = "configuration"
     elif move == "kinetic_trig_degree":
-        if not angles or kinetic_trig_degree(state) >= KINETIC_TRIG_DEGREE:
+        if not angles or n < 2 or kinetic_trig_degree(state) >= KINETIC_TRIG_DEGREE:
             return None
         new["kinetic"] = "configuration"
         new["kinetic_trig_degree"] = KINETIC_TRIG_DEGREE

@@ -135,6 +135,7 @@ def test_the_move_sets_the_degree_and_the_backward_phase_undoes_it():
     assert state["kinetic"] == "configuration" and kinetic_trig_degree(state) == 2
     assert moved(state, "kinetic_trig_degree", kinds, 2) is None
     assert moved(dict(START), "kinetic_trig_degree", ["linear"], 1) is None  # no angle
+    assert moved(dict(START), "kinetic_trig_degree", ["angle"], 1) is None  # one coordinate
     kinetic = moved(dict(START), "kinetic", kinds, 2)
     assert holds(state, kinetic) and not holds(kinetic, state)
     assert removed(state, "kinetic_trig_degree", kinds, START) == kinetic
