@@ -13,7 +13,9 @@ shape,
 with ``phi`` the products of single-coordinate functions (:mod:`.bases`) over at most
 ``interaction`` coordinates, ``kappa`` a constant or (``kinetic="configuration"``) such a
 product of low degree over at most ``kinetic_interaction`` coordinates (by default
-``interaction``), and ``gamma`` the first-degree functions of another coordinate. The
+``interaction``; an angle's sines and cosines in it of degree ``kinetic_trig_degree``, by
+default 1: with 2, ``sin(b)^2`` as in a spherical pendulum's ``sin(theta)^2 phi_dot^2``), and
+``gamma`` the first-degree functions of another coordinate. The
 potential may hold, per linear coordinate, the exponentials ``exp(a x)`` and ``exp(2 a x)``
 of one given rate (``exponentials``; :func:`~.bases.exponential_pair`), beside its powers. Per
 coordinate it adds dissipation (viscous ``qd_i``, smooth Coulomb ``tanh(qd_i / eps_i)``; with
@@ -156,8 +158,18 @@ class AutomaticCatalog(CatalogRepartition):
         Most coordinates in one product of functions.
     kinetic : {"constant", "configuration"}, default "configuration"
         Coefficients of the velocity products ``qd_i qd_j``: constants, or also products (over
-        ``kinetic_interaction`` coordinates) of linear coordinates up to degree 2 and of sines
-        and cosines of degree 1.
+        ``kinetic_interaction`` coordinates) of linear coordinates up to degree 2 and of the
+        angles' trigonometric monomials up to degree ``kinetic_trig_degree`` (by default 1:
+        sines and cosines).
+    kinetic_trig_degree : int or None, default None
+        Degree of the trigonometric monomials of the angles in the configuration-dependent
+        kinetic coefficients (None: ``min(trig_degree, 1)``). With 2 they hold ``sin(b)^2``
+        and ``sin(b) cos(b)`` (``cos(b)^2 = 1 - sin(b)^2`` is in their span with the
+        constant): the inertia of a link about an axis it is pitched to, as the spherical
+        pendulum's ``sin(theta)^2 phi_dot^2`` or a Furuta pendulum's arm inertia
+        ``(J + m l^2 sin(b)^2) a_dot^2``. Independent of ``trig_degree`` (the potential's);
+        ignored with ``kinetic="constant"``. Each step multiplies the kinetic terms: per angle
+        ``2 k`` functions at degree ``k`` (4 at 2, against 2).
     kinetic_interaction : int or None, default None
         Most coordinates in one configuration-dependent kinetic coefficient ``kappa(q)``
         (None: ``interaction``). The potential's products keep ``interaction``: with
@@ -241,6 +253,7 @@ class AutomaticCatalog(CatalogRepartition):
         "interaction": [Interval("int", 1)],
         "kinetic_interaction": [None, Interval("int", 1)],
         "kinetic": [Options(("constant", "configuration"))],
+        "kinetic_trig_degree": [None, Interval("int", 0)],
         "gyroscopic": [Boolean()],
         "dissipation": [None, Options(DISSIPATION), Collection("a sequence of dissipation models")],
         "coulomb_scale": [Interval("real", 0, low_open=True),
@@ -257,7 +270,7 @@ class AutomaticCatalog(CatalogRepartition):
                  angle_degree=0, interaction=1, kinetic="configuration", gyroscopic=False,
                  dissipation=("viscous",), coulomb_scale=0.01, splines=None, interlink=None,
                  max_terms=2000, kinetic_interaction=None, spline_ends="linear",
-                 spline_basis="bspline", exponentials=None):
+                 spline_basis="bspline", exponentials=None, kinetic_trig_degree=None):
         self.coordinates = coordinates
         self.kinds = kinds
         self.bounds = bounds
@@ -276,6 +289,7 @@ class AutomaticCatalog(CatalogRepartition):
         self.spline_ends = spline_ends
         self.spline_basis = spline_basis
         self.exponentials = exponentials
+        self.kinetic_trig_degree = kinetic_trig_degree
 
     # -- the parameters, checked ---------------------------------------------------------------
     def _coordinates(self) -> Coordinates:
@@ -300,6 +314,9 @@ class AutomaticCatalog(CatalogRepartition):
         options["kinetic_interaction"] = (
             options["interaction"] if self.kinetic_interaction is None else
             check_option("kinetic_interaction", self.kinetic_interaction, "int", low=1))
+        options["kinetic_trig_degree"] = (
+            min(options["trig_degree"], 1) if self.kinetic_trig_degree is None else
+            check_option("kinetic_trig_degree", self.kinetic_trig_degree, "int", low=0))
         options["kinetic"] = check_option("kinetic", self.kinetic, "choice",
                                           choices=("constant", "configuration"))
         options["gyroscopic"] = check_option("gyroscopic", self.gyroscopic, "bool")
@@ -467,7 +484,8 @@ class AutomaticCatalog(CatalogRepartition):
         if total > options["max_terms"]:
             raise ValueError(f"max_terms: the catalog would have {total} terms, more than "
                              f"max_terms={options['max_terms']}; lower degree, trig_degree, "
-                             "angle_degree, interaction, kinetic_interaction or splines, or "
+                             "angle_degree, interaction, kinetic_interaction, "
+                             "kinetic_trig_degree or splines, or "
                              "raise max_terms")
         libraries = [ExternalForces(coords, interlink=self.interlink)]
         polynomial = [t for t, f in zip(terms, fast, strict=True) if f]
@@ -522,9 +540,15 @@ class AutomaticCatalog(CatalogRepartition):
                     else f"{splines[1]} cubic splines, quadratic ends")
             parts.append(text)
         extras = [f"interaction {options['interaction']}", f"kinetic {options['kinetic']}"]
+        notes = []
         if options["kinetic"] == "configuration" and self.kinetic_interaction is not None \
                 and options["kinetic_interaction"] != options["interaction"]:
-            extras[-1] += f" (interaction {options['kinetic_interaction']})"
+            notes.append(f"interaction {options['kinetic_interaction']}")
+        if options["kinetic"] == "configuration" and self.kinetic_trig_degree is not None \
+                and "angle" in options["kinds"]:
+            notes.append(f"sin/cos degree {options['kinetic_trig_degree']}")
+        if notes:
+            extras[-1] += f" ({', '.join(notes)})"
         if options["gyroscopic"]:
             extras.append("gyroscopic")
         extras.append("dissipation " + ("+".join(options["dissipation"]) or "none"))
@@ -551,4 +575,5 @@ _DEFAULTS = {"kinds": None, "bounds": None, "degree": 2, "trig_degree": 1, "angl
              "interaction": 1, "kinetic": "configuration", "gyroscopic": False,
              "dissipation": ("viscous",), "coulomb_scale": 0.01, "splines": None,
              "interlink": None, "max_terms": 2000, "kinetic_interaction": None,
-             "spline_ends": "linear", "spline_basis": "bspline", "exponentials": None}
+             "spline_ends": "linear", "spline_basis": "bspline", "exponentials": None,
+             "kinetic_trig_degree": None}

@@ -19,7 +19,7 @@ __all__ = ["REMOVALS", "EXCHANGES", "removed", "backward_phase"]
 #: family, or its last degree step), or ``"trig"`` (an angle's sines and cosines, beside its
 #: powers).
 REMOVALS = ("splines", "exponentials", "trig", "trig_degree", "angle_degree", "degree",
-            "interaction", "kinetic", "gyroscopic", "coulomb")
+            "interaction", "kinetic", "gyroscopic", "coulomb", "kinetic_trig_degree")
 
 #: The moves a removal is exchanged for when it is not kept alone: the potential's families
 #: that stand in for each other (sines and cosines, or a degree of them, for powers of the
@@ -104,8 +104,13 @@ def removed(state: dict, move: str, kinds, start: dict) -> dict | None:
         if state[move] == start[move]:
             return None
         new[move] = start[move]
-        if move == "kinetic":  # (the order of the kinetic coefficients goes with them)
+        if move == "kinetic":  # (the order and degree of the kinetic coefficients go too)
             new.pop("kinetic_interaction", None)
+            new.pop("kinetic_trig_degree", None)
+    elif move == "kinetic_trig_degree":  # (back to the default degree)
+        if state.get("kinetic_trig_degree") is None:
+            return None
+        new.pop("kinetic_trig_degree")
     else:  # coulomb
         if "coulomb" not in state["dissipation"]:
             return None

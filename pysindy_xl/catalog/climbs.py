@@ -480,10 +480,11 @@ class Climber:
                 tried.add(parameters_key(kept))
                 parameters, step = kept, self.attempt(
                     kept, narrow(move, kinetic_order(state)))
-                if not step.note.startswith("ceiling"):
+                if not step.note.startswith(OVER):
                     return parameters, step
         smaller = dict(original, kinetic=START["kinetic"])
         smaller.pop("kinetic_interaction", None)
+        smaller.pop("kinetic_trig_degree", None)
         if parameters_key(smaller) not in tried and (state is None or not holds(state, smaller)):
             tried.add(parameters_key(smaller))  # the kinetic coefficients give way
             parameters, step = smaller, self.attempt(smaller, f"{move}-kinetic")
@@ -495,7 +496,7 @@ class Climber:
                 return parameters, step
             tried.add(parameters_key(narrower))
             parameters, step = narrower, self.attempt(narrower, narrow(move, order))
-            if not step.note.startswith("ceiling"):
+            if not step.note.startswith(OVER):
                 break
         return parameters, step
 

@@ -74,7 +74,9 @@ gain nothing, where quadratic ends written by knots extrapolate a stiffening spr
 final fit keeps each coordinate's splines whole either way.
 From the smallest catalog (constant kinetic coefficients, quadratic potentials of the linear
 coordinates, sines and cosines of the angles, viscous friction), each move of :data:`MOVES` but
-the splines' (:data:`~.moves.SPLINE_MOVES`) is first tried alone, and so is each pair of moves
+the splines' (:data:`~.moves.SPLINE_MOVES`) is first tried alone (``"kinetic_trig_degree"``:
+configuration-dependent kinetic coefficients with an angle's ``sin^2`` and ``sin cos``, the
+inertia ``sin(theta)^2 phi_dot^2`` of a link pitched to an axis), and so is each pair of moves
 whose joint catalog holds terms that neither adds alone (``"kinetic+interaction"``:
 configuration-dependent kinetic coefficients over products of two coordinates' functions, the
 ``cos(a - b)`` of a coupling ``cos(a - b) a_dot b_dot``; a climb through single moves reaches it
@@ -100,7 +102,8 @@ stand-ins only while it holds no physical catalog). The degree moves repeat whil
 look one degree further before they stop), and the growth stops when a whole pass keeps nothing
 or the criterion is settled: below ``good_enough`` (unforced data: :data:`EXACT`), or at its
 noise floor (``noise_floor``, below). Before it stops, pairs of the moves that are not repeated
-(kinetic, interaction, gyroscopic, Coulomb) are tried together: a law may gain from neither
+(kinetic, interaction, gyroscopic, Coulomb, the kinetic coefficients' second trigonometric
+degree) are tried together: a law may gain from neither
 alone (a coupling ``cos(a - b) a_dot b_dot`` needs both the products of two angles' functions
 and configuration-dependent kinetic coefficients). With ``steepest``, each step of a climb tries
 every move from the kept catalog and keeps the best instead of the first that improves (the
@@ -132,7 +135,8 @@ family beside it cannot displace. So a backward phase follows (a stepwise forwar
 search over the families): each family the start or the climb put in is dropped in turn (the
 moves ``"-splines"``, ``"-trig"``: an angle's sines and cosines beside its powers,
 ``"-trig_degree"``, ``"-angle_degree"``: its powers beside sines and cosines, ``"-degree"``,
-``"-interaction"``, ``"-kinetic"``, ``"-gyroscopic"``, ``"-coulomb"``; one degree step at a
+``"-interaction"``, ``"-kinetic"``, ``"-gyroscopic"``, ``"-coulomb"``,
+``"-kinetic_trig_degree"``; one degree step at a
 time), and the best drop that the keep rule accepts is kept; at an equal number of fitted
 terms the smaller catalog is kept within the tolerance too (the stand-in family goes). A
 family whose drop is not kept alone is exchanged for the one it stands in for (sines and

@@ -23,11 +23,18 @@ import re
 
 __all__ = ["exponential_base", "MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS",
            "SPLINE_MOVES", "RATE_MOVES", "LATE_MOVES", "REPEATED", "moved", "joint_moves", "holds",
-           "kinetic_order", "NARROW", "narrow", "narrow_order", "narrowed", "is_repeated"]
+           "kinetic_order", "NARROW", "narrow", "narrow_order", "narrowed", "is_repeated",
+           "kinetic_trig_degree", "KINETIC_TRIG_DEGREE"]
 
-#: The moves of the growth, in the order they are tried.
+#: The moves of the growth, in the order they are tried. ``"kinetic_trig_degree"`` gives the
+#: configuration-dependent kinetic coefficients an angle's trigonometric monomials of degree
+#: 2 (``sin(b)^2 a_dot^2``: a spherical pendulum, a Furuta pendulum's arm, a gimbal), and
+#: makes them configuration-dependent where they are constant (a move of its own from
+#: :data:`START`, not only after ``"kinetic"``); with two coordinates or more, as
+#: ``"gyroscopic"`` (a link pitched to another coordinate's axis: with one angle alone,
+#: ``sin(phi)^2 phi_dot^2`` beside ``cos(phi) phi_dot^2`` stands in for a quartic spring).
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
-         "coulomb", "exponentials", "splines", "quadratic_ends")
+         "coulomb", "kinetic_trig_degree", "exponentials", "splines", "quadratic_ends")
 #: The moves of the flexible basis, tried after the families: ``"splines"`` adds a
 #: coordinate's splines (natural: a constant force beyond the data) or refines them;
 #: ``"quadratic_ends"`` gives them quadratic ends (a constant stiffness beyond the data), adding
@@ -71,6 +78,9 @@ NARROW = "@k1"
 _NARROW_SUFFIX = re.compile(r"@k([1-9][0-9]*)$")
 #: The moves that go on while they improve (one step of a degree or of the splines each).
 REPEATED = ("degree", "trig_degree", "angle_degree", "splines")
+#: The degree of the angles' trigonometric monomials in the kinetic coefficients that the
+#: move ``"kinetic_trig_degree"`` sets (one step above the default 1).
+KINETIC_TRIG_DEGREE = 2
 
 
 def moved(state, move, kinds, n, skip=0, rates=None):
@@ -120,6 +130,8 @@ def moved(state, move, kinds, n, skip=0, rates=None):
     (3, 2)
     >>> kinetic_order(moved(dict(arm, kinetic_interaction=1), "kinetic", ["angle"] * 3, 3))
     2
+    >>> moved(START, "kinetic_trig_degree", ["angle", "angle"], 2)["kinetic_trig_degree"]
+    2
     >>> moved(START, "exponentials", ["linear"], 1, rates=lambda state: {"x": -1.5})[
     ...     "exponentials"]
     {'x': -1.5}
@@ -147,6 +159,11 @@ def moved(state, move, kinds, n, skip=0, rates=None):
                 new.pop("kinetic_interaction")
             return new
         new["kinetic"] = "configuration"
+    elif move == "kinetic_trig_degree":
+        if not angles or n < 2 or kinetic_trig_degree(state) >= KINETIC_TRIG_DEGREE:
+            return None
+        new["kinetic"] = "configuration"
+        new["kinetic_trig_degree"] = KINETIC_TRIG_DEGREE
     elif move == "interaction":
         if state["interaction"] >= n:
             return None
@@ -389,7 +406,8 @@ def narrowed(names, kinds, n, size, ceiling) -> list:
 def holds(state, other) -> bool:
     """Whether the catalog ``state`` holds every family of ``other``, each at least as far
     grown (degrees, interaction order, spline count with the same ends and writing;
-    configuration-dependent kinetic coefficients over as many coordinates, gyroscopic terms,
+    configuration-dependent kinetic coefficients over as many coordinates and of as high a
+    trigonometric degree, gyroscopic terms,
     each dissipation model, exponentials, whatever their rates).
 
     Parameters
@@ -411,7 +429,9 @@ def holds(state, other) -> bool:
     return (all(state[key] >= other[key] for key in (*LIMITS, "interaction"))
             and (other["kinetic"] == "constant" or (state["kinetic"] == "configuration"
                                                     and kinetic_order(state)
-                                                    >= kinetic_order(other)))
+                                                    >= kinetic_order(other)
+                                                    and kinetic_trig_degree(state)
+                                                    >= kinetic_trig_degree(other)))
             and (state["gyroscopic"] or not other["gyroscopic"])
             and set(other["dissipation"]) <= set(state["dissipation"])
             and (state["splines"] or 0) >= (other["splines"] or 0)
@@ -445,3 +465,26 @@ def kinetic_order(state) -> int:
     """
     order = state.get("kinetic_interaction")
     return state["interaction"] if order is None else order
+
+
+def kinetic_trig_degree(state) -> int:
+    """The degree of the angles' trigonometric monomials in the configuration-dependent
+    kinetic coefficients of the catalog ``state``: its ``kinetic_trig_degree`` where given,
+    else ``min(trig_degree, 1)`` (:class:`~.automatic.AutomaticCatalog`'s default).
+
+    Parameters
+    ----------
+    state : dict
+        Catalog parameters (the keys of :data:`START`, optionally ``kinetic_trig_degree``).
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> kinetic_trig_degree(START), kinetic_trig_degree(dict(START, kinetic_trig_degree=2))
+    (1, 2)
+    """
+    degree = state.get("kinetic_trig_degree")
+    return min(state["trig_degree"], 1) if degree is None else degree

@@ -1,7 +1,8 @@
 """The candidate terms of an automatic catalog, from its checked options.
 
 Pure functions of the options dictionary that :class:`~.automatic.AutomaticCatalog` checks
-(``coords``, ``kinds``, the degrees, the interaction orders, ``kinetic``, ``gyroscopic``,
+(``coords``, ``kinds``, the degrees, the interaction orders, ``kinetic``,
+``kinetic_trig_degree``, ``gyroscopic``,
 ``splines``, ``spline_ends``, ``spline_basis``, ``exponentials``, ``dissipation`` and
 ``coulomb_scale``): the single-coordinate factors (:mod:`.bases`), their products over a few
 coordinates, the kinetic, gyroscopic and potential candidates of the Lagrangian, and the
@@ -78,7 +79,7 @@ def lagrangian_candidates(options) -> tuple[list[sp.Expr], list[bool]]:
     kappas = [(sp.Integer(1), 0, True)]
     if options["kinetic"] == "configuration":
         factors = factors_of(options, min(options["degree"], 2),
-                           min(options["trig_degree"], 1), 0)
+                             options["kinetic_trig_degree"], 0)
         kappas += products(options, factors, "kinetic_interaction")
     for kappa, _, trig in kappas:
         for i, j in itertools.combinations_with_replacement(range(n), 2):
