@@ -16,7 +16,7 @@ import itertools
 import numpy as np
 
 from .automatic import AutomaticCatalog
-from .budget import OVER, REFUSED, budget_note, work_cost
+from .budget import REFUSED, budget_note, work_cost
 from .candidates import parameters_key, unfitted
 from .floor import EXACT, floor_reached, models_floor, noise_explains
 from .keep_rules import CONSENSUS_REACH, consensus_criteria, consensus_keeps, single_keeps
@@ -26,11 +26,10 @@ from .moves import (
     START,
     holds,
     is_repeated,
-    kinetic_order,
     moved,
-    narrow,
 )
 from .path import GrowthStep
+from .retries import attempt_within_limits
 
 __all__ = ["Climber"]
 
@@ -447,59 +446,6 @@ class Climber:
         (:func:`~.moves.holds`; None: no end)."""
         return not self.settled(best, floor) and (end is None or not holds(state, end))
 
-    def _attempt_within_ceiling(self, parameters, move, tried, ahead=(), state=None) -> tuple:
-        """The parameters and the step of a climb's move (:meth:`attempt`), recorded in
-        ``tried``. Where the ceiling refuses it (and ``retry_kinetic``), the move is tried
-        again, in turn, until a retry is within the ceiling:
-
-        1. where the move widened configuration-dependent kinetic coefficients of the catalog
-           ``state`` it moved from (an ``"interaction"`` move widens them with the
-           potential's products), with the kinetic order ``state`` had (``f"{move}@k<m>"``,
-           :func:`~.moves.narrow`): the potential's products grow alone, the inertia the
-           climb kept is kept (a three-link arm in relative angles: gravity in
-           ``cos(a + b + c)``, inertia in ``cos(b + c)``);
-        2. with constant kinetic coefficients (``f"{move}-kinetic"``), where that catalog is
-           neither in ``tried`` nor one that ``state`` holds: configuration-dependent ones
-           multiply the catalog by the velocity monomials;
-        3. with configuration-dependent kinetic coefficients over fewer coordinates'
-           functions, the widest order below the move's first (``f"{move}@k<m>"``), the
-           potential's products kept: a cart's pendulum ``cos(a) a_dot x1_dot`` beside the
-           spring ``x1 x2`` that couples two carts.
-
-        A retry whose catalog is in ``tried`` is not made; the last step made is returned."""
-        tried.add(parameters_key(parameters))
-        step = self.attempt(parameters, move, ahead)
-        if not (step.note.startswith(OVER) and self.retry_kinetic):
-            return parameters, step
-        original = parameters
-        configuration = original["kinetic"] == "configuration"
-        if (state is not None and configuration and state["kinetic"] == "configuration"
-                and kinetic_order(original) > kinetic_order(state)):
-            kept = moved(original, narrow("", kinetic_order(state)), self.kinds, self.n)
-            if kept is not None and parameters_key(kept) not in tried:
-                tried.add(parameters_key(kept))
-                parameters, step = kept, self.attempt(
-                    kept, narrow(move, kinetic_order(state)))
-                if not step.note.startswith(OVER):
-                    return parameters, step
-        smaller = dict(original, kinetic=START["kinetic"])
-        smaller.pop("kinetic_interaction", None)
-        smaller.pop("kinetic_trig_degree", None)
-        if parameters_key(smaller) not in tried and (state is None or not holds(state, smaller)):
-            tried.add(parameters_key(smaller))  # the kinetic coefficients give way
-            parameters, step = smaller, self.attempt(smaller, f"{move}-kinetic")
-            if not step.note.startswith(OVER):
-                return parameters, step
-        for order in range(kinetic_order(original) - 1, 0, -1) if configuration else ():
-            narrower = moved(original, narrow("", order), self.kinds, self.n)
-            if narrower is None or parameters_key(narrower) in tried:
-                return parameters, step
-            tried.add(parameters_key(narrower))
-            parameters, step = narrower, self.attempt(narrower, narrow(move, order))
-            if not step.note.startswith(OVER):
-                break
-        return parameters, step
-
     def steepest_climb(self, order, forced=None, end=None) -> tuple:
         """From the first catalog (after the move ``forced``), try every move of ``order``
         from the current catalog and keep the best; two moves at once where none is kept;
@@ -523,8 +469,8 @@ class Climber:
         state, best, path = dict(START), self.first, []
         tried = {parameters_key(state)}
         if forced is not None:
-            parameters, step = self._attempt_within_ceiling(self.moved(state, forced), forced,
-                                                            tried, state=state)
+            parameters, step = attempt_within_limits(self, self.moved(state, forced), forced,
+                                                     tried, state=state)
             if self.keeps(step, best):
                 state, best = parameters, step
                 path.append(step)
@@ -538,8 +484,8 @@ class Climber:
                     options.append((parameters, move))
             kept = []
             for k, (parameters, move) in enumerate(options):
-                moved_to, step = self._attempt_within_ceiling(
-                    parameters, move, tried, [p for p, _ in options[k + 1:]], state)
+                moved_to, step = attempt_within_limits(
+                    self, parameters, move, tried, [p for p, _ in options[k + 1:]], state)
                 if self.keeps(step, best):
                     kept.append((step.criterion, step.active, k, moved_to, step))
             if not kept:  # two moves at once, as the climb looks ahead
@@ -590,8 +536,8 @@ class Climber:
                     if parameters is None or parameters_key(parameters) in tried:
                         break
                     ahead = self._rejected(state, order, index, skip, tried, improved)
-                    parameters, step = self._attempt_within_ceiling(parameters, move, tried,
-                                                                    ahead, state)
+                    parameters, step = attempt_within_limits(self, parameters, move, tried,
+                                                             ahead, state)
                     keep = self.keeps(step, best)
                     if keep:
                         state, best, improved = parameters, step, True

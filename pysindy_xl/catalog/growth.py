@@ -112,21 +112,14 @@ coupling's links, poor alone) is not passed over for a stand-in that the order o
 alone tries first. Catalogs over ``max_terms`` are not tried (reported as the ceiling); by
 default the ceiling follows the data: ``1 / ROWS_PER_TERM`` (two thirds) of the rows of the
 search's fits (a selection over more columns is ill-posed at noise), at most :data:`MAX_TERMS`.
-A refused move is tried again (:meth:`~.climbs.Climber._attempt_within_ceiling`): where it
-widened configuration-dependent kinetic coefficients (an ``"interaction"`` move widens them with
-the potential's products), first with the kinetic order of the catalog it moved from
-(``"interaction@k2"``: the inertia kept, the potential's products grown alone); then with
-constant kinetic coefficients (``"degree-kinetic"``: configuration-dependent ones multiply the
-catalog by the velocity monomials; three masses on quartic springs are reached only so); where
-that is the catalog already tried, or over the ceiling too, with kinetic coefficients over fewer
-coordinates' functions, the widest order within the ceiling (``kinetic_interaction`` of
-:class:`~.automatic.AutomaticCatalog`; ``"kinetic@k2"``, ``"kinetic@k1"``,
-:func:`~.moves.narrow`): two spring-coupled carts, each carrying a pendulum, need ``cos(a)
-a_dot x1_dot`` and ``x1 x2``, 123 terms so, 333 with one order for both. A joint first move
-over the ceiling is narrowed so too, and the move ``"kinetic"`` widens a narrowed order by
-one. A serial chain in relative joint angles needs the kinetic order one below the
-potential's: a three-link arm's inertia in ``cos(b + c)``, its gravity in ``cos(a + b + c)``,
-143 terms (191 with one order for both).
+A refused move (over the ceiling, or over the work budget ``work_budget``, :mod:`.budget`) is
+tried again with fewer kinetic coefficients (:func:`~.retries.attempt_within_limits`): with the
+kinetic order of the catalog it moved from (``"interaction@k2"``: a three-link arm in relative
+angles, inertia in ``cos(b + c)``, gravity in ``cos(a + b + c)``, 143 terms, 191 with one order
+for both), with constant ones (``"degree-kinetic"``: three masses on quartic springs), or over
+fewer coordinates' functions (``kinetic_interaction``, ``"kinetic@k1"``: two spring-coupled
+carts, each with a pendulum, 123 terms, 333 with one order). A joint first move over the
+ceiling is narrowed so too, and the move ``"kinetic"`` widens a narrowed order by one.
 
 The climb only adds, and the start always holds an angle's sines and cosines: where families
 are nearly dependent on the data's range (``cos(phi) = 1 - phi^2/2 + phi^4/24 - ...``), the
@@ -173,7 +166,7 @@ error, not the data's precision: on a cart with a torsion-sprung pendulum, ``cos
 ``theta^2`` at 0.1 %); the climb goes on. A right law sits at 0.87 to 1.13 times its floor on
 the generic systems with two or more coordinates (where the stop applies), 1.2 to 1.7 times with
 one (where the climb goes on as without it). The chosen catalog is then fitted on all the data
-(:mod:`.final_fit`); the search's work is bounded (``work_budget``, :mod:`.budget`). """
+(:mod:`.final_fit`). """
 
 from __future__ import annotations
 
@@ -197,7 +190,7 @@ from .final_fit import fit_chosen
 from .floor import EXACT
 from .folds import REGIONS, held_out_splits
 from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first)
-from .growth_data import check_growth_data, data_span
+from .growth_data import check_growth_data, data_span, thinned
 from .keep_rules import single_keeps
 from .moves import LATE_MOVES, MORE_MOVES, MOVES, START, is_repeated, joint_moves, moved, narrowed
 from .path import GrowthResult, GrowthStep
@@ -504,7 +497,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                       good_enough=good_enough, physical=physical,
                       retry_kinetic=max_terms == "auto", criterion=criterion,
                       progress=progress, noise_floor=noise_floor,
-                      rates=RateFits(searched[0], _thinned(arrays, stride),
+                      rates=RateFits(searched[0], thinned(arrays, stride),
                                      template.test_functions,
                                      template.smoother,
                                      lambda parameters: fits.get(parameters)["criterion"])
@@ -601,11 +594,3 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                        final_weak)
     return GrowthResult(model, best_catalog, climber.steps, criterion, best.criterion,
                         search.max_terms, climber.work)
-
-
-def _thinned(arrays, stride) -> dict:
-    """``x``, ``t``, ``u`` and ``x_dot`` of every run, every ``stride``-th sample (the search's
-    samples, its held-out blocks too): the data on which the exponentials' rates are fitted."""
-    return {key: None if arrays[key] is None else
-            [np.asarray(value, dtype=float)[::stride] for value in arrays[key]]
-            for key in ("x", "t", "u", "x_dot")}

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["check_growth_data", "data_span", "END_PERCENTILE"]
+__all__ = ["check_growth_data", "data_span", "thinned", "END_PERCENTILE"]
 
 def check_growth_data(xs, names, n_terms: int) -> None:
     """``ValueError`` for a constant coordinate or data too short for ``n_terms`` terms.
@@ -69,3 +69,31 @@ def data_span(xs) -> list:
     """
     low, high = np.percentile(np.vstack(xs), [END_PERCENTILE, 100 - END_PERCENTILE], axis=0)
     return [(float(a), float(b)) for a, b in zip(low, high, strict=True)]
+
+
+def thinned(arrays, stride) -> dict:
+    """``x``, ``t``, ``u`` and ``x_dot`` of every run, every ``stride``-th sample (the search's
+    samples, its held-out blocks too): the data on which the exponentials' rates are fitted.
+
+    Parameters
+    ----------
+    arrays : dict
+        ``x``, ``t``, ``u``, ``x_dot`` (and possibly others): lists of arrays, one per run, or
+        None.
+    stride : int
+        Keep every ``stride``-th sample.
+
+    Returns
+    -------
+    dict
+        ``x``, ``t``, ``u`` and ``x_dot``, each a list of float arrays or None.
+
+    Examples
+    --------
+    >>> thinned({"x": [np.arange(6.0)], "t": [np.arange(6.0)], "u": None, "x_dot": None},
+    ...         2)["x"]
+    [array([0., 2., 4.])]
+    """
+    return {key: None if arrays[key] is None else
+            [np.asarray(value, dtype=float)[::stride] for value in arrays[key]]
+            for key in ("x", "t", "u", "x_dot")}

@@ -30,6 +30,7 @@ from pysindy_xl.catalog.moves import (
     narrowed,
 )
 from pysindy_xl.catalog.path import GrowthStep
+from pysindy_xl.catalog.retries import attempt_within_limits
 
 NAMES, KINDS = ["a", "b", "c"], ["angle"] * 3
 BENCHMARKS = pathlib.Path(__file__).resolve().parents[2] / "benchmarks"
@@ -109,15 +110,15 @@ def test_a_refused_interaction_move_keeps_the_kinetic_order_of_its_catalog():
     constant kinetic coefficients that drop the inertia the climb kept."""
     climber = _climber(ceiling=150)
     target = moved(SHARED, "interaction", KINDS, 3)
-    parameters, step = climber._attempt_within_ceiling(
-        target, "interaction", {parameters_key(SHARED)}, state=SHARED)
+    parameters, step = attempt_within_limits(
+        climber, target, "interaction", {parameters_key(SHARED)}, state=SHARED)
     assert [move for move, _ in climber.attempts] == ["interaction", "interaction@k2"]
     assert parameters == ARM and step.terms == 143 and not step.note
     assert holds(parameters, SHARED)
     # without the catalog it moved from, the retries are those of a move alone: constant
     # kinetic coefficients first (35 terms, within the ceiling)
     alone = _climber(ceiling=150)
-    parameters, _ = alone._attempt_within_ceiling(target, "interaction", set())
+    parameters, _ = attempt_within_limits(alone, target, "interaction", set())
     assert [move for move, _ in alone.attempts] == ["interaction", "interaction-kinetic"]
     assert parameters["kinetic"] == "constant"
 
@@ -129,13 +130,13 @@ def test_a_narrowing_retry_takes_the_widest_order_within_the_ceiling():
     state = dict(START, interaction=3)
     target = moved(state, "kinetic", KINDS, 3)
     climber = _climber(ceiling=150)
-    parameters, step = climber._attempt_within_ceiling(
-        target, "kinetic", {parameters_key(state)}, state=state)
+    parameters, step = attempt_within_limits(
+        climber, target, "kinetic", {parameters_key(state)}, state=state)
     assert [move for move, _ in climber.attempts] == ["kinetic", "kinetic@k2"]
     assert parameters == ARM and not step.note
     low = _climber(ceiling=100)
-    parameters, step = low._attempt_within_ceiling(
-        target, "kinetic", {parameters_key(state)}, state=state)
+    parameters, step = attempt_within_limits(
+        low, target, "kinetic", {parameters_key(state)}, state=state)
     assert [move for move, _ in low.attempts] == ["kinetic", "kinetic@k2", "kinetic@k1"]
     assert parameters == dict(ARM, kinetic_interaction=1) and not step.note
 
@@ -146,8 +147,8 @@ def test_a_widening_kinetic_move_over_the_ceiling_does_not_drop_the_inertia():
     kinetic coefficients (a catalog that the climb's own holds: no move forward)."""
     state = dict(ARM, kinetic_interaction=1)
     climber = _climber(ceiling=120)
-    parameters, step = climber._attempt_within_ceiling(
-        moved(state, "kinetic", KINDS, 3), "kinetic", {parameters_key(state)}, state=state)
+    parameters, step = attempt_within_limits(
+        climber, moved(state, "kinetic", KINDS, 3), "kinetic", {parameters_key(state)}, state=state)
     assert [move for move, _ in climber.attempts] == ["kinetic"]
     assert step.note.startswith("ceiling")
 

@@ -22,6 +22,7 @@ from pysindy_xl.catalog.candidates import parameters_key
 from pysindy_xl.catalog.climbs import Climber
 from pysindy_xl.catalog.moves import START, holds, kinetic_order, moved
 from pysindy_xl.catalog.path import GrowthStep
+from pysindy_xl.catalog.retries import attempt_within_limits
 
 NAMES, KINDS = ["x1", "x2", "a"], ["linear", "linear", "angle"]
 CART, SECOND, BOB, LENGTH, GRAVITY = 1.0, 0.8, 0.3, 0.5, 9.81
@@ -182,17 +183,17 @@ def test_a_kinetic_move_over_the_ceiling_is_retried_with_single_coordinate_inert
              for p in (target, dict(target, kinetic_interaction=1))]
     climber = _climber(ceiling=(sizes[0] + sizes[1]) // 2)
     tried = {parameters_key(state)}
-    parameters, step = climber._attempt_within_ceiling(target, "kinetic", tried)
+    parameters, step = attempt_within_limits(climber, target, "kinetic", tried)
     # the constant-kinetic retry is the state itself (tried): the kinetic order gives way
     assert [move for move, _ in climber.attempts] == ["kinetic", "kinetic@k1"]
     assert parameters == dict(target, kinetic_interaction=1) and step.terms == sizes[1]
     assert not step.note and kinetic_order(parameters) == 1
     assert holds(parameters, state) and not holds(parameters, target)
     # under the ceiling the move is fitted as it is; below the order 2, nothing is retried
-    assert _climber(ceiling=sizes[0])._attempt_within_ceiling(target, "kinetic", set())[0] \
+    assert attempt_within_limits(_climber(ceiling=sizes[0]), target, "kinetic", set())[0] \
         == target
     low = _climber(ceiling=10)
-    low._attempt_within_ceiling(moved(dict(START), "kinetic", KINDS, 3), "kinetic", set())
+    attempt_within_limits(low, moved(dict(START), "kinetic", KINDS, 3), "kinetic", set())
     assert [move for move, _ in low.attempts] == ["kinetic", "kinetic-kinetic"]
     # the backward phase drops the family with its order, and the potential's order alone
     assert "kinetic_interaction" not in removed(parameters, "kinetic", KINDS, START)
