@@ -2,6 +2,10 @@
 
 import linecache
 
+import numpy  # noqa: F401  (loads the BLAS libraries that the limit below reaches)
+import scipy.linalg  # noqa: F401
+import threadpoolctl
+
 _checkcache = linecache.checkcache
 
 
@@ -20,3 +24,9 @@ def _tolerant_checkcache(filename=None):
 
 def pytest_configure(config):
     linecache.checkcache = _tolerant_checkcache
+    # One BLAS thread per test process. The default run spreads the files over one worker per
+    # core, and OpenBLAS' own threads on top of them oversubscribe the cores: its waiting
+    # threads spin, and a test of small matrices ran 5-7x slower under load than on one thread.
+    # The package's results do not depend on the thread count (tests compare to tolerances
+    # that hold across BLAS kernels).
+    config._blas_limit = threadpoolctl.threadpool_limits(limits=1, user_api="blas")

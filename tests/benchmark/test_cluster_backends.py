@@ -61,14 +61,25 @@ def test_blas_threads_resolution():
         blas_thread_limit(0)
 
 
+@pytest.fixture
+def two_blas_threads():
+    """Two BLAS threads in this process (the test configuration runs on one), so that a run
+    limited to one thread differs from its caller."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    with threadpool_limits(limits=2, user_api="blas"):
+        assert {p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"} == {2}
+        yield
+
+
 @pytest.mark.parametrize("isolation", ["process", "none"])
-def test_blas_limit_reaches_the_run(isolation):
+def test_blas_limit_reaches_the_run(isolation, two_blas_threads):
     task = SMALL.tasks()[0]
     record = run_task(task, SMALL, isolation=isolation, function=blas_probe, blas_threads=1)
     assert json.loads(record["message"]) == [1]
 
 
-def test_grid_limits_blas_in_parallel_workers(tmp_path):
+def test_grid_limits_blas_in_parallel_workers(tmp_path, two_blas_threads):
     path = tmp_path / "records.jsonl"
     summary = run_grid(SMALL, path, n_jobs=2, progress=False, function=blas_probe,
                        isolation="none", blas_threads=1)
