@@ -17,6 +17,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
+from ._triangular import solve_triangular
+
 __all__ = ["law_elimination_path", "law_forward_path", "noise_ratio_law", "refine_law_by_swaps"]
 
 
@@ -26,13 +28,12 @@ def _whitened_factor(r_factor, moments):
     """
     k = moments.shape[-1]
     floor = 1e-10 * np.trace(moments, axis1=-2, axis2=-1) / max(k, 1)
-    # no noise at all on these columns: a floor far below the signal's
-    signal_floor = np.maximum(1e-30 * np.sum(r_factor**2, axis=(-2, -1)) / max(k, 1), 1e-300)
-    floor = np.where(floor > 0, floor, signal_floor)
+    if not np.all(floor > 0):  # no noise at all on some columns: a floor far below the signal's
+        signal_floor = np.maximum(1e-30 * np.sum(r_factor**2, axis=(-2, -1)) / max(k, 1), 1e-300)
+        floor = np.where(floor > 0, floor, signal_floor)
     lower = np.linalg.cholesky(moments + floor[..., None, None] * np.eye(k))
     if lower.ndim == 2:
-        whitened = scipy.linalg.solve_triangular(lower, r_factor.T, lower=True,
-                                                 check_finite=False).T
+        whitened = solve_triangular(lower, r_factor.T, lower=True).T
     else:  # a stack: LAPACK's triangular solve has no batched form in numpy
         whitened = np.swapaxes(np.linalg.solve(lower, np.swapaxes(r_factor, -1, -2)), -1, -2)
     return whitened, lower
@@ -51,8 +52,7 @@ def noise_pencil(r_factor, moments):
                               axis=-1)
     eigenvectors = np.swapaxes(wt[..., ::-1, :], -1, -2)
     if lower.ndim == 2:
-        vectors = scipy.linalg.solve_triangular(lower.T, eigenvectors, lower=False,
-                                                check_finite=False)
+        vectors = solve_triangular(lower.T, eigenvectors)
     else:
         vectors = np.linalg.solve(np.swapaxes(lower, -1, -2), eigenvectors)
     return singular[..., ::-1] ** 2, vectors
