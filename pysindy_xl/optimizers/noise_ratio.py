@@ -18,7 +18,7 @@ import numpy as np
 import scipy.linalg
 import scipy.linalg.lapack
 
-from ._triangular import solve_triangular, without_columns
+from ._triangular import solve_triangular
 
 __all__ = ["law_elimination_path", "law_forward_path", "noise_ratio_law", "refine_law_by_swaps",
            "smallest_pair"]
@@ -253,25 +253,11 @@ def law_elimination_path(r_factor, moments) -> np.ndarray:
     ndarray of int, shape (F,)
         The column order (the last eliminated first).
     """
-    r_factor = np.asarray(r_factor, dtype=float)
     support = np.arange(r_factor.shape[1])
     removed = []
-    factor = None  # the support's own triangular factor, while it has SMALLEST_ALONE columns
     while len(support) > 2:
-        if factor is None and len(support) >= SMALLEST_ALONE \
-                and r_factor.shape[0] >= r_factor.shape[1]:
-            factor = r_factor if _upper_triangular(r_factor) else scipy.linalg.qr(
-                r_factor, mode="r", check_finite=False)[0][: r_factor.shape[1]]
-        if factor is None:
-            kept = eliminate_one(r_factor, moments, support)
-            position = int(np.flatnonzero(~np.isin(support, kept))[0])
-        else:  # square pencils: the factor's columns updated, not all the rows' decomposed
-            values, vectors = noise_pencil(factor, moments[np.ix_(support, support)])
-            position = _least_constrained(values, vectors)
-            kept = np.delete(support, position)
-            factor = (without_columns(factor, np.delete(np.arange(len(support)), position))
-                      if len(kept) >= SMALLEST_ALONE else None)
-        removed.append(int(support[position]))
+        kept = eliminate_one(r_factor, moments, support)
+        removed.append(int(np.setdiff1d(support, kept)[0]))
         support = kept
     return np.concatenate([support, removed[::-1]]).astype(int)
 
