@@ -62,7 +62,7 @@ def noise_pencil(r_factor, moments):
 
 #: Pencils of at least this many columns get their smallest pair alone (:func:`smallest_pair`);
 #: below it, the full decomposition costs less than the extra calls.
-SMALLEST_ALONE = 40
+SMALLEST_ALONE = 24
 
 
 def smallest_pair(r_factor, moments):
