@@ -123,8 +123,10 @@ def _smallest_alone(r_factor, moments):
     if info == 0 and np.isfinite(inverse).all():
         gram = inverse @ inverse.T
         top, vectors, _, _, info = scipy.linalg.lapack.dsyevr(gram, range="I", il=k, iu=k)
-        if info == 0 and top[0] > 0:
-            return 1.0 / top[0], solve_triangular(lower.T, vectors[:, 0])
+        if info == 0 and 0 < top[0] < np.inf:
+            vector = solve_triangular(lower.T, vectors[:, 0])
+            if np.isfinite(vector).all():
+                return 1.0 / top[0], vector
     values, vectors = noise_pencil(r_factor, moments)  # singular: the SVD's zero
     return values[0], vectors[:, 0]
 
