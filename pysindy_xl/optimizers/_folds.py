@@ -9,9 +9,8 @@ use most columns, once on all of them).
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
 
-from ._triangular import triangular_system
+from ._triangular import solve_triangular, triangular_system
 
 
 def fold_labels(n_rows: int, n_blocks: int, n_folds: int) -> np.ndarray:
@@ -133,8 +132,7 @@ class HeldOutRows:
             # all nested models at once: beta_k = inv(R)[:, :k+1] @ rhs[:k+1], so the
             # predictions are cumulative sums of the columns of W = x_test inv(R) times rhs
             # (one triangular solve with the test rows, no inverse and no product with it)
-            weights = scipy.linalg.solve_triangular(
-                r_factor[:usable, :usable], x_test[:, :usable].T, trans="T", check_finite=False)
+            weights = solve_triangular(r_factor[:usable, :usable], x_test[:, :usable].T, trans=1)
             residual = np.cumsum(weights * rhs[:usable, None], axis=0) - y_test
             errors[fold, :usable] = np.mean(residual**2, axis=1)
         return errors

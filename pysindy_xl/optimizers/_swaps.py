@@ -8,6 +8,8 @@ import numpy as np
 import scipy.linalg
 import scipy.linalg.lapack
 
+from ._triangular import solve_triangular
+
 
 def _best_swap(usable, support, remaining2, correlation, removed, norms2, rss, y_norm2):
     """The exchange ``(c, j)`` (column ``c`` in for the ``j``-th selected) lowering the residual
@@ -181,8 +183,7 @@ def first_swaps(xs, y, usable, order, sizes, norms2=None):
         r_factor = r_factor[:largest]
     if largest == 0:
         return {}
-    inverse = scipy.linalg.solve_triangular(r_factor[:largest, :largest], np.eye(largest),
-                                            check_finite=False)
+    inverse = solve_triangular(r_factor[:largest, :largest], np.eye(largest))
     norms2 = column_norms2(xs) if norms2 is None else norms2
     y_norm2 = float(y @ y)
     # tail sums from row k (k <= largest): what lies off the span of the first k columns

@@ -1,5 +1,5 @@
-"""Triangular least-squares systems: the reduction of rows to ``[R | Q^T y]`` and its update
-after removing columns (the refits of backward elimination).
+"""Triangular least-squares systems: the reduction of rows to ``[R | Q^T y]``, its update after
+removing columns (the refits of backward elimination), and triangular solves.
 """
 
 from __future__ import annotations
@@ -7,6 +7,52 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 import scipy.linalg.lapack
+
+
+def solve_triangular(a, b, lower: bool = False, trans: int = 0):
+    """``scipy.linalg.solve_triangular(a, b, trans, lower, check_finite=False)`` of float arrays:
+    the same LAPACK call (``trtrs``, on ``a`` or its transpose as SciPy chooses), without SciPy's
+    argument handling and batching, which cost more than the solve on the small systems that
+    the selections solve tens of thousands of times per fit.
+
+    Parameters
+    ----------
+    a : ndarray, shape (k, k)
+        Triangular matrix (float).
+    b : ndarray, shape (k,) or (k, n)
+        Right-hand side (float).
+    lower : bool, default False
+        ``a`` is lower triangular.
+    trans : {0, 1}, default 0
+        Solve ``a x = b`` (0) or ``a^T x = b`` (1).
+
+    Returns
+    -------
+    ndarray, shape of ``b``
+        The solution.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If ``a`` has a zero on its diagonal.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> solve_triangular(np.array([[2.0, 1.0], [0.0, 4.0]]), np.array([4.0, 8.0])).tolist()
+    [1.0, 2.0]
+    """
+    if b.size == 0:
+        return scipy.linalg.solve_triangular(a, b, trans=trans, lower=lower, check_finite=False)
+    if a.flags.f_contiguous:
+        x, info = scipy.linalg.lapack.dtrtrs(a, b, lower=lower, trans=trans)
+    else:  # the transposed system (LAPACK's layout), as SciPy solves it
+        x, info = scipy.linalg.lapack.dtrtrs(a.T, b, lower=not lower, trans=not trans)
+    if info > 0:
+        raise np.linalg.LinAlgError(f"singular matrix: resolution failed at diagonal {info - 1}")
+    if info < 0:
+        raise ValueError(f"illegal value in {-info}-th argument of internal trtrs")
+    return x
 
 
 def triangular_system(x, y):

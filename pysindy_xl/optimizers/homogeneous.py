@@ -23,9 +23,9 @@ from .noise_ratio import (
     eliminate_one,
     law_elimination_path,
     law_forward_path,
-    noise_pencil,
     noise_ratio_law,
     refine_law_by_swaps,
+    smallest_pair,
 )
 from .selection import ChosenSupport, fold_labels, fold_summary
 
@@ -183,19 +183,19 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds, row_moments=No
         # leading columns of a triangular factor: its leading rows are all that is needed
         trains = [r_train[:size] if nested else r_train for _, r_train, *_ in fitted_folds]
         heights = {train.shape[0] for train in trains}
+        # each support's smallest-ratio law, (g, size) per fold
         if len(heights) == 1:
-            stacked = noise_pencil(
+            stacked = smallest_pair(
                 np.concatenate([np.swapaxes(train[:, columns], 0, 1) for train in trains]),
                 np.concatenate([f[3][columns[:, :, None], columns[:, None, :]]
                                 for f in fitted_folds]))[1]
-            fold_vectors = np.split(stacked, len(fitted_folds))
+            fold_laws = np.split(stacked, len(fitted_folds))
         else:  # factors of different heights (a fold of fewer rows than columns)
-            fold_vectors = [noise_pencil(np.swapaxes(train[:, columns], 0, 1),
-                                         f[3][columns[:, :, None], columns[:, None, :]])[1]
-                            for train, f in zip(trains, fitted_folds, strict=True)]
-        for (fold, _, r_test, _, test_moments), vectors in zip(fitted_folds, fold_vectors,
-                                                                strict=True):
-            laws = vectors[:, :, 0]  # (g, size): each support's smallest-ratio law
+            fold_laws = [smallest_pair(np.swapaxes(train[:, columns], 0, 1),
+                                       f[3][columns[:, :, None], columns[:, None, :]])[1]
+                         for train, f in zip(trains, fitted_folds, strict=True)]
+        for (fold, _, r_test, _, test_moments), laws in zip(fitted_folds, fold_laws,
+                                                             strict=True):
             noise = np.einsum("gi,gij,gj->g", laws,
                               test_moments[columns[:, :, None], columns[:, None, :]], laws)
             test_factor = r_test[:, columns]  # (rows, g, size)

@@ -16,8 +16,12 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg
+import scipy.linalg.lapack
 
-__all__ = ["law_elimination_path", "law_forward_path", "noise_ratio_law", "refine_law_by_swaps"]
+from ._triangular import solve_triangular
+
+__all__ = ["law_elimination_path", "law_forward_path", "noise_ratio_law", "refine_law_by_swaps",
+           "smallest_pair"]
 
 
 def _whitened_factor(r_factor, moments):
@@ -26,13 +30,12 @@ def _whitened_factor(r_factor, moments):
     """
     k = moments.shape[-1]
     floor = 1e-10 * np.trace(moments, axis1=-2, axis2=-1) / max(k, 1)
-    # no noise at all on these columns: a floor far below the signal's
-    signal_floor = np.maximum(1e-30 * np.sum(r_factor**2, axis=(-2, -1)) / max(k, 1), 1e-300)
-    floor = np.where(floor > 0, floor, signal_floor)
+    if not np.all(floor > 0):  # no noise at all on some columns: a floor far below the signal's
+        signal_floor = np.maximum(1e-30 * np.sum(r_factor**2, axis=(-2, -1)) / max(k, 1), 1e-300)
+        floor = np.where(floor > 0, floor, signal_floor)
     lower = np.linalg.cholesky(moments + floor[..., None, None] * np.eye(k))
     if lower.ndim == 2:
-        whitened = scipy.linalg.solve_triangular(lower, r_factor.T, lower=True,
-                                                 check_finite=False).T
+        whitened = solve_triangular(lower, r_factor.T, lower=True).T
     else:  # a stack: LAPACK's triangular solve has no batched form in numpy
         whitened = np.swapaxes(np.linalg.solve(lower, np.swapaxes(r_factor, -1, -2)), -1, -2)
     return whitened, lower
@@ -51,11 +54,81 @@ def noise_pencil(r_factor, moments):
                               axis=-1)
     eigenvectors = np.swapaxes(wt[..., ::-1, :], -1, -2)
     if lower.ndim == 2:
-        vectors = scipy.linalg.solve_triangular(lower.T, eigenvectors, lower=False,
-                                                check_finite=False)
+        vectors = solve_triangular(lower.T, eigenvectors)
     else:
         vectors = np.linalg.solve(np.swapaxes(lower, -1, -2), eigenvectors)
     return singular[..., ::-1] ** 2, vectors
+
+
+#: Pencils of at least this many columns get their smallest pair alone (:func:`smallest_pair`);
+#: below it, the full decomposition costs less than the extra calls.
+SMALLEST_ALONE = 24
+
+
+def smallest_pair(r_factor, moments):
+    """The smallest eigenpair of the pencil ``(R^T R, S)``: ``noise_pencil``'s first value and
+    vector, the same numbers to rounding.
+
+    From ``W = R L^-T`` made triangular (``R`` as given when it is upper triangular, else its QR),
+    the pair is the largest eigenpair of ``W^-1 W^-T``: a triangular inverse and one eigenpair
+    of a symmetric matrix (LAPACK's ``dsyevr``), where the SVD computes all of them. The largest
+    eigenvalue of ``W^-1 W^-T`` is the dominant one, so its vector carries no more rounding than
+    the SVD's smallest singular vector. Pencils of fewer than :data:`SMALLEST_ALONE` columns,
+    wide ones and singular ``W`` go through :func:`noise_pencil`.
+
+    Parameters
+    ----------
+    r_factor : ndarray, shape (..., m, k)
+        ``Theta``, or a factor ``R`` with ``R^T R = Theta^T Theta`` (stacks along leading axes).
+    moments : ndarray, shape (..., k, k)
+        Noise moments ``S`` of the same columns.
+
+    Returns
+    -------
+    value : ndarray, shape (...)
+        The smallest eigenvalue (the smallest noise ratio).
+    vector : ndarray, shape (..., k)
+        Its eigenvector, ``v^T S v = 1`` (either sign).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> theta = rng.normal(size=(300, 50))
+    >>> value, vector = smallest_pair(theta, np.eye(50))
+    >>> values, vectors = noise_pencil(theta, np.eye(50))
+    >>> bool(np.isclose(value, values[0])), bool(np.isclose(abs(vector @ vectors[:, 0]), 1.0))
+    (True, True)
+    """
+    r_factor, moments = np.asarray(r_factor, dtype=float), np.asarray(moments, dtype=float)
+    m, k = r_factor.shape[-2:]
+    if k < SMALLEST_ALONE or m < k:
+        values, vectors = noise_pencil(r_factor, moments)
+        return values[..., 0], vectors[..., :, 0]
+    lead = r_factor.shape[:-2]
+    flat_r, flat_s = r_factor.reshape(-1, m, k), moments.reshape(-1, k, k)
+    value, vector = np.empty(flat_r.shape[0]), np.empty((flat_r.shape[0], k))
+    for i, (factor, noise) in enumerate(zip(flat_r, flat_s, strict=True)):
+        value[i], vector[i] = _smallest_alone(factor, noise)
+    return value.reshape(lead), vector.reshape(lead + (k,))
+
+
+def _smallest_alone(r_factor, moments):
+    """:func:`smallest_pair` of one pencil of at least as many rows as columns."""
+    k = r_factor.shape[1]
+    if not _upper_triangular(r_factor):
+        r_factor = scipy.linalg.qr(r_factor, mode="r", check_finite=False)[0][:k]
+    whitened, lower = _whitened_factor(r_factor, moments)  # upper triangular, as R
+    inverse, info = scipy.linalg.lapack.dtrtri(whitened)
+    if info == 0 and np.isfinite(inverse).all():
+        gram = inverse @ inverse.T
+        top, vectors, _, _, info = scipy.linalg.lapack.dsyevr(gram, range="I", il=k, iu=k)
+        if info == 0 and 0 < top[0] < np.inf:
+            vector = solve_triangular(lower.T, vectors[:, 0])
+            if np.isfinite(vector).all():
+                return 1.0 / top[0], vector
+    values, vectors = noise_pencil(r_factor, moments)  # singular: the SVD's zero
+    return values[0], vectors[:, 0]
 
 
 def noise_ratio_law(r_factor, moments) -> tuple[float, np.ndarray]:
@@ -90,9 +163,9 @@ def noise_ratio_law(r_factor, moments) -> tuple[float, np.ndarray]:
     >>> round(ratio, 1), (law / law[0]).round(2)
     (1.0, array([ 1., -1.]))
     """
-    values, vectors = noise_pencil(np.asarray(r_factor, float), np.asarray(moments, float))
-    law = vectors[:, 0] / np.linalg.norm(vectors[:, 0])
-    return float(values[0]), law * np.sign(law[np.argmax(np.abs(law))])
+    value, vector = smallest_pair(r_factor, moments)
+    law = vector / np.linalg.norm(vector)
+    return float(value), law * np.sign(law[np.argmax(np.abs(law))])
 
 
 # Secular helpers: ``values`` (k,) or (k, m) and ``vectors`` (k, k) the current pencil;
@@ -189,6 +262,11 @@ def law_elimination_path(r_factor, moments) -> np.ndarray:
         removed.append(int(np.setdiff1d(support, kept)[0]))
         support = kept
     return np.concatenate([support, removed[::-1]]).astype(int)
+
+
+def _upper_triangular(matrix) -> bool:
+    """Whether a square matrix has zeros below its diagonal."""
+    return matrix.shape[0] == matrix.shape[1] and not np.tril(matrix, -1).any()
 
 
 def eliminate_one(r_factor, moments, support) -> np.ndarray:

@@ -26,7 +26,7 @@ from ._base import independent_columns
 from ._folds import HeldOutRows, fold_labels  # noqa: F401 (fold_labels kept)
 from ._forward import forward_order
 from ._swaps import column_norms2, first_swaps, swap_search
-from ._triangular import triangular_system, without_columns
+from ._triangular import solve_triangular, triangular_system, without_columns
 
 __all__ = ["elimination_path", "forward_path", "cross_validated_size", "cross_validated_supports",
            "refine_by_swaps", "select_support", "SelectionResult"]
@@ -109,7 +109,7 @@ def _elimination_order(active_mask, xs, y) -> np.ndarray:
             # an (almost) dependent column: drop the one that the others explain best
             drop_local = [int(np.argmin(diag))]
         else:
-            beta = scipy.linalg.solve_triangular(r_sub, qty, check_finite=False)
+            beta = solve_triangular(r_sub, qty)
             inverse, info = scipy.linalg.lapack.dtrtri(r_sub)
             if info != 0:
                 raise np.linalg.LinAlgError(f"dtrtri failed (info {info})")
