@@ -371,7 +371,9 @@ def narrowed(names, kinds, n, size, ceiling) -> list:
     Configuration-dependent kinetic coefficients over products of several coordinates'
     functions multiply the velocity products by the potential's products; held to fewer
     coordinates' functions (``cos(a) a_dot x1_dot``) beside the potential's products
-    (``x1 x2``), the joint catalog may fit under the ceiling that the full one is over.
+    (``x1 x2``), the joint catalog may fit under the ceiling that the full one is over. The
+    climbs make the narrowed moves from later catalogs too, where they narrow only what they
+    add (:func:`moved`: none from a catalog whose kinetic coefficients are wider already).
 
     Parameters
     ----------
