@@ -96,9 +96,14 @@ def moved(state, move, kinds, n, skip=0, rates=None):
         coefficients are then held to single coordinates' functions (``kinetic_interaction``
         1; None where they are constant or already so); with ``"@k<m>"`` (:func:`narrow`),
         to products over at most ``m`` coordinates (None where they are constant or over at
-        most ``m`` already). ``"kinetic"`` makes constant kinetic coefficients
-        configuration-dependent, or widens a kinetic order below the potential's by one
-        coordinate.
+        most ``m`` already). A named move narrows only the kinetic coefficients it adds: it
+        does not apply (None) from a ``state`` whose configuration-dependent kinetic
+        coefficients are over more than ``m`` coordinates already (the climb only adds; a
+        joint first move ``"interaction+kinetic_trig_degree@k1"`` made from a three-link
+        arm's ``cos(b + c)`` inertia would drop it for ``sin(b)^2`` stand-ins). The
+        suffix alone (``"@k<m>"``, a refused move's retry) narrows ``state`` itself.
+        ``"kinetic"`` makes constant kinetic coefficients configuration-dependent, or
+        widens a kinetic order below the potential's by one coordinate.
     kinds : sequence of str
         The coordinates' kinds (``"linear"``, ``"angle"``).
     n : int
@@ -130,6 +135,9 @@ def moved(state, move, kinds, n, skip=0, rates=None):
     (3, 2)
     >>> kinetic_order(moved(dict(arm, kinetic_interaction=1), "kinetic", ["angle"] * 3, 3))
     2
+    >>> two = moved(START, "kinetic+interaction", ["angle"] * 3, 3)    # cos(b + c) inertia
+    >>> moved(two, "interaction+kinetic_trig_degree@k1", ["angle"] * 3, 3) is None
+    True
     >>> moved(START, "kinetic_trig_degree", ["angle", "angle"], 2)["kinetic_trig_degree"]
     2
     >>> moved(START, "exponentials", ["linear"], 1, rates=lambda state: {"x": -1.5})[
@@ -139,6 +147,9 @@ def moved(state, move, kinds, n, skip=0, rates=None):
     suffix = _NARROW_SUFFIX.search(move)
     if suffix:  # then kinetic coefficients over at most `order` coordinates' functions
         order = int(suffix.group(1))
+        if (suffix.start() and state["kinetic"] == "configuration"
+                and kinetic_order(state) > order):
+            return None  # (a move narrows what it adds, never the kinetic terms `state` has)
         state = moved(state, move[:suffix.start()], kinds, n, skip, rates) if suffix.start() \
             else dict(state)
         if state is None or state["kinetic"] != "configuration" or kinetic_order(state) <= order:
@@ -360,7 +371,9 @@ def narrowed(names, kinds, n, size, ceiling) -> list:
     Configuration-dependent kinetic coefficients over products of several coordinates'
     functions multiply the velocity products by the potential's products; held to fewer
     coordinates' functions (``cos(a) a_dot x1_dot``) beside the potential's products
-    (``x1 x2``), the joint catalog may fit under the ceiling that the full one is over.
+    (``x1 x2``), the joint catalog may fit under the ceiling that the full one is over. The
+    climbs make the narrowed moves from later catalogs too, where they narrow only what they
+    add (:func:`moved`: none from a catalog whose kinetic coefficients are wider already).
 
     Parameters
     ----------
