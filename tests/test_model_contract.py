@@ -43,6 +43,7 @@ def test_fit_leaves_the_catalog_untouched_and_models_pickle(cart_pole_data):
                                model.feature_library_.weak_transform(z, phi, dphi))
 
 
+@pytest.mark.slow
 def test_fitted_models_go_through_joblib_worker_processes(cart_pole_data):
     """Fitted models travel to other processes (loky pickles them) and predict there exactly
     as here; so do unfitted ones, which fit there."""

@@ -91,6 +91,7 @@ def test_grid_limits_blas_in_parallel_workers(tmp_path, two_blas_threads):
 # -- Dask --------------------------------------------------------------------------------------
 @pytest.mark.skipif(importlib.util.find_spec("distributed") is None,
                     reason="dask.distributed is not installed (pip install 'dask[distributed]')")
+@pytest.mark.slow
 def test_dask_local_cluster_matches_loky_and_resumes(tmp_path):
     from dask.distributed import LocalCluster
 

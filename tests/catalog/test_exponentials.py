@@ -107,6 +107,7 @@ def _fresh_run_error(found):
     return float(np.sqrt(np.mean((predicted - u) ** 2) / np.mean(u ** 2))), x
 
 
+@pytest.mark.slow
 def test_the_growth_finds_the_morse_rate_and_forces_beyond_the_training_range():
     t, xs, _, _, us = _runs()
     noisy = [x + np.random.default_rng(3 + k).normal(0.0, 0.01 * x.std(), x.shape)

@@ -36,6 +36,7 @@ def _grow(*args, **kwargs):
         return grow_catalog(*args, **kwargs)
 
 
+@pytest.mark.slow
 def test_the_consensus_refuses_the_stand_in_that_the_time_blocks_keep():
     accelerations, forces = torsion_pendulum()
     ts, xs, us = forced_runs(accelerations, seed=1, noise=0.05)

@@ -6,6 +6,7 @@ import sys
 import warnings
 
 import numpy as np
+import pytest
 
 import pysindy_xl as px
 from pysindy_xl.catalog.floor import EXACT, EXPLAINED, noise_explains
@@ -18,6 +19,7 @@ def test_noise_explains_a_criterion_within_a_factor_of_its_floor():
     assert noise_explains(0.001, float("nan"))  # the floor unknown: nothing to tell
 
 
+@pytest.mark.slow
 def test_on_noise_free_data_a_stand_in_below_good_enough_does_not_stop_the_growth(monkeypatch):
     """The blind set's sprung cart with a torsion-sprung pendulum, spring-coupled to a second
     cart (``benchmarks/blind_systems.py``; sympy's Euler-Lagrange equations integrated by scipy

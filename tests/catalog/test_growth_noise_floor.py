@@ -43,6 +43,7 @@ def grown():
     return accelerations, xs, found, plain
 
 
+@pytest.mark.slow
 def test_the_climb_stops_at_the_noise_floor_with_the_law(grown):
     accelerations, xs, found, plain = grown
     # the law's criterion is at its floor (unforced, far above EXACT: only the floor stops)

@@ -79,6 +79,7 @@ def _wide_error(found, forces):
                  / np.linalg.norm(true))
 
 
+@pytest.mark.slow
 def test_no_second_judgment_where_the_criterion_is_cross_validated_or_two_folds_judge():
     accelerations, _ = quartic_rotor()
     ts, xs, us = forced_runs(accelerations, seed=6, noise=0.05, amplitude=1.5, n_runs=1,

@@ -117,6 +117,7 @@ def test_bad_input_to_the_guard(kwargs, match):
         TrackGuard(**arguments)
 
 
+@pytest.mark.slow
 def test_the_growth_gives_the_same_model_with_one_or_two_processes():
     """The automatic catalog grown on 2 s of a cart-pole exploration: the same steps, the
     same catalog (the law's, with configuration-dependent kinetic terms) and the same

@@ -26,6 +26,7 @@ def kinematic_model(request):
     return model
 
 
+@pytest.mark.slow
 def test_to_jax_takes_the_expression_path_and_agrees_with_the_kernel(kinematic_model):
     dynamics = kinematic_model.dynamics_
     n = dynamics.coords.n

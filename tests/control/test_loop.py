@@ -19,6 +19,7 @@ from pysindy_xl.control.tasks import get_task
 from pysindy_xl.mujoco import get_system
 
 
+@pytest.mark.slow
 def test_loop_explores_identifies_and_swings_up_the_cart_pole():
     """The loop's cycle on the plant, its identification step given the true equations."""
     seen = []

@@ -108,6 +108,7 @@ def test_linearization_and_lqr_match_finite_differences_at_the_upright():
     np.testing.assert_allclose(gain.gain, expected, rtol=1e-5)
 
 
+@pytest.mark.slow
 def test_ilqr_matches_lqr_near_the_upright():
     """iLQR on the nonlinear cart-pole from a small tilt, with the LQR's weights and its
     cost-to-go as terminal cost: the first feedback gain and command are the LQR's."""

@@ -68,6 +68,7 @@ def identify_from_noisy_positions(seed):
             "valid": result.valid, "model": model}
 
 
+@pytest.mark.slow
 def test_planar_arm_from_one_percent_position_noise():
     outcome = identify_from_noisy_positions(seed=1)
     assert outcome["mass"] < 0.05 and outcome["gravity"] < 0.05

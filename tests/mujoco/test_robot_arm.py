@@ -123,6 +123,7 @@ def test_physical_parameters_are_the_face_of_the_arm(arm, tmp_path, capsys):
     assert px.XLSINDy.load(path).physical_parameters() == parameters
 
 
+@pytest.mark.slow
 def test_the_arm_exports_to_jax(arm):
     jax = pytest.importorskip("jax")
     _, _, data, model = arm

@@ -144,6 +144,7 @@ def test_refit_is_the_least_squares_of_the_included_terms_on_all_rows():
             CatalogProblem.from_arrays(theta, 1, [0]), [1, 1, 0, 1, 0])
 
 
+@pytest.mark.slow
 def test_refit_coefficients_are_closer_to_the_truth_than_the_median(cart_pole_system):
     """The ensemble picks the terms, all the rows size them: at 3 % position noise the
     full-data refit of the included terms is more accurate than the median of the fits.

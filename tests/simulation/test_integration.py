@@ -162,6 +162,7 @@ def test_held_control_tightens_only_the_rk4_bound():
 HELD_ARM = STIFF_ARM.replace('kp="3000" kv="300"', 'kp="30" kv="3"')
 
 
+@pytest.mark.slow
 def test_held_control_keeps_rk4_past_the_unforced_ceiling(monkeypatch):
     system = MJCFSystem(HELD_ARM)
     model = system.mj_model()

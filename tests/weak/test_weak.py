@@ -245,6 +245,7 @@ def _success_rate(system, angles, level, seeds):
     return exact, float(np.median(errors)), valid
 
 
+@pytest.mark.slow
 def test_cart_pole_from_one_percent_noisy_positions(cart_pole_system):
     """CI cell of the noise sweep (measured: 5 of 8 seeds exact at 1 %, see the note)."""
     exact, error, valid = _success_rate(cart_pole_system, [1], 0.01, range(4))

@@ -89,6 +89,7 @@ def test_moments_are_those_of_the_draws(cart_pole_system):
                         noise="both")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 4])
 def test_double_pendulum_on_a_cart_at_five_percent(cart_double_pendulum_system, seed):
     """Seeds of the noise sweep where the rows fitted as they are lose a true term (seed 0:
