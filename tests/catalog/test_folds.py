@@ -81,6 +81,7 @@ def test_held_out_splits_of_the_extremes_train_inside_and_judge_beyond():
         held_out_splits(arrays, 5, region="extremes")
 
 
+@pytest.mark.slow
 def test_the_extreme_states_fold_refuses_the_stand_in_that_the_time_blocks_keep():
     accelerations, forces = torsion_pendulum()
     ts, xs, us = forced_runs(accelerations, seed=1, noise=0.05)

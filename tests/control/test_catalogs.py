@@ -21,6 +21,7 @@ def _exploration(name, seconds, seed=0, noise=0.01, force_limit=10.0):
     return episode, [(noisy_positions(episode, noise, rng), episode.t, episode.tau)]
 
 
+@pytest.mark.slow
 def test_the_automatic_catalog_grows_the_cart_pole_law_from_an_exploration():
     """2 s of excitation at 1 % position noise: the growth keeps configuration-dependent
     kinetic terms, and the model's accelerations match the true equations' on the recorded

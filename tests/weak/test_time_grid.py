@@ -123,6 +123,7 @@ def test_propagated_noise_covariance_matches_monte_carlo_on_a_jittered_grid():
                                                             abs=0.05)
 
 
+@pytest.mark.slow
 def test_jittered_and_gapped_stamps_identify_as_well_as_uniform(double_pendulum_system):
     # The same motion recorded on uniform stamps and on a log's stamps (jitter, gaps of up to
     # 9 steps, and one gap long enough to cut the record): the same law, as accurately.

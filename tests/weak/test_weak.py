@@ -354,6 +354,7 @@ def test_test_function_width_does_not_move_with_the_noise(seed):
         assert corner_frequency(t, noisy) == pytest.approx(clean, rel=0.1), level
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("grid", ["dropped", "two rates"])
 def test_positions_on_irregular_grids_are_recovered(grid, double_pendulum_system):
     # Lost samples or a changing logging rate: clean positions identify the true law as on a
