@@ -265,13 +265,14 @@ _ANGLES = {"cart_pole": [1], "double_pendulum": [0, 1], "cart_double_pendulum": 
 ])
 def test_noise_sweep_cells(name, level, request):
     system = request.getfixturevalue(f"{name}_system")
-    exact, error, valid = _success_rate(system, _ANGLES[name], level, range(6))
+    exact, error, valid = _success_rate(system, _ANGLES[name], level, range(4))
     # honest floors of what the method reaches today (measured on 10 seeds in
     # benchmarks/results/noise_sweep.md: exact support 6-10 of 10, median errors 0.1-0.8 %;
-    # the targets of issue 10 are higher)
+    # the targets of issue 10 are higher); four seeds per cell, the sweep's ten are the
+    # benchmark's
     assert exact >= 2, exact
     assert error < 0.02, error
-    assert valid >= 4, valid
+    assert valid >= 3, valid
 
 
 @pytest.mark.parametrize("name", ["cart_pole", "double_pendulum"])
