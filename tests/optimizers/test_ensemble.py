@@ -8,19 +8,15 @@ import numpy as np
 import pysindy as ps
 import pytest
 import scipy.stats
-from ground_truth import random_force, random_initial_state
-from support.paper import paper_catalog, true_coefficients
+from support.paper import noisy_run, paper_catalog, true_coefficients
 
 import pysindy_xl as px
 from pysindy_xl.optimizers import CatalogOptimizer, CatalogProblem
 
 
 def _noisy(system, seed, level=0.01, duration=30.0, active=None):
-    t = np.arange(0.0, duration, 0.01)
-    data = system.simulate(random_initial_state(system, seed), t,
-                           random_force(system, seed, active=active))
-    rng = np.random.default_rng(10_000 + seed)
-    return t, data["q"] + level * data["q"].std(0) * rng.normal(size=data["q"].shape), data
+    t, noisy, data, _ = noisy_run(system, seed, level, duration=duration, active=active)
+    return t, noisy, data
 
 
 def _ensemble_outcome(system, angles, seed, **options):

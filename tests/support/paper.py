@@ -24,12 +24,20 @@ def true_coefficients(system, library):
     return library.ideal_coefficients(lagrangian=system.lagrangian, classical=friction)
 
 
+_CLEAN_RUNS = {}
+
+
 def noisy_run(system, seed, level, duration=30.0, dt=0.01, active=None):
     """``(t, noisy q, clean run, force)``: a forced run with Gaussian position noise of
     ``level`` times each coordinate's standard deviation."""
     t = np.arange(0.0, duration, dt)
     force = random_force(system, seed, active=active)
-    data = system.simulate(random_initial_state(system, seed), t, force)
+    key = (system.name, str(system.lagrangian), system.friction.tobytes(),
+           system.force_amplitude.tobytes(), seed, duration, dt,
+           None if active is None else tuple(active))
+    if key not in _CLEAN_RUNS:  # the noise levels of a sweep share their seeds' runs
+        _CLEAN_RUNS[key] = system.simulate(random_initial_state(system, seed), t, force)
+    data = {name: value.copy() for name, value in _CLEAN_RUNS[key].items()}
     rng = np.random.default_rng(10_000 + seed)
     noisy = data["q"] + level * data["q"].std(axis=0) * rng.normal(size=data["q"].shape)
     return t, noisy, data, force
