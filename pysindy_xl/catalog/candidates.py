@@ -539,6 +539,28 @@ class CandidateFits:
         self._submit(ahead, key)
         return self.results[key]
 
+    def fit_key(self, parameters) -> str:
+        """The key of the one fit that serves ``parameters``: the :func:`parameters_key` of the
+        first parameters met whose catalogs hold what those of ``parameters`` hold
+        (:func:`candidate_content`), fitted once for all of them (:meth:`get`).
+
+        Parameters
+        ----------
+        parameters : dict
+            A candidate.
+
+        Returns
+        -------
+        str
+            Equal for parameters of equal content (their fit is the same, fitted once).
+
+        Examples
+        --------
+        >>> CandidateFits.fit_key.__name__
+        'fit_key'
+        """
+        return self._key(parameters)
+
     def _key(self, parameters, own=None) -> str:
         """The :func:`parameters_key` of the first parameters met whose catalogs hold what
         those of ``parameters`` hold (:func:`candidate_content`): equal catalogs give equal

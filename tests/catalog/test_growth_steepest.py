@@ -13,6 +13,7 @@ from sympy.physics import mechanics as me
 from pysindy_xl.catalog import grow_catalog
 from pysindy_xl.catalog import growth as growth_module
 from pysindy_xl.catalog.automatic import AutomaticCatalog
+from pysindy_xl.catalog.candidates import parameters_key
 from pysindy_xl.catalog.climbs import Climber
 from pysindy_xl.catalog.moves import REPEATED, START, holds, moved
 
@@ -156,6 +157,10 @@ class _ScoredFits:
 
     def __init__(self, criterion, max_terms):
         self.criterion, self.max_terms, self.asked = criterion, max_terms, []
+
+    @staticmethod
+    def fit_key(parameters):
+        return parameters_key(parameters)
 
     def get(self, parameters, ahead=()):
         self.asked.append(dict(parameters))
