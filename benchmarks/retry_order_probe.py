@@ -19,6 +19,7 @@ step fitted, identical content included). One JSON line per case on stdout::
 
     PYTHONPATH=$PWD python benchmarks/retry_order_probe.py double_pendulum:forced:0.0:0 ...
     PYTHONPATH=$PWD python benchmarks/retry_order_probe.py --grid 0 2   # half 0 of 2 (n >= 2)
+    PYTHONPATH=$PWD python benchmarks/retry_order_probe.py --grid 0 2 --done probe.jsonl
 """
 
 import json
@@ -129,6 +130,12 @@ def grid_cases(part, parts):
 
 if __name__ == "__main__":
     args = sys.argv[1:]
+    done = set()
+    if "--done" in args:  # (a JSONL file of this script's: its cases are skipped)
+        at = args.index("--done")
+        with open(args[at + 1], encoding="utf-8") as handle:
+            done = {json.loads(line)["case"] for line in handle if line.strip()}
+        args = args[:at] + args[at + 2:]
     keys = grid_cases(int(args[1]), int(args[2])) if args[:1] == ["--grid"] else args
-    for key in keys:
+    for key in [k for k in keys if k not in done]:
         print(json.dumps(probe(key)), flush=True)

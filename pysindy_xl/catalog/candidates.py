@@ -540,9 +540,8 @@ class CandidateFits:
         return self.results[key]
 
     def fit_key(self, parameters) -> str:
-        """The key of the one fit that serves ``parameters``: the :func:`parameters_key` of the
-        first parameters met whose catalogs hold what those of ``parameters`` hold
-        (:func:`candidate_content`), fitted once for all of them (:meth:`get`).
+        """The key of the one fit that serves ``parameters`` (equal for parameters of equal
+        content, fitted once for all of them by :meth:`get`: see :meth:`_key`).
 
         Parameters
         ----------
@@ -552,7 +551,6 @@ class CandidateFits:
         Returns
         -------
         str
-            Equal for parameters of equal content (their fit is the same, fitted once).
 
         Examples
         --------
