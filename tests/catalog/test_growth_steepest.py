@@ -111,7 +111,7 @@ def test_the_steepest_climb_retries_a_refused_move_narrowed_and_drops_the_stand_
     first = next(k for k, step in enumerate(found.steps) if step is refused[0])
     assert [(step.move, step.terms) for step in found.steps[first:first + 4]] == [
         ("degree", 117), ("degree@k1", 63), ("degree", 147), ("degree@k1", 75)]
-    assert not any(step.move.endswith("-kinetic") for step in found.steps)
+    assert not any(step.move == "degree-kinetic" for step in found.steps)
     assert (found.catalog.kinetic, found.catalog.degree, found.catalog.interaction) == (
         "constant", 4, 2)
     assert found.held_out_error < 1e-6
@@ -129,8 +129,9 @@ def test_the_steepest_climb_retries_a_refused_move_narrowed_and_drops_the_stand_
 
 def test_the_second_steepest_climb_is_given_the_first_ones_end(three_masses, monkeypatch):
     """With ``good_enough=0`` (and no noise floor) the growth climbs twice: the second
-    steepest climb, from the second-best first move (the interaction), stops at the first
-    climb's end, the law."""
+    steepest climb, from the second-best first move (the interaction), is given the first
+    climb's end (the law beside stand-in kinetic coefficients of single coordinates'
+    functions) and ends on the law itself."""
     _, t, xs, us = three_masses
     monkeypatch.setattr(growth_module, "MAX_TERMS", 100)
     _without_degree_pairs(monkeypatch)
@@ -146,8 +147,12 @@ def test_the_second_steepest_climb_is_given_the_first_ones_end(three_masses, mon
                          moves=("kinetic", "interaction", "degree"), steepest=True,
                          good_enough=0.0, noise_floor=False)
     law = dict(START, interaction=2, degree=4)
-    assert [(forced, end) for forced, end, _ in calls] == [(None, None), ("interaction", law)]
-    assert calls[0][2] == calls[1][2] == law
+    # the first climb ends on the law with the stand-in kinetic coefficients kept over single
+    # coordinates' functions (the refused degree move's retry keeps them); the backward
+    # phase drops them
+    end = dict(law, kinetic="configuration", kinetic_interaction=1)
+    assert [(forced, end) for forced, end, _ in calls] == [(None, None), ("interaction", end)]
+    assert calls[0][2] == end and calls[1][2] == law  # (the second climb reaches the law)
     assert (found.catalog.kinetic, found.catalog.degree, found.catalog.interaction) == (
         "constant", 4, 2)
 
