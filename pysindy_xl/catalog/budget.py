@@ -15,11 +15,14 @@ minutes. So the search counts its work in fits of a 100-term catalog,
 with ``c = 1`` on forced data and :data:`IMPLICIT_COST` on unforced data, whose implicit law
 selection costs several times an explicit one of the same size (per unit of ``(k / 100)^3``,
 2 to 6 CPU s on the half-car's unforced growths, 0.7 to 1.2 s on forced growths of three and
-four coordinates),
+four coordinates), the sum over the fits made: a candidate whose catalogs hold what an
+earlier one's hold (other parameters, the same columns) is that fit, not refitted
+(:meth:`~.candidates.CandidateFits.fit_key`), and adds nothing;
 
 and a candidate whose fit would take ``W`` over the budget is not fitted (its step's note
-says ``"budget"``); the climbs retry it smaller, as a move over the ceiling (constant kinetic
-coefficients, then kinetic coefficients of single coordinates' functions). Smaller catalogs
+says ``"budget"``); the climbs retry it smaller, as a move over the ceiling (kinetic
+coefficients of the catalog's order or over fewer coordinates' functions, or constant ones:
+:mod:`.retries`). Smaller catalogs
 still fit while the budget allows them: the climbs, their pairs and the backward phase go on
 among those. The budget bounds the search's CPU; the near ties' cross-validation and the
 final fit come on top (a few fits of the smallest catalogs of the laws found).

@@ -539,6 +539,26 @@ class CandidateFits:
         self._submit(ahead, key)
         return self.results[key]
 
+    def fit_key(self, parameters) -> str:
+        """The key of the one fit that serves ``parameters`` (equal for parameters of equal
+        content, fitted once for all of them by :meth:`get`: see :meth:`_key`).
+
+        Parameters
+        ----------
+        parameters : dict
+            A candidate.
+
+        Returns
+        -------
+        str
+
+        Examples
+        --------
+        >>> CandidateFits.fit_key.__name__
+        'fit_key'
+        """
+        return self._key(parameters)
+
     def _key(self, parameters, own=None) -> str:
         """The :func:`parameters_key` of the first parameters met whose catalogs hold what
         those of ``parameters`` hold (:func:`candidate_content`): equal catalogs give equal

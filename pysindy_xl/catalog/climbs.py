@@ -79,7 +79,9 @@ class Climber:
     first : GrowthStep
         The smallest catalog's step (after :meth:`start`).
     work : float
-        The work of the catalogs fitted so far (:func:`~.budget.work_cost` summed).
+        The work of the catalogs fitted so far (:func:`~.budget.work_cost` summed), each fit
+        once: parameters whose catalogs hold what an earlier candidate's hold share its fit
+        (:meth:`~.candidates.CandidateFits.fit_key`) and add nothing.
 
     Examples
     --------
@@ -98,6 +100,7 @@ class Climber:
         self.rates, self.budget, self.work = rates, budget, 0.0
         self.steps, self.first = [], None
         self._cache = {}  # every catalog is fitted once, whichever path tries it
+        self._paid = set()  # the fits paid for in :attr:`work` (their fit_key)
         self._parameters = {}  # the parameters of each step, by the step's id
         self._models = {}  # the fitted models of each step (its floor asked later), by id
         self._seconds = {}  # the second judge's steps, by the first's (of "consensus")
@@ -120,8 +123,13 @@ class Climber:
         GrowthStep
         """
         fields = self.fits.get(parameters, ahead)
-        if fields.get("terms", 0) > 0 and not fields.get("note", "").startswith(REFUSED):
-            # (a failed fit was paid too; unforced data: the implicit fit's cost)
+        fit = self.fits.fit_key(parameters)
+        if (fields.get("terms", 0) > 0 and not fields.get("note", "").startswith(REFUSED)
+                and fit not in self._paid):
+            # (a failed fit was paid too; unforced data: the implicit fit's cost); a catalog
+            # whose content was fitted before under other parameters is that fit, not paid
+            # again (:meth:`~.candidates.CandidateFits.get`)
+            self._paid.add(fit)
             self.work += work_cost(fields["terms"], self.criterion != "forces")
         step = GrowthStep(move=move, chosen=False,
                           **{key: value for key, value in fields.items() if key != "models"})

@@ -116,10 +116,15 @@ A refused move (over the ceiling, or over the work budget ``work_budget``, :mod:
 tried again with fewer kinetic coefficients (:func:`~.retries.attempt_within_limits`): with the
 kinetic order of the catalog it moved from (``"interaction@k2"``: a three-link arm in relative
 angles, inertia in ``cos(b + c)``, gravity in ``cos(a + b + c)``, 143 terms, 191 with one order
-for both), with constant ones (``"degree-kinetic"``: three masses on quartic springs), or over
-fewer coordinates' functions (``kinetic_interaction``, ``"kinetic@k1"``: two spring-coupled
-carts, each with a pendulum, 123 terms, 333 with one order). A joint first move over the
-ceiling is narrowed so too, and the move ``"kinetic"`` widens a narrowed order by one.
+for both), over fewer coordinates' functions (``kinetic_interaction``, ``"kinetic@k1"``: two
+spring-coupled carts, each with a pendulum, 123 terms, 333 with one order), or with constant
+ones (``"degree-kinetic"``: three masses on quartic springs). A retry drops no family the
+catalog it moved from holds while one that narrows it is within the limits
+(:func:`~.retries.retry_order`: from configuration-dependent kinetic coefficients the narrower
+orders come before constant ones; a Furuta pendulum's arm spring ``"angle_degree@k1"`` keeps
+the ``sin(b)^2`` inertia the climb kept); dropping a family is the backward phase's. A joint
+first move over the ceiling is narrowed so too, and the move ``"kinetic"`` widens a narrowed
+order by one.
 
 The climb only adds, and the start always holds an angle's sines and cosines: where families
 are nearly dependent on the data's range (``cos(phi) = 1 - phi^2/2 + phi^4/24 - ...``), the

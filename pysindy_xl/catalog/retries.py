@@ -3,8 +3,20 @@
 A catalog over the data-sized ceiling (``max_terms``) or over the search's work budget
 (:mod:`.budget`) is not fitted. Its move may still hold the family the law needs: the
 configuration-dependent kinetic coefficients multiply a catalog by the velocity monomials, so
-the move is tried again with fewer of them (the kinetic order its catalog had, constant
-coefficients, then narrower orders, :func:`~.moves.narrow`).
+the move is tried again with fewer of them (:func:`retry_catalogs`): the kinetic order its
+catalog had, kinetic coefficients over fewer coordinates' functions
+(:func:`~.moves.narrow`), or constant ones.
+
+The retries come in the order of what they keep of the catalog the move is made from
+(:func:`retry_order`). A climb only adds; dropping a family is the backward phase's job
+(:mod:`.backward`), judged there as a drop. So where that catalog holds
+configuration-dependent kinetic coefficients, the retries that keep them (over fewer
+coordinates' functions) come before the one that drops them (constant coefficients): on a
+Furuta pendulum's 85-term catalog (kinetic coefficients over two angles' functions with
+``sin(b)^2``, potential products of two angles), the move ``"angle_degree"`` (98 terms, over a
+ceiling of 96) is retried as ``"angle_degree@k1"`` (50 terms, the law's inertia
+``sin(b)^2 a_dot^2`` and its return spring ``a^2``), not as ``"angle_degree-kinetic"`` (26
+terms), which dropped the inertia the climb had kept.
 """
 
 from __future__ import annotations
@@ -13,29 +25,122 @@ from .budget import OVER
 from .candidates import parameters_key
 from .moves import START, holds, kinetic_order, moved, narrow
 
-__all__ = ["attempt_within_limits"]
+__all__ = ["attempt_within_limits", "retry_catalogs", "retry_order", "RETRIES"]
+
+#: The kinds of retries of a refused move (:func:`retry_catalogs`): ``"state_order"`` (the
+#: kinetic order of the catalog the move is made from, where the move widened it),
+#: ``"narrower"`` (kinetic coefficients over fewer coordinates' functions, widest first) and
+#: ``"constant"`` (constant kinetic coefficients).
+RETRIES = ("state_order", "narrower", "constant")
+
+
+def retry_catalogs(parameters, move, state, kinds, n) -> dict:
+    """The retries of the move ``move`` to ``parameters`` (from the catalog ``state``), by kind
+    (:data:`RETRIES`), each a list of ``(name, parameters)``.
+
+    - ``"state_order"``: where the move widened the configuration-dependent kinetic
+      coefficients of ``state`` (an ``"interaction"`` move widens them with the potential's
+      products), with the kinetic order ``state`` had (``f"{move}@k<m>"``,
+      :func:`~.moves.narrow`): the potential's products grow alone, the inertia the climb
+      kept is kept (a three-link arm in relative angles: gravity in ``cos(a + b + c)``,
+      inertia in ``cos(b + c)``);
+    - ``"narrower"``: with configuration-dependent kinetic coefficients over fewer
+      coordinates' functions, each order below the move's, widest first (``f"{move}@k<m>"``),
+      the potential's products kept: a cart's pendulum ``cos(a) a_dot x1_dot`` beside the
+      spring ``x1 x2`` that couples two carts;
+    - ``"constant"``: with constant kinetic coefficients (``f"{move}-kinetic"``):
+      configuration-dependent ones multiply the catalog by the velocity monomials.
+
+    Parameters
+    ----------
+    parameters : dict
+        The refused catalog.
+    move : str
+        The move's name.
+    state : dict or None
+        The catalog the move is made from (None: unknown).
+    kinds : sequence of str
+        The coordinates' kinds.
+    n : int
+        The number of coordinates.
+
+    Returns
+    -------
+    dict
+        ``{kind: [(name, parameters), ...]}`` for each kind of :data:`RETRIES` (an empty list
+        where none applies).
+
+    Examples
+    --------
+    >>> from pysindy_xl.catalog.moves import START, moved
+    >>> state = moved(START, "interaction+kinetic_trig_degree", ["angle"] * 2, 2)
+    >>> refused = moved(state, "angle_degree", ["angle"] * 2, 2)
+    >>> retries = retry_catalogs(refused, "angle_degree", state, ["angle"] * 2, 2)
+    >>> [name for kind in RETRIES for name, _ in retries[kind]]
+    ['angle_degree@k1', 'angle_degree-kinetic']
+    """
+    out = {kind: [] for kind in RETRIES}
+    configuration = parameters["kinetic"] == "configuration"
+    if (state is not None and configuration and state["kinetic"] == "configuration"
+            and kinetic_order(parameters) > kinetic_order(state)):
+        kept = moved(parameters, narrow("", kinetic_order(state)), kinds, n)
+        if kept is not None:
+            out["state_order"].append((narrow(move, kinetic_order(state)), kept))
+    for order in range(kinetic_order(parameters) - 1, 0, -1) if configuration else ():
+        narrower = moved(parameters, narrow("", order), kinds, n)
+        if narrower is not None:
+            out["narrower"].append((narrow(move, order), narrower))
+    smaller = dict(parameters, kinetic=START["kinetic"])
+    smaller.pop("kinetic_interaction", None)
+    smaller.pop("kinetic_trig_degree", None)
+    out["constant"].append((f"{move}-kinetic", smaller))
+    return out
+
+
+def retry_order(state) -> tuple:
+    """The order in which the kinds of retries (:data:`RETRIES`) of a move from ``state`` are
+    tried: first what keeps every family of ``state``, then what narrows what it holds, last
+    what drops one.
+
+    Where ``state`` holds configuration-dependent kinetic coefficients, the constant retry
+    drops them: it comes after the narrower ones, which keep them over fewer coordinates'
+    functions. Where ``state``'s kinetic coefficients are constant (or ``state`` is unknown),
+    the constant retry drops only what the move adds, and comes before the narrower ones.
+
+    Parameters
+    ----------
+    state : dict or None
+        The catalog the move is made from.
+
+    Returns
+    -------
+    tuple of str
+
+    Examples
+    --------
+    >>> from pysindy_xl.catalog.moves import START
+    >>> retry_order(dict(START, kinetic="configuration"))
+    ('state_order', 'narrower', 'constant')
+    >>> retry_order(START)
+    ('state_order', 'constant', 'narrower')
+    """
+    if state is not None and state["kinetic"] == "configuration":
+        return ("state_order", "narrower", "constant")
+    return ("state_order", "constant", "narrower")
 
 
 def attempt_within_limits(climber, parameters, move, tried, ahead=(), state=None) -> tuple:
     """The parameters and the step of a climb's move (:meth:`~.climbs.Climber.attempt`),
     recorded in ``tried``. Where the ceiling or the work budget refuses it (and the climber's
-    ``retry_kinetic``), the move is tried again, in turn, until a retry is within both:
+    ``retry_kinetic``), the move is tried again (:func:`retry_catalogs`, in the order of
+    :func:`retry_order`) until a retry is within both:
 
-    1. where the move widened configuration-dependent kinetic coefficients of the catalog
-       ``state`` it moved from (an ``"interaction"`` move widens them with the
-       potential's products), with the kinetic order ``state`` had (``f"{move}@k<m>"``,
-       :func:`~.moves.narrow`): the potential's products grow alone, the inertia the
-       climb kept is kept (a three-link arm in relative angles: gravity in
-       ``cos(a + b + c)``, inertia in ``cos(b + c)``);
-    2. with constant kinetic coefficients (``f"{move}-kinetic"``), where that catalog is
-       neither in ``tried`` nor one that ``state`` holds: configuration-dependent ones
-       multiply the catalog by the velocity monomials;
-    3. with configuration-dependent kinetic coefficients over fewer coordinates'
-       functions, the widest order below the move's first (``f"{move}@k<m>"``), the
-       potential's products kept: a cart's pendulum ``cos(a) a_dot x1_dot`` beside the
-       spring ``x1 x2`` that couples two carts.
-
-    A retry whose catalog is in ``tried`` is not made.
+    - a ``"state_order"`` retry whose catalog is in ``tried`` is not made;
+    - the ``"narrower"`` retries stop at the first whose catalog is in ``tried`` (the
+      kinetic order ``state`` had, tried already: below it the retries narrow what ``state``
+      holds, and the climb has judged that order);
+    - the ``"constant"`` retry is not made where its catalog is in ``tried`` or is one that
+      ``state`` holds (no move forward).
 
     Parameters
     ----------
@@ -62,31 +167,18 @@ def attempt_within_limits(climber, parameters, move, tried, ahead=(), state=None
     step = climber.attempt(parameters, move, ahead)
     if not (step.note.startswith(OVER) and climber.retry_kinetic):
         return parameters, step
-    original = parameters
-    configuration = original["kinetic"] == "configuration"
-    if (state is not None and configuration and state["kinetic"] == "configuration"
-            and kinetic_order(original) > kinetic_order(state)):
-        kept = moved(original, narrow("", kinetic_order(state)), climber.kinds, climber.n)
-        if kept is not None and parameters_key(kept) not in tried:
-            tried.add(parameters_key(kept))
-            parameters, step = kept, climber.attempt(
-                kept, narrow(move, kinetic_order(state)))
+    retries = retry_catalogs(parameters, move, state, climber.kinds, climber.n)
+    for kind in retry_order(state):
+        for name, retry in retries[kind]:
+            key = parameters_key(retry)
+            if key in tried:
+                if kind == "narrower":
+                    break
+                continue
+            if kind == "constant" and state is not None and holds(state, retry):
+                continue
+            tried.add(key)
+            parameters, step = retry, climber.attempt(retry, name)
             if not step.note.startswith(OVER):
                 return parameters, step
-    smaller = dict(original, kinetic=START["kinetic"])
-    smaller.pop("kinetic_interaction", None)
-    smaller.pop("kinetic_trig_degree", None)
-    if parameters_key(smaller) not in tried and (state is None or not holds(state, smaller)):
-        tried.add(parameters_key(smaller))  # the kinetic coefficients give way
-        parameters, step = smaller, climber.attempt(smaller, f"{move}-kinetic")
-        if not step.note.startswith(OVER):
-            return parameters, step
-    for order in range(kinetic_order(original) - 1, 0, -1) if configuration else ():
-        narrower = moved(original, narrow("", order), climber.kinds, climber.n)
-        if narrower is None or parameters_key(narrower) in tried:
-            return parameters, step
-        tried.add(parameters_key(narrower))
-        parameters, step = narrower, climber.attempt(narrower, narrow(move, order))
-        if not step.note.startswith(OVER):
-            break
     return parameters, step

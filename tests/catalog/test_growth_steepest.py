@@ -13,6 +13,7 @@ from sympy.physics import mechanics as me
 from pysindy_xl.catalog import grow_catalog
 from pysindy_xl.catalog import growth as growth_module
 from pysindy_xl.catalog.automatic import AutomaticCatalog
+from pysindy_xl.catalog.candidates import parameters_key
 from pysindy_xl.catalog.climbs import Climber
 from pysindy_xl.catalog.moves import REPEATED, START, holds, moved
 
@@ -84,13 +85,15 @@ def _without_degree_pairs(monkeypatch):
     monkeypatch.setattr(growth_module, "joint_moves", single_pairs)
 
 
-def test_the_steepest_climb_retries_a_refused_move_with_constant_kinetic_coefficients(
+def test_the_steepest_climb_retries_a_refused_move_narrowed_and_drops_the_stand_in_after(
         three_masses, monkeypatch):
     """From the first catalog the steepest climb keeps the joint move (configuration-dependent
     kinetic coefficients over products of two coordinates, 72 terms): a stand-in. The
-    quartic spring then needs degree 4, 147 terms there, over a ceiling of 100; with constant
-    kinetic coefficients it is 39 terms and states the law, which the climb keeps. The
-    model's accelerations match the sympy truth on fresh states."""
+    quartic spring then needs degree 4, 147 terms there, over a ceiling of 100. The retry
+    keeps the kinetic family the climb kept, over single coordinates' functions (75 terms,
+    holding the law), before it would drop it (constant coefficients, 39 terms); the climb
+    keeps it, and the backward phase drops the stand-in family (``"-kinetic"``): the law,
+    39 terms. The model's accelerations match the sympy truth on fresh states."""
     accelerations, t, xs, us = three_masses
     monkeypatch.setattr(growth_module, "MAX_TERMS", 100)
     _without_degree_pairs(monkeypatch)
@@ -99,13 +102,16 @@ def test_the_steepest_climb_retries_a_refused_move_with_constant_kinetic_coeffic
     assert found.max_terms == 100
     table = found.table()
     kept = [(step.move, step.terms) for step in found.steps if step.chosen]
-    assert kept == [("start", 15), ("kinetic+interaction", 72), ("degree-kinetic", 39)], table
+    assert kept == [("start", 15), ("kinetic+interaction", 72), ("degree@k1", 75),
+                    ("-kinetic", 39)], table
     refused = [step for step in found.steps if step.note.startswith("ceiling")]
     assert [(step.move, step.terms) for step in refused] == [("degree", 117), ("degree", 147)]
-    # each refused move is followed by its retry: degree 3, then 4, with constant coefficients
+    # each refused move is followed by its retry: degree 3, then 4, kinetic coefficients
+    # of single coordinates' functions (within the ceiling: no constant retry)
     first = next(k for k, step in enumerate(found.steps) if step is refused[0])
     assert [(step.move, step.terms) for step in found.steps[first:first + 4]] == [
-        ("degree", 117), ("degree-kinetic", 27), ("degree", 147), ("degree-kinetic", 39)]
+        ("degree", 117), ("degree@k1", 63), ("degree", 147), ("degree@k1", 75)]
+    assert not any(step.move == "degree-kinetic" for step in found.steps)
     assert (found.catalog.kinetic, found.catalog.degree, found.catalog.interaction) == (
         "constant", 4, 2)
     assert found.held_out_error < 1e-6
@@ -123,8 +129,9 @@ def test_the_steepest_climb_retries_a_refused_move_with_constant_kinetic_coeffic
 
 def test_the_second_steepest_climb_is_given_the_first_ones_end(three_masses, monkeypatch):
     """With ``good_enough=0`` (and no noise floor) the growth climbs twice: the second
-    steepest climb, from the second-best first move (the interaction), stops at the first
-    climb's end, the law."""
+    steepest climb, from the second-best first move (the interaction), is given the first
+    climb's end (the law beside stand-in kinetic coefficients of single coordinates'
+    functions) and ends on the law itself."""
     _, t, xs, us = three_masses
     monkeypatch.setattr(growth_module, "MAX_TERMS", 100)
     _without_degree_pairs(monkeypatch)
@@ -140,8 +147,12 @@ def test_the_second_steepest_climb_is_given_the_first_ones_end(three_masses, mon
                          moves=("kinetic", "interaction", "degree"), steepest=True,
                          good_enough=0.0, noise_floor=False)
     law = dict(START, interaction=2, degree=4)
-    assert [(forced, end) for forced, end, _ in calls] == [(None, None), ("interaction", law)]
-    assert calls[0][2] == calls[1][2] == law
+    # the first climb ends on the law with the stand-in kinetic coefficients kept over single
+    # coordinates' functions (the refused degree move's retry keeps them); the backward
+    # phase drops them
+    end = dict(law, kinetic="configuration", kinetic_interaction=1)
+    assert [(forced, end) for forced, end, _ in calls] == [(None, None), ("interaction", end)]
+    assert calls[0][2] == end and calls[1][2] == law  # (the second climb reaches the law)
     assert (found.catalog.kinetic, found.catalog.degree, found.catalog.interaction) == (
         "constant", 4, 2)
 
@@ -156,6 +167,10 @@ class _ScoredFits:
 
     def __init__(self, criterion, max_terms):
         self.criterion, self.max_terms, self.asked = criterion, max_terms, []
+
+    @staticmethod
+    def fit_key(parameters):
+        return parameters_key(parameters)
 
     def get(self, parameters, ahead=()):
         self.asked.append(dict(parameters))
