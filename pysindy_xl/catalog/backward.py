@@ -118,6 +118,49 @@ def removed(state: dict, move: str, kinds, start: dict) -> dict | None:
     return new
 
 
+def _stepped_down(smaller: dict, move: str, kinds) -> list:
+    """The catalogs an exchange starts from: ``smaller`` (``move``'s family one degree step
+    down) and, for a family grown by several degree steps, the family back at its lowest
+    (``trig_degree`` 1, no angle powers), with the number of steps taken down.
+
+    A stand-in grown degree by degree (``sin^3 a sin^3 b`` products for a spring
+    ``(a - b)^2``) is not left one step at a time: the catalog one step down still holds
+    most of the stand-in, and its exchange may score worse than the end, while the family at
+    its lowest with the other family beside it is the law.
+
+    Parameters
+    ----------
+    smaller : dict
+        The catalog parameters after the removal ``move`` (one step down).
+    move : str
+        The removal (:data:`REMOVALS`).
+    kinds : sequence of str
+        The coordinates' kinds.
+
+    Returns
+    -------
+    list of tuple
+        ``(steps, parameters)``: ``(1, smaller)``, then the lowest where it is further down.
+
+    Examples
+    --------
+    >>> start = {"degree": 2, "trig_degree": 1, "angle_degree": 0, "interaction": 1,
+    ...          "kinetic": "constant", "gyroscopic": False, "dissipation": ("viscous",),
+    ...          "splines": None, "spline_ends": "linear"}
+    >>> [(k, p["trig_degree"]) for k, p in _stepped_down(dict(start, trig_degree=2),
+    ...                                                  "trig_degree", ["angle"])]
+    [(1, 2), (2, 1)]
+    """
+    out = [(1, smaller)]
+    if move in ("trig_degree", "angle_degree"):
+        steps, lower = 1, smaller
+        while (further := removed(lower, move, kinds, START)) is not None:
+            steps, lower = steps + 1, further
+        if steps > 1:
+            out.append((steps, lower))
+    return out
+
+
 def backward_phase(climber, state, best, path, moves) -> tuple:
     """Drop the family whose removal the keep rule accepts best (a smaller catalog within
     the tolerance at an equal fitted size is kept too: the stand-in that a family offers
@@ -167,12 +210,14 @@ def backward_phase(climber, state, best, path, moves) -> tuple:
         exchanges = []
         for move, smaller in (refused if not dropped and not climber.settled(best, False)
                               else ()):
-            for other in EXCHANGES.get(move, ()):
-                for skip in (0, 1) if other in moves else ():
-                    parameters = climber.moved(smaller, other, skip)
-                    if (parameters is not None and parameters_key(parameters) not in visited
-                            and climber.size(parameters) != climber.size(smaller)):
-                        exchanges.append((f"-{move}+{other}", parameters))
+            for steps, base in _stepped_down(smaller, move, climber.kinds):
+                for other in EXCHANGES.get(move, ()):
+                    for skip in (0, 1) if other in moves else ():
+                        parameters = climber.moved(base, other, skip)
+                        if (parameters is not None and parameters_key(parameters) not in visited
+                                and climber.size(parameters) != climber.size(base)):
+                            exchanges.append((f"-{move}{'' if steps == 1 else f'*{steps}'}"
+                                              f"+{other}", parameters))
         for k, (name, parameters) in enumerate(exchanges):
             step = climber.attempt(parameters, name, [p for _, p in exchanges[k + 1:]])
             if climber.keeps(step, best):
