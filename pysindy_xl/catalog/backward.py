@@ -19,7 +19,8 @@ __all__ = ["REMOVALS", "EXCHANGES", "removed", "backward_phase"]
 #: family, or its last degree step), or ``"trig"`` (an angle's sines and cosines, beside its
 #: powers).
 REMOVALS = ("splines", "exponentials", "trig", "trig_degree", "angle_degree", "degree",
-            "interaction", "kinetic", "gyroscopic", "coulomb", "kinetic_trig_degree")
+            "interaction", "kinetic", "gyroscopic", "coulomb", "kinetic_trig_degree",
+            "differences")
 
 #: The moves a removal is exchanged for when it is not kept alone: the potential's families
 #: that stand in for each other (sines and cosines, or a degree of them, for powers of the
@@ -111,6 +112,10 @@ def removed(state: dict, move: str, kinds, start: dict) -> dict | None:
         if state.get("kinetic_trig_degree") is None:
             return None
         new.pop("kinetic_trig_degree")
+    elif move == "differences":  # (their squares last)
+        if not state.get("differences"):
+            return None
+        new["differences"] = 0 if state["differences"] <= 2 else state["differences"] - 1
     else:  # coulomb
         if "coulomb" not in state["dissipation"]:
             return None
