@@ -13,7 +13,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import pysindy_xl as px
-from pysindy_xl.catalog.backward import backward_phase, removed
+from pysindy_xl.catalog.backward import _stepped_down, backward_phase, removed
 from pysindy_xl.catalog.candidates import parameters_key
 from pysindy_xl.catalog.keep_rules import single_keeps
 from pysindy_xl.catalog.moves import MOVES, START, holds, moved
@@ -69,6 +69,9 @@ def test_backward_exchange_leaves_a_family_grown_several_degrees_at_once():
     # the one-step exchange (degree 2 beside the powers) was tried first, and refused
     assert "-trig_degree+angle_degree" in climber.tried
     assert path[-1].move == "-trig_degree*2+angle_degree"
+    # the angles' powers are exchanged one step at a time only (all of them out for sines and
+    # cosines one degree up is the stand-in that the blocks cannot tell from a spring at noise)
+    assert len(_stepped_down(dict(START, angle_degree=3), "angle_degree", KINDS)) == 1
 
 
 def test_difference_family_terms_sizes_and_refusals():
