@@ -86,9 +86,9 @@ def test_difference_family_terms_sizes_and_refusals():
     assert [str(t) for t in mixed.lagrange_terms() if "x1 + x2" in str(t)] == [
         f"(-x1 + x2)**{k}" for k in (2, 3, 4)]
     with pytest.raises(ValueError, match="differences"):
-        px.AutomaticCatalog(["m", "l"], kinds="angle", differences=1).n_terms
+        px.AutomaticCatalog(["m", "l"], kinds="angle", differences=1).lagrange_terms()
     with pytest.raises(ValueError, match="differences"):
-        px.AutomaticCatalog(["m", "l"], kinds="angle", differences=-1).n_terms
+        px.AutomaticCatalog(["m", "l"], kinds="angle", differences=-1).lagrange_terms()
     # the move grows it by degree steps and the backward phase takes them back
     assert moved(START, "differences", KINDS, 2)["differences"] == 2
     assert moved(START, "differences", KINDS, 2, skip=1)["differences"] == 3
