@@ -245,7 +245,7 @@ def case_of(key, table=None):
     return system, truth, forced, case_data(system, truth, float(noise), int(seed), forced)
 
 
-def run_case(system, truth, noise, seed, forced, baselines=True, region="block"):
+def run_case(system, truth, noise, seed, forced, baselines=True, region="block", extra_moves=()):
     runs, test, xs, ts, us = case_data(system, truth, noise, seed, forced)
     names = list(system["coords"].names)
     record = {"system": system["name"], "n": truth.n, "noise": noise, "seed": seed,
@@ -256,7 +256,7 @@ def run_case(system, truth, noise, seed, forced, baselines=True, region="block")
         warnings.simplefilter("ignore")
         try:
             found = px.grow_catalog(xs, ts, us, coordinates=names, kinds=system["kinds"],
-                                    region=region)
+                                    region=region, **_moves(extra_moves))
             record["seconds"] = time.perf_counter() - started
             record["cpu_seconds"] = time.process_time() - cpu
             record["catalog"] = found.catalog.describe()
@@ -316,6 +316,15 @@ def run_case(system, truth, noise, seed, forced, baselines=True, region="block")
     return record
 
 
+def _moves(extra_moves) -> dict:
+    """grow_catalog's ``moves`` with ``extra_moves`` (some of ``MORE_MOVES``) added; empty
+    (the default moves) without them."""
+    if not extra_moves:
+        return {}
+    from pysindy_xl.catalog.moves import MOVES
+    return {"moves": tuple(MOVES) + tuple(m for m in extra_moves if m not in MOVES)}
+
+
 def recorded(path, key):
     """``key(record)`` of every record already in the JSONL file ``path`` (the cases a rerun
     skips; empty when the file does not exist)."""
@@ -353,6 +362,8 @@ def main(argv=None):
     parser.add_argument("--report", default=None, metavar="FILE.md")
     parser.add_argument("--region", default="block",
                         help="grow_catalog's region (default: block)")
+    parser.add_argument("--extra-moves", nargs="*", default=[],
+                        help="moves of MORE_MOVES added to grow_catalog's default moves")
     args = parser.parse_args(argv)
     if args.report:
         write_report(args.out, args.report)
@@ -392,7 +403,10 @@ def run_grid(table, args, region="block") -> int:
                                                     forcing == "forced")))
         else:
             record = run_case(system, truth, noise, seed, forcing == "forced",
-                              baselines=not args.no_baselines, region=region)
+                              baselines=not args.no_baselines, region=region,
+                              extra_moves=getattr(args, "extra_moves", ()))
+            if getattr(args, "extra_moves", ()):
+                record["extra_moves"] = list(args.extra_moves)
         with open(args.out, "a", encoding="utf-8") as handle:
             handle.write(json.dumps(_finite(record)) + "\n")
         auto = record["auto"]

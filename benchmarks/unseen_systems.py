@@ -117,7 +117,7 @@ def systems():
     return {s["name"]: s for s in out}
 
 
-def explain(case, table=None):
+def explain(case, table=None, extra_moves=()):
     """Print the growth path of one case ``system:forcing:noise:seed`` of the systems ``table``
     (a function returning them; default :func:`systems`): its table, the fitted Lagrangian next
     to the truth, and the scores."""
@@ -125,7 +125,7 @@ def explain(case, table=None):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         found = px.grow_catalog(xs, ts, us, coordinates=list(system["coords"].names),
-                                kinds=system["kinds"])
+                                kinds=system["kinds"], **gs._moves(extra_moves))
     print(found.table())
     print("catalog:", found.catalog.describe())
     print("found L:", found.model.lagrangian())
@@ -258,12 +258,14 @@ def main(argv=None, table=None, results=RESULTS, script="unseen_systems.py",
                              "only the baselines on them")
     parser.add_argument("--report", default=None, metavar="FILE.md")
     parser.add_argument("--explain", default=None, metavar="SYSTEM:FORCING:NOISE:SEED")
+    parser.add_argument("--extra-moves", nargs="*", default=[],
+                        help="moves of MORE_MOVES added to grow_catalog's default moves")
     args = parser.parse_args(argv)
     if args.report:
         write_report(args.out, args.report, table, script, title)
         return 0
     if args.explain:
-        explain(args.explain, table)
+        explain(args.explain, table, args.extra_moves)
         return 0
     return gs.run_grid(table(), args)
 

@@ -156,6 +156,13 @@ class AutomaticCatalog(CatalogRepartition):
         Highest power of an angle itself (``theta^2``: torsion springs).
     interaction : int, default 1
         Most coordinates in one product of functions.
+    differences : int, default 0
+        Highest power of the difference of each pair of coordinates of one kind: the
+        potential gains ``(q_j - q_i)^k``, ``k = 2..differences`` (0: none; 1 is refused), a
+        spring between two coordinates (a joint's deflection ``l - m``, a coupling spring) in
+        one column, where the products of powers state it in three (``m^2, l m, l^2``) that the
+        sparse selection must keep together, and sines and cosines stand in for it in two
+        (``cos(l - m) = cos(l) cos(m) + sin(l) sin(m)``). Independent of ``interaction``.
     kinetic : {"constant", "configuration"}, default "configuration"
         Coefficients of the velocity products ``qd_i qd_j``: constants, or also products (over
         ``kinetic_interaction`` coordinates) of linear coordinates up to degree 2 and of the
@@ -251,6 +258,7 @@ class AutomaticCatalog(CatalogRepartition):
         "trig_degree": [Interval("int", 0)],
         "angle_degree": [Interval("int", 0)],
         "interaction": [Interval("int", 1)],
+        "differences": [Interval("int", 0)],
         "kinetic_interaction": [None, Interval("int", 1)],
         "kinetic": [Options(("constant", "configuration"))],
         "kinetic_trig_degree": [None, Interval("int", 0)],
@@ -270,7 +278,8 @@ class AutomaticCatalog(CatalogRepartition):
                  angle_degree=0, interaction=1, kinetic="configuration", gyroscopic=False,
                  dissipation=("viscous",), coulomb_scale=0.01, splines=None, interlink=None,
                  max_terms=2000, kinetic_interaction=None, spline_ends="linear",
-                 spline_basis="bspline", exponentials=None, kinetic_trig_degree=None):
+                 spline_basis="bspline", exponentials=None, kinetic_trig_degree=None,
+                 differences=0):
         self.coordinates = coordinates
         self.kinds = kinds
         self.bounds = bounds
@@ -290,6 +299,7 @@ class AutomaticCatalog(CatalogRepartition):
         self.spline_basis = spline_basis
         self.exponentials = exponentials
         self.kinetic_trig_degree = kinetic_trig_degree
+        self.differences = differences
 
     # -- the parameters, checked ---------------------------------------------------------------
     def _coordinates(self) -> Coordinates:
@@ -311,6 +321,10 @@ class AutomaticCatalog(CatalogRepartition):
         for name, low in (("degree", 0), ("trig_degree", 0), ("angle_degree", 0),
                           ("interaction", 1), ("max_terms", 1)):
             options[name] = check_option(name, getattr(self, name), "int", low=low)
+        options["differences"] = check_option("differences", self.differences, "int", low=0)
+        if options["differences"] == 1:
+            raise ValueError("differences: expected 0 (none) or a highest power of 2 or more, "
+                             "got 1 (a difference's first power is in the coordinates' own)")
         options["kinetic_interaction"] = (
             options["interaction"] if self.kinetic_interaction is None else
             check_option("kinetic_interaction", self.kinetic_interaction, "int", low=1))
@@ -540,6 +554,8 @@ class AutomaticCatalog(CatalogRepartition):
                     else f"{splines[1]} cubic splines, quadratic ends")
             parts.append(text)
         extras = [f"interaction {options['interaction']}", f"kinetic {options['kinetic']}"]
+        if options["differences"]:
+            extras.insert(0, f"differences ..^{options['differences']}")
         notes = []
         if options["kinetic"] == "configuration" and self.kinetic_interaction is not None \
                 and options["kinetic_interaction"] != options["interaction"]:
@@ -576,4 +592,4 @@ _DEFAULTS = {"kinds": None, "bounds": None, "degree": 2, "trig_degree": 1, "angl
              "dissipation": ("viscous",), "coulomb_scale": 0.01, "splines": None,
              "interlink": None, "max_terms": 2000, "kinetic_interaction": None,
              "spline_ends": "linear", "spline_basis": "bspline", "exponentials": None,
-             "kinetic_trig_degree": None}
+             "kinetic_trig_degree": None, "differences": 0}

@@ -140,8 +140,9 @@ terms the smaller catalog is kept within the tolerance too (the stand-in family 
 family whose drop is not kept alone is exchanged for the one it stands in for (sines and
 cosines, or a degree of them, for one or two more powers of the angle, powers for a sine
 degree, splines for powers: ``"-trig+angle_degree"``, the forward step of the search, taken
-where a stand-in leaves, while the criterion is not settled). The phase repeats,
-never back to a catalog already kept, until nothing is dropped (:mod:`.backward`). The two
+where a stand-in leaves, while the criterion is not settled; sines and cosines grown several
+degrees also from degree 1: ``"-trig_degree*2+angle_degree"``). The phase repeats, never back
+to a catalog already kept, until nothing is dropped (:mod:`.backward`). The two
 held-out blocks of each run judge cheaply (one fit per catalog) but on two fifths of the data:
 where a stand-in and the law differ by little on the recorded states, that judgment's noise
 decides between them. So, last, the near ties of the criterion are judged again on every block
@@ -269,6 +270,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     moves : sequence of str, default MOVES
         The moves tried (some of :data:`MOVES` and :data:`MORE_MOVES`); the backward phase
         drops the families of these moves only (``"trig_degree"``: the sines and cosines too).
+        ``"differences"`` (opt-in) adds ``(q_j - q_i)^2``, then higher powers, of each pair of
+        coordinates of one kind (a joint's spring in one column; ``AutomaticCatalog``'s
+        ``differences``).
         ``"exponentials"`` adds ``exp(a x)`` and ``exp(2 a x)`` of each linear coordinate,
         with the rate ``a`` fitted for the catalog it moves from (:class:`~.rates.RateFits`:
         by variable projection on the search's samples, then, where the exponentials lower

@@ -24,7 +24,7 @@ import re
 __all__ = ["exponential_base", "MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS",
            "SPLINE_MOVES", "RATE_MOVES", "LATE_MOVES", "REPEATED", "moved", "joint_moves", "holds",
            "kinetic_order", "NARROW", "narrow", "narrow_order", "narrowed", "is_repeated",
-           "kinetic_trig_degree", "KINETIC_TRIG_DEGREE"]
+           "kinetic_trig_degree", "KINETIC_TRIG_DEGREE", "DIFFERENCE_LIMIT"]
 
 #: The moves of the growth, in the order they are tried. ``"kinetic_trig_degree"`` gives the
 #: configuration-dependent kinetic coefficients an angle's trigonometric monomials of degree
@@ -58,7 +58,12 @@ LATE_MOVES = RATE_MOVES + SPLINE_MOVES
 #: ``"knots"`` writes the splines one column per interior knot (:data:`SPLINE_MOVES`; on the
 #: blind set's oblique slider it makes 4 more of 9 rows right, at up to twice the CPU of a
 #: growth that tries splines on 3-4 coordinates).
-MORE_MOVES = ("coupled_damping", "knots")
+#: ``"differences"`` adds the squared difference of each pair of coordinates of one kind to the
+#: potential (``differences`` of :class:`AutomaticCatalog`: ``(l - m)^2``, a joint's spring),
+#: then its higher powers, one degree a move up to :data:`DIFFERENCE_LIMIT`.
+MORE_MOVES = ("coupled_damping", "knots", "differences")
+#: The highest power of the coordinates' differences that the move ``"differences"`` reaches.
+DIFFERENCE_LIMIT = 4
 
 #: The parameters of the first catalog (:class:`~.automatic.AutomaticCatalog`'s options):
 #: constant kinetic coefficients, quadratic potentials of the linear coordinates, sines and
@@ -77,7 +82,7 @@ SPLINE_COUNTS = (8, 12, 16)
 NARROW = "@k1"
 _NARROW_SUFFIX = re.compile(r"@k([1-9][0-9]*)$")
 #: The moves that go on while they improve (one step of a degree or of the splines each).
-REPEATED = ("degree", "trig_degree", "angle_degree", "splines")
+REPEATED = ("degree", "trig_degree", "angle_degree", "splines", "differences")
 #: The degree of the angles' trigonometric monomials in the kinetic coefficients that the
 #: move ``"kinetic_trig_degree"`` sets (one step above the default 1).
 KINETIC_TRIG_DEGREE = 2
@@ -140,6 +145,10 @@ def moved(state, move, kinds, n, skip=0, rates=None):
     True
     >>> moved(START, "kinetic_trig_degree", ["angle", "angle"], 2)["kinetic_trig_degree"]
     2
+    >>> moved(START, "differences", ["angle", "angle"], 2)["differences"]
+    2
+    >>> moved(START, "differences", ["linear", "angle"], 2) is None    # no pair of one kind
+    True
     >>> moved(START, "exponentials", ["linear"], 1, rates=lambda state: {"x": -1.5})[
     ...     "exponentials"]
     {'x': -1.5}
@@ -187,6 +196,12 @@ def moved(state, move, kinds, n, skip=0, rates=None):
         if not relevant or state[move] + step > LIMITS[move]:
             return None
         new[move] = state[move] + step
+    elif move == "differences":
+        current = state.get("differences", 0)
+        step = (2 if not current else 1) + skip
+        if len(set(kinds)) == len(kinds) or current + step > DIFFERENCE_LIMIT:
+            return None  # (no two coordinates of one kind, or at the limit)
+        new["differences"] = current + step
     elif move == "gyroscopic":
         if state["gyroscopic"] or n < 2:
             return None
@@ -452,7 +467,8 @@ def holds(state, other) -> bool:
                  or (state.get("spline_ends") == other.get("spline_ends")
                      and state.get("spline_basis", "bspline")
                      == other.get("spline_basis", "bspline")))
-            and (bool(state.get("exponentials")) or not other.get("exponentials")))
+            and (bool(state.get("exponentials")) or not other.get("exponentials"))
+            and state.get("differences", 0) >= other.get("differences", 0))
 
 
 def kinetic_order(state) -> int:

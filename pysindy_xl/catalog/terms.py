@@ -1,7 +1,7 @@
 """The candidate terms of an automatic catalog, from its checked options.
 
 Pure functions of the options dictionary that :class:`~.automatic.AutomaticCatalog` checks
-(``coords``, ``kinds``, the degrees, the interaction orders, ``kinetic``,
+(``coords``, ``kinds``, the degrees, the interaction orders, ``differences``, ``kinetic``,
 ``kinetic_trig_degree``, ``gyroscopic``,
 ``splines``, ``spline_ends``, ``spline_basis``, ``exponentials``, ``dissipation`` and
 ``coulomb_scale``): the single-coordinate factors (:mod:`.bases`), their products over a few
@@ -107,6 +107,12 @@ def lagrangian_candidates(options) -> tuple[list[sp.Expr], list[bool]]:
             continue
         terms.append(phi)
         fast.append(trig)
+    # springs between two coordinates of one kind: powers of their difference, one column each
+    for (i, qi), (j, qj) in itertools.combinations(enumerate(coords.q), 2):
+        if options["kinds"][i] == options["kinds"][j]:
+            for k in range(2, options.get("differences", 0) + 1):
+                terms.append((qj - qi) ** k)
+                fast.append(False)
     exponentials = [f for q, rate in zip(coords.q, options["exponentials"], strict=True)
                     if rate is not None for f in exponential_pair(q, rate)]
     splines = spline_terms(options)
