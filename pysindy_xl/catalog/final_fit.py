@@ -14,7 +14,11 @@ where it keeps more terms than the judged fits did, and some they did not hold, 
 among the judged terms only (:class:`~pysindy_xl.optimizers.RestrictedOptimizer`). It may
 exchange a term or leave one out (more data tell a stand-in from the law), but a larger model
 was never judged (on a pendulum with a sprung vertical pivot, unforced and free of noise, it
-took 14 terms where the judged fits kept the law's 8, 9 % off on a fresh run).
+took 14 terms where the judged fits kept the law's 8, 9 % off on a fresh run). The refit is
+not taken where its mass matrix is not positive definite on the training states and the fit
+on all the columns' is (:func:`~pysindy_xl.fit.diagnostics.mass_matrix_failure`): such a
+model is no mechanical system and cannot be simulated along its own data, and a growth does
+not answer with one where it has another.
 """
 
 from __future__ import annotations
@@ -34,7 +38,8 @@ def _judged_terms_only(model, judged, catalog, data):
     size those fits kept. The fit on all the data is another selection: it may exchange a
     term (more data tell a stand-in from the law: ``a_dot x_dot cos(a)`` for the judged
     ``a_dot x_dot`` on a cart with two pendulums) or find fewer, but terms it adds beyond
-    that size were never judged.
+    that size were never judged. The refit is returned unless its mass matrix fails the
+    check on the training states where ``model``'s passes (:func:`_mass_matrix_fails`).
     """
     judged = [names for names in judged if names]
     if not judged:  # (a split's fit failed: nothing to restrict to)
@@ -52,7 +57,21 @@ def _judged_terms_only(model, judged, catalog, data):
     from ..optimizers import RestrictedOptimizer
     restricted = clone(model).set_params(optimizer=RestrictedOptimizer(
         clone(model.optimizer_), columns=np.flatnonzero(allowed).tolist()))
-    return restricted.fit(**data)
+    restricted.fit(**data)
+    # a model whose mass matrix is not positive definite on its own training states is no
+    # mechanical system (it cannot be simulated along its data): the judged terms alone do
+    # not buy one where the fit on all the columns has none
+    if _mass_matrix_fails(restricted) and not _mass_matrix_fails(model):
+        return model
+    return restricted
+
+
+def _mass_matrix_fails(model) -> bool:
+    """Whether ``model``'s mass matrix check finds it wrong on its training states
+    (:func:`~pysindy_xl.fit.diagnostics.mass_matrix_failure`; a model without accelerations
+    too)."""
+    from ..fit.diagnostics import mass_matrix_failure
+    return model.dynamics_ is None or mass_matrix_failure(model.mass_matrix_check_) is not None
 
 
 def _grouped_optimizer(optimizer, catalog, forced, estimated):
