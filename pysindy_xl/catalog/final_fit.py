@@ -14,14 +14,26 @@ where it keeps more terms than the judged fits did, and some they did not hold, 
 among the judged terms only (:class:`~pysindy_xl.optimizers.RestrictedOptimizer`). It may
 exchange a term or leave one out (more data tell a stand-in from the law), but a larger model
 was never judged (on a pendulum with a sprung vertical pivot, unforced and free of noise, it
-took 14 terms where the judged fits kept the law's 8, 9 % off on a fresh run).
+took 14 terms where the judged fits kept the law's 8, 9 % off on a fresh run). The refit is
+not taken where its mass matrix is not positive definite on the training states and the fit
+on all the columns' is (:func:`~pysindy_xl.fit.diagnostics.mass_matrix_failure`): such a
+model is no mechanical system and cannot be simulated along its own data, and a growth does
+not answer with one where it has another. Where the chosen catalog's final fit fails the check
+either way, the growth answers with the first of its other catalogs, by criterion, whose
+search fits passed it and whose final fit does (:func:`physical_alternative`; at most
+:data:`PHYSICAL_ALTERNATIVES` of them fitted), or with the failing model where none does (its
+fit warns).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["fit_chosen"]
+__all__ = ["fit_chosen", "mass_matrix_fails", "physical_alternative", "PHYSICAL_ALTERNATIVES"]
+
+#: Most other catalogs whose final fit a growth tries where its choice's fails the mass-matrix
+#: check (:func:`physical_alternative`).
+PHYSICAL_ALTERNATIVES = 3
 
 
 def _judged_terms_only(model, judged, catalog, data):
@@ -34,7 +46,8 @@ def _judged_terms_only(model, judged, catalog, data):
     size those fits kept. The fit on all the data is another selection: it may exchange a
     term (more data tell a stand-in from the law: ``a_dot x_dot cos(a)`` for the judged
     ``a_dot x_dot`` on a cart with two pendulums) or find fewer, but terms it adds beyond
-    that size were never judged.
+    that size were never judged. The refit is returned unless its mass matrix fails the
+    check on the training states where ``model``'s passes (:func:`mass_matrix_fails`).
     """
     judged = [names for names in judged if names]
     if not judged:  # (a split's fit failed: nothing to restrict to)
@@ -52,7 +65,81 @@ def _judged_terms_only(model, judged, catalog, data):
     from ..optimizers import RestrictedOptimizer
     restricted = clone(model).set_params(optimizer=RestrictedOptimizer(
         clone(model.optimizer_), columns=np.flatnonzero(allowed).tolist()))
-    return restricted.fit(**data)
+    restricted.fit(**data)
+    # a model whose mass matrix is not positive definite on its own training states is no
+    # mechanical system (it cannot be simulated along its data): the judged terms alone do
+    # not buy one where the fit on all the columns has none
+    if mass_matrix_fails(restricted) and not mass_matrix_fails(model):
+        return model
+    return restricted
+
+
+def mass_matrix_fails(model) -> bool:
+    """Whether a fitted model's mass matrix check finds it wrong on its training states.
+
+    Parameters
+    ----------
+    model : XLSINDy
+        Fitted.
+
+    Returns
+    -------
+    bool
+        True where the identified mass matrix is not positive definite on every checked
+        training state (:func:`~pysindy_xl.fit.diagnostics.mass_matrix_failure`), or the
+        model has no accelerations.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> t = np.linspace(0, 20, 2001)
+    >>> x = np.c_[np.sin(t) + 0.5 * np.sin(2.7 * t)]
+    >>> xdd = -np.sin(t) - 3.645 * np.sin(2.7 * t)
+    >>> catalog = px.AutomaticCatalog(["x"], kinetic="constant")
+    >>> model = px.XLSINDy(catalog).fit(x, t, u=2 * xdd[:, None] + 3 * x)
+    >>> mass_matrix_fails(model)
+    False
+    """
+    from ..fit.diagnostics import mass_matrix_failure
+    return model.dynamics_ is None or mass_matrix_failure(model.mass_matrix_check_) is not None
+
+
+def physical_alternative(steps, best, fit):
+    """The growth's answer where its chosen catalog's final fit fails the mass-matrix check.
+
+    The other catalogs the growth fitted whose search fits all passed the check
+    (:attr:`~.path.GrowthStep.definite` 1, criterion finite), by increasing criterion (then
+    terms), at most :data:`PHYSICAL_ALTERNATIVES` of them: the first whose final fit passes it.
+
+    Parameters
+    ----------
+    steps : list of GrowthStep
+        Every catalog the growth tried.
+    best : GrowthStep
+        The chosen one (left out).
+    fit : callable
+        ``fit(step) -> XLSINDy``: a step's final fit.
+
+    Returns
+    -------
+    tuple or None
+        ``(step, model)``, or None where no alternative's final fit passes.
+
+    Examples
+    --------
+    >>> from pysindy_xl.catalog.path import GrowthStep
+    >>> best = GrowthStep("start", "", 4, 3, 0.1, 0.1, 0.1, True)
+    >>> physical_alternative([best], best, fit=None) is None   # nothing else was fitted
+    True
+    """
+    others = sorted((step for step in steps if step is not best and step.definite >= 1
+                     and np.isfinite(step.criterion) and not step.note),
+                    key=lambda step: (step.criterion, step.terms))
+    for step in others[:PHYSICAL_ALTERNATIVES]:
+        model = fit(step)
+        if not mass_matrix_fails(model):
+            return step, model
+    return None
 
 
 def _grouped_optimizer(optimizer, catalog, forced, estimated):

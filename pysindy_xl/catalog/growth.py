@@ -172,7 +172,11 @@ error, not the data's precision: on a cart with a torsion-sprung pendulum, ``cos
 ``theta^2`` at 0.1 %); the climb goes on. A right law sits at 0.87 to 1.13 times its floor on
 the generic systems with two or more coordinates (where the stop applies), 1.2 to 1.7 times with
 one (where the climb goes on as without it). The chosen catalog is then fitted on all the data
-(:mod:`.final_fit`). """
+(:mod:`.final_fit`); where that model's mass matrix is not positive definite on its training
+states (no mechanical system: it cannot be simulated along its data), the growth answers with
+the first of its other catalogs, by criterion, whose final fit's is
+(:func:`~.final_fit.physical_alternative`), or, where none is, with that model (its fit
+warns). """
 
 from __future__ import annotations
 
@@ -192,7 +196,7 @@ from .candidates import (
     search_rows,
 )
 from .climbs import Climber
-from .final_fit import fit_chosen
+from .final_fit import fit_chosen, mass_matrix_fails, physical_alternative
 from .floor import EXACT
 from .folds import REGIONS, held_out_splits
 from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first)
@@ -590,16 +594,28 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         if chosen is not best:
             state, best = dict(climber.parameters_of(chosen)), chosen
             path.append(chosen)
+    full = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
+    if not is_list:
+        full = {key: None if value is None else value[0] for key, value in full.items()}
+
+    def final(step):
+        return fit_chosen(template, AutomaticCatalog(**fixed, **climber.parameters_of(step)),
+                          optimizer, full, step.support, active, final_weak)
+
+    best_catalog = AutomaticCatalog(**fixed, **state)
+    model = fit_chosen(template, best_catalog, optimizer, full, best.support, active,
+                       final_weak)
+    if mass_matrix_fails(model):  # no mechanical system: another catalog's, where one is
+        found = physical_alternative(climber.steps, best, final)
+        if found is not None:
+            best, model = found
+            state = dict(climber.parameters_of(best))
+            best_catalog = AutomaticCatalog(**fixed, **state)
+            path.append(best)
     if consensus:
         for step in path:
             climber.second_step(step)  # (each kept step reports both folds)
     for step in path:
         step.chosen = True
-    best_catalog = AutomaticCatalog(**fixed, **state)
-    full = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
-    if not is_list:
-        full = {key: None if value is None else value[0] for key, value in full.items()}
-    model = fit_chosen(template, best_catalog, optimizer, full, best.support, active,
-                       final_weak)
     return GrowthResult(model, best_catalog, climber.steps, criterion, best.criterion,
                         search.max_terms, climber.work)
