@@ -183,24 +183,17 @@ from __future__ import annotations
 import numpy as np
 
 from .._inputs import aligned, as_list
-from .._validation import check_option
 from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import backward_phase
 from .budget import WORK_BUDGET
-from .candidates import (
-    COMBINES,
-    MIN_TRIMMED_BLOCKS,
-    CandidateFits,
-    SearchData,
-    SearchSplit,
-    search_rows,
-)
+from .candidates import CandidateFits, SearchData, SearchSplit, search_rows
 from .climbs import Climber
 from .final_fit import fit_chosen, mass_matrix_fails, physical_alternative
 from .floor import EXACT
-from .folds import REGIONS, held_out_splits
+from .folds import held_out_splits
 from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first)
-from .growth_data import check_growth_data, data_span, thinned
+from .growth_data import GROWTH_REGIONS as GROWTH_REGIONS  # (where it was first)
+from .growth_data import check_growth_data, check_growth_options, data_span, thinned
 from .keep_rules import single_keeps
 from .moves import LATE_MOVES, MORE_MOVES, MOVES, START, is_repeated, joint_moves, moved, narrowed
 from .path import GrowthResult, GrowthStep
@@ -209,12 +202,6 @@ from .ties import break_ties, near_ties
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
            "check_growth_data", "GROWTH_REGIONS"]
-
-#: The values of ``region`` of :func:`grow_catalog`: the folds of
-#: :func:`~.folds.held_out_splits` (:data:`~.folds.REGIONS`), or ``"consensus"``: the
-#: ``"block"`` fold and the ``"extremes"`` fold as two judges, a change kept when one accepts
-#: it and the other does not find it worse (:func:`consensus_keeps`).
-GROWTH_REGIONS = (*REGIONS, "consensus")
 
 #: Ceiling of the catalog's size with ``max_terms="auto"``, whatever the data.
 MAX_TERMS = 400
@@ -420,31 +407,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     if len(names) != n:
         raise ValueError(f"coordinates: expected {n} names (the columns of x), got {names}")
     kinds = coordinate_kinds(names, kinds)
-    if isinstance(max_terms, str) and max_terms != "auto":
-        raise ValueError(f"max_terms: expected a positive int or 'auto', got {max_terms!r}")
-    if max_terms != "auto":
-        check_option("max_terms", max_terms, "int", low=1)
-    check_option("n_blocks", n_blocks, "int", low=3)
-    check_option("cross_validate", cross_validate, "bool")
-    if not isinstance(region, str) or region not in GROWTH_REGIONS:
-        raise ValueError(f"region: expected one of {GROWTH_REGIONS}, got {region!r}")
-    check_option("physical", physical, "bool")
-    check_option("steepest", steepest, "bool")
-    check_option("tie_break", tie_break, "bool")
-    check_option("noise_floor", noise_floor, "bool")
-    check_option("work_budget", work_budget, "real", low=0, allow_none=True, allow_inf=True)
-    if combine not in COMBINES:
-        raise ValueError(f"combine: expected one of {COMBINES}, got {combine!r}")
-    if combine == "trimmed" and not (cross_validate and n_blocks >= MIN_TRIMMED_BLOCKS):
-        raise ValueError(f"combine: 'trimmed' needs cross_validate=True and n_blocks >= "
-                         f"{MIN_TRIMMED_BLOCKS} (got cross_validate={cross_validate}, "
-                         f"n_blocks={n_blocks}): one block out of fewer is too much evidence "
-                         "to leave out")
-    check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
-    check_option("good_enough", good_enough, "real", low=0)
-    unknown = [m for m in moves if m not in MOVES + MORE_MOVES]
-    if unknown:
-        raise ValueError(f"moves: unknown {unknown}; expected some of {MOVES + MORE_MOVES}")
+    check_growth_options(max_terms=max_terms, n_blocks=n_blocks, cross_validate=cross_validate,
+                         region=region, physical=physical, steepest=steepest,
+                         tie_break=tie_break, noise_floor=noise_floor, work_budget=work_budget,
+                         combine=combine, tolerance=tolerance, good_enough=good_enough,
+                         moves=moves)
     forced = us is not None and any(np.any(np.asarray(uk) != 0) for uk in us)
     criterion = "forces" if forced else "accelerations"
     velocity_scale = [float(np.std(np.gradient(xk, tk, axis=0), axis=0).mean())

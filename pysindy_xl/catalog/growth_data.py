@@ -9,7 +9,20 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["check_growth_data", "data_span", "thinned", "END_PERCENTILE"]
+from .._validation import check_option
+from .candidates import COMBINES, MIN_TRIMMED_BLOCKS
+from .folds import REGIONS
+from .moves import MORE_MOVES, MOVES
+
+__all__ = ["check_growth_data", "check_growth_options", "data_span", "thinned",
+           "END_PERCENTILE", "GROWTH_REGIONS"]
+
+#: The values of ``region`` of :func:`~.growth.grow_catalog`: the folds of
+#: :func:`~.folds.held_out_splits` (:data:`~.folds.REGIONS`), or ``"consensus"``: the
+#: ``"block"`` fold and the ``"extremes"`` fold as two judges, a change kept when one accepts
+#: it and the other does not find it worse (:func:`~.keep_rules.consensus_keeps`).
+GROWTH_REGIONS = (*REGIONS, "consensus")
+
 
 def check_growth_data(xs, names, n_terms: int) -> None:
     """``ValueError`` for a constant coordinate or data too short for ``n_terms`` terms.
@@ -45,6 +58,59 @@ def check_growth_data(xs, names, n_terms: int) -> None:
 #: slope is fitted to the extreme samples instead of following a cubic piece that a few
 #: samples constrain.
 END_PERCENTILE = 1.0
+
+
+def check_growth_options(*, max_terms, n_blocks, cross_validate, region, physical, steepest,
+                         tie_break, noise_floor, work_budget, combine, tolerance, good_enough,
+                         moves) -> None:
+    """Check the options of :func:`~.growth.grow_catalog` before any data are read.
+
+    Parameters
+    ----------
+    max_terms, n_blocks, cross_validate, region, physical, steepest, tie_break, noise_floor, \
+work_budget, combine, tolerance, good_enough, moves
+        As :func:`~.growth.grow_catalog` takes them.
+
+    Raises
+    ------
+    ValueError, TypeError
+        Naming the option and what was expected.
+
+    Examples
+    --------
+    >>> check_growth_options(max_terms="auto", n_blocks=2, cross_validate=False,
+    ...                      region="block", physical=False, steepest=False, tie_break=True,
+    ...                      noise_floor=True, work_budget=None, combine="rms", tolerance=0.05,
+    ...                      good_enough=0.002, moves=("degree",))
+    Traceback (most recent call last):
+    ...
+    ValueError: n_blocks: expected an integer >= 3, got 2
+    """
+    if isinstance(max_terms, str) and max_terms != "auto":
+        raise ValueError(f"max_terms: expected a positive int or 'auto', got {max_terms!r}")
+    if max_terms != "auto":
+        check_option("max_terms", max_terms, "int", low=1)
+    check_option("n_blocks", n_blocks, "int", low=3)
+    check_option("cross_validate", cross_validate, "bool")
+    if not isinstance(region, str) or region not in GROWTH_REGIONS:
+        raise ValueError(f"region: expected one of {GROWTH_REGIONS}, got {region!r}")
+    check_option("physical", physical, "bool")
+    check_option("steepest", steepest, "bool")
+    check_option("tie_break", tie_break, "bool")
+    check_option("noise_floor", noise_floor, "bool")
+    check_option("work_budget", work_budget, "real", low=0, allow_none=True, allow_inf=True)
+    if combine not in COMBINES:
+        raise ValueError(f"combine: expected one of {COMBINES}, got {combine!r}")
+    if combine == "trimmed" and not (cross_validate and n_blocks >= MIN_TRIMMED_BLOCKS):
+        raise ValueError(f"combine: 'trimmed' needs cross_validate=True and n_blocks >= "
+                         f"{MIN_TRIMMED_BLOCKS} (got cross_validate={cross_validate}, "
+                         f"n_blocks={n_blocks}): one block out of fewer is too much evidence "
+                         "to leave out")
+    check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
+    check_option("good_enough", good_enough, "real", low=0)
+    unknown = [m for m in moves if m not in MOVES + MORE_MOVES]
+    if unknown:
+        raise ValueError(f"moves: unknown {unknown}; expected some of {MOVES + MORE_MOVES}")
 
 
 def data_span(xs) -> list:
