@@ -32,7 +32,7 @@ import pysindy_xl as px
 from pysindy_xl.catalog import climbs, retries
 from pysindy_xl.catalog.budget import OVER, REFUSED, work_cost
 from pysindy_xl.catalog.candidates import parameters_key
-from pysindy_xl.catalog.moves import holds
+from pysindy_xl.catalog.retries import retry_walk
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import generic_systems as gs  # noqa: E402
@@ -44,19 +44,10 @@ def walk(order, catalogs, tried, state, over):
     """The key of the catalog a refused move ends on and the keys tried, for one order of the
     retry kinds (the rules of ``attempt_within_limits``)."""
     tried, last = set(tried), None
-    for kind in order:
-        for _, retry in catalogs[kind]:
-            key = parameters_key(retry)
-            if key in tried:
-                if kind == "narrower":
-                    break
-                continue
-            if kind == "constant" and state is not None and holds(state, retry):
-                continue
-            tried.add(key)
-            last = key
-            if not over(retry):
-                return last, tried
+    for _, retry in retry_walk(catalogs, order, tried, state):
+        last = parameters_key(retry)
+        if not over(retry):
+            return last, tried
     return last, tried
 
 

@@ -25,7 +25,7 @@ from .budget import OVER
 from .candidates import parameters_key
 from .moves import START, holds, kinetic_order, moved, narrow
 
-__all__ = ["attempt_within_limits", "retry_catalogs", "retry_order", "RETRIES"]
+__all__ = ["attempt_within_limits", "retry_catalogs", "retry_order", "retry_walk", "RETRIES"]
 
 #: The kinds of retries of a refused move (:func:`retry_catalogs`): ``"state_order"`` (the
 #: kinetic order of the catalog the move is made from, where the move widened it),
@@ -168,7 +168,44 @@ def attempt_within_limits(climber, parameters, move, tried, ahead=(), state=None
     if not (step.note.startswith(OVER) and climber.retry_kinetic):
         return parameters, step
     retries = retry_catalogs(parameters, move, state, climber.kinds, climber.n)
-    for kind in retry_order(state):
+    for name, retry in retry_walk(retries, retry_order(state), tried, state):
+        parameters, step = retry, climber.attempt(retry, name)
+        if not step.note.startswith(OVER):
+            return parameters, step
+    return parameters, step
+
+
+def retry_walk(retries, order, tried, state):
+    """The retries to make, in turn, until one is within the limits (the caller stops there).
+
+    A retry whose catalog is in ``tried`` is skipped (and ends the narrower orders: a
+    narrower one would be tried already too); a constant-coefficients retry that ``state``
+    holds is not made (it would drop nothing the move adds).
+
+    Parameters
+    ----------
+    retries : dict
+        The kinds of retries and their ``(name, parameters)`` (:func:`retry_catalogs`).
+    order : sequence of str
+        The kinds in turn (:func:`retry_order`).
+    tried : set
+        Keys of the catalogs tried (:func:`~.candidates.parameters_key`); updated with each
+        retry yielded.
+    state : dict or None
+        The catalog the move is made from.
+
+    Yields
+    ------
+    tuple
+        ``(name, parameters)`` of each retry to make.
+
+    Examples
+    --------
+    >>> retries = {"constant": [("degree-kinetic", {"degree": 3})], "narrower": []}
+    >>> list(retry_walk(retries, ["narrower", "constant"], set(), None))
+    [('degree-kinetic', {'degree': 3})]
+    """
+    for kind in order:
         for name, retry in retries[kind]:
             key = parameters_key(retry)
             if key in tried:
@@ -178,7 +215,4 @@ def attempt_within_limits(climber, parameters, move, tried, ahead=(), state=None
             if kind == "constant" and state is not None and holds(state, retry):
                 continue
             tried.add(key)
-            parameters, step = retry, climber.attempt(retry, name)
-            if not step.note.startswith(OVER):
-                return parameters, step
-    return parameters, step
+            yield name, retry
