@@ -46,7 +46,7 @@ EXPLAINED = 10.0
 def held_out_scores(model, held, forced, floor=True) -> tuple:
     r"""The held-out criterion of a fitted model on held-out runs, and its noise floor.
 
-    The criterion is that of :func:`~.candidates.held_out_error`; the floor is its value for
+    The criterion is that of :func:`~.criterion.held_out_error`; the floor is its value for
     the residual that the positions' noise alone leaves (see the module docstring): with
     forces
 
@@ -132,7 +132,7 @@ def combined_floor(errors, floors, combine="rms") -> float:
 
     The RMS of the blocks' floors, or (``"trimmed"``) of those of the blocks whose errors the
     criterion keeps: all but the block of the largest error
-    (:func:`~.candidates.combine_errors`).
+    (:func:`~.criterion.combine_errors`).
 
     Parameters
     ----------
@@ -168,7 +168,7 @@ def models_floor(search, models, errors) -> float:
     Parameters
     ----------
     search : SearchData
-        The growth's data (:class:`~.candidates.SearchData`): the splits' held-out blocks,
+        The growth's data (:class:`~.search_data.SearchData`): the splits' held-out blocks,
         the kind of criterion and how the blocks combine.
     models : sequence of XLSINDy or None
         The fitted model of each split, None where its fit failed.

@@ -5,7 +5,7 @@ The criterion is the relative residual of the fitted model's equations in the we
 on samples the fit never saw: over the generalized forces' part for data with forces; for
 unforced data each coordinate's equation over its own kinetic part (the terms that carry
 inertia: about the relative error of the accelerations the law predicts), combined as an RMS
-over the coordinates (:func:`~.candidates.held_out_error`; an implicit law fixes each equation
+over the coordinates (:func:`~.criterion.held_out_error`; an implicit law fixes each equation
 only up to a factor: judged over all rows, a law that shrank one equation would hide its
 residual; judged over its largest term, a law that shrank its kinetic part behind large
 potential terms that nearly cancel would; the strong form where a block is shorter than a
@@ -50,7 +50,7 @@ others; the criterion is the RMS of all the blocks' errors): on a recording of a
 seconds the region block holds most of what identifies configuration-dependent terms, and a
 fit without it fails for the right catalog too (``region="extremes"`` adds a split judged on
 the extreme stretches). ``combine="trimmed"`` then leaves the largest of the block errors
-out of the RMS (:func:`~.candidates.combine_errors`): one failing fit out of at least four
+out of the RMS (:func:`~.criterion.combine_errors`): one failing fit out of at least four
 is tolerated, and the catalog is still judged on the others.
 
 The criterion is the RMS of the two errors. Splines end at the extreme percentiles of the
@@ -186,7 +186,7 @@ from .._inputs import aligned, as_list
 from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import backward_phase
 from .budget import WORK_BUDGET
-from .candidates import CandidateFits, SearchData, SearchSplit, search_rows
+from .candidates import CandidateFits
 from .climbs import Climber
 from .final_fit import fit_chosen, mass_matrix_fails, physical_alternative
 from .floor import EXACT
@@ -198,6 +198,7 @@ from .keep_rules import single_keeps
 from .moves import LATE_MOVES, MORE_MOVES, MOVES, START, is_repeated, joint_moves, moved, narrowed
 from .path import GrowthResult, GrowthStep
 from .rates import RateFits
+from .search_data import SearchData, SearchSplit, search_rows
 from .ties import break_ties, near_ties
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
@@ -240,7 +241,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         Ceiling of the catalog's size: larger catalogs are not tried. ``"auto"``:
         ``min(MAX_TERMS, R // ROWS_PER_TERM)``, with ``R`` the fewest rows (equations) of
         the search's fits over its splits (in the weak form, the coordinates times the test
-        functions on the training pieces; :func:`~.candidates.search_rows`), reported as
+        functions on the training pieces; :func:`~.search_data.search_rows`), reported as
         :attr:`GrowthResult.max_terms`.
     optimizer : optional
         Of :class:`~pysindy_xl.XLSINDy` (default: chosen from the forces).
@@ -323,7 +324,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         (joblib's convention; -1: all cores).
     combine : {"rms", "trimmed"}, default "rms"
         How the held-out blocks' errors :math:`e_1, \\dots, e_n` make the criterion
-        (:func:`~.candidates.combine_errors`): their RMS, or the RMS of all but the largest,
+        (:func:`~.criterion.combine_errors`): their RMS, or the RMS of all but the largest,
 
         .. math:: c = \\sqrt{\\tfrac{1}{n - 1} \\textstyle\\sum_{i=1}^{n-1} e_{(i)}^2}
                   \\quad (e_{(1)} \\le \\dots \\le e_{(n)}).

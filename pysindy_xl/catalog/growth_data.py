@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validation import check_option
-from .candidates import COMBINES, MIN_TRIMMED_BLOCKS
+from .criterion import COMBINES, MIN_TRIMMED_BLOCKS
 from .folds import REGIONS
 from .moves import MORE_MOVES, MOVES
 

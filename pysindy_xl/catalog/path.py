@@ -52,7 +52,7 @@ class GrowthStep:
         CPU time of the step's fit and scoring on the second fold (0 where it was not asked).
     block_errors : tuple of float, default ()
         The held-out error of each block, in order over the splits, that the criterion
-        combines (:func:`~.candidates.combine_errors`; empty when not fitted).
+        combines (:func:`~.criterion.combine_errors`; empty when not fitted).
     tie_error : float, default nan
         The step's criterion cross-validated on every block, where the step was one of the
         near ties judged again (:func:`~.ties.break_ties`); NaN elsewhere.

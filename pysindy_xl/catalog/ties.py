@@ -9,7 +9,7 @@ percent. So the catalogs whose criterion is within :data:`TIE_REACH` of the best
 most :data:`TIE_CANDIDATES` of them, the growth's choice first, one per fitted law) are judged
 again by cross-validation: every block of every run held out in turn, each by a fit on the
 others (:func:`~.folds.held_out_splits` with ``cross_validate``), and the criterion the RMS of
-all the blocks' errors (:func:`~.candidates.combine_errors`). All the data then judge, each
+all the blocks' errors (:func:`~.criterion.combine_errors`). All the data then judge, each
 block by a fit that did not see it, with the growth's keep rule
 (:func:`~.keep_rules.single_keeps`): another tie replaces the growth's choice where its
 cross-validated criterion is lower by the tolerance, or within it with fewer terms in the

@@ -238,7 +238,7 @@ class AutomaticGrowth:
             Its ``model`` is the chosen catalog fitted on all the data.
         """
         from ..catalog import MORE_MOVES, MOVES, grow_catalog
-        from ..catalog.candidates import MIN_TRIMMED_BLOCKS
+        from ..catalog.criterion import MIN_TRIMMED_BLOCKS
         from ..model import XLSINDy
         from ..mujoco import get_system
         from ..weak import BumpTestFunctions

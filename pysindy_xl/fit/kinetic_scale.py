@@ -5,7 +5,7 @@ residual needs a scale taken from the law itself. The part of an equation that s
 accelerations is its kinetic part, ``d/dt dT/dqd - dT/dq``: the columns that carry inertia
 (:func:`inertial_columns`). :func:`kinetic_relative_residuals` divides each equation's
 residual by it; the catalog growth's held-out criterion
-(:func:`~pysindy_xl.catalog.candidates.held_out_error`) and the fit-quality ``R^2`` of
+(:func:`~pysindy_xl.catalog.criterion.held_out_error`) and the fit-quality ``R^2`` of
 unforced fits (:func:`~pysindy_xl.evaluation.quality.fit_quality`) are both made of it.
 """
 
