@@ -22,14 +22,17 @@ not answer with one where it has another. Where the chosen catalog's final fit f
 either way, the growth answers with the first of its other catalogs, by criterion, whose
 search fits passed it and whose final fit does (:func:`physical_alternative`; at most
 :data:`PHYSICAL_ALTERNATIVES` of them fitted), or with the failing model where none does (its
-fit warns).
+fit warns): :func:`final_answer`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["fit_chosen", "mass_matrix_fails", "physical_alternative", "PHYSICAL_ALTERNATIVES"]
+from .automatic import AutomaticCatalog
+
+__all__ = ["fit_chosen", "final_answer", "mass_matrix_fails", "physical_alternative",
+           "PHYSICAL_ALTERNATIVES"]
 
 #: Most other catalogs whose final fit a growth tries where its choice's fails the mass-matrix
 #: check (:func:`physical_alternative`).
@@ -140,6 +143,62 @@ def physical_alternative(steps, best, fit):
         if not mass_matrix_fails(model):
             return step, model
     return None
+
+
+def final_answer(best, state, steps, parameters_of, fixed, fit):
+    """The growth's answer: its chosen catalog fitted on all the data, or, where that model is
+    no mechanical system (:func:`mass_matrix_fails`), the first physical alternative's
+    (:func:`physical_alternative`).
+
+    Parameters
+    ----------
+    best : GrowthStep
+        The growth's choice.
+    state : dict
+        Its catalog parameters (the growing ones).
+    steps : list of GrowthStep
+        Every catalog the growth tried.
+    parameters_of : callable
+        ``parameters_of(step) -> dict``: a step's catalog parameters (the growing ones).
+    fixed : dict
+        The catalog parameters that do not grow (the splines' end knots: those of all the
+        data).
+    fit : callable
+        ``fit(catalog, judged) -> XLSINDy``: ``catalog`` fitted on all the data,
+        ``judged`` the terms that each of its search fits kept (:func:`fit_chosen`).
+
+    Returns
+    -------
+    step : GrowthStep
+        The answer's step: ``best``, or the alternative that replaces it.
+    catalog : AutomaticCatalog
+        Its catalog.
+    model : XLSINDy
+        Its final fit.
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> from pysindy_xl.catalog.path import GrowthStep
+    >>> t = np.linspace(0, 20, 2001)
+    >>> x = np.c_[np.sin(t) + 0.5 * np.sin(2.7 * t)]
+    >>> u = 2 * (-np.sin(t) - 3.645 * np.sin(2.7 * t))[:, None] + 3 * x
+    >>> best = GrowthStep("start", "", 4, 3, 0.1, 0.1, 0.1, True)
+    >>> step, catalog, model = final_answer(
+    ...     best, {"kinetic": "constant"}, [best], None, {"coordinates": ["x"]},
+    ...     fit=lambda catalog, judged: px.XLSINDy(catalog).fit(x, t, u=u))
+    >>> step is best, mass_matrix_fails(model)
+    (True, False)
+    """
+    catalog = AutomaticCatalog(**fixed, **state)
+    model = fit(catalog, best.support)
+    if mass_matrix_fails(model):  # no mechanical system: another catalog's, where one is
+        found = physical_alternative(steps, best, lambda step: fit(
+            AutomaticCatalog(**fixed, **parameters_of(step)), step.support))
+        if found is not None:
+            best, model = found
+            catalog = AutomaticCatalog(**fixed, **parameters_of(best))
+    return best, catalog, model
 
 
 def _grouped_optimizer(optimizer, catalog, forced, estimated):

@@ -188,7 +188,7 @@ from .backward import backward_phase
 from .budget import WORK_BUDGET
 from .candidates import CandidateFits
 from .climbs import Climber
-from .final_fit import fit_chosen, mass_matrix_fails, physical_alternative
+from .final_fit import final_answer, fit_chosen
 from .floor import EXACT
 from .folds import held_out_splits
 from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first)
@@ -199,7 +199,7 @@ from .moves import LATE_MOVES, MORE_MOVES, MOVES, START, is_repeated, joint_move
 from .path import GrowthResult, GrowthStep
 from .rates import RateFits
 from .search_data import SearchData, SearchSplit, search_rows
-from .ties import break_ties, near_ties
+from .ties import judge_near_ties
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
            "check_growth_data", "GROWTH_REGIONS"]
@@ -211,6 +211,28 @@ MAX_TERMS = 400
 #: over ``rows // ROWS_PER_TERM`` terms are not tried (least squares inflate the rows' noise
 #: ``p / (r - p)`` times on ``p`` columns, ``r`` rows: 2 here; 143 of 234 fit an arm, 191 not).
 ROWS_PER_TERM = 1.5
+
+
+def _judge_data(splits, fixed, template, max_terms, forced):
+    """The search's data on a judge's splits (``"consensus"``'s second fold, the near ties').
+
+    Parameters
+    ----------
+    splits : list of (dict, list of dict)
+        The splits' training pieces and held-out blocks (:func:`~.folds.held_out_splits`).
+    fixed : dict
+        The catalog parameters that do not grow (the splines end where each split's training
+        data do).
+    template, max_terms, forced : XLSINDy, int, bool
+        As :class:`~.search_data.SearchData`'s.
+
+    Returns
+    -------
+    SearchData
+        Without noise floors.
+    """
+    return SearchData([SearchSplit(dict(fixed, bounds=data_span(train["x"])), train, held)
+                       for train, held in splits], template, max_terms, forced, floor="off")
 
 
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
@@ -467,10 +489,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     fits = CandidateFits(search, n_jobs)
     fits.warm_up()  # the workers start while the first catalog is fitted here
     # the second judge is asked only about candidates the first does not refuse: no guesses
-    second_fits = CandidateFits(SearchData(
-        [SearchSplit(dict(fixed, bounds=data_span(train["x"])), train, held)
-         for train, held in second_splits], template, search.max_terms,
-        forced, floor="off")) if consensus else None
+    second_fits = CandidateFits(_judge_data(second_splits, fixed, template, search.max_terms,
+                                            forced)) if consensus else None
 
     if not forced:  # no force sets the scale, an approximation can look small already: only
         good_enough = EXACT  # a law exact to the data's precision stops the growth
@@ -547,18 +567,15 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
             state, best, path = other
     state, best, path = backward_phase(climber, state, best, path, moves)
     fits.close()  # (a worker's last guess may still run: it ends during the final fit)
+
+    def every_block():  # the near ties' judge: each block held out by a fit on the others
+        folds, _ = held_out_splits(arrays, n_blocks, stride, True, region, margin=width)
+        return CandidateFits(_judge_data(folds, fixed, template, search.max_terms, forced), n_jobs)
+
     if tie_break and not cross_validate and not consensus and np.isfinite(best.criterion):
         # the near ties of the criterion judged again on every block, each by a fit without it
-        ties = near_ties(climber.steps, best, physical)
-        chosen = ties[0]  # (the smallest catalog of the chosen law)
-        if len(ties) > 1:
-            folds, _ = held_out_splits(arrays, n_blocks, stride, True, region, margin=width)
-            judge = CandidateFits(SearchData(
-                [SearchSplit(dict(fixed, bounds=data_span(train["x"])), train, held)
-                 for train, held in folds], template, search.max_terms, forced, floor="off"),
-                n_jobs)
-            chosen = break_ties(ties, climber.parameters_of, judge, tolerance, progress)
-            judge.close()
+        chosen = judge_near_ties(climber.steps, best, climber.parameters_of, every_block,
+                                 physical=physical, tolerance=tolerance, progress=progress)
         if chosen is not best:
             state, best = dict(climber.parameters_of(chosen)), chosen
             path.append(chosen)
@@ -566,20 +583,14 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     if not is_list:
         full = {key: None if value is None else value[0] for key, value in full.items()}
 
-    def final(step):
-        return fit_chosen(template, AutomaticCatalog(**fixed, **climber.parameters_of(step)),
-                          optimizer, full, step.support, active, final_weak)
+    def fit_all(catalog, judged):  # the final fit (final_fit.py): all the data, judged terms
+        return fit_chosen(template, catalog, optimizer, full, judged, active, final_weak)
 
-    best_catalog = AutomaticCatalog(**fixed, **state)
-    model = fit_chosen(template, best_catalog, optimizer, full, best.support, active,
-                       final_weak)
-    if mass_matrix_fails(model):  # no mechanical system: another catalog's, where one is
-        found = physical_alternative(climber.steps, best, final)
-        if found is not None:
-            best, model = found
-            state = dict(climber.parameters_of(best))
-            best_catalog = AutomaticCatalog(**fixed, **state)
-            path.append(best)
+    answer, best_catalog, model = final_answer(best, state, climber.steps,
+                                               climber.parameters_of, fixed, fit_all)
+    if answer is not best:  # a physical alternative: the choice's final fit is no mechanics
+        best = answer
+        path.append(best)
     if consensus:
         for step in path:
             climber.second_step(step)  # (each kept step reports both folds)

@@ -25,7 +25,8 @@ import numpy as np
 
 from .keep_rules import single_keeps
 
-__all__ = ["near_ties", "break_ties", "TIE_REACH", "TIE_CANDIDATES", "SAME_LAW"]
+__all__ = ["near_ties", "break_ties", "judge_near_ties", "TIE_REACH", "TIE_CANDIDATES",
+           "SAME_LAW"]
 
 #: Near ties: catalogs whose criterion is at most ``1 + TIE_REACH`` times the best one's.
 TIE_REACH = 0.3
@@ -142,6 +143,54 @@ def break_ties(ties, parameters_of, judge, tolerance: float = 0.05, progress=Non
     for step in sorted(ties[1:], key=lambda s: s.tie_error):
         if single_keeps(_judged(step), _judged(chosen), tolerance):
             chosen = step
+    return chosen
+
+
+def judge_near_ties(steps, best, parameters_of, judge, *, physical: bool = False,
+                    tolerance: float = 0.05, progress=None):
+    """The growth's choice among the near ties of its criterion, judged again on every block.
+
+    The near ties of ``best`` (:func:`near_ties`); where there are two or more, each is
+    cross-validated by the fits of ``judge()`` and the keep rule chooses among them
+    (:func:`break_ties`); the judge is closed after.
+
+    Parameters
+    ----------
+    steps : list of GrowthStep
+        Every catalog the growth tried.
+    best : GrowthStep
+        The growth's choice (one of ``steps``).
+    parameters_of : callable
+        ``parameters_of(step) -> dict``: a step's catalog parameters.
+    judge : callable
+        ``judge() -> CandidateFits``: the fits on the cross-validated splits (every block held
+        out in turn, each by a fit on the others: :func:`~.folds.held_out_splits`); called
+        only where there are two near ties or more.
+    physical : bool, default False
+        Leave out the ties less physical than ``best`` (:func:`near_ties`).
+    tolerance : float, default 0.05
+        The keep rule's fraction (:func:`break_ties`).
+    progress : callable, optional
+        Called with a line of text per catalog judged.
+
+    Returns
+    -------
+    GrowthStep
+        The chosen step: ``best``, the smallest catalog that states its law, or another tie.
+
+    Examples
+    --------
+    >>> from pysindy_xl.catalog.path import GrowthStep
+    >>> best = GrowthStep("start", "", 4, 3, 0.1, 0.1, 0.1, True)
+    >>> judge_near_ties([best], best, parameters_of=None, judge=None) is best   # no other tie
+    True
+    """
+    ties = near_ties(steps, best, physical)
+    chosen = ties[0]  # (the smallest catalog of the chosen law)
+    if len(ties) > 1:
+        fits = judge()
+        chosen = break_ties(ties, parameters_of, fits, tolerance, progress)
+        fits.close()
     return chosen
 
 
