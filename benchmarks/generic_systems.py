@@ -245,6 +245,23 @@ def case_of(key, table=None):
     return system, truth, forced, case_data(system, truth, float(noise), int(seed), forced)
 
 
+def grid_cases(table, systems=None, forcing=("forced", "unforced"), noise=(0.0, 0.01, 0.05),
+               seeds=(0, 1, 2)):
+    """The grid's cases ``(system, forcing, noise, seed)`` of the systems ``table``: each seed,
+    noise level, forcing and system (``systems``; None or empty: all of ``table``), in that
+    nesting, unforced only for the systems with free runs (``table[name]["unforced"]``).
+    :func:`case_key` makes the key of one."""
+    chosen = systems or list(table)
+    return [(name, kind, level, seed) for seed in seeds for level in noise for kind in forcing
+            for name in chosen if kind == "forced" or table[name]["unforced"]]
+
+
+def case_key(case) -> str:
+    """The key ``"system:forcing:noise:seed"`` of a case of :func:`grid_cases` (:func:`case_of`
+    reads it)."""
+    return ":".join(map(str, case))
+
+
 def run_case(system, truth, noise, seed, forced, baselines=True, region="block", extra_moves=()):
     runs, test, xs, ts, us = case_data(system, truth, noise, seed, forced)
     names = list(system["coords"].names)
@@ -377,10 +394,7 @@ def run_grid(table, args, region="block") -> int:
     killed and restarted resumes), with a progress line per case; returns 0. A case of the JSONL
     file ``args.reuse`` (optional) keeps that file's catalog figures and runs the baselines
     alone (its record then names the file in ``reused_from``)."""
-    chosen = args.systems or list(table)
-    cases = [(name, forcing, noise, seed) for seed in args.seeds for noise in args.noise
-             for forcing in args.forcing for name in chosen
-             if forcing == "forced" or table[name]["unforced"]]
+    cases = grid_cases(table, args.systems, args.forcing, args.noise, args.seeds)
     done = _done(args.out)
     todo = [c for c in cases if c not in done]
     print(f"{len(cases)} cases, {len(cases) - len(todo)} already in {args.out}", flush=True)

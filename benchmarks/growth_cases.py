@@ -30,16 +30,38 @@ import generic_systems as gs  # noqa: E402
 import pysindy_xl as px  # noqa: E402
 
 
+def grow(system, xs, ts, us, **options):
+    """``grow_catalog(**options)`` on a case's data (:func:`generic_systems.case_of`): the
+    system's coordinates and kinds, warnings silenced."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return px.grow_catalog(xs, ts, us, coordinates=list(system["coords"].names),
+                               kinds=system["kinds"], **options)
+
+
+def iter_cases(cases, run, out=None, done=None):
+    """Yield ``(case, run(case))`` for each case key of ``cases`` not yet recorded, each record
+    (a dict with its ``"case"``) appended to the JSONL file ``out`` (None: not written) before
+    it is yielded: a rerun skips the cases of ``done`` (a JSONL file; default ``out``), so a
+    run killed and restarted resumes."""
+    recorded = gs.recorded(out if done is None else done, lambda record: record["case"])
+    for case in cases:
+        if case in recorded:
+            continue
+        record = run(case)
+        if out:
+            with open(out, "a", encoding="utf-8") as handle:
+                handle.write(json.dumps(record) + "\n")
+        yield case, record
+
+
 def run_case(case: str) -> dict:
     """The growth on one case: its record (see the module docstring)."""
     system, truth, forced, (runs, test, xs, ts, us) = gs.case_of(case)
     record = {"case": case}
     cpu = time.process_time()
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            found = px.grow_catalog(xs, ts, us, coordinates=list(system["coords"].names),
-                                    kinds=system["kinds"])
+        found = grow(system, xs, ts, us)
         record["cpu"] = time.process_time() - cpu
         record["catalog"] = found.catalog.describe()
         record["path"] = [[s.move, s.terms, s.active, s.criterion, s.chosen]
@@ -105,13 +127,7 @@ def main(argv=None):
     if args.compare:
         print(compare(*args.compare))
         return
-    done = gs.recorded(args.out, lambda record: record["case"])
-    for case in args.cases:
-        if case in done:
-            continue
-        record = run_case(case)
-        with open(args.out, "a") as f:
-            f.write(json.dumps(record) + "\n")
+    for case, record in iter_cases(args.cases, run_case, args.out):
         score = record.get("score", {})
         print(case, record.get("catalog", record.get("error")),
               {k: round(v, 4) for k, v in score.items() if isinstance(v, float)},

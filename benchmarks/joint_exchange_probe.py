@@ -16,17 +16,15 @@ case with none asked is the same as before. One JSON line per case. Usage::
 """
 
 import argparse
-import json
 import os
 import sys
 import time
-import warnings
 
-import pysindy_xl as px
 from pysindy_xl.catalog import climbs
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import generic_systems as gs  # noqa: E402
+import growth_cases as gc  # noqa: E402
 
 ANGLES = ("gravity_torsion", "torsion_quartic", "bead_on_hoop", "spring_pendulum",
           "double_pendulum", "cart_spring_pendulum")
@@ -48,10 +46,7 @@ def probe(case, table=None) -> dict:
     climbs.Climber.attempt = attempt
     cpu = time.process_time()
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            found = px.grow_catalog(xs, ts, us, coordinates=list(system["coords"].names),
-                                    kinds=system["kinds"])
+        found = gc.grow(system, xs, ts, us)
     finally:
         climbs.Climber.attempt = original
     kept = [s.move for s in found.steps if s.chosen]
@@ -68,22 +63,11 @@ def main(argv=None) -> int:
     parser.add_argument("--out", required=True)
     args = parser.parse_args(argv)
     table = gs.systems()
-    done = set()
-    if os.path.exists(args.out):
-        with open(args.out, encoding="utf-8") as handle:
-            done = {json.loads(line)["case"] for line in handle if line.strip()}
-    for name in args.systems:
-        for forcing in ("forced", "unforced") if table[name]["unforced"] else ("forced",):
-            for noise in args.noise:
-                for seed in args.seeds:
-                    case = f"{name}:{forcing}:{noise}:{seed}"
-                    if case in done:
-                        continue
-                    record = probe(case, table)
-                    with open(args.out, "a", encoding="utf-8") as handle:
-                        handle.write(json.dumps(record) + "\n")
-                    print(case, "asked", record["asked"], "kept", record["kept_deep"],
-                          f"cpu {record['cpu_seconds']:.1f}", flush=True)
+    cases = [gs.case_key(case) for case in gs.grid_cases(table, args.systems,
+                                                         noise=args.noise, seeds=args.seeds)]
+    for case, record in gc.iter_cases(cases, lambda case: probe(case, table), args.out):
+        print(case, "asked", record["asked"], "kept", record["kept_deep"],
+              f"cpu {record['cpu_seconds']:.1f}", flush=True)
     return 0
 
 

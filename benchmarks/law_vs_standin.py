@@ -40,6 +40,7 @@ from pysindy_xl.catalog.moves import START
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import generic_systems as gs  # noqa: E402
+import growth_cases as gc  # noqa: E402
 import unseen_systems as us  # noqa: E402
 
 KEY = "elastic_double_pendulum:forced:0.01:2"
@@ -67,10 +68,7 @@ def search_of(key, **options):
 
     growth.CandidateFits = Intercept
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            px.grow_catalog(xs, ts, u, coordinates=list(system["coords"].names),
-                            kinds=system["kinds"], **options)
+        gc.grow(system, xs, ts, u, **options)
     except _Captured:
         pass
     finally:

@@ -16,13 +16,12 @@ import json
 import os
 import sys
 import time
-import warnings
 
-import pysindy_xl as px
 from pysindy_xl.catalog import growth
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import generic_systems as gs  # noqa: E402
+import growth_cases as gc  # noqa: E402
 
 
 class _Stop(Exception):
@@ -44,10 +43,7 @@ def probe(case, table=None) -> dict:
     system, _, _, (_, _, xs, ts, us) = gs.case_of(case, table)
     growth.narrowed = narrowed
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            px.grow_catalog(xs, ts, us, coordinates=list(system["coords"].names),
-                            kinds=system["kinds"])
+        gc.grow(system, xs, ts, us)
     except _Stop:
         pass
     finally:

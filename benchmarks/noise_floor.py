@@ -20,12 +20,11 @@ import argparse
 import dataclasses
 import json
 import time
-import warnings
 
 import generic_systems as gs
+import growth_cases as gc
 import numpy as np
 
-import pysindy_xl as px
 from pysindy_xl.catalog import candidates, growth
 
 
@@ -42,10 +41,7 @@ def _grow(system, xs, ts, us, noise_floor, every=False):
     growth.SearchData = _EverySearch if every else candidates.SearchData
     started = time.process_time()
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            found = px.grow_catalog(xs, ts, us, coordinates=list(system["coords"].names),
-                                    kinds=system["kinds"], noise_floor=noise_floor)
+        found = gc.grow(system, xs, ts, us, noise_floor=noise_floor)
     finally:
         growth.SearchData = candidates.SearchData
     return found, time.process_time() - started

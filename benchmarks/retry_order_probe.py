@@ -26,9 +26,7 @@ import json
 import os
 import sys
 import time
-import warnings
 
-import pysindy_xl as px
 from pysindy_xl.catalog import climbs, retries
 from pysindy_xl.catalog.budget import OVER, REFUSED, work_cost
 from pysindy_xl.catalog.candidates import parameters_key
@@ -36,6 +34,7 @@ from pysindy_xl.catalog.retries import retry_walk
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import generic_systems as gs  # noqa: E402
+import growth_cases as gc  # noqa: E402
 
 BEFORE = ("state_order", "constant", "narrower")  # the order before this change
 
@@ -90,10 +89,7 @@ def probe(case, table=None) -> dict:
     system, _, _, (_, _, xs, ts, us) = gs.case_of(case, table)
     climbs.attempt_within_limits = hooked
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            found = px.grow_catalog(xs, ts, us, coordinates=list(system["coords"].names),
-                                    kinds=system["kinds"])
+        found = gc.grow(system, xs, ts, us)
     finally:
         climbs.attempt_within_limits = original
     implicit = found.criterion != "forces"
@@ -112,21 +108,18 @@ def grid_cases(part, parts):
     """The development grid's cases with two coordinates or more, every ``parts``-th from
     ``part``."""
     table = gs.systems()
-    cases = [f"{name}:{forcing}:{noise}:{seed}" for seed in (0, 1, 2)
-             for noise in (0.0, 0.01, 0.05) for forcing in ("forced", "unforced")
-             for name, system in table.items()
-             if (forcing == "forced" or system["unforced"]) and system["coords"].n >= 2]
+    cases = [gs.case_key(case) for case in gs.grid_cases(table)
+             if table[case[0]]["coords"].n >= 2]
     return cases[part::parts]
 
 
 if __name__ == "__main__":
     args = sys.argv[1:]
-    done = set()
+    done = None
     if "--done" in args:  # (a JSONL file of this script's: its cases are skipped)
         at = args.index("--done")
-        with open(args[at + 1], encoding="utf-8") as handle:
-            done = {json.loads(line)["case"] for line in handle if line.strip()}
+        done = args[at + 1]
         args = args[:at] + args[at + 2:]
     keys = grid_cases(int(args[1]), int(args[2])) if args[:1] == ["--grid"] else args
-    for key in [k for k in keys if k not in done]:
-        print(json.dumps(probe(key)), flush=True)
+    for _, record in gc.iter_cases(keys, probe, done=done):
+        print(json.dumps(record), flush=True)

@@ -37,7 +37,6 @@ import argparse
 import json
 import os
 import sys
-import warnings
 
 import numpy as np
 import sympy as sp
@@ -45,8 +44,7 @@ import sympy as sp
 sys.path.insert(0, os.path.dirname(__file__))
 
 import generic_systems as gs  # noqa: E402 - the benchmark's machinery
-
-import pysindy_xl as px  # noqa: E402
+import growth_cases as gc  # noqa: E402
 
 RESULTS = os.path.join(os.path.dirname(__file__), "results", "unseen_systems.jsonl")
 #: A line of the report: ``--report`` keeps what is above it (the analysis written by hand).
@@ -122,10 +120,7 @@ def explain(case, table=None, extra_moves=()):
     (a function returning them; default :func:`systems`): its table, the fitted Lagrangian next
     to the truth, and the scores."""
     system, truth, forced, (runs, test, xs, ts, us) = gs.case_of(case, (table or systems)())
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        found = px.grow_catalog(xs, ts, us, coordinates=list(system["coords"].names),
-                                kinds=system["kinds"], **gs._moves(extra_moves))
+    found = gc.grow(system, xs, ts, us, **gs._moves(extra_moves))
     print(found.table())
     print("catalog:", found.catalog.describe())
     print("found L:", found.model.lagrangian())
