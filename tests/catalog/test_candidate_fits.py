@@ -8,8 +8,6 @@ from support.growth import HARDENING, MASS, STIFFNESS, noisy_duffing
 from pysindy_xl.catalog import grow_catalog
 from pysindy_xl.catalog.candidates import (
     CandidateFits,
-    SearchData,
-    SearchSplit,
     evaluate_candidate,
     parameters_key,
 )
@@ -38,25 +36,8 @@ def test_growth_in_two_processes_takes_the_same_path_to_the_same_law():
     assert joblib.Parallel(n_jobs=2)(joblib.delayed(abs)(-k) for k in range(3)) == [0, 1, 2]
 
 
-def _search(x, t, u):
-    from pysindy_xl import XLSINDy
-    from pysindy_xl.fit import RememberedSmoother
-    from pysindy_xl.optimizers import ExplicitOptimizer
-    from pysindy_xl.weak import BumpTestFunctions
-    fixed = {"coordinates": ["x"], "kinds": ["linear"], "bounds": [(-2.0, 2.0)],
-             "kinetic": "constant"}
-    train = {"x": [x[:2500]], "t": [t[:2500]], "u": [u[:2500]], "x_dot": None, "x_ddot": None}
-    blocks = [{"x": [x[2500:3250]], "t": [t[2500:3250]], "u": [u[2500:3250]]},
-              {"x": [x[3250:]], "t": [t[3250:]], "u": [u[3250:]]}]
-    template = XLSINDy(optimizer=ExplicitOptimizer(), formulation="weak",
-                       test_functions=BumpTestFunctions(width=0.5),
-                       smoother=RememberedSmoother())
-    return SearchData([SearchSplit(fixed, train, blocks)], template, max_terms=50, forced=True)
-
-
-def test_a_workers_candidate_is_the_callers_to_the_bit():
-    x, t, u = noisy_duffing()
-    search = _search(x, t, u)
+def test_a_workers_candidate_is_the_callers_to_the_bit(duffing_search):
+    search = duffing_search(kinetic="constant")
     fits = CandidateFits(search, n_jobs=2)
     fits.warm_up()
     quartic = {"degree": 4}
@@ -83,9 +64,8 @@ def test_a_workers_candidate_is_the_callers_to_the_bit():
     assert here["criterion"] > 0.95 * first["criterion"]
 
 
-def test_the_ceiling_and_the_sample_count_are_reported_not_fitted():
-    x, t, u = noisy_duffing()
-    search = _search(x, t, u)
+def test_the_ceiling_and_the_sample_count_are_reported_not_fitted(duffing_search):
+    search = duffing_search(kinetic="constant")
     search.max_terms = 4
     fields = CandidateFits(search).get({"degree": 4})
     assert fields["note"].startswith("ceiling") and fields["criterion"] == np.inf
@@ -97,9 +77,8 @@ def test_the_ceiling_and_the_sample_count_are_reported_not_fitted():
     assert fields["note"] == "too few samples for this size" and fields["terms"] == 6
 
 
-def test_parameters_of_a_catalog_met_before_get_its_fit_equal_to_their_own():
-    x, t, u = noisy_duffing()
-    search = _search(x, t, u)
+def test_parameters_of_a_catalog_met_before_get_its_fit_equal_to_their_own(duffing_search):
+    search = duffing_search(kinetic="constant")
     fits = CandidateFits(search)
     quartic = {"degree": 4}
     same = {"degree": 4, "interaction": 2}  # one coordinate: no product of two
@@ -122,10 +101,9 @@ def test_parameters_of_a_catalog_met_before_get_its_fit_equal_to_their_own():
     assert [kind for kind, _ in fits.events] == ["local", "same", "local"]
 
 
-def test_candidate_content_tells_equal_catalogs_from_different_ones():
+def test_candidate_content_tells_equal_catalogs_from_different_ones(duffing_search):
     from pysindy_xl.catalog.candidates import candidate_content
-    x, t, u = noisy_duffing()
-    search = _search(x, t, u)
+    search = duffing_search(kinetic="constant")
     quartic = candidate_content(search, {"degree": 4})
     assert quartic == candidate_content(search, {"degree": 4, "interaction": 2})
     assert quartic != candidate_content(search, {"degree": 4, "dissipation": ("coulomb",)})

@@ -19,7 +19,6 @@ import pytest
 import pysindy_xl as px
 from pysindy_xl.catalog import AutomaticCatalog
 from pysindy_xl.catalog.candidates import parameters_key
-from pysindy_xl.catalog.climbs import Climber
 from pysindy_xl.catalog.moves import (
     START,
     holds,
@@ -29,7 +28,6 @@ from pysindy_xl.catalog.moves import (
     narrow_order,
     narrowed,
 )
-from pysindy_xl.catalog.path import GrowthStep
 from pysindy_xl.catalog.retries import attempt_within_limits
 
 NAMES, KINDS = ["a", "b", "c"], ["angle"] * 3
@@ -84,31 +82,12 @@ def test_a_joint_move_over_the_ceiling_is_narrowed_to_the_widest_order_within_it
     assert narrowed(joint, KINDS, 3, _size, 191) == []  # not over it
 
 
-def _climber(ceiling):
-    """A climber whose fits only report the ceiling: each attempt is recorded."""
-    climber = Climber.__new__(Climber)
-    climber.retry_kinetic, climber.attempts = True, []
-    climber.kinds, climber.n = KINDS, 3
-
-    def attempt(parameters, move, ahead=()):
-        climber.attempts.append((move, parameters))
-        size = _size(parameters)
-        return GrowthStep(move=move, chosen=False, terms=size, active=0, description="",
-                          time_error=np.nan, region_error=np.nan,
-                          criterion=np.inf if size > ceiling else 0.1,
-                          note=f"ceiling: {size} > max_terms {ceiling}" if size > ceiling
-                          else "")
-
-    climber.attempt = attempt
-    return climber
-
-
-def test_a_refused_interaction_move_keeps_the_kinetic_order_of_its_catalog():
+def test_a_refused_interaction_move_keeps_the_kinetic_order_of_its_catalog(ceiling_climber):
     """From the joint catalog (inertia over two coordinates' functions, 135 terms), the
     move ``"interaction"`` (191 terms) is over a ceiling of 150: it is retried with the
     kinetic order of the catalog it moved from (the arm's law, 143 terms), not with
     constant kinetic coefficients that drop the inertia the climb kept."""
-    climber = _climber(ceiling=150)
+    climber = ceiling_climber(150, NAMES, KINDS)
     target = moved(SHARED, "interaction", KINDS, 3)
     parameters, step = attempt_within_limits(
         climber, target, "interaction", {parameters_key(SHARED)}, state=SHARED)
@@ -117,36 +96,36 @@ def test_a_refused_interaction_move_keeps_the_kinetic_order_of_its_catalog():
     assert holds(parameters, SHARED)
     # without the catalog it moved from, the retries are those of a move alone: constant
     # kinetic coefficients first (35 terms, within the ceiling)
-    alone = _climber(ceiling=150)
+    alone = ceiling_climber(150, NAMES, KINDS)
     parameters, _ = attempt_within_limits(alone, target, "interaction", set())
     assert [move for move, _ in alone.attempts] == ["interaction", "interaction-kinetic"]
     assert parameters["kinetic"] == "constant"
 
 
-def test_a_narrowing_retry_takes_the_widest_order_within_the_ceiling():
+def test_a_narrowing_retry_takes_the_widest_order_within_the_ceiling(ceiling_climber):
     """The move ``"kinetic"`` from constant kinetic coefficients with the potential's
     products of three (35 terms) is 191 terms; its constant retry is the catalog itself, so
     the kinetic order gives way: two coordinates' functions first (143), then one (71)."""
     state = dict(START, interaction=3)
     target = moved(state, "kinetic", KINDS, 3)
-    climber = _climber(ceiling=150)
+    climber = ceiling_climber(150, NAMES, KINDS)
     parameters, step = attempt_within_limits(
         climber, target, "kinetic", {parameters_key(state)}, state=state)
     assert [move for move, _ in climber.attempts] == ["kinetic", "kinetic@k2"]
     assert parameters == ARM and not step.note
-    low = _climber(ceiling=100)
+    low = ceiling_climber(100, NAMES, KINDS)
     parameters, step = attempt_within_limits(
         low, target, "kinetic", {parameters_key(state)}, state=state)
     assert [move for move, _ in low.attempts] == ["kinetic", "kinetic@k2", "kinetic@k1"]
     assert parameters == dict(ARM, kinetic_interaction=1) and not step.note
 
 
-def test_a_widening_kinetic_move_over_the_ceiling_does_not_drop_the_inertia():
+def test_a_widening_kinetic_move_over_the_ceiling_does_not_drop_the_inertia(ceiling_climber):
     """From the arm's narrow catalog (inertia of single coordinates), the move ``"kinetic"``
     to two coordinates' functions (143) over a ceiling of 120 is not retried with constant
     kinetic coefficients (a catalog that the climb's own holds: no move forward)."""
     state = dict(ARM, kinetic_interaction=1)
-    climber = _climber(ceiling=120)
+    climber = ceiling_climber(120, NAMES, KINDS)
     parameters, step = attempt_within_limits(
         climber, moved(state, "kinetic", KINDS, 3), "kinetic", {parameters_key(state)}, state=state)
     assert [move for move, _ in climber.attempts] == ["kinetic"]

@@ -7,7 +7,6 @@ and the time blocks keep them; and a forced Duffing oscillator, whose hardening 
 the extreme states, so that a fold fitted inside them alone cannot see it.
 """
 
-import warnings
 
 import numpy as np
 import pytest
@@ -20,6 +19,7 @@ from support.growth import (
     WEIGHT,
     forced_runs,
     noisy_duffing,
+    quiet_growth,
     torsion_pendulum,
     wide_force_error,
 )
@@ -30,19 +30,13 @@ from pysindy_xl.catalog.keep_rules import consensus_criteria, consensus_keeps
 from pysindy_xl.catalog.path import GrowthStep
 
 
-def _grow(*args, **kwargs):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return grow_catalog(*args, **kwargs)
-
-
 @pytest.mark.slow
 def test_the_consensus_refuses_the_stand_in_that_the_time_blocks_keep():
     accelerations, forces = torsion_pendulum()
     ts, xs, us = forced_runs(accelerations, seed=1, noise=0.05)
     assert np.abs(np.vstack(xs)).max() < 1.6  # the check below reaches 2.5
-    blocks = _grow(xs, ts, us, coordinates=["theta"], kinds="angle")
-    both = _grow(xs, ts, us, coordinates=["theta"], kinds="angle", region="consensus")
+    blocks = quiet_growth(xs, ts, us, coordinates=["theta"], kinds="angle")
+    both = quiet_growth(xs, ts, us, coordinates=["theta"], kinds="angle", region="consensus")
     # the default keeps sines and cosines of 2 theta for the spring: wrong beyond the data
     assert blocks.catalog.angle_degree == 0 and blocks.catalog.trig_degree == 2
     assert wide_force_error(blocks, forces) > 0.05
@@ -66,8 +60,8 @@ def test_the_consensus_refuses_the_stand_in_that_the_time_blocks_keep():
 
 def test_the_consensus_keeps_a_hardening_that_only_the_extreme_states_show():
     x, t, u = noisy_duffing()
-    extremes = _grow(x, t, u, coordinates=["x"], kinds="linear", region="extremes")
-    both = _grow(x, t, u, coordinates=["x"], kinds="linear", region="consensus")
+    extremes = quiet_growth(x, t, u, coordinates=["x"], kinds="linear", region="extremes")
+    both = quiet_growth(x, t, u, coordinates=["x"], kinds="linear", region="consensus")
     # fitted inside the threshold, x^4 extrapolates worse than the start: the extremes fold
     # stops at the start
     assert extremes.catalog.degree == 2

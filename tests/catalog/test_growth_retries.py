@@ -17,14 +17,12 @@ no catalog holding the arm's spring ``a^2`` beside the law's inertia was ever fi
 
 import numpy as np
 import sympy as sp
-from support.growth import noisy_duffing
 
 from pysindy_xl.catalog import AutomaticCatalog
 from pysindy_xl.catalog.budget import work_cost
 from pysindy_xl.catalog.candidates import CandidateFits, parameters_key
 from pysindy_xl.catalog.climbs import Climber
 from pysindy_xl.catalog.moves import START, kinetic_order, kinetic_trig_degree, moved
-from pysindy_xl.catalog.path import GrowthStep
 from pysindy_xl.catalog.retries import (
     RETRIES,
     attempt_within_limits,
@@ -68,34 +66,16 @@ def _states(parameters):
     return np.array(residuals) < 1e-8
 
 
-def _climber(ceiling):
-    """A climber whose fits only report the ceiling: each attempt's move is recorded."""
-    climber = Climber.__new__(Climber)
-    climber.retry_kinetic, climber.attempts = True, []
-    climber.kinds, climber.n = KINDS, len(KINDS)
-
-    def attempt(parameters, move, ahead=()):
-        size = _size(parameters)
-        climber.attempts.append((move, size))
-        return GrowthStep(move=move, chosen=False, terms=size, active=0, description="",
-                          time_error=np.nan, region_error=np.nan,
-                          criterion=np.inf if size > ceiling else 0.1,
-                          note=f"ceiling: {size} > max_terms {ceiling}" if size > ceiling
-                          else "")
-
-    climber.attempt = attempt
-    return climber
-
-
 #: The Furuta growth's kept catalog: configuration-dependent kinetic coefficients over both
 #: angles' functions with sin^2 and sin cos, the potential's products of two angles.
 KEPT = moved(dict(START), "interaction+kinetic_trig_degree", KINDS, 2)
 
 
-def test_a_refused_move_from_a_configuration_catalog_narrows_before_it_drops_the_inertia():
+def test_a_refused_move_from_a_configuration_catalog_narrows_before_it_drops_the_inertia(
+        ceiling_climber):
     refused = moved(KEPT, "angle_degree", KINDS, 2)
     assert (_size(KEPT), _size(refused)) == (85, 98)
-    climber = _climber(ceiling=96)
+    climber = ceiling_climber(96, NAMES, KINDS)
     parameters, step = attempt_within_limits(
         climber, refused, "angle_degree", {parameters_key(KEPT)}, state=KEPT)
     assert climber.attempts == [("angle_degree", 98), ("angle_degree@k1", 50)]
@@ -110,10 +90,10 @@ def test_a_refused_move_from_a_configuration_catalog_narrows_before_it_drops_the
     assert not _states(constant)[1] and _states(constant)[0]  # no sin(b)^2 a_dot^2; a^2
 
 
-def test_the_constant_retry_comes_last_from_a_configuration_catalog():
+def test_the_constant_retry_comes_last_from_a_configuration_catalog(ceiling_climber):
     """Where the narrower catalog is over the ceiling too, the constant retry still comes."""
     refused = moved(KEPT, "angle_degree", KINDS, 2)
-    climber = _climber(ceiling=40)
+    climber = ceiling_climber(40, NAMES, KINDS)
     parameters, step = attempt_within_limits(
         climber, refused, "angle_degree", {parameters_key(KEPT)}, state=KEPT)
     assert climber.attempts == [("angle_degree", 98), ("angle_degree@k1", 50),
@@ -121,14 +101,14 @@ def test_the_constant_retry_comes_last_from_a_configuration_catalog():
     assert parameters["kinetic"] == "constant" and not step.note
 
 
-def test_from_constant_kinetic_coefficients_the_constant_retry_comes_first():
+def test_from_constant_kinetic_coefficients_the_constant_retry_comes_first(ceiling_climber):
     """From constant kinetic coefficients the constant retry drops only what the move adds:
     it comes before the narrower ones (the order before this change)."""
     assert retry_order(dict(START)) == ("state_order", "constant", "narrower")
     assert retry_order(KEPT) == ("state_order", "narrower", "constant")
     assert retry_order(None) == ("state_order", "constant", "narrower")
     refused = moved(dict(START), "kinetic+interaction+kinetic_trig_degree", KINDS, 2)
-    climber = _climber(ceiling=80)
+    climber = ceiling_climber(80, NAMES, KINDS)
     parameters, _ = attempt_within_limits(
         climber, refused, "joint", {parameters_key(START)}, state=dict(START))
     assert climber.attempts == [("joint", 85), ("joint-kinetic", 13)]
@@ -139,15 +119,11 @@ def test_from_constant_kinetic_coefficients_the_constant_retry_comes_first():
     assert [name for name, _ in retries["narrower"]] == ["joint@k1"]
 
 
-def test_a_catalog_met_before_under_other_parameters_is_charged_once(monkeypatch):
+def test_a_catalog_met_before_under_other_parameters_is_charged_once(monkeypatch,
+                                                                      duffing_search):
     """Two parameters of one catalog (one coordinate: no product of two) are one fit; the work
     budget pays it once, and the fit is not made again (the cache hits)."""
-    from pysindy_xl import XLSINDy
     from pysindy_xl.catalog import candidates
-    from pysindy_xl.catalog.candidates import SearchData, SearchSplit
-    from pysindy_xl.fit import RememberedSmoother
-    from pysindy_xl.optimizers import ExplicitOptimizer
-    from pysindy_xl.weak import BumpTestFunctions
 
     fitted = []
     original = candidates.evaluate_candidate
@@ -157,16 +133,9 @@ def test_a_catalog_met_before_under_other_parameters_is_charged_once(monkeypatch
         return original(search, parameters)
 
     monkeypatch.setattr(candidates, "evaluate_candidate", recorded)
-    x, t, u = noisy_duffing()
-    fixed = {"coordinates": ["x"], "kinds": ["linear"], "bounds": [(-2.0, 2.0)]}
-    train = {"x": [x[:2500]], "t": [t[:2500]], "u": [u[:2500]], "x_dot": None, "x_ddot": None}
-    blocks = [{"x": [x[2500:3250]], "t": [t[2500:3250]], "u": [u[2500:3250]]},
-              {"x": [x[3250:]], "t": [t[3250:]], "u": [u[3250:]]}]
-    template = XLSINDy(optimizer=ExplicitOptimizer(), formulation="weak",
-                       test_functions=BumpTestFunctions(width=0.5),
-                       smoother=RememberedSmoother())
-    fits = CandidateFits(SearchData([SearchSplit(fixed, train, blocks)], template,
-                                    max_terms=50, forced=True))
+    search = duffing_search()
+    fixed = search.splits[0].fixed
+    fits = CandidateFits(search)
     climber = Climber(fits, None, fixed, ["linear"], tolerance=0.05, good_enough=1e-6,
                       physical=False, retry_kinetic=True, criterion="forces")
     quartic = dict(START, degree=4)

@@ -7,7 +7,6 @@ scipy at 1e-10), whose ``phi^4`` a cosine beside ``phi^2`` imitates on the recor
 """
 
 import json
-import warnings
 
 import numpy as np
 import pytest
@@ -18,6 +17,7 @@ from support.growth import (
     ROTOR_INERTIA,
     forced_runs,
     quartic_rotor,
+    quiet_growth,
     torsion_pendulum,
 )
 
@@ -26,18 +26,12 @@ from pysindy_xl.catalog.path import GrowthStep
 from pysindy_xl.catalog.ties import SAME_LAW, TIE_CANDIDATES, TIE_REACH, break_ties, near_ties
 
 
-def _grow(*args, **kwargs):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return grow_catalog(*args, **kwargs)
-
-
 def test_the_near_ties_judged_on_every_block_give_the_law_not_the_stand_in():
     accelerations, forces = quartic_rotor()
     ts, xs, us = forced_runs(accelerations, seed=6, noise=0.05, amplitude=1.5)
     assert np.abs(np.vstack(xs)).max() < 2.0  # the check below reaches 2.5
-    plain = _grow(xs, ts, us, coordinates=["phi"], kinds="angle", tie_break=False)
-    found = _grow(xs, ts, us, coordinates=["phi"], kinds="angle")
+    plain = quiet_growth(xs, ts, us, coordinates=["phi"], kinds="angle", tie_break=False)
+    found = quiet_growth(xs, ts, us, coordinates=["phi"], kinds="angle")
     # two held-out blocks per run prefer a cosine beside phi^2 for the quartic spring: wrong
     # beyond the recorded angles
     assert plain.catalog.trig_degree == 1 and plain.catalog.angle_degree == 2
@@ -84,9 +78,9 @@ def test_no_second_judgment_where_the_criterion_is_cross_validated_or_two_folds_
     accelerations, _ = quartic_rotor()
     ts, xs, us = forced_runs(accelerations, seed=6, noise=0.05, amplitude=1.5, n_runs=1,
                              duration=6.0)
-    plain = _grow(xs, ts, us, coordinates=["phi"], kinds="angle")
-    cross = _grow(xs, ts, us, coordinates=["phi"], kinds="angle", cross_validate=True)
-    both = _grow(xs, ts, us, coordinates=["phi"], kinds="angle", region="consensus")
+    plain = quiet_growth(xs, ts, us, coordinates=["phi"], kinds="angle")
+    cross = quiet_growth(xs, ts, us, coordinates=["phi"], kinds="angle", cross_validate=True)
+    both = quiet_growth(xs, ts, us, coordinates=["phi"], kinds="angle", region="consensus")
     assert any(np.isfinite(step.tie_error) for step in plain.steps)
     assert all(np.isnan(step.tie_error) for step in cross.steps + both.steps)
 

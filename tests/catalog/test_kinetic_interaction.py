@@ -19,9 +19,7 @@ import pysindy_xl as px
 from pysindy_xl.catalog import AutomaticCatalog
 from pysindy_xl.catalog.backward import removed
 from pysindy_xl.catalog.candidates import parameters_key
-from pysindy_xl.catalog.climbs import Climber
 from pysindy_xl.catalog.moves import START, holds, kinetic_order, moved
-from pysindy_xl.catalog.path import GrowthStep
 from pysindy_xl.catalog.retries import attempt_within_limits
 
 NAMES, KINDS = ["x1", "x2", "a"], ["linear", "linear", "angle"]
@@ -156,32 +154,13 @@ def test_the_narrow_catalog_fits_the_law_and_saves(tmp_path):
     assert np.allclose(loaded.predict(x2, xd2, u2), model.predict(x2, xd2, u2))
 
 
-def _climber(ceiling):
-    """A climber whose fits only report the ceiling (``ceiling`` terms): each attempt's
-    parameters and move are recorded."""
-    climber = Climber.__new__(Climber)
-    climber.retry_kinetic, climber.attempts = True, []
-    climber.kinds, climber.n = KINDS, len(KINDS)
-
-    def attempt(parameters, move, ahead=()):
-        climber.attempts.append((move, parameters))
-        size = AutomaticCatalog(NAMES, kinds=KINDS, max_terms=10 ** 6, **parameters).n_terms
-        return GrowthStep(move=move, chosen=False, terms=size, active=0, description="",
-                          time_error=np.nan, region_error=np.nan,
-                          criterion=np.inf if size > ceiling else 0.1,
-                          note=f"ceiling: {size} > max_terms {ceiling}" if size > ceiling
-                          else "")
-
-    climber.attempt = attempt
-    return climber
-
-
-def test_a_kinetic_move_over_the_ceiling_is_retried_with_single_coordinate_inertias():
+def test_a_kinetic_move_over_the_ceiling_is_retried_with_single_coordinate_inertias(
+        ceiling_climber):
     state = moved(dict(START), "interaction", KINDS, 3)  # the potential's products are in
     target = moved(state, "kinetic", KINDS, 3)
     sizes = [AutomaticCatalog(NAMES, kinds=KINDS, max_terms=10 ** 6, **p).n_terms
              for p in (target, dict(target, kinetic_interaction=1))]
-    climber = _climber(ceiling=(sizes[0] + sizes[1]) // 2)
+    climber = ceiling_climber((sizes[0] + sizes[1]) // 2, NAMES, KINDS)
     tried = {parameters_key(state)}
     parameters, step = attempt_within_limits(climber, target, "kinetic", tried)
     # the constant-kinetic retry is the state itself (tried): the kinetic order gives way
@@ -190,9 +169,9 @@ def test_a_kinetic_move_over_the_ceiling_is_retried_with_single_coordinate_inert
     assert not step.note and kinetic_order(parameters) == 1
     assert holds(parameters, state) and not holds(parameters, target)
     # under the ceiling the move is fitted as it is; below the order 2, nothing is retried
-    assert attempt_within_limits(_climber(ceiling=sizes[0]), target, "kinetic", set())[0] \
-        == target
-    low = _climber(ceiling=10)
+    assert attempt_within_limits(ceiling_climber(sizes[0], NAMES, KINDS), target, "kinetic",
+                                 set())[0] == target
+    low = ceiling_climber(10, NAMES, KINDS)
     attempt_within_limits(low, moved(dict(START), "kinetic", KINDS, 3), "kinetic", set())
     assert [move for move, _ in low.attempts] == ["kinetic", "kinetic-kinetic"]
     # the backward phase drops the family with its order, and the potential's order alone

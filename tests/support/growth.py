@@ -2,6 +2,8 @@
 scipy, and the equations of motion of a one-coordinate ``sympy.physics.mechanics`` model as
 numeric callables."""
 
+import warnings
+
 import numpy as np
 import sympy as sp
 from scipy.integrate import solve_ivp
@@ -291,3 +293,11 @@ def damped_forced_runs(restoring, amplitude: float, initial, damping: float = 0.
         ddxs.append((u + restoring(x) - damping * v)[:, None])
         us.append(u[:, None])
     return t, xs, dxs, ddxs, us
+
+
+def quiet_growth(*args, **kwargs):
+    """:func:`pysindy_xl.catalog.grow_catalog` with its warnings silenced."""
+    from pysindy_xl.catalog import grow_catalog
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return grow_catalog(*args, **kwargs)
