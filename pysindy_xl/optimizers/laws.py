@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .problem import coordinate_weights, scale_blocks
-
 __all__ = ["UndeterminedLawWarning", "combine_laws", "definite_mass", "explained_coordinates",
            "normalize_law"]
 
@@ -31,20 +29,12 @@ def explained_coordinates(theta, law, n_blocks: int, min_share: float = 1e-3) ->
     """The coordinates whose equations a law explains.
 
     Those where the law's terms carry at least ``min_share`` of the largest coordinate's
-    squared contribution, the blocks weighed in the law's own units: balanced
-    (:func:`~pysindy_xl.optimizers.coordinate_weights`) over the law's own columns, not over
-    the catalog's. The balance of a catalog's blocks is unit free but depends on every column
-    it holds: columns the law does not use (``z cos(theta)`` in a wheel's equation, the
-    small derivatives of ``cos(theta)^2`` in a pitch's) set its units, and a law's share then
-    depends on the catalog it was fitted in. Balanced over its own columns, a law's verdict
-    depends on the law and the data alone, and stays unit free (a change of a coordinate's
-    units scales its block by a factor that the balance takes back). A term that merely
-    touches a coordinate with a negligible coefficient still carries a negligible share.
+    squared contribution.
 
     Parameters
     ----------
     theta : array, shape (n_blocks * N, k)
-        The law's columns (others, where the law is zero, are left out).
+        The law's columns, balanced blocks.
     law : array, shape (k,)
         The law's coefficients.
     n_blocks : int
@@ -63,23 +53,8 @@ def explained_coordinates(theta, law, n_blocks: int, min_share: float = 1e-3) ->
     >>> theta = np.array([[1.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.0, 1.0]])
     >>> explained_coordinates(theta, np.array([1.0, 1e-4]), 2).tolist()
     [True, False]
-
-    A law in a catalog whose other columns are far larger in the second block: the catalog's
-    balance shrinks that block (the law's share there 1.7e-5), the law's own does not:
-
-    >>> from pysindy_xl.optimizers import balance_coordinates
-    >>> catalog = np.column_stack([[1.0, 2.0, 0.1, 0.2], [0.5, 0.4, 0.2, 0.1],
-    ...                            [1.0, 1.0, 1e4, 1e4], [2.0, 1.0, 1e4, 3e4]])
-    >>> law = np.array([1.0, -2.0, 0.0, 0.0])
-    >>> explained_coordinates(balance_coordinates(catalog, 2), law, 2).tolist()
-    [True, True]
     """
-    law = np.asarray(law, dtype=float).reshape(-1)
-    support = np.flatnonzero(law)
-    columns = np.asarray(theta, dtype=float)[:, support]
-    if n_blocks > 1 and support.size:
-        columns = scale_blocks(columns, coordinate_weights(columns, n_blocks))
-    contributions = (columns * law[support]).reshape(n_blocks, -1, support.size)
+    contributions = (np.asarray(theta, dtype=float) * law).reshape(n_blocks, -1, len(law))
     shares = np.sum(contributions**2, axis=(1, 2))
     return shares >= min_share * max(float(shares.max(initial=0.0)), 1e-300)
 
