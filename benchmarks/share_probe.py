@@ -91,9 +91,8 @@ def main():
     _report()
     from pysindy_xl.catalog.growth_data import END_PERCENTILE
     low, high = np.percentile(np.vstack(xs), [END_PERCENTILE, 100 - END_PERCENTILE], axis=0)
-    catalog = px.AutomaticCatalog(names, kinds=system["kinds"],
-                                  bounds=[(float(a), float(b)) for a, b in zip(low, high)],
-                                  **system["hand"])
+    bounds = [(float(a), float(b)) for a, b in zip(low, high, strict=True)]
+    catalog = px.AutomaticCatalog(names, kinds=system["kinds"], bounds=bounds, **system["hand"])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         hand = px.XLSINDy(catalog).fit(xs, ts, u=us)

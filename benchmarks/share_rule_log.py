@@ -33,7 +33,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 
 import generic_systems as gs  # noqa: E402
 
-from pysindy_xl.optimizers import ImplicitOptimizer, homogeneous, laws  # noqa: E402
+from pysindy_xl.optimizers import ImplicitOptimizer, homogeneous  # noqa: E402
 from pysindy_xl.optimizers.problem import coordinate_weights, scale_blocks  # noqa: E402
 
 COUNTS = {}
