@@ -284,7 +284,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     moves : sequence of str, default MOVES
         The moves tried (some of :data:`MOVES` and :data:`MORE_MOVES`); the backward phase
         drops the families of these moves only (``"trig_degree"``: the sines and cosines too).
-        ``"differences"`` (opt-in) adds ``(q_j - q_i)^2``, then higher powers, of each pair of
+        ``"differences"`` adds ``(q_j - q_i)^2``, then higher powers, of each pair of
         coordinates of one kind (a joint's spring in one column; ``AutomaticCatalog``'s
         ``differences``).
         ``"exponentials"`` adds ``exp(a x)`` and ``exp(2 a x)`` of each linear coordinate,
@@ -435,6 +435,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                          tie_break=tie_break, noise_floor=noise_floor, work_budget=work_budget,
                          combine=combine, tolerance=tolerance, good_enough=good_enough,
                          moves=moves)
+    moves = tuple(dict.fromkeys(moves))  # a move named twice (MOVES + ("differences",)) once
     forced = us is not None and any(np.any(np.asarray(uk) != 0) for uk in us)
     criterion = "forces" if forced else "accelerations"
     velocity_scale = [float(np.std(np.gradient(xk, tk, axis=0), axis=0).mean())

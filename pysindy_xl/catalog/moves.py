@@ -33,8 +33,14 @@ __all__ = ["exponential_base", "MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE
 #: :data:`START`, not only after ``"kinetic"``); with two coordinates or more, as
 #: ``"gyroscopic"`` (a link pitched to another coordinate's axis: with one angle alone,
 #: ``sin(phi)^2 phi_dot^2`` beside ``cos(phi) phi_dot^2`` stands in for a quartic spring).
+#: ``"differences"`` adds the squared difference of each pair of coordinates of one kind to the
+#: potential (``differences`` of :class:`AutomaticCatalog`: ``(l - m)^2``, a joint's spring, in
+#: one column where the products ``l^2, l m, m^2`` are three nearly collinear ones), then its
+#: higher powers, one degree a move up to :data:`DIFFERENCE_LIMIT`; it applies only where two
+#: coordinates are of one kind.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
-         "coulomb", "kinetic_trig_degree", "exponentials", "splines", "quadratic_ends")
+         "coulomb", "kinetic_trig_degree", "differences", "exponentials", "splines",
+         "quadratic_ends")
 #: The moves of the flexible basis, tried after the families: ``"splines"`` adds a
 #: coordinate's splines (natural: a constant force beyond the data) or refines them;
 #: ``"quadratic_ends"`` gives them quadratic ends (a constant stiffness beyond the data), adding
@@ -58,10 +64,7 @@ LATE_MOVES = RATE_MOVES + SPLINE_MOVES
 #: ``"knots"`` writes the splines one column per interior knot (:data:`SPLINE_MOVES`; on the
 #: blind set's oblique slider it makes 4 more of 9 rows right, at up to twice the CPU of a
 #: growth that tries splines on 3-4 coordinates).
-#: ``"differences"`` adds the squared difference of each pair of coordinates of one kind to the
-#: potential (``differences`` of :class:`AutomaticCatalog`: ``(l - m)^2``, a joint's spring),
-#: then its higher powers, one degree a move up to :data:`DIFFERENCE_LIMIT`.
-MORE_MOVES = ("coupled_damping", "knots", "differences")
+MORE_MOVES = ("coupled_damping", "knots")
 #: The highest power of the coordinates' differences that the move ``"differences"`` reaches.
 DIFFERENCE_LIMIT = 4
 

@@ -3,7 +3,7 @@
 Two mechanisms: the backward phase exchanges a degree family grown several steps from its
 lowest degree too (a trigonometric stand-in grown to ``sin/cos degree 3`` for ``(a - b)^2``
 is left at once, not one degree at a time), and the family ``differences`` states such a
-spring in one column ``(l - m)^2`` (the opt-in move ``"differences"``), where the products
+spring in one column ``(l - m)^2`` (the default move ``"differences"``), where the products
 of powers need three (``m^2, l m, l^2``) that the sparse selection must keep together and
 ``cos(l - m) = cos(l) cos(m) + sin(l) sin(m)`` stands in with two.
 """
@@ -137,8 +137,7 @@ def _joint_arm_runs(noise, motor=0.05, link=0.1, weight=1.4715, stiffness=5.0):
 @pytest.mark.slow
 def test_growth_with_differences_states_the_joint_spring_and_holds_off_the_trajectories():
     ts, xs, us, forces = _joint_arm_runs(0.01)
-    found = px.grow_catalog(xs, ts, us, coordinates=["m", "l"], kinds="angle",
-                            moves=(*MOVES, "differences"))
+    found = px.grow_catalog(xs, ts, us, coordinates=["m", "l"], kinds="angle")
     lagrangian = found.model.lagrangian()
     assert "(l - m)**2" in str(lagrangian), lagrangian
     # off the recorded deflections (within +-0.6 rad): deflections to 1.5 rad
