@@ -3,6 +3,7 @@ result is the calling process's to the bit, and the growth's path and model do n
 ``n_jobs``. The ground truth is a forced Duffing oscillator integrated by scipy."""
 
 import numpy as np
+from support.catalog_setups import duffing_search
 from support.growth import HARDENING, MASS, STIFFNESS, noisy_duffing
 
 from pysindy_xl.catalog import grow_catalog
@@ -36,7 +37,7 @@ def test_growth_in_two_processes_takes_the_same_path_to_the_same_law():
     assert joblib.Parallel(n_jobs=2)(joblib.delayed(abs)(-k) for k in range(3)) == [0, 1, 2]
 
 
-def test_a_workers_candidate_is_the_callers_to_the_bit(duffing_search):
+def test_a_workers_candidate_is_the_callers_to_the_bit():
     search = duffing_search(kinetic="constant")
     fits = CandidateFits(search, n_jobs=2)
     fits.warm_up()
@@ -64,7 +65,7 @@ def test_a_workers_candidate_is_the_callers_to_the_bit(duffing_search):
     assert here["criterion"] > 0.95 * first["criterion"]
 
 
-def test_the_ceiling_and_the_sample_count_are_reported_not_fitted(duffing_search):
+def test_the_ceiling_and_the_sample_count_are_reported_not_fitted():
     search = duffing_search(kinetic="constant")
     search.max_terms = 4
     fields = CandidateFits(search).get({"degree": 4})
@@ -77,7 +78,7 @@ def test_the_ceiling_and_the_sample_count_are_reported_not_fitted(duffing_search
     assert fields["note"] == "too few samples for this size" and fields["terms"] == 6
 
 
-def test_parameters_of_a_catalog_met_before_get_its_fit_equal_to_their_own(duffing_search):
+def test_parameters_of_a_catalog_met_before_get_its_fit_equal_to_their_own():
     search = duffing_search(kinetic="constant")
     fits = CandidateFits(search)
     quartic = {"degree": 4}
@@ -101,7 +102,7 @@ def test_parameters_of_a_catalog_met_before_get_its_fit_equal_to_their_own(duffi
     assert [kind for kind, _ in fits.events] == ["local", "same", "local"]
 
 
-def test_candidate_content_tells_equal_catalogs_from_different_ones(duffing_search):
+def test_candidate_content_tells_equal_catalogs_from_different_ones():
     from pysindy_xl.catalog.candidates import candidate_content
     search = duffing_search(kinetic="constant")
     quartic = candidate_content(search, {"degree": 4})

@@ -15,6 +15,7 @@ import warnings
 
 import numpy as np
 import pytest
+from support.catalog_setups import ceiling_climber
 
 import pysindy_xl as px
 from pysindy_xl.catalog import AutomaticCatalog
@@ -82,7 +83,7 @@ def test_a_joint_move_over_the_ceiling_is_narrowed_to_the_widest_order_within_it
     assert narrowed(joint, KINDS, 3, _size, 191) == []  # not over it
 
 
-def test_a_refused_interaction_move_keeps_the_kinetic_order_of_its_catalog(ceiling_climber):
+def test_a_refused_interaction_move_keeps_the_kinetic_order_of_its_catalog():
     """From the joint catalog (inertia over two coordinates' functions, 135 terms), the
     move ``"interaction"`` (191 terms) is over a ceiling of 150: it is retried with the
     kinetic order of the catalog it moved from (the arm's law, 143 terms), not with
@@ -102,7 +103,7 @@ def test_a_refused_interaction_move_keeps_the_kinetic_order_of_its_catalog(ceili
     assert parameters["kinetic"] == "constant"
 
 
-def test_a_narrowing_retry_takes_the_widest_order_within_the_ceiling(ceiling_climber):
+def test_a_narrowing_retry_takes_the_widest_order_within_the_ceiling():
     """The move ``"kinetic"`` from constant kinetic coefficients with the potential's
     products of three (35 terms) is 191 terms; its constant retry is the catalog itself, so
     the kinetic order gives way: two coordinates' functions first (143), then one (71)."""
@@ -120,7 +121,7 @@ def test_a_narrowing_retry_takes_the_widest_order_within_the_ceiling(ceiling_cli
     assert parameters == dict(ARM, kinetic_interaction=1) and not step.note
 
 
-def test_a_widening_kinetic_move_over_the_ceiling_does_not_drop_the_inertia(ceiling_climber):
+def test_a_widening_kinetic_move_over_the_ceiling_does_not_drop_the_inertia():
     """From the arm's narrow catalog (inertia of single coordinates), the move ``"kinetic"``
     to two coordinates' functions (143) over a ceiling of 120 is not retried with constant
     kinetic coefficients (a catalog that the climb's own holds: no move forward)."""

@@ -17,6 +17,7 @@ no catalog holding the arm's spring ``a^2`` beside the law's inertia was ever fi
 
 import numpy as np
 import sympy as sp
+from support.catalog_setups import ceiling_climber, duffing_search
 
 from pysindy_xl.catalog import AutomaticCatalog
 from pysindy_xl.catalog.budget import work_cost
@@ -71,8 +72,7 @@ def _states(parameters):
 KEPT = moved(dict(START), "interaction+kinetic_trig_degree", KINDS, 2)
 
 
-def test_a_refused_move_from_a_configuration_catalog_narrows_before_it_drops_the_inertia(
-        ceiling_climber):
+def test_a_refused_move_from_a_configuration_catalog_narrows_before_it_drops_the_inertia():
     refused = moved(KEPT, "angle_degree", KINDS, 2)
     assert (_size(KEPT), _size(refused)) == (85, 98)
     climber = ceiling_climber(96, NAMES, KINDS)
@@ -90,7 +90,7 @@ def test_a_refused_move_from_a_configuration_catalog_narrows_before_it_drops_the
     assert not _states(constant)[1] and _states(constant)[0]  # no sin(b)^2 a_dot^2; a^2
 
 
-def test_the_constant_retry_comes_last_from_a_configuration_catalog(ceiling_climber):
+def test_the_constant_retry_comes_last_from_a_configuration_catalog():
     """Where the narrower catalog is over the ceiling too, the constant retry still comes."""
     refused = moved(KEPT, "angle_degree", KINDS, 2)
     climber = ceiling_climber(40, NAMES, KINDS)
@@ -101,7 +101,7 @@ def test_the_constant_retry_comes_last_from_a_configuration_catalog(ceiling_clim
     assert parameters["kinetic"] == "constant" and not step.note
 
 
-def test_from_constant_kinetic_coefficients_the_constant_retry_comes_first(ceiling_climber):
+def test_from_constant_kinetic_coefficients_the_constant_retry_comes_first():
     """From constant kinetic coefficients the constant retry drops only what the move adds:
     it comes before the narrower ones (the order before this change)."""
     assert retry_order(dict(START)) == ("state_order", "constant", "narrower")
@@ -119,8 +119,7 @@ def test_from_constant_kinetic_coefficients_the_constant_retry_comes_first(ceili
     assert [name for name, _ in retries["narrower"]] == ["joint@k1"]
 
 
-def test_a_catalog_met_before_under_other_parameters_is_charged_once(monkeypatch,
-                                                                      duffing_search):
+def test_a_catalog_met_before_under_other_parameters_is_charged_once(monkeypatch):
     """Two parameters of one catalog (one coordinate: no product of two) are one fit; the work
     budget pays it once, and the fit is not made again (the cache hits)."""
     from pysindy_xl.catalog import candidates

@@ -14,6 +14,7 @@ import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
 from sklearn.base import clone
+from support.catalog_setups import ceiling_climber
 
 import pysindy_xl as px
 from pysindy_xl.catalog import AutomaticCatalog
@@ -154,8 +155,7 @@ def test_the_narrow_catalog_fits_the_law_and_saves(tmp_path):
     assert np.allclose(loaded.predict(x2, xd2, u2), model.predict(x2, xd2, u2))
 
 
-def test_a_kinetic_move_over_the_ceiling_is_retried_with_single_coordinate_inertias(
-        ceiling_climber):
+def test_a_kinetic_move_over_the_ceiling_is_retried_with_single_coordinate_inertias():
     state = moved(dict(START), "interaction", KINDS, 3)  # the potential's products are in
     target = moved(state, "kinetic", KINDS, 3)
     sizes = [AutomaticCatalog(NAMES, kinds=KINDS, max_terms=10 ** 6, **p).n_terms
