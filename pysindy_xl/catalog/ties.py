@@ -189,8 +189,10 @@ def judge_near_ties(steps, best, parameters_of, judge, *, physical: bool = False
     chosen = ties[0]  # (the smallest catalog of the chosen law)
     if len(ties) > 1:
         fits = judge()
-        chosen = break_ties(ties, parameters_of, fits, tolerance, progress)
-        fits.close()
+        try:
+            chosen = break_ties(ties, parameters_of, fits, tolerance, progress)
+        finally:  # (its workers end even where a judgment fails)
+            fits.close()
     return chosen
 
 
