@@ -281,6 +281,7 @@ def run_case(system, truth, noise, seed, forced, baselines=True, region="block",
             record["kept"] = int(np.count_nonzero(found.model.coefficients()))
             record["steps"] = len(found.steps)
             record["work"] = found.work  # (the search's work, grow_catalog's work_budget)
+            record["own_runs"] = found.own_runs  # (unforced: where the model leaves its runs)
             record["criterion"] = found.held_out_error
             # the near ties judged again on every block (move, terms, criterion, that
             # cross-validation, chosen)

@@ -31,7 +31,7 @@ import numpy as np
 
 from .automatic import AutomaticCatalog
 
-__all__ = ["fit_chosen", "final_answer", "mass_matrix_fails", "physical_alternative",
+__all__ = ["fit_chosen", "final_answer", "failure", "mass_matrix_fails", "physical_alternative",
            "PHYSICAL_ALTERNATIVES"]
 
 #: Most other catalogs whose final fit a growth tries where its choice's fails the mass-matrix
@@ -107,12 +107,14 @@ def mass_matrix_fails(model) -> bool:
     return model.dynamics_ is None or mass_matrix_failure(model.mass_matrix_check_) is not None
 
 
-def physical_alternative(steps, best, fit):
-    """The growth's answer where its chosen catalog's final fit fails the mass-matrix check.
+def physical_alternative(steps, best, fit, check=None):
+    """The growth's answer where its chosen catalog's final fit fails the mass-matrix check
+    (or ``check``).
 
     The other catalogs the growth fitted whose search fits all passed the check
     (:attr:`~.path.GrowthStep.definite` 1, criterion finite), by increasing criterion (then
-    terms), at most :data:`PHYSICAL_ALTERNATIVES` of them: the first whose final fit passes it.
+    terms), at most :data:`PHYSICAL_ALTERNATIVES` of them: the first whose final fit passes it
+    and ``check``.
 
     Parameters
     ----------
@@ -122,6 +124,9 @@ def physical_alternative(steps, best, fit):
         The chosen one (left out).
     fit : callable
         ``fit(step) -> XLSINDy``: a step's final fit.
+    check : callable or None, default None
+        ``check(model) -> str or None``: a further judgment a final fit must pass (None: it
+        passes; a string says why not), after the mass-matrix check.
 
     Returns
     -------
@@ -140,15 +145,45 @@ def physical_alternative(steps, best, fit):
                     key=lambda step: (step.criterion, step.terms))
     for step in others[:PHYSICAL_ALTERNATIVES]:
         model = fit(step)
-        if not mass_matrix_fails(model):
+        if failure(model, check) is None:
             return step, model
     return None
 
 
-def final_answer(best, state, steps, parameters_of, fixed, fit):
+def failure(model, check=None) -> str | None:
+    """Why a final fit is no model of its data: its mass matrix (:func:`mass_matrix_fails`),
+    then ``check``; None where it passes both.
+
+    Parameters
+    ----------
+    model : XLSINDy
+        Fitted.
+    check : callable or None, default None
+        ``check(model) -> str or None``: the further judgment (None: none).
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> import numpy as np, pysindy_xl as px
+    >>> t = np.linspace(0, 20, 2001)
+    >>> x = np.c_[np.sin(t) + 0.5 * np.sin(2.7 * t)]
+    >>> u = 2 * (-np.sin(t) - 3.645 * np.sin(2.7 * t))[:, None] + 3 * x
+    >>> model = px.XLSINDy(px.AutomaticCatalog(["x"], kinetic="constant")).fit(x, t, u=u)
+    >>> failure(model) is None, failure(model, lambda model: "leaves its runs")
+    (True, 'leaves its runs')
+    """
+    if mass_matrix_fails(model):
+        return "its mass matrix is not positive definite on its training states"
+    return None if check is None else check(model)
+
+
+def final_answer(best, state, steps, parameters_of, fixed, fit, check=None):
     """The growth's answer: its chosen catalog fitted on all the data, or, where that model is
-    no mechanical system (:func:`mass_matrix_fails`), the first physical alternative's
-    (:func:`physical_alternative`).
+    no mechanical system (:func:`mass_matrix_fails`) or fails ``check``, the first physical
+    alternative's (:func:`physical_alternative`).
 
     Parameters
     ----------
@@ -166,6 +201,9 @@ def final_answer(best, state, steps, parameters_of, fixed, fit):
     fit : callable
         ``fit(catalog, judged) -> XLSINDy``: ``catalog`` fitted on all the data,
         ``judged`` the terms that each of its search fits kept (:func:`fit_chosen`).
+    check : callable or None, default None
+        ``check(model) -> str or None``: a further judgment of a final fit (the growth's, on
+        unforced data: :func:`~pysindy_xl.fit.own_runs.own_runs_divergence`); None: none.
 
     Returns
     -------
@@ -175,6 +213,9 @@ def final_answer(best, state, steps, parameters_of, fixed, fit):
         Its catalog.
     model : XLSINDy
         Its final fit.
+    failed : str or None
+        Why the answer's final fit fails the checks (:func:`failure`) where no alternative
+        passes them, else None.
 
     Examples
     --------
@@ -184,21 +225,22 @@ def final_answer(best, state, steps, parameters_of, fixed, fit):
     >>> x = np.c_[np.sin(t) + 0.5 * np.sin(2.7 * t)]
     >>> u = 2 * (-np.sin(t) - 3.645 * np.sin(2.7 * t))[:, None] + 3 * x
     >>> best = GrowthStep("start", "", 4, 3, 0.1, 0.1, 0.1, True)
-    >>> step, catalog, model = final_answer(
+    >>> step, catalog, model, failed = final_answer(
     ...     best, {"kinetic": "constant"}, [best], None, {"coordinates": ["x"]},
     ...     fit=lambda catalog, judged: px.XLSINDy(catalog).fit(x, t, u=u))
-    >>> step is best, mass_matrix_fails(model)
-    (True, False)
+    >>> step is best, failed
+    (True, None)
     """
     catalog = AutomaticCatalog(**fixed, **state)
     model = fit(catalog, best.support)
-    if mass_matrix_fails(model):  # no mechanical system: another catalog's, where one is
+    failed = failure(model, check)
+    if failed is not None:  # no mechanical system: another catalog's, where one is
         found = physical_alternative(steps, best, lambda step: fit(
-            AutomaticCatalog(**fixed, **parameters_of(step)), step.support))
+            AutomaticCatalog(**fixed, **parameters_of(step)), step.support), check)
         if found is not None:
-            best, model = found
+            (best, model), failed = found, None
             catalog = AutomaticCatalog(**fixed, **parameters_of(best))
-    return best, catalog, model
+    return best, catalog, model, failed
 
 
 def _grouped_optimizer(optimizer, catalog, forced, estimated):

@@ -180,9 +180,13 @@ warns). """
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .._inputs import aligned, as_list
+from .._validation import IdentificationWarning
+from ..fit.own_runs import FREE_RUNS_ADVICE, own_runs_divergence
 from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import backward_phase
 from .budget import WORK_BUDGET
@@ -587,15 +591,27 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     def fit_all(catalog, judged):  # the final fit (final_fit.py): all the data, judged terms
         return fit_chosen(template, catalog, optimizer, full, judged, active, final_weak)
 
-    answer, best_catalog, model = final_answer(best, state, climber.steps,
-                                               climber.parameters_of, fixed, fit_all)
+    def free_runs(model):  # unforced: a free run's own energy bounds its model's simulation
+        return own_runs_divergence(model, xs, ts, x_dot=xds, kinds=kinds)
+
+    answer, best_catalog, model, failed = final_answer(
+        best, state, climber.steps, climber.parameters_of, fixed, fit_all,
+        check=None if forced else free_runs)
     if answer is not best:  # a physical alternative: the choice's final fit is no mechanics
+        if progress is not None:
+            progress(f"answer        {answer.move} ({answer.terms} terms): the chosen "
+                     "catalog's final fit is no mechanical system along its data")
         best = answer
         path.append(best)
+    if failed is not None and not forced:
+        warnings.warn(f"grow_catalog: the grown model is no model of its free runs ({failed}, "
+                      "simulated from the run's first state; no other catalog's final fit "
+                      f"stays in them either); {FREE_RUNS_ADVICE}", IdentificationWarning,
+                      stacklevel=2)
     if consensus:
         for step in path:
             climber.second_step(step)  # (each kept step reports both folds)
     for step in path:
         step.chosen = True
     return GrowthResult(model, best_catalog, climber.steps, criterion, best.criterion,
-                        search.max_terms, climber.work)
+                        search.max_terms, climber.work, failed if not forced else None)

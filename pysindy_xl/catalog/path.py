@@ -116,6 +116,11 @@ class GrowthResult:
         The work of the search's fits (the climbs and the backward phase): the sum of
         :func:`~.budget.work_cost` over the catalogs fitted (``work_budget`` of
         :func:`~.growth.grow_catalog` bounds it).
+    own_runs : str or None, default None
+        Unforced data: where ``model``, simulated from each run's first state, leaves its
+        recorded runs (:func:`~pysindy_xl.fit.own_runs.own_runs_divergence`: no catalog's
+        final fit the growth tried stays in them); None where it stays in them, or for forced
+        data (not asked: recorded forces may hold an unstable system by feedback).
 
     Examples
     --------
@@ -135,6 +140,7 @@ class GrowthResult:
     held_out_error: float
     max_terms: int | None = None
     work: float = float("nan")
+    own_runs: str | None = None
 
     def table(self) -> str:
         """The growth path as a plain-text table (one row per tried catalog).
@@ -218,13 +224,13 @@ class GrowthResult:
         -------
         dict
             ``criterion``, ``held_out_error``, ``max_terms`` (the ceiling), ``catalog`` (its
-            description) and ``steps`` (one dict per :class:`GrowthStep`); a figure that is
-            not finite (a failed fit's inf, a fold not asked: NaN) is None, so that the dict
-            is strict JSON.
+            description), ``own_runs`` and ``steps`` (one dict per :class:`GrowthStep`); a
+            figure that is not finite (a failed fit's inf, a fold not asked: NaN) is None, so
+            that the dict is strict JSON.
         """
         return {"criterion": self.criterion, "held_out_error": _finite(self.held_out_error),
                 "max_terms": self.max_terms,
-                "catalog": self.catalog.describe(),
+                "catalog": self.catalog.describe(), "own_runs": self.own_runs,
                 "steps": [{key: _finite(value) for key, value in dataclasses.asdict(s).items()}
                           for s in self.steps]}
 

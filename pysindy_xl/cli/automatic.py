@@ -60,10 +60,12 @@ _PHYSICAL_ADVICE = ("kinetic coefficients that cannot change sign (constants: in
                     "Python px.PhysicalOptimizer)")
 
 
-def honest_exit(r2=None, held_out=None, max_terms=400, mass_matrix_check=None) -> None:
-    """``CLIError`` when the fit explains nothing or its mass matrix is not physical.
+def honest_exit(r2=None, held_out=None, max_terms=400, mass_matrix_check=None,
+                own_runs=None) -> None:
+    """``CLIError`` when the fit explains nothing, its mass matrix is not physical or,
+    simulated, it leaves its own free runs.
 
-    Two judgments, both required of a model ``identify`` reports:
+    Three judgments, all required of a model ``identify`` reports:
 
     - **it explains the data:** R^2 (on the training data) at least :data:`POOR_R2`, and the
       held-out relative error (of a grown catalog) at most :data:`POOR_HELD_OUT`;
@@ -73,7 +75,11 @@ def honest_exit(r2=None, held_out=None, max_terms=400, mass_matrix_check=None) -
       ``mass_matrix_check_``). Where it is not, the kinetic energy is not positive, and a run
       crossing from one to the other passes a singular ``M``: the model cannot be simulated
       along its own data, whatever its R^2 (a kinetic coefficient that changes sign can fit the
-      weak form to R^2 = 0.9 with a law whose inertia vanishes at rest).
+      weak form to R^2 = 0.9 with a law whose inertia vanishes at rest);
+    - **it is a model of its free runs** (a grown catalog on unforced data): simulated from
+      each run's first state it stays within ten times the recorded range
+      (:func:`~pysindy_xl.fit.own_runs.own_runs_divergence`, ``GrowthResult.own_runs``): a
+      law that holds the rows but drives every state away from them is no law of the system.
 
     Parameters
     ----------
@@ -86,6 +92,9 @@ def honest_exit(r2=None, held_out=None, max_terms=400, mass_matrix_check=None) -
     mass_matrix_check : dict, optional
         The fitted model's ``mass_matrix_check_``
         (:func:`~pysindy_xl.fit.diagnostics.mass_matrix_report`); None: not judged.
+    own_runs : str, optional
+        Where the model leaves its own free runs (``GrowthResult.own_runs``); None: it stays
+        in them, or not judged.
 
     Returns
     -------
@@ -104,6 +113,10 @@ def honest_exit(r2=None, held_out=None, max_terms=400, mass_matrix_check=None) -
     Traceback (most recent call last):
     ...
     pysindy_xl.cli.steps.CLIError: the identified model is not physical (the identified mass ...
+    >>> honest_exit(r2=0.97, own_runs="run 0 leaves its recorded range (z_dot) at t = 0.6 s")
+    Traceback (most recent call last):
+    ...
+    pysindy_xl.cli.steps.CLIError: the identified model is no model of its free runs (run 0 ...
     >>> honest_exit(r2=0.999, mass_matrix_check={"positive_definite_fraction": 1.0,
     ...                                          "median_condition": 2.3})
     """
@@ -123,6 +136,11 @@ def honest_exit(r2=None, held_out=None, max_terms=400, mass_matrix_check=None) -
     if failure is not None:
         verdicts.append(f"is not physical ({failure}: {_NOT_PHYSICAL})")
         advice.append(("for the mass matrix: " if advice else "try: ") + _PHYSICAL_ADVICE)
+    if own_runs is not None:
+        from ..fit.own_runs import FREE_RUNS_ADVICE
+        verdicts.append(f"is no model of its free runs ({own_runs}, simulated from the run's "
+                        "first state)")
+        advice.append(("for the free runs: " if advice else "") + FREE_RUNS_ADVICE)
     if verdicts:
         raise CLIError(f"the identified model {' and '.join(verdicts)}; " + "; ".join(advice))
 

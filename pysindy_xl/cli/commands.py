@@ -369,7 +369,7 @@ def run_identify(args):
     honest_exit(None if quality is None else quality["r2"],
                 None if growth is None else growth.held_out_error,
                 getattr(args, "max_terms", 400) if growth is None else growth.max_terms,
-                model.mass_matrix_check_)
+                model.mass_matrix_check_, None if growth is None else growth.own_runs)
     if system.has_ground_truth:
         _, summary = summarize_coefficients(system, model)
         print(f"against the true model: max coefficient error {summary['max_relative_error']:.2g} "
