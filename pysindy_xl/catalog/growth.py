@@ -176,7 +176,16 @@ one (where the climb goes on as without it). The chosen catalog is then fitted o
 states (no mechanical system: it cannot be simulated along its data), the growth answers with
 the first of its other catalogs, by criterion, whose final fit's is
 (:func:`~.final_fit.physical_alternative`), or, where none is, with that model (its fit
-warns). """
+warns). On unforced data the final fit must also be a model of its free runs: simulated from
+each run's first state, it stays within ten times the recorded range
+(:func:`~pysindy_xl.fit.own_runs.own_runs_divergence`; a free run keeps or loses the energy it
+starts with). A stand-in can hold the rows and not the motion (the unforced half-car at 1 %
+noise: ``differences`` traded two suspension springs for a third of the wrong sign, a saddle
+where the body rests, 0.14 held out and every velocity ten times its range within a second);
+such a model is replaced like one without a positive definite mass matrix, and where no other
+catalog's stays in the runs the growth warns and says why (:attr:`GrowthResult.own_runs`).
+Forced runs are not asked: forces recorded under feedback, replayed open loop, do not hold
+an unstable system, and its right model would leave them too. """
 
 from __future__ import annotations
 
