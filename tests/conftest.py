@@ -17,7 +17,8 @@ atexit.register(shutil.rmtree, _DERIVATION_CACHE, ignore_errors=True)
 #: Test files of one long test, handed to a worker first in a parallel run. ``--dist loadfile``
 #: hands out the files with the most tests first, so a file of one test goes near the end: the
 #: docs build with its executed gallery (a fifth of the ``slow`` run's time) then ran alone on
-#: one worker while the other had finished (about 90 s of the CI's ``slow`` run on 2 cores).
+#: one worker while the other had finished (about 85 s of the CI's ``slow`` run on 2 cores,
+#: estimated: ``benchmarks/results/ci_time.md``).
 LONG_FILES = ("tests/test_docs.py",)
 
 

@@ -235,7 +235,8 @@ _RATES = {}
 def _success_rate(system, angles, level, seeds):
     """``(exact supports, median error, valid models)`` over ``seeds``, computed once per
     module: the sweep's cart-pole cell at 1 % is the CI cell's (same runs, same fits)."""
-    key = (system.name, tuple(angles), level, tuple(seeds))
+    key = (system.name, str(system.lagrangian), system.friction.tobytes(), tuple(angles),
+           level, tuple(seeds))
     if key not in _RATES:
         _RATES[key] = _measured_success_rate(system, angles, level, seeds)
     return _RATES[key]
