@@ -14,6 +14,30 @@ _DERIVATION_CACHE = tempfile.mkdtemp(prefix="pysindy_xl_cache_")
 os.environ["PYSINDY_XL_CACHE"] = _DERIVATION_CACHE
 atexit.register(shutil.rmtree, _DERIVATION_CACHE, ignore_errors=True)
 
+#: Test files of one long test, handed to a worker first in a parallel run. ``--dist loadfile``
+#: hands out the files with the most tests first, so a file of one test goes near the end: the
+#: docs build with its executed gallery (a fifth of the ``slow`` run's time) then ran alone on
+#: one worker while the other had finished (about 85 s of the CI's ``slow`` run on 2 cores,
+#: estimated: ``benchmarks/results/ci_time.md``).
+LONG_FILES = ("tests/test_docs.py",)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadfile`` with :data:`LONG_FILES` handed out first (other modes: xdist's)."""
+    if config.getoption("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class LongFilesFirst(LoadFileScheduling):
+        def _assign_work_unit(self, node):
+            for scope in reversed(LONG_FILES):
+                if scope in self.workqueue:
+                    self.workqueue.move_to_end(scope, last=False)
+            super()._assign_work_unit(node)
+
+    return LongFilesFirst(config, log)
+
 
 @pytest.fixture(scope="session")
 def cart_pole_system():
