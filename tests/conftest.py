@@ -31,9 +31,10 @@ def pytest_xdist_make_scheduler(config, log):
 
     class LongFilesFirst(LoadFileScheduling):
         def _assign_work_unit(self, node):
-            for scope in reversed(LONG_FILES):
-                if scope in self.workqueue:
-                    self.workqueue.move_to_end(scope, last=False)
+            queue = getattr(self, "workqueue", None)  # (xdist's internals: where they differ,
+            for scope in reversed(LONG_FILES):       # the order stays xdist's own)
+                if hasattr(queue, "move_to_end") and scope in queue:
+                    queue.move_to_end(scope, last=False)
             super()._assign_work_unit(node)
 
     return LongFilesFirst(config, log)
