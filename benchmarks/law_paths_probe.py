@@ -53,13 +53,33 @@ def main():
     parser.add_argument("case")
     parser.add_argument("--table", default="blind2", choices=["blind2", "generic", "unseen"])
     parser.add_argument("--out", default="/tmp/lp")
+    parser.add_argument("--all-data", action="store_true",
+                        help="fit on all the data (as share_probe's reference fit), not the splits")
     args = parser.parse_args()
     system, truth, forced, (runs, test, xs, ts, us) = gs.case_of(
         args.case, table_of(args.table).systems())
     names = list(system["coords"].names)
     implicit.select_laws = _capturing(implicit.select_laws)
-    search = share_probe.search_like(xs, ts, names, system["kinds"])
     tag = args.case.replace(":", "_")
+    if args.all_data:
+        from pysindy_xl.catalog.growth_data import END_PERCENTILE
+        import pysindy_xl as px
+        low, high = np.percentile(np.vstack(xs), [END_PERCENTILE, 100 - END_PERCENTILE], axis=0)
+        catalog = AutomaticCatalog(names, kinds=system["kinds"], bounds=list(zip(
+            low.tolist(), high.tolist(), strict=True)), **system["hand"])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model = px.XLSINDy(catalog).fit(xs, ts, u=us)
+        features = list(model.get_feature_names())
+        print(f"all data: {len(CAPTURED)} law searches, kept",
+              [f for f, c in zip(features, model.coefficients(), strict=True) if c != 0])
+        for k, entry in enumerate(CAPTURED):
+            np.savez(os.path.join(args.out, f"{tag}_all{k}.npz"), features=np.array(features),
+                     n_blocks=entry["n_blocks"],
+                     **{key: entry[key] for key in ("theta", "moments", "mass_matrices", "draws")
+                        if entry[key] is not None})
+        return
+    search = share_probe.search_like(xs, ts, names, system["kinds"])
     for k, split in enumerate(search.splits):
         CAPTURED.clear()
         cpu = time.process_time()

@@ -29,7 +29,7 @@ from .noise_ratio import (
 )
 from .selection import ChosenSupport, fold_labels, fold_summary
 
-__all__ = ["LawSelection", "RowMoments", "select_law", "select_laws"]
+__all__ = ["LawSelection", "RowMoments", "noise_balance", "select_law", "select_laws"]
 
 
 #: Rows left out of the training rows on each side of a held-out fold (fraction of a fold).
@@ -37,6 +37,9 @@ FOLD_GAP = 0.3
 
 #: Path supports of each size refined by swaps (those of lowest held-out ratio).
 STARTS_PER_SIZE = 3
+
+#: Most fixed-point steps of :func:`noise_balance` per reference support.
+BALANCE_STEPS = 20
 
 
 @dataclasses.dataclass(frozen=True)
@@ -210,7 +213,7 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds, row_moments=No
 
 def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
                resolution: float = 1e-8, swaps: bool = True, mass_matrices=None,
-               noise_draws=None) -> tuple[np.ndarray, float, LawSelection]:
+               noise_draws=None, balance: bool = True) -> tuple[np.ndarray, float, LawSelection]:
     """Sparsest homogeneous law of noisy columns, by held-out noise ratio (module documentation).
 
     Parameters
@@ -233,6 +236,10 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         candidates unless none is definite.
     noise_draws : array, shape (D, n_rows, F), optional
         Draws of the rows' errors: each fold's rows get their own moments (:class:`RowMoments`).
+    balance : bool, default True
+        Search again with the blocks weighted so that each coordinate's equation counts by its
+        own noise (:func:`noise_balance`), where a reference law that explains every
+        coordinate is found.
 
     Returns
     -------
@@ -253,6 +260,117 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     >>> law, ratio, selection = select_law(theta, 0.0025 * 2000 * np.eye(5)[None])
     >>> (law / law[0]).round(1) + 0.0, selection.size
     (array([ 1., -2., -1.,  0.,  0.]), 3)
+    """
+    theta = np.asarray(theta, dtype=float)
+    moments = np.asarray(noise_moments, dtype=float)
+    options = {"n_blocks": n_blocks, "n_folds": n_folds, "resolution": resolution,
+               "swaps": swaps, "mass_matrices": mass_matrices}
+    law, ratio, selection, references = _select_once(theta, moments, noise_draws=noise_draws,
+                                                     **options)
+    if not balance or n_blocks < 2:
+        return law, ratio, selection
+    weights = noise_balance(theta, moments, references, n_blocks, mass_matrices)
+    if weights is None:
+        return law, ratio, selection
+    rows = np.repeat(weights, theta.shape[0] // n_blocks)
+    draws = None if noise_draws is None else np.asarray(noise_draws, dtype=float) * rows[:, None]
+    return _select_once(theta * rows[:, None], moments * weights[:, None, None] ** 2,
+                        noise_draws=draws, **options)[:3]
+
+
+def noise_balance(theta, noise_moments, supports, n_blocks: int, mass_matrices=None):
+    r"""Block weights under which a reference law's noise is the same in every coordinate.
+
+    The noise ratio pools the blocks, so a coordinate whose equation carries little of a
+    law's noise (a light body: its terms scale with its inertia) hardly counts in it, and laws
+    that leave it unfitted score as well as the system's. Weighted by the inverse standard
+    deviation of its own noise, each equation counts alike (the equation weights of weighted
+    errors-in-variables fits, York 1966): the pooled ratio becomes the mean of the blocks' own
+    ratios. The weights are a fixed point, ``w_b^2 \propto 1 / (\xi^T S_b \xi)`` with ``xi``
+    the smallest-ratio law of a reference support on the weighted blocks; of the references
+    whose fixed point is reached within :data:`BALANCE_STEPS` steps (one that leaves a
+    coordinate out has none: that coordinate's weight grows without bound) and whose law then
+    explains every coordinate (and has a definite mass matrix where ``mass_matrices`` is given),
+    the one of smallest balanced ratio sets them.
+
+    Parameters
+    ----------
+    theta : array, shape (n_blocks * N, F)
+        Regression matrix, rows in ``n_blocks`` equal blocks (coordinates).
+    noise_moments : array, shape (n_blocks, F, F)
+        ``E[E_b^T E_b]`` of each block's errors.
+    supports : list of array of int
+        The reference supports.
+    n_blocks : int
+        Number of coordinate blocks.
+    mass_matrices : array, shape (S, F, n_blocks, n_blocks), optional
+        As in :func:`select_law`; default None (definiteness not judged).
+
+    Returns
+    -------
+    ndarray, shape (n_blocks,) or None
+        The weights (geometric mean 1), None where no reference qualifies.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> a, b = rng.normal(size=(2, 1000))
+    >>> clean = np.vstack([np.column_stack([a, a + b]), np.column_stack([0.01 * b, 0.01 * b])])
+    >>> theta = clean + np.repeat([0.1, 0.001], 1000)[:, None] * rng.normal(size=(2000, 2))
+    >>> moments = np.array([0.01 * 1000 * np.eye(2), 1e-6 * 1000 * np.eye(2)])
+    >>> weights = noise_balance(theta, moments, [np.array([0, 1])], 2)
+    >>> bool(weights[1] / weights[0] > 10)
+    True
+    """
+    theta = np.asarray(theta, dtype=float)
+    moments = np.asarray(noise_moments, dtype=float)
+    scale = np.sqrt(np.mean(theta**2, axis=0))
+    scale[scale == 0] = 1.0
+    theta = theta / scale
+    moments = moments / np.outer(scale, scale)[None]
+    rows = theta.shape[0] // n_blocks
+    factors = [triangular_factor(theta[b * rows:(b + 1) * rows]) for b in range(n_blocks)]
+    best = None
+    for support in supports:
+        support = np.asarray(support, dtype=int)
+        block_moments = moments[:, support][:, :, support]
+        weights, converged = np.ones(n_blocks), False
+        for _ in range(BALANCE_STEPS):
+            try:
+                ratio, law = noise_ratio_law(
+                    np.vstack([w * f[:, support] for w, f in zip(weights, factors, strict=True)]),
+                    np.einsum("b,bij->ij", weights**2, block_moments))
+            except np.linalg.LinAlgError:
+                break
+            noise = np.einsum("i,bij,j->b", law, block_moments, law)
+            if not np.all(np.isfinite(noise) & (noise > 0)):
+                break
+            update = 1 / np.sqrt(noise)
+            update /= np.exp(np.mean(np.log(update)))
+            if np.allclose(update, weights, rtol=1e-3):
+                converged = True
+                break
+            weights = update
+        # a reference that leaves a coordinate out has no fixed point: the weight of the
+        # coordinate it leaves grows without bound
+        if not converged:
+            continue
+        weighted = theta[:, support] * np.repeat(weights, rows)[:, None]
+        if not explained_coordinates(weighted, law, n_blocks).all() or (
+                mass_matrices is not None and not definite_mass(
+                    np.asarray(mass_matrices)[:, support], law / scale[support])):
+            continue
+        if best is None or ratio < best[0]:
+            best = (ratio, weights)
+    return None if best is None else best[1]
+
+
+def _select_once(theta, noise_moments, n_blocks, n_folds, resolution, swaps, mass_matrices,
+                 noise_draws):
+    """:func:`select_law` on the blocks as given, and the supports that may set their noise
+    balance (:func:`noise_balance`): the admissible lasso's starts, and the chosen law's support
+    where it is admissible.
     """
     theta = np.asarray(theta, dtype=float)
     moments = np.asarray(noise_moments, dtype=float)
@@ -281,10 +399,12 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     # (how, nested supports): each list is cross-validated at once (see _held_out_ratios)
     paths = [("backward path", [order[:k] for k in range(2, len(order) + 1)]),
              ("forward path", [forward[:k] for k in range(2, len(forward) + 1)])]
+    references = []
     if mass_matrices is not None:
-        paths += [("admissible start", supports) for supports in _admissible_starts(
+        starts = _admissible_starts(
             r_factor, total, mass_matrices / scale[None, :, None, None],
-            {frozenset(s.tolist()) for _, supports in paths for s in supports})]
+            {frozenset(s.tolist()) for _, supports in paths for s in supports}, references)
+        paths += [("admissible start", supports) for supports in starts]
     # Admissible laws only, when there are any: a law leaving a coordinate out says nothing
     # of it (the unforced cart-pole's Routhian holds exactly), one with an indefinite mass
     # matrix defines no motion (its momentum balance: det M = 0).
@@ -371,7 +491,9 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         cv_ratio=cv_ratio, cv_spread=cv_spread, size=len(support),
         best_size=len(best.support), rule=f"one standard error of the noise ratio ({chosen.how})",
         rivals=rivals, admissible=admissible(chosen), cv_relative=float(chosen.relative))
-    return law * np.sign(law[np.argmax(np.abs(law))]), ratio, selection
+    if selection.admissible:
+        references.append(np.sort(support))
+    return law * np.sign(law[np.argmax(np.abs(law))]), ratio, selection, references
 
 
 @dataclasses.dataclass
@@ -407,12 +529,14 @@ def _scored(theta, moments, supports, how, n_blocks, n_folds, row_moments=None) 
             for m, s in enumerate(supports) if np.isfinite(mean[m])]
 
 
-def _admissible_starts(r_factor, moments, mass_matrices, seen) -> list:
+def _admissible_starts(r_factor, moments, mass_matrices, seen, found=None) -> list:
     """The admissible lasso's supports, each with the backward path inside it (one list per start),
-    less the supports in ``seen``.
+    less the supports in ``seen``; the supports themselves appended to ``found``.
     """
     paths, starts = [], set()
     for start in admissible_supports(r_factor, mass_matrices):
+        if found is not None:
+            found.append(np.asarray(start))
         if tuple(start.tolist()) in starts:  # its path's supports are all seen
             paths.append([])
             continue
