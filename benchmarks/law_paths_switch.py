@@ -1,26 +1,27 @@
 """Run a benchmark script with the unforced law search's noise balance on or off.
 
-``optimizers.homogeneous.select_law(..., balance=...)`` swapped at run time (the package is
-not changed), for A/B runs on the same code:
+``on``: ``law_balance.install()`` swaps the balanced search into
+``optimizers.homogeneous`` at run time (the package is not changed); ``off``: the package as
+it is. For A/B runs on the same code:
 
     PYTHONPATH=$PWD python benchmarks/law_paths_switch.py off benchmarks/share_probe.py \\
         half_car:unforced:0.01:0
 """
 from __future__ import annotations
 
-import functools
 import os
 import runpy
 import sys
 
-from pysindy_xl.optimizers import homogeneous
+import law_balance
 
 
 def main():
     state, script, *arguments = sys.argv[1:]
     if state not in ("on", "off"):
         raise SystemExit(f"state: expected 'on' or 'off', got {state!r}")
-    homogeneous.select_law = functools.partial(homogeneous.select_law, balance=state == "on")
+    if state == "on":
+        law_balance.install()
     sys.argv = [script, *arguments]
     sys.path.insert(0, os.path.dirname(os.path.abspath(script)))
     runpy.run_path(script, run_name="__main__")

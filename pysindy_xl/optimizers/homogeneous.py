@@ -18,7 +18,7 @@ from ..weak.noise import draw_moments
 from ._base import coordinates_touched
 from ._sparse import column_norms, triangular_factor
 from .admissible import admissible_supports
-from .laws import definite_mass, explained_coordinates, noise_balance
+from .laws import definite_mass, explained_coordinates
 from .noise_ratio import (
     eliminate_one,
     law_elimination_path,
@@ -210,7 +210,7 @@ def _held_out_ratios(theta, moments, supports, n_blocks, n_folds, row_moments=No
 
 def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
                resolution: float = 1e-8, swaps: bool = True, mass_matrices=None,
-               noise_draws=None, balance: bool = True) -> tuple[np.ndarray, float, LawSelection]:
+               noise_draws=None) -> tuple[np.ndarray, float, LawSelection]:
     """Sparsest homogeneous law of noisy columns, by held-out noise ratio (module documentation).
 
     Parameters
@@ -233,10 +233,6 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
         candidates unless none is definite.
     noise_draws : array, shape (D, n_rows, F), optional
         Draws of the rows' errors: each fold's rows get their own moments (:class:`RowMoments`).
-    balance : bool, default True
-        Search again with the blocks weighted so that each coordinate's equation counts by its
-        own noise (:func:`~pysindy_xl.optimizers.laws.noise_balance`), where a reference law
-        that explains every coordinate is found.
 
     Returns
     -------
@@ -257,29 +253,6 @@ def select_law(theta, noise_moments, n_blocks: int = 1, n_folds: int = 5,
     >>> law, ratio, selection = select_law(theta, 0.0025 * 2000 * np.eye(5)[None])
     >>> (law / law[0]).round(1) + 0.0, selection.size
     (array([ 1., -2., -1.,  0.,  0.]), 3)
-    """
-    theta = np.asarray(theta, dtype=float)
-    moments = np.asarray(noise_moments, dtype=float)
-    options = {"n_blocks": n_blocks, "n_folds": n_folds, "resolution": resolution,
-               "swaps": swaps, "mass_matrices": mass_matrices}
-    law, ratio, selection, references = _select_once(theta, moments, noise_draws=noise_draws,
-                                                     **options)
-    if not balance or n_blocks < 2:
-        return law, ratio, selection
-    weights = noise_balance(theta, moments, references, n_blocks, mass_matrices)
-    if weights is None:
-        return law, ratio, selection
-    rows = np.repeat(weights, theta.shape[0] // n_blocks)
-    draws = None if noise_draws is None else np.asarray(noise_draws, dtype=float) * rows[:, None]
-    return _select_once(theta * rows[:, None], moments * weights[:, None, None] ** 2,
-                        noise_draws=draws, **options)[:3]
-
-
-def _select_once(theta, noise_moments, n_blocks, n_folds, resolution, swaps, mass_matrices,
-                 noise_draws):
-    """:func:`select_law` on the blocks as given, and the supports that may set their noise
-    balance (:func:`~pysindy_xl.optimizers.laws.noise_balance`): the admissible lasso's starts,
-    and the chosen law's support where it is admissible.
     """
     theta = np.asarray(theta, dtype=float)
     moments = np.asarray(noise_moments, dtype=float)
@@ -308,12 +281,10 @@ def _select_once(theta, noise_moments, n_blocks, n_folds, resolution, swaps, mas
     # (how, nested supports): each list is cross-validated at once (see _held_out_ratios)
     paths = [("backward path", [order[:k] for k in range(2, len(order) + 1)]),
              ("forward path", [forward[:k] for k in range(2, len(forward) + 1)])]
-    references = []
     if mass_matrices is not None:
-        starts = _admissible_starts(
+        paths += [("admissible start", supports) for supports in _admissible_starts(
             r_factor, total, mass_matrices / scale[None, :, None, None],
-            {frozenset(s.tolist()) for _, supports in paths for s in supports}, references)
-        paths += [("admissible start", supports) for supports in starts]
+            {frozenset(s.tolist()) for _, supports in paths for s in supports})]
     # Admissible laws only, when there are any: a law leaving a coordinate out says nothing
     # of it (the unforced cart-pole's Routhian holds exactly), one with an indefinite mass
     # matrix defines no motion (its momentum balance: det M = 0).
@@ -400,9 +371,7 @@ def _select_once(theta, noise_moments, n_blocks, n_folds, resolution, swaps, mas
         cv_ratio=cv_ratio, cv_spread=cv_spread, size=len(support),
         best_size=len(best.support), rule=f"one standard error of the noise ratio ({chosen.how})",
         rivals=rivals, admissible=admissible(chosen), cv_relative=float(chosen.relative))
-    if selection.admissible:
-        references.append(np.sort(support))
-    return law * np.sign(law[np.argmax(np.abs(law))]), ratio, selection, references
+    return law * np.sign(law[np.argmax(np.abs(law))]), ratio, selection
 
 
 @dataclasses.dataclass
@@ -438,14 +407,12 @@ def _scored(theta, moments, supports, how, n_blocks, n_folds, row_moments=None) 
             for m, s in enumerate(supports) if np.isfinite(mean[m])]
 
 
-def _admissible_starts(r_factor, moments, mass_matrices, seen, found=None) -> list:
+def _admissible_starts(r_factor, moments, mass_matrices, seen) -> list:
     """The admissible lasso's supports, each with the backward path inside it (one list per start),
-    less the supports in ``seen``; the supports themselves appended to ``found``.
+    less the supports in ``seen``.
     """
     paths, starts = [], set()
     for start in admissible_supports(r_factor, mass_matrices):
-        if found is not None:
-            found.append(np.asarray(start))
         if tuple(start.tolist()) in starts:  # its path's supports are all seen
             paths.append([])
             continue
