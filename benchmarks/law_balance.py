@@ -25,6 +25,9 @@ BALANCE_STEPS = 20
 
 ORIGINAL = homogeneous.select_law
 
+#: The weights set in this process, ``(n_blocks, weights)`` (for ``summary``).
+WEIGHTS = []
+
 
 def noise_balance(theta, noise_moments, supports, n_blocks: int, mass_matrices=None):
     r"""Block weights under which a reference law's noise is the same in every coordinate.
@@ -139,12 +142,25 @@ def balanced_select_law(theta, noise_moments, n_blocks: int = 1, mass_matrices=N
     weights = noise_balance(theta, moments, references, n_blocks, mass_matrices)
     if weights is None:
         return first
+    WEIGHTS.append(weights)
     rows = np.repeat(weights, theta.shape[0] // n_blocks)
     draws = None if noise_draws is None else np.asarray(noise_draws, dtype=float) * rows[:, None]
     return ORIGINAL(theta * rows[:, None], moments * weights[:, None, None] ** 2,
                     n_blocks=n_blocks, mass_matrices=mass_matrices, noise_draws=draws, **options)
 
 
-def install():
-    """Swap the balanced search into ``homogeneous`` (``select_laws`` calls it by name)."""
+def install(report: bool = False):
+    """Swap the balanced search into ``homogeneous`` (``select_laws`` calls it by name); with
+    ``report``, print the spread of the weights set (largest over smallest) at exit."""
     homogeneous.select_law = functools.wraps(ORIGINAL)(balanced_select_law)
+    if report:
+        import atexit
+        atexit.register(summary)
+
+
+def summary():
+    """Print how many searches were balanced and the spread of their weights."""
+    spreads = np.array([w.max() / w.min() for w in WEIGHTS])
+    if spreads.size:
+        print(f"law_balance: {spreads.size} searches balanced; weight spread (largest over "
+              f"smallest) quartiles {np.round(np.percentile(spreads, [0, 25, 50, 75, 100]), 2)}")

@@ -1,6 +1,7 @@
 """Run a benchmark script with the unforced law search's noise balance on or off.
 
-``on``: ``law_balance.install()`` swaps the balanced search into
+``on`` (``report``: and print the spread of the weights at exit):
+``law_balance.install()`` swaps the balanced search into
 ``optimizers.homogeneous`` at run time (the package is not changed); ``off``: the package as
 it is. For A/B runs on the same code:
 
@@ -18,10 +19,10 @@ import law_balance
 
 def main():
     state, script, *arguments = sys.argv[1:]
-    if state not in ("on", "off"):
-        raise SystemExit(f"state: expected 'on' or 'off', got {state!r}")
-    if state == "on":
-        law_balance.install()
+    if state not in ("on", "off", "report"):
+        raise SystemExit(f"state: expected 'on', 'off' or 'report', got {state!r}")
+    if state != "off":
+        law_balance.install(report=state == "report")
     sys.argv = [script, *arguments]
     sys.path.insert(0, os.path.dirname(os.path.abspath(script)))
     runpy.run_path(script, run_name="__main__")
