@@ -62,8 +62,8 @@ def main():
     implicit.select_laws = _capturing(implicit.select_laws)
     tag = args.case.replace(":", "_")
     if args.all_data:
-        from pysindy_xl.catalog.growth_data import END_PERCENTILE
         import pysindy_xl as px
+        from pysindy_xl.catalog.growth_data import END_PERCENTILE
         low, high = np.percentile(np.vstack(xs), [END_PERCENTILE, 100 - END_PERCENTILE], axis=0)
         catalog = AutomaticCatalog(names, kinds=system["kinds"], bounds=list(zip(
             low.tolist(), high.tolist(), strict=True)), **system["hand"])
