@@ -10,11 +10,15 @@ most :data:`TIE_CANDIDATES` of them, the growth's choice first, one per fitted l
 again by cross-validation: every block of every run held out in turn, each by a fit on the
 others (:func:`~.folds.held_out_splits` with ``cross_validate``), and the criterion the RMS of
 all the blocks' errors (:func:`~.criterion.combine_errors`). All the data then judge, each
-block by a fit that did not see it, with the growth's keep rule
-(:func:`~.keep_rules.single_keeps`): another tie replaces the growth's choice where its
-cross-validated criterion is lower by the tolerance, or within it with fewer terms in the
-fitted model. A difference of a few percent is noise on either criterion; the stand-ins that
-the two blocks let through are worse by more on all of them, or need more terms.
+block by a fit that did not see it, with the growth's keep rule stated on those fits
+(:func:`tie_keeps`): another tie replaces the growth's choice where its cross-validated
+criterion is within the tolerance with fewer terms in the fitted models (the median over the
+cross-validated fits, the fits that give the criterion), or lower by the tolerance and by more
+than the spread of the blocks (one standard error of the block-paired difference of the
+squared errors: the one-standard-error rule of cross-validation). A difference of a few
+percent is noise on either criterion; the stand-ins that the two blocks let through are worse
+by more on all of them, or need more terms. At noise, one block (the largest swings) may
+decide a difference of several percent: the paired spread then says it is not evidence.
 """
 
 from __future__ import annotations
@@ -23,10 +27,8 @@ import dataclasses
 
 import numpy as np
 
-from .keep_rules import single_keeps
-
-__all__ = ["near_ties", "break_ties", "judge_near_ties", "TIE_REACH", "TIE_CANDIDATES",
-           "SAME_LAW"]
+__all__ = ["near_ties", "break_ties", "judge_near_ties", "tie_keeps", "TieJudgment",
+           "TIE_REACH", "TIE_CANDIDATES", "SAME_LAW", "TIE_SPREAD"]
 
 #: Near ties: catalogs whose criterion is at most ``1 + TIE_REACH`` times the best one's.
 TIE_REACH = 0.3
@@ -35,6 +37,84 @@ TIE_CANDIDATES = 4
 #: Two catalogs whose criteria differ by less than this fraction hold the same law on the
 #: search's split (a tenth of the keep rule's default tolerance: no choice rests on it).
 SAME_LAW = 5e-3
+#: Standard errors of the block-paired difference by which a lower cross-validated criterion
+#: must be lower to replace the choice without fewer fitted terms (:func:`tie_keeps`; the
+#: one-standard-error rule).
+TIE_SPREAD = 1.0
+
+
+@dataclasses.dataclass(frozen=True)
+class TieJudgment:
+    """One near tie as the cross-validated fits judge it.
+
+    Parameters
+    ----------
+    criterion : float
+        The RMS of the held-out blocks' errors (inf where a fit failed).
+    active : int
+        Terms kept by the fitted models (their median over the cross-validated fits).
+    blocks : tuple of float, default ()
+        The held-out error of each block, in the order of the splits (the same for every
+        tie); empty where unknown.
+    """
+
+    criterion: float
+    active: int
+    blocks: tuple = ()
+
+
+def tie_keeps(step, chosen, tolerance: float = 0.05, spread: float = TIE_SPREAD) -> bool:
+    r"""The keep rule of the near ties: whether ``step`` replaces ``chosen``.
+
+    With :math:`c, b` the two cross-validated criteria, :math:`\tau` the tolerance and
+    :math:`d_k = e_k^2 - f_k^2` the block-paired differences of the squared block errors
+    (``step``'s :math:`e_k`, ``chosen``'s :math:`f_k`, :math:`k = 1 \dots K`; their mean is
+    :math:`c^2 - b^2`), ``step`` is kept where
+
+    - :math:`c \le (1 + \tau) b` and its fitted models keep fewer terms, or
+    - :math:`c < (1 - \tau) b` and :math:`\bar d + z\, s_d / \sqrt{K} < 0` (:math:`s_d` the
+      standard deviation of the :math:`d_k`, :math:`z` = ``spread``): lower by more than the
+      blocks' spread, not by one block alone.
+
+    The blocks hold the same noise draws for both catalogs, so the paired difference is free
+    of what they share; its standard error counts the folds (:math:`\sqrt{K}`). Where the
+    block errors are unknown, not finite or fewer than two, the tolerance alone decides.
+
+    Parameters
+    ----------
+    step, chosen : TieJudgment
+        The candidate and the tie chosen so far.
+    tolerance : float, default 0.05
+        The fraction :math:`\tau` (the growth's keep rule, :func:`~.keep_rules.single_keeps`).
+    spread : float, default TIE_SPREAD
+        :math:`z`, in standard errors of the paired difference.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> chosen = TieJudgment(0.0148, 8, (0.0212, 0.0085, 0.0110, 0.0173, 0.0122))
+    >>> step = TieJudgment(0.0135, 8, (0.0151, 0.0091, 0.0112, 0.0162, 0.0145))
+    >>> tie_keeps(step, chosen)        # 9 % lower, from the first block alone
+    False
+    >>> tie_keeps(TieJudgment(0.0135, 8, ()), chosen)   # no blocks: the tolerance alone
+    True
+    >>> tie_keeps(TieJudgment(0.0150, 7, step.blocks), chosen)   # within, fewer terms
+    True
+    """
+    c, b = step.criterion, chosen.criterion
+    if c <= b * (1 + tolerance) and step.active < chosen.active:
+        return True
+    if not c < b * (1 - tolerance):
+        return False
+    e, f = (np.asarray(x, dtype=float) for x in (step.blocks, chosen.blocks))
+    if e.shape != f.shape or e.size < 2 or not (np.all(np.isfinite(e))
+                                                 and np.all(np.isfinite(f))):
+        return True
+    d = e ** 2 - f ** 2
+    return bool(d.mean() + spread * d.std(ddof=1) / np.sqrt(d.size) < 0)
 
 
 def near_ties(steps, best, physical: bool = False) -> list:
@@ -117,9 +197,10 @@ def break_ties(ties, parameters_of, judge, tolerance: float = 0.05, progress=Non
     parameters_of : callable
         ``parameters_of(step) -> dict``: a step's catalog parameters.
     judge : CandidateFits
-        Fits of the cross-validated splits (:class:`~.candidates.CandidateFits`).
+        Fits of the cross-validated splits (:class:`~.candidates.CandidateFits`): ``get``
+        gives a catalog's ``criterion``, and its ``active`` and ``block_errors`` where known.
     tolerance : float, default 0.05
-        The keep rule's fraction (:func:`~.keep_rules.single_keeps`).
+        The keep rule's fraction (:func:`tie_keeps`).
     progress : callable, optional
         Called with a line of text per catalog judged.
 
@@ -128,20 +209,24 @@ def break_ties(ties, parameters_of, judge, tolerance: float = 0.05, progress=Non
     GrowthStep
         The chosen step: starting from the growth's choice, each other tie in the order of
         its cross-validated criterion replaces the one chosen so far where the keep rule
-        keeps it on that criterion (lower by the fraction ``tolerance``, or within it with
-        fewer terms in the fitted model). Each tie's :attr:`~.path.GrowthStep.tie_error` is
-        set.
+        of the near ties keeps it on the cross-validated fits (:func:`tie_keeps`: within the
+        fraction ``tolerance`` with fewer terms in the fitted models, or lower by it and by
+        more than the blocks' spread). Each tie's :attr:`~.path.GrowthStep.tie_error` is set.
     """
     candidates = [parameters_of(step) for step in ties]
+    judged = {}
     for k, step in enumerate(ties):
-        step.tie_error = float(judge.get(candidates[k], candidates[k + 1:])["criterion"])
+        fields = judge.get(candidates[k], candidates[k + 1:])
+        step.tie_error = float(fields["criterion"])
+        judged[id(step)] = TieJudgment(step.tie_error, int(fields.get("active", step.active)),
+                                       tuple(fields.get("block_errors", ())))
         if progress is not None:
             progress(f"{step.move:<13} {step.terms:>5} terms  cross-validated near tie "
                      + (f"{100 * step.tie_error:.2f} %" if np.isfinite(step.tie_error)
                         else "-"))
     chosen = ties[0]
     for step in sorted(ties[1:], key=lambda s: s.tie_error):
-        if single_keeps(_judged(step), _judged(chosen), tolerance):
+        if tie_keeps(judged[id(step)], judged[id(chosen)], tolerance):
             chosen = step
     return chosen
 
@@ -194,8 +279,3 @@ def judge_near_ties(steps, best, parameters_of, judge, *, physical: bool = False
         finally:  # (its workers end even where a judgment fails)
             fits.close()
     return chosen
-
-
-def _judged(step):
-    """``step`` with its cross-validated criterion as the criterion (for the keep rule)."""
-    return dataclasses.replace(step, criterion=step.tie_error)
