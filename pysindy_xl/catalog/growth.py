@@ -147,7 +147,8 @@ held-out blocks of each run judge cheaply (one fit per catalog) but on two fifth
 where a stand-in and the law differ by little on the recorded states, that judgment's noise
 decides between them. So, last, the near ties of the criterion are judged again on every block
 (``tie_break``, :mod:`.ties`): each by ``n_blocks`` fits, every block held out in turn, and the
-keep rule chooses on the RMS of all the blocks' errors; each law is stated by the smallest
+keep rule of the near ties chooses on those fits (:func:`~.ties.tie_keeps`: the RMS of all the
+blocks' errors, and the terms the cross-validated fits keep); each law is stated by the smallest
 catalog whose fit kept exactly its terms (a larger one only offers the final fit more columns
 to choose stand-ins from).
 
