@@ -177,32 +177,20 @@ one (where the climb goes on as without it). The chosen catalog is then fitted o
 states (no mechanical system: it cannot be simulated along its data), the growth answers with
 the first of its other catalogs, by criterion, whose final fit's is
 (:func:`~.final_fit.physical_alternative`), or, where none is, with that model (its fit
-warns). On unforced data the final fit must also be a model of its free runs: simulated from
-each run's first state, it stays within ten times the recorded range
-(:func:`~pysindy_xl.fit.own_runs.own_runs_divergence`; a free run keeps or loses the energy it
-starts with). A stand-in can hold the rows and not the motion (the unforced half-car at 1 %
-noise: ``differences`` traded two suspension springs for a third of the wrong sign, a saddle
-where the body rests, 0.14 held out and every velocity ten times its range within a second);
-such a model is replaced like one without a positive definite mass matrix, and where no other
-catalog's stays in the runs the growth warns and says why (:attr:`GrowthResult.own_runs`).
-Forced runs are not asked: forces recorded under feedback, replayed open loop, do not hold
-an unstable system, and its right model would leave them too. """
+warns). On unforced data the final fit must also stay in its free runs when simulated from
+their first states (:func:`~.final_fit.free_runs_check`; :attr:`GrowthResult.own_runs`). """
 
 from __future__ import annotations
-
-import warnings
 
 import numpy as np
 
 from .._inputs import aligned, as_list
-from .._validation import IdentificationWarning
-from ..fit.own_runs import FREE_RUNS_ADVICE, own_runs_divergence
 from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import backward_phase
 from .budget import WORK_BUDGET
 from .candidates import CandidateFits
 from .climbs import Climber
-from .final_fit import final_answer, fit_chosen
+from .final_fit import final_answer, fit_chosen, free_runs_check, warn_free_runs
 from .floor import EXACT
 from .folds import held_out_splits
 from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first)
@@ -601,12 +589,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     def fit_all(catalog, judged):  # the final fit (final_fit.py): all the data, judged terms
         return fit_chosen(template, catalog, optimizer, full, judged, active, final_weak)
 
-    def free_runs(model):  # unforced: a free run's own energy bounds its model's simulation
-        return own_runs_divergence(model, xs, ts, x_dot=xds, kinds=kinds)
-
     answer, best_catalog, model, failed = final_answer(
         best, state, climber.steps, climber.parameters_of, fixed, fit_all,
-        check=None if forced else free_runs)
+        check=None if forced else free_runs_check(xs, ts, xds, kinds))
     if answer is not best:  # a physical alternative: the choice's final fit is no mechanics
         if progress is not None:
             progress(f"answer        {answer.move} ({answer.terms} terms): the chosen "
@@ -614,10 +599,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         best = answer
         path.append(best)
     if failed is not None and not forced:
-        warnings.warn(f"grow_catalog: the grown model is no model of its free runs ({failed}, "
-                      "simulated from the run's first state; no other catalog's final fit "
-                      f"stays in them either); {FREE_RUNS_ADVICE}", IdentificationWarning,
-                      stacklevel=2)
+        warn_free_runs(failed)
     if consensus:
         for step in path:
             climber.second_step(step)  # (each kept step reports both folds)
