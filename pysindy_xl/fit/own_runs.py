@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._inputs import as_list
+from .._inputs import aligned, as_list, check_array
 
 __all__ = ["own_runs_divergence", "WIDEN", "MAX_EVALUATIONS", "SAMPLES", "FREE_RUNS_ADVICE"]
 
@@ -93,7 +93,8 @@ def own_runs_divergence(model, x, t, u=None, x_dot=None, *, kinds=None, widen: f
     Raises
     ------
     ValueError
-        When the model has no accelerations, or ``widen`` is not above 1.
+        When the model has no accelerations, ``widen`` is not above 1, or the runs' arrays
+        do not match (a column per coordinate, a time per sample, the same layout as ``x``).
 
     Examples
     --------
@@ -122,16 +123,19 @@ def own_runs_divergence(model, x, t, u=None, x_dot=None, *, kinds=None, widen: f
     if not widen > 1:
         raise ValueError(f"widen: expected a number above 1, got {widen!r}")
     xs, is_list = as_list(x, "x")
-    ts = list(t) if is_list else [t]
-    us = [None] * len(xs) if u is None else (list(u) if is_list else [u])
-    x_dots = [None] * len(xs) if x_dot is None else (list(x_dot) if is_list else [x_dot])
+    ts, us, x_dots = (aligned(value, name, xs, is_list, "runs")
+                      for value, name in ((t, "t"), (u, "u"), (x_dot, "x_dot")))
     names = list(model.feature_library_.coords.names)
     n = len(names)
     angles = np.array([kind == "angle" for kind in kinds] if kinds is not None else [False] * n)
     checked = np.r_[~angles, np.ones(n, dtype=bool)]
     labels = names + [f"{name}_dot" for name in names]
     for k, (xk, tk, uk, vk) in enumerate(zip(xs, ts, us, x_dots, strict=True)):
-        xk, tk = np.asarray(xk, dtype=float).reshape(len(tk), n), np.asarray(tk, dtype=float)
+        label = f"[{k}]" if is_list else ""
+        xk = check_array(xk, f"x{label}", n_columns=n)
+        tk = np.asarray(tk, dtype=float)
+        if tk.shape != (len(xk),):
+            raise ValueError(f"t{label}: expected {len(xk)} times, got shape {tk.shape}")
         forces = None if uk is None else force_function(np.asarray(uk, dtype=float), tk, n)
         # a range and a start need no more than a few thousand samples of a run
         every = slice(None, None, max(1, len(tk) // SAMPLES))

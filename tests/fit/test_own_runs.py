@@ -59,6 +59,12 @@ def test_bad_arguments_are_named():
         own_runs_divergence(px.XLSINDy(), FREE, T)
     with pytest.raises(ValueError, match="widen"):
         own_runs_divergence(_law(3.0), FREE, T, widen=1.0)
+    with pytest.raises(ValueError, match="t"):
+        own_runs_divergence(_law(3.0), [FREE, FREE], T)  # one time array for two runs
+    with pytest.raises(ValueError, match=r"t\[0\]"):
+        own_runs_divergence(_law(3.0), [FREE], [T[:-1]])
+    with pytest.raises(ValueError, match="x"):
+        own_runs_divergence(_law(3.0), np.c_[FREE, FREE], T)  # two columns, one coordinate
 
 
 def test_the_growth_answers_with_an_alternative_that_stays_in_its_free_runs():
