@@ -7,6 +7,8 @@ spring's sign turned, ``2 x'' - 3 x = u``, leaves that run when ``cosh(sqrt(1.5)
 ten times the recorded range.
 """
 
+import functools
+
 import numpy as np
 import pytest
 
@@ -21,6 +23,7 @@ MOTION_DDOT = (-np.sin(T) - 3.645 * np.sin(2.7 * T))[:, None]
 FREE = np.c_[np.cos(np.sqrt(1.5) * T)]  # the spring's free run from x = 1 at rest
 
 
+@functools.cache  # (read only: simulated, never refitted)
 def _law(stiffness):
     """``2 x'' + stiffness x = u`` identified from the forced motion (exact data)."""
     catalog = px.AutomaticCatalog(["x"], kinetic="constant")
