@@ -93,8 +93,9 @@ def own_runs_divergence(model, x, t, u=None, x_dot=None, *, kinds=None, widen: f
     Raises
     ------
     ValueError
-        When the model has no accelerations, ``widen`` is not above 1, or the runs' arrays
-        do not match (a column per coordinate, a time per sample, the same layout as ``x``).
+        When the model has no accelerations, ``widen`` is not above 1, ``kinds`` is not one
+        kind per coordinate, or the runs' arrays do not match (a column per coordinate, a
+        time per sample, the same layout as ``x``).
 
     Examples
     --------
@@ -127,7 +128,11 @@ def own_runs_divergence(model, x, t, u=None, x_dot=None, *, kinds=None, widen: f
                       for value, name in ((t, "t"), (u, "u"), (x_dot, "x_dot")))
     names = list(model.feature_library_.coords.names)
     n = len(names)
-    angles = np.array([kind == "angle" for kind in kinds] if kinds is not None else [False] * n)
+    kinds = ["linear"] * n if kinds is None else list(kinds)
+    if len(kinds) != n or not set(kinds) <= {"linear", "angle"}:
+        raise ValueError(f"kinds: expected {n} of 'linear' or 'angle' (one per coordinate "
+                         f"{names}), got {kinds}")
+    angles = np.array([kind == "angle" for kind in kinds])
     checked = np.r_[~angles, np.ones(n, dtype=bool)]
     labels = names + [f"{name}_dot" for name in names]
     for k, (xk, tk, uk, vk) in enumerate(zip(xs, ts, us, x_dots, strict=True)):

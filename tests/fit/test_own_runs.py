@@ -68,6 +68,10 @@ def test_bad_arguments_are_named():
         own_runs_divergence(_law(3.0), [FREE], [T[:-1]])
     with pytest.raises(ValueError, match="x"):
         own_runs_divergence(_law(3.0), np.c_[FREE, FREE], T)  # two columns, one coordinate
+    with pytest.raises(ValueError, match="kinds"):
+        own_runs_divergence(_law(3.0), FREE, T, kinds=["angle", "angle"])
+    with pytest.raises(ValueError, match="kinds"):
+        own_runs_divergence(_law(3.0), FREE, T, kinds=["angular"])
 
 
 def test_the_growth_answers_with_an_alternative_that_stays_in_its_free_runs():
