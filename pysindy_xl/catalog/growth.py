@@ -61,9 +61,7 @@ stiffness beyond), so the region fold judges their continuation as it judges any
 A spline's continuation is set by its slope and curvature at the end knot, which the few
 samples of the last knot intervals fix unsteadily: a cubic spline on 8 even knots fitted on
 the search's training pieces may continue 5 % or 30 % off over the region block, where the
-law of a slider on an oblique spring is off by 0.5 %. After the move ``"knots"`` (one of
-:data:`MORE_MOVES`, not tried by default: it may double the CPU of a growth that tries splines
-on several coordinates) the splines
+law of a slider on an oblique spring is off by 0.5 %. After the move ``"knots"`` the splines
 are written one column per interior knot (:func:`~.bases.truncated_power_splines`, the same
 span); the search's sparse selection then leaves out the knots its data do not need, and a
 spline with fewer knots has a steadier end slope and curvature. Which writing extrapolates,
@@ -200,7 +198,7 @@ from .keep_rules import single_keeps
 from .moves import LATE_MOVES, MORE_MOVES, MOVES, START, is_repeated, joint_moves, moved, narrowed
 from .path import GrowthResult, GrowthStep
 from .rates import RateFits
-from .search_data import SearchData, SearchSplit, search_rows
+from .search_data import SearchData, SearchSplit, judge_data, search_rows
 from .ties import judge_near_ties
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
@@ -213,28 +211,6 @@ MAX_TERMS = 400
 #: over ``rows // ROWS_PER_TERM`` terms are not tried (least squares inflate the rows' noise
 #: ``p / (r - p)`` times on ``p`` columns, ``r`` rows: 2 here; 143 of 234 fit an arm, 191 not).
 ROWS_PER_TERM = 1.5
-
-
-def _judge_data(splits, fixed, template, max_terms, forced):
-    """The search's data on a judge's splits (``"consensus"``'s second fold, the near ties').
-
-    Parameters
-    ----------
-    splits : list of (dict, list of dict)
-        The splits' training pieces and held-out blocks (:func:`~.folds.held_out_splits`).
-    fixed : dict
-        The catalog parameters that do not grow (the splines end where each split's training
-        data do).
-    template, max_terms, forced : XLSINDy, int, bool
-        As :class:`~.search_data.SearchData`'s.
-
-    Returns
-    -------
-    SearchData
-        Without noise floors.
-    """
-    return SearchData([SearchSplit(dict(fixed, bounds=data_span(train["x"])), train, held)
-                       for train, held in splits], template, max_terms, forced, floor="off")
 
 
 def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=None,
@@ -492,7 +468,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     fits = CandidateFits(search, n_jobs)
     fits.warm_up()  # the workers start while the first catalog is fitted here
     # the second judge is asked only about candidates the first does not refuse: no guesses
-    second_fits = CandidateFits(_judge_data(second_splits, fixed, template, search.max_terms,
+    second_fits = CandidateFits(judge_data(second_splits, fixed, template, search.max_terms,
                                             forced)) if consensus else None
 
     if not forced:  # no force sets the scale, an approximation can look small already: only
@@ -573,7 +549,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
 
     def every_block():  # the near ties' judge: each block held out by a fit on the others
         folds, _ = held_out_splits(arrays, n_blocks, stride, True, region, margin=width)
-        return CandidateFits(_judge_data(folds, fixed, template, search.max_terms, forced), n_jobs)
+        return CandidateFits(judge_data(folds, fixed, template, search.max_terms, forced), n_jobs)
 
     if tie_break and not cross_validate and not consensus and np.isfinite(best.criterion):
         # the near ties of the criterion judged again on every block, each by a fit without it

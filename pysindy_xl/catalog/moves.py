@@ -40,7 +40,7 @@ __all__ = ["exponential_base", "MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE
 #: coordinates are of one kind.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
          "coulomb", "kinetic_trig_degree", "differences", "exponentials", "splines",
-         "quadratic_ends")
+         "quadratic_ends", "knots")
 #: The moves of the flexible basis, tried after the families: ``"splines"`` adds a
 #: coordinate's splines (natural: a constant force beyond the data) or refines them;
 #: ``"quadratic_ends"`` gives them quadratic ends (a constant stiffness beyond the data), adding
@@ -60,11 +60,9 @@ RATE_MOVES = ("exponentials",)  # (with the degree back to the first catalog's)
 LATE_MOVES = RATE_MOVES + SPLINE_MOVES
 #: Moves a growth may be given beyond the default :data:`MOVES`: ``"coupled_damping"`` lets
 #: every velocity's viscous force enter every equation (``dissipation`` ``"coupled"`` of
-#: :class:`AutomaticCatalog`: the damping of a joint whose angle is a difference of coordinates);
-#: ``"knots"`` writes the splines one column per interior knot (:data:`SPLINE_MOVES`; on the
-#: blind set's oblique slider it makes 4 more of 9 rows right, at up to twice the CPU of a
-#: growth that tries splines on 3-4 coordinates).
-MORE_MOVES = ("coupled_damping", "knots")
+#: :class:`AutomaticCatalog`: the damping of a joint whose angle is a difference of coordinates).
+#: (``"knots"``, once here, is a default move: ``benchmarks/results/knots_default.md``.)
+MORE_MOVES = ("coupled_damping",)
 #: The highest power of the coordinates' differences that the move ``"differences"`` reaches.
 DIFFERENCE_LIMIT = 4
 

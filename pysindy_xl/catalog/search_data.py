@@ -9,7 +9,9 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["SearchSplit", "SearchData", "search_rows"]
+from .growth_data import data_span
+
+__all__ = ["SearchSplit", "SearchData", "judge_data", "search_rows"]
 
 
 @dataclasses.dataclass
@@ -116,3 +118,24 @@ def search_rows(search: SearchData, weak: bool) -> int:
                               for d in segments if d["t"][-1] - d["t"][0] >= 2 * h))
     return int(min(counts))
 
+
+def judge_data(splits, fixed, template, max_terms, forced):
+    """The search's data on a judge's splits (``"consensus"``'s second fold, the near ties').
+
+    Parameters
+    ----------
+    splits : list of (dict, list of dict)
+        The splits' training pieces and held-out blocks (:func:`~.folds.held_out_splits`).
+    fixed : dict
+        The catalog parameters that do not grow (the splines end where each split's training
+        data do).
+    template, max_terms, forced : XLSINDy, int, bool
+        As :class:`~.search_data.SearchData`'s.
+
+    Returns
+    -------
+    SearchData
+        Without noise floors.
+    """
+    return SearchData([SearchSplit(dict(fixed, bounds=data_span(train["x"])), train, held)
+                       for train, held in splits], template, max_terms, forced, floor="off")
