@@ -135,13 +135,12 @@ def _oblique(q):
 
 
 def test_the_growth_gives_an_oblique_spring_quadratic_ends_written_one_column_per_knot():
-    """At 1 % noise, written as B-splines only (the default moves less ``"knots"``), the search's fits of
-    quadratic-end splines continue so unsteadily beyond their training data that the region
-    block prefers natural splines (a constant force beyond the data, for a spring that keeps
-    stiffening): 5 % off over the data, 17 % up to 0.3 beyond. With the move ``"knots"``
-    (a default move), the search's
-    selection keeps the knots the data need and the growth keeps quadratic ends written so:
-    within 1 % and 3 %."""
+    """At 1 % noise, written as B-splines only (the default moves less ``"knots"``), the
+    search's fits of quadratic-end splines continue so unsteadily beyond their training data
+    that the region block prefers natural splines (a constant force beyond the data, for a
+    spring that keeps stiffening): 5 % off over the data, 17 % up to 0.3 beyond. With the
+    move ``"knots"`` (a default move), the search's selection keeps the knots the data need
+    and the growth keeps quadratic ends written so: within 1 % and 3 %."""
     t, xs, _, _, us = damped_forced_runs(_oblique, 3.0, lambda rng, seed: 0.3 * (seed - 0.5))
     noisy = [x + np.random.default_rng(7 + k).normal(0.0, 0.01 * x.std(), x.shape)
              for k, x in enumerate(xs)]
