@@ -469,7 +469,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     fits.warm_up()  # the workers start while the first catalog is fitted here
     # the second judge is asked only about candidates the first does not refuse: no guesses
     second_fits = CandidateFits(judge_data(second_splits, fixed, template, search.max_terms,
-                                            forced)) if consensus else None
+                                           forced)) if consensus else None
 
     if not forced:  # no force sets the scale, an approximation can look small already: only
         good_enough = EXACT  # a law exact to the data's precision stops the growth

@@ -61,7 +61,6 @@ LATE_MOVES = RATE_MOVES + SPLINE_MOVES
 #: Moves a growth may be given beyond the default :data:`MOVES`: ``"coupled_damping"`` lets
 #: every velocity's viscous force enter every equation (``dissipation`` ``"coupled"`` of
 #: :class:`AutomaticCatalog`: the damping of a joint whose angle is a difference of coordinates).
-#: (``"knots"``, once here, is a default move: ``benchmarks/results/knots_default.md``.)
 MORE_MOVES = ("coupled_damping",)
 #: The highest power of the coordinates' differences that the move ``"differences"`` reaches.
 DIFFERENCE_LIMIT = 4
