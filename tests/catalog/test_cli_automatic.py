@@ -1,5 +1,8 @@
 """``pysindy-xl identify`` on data given coordinates: the automatic catalog and the honest exit."""
 
+import contextlib
+import io
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -30,13 +33,26 @@ def _hardening_spring_csv(path, forces=None, noise=0.01):
     return path
 
 
-def test_identify_grows_a_catalog_and_prints_the_lagrangian(tmp_path, capsys):
-    path = _hardening_spring_csv(tmp_path / "spring.csv")
-    assert main(["identify", str(path), "--coordinates", "x", "--quiet"]) == 0
-    out = capsys.readouterr().out
+def _lagrangian(out):
+    return next(line for line in out.splitlines() if line.startswith("L = "))
+
+
+@pytest.fixture(scope="module")
+def spring_identified(tmp_path_factory):
+    """The hardening spring's CSV and what ``identify`` prints for it (one process)."""
+    path = _hardening_spring_csv(tmp_path_factory.mktemp("spring") / "spring.csv")
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = main(["identify", str(path), "--coordinates", "x", "--quiet"])
+    return path, code, out.getvalue()
+
+
+def test_identify_grows_a_catalog_and_prints_the_lagrangian(spring_identified):
+    _, code, out = spring_identified
+    assert code == 0
     assert "automatic catalog: x: x..x^4" in out
     assert "step  move" in out and "degree" in out
-    lagrangian = next(line for line in out.splitlines() if line.startswith("L = "))
+    lagrangian = _lagrangian(out)
     assert "x**4" in lagrangian and "x_dot**2" in lagrangian
     assert "automatic catalog, explicit solver" in out
 
@@ -59,16 +75,10 @@ def test_help_says_what_is_tried(capsys):
         assert phrase in text
 
 
-def test_identify_n_jobs_gives_the_same_model(tmp_path, capsys):
-    path = _hardening_spring_csv(tmp_path / "spring.csv")
-    lagrangians = []
-    for n_jobs in ("1", "2"):
-        assert main(["identify", str(path), "--coordinates", "x", "--quiet",
-                     "--n-jobs", n_jobs]) == 0
-        out = capsys.readouterr().out
-        lagrangians.append(next(line for line in out.splitlines() if line.startswith("L = ")))
-    assert lagrangians[0] == lagrangians[1]
-    assert "x**4" in lagrangians[0]
+def test_identify_n_jobs_gives_the_same_model(spring_identified, capsys):
+    path, _, alone = spring_identified  # one process (the default --n-jobs 1)
+    assert main(["identify", str(path), "--coordinates", "x", "--quiet", "--n-jobs", "2"]) == 0
+    assert _lagrangian(capsys.readouterr().out) == _lagrangian(alone)
 
 
 def test_n_jobs_must_be_a_positive_integer(tmp_path, capsys):
