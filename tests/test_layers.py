@@ -6,6 +6,7 @@ control, cli, benchmark)."""
 from __future__ import annotations
 
 import ast
+import functools
 import pathlib
 
 import pytest
@@ -33,13 +34,20 @@ def _known(target):
     return target
 
 
+@functools.cache
 def _imports(name):
-    """``(target module, imported name or None, line, at module level)`` of every import."""
+    """``(target module, imported name or None, line, at module level)`` of every import
+    (read once per module)."""
+    return tuple(_read_imports(name))
+
+
+def _read_imports(name):
     path = FILES[name]
     tree = ast.parse(path.read_text(encoding="utf-8"))
-    top = {id(node) for node in ast.walk(tree) if node in tree.body or any(
-        node in getattr(block, "body", ()) for block in tree.body
-        if isinstance(block, (ast.If, ast.Try)))}
+    # statements at module level: the module's own, and those of its top-level if/try blocks
+    top = {id(node) for node in tree.body}
+    top |= {id(node) for block in tree.body if isinstance(block, (ast.If, ast.Try))
+            for node in block.body}
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
