@@ -197,6 +197,7 @@ from .growth_data import check_growth_data, check_growth_options, data_span, thi
 from .keep_rules import single_keeps
 from .moves import LATE_MOVES, MORE_MOVES, MOVES, START, is_repeated, joint_moves, moved, narrowed
 from .path import GrowthResult, GrowthStep
+from .anchors import AnchorFits
 from .rates import RateFits
 from .search_data import SearchData, SearchSplit, judge_data, search_rows
 from .ties import judge_near_ties
@@ -481,7 +482,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                                      template.test_functions,
                                      template.smoother,
                                      lambda parameters: fits.get(parameters)["criterion"])
-                      if "exponentials" in moves else None, budget=work_budget)
+                      if "exponentials" in moves else None, budget=work_budget,
+                      anchors=AnchorFits(searched[0], thinned(arrays, stride),
+                                         template.test_functions, template.smoother,
+                                         lambda parameters: fits.get(parameters)["criterion"])
+                      if "anchored_springs" in moves else None)
 
     # pairs of moves whose joint catalog holds terms that neither adds alone (kinetic
     # coefficients over products of two coordinates' functions): tried as one move too
@@ -528,7 +533,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
              or (m in alone_steps and single_keeps(alone_steps[m], first, tolerance))]
     order = sorted([m for m in moves if m not in LATE_MOVES] + joint,
                    key=lambda m: rank.get(m, (1, np.inf)))
-    order += [m for m in moves if m in LATE_MOVES]
+    order += [m for m in LATE_MOVES if m in moves]  # (the fitted families before the splines)
     if "quadratic_ends" in moves and "knots" in moves:  # both at once: neither may gain alone
         order.append("quadratic_ends+knots")
     # climb from the best and from the second-best first move: which family goes in first is
