@@ -266,7 +266,7 @@ def _minima(kind, q, phis, target, basis) -> list:
             if da or db:
                 local &= scores <= padded[1 + da:1 + da + scores.shape[0],
                                           1 + db:1 + db + scores.shape[1]]
-    cells = sorted(zip(*np.nonzero(local)), key=lambda c: scores[c])[:MINIMA]
+    cells = sorted(zip(*np.nonzero(local), strict=True), key=lambda c: scores[c])[:MINIMA]
     out = []
     for a, b in cells:
         start = np.array([first[a], second[b]])

@@ -183,6 +183,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._inputs import aligned, as_list
+from .anchors import AnchorFits
 from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import backward_phase
 from .budget import WORK_BUDGET
@@ -197,7 +198,6 @@ from .growth_data import check_growth_data, check_growth_options, data_span, thi
 from .keep_rules import single_keeps
 from .moves import LATE_MOVES, MORE_MOVES, MOVES, START, is_repeated, joint_moves, moved, narrowed
 from .path import GrowthResult, GrowthStep
-from .anchors import AnchorFits
 from .rates import RateFits
 from .search_data import SearchData, SearchSplit, judge_data, search_rows
 from .ties import judge_near_ties
