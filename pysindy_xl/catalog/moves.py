@@ -24,7 +24,8 @@ import re
 __all__ = ["anchor_base", "exponential_base", "MOVES", "MORE_MOVES", "START", "LIMITS",
            "SPLINE_COUNTS", "SPLINE_MOVES", "RATE_MOVES", "LATE_MOVES", "REPEATED", "moved",
            "joint_moves", "holds", "kinetic_order", "NARROW", "narrow", "narrow_order",
-           "narrowed", "is_repeated", "kinetic_trig_degree", "KINETIC_TRIG_DEGREE", "DIFFERENCE_LIMIT"]
+           "narrowed", "is_repeated", "kinetic_trig_degree", "KINETIC_TRIG_DEGREE",
+           "DIFFERENCE_LIMIT"]
 
 #: The moves of the growth, in the order they are tried. ``"kinetic_trig_degree"`` gives the
 #: configuration-dependent kinetic coefficients an angle's trigonometric monomials of degree
