@@ -178,3 +178,19 @@ def test_the_growth_with_the_move_finds_the_slider_law():
 def test_the_growth_with_the_move_finds_the_slider_law_at_one_percent_noise():
     found, restoring, xs = _grown(0.01)
     _check_slider_law(found, restoring, xs, 0.05)
+
+
+def test_the_move_applies_once_and_the_backward_phase_takes_it_out():
+    from pysindy_xl.catalog.backward import removed
+    from pysindy_xl.catalog.moves import START, holds, moved
+
+    grown = dict(START, trig_degree=3)
+    state = moved(grown, "anchored_springs", ["angle"], 1, anchors=lambda s: {"theta": (E, PHI)})
+    # the length takes the place of the degrees that stood in for it
+    assert state["anchors"] == {"theta": (E, PHI)} and state["trig_degree"] == 1
+    assert moved(state, "anchored_springs", ["angle"], 1, anchors={"theta": (0.5, 0.0)}) is None
+    assert moved(START, "anchored_springs", ["angle"], 1) is None  # (no anchors fitted)
+    assert moved(START, "anchored_springs", ["angle"], 1, anchors=lambda s: {}) is None
+    assert holds(state, START) and not holds(START, state)
+    assert "anchors" not in removed(state, "anchored_springs", ["angle"], START)
+    assert removed(START, "anchored_springs", ["angle"], START) is None
