@@ -23,7 +23,10 @@ catalog's, no splines; forces included), and ``D_i(p)`` the column of the length
 ``f'(q)``); ``P`` projects on their span. ``r_i`` is evaluated on a coarse grid of the two
 parameters in scale-free units (an angle: ``log(1 - e)`` by ``phi``, periodic; a linear
 coordinate: ``c`` and ``log h`` in units of its span on the training data); each of the
-:data:`MINIMA` best local minima on the grid is refined by a bounded Nelder-Mead search.
+:data:`MINIMA` best local minima on the grid is refined by a bounded Nelder-Mead search. A
+minimum at the grid's smallest ``e`` (or largest ``h``), or refined to it, is refused: there the
+length is nearly a first-degree cosine (or a quadratic) plus higher degrees, and it stands in
+for a higher trigonometric degree (a rotating arm's ``sin^2``), not a spring.
 Where a second minimum is within :data:`~.rates.SECOND_MINIMUM` of the best, the growth's
 held-out criterion chooses between them (one coordinate only, as for the rates). A coordinate
 whose residual the length lowers by less than :data:`GAIN` gets none (a column more that the
@@ -236,8 +239,8 @@ def _minima(kind, q, phis, target, basis) -> list:
         def anchor(v):  # (log(1 - e), phi)
             return (1 - float(np.exp(v[0])), float(np.angle(np.exp(1j * v[1]))))
 
-        bounds = [(np.log(1e-3), np.log(0.95)), (-2 * np.pi, 2 * np.pi)]
-        periodic = True
+        bounds = [(np.log(1e-3), first[-1]), (-2 * np.pi, 2 * np.pi)]
+        periodic, edge = True, (0, first[-1])
     else:
         centre = float(np.median(values))
         span = float(np.ptp(values))
@@ -248,8 +251,8 @@ def _minima(kind, q, phis, target, basis) -> list:
         def anchor(v):  # (c / span from the median, log(h / span))
             return (centre + span * float(v[0]), span * float(np.exp(v[1])))
 
-        bounds = [(-2.0, 2.0), (np.log(0.01), np.log(20.0))]
-        periodic = False
+        bounds = [(-2.0, 2.0), (np.log(0.01), second[-1])]
+        periodic, edge = False, (1, second[-1])
 
     def residual(v):
         return anchor_residual(kind, anchor(v), q, phis, target, basis)
@@ -266,6 +269,13 @@ def _minima(kind, q, phis, target, basis) -> list:
             if da or db:
                 local &= scores <= padded[1 + da:1 + da + scores.shape[0],
                                           1 + db:1 + db + scores.shape[1]]
+    # (a minimum at the grid's smallest e, or largest h, is the residual falling towards a
+    # length that is a first-degree cosine or a quadratic, in the catalog already: no anchor,
+    # a stand-in for a higher degree; so is a refined one on that side of the grid)
+    if edge[0] == 0:
+        local[-1, :] = False
+    else:
+        local[:, -1] = False
     cells = sorted(zip(*np.nonzero(local), strict=True), key=lambda c: scores[c])[:MINIMA]
     out = []
     for a, b in cells:
@@ -274,6 +284,8 @@ def _minima(kind, q, phis, target, basis) -> list:
                          options={"xatol": TOLERANCE, "fatol": 1e-12, "maxfev": 300})
         v, value = (found.x, float(found.fun)) if found.fun < scores[a, b] else (
             start, float(scores[a, b]))
+        if v[edge[0]] >= edge[1] - 1e-3:
+            continue
         out.append((tuple(_rounded(x) for x in anchor(v)), value))
     out.sort(key=lambda item: item[1])
     kept = out[:1]
