@@ -2,7 +2,8 @@
 ``--extra-moves``) against the stitched baseline of main ``822725e`` (session 23's
 ``/work/notes/s23/baseline.py``): right before/after, held-out error, CPU seconds.
 
-Usage: ``python benchmarks/anchored_springs_compare.py blind2 blind1 grid unseen``
+Usage: ``python benchmarks/anchored_springs_compare.py blind2 blind1 grid unseen``; a name
+``v2:blind2`` reads ``anchored_springs_v2_blind2.jsonl`` (a rerun after a change).
 """
 
 import json
@@ -16,8 +17,9 @@ HERE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results")
 
 
 def main(names):
-    for name in names:
-        path = os.path.join(HERE, f"anchored_springs_{name}.jsonl")
+    for label in names:
+        prefix, _, name = label.rpartition(":")
+        path = os.path.join(HERE, f"anchored_springs_{prefix + '_' if prefix else ''}{name}.jsonl")
         if not os.path.exists(path):
             continue
         before = current(name)
