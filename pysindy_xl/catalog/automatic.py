@@ -17,7 +17,9 @@ product of low degree over at most ``kinetic_interaction`` coordinates (by defau
 default 1: with 2, ``sin(b)^2`` as in a spherical pendulum's ``sin(theta)^2 phi_dot^2``), and
 ``gamma`` the first-degree functions of another coordinate. The
 potential may hold, per linear coordinate, the exponentials ``exp(a x)`` and ``exp(2 a x)``
-of one given rate (``exponentials``; :func:`~.bases.exponential_pair`), beside its powers. Per
+of one given rate (``exponentials``; :func:`~.bases.exponential_pair`), beside its powers, and
+per coordinate the length of a spring anchored off its path (``anchors``;
+:func:`~.bases.anchored_spring`). Per
 coordinate it adds dissipation (viscous ``qd_i``, smooth Coulomb ``tanh(qd_i / eps_i)``; with
 ``"coupled"`` each velocity's viscous force in every equation, a Rayleigh function with
 cross terms) as classical terms, and the force columns. Terms that are trigonometric
@@ -52,7 +54,7 @@ from ..feature_library import (
     PolynomialLagrangeLibrary,
 )
 from ..symbols import Coordinates
-from .bases import KINDS, SPLINE_BASES, bspline_centers, exponential_pair
+from .bases import KINDS, SPLINE_BASES, anchored_spring, bspline_centers, exponential_pair
 from .terms import dissipation_terms, lagrangian_candidates, spline_basis
 
 __all__ = ["AutomaticCatalog", "DISSIPATION", "coordinate_kinds"]
@@ -229,6 +231,13 @@ class AutomaticCatalog(CatalogRepartition):
         as the Toda lattice's ``exp(x_1 - x_2)``, is not stated). Coordinates not named get
         none; an angle gets none (``ValueError``). :func:`~pysindy_xl.grow_catalog` fits the
         rates (:mod:`~pysindy_xl.catalog.rates`).
+    anchors : mapping {name: (float, float)}, optional
+        Per coordinate, the geometry of a spring anchored off its path: its potential gains the
+        spring's length (:func:`~pysindy_xl.catalog.bases.anchored_spring`:
+        ``sqrt(1 - e cos(theta - phi))`` of an angle, ``(e, phi)``; ``sqrt((x - c)^2 + h^2)``
+        of a linear coordinate, ``(c, h)``), one column beside its other functions.
+        :func:`~pysindy_xl.grow_catalog` fits the geometry (:mod:`~pysindy_xl.catalog.anchors`,
+        the move ``"anchored_springs"``).
     interlink : array (n, n), optional
         Of :class:`~pysindy_xl.ExternalForces`.
     max_terms : int, default 2000
@@ -270,6 +279,7 @@ class AutomaticCatalog(CatalogRepartition):
         "spline_ends": [Options(("linear", "quadratic"))],
         "spline_basis": [Options(SPLINE_BASES)],
         "exponentials": [None, Collection("a mapping {name: rate}")],
+        "anchors": [None, Collection("a mapping {name: (a, b)}")],
         "interlink": [None, Collection("an array of shape (n, n)")],
         "max_terms": [Interval("int", 1)],
     }
@@ -279,7 +289,7 @@ class AutomaticCatalog(CatalogRepartition):
                  dissipation=("viscous",), coulomb_scale=0.01, splines=None, interlink=None,
                  max_terms=2000, kinetic_interaction=None, spline_ends="linear",
                  spline_basis="bspline", exponentials=None, kinetic_trig_degree=None,
-                 differences=0):
+                 differences=0, anchors=None):
         self.coordinates = coordinates
         self.kinds = kinds
         self.bounds = bounds
@@ -300,6 +310,7 @@ class AutomaticCatalog(CatalogRepartition):
         self.exponentials = exponentials
         self.kinetic_trig_degree = kinetic_trig_degree
         self.differences = differences
+        self.anchors = anchors
 
     # -- the parameters, checked ---------------------------------------------------------------
     def _coordinates(self) -> Coordinates:
@@ -363,6 +374,12 @@ class AutomaticCatalog(CatalogRepartition):
                 bspline_centers(*bound, count)  # checks the bounds
             options["splines"].append((tuple(map(float, bound)), count) if count else None)
         options["exponentials"] = self._rates(names, options["kinds"])
+        if self.anchors is not None and not isinstance(self.anchors, Mapping):
+            raise TypeError(f"anchors: expected a mapping {{name: (a, b)}}, got {self.anchors!r}")
+        anchors = _per_coordinate(self.anchors or {}, names, "anchors")
+        options["anchors"] = [None if a is None else anchored_spring(q, kind, a)
+                              for q, kind, a in zip(coords.q, options["kinds"], anchors,
+                                                    strict=True)]
         return options
 
     def _rates(self, names, kinds) -> list:
@@ -548,6 +565,8 @@ class AutomaticCatalog(CatalogRepartition):
             if rate is not None:
                 text += ("" if text.endswith(": ") else ", ") + (
                     f"exp({rate:.4g} {name}), exp({2 * rate:.4g} {name})")
+            if options["anchors"][i] is not None:
+                text += ("" if text.endswith(": ") else ", ") + str(options["anchors"][i])
             if splines is not None:
                 text += (", " if not text.endswith(": ") else "") + (
                     f"{splines[1]} natural splines" if options["spline_ends"] == "linear"
@@ -592,4 +611,4 @@ _DEFAULTS = {"kinds": None, "bounds": None, "degree": 2, "trig_degree": 1, "angl
              "dissipation": ("viscous",), "coulomb_scale": 0.01, "splines": None,
              "interlink": None, "max_terms": 2000, "kinetic_interaction": None,
              "spline_ends": "linear", "spline_basis": "bspline", "exponentials": None,
-             "kinetic_trig_degree": None, "differences": 0}
+             "kinetic_trig_degree": None, "differences": 0, "anchors": None}

@@ -18,9 +18,9 @@ __all__ = ["REMOVALS", "EXCHANGES", "removed", "backward_phase"]
 #: The removals, by the family they drop: a move of :data:`~pysindy_xl.catalog.MOVES` (its
 #: family, or its last degree step), or ``"trig"`` (an angle's sines and cosines, beside its
 #: powers).
-REMOVALS = ("splines", "exponentials", "trig", "trig_degree", "angle_degree", "degree",
-            "interaction", "kinetic", "gyroscopic", "coulomb", "kinetic_trig_degree",
-            "differences")
+REMOVALS = ("splines", "exponentials", "anchored_springs", "trig", "trig_degree",
+            "angle_degree", "degree", "interaction", "kinetic", "gyroscopic", "coulomb",
+            "kinetic_trig_degree", "differences")
 
 #: The moves a removal is exchanged for when it is not kept alone: the potential's families
 #: that stand in for each other (sines and cosines, or a degree of them, for powers of the
@@ -43,7 +43,7 @@ def removed(state: dict, move: str, kinds, start: dict) -> dict | None:
     state : dict
         Parameters of an :class:`~pysindy_xl.AutomaticCatalog` (``degree``, ``trig_degree``,
         ``angle_degree``, ``interaction``, ``kinetic``, ``gyroscopic``, ``dissipation``,
-        ``splines``, optionally ``exponentials``).
+        ``splines``, optionally ``exponentials``, ``anchors``).
     move : str
         One of :data:`REMOVALS`.
     kinds : sequence of str
@@ -77,6 +77,10 @@ def removed(state: dict, move: str, kinds, start: dict) -> dict | None:
         if not state.get("exponentials"):
             return None
         new.pop("exponentials")
+    elif move == "anchored_springs":
+        if not state.get("anchors"):
+            return None
+        new.pop("anchors")
     elif move == "splines":
         if state["splines"] is None:
             return None

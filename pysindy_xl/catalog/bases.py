@@ -20,7 +20,9 @@ Per coordinate kind:
   catalog's growth tries both);
 - a linear coordinate, for exponential laws (Morse and Born-Mayer walls, exponential springs):
   :func:`exponential_pair`, ``exp(a x)`` and ``exp(2 a x)`` with one signed rate ``a``
-  (fitted on data by :mod:`.rates`).
+  (fitted on data by :mod:`.rates`);
+- either kind, for a spring anchored off the coordinate's path: :func:`anchored_spring`, the
+  spring's length (fitted on data by :mod:`.anchors`).
 
   :func:`truncated_power_splines` writes either span in another basis: a few polynomials and,
   per interior knot, the truncated cube ``(q - xi_j)_+^3`` made to respect the ends. Its
@@ -41,7 +43,8 @@ import functools
 import numpy as np
 import sympy as sp
 
-__all__ = ["KINDS", "bspline", "bspline_centers", "exponential_pair", "factor_functions",
+__all__ = ["KINDS", "anchored_spring", "bspline", "bspline_centers", "exponential_pair",
+           "factor_functions",
            "natural_splines", "quadratic_end_splines", "truncated_power_splines", "SPLINE_BASES"]
 
 #: The two ways of writing a coordinate's splines: ``"bspline"`` (each function a local bump,
@@ -430,6 +433,57 @@ def exponential_pair(q: sp.Symbol, rate: float) -> list[sp.Expr]:
     """
     rate = _check_rate(rate, "exponentials")
     return [sp.exp(sp.Float(rate) * q), sp.exp(sp.Float(2 * rate) * q)]
+
+
+def anchored_spring(q: sp.Symbol, kind: str, anchor) -> sp.Expr:
+    r"""The length of a spring between a point moved by ``q`` and an anchor off its path.
+
+    A linear spring of rest length :math:`l_0` has the potential
+    :math:`\tfrac{k}{2}(d - l_0)^2 = \tfrac{k}{2} d^2 - k l_0 d + \text{const}`; ``d^2`` is
+    a quadratic (or a first-degree sine and cosine) of ``q``, the length ``d`` is not, and no
+    polynomial, trigonometric or spline family continues it beyond the data. Up to a factor:
+
+    - ``"angle"`` (a point on a circle, an anchor at distance ``r`` from its centre, at the
+      angle ``phi``): :math:`d \propto \sqrt{1 - e \cos(q - \varphi)}`, ``0 < e < 1``;
+    - ``"linear"`` (a point on a line, an anchor at the distance ``h`` from it, beside the
+      position ``c``): :math:`d = \sqrt{(q - c)^2 + h^2}`, ``h > 0``.
+
+    Parameters
+    ----------
+    q : sympy.Symbol
+        The coordinate.
+    kind : {"linear", "angle"}
+        The coordinate's kind.
+    anchor : tuple of 2 float
+        ``(e, phi)`` of an angle, ``(c, h)`` of a linear coordinate.
+
+    Returns
+    -------
+    sympy.Expr
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> theta, x = sp.symbols("theta x", real=True)
+    >>> anchored_spring(theta, "angle", (0.85, 0.46))
+    sqrt(1 - 0.85*cos(theta - 0.46))
+    >>> anchored_spring(x, "linear", (0.0, 1.0))
+    sqrt(x**2 + 1.0)
+    """
+    if kind not in KINDS:
+        raise ValueError(f"kind: expected one of {KINDS}, got {kind!r}")
+    if isinstance(anchor, (str, bytes)) or not hasattr(anchor, "__len__") or len(anchor) != 2:
+        raise ValueError(f"anchors: expected a pair of numbers per coordinate, got {anchor!r}")
+    a, b = (float(v) for v in anchor)
+    if not (np.isfinite(a) and np.isfinite(b)):
+        raise ValueError(f"anchors: expected finite numbers, got {anchor!r}")
+    if kind == "angle":
+        if not 0 < a < 1:
+            raise ValueError(f"anchors: an angle's e must lie in (0, 1), got {a!r}")
+        return sp.sqrt(1 - sp.Float(a) * sp.cos(q - sp.Float(b)))
+    if not b > 0:
+        raise ValueError(f"anchors: a linear coordinate's h must be positive, got {b!r}")
+    return sp.sqrt((q - sp.Float(a)) ** 2 + sp.Float(b) ** 2)
 
 
 def _check_rate(rate, name: str) -> float:

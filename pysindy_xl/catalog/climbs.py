@@ -67,6 +67,10 @@ class Climber:
         ``rates(parameters) -> {name: rate}``: the exponentials' rates fitted for a catalog
         (:class:`~.rates.RateFits`), which the move ``"exponentials"`` adds; None: that move
         does not apply.
+    anchors : callable or None, default None
+        ``anchors(parameters) -> {name: (a, b)}``: the springs' anchors fitted for a catalog
+        (:class:`~.anchors.AnchorFits`), which the move ``"anchored_springs"`` adds; None: that
+        move does not apply.
     budget : float or None, default None
         The search's work budget (:mod:`.budget`): a candidate whose fit would take
         :attr:`work` over it is not fitted (its step's note says ``"budget"``; the climbs
@@ -91,13 +95,14 @@ class Climber:
 
     def __init__(self, fits, second_fits, fixed, kinds, *, tolerance, good_enough, physical,
                  retry_kinetic, criterion, progress=None, noise_floor=True, rates=None,
-                 budget=None):
+                 budget=None, anchors=None):
         self.fits, self.second_fits, self.fixed = fits, second_fits, fixed
         self.kinds, self.n = list(kinds), len(kinds)
         self.tolerance, self.good_enough, self.physical = tolerance, good_enough, physical
         self.retry_kinetic, self.criterion, self.progress = retry_kinetic, criterion, progress
         self.consensus, self.noise_floor = second_fits is not None, noise_floor
         self.rates, self.budget, self.work = rates, budget, 0.0
+        self.anchors = anchors
         self.steps, self.first = [], None
         self._cache = {}  # every catalog is fitted once, whichever path tries it
         self._paid = set()  # the fits paid for in :attr:`work` (their fit_key)
@@ -330,7 +335,7 @@ class Climber:
         dict or None
             The moved parameters, None where the move does not apply.
         """
-        return moved(state, move, self.kinds, self.n, skip, self.rates)
+        return moved(state, move, self.kinds, self.n, skip, self.rates, self.anchors)
 
     def first_moves(self, queue) -> tuple:
         """Each move of ``queue`` (``(move, parameters)`` pairs) alone from the first catalog:

@@ -183,6 +183,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._inputs import aligned, as_list
+from .anchors import AnchorFits
 from .automatic import AutomaticCatalog, coordinate_kinds
 from .backward import backward_phase
 from .budget import WORK_BUDGET
@@ -270,6 +271,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         by variable projection on the search's samples, then, where the exponentials lower
         the criterion by :data:`~.rates.REFINE_GAIN`, on the criterion itself); it is tried
         after the families, alone, as the splines' moves (:data:`~.moves.LATE_MOVES`).
+        ``"anchored_springs"`` (of :data:`MORE_MOVES`, not a default) adds the length of a
+        spring anchored off each coordinate's path (``sqrt(1 - e cos(theta - phi))``,
+        ``sqrt((x - c)^2 + h^2)``), its geometry fitted likewise (:class:`~.anchors.AnchorFits`);
+        it is tried after the exponentials, before the splines.
     search_optimizer : "auto" or optimizer, default "auto"
         Optimizer of the search's fits; ``"auto"``: ``optimizer`` when given, else one
         selection per fit (``ExplicitOptimizer()``, ``MixedOptimizer()``, or XLSINDy's default
@@ -481,7 +486,11 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                                      template.test_functions,
                                      template.smoother,
                                      lambda parameters: fits.get(parameters)["criterion"])
-                      if "exponentials" in moves else None, budget=work_budget)
+                      if "exponentials" in moves else None, budget=work_budget,
+                      anchors=AnchorFits(searched[0], thinned(arrays, stride),
+                                         template.test_functions, template.smoother,
+                                         lambda parameters: fits.get(parameters)["criterion"])
+                      if "anchored_springs" in moves else None)
 
     # pairs of moves whose joint catalog holds terms that neither adds alone (kinetic
     # coefficients over products of two coordinates' functions): tried as one move too
@@ -528,7 +537,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
              or (m in alone_steps and single_keeps(alone_steps[m], first, tolerance))]
     order = sorted([m for m in moves if m not in LATE_MOVES] + joint,
                    key=lambda m: rank.get(m, (1, np.inf)))
-    order += [m for m in moves if m in LATE_MOVES]
+    order += [m for m in LATE_MOVES if m in moves]  # (the fitted families before the splines)
     if "quadratic_ends" in moves and "knots" in moves:  # both at once: neither may gain alone
         order.append("quadratic_ends+knots")
     # climb from the best and from the second-best first move: which family goes in first is

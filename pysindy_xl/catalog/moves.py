@@ -21,10 +21,11 @@ from __future__ import annotations
 import itertools
 import re
 
-__all__ = ["exponential_base", "MOVES", "MORE_MOVES", "START", "LIMITS", "SPLINE_COUNTS",
-           "SPLINE_MOVES", "RATE_MOVES", "LATE_MOVES", "REPEATED", "moved", "joint_moves", "holds",
-           "kinetic_order", "NARROW", "narrow", "narrow_order", "narrowed", "is_repeated",
-           "kinetic_trig_degree", "KINETIC_TRIG_DEGREE", "DIFFERENCE_LIMIT"]
+__all__ = ["anchor_base", "exponential_base", "MOVES", "MORE_MOVES", "START", "LIMITS",
+           "SPLINE_COUNTS", "SPLINE_MOVES", "RATE_MOVES", "LATE_MOVES", "REPEATED", "moved",
+           "joint_moves", "holds", "kinetic_order", "NARROW", "narrow", "narrow_order",
+           "narrowed", "is_repeated", "kinetic_trig_degree", "KINETIC_TRIG_DEGREE",
+           "DIFFERENCE_LIMIT"]
 
 #: The moves of the growth, in the order they are tried. ``"kinetic_trig_degree"`` gives the
 #: configuration-dependent kinetic coefficients an angle's trigonometric monomials of degree
@@ -51,17 +52,21 @@ MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyr
 SPLINE_MOVES = ("splines", "quadratic_ends", "knots")
 #: The moves whose family has a rate fitted on data: ``"exponentials"`` adds ``exp(a x)`` and
 #: ``exp(2 a x)`` to each linear coordinate's potential, with the rate ``a`` that the growth
-#: fits for the catalog it moves from (:mod:`.rates`; :func:`moved`'s ``rates``).
-RATE_MOVES = ("exponentials",)  # (with the degree back to the first catalog's)
+#: fits for the catalog it moves from (:mod:`.rates`; :func:`moved`'s ``rates``);
+#: ``"anchored_springs"`` adds to each coordinate's potential the length of a spring anchored
+#: off its path, with the geometry fitted likewise (:mod:`.anchors`; :func:`moved`'s
+#: ``anchors``). The growth tries them in this order, before the splines.
+RATE_MOVES = ("exponentials", "anchored_springs")  # (degrees back to the first catalog's)
 #: The moves tried after the families, alone (never first moves, never in pairs of moves):
 #: the exponentials, then the flexible basis. A family with a fitted rate or a flexible basis
 #: fits what a missing family leaves; tried first, or lending a pair its gain, it would stand
 #: in for that family.
 LATE_MOVES = RATE_MOVES + SPLINE_MOVES
-#: Moves a growth may be given beyond the default :data:`MOVES`: ``"coupled_damping"`` lets
-#: every velocity's viscous force enter every equation (``dissipation`` ``"coupled"`` of
-#: :class:`AutomaticCatalog`: the damping of a joint whose angle is a difference of coordinates).
-MORE_MOVES = ("coupled_damping",)
+#: Moves a growth may be given beyond the default :data:`MOVES`: ``"anchored_springs"`` (see
+#: :data:`RATE_MOVES`); ``"coupled_damping"`` lets every velocity's viscous force enter every
+#: equation (``dissipation`` ``"coupled"`` of :class:`AutomaticCatalog`: the damping of a joint
+#: whose angle is a difference of coordinates).
+MORE_MOVES = ("anchored_springs", "coupled_damping")
 #: The highest power of the coordinates' differences that the move ``"differences"`` reaches.
 DIFFERENCE_LIMIT = 4
 
@@ -91,7 +96,7 @@ REPEATED = ("degree", "trig_degree", "angle_degree", "splines", "differences")
 KINETIC_TRIG_DEGREE = 2
 
 
-def moved(state, move, kinds, n, skip=0, rates=None):
+def moved(state, move, kinds, n, skip=0, rates=None, anchors=None):
     """The catalog parameters after ``move`` from ``state``, or None when it does not apply.
 
     Parameters
@@ -123,6 +128,10 @@ def moved(state, move, kinds, n, skip=0, rates=None):
         For ``"exponentials"``: the rates ``{name: a}`` of the linear coordinates, or
         ``rates(state) -> {name: a}`` (fitted for the catalog ``state``); None, or an empty
         mapping: the move does not apply.
+    anchors : callable, mapping or None, default None
+        For ``"anchored_springs"``: the anchors ``{name: (a, b)}`` of the coordinates
+        (:func:`~.bases.anchored_spring`), or ``anchors(state) -> {name: (a, b)}``; None, or
+        an empty mapping: the move does not apply.
 
     Returns
     -------
@@ -155,6 +164,9 @@ def moved(state, move, kinds, n, skip=0, rates=None):
     >>> moved(START, "exponentials", ["linear"], 1, rates=lambda state: {"x": -1.5})[
     ...     "exponentials"]
     {'x': -1.5}
+    >>> moved(START, "anchored_springs", ["angle"], 1, anchors={"theta": (0.85, 0.46)})[
+    ...     "anchors"]
+    {'theta': (0.85, 0.46)}
     """
     suffix = _NARROW_SUFFIX.search(move)
     if suffix:  # then kinetic coefficients over at most `order` coordinates' functions
@@ -162,14 +174,16 @@ def moved(state, move, kinds, n, skip=0, rates=None):
         if (suffix.start() and state["kinetic"] == "configuration"
                 and kinetic_order(state) > order):
             return None  # (a move narrows what it adds, never the kinetic terms `state` has)
-        state = moved(state, move[:suffix.start()], kinds, n, skip, rates) if suffix.start() \
+        state = moved(state, move[:suffix.start()], kinds, n, skip, rates, anchors) \
+            if suffix.start() \
             else dict(state)
         if state is None or state["kinetic"] != "configuration" or kinetic_order(state) <= order:
             return None
         return dict(state, kinetic_interaction=order)
     if "+" in move:
         for part in move.split("+"):
-            state = None if state is None else moved(state, part, kinds, n, skip, rates)
+            state = None if state is None else moved(state, part, kinds, n, skip, rates,
+                                                     anchors)
         return state
     new = dict(state)
     angles = "angle" in kinds
@@ -224,6 +238,13 @@ def moved(state, move, kinds, n, skip=0, rates=None):
         if not fitted:
             return None
         new = dict(exponential_base(state), exponentials=dict(fitted))
+    elif move == "anchored_springs":
+        if state.get("anchors") or anchors is None:
+            return None
+        fitted = anchors(state) if callable(anchors) else anchors
+        if not fitted:
+            return None
+        new = dict(anchor_base(state), anchors=dict(fitted))
     elif move == "quadratic_ends":
         if state.get("spline_ends") == "quadratic":
             return None
@@ -267,6 +288,36 @@ def exponential_base(state) -> dict:
     """
     new = {key: value for key, value in state.items() if key != "exponentials"}
     new["degree"] = min(state["degree"], START["degree"])
+    return new
+
+
+def anchor_base(state) -> dict:
+    """The catalog ``state`` that the move ``"anchored_springs"`` adds the springs' lengths
+    to: its anchors left out, its degree and trigonometric degree back to :data:`START`'s
+    where higher.
+
+    The square of a spring's length is a quadratic of a linear coordinate and a first-degree
+    sine and cosine of an angle, in the first catalog already; the length takes the place of
+    the higher powers and degrees that stand in for it (as the exponentials take that of the
+    powers, :func:`exponential_base`); a degree move may add them again.
+
+    Parameters
+    ----------
+    state : dict
+        Catalog parameters (the keys of :data:`START`).
+
+    Returns
+    -------
+    dict
+
+    Examples
+    --------
+    >>> anchor_base(dict(START, trig_degree=3, anchors={"theta": (0.85, 0.46)}))["trig_degree"]
+    1
+    """
+    new = {key: value for key, value in state.items() if key != "anchors"}
+    new["degree"] = min(state["degree"], START["degree"])
+    new["trig_degree"] = min(state["trig_degree"], START["trig_degree"])
     return new
 
 
@@ -471,6 +522,7 @@ def holds(state, other) -> bool:
                      and state.get("spline_basis", "bspline")
                      == other.get("spline_basis", "bspline")))
             and (bool(state.get("exponentials")) or not other.get("exponentials"))
+            and (bool(state.get("anchors")) or not other.get("anchors"))
             and state.get("differences", 0) >= other.get("differences", 0))
 
 

@@ -116,7 +116,8 @@ def lagrangian_candidates(options) -> tuple[list[sp.Expr], list[bool]]:
     exponentials = [f for q, rate in zip(coords.q, options["exponentials"], strict=True)
                     if rate is not None for f in exponential_pair(q, rate)]
     splines = spline_terms(options)
-    others = exponentials + splines
+    anchors = [f for f in options.get("anchors", ()) if f is not None]
+    others = exponentials + anchors + splines
     return terms + others, fast + [False] * len(others)
 
 

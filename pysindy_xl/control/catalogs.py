@@ -151,7 +151,7 @@ class AutomaticGrowth:
         the last and the farthest-reaching block at once.
     moves : sequence of str, optional
         Moves of the growth; default all of :data:`~pysindy_xl.catalog.MOVES` but "splines",
-        and :data:`~pysindy_xl.catalog.MORE_MOVES` (coupled damping).
+        and :data:`~pysindy_xl.catalog.MORE_MOVES` but "anchored_springs" (coupled damping).
     physical : bool, default False
         Never give up a catalog whose fits have a positive definite mass matrix on all
         their training states for one whose fits have not (``physical`` of
@@ -246,7 +246,8 @@ class AutomaticGrowth:
         if not data:
             raise ValueError("data: expected at least one recording (q, t, tau)")
         q, t, u = (list(part) for part in zip(*data, strict=True))
-        moves = tuple(m for m in MOVES + MORE_MOVES if m != "splines") if self.moves is None \
+        moves = tuple(m for m in MOVES + MORE_MOVES if m not in ("splines", "anchored_springs")) \
+            if self.moves is None \
             else tuple(self.moves)
         combine = self.combine
         if combine == "auto":
