@@ -2,9 +2,10 @@
 kinds (:class:`AutomaticCatalog`), grown on data while a held-out criterion improves
 (:func:`grow_catalog`)."""
 
-from .automatic import DISSIPATION, AutomaticCatalog, coordinate_kinds
+from .automatic import DISSIPATION, AutomaticCatalog
 from .bases import (
     KINDS,
+    anchored_spring,
     bspline,
     exponential_pair,
     natural_splines,
@@ -12,7 +13,9 @@ from .bases import (
     truncated_power_splines,
 )
 from .growth import MORE_MOVES, MOVES, GrowthResult, GrowthStep, grow_catalog
+from .kinds import coordinate_kinds
 
 __all__ = ["AutomaticCatalog", "grow_catalog", "GrowthResult", "GrowthStep", "MOVES", "MORE_MOVES",
            "coordinate_kinds", "DISSIPATION", "KINDS", "bspline", "natural_splines",
-           "quadratic_end_splines", "truncated_power_splines", "exponential_pair"]
+           "quadratic_end_splines", "truncated_power_splines", "exponential_pair",
+           "anchored_spring"]

@@ -41,7 +41,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .automatic import AutomaticCatalog, coordinate_kinds
+from .automatic import AutomaticCatalog
+from .kinds import coordinate_kinds
 from .moves import anchor_base
 from .rates import RANK_CUTOFF, SECOND_MINIMUM, RateFits
 

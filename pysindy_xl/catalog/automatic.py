@@ -55,9 +55,10 @@ from ..feature_library import (
 )
 from ..symbols import Coordinates
 from .bases import KINDS, SPLINE_BASES, anchored_spring, bspline_centers, exponential_pair
+from .kinds import coordinate_kinds, per_coordinate
 from .terms import dissipation_terms, lagrangian_candidates, spline_basis
 
-__all__ = ["AutomaticCatalog", "DISSIPATION", "coordinate_kinds"]
+__all__ = ["AutomaticCatalog", "DISSIPATION"]
 
 #: Dissipation models an automatic catalog offers per coordinate (``"coupled"``: viscous forces
 #: of each velocity in the other coordinates' equations too).
@@ -74,63 +75,6 @@ def _param_names(cls) -> tuple:
 #: are immutable): the clones that every fit makes, and equal catalogs, build them once.
 _TERMS: dict = {}
 _CACHED_TERMS = 32
-
-
-def coordinate_kinds(names, kinds) -> tuple[str, ...]:
-    """One kind per coordinate from ``kinds``.
-
-    Parameters
-    ----------
-    names : sequence of str
-        The coordinates' names.
-    kinds : None, str, sequence or mapping
-        None (all linear), one kind for all, one per coordinate, or ``{name: kind}``
-        (coordinates not named are linear); kinds from :data:`~pysindy_xl.catalog.KINDS`.
-
-    Returns
-    -------
-    tuple of str
-
-    Examples
-    --------
-    >>> coordinate_kinds(["r", "theta"], {"theta": "angle"})
-    ('linear', 'angle')
-    """
-    names = list(names)
-    if kinds is None:
-        out = ["linear"] * len(names)
-    elif isinstance(kinds, str):
-        out = [kinds] * len(names)
-    elif isinstance(kinds, Mapping):
-        unknown = [k for k in kinds if k not in names]
-        if unknown:
-            raise ValueError(f"kinds: {unknown} are not among the coordinates {names}")
-        out = [kinds.get(name, "linear") for name in names]
-    else:
-        out = list(kinds)
-        if len(out) != len(names):
-            raise ValueError(f"kinds: expected one kind per coordinate ({len(names)}), got "
-                             f"{len(out)}")
-    for name, kind in zip(names, out, strict=True):
-        if kind not in KINDS:
-            raise ValueError(f"kinds: coordinate {name!r} has the unknown kind {kind!r}; "
-                             f"expected one of {KINDS}")
-    return tuple(out)
-
-
-def _per_coordinate(value, names, name, default=None) -> list:
-    """``value`` spread over the coordinates: a mapping by name, a sequence, or one value."""
-    if value is None:
-        return [default] * len(names)
-    if isinstance(value, Mapping):
-        unknown = [k for k in value if k not in names]
-        if unknown:
-            raise ValueError(f"{name}: {unknown} are not among the coordinates {list(names)}")
-        return [value.get(n, default) for n in names]
-    if isinstance(value, (list, tuple, np.ndarray)) and len(value) == len(names) and (
-            name != "bounds" or all(v is None or np.ndim(v) == 1 for v in value)):
-        return list(value)
-    return [value] * len(names)
 
 
 class AutomaticCatalog(CatalogRepartition):
@@ -352,12 +296,12 @@ class AutomaticCatalog(CatalogRepartition):
                 raise ValueError(f"dissipation: unknown model {model!r}; expected some of "
                                  f"{DISSIPATION}")
         options["dissipation"] = dissipation
-        scales = _per_coordinate(self.coulomb_scale, names, "coulomb_scale")
+        scales = per_coordinate(self.coulomb_scale, names, "coulomb_scale")
         for scale in scales:
             check_option("coulomb_scale", scale, "real", low=0, low_open=True)
         options["coulomb_scale"] = [float(s) for s in scales]
-        splines = _per_coordinate(self.splines, names, "splines", default=0)
-        bounds = _per_coordinate(self.bounds, names, "bounds")
+        splines = per_coordinate(self.splines, names, "splines", default=0)
+        bounds = per_coordinate(self.bounds, names, "bounds")
         options["splines"] = []
         options["spline_ends"] = check_option("spline_ends", self.spline_ends, "choice",
                                               choices=("linear", "quadratic"))
@@ -376,7 +320,7 @@ class AutomaticCatalog(CatalogRepartition):
         options["exponentials"] = self._rates(names, options["kinds"])
         if self.anchors is not None and not isinstance(self.anchors, Mapping):
             raise TypeError(f"anchors: expected a mapping {{name: (a, b)}}, got {self.anchors!r}")
-        anchors = _per_coordinate(self.anchors or {}, names, "anchors")
+        anchors = per_coordinate(self.anchors or {}, names, "anchors")
         options["anchors"] = [None if a is None else anchored_spring(q, kind, a)
                               for q, kind, a in zip(coords.q, options["kinds"], anchors,
                                                     strict=True)]
@@ -389,7 +333,7 @@ class AutomaticCatalog(CatalogRepartition):
         if not isinstance(self.exponentials, Mapping):
             raise TypeError(f"exponentials: expected a mapping {{name: rate}}, got "
                             f"{type(self.exponentials).__name__} {self.exponentials!r}")
-        rates = _per_coordinate(self.exponentials, names, "exponentials")
+        rates = per_coordinate(self.exponentials, names, "exponentials")
         for name, kind, rate in zip(names, kinds, rates, strict=True):
             if rate is not None and kind != "linear":
                 raise ValueError(f"exponentials: {name!r} is an angle; exponentials of a "

@@ -184,7 +184,7 @@ import numpy as np
 
 from .._inputs import aligned, as_list
 from .anchors import AnchorFits
-from .automatic import AutomaticCatalog, coordinate_kinds
+from .automatic import AutomaticCatalog
 from .backward import backward_phase
 from .budget import WORK_BUDGET
 from .candidates import CandidateFits
@@ -196,6 +196,7 @@ from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first
 from .growth_data import GROWTH_REGIONS as GROWTH_REGIONS  # (where it was first)
 from .growth_data import check_growth_data, check_growth_options, data_span, thinned
 from .keep_rules import single_keeps
+from .kinds import coordinate_kinds
 from .moves import LATE_MOVES, MORE_MOVES, MOVES, START, is_repeated, joint_moves, moved, narrowed
 from .path import GrowthResult, GrowthStep
 from .rates import RateFits

@@ -48,8 +48,9 @@ import copy
 import numpy as np
 
 from ..symbols import stack_variables
-from .automatic import AutomaticCatalog, coordinate_kinds
+from .automatic import AutomaticCatalog
 from .candidates import parameters_key
+from .kinds import coordinate_kinds
 from .moves import exponential_base
 
 __all__ = ["RateFits", "GRID", "rate_residual"]
