@@ -40,17 +40,6 @@ def pytest_xdist_make_scheduler(config, log):
     return LongFilesFirst(config, log)
 
 
-def pytest_configure(config):
-    """In a parallel run, each worker's BLAS gets its share of the cores (as scikit-learn's
-    test suite does): the workers already fill the machine, and BLAS threads beyond it only
-    wait for each other."""
-    workers = os.environ.get("PYTEST_XDIST_WORKER_COUNT")
-    if workers is not None:
-        from threadpoolctl import threadpool_limits
-
-        threadpool_limits(max((os.cpu_count() or 1) // int(workers), 1))
-
-
 @pytest.fixture(scope="session")
 def cart_pole_system():
     """Cart-pole with the default parameters of :func:`ground_truth.cart_pole`."""

@@ -106,7 +106,8 @@ def test_lagrangian_matches_the_inertial_derivation(bench, name):
 
 @pytest.mark.parametrize("name", ["offset_spring_pendulum", "bead_rotating_parabola",
                                   "cart_stiffening_pendulum", "ball_rotating_dish",
-                                  "three_link_arm", "half_car"])
+                                  pytest.param("three_link_arm", marks=pytest.mark.slow),
+                                  "half_car"])
 def test_truth_conserves_energy_without_damping_or_force(bench, name):
     blind2, gs = bench
     system = dict(blind2.systems()[name])

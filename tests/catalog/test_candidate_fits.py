@@ -3,6 +3,7 @@ result is the calling process's to the bit, and the growth's path and model do n
 ``n_jobs``. The ground truth is a forced Duffing oscillator integrated by scipy."""
 
 import numpy as np
+import pytest
 from support.catalog_setups import duffing_search
 from support.growth import HARDENING, MASS, STIFFNESS, noisy_duffing
 
@@ -19,6 +20,7 @@ def _path(result):
              s.criterion, s.chosen, s.note) for s in result.steps]
 
 
+@pytest.mark.slow  # (the default run: identify --n-jobs 2 in test_cli_automatic.py)
 def test_growth_in_two_processes_takes_the_same_path_to_the_same_law():
     x, t, u = noisy_duffing()
     moves = ("degree", "coulomb")

@@ -50,6 +50,7 @@ def _acceleration_errors(model, episode, name="cart-pole"):
     return np.linalg.norm(identified - true, axis=0) / np.linalg.norm(true, axis=0)
 
 
+@pytest.mark.slow
 def test_every_block_held_out_in_turn_keeps_the_informative_swings_in_the_fits():
     """The loop's first exploration of seed 9 (2.5 s at 1 % noise): held out at once, the
     time block and the block reaching farthest (the largest swings) leave fits in which the

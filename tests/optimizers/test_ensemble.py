@@ -304,7 +304,7 @@ class _NoisyExplicit(px.ExplicitOptimizer):
         return super().fit_problem(problem, support)
 
 
-@pytest.mark.parametrize("n_jobs", [None, 2])
+@pytest.mark.parametrize("n_jobs", [None, pytest.param(2, marks=pytest.mark.slow)])
 def test_subsample_warnings_and_failures_are_reported_once_with_counts(n_jobs):
     rng = np.random.default_rng(2)
     a, b, c = rng.normal(size=(3, 600))

@@ -148,6 +148,7 @@ def test_bad_trees_are_refused(change, message):
         KinematicTree.from_dict({**base, **change})
 
 
+@pytest.mark.slow  # (a five-link arm: the JAX compilation is most of it)
 def test_jax_kernel_matches_numpy():
     jax = pytest.importorskip("jax")
     from pysindy_xl.export.jax_dynamics import dynamics_function
