@@ -40,6 +40,7 @@ def _noisy_runs(accelerations, noise=0.03, duration=8.0, rate=200.0, amplitude=1
     return [t, t], xs, us
 
 
+@pytest.mark.slow
 def test_backward_phase_gives_up_the_cosine_that_stands_in_for_a_quartic_spring():
     accelerations, forces = quartic_rotor()
     ts, xs, us = _noisy_runs(accelerations)

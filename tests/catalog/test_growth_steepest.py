@@ -127,6 +127,7 @@ def test_the_steepest_climb_retries_a_refused_move_narrowed_and_drops_the_stand_
     assert np.linalg.norm(predicted - truth) / np.linalg.norm(truth) < 1e-4
 
 
+@pytest.mark.slow
 def test_the_second_steepest_climb_is_given_the_first_ones_end(three_masses, monkeypatch):
     """With ``good_enough=0`` (and no noise floor) the growth climbs twice: the second
     steepest climb, from the second-best first move (the interaction), is given the first

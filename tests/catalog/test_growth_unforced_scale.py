@@ -79,6 +79,7 @@ def _fresh_error(model, accelerations, runs) -> float:
     return float(np.linalg.norm(predicted - truth) / np.linalg.norm(truth))
 
 
+@pytest.mark.slow
 def test_splines_beside_the_law_do_not_buy_a_shrunken_kinetic_part(spring):
     """At 5 % noise the splines of ``r`` and ``theta`` make room for a law whose kinetic part
     is a quarter of the true one, its potential large terms that nearly cancel

@@ -134,6 +134,7 @@ def _oblique(q):
     return -4.0 * (root - 0.5) * q / root
 
 
+@pytest.mark.slow  # (the move's writing and selection: the unit tests above, default run)
 def test_the_growth_gives_an_oblique_spring_quadratic_ends_written_one_column_per_knot():
     """At 1 % noise, written as B-splines only (the default moves less ``"knots"``), the
     search's fits of quadratic-end splines continue so unsteadily beyond their training data
