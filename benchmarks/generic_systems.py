@@ -262,7 +262,8 @@ def case_key(case) -> str:
     return ":".join(map(str, case))
 
 
-def run_case(system, truth, noise, seed, forced, baselines=True, region="block", extra_moves=()):
+def run_case(system, truth, noise, seed, forced, baselines=True, region="block", extra_moves=(),
+             hand=True):
     runs, test, xs, ts, us = case_data(system, truth, noise, seed, forced)
     names = list(system["coords"].names)
     record = {"system": system["name"], "n": truth.n, "noise": noise, "seed": seed,
@@ -301,33 +302,38 @@ def run_case(system, truth, noise, seed, forced, baselines=True, region="block",
             record["cpu_seconds"] = time.process_time() - cpu
             record["auto"] = {"right": False, "held_out": float("inf"), "simulation": float("inf"),
                               "off_box": float("inf"), "error": repr(error)[:300]}
-        try:  # the correct hand-built catalog, same data
-            # the splines' end knots where grow_catalog puts them
-            from pysindy_xl.catalog.growth_data import END_PERCENTILE
-            low, high = np.percentile(np.vstack(xs), [END_PERCENTILE, 100 - END_PERCENTILE],
-                                      axis=0)
-            bounds = [(float(a), float(b)) for a, b in zip(low, high, strict=True)]
-            catalog = px.AutomaticCatalog(names, kinds=system["kinds"], bounds=bounds,
-                                          **system["hand"])
-            hand = px.XLSINDy(catalog).fit(xs, ts, u=us)
-            record["hand"] = score(*_xlsindy_functions(hand), system, truth, test, runs, forced)
-        except Exception as error:  # noqa: BLE001
-            record["hand"] = {"right": False, "held_out": float("inf"), "error": repr(error)[:300]}
-        if "auto" in record and "error" not in record["auto"]:
-            # the same catalog fitted with the test functions of the automatic catalog's final
-            # fit (grow_catalog's search's): the two fits then differ by their catalogs alone
-            try:
-                same = px.XLSINDy(catalog, test_functions=found.model.test_functions).fit(
-                    xs, ts, u=us)
-                record["hand_same"] = score(*_xlsindy_functions(same), system, truth, test,
-                                            runs, forced)
+        if hand:  # the correct hand-built catalog, same data (skipped in a rerun of the
+            # automatic catalog alone, whose hand-built figures are known)
+            try:  # the splines' end knots where grow_catalog puts them
+                from pysindy_xl.catalog.growth_data import END_PERCENTILE
+                low, high = np.percentile(np.vstack(xs), [END_PERCENTILE, 100 - END_PERCENTILE],
+                                          axis=0)
+                bounds = [(float(a), float(b)) for a, b in zip(low, high, strict=True)]
+                catalog = px.AutomaticCatalog(names, kinds=system["kinds"], bounds=bounds,
+                                              **system["hand"])
+                fitted = px.XLSINDy(catalog).fit(xs, ts, u=us)
+                record["hand"] = score(*_xlsindy_functions(fitted), system, truth, test, runs,
+                                       forced)
             except Exception as error:  # noqa: BLE001
-                record["hand_same"] = {"right": False, "held_out": float("inf"),
-                                       "error": repr(error)[:300]}
+                record["hand"] = {"right": False, "held_out": float("inf"),
+                                  "error": repr(error)[:300]}
+            if "auto" in record and "error" not in record["auto"]:
+                # the same catalog fitted with the test functions of the automatic catalog's
+                # final fit (grow_catalog's search's): the two fits then differ by their
+                # catalogs alone
+                try:
+                    same = px.XLSINDy(catalog, test_functions=found.model.test_functions).fit(
+                        xs, ts, u=us)
+                    record["hand_same"] = score(*_xlsindy_functions(same), system, truth, test,
+                                                runs, forced)
+                except Exception as error:  # noqa: BLE001
+                    record["hand_same"] = {"right": False, "held_out": float("inf"),
+                                           "error": repr(error)[:300]}
         if baselines:
             record.update(baseline_scores(system, truth, forced, (runs, test, xs, ts, us)))
-    record["ratio"] = (record["auto"]["held_out"] / record["hand"]["held_out"]
-                       if record["hand"].get("held_out", 0) > 0 else None)
+    if "hand" in record:
+        record["ratio"] = (record["auto"]["held_out"] / record["hand"]["held_out"]
+                           if record["hand"].get("held_out", 0) > 0 else None)
     if "hand_same" in record:
         record["ratio_same"] = (record["auto"]["held_out"] / record["hand_same"]["held_out"]
                                 if record["hand_same"].get("held_out", 0) > 0 else None)
@@ -374,6 +380,9 @@ def main(argv=None):
     parser.add_argument("--forcing", nargs="*", default=["forced", "unforced"])
     parser.add_argument("--out", default=RESULTS)
     parser.add_argument("--no-baselines", action="store_true")
+    parser.add_argument("--no-hand", action="store_true",
+                        help="skip the hand-built catalog's fits (with --no-baselines: the "
+                        "automatic catalog alone, for a rerun whose other figures are known)")
     parser.add_argument("--reuse", default=None, metavar="FILE.jsonl",
                         help="take the catalogs' figures of the cases this file holds; run "
                              "only the baselines on them")
@@ -419,7 +428,8 @@ def run_grid(table, args, region="block") -> int:
         else:
             record = run_case(system, truth, noise, seed, forcing == "forced",
                               baselines=not args.no_baselines, region=region,
-                              extra_moves=getattr(args, "extra_moves", ()))
+                              extra_moves=getattr(args, "extra_moves", ()),
+                              hand=not getattr(args, "no_hand", False))
             if getattr(args, "extra_moves", ()):
                 record["extra_moves"] = list(args.extra_moves)
         with open(args.out, "a", encoding="utf-8") as handle:

@@ -248,6 +248,9 @@ def main(argv=None, table=None, results=RESULTS, script="unseen_systems.py",
     parser.add_argument("--forcing", nargs="*", default=["forced", "unforced"])
     parser.add_argument("--out", default=results)
     parser.add_argument("--no-baselines", action="store_true")
+    parser.add_argument("--no-hand", action="store_true",
+                        help="skip the hand-built catalog's fits (with --no-baselines: the "
+                        "automatic catalog alone, for a rerun whose other figures are known)")
     parser.add_argument("--reuse", default=None, metavar="FILE.jsonl",
                         help="take the catalogs' figures of the cases this file holds; run "
                              "only the baselines on them")
