@@ -195,3 +195,17 @@ def test_the_move_applies_once_and_the_backward_phase_takes_it_out():
     assert holds(state, START) and not holds(START, state)
     assert "anchors" not in removed(state, "anchored_springs", ["angle"], START)
     assert removed(START, "anchored_springs", ["angle"], START) is None
+
+
+def test_an_anchor_on_the_path_is_refused_as_a_stand_in():
+    """A torsion pendulum (``V = k/2 theta^2 - m g l cos(theta)``, no spring's length): from
+    the first catalog (sines and cosines, no power of theta) the residual falls towards an
+    anchor on the circle's far side, ``sqrt(1 + cos theta)``, a half-angle cosine that stands in
+    for ``theta^2``; that end of the range is refused, as its far end is."""
+    def torsion(theta):
+        return 1.5 * theta ** 2 - 3.924 * sp.cos(theta)
+
+    runs, _ = _runs(torsion, 1.0, 3.0)
+    fits = _fits("theta", "angle", runs)
+    anchors = fits({"degree": 2, "trig_degree": 1, "kinetic": "constant"})
+    assert "theta" not in anchors, anchors
