@@ -1,0 +1,126 @@
+"""Every row of the five benchmark sets with the move ``"anchored_springs"``, against the rows
+without it: the evidence for (or against) making it a default move.
+
+The rows without it are each set's stitched record (its full run with the later row-level
+reruns laid over it, a later file winning: :func:`stitched_sets.stitched`), as they stood on
+main ``8883912`` where the move is opt-in. The rows with it are the files
+``anchored_springs_all_<set>_8883912.jsonl`` (``--extra-moves anchored_springs --no-hand`` on
+``8883912``; the move's position among the moves does not change what is tried, so these are
+also the rows of the move made a default) and, for the three systems rerun after the grid-edge
+rule of session 23, the files ``anchored_springs_v2_<set>.jsonl``.
+
+Usage: ``python benchmarks/anchored_springs_rows.py [SET ...]`` prints per set the rates at
+0-1 % and 5 % noise without and with the move, every verdict that changed, the rows whose grown
+catalog keeps an anchored spring, and the CPU seconds.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import numpy as np
+from stitched_sets import rows, stitched
+
+RESULTS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results")
+
+#: Each set's full run, then its reruns in the order they were laid over it.
+BASELINE = {
+    "grid": ["generic_systems_grid_6a7b6d6", "differences_default_grid_5836b2b",
+             "degree_limit_1d_grid_f06c688", "degree_limit_grid_f06c688",
+             "own_runs_grid_19e7d92", "tie_count_grid_4031549", "knots_default_grid_64e6f85"],
+    "unseen": ["unseen_systems_412b492", "differences_default_unseen_5836b2b",
+               "degree_limit_1d_unseen_f06c688", "degree_limit_unseen_f06c688",
+               "own_runs_unseen_19e7d92", "tie_count_unseen_4031549",
+               "knots_default_unseen_64e6f85"],
+    "blind1": ["blind_systems_c2a50a8", "differences_default_blind1_5836b2b",
+               "degree_limit_1d_blind1_f06c688", "degree_limit_blind1_f06c688",
+               "own_runs_blind1_19e7d92", "tie_count_blind1_4031549",
+               "knots_default_blind1_64e6f85"],
+    "blind2": ["blind2_systems_c2a50a8", "differences_default_blind2_5836b2b",
+               "degree_limit_1d_blind2_f06c688", "degree_limit_blind2_f06c688",
+               "half_car_c0294a5", "own_runs_blind2_19e7d92", "tie_count_blind2_4031549",
+               "three_link_arm_1645dc8", "knots_default_blind2_64e6f85",
+               "knots_default_half_car_822725e", "knots_default_three_link_arm_822725e"],
+    "blind3": ["blind3_systems_412b492", "differences_default_blind3_5836b2b",
+               "degree_limit_1d_blind3_f06c688", "degree_limit_blind3_f06c688",
+               "own_runs_blind3_19e7d92", "tie_count_blind3_4031549",
+               "knots_default_blind3_64e6f85"],
+}
+#: The rows with the move: the run of every other system, then the reruns after the grid-edge
+#: rule.
+WITH_MOVE = {name: [f"anchored_springs_all_{name}_8883912", f"anchored_springs_v2_{name}"]
+             for name in BASELINE}
+
+
+def _existing(names) -> list:
+    paths = [os.path.join(RESULTS, f"{n}.jsonl") for n in names]
+    return [p for p in paths if os.path.exists(p)]
+
+
+def without_move(name) -> dict:
+    """The set's rows without the move, by ``(system, forcing, noise, seed)``."""
+    paths = _existing(BASELINE[name])
+    return stitched(paths[0], paths[1:])[0]
+
+
+def with_move(name) -> dict:
+    """The set's rows with the move (those run so far), by ``(system, forcing, noise, seed)``."""
+    found = {}
+    for path in _existing(WITH_MOVE[name]):
+        found.update(rows(path))
+    return found
+
+
+def _rate(records, keys) -> str:
+    right = sum(bool(records[k]["auto"].get("right")) for k in keys)
+    return f"{right}/{len(keys)} ({100 * right / max(len(keys), 1):.0f} %)"
+
+
+def report(name) -> str:
+    """The markdown section of one set."""
+    before, after = without_move(name), with_move(name)
+    keys = sorted(k for k in before if k in after)
+    merged = {k: after.get(k, before[k]) for k in before}
+    lines = [f"### {name}: {len(keys)} of {len(before)} rows run with the move", ""]
+    lines.append("| noise | right without the move | right with it (every row) |")
+    lines.append("| --- | --- | --- |")
+    for label, chosen in (("0-1 %", lambda k: k[2] <= 0.01), ("5 %", lambda k: k[2] > 0.01)):
+        picked = [k for k in before if chosen(k)]
+        lines.append(f"| {label} | {_rate(before, picked)} | {_rate(merged, picked)} |")
+    changed, kept = [], []
+    for key in keys:
+        old, new = before[key], after[key]
+        was, now = bool(old["auto"].get("right")), bool(new["auto"].get("right"))
+        row = (f"| {' | '.join(map(str, key))} | {was} -> {now} | "
+               f"{100 * old['auto']['held_out']:.3g} -> {100 * new['auto']['held_out']:.3g} | "
+               f"{new.get('catalog', '')} |")
+        if was != now:
+            changed.append(row)
+        if "sqrt" in new.get("catalog", ""):
+            kept.append(row)
+    header = ["| system | forcing | noise | seed | right | held-out % | catalog with the move |",
+              "| --- | --- | --- | --- | --- | --- | --- |"]
+    lines += ["", f"Verdicts changed: {len(changed)}", ""] + (header + changed if changed else [])
+    lines += ["", f"Grown catalogs that keep an anchored spring: {len(kept)}", ""]
+    lines += header + kept if kept else []
+    cpu_before = np.array([before[k].get("cpu_seconds", np.nan) for k in keys])
+    cpu_after = np.array([after[k].get("cpu_seconds", np.nan) for k in keys])
+    identical = sum(before[k].get("catalog") == after[k].get("catalog")
+                    and before[k]["auto"]["held_out"] == after[k]["auto"]["held_out"]
+                    for k in keys)
+    lines += ["", f"Same catalog and held-out error to the bit: {identical} of {len(keys)} rows. "
+              f"CPU s of these rows: {np.nansum(cpu_before):.0f} -> {np.nansum(cpu_after):.0f} "
+              f"({100 * (np.nansum(cpu_after) / np.nansum(cpu_before) - 1):+.0f} %); rows within "
+              f"10 CPU s: {int(np.sum(cpu_before <= 10))} -> {int(np.sum(cpu_after <= 10))}.", ""]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    names = list(sys.argv[1:] if argv is None else argv) or list(BASELINE)
+    print("\n".join(report(name) for name in names))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
