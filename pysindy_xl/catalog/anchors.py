@@ -26,10 +26,11 @@ coordinate: ``c`` and ``log h`` in units of its span on the training data); each
 :data:`MINIMA` best local minima on the grid is refined by a bounded Nelder-Mead search. A
 minimum at the grid's smallest ``e`` (or largest ``h``), or refined to it, is refused: there the
 length is nearly a first-degree cosine (or a quadratic) plus higher degrees, and it stands in
-for a higher trigonometric degree (a rotating arm's ``sin^2``), not a spring. So is a minimum
-refined to the other end of its range, ``e = 0.999`` (``h`` a hundredth of the span): the anchor
-on the path, where the length is a kink (``|x - c|``, ``|sin((theta - phi) / 2)|``) that stands
-in for a torsion spring's ``theta^2`` or for asymmetric stiffness.
+for a higher trigonometric degree (a rotating arm's ``sin^2``), not a spring. The refinement
+stays within the grid, and a minimum refined to its edge nearest the path (``e = 0.98``, ``h``
+a twentieth of the span) is refused too: an anchor that close to the path makes the length
+nearly a kink (``|x - c|``, ``|sin((theta - phi) / 2)|``), which stands in for a torsion
+spring's ``theta^2``, a three-link arm's higher harmonics or asymmetric stiffness.
 Where a second minimum is within :data:`~.rates.SECOND_MINIMUM` of the best, the growth's
 held-out criterion chooses between them (one coordinate only, as for the rates). A coordinate
 whose residual the length lowers by less than :data:`GAIN` gets none (a column more that the
@@ -243,7 +244,7 @@ def _minima(kind, q, phis, target, basis) -> list:
         def anchor(v):  # (log(1 - e), phi)
             return (1 - float(np.exp(v[0])), float(np.angle(np.exp(1j * v[1]))))
 
-        bounds = [(np.log(1e-3), first[-1]), (-2 * np.pi, 2 * np.pi)]
+        bounds = [(first[0], first[-1]), (-2 * np.pi, 2 * np.pi)]
         periodic, edge = True, (0, first[-1])
     else:
         centre = float(np.median(values))
@@ -255,7 +256,7 @@ def _minima(kind, q, phis, target, basis) -> list:
         def anchor(v):  # (c / span from the median, log(h / span))
             return (centre + span * float(v[0]), span * float(np.exp(v[1])))
 
-        bounds = [(-2.0, 2.0), (np.log(0.01), second[-1])]
+        bounds = [(-2.0, 2.0), (second[0], second[-1])]
         periodic, edge = False, (1, second[-1])
 
     def residual(v):
@@ -288,10 +289,9 @@ def _minima(kind, q, phis, target, basis) -> list:
                          options={"xatol": TOLERANCE, "fatol": 1e-12, "maxfev": 300})
         v, value = (found.x, float(found.fun)) if found.fun < scores[a, b] else (
             start, float(scores[a, b]))
-        # (refined to the anchor on the path, e -> 1 or h -> 0, the length is a kink, |x - c|
-        # or |sin((theta - phi) / 2)|, smooth on the data only as a half-angle cosine or a
-        # line: a degenerate geometry that stands in for what a family states, as on the far
-        # side)
+        # (refined to the grid's edge nearest the path, the length nears a kink, |x - c| or
+        # |sin((theta - phi) / 2)|, smooth on the data as a half-angle cosine or a line: a
+        # degenerate geometry that stands in for what a family states, as on the far side)
         if v[edge[0]] >= edge[1] - 1e-3 or v[edge[0]] <= bounds[edge[0]][0] + 1e-3:
             continue
         out.append((tuple(_rounded(x) for x in anchor(v)), value))
