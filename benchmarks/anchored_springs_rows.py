@@ -7,7 +7,8 @@ main ``8883912`` where the move is opt-in. The rows with it are the files
 ``anchored_springs_all_<set>_8883912.jsonl`` (``--extra-moves anchored_springs --no-hand`` on
 ``8883912``; the move's position among the moves does not change what is tried, so these are
 also the rows of the move made a default) and, for the three systems rerun after the grid-edge
-rule of session 23, the files ``anchored_springs_v2_<set>.jsonl``.
+rule of session 23, the files ``anchored_springs_v2_<set>.jsonl``; last, the rows rerun after
+the near-path rule (``anchored_springs_v3_<set>_a52ae4e.jsonl``).
 
 Usage: ``python benchmarks/anchored_springs_rows.py [SET ...]`` prints per set the rates at
 0-1 % and 5 % noise without and with the move, every verdict that changed, the rows whose grown
@@ -47,10 +48,11 @@ BASELINE = {
                "own_runs_blind3_19e7d92", "tie_count_blind3_4031549",
                "knots_default_blind3_64e6f85"],
 }
-#: The rows with the move: the run of every other system, then the reruns after the grid-edge
-#: rule.
-WITH_MOVE = {name: [f"anchored_springs_all_{name}_8883912", f"anchored_springs_v2_{name}"]
-             for name in BASELINE}
+#: The rows with the move: the run of every other system on ``8883912``, then the reruns after
+#: the grid-edge rule (session 23), then those after the near-path rule (``a52ae4e``: every row
+#: whose catalog or held-out error the move had changed, and the gains).
+WITH_MOVE = {name: [f"anchored_springs_all_{name}_8883912", f"anchored_springs_v2_{name}",
+                    f"anchored_springs_v3_{name}_a52ae4e"] for name in BASELINE}
 
 
 def _existing(names) -> list:
