@@ -213,7 +213,8 @@ def backward_phase(climber, state, best, path, moves) -> tuple:
         for k, (move, parameters) in enumerate(candidates):
             step = climber.attempt(parameters, f"-{move}", [p for _, p in candidates[k + 1:]])
             if climber.keeps(step, best) or (
-                    step.active == best.active and step.terms < best.terms
+                    not climber.refused(step) and step.active == best.active
+                    and step.terms < best.terms
                     and (not climber.physical or step.definite >= 1 or best.definite < 1)
                     and (lambda c, b: c <= b * (1 + tolerance))(*climber.compared(step, best))):
                 dropped.append((step.criterion, step.active, parameters, step))

@@ -109,6 +109,7 @@ class Climber:
         self._parameters = {}  # the parameters of each step, by the step's id
         self._models = {}  # the fitted models of each step (its floor asked later), by id
         self._seconds = {}  # the second judge's steps, by the first's (of "consensus")
+        self._refused = set()  # the steps never kept again (:meth:`refuse`), by id
 
     # -- fitting and judging ---------------------------------------------------------------
     def evaluate(self, parameters, move, ahead=()) -> GrowthStep:
@@ -259,13 +260,45 @@ class Climber:
             return np.inf, best.criterion
         return consensus_criteria(step, best, self.second_step(step), self.second_step(best))
 
+    def refuse(self, step, why: str) -> None:
+        """Never keep ``step`` again (:meth:`keeps`, the backward phase, the near ties): its
+        catalog cannot be the growth's answer.
+
+        Parameters
+        ----------
+        step : GrowthStep
+            A step this climber fitted.
+        why : str
+            The reason, which becomes the step's ``note`` (shown in the path's table).
+
+        Returns
+        -------
+        None
+        """
+        step.note = why
+        self._refused.add(id(step))
+
+    def refused(self, step) -> bool:
+        """Whether :meth:`refuse` refused ``step``.
+
+        Parameters
+        ----------
+        step : GrowthStep
+            A step this climber fitted.
+
+        Returns
+        -------
+        bool
+        """
+        return id(step) in self._refused
+
     def keeps(self, step, best) -> bool:
         """Whether ``step`` replaces ``best``: the keep rule of one fold
         (:func:`~.keep_rules.single_keeps`) or, with ``"consensus"``, of two
         (:func:`~.keep_rules.consensus_keeps`: the second fold is asked only about a larger
         candidate that the first keeps, or another within :data:`CONSENSUS_REACH`); with
         ``physical``, a catalog whose fits have a positive definite mass matrix is not given
-        up for one whose fits have not.
+        up for one whose fits have not. A refused step (:meth:`refuse`) is never kept.
 
         Parameters
         ----------
@@ -276,6 +309,8 @@ class Climber:
         -------
         bool
         """
+        if self.refused(step):
+            return False
         if not self.consensus:
             judged = single_keeps(step, best, self.tolerance)
         elif (not single_keeps(step, best, self.tolerance) if step.terms > best.terms

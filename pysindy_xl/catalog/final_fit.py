@@ -260,7 +260,7 @@ def warn_free_runs(failed: str) -> None:
                   f"them either); {FREE_RUNS_ADVICE}", IdentificationWarning, stacklevel=3)
 
 
-def final_answer(best, state, steps, parameters_of, fixed, fit, check=None):
+def final_answer(best, state, steps, parameters_of, fixed, fit, check=None, model=None):
     """The growth's answer: its chosen catalog fitted on all the data, or, where that model is
     no mechanical system (:func:`mass_matrix_fails`) or fails ``check``, the first physical
     alternative's (:func:`physical_alternative`).
@@ -284,6 +284,8 @@ def final_answer(best, state, steps, parameters_of, fixed, fit, check=None):
     check : callable or None, default None
         ``check(model) -> str or None``: a further judgment of a final fit (the growth's, on
         unforced data: :func:`~pysindy_xl.fit.own_runs.own_runs_divergence`); None: none.
+    model : XLSINDy or None, default None
+        ``best``'s final fit where it is already made (None: ``fit`` makes it).
 
     Returns
     -------
@@ -312,7 +314,8 @@ def final_answer(best, state, steps, parameters_of, fixed, fit, check=None):
     (True, None)
     """
     catalog = AutomaticCatalog(**fixed, **state)
-    model = fit(catalog, best.support)
+    if model is None:
+        model = fit(catalog, best.support)
     failed = failure(model, check)
     if failed is not None:  # no mechanical system: another catalog's, where one is
         found = physical_alternative(steps, best, lambda step: fit(

@@ -185,9 +185,9 @@ import numpy as np
 from .._inputs import aligned, as_list
 from .anchors import AnchorFits
 from .automatic import AutomaticCatalog
-from .backward import backward_phase
 from .budget import WORK_BUDGET
 from .candidates import CandidateFits
+from .climb_ends import resumed_end, search_end
 from .climbs import Climber
 from .final_fit import final_answer, fit_chosen, free_runs_check, warn_free_runs
 from .floor import EXACT
@@ -201,7 +201,6 @@ from .moves import LATE_MOVES, MORE_MOVES, MOVES, START, is_repeated, joint_move
 from .path import GrowthResult, GrowthStep
 from .rates import RateFits
 from .search_data import SearchData, SearchSplit, judge_data, search_rows
-from .ties import judge_near_ties
 
 __all__ = ["grow_catalog", "GrowthStep", "GrowthResult", "MOVES", "MORE_MOVES",
            "check_growth_data", "GROWTH_REGIONS"]
@@ -541,33 +540,16 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     order += [m for m in LATE_MOVES if m in moves]  # (the fitted families before the splines)
     if "quadratic_ends" in moves and "knots" in moves:  # both at once: neither may gain alone
         order.append("quadratic_ends+knots")
-    # climb from the best and from the second-best first move: which family goes in first is
-    # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
-    # a coupling that needs two moves), so the better of the two ends is kept
-    state, best, path = climber.steepest_climb(order) if steepest else climber.climb(order)
-    promising = [m for m in order if m not in LATE_MOVES and alone.get(m, np.inf)
-                 < first.criterion * (1 - tolerance)]
-    if not climber.settled(best) and len(promising) > 1:
-        second = [promising[1]] + [m for m in order if m != promising[1]]
-        other = (climber.steepest_climb(order, promising[1], state) if steepest
-                 else climber.climb(second, state))
-        if (climber.keeps(other[1], best) if not physical or (other[1].definite >= 1)
-                == (best.definite >= 1) else other[1].definite >= 1):
-            state, best, path = other
-    state, best, path = backward_phase(climber, state, best, path, moves)
-    fits.close()  # (a worker's last guess may still run: it ends during the final fit)
 
     def every_block():  # the near ties' judge: each block held out by a fit on the others
         folds, _ = held_out_splits(arrays, n_blocks, stride, True, region, margin=width)
         return CandidateFits(judge_data(folds, fixed, template, search.max_terms, forced), n_jobs)
 
-    if tie_break and not cross_validate and not consensus and np.isfinite(best.criterion):
-        # the near ties of the criterion judged again on every block, each by a fit without it
-        chosen = judge_near_ties(climber.steps, best, climber.parameters_of, every_block,
-                                 physical=physical, tolerance=tolerance, progress=progress)
-        if chosen is not best:
-            state, best = dict(climber.parameters_of(chosen)), chosen
-            path.append(chosen)
+    def search_again():  # (climbs, backward phase, near ties: each catalog fitted once)
+        judged = tie_break and not cross_validate and not consensus
+        return search_end(climber, order, alone, moves, steepest=steepest, physical=physical,
+                          judge_ties=every_block if judged else None, progress=progress)
+
     full = {"x": xs, "t": ts, "u": us if forced else None, "x_dot": xds, "x_ddot": xdds}
     if not is_list:
         full = {key: None if value is None else value[0] for key, value in full.items()}
@@ -575,9 +557,13 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     def fit_all(catalog, judged):  # the final fit (final_fit.py): all the data, judged terms
         return fit_chosen(template, catalog, optimizer, full, judged, active, final_weak)
 
+    # a settled end whose final fit fails is refused and the climbs go on (climb_ends.py)
+    check = None if forced else free_runs_check(xs, ts, xds, kinds)
+    state, best, path, model = resumed_end(
+        climber, search_again, lambda state, step: fit_all(
+            AutomaticCatalog(**fixed, **state), step.support), check, progress)
     answer, best_catalog, model, failed = final_answer(
-        best, state, climber.steps, climber.parameters_of, fixed, fit_all,
-        check=None if forced else free_runs_check(xs, ts, xds, kinds))
+        best, state, climber.steps, climber.parameters_of, fixed, fit_all, check, model=model)
     if answer is not best:  # a physical alternative: the choice's final fit is no mechanics
         if progress is not None:
             progress(f"answer        {answer.move} ({answer.terms} terms): the chosen "

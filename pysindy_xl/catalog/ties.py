@@ -170,7 +170,7 @@ def near_ties(steps, best, physical: bool = False) -> list:
     for step in sorted(steps, key=lambda s: (s.criterion, s.terms)):
         if len(ties) >= TIE_CANDIDATES or not step.criterion <= reach:
             break
-        if (step is best or step.note.startswith(("fit failed", "ceiling", "budget"))
+        if (step is best or step.note.startswith(("fit failed", "ceiling", "budget", "final fit"))
                 or (physical and step.definite < best.definite)):
             continue
         if not any(abs(step.criterion - other.criterion) <= SAME_LAW * other.criterion
@@ -190,7 +190,8 @@ def _smallest_stating(steps, step):
     if not step.support:
         return step
     same = [other for other in steps if other.support == step.support
-            and np.isfinite(other.criterion) and not other.note.startswith("fit failed")]
+            and np.isfinite(other.criterion)
+            and not other.note.startswith(("fit failed", "final fit"))]
     return min(same, key=lambda other: other.terms, default=step) if same else step
 
 
