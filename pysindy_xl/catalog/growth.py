@@ -171,12 +171,15 @@ error, not the data's precision: on a cart with a torsion-sprung pendulum, ``cos
 ``theta^2`` at 0.1 %); the climb goes on. A right law sits at 0.87 to 1.13 times its floor on
 the generic systems with two or more coordinates (where the stop applies), 1.2 to 1.7 times with
 one (where the climb goes on as without it). The chosen catalog is then fitted on all the data
-(:mod:`.final_fit`); where that model's mass matrix is not positive definite on its training
-states (no mechanical system: it cannot be simulated along its data), the growth answers with
-the first of its other catalogs, by criterion, whose final fit's is
-(:func:`~.final_fit.physical_alternative`), or, where none is, with that model (its fit
-warns). On unforced data the final fit must also stay in its free runs when simulated from
-their first states (:func:`~.final_fit.free_runs_check`; :attr:`GrowthResult.own_runs`). """
+(:mod:`.final_fit`). A settled choice whose final fit fails the checks below is refused and the
+search goes on past it (:mod:`.climb_ends`: the settlement claimed that nothing more was to be
+found, which a catalog that is no model of the data cannot claim). Where a final model's mass
+matrix is not positive definite on its training states (no mechanical system: it cannot be
+simulated along its data) and the search cannot go on, the growth answers with the first of
+its other catalogs, by criterion, whose final fit's is
+(:func:`~.final_fit.physical_alternative`), or, where none is, with that model (its fit warns).
+On unforced data the final fit must also stay in its free runs when simulated from their first
+states (:func:`~.final_fit.free_runs_check`; :attr:`GrowthResult.own_runs`). """
 
 from __future__ import annotations
 
