@@ -10,9 +10,13 @@ also the rows of the move made a default) and, for the three systems rerun after
 rule of session 23, the files ``anchored_springs_v2_<set>.jsonl``; last, the rows rerun after
 the near-path rule (``anchored_springs_v3_<set>_a52ae4e.jsonl``).
 
-Usage: ``python benchmarks/anchored_springs_rows.py [SET ...]`` prints per set the rates at
-0-1 % and 5 % noise without and with the move, every verdict that changed, the rows whose grown
-catalog keeps an anchored spring, and the CPU seconds.
+Usage: ``python benchmarks/anchored_springs_rows.py [--rows TEMPLATE] [SET ...]`` prints per
+set the rates at 0-1 % and 5 % noise without and with the move, every verdict that changed, the
+rows whose grown catalog keeps an anchored spring, and the CPU seconds. ``--rows`` takes the
+rows with the move from one run instead (``TEMPLATE`` a results file name with ``{set}``, for
+example ``anchored_springs_default_{set}_baa0658``: every row with the move and the resumed
+search, ``baa0658``); the verdicts and catalogs that differ from the stitched rows with the move
+above are then listed too.
 """
 
 from __future__ import annotations
@@ -66,10 +70,11 @@ def without_move(name) -> dict:
     return stitched(paths[0], paths[1:])[0]
 
 
-def with_move(name) -> dict:
-    """The set's rows with the move (those run so far), by ``(system, forcing, noise, seed)``."""
+def with_move(name, template=None) -> dict:
+    """The set's rows with the move (those run so far), by ``(system, forcing, noise, seed)``:
+    the stitched files of :data:`WITH_MOVE`, or the one file ``template`` names."""
     found = {}
-    for path in _existing(WITH_MOVE[name]):
+    for path in _existing([template.format(set=name)] if template else WITH_MOVE[name]):
         found.update(rows(path))
     return found
 
@@ -79,9 +84,9 @@ def _rate(records, keys) -> str:
     return f"{right}/{len(keys)} ({100 * right / max(len(keys), 1):.0f} %)"
 
 
-def report(name) -> str:
-    """The markdown section of one set."""
-    before, after = without_move(name), with_move(name)
+def report(name, template=None) -> str:
+    """The markdown section of one set (``template``: :func:`with_move`'s)."""
+    before, after = without_move(name), with_move(name, template)
     keys = sorted(k for k in before if k in after)
     merged = {k: after.get(k, before[k]) for k in before}
     lines = [f"### {name}: {len(keys)} of {len(before)} rows run with the move", ""]
@@ -115,12 +120,34 @@ def report(name) -> str:
               f"CPU s of these rows: {np.nansum(cpu_before):.0f} -> {np.nansum(cpu_after):.0f} "
               f"({100 * (np.nansum(cpu_after) / np.nansum(cpu_before) - 1):+.0f} %); rows within "
               f"10 CPU s: {int(np.sum(cpu_before <= 10))} -> {int(np.sum(cpu_after <= 10))}.", ""]
+    if template:
+        earlier = with_move(name)
+        moved = [key for key in keys if key in earlier and (
+            bool(earlier[key]["auto"].get("right")) != bool(after[key]["auto"].get("right"))
+            or not np.isclose(earlier[key]["auto"]["held_out"], after[key]["auto"]["held_out"],
+                              rtol=0.01, atol=1e-8))]
+        lines += [f"Against the earlier rows with the move: {len(moved)} of {len(keys)} rows "
+                  "with another verdict or a held-out error more than 1 % apart", ""]
+        lines += ["| system | forcing | noise | seed | right | held-out % | catalog now |",
+                  "| --- | --- | --- | --- | --- | --- | --- |"] if moved else []
+        for key in moved:
+            old, new = earlier[key]["auto"], after[key]["auto"]
+            lines.append(f"| {' | '.join(map(str, key))} | {bool(old.get('right'))} -> "
+                         f"{bool(new.get('right'))} | {100 * old['held_out']:.3g} -> "
+                         f"{100 * new['held_out']:.3g} | {after[key].get('catalog', '')} |")
+        lines.append("")
     return "\n".join(lines)
 
 
 def main(argv=None) -> int:
-    names = list(sys.argv[1:] if argv is None else argv) or list(BASELINE)
-    print("\n".join(report(name) for name in names))
+    import argparse
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("sets", nargs="*", default=list(BASELINE))
+    parser.add_argument("--rows", default=None, metavar="TEMPLATE",
+                        help="the rows with the move from one results file per set "
+                             "(its name with {set}, no .jsonl)")
+    args = parser.parse_args(argv)
+    print("\n".join(report(name, args.rows) for name in args.sets))
     return 0
 
 
