@@ -55,6 +55,9 @@ class _Climber:
     def settled(self, step, floor=True):
         return step.criterion < 1e-8
 
+    def refused(self, step):
+        return False
+
 
 def test_backward_exchange_leaves_a_family_grown_several_degrees_at_once():
     # the climb's end: sines and cosines to degree 3 standing in for (a - b)^2; the law is

@@ -38,7 +38,8 @@ def test_triangular_tall_and_stacked_agree_with_the_full_decomposition():
     for factor in (theta, r_factor):  # tall, and square upper triangular
         value, vector = smallest_pair(factor, moments)
         assert value == pytest.approx(values[0], rel=1e-10)
-        assert abs(vector @ moments @ vectors[:, 0]) == pytest.approx(1.0, abs=1e-10)
+        # the vectors' alignment is second order in their error; 1e-10 flips with the BLAS kernel
+        assert abs(vector @ moments @ vectors[:, 0]) == pytest.approx(1.0, abs=1e-8)
     stacked = smallest_pair(np.stack([theta, 2 * theta]), np.stack([moments, moments]))
     assert stacked[0].shape == (2,) and stacked[1].shape == (2, 50)
     assert stacked[0] == pytest.approx([values[0], 4 * values[0]], rel=1e-10)
