@@ -274,7 +274,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         by variable projection on the search's samples, then, where the exponentials lower
         the criterion by :data:`~.rates.REFINE_GAIN`, on the criterion itself); it is tried
         after the families, alone, as the splines' moves (:data:`~.moves.LATE_MOVES`).
-        ``"anchored_springs"`` (of :data:`MORE_MOVES`, not a default) adds the length of a
+        ``"anchored_springs"`` adds the length of a
         spring anchored off each coordinate's path (``sqrt(1 - e cos(theta - phi))``,
         ``sqrt((x - c)^2 + h^2)``), its geometry fitted likewise (:class:`~.anchors.AnchorFits`);
         it is tried after the exponentials, before the splines.

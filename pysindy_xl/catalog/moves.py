@@ -40,8 +40,8 @@ __all__ = ["anchor_base", "exponential_base", "MOVES", "MORE_MOVES", "START", "L
 #: higher powers, one degree a move up to :data:`DIFFERENCE_LIMIT`; it applies only where two
 #: coordinates are of one kind.
 MOVES = ("kinetic", "interaction", "degree", "trig_degree", "angle_degree", "gyroscopic",
-         "coulomb", "kinetic_trig_degree", "differences", "exponentials", "splines",
-         "quadratic_ends", "knots")
+         "coulomb", "kinetic_trig_degree", "differences", "exponentials", "anchored_springs",
+         "splines", "quadratic_ends", "knots")
 #: The moves of the flexible basis, tried after the families: ``"splines"`` adds a
 #: coordinate's splines (natural: a constant force beyond the data) or refines them;
 #: ``"quadratic_ends"`` gives them quadratic ends (a constant stiffness beyond the data), adding
@@ -62,11 +62,11 @@ RATE_MOVES = ("exponentials", "anchored_springs")  # (degrees back to the first 
 #: fits what a missing family leaves; tried first, or lending a pair its gain, it would stand
 #: in for that family.
 LATE_MOVES = RATE_MOVES + SPLINE_MOVES
-#: Moves a growth may be given beyond the default :data:`MOVES`: ``"anchored_springs"`` (see
-#: :data:`RATE_MOVES`); ``"coupled_damping"`` lets every velocity's viscous force enter every
-#: equation (``dissipation`` ``"coupled"`` of :class:`AutomaticCatalog`: the damping of a joint
-#: whose angle is a difference of coordinates).
-MORE_MOVES = ("anchored_springs", "coupled_damping")
+#: Moves a growth may be given beyond the default :data:`MOVES`: ``"coupled_damping"`` lets
+#: every velocity's viscous force enter every equation (``dissipation`` ``"coupled"`` of
+#: :class:`AutomaticCatalog`: the damping of a joint whose angle is a difference of
+#: coordinates).
+MORE_MOVES = ("coupled_damping",)
 #: The highest power of the coordinates' differences that the move ``"differences"`` reaches.
 DIFFERENCE_LIMIT = 4
 

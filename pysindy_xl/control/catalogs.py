@@ -150,8 +150,8 @@ class AutomaticGrowth:
         Hold out every block in turn (``n_blocks`` fits per candidate catalog) rather than
         the last and the farthest-reaching block at once.
     moves : sequence of str, optional
-        Moves of the growth; default all of :data:`~pysindy_xl.catalog.MOVES` but "splines",
-        and :data:`~pysindy_xl.catalog.MORE_MOVES` but "anchored_springs" (coupled damping).
+        Moves of the growth; default all of :data:`~pysindy_xl.catalog.MOVES` but "splines" and
+        "anchored_springs", and :data:`~pysindy_xl.catalog.MORE_MOVES` (coupled damping).
     physical : bool, default False
         Never give up a catalog whose fits have a positive definite mass matrix on all
         their training states for one whose fits have not (``physical`` of
