@@ -274,10 +274,10 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         by variable projection on the search's samples, then, where the exponentials lower
         the criterion by :data:`~.rates.REFINE_GAIN`, on the criterion itself); it is tried
         after the families, alone, as the splines' moves (:data:`~.moves.LATE_MOVES`).
-        ``"anchored_springs"`` adds the length of a
-        spring anchored off each coordinate's path (``sqrt(1 - e cos(theta - phi))``,
-        ``sqrt((x - c)^2 + h^2)``), its geometry fitted likewise (:class:`~.anchors.AnchorFits`);
-        it is tried after the exponentials, before the splines.
+        ``"anchored_springs"`` adds the length of a spring anchored off each coordinate's
+        path (``sqrt(1 - e cos(theta - phi))``, ``sqrt((x - c)^2 + h^2)``), its geometry
+        fitted likewise (:class:`~.anchors.AnchorFits`); it is tried after the exponentials,
+        before the splines.
     search_optimizer : "auto" or optimizer, default "auto"
         Optimizer of the search's fits; ``"auto"``: ``optimizer`` when given, else one
         selection per fit (``ExplicitOptimizer()``, ``MixedOptimizer()``, or XLSINDy's default
