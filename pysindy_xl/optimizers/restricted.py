@@ -15,8 +15,8 @@ import dataclasses
 import numpy as np
 from sklearn.base import clone
 
-from .._validation import Collection, HasMethods, validate_params
-from ._base import CatalogOptimizer, solve_problem
+from .._validation import Boolean, Collection, HasMethods, validate_params
+from ._base import CatalogOptimizer, pilot_optimizer, solve_problem
 from ._wrapping import WrappingOptimizer
 from .tags import CatalogTags, catalog_tags
 
@@ -39,6 +39,11 @@ class RestrictedOptimizer(WrappingOptimizer, CatalogOptimizer):
         The allowed catalog columns (those of ``XLSINDy.coef_``, mapped through the problem's
         catalog map; on a problem without one, its own columns). The force columns are always
         allowed. Empty: every column.
+    select : bool, default True
+        Whether the wrapped optimizer selects among the allowed columns. False: every allowed
+        column is kept and refitted on every row, nothing selected (the wrapped optimizer's
+        refit of a given support, or that of the single fit an ensemble bags; a wrapped
+        optimizer without one is refused at fit time).
 
     Attributes
     ----------
@@ -56,6 +61,10 @@ class RestrictedOptimizer(WrappingOptimizer, CatalogOptimizer):
     >>> restricted = RestrictedOptimizer(px.ExplicitOptimizer(), columns=[1, 2])
     >>> (restricted.fit_catalog(theta, 1, [0]).coef_ != 0).tolist()
     [True, True, True, False]
+    >>> given = RestrictedOptimizer(px.ExplicitOptimizer(threshold=0.5), columns=[1, 2],
+    ...                             select=False)
+    >>> (given.fit_catalog(theta, 1, [0]).coef_ != 0).tolist()   # 0.5 kept though below it
+    [True, True, True, False]
     """
 
     spec_type = "RestrictedOptimizer"
@@ -63,11 +72,13 @@ class RestrictedOptimizer(WrappingOptimizer, CatalogOptimizer):
     _parameter_constraints = {
         "optimizer": [None, HasMethods("a catalog optimizer", "fit_catalog")],
         "columns": [Collection("a sequence of column indices")],
+        "select": [Boolean()],
     }
 
-    def __init__(self, optimizer=None, columns=()):
+    def __init__(self, optimizer=None, columns=(), select=True):
         self.optimizer = optimizer
         self.columns = columns
+        self.select = select
 
     def catalog_tags(self) -> CatalogTags:
         """What this optimizer can do and needs: the wrapped optimizer's tags.
@@ -105,13 +116,26 @@ class RestrictedOptimizer(WrappingOptimizer, CatalogOptimizer):
         if problem.catalog_map is not None:  # (the wrapped optimizer's groups name the catalog)
             sub = dataclasses.replace(sub, catalog_map=dataclasses.replace(
                 problem.catalog_map, columns=np.asarray(problem.catalog_map.columns)[allowed]))
-        fitted = solve_problem(clone(self._base()), sub)
+        if self.select:
+            fitted = solve_problem(clone(self._base()), sub)
+        else:
+            fitted = _refitting(self._base()).fit_problem(sub, np.ones(sub.n_features, bool))
         self.optimizer_ = fitted
         self.coef_ = _spread(fitted.coef_, allowed, problem.n_features)
         for name in _PER_COLUMN:  # (an ensemble's, on the problem's columns)
             if hasattr(fitted, name):
                 setattr(self, name, _spread(getattr(fitted, name), allowed, problem.n_features))
         return self
+
+
+def _refitting(optimizer):
+    """An unfitted optimizer that refits a given support like ``optimizer``: itself, or the
+    single fit an ensemble bags (``TypeError`` where neither can)."""
+    for candidate in (optimizer, pilot_optimizer(optimizer)):
+        if catalog_tags(candidate).can_refit:
+            return clone(candidate)
+    raise TypeError(f"optimizer: {type(optimizer).__name__} cannot refit a given support "
+                    "(select=False needs the tag can_refit, or an ensemble of such fits)")
 
 
 #: Fitted attributes of the wrapped optimizer, by column (the last axis), that the wrapper
