@@ -15,7 +15,7 @@ from .criterion import combine_errors
 from .floor import combined_floor, held_out_scores
 from .search_data import SearchData
 
-__all__ = ["evaluate_candidate", "unfitted"]
+__all__ = ["evaluate_candidate", "support_criterion", "unfitted"]
 
 
 def unfitted(note, size=0, description="") -> dict:
@@ -136,3 +136,48 @@ def evaluate_candidate(search: SearchData, parameters) -> dict:
             "noise_floor": (combined_floor(errors, floors, search.combine) if now
                             else float("nan"))}
 
+
+def support_criterion(search: SearchData, parameters, optimizer, columns) -> float:
+    """The search's criterion of one catalog fitted on given columns, nothing selected.
+
+    Each split's catalog (its end knots, ``parameters``) is fitted on the split's training
+    pieces with the columns ``columns`` alone, every one kept
+    (:class:`~pysindy_xl.optimizers.RestrictedOptimizer` with ``select=False`` around
+    ``optimizer``), and scored on the split's held-out blocks as
+    :func:`evaluate_candidate` scores a catalog.
+
+    Parameters
+    ----------
+    search : SearchData
+        The growth's data and template.
+    parameters : dict
+        The catalog's growing parameters.
+    optimizer : catalog optimizer
+        The selection whose refit of a given support is used (itself, or the single fit of
+        an ensemble).
+    columns : sequence of int
+        The catalog columns kept.
+
+    Returns
+    -------
+    float
+        The blocks' errors combined (``search.combine``); inf where a fit fails.
+    """
+    from sklearn.base import clone
+
+    from ..optimizers import RestrictedOptimizer
+    errors = []
+    for split in search.splits:
+        model = clone(search.template).set_params(
+            feature_library=AutomaticCatalog(**split.fixed, **parameters),
+            optimizer=RestrictedOptimizer(clone(optimizer), columns=list(columns),
+                                          select=False))
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                model.fit(**split.train)
+            errors += [held_out_scores(model, held, search.forced, False)[0]
+                       for held in split.blocks]
+        except Exception:  # noqa: BLE001 - no law on these columns: they do not win
+            return float("inf")
+    return combine_errors(errors, search.combine)

@@ -189,10 +189,10 @@ from .._inputs import aligned, as_list
 from .anchors import AnchorFits
 from .automatic import AutomaticCatalog
 from .budget import WORK_BUDGET
+from .candidate_fit import support_criterion
 from .candidates import CandidateFits
 from .climb_ends import resumed_end, search_end
 from .climbs import Climber
-from .criterion import held_out_error
 from .final_fit import final_answer, fit_chosen, free_runs_check, warn_free_runs
 from .floor import EXACT
 from .folds import held_out_splits
@@ -558,12 +558,12 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     if not is_list:
         full = {key: None if value is None else value[0] for key, value in full.items()}
 
-    every_run = {"x": xs, "t": ts, "u": us if forced else None}
-
     def fit_all(catalog, judged):  # the final fit (final_fit.py): all the data, judged terms
+        growing = {key: value for key, value in catalog.get_params().items()
+                   if key not in fixed}
         return fit_chosen(template, catalog, optimizer, full, judged, active, final_weak,
-                          error=lambda model: held_out_error(model, every_run, forced),
-                          tolerance=tolerance)
+                          judge=lambda selection, columns: support_criterion(
+                              search, growing, selection, columns), tolerance=tolerance)
 
     # a settled end whose final fit fails is refused and the climbs go on (climb_ends.py)
     check = None if forced else free_runs_check(xs, ts, xds, kinds)

@@ -103,3 +103,39 @@ def test_lists_of_columns_round_trip_through_a_spec_and_bad_ones_are_named():
             optimizer_from_spec({"type": "RestrictedOptimizer", "params": {"columns": columns}})
     with pytest.raises(ValueError, match="groups"):
         optimizer_from_spec({"type": "GroupedOptimizer", "params": {"groups": [[-1]]}})
+
+
+def test_without_selection_every_allowed_column_is_refitted_on_every_row():
+    # the selection's threshold drops column 3 (0.2) among 1-3; without selection the allowed
+    # columns are least squares on every row, whatever the threshold
+    theta = _regression()
+    strict = px.ExplicitOptimizer(threshold=0.3)
+    selected = RestrictedOptimizer(strict, columns=[1, 2, 3]).fit_catalog(theta, 1, [0])
+    assert (selected.coef_ != 0).tolist() == [True, True, True, False, False]
+    given = RestrictedOptimizer(strict, columns=[1, 2, 3], select=False).fit_catalog(
+        theta, 1, [0])
+    assert (given.coef_ != 0).tolist() == [True, True, True, True, False]
+    lstsq = np.linalg.lstsq(theta[:, 1:4], theta[:, 0], rcond=None)[0]
+    np.testing.assert_allclose(given.coef_[1:4], lstsq, rtol=1e-8)
+    np.testing.assert_allclose(given.coef_[:4], [-1.0, 1.0, 0.5, 0.2], atol=0.01)
+    # an ensemble refits with the single fit it bags
+    bagged = RestrictedOptimizer(px.EnsembleOptimizer(strict), columns=[1, 2, 3],
+                                 select=False).fit_catalog(theta, 1, [0])
+    np.testing.assert_allclose(bagged.coef_, given.coef_, rtol=1e-10)
+
+
+def test_without_selection_an_optimizer_that_cannot_refit_is_named():
+    class NoRefit(px.ExplicitOptimizer):
+        def catalog_tags(self):
+            import dataclasses
+            return dataclasses.replace(super().catalog_tags(), can_refit=False)
+
+        def pilot(self):
+            return self
+
+    with pytest.raises(TypeError, match="optimizer: NoRefit cannot refit a given support"):
+        RestrictedOptimizer(NoRefit(), columns=[1], select=False).fit_catalog(
+            _regression(), 1, [0])
+    with pytest.raises((TypeError, ValueError), match="select"):
+        RestrictedOptimizer(px.ExplicitOptimizer(), select="no").fit_catalog(
+            _regression(), 1, [0])
