@@ -273,8 +273,14 @@ def run_case(system, truth, noise, seed, forced, baselines=True, region="block",
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
+            lines = []
             found = px.grow_catalog(xs, ts, us, coordinates=names, kinds=system["kinds"],
-                                    region=region, **_moves(extra_moves))
+                                    region=region, progress=lines.append,
+                                    **_moves(extra_moves))
+            # what the search's end did besides climbing: settled ends refused for their
+            # final fit, a physical alternative answering, judged terms restored
+            record["end_notes"] = [line for line in lines
+                                   if line.split(" ", 1)[0] in ("refused", "answer", "restored")]
             record["seconds"] = time.perf_counter() - started
             record["cpu_seconds"] = time.process_time() - cpu
             record["catalog"] = found.catalog.describe()

@@ -15,10 +15,11 @@ among the judged terms only (:class:`~pysindy_xl.optimizers.RestrictedOptimizer`
 exchange a term or leave one out (more data tell a stand-in from the law), but a larger model
 was never judged (on a pendulum with a sprung vertical pivot, unforced and free of noise, it
 took 14 terms where the judged fits kept the law's 8, 9 % off on a fresh run). Its selection,
-or the refit's, may also leave out a term that every judged fit kept: such terms are refitted
-with the model's, nothing selected, and kept where they lower the search's criterion by the
-growth's keep tolerance (the same pendulum, where rounding made the refit drop the pivot's
-viscous term: 2.8 % off on a fresh run, 6e-11 with it). The refit is
+or the refit's, may also leave out a term that every judged fit kept: in the growth's answer,
+once the search has settled, such terms are refitted with the model's, nothing selected, and
+kept where they lower the search's criterion by the growth's keep tolerance
+(:func:`restore_judged_terms`; the same pendulum, where rounding made the refit drop the
+pivot's viscous term: 2.8 % off on a fresh run, 6e-11 with it). The refit is
 not taken where its mass matrix is not positive definite on the training states and the fit
 on all the columns' is (:func:`~pysindy_xl.fit.diagnostics.mass_matrix_failure`): such a
 model is no mechanical system and cannot be simulated along its own data, and a growth does
@@ -48,14 +49,15 @@ from .automatic import AutomaticCatalog
 from .floor import EXACT
 
 __all__ = ["fit_chosen", "final_answer", "failure", "free_runs_check", "mass_matrix_fails",
-           "physical_alternative", "warn_free_runs", "PHYSICAL_ALTERNATIVES"]
+           "physical_alternative", "restore_judged_terms", "warn_free_runs",
+           "PHYSICAL_ALTERNATIVES"]
 
 #: Most other catalogs whose final fit a growth tries where its choice's fails the mass-matrix
 #: check (:func:`physical_alternative`).
 PHYSICAL_ALTERNATIVES = 3
 
 
-def _judged_terms_only(model, judged, catalog, data, judge=None, tolerance=0.05):
+def _judged_terms_only(model, judged, catalog, data):
     """``model`` refitted on the terms that the judged fits kept (``judged``: the names of each
     split's), where it keeps more terms than any of them and some that none held; a
     coordinate's splines count as judged (their knots, and so their names, follow each fit's
@@ -67,8 +69,6 @@ def _judged_terms_only(model, judged, catalog, data, judge=None, tolerance=0.05)
     ``a_dot x_dot`` on a cart with two pendulums) or find fewer, but terms it adds beyond
     that size were never judged. The refit is returned unless its mass matrix fails the
     check on the training states where ``model``'s passes (:func:`mass_matrix_fails`).
-    Otherwise, terms the fit left out that every judged fit kept may come back
-    (:func:`_dropped_terms_restored`, with ``judge`` and ``tolerance``).
     """
     judged = [names for names in judged if names]
     if not judged:  # (a split's fit failed: nothing to restrict to)
@@ -80,7 +80,7 @@ def _judged_terms_only(model, judged, catalog, data, judge=None, tolerance=0.05)
         allowed[list(group)] = True  # (kept whole or left out by the final fit's optimizer)
     kept = np.asarray(model.coefficients()) != 0
     if not np.any(kept & ~allowed) or kept.sum() <= max(len(names) for names in judged):
-        return _dropped_terms_restored(model, model.optimizer_, judged, data, judge, tolerance)
+        return model
     from sklearn.base import clone
 
     from ..optimizers import RestrictedOptimizer
@@ -92,50 +92,98 @@ def _judged_terms_only(model, judged, catalog, data, judge=None, tolerance=0.05)
     # not buy one where the fit on all the columns has none
     if mass_matrix_fails(restricted) and not mass_matrix_fails(model):
         return model
-    return _dropped_terms_restored(restricted, model.optimizer_, judged, data, judge,
-                                   tolerance)
+    return restricted
 
 
-def _dropped_terms_restored(model, optimizer, judged, data, judge, tolerance):
-    """``model`` with the terms that every judged fit kept and it left out, where they lower
-    the search's criterion by ``tolerance`` at least; else ``model``. ``optimizer`` is the
-    selection of the fit on all the columns (its refit of a given support is used).
+def restore_judged_terms(model, judged, data, judge, tolerance=0.05, check=None):
+    r"""A final fit with the terms that every judged fit kept and it left out, where they lower
+    the search's criterion by ``tolerance`` at least; else the final fit itself.
 
     The fit on all the data may leave out a term that the judged fits kept, rightly (more data
     tell a spurious term) or not: its selection can drop a small true term and let the other
     coefficients absorb it (a pendulum with a sprung vertical pivot, unforced and free of
     noise: the viscous term of the pivot dropped, the others 30-90 % off, 2.8 % on a fresh
-    run, where the judged fit kept the law at a criterion of 3e-9; its rounding decided). The
-    model's terms, with and without the dropped ones, are fitted as the search fits a catalog
-    but nothing selected (``judge``: the search's criterion of the catalog on given columns),
-    and the dropped terms come back where they lower that criterion by the growth's keep
-    ``tolerance``: the rule by which the growth keeps a larger catalog, on held-out blocks (on
-    all the data, spurious terms lower the error too: two of them by 5-14 % on a Duffing
-    oscillator at 1 % noise). Not where the model is exact already (its criterion at most
-    :data:`~.floor.EXACT`: a rounding's gain is no term's), where the refit's mass matrix fails
-    the check and the model's passes (:func:`mass_matrix_fails`), nor where the optimizer
-    cannot refit a given support.
+    run, where the judged fit kept the law at a criterion of 3e-9; its rounding decided). With
+    :math:`S` the model's terms and :math:`D` the dropped ones, both supports are fitted as
+    the search fits a catalog, nothing selected, and scored on the search's held-out blocks
+    (``judge``); the terms come back where
+
+    .. math:: J(S \cup D) < (1 - \mathrm{tolerance})\, J(S),
+
+    the rule by which the growth keeps a larger catalog (on all the data spurious terms lower
+    the error too: two of them by 5-14 % on a Duffing oscillator at 1 % noise). Not where the
+    model is exact already (:math:`J(S) \le` :data:`~.floor.EXACT`: a rounding's gain is no
+    term's), nor where the refit fails a check that the model passes (its mass matrix:
+    :func:`mass_matrix_fails`; ``check``), nor where the optimizer cannot refit a given
+    support. The growth applies it to its answer only, once the search has settled, so that
+    the path it took is the one without it.
+
+    Parameters
+    ----------
+    model : XLSINDy
+        A final fit (:func:`fit_chosen`).
+    judged : sequence of sequence of str
+        The terms that each search fit of its catalog kept (a failed fit's empty).
+    data : dict
+        The data of the final fit (``XLSINDy.fit``'s keyword arguments).
+    judge : callable
+        ``judge(optimizer, columns) -> float``: the search's criterion of the catalog fitted
+        on the given columns with ``optimizer``'s refit, nothing selected
+        (:func:`~.candidate_fit.support_criterion`).
+    tolerance : float, default 0.05
+        Relative decrease of the criterion that brings the terms back (the growth's keep
+        tolerance).
+    check : callable or None, default None
+        ``check(model) -> str or None``: a further judgment that the refit must pass where
+        ``model`` passes it (:func:`failure`'s); None: none.
+
+    Returns
+    -------
+    XLSINDy
+        The refit on the model's terms and the dropped ones
+        (:class:`~pysindy_xl.optimizers.RestrictedOptimizer` with ``select=False``), or
+        ``model``.
+
+    Examples
+    --------
+    A model that kept every judged term is returned as it is (``judge`` is not called):
+
+    >>> import numpy as np, pysindy_xl as px
+    >>> t = np.linspace(0, 20, 2001)
+    >>> x = np.c_[np.sin(t) + 0.5 * np.sin(2.7 * t)]
+    >>> u = 2 * (-np.sin(t) - 3.645 * np.sin(2.7 * t))[:, None] + 3 * x
+    >>> model = px.XLSINDy(px.AutomaticCatalog(["x"], kinetic="constant")).fit(x, t, u=u)
+    >>> judged = [[name for name, value in zip(model.get_feature_names(), model.coefficients())
+    ...            if value != 0]]
+    >>> restore_judged_terms(model, judged, {"x": x, "t": t, "u": u}, judge=None) is model
+    True
     """
+    judged = [names for names in judged if names]
+    if not judged:  # (a split's fit failed: nothing every judged fit kept)
+        return model
     names = model.get_feature_names()
     core = set(judged[0]).intersection(*judged[1:])
     kept = np.asarray(model.coefficients()) != 0
     dropped = np.array([name in core for name in names]) & ~kept
-    if judge is None or not dropped.any():
-        return model
-    before = judge(optimizer, np.flatnonzero(kept))
-    if not before > EXACT or not judge(optimizer, np.flatnonzero(kept | dropped)) < (
-            1 - tolerance) * before:
+    if not dropped.any():
         return model
     from sklearn.base import clone
 
     from ..optimizers import RestrictedOptimizer
+    optimizer = model.optimizer_  # (the fit on all the columns, or the one a refit wraps)
+    if isinstance(optimizer, RestrictedOptimizer):
+        optimizer = optimizer.optimizer
+    before = judge(optimizer, np.flatnonzero(kept))
+    if not before > EXACT or not judge(optimizer, np.flatnonzero(kept | dropped)) < (
+            1 - tolerance) * before:
+        return model
     restored = clone(model).set_params(optimizer=RestrictedOptimizer(
         clone(optimizer), columns=np.flatnonzero(kept | dropped).tolist(), select=False))
     try:
         restored.fit(**data)
     except (TypeError, ValueError, RuntimeError):  # (no refit of a given support, or no law)
         return model
-    if mass_matrix_fails(restored) and not mass_matrix_fails(model):
+    if failure(restored, check) is not None and failure(model, check) is None:
         return model
     return restored
 
@@ -393,8 +441,7 @@ def _grouped_optimizer(optimizer, catalog, forced, estimated):
     return GroupedOptimizer(optimizer, groups=groups)
 
 
-def fit_chosen(template, catalog, optimizer, data, judged, active, estimated, judge=None,
-               tolerance=0.05):
+def fit_chosen(template, catalog, optimizer, data, judged, active, estimated):
     """The growth's final model: ``catalog`` fitted on all the data.
 
     Parameters
@@ -414,20 +461,10 @@ def fit_chosen(template, catalog, optimizer, data, judged, active, estimated, ju
         The forced coordinates.
     estimated : bool
         Whether the columns come from noisy positions (the weak form).
-    judge : callable or None, default None
-        ``judge(optimizer, columns) -> float``: the search's criterion of ``catalog`` fitted
-        on the given columns, nothing selected (the growth's:
-        :func:`~.candidate_fit.support_criterion`); None: terms the fit left out are not
-        restored.
-    tolerance : float, default 0.05
-        Relative decrease of that criterion that restores them (the growth's keep
-        tolerance).
-
     Returns
     -------
     XLSINDy
-        Fitted, refitted among the judged terms, or with judged terms restored, where
-        :func:`_judged_terms_only` says so.
+        Fitted, refitted among the judged terms where :func:`_judged_terms_only` says so.
     """
     from sklearn.base import clone
 
@@ -436,4 +473,4 @@ def fit_chosen(template, catalog, optimizer, data, judged, active, estimated, ju
         feature_library=catalog, smoother=None,
         optimizer=_grouped_optimizer(optimizer, catalog, active, estimated))
     model.fit(**data)
-    return _judged_terms_only(model, judged, catalog, data, judge, tolerance)
+    return _judged_terms_only(model, judged, catalog, data)

@@ -193,7 +193,13 @@ from .candidate_fit import support_criterion
 from .candidates import CandidateFits
 from .climb_ends import resumed_end, search_end
 from .climbs import Climber
-from .final_fit import final_answer, fit_chosen, free_runs_check, warn_free_runs
+from .final_fit import (
+    final_answer,
+    fit_chosen,
+    free_runs_check,
+    restore_judged_terms,
+    warn_free_runs,
+)
 from .floor import EXACT
 from .folds import held_out_splits
 from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first)
@@ -559,11 +565,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         full = {key: None if value is None else value[0] for key, value in full.items()}
 
     def fit_all(catalog, judged):  # the final fit (final_fit.py): all the data, judged terms
-        growing = {key: value for key, value in catalog.get_params().items()
-                   if key not in fixed}
-        return fit_chosen(template, catalog, optimizer, full, judged, active, final_weak,
-                          judge=lambda selection, columns: support_criterion(
-                              search, growing, selection, columns), tolerance=tolerance)
+        return fit_chosen(template, catalog, optimizer, full, judged, active, final_weak)
 
     # a settled end whose final fit fails is refused and the climbs go on (climb_ends.py)
     check = None if forced else free_runs_check(xs, ts, xds, kinds)
@@ -578,7 +580,19 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                      "catalog's final fit is no mechanical system along its data")
         best = answer
         path.append(best)
-    if failed is not None and not forced:
+    if failed is None:  # (the path settled without it: a term back changes no catalog)
+        growing = {key: value for key, value in best_catalog.get_params().items()
+                   if key not in fixed}
+        restored = restore_judged_terms(model, best.support, full, lambda selection, columns:
+                                        support_criterion(search, growing, selection, columns),
+                                        tolerance, check)
+        if restored is not model and progress is not None:
+            back = (np.asarray(restored.coefficients()) != 0) & (
+                np.asarray(model.coefficients()) == 0)
+            progress("restored      " + ", ".join(np.asarray(model.get_feature_names())[back])
+                     + ": judged terms the final fit left out lower the criterion")
+        model = restored
+    elif not forced:
         warn_free_runs(failed)
     if consensus:
         for step in path:

@@ -23,7 +23,12 @@ from support.growth import forced_runs, log_cosh_well
 from pysindy_xl import XLSINDy
 from pysindy_xl.catalog import AutomaticCatalog, grow_catalog
 from pysindy_xl.catalog.candidate_fit import support_criterion
-from pysindy_xl.catalog.final_fit import fit_chosen, mass_matrix_fails, physical_alternative
+from pysindy_xl.catalog.final_fit import (
+    fit_chosen,
+    mass_matrix_fails,
+    physical_alternative,
+    restore_judged_terms,
+)
 from pysindy_xl.catalog.folds import held_out_splits
 from pysindy_xl.catalog.path import GrowthStep
 from pysindy_xl.catalog.search_data import judge_data
@@ -135,7 +140,6 @@ def test_a_growth_answers_with_the_best_physical_alternative():
     assert _acceleration_error(model, data["x"]) < 0.02
 
 
-
 #: The Duffing oscillator ``1.5 x'' + 0.1 x' + 2 x + x^3 = u``: ``L = 0.75 x_dot^2 - x^2 -
 #: x^4 / 4`` and the viscous term 0.1, against the force's -1.
 _DUFFING_LAW = {"L[x_dot**2]": 0.75, "L[x**2]": -1.0, "L[x**4]": -0.25, "C_x[x_dot]": 0.1}
@@ -154,10 +158,11 @@ def _duffing_final_fit(noise, seed, optimizer, judged, judged_again=True):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         model = fit_chosen(template, AutomaticCatalog(**fixed, **_DUFFING_CATALOG), optimizer,
-                           data, judged, np.ones(1, dtype=bool), noise > 0,
-                           judge=(lambda selection, columns: support_criterion(
-                               search, _DUFFING_CATALOG, selection, columns))
-                           if judged_again else None)
+                           data, judged, np.ones(1, dtype=bool), noise > 0)
+        if judged_again:
+            model = restore_judged_terms(model, judged, data, lambda selection, columns:
+                                         support_criterion(search, _DUFFING_CATALOG,
+                                                           selection, columns))
     return dict(zip(model.get_feature_names(), model.coefficients(), strict=True))
 
 
