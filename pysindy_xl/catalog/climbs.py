@@ -474,12 +474,12 @@ class Climber:
             # (a floor of round-off) a stand-in at 0.1 % is not what the data allow, and the
             # climb goes on (a cosine and a cos(theta) inertia for a torsion spring on a cart)
             return (step.criterion <= EXACT or not self.noise_floor or step is self.first
-                    or noise_explains(step.criterion, self._floor(step)))
+                    or noise_explains(step.criterion, self.floor(step)))
         if not (floor and self.noise_floor and step is not self.first):
             return False
-        return floor_reached(step.criterion, self._floor(step), self.tolerance)
+        return floor_reached(step.criterion, self.floor(step), self.tolerance)
 
-    def _floor(self, step) -> float:
+    def floor(self, step) -> float:
         """``step``'s noise floor, computed from its stored fits when first asked (the floor
         is computed only for the catalogs whose criterion decides a climb); NaN where they
         are not stored."""

@@ -585,7 +585,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                    if key not in fixed}
         restored = restore_judged_terms(model, best.support, full, lambda selection, columns:
                                         support_criterion(search, growing, selection, columns),
-                                        tolerance, check)
+                                        tolerance, check, climber.floor(best))
         if restored is not model and progress is not None:
             back = (np.asarray(restored.coefficients()) != 0) & (
                 np.asarray(model.coefficients()) == 0)
