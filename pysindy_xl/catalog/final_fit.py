@@ -16,8 +16,9 @@ exchange a term or leave one out (more data tell a stand-in from the law), but a
 was never judged (on a pendulum with a sprung vertical pivot, unforced and free of noise, it
 took 14 terms where the judged fits kept the law's 8, 9 % off on a fresh run). Its selection,
 or the refit's, may also leave out a term that every judged fit kept: in the growth's answer,
-once the search has settled, such terms are refitted with the model's, nothing selected, and
-kept where they lower the search's criterion by the growth's keep tolerance
+once the search has settled and where the noise does not account for its criterion, such
+terms are refitted with the model's, nothing selected, and kept where they lower the search's
+criterion by the growth's keep tolerance
 (:func:`restore_judged_terms`; the same pendulum, where rounding made the refit drop the
 pivot's viscous term: 2.8 % off on a fresh run, 6e-11 with it). The refit is
 not taken where its mass matrix is not positive definite on the training states and the fit
