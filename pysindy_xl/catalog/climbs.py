@@ -480,9 +480,21 @@ class Climber:
         return floor_reached(step.criterion, self.floor(step), self.tolerance)
 
     def floor(self, step) -> float:
-        """``step``'s noise floor, computed from its stored fits when first asked (the floor
-        is computed only for the catalogs whose criterion decides a climb); NaN where they
-        are not stored."""
+        """A step's noise floor, computed from its stored fits when first asked (the floor
+        is computed only for the catalogs whose criterion decides a climb, and for the
+        growth's answer).
+
+        Parameters
+        ----------
+        step : GrowthStep
+            A step of this climber.
+
+        Returns
+        -------
+        float
+            Its criterion's noise floor (:func:`~.floor.models_floor`), NaN where its fits
+            are not stored.
+        """
         models = self._models.get(id(step))
         if np.isnan(step.noise_floor) and models is not None and np.isfinite(step.criterion):
             step.noise_floor = models_floor(self.fits.search, models, step.block_errors)
