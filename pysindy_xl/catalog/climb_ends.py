@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .ascents import climb, steepest_climb
 from .backward import backward_phase
 from .final_fit import failure
 from .moves import LATE_MOVES
@@ -50,7 +51,7 @@ def search_end(climber, order, alone, moves, *, steepest, physical, judge_ties=N
     moves : sequence of str
         The growth's moves (the backward phase drops only their families).
     steepest : bool
-        Climb by the best move at each step (:meth:`~.climbs.Climber.steepest_climb`).
+        Climb by the best move at each step (:func:`~.ascents.steepest_climb`).
     physical : bool
         Never give up a catalog whose fits are physical for one whose fits are not.
     judge_ties : callable or None, default None
@@ -67,13 +68,13 @@ def search_end(climber, order, alone, moves, *, steepest, physical, judge_ties=N
     # climb from the best and from the second-best first move: which family goes in first is
     # where a stand-in wins (a cos(theta) inertia for a torsion spring; a power of an angle for
     # a coupling that needs two moves), so the better of the two ends is kept
-    state, best, path = climber.steepest_climb(order) if steepest else climber.climb(order)
+    state, best, path = steepest_climb(climber, order) if steepest else climb(climber, order)
     promising = [m for m in order if m not in LATE_MOVES and alone.get(m, np.inf)
                  < climber.first.criterion * (1 - climber.tolerance)]
     if not climber.settled(best) and len(promising) > 1:
         second = [promising[1]] + [m for m in order if m != promising[1]]
-        other = (climber.steepest_climb(order, promising[1], state) if steepest
-                 else climber.climb(second, state))
+        other = (steepest_climb(climber, order, promising[1], state) if steepest
+                 else climb(climber, second, state))
         if (climber.keeps(other[1], best) if not physical or (other[1].definite >= 1)
                 == (best.definite >= 1) else other[1].definite >= 1):
             state, best, path = other

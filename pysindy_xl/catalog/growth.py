@@ -581,8 +581,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         best = answer
         path.append(best)
     if failed is None:  # (the path settled without it: a term back changes no catalog)
-        growing = {key: value for key, value in best_catalog.get_params().items()
-                   if key not in fixed}
+        growing = climber.parameters_of(best)
         restored = restore_judged_terms(model, best.support, full, lambda selection, columns:
                                         support_criterion(search, growing, selection, columns),
                                         tolerance, check, climber.floor(best))
