@@ -341,7 +341,6 @@ class RateFits:
             offset = 0.0  # (within the criterion's noise: the residual's rate)
         rate = _rounded(sign * np.exp(centre + offset))
         return dict(rates, **{name: rate}), memo[offset]
-        return rates
 
 
 def _minima(residual, span) -> list:
