@@ -71,6 +71,17 @@ def _param_names(cls) -> tuple:
     return tuple(cls._get_param_names())
 
 
+def _check_bound(name, bound) -> None:
+    """``ValueError`` unless ``bound`` is a pair ``(low, high)`` of finite reals, low < high."""
+    try:
+        low, high = (float(b) for b in bound)
+    except (TypeError, ValueError):
+        raise ValueError(f"bounds: expected a pair (low, high) of real numbers for {name!r}, "
+                         f"got {bound!r}") from None
+    if not (np.isfinite(low) and np.isfinite(high) and high > low):
+        raise ValueError(f"bounds: expected finite low < high for {name!r}, got {bound!r}")
+
+
 #: Terms of recent catalogs by their parameters, most recently used last (sympy expressions
 #: are immutable): the clones that every fit makes, and equal catalogs, build them once.
 _TERMS: dict = {}
@@ -308,6 +319,8 @@ class AutomaticCatalog(CatalogRepartition):
         options["spline_basis"] = check_option("spline_basis", self.spline_basis, "choice",
                                                choices=SPLINE_BASES)
         for name, count, bound in zip(names, splines, bounds, strict=True):
+            if bound is not None:
+                _check_bound(name, bound)
             count = check_option("splines", count or 0, "int", low=0)
             if count and bound is None:
                 raise ValueError(f"bounds: B-splines of {name!r} need its range (low, high)")

@@ -185,7 +185,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._inputs import aligned, as_list
+from .._inputs import as_list, trajectory_arrays
 from .anchors import AnchorFits
 from .automatic import AutomaticCatalog
 from .budget import WORK_BUDGET
@@ -238,8 +238,9 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     ----------
     x : array (N, n) or list of arrays
         Positions, one run or several.
-    t : array (N,) or list of arrays
-        Strictly increasing times, matching ``x``.
+    t : float, array (N,) or list of arrays
+        Time step, or strictly increasing times matching ``x`` (one array for every run, or
+        a list of one per run).
     u : same layout as ``x``, optional
         Generalized forces (zero columns: unforced coordinates); None: unforced data.
     x_dot, x_ddot : same layout as ``x``, optional
@@ -408,26 +409,27 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     """
     from ..model import XLSINDy
 
-    xs, is_list = as_list(x, "x")
-    ts, us, xds, xdds = (aligned(value, name, xs, is_list) for value, name in
-                         ((t, "t"), (u, "u"), (x_dot, "x_dot"), (x_ddot, "x_ddot")))
-    us, xds, xdds = (None if value is None else value for value in
-                     (None if u is None else us, None if x_dot is None else xds,
-                      None if x_ddot is None else xdds))
-    xs = [np.asarray(xk, dtype=float).reshape(len(xk), -1) for xk in xs]
-    ts = [np.asarray(tk, dtype=float) for tk in ts]
-    if len(ts) != len(xs) or any(tk.shape != (len(xk),) for tk, xk in zip(ts, xs, strict=True)):
-        raise ValueError("t: expected one time array per run of x, of its length")
+    if progress is not None and not callable(progress):
+        raise TypeError("progress: expected a callable (given each line of text) or None, got "
+                        f"{type(progress).__name__}")
     names = list(coordinates.split(",") if isinstance(coordinates, str) else coordinates)
-    n = xs[0].shape[1]
-    if len(names) != n:
-        raise ValueError(f"coordinates: expected {n} names (the columns of x), got {names}")
+    first_run, is_list = as_list(x, "x")
+    if np.ndim(first_run[0]) in (1, 2):  # (anything else: the data's own error, below)
+        n = np.shape(first_run[0])[1] if np.ndim(first_run[0]) == 2 else 1
+        if len(names) != n:
+            raise ValueError(f"coordinates: expected {n} names (the columns of x), got {names}")
+    # XLSINDy.fit's validation of the data: the same errors at the same boundary
+    runs = trajectory_arrays(x, t, x_dot, x_ddot, u, None, len(names))
+    xs, ts = [run["x"] for run in runs], [run["t"] for run in runs]
+    us, xds, xdds = (None if given is None else [run[key] for run in runs]
+                     for key, given in (("u", u), ("x_dot", x_dot), ("x_ddot", x_ddot)))
     kinds = coordinate_kinds(names, kinds)
     check_growth_options(max_terms=max_terms, n_blocks=n_blocks, cross_validate=cross_validate,
                          region=region, physical=physical, steepest=steepest,
                          tie_break=tie_break, noise_floor=noise_floor, work_budget=work_budget,
                          combine=combine, tolerance=tolerance, good_enough=good_enough,
                          moves=moves)
+    check_growth_data(xs, names)  # (a constant coordinate, before its range is a catalog's)
     moves = tuple(dict.fromkeys(moves))  # a move named twice (MOVES + ("differences",)) once
     forced = us is not None and any(np.any(np.asarray(uk) != 0) for uk in us)
     criterion = "forces" if forced else "accelerations"

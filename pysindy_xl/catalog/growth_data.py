@@ -24,7 +24,7 @@ __all__ = ["check_growth_data", "check_growth_options", "data_span", "thinned",
 GROWTH_REGIONS = (*REGIONS, "consensus")
 
 
-def check_growth_data(xs, names, n_terms: int) -> None:
+def check_growth_data(xs, names, n_terms: int | None = None) -> None:
     """``ValueError`` for a constant coordinate or data too short for ``n_terms`` terms.
 
     Parameters
@@ -33,8 +33,9 @@ def check_growth_data(xs, names, n_terms: int) -> None:
         Positions of each trajectory.
     names : list of str
         Coordinate names, for the messages.
-    n_terms : int
-        Size of the catalog to fit (at least 10 equations per term are needed).
+    n_terms : int, optional
+        Size of the catalog to fit (at least 10 equations per term are needed); None: the
+        coordinates only (before a catalog is built on their ranges).
 
     Returns
     -------
@@ -48,7 +49,7 @@ def check_growth_data(xs, names, n_terms: int) -> None:
             raise ValueError(f"x: coordinate {name!r} is constant in the data; nothing about its "
                              "dynamics can be identified (leave it out, or excite it)")
     rows = len(stacked) * len(names)
-    if rows < 10 * n_terms:
+    if n_terms is not None and rows < 10 * n_terms:
         raise ValueError(f"x: {len(stacked)} samples of {len(names)} coordinates are too short "
                          f"for a catalog of {n_terms} terms (at least {10 * n_terms} equations "
                          "needed); record longer, or lower max_terms")

@@ -110,6 +110,9 @@ def test_bspline_is_a_partition_of_unity_and_simulates():
     ({"dissipation": ("stribeck",)}, "dissipation: unknown model 'stribeck'"),
     ({"splines": 4}, "bounds: B-splines of 'x' need its range"),
     ({"coordinates": []}, "coordinates: expected a non-empty list"),
+    ({"bounds": [(1.0, -1.0)]}, "bounds: expected finite low < high for 'x'"),
+    ({"bounds": {"x": (0.0, np.inf)}}, "bounds: expected finite low < high for 'x'"),
+    ({"bounds": [(0.0, 1.0, 2.0)]}, r"bounds: expected a pair \(low, high\) of real numbers"),
 ])
 def test_bad_parameters_name_the_argument(kwargs, message):
     params = {"coordinates": ["x"], **kwargs}

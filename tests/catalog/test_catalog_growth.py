@@ -127,6 +127,26 @@ def test_growth_refuses_bad_data():
         grow_catalog(np.sin(t)[:, None], t, np.cos(t)[:, None], coordinates=["x", "y"])
 
 
+_T = np.linspace(0, 10, 1001)
+_X, _U = np.sin(_T)[:, None], np.cos(_T)[:, None]
+
+
+@pytest.mark.parametrize("x, t, u, options, error, message", [
+    (np.where(_T[:, None] > 5, np.nan, _X), _T, _U, {}, ValueError, "x: contains NaN or inf"),
+    (_X + 1j * _X, _T, _U, {}, TypeError, "x: expected real numbers, got complex values"),
+    (_X.astype(str), _T, _U, {}, TypeError, "x: expected real numbers, got an array of str"),
+    (_X, _T, _U > 0, {}, TypeError, "u: expected real numbers, got booleans"),
+    (_X, _T, _U[1:], {}, ValueError, r"u: expected shape \(1001, 1\), got \(1000, 1\)"),
+    (_X, _T[::-1], _U, {}, ValueError, "t: times must be strictly increasing"),
+    (_X, _T, _U, {"progress": 3}, TypeError, "progress: expected a callable"),
+])
+def test_growth_refuses_what_the_model_refuses(x, t, u, options, error, message):
+    """The data are checked as XLSINDy.fit checks them: nothing is cast or dropped silently,
+    and NaN is named, not taken for a constant coordinate."""
+    with pytest.raises(error, match=message):
+        grow_catalog(x, t, u, coordinates=["x"], **options)
+
+
 def test_ceiling_is_reported_in_the_path():
     t = np.linspace(0, 20, 2001)
     x = (np.sin(t) + 0.5 * np.sin(2.7 * t))[:, None]
