@@ -55,7 +55,7 @@ from ..feature_library import (
 )
 from ..symbols import Coordinates
 from .bases import KINDS, SPLINE_BASES, anchored_spring, bspline_centers, exponential_pair
-from .kinds import coordinate_kinds, per_coordinate
+from .kinds import coordinate_kinds, coordinate_names, per_coordinate
 from .terms import dissipation_terms, lagrangian_candidates, spline_basis
 
 __all__ = ["AutomaticCatalog", "DISSIPATION"]
@@ -271,13 +271,7 @@ class AutomaticCatalog(CatalogRepartition):
     def _coordinates(self) -> Coordinates:
         if isinstance(self.coordinates, Coordinates):
             return self.coordinates
-        names = self.coordinates
-        if isinstance(names, str):
-            names = [c.strip() for c in names.split(",") if c.strip()]
-        if not isinstance(names, (list, tuple)) or not names:
-            raise ValueError(f"coordinates: expected a non-empty list of names, got "
-                             f"{self.coordinates!r}")
-        return Coordinates(list(names))
+        return Coordinates(coordinate_names(self.coordinates))
 
     def _options(self) -> dict:
         validate_params(self)

@@ -206,7 +206,7 @@ from .growth_data import END_PERCENTILE as END_PERCENTILE  # (where it was first
 from .growth_data import GROWTH_REGIONS as GROWTH_REGIONS  # (where it was first)
 from .growth_data import check_growth_data, check_growth_options, data_span, thinned
 from .keep_rules import single_keeps
-from .kinds import coordinate_kinds
+from .kinds import coordinate_kinds, coordinate_names
 from .moves import LATE_MOVES, MORE_MOVES, MOVES, START, is_repeated, joint_moves, moved, narrowed
 from .path import GrowthResult, GrowthStep
 from .rates import RateFits
@@ -286,7 +286,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
         path (``sqrt(1 - e cos(theta - phi))``, ``sqrt((x - c)^2 + h^2)``), its geometry
         fitted likewise (:class:`~.anchors.AnchorFits`); it is tried after the exponentials,
         before the splines.
-    search_optimizer : "auto" or optimizer, default "auto"
+    search_optimizer : "auto", str or optimizer, default "auto"
         Optimizer of the search's fits; ``"auto"``: ``optimizer`` when given, else one
         selection per fit (``ExplicitOptimizer()``, ``MixedOptimizer()``, or XLSINDy's default
         for unforced data) where the final fit bags selections on noisy positions.
@@ -412,7 +412,7 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
     if progress is not None and not callable(progress):
         raise TypeError("progress: expected a callable (given each line of text) or None, got "
                         f"{type(progress).__name__}")
-    names = list(coordinates.split(",") if isinstance(coordinates, str) else coordinates)
+    names = coordinate_names(coordinates)
     first_run, is_list = as_list(x, "x")
     if np.ndim(first_run[0]) in (1, 2):  # (anything else: the data's own error, below)
         n = np.shape(first_run[0])[1] if np.ndim(first_run[0]) == 2 else 1
@@ -428,7 +428,8 @@ def grow_catalog(x, t, u=None, x_dot=None, x_ddot=None, *, coordinates, kinds=No
                          region=region, physical=physical, steepest=steepest,
                          tie_break=tie_break, noise_floor=noise_floor, work_budget=work_budget,
                          combine=combine, tolerance=tolerance, good_enough=good_enough,
-                         moves=moves)
+                         moves=moves, search_optimizer=search_optimizer,
+                         search_samples=search_samples)
     check_growth_data(xs, names)  # (a constant coordinate, before its range is a catalog's)
     moves = tuple(dict.fromkeys(moves))  # a move named twice (MOVES + ("differences",)) once
     forced = us is not None and any(np.any(np.asarray(uk) != 0) for uk in us)

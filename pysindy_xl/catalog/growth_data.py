@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validation import check_option
+from .._validation import check_instance, check_option
+from ..optimizers.defaults import SOLVER_KINDS
 from .criterion import COMBINES, MIN_TRIMMED_BLOCKS
 from .folds import REGIONS
 from .moves import MORE_MOVES, MOVES
@@ -63,14 +64,15 @@ END_PERCENTILE = 1.0
 
 def check_growth_options(*, max_terms, n_blocks, cross_validate, region, physical, steepest,
                          tie_break, noise_floor, work_budget, combine, tolerance, good_enough,
-                         moves) -> None:
+                         moves, search_optimizer="auto", search_samples=6000) -> None:
     """Check the options of :func:`~.growth.grow_catalog` before any data are read.
 
     Parameters
     ----------
     max_terms, n_blocks, cross_validate, region, physical, steepest, tie_break, noise_floor, \
-work_budget, combine, tolerance, good_enough, moves
-        As :func:`~.growth.grow_catalog` takes them.
+work_budget, combine, tolerance, good_enough, moves, search_optimizer, search_samples
+        As :func:`~.growth.grow_catalog` takes them (``search_optimizer`` default ``"auto"``,
+        ``search_samples`` default 6000).
 
     Raises
     ------
@@ -109,6 +111,20 @@ work_budget, combine, tolerance, good_enough, moves
                          "to leave out")
     check_option("tolerance", tolerance, "real", low=0, high=1, high_open=True)
     check_option("good_enough", good_enough, "real", low=0)
+    check_option("search_samples", search_samples, "int", low=1, allow_none=True)
+    # what XLSINDy's optimizer takes, or "auto": a search whose every fit fails on its
+    # optimizer would otherwise end on the final fit alone
+    if isinstance(search_optimizer, str):
+        if search_optimizer not in ("auto", *SOLVER_KINDS):
+            raise ValueError(f"search_optimizer: expected 'auto', one of {SOLVER_KINDS} or an "
+                             f"optimizer, got {search_optimizer!r}")
+    elif search_optimizer is not None:
+        check_instance("search_optimizer", search_optimizer, "an optimizer")
+        if not (hasattr(search_optimizer, "fit_catalog")
+                or callable(getattr(search_optimizer, "fit", None))):
+            raise TypeError("search_optimizer: expected a catalog optimizer with fit_catalog or "
+                            "a regressor with fit(X, y), got "
+                            f"{type(search_optimizer).__name__}")
     unknown = [m for m in moves if m not in MOVES + MORE_MOVES]
     if unknown:
         raise ValueError(f"moves: unknown {unknown}; expected some of {MOVES + MORE_MOVES}")

@@ -9,7 +9,44 @@ import numpy as np
 
 from .bases import KINDS
 
-__all__ = ["coordinate_kinds", "per_coordinate"]
+__all__ = ["coordinate_kinds", "coordinate_names", "per_coordinate"]
+
+
+def coordinate_names(coordinates) -> list[str]:
+    """The coordinates' names, checked.
+
+    Parameters
+    ----------
+    coordinates : list of str, str or Coordinates
+        Names (``"r,theta"`` also works), or :class:`~pysindy_xl.Coordinates`.
+
+    Returns
+    -------
+    list of str
+
+    Raises
+    ------
+    ValueError, TypeError
+        Naming ``coordinates``: no names, a name that is not a string, a name twice.
+
+    Examples
+    --------
+    >>> coordinate_names("r, theta")
+    ['r', 'theta']
+    """
+    names = getattr(coordinates, "names", coordinates)  # (a Coordinates object)
+    if isinstance(names, str):
+        names = [c.strip() for c in names.split(",") if c.strip()]
+    if not isinstance(names, (list, tuple)) or not names:
+        raise ValueError(f"coordinates: expected a non-empty list of names, got {coordinates!r}")
+    for name in names:
+        if not isinstance(name, str):
+            raise TypeError(f"coordinates: expected names (str), got the "
+                            f"{type(name).__name__} {name!r}")
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if twice:
+        raise ValueError(f"coordinates: the names {twice} are given more than once")
+    return list(names)
 
 
 def coordinate_kinds(names, kinds) -> tuple[str, ...]:

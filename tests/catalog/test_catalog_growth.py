@@ -147,6 +147,23 @@ def test_growth_refuses_what_the_model_refuses(x, t, u, options, error, message)
         grow_catalog(x, t, u, coordinates=["x"], **options)
 
 
+@pytest.mark.parametrize("options, error, message", [
+    ({"search_optimizer": "fast"}, ValueError, "search_optimizer: expected 'auto', one of"),
+    ({"search_optimizer": 3}, TypeError, "search_optimizer: expected a catalog optimizer"),
+    ({"search_samples": 0}, ValueError, "search_samples: expected an integer >= 1 or None"),
+    ({"search_samples": "all"}, TypeError, "search_samples: expected an integer >= 1"),
+    ({"coordinates": None}, ValueError, "coordinates: expected a non-empty list of names"),
+    ({"coordinates": ["x", 3]}, TypeError, "coordinates: expected names"),
+    ({"coordinates": "x, y, x"}, ValueError, r"coordinates: the names \['x'\] are given more"),
+])
+def test_growth_options_are_refused_by_name(options, error, message):
+    """A search optimizer that no fit accepts is refused before the search (its fits would
+    all fail, and the growth end on the final fit alone)."""
+    x = np.c_[_X, np.cos(1.3 * _T), np.sin(0.7 * _T)]
+    with pytest.raises(error, match=message):
+        grow_catalog(x, _T, np.c_[_U, _U, _U], **{"coordinates": ["x", "y", "z"], **options})
+
+
 def test_ceiling_is_reported_in_the_path():
     t = np.linspace(0, 20, 2001)
     x = (np.sin(t) + 0.5 * np.sin(2.7 * t))[:, None]
