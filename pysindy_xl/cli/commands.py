@@ -419,8 +419,13 @@ def _column_map(items):
     return columns
 
 
-def _names(text):
-    return [c.strip() for c in text.split(",") if c.strip()] if text else None
+def _names(text, option="--coordinates"):
+    """The comma-separated names of ``option`` (None when not given); a name twice refused."""
+    names = [c.strip() for c in text.split(",") if c.strip()] if text else None
+    twice = sorted({name for name in names or () if names.count(name) > 1})
+    if twice:
+        raise CLIError(f"{option}: the names {twice} are given more than once")
+    return names
 
 
 def _load(args, path, system=None):
@@ -449,7 +454,7 @@ def _load(args, path, system=None):
 def _identify_inputs(args):
     """The dataset of ``identify`` (CSV or NPZ) and the system naming its coordinates."""
     from pysindy_xl.mujoco import coordinate_system
-    coordinates, angles = _names(args.coordinates), _names(args.angles) or []
+    coordinates, angles = _names(args.coordinates), _names(args.angles, "--angles") or []
     if args.system and args.angles:
         raise CLIError("--angles: the system gives the angles; use --angles with "
                        "--coordinates (no --system)")

@@ -84,6 +84,10 @@ def test_identify_npz_with_coordinates(tmp_path, capsys):
          "--angles: angles: ['phi'] not among the coordinates"),
         ("column.csv", "t,theta\n0,0\n1,1\n", ["--column", "theta"],
          "--column: expected KEY=HEADER"),
+        ("twice.csv", "t,theta\n0,0\n1,1\n", ["--coordinates", "theta,theta"],
+         "--coordinates: the names ['theta'] are given more than once"),
+        ("twice_angles.csv", "t,theta\n0,0\n1,1\n", ["--angles", "theta, theta"],
+         "--angles: the names ['theta'] are given more than once"),
     ],
 )
 def test_identify_mistakes_name_file_and_column(tmp_path, capsys, name, text, argv, message):
