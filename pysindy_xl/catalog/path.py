@@ -7,6 +7,7 @@ import dataclasses
 
 import numpy as np
 
+from .._validation import check_option
 from .automatic import AutomaticCatalog
 
 __all__ = ["GrowthStep", "GrowthResult"]
@@ -202,6 +203,7 @@ class GrowthResult:
             model keeps a spline term.
         """
         import sympy as sp
+        check_option("n_points", n_points, "int", low=2)
         library, coef = self.model.feature_library_, self.model.coef_
         out = {}
         for i, (q, name) in enumerate(zip(library.coords.q, library.coords.names,
