@@ -15,6 +15,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._optional import import_optional
+from .._validation import check_numeric_array, check_option
 
 jax = import_optional("jax", purpose="pysindy_xl.control")
 jnp = import_optional("jax.numpy", purpose="pysindy_xl.control")
@@ -133,11 +134,16 @@ def ilqr(step, cost, x0, controls, control_limit=None, iterations: int = 50,
     >>> bool(jnp.all(jnp.abs(solution.states[-1]) < 0.05))
     True
     """
-    x0 = jnp.asarray(x0, dtype=jnp.asarray(0.0).dtype)
+    if not callable(step):
+        raise TypeError(f"step: expected a callable step(x, u), got {type(step).__name__}")
+    x0 = jnp.asarray(check_numeric_array(x0, "x0", ndim=1), dtype=jnp.asarray(0.0).dtype)
+    controls = check_numeric_array(controls, "controls", min_samples=0)
+    if controls.ndim != 2 or controls.shape[0] < 1 or controls.shape[1] < 1:
+        raise ValueError(f"controls: expected an initial guess (H, m), H and m at least 1, "
+                         f"got shape {controls.shape}")
     controls = jnp.asarray(controls, dtype=x0.dtype)
-    if controls.ndim != 2:
-        raise ValueError(f"controls: expected an initial guess (H, m), got shape "
-                         f"{controls.shape}")
+    check_option("tolerance", tolerance, "real", low=0)
+    check_option("regularization", regularization, "real", low=0)
     m = controls.shape[1]
     if control_limit is None:
         limit = np.full(m, np.inf)

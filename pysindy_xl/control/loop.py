@@ -32,6 +32,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from .._validation import check_option
 from .catalogs import catalog_identifier
 from .costs import swing_up_cost
 from .discrete import continuous_dynamics, discrete_dynamics
@@ -65,6 +66,10 @@ PLANNER_SETTINGS = {
     "cart-double-pendulum": {"control_dt": 0.02, "substeps": 2, "horizon": 60,
                              "n_samples": 256, "knots": 10},
 }
+
+#: The settings that ``planner`` of :func:`learn_to_control` may override.
+PLANNER_OPTIONS = ("control_dt", "substeps", "horizon", "n_samples", "knots", "noise",
+                   "temperature", "iterations", "lqr_region")
 
 
 @dataclass
@@ -332,6 +337,15 @@ def learn_to_control(system: str = "cart-pole", task: str = "swing-up", catalog=
     catalog_name, identifier = ("given model", None) if model is not None else \
         ("custom identification", None) if identify is not None else \
         catalog_identifier(catalog)
+    check_option("max_episodes", max_episodes, "int", low=1)
+    check_option("max_interaction_s", max_interaction_s, "real", low=0, low_open=True)
+    if log is not None and not callable(log):
+        raise TypeError(f"log: expected a callable log(message) or None, got "
+                        f"{type(log).__name__}")
+    unknown = sorted(set(planner or {}) - set(PLANNER_OPTIONS))
+    if unknown:  # (a misspelt setting would otherwise be dropped unseen)
+        raise ValueError(f"planner: unknown settings {unknown}; expected some of "
+                         f"{PLANNER_OPTIONS}")
     settings = dict(PLANNER_SETTINGS.get(system, PLANNER_SETTINGS["cart-pole"]))
     settings.update(planner or {})
     control_dt = settings.pop("control_dt")

@@ -13,6 +13,7 @@ import time
 import numpy as np
 
 from .._optional import import_optional
+from .._validation import check_option
 from .costs import angle_error
 from .lqr import discrete_lqr, linearize
 from .sampling import sampling_planner
@@ -76,6 +77,7 @@ class PredictiveController:
 
     def __init__(self, step, cost, control_limit, horizon: int = 60, goal=None, angles=(),
                  lqr_weights=None, lqr_region: float = 0.25, seed: int = 0, **planner_options):
+        check_option("lqr_region", lqr_region, "real", low=0, low_open=True)
         self.step = step
         self.cost = cost
         self.planner = sampling_planner(step, cost, horizon, control_limit, **planner_options)

@@ -94,10 +94,14 @@ def test_the_plant_clips_to_the_force_limit_and_counts_time():
     ({"force_limit": -1.0}, ValueError, "force_limit: expected a positive number"),
     ({"noise": -0.1}, ValueError, "noise: expected"),
     ({"model": object()}, TypeError, "model: expected"),
+    ({"max_episodes": 0}, ValueError, "max_episodes: expected an integer >= 1"),
+    ({"max_interaction_s": 0.0}, ValueError, "max_interaction_s: expected a real number > 0"),
+    ({"log": "stderr"}, TypeError, "log: expected a callable"),
+    ({"planner": {"horizons": 30}}, ValueError, r"planner: unknown settings \['horizons'\]"),
 ])
 def test_bad_input_to_the_loop(kwargs, error, match):
     with pytest.raises(error, match=match):
-        learn_to_control(**kwargs, max_episodes=1)
+        learn_to_control(**{"max_episodes": 1, **kwargs})
 
 
 def test_a_model_without_accelerations_is_refused():

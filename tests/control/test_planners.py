@@ -57,6 +57,22 @@ def test_ilqr_converges_to_the_riccati_solution_of_a_double_integrator():
         assert int(solution.iterations) <= 5  # linear-quadratic: exact after one step
 
 
+@pytest.mark.parametrize("change, error, match", [
+    ({"x0": [np.nan, 0.0]}, ValueError, "x0: contains NaN or inf"),
+    ({"x0": [1j, 0.0]}, TypeError, "x0: expected real numbers, got complex values"),
+    ({"controls": np.zeros((0, 1))}, ValueError, r"controls: expected an initial guess \(H, m\)"),
+    ({"step": 3}, TypeError, "step: expected a callable"),
+    ({"tolerance": -1.0}, ValueError, "tolerance: expected a real number >= 0"),
+    ({"regularization": float("nan")}, ValueError, "regularization: expected a real number"),
+])
+def test_ilqr_refuses_bad_input_by_name(change, error, match):
+    cost = quadratic_cost([0.0, 0.0], [1.0, 0.1], [0.01])
+    arguments = {"step": _double_integrator(), "cost": cost, "x0": [1.0, 0.0],
+                 "controls": np.zeros((10, 1)), **change}
+    with pytest.raises(error, match=match):
+        ilqr(**arguments)
+
+
 def test_ilqr_respects_the_control_limit():
     with jax.enable_x64(True):
         cost = quadratic_cost([0.0, 0.0], [1.0, 0.1], [1e-4], terminal_weights=[100.0, 10.0])
