@@ -16,6 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._optional import import_optional
+from .._validation import check_numeric_array
 
 jnp = import_optional("jax.numpy", purpose="pysindy_xl.control")
 
@@ -80,12 +81,20 @@ def angle_error(x, goal, angle_mask):
 
 
 def _matrix(value, size: int, name: str) -> np.ndarray:
-    value = np.asarray(value, dtype=float)
+    """The weights ``value`` (a diagonal or a matrix) as a symmetric positive semidefinite
+    ``(size, size)`` matrix: other weights make a cost without a minimum (the planners would
+    push the state away from the goal)."""
+    value = check_numeric_array(value, name, ndim=(1, 2), min_samples=0)
     if value.ndim == 1:
         value = np.diag(value)
     if value.shape != (size, size):
         raise ValueError(f"{name}: expected a vector ({size},) or a matrix ({size}, {size}), "
                          f"got shape {value.shape}")
+    scale = max(float(np.abs(value).max()), 1e-300)
+    if (not np.allclose(value, value.T, rtol=0, atol=1e-12 * scale)
+            or np.linalg.eigvalsh(value).min() < -1e-12 * scale):
+        raise ValueError(f"{name}: expected symmetric positive semidefinite weights "
+                         "(non-negative on the diagonal)")
     return value
 
 
@@ -116,13 +125,13 @@ def quadratic_cost(goal, state_weights, control_weights, terminal_weights=None, 
     >>> round(float(cost.running(jnp.array([1.0, 2.0]), jnp.array([10.0]))), 4)
     2.4
     """
-    goal = np.asarray(goal, dtype=float)
+    goal = check_numeric_array(goal, "goal", min_samples=0)
     if goal.ndim != 1 or goal.size % 2:
         raise ValueError(f"goal: expected a state (2n,), got shape {goal.shape}")
     q = _matrix(state_weights, goal.size, "state_weights")
     qf = q if terminal_weights is None else _matrix(terminal_weights, goal.size,
                                                     "terminal_weights")
-    r = np.asarray(control_weights, dtype=float)
+    r = check_numeric_array(control_weights, "control_weights", min_samples=0)
     m = r.shape[0] if r.ndim else 1
     r = _matrix(r.reshape(-1) if r.ndim < 2 else r, m, "control_weights")
     u_goal = np.zeros(m) if goal_control is None else np.asarray(goal_control, dtype=float)

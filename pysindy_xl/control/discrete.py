@@ -123,6 +123,8 @@ def discrete_dynamics(f, dt: float, actuation, substeps: int = 2):
     >>> [round(float(v), 6) for v in step(jnp.array([0.0, 1.0]), jnp.array([2.0]))]
     [0.11, 1.2]
     """
+    if not callable(f):
+        raise TypeError(f"f: expected a callable f(state, tau), got {type(f).__name__}")
     dt = float(dt)
     if not (np.isfinite(dt) and dt > 0):
         raise ValueError(f"dt: expected a positive control period, got {dt!r}")

@@ -73,6 +73,25 @@ def test_ilqr_refuses_bad_input_by_name(change, error, match):
         ilqr(**arguments)
 
 
+@pytest.mark.parametrize("arguments, error, match", [
+    (([0.0, 0.0], [-1.0, 1.0], [1.0]), ValueError, "state_weights: expected symmetric positive"),
+    (([0.0, 0.0], [1.0, 1.0], [[-1.0]]), ValueError, "control_weights: expected symmetric"),
+    (([0.0, 0.0], [[1.0, 2.0], [0.0, 1.0]], [1.0]), ValueError, "state_weights: expected"),
+    (([0.0, np.nan], [1.0, 1.0], [1.0]), ValueError, "goal: contains NaN or inf"),
+    (([0.0, 0.0], [1.0, 1.0], [1j]), TypeError, "control_weights: expected real numbers"),
+])
+def test_a_cost_without_a_minimum_is_refused(arguments, error, match):
+    """Weights that are not positive semidefinite make a cost that a planner lowers by
+    leaving the goal."""
+    with pytest.raises(error, match=match):
+        quadratic_cost(*arguments)
+
+
+def test_discrete_dynamics_needs_a_function():
+    with pytest.raises(TypeError, match="f: expected a callable"):
+        discrete_dynamics(3, DT, [[1.0]])
+
+
 def test_ilqr_respects_the_control_limit():
     with jax.enable_x64(True):
         cost = quadratic_cost([0.0, 0.0], [1.0, 0.1], [1e-4], terminal_weights=[100.0, 10.0])
