@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._optional import import_optional
-from .._validation import check_option
+from .._validation import check_numeric_array, check_option
 from ..dynamics import DynamicsError
 
 gymnasium = import_optional("gymnasium", purpose="XLSINDy.to_gymnasium (pysindy_xl.export.gym_env)")
@@ -184,10 +184,12 @@ class IdentifiedDynamicsEnv(gymnasium.Env):
         info : dict
             ``"time"`` and, on failure, ``"failure"``.
         """
-        action = np.asarray(action, dtype=float).reshape(-1)
+        action = check_numeric_array(action, "action", min_samples=0, finite=False).reshape(-1)
         if action.shape != self.action_space.shape:
             raise ValueError(f"action: expected shape {self.action_space.shape}, got "
                              f"{action.shape}")
+        if not np.all(np.isfinite(action)):  # (clipping would pass NaN on to the model)
+            raise ValueError(f"action: expected finite values, got {action.tolist()}")
         action = np.clip(action, self.action_space.low, self.action_space.high)
         u = np.zeros(self.n)
         u[list(self.actuated)] = action

@@ -82,6 +82,10 @@ def test_actions_are_clipped_and_checked(model):
     np.testing.assert_array_equal(clipped, bound)
     with pytest.raises(ValueError, match=r"action: expected shape \(1,\)"):
         env.step(np.zeros(2))
+    with pytest.raises(ValueError, match=r"action: expected finite values, got \[nan\]"):
+        env.step(np.array([np.nan]))
+    with pytest.raises(TypeError, match="action: expected real numbers, got complex values"):
+        env.step(np.array([0.1 + 1j]))
 
 
 @pytest.mark.parametrize("options, match", [
