@@ -322,7 +322,7 @@ class AutomaticCatalog(CatalogRepartition):
                 raise ValueError(f"splines: expected at least 4 natural splines of {name!r} "
                                  f"(or 0), got {count}")
             if count:
-                bspline_centers(*bound, count)  # checks the bounds
+                bspline_centers(*bound, count)  # checks the count against the range
             options["splines"].append((tuple(map(float, bound)), count) if count else None)
         options["exponentials"] = self._rates(names, options["kinds"])
         if self.anchors is not None and not isinstance(self.anchors, Mapping):
