@@ -273,7 +273,9 @@ class SelectionResult(ChosenSupport):
         Columns from most to least needed.
     cv_error, cv_spread : ndarray
         Mean held-out relative squared error of each model size (index ``k - 1``) and its
-        standard error over the folds (inf for the sizes past every path's reach).
+        standard error over the folds: the best of the path models of that size and their
+        swap refinements (refined up to the chosen size); inf for the sizes past every
+        path's reach.
     size : int
         Chosen number of terms.
     best_size : int
@@ -409,7 +411,8 @@ def select_support(x, y, n_blocks: int = 1, n_folds: int = 5, max_size=None,
     tolerance = max(best[2], resolution)
     if swaps:
         path_choice = min(c[0] for c in candidates if c[1] <= best[1] + tolerance)
-        candidates += _swap_candidates(local, held_out, paths, seen, path_choice, keep, free)
+        candidates += _swap_candidates(local, held_out, paths, seen, path_choice,
+                                       best[1] + tolerance, keep, free)
     size, mean, _, how, order = min((c for c in candidates if c[1] <= best[1] + tolerance),
                                     key=lambda c: (c[0], c[1]))
     n_sizes = max(c[0] for c in candidates)
@@ -465,9 +468,16 @@ def _profiled(reduced, keep):
     return free, (active[free] & left, rest, y - basis @ (basis.T @ y))
 
 
-def _swap_candidates(reduced, held_out, paths, seen, limit, keep=(), free=None):
+def _swap_candidates(reduced, held_out, paths, seen, limit, bound, keep=(), free=None):
     """Swap refinements of the path models of at most ``limit`` terms, scored on ``held_out``
     (:class:`HeldOutRows`); only the ``free`` columns are exchanged.
+
+    The sizes are refined in increasing order, every path's model of a size before the next
+    size, up to the first size with a refined model whose held-out mean is within ``bound``:
+    a larger model cannot be the sparsest one within it, and the searches from the larger
+    starts cost the most. A search only passes through supports of its own size, so what it
+    shares with the others (the supports already visited, where the supports it passes
+    through end) is the same in this order as path by path.
     """
     active, xs, y_reduced = reduced
     n_keep = len(keep)
@@ -476,16 +486,21 @@ def _swap_candidates(reduced, held_out, paths, seen, limit, keep=(), free=None):
         paths = [(path, np.array([position[int(c)] for c in order[n_keep:]], dtype=int),
                   mean[n_keep:]) for path, order, mean in paths]
         limit -= n_keep
-    refined, visited = [], set()  # starts already refined and local optima reached
+    visited = set()  # starts already refined and local optima reached
     memo = {}  # supports the searches went through, to where they ended
     norms2 = column_norms2(xs)
     in_support = np.zeros(xs.shape[1], dtype=bool)
+    starts = []  # per path: its name, order, sizes to refine and their first swaps
     for path, order, mean in paths:
         sizes = [k for k in range(1, min(limit, len(order)) + 1) if np.isfinite(mean[k - 1])]
-        first = first_swaps(xs, y_reduced, active, order, sizes, norms2)
-        for k in sizes:
+        starts.append((path, order, set(sizes),
+                       first_swaps(xs, y_reduced, active, order, sizes, norms2)))
+    out = []
+    for k in range(1, limit + 1):
+        refined = []
+        for path, order, sizes, first in starts:
             start = frozenset(order[:k].tolist())
-            if start in visited:
+            if k not in sizes or start in visited:
                 continue
             if k not in first:
                 support = swap_search(xs, y_reduced, active, order[:k], max_swaps=50,
@@ -506,8 +521,11 @@ def _swap_candidates(reduced, held_out, paths, seen, limit, keep=(), free=None):
             if key not in seen:
                 seen.add(key)
                 refined.append((path, support, np.concatenate([support, rest])))
-    if not refined:
-        return []
-    mean, spread = fold_summary(held_out.support_errors([support for _, support, _ in refined]))
-    return [(len(support), mean[m], spread[m], f"{path} path, swap-refined", order)
-            for m, (path, support, order) in enumerate(refined) if np.isfinite(mean[m])]
+        if not refined:
+            continue
+        mean, spread = fold_summary(held_out.support_errors([s for _, s, _ in refined]))
+        out += [(len(support), mean[m], spread[m], f"{path} path, swap-refined", order)
+                for m, (path, support, order) in enumerate(refined) if np.isfinite(mean[m])]
+        if np.any(mean <= bound):
+            break
+    return out

@@ -3,13 +3,15 @@
 - the argmin of bisected roots, bisecting only the candidates that can win, against the
   argmin of every candidate's full bisection;
 - the admissible lasso on cvxpy's data canonicalized once, against ``problem.solve``;
-- the swap searches of one selection sharing where supports end, against independent searches.
+- the swap searches of one selection sharing where supports end, against independent searches;
+- the swap refinement stopped at the first size with a model within the one-standard-error
+  bound, against refining every size up to the path's choice.
 """
 
 import numpy as np
 import pytest
 
-from pysindy_xl.optimizers import admissible
+from pysindy_xl.optimizers import admissible, selection
 from pysindy_xl.optimizers._swaps import column_norms2, swap_search
 from pysindy_xl.optimizers.noise_ratio import (
     _bordered_minima,
@@ -131,3 +133,34 @@ def test_shared_swap_searches_end_where_independent_ones_do():
                 shared = swap_search(xs, y, usable, start, 50, norms2=norms2, memo=memo)
                 np.testing.assert_array_equal(shared, alone)
         assert memo
+
+
+def test_swap_refinement_stopped_early_chooses_what_refining_every_size_chooses(monkeypatch):
+    rng = np.random.default_rng(5)
+    problems = []
+    for _ in range(30):
+        n_rows, n_columns = 300, 60
+        base = rng.normal(size=(n_rows, 8))
+        xs = np.column_stack([base, base @ rng.normal(size=(8, n_columns - 8))
+                              + 0.2 * rng.normal(size=(n_rows, n_columns - 8))])
+        true = rng.choice(n_columns, 10, replace=False)
+        y = xs[:, true] @ rng.uniform(0.5, 2.0, 10) + 0.5 * rng.normal(size=n_rows)
+        problems.append((xs, y))
+    stopped = [selection.select_support(xs, y) for xs, y in problems]
+    refined_sizes = []
+
+    def every_size(reduced, held_out, paths, seen, limit, bound, keep=(), free=None):
+        found = original(reduced, held_out, paths, seen, limit, -np.inf, keep, free)
+        refined_sizes.append((limit, max((c[0] for c in found), default=0)))
+        return found
+
+    original = selection._swap_candidates
+    monkeypatch.setattr(selection, "_swap_candidates", every_size)
+    for (xs, y), early in zip(problems, stopped, strict=True):
+        full = selection.select_support(xs, y)
+        assert (full.size, full.support.tolist()) == (early.size, early.support.tolist())
+        np.testing.assert_allclose(early.cv_error[early.size - 1],
+                                   full.cv_error[full.size - 1], rtol=1e-10)
+    # the refinement went past the chosen size where every size was refined
+    assert sum(largest > early.size for (_, largest), early
+               in zip(refined_sizes, stopped, strict=True)) >= 5, refined_sizes
